@@ -1,0 +1,150 @@
+"""The ``s7graph`` command line: ``run``, ``sim``, ``check``, ``--version``.
+
+Each command lives in its own module (``web/cmd_*.py``) and is imported only when used, so
+``s7graph check`` never pays for zenoh or viser. Errors are one line on stderr and a
+non-zero exit, never a traceback.
+"""
+
+from __future__ import annotations
+
+import sys
+from importlib.metadata import PackageNotFoundError, version
+from pathlib import Path
+from typing import Annotated, Optional
+
+import typer
+
+from engine.errors import S7Error
+
+app = typer.Typer(
+    add_completion=False,
+    no_args_is_help=True,
+    help="s7graph: S7-GRAPH sequential control on a soft PLC.",
+    pretty_exceptions_enable=False,
+)
+
+
+def _version() -> str:
+    try:
+        return version("s7graph")
+    except PackageNotFoundError:  # running from a source tree
+        return "0+unknown"
+
+
+def _show_version(value: bool) -> None:
+    if value:
+        typer.echo(f"s7graph {_version()}")
+        raise typer.Exit(0)
+
+
+@app.callback()
+def _root(
+    version_: Annotated[
+        bool,
+        typer.Option("--version", callback=_show_version, is_eager=True, help="Print the version."),
+    ] = False,
+) -> None:
+    """s7graph: S7-GRAPH sequential control on a soft PLC."""
+
+
+@app.command()
+def run(
+    program: Annotated[Path, typer.Argument(help="A Python program of blocks (.py) or a chart (.s7g).")],
+    plant: Annotated[
+        Optional[Path], typer.Option(help="A simulated plant (.py) for a chart.")  # noqa: UP045
+    ] = None,
+    symbols: Annotated[
+        Optional[Path], typer.Option(help="A symbol table file for a chart.")  # noqa: UP045
+    ] = None,
+    state: Annotated[
+        Optional[Path], typer.Option(help="SQLite file for retentive data (default: beside the program).")  # noqa: UP045,E501
+    ] = None,
+    cycle_ms: Annotated[float, typer.Option(help="Minimum cycle time in ms.")] = 10.0,
+    duration_s: Annotated[
+        Optional[float], typer.Option(help="Stop after this many seconds (default: until Ctrl-C).")  # noqa: UP045,E501
+    ] = None,
+    web: Annotated[bool, typer.Option(help="Serve the browser view (charts only).")] = False,
+    port: Annotated[int, typer.Option(help="Port of the browser view.")] = 8080,
+) -> None:
+    """Run a program or a chart on the system clock until Ctrl-C."""
+    if program.suffix.lower() == ".s7g":
+        from web.cmd_run_chart import run_chart
+
+        raise typer.Exit(
+            run_chart(program, plant=plant, symbols=symbols, state=state, cycle_ms=cycle_ms,
+                      duration_s=duration_s, web=web, port=port)
+        )
+    from web.cmd_run import run_program
+
+    raise typer.Exit(run_program(program, state=state, cycle_ms=cycle_ms, duration_s=duration_s))
+
+
+@app.command()
+def check(
+    chart: Annotated[Path, typer.Argument(help="A chart in .s7g source.")],
+    symbols: Annotated[
+        Optional[Path], typer.Option(help="A symbol table file.")  # noqa: UP045
+    ] = None,
+) -> None:
+    """Print a chart's diagnostics; exit 0 clean, 1 warnings only, 2 errors."""
+    from web.cmd_check import check_command
+
+    raise typer.Exit(check_command(chart, symbols=symbols))
+
+
+@app.command()
+def sim(
+    chart: Annotated[Path, typer.Argument(help="A chart in .s7g source.")],
+    stimulus: Annotated[
+        Optional[Path], typer.Option(help="JSONL stimulus: {\"at_ms\": 0, \"set\": {...}} a line.")  # noqa: UP045,E501
+    ] = None,
+    cycle_ms: Annotated[float, typer.Option(help="Virtual cycle time in ms.")] = 10.0,
+    cycles: Annotated[int, typer.Option(help="Number of cycles to run.")] = 100,
+    watch: Annotated[
+        str, typer.Option(help="Comma-separated addresses, symbols or FB pins to report.")
+    ] = "",
+    trace: Annotated[
+        Optional[Path], typer.Option(help="Write the per-cycle JSONL here (default stdout).")  # noqa: UP045,E501
+    ] = None,
+    symbols: Annotated[
+        Optional[Path], typer.Option(help="A symbol table file.")  # noqa: UP045
+    ] = None,
+    plant: Annotated[
+        Optional[Path], typer.Option(help="A simulated plant (.py) run each cycle.")  # noqa: UP045
+    ] = None,
+) -> None:
+    """Run a chart on the virtual clock: stimulus in, one JSON line per cycle out (SPEC §4)."""
+    from web.cmd_sim import sim_command
+
+    raise typer.Exit(
+        sim_command(chart, stimulus=stimulus, cycle_ms=cycle_ms, cycles=cycles, watch=watch,
+                    trace=trace, symbols=symbols, plant=plant)
+    )
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the console script; turns every known error into one stderr line."""
+    try:
+        rc = app(args=argv, standalone_mode=False)
+    except S7Error as exc:
+        print(f"s7graph: error: {exc}", file=sys.stderr)
+        return 2
+    except typer.Exit as exc:
+        return int(exc.exit_code or 0)
+    except SystemExit as exc:  # click usage errors
+        return int(exc.code or 0) if isinstance(exc.code, int) else 2
+    except Exception as exc:  # click.ClickException and friends
+        import click
+
+        if isinstance(exc, click.ClickException):
+            exc.show()
+            return exc.exit_code
+        if isinstance(exc, click.exceptions.Abort):
+            return 130
+        print(f"s7graph: error: {type(exc).__name__}: {exc}", file=sys.stderr)
+        return 2
+    return rc if isinstance(rc, int) else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
