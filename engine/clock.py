@@ -28,7 +28,7 @@ class VirtualClock:
 
     def advance(self, ms: float = 0, *, ns: int = 0) -> int:
         """Move time forward by ``ms`` milliseconds plus ``ns`` nanoseconds; return the new time."""
-        step = int(round(ms * 1_000_000)) + ns
+        step = round(ms * 1_000_000) + ns
         if step < 0:
             raise ValueError("a virtual clock never goes back")
         self._now += step

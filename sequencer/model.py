@@ -147,7 +147,7 @@ class ActionRow:
     loc: SourceLocation = NOWHERE
 
 
-# ---------------------------------------------------------------- permanent instructions (SPEC §2.9)
+# ------------------------------------------------------- permanent instructions (SPEC §2.9)
 
 
 @dataclass(frozen=True, slots=True)

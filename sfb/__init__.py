@@ -1,0 +1,74 @@
+"""System blocks: SFB0-5, S5 timers/counters, edges, clock/memory/control SFCs, alarms
+(SPEC.md §1.7; seeds-runtime §5-7).
+
+The semantics are pure state machines over ``(inputs, now_ns)``; thin adapters declare them
+as engine SFBs/SFCs from the one ``catalogue``. ``install(cpu)`` loads every system block so
+``ctx.call("SFB4", 10, IN=..., PT=...)`` and ``ctx.call("SFC46")`` work.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol
+
+from engine.blocks import FB, FC
+from sfb import alarms, iec_counters, iec_timers, sfc_clock, sfc_control, sfc_memory
+from sfb.alarms import Message, MessageEvent, MessageList, MessageState, message_list
+from sfb.catalogue import CATALOGUE, Direction, Entry, Kind, Pin, find, lookup
+from sfb.diag_read import rdsysst, wr_usmsg
+from sfb.edges import F_TRIG, R_TRIG, fn, fp
+from sfb.iec_counters import CTD, CTU, CTUD
+from sfb.iec_timers import TOF, TON, TP
+from sfb.sfc_clock import RealTimeClock, rtc_of
+from sfb.sfc_memory import AnyPointer, parse_any
+
+__all__ = [
+    "CATALOGUE",
+    "CTD",
+    "CTU",
+    "CTUD",
+    "F_TRIG",
+    "R_TRIG",
+    "SYSTEM_BLOCKS",
+    "TOF",
+    "TON",
+    "TP",
+    "AnyPointer",
+    "Direction",
+    "Entry",
+    "Kind",
+    "Message",
+    "MessageEvent",
+    "MessageList",
+    "MessageState",
+    "Pin",
+    "RealTimeClock",
+    "find",
+    "fn",
+    "fp",
+    "install",
+    "lookup",
+    "message_list",
+    "parse_any",
+    "rdsysst",
+    "rtc_of",
+    "wr_usmsg",
+]
+
+SYSTEM_BLOCKS: tuple[FB | FC, ...] = (
+    *iec_counters.BLOCKS,
+    *iec_timers.BLOCKS,
+    *sfc_clock.BLOCKS,
+    *alarms.BLOCKS,
+    *sfc_memory.BLOCKS,
+    *sfc_control.BLOCKS,
+)
+"""Every system block with an engine adapter, in catalogue order of kind and number."""
+
+
+class _Loader(Protocol):
+    def load(self, *blocks: FB | FC) -> None: ...
+
+
+def install(cpu: _Loader) -> None:
+    """Load all system blocks into ``cpu`` (they belong to the OS: no download needed)."""
+    cpu.load(*SYSTEM_BLOCKS)

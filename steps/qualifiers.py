@@ -91,7 +91,11 @@ def table_rows() -> list[tuple[str, str, str]]:
     """The table as (events, instructions, note) rows, for the README and ``s7graph check``."""
     return [
         ("(none)", "N S R CALL [C]; D L (time); N x := expr [C]", "every cycle while active"),
-        ("S1 V1 A1 R1", "N S R CALL ON OFF [C]; OFF S_ALL [C] with S1 V1", "once, in the event call"),
-        ("S0 V0 L0 L1", "N S R CALL ON OFF (no C); OFF S_ALL with L1", "once, in the event call"),
+        (
+            "S1 V1 A1 R1",
+            "N S R CALL ON OFF [C]; OFF S_ALL [C] with S1 V1",
+            "once, in the event call",
+        ),
+        ("S0 V0 L0 L1", "N S R CALL ON OFF (no C); OFF S_ALL with L1", "once"),
         ("any event", "CS CU CD CR (counters); TL TD TF TR (timers); x := expr", "once"),
     ]

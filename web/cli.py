@@ -10,7 +10,7 @@ from __future__ import annotations
 import sys
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
-from typing import Annotated, Optional
+from typing import Annotated
 
 import typer
 
@@ -49,19 +49,18 @@ def _root(
 
 @app.command()
 def run(
-    program: Annotated[Path, typer.Argument(help="A Python program of blocks (.py) or a chart (.s7g).")],
-    plant: Annotated[
-        Optional[Path], typer.Option(help="A simulated plant (.py) for a chart.")  # noqa: UP045
-    ] = None,
-    symbols: Annotated[
-        Optional[Path], typer.Option(help="A symbol table file for a chart.")  # noqa: UP045
-    ] = None,
+    program: Annotated[
+        Path, typer.Argument(help="A Python program of blocks (.py) or a chart (.s7g).")
+    ],
+    plant: Annotated[Path | None, typer.Option(help="A simulated plant (.py) for a chart.")] = None,
+    symbols: Annotated[Path | None, typer.Option(help="A symbol table file for a chart.")] = None,
     state: Annotated[
-        Optional[Path], typer.Option(help="SQLite file for retentive data (default: beside the program).")  # noqa: UP045,E501
+        Path | None,
+        typer.Option(help="SQLite file for retentive data (default: beside the program)."),
     ] = None,
     cycle_ms: Annotated[float, typer.Option(help="Minimum cycle time in ms.")] = 10.0,
     duration_s: Annotated[
-        Optional[float], typer.Option(help="Stop after this many seconds (default: until Ctrl-C).")  # noqa: UP045,E501
+        float | None, typer.Option(help="Stop after this many seconds (default: until Ctrl-C).")
     ] = None,
     web: Annotated[bool, typer.Option(help="Serve the browser view (charts only).")] = False,
     port: Annotated[int, typer.Option(help="Port of the browser view.")] = 8080,
@@ -71,8 +70,16 @@ def run(
         from web.cmd_run_chart import run_chart
 
         raise typer.Exit(
-            run_chart(program, plant=plant, symbols=symbols, state=state, cycle_ms=cycle_ms,
-                      duration_s=duration_s, web=web, port=port)
+            run_chart(
+                program,
+                plant=plant,
+                symbols=symbols,
+                state=state,
+                cycle_ms=cycle_ms,
+                duration_s=duration_s,
+                web=web,
+                port=port,
+            )
         )
     from web.cmd_run import run_program
 
@@ -82,9 +89,7 @@ def run(
 @app.command()
 def check(
     chart: Annotated[Path, typer.Argument(help="A chart in .s7g source.")],
-    symbols: Annotated[
-        Optional[Path], typer.Option(help="A symbol table file.")  # noqa: UP045
-    ] = None,
+    symbols: Annotated[Path | None, typer.Option(help="A symbol table file.")] = None,
 ) -> None:
     """Print a chart's diagnostics; exit 0 clean, 1 warnings only, 2 errors."""
     from web.cmd_check import check_command
@@ -96,7 +101,7 @@ def check(
 def sim(
     chart: Annotated[Path, typer.Argument(help="A chart in .s7g source.")],
     stimulus: Annotated[
-        Optional[Path], typer.Option(help="JSONL stimulus: {\"at_ms\": 0, \"set\": {...}} a line.")  # noqa: UP045,E501
+        Path | None, typer.Option(help='JSONL stimulus: {"at_ms": 0, "set": {...}} a line.')
     ] = None,
     cycle_ms: Annotated[float, typer.Option(help="Virtual cycle time in ms.")] = 10.0,
     cycles: Annotated[int, typer.Option(help="Number of cycles to run.")] = 100,
@@ -104,21 +109,27 @@ def sim(
         str, typer.Option(help="Comma-separated addresses, symbols or FB pins to report.")
     ] = "",
     trace: Annotated[
-        Optional[Path], typer.Option(help="Write the per-cycle JSONL here (default stdout).")  # noqa: UP045,E501
+        Path | None, typer.Option(help="Write the per-cycle JSONL here (default stdout).")
     ] = None,
-    symbols: Annotated[
-        Optional[Path], typer.Option(help="A symbol table file.")  # noqa: UP045
-    ] = None,
+    symbols: Annotated[Path | None, typer.Option(help="A symbol table file.")] = None,
     plant: Annotated[
-        Optional[Path], typer.Option(help="A simulated plant (.py) run each cycle.")  # noqa: UP045
+        Path | None, typer.Option(help="A simulated plant (.py) run each cycle.")
     ] = None,
 ) -> None:
     """Run a chart on the virtual clock: stimulus in, one JSON line per cycle out (SPEC §4)."""
     from web.cmd_sim import sim_command
 
     raise typer.Exit(
-        sim_command(chart, stimulus=stimulus, cycle_ms=cycle_ms, cycles=cycles, watch=watch,
-                    trace=trace, symbols=symbols, plant=plant)
+        sim_command(
+            chart,
+            stimulus=stimulus,
+            cycle_ms=cycle_ms,
+            cycles=cycles,
+            watch=watch,
+            trace=trace,
+            symbols=symbols,
+            plant=plant,
+        )
     )
 
 

@@ -1,0 +1,707 @@
+"""The soft CPU: modes, startup, the scan cycle and error handling (SPEC.md §1.4–1.6).
+
+``scan()`` reads the clock once and runs one cycle in S7 order: commands queued since the
+last scan are applied, cycle monitoring judges the previous cycle, PII is read from the
+module side, OB1 runs, due cyclic interrupts OB30–OB38 run (highest priority first), PIQ is
+written to the modules. Outside RUN the module outputs are 0. A Python exception in a user
+block is a programming error: OB121 if loaded, else STOP — the process never dies.
+All timing uses *process time*: the clock minus the time spent in HOLD, so HOLD freezes
+timers, interrupts and monitoring while the diagnostic time stamps keep the real clock.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
+from functools import lru_cache
+from typing import Any
+
+from engine.address import Address, parse_address
+from engine.blocks import DB, FB, FC, OB, BlockKind, Decl, InstanceDB, is_stringy
+from engine.clock import Clock
+from engine.datatypes import check_value
+from engine.diagnostics import DiagnosticBuffer, EventId
+from engine.errors import AddressError, BlockError, TypeMismatch
+from engine.interrupts import CYCLIC_DEFAULT_MS, CyclicScheduler
+from engine.memory import AreaLengthError, Memory
+from engine.modes import CpuMode, KeySwitch, ModeRequest, SetKeySwitch, resolve_requests
+from engine.record import ScanRecord
+from engine.restart import RESTART, RestartType, parse_restart
+from engine.watchdog import CycleStatistics, Verdict, Watchdog
+
+CLOCK_MEMORY_HALF_MS = (50, 100, 200, 250, 400, 500, 800, 1000)
+"""Half periods of clock-memory bits 0..7 (periods 0.1 … 2.0 s, behaviour 15)."""
+
+_MISSING_STOP = {
+    80: EventId.STOP_OB80_MISSING,
+    82: EventId.STOP_OB82_MISSING,
+    83: EventId.STOP_OB83_MISSING,
+    84: EventId.STOP_OB84_MISSING,
+    85: EventId.STOP_OB85_MISSING,
+    86: EventId.STOP_OB86_MISSING,
+    87: EventId.STOP_OB87_MISSING,
+}
+
+
+class NestingOverflow(BlockError):
+    """Block nesting deeper than the CPU allows (B-stack overflow → STOP, behaviour 31)."""
+
+
+class _Fault(Exception):
+    """A user-block exception tagged with the innermost block it escaped from."""
+
+    def __init__(self, block: str, exc: BaseException) -> None:
+        super().__init__(block, exc)
+        self.block = block
+        self.exc = exc
+
+
+_INT_RANGES: dict[str, tuple[int, int]] = {
+    "INT": (-32768, 32767),
+    "DINT": (-(2**31), 2**31 - 1),
+    "TIME": (-(2**31), 2**31 - 1),
+    "BYTE": (0, 0xFF),
+    "WORD": (0, 0xFFFF),
+    "DWORD": (0, 0xFFFF_FFFF),
+}
+
+
+def _fits(type_name: str, value: object) -> bool:
+    """Fast path of ``check_value`` for the common cases (BOOL, in-range integers)."""
+    cls = value.__class__
+    if cls is bool:
+        return type_name == "BOOL"
+    if cls is int:
+        bounds = _INT_RANGES.get(type_name)
+        return bounds is not None and bounds[0] <= value <= bounds[1]  # type: ignore[operator]
+    return type_name == "OBJECT"
+
+
+@lru_cache(maxsize=4096)
+def _addr(text: str) -> Address:
+    return parse_address(text)
+
+
+@dataclass(slots=True)
+class Pending:
+    """A submitted command: ``done`` once applied at a scan boundary, with result or error."""
+
+    command: object
+    done: bool = False
+    result: object = None
+    error: str = ""
+
+
+class CallContext:
+    """What a block body sees during a scan: the CPU, memory, process time, cycle number."""
+
+    __slots__ = ("cpu", "cycle", "depth", "mem", "now_ns", "ob", "start_info")
+
+    def __init__(self, cpu: Cpu) -> None:
+        self.cpu = cpu
+        self.mem = cpu.mem
+        self.now_ns = 0
+        self.cycle = 0
+        self.ob = 0
+        self.depth = 0
+        self.start_info: dict[str, Any] = {}
+
+    def emit(self, event: object) -> None:
+        """Add ``event`` to this scan's ``ScanRecord.events``."""
+        self.cpu._events.append(event)
+
+    def alarm(self, alarm: object) -> None:
+        """Add ``alarm`` to this scan's ``ScanRecord.alarms``."""
+        self.cpu._alarms.append(alarm)
+
+    def call(
+        self,
+        block: FB | FC | InstanceDB | str | int,
+        instance: InstanceDB | int | None = None,
+        **params: object,
+    ) -> dict[str, object]:
+        """Call an FB/SFB (with its instance DB) or an FC/SFC; return its outputs by name.
+
+        A ``str`` actual for a non-string parameter is an operand (``"MW10"``); OUT and
+        IN_OUT operands receive the values after the call (behaviours 33, 34).
+        """
+        blk: OB | FB | FC | DB
+        if isinstance(block, FB | FC):
+            blk = block
+        elif isinstance(block, InstanceDB):
+            instance, blk = block, block.fb
+        else:
+            blk = self.cpu.block(block)
+        if isinstance(blk, FB):
+            if instance is None:
+                raise BlockError(f"{blk.label} {blk.name!r} called without an instance DB")
+            idb = instance if isinstance(instance, InstanceDB) else self.cpu.instance_db(instance)
+            if idb.fb is not blk and idb.fb != blk:
+                raise BlockError(f"{idb.name} is an instance of {idb.fb.label}, not {blk.label}")
+            return self._call_fb(blk, idb, params)
+        if isinstance(blk, FC):
+            return self._call_fc(blk, params)
+        raise BlockError(f"{blk.label} cannot be called")
+
+    def _enter(self, label: str) -> None:
+        self.depth += 1
+        if self.depth > self.cpu.max_nesting:
+            self.depth -= 1
+            raise NestingOverflow(f"block nesting deeper than {self.cpu.max_nesting} at {label}")
+
+    def _call_fb(self, blk: FB, idb: InstanceDB, params: dict[str, object]) -> dict[str, object]:
+        values = idb.values
+        table = blk.params
+        writes: list[tuple[str, str, str]] | None = None
+        for name, actual in params.items():
+            spec = table.get(name)
+            if spec is None or spec[0] is Decl.STAT:
+                raise BlockError(f"{blk.label} has no parameter {name!r}")
+            decl, type_name = spec
+            if decl is Decl.OUT:
+                if not isinstance(actual, str):
+                    raise BlockError(f"{blk.label}.{name}: an OUT needs an operand, not {actual!r}")
+                writes = writes or []
+                writes.append((name, actual, type_name))
+                continue
+            if isinstance(actual, str) and not is_stringy(type_name):
+                if decl is Decl.IN_OUT:
+                    writes = writes or []
+                    writes.append((name, actual, type_name))
+                actual = self.mem.read_as(_addr(actual), type_name)
+            elif not _fits(type_name, actual):
+                actual = check_value(type_name, actual)
+            values[name] = actual
+        if self.depth >= self.cpu.max_nesting:
+            raise NestingOverflow(
+                f"block nesting deeper than {self.cpu.max_nesting} at {blk.label}"
+            )
+        self.depth += 1
+        try:
+            blk.body(self, idb)
+        except _Fault:
+            raise
+        except Exception as exc:
+            raise _Fault(blk.label, exc) from exc
+        finally:
+            self.depth -= 1
+        if writes:
+            for name, operand, type_name in writes:
+                self.mem.write_as(_addr(operand), type_name, values[name])
+        out: dict[str, object] = {}
+        for name in blk.out_names:
+            out[name] = values[name]
+        return out
+
+    def _call_fc(self, blk: FC, params: dict[str, object]) -> dict[str, object]:
+        table = blk.params
+        missing = [n for n in table if n not in params]
+        if missing:
+            raise BlockError(f"{blk.label} {blk.name!r}: parameter(s) {', '.join(missing)} missing")
+        args: dict[str, object] = {}
+        refs: list[tuple[str, str, str]] = []
+        for name, actual in params.items():
+            spec = table.get(name)
+            if spec is None:
+                raise BlockError(f"{blk.label} has no parameter {name!r}")
+            decl, type_name = spec
+            if isinstance(actual, str) and not is_stringy(type_name):
+                args[name] = self.mem.read_as(_addr(actual), type_name)
+                if decl is not Decl.IN:
+                    refs.append((name, actual, type_name))
+            elif decl is not Decl.IN:
+                raise BlockError(f"{blk.label}.{name}: {decl} needs an operand, not {actual!r}")
+            else:
+                args[name] = check_value(type_name, actual)
+        self._enter(blk.label)
+        try:
+            ret = blk.body(self, args)
+        except _Fault:
+            raise
+        except Exception as exc:
+            raise _Fault(blk.label, exc) from exc
+        finally:
+            self.depth -= 1
+        out: dict[str, object] = {}
+        for name, operand, type_name in refs:
+            self.mem.write_as(_addr(operand), type_name, args[name])
+            out[name] = args[name]
+        if blk.ret_type is not None:
+            out["RET_VAL"] = ret
+        return out
+
+
+@dataclass(slots=True)
+class _Startup:
+    restart: RestartType
+    hot_blockers: set[str] = field(default_factory=set)
+
+
+class Cpu:
+    """One soft CPU (docs/contracts.md). Power-on leaves it in STOP (behaviour 1)."""
+
+    def __init__(
+        self,
+        clock: Clock,
+        *,
+        memory: Memory | None = None,
+        key: KeySwitch = KeySwitch.RUN_P,
+        max_cycle_ms: float = 150.0,
+        min_cycle_ms: float = 0.0,
+        diag_capacity: int = 100,
+        clock_memory: int | None = None,
+        max_nesting: int = 16,
+        hot_restart_enabled: bool = True,
+        keep_outputs_on_hot_restart: bool = False,
+        name: str = "cpu",
+    ) -> None:
+        self.clock = clock
+        self.mem = memory if memory is not None else Memory()
+        self.name = name
+        self.mode = CpuMode.STOP
+        self.key = key
+        self.diagnostics = DiagnosticBuffer(diag_capacity)
+        self.watchdog = Watchdog(max_cycle_ms, min_cycle_ms)
+        self.stats = CycleStatistics()
+        self.interrupts = CyclicScheduler()
+        self.clock_memory = clock_memory
+        self.max_nesting = max_nesting
+        self.hot_restart_enabled = hot_restart_enabled
+        self.keep_outputs_on_hot_restart = keep_outputs_on_hot_restart
+        self.blocks: dict[str, OB | FB | FC | DB] = {}
+        self.obs: dict[int, OB] = {}
+        self.instance_dbs: dict[int, InstanceDB] = {}
+        self.cycle = 0
+        self.last_restart: RestartType | None = None
+        self.hot_blockers: set[str] = {"program download"}
+        """Why only a warm restart is possible now (behaviour 6); cleared by a warm restart."""
+        self._commands: deque[Pending] = deque()
+        self._ctx = CallContext(self)
+        self._events: list[object] = []
+        self._alarms: list[object] = []
+        self._ran: list[int] = []
+        self._held_ns = 0
+        self._hold_since: int | None = None
+        self._last_ob1: int | None = None
+        self._now = 0
+        self._raw = 0
+        self._pq_seen = bytes(self.mem.periph_out)
+
+    # ---- program ---------------------------------------------------------------------------
+
+    def load(self, *blocks: OB | FB | FC | DB | Iterable[Any]) -> None:
+        """Download blocks (a later block replaces one with the same label); DBs are created."""
+        for item in blocks:
+            if isinstance(item, OB | FB | FC | DB):
+                self._load_one(item)
+            elif isinstance(item, Iterable) and not isinstance(item, str | bytes):
+                self.load(*item)
+            else:
+                raise BlockError(f"cannot load {item!r}: not a block")
+        self.hot_blockers.add("program download")
+
+    def _load_one(self, block: OB | FB | FC | DB) -> None:
+        self.blocks[block.label] = block
+        if isinstance(block, OB):
+            self.obs[block.number] = block
+        elif isinstance(block, DB):
+            if block.number in self.instance_dbs:
+                raise BlockError(f"DB{block.number} is already an instance DB")
+            self.mem.dbs.pop(block.number, None)
+            self.mem.create_db(
+                block.number, block.size, init=block.init, retain=block.retain, name=block.name
+            )
+
+    def block(self, ref: str | int) -> OB | FB | FC | DB:
+        """A loaded block by label (``'FC2'``, ``'SFB4'``), name, or FB/FC number."""
+        if isinstance(ref, int):
+            found = self.blocks.get(f"FB{ref}") or self.blocks.get(f"FC{ref}")
+        else:
+            key = "".join(ref.split()).upper()
+            found = self.blocks.get(key)
+            if found is None:
+                found = next(
+                    (b for b in self.blocks.values() if getattr(b, "name", "") == ref), None
+                )
+        if found is None:
+            raise BlockError(f"block {ref} is not loaded")
+        return found
+
+    def create_instance_db(self, number: int, fb: FB, *, name: str | None = None) -> InstanceDB:
+        """Create instance DB ``number`` from a loaded FB's interface (or an SFB's)."""
+        if fb.kind is BlockKind.FB and self.blocks.get(fb.label) != fb:
+            raise BlockError(f"{fb.label} {fb.name!r} must be loaded before its instance DB")
+        if number in self.instance_dbs or number in self.mem.dbs:
+            raise BlockError(f"DB{number} already exists")
+        idb = InstanceDB(number, fb, name=name)
+        self.instance_dbs[number] = idb
+        return idb
+
+    def instance_db(self, number: int) -> InstanceDB:
+        try:
+            return self.instance_dbs[number]
+        except KeyError:
+            raise BlockError(f"instance DB{number} is not loaded") from None
+
+    # ---- modes -----------------------------------------------------------------------------
+
+    def submit(self, command: object) -> Pending:
+        """Queue a command (ModeRequest, SetKeySwitch, callable ``f(cpu)`` or ``.apply(cpu)``);
+        it is applied at the next scan boundary, never in the caller's thread."""
+        pending = Pending(command)
+        self._commands.append(pending)
+        return pending
+
+    def set_key(self, position: KeySwitch) -> None:
+        """Turn the key switch; to STOP stops the CPU (transition 8)."""
+        self.key = KeySwitch(position)
+        if self.key is KeySwitch.STOP and self.mode is not CpuMode.STOP:
+            self._go_stop(EventId.STOP_BY_SWITCH, "", "key switch turned to STOP")
+
+    def start(self, restart: str | RestartType = "warm") -> ScanRecord:
+        """STOP → STARTUP (OB100/101/102) → RUN; refused with the key in STOP (behaviour 1)."""
+        self._begin(self.clock.now_ns())
+        mark = self.diagnostics.total
+        self._startup(parse_restart(restart))
+        return self._record(mark, 0)
+
+    def stop(self, reason: str = "") -> None:
+        """Go to STOP now (PG STOP or SFC46 STP); module outputs go to 0."""
+        if self.mode is not CpuMode.STOP:
+            self._go_stop(EventId.STOP_BY_REQUEST, "", reason or "STOP requested")
+
+    def hold(self) -> None:
+        """RUN/STARTUP → HOLD (breakpoint): timers and monitoring freeze, outputs disabled."""
+        if self.mode in (CpuMode.RUN, CpuMode.STARTUP):
+            raw = self.clock.now_ns()
+            self._hold_since = raw
+            self.mode = CpuMode.HOLD
+            self.mem.periph_out[:] = bytes(len(self.mem.periph_out))
+            self.diagnostics.record(raw, EventId.HOLD_ENTERED, "", "RUN → HOLD")
+
+    def resume(self) -> None:
+        """HOLD → RUN: the frozen process time continues where it stopped (behaviour 51)."""
+        if self.mode is CpuMode.HOLD and self._hold_since is not None:
+            raw = self.clock.now_ns()
+            self._held_ns += raw - self._hold_since
+            self._hold_since = None
+            self.mode = CpuMode.RUN
+            self.diagnostics.record(raw, EventId.HOLD_LEFT, "", "HOLD → RUN")
+
+    def memory_reset(self) -> None:
+        """MRES (STOP only): program and operand areas cleared; diagnostics and key kept
+        (behaviour 54)."""
+        if self.mode is not CpuMode.STOP:
+            raise BlockError("memory reset is possible only in STOP")
+        self.blocks.clear()
+        self.obs.clear()
+        self.instance_dbs.clear()
+        self.mem.dbs.clear()
+        self.mem.reset_to_initial()
+        self.hot_blockers.add("memory reset")
+        self.cycle = 0
+        self.diagnostics.record(self.clock.now_ns(), EventId.MEMORY_RESET, "", "memory reset")
+
+    def process_ns(self) -> int:
+        """The clock minus time spent in HOLD: what timers, interrupts and monitoring see."""
+        raw = self.clock.now_ns()
+        since = self._hold_since
+        return (since if since is not None else raw) - self._held_ns
+
+    def retrigger(self) -> None:
+        """SFC43 RE_TRIGR: restart cycle-time monitoring for this cycle."""
+        self.watchdog.retrigger()
+
+    def update_pii(self) -> None:
+        """Read the module inputs into the process-image input table (also SFC26 UPDAT_PI)."""
+        n = len(self.mem.inputs)
+        self.mem.inputs[:] = self.mem.periph_in[:n]
+
+    def update_piq(self) -> None:
+        """Write the process-image output table to the modules (also SFC27 UPDAT_PO)."""
+        n = len(self.mem.outputs)
+        if self.mode is CpuMode.RUN:
+            self.mem.periph_out[:n] = self.mem.outputs
+
+    def raise_async_error(self, ob: int, info: dict[str, Any] | None = None) -> None:
+        """An asynchronous error event for OB80..OB87 (module fault, rack failure ...).
+
+        Runs the OB if loaded; without it the CPU stops, except OB81 (behaviour 28).
+        """
+        raw = self.clock.now_ns()
+        self.diagnostics.record(
+            raw, EventId.ASYNC_ERROR | (ob - 80), f"OB{ob}", "asynchronous error"
+        )
+        if self.mode is not CpuMode.RUN:
+            return
+        if ob in self.obs:
+            self._ctx.now_ns = self.process_ns()
+            self._run_ob(ob, dict(info or {}))
+        elif ob != 81:
+            self._go_stop(_MISSING_STOP.get(ob, EventId.STOP_OB85_MISSING), f"OB{ob}", "not loaded")
+
+    # ---- the scan --------------------------------------------------------------------------
+
+    def scan(self) -> ScanRecord:
+        """One cycle; reads the clock once and returns what happened."""
+        raw = self.clock.now_ns()
+        self._begin(raw)
+        mark = self.diagnostics.total
+        self._drain()
+        cycle_ns = 0
+        if self.mode is CpuMode.RUN:
+            cycle_ns = self._cycle(raw - self._held_ns)
+        return self._record(mark, cycle_ns)
+
+    def _begin(self, raw: int) -> None:
+        self._raw = raw
+        self._events = []
+        self._alarms = []
+        self._ran = []
+
+    def _record(self, mark: int, cycle_ns: int) -> ScanRecord:
+        pq = self.mem.periph_out
+        outputs: dict[str, int] = {}
+        if pq != self._pq_seen:
+            seen = self._pq_seen
+            outputs = {f"PQB{i}": b for i, b in enumerate(pq) if i >= len(seen) or seen[i] != b}
+            self._pq_seen = bytes(pq)
+        return ScanRecord(
+            self.cycle,
+            self._raw,
+            cycle_ns,
+            self.mode,
+            tuple(self._events),
+            outputs,
+            self.diagnostics.since(mark),
+            tuple(self._alarms),
+            tuple(self._ran),
+        )
+
+    def _cycle(self, now: int) -> int:
+        self._now = now
+        ctx = self._ctx
+        ctx.now_ns = now
+        last = self._last_ob1
+        if last is not None and now - last < self.watchdog.min_cycle_ns:
+            self._interrupts(now)  # interrupt OBs still run in the minimum-cycle wait
+            return 0
+        cycle_ns = 0
+        if last is not None:
+            cycle_ns = now - last
+            self.stats.add(cycle_ns)
+            verdict = self.watchdog.check(cycle_ns, has_ob80=80 in self.obs)
+            if verdict is not Verdict.OK:
+                limit = self.watchdog.max_cycle_ns // 1_000_000
+                msg = f"cycle time {cycle_ns / 1e6:.1f} ms exceeds {limit} ms"
+                self.diagnostics.record(self._raw, EventId.CYCLE_TIME_EXCEEDED, "OB1", msg)
+                if verdict is Verdict.STOP:
+                    if 80 in self.obs:
+                        self._go_stop(EventId.STOP_CYCLE_TIME, "OB80", "twice the maximum")
+                    else:
+                        self._go_stop(EventId.STOP_OB80_MISSING, "OB80", "not loaded")
+                    return cycle_ns
+                self._run_ob(80, {"FLT_ID": 0x01, "CYCLE_MS": cycle_ns // 1_000_000})
+                if self.mode is not CpuMode.RUN:
+                    return cycle_ns
+        self._last_ob1 = now
+        self.cycle += 1
+        ctx.cycle = self.cycle
+        if self.clock_memory is not None:
+            self._clock_memory(now)
+        self.update_pii()
+        self._run_ob(1, self.stats.start_info_ms())
+        if self.mode is CpuMode.RUN:
+            self._interrupts(now)
+        if self.mode is CpuMode.RUN:
+            self.update_piq()
+        return cycle_ns
+
+    def _clock_memory(self, now: int) -> None:
+        assert self.clock_memory is not None
+        ms = now // 1_000_000
+        value = 0
+        for bit, half in enumerate(CLOCK_MEMORY_HALF_MS):
+            value |= ((ms // half) & 1) << bit
+        self.mem.markers[self.clock_memory] = value
+
+    def _interrupts(self, now: int) -> None:
+        for ob, lost in self.interrupts.due(now):
+            if self.mode is not CpuMode.RUN:
+                return
+            if lost:
+                self.diagnostics.record(
+                    self._raw, EventId.OB_REQUEST_ERROR, f"OB{ob}", f"{lost} start event(s) lost"
+                )
+            if ob in self.obs:
+                period = self.interrupts.active[ob]
+                self._run_ob(ob, {"PHASE_OFFSET": period.phase_ns // 1_000_000, "LOST": lost})
+                continue
+            self.diagnostics.record(
+                self._raw, EventId.INTERRUPT_OB_MISSING, f"OB{ob}", "not loaded"
+            )
+            if 85 in self.obs:
+                self._run_ob(85, {"OB": ob})
+            else:
+                self._go_stop(EventId.STOP_OB85_MISSING, "OB85", f"not loaded (event for OB{ob})")
+
+    def _run_ob(self, number: int, start_info: dict[str, Any]) -> None:
+        block = self.obs.get(number)
+        if block is None:
+            return
+        ctx = self._ctx
+        ctx.ob = number
+        ctx.depth = 0
+        ctx.start_info = start_info
+        self._ran.append(number)
+        try:
+            block.body(ctx)
+        except _Fault as fault:
+            self._program_error(number, fault.block, fault.exc)
+        except Exception as exc:
+            self._program_error(number, block.label, exc)
+
+    def _program_error(self, ob: int, block: str, exc: BaseException) -> None:
+        event = _classify(exc)
+        message = f"{type(exc).__name__}: {exc}"
+        self.diagnostics.record(self._raw, event, block, message, getattr(exc, "address", ""))
+        if isinstance(exc, NestingOverflow | RecursionError):
+            self.hot_blockers.add("stack overflow")
+            self._go_stop(EventId.STACK_OVERFLOW, block, "block stack overflow")
+        elif ob == 121 or 121 not in self.obs:
+            self._go_stop(EventId.STOP_OB121_MISSING, block, "programming error, OB121 not loaded")
+        else:
+            info = {"SW_FLT": event & 0xFF, "BLOCK": block, "MESSAGE": message, "FAULT_OB": ob}
+            info["EXCEPTION"] = exc
+            self._run_ob(121, info)
+
+    def _go_stop(self, event: int, block: str, message: str) -> None:
+        self.mode = CpuMode.STOP
+        self._hold_since = None
+        self.mem.periph_out[:] = bytes(len(self.mem.periph_out))
+        self.diagnostics.record(self.clock.now_ns(), event, block, message)
+
+    # ---- commands and startup ---------------------------------------------------------------
+
+    def _drain(self) -> None:
+        requests: list[ModeRequest] = []
+        while self._commands:
+            pending = self._commands.popleft()
+            command = pending.command
+            try:
+                if isinstance(command, ModeRequest):
+                    requests.append(command)
+                elif isinstance(command, SetKeySwitch):
+                    self.set_key(command.position)
+                elif hasattr(command, "apply"):
+                    pending.result = command.apply(self)
+                elif callable(command):
+                    pending.result = command(self)
+                else:
+                    raise BlockError(f"unknown command {command!r}")
+            except Exception as exc:
+                pending.error = f"{type(exc).__name__}: {exc}"
+                self.diagnostics.record(self._raw, EventId.COMMAND_FAILED, "", pending.error)
+            pending.done = True
+        if requests:
+            self._apply_mode(requests)
+
+    def _apply_mode(self, requests: list[ModeRequest]) -> None:
+        """Several requests at one boundary: the highest priority wins (behaviour 2)."""
+        winner = resolve_requests(r.mode for r in requests)
+        request = next(r for r in requests if r.mode is winner)
+        if winner is CpuMode.STOP:
+            self.stop(request.reason)
+        elif winner is CpuMode.HOLD:
+            self.hold()
+        elif self.mode is CpuMode.HOLD:
+            self.resume()
+        elif self.mode is CpuMode.STOP:
+            self._startup(parse_restart(request.restart))
+
+    def _startup(self, restart: RestartType) -> None:
+        raw = self._raw
+        if self.mode is not CpuMode.STOP:
+            self._go_stop(EventId.STOP_BY_REQUEST, "", f"{restart} restart requested")
+        if self.key is KeySwitch.STOP:
+            self.diagnostics.record(raw, EventId.STARTUP_REFUSED, "", "key switch is in STOP")
+            return
+        deselected = sorted(self.interrupts.deselected() & self.obs.keys())
+        if deselected:
+            msg = f"OB{deselected[0]} is loaded but deselected: startup aborted"
+            self.diagnostics.record(raw, EventId.STARTUP_REFUSED, f"OB{deselected[0]}", msg)
+            return
+        if restart is RestartType.HOT and (self.hot_blockers or not self.hot_restart_enabled):
+            why = ", ".join(sorted(self.hot_blockers)) or "hot restart not enabled"
+            self.diagnostics.record(
+                raw, EventId.STARTUP_REFUSED, "", f"hot restart refused ({why}): warm restart"
+            )
+            restart = RestartType.WARM
+        rule = RESTART[restart]
+        self.mode = CpuMode.STARTUP
+        self.diagnostics.record(raw, EventId.STOP_TO_STARTUP, f"OB{rule.ob}", f"{restart} restart")
+        mem = self.mem
+        if rule.reload_dbs:
+            mem.reset_to_initial()
+            for idb in self.instance_dbs.values():
+                idb.reset()
+        elif rule.clear_nonretentive_mtc:
+            mem.clear_non_retentive()
+        if rule.clear_piq and not rule.residual_cycle:
+            mem.outputs[:] = bytes(len(mem.outputs))
+        if rule.clear_pii:
+            mem.inputs[:] = bytes(len(mem.inputs))
+        mem.periph_out[:] = bytes(len(mem.periph_out))
+        self._held_ns = 0
+        self._hold_since = None
+        self._last_ob1 = None
+        self.stats.reset()
+        if restart is not RestartType.HOT:
+            self.cycle = 0
+        ctx = self._ctx
+        ctx.now_ns = raw
+        ctx.cycle = self.cycle
+        self._run_ob(rule.ob, {"RESTART": str(restart)})
+        if self.mode is not CpuMode.STARTUP:
+            if restart is RestartType.WARM:
+                self.hot_blockers.add("aborted warm restart")
+            return
+        if restart is RestartType.HOT and self.keep_outputs_on_hot_restart:
+            pass
+        elif restart is RestartType.HOT:
+            mem.outputs[:] = bytes(len(mem.outputs))
+        self.update_pii()
+        t_run = self.clock.now_ns()  # STOP→RUN instant, after the (unmonitored) startup program
+        self.mode = CpuMode.RUN
+        self.last_restart = restart
+        if restart is not RestartType.HOT:
+            self.hot_blockers.clear()
+        self.diagnostics.record(t_run, EventId.STARTUP_TO_RUN, "", f"STARTUP → RUN ({restart})")
+        cyclic = {ob for ob in self.obs if ob in CYCLIC_DEFAULT_MS}
+        cyclic |= {ob for ob in CYCLIC_DEFAULT_MS if self.interrupts.is_configured(ob)}
+        self.interrupts.arm(cyclic, t_run)
+
+
+def _classify(exc: BaseException) -> int:
+    """Event id 16#25xx of a programming error (seeds-runtime §2.1 OB121 SW_FLT)."""
+    if isinstance(exc, AreaLengthError):
+        return 0x2500 | exc.sw_flt
+    if isinstance(exc, AddressError):
+        return EventId.AREA_ERROR
+    if isinstance(exc, TypeMismatch):
+        return EventId.TYPE_ERROR
+    if isinstance(exc, BlockError):
+        text = str(exc)
+        for kind, event in (
+            ("FC", EventId.FC_NOT_LOADED),
+            ("FB", EventId.FB_NOT_LOADED),
+            ("DB", EventId.DB_NOT_LOADED),
+        ):
+            if f"block {kind}" in text or f"instance {kind}" in text:
+                return event
+        return EventId.PYTHON_EXCEPTION
+    return EventId.PYTHON_EXCEPTION
+
+
+CommandFn = Callable[[Cpu], object]

@@ -1,0 +1,89 @@
+"""The diagnostic buffer (seeds-runtime §7.2, behaviour 52).
+
+A ring of fixed length: the newest entry overwrites the oldest. The user program cannot
+clear it; it survives restarts and memory reset (it belongs to the CPU, not to memory).
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Iterator
+from enum import IntEnum
+
+from engine.record import DiagEntry
+
+
+class EventId(IntEnum):
+    """Event ids 16#CEnn used by the runtime (seeds-runtime §7.4; 16#25FF is ours)."""
+
+    STOP_TO_STARTUP = 0x4301
+    STARTUP_TO_RUN = 0x4302
+    STOP_BY_SWITCH = 0x4303
+    STOP_BY_REQUEST = 0x4304
+    HOLD_ENTERED = 0x4305
+    HOLD_LEFT = 0x4306
+    MEMORY_RESET = 0x4307
+    STARTUP_REFUSED = 0x4309
+    STOP_OB121_MISSING = 0x4562
+    STOP_OB80_MISSING = 0x4564
+    STOP_CYCLE_TIME = 0x4580
+    STOP_OB82_MISSING = 0x4565
+    STOP_OB83_MISSING = 0x4566
+    STOP_OB84_MISSING = 0x4567
+    STOP_OB85_MISSING = 0x4568
+    STOP_OB87_MISSING = 0x4569
+    STOP_OB86_MISSING = 0x456A
+    CYCLE_TIME_EXCEEDED = 0x3501
+    OB_REQUEST_ERROR = 0x3502
+    STACK_OVERFLOW = 0x3574
+    ASYNC_ERROR = 0x3900
+    INTERRUPT_OB_MISSING = 0x35A1
+    AREA_ERROR = 0x2524
+    DB_NOT_LOADED = 0x253A
+    FC_NOT_LOADED = 0x253C
+    FB_NOT_LOADED = 0x253E
+    TYPE_ERROR = 0x2521
+    PYTHON_EXCEPTION = 0x25FF
+    COMMAND_FAILED = 0x5FFF
+
+
+class DiagnosticBuffer:
+    """A fixed-length ring of ``DiagEntry``: iteration oldest first, ``latest()`` newest first."""
+
+    __slots__ = ("_entries", "capacity", "total")
+
+    def __init__(self, capacity: int = 100) -> None:
+        if capacity < 1:
+            raise ValueError("a diagnostic buffer holds at least one entry")
+        self.capacity = capacity
+        self._entries: deque[DiagEntry] = deque(maxlen=capacity)
+        self.total = 0
+        """Entries ever added (a sequence number: the last ``total - n`` are new)."""
+
+    def add(self, entry: DiagEntry) -> DiagEntry:
+        self._entries.append(entry)
+        self.total += 1
+        return entry
+
+    def record(
+        self, t_ns: int, event_id: int, block: str = "", message: str = "", address: str = ""
+    ) -> DiagEntry:
+        """Append an entry built from its fields and return it."""
+        return self.add(DiagEntry(t_ns, int(event_id), block, message, address))
+
+    def since(self, total: int) -> tuple[DiagEntry, ...]:
+        """Entries added after the buffer's ``total`` was ``total`` (at most ``capacity``)."""
+        n = min(self.total - total, len(self._entries))
+        if n <= 0:
+            return ()
+        return tuple(self._entries)[-n:]
+
+    def latest(self) -> list[DiagEntry]:
+        """Newest first, as a programming device lists them (No. 1 = newest)."""
+        return list(reversed(self._entries))
+
+    def __iter__(self) -> Iterator[DiagEntry]:
+        return iter(tuple(self._entries))
+
+    def __len__(self) -> int:
+        return len(self._entries)

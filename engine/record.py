@@ -1,0 +1,43 @@
+"""The one trace format: what a scan did (DESIGN.md "The core is a pure function").
+
+``ScanRecord`` is frozen and cheap (slots, tuples, no copies of memory); everybody — tests,
+the web view, the bus, the recorder, persistence — reads the same record.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from engine.modes import CpuMode
+
+
+@dataclass(frozen=True, slots=True)
+class DiagEntry:
+    """One diagnostic-buffer entry: time, event id 16#xxxx, block, message (seeds-runtime §7.2)."""
+
+    t_ns: int
+    event_id: int
+    block: str = ""
+    message: str = ""
+    address: str = ""
+
+    def __str__(self) -> str:
+        where = f" {self.block}" if self.block else ""
+        at = f" @{self.address}" if self.address else ""
+        return f"{self.t_ns / 1e9:.3f}s 16#{self.event_id:04X}{where}{at}: {self.message}"
+
+
+@dataclass(frozen=True, slots=True)
+class ScanRecord:
+    """What one scan (or a startup) did: cycle, time, mode, emitted events, changed PQ bytes."""
+
+    cycle: int
+    t_ns: int
+    cycle_ns: int
+    mode: CpuMode
+    events: tuple[object, ...] = ()
+    outputs: dict[str, int] = field(default_factory=dict)
+    diagnostics: tuple[DiagEntry, ...] = ()
+    alarms: tuple[object, ...] = ()
+    ran: tuple[int, ...] = ()
+    """Numbers of the OBs that ran in this scan, in order (OB1, OB35, OB80, ...)."""

@@ -1,0 +1,85 @@
+"""One table: restart type → startup OB and what each keeps or clears (SPEC.md §1.4).
+
+Seeds-runtime §3.2 / Table 9-4 and behaviours 3–6. ``True`` in a ``clear_*`` column means
+the area is reset; DBs are "reloaded" from their load-memory initial values.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import StrEnum
+
+
+class RestartType(StrEnum):
+    """Startup types: warm (OB100), hot (OB101), cold (OB102)."""
+
+    WARM = "warm"
+    HOT = "hot"
+    COLD = "cold"
+
+
+@dataclass(frozen=True, slots=True)
+class RestartRule:
+    """What one startup type does to memory before its startup OB runs."""
+
+    ob: int
+    clear_nonretentive_mtc: bool
+    clear_retentive_mtc: bool
+    reload_dbs: bool
+    """Global DBs and instance DBs back to their initial values."""
+    delete_runtime_dbs: bool
+    """DBs created at run time (SFC22), not by a download, are deleted."""
+    clear_piq: bool
+    clear_pii: bool
+    residual_cycle: bool
+
+
+RESTART: dict[RestartType, RestartRule] = {
+    RestartType.WARM: RestartRule(
+        ob=100,
+        clear_nonretentive_mtc=True,
+        clear_retentive_mtc=False,
+        reload_dbs=False,
+        delete_runtime_dbs=False,
+        clear_piq=True,
+        clear_pii=True,
+        residual_cycle=False,
+    ),
+    RestartType.HOT: RestartRule(
+        ob=101,
+        clear_nonretentive_mtc=False,
+        clear_retentive_mtc=False,
+        reload_dbs=False,
+        delete_runtime_dbs=False,
+        clear_piq=True,  # after the residual cycle unless "keep outputs at hot restart"
+        clear_pii=False,
+        residual_cycle=True,
+    ),
+    RestartType.COLD: RestartRule(
+        ob=102,
+        clear_nonretentive_mtc=True,
+        clear_retentive_mtc=True,
+        reload_dbs=True,
+        delete_runtime_dbs=True,
+        clear_piq=True,
+        clear_pii=True,
+        residual_cycle=False,
+    ),
+}
+
+
+HOT_RESTART_BLOCKERS: tuple[str, ...] = (
+    "memory reset",
+    "program download",
+    "stack overflow",
+    "aborted warm restart",
+)
+"""Causes after which only a warm restart is allowed (behaviour 6, [002:L2722-2730])."""
+
+
+def parse_restart(text: str | RestartType) -> RestartType:
+    """``'warm'``/``'hot'``/``'cold'`` (any case) as a ``RestartType``; ValueError otherwise."""
+    try:
+        return RestartType(str(text).lower())
+    except ValueError:
+        raise ValueError(f"unknown restart type {text!r} (warm, hot or cold)") from None

@@ -1,0 +1,109 @@
+"""CompiledChart: a chart as immutable, int-indexed data plus one compiled code object
+(DESIGN "A compiled chart is immutable data"; SPEC §2.1).
+
+Steps and transitions are numbered ``0..n-1`` in definition order (sequence by sequence).
+``leaving[i]`` lists the transitions leaving step ``i`` in priority order (written order,
+SPEC §2.2 4b, §3). All conditions and action programs of the chart are one generated Python
+module (``source``), compiled once; ``bind(mem)`` executes it against one CPU's memory and
+returns the ``Program`` (tuples of functions indexed like the steps/transitions).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from types import CodeType
+from typing import Any
+
+from sequencer.model import Chart, ChartOptions
+from steps.expressions import RUNTIME as EXPR_RUNTIME
+from steps.operands import RUNTIME as OPERAND_RUNTIME
+from steps.operands import area_buffer
+
+
+@dataclass(frozen=True, slots=True)
+class Program:
+    """The generated functions of a chart bound to one memory.
+
+    ``tcond[j](st) -> (bool, crit)``; ``ilc[i]``/``svc[i]`` the same or None (no interlock /
+    supervision); ``act[i](st, R, ev, c_ok, zero)``; ``fin[i](st, R, ev)``;
+    ``before(st, R)``/``after(st, R)`` the permanent instructions."""
+
+    tcond: tuple[Any, ...]
+    ilc: tuple[Any, ...]
+    svc: tuple[Any, ...]
+    act: tuple[Any, ...]
+    fin: tuple[Any, ...]
+    before: Any
+    after: Any
+
+
+@dataclass(frozen=True)
+class CompiledChart:
+    chart: Chart
+    options: ChartOptions
+    parameters: str
+    step_numbers: tuple[int, ...]
+    step_names: tuple[str, ...]
+    step_seq: tuple[int, ...]  # sequence index of each step
+    initial: tuple[int, ...]  # indices of the initial steps
+    has_interlock: tuple[bool, ...]
+    has_supervision: tuple[bool, ...]
+    transition_numbers: tuple[int, ...]
+    transition_names: tuple[str, ...]
+    tr_seq: tuple[int, ...]
+    tr_src: tuple[tuple[int, ...], ...]  # preceding step indices
+    tr_dst: tuple[tuple[int, ...], ...]  # following step indices; () = branch stop
+    leaving: tuple[tuple[int, ...], ...]  # per step: leaving transitions, priority order
+    seq_numbers: tuple[int, ...]
+    seq_names: tuple[str, ...]
+    seq_steps: tuple[tuple[int, ...], ...]
+    crit_labels: tuple[tuple[str, ...], ...]  # per transition: contact texts
+    il_labels: tuple[tuple[str, ...], ...]
+    sv_labels: tuple[tuple[str, ...], ...]
+    var_inits: dict[str, Any]
+    var_types: dict[str, str]
+    source: str
+    code: CodeType
+    buffers: tuple[tuple[str, int | None], ...]
+    consts: dict[str, Any]
+    step_index: dict[int, int] = field(default_factory=dict)
+    transition_index: dict[int, int] = field(default_factory=dict)
+    warnings: tuple[str, ...] = ()
+
+    @property
+    def name(self) -> str:
+        return self.chart.name
+
+    @property
+    def n_steps(self) -> int:
+        return len(self.step_numbers)
+
+    @property
+    def n_transitions(self) -> int:
+        return len(self.transition_numbers)
+
+    def bind(self, mem: Any) -> Program:
+        """Execute the generated module against ``mem`` (once per FB instance)."""
+        ns: dict[str, Any] = {"__builtins__": __builtins__, "_mem": mem}
+        ns.update(OPERAND_RUNTIME)
+        ns.update(EXPR_RUNTIME)
+        ns.update(self.consts)
+        for k, (area, db) in enumerate(self.buffers):
+            ns[f"_m{k}"] = area_buffer(mem, area, db)
+        exec(self.code, ns)
+        n, m = self.n_steps, self.n_transitions
+        return Program(
+            tcond=tuple(ns[f"_t{j}"] for j in range(m)),
+            ilc=tuple(ns.get(f"_il{i}") for i in range(n)),
+            svc=tuple(ns.get(f"_sv{i}") for i in range(n)),
+            act=tuple(ns[f"_a{i}"] for i in range(n)),
+            fin=tuple(ns[f"_f{i}"] for i in range(n)),
+            before=ns["_before"],
+            after=ns["_after"],
+        )
+
+    def step_label(self, i: int) -> str:
+        return f"S{self.step_numbers[i]}"
+
+    def transition_label(self, j: int) -> str:
+        return f"T{self.transition_numbers[j]}"

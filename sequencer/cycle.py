@@ -1,0 +1,482 @@
+"""One call of a GRAPH FB: the algorithm of SPEC §2.2, in that order (graph-semantics §A.2).
+
+1. latch the FB inputs, detect rising edges, advance step times (T; U unless disturbed;
+   both frozen by HALT_TM);
+2. apply OFF_SQ, INIT_SQ (and the very first call, which initializes like INIT_SQ), mode
+   changes, MAN requests S_ON/S_OFF, acknowledgement (ACK_EF, ACK_S) and registration;
+3. permanent *before* instructions;
+4. per sequencer, in definition order: a) evaluate the transitions leaving active steps
+   (criteria bits), b) decide which switch (mode rule, HALT_SQ, supervision faults, at an
+   alternative divergence the first-listed), c) switch (S0/S1, skip steps), d) interlock
+   and supervision of the active steps, e) final scans of the steps left, then the action
+   rows of the active steps;
+5. permanent *after* instructions;
+6. group flags and FB outputs.
+
+The option ``order = "codesys"`` runs d) and e) before a)–c): new steps act in the next call.
+Work is proportional to the active steps: only ``st.active`` is visited.
+"""
+
+from __future__ import annotations
+
+import operator
+from collections.abc import Callable
+from typing import Any
+
+from sequencer import display
+from sequencer.compiled import CompiledChart, Program
+from sequencer.modes import MODE_RULES, select_mode
+from sequencer.params import input_defaults, inputs_for, output_defaults
+from sequencer.state import (
+    EDGE_INPUTS,
+    EV_A1,
+    EV_L0,
+    EV_L1,
+    EV_R1,
+    EV_S0,
+    EV_S1,
+    EV_V0,
+    EV_V1,
+    GraphState,
+)
+
+BlockCaller = Callable[[str, Any, Any, dict[str, Any]], dict[str, Any]]
+CellOp = Callable[[str, int, Any], None]
+
+
+def _no_calls(kind: str, block: Any, instance: Any, params: dict[str, Any]) -> dict[str, Any]:
+    raise RuntimeError(f"CALL {kind} {block}: no block runtime bound to this sequencer")
+
+
+def _no_cells(op: str, number: int, value: Any) -> None:
+    raise RuntimeError(f"{op} {number}: no timer/counter cells bound to this sequencer")
+
+
+class GraphRuntime:
+    """A compiled chart bound to its state and the engine: ``execute`` is one FB call.
+
+    Generated action code calls back ``on``/``off``/``off_all`` (ON/OFF Sx, OFF S_ALL),
+    ``call`` (CALL of a block) and ``counter``/``timer`` (CS CU CD CR / TL TD TF TR)."""
+
+    def __init__(
+        self,
+        cc: CompiledChart,
+        prog: Program,
+        state: GraphState | None = None,
+        *,
+        call: BlockCaller = _no_calls,
+        counter: CellOp = _no_cells,
+        timer: CellOp = _no_cells,
+    ) -> None:
+        self.cc = cc
+        self.prog = prog
+        self.st = state if state is not None else new_state(cc)
+        self._call = call
+        self.counter = counter
+        self.timer = timer
+        params = cc.parameters
+        self.input_names = tuple(p.name for p in inputs_for(params))
+        self.edge_names = tuple(n for n in self.input_names if n in EDGE_INPUTS)
+        self.codesys = cc.options.order == "codesys"
+        self.multi = len(cc.seq_numbers) > 1
+        self._acked: set[int] = set()
+        self._final: list[int] = []  # steps left, awaiting their final scan
+        self._getter = operator.itemgetter(*self.input_names)
+        self._last_in: Any = None  # the input pins of the previous call (fast path)
+
+    # ------------------------------------------------------------ callbacks of generated code
+
+    def call(self, kind: str, block: Any, instance: Any, params: dict[str, Any]) -> dict[str, Any]:
+        return self._call(kind, block, instance, params)
+
+    def on(self, i: int) -> None:
+        """ON Sx: activate step ``i`` now (event S1); its rows run in this call."""
+        if not self.st.x[i]:
+            self._activate(i)
+
+    def off(self, i: int) -> None:
+        """OFF Sx: deactivate step ``i`` now (event S0) and run its final scan."""
+        st = self.st
+        if st.x[i]:
+            self._deactivate(i)
+            self._final.remove(i)
+            self.prog.fin[i](st, self, st.ev[i])
+
+    def off_all(self, keep: int) -> None:
+        """OFF S_ALL: deactivate every step except ``keep`` (the one holding the action)."""
+        for i in list(self.st.active):
+            if i != keep:
+                self.off(i)
+
+    # ------------------------------------------------------------ state changes
+
+    def _raise(self, i: int, bit: int) -> None:
+        st = self.st
+        if not st.ev[i]:
+            st.ev_steps.append(i)
+        st.ev[i] |= bit
+        st.log.append((i, bit))
+
+    def _activate(self, i: int) -> None:
+        st = self.st
+        st.x[i] = True
+        st.t_ns[i] = 0
+        st.u_ns[i] = 0
+        st.act_ns[i] = st.last_ns
+        st.il_err[i] = False
+        st.sv_err[i] = False
+        st.active.append(i)
+        st.entered.append(i)
+        self._raise(i, EV_S1)
+
+    def _deactivate(self, i: int) -> None:
+        st = self.st
+        st.x[i] = False
+        st.active.remove(i)
+        st.left.append(i)
+        self._final.append(i)
+        st.il_err[i] = False
+        if st.sv_err[i]:
+            st.sv_err[i] = False
+        st.il_ok[i] = True
+        self._raise(i, EV_S0)
+
+    def _all_off(self) -> None:
+        st = self.st
+        for i in list(st.active):
+            self.off(i)
+
+    def initialize(self) -> None:
+        """INIT_SQ: every step off (final scan), errors cleared, the initial steps on."""
+        st = self.st
+        self._all_off()
+        for i in range(st.n_steps):
+            st.sv_err[i] = False
+            st.il_err[i] = False
+        for i in self.cc.initial:
+            self._activate(i)
+
+    # ------------------------------------------------------------ one FB call
+
+    def execute(self, inputs: dict[str, Any], now_ns: int) -> GraphState:
+        """One FB call with the pin values ``inputs`` at clock time ``now_ns`` (SPEC §2.2)."""
+        st = self.st
+        cc = self.cc
+        prog = self.prog
+        # 1. latch inputs, edges, per-call lists, times
+        ins = st.inputs
+        rose = st.rose
+        rose.clear()
+        try:
+            cur = self._getter(inputs)
+        except KeyError:
+            cur = None
+        if cur is None or cur != self._last_in:
+            self._last_in = cur
+            self._latch(inputs)
+        carry = st.entered[:] if self.codesys else ()
+        for i in st.ev_steps:
+            st.ev[i] = 0
+        st.ev_steps.clear()
+        st.log.clear()
+        st.fired.clear()
+        st.entered.clear()
+        st.left.clear()
+        st.ov = False
+        dt = now_ns - st.last_ns if st.last_ns >= 0 else 0
+        st.last_ns = now_ns
+        if dt and not st.tm_halted:
+            t_ns, u_ns, il_err, sv_err = st.t_ns, st.u_ns, st.il_err, st.sv_err
+            for i in st.active:
+                t_ns[i] += dt
+                if not (il_err[i] or sv_err[i]):
+                    u_ns[i] += dt
+        for i in carry:
+            if st.x[i]:
+                self._raise(i, EV_S1)
+        display.page(cc, st, ins, rose)
+
+        # 2. OFF_SQ, INIT_SQ, modes, MAN requests, acknowledgement, registration
+        if st.calls == 0 or "INIT_SQ" in rose:
+            self.initialize()
+        if st.off and st.active:
+            self._all_off()
+        if rose:
+            self._requests(rose)
+        st.calls += 1
+
+        # 3. permanent before
+        prog.before(st, self)
+        # 4. the sequencers
+        if self.multi:
+            for k in range(len(cc.seq_numbers)):
+                self._sequencer(k)
+        else:
+            self._sequencer(-1)
+        # 5. permanent after
+        prog.after(st, self)
+        # 6. group flags and outputs
+        self._outputs()
+        return st
+
+    def _latch(self, inputs: dict[str, Any]) -> None:
+        """Step 1 when an input changed: latch, detect rising edges, level options."""
+        st = self.st
+        ins = st.inputs
+        for name in self.input_names:
+            if name in inputs:
+                ins[name] = inputs[name]
+        rose = st.rose
+        prev = st.prev
+        for name in self.edge_names:
+            v = bool(ins[name])
+            if v and not prev.get(name, False):
+                rose.add(name)
+            prev[name] = v
+        st.off = bool(ins["OFF_SQ"])
+        st.halted = bool(ins["HALT_SQ"])
+        st.tm_halted = bool(ins["HALT_TM"])
+        st.zeroed = bool(ins["ZERO_OP"])
+        st.il_enabled = bool(ins["EN_IL"])
+        st.sv_enabled = bool(ins["EN_SV"])
+        st.ackreq_enabled = bool(ins["EN_ACKREQ"])
+        st.sskip_enabled = bool(ins["EN_SSKIP"])
+
+    def _requests(self, rose: set[str]) -> None:
+        st = self.st
+        st.mode = select_mode(st.mode, rose)
+        if st.mode == "MAN" and ("S_ON" in rose or "S_OFF" in rose):
+            i = self.cc.step_index.get(st.s_no)
+            if i is not None:
+                if "S_ON" in rose and not st.x[i]:
+                    self._activate(i)
+                elif "S_OFF" in rose and st.x[i]:
+                    self.off(i)
+        acks: list[int] = []
+        if "ACK_EF" in rose:
+            acks = [i for i in st.active if st.sv_err[i]]
+        elif "ACK_S" in rose:
+            i = self.cc.step_index.get(st.s_no, -1)
+            if i >= 0 and st.sv_err[i]:
+                acks = [i]
+        self._acked.clear()
+        for i in acks:
+            if not st.sv_cond[i]:  # a fault whose cause persists stays latched
+                st.sv_err[i] = False
+                self._raise(i, EV_A1)
+                self._raise(i, EV_V0)
+                self._acked.add(i)
+        if "REG_EF" in rose:
+            for i in st.active:
+                if st.il_err[i] or st.sv_err[i]:
+                    self._raise(i, EV_R1)
+        elif "REG_S" in rose:
+            i = self.cc.step_index.get(st.s_no, -1)
+            if i >= 0 and st.x[i]:
+                self._raise(i, EV_R1)
+
+    def _sequencer(self, k: int) -> None:
+        if self.codesys:
+            self._conditions_and_actions(k)
+            self._switch(k)
+        else:
+            self._switch(k)
+            self._conditions_and_actions(k)
+
+    def _switch(self, k: int) -> None:
+        """Steps a–c: evaluate, decide, switch (SPEC §2.2 4a–4c)."""
+        st = self.st
+        cc = self.cc
+        prog = self.prog
+        x = st.x
+        leaving = cc.leaving
+        tr_src = cc.tr_src
+        step_seq = cc.step_seq
+        tcond = prog.tcond
+        tt, crit, crit_old = st.tt, st.crit, st.crit_old
+        rule = MODE_RULES[st.mode]
+        push = "T_PUSH" in st.rose
+        blocked = st.halted or st.off
+        sv_err = st.sv_err
+        forced = self._acked if cc.options.ack_forces_switch else ()
+        # a+b: on the state at the start of this step
+        fire: list[int] = []
+        taken: set[int] | None = None
+        joins: set[int] | None = None
+        for i in st.active:
+            if k >= 0 and step_seq[i] != k:
+                continue
+            for j in leaving[i]:
+                srcs = tr_src[j]
+                if len(srcs) > 1:  # simultaneous join: all preceding steps active, once
+                    if not all(x[s] for s in srcs):
+                        continue
+                    if joins is None:
+                        joins = set()
+                    elif j in joins:
+                        continue
+                    joins.add(j)
+                v, c = tcond[j](st)
+                crit_old[j] = crit[j]
+                crit[j] = c
+                tt[j] = v
+                if blocked:
+                    continue
+                if i in forced:
+                    v = True
+                if not rule(v, push):
+                    continue
+                if any(sv_err[s] for s in srcs):
+                    continue
+                if taken is None:
+                    taken = set()
+                elif any(s in taken for s in srcs):
+                    continue
+                taken.update(srcs)
+                fire.append(j)
+                break  # alternative divergence: the first-listed switchable path wins
+        # c: switch
+        if not fire:
+            return
+        tr_dst = cc.tr_dst
+        for j in fire:
+            st.fired.append(j)
+            for s in tr_src[j]:
+                if x[s]:
+                    self._deactivate(s)
+            for d in tr_dst[j]:
+                if not x[d]:
+                    self._activate(d)
+        if st.sskip_enabled:
+            self._skip(rule)
+
+    def _skip(self, rule: Callable[[bool, bool], bool]) -> None:
+        """Skip steps: a step entered in this call whose leaving transition already holds is
+        passed through without being active (no S1, no actions; graph-semantics §A.3)."""
+        st = self.st
+        cc = self.cc
+        for _ in range(st.n_steps):
+            moved = False
+            for i in list(st.entered):
+                if not st.x[i]:
+                    continue
+                for j in cc.leaving[i]:
+                    srcs = cc.tr_src[j]
+                    if not all(st.x[s] for s in srcs):
+                        continue
+                    v, c = self.prog.tcond[j](st)
+                    st.crit_old[j], st.crit[j], st.tt[j] = st.crit[j], c, v
+                    if not rule(v, False):
+                        continue
+                    for s in srcs:
+                        if s in st.entered:  # passed through: never active
+                            st.x[s] = False
+                            st.active.remove(s)
+                            st.entered.remove(s)
+                            st.ev[s] &= ~EV_S1
+                            st.log = [e for e in st.log if e != (s, EV_S1)]
+                        elif st.x[s]:
+                            self._deactivate(s)
+                    st.fired.append(j)
+                    for d in cc.tr_dst[j]:
+                        if not st.x[d]:
+                            self._activate(d)
+                    moved = True
+                    break
+            if not moved:
+                return
+
+    def _conditions_and_actions(self, k: int) -> None:
+        """Steps d–e: interlock and supervision, final scans, action rows (SPEC §2.2 4d–4e)."""
+        st = self.st
+        cc = self.cc
+        prog = self.prog
+        step_seq = cc.step_seq
+        ilc, svc = prog.ilc, prog.svc
+        il_on = st.il_enabled
+        sv_on = st.sv_enabled
+        ack = st.ackreq_enabled
+        ev = st.ev
+        # d: interlock and supervision of the active steps
+        for i in st.active:
+            if k >= 0 and step_seq[i] != k:
+                continue
+            f = ilc[i]
+            if f is not None:
+                if il_on:
+                    ok, c = f(st)
+                else:
+                    ok, c = True, 0
+                st.crit_loc[i] = c
+                was = st.il_ok[i] and not (ev[i] & EV_S1)
+                if not ok and (was or ev[i] & EV_S1):
+                    self._raise(i, EV_L1)
+                    st.crit_loc_err[i] = c
+                elif ok and not st.il_ok[i] and not (ev[i] & EV_S1):
+                    self._raise(i, EV_L0)
+                st.il_ok[i] = ok
+                st.il_err[i] = not ok
+            f = svc[i]
+            if f is not None:
+                if sv_on:
+                    bad, c = f(st)
+                else:
+                    bad, c = False, 0
+                st.crit_sup[i] = c
+                st.sv_cond[i] = bad
+                if bad and not st.sv_err[i]:
+                    st.sv_err[i] = True
+                    self._raise(i, EV_V1)
+                    for j in cc.leaving[i]:
+                        st.crit_flt[j] = st.crit[j]
+                elif st.sv_err[i] and not bad and (not ack or not sv_on):
+                    st.sv_err[i] = False
+                    self._raise(i, EV_V0)
+        # e: final scans, then the action rows of active steps, in activation order
+        fin = prog.fin
+        final = self._final
+        if final:
+            keep: list[int] = []
+            for i in final:
+                if k >= 0 and step_seq[i] != k:
+                    keep.append(i)
+                else:
+                    fin[i](st, self, ev[i] | EV_S0)
+            final[:] = keep
+        act = prog.act
+        zero = st.zeroed
+        il_ok = st.il_ok
+        active = st.active
+        n = 0
+        while n < len(active):
+            i = active[n]
+            n += 1
+            if k >= 0 and step_seq[i] != k:
+                continue
+            act[i](st, self, ev[i], il_ok[i], zero)
+
+    def _outputs(self) -> None:
+        """Group flags and the FB outputs of SPEC §2.2 step 6 (display pins: display.py)."""
+        st = self.st
+        error = fault = False
+        for i in st.active:
+            if st.il_err[i]:
+                error = True
+            if st.sv_err[i]:
+                fault = True
+        st.error, st.fault = error, fault
+        st.err_flt = error or fault
+        st.outputs.update(display.compute_outputs(self.cc, st))
+        display.settle(self.cc, st)
+
+
+def new_state(cc: CompiledChart) -> GraphState:
+    """A fresh instance-DB content for ``cc``: pins at their defaults, variables at their
+    initial values, no step active (the first call initializes, SPEC §2.6 INIT_SQ)."""
+    st = GraphState(cc.n_steps, cc.n_transitions)
+    st.inputs.update(input_defaults(cc.parameters, cc.options))
+    st.outputs.update(output_defaults(cc.parameters))
+    st.vars.update(cc.var_inits)
+    st.ackreq_enabled = cc.options.ack_required
+    st.sskip_enabled = cc.options.skip_steps
+    return st

@@ -1,0 +1,98 @@
+"""Compile diagnostics of a chart: what is wrong, where, and which element (SPEC.md §3).
+
+Every diagnostic carries ``file:line:col`` and the step / transition / row it concerns;
+``format_diagnostic`` prints it the way compilers do::
+
+    drill.s7g:14:5: error[E020]: S0 NC: the interlock mark C is allowed only ... (step S2 row 3)
+
+Codes: ``E0xx`` errors (the chart does not compile), ``W1xx`` warnings. The list of codes
+lives in ``CODES`` so tests and ``s7graph check`` can name them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Final, Literal
+
+from engine.errors import SourceLocation
+
+Severity = Literal["error", "warning"]
+
+CODES: Final[dict[str, str]] = {
+    # parser (sequencer/parse.py)
+    "E001": "syntax error: unexpected token or character",
+    "E002": "unexpected end of file",
+    "E003": "literal that does not parse or does not fit its type",
+    "E004": "unknown header option or option value",
+    "E005": "action row whose operand does not fit its qualifier",
+    # structure (sequencer/validate.py)
+    "E010": "unknown step in FROM / TO",
+    "E011": "duplicate step number",
+    "E012": "duplicate transition number",
+    "E013": "duplicate declaration (FB variable or symbol)",
+    # action rows
+    "E020": "event / qualifier / C combination outside the table of SPEC §2.8",
+    "E021": "missing value (D L CS TL TD TF need one)",
+    "E022": "D / L time is not a TIME",
+    "E023": "value given to a qualifier that takes none, or of the wrong type",
+    "E024": "operand of the wrong kind for the qualifier (bit, timer, counter)",
+    "E025": "OFF S_ALL misuse",
+    "E026": "ON / OFF of an unknown step",
+    # types (SPEC §2.8, §2.9; seed 000:5838-5884)
+    "E030": "comparison of different or non-comparable types",
+    "E031": "assignment of a value of another type",
+    "E032": "operator not allowed for the operand type",
+    "E033": "unknown function or wrong argument",
+    "E034": "condition that is not a boolean of contacts and comparisons",
+    "E035": "a coil (bit assignment) outside the permanent instructions",
+    # operands
+    "E040": "unknown symbol",
+    "E041": "absolute address that does not parse or is out of range",
+    "E042": "unknown FB variable or name",
+    "E043": "Sn.X / Sn.T / Sn.U of an unknown step",
+    "E044": "Tn.TT of an unknown transition",
+    "E045": "write to a read-only operand (FB output pin, step or transition attribute)",
+    # warnings
+    "W101": "step without a way in",
+    "W102": "step without a way out",
+    "W103": "sequencer without an initial step",
+    "W110": "limit exceeded (SPEC §2.1)",
+    "W120": "empty transition condition (always holds)",
+    "W121": "step without actions",
+    "W122": "rows marked C on a step without an interlock",
+    "W130": "simultaneous branch that can never join",
+}
+
+
+@dataclass(frozen=True, slots=True)
+class Diagnostic:
+    """One problem of a chart. ``element`` names what it concerns: ``step S3``,
+    ``transition T2``, ``step S2 row 3``, ``sequence 1``, ``permanent before`` or ``""``."""
+
+    severity: Severity
+    code: str
+    message: str
+    loc: SourceLocation
+    element: str = ""
+
+    @property
+    def is_error(self) -> bool:
+        return self.severity == "error"
+
+
+def error(code: str, message: str, loc: SourceLocation, element: str = "") -> Diagnostic:
+    return Diagnostic("error", code, message, loc, element)
+
+
+def warning(code: str, message: str, loc: SourceLocation, element: str = "") -> Diagnostic:
+    return Diagnostic("warning", code, message, loc, element)
+
+
+def format_diagnostic(d: Diagnostic) -> str:
+    """``file:line:col: error[E012]: message (step S3)``."""
+    tail = f" ({d.element})" if d.element else ""
+    return f"{d.loc}: {d.severity}[{d.code}]: {d.message}{tail}"
+
+
+def sort_key(d: Diagnostic) -> tuple[str, int, int, str]:
+    return (d.loc.file, d.loc.line, d.loc.col, d.code)

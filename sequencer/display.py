@@ -1,0 +1,278 @@
+"""Display outputs of a GRAPH FB: S_NO paging, step/transition status, group bits
+(SPEC §2.6, §2.7; graph-semantics §D.3, §D.4).
+
+S_PREV/S_NEXT and T_PREV/T_NEXT only page the step/transition *shown*; they never move the
+sequence (SPEC §2.6 — seed 000:6007-6008 says otherwise and is wrong, TIA-V21 comments).
+
+The cursor lives in the instance DB: ``GraphState.s_no``/``t_no`` and ``GraphState.display``
+(``set``: "SACT" | "SEF" | "SALL"; ``pinned``: S_NO shows a step chosen with S_SEL even if
+it is outside the display set; ``s_sel``: the S_SEL value of the previous call). The cycle
+calls ``page`` once per call right after latching the inputs (so ACK_S, REG_S and MAN's
+S_ON/S_OFF act on the step the operator sees), ``compute_outputs`` at the end and then
+``settle`` to store what was shown.
+
+Decisions (UNCERTAIN in graph-semantics, pinned by tests/sequencer/test_display.py):
+* DISP_SACT/DISP_SEF/DISP_SALL: a rising edge selects the display set, kept until another
+  edge; default SACT (TIA start value of MOP.SACT_DISP).
+* S_SEL applies when its value changes to an existing step number (or again on an S_SELOK
+  edge); the chosen step stays shown (pinned) even outside the display set, until S_PREV or
+  S_NEXT pages. S_SEL 0 or an unknown number leaves S_NO unchanged.
+* Otherwise S_NO follows the display set: if the shown step leaves the set, S_NO moves to
+  the first step of the set with a number ≥ the old one (else the first); 0 if the set is
+  empty. Paging wraps around. T_NO does the same through the *valid* transitions (all
+  preceding steps active), ordered by transition number.
+* S_TIME = T, S_TIMEOK = U of the shown step (ms).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from typing import Any, Final
+
+from sequencer.compiled import CompiledChart
+from sequencer.params import Direction, outputs_for
+from sequencer.state import GraphState
+
+DISPLAY_SETS: Final = ("SACT", "SEF", "SALL")
+
+# S_STATE (WORD) bit layout — engine-defined (graph-semantics §D.4: not in any public source).
+S_STATE_BITS: Final[tuple[tuple[int, str, str], ...]] = (
+    (0, "X", "step active"),
+    (1, "LA", "interlock error: active and interlock not held (C rows off, red)"),
+    (2, "VA", "supervision fault latched (blocks the step's transitions)"),
+    (3, "VS", "supervision condition true now (the fault's cause is present)"),
+    (4, "LS", "interlock condition holds now"),
+    (5, "DISTURBED", "interlock error or supervision fault (SERRX, shown red)"),
+    (6, "ACK_WAIT", "fault latched although its cause has gone: awaits acknowledgement"),
+    (7, "INIT", "initial step"),
+    (8, "S1", "event S1 in this call (activated)"),
+    (9, "S0", "event S0 in this call (deactivated)"),
+    (10, "V1", "event V1 in this call (supervision fault came)"),
+    (11, "V0", "event V0 in this call (supervision fault went / acknowledged)"),
+    (12, "L1", "event L1 in this call (interlock lost)"),
+    (13, "L0", "event L0 in this call (interlock returned)"),
+    (14, "A1", "event A1 in this call (acknowledged)"),
+    (15, "R1", "event R1 in this call (registered)"),
+)
+_EVENT_SHIFT: Final = 8  # GraphState.ev bits S1..R1 (EV_S1=1 … EV_R1=128) → bits 8..15
+
+
+def s_state(chart: CompiledChart, state: GraphState, i: int) -> int:
+    """The S_STATE word of step index ``i`` (layout ``S_STATE_BITS``)."""
+    flags = (
+        state.x[i],
+        state.il_err[i],
+        state.sv_err[i],
+        state.sv_cond[i],
+        state.il_ok[i],
+        state.disturbed(i),
+        state.sv_err[i] and not state.sv_cond[i],
+        i in chart.initial,
+    )
+    word = sum(1 << k for k, on in enumerate(flags) if on)
+    return word | (state.ev[i] & 0xFF) << _EVENT_SHIFT
+
+
+# ---------------------------------------------------------------- the sets paged through
+
+
+def display_set(state: GraphState) -> str:
+    name = state.display.get("set", "SACT")
+    return name if name in DISPLAY_SETS else "SACT"
+
+
+def shown_steps(chart: CompiledChart, state: GraphState) -> list[int]:
+    """Step numbers S_NO pages through, ascending (DISP_SACT / DISP_SEF / DISP_SALL)."""
+    which = display_set(state)
+    idx = range(chart.n_steps)
+    if which == "SACT":
+        chosen = [i for i in idx if state.x[i]]
+    elif which == "SEF":
+        chosen = [i for i in idx if state.disturbed(i)]
+    else:
+        chosen = list(idx)
+    return sorted(chart.step_numbers[i] for i in chosen)
+
+
+def valid_transitions(chart: CompiledChart, state: GraphState) -> list[int]:
+    """Transition numbers whose preceding steps are all active (TVX), ascending."""
+    return sorted(
+        chart.transition_numbers[j]
+        for j in range(chart.n_transitions)
+        if chart.tr_src[j] and all(state.x[i] for i in chart.tr_src[j])
+    )
+
+
+def _snap(current: int, members: list[int]) -> int:
+    if not members:
+        return 0
+    if current in members:
+        return current
+    return next((n for n in members if n >= current), members[0])
+
+
+def _step(current: int, members: list[int], delta: int) -> int:
+    if not members:
+        return 0
+    if current not in members:
+        return _snap(current, members)
+    return members[(members.index(current) + delta) % len(members)]
+
+
+def shown_step(chart: CompiledChart, state: GraphState) -> int:
+    """The step number S_NO shows for this state (0 = none)."""
+    if state.display.get("pinned") and state.s_no in chart.step_index:
+        return state.s_no
+    return _snap(state.s_no, shown_steps(chart, state))
+
+
+def shown_transition(chart: CompiledChart, state: GraphState) -> int:
+    """The transition number T_NO shows for this state (0 = none)."""
+    return _snap(state.t_no, valid_transitions(chart, state))
+
+
+# ---------------------------------------------------------------- cursor update (per call)
+
+
+def page(
+    chart: CompiledChart,
+    state: GraphState,
+    inputs: Mapping[str, Any],
+    edges: Iterable[str],
+) -> None:
+    """Move the display cursor for this call's inputs (call after latching inputs).
+
+    Reads DISP_* / S_PREV / S_NEXT / T_PREV / T_NEXT / S_SELOK rising edges (``edges``) and
+    the S_SEL value; writes ``state.s_no``, ``state.t_no`` and ``state.display``. Never
+    touches a step bit."""
+    rose = set(edges)
+    disp = state.display
+    for name in DISPLAY_SETS:
+        if f"DISP_{name}" in rose:
+            disp["set"] = name
+    disp.setdefault("set", "SACT")
+    state.s_no = shown_step(chart, state)
+
+    sel = int(inputs.get("S_SEL", 0) or 0)
+    if (sel != disp.get("s_sel", 0) or "S_SELOK" in rose) and sel in chart.step_index:
+        state.s_no = sel
+        disp["pinned"] = True
+    disp["s_sel"] = sel
+
+    delta = ("S_NEXT" in rose) - ("S_PREV" in rose)
+    if delta:
+        members = shown_steps(chart, state)
+        state.s_no = _step(state.s_no, members, delta)
+        disp["pinned"] = False
+
+    state.t_no = shown_transition(chart, state)
+    t_delta = ("T_NEXT" in rose) - ("T_PREV" in rose)
+    if t_delta:
+        state.t_no = _step(state.t_no, valid_transitions(chart, state), t_delta)
+
+
+def settle(chart: CompiledChart, state: GraphState) -> None:
+    """Store the S_NO/T_NO shown after this call (what ``compute_outputs`` reports)."""
+    state.s_no = shown_step(chart, state)
+    state.t_no = shown_transition(chart, state)
+
+
+# ---------------------------------------------------------------- outputs
+
+
+def compute_outputs(
+    chart: CompiledChart,
+    state: GraphState,
+    inputs: Mapping[str, Any] | None = None,
+    edges: Iterable[str] = (),
+    *,
+    set_name: str | None = None,
+) -> dict[str, object]:
+    """Every output pin of ``set_name`` (default: the chart's parameter set) for this state.
+
+    Pure: reads the state (and the cursor left by ``page``), writes nothing. ``inputs`` and
+    ``edges`` are accepted for symmetry with ``page``; the effective options of this call
+    (EN_IL, HALT_SQ, …) are already in the state."""
+    del inputs, edges
+    s_no = shown_step(chart, state)
+    t_no = shown_transition(chart, state)
+    steps = shown_steps(chart, state)
+    trans = valid_transitions(chart, state)
+    i = chart.step_index.get(s_no)
+    j = chart.transition_index.get(t_no)
+    which = display_set(state)
+    values: dict[str, object] = {
+        "S_NO": s_no,
+        "S_MORE": any(n != s_no for n in steps),
+        "S_ACTIVE": bool(i is not None and state.x[i]),
+        "S_TIME": state.step_t_ms(i) if i is not None else 0,
+        "S_TIMEOK": state.step_u_ms(i) if i is not None else 0,
+        "S_CRITLOC": int(state.crit_loc[i]) if i is not None else 0,
+        "S_CRITLOCERR": int(state.crit_loc_err[i]) if i is not None else 0,
+        "S_CRITSUP": int(state.crit_sup[i]) if i is not None else 0,
+        "S_STATE": s_state(chart, state, i) if i is not None else 0,
+        "T_NO": t_no,
+        "T_MORE": any(n != t_no for n in trans),
+        "T_CRIT": int(state.crit[j]) if j is not None else 0,
+        "T_CRITOLD": int(state.crit_old[j]) if j is not None else 0,
+        "T_CRITFLT": int(state.crit_flt[j]) if j is not None else 0,
+        "ERROR": state.error,
+        "FAULT": state.fault,
+        "ERR_FLT": state.err_flt,
+        "SQ_ISOFF": state.off,
+        "SQ_HALTED": state.halted,
+        "TM_HALTED": state.tm_halted,
+        "OP_ZEROED": state.zeroed,
+        "IL_ENABLED": state.il_enabled,
+        "SV_ENABLED": state.sv_enabled,
+        "ACKREQ_ENABLED": state.ackreq_enabled,
+        "SSKIP_ENABLED": state.sskip_enabled,
+        "SACT_DISP": which == "SACT",
+        "SEF_DISP": which == "SEF",
+        "SALL_DISP": which == "SALL",
+        "AUTO_ON": state.mode == "AUTO",
+        "TAP_ON": state.mode == "TAP",
+        "TOP_ON": state.mode == "TOP",
+        "MAN_ON": state.mode == "MAN",
+    }
+    wanted = outputs_for(set_name or chart.parameters)
+    return {p.name: values[p.name] for p in wanted if p.direction is Direction.OUT}
+
+
+# ---------------------------------------------------------------- "why does it not switch?"
+
+
+def criteria_by_name(
+    chart: CompiledChart, state: GraphState, element: str
+) -> list[tuple[str, bool]]:
+    """Each contact of a condition with its truth in the last evaluation (CRIT bits).
+
+    ``element``: a transition ``"T2"`` or its name, a step's interlock ``"S3.IL"`` /
+    ``"S3.INTERLOCK"`` or supervision ``"S3.SV"`` / ``"S3.SUPERVISION"`` (case-insensitive).
+    Raises ``KeyError`` naming the element when it does not exist."""
+    up = element.strip().upper()
+    if "." in up:
+        head, _, what = up.partition(".")
+        i = chart.step_index.get(_number(head, "S"))
+        if i is not None and what in ("IL", "INTERLOCK", "C"):
+            return _bits(chart.il_labels[i], int(state.crit_loc[i]))
+        if i is not None and what in ("SV", "SUPERVISION", "V"):
+            return _bits(chart.sv_labels[i], int(state.crit_sup[i]))
+        raise KeyError(f"no interlock or supervision {element!r}")
+    j = chart.transition_index.get(_number(up, "T"))
+    if j is None:
+        names = [n.upper() for n in chart.transition_names]
+        j = names.index(up) if up in names else None
+    if j is None:
+        raise KeyError(f"no transition {element!r}")
+    return _bits(chart.crit_labels[j], int(state.crit[j]))
+
+
+def _number(text: str, prefix: str) -> int:
+    if text.startswith(prefix) and text[1:].isdigit():
+        return int(text[1:])
+    return -1
+
+
+def _bits(labels: tuple[str, ...], word: int) -> list[tuple[str, bool]]:
+    return [(label, bool(word >> k & 1)) for k, label in enumerate(labels)]

@@ -1,0 +1,190 @@
+"""GraphFB: a compiled chart as an engine FB (SPEC §2.2, §2.7; DESIGN "State lives in the
+instance DB").
+
+The FB's interface is the chart's parameter set (``sequencer.params``: IN pins, OUT pins)
+plus one STAT ``G7_STATE`` of type OBJECT holding the ``GraphState`` — so snapshot/restore
+of the instance DB persists the whole sequencer. OB1 calls the FB every scan; OB100 calls it
+with INIT_SQ = 1 (``startup_obs``). Several GraphFBs may share one CPU. Each call emits
+the step events of ``GraphState.log`` into the scan's ``ScanRecord.events`` as
+``StepEvent`` values.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+from typing import Any
+
+from engine.blocks import FB, OB, Decl, InstanceDB, Var
+from engine.errors import BlockError
+from sequencer.compiled import CompiledChart, Program
+from sequencer.cycle import GraphRuntime, new_state
+from sequencer.params import Direction, pins_for
+from sequencer.state import EVENT_NAMES, GraphState
+from sfb import s5_counters, s5_timers
+
+STATE_VAR = "G7_STATE"
+_EVENT_OF_BIT = {1 << k: name for k, name in enumerate(EVENT_NAMES)}
+
+
+@dataclass(frozen=True, slots=True)
+class StepEvent:
+    """One step event (S1 S0 V1 V0 L1 L0 A1 R1) of a GRAPH FB call, for the ScanRecord."""
+
+    fb: str
+    db: int
+    step: int
+    event: str
+    cycle: int
+
+    def __str__(self) -> str:
+        return f"{self.fb}/DB{self.db} S{self.step} {self.event} @{self.cycle}"
+
+
+class GraphFB:
+    """A ``CompiledChart`` bound to an engine FB number and an instance DB number."""
+
+    def __init__(self, cc: CompiledChart, *, fb_number: int | None = None,
+                 db_number: int | None = None) -> None:  # fmt: skip
+        self.cc = cc
+        self.fb_number = fb_number or cc.chart.fb_number or 1
+        self.db_number = db_number or cc.chart.db_number or self.fb_number
+        pins = pins_for(cc.parameters)
+        self.in_pins = tuple(p for p in pins if p.direction is Direction.IN)
+        self.out_pins = tuple(p.name for p in pins if p.direction is Direction.OUT)
+        interface = [
+            Var(p.name, p.type, Decl.IN if p.direction is Direction.IN else Decl.OUT, p.default)
+            for p in pins
+        ]
+        interface.append(Var(STATE_VAR, "OBJECT", Decl.STAT, self._fresh_state))
+        self.fb = FB(self.fb_number, cc.name, tuple(interface), self._body)
+        self.idb: InstanceDB | None = None
+        self._runtime: GraphRuntime | None = None
+        self._prog: Program | None = None
+        self._mem: Any = None
+        self._ctx: Any = None
+
+    def _fresh_state(self) -> GraphState:
+        return new_state(self.cc)
+
+    # ------------------------------------------------------------ engine wiring
+
+    def install(self, cpu: Any) -> InstanceDB:
+        """Load the FB into ``cpu`` and create its instance DB."""
+        cpu.load(self.fb)
+        self.idb = cpu.create_instance_db(self.db_number, self.fb, name=self.cc.name)
+        return self.idb
+
+    @property
+    def state(self) -> GraphState:
+        if self.idb is None:
+            raise BlockError(f"{self.cc.name}: not installed in a CPU")
+        return self.idb.values[STATE_VAR]  # type: ignore[return-value]
+
+    @property
+    def outputs(self) -> dict[str, Any]:
+        """The FB output pins after the last call (S_NO, ERR_FLT, AUTO_ON, ...)."""
+        if self.idb is None:
+            return {}
+        v = self.idb.values
+        return {name: v[name] for name in self.out_pins}
+
+    def call(self, ctx: Any, **params: Any) -> dict[str, Any]:
+        """Call the FB from an OB body (``ctx.call`` with its instance DB)."""
+        return ctx.call(self.fb, self.idb, **params)  # type: ignore[no-any-return]
+
+    def runtime(self, mem: Any) -> GraphRuntime:
+        """The runtime of this FB bound to ``mem`` (built once, rebound on a new state)."""
+        st = self.state
+        rt = self._runtime
+        if rt is None or self._mem is not mem:
+            self._prog = self.cc.bind(mem)
+            self._mem = mem
+            rt = GraphRuntime(self.cc, self._prog, st, call=self._call_block,
+                              counter=self._counter, timer=self._timer)  # fmt: skip
+            self._runtime = rt
+        elif rt.st is not st:
+            rt.st = st
+            rt._final.clear()
+        return rt
+
+    # ------------------------------------------------------------ the FB body
+
+    def _body(self, ctx: Any, idb: InstanceDB) -> None:
+        self.idb = idb
+        self._ctx = ctx
+        rt = self.runtime(ctx.mem)
+        values = idb.values
+        st = rt.execute(values, ctx.now_ns)
+        out = st.outputs
+        for name in self.out_pins:
+            values[name] = out[name]
+        if st.log:
+            step_numbers = self.cc.step_numbers
+            for i, bit in st.log:
+                ctx.emit(StepEvent(self.cc.name, idb.number, step_numbers[i],
+                                   _EVENT_OF_BIT[bit], ctx.cycle))  # fmt: skip
+
+    # ------------------------------------------------------------ callbacks of action rows
+
+    def _call_block(self, kind: str, block: Any, instance: Any, params: dict[str, Any]) -> Any:
+        ref = f"{kind}{block}" if kind and isinstance(block, int) else block
+        inst = instance
+        if isinstance(instance, str) and instance.upper().startswith("DB"):
+            inst = int(instance[2:])
+        return self._ctx.call(ref, inst, **params)
+
+    def _counter(self, op: str, number: int, value: Any) -> None:
+        """CS (load BCD ``C#``), CU, CD, CR on counter cell C ``number`` (event rows: once)."""
+        cell = s5_counters.cell_of(self._mem.counters, number)
+        if op == "CS":
+            cell.s_edge = False
+            s5_counters.set_preset(cell, True, int(value))
+        elif op == "CU":
+            cell.cu_edge = False
+            s5_counters.count_up(cell, True)
+        elif op == "CD":
+            cell.cd_edge = False
+            s5_counters.count_down(cell, True)
+        else:
+            s5_counters.reset(cell, True)
+
+    def _timer(self, op: str, number: int, value: Any) -> None:
+        """TL (extended pulse), TD (retentive on-delay), TF (off-delay), TR (reset) on timer
+        cell T ``number``: started once in the event call, then run by the CPU's time base."""
+        cell = s5_timers.cell_of(self._mem.timers, number)
+        now = self._ctx.now_ns
+        if op == "TR":
+            s5_timers.reset(cell)
+            return
+        fn = {"TL": "SE", "TD": "SS", "TF": "SF"}[op]
+        cell.s_edge = False
+        s5_timers.run(cell, fn, True, int(value), now)
+        if op == "TF":
+            s5_timers.run(cell, fn, False, int(value), now)
+
+
+def startup_obs(*fbs: GraphFB, extra_ob1: Any = None) -> tuple[OB, OB]:
+    """OB1 calling every GraphFB in order, and OB100 calling each with INIT_SQ = 1."""
+
+    def ob1_body(ctx: Any) -> None:
+        for g in fbs:
+            ctx.call(g.fb, g.idb)
+        if extra_ob1 is not None:
+            extra_ob1(ctx)
+
+    def ob100_body(ctx: Any) -> None:
+        for g in fbs:
+            ctx.call(g.fb, g.idb, INIT_SQ=True)
+            assert g.idb is not None
+            g.idb.values["INIT_SQ"] = False
+
+    return OB(1, "OB1", ob1_body), OB(100, "OB100", ob100_body)
+
+
+def install_all(cpu: Any, fbs: Iterable[GraphFB]) -> None:
+    """Install several GraphFBs and their OB1/OB100 in ``cpu``."""
+    items = list(fbs)
+    for g in items:
+        g.install(cpu)
+    cpu.load(*startup_obs(*items))

@@ -1,0 +1,161 @@
+"""Interlock and supervision messages of a GRAPH FB in the CPU's message list (SPEC §2.10;
+graph-semantics §C "Messages"; seed 000:6226-6300).
+
+With ``MESSAGES := TRUE`` every interlock error and supervision fault of a step becomes a
+message in ``sfb.alarms.MessageList`` with the seed's text template
+(``S7GRAPH Supervision Error: FB1, DB1, S001 material is missing``), coming and going with
+the fault and acknowledgeable. The cycle calls ``sync_messages`` once per FB call, after the
+fault latches are up to date; it diffs the latches in ``GraphState`` against what was
+already raised, so the cycle needs no other hook. The list records who acknowledged and when
+(``program`` for ACK_EF / ACK_S / INIT_SQ, a user name for a remote acknowledgement) and is
+persisted through ``MessageList.snapshot``.
+
+Decisions (UNCERTAIN, pinned by tests/sequencer/test_messages.py):
+* A supervision message comes when the step's fault latches (``sv_err``) and goes when the
+  cause is gone (``sv_cond`` false, or the latch released); it needs acknowledgement when
+  EN_ACKREQ is in force. It is acknowledged as ``program`` when the latch is released by
+  the FB (ACK_EF, ACK_S, INIT_SQ, OFF_SQ).
+* An interlock message comes and goes with ``il_err``; with EN_ACKREQ it needs
+  acknowledgement too (ALARM_SQ, as in V5) and is acknowledged as ``program`` by an
+  ACK_EF or INIT_SQ edge, or an ACK_S edge for the step shown in S_NO. Acknowledging it
+  changes nothing in the sequence (an interlock error clears itself, SPEC §2.3).
+* A supervision message acknowledged in the list by a user while the step is still latched
+  (and the cause has gone) is an acknowledgement of the step: ``sync_messages`` and
+  ``remote_acks`` return those step indices, and the cycle acknowledges them at its next
+  call exactly as ACK_S would.
+* Which occurrence was raised is remembered in ``GraphState.display["msg"]``
+  (msg_id → event id) so a message acknowledged and removed from the list is not raised
+  again while its latch lasts.
+"""
+
+from __future__ import annotations
+
+from typing import Final
+
+from sequencer.compiled import CompiledChart
+from sequencer.state import GraphState
+from sfb.alarms import MessageList
+
+PROGRAM_USER: Final = "program"
+TEMPLATES: Final = {
+    "IL": "S7GRAPH Interlock Error: {fb}, {db}, S{step:03d} {text}",
+    "SV": "S7GRAPH Supervision Error: {fb}, {db}, S{step:03d} {text}",
+}
+SOURCE: Final = "S7-Graph"
+_MEMORY_KEY: Final = "msg"
+
+
+def message_id(fb_name: str, db_number: int, step: int, kind: str) -> str:
+    """The message number of one step's interlock (``IL``) or supervision (``SV``) fault."""
+    return f"{fb_name}/DB{db_number}/S{step}/{kind}"
+
+
+def message_text(chart: CompiledChart, fb_name: str, db_number: int, i: int, kind: str) -> str:
+    """The text of step index ``i``'s message: the template with FB, DB, step number and the
+    step's own message text (its name when it has none)."""
+    step = chart.chart.all_steps()[i]
+    fb = f"FB{chart.chart.fb_number}" if chart.chart.fb_number is not None else fb_name
+    return TEMPLATES[kind].format(
+        fb=fb, db=f"DB{db_number}", step=step.number, text=step.message or step.name
+    )
+
+
+def _memory(state: GraphState) -> dict[str, int]:
+    mem = state.display.setdefault(_MEMORY_KEY, {})
+    assert isinstance(mem, dict)
+    return mem
+
+
+def remote_acks(
+    chart: CompiledChart,
+    state: GraphState,
+    message_list: MessageList,
+    fb_name: str,
+    db_number: int,
+) -> list[int]:
+    """Step indices whose supervision message a user acknowledged in the list while the
+    step's fault is still latched and its cause has gone: the cycle acknowledges them as
+    ACK_S would. Pure."""
+    if not chart.options.messages:
+        return []
+    raised = state.display.get(_MEMORY_KEY, {})
+    found: list[int] = []
+    for i, number in enumerate(chart.step_numbers):
+        mid = message_id(fb_name, db_number, number, "SV")
+        if not state.sv_err[i] or state.sv_cond[i] or mid not in raised:
+            continue
+        msg = message_list.get(mid)
+        if msg is None or msg.event_id != raised[mid]:
+            found.append(i)  # acknowledged and gone from the list
+        elif msg.ack_required and msg.acked and msg.ack_user != PROGRAM_USER:
+            found.append(i)
+    return found
+
+
+def sync_messages(
+    chart: CompiledChart,
+    state: GraphState,
+    message_list: MessageList,
+    fb_name: str,
+    db_number: int,
+    now_ns: int,
+) -> list[int]:
+    """Bring the message list in line with this call's fault latches and acknowledgement
+    edges (``state.rose``); return ``remote_acks`` (steps the cycle acknowledges at its next
+    call). No-op without MESSAGES."""
+    if not chart.options.messages:
+        return []
+    acks = remote_acks(chart, state, message_list, fb_name, db_number)
+    mem = _memory(state)
+    for i, number in enumerate(chart.step_numbers):
+        for kind, latched, cause in (
+            ("SV", state.sv_err[i], state.sv_err[i] and state.sv_cond[i]),
+            ("IL", state.il_err[i], state.il_err[i]),
+        ):
+            mid = message_id(fb_name, db_number, number, kind)
+            if latched and mid not in mem:
+                msg = message_list.raise_(
+                    mid,
+                    now_ns,
+                    text=message_text(chart, fb_name, db_number, i, kind),
+                    values=(number, chart.step_names[i]),
+                    ack_required=state.ackreq_enabled,
+                    source=SOURCE,
+                )
+                mem[mid] = msg.event_id
+            current = message_list.get(mid)
+            ours = current is not None and current.event_id == mem.get(mid)
+            if ours and not cause and current is not None:
+                message_list.clear(mid, now_ns)  # no-op unless incoming
+            if ours and kind == "SV" and not latched:
+                message_list.acknowledge(mid, PROGRAM_USER, now_ns)  # the FB released it
+            if not latched:
+                mem.pop(mid, None)
+    _acknowledge_by_inputs(chart, state, message_list, fb_name, db_number, now_ns)
+    return acks
+
+
+def _acknowledge_by_inputs(
+    chart: CompiledChart,
+    state: GraphState,
+    message_list: MessageList,
+    fb_name: str,
+    db_number: int,
+    now_ns: int,
+) -> None:
+    """ACK_EF / INIT_SQ edges acknowledge every message of this FB, ACK_S those of the step
+    shown in S_NO — except supervision faults the FB still holds latched."""
+    rose = state.rose
+    if "ACK_EF" in rose or "INIT_SQ" in rose:
+        steps = range(chart.n_steps)
+    elif "ACK_S" in rose and state.s_no in chart.step_index:
+        steps = range(chart.step_index[state.s_no], chart.step_index[state.s_no] + 1)
+    else:
+        return
+    for i in steps:
+        number = chart.step_numbers[i]
+        if not state.sv_err[i]:
+            message_list.acknowledge(
+                message_id(fb_name, db_number, number, "SV"), PROGRAM_USER, now_ns
+            )
+        message_list.acknowledge(message_id(fb_name, db_number, number, "IL"), PROGRAM_USER, now_ns)

@@ -1,0 +1,98 @@
+"""What an operand written in a chart stands for (SPEC.md §1.1, §2.7, §2.9).
+
+``resolve_operand(op, chart, symbols)`` is pure: it reads the chart's declarations, the FB
+pin table (``sequencer.params``, the one table of pins) and an optional symbol table, and
+returns a :class:`Resolved`. The order of lookup is the rule:
+
+* a quoted name (``"Start_button"``) is a symbol: the chart's own ``SYMBOLS`` section first,
+  then the symbol table given; unknown → ``SymbolError``;
+* an unquoted name is, in this order, an FB variable (``VAR``), an FB pin (``S_NO``,
+  ``ERR_FLT`` ...; any parameter set — whether the chart's set has it is the compiler's
+  business), or an absolute address (``I0.7``, ``MW10``, ``T5``, ``DB1.DBX0.0``; a malformed
+  one raises ``AddressError`` at the operand's own column); anything else → ``SymbolError``.
+
+Types: a symbol or variable has its declared type, a pin its table type, an absolute address
+its natural type (``engine.symbols.default_type``: BOOL BYTE WORD DWORD TIMER COUNTER). An
+absolute address is untyped memory: the validator lets a WORD address stand for INT and a
+DWORD address for DINT, REAL or TIME (``is_untyped``).
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from typing import Final, Literal
+
+from engine.address import Address, parse_address
+from engine.errors import SymbolError
+from engine.symbols import SymbolTable, default_type
+from sequencer.model import Chart, Operand
+from sequencer.params import Direction, pin
+
+Kind = Literal["address", "symbol", "var", "pin"]
+
+# The shape of an absolute address (as the grammar's ADDRESS terminal, blanks removed).
+ADDRESS_SHAPE: Final = re.compile(
+    r"(?i)(DB\d+\.DB[XBWD]\d+(\.\d+)?|P[IQEA][XBWD]?\d+(\.\d+)?|[IQEAML][XBWD]?\d+(\.\d+)?"
+    r"|[TCZ]\d+)"
+)
+
+
+@dataclass(frozen=True, slots=True)
+class Resolved:
+    """An operand resolved: ``kind`` address | symbol | var | pin; ``address`` for addresses
+    and symbols (None for FB variables and pins); ``type`` the S7 type name (upper case);
+    ``writable`` is False for FB output pins (the FB itself writes them)."""
+
+    kind: Kind
+    address: Address | None
+    type: str
+    writable: bool = True
+
+    @property
+    def is_untyped(self) -> bool:
+        """An absolute address: its width, not a declaration, gives the type."""
+        return self.kind == "address"
+
+
+def looks_like_address(name: str) -> bool:
+    """The text has the shape of an absolute address (it may still be out of range)."""
+    return ADDRESS_SHAPE.fullmatch(re.sub(r"\s+", "", name)) is not None
+
+
+def resolve_operand(op: Operand, chart: Chart, symbols: SymbolTable | None = None) -> Resolved:
+    """Resolve one operand (rule in the module docstring). Raises ``SymbolError`` for an
+    unknown name and ``AddressError`` for a malformed address, both with ``op.loc``."""
+    if op.quoted:
+        return _symbol(op, chart, symbols)
+    key = op.name.upper()
+    for v in chart.vars:
+        if v.name.upper() == key:
+            return Resolved("var", None, v.type.upper())
+    p = pin(op.name)
+    if p is not None:
+        return Resolved("pin", None, p.type, writable=p.direction is Direction.IN)
+    if looks_like_address(op.name):
+        addr = parse_address(op.name, op.loc)
+        return Resolved("address", addr, default_type(addr))
+    hint = ""
+    if (symbols is not None and symbols.lookup(op.name) is not None) or any(
+        s.name.upper() == key for s in chart.symbols
+    ):
+        hint = f'; symbols are written in double quotes: "{op.name}"'
+    raise SymbolError(
+        f"unknown name {op.name!r}: not an FB variable, FB pin or address{hint}", op.loc
+    )
+
+
+def _symbol(op: Operand, chart: Chart, symbols: SymbolTable | None) -> Resolved:
+    key = op.name.casefold()
+    for s in chart.symbols:
+        if s.name.casefold() == key:
+            addr = parse_address(s.address, s.loc)
+            return Resolved("symbol", addr, s.type.upper())
+    if symbols is not None:
+        sym = symbols.lookup(op.name)
+        if sym is not None:
+            return Resolved("symbol", sym.address, sym.type.upper())
+    raise SymbolError(f'unknown symbol "{op.name}"', op.loc)

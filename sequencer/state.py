@@ -1,0 +1,218 @@
+"""GraphState: the content of a GRAPH FB's instance DB (SPEC §2.2-§2.6, DESIGN "State lives
+in the instance DB").
+
+Everything the cycle remembers between calls lives here, in flat lists indexed by the
+compiled step index ``i`` (``0 .. n_steps-1``, see ``CompiledChart.step_numbers``) and the
+compiled transition index ``j`` (``CompiledChart.transition_numbers``). No per-call
+allocation per step: the cycle updates the lists in place. ``to_state``/``from_state`` give a
+JSON-able snapshot that restores exactly (persistence, online change, hot standby).
+
+Field names are a contract with ``sequencer/display.py`` and ``sequencer/messages.py``
+(which compute S_NO, S_STATE, criteria outputs and alarms from this object) — never rename.
+
+Times are integer nanoseconds of the injected clock; ``step_t_ms``/``step_u_ms`` give the
+S7 TIME values (ms) that ``Sn.T``/``Sn.U`` read.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Final
+
+# Step event bits in ``GraphState.ev[i]``, in the order of ``steps.qualifiers.EVENTS``.
+EV_S1: Final = 1  # step activated in this call
+EV_S0: Final = 2  # step deactivated in this call
+EV_V1: Final = 4  # supervision fault came (or was present at activation)
+EV_V0: Final = 8  # supervision fault went (eliminated or acknowledged)
+EV_L1: Final = 16  # interlock lost (or not held at activation)
+EV_L0: Final = 32  # interlock returned
+EV_A1: Final = 64  # fault acknowledged
+EV_R1: Final = 128  # registration (REG_EF / REG_S)
+EVENT_BITS: Final = {
+    "S1": EV_S1, "S0": EV_S0, "V1": EV_V1, "V0": EV_V0,
+    "L1": EV_L1, "L0": EV_L0, "A1": EV_A1, "R1": EV_R1,
+}  # fmt: skip
+EVENT_NAMES: Final = tuple(EVENT_BITS)
+
+MODES: Final = ("AUTO", "MAN", "TAP", "TOP")
+
+# Inputs whose rising edge (not level) counts (SPEC §2.2 step 1, §2.5, §2.6).
+EDGE_INPUTS: Final = (
+    "INIT_SQ", "ACK_EF", "ACK_S", "REG_EF", "REG_S", "S_ON", "S_OFF", "T_PUSH",
+    "SW_AUTO", "SW_MAN", "SW_TAP", "SW_TOP", "S_PREV", "S_NEXT", "T_PREV", "T_NEXT",
+    "S_SELOK", "DISP_SACT", "DISP_SEF", "DISP_SALL",
+)  # fmt: skip
+
+_LIST_FIELDS: Final = (
+    "x", "t_ns", "u_ns", "act_ns", "il_ok", "il_err", "sv_cond", "sv_err",
+    "crit_loc", "crit_loc_err", "crit_sup", "ev",
+    "tt", "crit", "crit_old", "crit_flt",
+)  # fmt: skip
+_SCALAR_FIELDS: Final = (
+    "mode", "calls", "last_ns", "off", "halted", "tm_halted", "zeroed", "il_enabled",
+    "sv_enabled", "ackreq_enabled", "sskip_enabled", "error", "fault", "err_flt",
+    "ov", "ov_count", "s_no", "t_no",
+)  # fmt: skip
+
+
+class GraphState:
+    """The instance-DB content of one GRAPH FB.
+
+    Per step ``i``:
+      ``x[i]``            step active (``Sn.X``)
+      ``t_ns[i]``         activation time accumulator (``Sn.T``; keeps the last value after exit)
+      ``u_ns[i]``         activation time without disturbance (``Sn.U``; frozen while the step
+                          has an interlock error or a supervision fault)
+      ``act_ns[i]``       clock time of the last activation
+      ``il_ok[i]``        interlock condition holds now (LS; True without interlock / EN_IL=0)
+      ``il_err[i]``       step active and interlock not held (LA: disturbed, red)
+      ``sv_cond[i]``      supervision condition true now (VS: the fault cause is present)
+      ``sv_err[i]``       supervision fault, latched until acknowledged when ack is required
+                          (VA / H_SV_FLT); blocks the step's transitions
+      ``crit_loc[i]``     interlock criteria bits of this call (bit k = k-th contact true)
+      ``crit_loc_err[i]`` copy of ``crit_loc`` taken when the interlock was lost
+      ``crit_sup[i]``     supervision criteria bits of this call
+      ``ev[i]``           step event bits of this call (``EV_S1`` ... ``EV_R1``)
+    Per transition ``j``:
+      ``tt[j]``           condition held at its last evaluation (``Tn.TT``)
+      ``crit[j]``         criteria bits of this call; ``crit_old[j]`` those of the previous
+                          evaluation; ``crit_flt[j]`` copy taken when a preceding step faulted
+    Lists of this call (cleared at the start of each call):
+      ``active``          active step indices, in activation order (the cycle's work list)
+      ``ev_steps``        step indices whose ``ev`` is non-zero in this call
+      ``fired``           transition indices that switched in this call, in switching order
+      ``entered``/``left`` step indices activated / deactivated in this call
+      ``log``             events raised in this call, in order: (step index, ``EV_*`` bit)
+    Scalars:
+      ``mode``            "AUTO" "MAN" "TAP" "TOP" (survives warm restart)
+      ``inputs``          FB input pins latched at the start of this call (name → value)
+      ``prev``            edge memories: each edge input's value in the previous call
+      ``rose``            names of edge inputs with a rising edge in this call
+      ``outputs``         FB output pins written at the end of this call (name → value)
+      ``vars``            the chart's static variables (``VAR ... END_VAR``)
+      ``off``             SQ_ISOFF; ``halted`` SQ_HALTED; ``tm_halted`` TM_HALTED;
+      ``zeroed``          OP_ZEROED; ``il_enabled`` ``sv_enabled`` ``ackreq_enabled``
+                          ``sskip_enabled`` — the effective options of this call
+      ``error``           some active step has an interlock error (ERROR)
+      ``fault``           some step has a supervision fault (FAULT)
+      ``err_flt``         ``error or fault`` (ERR_FLT)
+      ``ov``              an arithmetic overflow happened in this call (OV status);
+                          ``ov_count`` how many so far; ``diag`` the last messages (≤ 16)
+      ``calls``           number of FB calls; ``last_ns`` clock time of the previous call
+                          (-1 before the first)
+      ``s_no`` ``t_no``   step / transition shown (owned by ``display.py``)
+      ``display``         free scratch of ``display.py`` (persisted, JSON-able)
+    """
+
+    __slots__ = (
+        *_LIST_FIELDS, *_SCALAR_FIELDS,
+        "n_steps", "n_transitions", "active", "ev_steps", "fired", "entered", "left", "log",
+        "inputs", "prev", "rose", "outputs", "vars", "diag", "display",
+    )  # fmt: skip
+
+    def __init__(self, n_steps: int, n_transitions: int) -> None:
+        self.n_steps = n_steps
+        self.n_transitions = n_transitions
+        self.x: list[bool] = [False] * n_steps
+        self.t_ns: list[int] = [0] * n_steps
+        self.u_ns: list[int] = [0] * n_steps
+        self.act_ns: list[int] = [0] * n_steps
+        self.il_ok: list[bool] = [True] * n_steps
+        self.il_err: list[bool] = [False] * n_steps
+        self.sv_cond: list[bool] = [False] * n_steps
+        self.sv_err: list[bool] = [False] * n_steps
+        self.crit_loc: list[int] = [0] * n_steps
+        self.crit_loc_err: list[int] = [0] * n_steps
+        self.crit_sup: list[int] = [0] * n_steps
+        self.ev: list[int] = [0] * n_steps
+        self.tt: list[bool] = [False] * n_transitions
+        self.crit: list[int] = [0] * n_transitions
+        self.crit_old: list[int] = [0] * n_transitions
+        self.crit_flt: list[int] = [0] * n_transitions
+        self.active: list[int] = []
+        self.ev_steps: list[int] = []
+        self.fired: list[int] = []
+        self.entered: list[int] = []
+        self.left: list[int] = []
+        self.log: list[tuple[int, int]] = []
+        self.mode: str = "AUTO"
+        self.inputs: dict[str, Any] = {}
+        self.prev: dict[str, bool] = {}
+        self.rose: set[str] = set()
+        self.outputs: dict[str, Any] = {}
+        self.vars: dict[str, Any] = {}
+        self.off = False
+        self.halted = False
+        self.tm_halted = False
+        self.zeroed = False
+        self.il_enabled = True
+        self.sv_enabled = True
+        self.ackreq_enabled = True
+        self.sskip_enabled = False
+        self.error = False
+        self.fault = False
+        self.err_flt = False
+        self.ov = False
+        self.ov_count = 0
+        self.diag: list[str] = []
+        self.calls = 0
+        self.last_ns = -1
+        self.s_no = 0
+        self.t_no = 0
+        self.display: dict[str, Any] = {}
+
+    # ------------------------------------------------------------ reading times (S7 TIME, ms)
+
+    def step_t_ms(self, i: int) -> int:
+        """``Sn.T`` of step index ``i`` in milliseconds."""
+        return self.t_ns[i] // 1_000_000
+
+    def step_u_ms(self, i: int) -> int:
+        """``Sn.U`` of step index ``i`` in milliseconds."""
+        return self.u_ns[i] // 1_000_000
+
+    def disturbed(self, i: int) -> bool:
+        """The step shows red: interlock error or supervision fault (SERRX)."""
+        return self.il_err[i] or self.sv_err[i]
+
+    # ------------------------------------------------------------ persistence
+
+    def to_state(self) -> dict[str, Any]:
+        """A JSON-able snapshot; ``from_state`` restores it exactly."""
+        data: dict[str, Any] = {"n_steps": self.n_steps, "n_transitions": self.n_transitions}
+        for name in _LIST_FIELDS:
+            data[name] = list(getattr(self, name))
+        for name in _SCALAR_FIELDS:
+            data[name] = getattr(self, name)
+        data["active"] = list(self.active)
+        data["inputs"] = dict(self.inputs)
+        data["prev"] = dict(self.prev)
+        data["outputs"] = dict(self.outputs)
+        data["vars"] = dict(self.vars)
+        data["diag"] = list(self.diag)
+        data["display"] = dict(self.display)
+        return data
+
+    @classmethod
+    def from_state(cls, data: dict[str, Any]) -> GraphState:
+        """Rebuild a state from ``to_state`` output (per-call lists start empty)."""
+        st = cls(int(data["n_steps"]), int(data["n_transitions"]))
+        for name in _LIST_FIELDS:
+            setattr(st, name, list(data[name]))
+        for name in _SCALAR_FIELDS:
+            setattr(st, name, data[name])
+        st.active = [int(i) for i in data["active"]]
+        st.inputs = dict(data.get("inputs", {}))
+        st.prev = dict(data.get("prev", {}))
+        st.outputs = dict(data.get("outputs", {}))
+        st.vars = dict(data.get("vars", {}))
+        st.diag = list(data.get("diag", []))
+        st.display = dict(data.get("display", {}))
+        return st
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, GraphState) and self.to_state() == other.to_state()
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def __repr__(self) -> str:
+        return f"GraphState(active={self.active}, mode={self.mode}, calls={self.calls})"

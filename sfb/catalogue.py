@@ -1,0 +1,252 @@
+"""The one catalogue of system blocks, and the RET_VAL conventions (SPEC.md §1.7; seeds §6.1).
+
+``CATALOGUE`` lists every SFB/SFC s7graph emulates: number, name, kind, and the pins with
+direction and S7 type in the order Siemens documents them. Code reads it — to declare the
+engine interfaces and to let the sequencer's ``CALL`` validate parameters — so a pin is
+named once, here. ``lookup("SFB4")``, ``lookup("SFB 4")`` and ``lookup("TON")`` give the
+same entry.
+
+RET_VAL (behaviour 40): ``>= 0`` success (BR = 1), ``< 0`` error (bit 15 set, BR = 0).
+Error words are ``W#16#8xyy``: general errors carry the parameter number in ``x``, specific
+errors have ``x = 0``. As an INT a word ``W#16#8122`` is ``-32478``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+from enum import StrEnum
+
+from engine.errors import BlockError
+
+# --- RET_VAL -----------------------------------------------------------------------------
+
+OK = 0
+# General error events (low byte ``yy``; the parameter number goes into ``x``), seeds §6.1.
+AREA_LENGTH_READ = 0x22
+AREA_LENGTH_WRITE = 0x23
+AREA_READ = 0x24
+AREA_WRITE = 0x25
+DB_NOT_LOADED = 0x3A
+# Specific error codes (x = 0).
+PARAM_RANGE = 0x8080  # a parameter value is out of range (e.g. SET_CLK date)
+
+
+def as_int(word: int) -> int:
+    """A 16-bit RET_VAL word as the signed INT the block returns (``W#16#8122`` -> -32478)."""
+    word &= 0xFFFF
+    return word - 0x10000 if word & 0x8000 else word
+
+
+def as_word(ret_val: int) -> int:
+    """A signed RET_VAL as its 16-bit word (for display as ``W#16#8122``)."""
+    return ret_val & 0xFFFF
+
+
+def general_error(param: int, event: int) -> int:
+    """General error code ``W#16#8xyy`` for parameter number ``param`` (1-based), as INT."""
+    return as_int(0x8000 | (param << 8) | event)
+
+
+def specific_error(code: int) -> int:
+    """Specific error ``W#16#80yy`` as INT."""
+    return as_int(code)
+
+
+def is_error(ret_val: int) -> bool:
+    """RET_VAL < 0 (bit 15 set) means failure."""
+    return as_int(ret_val) < 0
+
+
+def br_of(ret_val: int) -> bool:
+    """The BR bit (ENO) an SFC leaves: 1 on success, 0 on error."""
+    return not is_error(ret_val)
+
+
+# --- The catalogue -----------------------------------------------------------------------
+
+
+class Kind(StrEnum):
+    SFB = "SFB"  # needs an instance DB (or multi-instance)
+    SFC = "SFC"  # no memory of its own
+
+
+class Direction(StrEnum):
+    IN = "IN"
+    OUT = "OUT"
+    IN_OUT = "IN_OUT"
+
+
+@dataclass(frozen=True, slots=True)
+class Pin:
+    """One formal parameter: name, direction and S7 type (``ANY`` for an area pointer)."""
+
+    name: str
+    direction: Direction
+    type: str
+    comment: str = ""
+
+    @property
+    def is_input(self) -> bool:
+        return self.direction in (Direction.IN, Direction.IN_OUT)
+
+    @property
+    def is_output(self) -> bool:
+        return self.direction in (Direction.OUT, Direction.IN_OUT)
+
+
+@dataclass(frozen=True, slots=True)
+class Entry:
+    """One system block: ``SFB4 TON`` with its pins in documentation order."""
+
+    kind: Kind
+    number: int
+    name: str
+    pins: tuple[Pin, ...]
+    summary: str
+
+    @property
+    def key(self) -> str:
+        """``SFB4``."""
+        return f"{self.kind}{self.number}"
+
+    @property
+    def needs_instance(self) -> bool:
+        return self.kind is Kind.SFB
+
+    def pin(self, name: str) -> Pin | None:
+        upper = name.upper()
+        return next((p for p in self.pins if p.name == upper), None)
+
+    def param_number(self, name: str) -> int:
+        """1-based position of pin ``name`` (the ``x`` of a general error code)."""
+        upper = name.upper()
+        for i, p in enumerate(self.pins, start=1):
+            if p.name == upper:
+                return i
+        raise KeyError(f"{self.key} {self.name} has no parameter {name}")
+
+    @property
+    def inputs(self) -> tuple[Pin, ...]:
+        return tuple(p for p in self.pins if p.is_input)
+
+    @property
+    def outputs(self) -> tuple[Pin, ...]:
+        return tuple(p for p in self.pins if p.is_output)
+
+    def check_call(
+        self, inputs: Iterable[str] = (), outputs: Iterable[str] = (), *, has_instance: bool
+    ) -> list[str]:
+        """Problems with ``CALL <block>(in := ..., out => ...)``; empty when the call is valid.
+
+        An SFB needs an instance DB, an SFC must not have one; ``:=`` must name an IN/IN_OUT
+        pin, ``=>`` an OUT/IN_OUT pin; a pin may be given once.
+        """
+        where = f"{self.key} {self.name}"
+        problems: list[str] = []
+        if self.needs_instance and not has_instance:
+            problems.append(f"{where} is an SFB and needs an instance DB")
+        if not self.needs_instance and has_instance:
+            problems.append(f"{where} is an SFC and takes no instance DB")
+        seen: set[str] = set()
+        for names, want_input in ((inputs, True), (outputs, False)):
+            for name in names:
+                pin = self.pin(name)
+                if pin is None:
+                    known = ", ".join(p.name for p in self.pins) or "none"
+                    problems.append(f"{where} has no parameter {name} (parameters: {known})")
+                    continue
+                if name.upper() in seen:
+                    problems.append(f"{where}: parameter {pin.name} given twice")
+                seen.add(name.upper())
+                if want_input and not pin.is_input:
+                    problems.append(f"{where}: {pin.name} is an output, use {pin.name} => ...")
+                if not want_input and not pin.is_output:
+                    problems.append(f"{where}: {pin.name} is an input, use {pin.name} := ...")
+        return problems
+
+
+def _pins(spec: str) -> tuple[Pin, ...]:
+    """``"IN CU:BOOL R:BOOL; OUT Q:BOOL"`` -> pins (the compact notation of the table below)."""
+    pins: list[Pin] = []
+    for section in filter(None, (s.strip() for s in spec.split(";"))):
+        direction, *items = section.split()
+        for item in items:
+            name, type_ = item.split(":")
+            pins.append(Pin(name, Direction(direction), type_))
+    return tuple(pins)
+
+
+def _e(kind: Kind, number: int, name: str, pins: str, summary: str) -> Entry:
+    return Entry(kind, number, name, _pins(pins), summary)
+
+
+_SFB, _SFC = Kind.SFB, Kind.SFC
+
+CATALOGUE: tuple[Entry, ...] = (
+    _e(_SFB, 0, "CTU", "IN CU:BOOL R:BOOL PV:INT; OUT Q:BOOL CV:INT",
+       "up counter: CV+1 on rising CU to 32767, R -> 0, Q = CV >= PV"),
+    _e(_SFB, 1, "CTD", "IN CD:BOOL LOAD:BOOL PV:INT; OUT Q:BOOL CV:INT",
+       "down counter: CV-1 on rising CD to -32768, LOAD -> PV, Q = CV <= 0"),
+    _e(_SFB, 2, "CTUD", "IN CU:BOOL CD:BOOL R:BOOL LOAD:BOOL PV:INT; OUT QU:BOOL QD:BOOL CV:INT",
+       "up/down counter: QU = CV >= PV, QD = CV <= 0"),
+    _e(_SFB, 3, "TP", "IN IN:BOOL PT:TIME; OUT Q:BOOL ET:TIME", "pulse of length PT"),
+    _e(_SFB, 4, "TON", "IN IN:BOOL PT:TIME; OUT Q:BOOL ET:TIME", "on delay"),
+    _e(_SFB, 5, "TOF", "IN IN:BOOL PT:TIME; OUT Q:BOOL ET:TIME", "off delay"),
+    _e(_SFC, 0, "SET_CLK", "IN PDT:DATE_AND_TIME; OUT RET_VAL:INT", "set the CPU clock"),
+    _e(_SFC, 1, "READ_CLK", "OUT RET_VAL:INT CDT:DATE_AND_TIME", "read the CPU clock"),
+    _e(_SFC, 17, "ALARM_SQ", "IN SIG:BOOL ID:WORD EV_ID:DWORD SD:ANY; OUT RET_VAL:INT",
+       "acknowledgeable message on each SIG edge"),
+    _e(_SFC, 18, "ALARM_S", "IN SIG:BOOL ID:WORD EV_ID:DWORD SD:ANY; OUT RET_VAL:INT",
+       "message without acknowledgement on each SIG edge"),
+    _e(_SFC, 19, "ALARM_SC", "IN EV_ID:DWORD; OUT RET_VAL:INT STATE:BOOL Q_STATE:BOOL",
+       "query the signal and acknowledgement state of a message"),
+    _e(_SFC, 20, "BLKMOV", "IN SRCBLK:ANY; OUT RET_VAL:INT DSTBLK:ANY", "copy an area"),
+    _e(_SFC, 21, "FILL", "IN BVAL:ANY; OUT RET_VAL:INT BLK:ANY", "fill an area with a pattern"),
+    _e(_SFC, 43, "RE_TRIGR", "", "restart cycle-time monitoring"),
+    _e(_SFC, 46, "STP", "", "put the CPU into STOP"),
+    _e(_SFC, 47, "WAIT", "IN WT:INT", "busy-wait WT microseconds (recorded, time not advanced)"),
+    _e(_SFC, 51, "RDSYSST",
+       "IN REQ:BOOL SZL_ID:WORD INDEX:WORD; OUT RET_VAL:INT BUSY:BOOL SZL_HEADER:ANY DR:ANY",
+       "read a system status list (0x00A0: diagnostic buffer, newest first)"),
+    _e(_SFC, 64, "TIME_TCK", "OUT RET_VAL:TIME", "ms tick of the CPU clock, wrapping at 2^31"),
+)  # fmt: skip
+
+_BY_KEY: dict[str, Entry] = {e.key: e for e in CATALOGUE} | {e.name: e for e in CATALOGUE}
+
+
+def find(key: str) -> Entry | None:
+    """The entry for ``SFB4`` / ``SFB 4`` / ``sfb4`` / ``TON``, or None."""
+    return _BY_KEY.get("".join(str(key).split()).upper())
+
+
+def lookup(key: str) -> Entry:
+    """Like ``find`` but an unknown block raises ``BlockError`` naming the known ones."""
+    entry = find(key)
+    if entry is None:
+        known = ", ".join(f"{e.key} {e.name}" for e in CATALOGUE)
+        raise BlockError(f"unknown system block {key!r} (known: {known})")
+    return entry
+
+
+# --- Engine declarations -----------------------------------------------------------------
+
+ANY_AS = "STRING[254]"
+"""How an ANY pin is declared to the engine: the pointer text ``P#M0.0 BYTE 10``."""
+
+
+def engine_sections(entry: Entry) -> tuple[dict[str, dict[str, str]], str | None]:
+    """The ``engine.blocks`` sections for ``entry`` and the RET type of an SFC.
+
+    RET_VAL becomes the SFC's return value; an ANY pin is passed as pointer text and is
+    therefore an IN for the engine even when it names a destination (DSTBLK, BLK, DR).
+    """
+    sections: dict[str, dict[str, str]] = {}
+    ret: str | None = None
+    for pin in entry.pins:
+        if pin.name == "RET_VAL":
+            ret = pin.type
+            continue
+        decl = "IN" if pin.type == "ANY" else pin.direction.value
+        sections.setdefault(decl, {})[pin.name] = ANY_AS if pin.type == "ANY" else pin.type
+    return sections, ret

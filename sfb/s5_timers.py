@@ -1,0 +1,209 @@
+"""S5 timers SP SE SD SS SF on the T area, and the S5TIME codec (SPEC.md §1.7; seeds §5.1).
+
+S5TIME (16 bit): bits 0-11 three BCD digits 0..999, bits 12-13 the time base (10 ms, 100 ms,
+1 s, 10 s); a preset in ms is encoded with the smallest base that fits (``S5T#2S`` =
+``W#16#0200``). A timer cell counts its value down **at its time base on the CPU's tick
+grid** (``now_ns // base``), asynchronously to the program, so a started timer expires
+between TV - 1 base and TV after the start (behaviour 46). ``L T n`` reads the count
+binary, ``LC T n`` reads it BCD with the time base. The five functions (behaviours 44, 45):
+
+* SP pulse: rising S starts; Q = 1 while S = 1 and time runs; S = 0 stops it.
+* SE extended pulse: rising S starts; Q = 1 for the full time; a rising S retriggers.
+* SD on-delay: rising S starts; Q = 1 after TV while S = 1; S = 0 resets value and Q.
+* SS retentive on-delay: rising S starts (restarts while running); Q = 1 after TV until R.
+* SF off-delay: S = 1 gives Q = 1; the falling S starts; Q = 0 after TV; rising S stops it.
+
+R = 1 clears value and Q for all five (R dominates). A rising FR with S = 1 restarts.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from enum import StrEnum
+from typing import NamedTuple
+
+from engine.datatypes import S5_BASES_MS as TIME_BASES_MS
+from engine.datatypes import bcd_to_int, int_to_bcd, ms_to_s5time, s5time_to_ms
+from engine.errors import ProgramError
+from engine.memory import S5Timer
+
+NS_PER_MS = 1_000_000
+
+# The S5TIME codec lives in engine.datatypes; these names are the sfb spelling of it.
+s5time_encode = ms_to_s5time
+s5time_decode = s5time_to_ms
+to_bcd = int_to_bcd
+from_bcd = bcd_to_int
+
+
+def s5time_split(word: int) -> tuple[int, int]:
+    """S5TIME word to ``(count, base_ms)``; bits 14-15 are ignored."""
+    return from_bcd(word & 0x0FFF), TIME_BASES_MS[(word >> 12) & 0x3]
+
+
+class TimerFunction(StrEnum):
+    """The five S5 timer functions (English STL mnemonic; German/box names in comments)."""
+
+    SP = "SP"  # SI, S_PULSE
+    SE = "SE"  # SV, S_PEXT
+    SD = "SD"  # SE, S_ODT
+    SS = "SS"  # SS, S_ODTS
+    SF = "SF"  # SA, S_OFFDT
+
+
+# German STL and SCL/LAD box names for the same functions (seeds-runtime §5.1 table).
+FUNCTION_ALIASES: dict[str, TimerFunction] = {
+    "S_PULSE": TimerFunction.SP, "SI": TimerFunction.SP,
+    "S_PEXT": TimerFunction.SE, "SV": TimerFunction.SE,
+    "S_ODT": TimerFunction.SD,
+    "S_ODTS": TimerFunction.SS,
+    "S_OFFDT": TimerFunction.SF, "SA": TimerFunction.SF,
+}  # fmt: skip
+
+
+def _function(name: TimerFunction | str) -> TimerFunction:
+    key = str(name).upper()
+    try:
+        return FUNCTION_ALIASES.get(key) or TimerFunction(key)
+    except ValueError:
+        raise ProgramError(f"unknown S5 timer function {name!r} (SP SE SD SS SF)") from None
+
+
+def _remaining_count(cell: S5Timer, now_ns: int) -> int:
+    """Ticks left: the preset count minus the time-base boundaries passed since the start."""
+    base_ns = cell.time_base_ms * NS_PER_MS
+    passed = max(0, now_ns // base_ns - cell.start_ns // base_ns)
+    return max(0, cell.preset_ms // cell.time_base_ms - passed)
+
+
+def tick(cell: S5Timer, now_ns: int) -> None:
+    """The OS update of one cell: count down on the time-base grid; handle expiry."""
+    if not cell.running:
+        return
+    count = _remaining_count(cell, now_ns)
+    cell.value_ms = count * cell.time_base_ms
+    if count == 0:
+        cell.running = False
+        cell.q = {TimerFunction.SD: cell.s_edge, TimerFunction.SS: True}.get(
+            _function(cell.mode), False
+        )
+
+
+def tick_all(timers: Sequence[S5Timer], now_ns: int) -> None:
+    """The OS update of the T area (call once per scan, and before reading a timer)."""
+    for cell in timers:
+        tick(cell, now_ns)
+
+
+def shift(timers: Sequence[S5Timer], delta_ns: int) -> None:
+    """Freeze running timers for ``delta_ns`` (HOLD: timers stop, the RTC runs; behaviour 51)."""
+    for cell in timers:
+        if cell.running:
+            cell.start_ns += delta_ns
+
+
+def cell_of(timers: Sequence[S5Timer], number: int) -> S5Timer:
+    """Timer ``T number``; a number beyond the area is a programming error (8x26)."""
+    if not 0 <= number < len(timers):
+        raise ProgramError(f"T{number}: timer number too high (the CPU has {len(timers)})")
+    return timers[number]
+
+
+def _load(cell: S5Timer, tv_ms: int, now_ns: int) -> None:
+    count, base = s5time_split(s5time_encode(tv_ms))
+    cell.time_base_ms, cell.preset_ms, cell.value_ms = base, count * base, count * base
+    cell.start_ns = now_ns
+    cell.running = count > 0
+
+
+def reset(cell: S5Timer) -> None:
+    """``R T n``: value 0, status 0, stopped (edge memories are kept)."""
+    cell.value_ms, cell.running, cell.q = 0, False, False
+
+
+def run(
+    cell: S5Timer,
+    function: TimerFunction | str,
+    s: bool,
+    tv_ms: int,
+    now_ns: int,
+    *,
+    r: bool = False,
+    fr: bool = False,
+) -> bool:
+    """One timer instruction or box call on ``cell``: start/stop per function, then R; Q.
+
+    ``tv_ms`` is the S5TIME preset in ms (encoded with the finest base that fits).
+    """
+    fn = _function(function)
+    tick(cell, now_ns)
+    s, r, fr = bool(s), bool(r), bool(fr)
+    start = (s and not cell.s_edge) or (fr and not cell.fr_edge and s)
+    falling = cell.s_edge and not s
+    cell.mode, cell.s_edge, cell.fr_edge = fn.value, s, fr
+    if fn is TimerFunction.SP:
+        if start:
+            _load(cell, tv_ms, now_ns)
+            cell.q = cell.running
+        elif not s:
+            cell.running, cell.q = False, False
+    elif fn is TimerFunction.SE:
+        if start:
+            _load(cell, tv_ms, now_ns)
+            cell.q = cell.running
+    elif fn is TimerFunction.SD:
+        if not s:
+            reset(cell)
+        elif start:
+            _load(cell, tv_ms, now_ns)
+            cell.q = not cell.running
+    elif fn is TimerFunction.SS:
+        if start and not cell.q:
+            _load(cell, tv_ms, now_ns)
+            cell.q = not cell.running
+    elif s:
+        cell.running, cell.q = False, True
+    elif falling:
+        _load(cell, tv_ms, now_ns)
+        cell.q = cell.running
+    if r:
+        reset(cell)
+    return cell.q
+
+
+def s_pulse(cell: S5Timer, s: bool, tv_ms: int, now_ns: int, *, r: bool = False) -> TimerBox:
+    """S_PULSE box (SP)."""
+    return _box(cell, TimerFunction.SP, s, tv_ms, now_ns, r)
+
+
+def s_pext(cell: S5Timer, s: bool, tv_ms: int, now_ns: int, *, r: bool = False) -> TimerBox:
+    """S_PEXT box (SE)."""
+    return _box(cell, TimerFunction.SE, s, tv_ms, now_ns, r)
+
+
+def s_odt(cell: S5Timer, s: bool, tv_ms: int, now_ns: int, *, r: bool = False) -> TimerBox:
+    """S_ODT box (SD)."""
+    return _box(cell, TimerFunction.SD, s, tv_ms, now_ns, r)
+
+
+def s_odts(cell: S5Timer, s: bool, tv_ms: int, now_ns: int, *, r: bool = False) -> TimerBox:
+    """S_ODTS box (SS)."""
+    return _box(cell, TimerFunction.SS, s, tv_ms, now_ns, r)
+
+
+def s_offdt(cell: S5Timer, s: bool, tv_ms: int, now_ns: int, *, r: bool = False) -> TimerBox:
+    """S_OFFDT box (SF)."""
+    return _box(cell, TimerFunction.SF, s, tv_ms, now_ns, r)
+
+
+class TimerBox(NamedTuple):
+    """A timer box result: Q, BI (remaining count, binary) and the function value (BCD)."""
+
+    q: bool
+    bi: int
+    bcd: int
+
+
+def _box(cell: S5Timer, fn: TimerFunction, s: bool, tv_ms: int, now_ns: int, r: bool) -> TimerBox:
+    q = run(cell, fn, s, tv_ms, now_ns, r=r)
+    return TimerBox(q, cell.binary(), cell.bcd())

@@ -1,0 +1,79 @@
+"""SFC46 STP, SFC47 WAIT, SFC43 RE_TRIGR (SPEC.md §1.7; seeds-runtime §6.3, behaviour 30).
+
+* STP puts the CPU into STOP from any OB, OB100 included (behaviour 30): ``cpu.stop``.
+* WAIT(WT) busy-waits WT µs (INT, max 32767) on a real CPU and has no RET_VAL. Here time is
+  the injected clock, so nothing advances: the wait is recorded as a ``Waited`` event in
+  the scan's record; a negative WT waits 0 µs (``[K]``).
+* RE_TRIGR restarts the cycle-time monitoring of the current cycle: ``cpu.retrigger``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Protocol, cast
+
+from engine import blocks
+from sfb.catalogue import engine_sections, lookup
+
+if TYPE_CHECKING:
+    from engine.cpu import CallContext
+
+WT_MAX_US = 32767
+
+
+class CpuControl(Protocol):
+    """What the control SFCs need from the CPU (``engine.cpu.Cpu`` satisfies it)."""
+
+    def stop(self, reason: str = "") -> None: ...
+
+    def retrigger(self) -> None: ...
+
+
+@dataclass(frozen=True, slots=True)
+class Waited:
+    """SFC47 WAIT was called for ``us`` microseconds (recorded; the clock is not advanced)."""
+
+    us: int
+    block: str = "SFC47"
+
+
+def stp(cpu: CpuControl) -> None:
+    """SFC46 STP: go to STOP now (behaviour 30)."""
+    cpu.stop("SFC46 STP")
+
+
+def wait(wt_us: int) -> Waited:
+    """SFC47 WAIT(WT): the record of a wait of WT µs (clamped to 0..32767)."""
+    return Waited(max(0, min(int(wt_us), WT_MAX_US)))
+
+
+def re_trigr(cpu: CpuControl) -> None:
+    """SFC43 RE_TRIGR: restart cycle-time monitoring for this cycle."""
+    cpu.retrigger()
+
+
+# --- Engine adapters --------------------------------------------------------------------
+
+
+def _declare(name: str, body: blocks.FCBody) -> blocks.FC:
+    entry = lookup(name)
+    sections, ret = engine_sections(entry)
+    return blocks.sfc(entry.number, entry.name, RET=ret, **sections)(body)
+
+
+def _stp(ctx: CallContext, params: dict[str, object]) -> None:
+    stp(ctx.cpu)
+
+
+def _wait(ctx: CallContext, params: dict[str, object]) -> None:
+    ctx.emit(wait(cast(int, params["WT"])))
+
+
+def _re_trigr(ctx: CallContext, params: dict[str, object]) -> None:
+    re_trigr(ctx.cpu)
+
+
+SFC46 = _declare("STP", _stp)
+SFC47 = _declare("WAIT", _wait)
+SFC43 = _declare("RE_TRIGR", _re_trigr)
+BLOCKS = (SFC43, SFC46, SFC47)

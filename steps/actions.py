@@ -1,0 +1,157 @@
+"""Action rows of a step → two generated Python functions (SPEC §2.8, graph-semantics §E).
+
+``def _a<i>(st, R, ev, c_ok, zero)`` runs while step ``i`` is active, rows top to bottom:
+  N bit      operand = 1 (0 while C does not hold, or ZERO_OP); an event N row writes
+             ``event occurred`` — a one-call pulse, the compiled form ``A ev; = op``
+  S / R      set / reset (latching), every call (or once, with an event)
+  D op, t    operand = 1 once the step has been active ≥ t (``st.t_ns``: HALT_TM freezes it)
+  L op, t    operand = 1 while the step has been active < t
+  CALL       ``R.call(...)`` every call (skipped by ZERO_OP)
+  x := expr  assignment (every call, or once with an event)
+  ON/OFF Sx, OFF S_ALL, counters CS CU CD CR, timers TL TD TF TR: event rows only
+``ev`` is the step's event bits of this call, ``c_ok`` whether its interlock holds.
+``def _f<i>(st, R, ev)`` is the final scan of a step deactivated in this call: N, D and L
+operands are reset, then the S0 rows run.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from engine.errors import S7Error
+from sequencer.model import ActionRow, Assignment, BlockCall, Expr, Operand, Step, StepTarget
+from sequencer.state import EVENT_BITS
+from steps.expressions import Resolve, StepIndex, gen_value
+from steps.operands import CodeGen, Ref
+
+TimeValue = Callable[[Expr], str]
+
+
+class ActionError(S7Error):
+    """An action row that cannot be compiled."""
+
+
+def _indent(lines: list[str], n: int = 1) -> list[str]:
+    return ["    " * n + ln for ln in lines]
+
+
+def gen_step_actions(
+    i: int,
+    step: Step,
+    g: CodeGen,
+    resolve: Resolve,
+    sidx: StepIndex,
+    tidx: StepIndex,
+) -> tuple[str, str]:
+    """Source of ``_a<i>`` and ``_f<i>`` for one step."""
+    body: list[str] = []
+    final_reset: list[str] = []
+    s0_rows: list[str] = []
+
+    def val(e: Expr) -> str:
+        return gen_value(e, g, resolve, sidx, tidx)
+
+    for row in step.actions:
+        code = _row(i, row, g, resolve, val, sidx)
+        q = row.qualifier.upper()
+        if q in ("N", "D", "L") and isinstance(row.operand, Operand):
+            final_reset.append(g.set_bit(resolve(row.operand), False))
+        if row.event == "S0":
+            s0_rows.extend(code)
+            continue
+        if row.event is not None:
+            cond = f"ev & {EVENT_BITS[row.event]}"
+            if row.interlocked:
+                cond += " and c_ok"
+            if q == "N" and isinstance(row.operand, Operand):
+                # the one-call pulse: written every call while active
+                body.extend(_n_event(row, g, resolve, cond))
+                continue
+            body.append(f"if {cond}:")
+            body.extend(_indent(code))
+        elif row.interlocked and q not in ("N", "D", "L"):
+            body.append("if c_ok:")
+            body.extend(_indent(code))
+        else:
+            body.extend(code)
+    a_src = [f"def _a{i}(st, R, ev, c_ok, zero):", "    X = st.x", "    V = st.vars"]
+    a_src += _indent(body) or ["    pass"]
+    f_src = [f"def _f{i}(st, R, ev):", "    X = st.x", "    V = st.vars"]
+    f_src += _indent(final_reset)
+    if s0_rows:
+        f_src += ["    c_ok = True", "    zero = False", *_indent(s0_rows)]
+    if len(f_src) == 3:
+        f_src.append("    pass")
+    return "\n".join(a_src) + "\n", "\n".join(f_src) + "\n"
+
+
+def _n_event(row: ActionRow, g: CodeGen, resolve: Resolve, cond: str) -> list[str]:
+    assert isinstance(row.operand, Operand)
+    return [g.write(resolve(row.operand), f"bool({cond}) and not zero")]
+
+
+def _bit(row: ActionRow, resolve: Resolve) -> Ref:
+    if not isinstance(row.operand, Operand):
+        raise ActionError(f"{row.qualifier} needs a bit operand", row.loc)
+    ref = resolve(row.operand)
+    if ref.type != "BOOL":
+        raise ActionError(
+            f"{row.qualifier} {row.operand.name}: operand must be BOOL, not {ref.type}", row.loc
+        )
+    return ref
+
+
+def _row(
+    i: int,
+    row: ActionRow,
+    g: CodeGen,
+    resolve: Resolve,
+    val: Callable[[Expr], str],
+    sidx: StepIndex,
+) -> list[str]:
+    """The statements of one row, without its event/interlock guard (N/D/L include C)."""
+    q = row.qualifier.upper()
+    op = row.operand
+    gate = " and c_ok" if row.interlocked else ""
+    if isinstance(op, Assignment):
+        return [g.write(resolve(op.target), val(op.expr))]
+    if q == "N":
+        ref = _bit(row, resolve)
+        return [g.write(ref, f"not zero{gate}")]
+    if q in ("S", "R"):
+        return [g.set_bit(_bit(row, resolve), q == "S")]
+    if q in ("D", "L"):
+        ref = _bit(row, resolve)
+        if row.value is None:
+            raise ActionError(f"{q} needs a time", row.loc)
+        t = f"st.t_ns[{i}] {'>=' if q == 'D' else '<'} ({val(row.value)}) * 1000000"
+        return [g.write(ref, f"not zero{gate} and {t}")]
+    if q == "CALL":
+        if not isinstance(op, BlockCall):
+            raise ActionError("CALL needs a block", row.loc)
+        ins = ", ".join(f"{name!r}: {val(e)}" for name, e in op.inputs)
+        lines = [f"_o = R.call({op.kind!r}, {op.block!r}, {op.instance!r}, {{{ins}}})"]
+        lines = ["if not zero:", f"    {lines[0]}"]
+        for name, target in op.outputs:
+            lines.append(f"    if {name!r} in _o:")
+            lines.append(f"        {g.write(resolve(target), f'_o[{name!r}]')}")
+        return lines
+    if q in ("ON", "OFF"):
+        if not isinstance(op, StepTarget):
+            raise ActionError(f"{q} needs a step (Sn or S_ALL)", row.loc)
+        if op.step is None:
+            return [f"R.off_all({i})"]
+        k = sidx(op.step, op.loc)
+        return [f"R.{q.lower()}({k})"]
+    if q in ("CS", "CU", "CD", "CR", "TL", "TD", "TF", "TR"):
+        if not isinstance(op, Operand):
+            raise ActionError(f"{q} needs a timer or counter", row.loc)
+        ref = resolve(op)
+        if ref.kind not in ("timer", "counter"):
+            raise ActionError(
+                f"{q} {op.name}: not a {'counter' if q[0] == 'C' else 'timer'}", row.loc
+            )
+        value = val(row.value) if row.value is not None else "0"
+        fn = "counter" if q[0] == "C" else "timer"
+        return [f"R.{fn}({q!r}, {ref.number}, {value})"]
+    raise ActionError(f"unknown qualifier {row.qualifier}", row.loc)

@@ -1,0 +1,87 @@
+"""Conditions (transitions, interlocks, supervisions, permanent coils) → Python source
+(SPEC §2.9, graph-semantics §E.3).
+
+A condition is a boolean expression of *contacts*: an address / symbol / variable contact,
+``Sn.X``, ``Tn.TT``, or a comparison box (``S3.U > T#10S`` is one contact). Every contact is
+evaluated (no short circuit) so the criteria word is complete: bit ``k`` = truth of the
+``k``-th contact in source order (max 32, CRIT/CRIT_LOC/CRIT_SUP, M-V5 15-9). The generated
+function ``def name(st): ... return value, crit`` is compiled once with the whole chart.
+"""
+
+from __future__ import annotations
+
+from sequencer.model import Binary, Const, Expr, Operand, StepAttr, TransAttr, Unary
+from steps.expressions import COMPARE, Resolve, StepIndex, expr_type, gen_value
+from steps.operands import CodeGen
+
+MAX_CONTACTS = 32
+
+
+def contacts(e: Expr | None, resolve: Resolve) -> list[Expr]:
+    """The contacts of a condition in source order."""
+    out: list[Expr] = []
+
+    def walk(n: Expr) -> None:
+        if isinstance(n, Unary) and n.op == "NOT":
+            walk(n.operand)
+        elif (
+            isinstance(n, Binary)
+            and n.op.upper() in ("AND", "OR", "XOR")
+            and expr_type(n, resolve) == "BOOL"
+        ):
+            walk(n.left)
+            walk(n.right)
+        else:
+            out.append(n)
+
+    if e is not None:
+        walk(e)
+    return out
+
+
+def contact_text(e: Expr) -> str:
+    """A short label of a contact (for criteria displays)."""
+    if isinstance(e, Operand):
+        return f'"{e.name}"' if e.quoted else e.name
+    if isinstance(e, StepAttr):
+        return f"S{e.step}.{e.attr}"
+    if isinstance(e, TransAttr):
+        return f"T{e.transition}.TT"
+    if isinstance(e, Const):
+        return e.text
+    if isinstance(e, Binary) and e.op in COMPARE:
+        return f"{contact_text(e.left)} {e.op} {contact_text(e.right)}"
+    return type(e).__name__
+
+
+def gen_condition(
+    name: str,
+    e: Expr | None,
+    g: CodeGen,
+    resolve: Resolve,
+    sidx: StepIndex,
+    tidx: StepIndex,
+) -> str:
+    """Source of ``def name(st) -> (bool, crit)``; an empty condition holds with crit 0."""
+    if e is None:
+        return f"def {name}(st):\n    return True, 0\n"
+    leaves = contacts(e, resolve)
+    ids = {id(c): k for k, c in enumerate(leaves)}
+    lines = [f"def {name}(st):", "    X = st.x", "    V = st.vars"]
+    for k, c in enumerate(leaves):
+        lines.append(f"    c{k} = bool({gen_value(c, g, resolve, sidx, tidx)})")
+
+    def combine(n: Expr) -> str:
+        if id(n) in ids:
+            return f"c{ids[id(n)]}"
+        if isinstance(n, Unary):
+            return f"(not {combine(n.operand)})"
+        assert isinstance(n, Binary)
+        op = n.op.upper()
+        if op == "XOR":
+            return f"({combine(n.left)} != {combine(n.right)})"
+        return f"({combine(n.left)} {op.lower()} {combine(n.right)})"
+
+    crit = " | ".join(f"c{k} << {k}" if k else "c0" for k in range(min(len(leaves), 32)))
+    lines.append(f"    return {combine(e)}, ({crit or '0'})")
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,332 @@
+"""Arithmetic of action rows and comparisons of conditions, compiled to Python source
+(SPEC §2.8 last row, seed 000:5838-5884, graph-semantics §E.2).
+
+Operators ``+ - * /`` on INT DINT REAL (TIME counts as DINT ms), ``MOD`` (DINT),
+``AND OR XOR`` on WORD/DWORD, ``SHL SHR SSR ROL ROR``; the functions of ``FUNCTIONS``.
+INT/DINT results that leave their range, and divisions by zero, do not raise: they set the
+overflow status (``st.ov``, ``st.ov_count``, one line in ``st.diag``) and the result wraps
+as on the CPU (``/`` by zero gives 0).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any
+
+from engine.errors import TypeMismatch
+from sequencer.model import Binary, Const, Expr, FuncCall, Operand, StepAttr, TransAttr, Unary
+from steps.operands import CodeGen, Ref
+
+Resolve = Callable[[Operand], Ref]
+StepIndex = Callable[[int, Any], int]
+
+INTS = frozenset({"INT", "DINT", "TIME", "S5TIME", "TIME_OF_DAY", "TOD"})
+BITS = frozenset({"BYTE", "WORD", "DWORD", "CHAR"})
+NUMERIC = INTS | BITS | {"REAL"}
+RANGE = {"INT": (-32768, 32767), "DINT": (-(2**31), 2**31 - 1), "TIME": (-(2**31), 2**31 - 1)}
+MASK = {"BYTE": 0xFF, "CHAR": 0xFF, "WORD": 0xFFFF, "DWORD": 0xFFFFFFFF}
+COMPARE = {"=": "==", "<>": "!=", "<": "<", ">": ">", "<=": "<=", ">=": ">="}
+
+# name -> (result type or None = same as argument, Python helper name)
+FUNCTIONS: dict[str, tuple[str | None, str]] = {
+    "BCD_TO_NUM": (None, "_bcd_to_num"),
+    "NUM_TO_BCD": (None, "_num_to_bcd"),
+    "INT_TO_DINT": ("DINT", "int"),
+    "DINT_TO_REAL": ("REAL", "float"),
+    "ROUND": ("DINT", "_round"),
+    "TRUNC": ("DINT", "_trunc"),
+    "NEGR": ("REAL", "_negr"),
+    "ABS": ("REAL", "_abs"),
+    "SQR": ("REAL", "_sqr"),
+    "SQRT": ("REAL", "_sqrt"),
+    "LN": ("REAL", "_ln"),
+    "EXP": ("REAL", "_exp"),
+    "SIN": ("REAL", "_sin"),
+    "ASIN": ("REAL", "_asin"),
+    "COS": ("REAL", "_cos"),
+    "ACOS": ("REAL", "_acos"),
+    "TAN": ("REAL", "_tan"),
+    "ATAN": ("REAL", "_atan"),
+    "NEG": (None, "_neg"),
+    "NOT": (None, "_not"),
+    "SWAP": (None, "_swap"),
+    "RLDA": ("DWORD", "_rlda"),
+    "RRDA": ("DWORD", "_rrda"),
+}
+
+
+def expr_type(e: Expr, resolve: Resolve) -> str:
+    """The S7 type of an expression (for code selection and the same-type check)."""
+    if isinstance(e, Const):
+        return e.type
+    if isinstance(e, Operand):
+        return resolve(e).type
+    if isinstance(e, StepAttr):
+        return "BOOL" if e.attr == "X" else "TIME"
+    if isinstance(e, TransAttr):
+        return "BOOL"
+    if isinstance(e, Unary):
+        return "BOOL" if e.op == "NOT" else expr_type(e.operand, resolve)
+    if isinstance(e, FuncCall):
+        res, _ = FUNCTIONS.get(e.name.upper(), (None, ""))
+        return res or (expr_type(e.args[0], resolve) if e.args else "DINT")
+    if isinstance(e, Binary):
+        if e.op in COMPARE:
+            return "BOOL"
+        lt, rt = expr_type(e.left, resolve), expr_type(e.right, resolve)
+        if e.op in ("SHL", "SHR", "SSR", "ROL", "ROR"):
+            return lt
+        if lt == "BOOL" and rt == "BOOL":
+            return "BOOL"
+        return _wider(lt, rt)
+    raise TypeMismatch(f"not an expression: {e!r}")
+
+
+def _wider(a: str, b: str) -> str:
+    order = ("BYTE", "CHAR", "WORD", "INT", "S5TIME", "DWORD", "DINT", "TIME", "REAL")
+    if a == b:
+        return a
+    if "TIME" in (a, b):
+        return "TIME"
+    ia = order.index(a) if a in order else 0
+    ib = order.index(b) if b in order else 0
+    return a if ia >= ib else b
+
+
+def gen_value(e: Expr, g: CodeGen, resolve: Resolve, sidx: StepIndex, tidx: StepIndex) -> str:
+    """Python source computing the value of ``e`` (locals ``st V X`` in scope)."""
+    if isinstance(e, Const):
+        v = e.value
+        if isinstance(v, (bool, int, float)):
+            return repr(v)
+        return g.const(v)
+    if isinstance(e, Operand):
+        return g.read(resolve(e))
+    if isinstance(e, StepAttr):
+        i = sidx(e.step, e.loc)
+        if e.attr == "X":
+            return f"X[{i}]"
+        arr = "t_ns" if e.attr == "T" else "u_ns"
+        return f"(st.{arr}[{i}] // 1000000)"
+    if isinstance(e, TransAttr):
+        return f"st.tt[{tidx(e.transition, e.loc)}]"
+    if isinstance(e, Unary):
+        inner = gen_value(e.operand, g, resolve, sidx, tidx)
+        if e.op == "NOT":
+            t = expr_type(e.operand, resolve)
+            return f"_not(st, {inner}, {t!r})" if t in BITS else f"(not {inner})"
+        t = expr_type(e.operand, resolve)
+        return f"_ck(st, -({inner}), {t!r})" if t in RANGE else f"(-({inner}))"
+    if isinstance(e, FuncCall):
+        name = e.name.upper()
+        if name not in FUNCTIONS:
+            raise TypeMismatch(f"unknown function {e.name}", e.loc)
+        args = [gen_value(a, g, resolve, sidx, tidx) for a in e.args]
+        t = expr_type(e.args[0], resolve) if e.args else "DINT"
+        _, helper = FUNCTIONS[name]
+        if helper in ("int", "float"):
+            return f"{helper}({args[0]})"
+        return f"{helper}(st, {', '.join(args)}, {t!r})"
+    if isinstance(e, Binary):
+        left = gen_value(e.left, g, resolve, sidx, tidx)
+        right = gen_value(e.right, g, resolve, sidx, tidx)
+        op = e.op.upper()
+        if op in COMPARE:
+            return f"({left} {COMPARE[op]} {right})"
+        t = expr_type(e, resolve)
+        if op in ("AND", "OR", "XOR"):
+            py = {"AND": "and", "OR": "or", "XOR": "!="}[op]
+            if t == "BOOL":
+                if op == "XOR":
+                    return f"(bool({left}) != bool({right}))"
+                return f"(bool({left}) {py} bool({right}))"
+            py = {"AND": "&", "OR": "|", "XOR": "^"}[op]
+            return f"(({left}) {py} ({right}))"
+        if op in ("SHL", "SHR", "SSR", "ROL", "ROR"):
+            return f"_shift(st, {op!r}, {left}, {right}, {t!r})"
+        if op in ("+", "-", "*"):
+            src = f"(({left}) {op} ({right}))"
+            if t in RANGE:
+                return f"_ck(st, {src}, {t!r})"
+            if t in MASK:
+                return f"({src} & {MASK[t]})"
+            return src
+        if op == "/":
+            return f"_div(st, {left}, {right}, {t!r})"
+        if op == "MOD":
+            return f"_mod(st, {left}, {right}, {t!r})"
+        raise TypeMismatch(f"unknown operator {e.op}", e.loc)
+    raise TypeMismatch(f"not an expression: {e!r}")
+
+
+# ------------------------------------------------------------ runtime helpers
+
+
+def _overflow(st: Any, what: str) -> None:
+    st.ov = True
+    st.ov_count += 1
+    st.diag.append(what)
+    if len(st.diag) > 16:
+        del st.diag[0]
+
+
+def _ck(st: Any, v: Any, t: str) -> Any:
+    """Range check of an INT/DINT/TIME result: out of range sets OV and wraps."""
+    lo, hi = RANGE[t]
+    if lo <= v <= hi:
+        return v
+    _overflow(st, f"{t} overflow: {v}")
+    span = hi - lo + 1
+    return (int(v) - lo) % span + lo
+
+
+def _div(st: Any, a: Any, b: Any, t: str) -> Any:
+    if t == "REAL":
+        if b == 0:
+            _overflow(st, "REAL division by zero")
+            return math.inf if a >= 0 else -math.inf
+        return a / b
+    if b == 0:
+        _overflow(st, f"{t} division by zero")
+        return 0
+    q = abs(int(a)) // abs(int(b))
+    q = q if (a >= 0) == (b >= 0) else -q
+    return _ck(st, q, t) if t in RANGE else q
+
+
+def _mod(st: Any, a: int, b: int, t: str) -> int:
+    if b == 0:
+        _overflow(st, f"{t} MOD by zero")
+        return 0
+    r = abs(int(a)) % abs(int(b))
+    return r if a >= 0 else -r
+
+
+def _width(t: str) -> int:
+    return {"BYTE": 8, "CHAR": 8, "WORD": 16, "INT": 16, "S5TIME": 16}.get(t, 32)
+
+
+def _shift(st: Any, op: str, v: int, n: int, t: str) -> int:
+    w = _width(t)
+    mask = (1 << w) - 1
+    n = int(n) & 255
+    u = int(v) & mask
+    if op == "SHL":
+        r = (u << n) & mask if n < w else 0
+    elif op == "SHR":
+        r = u >> n if n < w else 0
+    elif op == "SSR":
+        s = int(v) if int(v) < (1 << (w - 1)) else int(v) - (1 << w)
+        return s >> min(n, w)
+    else:
+        n %= w
+        r = (
+            ((u << n) | (u >> (w - n))) & mask
+            if op == "ROL"
+            else ((u >> n) | (u << (w - n))) & mask
+        )
+    if t in RANGE:  # signed view of the bit pattern
+        return r - (1 << w) if r >> (w - 1) else r
+    return r
+
+
+def _bcd_to_num(st: Any, v: int, t: str) -> int:
+    digits = (_width(t) // 4) - 1
+    u = int(v) & ((1 << _width(t)) - 1)
+    n = 0
+    for k in range(digits - 1, -1, -1):
+        d = (u >> (4 * k)) & 15
+        if d > 9:
+            _overflow(st, f"BCD_TO_NUM: invalid BCD digit in {u:#x}")
+            return 0
+        n = n * 10 + d
+    sign = (u >> (4 * digits)) & 15
+    return -n if sign else n
+
+
+def _num_to_bcd(st: Any, v: int, t: str) -> int:
+    digits = (_width(t) // 4) - 1
+    a = abs(int(v))
+    if a >= 10**digits:
+        _overflow(st, f"NUM_TO_BCD: {v} has more than {digits} digits")
+        return 0
+    r = 0
+    for k, ch in enumerate(reversed(str(a))):
+        r |= int(ch) << (4 * k)
+    if v < 0:
+        r |= 15 << (4 * digits)
+    return r
+
+
+def _round(st: Any, v: float, t: str) -> int:
+    r = math.floor(v + 0.5) if v >= 0 else -math.floor(-v + 0.5)
+    return _ck(st, int(r), "DINT")
+
+
+def _trunc(st: Any, v: float, t: str) -> int:
+    return _ck(st, int(v), "DINT")
+
+
+def _negr(st: Any, v: float, t: str) -> float:
+    return -float(v)
+
+
+def _abs(st: Any, v: float, t: str) -> float:
+    return abs(float(v))
+
+
+def _sqr(st: Any, v: float, t: str) -> float:
+    return float(v) * float(v)
+
+
+def _real(fn: Callable[[float], float], name: str) -> Callable[[Any, float, str], float]:
+    def apply(st: Any, v: float, t: str) -> float:
+        try:
+            return fn(float(v))
+        except (ValueError, OverflowError):
+            _overflow(st, f"{name}({v}) is not a number")
+            return math.nan
+
+    return apply
+
+
+_sqrt = _real(math.sqrt, "SQRT")
+_ln = _real(math.log, "LN")
+_exp = _real(math.exp, "EXP")
+_sin = _real(math.sin, "SIN")
+_asin = _real(math.asin, "ASIN")
+_cos = _real(math.cos, "COS")
+_acos = _real(math.acos, "ACOS")
+_tan = _real(math.tan, "TAN")
+_atan = _real(math.atan, "ATAN")
+
+
+def _neg(st: Any, v: Any, t: str) -> Any:
+    return _ck(st, -v, t) if t in RANGE else -v
+
+
+def _not(st: Any, v: Any, t: str) -> int:
+    if t in RANGE:
+        return ~int(v)
+    return ~int(v) & MASK.get(t, 0xFFFFFFFF)
+
+
+def _swap(st: Any, v: int, t: str) -> int:
+    n = _width(t) // 8
+    return int.from_bytes((int(v) & ((1 << (8 * n)) - 1)).to_bytes(n, "big")[::-1], "big")
+
+
+def _rlda(st: Any, v: int, t: str) -> int:
+    return _shift(st, "ROL", v, 1, "DWORD")
+
+
+def _rrda(st: Any, v: int, t: str) -> int:
+    return _shift(st, "ROR", v, 1, "DWORD")
+
+
+RUNTIME: dict[str, Any] = {
+    name: obj
+    for name, obj in globals().items()
+    if name.startswith("_") and callable(obj) and not name.startswith("__")
+}

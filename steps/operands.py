@@ -1,0 +1,203 @@
+"""Operands of conditions and actions, resolved once at compile time into code snippets.
+
+A ``Ref`` says what a name means (SPEC §2.9): an S7 address (I Q M DB PI PQ, T/C cells), an
+FB static variable, an FB pin, a step attribute ``Sn.X/T/U`` or ``Tn.TT``. ``CodeGen`` turns a
+``Ref`` into a Python expression over names bound once per FB instance (``bind``): memory
+areas are bound as ``bytearray`` objects (``_m0`` ``_m1`` ...), so a bit read is one index and
+one shift, never a dict lookup or an Address parse.
+
+Inside generated functions these locals exist: ``st`` (GraphState), ``V`` (``st.vars``),
+``X`` (``st.x``). Values follow docs/contracts.md: BOOL → bool/int 0/1, INT/DINT signed int,
+WORD/DWORD unsigned int, REAL float, TIME ms.
+"""
+
+from __future__ import annotations
+
+import struct
+from dataclasses import dataclass, field
+from typing import Any
+
+from engine.errors import SourceLocation, SymbolError
+
+# The default type of an absolute address by width, when no symbol says otherwise.
+WIDTH_TYPE = {1: "BOOL", 8: "BYTE", 16: "INT", 32: "DINT"}
+# Bytes of each value type in memory.
+TYPE_BYTES = {
+    "BOOL": 0, "BYTE": 1, "CHAR": 1, "WORD": 2, "INT": 2, "S5TIME": 2, "DATE": 2,
+    "DWORD": 4, "DINT": 4, "REAL": 4, "TIME": 4, "TIME_OF_DAY": 4, "TOD": 4,
+}  # fmt: skip
+
+
+@dataclass(frozen=True, slots=True)
+class Ref:
+    """A resolved operand. ``kind``: ``mem`` (address), ``var`` (FB static variable),
+    ``pin`` (FB pin, ``name``), ``step`` (``index``, ``attr`` X/T/U), ``trans`` (``index``),
+    ``timer``/``counter`` (``number``: the status bit of an S5 cell)."""
+
+    kind: str
+    type: str
+    name: str = ""
+    area: str = ""
+    db: int | None = None
+    byte: int = 0
+    bit: int = 0
+    index: int = 0
+    attr: str = ""
+    number: int = 0
+
+
+@dataclass
+class CodeGen:
+    """Collects the memory buffers a generated module needs and renders operand code."""
+
+    buffers: list[tuple[str, int | None]] = field(default_factory=list)
+    consts: dict[str, Any] = field(default_factory=dict)
+
+    def buf(self, area: str, db: int | None) -> str:
+        key = (area, db)
+        if key not in self.buffers:
+            self.buffers.append(key)
+        return f"_m{self.buffers.index(key)}"
+
+    def const(self, value: Any, hint: str = "k") -> str:
+        name = f"_{hint}{len(self.consts)}"
+        self.consts[name] = value
+        return name
+
+    # ------------------------------------------------------------ reading
+
+    def read(self, ref: Ref) -> str:
+        """A Python expression reading ``ref``."""
+        k = ref.kind
+        if k == "step":
+            if ref.attr == "X":
+                return f"X[{ref.index}]"
+            arr = "t_ns" if ref.attr == "T" else "u_ns"
+            return f"(st.{arr}[{ref.index}] // 1000000)"
+        if k == "trans":
+            return f"st.tt[{ref.index}]"
+        if k == "var":
+            return f"V[{ref.name!r}]"
+        if k == "pin":
+            return f"_pin(st, {ref.name!r})"
+        if k in ("timer", "counter"):
+            return f"_cell_q(_mem, {k!r}, {ref.number})"
+        b = self.buf(ref.area, ref.db)
+        n = ref.byte
+        t = ref.type
+        if t == "BOOL":
+            return f"({b}[{n}] >> {ref.bit} & 1)"
+        if t in ("BYTE", "CHAR"):
+            return f"{b}[{n}]"
+        if t in ("WORD", "S5TIME", "DATE"):
+            return f"({b}[{n}] << 8 | {b}[{n + 1}])"
+        if t == "INT":
+            return f"_s16({b}[{n}] << 8 | {b}[{n + 1}])"
+        if t == "DWORD":
+            return f"int.from_bytes({b}[{n}:{n + 4}], 'big')"
+        if t in ("DINT", "TIME", "TIME_OF_DAY", "TOD"):
+            return f"int.from_bytes({b}[{n}:{n + 4}], 'big', signed=True)"
+        if t == "REAL":
+            return f"_unpack_f({b}, {n})[0]"
+        raise SymbolError(f"cannot read an operand of type {t}")
+
+    # ------------------------------------------------------------ writing
+
+    def write(self, ref: Ref, value_src: str) -> str:
+        """One Python statement writing ``value_src`` to ``ref``."""
+        k = ref.kind
+        if k == "var":
+            return f"V[{ref.name!r}] = {value_src}"
+        if k == "pin":
+            return f"st.outputs[{ref.name!r}] = {value_src}"
+        if k != "mem":
+            raise SymbolError(f"{ref.name or k} cannot be written")
+        b = self.buf(ref.area, ref.db)
+        n = ref.byte
+        t = ref.type
+        if t == "BOOL":
+            m = 1 << ref.bit
+            return f"{b}[{n}] = ({b}[{n}] | {m}) if {value_src} else ({b}[{n}] & {255 ^ m})"
+        if t in ("BYTE", "CHAR"):
+            return f"{b}[{n}] = ({value_src}) & 255"
+        if t in ("WORD", "INT", "S5TIME", "DATE"):
+            return f"{b}[{n}:{n + 2}] = (int({value_src}) & 65535).to_bytes(2, 'big')"
+        if t in ("DWORD", "DINT", "TIME", "TIME_OF_DAY", "TOD"):
+            return f"{b}[{n}:{n + 4}] = (int({value_src}) & 4294967295).to_bytes(4, 'big')"
+        if t == "REAL":
+            return f"_pack_f({b}, {n}, {value_src})"
+        raise SymbolError(f"cannot write an operand of type {t}")
+
+    def set_bit(self, ref: Ref, on: bool) -> str:
+        """A statement setting (``on``) or resetting a BOOL operand."""
+        if ref.kind == "mem" and ref.type == "BOOL":
+            b = self.buf(ref.area, ref.db)
+            m = 1 << ref.bit
+            op = f"| {m}" if on else f"& {255 ^ m}"
+            return f"{b}[{ref.byte}] = {b}[{ref.byte}] {op}"
+        return self.write(ref, "True" if on else "False")
+
+
+# ------------------------------------------------------------ runtime helpers (bound globals)
+
+
+def _s16(v: int) -> int:
+    return v - 65536 if v & 0x8000 else v
+
+
+_F = struct.Struct(">f")
+
+
+def _unpack_f(buf: bytearray, n: int) -> tuple[float]:
+    return _F.unpack_from(buf, n)  # type: ignore[return-value]
+
+
+def _pack_f(buf: bytearray, n: int, v: float) -> None:
+    _F.pack_into(buf, n, float(v))
+
+
+def _pin(st: Any, name: str) -> Any:
+    """An FB pin: the latched input, else the output of the previous call, else 0."""
+    v = st.inputs.get(name)
+    if v is None:
+        v = st.outputs.get(name, 0)
+    return v
+
+
+def _cell_q(mem: Any, kind: str, number: int) -> bool:
+    """The status bit of S5 timer / counter cell ``number`` (T n / C n as a contact)."""
+    cells = mem.timers if kind == "timer" else mem.counters
+    cell = cells[number]
+    for attr in ("q", "status", "Q"):
+        if hasattr(cell, attr):
+            return bool(getattr(cell, attr))
+    return bool(cell)
+
+
+RUNTIME: dict[str, Any] = {
+    "_s16": _s16,
+    "_unpack_f": _unpack_f,
+    "_pack_f": _pack_f,
+    "_pin": _pin,
+    "_cell_q": _cell_q,
+}
+
+
+def area_buffer(mem: Any, area: str, db: int | None) -> bytearray:
+    """The live ``bytearray`` of a memory area (or DB) of ``mem``."""
+    fn = getattr(mem, "area_bytes", None)
+    if fn is not None:
+        try:
+            return fn(area, db) if db is not None else fn(area)  # type: ignore[no-any-return]
+        except TypeError:
+            pass
+    if area == "DB" and db is not None:
+        blk = mem.dbs[db]
+        for attr in ("data", "buf", "bytes"):
+            if hasattr(blk, attr):
+                return getattr(blk, attr)  # type: ignore[no-any-return]
+    raise SymbolError(f"memory has no area {area}{db if db is not None else ''}")
+
+
+def where(loc: SourceLocation | None) -> str:
+    return str(loc) if loc is not None else "<input>"

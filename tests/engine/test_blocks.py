@@ -1,0 +1,173 @@
+"""Blocks, interfaces, instance DBs and calls (SPEC.md §1.3; seeds-runtime §1.2–1.3)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+
+from engine import BlockError, CallContext, Cpu, InstanceDB, Var, VirtualClock, fb, fc, ob
+from engine.blocks import Decl
+
+
+class Tally:
+    """An OBJECT value with to_state/from_state (like a GraphFB state)."""
+
+    def __init__(self) -> None:
+        self.hits = 0
+
+    def to_state(self) -> dict[str, Any]:
+        return {"hits": self.hits}
+
+    @classmethod
+    def from_state(cls, data: dict[str, Any]) -> Tally:
+        t = cls()
+        t.hits = int(data["hits"])
+        return t
+
+
+@fb(
+    1,
+    "Motor",
+    IN={"start": "BOOL", "speed": ("INT", 10)},
+    OUT={"running": "BOOL", "calls": "INT"},
+    STAT={"n": ("INT", 0), "tally": ("OBJECT", Tally)},
+    TEMP={"scratch": "INT"},
+)
+def motor(ctx: CallContext, db: InstanceDB) -> None:
+    db.n = int(db.n) + 1  # type: ignore[call-overload]
+    db.running = db.start
+    db.calls = db.n
+    tally = db.tally
+    assert isinstance(tally, Tally)
+    tally.hits += 1
+
+
+def _cpu(clock: VirtualClock, body: Any) -> Cpu:
+    cpu = Cpu(clock)
+    cpu.load(ob(1)(body), motor)
+    cpu.create_instance_db(1, motor)
+    cpu.start()
+    return cpu
+
+
+def test_fb_stat_and_out_persist_between_calls(clock: VirtualClock) -> None:
+    """Behaviour 32: STAT and OUT values stay in the instance DB; TEMP is never stored."""
+    outs: list[dict[str, object]] = []
+    cpu = _cpu(clock, lambda ctx: outs.append(ctx.call(motor, 1, start=True)))
+    for _ in range(3):
+        cpu.scan()
+    assert outs[-1] == {"running": True, "calls": 3}
+    idb = cpu.instance_db(1)
+    assert "scratch" not in idb and "scratch" not in idb.snapshot()
+    with pytest.raises(AttributeError):
+        _ = idb.scratch
+
+
+def test_omitted_fb_input_keeps_its_last_value(clock: VirtualClock) -> None:
+    """Behaviour 33: an IN omitted at the call keeps the value stored in the instance DB."""
+    calls = iter([{"start": True, "speed": 50}, {}])
+    cpu = _cpu(clock, lambda ctx: ctx.call(motor, 1, **next(calls)))
+    cpu.scan()
+    cpu.scan()
+    idb = cpu.instance_db(1)
+    assert idb.start is True and idb.speed == 50
+
+
+def test_fb_actuals_may_be_operands(clock: VirtualClock) -> None:
+    """Behaviour 33: an address string is an operand: IN read from it, OUT written to it."""
+    cpu = _cpu(clock, lambda ctx: ctx.call(motor, 1, start="I0.3", running="Q0.2", calls="MW4"))
+    cpu.mem.periph_in[0] = 0b1000
+    cpu.scan()
+    assert cpu.mem.get("Q0.2") is True and cpu.mem.get("MW4") == 1
+
+
+def test_calling_an_fb_without_instance_db_is_an_error(clock: VirtualClock) -> None:
+    """SPEC §1.3: calling an FB without an instance DB raises BlockError."""
+    ctx = Cpu(clock)._ctx
+    with pytest.raises(BlockError, match="without an instance DB"):
+        ctx.call(motor)
+
+
+def test_fc_must_get_every_parameter_and_writes_to_the_actual_operand(clock: VirtualClock) -> None:
+    """Behaviour 34: an FC needs all parameters; its OUT goes straight to the actual operand."""
+
+    @fc(2, IN={"a": "INT", "b": "INT"}, OUT={"sum": "INT"}, RET="BOOL")
+    def add(ctx: CallContext, p: dict[str, object]) -> object:
+        p["sum"] = int(p["a"]) + int(p["b"])  # type: ignore[call-overload]
+        return True
+
+    results: list[dict[str, object]] = []
+    cpu = _cpu(clock, lambda ctx: results.append(ctx.call(add, a=-5, b="MW10", sum="MW12")))
+    cpu.mem.set("MW10", 7)
+    cpu.scan()
+    assert cpu.mem.get("MW12") == 2 and results == [{"sum": 2, "RET_VAL": True}]
+    with pytest.raises(BlockError, match="missing"):
+        cpu._ctx.call(add, a=1, sum="MW12")
+    with pytest.raises(BlockError, match="needs an operand"):
+        cpu._ctx.call(add, a=1, b=2, sum=3)
+
+
+def test_two_multi_instances_are_independent(clock: VirtualClock) -> None:
+    """Behaviour 35: FBs declared as STAT store their data in the caller's instance DB."""
+
+    @fb(3, STAT={"m1": motor, "m2": motor})
+    def line(ctx: CallContext, db: InstanceDB) -> None:
+        ctx.call(db.m1, start=True)  # type: ignore[arg-type]
+        ctx.call(db.m1, start=True)  # type: ignore[arg-type]
+        ctx.call(db.m2)  # type: ignore[arg-type]
+
+    cpu = Cpu(clock)
+    cpu.load(ob(1)(lambda ctx: ctx.call(line, 3)), motor, line)
+    idb = cpu.create_instance_db(3, line)
+    cpu.start()
+    cpu.scan()
+    m1, m2 = idb.m1, idb.m2
+    assert isinstance(m1, InstanceDB) and isinstance(m2, InstanceDB)
+    assert (m1.n, m2.n, m1.running, m2.running) == (2, 1, True, False)
+    assert idb.snapshot()["m1"]["n"] == 2  # type: ignore[index]
+
+
+def test_object_stat_round_trips_through_snapshot(clock: VirtualClock) -> None:
+    """SPEC §1.3: a STAT of type OBJECT persists through to_state()/from_state()."""
+    a = InstanceDB(1, motor)
+    b = InstanceDB(2, motor)
+    assert a.tally is not b.tally  # each instance gets its own object
+    tally = a.tally
+    assert isinstance(tally, Tally)
+    tally.hits = 9
+    a.n = 4
+    b.restore(a.snapshot())
+    restored = b.tally
+    assert isinstance(restored, Tally) and restored.hits == 9 and b.n == 4
+
+
+def test_interface_declaration_rules() -> None:
+    """Table 2-2: STAT only in FBs, no TEMP/FC initial values, known types, unique names."""
+    with pytest.raises(BlockError, match="STAT"):
+        fc(1, STAT={"x": "INT"})(lambda ctx, p: None)
+    with pytest.raises(BlockError, match="initial"):
+        fb(1, TEMP={"x": ("INT", 1)})(lambda ctx, db: None)
+    with pytest.raises(BlockError, match="initial"):
+        fc(1, IN={"x": ("INT", 1)})(lambda ctx, p: None)
+    with pytest.raises(BlockError, match="unknown data type"):
+        fb(1, IN={"x": "FLOAT"})(lambda ctx, db: None)
+    with pytest.raises(BlockError, match="twice"):
+        fb(1, IN={"x": "INT"}, OUT={"x": "INT"})(lambda ctx, db: None)
+    with pytest.raises(BlockError, match="initial value"):
+        fb(1, STAT={"x": ("INT", 40000)})(lambda ctx, db: None)
+    assert motor.interface[0] == Var("start", "BOOL", Decl.IN)
+
+
+def test_unknown_variable_and_parameter_are_errors(clock: VirtualClock) -> None:
+    """SPEC §1.1 spirit: no silent zeroes — unknown names raise BlockError."""
+    idb = InstanceDB(1, motor)
+    with pytest.raises(BlockError):
+        idb.nope = 1
+    cpu = Cpu(clock)
+    cpu.load(motor)
+    cpu.create_instance_db(1, motor)
+    with pytest.raises(BlockError, match="no parameter"):
+        cpu._ctx.call(motor, 1, nope=True)
+    with pytest.raises(BlockError, match="already exists"):
+        cpu.create_instance_db(1, motor)

@@ -1,0 +1,204 @@
+"""Retentive state in SQLite; a killed CPU process comes back by warm restart (DESIGN.md)."""
+
+from __future__ import annotations
+
+import base64
+import json
+import os
+import signal
+import sqlite3
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from engine import DB, CallContext, Cpu, InstanceDB, VirtualClock, fb, ob
+from engine.persistence import StateStore
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+@fb(2, STAT={"total": ("DINT", 0), "note": ("STRING[8]", "")})
+def acc(ctx: CallContext, db: InstanceDB) -> None:
+    db.total = int(db.total) + 1  # type: ignore[call-overload]
+
+
+@ob(1)
+def main(ctx: CallContext) -> None:
+    ctx.mem.set("MW2", int(ctx.mem.get("MW2")) + 1)  # type: ignore[call-overload]
+    ctx.mem.set("MW100", 5)
+    ctx.call(acc, 2)
+
+
+def _cpu(clock: VirtualClock) -> Cpu:
+    cpu = Cpu(clock)
+    cpu.load(main, acc, DB(1, 4))
+    cpu.create_instance_db(2, acc)
+    return cpu
+
+
+def test_state_round_trips_and_restarts_warm(clock: VirtualClock, tmp_path: Path) -> None:
+    """Behaviour 3: after load + warm restart retentive M, DBs and instance DBs are intact,
+    non-retentive M is cleared; the diagnostic buffer comes back too."""
+    store = StateStore(tmp_path / "s.sqlite")
+    cpu = _cpu(clock)
+    cpu.start()
+    for _ in range(5):
+        clock.advance(10)
+        cpu.scan()
+    cpu.mem.set("DB1.DBW2", 1234)
+    cpu.instance_db(2).note = "hello"
+    store.save(cpu)
+    store.close()
+
+    again = _cpu(VirtualClock())
+    store = StateStore(tmp_path / "s.sqlite")
+    assert store.load(again)
+    again.start("warm")
+    assert again.mem.get("MW2") == 5 and again.mem.get("MW100") == 0
+    assert again.mem.get("DB1.DBW2") == 1234
+    assert again.instance_db(2).total == 5 and again.instance_db(2).note == "hello"
+    assert [e.message for e in again.diagnostics][:2] == ["warm restart", "STARTUP → RUN (warm)"]
+
+
+def test_maybe_save_writes_only_when_retentive_data_changed(
+    clock: VirtualClock, tmp_path: Path
+) -> None:
+    """Saving each scan that changed retentive data — and only then."""
+    store = StateStore(tmp_path / "s.sqlite")
+    cpu = Cpu(clock)
+    cpu.start()
+    assert store.maybe_save(cpu)
+    cpu.scan()
+    assert not store.maybe_save(cpu)
+    cpu.mem.set("MW100", 9)  # not retentive
+    assert not store.maybe_save(cpu)
+    cpu.mem.set("MW0", 9)
+    assert store.maybe_save(cpu)
+
+
+def test_interval_limits_how_often_it_saves(clock: VirtualClock, tmp_path: Path) -> None:
+    """A configurable interval bounds the saving rate."""
+    store = StateStore(tmp_path / "s.sqlite", interval_ms=100)
+    cpu = Cpu(clock)
+    cpu.start()
+    assert store.maybe_save(cpu)
+    cpu.mem.set("MW0", 1)
+    clock.advance(50)
+    assert not store.maybe_save(cpu)
+    clock.advance(50)
+    assert store.maybe_save(cpu)
+
+
+def test_alarm_and_audit_tables(tmp_path: Path) -> None:
+    """Alarms and the audit log (who, what, when) are stored append-only."""
+    store = StateStore(tmp_path / "s.sqlite")
+    store.log_alarm(5, "FB1.S3.V", "incoming", "Step 3 supervision")
+    store.log_audit(7, "ann", "ack", "FB1 S3")
+    assert store.alarms() == [
+        {"t_ns": 5, "key": "FB1.S3.V", "state": "incoming", "text": "Step 3 supervision"}
+    ]
+    assert store.audit()[0]["user"] == "ann"
+
+
+PROGRAM = """
+from engine import DB, fb, ob
+
+RESTARTS = DB(1, 8)
+
+@ob(100)
+def startup(ctx):
+    ctx.mem.set("DB1.DBW0", ctx.mem.get("DB1.DBW0") + 1)   # restart count
+    ctx.mem.set("DB1.DBW2", ctx.mem.get("MW2"))            # retentive MW seen at restart
+    ctx.mem.set("DB1.DBW4", ctx.mem.get("MW100"))          # non-retentive MW seen at restart
+
+@fb(2, STAT={"total": ("DINT", 0)})
+def acc(ctx, db):
+    db.total += 1
+
+@ob(1)
+def main(ctx):
+    ctx.mem.set("MW2", ctx.mem.get("MW2") + 1)
+    ctx.mem.set("MW100", ctx.mem.get("MW100") + 1)
+    ctx.call(acc, 2)
+
+def setup(cpu):
+    cpu.create_instance_db(2, acc)
+"""
+
+
+def _read(path: Path) -> dict[str, Any] | None:
+    if not path.exists():
+        return None
+    try:
+        con = sqlite3.connect(f"file:{path}?mode=ro", uri=True, timeout=1)
+        try:
+            row = con.execute("SELECT value FROM meta WHERE key='memory'").fetchone()
+            inst = con.execute("SELECT state FROM instances WHERE number=2").fetchone()
+            restart = con.execute("SELECT value FROM meta WHERE key='last_restart'").fetchone()
+        finally:
+            con.close()
+    except sqlite3.Error:
+        return None
+    if row is None or inst is None:
+        return None
+    mem = json.loads(row[0])
+    markers = base64.b64decode(mem["markers"]["data"])
+    db1 = base64.b64decode(mem["dbs"]["1"]["data"])
+    return {
+        "MW2": int.from_bytes(markers[2:4], "big"),
+        "restarts": int.from_bytes(db1[0:2], "big"),
+        "MW2_at_restart": int.from_bytes(db1[2:4], "big"),
+        "MW100_at_restart": int.from_bytes(db1[4:6], "big"),
+        "total": json.loads(inst[0])["total"],
+        "last_restart": restart[0] if restart else "",
+    }
+
+
+def _wait_for(path: Path, pred: Any, proc: subprocess.Popen[bytes]) -> dict[str, Any]:
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline:
+        state = _read(path)
+        if state is not None and pred(state):
+            return state
+        assert proc.poll() is None, proc.stderr.read() if proc.stderr else b""
+        time.sleep(0.05)
+    raise AssertionError(f"timed out; last state {_read(path)}")
+
+
+@pytest.mark.timeout(90)
+@pytest.mark.skipif(os.name != "posix", reason="SIGKILL")
+def test_killed_cpu_process_comes_back_by_warm_restart(tmp_path: Path) -> None:
+    """Behaviour 3: a SIGKILLed CPU process restarts warm with every retentive value intact
+    (retentive MW, DB and instance DB) and non-retentive MW cleared."""
+    program = tmp_path / "prog.py"
+    program.write_text(textwrap.dedent(PROGRAM))
+    state = tmp_path / "state.sqlite"
+    cmd = [sys.executable, "-m", "web.cli", "run", str(program), "--state", str(state)]
+    cmd += ["--cycle-ms", "5"]
+
+    first = subprocess.Popen(cmd, cwd=ROOT, stderr=subprocess.PIPE)
+    try:
+        _wait_for(state, lambda s: s["MW2"] >= 20, first)
+    finally:
+        first.send_signal(signal.SIGKILL)
+        first.wait(10)
+    killed = _read(state)
+    assert killed is not None and killed["restarts"] == 1
+
+    second = subprocess.Popen(cmd, cwd=ROOT, stderr=subprocess.PIPE)
+    try:
+        after = _wait_for(state, lambda s: s["restarts"] == 2, second)
+    finally:
+        second.send_signal(signal.SIGTERM)
+        second.wait(10)
+    assert after["last_restart"] == "warm"
+    assert after["MW2_at_restart"] == killed["MW2"]  # retentive marker intact
+    assert after["MW100_at_restart"] == 0  # non-retentive marker cleared
+    assert after["total"] >= killed["total"]  # instance DB intact
+    final = _read(state)
+    assert final is not None and final["MW2"] >= killed["MW2"]

@@ -1,0 +1,85 @@
+"""Symbol table (SPEC.md §1.1, docs/contracts.md engine.symbols)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from engine.address import parse_address
+from engine.errors import AddressError, SymbolError
+from engine.memory import Memory
+from engine.symbols import SymbolTable
+
+
+def test_semicolon_lines_give_name_address_type_comment(tmp_path: Path) -> None:
+    path = tmp_path / "plant.sym"
+    path.write_text('// plant\n"Start_button" ; I0.7 ; BOOL ; green button\n"Speed";MW10;INT;\n')
+    table = SymbolTable.from_file(path)
+    sym = table.lookup('"Start_button"')
+    assert sym is not None
+    assert (sym.address, sym.type, sym.comment) == (parse_address("I0.7"), "BOOL", "green button")
+    assert table.resolve("Speed") == parse_address("MW10")
+
+
+def test_csv_with_header_maps_columns_by_name() -> None:
+    text = 'Address,Symbol,Comment,Data type\nE 0.1,Stop,"red, mushroom",BOOL\nQW2,Valve,,WORD\n'
+    table = SymbolTable.from_text(text, file="io.csv")
+    stop = table.lookup("Stop")
+    assert stop is not None
+    assert (str(stop.address), stop.type, stop.comment) == ("I0.1", "BOOL", "red, mushroom")
+    assert len(table) == 2
+
+
+def test_colon_entries_as_in_the_s7g_symbols_section() -> None:
+    text = '  "Start_button" : I0.7 : BOOL;  "Dr_mot_on" : Q0.0 : BOOL;\n  "T_feed" : T1 : TIMER;\n'
+    table = SymbolTable.from_text(text, file="drill.s7g", line=5)
+    assert [s.name for s in table] == ["Start_button", "Dr_mot_on", "T_feed"]
+    assert table.resolve('"T_feed"') == parse_address("T1")
+
+
+def test_lookup_is_case_insensitive_and_unknown_gives_none() -> None:
+    table = SymbolTable()
+    table.add("Motor", "Q0.0", "BOOL")
+    assert table.lookup("MOTOR") is not None
+    assert table.lookup("Pump") is None
+
+
+def test_duplicate_symbol_is_a_symbol_error_with_file_and_line() -> None:
+    text = '"Pump" ; Q0.0 ; BOOL ; \n\n"pump" ; Q0.1 ; BOOL ;\n'
+    with pytest.raises(SymbolError, match=r"^plant\.sym:3:1: duplicate symbol .*plant\.sym:1:1"):
+        SymbolTable.from_text(text, file="plant.sym")
+
+
+def test_unknown_type_is_a_symbol_error_with_file_and_line() -> None:
+    with pytest.raises(SymbolError, match=r"^plant\.sym:2:1: .*unknown data type 'FLOAT'"):
+        SymbolTable.from_text('"A" ; I0.0 ; BOOL\n"B" ; MD0 ; FLOAT\n', file="plant.sym")
+
+
+def test_type_that_does_not_fit_the_address_is_a_symbol_error() -> None:
+    with pytest.raises(SymbolError, match="BOOL does not fit MW0"):
+        SymbolTable().add("X", "MW0", "BOOL")
+
+
+def test_bad_address_in_a_colon_entry_names_its_own_line() -> None:
+    text = '"A" : I0.0 : BOOL;\n"B" : I0.9 : BOOL;\n'
+    with pytest.raises(SymbolError, match=r"^s\.s7g:2:1: .*I0\.9"):
+        SymbolTable.from_text(text, file="s.s7g")
+
+
+def test_resolve_falls_back_to_absolute_addresses_but_not_for_quoted_names() -> None:
+    table = SymbolTable()
+    assert table.resolve_typed("MW4") == (parse_address("MW4"), "WORD")
+    with pytest.raises(SymbolError, match='"Ghost"'):
+        table.resolve('"Ghost"')
+    with pytest.raises(AddressError):
+        table.resolve("Ghost")
+
+
+def test_memory_get_and_set_read_symbols_as_their_declared_type() -> None:
+    mem = Memory()
+    mem.symbols = SymbolTable()
+    mem.symbols.add("Temp", "MW20", "INT")
+    mem.set('"Temp"', -250)
+    assert mem.get("Temp") == -250
+    assert mem.get("MW20") == 0xFF06

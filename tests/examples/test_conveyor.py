@@ -1,0 +1,109 @@
+"""The two conveyor belts of seed 000 §14.6 example 1 (000:6160-6174), run through
+``s7graph sim`` (SPEC §4) with the example's stimulus (the operator's buttons) and plant
+(material on belt B)."""
+
+from __future__ import annotations
+
+import itertools
+import json
+from pathlib import Path
+
+from web.cli import main
+
+EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "conveyor"
+WATCH = ("Belt_A", "Belt_B", "Spill", "Belt_B_empty", "Emergency_stop", "ERR_FLT")
+
+
+def run_sim(
+    tmp_path: Path, *, stimulus: Path = EXAMPLE / "stimulus.jsonl", cycles: int = 4000
+) -> list[dict]:
+    """Run the example's ``s7graph sim`` command (10 ms cycle); return the trace records."""
+    trace = tmp_path / "trace.jsonl"
+    rc = main([
+        "sim", str(EXAMPLE / "conveyor.s7g"), "--symbols", str(EXAMPLE / "symbols.txt"),
+        "--plant", str(EXAMPLE / "plant.py"), "--stimulus", str(stimulus),
+        "--cycle-ms", "10", "--cycles", str(cycles), "--watch", ",".join(WATCH),
+        "--trace", str(trace),
+    ])  # fmt: skip
+    assert rc == 0
+    records = [json.loads(line) for line in trace.read_text().splitlines()]
+    assert len(records) == cycles
+    return records
+
+
+def edges(records: list[dict], name: str, rising: bool = True) -> list[int]:
+    """The times (ms) at which the watched ``name`` rose (or fell)."""
+    times, before = [], not rising
+    for rec in records:
+        now = bool(rec["values"][name])
+        if now == rising and before != rising:
+            times.append(rec["t_ms"])
+        before = now
+    return times
+
+
+def value_at(records: list[dict], name: str, t_ms: int) -> object:
+    return next(rec["values"][name] for rec in records if rec["t_ms"] == t_ms)
+
+
+def test_start_runs_belt_b_at_once_and_belt_a_five_seconds_later(tmp_path: Path) -> None:
+    records = run_sim(tmp_path)
+    b_on, a_on = edges(records, "Belt_B")[0], edges(records, "Belt_A")[0]
+    assert 500 <= b_on <= 510  # Start pressed at 500 ms, read in that cycle (SPEC §4)
+    assert 5000 <= a_on - b_on <= 5010
+
+
+def test_stop_halts_belt_a_at_once_and_belt_b_seven_seconds_later(tmp_path: Path) -> None:
+    records = run_sim(tmp_path)
+    a_off, b_off = edges(records, "Belt_A", False)[0], edges(records, "Belt_B", False)[0]
+    assert 12000 <= a_off <= 12010  # Stop pressed at 12 s
+    assert 7000 <= b_off - a_off <= 7010
+    # the run-on carried everything off belt B, and belt A never fed a standing belt
+    assert value_at(records, "Belt_B_empty", b_off + 100) is True
+    assert not any(rec["values"]["Spill"] for rec in records)
+
+
+def test_emergency_stops_both_belts_at_once_while_belt_a_waits_to_start(
+    tmp_path: Path,
+) -> None:
+    records = run_sim(tmp_path)
+    window = [rec for rec in records if 22000 <= rec["t_ms"] < 26000]
+    b_on = edges(window, "Belt_B")[0]
+    assert 22000 <= b_on <= 22010
+    assert 24000 <= edges(window, "Belt_B", False)[0] <= 24010  # Emergency at 24 s
+    assert not any(rec["values"]["Belt_A"] for rec in window)  # the 5 s delay was cut
+    assert "S6" in next(rec["active"] for rec in window if rec["t_ms"] == 24020)
+
+
+def test_emergency_stops_belt_b_at_once_while_it_runs_on(tmp_path: Path) -> None:
+    records = run_sim(tmp_path)
+    window = [rec for rec in records if rec["t_ms"] >= 34000]
+    assert 34000 <= edges(window, "Belt_A", False)[0] <= 34010  # Stop at 34 s
+    b_off = edges(window, "Belt_B", False)[0]
+    assert 37000 <= b_off <= 37010  # Emergency at 37 s, not 7 s after the stop
+    assert value_at(records, "Belt_B_empty", b_off + 100) is False  # material left on B
+    assert records[-1]["active"] == ["S1"]
+
+
+def test_three_alternative_paths_leave_the_initial_step(tmp_path: Path) -> None:
+    records = run_sim(tmp_path)
+    after_s1 = {
+        tuple(rec["active"])
+        for prev, rec in itertools.pairwise(records)
+        if prev["active"] == ["S1"] and rec["active"] != ["S1"]
+    }
+    assert after_s1 == {("S2",), ("S4",), ("S6",)}
+
+
+def test_emergency_wins_over_start_pressed_in_the_same_cycle(tmp_path: Path) -> None:
+    stim = tmp_path / "stim.jsonl"
+    stim.write_text(
+        json.dumps({"at_ms": 500, "set": {"Start_button": True, "Emergency_stop": True}})
+        + "\n"
+        + json.dumps({"at_ms": 1000, "set": {"Start_button": False, "Emergency_stop": False}})
+        + "\n"
+    )
+    records = run_sim(tmp_path, stimulus=stim, cycles=200)
+    assert not any(rec["values"]["Belt_B"] or rec["values"]["Belt_A"] for rec in records)
+    assert ["S2"] not in [rec["active"] for rec in records]
+    assert ["S6"] in [rec["active"] for rec in records]

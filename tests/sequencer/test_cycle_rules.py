@@ -1,0 +1,324 @@
+"""The per-call algorithm of SPEC §2.1/§2.2, one test per rule, on the virtual clock."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from engine.clock import VirtualClock
+from engine.memory import Memory
+from sequencer.compile import compile_chart
+from sequencer.cycle import GraphRuntime
+from sequencer.params import is_pin
+from sequencer.parse import parse_chart
+
+
+class Chart:
+    """A chart from source text, called directly (no CPU), 10 ms per call."""
+
+    def __init__(self, sequences: str, *, header: str = "", params: str = "MAXIMUM") -> None:
+        text = (
+            f'FUNCTION_BLOCK "T"\n  PARAMETERS := {params};\n{header}\n{sequences}\n'
+            "END_FUNCTION_BLOCK\n"
+        )
+        self.cc = compile_chart(parse_chart(text, "t.s7g"))
+        self.mem = Memory()
+        self.clock = VirtualClock()
+        self.rt = GraphRuntime(self.cc, self.cc.bind(self.mem))
+        self.pins: dict[str, Any] = {}
+
+    def set(self, **values: Any) -> None:
+        for name, v in values.items():
+            if is_pin(name):
+                self.pins[name] = v
+            else:
+                self.mem.set(name.replace("_", "."), v)
+
+    def call(self, n: int = 1, ms: int = 10) -> None:
+        for _ in range(n):
+            self.rt.execute(self.pins, self.clock.now_ns())
+            self.clock.advance(ms)
+
+    @property
+    def active(self) -> list[str]:
+        st = self.rt.st
+        return [
+            self.cc.step_label(i) for i in sorted(st.active, key=self.cc.step_numbers.__getitem__)
+        ]
+
+    @property
+    def fired(self) -> list[str]:
+        return [self.cc.transition_label(j) for j in self.rt.st.fired]
+
+    def q(self, addr: str) -> bool:
+        return bool(self.mem.get(addr))
+
+
+def seq(body: str, number: int = 1) -> str:
+    return f'SEQUENCE {number} "s{number}"\n{body}\nEND_SEQUENCE\n'
+
+
+LINEAR = seq("""
+  INITIAL_STEP S1 "a": END_STEP
+  STEP S2 "b": N Q0.0; END_STEP
+  TRANSITION T1 FROM S1 TO S2 := I0.0;
+  TRANSITION T2 FROM S2 TO S1 := I0.1;
+""")
+
+
+def test_first_call_activates_the_initial_steps() -> None:
+    c = Chart(LINEAR)
+    c.call()
+    assert c.active == ["S1"]
+
+
+def test_linear_chain_switches_when_the_transition_holds() -> None:
+    c = Chart(LINEAR)
+    c.call()
+    c.set(I0_0=True)
+    c.call()
+    assert c.active == ["S2"] and c.fired == ["T1"]
+    assert c.q("Q0.0")
+
+
+def test_new_step_acts_in_the_switching_call_and_left_step_gets_final_scan() -> None:
+    c = Chart(LINEAR)
+    c.set(I0_0=True)
+    c.call(2)
+    assert c.q("Q0.0")
+    c.set(I0_0=False, I0_1=True)
+    c.call()
+    assert c.active == ["S1"] and not c.q("Q0.0")
+
+
+def test_only_one_step_per_call_without_skip_steps() -> None:
+    c = Chart(LINEAR)
+    c.call()
+    c.set(I0_0=True, I0_1=True)
+    c.call()
+    assert c.active == ["S2"]
+    c.call()
+    assert c.active == ["S1"]
+
+
+ALT = seq("""
+  INITIAL_STEP S1 "a": END_STEP
+  STEP S2 "b": END_STEP
+  STEP S3 "c": END_STEP
+  TRANSITION T9 FROM S1 TO S3 := I0.1;
+  TRANSITION T2 FROM S1 TO S2 := I0.0;
+""")
+
+
+def test_alternative_divergence_takes_only_the_first_listed_true_transition() -> None:
+    c = Chart(ALT)
+    c.call()
+    c.set(I0_0=True, I0_1=True)
+    c.call()
+    assert c.active == ["S3"] and c.fired == ["T9"]
+
+
+def test_alternative_divergence_takes_a_later_path_when_the_first_is_false() -> None:
+    c = Chart(ALT)
+    c.call()
+    c.set(I0_0=True)
+    c.call()
+    assert c.active == ["S2"]
+
+
+SIM = seq("""
+  INITIAL_STEP S1 "a": END_STEP
+  STEP S2 "b": END_STEP
+  STEP S3 "c": END_STEP
+  STEP S4 "d": END_STEP
+  TRANSITION T1 FROM S1 TO (S2, S3) := I0.0;
+  TRANSITION T2 FROM S3 TO S4 := I0.1;
+  TRANSITION T3 FROM (S2, S4) TO S1 := I0.2;
+""")
+
+
+def test_simultaneous_divergence_activates_every_path() -> None:
+    c = Chart(SIM)
+    c.set(I0_0=True)
+    c.call(2)
+    assert c.active == ["S2", "S3"]
+
+
+def test_join_waits_for_the_last_step_of_every_path() -> None:
+    c = Chart(SIM)
+    c.set(I0_0=True, I0_2=True)
+    c.call(3)
+    assert c.active == ["S2", "S3"]  # S4 not yet active: T3 not valid
+    c.set(I0_0=False, I0_1=True)
+    c.call()
+    assert c.active == ["S2", "S4"]
+    c.call()
+    assert c.active == ["S1"] and c.fired == ["T3"]
+
+
+def test_jump_to_the_step_before_the_transition_restarts_it() -> None:
+    c = Chart(
+        seq("""
+      INITIAL_STEP S1 "a": S1 S M0.0; END_STEP
+      TRANSITION T1 FROM S1 TO S1 := I0.0;
+    """)
+    )
+    c.call()
+    c.set(I0_0=True)
+    c.call(3)
+    assert c.active == ["S1"] and c.fired == ["T1"]
+    st = c.rt.st
+    assert st.t_ns[0] == 0
+
+
+def test_branch_stop_ends_the_path() -> None:
+    c = Chart(
+        seq("""
+      INITIAL_STEP S1 "a": END_STEP
+      TRANSITION T1 FROM S1 TO STOP := I0.0;
+    """)
+    )
+    c.set(I0_0=True)
+    c.call(2)
+    assert c.active == []
+
+
+def test_jump_into_another_sequencer() -> None:
+    c = Chart(
+        seq("""
+      INITIAL_STEP S1 "a": END_STEP
+      TRANSITION T1 FROM S1 TO S12 := I0.0;
+    """)
+        + seq(
+            '  STEP S11 "x": END_STEP\n  STEP S12 "y": END_STEP\n'
+            "  TRANSITION T11 FROM S11 TO S12 := FALSE;",
+            2,
+        )
+    )
+    c.set(I0_0=True)
+    c.call(2)
+    assert c.active == ["S12"]
+
+
+def test_sequencers_run_in_definition_order_and_see_earlier_actions() -> None:
+    c = Chart(
+        seq("""
+      INITIAL_STEP S1 "a": N M0.0; END_STEP
+      TRANSITION T1 FROM S1 TO STOP := FALSE;
+    """)
+        + seq(
+            """
+      INITIAL_STEP S11 "x": END_STEP
+      STEP S12 "y": END_STEP
+      TRANSITION T11 FROM S11 TO S12 := M0.0;
+    """,
+            2,
+        )
+    )
+    c.call()  # sequencer 1 sets M0.0 before sequencer 2 evaluates T11
+    assert c.active == ["S1", "S12"]
+
+
+def test_transitions_are_evaluated_on_the_state_at_the_start_of_the_sequencer() -> None:
+    # T2 reads S2.X: S2 becomes active in this call, but T2 is evaluated before switching
+    c = Chart(
+        seq("""
+      INITIAL_STEP S1 "a": END_STEP
+      STEP S2 "b": END_STEP
+      INITIAL_STEP S3 "c": END_STEP
+      STEP S4 "d": END_STEP
+      TRANSITION T1 FROM S1 TO S2 := I0.0;
+      TRANSITION T2 FROM S3 TO S4 := S2.X;
+    """)
+    )
+    c.call()
+    c.set(I0_0=True)
+    c.call()
+    assert c.active == ["S2", "S3"]
+    c.call()
+    assert c.active == ["S2", "S4"]
+
+
+def test_permanent_before_runs_before_the_sequencer_and_after_after_it() -> None:
+    c = Chart(
+        seq("""
+      INITIAL_STEP S1 "a": N M1.0; END_STEP
+      STEP S2 "b": END_STEP
+      TRANSITION T1 FROM S1 TO S2 := M0.0;
+    """),
+        header="PERMANENT BEFORE\n M0.0 := I0.0;\nEND_PERMANENT\n"
+        "PERMANENT AFTER\n M0.1 := M1.0;\nEND_PERMANENT\n",
+    )
+    c.set(I0_0=True)
+    c.call()  # first call: init; S1 active; M0.0 set before, T1 switches already
+    assert c.active == ["S2"]
+    c2 = Chart(
+        seq('INITIAL_STEP S1 "a": N M1.0; END_STEP\nTRANSITION T1 FROM S1 TO STOP := FALSE;'),
+        header="PERMANENT AFTER\n M0.1 := M1.0;\nEND_PERMANENT\n",
+    )
+    c2.call()
+    assert c2.q("M0.1")  # after sees the action of this call
+
+
+def test_step_time_T_keeps_the_last_activation_time_after_exit() -> None:
+    c = Chart(LINEAR)
+    c.call()
+    c.set(I0_0=True)
+    c.call()  # S2 active from t=10 ms
+    c.call(5)
+    c.set(I0_0=False, I0_1=True)
+    c.call()
+    assert c.active == ["S1"]
+    c.call(3)
+    assert c.rt.st.step_t_ms(1) == 60
+
+
+def test_skip_steps_passes_through_a_step_whose_transition_already_holds() -> None:
+    body = seq("""
+      INITIAL_STEP S1 "a": END_STEP
+      STEP S2 "b": S1 S M5.0; END_STEP
+      STEP S3 "c": END_STEP
+      TRANSITION T1 FROM S1 TO S2 := I0.0;
+      TRANSITION T2 FROM S2 TO S3 := I0.1;
+    """)
+    c = Chart(body, header="SKIP_STEPS := TRUE;")
+    c.call()
+    c.set(I0_0=True, I0_1=True)
+    c.call()
+    assert c.active == ["S3"] and not c.q("M5.0")
+    off = Chart(body)
+    off.call()
+    off.set(I0_0=True, I0_1=True)
+    off.call()
+    assert off.active == ["S2"] and off.q("M5.0")
+
+
+def test_codesys_order_lets_a_new_step_act_in_the_next_call() -> None:
+    body = seq("""
+      INITIAL_STEP S1 "a": END_STEP
+      STEP S2 "b": N Q0.0; END_STEP
+      TRANSITION T1 FROM S1 TO S2 := I0.0;
+    """)
+    c = Chart(body, header="ORDER := CODESYS;")
+    c.call()
+    c.set(I0_0=True)
+    c.call()
+    assert c.active == ["S2"] and not c.q("Q0.0")
+    c.call()
+    assert c.q("Q0.0")
+
+
+def test_cost_visits_only_transitions_of_active_steps() -> None:
+    steps = "\n".join(f'STEP S{n} "s": END_STEP' for n in range(2, 50))
+    trans = "\n".join(f"TRANSITION T{n} FROM S{n} TO S{n + 1} := TRUE;" for n in range(2, 49))
+    first = 'INITIAL_STEP S1 "a": END_STEP\nTRANSITION T1 FROM S1 TO S2 := FALSE;'
+    c = Chart(seq(f"{first}\n{steps}\n{trans}"))
+    calls: list[int] = []
+    prog = c.rt.prog
+
+    def spy(j: int, f: Any) -> Any:
+        return lambda st: (calls.append(j), f(st))[1]
+
+    wrapped = tuple(spy(j, f) for j, f in enumerate(prog.tcond))
+    object.__setattr__(prog, "tcond", wrapped)
+    c.call(5)
+    assert set(calls) == {0}

@@ -1,0 +1,107 @@
+"""SFB3 TP, SFB4 TON, SFB5 TOF against their timing diagrams (seeds-runtime §5.3, behaviour 49).
+
+Each table row is ``(t_ms, IN, expected Q, expected ET)``; the timer is called once per row
+with ``now_ns = t_ms * 1e6``.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from sfb.iec_timers import TIME_MAX_MS, TOF, TON, TP, TimerOut
+
+MS = 1_000_000
+Row = tuple[int, bool, bool, int]
+
+
+def drive(timer: TP | TON | TOF, pt: int, rows: list[Row]) -> None:
+    for t, in_, q, et in rows:
+        assert timer(in_, pt, t * MS) == TimerOut(q, et), f"at t={t} ms IN={in_}"
+
+
+def test_ton_sets_q_after_in_was_true_for_pt_and_in_false_resets_q_and_et() -> None:
+    """Behaviour 49: TON, PT = T#100MS."""
+    drive(TON(), 100, [
+        (0, False, False, 0),
+        (10, True, False, 0),
+        (60, True, False, 50),
+        (109, True, False, 99),
+        (110, True, True, 100),
+        (500, True, True, 100),
+        (501, False, False, 0),
+        (510, True, False, 0),
+        (550, False, False, 0),   # IN fell before PT: no Q
+        (700, False, False, 0),
+    ])  # fmt: skip
+
+
+def test_tp_gives_a_pulse_of_pt_that_is_not_retriggerable() -> None:
+    """Behaviour 49: TP, PT = T#100MS; IN falling or rising during the pulse changes nothing."""
+    drive(TP(), 100, [
+        (0, True, True, 0),
+        (30, False, True, 30),
+        (40, True, True, 40),     # rising edge during the pulse: no retrigger
+        (99, True, True, 99),
+        (100, True, False, 100),  # pulse over, ET holds PT while IN = 1
+        (150, True, False, 100),
+        (151, False, False, 0),   # IN = 0 after the pulse: ET = 0
+        (200, True, True, 0),     # new rising edge: new pulse
+        (250, False, True, 50),
+        (300, False, False, 0),   # pulse ends with IN = 0: ET back to 0
+    ])  # fmt: skip
+
+
+def test_tof_keeps_q_for_pt_after_in_falls_and_a_rising_in_resets_et() -> None:
+    """Behaviour 49: TOF, PT = T#100MS."""
+    drive(TOF(), 100, [
+        (0, False, False, 0),
+        (10, True, True, 0),
+        (50, False, True, 0),
+        (100, False, True, 50),
+        (120, True, True, 0),     # rising IN during the delay: ET = 0, Q stays 1
+        (130, False, True, 0),
+        (229, False, True, 99),
+        (230, False, False, 100),
+        (400, False, False, 100),
+    ])  # fmt: skip
+
+
+def test_time_advances_only_when_the_instance_is_called() -> None:
+    """Behaviour 49: ET/Q are computed at call time; skipping calls just jumps ET."""
+    ton = TON()
+    ton(True, 1000, 0)
+    assert (ton.Q, ton.ET) == (False, 0)  # nothing changed between calls
+    assert ton(True, 1000, 5000 * MS) == TimerOut(True, 1000)
+
+
+def test_iec_timers_count_in_milliseconds_up_to_t_24d20h31m23s647ms() -> None:
+    """Behaviour 49: 1 ms resolution and the TIME maximum as PT."""
+    assert TIME_MAX_MS == 24 * 86_400_000 + 20 * 3_600_000 + 31 * 60_000 + 23_000 + 647
+    ton = TON()
+    ton(True, TIME_MAX_MS, 0)
+    assert ton(True, TIME_MAX_MS, (TIME_MAX_MS - 1) * MS) == TimerOut(False, TIME_MAX_MS - 1)
+    assert ton(True, TIME_MAX_MS, TIME_MAX_MS * MS) == TimerOut(True, TIME_MAX_MS)
+    ton2 = TON()
+    ton2(True, 5, 0)
+    assert ton2(True, 5, 4 * MS + 999_999).et == 4  # sub-ms time does not count
+
+
+def test_tp_with_q_fed_back_to_in_toggles_every_pt() -> None:
+    """Seed example [000:L810-812]: a TP whose Q is fed back (negated) to IN pulses."""
+    tp = TP()
+    seen = []
+    q = False
+    for t in range(0, 6):
+        q = tp(not q, 1, t * MS).q
+        seen.append(q)
+    assert seen == [True, False, True, False, True, False]
+
+
+@pytest.mark.parametrize("cls", [TP, TON, TOF])
+def test_an_iec_timer_instance_round_trips_through_its_state(cls: type[TON]) -> None:
+    timer = cls()
+    timer(True, 100, 0)
+    timer(False, 100, 20 * MS)
+    copy = cls.from_state(timer.to_state())
+    assert copy == timer
+    assert copy(True, 100, 300 * MS) == timer(True, 100, 300 * MS)

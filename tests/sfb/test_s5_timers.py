@@ -1,0 +1,172 @@
+"""S5 timers SP SE SD SS SF on T-area cells (seeds-runtime §5.1, behaviours 44, 45, 46, 51).
+
+Rows are ``(t_ms, S, R, expected Q)``; every row is one timer instruction at ``t_ms``.
+"""
+
+from __future__ import annotations
+
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from engine.address import parse_address
+from engine.errors import ProgramError
+from engine.memory import Memory, S5Timer
+from sfb import s5_timers as s5
+from sfb.s5_timers import TimerFunction
+
+MS = 1_000_000
+Row = tuple[int, bool, bool, bool]
+
+
+def drive(fn: str, tv_ms: int, rows: list[Row], cell: S5Timer | None = None) -> S5Timer:
+    cell = cell if cell is not None else S5Timer()
+    for t, s, r, q in rows:
+        assert s5.run(cell, fn, s, tv_ms, t * MS, r=r) is q, f"{fn} at t={t} ms S={s} R={r}"
+    return cell
+
+
+def test_on_delay_sets_q_7_s_after_the_rising_edge_and_s_false_resets_it() -> None:
+    """Behaviour 44: SD (German SE, S_ODT) with S5T#7S, the mixing FB1 feedback supervision."""
+    drive("SD", 7000, [
+        (0, True, False, False),
+        (6990, True, False, False),
+        (7000, True, False, True),
+        (9000, True, False, True),
+        (9001, False, False, False),   # S -> 0: Q and value reset
+        (10000, True, False, False),
+        (15000, False, False, False),  # S fell before 7 s: never set
+        (30000, False, False, False),
+    ])  # fmt: skip
+
+
+def test_extended_pulse_is_retriggered_by_a_new_rising_edge() -> None:
+    """Behaviour 45: SE (German SV, S_PEXT) keeps Q for TV even when S falls; retriggers."""
+    drive("S_PEXT", 100, [
+        (0, True, False, True),
+        (20, False, False, True),    # S fell: pulse continues
+        (60, True, False, True),     # new edge: restart with TV from 60
+        (150, False, False, True),   # the first pulse would have ended at 100
+        (159, False, False, True),
+        (160, False, False, False),
+        (300, False, False, False),
+    ])  # fmt: skip
+
+
+def test_pulse_ends_early_when_s_goes_false() -> None:
+    """Behaviour 45: SP (German SI, S_PULSE) — Q only while S = 1 and the time runs."""
+    cell = drive("SP", 100, [
+        (0, True, False, True),
+        (50, True, False, True),
+        (60, False, False, False),   # ends early
+        (70, True, False, True),     # new pulse
+        (170, True, False, False),   # expired although S = 1
+        (200, True, False, False),
+    ])  # fmt: skip
+    assert cell.binary() == 0
+
+
+def test_retentive_on_delay_stays_set_until_r() -> None:
+    """Behaviour 45: SS (S_ODTS) runs on after S falls; Q = 1 after TV until R."""
+    drive("SS", 100, [
+        (0, True, False, False),
+        (10, False, False, False),   # keeps running
+        (100, False, False, True),
+        (500, False, False, True),
+        (510, True, False, True),    # an edge after expiry changes nothing
+        (520, False, True, False),   # R
+        (530, False, False, False),
+        (540, True, False, False),   # start again
+        (580, False, False, False),
+        (590, True, False, False),   # rising while running: restart at 590
+        (689, True, False, False),
+        (690, True, False, True),
+    ])  # fmt: skip
+
+
+def test_off_delay_starts_on_the_falling_edge() -> None:
+    """Behaviour 45: SF (German SA, S_OFFDT): Q = 1 with S, drops TV after S falls."""
+    drive("SF", 100, [
+        (0, False, False, False),
+        (10, True, False, True),
+        (500, True, False, True),    # held: no timing while S = 1
+        (510, False, False, True),   # falling edge starts
+        (560, True, False, True),    # S rises while running: timer stops, Q stays 1
+        (570, False, False, True),   # falls again: restart from 570
+        (669, False, False, True),
+        (670, False, False, False),
+    ])  # fmt: skip
+
+
+@pytest.mark.parametrize("fn", list(TimerFunction))
+def test_r_clears_value_and_q_for_every_function(fn: TimerFunction) -> None:
+    """Seeds §5.1: R = 1 sets the time value to 0 and Q to 0 for all five functions."""
+    cell = S5Timer()
+    s5.run(cell, fn, True, 1000, 0)
+    s5.run(cell, fn, fn is not TimerFunction.SF, 1000, 10 * MS)
+    assert s5.run(cell, fn, False, 1000, 20 * MS, r=True) is False
+    assert cell.binary() == 0
+
+
+def test_l_t_reads_the_count_binary_and_lc_t_reads_bcd_with_time_base() -> None:
+    """Behaviour 46: S5T#1M20S = W#16#1800 (800 x 100 ms); L T strips the base."""
+    cell = S5Timer()
+    s5.run(cell, "SE", True, 80_000, 0)
+    assert cell.bcd() == 0x1800
+    assert cell.binary() == 800
+    s5.tick(cell, 12_345 * MS)
+    assert cell.binary() == 800 - 123
+    assert cell.bcd() == 0x1677
+    assert cell.value_ms == 67_700
+
+
+def test_s5_timers_tick_at_their_time_base_so_accuracy_is_minus_one_base() -> None:
+    """Behaviour 46: started mid-base, an S5T#1S timer (100 x 10 ms) expires after 990..1000 ms."""
+    cell = S5Timer()
+    s5.run(cell, "SD", True, 1000, 7 * MS)  # 7 ms into the first 10 ms base
+    s5.tick(cell, 996 * MS)
+    assert not cell.q
+    s5.tick(cell, 1000 * MS)  # 993 ms after the start: the 100th boundary passed
+    assert cell.q
+    big = S5Timer()
+    s5.run(big, "SD", True, 20_000, 0)  # S5T#20S = 200 x 100 ms
+    s5.tick(big, 150 * MS)
+    assert big.binary() == 199  # value moves in whole time-base steps
+
+
+def test_timers_are_frozen_in_hold_by_shifting_their_start() -> None:
+    """Behaviour 51: timer update stops during HOLD while the clock runs."""
+    mem = Memory(timers=4)
+    cell = s5.cell_of(mem.timers, 2)
+    s5.run(cell, "SD", True, 100, 0)
+    s5.tick_all(mem.timers, 50 * MS)
+    s5.shift(mem.timers, 1000 * MS)  # 1 s in HOLD
+    s5.tick_all(mem.timers, 1050 * MS)
+    assert not cell.q and cell.binary() == 5
+    s5.tick_all(mem.timers, 1100 * MS)
+    assert cell.q
+    assert mem.read(parse_address("T2")) == 0  # L T2 after expiry
+
+
+def test_a_timer_number_beyond_the_area_is_a_programming_error() -> None:
+    with pytest.raises(ProgramError, match="T9"):
+        s5.cell_of(Memory(timers=4).timers, 9)
+
+
+def test_the_s5time_literals_of_the_seeds_encode_with_the_smallest_base() -> None:
+    """Seeds §5.1: S5T#2S = 16#0200, S5T#1M20S = 16#1800, S5T#2M = 16#2120, max 16#3999."""
+    assert s5.s5time_encode(2000) == 0x0200
+    assert s5.s5time_encode(80_000) == 0x1800
+    assert s5.s5time_encode(120_000) == 0x2120
+    assert s5.s5time_encode(9_990_000) == 0x3999
+    assert s5.s5time_split(0xC200) == (200, 10)  # bits 14-15 ignored
+
+
+@given(st.integers(0, 3), st.integers(0, 999))
+def test_s5time_decode_then_encode_gives_the_finest_equivalent_word(base: int, count: int) -> None:
+    """Round trip: decode(encode(decode(w))) == decode(w); encode picks the finest base."""
+    word = (base << 12) | s5.to_bcd(count)
+    ms = s5.s5time_decode(word)
+    again = s5.s5time_encode(ms)
+    assert s5.s5time_decode(again) == ms
+    assert (again >> 12) <= base

@@ -1,0 +1,159 @@
+"""The live view in a real headless Chromium: a real viser server and a real zenoh bus on
+loopback; only the scans are test data. One browser for the whole module (CI has 2 cores)."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from sequencer.model import Chart, Operand, Sequence, Step, Transition
+from web.demo import WebEdge, serve_view
+from web.protocol import StepStateUpdate
+from web.view import ACTIVE, DISTURBED, INACTIVE
+
+CHROMIUM = "/usr/bin/chromium"
+ARGS = [
+    "--no-sandbox",
+    "--headless",
+    "--enable-unsafe-swiftshader",
+    "--use-angle=swiftshader",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--no-first-run",
+]
+
+pytestmark = [
+    pytest.mark.timeout(90),
+    pytest.mark.skipif(not os.path.exists(CHROMIUM), reason=f"no browser at {CHROMIUM}"),
+]
+sync_api = pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
+
+
+def small_chart() -> Chart:
+    """Fill, then heat and stir side by side, drain; jump back to the start."""
+    return Chart(
+        "MIXER",
+        sequences=(
+            Sequence(
+                1,
+                "Mixer",
+                (
+                    Step(1, "Idle", initial=True),
+                    Step(2, "Fill", interlock=Operand("Inlet_ok", quoted=True)),
+                    Step(3, "Heat", supervision=Operand("Too_long", quoted=True)),
+                    Step(4, "Stir"),
+                    Step(5, "Drain"),
+                ),
+                (
+                    Transition(1, "Start", (1,), (2,), Operand("Start", quoted=True)),
+                    Transition(2, "Full", (2,), (3, 4), Operand("Level_high", quoted=True)),
+                    Transition(3, "Hot", (3, 4), (5,), Operand("Temp_ok", quoted=True)),
+                    Transition(4, "Empty", (5,), (1,), Operand("Level_low", quoted=True)),
+                ),
+            ),
+        ),
+    )
+
+
+FEED = [  # the fake scans: S3 and S4 active, S3 with a latched supervision error
+    StepStateUpdate(cycle=1, t_ms=10, mode="AUTO", active=[1], events=[("S1", 1)]),
+    StepStateUpdate(cycle=2, t_ms=20, mode="AUTO", active=[2], events=[("S0", 1), ("S1", 2)]),
+    StepStateUpdate(
+        cycle=3,
+        t_ms=30,
+        mode="AUTO",
+        active=[3, 4],
+        disturbed=[3],
+        latched=[3],
+        events=[("S0", 2), ("S1", 3), ("S1", 4), ("V1", 3)],
+    ),
+]
+
+
+@pytest.fixture(scope="module")
+def edge() -> Iterator[WebEdge]:
+    with serve_view(small_chart(), None, port=0) as running:
+        for update in FEED:
+            running.publisher.publish("MIXER", update)
+        yield running
+
+
+@pytest.fixture(scope="module")
+def page(edge: WebEdge) -> Iterator[object]:
+    with sync_api.sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, headless=True, args=ARGS)
+        try:
+            pg = browser.new_page(viewport={"width": 1280, "height": 800})
+            pg.goto(edge.url)
+            pg.get_by_role("button", name="Acknowledge").wait_for(timeout=30_000)
+            yield pg
+            pg.close()
+        finally:
+            browser.close()
+
+
+def wait_until(predicate, timeout: float = 10.0) -> bool:  # noqa: ANN001
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if predicate():
+            return True
+        time.sleep(0.05)
+    return predicate()
+
+
+def test_control_sequencer_panel_offers_every_command(page) -> None:  # noqa: ANN001
+    for name in (
+        "AUTO",
+        "MAN",
+        "TAP",
+        "TOP",
+        "Initialize",
+        "Disable (OFF)",
+        "Acknowledge",
+        "T_PUSH (Continue)",
+        "Activate",
+        "Deactivate",
+    ):
+        assert page.get_by_role("button", name=name, exact=True).count() == 1, name
+    assert page.get_by_text("Control Sequencer").count() >= 1
+
+
+def test_steps_are_coloured_from_the_bus_state(edge: WebEdge) -> None:
+    view = edge.view
+    assert wait_until(lambda: view.boxes[4].color == ACTIVE)
+    assert view.boxes[3].color == DISTURBED  # latched supervision error wins over active
+    assert view.boxes[1].color == INACTIVE
+    assert "cycle 3" in view.status.content
+
+
+def test_acknowledge_click_reaches_the_cpu_queue_and_is_answered(
+    page,  # noqa: ANN001
+    edge: WebEdge,
+    tmp_path: Path,
+) -> None:
+    page.get_by_role("button", name="Acknowledge", exact=True).click()
+    received = []
+    assert wait_until(lambda: received.extend(edge.publisher.drain_commands()) or received)
+    (pending,) = received
+    assert (pending.command.op, pending.command.fb, pending.command.user) == (
+        "ack",
+        "MIXER",
+        "operator",
+    )
+    pending.resolve(True, cycle=4)
+    assert wait_until(lambda: bool(edge.view.replies))
+    assert edge.view.replies[-1].applied
+    assert wait_until(lambda: "ack" in edge.view.event_log.content)
+
+    shot = tmp_path / "view.png"
+    page.screenshot(path=str(shot))
+    assert shot.stat().st_size > 10_000
+    keep = os.environ.get("S7GRAPH_SCREENSHOT")
+    if keep:  # for a human to look at the chart
+        shutil.copy(shot, keep)

@@ -1,0 +1,120 @@
+"""``s7graph run PROGRAM.py``: a Python program of blocks on the system clock.
+
+Program convention: a Python file whose module-level ``@ob``/``@fb``/``@fc`` blocks (and
+``DB`` definitions) are loaded; an optional ``CPU = {...}`` dict passes keyword options to
+``Cpu`` (``max_cycle_ms``, ``clock_memory``, ...); an optional ``setup(cpu)`` creates
+instance DBs and configures interrupts. The state file restores retentive data and the CPU
+comes back by warm restart; on Ctrl-C, SIGTERM or ``--duration-s`` the CPU goes to STOP
+(outputs 0) and the state is saved. A broken program is one line on stderr and exit 2.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import signal
+import sys
+from collections.abc import Callable
+from pathlib import Path
+from types import FrameType, ModuleType
+from typing import Any
+
+from engine.blocks import DB, FB, FC, OB
+from engine.clock import SystemClock
+from engine.cpu import Cpu
+from engine.modes import CpuMode
+from engine.persistence import StateStore
+from engine.record import ScanRecord
+from engine.runner import Runner
+
+
+class ProgramLoadError(Exception):
+    """A program file that cannot be imported or set up."""
+
+
+def _fail(path: Path, message: str) -> int:
+    print(f"s7graph: error: {path}: {message}", file=sys.stderr)
+    return 2
+
+
+def import_program(path: Path) -> ModuleType:
+    """Import a program file as a fresh module (never cached under a real package name)."""
+    if not path.is_file():
+        raise ProgramLoadError("no such file")
+    spec = importlib.util.spec_from_file_location(f"s7graph_program_{path.stem}", path)
+    if spec is None or spec.loader is None:
+        raise ProgramLoadError("not a Python program")
+    module = importlib.util.module_from_spec(spec)
+    try:
+        spec.loader.exec_module(module)
+    except SyntaxError as exc:
+        raise ProgramLoadError(f"line {exc.lineno}: syntax error: {exc.msg}") from None
+    except Exception as exc:
+        raise ProgramLoadError(f"{type(exc).__name__}: {exc}") from None
+    return module
+
+
+def build_cpu(module: ModuleType, clock: Any) -> Cpu:
+    """A CPU with the module's blocks loaded and its ``setup(cpu)`` applied."""
+    blocks = [v for v in vars(module).values() if isinstance(v, OB | FB | FC | DB)]
+    if not any(isinstance(b, OB) for b in blocks):
+        raise ProgramLoadError("defines no OB (decorate a function with @ob(1) or @ob(35))")
+    options = getattr(module, "CPU", {})
+    if not isinstance(options, dict):
+        raise ProgramLoadError("CPU must be a dict of Cpu options")
+    try:
+        cpu = Cpu(clock, **options)
+        cpu.load(*blocks)
+        setup: Callable[[Cpu], object] | None = getattr(module, "setup", None)
+        if setup is not None:
+            setup(cpu)
+    except Exception as exc:
+        raise ProgramLoadError(f"{type(exc).__name__}: {exc}") from None
+    return cpu
+
+
+def _report(record: ScanRecord) -> None:
+    for entry in record.diagnostics:
+        if entry.event_id >> 8 in (0x45, 0x25, 0x35):
+            print(f"s7graph: {entry}", file=sys.stderr)
+
+
+def _terminate(signum: int, frame: FrameType | None) -> None:
+    raise KeyboardInterrupt
+
+
+def run_program(
+    path: Path, *, state: Path | None, cycle_ms: float, duration_s: float | None
+) -> int:
+    """Run a program until Ctrl-C/SIGTERM/duration; 0 on a clean end, 2 on a broken program."""
+    try:
+        module = import_program(path)
+        cpu = build_cpu(module, SystemClock())
+    except ProgramLoadError as exc:
+        return _fail(path, str(exc))
+    state_path = state if state is not None else path.with_suffix(".state.sqlite")
+    try:
+        store = StateStore(state_path)
+    except Exception as exc:
+        return _fail(state_path, f"cannot open state file: {exc}")
+    try:
+        restored = store.load(cpu)
+    except Exception as exc:
+        store.close()
+        return _fail(state_path, f"state does not fit this program: {exc}")
+    previous = signal.signal(signal.SIGTERM, _terminate)
+    runner = Runner(cpu, cycle_ms=cycle_ms, store=store, on_record=_report)
+    try:
+        record = cpu.start("warm")
+        _report(record)
+        how = f"warm restart from {state_path}" if restored else "fresh start"
+        print(f"s7graph: {path.name} in {cpu.mode} ({how})", file=sys.stderr)
+        store.save(cpu)
+        if cpu.mode is CpuMode.RUN:
+            runner.run(duration_s=duration_s)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+        runner.shutdown("s7graph run ended")
+        store.close()
+    return 0

@@ -1,0 +1,98 @@
+"""``s7graph run CHART.s7g``: a chart as a GraphFB from OB1, on the system clock.
+
+The chart is compiled (exit 2 with diagnostics on stderr if it does not), installed with
+OB1/OB100 in one CPU, the state file restores the instance DB (the sequencer comes back by
+warm restart with its steps, times and mode), and ``engine.runner.Runner`` paces the scans.
+A plant (``--plant``) runs after every scan; a plant error ends the run with one line.
+``web``/``port`` are accepted for the browser view (added elsewhere).
+"""
+
+from __future__ import annotations
+
+import signal
+import sys
+from pathlib import Path
+from types import FrameType
+
+from engine.clock import SystemClock
+from engine.errors import S7Error
+from engine.modes import CpuMode
+from engine.persistence import StateStore
+from engine.record import ScanRecord
+from engine.runner import Runner
+from web.cmd_sim import ChartLoadError, ChartSession, load_chart
+from web.plant import LoadedPlant, PlantError, load_plant
+
+
+def _terminate(signum: int, frame: FrameType | None) -> None:
+    raise KeyboardInterrupt
+
+
+def run_chart(
+    path: Path,
+    *,
+    plant: Path | None = None,
+    symbols: Path | None = None,
+    state: Path | None = None,
+    cycle_ms: float = 10.0,
+    duration_s: float | None = None,
+    web: bool = False,
+    port: int = 8080,
+) -> int:
+    """Run ``path`` until Ctrl-C/SIGTERM/``duration_s``; 0 clean, 1 plant error, 2 bad chart."""
+    del web, port
+    try:
+        cc, table = load_chart(path, symbols)
+    except ChartLoadError as exc:
+        for line in exc.lines:
+            print(line, file=sys.stderr)
+        return 2
+    clock = SystemClock()
+    try:
+        session = ChartSession(cc, table, clock)
+        loaded: LoadedPlant | None = load_plant(plant) if plant is not None else None
+    except S7Error as exc:
+        print(f"s7graph: error: {exc}", file=sys.stderr)
+        return 2
+    cpu = session.cpu
+    state_path = state if state is not None else path.with_suffix(".state.sqlite")
+    try:
+        store = StateStore(state_path)
+        restored = store.load(cpu)
+    except Exception as exc:
+        print(f"s7graph: error: {state_path}: cannot use state file: {exc}", file=sys.stderr)
+        return 2
+    failure: list[str] = []
+    last = [clock.now_ns()]
+    runner: Runner
+
+    def on_record(record: ScanRecord) -> None:
+        if loaded is None or record.mode is not CpuMode.RUN:
+            return
+        now = record.t_ns
+        try:
+            loaded.cycle(session, now // 1_000_000, (now - last[0]) // 1_000_000)
+        except PlantError as exc:
+            failure.append(str(exc))
+            runner.stop()
+        last[0] = now
+
+    runner = Runner(cpu, cycle_ms=cycle_ms, store=store, on_record=on_record)
+    previous = signal.signal(signal.SIGTERM, _terminate)
+    try:
+        cpu.start("warm")
+        how = f"warm restart from {state_path}" if restored else "fresh start"
+        print(f"s7graph: {path.name} ({cc.name}) in {cpu.mode} ({how})", file=sys.stderr)
+        store.save(cpu)
+        if cpu.mode is CpuMode.RUN:
+            runner.run(duration_s=duration_s)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+        runner.shutdown("s7graph run ended")
+        store.close()
+    if failure:
+        print(f"s7graph: error: {failure[0]}", file=sys.stderr)
+        return 1
+    return 0

@@ -1,0 +1,361 @@
+"""Place a chart the way S7-GRAPH draws it; a pure function from a chart to grid positions.
+
+Sequences are columns side by side. Within a sequence, a depth-first walk from the initial
+step (transitions in written order, i.e. by priority) lays out the main path top-down in
+the leftmost lane; alternative branches (several transitions leaving one step) and
+simultaneous branches (one transition with several targets) open lanes to the right.
+Rows are the longest path from the top, so a convergence or a join sits below every branch
+that reaches it. An edge back to a step already on the path, or to another sequence, is a
+jump: an arrow under the transition with the target number. ``TO STOP`` is a branch stop.
+
+Coordinates are grid units: ``x`` is a lane (0, 1, 2 …), ``y`` a row growing downward;
+steps and transitions alternate rows. Views scale them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from sequencer.model import Chart
+from web.protocol import ChartLayout, SequenceInfo, TransitionInfo
+
+__all__ = [
+    "IncomingJump",
+    "Jump",
+    "Link",
+    "PlacedSequence",
+    "PlacedStep",
+    "PlacedTransition",
+    "Placement",
+    "Stop",
+    "place",
+]
+
+Point = tuple[float, float]
+
+
+@dataclass(frozen=True, slots=True)
+class PlacedStep:
+    number: int
+    name: str
+    x: float
+    y: float
+    initial: bool
+    interlock: bool
+    supervision: bool
+    sequence: int
+
+
+@dataclass(frozen=True, slots=True)
+class PlacedTransition:
+    number: int
+    name: str
+    x: float
+    y: float
+    condition: str
+    sequence: int
+
+
+@dataclass(frozen=True, slots=True)
+class Link:
+    """A polyline from a step to a transition or back; ``double`` marks the horizontal
+    part of a simultaneous divergence or join (S7-GRAPH's double line)."""
+
+    points: tuple[Point, ...]
+    double: bool = False
+    transition: int = 0
+
+
+@dataclass(frozen=True, slots=True)
+class Jump:
+    """A jump arrow under ``transition`` (at ``x, y``) to step ``target``."""
+
+    transition: int
+    target: int
+    x: float
+    y: float
+
+
+@dataclass(frozen=True, slots=True)
+class IncomingJump:
+    """The mark beside step ``step`` saying transition ``transition`` jumps here."""
+
+    step: int
+    transition: int
+    x: float
+    y: float
+
+
+@dataclass(frozen=True, slots=True)
+class Stop:
+    """A branch stop (``TO STOP``) under ``transition``."""
+
+    transition: int
+    x: float
+    y: float
+
+
+@dataclass(frozen=True, slots=True)
+class PlacedSequence:
+    number: int
+    name: str
+    x0: float
+    x1: float
+
+
+@dataclass(frozen=True, slots=True)
+class Placement:
+    steps: dict[int, PlacedStep]
+    transitions: dict[int, PlacedTransition]
+    links: tuple[Link, ...]
+    jumps: tuple[Jump, ...]
+    incoming_jumps: tuple[IncomingJump, ...]
+    stops: tuple[Stop, ...]
+    sequences: tuple[PlacedSequence, ...]
+    width: float
+    height: float
+
+
+# Graph nodes: ("S", n) for a step, ("T", n) for a transition.
+Node = tuple[str, int]
+MARK_OFFSET = 0.55  # how far below a transition a jump arrow or stop is drawn
+SEQUENCE_GAP = 1.0  # empty lanes between two sequence columns
+
+
+def place(chart: Chart | ChartLayout) -> Placement:
+    """Grid positions of every step, transition, line, jump and stop of ``chart``."""
+    layout = chart if isinstance(chart, ChartLayout) else ChartLayout.from_chart(chart)
+    parts = []
+    x0 = 0.0
+    for seq in layout.sequences:
+        part = _place_sequence(layout, seq, x0)
+        parts.append(part)
+        x0 = part.width_end + SEQUENCE_GAP
+    steps = {s.number: s for p in parts for s in p.steps}
+    transitions = {t.number: t for p in parts for t in p.transitions}
+    jumps = tuple(j for p in parts for j in p.jumps)
+    incoming = []
+    for j in jumps:
+        target = steps.get(j.target)
+        if target is not None:
+            incoming.append(IncomingJump(j.target, j.transition, target.x - 0.6, target.y))
+    height = max((p.height for p in parts), default=0.0)
+    return Placement(
+        steps=steps,
+        transitions=transitions,
+        links=tuple(link for p in parts for link in p.links),
+        jumps=jumps,
+        incoming_jumps=tuple(incoming),
+        stops=tuple(s for p in parts for s in p.stops),
+        sequences=tuple(p.column for p in parts),
+        width=max(x0 - SEQUENCE_GAP, 0.0),
+        height=height,
+    )
+
+
+@dataclass(slots=True)
+class _Part:
+    steps: list[PlacedStep]
+    transitions: list[PlacedTransition]
+    links: list[Link]
+    jumps: list[Jump]
+    stops: list[Stop]
+    column: PlacedSequence
+    width_end: float
+    height: float
+
+
+def _place_sequence(layout: ChartLayout, seq: SequenceInfo, x0: float) -> _Part:
+    step_info = {s.number: s for s in layout.steps if s.number in set(seq.steps)}
+    trans = {t.number: t for t in layout.transitions if t.number in set(seq.transitions)}
+    own_steps = [n for n in seq.steps if n in step_info]
+    out: dict[int, list[TransitionInfo]] = {n: [] for n in own_steps}
+    for number in seq.transitions:
+        t = trans.get(number)
+        if t is None:
+            continue
+        for s in t.sources:
+            if s in out:
+                out[s].append(t)
+
+    def successors(node: Node) -> list[Node]:
+        kind, n = node
+        if kind == "S":
+            return [("T", t.number) for t in out.get(n, [])]
+        return [("S", s) for s in trans[n].targets if s in step_info]
+
+    # Depth-first walk: classify edges (tree / forward / back), record discovery order.
+    tree_children: dict[Node, list[Node]] = {}
+    dag_preds: dict[Node, list[Node]] = {}
+    back_edges: set[tuple[Node, Node]] = set()
+    postorder: list[Node] = []
+    roots: list[Node] = []
+    state: dict[Node, int] = {}  # 1 on the stack, 2 finished
+
+    def visit(root: Node) -> None:
+        state[root] = 1
+        tree_children[root] = []
+        stack: list[tuple[Node, list[Node]]] = [(root, successors(root))]
+        while stack:
+            node, todo = stack[-1]
+            if not todo:
+                state[node] = 2
+                postorder.append(node)
+                stack.pop()
+                continue
+            nxt = todo.pop(0)
+            if state.get(nxt) == 1:
+                back_edges.add((node, nxt))
+                continue
+            dag_preds.setdefault(nxt, []).append(node)
+            if nxt not in state:
+                state[nxt] = 1
+                tree_children[node].append(nxt)
+                tree_children[nxt] = []
+                stack.append((nxt, successors(nxt)))
+
+    starts = [("S", n) for n in own_steps if step_info[n].initial]
+    starts += [("S", n) for n in own_steps]
+    starts += [("T", n) for n in seq.transitions if n in trans]
+    for node in starts:
+        if node not in state:
+            roots.append(node)
+            visit(node)
+
+    # Rows: longest path over the DAG (reverse postorder is a topological order).
+    row: dict[Node, int] = {}
+    for node in reversed(postorder):
+        preds = dag_preds.get(node, [])
+        row[node] = max((row[p] + 1 for p in preds if p in row), default=0)
+        if node[0] == "T" and row[node] % 2 == 0:
+            row[node] += 1  # transitions always sit on odd rows, steps on even rows
+        elif node[0] == "S" and row[node] % 2 == 1:
+            row[node] += 1
+
+    # Lanes: tree children side by side; jumps in a simultaneous divergence take a lane.
+    def jump_targets(node: Node) -> list[int]:
+        if node[0] != "T":
+            return []
+        t = trans[node[1]]
+        return [s for s in t.targets if s not in step_info or (node, ("S", s)) in back_edges]
+
+    width: dict[Node, int] = {}
+    for node in postorder:
+        own = sum(width[c] for c in tree_children[node])
+        if node[0] == "T" and len(trans[node[1]].targets) > 1:
+            own += len(jump_targets(node))
+        width[node] = max(1, own)
+
+    lane: dict[Node, float] = {}
+    jump_lane: dict[tuple[int, int], float] = {}
+    next_lane = x0
+    for root in roots:
+        lane[root] = next_lane
+        stack = [root]
+        while stack:
+            node = stack.pop()
+            x = lane[node]
+            children = tree_children[node]
+            if node[0] == "T" and len(trans[node[1]].targets) > 1:
+                # Keep written target order across real steps and jumps.
+                tree = {c[1]: c for c in children}
+                jumps = set(jump_targets(node))
+                for target in trans[node[1]].targets:
+                    if target in tree:
+                        lane[tree[target]] = x
+                        stack.append(tree[target])
+                        x += width[tree[target]]
+                    elif target in jumps:
+                        jump_lane[(node[1], target)] = x
+                        x += 1
+            else:
+                for child in children:
+                    lane[child] = x
+                    stack.append(child)
+                    x += width[child]
+        next_lane += width[root]
+
+    placed_steps = [
+        PlacedStep(
+            number=n,
+            name=step_info[n].name,
+            x=lane[("S", n)],
+            y=float(row[("S", n)]),
+            initial=step_info[n].initial,
+            interlock=step_info[n].interlock,
+            supervision=step_info[n].supervision,
+            sequence=seq.number,
+        )
+        for n in own_steps
+    ]
+    placed_trans = [
+        PlacedTransition(
+            number=n,
+            name=trans[n].name,
+            x=lane[("T", n)],
+            y=float(row[("T", n)]),
+            condition=trans[n].condition,
+            sequence=seq.number,
+        )
+        for n in seq.transitions
+        if n in trans
+    ]
+    pos = {("S", s.number): (s.x, s.y) for s in placed_steps}
+    pos.update({("T", t.number): (t.x, t.y) for t in placed_trans})
+
+    links: list[Link] = []
+    jumps: list[Jump] = []
+    stops: list[Stop] = []
+    for t in placed_trans:
+        info = trans[t.number]
+        node: Node = ("T", t.number)
+        for s in info.sources:
+            src: Node = ("S", s)
+            if src not in pos or (src, node) in back_edges:
+                continue
+            sx, sy = pos[src]
+            if len(info.sources) > 1:  # simultaneous join: double line just above the bar
+                links.append(_elbow((sx, sy), (t.x, t.y), t.y - 0.5, True, t.number))
+            elif len(out.get(s, [])) > 1:  # alternative divergence: line under the step
+                links.append(_elbow((sx, sy), (t.x, t.y), sy + 0.5, False, t.number))
+            else:
+                links.append(_elbow((sx, sy), (t.x, t.y), t.y - 0.5, False, t.number))
+        if not info.targets:
+            stops.append(Stop(t.number, t.x, t.y + MARK_OFFSET))
+        jumps_here = set(jump_targets(node))
+        for target in info.targets:
+            if target in jumps_here:
+                jx = jump_lane.get((t.number, target), t.x)
+                if jx != t.x:
+                    links.append(_elbow((t.x, t.y), (jx, t.y + 1), t.y + 0.5, True, t.number))
+                    jumps.append(Jump(t.number, target, jx, t.y + 1 - 0.45))
+                else:
+                    jumps.append(Jump(t.number, target, t.x, t.y + MARK_OFFSET))
+                continue
+            tx, ty = pos[("S", target)]
+            if len(info.targets) > 1:  # simultaneous divergence: double line under the bar
+                links.append(_elbow((t.x, t.y), (tx, ty), t.y + 0.5, True, t.number))
+            else:  # a plain line, or an alternative convergence just above the step
+                links.append(_elbow((t.x, t.y), (tx, ty), ty - 0.5, False, t.number))
+
+    lanes_used = [*lane.values(), *jump_lane.values()]
+    x_end = max(lanes_used, default=x0) + 1
+    height = max((float(r) for r in row.values()), default=0.0) + 1
+    return _Part(
+        steps=placed_steps,
+        transitions=placed_trans,
+        links=links,
+        jumps=jumps,
+        stops=stops,
+        column=PlacedSequence(seq.number, seq.name, x0, x_end - 1),
+        width_end=x_end,
+        height=height,
+    )
+
+
+def _elbow(a: Point, b: Point, y_mid: float, double: bool, transition: int) -> Link:
+    """Down from ``a`` to ``y_mid``, across to ``b``'s lane, down to ``b``."""
+    (ax, ay), (bx, by) = a, b
+    if ax == bx:
+        return Link(((ax, ay), (bx, by)), False, transition)
+    return Link(((ax, ay), (ax, y_mid), (bx, y_mid), (bx, by)), double, transition)

@@ -1,0 +1,335 @@
+"""Wire messages between a CPU and its views: frozen msgspec structs, JSON on the bus.
+
+Every struct forbids unknown fields and bounds its numbers, strings and lists, so a hostile
+message is refused with a :class:`ProtocolError` naming the bad field (``$.args.step``),
+never an exception that escapes. Schema evolution follows msgspec's rules: a new field gets
+a default, a field never changes type.
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Annotated, Any, Literal, TypeVar
+
+import msgspec
+from msgspec import Meta, Struct
+
+from sequencer.model import (
+    Binary,
+    Chart,
+    Const,
+    Expr,
+    FuncCall,
+    Operand,
+    StepAttr,
+    TransAttr,
+    Unary,
+)
+
+__all__ = [
+    "EVENTS",
+    "MAX_MESSAGE_BYTES",
+    "MODES",
+    "OPS",
+    "ChartLayout",
+    "Command",
+    "CommandReply",
+    "CpuStatus",
+    "ProtocolError",
+    "SequenceInfo",
+    "StepInfo",
+    "StepStateUpdate",
+    "TransitionInfo",
+    "condition_text",
+    "decode",
+    "encode",
+    "valid_name",
+]
+
+SCHEMA = 1
+MAX_MESSAGE_BYTES = 1 << 20  # refuse anything larger before decoding it
+
+Mode = Literal["AUTO", "MAN", "TAP", "TOP"]
+MODES: tuple[str, ...] = ("AUTO", "MAN", "TAP", "TOP")
+Event = Literal["S1", "S0", "V1", "V0", "L1", "L0", "A1", "R1"]
+EVENTS: tuple[str, ...] = ("S1", "S0", "V1", "V0", "L1", "L0", "A1", "R1")
+Op = Literal["ack", "mode", "init", "off", "step_on", "step_off", "t_push"]
+OPS: tuple[str, ...] = ("ack", "mode", "init", "off", "step_on", "step_off", "t_push")
+
+# A name that is safe inside a zenoh key expression and in a scene node path.
+NAME_PATTERN = r"^[A-Za-z_][A-Za-z0-9_.\-]{0,63}$"
+_NAME_RE = re.compile(NAME_PATTERN)
+
+StepNo = Annotated[int, Meta(ge=0, le=65535)]
+Count = Annotated[int, Meta(ge=0, le=2**63 - 1)]
+Name = Annotated[str, Meta(pattern=NAME_PATTERN)]
+Text = Annotated[str, Meta(max_length=4096)]
+ShortText = Annotated[str, Meta(max_length=256)]
+Steps = Annotated[list[StepNo], Meta(max_length=4096)]
+Scalar = bool | int | float | str | None
+ValueName = Annotated[str, Meta(min_length=1, max_length=128)]
+
+
+def valid_name(name: str) -> bool:
+    """Whether ``name`` may be a CPU or FB name (letters, digits, ``_ . -``; no key wildcards)."""
+    return bool(_NAME_RE.match(name))
+
+
+class ProtocolError(ValueError):
+    """A message that does not decode to the expected struct; the text says where and why."""
+
+
+class _Msg(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
+    pass
+
+
+# ---------------------------------------------------------------- chart structure
+
+
+class StepInfo(_Msg, kw_only=True):
+    """One step box: number, name, and which frames the view draws around it."""
+
+    number: StepNo
+    name: ShortText = ""
+    initial: bool = False
+    interlock: bool = False
+    supervision: bool = False
+    message: Text = ""
+
+
+class TransitionInfo(_Msg, kw_only=True):
+    """One transition bar; ``targets == []`` is a branch stop (``TO STOP``)."""
+
+    number: StepNo
+    name: ShortText = ""
+    sources: Steps
+    targets: Steps
+    condition: Text = ""
+
+
+class SequenceInfo(_Msg, kw_only=True):
+    """One sequencer (a column in the chart), listing its steps and transitions in file order."""
+
+    number: StepNo
+    name: ShortText = ""
+    steps: Steps
+    transitions: Steps
+
+
+class ChartLayout(_Msg, kw_only=True):
+    """What a view needs to draw one GRAPH FB (served by ``fb/<name>/chart``)."""
+
+    fb: Name
+    steps: Annotated[list[StepInfo], Meta(max_length=4096)]
+    transitions: Annotated[list[TransitionInfo], Meta(max_length=4096)]
+    sequences: Annotated[list[SequenceInfo], Meta(max_length=256)]
+    schema: int = SCHEMA
+
+    @classmethod
+    def from_chart(cls, chart: Chart, *, fb: str | None = None) -> ChartLayout:
+        """Describe ``chart`` for a view; ``fb`` defaults to the chart's name."""
+        steps = [
+            StepInfo(
+                number=s.number,
+                name=s.name,
+                initial=s.initial,
+                interlock=s.interlock is not None,
+                supervision=s.supervision is not None,
+                message=s.message,
+            )
+            for s in chart.all_steps()
+        ]
+        transitions = [
+            TransitionInfo(
+                number=t.number,
+                name=t.name,
+                sources=list(t.sources),
+                targets=list(t.targets),
+                condition=condition_text(t.condition),
+            )
+            for t in chart.all_transitions()
+        ]
+        sequences = [
+            SequenceInfo(
+                number=q.number,
+                name=q.name,
+                steps=[s.number for s in q.steps],
+                transitions=[t.number for t in q.transitions],
+            )
+            for q in chart.sequences
+        ]
+        return cls(fb=fb or chart.name, steps=steps, transitions=transitions, sequences=sequences)
+
+    def step(self, number: int) -> StepInfo | None:
+        """The step with this number, or None."""
+        return next((s for s in self.steps if s.number == number), None)
+
+
+# ---------------------------------------------------------------- per-scan state
+
+
+class StepStateUpdate(_Msg, kw_only=True):
+    """The FB's state after one scan (``fb/<name>/state``; ``fb/<name>/delta`` on change).
+
+    ``seq`` counts changes (the bus publisher numbers them); ``disturbed`` are steps with an
+    interlock or supervision error, ``latched`` those whose supervision error is not yet
+    acknowledged; ``events`` are ``[event, step]`` pairs raised this scan."""
+
+    seq: Count = 0
+    cycle: Count
+    t_ms: Count
+    mode: Mode
+    active: Steps
+    disturbed: Steps = []
+    latched: Steps = []
+    events: Annotated[list[tuple[Event, StepNo]], Meta(max_length=4096)] = []
+    values: Annotated[dict[ValueName, Scalar], Meta(max_length=1024)] = {}
+
+    def changed_from(self, other: StepStateUpdate | None) -> bool:
+        """Whether this scan differs from ``other`` in more than its cycle and time."""
+        if other is None:
+            return True
+        return (
+            bool(self.events)
+            or self.mode != other.mode
+            or self.active != other.active
+            or self.disturbed != other.disturbed
+            or self.latched != other.latched
+            or self.values != other.values
+        )
+
+
+class CpuStatus(_Msg, kw_only=True):
+    """``status``: the CPU's run state and its FBs; published on change and at 1 Hz."""
+
+    cpu: Name
+    state: Literal["RUN", "STOP", "STARTUP"] = "RUN"
+    cycle: Count = 0
+    t_ms: Count = 0
+    fbs: Annotated[list[Name], Meta(max_length=256)] = []
+
+
+# ---------------------------------------------------------------- commands
+
+_ARGS_BY_OP: dict[str, frozenset[str]] = {
+    "ack": frozenset(),
+    "mode": frozenset({"mode"}),
+    "init": frozenset(),
+    "off": frozenset(),
+    "step_on": frozenset({"step"}),
+    "step_off": frozenset({"step"}),
+    "t_push": frozenset(),
+}
+
+
+class Command(_Msg, kw_only=True):
+    """An operator command (``cmd`` queryable), applied at a scan boundary.
+
+    ``mode`` takes ``{"mode": "AUTO"|"MAN"|"TAP"|"TOP"}``; ``step_on``/``step_off`` take
+    ``{"step": n}``; the other ops take no arguments."""
+
+    op: Op
+    fb: Name
+    user: Annotated[str, Meta(max_length=64)] = ""
+    args: Annotated[dict[Annotated[str, Meta(max_length=32)], Scalar], Meta(max_length=8)] = {}
+
+    def __post_init__(self) -> None:
+        expected = _ARGS_BY_OP[self.op]
+        extra = sorted(set(self.args) - expected)
+        missing = sorted(expected - set(self.args))
+        if extra:
+            raise ValueError(f"op {self.op!r} takes no argument {extra[0]!r} - at `$.args`")
+        if missing:
+            raise ValueError(f"op {self.op!r} needs argument {missing[0]!r} - at `$.args`")
+        if self.op == "mode" and self.args["mode"] not in MODES:
+            raise ValueError(f"mode must be one of {', '.join(MODES)} - at `$.args.mode`")
+        if self.op in ("step_on", "step_off"):
+            step = self.args["step"]
+            if isinstance(step, bool) or not isinstance(step, int) or not 0 < step <= 65535:
+                raise ValueError("step must be a step number 1..65535 - at `$.args.step`")
+
+    @property
+    def step(self) -> int | None:
+        """The step of ``step_on``/``step_off``, else None."""
+        value = self.args.get("step")
+        return value if isinstance(value, int) and not isinstance(value, bool) else None
+
+    @property
+    def mode(self) -> str | None:
+        """The mode of a ``mode`` command, else None."""
+        value = self.args.get("mode")
+        return value if isinstance(value, str) else None
+
+
+class CommandReply(_Msg, kw_only=True):
+    """The answer to a command: applied, or refused with a reason."""
+
+    applied: bool
+    reason: Text = ""
+    op: ShortText = ""
+    fb: ShortText = ""
+    cycle: Count | None = None
+
+
+# ---------------------------------------------------------------- encode / decode
+
+T = TypeVar("T")
+_DECODERS: dict[type[Any], msgspec.json.Decoder[Any]] = {}
+_ENCODER = msgspec.json.Encoder()
+
+
+def encode(message: Struct) -> bytes:
+    """JSON bytes of a message."""
+    return _ENCODER.encode(message)
+
+
+def decode(data: bytes | bytearray | memoryview | str, kind: type[T]) -> T:
+    """Decode JSON ``data`` as ``kind``; raise :class:`ProtocolError` with a clear reason."""
+    size = len(data.encode() if isinstance(data, str) else data)
+    if size > MAX_MESSAGE_BYTES:
+        raise ProtocolError(f"message too large: {size} bytes (limit {MAX_MESSAGE_BYTES})")
+    decoder = _DECODERS.get(kind)
+    if decoder is None:
+        decoder = _DECODERS[kind] = msgspec.json.Decoder(kind)
+    try:
+        return decoder.decode(data)  # type: ignore[no-any-return]
+    except msgspec.ValidationError as exc:
+        raise ProtocolError(f"invalid {kind.__name__}: {exc}") from None
+    except msgspec.DecodeError as exc:
+        raise ProtocolError(f"malformed JSON: {exc}") from None
+    except (RecursionError, UnicodeDecodeError, ValueError, TypeError) as exc:
+        raise ProtocolError(f"invalid {kind.__name__}: {type(exc).__name__}") from None
+
+
+# ---------------------------------------------------------------- condition text
+
+_PRECEDENCE = {"OR": 1, "XOR": 2, "AND": 3, "=": 4, "<>": 4, "<": 4, ">": 4, "<=": 4, ">=": 4}
+
+
+def condition_text(expr: Expr | None) -> str:
+    """An expression as S7 text (``"Start" AND NOT S3.X``); "" for an empty condition."""
+    if expr is None:
+        return ""
+    return _text(expr, 0)
+
+
+def _text(e: Expr, outer: int) -> str:
+    match e:
+        case Const(text=text, value=value):
+            return text or str(value)
+        case Operand(name=name, quoted=quoted):
+            return f'"{name}"' if quoted else name
+        case StepAttr(step=step, attr=attr):
+            return f"S{step}.{attr}"
+        case TransAttr(transition=t, attr=attr):
+            return f"T{t}.{attr}"
+        case Unary(op=op, operand=operand):
+            inner = _text(operand, 9)
+            return f"NOT {inner}" if op == "NOT" else f"-{inner}"
+        case Binary(op=op, left=left, right=right):
+            prec = _PRECEDENCE.get(op, 5)
+            s = f"{_text(left, prec)} {op} {_text(right, prec + 1)}"
+            return f"({s})" if prec < outer else s
+        case FuncCall(name=name, args=args):
+            return f"{name}({', '.join(_text(a, 0) for a in args)})"
+    return "?"
