@@ -2,8 +2,10 @@
 
 ``scan()`` reads the clock once and runs one cycle in S7 order: commands queued since the
 last scan are applied, cycle monitoring judges the previous cycle, PII is read from the
-module side, OB1 runs, due cyclic interrupts OB30–OB38 run (highest priority first), PIQ is
-written to the modules. Outside RUN the module outputs are 0. A Python exception in a user
+module side, OB1 runs, due interrupt OBs run — time-of-day OB10–17, delay OB20–23, cyclic
+OB30–38 — highest priority first and, within one priority, in the order of their start
+events (behaviour 17), PIQ is written to the modules. Scan hooks (``add_scan_hook``; the
+S5 timer update of ``sfb``) run at the start of every cycle on the process time. Outside RUN the module outputs are 0. A Python exception in a user
 block is a programming error: OB121 if loaded, else STOP — the process never dies.
 All timing uses *process time*: the clock minus the time spent in HOLD, so HOLD freezes
 timers, interrupts and monitoring while the diagnostic time stamps keep the real clock.
@@ -14,6 +16,7 @@ from __future__ import annotations
 from collections import deque
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
+from datetime import datetime, timedelta
 from functools import lru_cache
 from typing import Any
 
@@ -23,11 +26,14 @@ from engine.clock import Clock
 from engine.datatypes import check_value
 from engine.diagnostics import DiagnosticBuffer, EventId
 from engine.errors import AddressError, BlockError, TypeMismatch
-from engine.interrupts import CYCLIC_DEFAULT_MS, CyclicScheduler
+from engine.interrupts import CYCLIC_DEFAULT_MS, CyclicScheduler, priority
 from engine.memory import AreaLengthError, Memory
 from engine.modes import CpuMode, KeySwitch, ModeRequest, SetKeySwitch, resolve_requests
 from engine.record import ScanRecord
 from engine.restart import RESTART, RestartType, parse_restart
+from engine.rtc import RealTimeClock
+from engine.rtm import RuntimeMeters
+from engine.timed import DelayInterrupts, TodInterrupts
 from engine.watchdog import CycleStatistics, Verdict, Watchdog
 
 CLOCK_MEMORY_HALF_MS = (50, 100, 200, 250, 400, 500, 800, 1000)
@@ -76,6 +82,20 @@ def _fits(type_name: str, value: object) -> bool:
         bounds = _INT_RANGES.get(type_name)
         return bounds is not None and bounds[0] <= value <= bounds[1]  # type: ignore[operator]
     return type_name == "OBJECT"
+
+
+ScanHook = Callable[["Cpu", int], None]
+"""``hook(cpu, process_ns)``: an operating-system task run at the start of every cycle."""
+
+OS_SCAN_HOOKS: list[ScanHook] = []
+"""Scan hooks every CPU runs (registered by ``sfb`` at import, see ``add_os_scan_hook``)."""
+
+
+def add_os_scan_hook(hook: ScanHook) -> None:
+    """Register ``hook`` for every CPU (idempotent): how ``sfb`` makes the S5 timers tick
+    once per scan without the engine importing it (seeds-runtime §5.1, behaviour 46)."""
+    if hook not in OS_SCAN_HOOKS:
+        OS_SCAN_HOOKS.append(hook)
 
 
 @lru_cache(maxsize=4096)
@@ -207,7 +227,8 @@ class CallContext:
                 raise BlockError(f"{blk.label} has no parameter {name!r}")
             decl, type_name = spec
             if isinstance(actual, str) and not is_stringy(type_name):
-                args[name] = self.mem.read_as(_addr(actual), type_name)
+                if decl is not Decl.OUT:  # an OUT is written, never read in
+                    args[name] = self.mem.read_as(_addr(actual), type_name)
                 if decl is not Decl.IN:
                     refs.append((name, actual, type_name))
             elif decl is not Decl.IN:
@@ -225,8 +246,9 @@ class CallContext:
             self.depth -= 1
         out: dict[str, object] = {}
         for name, operand, type_name in refs:
-            self.mem.write_as(_addr(operand), type_name, args[name])
-            out[name] = args[name]
+            if name in args:  # an OUT the FC left unassigned leaves its operand alone
+                self.mem.write_as(_addr(operand), type_name, args[name])
+                out[name] = args[name]
         if blk.ret_type is not None:
             out["RET_VAL"] = ret
         return out
@@ -265,6 +287,16 @@ class Cpu:
         self.watchdog = Watchdog(max_cycle_ms, min_cycle_ms)
         self.stats = CycleStatistics()
         self.interrupts = CyclicScheduler()
+        self.delays = DelayInterrupts()
+        self.tod = TodInterrupts()
+        self.rtc = RealTimeClock()
+        """The CPU's date and time on the injected clock (SFC0/SFC1, TOD interrupts)."""
+        self.meters = RuntimeMeters()
+        self.ob_priority: dict[int, int] = {}
+        """Parametrised OB priorities; others have the defaults of behaviour 18."""
+        self._scan_hooks: list[ScanHook] = []
+        self._airt_disabled = 0
+        self._tod_seen: tuple[int, object] | None = None
         self.clock_memory = clock_memory
         self.max_nesting = max_nesting
         self.hot_restart_enabled = hot_restart_enabled
@@ -413,6 +445,41 @@ class Cpu:
         """SFC43 RE_TRIGR: restart cycle-time monitoring for this cycle."""
         self.watchdog.retrigger()
 
+    def add_scan_hook(self, hook: ScanHook) -> None:
+        """Run ``hook(cpu, process_ns)`` at the start of every cycle and before the startup
+        OB (idempotent). Process time stands still in HOLD, so hooks see frozen time."""
+        if hook not in self._scan_hooks:
+            self._scan_hooks.append(hook)
+
+    def _run_hooks(self, now: int) -> None:
+        for hook in OS_SCAN_HOOKS:
+            hook(self, now)
+        for hook in self._scan_hooks:
+            hook(self, now)
+
+    def priority_of(self, ob: int) -> int:
+        """The OB's priority class: parametrised in ``ob_priority`` or the default (18)."""
+        got = self.ob_priority.get(ob)
+        return got if got is not None else priority(ob)
+
+    def dis_airt(self) -> int:
+        """SFC41 DIS_AIRT: delay higher-priority interrupts until EN_AIRT or the end of the
+        current OB — delayed, never lost (behaviour 23); returns the number of delays."""
+        self._airt_disabled += 1
+        return self._airt_disabled
+
+    def en_airt(self) -> int | None:
+        """SFC42 EN_AIRT: undo one DIS_AIRT; the remaining count, None if none was active."""
+        if self._airt_disabled == 0:
+            return None
+        self._airt_disabled -= 1
+        return self._airt_disabled
+
+    @property
+    def airt_disabled(self) -> int:
+        """How many DIS_AIRT calls of the running OB are still in force."""
+        return self._airt_disabled
+
     def update_pii(self) -> None:
         """Read the module inputs into the process-image input table (also SFC26 UPDAT_PI)."""
         n = len(self.mem.inputs)
@@ -483,6 +550,8 @@ class Cpu:
         self._now = now
         ctx = self._ctx
         ctx.now_ns = now
+        if OS_SCAN_HOOKS or self._scan_hooks:
+            self._run_hooks(now)
         last = self._last_ob1
         if last is not None and now - last < self.watchdog.min_cycle_ns:
             self._interrupts(now)  # interrupt OBs still run in the minimum-cycle wait
@@ -527,24 +596,69 @@ class Cpu:
         self.mem.markers[self.clock_memory] = value
 
     def _interrupts(self, now: int) -> None:
-        for ob, lost in self.interrupts.due(now):
-            if self.mode is not CpuMode.RUN:
-                return
+        """Run due interrupt OBs: priority first, then the order of their start events."""
+        queue: list[tuple[int, int, int, dict[str, Any], int]] = []
+        for ob, lost, at in self.interrupts.due_events(now):
             if lost:
                 self.diagnostics.record(
                     self._raw, EventId.OB_REQUEST_ERROR, f"OB{ob}", f"{lost} start event(s) lost"
                 )
+            period = self.interrupts.active[ob]
+            info = {"PHASE_OFFSET": period.phase_ns // 1_000_000, "LOST": lost}
+            queue.append((ob, at, 85, info, 0))
+        if self.delays.pending:
+            for d in self.delays.due(now):
+                queue.append((d.ob, d.due_ns, 80, {"SIGN": d.sign}, 0))
+        if self.tod.table:
+            queue.extend(self._tod_due(now))
+        else:
+            self._tod_seen = None
+        if not queue or self.mode is not CpuMode.RUN:
+            return
+        queue.sort(key=lambda e: (-self.priority_of(e[0]), e[1], e[0]))
+        for ob, _, error_ob, info, _ in queue:
+            if self.mode is not CpuMode.RUN:
+                return
             if ob in self.obs:
-                period = self.interrupts.active[ob]
-                self._run_ob(ob, {"PHASE_OFFSET": period.phase_ns // 1_000_000, "LOST": lost})
+                self._run_ob(ob, info)
                 continue
             self.diagnostics.record(
                 self._raw, EventId.INTERRUPT_OB_MISSING, f"OB{ob}", "not loaded"
             )
-            if 85 in self.obs:
-                self._run_ob(85, {"OB": ob})
+            if error_ob in self.obs:
+                self._run_ob(error_ob, {"OB": ob})
             else:
-                self._go_stop(EventId.STOP_OB85_MISSING, "OB85", f"not loaded (event for OB{ob})")
+                event = _MISSING_STOP[error_ob]
+                self._go_stop(event, f"OB{error_ob}", f"not loaded (event for OB{ob})")
+
+    def _tod_due(self, now: int) -> list[tuple[int, int, int, dict[str, Any], int]]:
+        """Due time-of-day interrupts on the RTC; a clock set forward over some calls OB80
+        (FLT_ID 16#05) first, then each skipped OB runs once unless OB80 cancelled it
+        (behaviour 22, [002:L1373-1384])."""
+        dt = self.rtc.read(self._raw)
+        seen, self._tod_seen = self._tod_seen, (self.rtc.version, dt)
+        jumped_from = None
+        if seen is not None and seen[0] != self.rtc.version and isinstance(seen[1], datetime):
+            jumped_from = seen[1] if dt > seen[1] else None
+        events = self.tod.due(dt, jumped_from)
+        skipped = sorted({e.ob for e in events if e.skipped})
+        if skipped:
+            self.diagnostics.record(
+                self._raw, EventId.ASYNC_ERROR, "OB80", f"TOD interrupt(s) skipped: {skipped}"
+            )
+            info = {"FLT_ID": 0x05, "SKIPPED": tuple(skipped)}
+            info["SKIPPED_MASK"] = sum(1 << (ob - 10) for ob in skipped)
+            if 80 in self.obs:
+                self._run_ob(80, info)
+            else:
+                self._go_stop(EventId.STOP_OB80_MISSING, "OB80", "not loaded (TOD skipped)")
+                return []
+        out: list[tuple[int, int, int, dict[str, Any], int]] = []
+        for e in events:
+            if self.tod.consume(e.ob, dt):
+                at = now - (dt - e.due) // timedelta(microseconds=1) * 1000
+                out.append((e.ob, at, 80, {"DATE_TIME": e.due, "SKIPPED": e.skipped}, 0))
+        return out
 
     def _run_ob(self, number: int, start_info: dict[str, Any]) -> None:
         block = self.obs.get(number)
@@ -555,12 +669,15 @@ class Cpu:
         ctx.depth = 0
         ctx.start_info = start_info
         self._ran.append(number)
+        airt = self._airt_disabled
         try:
             block.body(ctx)
         except _Fault as fault:
             self._program_error(number, fault.block, fault.exc)
         except Exception as exc:
             self._program_error(number, block.label, exc)
+        finally:
+            self._airt_disabled = airt  # DIS_AIRT ends with its OB (behaviour 23)
 
     def _program_error(self, ob: int, block: str, exc: BaseException) -> None:
         event = _classify(exc)
@@ -579,6 +696,8 @@ class Cpu:
     def _go_stop(self, event: int, block: str, message: str) -> None:
         self.mode = CpuMode.STOP
         self._hold_since = None
+        self.meters.stop_cpu(self.clock.now_ns())
+        self.delays.clear()
         self.mem.periph_out[:] = bytes(len(self.mem.periph_out))
         self.diagnostics.record(self.clock.now_ns(), event, block, message)
 
@@ -662,6 +781,13 @@ class Cpu:
         ctx = self._ctx
         ctx.now_ns = raw
         ctx.cycle = self.cycle
+        hot = restart is RestartType.HOT
+        self.meters.start_cpu(raw, hot=hot)
+        self.tod.startup(self.rtc.read(raw), hot=hot)
+        self._tod_seen = None
+        self._airt_disabled = 0
+        if OS_SCAN_HOOKS or self._scan_hooks:
+            self._run_hooks(raw)  # S5 timers keep running in STARTUP (behaviour 8)
         self._run_ob(rule.ob, {"RESTART": str(restart)})
         if self.mode is not CpuMode.STARTUP:
             if restart is RestartType.WARM:

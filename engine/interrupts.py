@@ -1,4 +1,4 @@
-"""OB priorities and cyclic interrupts OB30–OB38 (SPEC.md §1.5; behaviours 18, 19, 23).
+"""OB priorities and cyclic interrupts OB30–OB38 (SPEC.md §1.5; behaviours 17, 18, 19, 23).
 
 A cyclic OB runs every ``period`` measured on the CPU's process time from the STOP→RUN
 transition, delayed by its phase offset (0 <= phase < period). Only loaded OBs have a
@@ -108,14 +108,20 @@ class CyclicScheduler:
 
     def due(self, now_ns: int) -> list[tuple[int, int]]:
         """OBs due at ``now_ns`` as ``(ob, lost_events)``, highest priority first."""
-        out: list[tuple[int, int]] = []
+        return [(ob, lost) for ob, lost, _ in self.due_events(now_ns)]
+
+    def due_events(self, now_ns: int) -> list[tuple[int, int, int]]:
+        """OBs due at ``now_ns`` as ``(ob, lost_events, first_event_ns)``, highest OB first;
+        the event time lets the CPU queue equal priorities in event order (behaviour 17)."""
+        out: list[tuple[int, int, int]] = []
         for ob in sorted(self.active, reverse=True):
             ci = self.active[ob]
             if now_ns < ci.next_due_ns:
                 continue
-            events = (now_ns - ci.next_due_ns) // ci.period_ns + 1
+            first = ci.next_due_ns
+            events = (now_ns - first) // ci.period_ns + 1
             ci.next_due_ns += events * ci.period_ns
             if ci.enabled:
-                out.append((ob, events - 1))
+                out.append((ob, events - 1, first))
                 ci.lost += events - 1
         return out

@@ -260,12 +260,11 @@ class GraphRuntime:
             if i >= 0 and st.sv_err[i]:
                 acks = [i]
         self._acked.clear()
-        for i in acks:
-            if not st.sv_cond[i]:  # a fault whose cause persists stays latched
-                st.sv_err[i] = False
-                self._raise(i, EV_A1)
-                self._raise(i, EV_V0)
-                self._acked.add(i)
+        for i in acks:  # releases the step for this call's switching (SPEC §2.4); a cause
+            st.sv_err[i] = False  # that persists raises V1 again in step 4d
+            self._raise(i, EV_A1)
+            self._raise(i, EV_V0)
+            self._acked.add(i)
         if "REG_EF" in rose:
             for i in st.active:
                 if st.il_err[i] or st.sv_err[i]:

@@ -11,7 +11,18 @@ from __future__ import annotations
 from typing import Protocol
 
 from engine.blocks import FB, FC
-from sfb import alarms, iec_counters, iec_timers, sfc_clock, sfc_control, sfc_memory
+from sfb import (
+    alarms,
+    iec_counters,
+    iec_timers,
+    sfc_clock,
+    sfc_control,
+    sfc_db,
+    sfc_interrupts,
+    sfc_memory,
+    sfc_rtm,
+)
+from sfb import s5_timers  # noqa: F401  (importing it registers the S5 timer tick)
 from sfb.alarms import Message, MessageEvent, MessageList, MessageState, message_list
 from sfb.catalogue import CATALOGUE, Direction, Entry, Kind, Pin, find, lookup
 from sfb.diag_read import rdsysst, wr_usmsg
@@ -58,8 +69,11 @@ SYSTEM_BLOCKS: tuple[FB | FC, ...] = (
     *iec_counters.BLOCKS,
     *iec_timers.BLOCKS,
     *sfc_clock.BLOCKS,
+    *sfc_rtm.BLOCKS,
     *alarms.BLOCKS,
     *sfc_memory.BLOCKS,
+    *sfc_db.BLOCKS,
+    *sfc_interrupts.BLOCKS,
     *sfc_control.BLOCKS,
 )
 """Every system block with an engine adapter, in catalogue order of kind and number."""
@@ -70,5 +84,10 @@ class _Loader(Protocol):
 
 
 def install(cpu: _Loader) -> None:
-    """Load all system blocks into ``cpu`` (they belong to the OS: no download needed)."""
+    """Load all system blocks into ``cpu`` (they belong to the OS: no download needed).
+
+    The S5 timer update needs no install: importing ``sfb`` registers it as an OS scan hook
+    of every CPU (``s5_timers.scan_hook``), so GraphFB timers tick too.
+    """
     cpu.load(*SYSTEM_BLOCKS)
+

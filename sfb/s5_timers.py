@@ -14,6 +14,11 @@ binary, ``LC T n`` reads it BCD with the time base. The five functions (behaviou
 * SF off-delay: S = 1 gives Q = 1; the falling S starts; Q = 0 after TV; rising S stops it.
 
 R = 1 clears value and Q for all five (R dominates). A rising FR with S = 1 restarts.
+
+The OS updates the T area once per scan: importing this module registers ``scan_hook`` with
+``engine.cpu.add_os_scan_hook``, so every CPU ticks its timers at the start of each cycle on
+the process time (frozen in HOLD, running in STARTUP; behaviours 8, 46, 51) without any
+further timer instruction.
 """
 
 from __future__ import annotations
@@ -22,6 +27,7 @@ from collections.abc import Sequence
 from enum import StrEnum
 from typing import NamedTuple
 
+from engine.cpu import Cpu, add_os_scan_hook
 from engine.datatypes import S5_BASES_MS as TIME_BASES_MS
 from engine.datatypes import bcd_to_int, int_to_bcd, ms_to_s5time, s5time_to_ms
 from engine.errors import ProgramError
@@ -92,7 +98,16 @@ def tick(cell: S5Timer, now_ns: int) -> None:
 def tick_all(timers: Sequence[S5Timer], now_ns: int) -> None:
     """The OS update of the T area (call once per scan, and before reading a timer)."""
     for cell in timers:
-        tick(cell, now_ns)
+        if cell.running:
+            tick(cell, now_ns)
+
+
+def scan_hook(cpu: Cpu, now_ns: int) -> None:
+    """The per-scan OS task: tick every running timer cell of ``cpu``."""
+    tick_all(cpu.mem.timers, now_ns)
+
+
+add_os_scan_hook(scan_hook)
 
 
 def shift(timers: Sequence[S5Timer], delta_ns: int) -> None:

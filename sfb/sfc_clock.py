@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 from weakref import WeakKeyDictionary
 
 from engine import blocks
+from engine.rtc import RealTimeClock, truncate_ms
 from sfb.catalogue import OK, PARAM_RANGE, engine_sections, lookup, specific_error
 
 if TYPE_CHECKING:
@@ -23,44 +24,14 @@ if TYPE_CHECKING:
 
 NS_PER_MS = 1_000_000
 TICK_MODULUS = 2**31
-DT_MIN = datetime(1990, 1, 1)
+DT_MIN = datetime(1990, 1, 1)  # == engine.rtc.DT_MIN
 DT_MAX = datetime(2089, 12, 31, 23, 59, 59, 999_000)
 RET_DT_RANGE = specific_error(PARAM_RANGE)
 
 
-def _ms(dt: datetime) -> datetime:
-    return dt.replace(microsecond=dt.microsecond // 1000 * 1000, tzinfo=None)
-
-
-class RealTimeClock:
-    """The CPU clock: ``epoch`` at injected time 0, moved by SET_CLK through an offset."""
-
-    def __init__(self, epoch: datetime = DT_MIN) -> None:
-        self._epoch = _ms(epoch)
-        self._offset_ns = 0
-
-    def read(self, now_ns: int) -> datetime:
-        """The CPU date and time at injected time ``now_ns`` (ms resolution)."""
-        ms = (now_ns + self._offset_ns) // NS_PER_MS
-        return self._epoch + timedelta(milliseconds=ms)
-
-    def set(self, value: datetime, now_ns: int) -> None:
-        """Make ``read(now_ns)`` return ``value`` from now on."""
-        target = _ms(value) - self._epoch
-        target_ns = (target // timedelta(milliseconds=1)) * NS_PER_MS
-        self._offset_ns = target_ns - now_ns
-
-    def snapshot(self) -> dict[str, object]:
-        return {"epoch": self._epoch.isoformat(), "offset_ns": self._offset_ns}
-
-    def restore(self, data: dict[str, object]) -> None:
-        self._epoch = datetime.fromisoformat(str(data["epoch"]))
-        self._offset_ns = int(str(data["offset_ns"]))
-
-
 def set_clk(rtc: RealTimeClock, pdt: datetime, now_ns: int) -> int:
     """SFC0 SET_CLK(PDT): set the CPU date and time; RET_VAL 0 or W#16#8080 (out of range)."""
-    if not DT_MIN <= _ms(pdt) <= DT_MAX:
+    if not DT_MIN <= truncate_ms(pdt) <= DT_MAX:
         return RET_DT_RANGE
     rtc.set(pdt, now_ns)
     return OK
@@ -87,7 +58,11 @@ _RTCS: WeakKeyDictionary[object, RealTimeClock] = WeakKeyDictionary()
 
 
 def rtc_of(cpu: object) -> RealTimeClock:
-    """The real-time clock of ``cpu`` (created at DT#1990-01-01 on first use)."""
+    """The real-time clock of ``cpu``: ``cpu.rtc`` of an ``engine.cpu.Cpu``, else one kept in a
+    weak table (created at DT#1990-01-01 on first use)."""
+    own = getattr(cpu, "rtc", None)
+    if isinstance(own, RealTimeClock):
+        return own
     rtc = _RTCS.get(cpu)
     if rtc is None:
         rtc = _RTCS[cpu] = RealTimeClock()

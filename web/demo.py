@@ -61,6 +61,7 @@ class WebEdge:
             self.view = ChartView(self.server, seen, self.client.send)
             self._closers.append(self.view.close)
             self.follower = self.client.follow(self.fb, self.view.apply)
+            self.client.on_status(self.view.apply_status)
         except BaseException:
             self.close()
             raise

@@ -119,7 +119,7 @@ class Placement:
 # Graph nodes: ("S", n) for a step, ("T", n) for a transition.
 Node = tuple[str, int]
 MARK_OFFSET = 0.55  # how far below a transition a jump arrow or stop is drawn
-SEQUENCE_GAP = 1.0  # empty lanes between two sequence columns
+SEQUENCE_GAP = 0.5  # empty lanes between two sequence columns
 
 
 def place(chart: Chart | ChartLayout) -> Placement:

@@ -24,7 +24,7 @@ import viser
 from PIL import Image, ImageDraw, ImageFont
 
 from web.layout import Placement, place
-from web.protocol import ChartLayout, Command, CommandReply, StepStateUpdate
+from web.protocol import ChartLayout, Command, CommandReply, CpuStatus, StepStateUpdate
 
 __all__ = ["ACTIVE", "DISTURBED", "INACTIVE", "ChartView", "make_server"]
 
@@ -90,6 +90,8 @@ class ChartView:
         self._wake = threading.Event()
         self._closed = False
         self._log: deque[str] = deque(maxlen=LOG_LINES)
+        self._cpu_cycle = 0
+        self._cpu_state = "RUN"
         self._step_colour: dict[int, tuple[int, int, int]] = {}
         self.replies: list[CommandReply] = []  # every answer the CPU gave this view
         self._draw_chart()
@@ -255,7 +257,7 @@ class ChartView:
     def _aim_camera(self, aspect: float = 1.6, panel: float = 0.28) -> None:
         """Look straight down at the chart so it fits the part of the page left of the panel."""
         p = self.placement
-        xs = [x for s in p.steps.values() for x in (s.x * LANE - 1.4, s.x * LANE + BOX_W / 2)]
+        xs = [x for s in p.steps.values() for x in (s.x * LANE - 2.3, s.x * LANE + BOX_W / 2)]
         xs += [t.x * LANE + 1.6 for t in p.transitions.values()]  # room for the bar's text
         ys = [-y * ROW for y in (0.0, p.height + 0.2)]
         ys.append(1.0)  # the sequence titles
@@ -341,6 +343,14 @@ class ChartView:
             self._append_log(f"cycle {update.cycle}: {event} S{step}{name}", render=False)
         self._wake.set()
 
+    def apply_status(self, status: CpuStatus) -> None:
+        """Keep the cycle in the status line current between deltas (status comes at 1 Hz)."""
+        with self._lock:
+            self._cpu_cycle = status.cycle
+            self._cpu_state = status.state
+        self._shown = None
+        self._wake.set()
+
     def close(self) -> None:
         """Stop the render thread (the server stays the caller's)."""
         self._closed = True
@@ -393,13 +403,15 @@ class ChartView:
         active = ", ".join(f"S{n}" for n in update.active) or "none"
         parts = [
             f"<b>{html.escape(update.mode)}</b>",
-            f"cycle {update.cycle}",
+            f"cycle {max(update.cycle, self._cpu_cycle)}",
             f"active: {html.escape(active)}",
         ]
         bad = sorted(set(update.disturbed) | set(update.latched))
         if bad:
             errors = ", ".join(f"S{n}" for n in bad)
             parts.append(f'<span style="color:#c00">error: {html.escape(errors)}</span>')
+        if self._cpu_state != "RUN":
+            parts.insert(0, f'<b style="color:#c00">{html.escape(self._cpu_state)}</b>')
         return f'<div style="font-size:0.85em">{" · ".join(parts)}</div>'
 
 

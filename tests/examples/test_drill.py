@@ -119,7 +119,7 @@ def test_drill_halts_with_a_supervision_fault_when_clamping_takes_over_500_ms(
         {"at_ms": 4000, "set": {"ACK_EF": True}},
         {"at_ms": 4100, "set": {"ACK_EF": False}},
     )
-    records = run_sim(tmp_path, plant=plant, stimulus=stim)
+    records = run_sim(tmp_path, plant=plant, stimulus=stim, cycles=1100)
     (s2,) = entered(records, "S2")
     fault = [rec["t_ms"] for rec in records if rec["values"]["ERR_FLT"]]
     assert fault, "no supervision fault"

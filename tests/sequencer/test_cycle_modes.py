@@ -14,7 +14,7 @@ _rules = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(_rules)
 Chart, seq = _rules.Chart, _rules.seq
 
-from sequencer.state import EV_A1, EV_V0  # noqa: E402
+from sequencer.state import EV_A1, EV_V0, EV_V1  # noqa: E402
 
 IL = seq("""
   INITIAL_STEP S1 "a":
@@ -108,13 +108,19 @@ def test_supervision_fault_stays_latched_until_ack_ef_rising_edge() -> None:
     assert c.active == ["S2", "S4"]
 
 
-def test_ack_does_not_release_a_fault_whose_cause_persists() -> None:
+def test_ack_releases_the_step_and_a_persisting_cause_faults_again() -> None:
     c = Chart(SV)
     c.set(I0_6=True)
     c.call()
     c.set(ACK_EF=True)
     c.call()
+    assert (0, EV_A1) in c.rt.st.log and (0, EV_V1) in c.rt.st.log
     assert c.rt.st.sv_err[0]
+    c.set(ACK_EF=False)
+    c.call()
+    c.set(ACK_EF=True, I0_0=True)
+    c.call()
+    assert c.active == ["S2", "S4"]
 
 
 def test_without_ack_required_the_fault_clears_with_its_cause() -> None:

@@ -200,13 +200,9 @@ def test_en_sv_zero_disables_supervision() -> None:
     assert not run.out("FAULT") and not run.out("SV_ENABLED") and run.active == [3, 4, 11]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="cycle: an acknowledgement is refused while the supervision condition holds, and "
-    "S2.U > limit keeps holding because the fault itself froze U — a time supervision can "
-    "never be acknowledged (SPEC §2.4: acknowledgement releases the step)",
-)
 def test_ack_releases_a_time_supervision_frozen_by_its_own_fault() -> None:
+    """``S1.U > limit`` stays true once the fault froze U: the acknowledgement must still
+    release the step for the call's switching (SPEC §2.4)."""
     run = Run(
         'FUNCTION_BLOCK "U" PARAMETERS := STANDARD; SEQUENCE 1 "s"\n'
         'INITIAL_STEP S1 "a": SUPERVISION := S1.U > T#50MS; END_STEP\n'

@@ -6,15 +6,19 @@ from __future__ import annotations
 import os
 import shutil
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 
 from sequencer.model import Chart, Operand, Sequence, Step, Transition
-from web.demo import WebEdge, serve_view
-from web.protocol import StepStateUpdate
+from web.demo import ToySequencer, WebEdge, serve_view
+from web.protocol import ChartLayout, Command, StepStateUpdate
 from web.view import ACTIVE, DISTURBED, INACTIVE
+
+if TYPE_CHECKING:
+    from playwright.sync_api import Page
 
 CHROMIUM = "/usr/bin/chromium"
 ARGS = [
@@ -85,7 +89,7 @@ def edge() -> Iterator[WebEdge]:
 
 
 @pytest.fixture(scope="module")
-def page(edge: WebEdge) -> Iterator[object]:
+def page(edge: WebEdge) -> Iterator[Page]:
     with sync_api.sync_playwright() as p:
         browser = p.chromium.launch(executable_path=CHROMIUM, headless=True, args=ARGS)
         try:
@@ -98,7 +102,7 @@ def page(edge: WebEdge) -> Iterator[object]:
             browser.close()
 
 
-def wait_until(predicate, timeout: float = 10.0) -> bool:  # noqa: ANN001
+def wait_until(predicate: Callable[[], object], timeout: float = 10.0) -> bool:
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         if predicate():
@@ -107,7 +111,7 @@ def wait_until(predicate, timeout: float = 10.0) -> bool:  # noqa: ANN001
     return predicate()
 
 
-def test_control_sequencer_panel_offers_every_command(page) -> None:  # noqa: ANN001
+def test_control_sequencer_panel_offers_every_command(page: Page) -> None:
     for name in (
         "AUTO",
         "MAN",
@@ -133,7 +137,7 @@ def test_steps_are_coloured_from_the_bus_state(edge: WebEdge) -> None:
 
 
 def test_acknowledge_click_reaches_the_cpu_queue_and_is_answered(
-    page,  # noqa: ANN001
+    page: Page,
     edge: WebEdge,
     tmp_path: Path,
 ) -> None:
@@ -157,3 +161,14 @@ def test_acknowledge_click_reaches_the_cpu_queue_and_is_answered(
     keep = os.environ.get("S7GRAPH_SCREENSHOT")
     if keep:  # for a human to look at the chart
         shutil.copy(shot, keep)
+
+
+def test_demo_feed_applies_commands_between_scans() -> None:
+    """serve_view with a feed: a mode command from a bus client lands between two scans."""
+    toy = ToySequencer(ChartLayout.from_chart(small_chart()), hold=1000)
+    with serve_view(small_chart(), toy.run(5), port=0, apply_command=toy.apply) as running:
+        reply = running.client.send(Command(op="mode", fb="MIXER", args={"mode": "MAN"}))
+        assert reply.applied, reply.reason
+        assert wait_until(lambda: running.follower.latest and running.follower.latest.mode == "MAN")
+        refused = running.client.send(Command(op="t_push", fb="MIXER"))
+        assert not refused.applied and "TAP and TOP" in refused.reason

@@ -1,0 +1,169 @@
+"""The bus on a real zenoh: a CPU session and a view session over a unix socket."""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from sequencer.model import Chart, Sequence, Step, Transition
+from web.bus import BusClient, BusPublisher, open_session
+from web.protocol import ChartLayout, Command, CommandReply, StepStateUpdate
+
+pytestmark = pytest.mark.timeout(30)
+
+
+def layout() -> ChartLayout:
+    steps = (Step(1, "Idle", initial=True), Step(2, "Run"))
+    transitions = (Transition(1, "", (1,), (2,)), Transition(2, "", (2,), (1,)))
+    return ChartLayout.from_chart(Chart("FILL", sequences=(Sequence(1, "M", steps, transitions),)))
+
+
+def scan(cycle: int, active: list[int], **kw: object) -> StepStateUpdate:
+    return StepStateUpdate(cycle=cycle, t_ms=cycle * 10, mode="AUTO", active=active, **kw)
+
+
+@pytest.fixture
+def bus(tmp_path: Path) -> Iterator[tuple[BusPublisher, BusClient]]:
+    endpoint = f"unixsock-stream/{tmp_path}/bus.sock"
+    with open_session(listen=[endpoint]) as cpu, open_session(connect=[endpoint]) as view:
+        publisher = BusPublisher(cpu, "cpu1", {"FILL": layout()})
+        client = BusClient(view, "cpu1")
+        try:
+            assert wait_until(lambda: client.chart("FILL") is not None)
+            yield publisher, client
+        finally:
+            client.close()
+            publisher.close()
+
+
+def wait_until(predicate, timeout: float = 5.0) -> bool:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if predicate():
+            return True
+        time.sleep(0.02)
+    return bool(predicate())
+
+
+def send_in_background(
+    client: BusClient, command: Command
+) -> tuple[threading.Thread, list[CommandReply]]:
+    replies: list[CommandReply] = []
+    sender = threading.Thread(target=lambda: replies.append(client.send(command)))
+    sender.start()
+    return sender, replies
+
+
+def test_chart_queryable_serves_the_layout(bus: tuple[BusPublisher, BusClient]) -> None:
+    _, client = bus
+    assert client.chart("FILL") == layout()
+    assert client.chart("OTHER") is None
+
+
+def test_late_joiner_gets_the_state_then_only_newer_deltas(
+    bus: tuple[BusPublisher, BusClient],
+) -> None:
+    publisher, client = bus
+    assert publisher.publish("FILL", scan(1, [1], events=[("S1", 1)]))
+    assert not publisher.publish("FILL", scan(2, [1]))  # nothing changed: no delta
+    state = client.state("FILL")
+    assert state is not None and (state.seq, state.cycle) == (1, 2)
+
+    seen: list[StepStateUpdate] = []
+    follower = client.follow("FILL", seen.append)
+    assert [u.cycle for u in seen] == [2]  # the snapshot
+    publisher.publish("FILL", scan(3, [2], events=[("S0", 1), ("S1", 2)]))
+    publisher.publish("FILL", scan(4, [2]))
+    publisher.publish("FILL", scan(5, [1], events=[("S0", 2), ("S1", 1)]))
+    assert wait_until(lambda: len(seen) == 3)
+    assert [(u.seq, u.cycle, u.active) for u in seen] == [(1, 2, [1]), (2, 3, [2]), (3, 5, [1])]
+    assert follower.latest == seen[-1] and follower.gaps == 0
+
+
+def test_command_round_trip_is_applied_at_the_scan_boundary(
+    bus: tuple[BusPublisher, BusClient],
+) -> None:
+    publisher, client = bus
+    replies: list[CommandReply] = []
+    sender = threading.Thread(
+        target=lambda: replies.append(
+            client.send(Command(op="step_on", fb="FILL", user="bob", args={"step": 2}))
+        )
+    )
+    sender.start()
+    pending = []
+    assert wait_until(lambda: pending.extend(publisher.drain_commands()) or pending)
+    assert not replies  # nothing answered before the scan loop decides
+    assert pending[0].command.step == 2 and pending[0].command.user == "bob"
+    pending[0].resolve(True, cycle=7)
+    sender.join(5)
+    assert replies == [CommandReply(applied=True, op="step_on", fb="FILL", cycle=7)]
+
+
+def test_command_refused_by_the_cpu_carries_its_reason(
+    bus: tuple[BusPublisher, BusClient],
+) -> None:
+    publisher, client = bus
+    replies: list[CommandReply] = []
+    sender = threading.Thread(
+        target=lambda: replies.append(client.send(Command(op="ack", fb="FILL")))
+    )
+    sender.start()
+
+    def apply(command: Command) -> tuple[bool, str]:
+        return False, "no error to acknowledge"
+
+    assert wait_until(lambda: publisher.apply_commands(apply, cycle=3) > 0)
+    sender.join(5)
+    assert replies[0].applied is False and replies[0].reason == "no error to acknowledge"
+
+
+def test_hostile_or_misdirected_command_is_refused_at_once(
+    bus: tuple[BusPublisher, BusClient],
+) -> None:
+    publisher, client = bus
+    bad = client.send_raw(b'{"op":"mode","fb":"FILL","args":{"mode":"TURBO"}}')
+    assert bad is not None and not bad.applied and "$.args.mode" in bad.reason
+    junk = client.send_raw(b"\x00not json")
+    assert junk is not None and not junk.applied and "malformed JSON" in junk.reason
+    other = client.send(Command(op="ack", fb="NOPE"))
+    assert not other.applied and "unknown FB 'NOPE'" in other.reason
+    assert publisher.drain_commands() == []  # none of them reached the scan loop
+
+
+def test_a_command_nobody_drains_ends_in_a_refusal_not_a_hang(
+    bus: tuple[BusPublisher, BusClient],
+) -> None:
+    _, client = bus
+    reply = client.send(Command(op="init", fb="FILL"), timeout=0.3)
+    assert not reply.applied and "no answer" in reply.reason
+
+
+def test_an_exception_while_applying_refuses_that_command_only(
+    bus: tuple[BusPublisher, BusClient],
+) -> None:
+    publisher, client = bus
+    replies: list[CommandReply] = []
+    sender = threading.Thread(
+        target=lambda: replies.append(client.send(Command(op="off", fb="FILL")))
+    )
+    sender.start()
+
+    def apply(command: Command) -> tuple[bool, str]:
+        raise RuntimeError("boom")
+
+    assert wait_until(lambda: publisher.apply_commands(apply) > 0)
+    sender.join(5)
+    assert not replies[0].applied and "RuntimeError: boom" in replies[0].reason
+
+
+def test_status_reports_the_cpu_and_its_fbs(bus: tuple[BusPublisher, BusClient]) -> None:
+    publisher, client = bus
+    publisher.publish("FILL", scan(9, [1]))
+    status = client.status()
+    assert status is not None and status.cpu == "cpu1" and status.fbs == ["FILL"]
+    assert status.cycle == 9

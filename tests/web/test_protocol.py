@@ -1,0 +1,159 @@
+"""Wire messages: every struct round-trips; unknown fields and hostile values are refused
+with a message that says where and why, never with an exception other than ProtocolError."""
+
+from __future__ import annotations
+
+import pytest
+
+from sequencer.model import (
+    Binary,
+    Chart,
+    Const,
+    Operand,
+    Sequence,
+    Step,
+    StepAttr,
+    Transition,
+    Unary,
+)
+from web.protocol import (
+    MAX_MESSAGE_BYTES,
+    ChartLayout,
+    Command,
+    CommandReply,
+    CpuStatus,
+    ProtocolError,
+    StepStateUpdate,
+    condition_text,
+    decode,
+    encode,
+)
+
+pytestmark = pytest.mark.timeout(30)
+
+
+def chart() -> Chart:
+    cond = Binary("AND", Operand("Start", quoted=True), Unary("NOT", StepAttr(3, "X")))
+    return Chart(
+        "FILL",
+        sequences=(
+            Sequence(
+                1,
+                "Main",
+                (
+                    Step(1, "Idle", initial=True),
+                    Step(2, "Fill", interlock=Operand("ok"), supervision=Operand("late")),
+                    Step(3, "Drain"),
+                ),
+                (
+                    Transition(1, "Go", (1,), (2,), cond),
+                    Transition(2, "", (2,), (3,), None),
+                    Transition(3, "", (3,), ()),
+                ),
+            ),
+        ),
+    )
+
+
+SAMPLES = [
+    ChartLayout.from_chart(chart()),
+    StepStateUpdate(
+        seq=3,
+        cycle=12,
+        t_ms=120,
+        mode="TAP",
+        active=[2],
+        disturbed=[2],
+        latched=[2],
+        events=[("V1", 2), ("S1", 2)],
+        values={"level": 1.5, "run": True, "n": 3, "name": "x", "none": None},
+    ),
+    Command(op="ack", fb="FILL", user="alice"),
+    Command(op="mode", fb="FILL", args={"mode": "MAN"}),
+    Command(op="step_on", fb="FILL", args={"step": 3}),
+    CommandReply(applied=False, reason="no error to acknowledge", op="ack", fb="FILL", cycle=9),
+    CpuStatus(cpu="cpu1", state="STOP", cycle=4, t_ms=40, fbs=["FILL"]),
+]
+
+
+@pytest.mark.parametrize("message", SAMPLES, ids=lambda m: type(m).__name__)
+def test_every_struct_round_trips_through_json(message: object) -> None:
+    assert decode(encode(message), type(message)) == message  # type: ignore[arg-type]
+
+
+def test_chart_layout_describes_steps_transitions_and_sequences() -> None:
+    layout = ChartLayout.from_chart(chart())
+    assert layout.fb == "FILL"
+    idle, fill, _ = layout.steps
+    assert idle.initial and not idle.interlock
+    assert fill.interlock and fill.supervision
+    go, _, stop = layout.transitions
+    assert (go.sources, go.targets, go.condition) == ([1], [2], '"Start" AND NOT S3.X')
+    assert stop.targets == []
+    assert layout.sequences[0].steps == [1, 2, 3]
+
+
+def test_condition_text_keeps_precedence_with_parentheses() -> None:
+    expr = Binary("AND", Binary("OR", Operand("a"), Operand("b")), Const(5, "INT", "5"))
+    assert condition_text(expr) == "(a OR b) AND 5"
+    assert condition_text(None) == ""
+
+
+@pytest.mark.parametrize(
+    ("payload", "reason"),
+    [
+        (b'{"op":"ack","fb":"FILL","sudo":true}', "unknown field `sudo`"),
+        (b'{"op":"format_disk","fb":"FILL"}', "$.op"),
+        (b'{"op":"ack","fb":"s7graph/**"}', "$.fb"),
+        (b'{"op":"ack","fb":"FILL","user":"' + b"x" * 100 + b'"}', "$.user"),
+        (b'{"op":"mode","fb":"FILL","args":{"mode":"TURBO"}}', "$.args.mode"),
+        (b'{"op":"mode","fb":"FILL"}', "needs argument 'mode'"),
+        (b'{"op":"ack","fb":"FILL","args":{"step":1}}', "takes no argument 'step'"),
+        (b'{"op":"step_on","fb":"FILL","args":{"step":-1}}', "$.args.step"),
+        (b'{"op":"step_on","fb":"FILL","args":{"step":true}}', "$.args.step"),
+        (b'{"op":"step_on","fb":"FILL","args":{"step":"3"}}', "$.args.step"),
+        (b'{"op":"step_on","fb":"FILL","args":{"step":1e999}}', "out of range"),
+        (b'{"op":"ack","fb":"FILL","args":{"a":[1,[2]]}}', "$.args"),
+        (b'["ack","FILL"]', "Expected `object`"),
+        (b"[" * 50_000, "Expected `object`"),
+        (b"\xff\xfe\x00", "malformed JSON"),
+        (b"", "malformed JSON"),
+        (b" " * (MAX_MESSAGE_BYTES + 1), "too large"),
+    ],
+)
+def test_hostile_command_is_refused_with_a_clear_reason(payload: bytes, reason: str) -> None:
+    with pytest.raises(ProtocolError) as err:
+        decode(payload, Command)
+    assert reason in str(err.value)
+
+
+@pytest.mark.parametrize(
+    "payload",
+    [
+        b'{"cycle":1,"t_ms":0,"mode":"AUTO","active":[1],"extra":1}',
+        b'{"cycle":-1,"t_ms":0,"mode":"AUTO","active":[1]}',
+        b'{"cycle":1,"t_ms":0,"mode":"FAST","active":[1]}',
+        b'{"cycle":1,"t_ms":0,"mode":"AUTO","active":[70000]}',
+        b'{"cycle":1,"t_ms":0,"mode":"AUTO","active":[1],"events":[["X9",1]]}',
+        b'{"cycle":1,"t_ms":0,"mode":"AUTO","active":[1],"values":{"a":{"b":1}}}',
+    ],
+)
+def test_hostile_state_update_is_refused(payload: bytes) -> None:
+    with pytest.raises(ProtocolError):
+        decode(payload, StepStateUpdate)
+
+
+def test_building_a_bad_command_in_python_fails_too() -> None:
+    with pytest.raises(ValueError, match="mode must be one of"):
+        Command(op="mode", fb="FILL", args={"mode": "FAST"})
+
+
+def test_unchanged_scan_is_not_a_change_but_an_event_is() -> None:
+    a = StepStateUpdate(cycle=1, t_ms=10, mode="AUTO", active=[1])
+    b = StepStateUpdate(cycle=2, t_ms=20, mode="AUTO", active=[1])
+    assert a.changed_from(None)
+    assert not b.changed_from(a)
+    assert StepStateUpdate(
+        cycle=3, t_ms=30, mode="AUTO", active=[1], events=[("S1", 1)]
+    ).changed_from(b)
+    assert StepStateUpdate(cycle=3, t_ms=30, mode="MAN", active=[1]).changed_from(b)
