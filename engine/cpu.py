@@ -1,14 +1,15 @@
 """The soft CPU: modes, startup, the scan cycle and error handling (SPEC.md §1.4–1.6).
 
 ``scan()`` reads the clock once and runs one cycle in S7 order: commands queued since the
-last scan are applied, cycle monitoring judges the previous cycle, PII is read from the
-module side, OB1 runs, due interrupt OBs run — time-of-day OB10–17, delay OB20–23, cyclic
-OB30–38 — highest priority first and, within one priority, in the order of their start
-events (behaviour 17), PIQ is written to the modules. Scan hooks (``add_scan_hook``; the
-S5 timer update of ``sfb``) run at the start of every cycle on the process time. Outside RUN the module outputs are 0. A Python exception in a user
-block is a programming error: OB121 if loaded, else STOP — the process never dies.
-All timing uses *process time*: the clock minus the time spent in HOLD, so HOLD freezes
-timers, interrupts and monitoring while the diagnostic time stamps keep the real clock.
+last scan are applied, scan hooks run (``add_scan_hook``; the S5 timer update of ``sfb``),
+cycle monitoring judges the previous cycle, PII is read from the module side, OB1 runs,
+due interrupt OBs run — time-of-day OB10–17, delay OB20–23, cyclic OB30–38 — highest
+priority first and, within one priority, in the order of their start events (behaviour
+17), PIQ is written to the modules. Outside RUN the module outputs are 0. A Python
+exception in a user block is a programming error: OB121 if loaded, else STOP — the process
+never dies. All timing uses *process time*: the clock minus the time spent in HOLD, so HOLD
+freezes timers, interrupts and monitoring while the diagnostic time stamps and the
+real-time clock keep the real clock.
 """
 
 from __future__ import annotations

@@ -83,6 +83,18 @@ class GraphRuntime:
         self._final: list[int] = []  # steps left, awaiting their final scan
         self._getter = operator.itemgetter(*self.input_names)
         self._last_in: Any = None  # the input pins of the previous call (fast path)
+        self.display = display.Display(cc)
+        # per sequencer: its active steps in activation order (multi-sequencer FBs only),
+        # rebuilt from ``st.active`` each call and kept in step by _activate/_deactivate
+        self._by_seq: list[list[int]] = [[] for _ in cc.seq_numbers] if self.multi else []
+
+    def rebind(self, state: GraphState) -> None:
+        """Run on another instance-DB content (restored snapshot, new instance)."""
+        self.st = state
+        self._final.clear()
+        self._acked.clear()
+        self._last_in = None
+        self.display.dirty = True
 
     # ------------------------------------------------------------ callbacks of generated code
 
@@ -126,6 +138,8 @@ class GraphRuntime:
         st.il_err[i] = False
         st.sv_err[i] = False
         st.active.append(i)
+        if self.multi:
+            self._by_seq[self.cc.step_seq[i]].append(i)
         st.entered.append(i)
         self._raise(i, EV_S1)
 
@@ -133,6 +147,8 @@ class GraphRuntime:
         st = self.st
         st.x[i] = False
         st.active.remove(i)
+        if self.multi:
+            self._by_seq[self.cc.step_seq[i]].remove(i)
         st.left.append(i)
         self._final.append(i)
         st.il_err[i] = False
@@ -174,6 +190,14 @@ class GraphRuntime:
         if cur is None or cur != self._last_in:
             self._last_in = cur
             self._latch(inputs)
+            self.display.dirty = True
+        if self.multi:
+            by_seq = self._by_seq
+            for lst in by_seq:
+                lst.clear()
+            step_seq = cc.step_seq
+            for i in st.active:
+                by_seq[step_seq[i]].append(i)
         carry = st.entered[:] if self.codesys else ()
         for i in st.ev_steps:
             st.ev[i] = 0
@@ -194,7 +218,7 @@ class GraphRuntime:
         for i in carry:
             if st.x[i]:
                 self._raise(i, EV_S1)
-        display.page(cc, st, ins, rose)
+        self.display.page(st, ins, rose)
 
         # 2. OFF_SQ, INIT_SQ, modes, MAN requests, acknowledgement, registration
         if st.calls == 0 or "INIT_SQ" in rose:
@@ -209,10 +233,13 @@ class GraphRuntime:
         prog.before(st, self)
         # 4. the sequencers
         if self.multi:
-            for k in range(len(cc.seq_numbers)):
-                self._sequencer(k)
+            by_seq = self._by_seq
+            for k in range(len(by_seq)):
+                steps = by_seq[k]
+                if steps or self._final:
+                    self._sequencer(k, steps)
         else:
-            self._sequencer(-1)
+            self._sequencer(-1, st.active)
         # 5. permanent after
         prog.after(st, self)
         # 6. group flags and outputs
@@ -274,23 +301,24 @@ class GraphRuntime:
             if i >= 0 and st.x[i]:
                 self._raise(i, EV_R1)
 
-    def _sequencer(self, k: int) -> None:
+    def _sequencer(self, k: int, steps: list[int]) -> None:
+        """Sequencer ``k`` (-1: the only one) whose active steps are ``steps``."""
         if self.codesys:
-            self._conditions_and_actions(k)
-            self._switch(k)
+            self._conditions_and_actions(k, steps)
+            self._switch(steps)
         else:
-            self._switch(k)
-            self._conditions_and_actions(k)
+            self._switch(steps)
+            self._conditions_and_actions(k, steps)
 
-    def _switch(self, k: int) -> None:
-        """Steps a–c: evaluate, decide, switch (SPEC §2.2 4a–4c)."""
+    def _switch(self, steps: list[int]) -> None:
+        """Steps a–c: evaluate, decide, switch (SPEC §2.2 4a–4c) for one sequencer's active
+        ``steps``."""
         st = self.st
         cc = self.cc
         prog = self.prog
         x = st.x
         leaving = cc.leaving
         tr_src = cc.tr_src
-        step_seq = cc.step_seq
         tcond = prog.tcond
         tt, crit, crit_old = st.tt, st.crit, st.crit_old
         rule = MODE_RULES[st.mode]
@@ -302,9 +330,7 @@ class GraphRuntime:
         fire: list[int] = []
         taken: set[int] | None = None
         joins: set[int] | None = None
-        for i in st.active:
-            if k >= 0 and step_seq[i] != k:
-                continue
+        for i in steps:
             for j in leaving[i]:
                 srcs = tr_src[j]
                 if len(srcs) > 1:  # simultaneous join: all preceding steps active, once
@@ -371,6 +397,8 @@ class GraphRuntime:
                         if s in st.entered:  # passed through: never active
                             st.x[s] = False
                             st.active.remove(s)
+                            if self.multi:
+                                self._by_seq[cc.step_seq[s]].remove(s)
                             st.entered.remove(s)
                             st.ev[s] &= ~EV_S1
                             st.log = [e for e in st.log if e != (s, EV_S1)]
@@ -385,8 +413,9 @@ class GraphRuntime:
             if not moved:
                 return
 
-    def _conditions_and_actions(self, k: int) -> None:
-        """Steps d–e: interlock and supervision, final scans, action rows (SPEC §2.2 4d–4e)."""
+    def _conditions_and_actions(self, k: int, steps: list[int]) -> None:
+        """Steps d–e: interlock and supervision, final scans, action rows (SPEC §2.2 4d–4e)
+        of sequencer ``k`` (-1: the only one) whose active steps are ``steps``."""
         st = self.st
         cc = self.cc
         prog = self.prog
@@ -397,9 +426,7 @@ class GraphRuntime:
         ack = st.ackreq_enabled
         ev = st.ev
         # d: interlock and supervision of the active steps
-        for i in st.active:
-            if k >= 0 and step_seq[i] != k:
-                continue
+        for i in steps:
             f = ilc[i]
             if f is not None:
                 if il_on:
@@ -445,13 +472,10 @@ class GraphRuntime:
         act = prog.act
         zero = st.zeroed
         il_ok = st.il_ok
-        active = st.active
         n = 0
-        while n < len(active):
-            i = active[n]
+        while n < len(steps):  # ON Sx in a row may append a step to this sequencer
+            i = steps[n]
             n += 1
-            if k >= 0 and step_seq[i] != k:
-                continue
             act[i](st, self, ev[i], il_ok[i], zero)
 
     def _outputs(self) -> None:
@@ -465,8 +489,7 @@ class GraphRuntime:
                 fault = True
         st.error, st.fault = error, fault
         st.err_flt = error or fault
-        st.outputs.update(display.compute_outputs(self.cc, st))
-        display.settle(self.cc, st)
+        self.display.update(st)
 
 
 def new_state(cc: CompiledChart) -> GraphState:

@@ -26,7 +26,7 @@ Decisions (UNCERTAIN in graph-semantics, pinned by tests/sequencer/test_display.
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any, Final
 
 from sequencer.compiled import CompiledChart
@@ -81,26 +81,41 @@ def display_set(state: GraphState) -> str:
     return name if name in DISPLAY_SETS else "SACT"
 
 
-def shown_steps(chart: CompiledChart, state: GraphState) -> list[int]:
-    """Step numbers S_NO pages through, ascending (DISP_SACT / DISP_SEF / DISP_SALL)."""
+def shown_steps(
+    chart: CompiledChart, state: GraphState, active: Sequence[int] | None = None
+) -> list[int]:
+    """Step numbers S_NO pages through, ascending (DISP_SACT / DISP_SEF / DISP_SALL).
+
+    ``active``: the active step indices (``state.active``) when the state is kept by the
+    cycle — the work is then proportional to them; None walks every step's ``x``."""
     which = display_set(state)
-    idx = range(chart.n_steps)
+    numbers = chart.step_numbers
+    if which == "SALL":
+        return sorted(numbers)
+    idx: Iterable[int] = range(chart.n_steps) if active is None else active
     if which == "SACT":
-        chosen = [i for i in idx if state.x[i]]
-    elif which == "SEF":
-        chosen = [i for i in idx if state.disturbed(i)]
+        x = state.x
+        return sorted([numbers[i] for i in idx if x[i]])
+    il_err, sv_err = state.il_err, state.sv_err
+    return sorted([numbers[i] for i in idx if il_err[i] or sv_err[i]])
+
+
+def valid_transitions(
+    chart: CompiledChart, state: GraphState, active: Sequence[int] | None = None
+) -> list[int]:
+    """Transition numbers whose preceding steps are all active (TVX), ascending.
+
+    With ``active`` only the transitions leaving those steps are looked at."""
+    x = state.x
+    tr_src = chart.tr_src
+    cand: Iterable[int]
+    if active is None:
+        cand = range(chart.n_transitions)
     else:
-        chosen = list(idx)
-    return sorted(chart.step_numbers[i] for i in chosen)
-
-
-def valid_transitions(chart: CompiledChart, state: GraphState) -> list[int]:
-    """Transition numbers whose preceding steps are all active (TVX), ascending."""
-    return sorted(
-        chart.transition_numbers[j]
-        for j in range(chart.n_transitions)
-        if chart.tr_src[j] and all(state.x[i] for i in chart.tr_src[j])
-    )
+        leaving = chart.leaving
+        cand = {j for i in active for j in leaving[i]}
+    numbers = chart.transition_numbers
+    return sorted([numbers[j] for j in cand if tr_src[j] and all(x[s] for s in tr_src[j])])
 
 
 def _snap(current: int, members: list[int]) -> int:
@@ -119,16 +134,22 @@ def _step(current: int, members: list[int], delta: int) -> int:
     return members[(members.index(current) + delta) % len(members)]
 
 
-def shown_step(chart: CompiledChart, state: GraphState) -> int:
-    """The step number S_NO shows for this state (0 = none)."""
+def _shown_step(chart: CompiledChart, state: GraphState, members: Callable[[], list[int]]) -> int:
     if state.display.get("pinned") and state.s_no in chart.step_index:
         return state.s_no
-    return _snap(state.s_no, shown_steps(chart, state))
+    return _snap(state.s_no, members())
 
 
-def shown_transition(chart: CompiledChart, state: GraphState) -> int:
+def shown_step(chart: CompiledChart, state: GraphState, active: Sequence[int] | None = None) -> int:
+    """The step number S_NO shows for this state (0 = none)."""
+    return _shown_step(chart, state, lambda: shown_steps(chart, state, active))
+
+
+def shown_transition(
+    chart: CompiledChart, state: GraphState, active: Sequence[int] | None = None
+) -> int:
     """The transition number T_NO shows for this state (0 = none)."""
-    return _snap(state.t_no, valid_transitions(chart, state))
+    return _snap(state.t_no, valid_transitions(chart, state, active))
 
 
 # ---------------------------------------------------------------- cursor update (per call)
@@ -139,19 +160,20 @@ def page(
     state: GraphState,
     inputs: Mapping[str, Any],
     edges: Iterable[str],
+    active: Sequence[int] | None = None,
 ) -> None:
     """Move the display cursor for this call's inputs (call after latching inputs).
 
     Reads DISP_* / S_PREV / S_NEXT / T_PREV / T_NEXT / S_SELOK rising edges (``edges``) and
     the S_SEL value; writes ``state.s_no``, ``state.t_no`` and ``state.display``. Never
-    touches a step bit."""
-    rose = set(edges)
+    touches a step bit. ``active`` as for ``shown_steps``."""
+    rose = edges if isinstance(edges, (set, frozenset)) else set(edges)
     disp = state.display
     for name in DISPLAY_SETS:
         if f"DISP_{name}" in rose:
             disp["set"] = name
     disp.setdefault("set", "SACT")
-    state.s_no = shown_step(chart, state)
+    state.s_no = shown_step(chart, state, active)
 
     sel = int(inputs.get("S_SEL", 0) or 0)
     if (sel != disp.get("s_sel", 0) or "S_SELOK" in rose) and sel in chart.step_index:
@@ -161,23 +183,121 @@ def page(
 
     delta = ("S_NEXT" in rose) - ("S_PREV" in rose)
     if delta:
-        members = shown_steps(chart, state)
+        members = shown_steps(chart, state, active)
         state.s_no = _step(state.s_no, members, delta)
         disp["pinned"] = False
 
-    state.t_no = shown_transition(chart, state)
+    state.t_no = shown_transition(chart, state, active)
     t_delta = ("T_NEXT" in rose) - ("T_PREV" in rose)
     if t_delta:
-        state.t_no = _step(state.t_no, valid_transitions(chart, state), t_delta)
+        state.t_no = _step(state.t_no, valid_transitions(chart, state, active), t_delta)
 
 
-def settle(chart: CompiledChart, state: GraphState) -> None:
+def settle(chart: CompiledChart, state: GraphState, active: Sequence[int] | None = None) -> None:
     """Store the S_NO/T_NO shown after this call (what ``compute_outputs`` reports)."""
-    state.s_no = shown_step(chart, state)
-    state.t_no = shown_transition(chart, state)
+    state.s_no = shown_step(chart, state, active)
+    state.t_no = shown_transition(chart, state, active)
 
 
 # ---------------------------------------------------------------- outputs
+
+_GROUP_PINS: Final[dict[str, Callable[[GraphState], bool]]] = {
+    "ERROR": lambda st: st.error,
+    "FAULT": lambda st: st.fault,
+    "ERR_FLT": lambda st: st.err_flt,
+    "SQ_ISOFF": lambda st: st.off,
+    "SQ_HALTED": lambda st: st.halted,
+    "TM_HALTED": lambda st: st.tm_halted,
+    "OP_ZEROED": lambda st: st.zeroed,
+    "IL_ENABLED": lambda st: st.il_enabled,
+    "SV_ENABLED": lambda st: st.sv_enabled,
+    "ACKREQ_ENABLED": lambda st: st.ackreq_enabled,
+    "SSKIP_ENABLED": lambda st: st.sskip_enabled,
+    "SACT_DISP": lambda st: display_set(st) == "SACT",
+    "SEF_DISP": lambda st: display_set(st) == "SEF",
+    "SALL_DISP": lambda st: display_set(st) == "SALL",
+    "AUTO_ON": lambda st: st.mode == "AUTO",
+    "TAP_ON": lambda st: st.mode == "TAP",
+    "TOP_ON": lambda st: st.mode == "TOP",
+    "MAN_ON": lambda st: st.mode == "MAN",
+}
+# Pins of the shown step / transition that change from call to call without a step switch,
+# fault change or display edge (times, criteria bits, events).
+_STEP_PINS: Final = ("S_TIME", "S_TIMEOK", "S_CRITLOC", "S_CRITLOCERR", "S_CRITSUP", "S_STATE")
+_TRANSITION_PINS: Final = ("T_CRIT", "T_CRITOLD", "T_CRITFLT")
+
+
+def _wanted(set_name: str) -> tuple[str, ...]:
+    return tuple(p.name for p in outputs_for(set_name) if p.direction is Direction.OUT)
+
+
+def _step_pins(
+    chart: CompiledChart,
+    state: GraphState,
+    i: int | None,
+    names: Iterable[str],
+    out: dict[str, object],
+) -> None:
+    for name in names:
+        if i is None:
+            out[name] = 0
+        elif name == "S_TIME":
+            out[name] = state.t_ns[i] // 1_000_000
+        elif name == "S_TIMEOK":
+            out[name] = state.u_ns[i] // 1_000_000
+        elif name == "S_CRITLOC":
+            out[name] = int(state.crit_loc[i])
+        elif name == "S_CRITLOCERR":
+            out[name] = int(state.crit_loc_err[i])
+        elif name == "S_CRITSUP":
+            out[name] = int(state.crit_sup[i])
+        else:
+            out[name] = s_state(chart, state, i)
+
+
+def _transition_pins(
+    state: GraphState, j: int | None, names: Iterable[str], out: dict[str, object]
+) -> None:
+    for name in names:
+        if j is None:
+            out[name] = 0
+        elif name == "T_CRIT":
+            out[name] = int(state.crit[j])
+        elif name == "T_CRITOLD":
+            out[name] = int(state.crit_old[j])
+        else:
+            out[name] = int(state.crit_flt[j])
+
+
+def _outputs(
+    chart: CompiledChart,
+    state: GraphState,
+    wanted: tuple[str, ...],
+    active: Sequence[int] | None,
+) -> dict[str, object]:
+    """The pins ``wanted`` (in that order); only what they need is computed."""
+    out: dict[str, object] = {}
+    need = set(wanted)
+    if need & {"S_NO", "S_MORE", "S_ACTIVE", *_STEP_PINS}:
+        steps = shown_steps(chart, state, active)
+        s_no = _shown_step(chart, state, lambda: steps)
+        i = chart.step_index.get(s_no)
+        out["S_NO"] = s_no
+        out["S_MORE"] = any(n != s_no for n in steps)
+        out["S_ACTIVE"] = bool(i is not None and state.x[i])
+        _step_pins(chart, state, i, [n for n in _STEP_PINS if n in need], out)
+    if need & {"T_NO", "T_MORE", *_TRANSITION_PINS}:
+        trans = valid_transitions(chart, state, active)
+        t_no = _snap(state.t_no, trans)
+        out["T_NO"] = t_no
+        out["T_MORE"] = any(n != t_no for n in trans)
+        j = chart.transition_index.get(t_no)
+        _transition_pins(state, j, [n for n in _TRANSITION_PINS if n in need], out)
+    for name in wanted:
+        f = _GROUP_PINS.get(name)
+        if f is not None:
+            out[name] = f(state)
+    return {name: out[name] for name in wanted}
 
 
 def compute_outputs(
@@ -187,56 +307,60 @@ def compute_outputs(
     edges: Iterable[str] = (),
     *,
     set_name: str | None = None,
+    active: Sequence[int] | None = None,
 ) -> dict[str, object]:
     """Every output pin of ``set_name`` (default: the chart's parameter set) for this state.
 
     Pure: reads the state (and the cursor left by ``page``), writes nothing. ``inputs`` and
     ``edges`` are accepted for symmetry with ``page``; the effective options of this call
-    (EN_IL, HALT_SQ, …) are already in the state."""
+    (EN_IL, HALT_SQ, …) are already in the state. ``active`` as for ``shown_steps``."""
     del inputs, edges
-    s_no = shown_step(chart, state)
-    t_no = shown_transition(chart, state)
-    steps = shown_steps(chart, state)
-    trans = valid_transitions(chart, state)
-    i = chart.step_index.get(s_no)
-    j = chart.transition_index.get(t_no)
-    which = display_set(state)
-    values: dict[str, object] = {
-        "S_NO": s_no,
-        "S_MORE": any(n != s_no for n in steps),
-        "S_ACTIVE": bool(i is not None and state.x[i]),
-        "S_TIME": state.step_t_ms(i) if i is not None else 0,
-        "S_TIMEOK": state.step_u_ms(i) if i is not None else 0,
-        "S_CRITLOC": int(state.crit_loc[i]) if i is not None else 0,
-        "S_CRITLOCERR": int(state.crit_loc_err[i]) if i is not None else 0,
-        "S_CRITSUP": int(state.crit_sup[i]) if i is not None else 0,
-        "S_STATE": s_state(chart, state, i) if i is not None else 0,
-        "T_NO": t_no,
-        "T_MORE": any(n != t_no for n in trans),
-        "T_CRIT": int(state.crit[j]) if j is not None else 0,
-        "T_CRITOLD": int(state.crit_old[j]) if j is not None else 0,
-        "T_CRITFLT": int(state.crit_flt[j]) if j is not None else 0,
-        "ERROR": state.error,
-        "FAULT": state.fault,
-        "ERR_FLT": state.err_flt,
-        "SQ_ISOFF": state.off,
-        "SQ_HALTED": state.halted,
-        "TM_HALTED": state.tm_halted,
-        "OP_ZEROED": state.zeroed,
-        "IL_ENABLED": state.il_enabled,
-        "SV_ENABLED": state.sv_enabled,
-        "ACKREQ_ENABLED": state.ackreq_enabled,
-        "SSKIP_ENABLED": state.sskip_enabled,
-        "SACT_DISP": which == "SACT",
-        "SEF_DISP": which == "SEF",
-        "SALL_DISP": which == "SALL",
-        "AUTO_ON": state.mode == "AUTO",
-        "TAP_ON": state.mode == "TAP",
-        "TOP_ON": state.mode == "TOP",
-        "MAN_ON": state.mode == "MAN",
-    }
-    wanted = outputs_for(set_name or chart.parameters)
-    return {p.name: values[p.name] for p in wanted if p.direction is Direction.OUT}
+    return _outputs(chart, state, _wanted(set_name or chart.parameters), active)
+
+
+class Display:
+    """The display of one runtime (SPEC §2.6, §2.7), incremental: the cycle calls ``page``
+    after latching the inputs and ``update`` at the end of the call.
+
+    The sets S_NO/T_NO page through are recomputed — from ``state.active`` and the leaving
+    transitions, never all steps — only when the cycle reports a change (a step switched, a
+    fault or interlock changed, an input pin changed: ``dirty``); otherwise only the pins of
+    the shown step/transition that move by themselves (times, criteria, S_STATE) are
+    refreshed, and with the STANDARD set nothing is. Results equal ``page`` +
+    ``compute_outputs`` + ``settle`` of the pure functions (tests/sequencer/test_display.py)."""
+
+    __slots__ = ("chart", "dirty", "step_pins", "transition_pins", "wanted")
+
+    def __init__(self, chart: CompiledChart) -> None:
+        self.chart = chart
+        self.wanted = _wanted(chart.parameters)
+        self.step_pins = tuple(n for n in _STEP_PINS if n in self.wanted)
+        self.transition_pins = tuple(n for n in _TRANSITION_PINS if n in self.wanted)
+        self.dirty = True
+
+    def page(self, state: GraphState, inputs: Mapping[str, Any], rose: set[str]) -> None:
+        """``page`` when a display input acts (an edge, a new S_SEL) or the state changed."""
+        sel = int(inputs.get("S_SEL", 0) or 0)
+        if not self.dirty and not rose and sel == state.display.get("s_sel", 0):
+            return
+        page(self.chart, state, inputs, rose, state.active)
+        self.dirty = True
+
+    def update(self, state: GraphState) -> None:
+        """Write this call's output pins into ``state.outputs`` and settle S_NO/T_NO."""
+        out = state.outputs
+        chart = self.chart
+        if self.dirty or state.log:
+            active = state.active
+            out.update(_outputs(chart, state, self.wanted, active))
+            settle(chart, state, active)
+            self.dirty = False
+            return
+        if self.step_pins:
+            _step_pins(chart, state, chart.step_index.get(state.s_no), self.step_pins, out)
+        if self.transition_pins:
+            j = chart.transition_index.get(state.t_no)
+            _transition_pins(state, j, self.transition_pins, out)
 
 
 # ---------------------------------------------------------------- "why does it not switch?"

@@ -104,8 +104,7 @@ class GraphFB:
                               counter=self._counter, timer=self._timer)  # fmt: skip
             self._runtime = rt
         elif rt.st is not st:
-            rt.st = st
-            rt._final.clear()
+            rt.rebind(st)
         return rt
 
     # ------------------------------------------------------------ the FB body

@@ -15,6 +15,7 @@ from sfb import (
     alarms,
     iec_counters,
     iec_timers,
+    s5_timers,  # noqa: F401  (importing it registers the S5 timer tick)
     sfc_clock,
     sfc_control,
     sfc_db,
@@ -22,7 +23,6 @@ from sfb import (
     sfc_memory,
     sfc_rtm,
 )
-from sfb import s5_timers  # noqa: F401  (importing it registers the S5 timer tick)
 from sfb.alarms import Message, MessageEvent, MessageList, MessageState, message_list
 from sfb.catalogue import CATALOGUE, Direction, Entry, Kind, Pin, find, lookup
 from sfb.diag_read import rdsysst, wr_usmsg
@@ -90,4 +90,3 @@ def install(cpu: _Loader) -> None:
     of every CPU (``s5_timers.scan_hook``), so GraphFB timers tick too.
     """
     cpu.load(*SYSTEM_BLOCKS)
-

@@ -11,12 +11,13 @@ range 1990-01-01 .. 2089-12-31 (seeds-runtime §4.3); a date outside it gives RE
 
 from __future__ import annotations
 
-from datetime import datetime, timedelta
+from datetime import datetime
 from typing import TYPE_CHECKING
 from weakref import WeakKeyDictionary
 
 from engine import blocks
-from engine.rtc import RealTimeClock, truncate_ms
+from engine.rtc import RealTimeClock as RealTimeClock
+from engine.rtc import truncate_ms
 from sfb.catalogue import OK, PARAM_RANGE, engine_sections, lookup, specific_error
 
 if TYPE_CHECKING:

@@ -36,6 +36,7 @@ from web.protocol import (
     Command,
     CommandReply,
     CpuStatus,
+    CycleStats,
     ProtocolError,
     StepStateUpdate,
     decode,
@@ -220,6 +221,11 @@ class BusPublisher:
             self._status = msgspec.structs.replace(self._status, state=state)
             self._status_sent_ns = 0
         self._publish_status(None)
+
+    def set_cycle_stats(self, stats: CycleStats) -> None:
+        """Carry ``stats`` in the next ``status`` (published at most once a second)."""
+        with self._lock:
+            self._status = msgspec.structs.replace(self._status, stats=stats)
 
     def drain_commands(self) -> list[PendingCommand]:
         """Every command received since the last call, oldest first (call at a scan boundary).

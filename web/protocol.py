@@ -35,6 +35,7 @@ __all__ = [
     "Command",
     "CommandReply",
     "CpuStatus",
+    "CycleStats",
     "ProtocolError",
     "SequenceInfo",
     "StepInfo",
@@ -68,6 +69,7 @@ ShortText = Annotated[str, Meta(max_length=256)]
 Steps = Annotated[list[StepNo], Meta(max_length=4096)]
 Scalar = bool | int | float | str | None
 ValueName = Annotated[str, Meta(min_length=1, max_length=128)]
+Millis = Annotated[float, Meta(ge=0.0, le=1e12)]
 
 
 def valid_name(name: str) -> bool:
@@ -199,14 +201,26 @@ class StepStateUpdate(_Msg, kw_only=True):
         )
 
 
+class CycleStats(_Msg, kw_only=True):
+    """The CPU's cycle statistics in ms: cycle time (OB1 start to OB1 start: last, min,
+    max), mean scan execution time, and how many cycles overran the set cycle time."""
+
+    last_ms: Millis = 0.0
+    min_ms: Millis = 0.0
+    max_ms: Millis = 0.0
+    exec_ms: Millis = 0.0
+    overruns: Count = 0
+
+
 class CpuStatus(_Msg, kw_only=True):
     """``status``: the CPU's run state and its FBs; published on change and at 1 Hz."""
 
     cpu: Name
-    state: Literal["RUN", "STOP", "STARTUP"] = "RUN"
+    state: Literal["RUN", "STOP", "STARTUP", "HOLD"] = "RUN"
     cycle: Count = 0
     t_ms: Count = 0
     fbs: Annotated[list[Name], Meta(max_length=256)] = []
+    stats: CycleStats | None = None
 
 
 # ---------------------------------------------------------------- commands

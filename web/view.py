@@ -24,7 +24,14 @@ import viser
 from PIL import Image, ImageDraw, ImageFont
 
 from web.layout import Placement, place
-from web.protocol import ChartLayout, Command, CommandReply, CpuStatus, StepStateUpdate
+from web.protocol import (
+    ChartLayout,
+    Command,
+    CommandReply,
+    CpuStatus,
+    CycleStats,
+    StepStateUpdate,
+)
 
 __all__ = ["ACTIVE", "DISTURBED", "INACTIVE", "ChartView", "make_server"]
 
@@ -92,6 +99,7 @@ class ChartView:
         self._log: deque[str] = deque(maxlen=LOG_LINES)
         self._cpu_cycle = 0
         self._cpu_state = "RUN"
+        self._cpu_stats: CycleStats | None = None
         self._step_colour: dict[int, tuple[int, int, int]] = {}
         self.replies: list[CommandReply] = []  # every answer the CPU gave this view
         self._draw_chart()
@@ -348,6 +356,7 @@ class ChartView:
         with self._lock:
             self._cpu_cycle = status.cycle
             self._cpu_state = status.state
+            self._cpu_stats = status.stats
         self._shown = None
         self._wake.set()
 
@@ -406,6 +415,9 @@ class ChartView:
             f"cycle {max(update.cycle, self._cpu_cycle)}",
             f"active: {html.escape(active)}",
         ]
+        stats = self._cpu_stats
+        if stats is not None and stats.max_ms > 0:
+            parts.append(f"cycle time {stats.last_ms:.1f} ms (max {stats.max_ms:.1f})")
         bad = sorted(set(update.disturbed) | set(update.latched))
         if bad:
             errors = ", ".join(f"S{n}" for n in bad)

@@ -171,3 +171,33 @@ def test_unknown_variable_and_parameter_are_errors(clock: VirtualClock) -> None:
         cpu._ctx.call(motor, 1, nope=True)
     with pytest.raises(BlockError, match="already exists"):
         cpu.create_instance_db(1, motor)
+
+
+def test_fc_out_operand_is_written_not_read_and_left_alone_when_unassigned() -> None:
+    """Behaviour 34: an FC OUT refers to the actual operand and is only written — a zeroed
+    DB (no valid DATE_AND_TIME bytes) is a fine OUT; an OUT the FC does not assign keeps
+    the operand's value."""
+    from datetime import datetime
+
+    from engine import DB, parse_address
+
+    clock = VirtualClock()
+    stamp = datetime(2026, 1, 2, 3, 4, 5)
+
+    @fc(5, OUT={"CDT": "DATE_AND_TIME", "N": "INT"})
+    def read_clock(ctx: CallContext, params: dict[str, Any]) -> None:
+        assert "CDT" not in params
+        params["CDT"] = stamp
+
+    @ob(1)
+    def main(ctx: CallContext) -> None:
+        assert ctx.call("FC5", CDT="DB1.DBB0", N="MW10") == {"CDT": stamp}
+
+    cpu = Cpu(clock)
+    cpu.load(read_clock, main, DB(1, 8))
+    cpu.mem.set("MW10", 77)
+    cpu.start()
+    record = cpu.scan()
+    assert record.mode == "RUN", record.diagnostics
+    assert cpu.mem.read_as(parse_address("DB1.DBB0"), "DATE_AND_TIME") == stamp
+    assert cpu.mem.get("MW10") == 77

@@ -128,3 +128,21 @@ def test_scheduler_arms_only_given_obs() -> None:
     sched.arm([35, 1, 100], 0)
     assert list(sched.active) == [35]
     assert sched.due(99_999_999) == [] and sched.due(100_000_000) == [(35, 0)]
+
+
+def test_equal_priority_cyclic_obs_run_in_the_order_of_their_start_events(
+    clock: VirtualClock,
+) -> None:
+    """Behaviour 17: OBs of equal priority never interrupt each other and queue in order
+    of their start events [002:L1037-1038] — here OB35 (due at 60 ms) before OB36 (due at
+    100 ms) although OB36 has the higher default priority."""
+    cpu = Cpu(clock, max_cycle_ms=10_000)
+    cpu.load(ob(1)(lambda ctx: None), _cyclic(35), _cyclic(36))  # type: ignore[arg-type]
+    cpu.interrupts.configure(35, 60)
+    cpu.interrupts.configure(36, 100)
+    cpu.start()
+    clock.advance(100)
+    assert cpu.scan().ran == (1, 36, 35)  # default priorities 13 > 12
+    cpu.ob_priority.update({35: 10, 36: 10})
+    clock.advance(100)  # OB35 due at 120 and 180, OB36 at 200
+    assert cpu.scan().ran == (1, 35, 36)

@@ -118,8 +118,7 @@ def test_set_clk_and_read_clk_use_the_injected_clock(clock: VirtualClock) -> Non
         read.append(ctx.call("READ_CLK", CDT="DB1.DBB0"))
         read.append(ctx.call("TIME_TCK"))
 
-    # The engine reads an FC's OUT operand before the call, so it must hold a valid DT.
-    cpu = make_cpu(clock, main, DB(1, 8, init=bytes.fromhex("9001010000000002")))
+    cpu = make_cpu(clock, main, DB(1, 8))  # zeroed: an FC OUT is never read in
     cpu.start()
     cpu.scan()
     clock.advance(125)  # below the 150 ms cycle-time limit

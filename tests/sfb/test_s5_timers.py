@@ -170,3 +170,40 @@ def test_s5time_decode_then_encode_gives_the_finest_equivalent_word(base: int, c
     again = s5.s5time_encode(ms)
     assert s5.s5time_decode(again) == ms
     assert (again >> 12) <= base
+
+
+def test_sd_timer_started_once_expires_after_the_right_number_of_scans_without_more_calls() -> None:
+    """Behaviours 44, 46, 51: the OS ticks the T area once per scan on the process time.
+
+    An SD timer with S5T#50MS started in the first scan (no instruction after that) sets Q
+    in the scan at 50 ms; HOLD freezes it, STARTUP does not."""
+    from engine.blocks import ob
+    from engine.clock import VirtualClock
+    from engine.cpu import CallContext, Cpu
+
+    clock = VirtualClock()
+    started: list[int] = []
+
+    @ob(1)
+    def main(ctx: CallContext) -> None:
+        if not started:
+            s5.run(ctx.mem.timers[3], "SD", True, 50, ctx.now_ns)
+            started.append(ctx.cycle)
+
+    cpu = Cpu(clock)  # no sfb.install: importing sfb registers the tick
+    cpu.load(main)
+    cpu.start()
+    cell = cpu.mem.timers[3]
+    cpu.scan()
+    q_at: list[int] = []
+    for scan in range(1, 8):
+        clock.advance(10)
+        if scan == 2:
+            cpu.hold()
+            clock.advance(1000)  # frozen: HOLD time does not count
+            cpu.resume()
+        cpu.scan()
+        if cell.q:
+            q_at.append(scan)
+    assert started == [1]
+    assert q_at[0] == 5 and cell.value_ms == 0 and not cell.running

@@ -1,0 +1,103 @@
+"""``s7graph run CHART --web``: the browser view and the bus fed by the real scan loop.
+
+:class:`LiveEdge` serves the view of one :class:`~web.live.LiveGraph` (``web.demo``'s
+:class:`~web.demo.WebEdge`: a CPU-side and a view-side zenoh session, a viser server on
+127.0.0.1) and is called back after each scan, in the scan thread: it publishes the
+scan's :class:`StepStateUpdate`, the CPU state and cycle statistics, optionally records
+the update to a rerun ``.rrd`` file, then applies the commands received since the last
+scan — the scan boundary.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from pathlib import Path
+
+from engine.modes import CpuMode
+from engine.record import ScanRecord
+from engine.runner import Runner
+from engine.watchdog import CycleStatistics
+from web.demo import WebEdge, serve_view
+from web.live import LiveGraph
+from web.protocol import CycleStats, StepStateUpdate
+from web.recorder import Recorder
+
+__all__ = ["LiveEdge", "cycle_stats"]
+
+_MS = 1e6
+
+
+def cycle_stats(cpu: CycleStatistics, runner: Runner | None = None) -> CycleStats:
+    """The published statistics: the CPU's cycle time and the runner's execution time."""
+    return CycleStats(
+        last_ms=cpu.last_ns / _MS,
+        min_ms=cpu.min_ns / _MS,
+        max_ms=cpu.max_ns / _MS,
+        exec_ms=runner.exec_stats.mean_ns / _MS if runner is not None else 0.0,
+        overruns=runner.overruns if runner is not None else 0,
+    )
+
+
+class LiveEdge:
+    """The view, bus and optional recording of one running GraphFB; close it when done."""
+
+    def __init__(
+        self,
+        live: LiveGraph,
+        *,
+        host: str = "127.0.0.1",
+        port: int = 8080,
+        cpu: str = "cpu1",
+        record: Path | None = None,
+        endpoint: str | None = None,
+    ) -> None:
+        self.live = live
+        self.recorder: Recorder | None = None
+        self.edge: WebEdge = serve_view(
+            live.layout, None, host=host, port=port, cpu=cpu, endpoint=endpoint
+        )
+        try:
+            if record is not None:
+                self.recorder = Recorder(live.layout, record)
+        except BaseException:
+            self.edge.close()
+            raise
+        self.url = self.edge.url
+        self.endpoint = self.edge.endpoint
+        self._cpu_state: str | None = None
+
+    def on_record(
+        self,
+        record: ScanRecord,
+        *,
+        stats: CycleStatistics | None = None,
+        runner: Runner | None = None,
+    ) -> StepStateUpdate:
+        """Publish the scan ``record`` and apply the pending commands (call in the scan thread)."""
+        update = self.live.update(record)
+        publisher = self.edge.publisher
+        state = str(record.mode)
+        if state != self._cpu_state:
+            self._cpu_state = state
+            publisher.set_cpu_state(state)
+        if stats is not None:
+            publisher.set_cycle_stats(cycle_stats(stats, runner))
+        publisher.publish(self.live.fb, update)
+        if self.recorder is not None and record.mode is CpuMode.RUN:
+            self.recorder.record(update)
+        publisher.apply_commands(self.live.apply, cycle=record.cycle)
+        return update
+
+    def close(self) -> None:
+        """Close the recording, the view, the bus and both zenoh sessions."""
+        if self.recorder is not None:
+            with contextlib.suppress(Exception):
+                self.recorder.close()
+            self.recorder = None
+        self.edge.close()
+
+    def __enter__(self) -> LiveEdge:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
