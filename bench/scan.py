@@ -18,7 +18,10 @@ default), ``single`` = 200 FBs of one sequencer each. The FBs are called from OB
 Baseline: one ``transitions.Machine`` per sequencer (25 states, one ``scan`` trigger per scan
 whose condition is a model callback ``c >= p``, ``after_state_change`` resets ``c`` and the
 step's start time), then the same per-scan actions (``c += 1``, the D and L bits written into
-a marker bytearray) in plain Python. Same number of scans, same virtual clock.
+a marker bytearray) in plain Python. Same number of scans, same virtual clock. The workloads
+run in rounds of 50 scans each, in turn, so load from other processes on the machine hits
+them alike; at the end the run checks that the engine and the baseline left every
+sequencer in the same step with the same D/L bits (exit status 1 if not).
 
 Also: parse and compile time of one 250-step chart (target: compile <= 100 ms).
 """
@@ -32,22 +35,22 @@ import pstats
 import statistics
 import sys
 import time
-from collections.abc import Callable
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from engine.clock import VirtualClock  # noqa: E402
-from engine.cpu import Cpu  # noqa: E402
-from sequencer.compile import compile_chart  # noqa: E402
-from sequencer.fb import GraphFB, install_all  # noqa: E402
-from sequencer.parse import parse_chart  # noqa: E402
+from engine.clock import VirtualClock
+from engine.cpu import Cpu
+from sequencer.compile import compile_chart
+from sequencer.fb import GraphFB, install_all
+from sequencer.parse import parse_chart
 
 N_SEQUENCERS = 200
 STEPS = 25
 CYCLE_MS = 10
 D_MS = 20
 L_MS = 20
+BLOCK = 50  # scans per workload per round
 
 
 def threshold(g: int) -> int:
@@ -108,116 +111,128 @@ def stats(samples_ns: list[int]) -> dict[str, float]:
 # ---------------------------------------------------------------------------- the engine
 
 
-def build_cpu(layout: str) -> tuple[Cpu, VirtualClock, list[GraphFB]]:
-    per_fb = 8 if layout == "packed" else 1
-    clock = VirtualClock()
-    cpu = Cpu(clock)
-    fbs = []
-    for f in range(N_SEQUENCERS // per_fb):
-        text = chart_source(f + 1, f * per_fb, per_fb)
-        cc = compile_chart(parse_chart(text, f"<bench FB{f + 1}>"))
-        fbs.append(GraphFB(cc))
-    install_all(cpu, fbs)
-    cpu.start("warm")
-    return cpu, clock, fbs
+class EngineWorkload:
+    """The sequencers as GraphFBs called from OB1 of one CPU on a virtual clock."""
 
+    def __init__(self, layout: str) -> None:
+        per_fb = 8 if layout == "packed" else 1
+        self.name = f"engine {layout}"
+        self.clock = VirtualClock()
+        self.cpu = Cpu(self.clock)
+        self.fbs = []
+        for f in range(N_SEQUENCERS // per_fb):
+            text = chart_source(f + 1, f * per_fb, per_fb)
+            cc = compile_chart(parse_chart(text, f"<bench FB{f + 1}>"))
+            self.fbs.append(GraphFB(cc))
+        install_all(self.cpu, self.fbs)
+        self.cpu.start("warm")  # OB100 calls each FB once: initial steps, their rows run
+        self.switches = 0
+        self.profile: cProfile.Profile | None = None
 
-def run_engine(layout: str, scans: int, warmup: int, profile: bool) -> dict[str, float]:
-    cpu, clock, fbs = build_cpu(layout)
-    for _ in range(warmup):
-        clock.advance(CYCLE_MS)
-        cpu.scan()
-    active = sum(len(g.state.active) for g in fbs)
-    samples: list[int] = []
-    switches = 0
-    prof = cProfile.Profile() if profile else None
-    perf = time.perf_counter_ns
-    for _ in range(scans):
-        clock.advance(CYCLE_MS)
+    def scan(self) -> int:
+        """One scan; returns its wall time in ns."""
+        self.clock.advance(CYCLE_MS)
+        prof = self.profile
         if prof is not None:
             prof.enable()
-        t0 = perf()
-        rec = cpu.scan()
-        samples.append(perf() - t0)
+        t0 = time.perf_counter_ns()
+        rec = self.cpu.scan()
+        dt = time.perf_counter_ns() - t0
         if prof is not None:
             prof.disable()
-        switches += sum(1 for e in rec.events if getattr(e, "event", "") == "S1")
-    assert str(cpu.mode).endswith("RUN"), f"CPU left RUN: {cpu.mode}"
-    assert active == N_SEQUENCERS, f"{active} active steps, expected {N_SEQUENCERS}"
-    result = stats(samples)
-    result["active"] = active
-    result["switches_per_scan"] = switches / scans
-    result["fbs"] = len(fbs)
-    if prof is not None:
-        buf = io.StringIO()
-        pstats.Stats(prof, stream=buf).sort_stats("tottime").print_stats(20)
-        print(buf.getvalue())
-    return result
+        self.switches += sum(1 for e in rec.events if getattr(e, "event", "") == "S1")
+        return dt
+
+    def active(self) -> int:
+        return sum(len(g.state.active) for g in self.fbs)
+
+    def positions(self) -> list[int]:
+        """The step (0..24) each sequencer is in, in global sequencer order."""
+        out = []
+        for g in self.fbs:
+            cc = g.cc
+            by_seq = {cc.step_seq[i]: (cc.step_numbers[i] - 1) % STEPS for i in g.state.active}
+            out += [by_seq[k] for k in range(len(cc.seq_numbers))]
+        return out
+
+    def markers(self) -> bytes:
+        return bytes(self.cpu.mem.markers[: N_SEQUENCERS // 4])
 
 
 # ---------------------------------------------------------------------------- transitions
 
 
-def run_transitions(scans: int, warmup: int) -> dict[str, float]:
-    from transitions import Machine
+class _Seq:
+    """One ``transitions`` model: ``c`` and the step's start time; D/L bits go to ``mem``."""
 
-    class Seq:
-        """One sequencer: ``c`` and the step's start time; D/L bits go to ``mem``."""
+    def __init__(self, g: int, mem: bytearray) -> None:
+        self.p = threshold(g)
+        self.c = 0
+        self.now = 0
+        self.since = 0
+        self.mem = mem
+        self.byte, bit = divmod(g, 4)
+        self.d_mask = 1 << (2 * bit)
+        self.l_mask = 1 << (2 * bit + 1)
 
-        def __init__(self, g: int, mem: bytearray) -> None:
-            self.p = threshold(g)
-            self.c = 0
-            self.now = 0
-            self.since = 0
-            self.mem = mem
-            self.byte, bit = divmod(g, 4)
-            self.d_mask = 1 << (2 * bit)
-            self.l_mask = 1 << (2 * bit + 1)
+    def ready(self) -> bool:
+        return self.c >= self.p
 
-        def ready(self) -> bool:
-            return self.c >= self.p
+    def entered(self) -> None:
+        self.c = 0
+        self.since = self.now
 
-        def entered(self) -> None:
-            self.c = 0
-            self.since = self.now
+    def act(self) -> None:
+        self.c += 1
+        elapsed = self.now - self.since
+        v = self.mem[self.byte] & ~(self.d_mask | self.l_mask)
+        if elapsed >= D_MS:
+            v |= self.d_mask
+        if elapsed < L_MS:
+            v |= self.l_mask
+        self.mem[self.byte] = v
 
-        def act(self) -> None:
-            self.c += 1
-            elapsed = self.now - self.since
-            v = self.mem[self.byte] & ~(self.d_mask | self.l_mask)
-            if elapsed >= D_MS:
-                v |= self.d_mask
-            if elapsed < L_MS:
-                v |= self.l_mask
-            self.mem[self.byte] = v
 
-    states = [f"s{k}" for k in range(STEPS)]
-    table = [
-        {"trigger": "scan", "source": states[k], "dest": states[(k + 1) % STEPS],
-         "conditions": "ready"}
-        for k in range(STEPS)
-    ]  # fmt: skip
-    mem = bytearray(64)
-    seqs = []
-    for g in range(N_SEQUENCERS):
-        m = Seq(g, mem)
-        Machine(model=m, states=states, transitions=table, initial=states[0],
-                auto_transitions=False, after_state_change="entered")  # fmt: skip
-        seqs.append(m)
+class TransitionsWorkload:
+    """One ``transitions.Machine`` per sequencer, one ``scan`` trigger each per scan."""
 
-    now = 0
-    samples: list[int] = []
-    perf = time.perf_counter_ns
-    for n in range(warmup + scans):
-        now += CYCLE_MS
-        t0 = perf()
-        for m in seqs:
+    name = "transitions"
+
+    def __init__(self) -> None:
+        from transitions import Machine
+
+        states = [f"s{k}" for k in range(STEPS)]
+        table = [
+            {"trigger": "scan", "source": states[k], "dest": states[(k + 1) % STEPS],
+             "conditions": "ready"}
+            for k in range(STEPS)
+        ]  # fmt: skip
+        self.mem = bytearray(64)
+        self.seqs = []
+        for g in range(N_SEQUENCERS):
+            m = _Seq(g, self.mem)
+            Machine(model=m, states=states, transitions=table, initial=states[0],
+                    auto_transitions=False, after_state_change="entered")  # fmt: skip
+            self.seqs.append(m)
+        self.now = 0
+        for m in self.seqs:  # as the engine's startup call: the initial steps' rows once
+            m.act()
+
+    def scan(self) -> int:
+        self.now += CYCLE_MS
+        now = self.now
+        t0 = time.perf_counter_ns()
+        for m in self.seqs:
             m.now = now
             m.scan()  # type: ignore[attr-defined]
             m.act()
-        if n >= warmup:
-            samples.append(perf() - t0)
-    return stats(samples)
+        return time.perf_counter_ns() - t0
+
+    def positions(self) -> list[int]:
+        return [int(m.state[1:]) for m in self.seqs]  # type: ignore[attr-defined]
+
+    def markers(self) -> bytes:
+        return bytes(self.mem[: N_SEQUENCERS // 4])
 
 
 # ---------------------------------------------------------------------------- compile time
@@ -246,26 +261,64 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--profile", action="store_true", help="cProfile the engine scans")
     args = ap.parse_args(argv)
 
-    line: Callable[..., None] = print
-    line(f"python {sys.version.split()[0]}, {N_SEQUENCERS} sequencers x {STEPS} steps, "
-         f"{args.scans} scans of {CYCLE_MS} ms virtual time")  # fmt: skip
-    base = run_transitions(args.scans, args.warmup)
-    line(f"transitions   mean {base['mean']:.3f} ms  p50 {base['p50']:.3f}  "
-         f"p99 {base['p99']:.3f}  max {base['max']:.3f}")  # fmt: skip
+    print(
+        f"python {sys.version.split()[0]}, {N_SEQUENCERS} sequencers x {STEPS} steps, "
+        f"{args.scans} scans of {CYCLE_MS} ms virtual time, in rounds of {BLOCK} scans per workload"
+    )
+    base = TransitionsWorkload()
     layouts = ("packed", "single") if args.layout == "both" else (args.layout,)
-    for layout in layouts:
-        r = run_engine(layout, args.scans, args.warmup, args.profile)
-        per_step_us = r["mean"] * 1e3 / r["active"]
-        line(f"engine {layout:6} mean {r['mean']:.3f} ms  p50 {r['p50']:.3f}  "
-             f"p99 {r['p99']:.3f}  max {r['max']:.3f}  ({int(r['fbs'])} FBs, "
-             f"{int(r['active'])} active, {r['switches_per_scan']:.1f} switches/scan)")  # fmt: skip
-        line(f"       {layout:6} {per_step_us:.2f} us per active step; "
-             f"transitions/engine = {base['mean'] / r['mean']:.2f}x "
-             f"(target >= 10x, mean <= 2 ms)")  # fmt: skip
+    engines = [EngineWorkload(layout) for layout in layouts]
+    prof = cProfile.Profile() if args.profile else None
+    for e in engines:
+        e.profile = prof
+    workloads: list[TransitionsWorkload | EngineWorkload] = [base, *engines]
+    samples: dict[str, list[int]] = {w.name: [] for w in workloads}
+    for w in workloads:
+        for _ in range(args.warmup):
+            w.scan()
+    done = 0
+    while done < args.scans:  # rounds of BLOCK scans each, so load drift hits all alike
+        n = min(BLOCK, args.scans - done)
+        for w in workloads:
+            samples[w.name] += [w.scan() for _ in range(n)]
+        done += n
+
+    b = stats(samples[base.name])
+    print(
+        f"transitions   mean {b['mean']:.3f} ms  p50 {b['p50']:.3f}  p99 {b['p99']:.3f}  "
+        f"max {b['max']:.3f}"
+    )
+    for e in engines:
+        r = stats(samples[e.name])
+        active = e.active()
+        assert str(e.cpu.mode).endswith("RUN"), f"{e.name}: CPU left RUN ({e.cpu.mode})"
+        assert active == N_SEQUENCERS, f"{e.name}: {active} active steps"
+        same = (e.positions(), e.markers()) == (base.positions(), base.markers())
+        print(
+            f"{e.name:13} mean {r['mean']:.3f} ms  p50 {r['p50']:.3f}  p99 {r['p99']:.3f}  "
+            f"max {r['max']:.3f}  ({len(e.fbs)} FBs, {active} active steps, "
+            f"{e.switches / (args.warmup + args.scans):.1f} switches/scan)"
+        )
+        print(
+            f"{'':13} {r['mean'] * 1e3 / active:.2f} us per active step; "
+            f"transitions/engine {b['mean'] / r['mean']:.2f}x (p50 {b['p50'] / r['p50']:.2f}x); "
+            f"final steps and D/L bits {'same as' if same else 'DIFFER FROM'} transitions"
+        )
+    print("targets: engine mean <= 2 ms, >= 10x faster than transitions")
     c = time_compile()
-    line(f"250-step chart: parse {c['parse']:.1f} ms, compile {c['compile']:.1f} ms "
-         f"(target compile <= 100 ms)")  # fmt: skip
-    return 0
+    print(
+        f"250-step chart: parse {c['parse']:.1f} ms, compile {c['compile']:.1f} ms "
+        f"(target: compile <= 100 ms)"
+    )
+    if prof is not None:
+        buf = io.StringIO()
+        pstats.Stats(prof, stream=buf).sort_stats("tottime").print_stats(25)
+        print(buf.getvalue())
+    return (
+        0
+        if all((e.positions(), e.markers()) == (base.positions(), base.markers()) for e in engines)
+        else 1
+    )
 
 
 if __name__ == "__main__":

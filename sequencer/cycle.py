@@ -84,6 +84,7 @@ class GraphRuntime:
         self._getter = operator.itemgetter(*self.input_names)
         self._last_in: Any = None  # the input pins of the previous call (fast path)
         self.display = display.Display(cc)
+        self._permanent = bool(cc.chart.before or cc.chart.after)
         # per sequencer: its active steps in activation order (multi-sequencer FBs only),
         # rebuilt from ``st.active`` each call and kept in step by _activate/_deactivate
         self._by_seq: list[list[int]] = [[] for _ in cc.seq_numbers] if self.multi else []
@@ -218,7 +219,8 @@ class GraphRuntime:
         for i in carry:
             if st.x[i]:
                 self._raise(i, EV_S1)
-        self.display.page(st, ins, rose)
+        if self.display.dirty:  # else no input pin changed: no edge, same S_SEL
+            self.display.page(st, ins, rose)
 
         # 2. OFF_SQ, INIT_SQ, modes, MAN requests, acknowledgement, registration
         if st.calls == 0 or "INIT_SQ" in rose:
@@ -230,18 +232,27 @@ class GraphRuntime:
         st.calls += 1
 
         # 3. permanent before
-        prog.before(st, self)
+        if self._permanent:
+            prog.before(st, self)
         # 4. the sequencers
+        rule = MODE_RULES[st.mode]
+        sw = (
+            rule if st.mode != "AUTO" else None,
+            "T_PUSH" in rose,
+            st.halted or st.off,
+            self._acked if cc.options.ack_forces_switch and self._acked else (),
+        )
         if self.multi:
             by_seq = self._by_seq
             for k in range(len(by_seq)):
                 steps = by_seq[k]
                 if steps or self._final:
-                    self._sequencer(k, steps)
+                    self._sequencer(k, steps, sw, rule)
         else:
-            self._sequencer(-1, st.active)
+            self._sequencer(-1, st.active, sw, rule)
         # 5. permanent after
-        prog.after(st, self)
+        if self._permanent:
+            prog.after(st, self)
         # 6. group flags and outputs
         self._outputs()
         return st
@@ -301,31 +312,33 @@ class GraphRuntime:
             if i >= 0 and st.x[i]:
                 self._raise(i, EV_R1)
 
-    def _sequencer(self, k: int, steps: list[int]) -> None:
-        """Sequencer ``k`` (-1: the only one) whose active steps are ``steps``."""
+    def _sequencer(
+        self, k: int, steps: list[int], sw: tuple[Any, ...], rule: Callable[[bool, bool], bool]
+    ) -> None:
+        """Sequencer ``k`` (-1: the only one) whose active steps are ``steps``; ``sw`` holds
+        this call's switching options (see ``_switch``)."""
         if self.codesys:
             self._conditions_and_actions(k, steps)
-            self._switch(steps)
+            self._switch(steps, sw, rule)
         else:
-            self._switch(steps)
+            self._switch(steps, sw, rule)
             self._conditions_and_actions(k, steps)
 
-    def _switch(self, steps: list[int]) -> None:
+    def _switch(
+        self, steps: list[int], sw: tuple[Any, ...], rule: Callable[[bool, bool], bool]
+    ) -> None:
         """Steps a–c: evaluate, decide, switch (SPEC §2.2 4a–4c) for one sequencer's active
-        ``steps``."""
+        ``steps``. ``sw`` = (mode rule, None in AUTO; T_PUSH edge; switching blocked by
+        HALT_SQ/OFF_SQ; steps whose acknowledgement forces their transition)."""
         st = self.st
         cc = self.cc
-        prog = self.prog
         x = st.x
         leaving = cc.leaving
         tr_src = cc.tr_src
-        tcond = prog.tcond
+        tcond = self.prog.tcond
         tt, crit, crit_old = st.tt, st.crit, st.crit_old
-        rule = MODE_RULES[st.mode]
-        push = "T_PUSH" in st.rose
-        blocked = st.halted or st.off
+        mode_rule, push, blocked, forced = sw
         sv_err = st.sv_err
-        forced = self._acked if cc.options.ack_forces_switch else ()
         # a+b: on the state at the start of this step
         fire: list[int] = []
         taken: set[int] | None = None
@@ -333,7 +346,8 @@ class GraphRuntime:
         for i in steps:
             for j in leaving[i]:
                 srcs = tr_src[j]
-                if len(srcs) > 1:  # simultaneous join: all preceding steps active, once
+                single = len(srcs) == 1
+                if not single:  # simultaneous join: all preceding steps active, once
                     if not all(x[s] for s in srcs):
                         continue
                     if joins is None:
@@ -347,17 +361,23 @@ class GraphRuntime:
                 tt[j] = v
                 if blocked:
                     continue
-                if i in forced:
+                if forced and i in forced:
                     v = True
-                if not rule(v, push):
+                if mode_rule is not None:
+                    v = mode_rule(v, push)
+                if not v:
                     continue
-                if any(sv_err[s] for s in srcs):
+                if single:
+                    if sv_err[i]:
+                        continue
+                elif any(sv_err[s] for s in srcs):
                     continue
                 if taken is None:
-                    taken = set()
-                elif any(s in taken for s in srcs):
-                    continue
-                taken.update(srcs)
+                    taken = set(srcs)
+                else:
+                    if (i in taken) if single else any(s in taken for s in srcs):
+                        continue
+                    taken.update(srcs)
                 fire.append(j)
                 break  # alternative divergence: the first-listed switchable path wins
         # c: switch

@@ -27,6 +27,8 @@ Decisions (UNCERTAIN in graph-semantics, pinned by tests/sequencer/test_display.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass
+from functools import cache
 from typing import Any, Final
 
 from sequencer.compiled import CompiledChart
@@ -227,8 +229,30 @@ _STEP_PINS: Final = ("S_TIME", "S_TIMEOK", "S_CRITLOC", "S_CRITLOCERR", "S_CRITS
 _TRANSITION_PINS: Final = ("T_CRIT", "T_CRITOLD", "T_CRITFLT")
 
 
-def _wanted(set_name: str) -> tuple[str, ...]:
-    return tuple(p.name for p in outputs_for(set_name) if p.direction is Direction.OUT)
+@dataclass(frozen=True, slots=True)
+class _Plan:
+    """What the pins of one parameter set need: the shown step (and which of its per-call
+    pins), the shown transition (and which pins), the group/option/mode pins."""
+
+    wanted: tuple[str, ...]
+    step: bool
+    step_pins: tuple[str, ...]
+    transition: bool
+    transition_pins: tuple[str, ...]
+    groups: tuple[tuple[str, Callable[[GraphState], bool]], ...]
+
+
+@cache
+def _plan(set_name: str) -> _Plan:
+    wanted = tuple(p.name for p in outputs_for(set_name) if p.direction is Direction.OUT)
+    return _Plan(
+        wanted=wanted,
+        step=bool({"S_NO", "S_MORE", "S_ACTIVE", *_STEP_PINS} & set(wanted)),
+        step_pins=tuple(n for n in _STEP_PINS if n in wanted),
+        transition=bool({"T_NO", "T_MORE", *_TRANSITION_PINS} & set(wanted)),
+        transition_pins=tuple(n for n in _TRANSITION_PINS if n in wanted),
+        groups=tuple((n, _GROUP_PINS[n]) for n in wanted if n in _GROUP_PINS),
+    )
 
 
 def _step_pins(
@@ -272,32 +296,30 @@ def _transition_pins(
 def _outputs(
     chart: CompiledChart,
     state: GraphState,
-    wanted: tuple[str, ...],
+    plan: _Plan,
     active: Sequence[int] | None,
-) -> dict[str, object]:
-    """The pins ``wanted`` (in that order); only what they need is computed."""
-    out: dict[str, object] = {}
-    need = set(wanted)
-    if need & {"S_NO", "S_MORE", "S_ACTIVE", *_STEP_PINS}:
-        steps = shown_steps(chart, state, active)
-        s_no = _shown_step(chart, state, lambda: steps)
+    out: dict[str, object],
+) -> tuple[int, int]:
+    """Write the pins of ``plan`` into ``out``; return the S_NO and T_NO shown (T_NO only
+    when the set has transition pins, else ``state.t_no``). Only what they need is computed."""
+    steps = shown_steps(chart, state, active)
+    s_no = _shown_step(chart, state, lambda: steps)
+    if plan.step:
         i = chart.step_index.get(s_no)
         out["S_NO"] = s_no
-        out["S_MORE"] = any(n != s_no for n in steps)
-        out["S_ACTIVE"] = bool(i is not None and state.x[i])
-        _step_pins(chart, state, i, [n for n in _STEP_PINS if n in need], out)
-    if need & {"T_NO", "T_MORE", *_TRANSITION_PINS}:
+        out["S_MORE"] = len(steps) > 1 or (len(steps) == 1 and steps[0] != s_no)
+        out["S_ACTIVE"] = i is not None and state.x[i]
+        _step_pins(chart, state, i, plan.step_pins, out)
+    t_no = state.t_no
+    if plan.transition:
         trans = valid_transitions(chart, state, active)
-        t_no = _snap(state.t_no, trans)
+        t_no = _snap(t_no, trans)
         out["T_NO"] = t_no
-        out["T_MORE"] = any(n != t_no for n in trans)
-        j = chart.transition_index.get(t_no)
-        _transition_pins(state, j, [n for n in _TRANSITION_PINS if n in need], out)
-    for name in wanted:
-        f = _GROUP_PINS.get(name)
-        if f is not None:
-            out[name] = f(state)
-    return {name: out[name] for name in wanted}
+        out["T_MORE"] = len(trans) > 1 or (len(trans) == 1 and trans[0] != t_no)
+        _transition_pins(state, chart.transition_index.get(t_no), plan.transition_pins, out)
+    for name, f in plan.groups:
+        out[name] = f(state)
+    return s_no, t_no
 
 
 def compute_outputs(
@@ -315,7 +337,10 @@ def compute_outputs(
     ``edges`` are accepted for symmetry with ``page``; the effective options of this call
     (EN_IL, HALT_SQ, …) are already in the state. ``active`` as for ``shown_steps``."""
     del inputs, edges
-    return _outputs(chart, state, _wanted(set_name or chart.parameters), active)
+    plan = _plan(set_name or chart.parameters)
+    out: dict[str, object] = {}
+    _outputs(chart, state, plan, active, out)
+    return {name: out[name] for name in plan.wanted}
 
 
 class Display:
@@ -323,19 +348,18 @@ class Display:
     after latching the inputs and ``update`` at the end of the call.
 
     The sets S_NO/T_NO page through are recomputed — from ``state.active`` and the leaving
-    transitions, never all steps — only when the cycle reports a change (a step switched, a
-    fault or interlock changed, an input pin changed: ``dirty``); otherwise only the pins of
-    the shown step/transition that move by themselves (times, criteria, S_STATE) are
-    refreshed, and with the STANDARD set nothing is. Results equal ``page`` +
-    ``compute_outputs`` + ``settle`` of the pure functions (tests/sequencer/test_display.py)."""
+    transitions, never all steps — only when the cycle reports a change (``dirty``: an
+    input pin changed) or the call raised a step event (a step switched, a fault or
+    interlock changed); otherwise only the pins of the shown step/transition that move by
+    themselves (times, criteria, S_STATE) are refreshed, and with the STANDARD set nothing
+    is. Results equal ``page`` + ``compute_outputs`` + ``settle`` of the pure functions
+    (tests/sequencer/test_display.py). T_NO is tracked only when the set shows it."""
 
-    __slots__ = ("chart", "dirty", "step_pins", "transition_pins", "wanted")
+    __slots__ = ("chart", "dirty", "plan")
 
     def __init__(self, chart: CompiledChart) -> None:
         self.chart = chart
-        self.wanted = _wanted(chart.parameters)
-        self.step_pins = tuple(n for n in _STEP_PINS if n in self.wanted)
-        self.transition_pins = tuple(n for n in _TRANSITION_PINS if n in self.wanted)
+        self.plan = _plan(chart.parameters)
         self.dirty = True
 
     def page(self, state: GraphState, inputs: Mapping[str, Any], rose: set[str]) -> None:
@@ -348,19 +372,18 @@ class Display:
 
     def update(self, state: GraphState) -> None:
         """Write this call's output pins into ``state.outputs`` and settle S_NO/T_NO."""
-        out = state.outputs
+        plan = self.plan
         chart = self.chart
         if self.dirty or state.log:
-            active = state.active
-            out.update(_outputs(chart, state, self.wanted, active))
-            settle(chart, state, active)
             self.dirty = False
+            state.s_no, state.t_no = _outputs(chart, state, plan, state.active, state.outputs)
             return
-        if self.step_pins:
-            _step_pins(chart, state, chart.step_index.get(state.s_no), self.step_pins, out)
-        if self.transition_pins:
+        if plan.step_pins:
+            i = chart.step_index.get(state.s_no)
+            _step_pins(chart, state, i, plan.step_pins, state.outputs)
+        if plan.transition_pins:
             j = chart.transition_index.get(state.t_no)
-            _transition_pins(state, j, self.transition_pins, out)
+            _transition_pins(state, j, plan.transition_pins, state.outputs)
 
 
 # ---------------------------------------------------------------- "why does it not switch?"

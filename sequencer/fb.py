@@ -12,8 +12,7 @@ the step events of ``GraphState.log`` into the scan's ``ScanRecord.events`` as
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 from engine.blocks import FB, OB, Decl, InstanceDB, Var
 from engine.errors import BlockError
@@ -27,9 +26,9 @@ STATE_VAR = "G7_STATE"
 _EVENT_OF_BIT = {1 << k: name for k, name in enumerate(EVENT_NAMES)}
 
 
-@dataclass(frozen=True, slots=True)
-class StepEvent:
-    """One step event (S1 S0 V1 V0 L1 L0 A1 R1) of a GRAPH FB call, for the ScanRecord."""
+class StepEvent(NamedTuple):
+    """One step event (S1 S0 V1 V0 L1 L0 A1 R1) of a GRAPH FB call, for the ScanRecord
+    (immutable; a named tuple because a scan may carry hundreds of them)."""
 
     fb: str
     db: int

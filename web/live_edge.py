@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import contextlib
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from engine.modes import CpuMode
 from engine.record import ScanRecord
@@ -20,7 +21,9 @@ from engine.watchdog import CycleStatistics
 from web.demo import WebEdge, serve_view
 from web.live import LiveGraph
 from web.protocol import CycleStats, StepStateUpdate
-from web.recorder import Recorder
+
+if TYPE_CHECKING:
+    from web.recorder import Recorder
 
 __all__ = ["LiveEdge", "cycle_stats"]
 
@@ -39,7 +42,8 @@ def cycle_stats(cpu: CycleStatistics, runner: Runner | None = None) -> CycleStat
 
 
 class LiveEdge:
-    """The view, bus and optional recording of one running GraphFB; close it when done."""
+    """The view and bus (``serve``) and the recording (``record``) of one running GraphFB;
+    close it when done."""
 
     def __init__(
         self,
@@ -50,20 +54,25 @@ class LiveEdge:
         cpu: str = "cpu1",
         record: Path | None = None,
         endpoint: str | None = None,
+        serve: bool = True,
     ) -> None:
         self.live = live
         self.recorder: Recorder | None = None
-        self.edge: WebEdge = serve_view(
-            live.layout, None, host=host, port=port, cpu=cpu, endpoint=endpoint
-        )
+        self.edge: WebEdge | None = None
+        if serve:
+            self.edge = serve_view(
+                live.layout, None, host=host, port=port, cpu=cpu, endpoint=endpoint
+            )
         try:
             if record is not None:
+                from web.recorder import Recorder  # rerun-sdk only when recording
+
                 self.recorder = Recorder(live.layout, record)
         except BaseException:
-            self.edge.close()
+            self.close()
             raise
-        self.url = self.edge.url
-        self.endpoint = self.edge.endpoint
+        self.url = self.edge.url if self.edge is not None else ""
+        self.endpoint = self.edge.endpoint if self.edge is not None else ""
         self._cpu_state: str | None = None
 
     def on_record(
@@ -75,6 +84,10 @@ class LiveEdge:
     ) -> StepStateUpdate:
         """Publish the scan ``record`` and apply the pending commands (call in the scan thread)."""
         update = self.live.update(record)
+        if self.recorder is not None and record.mode is CpuMode.RUN:
+            self.recorder.record(update)
+        if self.edge is None:
+            return update
         publisher = self.edge.publisher
         state = str(record.mode)
         if state != self._cpu_state:
@@ -83,8 +96,6 @@ class LiveEdge:
         if stats is not None:
             publisher.set_cycle_stats(cycle_stats(stats, runner))
         publisher.publish(self.live.fb, update)
-        if self.recorder is not None and record.mode is CpuMode.RUN:
-            self.recorder.record(update)
         publisher.apply_commands(self.live.apply, cycle=record.cycle)
         return update
 
@@ -94,7 +105,9 @@ class LiveEdge:
             with contextlib.suppress(Exception):
                 self.recorder.close()
             self.recorder = None
-        self.edge.close()
+        if self.edge is not None:
+            self.edge.close()
+            self.edge = None
 
     def __enter__(self) -> LiveEdge:
         return self

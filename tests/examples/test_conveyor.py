@@ -8,6 +8,8 @@ import itertools
 import json
 from pathlib import Path
 
+import pytest
+
 from web.cli import main
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "conveyor"
@@ -31,6 +33,12 @@ def run_sim(
     return records
 
 
+@pytest.fixture(scope="module")
+def records(tmp_path_factory: pytest.TempPathFactory) -> list[dict]:
+    """The trace of the example's own command (stimulus and plant as shipped)."""
+    return run_sim(tmp_path_factory.mktemp("trace"))
+
+
 def edges(records: list[dict], name: str, rising: bool = True) -> list[int]:
     """The times (ms) at which the watched ``name`` rose (or fell)."""
     times: list[int] = []
@@ -47,15 +55,13 @@ def value_at(records: list[dict], name: str, t_ms: int) -> object:
     return next(rec["values"][name] for rec in records if rec["t_ms"] == t_ms)
 
 
-def test_start_runs_belt_b_at_once_and_belt_a_five_seconds_later(tmp_path: Path) -> None:
-    records = run_sim(tmp_path)
+def test_start_runs_belt_b_at_once_and_belt_a_five_seconds_later(records: list[dict]) -> None:
     b_on, a_on = edges(records, "Belt_B")[0], edges(records, "Belt_A")[0]
     assert b_on == 500  # Start pressed at 500 ms acts in that cycle (SPEC §4)
     assert 5000 <= a_on - b_on <= 5010
 
 
-def test_stop_halts_belt_a_at_once_and_belt_b_seven_seconds_later(tmp_path: Path) -> None:
-    records = run_sim(tmp_path)
+def test_stop_halts_belt_a_at_once_and_belt_b_seven_seconds_later(records: list[dict]) -> None:
     a_off, b_off = edges(records, "Belt_A", False)[0], edges(records, "Belt_B", False)[0]
     assert a_off == 12000  # Stop pressed at 12 s acts in that cycle (SPEC §4)
     assert 7000 <= b_off - a_off <= 7010
@@ -65,9 +71,8 @@ def test_stop_halts_belt_a_at_once_and_belt_b_seven_seconds_later(tmp_path: Path
 
 
 def test_emergency_stops_both_belts_at_once_while_belt_a_waits_to_start(
-    tmp_path: Path,
+    records: list[dict],
 ) -> None:
-    records = run_sim(tmp_path)
     assert 22000 in edges(records, "Belt_B")  # Start at 22 s
     assert 24000 in edges(records, "Belt_B", False)  # Emergency at 24 s
     window = [rec for rec in records if 22000 <= rec["t_ms"] < 26000]
@@ -75,16 +80,14 @@ def test_emergency_stops_both_belts_at_once_while_belt_a_waits_to_start(
     assert next(rec["active"] for rec in records if rec["t_ms"] == 24010) == ["S6"]
 
 
-def test_emergency_stops_belt_b_at_once_while_it_runs_on(tmp_path: Path) -> None:
-    records = run_sim(tmp_path)
+def test_emergency_stops_belt_b_at_once_while_it_runs_on(records: list[dict]) -> None:
     assert edges(records, "Belt_A", False)[-1] == 38000  # Stop at 38 s
     assert edges(records, "Belt_B", False)[-1] == 40000  # Emergency at 40 s, not at 45 s
     assert value_at(records, "Belt_B_empty", 40100) is False  # material left on belt B
     assert records[-1]["active"] == ["S1"]
 
 
-def test_three_alternative_paths_leave_the_initial_step(tmp_path: Path) -> None:
-    records = run_sim(tmp_path)
+def test_three_alternative_paths_leave_the_initial_step(records: list[dict]) -> None:
     after_s1 = {
         tuple(rec["active"])
         for prev, rec in itertools.pairwise(records)

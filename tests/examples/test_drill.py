@@ -6,6 +6,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import pytest
+
 from web.cli import main
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "drill"
@@ -34,6 +36,12 @@ def run_sim(
     records = [json.loads(line) for line in trace.read_text().splitlines()]
     assert len(records) == cycles
     return records
+
+
+@pytest.fixture(scope="module")
+def records(tmp_path_factory: pytest.TempPathFactory) -> list[dict]:
+    """The trace of the example's own command (stimulus and plant as shipped)."""
+    return run_sim(tmp_path_factory.mktemp("trace"))
 
 
 def path_of(records: list[dict]) -> list[list[str]]:
@@ -77,8 +85,7 @@ def stimulus_file(tmp_path: Path, *lines: dict) -> Path:
     return path
 
 
-def test_drill_clamps_lowers_dwells_raises_and_releases(tmp_path: Path) -> None:
-    records = run_sim(tmp_path)
+def test_drill_clamps_lowers_dwells_raises_and_releases(records: list[dict]) -> None:
     assert path_of(records) == [["S1"], ["S2"], ["S3"], ["S4"], ["S5"], ["S6"], ["S7"], ["S1"]]
     (s2,), (s4,), (s5,), (s6,), (s7,) = (
         entered(records, s) for s in ("S2", "S4", "S5", "S6", "S7")
@@ -90,8 +97,7 @@ def test_drill_clamps_lowers_dwells_raises_and_releases(tmp_path: Path) -> None:
     assert not any(rec["values"]["ERR_FLT"] for rec in records)
 
 
-def test_drill_outputs_follow_the_active_steps(tmp_path: Path) -> None:
-    records = run_sim(tmp_path)
+def test_drill_outputs_follow_the_active_steps(records: list[dict]) -> None:
     for rec in records:
         active, v = set(rec["active"]), rec["values"]
         assert v["Lower_drill"] == ("S4" in active), rec  # N: on exactly while S4 is active

@@ -8,6 +8,8 @@ import json
 from collections.abc import Callable
 from pathlib import Path
 
+import pytest
+
 from web.cli import main
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "mixing"
@@ -36,6 +38,12 @@ def run_sim(
     records = [json.loads(line) for line in trace.read_text().splitlines()]
     assert len(records) == cycles
     return records
+
+
+@pytest.fixture(scope="module")
+def records(tmp_path_factory: pytest.TempPathFactory) -> list[dict]:
+    """The trace of the example's own command (stimulus and plant as shipped)."""
+    return run_sim(tmp_path_factory.mktemp("trace"))
 
 
 def path_of(records: list[dict]) -> list[list[str]]:
@@ -82,8 +90,7 @@ START = ({"at_ms": 0, "set": {"NOT_AUS_aus": True}},
          {"at_ms": 1500, "set": {"Batch_start": False}})  # fmt: skip
 
 
-def test_mixing_feeds_a_and_b_together_then_mixes_then_drains(tmp_path: Path) -> None:
-    records = run_sim(tmp_path)
+def test_mixing_feeds_a_and_b_together_then_mixes_then_drains(records: list[dict]) -> None:
     assert path_of(records) == [
         ["S1"], ["S2", "S4"], ["S2", "S5"], ["S3", "S5"], ["S6"], ["S7"], ["S8"], ["S1"]
     ]  # fmt: skip
@@ -96,8 +103,7 @@ def test_mixing_feeds_a_and_b_together_then_mixes_then_drains(tmp_path: Path) ->
     assert records[-1]["values"]["Behaelter_Leer_Anz"] is True
 
 
-def test_mixing_opens_the_valves_one_second_after_the_pump(tmp_path: Path) -> None:
-    records = run_sim(tmp_path)
+def test_mixing_opens_the_valves_one_second_after_the_pump(records: list[dict]) -> None:
     pump = first(records, on("Speisepumpe_A"))
     for valve in ("Einlassventil_A", "Speiseventil_A", "Einlassventil_B", "Speiseventil_B"):
         assert 1000 <= first(records, on(valve)) - pump <= 1050, valve
@@ -109,9 +115,8 @@ def test_mixing_opens_the_valves_one_second_after_the_pump(tmp_path: Path) -> No
 
 
 def test_mixing_runs_the_agitator_20_s_and_drains_only_once_it_has_stopped(
-    tmp_path: Path,
+    records: list[dict],
 ) -> None:
-    records = run_sim(tmp_path)
     mix_on = first(records, on("Ruehrwerk"))
     mix_off = first(records, lambda r: r["t_ms"] > mix_on and not r["values"]["Ruehrwerk"])
     assert 20000 <= mix_off - mix_on <= 20050  # S6.U >= mix_time

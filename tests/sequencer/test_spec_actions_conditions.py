@@ -1,0 +1,412 @@
+"""SPEC §2.8 (actions) and §2.9 (conditions): the rules not pinned elsewhere.
+
+Driven through the real cycle (``GraphRuntime``) by the scenario harness, 10 ms per call;
+the CALL rules through a CPU (OB1 calls the GraphFB, which calls an FC).
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from engine.blocks import fc
+from engine.clock import VirtualClock
+from engine.cpu import Cpu
+from sequencer.compile import compile_chart
+from sequencer.fb import GraphFB, install_all
+from sequencer.parse import parse_chart
+from sequencer.validate import validate
+from tests.sequencer.spec_charts.common import chart, enter, leave, seq, source, two_steps
+
+# ---------------------------------------------------------------- §2.8 qualifiers
+
+
+def test_plain_s_row_re_issues_the_set_every_cycle_while_s1_s_sets_once() -> None:
+    """SPEC §2.2 4e / §2.8: a plain S row runs every cycle while the step is active; an
+    S1 S row only in the activation call."""
+    run = two_steps("S M0.0; S1 S M0.1;")
+    enter(run)
+    assert run.get("M0.0") is True and run.get("M0.1") is True
+    run.set(M0_0=False, M0_1=False).call()
+    assert run.get("M0.0") is True and run.get("M0.1") is False
+
+
+def test_n_operand_is_zero_after_the_step_is_left_but_s_stays_set() -> None:
+    """SPEC §2.8: N is 0 after the step is left; S / R latch."""
+    run = two_steps("N Q0.0; S Q0.1;")
+    enter(run)
+    leave(run)
+    run.call(3)
+    assert run.get("Q0.0") is False and run.get("Q0.1") is True
+
+
+def test_d_operand_is_never_set_when_the_step_is_left_before_its_time() -> None:
+    """SPEC §2.8 D: never set if left earlier — also not after a re-entry that is again
+    shorter than the time (the delay restarts at each activation)."""
+    run = two_steps("D Q0.0, T#50MS;")
+    enter(run)
+    run.call(2)
+    leave(run)
+    run.set(I0_2=True).call()
+    run.set(I0_2=False, I0_0=True).call()
+    run.set(I0_0=False).call(2)
+    assert run.active == [2] and run.get("Q0.0") is False
+    run.call(3)
+    assert run.get("Q0.0") is True
+
+
+def test_d_time_may_be_a_time_variable() -> None:
+    """SPEC §2.8: D takes a bit and a TIME (here an FB variable)."""
+    run = two_steps("D Q0.0, dwell;", header="VAR dwell : TIME := T#40MS; END_VAR")
+    enter(run)
+    run.call(2)
+    assert run.get("Q0.0") is False
+    run.call(3)
+    assert run.get("Q0.0") is True
+
+
+def test_l_operand_is_one_from_activation_and_zero_after_its_time_while_active() -> None:
+    """SPEC §2.8 L: 1 from activation for the time, then 0 (the step stays active)."""
+    run = two_steps("L Q0.0, T#50MS;")
+    enter(run)
+    assert run.get("Q0.0") is True
+    run.call(3)
+    assert run.get("Q0.0") is True
+    run.call(5)
+    assert run.active == [2] and run.get("Q0.0") is False
+
+
+def test_halt_tm_keeps_a_d_operand_from_being_set() -> None:
+    """SPEC §2.6 HALT_TM: D timing frozen — D does not come while the time is halted."""
+    run = two_steps("D Q0.0, T#50MS;")
+    enter(run)
+    run.set(HALT_TM=True).call(20)
+    assert run.get("Q0.0") is False and run.out("TM_HALTED") is True
+    run.set(HALT_TM=False).call(6)
+    assert run.get("Q0.0") is True
+
+
+def test_zero_op_forces_d_and_l_operands_to_zero_and_they_return_after() -> None:
+    """SPEC §2.6 ZERO_OP: N, D, L operands forced to 0 while set; S rows still run."""
+    run = two_steps("N Q0.0; D Q0.1, T#20MS; L Q0.2, T#1S; S Q0.3;")
+    enter(run)
+    run.call(3)
+    assert [run.get(f"Q0.{k}") for k in range(4)] == [True, True, True, True]
+    run.set(Q0_3=False, ZERO_OP=True).call()
+    assert [run.get(f"Q0.{k}") for k in range(3)] == [False, False, False]
+    assert run.get("Q0.3") is True
+    run.set(ZERO_OP=False).call()
+    assert [run.get(f"Q0.{k}") for k in range(3)] == [True, True, True]
+
+
+def test_time_assignment_every_cycle() -> None:
+    """SPEC §2.8: `N A := expr` with TIME runs every cycle while the step is active."""
+    run = two_steps("N t := t + T#10MS;", header="VAR t : TIME := T#0MS; END_VAR")
+    enter(run)
+    run.call(4)
+    assert run.st.vars["t"] == 50
+
+
+def test_dint_and_real_assignments() -> None:
+    """SPEC §2.8: assignments of DINT and REAL values."""
+    run = two_steps(
+        "S1 N d := d * 1000; S1 N r := r / 4.0;",
+        header="VAR d : DINT := L#70000; r : REAL := 1.0; END_VAR",
+    )
+    enter(run)
+    assert run.st.vars["d"] == 70_000_000 and run.st.vars["r"] == pytest.approx(0.25)
+    assert not run.st.ov
+
+
+def test_int_overflow_in_an_assignment_leaves_the_sequencer_running() -> None:
+    """SPEC §2.8: INT overflow sets the overflow status; the chart keeps switching."""
+    run = two_steps("N x := x + 20000;", header="VAR x : INT := 20000; END_VAR")
+    enter(run)
+    assert run.st.ov
+    leave(run)
+    assert run.active == [3]
+
+
+def _cpu_with_fc(rows: str) -> tuple[Cpu, VirtualClock, GraphFB]:
+    text = source(
+        seq(f"""
+      INITIAL_STEP S1 "a": END_STEP
+      STEP S2 "b": {rows} END_STEP
+      TRANSITION T1 FROM S1 TO S2 := I0.0;
+      TRANSITION T2 FROM S2 TO S1 := I0.1;
+    """)
+    )
+
+    @fc(1, "Count")
+    def count(ctx, params) -> None:
+        ctx.mem.set("MW20", ctx.mem.get("MW20") + 1)
+
+    clock = VirtualClock()
+    cpu = Cpu(clock)
+    g = GraphFB(compile_chart(parse_chart(text, "call.s7g")))
+    cpu.load(count)
+    install_all(cpu, [g])
+    cpu.start("warm")
+    return cpu, clock, g
+
+
+def _scan(cpu: Cpu, clock: VirtualClock, n: int = 1, **inputs: bool) -> None:
+    for name, value in inputs.items():
+        cpu.mem.set(name.replace("_", "."), value)
+    for _ in range(n):
+        clock.advance(10)
+        cpu.scan()
+
+
+def test_call_row_calls_the_block_every_cycle_while_the_step_is_active() -> None:
+    """SPEC §2.8 CALL: called every cycle (and not once the step is left)."""
+    cpu, clock, _ = _cpu_with_fc("CALL FC 1;")
+    _scan(cpu, clock, 2)
+    assert cpu.mem.get("MW20") == 0
+    cpu.mem.periph_in[0] = 1
+    _scan(cpu, clock, 1)
+    cpu.mem.periph_in[0] = 0
+    _scan(cpu, clock, 4)
+    assert cpu.mem.get("MW20") == 5
+    cpu.mem.periph_in[0] = 2
+    _scan(cpu, clock, 1)
+    cpu.mem.periph_in[0] = 0
+    _scan(cpu, clock, 3)
+    assert cpu.mem.get("MW20") == 5
+
+
+def test_s1_call_row_calls_the_block_once_per_activation() -> None:
+    """SPEC §2.8: an event row (S1 CALL) runs once, in the call of its event."""
+    cpu, clock, _ = _cpu_with_fc("S1 CALL FC 1;")
+    cpu.mem.periph_in[0] = 1
+    _scan(cpu, clock, 1)
+    cpu.mem.periph_in[0] = 0
+    _scan(cpu, clock, 5)
+    assert cpu.mem.get("MW20") == 1
+
+
+# ---------------------------------------------------------------- §2.8 ON / OFF
+
+
+def test_on_and_off_reach_steps_of_another_sequencer() -> None:
+    """SPEC §2.8: `ON Sx` / `OFF Sx` (de)activate another step — of any sequencer."""
+    run = chart(
+        seq("""
+      INITIAL_STEP S1 "a": END_STEP
+      STEP S2 "b": S1 ON S12; S1 OFF S11; END_STEP
+      TRANSITION T1 FROM S1 TO S2 := I0.0;
+      TRANSITION T2 FROM S2 TO S1 := FALSE;
+    """)
+        + seq(
+            """
+      INITIAL_STEP S11 "x": END_STEP
+      STEP S12 "y": N Q2.0; END_STEP
+      TRANSITION T11 FROM S11 TO S12 := FALSE;
+      TRANSITION T12 FROM S12 TO S11 := FALSE;
+    """,
+            2,
+        )
+    )
+    run.call()
+    assert run.active == [1, 11]
+    run.set(I0_0=True).call()
+    run.set(I0_0=False).call()
+    assert run.active == [2, 12]
+    assert run.get("Q2.0") is True
+
+
+def test_off_s_all_clears_every_sequencer_but_keeps_the_step_holding_it() -> None:
+    """SPEC §2.8: `OFF S_ALL` deactivates every step except the one holding the action
+    (here V1 OFF S_ALL, steps of two sequencers)."""
+    run = chart(
+        seq("""
+      INITIAL_STEP S1 "a": END_STEP
+      STEP S2 "b": SUPERVISION := I0.6; V1 OFF S_ALL; END_STEP
+      INITIAL_STEP S3 "c": END_STEP
+      TRANSITION T1 FROM S1 TO S2 := I0.0;
+      TRANSITION T2 FROM S2 TO S1 := FALSE;
+      TRANSITION T3 FROM S3 TO S1 := FALSE;
+    """)
+        + seq('INITIAL_STEP S11 "x": END_STEP\nTRANSITION T11 FROM S11 TO STOP := FALSE;', 2)
+    )
+    run.call()
+    run.set(I0_0=True).call()
+    assert run.active == [2, 3, 11]
+    run.set(I0_6=True).call(2)
+    assert run.active == [2]
+
+
+# ---------------------------------------------------------------- §2.8 allowed rows
+
+ALLOWED = [
+    "S1 NC Q0.0;", "V1 SC Q0.0;", "A1 RC Q0.0;", "R1 ONC S1;", "S1 OFFC S1;",
+    "S1 OFF S_ALL;", "V1 OFF S_ALL;", "L1 OFF S_ALL;",
+    "S0 N Q0.0;", "V0 S Q0.0;", "L0 R Q0.0;", "L1 ON S1;", "S0 OFF S1;",
+    "S0 CS C 1, C#5;", "L0 CU C 1;", "V0 CD C 1;", "A1 CR C 1;",
+    "R1 TL T 1, S5T#1S;", "S0 TD T 1, S5T#1S;", "L1 TF T 1, S5T#1S;", "V1 TR T 1;",
+    "L0 N x := x + 1;",
+]  # fmt: skip
+
+REFUSED = [
+    ("S0 NC Q0.0;", "E020"), ("V0 SC Q0.0;", "E020"), ("L0 RC Q0.0;", "E020"),
+    ("L1 ONC S1;", "E020"), ("S1 D Q0.0, T#1S;", "E020"), ("V1 L Q0.0, T#1S;", "E020"),
+    ("A1 OFF S_ALL;", "E025"), ("R1 OFF S_ALL;", "E025"), ("L0 OFF S_ALL;", "E025"),
+    ("V0 OFF S_ALL;", "E025"),
+]  # fmt: skip
+
+
+def _row_chart(row: str) -> str:
+    return source(
+        seq(f"""
+      INITIAL_STEP S1 "a": N Q1.0; END_STEP
+      STEP S2 "b": INTERLOCK := I0.5; SUPERVISION := I0.6;
+        N Q1.1;
+        {row}
+      END_STEP
+      TRANSITION T1 FROM S1 TO S2 := I0.0;
+      TRANSITION T2 FROM S2 TO S1 := I0.1;
+    """),
+        header="VAR x : INT := 0; END_VAR",
+    )
+
+
+@pytest.mark.parametrize("row", ALLOWED)
+def test_rows_of_the_allowed_table_compile(row: str) -> None:
+    """SPEC §2.8 table of allowed event / qualifier / C combinations."""
+    errors = [d for d in validate(parse_chart(_row_chart(row), "r.s7g")) if d.is_error]
+    assert errors == []
+
+
+@pytest.mark.parametrize(("row", "code"), REFUSED)
+def test_rows_outside_the_table_are_compile_errors_naming_step_and_row(row, code) -> None:
+    """SPEC §2.8: any other combination is a compile error naming the step and row."""
+    errors = [d for d in validate(parse_chart(_row_chart(row), "r.s7g")) if d.is_error]
+    assert [d.code for d in errors] == [code]
+    assert errors[0].element == "step S2 row 2"
+
+
+# ---------------------------------------------------------------- §2.9 conditions
+
+
+def test_xor_in_a_transition() -> None:
+    """SPEC §2.9: XOR of contacts."""
+    body = seq("""
+      INITIAL_STEP S1 "a": END_STEP
+      STEP S2 "b": END_STEP
+      TRANSITION T1 FROM S1 TO S2 := I0.0 XOR I0.1;
+    """)
+    for a, b, switched in ((True, True, False), (False, False, False), (True, False, True),
+                           (False, True, True)):  # fmt: skip
+        run = chart(body)
+        run.set(I0_0=a, I0_1=b).call(2)
+        assert (run.active == [2]) is switched, (a, b)
+
+
+def test_time_comparison_with_a_step_time_and_a_time_variable() -> None:
+    """SPEC §2.9: comparisons of TIME (`S2.T >= dwell`)."""
+    run = chart(
+        seq("""
+      INITIAL_STEP S1 "a": END_STEP
+      STEP S2 "b": END_STEP
+      STEP S3 "c": END_STEP
+      TRANSITION T1 FROM S1 TO S2 := TRUE;
+      TRANSITION T2 FROM S2 TO S3 := S2.T >= dwell AND dwell <> T#0MS;
+    """),
+        header="VAR dwell : TIME := T#50MS; END_VAR",
+    )
+    run.call()  # t = 0: S1 on, T1 switches at once: S2 active from t = 0
+    assert run.active == [2]
+    run.call(4)  # t = 10 .. 40: S2.T < 50
+    assert run.active == [2]
+    run.call()  # t = 50
+    assert run.active == [3]
+
+
+def test_comparisons_of_int_dint_and_real() -> None:
+    """SPEC §2.9: comparisons (= <> < > <= >=) of same-typed INT, DINT, REAL."""
+    run = chart(
+        seq("""
+      INITIAL_STEP S1 "a": END_STEP
+      STEP S2 "b": END_STEP
+      TRANSITION T1 FROM S1 TO S2 := i <= 3 AND d > L#70000 AND r < 1.5 AND i <> 2;
+    """),
+        header="VAR i : INT := 3; d : DINT := L#70001; r : REAL := 1.25; END_VAR",
+    )
+    run.call(2)
+    assert run.active == [2]
+    run2 = chart(
+        seq("""
+      INITIAL_STEP S1 "a": END_STEP
+      STEP S2 "b": END_STEP
+      TRANSITION T1 FROM S1 TO S2 := r >= 1.5;
+    """),
+        header="VAR r : REAL := 1.25; END_VAR",
+    )
+    run2.call(3)
+    assert run2.active == [1]
+
+
+def test_tt_says_that_the_transition_condition_holds() -> None:
+    """SPEC §2.9: `T2.TT` (condition holds) — read here while TAP holds the switch back."""
+    run = chart(
+        seq("""
+      INITIAL_STEP S1 "a": END_STEP
+      STEP S2 "b": END_STEP
+      TRANSITION T1 FROM S1 TO S2 := I0.0;
+    """),
+        header="PERMANENT AFTER\n  M0.0 := T1.TT;\nEND_PERMANENT\n",
+    )
+    run.set(SW_TAP=True).call()
+    run.call()
+    assert run.get("M0.0") is False
+    run.set(I0_0=True).call()
+    assert run.get("M0.0") is True and run.active == [1]
+    run.set(I0_0=False).call()
+    assert run.get("M0.0") is False
+
+
+def test_permanent_s_and_r_coils_latch() -> None:
+    """SPEC §2.9: permanent instructions write with coils `:=`, `S`, `R`."""
+    run = chart(
+        seq('INITIAL_STEP S1 "a": END_STEP\nTRANSITION T1 FROM S1 TO STOP := FALSE;'),
+        header="PERMANENT BEFORE\n  S M0.2 := I0.3;\n  R M0.2 := I0.4;\n"
+        "  M0.1 := I0.3;\nEND_PERMANENT\n",
+    )
+    run.set(I0_3=True).call()
+    assert run.get("M0.2") is True and run.get("M0.1") is True
+    run.set(I0_3=False).call(2)
+    assert run.get("M0.2") is True and run.get("M0.1") is False
+    run.set(I0_4=True).call()
+    run.set(I0_4=False).call()
+    assert run.get("M0.2") is False
+
+
+def test_empty_transition_condition_holds_and_warns() -> None:
+    """SPEC §2.9: an empty transition condition holds (compile warning)."""
+    body = seq("""
+      INITIAL_STEP S1 "a": END_STEP
+      STEP S2 "b": N Q0.0; END_STEP
+      TRANSITION T1 FROM S1 TO S2;
+    """)
+    assert "W120" in [d.code for d in validate(parse_chart(source(body), "e.s7g"))]
+    run = chart(body)
+    run.call(2)
+    assert run.active == [2] and run.get("Q0.0") is True
+
+
+def test_an_action_row_may_not_write_with_a_coil() -> None:
+    """SPEC §2.9: only permanent instructions may write with coils (E035 in a step)."""
+    codes = [d.code for d in validate(parse_chart(_row_chart("N M0.0 := I0.1;"), "c.s7g"))]
+    assert "E035" in codes
+
+
+def test_a_permanent_coil_may_not_write_a_step_attribute() -> None:
+    """SPEC §2.9: `S3.X` is a read-only operand (E045)."""
+    text = source(
+        seq('''
+      INITIAL_STEP S1 "a": END_STEP
+      TRANSITION T1 FROM S1 TO STOP := FALSE;
+    '''),
+        header="PERMANENT BEFORE\n  M0.0 := S1.X;\n  AUTO_ON := I0.0;\nEND_PERMANENT\n",
+    )
+    codes = [d.code for d in validate(parse_chart(text, "c.s7g"))]
+    assert codes == ["E045"]

@@ -1,0 +1,231 @@
+"""web/live.py: a real compiled chart on the virtual clock, seen live and commanded."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
+
+import pytest
+
+from engine.clock import VirtualClock
+from engine.persistence import StateStore
+from web.cmd_sim import ChartSession, load_chart
+from web.live import LiveGraph, watch_names
+from web.protocol import Command, StepStateUpdate
+
+# A MINIMUM parameter set has no ACK_EF, SW_MAN, S_ON ... pins: the Control Sequencer's
+# commands act all the same.
+CHART = """\
+FUNCTION_BLOCK "Live" FB 1 DB 1
+  PARAMETERS := MINIMUM;
+  ACK_REQUIRED := TRUE;
+SYMBOLS
+  "Start" : I0.0 : BOOL;
+  "Full" : I0.1 : BOOL;
+  "Door" : I0.2 : BOOL;
+  "Pump" : Q0.0 : BOOL;
+END_SYMBOLS
+SEQUENCE 1 "Main"
+  INITIAL_STEP S1 "Idle":
+  END_STEP
+  STEP S2 "Fill":
+    INTERLOCK := "Door";
+    SUPERVISION := S2.U > T#1S;
+    N C "Pump";
+  END_STEP
+  STEP S3 "Done":
+  END_STEP
+  TRANSITION T1 "Go" FROM S1 TO S2 := "Start";
+  TRANSITION T2 "Full" FROM S2 TO S3 := "Full";
+  TRANSITION T3 "Back" FROM S3 TO S1 := NOT "Start";
+END_SEQUENCE
+END_FUNCTION_BLOCK
+"""
+
+
+@dataclass
+class Rig:
+    session: ChartSession
+    clock: VirtualClock
+    live: LiveGraph
+    store: StateStore
+
+    def scan(self, ms: float = 10.0) -> StepStateUpdate:
+        self.clock.advance(ms)
+        return self.live.update(self.session.scan())
+
+    def scans(self, n: int, ms: float = 10.0) -> list[StepStateUpdate]:
+        return [self.scan(ms) for _ in range(n)]
+
+    def cmd(self, op: str, user: str = "alice", **args: Any) -> tuple[bool, str]:
+        return self.live.apply(Command(op=op, fb="Live", user=user, args=args))  # type: ignore[arg-type]
+
+
+@pytest.fixture
+def rig(tmp_path: Path) -> Iterator[Rig]:
+    path = tmp_path / "live.s7g"
+    path.write_text(CHART, encoding="utf-8")
+    cc, table = load_chart(path)
+    clock = VirtualClock()
+    session = ChartSession(cc, table, clock)
+    store = StateStore(tmp_path / "state.sqlite")
+    live = LiveGraph(
+        session.graph,
+        read=session.get,
+        watch=[*watch_names(table), "no_such_operand"],
+        store=store,
+        wall_ns=lambda: 1_700_000_000_000_000_000,
+    )
+    session.start()
+    r = Rig(session, clock, live, store)
+    r.scan()
+    try:
+        yield r
+    finally:
+        store.close()
+
+
+def events(updates: list[StepStateUpdate]) -> list[tuple[str, int]]:
+    return [e for u in updates for e in u.events]
+
+
+def test_first_scan_shows_the_initial_step_active_in_auto(rig: Rig) -> None:
+    update = rig.scan()
+    assert (update.active, update.mode, update.disturbed, update.latched) == ([1], "AUTO", [], [])
+
+
+def test_supervision_fault_is_disturbed_and_latched_until_acknowledged(rig: Rig) -> None:
+    rig.session.set("Start", True)
+    rig.session.set("Door", True)
+    seen = rig.scans(3)
+    assert ("S1", 2) in events(seen) and seen[-1].active == [2]
+    seen = rig.scans(110)  # S2.U passes 1 s
+    assert ("V1", 2) in events(seen)
+    assert (seen[-1].disturbed, seen[-1].latched) == ([2], [2])
+    rig.session.set("Full", True)
+    assert rig.scans(5)[-1].active == [2]  # the fault holds the transition
+
+    assert rig.cmd("ack", user="alice") == (True, "")
+    after = rig.scan()
+    assert ("A1", 2) in after.events
+    assert (after.active, after.disturbed, after.latched) == ([3], [], [])
+    (entry,) = rig.store.audit()
+    assert (entry["user"], entry["action"], entry["t_ns"]) == (
+        "alice",
+        "ack",
+        1_700_000_000_000_000_000,
+    )
+    assert "S2" in entry["detail"]
+
+
+def test_interlock_error_is_disturbed_but_not_latched(rig: Rig) -> None:
+    rig.session.set("Start", True)
+    update = rig.scans(3)[-1]  # "Door" open: S2's interlock does not hold
+    assert (update.active, update.disturbed, update.latched) == ([2], [2], [])
+    assert update.values["Pump"] is False
+
+
+def test_ack_without_a_fault_is_refused_and_not_audited(rig: Rig) -> None:
+    applied, reason = rig.cmd("ack")
+    assert not applied and "no supervision fault" in reason
+    assert rig.store.audit() == []
+
+
+def test_step_on_and_off_need_man_mode_and_a_known_step(rig: Rig) -> None:
+    applied, reason = rig.cmd("step_on", step=3)
+    assert not applied
+    assert reason == "step_on needs mode MAN (S7-GRAPH Control Sequencer)"
+    assert rig.cmd("mode", mode="MAN") == (True, "")
+    assert rig.scan().mode == "MAN"
+    assert rig.cmd("step_on", step=3) == (True, "")
+    update = rig.scan()
+    assert update.active == [1, 3] and ("S1", 3) in update.events
+    assert rig.cmd("step_on", step=3) == (False, "S3 is already active")
+    assert rig.cmd("step_on", step=9) == (False, "no step S9 in Live")
+    assert rig.cmd("step_off", step=1) == (True, "")
+    assert rig.scan().active == [3]
+    assert rig.cmd("step_off", step=1) == (False, "S1 is not active")
+    assert [e["action"] for e in rig.store.audit()] == ["mode", "step_on", "step_off"]
+
+
+def test_mode_then_step_on_at_one_boundary_act_in_order(rig: Rig) -> None:
+    assert rig.cmd("mode", mode="MAN") == (True, "")
+    assert rig.cmd("step_on", step=2) == (True, "")
+    update = rig.scan()
+    assert (update.mode, update.active) == ("MAN", [1, 2])
+
+
+def test_man_mode_holds_the_sequence_and_auto_releases_it(rig: Rig) -> None:
+    rig.cmd("mode", mode="MAN")
+    rig.session.set("Start", True)
+    assert rig.scans(3)[-1].active == [1]  # no switching in MAN
+    rig.cmd("mode", mode="AUTO")
+    assert rig.scans(2)[-1].active == [2]
+
+
+def test_t_push_needs_tap_or_top_and_switches_in_tap(rig: Rig) -> None:
+    applied, reason = rig.cmd("t_push")
+    assert not applied and "TAP or TOP" in reason
+    rig.cmd("mode", mode="TAP")
+    rig.session.set("Start", True)
+    assert rig.scans(3)[-1].active == [1]  # TAP: condition AND push
+    assert rig.cmd("t_push") == (True, "")
+    assert rig.scan().active == [2]
+
+
+def test_off_deactivates_every_step_and_init_restores_the_initial_step(rig: Rig) -> None:
+    assert rig.cmd("off") == (True, "")
+    update = rig.scan()
+    assert update.active == [] and ("S0", 1) in update.events
+    assert rig.scans(3)[-1].active == []  # OFF acts for one call; the sequencer stays off
+    assert rig.cmd("init") == (True, "")
+    assert rig.scan().active == [1]
+
+
+def test_values_hold_the_fb_outputs_and_the_watched_operands(rig: Rig) -> None:
+    values = rig.scan().values
+    assert {"Start", "Full", "Door", "Pump"} <= set(values)
+    assert "no_such_operand" not in values  # an unreadable watch is left out, not raised
+    assert set(rig.session.graph.out_pins) <= set(values)
+
+
+def test_commands_are_refused_while_the_cpu_is_not_in_run(rig: Rig) -> None:
+    rig.session.cpu.stop("test")
+    rig.scan()
+    applied, reason = rig.cmd("init")
+    assert not applied and "STOP" in reason
+
+
+@pytest.mark.parametrize(
+    "hostile",
+    [
+        None,
+        object(),
+        SimpleNamespace(op="step_on", step="S3", mode=None, user="x", args={}),
+        SimpleNamespace(op="step_on", step=True, mode=None, user="x", args={}),
+        SimpleNamespace(op="mode", step=None, mode="FAST", user="x", args={}),
+        SimpleNamespace(op="ack", step=None, mode=None, user=None, args={}),
+        SimpleNamespace(op="reboot", step=None, mode=None, user="x", args={}),
+    ],
+)
+def test_hostile_command_is_refused_and_the_scan_loop_goes_on(rig: Rig, hostile: object) -> None:
+    rig.cmd("mode", mode="MAN")
+    rig.scan()
+    applied, reason = rig.live.apply(hostile)  # type: ignore[arg-type]
+    assert applied is False and reason
+    update = rig.scan()
+    assert update.active == [1]
+
+
+def test_a_failing_fb_hook_refuses_the_command_instead_of_raising(
+    rig: Rig, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    def boom(*args: object, **kwargs: object) -> None:
+        raise RuntimeError("hook broke")
+
+    monkeypatch.setattr(rig.session.graph, "command", boom)
+    assert rig.cmd("init") == (False, "command refused: RuntimeError: hook broke")
+    assert rig.scan().active == [1]

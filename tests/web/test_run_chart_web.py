@@ -1,0 +1,216 @@
+"""``s7graph run CHART --web``: the live view of the real running sequence.
+
+In process: :class:`LiveEdge` on a compiled chart and the virtual clock, commanded over the
+real zenoh bus. End to end: the drill example as a real subprocess on the system clock,
+its page in one headless Chromium, a supervision fault acknowledged by a click.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import queue
+import re
+import signal
+import socket
+import sqlite3
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import pytest
+
+from engine.clock import VirtualClock
+from web.bus import BusClient, open_session
+from web.cmd_sim import ChartSession, load_chart
+from web.live import LiveGraph
+from web.live_edge import LiveEdge
+from web.protocol import Command
+
+ROOT = Path(__file__).resolve().parents[2]
+DRILL = ROOT / "examples" / "drill"
+CHROMIUM = "/usr/bin/chromium"
+ARGS = [
+    "--no-sandbox",
+    "--headless",
+    "--enable-unsafe-swiftshader",
+    "--use-angle=swiftshader",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--no-first-run",
+]
+FB = "Seq_drill"
+
+
+def wait_until(predicate: Callable[[], object], timeout: float = 10.0) -> bool:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        if predicate():
+            return True
+        time.sleep(0.05)
+    return bool(predicate())
+
+
+@pytest.fixture
+def running_edge() -> Iterator[tuple[LiveEdge, ChartSession]]:
+    """The drill chart on the virtual clock, scanned in a thread, served on a free port."""
+    cc, table = load_chart(DRILL / "drill.s7g", DRILL / "symbols.txt")
+    session = ChartSession(cc, table, VirtualClock())
+    live = LiveGraph(session.graph, read=session.get, watch=["Start_button"])
+    stop = threading.Event()
+    with LiveEdge(live, port=0) as edge:
+        session.start()
+
+        def scan_loop() -> None:
+            clock = session.clock
+            assert isinstance(clock, VirtualClock)
+            while not stop.is_set():
+                clock.advance(10)
+                edge.on_record(session.scan(), stats=session.cpu.stats)
+                time.sleep(0.005)
+
+        thread = threading.Thread(target=scan_loop, daemon=True)
+        thread.start()
+        try:
+            yield edge, session
+        finally:
+            stop.set()
+            thread.join(timeout=5)
+
+
+@pytest.mark.timeout(60)
+def test_live_edge_publishes_each_scan_and_applies_bus_commands_between_scans(
+    running_edge: tuple[LiveEdge, ChartSession],
+) -> None:
+    edge, _ = running_edge
+    assert edge.edge is not None
+    client = edge.edge.client
+    follower = edge.edge.follower
+    assert wait_until(lambda: follower.latest is not None and follower.latest.active == [1])
+    latest = follower.latest
+    assert latest is not None and "S_NO" in latest.values and "Start_button" in latest.values
+
+    refused = client.send(Command(op="step_on", fb=FB, args={"step": 2}))
+    assert not refused.applied
+    assert refused.reason == "step_on needs mode MAN (S7-GRAPH Control Sequencer)"
+    assert client.send(Command(op="mode", fb=FB, args={"mode": "MAN"})).applied
+    assert client.send(Command(op="step_on", fb=FB, args={"step": 2})).applied
+    assert wait_until(lambda: follower.latest is not None and follower.latest.active == [1, 2])
+    unknown = client.send(Command(op="step_off", fb=FB, args={"step": 42}))
+    assert (unknown.applied, unknown.reason) == (False, f"no step S42 in {FB}")
+    # S2's supervision (S2.U > 500 ms) trips: disturbed and latched until acknowledged
+    assert wait_until(lambda: follower.latest is not None and follower.latest.latched == [2])
+    ack = client.send(Command(op="ack", fb=FB, user="bob"))
+    assert ack.applied and ack.cycle is not None
+
+    status = client.status()
+    assert status is not None and status.state == "RUN" and status.stats is not None
+    assert status.stats.max_ms >= status.stats.min_ms > 0
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def _green_pixels(png: bytes) -> int:
+    """Pixels of the ACTIVE step colour family (green clearly above red and blue)."""
+    import numpy as np
+    from PIL import Image
+
+    rgb = np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(np.int16)
+    r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
+    return int(np.count_nonzero((g > r + 50) & (g > b + 50)))
+
+
+@pytest.mark.timeout(150)
+@pytest.mark.skipif(not os.path.exists(CHROMIUM), reason=f"no browser at {CHROMIUM}")
+def test_run_drill_web_serves_the_live_sequence_and_takes_an_acknowledge_click(
+    tmp_path: Path,
+) -> None:
+    sync_api = pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
+    state = tmp_path / "drill.sqlite"
+    stderr = (tmp_path / "stderr.txt").open("w")
+    command = [sys.executable, "-m", "web.cli", "run", str(DRILL / "drill.s7g")]
+    command += ["--plant", str(DRILL / "plant.py"), "--symbols", str(DRILL / "symbols.txt")]
+    command += ["--web", "--port", str(_free_port()), "--duration-s", "30", "--state", str(state)]
+    proc = subprocess.Popen(
+        command,
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=stderr,
+        text=True,
+    )
+    lines: queue.Queue[str] = queue.Queue()
+    assert proc.stdout is not None
+    out = proc.stdout
+
+    def read_lines() -> None:
+        for line in out:
+            lines.put(line)
+
+    threading.Thread(target=read_lines, daemon=True).start()
+    session = None
+    try:
+        found = None
+        deadline = time.monotonic() + 30
+        while found is None and time.monotonic() < deadline:
+            try:
+                found = re.search(r"view (\S+) \(bus (\S+)\)", lines.get(timeout=1))
+            except queue.Empty:
+                assert proc.poll() is None, (tmp_path / "stderr.txt").read_text()
+        assert found is not None, "no view URL printed"
+        url, endpoint = found[1], found[2]
+        assert url.startswith("http://127.0.0.1:")
+
+        session = open_session(connect=[endpoint])
+        client = BusClient(session, "cpu1")
+        with sync_api.sync_playwright() as p:
+            browser = p.chromium.launch(executable_path=CHROMIUM, headless=True, args=ARGS)
+            try:
+                page = browser.new_page(viewport={"width": 1280, "height": 800})
+                page.goto(url)
+                page.get_by_role("button", name="Acknowledge", exact=True).wait_for(timeout=30_000)
+                # the initial step S1 is active: its box turns green in the WebGL scene
+                assert wait_until(lambda: _green_pixels(page.screenshot()) > 200, 40)
+                page.get_by_text("active: S1").first.wait_for(timeout=10_000)
+
+                # operator: MAN, activate S2; its supervision (500 ms) trips and latches
+                assert client.send(Command(op="mode", fb=FB, args={"mode": "MAN"})).applied
+                reply = client.send(Command(op="step_on", fb=FB, args={"step": 2}))
+                assert reply.applied, reply.reason
+
+                def latched() -> bool:
+                    st = client.state(FB)
+                    return st is not None and st.latched == [2]
+
+                assert wait_until(latched, 10)
+                page.get_by_text("error: S2").first.wait_for(timeout=10_000)
+                page.get_by_role("button", name="Acknowledge", exact=True).click()
+                page.get_by_text("ack applied").first.wait_for(timeout=15_000)
+            finally:
+                browser.close()
+        client.close()
+        session.close()
+        session = None
+
+        proc.send_signal(signal.SIGINT)
+        assert proc.wait(timeout=30) == 0, (tmp_path / "stderr.txt").read_text()
+    finally:
+        if session is not None:
+            session.close()
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+        stderr.close()
+    err = (tmp_path / "stderr.txt").read_text()
+    assert "Traceback" not in err, err
+    with sqlite3.connect(state) as db:
+        audit = db.execute("SELECT user, action, detail FROM audit ORDER BY id").fetchall()
+    assert [(u, a) for u, a, _ in audit] == [("?", "mode"), ("?", "step_on"), ("operator", "ack")]
+    assert "S2" in audit[-1][2]
