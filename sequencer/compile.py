@@ -6,19 +6,19 @@ them. Then every operand is resolved once (symbol → address, FB variable, FB p
 transition attribute), and all conditions and action rows are rendered into one Python
 module compiled with ``compile()``; nothing is interpreted per scan.
 
-Name resolution order (SPEC §2.9): ``"quoted"`` → symbol; otherwise FB static variable,
-FB pin, S7 address, then an unquoted symbol.
+Name resolution (SPEC §2.9) is ``sequencer.names.resolve_operand``, shared with the
+validator: ``"quoted"`` → symbol; otherwise FB static variable, FB pin, S7 address.
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-from engine.address import Area, Width, parse_address
-from engine.errors import AddressError, S7Error, SourceLocation
+from engine.address import Area, Width
+from engine.errors import S7Error, SourceLocation
 from sequencer.compiled import CompiledChart
 from sequencer.model import BlockCall, Chart, Coil, Operand, Transition
-from sequencer.params import is_pin
+from sequencer.names import resolve_operand
 from sequencer.params import pin as pin_info
 from steps.actions import gen_step_actions
 from steps.conditions import contact_text, contacts, gen_condition
@@ -36,7 +36,9 @@ class ChartError(S7Error):
 
 
 class _Problem:
-    def __init__(self, where: SourceLocation | None, message: str, severity: str = "error"):
+    def __init__(
+        self, where: SourceLocation | str | None, message: str, severity: str = "error"
+    ) -> None:
         self.where = where
         self.message = message
         self.severity = severity
@@ -65,7 +67,6 @@ class _Resolver:
         self.step_index = step_index
         self.tr_index = tr_index
         self.vars = {v.name.upper(): v for v in chart.vars}
-        self.local_symbols = {s.name.upper(): s for s in chart.symbols}
         self.problems: list[_Problem] = []
         self.cache: dict[tuple[str, bool], Ref] = {}
 
@@ -81,39 +82,18 @@ class _Resolver:
             self.cache[key] = ref
         return ref
 
-    def _symbol(self, name: str, loc: SourceLocation) -> Ref | None:
-        decl = self.local_symbols.get(name.upper())
-        if decl is not None:
-            return _addr_ref(parse_address(decl.address, decl.loc), decl.type.upper(), name)
-        if self.symbols is not None:
-            sym = self.symbols.lookup(name)
-            if sym is not None:
-                return _addr_ref(sym.address, str(sym.type).upper(), name)
-        return None
-
     def _resolve(self, op: Operand) -> Ref:
-        name = op.name
-        if op.quoted:
-            ref = self._symbol(name, op.loc)
-            if ref is None:
-                raise S7Error(f'unknown symbol "{name}"', op.loc)
-            return ref
-        var = self.vars.get(name.upper())
-        if var is not None:
-            return Ref("var", var.type.upper(), name=var.name)
-        if is_pin(name):
-            p = pin_info(name)
+        """The operand as the generated code addresses it; the lookup order is the one rule
+        of ``sequencer.names.resolve_operand`` (SPEC §1.1, §2.7)."""
+        r = resolve_operand(op, self.chart, self.symbols)
+        if r.kind == "var":
+            return Ref("var", r.type, name=self.vars[op.name.upper()].name)
+        if r.kind == "pin":
+            p = pin_info(op.name)
             assert p is not None
             return Ref("pin", p.type, name=p.name)
-        try:
-            return _addr_ref(parse_address(name, op.loc), None, name)
-        except AddressError as exc:
-            ref = self._symbol(name, op.loc)
-            if ref is not None:
-                return ref
-            raise S7Error(
-                f"unknown operand {name}: not a variable, pin, address or symbol", op.loc
-            ) from exc
+        assert r.address is not None
+        return _addr_ref(r.address, r.type if r.kind == "symbol" else None, op.name)
 
     def step(self, number: int, loc: Any = None) -> int:
         try:

@@ -20,7 +20,7 @@ Work is proportional to the active steps: only ``st.active`` is visited.
 from __future__ import annotations
 
 import operator
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from typing import Any
 
 from sequencer import display
@@ -79,7 +79,10 @@ class GraphRuntime:
         self.edge_names = tuple(n for n in self.input_names if n in EDGE_INPUTS)
         self.codesys = cc.options.order == "codesys"
         self.multi = len(cc.seq_numbers) > 1
-        self._acked: set[int] = set()
+        self._acked: set[int] = set()  # steps acknowledged in this call
+        self._remote: list[int] = []  # acknowledgements queued for the next call
+        self._commands: list[tuple[str, int | None]] = []  # operator commands, next call
+        self._target: int | None = None  # step of this call's S_ON/S_OFF command
         self._final: list[int] = []  # steps left, awaiting their final scan
         self._getter = operator.itemgetter(*self.input_names)
         self._last_in: Any = None  # the input pins of the previous call (fast path)
@@ -95,6 +98,8 @@ class GraphRuntime:
         self._final.clear()
         self._acked.clear()
         self._last_in = None
+        self._remote.clear()
+        self._commands.clear()
         self.display.dirty = True
 
     # ------------------------------------------------------------ callbacks of generated code
@@ -120,6 +125,32 @@ class GraphRuntime:
         for i in list(self.st.active):
             if i != keep:
                 self.off(i)
+
+    def acknowledge(self, step_indices: Iterable[int]) -> None:
+        """Queue acknowledgements of steps' supervision faults from outside the FB (a user
+        acknowledging the message, SPEC §2.10): the next call releases each step still
+        latched exactly as ACK_S does (events A1, V0; the step may switch in that call)."""
+        self._remote.extend(step_indices)
+
+    def command(self, pin: str, step: int | None = None) -> None:
+        """Queue an operator command (S7-GRAPH "Control Sequencer", SPEC §2.5/§2.6): ``pin``
+        acts in the next call as a one-call rising edge whatever the parameter set and the
+        pin's wiring (OFF_SQ: switched off for that call); S_ON/S_OFF act on step number
+        ``step`` instead of S_NO."""
+        self._commands.append((pin, step))
+
+    def _apply_commands(self) -> None:
+        st = self.st
+        for pin, step in self._commands:
+            if pin == "OFF_SQ":
+                st.off = True
+            else:
+                st.rose.add(pin)
+            if step is not None:
+                self._target = step
+        self._commands.clear()
+        self._last_in = None  # the next call latches the pins again (ends OFF_SQ)
+        self.display.dirty = True
 
     # ------------------------------------------------------------ state changes
 
@@ -199,6 +230,9 @@ class GraphRuntime:
             step_seq = cc.step_seq
             for i in st.active:
                 by_seq[step_seq[i]].append(i)
+        self._target = None
+        if self._commands:
+            self._apply_commands()
         carry = st.entered[:] if self.codesys else ()
         for i in st.ev_steps:
             st.ev[i] = 0
@@ -227,8 +261,13 @@ class GraphRuntime:
             self.initialize()
         if st.off and st.active:
             self._all_off()
+        if self._acked:
+            self._acked.clear()
         if rose:
             self._requests(rose)
+        if self._remote:
+            self._release([i for i in self._remote if st.x[i] and st.sv_err[i]])
+            self._remote.clear()
         st.calls += 1
 
         # 3. permanent before
@@ -284,7 +323,7 @@ class GraphRuntime:
         st = self.st
         st.mode = select_mode(st.mode, rose)
         if st.mode == "MAN" and ("S_ON" in rose or "S_OFF" in rose):
-            i = self.cc.step_index.get(st.s_no)
+            i = self.cc.step_index.get(st.s_no if self._target is None else self._target)
             if i is not None:
                 if "S_ON" in rose and not st.x[i]:
                     self._activate(i)
@@ -297,12 +336,7 @@ class GraphRuntime:
             i = self.cc.step_index.get(st.s_no, -1)
             if i >= 0 and st.sv_err[i]:
                 acks = [i]
-        self._acked.clear()
-        for i in acks:  # releases the step for this call's switching (SPEC §2.4); a cause
-            st.sv_err[i] = False  # that persists raises V1 again in step 4d
-            self._raise(i, EV_A1)
-            self._raise(i, EV_V0)
-            self._acked.add(i)
+        self._release(acks)
         if "REG_EF" in rose:
             for i in st.active:
                 if st.il_err[i] or st.sv_err[i]:
@@ -311,6 +345,16 @@ class GraphRuntime:
             i = self.cc.step_index.get(st.s_no, -1)
             if i >= 0 and st.x[i]:
                 self._raise(i, EV_R1)
+
+    def _release(self, acks: Iterable[int]) -> None:
+        """Acknowledge the supervision faults of ``acks``: releases each step for this call's
+        switching (SPEC §2.4); a cause that persists raises V1 again in step 4d."""
+        st = self.st
+        for i in acks:
+            st.sv_err[i] = False
+            self._raise(i, EV_A1)
+            self._raise(i, EV_V0)
+            self._acked.add(i)
 
     def _sequencer(
         self, k: int, steps: list[int], sw: tuple[Any, ...], rule: Callable[[bool, bool], bool]

@@ -18,9 +18,11 @@ from engine.blocks import FB, OB, Decl, InstanceDB, Var
 from engine.errors import BlockError
 from sequencer.compiled import CompiledChart, Program
 from sequencer.cycle import GraphRuntime, new_state
+from sequencer.messages import sync_messages
 from sequencer.params import Direction, pins_for
 from sequencer.state import EVENT_NAMES, GraphState
 from sfb import s5_counters, s5_timers
+from sfb.alarms import message_list
 
 STATE_VAR = "G7_STATE"
 _EVENT_OF_BIT = {1 << k: name for k, name in enumerate(EVENT_NAMES)}
@@ -62,6 +64,8 @@ class GraphFB:
         self._prog: Program | None = None
         self._mem: Any = None
         self._ctx: Any = None
+        self._messages = cc.options.messages
+        self._commands: list[tuple[str, int | None]] = []
 
     def _fresh_state(self) -> GraphState:
         return new_state(self.cc)
@@ -106,22 +110,49 @@ class GraphFB:
             rt.rebind(st)
         return rt
 
+    def command(self, pin: str, step: int | None = None) -> None:
+        """An operator command for the next call: ``pin`` (ACK_EF, INIT_SQ, OFF_SQ, S_ON,
+        S_OFF, T_PUSH, SW_*) as a one-call rising edge, whatever the parameter set; S_ON and
+        S_OFF on step number ``step`` (``GraphRuntime.command``)."""
+        self._commands.append((pin, step))
+
     # ------------------------------------------------------------ the FB body
 
     def _body(self, ctx: Any, idb: InstanceDB) -> None:
         self.idb = idb
         self._ctx = ctx
-        rt = self.runtime(ctx.mem)
         values = idb.values
+        rt = self._runtime
+        if rt is None or self._mem is not ctx.mem or rt.st is not values[STATE_VAR]:
+            rt = self.runtime(ctx.mem)
+        if self._commands:
+            for pin, step in self._commands:
+                rt.command(pin, step)
+            self._commands.clear()
         st = rt.execute(values, ctx.now_ns)
         out = st.outputs
         for name in self.out_pins:
             values[name] = out[name]
+        if self._messages:
+            self._sync_messages(ctx, idb, rt, st)
         if st.log:
             step_numbers = self.cc.step_numbers
             for i, bit in st.log:
                 ctx.emit(StepEvent(self.cc.name, idb.number, step_numbers[i],
                                    _EVENT_OF_BIT[bit], ctx.cycle))  # fmt: skip
+
+    def _sync_messages(self, ctx: Any, idb: InstanceDB, rt: GraphRuntime, st: GraphState) -> None:
+        """MESSAGES := TRUE (SPEC §2.10): bring the CPU's message list in line with this
+        call's faults, queue the steps a user acknowledged there for the next call, and
+        forward the list's new events into the scan record."""
+        messages = message_list(ctx.cpu)
+        acks = sync_messages(self.cc, st, messages, self.cc.name, idb.number, ctx.now_ns)
+        if acks:
+            rt.acknowledge(acks)
+        alarm = getattr(ctx, "alarm", None)
+        if alarm is not None:
+            for event in messages.pop_events():
+                alarm(event)
 
     # ------------------------------------------------------------ callbacks of action rows
 

@@ -261,11 +261,11 @@ def _num_to_bcd(st: Any, v: int, t: str) -> int:
 
 def _round(st: Any, v: float, t: str) -> int:
     r = math.floor(v + 0.5) if v >= 0 else -math.floor(-v + 0.5)
-    return _ck(st, int(r), "DINT")
+    return int(_ck(st, int(r), "DINT"))
 
 
 def _trunc(st: Any, v: float, t: str) -> int:
-    return _ck(st, int(v), "DINT")
+    return int(_ck(st, int(v), "DINT"))
 
 
 def _negr(st: Any, v: float, t: str) -> float:

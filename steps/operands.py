@@ -149,7 +149,7 @@ _F = struct.Struct(">f")
 
 
 def _unpack_f(buf: bytearray, n: int) -> tuple[float]:
-    return _F.unpack_from(buf, n)  # type: ignore[return-value]
+    return _F.unpack_from(buf, n)
 
 
 def _pack_f(buf: bytearray, n: int, v: float) -> None:

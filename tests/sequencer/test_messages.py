@@ -3,11 +3,15 @@
 
 from __future__ import annotations
 
-import pytest
-
+from engine.clock import VirtualClock
+from engine.cpu import Cpu
+from engine.record import ScanRecord
+from sequencer.compile import compile_chart
+from sequencer.fb import GraphFB, install_all
 from sequencer.messages import PROGRAM_USER, message_id, remote_acks, sync_messages
+from sequencer.parse import parse_chart
 from sequencer.state import GraphState
-from sfb.alarms import MessageList, MessageState
+from sfb.alarms import MessageList, MessageState, message_list
 from tests.sequencer.scenarios.harness import Run, chart_text
 
 SV1 = message_id("Msg_plant", 1, 1, "SV")
@@ -91,11 +95,6 @@ def test_message_acknowledged_by_a_user_in_the_list_is_reported_for_the_step() -
     assert run.messages.log()[-1].user == "alice"
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="the cycle has no entry for remote acknowledgements yet "
-    "(GraphRuntime.acknowledge(step_indices), see messages.remote_acks)",
-)
 def test_remote_acknowledgement_releases_the_step_like_ack_s() -> None:
     run = plant()
     run.set(M3_1=True).call()
@@ -134,3 +133,58 @@ def test_message_state_survives_snapshot_and_restore_without_raising_twice() -> 
     sync_messages(run.cc, state, restored, "Msg_plant", 1, 999)
     (msg,) = restored.entries()
     assert msg.event_id == 1 and msg.came_ns == run.messages.entries()[0].came_ns
+
+
+# ---------------------------------------------------------------- the GraphFB in a CPU
+
+
+def cpu_plant() -> tuple[Cpu, VirtualClock, GraphFB]:
+    source, text = chart_text("messages")
+    clock = VirtualClock()
+    cpu = Cpu(clock)
+    g = GraphFB(compile_chart(parse_chart(source, text)))
+    install_all(cpu, [g])
+    cpu.mem.periph_in[1] = 0b1  # I1.0: S1's interlock holds
+    cpu.start("warm")
+    return cpu, clock, g
+
+
+def scan(cpu: Cpu, clock: VirtualClock) -> ScanRecord:
+    clock.advance(10)
+    return cpu.scan()
+
+
+def test_graph_fb_raises_its_messages_in_the_cpus_list_and_a_user_ack_releases_the_step() -> None:
+    cpu, clock, g = cpu_plant()
+    messages = message_list(cpu)
+    cpu.mem.set("M3.1", True)
+    rec = scan(cpu, clock)
+    msg = messages.get(SV1)
+    assert msg is not None and msg.state is MessageState.INCOMING
+    assert (SV1, "incoming") in [(e.msg_id, e.kind) for e in rec.alarms]  # in the record
+    cpu.mem.set("M3.1", False)
+    cpu.mem.periph_in[0] = 0b10  # I0.1: T1 holds
+    scan(cpu, clock)
+    assert g.state.active == [0]  # latched: waits for an acknowledgement
+    t_ack = clock.now_ns()
+    messages.acknowledge(SV1, "alice", t_ack)
+    scan(cpu, clock)  # sync sees the user's acknowledgement: queued for the next call
+    rec = scan(cpu, clock)
+    assert g.state.active == [1]
+    assert any(getattr(e, "event", "") == "A1" for e in rec.events)
+    (acked,) = [e for e in messages.log() if e.kind == "acknowledged" and e.msg_id == SV1]
+    assert (acked.user, acked.t_ns) == ("alice", t_ack)
+
+
+def test_graph_fb_ack_ef_acknowledges_its_message_as_program() -> None:
+    cpu, clock, g = cpu_plant()
+    messages = message_list(cpu)
+    cpu.mem.set("M3.1", True)
+    scan(cpu, clock)
+    cpu.mem.set("M3.1", False)
+    scan(cpu, clock)
+    g.idb.values["ACK_EF"] = True  # type: ignore[union-attr]
+    scan(cpu, clock)
+    assert messages.entries() == () and not g.outputs["ERR_FLT"]
+    assert messages.log()[-1].kind == "acknowledged"
+    assert (messages.log()[-1].user, messages.log()[-1].t_ns) == (PROGRAM_USER, clock.now_ns())

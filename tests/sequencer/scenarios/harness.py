@@ -95,9 +95,8 @@ class Run:
         for _ in range(n):
             for name, address in self.wires.items():
                 self.pins[name] = self.mem.get(address)
-            acknowledge = getattr(self.rt, "acknowledge", None)  # not in the cycle yet
-            if acknowledge is not None and self.remote_acks:
-                acknowledge(self.remote_acks)
+            if self.remote_acks:
+                self.rt.acknowledge(self.remote_acks)
             self.rt.execute(dict(self.pins), self.clock.now_ns())
             self.remote_acks = sync_messages(
                 self.cc, self.st, self.messages, self.cc.name, self.db_number, self.clock.now_ns()
