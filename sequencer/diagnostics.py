@@ -58,7 +58,6 @@ CODES: Final[dict[str, str]] = {
     "W103": "sequencer without an initial step",
     "W110": "limit exceeded (SPEC §2.1)",
     "W120": "empty transition condition (always holds)",
-    "W121": "step without actions",
     "W122": "rows marked C on a step without an interlock",
     "W130": "simultaneous branch that can never join",
 }

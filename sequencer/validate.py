@@ -290,14 +290,6 @@ def rule_empty_conditions(ctx: _Ctx) -> None:
                      t.loc, f"transition T{t.number}")  # fmt: skip
 
 
-def rule_steps_without_actions(ctx: _Ctx) -> None:
-    """A step without action rows does nothing while active (W121; initial steps excepted,
-    a waiting initial step is normal)."""
-    for s in ctx.chart.all_steps():
-        if not s.actions and not s.initial:
-            ctx.warn("W121", f"step S{s.number} has no actions", s.loc, _step_el(s.number))
-
-
 def rule_c_without_interlock(ctx: _Ctx) -> None:
     """Rows marked C on a step without INTERLOCK always run (W122, SPEC §2.3)."""
     for s in ctx.chart.all_steps():
@@ -679,7 +671,6 @@ RULES: Final[tuple[Callable[[_Ctx], None], ...]] = (
     rule_ways_in_and_out,
     rule_limits,
     rule_empty_conditions,
-    rule_steps_without_actions,
     rule_c_without_interlock,
     rule_action_rows,
     rule_permanent_instructions,

@@ -64,6 +64,9 @@ def run(
     ] = None,
     web: Annotated[bool, typer.Option(help="Serve the browser view (charts only).")] = False,
     port: Annotated[int, typer.Option(help="Port of the browser view.")] = 8080,
+    record: Annotated[
+        Path | None, typer.Option(help="Record the chart's run to a rerun .rrd file.")
+    ] = None,
 ) -> None:
     """Run a program or a chart on the system clock until Ctrl-C."""
     if program.suffix.lower() == ".s7g":
@@ -79,6 +82,7 @@ def run(
                 duration_s=duration_s,
                 web=web,
                 port=port,
+                record=record,
             )
         )
     from web.cmd_run import run_program

@@ -4,7 +4,10 @@ The chart is compiled (exit 2 with diagnostics on stderr if it does not), instal
 OB1/OB100 in one CPU, the state file restores the instance DB (the sequencer comes back by
 warm restart with its steps, times and mode), and ``engine.runner.Runner`` paces the scans.
 A plant (``--plant``) runs after every scan; a plant error ends the run with one line.
-``web``/``port`` are accepted for the browser view (added elsewhere).
+``--web`` serves the live browser view of the running FB on 127.0.0.1:``--port`` and its
+zenoh bus (``web/live_edge.py``): one state update per scan, operator commands applied
+between scans, acknowledgements in the state file's audit log. ``--record FILE.rrd``
+records the same updates as a rerun timeline (extra ``[trace]``).
 """
 
 from __future__ import annotations
@@ -13,6 +16,7 @@ import signal
 import sys
 from pathlib import Path
 from types import FrameType
+from typing import TYPE_CHECKING
 
 from engine.clock import SystemClock
 from engine.errors import S7Error
@@ -22,6 +26,9 @@ from engine.record import ScanRecord
 from engine.runner import Runner
 from web.cmd_sim import ChartLoadError, ChartSession, load_chart
 from web.plant import LoadedPlant, PlantError, load_plant
+
+if TYPE_CHECKING:
+    from web.live_edge import LiveEdge
 
 
 def _terminate(signum: int, frame: FrameType | None) -> None:
@@ -38,9 +45,9 @@ def run_chart(
     duration_s: float | None = None,
     web: bool = False,
     port: int = 8080,
+    record: Path | None = None,
 ) -> int:
     """Run ``path`` until Ctrl-C/SIGTERM/``duration_s``; 0 clean, 1 plant error, 2 bad chart."""
-    del web, port
     try:
         cc, table = load_chart(path, symbols)
     except ChartLoadError as exc:
@@ -62,20 +69,29 @@ def run_chart(
     except Exception as exc:
         print(f"s7graph: error: {state_path}: cannot use state file: {exc}", file=sys.stderr)
         return 2
+    live: LiveEdge | None = None
+    if web or record is not None:
+        try:
+            live = _serve(session, store, web=web, port=port, record=record)
+        except Exception as exc:  # port in use, no rerun-sdk, ...
+            print(f"s7graph: error: cannot serve the view: {exc}", file=sys.stderr)
+            store.close()
+            return 2
     failure: list[str] = []
     last = [clock.now_ns()]
     runner: Runner
 
     def on_record(record: ScanRecord) -> None:
-        if loaded is None or record.mode is not CpuMode.RUN:
-            return
-        now = record.t_ns
-        try:
-            loaded.cycle(session, now // 1_000_000, (now - last[0]) // 1_000_000)
-        except PlantError as exc:
-            failure.append(str(exc))
-            runner.stop()
-        last[0] = now
+        if loaded is not None and record.mode is CpuMode.RUN:
+            now = record.t_ns
+            try:
+                loaded.cycle(session, now // 1_000_000, (now - last[0]) // 1_000_000)
+            except PlantError as exc:
+                failure.append(str(exc))
+                runner.stop()
+            last[0] = now
+        if live is not None:
+            live.on_record(record, stats=cpu.stats, runner=runner)
 
     runner = Runner(cpu, cycle_ms=cycle_ms, store=store, on_record=on_record)
     previous = signal.signal(signal.SIGTERM, _terminate)
@@ -91,8 +107,28 @@ def run_chart(
     finally:
         signal.signal(signal.SIGTERM, previous)
         runner.shutdown("s7graph run ended")
+        if live is not None:
+            live.close()
         store.close()
     if failure:
         print(f"s7graph: error: {failure[0]}", file=sys.stderr)
         return 1
     return 0
+
+
+def _serve(
+    session: ChartSession, store: StateStore, *, web: bool, port: int, record: Path | None
+) -> LiveEdge:
+    """The live view (and recording) of the session's GraphFB; prints where to look."""
+    from web.live import LiveGraph, watch_names  # zenoh and viser only when asked for
+    from web.live_edge import LiveEdge
+
+    live = LiveGraph(
+        session.graph, read=session.get, watch=watch_names(session.symbols), store=store
+    )
+    edge = LiveEdge(live, port=port, record=record, serve=web)
+    if web:
+        print(f"s7graph: view {edge.url} (bus {edge.endpoint}); Ctrl-C to stop", flush=True)
+    if record is not None:
+        print(f"s7graph: recording to {record}", flush=True)
+    return edge

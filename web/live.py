@@ -11,22 +11,18 @@ whatever the chart's parameter set (a MINIMUM FB has no ACK_EF pin, yet can be
 acknowledged) and whatever the program wires to the pins. Each is applied at the scan
 boundary and acts in the FB's next call as a one-call rising edge (``GraphFB.command``):
 
-====== ============================== =========================================
-op     acts as                        refused when
-====== ============================== =========================================
-ack    ACK_EF                         no step waits for an acknowledgement
-mode   SW_AUTO / SW_MAN / SW_TAP /
-       SW_TOP
-init   INIT_SQ
-off    OFF_SQ for one call
-step_on  S_ON on ``step`` (not S_NO)  mode is not MAN, no such step, step active
-step_off S_OFF on ``step``            mode is not MAN, no such step, step idle
-t_push T_PUSH                         mode is not TAP or TOP
-====== ============================== =========================================
+- ``ack`` → ACK_EF; refused when no step waits for an acknowledgement;
+- ``mode`` → SW_AUTO / SW_MAN / SW_TAP / SW_TOP;
+- ``init`` → INIT_SQ; ``off`` → OFF_SQ for one call (the sequencer then stays off);
+- ``step_on`` / ``step_off`` → S_ON / S_OFF on ``step`` (not S_NO); refused outside MAN,
+  for an unknown step, an active step (on) or an idle one (off);
+- ``t_push`` → T_PUSH; refused outside TAP and TOP.
 
-Every command is refused while the CPU is not in RUN. An applied command goes to the
-audit log (who, when, what) when a ``StateStore`` is given. :meth:`LiveGraph.apply` never
-raises: a hostile command is refused with its reason, the scan loop goes on.
+Every command is refused while the CPU is not in RUN, and so is a second mode, step, or
+init/off command at the same scan boundary (one call would see both edges at once and
+resolve them by priority, not by order). An applied command goes to the audit log (who,
+when, what) when a ``StateStore`` is given. :meth:`LiveGraph.apply` never raises: a
+hostile command is refused with its reason, the scan loop goes on.
 """
 
 from __future__ import annotations
@@ -55,6 +51,9 @@ OP_PINS: dict[str, str] = {
 }
 MODE_PINS: dict[str, str] = {mode: pin for pin, mode in SELECTORS}
 MAX_WATCH = 64
+# Commands of one group queued at the same scan boundary would act as simultaneous edges
+# in one call (the FB resolves them by priority, not by order), so the second is refused.
+_GROUPS = {"mode": "mode", "step_on": "step", "step_off": "step", "init": "init", "off": "init"}
 
 
 def _scalar(value: object) -> bool | int | float | str | None:
@@ -90,6 +89,7 @@ class LiveGraph:
         self.cpu_mode = CpuMode.STOP
         self.cycle = 0
         self._pending_mode: str | None = None  # a mode change queued for the next call
+        self._pending: dict[str, str] = {}  # conflict group -> op queued for the next call
 
     # ------------------------------------------------------------ state out
 
@@ -98,6 +98,7 @@ class LiveGraph:
         self.cpu_mode = record.mode
         self.cycle = record.cycle
         self._pending_mode = None  # the commands queued before this scan have acted
+        self._pending.clear()
         st = self.graph.state
         numbers = self.cc.step_numbers
         active = sorted(numbers[i] for i in st.active)
@@ -150,6 +151,16 @@ class LiveGraph:
         op = getattr(command, "op", None)
         if self.cpu_mode is not CpuMode.RUN:
             return False, f"the CPU is in {self.cpu_mode}, not RUN", ""
+        group = _GROUPS.get(op) if isinstance(op, str) else None
+        queued = self._pending.get(group) if group else None
+        if queued is not None:
+            return False, f"{op} conflicts with {queued}, queued for the same scan; retry", ""
+        applied, reason, detail = self._queue(command, op)
+        if applied and group:
+            self._pending[group] = f"{op} {detail}".strip()
+        return applied, reason, detail
+
+    def _queue(self, command: Command, op: object) -> tuple[bool, str, str]:
         st = self.graph.state
         mode = self._pending_mode or st.mode
         cc = self.cc

@@ -18,11 +18,12 @@ def test_clean_chart_exits_0_with_a_summary(capsys: pytest.CaptureFixture[str]) 
 
 
 def test_warnings_only_exit_1(capsys: pytest.CaptureFixture[str]) -> None:
-    path = HERE / "broken" / "W121_step_without_actions.s7g"
+    path = HERE / "broken" / "W120_empty_condition.s7g"
     assert check_command(path, None) == 1
     lines = capsys.readouterr().out.splitlines()
     assert lines == [
-        f"{path}:5:3: warning[W121]: step S2 has no actions (step S2)",
+        f"{path}:5:3: warning[W120]: transition T1 has no condition; it switches at once "
+        "(transition T1)",
         f"{path}: 0 errors, 1 warning",
     ]
 
@@ -55,3 +56,15 @@ def test_symbol_file_resolves_quoted_names(
     syms.write_text('"Go" ; I0.0 ; BOOL ; go\n"Lamp" ; Q0.0 ; BOOL ; lamp\n', encoding="utf-8")
     assert check_command(chart, None) == 2
     assert check_command(chart, syms) == 0
+
+
+def test_a_waiting_step_without_actions_is_clean(tmp_path: Path) -> None:
+    """A step may hold no action rows (seed 000:5447): waiting steps are idiomatic."""
+    chart = tmp_path / "wait.s7g"
+    chart.write_text(
+        'FUNCTION_BLOCK "W"\nSEQUENCE 1\n  INITIAL_STEP S1: N Q0.0; END_STEP\n'
+        "  STEP S2: END_STEP\n  TRANSITION T1 FROM S1 TO S2 := I0.0;\n"
+        "  TRANSITION T2 FROM S2 TO S1 := I0.1;\nEND_SEQUENCE\nEND_FUNCTION_BLOCK\n",
+        encoding="utf-8",
+    )
+    assert check_command(chart, None) == 0

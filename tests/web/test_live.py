@@ -158,6 +158,16 @@ def test_mode_then_step_on_at_one_boundary_act_in_order(rig: Rig) -> None:
     assert (update.mode, update.active) == ("MAN", [1, 2])
 
 
+def test_second_mode_or_step_command_at_one_boundary_is_refused(rig: Rig) -> None:
+    assert rig.cmd("mode", mode="MAN") == (True, "")
+    applied, reason = rig.cmd("mode", mode="AUTO")
+    assert not applied and "conflicts with mode AUTO -> MAN" in reason
+    assert rig.cmd("step_on", step=2) == (True, "")
+    assert not rig.cmd("step_on", step=3)[0]
+    assert rig.scan().active == [1, 2]
+    assert rig.cmd("mode", mode="AUTO") == (True, "")  # a new scan, a new boundary
+
+
 def test_man_mode_holds_the_sequence_and_auto_releases_it(rig: Rig) -> None:
     rig.cmd("mode", mode="MAN")
     rig.session.set("Start", True)
