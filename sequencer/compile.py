@@ -12,6 +12,7 @@ validator: ``"quoted"`` → symbol; otherwise FB static variable, FB pin, S7 add
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 from engine.address import Area, Width
@@ -21,7 +22,7 @@ from sequencer.model import BlockCall, Chart, Coil, Operand, Transition
 from sequencer.names import resolve_operand
 from sequencer.params import pin as pin_info
 from steps.actions import gen_step_actions
-from steps.conditions import contact_text, contacts, gen_condition
+from steps.conditions import contact_text, contacts, gen_condition, with_locals
 from steps.expressions import gen_value
 from steps.operands import WIDTH_TYPE, CodeGen, Ref
 
@@ -173,7 +174,7 @@ def compile_chart(chart: Chart, symbols: Any = None) -> CompiledChart:
 
     if res.problems:
         raise ChartError(res.problems)
-    source = "\n".join(parts)
+    source = "\n".join(_share(parts))
     code = compile(source, f"<chart {chart.name}>", "exec")
     var_inits = {
         v.name: (v.init.value if v.init is not None else _zero(v.type)) for v in chart.vars
@@ -216,6 +217,33 @@ def compile_chart(chart: Chart, symbols: Any = None) -> CompiledChart:
     )
 
 
+_OWN_INDEX = re.compile(r", _i=(\d+)\):")
+
+
+def _share(parts: list[str]) -> list[str]:
+    """Generated functions with the same code (apart from their name and the own-step
+    default ``_i``) are compiled once: the others are bound to the first one's function
+    (``_with_index`` gives it another ``_i``). Keeps ``compile()`` proportional to the
+    distinct code, not to the steps (bench: 250 steps, 1000 functions → 3 distinct)."""
+    seen: dict[str, tuple[str, str | None]] = {}
+    out: list[str] = []
+    for src in parts:
+        head, _, rest = src.partition("(")
+        name = head[4:]
+        m = _OWN_INDEX.search(rest, 0, rest.find("\n"))
+        own = m.group(1) if m else None
+        key = _OWN_INDEX.sub(", _i=):", rest, 1) if m else rest
+        first = seen.get(key)
+        if first is None:
+            seen[key] = (name, own)
+            out.append(src)
+        elif first[1] == own:
+            out.append(f"{name} = {first[0]}\n")
+        else:
+            out.append(f"{name} = _with_index({first[0]}, {own})\n")
+    return out
+
+
 def _zero(type_name: str) -> Any:
     t = type_name.upper()
     if t == "BOOL":
@@ -229,7 +257,7 @@ def _zero(type_name: str) -> Any:
 
 def _gen_permanent(name: str, instrs: tuple[Any, ...], g: CodeGen, res: _Resolver) -> str:
     """``def name(st, R)``: permanent instructions, in order (SPEC §2.2 steps 3 and 5)."""
-    lines = [f"def {name}(st, R):", "    X = st.x", "    V = st.vars"]
+    lines = [f"def {name}(st, R):"]
 
     def val(e: Any) -> str:
         return gen_value(e, g, res, res.step, res.transition)
@@ -253,6 +281,6 @@ def _gen_permanent(name: str, instrs: tuple[Any, ...], g: CodeGen, res: _Resolve
                 lines.append("        " + g.write(res(target), f"_o[{pname!r}]"))
         else:  # Assignment
             lines.append("    " + g.write(res(ins.target), val(ins.expr)))
-    if len(lines) == 3:
+    if len(lines) == 1:
         lines.append("    pass")
-    return "\n".join(lines) + "\n"
+    return with_locals(lines)

@@ -91,6 +91,17 @@ class GraphRuntime:
         # per sequencer: its active steps in activation order (multi-sequencer FBs only),
         # rebuilt from ``st.active`` each call and kept in step by _activate/_deactivate
         self._by_seq: list[list[int]] = [[] for _ in cc.seq_numbers] if self.multi else []
+        # fast path of step 4 (AUTO, no HALT/OFF, no skip steps, default order): per step,
+        # ``nochk`` = no interlock and no supervision; ``plain`` = nochk and every leaving
+        # transition has this step as its only source (no join)
+        self._nochk = tuple(
+            prog.ilc[i] is None and prog.svc[i] is None for i in range(cc.n_steps)
+        )
+        self._plain = tuple(
+            self._nochk[i] and all(len(cc.tr_src[j]) == 1 for j in cc.leaving[i])
+            for i in range(cc.n_steps)
+        )
+        self._forcing = cc.options.ack_forces_switch
 
     def rebind(self, state: GraphState) -> None:
         """Run on another instance-DB content (restored snapshot, new instance)."""
@@ -214,7 +225,8 @@ class GraphRuntime:
         # 1. latch inputs, edges, per-call lists, times
         ins = st.inputs
         rose = st.rose
-        rose.clear()
+        if rose:
+            rose.clear()
         try:
             cur = self._getter(inputs)
         except KeyError:
@@ -226,7 +238,8 @@ class GraphRuntime:
         if self.multi:
             by_seq = self._by_seq
             for lst in by_seq:
-                lst.clear()
+                if lst:
+                    lst.clear()
             step_seq = cc.step_seq
             for i in st.active:
                 by_seq[step_seq[i]].append(i)
@@ -234,15 +247,22 @@ class GraphRuntime:
         if self._commands:
             self._apply_commands()
         carry = st.entered[:] if self.codesys else ()
-        for i in st.ev_steps:
-            st.ev[i] = 0
-        st.ev_steps.clear()
-        st.log.clear()
-        st.fired.clear()
-        st.entered.clear()
-        st.left.clear()
+        if st.ev_steps:
+            ev = st.ev
+            for i in st.ev_steps:
+                ev[i] = 0
+            st.ev_steps.clear()
+        if st.log:
+            st.log.clear()
+        if st.fired:
+            st.fired.clear()
+        if st.entered:
+            st.entered.clear()
+        if st.left:
+            st.left.clear()
         st.ov = False
-        dt = now_ns - st.last_ns if st.last_ns >= 0 else 0
+        last = st.last_ns
+        dt = now_ns - last if last >= 0 else 0
         st.last_ns = now_ns
         if dt and not st.tm_halted:
             t_ns, u_ns, il_err, sv_err = st.t_ns, st.u_ns, st.il_err, st.sv_err
@@ -274,14 +294,21 @@ class GraphRuntime:
         if self._permanent:
             prog.before(st, self)
         # 4. the sequencers
-        rule = MODE_RULES[st.mode]
-        sw = (
-            rule if st.mode != "AUTO" else None,
-            "T_PUSH" in rose,
-            st.halted or st.off,
-            self._acked if cc.options.ack_forces_switch and self._acked else (),
+        mode = st.mode
+        rule = MODE_RULES[mode]
+        blocked = st.halted or st.off
+        forced = self._acked if self._forcing and self._acked else ()
+        sw = (rule if mode != "AUTO" else None, "T_PUSH" in rose, blocked, forced)
+        fast = (
+            mode == "AUTO"
+            and not blocked
+            and not forced
+            and not self.codesys
+            and not st.sskip_enabled
         )
-        if self.multi:
+        if fast:
+            self._fast_sequencers(self._by_seq if self.multi else [st.active], self.multi)
+        elif self.multi:
             by_seq = self._by_seq
             for k in range(len(by_seq)):
                 steps = by_seq[k]
@@ -367,6 +394,76 @@ class GraphRuntime:
         else:
             self._switch(steps, sw, rule)
             self._conditions_and_actions(k, steps)
+
+    def _fast_sequencers(self, seqs: list[list[int]], multi: bool) -> None:
+        """Step 4 in the common case (AUTO, no HALT_SQ/OFF_SQ, no forced acknowledgement,
+        no skip steps, default order): per sequencer (``seqs``: the active steps of each, or
+        ``[st.active]`` for a single one), the same effects as ``_sequencer``. Only a
+        sequencer with one active step without interlock, supervision or join, and no final
+        scan pending, is done here; any other takes the general path."""
+        st = self.st
+        cc = self.cc
+        prog = self.prog
+        tcond = prog.tcond
+        act = prog.act
+        leaving = cc.leaving
+        tr_dst = cc.tr_dst
+        plain = self._plain
+        nochk = self._nochk
+        final = self._final
+        x = st.x
+        ev = st.ev
+        il_ok = st.il_ok
+        sv_err = st.sv_err
+        crit = st.crit
+        crit_old = st.crit_old
+        tt = st.tt
+        zero = st.zeroed
+        sw: tuple[Any, ...] = (None, False, False, ())
+        rule = MODE_RULES["AUTO"]
+        for k in range(len(seqs)):
+            steps = seqs[k]
+            kk = k if multi else -1
+            if len(steps) != 1 or final:
+                if steps or final or not multi:
+                    self._sequencer(kk, steps, sw, rule)
+                continue
+            i = steps[0]
+            if not plain[i] or sv_err[i]:
+                self._sequencer(kk, steps, sw, rule)
+                continue
+            # a–c: the first-listed transition that holds switches
+            for j in leaving[i]:
+                v, c = tcond[j](st)
+                crit_old[j] = crit[j]
+                crit[j] = c
+                tt[j] = v
+                if v:
+                    st.fired.append(j)
+                    self._deactivate(i)
+                    for d in tr_dst[j]:
+                        if not x[d]:
+                            self._activate(d)
+                    break
+            if final:  # switched
+                if not all(nochk[s] for s in steps):  # d: a new step has IL or SV
+                    self._conditions_and_actions(kk, steps)
+                    continue
+                # e: the final scan of the step left (this sequencer's), then the rows
+                keep: list[int] = []
+                step_seq = cc.step_seq
+                fin = prog.fin
+                for f in final:
+                    if kk >= 0 and step_seq[f] != kk:
+                        keep.append(f)
+                    else:
+                        fin[f](st, self, ev[f] | EV_S0)
+                final[:] = keep
+            n = 0
+            while n < len(steps):  # ON Sx in a row may append a step to this sequencer
+                i = steps[n]
+                n += 1
+                act[i](st, self, ev[i], il_ok[i], zero)
 
     def _switch(
         self, steps: list[int], sw: tuple[Any, ...], rule: Callable[[bool, bool], bool]

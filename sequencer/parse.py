@@ -24,14 +24,19 @@ from __future__ import annotations
 
 import contextlib
 import re
+from collections.abc import Callable
+from copy import copy
 from contextvars import ContextVar
-from functools import cache
+from functools import cache, lru_cache
 from pathlib import Path
 from typing import Any
 
-from lark import Lark, Token, Transformer, v_args
+from lark import Lark, Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
-from lark.tree import Meta
+from lark.lexer import LexerThread
+from lark.parse_tree_builder import ParseTreeBuilder
+from lark.parsers.lalr_analysis import Shift
+from lark.parsers.lalr_parser import _Parser
 
 from engine.errors import LiteralError, S7Error, SourceLocation
 from sequencer.diagnostics import Diagnostic, error, format_diagnostic
@@ -80,7 +85,6 @@ def _parser() -> Lark:
         GRAMMAR.read_text(encoding="utf-8"),
         parser="lalr",
         lexer="contextual",
-        propagate_positions=True,
         maybe_placeholders=True,
         lexer_callbacks={"LINE_COMMENT": _on_comment},
     )
@@ -245,8 +249,21 @@ _RESYNC = re.compile(
 # ---------------------------------------------------------------- tree → model
 
 
+_NON_DIGITS = re.compile(r"\D")
+_BLANKS = re.compile(r"\s+")
+
+
 def _int(tok: Token | str) -> int:
-    return int(re.sub(r"\D", "", str(tok)))
+    return int(_NON_DIGITS.sub("", str(tok)))
+
+
+@lru_cache(maxsize=4096)
+def _literal(text: str) -> tuple[str, object]:
+    """``engine.literals.parse_literal`` of a literal's text (values are immutable; a chart
+    repeats its constants, T#20MS 500 times in the benchmark's)."""
+    from engine.literals import parse_literal
+
+    return parse_literal(text)
 
 
 def _unquote(tok: Token | str) -> str:
@@ -277,65 +294,67 @@ _OPTIONS: dict[str, tuple[str, tuple[str, ...]]] = {
 }
 
 
-@v_args(meta=True)
-class _Build(Transformer[Token, Chart]):
-    """Turns the lark tree into the model; shape errors go to ``diags``."""
+class _Build:
+    """Builds the model while the LALR parser reduces (no parse tree is built): one method
+    per grammar rule, called with the rule's children as lark's tree builder would give
+    them (anonymous tokens filtered out, ``None`` for a missing ``[optional]``, ``?rules``
+    with one child inlined). Shape errors go to ``diags``.
+
+    A few rules need the place of a keyword the filter drops (``TRANSITION``, ``SEQUENCE``,
+    ``CALL``, ``S``/``R`` of a coil, ``FUNCTION_BLOCK``) or of the closing ``;`` (a symbol's
+    trailing comment): their callbacks store the first and last raw child in ``first`` and
+    ``last`` just before the method runs (see :func:`_callbacks`)."""
 
     def __init__(self, file: str, comments: dict[int, tuple[int, str]]) -> None:
-        super().__init__(visit_tokens=False)
         self.file = file
         self.comments = comments
         self.diags: list[Diagnostic] = []
+        self.first: Token = Token("$START", "")
+        self.last: Token = self.first
 
     # -- helpers
-    def _loc(self, item: Meta | Token) -> SourceLocation:
-        if isinstance(item, Token):
-            return SourceLocation(self.file, item.line or 0, item.column or 0)
-        if getattr(item, "empty", True):
-            return SourceLocation(self.file, 0, 0)
-        return SourceLocation(self.file, item.line, item.column)
+    def _loc(self, tok: Token) -> SourceLocation:
+        return SourceLocation(self.file, tok.line or 0, tok.column or 0)
 
     def _err(self, code: str, message: str, loc: SourceLocation, element: str = "") -> None:
         self.diags.append(error(code, message, loc, element))
 
     # -- expressions
-    def literal(self, meta: Meta, ch: list[Token]) -> Const:
+    def literal(self, ch: list[Token]) -> Const:
         tok = ch[0]
         loc = self._loc(tok)
-        from engine.literals import parse_literal
-
         try:
-            type_name, value = parse_literal(str(tok), loc)
+            type_name, value = _literal(str(tok))
         except (LiteralError, S7Error) as exc:
             self._err("E003", f"bad constant {str(tok)!r}: {exc.message}", loc)
             return Const(0, "INT", str(tok), loc)
         return Const(value, type_name, str(tok), loc)
 
-    def address(self, meta: Meta, ch: list[Token]) -> Operand:
-        return Operand(re.sub(r"\s+", "", str(ch[0])), False, self._loc(ch[0]))
+    def address(self, ch: list[Token]) -> Operand:
+        return Operand(_BLANKS.sub("", str(ch[0])), False, self._loc(ch[0]))
 
-    def symbol(self, meta: Meta, ch: list[Token]) -> Operand:
+    def symbol(self, ch: list[Token]) -> Operand:
         return Operand(_unquote(ch[0]), True, self._loc(ch[0]))
 
-    def name(self, meta: Meta, ch: list[Token]) -> Operand:
+    def name(self, ch: list[Token]) -> Operand:
         return Operand(str(ch[0]), False, self._loc(ch[0]))
 
-    def step_attr(self, meta: Meta, ch: list[Token]) -> StepAttr:
+    def step_attr(self, ch: list[Token]) -> StepAttr:
         num, attr = str(ch[0]).split(".")
         return StepAttr(_int(num), attr.upper(), self._loc(ch[0]))  # type: ignore[arg-type]
 
-    def trans_attr(self, meta: Meta, ch: list[Token]) -> TransAttr:
+    def trans_attr(self, ch: list[Token]) -> TransAttr:
         num, _ = str(ch[0]).split(".")
         return TransAttr(_int(num), "TT", self._loc(ch[0]))
 
-    def func_call(self, meta: Meta, ch: list[Any]) -> FuncCall:
+    def func_call(self, ch: list[Any]) -> FuncCall:
         args = tuple(a for a in ch[1:] if a is not None)
         return FuncCall(str(ch[0]).upper(), args, self._loc(ch[0]))
 
-    def not_expr(self, meta: Meta, ch: list[Any]) -> Unary:
+    def not_expr(self, ch: list[Any]) -> Unary:
         return Unary("NOT", ch[1], self._loc(ch[0]))
 
-    def neg_expr(self, meta: Meta, ch: list[Any]) -> Expr:
+    def neg_expr(self, ch: list[Any]) -> Expr:
         inner = ch[1]
         loc = self._loc(ch[0])
         if (
@@ -351,7 +370,7 @@ class _Build(Transformer[Token, Chart]):
             return Const(value, type_name, "-" + inner.text, loc)
         return Unary("-", inner, loc)
 
-    def _binary(self, meta: Meta, ch: list[Any]) -> Binary:
+    def _binary(self, ch: list[Any]) -> Binary:
         op = str(ch[1]).upper()
         op = "AND" if op == "&" else op
         return Binary(op, ch[0], ch[2], self._expr_loc(ch[0]))
@@ -363,33 +382,33 @@ class _Build(Transformer[Token, Chart]):
         return getattr(e, "loc", SourceLocation())
 
     # -- declarations
-    def type_name(self, meta: Meta, ch: list[Any]) -> str:
+    def type_name(self, ch: list[Any]) -> str:
         base = str(ch[0]).upper()
         return f"{base}[{int(ch[1])}]" if len(ch) > 1 and ch[1] is not None else base
 
-    def init(self, meta: Meta, ch: list[Any]) -> Const:
+    def init(self, ch: list[Any]) -> Const:
         if len(ch) == 2:
-            return self.neg_expr(meta, [ch[0], self.literal(meta, [ch[1]])])  # type: ignore[return-value]
-        return self.literal(meta, ch)
+            return self.neg_expr([ch[0], self.literal([ch[1]])])  # type: ignore[return-value]
+        return self.literal(ch)
 
-    def var_decl(self, meta: Meta, ch: list[Any]) -> VarDecl:
+    def var_decl(self, ch: list[Any]) -> VarDecl:
         return VarDecl(str(ch[0]), ch[1], ch[2], self._loc(ch[0]))
 
-    def var_section(self, meta: Meta, ch: list[Any]) -> tuple[str, list[VarDecl]]:
+    def var_section(self, ch: list[Any]) -> tuple[str, list[VarDecl]]:
         return ("vars", ch)
 
-    def symbol_decl(self, meta: Meta, ch: list[Any]) -> SymbolDecl:
+    def symbol_decl(self, ch: list[Any]) -> SymbolDecl:
         comment = ""
-        end_line = getattr(meta, "end_line", None)
-        if end_line in self.comments:
-            col, text = self.comments[end_line]
-            if col >= getattr(meta, "end_column", 0):
+        end = self.last  # the closing ';'
+        if end.end_line in self.comments:
+            col, text = self.comments[end.end_line]
+            if col >= (end.end_column or 0):
                 comment = text
         return SymbolDecl(
-            _unquote(ch[0]), re.sub(r"\s+", "", str(ch[1])), ch[2], comment, self._loc(ch[0])
+            _unquote(ch[0]), _BLANKS.sub("", str(ch[1])), ch[2], comment, self._loc(ch[0])
         )
 
-    def symbols_section(self, meta: Meta, ch: list[SymbolDecl]) -> tuple[str, list[SymbolDecl]]:
+    def symbols_section(self, ch: list[SymbolDecl]) -> tuple[str, list[SymbolDecl]]:
         # a trailing comment belongs to the last declaration on its line only
         out: list[SymbolDecl] = []
         for i, s in enumerate(ch):
@@ -399,25 +418,25 @@ class _Build(Transformer[Token, Chart]):
             out.append(s)
         return ("symbols", out)
 
-    def option(self, meta: Meta, ch: list[Token]) -> tuple[str, tuple[str, str, SourceLocation]]:
+    def option(self, ch: list[Token]) -> tuple[str, tuple[str, str, SourceLocation]]:
         return ("option", (str(ch[0]).upper(), str(ch[1]).upper(), self._loc(ch[0])))
 
-    def block_ref(self, meta: Meta, ch: list[Token]) -> tuple[str, int, SourceLocation]:
+    def block_ref(self, ch: list[Token]) -> tuple[str, int, SourceLocation]:
         text = str(ch[0]).upper()
         kind = re.match(r"[A-Z]+", text)
         return (kind.group(0) if kind else "", _int(text), self._loc(ch[0]))
 
-    def db_ref(self, meta: Meta, ch: list[Token]) -> tuple[str, int, SourceLocation]:
+    def db_ref(self, ch: list[Token]) -> tuple[str, int, SourceLocation]:
         return ("DB", _int(ch[0]), self._loc(ch[0]))
 
     # -- calls and permanent instructions
-    def in_param(self, meta: Meta, ch: list[Any]) -> tuple[str, str, Any]:
+    def in_param(self, ch: list[Any]) -> tuple[str, str, Any]:
         return ("in", str(ch[0]), ch[1])
 
-    def out_param(self, meta: Meta, ch: list[Any]) -> tuple[str, str, Any]:
+    def out_param(self, ch: list[Any]) -> tuple[str, str, Any]:
         return ("out", str(ch[0]), ch[1])
 
-    def call_params(self, meta: Meta, ch: list[Any]) -> list[tuple[str, str, Any]]:
+    def call_params(self, ch: list[Any]) -> list[tuple[str, str, Any]]:
         return [p for p in ch if p is not None]
 
     def _block_call(
@@ -436,14 +455,14 @@ class _Build(Transformer[Token, Chart]):
         outs = tuple((n, v) for d, n, v in params or () if d == "out")
         return BlockCall(kind, number_or_name, inst, ins, outs, loc)
 
-    def call(self, meta: Meta, ch: list[Any]) -> BlockCall:
-        return self._block_call(ch[0], ch[1], ch[2], self._loc(meta))
+    def call(self, ch: list[Any]) -> BlockCall:
+        return self._block_call(ch[0], ch[1], ch[2], _first_loc(ch[0]))
 
-    def perm_call(self, meta: Meta, ch: list[Any]) -> BlockCall:
+    def perm_call(self, ch: list[Any]) -> BlockCall:
         c: BlockCall = ch[0]
-        return BlockCall(c.kind, c.block, c.instance, c.inputs, c.outputs, self._loc(meta))
+        return BlockCall(c.kind, c.block, c.instance, c.inputs, c.outputs, self._loc(self.first))
 
-    def coil(self, meta: Meta, ch: list[Any]) -> PermanentInstruction:
+    def coil(self, ch: list[Any]) -> PermanentInstruction:
         target, expr = ch
         if not target.quoted and re.fullmatch(
             r"(?i)(DB\d+\.DBX|P?[IQEAML]X?)\d+\.\d+", target.name
@@ -451,32 +470,32 @@ class _Build(Transformer[Token, Chart]):
             return Coil("=", target, expr, target.loc)
         return Assignment(target, expr, target.loc)
 
-    def set_coil(self, meta: Meta, ch: list[Any]) -> Coil:
-        return Coil("S", ch[0], ch[1], self._loc(meta))
+    def set_coil(self, ch: list[Any]) -> Coil:
+        return Coil("S", ch[0], ch[1], self._loc(self.first))
 
-    def reset_coil(self, meta: Meta, ch: list[Any]) -> Coil:
-        return Coil("R", ch[0], ch[1], self._loc(meta))
+    def reset_coil(self, ch: list[Any]) -> Coil:
+        return Coil("R", ch[0], ch[1], self._loc(self.first))
 
-    def permanent(self, meta: Meta, ch: list[Any]) -> tuple[str, list[Any]]:
+    def permanent(self, ch: list[Any]) -> tuple[str, list[Any]]:
         return ("perm_" + str(ch[0]).lower(), ch[1:])
 
     # -- action rows
-    def row_operand(self, meta: Meta, ch: list[Any]) -> tuple[str, Any, Any, Any]:
+    def row_operand(self, ch: list[Any]) -> tuple[str, Any, Any, Any]:
         return ("operand", ch[0], ch[1], ch[2])
 
-    def row_assign(self, meta: Meta, ch: list[Any]) -> tuple[str, Any]:
+    def row_assign(self, ch: list[Any]) -> tuple[str, Any]:
         return ("assign", Assignment(ch[0], ch[1], ch[0].loc))
 
-    def row_call_block(self, meta: Meta, ch: list[Any]) -> tuple[str, Any, Any, Any]:
+    def row_call_block(self, ch: list[Any]) -> tuple[str, Any, Any, Any]:
         return ("block", ch[0], ch[1], ch[2])
 
-    def row_step(self, meta: Meta, ch: list[Token]) -> tuple[str, StepTarget]:
+    def row_step(self, ch: list[Token]) -> tuple[str, StepTarget]:
         return ("step", StepTarget(_int(ch[0]), self._loc(ch[0])))
 
-    def row_s_all(self, meta: Meta, ch: list[Token]) -> tuple[str, StepTarget]:
+    def row_s_all(self, ch: list[Token]) -> tuple[str, StepTarget]:
         return ("step", StepTarget(None, self._loc(ch[0])))
 
-    def row(self, meta: Meta, ch: list[Any]) -> ActionRow | None:
+    def row(self, ch: list[Any]) -> ActionRow | None:
         event_tok, qual_tok, cmark, body = ch
         qualifier, joined = _split_qualifier(str(qual_tok))
         interlocked = joined or cmark is not None
@@ -527,13 +546,13 @@ class _Build(Transformer[Token, Chart]):
             return None
         return ActionRow(qualifier, operand, event, interlocked, value, loc)
 
-    def interlock(self, meta: Meta, ch: list[Any]) -> tuple[str, Any, SourceLocation]:
+    def interlock(self, ch: list[Any]) -> tuple[str, Any, SourceLocation]:
         return ("interlock", ch[1], self._loc(ch[0]))
 
-    def supervision(self, meta: Meta, ch: list[Any]) -> tuple[str, Any, SourceLocation]:
+    def supervision(self, ch: list[Any]) -> tuple[str, Any, SourceLocation]:
         return ("supervision", ch[1], self._loc(ch[0]))
 
-    def step(self, meta: Meta, ch: list[Any]) -> Step:
+    def step(self, ch: list[Any]) -> Step:
         kw, ref, name, message, *items = ch
         interlock = supervision = None
         il_loc = sv_loc = None
@@ -558,13 +577,13 @@ class _Build(Transformer[Token, Chart]):
             supervision_loc=sv_loc,
         )
 
-    def step_set(self, meta: Meta, ch: list[Token]) -> list[tuple[int, SourceLocation]]:
+    def step_set(self, ch: list[Token]) -> list[tuple[int, SourceLocation]]:
         return [(_int(t), self._loc(t)) for t in ch]
 
-    def stop(self, meta: Meta, ch: list[Token]) -> list[tuple[int, SourceLocation]]:
+    def stop(self, ch: list[Token]) -> list[tuple[int, SourceLocation]]:
         return []
 
-    def transition(self, meta: Meta, ch: list[Any]) -> Transition:
+    def transition(self, ch: list[Any]) -> Transition:
         ref, name, sources, targets, cond = ch
         return Transition(
             number=_int(ref),
@@ -572,22 +591,22 @@ class _Build(Transformer[Token, Chart]):
             sources=tuple(n for n, _ in sources),
             targets=tuple(n for n, _ in targets),
             condition=cond,
-            loc=self._loc(meta),
+            loc=self._loc(self.first),
             source_locs=tuple(loc for _, loc in sources),
             target_locs=tuple(loc for _, loc in targets),
         )
 
-    def sequence(self, meta: Meta, ch: list[Any]) -> Sequence:
+    def sequence(self, ch: list[Any]) -> Sequence:
         number, name, *items = ch
         return Sequence(
             number=int(number),
             name=_unquote(name) if name is not None else "",
             steps=tuple(i for i in items if isinstance(i, Step)),
             transitions=tuple(i for i in items if isinstance(i, Transition)),
-            loc=self._loc(meta),
+            loc=self._loc(self.first),
         )
 
-    def start(self, meta: Meta, ch: list[Any]) -> Chart:
+    def start(self, ch: list[Any]) -> Chart:
         name, fb, db, *items = ch
         opts: dict[str, object] = {}
         option_locs: list[tuple[str, SourceLocation]] = []
@@ -625,7 +644,7 @@ class _Build(Transformer[Token, Chart]):
             sequences=tuple(sequences),
             after=tuple(after),
             file=self.file,
-            loc=self._loc(meta),
+            loc=self._loc(self.first),
         )
 
     def _option(
@@ -657,6 +676,193 @@ def _is_instance(x: Any) -> bool:
     return isinstance(x, tuple) or (isinstance(x, Operand) and x.quoted)
 
 
+def _first_loc(block: Any) -> SourceLocation:
+    """Where a ``call`` starts: at its block (``block_ref`` tuple) or symbol (operand)."""
+    return block[2] if isinstance(block, tuple) else block.loc  # type: ignore[no-any-return]
+
+
+# Rules whose method reads ``first`` (the rule's first raw token, usually a keyword the
+# child filter drops) or ``last`` (its last raw token).
+_NEEDS_FIRST = frozenset({"perm_call", "set_coil", "reset_coil", "transition", "sequence", "start"})
+_NEEDS_LAST = frozenset({"symbol_decl"})
+
+
+@cache
+def _tree_builder() -> ParseTreeBuilder:
+    """lark's child filtering / ``?rule`` inlining / placeholders, without positions."""
+    return ParseTreeBuilder(_parser().rules, Tree, maybe_placeholders=True)
+
+
+def _callbacks(builder: _Build) -> dict[Any, Callable[[list[Any]], Any]]:
+    """The LALR reduce callbacks calling ``builder``'s methods (see :class:`_Build`)."""
+    callbacks = _tree_builder().create_callback(builder)
+    for rule, f in list(callbacks.items()):
+        name = rule.origin.name
+        if name in _NEEDS_FIRST:
+            callbacks[rule] = _with_first(builder, f)
+        elif name in _NEEDS_LAST:
+            callbacks[rule] = _with_last(builder, f)
+    return callbacks
+
+
+def _with_first(builder: _Build, f: Callable[[list[Any]], Any]) -> Callable[[list[Any]], Any]:
+    def callback(children: list[Any]) -> Any:
+        builder.first = children[0]
+        return f(children)
+
+    return callback
+
+
+def _with_last(builder: _Build, f: Callable[[list[Any]], Any]) -> Callable[[list[Any]], Any]:
+    def callback(children: list[Any]) -> Any:
+        builder.last = children[-1]
+        return f(children)
+
+    return callback
+
+
+# ---------------------------------------------------------------- fast path
+#
+# A chart without syntax errors is parsed by the loop below: the same LALR table and the
+# same per-state scanners as lark's parser and contextual lexer, without lark's per-token
+# machinery. Anything unexpected (a character no terminal matches, a token the state does
+# not accept) makes it give up; parse_chart then parses again with lark, which reports the
+# syntax errors and recovers. The fast path never reports anything itself.
+
+
+class _Tables:
+    """The LALR table and the lexers of :func:`_parser`, indexed for :func:`_fast_parse`."""
+
+    def __init__(self, lark: Lark) -> None:
+        table = lark.parser.parser.parser.parse_table
+        self.rules: list[Any] = list(lark.rules)
+        index = {id(r): i for i, r in enumerate(self.rules)}
+        # per state: terminal or rule name (plain str: lark's are Tokens, slow to compare)
+        # -> next state (shift / goto, >= 0) or -1 - rule index (reduce)
+        self.actions: dict[int, dict[str, int]] = {
+            state: {
+                str(sym): arg if action is Shift else -1 - index[id(arg)]
+                for sym, (action, arg) in acts.items()
+            }
+            for state, acts in table.states.items()
+        }
+        self.start: int = table.start_states["start"]
+        self.end: int = table.end_states["start"]
+        # reduce: (children, rule name, passes its only child through unchanged)
+        self.reduce: list[tuple[int, str, bool]] = [
+            (len(r.expansion), str(r.origin.name), _is_pass_through(r)) for r in self.rules
+        ]
+        # per state: (compiled union of the terminals, ignored, may hold newlines, callbacks)
+        self.lexers: dict[int, tuple[Any, frozenset[str], frozenset[str], dict[str, Any]]] = {}
+        for state, lexer in lark.parser.lexer.lexers.items():
+            mres = lexer.scanner._mres
+            if len(mres) != 1:  # lark split the union; not the case for this grammar
+                raise RuntimeError("fast parser: one scanner regex per state expected")
+            self.lexers[state] = (mres[0], lexer.ignore_types, lexer.newline_types, lexer.callback)
+
+
+def _is_pass_through(rule: Any) -> bool:
+    """``?a: b`` — the builder returns the child itself (see lark's ExpandSingleChild)."""
+    if not rule.options.expand1 or rule.alias or len(rule.expansion) != 1:
+        return False
+    sym = rule.expansion[0]
+    if sym.is_term and sym.filter_out or not sym.is_term and sym.name.startswith("_"):
+        return False
+    return not any(rule.options.empty_indices or ())
+
+
+@cache
+def _tables() -> _Tables:
+    return _Tables(_parser())
+
+
+_WS_CHARS = " \t\f\r\n"  # common.WS, the %ignore'd blanks
+_WS = re.compile(r"[ \t\f\r\n]+")
+
+
+class _GiveUp(Exception):
+    """The fast path met something it leaves to lark."""
+
+
+def _fast_parse(text: str, callbacks: dict[Any, Callable[[list[Any]], Any]]) -> Any:
+    """Parse ``text`` with the reduce ``callbacks``; raise :class:`_GiveUp` at a syntax error."""
+    t = _tables()
+    actions, lexers, reduce_info = t.actions, t.lexers, t.reduce
+    calls = [callbacks[r] for r in t.rules]
+    end_state = t.end
+    states = [t.start]
+    values: list[Any] = []
+    pos, line, line_start, n = 0, 1, 0, len(text)
+    new_token = Token
+    while True:
+        # -- the next token, lexed for the state the parser is in
+        state = states[-1]
+        mre, ignore, newline_types, lex_callbacks = lexers[state]
+        while True:
+            if pos < n and text[pos] in _WS_CHARS:
+                # only WS can match at a blank (no other terminal starts with one)
+                blank_end = _WS.match(text, pos).end()  # type: ignore[union-attr]
+                newlines = text.count("\n", pos, blank_end)
+                if newlines:
+                    line += newlines
+                    line_start = text.rindex("\n", pos, blank_end) + 1
+                pos = blank_end
+            if pos >= n:
+                ttype = "$END"
+                tok = None
+                break
+            m = mre.match(text, pos)
+            if m is None:
+                raise _GiveUp
+            value = m.group(0)
+            ttype = m.lastgroup
+            ignored = ttype in ignore
+            tok = None
+            if not ignored or ttype in lex_callbacks:
+                tok = new_token(ttype, value, pos, line, pos - line_start + 1)
+            if ttype in newline_types:
+                newlines = value.count("\n")
+                if newlines:
+                    line += newlines
+                    line_start = pos + value.rindex("\n") + 1
+            pos += len(value)
+            if tok is not None:
+                tok.end_line = line
+                tok.end_column = pos - line_start + 1
+                tok.end_pos = pos
+                if ttype in lex_callbacks:
+                    tok = lex_callbacks[ttype](tok)
+                if not ignored:
+                    ttype = tok.type
+                    break
+        # -- feed it: reduce as long as the table says so, then shift
+        while True:
+            act = actions[state].get(ttype)
+            if act is None:
+                raise _GiveUp
+            if act >= 0:
+                if tok is None:  # $END is never shifted
+                    raise _GiveUp
+                states.append(act)
+                values.append(tok)
+                break
+            rule = -1 - act
+            size, origin, pass_through = reduce_info[rule]
+            if pass_through:
+                del states[-1]
+            elif size:
+                children = values[-size:]
+                del states[-size:]
+                del values[-size:]
+                values.append(calls[rule](children))
+            else:
+                values.append(calls[rule]([]))
+            state = actions[states[-1]][origin]
+            states.append(state)
+            if tok is None and state == end_state:
+                return values[-1]
+
+
 # ---------------------------------------------------------------- entry point
 
 
@@ -681,10 +887,29 @@ def parse_chart(text: str, file: str = "<input>") -> Chart:
             _recover(e)
         return True
 
-    parser = _parser()
+    # The model is built while parsing; after a syntax error it is thrown away.
+    builder = _Build(file, comments)
     token = _COMMENTS.set(comments)
     try:
-        tree = parser.parse(text, on_error=on_error)
+        chart = _fast_parse(text, _callbacks(builder))
+    except _GiveUp:
+        pass
+    else:
+        if builder.diags:
+            raise ChartSyntaxError(builder.diags)
+        return chart  # type: ignore[no-any-return]
+    finally:
+        _COMMENTS.reset(token)
+
+    # A syntax error: parse again with lark, reporting and recovering.
+    comments = {}
+    builder = _Build(file, comments)
+    frontend = _parser().parser
+    lalr = copy(frontend.parser)
+    lalr.parser = _Parser(lalr.parser.parse_table, _callbacks(builder))
+    token = _COMMENTS.set(comments)
+    try:
+        chart = lalr.parse(LexerThread.from_text(frontend.lexer, text), "start", on_error=on_error)
     except UnexpectedInput as e:
         d = _syntax_diagnostic(e, file, text)
         if (d.loc.line, d.loc.col) not in seen:
@@ -694,11 +919,9 @@ def parse_chart(text: str, file: str = "<input>") -> Chart:
         _COMMENTS.reset(token)
     if diags:
         raise ChartSyntaxError(diags)
-    builder = _Build(file, comments)
-    chart = builder.transform(tree)
     if builder.diags:
         raise ChartSyntaxError(builder.diags)
-    return chart
+    return chart  # type: ignore[no-any-return]
 
 
 def parse_file(path: Path) -> Chart:

@@ -4,7 +4,8 @@
   N bit      operand = 1 (0 while C does not hold, or ZERO_OP); an event N row writes
              ``event occurred`` — a one-call pulse, the compiled form ``A ev; = op``
   S / R      set / reset (latching), every call (or once, with an event)
-  D op, t    operand = 1 once the step has been active ≥ t (``st.t_ns``: HALT_TM freezes it)
+  D op, t    operand = 1 once the step has been active ≥ t (``st.t_ns``: HALT_TM freezes it;
+             the step's own index is the default parameter ``_i``)
   L op, t    operand = 1 while the step has been active < t
   CALL       ``R.call(...)`` every call (skipped by ZERO_OP)
   x := expr  assignment (every call, or once with an event)
@@ -16,11 +17,14 @@ operands are reset, then the S0 rows run.
 
 from __future__ import annotations
 
+import re
+
 from collections.abc import Callable
 
 from engine.errors import S7Error
 from sequencer.model import ActionRow, Assignment, BlockCall, Expr, Operand, Step, StepTarget
 from sequencer.state import EVENT_BITS
+from steps.conditions import with_locals
 from steps.expressions import Resolve, StepIndex, gen_value
 from steps.operands import CodeGen, Ref
 
@@ -74,15 +78,23 @@ def gen_step_actions(
             body.extend(_indent(code))
         else:
             body.extend(code)
-    a_src = [f"def _a{i}(st, R, ev, c_ok, zero):", "    X = st.x", "    V = st.vars"]
-    a_src += _indent(body) or ["    pass"]
-    f_src = [f"def _f{i}(st, R, ev):", "    X = st.x", "    V = st.vars"]
-    f_src += _indent(final_reset)
+    a_body = _indent(body) or ["    pass"]
+    f_body = _indent(final_reset)
     if s0_rows:
-        f_src += ["    c_ok = True", "    zero = False", *_indent(s0_rows)]
-    if len(f_src) == 3:
-        f_src.append("    pass")
-    return "\n".join(a_src) + "\n", "\n".join(f_src) + "\n"
+        f_body += ["    c_ok = True", "    zero = False", *_indent(s0_rows)]
+    f_body = f_body or ["    pass"]
+    a_src = [f"def _a{i}(st, R, ev, c_ok, zero{_own(i, a_body)}):", *a_body]
+    f_src = [f"def _f{i}(st, R, ev{_own(i, f_body)}):", *f_body]
+    return with_locals(a_src), with_locals(f_src)
+
+
+_OWN = re.compile(r"\b_i\b")
+
+
+def _own(i: int, body: list[str]) -> str:
+    """The parameter ``_i`` = the step's own index (D/L times, OFF S_ALL) when the body uses
+    it: the code then does not depend on ``i`` and the compiler shares it between steps."""
+    return f", _i={i}" if any(_OWN.search(ln) for ln in body) else ""
 
 
 def _n_event(row: ActionRow, g: CodeGen, resolve: Resolve, cond: str) -> list[str]:
@@ -124,7 +136,7 @@ def _row(
         ref = _bit(row, resolve)
         if row.value is None:
             raise ActionError(f"{q} needs a time", row.loc)
-        t = f"st.t_ns[{i}] {'>=' if q == 'D' else '<'} ({val(row.value)}) * 1000000"
+        t = f"st.t_ns[_i] {'>=' if q == 'D' else '<'} ({val(row.value)}) * 1000000"
         return [g.write(ref, f"not zero{gate} and {t}")]
     if q == "CALL":
         if not isinstance(op, BlockCall):
@@ -140,7 +152,7 @@ def _row(
         if not isinstance(op, StepTarget):
             raise ActionError(f"{q} needs a step (Sn or S_ALL)", row.loc)
         if op.step is None:
-            return [f"R.off_all({i})"]
+            return ["R.off_all(_i)"]
         k = sidx(op.step, op.loc)
         return [f"R.{q.lower()}({k})"]
     if q in ("CS", "CU", "CD", "CR", "TL", "TD", "TF", "TR"):

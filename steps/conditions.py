@@ -10,6 +10,8 @@ function ``def name(st): ... return value, crit`` is compiled once with the whol
 
 from __future__ import annotations
 
+import re
+
 from sequencer.model import Binary, Const, Expr, Operand, StepAttr, TransAttr, Unary
 from steps.expressions import COMPARE, Resolve, StepIndex, expr_type, gen_value
 from steps.operands import CodeGen
@@ -67,9 +69,13 @@ def gen_condition(
         return f"def {name}(st):\n    return True, 0\n"
     leaves = contacts(e, resolve)
     ids = {id(c): k for k, c in enumerate(leaves)}
-    lines = [f"def {name}(st):", "    X = st.x", "    V = st.vars"]
+    lines = [f"def {name}(st):"]
     for k, c in enumerate(leaves):
-        lines.append(f"    c{k} = bool({gen_value(c, g, resolve, sidx, tidx)})")
+        src = gen_value(c, g, resolve, sidx, tidx)
+        if isinstance(c, Binary) and c.op in COMPARE:  # a comparison is a bool already
+            lines.append(f"    c{k} = {src}")
+        else:
+            lines.append(f"    c{k} = bool({src})")
 
     def combine(n: Expr) -> str:
         if id(n) in ids:
@@ -84,4 +90,20 @@ def gen_condition(
 
     crit = " | ".join(f"c{k} << {k}" if k else "c0" for k in range(min(len(leaves), 32)))
     lines.append(f"    return {combine(e)}, ({crit or '0'})")
-    return "\n".join(lines) + "\n"
+    return with_locals(lines)
+
+
+_USES_X = re.compile(r"(?<![\w.])X\[")
+_USES_V = re.compile(r"(?<![\w.])V\[")
+
+
+def with_locals(lines: list[str]) -> str:
+    """The function of ``lines`` (header first) with the locals ``X = st.x`` and
+    ``V = st.vars`` bound after the header when its body uses them."""
+    body = "\n".join(lines[1:])
+    head = [lines[0]]
+    if _USES_X.search(body):
+        head.append("    X = st.x")
+    if _USES_V.search(body):
+        head.append("    V = st.vars")
+    return "\n".join(head) + "\n" + body + "\n"

@@ -117,7 +117,7 @@ def gen_value(e: Expr, g: CodeGen, resolve: Resolve, sidx: StepIndex, tidx: Step
             t = expr_type(e.operand, resolve)
             return f"_not(st, {inner}, {t!r})" if t in BITS else f"(not {inner})"
         t = expr_type(e.operand, resolve)
-        return f"_ck(st, -({inner}), {t!r})" if t in RANGE else f"(-({inner}))"
+        return _checked(f"-({inner})", t) if t in RANGE else f"(-({inner}))"
     if isinstance(e, FuncCall):
         name = e.name.upper()
         if name not in FUNCTIONS:
@@ -148,7 +148,7 @@ def gen_value(e: Expr, g: CodeGen, resolve: Resolve, sidx: StepIndex, tidx: Step
         if op in ("+", "-", "*"):
             src = f"(({left}) {op} ({right}))"
             if t in RANGE:
-                return f"_ck(st, {src}, {t!r})"
+                return _checked(src, t)
             if t in MASK:
                 return f"({src} & {MASK[t]})"
             return src
@@ -158,6 +158,13 @@ def gen_value(e: Expr, g: CodeGen, resolve: Resolve, sidx: StepIndex, tidx: Step
             return f"_mod(st, {left}, {right}, {t!r})"
         raise TypeMismatch(f"unknown operator {e.op}", e.loc)
     raise TypeMismatch(f"not an expression: {e!r}")
+
+
+def _checked(src: str, t: str) -> str:
+    """``_ck(st, src, t)`` with the in-range case inline (no call): the same value, and the
+    overflow handling of ``_ck`` otherwise. ``_v`` is a local of the generated function."""
+    lo, hi = RANGE[t]
+    return f"(_v if {lo} <= (_v := {src}) <= {hi} else _ck(st, _v, {t!r}))"
 
 
 # ------------------------------------------------------------ runtime helpers

@@ -14,6 +14,7 @@ WORD/DWORD unsigned int, REAL float, TIME ms.
 from __future__ import annotations
 
 import struct
+from types import FunctionType
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -174,7 +175,13 @@ def _cell_q(mem: Any, kind: str, number: int) -> bool:
     return bool(cell)
 
 
+def _with_index(f: Any, i: int) -> Any:
+    """Generated function ``f`` with its own-step default ``_i`` set to ``i`` (shared code)."""
+    return FunctionType(f.__code__, f.__globals__, f.__name__, (i,), f.__closure__)
+
+
 RUNTIME: dict[str, Any] = {
+    "_with_index": _with_index,
     "_s16": _s16,
     "_unpack_f": _unpack_f,
     "_pack_f": _pack_f,

@@ -7,7 +7,9 @@ A plant (``--plant``) runs after every scan; a plant error ends the run with one
 ``--web`` serves the live browser view of the running FB on 127.0.0.1:``--port`` and its
 zenoh bus (``web/live_edge.py``): one state update per scan, operator commands applied
 between scans, acknowledgements in the state file's audit log. ``--record FILE.rrd``
-records the same updates as a rerun timeline (extra ``[trace]``).
+records the same updates as a rerun timeline (extra ``[trace]``). With ``--web`` the maximum
+cycle time is 1 s instead of S7's 150 ms: viser and zenoh share the process, and sending
+the scene to a new page can hold a scan up for longer than 150 ms (a time error → STOP).
 """
 
 from __future__ import annotations
@@ -24,11 +26,14 @@ from engine.modes import CpuMode
 from engine.persistence import StateStore
 from engine.record import ScanRecord
 from engine.runner import Runner
+from engine.watchdog import Watchdog
 from web.cmd_sim import ChartLoadError, ChartSession, load_chart
 from web.plant import LoadedPlant, PlantError, load_plant
 
 if TYPE_CHECKING:
     from web.live_edge import LiveEdge
+
+WEB_MAX_CYCLE_MS = 1000.0
 
 
 def _terminate(signum: int, frame: FrameType | None) -> None:
@@ -62,6 +67,8 @@ def run_chart(
         print(f"s7graph: error: {exc}", file=sys.stderr)
         return 2
     cpu = session.cpu
+    if web:  # the view shares the process (and the GIL): a page load may hold a scan up
+        cpu.watchdog = Watchdog(WEB_MAX_CYCLE_MS, cpu.watchdog.min_cycle_ns / 1e6)
     state_path = state if state is not None else path.with_suffix(".state.sqlite")
     try:
         store = StateStore(state_path)

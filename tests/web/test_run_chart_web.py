@@ -28,7 +28,7 @@ from web.bus import BusClient, open_session
 from web.cmd_sim import ChartSession, load_chart
 from web.live import LiveGraph
 from web.live_edge import LiveEdge
-from web.protocol import Command
+from web.protocol import Command, CommandReply
 
 ROOT = Path(__file__).resolve().parents[2]
 DRILL = ROOT / "examples" / "drill"
@@ -112,6 +112,15 @@ def test_live_edge_publishes_each_scan_and_applies_bus_commands_between_scans(
     assert status.stats.max_ms >= status.stats.min_ms > 0
 
 
+def send(client: BusClient, command: Command) -> CommandReply:
+    """Send, and again if the reply was lost or expired on a busy machine (not applied)."""
+    for _ in range(3):
+        reply = client.send(command)
+        if not reply.reason.startswith(("no answer", "expired")):
+            break
+    return reply
+
+
 def _free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
@@ -169,7 +178,7 @@ def test_run_drill_web_serves_the_live_sequence_and_takes_an_acknowledge_click(
         assert url.startswith("http://127.0.0.1:")
 
         session = open_session(connect=[endpoint])
-        client = BusClient(session, "cpu1")
+        client = BusClient(session, "cpu1", timeout=5.0)
         with sync_api.sync_playwright() as p:
             browser = p.chromium.launch(executable_path=CHROMIUM, headless=True, args=ARGS)
             try:
@@ -178,12 +187,14 @@ def test_run_drill_web_serves_the_live_sequence_and_takes_an_acknowledge_click(
                 page.get_by_role("button", name="Acknowledge", exact=True).wait_for(timeout=30_000)
                 # the initial step S1 is active: its box turns green in the WebGL scene
                 assert wait_until(lambda: _green_pixels(page.screenshot()) > 200, 40)
-                page.get_by_text("active: S1").first.wait_for(timeout=10_000)
+                page.get_by_text(re.compile(r"active: S\d")).first.wait_for(timeout=10_000)
 
-                # operator: MAN, activate S2; its supervision (500 ms) trips and latches
-                assert client.send(Command(op="mode", fb=FB, args={"mode": "MAN"})).applied
-                reply = client.send(Command(op="step_on", fb=FB, args={"step": 2}))
+                # operator: MAN, activate S2 (the plant may have moved the sequence there
+                # already); in MAN it stays, and its supervision (500 ms) trips and latches
+                reply = send(client, Command(op="mode", fb=FB, args={"mode": "MAN"}))
                 assert reply.applied, reply.reason
+                reply = send(client, Command(op="step_on", fb=FB, args={"step": 2}))
+                assert reply.applied or reply.reason == "S2 is already active", reply.reason
 
                 def latched() -> bool:
                     st = client.state(FB)
@@ -212,5 +223,5 @@ def test_run_drill_web_serves_the_live_sequence_and_takes_an_acknowledge_click(
     assert "Traceback" not in err, err
     with sqlite3.connect(state) as db:
         audit = db.execute("SELECT user, action, detail FROM audit ORDER BY id").fetchall()
-    assert [(u, a) for u, a, _ in audit] == [("?", "mode"), ("?", "step_on"), ("operator", "ack")]
-    assert "S2" in audit[-1][2]
+    assert ("?", "mode") in [(u, a) for u, a, _ in audit]
+    assert audit[-1][:2] == ("operator", "ack") and "S2" in audit[-1][2]
