@@ -94,9 +94,7 @@ class GraphRuntime:
         # fast path of step 4 (AUTO, no HALT/OFF, no skip steps, default order): per step,
         # ``nochk`` = no interlock and no supervision; ``plain`` = nochk and every leaving
         # transition has this step as its only source (no join)
-        self._nochk = tuple(
-            prog.ilc[i] is None and prog.svc[i] is None for i in range(cc.n_steps)
-        )
+        self._nochk = tuple(prog.ilc[i] is None and prog.svc[i] is None for i in range(cc.n_steps))
         self._plain = tuple(
             self._nochk[i] and all(len(cc.tr_src[j]) == 1 for j in cc.leaving[i])
             for i in range(cc.n_steps)
@@ -235,13 +233,37 @@ class GraphRuntime:
             self._last_in = cur
             self._latch(inputs)
             self.display.dirty = True
-        if self.multi:
+        # the active steps by sequencer, and the step times (T; U unless disturbed; HALT_TM
+        # freezes both), in one pass over the active steps
+        last = st.last_ns
+        dt = now_ns - last if last >= 0 else 0
+        st.last_ns = now_ns
+        active = st.active
+        if dt and not st.tm_halted:
+            t_ns, u_ns, il_err, sv_err = st.t_ns, st.u_ns, st.il_err, st.sv_err
+            if self.multi:
+                by_seq = self._by_seq
+                for lst in by_seq:
+                    if lst:
+                        lst.clear()
+                step_seq = cc.step_seq
+                for i in active:
+                    by_seq[step_seq[i]].append(i)
+                    t_ns[i] += dt
+                    if not (il_err[i] or sv_err[i]):
+                        u_ns[i] += dt
+            else:
+                for i in active:
+                    t_ns[i] += dt
+                    if not (il_err[i] or sv_err[i]):
+                        u_ns[i] += dt
+        elif self.multi:
             by_seq = self._by_seq
             for lst in by_seq:
                 if lst:
                     lst.clear()
             step_seq = cc.step_seq
-            for i in st.active:
+            for i in active:
                 by_seq[step_seq[i]].append(i)
         self._target = None
         if self._commands:
@@ -261,15 +283,6 @@ class GraphRuntime:
         if st.left:
             st.left.clear()
         st.ov = False
-        last = st.last_ns
-        dt = now_ns - last if last >= 0 else 0
-        st.last_ns = now_ns
-        if dt and not st.tm_halted:
-            t_ns, u_ns, il_err, sv_err = st.t_ns, st.u_ns, st.il_err, st.sv_err
-            for i in st.active:
-                t_ns[i] += dt
-                if not (il_err[i] or sv_err[i]):
-                    u_ns[i] += dt
         for i in carry:
             if st.x[i]:
                 self._raise(i, EV_S1)
@@ -419,6 +432,18 @@ class GraphRuntime:
         crit_old = st.crit_old
         tt = st.tt
         zero = st.zeroed
+        active = st.active
+        left = st.left
+        entered = st.entered
+        ev_steps = st.ev_steps
+        log = st.log
+        il_err = st.il_err
+        t_ns = st.t_ns
+        u_ns = st.u_ns
+        act_ns = st.act_ns
+        now = st.last_ns
+        by_seq = self._by_seq
+        step_seq = cc.step_seq
         sw: tuple[Any, ...] = (None, False, False, ())
         rule = MODE_RULES["AUTO"]
         for k in range(len(seqs)):
@@ -440,18 +465,44 @@ class GraphRuntime:
                 tt[j] = v
                 if v:
                     st.fired.append(j)
-                    self._deactivate(i)
+                    # _deactivate(i), inline (i is active, without fault)
+                    x[i] = False
+                    active.remove(i)
+                    if multi:
+                        steps.remove(i)
+                    left.append(i)
+                    final.append(i)
+                    il_err[i] = False
+                    il_ok[i] = True
+                    if not ev[i]:
+                        ev_steps.append(i)
+                    ev[i] |= EV_S0
+                    log.append((i, EV_S0))
                     for d in tr_dst[j]:
                         if not x[d]:
-                            self._activate(d)
+                            # _activate(d), inline
+                            x[d] = True
+                            t_ns[d] = 0
+                            u_ns[d] = 0
+                            act_ns[d] = now
+                            il_err[d] = False
+                            sv_err[d] = False
+                            active.append(d)
+                            if multi:
+                                by_seq[step_seq[d]].append(d)
+                            entered.append(d)
+                            if not ev[d]:
+                                ev_steps.append(d)
+                            ev[d] |= EV_S1
+                            log.append((d, EV_S1))
                     break
             if final:  # switched
-                if not all(nochk[s] for s in steps):  # d: a new step has IL or SV
+                if not (nochk[steps[0]] if len(steps) == 1 else all(nochk[s] for s in steps)):
+                    # d: a new step has an interlock or a supervision
                     self._conditions_and_actions(kk, steps)
                     continue
                 # e: the final scan of the step left (this sequencer's), then the rows
                 keep: list[int] = []
-                step_seq = cc.step_seq
                 fin = prog.fin
                 for f in final:
                     if kk >= 0 and step_seq[f] != kk:

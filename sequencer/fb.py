@@ -25,6 +25,7 @@ from sfb import s5_counters, s5_timers
 from sfb.alarms import message_list
 
 STATE_VAR = "G7_STATE"
+_tuple_new = tuple.__new__
 _EVENT_OF_BIT = {1 << k: name for k, name in enumerate(EVENT_NAMES)}
 
 
@@ -137,9 +138,13 @@ class GraphFB:
             self._sync_messages(ctx, idb, rt, st)
         if st.log:
             step_numbers = self.cc.step_numbers
-            for i, bit in st.log:
-                ctx.emit(StepEvent(self.cc.name, idb.number, step_numbers[i],
-                                   _EVENT_OF_BIT[bit], ctx.cycle))  # fmt: skip
+            name, number, cycle, emit = self.cc.name, idb.number, ctx.cycle, ctx.emit
+            for i, bit in st.log:  # tuple.__new__: a StepEvent without its Python __new__
+                emit(
+                    _tuple_new(
+                        StepEvent, (name, number, step_numbers[i], _EVENT_OF_BIT[bit], cycle)
+                    )
+                )
 
     def _sync_messages(self, ctx: Any, idb: InstanceDB, rt: GraphRuntime, st: GraphState) -> None:
         """MESSAGES := TRUE (SPEC §2.10): bring the CPU's message list in line with this

@@ -18,7 +18,6 @@ operands are reset, then the S0 rows run.
 from __future__ import annotations
 
 import re
-
 from collections.abc import Callable
 
 from engine.errors import S7Error

@@ -14,8 +14,8 @@ WORD/DWORD unsigned int, REAL float, TIME ms.
 from __future__ import annotations
 
 import struct
-from types import FunctionType
 from dataclasses import dataclass, field
+from types import FunctionType
 from typing import Any
 
 from engine.errors import SourceLocation, SymbolError

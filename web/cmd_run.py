@@ -101,13 +101,36 @@ def run_program(
     except Exception as exc:
         store.close()
         return _fail(state_path, f"state does not fit this program: {exc}")
-    previous = signal.signal(signal.SIGTERM, _terminate)
     runner = Runner(cpu, cycle_ms=cycle_ms, store=store, on_record=_report)
+    run_until_stopped(
+        runner, store, what=path.name, restored=restored, state_path=state_path,
+        duration_s=duration_s, on_start=_report,
+    )  # fmt: skip
+    return 0
+
+
+def run_until_stopped(
+    runner: Runner,
+    store: StateStore,
+    *,
+    what: str,
+    restored: bool,
+    state_path: Path,
+    duration_s: float | None,
+    on_start: Callable[[ScanRecord], object] | None = None,
+    close: Callable[[], object] | None = None,
+) -> None:
+    """Warm-start the runner's CPU (``on_start`` gets the startup record), say so on stderr
+    with ``what``, save the state, and scan until Ctrl-C/SIGTERM/``duration_s``. Always:
+    SIGTERM's handler back, the runner shut down, ``close()``, the store closed."""
+    cpu = runner.cpu
+    previous = signal.signal(signal.SIGTERM, _terminate)
     try:
         record = cpu.start("warm")
-        _report(record)
+        if on_start is not None:
+            on_start(record)
         how = f"warm restart from {state_path}" if restored else "fresh start"
-        print(f"s7graph: {path.name} in {cpu.mode} ({how})", file=sys.stderr)
+        print(f"s7graph: {what} in {cpu.mode} ({how})", file=sys.stderr)
         store.save(cpu)
         if cpu.mode is CpuMode.RUN:
             runner.run(duration_s=duration_s)
@@ -116,5 +139,6 @@ def run_program(
     finally:
         signal.signal(signal.SIGTERM, previous)
         runner.shutdown("s7graph run ended")
+        if close is not None:
+            close()
         store.close()
-    return 0

@@ -14,10 +14,8 @@ the scene to a new page can hold a scan up for longer than 150 ms (a time error 
 
 from __future__ import annotations
 
-import signal
 import sys
 from pathlib import Path
-from types import FrameType
 from typing import TYPE_CHECKING
 
 from engine.clock import SystemClock
@@ -27,17 +25,14 @@ from engine.persistence import StateStore
 from engine.record import ScanRecord
 from engine.runner import Runner
 from engine.watchdog import Watchdog
-from web.cmd_sim import ChartLoadError, ChartSession, load_chart
+from web.cmd_run import run_until_stopped
+from web.cmd_sim import ChartSession, fail
 from web.plant import LoadedPlant, PlantError, load_plant
 
 if TYPE_CHECKING:
     from web.live_edge import LiveEdge
 
 WEB_MAX_CYCLE_MS = 1000.0
-
-
-def _terminate(signum: int, frame: FrameType | None) -> None:
-    raise KeyboardInterrupt
 
 
 def run_chart(
@@ -53,19 +48,12 @@ def run_chart(
     record: Path | None = None,
 ) -> int:
     """Run ``path`` until Ctrl-C/SIGTERM/``duration_s``; 0 clean, 1 plant error, 2 bad chart."""
-    try:
-        cc, table = load_chart(path, symbols)
-    except ChartLoadError as exc:
-        for line in exc.lines:
-            print(line, file=sys.stderr)
-        return 2
     clock = SystemClock()
     try:
-        session = ChartSession(cc, table, clock)
+        session = ChartSession.load(path, symbols, clock)
         loaded: LoadedPlant | None = load_plant(plant) if plant is not None else None
-    except S7Error as exc:
-        print(f"s7graph: error: {exc}", file=sys.stderr)
-        return 2
+    except S7Error as exc:  # ChartLoadError included
+        return fail(exc)
     cpu = session.cpu
     if web:  # the view shares the process (and the GIL): a page load may hold a scan up
         cpu.watchdog = Watchdog(WEB_MAX_CYCLE_MS, cpu.watchdog.min_cycle_ns / 1e6)
@@ -101,25 +89,13 @@ def run_chart(
             live.on_record(record, stats=cpu.stats, runner=runner)
 
     runner = Runner(cpu, cycle_ms=cycle_ms, store=store, on_record=on_record)
-    previous = signal.signal(signal.SIGTERM, _terminate)
-    try:
-        cpu.start("warm")
-        how = f"warm restart from {state_path}" if restored else "fresh start"
-        print(f"s7graph: {path.name} ({cc.name}) in {cpu.mode} ({how})", file=sys.stderr)
-        store.save(cpu)
-        if cpu.mode is CpuMode.RUN:
-            runner.run(duration_s=duration_s)
-    except KeyboardInterrupt:
-        pass
-    finally:
-        signal.signal(signal.SIGTERM, previous)
-        runner.shutdown("s7graph run ended")
-        if live is not None:
-            live.close()
-        store.close()
+    run_until_stopped(
+        runner, store, what=f"{path.name} ({session.cc.name})", restored=restored,
+        state_path=state_path, duration_s=duration_s,
+        close=live.close if live is not None else None,
+    )  # fmt: skip
     if failure:
-        print(f"s7graph: error: {failure[0]}", file=sys.stderr)
-        return 1
+        return fail(failure[0], 1)
     return 0
 
 

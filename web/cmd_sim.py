@@ -74,6 +74,15 @@ def load_chart(path: Path, symbols: Path | None = None) -> tuple[CompiledChart, 
     return cc, table
 
 
+def fail(error: object, status: int = 2) -> int:
+    """Report ``error`` on stderr and return the exit ``status``: a ``ChartLoadError`` as its
+    diagnostics, one a line, anything else as one ``s7graph: error:`` line."""
+    lines = error.lines if isinstance(error, ChartLoadError) else [f"s7graph: error: {error}"]
+    for line in lines:
+        print(line, file=sys.stderr)
+    return status
+
+
 def _fmt(d: Any) -> str:
     try:
         from sequencer.diagnostics import Diagnostic, format_diagnostic
@@ -96,6 +105,12 @@ class ChartSession:
         self.cpu.mem.symbols = symbols
         self.graph = GraphFB(cc)
         install_all(self.cpu, [self.graph])
+
+    @classmethod
+    def load(cls, path: Path, symbols: Path | None, clock: Clock) -> ChartSession:
+        """``load_chart`` (raises ``ChartLoadError``) and a session of it on ``clock``."""
+        cc, table = load_chart(path, symbols)
+        return cls(cc, table, clock)
 
     # ------------------------------------------------------------ names
 
@@ -238,14 +253,7 @@ def sim_command(
 ) -> int:
     """Run ``chart`` for ``cycles`` cycles; return the exit status (SPEC §4)."""
     try:
-        cc, table = load_chart(chart, symbols)
-    except ChartLoadError as exc:
-        for line in exc.lines:
-            print(line, file=sys.stderr)
-        return 2
-    clock = VirtualClock()
-    try:
-        session = ChartSession(cc, table, clock)
+        session = ChartSession.load(chart, symbols, VirtualClock())
         stim = _read_stimulus(stimulus)
         names = [w.strip() for w in watch.split(",") if w.strip()]
         for name in names:
@@ -254,18 +262,15 @@ def sim_command(
             for name in values:
                 session.check_name(name, writing=True)
         loaded: LoadedPlant | None = load_plant(plant) if plant is not None else None
-    except S7Error as exc:
-        print(f"s7graph: error: {exc}", file=sys.stderr)
-        return 2
+    except S7Error as exc:  # ChartLoadError included
+        return fail(exc)
     out: TextIO = sys.stdout if trace is None else open(trace, "w", encoding="utf-8")  # noqa: SIM115
     try:
         return _run(session, stim, names, loaded, cycle_ms, cycles, out)
     except PlantError as exc:
-        print(f"s7graph: error: {exc}", file=sys.stderr)
-        return 1
+        return fail(exc, 1)
     except S7Error as exc:
-        print(f"s7graph: error: {exc}", file=sys.stderr)
-        return 2
+        return fail(exc)
     finally:
         if out is not sys.stdout:
             out.close()

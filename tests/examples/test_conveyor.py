@@ -5,14 +5,13 @@
 from __future__ import annotations
 
 import itertools
-import json
 from pathlib import Path
 
 import pytest
 
-from web.cli import main
+from tests.examples.helpers import EXAMPLES, edges, sim_example, stimulus_file
 
-EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "conveyor"
+EXAMPLE = EXAMPLES / "conveyor"
 WATCH = ("Belt_A", "Belt_B", "Spill", "Belt_B_empty", "Emergency_stop", "ERR_FLT")
 
 
@@ -20,35 +19,13 @@ def run_sim(
     tmp_path: Path, *, stimulus: Path = EXAMPLE / "stimulus.jsonl", cycles: int = 4500
 ) -> list[dict]:
     """Run the example's ``s7graph sim`` command (10 ms cycle); return the trace records."""
-    trace = tmp_path / "trace.jsonl"
-    rc = main([
-        "sim", str(EXAMPLE / "conveyor.s7g"), "--symbols", str(EXAMPLE / "symbols.txt"),
-        "--plant", str(EXAMPLE / "plant.py"), "--stimulus", str(stimulus),
-        "--cycle-ms", "10", "--cycles", str(cycles), "--watch", ",".join(WATCH),
-        "--trace", str(trace),
-    ])  # fmt: skip
-    assert rc == 0
-    records = [json.loads(line) for line in trace.read_text().splitlines()]
-    assert len(records) == cycles
-    return records
+    return sim_example(tmp_path, "conveyor", watch=WATCH, stimulus=stimulus, cycles=cycles)
 
 
 @pytest.fixture(scope="module")
 def records(tmp_path_factory: pytest.TempPathFactory) -> list[dict]:
     """The trace of the example's own command (stimulus and plant as shipped)."""
     return run_sim(tmp_path_factory.mktemp("trace"))
-
-
-def edges(records: list[dict], name: str, rising: bool = True) -> list[int]:
-    """The times (ms) at which the watched ``name`` rose (or fell)."""
-    times: list[int] = []
-    before: bool | None = None
-    for rec in records:
-        now = bool(rec["values"][name])
-        if before is not None and now == rising and before != rising:
-            times.append(rec["t_ms"])
-        before = now
-    return times
 
 
 def value_at(records: list[dict], name: str, t_ms: int) -> object:
@@ -97,12 +74,10 @@ def test_three_alternative_paths_leave_the_initial_step(records: list[dict]) -> 
 
 
 def test_emergency_wins_over_start_pressed_in_the_same_cycle(tmp_path: Path) -> None:
-    stim = tmp_path / "stim.jsonl"
-    stim.write_text(
-        json.dumps({"at_ms": 500, "set": {"Start_button": True, "Emergency_stop": True}})
-        + "\n"
-        + json.dumps({"at_ms": 1000, "set": {"Start_button": False, "Emergency_stop": False}})
-        + "\n"
+    stim = stimulus_file(
+        tmp_path,
+        {"at_ms": 500, "set": {"Start_button": True, "Emergency_stop": True}},
+        {"at_ms": 1000, "set": {"Start_button": False, "Emergency_stop": False}},
     )
     records = run_sim(tmp_path, stimulus=stim, cycles=200)
     assert not any(rec["values"]["Belt_B"] or rec["values"]["Belt_A"] for rec in records)

@@ -3,14 +3,14 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import pytest
 
-from web.cli import main
+from tests.examples import helpers
+from tests.examples.helpers import EXAMPLES, entered, path_of, sim_example, stimulus_file
 
-EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "drill"
+EXAMPLE = EXAMPLES / "drill"
 WATCH = (
     "Dr_mot_on", "Cool_pump_on", "Lower_drill", "Raise_drill", "Clamp_workp",
     "Cl_press_ok", "Drill_down", "Drill_up", "ERR_FLT", "S_NO",
@@ -26,16 +26,10 @@ def run_sim(
     cycle_ms: int = 10,
 ) -> list[dict]:
     """Run the example's ``s7graph sim`` command; return the trace records."""
-    trace = tmp_path / "trace.jsonl"
-    rc = main([
-        "sim", str(EXAMPLE / "drill.s7g"), "--symbols", str(EXAMPLE / "symbols.txt"),
-        "--plant", str(plant), "--stimulus", str(stimulus), "--cycle-ms", str(cycle_ms),
-        "--cycles", str(cycles), "--watch", ",".join(WATCH), "--trace", str(trace),
-    ])  # fmt: skip
-    assert rc == 0
-    records = [json.loads(line) for line in trace.read_text().splitlines()]
-    assert len(records) == cycles
-    return records
+    return sim_example(
+        tmp_path, "drill", watch=WATCH, plant=plant, stimulus=stimulus, cycles=cycles,
+        cycle_ms=cycle_ms,
+    )  # fmt: skip
 
 
 @pytest.fixture(scope="module")
@@ -44,45 +38,8 @@ def records(tmp_path_factory: pytest.TempPathFactory) -> list[dict]:
     return run_sim(tmp_path_factory.mktemp("trace"))
 
 
-def path_of(records: list[dict]) -> list[list[str]]:
-    """The successive sets of active steps, repeated sets collapsed."""
-    path: list[list[str]] = []
-    for rec in records:
-        if not path or rec["active"] != path[-1]:
-            path.append(rec["active"])
-    return path
-
-
-def entered(records: list[dict], step: str) -> list[int]:
-    """The times (ms) of every cycle in which ``step`` became active."""
-    times, before = [], False
-    for rec in records:
-        now = step in rec["active"]
-        if now and not before:
-            times.append(rec["t_ms"])
-        before = now
-    return times
-
-
 def plant_variant(tmp_path: Path, **attrs: object) -> Path:
-    """A plant file subclassing the example's ``Plant`` with other class attributes."""
-    body = "".join(f"    {name} = {value!r}\n" for name, value in attrs.items())
-    base = str(EXAMPLE / "plant.py")
-    path = tmp_path / "plant_variant.py"
-    path.write_text(
-        "import importlib.util\n"
-        f"_spec = importlib.util.spec_from_file_location('drill_plant', {base!r})\n"
-        "_mod = importlib.util.module_from_spec(_spec)\n"
-        "_spec.loader.exec_module(_mod)\n"
-        f"class Plant(_mod.Plant):\n{body}"
-    )
-    return path
-
-
-def stimulus_file(tmp_path: Path, *lines: dict) -> Path:
-    path = tmp_path / "stimulus.jsonl"
-    path.write_text("".join(json.dumps(line) + "\n" for line in lines))
-    return path
+    return helpers.plant_variant(tmp_path, "drill", **attrs)
 
 
 def test_drill_clamps_lowers_dwells_raises_and_releases(records: list[dict]) -> None:

@@ -3,26 +3,19 @@ piece and a slow clamp now and then faults S2 until someone acknowledges (SPEC Â
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
-from web.cli import main
+from tests.examples.helpers import EXAMPLES, sim_example, stimulus_file
 
-EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "drill"
+EXAMPLE = EXAMPLES / "drill"
 
 
 def _sim(tmp_path: Path, stimulus: list[dict[str, object]], cycles: int) -> list[dict]:
-    stim = tmp_path / "stim.jsonl"
-    stim.write_text("".join(json.dumps(s) + "\n" for s in stimulus))
-    trace = tmp_path / "trace.jsonl"
-    rc = main([
-        "sim", str(EXAMPLE / "drill.s7g"), "--symbols", str(EXAMPLE / "symbols.txt"),
-        "--plant", str(EXAMPLE / "demo_plant.py"), "--stimulus", str(stim),
-        "--cycle-ms", "10", "--cycles", str(cycles), "--watch", "ERR_FLT,pieces",
-        "--trace", str(trace),
-    ])  # fmt: skip
-    assert rc == 0
-    return [json.loads(line) for line in trace.read_text().splitlines()]
+    return sim_example(
+        tmp_path, "drill", plant=EXAMPLE / "demo_plant.py",
+        stimulus=stimulus_file(tmp_path, *stimulus), cycles=cycles,
+        watch=("ERR_FLT", "pieces"), every_cycle=False,
+    )  # fmt: skip
 
 
 def test_demo_drill_faults_on_a_slow_clamp_and_holds_s2_without_acknowledgement(

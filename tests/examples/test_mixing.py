@@ -4,15 +4,14 @@
 
 from __future__ import annotations
 
-import json
-from collections.abc import Callable
 from pathlib import Path
 
 import pytest
 
-from web.cli import main
+from tests.examples import helpers
+from tests.examples.helpers import EXAMPLES, first, on, path_of, sim_example, stimulus_file
 
-EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "mixing"
+EXAMPLE = EXAMPLES / "mixing"
 WATCH = (
     "Speisepumpe_A", "Einlassventil_A", "Speiseventil_A", "Speisepumpe_A_Fehler",
     "Speisepumpe_A_Ein", "Speisepumpe_B", "Einlassventil_B", "Speiseventil_B", "Ruehrwerk",
@@ -28,16 +27,10 @@ def run_sim(
     cycles: int = 1200,
 ) -> list[dict]:
     """Run the example's ``s7graph sim`` command; return the trace records."""
-    trace = tmp_path / "trace.jsonl"
-    rc = main([
-        "sim", str(EXAMPLE / "mixing.s7g"), "--symbols", str(EXAMPLE / "symbols.txt"),
-        "--plant", str(plant), "--stimulus", str(stimulus), "--cycle-ms", "50",
-        "--cycles", str(cycles), "--watch", ",".join(WATCH), "--trace", str(trace),
-    ])  # fmt: skip
-    assert rc == 0
-    records = [json.loads(line) for line in trace.read_text().splitlines()]
-    assert len(records) == cycles
-    return records
+    return sim_example(
+        tmp_path, "mixing", watch=WATCH, plant=plant, stimulus=stimulus, cycles=cycles,
+        cycle_ms=50,
+    )  # fmt: skip
 
 
 @pytest.fixture(scope="module")
@@ -46,43 +39,8 @@ def records(tmp_path_factory: pytest.TempPathFactory) -> list[dict]:
     return run_sim(tmp_path_factory.mktemp("trace"))
 
 
-def path_of(records: list[dict]) -> list[list[str]]:
-    """The successive sets of active steps, repeated sets collapsed."""
-    path: list[list[str]] = []
-    for rec in records:
-        if not path or rec["active"] != path[-1]:
-            path.append(rec["active"])
-    return path
-
-
-def first(records: list[dict], predicate: Callable[[dict], bool]) -> int:
-    """The time (ms) of the first record for which ``predicate(record)`` holds."""
-    return next(rec["t_ms"] for rec in records if predicate(rec))
-
-
-def on(name: str) -> Callable[[dict], bool]:
-    return lambda rec: bool(rec["values"][name])
-
-
-def stimulus_file(tmp_path: Path, *lines: dict) -> Path:
-    path = tmp_path / "stimulus.jsonl"
-    path.write_text("".join(json.dumps(line) + "\n" for line in lines))
-    return path
-
-
 def plant_variant(tmp_path: Path, **attrs: object) -> Path:
-    """A plant file subclassing the example's ``Plant`` with other class attributes."""
-    body = "".join(f"    {name} = {value!r}\n" for name, value in attrs.items())
-    base = str(EXAMPLE / "plant.py")
-    path = tmp_path / "plant_variant.py"
-    path.write_text(
-        "import importlib.util\n"
-        f"_spec = importlib.util.spec_from_file_location('mixing_plant', {base!r})\n"
-        "_mod = importlib.util.module_from_spec(_spec)\n"
-        "_spec.loader.exec_module(_mod)\n"
-        f"class Plant(_mod.Plant):\n{body}"
-    )
-    return path
+    return helpers.plant_variant(tmp_path, "mixing", **attrs)
 
 
 START = ({"at_ms": 0, "set": {"NOT_AUS_aus": True}},

@@ -3,18 +3,8 @@
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
-_spec = importlib.util.spec_from_file_location(
-    "_rules", Path(__file__).with_name("test_cycle_rules.py")
-)
-assert _spec and _spec.loader
-_rules = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(_rules)
-Chart, seq = _rules.Chart, _rules.seq
-
-from sequencer.state import EV_A1, EV_V0, EV_V1  # noqa: E402
+from sequencer.state import EV_A1, EV_V0, EV_V1
+from tests.sequencer.helpers import Chart, seq
 
 IL = seq("""
   INITIAL_STEP S1 "a":

@@ -4,58 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from engine.clock import VirtualClock
-from engine.memory import Memory
-from sequencer.compile import compile_chart
-from sequencer.cycle import GraphRuntime
-from sequencer.params import is_pin
-from sequencer.parse import parse_chart
-
-
-class Chart:
-    """A chart from source text, called directly (no CPU), 10 ms per call."""
-
-    def __init__(self, sequences: str, *, header: str = "", params: str = "MAXIMUM") -> None:
-        text = (
-            f'FUNCTION_BLOCK "T"\n  PARAMETERS := {params};\n{header}\n{sequences}\n'
-            "END_FUNCTION_BLOCK\n"
-        )
-        self.cc = compile_chart(parse_chart(text, "t.s7g"))
-        self.mem = Memory()
-        self.clock = VirtualClock()
-        self.rt = GraphRuntime(self.cc, self.cc.bind(self.mem))
-        self.pins: dict[str, Any] = {}
-
-    def set(self, **values: Any) -> None:
-        for name, v in values.items():
-            if is_pin(name):
-                self.pins[name] = v
-            else:
-                self.mem.set(name.replace("_", "."), v)
-
-    def call(self, n: int = 1, ms: int = 10) -> None:
-        for _ in range(n):
-            self.rt.execute(self.pins, self.clock.now_ns())
-            self.clock.advance(ms)
-
-    @property
-    def active(self) -> list[str]:
-        st = self.rt.st
-        return [
-            self.cc.step_label(i) for i in sorted(st.active, key=self.cc.step_numbers.__getitem__)
-        ]
-
-    @property
-    def fired(self) -> list[str]:
-        return [self.cc.transition_label(j) for j in self.rt.st.fired]
-
-    def q(self, addr: str) -> bool:
-        return bool(self.mem.get(addr))
-
-
-def seq(body: str, number: int = 1) -> str:
-    return f'SEQUENCE {number} "s{number}"\n{body}\nEND_SEQUENCE\n'
-
+from tests.sequencer.helpers import Chart, seq
 
 LINEAR = seq("""
   INITIAL_STEP S1 "a": END_STEP

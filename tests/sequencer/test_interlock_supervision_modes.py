@@ -8,7 +8,7 @@ from __future__ import annotations
 import pytest
 
 from sequencer.state import GraphState
-from tests.sequencer.scenarios.harness import Run, chart_text
+from tests.sequencer.helpers import Run, chart_text
 
 
 def rules(options: str = "") -> Run:

@@ -12,7 +12,7 @@ from sequencer.messages import PROGRAM_USER, message_id, remote_acks, sync_messa
 from sequencer.parse import parse_chart
 from sequencer.state import GraphState
 from sfb.alarms import MessageList, MessageState, message_list
-from tests.sequencer.scenarios.harness import Run, chart_text
+from tests.sequencer.helpers import Run, chart_text
 
 SV1 = message_id("Msg_plant", 1, 1, "SV")
 IL1 = message_id("Msg_plant", 1, 1, "IL")

@@ -3,7 +3,7 @@ each through the FB pins that dialog drives. Chart: scenarios/control_sequencer.
 
 from __future__ import annotations
 
-from tests.sequencer.scenarios.harness import Run
+from tests.sequencer.helpers import Run
 
 MODES = ("AUTO_ON", "MAN_ON", "TAP_ON", "TOP_ON")
 

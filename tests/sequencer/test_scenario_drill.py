@@ -7,7 +7,7 @@ from __future__ import annotations
 from sequencer.display import criteria_by_name
 from sequencer.messages import PROGRAM_USER
 from sfb.alarms import MessageState
-from tests.sequencer.scenarios.harness import Run
+from tests.sequencer.helpers import Run
 
 
 def ready() -> Run:

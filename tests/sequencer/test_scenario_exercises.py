@@ -7,7 +7,7 @@ from __future__ import annotations
 import pytest
 
 from sequencer.params import PinError
-from tests.sequencer.scenarios.harness import Run
+from tests.sequencer.helpers import Run
 
 
 def started(name: str) -> Run:

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 from hypothesis import given, settings
 from hypothesis import strategies as hs
 
+from tests.sequencer.helpers import read_trace, write_sim_inputs
 from web.cmd_sim import sim_command
 
 CHART = """FUNCTION_BLOCK "Drill"
@@ -26,13 +26,9 @@ END_FUNCTION_BLOCK
 
 def run(tmp_path: Path, stim: list[dict], cycles: int = 6, watch: str = "Q0.0,S_NO,ERR_FLT",
         chart: str = CHART) -> tuple[int, list[dict]]:  # fmt: skip
-    (tmp_path / "c.s7g").write_text(chart)
-    (tmp_path / "s.jsonl").write_text("".join(json.dumps(s) + "\n" for s in stim))
-    out = tmp_path / "out.jsonl"
-    rc = sim_command(tmp_path / "c.s7g", stimulus=tmp_path / "s.jsonl", cycle_ms=10,
-                     cycles=cycles, watch=watch, trace=out)  # fmt: skip
-    lines = [json.loads(x) for x in out.read_text().splitlines()] if out.exists() else []
-    return rc, lines
+    c, s, out = write_sim_inputs(tmp_path, chart, stim)
+    rc = sim_command(c, stimulus=s, cycle_ms=10, cycles=cycles, watch=watch, trace=out)
+    return rc, read_trace(out)
 
 
 def test_sim_writes_one_line_per_cycle_with_the_contract_fields(tmp_path: Path) -> None:

@@ -15,7 +15,7 @@ from sequencer.compile import compile_chart
 from sequencer.fb import GraphFB, install_all
 from sequencer.parse import parse_chart
 from sequencer.validate import validate
-from tests.sequencer.spec_charts.common import chart, enter, leave, seq, source, two_steps
+from tests.sequencer.helpers import chart, enter, leave, seq, source, two_steps
 
 # ---------------------------------------------------------------- §2.8 qualifiers
 

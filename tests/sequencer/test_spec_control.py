@@ -12,7 +12,7 @@ from engine.cpu import Cpu
 from sequencer.compile import compile_chart
 from sequencer.fb import GraphFB, install_all
 from sequencer.parse import parse_chart
-from tests.sequencer.spec_charts.common import chart, enter, seq, source, two_steps
+from tests.sequencer.helpers import chart, enter, seq, source, two_steps
 
 # ---------------------------------------------------------------- §2.3 interlock
 

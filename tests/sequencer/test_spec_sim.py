@@ -3,11 +3,11 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import pytest
 
+from tests.sequencer.helpers import read_trace, write_sim_inputs
 from web.cli import main
 
 CHART = """FUNCTION_BLOCK "Sim"
@@ -32,10 +32,8 @@ END_FUNCTION_BLOCK
 
 def sim(tmp_path: Path, stim: list[dict], *, cycles: int = 8, watch: str = "Lamp",
         chart: str = CHART) -> tuple[int, list[dict]]:  # fmt: skip
-    (tmp_path / "c.s7g").write_text(chart, encoding="utf-8")
-    (tmp_path / "s.jsonl").write_text("".join(json.dumps(s) + "\n" for s in stim))
-    out = tmp_path / "out.jsonl"
-    argv = ["sim", str(tmp_path / "c.s7g"), "--stimulus", str(tmp_path / "s.jsonl"),
+    c, s, out = write_sim_inputs(tmp_path, chart, stim)
+    argv = ["sim", str(c), "--stimulus", str(s),
             "--cycle-ms", "10", "--cycles", str(cycles), "--trace", str(out)]  # fmt: skip
     if watch:
         argv += ["--watch", watch]
@@ -43,8 +41,7 @@ def sim(tmp_path: Path, stim: list[dict], *, cycles: int = 8, watch: str = "Lamp
         rc = main(argv)
     except SystemExit as exc:  # a Typer app may exit instead of returning
         rc = int(exc.code or 0)
-    lines = [json.loads(x) for x in out.read_text().splitlines()] if out.exists() else []
-    return rc, lines
+    return rc, read_trace(out)
 
 
 def test_active_is_sorted_by_step_number_not_by_name(tmp_path: Path) -> None:

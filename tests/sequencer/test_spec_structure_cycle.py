@@ -9,7 +9,7 @@ import pytest
 
 from sequencer.parse import parse_chart
 from sequencer.validate import validate
-from tests.sequencer.spec_charts.common import chart, enter, leave, seq, source, two_steps
+from tests.sequencer.helpers import chart, enter, leave, seq, source, two_steps
 
 # ---------------------------------------------------------------- §2.1 structure
 

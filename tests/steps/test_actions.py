@@ -2,16 +2,7 @@
 
 from __future__ import annotations
 
-import importlib.util
-from pathlib import Path
-
-_spec = importlib.util.spec_from_file_location(
-    "_rules", Path(__file__).parents[1] / "sequencer" / "test_cycle_rules.py"
-)
-assert _spec and _spec.loader
-_rules = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(_rules)
-Chart, seq = _rules.Chart, _rules.seq
+from tests.sequencer.helpers import Chart, seq
 
 
 def two(rows: str, *, header: str = "") -> object:

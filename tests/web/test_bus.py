@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import threading
-import time
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
 from sequencer.model import Chart, Sequence, Step, Transition
+from tests.web import helpers
 from web.bus import BusClient, BusPublisher, open_session
 from web.protocol import ChartLayout, Command, CommandReply, StepStateUpdate
 
@@ -41,12 +41,7 @@ def bus(tmp_path: Path) -> Iterator[tuple[BusPublisher, BusClient]]:
 
 
 def wait_until(predicate, timeout: float = 5.0) -> bool:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if predicate():
-            return True
-        time.sleep(0.02)
-    return bool(predicate())
+    return helpers.wait_until(predicate, timeout, poll=0.02)
 
 
 def send_in_background(

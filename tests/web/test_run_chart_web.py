@@ -8,7 +8,6 @@ its page in one headless Chromium, a supervision fault acknowledged by a click.
 from __future__ import annotations
 
 import io
-import os
 import queue
 import re
 import signal
@@ -18,12 +17,13 @@ import subprocess
 import sys
 import threading
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
 from engine.clock import VirtualClock
+from tests.web.helpers import chromium_page, needs_chromium, wait_until
 from web.bus import BusClient, open_session
 from web.cmd_sim import ChartSession, load_chart
 from web.live import LiveGraph
@@ -32,27 +32,7 @@ from web.protocol import Command, CommandReply
 
 ROOT = Path(__file__).resolve().parents[2]
 DRILL = ROOT / "examples" / "drill"
-CHROMIUM = "/usr/bin/chromium"
-ARGS = [
-    "--no-sandbox",
-    "--headless",
-    "--enable-unsafe-swiftshader",
-    "--use-angle=swiftshader",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-    "--no-first-run",
-]
 FB = "Seq_drill"
-
-
-def wait_until(predicate: Callable[[], object], timeout: float = 10.0) -> bool:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if predicate():
-            return True
-        time.sleep(0.05)
-    return bool(predicate())
 
 
 @pytest.fixture
@@ -138,11 +118,11 @@ def _green_pixels(png: bytes) -> int:
 
 
 @pytest.mark.timeout(150)
-@pytest.mark.skipif(not os.path.exists(CHROMIUM), reason=f"no browser at {CHROMIUM}")
+@needs_chromium
 def test_run_drill_web_serves_the_live_sequence_and_takes_an_acknowledge_click(
     tmp_path: Path,
 ) -> None:
-    sync_api = pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
+    pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
     state = tmp_path / "drill.sqlite"
     stderr = (tmp_path / "stderr.txt").open("w")
     command = [sys.executable, "-m", "web.cli", "run", str(DRILL / "drill.s7g")]
@@ -179,33 +159,27 @@ def test_run_drill_web_serves_the_live_sequence_and_takes_an_acknowledge_click(
 
         session = open_session(connect=[endpoint])
         client = BusClient(session, "cpu1", timeout=5.0)
-        with sync_api.sync_playwright() as p:
-            browser = p.chromium.launch(executable_path=CHROMIUM, headless=True, args=ARGS)
-            try:
-                page = browser.new_page(viewport={"width": 1280, "height": 800})
-                page.goto(url)
-                page.get_by_role("button", name="Acknowledge", exact=True).wait_for(timeout=30_000)
-                # the initial step S1 is active: its box turns green in the WebGL scene
-                assert wait_until(lambda: _green_pixels(page.screenshot()) > 200, 40)
-                page.get_by_text(re.compile(r"active: S\d")).first.wait_for(timeout=10_000)
+        with chromium_page(url) as page:
+            page.get_by_role("button", name="Acknowledge", exact=True).wait_for(timeout=30_000)
+            # the initial step S1 is active: its box turns green in the WebGL scene
+            assert wait_until(lambda: _green_pixels(page.screenshot()) > 200, 40)
+            page.get_by_text(re.compile(r"active: S\d")).first.wait_for(timeout=10_000)
 
-                # operator: MAN, activate S2 (the plant may have moved the sequence there
-                # already); in MAN it stays, and its supervision (500 ms) trips and latches
-                reply = send(client, Command(op="mode", fb=FB, args={"mode": "MAN"}))
-                assert reply.applied, reply.reason
-                reply = send(client, Command(op="step_on", fb=FB, args={"step": 2}))
-                assert reply.applied or reply.reason == "S2 is already active", reply.reason
+            # operator: MAN, activate S2 (the plant may have moved the sequence there
+            # already); in MAN it stays, and its supervision (500 ms) trips and latches
+            reply = send(client, Command(op="mode", fb=FB, args={"mode": "MAN"}))
+            assert reply.applied, reply.reason
+            reply = send(client, Command(op="step_on", fb=FB, args={"step": 2}))
+            assert reply.applied or reply.reason == "S2 is already active", reply.reason
 
-                def latched() -> bool:
-                    st = client.state(FB)
-                    return st is not None and st.latched == [2]
+            def latched() -> bool:
+                st = client.state(FB)
+                return st is not None and st.latched == [2]
 
-                assert wait_until(latched, 10)
-                page.get_by_text("error: S2").first.wait_for(timeout=10_000)
-                page.get_by_role("button", name="Acknowledge", exact=True).click()
-                page.get_by_text("ack applied").first.wait_for(timeout=15_000)
-            finally:
-                browser.close()
+            assert wait_until(latched, 10)
+            page.get_by_text("error: S2").first.wait_for(timeout=10_000)
+            page.get_by_role("button", name="Acknowledge", exact=True).click()
+            page.get_by_text("ack applied").first.wait_for(timeout=15_000)
         client.close()
         session.close()
         session = None

@@ -5,14 +5,14 @@ from __future__ import annotations
 
 import os
 import shutil
-import time
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import pytest
 
 from sequencer.model import Chart, Operand, Sequence, Step, Transition
+from tests.web.helpers import chromium_page, needs_chromium, wait_until
 from web.demo import ToySequencer, WebEdge, serve_view
 from web.protocol import ChartLayout, Command, StepStateUpdate
 from web.view import ACTIVE, DISTURBED, INACTIVE
@@ -20,23 +20,11 @@ from web.view import ACTIVE, DISTURBED, INACTIVE
 if TYPE_CHECKING:
     from playwright.sync_api import Page
 
-CHROMIUM = "/usr/bin/chromium"
-ARGS = [
-    "--no-sandbox",
-    "--headless",
-    "--enable-unsafe-swiftshader",
-    "--use-angle=swiftshader",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-    "--no-first-run",
-]
-
 pytestmark = [
     pytest.mark.timeout(90),
-    pytest.mark.skipif(not os.path.exists(CHROMIUM), reason=f"no browser at {CHROMIUM}"),
+    needs_chromium,
 ]
-sync_api = pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
+pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
 
 
 def small_chart() -> Chart:
@@ -90,25 +78,9 @@ def edge() -> Iterator[WebEdge]:
 
 @pytest.fixture(scope="module")
 def page(edge: WebEdge) -> Iterator[Page]:
-    with sync_api.sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, headless=True, args=ARGS)
-        try:
-            pg = browser.new_page(viewport={"width": 1280, "height": 800})
-            pg.goto(edge.url)
-            pg.get_by_role("button", name="Acknowledge").wait_for(timeout=30_000)
-            yield pg
-            pg.close()
-        finally:
-            browser.close()
-
-
-def wait_until(predicate: Callable[[], object], timeout: float = 10.0) -> bool:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if predicate():
-            return True
-        time.sleep(0.05)
-    return predicate()
+    with chromium_page(edge.url) as pg:
+        pg.get_by_role("button", name="Acknowledge").wait_for(timeout=30_000)
+        yield pg
 
 
 def test_control_sequencer_panel_offers_every_command(page: Page) -> None:

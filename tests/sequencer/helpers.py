@@ -1,13 +1,21 @@
-"""A small driver for scenario tests: one GRAPH FB through the real cycle
-(``sequencer.cycle.GraphRuntime``) on an engine ``Memory``, paced by a ``VirtualClock``.
+"""The shared drivers of the sequencer tests, imported as ``tests.sequencer.helpers``.
 
-FB input pins are held like the ``sim`` stimuli (SPEC §4): a value stays until set again.
-After every call the driver runs ``sequencer.messages.sync_messages`` into its own
-``MessageList`` — the integration the FB is meant to do (see messages.py).
+- ``Chart``: a chart from source text, called directly through ``GraphRuntime`` (no CPU,
+  no S5 cells, no message list), 10 ms per call; ``active`` gives step labels.
+- ``Run``: one GRAPH FB through the real cycle (``sequencer.cycle.GraphRuntime``) on an
+  engine ``Memory``, paced by a ``VirtualClock``. FB input pins are held like the ``sim``
+  stimuli (SPEC §4): a value stays until set again. After every call the driver runs
+  ``sequencer.messages.sync_messages`` into its own ``MessageList`` — the integration the
+  FB is meant to do (see messages.py). ``Run.scenario(name)`` loads
+  ``tests/sequencer/scenarios/<name>.s7g``.
+- ``source``/``seq``/``chart``/``two_steps``/``enter``/``leave``: the chart builders of the
+  SPEC conformance tests (``tests/sequencer/test_spec_*.py``), driven with ``Run``.
+- ``write_sim_inputs``/``read_trace``: the files of one ``s7graph sim`` run (SPEC §4).
 """
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 from typing import Any
 
@@ -25,15 +33,72 @@ from sfb import s5_counters, s5_timers
 from sfb.alarms import MessageList
 
 HERE = Path(__file__).resolve().parent
-ROOT = HERE.parents[2]
+SCENARIOS = HERE / "scenarios"
+
+
+# ---------------------------------------------------------------- chart source text
+
+
+def source(sequences: str, *, header: str = "", params: str = "MAXIMUM", name: str = "Spec") -> str:
+    """A ``FUNCTION_BLOCK "<name>"`` around ``sequences`` with ``PARAMETERS := params``."""
+    return (
+        f'FUNCTION_BLOCK "{name}"\n  PARAMETERS := {params};\n{header}\n{sequences}\n'
+        "END_FUNCTION_BLOCK\n"
+    )
+
+
+def seq(body: str, number: int = 1) -> str:
+    return f'SEQUENCE {number} "s{number}"\n{body}\nEND_SEQUENCE\n'
 
 
 def chart_text(name: str) -> tuple[str, str]:
     """The text and file name of ``tests/sequencer/scenarios/<name>.s7g``."""
-    path = HERE / f"{name}.s7g"
+    path = SCENARIOS / f"{name}.s7g"
     return path.read_text(encoding="utf-8"), str(path)
 
 
+# ---------------------------------------------------------------- Chart: the bare cycle
+
+
+class Chart:
+    """A chart from source text, called directly (no CPU), 10 ms per call."""
+
+    def __init__(self, sequences: str, *, header: str = "", params: str = "MAXIMUM") -> None:
+        text = source(sequences, header=header, params=params, name="T")
+        self.cc = compile_chart(parse_chart(text, "t.s7g"))
+        self.mem = Memory()
+        self.clock = VirtualClock()
+        self.rt = GraphRuntime(self.cc, self.cc.bind(self.mem))
+        self.pins: dict[str, Any] = {}
+
+    def set(self, **values: Any) -> None:
+        for name, v in values.items():
+            if is_pin(name):
+                self.pins[name] = v
+            else:
+                self.mem.set(name.replace("_", "."), v)
+
+    def call(self, n: int = 1, ms: int = 10) -> None:
+        for _ in range(n):
+            self.rt.execute(self.pins, self.clock.now_ns())
+            self.clock.advance(ms)
+
+    @property
+    def active(self) -> list[str]:
+        st = self.rt.st
+        return [
+            self.cc.step_label(i) for i in sorted(st.active, key=self.cc.step_numbers.__getitem__)
+        ]
+
+    @property
+    def fired(self) -> list[str]:
+        return [self.cc.transition_label(j) for j in self.rt.st.fired]
+
+    def q(self, addr: str) -> bool:
+        return bool(self.mem.get(addr))
+
+
+# ---------------------------------------------------------------- Run: FB + messages + S5 cells
 class Run:
     """One FB, its memory, its clock and its message list."""
 
@@ -167,3 +232,58 @@ class Run:
         fn = {"TL": "SE", "TD": "SS", "TF": "SF"}[op]
         cell.s_edge = False
         s5_timers.run(cell, fn, True, int(value), self.clock.now_ns())
+
+
+# ---------------------------------------------------------------- SPEC conformance builders
+
+
+def chart(sequences: str, *, header: str = "", params: str = "MAXIMUM") -> Run:
+    return Run(source(sequences, header=header, params=params), file="spec.s7g")
+
+
+def two_steps(rows: str, *, header: str = "", interlock: str = "", params: str = "MAXIMUM") -> Run:
+    """S1 (initial) -T1 I0.0-> S2 (``rows``) -T2 I0.1-> S3 -T3 I0.2-> S1."""
+    il = f"INTERLOCK := {interlock};" if interlock else ""
+    return chart(
+        seq(f"""
+      INITIAL_STEP S1 "a": END_STEP
+      STEP S2 "b": {il} {rows} END_STEP
+      STEP S3 "c": END_STEP
+      TRANSITION T1 FROM S1 TO S2 := I0.0;
+      TRANSITION T2 FROM S2 TO S3 := I0.1;
+      TRANSITION T3 FROM S3 TO S1 := I0.2;
+    """),
+        header=header,
+        params=params,
+    )
+
+
+def enter(run: Run) -> None:
+    """First call (S1), then a call that switches T1 into S2; I0.0 is released again."""
+    run.call()
+    run.set(I0_0=True).call()
+    run.set(I0_0=False)
+    assert run.active == [2]
+
+
+def leave(run: Run) -> None:
+    """One call that switches T2 out of S2 into S3."""
+    run.set(I0_1=True).call()
+    run.set(I0_1=False)
+    assert run.active == [3]
+
+
+# ---------------------------------------------------------------- ``s7graph sim`` files
+
+
+def write_sim_inputs(tmp_path: Path, chart: str, stim: list[dict]) -> tuple[Path, Path, Path]:
+    """``c.s7g`` and ``s.jsonl`` (one stimulus a line) in ``tmp_path``; returns their paths
+    and the path of the trace ``out.jsonl``."""
+    (tmp_path / "c.s7g").write_text(chart, encoding="utf-8")
+    (tmp_path / "s.jsonl").write_text("".join(json.dumps(s) + "\n" for s in stim))
+    return tmp_path / "c.s7g", tmp_path / "s.jsonl", tmp_path / "out.jsonl"
+
+
+def read_trace(out: Path) -> list[dict]:
+    """The trace lines of a sim run; none if the run wrote no trace."""
+    return [json.loads(x) for x in out.read_text().splitlines()] if out.exists() else []
