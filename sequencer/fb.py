@@ -169,33 +169,40 @@ class GraphFB:
         return self._ctx.call(ref, inst, **params)
 
     def _counter(self, op: str, number: int, value: Any) -> None:
-        """CS (load BCD ``C#``), CU, CD, CR on counter cell C ``number`` (event rows: once)."""
-        cell = s5_counters.cell_of(self._mem.counters, number)
-        if op == "CS":
-            cell.s_edge = False
-            s5_counters.set_preset(cell, True, int(value))
-        elif op == "CU":
-            cell.cu_edge = False
-            s5_counters.count_up(cell, True)
-        elif op == "CD":
-            cell.cd_edge = False
-            s5_counters.count_down(cell, True)
-        else:
-            s5_counters.reset(cell, True)
+        counter_row(self._mem.counters, op, number, value)
 
     def _timer(self, op: str, number: int, value: Any) -> None:
-        """TL (extended pulse), TD (retentive on-delay), TF (off-delay), TR (reset) on timer
-        cell T ``number``: started once in the event call, then run by the CPU's time base."""
-        cell = s5_timers.cell_of(self._mem.timers, number)
-        now = self._ctx.now_ns
-        if op == "TR":
-            s5_timers.reset(cell)
-            return
-        fn = {"TL": "SE", "TD": "SS", "TF": "SF"}[op]
+        timer_row(self._mem.timers, op, number, value, self._ctx.now_ns)
+
+
+def counter_row(cells: Any, op: str, number: int, value: Any) -> None:
+    """CS (load BCD ``C#``), CU, CD, CR on counter cell C ``number`` (event rows: once)."""
+    cell = s5_counters.cell_of(cells, number)
+    if op == "CS":
         cell.s_edge = False
-        s5_timers.run(cell, fn, True, int(value), now)
-        if op == "TF":
-            s5_timers.run(cell, fn, False, int(value), now)
+        s5_counters.set_preset(cell, True, int(value))
+    elif op == "CU":
+        cell.cu_edge = False
+        s5_counters.count_up(cell, True)
+    elif op == "CD":
+        cell.cd_edge = False
+        s5_counters.count_down(cell, True)
+    else:
+        s5_counters.reset(cell, True)
+
+
+def timer_row(cells: Any, op: str, number: int, value: Any, now_ns: int) -> None:
+    """TL (extended pulse), TD (retentive on-delay), TF (off-delay), TR (reset) on timer
+    cell T ``number``: started once in the event call, then run by the CPU's time base."""
+    cell = s5_timers.cell_of(cells, number)
+    if op == "TR":
+        s5_timers.reset(cell)
+        return
+    fn = {"TL": "SE", "TD": "SS", "TF": "SF"}[op]
+    cell.s_edge = False
+    s5_timers.run(cell, fn, True, int(value), now_ns)
+    if op == "TF":
+        s5_timers.run(cell, fn, False, int(value), now_ns)
 
 
 def startup_obs(*fbs: GraphFB, extra_ob1: Any = None) -> tuple[OB, OB]:

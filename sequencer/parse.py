@@ -25,8 +25,8 @@ from __future__ import annotations
 import contextlib
 import re
 from collections.abc import Callable
-from copy import copy
 from contextvars import ContextVar
+from copy import copy
 from functools import cache, lru_cache
 from pathlib import Path
 from typing import Any
@@ -690,12 +690,13 @@ _NEEDS_LAST = frozenset({"symbol_decl"})
 @cache
 def _tree_builder() -> ParseTreeBuilder:
     """lark's child filtering / ``?rule`` inlining / placeholders, without positions."""
-    return ParseTreeBuilder(_parser().rules, Tree, maybe_placeholders=True)
+    return ParseTreeBuilder(_parser().rules, Tree, maybe_placeholders=True)  # type: ignore[no-untyped-call]
 
 
 def _callbacks(builder: _Build) -> dict[Any, Callable[[list[Any]], Any]]:
     """The LALR reduce callbacks calling ``builder``'s methods (see :class:`_Build`)."""
-    callbacks = _tree_builder().create_callback(builder)
+    callbacks: dict[Any, Callable[[list[Any]], Any]]
+    callbacks = _tree_builder().create_callback(builder)  # type: ignore[no-untyped-call]
     for rule, f in list(callbacks.items()):
         name = rule.origin.name
         if name in _NEEDS_FIRST:
@@ -766,7 +767,7 @@ def _is_pass_through(rule: Any) -> bool:
     if not rule.options.expand1 or rule.alias or len(rule.expansion) != 1:
         return False
     sym = rule.expansion[0]
-    if sym.is_term and sym.filter_out or not sym.is_term and sym.name.startswith("_"):
+    if (sym.is_term and sym.filter_out) or (not sym.is_term and sym.name.startswith("_")):
         return False
     return not any(rule.options.empty_indices or ())
 

@@ -25,11 +25,11 @@ from engine.symbols import SymbolTable
 from sequencer.compile import compile_chart
 from sequencer.compiled import CompiledChart
 from sequencer.cycle import GraphRuntime
+from sequencer.fb import counter_row, timer_row
 from sequencer.messages import sync_messages
 from sequencer.params import Direction, check_pin, is_pin
 from sequencer.parse import parse_chart
 from sequencer.state import EVENT_BITS, GraphState
-from sfb import s5_counters, s5_timers
 from sfb.alarms import MessageList
 
 HERE = Path(__file__).resolve().parent
@@ -211,27 +211,10 @@ class Run:
     # ------------------------------------------------------------ S5 cells for CS/TL rows
 
     def _counter(self, op: str, number: int, value: Any) -> None:
-        cell = s5_counters.cell_of(self.mem.counters, number)
-        if op == "CS":
-            cell.s_edge = False
-            s5_counters.set_preset(cell, True, int(value))
-        elif op == "CU":
-            cell.cu_edge = False
-            s5_counters.count_up(cell, True)
-        elif op == "CD":
-            cell.cd_edge = False
-            s5_counters.count_down(cell, True)
-        else:
-            s5_counters.reset(cell, True)
+        counter_row(self.mem.counters, op, number, value)
 
     def _timer(self, op: str, number: int, value: Any) -> None:
-        cell = s5_timers.cell_of(self.mem.timers, number)
-        if op == "TR":
-            s5_timers.reset(cell)
-            return
-        fn = {"TL": "SE", "TD": "SS", "TF": "SF"}[op]
-        cell.s_edge = False
-        s5_timers.run(cell, fn, True, int(value), self.clock.now_ns())
+        timer_row(self.mem.timers, op, number, value, self.clock.now_ns())
 
 
 # ---------------------------------------------------------------- SPEC conformance builders
