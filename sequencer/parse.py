@@ -895,6 +895,8 @@ def parse_chart(text: str, file: str = "<input>") -> Chart:
         chart = _fast_parse(text, _callbacks(builder))
     except _GiveUp:
         pass
+    except (AttributeError, KeyError, TypeError, RuntimeError):  # lark internals changed:
+        pass  # the fast path is only a shortcut; lark's own parser below is the reference
     else:
         if builder.diags:
             raise ChartSyntaxError(builder.diags)
