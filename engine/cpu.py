@@ -147,6 +147,8 @@ class CallContext:
         A ``str`` actual for a non-string parameter is an operand (``"MW10"``); OUT and
         IN_OUT operands receive the values after the call (behaviours 33, 34).
         """
+        if isinstance(block, FB) and isinstance(instance, InstanceDB) and instance.fb is block:
+            return self._call_fb(block, instance, params)  # the common case, checks below
         blk: OB | FB | FC | DB
         if isinstance(block, FB | FC):
             blk = block
@@ -165,6 +167,25 @@ class CallContext:
             return self._call_fc(blk, params)
         raise BlockError(f"{blk.label} cannot be called")
 
+    def run_fb(self, blk: FB, idb: InstanceDB) -> None:
+        """Call FB ``blk`` with its instance DB ``idb`` and no parameters, for a caller that
+        reads no outputs (``call`` without building the outputs dict; same checks)."""
+        if idb.fb is not blk and idb.fb != blk:
+            raise BlockError(f"{idb.name} is an instance of {idb.fb.label}, not {blk.label}")
+        if self.depth >= self.cpu.max_nesting:
+            raise NestingOverflow(
+                f"block nesting deeper than {self.cpu.max_nesting} at {blk.label}"
+            )
+        self.depth += 1
+        try:
+            blk.body(self, idb)
+        except _Fault:
+            raise
+        except Exception as exc:
+            raise _Fault(blk.label, exc) from exc
+        finally:
+            self.depth -= 1
+
     def _enter(self, label: str) -> None:
         self.depth += 1
         if self.depth > self.cpu.max_nesting:
@@ -175,7 +196,7 @@ class CallContext:
         values = idb.values
         table = blk.params
         writes: list[tuple[str, str, str]] | None = None
-        for name, actual in params.items():
+        for name, actual in params.items() if params else ():
             spec = table.get(name)
             if spec is None or spec[0] is Decl.STAT:
                 raise BlockError(f"{blk.label} has no parameter {name!r}")
@@ -210,10 +231,7 @@ class CallContext:
         if writes:
             for name, operand, type_name in writes:
                 self.mem.write_as(_addr(operand), type_name, values[name])
-        out: dict[str, object] = {}
-        for name in blk.out_names:
-            out[name] = values[name]
-        return out
+        return {name: values[name] for name in blk.out_names}
 
     def _call_fc(self, blk: FC, params: dict[str, object]) -> dict[str, object]:
         table = blk.params

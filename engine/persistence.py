@@ -2,18 +2,21 @@
 
 Saved: retentive M/T/C and retain DBs (``Memory.snapshot()``), every instance DB
 (``InstanceDB.snapshot()``, OBJECT values through ``to_state()``), the diagnostic buffer,
-and the restart type. ``maybe_save`` writes after each scan that changed retentive data (or
-at most every ``interval_ms``); ``save`` on stop. A killed process comes back through
-``load`` + warm restart with every retentive value intact. Alarms and the audit log
-(who acknowledged or downloaded what, when) are append-only tables.
+the restart type, and any extra named parts registered with ``add_part`` (the CPU's
+message list: the engine does not know its type). ``maybe_save`` writes after each scan that
+changed retentive data (or at most every ``interval_ms``); ``save`` on stop; all in one
+transaction. A killed process comes back through ``load`` + warm restart with every
+retentive value intact. Alarms (every message event, with the acknowledging user) and the
+audit log (who acknowledged or downloaded what, when) are append-only tables.
 """
 
 from __future__ import annotations
 
 import json
 import sqlite3
+from collections.abc import Callable, Iterable
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol, runtime_checkable
 
 from engine.cpu import Cpu
 from engine.record import DiagEntry
@@ -26,10 +29,26 @@ CREATE TABLE IF NOT EXISTS diagnostics (
     seq INTEGER PRIMARY KEY, t_ns INTEGER, event_id INTEGER, block TEXT, message TEXT,
     address TEXT);
 CREATE TABLE IF NOT EXISTS alarms (
-    id INTEGER PRIMARY KEY AUTOINCREMENT, t_ns INTEGER, key TEXT, state TEXT, text TEXT);
+    id INTEGER PRIMARY KEY AUTOINCREMENT, t_ns INTEGER, key TEXT, state TEXT, text TEXT,
+    user TEXT NOT NULL DEFAULT '', cpu_ns INTEGER);
+CREATE TABLE IF NOT EXISTS parts (name TEXT PRIMARY KEY, state TEXT NOT NULL);
 CREATE TABLE IF NOT EXISTS audit (
     id INTEGER PRIMARY KEY AUTOINCREMENT, t_ns INTEGER, user TEXT, action TEXT, detail TEXT);
 """
+
+
+_ALARM_COLUMNS = ("t_ns", "key", "state", "text", "user", "cpu_ns")
+
+
+@runtime_checkable
+class AlarmEvent(Protocol):
+    """What ``log_alarms`` takes from ``ScanRecord.alarms`` (``sfb.alarms.MessageEvent``)."""
+
+    kind: str
+    msg_id: int | str
+    t_ns: int
+    user: str
+    text: str
 
 
 def _dumps(data: object) -> str:
@@ -46,7 +65,13 @@ class StateStore:
         self._db.execute("PRAGMA journal_mode=WAL")
         self._db.execute("PRAGMA synchronous=NORMAL")
         self._db.executescript(_SCHEMA)
-        self._last: tuple[str, str] | None = None
+        columns = {row[1] for row in self._db.execute("PRAGMA table_info(alarms)")}
+        for column, decl in (("user", "TEXT NOT NULL DEFAULT ''"), ("cpu_ns", "INTEGER")):
+            if column not in columns:  # a state file from before the column existed
+                self._db.execute(f"ALTER TABLE alarms ADD COLUMN {column} {decl}")
+        self._parts: dict[str, tuple[Callable[[], object], Callable[[Any], None]]] = {}
+        self._parts_cache: tuple[tuple[int, ...], str, object] | None = None
+        self._last: tuple[str, str, str] | None = None
         self._last_ns: int | None = None
         self._diag_saved = 0
         self.saves = 0
@@ -58,10 +83,26 @@ class StateStore:
         row = self._db.execute("SELECT 1 FROM meta WHERE key='memory'").fetchone()
         return row is not None
 
-    def _state(self, cpu: Cpu) -> tuple[str, str]:
+    def add_part(
+        self, name: str, snapshot: Callable[[], object], restore: Callable[[Any], None]
+    ) -> None:
+        """Persist ``snapshot()`` (JSON-able plain data) under ``name`` with every save, in
+        the same transaction; ``load`` hands it back to ``restore``. Register before ``load``.
+        A ``snapshot`` returning the very same object as last time is not encoded again."""
+        self._parts[name] = (snapshot, restore)
+
+    def _state(self, cpu: Cpu) -> tuple[str, str, str]:
         memory = _dumps(cpu.mem.snapshot())
         inst = _dumps({str(n): [i.fb.label, i.snapshot()] for n, i in cpu.instance_dbs.items()})
-        return memory, inst
+        return memory, inst, self._parts_json()
+
+    def _parts_json(self) -> str:
+        snaps = [(name, snap()) for name, (snap, _) in self._parts.items()]
+        ids = tuple(id(data) for _, data in snaps)
+        if self._parts_cache is None or self._parts_cache[0] != ids:
+            # the snapshots are kept alive with their ids, so an id cannot be reused
+            self._parts_cache = (ids, _dumps(dict(snaps)), snaps)
+        return self._parts_cache[1]
 
     def maybe_save(self, cpu: Cpu) -> bool:
         """Save if retentive data changed since the last save (and the interval has passed)."""
@@ -83,10 +124,11 @@ class StateStore:
         """Save unconditionally (on stop)."""
         self._write(cpu, self._state(cpu))
 
-    def _write(self, cpu: Cpu, state: tuple[str, str]) -> None:
-        memory, inst = state
+    def _write(self, cpu: Cpu, state: tuple[str, str, str]) -> None:
+        memory, inst, parts = state
         db = self._db
         rows = json.loads(inst)
+        part_rows = [(name, _dumps(data)) for name, data in json.loads(parts).items()]
         new_diag = cpu.diagnostics.since(self._diag_saved)
         first_seq = cpu.diagnostics.total - len(new_diag)
         db.execute("BEGIN")
@@ -103,6 +145,7 @@ class StateStore:
                 "INSERT INTO instances VALUES (?, ?, ?)",
                 [(int(n), label, _dumps(snap)) for n, (label, snap) in rows.items()],
             )
+            db.executemany("INSERT OR REPLACE INTO parts VALUES (?, ?)", part_rows)
             db.executemany(
                 "INSERT OR REPLACE INTO diagnostics VALUES (?, ?, ?, ?, ?, ?)",
                 [
@@ -123,7 +166,8 @@ class StateStore:
         return None if row is None else str(row[0])
 
     def load(self, cpu: Cpu) -> bool:
-        """Restore retentive memory, DBs, instance DBs and diagnostics into a STOPped CPU.
+        """Restore retentive memory, DBs, instance DBs, diagnostics and the registered parts
+        into a STOPped CPU.
 
         Instance DBs are matched by number and FB label; returns False if the file is empty.
         """
@@ -141,15 +185,44 @@ class StateStore:
         for t_ns, event_id, block, message, address in entries[-cpu.diagnostics.capacity :]:
             cpu.diagnostics.add(DiagEntry(t_ns, event_id, block, message, address))
         self._diag_saved = cpu.diagnostics.total
+        for name, state in self._db.execute("SELECT name, state FROM parts"):
+            part = self._parts.get(str(name))
+            if part is not None:
+                part[1](json.loads(state))
         return True
 
     # ---- alarms and audit (hooks for sfb/alarms and the web commands) ---------------------
 
-    def log_alarm(self, t_ns: int, key: str, state: str, text: str = "") -> None:
+    def log_alarm(
+        self,
+        t_ns: int,
+        key: str,
+        state: str,
+        text: str = "",
+        user: str = "",
+        cpu_ns: int | None = None,
+    ) -> None:
         self._db.execute(
-            "INSERT INTO alarms (t_ns, key, state, text) VALUES (?, ?, ?, ?)",
-            (t_ns, key, state, text),
+            "INSERT INTO alarms (t_ns, key, state, text, user, cpu_ns) VALUES (?, ?, ?, ?, ?, ?)",
+            (t_ns, key, state, text, user, cpu_ns),
         )
+
+    def log_alarms(self, events: Iterable[object], wall_ns: int) -> int:
+        """Append every message event among ``events`` (a ``ScanRecord.alarms``) at wall time
+        ``wall_ns``: kind as state, the acknowledging user, the CPU clock's time. Returns
+        how many were logged."""
+        rows = [
+            (wall_ns, str(e.msg_id), e.kind, e.text, e.user, e.t_ns)
+            for e in events
+            if isinstance(e, AlarmEvent)
+        ]
+        if rows:
+            self._db.executemany(
+                "INSERT INTO alarms (t_ns, key, state, text, user, cpu_ns) "
+                "VALUES (?, ?, ?, ?, ?, ?)",
+                rows,
+            )
+        return len(rows)
 
     def log_audit(self, t_ns: int, user: str, action: str, detail: str = "") -> None:
         self._db.execute(
@@ -158,8 +231,8 @@ class StateStore:
         )
 
     def alarms(self) -> list[dict[str, Any]]:
-        cur = self._db.execute("SELECT t_ns, key, state, text FROM alarms ORDER BY id")
-        return [dict(zip(("t_ns", "key", "state", "text"), r, strict=True)) for r in cur]
+        cur = self._db.execute(f"SELECT {', '.join(_ALARM_COLUMNS)} FROM alarms ORDER BY id")
+        return [dict(zip(_ALARM_COLUMNS, r, strict=True)) for r in cur]
 
     def audit(self) -> list[dict[str, Any]]:
         cur = self._db.execute("SELECT t_ns, user, action, detail FROM audit ORDER BY id")

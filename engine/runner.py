@@ -2,8 +2,9 @@
 
 The only engine module allowed ``threading`` and sleeping: it calls ``cpu.scan()`` every
 ``cycle_ms`` (a minimum cycle time: a late scan starts the next one at once), hands each
-``ScanRecord`` to ``on_record``, lets a ``StateStore`` save changed retentive data, and
-keeps statistics of the scan execution time and of overruns.
+``ScanRecord`` to ``on_record``, lets a ``StateStore`` save changed retentive data and log
+the scan's message events (``ScanRecord.alarms``, stamped with the wall clock), and keeps
+statistics of the scan execution time and of overruns.
 """
 
 from __future__ import annotations
@@ -60,8 +61,10 @@ class Runner:
             record = self.cpu.scan()
             self.exec_stats.add(time.perf_counter_ns() - started)
             self.scans += 1
-            if self.store is not None and self.cpu.mode is CpuMode.RUN:
-                self.store.maybe_save(self.cpu)
+            if self.store is not None:
+                self.log_alarms(record)
+                if self.cpu.mode is CpuMode.RUN:
+                    self.store.maybe_save(self.cpu)
             if self.on_record is not None:
                 self.on_record(record)
             due += self.cycle_s
@@ -71,6 +74,11 @@ class Runner:
             else:
                 self.overruns += 1
                 due = time.monotonic()
+
+    def log_alarms(self, record: ScanRecord) -> None:
+        """Append the message events of ``record`` to the store's alarm log (wall time)."""
+        if self.store is not None and record.alarms:
+            self.store.log_alarms(record.alarms, time.time_ns())
 
     def start_thread(self, *, duration_s: float | None = None) -> threading.Thread:
         """Run the loop in a daemon thread (for hosts that own the main thread)."""
@@ -91,6 +99,7 @@ class Runner:
         self.join()
         self.cpu.stop(reason)
         record = self.cpu.scan()
+        self.log_alarms(record)
         if self.on_record is not None:
             self.on_record(record)
         if self.store is not None:

@@ -21,8 +21,15 @@ from sequencer.compiled import CompiledChart
 from sequencer.model import BlockCall, Chart, Coil, Operand, Transition
 from sequencer.names import resolve_operand
 from sequencer.params import pin as pin_info
-from steps.actions import gen_step_actions
-from steps.conditions import contact_text, contacts, gen_condition, with_locals
+from steps.actions import step_action_parts
+from steps.conditions import (
+    condition_parts,
+    condition_source,
+    contact_text,
+    contacts,
+    gen_condition,
+    with_locals,
+)
 from steps.expressions import gen_value
 from steps.operands import WIDTH_TYPE, CodeGen, Ref
 
@@ -155,27 +162,34 @@ def compile_chart(chart: Chart, symbols: Any = None) -> CompiledChart:
         for i in srcs:
             leaving[i].append(j)
 
+    conds: list[tuple[list[str], str, str]] = []
     for j, t in enumerate(trans):
-        parts.append(gen_condition(f"_t{j}", t.condition, g, res, res.step, res.transition))
+        conds.append(condition_parts(t.condition, g, res, res.step, res.transition))
+        parts.append(condition_source(f"_t{j}", conds[j]))
     for i, s in enumerate(steps):
         if s.interlock is not None:
             parts.append(gen_condition(f"_il{i}", s.interlock, g, res, res.step, res.transition))
         if s.supervision is not None:
             parts.append(gen_condition(f"_sv{i}", s.supervision, g, res, res.step, res.transition))
+        a_body: list[str] | None = None
         try:
-            a_src, f_src = gen_step_actions(i, s, g, res, res.step, res.transition)
+            a_src, f_src, a_body = step_action_parts(i, s, g, res, res.step, res.transition)
         except S7Error as exc:
             res.problems.append(_Problem(exc.where or s.loc, f"S{s.number}: {exc.message}"))
             a_src = f"def _a{i}(st, R, ev, c_ok, zero):\n    pass\n"
             f_src = f"def _f{i}(st, R, ev):\n    pass\n"
         parts += [a_src, f_src]
+        plain = s.interlock is None and s.supervision is None
+        if a_body is not None and plain and all(len(tr_src[j]) == 1 for j in leaving[i]):
+            parts.append(_gen_step(i, leaving[i], conds, a_body))
     parts.append(_gen_permanent("_before", chart.before, g, res))
     parts.append(_gen_permanent("_after", chart.after, g, res))
 
     if res.problems:
         raise ChartError(res.problems)
-    source = "\n".join(_share(parts))
-    code = compile(source, f"<chart {chart.name}>", "exec")
+    distinct, aliases = _share(parts)
+    code = compile("\n".join(distinct), f"<chart {chart.name}>", "exec")
+    source = "\n".join(_alias_source(src, aliases) for src in parts)
     var_inits = {
         v.name: (v.init.value if v.init is not None else _zero(v.type)) for v in chart.vars
     }
@@ -214,34 +228,81 @@ def compile_chart(chart: Chart, symbols: Any = None) -> CompiledChart:
         step_index=step_index,
         transition_index=tr_index,
         warnings=tuple(str(w) for w in warnings),
+        aliases=tuple(aliases.values()),
     )
 
 
-_OWN_INDEX = re.compile(r", _i=(\d+)\):")
+def _gen_step(
+    i: int, leaving: list[int], conds: list[tuple[list[str], str, str]], a_body: list[str]
+) -> str:
+    """``def _s<i>(st, R, ev, c_ok, zero, _i, _j0, …) -> int`` (``Program.step``): step
+    ``i``'s leaving transitions in priority order, each as ``tcond`` then ``crit_old``/
+    ``crit``/``tt`` as the cycle writes them; the first that holds is returned, else the
+    step's action rows run and -1 is returned. The indices are defaults, so the code of
+    like steps is shared (``_share``)."""
+    defaults = "".join(f", _j{k}={j}" for k, j in enumerate(leaving))
+    lines = [f"def _s{i}(st, R, ev, c_ok, zero, _i={i}{defaults}):"]
+    if leaving:
+        lines += ["    _cr = st.crit", "    _tt = st.tt", "    _co = st.crit_old"]
+    for k, j in enumerate(leaving):
+        body, value, crit = conds[j]
+        lines += body
+        lines += [
+            f"    _v = {value}",
+            f"    _co[_j{k}] = _cr[_j{k}]",
+            f"    _cr[_j{k}] = {crit}",
+            f"    _tt[_j{k}] = _v",
+            "    if _v:",
+            f"        return _j{k}",
+        ]
+    lines += a_body
+    lines.append("    return -1")
+    return with_locals(lines)
 
 
-def _share(parts: list[str]) -> list[str]:
-    """Generated functions with the same code (apart from their name and the own-step
-    default ``_i``) are compiled once: the others are bound to the first one's function
-    (``_with_index`` gives it another ``_i``). Keeps ``compile()`` proportional to the
-    distinct code, not to the steps (bench: 250 steps, 1000 functions → 3 distinct)."""
-    seen: dict[str, tuple[str, str | None]] = {}
+_DEFAULTS = re.compile(r"((?:, _[ij]\d*=\d+)+)\):")
+_DEFAULT_VALUE = re.compile(r"=(\d+)")
+
+
+Alias = tuple[str, str, "tuple[int, ...] | None"]
+
+
+def _share(parts: list[str]) -> tuple[list[str], dict[str, Alias]]:
+    """Generated functions with the same code (apart from their name and the index
+    defaults ``_i``, ``_j0``, …) are compiled once: the others are aliases of the first one
+    — (name, first name, its other defaults or None), bound by ``CompiledChart.bind``.
+    Keeps ``compile()`` proportional to the distinct code, not to the steps (bench: 250
+    steps, 1000 functions → 5 distinct). Returns the distinct sources and the aliases by
+    name."""
+    seen: dict[str, tuple[str, tuple[int, ...] | None]] = {}
     out: list[str] = []
+    aliases: dict[str, Alias] = {}
     for src in parts:
         head, _, rest = src.partition("(")
         name = head[4:]
-        m = _OWN_INDEX.search(rest, 0, rest.find("\n"))
-        own = m.group(1) if m else None
-        key = _OWN_INDEX.sub(", _i=):", rest, 1) if m else rest
+        m = _DEFAULTS.search(rest, 0, rest.find("\n"))
+        own = None
+        key = rest
+        if m:
+            own = tuple(int(v) for v in _DEFAULT_VALUE.findall(m.group(1)))
+            key = rest[: m.start(1)] + _DEFAULT_VALUE.sub("=", m.group(1)) + rest[m.end(1) :]
         first = seen.get(key)
         if first is None:
             seen[key] = (name, own)
             out.append(src)
-        elif first[1] == own:
-            out.append(f"{name} = {first[0]}\n")
         else:
-            out.append(f"{name} = _with_index({first[0]}, {own})\n")
-    return out
+            aliases[name] = (name, first[0], None if first[1] == own else own)
+    return out, aliases
+
+
+def _alias_source(src: str, aliases: dict[str, Alias]) -> str:
+    """``src`` for ``CompiledChart.source``: an alias as the assignment it stands for."""
+    a = aliases.get(src[4 : src.find("(")])
+    if a is None:
+        return src
+    if a[2] is None:
+        return f"{a[0]} = {a[1]}\n"
+    return f"{a[0]} = _with_defaults({a[1]}, {a[2]!r})\n"
 
 
 def _zero(type_name: str) -> Any:

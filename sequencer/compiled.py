@@ -11,7 +11,7 @@ returns the ``Program`` (tuples of functions indexed like the steps/transitions)
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from types import CodeType
+from types import CodeType, FunctionType
 from typing import Any
 
 from sequencer.model import Chart, ChartOptions
@@ -26,7 +26,11 @@ class Program:
 
     ``tcond[j](st) -> (bool, crit)``; ``ilc[i]``/``svc[i]`` the same or None (no interlock /
     supervision); ``act[i](st, R, ev, c_ok, zero)``; ``fin[i](st, R, ev)``;
-    ``before(st, R)``/``after(st, R)`` the permanent instructions."""
+    ``before(st, R)``/``after(st, R)`` the permanent instructions; ``step[i](st, R, ev,
+    c_ok, zero) -> int`` (None for a step with an interlock, a supervision or a join): the
+    leaving transitions of step ``i`` in priority order (``crit_old``/``crit``/``tt`` as
+    each is evaluated) returning the first that holds, else -1 after running ``act[i]``'s
+    rows."""
 
     tcond: tuple[Any, ...]
     ilc: tuple[Any, ...]
@@ -35,6 +39,7 @@ class Program:
     fin: tuple[Any, ...]
     before: Any
     after: Any
+    step: tuple[Any, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -69,6 +74,10 @@ class CompiledChart:
     step_index: dict[int, int] = field(default_factory=dict)
     transition_index: dict[int, int] = field(default_factory=dict)
     warnings: tuple[str, ...] = ()
+    # generated functions that share the code of another (``compile._share``): (name, name
+    # of the compiled one, its other index defaults or None); ``code`` holds only the
+    # distinct ones, ``source`` shows all
+    aliases: tuple[tuple[str, str, tuple[int, ...] | None], ...] = ()
 
     @property
     def name(self) -> str:
@@ -91,6 +100,11 @@ class CompiledChart:
         for k, (area, db) in enumerate(self.buffers):
             ns[f"_m{k}"] = area_buffer(mem, area, db)
         exec(self.code, ns)
+        for name, first, defaults in self.aliases:
+            f = ns[first]
+            if defaults is not None:
+                f = FunctionType(f.__code__, f.__globals__, f.__name__, defaults, f.__closure__)
+            ns[name] = f
         n, m = self.n_steps, self.n_transitions
         return Program(
             tcond=tuple(ns[f"_t{j}"] for j in range(m)),
@@ -100,6 +114,7 @@ class CompiledChart:
             fin=tuple(ns[f"_f{i}"] for i in range(n)),
             before=ns["_before"],
             after=ns["_after"],
+            step=tuple(ns.get(f"_s{i}") for i in range(n)),
         )
 
     def step_label(self, i: int) -> str:

@@ -95,11 +95,21 @@ class GraphRuntime:
         # ``nochk`` = no interlock and no supervision; ``plain`` = nochk and every leaving
         # transition has this step as its only source (no join)
         self._nochk = tuple(prog.ilc[i] is None and prog.svc[i] is None for i in range(cc.n_steps))
+        fused = prog.step  # per plain step: its transitions, then its rows (Program.step)
         self._plain = tuple(
-            self._nochk[i] and all(len(cc.tr_src[j]) == 1 for j in cc.leaving[i])
+            self._nochk[i]
+            and all(len(cc.tr_src[j]) == 1 for j in cc.leaving[i])
+            and i < len(fused)
+            and fused[i] is not None
             for i in range(cc.n_steps)
         )
+        self._none = (False,) * cc.n_steps
+        self._tcond, self._act = prog.tcond, prog.act
         self._forcing = cc.options.ack_forces_switch
+        self._lean = not self.codesys  # execute may take _quiet_call
+        plan = self.display.plan
+        self._live_pins = bool(plan.step_pins or plan.transition_pins)
+        self.outs_changed = True  # st.outputs rewritten in the last call (GraphFB copies)
 
     def rebind(self, state: GraphState) -> None:
         """Run on another instance-DB content (restored snapshot, new instance)."""
@@ -218,53 +228,115 @@ class GraphRuntime:
     def execute(self, inputs: dict[str, Any], now_ns: int) -> GraphState:
         """One FB call with the pin values ``inputs`` at clock time ``now_ns`` (SPEC §2.2)."""
         st = self.st
-        cc = self.cc
+        try:
+            cur = self._getter(inputs)
+        except KeyError:
+            cur = None
+        if (
+            cur == self._last_in
+            and cur is not None
+            and self._lean
+            and st.mode == "AUTO"
+            and st.calls
+            and not (self._commands or self._remote or self.display.dirty)
+            and not (st.off or st.halted or st.sskip_enabled)
+        ):
+            # the quiet call: no input pin changed since the last latch, no command or
+            # remote acknowledgement is queued, the display needs no paging, AUTO without
+            # HALT_SQ/OFF_SQ/skip steps, default order — the same effects as below with the
+            # steps that cannot act then left out (latch, edges, INIT_SQ, requests,
+            # acknowledgement); step 4 is the fast path
+            rose = st.rose
+            if rose:
+                rose.clear()
+            active = st.active
+            if self.multi:
+                self._advance(now_ns)
+            else:  # _advance, inline
+                last = st.last_ns
+                st.last_ns = now_ns
+                if last >= 0 and now_ns != last and not st.tm_halted:
+                    dt = now_ns - last
+                    t_ns, u_ns, il_err, sv_err = st.t_ns, st.u_ns, st.il_err, st.sv_err
+                    for i in active:
+                        t_ns[i] += dt
+                        if not (il_err[i] or sv_err[i]):
+                            u_ns[i] += dt
+            self._target = None
+            if st.ev_steps:
+                ev = st.ev
+                for i in st.ev_steps:
+                    ev[i] = 0
+                st.ev_steps.clear()
+            if st.log:
+                st.log.clear()
+            if st.fired:
+                st.fired.clear()
+            if st.entered:
+                st.entered.clear()
+            if st.left:
+                st.left.clear()
+            st.ov = False
+            if self._acked:
+                self._acked.clear()
+            st.calls += 1
+            if self._permanent:
+                self.prog.before(st, self)
+                self._fast_sequencers(self._by_seq if self.multi else [active], self.multi)
+                self.prog.after(st, self)
+            elif self.multi or len(active) != 1:
+                self._fast_sequencers(self._by_seq if self.multi else [active], self.multi)
+            else:  # _fast_sequencers of the only sequencer with one active step, inline
+                i = active[0]
+                prog = self.prog
+                if (
+                    self._plain[i]
+                    and not st.sv_err[i]
+                    and not self._final
+                    and prog.tcond is self._tcond
+                    and prog.act is self._act
+                ):
+                    ev = st.ev
+                    j = prog.step[i](st, self, ev[i], st.il_ok[i], st.zeroed)
+                    if j >= 0:
+                        self._fast_switch(-1, active, i, j, False)
+                    elif len(active) > 1:  # a step an ON Sx row of step i appended
+                        act, il_ok, zero = prog.act, st.il_ok, st.zeroed
+                        n = 1
+                        while n < len(active):
+                            i = active[n]
+                            n += 1
+                            act[i](st, self, ev[i], il_ok[i], zero)
+                else:
+                    self._fast_sequencers([active], False)
+            # 6. _outputs, inline
+            il_err, sv_err = st.il_err, st.sv_err
+            error = fault = False
+            for i in active:
+                if il_err[i]:
+                    error = True
+                if sv_err[i]:
+                    fault = True
+            st.error, st.fault = error, fault
+            st.err_flt = error or fault
+            disp = self.display
+            if disp.dirty or st.log or self._live_pins:
+                self.outs_changed = True
+                disp.update(st)
+            else:  # Display.update would write nothing: no page, no event, no live pin
+                self.outs_changed = False
+            return st
         prog = self.prog
         # 1. latch inputs, edges, per-call lists, times
         ins = st.inputs
         rose = st.rose
         if rose:
             rose.clear()
-        try:
-            cur = self._getter(inputs)
-        except KeyError:
-            cur = None
         if cur is None or cur != self._last_in:
             self._last_in = cur
             self._latch(inputs)
             self.display.dirty = True
-        # the active steps by sequencer, and the step times (T; U unless disturbed; HALT_TM
-        # freezes both), in one pass over the active steps
-        last = st.last_ns
-        dt = now_ns - last if last >= 0 else 0
-        st.last_ns = now_ns
-        active = st.active
-        if dt and not st.tm_halted:
-            t_ns, u_ns, il_err, sv_err = st.t_ns, st.u_ns, st.il_err, st.sv_err
-            if self.multi:
-                by_seq = self._by_seq
-                for lst in by_seq:
-                    if lst:
-                        lst.clear()
-                step_seq = cc.step_seq
-                for i in active:
-                    by_seq[step_seq[i]].append(i)
-                    t_ns[i] += dt
-                    if not (il_err[i] or sv_err[i]):
-                        u_ns[i] += dt
-            else:
-                for i in active:
-                    t_ns[i] += dt
-                    if not (il_err[i] or sv_err[i]):
-                        u_ns[i] += dt
-        elif self.multi:
-            by_seq = self._by_seq
-            for lst in by_seq:
-                if lst:
-                    lst.clear()
-            step_seq = cc.step_seq
-            for i in active:
-                by_seq[step_seq[i]].append(i)
+        self._advance(now_ns)
         self._target = None
         if self._commands:
             self._apply_commands()
@@ -335,6 +407,41 @@ class GraphRuntime:
         # 6. group flags and outputs
         self._outputs()
         return st
+
+    def _advance(self, now_ns: int) -> None:
+        """The active steps by sequencer, and the step times (T; U unless disturbed; HALT_TM
+        freezes both), in one pass over the active steps."""
+        st = self.st
+        last = st.last_ns
+        dt = now_ns - last if last >= 0 else 0
+        st.last_ns = now_ns
+        active = st.active
+        if dt and not st.tm_halted:
+            t_ns, u_ns, il_err, sv_err = st.t_ns, st.u_ns, st.il_err, st.sv_err
+            if self.multi:
+                by_seq = self._by_seq
+                for lst in by_seq:
+                    if lst:
+                        lst.clear()
+                step_seq = self.cc.step_seq
+                for i in active:
+                    by_seq[step_seq[i]].append(i)
+                    t_ns[i] += dt
+                    if not (il_err[i] or sv_err[i]):
+                        u_ns[i] += dt
+            else:
+                for i in active:
+                    t_ns[i] += dt
+                    if not (il_err[i] or sv_err[i]):
+                        u_ns[i] += dt
+        elif self.multi:
+            by_seq = self._by_seq
+            for lst in by_seq:
+                if lst:
+                    lst.clear()
+            step_seq = self.cc.step_seq
+            for i in active:
+                by_seq[step_seq[i]].append(i)
 
     def _latch(self, inputs: dict[str, Any]) -> None:
         """Step 1 when an input changed: latch, detect rising edges, level options."""
@@ -415,106 +522,109 @@ class GraphRuntime:
         sequencer with one active step without interlock, supervision or join, and no final
         scan pending, is done here; any other takes the general path."""
         st = self.st
-        cc = self.cc
         prog = self.prog
-        tcond = prog.tcond
+        fused = prog.step
         act = prog.act
-        leaving = cc.leaving
-        tr_dst = cc.tr_dst
-        plain = self._plain
-        nochk = self._nochk
+        # the fused functions embed the chart's conditions and rows: with a replaced
+        # ``tcond``/``act`` (instrumented) every sequencer takes the general path
+        plain = self._plain if prog.tcond is self._tcond and act is self._act else self._none
         final = self._final
-        x = st.x
         ev = st.ev
         il_ok = st.il_ok
         sv_err = st.sv_err
-        crit = st.crit
-        crit_old = st.crit_old
-        tt = st.tt
         zero = st.zeroed
-        active = st.active
-        left = st.left
-        entered = st.entered
-        ev_steps = st.ev_steps
-        log = st.log
-        il_err = st.il_err
-        t_ns = st.t_ns
-        u_ns = st.u_ns
-        act_ns = st.act_ns
-        now = st.last_ns
-        by_seq = self._by_seq
-        step_seq = cc.step_seq
-        sw: tuple[Any, ...] = (None, False, False, ())
-        rule = MODE_RULES["AUTO"]
         for k in range(len(seqs)):
             steps = seqs[k]
             kk = k if multi else -1
             if len(steps) != 1 or final:
                 if steps or final or not multi:
-                    self._sequencer(kk, steps, sw, rule)
+                    self._sequencer(kk, steps, _AUTO_SW, _AUTO_RULE)
                 continue
             i = steps[0]
             if not plain[i] or sv_err[i]:
-                self._sequencer(kk, steps, sw, rule)
+                self._sequencer(kk, steps, _AUTO_SW, _AUTO_RULE)
                 continue
-            # a–c: the first-listed transition that holds switches
-            for j in leaving[i]:
-                v, c = tcond[j](st)
-                crit_old[j] = crit[j]
-                crit[j] = c
-                tt[j] = v
-                if v:
-                    st.fired.append(j)
-                    # _deactivate(i), inline (i is active, without fault)
-                    x[i] = False
-                    active.remove(i)
-                    if multi:
-                        steps.remove(i)
-                    left.append(i)
-                    final.append(i)
-                    il_err[i] = False
-                    il_ok[i] = True
-                    if not ev[i]:
-                        ev_steps.append(i)
-                    ev[i] |= EV_S0
-                    log.append((i, EV_S0))
-                    for d in tr_dst[j]:
-                        if not x[d]:
-                            # _activate(d), inline
-                            x[d] = True
-                            t_ns[d] = 0
-                            u_ns[d] = 0
-                            act_ns[d] = now
-                            il_err[d] = False
-                            sv_err[d] = False
-                            active.append(d)
-                            if multi:
-                                by_seq[step_seq[d]].append(d)
-                            entered.append(d)
-                            if not ev[d]:
-                                ev_steps.append(d)
-                            ev[d] |= EV_S1
-                            log.append((d, EV_S1))
-                    break
-            if final:  # switched
-                if not (nochk[steps[0]] if len(steps) == 1 else all(nochk[s] for s in steps)):
-                    # d: a new step has an interlock or a supervision
-                    self._conditions_and_actions(kk, steps)
-                    continue
-                # e: the final scan of the step left (this sequencer's), then the rows
-                keep: list[int] = []
-                fin = prog.fin
-                for f in final:
-                    if kk >= 0 and step_seq[f] != kk:
-                        keep.append(f)
-                    else:
-                        fin[f](st, self, ev[f] | EV_S0)
-                final[:] = keep
-            n = 0
-            while n < len(steps):  # ON Sx in a row may append a step to this sequencer
-                i = steps[n]
-                n += 1
-                act[i](st, self, ev[i], il_ok[i], zero)
+            # a–c: the first-listed transition that holds switches; if none, the rows (e)
+            j = fused[i](st, self, ev[i], il_ok[i], zero)
+            if j < 0:
+                n = 1
+                while n < len(steps):  # a step an ON Sx row of step i appended
+                    i = steps[n]
+                    n += 1
+                    act[i](st, self, ev[i], il_ok[i], zero)
+                continue
+            self._fast_switch(kk, steps, i, j, multi)
+
+    def _fast_switch(self, kk: int, steps: list[int], i: int, j: int, multi: bool) -> None:
+        """The fast path's switch of sequencer ``kk`` (-1: the only one) whose only active
+        step ``i`` (plain, no fault) leaves by transition ``j`` (its fused function returned
+        ``j``): c) deactivate ``i``, activate the targets (events S0, S1), then d) the
+        general path if a new step has an interlock or supervision, else e) the final scan
+        of ``i`` and the rows of the new steps."""
+        st = self.st
+        prog = self.prog
+        final = self._final
+        ev = st.ev
+        il_ok = st.il_ok
+        sv_err = st.sv_err
+        zero = st.zeroed
+        act = prog.act
+        x = st.x
+        il_err = st.il_err
+        log = st.log
+        ev_steps = st.ev_steps
+        active = st.active
+        st.fired.append(j)
+        # _deactivate(i), inline (i is active, without fault)
+        x[i] = False
+        active.remove(i)
+        if multi:
+            steps.remove(i)
+        st.left.append(i)
+        final.append(i)
+        il_err[i] = False
+        il_ok[i] = True
+        if not ev[i]:
+            ev_steps.append(i)
+        ev[i] |= EV_S0
+        log.append((i, EV_S0))
+        for d in self.cc.tr_dst[j]:
+            if not x[d]:
+                # _activate(d), inline
+                x[d] = True
+                st.t_ns[d] = 0
+                st.u_ns[d] = 0
+                st.act_ns[d] = st.last_ns
+                il_err[d] = False
+                sv_err[d] = False
+                active.append(d)
+                if multi:
+                    self._by_seq[self.cc.step_seq[d]].append(d)
+                st.entered.append(d)
+                if not ev[d]:
+                    ev_steps.append(d)
+                ev[d] |= EV_S1
+                log.append((d, EV_S1))
+        nochk = self._nochk
+        if not (nochk[steps[0]] if len(steps) == 1 else all(nochk[s] for s in steps)):
+            # d: a new step has an interlock or a supervision
+            self._conditions_and_actions(kk, steps)
+            return
+        # e: the final scan of the step left (this sequencer's), then the rows
+        keep: list[int] = []
+        fin = prog.fin
+        step_seq = self.cc.step_seq
+        for f in final:
+            if kk >= 0 and step_seq[f] != kk:
+                keep.append(f)
+            else:
+                fin[f](st, self, ev[f] | EV_S0)
+        final[:] = keep
+        n = 0
+        while n < len(steps):  # ON Sx in a row may append a step to this sequencer
+            i = steps[n]
+            n += 1
+            act[i](st, self, ev[i], il_ok[i], zero)
 
     def _switch(
         self, steps: list[int], sw: tuple[Any, ...], rule: Callable[[bool, bool], bool]
@@ -701,7 +811,13 @@ class GraphRuntime:
                 fault = True
         st.error, st.fault = error, fault
         st.err_flt = error or fault
-        self.display.update(st)
+        disp = self.display
+        self.outs_changed = disp.dirty or bool(st.log) or self._live_pins
+        disp.update(st)
+
+
+_AUTO_SW: tuple[Any, ...] = (None, False, False, ())  # _switch options in the fast path
+_AUTO_RULE = MODE_RULES["AUTO"]
 
 
 def new_state(cc: CompiledChart) -> GraphState:

@@ -404,9 +404,9 @@ def criteria_by_name(
         head, _, what = up.partition(".")
         i = chart.step_index.get(_number(head, "S"))
         if i is not None and what in ("IL", "INTERLOCK", "C"):
-            return _bits(chart.il_labels[i], int(state.crit_loc[i]))
+            return contact_bits(chart.il_labels[i], int(state.crit_loc[i]))
         if i is not None and what in ("SV", "SUPERVISION", "V"):
-            return _bits(chart.sv_labels[i], int(state.crit_sup[i]))
+            return contact_bits(chart.sv_labels[i], int(state.crit_sup[i]))
         raise KeyError(f"no interlock or supervision {element!r}")
     j = chart.transition_index.get(_number(up, "T"))
     if j is None:
@@ -414,7 +414,7 @@ def criteria_by_name(
         j = names.index(up) if up in names else None
     if j is None:
         raise KeyError(f"no transition {element!r}")
-    return _bits(chart.crit_labels[j], int(state.crit[j]))
+    return contact_bits(chart.crit_labels[j], int(state.crit[j]))
 
 
 def _number(text: str, prefix: str) -> int:
@@ -423,5 +423,6 @@ def _number(text: str, prefix: str) -> int:
     return -1
 
 
-def _bits(labels: tuple[str, ...], word: int) -> list[tuple[str, bool]]:
+def contact_bits(labels: tuple[str, ...], word: int) -> list[tuple[str, bool]]:
+    """Each contact label with its bit of a criteria word (``crit``/``crit_loc``/``crit_sup``)."""
     return [(label, bool(word >> k & 1)) for k, label in enumerate(labels)]

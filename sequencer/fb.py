@@ -67,6 +67,7 @@ class GraphFB:
         self._ctx: Any = None
         self._messages = cc.options.messages
         self._commands: list[tuple[str, int | None]] = []
+        self._copied: Any = None  # the instance-DB values the outputs were last copied to
 
     def _fresh_state(self) -> GraphState:
         return new_state(self.cc)
@@ -131,9 +132,11 @@ class GraphFB:
                 rt.command(pin, step)
             self._commands.clear()
         st = rt.execute(values, ctx.now_ns)
-        out = st.outputs
-        for name in self.out_pins:
-            values[name] = out[name]
+        if rt.outs_changed or self._copied is not values:  # else st.outputs as last copied
+            out = st.outputs
+            for name in self.out_pins:
+                values[name] = out[name]
+            self._copied = values
         if self._messages:
             self._sync_messages(ctx, idb, rt, st)
         if st.log:
@@ -209,8 +212,12 @@ def startup_obs(*fbs: GraphFB, extra_ob1: Any = None) -> tuple[OB, OB]:
     """OB1 calling every GraphFB in order, and OB100 calling each with INIT_SQ = 1."""
 
     def ob1_body(ctx: Any) -> None:
+        run = getattr(ctx, "run_fb", None)  # engine.cpu.CallContext: no outputs dict
         for g in fbs:
-            ctx.call(g.fb, g.idb)
+            if run is not None and g.idb is not None:
+                run(g.fb, g.idb)
+            else:
+                ctx.call(g.fb, g.idb)
         if extra_ob1 is not None:
             extra_ob1(ctx)
 

@@ -50,6 +50,19 @@ def message_id(fb_name: str, db_number: int, step: int, kind: str) -> str:
     return f"{fb_name}/DB{db_number}/S{step}/{kind}"
 
 
+def parse_message_id(msg_id: object) -> tuple[str, int, int, str] | None:
+    """``(fb, db, step, kind)`` of a ``message_id``; None for any other message number."""
+    if not isinstance(msg_id, str):
+        return None
+    parts = msg_id.rsplit("/", 3)
+    if len(parts) != 4 or parts[3] not in TEMPLATES:
+        return None
+    fb, db, step, kind = parts
+    if not (db[:2] == "DB" and db[2:].isdigit() and step[:1] == "S" and step[1:].isdigit()):
+        return None
+    return fb, int(db[2:]), int(step[1:]), kind
+
+
 def message_text(chart: CompiledChart, fb_name: str, db_number: int, i: int, kind: str) -> str:
     """The text of step index ``i``'s message: the template with FB, DB, step number and the
     step's own message text (its name when it has none)."""

@@ -90,6 +90,7 @@ class MessageList:
         self._log: deque[MessageEvent] = deque(maxlen=log_size)
         self._new: list[MessageEvent] = []
         self._next_event = 1
+        self.changes = 0  # counts every change (a cheap "did it change?" for persistence)
 
     # --- changes ------------------------------------------------------------------------
 
@@ -192,6 +193,7 @@ class MessageList:
         self._log.clear()
         self._log.extend(MessageEvent(**e) for e in data["log"])
         self._new = []
+        self.changes += 1
 
     # --- SFC17 / SFC18 / SFC19 ----------------------------------------------------------
 
@@ -213,6 +215,7 @@ class MessageList:
         if self._sig.get(ev_id, False) == sig:
             return RET_SIG_UNCHANGED
         self._sig[ev_id] = sig
+        self.changes += 1
         source = "SFC17 ALARM_SQ" if ack else "SFC18 ALARM_S"
         if sig:
             self.raise_(ev_id, now_ns, text=text, values=sd, ack_required=ack, source=source)
@@ -236,6 +239,7 @@ class MessageList:
             self._active.pop(msg.msg_id, None)
 
     def _record(self, event: MessageEvent) -> None:
+        self.changes += 1
         self._log.append(event)
         self._new.append(event)
 

@@ -47,6 +47,20 @@ def gen_step_actions(
     tidx: StepIndex,
 ) -> tuple[str, str]:
     """Source of ``_a<i>`` and ``_f<i>`` for one step."""
+    a_src, f_src, _ = step_action_parts(i, step, g, resolve, sidx, tidx)
+    return a_src, f_src
+
+
+def step_action_parts(
+    i: int,
+    step: Step,
+    g: CodeGen,
+    resolve: Resolve,
+    sidx: StepIndex,
+    tidx: StepIndex,
+) -> tuple[str, str, list[str]]:
+    """``gen_step_actions`` and the body of ``_a<i>`` (indented one level; uses ``st R ev
+    c_ok zero`` and ``_i``), for a function that runs the rows after other code."""
     body: list[str] = []
     final_reset: list[str] = []
     s0_rows: list[str] = []
@@ -84,7 +98,7 @@ def gen_step_actions(
     f_body = f_body or ["    pass"]
     a_src = [f"def _a{i}(st, R, ev, c_ok, zero{_own(i, a_body)}):", *a_body]
     f_src = [f"def _f{i}(st, R, ev{_own(i, f_body)}):", *f_body]
-    return with_locals(a_src), with_locals(f_src)
+    return with_locals(a_src), with_locals(f_src), _indent(body)
 
 
 _OWN = re.compile(r"\b_i\b")

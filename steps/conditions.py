@@ -41,6 +41,25 @@ def contacts(e: Expr | None, resolve: Resolve) -> list[Expr]:
     return out
 
 
+def contact_negations(e: Expr | None) -> list[bool]:
+    """Per contact of ``contacts`` (same order): whether an odd number of NOTs inverts it
+    (a normally closed contact). Walks every AND/OR/XOR below a BOOL root, which are BOOL."""
+    out: list[bool] = []
+
+    def walk(n: Expr, negated: bool) -> None:
+        if isinstance(n, Unary) and n.op == "NOT":
+            walk(n.operand, not negated)
+        elif isinstance(n, Binary) and n.op.upper() in ("AND", "OR", "XOR"):
+            walk(n.left, negated)
+            walk(n.right, negated)
+        else:
+            out.append(negated)
+
+    if e is not None:
+        walk(e, False)
+    return out
+
+
 def contact_text(e: Expr) -> str:
     """A short label of a contact (for criteria displays)."""
     if isinstance(e, Operand):
@@ -65,11 +84,29 @@ def gen_condition(
     tidx: StepIndex,
 ) -> str:
     """Source of ``def name(st) -> (bool, crit)``; an empty condition holds with crit 0."""
+    return condition_source(name, condition_parts(e, g, resolve, sidx, tidx))
+
+
+def condition_source(name: str, parts: tuple[list[str], str, str]) -> str:
+    """``gen_condition`` from the ``condition_parts`` of the condition."""
+    lines, value, crit = parts
+    return with_locals([f"def {name}(st):", *lines, f"    return {value}, {crit}"])
+
+
+def condition_parts(
+    e: Expr | None,
+    g: CodeGen,
+    resolve: Resolve,
+    sidx: StepIndex,
+    tidx: StepIndex,
+) -> tuple[list[str], str, str]:
+    """The body of a condition (statements indented one level, binding ``c0``, ``c1``, …
+    the contacts), its value expression and its criteria expression."""
     if e is None:
-        return f"def {name}(st):\n    return True, 0\n"
+        return [], "True", "0"
     leaves = contacts(e, resolve)
     ids = {id(c): k for k, c in enumerate(leaves)}
-    lines = [f"def {name}(st):"]
+    lines: list[str] = []
     for k, c in enumerate(leaves):
         src = gen_value(c, g, resolve, sidx, tidx)
         if isinstance(c, Binary) and c.op in COMPARE:  # a comparison is a bool already
@@ -89,8 +126,7 @@ def gen_condition(
         return f"({combine(n.left)} {op.lower()} {combine(n.right)})"
 
     crit = " | ".join(f"c{k} << {k}" if k else "c0" for k in range(min(len(leaves), 32)))
-    lines.append(f"    return {combine(e)}, ({crit or '0'})")
-    return with_locals(lines)
+    return lines, combine(e), f"({crit or '0'})"
 
 
 _USES_X = re.compile(r"(?<![\w.])X\[")

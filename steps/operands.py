@@ -180,8 +180,14 @@ def _with_index(f: Any, i: int) -> Any:
     return FunctionType(f.__code__, f.__globals__, f.__name__, (i,), f.__closure__)
 
 
+def _with_defaults(f: Any, values: tuple[int, ...]) -> Any:
+    """Generated function ``f`` with other default values (``_i``, ``_j0``, …: shared code)."""
+    return FunctionType(f.__code__, f.__globals__, f.__name__, values, f.__closure__)
+
+
 RUNTIME: dict[str, Any] = {
     "_with_index": _with_index,
+    "_with_defaults": _with_defaults,
     "_s16": _s16,
     "_unpack_f": _unpack_f,
     "_pack_f": _pack_f,

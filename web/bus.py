@@ -9,6 +9,8 @@ Key space, all under ``s7graph/<cpu>/``:
 - ``fb/<name>/delta`` — the :class:`StepStateUpdate` of every scan that changed something;
   ``seq`` counts these, so a late joiner does ``get(state)`` and applies newer deltas only,
   and a gap in ``seq`` means a missed delta;
+- ``alarms`` — the :class:`AlarmList` (the CPU's message list), published on change;
+  ``alarms/list`` — queryable: the current one (``seq`` orders the two);
 - ``cmd`` — queryable: a :class:`Command` in, one :class:`CommandReply` out. Valid commands
   go on a thread-safe queue; the scan loop drains it at a scan boundary and resolves each,
   which sends the reply. Invalid ones are refused at once with the reason.
@@ -32,6 +34,7 @@ import msgspec
 import zenoh
 
 from web.protocol import (
+    AlarmList,
     ChartLayout,
     Command,
     CommandReply,
@@ -94,6 +97,14 @@ class keys:
     @property
     def status(self) -> str:
         return f"{ROOT}/{self.cpu}/status"
+
+    @property
+    def alarms(self) -> str:
+        return f"{ROOT}/{self.cpu}/alarms"
+
+    @property
+    def alarm_list(self) -> str:
+        return f"{ROOT}/{self.cpu}/alarms/list"
 
     @property
     def cmd(self) -> str:
@@ -169,6 +180,7 @@ class BusPublisher:
         self._max_age_ns = int(max_age_s * 1e9)
         self._status = CpuStatus(cpu=cpu, fbs=list(self._charts))
         self._status_sent_ns = 0
+        self._alarms = AlarmList()
         self._declared: list[Any] = []
         self._delta_pubs: dict[str, zenoh.Publisher] = {}
         try:
@@ -192,6 +204,15 @@ class BusPublisher:
                 self._keys.status, encoding=zenoh.Encoding.APPLICATION_JSON
             )
             self._declared.append(self._status_pub)
+            self._alarm_pub = session.declare_publisher(
+                self._keys.alarms,
+                encoding=zenoh.Encoding.APPLICATION_JSON,
+                congestion_control=zenoh.CongestionControl.BLOCK,
+            )
+            self._declared.append(self._alarm_pub)
+            self._declared.append(
+                session.declare_queryable(self._keys.alarm_list, self._on_alarm_list)
+            )
         except BaseException:
             self.close()
             raise
@@ -214,6 +235,15 @@ class BusPublisher:
             self._delta_pubs[fb].put(encode(update))
         self._publish_status(update)
         return changed
+
+    def publish_alarms(self, alarms: AlarmList) -> AlarmList:
+        """Publish a changed message list on ``alarms`` (``seq`` is the bus's own counter)
+        and serve it on ``alarms/list``; returns what went out."""
+        with self._lock:
+            alarms = msgspec.structs.replace(alarms, seq=self._alarms.seq + 1)
+            self._alarms = alarms
+        self._alarm_pub.put(encode(alarms))
+        return alarms
 
     def set_cpu_state(self, state: str) -> None:
         """Report a CPU run state change (RUN/STOP/STARTUP) on ``status`` at once."""
@@ -302,6 +332,11 @@ class BusPublisher:
         if state is not None:
             query.reply(query.key_expr, encode(state), encoding=zenoh.Encoding.APPLICATION_JSON)
 
+    def _on_alarm_list(self, query: zenoh.Query) -> None:
+        with self._lock:
+            payload = encode(self._alarms)
+        query.reply(query.key_expr, payload, encoding=zenoh.Encoding.APPLICATION_JSON)
+
     def _on_status(self, query: zenoh.Query) -> None:
         with self._lock:
             payload = encode(self._status)
@@ -365,6 +400,34 @@ class BusClient:
     def status(self) -> CpuStatus | None:
         data = self._get_one(self._keys.status)
         return None if data is None else decode(data, CpuStatus)
+
+    def alarms(self) -> AlarmList | None:
+        """The CPU's current message list, or None if no CPU answers."""
+        data = self._get_one(self._keys.alarm_list)
+        return None if data is None else decode(data, AlarmList)
+
+    def on_alarms(self, callback: Callable[[AlarmList], None]) -> None:
+        """Call ``callback`` with the current message list, then with each newer one (by
+        ``seq``; on a zenoh thread)."""
+        lock = threading.Lock()
+        latest = [-1]
+
+        def offer(alarms: AlarmList) -> None:
+            with lock:
+                if alarms.seq <= latest[0]:
+                    return
+                latest[0] = alarms.seq
+                callback(alarms)
+
+        def on_sample(sample: zenoh.Sample) -> None:
+            with contextlib.suppress(ProtocolError):
+                offer(decode(sample.payload.to_bytes(), AlarmList))
+
+        self._subscribers.append(self._session.declare_subscriber(self._keys.alarms, on_sample))
+        with contextlib.suppress(ProtocolError, zenoh.ZError):
+            current = self.alarms()
+            if current is not None:
+                offer(current)
 
     def send(self, command: Command, *, timeout: float | None = None) -> CommandReply:
         """Send a command and wait for the CPU's answer; no answer is a refusal too."""

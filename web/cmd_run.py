@@ -3,9 +3,11 @@
 Program convention: a Python file whose module-level ``@ob``/``@fb``/``@fc`` blocks (and
 ``DB`` definitions) are loaded; an optional ``CPU = {...}`` dict passes keyword options to
 ``Cpu`` (``max_cycle_ms``, ``clock_memory``, ...); an optional ``setup(cpu)`` creates
-instance DBs and configures interrupts. The state file restores retentive data and the CPU
-comes back by warm restart; on Ctrl-C, SIGTERM or ``--duration-s`` the CPU goes to STOP
-(outputs 0) and the state is saved. A broken program is one line on stderr and exit 2.
+instance DBs and configures interrupts. The state file restores retentive data and the
+CPU's message list (who acknowledged what, when; every message event is also appended to
+its alarm log) and the CPU comes back by warm restart; on Ctrl-C, SIGTERM or
+``--duration-s`` the CPU goes to STOP (outputs 0) and the state is saved. A broken program
+is one line on stderr and exit 2.
 """
 
 from __future__ import annotations
@@ -25,6 +27,20 @@ from engine.modes import CpuMode
 from engine.persistence import StateStore
 from engine.record import ScanRecord
 from engine.runner import Runner
+from sfb.alarms import message_list
+
+
+def persist_messages(store: StateStore, cpu: Cpu) -> None:
+    """Save the CPU's message list (``sfb.alarms``) with the state; call before ``load``."""
+    messages = message_list(cpu)
+    cached: list[Any] = [-1, None]  # (changes, snapshot): the same object while unchanged
+
+    def snapshot() -> object:
+        if cached[0] != messages.changes:
+            cached[:] = [messages.changes, messages.snapshot()]
+        return cached[1]
+
+    store.add_part("messages", snapshot, messages.restore)
 
 
 class ProgramLoadError(Exception):
@@ -97,6 +113,7 @@ def run_program(
     except Exception as exc:
         return _fail(state_path, f"cannot open state file: {exc}")
     try:
+        persist_messages(store, cpu)
         restored = store.load(cpu)
     except Exception as exc:
         store.close()
@@ -127,6 +144,7 @@ def run_until_stopped(
     previous = signal.signal(signal.SIGTERM, _terminate)
     try:
         record = cpu.start("warm")
+        runner.log_alarms(record)
         if on_start is not None:
             on_start(record)
         how = f"warm restart from {state_path}" if restored else "fresh start"

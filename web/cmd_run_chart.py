@@ -2,7 +2,8 @@
 
 The chart is compiled (exit 2 with diagnostics on stderr if it does not), installed with
 OB1/OB100 in one CPU, the state file restores the instance DB (the sequencer comes back by
-warm restart with its steps, times and mode), and ``engine.runner.Runner`` paces the scans.
+warm restart with its steps, times and mode) and the CPU's message list, and
+``engine.runner.Runner`` paces the scans.
 A plant (``--plant``) runs after every scan; a plant error ends the run with one line.
 ``--web`` serves the live browser view of the running FB on 127.0.0.1:``--port`` and its
 zenoh bus (``web/live_edge.py``): one state update per scan, operator commands applied
@@ -25,7 +26,8 @@ from engine.persistence import StateStore
 from engine.record import ScanRecord
 from engine.runner import Runner
 from engine.watchdog import Watchdog
-from web.cmd_run import run_until_stopped
+from sfb.alarms import message_list
+from web.cmd_run import persist_messages, run_until_stopped
 from web.cmd_sim import ChartSession, fail
 from web.plant import LoadedPlant, PlantError, load_plant
 
@@ -60,6 +62,7 @@ def run_chart(
     state_path = state if state is not None else path.with_suffix(".state.sqlite")
     try:
         store = StateStore(state_path)
+        persist_messages(store, cpu)
         restored = store.load(cpu)
     except Exception as exc:
         print(f"s7graph: error: {state_path}: cannot use state file: {exc}", file=sys.stderr)
@@ -107,8 +110,9 @@ def _serve(
     from web.live_edge import LiveEdge
 
     live = LiveGraph(
-        session.graph, read=session.get, watch=watch_names(session.symbols), store=store
-    )
+        session.graph, read=session.get, watch=watch_names(session.symbols), store=store,
+        messages=message_list(session.cpu),
+    )  # fmt: skip
     edge = LiveEdge(live, port=port, record=record, serve=web)
     if web:
         print(f"s7graph: view {edge.url} (bus {edge.endpoint}); Ctrl-C to stop", flush=True)

@@ -62,6 +62,7 @@ class WebEdge:
             self._closers.append(self.view.close)
             self.follower = self.client.follow(self.fb, self.view.apply)
             self.client.on_status(self.view.apply_status)
+            self.client.on_alarms(self.view.apply_alarms)
         except BaseException:
             self.close()
             raise

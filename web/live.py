@@ -16,7 +16,16 @@ boundary and acts in the FB's next call as a one-call rising edge (``GraphFB.com
 - ``init`` → INIT_SQ; ``off`` → OFF_SQ for one call (the sequencer then stays off);
 - ``step_on`` / ``step_off`` → S_ON / S_OFF on ``step`` (not S_NO); refused outside MAN,
   for an unknown step, an active step (on) or an idle one (off);
-- ``t_push`` → T_PUSH; refused outside TAP and TOP.
+- ``t_push`` → T_PUSH; refused outside TAP and TOP;
+- ``ack_msg`` → acknowledges one message of the CPU's message list as the command's user
+  at once (``MessageList.acknowledge``); refused for an unknown or already acknowledged
+  message and for the user name ``program`` (reserved for ACK_EF). A supervision message
+  acknowledged while its fault is latched and its cause gone releases the step at the FB's
+  next call (``sequencer.messages.remote_acks``).
+
+Each update also carries a :class:`StepDetail` per active step (times to 0.1 s, interlock
+and supervision contacts, the contacts of its valid transitions: the CRIT bits), and
+:meth:`LiveGraph.alarms_changed` gives the message list whenever it changed.
 
 Every command is refused while the CPU is not in RUN, and so is a second mode, step, or
 init/off command at the same scan boundary (one call would see both edges at once and
@@ -34,9 +43,24 @@ from typing import Any
 from engine.modes import CpuMode
 from engine.persistence import StateStore
 from engine.record import ScanRecord
+from sequencer.display import contact_bits
 from sequencer.fb import GraphFB, StepEvent
+from sequencer.messages import PROGRAM_USER, parse_message_id
 from sequencer.modes import SELECTORS
-from web.protocol import EVENTS, MODES, ChartLayout, Command, StepStateUpdate
+from sfb.alarms import Message, MessageList
+from steps.conditions import contact_negations
+from web.protocol import (
+    EVENTS,
+    MODES,
+    AlarmEntry,
+    AlarmList,
+    ChartLayout,
+    Command,
+    Contact,
+    StepDetail,
+    StepStateUpdate,
+    TransitionCriteria,
+)
 
 __all__ = ["CONTROL_SEQUENCER", "MODE_PINS", "OP_PINS", "LiveGraph", "watch_names"]
 
@@ -66,7 +90,9 @@ class LiveGraph:
     """One GraphFB seen live: :meth:`update` after each scan, :meth:`apply` at the boundary.
 
     ``read(name)`` gives the value of a watched operand (``ChartSession.get``); ``store``
-    receives the audit log; ``wall_ns`` stamps it (the wall clock: an audit says *when*)."""
+    receives the audit log; ``wall_ns`` stamps it (the wall clock: an audit says *when*);
+    ``messages`` is the CPU's message list (``sfb.alarms.message_list(cpu)``) for
+    ``ack_msg`` and :meth:`alarms_changed`."""
 
     def __init__(
         self,
@@ -77,8 +103,10 @@ class LiveGraph:
         watch: Iterable[str] = (),
         store: StateStore | None = None,
         wall_ns: Callable[[], int] = time.time_ns,
+        messages: MessageList | None = None,
     ) -> None:
         self.graph = graph
+        self.messages = messages
         self.cc = graph.cc
         self.fb = fb or graph.cc.name
         self.layout = ChartLayout.from_chart(graph.cc.chart, fb=self.fb)
@@ -90,6 +118,19 @@ class LiveGraph:
         self.cycle = 0
         self._pending_mode: str | None = None  # a mode change queued for the next call
         self._pending: dict[str, str] = {}  # conflict group -> op queued for the next call
+        self._t_ns = 0  # CPU time of the last scan
+        chart = graph.cc.chart
+        self._tr_neg = tuple(
+            _negations(t.condition, n)
+            for t, n in zip(chart.all_transitions(), self.cc.crit_labels, strict=True)
+        )
+        self._il_neg = tuple(
+            _negations(st.interlock, n)
+            for st, n in zip(chart.all_steps(), self.cc.il_labels, strict=True)
+        )
+        self._sv_neg = tuple(_negations(st.supervision, n) for st, n in zip(
+            chart.all_steps(), self.cc.sv_labels, strict=True))  # fmt: skip
+        self._alarm_entries: tuple[Message, ...] | None = None
 
     # ------------------------------------------------------------ state out
 
@@ -97,6 +138,7 @@ class LiveGraph:
         """The FB's state after the scan ``record`` (call once per scan, in the scan thread)."""
         self.cpu_mode = record.mode
         self.cycle = record.cycle
+        self._t_ns = record.t_ns
         self._pending_mode = None  # the commands queued before this scan have acted
         self._pending.clear()
         st = self.graph.state
@@ -120,7 +162,79 @@ class LiveGraph:
             latched=latched,
             events=events,  # type: ignore[arg-type]
             values=self.values(),
+            details=self.details(),
         )
+
+    def details(self) -> list[StepDetail]:
+        """A :class:`StepDetail` per active step (cost proportional to the active steps)."""
+        st = self.graph.state
+        cc = self.cc
+        x, tt, crit = st.x, st.tt, st.crit
+        out = []
+        for i in sorted(st.active):
+            transitions = [
+                TransitionCriteria(
+                    number=cc.transition_numbers[j],
+                    name=cc.transition_names[j],
+                    holds=bool(tt[j]),
+                    contacts=_contacts(cc.crit_labels[j], crit[j], self._tr_neg[j]),
+                )
+                for j in cc.leaving[i]
+                if cc.tr_src[j] and all(x[s] for s in cc.tr_src[j])
+            ]
+            out.append(
+                StepDetail(
+                    number=cc.step_numbers[i],
+                    t_ms=st.t_ns[i] // 100_000_000 * 100,
+                    u_ms=st.u_ns[i] // 100_000_000 * 100,
+                    interlock_ok=bool(st.il_ok[i]),
+                    interlock_error=bool(st.il_err[i]),
+                    supervision_fault=bool(st.sv_err[i]),
+                    interlock=_contacts(cc.il_labels[i], st.crit_loc[i], self._il_neg[i]),
+                    supervision=_contacts(cc.sv_labels[i], st.crit_sup[i], self._sv_neg[i]),
+                    transitions=transitions,
+                )
+            )
+        return out
+
+    def alarms_changed(self) -> AlarmList | None:
+        """The message list if it changed since the last call (first call: always), else
+        None. Times become wall-clock ms (``wall_ns`` minus the age on the CPU clock)."""
+        if self.messages is None:
+            return None
+        entries = self.messages.entries()
+        if entries == self._alarm_entries:
+            return None
+        self._alarm_entries = entries
+        offset = self._wall_ns() - self._t_ns
+
+        def wall(t_ns: int | None) -> int | None:
+            return None if t_ns is None else max((t_ns + offset) // 1_000_000, 0)
+
+        out = []
+        for m in entries:
+            where = parse_message_id(m.msg_id)
+            fb, db, step, kind = where if where is not None else ("", None, None, "")
+            out.append(
+                AlarmEntry(
+                    msg_id=m.msg_id,
+                    event_id=m.event_id,
+                    state=m.state.value,  # type: ignore[arg-type]
+                    text=m.text[:4096],
+                    source=m.source[:256],
+                    came_ms=wall(m.came_ns) or 0,
+                    went_ms=wall(m.went_ns),
+                    ack_required=m.ack_required,
+                    acked=m.acked,
+                    ack_user=m.ack_user[:64],
+                    ack_ms=wall(m.ack_ns),
+                    fb=fb,
+                    db=db,
+                    step=step,
+                    kind=kind,  # type: ignore[arg-type]
+                )
+            )
+        return AlarmList(cycle=max(self.cycle, 0), entries=out)
 
     def values(self) -> dict[str, bool | int | float | str | None]:
         """The FB outputs, then the watched operands (an unreadable one is left out)."""
@@ -177,6 +291,8 @@ class LiveGraph:
                 return False, "no supervision fault waits for an acknowledgement", ""
             self.graph.command(OP_PINS[op])
             return True, "", "steps " + ", ".join(f"S{n}" for n in sorted(waiting))
+        if op == "ack_msg":
+            return self._ack_msg(command)
         if op in ("init", "off"):
             self.graph.command(OP_PINS[op])
             return True, "", ""
@@ -200,11 +316,41 @@ class LiveGraph:
             return True, "", f"S{step}"
         return False, f"unknown command {op!r}", ""
 
+    def _ack_msg(self, command: Command) -> tuple[bool, str, str]:
+        mid, user = command.msg_id, command.user or "?"
+        if self.messages is None:
+            return False, "this view has no message list", ""
+        if user == PROGRAM_USER:
+            return False, f"the user name {PROGRAM_USER!r} is reserved for ACK_EF", ""
+        msg = self.messages.get(mid) if mid is not None else None
+        if msg is None:
+            return False, f"no message {mid!r} in the message list", ""
+        if msg.acked:
+            how = f" by {msg.ack_user}" if msg.ack_user else ""
+            return False, f"message {mid!r} is already acknowledged{how}", ""
+        self.messages.acknowledge(msg.msg_id, user, self._t_ns)
+        return True, "", f"message {mid}: {msg.text}"
+
     def _audit(self, command: Command, detail: str) -> None:
         if self.store is None:
             return
         what = f"FB {self.fb} cycle {self.cycle}" + (f": {detail}" if detail else "")
         self.store.log_audit(self._wall_ns(), command.user or "?", command.op, what)
+
+
+def _negations(condition: Any, labels: tuple[str, ...]) -> tuple[bool, ...]:
+    """Which contacts of ``condition`` are negated; none if the walk does not match."""
+    found = contact_negations(condition)
+    return tuple(found) if len(found) == len(labels) else (False,) * len(labels)
+
+
+def _contacts(labels: tuple[str, ...], word: int, negated: tuple[bool, ...]) -> list[Contact]:
+    """Each contact as the operator reads it: ``NOT x`` for a negated one, ``ok`` when it
+    lets the condition through (the CRIT bit is the operand's value)."""
+    return [
+        Contact(text=f"NOT {text}"[:4096] if neg else text[:4096], ok=value != neg)
+        for (text, value), neg in zip(contact_bits(labels, int(word)), negated, strict=True)
+    ]
 
 
 def watch_names(symbols: Iterable[Any], limit: int = 16) -> list[str]:

@@ -3,7 +3,8 @@
 :class:`LiveEdge` serves the view of one :class:`~web.live.LiveGraph` (``web.demo``'s
 :class:`~web.demo.WebEdge`: a CPU-side and a view-side zenoh session, a viser server on
 127.0.0.1) and is called back after each scan, in the scan thread: it publishes the
-scan's :class:`StepStateUpdate`, the CPU state and cycle statistics, optionally records
+scan's :class:`StepStateUpdate`, the CPU state and cycle statistics, the CPU's message
+list when it changed (``alarms``), optionally records
 the update to a rerun ``.rrd`` file, then applies the commands received since the last
 scan — the scan boundary.
 """
@@ -96,6 +97,9 @@ class LiveEdge:
         if stats is not None:
             publisher.set_cycle_stats(cycle_stats(stats, runner))
         publisher.publish(self.live.fb, update)
+        alarms = self.live.alarms_changed()
+        if alarms is not None:
+            publisher.publish_alarms(alarms)
         publisher.apply_commands(self.live.apply, cycle=record.cycle)
         return update
 

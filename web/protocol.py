@@ -31,15 +31,20 @@ __all__ = [
     "MAX_MESSAGE_BYTES",
     "MODES",
     "OPS",
+    "AlarmEntry",
+    "AlarmList",
     "ChartLayout",
     "Command",
     "CommandReply",
+    "Contact",
     "CpuStatus",
     "CycleStats",
     "ProtocolError",
     "SequenceInfo",
+    "StepDetail",
     "StepInfo",
     "StepStateUpdate",
+    "TransitionCriteria",
     "TransitionInfo",
     "condition_text",
     "decode",
@@ -54,8 +59,10 @@ Mode = Literal["AUTO", "MAN", "TAP", "TOP"]
 MODES: tuple[str, ...] = ("AUTO", "MAN", "TAP", "TOP")
 Event = Literal["S1", "S0", "V1", "V0", "L1", "L0", "A1", "R1"]
 EVENTS: tuple[str, ...] = ("S1", "S0", "V1", "V0", "L1", "L0", "A1", "R1")
-Op = Literal["ack", "mode", "init", "off", "step_on", "step_off", "t_push"]
-OPS: tuple[str, ...] = ("ack", "mode", "init", "off", "step_on", "step_off", "t_push")
+Op = Literal["ack", "mode", "init", "off", "step_on", "step_off", "t_push", "ack_msg"]
+OPS: tuple[str, ...] = (
+    "ack", "mode", "init", "off", "step_on", "step_off", "t_push", "ack_msg",
+)  # fmt: skip
 
 # A name that is safe inside a zenoh key expression and in a scene node path.
 NAME_PATTERN = r"^[A-Za-z_][A-Za-z0-9_.\-]{0,63}$"
@@ -70,6 +77,8 @@ Steps = Annotated[list[StepNo], Meta(max_length=4096)]
 Scalar = bool | int | float | str | None
 ValueName = Annotated[str, Meta(min_length=1, max_length=128)]
 Millis = Annotated[float, Meta(ge=0.0, le=1e12)]
+MsgKey = Annotated[str, Meta(min_length=1, max_length=128)]
+MsgId = Annotated[int, Meta(ge=1, le=0xFFFFFFFF)] | MsgKey
 
 
 def valid_name(name: str) -> bool:
@@ -186,6 +195,7 @@ class StepStateUpdate(_Msg, kw_only=True):
     latched: Steps = []
     events: Annotated[list[tuple[Event, StepNo]], Meta(max_length=4096)] = []
     values: Annotated[dict[ValueName, Scalar], Meta(max_length=1024)] = {}
+    details: Annotated[list[StepDetail], Meta(max_length=4096)] = []
 
     def changed_from(self, other: StepStateUpdate | None) -> bool:
         """Whether this scan differs from ``other`` in more than its cycle and time."""
@@ -198,7 +208,44 @@ class StepStateUpdate(_Msg, kw_only=True):
             or self.disturbed != other.disturbed
             or self.latched != other.latched
             or self.values != other.values
+            or self.details != other.details
         )
+
+
+class Contact(_Msg, kw_only=True):
+    """One contact of a condition in its last evaluation (a CRIT bit): ``ok`` when it lets
+    the condition through (a ``NOT x`` contact when ``x`` is false)."""
+
+    text: Text
+    ok: bool
+
+
+Contacts = Annotated[list[Contact], Meta(max_length=32)]
+
+
+class TransitionCriteria(_Msg, kw_only=True):
+    """A valid transition leaving an active step: whether its condition held (``Tn.TT``)
+    at its last evaluation, and each contact."""
+
+    number: StepNo
+    name: ShortText = ""
+    holds: bool
+    contacts: Contacts = []
+
+
+class StepDetail(_Msg, kw_only=True):
+    """Why an active step does (not) switch: its times (to 0.1 s), interlock and
+    supervision state with their contacts, and its valid outgoing transitions."""
+
+    number: StepNo
+    t_ms: Count = 0
+    u_ms: Count = 0
+    interlock_ok: bool = True
+    interlock_error: bool = False
+    supervision_fault: bool = False
+    interlock: Contacts = []
+    supervision: Contacts = []
+    transitions: Annotated[list[TransitionCriteria], Meta(max_length=256)] = []
 
 
 class CycleStats(_Msg, kw_only=True):
@@ -223,6 +270,44 @@ class CpuStatus(_Msg, kw_only=True):
     stats: CycleStats | None = None
 
 
+# ---------------------------------------------------------------- messages (alarms)
+
+
+class AlarmEntry(_Msg, kw_only=True):
+    """One message of the CPU's message list. Times are wall-clock ms since the epoch;
+    ``fb``/``db``/``step``/``kind`` (``IL`` interlock, ``SV`` supervision) name the step
+    of a sequencer message."""
+
+    msg_id: MsgId
+    event_id: Count
+    state: Literal["incoming", "outgoing"]
+    text: Text = ""
+    source: ShortText = ""
+    came_ms: Count
+    went_ms: Count | None = None
+    ack_required: bool = True
+    acked: bool = False
+    ack_user: Annotated[str, Meta(max_length=64)] = ""
+    ack_ms: Count | None = None
+    fb: ShortText = ""
+    db: Count | None = None
+    step: StepNo | None = None
+    kind: Literal["IL", "SV", ""] = ""
+
+
+class AlarmList(_Msg, kw_only=True):
+    """The CPU's message list (``alarms`` on change, ``alarms/list`` queryable), oldest
+    first; ``seq`` counts the changes."""
+
+    seq: Count = 0
+    cycle: Count = 0
+    entries: Annotated[list[AlarmEntry], Meta(max_length=4096)] = []
+
+    def pending(self) -> list[AlarmEntry]:
+        """The entries still waiting for an acknowledgement."""
+        return [e for e in self.entries if e.ack_required and not e.acked]
+
+
 # ---------------------------------------------------------------- commands
 
 _ARGS_BY_OP: dict[str, frozenset[str]] = {
@@ -233,6 +318,7 @@ _ARGS_BY_OP: dict[str, frozenset[str]] = {
     "step_on": frozenset({"step"}),
     "step_off": frozenset({"step"}),
     "t_push": frozenset(),
+    "ack_msg": frozenset({"msg_id"}),
 }
 
 
@@ -240,7 +326,8 @@ class Command(_Msg, kw_only=True):
     """An operator command (``cmd`` queryable), applied at a scan boundary.
 
     ``mode`` takes ``{"mode": "AUTO"|"MAN"|"TAP"|"TOP"}``; ``step_on``/``step_off`` take
-    ``{"step": n}``; the other ops take no arguments."""
+    ``{"step": n}``; ``ack_msg`` takes ``{"msg_id": n | "text"}`` (a message of the
+    ``alarms`` list, acknowledged as ``user``); the other ops take no arguments."""
 
     op: Op
     fb: Name
@@ -261,12 +348,25 @@ class Command(_Msg, kw_only=True):
             step = self.args["step"]
             if isinstance(step, bool) or not isinstance(step, int) or not 0 < step <= 65535:
                 raise ValueError("step must be a step number 1..65535 - at `$.args.step`")
+        if self.op == "ack_msg":
+            mid = self.args["msg_id"]
+            number = isinstance(mid, int) and not isinstance(mid, bool) and 0 < mid <= 0xFFFFFFFF
+            if not number and not (isinstance(mid, str) and 0 < len(mid) <= 128):
+                raise ValueError(
+                    "msg_id must be a message number or key (1..128 chars) - at `$.args.msg_id`"
+                )
 
     @property
     def step(self) -> int | None:
         """The step of ``step_on``/``step_off``, else None."""
         value = self.args.get("step")
         return value if isinstance(value, int) and not isinstance(value, bool) else None
+
+    @property
+    def msg_id(self) -> int | str | None:
+        """The message of an ``ack_msg`` command, else None."""
+        value = self.args.get("msg_id")
+        return value if isinstance(value, int | str) and not isinstance(value, bool) else None
 
     @property
     def mode(self) -> str | None:

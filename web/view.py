@@ -5,6 +5,10 @@ interlock/supervision), transitions as bars with their number, lines, jumps and 
 it is coloured live (active green, disturbed or latched red, inactive grey). The panel
 "Control Sequencer" turns clicks into :class:`Command` s handed to ``send`` — in the app
 that is :meth:`web.bus.BusClient.send`, so the view reaches the CPU only over the bus.
+"Alarms" lists the CPU's message list (:meth:`ChartView.apply_alarms`) with an Acknowledge
+button per unacknowledged message (``ack_msg`` as the operator); "Step details" shows one
+step's state, times, interlock and supervision contacts and, per valid transition leaving
+it, each contact ✓/✗ (from ``StepStateUpdate.details``) — which contact blocks.
 Every dynamic text goes through ``html.escape`` before ``add_html``.
 """
 
@@ -25,11 +29,15 @@ from PIL import Image, ImageDraw, ImageFont
 
 from web.layout import Placement, place
 from web.protocol import (
+    AlarmEntry,
+    AlarmList,
     ChartLayout,
     Command,
     CommandReply,
+    Contact,
     CpuStatus,
     CycleStats,
+    StepDetail,
     StepStateUpdate,
 )
 
@@ -101,6 +109,10 @@ class ChartView:
         self._cpu_state = "RUN"
         self._cpu_stats: CycleStats | None = None
         self._step_colour: dict[int, tuple[int, int, int]] = {}
+        self._alarms: AlarmList | None = None
+        self._alarms_shown: AlarmList | None = None
+        self._alarm_buttons: dict[int | str, viser.GuiButtonHandle] = {}
+        self._detail_shown = ""
         self.replies: list[CommandReply] = []  # every answer the CPU gave this view
         self._draw_chart()
         self._build_panel(user)
@@ -307,6 +319,15 @@ class ChartView:
                 lambda ev: self._command(ev, "step_off", {"step": int(self.step_number.value)})
             )
             self.operator = gui.add_text("Operator", user)
+        with gui.add_folder("Alarms") as self.alarm_folder:
+            self.alarm_html = gui.add_html(_alarms_html(None))
+        with gui.add_folder("Step details"):
+            self.detail_step = gui.add_number(
+                "Show step", 0, min=0, max=65535, step=1,
+                hint="0: follow the first disturbed, else the first active step",
+            )  # fmt: skip
+            self.detail_html = gui.add_html(self._detail_html(None))
+        self.detail_step.on_update(lambda _: self._refresh())
         with gui.add_folder("Events"):
             self.event_log = gui.add_html(self._log_html())
 
@@ -316,6 +337,7 @@ class ChartView:
     def _clicked_step(self, number: int) -> Callable[[object], None]:
         def handler(_: object) -> None:
             self.step_number.value = number
+            self.detail_step.value = number
 
         return handler
 
@@ -351,6 +373,16 @@ class ChartView:
             self._append_log(f"cycle {update.cycle}: {event} S{step}{name}", render=False)
         self._wake.set()
 
+    def apply_alarms(self, alarms: AlarmList) -> None:
+        """Show the CPU's message list (thread-safe; drawn by the render thread)."""
+        with self._lock:
+            self._alarms = alarms
+        self._refresh()
+
+    def _refresh(self) -> None:
+        self._shown = None
+        self._wake.set()
+
     def apply_status(self, status: CpuStatus) -> None:
         """Keep the cycle in the status line current between deltas (status comes at 1 Hz)."""
         with self._lock:
@@ -378,8 +410,12 @@ class ChartView:
     def _render(self) -> None:
         with self._lock:
             update = self._latest
+            alarms = self._alarms
+        if alarms is not self._alarms_shown:
+            self._render_alarms(alarms)
         if update is None or update is self._shown:
             return
+        detail = self._detail_html(update)
         active, bad = set(update.active), set(update.disturbed) | set(update.latched)
         with self.server.atomic():
             for number, box in self.boxes.items():
@@ -389,7 +425,55 @@ class ChartView:
                     self._step_colour[number] = colour
             self.status.content = self._status_html(update)
             self.event_log.content = self._log_html()
+            if detail != self._detail_shown:
+                self.detail_html.content = detail
+                self._detail_shown = detail
         self._shown = update
+
+    def _render_alarms(self, alarms: AlarmList | None) -> None:
+        """The alarm list and one Acknowledge button per unacknowledged message."""
+        self._alarms_shown = alarms
+        pending = alarms.pending() if alarms is not None else []
+        wanted = {e.msg_id: e for e in pending}
+        with self.server.atomic():
+            self.alarm_html.content = _alarms_html(alarms)
+            for mid in [m for m in self._alarm_buttons if m not in wanted]:
+                self._alarm_buttons.pop(mid).remove()
+            with self.alarm_folder:
+                for mid, entry in wanted.items():
+                    if mid not in self._alarm_buttons:
+                        button = self.server.gui.add_button(
+                            _ack_label(entry), color="red", hint=_clip(entry.text, 200)
+                        )
+                        button.on_click(self._ack_handler(mid))
+                        self._alarm_buttons[mid] = button
+
+    def _ack_handler(self, msg_id: int | str) -> Callable[[viser.GuiEvent], None]:
+        return lambda ev: self._command(ev, "ack_msg", {"msg_id": msg_id})
+
+    def _detail_html(self, update: StepStateUpdate | None) -> str:
+        """The "Step details" of the chosen step: why it does (not) switch."""
+        number = int(self.detail_step.value) if hasattr(self, "detail_step") else 0
+        if number == 0:  # follow: the first disturbed, else the first active step
+            if update is None or not update.active:
+                return _small("no active step (choose one with <i>Show step</i>)")
+            number = (sorted(set(update.disturbed) & set(update.active)) or update.active)[0]
+        info = self.layout.step(number)
+        if info is None:
+            return _small(f"no step S{number} in {self.layout.fb}")
+        title = f"<b>{html.escape(_title('S', number, info.name, 24))}</b>"
+        if update is None:
+            return _small(f"{title}: waiting for the CPU…")
+        detail = next((d for d in update.details if d.number == number), None)
+        if detail is None:
+            rows = [f"{title}: inactive"]
+            for t in self.layout.transitions:
+                if number in t.sources:
+                    cond = html.escape(t.condition or "TRUE")
+                    name = html.escape(_title("T", t.number, t.name, 24))
+                    rows.append(f"{name}: {cond} <i>(evaluated while the step is active)</i>")
+            return _small("<br>".join(rows))
+        return _small("<br>".join([title + ": " + _step_state(detail), *_step_rows(detail)]))
 
     def _append_log(self, line: str, *, render: bool = True) -> None:
         with self._lock:
@@ -431,6 +515,73 @@ def _title(prefix: str, number: int, name: str, width: int) -> str:
     """``S3  Fill``; just ``S3`` when the name is empty or only repeats the number."""
     short = f"{prefix}{number}"
     return short if name in ("", short) else f"{short}  {_clip(name, width)}"
+
+
+def _small(body: str) -> str:
+    return f'<div style="font-size:0.8em;line-height:1.5">{body}</div>'
+
+
+def _clock(ms: int | None) -> str:
+    return "" if ms is None else time.strftime("%H:%M:%S", time.localtime(ms / 1000))
+
+
+def _ack_label(entry: AlarmEntry) -> str:
+    if entry.step is not None and entry.kind:
+        what = "supervision" if entry.kind == "SV" else "interlock"
+        return f"Acknowledge S{entry.step} {what}"
+    return _clip(f"Acknowledge message {entry.msg_id}", 64)
+
+
+def _alarms_html(alarms: AlarmList | None) -> str:
+    """Every listed message: time, state, text, step, who acknowledged it and when."""
+    if alarms is None or not alarms.entries:
+        return _small('<span style="color:#777">no messages</span>')
+    rows = []
+    for e in reversed(alarms.entries):  # newest first
+        colour = "#c00" if e.state == "incoming" else "#a60"
+        where = f" · S{e.step}" if e.step is not None else ""
+        ack = (
+            f"acknowledged by {html.escape(e.ack_user or '?')} {_clock(e.ack_ms)}"
+            if e.acked
+            else "<b>unacknowledged</b>"
+        )
+        rows.append(
+            f'<div style="border-left:3px solid {colour};padding-left:4px;margin-bottom:4px">'
+            f'{_clock(e.came_ms)} <span style="color:{colour}">{e.state}</span>'
+            f"{html.escape(where)} · {ack}<br>{html.escape(e.text)}</div>"
+        )
+    return _small("".join(rows))
+
+
+def _mark(c: Contact) -> str:
+    tick = '<span style="color:#080">✓</span>' if c.ok else '<span style="color:#c00">✗</span>'
+    return f"&nbsp;&nbsp;{tick} {html.escape(c.text)}"
+
+
+def _step_state(d: StepDetail) -> str:
+    parts = ["active", f"T {d.t_ms / 1000:.1f} s", f"U {d.u_ms / 1000:.1f} s"]
+    if d.interlock_error:
+        parts.append('<span style="color:#c00">interlock error</span>')
+    if d.supervision_fault:
+        parts.append('<span style="color:#c00">supervision fault</span>')
+    return " · ".join(parts)
+
+
+def _step_rows(d: StepDetail) -> list[str]:
+    rows = []
+    if d.interlock:
+        state = "holds" if d.interlock_ok else '<span style="color:#c00">lost</span>'
+        rows += [f"Interlock (C): {state}", *map(_mark, d.interlock)]
+    if d.supervision:
+        state = '<span style="color:#c00">fault</span>' if d.supervision_fault else "ok"
+        rows += [f"Supervision (V): {state}", *map(_mark, d.supervision)]
+    for t in d.transitions:
+        holds = "holds" if t.holds else '<span style="color:#c00">does not hold</span>'
+        name = html.escape(_title("T", t.number, t.name, 24))
+        rows += [f"<b>{name}</b>: {holds}", *map(_mark, t.contacts)]
+    if not d.transitions:
+        rows.append("no valid transition leaves it (a step before it is inactive)")
+    return rows
 
 
 def _describe(args: dict[str, object]) -> str:

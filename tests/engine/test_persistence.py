@@ -11,6 +11,7 @@ import subprocess
 import sys
 import textwrap
 import time
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -100,9 +101,79 @@ def test_alarm_and_audit_tables(tmp_path: Path) -> None:
     store.log_alarm(5, "FB1.S3.V", "incoming", "Step 3 supervision")
     store.log_audit(7, "ann", "ack", "FB1 S3")
     assert store.alarms() == [
-        {"t_ns": 5, "key": "FB1.S3.V", "state": "incoming", "text": "Step 3 supervision"}
-    ]
+        {"t_ns": 5, "key": "FB1.S3.V", "state": "incoming", "text": "Step 3 supervision",
+         "user": "", "cpu_ns": None}
+    ]  # fmt: skip
     assert store.audit()[0]["user"] == "ann"
+
+
+@dataclass(frozen=True)
+class _Event:  # the shape of sfb.alarms.MessageEvent (the engine may not import sfb)
+    kind: str
+    msg_id: int | str
+    event_id: int
+    t_ns: int
+    user: str = ""
+    text: str = ""
+
+
+def test_log_alarms_appends_each_message_event_with_its_user(tmp_path: Path) -> None:
+    """Every message event of a scan record goes to the alarm log: who acknowledged, when
+    (wall time) and the CPU clock's time; anything else in the record is skipped."""
+    store = StateStore(tmp_path / "s.sqlite")
+    events = (
+        _Event("incoming", "FB1/DB1/S2/SV", 1, 10, text="S002 overdue"),
+        "not a message event",
+        _Event("acknowledged", "FB1/DB1/S2/SV", 1, 20, "ann", "S002 overdue"),
+    )
+    assert store.log_alarms(events, wall_ns=1_700_000_000_000_000_000) == 2
+    rows = store.alarms()
+    assert [(r["state"], r["user"], r["cpu_ns"]) for r in rows] == [
+        ("incoming", "", 10),
+        ("acknowledged", "ann", 20),
+    ]
+    assert {r["t_ns"] for r in rows} == {1_700_000_000_000_000_000}
+
+
+def test_added_parts_are_saved_with_the_state_and_restored_on_load(
+    clock: VirtualClock, tmp_path: Path
+) -> None:
+    """``add_part``: extra named snapshots (the CPU's message list) ride in every save;
+    a changed part alone makes ``maybe_save`` write."""
+    part = {"messages": ["m1"]}
+    store = StateStore(tmp_path / "s.sqlite")
+    store.add_part("extra", lambda: dict(part), lambda data: None)
+    cpu = Cpu(clock)
+    cpu.start()
+    assert store.maybe_save(cpu)
+    assert not store.maybe_save(cpu)
+    part["messages"] = ["m1", "m2"]
+    assert store.maybe_save(cpu)
+    store.close()
+
+    restored: list[object] = []
+    store = StateStore(tmp_path / "s.sqlite")
+    store.add_part("extra", dict, restored.append)
+    store.add_part("unknown", dict, restored.append)  # nothing saved under it: not called
+    assert store.load(Cpu(VirtualClock()))
+    assert restored == [{"messages": ["m1", "m2"]}]
+
+
+def test_an_old_state_file_gains_the_user_column_of_the_alarm_log(tmp_path: Path) -> None:
+    path = tmp_path / "old.sqlite"
+    with sqlite3.connect(path) as con:
+        con.execute(
+            "CREATE TABLE alarms (id INTEGER PRIMARY KEY AUTOINCREMENT, t_ns INTEGER, "
+            "key TEXT, state TEXT, text TEXT)"
+        )
+        con.execute("INSERT INTO alarms (t_ns, key, state, text) VALUES (1, 'k', 'incoming', '')")
+    con.close()
+    store = StateStore(path)
+    store.log_alarm(2, "k", "acknowledged", user="bob")
+    assert [(r["state"], r["user"]) for r in store.alarms()] == [
+        ("incoming", ""),
+        ("acknowledged", "bob"),
+    ]
 
 
 PROGRAM = """

@@ -18,12 +18,17 @@ from sequencer.model import (
 )
 from web.protocol import (
     MAX_MESSAGE_BYTES,
+    AlarmEntry,
+    AlarmList,
     ChartLayout,
     Command,
     CommandReply,
+    Contact,
     CpuStatus,
     ProtocolError,
+    StepDetail,
     StepStateUpdate,
+    TransitionCriteria,
     condition_text,
     decode,
     encode,
@@ -73,7 +78,44 @@ SAMPLES = [
     Command(op="step_on", fb="FILL", args={"step": 3}),
     CommandReply(applied=False, reason="no error to acknowledge", op="ack", fb="FILL", cycle=9),
     CpuStatus(cpu="cpu1", state="STOP", cycle=4, t_ms=40, fbs=["FILL"]),
-]
+    Command(op="ack_msg", fb="FILL", user="bob", args={"msg_id": "FILL/DB1/S2/SV"}),
+    Command(op="ack_msg", fb="FILL", args={"msg_id": 17}),
+    StepStateUpdate(
+        cycle=5,
+        t_ms=50,
+        mode="AUTO",
+        active=[2],
+        details=[
+            StepDetail(
+                number=2,
+                t_ms=1200,
+                u_ms=700,
+                interlock_ok=False,
+                interlock_error=True,
+                interlock=[Contact(text="ok", ok=False)],
+                transitions=[
+                    TransitionCriteria(
+                        number=2, name="Full", holds=False,
+                        contacts=[Contact(text='"A"', ok=True), Contact(text='NOT "B"', ok=False)],
+                    )
+                ],
+            )
+        ],
+    ),
+    AlarmList(
+        seq=2,
+        cycle=9,
+        entries=[
+            AlarmEntry(
+                msg_id="FILL/DB1/S2/SV", event_id=1, state="outgoing", text="<b>late</b>",
+                source="S7-Graph", came_ms=1_700_000_000_000, went_ms=1_700_000_000_500,
+                acked=True, ack_user="bob", ack_ms=1_700_000_000_900, fb="FILL", db=1, step=2,
+                kind="SV",
+            ),
+            AlarmEntry(msg_id=17, event_id=2, state="incoming", came_ms=5),
+        ],
+    ),
+]  # fmt: skip
 
 
 @pytest.mark.parametrize("message", SAMPLES, ids=lambda m: type(m).__name__)
@@ -114,6 +156,12 @@ def test_condition_text_keeps_precedence_with_parentheses() -> None:
         (b'{"op":"step_on","fb":"FILL","args":{"step":"3"}}', "$.args.step"),
         (b'{"op":"step_on","fb":"FILL","args":{"step":1e999}}', "out of range"),
         (b'{"op":"ack","fb":"FILL","args":{"a":[1,[2]]}}', "$.args"),
+        (b'{"op":"ack_msg","fb":"FILL"}', "needs argument 'msg_id'"),
+        (b'{"op":"ack_msg","fb":"FILL","args":{"msg_id":true}}', "$.args.msg_id"),
+        (b'{"op":"ack_msg","fb":"FILL","args":{"msg_id":0}}', "$.args.msg_id"),
+        (b'{"op":"ack_msg","fb":"FILL","args":{"msg_id":""}}', "$.args.msg_id"),
+        (b'{"op":"ack_msg","fb":"FILL","args":{"msg_id":"' + b"m" * 129 + b'"}}', "$.args.msg_id"),
+        (b'{"op":"ack_msg","fb":"FILL","args":{"msg_id":1,"step":2}}', "no argument 'step'"),
         (b'["ack","FILL"]', "Expected `object`"),
         (b"[" * 50_000, "Expected `object`"),
         (b"\xff\xfe\x00", "malformed JSON"),
@@ -157,3 +205,24 @@ def test_unchanged_scan_is_not_a_change_but_an_event_is() -> None:
         cycle=3, t_ms=30, mode="AUTO", active=[1], events=[("S1", 1)]
     ).changed_from(b)
     assert StepStateUpdate(cycle=3, t_ms=30, mode="MAN", active=[1]).changed_from(b)
+
+
+def test_changed_criteria_of_an_active_step_are_a_change() -> None:
+    def update(ok: bool) -> StepStateUpdate:
+        crit = TransitionCriteria(number=1, holds=ok, contacts=[Contact(text="x", ok=ok)])
+        detail = StepDetail(number=1, transitions=[crit])
+        return StepStateUpdate(cycle=1, t_ms=0, mode="AUTO", active=[1], details=[detail])
+
+    assert update(True).changed_from(update(False))
+    assert not update(True).changed_from(update(True))
+
+
+def test_pending_alarms_are_those_waiting_for_an_acknowledgement() -> None:
+    entries = [
+        AlarmEntry(msg_id=1, event_id=1, state="incoming", came_ms=0),
+        AlarmEntry(msg_id=2, event_id=2, state="incoming", came_ms=0, acked=True),
+        AlarmEntry(msg_id=3, event_id=3, state="incoming", came_ms=0, ack_required=False),
+    ]
+    assert [e.msg_id for e in AlarmList(entries=entries).pending()] == [1]
+    with pytest.raises(ProtocolError, match="state"):
+        decode(b'{"entries":[{"msg_id":1,"event_id":1,"state":"gone","came_ms":0}]}', AlarmList)

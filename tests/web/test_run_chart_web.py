@@ -178,6 +178,16 @@ def test_run_drill_web_serves_the_live_sequence_and_takes_an_acknowledge_click(
 
             assert wait_until(latched, 10)
             page.get_by_text("error: S2").first.wait_for(timeout=10_000)
+            # Step details follow the disturbed step: its supervision contact and the
+            # contacts of the transitions leaving it
+            page.get_by_text("Supervision (V): fault").first.wait_for(timeout=10_000)
+            page.get_by_text("S2.U > T#500MS").first.wait_for(timeout=10_000)
+            page.get_by_text("T2  Clamped, coolant").first.wait_for(timeout=10_000)
+            # the supervision message in the Alarms panel, acknowledged by its own button
+            page.get_by_text("S002 Work piece not clamped").first.wait_for(timeout=10_000)
+            page.get_by_role("button", name="Acknowledge S2 supervision").click()
+            page.get_by_text("ack_msg applied").first.wait_for(timeout=15_000)
+            page.get_by_text("acknowledged by operator").first.wait_for(timeout=10_000)
             page.get_by_role("button", name="Acknowledge", exact=True).click()
             page.get_by_text("ack applied").first.wait_for(timeout=15_000)
         client.close()
@@ -197,5 +207,10 @@ def test_run_drill_web_serves_the_live_sequence_and_takes_an_acknowledge_click(
     assert "Traceback" not in err, err
     with sqlite3.connect(state) as db:
         audit = db.execute("SELECT user, action, detail FROM audit ORDER BY id").fetchall()
+        alarms = db.execute("SELECT key, state, user FROM alarms ORDER BY id").fetchall()
+        part = db.execute("SELECT state FROM parts WHERE name='messages'").fetchone()
     assert ("?", "mode") in [(u, a) for u, a, _ in audit]
+    assert ("operator", "ack_msg") in [(u, a) for u, a, _ in audit]
     assert audit[-1][:2] == ("operator", "ack") and "S2" in audit[-1][2]
+    assert (f"{FB}/DB1/S2/SV", "acknowledged", "operator") in alarms
+    assert part is not None and f"{FB}/DB1/S2/SV" in part[0]  # the message list, persisted

@@ -1,0 +1,124 @@
+"""The CPU's message list and its acknowledgement log survive a killed ``s7graph run``
+process (issue 4: who acknowledged, when, persisted)."""
+
+from __future__ import annotations
+
+import base64
+import json
+import os
+import signal
+import sqlite3
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+
+PROGRAM = """
+from engine import DB, ob
+from sfb.alarms import message_list
+
+SEEN = DB(1, 8)
+
+@ob(100)
+def startup(ctx):
+    msg = message_list(ctx.cpu).get(7)
+    ctx.mem.set("DB1.DBW0", ctx.mem.get("DB1.DBW0") + 1)   # restart count
+    ctx.mem.set("DB1.DBX2.0", msg is not None and msg.acked and msg.ack_user == "ann")
+
+@ob(1)
+def main(ctx):
+    messages = message_list(ctx.cpu)
+    now = ctx.cpu.clock.now_ns()
+    n = ctx.mem.get("MW2") + 1   # retentive: counts on across restarts
+    ctx.mem.set("MW2", n)
+    if n == 3:
+        messages.alarm(True, 7, now, text="Tank 7 overflow")   # ALARM_SQ, incoming
+    if n == 6:
+        messages.acknowledge(7, "ann", now)
+    for event in messages.pop_events():
+        ctx.alarm(event)
+"""
+
+
+def _read(path: Path) -> dict[str, Any] | None:
+    if not path.exists():
+        return None
+    try:
+        con = sqlite3.connect(f"file:{path}?mode=ro", uri=True, timeout=1)
+        try:
+            alarms = con.execute("SELECT t_ns, key, state, user FROM alarms ORDER BY id").fetchall()
+            part = con.execute("SELECT state FROM parts WHERE name='messages'").fetchone()
+            db1 = con.execute("SELECT value FROM meta WHERE key='memory'").fetchone()
+        finally:
+            con.close()
+    except sqlite3.Error:
+        return None
+    if part is None or db1 is None:
+        return None
+    data = base64.b64decode(json.loads(db1[0])["dbs"]["1"]["data"])
+    return {
+        "alarms": alarms,
+        "messages": json.loads(part[0]),
+        "restarts": int.from_bytes(data[0:2], "big"),
+        "restored_ack": bool(data[2] & 1),
+    }
+
+
+def _wait_for(path: Path, pred: Any, proc: subprocess.Popen[bytes]) -> dict[str, Any]:
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline:
+        state = _read(path)
+        if state is not None and pred(state):
+            return state
+        assert proc.poll() is None, proc.stderr.read() if proc.stderr else b""
+        time.sleep(0.05)
+    raise AssertionError(f"timed out; last state {_read(path)}")
+
+
+def _acked(state: dict[str, Any]) -> bool:
+    active = state["messages"]["active"]
+    return bool(active) and active[0]["ack_user"] == "ann"
+
+
+@pytest.mark.timeout(90)
+@pytest.mark.skipif(os.name != "posix", reason="SIGKILL")
+def test_killed_cpu_keeps_its_message_list_and_who_acknowledged_when(tmp_path: Path) -> None:
+    program = tmp_path / "prog.py"
+    program.write_text(textwrap.dedent(PROGRAM))
+    state = tmp_path / "state.sqlite"
+    cmd = [sys.executable, "-m", "web.cli", "run", str(program), "--state", str(state)]
+    cmd += ["--cycle-ms", "5"]
+    started = time.time_ns()
+
+    first = subprocess.Popen(cmd, cwd=ROOT, stderr=subprocess.PIPE)
+    try:
+        killed = _wait_for(state, lambda s: _acked(s) and len(s["alarms"]) == 2, first)
+    finally:
+        first.send_signal(signal.SIGKILL)
+        first.wait(10)
+    (incoming, acked) = killed["alarms"]
+    assert incoming[1:] == ("7", "incoming", "")
+    assert acked[1:] == ("7", "acknowledged", "ann")
+    assert started <= incoming[0] <= acked[0] <= time.time_ns()  # wall-clock "when"
+
+    second = subprocess.Popen(cmd, cwd=ROOT, stderr=subprocess.PIPE)
+    try:
+        after = _wait_for(state, lambda s: s["restarts"] == 2, second)
+    finally:
+        second.send_signal(signal.SIGTERM)
+        second.wait(10)
+    assert after["restored_ack"]  # OB100 of the new process saw message 7 acked by ann
+    (message,) = after["messages"]["active"]
+    assert (message["msg_id"], message["state"], message["text"]) == (
+        7,
+        "incoming",
+        "Tank 7 overflow",
+    )
+    assert message["ack_ns"] is not None
+    assert after["alarms"][:2] == killed["alarms"]  # the log is append-only, kept
