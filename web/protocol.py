@@ -208,8 +208,13 @@ class StepStateUpdate(_Msg, kw_only=True):
             or self.disturbed != other.disturbed
             or self.latched != other.latched
             or self.values != other.values
-            or self.details != other.details
+            or _coarse(self.details) != _coarse(other.details)
         )
+
+
+def _coarse(details: list[StepDetail]) -> list[StepDetail]:
+    """Details with whole-second times: a step's T/U alone makes a delta once a second."""
+    return [msgspec.structs.replace(d, t_ms=d.t_ms // 1000, u_ms=d.u_ms // 1000) for d in details]
 
 
 class Contact(_Msg, kw_only=True):
@@ -234,8 +239,9 @@ class TransitionCriteria(_Msg, kw_only=True):
 
 
 class StepDetail(_Msg, kw_only=True):
-    """Why an active step does (not) switch: its times (to 0.1 s), interlock and
-    supervision state with their contacts, and its valid outgoing transitions."""
+    """Why an active step does (not) switch: its times (to 0.1 s; a change of times alone is
+    a change once a second), interlock and supervision state with their contacts, and its
+    valid outgoing transitions."""
 
     number: StepNo
     t_ms: Count = 0

@@ -112,7 +112,6 @@ class ChartView:
         self._alarms: AlarmList | None = None
         self._alarms_shown: AlarmList | None = None
         self._alarm_buttons: dict[int | str, viser.GuiButtonHandle] = {}
-        self._detail_shown = ""
         self.replies: list[CommandReply] = []  # every answer the CPU gave this view
         self._draw_chart()
         self._build_panel(user)
@@ -423,11 +422,14 @@ class ChartView:
                 if self._step_colour.get(number) != colour:
                     box.color = colour
                     self._step_colour[number] = colour
-            self.status.content = self._status_html(update)
-            self.event_log.content = self._log_html()
-            if detail != self._detail_shown:
-                self.detail_html.content = detail
-                self._detail_shown = detail
+            # only what changed goes to the page (a step's T alone changes ten times a second)
+            for handle, content in (
+                (self.status, self._status_html(update)),
+                (self.event_log, self._log_html()),
+                (self.detail_html, detail),
+            ):
+                if handle.content != content:
+                    handle.content = content
         self._shown = update
 
     def _render_alarms(self, alarms: AlarmList | None) -> None:
