@@ -88,6 +88,12 @@ def _check_type(owner: str, var: Var) -> None:
         raise BlockError(f"{owner}: variable {var.name!r}: {exc.message}") from None
 
 
+def _params(label: str, kind: BlockKind, interface: tuple[Var, ...]) -> dict[str, tuple[Decl, str]]:
+    """The checked interface's stored parameters by name (all but TEMP): ``(decl, type)``."""
+    _check_interface(label, kind, interface)
+    return {v.name: (v.decl, v.type) for v in interface if v.decl is not Decl.TEMP}
+
+
 def _check_interface(owner: str, kind: BlockKind, interface: tuple[Var, ...]) -> None:
     seen: set[str] = set()
     for var in interface:
@@ -123,9 +129,7 @@ class FB:
     out_names: tuple[str, ...] = field(init=False, repr=False, compare=False, default=())
 
     def __post_init__(self) -> None:
-        _check_interface(self.label, self.kind, self.interface)
-        stored = {v.name: (v.decl, v.type) for v in self.interface if v.decl is not Decl.TEMP}
-        object.__setattr__(self, "params", stored)
+        object.__setattr__(self, "params", _params(self.label, self.kind, self.interface))
         outs = tuple(v.name for v in self.interface if v.decl in (Decl.OUT, Decl.IN_OUT))
         object.__setattr__(self, "out_names", outs)
 
@@ -152,9 +156,7 @@ class FC:
     )
 
     def __post_init__(self) -> None:
-        _check_interface(self.label, self.kind, self.interface)
-        stored = {v.name: (v.decl, v.type) for v in self.interface if v.decl is not Decl.TEMP}
-        object.__setattr__(self, "params", stored)
+        object.__setattr__(self, "params", _params(self.label, self.kind, self.interface))
 
     @property
     def label(self) -> str:

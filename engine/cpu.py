@@ -9,22 +9,21 @@ priority first and, within one priority, in the order of their start events (beh
 exception in a user block is a programming error: OB121 if loaded, else STOP — the process
 never dies. All timing uses *process time*: the clock minus the time spent in HOLD, so HOLD
 freezes timers, interrupts and monitoring while the diagnostic time stamps and the
-real-time clock keep the real clock.
+real-time clock keep the real clock. What a block body sees (``CallContext``, block calls)
+lives in ``engine/context.py``.
 """
 
 from __future__ import annotations
 
 from collections import deque
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from datetime import datetime, timedelta
-from functools import lru_cache
 from typing import Any
 
-from engine.address import Address, parse_address
-from engine.blocks import DB, FB, FC, OB, BlockKind, Decl, InstanceDB, is_stringy
+from engine.blocks import DB, FB, FC, OB, BlockKind, InstanceDB
 from engine.clock import Clock
-from engine.datatypes import check_value
+from engine.context import CallContext, NestingOverflow, _Fault
 from engine.diagnostics import DiagnosticBuffer, EventId
 from engine.errors import AddressError, BlockError, TypeMismatch
 from engine.interrupts import CYCLIC_DEFAULT_MS, CyclicScheduler, priority
@@ -36,6 +35,18 @@ from engine.rtc import RealTimeClock
 from engine.rtm import RuntimeMeters
 from engine.timed import DelayInterrupts, TodInterrupts
 from engine.watchdog import CycleStatistics, Verdict, Watchdog
+
+__all__ = [
+    "CLOCK_MEMORY_HALF_MS",
+    "OS_SCAN_HOOKS",
+    "CallContext",
+    "CommandFn",
+    "Cpu",
+    "NestingOverflow",
+    "Pending",
+    "ScanHook",
+    "add_os_scan_hook",
+]
 
 CLOCK_MEMORY_HALF_MS = (50, 100, 200, 250, 400, 500, 800, 1000)
 """Half periods of clock-memory bits 0..7 (periods 0.1 … 2.0 s, behaviour 15)."""
@@ -49,40 +60,6 @@ _MISSING_STOP = {
     86: EventId.STOP_OB86_MISSING,
     87: EventId.STOP_OB87_MISSING,
 }
-
-
-class NestingOverflow(BlockError):
-    """Block nesting deeper than the CPU allows (B-stack overflow → STOP, behaviour 31)."""
-
-
-class _Fault(Exception):
-    """A user-block exception tagged with the innermost block it escaped from."""
-
-    def __init__(self, block: str, exc: BaseException) -> None:
-        super().__init__(block, exc)
-        self.block = block
-        self.exc = exc
-
-
-_INT_RANGES: dict[str, tuple[int, int]] = {
-    "INT": (-32768, 32767),
-    "DINT": (-(2**31), 2**31 - 1),
-    "TIME": (-(2**31), 2**31 - 1),
-    "BYTE": (0, 0xFF),
-    "WORD": (0, 0xFFFF),
-    "DWORD": (0, 0xFFFF_FFFF),
-}
-
-
-def _fits(type_name: str, value: object) -> bool:
-    """Fast path of ``check_value`` for the common cases (BOOL, in-range integers)."""
-    cls = value.__class__
-    if cls is bool:
-        return type_name == "BOOL"
-    if cls is int:
-        bounds = _INT_RANGES.get(type_name)
-        return bounds is not None and bounds[0] <= value <= bounds[1]  # type: ignore[operator]
-    return type_name == "OBJECT"
 
 
 ScanHook = Callable[["Cpu", int], None]
@@ -99,11 +76,6 @@ def add_os_scan_hook(hook: ScanHook) -> None:
         OS_SCAN_HOOKS.append(hook)
 
 
-@lru_cache(maxsize=4096)
-def _addr(text: str) -> Address:
-    return parse_address(text)
-
-
 @dataclass(slots=True)
 class Pending:
     """A submitted command: ``done`` once applied at a scan boundary, with result or error."""
@@ -112,171 +84,6 @@ class Pending:
     done: bool = False
     result: object = None
     error: str = ""
-
-
-class CallContext:
-    """What a block body sees during a scan: the CPU, memory, process time, cycle number."""
-
-    __slots__ = ("cpu", "cycle", "depth", "mem", "now_ns", "ob", "start_info")
-
-    def __init__(self, cpu: Cpu) -> None:
-        self.cpu = cpu
-        self.mem = cpu.mem
-        self.now_ns = 0
-        self.cycle = 0
-        self.ob = 0
-        self.depth = 0
-        self.start_info: dict[str, Any] = {}
-
-    def emit(self, event: object) -> None:
-        """Add ``event`` to this scan's ``ScanRecord.events``."""
-        self.cpu._events.append(event)
-
-    def alarm(self, alarm: object) -> None:
-        """Add ``alarm`` to this scan's ``ScanRecord.alarms``."""
-        self.cpu._alarms.append(alarm)
-
-    def call(
-        self,
-        block: FB | FC | InstanceDB | str | int,
-        instance: InstanceDB | int | None = None,
-        **params: object,
-    ) -> dict[str, object]:
-        """Call an FB/SFB (with its instance DB) or an FC/SFC; return its outputs by name.
-
-        A ``str`` actual for a non-string parameter is an operand (``"MW10"``); OUT and
-        IN_OUT operands receive the values after the call (behaviours 33, 34).
-        """
-        if isinstance(block, FB) and isinstance(instance, InstanceDB) and instance.fb is block:
-            return self._call_fb(block, instance, params)  # the common case, checks below
-        blk: OB | FB | FC | DB
-        if isinstance(block, FB | FC):
-            blk = block
-        elif isinstance(block, InstanceDB):
-            instance, blk = block, block.fb
-        else:
-            blk = self.cpu.block(block)
-        if isinstance(blk, FB):
-            if instance is None:
-                raise BlockError(f"{blk.label} {blk.name!r} called without an instance DB")
-            idb = instance if isinstance(instance, InstanceDB) else self.cpu.instance_db(instance)
-            if idb.fb is not blk and idb.fb != blk:
-                raise BlockError(f"{idb.name} is an instance of {idb.fb.label}, not {blk.label}")
-            return self._call_fb(blk, idb, params)
-        if isinstance(blk, FC):
-            return self._call_fc(blk, params)
-        raise BlockError(f"{blk.label} cannot be called")
-
-    def run_fb(self, blk: FB, idb: InstanceDB) -> None:
-        """Call FB ``blk`` with its instance DB ``idb`` and no parameters, for a caller that
-        reads no outputs (``call`` without building the outputs dict; same checks)."""
-        if idb.fb is not blk and idb.fb != blk:
-            raise BlockError(f"{idb.name} is an instance of {idb.fb.label}, not {blk.label}")
-        if self.depth >= self.cpu.max_nesting:
-            raise NestingOverflow(
-                f"block nesting deeper than {self.cpu.max_nesting} at {blk.label}"
-            )
-        self.depth += 1
-        try:
-            blk.body(self, idb)
-        except _Fault:
-            raise
-        except Exception as exc:
-            raise _Fault(blk.label, exc) from exc
-        finally:
-            self.depth -= 1
-
-    def _enter(self, label: str) -> None:
-        self.depth += 1
-        if self.depth > self.cpu.max_nesting:
-            self.depth -= 1
-            raise NestingOverflow(f"block nesting deeper than {self.cpu.max_nesting} at {label}")
-
-    def _call_fb(self, blk: FB, idb: InstanceDB, params: dict[str, object]) -> dict[str, object]:
-        values = idb.values
-        table = blk.params
-        writes: list[tuple[str, str, str]] | None = None
-        for name, actual in params.items() if params else ():
-            spec = table.get(name)
-            if spec is None or spec[0] is Decl.STAT:
-                raise BlockError(f"{blk.label} has no parameter {name!r}")
-            decl, type_name = spec
-            if decl is Decl.OUT:
-                if not isinstance(actual, str):
-                    raise BlockError(f"{blk.label}.{name}: an OUT needs an operand, not {actual!r}")
-                writes = writes or []
-                writes.append((name, actual, type_name))
-                continue
-            if isinstance(actual, str) and not is_stringy(type_name):
-                if decl is Decl.IN_OUT:
-                    writes = writes or []
-                    writes.append((name, actual, type_name))
-                actual = self.mem.read_as(_addr(actual), type_name)
-            elif not _fits(type_name, actual):
-                actual = check_value(type_name, actual)
-            values[name] = actual
-        if self.depth >= self.cpu.max_nesting:
-            raise NestingOverflow(
-                f"block nesting deeper than {self.cpu.max_nesting} at {blk.label}"
-            )
-        self.depth += 1
-        try:
-            blk.body(self, idb)
-        except _Fault:
-            raise
-        except Exception as exc:
-            raise _Fault(blk.label, exc) from exc
-        finally:
-            self.depth -= 1
-        if writes:
-            for name, operand, type_name in writes:
-                self.mem.write_as(_addr(operand), type_name, values[name])
-        return {name: values[name] for name in blk.out_names}
-
-    def _call_fc(self, blk: FC, params: dict[str, object]) -> dict[str, object]:
-        table = blk.params
-        missing = [n for n in table if n not in params]
-        if missing:
-            raise BlockError(f"{blk.label} {blk.name!r}: parameter(s) {', '.join(missing)} missing")
-        args: dict[str, object] = {}
-        refs: list[tuple[str, str, str]] = []
-        for name, actual in params.items():
-            spec = table.get(name)
-            if spec is None:
-                raise BlockError(f"{blk.label} has no parameter {name!r}")
-            decl, type_name = spec
-            if isinstance(actual, str) and not is_stringy(type_name):
-                if decl is not Decl.OUT:  # an OUT is written, never read in
-                    args[name] = self.mem.read_as(_addr(actual), type_name)
-                if decl is not Decl.IN:
-                    refs.append((name, actual, type_name))
-            elif decl is not Decl.IN:
-                raise BlockError(f"{blk.label}.{name}: {decl} needs an operand, not {actual!r}")
-            else:
-                args[name] = check_value(type_name, actual)
-        self._enter(blk.label)
-        try:
-            ret = blk.body(self, args)
-        except _Fault:
-            raise
-        except Exception as exc:
-            raise _Fault(blk.label, exc) from exc
-        finally:
-            self.depth -= 1
-        out: dict[str, object] = {}
-        for name, operand, type_name in refs:
-            if name in args:  # an OUT the FC left unassigned leaves its operand alone
-                self.mem.write_as(_addr(operand), type_name, args[name])
-                out[name] = args[name]
-        if blk.ret_type is not None:
-            out["RET_VAL"] = ret
-        return out
-
-
-@dataclass(slots=True)
-class _Startup:
-    restart: RestartType
-    hot_blockers: set[str] = field(default_factory=set)
 
 
 class Cpu:

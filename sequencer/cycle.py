@@ -13,6 +13,7 @@
 5. permanent *after* instructions;
 6. group flags and FB outputs.
 
+The quiet call and the fast path of step 4 are in ``sequencer/fastpath.py``.
 The option ``order = "codesys"`` runs d) and e) before a)–c): new steps act in the next call.
 Work is proportional to the active steps: only ``st.active`` is visited.
 """
@@ -25,6 +26,7 @@ from typing import Any
 
 from sequencer import display
 from sequencer.compiled import CompiledChart, Program
+from sequencer.fastpath import FastPath
 from sequencer.modes import MODE_RULES, select_mode
 from sequencer.params import input_defaults, inputs_for, output_defaults
 from sequencer.state import (
@@ -52,7 +54,7 @@ def _no_cells(op: str, number: int, value: Any) -> None:
     raise RuntimeError(f"{op} {number}: no timer/counter cells bound to this sequencer")
 
 
-class GraphRuntime:
+class GraphRuntime(FastPath):
     """A compiled chart bound to its state and the engine: ``execute`` is one FB call.
 
     Generated action code calls back ``on``/``off``/``off_all`` (ON/OFF Sx, OFF S_ALL),
@@ -241,91 +243,7 @@ class GraphRuntime:
             and not (self._commands or self._remote or self.display.dirty)
             and not (st.off or st.halted or st.sskip_enabled)
         ):
-            # the quiet call: no input pin changed since the last latch, no command or
-            # remote acknowledgement is queued, the display needs no paging, AUTO without
-            # HALT_SQ/OFF_SQ/skip steps, default order — the same effects as below with the
-            # steps that cannot act then left out (latch, edges, INIT_SQ, requests,
-            # acknowledgement); step 4 is the fast path
-            rose = st.rose
-            if rose:
-                rose.clear()
-            active = st.active
-            if self.multi:
-                self._advance(now_ns)
-            else:  # _advance, inline
-                last = st.last_ns
-                st.last_ns = now_ns
-                if last >= 0 and now_ns != last and not st.tm_halted:
-                    dt = now_ns - last
-                    t_ns, u_ns, il_err, sv_err = st.t_ns, st.u_ns, st.il_err, st.sv_err
-                    for i in active:
-                        t_ns[i] += dt
-                        if not (il_err[i] or sv_err[i]):
-                            u_ns[i] += dt
-            self._target = None
-            if st.ev_steps:
-                ev = st.ev
-                for i in st.ev_steps:
-                    ev[i] = 0
-                st.ev_steps.clear()
-            if st.log:
-                st.log.clear()
-            if st.fired:
-                st.fired.clear()
-            if st.entered:
-                st.entered.clear()
-            if st.left:
-                st.left.clear()
-            st.ov = False
-            if self._acked:
-                self._acked.clear()
-            st.calls += 1
-            if self._permanent:
-                self.prog.before(st, self)
-                self._fast_sequencers(self._by_seq if self.multi else [active], self.multi)
-                self.prog.after(st, self)
-            elif self.multi or len(active) != 1:
-                self._fast_sequencers(self._by_seq if self.multi else [active], self.multi)
-            else:  # _fast_sequencers of the only sequencer with one active step, inline
-                i = active[0]
-                prog = self.prog
-                if (
-                    self._plain[i]
-                    and not st.sv_err[i]
-                    and not self._final
-                    and prog.tcond is self._tcond
-                    and prog.act is self._act
-                ):
-                    ev = st.ev
-                    j = prog.step[i](st, self, ev[i], st.il_ok[i], st.zeroed)
-                    if j >= 0:
-                        self._fast_switch(-1, active, i, j, False)
-                    elif len(active) > 1:  # a step an ON Sx row of step i appended
-                        act, il_ok, zero = prog.act, st.il_ok, st.zeroed
-                        n = 1
-                        while n < len(active):
-                            i = active[n]
-                            n += 1
-                            act[i](st, self, ev[i], il_ok[i], zero)
-                else:
-                    self._fast_sequencers([active], False)
-            # 6. _outputs, inline
-            il_err, sv_err = st.il_err, st.sv_err
-            error = fault = False
-            for i in active:
-                if il_err[i]:
-                    error = True
-                if sv_err[i]:
-                    fault = True
-            st.error, st.fault = error, fault
-            st.err_flt = error or fault
-            disp = self.display
-            if disp.dirty or st.log or self._live_pins:
-                self.outs_changed = True
-                disp.update(st)
-            else:  # Display.update would write nothing: no page, no event, no live pin
-                self.outs_changed = False
-            return st
+            return self._quiet_call(st, now_ns)
         prog = self.prog
         # 1. latch inputs, edges, per-call lists, times
         ins = st.inputs
@@ -341,20 +259,7 @@ class GraphRuntime:
         if self._commands:
             self._apply_commands()
         carry = st.entered[:] if self.codesys else ()
-        if st.ev_steps:
-            ev = st.ev
-            for i in st.ev_steps:
-                ev[i] = 0
-            st.ev_steps.clear()
-        if st.log:
-            st.log.clear()
-        if st.fired:
-            st.fired.clear()
-        if st.entered:
-            st.entered.clear()
-        if st.left:
-            st.left.clear()
-        st.ov = False
+        self._new_call(st)
         for i in carry:
             if st.x[i]:
                 self._raise(i, EV_S1)
@@ -407,6 +312,23 @@ class GraphRuntime:
         # 6. group flags and outputs
         self._outputs()
         return st
+
+    def _new_call(self, st: GraphState) -> None:
+        """Clear the per-call lists (events, log, fired, entered, left) and OV."""
+        if st.ev_steps:
+            ev = st.ev
+            for i in st.ev_steps:
+                ev[i] = 0
+            st.ev_steps.clear()
+        if st.log:
+            st.log.clear()
+        if st.fired:
+            st.fired.clear()
+        if st.entered:
+            st.entered.clear()
+        if st.left:
+            st.left.clear()
+        st.ov = False
 
     def _advance(self, now_ns: int) -> None:
         """The active steps by sequencer, and the step times (T; U unless disturbed; HALT_TM
@@ -514,117 +436,6 @@ class GraphRuntime:
         else:
             self._switch(steps, sw, rule)
             self._conditions_and_actions(k, steps)
-
-    def _fast_sequencers(self, seqs: list[list[int]], multi: bool) -> None:
-        """Step 4 in the common case (AUTO, no HALT_SQ/OFF_SQ, no forced acknowledgement,
-        no skip steps, default order): per sequencer (``seqs``: the active steps of each, or
-        ``[st.active]`` for a single one), the same effects as ``_sequencer``. Only a
-        sequencer with one active step without interlock, supervision or join, and no final
-        scan pending, is done here; any other takes the general path."""
-        st = self.st
-        prog = self.prog
-        fused = prog.step
-        act = prog.act
-        # the fused functions embed the chart's conditions and rows: with a replaced
-        # ``tcond``/``act`` (instrumented) every sequencer takes the general path
-        plain = self._plain if prog.tcond is self._tcond and act is self._act else self._none
-        final = self._final
-        ev = st.ev
-        il_ok = st.il_ok
-        sv_err = st.sv_err
-        zero = st.zeroed
-        for k in range(len(seqs)):
-            steps = seqs[k]
-            kk = k if multi else -1
-            if len(steps) != 1 or final:
-                if steps or final or not multi:
-                    self._sequencer(kk, steps, _AUTO_SW, _AUTO_RULE)
-                continue
-            i = steps[0]
-            if not plain[i] or sv_err[i]:
-                self._sequencer(kk, steps, _AUTO_SW, _AUTO_RULE)
-                continue
-            # a–c: the first-listed transition that holds switches; if none, the rows (e)
-            j = fused[i](st, self, ev[i], il_ok[i], zero)
-            if j < 0:
-                n = 1
-                while n < len(steps):  # a step an ON Sx row of step i appended
-                    i = steps[n]
-                    n += 1
-                    act[i](st, self, ev[i], il_ok[i], zero)
-                continue
-            self._fast_switch(kk, steps, i, j, multi)
-
-    def _fast_switch(self, kk: int, steps: list[int], i: int, j: int, multi: bool) -> None:
-        """The fast path's switch of sequencer ``kk`` (-1: the only one) whose only active
-        step ``i`` (plain, no fault) leaves by transition ``j`` (its fused function returned
-        ``j``): c) deactivate ``i``, activate the targets (events S0, S1), then d) the
-        general path if a new step has an interlock or supervision, else e) the final scan
-        of ``i`` and the rows of the new steps."""
-        st = self.st
-        prog = self.prog
-        final = self._final
-        ev = st.ev
-        il_ok = st.il_ok
-        sv_err = st.sv_err
-        zero = st.zeroed
-        act = prog.act
-        x = st.x
-        il_err = st.il_err
-        log = st.log
-        ev_steps = st.ev_steps
-        active = st.active
-        st.fired.append(j)
-        # _deactivate(i), inline (i is active, without fault)
-        x[i] = False
-        active.remove(i)
-        if multi:
-            steps.remove(i)
-        st.left.append(i)
-        final.append(i)
-        il_err[i] = False
-        il_ok[i] = True
-        if not ev[i]:
-            ev_steps.append(i)
-        ev[i] |= EV_S0
-        log.append((i, EV_S0))
-        for d in self.cc.tr_dst[j]:
-            if not x[d]:
-                # _activate(d), inline
-                x[d] = True
-                st.t_ns[d] = 0
-                st.u_ns[d] = 0
-                st.act_ns[d] = st.last_ns
-                il_err[d] = False
-                sv_err[d] = False
-                active.append(d)
-                if multi:
-                    self._by_seq[self.cc.step_seq[d]].append(d)
-                st.entered.append(d)
-                if not ev[d]:
-                    ev_steps.append(d)
-                ev[d] |= EV_S1
-                log.append((d, EV_S1))
-        nochk = self._nochk
-        if not (nochk[steps[0]] if len(steps) == 1 else all(nochk[s] for s in steps)):
-            # d: a new step has an interlock or a supervision
-            self._conditions_and_actions(kk, steps)
-            return
-        # e: the final scan of the step left (this sequencer's), then the rows
-        keep: list[int] = []
-        fin = prog.fin
-        step_seq = self.cc.step_seq
-        for f in final:
-            if kk >= 0 and step_seq[f] != kk:
-                keep.append(f)
-            else:
-                fin[f](st, self, ev[f] | EV_S0)
-        final[:] = keep
-        n = 0
-        while n < len(steps):  # ON Sx in a row may append a step to this sequencer
-            i = steps[n]
-            n += 1
-            act[i](st, self, ev[i], il_ok[i], zero)
 
     def _switch(
         self, steps: list[int], sw: tuple[Any, ...], rule: Callable[[bool, bool], bool]
@@ -814,10 +625,6 @@ class GraphRuntime:
         disp = self.display
         self.outs_changed = disp.dirty or bool(st.log) or self._live_pins
         disp.update(st)
-
-
-_AUTO_SW: tuple[Any, ...] = (None, False, False, ())  # _switch options in the fast path
-_AUTO_RULE = MODE_RULES["AUTO"]
 
 
 def new_state(cc: CompiledChart) -> GraphState:

@@ -1,0 +1,204 @@
+"""What a block body sees during a scan, and how one block calls another (SPEC.md §1.3–1.4).
+
+``CallContext.call`` binds the actual parameters (a ``str`` for a non-string parameter is an
+operand, behaviours 33, 34), runs the body one nesting level deeper (B-stack overflow →
+``NestingOverflow``, behaviour 31) and tags an escaping exception with the innermost block
+(``_Fault``), which the CPU turns into OB121 or STOP.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from typing import TYPE_CHECKING, Any
+
+from engine.address import Address, parse_address
+from engine.blocks import DB, FB, FC, OB, Decl, InstanceDB, is_stringy
+from engine.datatypes import check_value
+from engine.errors import BlockError
+
+if TYPE_CHECKING:
+    from engine.cpu import Cpu
+
+
+class NestingOverflow(BlockError):
+    """Block nesting deeper than the CPU allows (B-stack overflow → STOP, behaviour 31)."""
+
+
+class _Fault(Exception):
+    """A user-block exception tagged with the innermost block it escaped from."""
+
+    def __init__(self, block: str, exc: BaseException) -> None:
+        super().__init__(block, exc)
+        self.block = block
+        self.exc = exc
+
+
+_INT_RANGES: dict[str, tuple[int, int]] = {
+    "INT": (-32768, 32767),
+    "DINT": (-(2**31), 2**31 - 1),
+    "TIME": (-(2**31), 2**31 - 1),
+    "BYTE": (0, 0xFF),
+    "WORD": (0, 0xFFFF),
+    "DWORD": (0, 0xFFFF_FFFF),
+}
+
+
+def _fits(type_name: str, value: object) -> bool:
+    """Fast path of ``check_value`` for the common cases (BOOL, in-range integers)."""
+    cls = value.__class__
+    if cls is bool:
+        return type_name == "BOOL"
+    if cls is int:
+        bounds = _INT_RANGES.get(type_name)
+        return bounds is not None and bounds[0] <= value <= bounds[1]  # type: ignore[operator]
+    return type_name == "OBJECT"
+
+
+@lru_cache(maxsize=4096)
+def _addr(text: str) -> Address:
+    return parse_address(text)
+
+
+class CallContext:
+    """What a block body sees during a scan: the CPU, memory, process time, cycle number."""
+
+    __slots__ = ("cpu", "cycle", "depth", "mem", "now_ns", "ob", "start_info")
+
+    def __init__(self, cpu: Cpu) -> None:
+        self.cpu = cpu
+        self.mem = cpu.mem
+        self.now_ns = 0
+        self.cycle = 0
+        self.ob = 0
+        self.depth = 0
+        self.start_info: dict[str, Any] = {}
+
+    def emit(self, event: object) -> None:
+        """Add ``event`` to this scan's ``ScanRecord.events``."""
+        self.cpu._events.append(event)
+
+    def alarm(self, alarm: object) -> None:
+        """Add ``alarm`` to this scan's ``ScanRecord.alarms``."""
+        self.cpu._alarms.append(alarm)
+
+    def call(
+        self,
+        block: FB | FC | InstanceDB | str | int,
+        instance: InstanceDB | int | None = None,
+        **params: object,
+    ) -> dict[str, object]:
+        """Call an FB/SFB (with its instance DB) or an FC/SFC; return its outputs by name.
+
+        A ``str`` actual for a non-string parameter is an operand (``"MW10"``); OUT and
+        IN_OUT operands receive the values after the call (behaviours 33, 34).
+        """
+        if isinstance(block, FB) and isinstance(instance, InstanceDB) and instance.fb is block:
+            return self._call_fb(block, instance, params)  # the common case, checks below
+        blk: OB | FB | FC | DB
+        if isinstance(block, FB | FC):
+            blk = block
+        elif isinstance(block, InstanceDB):
+            instance, blk = block, block.fb
+        else:
+            blk = self.cpu.block(block)
+        if isinstance(blk, FB):
+            if instance is None:
+                raise BlockError(f"{blk.label} {blk.name!r} called without an instance DB")
+            idb = instance if isinstance(instance, InstanceDB) else self.cpu.instance_db(instance)
+            if idb.fb is not blk and idb.fb != blk:
+                raise BlockError(f"{idb.name} is an instance of {idb.fb.label}, not {blk.label}")
+            return self._call_fb(blk, idb, params)
+        if isinstance(blk, FC):
+            return self._call_fc(blk, params)
+        raise BlockError(f"{blk.label} cannot be called")
+
+    def run_fb(self, blk: FB, idb: InstanceDB) -> None:
+        """Call FB ``blk`` with its instance DB ``idb`` and no parameters, for a caller that
+        reads no outputs (``call`` without building the outputs dict; same checks)."""
+        if idb.fb is not blk and idb.fb != blk:
+            raise BlockError(f"{idb.name} is an instance of {idb.fb.label}, not {blk.label}")
+        self._invoke(blk, idb)
+
+    def _invoke(self, blk: FB | FC, arg: Any) -> Any:
+        """``blk.body(self, arg)`` one nesting level deeper; an exception escaping it is
+        tagged with the innermost block it escaped from (``_Fault``)."""
+        if self.depth >= self.cpu.max_nesting:
+            raise NestingOverflow(
+                f"block nesting deeper than {self.cpu.max_nesting} at {blk.label}"
+            )
+        self.depth += 1
+        try:
+            return blk.body(self, arg)
+        except _Fault:
+            raise
+        except Exception as exc:
+            raise _Fault(blk.label, exc) from exc
+        finally:
+            self.depth -= 1
+
+    def _write_back(
+        self, refs: list[tuple[str, str, str]], values: dict[str, object]
+    ) -> dict[str, object]:
+        """Write OUT/IN_OUT ``values`` to their operands; an OUT the block left unassigned
+        (absent from ``values``) leaves its operand alone. Returns what was written."""
+        out: dict[str, object] = {}
+        for name, operand, type_name in refs:
+            if name in values:
+                self.mem.write_as(_addr(operand), type_name, values[name])
+                out[name] = values[name]
+        return out
+
+    def _call_fb(self, blk: FB, idb: InstanceDB, params: dict[str, object]) -> dict[str, object]:
+        values = idb.values
+        table = blk.params
+        writes: list[tuple[str, str, str]] | None = None
+        for name, actual in params.items() if params else ():
+            spec = table.get(name)
+            if spec is None or spec[0] is Decl.STAT:
+                raise BlockError(f"{blk.label} has no parameter {name!r}")
+            decl, type_name = spec
+            if decl is Decl.OUT:
+                if not isinstance(actual, str):
+                    raise BlockError(f"{blk.label}.{name}: an OUT needs an operand, not {actual!r}")
+                writes = writes or []
+                writes.append((name, actual, type_name))
+                continue
+            if isinstance(actual, str) and not is_stringy(type_name):
+                if decl is Decl.IN_OUT:
+                    writes = writes or []
+                    writes.append((name, actual, type_name))
+                actual = self.mem.read_as(_addr(actual), type_name)
+            elif not _fits(type_name, actual):
+                actual = check_value(type_name, actual)
+            values[name] = actual
+        self._invoke(blk, idb)
+        if writes:
+            self._write_back(writes, values)
+        return {name: values[name] for name in blk.out_names}
+
+    def _call_fc(self, blk: FC, params: dict[str, object]) -> dict[str, object]:
+        table = blk.params
+        missing = [n for n in table if n not in params]
+        if missing:
+            raise BlockError(f"{blk.label} {blk.name!r}: parameter(s) {', '.join(missing)} missing")
+        args: dict[str, object] = {}
+        refs: list[tuple[str, str, str]] = []
+        for name, actual in params.items():
+            spec = table.get(name)
+            if spec is None:
+                raise BlockError(f"{blk.label} has no parameter {name!r}")
+            decl, type_name = spec
+            if isinstance(actual, str) and not is_stringy(type_name):
+                if decl is not Decl.OUT:  # an OUT is written, never read in
+                    args[name] = self.mem.read_as(_addr(actual), type_name)
+                if decl is not Decl.IN:
+                    refs.append((name, actual, type_name))
+            elif decl is not Decl.IN:
+                raise BlockError(f"{blk.label}.{name}: {decl} needs an operand, not {actual!r}")
+            else:
+                args[name] = check_value(type_name, actual)
+        ret = self._invoke(blk, args)
+        out = self._write_back(refs, args)
+        if blk.ret_type is not None:
+            out["RET_VAL"] = ret
+        return out
