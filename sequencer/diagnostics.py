@@ -25,7 +25,7 @@ CODES: Final[dict[str, str]] = {
     "E003": "literal that does not parse or does not fit its type",
     "E004": "unknown header option or option value",
     "E005": "action row whose operand does not fit its qualifier",
-    # structure (sequencer/validate.py)
+    # structure (sequencer/validate.py, rules in sequencer/rules_*.py)
     "E010": "unknown step in FROM / TO",
     "E011": "duplicate step number",
     "E012": "duplicate transition number",

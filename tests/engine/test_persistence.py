@@ -8,9 +8,6 @@ import os
 import signal
 import sqlite3
 import subprocess
-import sys
-import textwrap
-import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -19,8 +16,7 @@ import pytest
 
 from engine import DB, CallContext, Cpu, InstanceDB, VirtualClock, fb, ob
 from engine.persistence import StateStore
-
-ROOT = Path(__file__).resolve().parents[2]
+from tests.real_process import ROOT, query_store, run_command, wait_for
 
 
 @fb(2, STAT={"total": ("DINT", 0), "note": ("STRING[8]", "")})
@@ -203,18 +199,17 @@ def setup(cpu):
 
 
 def _read(path: Path) -> dict[str, Any] | None:
-    if not path.exists():
+    rows = query_store(
+        path,
+        lambda con: (
+            con.execute("SELECT value FROM meta WHERE key='memory'").fetchone(),
+            con.execute("SELECT state FROM instances WHERE number=2").fetchone(),
+            con.execute("SELECT value FROM meta WHERE key='last_restart'").fetchone(),
+        ),
+    )
+    if rows is None:
         return None
-    try:
-        con = sqlite3.connect(f"file:{path}?mode=ro", uri=True, timeout=1)
-        try:
-            row = con.execute("SELECT value FROM meta WHERE key='memory'").fetchone()
-            inst = con.execute("SELECT state FROM instances WHERE number=2").fetchone()
-            restart = con.execute("SELECT value FROM meta WHERE key='last_restart'").fetchone()
-        finally:
-            con.close()
-    except sqlite3.Error:
-        return None
+    row, inst, restart = rows
     if row is None or inst is None:
         return None
     mem = json.loads(row[0])
@@ -230,31 +225,16 @@ def _read(path: Path) -> dict[str, Any] | None:
     }
 
 
-def _wait_for(path: Path, pred: Any, proc: subprocess.Popen[bytes]) -> dict[str, Any]:
-    deadline = time.monotonic() + 30
-    while time.monotonic() < deadline:
-        state = _read(path)
-        if state is not None and pred(state):
-            return state
-        assert proc.poll() is None, proc.stderr.read() if proc.stderr else b""
-        time.sleep(0.05)
-    raise AssertionError(f"timed out; last state {_read(path)}")
-
-
 @pytest.mark.timeout(90)
 @pytest.mark.skipif(os.name != "posix", reason="SIGKILL")
 def test_killed_cpu_process_comes_back_by_warm_restart(tmp_path: Path) -> None:
     """Behaviour 3: a SIGKILLed CPU process restarts warm with every retentive value intact
     (retentive MW, DB and instance DB) and non-retentive MW cleared."""
-    program = tmp_path / "prog.py"
-    program.write_text(textwrap.dedent(PROGRAM))
-    state = tmp_path / "state.sqlite"
-    cmd = [sys.executable, "-m", "web.cli", "run", str(program), "--state", str(state)]
-    cmd += ["--cycle-ms", "5"]
+    cmd, state = run_command(tmp_path, PROGRAM)
 
     first = subprocess.Popen(cmd, cwd=ROOT, stderr=subprocess.PIPE)
     try:
-        _wait_for(state, lambda s: s["MW2"] >= 20, first)
+        wait_for(_read, state, lambda s: s["MW2"] >= 20, first)
     finally:
         first.send_signal(signal.SIGKILL)
         first.wait(10)
@@ -263,7 +243,7 @@ def test_killed_cpu_process_comes_back_by_warm_restart(tmp_path: Path) -> None:
 
     second = subprocess.Popen(cmd, cwd=ROOT, stderr=subprocess.PIPE)
     try:
-        after = _wait_for(state, lambda s: s["restarts"] == 2, second)
+        after = wait_for(_read, state, lambda s: s["restarts"] == 2, second)
     finally:
         second.send_signal(signal.SIGTERM)
         second.wait(10)

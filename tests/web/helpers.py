@@ -1,5 +1,6 @@
 """Shared helpers of the web tests, imported as ``tests.web.helpers``: polling with a
-deadline and one headless Chromium page through playwright."""
+deadline, one headless Chromium page through playwright and a compiled chart's session on
+the virtual clock."""
 
 from __future__ import annotations
 
@@ -7,9 +8,15 @@ import os
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from pathlib import Path
 from typing import TYPE_CHECKING
 
 import pytest
+
+from engine.clock import VirtualClock
+from engine.persistence import StateStore
+from engine.symbols import SymbolTable
+from web.cmd_sim import ChartSession, load_chart
 
 if TYPE_CHECKING:
     from playwright.sync_api import Page
@@ -53,3 +60,17 @@ def chromium_page(url: str) -> Iterator[Page]:
             page.close()
         finally:
             browser.close()
+
+
+def chart_session(
+    tmp_path: Path, name: str, chart: str
+) -> tuple[ChartSession, SymbolTable, VirtualClock, StateStore]:
+    """``chart`` written to ``tmp_path / name`` and compiled, in a (not yet started)
+    session on a virtual clock, and a state store ``state.sqlite`` beside it (close it)."""
+    path = tmp_path / name
+    path.write_text(chart, encoding="utf-8")
+    cc, table = load_chart(path)
+    clock = VirtualClock()
+    session = ChartSession(cc, table, clock)
+    store = StateStore(tmp_path / "state.sqlite")
+    return session, table, clock, store

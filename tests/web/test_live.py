@@ -12,7 +12,8 @@ import pytest
 
 from engine.clock import VirtualClock
 from engine.persistence import StateStore
-from web.cmd_sim import ChartSession, load_chart
+from tests.web.helpers import chart_session
+from web.cmd_sim import ChartSession
 from web.live import LiveGraph, watch_names
 from web.protocol import Command, StepStateUpdate
 
@@ -66,12 +67,7 @@ class Rig:
 
 @pytest.fixture
 def rig(tmp_path: Path) -> Iterator[Rig]:
-    path = tmp_path / "live.s7g"
-    path.write_text(CHART, encoding="utf-8")
-    cc, table = load_chart(path)
-    clock = VirtualClock()
-    session = ChartSession(cc, table, clock)
-    store = StateStore(tmp_path / "state.sqlite")
+    session, table, clock, store = chart_session(tmp_path, "live.s7g", CHART)
     live = LiveGraph(
         session.graph,
         read=session.get,

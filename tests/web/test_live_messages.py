@@ -14,8 +14,8 @@ import pytest
 from engine.clock import VirtualClock
 from engine.persistence import StateStore
 from sfb.alarms import message_list
-from tests.web.helpers import wait_until
-from web.cmd_sim import ChartSession, load_chart
+from tests.web.helpers import chart_session, wait_until
+from web.cmd_sim import ChartSession
 from web.live import LiveGraph
 from web.live_edge import LiveEdge
 from web.protocol import AlarmList, Command, StepStateUpdate
@@ -74,12 +74,7 @@ class Rig:
 
 @pytest.fixture
 def rig(tmp_path: Path) -> Iterator[Rig]:
-    path = tmp_path / "msg.s7g"
-    path.write_text(CHART, encoding="utf-8")
-    cc, table = load_chart(path)
-    clock = VirtualClock()
-    session = ChartSession(cc, table, clock)
-    store = StateStore(tmp_path / "state.sqlite")
+    session, _, clock, store = chart_session(tmp_path, "msg.s7g", CHART)
     live = LiveGraph(
         session.graph,
         store=store,

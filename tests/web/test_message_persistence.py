@@ -7,17 +7,14 @@ import base64
 import json
 import os
 import signal
-import sqlite3
 import subprocess
-import sys
-import textwrap
 import time
 from pathlib import Path
 from typing import Any
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
+from tests.real_process import ROOT, query_store, run_command, wait_for
 
 PROGRAM = """
 from engine import DB, ob
@@ -47,18 +44,17 @@ def main(ctx):
 
 
 def _read(path: Path) -> dict[str, Any] | None:
-    if not path.exists():
+    rows = query_store(
+        path,
+        lambda con: (
+            con.execute("SELECT t_ns, key, state, user FROM alarms ORDER BY id").fetchall(),
+            con.execute("SELECT state FROM parts WHERE name='messages'").fetchone(),
+            con.execute("SELECT value FROM meta WHERE key='memory'").fetchone(),
+        ),
+    )
+    if rows is None:
         return None
-    try:
-        con = sqlite3.connect(f"file:{path}?mode=ro", uri=True, timeout=1)
-        try:
-            alarms = con.execute("SELECT t_ns, key, state, user FROM alarms ORDER BY id").fetchall()
-            part = con.execute("SELECT state FROM parts WHERE name='messages'").fetchone()
-            db1 = con.execute("SELECT value FROM meta WHERE key='memory'").fetchone()
-        finally:
-            con.close()
-    except sqlite3.Error:
-        return None
+    alarms, part, db1 = rows
     if part is None or db1 is None:
         return None
     data = base64.b64decode(json.loads(db1[0])["dbs"]["1"]["data"])
@@ -70,17 +66,6 @@ def _read(path: Path) -> dict[str, Any] | None:
     }
 
 
-def _wait_for(path: Path, pred: Any, proc: subprocess.Popen[bytes]) -> dict[str, Any]:
-    deadline = time.monotonic() + 30
-    while time.monotonic() < deadline:
-        state = _read(path)
-        if state is not None and pred(state):
-            return state
-        assert proc.poll() is None, proc.stderr.read() if proc.stderr else b""
-        time.sleep(0.05)
-    raise AssertionError(f"timed out; last state {_read(path)}")
-
-
 def _acked(state: dict[str, Any]) -> bool:
     active = state["messages"]["active"]
     return bool(active) and active[0]["ack_user"] == "ann"
@@ -89,16 +74,12 @@ def _acked(state: dict[str, Any]) -> bool:
 @pytest.mark.timeout(90)
 @pytest.mark.skipif(os.name != "posix", reason="SIGKILL")
 def test_killed_cpu_keeps_its_message_list_and_who_acknowledged_when(tmp_path: Path) -> None:
-    program = tmp_path / "prog.py"
-    program.write_text(textwrap.dedent(PROGRAM))
-    state = tmp_path / "state.sqlite"
-    cmd = [sys.executable, "-m", "web.cli", "run", str(program), "--state", str(state)]
-    cmd += ["--cycle-ms", "5"]
+    cmd, state = run_command(tmp_path, PROGRAM)
     started = time.time_ns()
 
     first = subprocess.Popen(cmd, cwd=ROOT, stderr=subprocess.PIPE)
     try:
-        killed = _wait_for(state, lambda s: _acked(s) and len(s["alarms"]) == 2, first)
+        killed = wait_for(_read, state, lambda s: _acked(s) and len(s["alarms"]) == 2, first)
     finally:
         first.send_signal(signal.SIGKILL)
         first.wait(10)
@@ -109,7 +90,7 @@ def test_killed_cpu_keeps_its_message_list_and_who_acknowledged_when(tmp_path: P
 
     second = subprocess.Popen(cmd, cwd=ROOT, stderr=subprocess.PIPE)
     try:
-        after = _wait_for(state, lambda s: s["restarts"] == 2, second)
+        after = wait_for(_read, state, lambda s: s["restarts"] == 2, second)
     finally:
         second.send_signal(signal.SIGTERM)
         second.wait(10)

@@ -1,0 +1,34 @@
+"""The state the validation rules share: the chart, its symbols, the steps and transitions by
+number and the diagnostics found so far (SPEC.md §3)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from engine.errors import SourceLocation
+from engine.symbols import SymbolTable
+from sequencer.diagnostics import Diagnostic, error, warning
+from sequencer.model import Chart, Step, Transition
+
+
+@dataclass
+class _Ctx:
+    chart: Chart
+    symbols: SymbolTable | None
+    steps: dict[int, Step] = field(default_factory=dict)
+    transitions: dict[int, Transition] = field(default_factory=dict)
+    diags: list[Diagnostic] = field(default_factory=list)
+
+    def err(self, code: str, msg: str, loc: SourceLocation, element: str = "") -> None:
+        self.diags.append(error(code, msg, loc, element))
+
+    def warn(self, code: str, msg: str, loc: SourceLocation, element: str = "") -> None:
+        self.diags.append(warning(code, msg, loc, element))
+
+
+def _step_el(n: int) -> str:
+    return f"step S{n}"
+
+
+def _row_el(step: Step, i: int) -> str:
+    return f"step S{step.number} row {i + 1}"

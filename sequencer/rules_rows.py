@@ -1,0 +1,147 @@
+"""Validation rules for action rows and permanent instructions (SPEC.md §2.3, §2.8, §3).
+
+The event × qualifier table is read from ``steps.qualifiers`` (never re-encoded here).
+"""
+
+from __future__ import annotations
+
+from sequencer.model import ActionRow, Assignment, BlockCall, Coil, Operand, Step, StepTarget
+from sequencer.rules_context import _Ctx, _row_el
+from sequencer.rules_types import _ADDRESS_FLEX, _loc, _resolve, _show, _type, _unify
+from steps.qualifiers import (
+    COUNTER_QUALIFIERS,
+    NEEDS_VALUE,
+    TIMED_QUALIFIERS,
+    TIMER_QUALIFIERS,
+    check,
+    operand_kind,
+)
+
+
+def rule_c_without_interlock(ctx: _Ctx) -> None:
+    """Rows marked C on a step without INTERLOCK always run (W122, SPEC §2.3)."""
+    for s in ctx.chart.all_steps():
+        if s.interlock is not None:
+            continue
+        for i, r in enumerate(s.actions):
+            if r.interlocked:
+                ctx.warn("W122", f"row marked C but step S{s.number} has no INTERLOCK; the "
+                         "mark has no effect", r.loc, _row_el(s, i))  # fmt: skip
+
+
+# ---------------------------------------------------------------- action rows (SPEC §2.8)
+
+
+def rule_action_rows(ctx: _Ctx) -> None:
+    """Each row: event/qualifier/C per the table (E020, E025), value present and typed
+    (E021, E022, E023), operand of the right kind (E024), ON/OFF steps known (E026),
+    no bit assignments in actions (E035), assignments typed (E031)."""
+    for s in ctx.chart.all_steps():
+        for i, r in enumerate(s.actions):
+            _check_row(ctx, s, i, r)
+
+
+def _check_row(ctx: _Ctx, step: Step, i: int, r: ActionRow) -> None:
+    el = _row_el(step, i)
+    op = r.operand
+    s_all = isinstance(op, StepTarget) and op.step is None
+    kind = operand_kind(r.qualifier, assignment=isinstance(op, Assignment), s_all=s_all)
+    rule = check(r.event, r.qualifier, r.interlocked, kind)
+    if not rule.allowed:
+        ctx.err("E025" if s_all else "E020", rule.reason, r.loc, el)
+    q = r.qualifier
+    if q in NEEDS_VALUE and r.value is None:
+        example = {"D": "T#2S", "L": "T#2S", "CS": "C#5"}.get(q, "S5T#2S")
+        ctx.err("E021", f"{q} needs a value after a comma, e.g. ', {example}'", r.loc, el)
+    if r.value is not None:
+        _check_row_value(ctx, r, el)
+    if isinstance(op, StepTarget):
+        if op.step is not None and op.step not in ctx.steps:
+            ctx.err("E026", f"{q} of unknown step S{op.step}", op.loc, el)
+    elif isinstance(op, Assignment):
+        _check_assignment(ctx, op, el, in_action=True)
+    elif isinstance(op, BlockCall):
+        _check_call(ctx, op, el)
+    elif isinstance(op, Operand):
+        _check_row_operand(ctx, r, op, el)
+
+
+def _check_row_value(ctx: _Ctx, r: ActionRow, el: str) -> None:
+    q, value = r.qualifier, r.value
+    assert value is not None
+    if q not in NEEDS_VALUE:
+        ctx.err("E023", f"{q} takes no value", _loc(value), el)
+        return
+    t = _type(ctx, value, el)
+    if t is None:
+        return
+    want = {"D": "TIME", "L": "TIME", "CS": "WORD"}.get(q, "S5TIME")
+    if _unify(t, want) != want:
+        code = "E022" if q in TIMED_QUALIFIERS else "E023"
+        example = {"TIME": "T#2S", "WORD": "C#5", "S5TIME": "S5T#2S"}[want]
+        ctx.err(code, f"{q} needs a {want} value like {example}, not {_show(t)}", _loc(value), el)
+
+
+def _check_row_operand(ctx: _Ctx, r: ActionRow, op: Operand, el: str) -> None:
+    res = _resolve(ctx, op, el)
+    if res is None:
+        return
+    q = r.qualifier
+    if q in COUNTER_QUALIFIERS:
+        want, what = "COUNTER", "a counter like C 5"
+    elif q in TIMER_QUALIFIERS:
+        want, what = "TIMER", "a timer like T 5"
+    else:
+        want, what = "BOOL", "a bit like Q0.0"
+    if res.type != want:
+        ctx.err("E024", f"{q} needs {what}, not {op.name} ({res.type})", op.loc, el)
+    elif not res.writable:
+        ctx.err("E045", f"{op.name} is an FB output; the chart cannot write it", op.loc, el)
+
+
+def _check_call(ctx: _Ctx, call: BlockCall, el: str) -> None:
+    for _, e in call.inputs:
+        _type(ctx, e, el)
+    for _, o in call.outputs:
+        _resolve(ctx, o, el)
+
+
+def _check_assignment(ctx: _Ctx, a: Assignment, el: str, *, in_action: bool) -> None:
+    res = _resolve(ctx, a.target, el)
+    t = _type(ctx, a.expr, el)
+    if res is None:
+        return
+    if not res.writable:
+        ctx.err("E045", f"{a.target.name} is an FB output; the chart cannot write it",
+                a.target.loc, el)  # fmt: skip
+        return
+    target = _ADDRESS_FLEX.get(res.type, res.type) if res.is_untyped else res.type
+    if in_action and target == "BOOL":
+        ctx.err("E035", f"{a.target.name} := ... writes a bit: a coil belongs in the permanent "
+                "instructions; in a step use N, S or R", a.target.loc, el)  # fmt: skip
+        return
+    if t is not None and _unify(target, t) is None:
+        ctx.err("E031", f"cannot assign {_show(t)} to {a.target.name} ({_show(target)})",
+                a.target.loc, el)  # fmt: skip
+
+
+# ---------------------------------------------------------------- permanent instructions
+
+
+def rule_permanent_instructions(ctx: _Ctx) -> None:
+    """Coils write bits from conditions; assignments are typed; calls name known operands."""
+    for place, items in (("before", ctx.chart.before), ("after", ctx.chart.after)):
+        el = f"permanent {place}"
+        for it in items:
+            if isinstance(it, Coil):
+                res = _resolve(ctx, it.target, el)
+                if res is not None and res.type != "BOOL":
+                    ctx.err("E031", f"a coil writes a bit; {it.target.name} is {res.type}",
+                            it.target.loc, el)  # fmt: skip
+                elif res is not None and not res.writable:
+                    ctx.err("E045", f"{it.target.name} is an FB output; the chart cannot "
+                            "write it", it.target.loc, el)  # fmt: skip
+            elif isinstance(it, Assignment):
+                _check_assignment(ctx, it, el, in_action=False)
+            elif isinstance(it, BlockCall):
+                _check_call(ctx, it, el)

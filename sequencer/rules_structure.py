@@ -1,0 +1,187 @@
+"""Validation rules for the chart's structure (SPEC.md §2.1, §3): numbers, declarations,
+FROM/TO, initial steps, ways in and out, limits and joins."""
+
+from __future__ import annotations
+
+from typing import Final
+
+from engine.address import parse_address
+from engine.errors import AddressError
+from sequencer.model import Binary, Expr, Step, StepTarget, Transition, Unary
+from sequencer.rules_context import _Ctx, _step_el
+from sequencer.rules_types import LOGIC, _conditions, _show, _type, _unify
+
+# Limits that warn (SPEC §2.1).
+MAX_STEPS: Final = 250
+MAX_TRANSITIONS: Final = 250
+MAX_ALTERNATIVE_PATHS: Final = 125
+MAX_SIMULTANEOUS_PATHS: Final = 249
+MAX_SEQUENCES: Final = 8
+MAX_CONDITION_ELEMENTS: Final = 32
+MAX_MARKINGS: Final = 20_000  # state-space bound of the join analysis
+
+
+def rule_duplicate_numbers(ctx: _Ctx) -> None:
+    """Step and transition numbers are unique within the FB (E011, E012)."""
+    seen_s: dict[int, Step] = {}
+    for s in ctx.chart.all_steps():
+        if s.number in seen_s:
+            first = seen_s[s.number].loc
+            ctx.err("E011", f"step S{s.number} is defined twice (first at line {first.line})",
+                    s.loc, _step_el(s.number))  # fmt: skip
+        seen_s.setdefault(s.number, s)
+    seen_t: dict[int, Transition] = {}
+    for t in ctx.chart.all_transitions():
+        if t.number in seen_t:
+            first = seen_t[t.number].loc
+            ctx.err("E012", f"transition T{t.number} is defined twice (first at line "
+                    f"{first.line})", t.loc, f"transition T{t.number}")  # fmt: skip
+        seen_t.setdefault(t.number, t)
+
+
+def rule_duplicate_declarations(ctx: _Ctx) -> None:
+    """FB variables and chart symbols are declared once each (E013)."""
+    seen: set[str] = set()
+    for v in ctx.chart.vars:
+        if v.name.upper() in seen:
+            ctx.err("E013", f"FB variable {v.name} is declared twice", v.loc)
+        seen.add(v.name.upper())
+    seen_sym: set[str] = set()
+    for s in ctx.chart.symbols:
+        if s.name.casefold() in seen_sym:
+            ctx.err("E013", f'symbol "{s.name}" is declared twice', s.loc)
+        seen_sym.add(s.name.casefold())
+
+
+def rule_declarations(ctx: _Ctx) -> None:
+    """Chart symbols name valid addresses (E041); a variable's initial value fits its
+    type (E031)."""
+    for s in ctx.chart.symbols:
+        try:
+            parse_address(s.address, s.loc)
+        except AddressError as exc:
+            ctx.err("E041", exc.message, s.loc, f'symbol "{s.name}"')
+    for v in ctx.chart.vars:
+        if v.init is not None:
+            t = _type(ctx, v.init, f"variable {v.name}")
+            if t is not None and _unify(v.type.upper(), t) is None:
+                ctx.err("E031", f"initial value {v.init.text} ({_show(t)}) does not fit "
+                        f"{v.name} : {v.type}", v.init.loc, f"variable {v.name}")  # fmt: skip
+
+
+def rule_unknown_steps_in_from_to(ctx: _Ctx) -> None:
+    """Every step named in FROM / TO exists in the FB (E010); the column is the step's own."""
+    for t in ctx.chart.all_transitions():
+        for part, numbers, locs in (("FROM", t.sources, t.source_locs),
+                                    ("TO", t.targets, t.target_locs)):  # fmt: skip
+            for i, n in enumerate(numbers):
+                if n not in ctx.steps:
+                    loc = locs[i] if i < len(locs) else t.loc
+                    ctx.err("E010", f"unknown step S{n} in {part}", loc, f"transition T{t.number}")
+
+
+def rule_initial_steps(ctx: _Ctx) -> None:
+    """Each sequencer has at least one initial step, else it never starts (W103)."""
+    for seq in ctx.chart.sequences:
+        if seq.steps and not any(s.initial for s in seq.steps):
+            ctx.warn("W103", f"sequence {seq.number} has no initial step; it starts only by "
+                     "ON or MAN mode", seq.loc, f"sequence {seq.number}")  # fmt: skip
+
+
+def _on_targets(ctx: _Ctx) -> set[int]:
+    return {
+        r.operand.step
+        for s in ctx.chart.all_steps()
+        for r in s.actions
+        if r.qualifier == "ON" and isinstance(r.operand, StepTarget) and r.operand.step is not None
+    }
+
+
+def rule_ways_in_and_out(ctx: _Ctx) -> None:
+    """A step that is not initial needs a transition (or ON) leading in (W101); every step
+    needs a transition leading out (W102)."""
+    into = {n for t in ctx.chart.all_transitions() for n in t.targets} | _on_targets(ctx)
+    out = {n for t in ctx.chart.all_transitions() for n in t.sources}
+    for s in ctx.chart.all_steps():
+        if not s.initial and s.number not in into:
+            ctx.warn("W101", f"no transition leads to step S{s.number}; it can never become "
+                     "active", s.loc, _step_el(s.number))  # fmt: skip
+        if s.number not in out:
+            ctx.warn("W102", f"no transition leaves step S{s.number}; once active it stays "
+                     "active", s.loc, _step_el(s.number))  # fmt: skip
+
+
+def rule_limits(ctx: _Ctx) -> None:
+    """The limits of SPEC §2.1 warn (W110)."""
+    c = ctx.chart
+    steps, trans = c.all_steps(), c.all_transitions()
+    if len(c.sequences) > MAX_SEQUENCES:
+        ctx.warn("W110", f"{len(c.sequences)} sequencers; S7-GRAPH allows {MAX_SEQUENCES}",
+                 c.sequences[MAX_SEQUENCES].loc)  # fmt: skip
+    if len(steps) > MAX_STEPS:
+        ctx.warn("W110", f"{len(steps)} steps; S7-GRAPH allows {MAX_STEPS}", steps[MAX_STEPS].loc)
+    if len(trans) > MAX_TRANSITIONS:
+        ctx.warn("W110", f"{len(trans)} transitions; S7-GRAPH allows {MAX_TRANSITIONS}",
+                 trans[MAX_TRANSITIONS].loc)  # fmt: skip
+    leaving: dict[int, list[Transition]] = {}
+    for t in trans:
+        for n in t.sources:
+            leaving.setdefault(n, []).append(t)
+        paths = max(len(t.sources), len(t.targets))
+        if paths > MAX_SIMULTANEOUS_PATHS:
+            ctx.warn("W110", f"{paths} simultaneous paths; S7-GRAPH allows "
+                     f"{MAX_SIMULTANEOUS_PATHS}", t.loc, f"transition T{t.number}")  # fmt: skip
+    for n, ts in leaving.items():
+        if len(ts) > MAX_ALTERNATIVE_PATHS:
+            msg = f"{len(ts)} alternative paths leave S{n}; S7-GRAPH allows {MAX_ALTERNATIVE_PATHS}"
+            ctx.warn("W110", msg, ts[MAX_ALTERNATIVE_PATHS].loc, _step_el(n))
+    for expr, loc, el in _conditions(ctx):
+        k = _elements(expr)
+        if k > MAX_CONDITION_ELEMENTS:
+            ctx.warn("W110", f"condition has {k} elements; S7-GRAPH allows "
+                     f"{MAX_CONDITION_ELEMENTS}", loc, el)  # fmt: skip
+
+
+def _elements(e: Expr) -> int:
+    """Contacts and comparators of a condition (each is one CRIT bit)."""
+    if isinstance(e, Binary) and e.op in LOGIC:
+        return _elements(e.left) + _elements(e.right)
+    if isinstance(e, Unary) and e.op == "NOT":
+        return _elements(e.operand)
+    return 1
+
+
+# ---------------------------------------------------------------- join analysis (W130)
+
+
+def rule_joins(ctx: _Ctx) -> None:
+    """A join transition whose source steps are each reachable but never active together
+    can never switch (W130). Token game over the net from the initial steps (conditions
+    ignored, any enabled transition may fire); skipped when the state space is too large
+    or an ON action could activate a source."""
+    joins = [t for t in ctx.chart.all_transitions() if len(t.sources) > 1]
+    if not joins:
+        return
+    on = _on_targets(ctx)
+    trans = [t for t in ctx.chart.all_transitions() if all(n in ctx.steps for n in t.sources)]
+    start = frozenset(s.number for s in ctx.chart.all_steps() if s.initial)
+    seen = {start}
+    todo = [start]
+    while todo:
+        m = todo.pop()
+        for t in trans:
+            if all(n in m for n in t.sources):
+                nxt = (m - frozenset(t.sources)) | frozenset(n for n in t.targets if n in ctx.steps)
+                if nxt not in seen:
+                    if len(seen) >= MAX_MARKINGS:
+                        return
+                    seen.add(nxt)
+                    todo.append(nxt)
+    reachable = frozenset().union(*seen)
+    for t in joins:
+        if any(n not in ctx.steps or n not in reachable or n in on for n in t.sources):
+            continue
+        if not any(all(n in m for n in t.sources) for m in seen):
+            names = ", ".join(f"S{n}" for n in t.sources)
+            ctx.warn("W130", f"steps {names} are never active together: transition "
+                     f"T{t.number} can never switch", t.loc, f"transition T{t.number}")  # fmt: skip

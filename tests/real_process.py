@@ -1,0 +1,61 @@
+"""Shared helpers of the tests that run ``s7graph run`` as a real process and read its
+SQLite state store from outside while it runs, imported as ``tests.real_process``
+(tests/engine/test_persistence.py, tests/web/test_message_persistence.py)."""
+
+from __future__ import annotations
+
+import sqlite3
+import subprocess
+import sys
+import textwrap
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import TypeVar
+
+ROOT = Path(__file__).resolve().parent.parent
+
+T = TypeVar("T")
+
+
+def run_command(tmp_path: Path, program: str) -> tuple[list[str], Path]:
+    """Write ``program`` (dedented) to ``tmp_path``; the ``s7graph run`` command line running
+    it at a 5 ms cycle (start it with ``cwd=ROOT``) and the path of its state store."""
+    path = tmp_path / "prog.py"
+    path.write_text(textwrap.dedent(program))
+    state = tmp_path / "state.sqlite"
+    cmd = [sys.executable, "-m", "web.cli", "run", str(path), "--state", str(state)]
+    cmd += ["--cycle-ms", "5"]
+    return cmd, state
+
+
+def query_store(path: Path, query: Callable[[sqlite3.Connection], T]) -> T | None:
+    """``query`` on a read-only connection to the store at ``path``; None while the file does
+    not exist yet or SQLite refuses (busy, tables not created yet)."""
+    if not path.exists():
+        return None
+    try:
+        con = sqlite3.connect(f"file:{path}?mode=ro", uri=True, timeout=1)
+        try:
+            return query(con)
+        finally:
+            con.close()
+    except sqlite3.Error:
+        return None
+
+
+def wait_for(
+    read: Callable[[Path], T | None],
+    path: Path,
+    pred: Callable[[T], bool],
+    proc: subprocess.Popen[bytes],
+) -> T:
+    """Poll ``read(path)`` until ``pred`` holds (30 s); fail at once if ``proc`` ended."""
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline:
+        state = read(path)
+        if state is not None and pred(state):
+            return state
+        assert proc.poll() is None, proc.stderr.read() if proc.stderr else b""
+        time.sleep(0.05)
+    raise AssertionError(f"timed out; last state {read(path)}")
