@@ -19,7 +19,7 @@ from engine.errors import BlockError
 from sequencer.compiled import CompiledChart, Program
 from sequencer.cycle import GraphRuntime, new_state
 from sequencer.messages import sync_messages
-from sequencer.params import Direction, pins_for
+from sequencer.params import Direction, check_pin, is_pin, pins_for
 from sequencer.state import EVENT_NAMES, GraphState
 from sfb import s5_counters, s5_timers
 from sfb.alarms import message_list
@@ -95,7 +95,11 @@ class GraphFB:
         return {name: v[name] for name in self.out_pins}
 
     def call(self, ctx: Any, **params: Any) -> dict[str, Any]:
-        """Call the FB from an OB body (``ctx.call`` with its instance DB)."""
+        """Call the FB from an OB body (``ctx.call`` with its instance DB). A pin outside the
+        chart's parameter set is refused, naming the set (SPEC §2.7)."""
+        for name in params:
+            if is_pin(name):
+                check_pin(name, self.cc.parameters, direction=Direction.IN)
         return ctx.call(self.fb, self.idb, **params)  # type: ignore[no-any-return]
 
     def runtime(self, mem: Any) -> GraphRuntime:

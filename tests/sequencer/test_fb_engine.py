@@ -64,3 +64,24 @@ def test_several_graph_fbs_share_one_cpu() -> None:
     clock.advance(10)
     cpu.scan()
     assert a.state.active == [0] and b.state.active == [0] and a.state is not b.state
+
+
+def test_a_program_calling_a_pin_outside_the_parameter_set_stops_with_the_set_named() -> None:
+    """SPEC §2.7: HALT_SQ is a MAXIMUM pin; a program passing it to a STANDARD FB is a
+    programming error naming the parameter set (OB121 absent: STOP, diagnostic entry)."""
+    from engine.blocks import ob
+
+    graph = GraphFB(compile_chart(parse_chart(TEXT, "seq.s7g")))
+    cpu = Cpu(VirtualClock())
+    graph.install(cpu)
+
+    @ob(1)
+    def main(ctx: object) -> None:
+        graph.call(ctx, HALT_SQ=True)
+
+    cpu.load(main)
+    cpu.start()
+    cpu.scan()
+    assert str(cpu.mode) == "STOP"
+    messages = [e.message for e in cpu.diagnostics.since(0)]
+    assert any("pin HALT_SQ is not in parameter set STANDARD" in m for m in messages), messages
