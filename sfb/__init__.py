@@ -1,4 +1,5 @@
-"""System blocks: SFB0-5, S5 timers/counters, edges, clock/memory/control SFCs, alarms
+"""System blocks: SFB0-5, S5 timers/counters, edges, clock/memory/control SFCs, alarms,
+RDSYSST/WR_USMSG
 (SPEC.md §1.7; seeds-runtime §5-7).
 
 The semantics are pure state machines over ``(inputs, now_ns)``; thin adapters declare them
@@ -13,6 +14,7 @@ from typing import Protocol
 from engine.blocks import FB, FC
 from sfb import (
     alarms,
+    diag_read,
     iec_counters,
     iec_timers,
     s5_timers,  # noqa: F401  (importing it registers the S5 timer tick)
@@ -75,6 +77,7 @@ SYSTEM_BLOCKS: tuple[FB | FC, ...] = (
     *sfc_db.BLOCKS,
     *sfc_interrupts.BLOCKS,
     *sfc_control.BLOCKS,
+    *diag_read.BLOCKS,
 )
 """Every system block with an engine adapter, in catalogue order of kind and number."""
 

@@ -236,6 +236,8 @@ CATALOGUE: tuple[Entry, ...] = (
     _e(_SFC, 51, "RDSYSST",
        "IN REQ:BOOL SZL_ID:WORD INDEX:WORD; OUT RET_VAL:INT BUSY:BOOL SZL_HEADER:ANY DR:ANY",
        "read a system status list (0x00A0: diagnostic buffer, newest first)"),
+    _e(_SFC, 52, "WR_USMSG", "IN SEND:BOOL EVENTN:WORD INFO1:ANY INFO2:ANY; OUT RET_VAL:INT",
+       "user entry in the diagnostic buffer with time stamp (EVENTN W#16#8000..BFFF)"),
     _e(_SFC, 64, "TIME_TCK", "OUT RET_VAL:TIME", "ms tick of the CPU clock, wrapping at 2^31"),
     _e(_SFC, 101, "RTM", "IN NR:BYTE MODE:BYTE PV:DINT; OUT RET_VAL:INT CQ:BOOL CV:DINT",
        "32-bit run-time meter NR (0..15): MODE 0 read, 1 start, 2 stop, 4/5/6 set (+start/stop)"),
