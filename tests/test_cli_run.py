@@ -6,6 +6,7 @@ import itertools
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -88,3 +89,78 @@ def test_example_blinks_on_the_virtual_clock() -> None:
         q.append(cpu.mem.periph_out[0] & 1)
     edges = sum(1 for a, b in itertools.pairwise(q) if not a and b)
     assert edges == 3 and cpu.mem.get("MW0") == 3
+
+
+@pytest.fixture
+def max_cycle_seen(monkeypatch: pytest.MonkeyPatch) -> list[float]:
+    """The maximum cycle time (ms) of every CPU a ``Runner`` starts scanning."""
+    from engine.runner import Runner
+
+    seen: list[float] = []
+    real_run = Runner.run
+
+    def spy(self: Runner, *args: Any, **kwargs: Any) -> Any:
+        seen.append(self.cpu.watchdog.max_cycle_ns / 1e6)
+        return real_run(self, *args, **kwargs)
+
+    monkeypatch.setattr(Runner, "run", spy)
+    return seen
+
+
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize(
+    ("options", "expected"),
+    [((), 150.0), (("--max-cycle-ms", "400"), 400.0), (("--max-cycle-ms", "12.5"), 12.5)],
+)
+def test_max_cycle_time_reaches_the_cpu_of_a_program_run(
+    tmp_path: Path, max_cycle_seen: list[float], options: tuple[str, ...], expected: float
+) -> None:
+    """``--max-cycle-ms`` is the watchdog's limit of a program run; S7's 150 ms by default."""
+    from web.cli import main
+
+    program = str(ROOT / "examples/blink.py")
+    state = str(tmp_path / "blink.sqlite")
+    rc = main(["run", program, "--state", state, "--duration-s", "0.2", *options])
+    assert rc == 0
+    assert max_cycle_seen == [expected]
+
+
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize(
+    ("options", "expected"),
+    [
+        ((), 150.0),
+        (("--max-cycle-ms", "400"), 400.0),
+        (("--web",), 1000.0),
+        (("--web", "--max-cycle-ms", "250"), 250.0),
+    ],
+)
+def test_max_cycle_time_reaches_the_cpu_of_a_chart_run(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    max_cycle_seen: list[float],
+    options: tuple[str, ...],
+    expected: float,
+) -> None:
+    """``--max-cycle-ms`` is the watchdog's limit of a chart run: 150 ms by default, 1 s with
+    ``--web`` (no browser here: the view is not served)."""
+    import web.cmd_run_chart
+    from web.cli import main
+
+    monkeypatch.setattr(web.cmd_run_chart, "_serve", lambda *args, **kwargs: None)
+    drill = ROOT / "examples/drill"
+    rc = main(
+        ["run", str(drill / "drill.s7g"), "--symbols", str(drill / "symbols.txt"),
+         "--state", str(tmp_path / "drill.sqlite"), "--duration-s", "0.2", *options]
+    )  # fmt: skip
+    assert rc == 0
+    assert max_cycle_seen == [expected]
+
+
+@pytest.mark.parametrize("value", ["0", "-5"])
+def test_max_cycle_time_must_be_positive(tmp_path: Path, value: str) -> None:
+    """A maximum cycle time of 0 ms or less is a usage error, exit 2, never a traceback."""
+    proc = _run(str(ROOT / "examples/blink.py"), "--state", str(tmp_path / "s.sqlite"),
+                "--duration-s", "0.2", "--max-cycle-ms", value)  # fmt: skip
+    assert proc.returncode == 2
+    assert "max-cycle-ms" in proc.stderr and "Traceback" not in proc.stderr

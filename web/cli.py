@@ -47,6 +47,12 @@ def _root(
     """s7graph: S7-GRAPH sequential control on a soft PLC."""
 
 
+def _positive_ms(value: float | None) -> float | None:
+    if value is not None and not value > 0:
+        raise typer.BadParameter("--max-cycle-ms must be more than 0 ms")
+    return value
+
+
 @app.command()
 def run(
     program: Annotated[
@@ -59,6 +65,15 @@ def run(
         typer.Option(help="SQLite file for retentive data (default: beside the program)."),
     ] = None,
     cycle_ms: Annotated[float, typer.Option(help="Minimum cycle time in ms.")] = 10.0,
+    max_cycle_ms: Annotated[
+        float | None,
+        typer.Option(
+            callback=_positive_ms,
+            help="Maximum cycle time in ms; a longer scan is a time error (OB80, else STOP). "
+            "Default: 150 (S7's), 1000 with --web (the view shares the process); "
+            "for a program, its CPU dict's max_cycle_ms, else 150.",
+        ),
+    ] = None,
     duration_s: Annotated[
         float | None, typer.Option(help="Stop after this many seconds (default: until Ctrl-C).")
     ] = None,
@@ -79,6 +94,7 @@ def run(
                 symbols=symbols,
                 state=state,
                 cycle_ms=cycle_ms,
+                max_cycle_ms=max_cycle_ms,
                 duration_s=duration_s,
                 web=web,
                 port=port,
@@ -87,7 +103,15 @@ def run(
         )
     from web.cmd_run import run_program
 
-    raise typer.Exit(run_program(program, state=state, cycle_ms=cycle_ms, duration_s=duration_s))
+    raise typer.Exit(
+        run_program(
+            program,
+            state=state,
+            cycle_ms=cycle_ms,
+            max_cycle_ms=max_cycle_ms,
+            duration_s=duration_s,
+        )
+    )
 
 
 @app.command()

@@ -2,7 +2,8 @@
 
 Program convention: a Python file whose module-level ``@ob``/``@fb``/``@fc`` blocks (and
 ``DB`` definitions) are loaded; an optional ``CPU = {...}`` dict passes keyword options to
-``Cpu`` (``max_cycle_ms``, ``clock_memory``, ...); an optional ``setup(cpu)`` creates
+``Cpu`` (``max_cycle_ms``, ``clock_memory``, ...; ``--max-cycle-ms`` overrides its
+``max_cycle_ms``); an optional ``setup(cpu)`` creates
 instance DBs and configures interrupts. The state file restores retentive data and the
 CPU's message list (who acknowledged what, when; every message event is also appended to
 its alarm log) and the CPU comes back by warm restart; on Ctrl-C, SIGTERM or
@@ -69,14 +70,19 @@ def import_program(path: Path) -> ModuleType:
     return module
 
 
-def build_cpu(module: ModuleType, clock: Any) -> Cpu:
-    """A CPU with the module's blocks loaded and its ``setup(cpu)`` applied."""
+def build_cpu(module: ModuleType, clock: Any, *, max_cycle_ms: float | None = None) -> Cpu:
+    """A CPU with the module's blocks loaded and its ``setup(cpu)`` applied.
+
+    ``max_cycle_ms`` (``--max-cycle-ms``) overrides the program's ``CPU`` option; None keeps
+    it (S7's 150 ms when the program sets none)."""
     blocks = [v for v in vars(module).values() if isinstance(v, OB | FB | FC | DB)]
     if not any(isinstance(b, OB) for b in blocks):
         raise ProgramLoadError("defines no OB (decorate a function with @ob(1) or @ob(35))")
     options = getattr(module, "CPU", {})
     if not isinstance(options, dict):
         raise ProgramLoadError("CPU must be a dict of Cpu options")
+    if max_cycle_ms is not None:
+        options = {**options, "max_cycle_ms": max_cycle_ms}
     try:
         cpu = Cpu(clock, **options)
         cpu.load(*blocks)
@@ -99,12 +105,19 @@ def _terminate(signum: int, frame: FrameType | None) -> None:
 
 
 def run_program(
-    path: Path, *, state: Path | None, cycle_ms: float, duration_s: float | None
+    path: Path,
+    *,
+    state: Path | None,
+    cycle_ms: float,
+    duration_s: float | None,
+    max_cycle_ms: float | None = None,
 ) -> int:
-    """Run a program until Ctrl-C/SIGTERM/duration; 0 on a clean end, 2 on a broken program."""
+    """Run a program until Ctrl-C/SIGTERM/duration; 0 on a clean end, 2 on a broken program.
+
+    ``max_cycle_ms``: the maximum cycle time; None keeps the program's (see ``build_cpu``)."""
     try:
         module = import_program(path)
-        cpu = build_cpu(module, SystemClock())
+        cpu = build_cpu(module, SystemClock(), max_cycle_ms=max_cycle_ms)
     except ProgramLoadError as exc:
         return _fail(path, str(exc))
     state_path = state if state is not None else path.with_suffix(".state.sqlite")

@@ -8,9 +8,10 @@ A plant (``--plant``) runs after every scan; a plant error ends the run with one
 ``--web`` serves the live browser view of the running FB on 127.0.0.1:``--port`` and its
 zenoh bus (``web/live_edge.py``): one state update per scan, operator commands applied
 between scans, acknowledgements in the state file's audit log. ``--record FILE.rrd``
-records the same updates as a rerun timeline (extra ``[trace]``). With ``--web`` the maximum
-cycle time is 1 s instead of S7's 150 ms: viser and zenoh share the process, and sending
-the scene to a new page can hold a scan up for longer than 150 ms (a time error → STOP).
+records the same updates as a rerun timeline (extra ``[trace]``). The maximum cycle time is
+``--max-cycle-ms``; by default S7's 150 ms, but 1 s with ``--web``: viser and zenoh share the
+process, and sending the scene to a new page can hold a scan up for longer than 150 ms (a
+time error → STOP).
 """
 
 from __future__ import annotations
@@ -34,6 +35,7 @@ from web.plant import LoadedPlant, PlantError, load_plant
 if TYPE_CHECKING:
     from web.live_edge import LiveEdge
 
+DEFAULT_MAX_CYCLE_MS = 150.0  # S7's default maximum cycle time
 WEB_MAX_CYCLE_MS = 1000.0
 
 
@@ -44,12 +46,15 @@ def run_chart(
     symbols: Path | None = None,
     state: Path | None = None,
     cycle_ms: float = 10.0,
+    max_cycle_ms: float | None = None,
     duration_s: float | None = None,
     web: bool = False,
     port: int = 8080,
     record: Path | None = None,
 ) -> int:
-    """Run ``path`` until Ctrl-C/SIGTERM/``duration_s``; 0 clean, 1 plant error, 2 bad chart."""
+    """Run ``path`` until Ctrl-C/SIGTERM/``duration_s``; 0 clean, 1 plant error, 2 bad chart.
+
+    ``max_cycle_ms`` None: ``WEB_MAX_CYCLE_MS`` with ``web``, else ``DEFAULT_MAX_CYCLE_MS``."""
     clock = SystemClock()
     try:
         session = ChartSession.load(path, symbols, clock)
@@ -57,8 +62,9 @@ def run_chart(
     except S7Error as exc:  # ChartLoadError included
         return fail(exc)
     cpu = session.cpu
-    if web:  # the view shares the process (and the GIL): a page load may hold a scan up
-        cpu.watchdog = Watchdog(WEB_MAX_CYCLE_MS, cpu.watchdog.min_cycle_ns / 1e6)
+    if max_cycle_ms is None:  # the view shares the process (and the GIL): a page load
+        max_cycle_ms = WEB_MAX_CYCLE_MS if web else DEFAULT_MAX_CYCLE_MS  # may hold a scan up
+    cpu.watchdog = Watchdog(max_cycle_ms, cpu.watchdog.min_cycle_ns / 1e6)
     state_path = state if state is not None else path.with_suffix(".state.sqlite")
     try:
         store = StateStore(state_path)

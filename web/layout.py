@@ -171,12 +171,12 @@ def _place_sequence(layout: ChartLayout, seq: SequenceInfo, x0: float) -> _Part:
     own_steps = [n for n in seq.steps if n in step_info]
     out: dict[int, list[TransitionInfo]] = {n: [] for n in own_steps}
     for number in seq.transitions:
-        t = trans.get(number)
-        if t is None:
+        found = trans.get(number)
+        if found is None:
             continue
-        for s in t.sources:
+        for s in found.sources:
             if s in out:
-                out[s].append(t)
+                out[s].append(found)
 
     def successors(node: Node) -> list[Node]:
         kind, n = node
@@ -259,13 +259,13 @@ def _place_sequence(layout: ChartLayout, seq: SequenceInfo, x0: float) -> _Part:
             if node[0] == "T" and len(trans[node[1]].targets) > 1:
                 # Keep written target order across real steps and jumps.
                 tree = {c[1]: c for c in children}
-                jumps = set(jump_targets(node))
+                jumped = set(jump_targets(node))
                 for target in trans[node[1]].targets:
                     if target in tree:
                         lane[tree[target]] = x
                         stack.append(tree[target])
                         x += width[tree[target]]
-                    elif target in jumps:
+                    elif target in jumped:
                         jump_lane[(node[1], target)] = x
                         x += 1
             else:
@@ -308,7 +308,7 @@ def _place_sequence(layout: ChartLayout, seq: SequenceInfo, x0: float) -> _Part:
     stops: list[Stop] = []
     for t in placed_trans:
         info = trans[t.number]
-        node: Node = ("T", t.number)
+        node = ("T", t.number)
         for s in info.sources:
             src: Node = ("S", s)
             if src not in pos or (src, node) in back_edges:

@@ -219,7 +219,7 @@ class LiveGraph:
                 AlarmEntry(
                     msg_id=m.msg_id,
                     event_id=m.event_id,
-                    state=m.state.value,  # type: ignore[arg-type]
+                    state=m.state.value,
                     text=m.text[:4096],
                     source=m.source[:256],
                     came_ms=wall(m.came_ns) or 0,

@@ -41,7 +41,8 @@ class LoadedPlant:
         self.path = path
         self.plant = plant
 
-    def cycle(self, io: PlantIO, t_ms: int, dt_ms: int) -> None:
+    def cycle(self, io: PlantIO, t_ms: int | float, dt_ms: int | float) -> None:
+        """One plant cycle; ``s7graph sim`` passes floats when the cycle time is fractional."""
         try:
             self.plant.cycle(io, t_ms, dt_ms)
         except S7Error as exc:

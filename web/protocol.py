@@ -97,7 +97,7 @@ class _Msg(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
 # ---------------------------------------------------------------- chart structure
 
 
-class StepInfo(_Msg, kw_only=True):
+class StepInfo(_Msg, frozen=True, kw_only=True):
     """One step box: number, name, and which frames the view draws around it."""
 
     number: StepNo
@@ -108,7 +108,7 @@ class StepInfo(_Msg, kw_only=True):
     message: Text = ""
 
 
-class TransitionInfo(_Msg, kw_only=True):
+class TransitionInfo(_Msg, frozen=True, kw_only=True):
     """One transition bar; ``targets == []`` is a branch stop (``TO STOP``)."""
 
     number: StepNo
@@ -118,7 +118,7 @@ class TransitionInfo(_Msg, kw_only=True):
     condition: Text = ""
 
 
-class SequenceInfo(_Msg, kw_only=True):
+class SequenceInfo(_Msg, frozen=True, kw_only=True):
     """One sequencer (a column in the chart), listing its steps and transitions in file order."""
 
     number: StepNo
@@ -127,7 +127,7 @@ class SequenceInfo(_Msg, kw_only=True):
     transitions: Steps
 
 
-class ChartLayout(_Msg, kw_only=True):
+class ChartLayout(_Msg, frozen=True, kw_only=True):
     """What a view needs to draw one GRAPH FB (served by ``fb/<name>/chart``)."""
 
     fb: Name
@@ -179,7 +179,7 @@ class ChartLayout(_Msg, kw_only=True):
 # ---------------------------------------------------------------- per-scan state
 
 
-class StepStateUpdate(_Msg, kw_only=True):
+class StepStateUpdate(_Msg, frozen=True, kw_only=True):
     """The FB's state after one scan (``fb/<name>/state``; ``fb/<name>/delta`` on change).
 
     ``seq`` counts changes (the bus publisher numbers them); ``disturbed`` are steps with an
@@ -217,7 +217,7 @@ def _coarse(details: list[StepDetail]) -> list[StepDetail]:
     return [msgspec.structs.replace(d, t_ms=d.t_ms // 1000, u_ms=d.u_ms // 1000) for d in details]
 
 
-class Contact(_Msg, kw_only=True):
+class Contact(_Msg, frozen=True, kw_only=True):
     """One contact of a condition in its last evaluation (a CRIT bit): ``ok`` when it lets
     the condition through (a ``NOT x`` contact when ``x`` is false)."""
 
@@ -228,7 +228,7 @@ class Contact(_Msg, kw_only=True):
 Contacts = Annotated[list[Contact], Meta(max_length=32)]
 
 
-class TransitionCriteria(_Msg, kw_only=True):
+class TransitionCriteria(_Msg, frozen=True, kw_only=True):
     """A valid transition leaving an active step: whether its condition held (``Tn.TT``)
     at its last evaluation, and each contact."""
 
@@ -238,7 +238,7 @@ class TransitionCriteria(_Msg, kw_only=True):
     contacts: Contacts = []
 
 
-class StepDetail(_Msg, kw_only=True):
+class StepDetail(_Msg, frozen=True, kw_only=True):
     """Why an active step does (not) switch: its times (to 0.1 s; a change of times alone is
     a change once a second), interlock and supervision state with their contacts, and its
     valid outgoing transitions."""
@@ -254,7 +254,7 @@ class StepDetail(_Msg, kw_only=True):
     transitions: Annotated[list[TransitionCriteria], Meta(max_length=256)] = []
 
 
-class CycleStats(_Msg, kw_only=True):
+class CycleStats(_Msg, frozen=True, kw_only=True):
     """The CPU's cycle statistics in ms: cycle time (OB1 start to OB1 start: last, min,
     max), mean scan execution time, and how many cycles overran the set cycle time."""
 
@@ -265,7 +265,7 @@ class CycleStats(_Msg, kw_only=True):
     overruns: Count = 0
 
 
-class CpuStatus(_Msg, kw_only=True):
+class CpuStatus(_Msg, frozen=True, kw_only=True):
     """``status``: the CPU's run state and its FBs; published on change and at 1 Hz."""
 
     cpu: Name
@@ -279,7 +279,7 @@ class CpuStatus(_Msg, kw_only=True):
 # ---------------------------------------------------------------- messages (alarms)
 
 
-class AlarmEntry(_Msg, kw_only=True):
+class AlarmEntry(_Msg, frozen=True, kw_only=True):
     """One message of the CPU's message list. Times are wall-clock ms since the epoch;
     ``fb``/``db``/``step``/``kind`` (``IL`` interlock, ``SV`` supervision) name the step
     of a sequencer message."""
@@ -301,7 +301,7 @@ class AlarmEntry(_Msg, kw_only=True):
     kind: Literal["IL", "SV", ""] = ""
 
 
-class AlarmList(_Msg, kw_only=True):
+class AlarmList(_Msg, frozen=True, kw_only=True):
     """The CPU's message list (``alarms`` on change, ``alarms/list`` queryable), oldest
     first; ``seq`` counts the changes."""
 
@@ -328,7 +328,7 @@ _ARGS_BY_OP: dict[str, frozenset[str]] = {
 }
 
 
-class Command(_Msg, kw_only=True):
+class Command(_Msg, frozen=True, kw_only=True):
     """An operator command (``cmd`` queryable), applied at a scan boundary.
 
     ``mode`` takes ``{"mode": "AUTO"|"MAN"|"TAP"|"TOP"}``; ``step_on``/``step_off`` take
@@ -381,7 +381,7 @@ class Command(_Msg, kw_only=True):
         return value if isinstance(value, str) else None
 
 
-class CommandReply(_Msg, kw_only=True):
+class CommandReply(_Msg, frozen=True, kw_only=True):
     """The answer to a command: applied, or refused with a reason."""
 
     applied: bool

@@ -15,6 +15,7 @@ from types import ModuleType
 
 from web.protocol import ChartLayout, StepStateUpdate
 
+_rr: ModuleType | None
 try:  # rerun-sdk is ~670 MB installed, so it is optional
     import rerun as _rr
 except ImportError:  # pragma: no cover - depends on the environment

@@ -22,6 +22,7 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 import viser
@@ -185,8 +186,8 @@ class ChartView:
             ]
             self._text(f"S{j.target}", x + 0.12, tip + 0.05, "center-left", 0.22)
         sources: dict[int, list[int]] = {}
-        for j in p.incoming_jumps:
-            sources.setdefault(j.step, []).append(j.transition)
+        for inc in p.incoming_jumps:
+            sources.setdefault(inc.step, []).append(inc.transition)
         for number, transitions in sources.items():
             target = p.steps[number]
             sx, y = _xy(target.x, target.y)
@@ -330,17 +331,18 @@ class ChartView:
         with gui.add_folder("Events"):
             self.event_log = gui.add_html(self._log_html())
 
-    def _make_handler(self, op: str) -> Callable[[viser.GuiEvent], None]:
+    def _make_handler(self, op: str) -> Callable[[viser.GuiEvent[viser.GuiButtonHandle]], None]:
         return lambda ev: self._command(ev, op, {})
 
     def _clicked_step(self, number: int) -> Callable[[object], None]:
         def handler(_: object) -> None:
-            self.step_number.value = number
-            self.detail_step.value = number
+            # viser defines the value setter apart from its getter, so mypy sees no setter
+            self.step_number.value = number  # type: ignore[misc]
+            self.detail_step.value = number  # type: ignore[misc]
 
         return handler
 
-    def _command(self, ev: viser.GuiEvent | None, op: str, args: dict[str, object]) -> None:
+    def _command(self, ev: viser.GuiEvent[Any] | None, op: str, args: dict[str, object]) -> None:
         """Build, send and log one command (runs in viser's callback thread pool)."""
         user = _clip(str(self.operator.value), 64)
         try:
@@ -450,7 +452,9 @@ class ChartView:
                         button.on_click(self._ack_handler(mid))
                         self._alarm_buttons[mid] = button
 
-    def _ack_handler(self, msg_id: int | str) -> Callable[[viser.GuiEvent], None]:
+    def _ack_handler(
+        self, msg_id: int | str
+    ) -> Callable[[viser.GuiEvent[viser.GuiButtonHandle]], None]:
         return lambda ev: self._command(ev, "ack_msg", {"msg_id": msg_id})
 
     def _detail_html(self, update: StepStateUpdate | None) -> str:
