@@ -172,13 +172,13 @@ def main(argv: list[str] | None = None) -> int:
         return int(exc.exit_code or 0)
     except SystemExit as exc:  # click usage errors
         return int(exc.code or 0) if isinstance(exc.code, int) else 2
-    except Exception as exc:  # click.ClickException and friends
-        import click
-
-        if isinstance(exc, click.ClickException):
-            exc.show()
-            return exc.exit_code
-        if isinstance(exc, click.exceptions.Abort):
+    except Exception as exc:
+        message = getattr(exc, "format_message", None)
+        if callable(message):  # a usage error of the command line (typer's click)
+            print(f"s7graph: error: {message()} (see s7graph --help)", file=sys.stderr)
+            code = getattr(exc, "exit_code", 2)
+            return code if isinstance(code, int) else 2
+        if type(exc).__name__ == "Abort":  # Ctrl-C at a prompt
             return 130
         print(f"s7graph: error: {type(exc).__name__}: {exc}", file=sys.stderr)
         return 2

@@ -1,0 +1,28 @@
+"""The command line: usage errors are one line on stderr naming the problem, exit 2."""
+
+from __future__ import annotations
+
+import pytest
+
+from web.cli import main
+
+
+@pytest.mark.parametrize(
+    ("argv", "expected"),
+    [
+        (["run", "--max-cycle-ms", "abc", "x.py"], "Invalid value for '--max-cycle-ms'"),
+        (["frob"], "No such command 'frob'"),
+        (["sim"], "Missing argument 'chart'"),
+    ],
+)
+def test_a_usage_error_is_one_stderr_line_and_exit_2(
+    argv: list[str], expected: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(argv) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith("s7graph: error: ") and expected in err[0]
+
+
+def test_version_prints_the_distribution_version(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["--version"]) == 0
+    assert capsys.readouterr().out.startswith("s7graph ")
