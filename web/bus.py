@@ -59,7 +59,7 @@ __all__ = [
 
 ROOT = "s7graph"
 COMMAND_QUEUE_SIZE = 256
-COMMAND_MAX_AGE_S = 1.5  # older commands are refused: their sender (2 s timeout) gave up
+COMMAND_MAX_AGE_S = 4.5  # older commands are refused: their sender (5 s timeout) gave up
 STATUS_PERIOD_S = 1.0
 
 
@@ -372,7 +372,7 @@ class BusPublisher:
 class BusClient:
     """A view's (or a test's) handle on one CPU over the bus."""
 
-    def __init__(self, session: zenoh.Session, cpu: str, *, timeout: float = 2.0) -> None:
+    def __init__(self, session: zenoh.Session, cpu: str, *, timeout: float = 5.0) -> None:
         self._keys = keys(cpu)
         self._session = session
         self._timeout = timeout
