@@ -39,11 +39,11 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from engine.clock import VirtualClock
-from engine.cpu import Cpu
-from sequencer.compile import compile_chart
-from sequencer.fb import GraphFB, install_all
-from sequencer.parse import parse_chart
+from s7graph.engine.clock import VirtualClock
+from s7graph.engine.cpu import Cpu
+from s7graph.sequencer.compile import compile_chart
+from s7graph.sequencer.fb import GraphFB, install_all
+from s7graph.sequencer.parse import parse_chart
 
 N_SEQUENCERS = 200
 STEPS = 25

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-from engine.address import Address, Area, Width, parse_address
-from engine.blocks import DB, FB, FC, OB, Decl, InstanceDB, Var, fb, fc, ob, sfb, sfc
-from engine.clock import Clock, SystemClock, VirtualClock
-from engine.cpu import CallContext, Cpu, Pending
-from engine.diagnostics import DiagnosticBuffer, EventId
-from engine.errors import (
+from s7graph.engine.address import Address, Area, Width, parse_address
+from s7graph.engine.blocks import DB, FB, FC, OB, Decl, InstanceDB, Var, fb, fc, ob, sfb, sfc
+from s7graph.engine.clock import Clock, SystemClock, VirtualClock
+from s7graph.engine.cpu import CallContext, Cpu, Pending
+from s7graph.engine.diagnostics import DiagnosticBuffer, EventId
+from s7graph.engine.errors import (
     AddressError,
     BlockError,
     LiteralError,
@@ -17,10 +17,10 @@ from engine.errors import (
     SymbolError,
     TypeMismatch,
 )
-from engine.memory import Memory
-from engine.modes import CpuMode, KeySwitch, ModeRequest, SetKeySwitch
-from engine.record import DiagEntry, ScanRecord
-from engine.restart import RestartType
+from s7graph.engine.memory import Memory
+from s7graph.engine.modes import CpuMode, KeySwitch, ModeRequest, SetKeySwitch
+from s7graph.engine.record import DiagEntry, ScanRecord
+from s7graph.engine.restart import RestartType
 
 __all__ = [
     "DB",

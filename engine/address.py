@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from enum import IntEnum, StrEnum
 from functools import lru_cache
 
-from engine.errors import AddressError, SourceLocation
+from s7graph.engine.errors import AddressError, SourceLocation
 
 __all__ = ["Address", "Area", "Width", "parse_address"]
 

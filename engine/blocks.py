@@ -20,11 +20,11 @@ from datetime import date, datetime
 from enum import StrEnum
 from typing import TYPE_CHECKING, Any
 
-from engine.datatypes import DT_MIN, check_value, decode, type_of
-from engine.errors import BlockError, TypeMismatch
+from s7graph.engine.datatypes import DT_MIN, check_value, decode, type_of
+from s7graph.engine.errors import BlockError, TypeMismatch
 
 if TYPE_CHECKING:
-    from engine.cpu import CallContext
+    from s7graph.engine.cpu import CallContext
 
 OBJECT = "OBJECT"
 """Type of a STAT holding a Python object with ``to_state()``/``from_state()``."""

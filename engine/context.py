@@ -11,13 +11,13 @@ from __future__ import annotations
 from functools import lru_cache
 from typing import TYPE_CHECKING, Any
 
-from engine.address import Address, parse_address
-from engine.blocks import DB, FB, FC, OB, Decl, InstanceDB, is_stringy
-from engine.datatypes import check_value
-from engine.errors import BlockError
+from s7graph.engine.address import Address, parse_address
+from s7graph.engine.blocks import DB, FB, FC, OB, Decl, InstanceDB, is_stringy
+from s7graph.engine.datatypes import check_value
+from s7graph.engine.errors import BlockError
 
 if TYPE_CHECKING:
-    from engine.cpu import Cpu
+    from s7graph.engine.cpu import Cpu
 
 
 class NestingOverflow(BlockError):

@@ -21,20 +21,20 @@ from dataclasses import dataclass
 from datetime import datetime, timedelta
 from typing import Any
 
-from engine.blocks import DB, FB, FC, OB, BlockKind, InstanceDB
-from engine.clock import Clock
-from engine.context import CallContext, NestingOverflow, _Fault
-from engine.diagnostics import DiagnosticBuffer, EventId
-from engine.errors import AddressError, BlockError, TypeMismatch
-from engine.interrupts import CYCLIC_DEFAULT_MS, CyclicScheduler, priority
-from engine.memory import AreaLengthError, Memory
-from engine.modes import CpuMode, KeySwitch, ModeRequest, SetKeySwitch, resolve_requests
-from engine.record import ScanRecord
-from engine.restart import RESTART, RestartType, parse_restart
-from engine.rtc import RealTimeClock
-from engine.rtm import RuntimeMeters
-from engine.timed import DelayInterrupts, TodInterrupts
-from engine.watchdog import CycleStatistics, Verdict, Watchdog
+from s7graph.engine.blocks import DB, FB, FC, OB, BlockKind, InstanceDB
+from s7graph.engine.clock import Clock
+from s7graph.engine.context import CallContext, NestingOverflow, _Fault
+from s7graph.engine.diagnostics import DiagnosticBuffer, EventId
+from s7graph.engine.errors import AddressError, BlockError, TypeMismatch
+from s7graph.engine.interrupts import CYCLIC_DEFAULT_MS, CyclicScheduler, priority
+from s7graph.engine.memory import AreaLengthError, Memory
+from s7graph.engine.modes import CpuMode, KeySwitch, ModeRequest, SetKeySwitch, resolve_requests
+from s7graph.engine.record import ScanRecord
+from s7graph.engine.restart import RESTART, RestartType, parse_restart
+from s7graph.engine.rtc import RealTimeClock
+from s7graph.engine.rtm import RuntimeMeters
+from s7graph.engine.timed import DelayInterrupts, TodInterrupts
+from s7graph.engine.watchdog import CycleStatistics, Verdict, Watchdog
 
 __all__ = [
     "CLOCK_MEMORY_HALF_MS",

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from datetime import date, datetime, timedelta
 from functools import lru_cache
 
-from engine.errors import TypeMismatch
+from s7graph.engine.errors import TypeMismatch
 
 __all__ = [
     "DATE_EPOCH",

@@ -10,7 +10,7 @@ from collections import deque
 from collections.abc import Iterator
 from enum import IntEnum
 
-from engine.record import DiagEntry
+from s7graph.engine.record import DiagEntry
 
 
 class EventId(IntEnum):

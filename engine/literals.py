@@ -12,7 +12,7 @@ import re
 from datetime import date, datetime
 from fractions import Fraction
 
-from engine.datatypes import (
+from s7graph.engine.datatypes import (
     DATE_EPOCH,
     DATE_MAX,
     DT_MAX,
@@ -23,7 +23,7 @@ from engine.datatypes import (
     check_value,
     type_of,
 )
-from engine.errors import LiteralError, SourceLocation, TypeMismatch
+from s7graph.engine.errors import LiteralError, SourceLocation, TypeMismatch
 
 __all__ = ["format_literal", "parse_literal"]
 

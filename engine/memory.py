@@ -14,12 +14,12 @@ from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, fields
 from typing import TYPE_CHECKING, Any
 
-from engine.address import Address, Area, Width, parse_address
-from engine.datatypes import Layout, decode, encode, ms_to_s5time, type_of
-from engine.errors import AddressError, BlockError, TypeMismatch
+from s7graph.engine.address import Address, Area, Width, parse_address
+from s7graph.engine.datatypes import Layout, decode, encode, ms_to_s5time, type_of
+from s7graph.engine.errors import AddressError, BlockError, TypeMismatch
 
 if TYPE_CHECKING:
-    from engine.symbols import SymbolTable
+    from s7graph.engine.symbols import SymbolTable
 
 __all__ = ["AreaLengthError", "DataBlock", "Memory", "S5Counter", "S5Timer"]
 

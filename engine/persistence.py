@@ -18,8 +18,8 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any, Protocol, runtime_checkable
 
-from engine.cpu import Cpu
-from engine.record import DiagEntry
+from s7graph.engine.cpu import Cpu
+from s7graph.engine.record import DiagEntry
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);

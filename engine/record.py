@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from engine.modes import CpuMode
+from s7graph.engine.modes import CpuMode
 
 
 @dataclass(frozen=True, slots=True)

@@ -13,11 +13,11 @@ import threading
 import time
 from collections.abc import Callable
 
-from engine.cpu import Cpu
-from engine.modes import CpuMode
-from engine.persistence import StateStore
-from engine.record import ScanRecord
-from engine.watchdog import CycleStatistics
+from s7graph.engine.cpu import Cpu
+from s7graph.engine.modes import CpuMode
+from s7graph.engine.persistence import StateStore
+from s7graph.engine.record import ScanRecord
+from s7graph.engine.watchdog import CycleStatistics
 
 
 class Runner:

@@ -16,9 +16,9 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
-from engine.address import Address, Area, Width, parse_address
-from engine.datatypes import type_of
-from engine.errors import AddressError, SourceLocation, SymbolError, TypeMismatch
+from s7graph.engine.address import Address, Area, Width, parse_address
+from s7graph.engine.datatypes import type_of
+from s7graph.engine.errors import AddressError, SourceLocation, SymbolError, TypeMismatch
 
 __all__ = ["Symbol", "SymbolTable", "default_type"]
 

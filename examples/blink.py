@@ -8,8 +8,8 @@ restart. ``s7graph run examples/blink.py`` — stop with Ctrl-C.
 
 from __future__ import annotations
 
-from engine import CallContext, Cpu, InstanceDB, fb, ob
-from sfb.iec_counters import CTU
+from s7graph.engine import CallContext, Cpu, InstanceDB, fb, ob
+from s7graph.sfb.iec_counters import CTU
 
 
 @fb(10, "BlinkCounter", IN={"pulse": "BOOL"}, OUT={"count": "INT"}, STAT={"ctu": ("OBJECT", CTU)})

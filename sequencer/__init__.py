@@ -11,45 +11,45 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from sequencer.compile import ChartError, compile_chart
-    from sequencer.compiled import CompiledChart, Program
-    from sequencer.cycle import GraphRuntime, new_state
-    from sequencer.diagnostics import Diagnostic
-    from sequencer.display import compute_outputs, criteria_by_name
-    from sequencer.fb import GraphFB, StepEvent, install_all, startup_obs
-    from sequencer.messages import sync_messages
-    from sequencer.model import Chart, ChartOptions
-    from sequencer.names import resolve_operand
-    from sequencer.params import PARAMETER_SETS, Pin, pins_for
-    from sequencer.parse import parse_chart, parse_file
-    from sequencer.state import GraphState
-    from sequencer.validate import validate
+    from s7graph.sequencer.compile import ChartError, compile_chart
+    from s7graph.sequencer.compiled import CompiledChart, Program
+    from s7graph.sequencer.cycle import GraphRuntime, new_state
+    from s7graph.sequencer.diagnostics import Diagnostic
+    from s7graph.sequencer.display import compute_outputs, criteria_by_name
+    from s7graph.sequencer.fb import GraphFB, StepEvent, install_all, startup_obs
+    from s7graph.sequencer.messages import sync_messages
+    from s7graph.sequencer.model import Chart, ChartOptions
+    from s7graph.sequencer.names import resolve_operand
+    from s7graph.sequencer.params import PARAMETER_SETS, Pin, pins_for
+    from s7graph.sequencer.parse import parse_chart, parse_file
+    from s7graph.sequencer.state import GraphState
+    from s7graph.sequencer.validate import validate
 
 _EXPORTS: dict[str, str] = {
-    "ChartError": "sequencer.compile",
-    "compile_chart": "sequencer.compile",
-    "CompiledChart": "sequencer.compiled",
-    "Program": "sequencer.compiled",
-    "GraphRuntime": "sequencer.cycle",
-    "new_state": "sequencer.cycle",
-    "Diagnostic": "sequencer.diagnostics",
-    "compute_outputs": "sequencer.display",
-    "criteria_by_name": "sequencer.display",
-    "GraphFB": "sequencer.fb",
-    "StepEvent": "sequencer.fb",
-    "install_all": "sequencer.fb",
-    "startup_obs": "sequencer.fb",
-    "sync_messages": "sequencer.messages",
-    "Chart": "sequencer.model",
-    "ChartOptions": "sequencer.model",
-    "resolve_operand": "sequencer.names",
-    "PARAMETER_SETS": "sequencer.params",
-    "Pin": "sequencer.params",
-    "pins_for": "sequencer.params",
-    "parse_chart": "sequencer.parse",
-    "parse_file": "sequencer.parse",
-    "GraphState": "sequencer.state",
-    "validate": "sequencer.validate",
+    "ChartError": "s7graph.sequencer.compile",
+    "compile_chart": "s7graph.sequencer.compile",
+    "CompiledChart": "s7graph.sequencer.compiled",
+    "Program": "s7graph.sequencer.compiled",
+    "GraphRuntime": "s7graph.sequencer.cycle",
+    "new_state": "s7graph.sequencer.cycle",
+    "Diagnostic": "s7graph.sequencer.diagnostics",
+    "compute_outputs": "s7graph.sequencer.display",
+    "criteria_by_name": "s7graph.sequencer.display",
+    "GraphFB": "s7graph.sequencer.fb",
+    "StepEvent": "s7graph.sequencer.fb",
+    "install_all": "s7graph.sequencer.fb",
+    "startup_obs": "s7graph.sequencer.fb",
+    "sync_messages": "s7graph.sequencer.messages",
+    "Chart": "s7graph.sequencer.model",
+    "ChartOptions": "s7graph.sequencer.model",
+    "resolve_operand": "s7graph.sequencer.names",
+    "PARAMETER_SETS": "s7graph.sequencer.params",
+    "Pin": "s7graph.sequencer.params",
+    "pins_for": "s7graph.sequencer.params",
+    "parse_chart": "s7graph.sequencer.parse",
+    "parse_file": "s7graph.sequencer.parse",
+    "GraphState": "s7graph.sequencer.state",
+    "validate": "s7graph.sequencer.validate",
 }
 
 __all__ = [

@@ -15,14 +15,14 @@ from __future__ import annotations
 import re
 from typing import Any
 
-from engine.address import Area, Width
-from engine.errors import S7Error, SourceLocation
-from sequencer.compiled import CompiledChart
-from sequencer.model import BlockCall, Chart, Coil, Operand, Transition
-from sequencer.names import resolve_operand
-from sequencer.params import pin as pin_info
-from steps.actions import step_action_parts
-from steps.conditions import (
+from s7graph.engine.address import Area, Width
+from s7graph.engine.errors import S7Error, SourceLocation
+from s7graph.sequencer.compiled import CompiledChart
+from s7graph.sequencer.model import BlockCall, Chart, Coil, Operand, Transition
+from s7graph.sequencer.names import resolve_operand
+from s7graph.sequencer.params import pin as pin_info
+from s7graph.steps.actions import step_action_parts
+from s7graph.steps.conditions import (
     condition_parts,
     condition_source,
     contact_text,
@@ -30,8 +30,8 @@ from steps.conditions import (
     gen_condition,
     with_locals,
 )
-from steps.expressions import gen_value
-from steps.operands import WIDTH_TYPE, CodeGen, Ref
+from s7graph.steps.expressions import gen_value
+from s7graph.steps.operands import WIDTH_TYPE, CodeGen, Ref
 
 
 class ChartError(S7Error):
@@ -58,7 +58,7 @@ class _Problem:
 def _validate(chart: Chart, symbols: Any) -> tuple[list[Any], list[Any]]:
     """Run ``sequencer.validate`` when present; return (errors, warnings)."""
     try:
-        from sequencer.validate import validate  # written by H4
+        from s7graph.sequencer.validate import validate  # written by H4
     except ImportError:
         return [], []
     diags = list(validate(chart, symbols))

@@ -14,10 +14,10 @@ from dataclasses import dataclass, field
 from types import CodeType, FunctionType
 from typing import Any
 
-from sequencer.model import Chart, ChartOptions
-from steps.expressions import RUNTIME as EXPR_RUNTIME
-from steps.operands import RUNTIME as OPERAND_RUNTIME
-from steps.operands import area_buffer
+from s7graph.sequencer.model import Chart, ChartOptions
+from s7graph.steps.expressions import RUNTIME as EXPR_RUNTIME
+from s7graph.steps.operands import RUNTIME as OPERAND_RUNTIME
+from s7graph.steps.operands import area_buffer
 
 
 @dataclass(frozen=True, slots=True)

@@ -24,12 +24,12 @@ import operator
 from collections.abc import Callable, Iterable
 from typing import Any
 
-from sequencer import display
-from sequencer.compiled import CompiledChart, Program
-from sequencer.fastpath import FastPath
-from sequencer.modes import MODE_RULES, select_mode
-from sequencer.params import input_defaults, inputs_for, output_defaults
-from sequencer.state import (
+from s7graph.sequencer import display
+from s7graph.sequencer.compiled import CompiledChart, Program
+from s7graph.sequencer.fastpath import FastPath
+from s7graph.sequencer.modes import MODE_RULES, select_mode
+from s7graph.sequencer.params import input_defaults, inputs_for, output_defaults
+from s7graph.sequencer.state import (
     EDGE_INPUTS,
     EV_A1,
     EV_L0,

@@ -14,7 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Final, Literal
 
-from engine.errors import SourceLocation
+from s7graph.engine.errors import SourceLocation
 
 Severity = Literal["error", "warning"]
 

@@ -31,9 +31,9 @@ from dataclasses import dataclass
 from functools import cache
 from typing import Any, Final
 
-from sequencer.compiled import CompiledChart
-from sequencer.params import Direction, outputs_for
-from sequencer.state import GraphState
+from s7graph.sequencer.compiled import CompiledChart
+from s7graph.sequencer.params import Direction, outputs_for
+from s7graph.sequencer.state import GraphState
 
 DISPLAY_SETS: Final = ("SACT", "SEF", "SALL")
 

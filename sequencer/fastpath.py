@@ -11,12 +11,12 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from sequencer.modes import MODE_RULES
-from sequencer.state import EV_S0, EV_S1, GraphState
+from s7graph.sequencer.modes import MODE_RULES
+from s7graph.sequencer.state import EV_S0, EV_S1, GraphState
 
 if TYPE_CHECKING:
-    from sequencer.compiled import CompiledChart, Program
-    from sequencer.display import Display
+    from s7graph.sequencer.compiled import CompiledChart, Program
+    from s7graph.sequencer.display import Display
 
 _AUTO_SW: tuple[Any, ...] = (None, False, False, ())  # _switch options in the fast path
 _AUTO_RULE = MODE_RULES["AUTO"]

@@ -14,15 +14,15 @@ from __future__ import annotations
 from collections.abc import Iterable
 from typing import Any, NamedTuple
 
-from engine.blocks import FB, OB, Decl, InstanceDB, Var
-from engine.errors import BlockError
-from sequencer.compiled import CompiledChart, Program
-from sequencer.cycle import GraphRuntime, new_state
-from sequencer.messages import sync_messages
-from sequencer.params import Direction, check_pin, is_pin, pins_for
-from sequencer.state import EVENT_NAMES, GraphState
-from sfb import s5_counters, s5_timers
-from sfb.alarms import message_list
+from s7graph.engine.blocks import FB, OB, Decl, InstanceDB, Var
+from s7graph.engine.errors import BlockError
+from s7graph.sequencer.compiled import CompiledChart, Program
+from s7graph.sequencer.cycle import GraphRuntime, new_state
+from s7graph.sequencer.messages import sync_messages
+from s7graph.sequencer.params import Direction, check_pin, is_pin, pins_for
+from s7graph.sequencer.state import EVENT_NAMES, GraphState
+from s7graph.sfb import s5_counters, s5_timers
+from s7graph.sfb.alarms import message_list
 
 STATE_VAR = "G7_STATE"
 _tuple_new = tuple.__new__

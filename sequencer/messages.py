@@ -32,9 +32,9 @@ from __future__ import annotations
 
 from typing import Final
 
-from sequencer.compiled import CompiledChart
-from sequencer.state import GraphState
-from sfb.alarms import MessageList
+from s7graph.sequencer.compiled import CompiledChart
+from s7graph.sequencer.state import GraphState
+from s7graph.sfb.alarms import MessageList
 
 PROGRAM_USER: Final = "program"
 TEMPLATES: Final = {

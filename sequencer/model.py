@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Literal
 
-from engine.errors import SourceLocation
+from s7graph.engine.errors import SourceLocation
 
 NOWHERE = SourceLocation()
 

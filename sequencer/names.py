@@ -23,11 +23,11 @@ import re
 from dataclasses import dataclass
 from typing import Final, Literal
 
-from engine.address import Address, parse_address
-from engine.errors import SymbolError
-from engine.symbols import SymbolTable, default_type
-from sequencer.model import Chart, Operand
-from sequencer.params import Direction, pin
+from s7graph.engine.address import Address, parse_address
+from s7graph.engine.errors import SymbolError
+from s7graph.engine.symbols import SymbolTable, default_type
+from s7graph.sequencer.model import Chart, Operand
+from s7graph.sequencer.params import Direction, pin
 
 Kind = Literal["address", "symbol", "var", "pin"]
 

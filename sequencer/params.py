@@ -16,8 +16,8 @@ from dataclasses import dataclass
 from enum import StrEnum
 from typing import Final
 
-from engine.errors import SourceLocation, SymbolError
-from sequencer.model import ChartOptions
+from s7graph.engine.errors import SourceLocation, SymbolError
+from s7graph.sequencer.model import ChartOptions
 
 PARAMETER_SETS: Final = ("MINIMUM", "STANDARD", "MAXIMUM", "USER")
 

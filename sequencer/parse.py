@@ -38,11 +38,11 @@ from lark.lexer import LexerThread
 from lark.parse_tree_builder import ParseTreeBuilder
 from lark.parsers.lalr_parser import _Parser
 
-from engine.errors import S7Error, SourceLocation
-from sequencer.diagnostics import Diagnostic, error, format_diagnostic
-from sequencer.model import Chart
-from sequencer.parse_build import _NEEDS_FIRST, _NEEDS_LAST, _Build
-from sequencer.parse_fast import _fast_parse, _GiveUp, _Tables
+from s7graph.engine.errors import S7Error, SourceLocation
+from s7graph.sequencer.diagnostics import Diagnostic, error, format_diagnostic
+from s7graph.sequencer.model import Chart
+from s7graph.sequencer.parse_build import _NEEDS_FIRST, _NEEDS_LAST, _Build
+from s7graph.sequencer.parse_fast import _fast_parse, _GiveUp, _Tables
 
 GRAMMAR = Path(__file__).with_name("grammar.lark")
 MAX_SYNTAX_ERRORS = 20

@@ -12,9 +12,9 @@ from typing import Any
 
 from lark import Token
 
-from engine.errors import LiteralError, S7Error, SourceLocation
-from sequencer.diagnostics import Diagnostic, error
-from sequencer.model import (
+from s7graph.engine.errors import LiteralError, S7Error, SourceLocation
+from s7graph.sequencer.diagnostics import Diagnostic, error
+from s7graph.sequencer.model import (
     ActionRow,
     Assignment,
     Binary,
@@ -37,7 +37,7 @@ from sequencer.model import (
     Unary,
     VarDecl,
 )
-from steps.qualifiers import QUALIFIERS
+from s7graph.steps.qualifiers import QUALIFIERS
 
 _NON_DIGITS = re.compile(r"\D")
 _BLANKS = re.compile(r"\s+")
@@ -51,7 +51,7 @@ def _int(tok: Token | str) -> int:
 def _literal(text: str) -> tuple[str, object]:
     """``engine.literals.parse_literal`` of a literal's text (values are immutable; a chart
     repeats its constants, T#20MS 500 times in the benchmark's)."""
-    from engine.literals import parse_literal
+    from s7graph.engine.literals import parse_literal
 
     return parse_literal(text)
 

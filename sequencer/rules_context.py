@@ -5,10 +5,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from engine.errors import SourceLocation
-from engine.symbols import SymbolTable
-from sequencer.diagnostics import Diagnostic, error, warning
-from sequencer.model import Chart, Step, Transition
+from s7graph.engine.errors import SourceLocation
+from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer.diagnostics import Diagnostic, error, warning
+from s7graph.sequencer.model import Chart, Step, Transition
 
 
 @dataclass

@@ -5,10 +5,18 @@ The event × qualifier table is read from ``steps.qualifiers`` (never re-encoded
 
 from __future__ import annotations
 
-from sequencer.model import ActionRow, Assignment, BlockCall, Coil, Operand, Step, StepTarget
-from sequencer.rules_context import _Ctx, _row_el
-from sequencer.rules_types import _ADDRESS_FLEX, _loc, _resolve, _show, _type, _unify
-from steps.qualifiers import (
+from s7graph.sequencer.model import (
+    ActionRow,
+    Assignment,
+    BlockCall,
+    Coil,
+    Operand,
+    Step,
+    StepTarget,
+)
+from s7graph.sequencer.rules_context import _Ctx, _row_el
+from s7graph.sequencer.rules_types import _ADDRESS_FLEX, _loc, _resolve, _show, _type, _unify
+from s7graph.steps.qualifiers import (
     COUNTER_QUALIFIERS,
     NEEDS_VALUE,
     TIMED_QUALIFIERS,

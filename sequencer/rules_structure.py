@@ -5,11 +5,11 @@ from __future__ import annotations
 
 from typing import Final
 
-from engine.address import parse_address
-from engine.errors import AddressError
-from sequencer.model import Binary, Expr, Step, StepTarget, Transition, Unary
-from sequencer.rules_context import _Ctx, _step_el
-from sequencer.rules_types import LOGIC, _conditions, _show, _type, _unify
+from s7graph.engine.address import parse_address
+from s7graph.engine.errors import AddressError
+from s7graph.sequencer.model import Binary, Expr, Step, StepTarget, Transition, Unary
+from s7graph.sequencer.rules_context import _Ctx, _step_el
+from s7graph.sequencer.rules_types import LOGIC, _conditions, _show, _type, _unify
 
 # Limits that warn (SPEC §2.1).
 MAX_STEPS: Final = 250

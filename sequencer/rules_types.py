@@ -14,8 +14,8 @@ from __future__ import annotations
 from collections.abc import Iterator
 from typing import Final
 
-from engine.errors import AddressError, SourceLocation, SymbolError
-from sequencer.model import (
+from s7graph.engine.errors import AddressError, SourceLocation, SymbolError
+from s7graph.sequencer.model import (
     Binary,
     Coil,
     Const,
@@ -26,8 +26,8 @@ from sequencer.model import (
     TransAttr,
     Unary,
 )
-from sequencer.names import Resolved, resolve_operand
-from sequencer.rules_context import _Ctx
+from s7graph.sequencer.names import Resolved, resolve_operand
+from s7graph.sequencer.rules_context import _Ctx
 
 COMPARABLE: Final = frozenset({"INT", "DINT", "REAL", "TIME"})
 COMPARISONS: Final = frozenset({"=", "<>", "<", ">", "<=", ">="})

@@ -14,16 +14,16 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Final
 
-from engine.symbols import SymbolTable
-from sequencer.diagnostics import Diagnostic, sort_key
-from sequencer.model import Chart
-from sequencer.rules_context import _Ctx
-from sequencer.rules_rows import (
+from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer.diagnostics import Diagnostic, sort_key
+from s7graph.sequencer.model import Chart
+from s7graph.sequencer.rules_context import _Ctx
+from s7graph.sequencer.rules_rows import (
     rule_action_rows,
     rule_c_without_interlock,
     rule_permanent_instructions,
 )
-from sequencer.rules_structure import (
+from s7graph.sequencer.rules_structure import (
     MAX_ALTERNATIVE_PATHS,
     MAX_CONDITION_ELEMENTS,
     MAX_MARKINGS,
@@ -40,7 +40,7 @@ from sequencer.rules_structure import (
     rule_unknown_steps_in_from_to,
     rule_ways_in_and_out,
 )
-from sequencer.rules_types import (
+from s7graph.sequencer.rules_types import (
     COMPARABLE,
     COMPARISONS,
     FUNCTIONS,

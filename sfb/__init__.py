@@ -11,8 +11,8 @@ from __future__ import annotations
 
 from typing import Protocol
 
-from engine.blocks import FB, FC
-from sfb import (
+from s7graph.engine.blocks import FB, FC
+from s7graph.sfb import (
     alarms,
     diag_read,
     iec_counters,
@@ -25,14 +25,14 @@ from sfb import (
     sfc_memory,
     sfc_rtm,
 )
-from sfb.alarms import Message, MessageEvent, MessageList, MessageState, message_list
-from sfb.catalogue import CATALOGUE, Direction, Entry, Kind, Pin, find, lookup
-from sfb.diag_read import rdsysst, wr_usmsg
-from sfb.edges import F_TRIG, R_TRIG, fn, fp
-from sfb.iec_counters import CTD, CTU, CTUD
-from sfb.iec_timers import TOF, TON, TP
-from sfb.sfc_clock import RealTimeClock, rtc_of
-from sfb.sfc_memory import AnyPointer, parse_any
+from s7graph.sfb.alarms import Message, MessageEvent, MessageList, MessageState, message_list
+from s7graph.sfb.catalogue import CATALOGUE, Direction, Entry, Kind, Pin, find, lookup
+from s7graph.sfb.diag_read import rdsysst, wr_usmsg
+from s7graph.sfb.edges import F_TRIG, R_TRIG, fn, fp
+from s7graph.sfb.iec_counters import CTD, CTU, CTUD
+from s7graph.sfb.iec_timers import TOF, TON, TP
+from s7graph.sfb.sfc_clock import RealTimeClock, rtc_of
+from s7graph.sfb.sfc_memory import AnyPointer, parse_any
 
 __all__ = [
     "CATALOGUE",

@@ -24,13 +24,13 @@ from enum import StrEnum
 from typing import TYPE_CHECKING, Any, cast
 from weakref import WeakKeyDictionary
 
-from engine import blocks
-from engine.errors import S7Error
-from sfb.catalogue import OK, engine_sections, lookup, specific_error
-from sfb.sfc_memory import parse_any
+from s7graph.engine import blocks
+from s7graph.engine.errors import S7Error
+from s7graph.sfb.catalogue import OK, engine_sections, lookup, specific_error
+from s7graph.sfb.sfc_memory import parse_any
 
 if TYPE_CHECKING:
-    from engine.cpu import CallContext
+    from s7graph.engine.cpu import CallContext
 
 MsgId = int | str
 

@@ -17,7 +17,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 from enum import StrEnum
 
-from engine.errors import BlockError
+from s7graph.engine.errors import BlockError
 
 # --- RET_VAL -----------------------------------------------------------------------------
 

@@ -26,10 +26,10 @@ from collections.abc import Iterable, Sequence
 from datetime import datetime
 from typing import TYPE_CHECKING, NamedTuple, Protocol, cast
 
-from engine import blocks
-from engine.datatypes import encode
-from engine.record import DiagEntry
-from sfb.catalogue import (
+from s7graph.engine import blocks
+from s7graph.engine.datatypes import encode
+from s7graph.engine.record import DiagEntry
+from s7graph.sfb.catalogue import (
     AREA_LENGTH_WRITE,
     OK,
     engine_sections,
@@ -37,11 +37,11 @@ from sfb.catalogue import (
     lookup,
     specific_error,
 )
-from sfb.sfc_clock import rtc_of
-from sfb.sfc_memory import _pointer, _span, _store
+from s7graph.sfb.sfc_clock import rtc_of
+from s7graph.sfb.sfc_memory import _pointer, _span, _store
 
 if TYPE_CHECKING:
-    from engine.cpu import CallContext
+    from s7graph.engine.cpu import CallContext
 
 SZL_DIAG_ALL = 0x00A0
 SZL_DIAG_NEWEST = 0x01A0

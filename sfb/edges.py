@@ -10,8 +10,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import NamedTuple
 
-from engine.address import Address
-from engine.memory import Memory
+from s7graph.engine.address import Address
+from s7graph.engine.memory import Memory
 
 
 class Edge(NamedTuple):

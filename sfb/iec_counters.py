@@ -11,11 +11,11 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 from typing import TYPE_CHECKING, NamedTuple, Self, cast
 
-from engine import blocks
-from sfb.catalogue import engine_sections, lookup
+from s7graph.engine import blocks
+from s7graph.sfb.catalogue import engine_sections, lookup
 
 if TYPE_CHECKING:
-    from engine.cpu import CallContext
+    from s7graph.engine.cpu import CallContext
 
 INT_MIN = -32768
 INT_MAX = 32767

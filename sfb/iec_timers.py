@@ -12,11 +12,11 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 from typing import TYPE_CHECKING, NamedTuple, Self, cast
 
-from engine import blocks
-from sfb.catalogue import engine_sections, lookup
+from s7graph.engine import blocks
+from s7graph.sfb.catalogue import engine_sections, lookup
 
 if TYPE_CHECKING:
-    from engine.cpu import CallContext
+    from s7graph.engine.cpu import CallContext
 
 NS_PER_MS = 1_000_000
 TIME_MAX_MS = 2**31 - 1  # T#24D20H31M23S647MS

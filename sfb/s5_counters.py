@@ -13,9 +13,9 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import NamedTuple
 
-from engine.datatypes import bcd_to_int
-from engine.errors import ProgramError, TypeMismatch
-from engine.memory import S5Counter
+from s7graph.engine.datatypes import bcd_to_int
+from s7graph.engine.errors import ProgramError, TypeMismatch
+from s7graph.engine.memory import S5Counter
 
 COUNT_MAX = 999
 

@@ -27,11 +27,11 @@ from collections.abc import Sequence
 from enum import StrEnum
 from typing import NamedTuple
 
-from engine.cpu import Cpu, add_os_scan_hook
-from engine.datatypes import S5_BASES_MS as TIME_BASES_MS
-from engine.datatypes import bcd_to_int, int_to_bcd, ms_to_s5time, s5time_to_ms
-from engine.errors import ProgramError
-from engine.memory import S5Timer
+from s7graph.engine.cpu import Cpu, add_os_scan_hook
+from s7graph.engine.datatypes import S5_BASES_MS as TIME_BASES_MS
+from s7graph.engine.datatypes import bcd_to_int, int_to_bcd, ms_to_s5time, s5time_to_ms
+from s7graph.engine.errors import ProgramError
+from s7graph.engine.memory import S5Timer
 
 NS_PER_MS = 1_000_000
 

@@ -15,13 +15,13 @@ from datetime import datetime
 from typing import TYPE_CHECKING
 from weakref import WeakKeyDictionary
 
-from engine import blocks
-from engine.rtc import RealTimeClock as RealTimeClock
-from engine.rtc import truncate_ms
-from sfb.catalogue import OK, PARAM_RANGE, engine_sections, lookup, specific_error
+from s7graph.engine import blocks
+from s7graph.engine.rtc import RealTimeClock as RealTimeClock
+from s7graph.engine.rtc import truncate_ms
+from s7graph.sfb.catalogue import OK, PARAM_RANGE, engine_sections, lookup, specific_error
 
 if TYPE_CHECKING:
-    from engine.cpu import CallContext
+    from s7graph.engine.cpu import CallContext
 
 NS_PER_MS = 1_000_000
 TICK_MODULUS = 2**31

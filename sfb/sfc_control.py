@@ -12,11 +12,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol, cast
 
-from engine import blocks
-from sfb.catalogue import engine_sections, lookup
+from s7graph.engine import blocks
+from s7graph.sfb.catalogue import engine_sections, lookup
 
 if TYPE_CHECKING:
-    from engine.cpu import CallContext
+    from s7graph.engine.cpu import CallContext
 
 WT_MAX_US = 32767
 

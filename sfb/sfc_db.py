@@ -14,11 +14,11 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, cast
 
-from engine import blocks
-from sfb.catalogue import OK, engine_sections, lookup, specific_error
+from s7graph.engine import blocks
+from s7graph.sfb.catalogue import OK, engine_sections, lookup, specific_error
 
 if TYPE_CHECKING:
-    from engine.cpu import CallContext
+    from s7graph.engine.cpu import CallContext
 
 WRONG_NUMBER = 0x80A1
 WRONG_LENGTH = 0x80A2

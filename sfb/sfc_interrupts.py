@@ -15,12 +15,12 @@ from __future__ import annotations
 from datetime import datetime
 from typing import TYPE_CHECKING, cast
 
-from engine import blocks
-from engine.timed import ST_DISABLED, ST_LOADED
-from sfb.catalogue import as_int, engine_sections, lookup, specific_error
+from s7graph.engine import blocks
+from s7graph.engine.timed import ST_DISABLED, ST_LOADED
+from s7graph.sfb.catalogue import as_int, engine_sections, lookup, specific_error
 
 if TYPE_CHECKING:
-    from engine.cpu import CallContext, Cpu
+    from s7graph.engine.cpu import CallContext, Cpu
 
 EN_AIRT_NOT_DISABLED = 0x8080
 

@@ -20,12 +20,12 @@ import re
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from engine import blocks
-from engine.address import Area, Width, parse_address
-from engine.datatypes import type_of
-from engine.errors import AddressError, TypeMismatch
-from engine.memory import Memory
-from sfb.catalogue import (
+from s7graph.engine import blocks
+from s7graph.engine.address import Area, Width, parse_address
+from s7graph.engine.datatypes import type_of
+from s7graph.engine.errors import AddressError, TypeMismatch
+from s7graph.engine.memory import Memory
+from s7graph.sfb.catalogue import (
     AREA_LENGTH_READ,
     AREA_LENGTH_WRITE,
     AREA_READ,
@@ -38,7 +38,7 @@ from sfb.catalogue import (
 )
 
 if TYPE_CHECKING:
-    from engine.cpu import CallContext
+    from s7graph.engine.cpu import CallContext
 
 ALIGN_READ = 0x28
 ALIGN_WRITE = 0x29

@@ -12,12 +12,12 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, cast
 
-from engine import blocks
-from engine.rtm import MAX_HOURS_16, MAX_HOURS_32
-from sfb.catalogue import OK, engine_sections, lookup, specific_error
+from s7graph.engine import blocks
+from s7graph.engine.rtm import MAX_HOURS_16, MAX_HOURS_32
+from s7graph.sfb.catalogue import OK, engine_sections, lookup, specific_error
 
 if TYPE_CHECKING:
-    from engine.cpu import CallContext
+    from s7graph.engine.cpu import CallContext
 
 WRONG_NR = 0x8080
 NEGATIVE_PV = 0x8081

@@ -10,27 +10,27 @@ import importlib
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
-    from steps.actions import ActionError, gen_step_actions
-    from steps.conditions import MAX_CONTACTS, contact_text, contacts, gen_condition
-    from steps.expressions import expr_type, gen_value
-    from steps.operands import CodeGen, Ref
-    from steps.qualifiers import Rule, check, operand_kind, table_rows
+    from s7graph.steps.actions import ActionError, gen_step_actions
+    from s7graph.steps.conditions import MAX_CONTACTS, contact_text, contacts, gen_condition
+    from s7graph.steps.expressions import expr_type, gen_value
+    from s7graph.steps.operands import CodeGen, Ref
+    from s7graph.steps.qualifiers import Rule, check, operand_kind, table_rows
 
 _EXPORTS: dict[str, str] = {
-    "ActionError": "steps.actions",
-    "gen_step_actions": "steps.actions",
-    "MAX_CONTACTS": "steps.conditions",
-    "contact_text": "steps.conditions",
-    "contacts": "steps.conditions",
-    "gen_condition": "steps.conditions",
-    "expr_type": "steps.expressions",
-    "gen_value": "steps.expressions",
-    "CodeGen": "steps.operands",
-    "Ref": "steps.operands",
-    "Rule": "steps.qualifiers",
-    "check": "steps.qualifiers",
-    "operand_kind": "steps.qualifiers",
-    "table_rows": "steps.qualifiers",
+    "ActionError": "s7graph.steps.actions",
+    "gen_step_actions": "s7graph.steps.actions",
+    "MAX_CONTACTS": "s7graph.steps.conditions",
+    "contact_text": "s7graph.steps.conditions",
+    "contacts": "s7graph.steps.conditions",
+    "gen_condition": "s7graph.steps.conditions",
+    "expr_type": "s7graph.steps.expressions",
+    "gen_value": "s7graph.steps.expressions",
+    "CodeGen": "s7graph.steps.operands",
+    "Ref": "s7graph.steps.operands",
+    "Rule": "s7graph.steps.qualifiers",
+    "check": "s7graph.steps.qualifiers",
+    "operand_kind": "s7graph.steps.qualifiers",
+    "table_rows": "s7graph.steps.qualifiers",
 }
 
 __all__ = [

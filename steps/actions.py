@@ -20,12 +20,20 @@ from __future__ import annotations
 import re
 from collections.abc import Callable
 
-from engine.errors import S7Error
-from sequencer.model import ActionRow, Assignment, BlockCall, Expr, Operand, Step, StepTarget
-from sequencer.state import EVENT_BITS
-from steps.conditions import with_locals
-from steps.expressions import Resolve, StepIndex, gen_value
-from steps.operands import CodeGen, Ref
+from s7graph.engine.errors import S7Error
+from s7graph.sequencer.model import (
+    ActionRow,
+    Assignment,
+    BlockCall,
+    Expr,
+    Operand,
+    Step,
+    StepTarget,
+)
+from s7graph.sequencer.state import EVENT_BITS
+from s7graph.steps.conditions import with_locals
+from s7graph.steps.expressions import Resolve, StepIndex, gen_value
+from s7graph.steps.operands import CodeGen, Ref
 
 TimeValue = Callable[[Expr], str]
 

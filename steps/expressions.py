@@ -14,9 +14,18 @@ import math
 from collections.abc import Callable
 from typing import Any
 
-from engine.errors import TypeMismatch
-from sequencer.model import Binary, Const, Expr, FuncCall, Operand, StepAttr, TransAttr, Unary
-from steps.operands import CodeGen, Ref
+from s7graph.engine.errors import TypeMismatch
+from s7graph.sequencer.model import (
+    Binary,
+    Const,
+    Expr,
+    FuncCall,
+    Operand,
+    StepAttr,
+    TransAttr,
+    Unary,
+)
+from s7graph.steps.operands import CodeGen, Ref
 
 Resolve = Callable[[Operand], Ref]
 StepIndex = Callable[[int, Any], int]

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from types import FunctionType
 from typing import Any
 
-from engine.errors import SourceLocation, SymbolError
+from s7graph.engine.errors import SourceLocation, SymbolError
 
 # The default type of an absolute address by width, when no symbol says otherwise.
 WIDTH_TYPE = {1: "BOOL", 8: "BYTE", 16: "INT", 32: "DINT"}

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from engine.clock import VirtualClock
+from s7graph.engine.clock import VirtualClock
 
 ROOT = Path(__file__).resolve().parent.parent
 SHARED = ROOT.parent / "shared"

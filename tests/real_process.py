@@ -24,7 +24,7 @@ def run_command(tmp_path: Path, program: str) -> tuple[list[str], Path]:
     path = tmp_path / "prog.py"
     path.write_text(textwrap.dedent(program))
     state = tmp_path / "state.sqlite"
-    cmd = [sys.executable, "-m", "web.cli", "run", str(path), "--state", str(state)]
+    cmd = [sys.executable, "-m", "s7graph", "run", str(path), "--state", str(state)]
     cmd += ["--cycle-ms", "5"]
     return cmd, state
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from web.cli import main
+from s7graph.web.cli import main
 
 
 @pytest.mark.parametrize(

@@ -10,14 +10,14 @@ from typing import Any
 
 import pytest
 
-from engine.persistence import StateStore
+from s7graph.engine.persistence import StateStore
 
 ROOT = Path(__file__).resolve().parent.parent
 
 
 def _run(*args: str) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
-        [sys.executable, "-m", "web.cli", "run", *args],
+        [sys.executable, "-m", "s7graph", "run", *args],
         cwd=ROOT,
         capture_output=True,
         text=True,
@@ -33,8 +33,8 @@ def test_blink_example_runs_for_a_duration_and_saves_its_count(tmp_path: Path) -
         proc = _run(str(ROOT / "examples/blink.py"), "--state", str(state), "--duration-s", "1.2")
         assert proc.returncode == 0, proc.stderr
         assert "Traceback" not in proc.stderr
-    from engine import Cpu, VirtualClock
-    from web.cmd_run import build_cpu, import_program
+    from s7graph.engine import Cpu, VirtualClock
+    from s7graph.web.cli.run_program import build_cpu, import_program
 
     cpu = build_cpu(import_program(ROOT / "examples/blink.py"), VirtualClock())
     store = StateStore(state)
@@ -76,8 +76,8 @@ def test_missing_program_file(tmp_path: Path) -> None:
 
 def test_example_blinks_on_the_virtual_clock() -> None:
     """examples/blink.py: OB35 toggles Q0.0 every 500 ms; MW0 counts the blinks."""
-    from engine import VirtualClock
-    from web.cmd_run import build_cpu, import_program
+    from s7graph.engine import VirtualClock
+    from s7graph.web.cli.run_program import build_cpu, import_program
 
     clock = VirtualClock()
     cpu = build_cpu(import_program(ROOT / "examples/blink.py"), clock)
@@ -94,7 +94,7 @@ def test_example_blinks_on_the_virtual_clock() -> None:
 @pytest.fixture
 def max_cycle_seen(monkeypatch: pytest.MonkeyPatch) -> list[float]:
     """The maximum cycle time (ms) of every CPU a ``Runner`` starts scanning."""
-    from engine.runner import Runner
+    from s7graph.engine.runner import Runner
 
     seen: list[float] = []
     real_run = Runner.run
@@ -116,7 +116,7 @@ def test_max_cycle_time_reaches_the_cpu_of_a_program_run(
     tmp_path: Path, max_cycle_seen: list[float], options: tuple[str, ...], expected: float
 ) -> None:
     """``--max-cycle-ms`` is the watchdog's limit of a program run; S7's 150 ms by default."""
-    from web.cli import main
+    from s7graph.web.cli import main
 
     program = str(ROOT / "examples/blink.py")
     state = str(tmp_path / "blink.sqlite")
@@ -144,10 +144,10 @@ def test_max_cycle_time_reaches_the_cpu_of_a_chart_run(
 ) -> None:
     """``--max-cycle-ms`` is the watchdog's limit of a chart run: 150 ms by default, 1 s with
     ``--web`` (no browser here: the view is not served)."""
-    import web.cmd_run_chart
-    from web.cli import main
+    import s7graph.web.cli.run_chart
+    from s7graph.web.cli import main
 
-    monkeypatch.setattr(web.cmd_run_chart, "_serve", lambda *args, **kwargs: None)
+    monkeypatch.setattr(s7graph.web.cli.run_chart, "_serve", lambda *args, **kwargs: None)
     drill = ROOT / "examples/drill"
     rc = main(
         ["run", str(drill / "drill.s7g"), "--symbols", str(drill / "symbols.txt"),

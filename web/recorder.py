@@ -13,7 +13,7 @@ import re
 from pathlib import Path
 from types import ModuleType
 
-from web.protocol import ChartLayout, StepStateUpdate
+from s7graph.web.bus.protocol import ChartLayout, StepStateUpdate
 
 _rr: ModuleType | None
 try:  # rerun-sdk is ~670 MB installed, so it is optional

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from engine.address import Address, Area, Width, parse_address
-from engine.errors import AddressError, SourceLocation
+from s7graph.engine.address import Address, Area, Width, parse_address
+from s7graph.engine.errors import AddressError, SourceLocation
 
 
 @pytest.mark.parametrize(

@@ -6,8 +6,8 @@ from typing import Any
 
 import pytest
 
-from engine import BlockError, CallContext, Cpu, InstanceDB, Var, VirtualClock, fb, fc, ob
-from engine.blocks import Decl
+from s7graph.engine import BlockError, CallContext, Cpu, InstanceDB, Var, VirtualClock, fb, fc, ob
+from s7graph.engine.blocks import Decl
 
 
 class Tally:
@@ -179,7 +179,7 @@ def test_fc_out_operand_is_written_not_read_and_left_alone_when_unassigned() -> 
     the operand's value."""
     from datetime import datetime
 
-    from engine import DB, parse_address
+    from s7graph.engine import DB, parse_address
 
     clock = VirtualClock()
     stamp = datetime(2026, 1, 2, 3, 4, 5)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from engine import (
+from s7graph.engine import (
     CallContext,
     Cpu,
     CpuMode,
@@ -14,7 +14,7 @@ from engine import (
     VirtualClock,
     ob,
 )
-from engine.errors import BlockError
+from s7graph.engine.errors import BlockError
 
 
 def _counting_cpu(clock: VirtualClock, **kw: object) -> Cpu:

@@ -6,7 +6,7 @@ from datetime import date, datetime
 
 import pytest
 
-from engine.datatypes import (
+from s7graph.engine.datatypes import (
     bcd_to_int,
     check_value,
     decode,
@@ -17,7 +17,7 @@ from engine.datatypes import (
     s5time_to_ms,
     type_of,
 )
-from engine.errors import TypeMismatch
+from s7graph.engine.errors import TypeMismatch
 
 
 @pytest.mark.parametrize(

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from engine import Cpu, CpuMode, DiagnosticBuffer, EventId, VirtualClock
+from s7graph.engine import Cpu, CpuMode, DiagnosticBuffer, EventId, VirtualClock
 
 
 def test_mode_transitions_are_entered_with_time(clock: VirtualClock) -> None:

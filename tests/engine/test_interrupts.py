@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from engine import CallContext, Cpu, CpuMode, EventId, VirtualClock, ob
-from engine.interrupts import CYCLIC_DEFAULT_MS, CyclicScheduler, priority
+from s7graph.engine import CallContext, Cpu, CpuMode, EventId, VirtualClock, ob
+from s7graph.engine.interrupts import CYCLIC_DEFAULT_MS, CyclicScheduler, priority
 
 
 def _times(clock: VirtualClock, cpu: Cpu, number: int, until_ms: int, step: int = 1) -> list[int]:

@@ -6,8 +6,8 @@ from datetime import date, datetime
 
 import pytest
 
-from engine.errors import LiteralError, SourceLocation, TypeMismatch
-from engine.literals import format_literal, parse_literal
+from s7graph.engine.errors import LiteralError, SourceLocation, TypeMismatch
+from s7graph.engine.literals import format_literal, parse_literal
 
 
 @pytest.mark.parametrize(

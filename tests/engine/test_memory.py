@@ -7,10 +7,10 @@ from datetime import datetime
 
 import pytest
 
-from engine.address import Address, Area, parse_address
-from engine.datatypes import layout
-from engine.errors import AddressError, BlockError, TypeMismatch
-from engine.memory import AreaLengthError, Memory, S5Counter, S5Timer
+from s7graph.engine.address import Address, Area, parse_address
+from s7graph.engine.datatypes import layout
+from s7graph.engine.errors import AddressError, BlockError, TypeMismatch
+from s7graph.engine.memory import AreaLengthError, Memory, S5Counter, S5Timer
 
 
 def A(text: str) -> Address:

@@ -14,8 +14,8 @@ from typing import Any
 
 import pytest
 
-from engine import DB, CallContext, Cpu, InstanceDB, VirtualClock, fb, ob
-from engine.persistence import StateStore
+from s7graph.engine import DB, CallContext, Cpu, InstanceDB, VirtualClock, fb, ob
+from s7graph.engine.persistence import StateStore
 from tests.real_process import ROOT, query_store, run_command, wait_for
 
 
@@ -173,7 +173,7 @@ def test_an_old_state_file_gains_the_user_column_of_the_alarm_log(tmp_path: Path
 
 
 PROGRAM = """
-from engine import DB, fb, ob
+from s7graph.engine import DB, fb, ob
 
 RESTARTS = DB(1, 8)
 

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from engine import DB, CallContext, Cpu, CpuMode, EventId, InstanceDB, VirtualClock, fb, ob
-from engine.restart import RESTART, RestartType
+from s7graph.engine import DB, CallContext, Cpu, CpuMode, EventId, InstanceDB, VirtualClock, fb, ob
+from s7graph.engine.restart import RESTART, RestartType
 
 ran: list[int] = []
 

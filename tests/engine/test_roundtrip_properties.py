@@ -7,10 +7,10 @@ from datetime import date, datetime
 from hypothesis import given
 from hypothesis import strategies as st
 
-from engine.address import Address, Area, Width, parse_address
-from engine.datatypes import decode, encode, ms_to_s5time, s5time_to_ms
-from engine.literals import format_literal, parse_literal
-from engine.memory import Memory
+from s7graph.engine.address import Address, Area, Width, parse_address
+from s7graph.engine.datatypes import decode, encode, ms_to_s5time, s5time_to_ms
+from s7graph.engine.literals import format_literal, parse_literal
+from s7graph.engine.memory import Memory
 
 BYTES = st.integers(0, 65535)
 

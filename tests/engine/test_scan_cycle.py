@@ -7,7 +7,7 @@ import itertools
 
 import pytest
 
-from engine import (
+from s7graph.engine import (
     CallContext,
     Cpu,
     CpuMode,

@@ -6,10 +6,10 @@ from pathlib import Path
 
 import pytest
 
-from engine.address import parse_address
-from engine.errors import AddressError, SymbolError
-from engine.memory import Memory
-from engine.symbols import SymbolTable
+from s7graph.engine.address import parse_address
+from s7graph.engine.errors import AddressError, SymbolError
+from s7graph.engine.memory import Memory
+from s7graph.engine.symbols import SymbolTable
 
 
 def test_semicolon_lines_give_name_address_type_comment(tmp_path: Path) -> None:

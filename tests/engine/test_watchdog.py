@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from engine import CallContext, Cpu, CpuMode, EventId, VirtualClock, ob
-from engine.watchdog import CycleStatistics, Verdict, Watchdog
+from s7graph.engine import CallContext, Cpu, CpuMode, EventId, VirtualClock, ob
+from s7graph.engine.watchdog import CycleStatistics, Verdict, Watchdog
 
 flt: list[object] = []
 

@@ -8,7 +8,7 @@ import json
 from collections.abc import Callable, Iterable
 from pathlib import Path
 
-from web.cli import main
+from s7graph.web.cli import main
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 

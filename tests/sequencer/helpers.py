@@ -19,18 +19,18 @@ import json
 from pathlib import Path
 from typing import Any
 
-from engine.clock import VirtualClock
-from engine.memory import Memory
-from engine.symbols import SymbolTable
-from sequencer.compile import compile_chart
-from sequencer.compiled import CompiledChart
-from sequencer.cycle import GraphRuntime
-from sequencer.fb import counter_row, timer_row
-from sequencer.messages import sync_messages
-from sequencer.params import Direction, check_pin, is_pin
-from sequencer.parse import parse_chart
-from sequencer.state import EVENT_BITS, GraphState
-from sfb.alarms import MessageList
+from s7graph.engine.clock import VirtualClock
+from s7graph.engine.memory import Memory
+from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer.compile import compile_chart
+from s7graph.sequencer.compiled import CompiledChart
+from s7graph.sequencer.cycle import GraphRuntime
+from s7graph.sequencer.fb import counter_row, timer_row
+from s7graph.sequencer.messages import sync_messages
+from s7graph.sequencer.params import Direction, check_pin, is_pin
+from s7graph.sequencer.parse import parse_chart
+from s7graph.sequencer.state import EVENT_BITS, GraphState
+from s7graph.sfb.alarms import MessageList
 
 HERE = Path(__file__).resolve().parent
 SCENARIOS = HERE / "scenarios"

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from web.cmd_check import check_command
+from s7graph.web.cli.check import check_command
 
 HERE = Path(__file__).parent
 

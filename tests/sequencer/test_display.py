@@ -8,9 +8,9 @@ from __future__ import annotations
 
 import pytest
 
-from sequencer.compile import compile_chart
-from sequencer.compiled import CompiledChart
-from sequencer.display import (
+from s7graph.sequencer.compile import compile_chart
+from s7graph.sequencer.compiled import CompiledChart
+from s7graph.sequencer.display import (
     S_STATE_BITS,
     compute_outputs,
     criteria_by_name,
@@ -18,7 +18,7 @@ from sequencer.display import (
     settle,
     shown_step,
 )
-from sequencer.model import (
+from s7graph.sequencer.model import (
     Binary,
     Chart,
     ChartOptions,
@@ -30,8 +30,8 @@ from sequencer.model import (
     Transition,
     VarDecl,
 )
-from sequencer.params import outputs_for
-from sequencer.state import EV_L1, EV_S1, GraphState
+from s7graph.sequencer.params import outputs_for
+from s7graph.sequencer.state import EV_L1, EV_S1, GraphState
 
 
 def chart(parameters: str = "USER") -> CompiledChart:

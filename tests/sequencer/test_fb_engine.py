@@ -3,12 +3,12 @@ the instance DB (SPEC §2.2, DESIGN "State lives in the instance DB")."""
 
 from __future__ import annotations
 
-from engine.clock import VirtualClock
-from engine.cpu import Cpu
-from sequencer.compile import compile_chart
-from sequencer.fb import GraphFB, StepEvent, install_all
-from sequencer.parse import parse_chart
-from sequencer.state import GraphState
+from s7graph.engine.clock import VirtualClock
+from s7graph.engine.cpu import Cpu
+from s7graph.sequencer.compile import compile_chart
+from s7graph.sequencer.fb import GraphFB, StepEvent, install_all
+from s7graph.sequencer.parse import parse_chart
+from s7graph.sequencer.state import GraphState
 
 TEXT = """FUNCTION_BLOCK "Seq" FB 3 DB 4
 SEQUENCE 1 "s"
@@ -69,7 +69,7 @@ def test_several_graph_fbs_share_one_cpu() -> None:
 def test_a_program_calling_a_pin_outside_the_parameter_set_stops_with_the_set_named() -> None:
     """SPEC §2.7: HALT_SQ is a MAXIMUM pin; a program passing it to a STANDARD FB is a
     programming error naming the parameter set (OB121 absent: STOP, diagnostic entry)."""
-    from engine.blocks import ob
+    from s7graph.engine.blocks import ob
 
     graph = GraphFB(compile_chart(parse_chart(TEXT, "seq.s7g")))
     cpu = Cpu(VirtualClock())

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import pytest
 
-from sequencer.state import GraphState
+from s7graph.sequencer.state import GraphState
 from tests.sequencer.helpers import Run, chart_text
 
 

@@ -3,15 +3,15 @@
 
 from __future__ import annotations
 
-from engine.clock import VirtualClock
-from engine.cpu import Cpu
-from engine.record import ScanRecord
-from sequencer.compile import compile_chart
-from sequencer.fb import GraphFB, install_all
-from sequencer.messages import PROGRAM_USER, message_id, remote_acks, sync_messages
-from sequencer.parse import parse_chart
-from sequencer.state import GraphState
-from sfb.alarms import MessageList, MessageState, message_list
+from s7graph.engine.clock import VirtualClock
+from s7graph.engine.cpu import Cpu
+from s7graph.engine.record import ScanRecord
+from s7graph.sequencer.compile import compile_chart
+from s7graph.sequencer.fb import GraphFB, install_all
+from s7graph.sequencer.messages import PROGRAM_USER, message_id, remote_acks, sync_messages
+from s7graph.sequencer.parse import parse_chart
+from s7graph.sequencer.state import GraphState
+from s7graph.sfb.alarms import MessageList, MessageState, message_list
 from tests.sequencer.helpers import Run, chart_text
 
 SV1 = message_id("Msg_plant", 1, 1, "SV")

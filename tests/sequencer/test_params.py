@@ -6,9 +6,9 @@ import itertools
 
 import pytest
 
-from engine.errors import SourceLocation
-from sequencer.model import ChartOptions
-from sequencer.params import (
+from s7graph.engine.errors import SourceLocation
+from s7graph.sequencer.model import ChartOptions
+from s7graph.sequencer.params import (
     PARAMETER_SETS,
     PINS,
     Direction,

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from sequencer.model import (
+from s7graph.sequencer.model import (
     ActionRow,
     Assignment,
     Binary,
@@ -18,7 +18,7 @@ from sequencer.model import (
     StepTarget,
     TransAttr,
 )
-from sequencer.parse import ChartSyntaxError, parse_chart
+from s7graph.sequencer.parse import ChartSyntaxError, parse_chart
 
 CHARTS = Path(__file__).parent / "charts"
 

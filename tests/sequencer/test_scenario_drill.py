@@ -4,9 +4,9 @@ Chart: scenarios/drill_supervised.s7g; the plant is played by setting the inputs
 
 from __future__ import annotations
 
-from sequencer.display import criteria_by_name
-from sequencer.messages import PROGRAM_USER
-from sfb.alarms import MessageState
+from s7graph.sequencer.display import criteria_by_name
+from s7graph.sequencer.messages import PROGRAM_USER
+from s7graph.sfb.alarms import MessageState
 from tests.sequencer.helpers import Run
 
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import pytest
 
-from sequencer.params import PinError
+from s7graph.sequencer.params import PinError
 from tests.sequencer.helpers import Run
 
 

@@ -7,8 +7,8 @@ from pathlib import Path
 from hypothesis import given, settings
 from hypothesis import strategies as hs
 
+from s7graph.web.cli.sim import sim_command
 from tests.sequencer.helpers import read_trace, write_sim_inputs
-from web.cmd_sim import sim_command
 
 CHART = """FUNCTION_BLOCK "Drill"
   PARAMETERS := STANDARD;

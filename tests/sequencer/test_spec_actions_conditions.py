@@ -8,13 +8,13 @@ from __future__ import annotations
 
 import pytest
 
-from engine.blocks import fc
-from engine.clock import VirtualClock
-from engine.cpu import Cpu
-from sequencer.compile import compile_chart
-from sequencer.fb import GraphFB, install_all
-from sequencer.parse import parse_chart
-from sequencer.validate import validate
+from s7graph.engine.blocks import fc
+from s7graph.engine.clock import VirtualClock
+from s7graph.engine.cpu import Cpu
+from s7graph.sequencer.compile import compile_chart
+from s7graph.sequencer.fb import GraphFB, install_all
+from s7graph.sequencer.parse import parse_chart
+from s7graph.sequencer.validate import validate
 from tests.sequencer.helpers import chart, enter, leave, seq, source, two_steps
 
 # ---------------------------------------------------------------- §2.8 qualifiers

@@ -7,11 +7,11 @@ the warm restart through a CPU.
 
 from __future__ import annotations
 
-from engine.clock import VirtualClock
-from engine.cpu import Cpu
-from sequencer.compile import compile_chart
-from sequencer.fb import GraphFB, install_all
-from sequencer.parse import parse_chart
+from s7graph.engine.clock import VirtualClock
+from s7graph.engine.cpu import Cpu
+from s7graph.sequencer.compile import compile_chart
+from s7graph.sequencer.fb import GraphFB, install_all
+from s7graph.sequencer.parse import parse_chart
 from tests.sequencer.helpers import chart, enter, seq, source, two_steps
 
 # ---------------------------------------------------------------- §2.3 interlock

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
+from s7graph.web.cli import main
 from tests.sequencer.helpers import read_trace, write_sim_inputs
-from web.cli import main
 
 CHART = """FUNCTION_BLOCK "Sim"
   PARAMETERS := STANDARD;

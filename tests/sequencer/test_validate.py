@@ -6,8 +6,8 @@ from pathlib import Path
 
 import pytest
 
-from sequencer.parse import parse_chart
-from sequencer.validate import validate
+from s7graph.sequencer.parse import parse_chart
+from s7graph.sequencer.validate import validate
 
 CHARTS = Path(__file__).parent / "charts"
 

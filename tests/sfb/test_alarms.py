@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import json
 
-from sfb.alarms import (
+from s7graph.sfb.alarms import (
     RET_EV_ID_RANGE,
     RET_NOT_OCCUPIED,
     RET_SD_TOO_LONG,

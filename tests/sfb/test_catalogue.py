@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from engine.errors import BlockError
-from sfb.catalogue import (
+from s7graph.engine.errors import BlockError
+from s7graph.sfb.catalogue import (
     CATALOGUE,
     Direction,
     as_int,

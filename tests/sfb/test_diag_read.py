@@ -4,14 +4,14 @@ from __future__ import annotations
 
 from datetime import datetime
 
-from engine.blocks import DB, ob
-from engine.clock import VirtualClock
-from engine.cpu import CallContext, Cpu
-from engine.datatypes import decode
-from engine.diagnostics import DiagnosticBuffer
-from sfb import install
-from sfb.catalogue import as_int
-from sfb.diag_read import (
+from s7graph.engine.blocks import DB, ob
+from s7graph.engine.clock import VirtualClock
+from s7graph.engine.cpu import CallContext, Cpu
+from s7graph.engine.datatypes import decode
+from s7graph.engine.diagnostics import DiagnosticBuffer
+from s7graph.sfb import install
+from s7graph.sfb.catalogue import as_int
+from s7graph.sfb.diag_read import (
     RET_DR_PARTIAL,
     RET_DR_TOO_SHORT,
     RET_EVENTN_ILLEGAL,

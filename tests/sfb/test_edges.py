@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from engine.address import parse_address
-from engine.memory import Memory
-from sfb.edges import F_TRIG, R_TRIG, Edge, fn, fn_at, fp, fp_at
+from s7graph.engine.address import parse_address
+from s7graph.engine.memory import Memory
+from s7graph.sfb.edges import F_TRIG, R_TRIG, Edge, fn, fn_at, fp, fp_at
 
 
 def test_fp_and_fn_follow_the_edge_memory_algorithm() -> None:

@@ -5,15 +5,15 @@ from __future__ import annotations
 
 from datetime import datetime
 
-from engine.blocks import DB, ob
-from engine.clock import VirtualClock
-from engine.cpu import CallContext, Cpu
-from engine.modes import CpuMode
-from sfb import SYSTEM_BLOCKS, install, message_list
-from sfb.alarms import MessageEvent
-from sfb.catalogue import CATALOGUE, lookup
-from sfb.iec_timers import SFB4, TON
-from sfb.sfc_control import Waited
+from s7graph.engine.blocks import DB, ob
+from s7graph.engine.clock import VirtualClock
+from s7graph.engine.cpu import CallContext, Cpu
+from s7graph.engine.modes import CpuMode
+from s7graph.sfb import SYSTEM_BLOCKS, install, message_list
+from s7graph.sfb.alarms import MessageEvent
+from s7graph.sfb.catalogue import CATALOGUE, lookup
+from s7graph.sfb.iec_timers import SFB4, TON
+from s7graph.sfb.sfc_control import Waited
 
 
 def make_cpu(clock: VirtualClock, body: object, *extra: object) -> Cpu:

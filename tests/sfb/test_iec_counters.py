@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from sfb.iec_counters import CTD, CTU, CTUD, INT_MAX, INT_MIN, CounterOut, UpDownOut
+from s7graph.sfb.iec_counters import CTD, CTU, CTUD, INT_MAX, INT_MIN, CounterOut, UpDownOut
 
 
 def test_ctu_counts_rising_edges_and_q_is_cv_at_least_pv() -> None:

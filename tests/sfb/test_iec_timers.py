@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import pytest
 
-from sfb.iec_timers import TIME_MAX_MS, TOF, TON, TP, TimerOut
+from s7graph.sfb.iec_timers import TIME_MAX_MS, TOF, TON, TP, TimerOut
 
 MS = 1_000_000
 Row = tuple[int, bool, bool, int]

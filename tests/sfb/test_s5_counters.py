@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import pytest
 
-from engine.address import parse_address
-from engine.errors import ProgramError
-from engine.memory import Memory, S5Counter
-from sfb import s5_counters as c
+from s7graph.engine.address import parse_address
+from s7graph.engine.errors import ProgramError
+from s7graph.engine.memory import Memory, S5Counter
+from s7graph.sfb import s5_counters as c
 
 
 def test_counters_count_rising_edges_and_saturate_at_0_and_999() -> None:

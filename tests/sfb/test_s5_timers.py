@@ -9,11 +9,11 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from engine.address import parse_address
-from engine.errors import ProgramError
-from engine.memory import Memory, S5Timer
-from sfb import s5_timers as s5
-from sfb.s5_timers import TimerFunction
+from s7graph.engine.address import parse_address
+from s7graph.engine.errors import ProgramError
+from s7graph.engine.memory import Memory, S5Timer
+from s7graph.sfb import s5_timers as s5
+from s7graph.sfb.s5_timers import TimerFunction
 
 MS = 1_000_000
 Row = tuple[int, bool, bool, bool]
@@ -177,9 +177,9 @@ def test_sd_timer_started_once_expires_after_the_right_number_of_scans_without_m
 
     An SD timer with S5T#50MS started in the first scan (no instruction after that) sets Q
     in the scan at 50 ms; HOLD freezes it, STARTUP does not."""
-    from engine.blocks import ob
-    from engine.clock import VirtualClock
-    from engine.cpu import CallContext, Cpu
+    from s7graph.engine.blocks import ob
+    from s7graph.engine.clock import VirtualClock
+    from s7graph.engine.cpu import CallContext, Cpu
 
     clock = VirtualClock()
     started: list[int] = []

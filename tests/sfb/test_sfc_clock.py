@@ -4,7 +4,14 @@ from __future__ import annotations
 
 from datetime import datetime
 
-from sfb.sfc_clock import RET_DT_RANGE, RealTimeClock, read_clk, set_clk, tick_diff, time_tck
+from s7graph.sfb.sfc_clock import (
+    RET_DT_RANGE,
+    RealTimeClock,
+    read_clk,
+    set_clk,
+    tick_diff,
+    time_tck,
+)
 
 MS = 1_000_000
 

@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-from engine.blocks import DB, OB
-from engine.clock import VirtualClock
-from engine.cpu import CallContext, Cpu
-from sfb import install
-from sfb.catalogue import as_int
+from s7graph.engine.blocks import DB, OB
+from s7graph.engine.clock import VirtualClock
+from s7graph.engine.cpu import CallContext, Cpu
+from s7graph.sfb import install
+from s7graph.sfb.catalogue import as_int
 
 
 def make_cpu(clock: VirtualClock, main: object) -> Cpu:

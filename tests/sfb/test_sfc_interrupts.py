@@ -7,13 +7,13 @@ from collections.abc import Callable
 from datetime import datetime
 from typing import Any
 
-from engine.blocks import OB
-from engine.clock import VirtualClock
-from engine.cpu import CallContext, Cpu
-from engine.modes import CpuMode
-from engine.timed import Period, next_occurrence
-from sfb import install
-from sfb.catalogue import as_int
+from s7graph.engine.blocks import OB
+from s7graph.engine.clock import VirtualClock
+from s7graph.engine.cpu import CallContext, Cpu
+from s7graph.engine.modes import CpuMode
+from s7graph.engine.timed import Period, next_occurrence
+from s7graph.sfb import install
+from s7graph.sfb.catalogue import as_int
 
 T0 = datetime(2026, 3, 2, 9, 59, 0)
 

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import pytest
 
-from engine.address import Area
-from engine.errors import AddressError
-from engine.memory import Memory
-from sfb.catalogue import as_word, br_of
-from sfb.sfc_memory import AnyPointer, blkmov, fill, parse_any
+from s7graph.engine.address import Area
+from s7graph.engine.errors import AddressError
+from s7graph.engine.memory import Memory
+from s7graph.sfb.catalogue import as_word, br_of
+from s7graph.sfb.sfc_memory import AnyPointer, blkmov, fill, parse_any
 
 
 @pytest.fixture

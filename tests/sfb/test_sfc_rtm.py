@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-from engine.blocks import OB
-from engine.clock import VirtualClock
-from engine.cpu import CallContext, Cpu
-from engine.rtm import NS_PER_HOUR
-from sfb import install
-from sfb.catalogue import as_int
+from s7graph.engine.blocks import OB
+from s7graph.engine.clock import VirtualClock
+from s7graph.engine.cpu import CallContext, Cpu
+from s7graph.engine.rtm import NS_PER_HOUR
+from s7graph.sfb import install
+from s7graph.sfb.catalogue import as_int
 
 HOUR_MS = NS_PER_HOUR // 1_000_000
 

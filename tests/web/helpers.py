@@ -13,10 +13,10 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from engine.clock import VirtualClock
-from engine.persistence import StateStore
-from engine.symbols import SymbolTable
-from web.cmd_sim import ChartSession, load_chart
+from s7graph.engine.clock import VirtualClock
+from s7graph.engine.persistence import StateStore
+from s7graph.engine.symbols import SymbolTable
+from s7graph.web.harness.session import ChartSession, load_chart
 
 if TYPE_CHECKING:
     from playwright.sync_api import Page

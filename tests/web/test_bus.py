@@ -8,10 +8,10 @@ from pathlib import Path
 
 import pytest
 
-from sequencer.model import Chart, Sequence, Step, Transition
+from s7graph.sequencer.model import Chart, Sequence, Step, Transition
+from s7graph.web.bus.protocol import ChartLayout, Command, CommandReply, StepStateUpdate
+from s7graph.web.bus.zenoh_bus import BusClient, BusPublisher, open_session
 from tests.web import helpers
-from web.bus import BusClient, BusPublisher, open_session
-from web.protocol import ChartLayout, Command, CommandReply, StepStateUpdate
 
 pytestmark = pytest.mark.timeout(30)
 

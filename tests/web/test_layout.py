@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import pytest
 
-from sequencer.model import Chart, Sequence, Step, Transition
-from web.layout import place
-from web.protocol import ChartLayout
+from s7graph.sequencer.model import Chart, Sequence, Step, Transition
+from s7graph.web.bus.protocol import ChartLayout
+from s7graph.web.view.layout import place
 
 pytestmark = pytest.mark.timeout(30)
 

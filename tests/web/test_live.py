@@ -10,12 +10,12 @@ from typing import Any
 
 import pytest
 
-from engine.clock import VirtualClock
-from engine.persistence import StateStore
+from s7graph.engine.clock import VirtualClock
+from s7graph.engine.persistence import StateStore
+from s7graph.web.bus.live import LiveGraph, watch_names
+from s7graph.web.bus.protocol import Command, StepStateUpdate
+from s7graph.web.harness.session import ChartSession
 from tests.web.helpers import chart_session
-from web.cmd_sim import ChartSession
-from web.live import LiveGraph, watch_names
-from web.protocol import Command, StepStateUpdate
 
 # A MINIMUM parameter set has no ACK_EF, SW_MAN, S_ON ... pins: the Control Sequencer's
 # commands act all the same.

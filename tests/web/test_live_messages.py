@@ -11,14 +11,14 @@ from typing import Any
 
 import pytest
 
-from engine.clock import VirtualClock
-from engine.persistence import StateStore
-from sfb.alarms import message_list
+from s7graph.engine.clock import VirtualClock
+from s7graph.engine.persistence import StateStore
+from s7graph.sfb.alarms import message_list
+from s7graph.web.bus.live import LiveGraph
+from s7graph.web.bus.protocol import AlarmList, Command, StepStateUpdate
+from s7graph.web.harness.session import ChartSession
+from s7graph.web.view.live_edge import LiveEdge
 from tests.web.helpers import chart_session, wait_until
-from web.cmd_sim import ChartSession
-from web.live import LiveGraph
-from web.live_edge import LiveEdge
-from web.protocol import AlarmList, Command, StepStateUpdate
 
 pytestmark = pytest.mark.timeout(60)
 

@@ -17,8 +17,8 @@ import pytest
 from tests.real_process import ROOT, query_store, run_command, wait_for
 
 PROGRAM = """
-from engine import DB, ob
-from sfb.alarms import message_list
+from s7graph.engine import DB, ob
+from s7graph.sfb.alarms import message_list
 
 SEEN = DB(1, 8)
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from sequencer.model import (
+from s7graph.sequencer.model import (
     Binary,
     Chart,
     Const,
@@ -16,7 +16,7 @@ from sequencer.model import (
     Transition,
     Unary,
 )
-from web.protocol import (
+from s7graph.web.bus.protocol import (
     MAX_MESSAGE_BYTES,
     AlarmEntry,
     AlarmList,

@@ -6,9 +6,9 @@ from pathlib import Path
 
 import pytest
 
-from sequencer.model import Chart, Sequence, Step, Transition
-from web.protocol import ChartLayout, StepStateUpdate
-from web.recorder import Recorder, available
+from s7graph.sequencer.model import Chart, Sequence, Step, Transition
+from s7graph.web.bus.protocol import ChartLayout, StepStateUpdate
+from s7graph.web.recorder import Recorder, available
 
 pytestmark = [
     pytest.mark.timeout(60),

@@ -22,13 +22,13 @@ from pathlib import Path
 
 import pytest
 
-from engine.clock import VirtualClock
+from s7graph.engine.clock import VirtualClock
+from s7graph.web.bus.live import LiveGraph
+from s7graph.web.bus.protocol import Command, CommandReply
+from s7graph.web.bus.zenoh_bus import BusClient, open_session
+from s7graph.web.harness.session import ChartSession, load_chart
+from s7graph.web.view.live_edge import LiveEdge
 from tests.web.helpers import chromium_page, needs_chromium, wait_until
-from web.bus import BusClient, open_session
-from web.cmd_sim import ChartSession, load_chart
-from web.live import LiveGraph
-from web.live_edge import LiveEdge
-from web.protocol import Command, CommandReply
 
 ROOT = Path(__file__).resolve().parents[2]
 DRILL = ROOT / "examples" / "drill"
@@ -125,7 +125,7 @@ def test_run_drill_web_serves_the_live_sequence_and_takes_an_acknowledge_click(
     pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
     state = tmp_path / "drill.sqlite"
     stderr = (tmp_path / "stderr.txt").open("w")
-    command = [sys.executable, "-m", "web.cli", "run", str(DRILL / "drill.s7g")]
+    command = [sys.executable, "-m", "s7graph", "run", str(DRILL / "drill.s7g")]
     command += ["--plant", str(DRILL / "plant.py"), "--symbols", str(DRILL / "symbols.txt")]
     command += ["--web", "--port", str(_free_port()), "--duration-s", "200", "--state", str(state)]
     proc = subprocess.Popen(

@@ -11,11 +11,12 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from sequencer.model import Chart, Operand, Sequence, Step, Transition
+from s7graph.sequencer.model import Chart, Operand, Sequence, Step, Transition
+from s7graph.web.bus.protocol import ChartLayout, Command, StepStateUpdate
+from s7graph.web.view.chart_view import ACTIVE, DISTURBED, INACTIVE
+from s7graph.web.view.edge import WebEdge, serve_view
 from tests.web.helpers import chromium_page, needs_chromium, wait_until
-from web.demo import ToySequencer, WebEdge, serve_view
-from web.protocol import ChartLayout, Command, StepStateUpdate
-from web.view import ACTIVE, DISTURBED, INACTIVE
+from tests.web.toy_feed import ToySequencer
 
 if TYPE_CHECKING:
     from playwright.sync_api import Page

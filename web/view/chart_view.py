@@ -28,8 +28,7 @@ import numpy as np
 import viser
 from PIL import Image, ImageDraw, ImageFont
 
-from web.layout import Placement, place
-from web.protocol import (
+from s7graph.web.bus.protocol import (
     AlarmEntry,
     AlarmList,
     ChartLayout,
@@ -41,6 +40,7 @@ from web.protocol import (
     StepDetail,
     StepStateUpdate,
 )
+from s7graph.web.view.layout import Placement, place
 
 __all__ = ["ACTIVE", "DISTURBED", "INACTIVE", "ChartView", "make_server"]
 

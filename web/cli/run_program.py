@@ -21,27 +21,14 @@ from pathlib import Path
 from types import FrameType, ModuleType
 from typing import Any
 
-from engine.blocks import DB, FB, FC, OB
-from engine.clock import SystemClock
-from engine.cpu import Cpu
-from engine.modes import CpuMode
-from engine.persistence import StateStore
-from engine.record import ScanRecord
-from engine.runner import Runner
-from sfb.alarms import message_list
-
-
-def persist_messages(store: StateStore, cpu: Cpu) -> None:
-    """Save the CPU's message list (``sfb.alarms``) with the state; call before ``load``."""
-    messages = message_list(cpu)
-    cached: list[Any] = [-1, None]  # (changes, snapshot): the same object while unchanged
-
-    def snapshot() -> object:
-        if cached[0] != messages.changes:
-            cached[:] = [messages.changes, messages.snapshot()]
-        return cached[1]
-
-    store.add_part("messages", snapshot, messages.restore)
+from s7graph.engine.blocks import DB, FB, FC, OB
+from s7graph.engine.clock import SystemClock
+from s7graph.engine.cpu import Cpu
+from s7graph.engine.modes import CpuMode
+from s7graph.engine.persistence import StateStore
+from s7graph.engine.record import ScanRecord
+from s7graph.engine.runner import Runner
+from s7graph.web.harness.persist import persist_messages
 
 
 class ProgramLoadError(Exception):

@@ -33,7 +33,7 @@ from typing import Any
 import msgspec
 import zenoh
 
-from web.protocol import (
+from s7graph.web.bus.protocol import (
     AlarmList,
     ChartLayout,
     Command,

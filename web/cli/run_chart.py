@@ -20,20 +20,22 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from engine.clock import SystemClock
-from engine.errors import S7Error
-from engine.modes import CpuMode
-from engine.persistence import StateStore
-from engine.record import ScanRecord
-from engine.runner import Runner
-from engine.watchdog import Watchdog
-from sfb.alarms import message_list
-from web.cmd_run import persist_messages, run_until_stopped
-from web.cmd_sim import ChartSession, fail
-from web.plant import LoadedPlant, PlantError, load_plant
+from s7graph.engine.clock import SystemClock
+from s7graph.engine.errors import S7Error
+from s7graph.engine.modes import CpuMode
+from s7graph.engine.persistence import StateStore
+from s7graph.engine.record import ScanRecord
+from s7graph.engine.runner import Runner
+from s7graph.engine.watchdog import Watchdog
+from s7graph.sfb.alarms import message_list
+from s7graph.web.cli.report import fail
+from s7graph.web.cli.run_program import run_until_stopped
+from s7graph.web.harness.persist import persist_messages
+from s7graph.web.harness.plant import LoadedPlant, PlantError, load_plant
+from s7graph.web.harness.session import ChartSession
 
 if TYPE_CHECKING:
-    from web.live_edge import LiveEdge
+    from s7graph.web.view.live_edge import LiveEdge
 
 DEFAULT_MAX_CYCLE_MS = 150.0  # S7's default maximum cycle time
 WEB_MAX_CYCLE_MS = 1000.0
@@ -112,8 +114,8 @@ def _serve(
     session: ChartSession, store: StateStore, *, web: bool, port: int, record: Path | None
 ) -> LiveEdge:
     """The live view (and recording) of the session's GraphFB; prints where to look."""
-    from web.live import LiveGraph, watch_names  # zenoh and viser only when asked for
-    from web.live_edge import LiveEdge
+    from s7graph.web.bus.live import LiveGraph, watch_names  # zenoh and viser only when asked for
+    from s7graph.web.view.live_edge import LiveEdge
 
     live = LiveGraph(
         session.graph, read=session.get, watch=watch_names(session.symbols), store=store,

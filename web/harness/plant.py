@@ -15,7 +15,7 @@ import traceback
 from pathlib import Path
 from typing import Any, Protocol
 
-from engine.errors import S7Error
+from s7graph.engine.errors import S7Error
 
 
 class PlantError(S7Error):

@@ -16,8 +16,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from sequencer.model import Chart
-from web.protocol import ChartLayout, SequenceInfo, TransitionInfo
+from s7graph.sequencer.model import Chart
+from s7graph.web.bus.protocol import ChartLayout, SequenceInfo, TransitionInfo
 
 __all__ = [
     "IncomingJump",

@@ -40,16 +40,16 @@ import time
 from collections.abc import Callable, Iterable
 from typing import Any
 
-from engine.modes import CpuMode
-from engine.persistence import StateStore
-from engine.record import ScanRecord
-from sequencer.display import contact_bits
-from sequencer.fb import GraphFB, StepEvent
-from sequencer.messages import PROGRAM_USER, parse_message_id
-from sequencer.modes import SELECTORS
-from sfb.alarms import Message, MessageList
-from steps.conditions import contact_negations
-from web.protocol import (
+from s7graph.engine.modes import CpuMode
+from s7graph.engine.persistence import StateStore
+from s7graph.engine.record import ScanRecord
+from s7graph.sequencer.display import contact_bits
+from s7graph.sequencer.fb import GraphFB, StepEvent
+from s7graph.sequencer.messages import PROGRAM_USER, parse_message_id
+from s7graph.sequencer.modes import SELECTORS
+from s7graph.sfb.alarms import Message, MessageList
+from s7graph.steps.conditions import contact_negations
+from s7graph.web.bus.protocol import (
     EVENTS,
     MODES,
     AlarmEntry,

@@ -10,11 +10,11 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from engine.errors import S7Error
-from engine.symbols import SymbolTable
-from sequencer.diagnostics import Diagnostic, format_diagnostic
-from sequencer.parse import ChartSyntaxError, parse_chart
-from sequencer.validate import validate
+from s7graph.engine.errors import S7Error
+from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer.diagnostics import Diagnostic, format_diagnostic
+from s7graph.sequencer.parse import ChartSyntaxError, parse_chart
+from s7graph.sequencer.validate import validate
 
 
 def check_command(chart: Path, symbols: Path | None = None) -> int:

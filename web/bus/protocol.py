@@ -14,7 +14,7 @@ from typing import Annotated, Any, Literal, TypeVar
 import msgspec
 from msgspec import Meta, Struct
 
-from sequencer.model import (
+from s7graph.sequencer.model import (
     Binary,
     Chart,
     Const,

@@ -1,6 +1,6 @@
 """The ``s7graph`` command line: ``run``, ``sim``, ``check``, ``--version``.
 
-Each command lives in its own module (``web/cmd_*.py``) and is imported only when used, so
+Each command lives in its own module (``web/cli/*.py``) and is imported only when used, so
 ``s7graph check`` never pays for zenoh or viser. Errors are one line on stderr and a
 non-zero exit, never a traceback.
 """
@@ -8,13 +8,13 @@ non-zero exit, never a traceback.
 from __future__ import annotations
 
 import sys
-from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
-from engine.errors import S7Error
+from s7graph import __version__
+from s7graph.engine.errors import S7Error
 
 app = typer.Typer(
     add_completion=False,
@@ -24,16 +24,9 @@ app = typer.Typer(
 )
 
 
-def _version() -> str:
-    try:
-        return version("s7graph")
-    except PackageNotFoundError:  # running from a source tree
-        return "0+unknown"
-
-
 def _show_version(value: bool) -> None:
     if value:
-        typer.echo(f"s7graph {_version()}")
+        typer.echo(f"s7graph {__version__}")
         raise typer.Exit(0)
 
 
@@ -85,7 +78,7 @@ def run(
 ) -> None:
     """Run a program or a chart on the system clock until Ctrl-C."""
     if program.suffix.lower() == ".s7g":
-        from web.cmd_run_chart import run_chart
+        from s7graph.web.cli.run_chart import run_chart
 
         raise typer.Exit(
             run_chart(
@@ -101,7 +94,7 @@ def run(
                 record=record,
             )
         )
-    from web.cmd_run import run_program
+    from s7graph.web.cli.run_program import run_program
 
     raise typer.Exit(
         run_program(
@@ -120,7 +113,7 @@ def check(
     symbols: Annotated[Path | None, typer.Option(help="A symbol table file.")] = None,
 ) -> None:
     """Print a chart's diagnostics; exit 0 clean, 1 warnings only, 2 errors."""
-    from web.cmd_check import check_command
+    from s7graph.web.cli.check import check_command
 
     raise typer.Exit(check_command(chart, symbols=symbols))
 
@@ -145,7 +138,7 @@ def sim(
     ] = None,
 ) -> None:
     """Run a chart on the virtual clock: stimulus in, one JSON line per cycle out (SPEC §4)."""
-    from web.cmd_sim import sim_command
+    from s7graph.web.cli.sim import sim_command
 
     raise typer.Exit(
         sim_command(

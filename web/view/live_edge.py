@@ -15,16 +15,16 @@ import contextlib
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from engine.modes import CpuMode
-from engine.record import ScanRecord
-from engine.runner import Runner
-from engine.watchdog import CycleStatistics
-from web.demo import WebEdge, serve_view
-from web.live import LiveGraph
-from web.protocol import CycleStats, StepStateUpdate
+from s7graph.engine.modes import CpuMode
+from s7graph.engine.record import ScanRecord
+from s7graph.engine.runner import Runner
+from s7graph.engine.watchdog import CycleStatistics
+from s7graph.web.bus.live import LiveGraph
+from s7graph.web.bus.protocol import CycleStats, StepStateUpdate
+from s7graph.web.view.edge import WebEdge, serve_view
 
 if TYPE_CHECKING:
-    from web.recorder import Recorder
+    from s7graph.web.recorder import Recorder
 
 __all__ = ["LiveEdge", "cycle_stats"]
 
@@ -66,7 +66,7 @@ class LiveEdge:
             )
         try:
             if record is not None:
-                from web.recorder import Recorder  # rerun-sdk only when recording
+                from s7graph.web.recorder import Recorder  # rerun-sdk only when recording
 
                 self.recorder = Recorder(live.layout, record)
         except BaseException:

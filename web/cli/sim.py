@@ -1,0 +1,148 @@
+"""``s7graph sim``: run a chart on the virtual clock — the black-box contract of SPEC §4.
+
+Each cycle (``k`` = 0, 1, …, at ``t_ms = k * cycle_ms``): apply the stimuli with
+``at_ms <= t_ms`` (values stay until set again), read inputs, call the FB from OB1, write
+outputs, run the plant (if any), write one JSON line, advance the clock by ``cycle_ms``::
+
+    {"cycle": 7, "t_ms": 70, "active": ["S1", "S3"], "events": [["S1", "S3"]],
+     "mode": "AUTO", "values": {"Q0.0": true, "S_NO": 3, "ERR_FLT": false}}
+
+``active``: the active steps sorted by number. ``events``: the transitions switched in this
+cycle, in switching order, as ``[from, to]`` step pairs — one pair per preceding × following
+step (a divergence from S1 to S2, S3 gives ``["S1","S2"], ["S1","S3"]``; a branch stop gives
+``[from, "STOP"]``). The CPU's startup (OB100 with INIT_SQ) happens before cycle 0.
+``values``: every ``--watch`` name — S7 addresses, symbols, FB pins of the chart's parameter
+set, FB variables, ``Sn.X``/``Sn.T``/``Sn.U``, ``Tn.TT``.
+
+Stimulus names: addresses, symbols, FB *input* pins of the parameter set, FB variables.
+An input address (I…) is written on the module side (PI), so the CPU reads it at the start
+of the cycle. A chart that does not compile, an unknown name or a pin outside the parameter
+set: diagnostics on stderr, exit status 2.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+from typing import Any, TextIO
+
+from s7graph.engine.clock import VirtualClock
+from s7graph.engine.errors import S7Error
+from s7graph.sequencer.compiled import CompiledChart
+from s7graph.web.cli.report import fail
+from s7graph.web.harness.plant import LoadedPlant, PlantError, load_plant
+from s7graph.web.harness.session import ChartSession
+
+
+def _read_stimulus(path: Path | None) -> list[tuple[float, dict[str, Any]]]:
+    if path is None:
+        return []
+    out: list[tuple[float, dict[str, Any]]] = []
+    for n, line in enumerate(Path(path).read_text(encoding="utf-8").splitlines(), 1):
+        if not line.strip():
+            continue
+        try:
+            obj = json.loads(line)
+            at = float(obj.get("at_ms", 0))
+            values = obj["set"]
+            if not isinstance(values, dict):
+                raise ValueError("'set' must be an object")
+        except (ValueError, KeyError, TypeError, AttributeError) as exc:
+            raise S7Error(f"{path}:{n}: bad stimulus line: {exc}") from None
+        out.append((at, values))
+    out.sort(key=lambda item: item[0])
+    return out
+
+
+def _events(cc: CompiledChart, fired: list[int]) -> list[list[str]]:
+    pairs: list[list[str]] = []
+    for j in fired:
+        for s in cc.tr_src[j]:
+            src = cc.step_label(s)
+            if cc.tr_dst[j]:
+                pairs.extend([src, cc.step_label(d)] for d in cc.tr_dst[j])
+            else:
+                pairs.append([src, "STOP"])
+    return pairs
+
+
+def _ms(v: float) -> int | float:
+    return int(v) if float(v).is_integer() else round(v, 6)
+
+
+def sim_command(
+    chart: Path,
+    *,
+    stimulus: Path | None = None,
+    cycle_ms: float = 10.0,
+    cycles: int = 100,
+    watch: str = "",
+    trace: Path | None = None,
+    symbols: Path | None = None,
+    plant: Path | None = None,
+) -> int:
+    """Run ``chart`` for ``cycles`` cycles; return the exit status (SPEC §4)."""
+    try:
+        session = ChartSession.load(chart, symbols, VirtualClock())
+        stim = _read_stimulus(stimulus)
+        names = [w.strip() for w in watch.split(",") if w.strip()]
+        for name in names:
+            session.check_name(name, writing=False)
+        for _, values in stim:
+            for name in values:
+                session.check_name(name, writing=True)
+        loaded: LoadedPlant | None = load_plant(plant) if plant is not None else None
+    except S7Error as exc:  # ChartLoadError included
+        return fail(exc)
+    out: TextIO = sys.stdout if trace is None else open(trace, "w", encoding="utf-8")  # noqa: SIM115
+    try:
+        return _run(session, stim, names, loaded, cycle_ms, cycles, out)
+    except PlantError as exc:
+        return fail(exc, 1)
+    except S7Error as exc:
+        return fail(exc)
+    finally:
+        if out is not sys.stdout:
+            out.close()
+
+
+def _run(
+    session: ChartSession,
+    stim: list[tuple[float, dict[str, Any]]],
+    names: list[str],
+    plant: LoadedPlant | None,
+    cycle_ms: float,
+    cycles: int,
+    out: TextIO,
+) -> int:
+    cc = session.cc
+    clock = session.clock
+    assert isinstance(clock, VirtualClock)
+    session.start()
+    nxt = 0
+    for k in range(cycles):
+        t_ms = k * cycle_ms
+        while nxt < len(stim) and stim[nxt][0] <= t_ms + 1e-9:
+            for name, value in stim[nxt][1].items():
+                session.set(name, value)
+            nxt += 1
+        record = session.scan()
+        st = session.graph.state
+        if plant is not None:
+            plant.cycle(session, _ms(t_ms), _ms(cycle_ms))
+        if record.mode.name != "RUN" and k == 0:
+            pass
+        line = {
+            "cycle": k,
+            "t_ms": _ms(t_ms),
+            "active": [
+                cc.step_label(i) for i in sorted(st.active, key=cc.step_numbers.__getitem__)
+            ],
+            "events": _events(cc, st.fired),
+            "mode": st.mode,
+            "values": {name: session.get(name) for name in names},
+        }
+        out.write(json.dumps(line) + "\n")
+        clock.advance(cycle_ms)
+    return 0

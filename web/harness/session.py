@@ -1,0 +1,176 @@
+"""A chart in a CPU: the harness that ``sim``, ``run`` and the tests share.
+
+:func:`load_chart` parses, validates and compiles a chart file with its symbol table;
+:class:`ChartSession` loads the compiled chart as a GraphFB called from OB1 of one CPU and
+reads and writes it by name — S7 addresses, symbols, FB pins of the chart's parameter set,
+FB variables and step/transition attributes (``Sn.X``, ``Sn.T``, ``Sn.U``, ``Tn.TT``).
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from typing import Any
+
+from s7graph.engine.address import Address, Area, parse_address
+from s7graph.engine.clock import Clock
+from s7graph.engine.cpu import Cpu
+from s7graph.engine.errors import AddressError, S7Error
+from s7graph.engine.symbols import SymbolTable, default_type
+from s7graph.sequencer.compile import ChartError, compile_chart
+from s7graph.sequencer.compiled import CompiledChart
+from s7graph.sequencer.diagnostics import Diagnostic, format_diagnostic
+from s7graph.sequencer.fb import GraphFB, install_all
+from s7graph.sequencer.params import Direction, check_pin, is_pin
+from s7graph.sequencer.parse import ChartSyntaxError, parse_chart
+
+__all__ = ["ChartLoadError", "ChartSession", "load_chart"]
+
+_STEP_ATTR = re.compile(r"S(\d+)\.([XTU])", re.I)
+_TRANS_ATTR = re.compile(r"T(\d+)\.TT", re.I)
+
+
+class ChartLoadError(S7Error):
+    """A chart (or symbol table) that does not load; ``lines`` are the diagnostics."""
+
+    def __init__(self, lines: list[str]) -> None:
+        self.lines = lines
+        super().__init__("\n".join(lines))
+
+
+def load_chart(path: Path, symbols: Path | None = None) -> tuple[CompiledChart, SymbolTable]:
+    """Parse, validate and compile a chart file (with an optional symbol table file)."""
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ChartLoadError([f"s7graph: error: cannot read {path}: {exc.strerror}"]) from None
+    table = SymbolTable()
+    try:
+        if symbols is not None:
+            table = SymbolTable.from_file(symbols)
+        chart = parse_chart(text, str(path))
+        for s in chart.symbols:
+            if table.lookup(s.name) is None:
+                table.add(s.name, s.address, s.type, s.comment, where=s.loc)
+        cc = compile_chart(chart, table)
+    except (ChartSyntaxError, ChartError) as exc:
+        raise ChartLoadError([_fmt(d) for d in exc.diagnostics]) from None
+    except S7Error as exc:
+        raise ChartLoadError([f"{exc}"]) from None
+    return cc, table
+
+
+def _fmt(d: Any) -> str:
+    return format_diagnostic(d) if isinstance(d, Diagnostic) else str(d)
+
+
+class ChartSession:
+    """One CPU running one compiled chart as a GraphFB from OB1 (sim and run)."""
+
+    def __init__(self, cc: CompiledChart, symbols: SymbolTable, clock: Clock) -> None:
+        self.cc = cc
+        self.symbols = symbols
+        self.clock = clock
+        self.cpu = Cpu(clock)
+        self.cpu.mem.symbols = symbols
+        self.graph = GraphFB(cc)
+        install_all(self.cpu, [self.graph])
+
+    @classmethod
+    def load(cls, path: Path, symbols: Path | None, clock: Clock) -> ChartSession:
+        """``load_chart`` (raises ``ChartLoadError``) and a session of it on ``clock``."""
+        cc, table = load_chart(path, symbols)
+        return cls(cc, table, clock)
+
+    # ------------------------------------------------------------ names
+
+    def _address(self, name: str) -> tuple[Address, str] | None:
+        sym = self.symbols.lookup(name)
+        if sym is not None:
+            return sym.address, sym.type
+        try:
+            addr = parse_address(name)
+        except AddressError:
+            return None
+        return addr, default_type(addr)
+
+    def check_name(self, name: str, *, writing: bool) -> None:
+        """Raise S7Error if ``name`` cannot be set (``writing``) or watched."""
+        if _STEP_ATTR.fullmatch(name) or _TRANS_ATTR.fullmatch(name):
+            if writing:
+                raise S7Error(f"{name} cannot be set")
+            return
+        if name in self.cc.var_types:
+            return
+        if is_pin(name):
+            check_pin(name, self.cc.parameters,
+                      direction=Direction.IN if writing else None)  # fmt: skip
+            return
+        if self._address(name) is None:
+            raise S7Error(f"unknown name {name}: not an address, symbol, FB pin or variable")
+
+    def get(self, name: str) -> Any:
+        """The current value of an address, symbol, FB pin, variable or step attribute."""
+        st = self.graph.state
+        if m := _STEP_ATTR.fullmatch(name):
+            i = self.cc.step_index.get(int(m[1]))
+            if i is None:
+                raise S7Error(f"no step S{m[1]}")
+            attr = m[2].upper()
+            return st.x[i] if attr == "X" else st.step_t_ms(i) if attr == "T" else st.step_u_ms(i)
+        if m := _TRANS_ATTR.fullmatch(name):
+            j = self.cc.transition_index.get(int(m[1]))
+            if j is None:
+                raise S7Error(f"no transition T{m[1]}")
+            return st.tt[j]
+        if name in self.cc.var_types:
+            return _json(st.vars[name])
+        if is_pin(name):
+            pin = check_pin(name, self.cc.parameters)
+            assert self.graph.idb is not None
+            return _json(self.graph.idb.values[pin.name])
+        found = self._address(name)
+        if found is None:
+            raise S7Error(f"unknown name {name}")
+        addr, type_name = found
+        if addr.area in (Area.T, Area.C):
+            cells = self.cpu.mem.timers if addr.area is Area.T else self.cpu.mem.counters
+            return bool(cells[addr.byte].q)
+        return _json(self.cpu.mem.read_as(addr, type_name))
+
+    def set(self, name: str, value: Any) -> None:
+        """Write an input: module-side inputs, memory, an FB input pin or an FB variable."""
+        if name in self.cc.var_types:
+            self.graph.state.vars[name] = value
+            return
+        if is_pin(name):
+            pin = check_pin(name, self.cc.parameters, direction=Direction.IN)
+            assert self.graph.idb is not None
+            self.graph.idb.values[pin.name] = value
+            return
+        found = self._address(name)
+        if found is None:
+            raise S7Error(f"unknown name {name}")
+        addr, type_name = found
+        mem = self.cpu.mem
+        mem.write_as(addr, type_name, value)
+        if addr.area is Area.I:  # the module side, read into the PII at the next cycle
+            n = addr.byte
+            size = max(1, int(addr.width) // 8)
+            mem.periph_in[n : n + size] = mem.inputs[n : n + size]
+
+    # ------------------------------------------------------------ running
+
+    def start(self) -> None:
+        self.cpu.start("warm")
+
+    def scan(self) -> Any:
+        return self.cpu.scan()
+
+
+def _json(v: Any) -> Any:
+    if isinstance(v, (bool, int, float, str)) or v is None:
+        return v
+    return str(v)
+
+
