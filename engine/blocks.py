@@ -18,13 +18,10 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from datetime import date, datetime
 from enum import StrEnum
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from s7graph.engine.datatypes import DT_MIN, check_value, decode, type_of
 from s7graph.engine.errors import BlockError, TypeMismatch
-
-if TYPE_CHECKING:
-    from s7graph.engine.cpu import CallContext
 
 OBJECT = "OBJECT"
 """Type of a STAT holding a Python object with ``to_state()``/``from_state()``."""
@@ -62,9 +59,11 @@ class Var:
     comment: str = ""
 
 
-FBBody = Callable[["CallContext", "InstanceDB"], None]
-FCBody = Callable[["CallContext", dict[str, object]], object]
-OBBody = Callable[["CallContext"], None]
+# A body's first argument is its ``engine.context.CallContext``; typed ``Any`` here because the
+# call context is built on the blocks (blocks never import the context).
+FBBody = Callable[[Any, "InstanceDB"], None]
+FCBody = Callable[[Any, dict[str, object]], object]
+OBBody = Callable[[Any], None]
 SectionSpec = Mapping[str, "str | tuple[Any, ...] | Var | FB"]
 
 _STRINGY = ("STRING", "CHAR", OBJECT)

@@ -9,15 +9,55 @@ operand, behaviours 33, 34), runs the body one nesting level deeper (B-stack ove
 from __future__ import annotations
 
 from functools import lru_cache
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 from s7graph.engine.address import Address, parse_address
 from s7graph.engine.blocks import DB, FB, FC, OB, Decl, InstanceDB, is_stringy
+from s7graph.engine.clock import Clock
 from s7graph.engine.datatypes import check_value
+from s7graph.engine.diagnostics import DiagnosticBuffer
 from s7graph.engine.errors import BlockError
+from s7graph.engine.interrupts import CyclicScheduler
+from s7graph.engine.memory import Memory
+from s7graph.engine.rtc import RealTimeClock
+from s7graph.engine.rtm import RuntimeMeters
+from s7graph.engine.timed import DelayInterrupts, TodInterrupts
 
-if TYPE_CHECKING:
-    from s7graph.engine.cpu import Cpu
+
+class BlockHost(Protocol):
+    """What a block may reach of its CPU through ``ctx.cpu`` (``engine.cpu.Cpu`` is one).
+
+    Declared here, below the CPU, so that the CPU imports its call context and never the
+    other way round."""
+
+    mem: Memory
+    clock: Clock
+    rtc: RealTimeClock
+    diagnostics: DiagnosticBuffer
+    meters: RuntimeMeters
+    interrupts: CyclicScheduler
+    tod: TodInterrupts
+    delays: DelayInterrupts
+    blocks: dict[str, OB | FB | FC | DB]
+    obs: dict[int, OB]
+    instance_dbs: dict[int, InstanceDB]
+    max_nesting: int
+    scan_events: list[object]
+    scan_alarms: list[object]
+
+    def block(self, ref: str | int) -> OB | FB | FC | DB: ...
+
+    def instance_db(self, number: int) -> InstanceDB: ...
+
+    def stop(self, reason: str = "") -> None: ...
+
+    def retrigger(self) -> None: ...
+
+    def update_pii(self) -> None: ...
+
+    def dis_airt(self) -> int: ...
+
+    def en_airt(self) -> int | None: ...
 
 
 class NestingOverflow(BlockError):
@@ -64,7 +104,7 @@ class CallContext:
 
     __slots__ = ("cpu", "cycle", "depth", "mem", "now_ns", "ob", "start_info")
 
-    def __init__(self, cpu: Cpu) -> None:
+    def __init__(self, cpu: BlockHost) -> None:
         self.cpu = cpu
         self.mem = cpu.mem
         self.now_ns = 0
@@ -75,11 +115,11 @@ class CallContext:
 
     def emit(self, event: object) -> None:
         """Add ``event`` to this scan's ``ScanRecord.events``."""
-        self.cpu._events.append(event)
+        self.cpu.scan_events.append(event)
 
     def alarm(self, alarm: object) -> None:
         """Add ``alarm`` to this scan's ``ScanRecord.alarms``."""
-        self.cpu._alarms.append(alarm)
+        self.cpu.scan_alarms.append(alarm)
 
     def call(
         self,

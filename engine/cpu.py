@@ -136,8 +136,8 @@ class Cpu:
         """Why only a warm restart is possible now (behaviour 6); cleared by a warm restart."""
         self._commands: deque[Pending] = deque()
         self._ctx = CallContext(self)
-        self._events: list[object] = []
-        self._alarms: list[object] = []
+        self.scan_events: list[object] = []
+        self.scan_alarms: list[object] = []
         self._ran: list[int] = []
         self._held_ns = 0
         self._hold_since: int | None = None
@@ -349,8 +349,8 @@ class Cpu:
 
     def _begin(self, raw: int) -> None:
         self._raw = raw
-        self._events = []
-        self._alarms = []
+        self.scan_events = []
+        self.scan_alarms = []
         self._ran = []
 
     def _record(self, mark: int, cycle_ns: int) -> ScanRecord:
@@ -365,10 +365,10 @@ class Cpu:
             self._raw,
             cycle_ns,
             self.mode,
-            tuple(self._events),
+            tuple(self.scan_events),
             outputs,
             self.diagnostics.since(mark),
-            tuple(self._alarms),
+            tuple(self.scan_alarms),
             tuple(self._ran),
         )
 

@@ -173,7 +173,7 @@ def compile_chart(chart: Chart, symbols: Any = None) -> CompiledChart:
             parts.append(gen_condition(f"_sv{i}", s.supervision, g, res, res.step, res.transition))
         a_body: list[str] | None = None
         try:
-            a_src, f_src, a_body = step_action_parts(i, s, g, res, res.step, res.transition)
+            a_src, f_src, a_body = step_action_parts(i, s.actions, g, res, res.step, res.transition)
         except S7Error as exc:
             res.problems.append(_Problem(exc.where or s.loc, f"S{s.number}: {exc.message}"))
             a_src = f"def _a{i}(st, R, ev, c_ok, zero):\n    pass\n"

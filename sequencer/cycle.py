@@ -29,18 +29,8 @@ from s7graph.sequencer.compiled import CompiledChart, Program
 from s7graph.sequencer.fastpath import FastPath
 from s7graph.sequencer.modes import MODE_RULES, select_mode
 from s7graph.sequencer.params import input_defaults, inputs_for, output_defaults
-from s7graph.sequencer.state import (
-    EDGE_INPUTS,
-    EV_A1,
-    EV_L0,
-    EV_L1,
-    EV_R1,
-    EV_S0,
-    EV_S1,
-    EV_V0,
-    EV_V1,
-    GraphState,
-)
+from s7graph.sequencer.state import EDGE_INPUTS, GraphState
+from s7graph.steps.qualifiers import EV_A1, EV_L0, EV_L1, EV_R1, EV_S0, EV_S1, EV_V0, EV_V1
 
 BlockCaller = Callable[[str, Any, Any, dict[str, Any]], dict[str, Any]]
 CellOp = Callable[[str, int, Any], None]

@@ -12,7 +12,8 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from s7graph.sequencer.modes import MODE_RULES
-from s7graph.sequencer.state import EV_S0, EV_S1, GraphState
+from s7graph.sequencer.state import GraphState
+from s7graph.steps.qualifiers import EV_S0, EV_S1
 
 if TYPE_CHECKING:
     from s7graph.sequencer.compiled import CompiledChart, Program

@@ -20,9 +20,10 @@ from s7graph.sequencer.compiled import CompiledChart, Program
 from s7graph.sequencer.cycle import GraphRuntime, new_state
 from s7graph.sequencer.messages import sync_messages
 from s7graph.sequencer.params import Direction, check_pin, is_pin, pins_for
-from s7graph.sequencer.state import EVENT_NAMES, GraphState
+from s7graph.sequencer.state import GraphState
 from s7graph.sfb import s5_counters, s5_timers
 from s7graph.sfb.alarms import message_list
+from s7graph.steps.qualifiers import EVENT_NAMES
 
 STATE_VAR = "G7_STATE"
 _tuple_new = tuple.__new__

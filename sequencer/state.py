@@ -18,21 +18,6 @@ from __future__ import annotations
 
 from typing import Any, Final
 
-# Step event bits in ``GraphState.ev[i]``, in the order of ``steps.qualifiers.EVENTS``.
-EV_S1: Final = 1  # step activated in this call
-EV_S0: Final = 2  # step deactivated in this call
-EV_V1: Final = 4  # supervision fault came (or was present at activation)
-EV_V0: Final = 8  # supervision fault went (eliminated or acknowledged)
-EV_L1: Final = 16  # interlock lost (or not held at activation)
-EV_L0: Final = 32  # interlock returned
-EV_A1: Final = 64  # fault acknowledged
-EV_R1: Final = 128  # registration (REG_EF / REG_S)
-EVENT_BITS: Final = {
-    "S1": EV_S1, "S0": EV_S0, "V1": EV_V1, "V0": EV_V0,
-    "L1": EV_L1, "L0": EV_L0, "A1": EV_A1, "R1": EV_R1,
-}  # fmt: skip
-EVENT_NAMES: Final = tuple(EVENT_BITS)
-
 MODES: Final = ("AUTO", "MAN", "TAP", "TOP")
 
 # Inputs whose rising edge (not level) counts (SPEC §2.2 step 1, §2.5, §2.6).

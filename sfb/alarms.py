@@ -30,7 +30,7 @@ from s7graph.sfb.catalogue import OK, engine_sections, lookup, specific_error
 from s7graph.sfb.sfc_memory import parse_any
 
 if TYPE_CHECKING:
-    from s7graph.engine.cpu import CallContext
+    from s7graph.engine.context import CallContext
 
 MsgId = int | str
 

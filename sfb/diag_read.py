@@ -41,7 +41,7 @@ from s7graph.sfb.sfc_clock import rtc_of
 from s7graph.sfb.sfc_memory import _pointer, _span, _store
 
 if TYPE_CHECKING:
-    from s7graph.engine.cpu import CallContext
+    from s7graph.engine.context import CallContext
 
 SZL_DIAG_ALL = 0x00A0
 SZL_DIAG_NEWEST = 0x01A0

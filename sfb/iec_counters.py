@@ -15,7 +15,7 @@ from s7graph.engine import blocks
 from s7graph.sfb.catalogue import engine_sections, lookup
 
 if TYPE_CHECKING:
-    from s7graph.engine.cpu import CallContext
+    from s7graph.engine.context import CallContext
 
 INT_MIN = -32768
 INT_MAX = 32767

@@ -16,7 +16,7 @@ from s7graph.engine import blocks
 from s7graph.sfb.catalogue import engine_sections, lookup
 
 if TYPE_CHECKING:
-    from s7graph.engine.cpu import CallContext
+    from s7graph.engine.context import CallContext
 
 NS_PER_MS = 1_000_000
 TIME_MAX_MS = 2**31 - 1  # T#24D20H31M23S647MS

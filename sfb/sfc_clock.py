@@ -21,7 +21,7 @@ from s7graph.engine.rtc import truncate_ms
 from s7graph.sfb.catalogue import OK, PARAM_RANGE, engine_sections, lookup, specific_error
 
 if TYPE_CHECKING:
-    from s7graph.engine.cpu import CallContext
+    from s7graph.engine.context import CallContext
 
 NS_PER_MS = 1_000_000
 TICK_MODULUS = 2**31

@@ -16,7 +16,7 @@ from s7graph.engine import blocks
 from s7graph.sfb.catalogue import engine_sections, lookup
 
 if TYPE_CHECKING:
-    from s7graph.engine.cpu import CallContext
+    from s7graph.engine.context import CallContext
 
 WT_MAX_US = 32767
 

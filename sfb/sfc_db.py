@@ -18,7 +18,7 @@ from s7graph.engine import blocks
 from s7graph.sfb.catalogue import OK, engine_sections, lookup, specific_error
 
 if TYPE_CHECKING:
-    from s7graph.engine.cpu import CallContext
+    from s7graph.engine.context import CallContext
 
 WRONG_NUMBER = 0x80A1
 WRONG_LENGTH = 0x80A2

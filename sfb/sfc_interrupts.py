@@ -20,7 +20,7 @@ from s7graph.engine.timed import ST_DISABLED, ST_LOADED
 from s7graph.sfb.catalogue import as_int, engine_sections, lookup, specific_error
 
 if TYPE_CHECKING:
-    from s7graph.engine.cpu import CallContext, Cpu
+    from s7graph.engine.context import BlockHost, CallContext
 
 EN_AIRT_NOT_DISABLED = 0x8080
 
@@ -35,11 +35,11 @@ def _ob(params: dict[str, object]) -> int:
     return cast(int, params["OB_NR"])
 
 
-def _rtc_now(cpu: Cpu) -> datetime:
+def _rtc_now(cpu: BlockHost) -> datetime:
     return cpu.rtc.read(cpu.clock.now_ns())
 
 
-def _status(cpu: Cpu, ob: int, pending: int) -> int:
+def _status(cpu: BlockHost, ob: int, pending: int) -> int:
     loaded = ST_LOADED if ob in cpu.obs else 0
     ci = cpu.interrupts.active.get(ob)
     disabled = ST_DISABLED if ci is not None and not ci.enabled else 0

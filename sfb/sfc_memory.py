@@ -38,7 +38,7 @@ from s7graph.sfb.catalogue import (
 )
 
 if TYPE_CHECKING:
-    from s7graph.engine.cpu import CallContext
+    from s7graph.engine.context import CallContext
 
 ALIGN_READ = 0x28
 ALIGN_WRITE = 0x29

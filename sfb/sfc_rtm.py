@@ -17,7 +17,7 @@ from s7graph.engine.rtm import MAX_HOURS_16, MAX_HOURS_32
 from s7graph.sfb.catalogue import OK, engine_sections, lookup, specific_error
 
 if TYPE_CHECKING:
-    from s7graph.engine.cpu import CallContext
+    from s7graph.engine.context import CallContext
 
 WRONG_NR = 0x8080
 NEGATIVE_PV = 0x8081

@@ -21,19 +21,18 @@ import re
 from collections.abc import Callable
 
 from s7graph.engine.errors import S7Error
-from s7graph.sequencer.model import (
+from s7graph.steps.conditions import with_locals
+from s7graph.steps.expressions import Resolve, StepIndex, gen_value
+from s7graph.steps.operands import CodeGen, Ref
+from s7graph.steps.qualifiers import EVENT_BITS
+from s7graph.steps.syntax import (
     ActionRow,
     Assignment,
     BlockCall,
     Expr,
     Operand,
-    Step,
     StepTarget,
 )
-from s7graph.sequencer.state import EVENT_BITS
-from s7graph.steps.conditions import with_locals
-from s7graph.steps.expressions import Resolve, StepIndex, gen_value
-from s7graph.steps.operands import CodeGen, Ref
 
 TimeValue = Callable[[Expr], str]
 
@@ -48,20 +47,20 @@ def _indent(lines: list[str], n: int = 1) -> list[str]:
 
 def gen_step_actions(
     i: int,
-    step: Step,
+    rows: tuple[ActionRow, ...],
     g: CodeGen,
     resolve: Resolve,
     sidx: StepIndex,
     tidx: StepIndex,
 ) -> tuple[str, str]:
-    """Source of ``_a<i>`` and ``_f<i>`` for one step."""
-    a_src, f_src, _ = step_action_parts(i, step, g, resolve, sidx, tidx)
+    """Source of ``_a<i>`` and ``_f<i>`` for the action ``rows`` of step ``i``."""
+    a_src, f_src, _ = step_action_parts(i, rows, g, resolve, sidx, tidx)
     return a_src, f_src
 
 
 def step_action_parts(
     i: int,
-    step: Step,
+    rows: tuple[ActionRow, ...],
     g: CodeGen,
     resolve: Resolve,
     sidx: StepIndex,
@@ -76,7 +75,7 @@ def step_action_parts(
     def val(e: Expr) -> str:
         return gen_value(e, g, resolve, sidx, tidx)
 
-    for row in step.actions:
+    for row in rows:
         code = _row(i, row, g, resolve, val, sidx)
         q = row.qualifier.upper()
         if q in ("N", "D", "L") and isinstance(row.operand, Operand):

@@ -12,9 +12,9 @@ from __future__ import annotations
 
 import re
 
-from s7graph.sequencer.model import Binary, Const, Expr, Operand, StepAttr, TransAttr, Unary
 from s7graph.steps.expressions import COMPARE, Resolve, StepIndex, expr_type, gen_value
 from s7graph.steps.operands import CodeGen
+from s7graph.steps.syntax import Binary, Const, Expr, Operand, StepAttr, TransAttr, Unary
 
 MAX_CONTACTS = 32
 

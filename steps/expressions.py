@@ -15,7 +15,8 @@ from collections.abc import Callable
 from typing import Any
 
 from s7graph.engine.errors import TypeMismatch
-from s7graph.sequencer.model import (
+from s7graph.steps.operands import CodeGen, Ref
+from s7graph.steps.syntax import (
     Binary,
     Const,
     Expr,
@@ -25,7 +26,6 @@ from s7graph.sequencer.model import (
     TransAttr,
     Unary,
 )
-from s7graph.steps.operands import CodeGen, Ref
 
 Resolve = Callable[[Operand], Ref]
 StepIndex = Callable[[int, Any], int]

@@ -17,6 +17,21 @@ QUALIFIERS: Final = (
     "CS", "CU", "CD", "CR", "TL", "TD", "TF", "TR",
 )  # fmt: skip
 
+# Step event bits (``GraphState.ev[i]`` of the sequencer), in the order of ``EVENTS``.
+EV_S1: Final = 1  # step activated in this call
+EV_S0: Final = 2  # step deactivated in this call
+EV_V1: Final = 4  # supervision fault came (or was present at activation)
+EV_V0: Final = 8  # supervision fault went (eliminated or acknowledged)
+EV_L1: Final = 16  # interlock lost (or not held at activation)
+EV_L0: Final = 32  # interlock returned
+EV_A1: Final = 64  # fault acknowledged
+EV_R1: Final = 128  # registration (REG_EF / REG_S)
+EVENT_BITS: Final = {
+    "S1": EV_S1, "S0": EV_S0, "V1": EV_V1, "V0": EV_V0,
+    "L1": EV_L1, "L0": EV_L0, "A1": EV_A1, "R1": EV_R1,
+}  # fmt: skip
+EVENT_NAMES: Final = tuple(EVENT_BITS)
+
 # Events whose rows may carry the interlock mark C.
 EVENTS_WITH_C: Final = frozenset({"S1", "V1", "A1", "R1"})
 # Events after which OFF S_ALL may stand.

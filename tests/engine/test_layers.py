@@ -1,15 +1,25 @@
-"""The one rule of the layers (docs/contracts.md, DESIGN.md): the core is pure.
+"""The rules of the layers (docs/architecture.md): imports point down, never in a circle, and
+the core is pure.
 
-Nothing under engine/ sfb/ steps/ sequencer/ imports viser, zenoh, rerun or threading, or
-reads the wall clock or sleeps; engine/clock.py and engine/runner.py are the exceptions.
+- Layers, bottom to top: ``engine`` → ``sfb`` and ``steps`` (siblings, neither imports the
+  other) → ``sequencer`` → ``web``; inside ``web`` the roles stack ``harness`` → ``bus`` →
+  ``recorder`` → ``view`` → ``cli``. A module imports only from its own layer or below.
+- No import cycle between modules, whether the import runs at import time, inside a
+  function or only for the type checker (``TYPE_CHECKING``): every import is an edge.
+- Every import of the project names it ``s7graph.…`` (the folders are not packages of
+  their own once installed).
+- Nothing under engine/ sfb/ steps/ sequencer/ imports viser, zenoh, rerun or threading,
+  or reads the wall clock or sleeps; engine/clock.py and engine/runner.py are the exceptions.
 """
 
 from __future__ import annotations
 
 import ast
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
+LAYERS = ("engine", "sfb", "steps", "sequencer", "web")
 CORE = ("engine", "sfb", "steps", "sequencer")
 EXEMPT = {"engine/clock.py", "engine/runner.py"}
 BANNED_MODULES = {"viser", "zenoh", "rerun", "threading"}
@@ -27,6 +37,23 @@ BANNED_CALLS = {
     "date.today",
     "datetime.datetime.now",
     "datetime.date.today",
+}
+
+# The rank of each layer (and of web's roles): an import may point to a lower rank or stay
+# inside its own unit. ``s7graph`` itself (its ``__init__``) is the floor, ``__main__`` the top.
+RANKS: dict[str, float] = {
+    "s7graph": 0,
+    "s7graph.engine": 1,
+    "s7graph.sfb": 2,
+    "s7graph.steps": 2,
+    "s7graph.sequencer": 3,
+    "s7graph.web": 4,
+    "s7graph.web.harness": 4.1,
+    "s7graph.web.bus": 4.2,
+    "s7graph.web.recorder": 4.3,
+    "s7graph.web.view": 4.4,
+    "s7graph.web.cli": 4.5,
+    "s7graph.__main__": 5,
 }
 
 
@@ -57,19 +84,180 @@ def violations(source: str, name: str) -> list[str]:
     return found
 
 
+# ---------------------------------------------------------------- the module graph
+
+
+def project_modules(root: Path = ROOT) -> dict[str, Path]:
+    """Every module of the installed package by its dotted name (``s7graph.engine.cpu``)."""
+    found: dict[str, Path] = {}
+    for folder, prefix in [(root / "s7graph", "s7graph")] + [
+        (root / layer, f"s7graph.{layer}") for layer in LAYERS
+    ]:
+        for path in sorted(folder.rglob("*.py")):
+            parts = list(path.relative_to(folder).with_suffix("").parts)
+            if parts[-1] == "__init__":
+                parts.pop()
+            found[".".join([prefix, *parts])] = path
+    return found
+
+
+def imports_of(source: str, module: str, is_package: bool, known: set[str]) -> set[str]:
+    """The project modules ``module`` imports (``from pkg import sub`` is ``pkg.sub``)."""
+    out: set[str] = set()
+    base = module if is_package else module.rpartition(".")[0]
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Import):
+            out.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            target = node.module or ""
+            if node.level:
+                anchor = base.split(".")[: len(base.split(".")) - (node.level - 1)]
+                target = ".".join([*anchor, target] if target else anchor)
+            for alias in node.names:
+                sub = f"{target}.{alias.name}"
+                out.add(sub if sub in known else target)
+    return {m for m in out if m.split(".")[0] in ("s7graph", *LAYERS)}
+
+
+def import_graph(root: Path = ROOT) -> dict[str, set[str]]:
+    modules = project_modules(root)
+    known = set(modules)
+    return {
+        name: imports_of(path.read_text(encoding="utf-8"), name, path.name == "__init__.py", known)
+        for name, path in modules.items()
+    }
+
+
+def rank(module: str) -> tuple[float, str]:
+    """The rank of ``module`` and the unit it belongs to (its longest prefix in RANKS)."""
+    parts = module.split(".")
+    for n in range(len(parts), 0, -1):
+        unit = ".".join(parts[:n])
+        if unit in RANKS:
+            return RANKS[unit], unit
+    raise KeyError(module)
+
+
+def upward(graph: dict[str, set[str]]) -> list[str]:
+    """Imports that point up a layer, sideways between sibling layers, or at a bare folder."""
+    found: list[str] = []
+    for module, targets in sorted(graph.items()):
+        mine, unit = rank(module)
+        for target in sorted(targets):
+            if not target.startswith("s7graph"):
+                found.append(f"{module} imports {target}: name it s7graph.{target}")
+                continue
+            theirs, their_unit = rank(target)
+            inside = their_unit == unit or target.startswith(unit + ".")
+            if not inside and theirs >= mine:
+                found.append(f"{module} ({unit}) imports {target} ({their_unit})")
+    return found
+
+
+def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components with more than one module, or a module importing
+    itself (Tarjan)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    out: list[list[str]] = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in graph.get(v, ()):
+            if w not in graph:
+                continue
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            scc: list[str] = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                scc.append(w)
+                if w == v:
+                    break
+            if len(scc) > 1 or v in graph.get(v, ()):
+                out.append(sorted(scc))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return out
+
+
+def _graph_of(sources: dict[str, str]) -> dict[str, set[str]]:
+    known = set(sources)
+    return {m: imports_of(src, m, False, known) for m, src in sources.items()}
+
+
+def _walk_core() -> Iterator[tuple[str, str]]:
+    for package in CORE:
+        for path in sorted((ROOT / package).rglob("*.py")):
+            rel = path.relative_to(ROOT).as_posix()
+            if rel not in EXEMPT:
+                yield rel, path.read_text(encoding="utf-8")
+
+
+def _lines(items: Iterable[object]) -> str:
+    return "\n".join(str(i) for i in items)
+
+
+# ---------------------------------------------------------------- the checks can fail
+
+
 def test_the_checker_catches_violations() -> None:
-    """The check itself can fail."""
+    """The purity check itself can fail."""
     bad = "import threading\nimport time\nfrom datetime import datetime\nx = datetime.now()\n"
     bad += "time.time()\nfrom zenoh import open\n"
     assert len(violations(bad, "bad.py")) == 4
 
 
+def test_the_cycle_check_finds_a_two_way_tie_and_a_type_only_one() -> None:
+    """A circle through a TYPE_CHECKING import is still a circle."""
+    graph = _graph_of(
+        {
+            "s7graph.engine.a": "from s7graph.engine.b import x\n",
+            "s7graph.engine.b": "from typing import TYPE_CHECKING\n"
+            "if TYPE_CHECKING:\n    from s7graph.engine.a import y\n",
+            "s7graph.engine.c": "from s7graph.engine import a\n",
+        }
+    )
+    assert cycles(graph) == [["s7graph.engine.a", "s7graph.engine.b"]]
+
+
+def test_the_layer_check_finds_an_upward_a_sideways_and_a_bare_import() -> None:
+    graph = _graph_of(
+        {
+            "s7graph.steps.x": "from s7graph.sequencer.model import Step\n"
+            "from s7graph.sfb.alarms import Message\n",
+            "s7graph.web.bus.y": "from s7graph.web.view.layout import place\n",
+            "s7graph.sequencer.z": "from engine.cpu import Cpu\n",
+        }
+    )
+    assert len(upward(graph)) == 4
+
+
+# ---------------------------------------------------------------- the rules
+
+
 def test_core_packages_stay_pure() -> None:
     """No core module imports viser/zenoh/rerun/threading or reads the wall clock."""
     found: list[str] = []
-    for package in CORE:
-        for path in sorted((ROOT / package).rglob("*.py")):
-            rel = path.relative_to(ROOT).as_posix()
-            if rel not in EXEMPT:
-                found += violations(path.read_text(encoding="utf-8"), rel)
+    for rel, source in _walk_core():
+        found += violations(source, rel)
     assert found == []
+
+
+def test_no_import_cycle_between_modules() -> None:
+    assert _lines(cycles(import_graph())) == ""
+
+
+def test_imports_point_down_the_layers() -> None:
+    assert _lines(upward(import_graph())) == ""

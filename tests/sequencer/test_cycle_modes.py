@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-from s7graph.sequencer.state import EV_A1, EV_V0, EV_V1
+from s7graph.steps.qualifiers import EV_A1, EV_V0, EV_V1
 from tests.sequencer.helpers import Chart, seq
 
 IL = seq("""

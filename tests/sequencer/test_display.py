@@ -31,7 +31,8 @@ from s7graph.sequencer.model import (
     VarDecl,
 )
 from s7graph.sequencer.params import outputs_for
-from s7graph.sequencer.state import EV_L1, EV_S1, GraphState
+from s7graph.sequencer.state import GraphState
+from s7graph.steps.qualifiers import EV_L1, EV_S1
 
 
 def chart(parameters: str = "USER") -> CompiledChart:

@@ -402,10 +402,10 @@ def test_an_action_row_may_not_write_with_a_coil() -> None:
 def test_a_permanent_coil_may_not_write_a_step_attribute() -> None:
     """SPEC §2.9: `S3.X` is a read-only operand (E045)."""
     text = source(
-        seq('''
+        seq("""
       INITIAL_STEP S1 "a": END_STEP
       TRANSITION T1 FROM S1 TO STOP := FALSE;
-    '''),
+    """),
         header="PERMANENT BEFORE\n  M0.0 := S1.X;\n  AUTO_ON := I0.0;\nEND_PERMANENT\n",
     )
     codes = [d.code for d in validate(parse_chart(text, "c.s7g"))]

@@ -172,5 +172,3 @@ def _json(v: Any) -> Any:
     if isinstance(v, (bool, int, float, str)) or v is None:
         return v
     return str(v)
-
-

@@ -1,0 +1,184 @@
+"""The language inside a step: expressions, action rows and permanent instructions as
+written, with the place of every element (SPEC §2.8, §2.9).
+
+The parser builds these nodes; ``steps`` compiles them to Python and the chart model
+(``sequencer.model``) holds them in its steps, transitions and permanent instructions.
+Nothing here evaluates anything.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+from s7graph.engine.errors import SourceLocation
+
+__all__ = [
+    "NOWHERE",
+    "ActionOperand",
+    "ActionRow",
+    "Assignment",
+    "Binary",
+    "BlockCall",
+    "Coil",
+    "Const",
+    "Expr",
+    "FuncCall",
+    "Operand",
+    "PermanentInstruction",
+    "StepAttr",
+    "StepTarget",
+    "TransAttr",
+    "Unary",
+]
+
+NOWHERE = SourceLocation()
+
+# ---------------------------------------------------------------- expressions (SPEC §2.9, §2.8)
+
+
+@dataclass(frozen=True, slots=True)
+class Const:
+    """A literal. ``type`` is the S7 type name (BOOL INT DINT REAL TIME S5TIME WORD ...);
+    ``value`` is the Python value (bool, int, float; TIME and S5TIME in milliseconds);
+    ``text`` is the literal as written."""
+
+    value: object
+    type: str
+    text: str
+    loc: SourceLocation = NOWHERE
+
+
+@dataclass(frozen=True, slots=True)
+class Operand:
+    """A named or addressed operand as written: an absolute address (``I0.7``, ``MW10``,
+    ``DB1.DBX0.0``), a quoted symbol (``"Start_button"``, quotes removed, ``quoted`` set),
+    an FB variable or FB pin (``count``, ``ERR_FLT``). Resolution happens in the validator
+    and compiler."""
+
+    name: str
+    quoted: bool = False
+    loc: SourceLocation = NOWHERE
+
+
+@dataclass(frozen=True, slots=True)
+class StepAttr:
+    """``S3.X`` (active), ``S3.T`` (activation time), ``S3.U`` (time without disturbance)."""
+
+    step: int
+    attr: Literal["X", "T", "U"]
+    loc: SourceLocation = NOWHERE
+
+
+@dataclass(frozen=True, slots=True)
+class TransAttr:
+    """``T2.TT``: the transition's condition holds."""
+
+    transition: int
+    attr: Literal["TT"]
+    loc: SourceLocation = NOWHERE
+
+
+@dataclass(frozen=True, slots=True)
+class Unary:
+    """``NOT x`` or arithmetic negation ``-x``."""
+
+    op: Literal["NOT", "-"]
+    operand: Expr
+    loc: SourceLocation = NOWHERE
+
+
+@dataclass(frozen=True, slots=True)
+class Binary:
+    """Boolean (AND OR XOR), comparison (= <> < > <= >=) or arithmetic / word
+    (+ - * / MOD AND OR XOR SHL SHR SSR ROL ROR) operation. ``AND``/``OR``/``XOR`` are
+    boolean on BOOL operands and bitwise on WORD/DWORD operands."""
+
+    op: str
+    left: Expr
+    right: Expr
+    loc: SourceLocation = NOWHERE
+
+
+@dataclass(frozen=True, slots=True)
+class FuncCall:
+    """A function of seed 000 lines 5838-5884: ``ABS(x)``, ``INT_TO_DINT(x)``, ``SQRT(x)`` ..."""
+
+    name: str
+    args: tuple[Expr, ...]
+    loc: SourceLocation = NOWHERE
+
+
+Expr = Const | Operand | StepAttr | TransAttr | Unary | Binary | FuncCall
+
+# ---------------------------------------------------------------- action rows (SPEC §2.8)
+
+
+@dataclass(frozen=True, slots=True)
+class Assignment:
+    """``target := expr`` (an action row with qualifier N, or a permanent instruction)."""
+
+    target: Operand
+    expr: Expr
+    loc: SourceLocation = NOWHERE
+
+
+@dataclass(frozen=True, slots=True)
+class BlockCall:
+    """``CALL FB 5, DB 5 (IN1 := I0.0, OUT1 => Q0.1)`` / ``CALL FC 1`` / ``CALL "Name"``
+    / ``CALL SFB 4, DB 10 (...)``. ``kind`` is FB FC SFB SFC or "" for a symbolic name.
+    ``inputs`` are ``:=`` parameters, ``outputs`` are ``=>`` parameters."""
+
+    kind: str
+    block: int | str
+    instance: int | str | None = None
+    inputs: tuple[tuple[str, Expr], ...] = ()
+    outputs: tuple[tuple[str, Operand], ...] = ()
+    loc: SourceLocation = NOWHERE
+
+
+@dataclass(frozen=True, slots=True)
+class StepTarget:
+    """The operand of ``ON S4`` / ``OFF S4``; ``step`` is None for ``S_ALL``."""
+
+    step: int | None
+    loc: SourceLocation = NOWHERE
+
+
+ActionOperand = Operand | Assignment | BlockCall | StepTarget
+
+
+@dataclass(frozen=True, slots=True)
+class ActionRow:
+    """One row ``[event] qualifier[C] operand [, value]`` of a step's action table.
+
+    ``qualifier``: N S R D L CALL ON OFF CS CU CD CR TL TD TF TR.
+    ``event``: None or S1 S0 V1 V0 L1 L0 A1 R1.
+    ``value``: the time of D/L (a TIME Expr), the counter preset of CS (``C#5``), the S5TIME
+    of TL/TD/TF; None otherwise.
+    ``operand``: Operand for bit / timer / counter rows, Assignment for ``N x := expr``,
+    BlockCall for CALL, StepTarget for ON/OFF."""
+
+    qualifier: str
+    operand: ActionOperand
+    event: str | None = None
+    interlocked: bool = False
+    value: Expr | None = None
+    loc: SourceLocation = NOWHERE
+
+
+# ------------------------------------------------------- permanent instructions (SPEC §2.9)
+
+
+@dataclass(frozen=True, slots=True)
+class Coil:
+    """A permanent instruction writing a bit: ``M0.1 := cond;`` (``kind`` "="), ``S M0.1 := cond;``
+    (set when cond), ``R M0.1 := cond;`` (reset when cond)."""
+
+    kind: Literal["=", "S", "R"]
+    target: Operand
+    condition: Expr
+    loc: SourceLocation = NOWHERE
+
+
+PermanentInstruction = Coil | Assignment | BlockCall
