@@ -32,10 +32,14 @@ import argparse
 import cProfile
 import io
 import pstats
+import shutil
 import statistics
+import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
@@ -235,6 +239,148 @@ class TransitionsWorkload:
         return bytes(self.mem[: N_SEQUENCERS // 4])
 
 
+# ---------------------------------------------------------------------------- more peers
+
+
+class StatemachineWorkload:
+    """One ``python-statemachine`` machine per sequencer: a ``scan`` event per scan whose
+    transitions are guarded by ``ready`` (``c >= p``); entering a state resets ``c``."""
+
+    name = "python-statemachine"
+
+    def __init__(self) -> None:
+        from statemachine import State, StateMachine
+
+        attrs: dict[str, object] = {f"s{k}": State(initial=k == 0) for k in range(STEPS)}
+        scan = None
+        for k in range(STEPS):
+            edge = attrs[f"s{k}"].to(attrs[f"s{(k + 1) % STEPS}"], cond="ready")  # type: ignore[attr-defined]
+            scan = edge if scan is None else scan | edge
+        attrs |= {"scan": scan, "allow_event_without_transition": True}
+        loop = type("Loop", (StateMachine,), attrs)
+        self.mem = bytearray(64)
+        self.seqs = [_Seq(g, self.mem) for g in range(N_SEQUENCERS)]
+        for m in self.seqs:
+            m.on_enter_state = m.entered  # type: ignore[attr-defined]
+        self.machines = [loop(model=m) for m in self.seqs]
+        self.now = 0
+        for m in self.seqs:
+            m.act()
+
+    def scan(self) -> int:
+        self.now += CYCLE_MS
+        now = self.now
+        t0 = time.perf_counter_ns()
+        for m, sm in zip(self.seqs, self.machines, strict=True):
+            m.now = now
+            sm.scan()
+            m.act()
+        return time.perf_counter_ns() - t0
+
+    def positions(self) -> list[int]:
+        return [int(next(iter(sm.configuration)).id[1:]) for sm in self.machines]
+
+    def markers(self) -> bytes:
+        return bytes(self.mem[: N_SEQUENCERS // 4])
+
+
+class SismicWorkload:
+    """One ``sismic`` statechart interpreter per sequencer (YAML chart: 25 states, a ``scan``
+    event guarded by ``c >= p``, ``on entry: c = 0``); the step's actions in plain Python."""
+
+    name = "sismic"
+
+    def __init__(self) -> None:
+        from sismic.interpreter import Interpreter
+        from sismic.io import import_from_yaml
+
+        lines = ["statechart:", "  name: loop", "  root state:", "    name: root",
+                 "    initial: s0", "    states:"]  # fmt: skip
+        for k in range(STEPS):
+            lines += [f"    - name: s{k}", "      on entry: c = 0", "      transitions:",
+                      f"      - target: s{(k + 1) % STEPS}", "        event: scan",
+                      "        guard: c >= p"]  # fmt: skip
+        chart = import_from_yaml("\n".join(lines))
+        self.mem = bytearray(64)
+        self.seqs = [_Seq(g, self.mem) for g in range(N_SEQUENCERS)]
+        self.interpreters = []
+        for m in self.seqs:
+            it = Interpreter(chart, initial_context={"p": m.p, "c": 0})
+            it.execute_once()
+            self.interpreters.append(it)
+        self.now = 0
+        for m, it in zip(self.seqs, self.interpreters, strict=True):
+            self._act(m, it)
+
+    @staticmethod
+    def _act(m: _Seq, it: Any) -> None:
+        """The step's actions on the interpreter's ``c`` (its entry action reset it)."""
+        m.c = it.context["c"]
+        m.act()
+        it.context["c"] = m.c
+
+    def scan(self) -> int:
+        self.now += CYCLE_MS
+        now = self.now
+        t0 = time.perf_counter_ns()
+        for m, it in zip(self.seqs, self.interpreters, strict=True):
+            m.now = now
+            it.queue("scan")
+            step = it.execute_once()
+            if step is not None and step.transitions:
+                m.since = now
+            self._act(m, it)
+        return time.perf_counter_ns() - t0
+
+    def positions(self) -> list[int]:
+        return [
+            int(next(s for s in it.configuration if s != "root")[1:]) for it in self.interpreters
+        ]
+
+    def markers(self) -> bytes:
+        return bytes(self.mem[: N_SEQUENCERS // 4])
+
+
+class CReference:
+    """``bench/scan_ref.c``: the workload in plain C, walking every step of every sequencer
+    each scan as matiec-generated code does; built with the system's C compiler and called
+    through ctypes so that its scans interleave with the others."""
+
+    name = "C reference"
+
+    def __init__(self, build_dir: Path) -> None:
+        import ctypes
+
+        lib = build_dir / "scan_ref.so"
+        src = Path(__file__).with_name("scan_ref.c")
+        cc = shutil.which("cc") or shutil.which("gcc")
+        if cc is None:
+            raise RuntimeError("no C compiler")
+        subprocess.run([cc, "-O2", "-shared", "-fPIC", "-o", str(lib), str(src)], check=True)
+        self.lib = ctypes.CDLL(str(lib))
+        self.ctypes = ctypes
+        self.lib.ref_start()
+
+    def scans(self, n: int) -> list[int]:
+        buf = (self.ctypes.c_int64 * n)()
+        self.lib.ref_scan(n, buf)
+        return list(buf)
+
+    def scan(self) -> int:
+        return self.scans(1)[0]
+
+    def positions(self) -> list[int]:
+        pos = (self.ctypes.c_int32 * N_SEQUENCERS)()
+        mk = (self.ctypes.c_uint8 * (N_SEQUENCERS // 4))()
+        self.lib.ref_positions(pos, mk)
+        self._markers = bytes(mk)
+        return list(pos)
+
+    def markers(self) -> bytes:
+        self.positions()
+        return self._markers
+
+
 # ---------------------------------------------------------------------------- compile time
 
 
@@ -253,58 +399,111 @@ def time_compile(steps: int = 250, repeat: int = 5) -> dict[str, float]:
     return {"parse": statistics.median(parse_ms), "compile": statistics.median(compile_ms)}
 
 
+Workload = EngineWorkload | TransitionsWorkload | StatemachineWorkload | SismicWorkload | CReference
+
+
+def peers(build_dir: Path, names: set[str]) -> list[Workload]:
+    """The peers that can run here (a missing library or compiler is reported, not fatal)."""
+    out: list[Workload] = [TransitionsWorkload()]
+    makers: dict[str, Any] = {
+        "python-statemachine": StatemachineWorkload,
+        "sismic": SismicWorkload,
+        "C reference": lambda: CReference(build_dir),
+    }
+    for name, make in makers.items():
+        if name not in names:
+            continue
+        try:
+            out.append(make())
+        except (ImportError, RuntimeError, OSError, subprocess.CalledProcessError) as exc:
+            print(f"{name}: not measured ({exc})")
+    return out
+
+
+def measure(workloads: list[Workload], scans: int, warmup: int) -> dict[str, list[int]]:
+    """``scans`` scans of each workload after ``warmup``, in rounds of BLOCK scans each, in
+    turn, so that load from other processes hits them alike."""
+    samples: dict[str, list[int]] = {w.name: [] for w in workloads}
+    for w in workloads:
+        for _ in range(warmup):
+            w.scan()
+    done = 0
+    while done < scans:
+        n = min(BLOCK, scans - done)
+        for w in workloads:
+            if isinstance(w, CReference):
+                samples[w.name] += w.scans(n)
+            else:
+                samples[w.name] += [w.scan() for _ in range(n)]
+        done += n
+    return samples
+
+
+def _spread(values: list[float], fmt: str = "{:.3f}") -> str:
+    """min / median / max of repeated runs."""
+    lo, mid, hi = min(values), statistics.median(values), max(values)
+    return "/".join(fmt.format(v) for v in (lo, mid, hi))
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--scans", type=int, default=1000, help="measured scans (default 1000)")
+    ap.add_argument("--scans", type=int, default=1000, help="measured scans per run (1000)")
     ap.add_argument("--warmup", type=int, default=100, help="unmeasured scans first")
+    ap.add_argument("--repeat", type=int, default=3, help="runs; min/median/max over them (3)")
     ap.add_argument("--layout", choices=("packed", "single", "both"), default="both")
+    ap.add_argument(
+        "--peers",
+        default="python-statemachine,sismic,C reference",
+        help="peers besides transitions (comma-separated; default all)",
+    )
     ap.add_argument("--profile", action="store_true", help="cProfile the engine scans")
     args = ap.parse_args(argv)
 
     print(
         f"python {sys.version.split()[0]}, {N_SEQUENCERS} sequencers x {STEPS} steps, "
-        f"{args.scans} scans of {CYCLE_MS} ms virtual time, in rounds of {BLOCK} scans per workload"
+        f"{args.repeat} runs of {args.scans} scans of {CYCLE_MS} ms virtual time, in rounds "
+        f"of {BLOCK} scans per workload"
     )
-    base = TransitionsWorkload()
     layouts = ("packed", "single") if args.layout == "both" else (args.layout,)
-    engines = [EngineWorkload(layout) for layout in layouts]
     prof = cProfile.Profile() if args.profile else None
-    for e in engines:
-        e.profile = prof
-    workloads: list[TransitionsWorkload | EngineWorkload] = [base, *engines]
-    samples: dict[str, list[int]] = {w.name: [] for w in workloads}
-    for w in workloads:
-        for _ in range(args.warmup):
-            w.scan()
-    done = 0
-    while done < args.scans:  # rounds of BLOCK scans each, so load drift hits all alike
-        n = min(BLOCK, args.scans - done)
-        for w in workloads:
-            samples[w.name] += [w.scan() for _ in range(n)]
-        done += n
-
-    b = stats(samples[base.name])
-    print(
-        f"transitions   mean {b['mean']:.3f} ms  p50 {b['p50']:.3f}  p99 {b['p99']:.3f}  "
-        f"max {b['max']:.3f}"
-    )
-    for e in engines:
-        r = stats(samples[e.name])
-        active = e.active()
-        assert str(e.cpu.mode).endswith("RUN"), f"{e.name}: CPU left RUN ({e.cpu.mode})"
-        assert active == N_SEQUENCERS, f"{e.name}: {active} active steps"
-        same = (e.positions(), e.markers()) == (base.positions(), base.markers())
+    means: dict[str, list[float]] = {}
+    p50s: dict[str, list[float]] = {}
+    agree = True
+    with tempfile.TemporaryDirectory(prefix="s7graph-bench-") as tmp:
+        names = {n.strip() for n in args.peers.split(",") if n.strip()}
+        for _ in range(args.repeat):
+            engines = [EngineWorkload(layout) for layout in layouts]
+            for e in engines:
+                e.profile = prof
+            others = peers(Path(tmp), names)
+            workloads: list[Workload] = [*others, *engines]
+            samples = measure(workloads, args.scans, args.warmup)
+            for w in workloads:
+                st = stats(samples[w.name])
+                means.setdefault(w.name, []).append(st["mean"])
+                p50s.setdefault(w.name, []).append(st["p50"])
+            base = others[0]
+            for e in engines:
+                assert str(e.cpu.mode).endswith("RUN"), f"{e.name}: CPU left RUN ({e.cpu.mode})"
+                assert e.active() == N_SEQUENCERS, f"{e.name}: {e.active()} active steps"
+            for w in workloads[1:]:
+                if (w.positions(), w.markers()) != (base.positions(), base.markers()):
+                    agree = False
+                    print(f"{w.name}: final steps or D/L bits DIFFER FROM transitions")
+    print(f"{'workload':22} {'mean ms':>20} {'p50 ms':>20} {'us/active step':>18}   "
+          "time ÷ engine packed")  # fmt: skip
+    ref = "engine packed" if "engine packed" in means else f"engine {layouts[0]}"
+    for name, ms in means.items():
+        per_step = [m * 1e3 / N_SEQUENCERS for m in ms]
+        ratio = [m / r for m, r in zip(ms, means[ref], strict=True)]
         print(
-            f"{e.name:13} mean {r['mean']:.3f} ms  p50 {r['p50']:.3f}  p99 {r['p99']:.3f}  "
-            f"max {r['max']:.3f}  ({len(e.fbs)} FBs, {active} active steps, "
-            f"{e.switches / (args.warmup + args.scans):.1f} switches/scan)"
+            f"{name:22} {_spread(ms):>20} {_spread(p50s[name]):>20} "
+            f"{_spread(per_step, '{:.2f}'):>18}   {_spread(ratio, '{:.2f}')}"
         )
-        print(
-            f"{'':13} {r['mean'] * 1e3 / active:.2f} us per active step; "
-            f"transitions/engine {b['mean'] / r['mean']:.2f}x (p50 {b['p50'] / r['p50']:.2f}x); "
-            f"final steps and D/L bits {'same as' if same else 'DIFFER FROM'} transitions"
-        )
-    print("targets: engine mean <= 2 ms, >= 10x faster than transitions")
+    for e_name in (n for n in means if n.startswith("engine")):
+        ratio = [b / e for b, e in zip(means["transitions"], means[e_name], strict=True)]
+        print(f"transitions / {e_name}: {_spread(ratio, '{:.2f}')}x (min/median/max)")
+    print("targets: packed >= 4x transitions, single >= 3x")
     c = time_compile()
     print(
         f"250-step chart: parse {c['parse']:.1f} ms, compile {c['compile']:.1f} ms "
@@ -314,11 +513,7 @@ def main(argv: list[str] | None = None) -> int:
         buf = io.StringIO()
         pstats.Stats(prof, stream=buf).sort_stats("tottime").print_stats(25)
         print(buf.getvalue())
-    return (
-        0
-        if all((e.positions(), e.markers()) == (base.positions(), base.markers()) for e in engines)
-        else 1
-    )
+    return 0 if agree else 1
 
 
 if __name__ == "__main__":
