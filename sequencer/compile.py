@@ -30,7 +30,7 @@ from s7graph.steps.conditions import (
     gen_condition,
     with_locals,
 )
-from s7graph.steps.expressions import gen_value
+from s7graph.steps.expressions import gen_assigned, gen_value
 from s7graph.steps.operands import WIDTH_TYPE, CodeGen, Ref
 
 
@@ -341,7 +341,8 @@ def _gen_permanent(name: str, instrs: tuple[Any, ...], g: CodeGen, res: _Resolve
                 lines.append(f"    if {pname!r} in _o:")
                 lines.append("        " + g.write(res(target), f"_o[{pname!r}]"))
         else:  # Assignment
-            lines.append("    " + g.write(res(ins.target), val(ins.expr)))
+            ref = res(ins.target)
+            lines.append("    " + gen_assigned(ins.expr, ref, g, res, res.step, res.transition))
     if len(lines) == 1:
         lines.append("    pass")
     return with_locals(lines)

@@ -7,14 +7,18 @@
 3. permanent *before* instructions;
 4. per sequencer, in definition order: a) evaluate the transitions leaving active steps
    (criteria bits), b) decide which switch (mode rule, HALT_SQ, supervision faults, at an
-   alternative divergence the first-listed), c) switch (S0/S1, skip steps), d) interlock
-   and supervision of the active steps, e) final scans of the steps left, then the action
-   rows of the active steps;
+   alternative divergence the first-listed; a step activated in step 2 — INIT_SQ, the
+   first call, S_ON — stays for this call, seed 000:5759, 000:5901), c) switch (S0/S1,
+   skip steps), d) interlock and supervision of the active steps, e) final scans of the
+   steps left, then the action rows of the active steps; then d) and e) of the steps a
+   later sequencer activated in an earlier one (``_late_steps``: every activation runs
+   its S1 rows, S7-GRAPH manual 6-2, 6-4);
 5. permanent *after* instructions;
 6. group flags and FB outputs.
 
 The quiet call and the fast path of step 4 are in ``sequencer/fastpath.py``.
-The option ``order = "codesys"`` runs d) and e) before a)–c): new steps act in the next call.
+The option ``order = "codesys"`` runs d) and e) before a)–c): new steps act in the next call
+(their S1 rows once: a step whose rows ran in its activation call is not carried).
 Work is proportional to the active steps: only ``st.active`` is visited.
 """
 
@@ -83,6 +87,12 @@ class GraphRuntime(FastPath):
         # per sequencer: its active steps in activation order (multi-sequencer FBs only),
         # rebuilt from ``st.active`` each call and kept in step by _activate/_deactivate
         self._by_seq: list[list[int]] = [[] for _ in cc.seq_numbers] if self.multi else []
+        # step 4: the sequencers before ``_done`` have run their rows in this call; a step
+        # activated in one of them waits in ``_late`` (see _late_steps); with the CODESYS
+        # order such steps are carried to the next call (``_carry``: S1 raised again there)
+        self._done = 0
+        self._late: list[int] = []
+        self._carry: list[int] = []
         # fast path of step 4 (AUTO, no HALT/OFF, no skip steps, default order): per step,
         # ``nochk`` = no interlock and no supervision; ``plain`` = nochk and every leaving
         # transition has this step as its only source (no join)
@@ -111,6 +121,9 @@ class GraphRuntime(FastPath):
         self._last_in = None
         self._remote.clear()
         self._commands.clear()
+        self._late.clear()
+        self._carry.clear()
+        self._done = 0
         self.display.dirty = True
 
     # ------------------------------------------------------------ callbacks of generated code
@@ -181,8 +194,11 @@ class GraphRuntime(FastPath):
         st.il_err[i] = False
         st.sv_err[i] = False
         st.active.append(i)
+        k = self.cc.step_seq[i]
         if self.multi:
-            self._by_seq[self.cc.step_seq[i]].append(i)
+            self._by_seq[k].append(i)
+        if k < self._done:
+            self._late.append(i)
         st.entered.append(i)
         self._raise(i, EV_S1)
 
@@ -248,11 +264,12 @@ class GraphRuntime(FastPath):
         self._target = None
         if self._commands:
             self._apply_commands()
-        carry = st.entered[:] if self.codesys else ()
         self._new_call(st)
-        for i in carry:
-            if st.x[i]:
-                self._raise(i, EV_S1)
+        if self._carry:
+            for i in self._carry:
+                if st.x[i]:
+                    self._raise(i, EV_S1)
+            self._carry.clear()
         if self.display.dirty:  # else no input pin changed: no edge, same S_SEL
             self.display.page(st, ins, rose)
 
@@ -278,11 +295,14 @@ class GraphRuntime(FastPath):
         rule = MODE_RULES[mode]
         blocked = st.halted or st.off
         forced = self._acked if self._forcing and self._acked else ()
-        sw = (rule if mode != "AUTO" else None, "T_PUSH" in rose, blocked, forced)
+        # steps activated in step 2 (INIT_SQ, the first call, S_ON) stay for this call
+        held = frozenset(st.entered) if st.entered and not self.codesys else frozenset()
+        sw = (rule if mode != "AUTO" else None, "T_PUSH" in rose, blocked, forced, held)
         fast = (
             mode == "AUTO"
             and not blocked
             and not forced
+            and not held
             and not self.codesys
             and not st.sskip_enabled
         )
@@ -292,10 +312,14 @@ class GraphRuntime(FastPath):
             by_seq = self._by_seq
             for k in range(len(by_seq)):
                 steps = by_seq[k]
+                self._done = k
                 if steps or self._final:
                     self._sequencer(k, steps, sw, rule)
+            self._late_steps()
         else:
             self._sequencer(-1, st.active, sw, rule)
+            if self.codesys:
+                self._late_steps()
         # 5. permanent after
         if self._permanent:
             prog.after(st, self)
@@ -304,7 +328,10 @@ class GraphRuntime(FastPath):
         return st
 
     def _new_call(self, st: GraphState) -> None:
-        """Clear the per-call lists (events, log, fired, entered, left) and OV."""
+        """Clear the per-call lists (events, log, fired, entered, left, late steps) and OV."""
+        self._done = 0
+        if self._late:
+            self._late.clear()
         if st.ev_steps:
             ev = st.ev
             for i in st.ev_steps:
@@ -422,6 +449,7 @@ class GraphRuntime(FastPath):
         this call's switching options (see ``_switch``)."""
         if self.codesys:
             self._conditions_and_actions(k, steps)
+            self._done = max(k, 0) + 1  # a step its transitions activate acts in the next call
             self._switch(steps, sw, rule)
         else:
             self._switch(steps, sw, rule)
@@ -432,7 +460,8 @@ class GraphRuntime(FastPath):
     ) -> None:
         """Steps a–c: evaluate, decide, switch (SPEC §2.2 4a–4c) for one sequencer's active
         ``steps``. ``sw`` = (mode rule, None in AUTO; T_PUSH edge; switching blocked by
-        HALT_SQ/OFF_SQ; steps whose acknowledgement forces their transition)."""
+        HALT_SQ/OFF_SQ; steps whose acknowledgement forces their transition; steps ``held``
+        for this call because step 2 activated them)."""
         st = self.st
         cc = self.cc
         x = st.x
@@ -440,7 +469,7 @@ class GraphRuntime(FastPath):
         tr_src = cc.tr_src
         tcond = self.prog.tcond
         tt, crit, crit_old = st.tt, st.crit, st.crit_old
-        mode_rule, push, blocked, forced = sw
+        mode_rule, push, blocked, forced, held = sw
         sv_err = st.sv_err
         # a+b: on the state at the start of this step
         fire: list[int] = []
@@ -462,7 +491,7 @@ class GraphRuntime(FastPath):
                 crit_old[j] = crit[j]
                 crit[j] = c
                 tt[j] = v
-                if blocked:
+                if blocked or (held and not held.isdisjoint(srcs)):
                     continue
                 if forced and i in forced:
                     v = True
@@ -496,21 +525,22 @@ class GraphRuntime(FastPath):
                 if not x[d]:
                     self._activate(d)
         if st.sskip_enabled:
-            self._skip(rule)
+            self._skip(rule, held)
 
-    def _skip(self, rule: Callable[[bool, bool], bool]) -> None:
+    def _skip(self, rule: Callable[[bool, bool], bool], held: frozenset[int]) -> None:
         """Skip steps: a step entered in this call whose leaving transition already holds is
-        passed through without being active (no S1, no actions; graph-semantics §A.3)."""
+        passed through without being active (no S1, no actions; graph-semantics §A.3). A
+        step ``held`` (activated by INIT_SQ, the first call or S_ON) is never passed through."""
         st = self.st
         cc = self.cc
         for _ in range(st.n_steps):
             moved = False
             for i in list(st.entered):
-                if not st.x[i]:
+                if not st.x[i] or i in held:
                     continue
                 for j in cc.leaving[i]:
                     srcs = cc.tr_src[j]
-                    if not all(st.x[s] for s in srcs):
+                    if not all(st.x[s] for s in srcs) or not held.isdisjoint(srcs):
                         continue
                     v, c = self.prog.tcond[j](st)
                     st.crit_old[j], st.crit[j], st.tt[j] = st.crit[j], c, v
@@ -535,6 +565,29 @@ class GraphRuntime(FastPath):
                     break
             if not moved:
                 return
+
+    def _late_steps(self) -> None:
+        """The steps activated in a sequencer whose rows had already run in this call — a
+        jump or an ``ON Sx`` from a later sequencer of the FB: their interlock, supervision
+        and rows run now, once, with their S1 event, as for every activation (S7-GRAPH
+        manual 6-2, 6-4). With the CODESYS order they (and the steps a sequencer's own
+        transitions activated) act in the next call instead."""
+        late = self._late
+        if late and self.codesys:
+            self._carry = late[:]
+            late.clear()
+        elif late:
+            st = self.st
+            step_seq = self.cc.step_seq
+            self._done = len(self._by_seq)
+            for _ in range(st.n_steps):  # ON Sx in a late step's rows: one more round
+                batch = [i for i in late if st.x[i]]
+                late.clear()
+                for k in sorted({step_seq[i] for i in batch}):
+                    self._conditions_and_actions(k, [i for i in batch if step_seq[i] == k])
+                if not late:
+                    break
+            late.clear()
 
     def _conditions_and_actions(self, k: int, steps: list[int]) -> None:
         """Steps d–e: interlock and supervision, final scans, action rows (SPEC §2.2 4d–4e)
@@ -622,7 +675,7 @@ def new_state(cc: CompiledChart) -> GraphState:
     initial values, no step active (the first call initializes, SPEC §2.6 INIT_SQ)."""
     st = GraphState(cc.n_steps, cc.n_transitions)
     st.inputs.update(input_defaults(cc.parameters, cc.options))
-    st.outputs.update(output_defaults(cc.parameters))
+    st.outputs.update(output_defaults(cc.parameters, cc.options))
     st.vars.update(cc.var_inits)
     st.ackreq_enabled = cc.options.ack_required
     st.sskip_enabled = cc.options.skip_steps

@@ -207,7 +207,7 @@ _GROUP_PINS: Final[dict[str, Callable[[GraphState], bool]]] = {
     "ERROR": lambda st: st.error,
     "FAULT": lambda st: st.fault,
     "ERR_FLT": lambda st: st.err_flt,
-    "SQ_ISOFF": lambda st: st.off,
+    "SQ_ISOFF": lambda st: not st.active,  # no step active: OFF_SQ until INIT_SQ / S_ON
     "SQ_HALTED": lambda st: st.halted,
     "TM_HALTED": lambda st: st.tm_halted,
     "OP_ZEROED": lambda st: st.zeroed,

@@ -19,7 +19,7 @@ if TYPE_CHECKING:
     from s7graph.sequencer.compiled import CompiledChart, Program
     from s7graph.sequencer.display import Display
 
-_AUTO_SW: tuple[Any, ...] = (None, False, False, ())  # _switch options in the fast path
+_AUTO_SW: tuple[Any, ...] = (None, False, False, (), frozenset())  # _switch options, fast path
 _AUTO_RULE = MODE_RULES["AUTO"]
 
 
@@ -34,6 +34,8 @@ class FastPath:
         display: Display
         outs_changed: bool
         _by_seq: list[list[int]]
+        _done: int
+        _late: list[int]
         _final: list[int]
         _acked: set[int]
         _target: int | None
@@ -48,6 +50,7 @@ class FastPath:
         _new_call: Callable[[GraphState], None]
         _sequencer: Callable[[int, list[int], tuple[Any, ...], Callable[[bool, bool], bool]], None]
         _conditions_and_actions: Callable[[int, list[int]], None]
+        _late_steps: Callable[[], None]
 
     def _quiet_call(self, st: GraphState, now_ns: int) -> GraphState:
         """The quiet call: no input pin changed since the last latch, no command or
@@ -144,6 +147,7 @@ class FastPath:
         for k in range(len(seqs)):
             steps = seqs[k]
             kk = k if multi else -1
+            self._done = k
             if len(steps) != 1 or final:
                 if steps or final or not multi:
                     self._sequencer(kk, steps, _AUTO_SW, _AUTO_RULE)
@@ -162,6 +166,7 @@ class FastPath:
                     act[i](st, self, ev[i], il_ok[i], zero)
                 continue
             self._fast_switch(kk, steps, i, j, multi)
+        self._late_steps()
 
     def _fast_switch(self, kk: int, steps: list[int], i: int, j: int, multi: bool) -> None:
         """The fast path's switch of sequencer ``kk`` (-1: the only one) whose only active
@@ -207,7 +212,10 @@ class FastPath:
                 sv_err[d] = False
                 active.append(d)
                 if multi:
-                    self._by_seq[self.cc.step_seq[d]].append(d)
+                    k = self.cc.step_seq[d]
+                    self._by_seq[k].append(d)
+                    if k < self._done:  # a jump into an earlier sequencer (_late_steps)
+                        self._late.append(d)
                 st.entered.append(d)
                 if not ev[d]:
                     ev_steps.append(d)

@@ -19,7 +19,14 @@ from s7graph.engine.errors import BlockError
 from s7graph.sequencer.compiled import CompiledChart, Program
 from s7graph.sequencer.cycle import GraphRuntime, new_state
 from s7graph.sequencer.messages import sync_messages
-from s7graph.sequencer.params import Direction, check_pin, is_pin, pins_for
+from s7graph.sequencer.params import (
+    Direction,
+    check_pin,
+    input_defaults,
+    is_pin,
+    output_defaults,
+    pins_for,
+)
 from s7graph.sequencer.state import GraphState
 from s7graph.sfb import s5_counters, s5_timers
 from s7graph.sfb.alarms import message_list
@@ -55,10 +62,11 @@ class GraphFB:
         pins = pins_for(cc.parameters)
         self.in_pins = tuple(p for p in pins if p.direction is Direction.IN)
         self.out_pins = tuple(p.name for p in pins if p.direction is Direction.OUT)
-        interface = [
-            Var(p.name, p.type, Decl.IN if p.direction is Direction.IN else Decl.OUT, p.default)
-            for p in pins
-        ]
+        # initial values: EN_ACKREQ/EN_SSKIP hold the chart's options (params.OPTION_DEFAULTS)
+        initial = input_defaults(cc.parameters, cc.options)
+        initial.update(output_defaults(cc.parameters, cc.options))
+        decl = {Direction.IN: Decl.IN, Direction.OUT: Decl.OUT}
+        interface = [Var(p.name, p.type, decl[p.direction], initial[p.name]) for p in pins]
         interface.append(Var(STATE_VAR, "OBJECT", Decl.STAT, self._fresh_state))
         self.fb = FB(self.fb_number, cc.name, tuple(interface), self._body)
         self.idb: InstanceDB | None = None

@@ -12,6 +12,7 @@ pins, and the README (``markdown_table``).
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 from enum import StrEnum
 from typing import Final
@@ -31,7 +32,8 @@ class Direction(StrEnum):
 class Pin:
     """One FB parameter: ``smallest`` is the smallest parameter set that has it (the sets
     nest, so every larger set has it too); ``default`` is an input's value while unwired
-    (an output's value before the first call)."""
+    (an output's value before the first call) unless ``OPTION_DEFAULTS`` gives it a chart
+    option."""
 
     name: str
     direction: Direction
@@ -70,8 +72,8 @@ _TABLE: Final[tuple[tuple[str, Direction, str, str, object, str], ...]] = (
     ("ZERO_OP", _I, "BOOL", MAX, False, "N, D, L operands forced to 0, CALLs skipped"),
     ("EN_IL", _I, "BOOL", MAX, True, "Enable interlocks (0: every interlock holds)"),
     ("EN_SV", _I, "BOOL", MAX, True, "Enable supervisions (0: no supervision faults)"),
-    ("EN_ACKREQ", _I, "BOOL", USR, True, "Faults must be acknowledged (default: option)"),
-    ("EN_SSKIP", _I, "BOOL", USR, False, "Skip steps (default: option SKIP_STEPS)"),
+    ("EN_ACKREQ", _I, "BOOL", USR, True, "Faults must be acknowledged"),
+    ("EN_SSKIP", _I, "BOOL", USR, False, "Skip steps"),
     ("DISP_SACT", _I, "BOOL", USR, False, "Rising edge: S_NO pages through active steps"),
     ("DISP_SEF", _I, "BOOL", USR, False, "Rising edge: S_NO pages through disturbed steps"),
     ("DISP_SALL", _I, "BOOL", USR, False, "Rising edge: S_NO pages through all steps"),
@@ -121,6 +123,18 @@ _TABLE: Final[tuple[tuple[str, Direction, str, str, object, str], ...]] = (
     ("TOP_ON", _O, "BOOL", STD, False, "Mode TOP"),
     ("MAN_ON", _O, "BOOL", STD, False, "Mode MAN"),
 )
+
+# The block options that are the defaults of run-time pins (S7-GRAPH block settings "Skip
+# steps" and "Acknowledge errors" with their pins EN_SSKIP / EN_ACKREQ and the outputs
+# SSKIP_ENABLED / ACKREQ_ENABLED; graph-semantics §A.3, §C): pin → (``.s7g`` option,
+# ``ChartOptions`` field). The instance DB starts with the option's value in the pin, so an
+# unwired pin follows the option and a value written to the pin wins from then on.
+OPTION_DEFAULTS: Final[dict[str, tuple[str, str]]] = {
+    "EN_ACKREQ": ("ACK_REQUIRED", "ack_required"),
+    "EN_SSKIP": ("SKIP_STEPS", "skip_steps"),
+    "ACKREQ_ENABLED": ("ACK_REQUIRED", "ack_required"),
+    "SSKIP_ENABLED": ("SKIP_STEPS", "skip_steps"),
+}
 
 PINS: Final[tuple[Pin, ...]] = tuple(
     Pin(name, direction, type_, comment, smallest, default)
@@ -192,19 +206,26 @@ def input_defaults(set_name: str, options: ChartOptions | None = None) -> dict[s
     """The value of every input pin (of every set) while nothing drives it.
 
     Pins outside ``set_name`` do not exist on the FB, so they keep these values for good.
-    EN_ACKREQ follows the chart option ACK_REQUIRED and EN_SSKIP the option SKIP_STEPS
-    (graph-semantics §A.3, §C): the pin overrides the option only where it exists."""
+    With ``options`` a pin of ``OPTION_DEFAULTS`` starts at its option's value."""
     _set_name(set_name)
-    values: dict[str, object] = {p.name: p.default for p in PINS if p.direction is Direction.IN}
-    if options is not None:
-        values["EN_ACKREQ"] = options.ack_required
-        values["EN_SSKIP"] = options.skip_steps
+    return _defaults([p for p in PINS if p.direction is Direction.IN], options)
+
+
+def output_defaults(set_name: str, options: ChartOptions | None = None) -> dict[str, object]:
+    """The value of each output pin of ``set_name`` before the first call (ACKREQ_ENABLED
+    and SSKIP_ENABLED show their option, as the first call will)."""
+    return _defaults(outputs_for(set_name), options)
+
+
+def _defaults(pins: Iterable[Pin], options: ChartOptions | None) -> dict[str, object]:
+    values: dict[str, object] = {}
+    for p in pins:
+        option = OPTION_DEFAULTS.get(p.name)
+        if options is not None and option is not None:
+            values[p.name] = getattr(options, option[1])
+        else:
+            values[p.name] = p.default
     return values
-
-
-def output_defaults(set_name: str) -> dict[str, object]:
-    """The value of each output pin of ``set_name`` before the first call."""
-    return {p.name: p.default for p in outputs_for(set_name)}
 
 
 def markdown_table() -> str:
@@ -215,6 +236,9 @@ def markdown_table() -> str:
     for p in PINS:
         marks = " | ".join("✓" if p.in_set(s) else "" for s in PARAMETER_SETS)
         default = "" if p.direction is Direction.OUT else _fmt(p.default)
+        if p.name in OPTION_DEFAULTS and p.direction is Direction.IN:
+            option, field_name = OPTION_DEFAULTS[p.name]
+            default = f"option {option} ({_fmt(getattr(ChartOptions(), field_name))})"
         rows.append(
             f"| `{p.name}` | {p.direction.value} | {p.type} | {marks} | {default} | {p.comment} |"
         )

@@ -5,7 +5,10 @@ one of INT DINT REAL TIME; ``+ - * /`` on INT DINT REAL (``+ -`` also on TIME); 
 DINT; ``AND OR XOR`` on BOOL (logic) or WORD/DWORD (bitwise, assignments only); ``SHL SHR``
 on WORD/DWORD, ``SSR`` on INT/DINT, ``ROL ROR`` on DWORD, shift count INT. An untyped absolute
 address adapts (WORD address ~ INT, DWORD address ~ DINT REAL TIME); an integer literal fits
-INT and DINT. Conditions hold only contacts, NOT AND OR XOR and comparisons (SPEC §2.9).
+INT and DINT. A timer or counter cell (``T5``, ``C1``) is a contact (its status bit) where a
+BOOL is expected, and its INT value in comparisons, arithmetic, function arguments and
+assignments (``steps.operands.CELLS``; seed 003:1599-1604). Conditions hold only contacts,
+NOT AND OR XOR and comparisons (SPEC §2.9).
 Operand resolution is ``sequencer.names.resolve_operand``.
 """
 
@@ -38,8 +41,12 @@ _FLEX: Final[dict[str, frozenset[str]]] = {
     "@16": frozenset({"INT", "WORD", "S5TIME"}),
     "@32": frozenset({"DINT", "REAL", "TIME", "DWORD"}),
     "#INT": frozenset({"INT", "DINT"}),
+    "@T": frozenset({"BOOL", "INT"}),  # a timer: status bit or value
+    "@C": frozenset({"BOOL", "INT"}),  # a counter: status bit or value
 }
-_FLEX_DEFAULT: Final = {"@8": "BYTE", "@16": "INT", "@32": "DINT", "#INT": "INT"}
+_FLEX_DEFAULT: Final = {"@8": "BYTE", "@16": "INT", "@32": "DINT", "#INT": "INT",
+                        "@T": "BOOL", "@C": "BOOL"}  # fmt: skip
+_CELL_FLEX: Final = {"TIMER": "@T", "COUNTER": "@C"}
 _ADDRESS_FLEX: Final = {"BYTE": "@8", "WORD": "@16", "DWORD": "@32"}
 # Built-in functions of seed 000:5861-5884: name → {argument type: result type}.
 FUNCTIONS: Final[dict[str, dict[str, str]]] = {
@@ -113,7 +120,7 @@ def rule_conditions(ctx: _Ctx) -> None:
     for expr, _, el in _conditions(ctx):
         _check_condition_shape(ctx, expr, el)
         t = _type(ctx, expr, el)
-        if t is not None and t != "BOOL":
+        if t is not None and _as_bit(t) != "BOOL":
             ctx.err("E034", f"a condition must be TRUE or FALSE, this is {_show(t)}",
                     _loc(expr), el)  # fmt: skip
 
@@ -144,8 +151,22 @@ def _loc(e: object) -> SourceLocation:
     return loc if isinstance(loc, SourceLocation) else SourceLocation()
 
 
+_SHOW: Final = {"@8": "BYTE", "@16": "WORD", "@32": "DWORD", "#INT": "INT", "@T": "TIMER",
+                "@C": "COUNTER"}  # fmt: skip
+
+
 def _show(t: str) -> str:
-    return {"@8": "BYTE", "@16": "WORD", "@32": "DWORD", "#INT": "INT"}.get(t, t)
+    return _SHOW.get(t, t)
+
+
+def _as_bit(t: str) -> str:
+    """``t`` where a BOOL is expected: a timer or counter cell is its status bit."""
+    return "BOOL" if t in ("@T", "@C") else t
+
+
+def _as_number(t: str) -> str:
+    """``t`` where a number is expected: a timer or counter cell is its INT value."""
+    return "INT" if t in ("@T", "@C") else t
 
 
 def _unify(a: str, b: str) -> str | None:
@@ -193,6 +214,8 @@ def _type(ctx: _Ctx, e: Expr, el: str) -> str | None:
         res = _resolve(ctx, e, el)
         if res is None:
             return None
+        if res.type in _CELL_FLEX:
+            return _CELL_FLEX[res.type]
         return _ADDRESS_FLEX.get(res.type, res.type) if res.is_untyped else res.type
     if isinstance(e, StepAttr):
         if e.step not in ctx.steps:
@@ -214,9 +237,10 @@ def _type_unary(ctx: _Ctx, e: Unary, el: str) -> str | None:
     if t is None:
         return None
     if e.op == "NOT":
-        if t == "BOOL":
+        if _as_bit(t) == "BOOL":
             return "BOOL"
         return _apply(ctx, "NOT", FUNCTIONS["NOT"], t, e.loc, el)
+    t = _as_number(t)
     ok = {"INT", "DINT", "REAL", "TIME"}
     c = t if t in ok else next((x for x in sorted(_FLEX.get(t, ())) if x in ok), None)
     if c is None:
@@ -235,7 +259,7 @@ def _type_call(ctx: _Ctx, e: FuncCall, el: str) -> str | None:
         ctx.err("E033", f"{e.name} takes one argument, not {len(e.args)}", e.loc, el)
         return None
     t = arg_types[0]
-    return None if t is None else _apply(ctx, e.name, table, t, e.loc, el)
+    return None if t is None else _apply(ctx, e.name, table, _as_number(t), e.loc, el)
 
 
 def _apply(
@@ -254,6 +278,8 @@ def _type_binary(ctx: _Ctx, e: Binary, el: str) -> str | None:
     if lt is None or rt is None:
         return "BOOL" if e.op in COMPARISONS else None
     op = e.op
+    cast = _as_bit if op in LOGIC else _as_number
+    lt, rt = cast(lt), cast(rt)
     if op in COMPARISONS:
         u = _unify(lt, rt)
         if u is None:

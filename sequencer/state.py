@@ -74,7 +74,8 @@ class GraphState:
       ``rose``            names of edge inputs with a rising edge in this call
       ``outputs``         FB output pins written at the end of this call (name → value)
       ``vars``            the chart's static variables (``VAR ... END_VAR``)
-      ``off``             SQ_ISOFF; ``halted`` SQ_HALTED; ``tm_halted`` TM_HALTED;
+      ``off``             OFF_SQ holds in this call (SQ_ISOFF is "no step active");
+                          ``halted`` SQ_HALTED; ``tm_halted`` TM_HALTED;
       ``zeroed``          OP_ZEROED; ``il_enabled`` ``sv_enabled`` ``ackreq_enabled``
                           ``sskip_enabled`` — the effective options of this call
       ``error``           some active step has an interlock error (ERROR)

@@ -22,7 +22,7 @@ from collections.abc import Callable
 
 from s7graph.engine.errors import S7Error
 from s7graph.steps.conditions import with_locals
-from s7graph.steps.expressions import Resolve, StepIndex, gen_value
+from s7graph.steps.expressions import Resolve, StepIndex, gen_assigned, gen_value
 from s7graph.steps.operands import CodeGen, Ref
 from s7graph.steps.qualifiers import EVENT_BITS
 from s7graph.steps.syntax import (
@@ -76,10 +76,11 @@ def step_action_parts(
         return gen_value(e, g, resolve, sidx, tidx)
 
     for row in rows:
-        code = _row(i, row, g, resolve, val, sidx)
+        code = _row(i, row, g, resolve, val, sidx, tidx)
         q = row.qualifier.upper()
-        if q in ("N", "D", "L") and isinstance(row.operand, Operand):
-            final_reset.append(g.set_bit(resolve(row.operand), False))
+        bit = _nld_bit(row)
+        if bit is not None:
+            final_reset.append(g.set_bit(resolve(bit), False))
         if row.event == "S0":
             s0_rows.extend(code)
             continue
@@ -93,7 +94,7 @@ def step_action_parts(
                 continue
             body.append(f"if {cond}:")
             body.extend(_indent(code))
-        elif row.interlocked and q not in ("N", "D", "L"):
+        elif row.interlocked and bit is None:
             body.append("if c_ok:")
             body.extend(_indent(code))
         else:
@@ -106,6 +107,15 @@ def step_action_parts(
     a_src = [f"def _a{i}(st, R, ev, c_ok, zero{_own(i, a_body)}):", *a_body]
     f_src = [f"def _f{i}(st, R, ev{_own(i, f_body)}):", *f_body]
     return with_locals(a_src), with_locals(f_src), _indent(body)
+
+
+def _nld_bit(row: ActionRow) -> Operand | None:
+    """The bit of an N, D or L row (else None): the final scan resets it, and the row gates it by
+    writing ``operand = c_ok and …`` (C off writes 0). Every other row marked C — the
+    assignment ``N C x := expr`` included — runs only while the interlock holds (S7-GRAPH
+    manual 14-8: all actions marked C; seed 000:5794-5799)."""
+    nld = row.qualifier.upper() in ("N", "D", "L")
+    return row.operand if nld and isinstance(row.operand, Operand) else None
 
 
 _OWN = re.compile(r"\b_i\b")
@@ -140,13 +150,14 @@ def _row(
     resolve: Resolve,
     val: Callable[[Expr], str],
     sidx: StepIndex,
+    tidx: StepIndex,
 ) -> list[str]:
     """The statements of one row, without its event/interlock guard (N/D/L include C)."""
     q = row.qualifier.upper()
     op = row.operand
     gate = " and c_ok" if row.interlocked else ""
     if isinstance(op, Assignment):
-        return [g.write(resolve(op.target), val(op.expr))]
+        return [gen_assigned(op.expr, resolve(op.target), g, resolve, sidx, tidx)]
     if q == "N":
         ref = _bit(row, resolve)
         return [g.write(ref, f"not zero{gate}")]

@@ -15,7 +15,7 @@ from collections.abc import Callable
 from typing import Any
 
 from s7graph.engine.errors import TypeMismatch
-from s7graph.steps.operands import CodeGen, Ref
+from s7graph.steps.operands import CELL_VALUE_TYPE, CELLS, CodeGen, Ref
 from s7graph.steps.syntax import (
     Binary,
     Const,
@@ -35,6 +35,7 @@ BITS = frozenset({"BYTE", "WORD", "DWORD", "CHAR"})
 NUMERIC = INTS | BITS | {"REAL"}
 RANGE = {"INT": (-32768, 32767), "DINT": (-(2**31), 2**31 - 1), "TIME": (-(2**31), 2**31 - 1)}
 MASK = {"BYTE": 0xFF, "CHAR": 0xFF, "WORD": 0xFFFF, "DWORD": 0xFFFFFFFF}
+LOGIC = frozenset({"AND", "OR", "XOR"})
 COMPARE = {"=": "==", "<>": "!=", "<": "<", ">": ">", "<=": "<=", ">=": ">="}
 
 # name -> (result type or None = same as argument, Python helper name)
@@ -65,25 +66,28 @@ FUNCTIONS: dict[str, tuple[str | None, str]] = {
 }
 
 
-def expr_type(e: Expr, resolve: Resolve) -> str:
-    """The S7 type of an expression (for code selection and the same-type check)."""
+def expr_type(e: Expr, resolve: Resolve, number: bool = False) -> str:
+    """The S7 type of an expression (for code selection and the same-type check);
+    ``number``: where a number is expected (a timer or counter cell is its INT value)."""
     if isinstance(e, Const):
         return e.type
     if isinstance(e, Operand):
-        return resolve(e).type
+        ref = resolve(e)
+        return CELL_VALUE_TYPE if number and ref.kind in CELLS else ref.type
     if isinstance(e, StepAttr):
         return "BOOL" if e.attr == "X" else "TIME"
     if isinstance(e, TransAttr):
         return "BOOL"
     if isinstance(e, Unary):
-        return "BOOL" if e.op == "NOT" else expr_type(e.operand, resolve)
+        return "BOOL" if e.op == "NOT" else expr_type(e.operand, resolve, True)
     if isinstance(e, FuncCall):
         res, _ = FUNCTIONS.get(e.name.upper(), (None, ""))
-        return res or (expr_type(e.args[0], resolve) if e.args else "DINT")
+        return res or (expr_type(e.args[0], resolve, True) if e.args else "DINT")
     if isinstance(e, Binary):
         if e.op in COMPARE:
             return "BOOL"
-        lt, rt = expr_type(e.left, resolve), expr_type(e.right, resolve)
+        arith = e.op.upper() not in LOGIC
+        lt, rt = expr_type(e.left, resolve, arith), expr_type(e.right, resolve, arith)
         if e.op in ("SHL", "SHR", "SSR", "ROL", "ROR"):
             return lt
         if lt == "BOOL" and rt == "BOOL":
@@ -103,15 +107,20 @@ def _wider(a: str, b: str) -> str:
     return a if ia >= ib else b
 
 
-def gen_value(e: Expr, g: CodeGen, resolve: Resolve, sidx: StepIndex, tidx: StepIndex) -> str:
-    """Python source computing the value of ``e`` (locals ``st V X`` in scope)."""
+def gen_value(
+    e: Expr, g: CodeGen, resolve: Resolve, sidx: StepIndex, tidx: StepIndex, number: bool = False
+) -> str:
+    """Python source computing the value of ``e`` (locals ``st V X`` in scope); ``number``:
+    where a number is expected — inside comparisons, arithmetic and function arguments, and
+    for an assignment to a number — a timer or counter cell reads its value, else its
+    status bit (``operands.CELLS``)."""
     if isinstance(e, Const):
         v = e.value
         if isinstance(v, (bool, int, float)):
             return repr(v)
         return g.const(v)
     if isinstance(e, Operand):
-        return g.read(resolve(e))
+        return g.read_number(resolve(e)) if number else g.read(resolve(e))
     if isinstance(e, StepAttr):
         i = sidx(e.step, e.loc)
         if e.attr == "X":
@@ -121,30 +130,32 @@ def gen_value(e: Expr, g: CodeGen, resolve: Resolve, sidx: StepIndex, tidx: Step
     if isinstance(e, TransAttr):
         return f"st.tt[{tidx(e.transition, e.loc)}]"
     if isinstance(e, Unary):
-        inner = gen_value(e.operand, g, resolve, sidx, tidx)
         if e.op == "NOT":
+            inner = gen_value(e.operand, g, resolve, sidx, tidx)
             t = expr_type(e.operand, resolve)
             return f"_not(st, {inner}, {t!r})" if t in BITS else f"(not {inner})"
-        t = expr_type(e.operand, resolve)
+        inner = gen_value(e.operand, g, resolve, sidx, tidx, True)
+        t = expr_type(e.operand, resolve, True)
         return _checked(f"-({inner})", t) if t in RANGE else f"(-({inner}))"
     if isinstance(e, FuncCall):
         name = e.name.upper()
         if name not in FUNCTIONS:
             raise TypeMismatch(f"unknown function {e.name}", e.loc)
-        args = [gen_value(a, g, resolve, sidx, tidx) for a in e.args]
-        t = expr_type(e.args[0], resolve) if e.args else "DINT"
+        args = [gen_value(a, g, resolve, sidx, tidx, True) for a in e.args]
+        t = expr_type(e.args[0], resolve, True) if e.args else "DINT"
         _, helper = FUNCTIONS[name]
         if helper in ("int", "float"):
             return f"{helper}({args[0]})"
         return f"{helper}(st, {', '.join(args)}, {t!r})"
     if isinstance(e, Binary):
-        left = gen_value(e.left, g, resolve, sidx, tidx)
-        right = gen_value(e.right, g, resolve, sidx, tidx)
         op = e.op.upper()
+        arith = op not in LOGIC
+        left = gen_value(e.left, g, resolve, sidx, tidx, arith)
+        right = gen_value(e.right, g, resolve, sidx, tidx, arith)
         if op in COMPARE:
             return f"({left} {COMPARE[op]} {right})"
         t = expr_type(e, resolve)
-        if op in ("AND", "OR", "XOR"):
+        if op in LOGIC:
             py = {"AND": "and", "OR": "or", "XOR": "!="}[op]
             if t == "BOOL":
                 if op == "XOR":
@@ -167,6 +178,15 @@ def gen_value(e: Expr, g: CodeGen, resolve: Resolve, sidx: StepIndex, tidx: Step
             return f"_mod(st, {left}, {right}, {t!r})"
         raise TypeMismatch(f"unknown operator {e.op}", e.loc)
     raise TypeMismatch(f"not an expression: {e!r}")
+
+
+def gen_assigned(
+    e: Expr, target: Ref, g: CodeGen, resolve: Resolve, sidx: StepIndex, tidx: StepIndex
+) -> str:
+    """The statement ``target := e``: a number target reads timer and counter cells of
+    ``e`` as values, a BOOL target as status bits (``gen_value``'s ``number``)."""
+    value = gen_value(e, g, resolve, sidx, tidx, target.type != "BOOL")
+    return g.write(target, value)
 
 
 def _checked(src: str, t: str) -> str:

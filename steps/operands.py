@@ -20,6 +20,12 @@ from typing import Any
 
 from s7graph.engine.errors import SourceLocation, SymbolError
 
+# S5 timer and counter cells (``T n``, ``C n``): a contact reads the status bit, a number
+# (a comparison, arithmetic, an assignment to a number) reads the value as an INT — the
+# count, or the remaining time in units of the time base, as ``L C n`` / ``L T n`` load it
+# (seed 003:1599-1604: "used at the same address as a BOOL state or as the current value").
+CELLS = frozenset({"timer", "counter"})
+CELL_VALUE_TYPE = "INT"
 # The default type of an absolute address by width, when no symbol says otherwise.
 WIDTH_TYPE = {1: "BOOL", 8: "BYTE", 16: "INT", 32: "DINT"}
 # Bytes of each value type in memory.
@@ -33,7 +39,7 @@ TYPE_BYTES = {
 class Ref:
     """A resolved operand. ``kind``: ``mem`` (address), ``var`` (FB static variable),
     ``pin`` (FB pin, ``name``), ``step`` (``index``, ``attr`` X/T/U), ``trans`` (``index``),
-    ``timer``/``counter`` (``number``: the status bit of an S5 cell)."""
+    ``timer``/``counter`` (``number``: an S5 cell; ``type`` BOOL, its status bit — ``CELLS``)."""
 
     kind: str
     type: str
@@ -101,6 +107,13 @@ class CodeGen:
         if t == "REAL":
             return f"_unpack_f({b}, {n})[0]"
         raise SymbolError(f"cannot read an operand of type {t}")
+
+    def read_number(self, ref: Ref) -> str:
+        """A Python expression reading ``ref`` where a number is expected: a timer or counter
+        cell gives its value (``CELLS``), any other operand what ``read`` gives."""
+        if ref.kind in CELLS:
+            return f"_cell_v(_mem, {ref.kind!r}, {ref.number})"
+        return self.read(ref)
 
     # ------------------------------------------------------------ writing
 
@@ -175,6 +188,13 @@ def _cell_q(mem: Any, kind: str, number: int) -> bool:
     return bool(cell)
 
 
+def _cell_v(mem: Any, kind: str, number: int) -> int:
+    """The value of S5 timer / counter cell ``number`` read as a number (``CELLS``)."""
+    if kind == "timer":
+        return int(mem.timers[number].binary())
+    return int(mem.counters[number].value)
+
+
 def _with_index(f: Any, i: int) -> Any:
     """Generated function ``f`` with its own-step default ``_i`` set to ``i`` (shared code)."""
     return FunctionType(f.__code__, f.__globals__, f.__name__, (i,), f.__closure__)
@@ -193,6 +213,7 @@ RUNTIME: dict[str, Any] = {
     "_pack_f": _pack_f,
     "_pin": _pin,
     "_cell_q": _cell_q,
+    "_cell_v": _cell_v,
 }
 
 

@@ -10,7 +10,8 @@
   ``tests/sequencer/scenarios/<name>.s7g``.
 - ``source``/``seq``/``chart``/``two_steps``/``enter``/``leave``: the chart builders of the
   SPEC conformance tests (``tests/sequencer/test_spec_*.py``), driven with ``Run``.
-- ``write_sim_inputs``/``read_trace``: the files of one ``s7graph sim`` run (SPEC §4).
+- ``write_sim_inputs``/``read_trace``: the files of one ``s7graph sim`` run (SPEC §4);
+  ``sim_trace`` runs one and returns its exit status and trace.
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ from s7graph.sequencer.parse import parse_chart
 from s7graph.sequencer.state import GraphState
 from s7graph.sfb.alarms import MessageList
 from s7graph.steps.qualifiers import EVENT_BITS
+from s7graph.web.cli.sim import sim_command
 
 HERE = Path(__file__).resolve().parent
 SCENARIOS = HERE / "scenarios"
@@ -271,3 +273,13 @@ def write_sim_inputs(tmp_path: Path, chart: str, stim: list[dict]) -> tuple[Path
 def read_trace(out: Path) -> list[dict]:
     """The trace lines of a sim run; none if the run wrote no trace."""
     return [json.loads(x) for x in out.read_text().splitlines()] if out.exists() else []
+
+
+def sim_trace(
+    tmp_path: Path, chart: str, stim: list[dict], *, cycles: int, watch: str = "",
+    cycle_ms: float = 10,
+) -> tuple[int, list[dict]]:  # fmt: skip
+    """One ``s7graph sim`` run of ``chart`` with the stimuli ``stim``: (exit status, trace)."""
+    c, s, out = write_sim_inputs(tmp_path, chart, stim)
+    rc = sim_command(c, stimulus=s, cycle_ms=cycle_ms, cycles=cycles, watch=watch, trace=out)
+    return rc, read_trace(out)

@@ -151,8 +151,9 @@ def test_jump_into_another_sequencer() -> None:
 def test_sequencers_run_in_definition_order_and_see_earlier_actions() -> None:
     c = Chart(
         seq("""
-      INITIAL_STEP S1 "a": N M0.0; END_STEP
-      TRANSITION T1 FROM S1 TO STOP := FALSE;
+      INITIAL_STEP S1 "a": END_STEP
+      STEP S2 "b": N M0.0; END_STEP
+      TRANSITION T1 FROM S1 TO S2 := I0.0;
     """)
         + seq(
             """
@@ -163,8 +164,10 @@ def test_sequencers_run_in_definition_order_and_see_earlier_actions() -> None:
             2,
         )
     )
-    c.call()  # sequencer 1 sets M0.0 before sequencer 2 evaluates T11
-    assert c.active == ["S1", "S12"]
+    c.call()
+    c.set(I0_0=True)
+    c.call()  # sequencer 1 enters S2 and sets M0.0 before sequencer 2 evaluates T11
+    assert c.active == ["S2", "S12"]
 
 
 def test_transitions_are_evaluated_on_the_state_at_the_start_of_the_sequencer() -> None:
@@ -197,8 +200,9 @@ def test_permanent_before_runs_before_the_sequencer_and_after_after_it() -> None
         header="PERMANENT BEFORE\n M0.0 := I0.0;\nEND_PERMANENT\n"
         "PERMANENT AFTER\n M0.1 := M1.0;\nEND_PERMANENT\n",
     )
+    c.call()  # first call: init; S1 active
     c.set(I0_0=True)
-    c.call()  # first call: init; S1 active; M0.0 set before, T1 switches already
+    c.call()  # M0.0 set before the sequencer: T1 switches in the same call
     assert c.active == ["S2"]
     c2 = Chart(
         seq('INITIAL_STEP S1 "a": N M1.0; END_STEP\nTRANSITION T1 FROM S1 TO STOP := FALSE;'),

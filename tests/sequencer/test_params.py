@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+from pathlib import Path
 
 import pytest
 
@@ -138,3 +139,10 @@ def test_markdown_table_has_a_row_per_pin_with_set_marks() -> None:
     assert halt.count("✓") == 2
     init = next(line for line in lines if line.startswith("| `INIT_SQ`"))
     assert init.count("✓") == 4
+
+
+def test_readme_and_the_semantics_doc_hold_the_pin_table_of_the_code() -> None:
+    """The one pin table is the code's: README and docs/semantics.md print it verbatim."""
+    root = Path(__file__).resolve().parents[2]
+    for doc in (root / "README.md", root / "docs" / "semantics.md"):
+        assert markdown_table() in doc.read_text(encoding="utf-8"), doc.name

@@ -313,11 +313,11 @@ def test_time_comparison_with_a_step_time_and_a_time_variable() -> None:
     """),
         header="VAR dwell : TIME := T#50MS; END_VAR",
     )
-    run.call()  # t = 0: S1 on, T1 switches at once: S2 active from t = 0
+    run.call(2)  # t = 0: S1 on for the first call; t = 10: T1 switches, S2 from t = 10
     assert run.active == [2]
-    run.call(4)  # t = 10 .. 40: S2.T < 50
+    run.call(4)  # t = 20 .. 50: S2.T < 50
     assert run.active == [2]
-    run.call()  # t = 50
+    run.call()  # t = 60
     assert run.active == [3]
 
 

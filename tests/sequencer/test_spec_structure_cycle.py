@@ -353,7 +353,14 @@ def test_sequencers_run_in_definition_order_not_number_order() -> None:
     """SPEC §2.2 4: per sequencer, in *definition* order — SEQUENCE 2 written first runs
     first, so SEQUENCE 1 sees its action in the same call."""
     run = chart(
-        seq('INITIAL_STEP S11 "x": N M0.0; END_STEP\nTRANSITION T11 FROM S11 TO STOP := FALSE;', 2)
+        seq(
+            """
+      INITIAL_STEP S11 "x": END_STEP
+      STEP S12 "y": N M0.0; END_STEP
+      TRANSITION T11 FROM S11 TO S12 := I0.0;
+    """,
+            2,
+        )
         + seq("""
       INITIAL_STEP S1 "a": END_STEP
       STEP S2 "b": END_STEP
@@ -361,7 +368,8 @@ def test_sequencers_run_in_definition_order_not_number_order() -> None:
     """)
     )
     run.call()
-    assert run.active == [2, 11]
+    run.set(I0_0=True).call()
+    assert run.active == [2, 12]
 
 
 def test_permanent_instructions_run_once_per_call_around_all_sequencers() -> None:
