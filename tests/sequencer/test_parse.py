@@ -190,3 +190,15 @@ def test_parser_recovers_and_reports_every_syntax_error() -> None:
     with pytest.raises(ChartSyntaxError) as info:
         parse_chart(text)
     assert [(d.loc.line, d.loc.col) for d in info.value.diagnostics] == [(4, 5), (7, 43)]
+
+
+def test_a_line_comment_may_follow_an_operand_before_the_semicolon() -> None:
+    """``//`` starts a comment even where ``/`` could divide (the comment outranks MULOP)."""
+    text = (
+        'FUNCTION_BLOCK "T"\nSEQUENCE 1\n  INITIAL_STEP S1: END_STEP\n'
+        "  TRANSITION T1 FROM S1 TO S1 := I0.0 // the start button\n  ;\n"
+        "  TRANSITION T2 FROM S1 TO S1 := MW10 / 2 > 3;\nEND_SEQUENCE\nEND_FUNCTION_BLOCK\n"
+    )
+    t1, t2 = parse_chart(text).all_transitions()
+    assert isinstance(t1.condition, Operand) and t1.condition.name == "I0.0"
+    assert isinstance(t2.condition, Binary) and t2.condition.op == ">"

@@ -1,0 +1,440 @@
+"""Editing a chart: the table of edit operations, applying one, and an editing session
+with undo and redo (README "Editing charts (core)").
+
+The model is the source of truth: a chart is immutable, an edit gives a new chart (sharing
+what it does not change) validated by the same rules as ``s7graph check``
+(``sequencer.validate``), or a refusal naming the problem while the chart stays as it
+was. The source view is the chart written as text; a text typed there comes back through
+the ``set_source`` operation. ``OPERATIONS`` is the one table of what can be done, to which
+element, with which arguments; a user interface or a bus command builds edits from it
+(``make_edit``) and so cannot build anything else.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import MISSING, dataclass, fields, replace
+from typing import Any, Final, Literal
+
+from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer.diagnostics import Diagnostic
+from s7graph.sequencer.edit_base import (
+    MAX_NAME,
+    MAX_UNDO,
+    Edit,
+    EditRefused,
+    Refusal,
+    checked_number,
+    checked_text,
+)
+from s7graph.sequencer.edit_content import (
+    AddRow,
+    ChangeRow,
+    MoveRow,
+    RemoveRow,
+    RenameSequence,
+    RenameStep,
+    RenameTransition,
+    RenumberStep,
+    RenumberTransition,
+    SetCondition,
+    SetInitial,
+    SetInterlock,
+    SetMessage,
+    SetOption,
+    SetSource,
+    SetSupervision,
+)
+from s7graph.sequencer.edit_structure import (
+    BranchStop,
+    DeleteAlternativeBranch,
+    DeleteSequence,
+    DeleteSimultaneousBranch,
+    DeleteStep,
+    DeleteTransition,
+    InsertAlternativeBranch,
+    InsertSequence,
+    InsertSimultaneousBranch,
+    InsertStep,
+    Jump,
+    new_step,
+    new_transition,
+)
+from s7graph.sequencer.edit_text import RowFields, check_bounds
+from s7graph.sequencer.elements import (
+    Ref,
+    RowRef,
+    SequenceRef,
+    StepRef,
+    TransitionRef,
+    element_of,
+    find,
+    label,
+)
+from s7graph.sequencer.model import Chart, Sequence
+from s7graph.sequencer.validate import validate
+
+Target = Literal["step", "row", "transition", "sequence", "chart"]
+
+# The arguments naming the element an operation acts on, filled from the selection.
+_ELEMENT_ARGS: Final[dict[Target, tuple[str, ...]]] = {
+    "step": ("step",),
+    "row": ("step", "index"),
+    "transition": ("transition",),
+    "sequence": ("sequence",),
+    "chart": (),
+}
+
+
+@dataclass(frozen=True, slots=True)
+class Argument:
+    name: str
+    type: str  # "int", "str", "bool", "int | None", "RowFields"
+    default: object = MISSING  # MISSING: required
+
+    @property
+    def required(self) -> bool:
+        return self.default is MISSING
+
+
+@dataclass(frozen=True, slots=True)
+class Operation:
+    """One edit operation: its stable ``name`` (for a bus command), its ``edit`` class,
+    the kind of element it acts on and the menu ``title`` (S7-GRAPH's wording)."""
+
+    name: str
+    edit: type[Edit]
+    target: Target
+    title: str
+
+    @property
+    def doc(self) -> str:
+        """What the operation does (its class's docstring, one paragraph)."""
+        return " ".join((self.edit.__doc__ or "").split())
+
+    @property
+    def element_arguments(self) -> tuple[str, ...]:
+        """The leading arguments that name the element (filled from the selection)."""
+        return _ELEMENT_ARGS[self.target]
+
+    @property
+    def arguments(self) -> tuple[Argument, ...]:
+        return tuple(
+            Argument(f.name, str(f.type), f.default)
+            for f in fields(self.edit)  # type: ignore[arg-type]
+        )
+
+    def on(self, ref: Ref | None, **values: object) -> Edit:
+        """The edit of this operation on the element ``ref`` (the selection), with the
+        other arguments ``values``."""
+        names = self.element_arguments
+        got: tuple[object, ...] = ()
+        if self.target == "row" and isinstance(ref, RowRef):
+            got = (ref.step, ref.index)
+        elif self.target == "step" and isinstance(ref, StepRef | RowRef):
+            got = (ref.number if isinstance(ref, StepRef) else ref.step,)
+        elif (self.target == "transition" and isinstance(ref, TransitionRef)) or (
+            self.target == "sequence" and isinstance(ref, SequenceRef)
+        ):
+            got = (ref.number,)
+        if len(got) != len(names):
+            raise EditRefused(f"{self.title} acts on a {self.target}; select one first")
+        return make_edit(self.name, {**dict(zip(names, got, strict=True)), **values})
+
+
+# The one table of edit operations, by the element they act on (seed 000:5432-5489 for
+# S7-GRAPH's Insert menu: Step + Transition, Alternative/Simultaneous branch, Jump, Branch
+# stop, Sequencer).
+OPERATIONS: Final[tuple[Operation, ...]] = (
+    Operation("rename_step", RenameStep, "step", "Name"),
+    Operation("renumber_step", RenumberStep, "step", "Number"),
+    Operation("set_initial", SetInitial, "step", "Initial step"),
+    Operation("set_message", SetMessage, "step", "Message text"),
+    Operation("set_interlock", SetInterlock, "step", "Interlock"),
+    Operation("set_supervision", SetSupervision, "step", "Supervision"),
+    Operation("add_row", AddRow, "step", "Add action row"),
+    Operation("insert_alternative_branch", InsertAlternativeBranch, "step", "Alternative branch"),
+    Operation("delete_step", DeleteStep, "step", "Delete step"),
+    Operation(
+        "delete_simultaneous_branch", DeleteSimultaneousBranch, "step", "Delete simultaneous branch"
+    ),
+    Operation("change_row", ChangeRow, "row", "Change action row"),
+    Operation("remove_row", RemoveRow, "row", "Remove action row"),
+    Operation("move_row", MoveRow, "row", "Move action row"),
+    Operation("rename_transition", RenameTransition, "transition", "Name"),
+    Operation("renumber_transition", RenumberTransition, "transition", "Number"),
+    Operation("set_condition", SetCondition, "transition", "Condition"),
+    Operation("insert_step", InsertStep, "transition", "Step + Transition"),
+    Operation(
+        "insert_simultaneous_branch", InsertSimultaneousBranch, "transition", "Simultaneous branch"
+    ),
+    Operation("jump", Jump, "transition", "Jump"),
+    Operation("branch_stop", BranchStop, "transition", "Branch stop"),
+    Operation("delete_transition", DeleteTransition, "transition", "Delete transition"),
+    Operation(
+        "delete_alternative_branch",
+        DeleteAlternativeBranch,
+        "transition",
+        "Delete alternative branch",
+    ),
+    Operation("rename_sequence", RenameSequence, "sequence", "Name"),
+    Operation("delete_sequence", DeleteSequence, "sequence", "Delete sequencer"),
+    Operation("insert_sequence", InsertSequence, "chart", "Sequencer"),
+    Operation("set_option", SetOption, "chart", "Block option"),
+    Operation("set_source", SetSource, "chart", "Source"),
+)
+BY_NAME: Final[dict[str, Operation]] = {op.name: op for op in OPERATIONS}
+_BY_CLASS: Final[dict[type[Edit], Operation]] = {op.edit: op for op in OPERATIONS}
+
+
+def operations_for(ref: Ref | None) -> tuple[Operation, ...]:
+    """The operations that act on the element ``ref`` names (None: on the chart)."""
+    kinds: set[Target] = {"chart"}
+    if isinstance(ref, StepRef):
+        kinds.add("step")
+    elif isinstance(ref, RowRef):
+        kinds |= {"row", "step"}
+    elif isinstance(ref, TransitionRef):
+        kinds.add("transition")
+    elif isinstance(ref, SequenceRef):
+        kinds.add("sequence")
+    return tuple(op for op in OPERATIONS if op.target in kinds)
+
+
+def _value(arg: Argument, value: object, op: str) -> object:
+    what = f"{op}: {arg.name}"
+    if arg.type == "RowFields":
+        if isinstance(value, RowFields):
+            return value
+        if not isinstance(value, Mapping):
+            raise EditRefused(f"{what} must be the fields of an action row")
+        known = {f.name: f for f in fields(RowFields)}
+        extra = sorted(set(value) - set(known))
+        if extra:
+            raise EditRefused(f"{what}: unknown field {extra[0]!r}; fields are {', '.join(known)}")
+        kept: dict[str, Any] = {}
+        for name, v in value.items():
+            want = bool if name == "interlocked" else str
+            if not isinstance(v, want):
+                raise EditRefused(f"{what}.{name} must be {want.__name__}")
+            kept[name] = v
+        try:
+            return RowFields(**kept)
+        except TypeError:
+            raise EditRefused(f"{what} needs a qualifier and an operand") from None
+    if value is None and arg.type.endswith("| None"):
+        return None
+    if arg.type.startswith("int"):
+        if not isinstance(value, int) or isinstance(value, bool):
+            raise EditRefused(f"{what} must be a whole number")
+    elif arg.type == "bool":
+        if not isinstance(value, bool):
+            raise EditRefused(f"{what} must be true or false")
+    elif not isinstance(value, str):
+        raise EditRefused(f"{what} must be text")
+    return value
+
+
+def make_edit(name: str, args: Mapping[str, object]) -> Edit:
+    """The edit operation ``name`` with ``args`` (as a bus command or a form sends them),
+    every argument checked against ``OPERATIONS``; else refuse naming the problem."""
+    op = BY_NAME.get(name) if isinstance(name, str) else None
+    if op is None:
+        raise EditRefused(f"unknown edit operation {str(name)[:40]!r}")
+    if not isinstance(args, Mapping):
+        raise EditRefused(f"{name}: the arguments must be named")
+    params = {a.name: a for a in op.arguments}
+    extra = sorted(str(k) for k in args if k not in params)
+    if extra:
+        raise EditRefused(
+            f"{name}: unknown argument {extra[0][:40]!r}; it takes {', '.join(params) or 'none'}"
+        )
+    values = {}
+    for a in params.values():
+        if a.name in args:
+            values[a.name] = _value(a, args[a.name], name)
+        elif a.default is MISSING:
+            raise EditRefused(f"{name}: missing argument {a.name!r}")
+    return op.edit(**values)
+
+
+def describe(edit: Edit) -> str:
+    """A short line naming ``edit`` (the undo and redo menu)."""
+    op = _BY_CLASS.get(type(edit))
+    if op is None:
+        return type(edit).__name__
+    shown = []
+    for f in fields(edit):  # type: ignore[arg-type]
+        v = getattr(edit, f.name)
+        text = v.text() if isinstance(v, RowFields) else repr(v)
+        shown.append(f"{f.name}={text if len(text) <= 40 else text[:37] + '...'}")
+    return f"{op.title} ({', '.join(shown)})"
+
+
+# ---------------------------------------------------------------- applying an edit
+
+
+@dataclass(frozen=True, slots=True)
+class Outcome:
+    """What an edit gave: the chart (unchanged when refused), its diagnostics, the
+    refusal (None when made) and the element to select."""
+
+    chart: Chart
+    diagnostics: tuple[Diagnostic, ...]
+    refusal: Refusal | None = None
+    selection: Ref | None = None
+
+    @property
+    def made(self) -> bool:
+        return self.refusal is None
+
+
+def _checked(chart: Chart, symbols: SymbolTable | None) -> tuple[Diagnostic, ...]:
+    """The validator's diagnostics of a chart within the editor's limits."""
+    check_bounds(chart)
+    try:
+        return tuple(validate(chart, symbols))
+    except RecursionError:  # pragma: no cover - check_bounds bounds the nesting
+        raise EditRefused("the chart nests too deeply to check") from None
+
+
+def apply_edit(
+    chart: Chart,
+    edit: Edit,
+    symbols: SymbolTable | None = None,
+    diagnostics: tuple[Diagnostic, ...] | None = None,
+) -> Outcome:
+    """``edit`` applied to ``chart``: the edited chart with all its diagnostics (errors
+    included: they are listed, the chart is kept), or a refusal with ``chart`` and its
+    ``diagnostics`` (computed when not given). Never raises for any input."""
+    try:
+        if not isinstance(edit, Edit):
+            raise EditRefused(f"not an edit operation: {type(edit).__name__}")
+        edited, selection = edit.apply(chart)
+        return Outcome(edited, _checked(edited, symbols), None, selection)
+    except EditRefused as exc:
+        refusal = Refusal(exc.reason, exc.diagnostics)
+    except RecursionError:  # pragma: no cover - texts and charts are bounded before
+        refusal = Refusal("the edit nests too deeply")
+    if diagnostics is None:
+        diagnostics = tuple(validate(chart, symbols))
+    return Outcome(chart, diagnostics, refusal, None)
+
+
+def new_chart(
+    name: str = "GRAPH_block", fb_number: int | None = None, db_number: int | None = None
+) -> Chart:
+    """A new GRAPH block as TIA Portal creates one: sequencer 1 with the initial step S1
+    and transition T1 (empty condition) jumping back to S1."""
+    name = checked_text(name, "the block name", MAX_NAME)
+    for n in (fb_number, db_number):
+        if n is not None:
+            checked_number(n, "a block number")
+    seq = Sequence(1, "", (new_step(1, initial=True),), (new_transition(1, (1,), (1,)),))
+    return Chart(name, fb_number, db_number, sequences=(seq,), file=f"{name}.s7g")
+
+
+# ---------------------------------------------------------------- the session
+
+
+@dataclass(frozen=True, slots=True)
+class _Done:
+    chart: Chart
+    diagnostics: tuple[Diagnostic, ...]
+    selection: Ref | None
+    what: str
+
+
+@dataclass(frozen=True, slots=True)
+class Session:
+    """An editor's state as one immutable value: the chart, its diagnostics, the selected
+    element, the last refusal, and the charts to undo and redo (at most ``MAX_UNDO``).
+    Every method returns the next state; none raises except ``open`` on a chart beyond
+    the editor's limits."""
+
+    chart: Chart
+    diagnostics: tuple[Diagnostic, ...]
+    symbols: SymbolTable | None = None
+    selection: Ref | None = None
+    refusal: Refusal | None = None
+    done: tuple[_Done, ...] = ()
+    undone: tuple[_Done, ...] = ()
+
+    @classmethod
+    def open(cls, chart: Chart, symbols: SymbolTable | None = None) -> Session:
+        """A session on ``chart``; raises ``EditRefused`` when the chart is beyond the
+        editor's limits (``edit_base``: steps, transitions, rows, nesting)."""
+        return cls(chart, _checked(chart, symbols), symbols)
+
+    @property
+    def has_errors(self) -> bool:
+        """Whether the chart does not compile (a download refuses it)."""
+        return any(d.is_error for d in self.diagnostics)
+
+    @property
+    def undo_label(self) -> str | None:
+        return self.done[-1].what if self.done else None
+
+    @property
+    def redo_label(self) -> str | None:
+        return self.undone[-1].what if self.undone else None
+
+    def apply(self, edit: Edit) -> Session:
+        """The state after ``edit``: made (undoable, redo cleared) or refused (the chart
+        as it was, ``refusal`` saying why)."""
+        out = apply_edit(self.chart, edit, self.symbols, self.diagnostics)
+        if out.refusal is not None:
+            return replace(self, refusal=out.refusal)
+        done = _Done(self.chart, self.diagnostics, self.selection, describe(edit))
+        return replace(
+            self,
+            chart=out.chart,
+            diagnostics=out.diagnostics,
+            selection=out.selection,
+            refusal=None,
+            done=(*self.done, done)[-MAX_UNDO:],
+            undone=(),
+        )
+
+    def undo(self) -> Session:
+        """The state before the last edit made (the very chart it was); as it is when
+        there is nothing to undo."""
+        if not self.done:
+            return replace(self, refusal=Refusal("nothing to undo"))
+        last = self.done[-1]
+        back = _Done(self.chart, self.diagnostics, self.selection, last.what)
+        return replace(
+            self,
+            chart=last.chart,
+            diagnostics=last.diagnostics,
+            selection=last.selection,
+            refusal=None,
+            done=self.done[:-1],
+            undone=(*self.undone, back),
+        )
+
+    def redo(self) -> Session:
+        """The state after the last edit undone."""
+        if not self.undone:
+            return replace(self, refusal=Refusal("nothing to redo"))
+        last = self.undone[-1]
+        again = _Done(self.chart, self.diagnostics, self.selection, last.what)
+        return replace(
+            self,
+            chart=last.chart,
+            diagnostics=last.diagnostics,
+            selection=last.selection,
+            refusal=None,
+            done=(*self.done, again),
+            undone=self.undone[:-1],
+        )
+
+    def select(self, ref: Ref | None) -> Session:
+        """Select the element ``ref`` (None: nothing); refused when there is none."""
+        if ref is not None and find(self.chart, ref) is None:
+            return replace(self, refusal=Refusal(f"there is no {label(ref)} in the chart"))
+        return replace(self, selection=ref, refusal=None)
+
+    def select_diagnostic(self, d: Diagnostic) -> Session:
+        """Select the element diagnostic ``d`` concerns (a click in the diagnostics list)."""
+        return self.select(element_of(d, self.chart))
