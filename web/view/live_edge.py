@@ -19,9 +19,10 @@ from s7graph.engine.modes import CpuMode
 from s7graph.engine.record import ScanRecord
 from s7graph.engine.runner import Runner
 from s7graph.engine.watchdog import CycleStatistics
+from s7graph.web.bus.gate import Gate
 from s7graph.web.bus.live import LiveGraph
 from s7graph.web.bus.protocol import CycleStats, StepStateUpdate
-from s7graph.web.view.edge import WebEdge, serve_view
+from s7graph.web.view.edge import BusEnds, WebEdge, serve_view
 
 if TYPE_CHECKING:
     from s7graph.web.recorder import Recorder
@@ -56,14 +57,18 @@ class LiveEdge:
         record: Path | None = None,
         endpoint: str | None = None,
         serve: bool = True,
+        ends: BusEnds | None = None,
+        gate: Gate | None = None,
+        allowed_origins: tuple[str, ...] = (),
     ) -> None:
         self.live = live
         self.recorder: Recorder | None = None
         self.edge: WebEdge | None = None
         if serve:
             self.edge = serve_view(
-                live.layout, None, host=host, port=port, cpu=cpu, endpoint=endpoint
-            )
+                live.layout, None, host=host, port=port, cpu=cpu, endpoint=endpoint, ends=ends,
+                gate=gate, allowed_origins=allowed_origins,
+            )  # fmt: skip
         try:
             if record is not None:
                 from s7graph.web.recorder import Recorder  # rerun-sdk only when recording
