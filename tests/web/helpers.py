@@ -19,7 +19,7 @@ from s7graph.engine.symbols import SymbolTable
 from s7graph.web.harness.session import ChartSession, load_chart
 
 if TYPE_CHECKING:
-    from playwright.sync_api import Page
+    from playwright.sync_api import Locator, Page
 
 CHROMIUM = "/usr/bin/chromium"
 ARGS = [
@@ -60,6 +60,24 @@ def chromium_page(url: str) -> Iterator[Page]:
             page.close()
         finally:
             browser.close()
+
+
+def field(page: Page, label: str) -> Locator:
+    """The text input of a viser GUI field by its label (viser's label does not name it)."""
+    xpath = f"//label[text()='{label}']/ancestor::div[contains(@class,'mantine-Flex-root')][1]//input"
+    return page.locator(f"xpath={xpath}").first
+
+
+def log_in(page: Page, user: str, password: str = "") -> None:
+    """Log the page in through its Login panel and wait until it says so."""
+    field(page, "User").fill(user)
+    if password:
+        field(page, "Password").fill(password)
+        field(page, "Password").press("Tab")
+    else:
+        field(page, "User").press("Tab")
+    page.get_by_role("button", name="Log in", exact=True).click()
+    page.get_by_text(f"logged in as {user}").first.wait_for(timeout=30_000)
 
 
 def chart_session(

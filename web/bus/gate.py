@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from pathlib import Path
 from typing import TypeAlias
 
 import msgspec
@@ -20,6 +21,7 @@ import msgspec
 from s7graph.web.access.audit import AuditRecord, AuditStore
 from s7graph.web.access.login import Authenticator, Identity
 from s7graph.web.access.roles import NOT_AVAILABLE, allowed, lowest_role
+from s7graph.web.access.users import UsersError, UsersFile
 from s7graph.web.bus.protocol import (
     AlarmEvent,
     AlarmHistory,
@@ -30,7 +32,7 @@ from s7graph.web.bus.protocol import (
     LoginRequest,
 )
 
-__all__ = ["Apply", "Gate", "audit_entry"]
+__all__ = ["Apply", "Gate", "audit_entry", "cpu_gate"]
 
 ApplyResult: TypeAlias = tuple[bool, str] | tuple[bool, str, str]
 Apply: TypeAlias = Callable[[Command], ApplyResult]
@@ -241,3 +243,15 @@ class Gate:
                 for r in self.audit.alarm_history(n)
             ]
         )
+
+
+def cpu_gate(users: Path | None, state: Path) -> Gate:
+    """The gate of a CPU started from the command line: reading ``users`` (None: the
+    demo), auditing into the state file ``state``. A users file that is missing or cannot
+    be read raises ``UsersError`` here, at start."""
+    users_file = UsersFile(users) if users is not None else None
+    if users_file is not None:
+        if not users_file.path.is_file():
+            raise UsersError(f"{users_file.path}: no such users file (s7graph users add ...)")
+        users_file.load()
+    return Gate(Authenticator(users_file), AuditStore(state))

@@ -88,6 +88,11 @@ class ClientPanel:
         with gui.add_folder("Login"):
             self.user_field = gui.add_text("User", "")
             self.password = gui.add_text("Password", "", visible=not w.demo)
+            # viser has no password input: mask the one whose label points at this field
+            # (Chromium, Safari, Firefox >= 127 honour -webkit-text-security)
+            uid = self.password._impl.uuid
+            rule = f".mantine-Flex-root:has(label[for='{uid}']) input{{-webkit-text-security:disc}}"
+            gui.add_html(f"<style>{rule}</style>")
             self.login_button = gui.add_button("Log in")
             self.logout_button = gui.add_button("Log out", disabled=True)
             self.who = gui.add_html(texts.login_html("", "", True, w.demo))
