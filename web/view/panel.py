@@ -179,8 +179,12 @@ class ClientPanel:
         self._enable()
 
     def forget(self) -> None:
-        """The page went away: revoke its token."""
-        self._log_out()
+        """The page went away: revoke its token (its GUI is gone, nothing to update)."""
+        with self._lock:
+            token, user = self.token, self.user
+            self.token = ""
+        if token:
+            self.wiring.logout(token, user, self.origin)
 
     # ------------------------------------------------------------ commands
 
