@@ -64,7 +64,8 @@ def chromium_page(url: str) -> Iterator[Page]:
 
 def field(page: Page, label: str) -> Locator:
     """The text input of a viser GUI field by its label (viser's label does not name it)."""
-    xpath = f"//label[text()='{label}']/ancestor::div[contains(@class,'mantine-Flex-root')][1]//input"
+    row = "ancestor::div[contains(@class,'mantine-Flex-root')][1]"
+    xpath = f"//label[text()='{label}']/{row}//input"
     return page.locator(f"xpath={xpath}").first
 
 

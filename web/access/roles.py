@@ -53,9 +53,19 @@ COMMANDS: Final[tuple[CommandInfo, ...]] = (
     CommandInfo("en_il", "engineer", "EN_IL", "enable / disable interlocks", '{"on": false}'),
     CommandInfo("en_sv", "engineer", "EN_SV", "enable / disable supervisions", '{"on": false}'),
     CommandInfo(
-        "force", "engineer", "", "force an input, output or flag", '{"address": "I0.0", ...}'
+        "force",
+        "engineer",
+        "",
+        "force an input, output or flag (not available yet)",
+        '{"address": "I0.0", ...}',
     ),
-    CommandInfo("download", "engineer", "", "download a changed chart", '{"source": "..."}'),
+    CommandInfo(
+        "download",
+        "engineer",
+        "",
+        "download a changed chart (not available yet)",
+        '{"source": "..."}',
+    ),
 )
 # Ops the role table grants but this CPU does not carry out yet: refused after the role check.
 NOT_AVAILABLE: Final = frozenset({"force", "download"})
