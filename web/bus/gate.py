@@ -109,28 +109,30 @@ class Gate:
 
     # ------------------------------------------------------------ commands
 
-    def check(self, command: Command) -> Identity | str:
-        """The sender of ``command`` if it may be applied, else the reason it may not."""
+    def check(self, command: Command) -> tuple[Identity | None, str]:
+        """Who sent ``command`` (None: nobody we know) and why it may not be applied ("":
+        it may)."""
         who = self.auth.identify(command.user, command.token)
         if isinstance(who, str):
-            return who
+            return None, who
         if not allowed(who.role, command.op):
             need = lowest_role(command.op) or "?"
-            return f"role {who.role} may not {command.op} (needs {need})"
+            return who, f"role {who.role} may not {command.op} (needs {need})"
         if command.op in NOT_AVAILABLE:
-            return f"{command.op} is not available yet on this CPU"
-        return who
+            return who, f"{command.op} is not available yet on this CPU"
+        return who, ""
 
     def apply(
         self, command: Command, apply: Apply, *, cycle: int | None = None
     ) -> tuple[bool, str]:
         """Check, apply (as the established user, without the token) and audit ``command``;
         (applied, reason). ``apply`` raising refuses the command."""
-        who = self.check(command)
-        if isinstance(who, str):
-            name = command.user or "?"
-            self.record(name, "", command.origin, command.op, command.fb, command.args, False, who)
-            return False, who
+        who, refusal = self.check(command)
+        if who is None or refusal:
+            name, role = (who.label, who.role) if who is not None else (command.user or "?", "")
+            self.record(name, role, command.origin, command.op, command.fb, command.args, False,
+                        refusal)  # fmt: skip
+            return False, refusal
         as_user = msgspec.structs.replace(command, user=who.label, token="")
         try:
             result = apply(as_user)
@@ -140,17 +142,8 @@ class Gate:
             applied, reason, detail = False, f"{type(exc).__name__}: {exc}", ""
         if cycle is not None and applied:
             detail = f"cycle {cycle}" + (f": {detail}" if detail else "")
-        self.record(
-            who.label,
-            who.role,
-            command.origin,
-            command.op,
-            command.fb,
-            command.args,
-            applied,
-            reason,
-            detail,
-        )
+        self.record(who.label, who.role, command.origin, command.op, command.fb, command.args,
+                    applied, reason, detail)  # fmt: skip
         return applied, reason
 
     def refuse(self, command: Command | None, reason: str, origin: str = "") -> None:
