@@ -19,7 +19,7 @@ from __future__ import annotations
 import json
 import sqlite3
 import threading
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Final
@@ -131,13 +131,13 @@ class AuditStore:
         origin: str,
         op: str,
         fb: str,
-        args: dict[str, object],
+        args: Mapping[str, object],
         applied: bool,
         reason: str = "",
         detail: str = "",
     ) -> AuditRecord:
         """Append one row and return it."""
-        text = json.dumps(args, sort_keys=True, default=str)[:4096]
+        text = json.dumps(dict(args), sort_keys=True, default=str)[:4096]
         outcome = "applied" if applied else "refused"
         values = (
             t_ns,

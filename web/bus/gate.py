@@ -12,7 +12,7 @@ Tokens and passwords reach neither ``apply`` nor the audit nor any log.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import TypeAlias
 
@@ -137,7 +137,7 @@ class Gate:
         try:
             result = apply(as_user)
             applied, reason = result[0], result[1]
-            detail = result[2] if len(result) > 2 else ""  # type: ignore[misc]
+            detail = result[2] if len(result) > 2 else ""
         except Exception as exc:  # a bad command must not stop the scan loop
             applied, reason, detail = False, f"{type(exc).__name__}: {exc}", ""
         if cycle is not None and applied:
@@ -171,7 +171,7 @@ class Gate:
         origin: str,
         op: str,
         fb: str,
-        args: dict[str, object],
+        args: Mapping[str, object],
         applied: bool,
         reason: str = "",
         detail: str = "",

@@ -64,17 +64,17 @@ def send_command(
             if not login.ok:
                 return _fail(f"login refused: {login.reason}", 1)
             try:
+                fields: dict[str, Any] = {"op": op, "args": args}
                 command = Command(
-                    op=op, fb=name, user=user, token=login.token, origin=_origin(),
-                    args=args,  # type: ignore[arg-type]
-                )  # fmt: skip
+                    fb=name, user=user, token=login.token, origin=_origin(), **fields
+                )
                 reply = client.send(command)
             except (TypeError, ValueError) as exc:
                 return _fail(str(exc))
             finally:
                 client.logout(login.token, user=user, origin=_origin())
     finally:
-        session.close()
+        session.close()  # type: ignore[no-untyped-call]  # zenoh's stub
     if not reply.applied:
         print(f"s7graph: {op} refused: {reply.reason}", file=sys.stderr)
         return 1
@@ -135,5 +135,5 @@ def watch_command(net: NetOptions, *, fb: str | None, duration_s: float | None =
                 stop.wait(duration_s)
     finally:
         signal.signal(signal.SIGTERM, previous)
-        session.close()
+        session.close()  # type: ignore[no-untyped-call]  # zenoh's stub
     return 0

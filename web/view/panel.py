@@ -13,7 +13,7 @@ from __future__ import annotations
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Final
 
 import viser
 
@@ -30,7 +30,7 @@ from s7graph.web.view import texts
 __all__ = ["ClientPanel", "PageState", "Wiring"]
 
 MODES = ("AUTO", "MAN", "TAP", "TOP")
-CURRENT_MODE_COLOUR = "green"
+CURRENT_MODE_COLOUR: Final = "green"
 
 
 @dataclass(frozen=True, slots=True)
@@ -159,7 +159,7 @@ class ClientPanel:
     def _log_in(self) -> None:
         user = str(self.user_field.value).strip()
         password = str(self.password.value)
-        self.password.value = ""  # never left on the page  # type: ignore[misc]
+        self.password.value = ""  # type: ignore[misc]  # never left on the page
         reply = self.wiring.login(user, password, self.origin)
         if not reply.ok:
             self._notify("login refused", reply.reason, ok=False)
@@ -189,10 +189,16 @@ class ClientPanel:
     # ------------------------------------------------------------ commands
 
     def _handler(self, op: str, **args: object) -> Callable[[Any], None]:
-        return lambda _: self.command(op, dict(args))
+        def click(_: Any) -> None:
+            self.command(op, dict(args))
+
+        return click
 
     def _step_handler(self, op: str) -> Callable[[Any], None]:
-        return lambda _: self.command(op, {"step": int(self.step_number.value)})
+        def click(_: Any) -> None:
+            self.command(op, {"step": int(self.step_number.value)})
+
+        return click
 
     def _halt(self) -> None:
         self.command("halt", {"on": not self._halted})
@@ -203,10 +209,8 @@ class ClientPanel:
         with self._lock:
             user, token = self.user, self.token
         try:
-            command = Command(
-                op=op, fb=w.layout.fb, user=user, token=token, origin=self.origin,
-                args=args,  # type: ignore[arg-type]
-            )  # fmt: skip
+            fields: dict[str, Any] = {"op": op, "args": args}
+            command = Command(fb=w.layout.fb, user=user, token=token, origin=self.origin, **fields)
         except (TypeError, ValueError) as exc:
             reply = CommandReply(applied=False, reason=str(exc), op=op, fb=w.layout.fb)
         else:
