@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from s7graph.web.access.audit import AuditStore, read_audit
+from s7graph.web.access.audit import AuditStore, Facts, read_audit
 from s7graph.web.access.login import Authenticator
 from s7graph.web.access.roles import COMMANDS, ROLES, allowed, ops_of, role_table_markdown
 from s7graph.web.access.users import UsersError, UsersFile, check_name, verify_password
@@ -147,8 +147,8 @@ def test_audit_store_migrates_an_old_state_file(tmp_path: Path) -> None:
     old = StateStore(tmp_path / "state.sqlite")
     old.log_audit(7, "ann", "ack", "FB1 S3")  # a row from before the new columns
     store = AuditStore(tmp_path / "state.sqlite")
-    store.record(9, user="bob", role="operator", origin="shell", op="mode", fb="FB1",
-                 args={"mode": "MAN"}, applied=False, reason="role viewer")  # fmt: skip
+    store.record(9, Facts("bob", "operator", "shell", "mode", "FB1", {"mode": "MAN"}, False,
+                          "role viewer"))  # fmt: skip
     rows = read_audit(tmp_path / "state.sqlite")
     assert [(r.user, r.op, r.outcome) for r in rows] == [
         ("ann", "ack", "applied"),

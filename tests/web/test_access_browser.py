@@ -18,6 +18,7 @@ import viser
 
 from s7graph.engine.clock import VirtualClock
 from s7graph.engine.persistence import StateStore
+from s7graph.engine.record import ScanRecord
 from s7graph.sfb.alarms import message_list
 from s7graph.web.access.audit import AuditStore, read_audit
 from s7graph.web.access.login import Authenticator
@@ -28,7 +29,7 @@ from s7graph.web.bus.protocol import Command
 from s7graph.web.harness.session import ChartSession, load_chart
 from s7graph.web.view.chart_view import DISCONNECTED
 from s7graph.web.view.live_edge import LiveEdge
-from tests.web.helpers import ARGS, CHROMIUM, log_in, needs_chromium, wait_until
+from tests.web.helpers import ARGS, CHROMIUM, log_in, needs_chromium, scanning, wait_until
 
 if TYPE_CHECKING:
     from playwright.sync_api import Browser, Page
@@ -64,31 +65,18 @@ def plant(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Plant]:
     cc, table = load_chart(DRILL / "drill.s7g", DRILL / "symbols.txt")
     session = ChartSession(cc, table, VirtualClock())
     live = LiveGraph(session.graph, read=session.get, messages=message_list(session.cpu))
-    stop = threading.Event()
     gate = Gate(Authenticator(users), audit)
-    with LiveEdge(live, port=0, gate=gate) as edge:
-        session.start()
 
-        def scan_loop() -> None:
-            clock = session.clock
-            assert isinstance(clock, VirtualClock)
-            while not stop.is_set():
-                clock.advance(10)
-                record = session.scan()
-                if record.alarms:  # the alarm log, as the runner keeps it
-                    store.log_alarms(record.alarms, time.time_ns())
-                edge.on_record(record, stats=session.cpu.stats)
-                time.sleep(0.005)
+    def alarm_log(record: ScanRecord) -> None:  # as the runner keeps it
+        if record.alarms:
+            store.log_alarms(record.alarms, time.time_ns())
 
-        thread = threading.Thread(target=scan_loop, daemon=True)
-        thread.start()
-        try:
+    try:
+        with LiveEdge(live, port=0, gate=gate) as edge, scanning(session, edge, alarm_log) as stop:
             yield Plant(edge, session, state, stop)
-        finally:
-            stop.set()
-            thread.join(timeout=5)
-            store.close()
-            audit.close()
+    finally:
+        store.close()
+        audit.close()
 
 
 @pytest.fixture(scope="module")

@@ -28,7 +28,7 @@ from s7graph.web.bus.protocol import Command, CommandReply
 from s7graph.web.bus.zenoh_bus import BusClient, open_session
 from s7graph.web.harness.session import ChartSession, load_chart
 from s7graph.web.view.live_edge import LiveEdge
-from tests.web.helpers import chromium_page, log_in, needs_chromium, wait_until
+from tests.web.helpers import chromium_page, log_in, needs_chromium, scanning, wait_until
 
 ROOT = Path(__file__).resolve().parents[2]
 DRILL = ROOT / "examples" / "drill"
@@ -41,25 +41,8 @@ def running_edge() -> Iterator[tuple[LiveEdge, ChartSession]]:
     cc, table = load_chart(DRILL / "drill.s7g", DRILL / "symbols.txt")
     session = ChartSession(cc, table, VirtualClock())
     live = LiveGraph(session.graph, read=session.get, watch=["Start_button"])
-    stop = threading.Event()
-    with LiveEdge(live, port=0) as edge:
-        session.start()
-
-        def scan_loop() -> None:
-            clock = session.clock
-            assert isinstance(clock, VirtualClock)
-            while not stop.is_set():
-                clock.advance(10)
-                edge.on_record(session.scan(), stats=session.cpu.stats)
-                time.sleep(0.005)
-
-        thread = threading.Thread(target=scan_loop, daemon=True)
-        thread.start()
-        try:
-            yield edge, session
-        finally:
-            stop.set()
-            thread.join(timeout=5)
+    with LiveEdge(live, port=0) as edge, scanning(session, edge):
+        yield edge, session
 
 
 @pytest.mark.timeout(60)

@@ -16,6 +16,7 @@ queries never touch the scan thread's.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import sqlite3
 import threading
@@ -24,7 +25,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Final
 
-__all__ = ["AlarmRecord", "AuditRecord", "AuditStore", "read_audit"]
+__all__ = ["AlarmRecord", "AuditRecord", "AuditStore", "Facts", "read_audit"]
 
 _NEW_COLUMNS: Final = (
     ("role", "TEXT NOT NULL DEFAULT ''"),
@@ -71,6 +72,30 @@ class AuditRecord:
     outcome: str
     reason: str
     detail: str = ""
+
+
+@dataclass(frozen=True, slots=True)
+class Facts:
+    """What one audit row says about one command (the store adds the id and the time)."""
+
+    user: str
+    role: str
+    origin: str
+    op: str
+    fb: str
+    args: Mapping[str, object]
+    applied: bool
+    reason: str = ""
+    detail: str = ""
+
+    def at(self, row_id: int, t_ns: int) -> AuditRecord:
+        """The row, its fields cut to their column sizes and the arguments as JSON."""
+        args = json.dumps(dict(self.args), sort_keys=True, default=str)[:4096]
+        outcome = "applied" if self.applied else "refused"
+        return AuditRecord(
+            row_id, t_ns, self.user[:80], self.role[:16], self.origin[:160], self.op[:32],
+            self.fb[:64], args, outcome, self.reason[:4096], self.detail[:4096],
+        )  # fmt: skip
 
 
 @dataclass(frozen=True, slots=True)
@@ -122,43 +147,17 @@ class AuditStore:
         with self._lock:
             self._db.close()
 
-    def record(
-        self,
-        t_ns: int,
-        *,
-        user: str,
-        role: str,
-        origin: str,
-        op: str,
-        fb: str,
-        args: Mapping[str, object],
-        applied: bool,
-        reason: str = "",
-        detail: str = "",
-    ) -> AuditRecord:
+    def record(self, t_ns: int, facts: Facts) -> AuditRecord:
         """Append one row and return it."""
-        text = json.dumps(dict(args), sort_keys=True, default=str)[:4096]
-        outcome = "applied" if applied else "refused"
-        values = (
-            t_ns,
-            user[:80],
-            role[:16],
-            origin[:160],
-            op[:32],
-            fb[:64],
-            text,
-            outcome,
-            reason[:4096],
-            detail[:4096],
-        )
+        rec = facts.at(0, t_ns)
         with self._lock:
             cur = self._db.execute(
                 "INSERT INTO audit (t_ns, user, role, origin, action, fb, args, outcome, reason,"
                 " detail) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
-                values,
+                dataclasses.astuple(rec)[1:],
             )
             row_id = int(cur.lastrowid or 0)
-        return AuditRecord(row_id, t_ns, *(str(v) for v in values[1:]))
+        return dataclasses.replace(rec, id=row_id)
 
     def last(self, n: int = 50) -> list[AuditRecord]:
         """The last ``n`` audit rows, oldest first."""

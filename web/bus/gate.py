@@ -12,13 +12,13 @@ Tokens and passwords reach neither ``apply`` nor the audit nor any log.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from pathlib import Path
 from typing import TypeAlias
 
 import msgspec
 
-from s7graph.web.access.audit import AuditRecord, AuditStore
+from s7graph.web.access.audit import AuditRecord, AuditStore, Facts
 from s7graph.web.access.login import Authenticator, Identity
 from s7graph.web.access.roles import NOT_AVAILABLE, allowed, lowest_role
 from s7graph.web.access.users import UsersError, UsersFile
@@ -56,6 +56,13 @@ def audit_entry(r: AuditRecord) -> AuditEntry:
     )
 
 
+def _facts(
+    command: Command, user: str, role: str, applied: bool, reason: str, detail: str = ""
+) -> Facts:
+    return Facts(user, role, command.origin, command.op, command.fb, command.args, applied,
+                 reason, detail)  # fmt: skip
+
+
 class Gate:
     """Logins, role checks and the audit of one CPU (``audit`` None: no audit kept)."""
 
@@ -79,23 +86,15 @@ class Gate:
         """Answer a login or logout (runs on a worker thread: scrypt takes a while)."""
         if request.op == "logout":
             known = self.auth.logout(request.token)
-            self.record(
-                request.user or "?",
-                "",
-                request.origin,
-                "logout",
-                "",
-                {},
-                known,
-                "" if known else "no such session",
-            )
+            why = "" if known else "no such session"
+            who = request.user or "?"
+            self.record(Facts(who, "", request.origin, "logout", "", {}, known, why))
             return LoginReply(ok=known, reason="" if known else "no such session")
         result = self.auth.login(request.user, request.password)
         shown = request.user if result.ok or len(request.user) <= 32 else request.user[:32]
         label = Identity(shown, result.role, result.verified).label if result.ok else shown
-        self.record(
-            label or "?", result.role, request.origin, "login", "", {}, result.ok, result.reason
-        )
+        self.record(Facts(label or "?", result.role, request.origin, "login", "", {}, result.ok,
+                          result.reason))  # fmt: skip
         if not result.ok:
             return LoginReply(ok=False, reason=result.reason)
         return LoginReply(
@@ -130,8 +129,7 @@ class Gate:
         who, refusal = self.check(command)
         if who is None or refusal:
             name, role = (who.label, who.role) if who is not None else (command.user or "?", "")
-            self.record(name, role, command.origin, command.op, command.fb, command.args, False,
-                        refusal)  # fmt: skip
+            self.record(_facts(command, name, role, False, refusal))
             return False, refusal
         as_user = msgspec.structs.replace(command, user=who.label, token="")
         try:
@@ -142,74 +140,26 @@ class Gate:
             applied, reason, detail = False, f"{type(exc).__name__}: {exc}", ""
         if cycle is not None and applied:
             detail = f"cycle {cycle}" + (f": {detail}" if detail else "")
-        self.record(who.label, who.role, command.origin, command.op, command.fb, command.args,
-                    applied, reason, detail)  # fmt: skip
+        self.record(_facts(command, who.label, who.role, applied, reason, detail))
         return applied, reason
 
     def refuse(self, command: Command | None, reason: str, origin: str = "") -> None:
         """Audit a command refused before the scan boundary (unreadable, unknown FB, ...)."""
         if command is None:
-            self.record("?", "", origin, "?", "", {}, False, reason)
+            self.record(Facts("?", "", origin, "?", "", {}, False, reason))
         else:
-            self.record(
-                command.user or "?",
-                "",
-                command.origin,
-                command.op,
-                command.fb,
-                command.args,
-                False,
-                reason,
-            )
+            self.record(_facts(command, command.user or "?", "", False, reason))
 
     # ------------------------------------------------------------ audit
 
-    def record(
-        self,
-        user: str,
-        role: str,
-        origin: str,
-        op: str,
-        fb: str,
-        args: Mapping[str, object],
-        applied: bool,
-        reason: str = "",
-        detail: str = "",
-    ) -> AuditEntry:
+    def record(self, facts: Facts) -> AuditEntry:
         """One audit row (and its ``on_audit`` message)."""
         t_ns = self._wall_ns()
         if self.audit is not None:
-            rec = self.audit.record(
-                t_ns,
-                user=user,
-                role=role,
-                origin=origin,
-                op=op,
-                fb=fb,
-                args=args,
-                applied=applied,
-                reason=reason,
-                detail=detail,
-            )
+            entry = audit_entry(self.audit.record(t_ns, facts))
         else:
-            import json
-
             self._count += 1
-            rec = AuditRecord(
-                self._count,
-                t_ns,
-                user,
-                role,
-                origin,
-                op,
-                fb,
-                json.dumps(args, sort_keys=True, default=str),
-                "applied" if applied else "refused",
-                reason,
-                detail,
-            )
-        entry = audit_entry(rec)
-        if self.audit is None:
+            entry = audit_entry(facts.at(self._count, t_ns))
             self._recent = [*self._recent[-(AUDIT_PANEL - 1) :], entry]
         if self.on_audit is not None:
             self.on_audit(entry)

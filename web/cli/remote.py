@@ -10,10 +10,8 @@ one line each, until Ctrl-C or ``--duration-s``.
 
 from __future__ import annotations
 
-import contextlib
 import getpass
 import os
-import signal
 import socket
 import sys
 import threading
@@ -22,6 +20,7 @@ from typing import Any
 from s7graph.web.bus.protocol import Command, StepStateUpdate
 from s7graph.web.bus.zenoh_bus import BusClient, open_session
 from s7graph.web.cli.net import NetOptions
+from s7graph.web.cli.stopping import wait_until_stopped
 
 __all__ = ["PASSWORD_ENV", "send_command", "watch_command"]
 
@@ -100,13 +99,10 @@ def watch_command(net: NetOptions, *, fb: str | None, duration_s: float | None =
         problem = "give the bus with --connect ENDPOINT"
     if problem:
         return _fail(problem)
-    stop = threading.Event()
-    previous = signal.signal(signal.SIGTERM, lambda *_: stop.set())
     lock = threading.Lock()
     try:
         session = open_session(connect=net.connect, tls=net.tls)
     except Exception as exc:
-        signal.signal(signal.SIGTERM, previous)
         return _fail(f"cannot join the bus: {type(exc).__name__}: {exc}")
     try:
         with BusClient(session, net.cpu) as client:
@@ -131,9 +127,7 @@ def watch_command(net: NetOptions, *, fb: str | None, duration_s: float | None =
             client.on_alive(alive)
             for name in names:
                 client.follow(name, lambda u, n=name: show(n, u))  # type: ignore[misc]
-            with contextlib.suppress(KeyboardInterrupt):
-                stop.wait(duration_s)
+            wait_until_stopped(duration_s)
     finally:
-        signal.signal(signal.SIGTERM, previous)
         session.close()  # type: ignore[no-untyped-call]  # zenoh's stub
     return 0

@@ -3,12 +3,11 @@ on several machines meet (no extra binary). Runs until Ctrl-C or SIGTERM."""
 
 from __future__ import annotations
 
-import signal
 import sys
-import threading
 
 from s7graph.web.bus.zenoh_bus import open_session
 from s7graph.web.cli.net import NetOptions
+from s7graph.web.cli.stopping import wait_until_stopped
 
 __all__ = ["router_command"]
 
@@ -20,21 +19,15 @@ def router_command(net: NetOptions, duration_s: float | None = None) -> int:
     if problem:
         print(f"s7graph: error: {problem}", file=sys.stderr)
         return 2
-    stop = threading.Event()
-    previous = signal.signal(signal.SIGTERM, lambda *_: stop.set())
     try:
         session = open_session(net.listen, net.connect, mode="router", tls=net.tls)
     except Exception as exc:
-        signal.signal(signal.SIGTERM, previous)
         print(f"s7graph: error: cannot open the router: {type(exc).__name__}: {exc}",
               file=sys.stderr)  # fmt: skip
         return 2
     print(f"s7graph: router on {', '.join(net.listen)}; Ctrl-C to stop", flush=True)
     try:
-        stop.wait(duration_s)
-    except KeyboardInterrupt:
-        pass
+        wait_until_stopped(duration_s)
     finally:
-        signal.signal(signal.SIGTERM, previous)
         session.close()  # type: ignore[no-untyped-call]  # zenoh's stub
     return 0

@@ -9,13 +9,12 @@ page may leave this machine (``--host``) only when the CPU checks logins (a user
 
 from __future__ import annotations
 
-import signal
 import sys
-import threading
 import time
 
 from s7graph.web.bus.zenoh_bus import find_cpus, open_session
 from s7graph.web.cli.net import NetOptions, is_loopback_host
+from s7graph.web.cli.stopping import wait_until_stopped
 from s7graph.web.view.edge import PortError, ViewSide
 
 __all__ = ["web_command"]
@@ -64,25 +63,18 @@ def web_command(
             f"--host {net.host} is not loopback and CPU {chosen.cpu} has no users file: "
             "the page stays on this machine"
         )
-    stop = threading.Event()
-    previous = signal.signal(signal.SIGTERM, lambda *_: stop.set())
     try:
         view = ViewSide(
             cpu=chosen.cpu, fb=fb, ends=net.ends, host=net.host, port=port,
             allowed_origins=net.origins,
         )  # fmt: skip
     except (PortError, TimeoutError) as exc:
-        signal.signal(signal.SIGTERM, previous)
         return _fail(str(exc))
     except Exception as exc:
-        signal.signal(signal.SIGTERM, previous)
         return _fail(f"cannot serve the view: {type(exc).__name__}: {exc}")
     print(f"s7graph: view {view.url} of {chosen.cpu}/{view.fb}; Ctrl-C to stop", flush=True)
     try:
-        stop.wait(duration_s)
-    except KeyboardInterrupt:
-        pass
+        wait_until_stopped(duration_s)
     finally:
-        signal.signal(signal.SIGTERM, previous)
         view.close()
     return 0
