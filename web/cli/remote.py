@@ -17,6 +17,8 @@ import sys
 import threading
 from typing import Any
 
+import zenoh
+
 from s7graph.web.bus.protocol import Command, StepStateUpdate
 from s7graph.web.bus.zenoh_bus import BusClient, open_session
 from s7graph.web.cli.net import NetOptions
@@ -37,19 +39,26 @@ def _origin() -> str:
     return f"shell {who}@{socket.gethostname()} pid {os.getpid()}"[:160]
 
 
-def send_command(
-    net: NetOptions, *, fb: str | None, user: str, op: str, args: dict[str, Any]
-) -> int:
-    """Log in, send one command, log out; 0 applied, 1 refused, 2 a usage or bus error."""
+def _join(net: NetOptions) -> zenoh.Session | str:
+    """A session on the bus of ``net`` (connecting only), or why there is none."""
     problem = net.problem(listening=False)
     if problem is None and not net.connect:
         problem = "give the bus with --connect ENDPOINT"
     if problem:
-        return _fail(problem)
+        return problem
     try:
-        session = open_session(connect=net.connect, tls=net.tls)
+        return open_session(connect=net.connect, tls=net.tls)
     except Exception as exc:
-        return _fail(f"cannot join the bus: {type(exc).__name__}: {exc}")
+        return f"cannot join the bus: {type(exc).__name__}: {exc}"
+
+
+def send_command(
+    net: NetOptions, *, fb: str | None, user: str, op: str, args: dict[str, Any]
+) -> int:
+    """Log in, send one command, log out; 0 applied, 1 refused, 2 a usage or bus error."""
+    session = _join(net)
+    if isinstance(session, str):
+        return _fail(session)
     try:
         with BusClient(session, net.cpu) as client:
             status = client.status()
@@ -94,16 +103,10 @@ def _line(fb: str, update: StepStateUpdate) -> str:
 
 def watch_command(net: NetOptions, *, fb: str | None, duration_s: float | None = None) -> int:
     """Print step changes of ``net.cpu`` live; 0 at the end, 2 when nothing can be watched."""
-    problem = net.problem(listening=False)
-    if problem is None and not net.connect:
-        problem = "give the bus with --connect ENDPOINT"
-    if problem:
-        return _fail(problem)
     lock = threading.Lock()
-    try:
-        session = open_session(connect=net.connect, tls=net.tls)
-    except Exception as exc:
-        return _fail(f"cannot join the bus: {type(exc).__name__}: {exc}")
+    session = _join(net)
+    if isinstance(session, str):
+        return _fail(session)
     try:
         with BusClient(session, net.cpu) as client:
             status = client.status()
