@@ -226,3 +226,30 @@ def test_a_failing_fb_hook_refuses_the_command_instead_of_raising(
     monkeypatch.setattr(rig.session.graph, "command", boom)
     assert rig.cmd("init") == (False, "command refused: RuntimeError: hook broke")
     assert rig.scan().active == [1]
+
+
+def test_halt_holds_the_sequencer_until_released_whatever_the_parameter_set(rig: Rig) -> None:
+    """HALT_SQ from the Control Sequencer: no switching while held, the pin again after."""
+    assert rig.cmd("halt", on=True) == (True, "")
+    rig.session.set("Start", True)
+    held = rig.scans(5)[-1]
+    assert held.active == [1] and held.halted
+    assert rig.cmd("halt", on=False) == (True, "")
+    after = rig.scans(3)[-1]
+    assert after.active == [2] and not after.halted
+
+
+def test_en_sv_off_disables_supervision_and_ack_step_acknowledges_one_step(rig: Rig) -> None:
+    rig.session.set("Start", True)
+    rig.session.set("Door", True)
+    rig.scans(3)
+    assert rig.cmd("ack_step", step=2) == (False, "S2 waits for no acknowledgement")
+    assert rig.cmd("en_sv", on=False) == (True, "")
+    quiet = rig.scans(120)[-1]  # S2.U passes 1 s: no supervision fault while disabled
+    assert quiet.latched == [] and not quiet.sv_enabled
+    assert rig.cmd("en_sv", on=True) == (True, "")
+    latched = rig.scans(3)[-1]
+    assert latched.latched == [2] and latched.sv_enabled
+    assert rig.cmd("ack_step", step=9) == (False, "no step S9 in Live")
+    assert rig.cmd("ack_step", step=2) == (True, "")
+    assert ("A1", 2) in rig.scan().events  # released as ACK_S would (the cause persists)

@@ -107,6 +107,10 @@ def test_steps_are_coloured_from_the_bus_state(edge: WebEdge) -> None:
     assert view.boxes[3].color == DISTURBED  # latched supervision error wins over active
     assert view.boxes[1].color == INACTIVE
     assert wait_until(lambda: any("cycle 3" in p.status.content for p in view.panels.values()))
+    # the current mode is highlighted on its button, on every page
+    panels = list(view.panels.values())
+    assert wait_until(lambda: all(p.mode_buttons["AUTO"].color == "green" for p in panels))
+    assert all(p.mode_buttons["MAN"].color is None for p in panels)
 
 
 def test_acknowledge_click_reaches_the_cpu_queue_and_is_answered(
