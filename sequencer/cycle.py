@@ -78,7 +78,8 @@ class GraphRuntime(FastPath):
         self._acked: set[int] = set()  # steps acknowledged in this call
         self._remote: list[int] = []  # acknowledgements queued for the next call
         self._commands: list[tuple[str, int | None]] = []  # operator commands, next call
-        self._target: int | None = None  # step of this call's S_ON/S_OFF command
+        self._target: int | None = None  # step of this call's S_ON/S_OFF/ACK_S command
+        self.levels: dict[str, bool] = {}  # operator overrides of HALT_SQ / EN_IL / EN_SV
         self._final: list[int] = []  # steps left, awaiting their final scan
         self._getter = operator.itemgetter(*self.input_names)
         self._last_in: Any = None  # the input pins of the previous call (fast path)
@@ -162,6 +163,15 @@ class GraphRuntime(FastPath):
         pin's wiring (OFF_SQ: switched off for that call); S_ON/S_OFF act on step number
         ``step`` instead of S_NO."""
         self._commands.append((pin, step))
+
+    def set_level(self, pin: str, value: bool | None) -> None:
+        """Override the level pin HALT_SQ, EN_IL or EN_SV with ``value`` from the next call
+        on, whatever the pin's wiring (None: the pin decides again)."""
+        if value is None:
+            self.levels.pop(pin, None)
+        else:
+            self.levels[pin] = value
+        self._last_in = None  # the next call latches the pins again
 
     def _apply_commands(self) -> None:
         st = self.st
@@ -402,6 +412,11 @@ class GraphRuntime(FastPath):
         st.zeroed = bool(ins["ZERO_OP"])
         st.il_enabled = bool(ins["EN_IL"])
         st.sv_enabled = bool(ins["EN_SV"])
+        if self.levels:
+            levels = self.levels
+            st.halted = levels.get("HALT_SQ", st.halted)
+            st.il_enabled = levels.get("EN_IL", st.il_enabled)
+            st.sv_enabled = levels.get("EN_SV", st.sv_enabled)
         st.ackreq_enabled = bool(ins["EN_ACKREQ"])
         st.sskip_enabled = bool(ins["EN_SSKIP"])
 
@@ -419,7 +434,7 @@ class GraphRuntime(FastPath):
         if "ACK_EF" in rose:
             acks = [i for i in st.active if st.sv_err[i]]
         elif "ACK_S" in rose:
-            i = self.cc.step_index.get(st.s_no, -1)
+            i = self.cc.step_index.get(st.s_no if self._target is None else self._target, -1)
             if i >= 0 and st.sv_err[i]:
                 acks = [i]
         self._release(acks)

@@ -18,7 +18,7 @@ from s7graph.engine.blocks import FB, OB, Decl, InstanceDB, Var
 from s7graph.engine.errors import BlockError
 from s7graph.sequencer.compiled import CompiledChart, Program
 from s7graph.sequencer.cycle import GraphRuntime, new_state
-from s7graph.sequencer.messages import sync_messages
+from s7graph.sequencer.messages import PROGRAM_USER, sync_messages
 from s7graph.sequencer.params import (
     Direction,
     check_pin,
@@ -76,6 +76,8 @@ class GraphFB:
         self._ctx: Any = None
         self._messages = cc.options.messages
         self._commands: list[tuple[str, int | None]] = []
+        self._levels: dict[str, bool | None] = {}  # level overrides for the next call
+        self._acting: tuple[str, int | None] | None = None  # who commanded (user, ACK_S step)
         self._copied: Any = None  # the instance-DB values the outputs were last copied to
 
     def _fresh_state(self) -> GraphState:
@@ -125,11 +127,24 @@ class GraphFB:
             rt.rebind(st)
         return rt
 
-    def command(self, pin: str, step: int | None = None) -> None:
-        """An operator command for the next call: ``pin`` (ACK_EF, INIT_SQ, OFF_SQ, S_ON,
-        S_OFF, T_PUSH, SW_*) as a one-call rising edge, whatever the parameter set; S_ON and
-        S_OFF on step number ``step`` (``GraphRuntime.command``)."""
+    def command(self, pin: str, step: int | None = None, *, user: str | None = None) -> None:
+        """An operator command for the next call: ``pin`` (ACK_EF, ACK_S, INIT_SQ, OFF_SQ,
+        S_ON, S_OFF, T_PUSH, SW_*) as a one-call rising edge, whatever the parameter set;
+        S_ON, S_OFF and ACK_S on step number ``step`` (``GraphRuntime.command``). Messages
+        the command acknowledges are acknowledged as ``user`` (default ``program``)."""
         self._commands.append((pin, step))
+        if user is not None:
+            self._acting = (user, step if pin == "ACK_S" else None)
+
+    def set_level(self, pin: str, value: bool | None) -> None:
+        """Override HALT_SQ, EN_IL or EN_SV from the next call on (None: the pin decides
+        again), whatever the parameter set (``GraphRuntime.set_level``)."""
+        self._levels[pin] = value
+
+    @property
+    def levels(self) -> dict[str, bool]:
+        """The level overrides in force."""
+        return dict(self._runtime.levels) if self._runtime is not None else {}
 
     # ------------------------------------------------------------ the FB body
 
@@ -140,10 +155,15 @@ class GraphFB:
         rt = self._runtime
         if rt is None or self._mem is not ctx.mem or rt.st is not values[STATE_VAR]:
             rt = self.runtime(ctx.mem)
+        if self._levels:
+            for pin, value in self._levels.items():
+                rt.set_level(pin, value)
+            self._levels.clear()
         if self._commands:
             for pin, step in self._commands:
                 rt.command(pin, step)
             self._commands.clear()
+        acting, self._acting = self._acting, None
         st = rt.execute(values, ctx.now_ns)
         if rt.outs_changed or self._copied is not values:  # else st.outputs as last copied
             out = st.outputs
@@ -151,7 +171,7 @@ class GraphFB:
                 values[name] = out[name]
             self._copied = values
         if self._messages:
-            self._sync_messages(ctx, idb, rt, st)
+            self._sync_messages(ctx, idb, rt, st, acting)
         if st.log:
             step_numbers = self.cc.step_numbers
             name, number, cycle, emit = self.cc.name, idb.number, ctx.cycle, ctx.emit
@@ -162,12 +182,23 @@ class GraphFB:
                     )
                 )
 
-    def _sync_messages(self, ctx: Any, idb: InstanceDB, rt: GraphRuntime, st: GraphState) -> None:
+    def _sync_messages(
+        self,
+        ctx: Any,
+        idb: InstanceDB,
+        rt: GraphRuntime,
+        st: GraphState,
+        acting: tuple[str, int | None] | None = None,
+    ) -> None:
         """MESSAGES := TRUE (SPEC §2.10): bring the CPU's message list in line with this
         call's faults, queue the steps a user acknowledged there for the next call, and
-        forward the list's new events into the scan record."""
+        forward the list's new events into the scan record. ``acting``: the user (and
+        ACK_S step) of this call's operator command, who acknowledges what it releases."""
         messages = message_list(ctx.cpu)
-        acks = sync_messages(self.cc, st, messages, self.cc.name, idb.number, ctx.now_ns)
+        user, target = acting if acting is not None else (PROGRAM_USER, None)
+        acks = sync_messages(
+            self.cc, st, messages, self.cc.name, idb.number, ctx.now_ns, user=user, step=target
+        )
         if acks:
             rt.acknowledge(acks)
         alarm = getattr(ctx, "alarm", None)

@@ -20,9 +20,13 @@ Decisions (UNCERTAIN, pinned by tests/sequencer/test_messages.py):
   ACK_EF or INIT_SQ edge, or an ACK_S edge for the step shown in S_NO. Acknowledging it
   changes nothing in the sequence (an interlock error clears itself, SPEC §2.3).
 * A supervision message acknowledged in the list by a user while the step is still latched
-  (and the cause has gone) is an acknowledgement of the step: ``sync_messages`` and
-  ``remote_acks`` return those step indices, and the cycle acknowledges them at its next
-  call exactly as ACK_S would.
+  is an acknowledgement of the step, whether or not its cause has gone: ``sync_messages``
+  and ``remote_acks`` return those step indices (each occurrence once), and the cycle
+  acknowledges them at its next call exactly as ACK_S would. The next ``sync_messages``
+  lets that occurrence go; if the cause is still there the fault latches again (V1) and
+  comes as a new, unacknowledged message — as after ACK_EF.
+* An operator command (ACK_EF, ACK_S, INIT_SQ from the Control Sequencer) acknowledges
+  what it releases as the command's user; ``program`` stays for the FB's own pins.
 * Which occurrence was raised is remembered in ``GraphState.display["msg"]``
   (msg_id → event id) so a message acknowledged and removed from the list is not raised
   again while its latch lasts.
@@ -43,6 +47,7 @@ TEMPLATES: Final = {
 }
 SOURCE: Final = "S7-Graph"
 _MEMORY_KEY: Final = "msg"
+_RELEASED_KEY: Final = "msg_released"  # msg_id -> event id handed to the cycle as an ack
 
 
 def message_id(fb_name: str, db_number: int, step: int, kind: str) -> str:
@@ -87,15 +92,16 @@ def remote_acks(
     db_number: int,
 ) -> list[int]:
     """Step indices whose supervision message a user acknowledged in the list while the
-    step's fault is still latched and its cause has gone: the cycle acknowledges them as
-    ACK_S would. Pure."""
+    step's fault is still latched, whether or not its cause has gone, and not yet handed to
+    the cycle: the cycle acknowledges them as ACK_S would. Pure."""
     if not chart.options.messages:
         return []
     raised = state.display.get(_MEMORY_KEY, {})
+    released = state.display.get(_RELEASED_KEY, {})
     found: list[int] = []
     for i, number in enumerate(chart.step_numbers):
         mid = message_id(fb_name, db_number, number, "SV")
-        if not state.sv_err[i] or state.sv_cond[i] or mid not in raised:
+        if not state.sv_err[i] or mid not in raised or released.get(mid) == raised[mid]:
             continue
         msg = message_list.get(mid)
         if msg is None or msg.event_id != raised[mid]:
@@ -112,14 +118,28 @@ def sync_messages(
     fb_name: str,
     db_number: int,
     now_ns: int,
+    *,
+    user: str = PROGRAM_USER,
+    step: int | None = None,
 ) -> list[int]:
     """Bring the message list in line with this call's fault latches and acknowledgement
     edges (``state.rose``); return ``remote_acks`` (steps the cycle acknowledges at its next
-    call). No-op without MESSAGES."""
+    call). What this call's edges release is acknowledged as ``user`` (an operator's
+    command; the FB's own pins: ``program``), ACK_S on ``step`` if given, else S_NO.
+    No-op without MESSAGES."""
     if not chart.options.messages:
         return []
-    acks = remote_acks(chart, state, message_list, fb_name, db_number)
     mem = _memory(state)
+    released = state.display.get(_RELEASED_KEY)
+    if released:  # handed to the cycle at the last call: that occurrence goes now
+        for mid, event in list(released.items()):
+            current = message_list.get(mid)
+            if mem.get(mid) == event:
+                if current is not None and current.event_id == event:
+                    message_list.clear(mid, now_ns)
+                mem.pop(mid, None)
+            del released[mid]
+    acks = remote_acks(chart, state, message_list, fb_name, db_number)
     for i, number in enumerate(chart.step_numbers):
         for kind, latched, cause in (
             ("SV", state.sv_err[i], state.sv_err[i] and state.sv_cond[i]),
@@ -141,10 +161,17 @@ def sync_messages(
             if ours and not cause and current is not None:
                 message_list.clear(mid, now_ns)  # no-op unless incoming
             if ours and kind == "SV" and not latched:
-                message_list.acknowledge(mid, PROGRAM_USER, now_ns)  # the FB released it
+                message_list.acknowledge(mid, user, now_ns)  # the FB released it
             if not latched:
                 mem.pop(mid, None)
-    _acknowledge_by_inputs(chart, state, message_list, fb_name, db_number, now_ns)
+    if acks:
+        marks = state.display.setdefault(_RELEASED_KEY, {})
+        assert isinstance(marks, dict)
+        for i in acks:
+            mid = message_id(fb_name, db_number, chart.step_numbers[i], "SV")
+            if mid in mem:
+                marks[mid] = mem[mid]
+    _acknowledge_by_inputs(chart, state, message_list, fb_name, db_number, now_ns, user, step)
     return acks
 
 
@@ -155,20 +182,21 @@ def _acknowledge_by_inputs(
     fb_name: str,
     db_number: int,
     now_ns: int,
+    user: str = PROGRAM_USER,
+    step: int | None = None,
 ) -> None:
     """ACK_EF / INIT_SQ edges acknowledge every message of this FB, ACK_S those of the step
-    shown in S_NO — except supervision faults the FB still holds latched."""
+    shown in S_NO (or ``step``) — except supervision faults the FB still holds latched."""
     rose = state.rose
+    target = state.s_no if step is None else step
     if "ACK_EF" in rose or "INIT_SQ" in rose:
         steps = range(chart.n_steps)
-    elif "ACK_S" in rose and state.s_no in chart.step_index:
-        steps = range(chart.step_index[state.s_no], chart.step_index[state.s_no] + 1)
+    elif "ACK_S" in rose and target in chart.step_index:
+        steps = range(chart.step_index[target], chart.step_index[target] + 1)
     else:
         return
     for i in steps:
         number = chart.step_numbers[i]
         if not state.sv_err[i]:
-            message_list.acknowledge(
-                message_id(fb_name, db_number, number, "SV"), PROGRAM_USER, now_ns
-            )
-        message_list.acknowledge(message_id(fb_name, db_number, number, "IL"), PROGRAM_USER, now_ns)
+            message_list.acknowledge(message_id(fb_name, db_number, number, "SV"), user, now_ns)
+        message_list.acknowledge(message_id(fb_name, db_number, number, "IL"), user, now_ns)

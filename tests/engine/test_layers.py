@@ -2,8 +2,9 @@
 the core is pure.
 
 - Layers, bottom to top: ``engine`` → ``sfb`` and ``steps`` (siblings, neither imports the
-  other) → ``sequencer`` → ``web``; inside ``web`` the roles stack ``harness`` → ``bus`` →
-  ``recorder`` → ``view`` → ``cli``. A module imports only from its own layer or below.
+  other) → ``sequencer`` → ``web``; inside ``web`` the roles stack ``harness`` → ``access``
+  → ``bus`` → ``recorder`` → ``view`` → ``cli``. A module imports only from its own layer
+  or below.
 - No import cycle between modules, whether the import runs at import time, inside a
   function or only for the type checker (``TYPE_CHECKING``): every import is an edge.
 - Every import of the project names it ``s7graph.…`` (the folders are not packages of
@@ -49,6 +50,7 @@ RANKS: dict[str, float] = {
     "s7graph.sequencer": 3,
     "s7graph.web": 4,
     "s7graph.web.harness": 4.1,
+    "s7graph.web.access": 4.15,
     "s7graph.web.bus": 4.2,
     "s7graph.web.recorder": 4.3,
     "s7graph.web.view": 4.4,

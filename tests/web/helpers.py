@@ -5,6 +5,7 @@ the virtual clock."""
 from __future__ import annotations
 
 import os
+import threading
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -19,7 +20,10 @@ from s7graph.engine.symbols import SymbolTable
 from s7graph.web.harness.session import ChartSession, load_chart
 
 if TYPE_CHECKING:
-    from playwright.sync_api import Page
+    from playwright.sync_api import Locator, Page
+
+    from s7graph.engine.record import ScanRecord
+    from s7graph.web.view.live_edge import LiveEdge
 
 CHROMIUM = "/usr/bin/chromium"
 ARGS = [
@@ -60,6 +64,54 @@ def chromium_page(url: str) -> Iterator[Page]:
             page.close()
         finally:
             browser.close()
+
+
+def field(page: Page, label: str) -> Locator:
+    """The text input of a viser GUI field by its label (viser's label does not name it)."""
+    row = "ancestor::div[contains(@class,'mantine-Flex-root')][1]"
+    xpath = f"//label[text()='{label}']/{row}//input"
+    return page.locator(f"xpath={xpath}").first
+
+
+def log_in(page: Page, user: str, password: str = "") -> None:
+    """Log the page in through its Login panel and wait until it says so."""
+    field(page, "User").fill(user)
+    if password:
+        field(page, "Password").fill(password)
+        field(page, "Password").press("Tab")
+    else:
+        field(page, "User").press("Tab")
+    page.get_by_role("button", name="Log in", exact=True).click()
+    page.get_by_text(f"logged in as {user}").first.wait_for(timeout=30_000)
+
+
+@contextmanager
+def scanning(
+    session: ChartSession, edge: LiveEdge, on_record: Callable[[ScanRecord], object] | None = None
+) -> Iterator[threading.Event]:
+    """Start ``session`` and scan it every 10 ms of its virtual clock in a thread, each
+    record through ``on_record`` (if given) and ``edge``; set the event to stop early."""
+    session.start()
+    stop = threading.Event()
+
+    def scan_loop() -> None:
+        clock = session.clock
+        assert isinstance(clock, VirtualClock)
+        while not stop.is_set():
+            clock.advance(10)
+            record = session.scan()
+            if on_record is not None:
+                on_record(record)
+            edge.on_record(record, stats=session.cpu.stats)
+            time.sleep(0.005)
+
+    thread = threading.Thread(target=scan_loop, daemon=True)
+    thread.start()
+    try:
+        yield stop
+    finally:
+        stop.set()
+        thread.join(timeout=5)
 
 
 def chart_session(

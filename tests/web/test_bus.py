@@ -36,8 +36,21 @@ def bus(tmp_path: Path) -> Iterator[tuple[BusPublisher, BusClient]]:
             assert wait_until(lambda: client.chart("FILL") is not None)
             yield publisher, client
         finally:
+            _TOKENS.clear()
             client.close()
             publisher.close()
+
+
+_TOKENS: dict[int, str] = {}
+
+
+def cmd(client: BusClient, op: str, fb: str = "FILL", user: str = "bob", **args: object) -> Command:
+    """A command from ``user``, logged in at the CPU (the demo: no password)."""
+    if id(client) not in _TOKENS:
+        reply = client.login(user)
+        assert reply.ok, reply.reason
+        _TOKENS[id(client)] = reply.token
+    return Command(op=op, fb=fb, user=user, token=_TOKENS[id(client)], args=args)  # type: ignore[arg-type]
 
 
 def wait_until(predicate, timeout: float = 5.0) -> bool:
@@ -86,7 +99,7 @@ def test_command_round_trip_is_applied_at_the_scan_boundary(
     replies: list[CommandReply] = []
     sender = threading.Thread(
         target=lambda: replies.append(
-            client.send(Command(op="step_on", fb="FILL", user="bob", args={"step": 2}))
+            client.send(cmd(client, "step_on", step=2))
         )
     )
     sender.start()
@@ -105,7 +118,7 @@ def test_command_refused_by_the_cpu_carries_its_reason(
     publisher, client = bus
     replies: list[CommandReply] = []
     sender = threading.Thread(
-        target=lambda: replies.append(client.send(Command(op="ack", fb="FILL")))
+        target=lambda: replies.append(client.send(cmd(client, "ack")))
     )
     sender.start()
 
@@ -125,7 +138,7 @@ def test_hostile_or_misdirected_command_is_refused_at_once(
     assert bad is not None and not bad.applied and "$.args.mode" in bad.reason
     junk = client.send_raw(b"\x00not json")
     assert junk is not None and not junk.applied and "malformed JSON" in junk.reason
-    other = client.send(Command(op="ack", fb="NOPE"))
+    other = client.send(cmd(client, "ack", fb="NOPE"))
     assert not other.applied and "unknown FB 'NOPE'" in other.reason
     assert publisher.drain_commands() == []  # none of them reached the scan loop
 
@@ -134,7 +147,7 @@ def test_a_command_nobody_drains_ends_in_a_refusal_not_a_hang(
     bus: tuple[BusPublisher, BusClient],
 ) -> None:
     _, client = bus
-    reply = client.send(Command(op="init", fb="FILL"), timeout=0.3)
+    reply = client.send(cmd(client, "init"), timeout=0.3)
     assert not reply.applied and "no answer" in reply.reason
 
 
@@ -144,7 +157,7 @@ def test_an_exception_while_applying_refuses_that_command_only(
     publisher, client = bus
     replies: list[CommandReply] = []
     sender = threading.Thread(
-        target=lambda: replies.append(client.send(Command(op="off", fb="FILL")))
+        target=lambda: replies.append(client.send(cmd(client, "off")))
     )
     sender.start()
 

@@ -69,7 +69,8 @@ class Rig:
         return [self.scan() for _ in range(n)][-1]
 
     def cmd(self, op: str, user: str = "alice", **args: Any) -> tuple[bool, str]:
-        return self.live.apply(Command(op=op, fb="Msg", user=user, args=args))  # type: ignore[arg-type]
+        applied, reason, _ = self.live.apply(Command(op=op, fb="Msg", user=user, args=args))  # type: ignore[arg-type]
+        return applied, reason
 
 
 @pytest.fixture
@@ -77,7 +78,6 @@ def rig(tmp_path: Path) -> Iterator[Rig]:
     session, _, clock, store = chart_session(tmp_path, "msg.s7g", CHART)
     live = LiveGraph(
         session.graph,
-        store=store,
         wall_ns=lambda: WALL_NS,
         messages=message_list(session.cpu),
     )
@@ -154,8 +154,6 @@ def test_supervision_message_lists_its_step_and_acknowledges_as_the_user(rig: Ri
     acks = [e for r in rig.records for e in r.alarms if e.kind == "acknowledged"]
     assert [(e.msg_id, e.user) for e in acks] == [(SV, "bob")]
     assert rig.live.alarms_changed() == AlarmList(cycle=after.cycle)  # gone and acknowledged
-    (audit,) = rig.store.audit()
-    assert (audit["user"], audit["action"]) == ("bob", "ack_msg") and SV in audit["detail"]
 
 
 def test_an_acknowledged_incoming_message_stays_listed_and_refuses_a_second_ack(
@@ -205,17 +203,25 @@ def test_live_edge_serves_alarms_and_criteria_over_the_bus(rig: Rig) -> None:
         listed = client.alarms()
         assert listed is not None and [e.msg_id for e in listed.pending()] == [SV]
 
+        first = listed.pending()[0].event_id
+        login = client.login("dora")
+        assert login.ok and login.role == "engineer" and not login.verified
         replies = []
-        sender = threading.Thread(
-            target=lambda: replies.append(
-                client.send(Command(op="ack_msg", fb="Msg", user="dora", args={"msg_id": SV}))
-            )
-        )
+        command = Command(op="ack_msg", fb="Msg", user="dora", token=login.token,
+                          args={"msg_id": SV})  # fmt: skip
+        sender = threading.Thread(target=lambda: replies.append(client.send(command)))
         sender.start()
         assert wait_until(lambda: step() or bool(replies), 5)
         sender.join()
         assert replies[0].applied, replies[0].reason
-        step()
-        assert wait_until(lambda: seen[-1].entries and seen[-1].entries[0].acked)
-        assert seen[-1].entries[0].ack_user == "dora"
+        for _ in range(3):
+            step()
+        # its cause ("Late") is still there: released as ACK_S would, the fault comes again
+        # as a new, unacknowledged message; the first went acknowledged by dora
+        assert wait_until(
+            lambda: bool(seen[-1].pending()) and seen[-1].pending()[0].event_id > first
+        )
+        log = message_list(rig.session.cpu).log()
+        acks = [(e.msg_id, e.user) for e in log if e.kind == "acknowledged"]
+        assert acks == [(SV, "dora (unverified)")]
         assert [s.seq for s in seen] == sorted({s.seq for s in seen})

@@ -15,7 +15,7 @@ from s7graph.sequencer.model import Chart, Operand, Sequence, Step, Transition
 from s7graph.web.bus.protocol import ChartLayout, Command, StepStateUpdate
 from s7graph.web.view.chart_view import ACTIVE, DISTURBED, INACTIVE
 from s7graph.web.view.edge import WebEdge, serve_view
-from tests.web.helpers import chromium_page, needs_chromium, wait_until
+from tests.web.helpers import chromium_page, log_in, needs_chromium, wait_until
 from tests.web.toy_feed import ToySequencer
 
 if TYPE_CHECKING:
@@ -80,7 +80,7 @@ def edge() -> Iterator[WebEdge]:
 @pytest.fixture(scope="module")
 def page(edge: WebEdge) -> Iterator[Page]:
     with chromium_page(edge.url) as pg:
-        pg.get_by_role("button", name="Acknowledge").wait_for(timeout=30_000)
+        pg.get_by_role("button", name="Acknowledge", exact=True).wait_for(timeout=30_000)
         yield pg
 
 
@@ -106,7 +106,11 @@ def test_steps_are_coloured_from_the_bus_state(edge: WebEdge) -> None:
     assert wait_until(lambda: view.boxes[4].color == ACTIVE)
     assert view.boxes[3].color == DISTURBED  # latched supervision error wins over active
     assert view.boxes[1].color == INACTIVE
-    assert "cycle 3" in view.status.content
+    assert wait_until(lambda: any("cycle 3" in p.status.content for p in view.panels.values()))
+    # the current mode is highlighted on its button, on every page
+    panels = list(view.panels.values())
+    assert wait_until(lambda: all(p.mode_buttons["AUTO"].color == "green" for p in panels))
+    assert all(p.mode_buttons["MAN"].color is None for p in panels)
 
 
 def test_acknowledge_click_reaches_the_cpu_queue_and_is_answered(
@@ -114,19 +118,21 @@ def test_acknowledge_click_reaches_the_cpu_queue_and_is_answered(
     edge: WebEdge,
     tmp_path: Path,
 ) -> None:
-    page.get_by_role("button", name="Acknowledge", exact=True).click()
+    acknowledge = page.get_by_role("button", name="Acknowledge", exact=True)
+    assert acknowledge.is_disabled()  # a page is a viewer until it logs in
+    log_in(page, "olga")
+    assert wait_until(acknowledge.is_enabled)
+    acknowledge.click()
     received = []
     assert wait_until(lambda: received.extend(edge.publisher.drain_commands()) or received)
     (pending,) = received
-    assert (pending.command.op, pending.command.fb, pending.command.user) == (
-        "ack",
-        "MIXER",
-        "operator",
-    )
+    command = pending.command
+    assert (command.op, command.fb, command.user) == ("ack", "MIXER", "olga")
+    assert command.token and command.origin.startswith("page ")
     pending.resolve(True, cycle=4)
     assert wait_until(lambda: bool(edge.view.replies))
     assert edge.view.replies[-1].applied
-    assert wait_until(lambda: "ack" in edge.view.event_log.content)
+    page.get_by_text("ack applied").first.wait_for(timeout=30_000)
 
     shot = tmp_path / "view.png"
     page.screenshot(path=str(shot))
@@ -140,8 +146,14 @@ def test_demo_feed_applies_commands_between_scans() -> None:
     """serve_view with a feed: a mode command from a bus client lands between two scans."""
     toy = ToySequencer(ChartLayout.from_chart(small_chart()), hold=1000)
     with serve_view(small_chart(), toy.run(5), port=0, apply_command=toy.apply) as running:
-        reply = running.client.send(Command(op="mode", fb="MIXER", args={"mode": "MAN"}))
+        login = running.client.login("tom")
+        assert login.ok, login.reason
+        reply = running.client.send(
+            Command(op="mode", fb="MIXER", user="tom", token=login.token, args={"mode": "MAN"})
+        )
         assert reply.applied, reply.reason
         assert wait_until(lambda: running.follower.latest and running.follower.latest.mode == "MAN")
-        refused = running.client.send(Command(op="t_push", fb="MIXER"))
+        refused = running.client.send(
+            Command(op="t_push", fb="MIXER", user="tom", token=login.token)
+        )
         assert not refused.applied and "TAP and TOP" in refused.reason

@@ -12,16 +12,23 @@ acknowledged) and whatever the program wires to the pins. Each is applied at the
 boundary and acts in the FB's next call as a one-call rising edge (``GraphFB.command``):
 
 - ``ack`` → ACK_EF; refused when no step waits for an acknowledgement;
+- ``ack_step`` → ACK_S on ``step`` (not S_NO); refused unless that step waits;
 - ``mode`` → SW_AUTO / SW_MAN / SW_TAP / SW_TOP;
 - ``init`` → INIT_SQ; ``off`` → OFF_SQ for one call (the sequencer then stays off);
+- ``halt`` → HALT_SQ held on (``{"on": true}``) or left to the pin again (``false``);
+  ``en_il`` / ``en_sv`` with ``{"on": false}`` hold EN_IL / EN_SV off (interlocks or
+  supervisions disabled), ``true`` leaves them to the pin again;
 - ``step_on`` / ``step_off`` → S_ON / S_OFF on ``step`` (not S_NO); refused outside MAN,
   for an unknown step, an active step (on) or an idle one (off);
 - ``t_push`` → T_PUSH; refused outside TAP and TOP;
 - ``ack_msg`` → acknowledges one message of the CPU's message list as the command's user
   at once (``MessageList.acknowledge``); refused for an unknown or already acknowledged
   message and for the user name ``program`` (reserved for ACK_EF). A supervision message
-  acknowledged while its fault is latched and its cause gone releases the step at the FB's
-  next call (``sequencer.messages.remote_acks``).
+  acknowledged while its fault is latched releases the step at the FB's next call as ACK_S
+  would, whether or not its cause has gone (``sequencer.messages.remote_acks``).
+
+Messages a command acknowledges (``ack``, ``ack_step``, ``init``) are acknowledged as the
+command's user, never as ``program``.
 
 Each update also carries a :class:`StepDetail` per active step (times to 0.1 s, interlock
 and supervision contacts, the contacts of its valid transitions: the CRIT bits), and
@@ -29,8 +36,9 @@ and supervision contacts, the contacts of its valid transitions: the CRIT bits),
 
 Every command is refused while the CPU is not in RUN, and so is a second mode, step, or
 init/off command at the same scan boundary (one call would see both edges at once and
-resolve them by priority, not by order). An applied command goes to the audit log (who,
-when, what) when a ``StateStore`` is given. :meth:`LiveGraph.apply` never raises: a
+resolve them by priority, not by order). Who may send what, and the audit, are the bus
+gate's (``web.bus.gate``): :meth:`LiveGraph.apply` sees commands already checked, under
+the established user's name, and returns ``(applied, reason, detail)``. It never raises: a
 hostile command is refused with its reason, the scan loop goes on.
 """
 
@@ -41,7 +49,6 @@ from collections.abc import Callable, Iterable
 from typing import Any
 
 from s7graph.engine.modes import CpuMode
-from s7graph.engine.persistence import StateStore
 from s7graph.engine.record import ScanRecord
 from s7graph.sequencer.display import contact_bits
 from s7graph.sequencer.fb import GraphFB, StepEvent
@@ -67,6 +74,7 @@ __all__ = ["CONTROL_SEQUENCER", "MODE_PINS", "OP_PINS", "LiveGraph", "watch_name
 CONTROL_SEQUENCER = "S7-GRAPH Control Sequencer"
 OP_PINS: dict[str, str] = {
     "ack": "ACK_EF",
+    "ack_step": "ACK_S",
     "init": "INIT_SQ",
     "off": "OFF_SQ",
     "step_on": "S_ON",
@@ -74,10 +82,19 @@ OP_PINS: dict[str, str] = {
     "t_push": "T_PUSH",
 }
 MODE_PINS: dict[str, str] = {mode: pin for pin, mode in SELECTORS}
+# level commands: the pin, and the value a command holds it at (the other value frees it)
+LEVEL_PINS: dict[str, tuple[str, bool]] = {
+    "halt": ("HALT_SQ", True),
+    "en_il": ("EN_IL", False),
+    "en_sv": ("EN_SV", False),
+}
 MAX_WATCH = 64
 # Commands of one group queued at the same scan boundary would act as simultaneous edges
 # in one call (the FB resolves them by priority, not by order), so the second is refused.
-_GROUPS = {"mode": "mode", "step_on": "step", "step_off": "step", "init": "init", "off": "init"}
+_GROUPS = {
+    "mode": "mode", "step_on": "step", "step_off": "step", "ack_step": "step",
+    "init": "init", "off": "init",
+}  # fmt: skip
 
 
 def _scalar(value: object) -> bool | int | float | str | None:
@@ -89,8 +106,8 @@ def _scalar(value: object) -> bool | int | float | str | None:
 class LiveGraph:
     """One GraphFB seen live: :meth:`update` after each scan, :meth:`apply` at the boundary.
 
-    ``read(name)`` gives the value of a watched operand (``ChartSession.get``); ``store``
-    receives the audit log; ``wall_ns`` stamps it (the wall clock: an audit says *when*);
+    ``read(name)`` gives the value of a watched operand (``ChartSession.get``);
+    ``wall_ns`` turns CPU times into wall-clock times for the alarm list;
     ``messages`` is the CPU's message list (``sfb.alarms.message_list(cpu)``) for
     ``ack_msg`` and :meth:`alarms_changed`."""
 
@@ -101,7 +118,6 @@ class LiveGraph:
         fb: str | None = None,
         read: Callable[[str], object] | None = None,
         watch: Iterable[str] = (),
-        store: StateStore | None = None,
         wall_ns: Callable[[], int] = time.time_ns,
         messages: MessageList | None = None,
     ) -> None:
@@ -112,7 +128,6 @@ class LiveGraph:
         self.layout = ChartLayout.from_chart(graph.cc.chart, fb=self.fb)
         self._read = read
         self.watch = tuple(dict.fromkeys(watch))[:MAX_WATCH]
-        self.store = store
         self._wall_ns = wall_ns
         self.cpu_mode = CpuMode.STOP
         self.cycle = 0
@@ -163,6 +178,9 @@ class LiveGraph:
             events=events,  # type: ignore[arg-type]
             values=self.values(),
             details=self.details(),
+            halted=bool(st.halted),
+            il_enabled=bool(st.il_enabled),
+            sv_enabled=bool(st.sv_enabled),
         )
 
     def details(self) -> list[StepDetail]:
@@ -249,17 +267,17 @@ class LiveGraph:
 
     # ------------------------------------------------------------ commands in
 
-    def apply(self, command: Command) -> tuple[bool, str]:
-        """Queue ``command`` as a one-call edge of the next FB call; (applied, reason).
+    def apply(self, command: Command) -> tuple[bool, str, str]:
+        """Queue ``command`` as a one-call edge of the next FB call, as ``command.user``;
+        (applied, reason, detail: what it acted on, for the audit).
 
         Never raises: anything unexpected refuses the command with the reason."""
         try:
             applied, reason, detail = self._check(command)
-            if applied:
-                self._audit(command, detail)
-            return applied, reason
+            what = f"FB {self.fb}" + (f": {detail}" if detail else "")
+            return applied, reason, what if applied else ""
         except Exception as exc:
-            return False, f"command refused: {type(exc).__name__}: {exc}"[:4096]
+            return False, f"command refused: {type(exc).__name__}: {exc}"[:4096], ""
 
     def _check(self, command: Command) -> tuple[bool, str, str]:
         op = getattr(command, "op", None)
@@ -285,17 +303,35 @@ class LiveGraph:
             self.graph.command(MODE_PINS[new])
             self._pending_mode = new
             return True, "", f"{mode} -> {new}"
+        user = command.user or "?"
         if op == "ack":
             waiting = [cc.step_numbers[i] for i in st.active if st.sv_err[i]]
             if not waiting:
                 return False, "no supervision fault waits for an acknowledgement", ""
-            self.graph.command(OP_PINS[op])
+            self.graph.command(OP_PINS[op], user=user)
             return True, "", "steps " + ", ".join(f"S{n}" for n in sorted(waiting))
+        if op == "ack_step":
+            step = command.step
+            i = cc.step_index.get(step) if isinstance(step, int) else None
+            if i is None:
+                return False, f"no step S{step} in {self.fb}", ""
+            if not (st.x[i] and st.sv_err[i]):
+                return False, f"S{step} waits for no acknowledgement", ""
+            self.graph.command(OP_PINS[op], step=step, user=user)
+            return True, "", f"S{step}"
         if op == "ack_msg":
             return self._ack_msg(command)
         if op in ("init", "off"):
-            self.graph.command(OP_PINS[op])
+            self.graph.command(OP_PINS[op], user=user)
             return True, "", ""
+        if op in LEVEL_PINS:
+            pin, held = LEVEL_PINS[op]
+            on = command.args.get("on")
+            if not isinstance(on, bool):
+                return False, f"{op} needs on: true or false", ""
+            hold = on == held
+            self.graph.set_level(pin, held if hold else None)
+            return True, "", f"{pin} {'held at ' + str(int(held)) if hold else 'back to its pin'}"
         if op == "t_push":
             if mode not in ("TAP", "TOP"):
                 return False, f"t_push needs mode TAP or TOP ({CONTROL_SEQUENCER})", ""
@@ -330,12 +366,6 @@ class LiveGraph:
             return False, f"message {mid!r} is already acknowledged{how}", ""
         self.messages.acknowledge(msg.msg_id, user, self._t_ns)
         return True, "", f"message {mid}: {msg.text}"
-
-    def _audit(self, command: Command, detail: str) -> None:
-        if self.store is None:
-            return
-        what = f"FB {self.fb} cycle {self.cycle}" + (f": {detail}" if detail else "")
-        self.store.log_audit(self._wall_ns(), command.user or "?", command.op, what)
 
 
 def _negations(condition: Any, labels: tuple[str, ...]) -> tuple[bool, ...]:

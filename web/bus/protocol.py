@@ -32,13 +32,19 @@ __all__ = [
     "MODES",
     "OPS",
     "AlarmEntry",
+    "AlarmEvent",
+    "AlarmHistory",
     "AlarmList",
+    "AuditEntry",
+    "AuditList",
     "ChartLayout",
     "Command",
     "CommandReply",
     "Contact",
     "CpuStatus",
     "CycleStats",
+    "LoginReply",
+    "LoginRequest",
     "ProtocolError",
     "SequenceInfo",
     "StepDetail",
@@ -59,9 +65,14 @@ Mode = Literal["AUTO", "MAN", "TAP", "TOP"]
 MODES: tuple[str, ...] = ("AUTO", "MAN", "TAP", "TOP")
 Event = Literal["S1", "S0", "V1", "V0", "L1", "L0", "A1", "R1"]
 EVENTS: tuple[str, ...] = ("S1", "S0", "V1", "V0", "L1", "L0", "A1", "R1")
-Op = Literal["ack", "mode", "init", "off", "step_on", "step_off", "t_push", "ack_msg"]
+# the ops of web.access.roles.COMMANDS (a test keeps the two equal)
+Op = Literal[
+    "ack", "ack_step", "ack_msg", "mode", "init", "off", "halt", "t_push", "step_on", "step_off",
+    "en_il", "en_sv", "force", "download",
+]  # fmt: skip
 OPS: tuple[str, ...] = (
-    "ack", "mode", "init", "off", "step_on", "step_off", "t_push", "ack_msg",
+    "ack", "ack_step", "ack_msg", "mode", "init", "off", "halt", "t_push", "step_on", "step_off",
+    "en_il", "en_sv", "force", "download",
 )  # fmt: skip
 
 # A name that is safe inside a zenoh key expression and in a scene node path.
@@ -79,6 +90,11 @@ ValueName = Annotated[str, Meta(min_length=1, max_length=128)]
 Millis = Annotated[float, Meta(ge=0.0, le=1e12)]
 MsgKey = Annotated[str, Meta(min_length=1, max_length=128)]
 MsgId = Annotated[int, Meta(ge=1, le=0xFFFFFFFF)] | MsgKey
+# who and from where (web.access.users.USER_PATTERN; "" = nobody claimed a name)
+UserName = Annotated[str, Meta(pattern=r"^([A-Za-z0-9._-]{1,32})?$")]
+Token = Annotated[str, Meta(pattern=r"^[A-Za-z0-9_-]{0,64}$")]
+Origin = Annotated[str, Meta(pattern=r"^[ -~]{0,160}$")]  # printable ASCII: safe in a log line
+Label = Annotated[str, Meta(max_length=80)]
 
 
 def valid_name(name: str) -> bool:
@@ -196,6 +212,9 @@ class StepStateUpdate(_Msg, frozen=True, kw_only=True):
     events: Annotated[list[tuple[Event, StepNo]], Meta(max_length=4096)] = []
     values: Annotated[dict[ValueName, Scalar], Meta(max_length=1024)] = {}
     details: Annotated[list[StepDetail], Meta(max_length=4096)] = []
+    halted: bool = False  # HALT_SQ in force (a pin or a ``halt`` command)
+    il_enabled: bool = True  # EN_IL
+    sv_enabled: bool = True  # EN_SV
 
     def changed_from(self, other: StepStateUpdate | None) -> bool:
         """Whether this scan differs from ``other`` in more than its cycle and time."""
@@ -208,6 +227,8 @@ class StepStateUpdate(_Msg, frozen=True, kw_only=True):
             or self.disturbed != other.disturbed
             or self.latched != other.latched
             or self.values != other.values
+            or (self.halted, self.il_enabled, self.sv_enabled)
+            != (other.halted, other.il_enabled, other.sv_enabled)
             or _coarse(self.details) != _coarse(other.details)
         )
 
@@ -274,6 +295,7 @@ class CpuStatus(_Msg, frozen=True, kw_only=True):
     t_ms: Count = 0
     fbs: Annotated[list[Name], Meta(max_length=256)] = []
     stats: CycleStats | None = None
+    login: Literal["users", "demo"] = "demo"  # demo: no users file, names are claimed
 
 
 # ---------------------------------------------------------------- messages (alarms)
@@ -318,26 +340,37 @@ class AlarmList(_Msg, frozen=True, kw_only=True):
 
 _ARGS_BY_OP: dict[str, frozenset[str]] = {
     "ack": frozenset(),
+    "ack_step": frozenset({"step"}),
     "mode": frozenset({"mode"}),
     "init": frozenset(),
     "off": frozenset(),
+    "halt": frozenset({"on"}),
     "step_on": frozenset({"step"}),
     "step_off": frozenset({"step"}),
     "t_push": frozenset(),
     "ack_msg": frozenset({"msg_id"}),
+    "en_il": frozenset({"on"}),
+    "en_sv": frozenset({"on"}),
+    "force": frozenset({"address", "value"}),
+    "download": frozenset({"source"}),
 }
 
 
 class Command(_Msg, frozen=True, kw_only=True):
     """An operator command (``cmd`` queryable), applied at a scan boundary.
 
-    ``mode`` takes ``{"mode": "AUTO"|"MAN"|"TAP"|"TOP"}``; ``step_on``/``step_off`` take
-    ``{"step": n}``; ``ack_msg`` takes ``{"msg_id": n | "text"}`` (a message of the
-    ``alarms`` list, acknowledged as ``user``); the other ops take no arguments."""
+    ``mode`` takes ``{"mode": "AUTO"|"MAN"|"TAP"|"TOP"}``; ``step_on``/``step_off``/
+    ``ack_step`` take ``{"step": n}``; ``ack_msg`` takes ``{"msg_id": n | "text"}`` (a
+    message of the ``alarms`` list); ``halt``/``en_il``/``en_sv`` take ``{"on": bool}``;
+    the other ops take no arguments (web.access.roles.COMMANDS). ``user`` and ``token``
+    come from a ``login``; ``origin`` says where the command was given (``page 3
+    (127.0.0.1)``, ``shell``, ``bus``) for the audit."""
 
     op: Op
     fb: Name
-    user: Annotated[str, Meta(max_length=64)] = ""
+    user: UserName = ""
+    token: Token = ""
+    origin: Origin = ""
     args: Annotated[dict[Annotated[str, Meta(max_length=32)], Scalar], Meta(max_length=8)] = {}
 
     def __post_init__(self) -> None:
@@ -350,7 +383,9 @@ class Command(_Msg, frozen=True, kw_only=True):
             raise ValueError(f"op {self.op!r} needs argument {missing[0]!r} - at `$.args`")
         if self.op == "mode" and self.args["mode"] not in MODES:
             raise ValueError(f"mode must be one of {', '.join(MODES)} - at `$.args.mode`")
-        if self.op in ("step_on", "step_off"):
+        if self.op in ("halt", "en_il", "en_sv") and not isinstance(self.args["on"], bool):
+            raise ValueError("on must be true or false - at `$.args.on`")
+        if self.op in ("step_on", "step_off", "ack_step"):
             step = self.args["step"]
             if isinstance(step, bool) or not isinstance(step, int) or not 0 < step <= 65535:
                 raise ValueError("step must be a step number 1..65535 - at `$.args.step`")
@@ -389,6 +424,72 @@ class CommandReply(_Msg, frozen=True, kw_only=True):
     op: ShortText = ""
     fb: ShortText = ""
     cycle: Count | None = None
+
+
+# ---------------------------------------------------------------- login, audit, history
+
+
+class LoginRequest(_Msg, frozen=True, kw_only=True):
+    """``login`` queryable: ``login`` with user and password (none without a users file),
+    or ``logout`` with the token to revoke."""
+
+    op: Literal["login", "logout"]
+    user: UserName = ""
+    password: Annotated[str, Meta(max_length=1024)] = ""
+    token: Token = ""
+    origin: Origin = ""
+
+
+class LoginReply(_Msg, frozen=True, kw_only=True):
+    """The answer to a login: a token valid until ``expires_ms`` (wall clock), the role,
+    ``verified`` False for a name claimed without a users file; or a refusal and why."""
+
+    ok: bool
+    reason: Text = ""
+    user: UserName = ""
+    role: Annotated[str, Meta(max_length=16)] = ""
+    token: Token = ""
+    expires_ms: Count = 0
+    verified: bool = True
+
+
+class AuditEntry(_Msg, frozen=True, kw_only=True):
+    """One command as the CPU audited it (``audit``, ``audit/list``)."""
+
+    id: Count
+    t_ms: Count
+    user: Label
+    role: Annotated[str, Meta(max_length=16)] = ""
+    origin: Annotated[str, Meta(max_length=160)] = ""
+    op: ShortText
+    fb: ShortText = ""
+    args: Text = ""
+    outcome: Literal["applied", "refused"]
+    reason: Text = ""
+
+
+class AuditList(_Msg, frozen=True, kw_only=True):
+    """The last audit rows, oldest first (``audit/list``)."""
+
+    entries: Annotated[list[AuditEntry], Meta(max_length=1000)] = []
+
+
+class AlarmEvent(_Msg, frozen=True, kw_only=True):
+    """One message event of the alarm history: came (``incoming``), went (``outgoing``) or
+    ``acknowledged`` by ``user``; wall time in ms."""
+
+    id: Count
+    t_ms: Count
+    msg_id: MsgKey
+    state: ShortText
+    text: Text = ""
+    user: Label = ""
+
+
+class AlarmHistory(_Msg, frozen=True, kw_only=True):
+    """The last message events, oldest first (``alarms/history``)."""
+
+    entries: Annotated[list[AlarmEvent], Meta(max_length=1000)] = []
 
 
 # ---------------------------------------------------------------- encode / decode

@@ -11,35 +11,53 @@ Key space, all under ``s7graph/<cpu>/``:
   and a gap in ``seq`` means a missed delta;
 - ``alarms`` — the :class:`AlarmList` (the CPU's message list), published on change;
   ``alarms/list`` — queryable: the current one (``seq`` orders the two);
+- ``alarms/history`` — queryable: the last 200 message events (:class:`AlarmHistory`);
 - ``cmd`` — queryable: a :class:`Command` in, one :class:`CommandReply` out. Valid commands
-  go on a thread-safe queue; the scan loop drains it at a scan boundary and resolves each,
-  which sends the reply. Invalid ones are refused at once with the reason.
+  go on a thread-safe queue; the scan loop drains it at a scan boundary, where the
+  :class:`~web.bus.gate.Gate` checks who sent each and whether their role allows it,
+  applies and audits it, and resolves it, which sends the reply. Unreadable ones are
+  refused (and audited) at once with the reason;
+- ``login`` — queryable: a :class:`LoginRequest` in, a :class:`LoginReply` (a token) out;
+- ``audit`` — each :class:`AuditEntry` as it is written; ``audit/list`` — queryable: the
+  last 50 (:class:`AuditList`);
+- ``alive`` — a liveliness token while the CPU's bus is up (a view greys its chart when it
+  goes).
 
-Sessions use a loopback peer config (listen/connect on 127.0.0.1 or a unix socket,
-multicast and gossip scouting off) and must always be closed.
+A wildcard query (``s7graph/**``) gets the read-only answers, each under its own key;
+``cmd`` and ``login`` answer only a query for their exact key. Sessions talk only to the
+given endpoints (multicast and gossip scouting off; TLS with ``TlsFiles``) and must
+always be closed. docs/bus.md shows every message.
 """
 
 from __future__ import annotations
 
 import contextlib
+import functools
 import json
 import queue
 import threading
 import time
 from collections.abc import Callable, Iterable, Mapping
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any
 
 import msgspec
 import zenoh
 
+from s7graph.web.bus.gate import Apply, Gate
 from s7graph.web.bus.protocol import (
+    AlarmHistory,
     AlarmList,
+    AuditEntry,
+    AuditList,
     ChartLayout,
     Command,
     CommandReply,
     CpuStatus,
     CycleStats,
+    LoginReply,
+    LoginRequest,
     ProtocolError,
     StepStateUpdate,
     decode,
@@ -52,6 +70,8 @@ __all__ = [
     "BusPublisher",
     "PendingCommand",
     "StateFollower",
+    "TlsFiles",
+    "find_cpus",
     "keys",
     "loopback_config",
     "open_session",
@@ -63,25 +83,56 @@ COMMAND_MAX_AGE_S = 4.5  # older commands are refused: their sender (5 s timeout
 STATUS_PERIOD_S = 1.0
 
 
+@dataclass(frozen=True, slots=True)
+class TlsFiles:
+    """PEM files for zenoh's ``tls/`` endpoints: the CA that signed the peers'
+    certificates, and this node's certificate and key (needed to listen)."""
+
+    ca: str
+    cert: str | None = None
+    key: str | None = None
+
+
 def loopback_config(
-    listen: Iterable[str] = (), connect: Iterable[str] = (), *, mode: str = "peer"
+    listen: Iterable[str] = (),
+    connect: Iterable[str] = (),
+    *,
+    mode: str | None = None,
+    tls: TlsFiles | None = None,
 ) -> zenoh.Config:
     """A zenoh config that talks only to the given endpoints, never multicasts or gossips.
 
-    Endpoints look like ``tcp/127.0.0.1:7447`` or ``unixsock-stream/<dir>/z.sock``. With no
-    endpoints at all, the session only reaches itself (useful in one process)."""
+    Endpoints look like ``tcp/127.0.0.1:7447``, ``tls/localhost:7447`` or
+    ``unixsock-stream/<dir>/z.sock``. With no endpoints at all, the session only reaches
+    itself (useful in one process). ``mode`` None: ``peer`` when listening (or with no
+    endpoints), else ``client`` — a client reaches everyone through the peer or router it
+    connects to."""
+    listen, connect = list(listen), list(connect)
+    if mode is None:
+        mode = "client" if connect and not listen else "peer"
     config = zenoh.Config()
     config.insert_json5("mode", json.dumps(mode))
-    config.insert_json5("listen/endpoints", json.dumps(list(listen)))
-    config.insert_json5("connect/endpoints", json.dumps(list(connect)))
+    config.insert_json5("listen/endpoints", json.dumps(listen))
+    config.insert_json5("connect/endpoints", json.dumps(connect))
     config.insert_json5("scouting/multicast/enabled", "false")
     config.insert_json5("scouting/gossip/enabled", "false")
+    if tls is not None:
+        config.insert_json5("transport/link/tls/root_ca_certificate", json.dumps(tls.ca))
+        if tls.cert and tls.key:
+            config.insert_json5("transport/link/tls/listen_certificate", json.dumps(tls.cert))
+            config.insert_json5("transport/link/tls/listen_private_key", json.dumps(tls.key))
     return config
 
 
-def open_session(listen: Iterable[str] = (), connect: Iterable[str] = ()) -> zenoh.Session:
-    """Open a loopback peer session; the caller closes it (``with open_session(...) as s:``)."""
-    return zenoh.open(loopback_config(listen, connect))
+def open_session(
+    listen: Iterable[str] = (),
+    connect: Iterable[str] = (),
+    *,
+    mode: str | None = None,
+    tls: TlsFiles | None = None,
+) -> zenoh.Session:
+    """Open a session on the given endpoints; the caller closes it (``with open_session(...)``)."""
+    return zenoh.open(loopback_config(listen, connect, mode=mode, tls=tls))
 
 
 @dataclass(frozen=True, slots=True)
@@ -107,8 +158,28 @@ class keys:
         return f"{ROOT}/{self.cpu}/alarms/list"
 
     @property
+    def alarm_history(self) -> str:
+        return f"{ROOT}/{self.cpu}/alarms/history"
+
+    @property
     def cmd(self) -> str:
         return f"{ROOT}/{self.cpu}/cmd"
+
+    @property
+    def login(self) -> str:
+        return f"{ROOT}/{self.cpu}/login"
+
+    @property
+    def audit(self) -> str:
+        return f"{ROOT}/{self.cpu}/audit"
+
+    @property
+    def audit_list(self) -> str:
+        return f"{ROOT}/{self.cpu}/audit/list"
+
+    @property
+    def alive(self) -> str:
+        return f"{ROOT}/{self.cpu}/alive"
 
     def fb(self, name: str, leaf: str) -> str:
         if not valid_name(name):
@@ -144,6 +215,10 @@ class PendingCommand:
 
 
 def _answer(query: zenoh.Query | None, reply: CommandReply) -> None:
+    _reply(query, reply)
+
+
+def _reply(query: zenoh.Query | None, reply: CommandReply | LoginReply) -> None:
     if query is None:
         return
     try:
@@ -157,8 +232,9 @@ def _answer(query: zenoh.Query | None, reply: CommandReply) -> None:
 class BusPublisher:
     """The CPU's face on the bus: serves charts and state, publishes deltas, takes commands.
 
-    Call :meth:`publish` once per scan per FB, and :meth:`drain_commands` at the scan
-    boundary; :meth:`close` undeclares everything (the session stays the caller's)."""
+    Call :meth:`publish` once per scan per FB, and :meth:`apply_commands` at the scan
+    boundary; :meth:`close` undeclares everything (the session stays the caller's).
+    ``gate`` decides who may command (default: the demo, names claimed, no audit kept)."""
 
     def __init__(
         self,
@@ -168,8 +244,11 @@ class BusPublisher:
         *,
         queue_size: int = COMMAND_QUEUE_SIZE,
         max_age_s: float = COMMAND_MAX_AGE_S,
+        gate: Gate | None = None,
     ) -> None:
         self._keys = keys(cpu)
+        self.gate = gate if gate is not None else Gate()
+        self._logins = ThreadPoolExecutor(max_workers=1, thread_name_prefix="s7graph-login")
         self._session = session
         self._lock = threading.Lock()
         self._charts = dict(charts)
@@ -178,19 +257,17 @@ class BusPublisher:
         self._seq: dict[str, int] = dict.fromkeys(self._charts, 0)
         self._commands: queue.Queue[PendingCommand] = queue.Queue(maxsize=queue_size)
         self._max_age_ns = int(max_age_s * 1e9)
-        self._status = CpuStatus(cpu=cpu, fbs=list(self._charts))
+        self._status = CpuStatus(
+            cpu=cpu, fbs=list(self._charts), login="demo" if self.gate.auth.demo else "users"
+        )
         self._status_sent_ns = 0
         self._alarms = AlarmList()
         self._declared: list[Any] = []
         self._delta_pubs: dict[str, zenoh.Publisher] = {}
         try:
             for name in self._charts:
-                self._declared.append(
-                    session.declare_queryable(self._keys.fb(name, "chart"), self._on_chart)
-                )
-                self._declared.append(
-                    session.declare_queryable(self._keys.fb(name, "state"), self._on_state)
-                )
+                for leaf, read in (("chart", self._chart_of), ("state", self._state_of)):
+                    self._serve(self._keys.fb(name, leaf), functools.partial(read, name))
                 pub = session.declare_publisher(
                     self._keys.fb(name, "delta"),
                     encoding=zenoh.Encoding.APPLICATION_JSON,
@@ -199,7 +276,8 @@ class BusPublisher:
                 self._delta_pubs[name] = pub
                 self._declared.append(pub)
             self._declared.append(session.declare_queryable(self._keys.cmd, self._on_cmd))
-            self._declared.append(session.declare_queryable(self._keys.status, self._on_status))
+            self._declared.append(session.declare_queryable(self._keys.login, self._on_login))
+            self._serve(self._keys.status, self._status_bytes)
             self._status_pub = session.declare_publisher(
                 self._keys.status, encoding=zenoh.Encoding.APPLICATION_JSON
             )
@@ -210,9 +288,15 @@ class BusPublisher:
                 congestion_control=zenoh.CongestionControl.BLOCK,
             )
             self._declared.append(self._alarm_pub)
-            self._declared.append(
-                session.declare_queryable(self._keys.alarm_list, self._on_alarm_list)
+            self._serve(self._keys.alarm_list, self._alarm_bytes)
+            self._serve(self._keys.alarm_history, lambda: encode(self.gate.history()))
+            self._serve(self._keys.audit_list, lambda: encode(self.gate.audit_list()))
+            self._audit_pub = session.declare_publisher(
+                self._keys.audit, encoding=zenoh.Encoding.APPLICATION_JSON
             )
+            self._declared.append(self._audit_pub)
+            self.gate.on_audit = self._publish_audit
+            self._declared.append(session.liveliness().declare_token(self._keys.alive))
         except BaseException:
             self.close()
             raise
@@ -271,20 +355,18 @@ class BusPublisher:
                 return drained
             if now - p.received_ns > self._max_age_ns:
                 p.resolve(False, "expired before the scan boundary")
+                self.gate.refuse(p.command, "expired before the scan boundary")
             else:
                 drained.append(p)
 
-    def apply_commands(
-        self, apply: Callable[[Command], tuple[bool, str]], *, cycle: int | None = None
-    ) -> int:
-        """Drain and apply every pending command with ``apply(command) -> (applied, reason)``;
-        an exception from ``apply`` refuses that command. Returns how many were handled."""
+    def apply_commands(self, apply: Apply, *, cycle: int | None = None) -> int:
+        """Drain the pending commands and pass each through the gate: who sent it, may
+        their role, then ``apply(command) -> (applied, reason[, detail])`` as that user,
+        then the audit row. An exception from ``apply`` refuses that command. Returns how
+        many were handled."""
         pending = self.drain_commands()
         for p in pending:
-            try:
-                applied, reason = apply(p.command)
-            except Exception as exc:  # a bad command must not stop the scan loop
-                applied, reason = False, f"{type(exc).__name__}: {exc}"
+            applied, reason = self.gate.apply(p.command, apply, cycle=cycle)
             p.resolve(applied, reason, cycle=cycle)
         return len(pending)
 
@@ -292,6 +374,8 @@ class BusPublisher:
         """Undeclare queryables and publishers; refuse commands still waiting."""
         for p in self.drain_commands():
             p.resolve(False, "CPU bus closed")
+        self.gate.on_audit = None
+        self._logins.shutdown(wait=False, cancel_futures=True)
         for d in reversed(self._declared):
             with contextlib.suppress(zenoh.ZError):
                 d.undeclare()
@@ -318,52 +402,95 @@ class BusPublisher:
             payload = encode(self._status)
         self._status_pub.put(payload)
 
-    def _fb_of(self, query: zenoh.Query) -> str:
-        return str(query.key_expr).split("/")[-2]
+    def _publish_audit(self, entry: AuditEntry) -> None:
+        with contextlib.suppress(zenoh.ZError):
+            self._audit_pub.put(encode(entry))
 
-    def _on_chart(self, query: zenoh.Query) -> None:
-        data = self._chart_bytes.get(self._fb_of(query))
-        if data is not None:
-            query.reply(query.key_expr, data, encoding=zenoh.Encoding.APPLICATION_JSON)
+    def _serve(self, key: str, read: Callable[[], bytes | None]) -> None:
+        """A read-only queryable on ``key`` answering ``read()`` under ``key`` itself, so a
+        wildcard query (``s7graph/**``) gets each answer under its own name."""
 
-    def _on_state(self, query: zenoh.Query) -> None:
+        def on_query(query: zenoh.Query) -> None:
+            try:
+                data = read()
+                if data is not None:
+                    query.reply(key, data, encoding=zenoh.Encoding.APPLICATION_JSON)
+            except Exception:  # never raise on a zenoh thread
+                return
+
+        self._declared.append(self._session.declare_queryable(key, on_query))
+
+    def _chart_of(self, fb: str) -> bytes | None:
+        return self._chart_bytes.get(fb)
+
+    def _state_of(self, fb: str) -> bytes | None:
         with self._lock:
-            state = self._state.get(self._fb_of(query))
-        if state is not None:
-            query.reply(query.key_expr, encode(state), encoding=zenoh.Encoding.APPLICATION_JSON)
+            state = self._state.get(fb)
+        return None if state is None else encode(state)
 
-    def _on_alarm_list(self, query: zenoh.Query) -> None:
+    def _alarm_bytes(self) -> bytes:
         with self._lock:
-            payload = encode(self._alarms)
-        query.reply(query.key_expr, payload, encoding=zenoh.Encoding.APPLICATION_JSON)
+            return encode(self._alarms)
 
-    def _on_status(self, query: zenoh.Query) -> None:
+    def _status_bytes(self) -> bytes:
         with self._lock:
-            payload = encode(self._status)
-        query.reply(query.key_expr, payload, encoding=zenoh.Encoding.APPLICATION_JSON)
+            return encode(self._status)
+
+    def _on_login(self, query: zenoh.Query) -> None:
+        # Runs on a zenoh thread: only the exact key (never a wildcard), decode, and hand
+        # the password check (scrypt, tens of ms) to the login worker, which replies.
+        if str(query.key_expr) != self._keys.login:
+            return
+        try:
+            payload = query.payload
+            if payload is None:
+                raise ProtocolError("empty login")
+            request = decode(payload.to_bytes(), LoginRequest)
+        except ProtocolError as exc:
+            _reply(query, LoginReply(ok=False, reason=str(exc)))
+            return
+        try:
+            self._logins.submit(self._login, request, query)
+        except RuntimeError:  # shut down
+            _reply(query, LoginReply(ok=False, reason="CPU bus closed"))
+
+    def _login(self, request: LoginRequest, query: zenoh.Query) -> None:
+        try:
+            reply = self.gate.login(request)
+        except Exception as exc:
+            reply = LoginReply(ok=False, reason=f"login failed: {type(exc).__name__}")
+        _reply(query, reply)
 
     def _on_cmd(self, query: zenoh.Query) -> None:
-        # Runs on a zenoh thread: validate, enqueue, never block and never raise.
+        # Runs on a zenoh thread: validate, enqueue, never block and never raise. A wildcard
+        # query is no command: ignored.
+        if str(query.key_expr) != self._keys.cmd:
+            return
         try:
             payload = query.payload
             if payload is None:
                 raise ProtocolError("empty command")
             command = decode(payload.to_bytes(), Command)
-        except ProtocolError as exc:
-            _answer(query, CommandReply(applied=False, reason=str(exc)))
-            return
         except Exception as exc:
-            _answer(query, CommandReply(applied=False, reason=f"bad command: {exc}"))
+            reason = str(exc) if isinstance(exc, ProtocolError) else f"bad command: {exc}"
+            self._refuse(query, None, reason[:4096])
             return
+        if not command.origin:
+            command = msgspec.structs.replace(command, origin="bus")
         if command.fb not in self._charts:
             reason = f"unknown FB {command.fb!r}; this CPU runs {', '.join(self._charts)}"
-            _answer(query, CommandReply(applied=False, reason=reason, op=command.op, fb=command.fb))
+            self._refuse(query, command, reason)
             return
         try:
             self._commands.put_nowait(PendingCommand(command, query))
         except queue.Full:
-            reason = "command queue full; the CPU is not draining commands"
-            _answer(query, CommandReply(applied=False, reason=reason, op=command.op))
+            self._refuse(query, command, "command queue full; the CPU is not draining commands")
+
+    def _refuse(self, query: zenoh.Query, command: Command | None, reason: str) -> None:
+        op, fb = (command.op, command.fb) if command is not None else ("", "")
+        _answer(query, CommandReply(applied=False, reason=reason, op=op, fb=fb))
+        with contextlib.suppress(Exception):  # the audit must not raise on a zenoh thread
+            self.gate.refuse(command, reason, origin="bus")
 
 
 # ---------------------------------------------------------------- view side
@@ -444,6 +571,62 @@ class BusClient:
         except ProtocolError as exc:
             return CommandReply(applied=False, reason=f"unreadable answer: {exc}")
 
+    def login(self, user: str, password: str = "", *, origin: str = "") -> LoginReply:
+        """Log in at the CPU (no password needed without a users file); the reply holds the
+        token to put in each :class:`Command`. No answer is a refusal too."""
+        try:
+            request = LoginRequest(op="login", user=user, password=password, origin=origin)
+        except (TypeError, ValueError) as exc:
+            return LoginReply(ok=False, reason=str(exc))
+        return self._ask_login(request)
+
+    def logout(self, token: str, *, user: str = "", origin: str = "") -> LoginReply:
+        """Revoke ``token`` at the CPU."""
+        return self._ask_login(LoginRequest(op="logout", user=user, token=token, origin=origin))
+
+    def _ask_login(self, request: LoginRequest) -> LoginReply:
+        try:
+            data = self._get_one(self._keys.login, encode(request))
+        except (ProtocolError, zenoh.ZError) as exc:
+            return LoginReply(ok=False, reason=f"bus error: {type(exc).__name__}")
+        if data is None:
+            return LoginReply(ok=False, reason=f"no answer from CPU {self._keys.cpu!r}")
+        try:
+            return decode(data, LoginReply)
+        except ProtocolError as exc:
+            return LoginReply(ok=False, reason=f"unreadable answer: {exc}")
+
+    def audit(self) -> AuditList | None:
+        """The CPU's last 50 audit rows, or None if no CPU answers."""
+        data = self._get_one(self._keys.audit_list)
+        return None if data is None else decode(data, AuditList)
+
+    def history(self) -> AlarmHistory | None:
+        """The CPU's last 200 message events, or None if no CPU answers."""
+        data = self._get_one(self._keys.alarm_history)
+        return None if data is None else decode(data, AlarmHistory)
+
+    def on_audit(self, callback: Callable[[AuditEntry], None]) -> None:
+        """Call ``callback`` with each audit row as the CPU writes it (on a zenoh thread)."""
+
+        def on_sample(sample: zenoh.Sample) -> None:
+            with contextlib.suppress(ProtocolError):
+                callback(decode(sample.payload.to_bytes(), AuditEntry))
+
+        self._subscribers.append(self._session.declare_subscriber(self._keys.audit, on_sample))
+
+    def on_alive(self, callback: Callable[[bool], None]) -> None:
+        """Call ``callback(True)`` when the CPU's bus appears (also if it is up already) and
+        ``callback(False)`` when it goes (closed, crashed, or the link lost)."""
+
+        def on_sample(sample: zenoh.Sample) -> None:
+            callback(sample.kind == zenoh.SampleKind.PUT)
+
+        sub = self._session.liveliness().declare_subscriber(
+            self._keys.alive, on_sample, history=True
+        )
+        self._subscribers.append(sub)
+
     def send_raw(self, payload: bytes, *, timeout: float | None = None) -> CommandReply | None:
         """Send raw bytes to ``cmd`` (for tests of hostile input); None if nobody answered."""
         data = self._get_one(self._keys.cmd, payload, timeout)
@@ -480,6 +663,24 @@ class BusClient:
 
     def __exit__(self, *exc: object) -> None:
         self.close()
+
+
+def find_cpus(session: zenoh.Session, *, timeout: float = 2.0) -> list[CpuStatus]:
+    """The status of every CPU answering on the bus (a wildcard query), sorted by name."""
+    found: dict[str, CpuStatus] = {}
+    replies = session.get(
+        f"{ROOT}/*/status",
+        timeout=timeout,
+        target=zenoh.QueryTarget.ALL,
+        consolidation=zenoh.ConsolidationMode.NONE,
+    )
+    for reply in replies:
+        if reply.ok is None:
+            continue
+        with contextlib.suppress(ProtocolError):
+            status = decode(reply.ok.payload.to_bytes(), CpuStatus)
+            found[status.cpu] = status
+    return [found[name] for name in sorted(found)]
 
 
 class StateFollower:

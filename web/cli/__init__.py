@@ -1,4 +1,6 @@
-"""The ``s7graph`` command line: ``run``, ``sim``, ``check``, ``--version``.
+"""The ``s7graph`` command line: ``run``, ``sim``, ``check``, ``--version``; for the bus
+``web``, ``router``, ``watch`` and the shell's commands (``ack``, ``mode``, ...); ``users``
+and ``audit``.
 
 Each command lives in its own module (``web/cli/*.py``) and is imported only when used, so
 ``s7graph check`` never pays for zenoh or viser. Errors are one line on stderr and a
@@ -9,9 +11,12 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
+
+if TYPE_CHECKING:
+    from s7graph.web.cli.net import NetOptions
 
 from s7graph import __version__
 from s7graph.engine.errors import S7Error
@@ -38,6 +43,51 @@ def _root(
     ] = False,
 ) -> None:
     """s7graph: S7-GRAPH sequential control on a soft PLC."""
+
+
+# ---------------------------------------------------------------- bus and page options
+
+Listen = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--listen",
+        help="A zenoh endpoint to listen on (several allowed), "
+        "e.g. tcp/127.0.0.1:7447 or tls/0.0.0.0:7447.",
+    ),
+]
+Connect = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--connect", help="A zenoh endpoint to connect to: a router or a CPU (several allowed)."
+    ),
+]
+Host = Annotated[str, typer.Option(help="Address of the browser page (loopback unless --users).")]
+Users = Annotated[
+    Path | None, typer.Option(help="The users file (s7graph users add); without it: the demo.")
+]
+TlsCa = Annotated[Path | None, typer.Option(help="CA certificate (PEM) for tls/ endpoints.")]
+TlsCert = Annotated[Path | None, typer.Option(help="This node's certificate (PEM), to listen.")]
+TlsKey = Annotated[Path | None, typer.Option(help="This node's private key (PEM), to listen.")]
+Origin = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--origin",
+        help="Another Origin the page may be opened from (the public https URL behind a "
+        "reverse proxy).",
+    ),
+]
+CpuName = Annotated[str, typer.Option("--cpu", help="The CPU's name on the bus.")]
+FbName = Annotated[str | None, typer.Option("--fb", help="The FB (default: the CPU's first).")]
+UserName = Annotated[str, typer.Option("--user", help="Log in as this user.")]
+UsersFileArg = Annotated[Path, typer.Option("--file", help="The users file.")]
+
+
+def _net(**kw: Any) -> NetOptions:
+    from s7graph.web.cli.net import NetOptions
+
+    for key in ("listen", "connect", "origins"):
+        kw[key] = tuple(kw.get(key) or ())
+    return NetOptions(**kw)
 
 
 def _positive_ms(value: float | None) -> float | None:
@@ -75,10 +125,29 @@ def run(
     record: Annotated[
         Path | None, typer.Option(help="Record the chart's run to a rerun .rrd file.")
     ] = None,
+    cpu: CpuName = "cpu1",
+    listen: Listen = None,
+    connect: Connect = None,
+    host: Host = "127.0.0.1",
+    users: Users = None,
+    tls_ca: TlsCa = None,
+    tls_cert: TlsCert = None,
+    tls_key: TlsKey = None,
+    origin: Origin = None,
 ) -> None:
     """Run a program or a chart on the system clock until Ctrl-C."""
     if program.suffix.lower() == ".s7g":
         from s7graph.web.cli.run_chart import run_chart
+
+        net = _net(cpu=cpu, listen=listen, connect=connect, host=host, users=users,
+                   tls_ca=tls_ca, tls_cert=tls_cert, tls_key=tls_key, origins=origin)  # fmt: skip
+        problem = net.problem(listening=web)
+        if problem:
+            print(f"s7graph: error: {problem}", file=sys.stderr)
+            raise typer.Exit(2)
+        if not 0 <= port <= 65535:
+            print(f"s7graph: error: --port {port} is out of range (0-65535)", file=sys.stderr)
+            raise typer.Exit(2)
 
         raise typer.Exit(
             run_chart(
@@ -92,6 +161,7 @@ def run(
                 web=web,
                 port=port,
                 record=record,
+                net=net,
             )
         )
     from s7graph.web.cli.run_program import run_program
@@ -152,6 +222,204 @@ def sim(
             plant=plant,
         )
     )
+
+
+# ---------------------------------------------------------------- the bus
+
+
+@app.command()
+def web(
+    connect: Connect = None,
+    cpu: Annotated[str | None, typer.Option("--cpu", help="The CPU (default: the first).")] = None,
+    fb: FbName = None,
+    host: Host = "127.0.0.1",
+    port: Annotated[int, typer.Option(help="Port of the browser view (0: a free one).")] = 8080,
+    tls_ca: TlsCa = None,
+    origin: Origin = None,
+    duration_s: Annotated[float | None, typer.Option(help="Stop after this many seconds.")] = None,
+) -> None:
+    """Serve the browser view of a CPU on the bus, as a process of its own."""
+    from s7graph.web.cli.view import web_command
+
+    net = _net(connect=connect, host=host, tls_ca=tls_ca, origins=origin)
+    raise typer.Exit(web_command(net, cpu=cpu, fb=fb, port=port, duration_s=duration_s))
+
+
+@app.command()
+def router(
+    listen: Listen = None,
+    connect: Connect = None,
+    users: Users = None,
+    tls_ca: TlsCa = None,
+    tls_cert: TlsCert = None,
+    tls_key: TlsKey = None,
+    duration_s: Annotated[float | None, typer.Option(help="Stop after this many seconds.")] = None,
+) -> None:
+    """Run a zenoh router where CPUs and views on several machines meet."""
+    from s7graph.web.cli.router import router_command
+
+    net = _net(listen=listen, connect=connect, users=users, tls_ca=tls_ca, tls_cert=tls_cert,
+               tls_key=tls_key)  # fmt: skip
+    raise typer.Exit(router_command(net, duration_s))
+
+
+@app.command()
+def watch(
+    cpu: CpuName = "cpu1",
+    connect: Connect = None,
+    fb: FbName = None,
+    tls_ca: TlsCa = None,
+    duration_s: Annotated[float | None, typer.Option(help="Stop after this many seconds.")] = None,
+) -> None:
+    """Print a CPU's step changes live (one line each)."""
+    from s7graph.web.cli.remote import watch_command
+
+    net = _net(cpu=cpu, connect=connect, tls_ca=tls_ca)
+    raise typer.Exit(watch_command(net, fb=fb, duration_s=duration_s))
+
+
+def _remote(
+    op: str, args: dict[str, Any], cpu: str, connect: list[str] | None, fb: str | None,
+    user: str, tls_ca: Path | None,
+) -> None:  # fmt: skip
+    from s7graph.web.cli.remote import send_command
+
+    net = _net(cpu=cpu, connect=connect, tls_ca=tls_ca)
+    raise typer.Exit(send_command(net, fb=fb, user=user, op=op, args=args))
+
+
+@app.command()
+def ack(
+    user: UserName, cpu: CpuName = "cpu1", connect: Connect = None, fb: FbName = None,
+    tls_ca: TlsCa = None,
+    step: Annotated[int | None, typer.Option(help="Only this step (ACK_S).")] = None,
+    message: Annotated[str | None, typer.Option(help="One message of the alarm list.")] = None,
+) -> None:  # fmt: skip
+    """Acknowledge the FB's supervision faults (ACK_EF), one step's or one message."""
+    if message is not None:
+        msg_id: int | str = int(message) if message.isdigit() else message
+        _remote("ack_msg", {"msg_id": msg_id}, cpu, connect, fb, user, tls_ca)
+    if step is not None:
+        _remote("ack_step", {"step": step}, cpu, connect, fb, user, tls_ca)
+    _remote("ack", {}, cpu, connect, fb, user, tls_ca)
+
+
+@app.command()
+def mode(
+    new_mode: Annotated[str, typer.Argument(metavar="MODE", help="AUTO, MAN, TAP or TOP.")],
+    user: UserName, cpu: CpuName = "cpu1", connect: Connect = None, fb: FbName = None,
+    tls_ca: TlsCa = None,
+) -> None:  # fmt: skip
+    """Switch the FB's mode."""
+    _remote("mode", {"mode": new_mode.upper()}, cpu, connect, fb, user, tls_ca)
+
+
+@app.command()
+def init(
+    user: UserName, cpu: CpuName = "cpu1", connect: Connect = None, fb: FbName = None,
+    tls_ca: TlsCa = None,
+) -> None:  # fmt: skip
+    """Initialize the sequencer (INIT_SQ)."""
+    _remote("init", {}, cpu, connect, fb, user, tls_ca)
+
+
+@app.command()
+def off(
+    user: UserName, cpu: CpuName = "cpu1", connect: Connect = None, fb: FbName = None,
+    tls_ca: TlsCa = None,
+) -> None:  # fmt: skip
+    """Switch the sequencer off (OFF_SQ)."""
+    _remote("off", {}, cpu, connect, fb, user, tls_ca)
+
+
+@app.command("step-on")
+def step_on(
+    step: Annotated[int, typer.Argument(help="The step number.")],
+    user: UserName, cpu: CpuName = "cpu1", connect: Connect = None, fb: FbName = None,
+    tls_ca: TlsCa = None,
+) -> None:  # fmt: skip
+    """Activate a step (MAN, S_ON)."""
+    _remote("step_on", {"step": step}, cpu, connect, fb, user, tls_ca)
+
+
+@app.command("step-off")
+def step_off(
+    step: Annotated[int, typer.Argument(help="The step number.")],
+    user: UserName, cpu: CpuName = "cpu1", connect: Connect = None, fb: FbName = None,
+    tls_ca: TlsCa = None,
+) -> None:  # fmt: skip
+    """Deactivate a step (MAN, S_OFF)."""
+    _remote("step_off", {"step": step}, cpu, connect, fb, user, tls_ca)
+
+
+@app.command("t-push")
+def t_push(
+    user: UserName, cpu: CpuName = "cpu1", connect: Connect = None, fb: FbName = None,
+    tls_ca: TlsCa = None,
+) -> None:  # fmt: skip
+    """Switch a ready transition (TAP, TOP; T_PUSH)."""
+    _remote("t_push", {}, cpu, connect, fb, user, tls_ca)
+
+
+# ---------------------------------------------------------------- users and audit
+
+users_app = typer.Typer(no_args_is_help=True, help="The users file: add, list, remove, passwd.")
+app.add_typer(users_app, name="users")
+PasswordStdin = Annotated[
+    bool, typer.Option("--password-stdin", help="Read the password from standard input.")
+]
+
+
+@users_app.command("add")
+def users_add(
+    name: Annotated[str, typer.Argument(help="1-32 of A-Z a-z 0-9 . _ -")],
+    role: Annotated[str, typer.Option(help="viewer, operator or engineer.")],
+    file: UsersFileArg = Path("users.json"),
+    password_stdin: PasswordStdin = False,
+) -> None:
+    """Add a user with a role (the password from a prompt or --password-stdin)."""
+    from s7graph.web.cli import users as cmd
+
+    raise typer.Exit(cmd.users_add(file, name, role, password_stdin=password_stdin))
+
+
+@users_app.command("list")
+def users_list(file: UsersFileArg = Path("users.json")) -> None:
+    """List the users and their roles."""
+    from s7graph.web.cli import users as cmd
+
+    raise typer.Exit(cmd.users_list(file))
+
+
+@users_app.command("remove")
+def users_remove(name: str, file: UsersFileArg = Path("users.json")) -> None:
+    """Remove a user (their logins stop working at once)."""
+    from s7graph.web.cli import users as cmd
+
+    raise typer.Exit(cmd.users_remove(file, name))
+
+
+@users_app.command("passwd")
+def users_passwd(
+    name: str, file: UsersFileArg = Path("users.json"), password_stdin: PasswordStdin = False
+) -> None:
+    """Change a user's password."""
+    from s7graph.web.cli import users as cmd
+
+    raise typer.Exit(cmd.users_passwd(file, name, password_stdin=password_stdin))
+
+
+@app.command()
+def audit(
+    state: Annotated[Path, typer.Option(help="The CPU's SQLite state file.")],
+    since: Annotated[
+        str | None, typer.Option(help="From this time (2026-11-22T08:30, 08:30) or age (2h).")
+    ] = None,
+) -> None:
+    """Print who commanded what, when, from where, applied or refused."""
+    from s7graph.web.cli.audit import audit_command
+
+    raise typer.Exit(audit_command(state, since))
 
 
 def main(argv: list[str] | None = None) -> int:

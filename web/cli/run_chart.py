@@ -35,6 +35,7 @@ from s7graph.web.harness.plant import LoadedPlant, PlantError, load_plant
 from s7graph.web.harness.session import ChartSession
 
 if TYPE_CHECKING:
+    from s7graph.web.cli.net import NetOptions
     from s7graph.web.view.live_edge import LiveEdge
 
 DEFAULT_MAX_CYCLE_MS = 150.0  # S7's default maximum cycle time
@@ -53,8 +54,12 @@ def run_chart(
     web: bool = False,
     port: int = 8080,
     record: Path | None = None,
+    net: NetOptions | None = None,
 ) -> int:
     """Run ``path`` until Ctrl-C/SIGTERM/``duration_s``; 0 clean, 1 plant error, 2 bad chart.
+
+    ``net``: the bus and page options (``web.cli.net``); with endpoints the CPU is on the
+    bus even without ``web``.
 
     ``max_cycle_ms`` None: ``WEB_MAX_CYCLE_MS`` with ``web``, else ``DEFAULT_MAX_CYCLE_MS``."""
     clock = SystemClock()
@@ -76,9 +81,9 @@ def run_chart(
         print(f"s7graph: error: {state_path}: cannot use state file: {exc}", file=sys.stderr)
         return 2
     live: LiveEdge | None = None
-    if web or record is not None:
+    if web or record is not None or (net is not None and net.on_bus):
         try:
-            live = _serve(session, store, web=web, port=port, record=record)
+            live = _serve(session, store, web=web, port=port, record=record, net=net)
         except Exception as exc:  # port in use, no rerun-sdk, ...
             print(f"s7graph: error: cannot serve the view: {exc}", file=sys.stderr)
             store.close()
@@ -111,19 +116,34 @@ def run_chart(
 
 
 def _serve(
-    session: ChartSession, store: StateStore, *, web: bool, port: int, record: Path | None
+    session: ChartSession,
+    store: StateStore,
+    *,
+    web: bool,
+    port: int,
+    record: Path | None,
+    net: NetOptions | None = None,
 ) -> LiveEdge:
     """The live view (and recording) of the session's GraphFB; prints where to look."""
-    from s7graph.web.bus.live import LiveGraph, watch_names  # zenoh and viser only when asked for
+    from s7graph.web.bus.gate import cpu_gate  # zenoh and viser only when asked for
+    from s7graph.web.bus.live import LiveGraph, watch_names
+    from s7graph.web.cli.net import NetOptions
     from s7graph.web.view.live_edge import LiveEdge
 
+    net = net or NetOptions()
     live = LiveGraph(
-        session.graph, read=session.get, watch=watch_names(session.symbols), store=store,
+        session.graph, read=session.get, watch=watch_names(session.symbols),
         messages=message_list(session.cpu),
     )  # fmt: skip
-    edge = LiveEdge(live, port=port, record=record, serve=web)
+    gate = cpu_gate(net.users, store.path)
+    edge = LiveEdge(
+        live, port=port, record=record, serve=web, bus=net.on_bus, cpu=net.cpu, host=net.host,
+        ends=net.ends, gate=gate, allowed_origins=tuple(net.origins),
+    )  # fmt: skip
     if web:
         print(f"s7graph: view {edge.url} (bus {edge.endpoint}); Ctrl-C to stop", flush=True)
+    elif edge.endpoint:
+        print(f"s7graph: CPU {net.cpu} on the bus {edge.endpoint}; Ctrl-C to stop", flush=True)
     if record is not None:
         print(f"s7graph: recording to {record}", flush=True)
     return edge

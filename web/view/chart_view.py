@@ -1,27 +1,26 @@
-"""The live browser view: a viser scene drawing the chart as S7-GRAPH does, and a side panel.
+"""The live browser view: a viser scene drawing the chart as S7-GRAPH does, and a panel per page.
 
 The scene shows steps as boxes (the initial step double-framed, ``C``/``V`` marks for an
 interlock/supervision), transitions as bars with their number, lines, jumps and stops;
-it is coloured live (active green, disturbed or latched red, inactive grey). The panel
-"Control Sequencer" turns clicks into :class:`Command` s handed to ``send`` — in the app
-that is :meth:`web.bus.BusClient.send`, so the view reaches the CPU only over the bus.
-"Alarms" lists the CPU's message list (:meth:`ChartView.apply_alarms`) with an Acknowledge
-button per unacknowledged message (``ack_msg`` as the operator); "Step details" shows one
-step's state, times, interlock and supervision contacts and, per valid transition leaving
-it, each contact ✓/✗ (from ``StepStateUpdate.details``) — which contact blocks.
-Every dynamic text goes through ``html.escape`` before ``add_html``.
+it is coloured live (active green, disturbed or latched red, inactive grey) and greyed out
+with a "disconnected" banner while the CPU is unreachable (its ``alive`` token gone).
+The scene is shared by every page; each page has its own side panel
+(``web.view.panel.ClientPanel``: login, Control Sequencer, alarms, alarm history, audit,
+step details, events), built when the page connects — a page whose websocket came from a
+foreign ``Origin`` gets none (``web.view.guard``). Every dynamic text is escaped
+(``web.view.texts``).
 """
 
 from __future__ import annotations
 
+import contextlib
 import functools
-import html
 import itertools
 import math
 import threading
 import time
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from typing import Any
 
 import numpy as np
@@ -29,24 +28,28 @@ import viser
 from PIL import Image, ImageDraw, ImageFont
 
 from s7graph.web.bus.protocol import (
-    AlarmEntry,
+    AlarmHistory,
     AlarmList,
+    AuditEntry,
     ChartLayout,
     Command,
     CommandReply,
-    Contact,
     CpuStatus,
     CycleStats,
-    StepDetail,
+    LoginReply,
     StepStateUpdate,
 )
+from s7graph.web.view import texts
+from s7graph.web.view.guard import OriginGuard, guard_server
 from s7graph.web.view.layout import Placement, place
+from s7graph.web.view.panel import ClientPanel, PageState, Wiring
 
-__all__ = ["ACTIVE", "DISTURBED", "INACTIVE", "ChartView", "make_server"]
+__all__ = ["ACTIVE", "DISCONNECTED", "DISTURBED", "INACTIVE", "ChartView", "make_server"]
 
 ACTIVE = (40, 170, 60)
 DISTURBED = (220, 40, 40)
 INACTIVE = (205, 205, 205)
+DISCONNECTED = (238, 238, 238)  # every step, while the CPU is unreachable
 INK = (30, 30, 30)
 LANE = 3.0  # scene units per lane
 ROW = 0.8  # scene units per row
@@ -55,15 +58,27 @@ BAR_W = 0.55
 TEXT_PX = 90  # text layer pixels per scene unit
 MAX_FPS = 20.0
 LOG_LINES = 40
+AUDIT_ROWS = 50
 
 Sender = Callable[[Command], CommandReply]
+LoginCall = Callable[[str, str, str], LoginReply]
 
 
 def make_server(
-    host: str = "127.0.0.1", port: int = 8080, *, label: str = "s7graph"
-) -> viser.ViserServer:
-    """A viser server bound to ``host`` (loopback by default); read ``get_port()`` after."""
-    return viser.ViserServer(host=host, port=port, label=label, verbose=False)
+    host: str = "127.0.0.1",
+    port: int = 8080,
+    *,
+    label: str = "s7graph",
+    allowed_origins: Iterable[str] = (),
+) -> tuple[viser.ViserServer, OriginGuard]:
+    """A viser server bound to ``host`` (loopback by default) that refuses foreign-Origin
+    websockets and has no share tunnel; read ``get_port()`` after."""
+    server = viser.ViserServer(host=host, port=port, label=label, verbose=False)
+    return server, guard_server(server, allowed_origins)
+
+
+def _refuse_login(user: str, password: str, origin: str) -> LoginReply:
+    return LoginReply(ok=False, reason="this view cannot log in")
 
 
 def _xy(x: float, y: float) -> tuple[float, float]:
@@ -81,12 +96,13 @@ def _font(px: int) -> ImageFont.FreeTypeFont | ImageFont.ImageFont:
     return ImageFont.load_default(size=max(px, 6))
 
 
-def _clip(text: str, n: int) -> str:
-    return text if len(text) <= n else text[: n - 1] + "…"
-
-
 class ChartView:
-    """Draws one FB's chart in ``server``'s scene and runs its Control Sequencer panel."""
+    """Draws one FB's chart in ``server``'s scene and gives every page its own panel.
+
+    ``send`` carries a page's commands to the CPU (``BusClient.send``), ``login`` /
+    ``logout`` its logins (``BusClient.login``/``logout`` as ``(user, secret, origin)``);
+    ``demo``: the CPU has no users file (names are claimed). ``history`` fetches the
+    alarm history (called from the render thread when the alarm list changed)."""
 
     def __init__(
         self,
@@ -94,15 +110,21 @@ class ChartView:
         layout: ChartLayout,
         send: Sender,
         *,
-        user: str = "operator",
+        login: LoginCall = _refuse_login,
+        logout: LoginCall = _refuse_login,
+        cpu: str = "cpu1",
+        demo: bool = True,
+        guard: OriginGuard | None = None,
+        history: Callable[[], AlarmHistory | None] | None = None,
     ) -> None:
         self.server = server
         self.layout = layout
         self.placement: Placement = place(layout)
-        self._send = send
+        self.cpu = cpu
+        self._guard = guard
+        self._history_source = history
         self._lock = threading.Lock()
         self._latest: StepStateUpdate | None = None
-        self._shown: StepStateUpdate | None = None
         self._wake = threading.Event()
         self._closed = False
         self._log: deque[str] = deque(maxlen=LOG_LINES)
@@ -111,11 +133,17 @@ class ChartView:
         self._cpu_stats: CycleStats | None = None
         self._step_colour: dict[int, tuple[int, int, int]] = {}
         self._alarms: AlarmList | None = None
-        self._alarms_shown: AlarmList | None = None
-        self._alarm_buttons: dict[int | str, viser.GuiButtonHandle] = {}
+        self._alarms_html = texts.alarms_html(None)
+        self._history: AlarmHistory | None = None
+        self._history_stale = history is not None
+        self._audit: deque[AuditEntry] = deque(maxlen=AUDIT_ROWS)
+        self.connected = True
         self.replies: list[CommandReply] = []  # every answer the CPU gave this view
+        self.panels: dict[int, ClientPanel] = {}
+        self._wiring = Wiring(layout, cpu, send, login, logout, demo, self.replies.append)
         self._draw_chart()
-        self._build_panel(user)
+        server.on_client_connect(self._connect)
+        server.on_client_disconnect(self._disconnect)
         self._thread = threading.Thread(target=self._render_loop, name="s7graph-view", daemon=True)
         self._thread.start()
 
@@ -155,7 +183,7 @@ class ChartView:
             segments += _rect(x, y, BOX_W, BOX_H)
             if s.initial:  # S7-GRAPH draws the initial step with a double frame
                 segments += _rect(x, y, BOX_W + 0.12, BOX_H + 0.12)
-            self._text(_title("S", s.number, s.name, 12), x, y, "center-center", 0.25)
+            self._text(texts.title("S", s.number, s.name, 12), x, y, "center-center", 0.25)
             if s.interlock:
                 segments += _rect(x - BOX_W / 2 - 0.14, y, 0.22, 0.28)
                 self._text("C", x - BOX_W / 2 - 0.14, y, "center-center", 0.2)
@@ -171,9 +199,9 @@ class ChartView:
                 dimensions=(BAR_W, 0.07, 0.04),
                 position=(x, y, 0.0),
             )
-            text = _title("T", t.number, t.name, 12)
+            text = texts.title("T", t.number, t.name, 12)
             if t.condition:
-                text += f"\n{_clip(t.condition, 28)}"
+                text += f"\n{texts.clip(t.condition, 28)}"
             self._text(text, x + BAR_W / 2 + 0.08, y + 0.12, "top-left", 0.19)
 
         for j in p.jumps:
@@ -209,9 +237,8 @@ class ChartView:
             self._text("STOP", x + 0.25, y - 0.1, "center-left", 0.18)
         for q in p.sequences:
             x, _ = _xy(q.x0, 0)
-            self._text(
-                f"Sequence {q.number}  {_clip(q.name, 24)}", x - BOX_W / 2, 0.75, "bottom-left", 0.2
-            )
+            title = f"Sequence {q.number}  {texts.clip(q.name, 24)}"
+            self._text(title, x - BOX_W / 2, 0.75, "bottom-left", 0.2)
         if segments:
             sc.add_line_segments(
                 "/chart/lines",
@@ -289,78 +316,33 @@ class ChartView:
         cam = self.server.initial_camera
         cam.position, cam.look_at, cam.up = (cx, cy, z), (cx, cy, 0.0), (0.0, 1.0, 0.0)
 
-    # ------------------------------------------------------------ panel
-
-    def _build_panel(self, user: str) -> None:
-        gui = self.server.gui
-        gui.set_panel_label(f"S7-GRAPH {self.layout.fb}")
-        with gui.add_folder("Control Sequencer"):
-            self.status = gui.add_html(self._status_html(None))
-            self.mode_buttons = gui.add_button_group("Mode", ["AUTO", "MAN", "TAP", "TOP"])
-            self.mode_buttons.on_click(
-                lambda ev: self._command(ev, "mode", {"mode": self.mode_buttons.value})
-            )
-            self.buttons = {
-                "init": gui.add_button("Initialize", hint="INIT_SQ: activate the initial steps"),
-                "off": gui.add_button("Disable (OFF)", hint="OFF_SQ: deactivate every step"),
-                "ack": gui.add_button("Acknowledge", color="red", hint="ACK_EF"),
-                "t_push": gui.add_button("T_PUSH (Continue)", hint="Switch a ready transition"),
-            }
-            for op, button in self.buttons.items():
-                button.on_click(self._make_handler(op))
-            first = self.layout.steps[0].number if self.layout.steps else 1
-            self.step_number = gui.add_number("Step", first, min=1, max=65535, step=1)
-            self.activate = gui.add_button("Activate", hint="S_ON: activate the step (MAN)")
-            self.deactivate = gui.add_button("Deactivate", hint="S_OFF: deactivate the step")
-            self.activate.on_click(
-                lambda ev: self._command(ev, "step_on", {"step": int(self.step_number.value)})
-            )
-            self.deactivate.on_click(
-                lambda ev: self._command(ev, "step_off", {"step": int(self.step_number.value)})
-            )
-            self.operator = gui.add_text("Operator", user)
-        with gui.add_folder("Alarms") as self.alarm_folder:
-            self.alarm_html = gui.add_html(_alarms_html(None))
-        with gui.add_folder("Step details"):
-            self.detail_step = gui.add_number(
-                "Show step", 0, min=0, max=65535, step=1,
-                hint="0: follow the first disturbed, else the first active step",
-            )  # fmt: skip
-            self.detail_html = gui.add_html(self._detail_html(None))
-        self.detail_step.on_update(lambda _: self._refresh())
-        with gui.add_folder("Events"):
-            self.event_log = gui.add_html(self._log_html())
-
-    def _make_handler(self, op: str) -> Callable[[viser.GuiEvent[viser.GuiButtonHandle]], None]:
-        return lambda ev: self._command(ev, op, {})
-
-    def _clicked_step(self, number: int) -> Callable[[object], None]:
-        def handler(_: object) -> None:
-            # viser defines the value setter apart from its getter, so mypy sees no setter
-            self.step_number.value = number  # type: ignore[misc]
-            self.detail_step.value = number  # type: ignore[misc]
+    def _clicked_step(self, number: int) -> Callable[[Any], None]:
+        def handler(event: Any) -> None:
+            client = getattr(event, "client", None)
+            panel = self.panels.get(client.client_id) if client is not None else None
+            if panel is not None:  # the clicking page's Step and Show step fields
+                # viser defines the value setter apart from its getter: mypy sees no setter
+                panel.step_number.value = number  # type: ignore[misc]
+                panel.detail_step.value = number  # type: ignore[misc]
+                self._wake.set()
 
         return handler
 
-    def _command(self, ev: viser.GuiEvent[Any] | None, op: str, args: dict[str, object]) -> None:
-        """Build, send and log one command (runs in viser's callback thread pool)."""
-        user = _clip(str(self.operator.value), 64)
-        try:
-            command = Command(op=op, fb=self.layout.fb, user=user, args=args)  # type: ignore[arg-type]
-        except (TypeError, ValueError) as exc:
-            reply = CommandReply(applied=False, reason=str(exc), op=op, fb=self.layout.fb)
-        else:
-            reply = self._send(command)
-        self.replies.append(reply)
-        verdict = "applied" if reply.applied else f"refused: {reply.reason}"
-        self._append_log(f"{op} {_describe(args)} by {user or '?'}: {verdict}")
-        if ev is not None and ev.client is not None:
-            ev.client.add_notification(
-                f"{op} {'applied' if reply.applied else 'refused'}",
-                reply.reason or "OK",
-                auto_close_seconds=4.0,
-                color="green" if reply.applied else "red",
-            )
+    # ------------------------------------------------------------ pages
+
+    def _connect(self, client: viser.ClientHandle) -> None:
+        if self._guard is not None and self._guard.refused(client.client_id):
+            return  # closed for its foreign Origin: no panel, nothing sent
+        panel = ClientPanel(client, self._wiring)
+        with self._lock:
+            self.panels[client.client_id] = panel
+        self._wake.set()
+
+    def _disconnect(self, client: viser.ClientHandle) -> None:
+        with self._lock:
+            panel = self.panels.pop(client.client_id, None)
+        if panel is not None:
+            panel.forget()
 
     # ------------------------------------------------------------ live state
 
@@ -368,20 +350,33 @@ class ChartView:
         """Show ``update`` (thread-safe; the newest one wins, drawn at most ``MAX_FPS``/s)."""
         with self._lock:
             self._latest = update
-        for event, step in update.events:
-            info = self.layout.step(step)
-            name = f" {info.name}" if info and info.name else ""
-            self._append_log(f"cycle {update.cycle}: {event} S{step}{name}", render=False)
+            for event, step in update.events:
+                info = self.layout.step(step)
+                name = f" {info.name}" if info and info.name else ""
+                self._log.appendleft(f"cycle {update.cycle}: {event} S{step}{name}")
         self._wake.set()
 
     def apply_alarms(self, alarms: AlarmList) -> None:
         """Show the CPU's message list (thread-safe; drawn by the render thread)."""
+        html = texts.alarms_html(alarms)
         with self._lock:
-            self._alarms = alarms
-        self._refresh()
+            self._alarms, self._alarms_html = alarms, html
+            self._history_stale = self._history_source is not None
+        self._wake.set()
 
-    def _refresh(self) -> None:
-        self._shown = None
+    def apply_audit(self, entry: AuditEntry) -> None:
+        """Add one audit row (the CPU publishes each as it writes it)."""
+        with self._lock:
+            if not self._audit or entry.id > self._audit[-1].id:
+                self._audit.append(entry)
+        self._wake.set()
+
+    def apply_audit_list(self, entries: Iterable[AuditEntry]) -> None:
+        """Start the Audit panel from the CPU's last rows."""
+        with self._lock:
+            merged = {e.id: e for e in [*entries, *self._audit]}
+            self._audit.clear()
+            self._audit.extend(merged[k] for k in sorted(merged)[-AUDIT_ROWS:])
         self._wake.set()
 
     def apply_status(self, status: CpuStatus) -> None:
@@ -390,7 +385,13 @@ class ChartView:
             self._cpu_cycle = status.cycle
             self._cpu_state = status.state
             self._cpu_stats = status.stats
-        self._shown = None
+        self._wake.set()
+
+    def set_connected(self, connected: bool) -> None:
+        """The CPU's ``alive`` token came or went: grey the chart and say so, or recover."""
+        with self._lock:
+            self.connected = connected
+            self._step_colour.clear()  # repaint every box
         self._wake.set()
 
     def close(self) -> None:
@@ -401,194 +402,62 @@ class ChartView:
 
     def _render_loop(self) -> None:
         while not self._closed:
-            self._wake.wait()
+            self._wake.wait(timeout=1.0)
             self._wake.clear()
             if self._closed:
                 return
-            self._render()
+            with contextlib.suppress(Exception):  # a page gone mid-update must not stop it
+                self._render()
             time.sleep(1.0 / MAX_FPS)
 
     def _render(self) -> None:
+        if self._history_stale and self._history_source is not None:
+            self._history_stale = False
+            try:
+                self._history = self._history_source()
+            except Exception:
+                self._history_stale = True
         with self._lock:
-            update = self._latest
-            alarms = self._alarms
-        if alarms is not self._alarms_shown:
-            self._render_alarms(alarms)
-        if update is None or update is self._shown:
+            update, connected = self._latest, self.connected
+            page = PageState(
+                banner=texts.banner_html(connected, self.cpu),
+                status=texts.status_html(
+                    update, self._cpu_cycle, self._cpu_state, self._cpu_stats
+                )
+                if connected
+                else texts.small("no live state"),
+                mode=update.mode if update is not None and connected else None,
+                alarms=self._alarms,
+                alarms_html=self._alarms_html,
+                history=texts.history_html(self._history),
+                audit=texts.audit_html(list(self._audit)),
+                events=texts.log_html(list(self._log)),
+            )
+            panels = list(self.panels.values())
+        self._paint(update, connected)
+        detail = functools.lru_cache(maxsize=8)(
+            lambda number: texts.detail_html(self.layout, update, number)
+        )
+        halted = bool(update is not None and update.halted)
+        for panel in panels:
+            try:
+                panel.show(page, detail, halted)
+            except Exception:
+                continue
+
+    def _paint(self, update: StepStateUpdate | None, connected: bool) -> None:
+        if update is None and connected:
             return
-        detail = self._detail_html(update)
-        active, bad = set(update.active), set(update.disturbed) | set(update.latched)
+        active = set(update.active) if update is not None else set()
+        bad = set(update.disturbed) | set(update.latched) if update is not None else set()
         with self.server.atomic():
             for number, box in self.boxes.items():
-                colour = DISTURBED if number in bad else ACTIVE if number in active else INACTIVE
+                if not connected:
+                    colour = DISCONNECTED
+                elif number in bad:
+                    colour = DISTURBED
+                else:
+                    colour = ACTIVE if number in active else INACTIVE
                 if self._step_colour.get(number) != colour:
                     box.color = colour
                     self._step_colour[number] = colour
-            # only what changed goes to the page (a step's T alone changes ten times a second)
-            for handle, content in (
-                (self.status, self._status_html(update)),
-                (self.event_log, self._log_html()),
-                (self.detail_html, detail),
-            ):
-                if handle.content != content:
-                    handle.content = content
-        self._shown = update
-
-    def _render_alarms(self, alarms: AlarmList | None) -> None:
-        """The alarm list and one Acknowledge button per unacknowledged message."""
-        self._alarms_shown = alarms
-        pending = alarms.pending() if alarms is not None else []
-        wanted = {e.msg_id: e for e in pending}
-        with self.server.atomic():
-            self.alarm_html.content = _alarms_html(alarms)
-            for mid in [m for m in self._alarm_buttons if m not in wanted]:
-                self._alarm_buttons.pop(mid).remove()
-            with self.alarm_folder:
-                for mid, entry in wanted.items():
-                    if mid not in self._alarm_buttons:
-                        button = self.server.gui.add_button(
-                            _ack_label(entry), color="red", hint=_clip(entry.text, 200)
-                        )
-                        button.on_click(self._ack_handler(mid))
-                        self._alarm_buttons[mid] = button
-
-    def _ack_handler(
-        self, msg_id: int | str
-    ) -> Callable[[viser.GuiEvent[viser.GuiButtonHandle]], None]:
-        return lambda ev: self._command(ev, "ack_msg", {"msg_id": msg_id})
-
-    def _detail_html(self, update: StepStateUpdate | None) -> str:
-        """The "Step details" of the chosen step: why it does (not) switch."""
-        number = int(self.detail_step.value) if hasattr(self, "detail_step") else 0
-        if number == 0:  # follow: the first disturbed, else the first active step
-            if update is None or not update.active:
-                return _small("no active step (choose one with <i>Show step</i>)")
-            number = (sorted(set(update.disturbed) & set(update.active)) or update.active)[0]
-        info = self.layout.step(number)
-        if info is None:
-            return _small(f"no step S{number} in {self.layout.fb}")
-        title = f"<b>{html.escape(_title('S', number, info.name, 24))}</b>"
-        if update is None:
-            return _small(f"{title}: waiting for the CPU…")
-        detail = next((d for d in update.details if d.number == number), None)
-        if detail is None:
-            rows = [f"{title}: inactive"]
-            for t in self.layout.transitions:
-                if number in t.sources:
-                    cond = html.escape(t.condition or "TRUE")
-                    name = html.escape(_title("T", t.number, t.name, 24))
-                    rows.append(f"{name}: {cond} <i>(evaluated while the step is active)</i>")
-            return _small("<br>".join(rows))
-        return _small("<br>".join([title + ": " + _step_state(detail), *_step_rows(detail)]))
-
-    def _append_log(self, line: str, *, render: bool = True) -> None:
-        with self._lock:
-            self._log.appendleft(line)
-        if render:
-            self.event_log.content = self._log_html()
-
-    def _log_html(self) -> str:
-        with self._lock:
-            lines = list(self._log)
-        if not lines:
-            return '<div style="font-size:0.8em;color:#777">no events yet</div>'
-        body = "<br>".join(html.escape(line) for line in lines)
-        style = "font-family:monospace;font-size:0.75em;max-height:14em;overflow:auto"
-        return f'<div style="{style}">{body}</div>'
-
-    def _status_html(self, update: StepStateUpdate | None) -> str:
-        if update is None:
-            return '<div style="font-size:0.85em">waiting for the CPU…</div>'
-        active = ", ".join(f"S{n}" for n in update.active) or "none"
-        parts = [
-            f"<b>{html.escape(update.mode)}</b>",
-            f"cycle {max(update.cycle, self._cpu_cycle)}",
-            f"active: {html.escape(active)}",
-        ]
-        stats = self._cpu_stats
-        if stats is not None and stats.max_ms > 0:
-            parts.append(f"cycle time {stats.last_ms:.1f} ms (max {stats.max_ms:.1f})")
-        bad = sorted(set(update.disturbed) | set(update.latched))
-        if bad:
-            errors = ", ".join(f"S{n}" for n in bad)
-            parts.append(f'<span style="color:#c00">error: {html.escape(errors)}</span>')
-        if self._cpu_state != "RUN":
-            parts.insert(0, f'<b style="color:#c00">{html.escape(self._cpu_state)}</b>')
-        return f'<div style="font-size:0.85em">{" · ".join(parts)}</div>'
-
-
-def _title(prefix: str, number: int, name: str, width: int) -> str:
-    """``S3  Fill``; just ``S3`` when the name is empty or only repeats the number."""
-    short = f"{prefix}{number}"
-    return short if name in ("", short) else f"{short}  {_clip(name, width)}"
-
-
-def _small(body: str) -> str:
-    return f'<div style="font-size:0.8em;line-height:1.5">{body}</div>'
-
-
-def _clock(ms: int | None) -> str:
-    return "" if ms is None else time.strftime("%H:%M:%S", time.localtime(ms / 1000))
-
-
-def _ack_label(entry: AlarmEntry) -> str:
-    if entry.step is not None and entry.kind:
-        what = "supervision" if entry.kind == "SV" else "interlock"
-        return f"Acknowledge S{entry.step} {what}"
-    return _clip(f"Acknowledge message {entry.msg_id}", 64)
-
-
-def _alarms_html(alarms: AlarmList | None) -> str:
-    """Every listed message: time, state, text, step, who acknowledged it and when."""
-    if alarms is None or not alarms.entries:
-        return _small('<span style="color:#777">no messages</span>')
-    rows = []
-    for e in reversed(alarms.entries):  # newest first
-        colour = "#c00" if e.state == "incoming" else "#a60"
-        where = f" · S{e.step}" if e.step is not None else ""
-        ack = (
-            f"acknowledged by {html.escape(e.ack_user or '?')} {_clock(e.ack_ms)}"
-            if e.acked
-            else "<b>unacknowledged</b>"
-        )
-        rows.append(
-            f'<div style="border-left:3px solid {colour};padding-left:4px;margin-bottom:4px">'
-            f'{_clock(e.came_ms)} <span style="color:{colour}">{e.state}</span>'
-            f"{html.escape(where)} · {ack}<br>{html.escape(e.text)}</div>"
-        )
-    return _small("".join(rows))
-
-
-def _mark(c: Contact) -> str:
-    tick = '<span style="color:#080">✓</span>' if c.ok else '<span style="color:#c00">✗</span>'
-    return f"&nbsp;&nbsp;{tick} {html.escape(c.text)}"
-
-
-def _step_state(d: StepDetail) -> str:
-    parts = ["active", f"T {d.t_ms / 1000:.1f} s", f"U {d.u_ms / 1000:.1f} s"]
-    if d.interlock_error:
-        parts.append('<span style="color:#c00">interlock error</span>')
-    if d.supervision_fault:
-        parts.append('<span style="color:#c00">supervision fault</span>')
-    return " · ".join(parts)
-
-
-def _step_rows(d: StepDetail) -> list[str]:
-    rows = []
-    if d.interlock:
-        state = "holds" if d.interlock_ok else '<span style="color:#c00">lost</span>'
-        rows += [f"Interlock (C): {state}", *map(_mark, d.interlock)]
-    if d.supervision:
-        state = '<span style="color:#c00">fault</span>' if d.supervision_fault else "ok"
-        rows += [f"Supervision (V): {state}", *map(_mark, d.supervision)]
-    for t in d.transitions:
-        holds = "holds" if t.holds else '<span style="color:#c00">does not hold</span>'
-        name = html.escape(_title("T", t.number, t.name, 24))
-        rows += [f"<b>{name}</b>: {holds}", *map(_mark, t.contacts)]
-    if not d.transitions:
-        rows.append("no valid transition leaves it (a step before it is inactive)")
-    return rows
-
-
-def _describe(args: dict[str, object]) -> str:
-    return " ".join(f"{k}={v}" for k, v in args.items())

@@ -1,30 +1,171 @@
 """Wire a chart, a feed of scans, the bus and the browser view together.
 
-``serve_view(chart, updates)`` opens two loopback zenoh sessions — the CPU's and the
-view's — so the view reaches the CPU only over the bus, the same path a remote view takes.
+:class:`CpuSide` is the CPU's end of the bus: a zenoh session listening on (or connecting
+to) the given endpoints — a unix socket in a temporary folder by default — and its
+:class:`BusPublisher` with the :class:`Gate`. :class:`ViewSide` is a view's end: its own
+session connecting to the bus, a :class:`BusClient`, a viser server and the
+:class:`ChartView` — all it knows of the CPU comes over the bus, so it runs as well in
+another process (``s7graph web``) as beside the CPU (``s7graph run --web``).
+``serve_view(chart, updates)`` starts both, as ``run --web`` does.
 """
 
 from __future__ import annotations
 
 import contextlib
 import shutil
+import socket
 import tempfile
 import threading
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
 
 from s7graph.sequencer.model import Chart
-from s7graph.web.bus.protocol import ChartLayout, Command, StepStateUpdate
-from s7graph.web.bus.zenoh_bus import BusClient, BusPublisher, open_session
+from s7graph.web.bus.gate import Apply, Gate
+from s7graph.web.bus.protocol import ChartLayout, Command, CpuStatus, StepStateUpdate
+from s7graph.web.bus.zenoh_bus import BusClient, BusPublisher, TlsFiles, open_session
 from s7graph.web.view.chart_view import ChartView, make_server
 
-__all__ = ["WebEdge", "serve_view"]
+__all__ = ["BusEnds", "CpuSide", "PortError", "ViewSide", "WebEdge", "check_port", "serve_view"]
 
-Apply = Callable[[Command], tuple[bool, str]]
+
+class PortError(ValueError):
+    """A page port out of range or taken."""
+
+
+@dataclass(frozen=True, slots=True)
+class BusEnds:
+    """Where a session meets the bus: endpoints to listen on and to connect to, and TLS."""
+
+    listen: Sequence[str] = ()
+    connect: Sequence[str] = ()
+    tls: TlsFiles | None = None
+
+
+def check_port(host: str, port: int) -> None:
+    """:class:`PortError` if ``port`` is out of range or taken on ``host`` (0: any free one)."""
+    if not 0 <= port <= 65535:
+        raise PortError(f"--port {port} is out of range (0-65535; 0 picks a free one)")
+    if port == 0:
+        return
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    with socket.socket(family, socket.SOCK_STREAM) as s:
+        try:
+            s.bind((host, port))
+        except OSError as exc:
+            raise PortError(f"port {port} on {host} is in use ({exc.strerror})") from None
+
+
+class CpuSide:
+    """The CPU's end of the bus; ``endpoint`` is where a view connects."""
+
+    def __init__(
+        self,
+        charts: dict[str, ChartLayout],
+        *,
+        cpu: str,
+        ends: BusEnds = BusEnds(),
+        gate: Gate | None = None,
+    ) -> None:
+        self._tmp = None
+        listen = list(ends.listen)
+        if not listen and not ends.connect:
+            self._tmp = tempfile.mkdtemp(prefix="s7graph-bus-")
+            listen = [f"unixsock-stream/{self._tmp}/bus.sock"]
+        self.endpoint = listen[0] if listen else ends.connect[0]
+        self.session = open_session(listen=listen, connect=ends.connect, tls=ends.tls)
+        try:
+            self.publisher = BusPublisher(self.session, cpu, charts, gate=gate)
+        except BaseException:
+            self.close()
+            raise
+
+    def close(self) -> None:
+        with contextlib.suppress(Exception):
+            if hasattr(self, "publisher"):
+                self.publisher.close()
+        with contextlib.suppress(Exception):
+            self.session.close()  # type: ignore[no-untyped-call]  # zenoh's stub
+        if self._tmp:
+            shutil.rmtree(self._tmp, ignore_errors=True)
+            self._tmp = None
+
+
+class ViewSide:
+    """A browser view of one FB of ``cpu``, reached over the bus at ``ends.connect``."""
+
+    def __init__(
+        self,
+        *,
+        cpu: str,
+        fb: str | None,
+        ends: BusEnds,
+        host: str = "127.0.0.1",
+        port: int = 8080,
+        allowed_origins: Iterable[str] = (),
+        wait_s: float = 5.0,
+    ) -> None:
+        self._closers: list[Callable[[], object]] = []
+        try:
+            check_port(host, port)
+            session = open_session(connect=ends.connect, tls=ends.tls)
+            self._closers.append(session.close)
+            self.session = session
+            self.client = BusClient(session, cpu)
+            self._closers.append(self.client.close)
+            status, layout = self._wait_for_chart(fb, wait_s)
+            self.fb = layout.fb
+            self.server, guard = make_server(host, port, allowed_origins=allowed_origins)
+            self._closers.append(self.server.stop)
+            if port and self.server.get_port() != port:  # viser moved on to the next port
+                raise PortError(f"port {port} on {host} is in use")
+            client = self.client
+            self.view = ChartView(
+                self.server, layout, client.send, cpu=cpu, guard=guard,
+                login=lambda user, password, origin: client.login(user, password, origin=origin),
+                logout=lambda token, user, origin: client.logout(token, user=user, origin=origin),
+                demo=status is None or status.login == "demo", history=client.history,
+            )  # fmt: skip
+            self._closers.append(self.view.close)
+            self.follower = client.follow(self.fb, self.view.apply)
+            client.on_status(self.view.apply_status)
+            client.on_alarms(self.view.apply_alarms)
+            client.on_audit(self.view.apply_audit)
+            client.on_alive(self.view.set_connected)
+            with contextlib.suppress(Exception):
+                listed = client.audit()
+                if listed is not None:
+                    self.view.apply_audit_list(listed.entries)
+        except BaseException:
+            self.close()
+            raise
+        shown = f"[{host}]" if ":" in host else host
+        self.url = f"http://{shown}:{self.server.get_port()}/"
+
+    def _wait_for_chart(
+        self, fb: str | None, timeout: float
+    ) -> tuple[CpuStatus | None, ChartLayout]:
+        deadline = time.monotonic() + timeout
+        while True:
+            status = self.client.status()
+            name = fb or (status.fbs[0] if status is not None and status.fbs else None)
+            layout = self.client.chart(name) if name else None
+            if layout is not None:
+                return status, layout
+            if time.monotonic() > deadline:
+                what = f"FB {fb!r}" if fb else "a CPU with an FB"
+                raise TimeoutError(f"no chart for {what} on the bus within {timeout:g} s")
+            time.sleep(0.05)
+
+    def close(self) -> None:
+        while self._closers:
+            with contextlib.suppress(Exception):  # keep closing the rest
+                self._closers.pop()()
 
 
 class WebEdge:
-    """A running view: ``publisher`` is the CPU's side of the bus, ``url`` the page."""
+    """A running view beside its CPU: ``publisher`` is the CPU's side of the bus, ``url``
+    the page, ``client``/``view``/``follower`` the view's side."""
 
     def __init__(
         self,
@@ -34,46 +175,34 @@ class WebEdge:
         port: int,
         cpu: str,
         fb: str | None,
-        endpoint: str | None,
+        endpoint: str | None = None,
+        ends: BusEnds | None = None,
+        gate: Gate | None = None,
+        allowed_origins: Iterable[str] = (),
     ) -> None:
         layout = chart if isinstance(chart, ChartLayout) else ChartLayout.from_chart(chart, fb=fb)
         self.fb = layout.fb
-        self._tmp = None if endpoint else tempfile.mkdtemp(prefix="s7graph-bus-")
-        self.endpoint = endpoint or f"unixsock-stream/{self._tmp}/bus.sock"
         self._stop = threading.Event()
         self._pump: threading.Thread | None = None
-        self._closers: list[Callable[[], object]] = []
+        if ends is None:
+            ends = BusEnds(listen=[endpoint] if endpoint else [])
+        self.cpu_side = CpuSide({self.fb: layout}, cpu=cpu, ends=ends, gate=gate)
+        self.endpoint = self.cpu_side.endpoint
+        self.publisher = self.cpu_side.publisher
         try:
-            cpu_session = open_session(listen=[self.endpoint])
-            self._closers.append(cpu_session.close)
-            self.publisher = BusPublisher(cpu_session, cpu, {self.fb: layout})
-            self._closers.append(self.publisher.close)
-            view_session = open_session(connect=[self.endpoint])
-            self._closers.append(view_session.close)
-            self.client = BusClient(view_session, cpu)
-            self._closers.append(self.client.close)
-            seen = self._wait_for_chart()
-            self.server = make_server(host, port)
-            self._closers.append(self.server.stop)
-            self.view = ChartView(self.server, seen, self.client.send)
-            self._closers.append(self.view.close)
-            self.follower = self.client.follow(self.fb, self.view.apply)
-            self.client.on_status(self.view.apply_status)
-            self.client.on_alarms(self.view.apply_alarms)
+            connect = list(ends.connect) or [self.endpoint]
+            self.view_side = ViewSide(
+                cpu=cpu, fb=self.fb, ends=BusEnds(connect=connect, tls=ends.tls),
+                host=host, port=port, allowed_origins=allowed_origins,
+            )  # fmt: skip
         except BaseException:
-            self.close()
+            self.cpu_side.close()
             raise
-        self.url = f"http://{host}:{self.server.get_port()}/"
-
-    def _wait_for_chart(self, timeout: float = 5.0) -> ChartLayout:
-        deadline = time.monotonic() + timeout
-        while True:
-            layout = self.client.chart(self.fb)
-            if layout is not None:
-                return layout
-            if time.monotonic() > deadline:
-                raise TimeoutError(f"no chart for FB {self.fb!r} on the bus within {timeout:g} s")
-            time.sleep(0.05)
+        self.client = self.view_side.client
+        self.view = self.view_side.view
+        self.follower = self.view_side.follower
+        self.server = self.view_side.server
+        self.url = self.view_side.url
 
     def pump(self, updates: Iterable[StepStateUpdate], apply: Apply | None) -> None:
         """Publish ``updates`` in a thread; between two of them, apply pending commands."""
@@ -107,11 +236,8 @@ class WebEdge:
         self._stop.set()
         if self._pump is not None:
             self._pump.join(timeout=2.0)
-        while self._closers:
-            with contextlib.suppress(Exception):  # keep closing the rest
-                self._closers.pop()()
-        if self._tmp:
-            shutil.rmtree(self._tmp, ignore_errors=True)
+        self.view_side.close()
+        self.cpu_side.close()
 
     def __enter__(self) -> WebEdge:
         return self
@@ -130,15 +256,23 @@ def serve_view(
     fb: str | None = None,
     apply_command: Apply | None = None,
     endpoint: str | None = None,
+    ends: BusEnds | None = None,
+    gate: Gate | None = None,
+    allowed_origins: Iterable[str] = (),
 ) -> WebEdge:
     """Serve the browser view of ``chart`` and return the running edge (close it when done).
 
     ``updates_source`` yields one :class:`StepStateUpdate` per scan (it may block to pace
     the scans); between two of them, ``apply_command(command) -> (applied, reason)`` runs
-    for each command from the view — a scan boundary when the iterator runs the scan. With
-    ``updates_source=None`` the caller drives ``edge.publisher`` itself. ``endpoint`` is the
-    bus's listen endpoint (default: a unix socket in a temporary directory)."""
-    edge = WebEdge(chart, host=host, port=port, cpu=cpu, fb=fb, endpoint=endpoint)
+    for each command from the view that the gate lets through — a scan boundary when the
+    iterator runs the scan. With ``updates_source=None`` the caller drives
+    ``edge.publisher`` itself. ``endpoint`` (or ``ends``) is where the bus listens
+    (default: a unix socket in a temporary directory); ``gate`` who may command (default:
+    the demo)."""
+    edge = WebEdge(
+        chart, host=host, port=port, cpu=cpu, fb=fb, endpoint=endpoint, ends=ends, gate=gate,
+        allowed_origins=allowed_origins,
+    )  # fmt: skip
     if updates_source is not None:
         edge.pump(updates_source, apply_command)
     return edge

@@ -19,9 +19,11 @@ from s7graph.engine.modes import CpuMode
 from s7graph.engine.record import ScanRecord
 from s7graph.engine.runner import Runner
 from s7graph.engine.watchdog import CycleStatistics
+from s7graph.web.bus.gate import Gate
 from s7graph.web.bus.live import LiveGraph
 from s7graph.web.bus.protocol import CycleStats, StepStateUpdate
-from s7graph.web.view.edge import WebEdge, serve_view
+from s7graph.web.bus.zenoh_bus import BusPublisher
+from s7graph.web.view.edge import BusEnds, CpuSide, WebEdge, serve_view
 
 if TYPE_CHECKING:
     from s7graph.web.recorder import Recorder
@@ -43,8 +45,8 @@ def cycle_stats(cpu: CycleStatistics, runner: Runner | None = None) -> CycleStat
 
 
 class LiveEdge:
-    """The view and bus (``serve``) and the recording (``record``) of one running GraphFB;
-    close it when done."""
+    """The view and bus (``serve``), or the bus alone (``bus``), and the recording
+    (``record``) of one running GraphFB; close it when done."""
 
     def __init__(
         self,
@@ -56,14 +58,27 @@ class LiveEdge:
         record: Path | None = None,
         endpoint: str | None = None,
         serve: bool = True,
+        ends: BusEnds | None = None,
+        gate: Gate | None = None,
+        allowed_origins: tuple[str, ...] = (),
+        bus: bool = False,
     ) -> None:
         self.live = live
         self.recorder: Recorder | None = None
         self.edge: WebEdge | None = None
+        self.cpu_side: CpuSide | None = None
+        self.publisher: BusPublisher | None = None
         if serve:
             self.edge = serve_view(
-                live.layout, None, host=host, port=port, cpu=cpu, endpoint=endpoint
+                live.layout, None, host=host, port=port, cpu=cpu, endpoint=endpoint, ends=ends,
+                gate=gate, allowed_origins=allowed_origins,
+            )  # fmt: skip
+            self.publisher = self.edge.publisher
+        elif bus:
+            self.cpu_side = CpuSide(
+                {live.fb: live.layout}, cpu=cpu, ends=ends or BusEnds(), gate=gate
             )
+            self.publisher = self.cpu_side.publisher
         try:
             if record is not None:
                 from s7graph.web.recorder import Recorder  # rerun-sdk only when recording
@@ -73,7 +88,13 @@ class LiveEdge:
             self.close()
             raise
         self.url = self.edge.url if self.edge is not None else ""
-        self.endpoint = self.edge.endpoint if self.edge is not None else ""
+        self.endpoint = (
+            self.edge.endpoint
+            if self.edge is not None
+            else self.cpu_side.endpoint
+            if self.cpu_side is not None
+            else ""
+        )
         self._cpu_state: str | None = None
 
     def on_record(
@@ -87,9 +108,9 @@ class LiveEdge:
         update = self.live.update(record)
         if self.recorder is not None and record.mode is CpuMode.RUN:
             self.recorder.record(update)
-        if self.edge is None:
+        publisher = self.publisher
+        if publisher is None:
             return update
-        publisher = self.edge.publisher
         state = str(record.mode)
         if state != self._cpu_state:
             self._cpu_state = state
@@ -112,6 +133,10 @@ class LiveEdge:
         if self.edge is not None:
             self.edge.close()
             self.edge = None
+        if self.cpu_side is not None:
+            self.cpu_side.close()
+            self.cpu_side = None
+        self.publisher = None
 
     def __enter__(self) -> LiveEdge:
         return self

@@ -1,0 +1,56 @@
+"""``s7graph audit --state FILE [--since WHEN]``: the audit trail of a CPU's state file.
+
+``--since`` takes a time (``2026-11-22``, ``2026-11-22T08:30``, ``08:30`` today) or an age
+(``90s``, ``15m``, ``2h``, ``3d``).
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import re
+import sqlite3
+import sys
+import time
+from pathlib import Path
+
+from s7graph.web.access.audit import lines, read_audit
+
+__all__ = ["audit_command", "parse_since"]
+
+_AGE = re.compile(r"^(\d+(?:\.\d+)?)([smhd])$")
+_UNIT = {"s": 1, "m": 60, "h": 3600, "d": 86400}
+
+
+def parse_since(text: str, now: float | None = None) -> int:
+    """Wall-clock ns of ``--since``; ValueError naming the accepted forms."""
+    now = time.time() if now is None else now
+    age = _AGE.match(text.strip())
+    if age:
+        return int((now - float(age[1]) * _UNIT[age[2]]) * 1e9)
+    try:
+        if re.fullmatch(r"\d{1,2}:\d{2}(:\d{2})?", text.strip()):
+            today = dt.datetime.fromtimestamp(now).date().isoformat()
+            when = dt.datetime.fromisoformat(f"{today}T{text.strip()}")
+        else:
+            when = dt.datetime.fromisoformat(text.strip())
+    except ValueError:
+        raise ValueError(
+            f"--since {text!r}: give a time (2026-11-22T08:30, 08:30) or an age (15m, 2h, 3d)"
+        ) from None
+    return int(when.timestamp() * 1e9)
+
+
+def audit_command(state: Path, since: str | None) -> int:
+    """Print the audit rows (oldest first); exit 2 for a missing file or a bad --since."""
+    if not state.is_file():
+        print(f"s7graph: error: {state}: no such state file", file=sys.stderr)
+        return 2
+    try:
+        since_ns = parse_since(since) if since else None
+        rows = read_audit(state, since_ns=since_ns)
+    except (ValueError, sqlite3.Error) as exc:
+        print(f"s7graph: error: {exc}", file=sys.stderr)
+        return 2
+    for line in lines(rows):
+        print(line)
+    return 0

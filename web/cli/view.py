@@ -1,0 +1,80 @@
+"""``s7graph web --connect EP [--cpu NAME] [--fb NAME]``: the browser view as a process of
+its own, for any CPU on the bus.
+
+It lists the CPUs answering on the bus with their FBs, serves the view of ``--cpu`` (by
+default the first, by name) and ``--fb`` (by default its first FB) on ``--host:--port``,
+and knows the CPU only over the bus — as ``s7graph run --web`` does in one process. The
+page may leave this machine (``--host``) only when the CPU checks logins (a users file).
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+
+from s7graph.web.bus.zenoh_bus import find_cpus, open_session
+from s7graph.web.cli.net import NetOptions, is_loopback_host
+from s7graph.web.cli.stopping import wait_until_stopped
+from s7graph.web.view.edge import PortError, ViewSide
+
+__all__ = ["web_command"]
+
+
+def _fail(message: str) -> int:
+    print(f"s7graph: error: {message}", file=sys.stderr)
+    return 2
+
+
+def web_command(
+    net: NetOptions,
+    *,
+    cpu: str | None,
+    fb: str | None,
+    port: int,
+    duration_s: float | None = None,
+    wait_s: float = 10.0,
+) -> int:
+    problem = NetOptions(**{**net.__dict__, "host": "127.0.0.1"}).problem()
+    if problem is None and not net.connect:
+        problem = "give the bus to join with --connect ENDPOINT"
+    if problem:
+        return _fail(problem)
+    try:
+        with open_session(connect=net.connect, tls=net.tls) as probe:
+            deadline = time.monotonic() + wait_s
+            cpus = find_cpus(probe)
+            while not cpus and time.monotonic() < deadline:
+                time.sleep(0.2)
+                cpus = find_cpus(probe)
+    except Exception as exc:
+        return _fail(f"cannot join the bus: {type(exc).__name__}: {exc}")
+    if not cpus:
+        return _fail(f"no CPU answers on {', '.join(net.connect)}")
+    for status in cpus:
+        print(f"s7graph: CPU {status.cpu} ({status.state}, logins: {status.login}): "
+              f"{', '.join(status.fbs) or 'no FB'}", flush=True)  # fmt: skip
+    chosen = next((s for s in cpus if s.cpu == cpu), None) if cpu else cpus[0]
+    if chosen is None:
+        return _fail(f"no CPU {cpu!r} on the bus; found {', '.join(s.cpu for s in cpus)}")
+    if fb is not None and fb not in chosen.fbs:
+        return _fail(f"CPU {chosen.cpu} runs no FB {fb!r}; it runs {', '.join(chosen.fbs)}")
+    if not is_loopback_host(net.host) and chosen.login != "users":
+        return _fail(
+            f"--host {net.host} is not loopback and CPU {chosen.cpu} has no users file: "
+            "the page stays on this machine"
+        )
+    try:
+        view = ViewSide(
+            cpu=chosen.cpu, fb=fb, ends=net.ends, host=net.host, port=port,
+            allowed_origins=net.origins,
+        )  # fmt: skip
+    except (PortError, TimeoutError) as exc:
+        return _fail(str(exc))
+    except Exception as exc:
+        return _fail(f"cannot serve the view: {type(exc).__name__}: {exc}")
+    print(f"s7graph: view {view.url} of {chosen.cpu}/{view.fb}; Ctrl-C to stop", flush=True)
+    try:
+        wait_until_stopped(duration_s)
+    finally:
+        view.close()
+    return 0

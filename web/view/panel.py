@@ -1,0 +1,285 @@
+"""One browser page's side panel: its own login, its own Control Sequencer, its own alarms.
+
+Every page is a session of its own (viser's per-client GUI, ``client.gui``): its ``User``
+and ``Password`` fields, ``Log in`` / ``Log out``, and the token the CPU gave it are never
+seen by another page. Until it logs in a page is a viewer: every command button is
+disabled (and the CPU refuses commands without a valid token anyway); after login the
+buttons its role allows (``web.access.roles``) are enabled. The current mode is
+highlighted on its button. Command verdicts come back as notifications on this page only.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, Final
+
+import viser
+
+from s7graph.web.access.roles import allowed
+from s7graph.web.bus.protocol import (
+    AlarmList,
+    ChartLayout,
+    Command,
+    CommandReply,
+    LoginReply,
+)
+from s7graph.web.view import texts
+
+__all__ = ["ClientPanel", "PageState", "Wiring"]
+
+MODES = ("AUTO", "MAN", "TAP", "TOP")
+CURRENT_MODE_COLOUR: Final = "green"
+
+
+@dataclass(frozen=True, slots=True)
+class Wiring:
+    """What a panel talks to: the FB, the bus calls, the mode (demo: no users file)."""
+
+    layout: ChartLayout
+    cpu: str
+    send: Callable[[Command], CommandReply]
+    login: Callable[[str, str, str], LoginReply]
+    logout: Callable[[str, str, str], LoginReply]
+    demo: bool
+    on_reply: Callable[[CommandReply], None]
+
+
+@dataclass(frozen=True, slots=True)
+class PageState:
+    """What every page shows, computed once per render (HTML already escaped)."""
+
+    banner: str
+    status: str
+    mode: str | None
+    alarms: AlarmList | None
+    alarms_html: str
+    history: str
+    audit: str
+    events: str
+
+
+class ClientPanel:
+    """The side panel of one browser page (``client``)."""
+
+    def __init__(self, client: viser.ClientHandle, wiring: Wiring) -> None:
+        self.client = client
+        self.wiring = wiring
+        self.user = ""
+        self.token = ""
+        self.role = "viewer"
+        self.verified = True
+        self._lock = threading.Lock()
+        self._alarm_buttons: dict[int | str, viser.GuiButtonHandle] = {}
+        self._shown: dict[str, str] = {}
+        self._mode: str | None = None
+        self._alarms: AlarmList | None = None
+        self.origin = _origin(client)
+        self._build()
+
+    # ------------------------------------------------------------ building
+
+    def _build(self) -> None:
+        gui = self.client.gui
+        w = self.wiring
+        gui.set_panel_label(f"S7-GRAPH {w.layout.fb} on {w.cpu}")
+        self.banner = gui.add_html("")
+        with gui.add_folder("Login"):
+            self.user_field = gui.add_text("User", "")
+            self.password = gui.add_text("Password", "", visible=not w.demo)
+            # viser has no password input: mask the one whose label points at this field
+            # (Chromium, Safari, Firefox >= 127 honour -webkit-text-security)
+            uid = self.password._impl.uuid
+            rule = f".mantine-Flex-root:has(label[for='{uid}']) input{{-webkit-text-security:disc}}"
+            gui.add_html(f"<style>{rule}</style>")
+            self.login_button = gui.add_button("Log in")
+            self.logout_button = gui.add_button("Log out", disabled=True)
+            self.who = gui.add_html(texts.login_html("", "", True, w.demo))
+        self.login_button.on_click(lambda _: self._log_in())
+        self.logout_button.on_click(lambda _: self._log_out())
+        with gui.add_folder("Control Sequencer"):
+            self.status = gui.add_html(texts.status_html(None, 0, "RUN", None))
+            self.mode_buttons = {m: gui.add_button(m, hint=f"SW_{m}") for m in MODES}
+            for mode, button in self.mode_buttons.items():
+                button.on_click(self._handler("mode", mode=mode))
+            self.buttons: dict[str, viser.GuiButtonHandle] = {
+                "init": gui.add_button("Initialize", hint="INIT_SQ: activate the initial steps"),
+                "off": gui.add_button("Disable (OFF)", hint="OFF_SQ: deactivate every step"),
+                "ack": gui.add_button("Acknowledge", color="red", hint="ACK_EF"),
+                "t_push": gui.add_button("T_PUSH (Continue)", hint="Switch a ready transition"),
+                "halt": gui.add_button("Halt", hint="HALT_SQ: hold / resume the sequencer"),
+            }
+            for op, button in self.buttons.items():
+                button.on_click(self._handler(op) if op != "halt" else lambda _: self._halt())
+            first = w.layout.steps[0].number if w.layout.steps else 1
+            self.step_number = gui.add_number("Step", first, min=1, max=65535, step=1)
+            self.step_buttons = {
+                "step_on": gui.add_button("Activate", hint="S_ON: activate the step (MAN)"),
+                "step_off": gui.add_button("Deactivate", hint="S_OFF: deactivate the step"),
+                "ack_step": gui.add_button("Acknowledge step", hint="ACK_S on this step"),
+            }
+            for op, button in self.step_buttons.items():
+                button.on_click(self._step_handler(op))
+        with gui.add_folder("Alarms") as self.alarm_folder:
+            self.alarm_html = gui.add_html(texts.alarms_html(None))
+        with gui.add_folder("Alarm history", expand_by_default=False):
+            self.history_html = gui.add_html(texts.history_html(None))
+        with gui.add_folder("Audit", expand_by_default=False):
+            self.audit_html = gui.add_html(texts.audit_html([]))
+        with gui.add_folder("Step details"):
+            self.detail_step = gui.add_number(
+                "Show step", 0, min=0, max=65535, step=1,
+                hint="0: follow the first disturbed, else the first active step",
+            )  # fmt: skip
+            self.detail_html = gui.add_html(texts.small("waiting for the CPU…"))
+        with gui.add_folder("Events"):
+            self.event_log = gui.add_html(texts.log_html([]))
+        self._halted = False
+        self._enable()
+
+    def _enable(self) -> None:
+        """Enable exactly the buttons this page's role allows."""
+        role = self.role if self.token else "viewer"
+        for mode_button in self.mode_buttons.values():
+            mode_button.disabled = not allowed(role, "mode")
+        for op, button in {**self.buttons, **self.step_buttons}.items():
+            button.disabled = not allowed(role, op)
+        for button in self._alarm_buttons.values():
+            button.disabled = not allowed(role, "ack_msg")
+        self.login_button.disabled = bool(self.token)
+        self.logout_button.disabled = not self.token
+        self.user_field.disabled = bool(self.token)
+        self.who.content = texts.login_html(
+            self.user if self.token else "", self.role, self.verified, self.wiring.demo
+        )
+
+    # ------------------------------------------------------------ login
+
+    def _log_in(self) -> None:
+        user = str(self.user_field.value).strip()
+        password = str(self.password.value)
+        self.password.value = ""  # type: ignore[misc]  # never left on the page
+        reply = self.wiring.login(user, password, self.origin)
+        if not reply.ok:
+            self._notify("login refused", reply.reason, ok=False)
+            return
+        with self._lock:
+            self.user, self.token, self.role = reply.user, reply.token, reply.role
+            self.verified = reply.verified
+        self._enable()
+        self._notify("logged in", f"{reply.user} ({reply.role})", ok=True)
+
+    def _log_out(self) -> None:
+        with self._lock:
+            token, user = self.token, self.user
+            self.token, self.user, self.role = "", "", "viewer"
+        if token:
+            self.wiring.logout(token, user, self.origin)
+        self._enable()
+
+    def forget(self) -> None:
+        """The page went away: revoke its token (its GUI is gone, nothing to update)."""
+        with self._lock:
+            token, user = self.token, self.user
+            self.token = ""
+        if token:
+            self.wiring.logout(token, user, self.origin)
+
+    # ------------------------------------------------------------ commands
+
+    def _handler(self, op: str, **args: object) -> Callable[[Any], None]:
+        def click(_: Any) -> None:
+            self.command(op, dict(args))
+
+        return click
+
+    def _step_handler(self, op: str) -> Callable[[Any], None]:
+        def click(_: Any) -> None:
+            self.command(op, {"step": int(self.step_number.value)})
+
+        return click
+
+    def _halt(self) -> None:
+        self.command("halt", {"on": not self._halted})
+
+    def command(self, op: str, args: dict[str, object]) -> CommandReply:
+        """Send one command as this page's user (runs in viser's callback threads)."""
+        w = self.wiring
+        with self._lock:
+            user, token = self.user, self.token
+        try:
+            fields: dict[str, Any] = {"op": op, "args": args}
+            command = Command(fb=w.layout.fb, user=user, token=token, origin=self.origin, **fields)
+        except (TypeError, ValueError) as exc:
+            reply = CommandReply(applied=False, reason=str(exc), op=op, fb=w.layout.fb)
+        else:
+            reply = w.send(command)
+        w.on_reply(reply)
+        verdict = "applied" if reply.applied else "refused"
+        self._notify(f"{op} {verdict}", reply.reason or "OK", ok=reply.applied)
+        return reply
+
+    def _notify(self, title: str, body: str, *, ok: bool) -> None:
+        self.client.add_notification(
+            title, body, auto_close_seconds=4.0, color="green" if ok else "red"
+        )
+
+    # ------------------------------------------------------------ showing
+
+    def _set(self, handle: Any, key: str, content: str) -> None:
+        if self._shown.get(key) != content:
+            handle.content = content
+            self._shown[key] = content
+
+    def show(self, page: PageState, detail: Callable[[int], str], halted: bool) -> None:
+        """Bring this page up to date (render thread; only what changed is sent)."""
+        with self.client.atomic():
+            self._set(self.banner, "banner", page.banner)
+            self._set(self.status, "status", page.status)
+            self._set(self.event_log, "events", page.events)
+            self._set(self.history_html, "history", page.history)
+            self._set(self.audit_html, "audit", page.audit)
+            self._set(self.detail_html, "detail", detail(int(self.detail_step.value)))
+            if page.mode != self._mode:
+                self._mode = page.mode
+                for mode, button in self.mode_buttons.items():
+                    button.color = CURRENT_MODE_COLOUR if mode == page.mode else None
+            if halted != self._halted:
+                self._halted = halted
+                self.buttons["halt"].label = "Resume (HALT off)" if halted else "Halt"
+            if page.alarms is not self._alarms:
+                self._alarms = page.alarms
+                self._set(self.alarm_html, "alarms", page.alarms_html)
+                self._alarm_rows(page.alarms)
+
+    def _alarm_rows(self, alarms: AlarmList | None) -> None:
+        """One Acknowledge button per unacknowledged message."""
+        pending = alarms.pending() if alarms is not None else []
+        wanted = {e.msg_id: e for e in pending}
+        for mid in [m for m in self._alarm_buttons if m not in wanted]:
+            self._alarm_buttons.pop(mid).remove()
+        role = self.role if self.token else "viewer"
+        with self.alarm_folder:
+            for mid, entry in wanted.items():
+                if mid not in self._alarm_buttons:
+                    button = self.client.gui.add_button(
+                        texts.ack_label(entry), color="red", hint=texts.clip(entry.text, 200),
+                        disabled=not allowed(role, "ack_msg"),
+                    )  # fmt: skip
+                    button.on_click(self._handler("ack_msg", msg_id=mid))
+                    self._alarm_buttons[mid] = button
+
+
+def _origin(client: viser.ClientHandle) -> str:
+    """``page <id> (<address>)`` for the audit: which browser page gave a command."""
+    address = ""
+    try:
+        ws: Any = client._viser_server._websock_server  # viser 1.1.1 (pinned)
+        conn = ws._live_connections.get(client.client_id)
+        if conn is not None and conn.remote_address:
+            address = str(conn.remote_address[0])
+    except Exception:
+        address = ""
+    where = f" ({address})" if address else ""
+    return f"page {client.client_id}{where}"[:160]

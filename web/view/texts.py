@@ -1,0 +1,242 @@
+"""Every text the page shows, as escaped HTML: status line, alarms, alarm history, audit,
+step details, login state and the "disconnected" banner.
+
+Whatever came over the bus or from a user (names, message texts, reasons, conditions)
+goes through ``html.escape`` here; nothing else builds HTML for the page.
+"""
+
+from __future__ import annotations
+
+import html
+import time
+
+from s7graph.web.bus.protocol import (
+    AlarmEntry,
+    AlarmHistory,
+    AlarmList,
+    AuditEntry,
+    ChartLayout,
+    Contact,
+    CycleStats,
+    StepDetail,
+    StepStateUpdate,
+)
+
+__all__ = [
+    "ack_label",
+    "alarms_html",
+    "audit_html",
+    "banner_html",
+    "clip",
+    "describe",
+    "detail_html",
+    "history_html",
+    "log_html",
+    "login_html",
+    "small",
+    "status_html",
+    "step_rows",
+    "step_state",
+    "title",
+]
+
+
+def clip(text: str, n: int) -> str:
+    return text if len(text) <= n else text[: n - 1] + "…"
+
+
+def title(prefix: str, number: int, name: str, width: int) -> str:
+    """``S3  Fill``; just ``S3`` when the name is empty or only repeats the number."""
+    short = f"{prefix}{number}"
+    return short if name in ("", short) else f"{short}  {clip(name, width)}"
+
+
+def small(body: str) -> str:
+    return f'<div style="font-size:0.8em;line-height:1.5">{body}</div>'
+
+
+def clock(ms: int | None) -> str:
+    return "" if ms is None else time.strftime("%H:%M:%S", time.localtime(ms / 1000))
+
+
+def ack_label(entry: AlarmEntry) -> str:
+    if entry.step is not None and entry.kind:
+        what = "supervision" if entry.kind == "SV" else "interlock"
+        return f"Acknowledge S{entry.step} {what}"
+    return clip(f"Acknowledge message {entry.msg_id}", 64)
+
+
+def alarms_html(alarms: AlarmList | None) -> str:
+    """Every listed message: time, state, text, step, who acknowledged it and when."""
+    if alarms is None or not alarms.entries:
+        return small('<span style="color:#777">no messages</span>')
+    rows = []
+    for e in reversed(alarms.entries):  # newest first
+        colour = "#c00" if e.state == "incoming" else "#a60"
+        where = f" · S{e.step}" if e.step is not None else ""
+        ack = (
+            f"acknowledged by {html.escape(e.ack_user or '?')} {clock(e.ack_ms)}"
+            if e.acked
+            else "<b>unacknowledged</b>"
+        )
+        rows.append(
+            f'<div style="border-left:3px solid {colour};padding-left:4px;margin-bottom:4px">'
+            f'{clock(e.came_ms)} <span style="color:{colour}">{e.state}</span>'
+            f"{html.escape(where)} · {ack}<br>{html.escape(e.text)}</div>"
+        )
+    return small("".join(rows))
+
+
+def mark(c: Contact) -> str:
+    tick = '<span style="color:#080">✓</span>' if c.ok else '<span style="color:#c00">✗</span>'
+    return f"&nbsp;&nbsp;{tick} {html.escape(c.text)}"
+
+
+def step_state(d: StepDetail) -> str:
+    parts = ["active", f"T {d.t_ms / 1000:.1f} s", f"U {d.u_ms / 1000:.1f} s"]
+    if d.interlock_error:
+        parts.append('<span style="color:#c00">interlock error</span>')
+    if d.supervision_fault:
+        parts.append('<span style="color:#c00">supervision fault</span>')
+    return " · ".join(parts)
+
+
+def step_rows(d: StepDetail) -> list[str]:
+    rows = []
+    if d.interlock:
+        state = "holds" if d.interlock_ok else '<span style="color:#c00">lost</span>'
+        rows += [f"Interlock (C): {state}", *map(mark, d.interlock)]
+    if d.supervision:
+        state = '<span style="color:#c00">fault</span>' if d.supervision_fault else "ok"
+        rows += [f"Supervision (V): {state}", *map(mark, d.supervision)]
+    for t in d.transitions:
+        holds = "holds" if t.holds else '<span style="color:#c00">does not hold</span>'
+        name = html.escape(title("T", t.number, t.name, 24))
+        rows += [f"<b>{name}</b>: {holds}", *map(mark, t.contacts)]
+    if not d.transitions:
+        rows.append("no valid transition leaves it (a step before it is inactive)")
+    return rows
+
+
+def describe(args: dict[str, object]) -> str:
+    return " ".join(f"{k}={v}" for k, v in args.items())
+
+
+def log_html(lines: list[str]) -> str:
+    if not lines:
+        return '<div style="font-size:0.8em;color:#777">no events yet</div>'
+    body = "<br>".join(html.escape(line) for line in lines)
+    style = "font-family:monospace;font-size:0.75em;max-height:14em;overflow:auto"
+    return f'<div style="{style}">{body}</div>'
+
+
+def status_html(
+    update: StepStateUpdate | None, cpu_cycle: int, cpu_state: str, stats: CycleStats | None
+) -> str:
+    """The status line: mode, cycle, active steps, cycle time, errors, halts."""
+    if update is None:
+        return '<div style="font-size:0.85em">waiting for the CPU…</div>'
+    active = ", ".join(f"S{n}" for n in update.active) or "none"
+    parts = [
+        f"<b>{html.escape(update.mode)}</b>",
+        f"cycle {max(update.cycle, cpu_cycle)}",
+        f"active: {html.escape(active)}",
+    ]
+    if stats is not None and stats.max_ms > 0:
+        parts.append(f"cycle time {stats.last_ms:.1f} ms (max {stats.max_ms:.1f})")
+    bad = sorted(set(update.disturbed) | set(update.latched))
+    if bad:
+        errors = ", ".join(f"S{n}" for n in bad)
+        parts.append(f'<span style="color:#c00">error: {html.escape(errors)}</span>')
+    for flag, text in ((update.halted, "HALTED"), (not update.il_enabled, "interlocks off"),
+                       (not update.sv_enabled, "supervisions off")):  # fmt: skip
+        if flag:
+            parts.append(f'<b style="color:#a60">{text}</b>')
+    if cpu_state != "RUN":
+        parts.insert(0, f'<b style="color:#c00">{html.escape(cpu_state)}</b>')
+    return f'<div style="font-size:0.85em">{" · ".join(parts)}</div>'
+
+
+def banner_html(connected: bool, cpu: str) -> str:
+    """Nothing while the CPU is reachable, else a red "disconnected" banner."""
+    if connected:
+        return ""
+    style = "background:#c00;color:#fff;padding:6px;font-weight:bold;border-radius:4px"
+    return (
+        f'<div style="{style}">disconnected: CPU {html.escape(cpu)} is not reachable '
+        "over the bus; the chart shows no live state</div>"
+    )
+
+
+def audit_html(entries: list[AuditEntry]) -> str:
+    """The last audit rows, newest first: when, who (role), from where, what, verdict."""
+    if not entries:
+        return small('<span style="color:#777">no commands yet</span>')
+    rows = []
+    for e in reversed(entries):
+        verdict = (
+            '<span style="color:#080">applied</span>'
+            if e.outcome == "applied"
+            else f'<span style="color:#c00">refused: {html.escape(e.reason)}</span>'
+        )
+        who = html.escape(e.user) + (f" ({html.escape(e.role)})" if e.role else "")
+        args = "" if e.args in ("", "{}") else " " + html.escape(e.args)
+        origin = f" · {html.escape(e.origin)}" if e.origin else ""
+        rows.append(
+            f"{clock(e.t_ms)} <b>{who}</b>{origin}: {html.escape(e.op)}{args} — {verdict}"
+        )
+    style = "max-height:16em;overflow:auto"
+    return small(f'<div style="{style}">' + "<br>".join(rows) + "</div>")
+
+
+def history_html(history: AlarmHistory | None) -> str:
+    """The alarm history, newest first: when, came / went / acknowledged by whom, text."""
+    if history is None or not history.entries:
+        return small('<span style="color:#777">no message events yet</span>')
+    words = {"incoming": "came", "outgoing": "went", "acknowledged": "acknowledged"}
+    rows = []
+    for e in reversed(history.entries):
+        what = words.get(e.state, e.state)
+        if e.state == "acknowledged":
+            what += f" by {e.user or '?'}"
+        rows.append(f"{clock(e.t_ms)} <b>{html.escape(what)}</b> {html.escape(e.text)}")
+    style = "max-height:16em;overflow:auto"
+    return small(f'<div style="{style}">' + "<br>".join(rows) + "</div>")
+
+
+def detail_html(layout: ChartLayout, update: StepStateUpdate | None, number: int) -> str:
+    """The "Step details" of step ``number`` (0: the first disturbed, else the first
+    active step): why it does (not) switch."""
+    if number == 0:
+        if update is None or not update.active:
+            return small("no active step (choose one with <i>Show step</i>)")
+        number = (sorted(set(update.disturbed) & set(update.active)) or update.active)[0]
+    info = layout.step(number)
+    if info is None:
+        return small(f"no step S{number} in {html.escape(layout.fb)}")
+    head = f"<b>{html.escape(title('S', number, info.name, 24))}</b>"
+    if update is None:
+        return small(f"{head}: waiting for the CPU…")
+    detail = next((d for d in update.details if d.number == number), None)
+    if detail is None:
+        rows = [f"{head}: inactive"]
+        for t in layout.transitions:
+            if number in t.sources:
+                cond = html.escape(t.condition or "TRUE")
+                name = html.escape(title("T", t.number, t.name, 24))
+                rows.append(f"{name}: {cond} <i>(evaluated while the step is active)</i>")
+        return small("<br>".join(rows))
+    return small("<br>".join([head + ": " + step_state(detail), *step_rows(detail)]))
+
+
+def login_html(user: str, role: str, verified: bool, demo: bool) -> str:
+    """Who this page is logged in as, or how to log in."""
+    if not user:
+        how = (
+            "type your name and <i>Log in</i> (no users file: names are recorded unverified)"
+            if demo
+            else "log in to command; until then this page only watches"
+        )
+        return small(f'<span style="color:#777">viewer: {how}</span>')
+    shown = html.escape(user) + ("" if verified else " (unverified)")
+    return small(f"logged in as <b>{shown}</b> ({html.escape(role)})")
