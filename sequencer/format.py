@@ -285,4 +285,10 @@ def _strip(obj: Any) -> Any:
 
 # Fields that only say where something was written (``INTERLOCK := ;`` has a place but no
 # condition, so these are dropped rather than compared).
-_PLACE_ONLY: dict[str, Any] = {"option_locs": (), "interlock_loc": None, "supervision_loc": None}
+_PLACE_ONLY: dict[str, Any] = {
+    "option_locs": (),
+    "interlock_loc": None,
+    "supervision_loc": None,
+    "source_locs": (),
+    "target_locs": (),
+}

@@ -592,6 +592,11 @@ class _Convert:
                 "I021", f"action {action.name}: {action.body.what} not imported", action.body.loc
             )
             return []
+        if not action.body:
+            self.p.warn(
+                "I021", f"action {action.name} has an empty body (a comment at most); no rows", at
+            )
+            return []
         rows: list[ActionRow] = []
         coils: list[PermanentInstruction] = []
         ev = event or None

@@ -525,10 +525,24 @@ def read_plcopen(root: Node, problems: Problems) -> list[IecChart | tuple[str, i
     for pou in root.iter("pou"):
         sfc = next((b.child("SFC") for b in pou.all("body") if b.child("SFC") is not None), None)
         if sfc is None:
+            langs = {c.tag for b in pou.all("body") for c in b.children}
+            problems.warn(
+                "I024",
+                f"POU {pou.get('name')} ({'/'.join(sorted(langs)) or 'no body'})"
+                " has no SFC body; not imported",
+                reader.at(pou),
+            )
             continue
         source = s7graph_source(pou)
         if source is not None:
             out.append((*source, pou.get("name")))
             continue
         out.append(reader.chart(pou, sfc))
+    for conf in root.iter("configuration"):
+        problems.warn(
+            "I024",
+            f"configuration {conf.get('name')} not imported: its tasks and "
+            "instances call POUs; a GRAPH FB is called from OB1",
+            reader.at(conf),
+        )
     return out
