@@ -38,7 +38,7 @@ FORMATS = {
     "s7g": "s7graph chart",
 }
 _SUFFIXES = (".xml", ".txt", ".st", ".sfc", ".iec", ".s7g")
-_PLCOPEN = re.compile(rb"<project\b[^>]*plcopen\.org/xml/tc6", re.IGNORECASE)
+_PLCOPEN = re.compile(rb"<(?:[\w.-]+:)?project\b[^>]*plcopen\.org/xml/tc6", re.IGNORECASE)
 _GRAPH = re.compile(rb"NetworkSource/Graph/v\d+|<ProgrammingLanguage>\s*GRAPH\s*<", re.IGNORECASE)
 _SFC_TEXT = re.compile(rb"\bINITIAL_STEP\b", re.IGNORECASE)
 _S7G = re.compile(rb"^\s*(?:\(\*[\s\S]*?\*\)\s*|//[^\n]*\n\s*)*FUNCTION_BLOCK\s+\"", re.IGNORECASE)
@@ -59,7 +59,7 @@ def detect_format(data: bytes) -> str | None:
     if head.lstrip().startswith(b"<"):
         if _PLCOPEN.search(head):
             return "plcopen"
-        if _GRAPH.search(head) and b"<Document" in head:
+        if _GRAPH.search(head) and re.search(rb"<(?:[\w.-]+:)?Document\b", head):
             return "simaticml"
         return None
     if _S7G.match(head):

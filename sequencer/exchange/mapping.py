@@ -206,19 +206,19 @@ CONSTRUCTS: Final[tuple[tuple[str, str, str], ...]] = (
     ),
     ("set / reset coil of an action network", "PERMANENT AFTER `S x := gate AND …`", ""),
     (
-        "blocks of the SFC body feeding a condition (Beremiz)",
+        "statements of a textual POU body beside its SFC",
         "PERMANENT BEFORE",
-        "run every call before the chart, as Beremiz generates them",
+        "run every call, before the chart",
     ),
     (
         "FB instance (TON, CTU, R_TRIG, SR …) and its calls",
         "not imported",
-        "GRAPH calls "
-        "blocks with instance DBs; `TON3.Q` reads the FB variable `TON3_Q`, which nothing "
-        "writes",
+        "GRAPH calls blocks with instance DBs; `TON3.Q` reads the FB variable `TON3_Q`, "
+        "which nothing writes; an array element `A[1]` is the FB variable `A_1`",
     ),
     ("IF, CASE, FOR, WHILE, REPEAT", "not imported", "GRAPH rows are single instructions"),
-    ("IL bodies and conditions, macro steps", "not imported", ""),
+    ("IL action bodies", "not imported", ""),
+    ("IL transition conditions, macro steps", "no chart (an error)", "a path needs them"),
     (
         "CODESYS entry / active / exit step actions",
         "S1 rows / rows / S0 rows",

@@ -2,8 +2,8 @@
 IEC directly represented variables (``%IX0.1``) ↔ S7 addresses (``I0.1``).
 
 An FB variable's name must read back as that variable wherever the chart uses it: not a
-keyword, qualifier, event or FB pin of GRAPH, not a step (``S3``) or block (``FB1``)
-reference. Other names get a ``_`` suffix (the importer reports each rename).
+keyword, event or FB pin of GRAPH, not ``S`` or ``R`` (a permanent set/reset coil) or ``C``
+(the interlock mark), not a step (``S3``) or block (``FB1``) reference. Other names get a ``_`` suffix (the importer reports each rename).
 
 IEC addresses: ``%I`` ``%Q`` ``%M`` with size ``X`` (or none) ``B`` ``W`` ``D`` and the
 two-level ``byte.bit`` form map one to one (``%QX2.3`` → ``Q2.3``, ``%MW4`` → ``MW4``); a
@@ -17,7 +17,6 @@ import re
 from typing import Final
 
 from s7graph.sequencer.params import pin
-from s7graph.steps.qualifiers import QUALIFIERS
 
 __all__ = ["iec_address", "is_graph_name", "s7_to_iec", "safe_name"]
 
@@ -66,6 +65,8 @@ _KEYWORDS: Final = frozenset(
         "L0",
         "A1",
         "R1",
+        "S",
+        "R",
         "C",
     ]
 )
@@ -77,8 +78,6 @@ def is_graph_name(name: str) -> bool:
     """``name`` can be an unquoted FB variable of a chart."""
     up = name.upper()
     if not _NAME.fullmatch(name) or up in _KEYWORDS or _REFERENCE.fullmatch(name):
-        return False
-    if up in QUALIFIERS or (up.endswith("C") and up[:-1] in QUALIFIERS):
         return False
     return pin(name) is None
 

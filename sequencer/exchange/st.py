@@ -276,8 +276,10 @@ class _Build(Transformer[Token, Any]):
 def _fail(exc: UnexpectedInput, file: str, origin: tuple[int, int], what: str) -> StSyntaxError:
     line, col = shift(exc.line or 1, exc.column or 1, origin)
     if isinstance(exc, UnexpectedToken):
-        found = "the end of the text" if exc.token.type == "$END" else repr(str(exc.token))
-        msg = f"{what} does not parse: unexpected {found}"
+        if exc.token.type == "$END":
+            msg = f"{what} does not parse: it ends too early"
+        else:
+            msg = f"{what} does not parse: unexpected {str(exc.token)!r}"
     elif isinstance(exc, UnexpectedCharacters):
         msg = f"{what} does not parse: unexpected character {exc.char!r}"
     else:
