@@ -3,7 +3,8 @@ IEC directly represented variables (``%IX0.1``) ↔ S7 addresses (``I0.1``).
 
 An FB variable's name must read back as that variable wherever the chart uses it: not a
 keyword, event or FB pin of GRAPH, not ``S`` or ``R`` (a permanent set/reset coil) or ``C``
-(the interlock mark), not a step (``S3``) or block (``FB1``) reference. Other names get a ``_`` suffix (the importer reports each rename).
+(the interlock mark), not a step (``S3``) or block (``FB1``) reference. Other names get
+a ``_`` suffix (the importer reports each rename).
 
 IEC addresses: ``%I`` ``%Q`` ``%M`` with size ``X`` (or none) ``B`` ``W`` ``D`` and the
 two-level ``byte.bit`` form map one to one (``%QX2.3`` → ``Q2.3``, ``%MW4`` → ``MW4``); a

@@ -64,8 +64,10 @@ def test_export_refuses_an_unknown_format_and_a_chart_that_does_not_compile(
     assert main(["export", str(drill), "--to", "json", "-o", str(tmp_path / "x")]) == 2
     assert "--to must be plcopen or simaticml" in capsys.readouterr().err
     broken = tmp_path / "broken.s7g"
-    broken.write_text('FUNCTION_BLOCK "B"\nSEQUENCE 1\nINITIAL_STEP S1: END_STEP\n'
-                      "TRANSITION T1 FROM S1 TO S9 := TRUE;\nEND_SEQUENCE\nEND_FUNCTION_BLOCK\n")  # fmt: skip
+    broken.write_text(
+        'FUNCTION_BLOCK "B"\nSEQUENCE 1\nINITIAL_STEP S1: END_STEP\n'
+        "TRANSITION T1 FROM S1 TO S9 := TRUE;\nEND_SEQUENCE\nEND_FUNCTION_BLOCK\n"
+    )
     assert main(["export", str(broken), "--to", "plcopen", "-o", str(tmp_path / "x")]) == 2
     assert "error[E010]" in capsys.readouterr().err
 

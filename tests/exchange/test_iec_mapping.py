@@ -78,9 +78,11 @@ def test_statements_beyond_assignments_are_reported_where_they_are() -> None:
 
 
 def test_priority_orders_the_paths_of_an_alternative() -> None:
-    text = (b"PROGRAM P\nVAR x : BOOL; END_VAR\nINITIAL_STEP A: END_STEP\nSTEP B: END_STEP\n"
-            b"STEP C: END_STEP\nTRANSITION (PRIORITY := 2) FROM A TO B := x; END_TRANSITION\n"
-            b"TRANSITION (PRIORITY := 1) FROM A TO C := x; END_TRANSITION\nEND_PROGRAM\n")  # fmt: skip
+    text = (
+        b"PROGRAM P\nVAR x : BOOL; END_VAR\nINITIAL_STEP A: END_STEP\nSTEP B: END_STEP\n"
+        b"STEP C: END_STEP\nTRANSITION (PRIORITY := 2) FROM A TO B := x; END_TRANSITION\n"
+        b"TRANSITION (PRIORITY := 1) FROM A TO C := x; END_TRANSITION\nEND_PROGRAM\n"
+    )
     chart = import_chart(text, "p.st").chart
     assert [t.targets for t in chart.all_transitions()] == [(3,), (2,)]
 
@@ -122,12 +124,16 @@ CODESYS = b"""<?xml version="1.0" encoding="utf-8"?>
         <variable name="lamp"><type><BOOL/></type></variable>
       </localVars></interface>
       <actions>
-        <action name="Enter"><body><ST><xhtml:p xmlns:xhtml="http://www.w3.org/1999/xhtml">n := n + 1;</xhtml:p></ST></body></action>
+        <action name="Enter"><body><ST>
+          <xhtml:p xmlns:xhtml="http://www.w3.org/1999/xhtml">n := n + 1;</xhtml:p>
+        </ST></body></action>
         <action name="Busy"><body><ST>lamp := TRUE;</ST></body></action>
         <action name="Leave"><body><ST>lamp := FALSE;</ST></body></action>
       </actions>
       <body><SFC>
-        <step localId="0" initialStep="true" name="Init"><connectionPointOut formalParameter="sfc"/></step>
+        <step localId="0" initialStep="true" name="Init">
+          <connectionPointOut formalParameter="sfc"/>
+        </step>
         <inVariable localId="1"><expression>go</expression></inVariable>
         <transition localId="2">
           <connectionPointIn><connection refLocalId="0" formalParameter="sfc"/></connectionPointIn>
@@ -135,7 +141,8 @@ CODESYS = b"""<?xml version="1.0" encoding="utf-8"?>
         </transition>
         <step localId="3" name="Work">
           <connectionPointIn><connection refLocalId="2"/></connectionPointIn>
-          <addData><data name="http://www.3s-software.com/plcopenxml/sfc/element" handleUnknown="implementation">
+          <addData><data name="http://www.3s-software.com/plcopenxml/sfc/element"
+                         handleUnknown="implementation">
             <attributes>
               <attribute guid="a6b08bd8-b696-47e3-9cbf-7408b61c9ff8">Enter</attribute>
               <attribute guid="700a583f-b4d4-43e4-8c14-629c7cd3bec8">Busy</attribute>
@@ -147,7 +154,9 @@ CODESYS = b"""<?xml version="1.0" encoding="utf-8"?>
           <connectionPointIn><connection refLocalId="3"/></connectionPointIn>
           <condition><connectionPointIn><connection refLocalId="4"/></connectionPointIn></condition>
         </transition>
-        <jumpStep localId="6" targetName="Init"><connectionPointIn><connection refLocalId="5"/></connectionPointIn></jumpStep>
+        <jumpStep localId="6" targetName="Init">
+          <connectionPointIn><connection refLocalId="5"/></connectionPointIn>
+        </jumpStep>
       </SFC></body>
     </pou>
   </pous></types>

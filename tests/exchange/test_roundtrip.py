@@ -63,7 +63,8 @@ def test_plcopen_export_is_an_iec_sfc_with_the_same_steps_conditions_and_rows() 
 
     def shape(c: Chart) -> list[object]:
         return [
-            [(s.number, s.name, s.initial, [format_row(r) for r in s.actions]) for s in c.all_steps()],
+            [(s.number, s.name, s.initial, [format_row(r) for r in s.actions])
+             for s in c.all_steps()],
             [(t.number, t.name, t.sources, t.targets, without_places(t.condition))
              for t in c.all_transitions()],
         ]  # fmt: skip
