@@ -22,43 +22,25 @@ from xml.sax.saxutils import escape, quoteattr
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.exchange.naming import s7_to_iec
 from s7graph.sequencer.exchange.plcopen import S7GRAPH_DATA
-from s7graph.sequencer.format import format_chart, format_row
+from s7graph.sequencer.exchange.shape import shape_of
+from s7graph.sequencer.format import format_chart, format_expr, format_row
 from s7graph.sequencer.model import (
     ActionRow,
     Assignment,
-    Binary,
     Chart,
     Const,
     Expr,
-    FuncCall,
     Operand,
     Sequence,
     Step,
     StepAttr,
     TransAttr,
-    Unary,
 )
 
 __all__ = ["export_plcopen"]
 
 _NS = "http://www.plcopen.org/xml/tc6_0201"
 _TYPES = {"TIME_OF_DAY": "TOD", "DATE_AND_TIME": "DT"}
-_LEVEL = {
-    "OR": 1,
-    "XOR": 2,
-    "AND": 3,
-    "=": 4,
-    "<>": 4,
-    "<": 4,
-    ">": 4,
-    "<=": 4,
-    ">=": 4,
-    "+": 6,
-    "-": 6,
-    "*": 7,
-    "/": 7,
-    "MOD": 7,
-}
 
 
 def _ident(name: str) -> str:
@@ -85,33 +67,21 @@ class _Export:
     # ------------------------------------------------------------ ST text
 
     def st(self, e: Expr) -> str:
-        if isinstance(e, Const):
-            text = e.text
-            if e.type in ("WORD", "DWORD", "BYTE") and "#16#" in text:
-                return f"{e.type}#16#{text.rsplit('#', 1)[1]}"
-            return text
+        """``e`` in ST: the `.s7g` expression with IEC operands and constants."""
+        return format_expr(e, self.iec)
+
+    def iec(self, e: Expr) -> str | None:
+        if isinstance(e, Const) and e.type in ("WORD", "DWORD", "BYTE") and "#16#" in e.text:
+            return f"{e.type}#16#{e.text.rsplit('#', 1)[1]}"
+        if isinstance(e, Operand) and e.quoted:
+            return _ident(e.name)
         if isinstance(e, Operand):
-            if e.quoted:
-                return _ident(e.name)
-            iec = s7_to_iec(e.name)
-            return iec if iec is not None else e.name
+            return s7_to_iec(e.name) or e.name
         if isinstance(e, StepAttr):
             return f"{self.step_name.get(e.step, f'S{e.step}')}.{'T' if e.attr == 'U' else e.attr}"
         if isinstance(e, TransAttr):
             return f"T{e.transition}_TT"
-        if isinstance(e, FuncCall):
-            return f"{e.name}({', '.join(self.st(a) for a in e.args)})"
-        if isinstance(e, Unary):
-            inner = self.st(e.operand)
-            wrap = f"({inner})" if isinstance(e.operand, Binary) else inner
-            return f"NOT {wrap}" if e.op == "NOT" else f"-{wrap}"
-        level = _LEVEL.get(e.op, 5)
-        left, right = self.st(e.left), self.st(e.right)
-        if isinstance(e.left, Binary) and _LEVEL.get(e.left.op, 5) < level:
-            left = f"({left})"
-        if isinstance(e.right, Binary) and _LEVEL.get(e.right.op, 5) <= level:
-            right = f"({right})"
-        return f"{left} {e.op} {right}"
+        return None
 
     # ------------------------------------------------------------ actions
 
@@ -159,45 +129,23 @@ class _Export:
         x0 = 40 + column * 400
         step_id: dict[int, int] = {s.number: self.next_id() for s in q.steps}
         trans_id: dict[int, int] = {t.number: self.next_id() for t in q.transitions}
-        leaving: dict[int, list[int]] = {}
-        for t in q.transitions:
-            for s in t.sources:
-                leaving.setdefault(s, []).append(t.number)
-        arriving: dict[int, list[int]] = {}
-        jumps: set[tuple[int, int]] = set()
-        for t in q.transitions:
-            for d in t.targets:
-                if d not in order or order[d] <= min(order.get(s, -1) for s in t.sources):
-                    jumps.add((t.number, d))
-                else:
-                    arriving.setdefault(d, []).append(t.number)
+        drawn = shape_of(q)
+        leaving, arriving, jumps = drawn.leaving, drawn.arriving, drawn.jumps
         # what a transition's input connects to: a step, or that step's divergence
         out_of: dict[int, int] = {}
         for s, trs in leaving.items():
             if s not in step_id:
                 continue
             if len(trs) > 1:
-                div = self.next_id()
-                y = 60 + order[s] * 120 + 40
-                out.append(
-                    f'<selectionDivergence localId="{div}" height="1" width="200">'
-                    f'<position x="{x0}" y="{y}"/>{_cpin([step_id[s]])}'
-                    + "<connectionPointOut/>" * len(trs)
-                    + "</selectionDivergence>"
-                )
-                out_of[s] = div
+                out_of[s] = self.branch("selectionDivergence", [step_id[s]], len(trs), out)
             else:
                 out_of[s] = step_id[s]
         after: dict[int, int] = {}  # transition → the element after it (simultaneous div.)
         for t in q.transitions:
             targets = [d for d in t.targets if (t.number, d) not in jumps]
             if len(t.targets) > 1:
-                div = self.next_id()
-                out.append(
-                    f'<simultaneousDivergence localId="{div}" height="3" width="200">'
-                    f"{_cpin([trans_id[t.number]])}"
-                    + "<connectionPointOut/>" * len(t.targets)
-                    + "</simultaneousDivergence>"
+                div = self.branch(
+                    "simultaneousDivergence", [trans_id[t.number]], len(t.targets), out
                 )
                 after[t.number] = div
             else:
@@ -214,24 +162,12 @@ class _Export:
             ins = [after[t] for t in arriving.get(st.number, [])]
             y = 60 + order[st.number] * 120
             if len(ins) > 1:
-                conv = self.next_id()
-                out.append(
-                    f'<selectionConvergence localId="{conv}" height="1" width="200">'
-                    + "".join(_cpin([i]) for i in ins)
-                    + "<connectionPointOut/></selectionConvergence>"
-                )
-                ins = [conv]
+                ins = [self.branch("selectionConvergence", ins, 1, out)]
             out.append(self.step(st, step_id[st.number], ins, x0, y))
         for t in q.transitions:
             srcs = [out_of.get(s, step_id.get(s, 0)) for s in t.sources]
             if len(srcs) > 1:
-                conv = self.next_id()
-                out.append(
-                    f'<simultaneousConvergence localId="{conv}" height="3" width="200">'
-                    + "".join(_cpin([i]) for i in srcs)
-                    + "<connectionPointOut/></simultaneousConvergence>"
-                )
-                srcs = [conv]
+                srcs = [self.branch("simultaneousConvergence", srcs, 1, out)]
             first = t.sources[0]
             rank = leaving.get(first, [t.number]).index(t.number)
             x = x0 + rank * 160
@@ -244,6 +180,18 @@ class _Export:
                 f'<condition><inline name=""><ST><xhtml:p><![CDATA[{cond}]]></xhtml:p>'
                 "</ST></inline></condition></transition>"
             )
+
+    def branch(self, tag: str, ins: list[int], outs: int, out: list[str]) -> int:
+        """A divergence (one input, ``outs`` outputs) or a convergence (one input point per
+        element in ``ins``, one output); returns its localId."""
+        bid = self.next_id()
+        points = _cpin(ins) if tag.endswith("Divergence") else "".join(_cpin([i]) for i in ins)
+        out.append(
+            f'<{tag} localId="{bid}" height="2" width="200">{points}'
+            + "<connectionPointOut/>" * outs
+            + f"</{tag}>"
+        )
+        return bid
 
     def step(self, s: Step, sid: int, ins: list[int], x: int, y: int) -> str:
         init = "true" if s.initial else "false"

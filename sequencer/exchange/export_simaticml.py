@@ -24,6 +24,7 @@ from xml.sax.saxutils import escape, quoteattr
 from s7graph.engine.address import parse_address
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.exchange.flgnet import write_network
+from s7graph.sequencer.exchange.shape import shape_of
 from s7graph.sequencer.format import row_body
 from s7graph.sequencer.model import (
     ActionRow,
@@ -181,8 +182,6 @@ class _Export:
         )
 
     def sequence(self, q: Sequence) -> str:
-        order = {s.number: i for i, s in enumerate(q.steps)}
-        initial = {s.number for s in q.steps if s.initial}
         branches: list[str] = []
         links: list[tuple[str, str, str]] = []
 
@@ -192,23 +191,8 @@ class _Export:
             )
             return len(branches)
 
-        leaving: dict[int, list[int]] = {}
-        for t in q.transitions:
-            for s in t.sources:
-                leaving.setdefault(s, []).append(t.number)
-        forward: dict[int, list[int]] = {}
-        jumps: set[tuple[int, int]] = set()
-        for t in q.transitions:
-            for d in t.targets:
-                back = (
-                    d not in order
-                    or d in initial
-                    or order[d] <= min(order.get(s, -1) for s in t.sources)
-                )
-                if back or (len(t.targets) > 1 and forward.get(d)):
-                    jumps.add((t.number, d))
-                else:
-                    forward.setdefault(d, []).append(t.number)
+        drawn = shape_of(q)
+        leaving, forward, jumps = drawn.leaving, drawn.arriving, drawn.jumps
         # into each transition
         into_trans: dict[int, list[str]] = {}
         for s, trs in leaving.items():

@@ -22,21 +22,14 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from s7graph.engine.errors import SourceLocation
-from s7graph.sequencer.exchange.xmltree import Node
+from s7graph.sequencer.exchange.xmltree import ElementError, Node
 from s7graph.sequencer.model import Binary, Const, Expr, Unary
 
-__all__ = ["COMPARE_PARTS", "FlgNetError", "read_network", "write_network"]
+__all__ = ["COMPARE_PARTS", "read_network", "write_network"]
 
 COMPARE_PARTS = {"Eq": "=", "Ne": "<>", "Gt": ">", "Ge": ">=", "Lt": "<", "Le": "<="}
 _PART_OF = {v: k for k, v in COMPARE_PARTS.items()}
 COILS = {"TrCoil", "IlCoil", "SvCoil", "Coil", "SCoil", "RCoil"}
-
-
-class FlgNetError(Exception):
-    def __init__(self, message: str, node: Node) -> None:
-        super().__init__(message)
-        self.message = message
-        self.node = node
 
 
 Operand = Callable[[Node, str | None], Expr]  # an Access element (and the type it needs)
@@ -75,7 +68,7 @@ class _Net:
         part = self.parts[uid]
         srcs = self.sources.get((uid, name), [])
         if not srcs:
-            raise FlgNetError(f"pin {name} of {part.get('Name')} is not connected", part)
+            raise ElementError(f"pin {name} of {part.get('Name')} is not connected", part)
         values = [self.value(s, want) for s in srcs]
         negated = any(n.get("Name") == name for n in part.all("Negated"))
         out: Expr | None
@@ -88,7 +81,7 @@ class _Net:
                 out = Binary("OR", out, v, self.loc(part))
         if negated:
             if out is None:
-                raise FlgNetError(f"a negated {name} on the power rail", part)
+                raise ElementError(f"a negated {name} on the power rail", part)
             out = Unary("NOT", out, self.loc(part))
         return out
 
@@ -98,7 +91,7 @@ class _Net:
             return None
         part = self.parts.get(uid)
         if part is None:
-            raise FlgNetError(f"a wire from element {uid}, which does not exist", self.root)
+            raise ElementError(f"a wire from element {uid}, which does not exist", self.root)
         if pin == "@" or part.tag == "Access":
             return self.operand(part, want)
         kind = part.get("Name")
@@ -121,7 +114,7 @@ class _Net:
         if kind == "Not":
             inner = self.pin(uid, "in")
             if inner is None:
-                raise FlgNetError("NOT of the power rail", part)
+                raise ElementError("NOT of the power rail", part)
             return Unary("NOT", inner, loc)
         if kind in COMPARE_PARTS:
             src_type = next(
@@ -134,11 +127,11 @@ class _Net:
             )
             left, right = self.pin(uid, "in1", src_type), self.pin(uid, "in2", src_type)
             if left is None or right is None:
-                raise FlgNetError("a comparison of the power rail", part)
+                raise ElementError("a comparison of the power rail", part)
             cmp = Binary(COMPARE_PARTS[kind], left, right, loc)
             pre = self.pin(uid, "pre") if (uid, "pre") in self.sources else None
             return _and(pre, cmp, loc)
-        raise FlgNetError(f"part {kind} has no GRAPH condition form", part)
+        raise ElementError(f"part {kind} has no GRAPH condition form", part)
 
 
 def _cardinality(part: Node) -> int:

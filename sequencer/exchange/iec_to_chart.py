@@ -252,13 +252,8 @@ class _Convert:
         if e is None:
             return None
         if isinstance(e, SLiteral):
-            text = e.text
-            if type_name == "BOOL" and text in ("0", "1"):
-                text = "TRUE" if text == "1" else "FALSE"
-            if type_name == "REAL" and text.lstrip("-").isdigit():
-                text += ".0"
             try:
-                return const(text, loc)
+                return const(_typed(e.text, type_name), loc)
             except (LiteralError, S7Error):
                 pass
         self.p.warn("I023", "initial value not imported (not a literal GRAPH reads)", loc)
@@ -656,12 +651,7 @@ class _Convert:
         """The value of an assignment; IEC's 0/1 for a BOOL and integers for a REAL are
         the same constants in GRAPH."""
         if isinstance(e, SLiteral):
-            text = e.text
-            if target_type == "BOOL" and text in ("0", "1"):
-                text = "TRUE" if text == "1" else "FALSE"
-            elif target_type == "REAL" and text.lstrip("-").isdigit():
-                text += ".0"
-            e = SLiteral(text, e.line, e.col)
+            e = SLiteral(_typed(e.text, target_type), e.line, e.col)
         return self.expr(e, origin)
 
     def gate(self, kind: str, step: IecStep, number: int, loc: SourceLocation) -> Expr:
@@ -746,6 +736,16 @@ class _Convert:
                 "acts on it",
                 self.body_writes[name],
             )
+
+
+def _typed(text: str, type_name: str | None) -> str:
+    """An IEC literal as the constant of ``type_name`` it stands for: ``1``/``0`` for a
+    BOOL, an integer for a REAL (IEC converts them; GRAPH's constants are typed)."""
+    if type_name == "BOOL" and text in ("0", "1"):
+        return "TRUE" if text == "1" else "FALSE"
+    if type_name == "REAL" and text.lstrip("-").isdigit():
+        return text + ".0"
+    return text
 
 
 def _bool_compare(op: str, left: Expr, right: Expr, loc: SourceLocation) -> Expr:
@@ -908,12 +908,13 @@ def accepted(chart: Chart, problems: Problems, symbols: SymbolTable | None = Non
             kept: list[ActionRow] = []
             for row in s.actions:
                 probe_step = dataclasses.replace(base.sequences[qi].steps[si], actions=(row,))
-                if ok(_with_step(base, qi, si, probe_step), f"step {s.name} row", row.loc):
+                if ok(_with(base, qi, "steps", si, probe_step), f"step {s.name} row", row.loc):
                     kept.append(row)
             steps.append(dataclasses.replace(s, actions=tuple(kept)))
         for ti, t in enumerate(q.transitions):
             if t.condition is not None:
-                ok(_with_transition(base, qi, ti, t), f"transition T{t.number}", t.loc, fatal=True)
+                probe = _with(base, qi, "transitions", ti, t)
+                ok(probe, f"transition T{t.number}", t.loc, fatal=True)
         seqs.append(dataclasses.replace(q, steps=tuple(steps)))
     problems.fail_if_errors()
     before = [
@@ -935,21 +936,13 @@ def accepted(chart: Chart, problems: Problems, symbols: SymbolTable | None = Non
     return out
 
 
-def _with_step(base: Chart, qi: int, si: int, step: Step) -> Chart:
+def _with(base: Chart, qi: int, field: str, i: int, item: Step | Transition) -> Chart:
+    """``base`` with item ``i`` of sequence ``qi``'s ``steps`` or ``transitions`` replaced."""
     q = base.sequences[qi]
-    steps = list(q.steps)
-    steps[si] = step
+    items = list(getattr(q, field))
+    items[i] = item
     seqs = list(base.sequences)
-    seqs[qi] = dataclasses.replace(q, steps=tuple(steps))
-    return dataclasses.replace(base, sequences=tuple(seqs))
-
-
-def _with_transition(base: Chart, qi: int, ti: int, t: Transition) -> Chart:
-    q = base.sequences[qi]
-    trs = list(q.transitions)
-    trs[ti] = t
-    seqs = list(base.sequences)
-    seqs[qi] = dataclasses.replace(q, transitions=tuple(trs))
+    seqs[qi] = dataclasses.replace(q, **{field: tuple(items)})
     return dataclasses.replace(base, sequences=tuple(seqs))
 
 

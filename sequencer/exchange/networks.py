@@ -29,9 +29,9 @@ from s7graph.sequencer.exchange.st import (
     absolute,
     parse_expression,
 )
-from s7graph.sequencer.exchange.xmltree import Node
+from s7graph.sequencer.exchange.xmltree import ElementError, Node
 
-__all__ = ["Network", "NetworkError"]
+__all__ = ["Network"]
 
 _OPERATORS = {
     "AND": "AND",
@@ -49,15 +49,6 @@ _OPERATORS = {
     "DIV": "/",
     "MOD": "MOD",
 }
-
-
-class NetworkError(Exception):
-    """A network element the importer cannot read, at ``node``."""
-
-    def __init__(self, message: str, node: Node) -> None:
-        super().__init__(message)
-        self.message = message
-        self.node = node
 
 
 def _not(e: SExpr, node: Node) -> SExpr:
@@ -88,15 +79,15 @@ class Network:
             origin = (node.text_line or node.line, node.text_col or node.col)
             return absolute(parse_expression(text, self.file, origin, "expression"), origin)  # type: ignore[no-any-return]
         except StSyntaxError as exc:
-            raise NetworkError(exc.message, node) from None
+            raise ElementError(exc.message, node) from None
 
     def value_of(self, point: Node | None, seen: frozenset[str] = frozenset()) -> SExpr:
         """What flows into ``point`` (a ``connectionPointIn``)."""
         if point is None:
-            raise NetworkError("an unconnected input", self.root)
+            raise ElementError("an unconnected input", self.root)
         conns = point.all("connection")
         if not conns:
-            raise NetworkError("an unconnected input", point)
+            raise ElementError("an unconnected input", point)
         values = [self.source(c, seen) for c in conns]
         out = values[0]
         for v in values[1:]:
@@ -107,16 +98,16 @@ class Network:
         ref = conn.get("refLocalId")
         node = self.by_id.get(ref)
         if node is None:
-            raise NetworkError(f"a connection to element {ref}, which does not exist", conn)
+            raise ElementError(f"a connection to element {ref}, which does not exist", conn)
         if ref in seen:
-            raise NetworkError("a feedback loop in the network", node)
+            raise ElementError("a feedback loop in the network", node)
         seen = seen | {ref}
         tag = node.tag
         if tag == "leftPowerRail":
             return SLiteral("TRUE", node.line, node.col)
         if tag == "contact":
             if node.get("edge", "none") not in ("none", ""):
-                raise NetworkError(
+                raise ElementError(
                     f"an edge contact ({node.get('edge')}) has no GRAPH condition form", node
                 )
             var = self.variable(node)
@@ -129,19 +120,19 @@ class Network:
         if tag == "continuation":
             target = self.connectors.get(node.get("name"))
             if target is None:
-                raise NetworkError(f"continuation {node.get('name')} has no connector", node)
+                raise ElementError(f"continuation {node.get('name')} has no connector", node)
             return self.value_of(target.child("connectionPointIn"), seen)
         if tag == "block":
             return self.block(node, conn.get("formalParameter"), seen)
         if tag == "coil":  # a coil passes its input on (LD series)
             return self.value_of(node.child("connectionPointIn"), seen)
-        raise NetworkError(f"a {tag} element cannot feed a condition", node)
+        raise ElementError(f"a {tag} element cannot feed a condition", node)
 
     def expr_of(self, node: Node) -> SExpr:
         """The ST expression of an in/out variable element."""
         child = node.child("expression")
         if child is None or not child.text.strip():
-            raise NetworkError(f"a {node.tag} without an expression", node)
+            raise ElementError(f"a {node.tag} without an expression", node)
         return self.expression(child, child.text.strip())
 
     def text(self, node: Node) -> str:
@@ -151,7 +142,7 @@ class Network:
     def variable(self, node: Node) -> SExpr:
         var = node.child("variable")
         if var is None or not var.text.strip():
-            raise NetworkError(f"a {node.tag} without a variable", node)
+            raise ElementError(f"a {node.tag} without a variable", node)
         return self.expression(var, var.text.strip())
 
     def inputs(self, block: Node, seen: frozenset[str]) -> list[tuple[str, SExpr]]:
@@ -177,7 +168,7 @@ class Network:
             return args[0]
         op = _OPERATORS.get(type_name)
         if op is None or len(args) < 2:
-            raise NetworkError(
+            raise ElementError(
                 f"block {node.get('typeName')} has no GRAPH form in a condition or assignment", node
             )
         out = args[0]
@@ -202,7 +193,7 @@ class Network:
             target = self.variable(node)
             value = self.value_of(node.child("connectionPointIn"))
             if not isinstance(target, SName):
-                raise NetworkError("a coil must write a variable", node)
+                raise ElementError("a coil must write a variable", node)
             storage = node.get("storage", "none")
             if storage in ("set", "reset"):
                 return SSetReset(
@@ -217,7 +208,7 @@ class Network:
                 return None
             target = self.expr_of(node)
             if not isinstance(target, SName):
-                raise NetworkError("an output variable must be a variable", node)
+                raise ElementError("an output variable must be a variable", node)
             value = self.value_of(point)
             if node.get("negatedIn") == "true" or node.get("negated") == "true":
                 value = _not(value, node)

@@ -24,7 +24,7 @@ from s7graph.sequencer.exchange.iec_model import (
     IecVar,
     Unsupported,
 )
-from s7graph.sequencer.exchange.networks import Network, NetworkError
+from s7graph.sequencer.exchange.networks import Network
 from s7graph.sequencer.exchange.problems import Problems
 from s7graph.sequencer.exchange.st import (
     SExpr,
@@ -34,7 +34,7 @@ from s7graph.sequencer.exchange.st import (
     parse_expression,
     parse_statements,
 )
-from s7graph.sequencer.exchange.xmltree import Node
+from s7graph.sequencer.exchange.xmltree import ElementError, Node
 
 __all__ = ["S7GRAPH_DATA", "read_plcopen"]
 
@@ -235,7 +235,7 @@ class _Reader:
         if lang.tag in ("LD", "FBD"):
             try:
                 return Network(lang, self.file).statements(), (1, 1)
-            except NetworkError as exc:
+            except ElementError as exc:
                 return Unsupported(f"a {lang.tag} network with {exc.message}", self.at(exc.node)), (
                     1,
                     1,
@@ -274,7 +274,7 @@ class _Reader:
             elif lang.tag in ("LD", "FBD"):
                 try:
                     value = Network(lang, self.file).output_named(name)
-                except NetworkError as exc:
+                except ElementError as exc:
                     value = None
                     out[name.upper()] = (
                         Unsupported(f"a network with {exc.message}", self.at(exc.node)),
@@ -407,7 +407,7 @@ class _Reader:
         """The steps before ``node`` (through selection divergences and simultaneous
         convergences)."""
         if node is None:
-            raise NetworkError("a connection to an element that does not exist", at)
+            raise ElementError("a connection to an element that does not exist", at)
         if node.tag == "step":
             return [node.get("name")]
         conns = _connections(node)
@@ -416,7 +416,7 @@ class _Reader:
             for c in conns:
                 found += self.previous(by_id.get(c.get("refLocalId")), by_id, c)
             return found
-        raise NetworkError(f"a transition after a {node.tag}", node)
+        raise ElementError(f"a transition after a {node.tag}", node)
 
     def following(
         self, node: Node, refs: dict[str, list[Node]], by_id: dict[str, Node]
@@ -431,7 +431,7 @@ class _Reader:
             elif nxt.tag in ("selectionConvergence", "simultaneousDivergence"):
                 out += self.following(nxt, refs, by_id)
             elif nxt.tag == "macroStep":
-                raise NetworkError("a transition into a macro step", nxt)
+                raise ElementError("a transition into a macro step", nxt)
         return out
 
     def transition(
@@ -450,7 +450,7 @@ class _Reader:
             for c in conns:
                 sources += self.previous(by_id.get(c.get("refLocalId")), by_id, c)
             targets = self.following(el, refs, by_id)
-        except NetworkError as exc:
+        except ElementError as exc:
             self.p.error("I011", exc.message, self.at(exc.node))
             return None
         if not sources:
@@ -504,7 +504,7 @@ class _Reader:
         if point is not None:
             try:
                 return net.value_of(point), (1, 1)
-            except NetworkError as exc:
+            except ElementError as exc:
                 return Unsupported(f"a wired condition with {exc.message}", self.at(exc.node)), (
                     1,
                     1,

@@ -27,10 +27,10 @@ from dataclasses import replace
 from s7graph.engine.errors import LiteralError, S7Error, SourceLocation
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.exchange.export_simaticml import S7GRAPH_COMMENT
-from s7graph.sequencer.exchange.flgnet import FlgNetError, read_network
+from s7graph.sequencer.exchange.flgnet import read_network
 from s7graph.sequencer.exchange.iec_to_chart import accepted, const
 from s7graph.sequencer.exchange.problems import Problems
-from s7graph.sequencer.exchange.xmltree import Node
+from s7graph.sequencer.exchange.xmltree import ElementError, Node
 from s7graph.sequencer.model import (
     ActionRow,
     Assignment,
@@ -158,13 +158,13 @@ class _Reader:
             try:
                 return const(text, loc)
             except (LiteralError, S7Error):
-                raise FlgNetError(f"constant {text!r} has no GRAPH form", node) from None
+                raise ElementError(f"constant {text!r} has no GRAPH form", node) from None
         sym = node.child("Symbol")
         if sym is None:
             address = node.child("Address")
             if address is not None and scope == "GlobalVariable":
                 return Operand(self.absolute(address, node), False, loc)
-            raise FlgNetError(f"an operand of scope {scope} the importer does not read", node)
+            raise ElementError(f"an operand of scope {scope} the importer does not read", node)
         parts = [_component(c) for c in sym.all("Component")]
         addr = sym.child("Address")
         t = addr.get("Type").upper() if addr is not None else None
@@ -175,7 +175,7 @@ class _Reader:
                 return TransAttr(self.trans_names[parts[0]], "TT", loc)
             if len(parts) == 1:
                 return Operand(parts[0], False, loc)
-            raise FlgNetError(
+            raise ElementError(
                 f"#{'.'.join(parts)} is not an FB variable, step or transition attribute", node
             )
         informative, where = "", ""
@@ -192,7 +192,7 @@ class _Reader:
         offset = address.get("BitOffset")
         t = TIA_TYPES.get(address.get("Type").upper(), "")
         if area is None or not offset.isdigit() or t not in _WIDTH:
-            raise FlgNetError("an absolute address the importer does not read", at)
+            raise ElementError("an absolute address the importer does not read", at)
         n = int(offset)
         width = _WIDTH[t]
         return f"{area}{n // 8}.{n % 8}" if width == "" else f"{area}{width}{n // 8}"
@@ -206,7 +206,7 @@ class _Reader:
     def condition(self, holder: Node | None, what: str) -> Expr | None:
         coils = self.network(holder)
         if len(coils) != 1:
-            raise FlgNetError(f"{what} needs exactly one coil", holder or self.fb)
+            raise ElementError(f"{what} needs exactly one coil", holder or self.fb)
         return coils[0][1]
 
     # ------------------------------------------------------------ rows
@@ -441,7 +441,7 @@ class _Reader:
             try:
                 for coil, cond in self.network(op):
                     out.append(self.coil(coil, cond, op))
-            except FlgNetError as exc:
+            except ElementError as exc:
                 self.p.warn(
                     "I022", f"permanent operation not imported: {exc.message}", self.at(exc.node)
                 )
@@ -464,7 +464,7 @@ class _Reader:
                 acc = next(p for p in net.iter("Access") if p.get("UId") == ends[0].get("UId"))
                 target = self.access(acc, "BOOL")
         if not isinstance(target, Operand):
-            raise FlgNetError("a coil without an operand", coil)
+            raise ElementError("a coil without an operand", coil)
         value = cond if cond is not None else Const(True, "BOOL", "TRUE", self.at(coil))
         kind = {"SCoil": "S", "RCoil": "R"}.get(coil.get("Name"), "=")
         if kind == "=":
@@ -492,7 +492,7 @@ class _Reader:
                 text = holder.find("AlarmText", "MultiLanguageText") if holder is not None else None
                 if text is not None and text.text.strip() and not message:
                     message = text.text.strip()
-        except FlgNetError as exc:
+        except ElementError as exc:
             self.p.error("I012", f"step {number}: {exc.message}", self.at(exc.node))
         for attr in ("MaximumStepTime", "WarningTime"):
             if s.get(attr) and s.get(attr).upper() not in ("T#10S", "T#7S", "T#0MS", "T#0S"):
@@ -525,7 +525,7 @@ class _Reader:
         for n, t in trans.items():
             try:
                 cond = self.condition(t, f"transition {n}")
-            except FlgNetError as exc:
+            except ElementError as exc:
                 self.p.error("I012", f"transition {n}: {exc.message}", self.at(exc.node))
                 continue
             sources, targets = links.sources(n), links.targets(n)

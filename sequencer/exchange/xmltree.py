@@ -19,7 +19,7 @@ from xml.parsers import expat
 from s7graph.engine.errors import SourceLocation
 from s7graph.sequencer.exchange.problems import ImportFailed, Problems
 
-__all__ = ["Node", "parse_xml"]
+__all__ = ["ElementError", "Node", "parse_xml"]
 
 _CONFLICT = re.compile(rb"^(<{7}|={7}|>{7})(?:[ \t].*)?\r?$", re.MULTILINE)
 
@@ -71,6 +71,15 @@ class Node:
 
     def loc(self, file: str) -> SourceLocation:
         return SourceLocation(file, self.line, self.col)
+
+
+class ElementError(Exception):
+    """An element of a file that an importer cannot read, with the element (its place)."""
+
+    def __init__(self, message: str, node: Node) -> None:
+        super().__init__(message)
+        self.message = message
+        self.node = node
 
 
 class _Refused(Exception):
