@@ -105,8 +105,8 @@ class IecTransition:
 
 @dataclass
 class IecChart:
-    """One POU with an SFC body. ``prelude``: statements the POU runs every call before the
-    chart (blocks of networks feeding conditions, as Beremiz generates them)."""
+    """One POU with an SFC body. ``prelude``: statements of its body outside the SFC
+    elements (textual SFC), run every call before the chart."""
 
     name: str
     kind: str  # functionBlock | program | function

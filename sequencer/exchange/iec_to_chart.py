@@ -12,8 +12,8 @@
   with instance DBs); a read of ``INST.Q`` reads the FB variable ``INST_Q``, reported.
 * Action rows by qualifier and statement (``mapping``); a bit assigned from an expression
   goes to PERMANENT AFTER, gated by the step (GRAPH writes bits from conditions only in
-  permanent instructions); statements of the POU body before the chart (Beremiz's network
-  blocks) go to PERMANENT BEFORE.
+  permanent instructions); statements of a textual POU body beside its SFC elements go
+  to PERMANENT BEFORE.
 
 Everything left out is reported with its place. The chart is then validated: an action
 row or instruction the validator refuses is left out and reported too, so the result is a
@@ -942,7 +942,7 @@ def _with(base: Chart, qi: int, field: str, i: int, item: Step | Transition) -> 
     items = list(getattr(q, field))
     items[i] = item
     seqs = list(base.sequences)
-    seqs[qi] = dataclasses.replace(q, **{field: tuple(items)})
+    seqs[qi] = dataclasses.replace(q, **{field: tuple(items)})  # type: ignore[arg-type]
     return dataclasses.replace(base, sequences=tuple(seqs))
 
 
