@@ -110,3 +110,37 @@ def test_the_command_line_reports_failures_as_lines_not_tracebacks(
     assert not (tmp_path / "out.s7g").exists()
     assert main(["import", str(tmp_path / "missing.xml")]) == 2
     assert "cannot read" in capsys.readouterr().err
+
+
+CORPUS_FILES = [
+    "plcopen/matiec_SFC_TEST.xml",
+    "plcopen/beremiz_traffic_light.xml",
+    "simaticml/StepSequence.xml",
+    "iec-text/matiec_annexF_gravel.txt",
+]
+
+
+@pytest.mark.parametrize("relative", CORPUS_FILES)
+def test_damaged_files_give_a_chart_or_located_problems_never_an_exception(relative: str) -> None:
+    """Cut, spliced or sprinkled with markup characters, a file still imports or fails with
+    its problems listed — nothing else escapes."""
+    import random
+
+    data = corpus(relative).read_bytes()
+    rng = random.Random(relative)
+    for trial in range(12):
+        d = bytearray(data)
+        if trial % 3 == 0:
+            d = d[: rng.randrange(len(d))]
+        elif trial % 3 == 1:
+            for _ in range(5):
+                d[rng.randrange(len(d))] = rng.choice(b'<>"&;:=()ab01 \n')
+        else:
+            i = rng.randrange(len(d))
+            del d[i : i + rng.randrange(200)]
+        try:
+            result = import_chart(bytes(d), "damaged")
+        except ImportFailed as exc:
+            assert exc.diagnostics and all(x.loc.line >= 1 for x in exc.diagnostics)
+        else:
+            assert result.chart.sequences
