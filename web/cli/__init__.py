@@ -1,6 +1,6 @@
-"""The ``s7graph`` command line: ``run``, ``sim``, ``check``, ``--version``; for the bus
-``web``, ``router``, ``watch`` and the shell's commands (``ack``, ``mode``, ...); ``users``
-and ``audit``.
+"""The ``s7graph`` command line: ``run``, ``sim``, ``check``, ``import``, ``export``,
+``--version``; for the bus ``web``, ``router``, ``watch`` and the shell's commands (``ack``,
+``mode``, ...); ``users`` and ``audit``.
 
 Each command lives in its own module (``web/cli/*.py``) and is imported only when used, so
 ``s7graph check`` never pays for zenoh or viser. Errors are one line on stderr and a
@@ -222,6 +222,54 @@ def sim(
             plant=plant,
         )
     )
+
+
+# ---------------------------------------------------------------- other formats
+
+
+@app.command("import")
+def import_(
+    source: Annotated[
+        Path, typer.Argument(help="A SimaticML GRAPH block, PLCopen XML or IEC text SFC file.")
+    ],
+    output: Annotated[
+        Path | None, typer.Option("-o", "--output", help="The .s7g chart (default: stdout).")
+    ] = None,
+    symbols_out: Annotated[
+        Path | None, typer.Option(help="Write the chart's symbols to this symbol table file.")
+    ] = None,
+    symbols: Annotated[
+        Path | None, typer.Option(help="A symbol table the source's tags refer to (SimaticML).")
+    ] = None,
+    pou: Annotated[
+        str | None, typer.Option(help="The POU to import when there are several.")
+    ] = None,
+    strict: Annotated[
+        bool, typer.Option(help="Fail (exit 2) when anything cannot be mapped.")
+    ] = False,
+) -> None:
+    """Import a chart written elsewhere; exit 0 as it is, 1 with warnings, 2 not imported."""
+    from s7graph.web.cli.exchange import import_command
+
+    raise typer.Exit(
+        import_command(
+            source, output=output, symbols_out=symbols_out, symbols=symbols, pou=pou,
+            strict=strict,
+        )
+    )  # fmt: skip
+
+
+@app.command()
+def export(
+    chart: Annotated[Path, typer.Argument(help="A chart in .s7g source.")],
+    to: Annotated[str, typer.Option(help="plcopen or simaticml.")],
+    output: Annotated[Path, typer.Option("-o", "--output", help="The file to write.")],
+    symbols: Annotated[Path | None, typer.Option(help="A symbol table file.")] = None,
+) -> None:
+    """Export a chart as PLCopen TC6 XML or a TIA Portal SimaticML GRAPH block."""
+    from s7graph.web.cli.exchange import export_command
+
+    raise typer.Exit(export_command(chart, to=to, output=output, symbols=symbols))
 
 
 # ---------------------------------------------------------------- the bus

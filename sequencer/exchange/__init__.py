@@ -1,0 +1,200 @@
+"""Charts written elsewhere: import from TIA Portal SimaticML, PLCopen TC6 XML and IEC
+61131-3 textual SFC; export to PLCopen and SimaticML.
+
+``import_chart(data, file)`` detects the format (``detect_format``) and returns an
+``Imported``: the chart and the problems worth knowing (each located in the file); when no
+chart can be built it raises ``ImportFailed`` with every problem found. ``export_chart``
+writes a chart in one of the XML formats. ``importable_files(directory)`` lists the files
+of a directory an import can read, with their format, for a file chooser (the browser
+editor's *Open*).
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer.diagnostics import Diagnostic, sort_key
+from s7graph.sequencer.exchange.problems import ImportFailed, Problems
+from s7graph.sequencer.model import Chart
+
+__all__ = [
+    "FORMATS",
+    "ImportFailed",
+    "Imported",
+    "detect_format",
+    "export_chart",
+    "import_chart",
+    "import_file",
+    "importable_files",
+]
+
+FORMATS = {
+    "simaticml": "TIA Portal SimaticML (S7-GRAPH)",
+    "plcopen": "PLCopen TC6 XML (SFC)",
+    "iec-text": "IEC 61131-3 textual SFC",
+    "s7g": "s7graph chart",
+}
+_SUFFIXES = (".xml", ".txt", ".st", ".sfc", ".iec", ".s7g")
+_PLCOPEN = re.compile(rb"<(?:[\w.-]+:)?project\b[^>]*plcopen\.org/xml/tc6", re.IGNORECASE)
+_GRAPH = re.compile(rb"NetworkSource/Graph/v\d+|<ProgrammingLanguage>\s*GRAPH\s*<", re.IGNORECASE)
+_SFC_TEXT = re.compile(rb"\bINITIAL_STEP\b", re.IGNORECASE)
+_S7G = re.compile(rb"^\s*(?:\(\*[\s\S]*?\*\)\s*|//[^\n]*\n\s*)*FUNCTION_BLOCK\s+\"", re.IGNORECASE)
+
+
+@dataclass(frozen=True)
+class Imported:
+    """An imported chart, its source format and what the import reports about it."""
+
+    chart: Chart
+    format: str
+    problems: list[Diagnostic] = field(default_factory=list)
+
+
+def detect_format(data: bytes) -> str | None:
+    """``simaticml`` | ``plcopen`` | ``iec-text`` | ``s7g`` | None, from the content."""
+    head = data[:200_000].removeprefix(b"\xef\xbb\xbf")
+    if head.lstrip().startswith(b"<"):
+        if _PLCOPEN.search(head):
+            return "plcopen"
+        if _GRAPH.search(head) and re.search(rb"<(?:[\w.-]+:)?Document\b", head):
+            return "simaticml"
+        return None
+    if _S7G.match(head):
+        return "s7g"
+    if _SFC_TEXT.search(head):
+        return "iec-text"
+    return None
+
+
+def _text(data: bytes) -> str:
+    raw = data.removeprefix(b"\xef\xbb\xbf")
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError:
+        text = raw.decode("latin-1")
+    return text.replace("\r\n", "\n").replace("\r", "\n")
+
+
+def import_chart(
+    data: bytes,
+    file: str = "<input>",
+    *,
+    pou: str | None = None,
+    symbols: SymbolTable | None = None,
+) -> Imported:
+    """Import one chart from ``data`` (raises ``ImportFailed`` with located problems).
+    ``pou`` chooses a POU when the file holds several charts; ``symbols`` gives the tag
+    table a SimaticML block export refers to."""
+    from s7graph.sequencer.exchange.iec_text import read_iec_text
+    from s7graph.sequencer.exchange.iec_to_chart import iec_to_chart
+    from s7graph.sequencer.exchange.plcopen import read_plcopen
+    from s7graph.sequencer.exchange.simaticml import read_simaticml
+    from s7graph.sequencer.exchange.xmltree import parse_xml
+    from s7graph.sequencer.parse import ChartSyntaxError, parse_chart
+
+    problems = Problems(file)
+    found_fmt = detect_format(data)
+    if found_fmt is None:
+        looks_xml = data.removeprefix(b"\xef\xbb\xbf").lstrip().startswith(b"<")
+        if looks_xml:
+            parse_xml(data, file)  # a malformed file says so first
+        what = (
+            "an XML file that is neither PLCopen TC6 nor a SimaticML GRAPH block"
+            if (looks_xml)
+            else "no SFC in the file (no INITIAL_STEP, no known XML)"
+        )
+        problems.error("I001", f"not a chart this import reads: {what}", problems.at(1, 1))
+        problems.fail_if_errors()
+    fmt: str = found_fmt or ""
+    if fmt == "simaticml":
+        chart = read_simaticml(parse_xml(data, file), problems, symbols)
+        return Imported(chart, "simaticml", sorted(problems.items, key=sort_key))
+    if fmt == "s7g":
+        try:
+            return Imported(parse_chart(_text(data), file), "s7g")
+        except ChartSyntaxError as exc:
+            raise ImportFailed(exc.diagnostics) from None
+    if fmt == "plcopen":
+        found = read_plcopen(parse_xml(data, file), problems)
+    else:
+        found = list(read_iec_text(_text(data), file, problems))
+    problems.fail_if_errors()
+    names = [c.name if not isinstance(c, tuple) else c[3] for c in found]
+    if not found:
+        problems.error("I004", "no POU with an SFC body in the file", problems.at(1, 1))
+        problems.fail_if_errors()
+    if pou is not None:
+        picked = [c for c, n in zip(found, names, strict=True) if n.upper() == pou.upper()]
+        if not picked:
+            problems.error(
+                "I005",
+                f"no chart {pou} in the file; it holds {', '.join(names)}",
+                problems.at(1, 1),
+            )
+            problems.fail_if_errors()
+        found = picked
+    elif len(found) > 1:
+        problems.error(
+            "I005",
+            f"the file holds {len(found)} charts ({', '.join(names)}); choose one with --pou",
+            problems.at(1, 1),
+        )
+        problems.fail_if_errors()
+    item = found[0]
+    if isinstance(item, tuple):  # s7graph's own export: its source, kept in the file
+        text, line, _, _ = item
+        try:
+            chart = parse_chart("\n" * (line - 1) + text, file)
+        except ChartSyntaxError as exc:
+            raise ImportFailed(exc.diagnostics) from None
+        return Imported(chart, fmt, [])
+    chart = iec_to_chart(item, problems)
+    return Imported(chart, fmt, sorted(problems.items, key=sort_key))
+
+
+def import_file(
+    path: Path, *, pou: str | None = None, symbols: SymbolTable | None = None
+) -> Imported:
+    """``import_chart`` of a file (an unreadable file is ``ImportFailed`` too)."""
+    problems = Problems(str(path))
+    try:
+        data = Path(path).read_bytes()
+    except OSError as exc:
+        problems.error("I001", f"cannot read the file: {exc.strerror}", problems.at(1, 1))
+        raise ImportFailed(problems.items) from None
+    return import_chart(data, str(path), pou=pou, symbols=symbols)
+
+
+def importable_files(directory: Path) -> list[tuple[Path, str]]:
+    """The files of ``directory`` (not its subdirectories) that ``import`` reads, sorted by
+    name, with their format — what the editor's *Open* offers besides `.s7g` charts."""
+    out: list[tuple[Path, str]] = []
+    for path in sorted(Path(directory).iterdir()):
+        if not path.is_file() or path.suffix.lower() not in _SUFFIXES:
+            continue
+        try:
+            with path.open("rb") as f:
+                head = f.read(200_000)
+        except OSError:
+            continue
+        fmt = detect_format(head)
+        if fmt is not None:
+            out.append((path, fmt))
+    return out
+
+
+def export_chart(chart: Chart, to: str, symbols: SymbolTable | None = None) -> str:
+    """``chart`` as a ``plcopen`` or ``simaticml`` document (``ValueError`` for a chart
+    part the format cannot hold)."""
+    if to == "plcopen":
+        from s7graph.sequencer.exchange.export_plcopen import export_plcopen
+
+        return export_plcopen(chart, symbols)
+    if to == "simaticml":
+        from s7graph.sequencer.exchange.export_simaticml import export_simaticml
+
+        return export_simaticml(chart, symbols)
+    raise ValueError(f"unknown export format {to!r}: plcopen or simaticml")

@@ -1,0 +1,292 @@
+"""Write a chart as PLCopen TC6 XML 2.01 (``tc6_0201``): an SFC body other IEC tools read,
+plus the chart's `.s7g` source in the POU's ``addData`` (PLCopen's place for a tool's own
+data), from which s7graph reads it back exactly.
+
+The SFC body: one ``step`` per step (IEC name: the GRAPH name when it is a unique
+identifier, else ``S<n>``), the transitions leaving a step left to right in their priority
+order (after a ``selectionDivergence`` when there are several), ``simultaneousDivergence``
+/ ``simultaneousConvergence`` for ``TO (…)`` / ``FROM (…)``, a ``selectionConvergence``
+before a step several transitions lead to, and a ``jumpStep`` for a transition that leads
+back up. Conditions are inline ST. Action rows with an IEC equivalent (``exchange.mapping``
+read backwards) become actions: ``N S R D L`` on a bit as Boolean actions, ``S1``/``S0``
+rows as ``P``/``P0`` actions, assignments as inline ST; the others (interlocked rows, other
+events, calls, counters, timers) an inline ST comment holding the GRAPH row. Symbols are
+global variables of the configuration at their IEC address. Interlocks, supervisions,
+options, permanent instructions and ``TO STOP`` live in the `.s7g` source only.
+"""
+
+from __future__ import annotations
+
+from xml.sax.saxutils import escape, quoteattr
+
+from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer.exchange.naming import s7_to_iec
+from s7graph.sequencer.exchange.plcopen import S7GRAPH_DATA
+from s7graph.sequencer.exchange.shape import shape_of
+from s7graph.sequencer.format import format_chart, format_expr, format_row
+from s7graph.sequencer.model import (
+    ActionRow,
+    Assignment,
+    Chart,
+    Const,
+    Expr,
+    Operand,
+    Sequence,
+    Step,
+    StepAttr,
+    TransAttr,
+)
+
+__all__ = ["export_plcopen"]
+
+_NS = "http://www.plcopen.org/xml/tc6_0201"
+_TYPES = {"TIME_OF_DAY": "TOD", "DATE_AND_TIME": "DT"}
+
+
+def _ident(name: str) -> str:
+    out = "".join(c if c.isalnum() or c == "_" else "_" for c in name)
+    return out if out and not out[0].isdigit() else "_" + out
+
+
+class _Export:
+    def __init__(self, chart: Chart, symbols: SymbolTable | None) -> None:
+        self.chart = chart
+        self.table = symbols
+        self.ids = 0
+        names = [s.name for s in chart.all_steps()]
+        self.step_name: dict[int, str] = {}
+        for s in chart.all_steps():
+            ident = _ident(s.name) if s.name else ""
+            unique = ident and names.count(s.name) == 1 and ident.upper() != f"S{s.number}"
+            self.step_name[s.number] = ident if unique else f"S{s.number}"
+
+    def next_id(self) -> int:
+        self.ids += 1
+        return self.ids
+
+    # ------------------------------------------------------------ ST text
+
+    def st(self, e: Expr) -> str:
+        """``e`` in ST: the `.s7g` expression with IEC operands and constants."""
+        return format_expr(e, self.iec)
+
+    def iec(self, e: Expr) -> str | None:
+        if isinstance(e, Const) and e.type in ("WORD", "DWORD", "BYTE") and "#16#" in e.text:
+            return f"{e.type}#16#{e.text.rsplit('#', 1)[1]}"
+        if isinstance(e, Operand) and e.quoted:
+            return _ident(e.name)
+        if isinstance(e, Operand):
+            return s7_to_iec(e.name) or e.name
+        if isinstance(e, StepAttr):
+            return f"{self.step_name.get(e.step, f'S{e.step}')}.{'T' if e.attr == 'U' else e.attr}"
+        if isinstance(e, TransAttr):
+            return f"T{e.transition}_TT"
+        return None
+
+    # ------------------------------------------------------------ actions
+
+    def action(self, r: ActionRow) -> str:
+        op = r.operand
+        plain = not r.interlocked
+        qualifier = {None: "", "S1": "P", "S0": "P0"}.get(r.event)
+        if plain and qualifier == "" and r.qualifier in ("N", "S", "R") and isinstance(op, Operand):
+            return self.bool_action(r.qualifier, op)
+        if (
+            plain
+            and qualifier == ""
+            and r.qualifier in ("D", "L")
+            and isinstance(op, Operand)
+            and r.value is not None
+        ):
+            return self.bool_action(r.qualifier, op, self.st(r.value))
+        if plain and qualifier is not None and isinstance(op, Assignment) and r.qualifier == "N":
+            body = f"{self.st(op.target)} := {self.st(op.expr)};"
+            return self.inline(qualifier or "N", body)
+        if plain and qualifier and r.qualifier in ("S", "R") and isinstance(op, Operand):
+            body = f"{self.st(op)} := {'TRUE' if r.qualifier == 'S' else 'FALSE'};"
+            return self.inline(qualifier, body)
+        if plain and qualifier == "P" and r.qualifier == "N" and isinstance(op, Operand):
+            return self.bool_action("P", op)
+        return self.inline("N", f"(* s7graph: {format_row(r).replace('*)', '* )')} *)")
+
+    def bool_action(self, qualifier: str, op: Operand, duration: str = "") -> str:
+        dur = f" duration={quoteattr(duration)}" if duration else ""
+        return (
+            f'<action localId="0" qualifier="{qualifier}"{dur}>'
+            f"<reference name={quoteattr(self.st(op))}/></action>"
+        )
+
+    def inline(self, qualifier: str, body: str) -> str:
+        return (
+            f'<action localId="0" qualifier="{qualifier}"><inline><ST>'
+            f"<xhtml:p><![CDATA[{body}]]></xhtml:p></ST></inline></action>"
+        )
+
+    # ------------------------------------------------------------ SFC body
+
+    def sequence(self, q: Sequence, column: int, out: list[str]) -> None:
+        order = {s.number: i for i, s in enumerate(q.steps)}
+        x0 = 40 + column * 400
+        step_id: dict[int, int] = {s.number: self.next_id() for s in q.steps}
+        trans_id: dict[int, int] = {t.number: self.next_id() for t in q.transitions}
+        drawn = shape_of(q)
+        leaving, arriving, jumps = drawn.leaving, drawn.arriving, drawn.jumps
+        # what a transition's input connects to: a step, or that step's divergence
+        out_of: dict[int, int] = {}
+        for s, trs in leaving.items():
+            if s not in step_id:
+                continue
+            if len(trs) > 1:
+                out_of[s] = self.branch("selectionDivergence", [step_id[s]], len(trs), out)
+            else:
+                out_of[s] = step_id[s]
+        after: dict[int, int] = {}  # transition → the element after it (simultaneous div.)
+        for t in q.transitions:
+            targets = [d for d in t.targets if (t.number, d) not in jumps]
+            if len(t.targets) > 1:
+                div = self.branch(
+                    "simultaneousDivergence", [trans_id[t.number]], len(t.targets), out
+                )
+                after[t.number] = div
+            else:
+                after[t.number] = trans_id[t.number]
+            for d in t.targets:
+                if (t.number, d) in jumps or (len(t.targets) > 1 and d not in targets):
+                    jid = self.next_id()
+                    out.append(
+                        f'<jumpStep localId="{jid}" height="13" width="12" '
+                        f"targetName={quoteattr(self.step_name[d])}>"
+                        f"{_cpin([after[t.number]])}</jumpStep>"
+                    )
+        for st in q.steps:
+            ins = [after[t] for t in arriving.get(st.number, [])]
+            y = 60 + order[st.number] * 120
+            if len(ins) > 1:
+                ins = [self.branch("selectionConvergence", ins, 1, out)]
+            out.append(self.step(st, step_id[st.number], ins, x0, y))
+        for t in q.transitions:
+            srcs = [out_of.get(s, step_id.get(s, 0)) for s in t.sources]
+            if len(srcs) > 1:
+                srcs = [self.branch("simultaneousConvergence", srcs, 1, out)]
+            first = t.sources[0]
+            rank = leaving.get(first, [t.number]).index(t.number)
+            x = x0 + rank * 160
+            y = 60 + order.get(first, 0) * 120 + 80
+            cond = self.st(t.condition) if t.condition is not None else "TRUE"
+            name = f" name={quoteattr(t.name)}" if t.name else ""
+            out.append(
+                f'<transition localId="{trans_id[t.number]}" height="2" width="20"{name}>'
+                f'<position x="{x}" y="{y}"/>{_cpin(srcs)}<connectionPointOut/>'
+                f'<condition><inline name=""><ST><xhtml:p><![CDATA[{cond}]]></xhtml:p>'
+                "</ST></inline></condition></transition>"
+            )
+
+    def branch(self, tag: str, ins: list[int], outs: int, out: list[str]) -> int:
+        """A divergence (one input, ``outs`` outputs) or a convergence (one input point per
+        element in ``ins``, one output); returns its localId."""
+        bid = self.next_id()
+        points = _cpin(ins) if tag.endswith("Divergence") else "".join(_cpin([i]) for i in ins)
+        out.append(
+            f'<{tag} localId="{bid}" height="2" width="200">{points}'
+            + "<connectionPointOut/>" * outs
+            + f"</{tag}>"
+        )
+        return bid
+
+    def step(self, s: Step, sid: int, ins: list[int], x: int, y: int) -> str:
+        init = "true" if s.initial else "false"
+        cp = _cpin(ins) if ins else ""
+        xml = (
+            f'<step localId="{sid}" height="30" width="80" '
+            f'name={quoteattr(self.step_name[s.number])} initialStep="{init}">'
+            f'<position x="{x}" y="{y}"/>{cp}'
+            "<connectionPointOut/><connectionPointOutAction/></step>"
+        )
+        if s.actions:
+            bid = self.next_id()
+            xml += (
+                f'<actionBlock localId="{bid}" height="30" width="200">'
+                f'<position x="{x + 120}" y="{y}"/>{_cpin([sid])}'
+                + "".join(self.action(r) for r in s.actions)
+                + "</actionBlock>"
+            )
+        return xml
+
+    # ------------------------------------------------------------ the document
+
+    def interface(self) -> tuple[str, str]:
+        local = []
+        for v in self.chart.vars:
+            init = (
+                f"<initialValue><simpleValue value={quoteattr(self.st(v.init))}/></initialValue>"
+                if v.init is not None
+                else ""
+            )
+            local.append(f"<variable name={quoteattr(v.name)}>{_type(v.type)}{init}</variable>")
+        external, globals_ = [], []
+        for name, address, type_name in self.symbols():
+            ident = _ident(name)
+            external.append(f"<variable name={quoteattr(ident)}>{_type(type_name)}</variable>")
+            iec = s7_to_iec(address)
+            at = f" address={quoteattr(iec)}" if iec else ""
+            globals_.append(f"<variable name={quoteattr(ident)}{at}>{_type(type_name)}</variable>")
+        iface = ""
+        if local:
+            iface += "<localVars>" + "".join(local) + "</localVars>"
+        if external:
+            iface += "<externalVars>" + "".join(external) + "</externalVars>"
+        return iface, "".join(globals_)
+
+    def symbols(self) -> list[tuple[str, str, str]]:
+        seen: dict[str, tuple[str, str, str]] = {}
+        for s in self.chart.symbols:
+            seen[s.name] = (s.name, s.address, s.type)
+        for sym in self.table or ():
+            seen.setdefault(sym.name, (sym.name, str(sym.address), sym.type))
+        return list(seen.values())
+
+    def document(self) -> str:
+        body: list[str] = []
+        for i, q in enumerate(self.chart.sequences):
+            self.sequence(q, i, body)
+        iface, globals_ = self.interface()
+        source = format_chart(self.chart).replace("]]>", "]]]]><![CDATA[>")
+        name = quoteattr(self.chart.name)
+        return (
+            '<?xml version="1.0" encoding="utf-8"?>\n'
+            f'<project xmlns="{_NS}" xmlns:xhtml="http://www.w3.org/1999/xhtml">\n'
+            '<fileHeader companyName="s7graph" productName="s7graph" productVersion="1" '
+            'creationDateTime="2000-01-01T00:00:00"/>\n'
+            f'<contentHeader name={name}><coordinateInfo><fbd><scaling x="1" y="1"/></fbd>'
+            '<ld><scaling x="1" y="1"/></ld><sfc><scaling x="1" y="1"/></sfc>'
+            "</coordinateInfo></contentHeader>\n"
+            f'<types><dataTypes/><pous><pou name={name} pouType="functionBlock">\n'
+            f"<interface>{iface}</interface>\n"
+            "<body><SFC>\n" + "\n".join(body) + "\n</SFC></body>\n"
+            f'<addData><data name="{S7GRAPH_DATA}" handleUnknown="discard">'
+            f"<text><![CDATA[{source}]]></text></data></addData>\n"
+            "</pou></pous></types>\n"
+            '<instances><configurations><configuration name="s7graph">'
+            f'<resource name="cpu"><task name="OB1" priority="1" interval="T#10ms">'
+            f'<pouInstance name="{escape(_ident(self.chart.name))}_DB" typeName={name}/></task>'
+            f"</resource><globalVars>{globals_}</globalVars></configuration></configurations>"
+            "</instances>\n</project>\n"
+        )
+
+
+def _cpin(refs: list[int]) -> str:
+    conns = "".join(f'<connection refLocalId="{r}"/>' for r in refs)
+    return f"<connectionPointIn>{conns}</connectionPointIn>"
+
+
+def _type(type_name: str) -> str:
+    t = _TYPES.get(type_name, type_name)
+    if t.startswith("STRING"):
+        length = t[7:-1] if "[" in t else ""
+        return f'<type><string length="{length}"/></type>' if length else "<type><string/></type>"
+    return f"<type><{t}/></type>"
+
+
+def export_plcopen(chart: Chart, symbols: SymbolTable | None = None) -> str:
+    """The PLCopen XML document of ``chart`` (``symbols``: the table its symbols are in)."""
+    return _Export(chart, symbols).document()

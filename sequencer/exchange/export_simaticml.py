@@ -1,0 +1,383 @@
+"""Write a chart as a TIA Portal Openness SimaticML GRAPH FB (``Graph/v5``, GraphVersion
+6.0, the interface in ``Interface/v4``, as TIA V16 exports and V20 imports it).
+
+GRAPH to GRAPH: steps and transitions keep numbers and names; a step with several
+transitions leaving it opens an ``AltBegin`` branch (``Out`` 0 is the first written, the
+highest priority), a transition to several steps a ``SimBegin``, a transition from several
+steps closes a ``SimEnd``, a step reached forward by several transitions an ``AltEnd``; a
+transition that leads back up, or into another sequence, is a ``Jump`` link, ``TO STOP``
+an ``EndConnection``. Conditions, interlocks, supervisions (with the step's message text
+as alarm text) and bit coils of the permanent instructions are LAD networks
+(``exchange.flgnet``); action rows are ``Action`` elements with the row's text as tokens
+(``"Tag"``, ``#variable``, ``%Q0.3``). Symbols are global tags with their address as
+informative data. What a GRAPH block has no field for — the instance DB number,
+``ORDER``, ``ACK_FORCES_SWITCH`` — is kept in the block comment (``s7graph: …``), which
+the importer reads. Block calls, non-bit assignments in the permanent instructions and XOR
+in a condition have no form here (``ValueError``).
+"""
+
+from __future__ import annotations
+
+import re
+from xml.sax.saxutils import escape, quoteattr
+
+from s7graph.engine.address import parse_address
+from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer.exchange.flgnet import write_network
+from s7graph.sequencer.exchange.shape import shape_of
+from s7graph.sequencer.format import row_body
+from s7graph.sequencer.model import (
+    ActionRow,
+    Assignment,
+    BlockCall,
+    Chart,
+    Coil,
+    Const,
+    Expr,
+    Operand,
+    Sequence,
+    Step,
+    StepAttr,
+    TransAttr,
+)
+from s7graph.sequencer.params import Direction, pins_for
+
+__all__ = ["S7GRAPH_COMMENT", "export_simaticml"]
+
+S7GRAPH_COMMENT = "s7graph:"
+_GRAPH_NS = "http://www.siemens.com/automation/Openness/SW/NetworkSource/Graph/v5"
+_IFACE_NS = "http://www.siemens.com/automation/Openness/SW/Interface/v4"
+_TIA = {
+    "BOOL": "Bool",
+    "BYTE": "Byte",
+    "WORD": "Word",
+    "DWORD": "DWord",
+    "INT": "Int",
+    "DINT": "DInt",
+    "REAL": "Real",
+    "TIME": "Time",
+    "S5TIME": "S5Time",
+    "DATE": "Date",
+    "TIME_OF_DAY": "Time_Of_Day",
+    "CHAR": "Char",
+    "DATE_AND_TIME": "Date_And_Time",
+}
+_AREA = {"I": "Input", "Q": "Output", "M": "Memory"}
+_IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+
+
+def _tia_type(t: str) -> str:
+    if t.startswith("STRING"):
+        return "String" + t[6:]
+    return _TIA.get(t, t)
+
+
+def _text(text: str) -> str:
+    return f'<MultiLanguageText Lang="en-US">{escape(text)}</MultiLanguageText>'
+
+
+class _Export:
+    def __init__(self, chart: Chart, symbols: SymbolTable | None) -> None:
+        self.chart = chart
+        self.table = symbols
+        self.step_names = {s.number: s.name or f"Step{s.number}" for s in chart.all_steps()}
+        self.trans_names = {t.number: t.name or f"Trans{t.number}" for t in chart.all_transitions()}
+
+    # ------------------------------------------------------------ operands
+
+    def address_of(self, name: str) -> tuple[str, str] | None:
+        """(S7 address, type) of a symbol, from the chart or the table."""
+        for s in self.chart.symbols:
+            if s.name.casefold() == name.casefold():
+                return s.address, s.type
+        sym = self.table.lookup(name) if self.table is not None else None
+        return (str(sym.address), sym.type) if sym is not None else None
+
+    def access(self, e: Expr, uid: str) -> str:
+        if isinstance(e, Const):
+            ctype = _TIA.get(e.type, e.type)
+            return (
+                f'<Access Scope="LiteralConstant" UId="{uid}"><Constant><ConstantType>{ctype}'
+                f"</ConstantType><ConstantValue>{escape(e.text)}</ConstantValue></Constant>"
+                "</Access>"
+            )
+        if isinstance(e, StepAttr | TransAttr):
+            owner = (
+                self.step_names.get(e.step, f"Step{e.step}")
+                if isinstance(e, StepAttr)
+                else self.trans_names.get(e.transition, f"Trans{e.transition}")
+            )
+            return (
+                f'<Access Scope="LocalVariable" UId="{uid}"><Symbol><Component '
+                f'Name={quoteattr(owner)} /><Component Name="{e.attr}" /></Symbol></Access>'
+            )
+        if not isinstance(e, Operand):
+            raise ValueError("a condition operand that is not an operand or constant")
+        if not e.quoted and not any(v.name.upper() == e.name.upper() for v in self.chart.vars):
+            addr = parse_address(e.name)
+            return (
+                f'<Access Scope="GlobalVariable" UId="{uid}"><Address Area='
+                f'"{_AREA.get(str(addr.area), str(addr.area))}" Type="{_address_type(e.name)}"'
+                f' BitOffset="{addr.byte * 8 + addr.bit}" /></Access>'
+            )
+        if not e.quoted:
+            return (
+                f'<Access Scope="LocalVariable" UId="{uid}"><Symbol><Component '
+                f"Name={quoteattr(e.name)} /></Symbol></Access>"
+            )
+        info = ""
+        found = self.address_of(e.name)
+        if found is not None and found[0][0] in _AREA:
+            addr = parse_address(found[0])
+            info = (
+                f'<Address Area="{_AREA[found[0][0]]}" Type="{_tia_type(found[1])}" '
+                f'BitOffset="{addr.byte * 8 + addr.bit}" Informative="true" />'
+            )
+        comps = "".join(f"<Component Name={quoteattr(p)} />" for p in _path(e.name))
+        return f'<Access Scope="GlobalVariable" UId="{uid}"><Symbol>{comps}{info}</Symbol></Access>'
+
+    def spell(self, e: Expr) -> str | None:
+        """An operand in a TIA action's text."""
+        if isinstance(e, Operand) and e.quoted:
+            parts = _path(e.name)
+            return '"' + parts[0] + '"' + "".join("." + p for p in parts[1:])
+        if isinstance(e, Operand) and any(
+            v.name.upper() == e.name.upper() for v in self.chart.vars
+        ):
+            return "#" + e.name
+        if isinstance(e, Operand):
+            return "%" + e.name
+        return None
+
+    # ------------------------------------------------------------ elements
+
+    def network(self, cond: Expr | None, coil: str, target: Expr | None = None) -> str:
+        try:
+            return write_network(cond, coil, self.access, target)
+        except ValueError as exc:
+            raise ValueError(f"{exc}: a SimaticML network cannot hold it") from None
+
+    def action(self, r: ActionRow) -> str:
+        if isinstance(r.operand, BlockCall):
+            raise ValueError(
+                f"step action CALL {r.operand.block}: CALL rows have no SimaticML form"
+            )
+        attrs = f' Event="{r.event}"' if r.event else ""
+        attrs += ' Interlock="true"' if r.interlocked else ""
+        attrs += f' Qualifier="{r.qualifier}"'
+        text = row_body(r, self.spell)
+        return f'<Action{attrs}><Token Text={quoteattr(text)} /><Token Text="&#xA;" /></Action>'
+
+    def step(self, s: Step) -> str:
+        rows = "".join(self.action(r) for r in s.actions)
+        alarm = f"<AlarmText>{_text(s.message)}</AlarmText>" if s.message else ""
+        return (
+            f'<Step Number="{s.number}" Init="{str(s.initial).lower()}" '
+            f'Name={quoteattr(self.step_names[s.number])} MaximumStepTime="T#10S" '
+            f'WarningTime="T#7S"><Actions>{rows}<Action /></Actions>'
+            f'<Supervisions><Supervision ProgrammingLanguage="LAD">{alarm}'
+            f"{self.network(s.supervision, 'SvCoil')}</Supervision></Supervisions>"
+            f'<Interlocks><Interlock ProgrammingLanguage="LAD">'
+            f"{self.network(s.interlock, 'IlCoil')}</Interlock></Interlocks></Step>"
+        )
+
+    def sequence(self, q: Sequence) -> str:
+        branches: list[str] = []
+        links: list[tuple[str, str, str]] = []
+
+        def branch(kind: str, card: int) -> int:
+            branches.append(
+                f'<Branch Number="{len(branches) + 1}" Type="{kind}" Cardinality="{card}" />'
+            )
+            return len(branches)
+
+        drawn = shape_of(q)
+        leaving, forward, jumps = drawn.leaving, drawn.arriving, drawn.jumps
+        # into each transition
+        into_trans: dict[int, list[str]] = {}
+        for s, trs in leaving.items():
+            if len(trs) > 1:
+                b = branch("AltBegin", len(trs))
+                links.append(
+                    (f'<StepRef Number="{s}" />', f'<BranchRef Number="{b}" In="0" />', "Direct")
+                )
+                for i, tn in enumerate(trs):
+                    into_trans.setdefault(tn, []).append(f'<BranchRef Number="{b}" Out="{i}" />')
+            else:
+                into_trans.setdefault(trs[0], []).append(f'<StepRef Number="{s}" />')
+        for t in q.transitions:
+            srcs = into_trans.get(t.number, [])
+            if len(t.sources) > 1:
+                b = branch("SimEnd", len(t.sources))
+                for i, src in enumerate(srcs):
+                    links.append((src, f'<BranchRef Number="{b}" In="{i}" />', "Direct"))
+                srcs = [f'<BranchRef Number="{b}" Out="0" />']
+            for src in srcs:
+                links.append((src, f'<TransitionRef Number="{t.number}" />', "Direct"))
+        # out of each transition
+        alt_end: dict[int, int] = {}
+        for d, trs in forward.items():
+            if len(trs) > 1:
+                alt_end[d] = branch("AltEnd", len(trs))
+                links.append(
+                    (
+                        f'<BranchRef Number="{alt_end[d]}" Out="0" />',
+                        f'<StepRef Number="{d}" />',
+                        "Direct",
+                    )
+                )
+        for t in q.transitions:
+            tref = f'<TransitionRef Number="{t.number}" />'
+            if not t.targets:
+                links.append((tref, "<EndConnection />", "Direct"))
+                continue
+            src = tref
+            if len(t.targets) > 1:
+                b = branch("SimBegin", len(t.targets))
+                links.append((tref, f'<BranchRef Number="{b}" In="0" />', "Direct"))
+                outs = [f'<BranchRef Number="{b}" Out="{i}" />' for i in range(len(t.targets))]
+            else:
+                outs = [src]
+            for out, d in zip(outs, t.targets, strict=True):
+                if (t.number, d) in jumps:
+                    links.append((out, f'<StepRef Number="{d}" />', "Jump"))
+                elif d in alt_end:
+                    i = forward[d].index(t.number)
+                    links.append((out, f'<BranchRef Number="{alt_end[d]}" In="{i}" />', "Direct"))
+                else:
+                    links.append((out, f'<StepRef Number="{d}" />', "Direct"))
+        title = f"<Title>{_text(q.name)}</Title>" if q.name else ""
+        steps = "".join(self.step(s) for s in q.steps)
+        trans = "".join(
+            f'<Transition IsMissing="false" Name={quoteattr(self.trans_names[t.number])} '
+            f'Number="{t.number}" ProgrammingLanguage="LAD">{self.network(t.condition, "TrCoil")}'
+            "</Transition>"
+            for t in q.transitions
+        )
+        conns = "".join(
+            f"<Connection><NodeFrom>{a}</NodeFrom><NodeTo>{b}</NodeTo>"
+            f"<LinkType>{k}</LinkType></Connection>"
+            for a, b, k in links
+        )
+        return (
+            f"<Sequence>{title}<Steps>{steps}</Steps><Transitions>{trans}</Transitions>"
+            f"<Branches>{''.join(branches)}</Branches><Connections>{conns}</Connections>"
+            "</Sequence>"
+        )
+
+    def permanent(self, items: tuple[object, ...]) -> str:
+        out: list[str] = []
+        for p in items:
+            if isinstance(p, Coil):
+                coil = {"=": "Coil", "S": "SCoil", "R": "RCoil"}[p.kind]
+                net = self.network(p.condition, coil, p.target)
+            elif isinstance(p, Assignment) and self.is_bit(p.target):
+                net = self.network(p.expr, "Coil", p.target)
+            else:
+                raise ValueError(
+                    "a permanent instruction that is not a bit coil (an arithmetic "
+                    "assignment or a CALL) has no SimaticML LAD form here"
+                )
+            out.append(f'<PermanentOperation ProgrammingLanguage="LAD">{net}</PermanentOperation>')
+        return "".join(out)
+
+    def is_bit(self, op: Operand) -> bool:
+        if op.quoted:
+            found = self.address_of(op.name)
+            return found is None or found[1] == "BOOL"
+        var = next((v for v in self.chart.vars if v.name.upper() == op.name.upper()), None)
+        return var.type == "BOOL" if var is not None else "." in op.name
+
+    # ------------------------------------------------------------ the document
+
+    def interface(self) -> str:
+        params = self.chart.options.parameters
+        ins = [p for p in pins_for(params) if p.direction is Direction.IN]
+        outs = [p for p in pins_for(params) if p.direction is not Direction.IN]
+
+        def member(name: str, t: str, start: str = "") -> str:
+            sv = f"<StartValue>{escape(start)}</StartValue>" if start else ""
+            return f'<Member Name={quoteattr(name)} Datatype="{_tia_type(t)}">{sv}</Member>'
+
+        statics = "".join(
+            member(v.name, v.type, v.init.text if v.init else "") for v in self.chart.vars
+        )
+        return (
+            f'<Interface><Sections xmlns="{_IFACE_NS}"><Section Name="Base">'
+            '<Sections Datatype="GRAPH_BASE" Version="1.0"><Section Name="Input" />'
+            '<Section Name="Output" /><Section Name="InOut" /><Section Name="Static" />'
+            "</Sections></Section>"
+            f'<Section Name="Input">{"".join(member(p.name, p.type) for p in ins)}</Section>'
+            f'<Section Name="Output">{"".join(member(p.name, p.type) for p in outs)}</Section>'
+            f'<Section Name="InOut" /><Section Name="Static">{statics}</Section>'
+            '<Section Name="Temp" /><Section Name="Constant" /></Sections></Interface>'
+        )
+
+    def comment(self) -> str:
+        o = self.chart.options
+        keep = []
+        if self.chart.db_number is not None:
+            keep.append(f"DB {self.chart.db_number}")
+        if o.order != "graph":
+            keep.append(f"ORDER := {o.order.upper()}")
+        if o.ack_forces_switch:
+            keep.append("ACK_FORCES_SWITCH := TRUE")
+        return f"{S7GRAPH_COMMENT} {'; '.join(keep)}" if keep else ""
+
+    def document(self) -> str:
+        c = self.chart
+        o = c.options
+        sequences = "".join(self.sequence(q) for q in c.sequences)
+        number = f"<Number>{c.fb_number}</Number>" if c.fb_number is not None else ""
+        comment = self.comment()
+        alarms = "".join(
+            f'<AlarmSupervisionCategory Id="{i}" DisplayClass="0" />' for i in range(1, 9)
+        )
+        return (
+            '<?xml version="1.0" encoding="utf-8"?>\n<Document><Engineering version="V16" />'
+            '<SW.Blocks.FB ID="0"><AttributeList>'
+            f"<AcknowledgeErrorsRequired>{str(o.ack_required).lower()}</AcknowledgeErrorsRequired>"
+            "<GraphVersion>6.0</GraphVersion>"
+            f"{self.interface()}"
+            "<LanguageInNetworks>LAD</LanguageInNetworks>"
+            "<LockOperatingMode>false</LockOperatingMode>"
+            f"<Name>{escape(c.name)}</Name>{number}"
+            "<PermanentILProcessingInMANMode>false</PermanentILProcessingInMANMode>"
+            "<ProgrammingLanguage>GRAPH</ProgrammingLanguage>"
+            "<SetENOAutomatically>false</SetENOAutomatically>"
+            f"<SkipSteps>{str(o.skip_steps).lower()}</SkipSteps>"
+            f"<WithAlarmHandling>{str(o.messages).lower()}</WithAlarmHandling>"
+            "</AttributeList><ObjectList>"
+            '<MultilingualText ID="1" CompositionName="Comment"><ObjectList>'
+            '<MultilingualTextItem ID="2" CompositionName="Items"><AttributeList>'
+            f"<Culture>en-US</Culture><Text>{escape(comment)}</Text></AttributeList>"
+            "</MultilingualTextItem></ObjectList></MultilingualText>"
+            '<SW.Blocks.CompileUnit ID="3" CompositionName="CompileUnits"><AttributeList>'
+            f'<NetworkSource><Graph xmlns="{_GRAPH_NS}">'
+            f"<PreOperations>{self.permanent(c.before)}</PreOperations>{sequences}"
+            f"<PostOperations>{self.permanent(c.after)}</PostOperations>"
+            f"<AlarmsSettings><AlarmSupervisionCategories>{alarms}</AlarmSupervisionCategories>"
+            '<AlarmInterlockCategory Id="1" /><AlarmSubcategory1Interlock Id="0" />'
+            '<AlarmSubcategory2Interlock Id="0" /><AlarmCategorySupervision Id="1" />'
+            '<AlarmSubcategory1Supervision Id="0" /><AlarmSubcategory2Supervision Id="0" />'
+            '<AlarmWarningCategory Id="2" /><AlarmSubcategory1Warning Id="0" />'
+            '<AlarmSubcategory2Warning Id="0" /></AlarmsSettings></Graph></NetworkSource>'
+            "<ProgrammingLanguage>GRAPH</ProgrammingLanguage></AttributeList></SW.Blocks.CompileUnit>"
+            "</ObjectList></SW.Blocks.FB></Document>\n"
+        )
+
+
+def _path(name: str) -> list[str]:
+    """A tag name's components: ``A.b.c`` → [A, b, c] when each is an identifier."""
+    parts = name.split(".")
+    return parts if len(parts) > 1 and all(_IDENT.fullmatch(p) for p in parts) else [name]
+
+
+def _address_type(address: str) -> str:
+    a = parse_address(address)
+    return {1: "Bool", 8: "Byte", 16: "Word", 32: "DWord"}.get(int(a.width), "Word")
+
+
+def export_simaticml(chart: Chart, symbols: SymbolTable | None = None) -> str:
+    """The SimaticML document of ``chart`` (``ValueError`` for what it cannot hold)."""
+    return _Export(chart, symbols).document()

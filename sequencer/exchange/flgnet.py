@@ -1,0 +1,269 @@
+"""TIA Portal LAD/FBD networks (``FlgNet``) ↔ GRAPH conditions, for SimaticML GRAPH blocks.
+
+Reading (``condition``): a wire connects its first end (the power rail, a part's output
+pin or an operand) to its other ends; a value is followed back from the network's coil
+(``TrCoil`` ``IlCoil`` ``SvCoil``, or ``Coil`` ``SCoil`` ``RCoil`` of a permanent
+operation): the power rail is TRUE, a ``Contact`` ANDs its operand (``Negated`` on the
+``operand`` pin: NOT) with its ``in``, ``O`` ORs its inputs, ``A``/``X`` (FBD) AND/XOR them,
+``Not`` negates, a comparison box (``Eq Ne Gt Ge Lt Le``, ``SrcType`` its type) compares
+``in1`` with ``in2`` and ANDs ``pre`` (LAD). A coil fed by the rail alone carries no
+condition: an empty transition (holds), no interlock, no supervision.
+
+Writing (``network``): the inverse, in LAD — a sum of products as contacts in series
+(AND) and ``O`` boxes (OR), comparisons as boxes, ``NOT x`` as a negated contact,
+other NOTs as a ``Not`` part — ending in the coil given. Operands are written by the
+caller (``Operands``): symbols as global ``Access`` es, FB variables and step/transition
+attributes as local ones, constants as literals.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+from s7graph.engine.errors import SourceLocation
+from s7graph.sequencer.exchange.xmltree import ElementError, Node
+from s7graph.sequencer.model import Binary, Const, Expr, Unary
+
+__all__ = ["COMPARE_PARTS", "read_network", "write_network"]
+
+COMPARE_PARTS = {"Eq": "=", "Ne": "<>", "Gt": ">", "Ge": ">=", "Lt": "<", "Le": "<="}
+_PART_OF = {v: k for k, v in COMPARE_PARTS.items()}
+COILS = {"TrCoil", "IlCoil", "SvCoil", "Coil", "SCoil", "RCoil"}
+
+
+Operand = Callable[[Node, str | None], Expr]  # an Access element (and the type it needs)
+
+
+@dataclass
+class _Net:
+    root: Node
+    operand: Operand
+    file: str
+    parts: dict[str, Node] = field(default_factory=dict)
+    sources: dict[tuple[str, str], list[tuple[str, str]]] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        holder = self.root.child("Parts")
+        for p in holder.children if holder is not None else []:
+            self.parts[p.get("UId")] = p
+        wires = self.root.child("Wires")
+        for w in wires.children if wires is not None else []:
+            ends = [(e.tag, e.get("UId"), e.get("Name")) for e in w.children]
+            if not ends:
+                continue
+            tag, uid, name = ends[0]
+            src = ("rail", "") if tag == "Powerrail" else (uid, name or "")
+            if tag == "IdentCon":
+                src = (uid, "@")
+            for t, u, n in ends[1:]:
+                if t in ("NameCon", "IdentCon"):
+                    self.sources.setdefault((u, n or ""), []).append(src)
+
+    def loc(self, node: Node) -> SourceLocation:
+        return node.loc(self.file)
+
+    def pin(self, uid: str, name: str, want: str | None = None) -> Expr | None:
+        """What flows into pin ``name`` of part ``uid`` (None: the power rail alone)."""
+        part = self.parts[uid]
+        srcs = self.sources.get((uid, name), [])
+        if not srcs:
+            raise ElementError(f"pin {name} of {part.get('Name')} is not connected", part)
+        values = [self.value(s, want) for s in srcs]
+        negated = any(n.get("Name") == name for n in part.all("Negated"))
+        out: Expr | None
+        if any(v is None for v in values):  # the rail: no condition, or TRUE in parallel
+            out = None if len(values) == 1 else Const(True, "BOOL", "TRUE", self.loc(part))
+        else:
+            out = values[0]
+            for v in values[1:]:
+                assert out is not None and v is not None
+                out = Binary("OR", out, v, self.loc(part))
+        if negated:
+            if out is None:
+                raise ElementError(f"a negated {name} on the power rail", part)
+            out = Unary("NOT", out, self.loc(part))
+        return out
+
+    def value(self, src: tuple[str, str], want: str | None) -> Expr | None:
+        uid, pin = src
+        if uid == "rail":
+            return None
+        part = self.parts.get(uid)
+        if part is None:
+            raise ElementError(f"a wire from element {uid}, which does not exist", self.root)
+        if pin == "@" or part.tag == "Access":
+            return self.operand(part, want)
+        kind = part.get("Name")
+        loc = self.loc(part)
+        if kind == "Contact":
+            op = self.pin(uid, "operand", "BOOL")
+            assert op is not None
+            return _and(self.pin(uid, "in"), op, loc)
+        if kind in ("O", "A", "X"):
+            n = _cardinality(part)
+            ins = [self.pin(uid, f"in{i}") for i in range(1, n + 1)]
+            logic = {"O": "OR", "A": "AND", "X": "XOR"}[kind]
+            if logic == "OR" and any(v is None for v in ins):
+                return None
+            vals = [v if v is not None else Const(True, "BOOL", "TRUE", loc) for v in ins]
+            out = vals[0]
+            for v in vals[1:]:
+                out = Binary(logic, out, v, loc)
+            return out
+        if kind == "Not":
+            inner = self.pin(uid, "in")
+            if inner is None:
+                raise ElementError("NOT of the power rail", part)
+            return Unary("NOT", inner, loc)
+        if kind in COMPARE_PARTS:
+            src_type = next(
+                (
+                    t.text.strip().upper()
+                    for t in part.all("TemplateValue")
+                    if t.get("Name") == "SrcType"
+                ),
+                None,
+            )
+            left, right = self.pin(uid, "in1", src_type), self.pin(uid, "in2", src_type)
+            if left is None or right is None:
+                raise ElementError("a comparison of the power rail", part)
+            cmp = Binary(COMPARE_PARTS[kind], left, right, loc)
+            pre = self.pin(uid, "pre") if (uid, "pre") in self.sources else None
+            return _and(pre, cmp, loc)
+        raise ElementError(f"part {kind} has no GRAPH condition form", part)
+
+
+def _cardinality(part: Node) -> int:
+    for t in part.all("TemplateValue"):
+        if t.get("Name") == "Card" and t.text.strip().isdigit():
+            return int(t.text.strip())
+    return 2
+
+
+def _and(a: Expr | None, b: Expr, loc: SourceLocation) -> Expr:
+    return b if a is None else Binary("AND", a, b, loc)
+
+
+def read_network(net: Node, operand: Operand, file: str) -> list[tuple[Node, Expr | None]]:
+    """Every coil of ``net`` (a ``FlgNet``) with the condition flowing into it."""
+    n = _Net(net, operand, file)
+    out: list[tuple[Node, Expr | None]] = []
+    for uid, part in n.parts.items():
+        if part.tag == "Part" and part.get("Name") in COILS:
+            out.append((part, n.pin(uid, "in")))
+    return out
+
+
+# ---------------------------------------------------------------- writing
+
+
+class _Writer:
+    def __init__(self, access: Callable[[Expr, str], str], start: int = 21) -> None:
+        self.access = access  # writes an operand's <Access UId=…> element, returns it
+        self.uid = start
+        self.parts: list[str] = []
+        self.wires: dict[str, list[str]] = {}  # one wire per source, to all its sinks
+
+    def next(self) -> str:
+        self.uid += 1
+        return str(self.uid - 1)
+
+    def wire(self, src: str, *sinks: str) -> None:
+        self.wires.setdefault(src, []).extend(sinks)
+
+    def wires_xml(self) -> str:
+        out = []
+        for src, sinks in self.wires.items():
+            out.append(f'<Wire UId="{self.next()}">{src}{"".join(sinks)}</Wire>')
+        return "".join(out)
+
+    def operand(self, e: Expr) -> str:
+        uid = self.next()
+        self.parts.append(self.access(e, uid))
+        return uid
+
+    def flow(self, e: Expr, into: list[str]) -> None:
+        """Wire the power flow of ``e`` into the pins ``into`` (NameCon elements)."""
+        self._flow(e, "<Powerrail />", into)
+
+    def _flow(self, e: Expr, src: str, into: list[str]) -> None:
+        if isinstance(e, Binary) and e.op == "AND":
+            mid = self._series(e.left, src)
+            self._flow(e.right, mid, into)
+            return
+        out = self._series(e, src)
+        self.wire(out, *into)
+
+    def _series(self, e: Expr, src: str) -> str:
+        """Element(s) for ``e`` fed by ``src``; returns the NameCon of their output."""
+        if isinstance(e, Binary) and e.op == "AND":
+            return self._series(e.right, self._series(e.left, src))
+        if isinstance(e, Binary) and e.op == "OR":
+            terms = _or_terms(e)
+            box = self.next()
+            self.parts.append(
+                f'<Part Name="O" UId="{box}"><TemplateValue Name="Card" '
+                f'Type="Cardinality">{len(terms)}</TemplateValue></Part>'
+            )
+            for i, t in enumerate(terms, 1):
+                self._flow(t, src, [f'<NameCon UId="{box}" Name="in{i}" />'])
+            return f'<NameCon UId="{box}" Name="out" />'
+        if isinstance(e, Binary) and e.op in _PART_OF:
+            box = self.next()
+            self.parts.append(f'<Part Name="{_PART_OF[e.op]}" UId="{box}" />')
+            self.wire(src, f'<NameCon UId="{box}" Name="pre" />')
+            for pin, side in (("in1", e.left), ("in2", e.right)):
+                op = self.operand(side)
+                self.wire(f'<IdentCon UId="{op}" />', f'<NameCon UId="{box}" Name="{pin}" />')
+            return f'<NameCon UId="{box}" Name="out" />'
+        if isinstance(e, Unary) and e.op == "NOT" and not isinstance(e.operand, Binary | Unary):
+            return self._contact(e.operand, src, negated=True)
+        if isinstance(e, Unary) and e.op == "NOT":
+            inner = self._series(e.operand, src)
+            box = self.next()
+            self.parts.append(f'<Part Name="Not" UId="{box}" />')
+            self.wire(inner, f'<NameCon UId="{box}" Name="in" />')
+            return f'<NameCon UId="{box}" Name="out" />'
+        if isinstance(e, Binary):
+            raise ValueError(f"{e.op} has no LAD form")
+        return self._contact(e, src, negated=False)
+
+    def _contact(self, e: Expr, src: str, *, negated: bool) -> str:
+        op = self.operand(e)
+        box = self.next()
+        neg = '<Negated Name="operand" />' if negated else ""
+        self.parts.append(f'<Part Name="Contact" UId="{box}">{neg}</Part>')
+        self.wire(src, f'<NameCon UId="{box}" Name="in" />')
+        self.wire(f'<IdentCon UId="{op}" />', f'<NameCon UId="{box}" Name="operand" />')
+        return f'<NameCon UId="{box}" Name="out" />'
+
+
+def _or_terms(e: Expr) -> list[Expr]:
+    if isinstance(e, Binary) and e.op == "OR":
+        return _or_terms(e.left) + _or_terms(e.right)
+    return [e]
+
+
+def write_network(
+    cond: Expr | None,
+    coil: str,
+    access: Callable[[Expr, str], str],
+    coil_operand: Expr | None = None,
+) -> str:
+    """A ``FlgNet`` computing ``cond`` (None: the rail alone) into part ``coil``; raises
+    ValueError for an operator LAD cannot draw (XOR)."""
+    w = _Writer(access)
+    target = ""
+    if coil_operand is not None:
+        target = w.operand(coil_operand)
+    box = w.next()
+    w.parts.append(f'<Part Name="{coil}" UId="{box}" />')
+    into = [f'<NameCon UId="{box}" Name="in" />']
+    if cond is None:
+        w.wire("<Powerrail />", *into)
+    else:
+        w.flow(cond, into)
+    if target:
+        w.wire(f'<IdentCon UId="{target}" />', f'<NameCon UId="{box}" Name="operand" />')
+    return f"<FlgNet><Parts>{''.join(w.parts)}</Parts><Wires>{w.wires_xml()}</Wires></FlgNet>"

@@ -1,0 +1,194 @@
+"""Read IEC 61131-3 textual SFC (``INITIAL_STEP … END_STEP``, ``TRANSITION FROM … TO …``,
+``ACTION … END_ACTION``) as matiec and ironplc read it, into ``IecChart`` s.
+
+A file holds POUs (``FUNCTION_BLOCK``, ``PROGRAM``) and configurations; every POU with SFC
+elements is a chart. Configurations are skipped (and reported: they bind a program's
+variables to locations, which a GRAPH FB does not have). Statements of a POU body outside
+the SFC elements are kept as its ``prelude``. Divergences and convergences are implicit:
+several transitions from one step form an alternative, ``TO (a, b)`` a simultaneous
+divergence, ``FROM (a, b)`` a simultaneous join (IEC 61131-3 §6.7.3).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from lark import Token, Tree
+
+from s7graph.engine.errors import SourceLocation
+from s7graph.sequencer.exchange.iec_model import (
+    IecAction,
+    IecAssociation,
+    IecChart,
+    IecStep,
+    IecTransition,
+    IecVar,
+    Unsupported,
+)
+from s7graph.sequencer.exchange.problems import Problems
+from s7graph.sequencer.exchange.st import SLiteral, SName, StSyntaxError, build, parse_tree
+
+__all__ = ["read_iec_text"]
+
+_KINDS = {
+    "VAR_INPUT": "input",
+    "VAR_OUTPUT": "output",
+    "VAR_IN_OUT": "inout",
+    "VAR_EXTERNAL": "external",
+    "VAR_GLOBAL": "global",
+    "VAR_TEMP": "temp",
+    "VAR": "local",
+}
+_POU_KINDS = {"FUNCTION_BLOCK": "functionBlock", "PROGRAM": "program", "FUNCTION": "function"}
+
+
+def _loc(file: str, tok: Any) -> SourceLocation:
+    if isinstance(tok, Token):
+        return SourceLocation(file, tok.line or 0, tok.column or 0)
+    return SourceLocation(file, getattr(tok, "line", 0), getattr(tok, "col", 0))
+
+
+def read_iec_text(text: str, file: str, problems: Problems) -> list[IecChart]:
+    """Every POU of ``text`` that holds SFC elements."""
+    try:
+        tree = build(parse_tree(text, "file", file, (1, 1), "the IEC text"))
+    except StSyntaxError as exc:
+        where = exc.where if isinstance(exc.where, SourceLocation) else problems.at(1, 1)
+        problems.error("I001", exc.message, where)
+        return []
+    charts: list[IecChart] = []
+    for item in tree.children:
+        if isinstance(item, Tree) and item.data == "configuration":
+            problems.warn(
+                "I024",
+                "CONFIGURATION not imported: it binds program variables to "
+                "tasks and locations; a GRAPH FB is called from OB1",
+                _loc(file, item.children[0]),
+            )
+            continue
+        chart = _pou(item, file)
+        if chart.steps:
+            charts.append(chart)
+        else:
+            problems.warn("I024", f"{chart.name} has no SFC elements; not imported", chart.loc)
+    return charts
+
+
+def _pou(tree: Tree[Any], file: str) -> IecChart:
+    head = tree.children[0]
+    kind_tok, name_tok = head.children[0], head.children[1]
+    chart = IecChart(
+        str(name_tok), _POU_KINDS[str(kind_tok).upper()], _loc(file, kind_tok), dialect="iec"
+    )
+    order = 0
+    for ch in tree.children[1:]:
+        if isinstance(ch, Tree):
+            rule = ch.data
+            if rule == "var_block":
+                chart.vars += _var_block(ch, file)
+            elif rule == "step":
+                chart.steps.append(_step(ch, file))
+            elif rule == "transition":
+                chart.transitions.append(_transition(ch, file, order))
+                order += 1
+            elif rule == "action":
+                act = _action(ch, file)
+                chart.actions[act.name.upper()] = act
+        elif ch is not None and not isinstance(ch, Token):
+            chart.prelude.append(ch)  # a statement of the POU body
+    return chart
+
+
+def _var_block(tree: Tree[Any], file: str) -> list[IecVar]:
+    kind = _KINDS[str(tree.children[0]).upper()]
+    qual = str(tree.children[1]).upper() if tree.children[1] is not None else ""
+    out: list[IecVar] = []
+    for decl in tree.children[2:]:
+        names = [c for c in decl.children if isinstance(c, Token) and c.type == "NAME"]
+        address = next(
+            (str(c) for c in decl.children if isinstance(c, Token) and c.type == "DIRECT"), ""
+        )
+        type_spec = next(c for c in decl.children if isinstance(c, Tree) and c.data == "type_spec")
+        init = decl.children[-1] if not isinstance(decl.children[-1], Tree | Token) else None
+        type_name = _type(type_spec)
+        for n in names:
+            out.append(
+                IecVar(
+                    str(n),
+                    type_name,
+                    kind,
+                    _loc(file, n),
+                    address.upper(),
+                    init,
+                    constant=qual == "CONSTANT",
+                )
+            )
+    return out
+
+
+def _type(spec: Tree[Any]) -> str:
+    first = spec.children[0]
+    if isinstance(first, Token) and first.type == "ARRAY_KW":
+        return "ARRAY"
+    base = str(first).upper()
+    size = spec.children[1] if len(spec.children) > 1 else None
+    if isinstance(size, SLiteral):
+        return f"{base}[{size.text}]"
+    return base
+
+
+def _step(tree: Tree[Any], file: str) -> IecStep:
+    kw, name = tree.children[0], tree.children[1]
+    step = IecStep(str(name), str(kw).upper() == "INITIAL_STEP", _loc(file, kw))
+    for assoc in tree.children[2:]:
+        if isinstance(assoc, Tree) and assoc.data == "association":
+            step.associations.append(_association(assoc, file))
+    return step
+
+
+def _association(tree: Tree[Any], file: str) -> IecAssociation:
+    name = tree.children[0]
+    args: list[Any] = [a for a in tree.children[1:] if a is not None]
+    qualifier, duration, indicator = "N", "", ""
+    rest = args
+    if args and isinstance(args[0], SName) and len(args[0].parts) == 1:
+        qualifier = args[0].parts[0].upper()
+        rest = args[1:]
+    for a in rest:
+        if isinstance(a, SLiteral) and "#" in a.text:
+            duration = a.text
+        elif isinstance(a, SName):
+            indicator = a.text
+    return IecAssociation(str(name), qualifier, _loc(file, name), duration, indicator)
+
+
+def _names(tree: Tree[Any]) -> list[str]:
+    return [str(t) for t in tree.children if isinstance(t, Token)]
+
+
+def _transition(tree: Tree[Any], file: str, order: int) -> IecTransition:
+    ch = tree.children
+    kw, name, prio = ch[0], ch[1], ch[2]
+    sets = [c for c in ch if isinstance(c, Tree) and c.data == "step_names"]
+    cond_tree = next(c for c in ch if isinstance(c, Tree) and c.data.endswith("_condition"))
+    condition: Any
+    if cond_tree.data == "il_condition":
+        condition = Unsupported("an IL transition condition", _loc(file, cond_tree.children[0]))
+    else:
+        condition = cond_tree.children[0]
+    priority = int(str(prio.children[1])) if isinstance(prio, Tree) else None
+    return IecTransition(
+        _names(sets[0]),
+        _names(sets[1]),
+        condition,
+        _loc(file, kw),
+        name=str(name) if name is not None else "",
+        priority=priority,
+        order=order,
+    )
+
+
+def _action(tree: Tree[Any], file: str) -> IecAction:
+    kw, name = tree.children[0], tree.children[1]
+    body: list[Any] = [s for s in tree.children[2:] if s is not None and not isinstance(s, Token)]
+    return IecAction(str(name), body, _loc(file, kw))

@@ -1,0 +1,954 @@
+"""An IEC 61131-3 SFC (``IecChart``) as a GRAPH chart, by the rules of ``exchange.mapping``.
+
+* Steps are numbered in the order written (s7graph's own export keeps its numbers); each
+  chart of the POU (the steps its transitions connect, jumps aside) becomes a sequence.
+* The transitions leaving one step are written in the order of their priority: IEC
+  ``PRIORITY`` first (lower first, as matiec), then left to right, then as written. GRAPH
+  switches exactly one path of an alternative where IEC without priority may switch all
+  whose condition holds (matiec, GRAFCET rule 4): the GRAPH rule applies.
+* Variables become FB variables; a located one a symbol at its S7 address, unless that
+  would change what it does (an initial value on an I/Q location, an input the chart
+  writes): then an FB variable, reported. FB instances are not called (GRAPH calls blocks
+  with instance DBs); a read of ``INST.Q`` reads the FB variable ``INST_Q``, reported.
+* Action rows by qualifier and statement (``mapping``); a bit assigned from an expression
+  goes to PERMANENT AFTER, gated by the step (GRAPH writes bits from conditions only in
+  permanent instructions); statements of a textual POU body beside its SFC elements go
+  to PERMANENT BEFORE.
+
+Everything left out is reported with its place. The chart is then validated: an action
+row or instruction the validator refuses is left out and reported too, so the result is a
+chart ``s7graph check`` accepts; a refused condition is an error (no chart).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+from functools import cache
+from typing import Literal
+
+from s7graph.engine.errors import LiteralError, S7Error, SourceLocation
+from s7graph.engine.literals import format_literal, parse_literal
+from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer.diagnostics import Diagnostic
+from s7graph.sequencer.exchange.iec_model import (
+    IecAction,
+    IecAssociation,
+    IecChart,
+    IecStep,
+    IecTransition,
+    Unsupported,
+)
+from s7graph.sequencer.exchange.mapping import FUNCTIONS, QUALIFIERS, TYPES
+from s7graph.sequencer.exchange.naming import iec_address, safe_name
+from s7graph.sequencer.exchange.problems import Problems
+from s7graph.sequencer.exchange.st import (
+    SAssign,
+    SCall,
+    SCallStmt,
+    SDirect,
+    SExpr,
+    SLiteral,
+    SName,
+    SOther,
+    SSetReset,
+    SUnary,
+    shift,
+)
+from s7graph.sequencer.model import (
+    NOWHERE,
+    ActionRow,
+    Assignment,
+    Binary,
+    Chart,
+    ChartOptions,
+    Coil,
+    Const,
+    Expr,
+    Operand,
+    PermanentInstruction,
+    Sequence,
+    Step,
+    StepAttr,
+    SymbolDecl,
+    Transition,
+    Unary,
+    VarDecl,
+)
+from s7graph.sequencer.validate import validate
+
+__all__ = ["const", "iec_to_chart"]
+
+# FB types whose instances the importer knows the outputs of (for ``INST.Q`` reads).
+_FB_MEMBERS: dict[str, dict[str, str]] = {
+    "TON": {"Q": "BOOL", "ET": "TIME"},
+    "TOF": {"Q": "BOOL", "ET": "TIME"},
+    "TP": {"Q": "BOOL", "ET": "TIME"},
+    "CTU": {"Q": "BOOL", "CV": "INT"},
+    "CTD": {"Q": "BOOL", "CV": "INT"},
+    "CTUD": {"QU": "BOOL", "QD": "BOOL", "CV": "INT"},
+    "R_TRIG": {"Q": "BOOL"},
+    "F_TRIG": {"Q": "BOOL"},
+    "SR": {"Q1": "BOOL"},
+    "RS": {"Q1": "BOOL"},
+}
+_COMPARE = {"=", "<>", "<", ">", "<=", ">="}
+
+
+class _NoMap(Exception):
+    """A construct without an exact GRAPH equivalent, at ``loc``."""
+
+    def __init__(self, message: str, loc: SourceLocation) -> None:
+        super().__init__(message)
+        self.message = message
+        self.loc = loc
+
+
+_TYPED = re.compile(
+    r"(?i)(SINT|USINT|UINT|UDINT|LINT|ULINT|INT|DINT|LREAL|REAL|BOOL|BYTE|"
+    r"WORD|DWORD|LWORD)#(.+)"
+)
+
+
+def iec_literal(text: str) -> str:
+    """An IEC typed literal in S7 spelling: ``UINT#5`` → ``5``, ``BOOL#1`` → ``TRUE``,
+    ``WORD#16#FF`` → ``W#16#FF`` (the type follows from the value and its use)."""
+    m = _TYPED.fullmatch(text.strip().replace("_", "") if "#" in text else text.strip())
+    if m is None:
+        return text
+    kind, body = m.group(1).upper(), m.group(2)
+    if kind == "BOOL":
+        return "TRUE" if body.upper() in ("1", "TRUE") else "FALSE"
+    if kind in ("BYTE", "WORD", "DWORD", "LWORD"):
+        return ("B#" if kind == "BYTE" else "DW#" if kind in ("DWORD", "LWORD") else "W#") + (
+            body if "#" in body else f"16#{int(body):X}"
+        )
+    return body
+
+
+@cache
+def _s7g_literal() -> re.Pattern[str]:
+    """The `.s7g` grammar's LITERAL terminal (a constant written so reads back as one)."""
+    from s7graph.sequencer.parse import _parser
+
+    return re.compile(_parser().get_terminal("LITERAL").pattern.to_regexp())
+
+
+def const(text: str, loc: SourceLocation = NOWHERE) -> Const:
+    """The GRAPH constant of a literal: as written when the chart format reads it so,
+    else in canonical S7 spelling."""
+    text = iec_literal(text)
+    type_name, value = parse_literal(text)
+    if _s7g_literal().fullmatch(text) and not text.startswith("-"):
+        return Const(value, type_name, text, loc)
+    canonical = format_literal(type_name, value)
+    type_name, value = parse_literal(canonical)
+    return Const(value, type_name, canonical, loc)
+
+
+@dataclasses.dataclass
+class _Var:
+    graph: str  # the FB variable's or the symbol's name
+    type: str
+    symbol: bool = False
+
+
+class _Convert:
+    def __init__(self, src: IecChart, problems: Problems) -> None:
+        self.src = src
+        self.p = problems
+        self.file = problems.file
+        self.vars: dict[str, _Var] = {}
+        self.decls: list[VarDecl] = []
+        self.symbols: list[SymbolDecl] = []
+        self.instances: dict[str, tuple[str, str, SourceLocation]] = {}
+        self.taken: set[str] = set()
+        self.steps: dict[str, Step] = {}
+        self.step_numbers: dict[str, int] = {}
+        self.before: list[PermanentInstruction] = []
+        self.after: list[PermanentInstruction] = []
+        self.rows: dict[int, list[ActionRow]] = {}
+        self.warned: set[tuple[str, str]] = set()
+        self.bool_actions: set[str] = set()
+        self.body_writes: dict[str, SourceLocation] = {}
+
+    # ------------------------------------------------------------ helpers
+
+    def loc(self, node: object, origin: tuple[int, int]) -> SourceLocation:
+        line, col = shift(getattr(node, "line", 0) or 1, getattr(node, "col", 0) or 1, origin)
+        return SourceLocation(self.file, line, col)
+
+    def warn_once(self, key: tuple[str, str], code: str, msg: str, loc: SourceLocation) -> None:
+        if key not in self.warned:
+            self.warned.add(key)
+            self.p.warn(code, msg, loc)
+
+    def declare(
+        self, name: str, type_name: str, loc: SourceLocation, init: Const | None = None
+    ) -> str:
+        graph = safe_name(name, self.taken)
+        if graph != name:
+            self.p.warn(
+                "I030",
+                f"{name} is named {graph} in the chart ({name} is not a valid GRAPH variable name)",
+                loc,
+            )
+        self.taken.add(graph.upper())
+        self.decls.append(VarDecl(graph, type_name, init, loc))
+        self.vars[name.upper()] = _Var(graph, type_name)
+        return graph
+
+    def helper(self, name: str, type_name: str) -> str:
+        """An FB variable the importer adds (instance outputs, step pulses)."""
+        key = name.upper()
+        if key in self.vars:
+            return self.vars[key].graph
+        graph = safe_name(name, self.taken)
+        self.taken.add(graph.upper())
+        self.decls.append(VarDecl(graph, type_name))
+        self.vars[key] = _Var(graph, type_name)
+        return graph
+
+    # ------------------------------------------------------------ variables
+
+    def variables(self) -> None:
+        for v in self.src.vars:
+            base = v.type.split("[")[0]
+            if v.type.startswith("ARRAY"):
+                self.instances[v.name.upper()] = (v.name, v.type, v.loc)
+                continue
+            if base in _FB_MEMBERS or base not in TYPES:
+                self.instances[v.name.upper()] = (v.name, base, v.loc)
+                if base not in _FB_MEMBERS:
+                    self.p.warn(
+                        "I023",
+                        f"{v.name} : {v.type} not imported: GRAPH FB "
+                        "variables are of elementary types",
+                        v.loc,
+                    )
+                continue
+            graph_type, exact = TYPES[base]
+            if "[" in v.type and base == "STRING":
+                graph_type = "STRING" + v.type[len(base) :]
+            if not exact:
+                self.p.warn(
+                    "I023",
+                    f"{v.name} : {v.type} is declared {graph_type}: S7 has no {v.type}",
+                    v.loc,
+                )
+            init = self.initial(v.init, graph_type, v.loc)
+            if v.address and self.located(v.name, v.address, graph_type, init, v.kind, v.loc):
+                continue
+            if v.kind == "external" and v.init is None:
+                self.p.warn(
+                    "I023",
+                    f"external {v.name} has no value in the file: it starts "
+                    f"at the default of {graph_type}",
+                    v.loc,
+                )
+            self.declare(v.name, graph_type, v.loc, init)
+
+    def initial(self, e: SExpr | None, type_name: str, loc: SourceLocation) -> Const | None:
+        if e is None:
+            return None
+        if isinstance(e, SLiteral):
+            try:
+                return const(_typed(e.text, type_name), loc)
+            except (LiteralError, S7Error):
+                pass
+        self.p.warn("I023", "initial value not imported (not a literal GRAPH reads)", loc)
+        return None
+
+    def located(
+        self,
+        name: str,
+        address: str,
+        type_name: str,
+        init: Const | None,
+        kind: str,
+        loc: SourceLocation,
+    ) -> bool:
+        """Make a located variable a symbol; False when it stays an FB variable."""
+        s7 = iec_address(address)
+        why = ""
+        if s7 is None:
+            why = f"{address} has no S7 form"
+        elif init is not None and init.value not in (0, False, 0.0) and s7[0] in "IQ":
+            why = f"S7 {'inputs' if s7[0] == 'I' else 'outputs'} have no initial value"
+        elif s7[0] == "I" and name.upper() in self.written:
+            why = "the chart writes it, and S7 reads inputs again every cycle"
+        if why:
+            self.p.warn("I023", f"{name} AT {address} is an FB variable, not a symbol: {why}", loc)
+            return False
+        assert s7 is not None
+        self.symbols.append(SymbolDecl(name, s7, type_name, f"IEC {address}", loc))
+        self.vars[name.upper()] = _Var(name, type_name, symbol=True)
+        return True
+
+    # ------------------------------------------------------------ expressions
+
+    def operand(self, n: SName | SDirect, origin: tuple[int, int]) -> Expr:
+        loc = self.loc(n, origin)
+        if isinstance(n, SDirect):
+            s7 = iec_address(n.text)
+            if s7 is None:
+                raise _NoMap(f"{n.text} has no S7 address", loc)
+            return Operand(s7, False, loc)
+        head = n.parts[0].upper()
+        if n.indexed:
+            return self.element(n, head, loc)
+        if len(n.parts) == 1:
+            v = self.vars.get(head)
+            if v is None:
+                if head in self.instances:
+                    kind = self.instances[head][1]
+                    what = (
+                        "a function block instance"
+                        if kind in _FB_MEMBERS
+                        else f"of type {kind}, which has no GRAPH form"
+                    )
+                    raise _NoMap(f"{n.parts[0]} is {what}", loc)
+                raise _NoMap(f"unknown variable {n.parts[0]}", loc)
+            return Operand(v.graph, v.symbol, loc)
+        if len(n.parts) == 2:
+            member = n.parts[1].upper()
+            if head in self.step_numbers and member in ("X", "T"):
+                return StepAttr(self.step_numbers[head], member, loc)  # type: ignore[arg-type]
+            if head in self.instances:
+                return self.instance_member(head, member, loc)
+        raise _NoMap(f"{n.text} is not a variable, step attribute or instance output", loc)
+
+    def element(self, n: SName, head: str, loc: SourceLocation) -> Operand:
+        """An array element ``A[0, 1]``: GRAPH FB variables are not arrays, so it reads the
+        FB variable ``A_0_1`` (reported once per array)."""
+        found = self.instances.get(head)
+        if found is None or not found[1].startswith("ARRAY") or "?" in n.index or len(n.parts) > 1:
+            raise _NoMap(f"{n.text}[…]: only elements of an array with constant indexes map", loc)
+        name, type_name, decl_loc = found
+        elem = type_name.removeprefix("ARRAY OF ").strip()
+        graph_type = TYPES.get(elem, ("INT", False))[0]
+        graph = self.helper(f"{name}_{'_'.join(n.index)}", graph_type)
+        self.warn_once(
+            (name, "array"),
+            "I023",
+            f"{name} is an array, which a GRAPH FB does "
+            f"not hold; each element it uses is an FB variable ({graph} …)",
+            decl_loc,
+        )
+        return Operand(graph, False, loc)
+
+    def instance_member(self, head: str, member: str, loc: SourceLocation) -> Operand:
+        name, fb_type, decl_loc = self.instances[head]
+        members = _FB_MEMBERS.get(fb_type, {})
+        if member not in members:
+            raise _NoMap(f"{name}.{member} is not an output of {fb_type}", loc)
+        graph = self.helper(f"{name}_{member}", members[member])
+        self.warn_once(
+            (name, "instance"),
+            "I022",
+            f"{name} : {fb_type} is not called by the "
+            f"chart (GRAPH calls blocks with an instance DB); {name}.{member} reads "
+            f"the FB variable {graph}, which nothing in the chart writes",
+            decl_loc,
+        )
+        return Operand(graph, False, loc)
+
+    def type_of(self, e: Expr) -> str | None:
+        if isinstance(e, Const):
+            return e.type
+        if isinstance(e, Operand):
+            key = e.name.upper()
+            v = next((x for x in self.vars.values() if x.graph.upper() == key), None)
+            return v.type if v is not None else ("BOOL" if "." in e.name else None)
+        if isinstance(e, StepAttr):
+            return "BOOL" if e.attr == "X" else "TIME"
+        if isinstance(e, Unary):
+            return self.type_of(e.operand)
+        if isinstance(e, Binary):
+            if e.op in _COMPARE:
+                return "BOOL"
+            return self.type_of(e.left) or self.type_of(e.right)
+        return None
+
+    def expr(self, e: SExpr, origin: tuple[int, int]) -> Expr:
+        loc = self.loc(e, origin)
+        if isinstance(e, SLiteral):
+            try:
+                return const(e.text, loc)
+            except (LiteralError, S7Error) as exc:
+                raise _NoMap(f"constant {e.text} has no GRAPH form ({exc.message})", loc) from None
+        if isinstance(e, SName | SDirect):
+            return self.operand(e, origin)
+        if isinstance(e, SUnary):
+            return Unary(e.op, self.expr(e.operand, origin), loc)  # type: ignore[arg-type]
+        if isinstance(e, SCall):
+            return self.call(e, origin, loc)
+        if e.op == "**":
+            raise _NoMap("** (power) has no GRAPH operator", loc)
+        left, right = self.expr(e.left, origin), self.expr(e.right, origin)
+        if e.op in ("=", "<>") and "BOOL" in (self.type_of(left), self.type_of(right)):
+            return _bool_compare(e.op, left, right, loc)
+        return Binary(e.op, left, right, left.loc if hasattr(left, "loc") else loc)
+
+    def call(self, e: SCall, origin: tuple[int, int], loc: SourceLocation) -> Expr:
+        args = [self.expr(v, origin) for _, v in e.params]
+        if e.name in ("AND", "OR", "XOR") and len(args) >= 2:
+            out = args[0]
+            for a in args[1:]:
+                out = Binary(e.name, out, a, loc)
+            return out
+        if e.name == "NOT" and len(args) == 1:
+            return Unary("NOT", args[0], loc)
+        if e.name in FUNCTIONS and len(args) == 1:
+            from s7graph.sequencer.model import FuncCall
+
+            return FuncCall(FUNCTIONS[e.name], (args[0],), loc)
+        raise _NoMap(f"function {e.name} has no exact GRAPH equivalent", loc)
+
+    # ------------------------------------------------------------ structure
+
+    def number_steps(self) -> None:
+        used = {s.graph_number for s in self.src.steps if s.graph_number is not None}
+        n = 0
+        for s in self.src.steps:
+            if s.name.upper() in self.step_numbers:
+                self.p.error("I010", f"step {s.name} is declared twice", s.loc)
+                continue
+            number = s.graph_number
+            if number is None:
+                n += 1
+                while n in used:
+                    n += 1
+                number = n
+            self.step_numbers[s.name.upper()] = number
+
+    def transitions(self) -> list[tuple[IecTransition, Transition]]:
+        out: list[tuple[IecTransition, Transition]] = []
+        for t in self.src.transitions:
+            sources = [self.step_ref(n, t.loc) for n in t.sources]
+            targets = [self.step_ref(n, t.loc) for n in t.targets]
+            if None in sources or None in targets:
+                continue
+            if not sources:
+                self.p.error("I011", "a transition without a preceding step", t.loc)
+                continue
+            cond: Expr | None = None
+            if isinstance(t.condition, Unsupported):
+                self.p.error(
+                    "I012",
+                    f"{t.condition.what} is not imported; a transition needs its condition",
+                    t.condition.loc,
+                )
+                continue
+            if t.condition is not None:
+                try:
+                    cond = self.expr(t.condition, t.cond_origin)
+                except _NoMap as exc:
+                    self.p.error("I012", f"condition not imported: {exc.message}", exc.loc)
+                    continue
+            tr = Transition(
+                0,
+                t.name,
+                tuple(s for s in sources if s is not None),
+                tuple(s for s in targets if s is not None),
+                cond,
+                t.loc,
+                tuple(t.loc for _ in sources),
+                tuple(t.loc for _ in targets),
+            )
+            out.append((t, tr))
+        return out
+
+    def step_ref(self, name: str, loc: SourceLocation) -> int | None:
+        n = self.step_numbers.get(name.upper())
+        if n is None:
+            self.p.error("I010", f"unknown step {name}", loc)
+        return n
+
+    # ------------------------------------------------------------ actions
+
+    def scan_writes(self) -> None:
+        """What the chart writes (a located input written must stay an FB variable)."""
+        self.written: set[str] = set()
+        names = {v.name.upper() for v in self.src.vars}
+        for s in self.src.steps:
+            for a in s.associations:
+                if a.inline is None and a.action.upper() in names:
+                    self.written.add(a.action.upper())
+                    self.bool_actions.add(a.action.upper())
+        bodies = [a.body for a in self.src.actions.values()]
+        bodies += [a.inline.body for s in self.src.steps for a in s.associations if a.inline]
+        bodies.append(self.src.prelude)
+        for body in bodies:
+            if isinstance(body, Unsupported):
+                continue
+            for st in body:
+                if isinstance(st, SAssign | SSetReset) and isinstance(st.target, SName):
+                    self.written.add(st.target.parts[0].upper())
+
+    def step_actions(self, step: IecStep, number: int) -> list[ActionRow]:
+        rows: list[ActionRow] = []
+        for a in step.associations:
+            rule = QUALIFIERS.get(a.qualifier.upper()) if not a.phase else None
+            if a.phase:
+                rows += self.phase_action(a, step, number)
+                continue
+            if rule is None:
+                self.p.warn(
+                    "I020",
+                    f"qualifier {a.qualifier} is not an IEC action qualifier; "
+                    f"{a.action} not imported",
+                    a.loc,
+                )
+                continue
+            if a.indicator:
+                self.p.warn(
+                    "I020",
+                    f"indicator variable {a.indicator} not imported (GRAPH rows have no indicator)",
+                    a.loc,
+                )
+            key = a.action.upper()
+            action = a.inline or self.src.actions.get(key)
+            if action is None and key in self.vars and self.vars[key].type == "BOOL":
+                rows += self.variable_action(a, rule.iec, number)
+                continue
+            if action is None:
+                self.p.warn(
+                    "I021",
+                    f"action {a.action} is neither an action nor a Boolean "
+                    "variable of the POU; not imported",
+                    a.loc,
+                )
+                continue
+            if rule.body is None:
+                self.p.warn("I020", f"{a.qualifier} {a.action} not imported: {rule.why}", a.loc)
+                continue
+            rows += self.body(action, rule.body, rule.gate, step, number, a.loc)
+        return rows
+
+    def phase_action(self, a: IecAssociation, step: IecStep, number: int) -> list[ActionRow]:
+        """A CODESYS entry/active/exit step action: its body once on entry (S1), every
+        call (no event), once on exit (S0)."""
+        action = self.src.actions.get(a.action.upper())
+        if action is None:
+            self.p.warn("I021", f"step action {a.action} is not in the POU; not imported", a.loc)
+            return []
+        event, gate = {"entry": ("S1", "P"), "active": ("", "X"), "exit": ("S0", "")}[a.phase]
+        return self.body(action, event, gate, step, number, a.loc)
+
+    def variable_action(self, a: IecAssociation, qualifier: str, number: int) -> list[ActionRow]:
+        rule = QUALIFIERS[qualifier]
+        var = self.vars[a.action.upper()]
+        if rule.variable is None:
+            self.p.warn("I020", f"{qualifier} {a.action} not imported: {rule.why}", a.loc)
+            return []
+        op = Operand(var.graph, var.symbol, a.loc)
+        event, q = (None, rule.variable) if " " not in rule.variable else rule.variable.split()
+        value: Expr | None = None
+        if rule.timed:
+            value = self.duration(a)
+            if value is None:
+                return []
+        return [ActionRow(q, op, event, False, value, a.loc)]
+
+    def duration(self, a: IecAssociation) -> Const | None:
+        text = a.duration.strip()
+        if not text:
+            self.p.warn("I020", f"{a.qualifier} {a.action} has no time; not imported", a.loc)
+            return None
+        if "#" not in text:
+            self.p.warn("I031", f"duration {text!r} has no T#; read as T#{text}", a.loc)
+            text = "T#" + text
+        try:
+            c = const(text, a.loc)
+        except (LiteralError, S7Error):
+            c = None
+        if c is None or c.type != "TIME":
+            self.p.warn(
+                "I020",
+                f"duration {a.duration!r} is not a constant TIME; "
+                f"{a.qualifier} {a.action} not imported",
+                a.loc,
+            )
+            return None
+        return c
+
+    def body(
+        self,
+        action: IecAction,
+        event: str,
+        gate_kind: str,
+        step: IecStep,
+        number: int,
+        at: SourceLocation,
+    ) -> list[ActionRow]:
+        if isinstance(action.body, Unsupported):
+            self.p.warn(
+                "I021", f"action {action.name}: {action.body.what} not imported", action.body.loc
+            )
+            return []
+        if not action.body:
+            self.p.warn(
+                "I021", f"action {action.name} has an empty body (a comment at most); no rows", at
+            )
+            return []
+        rows: list[ActionRow] = []
+        coils: list[PermanentInstruction] = []
+        ev = event or None
+        for st in action.body:
+            loc = self.loc(st, action.origin)
+            try:
+                if isinstance(st, SOther):
+                    raise _NoMap(
+                        f"{st.keyword} statement not imported (a GRAPH row is one instruction)", loc
+                    )
+                if isinstance(st, SCallStmt):
+                    raise _NoMap(
+                        f"call of {st.name} not imported: GRAPH calls blocks with an instance DB",
+                        loc,
+                    )
+                target = self.operand(st.target, action.origin)
+                assert isinstance(target, Operand)
+                ttype = self.type_of(target)
+                if isinstance(st, SSetReset):
+                    cond = self.expr(st.expr, action.origin)
+                    if isinstance(cond, Const) and cond.value is True:
+                        rows.append(ActionRow(st.kind, target, ev, False, None, loc))
+                    else:
+                        gate = self.gate(gate_kind, step, number, loc)
+                        coils.append(Coil(st.kind, target, Binary("AND", gate, cond, loc), loc))  # type: ignore[arg-type]
+                    continue
+                value = self.assigned(st.expr, ttype, action.origin)
+                if ttype == "BOOL" and isinstance(value, Const):
+                    q = "S" if value.value else "R"
+                    rows.append(ActionRow(q, target, ev, False, None, loc))
+                elif ttype == "BOOL":
+                    gate = self.gate(gate_kind, step, number, loc)
+                    coils.append(_gated(target, gate, value, loc))
+                else:
+                    rows.append(
+                        ActionRow("N", Assignment(target, value, loc), ev, False, None, loc)
+                    )
+            except _NoMap as exc:
+                self.p.warn("I021", f"action {action.name}: {exc.message}", exc.loc)
+        if rows and coils:
+            self.warn_once(
+                (action.name, "mixed"),
+                "I031",
+                f"action {action.name}: its bit "
+                "assignments from expressions run in PERMANENT AFTER, its other "
+                "statements as rows of the step, so their order is not the "
+                "body's",
+                at,
+            )
+        self.after += coils
+        for st in action.body:
+            if isinstance(st, SAssign | SSetReset) and isinstance(st.target, SName):
+                self.body_writes.setdefault(st.target.parts[0].upper(), self.loc(st, action.origin))
+        return rows
+
+    def assigned(self, e: SExpr, target_type: str | None, origin: tuple[int, int]) -> Expr:
+        """The value of an assignment; IEC's 0/1 for a BOOL and integers for a REAL are
+        the same constants in GRAPH."""
+        if isinstance(e, SLiteral):
+            e = SLiteral(_typed(e.text, target_type), e.line, e.col)
+        return self.expr(e, origin)
+
+    def gate(self, kind: str, step: IecStep, number: int, loc: SourceLocation) -> Expr:
+        if kind == "X":
+            return StepAttr(number, "X", loc)
+        if kind == "P":
+            name = self.helper(f"{step.name}_P1", "BOOL")
+            rows = self.rows.setdefault(number, [])
+            if not any(isinstance(r.operand, Operand) and r.operand.name == name for r in rows):
+                rows.append(ActionRow("N", Operand(name, False, loc), "S1", False, None, loc))
+            return Operand(name, False, loc)
+        raise _NoMap(
+            "a bit assigned from an expression on leaving the step has no exact "
+            "GRAPH form (an S0 row cannot pulse)",
+            loc,
+        )
+
+    def prelude(self) -> None:
+        for st in self.src.prelude:
+            loc = self.loc(st, (1, 1))
+            try:
+                if isinstance(st, SOther | SCallStmt):
+                    what = st.keyword if isinstance(st, SOther) else f"call of {st.name}"
+                    raise _NoMap(f"{what} in the POU body not imported", loc)
+                target = self.operand(st.target, (1, 1))
+                assert isinstance(target, Operand)
+                value = self.assigned(st.expr, self.type_of(target), (1, 1))
+                if isinstance(st, SSetReset):
+                    self.before.append(Coil(st.kind, target, value, loc))  # type: ignore[arg-type]
+                else:
+                    self.before.append(_permanent_assignment(target, value, loc))
+            except _NoMap as exc:
+                self.p.warn("I022", exc.message, exc.loc)
+
+    # ------------------------------------------------------------ the chart
+
+    def build(self) -> Chart | None:
+        self.number_steps()
+        self.scan_writes()
+        self.variables()
+        pairs = self.transitions()
+        steps: dict[int, tuple[IecStep, Step]] = {}
+        for s in self.src.steps:
+            number = self.step_numbers[s.name.upper()]
+            if number in steps:
+                continue
+            rows = self.step_actions(s, number)
+            steps[number] = (s, _step(s, number, rows))
+        for number, extra in self.rows.items():  # pulses of P gates go first
+            s, st = steps[number]
+            steps[number] = (s, dataclasses.replace(st, actions=(*extra, *st.actions)))
+        self.prelude()
+        self.check_shared_variables()
+        used = {a.action.upper() for s in self.src.steps for a in s.associations}
+        for name, act in self.src.actions.items():
+            if name not in used:
+                self.p.warn(
+                    "I024", f"action {act.name} is not used by any step; not imported", act.loc
+                )
+        self.p.fail_if_errors()
+        sequences = _sequences(self.src, steps, _ordered(pairs, self.step_numbers))
+        chart = Chart(
+            name=self.src.name,
+            options=_options(self.src),
+            vars=tuple(self.decls),
+            symbols=tuple(self.symbols),
+            before=tuple(self.before),
+            sequences=sequences,
+            after=tuple(self.after),
+            file=self.file,
+            loc=self.src.loc,
+        )
+        return chart
+
+    def check_shared_variables(self) -> None:
+        for name in sorted(self.bool_actions & set(self.body_writes)):
+            self.p.warn(
+                "I031",
+                f"{self.vars[name].graph if name in self.vars else name} is a "
+                "Boolean action and is also written by an action body: matiec writes "
+                "it from the action's state every call, GRAPH only while a row "
+                "acts on it",
+                self.body_writes[name],
+            )
+
+
+def _typed(text: str, type_name: str | None) -> str:
+    """An IEC literal as the constant of ``type_name`` it stands for: ``1``/``0`` for a
+    BOOL, an integer for a REAL (IEC converts them; GRAPH's constants are typed)."""
+    if type_name == "BOOL" and text in ("0", "1"):
+        return "TRUE" if text == "1" else "FALSE"
+    if type_name == "REAL" and text.lstrip("-").isdigit():
+        return text + ".0"
+    return text
+
+
+def _bool_compare(op: str, left: Expr, right: Expr, loc: SourceLocation) -> Expr:
+    """``x = TRUE`` → ``x``; ``x = FALSE`` → ``NOT x``; ``a = b`` → ``NOT (a XOR b)``."""
+    for const_side, other in ((right, left), (left, right)):
+        if isinstance(const_side, Const) and isinstance(const_side.value, bool):
+            holds = const_side.value == (op == "=")
+            return other if holds else Unary("NOT", other, loc)
+    xor = Binary("XOR", left, right, loc)
+    return Unary("NOT", xor, loc) if op == "=" else xor
+
+
+def _gated(target: Operand, gate: Expr, value: Expr, loc: SourceLocation) -> PermanentInstruction:
+    """``target := gate AND (value) OR NOT gate AND target``: the body's assignment in the
+    calls the gate holds, the old value otherwise."""
+    expr = Binary(
+        "OR",
+        Binary("AND", gate, value, loc),
+        Binary("AND", Unary("NOT", gate, loc), target, loc),
+        loc,
+    )
+    return _permanent_assignment(target, expr, loc)
+
+
+def _permanent_assignment(
+    target: Operand, value: Expr, loc: SourceLocation
+) -> PermanentInstruction:
+    """A coil on an absolute bit address, else an assignment (the parser's reading)."""
+    from s7graph.sequencer.parse_build import _BIT_ADDRESS
+
+    if not target.quoted and _BIT_ADDRESS.fullmatch(target.name):
+        return Coil("=", target, value, loc)
+    return Assignment(target, value, loc)
+
+
+def _step(s: IecStep, number: int, rows: list[ActionRow]) -> Step:
+    g = s.graph
+    return Step(number, s.name, s.initial, g.get("message", ""), actions=tuple(rows), loc=s.loc)
+
+
+def _ordered(
+    pairs: list[tuple[IecTransition, Transition]], numbers: dict[str, int]
+) -> list[tuple[IecTransition, Transition]]:
+    """Transitions in priority order per step (PRIORITY, left to right, as written), then
+    numbered T1… (s7graph's own export keeps its numbers and order)."""
+    if all(t.graph_number is not None for t, _ in pairs):
+        return [(t, dataclasses.replace(tr, number=t.graph_number or 0)) for t, tr in pairs]
+    inf = float("inf")
+    pairs = sorted(
+        pairs,
+        key=lambda p: (
+            min(p[1].sources),
+            p[0].priority if p[0].priority is not None else inf,
+            p[0].x if p[0].x is not None else inf,
+            p[0].order,
+        ),
+    )
+    return [(t, dataclasses.replace(tr, number=i)) for i, (t, tr) in enumerate(pairs, 1)]
+
+
+def _sequences(
+    src: IecChart,
+    steps: dict[int, tuple[IecStep, Step]],
+    pairs: list[tuple[IecTransition, Transition]],
+) -> tuple[Sequence, ...]:
+    """One sequence per chart: the steps connected by transitions (jumps aside), in the
+    order of their first step."""
+    parent = {n: n for n in steps}
+
+    def find(n: int) -> int:
+        while parent[n] != n:
+            parent[n] = parent[parent[n]]
+            n = parent[n]
+        return n
+
+    for t, tr in pairs:
+        linked = list(tr.sources) + [
+            n for n, name in zip(tr.targets, t.targets, strict=True) if name not in t.jumps
+        ]
+        for a in linked[1:]:
+            parent[find(a)] = find(linked[0])
+    order = list(steps)
+    groups: dict[int, list[int]] = {}
+    for n in order:
+        groups.setdefault(find(n), []).append(n)
+    seq_of = {n: i for i, members in enumerate(groups.values()) for n in members}
+    out: list[Sequence] = []
+    for i, members in enumerate(groups.values()):
+        trs = tuple(tr for _, tr in pairs if seq_of[tr.sources[0]] == i)
+        name = src.graph.get(f"sequence{i + 1}", "")
+        out.append(
+            Sequence(
+                i + 1, name, tuple(steps[n][1] for n in members), trs, steps[members[0]][0].loc
+            )
+        )
+    return tuple(out)
+
+
+def _options(src: IecChart) -> ChartOptions:
+    order: Literal["graph", "codesys"] = (
+        "codesys" if src.dialect in ("codesys", "twincat") else "graph"
+    )
+    g = src.graph
+    return ChartOptions(
+        parameters=g.get("parameters", "STANDARD"),
+        skip_steps=g.get("skip_steps") == "TRUE",
+        ack_required=g.get("ack_required", "TRUE") == "TRUE",
+        messages=g.get("messages") == "TRUE",
+        ack_forces_switch=g.get("ack_forces_switch") == "TRUE",
+        order=g.get("order", order),  # type: ignore[arg-type]
+    )
+
+
+# ---------------------------------------------------------------- validation
+
+
+def _refused(chart: Chart, symbols: SymbolTable | None = None) -> list[Diagnostic]:
+    return [d for d in validate(chart, symbols) if d.is_error]
+
+
+def _probe(chart: Chart) -> Chart:
+    """The chart without rows, interlocks, supervisions, conditions and instructions."""
+    seqs = tuple(
+        dataclasses.replace(
+            q,
+            steps=tuple(
+                dataclasses.replace(s, actions=(), interlock=None, supervision=None)
+                for s in q.steps
+            ),
+            transitions=tuple(dataclasses.replace(t, condition=None) for t in q.transitions),
+        )
+        for q in chart.sequences
+    )
+    return dataclasses.replace(chart, before=(), after=(), sequences=seqs)
+
+
+def accepted(chart: Chart, problems: Problems, symbols: SymbolTable | None = None) -> Chart:
+    """``chart`` without the rows and instructions the validator refuses (each reported,
+    located at its source); a refused condition, or a structural error, fails the import."""
+    if not _refused(chart, symbols):
+        return chart
+    base = _probe(chart)
+    for d in _refused(base, symbols):
+        problems.error("I013", d.message, d.loc, d.element)
+    problems.fail_if_errors()
+
+    def ok(candidate: Chart, what: str, loc: SourceLocation, *, fatal: bool = False) -> bool:
+        bad = _refused(candidate, symbols)
+        for d in bad[:1]:
+            if fatal:
+                problems.error("I012", f"{what}: {d.message}", loc, d.element)
+            else:
+                problems.warn("I021", f"{what} not imported: {d.message}", loc, d.element)
+        return not bad
+
+    seqs: list[Sequence] = []
+    for qi, q in enumerate(chart.sequences):
+        steps: list[Step] = []
+        for si, s in enumerate(q.steps):
+            kept: list[ActionRow] = []
+            for row in s.actions:
+                probe_step = dataclasses.replace(base.sequences[qi].steps[si], actions=(row,))
+                if ok(_with(base, qi, "steps", si, probe_step), f"step {s.name} row", row.loc):
+                    kept.append(row)
+            steps.append(dataclasses.replace(s, actions=tuple(kept)))
+        for ti, t in enumerate(q.transitions):
+            if t.condition is not None:
+                probe = _with(base, qi, "transitions", ti, t)
+                ok(probe, f"transition T{t.number}", t.loc, fatal=True)
+        seqs.append(dataclasses.replace(q, steps=tuple(steps)))
+    problems.fail_if_errors()
+    before = [
+        p
+        for p in chart.before
+        if ok(dataclasses.replace(base, before=(p,)), "permanent instruction", p.loc)
+    ]
+    after = [
+        p
+        for p in chart.after
+        if ok(dataclasses.replace(base, after=(p,)), "permanent instruction", p.loc)
+    ]
+    out = dataclasses.replace(
+        chart, sequences=tuple(seqs), before=tuple(before), after=tuple(after)
+    )
+    for d in _refused(out, symbols):
+        problems.error("I013", d.message, d.loc, d.element)
+    problems.fail_if_errors()
+    return out
+
+
+def _with(base: Chart, qi: int, field: str, i: int, item: Step | Transition) -> Chart:
+    """``base`` with item ``i`` of sequence ``qi``'s ``steps`` or ``transitions`` replaced."""
+    q = base.sequences[qi]
+    items = list(getattr(q, field))
+    items[i] = item
+    seqs = list(base.sequences)
+    seqs[qi] = dataclasses.replace(q, **{field: tuple(items)})  # type: ignore[arg-type]
+    return dataclasses.replace(base, sequences=tuple(seqs))
+
+
+def iec_to_chart(src: IecChart, problems: Problems) -> Chart:
+    """The GRAPH chart of ``src`` (raises ``ImportFailed`` with the located problems)."""
+    conv = _Convert(src, problems)
+    chart = conv.build()
+    assert chart is not None
+    return accepted(chart, problems)

@@ -1,0 +1,232 @@
+"""PLCopen LD and FBD networks read as ST: what a wire carries, and what a network writes.
+
+A wire's value (``value_of``) follows ``connectionPointIn`` back to its source: a left power
+rail is TRUE, a contact ANDs its variable (negated: NOT) with what feeds it, several
+connections into one point are an OR (parallel branches), an ``inVariable`` is its ST
+expression, a function block of the standard logic and comparison functions (AND OR XOR
+NOT, GT GE EQ NE LE LT, ADD SUB MUL DIV MOD, MOVE) is the operator, an output of a function
+block instance (``TON3.Q``) is that instance's member, a continuation is its connector's
+input. A network's statements (``statements``) are its coils (set/reset coils as such),
+output variables and inout variables, in execution order, and its calls of function
+block instances (which the importer reports, as GRAPH does not call them).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from s7graph.sequencer.exchange.st import (
+    SAssign,
+    SBinary,
+    SCallStmt,
+    SExpr,
+    SLiteral,
+    SName,
+    SSetReset,
+    SStmt,
+    StSyntaxError,
+    SUnary,
+    absolute,
+    parse_expression,
+)
+from s7graph.sequencer.exchange.xmltree import ElementError, Node
+
+__all__ = ["Network"]
+
+_OPERATORS = {
+    "AND": "AND",
+    "OR": "OR",
+    "XOR": "XOR",
+    "GT": ">",
+    "GE": ">=",
+    "EQ": "=",
+    "NE": "<>",
+    "LE": "<=",
+    "LT": "<",
+    "ADD": "+",
+    "SUB": "-",
+    "MUL": "*",
+    "DIV": "/",
+    "MOD": "MOD",
+}
+
+
+def _not(e: SExpr, node: Node) -> SExpr:
+    return SUnary("NOT", e, node.line, node.col)
+
+
+def _and(a: SExpr, b: SExpr, node: Node) -> SExpr:
+    if isinstance(a, SLiteral) and a.text.upper() == "TRUE":
+        return b
+    return SBinary("AND", a, b, node.line, node.col)
+
+
+@dataclass
+class Network:
+    """The elements of one LD/FBD body (or of an SFC body's networks), by ``localId``."""
+
+    root: Node
+    file: str
+    by_id: dict[str, Node] = field(init=False)
+    connectors: dict[str, Node] = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.by_id = {n.get("localId"): n for n in self.root.children if n.get("localId")}
+        self.connectors = {n.get("name"): n for n in self.root.children if n.tag == "connector"}
+
+    def expression(self, node: Node, text: str) -> SExpr:
+        try:
+            origin = (node.text_line or node.line, node.text_col or node.col)
+            return absolute(parse_expression(text, self.file, origin, "expression"), origin)  # type: ignore[no-any-return]
+        except StSyntaxError as exc:
+            raise ElementError(exc.message, node) from None
+
+    def value_of(self, point: Node | None, seen: frozenset[str] = frozenset()) -> SExpr:
+        """What flows into ``point`` (a ``connectionPointIn``)."""
+        if point is None:
+            raise ElementError("an unconnected input", self.root)
+        conns = point.all("connection")
+        if not conns:
+            raise ElementError("an unconnected input", point)
+        values = [self.source(c, seen) for c in conns]
+        out = values[0]
+        for v in values[1:]:
+            out = SBinary("OR", out, v, point.line, point.col)
+        return out
+
+    def source(self, conn: Node, seen: frozenset[str]) -> SExpr:
+        ref = conn.get("refLocalId")
+        node = self.by_id.get(ref)
+        if node is None:
+            raise ElementError(f"a connection to element {ref}, which does not exist", conn)
+        if ref in seen:
+            raise ElementError("a feedback loop in the network", node)
+        seen = seen | {ref}
+        tag = node.tag
+        if tag == "leftPowerRail":
+            return SLiteral("TRUE", node.line, node.col)
+        if tag == "contact":
+            if node.get("edge", "none") not in ("none", ""):
+                raise ElementError(
+                    f"an edge contact ({node.get('edge')}) has no GRAPH condition form", node
+                )
+            var = self.variable(node)
+            if node.get("negated") == "true":
+                var = _not(var, node)
+            return _and(self.value_of(node.child("connectionPointIn"), seen), var, node)
+        if tag in ("inVariable", "inOutVariable"):
+            e = self.expr_of(node)
+            return _not(e, node) if node.get("negated") == "true" else e
+        if tag == "continuation":
+            target = self.connectors.get(node.get("name"))
+            if target is None:
+                raise ElementError(f"continuation {node.get('name')} has no connector", node)
+            return self.value_of(target.child("connectionPointIn"), seen)
+        if tag == "block":
+            return self.block(node, conn.get("formalParameter"), seen)
+        if tag == "coil":  # a coil passes its input on (LD series)
+            return self.value_of(node.child("connectionPointIn"), seen)
+        raise ElementError(f"a {tag} element cannot feed a condition", node)
+
+    def expr_of(self, node: Node) -> SExpr:
+        """The ST expression of an in/out variable element."""
+        child = node.child("expression")
+        if child is None or not child.text.strip():
+            raise ElementError(f"a {node.tag} without an expression", node)
+        return self.expression(child, child.text.strip())
+
+    def text(self, node: Node) -> str:
+        expr = node.child("expression")
+        return (expr.text if expr is not None else "").strip()
+
+    def variable(self, node: Node) -> SExpr:
+        var = node.child("variable")
+        if var is None or not var.text.strip():
+            raise ElementError(f"a {node.tag} without a variable", node)
+        return self.expression(var, var.text.strip())
+
+    def inputs(self, block: Node, seen: frozenset[str]) -> list[tuple[str, SExpr]]:
+        out: list[tuple[str, SExpr]] = []
+        holder = block.child("inputVariables")
+        for v in holder.all("variable") if holder is not None else []:
+            value = self.value_of(v.child("connectionPointIn"), seen)
+            if v.get("negated") == "true":
+                value = _not(value, v)
+            out.append((v.get("formalParameter"), value))
+        return out
+
+    def block(self, node: Node, output: str, seen: frozenset[str]) -> SExpr:
+        type_name = node.get("typeName").upper()
+        instance = node.get("instanceName")
+        if instance:
+            member = output or "Q"
+            return SName((instance, member), node.line, node.col)
+        args = [v for _, v in self.inputs(node, seen)]
+        if type_name == "NOT" and len(args) == 1:
+            return _not(args[0], node)
+        if type_name == "MOVE" and len(args) == 1:
+            return args[0]
+        op = _OPERATORS.get(type_name)
+        if op is None or len(args) < 2:
+            raise ElementError(
+                f"block {node.get('typeName')} has no GRAPH form in a condition or assignment", node
+            )
+        out = args[0]
+        for a in args[1:]:
+            out = SBinary(op, out, a, node.line, node.col)
+        return out
+
+    def statements(self) -> list[SStmt]:
+        """What the network writes, in execution order (then as written)."""
+        items: list[tuple[int, int, SStmt]] = []
+        for i, node in enumerate(self.root.children):
+            order = int(node.get("executionOrderId", "0") or 0)
+            stmt = self.statement(node)
+            if stmt is not None:
+                items.append((order, i, stmt))
+        items.sort(key=lambda t: (t[0], t[1]))
+        return [s for _, _, s in items]
+
+    def statement(self, node: Node) -> SStmt | None:
+        tag = node.tag
+        if tag == "coil":
+            target = self.variable(node)
+            value = self.value_of(node.child("connectionPointIn"))
+            if not isinstance(target, SName):
+                raise ElementError("a coil must write a variable", node)
+            storage = node.get("storage", "none")
+            if storage in ("set", "reset"):
+                return SSetReset(
+                    "S" if storage == "set" else "R", target, value, node.line, node.col
+                )
+            if node.get("negated") == "true":
+                value = _not(value, node)
+            return SAssign(target, value, node.line, node.col)
+        if tag in ("outVariable", "inOutVariable") and node.child("connectionPointIn"):
+            point = node.child("connectionPointIn")
+            if point is None or not point.all("connection"):
+                return None
+            target = self.expr_of(node)
+            if not isinstance(target, SName):
+                raise ElementError("an output variable must be a variable", node)
+            value = self.value_of(point)
+            if node.get("negatedIn") == "true" or node.get("negated") == "true":
+                value = _not(value, node)
+            return SAssign(target, value, node.line, node.col)
+        if tag == "block" and node.get("instanceName"):
+            return SCallStmt(node.get("instanceName"), (), (), node.line, node.col)
+        return None
+
+    def output_named(self, name: str) -> SExpr | None:
+        """The value written to ``name`` (a named transition's LD/FBD body)."""
+        for node in self.root.children:
+            if node.tag in ("outVariable", "coil"):
+                var = node.child("variable")
+                label = (
+                    self.text(node)
+                    if node.tag == "outVariable"
+                    else (var.text.strip() if var is not None else "")
+                )
+                if label.upper() == name.upper():
+                    return self.value_of(node.child("connectionPointIn"))
+        return None

@@ -1,0 +1,548 @@
+"""Read PLCopen TC6 XML SFC bodies (tc6_0200, tc6_0201 and the old ``tc6.xsd`` namespace)
+into ``IecChart`` s, in the Beremiz/OpenPLC, CODESYS and TwinCAT dialects.
+
+The chart's shape comes from the ``connectionPointIn`` references between its elements:
+a transition's preceding steps are found back through selection divergences and
+simultaneous convergences, its following steps forward through selection convergences,
+simultaneous divergences and jump steps (IEC 61131-3 §6.7; PLCopen TC6 XML 2.01 §6.6).
+Conditions are inline ST, references to named transitions (ST, LD or FBD bodies) or wired
+from networks of the SFC body (``exchange.networks``); actions are action blocks of a
+step, inline or named. CODESYS step actions (entry, active, exit) are read from the
+step's vendor data. A file written by s7graph carries its `.s7g` source in the POU's
+``addData`` and is read from it.
+"""
+
+from __future__ import annotations
+
+from s7graph.engine.errors import SourceLocation
+from s7graph.sequencer.exchange.iec_model import (
+    IecAction,
+    IecAssociation,
+    IecChart,
+    IecStep,
+    IecTransition,
+    IecVar,
+    Unsupported,
+)
+from s7graph.sequencer.exchange.networks import Network
+from s7graph.sequencer.exchange.problems import Problems
+from s7graph.sequencer.exchange.st import (
+    SExpr,
+    SLiteral,
+    SStmt,
+    StSyntaxError,
+    parse_expression,
+    parse_statements,
+)
+from s7graph.sequencer.exchange.xmltree import ElementError, Node
+
+__all__ = ["S7GRAPH_DATA", "read_plcopen"]
+
+S7GRAPH_DATA = "urn:s7graph:chart"
+CODESYS_DATA = "http://www.3s-software.com/plcopenxml/sfc/element"
+_CODESYS_STEP_ACTIONS = {
+    "a6b08bd8-b696-47e3-9cbf-7408b61c9ff8": "entry",
+    "700a583f-b4d4-43e4-8c14-629c7cd3bec8": "active",
+    "a2621e18-7de3-4ea6-ae6d-89e9e0b7befd": "exit",
+}
+_CODESYS_PRIORITY = "8294df19-5962-4dee-a874-1051dabb0e3e"
+_CODESYS_TIMES = {
+    "cacf1a68-236e-47c2-b7b1-1cf9199718cb": "minimum time",
+    "b693554c-1b01-4a8d-afde-9e3a46f7465d": "maximum time",
+}
+_SECTIONS = {
+    "inputVars": "input",
+    "outputVars": "output",
+    "inOutVars": "inout",
+    "localVars": "local",
+    "externalVars": "external",
+    "globalVars": "global",
+    "tempVars": "temp",
+}
+
+
+def dialect_of(root: Node) -> str:
+    """beremiz | codesys | twincat | s7graph | iec, from the file header."""
+    head = root.child("fileHeader")
+    text = " ".join(head.attrib.values()).lower() if head is not None else ""
+    for key, name in (
+        ("s7graph", "s7graph"),
+        ("beckhoff", "twincat"),
+        ("twincat", "twincat"),
+        ("codesys", "codesys"),
+        ("3s", "codesys"),
+        ("beremiz", "beremiz"),
+        ("openplc", "beremiz"),
+    ):
+        if key in text.split() or key in text:
+            return name
+    return "iec"
+
+
+def s7graph_source(pou: Node) -> tuple[str, int, int] | None:
+    """The `.s7g` text s7graph wrote into a POU's ``addData``, with its place."""
+    for data in pou.iter("data"):
+        if data.get("name") == S7GRAPH_DATA:
+            text, line, col = data.deep_text()
+            if text.strip():
+                return text, line, col
+    return None
+
+
+class _Reader:
+    def __init__(self, root: Node, problems: Problems) -> None:
+        self.root = root
+        self.p = problems
+        self.file = problems.file
+        self.dialect = dialect_of(root)
+        self.aliases: dict[str, Node] = {d.get("name").upper(): d for d in root.iter("dataType")}
+        self.warned_types: set[str] = set()
+        self.globals: dict[str, IecVar] = {}
+        for section in root.iter("globalVars"):
+            for v in self.variables(section, "global"):
+                self.globals[v.name.upper()] = v
+
+    def at(self, node: Node) -> SourceLocation:
+        return node.loc(self.file)
+
+    # ------------------------------------------------------------ declarations
+
+    def type_of(self, var: Node) -> str:
+        t = var.child("type")
+        if t is None or not t.children:
+            return "BOOL"
+        first = t.children[0]
+        if first.tag == "derived":
+            return self.resolve(first.get("name"), first, set())
+        if first.tag in ("string", "wstring"):
+            length = first.get("length")
+            return f"STRING[{length}]" if length else "STRING"
+        if first.tag == "array":
+            return self.array(first)
+        return first.tag.upper()
+
+    def array(self, node: Node) -> str:
+        """``ARRAY OF <element type>`` (the element type resolved as far as it goes)."""
+        inner = node.child("baseType")
+        elem = inner.children[0] if inner is not None and inner.children else None
+        if elem is None:
+            return "ARRAY OF ?"
+        if elem.tag == "derived":
+            return "ARRAY OF " + self.resolve(elem.get("name"), elem, set())
+        return "ARRAY OF " + elem.tag.upper()
+
+    def resolve(self, name: str, at: Node, seen: set[str]) -> str:
+        """A derived type: its elementary base when it is an alias or a subrange (the range
+        is not checked in GRAPH: reported), else its name."""
+        d = self.aliases.get(name.upper())
+        if d is None or name.upper() in seen:
+            return name.upper()
+        base = d.child("baseType")
+        first = base.children[0] if base is not None and base.children else None
+        if first is None:
+            return name.upper()
+        if first.tag == "derived":
+            return self.resolve(first.get("name"), at, seen | {name.upper()})
+        if first.tag in ("subrangeSigned", "subrangeUnsigned"):
+            inner = first.find("baseType")
+            rng = first.child("range")
+            elem = inner.children[0].tag.upper() if inner is not None and inner.children else ""
+            if elem and name.upper() not in self.warned_types:
+                self.warned_types.add(name.upper())
+                bounds = f"{rng.get('lower')}..{rng.get('upper')}" if rng is not None else ""
+                self.p.warn(
+                    "I023",
+                    f"type {name} is {elem} {bounds}: GRAPH does not check the range",
+                    self.at(d),
+                )
+            return elem or name.upper()
+        if first.tag == "array":
+            return self.array(first)
+        if first.tag in ("enum", "struct"):
+            return name.upper()
+        return first.tag.upper()
+
+    def variables(self, section: Node, kind: str) -> list[IecVar]:
+        out: list[IecVar] = []
+        for v in section.all("variable"):
+            init: SExpr | None = None
+            simple = v.find("initialValue", "simpleValue")
+            if simple is not None and simple.get("value"):
+                init = self.literal(simple.get("value"), simple)
+            out.append(
+                IecVar(
+                    v.get("name"),
+                    self.type_of(v),
+                    kind,
+                    self.at(v),
+                    v.get("address").upper(),
+                    init,
+                    constant=section.get("constant") == "true",
+                )
+            )
+        return out
+
+    def literal(self, text: str, node: Node) -> SExpr | None:
+        try:
+            return parse_expression(text, self.file, (node.line, node.col), "initial value")
+        except StSyntaxError:
+            return SLiteral(text, node.line, node.col)
+
+    def interface(self, pou: Node) -> list[IecVar]:
+        out: list[IecVar] = []
+        iface = pou.child("interface")
+        for section in iface.children if iface is not None else []:
+            kind = _SECTIONS.get(section.tag)
+            if kind is None:
+                continue
+            for v in self.variables(section, kind):
+                if kind == "external":
+                    g = self.globals.get(v.name.upper())
+                    if g is not None:
+                        v.init = v.init or g.init
+                        v.address = v.address or g.address
+                        v.type = g.type if v.type == "BOOL" and g.type else v.type
+                out.append(v)
+        return out
+
+    # ------------------------------------------------------------ bodies
+
+    def st_text(self, node: Node) -> tuple[str, tuple[int, int]]:
+        text, line, col = node.deep_text()
+        return text, (line, col)
+
+    def body_of(self, holder: Node) -> Node | None:
+        """The language element of a ``body`` (or of an ``inline``)."""
+        for lang in ("ST", "LD", "FBD", "IL", "SFC"):
+            found = holder.child(lang)
+            if found is not None:
+                return found
+        return None
+
+    def statements(
+        self, name: str, holder: Node
+    ) -> tuple[list[SStmt] | Unsupported, tuple[int, int]]:
+        lang = self.body_of(holder)
+        if lang is None:
+            return Unsupported("an empty or unknown action body", self.at(holder)), (1, 1)
+        if lang.tag == "ST":
+            text, origin = self.st_text(lang)
+            try:
+                return parse_statements(text, self.file, origin, f"action {name}"), origin
+            except StSyntaxError as exc:
+                where = exc.where if isinstance(exc.where, SourceLocation) else self.at(lang)
+                return Unsupported(f"ST that does not parse ({exc.message})", where), origin
+        if lang.tag in ("LD", "FBD"):
+            try:
+                return Network(lang, self.file).statements(), (1, 1)
+            except ElementError as exc:
+                return Unsupported(f"a {lang.tag} network with {exc.message}", self.at(exc.node)), (
+                    1,
+                    1,
+                )
+        return Unsupported(f"an {lang.tag} body", self.at(lang)), (1, 1)
+
+    def actions(self, pou: Node) -> dict[str, IecAction]:
+        out: dict[str, IecAction] = {}
+        holder = pou.child("actions")
+        for a in holder.all("action") if holder is not None else []:
+            body = a.child("body")
+            name = a.get("name")
+            if body is None:
+                continue
+            stmts, origin = self.statements(name, body)
+            out[name.upper()] = IecAction(name, stmts, self.at(a), origin)
+        return out
+
+    def named_transitions(
+        self, pou: Node
+    ) -> dict[str, tuple[SExpr | Unsupported, tuple[int, int]]]:
+        out: dict[str, tuple[SExpr | Unsupported, tuple[int, int]]] = {}
+        holder = pou.child("transitions")
+        for t in holder.all("transition") if holder is not None else []:
+            name = t.get("name")
+            body = t.child("body")
+            lang = self.body_of(body) if body is not None else None
+            if lang is None:
+                out[name.upper()] = (
+                    Unsupported(f"transition {name} without a body", self.at(t)),
+                    (1, 1),
+                )
+            elif lang.tag == "ST":
+                text, origin = self.st_text(lang)
+                out[name.upper()] = (self.st_condition(text, origin, lang), origin)
+            elif lang.tag in ("LD", "FBD"):
+                try:
+                    value = Network(lang, self.file).output_named(name)
+                except ElementError as exc:
+                    value = None
+                    out[name.upper()] = (
+                        Unsupported(f"a network with {exc.message}", self.at(exc.node)),
+                        (1, 1),
+                    )
+                    continue
+                if value is None:
+                    out[name.upper()] = (
+                        Unsupported(
+                            f"transition {name}: its {lang.tag} body writes no {name}",
+                            self.at(lang),
+                        ),
+                        (1, 1),
+                    )
+                else:
+                    out[name.upper()] = (value, (1, 1))
+            else:
+                out[name.upper()] = (
+                    Unsupported(f"an {lang.tag} transition body", self.at(lang)),
+                    (1, 1),
+                )
+        return out
+
+    def st_condition(self, text: str, origin: tuple[int, int], node: Node) -> SExpr | Unsupported:
+        """A condition in ST; a named transition's body may read ``:= expr;``."""
+        body = text.strip()
+        lead = len(text) - len(text.lstrip())
+        if body.startswith(":="):
+            body = body[2:]
+            lead += 2
+        body = body.rstrip().rstrip(";")
+        pad = " " * lead  # keep columns
+        try:
+            return parse_expression(pad + body, self.file, origin, "condition")
+        except StSyntaxError as exc:
+            where = exc.where if isinstance(exc.where, SourceLocation) else self.at(node)
+            return Unsupported(f"a condition that does not parse ({exc.message})", where)
+
+    # ------------------------------------------------------------ the chart
+
+    def chart(self, pou: Node, sfc: Node) -> IecChart:
+        chart = IecChart(
+            pou.get("name"), pou.get("pouType", "program"), self.at(pou), dialect=self.dialect
+        )
+        chart.vars = self.interface(pou)
+        chart.actions = self.actions(pou)
+        named = self.named_transitions(pou)
+        net = Network(sfc, self.file)
+        by_id = net.by_id
+        refs: dict[str, list[Node]] = {}
+        for el in sfc.children:
+            for c in _connections(el):
+                refs.setdefault(c.get("refLocalId"), []).append(el)
+        for el in sfc.children:
+            if el.tag == "step":
+                chart.steps.append(self.step(el))
+            elif el.tag == "macroStep":
+                self.p.error(
+                    "I013",
+                    f"macro step {el.get('name')} is not imported (GRAPH has no macro steps)",
+                    self.at(el),
+                )
+            elif el.tag == "block" and el.get("instanceName"):
+                self.p.warn(
+                    "I022",
+                    f"block {el.get('instanceName')} : {el.get('typeName')} of "
+                    "the chart's network is not called (GRAPH calls blocks with an "
+                    "instance DB)",
+                    self.at(el),
+                )
+        steps = {s.name.upper(): s for s in chart.steps}
+        for el in sfc.children:
+            if el.tag == "actionBlock":
+                self.action_block(el, by_id, steps, chart)
+        for order, el in enumerate(e for e in sfc.children if e.tag == "transition"):
+            t = self.transition(el, order, by_id, refs, named, net)
+            if t is not None:
+                chart.transitions.append(t)
+        return chart
+
+    def step(self, el: Node) -> IecStep:
+        step = IecStep(el.get("name"), el.get("initialStep") == "true", self.at(el))
+        for attr in el.iter("attribute"):
+            phase = _CODESYS_STEP_ACTIONS.get(attr.get("guid").strip("{}"))
+            name = attr.text.strip()
+            if phase and name:
+                step.associations.append(IecAssociation(name, "", self.at(attr), phase=phase))
+            what = _CODESYS_TIMES.get(attr.get("guid").strip("{}"))
+            if what and name and name not in ("0", "T#0s", "T#0S", "T#0ms"):
+                self.p.warn(
+                    "I020",
+                    f"the step's {what} {name} is not imported (a GRAPH "
+                    "supervision can check it: Sn.T)",
+                    self.at(attr),
+                )
+        return step
+
+    def action_block(
+        self, el: Node, by_id: dict[str, Node], steps: dict[str, IecStep], chart: IecChart
+    ) -> None:
+        point = el.child("connectionPointIn")
+        conn = point.child("connection") if point is not None else None
+        owner = by_id.get(conn.get("refLocalId")) if conn is not None else None
+        if owner is None or owner.tag != "step":
+            self.p.warn(
+                "I024", "an action block not connected to a step; not imported", self.at(el)
+            )
+            return
+        step = steps[owner.get("name").upper()]
+        for i, a in enumerate(el.all("action")):
+            qualifier = a.get("qualifier", "N") or "N"
+            assoc = IecAssociation(
+                "", qualifier.upper(), self.at(a), a.get("duration"), a.get("indicator")
+            )
+            ref = a.child("reference")
+            inline = a.child("inline")
+            if ref is not None:
+                assoc.action = ref.get("name")
+            elif inline is not None:
+                name = f"{step.name}_inline{i + 1}"
+                body, origin = self.statements(name, inline)
+                assoc.action = name
+                assoc.inline = IecAction(name, body, self.at(inline), origin)
+            else:
+                self.p.warn("I021", "an action without reference or body; not imported", self.at(a))
+                continue
+            step.associations.append(assoc)
+
+    def previous(self, node: Node | None, by_id: dict[str, Node], at: Node) -> list[str]:
+        """The steps before ``node`` (through selection divergences and simultaneous
+        convergences)."""
+        if node is None:
+            raise ElementError("a connection to an element that does not exist", at)
+        if node.tag == "step":
+            return [node.get("name")]
+        conns = _connections(node)
+        if node.tag in ("selectionDivergence", "simultaneousConvergence") and conns:
+            found: list[str] = []
+            for c in conns:
+                found += self.previous(by_id.get(c.get("refLocalId")), by_id, c)
+            return found
+        raise ElementError(f"a transition after a {node.tag}", node)
+
+    def following(
+        self, node: Node, refs: dict[str, list[Node]], by_id: dict[str, Node]
+    ) -> list[tuple[str, bool]]:
+        """The steps after ``node`` (name, reached by a jump)."""
+        out: list[tuple[str, bool]] = []
+        for nxt in refs.get(node.get("localId"), []):
+            if nxt.tag == "step":
+                out.append((nxt.get("name"), False))
+            elif nxt.tag == "jumpStep":
+                out.append((nxt.get("targetName"), True))
+            elif nxt.tag in ("selectionConvergence", "simultaneousDivergence"):
+                out += self.following(nxt, refs, by_id)
+            elif nxt.tag == "macroStep":
+                raise ElementError("a transition into a macro step", nxt)
+        return out
+
+    def transition(
+        self,
+        el: Node,
+        order: int,
+        by_id: dict[str, Node],
+        refs: dict[str, list[Node]],
+        named: dict[str, tuple[SExpr | Unsupported, tuple[int, int]]],
+        net: Network,
+    ) -> IecTransition | None:
+        try:
+            point = el.child("connectionPointIn")
+            conns = point.all("connection") if point is not None else []
+            sources: list[str] = []
+            for c in conns:
+                sources += self.previous(by_id.get(c.get("refLocalId")), by_id, c)
+            targets = self.following(el, refs, by_id)
+        except ElementError as exc:
+            self.p.error("I011", exc.message, self.at(exc.node))
+            return None
+        if not sources:
+            self.p.error("I011", "a transition without a preceding step", self.at(el))
+            return None
+        if not targets:
+            self.p.error("I011", "a transition without a following step", self.at(el))
+            return None
+        cond, origin = self.condition(el, named, net)
+        pos = el.child("position")
+        priority = el.get("priority")
+        for attr in el.iter("attribute"):
+            if attr.get("guid").strip("{}") == _CODESYS_PRIORITY and attr.text.strip().isdigit():
+                priority = priority or attr.text.strip()
+        return IecTransition(
+            sources,
+            [n for n, _ in targets],
+            cond,
+            self.at(el),
+            name=el.get("name"),
+            priority=int(priority) if priority and priority.lstrip("-").isdigit() else None,
+            x=float(pos.get("x")) if pos is not None and pos.get("x") else None,
+            order=order,
+            cond_origin=origin,
+            jumps={n for n, j in targets if j},
+        )
+
+    def condition(
+        self, el: Node, named: dict[str, tuple[SExpr | Unsupported, tuple[int, int]]], net: Network
+    ) -> tuple[SExpr | Unsupported, tuple[int, int]]:
+        cond = el.child("condition")
+        if cond is None:
+            return Unsupported("a transition without a condition", self.at(el)), (1, 1)
+        inline = cond.child("inline")
+        ref = cond.child("reference")
+        point = cond.child("connectionPointIn") or (cond if cond.child("connection") else None)
+        if inline is not None:
+            lang = self.body_of(inline)
+            if lang is not None and lang.tag == "ST":
+                text, origin = self.st_text(lang)
+                return self.st_condition(text, origin, lang), origin
+            what = f"an inline {lang.tag} condition" if lang is not None else "an empty condition"
+            return Unsupported(what, self.at(inline)), (1, 1)
+        if ref is not None:
+            found = named.get(ref.get("name").upper())
+            if found is None:
+                return Unsupported(
+                    f"transition {ref.get('name')}, which the POU does not define", self.at(ref)
+                ), (1, 1)
+            return found
+        if point is not None:
+            try:
+                return net.value_of(point), (1, 1)
+            except ElementError as exc:
+                return Unsupported(f"a wired condition with {exc.message}", self.at(exc.node)), (
+                    1,
+                    1,
+                )
+        return Unsupported("a condition the importer does not know", self.at(cond)), (1, 1)
+
+
+def _connections(el: Node) -> list[Node]:
+    """The connections into ``el`` (a convergence has one ``connectionPointIn`` per input)."""
+    return [c for p in el.all("connectionPointIn") for c in p.all("connection")]
+
+
+def read_plcopen(root: Node, problems: Problems) -> list[IecChart | tuple[str, int, int, str]]:
+    """Every POU with an SFC body: an ``IecChart``, or the `.s7g` source s7graph wrote
+    (text, line, col, POU name)."""
+    reader = _Reader(root, problems)
+    out: list[IecChart | tuple[str, int, int, str]] = []
+    for pou in root.iter("pou"):
+        sfc = next((b.child("SFC") for b in pou.all("body") if b.child("SFC") is not None), None)
+        if sfc is None:
+            langs = {c.tag for b in pou.all("body") for c in b.children}
+            problems.warn(
+                "I024",
+                f"POU {pou.get('name')} ({'/'.join(sorted(langs)) or 'no body'})"
+                " has no SFC body; not imported",
+                reader.at(pou),
+            )
+            continue
+        source = s7graph_source(pou)
+        if source is not None:
+            out.append((*source, pou.get("name")))
+            continue
+        out.append(reader.chart(pou, sfc))
+    for conf in root.iter("configuration"):
+        problems.warn(
+            "I024",
+            f"configuration {conf.get('name')} not imported: its tasks and "
+            "instances call POUs; a GRAPH FB is called from OB1",
+            reader.at(conf),
+        )
+    return out

@@ -1,0 +1,723 @@
+"""Read a TIA Portal Openness SimaticML export of an S7-GRAPH FB (``NetworkSource/Graph/v1``
+… ``v6``, TIA V14–V21) into the chart model. GRAPH to GRAPH: steps keep their numbers and
+names, transitions their numbers, names and order.
+
+* Shape (``Connections``): a transition's preceding steps come in directly, through an
+  ``AltBegin`` (its ``Out`` index is the branch's priority: leftmost first) or a
+  ``SimEnd``; its following steps go out directly, through an ``AltEnd`` or a ``SimBegin``,
+  or it ends the path (``EndConnection``: TO STOP). A ``Jump`` link is a jump.
+* Conditions, interlocks, supervisions and permanent operations are LAD/FBD networks
+  (``exchange.flgnet``); a supervision's alarm text is the step's message text.
+* Action rows are ``Action`` elements (``Event``, ``Qualifier``, ``Interlock``) whose tokens
+  spell the row as in the GRAPH editor: ``"Tag".member`` is the symbol ``"Tag.member"``,
+  ``#x`` the FB variable ``x``, ``%Q0.3`` the address ``Q0.3``.
+* The FB's attributes: ``SkipSteps``, ``AcknowledgeErrorsRequired``, ``WithAlarmHandling``
+  (messages); its parameter set is the set whose pins the interface holds. Static members
+  of elementary types are FB variables.
+* Global tags: a block export does not carry the tag table. Tags found in the symbol
+  table given keep their addresses there; the others are declared with an allocated
+  marker address (reported), which the user replaces with the tag table's.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import replace
+
+from s7graph.engine.errors import LiteralError, S7Error, SourceLocation
+from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer.exchange.export_simaticml import S7GRAPH_COMMENT
+from s7graph.sequencer.exchange.flgnet import read_network
+from s7graph.sequencer.exchange.iec_to_chart import accepted, const
+from s7graph.sequencer.exchange.problems import Problems
+from s7graph.sequencer.exchange.xmltree import ElementError, Node
+from s7graph.sequencer.model import (
+    ActionRow,
+    Assignment,
+    Chart,
+    ChartOptions,
+    Coil,
+    Const,
+    Expr,
+    Operand,
+    PermanentInstruction,
+    Sequence,
+    Step,
+    StepAttr,
+    SymbolDecl,
+    TransAttr,
+    Transition,
+    VarDecl,
+)
+from s7graph.sequencer.params import PARAMETER_SETS, pins_for
+from s7graph.sequencer.parse import ChartSyntaxError, parse_chart
+
+__all__ = ["TIA_TYPES", "read_simaticml"]
+
+# TIA data types → S7 types of the chart model.
+TIA_TYPES = {
+    "BOOL": "BOOL",
+    "BYTE": "BYTE",
+    "WORD": "WORD",
+    "DWORD": "DWORD",
+    "INT": "INT",
+    "DINT": "DINT",
+    "REAL": "REAL",
+    "TIME": "TIME",
+    "S5TIME": "S5TIME",
+    "DATE": "DATE",
+    "TIME_OF_DAY": "TIME_OF_DAY",
+    "TOD": "TIME_OF_DAY",
+    "CHAR": "CHAR",
+    "STRING": "STRING",
+    "DATE_AND_TIME": "DATE_AND_TIME",
+    "DTL": "",
+}
+_AREAS = {"Input": "I", "Output": "Q", "Memory": "M"}
+_WIDTH = {
+    "BOOL": "",
+    "BYTE": "B",
+    "CHAR": "B",
+    "WORD": "W",
+    "INT": "W",
+    "S5TIME": "W",
+    "DWORD": "D",
+    "DINT": "D",
+    "REAL": "D",
+    "TIME": "D",
+}
+
+
+class _Alloc:
+    """Marker addresses for tags the export names without an address: bits from M100.0,
+    bytes, words and double words from MB150."""
+
+    def __init__(self) -> None:
+        self.bit = 800
+        self.byte = 150
+
+    def take(self, type_name: str) -> str:
+        width = _WIDTH.get(type_name, "W")
+        if width == "":
+            n, self.bit = self.bit, self.bit + 1
+            return f"M{n // 8}.{n % 8}"
+        size = {"B": 1, "W": 2, "D": 4}[width]
+        if size > 1 and self.byte % 2:
+            self.byte += 1
+        n, self.byte = self.byte, self.byte + size
+        return f"M{width}{n}"
+
+
+class _Reader:
+    def __init__(self, fb: Node, problems: Problems, symbols: SymbolTable | None) -> None:
+        self.fb = fb
+        self.p = problems
+        self.file = problems.file
+        self.known = symbols
+        self.symbols: dict[str, SymbolDecl] = {}
+        self.types: dict[str, str] = {}  # symbol → type seen
+        self.alloc = _Alloc()
+        self.vars: dict[str, VarDecl] = {}
+        self.step_names: dict[str, int] = {}
+        self.trans_names: dict[str, int] = {}
+
+    def at(self, node: Node) -> SourceLocation:
+        return node.loc(self.file)
+
+    def attr(self, name: str) -> str:
+        node = self.fb.find("AttributeList", name)
+        return node.text.strip() if node is not None else ""
+
+    # ------------------------------------------------------------ operands
+
+    def symbol(
+        self, name: str, type_name: str | None, node: Node, informative: str = "", address: str = ""
+    ) -> Operand:
+        """A global tag: the symbol table's if it knows it, else declared in the chart (at
+        the export's informative address, or at an allocated one)."""
+        if self.known is not None and self.known.lookup(name) is not None:
+            return Operand(name, True, self.at(node))
+        if type_name:
+            self.types.setdefault(name, type_name)
+        old = self.symbols.get(name)
+        if old is None or (address and not old.address):
+            self.symbols[name] = SymbolDecl(
+                name, address, type_name or "", informative, self.at(node)
+            )
+        return Operand(name, True, self.at(node))
+
+    def access(self, node: Node, want: str | None) -> Expr:
+        scope = node.get("Scope")
+        loc = self.at(node)
+        if scope in ("LiteralConstant", "TypedConstant"):
+            value = node.find("Constant", "ConstantValue")
+            text = value.text.strip() if value is not None else ""
+            ctype = node.find("Constant", "ConstantType")
+            if ctype is not None and ctype.text.strip().upper() == "BOOL":
+                text = text.upper()
+            try:
+                return const(text, loc)
+            except (LiteralError, S7Error):
+                raise ElementError(f"constant {text!r} has no GRAPH form", node) from None
+        sym = node.child("Symbol")
+        if sym is None:
+            address = node.child("Address")
+            if address is not None and scope == "GlobalVariable":
+                return Operand(self.absolute(address, node), False, loc)
+            raise ElementError(f"an operand of scope {scope} the importer does not read", node)
+        parts = [_component(c) for c in sym.all("Component")]
+        addr = sym.child("Address")
+        t = addr.get("Type").upper() if addr is not None else None
+        if scope == "LocalVariable":
+            if len(parts) == 2 and parts[0] in self.step_names and parts[1] in ("X", "T", "U"):
+                return StepAttr(self.step_names[parts[0]], parts[1], loc)  # type: ignore[arg-type]
+            if len(parts) == 2 and parts[0] in self.trans_names and parts[1] == "TT":
+                return TransAttr(self.trans_names[parts[0]], "TT", loc)
+            if len(parts) == 1:
+                return Operand(parts[0], False, loc)
+            raise ElementError(
+                f"#{'.'.join(parts)} is not an FB variable, step or transition attribute", node
+            )
+        informative, where = "", ""
+        if addr is not None and addr.get("BlockNumber") and addr.get("BitOffset"):
+            informative = f"TIA: DB{addr.get('BlockNumber')} bit offset {addr.get('BitOffset')}"
+        elif addr is not None and addr.get("Area") in _AREAS:
+            where = self.absolute(addr, node)
+        return self.symbol(
+            ".".join(parts), TIA_TYPES.get(t or "") or want, node, informative, where
+        )
+
+    def absolute(self, address: Node, at: Node) -> str:
+        area = _AREAS.get(address.get("Area"))
+        offset = address.get("BitOffset")
+        t = TIA_TYPES.get(address.get("Type").upper(), "")
+        if area is None or not offset.isdigit() or t not in _WIDTH:
+            raise ElementError("an absolute address the importer does not read", at)
+        n = int(offset)
+        width = _WIDTH[t]
+        return f"{area}{n // 8}.{n % 8}" if width == "" else f"{area}{width}{n // 8}"
+
+    def network(self, holder: Node | None) -> list[tuple[Node, Expr | None]]:
+        net = holder.child("FlgNet") if holder is not None else None
+        if net is None:
+            return []
+        return read_network(net, self.access, self.file)
+
+    def condition(self, holder: Node | None, what: str) -> Expr | None:
+        coils = self.network(holder)
+        if len(coils) != 1:
+            raise ElementError(f"{what} needs exactly one coil", holder or self.fb)
+        return coils[0][1]
+
+    # ------------------------------------------------------------ rows
+
+    def row(self, action: Node, step: int) -> ActionRow | None:
+        pieces: list[str] = []
+        for c in action.children:
+            if c.tag == "Token":
+                pieces.append(c.get("Text"))
+            elif c.tag == "Access":
+                pieces.append(self.access_text(c))
+        text = "".join(pieces).strip()
+        qualifier = action.get("Qualifier")
+        if not text and not qualifier:
+            return None  # the empty row that ends an action table
+        event = action.get("Event")
+        head = f"{event} " if event else ""
+        head += qualifier + ("C" if action.get("Interlock") == "true" else "")
+        body = _graph_text(text.replace("\n", " "))
+        source = (
+            f'FUNCTION_BLOCK "x" SEQUENCE 1 STEP S{step}:\n{head} {body};\n'
+            "END_STEP END_SEQUENCE END_FUNCTION_BLOCK"
+        )
+        try:
+            chart = parse_chart(source, self.file)
+        except ChartSyntaxError as exc:
+            self.p.warn(
+                "I021",
+                f"action row {head} {text!r} not imported: {exc.diagnostics[0].message}",
+                self.at(action),
+            )
+            return None
+        row = chart.sequences[0].steps[0].actions[0]
+        self.row_symbols(row, action)
+        return _relocated(row, self.at(action))  # type: ignore[return-value]
+
+    def row_symbols(self, row: ActionRow, at: Node) -> None:
+        """Declare the tags a row names, typed by their use: a bit for N S R D L, a TIME
+        for a D/L time, an assignment's target the type of its value."""
+        op = row.operand
+        if isinstance(op, Operand) and op.quoted:
+            want = {"D": "BOOL", "L": "BOOL", "N": "BOOL", "S": "BOOL", "R": "BOOL"}.get(
+                row.qualifier
+            )
+            self.symbol(op.name, want, at)
+        if isinstance(row.value, Operand) and row.value.quoted:
+            self.symbol(row.value.name, "TIME", at)
+        if isinstance(op, Assignment):
+            value_type = self.expr_type(op.expr)
+            for o in _operands(op.expr):
+                if o.quoted:
+                    self.symbol(o.name, value_type, at)
+            if op.target.quoted:
+                self.symbol(op.target.name, value_type or "INT", at)
+
+    def expr_type(self, e: Expr) -> str | None:
+        if isinstance(e, Const):
+            return "INT" if e.type in ("INT", "DINT") and e.text.lstrip("-").isdigit() else e.type
+        if isinstance(e, Operand):
+            if e.quoted:
+                return self.types.get(e.name)
+            v = self.vars.get(e.name)
+            return v.type if v is not None else None
+        for child in (
+            getattr(e, "left", None),
+            getattr(e, "right", None),
+            getattr(e, "operand", None),
+        ):
+            if child is not None:
+                t = self.expr_type(child)
+                if t is not None:
+                    return t
+        return None
+
+    def access_text(self, node: Node) -> str:
+        scope = node.get("Scope")
+        sym = node.child("Symbol")
+        if sym is not None:
+            parts = [_component(c) for c in sym.all("Component")]
+            if scope == "LocalVariable":
+                return "#" + ".".join(parts)
+            return '"' + ".".join(parts) + '"'
+        value = node.find("Constant", "ConstantValue")
+        return value.text.strip() if value is not None else ""
+
+    # ------------------------------------------------------------ the block
+
+    def variables(self) -> None:
+        for section in self.fb.iter("Section"):
+            if section.get("Name") != "Static" or section.parent is None:
+                continue
+            if section.parent.tag != "Sections" or section.parent.get("Datatype"):
+                continue  # the GRAPH base section
+            for m in section.all("Member"):
+                t = m.get("Datatype").upper().strip('"')
+                if t.startswith("G7_"):
+                    continue
+                graph_type = TIA_TYPES.get(t.split("[")[0], "")
+                if not graph_type:
+                    self.p.warn(
+                        "I023",
+                        f"static {m.get('Name')} : {m.get('Datatype')} not "
+                        "imported: FB variables are of elementary types",
+                        self.at(m),
+                    )
+                    continue
+                start = m.child("StartValue")
+                init: Const | None = None
+                if start is not None and start.text.strip():
+                    text = start.text.strip()
+                    try:
+                        init = const(text.upper() if graph_type == "BOOL" else text, self.at(start))
+                    except (LiteralError, S7Error):
+                        self.p.warn("I023", f"start value {text!r} not imported", self.at(start))
+                self.vars[m.get("Name")] = VarDecl(m.get("Name"), graph_type, init, self.at(m))
+
+    def options(self) -> ChartOptions:
+        pins: set[str] = set()
+        for section in self.fb.iter("Section"):
+            if (
+                section.get("Name") in ("Input", "Output")
+                and section.parent is not None
+                and not section.parent.get("Datatype")
+            ):
+                pins |= {m.get("Name") for m in section.all("Member")}
+        parameters = "STANDARD"
+        if pins:
+            fits = [s for s in PARAMETER_SETS if {p.name for p in pins_for(s)} == pins]
+            if fits:
+                parameters = fits[0]
+            else:
+                bigger = [s for s in PARAMETER_SETS if {p.name for p in pins_for(s)} >= pins]
+                parameters = bigger[0] if bigger else "USER"
+                self.p.warn(
+                    "I031",
+                    f"the FB's pins are no GRAPH parameter set; read as {parameters}",
+                    self.at(self.fb),
+                )
+        for name, what in (
+            ("LockOperatingMode", "lock operating mode"),
+            ("PermanentILProcessingInMANMode", "permanent interlock processing in MAN"),
+        ):
+            if self.attr(name).lower() == "true":
+                self.p.warn(
+                    "I020",
+                    f"the block setting {what} is not imported (its behaviour is not documented)",
+                    self.at(self.fb),
+                )
+        kept = self.kept()
+        return ChartOptions(
+            parameters=parameters,
+            skip_steps=self.attr("SkipSteps").lower() == "true",
+            ack_required=self.attr("AcknowledgeErrorsRequired").lower() != "false",
+            messages=self.attr("WithAlarmHandling").lower() == "true",
+            ack_forces_switch=kept.get("ACK_FORCES_SWITCH") == "TRUE",
+            order="codesys" if kept.get("ORDER") == "CODESYS" else "graph",
+        )
+
+    def kept(self) -> dict[str, str]:
+        """What s7graph's export kept in the block comment (``s7graph: DB 1; ORDER := …``)."""
+        out: dict[str, str] = {}
+        for item in self.fb.iter("MultilingualTextItem"):
+            text = item.find("AttributeList", "Text")
+            body = text.text.strip() if text is not None else ""
+            if not body.startswith(S7GRAPH_COMMENT):
+                continue
+            for part in body[len(S7GRAPH_COMMENT) :].split(";"):
+                key, _, value = part.strip().partition(":=")
+                if key.strip().startswith("DB ") and key.strip()[3:].isdigit():
+                    out["DB"] = key.strip()[3:]
+                elif value:
+                    out[key.strip().upper()] = value.strip().upper()
+        return out
+
+    def chart(self, graph: Node) -> Chart:
+        self.variables()
+        opts = self.options()
+        seq_nodes = graph.all("Sequence")
+        for q in seq_nodes:
+            for s in q.iter("Step"):
+                self.step_names[s.get("Name")] = int(s.get("Number"))
+            for t in q.iter("Transition"):
+                self.trans_names[t.get("Name")] = int(t.get("Number"))
+        before = self.permanent(graph.child("PreOperations"))
+        sequences = tuple(self.sequence(q, i + 1) for i, q in enumerate(seq_nodes))
+        after = self.permanent(graph.child("PostOperations"))
+        self.p.fail_if_errors()
+        symbols = self.finish_symbols()
+        name = self.attr("Name") or "GRAPH"
+        number = self.attr("Number")
+        db = self.kept().get("DB")
+        chart = Chart(
+            name=name,
+            fb_number=int(number) if number.isdigit() else None,
+            db_number=int(db) if db is not None else None,
+            options=opts,
+            vars=tuple(self.vars.values()),
+            symbols=symbols,
+            before=before,
+            sequences=sequences,
+            after=after,
+            file=self.file,
+            loc=self.at(self.fb),
+        )
+        return accepted(chart, self.p, self.known)
+
+    def finish_symbols(self) -> tuple[SymbolDecl, ...]:
+        out: list[SymbolDecl] = []
+        allocated = 0
+        for name, s in self.symbols.items():
+            t = s.type or self.types.get(name, "BOOL")
+            if s.address:
+                out.append(SymbolDecl(name, s.address, t, "", s.loc))
+                continue
+            address = self.alloc.take(t)
+            allocated += 1
+            comment = s.comment or "TIA tag"
+            out.append(SymbolDecl(name, address, t, f"{comment}; address allocated", s.loc))
+        if allocated:
+            self.p.warn(
+                "I032",
+                f"{allocated} global tag(s) have no address in a block export; "
+                "they are declared at allocated marker addresses (M100.0…, MW150…): "
+                "give the tag table with --symbols",
+                self.at(self.fb),
+            )
+        return tuple(out)
+
+    def permanent(self, holder: Node | None) -> tuple[PermanentInstruction, ...]:
+        out: list[PermanentInstruction] = []
+        for op in holder.all("PermanentOperation") if holder is not None else []:
+            try:
+                for coil, cond in self.network(op):
+                    out.append(self.coil(coil, cond, op))
+            except ElementError as exc:
+                self.p.warn(
+                    "I022", f"permanent operation not imported: {exc.message}", self.at(exc.node)
+                )
+        return tuple(out)
+
+    def coil(self, coil: Node, cond: Expr | None, op: Node) -> PermanentInstruction:
+        net = op.child("FlgNet")
+        assert net is not None
+        target: Expr | None = None
+        wires = net.child("Wires")
+        for w in wires.children if wires is not None else []:
+            ends = w.children
+            if (
+                ends
+                and ends[0].tag == "IdentCon"
+                and any(
+                    e.get("UId") == coil.get("UId") and e.get("Name") == "operand" for e in ends[1:]
+                )
+            ):
+                acc = next(p for p in net.iter("Access") if p.get("UId") == ends[0].get("UId"))
+                target = self.access(acc, "BOOL")
+        if not isinstance(target, Operand):
+            raise ElementError("a coil without an operand", coil)
+        value = cond if cond is not None else Const(True, "BOOL", "TRUE", self.at(coil))
+        kind = {"SCoil": "S", "RCoil": "R"}.get(coil.get("Name"), "=")
+        if kind == "=":
+            from s7graph.sequencer.exchange.iec_to_chart import _permanent_assignment
+
+            return _permanent_assignment(target, value, self.at(coil))
+        return Coil(kind, target, value, self.at(coil))  # type: ignore[arg-type]
+
+    def step(self, s: Node) -> Step:
+        number = int(s.get("Number"))
+        rows = []
+        actions = s.child("Actions")
+        for a in actions.all("Action") if actions is not None else []:
+            row = self.row(a, number)
+            if row is not None:
+                rows.append(row)
+        interlock = supervision = None
+        message = ""
+        try:
+            il = s.find("Interlocks", "Interlock")
+            interlock = self.condition(il, "an interlock") if il is not None else None
+            sv = s.find("Supervisions", "Supervision")
+            supervision = self.condition(sv, "a supervision") if sv is not None else None
+            for holder in (sv, il):
+                text = holder.find("AlarmText", "MultiLanguageText") if holder is not None else None
+                if text is not None and text.text.strip() and not message:
+                    message = text.text.strip()
+        except ElementError as exc:
+            self.p.error("I012", f"step {number}: {exc.message}", self.at(exc.node))
+        for attr in ("MaximumStepTime", "WarningTime"):
+            if s.get(attr) and s.get(attr).upper() not in ("T#10S", "T#7S", "T#0MS", "T#0S"):
+                self.p.warn(
+                    "I020",
+                    f"step {number}: {attr} {s.get(attr)} is not imported (a "
+                    "supervision can compare Sn.T)",
+                    self.at(s),
+                )
+        return Step(
+            number,
+            s.get("Name"),
+            s.get("Init") == "true",
+            message,
+            interlock,
+            supervision,
+            tuple(rows),
+            self.at(s),
+            self.at(s) if interlock is not None else None,
+            self.at(s) if supervision is not None else None,
+        )
+
+    def sequence(self, q: Node, number: int) -> Sequence:
+        steps = [self.step(s) for s in q.iter("Step")]
+        title = q.find("Title", "MultiLanguageText")
+        name = title.text.strip() if title is not None else ""
+        trans = {int(t.get("Number")): t for t in q.iter("Transition")}
+        links = _Links(q, self)
+        out: list[Transition] = []
+        for n, t in trans.items():
+            try:
+                cond = self.condition(t, f"transition {n}")
+            except ElementError as exc:
+                self.p.error("I012", f"transition {n}: {exc.message}", self.at(exc.node))
+                continue
+            sources, targets = links.sources(n), links.targets(n)
+            if not sources:
+                self.p.error("I011", f"transition {n} has no preceding step", self.at(t))
+                continue
+            if targets is None:
+                self.p.error("I011", f"transition {n} leads nowhere", self.at(t))
+                continue
+            out.append(
+                Transition(
+                    n,
+                    t.get("Name"),
+                    tuple(sources),
+                    tuple(targets),
+                    cond,
+                    self.at(t),
+                    tuple(self.at(t) for _ in sources),
+                    tuple(self.at(t) for _ in targets),
+                )
+            )
+        out = links.in_priority_order(out)
+        return Sequence(number, name, tuple(steps), tuple(out), self.at(q))
+
+
+class _Links:
+    """The ``Connections`` of one sequence."""
+
+    def __init__(self, q: Node, reader: _Reader) -> None:
+        self.out: dict[tuple[str, int, int], list[tuple[str, int, int]]] = {}
+        self.into: dict[tuple[str, int, int], list[tuple[str, int, int]]] = {}
+        self.types: dict[int, str] = {}
+        for b in q.iter("Branch"):
+            self.types[int(b.get("Number"))] = b.get("Type")
+        for c in q.iter("Connection"):
+            src, dst = c.child("NodeFrom"), c.child("NodeTo")
+            if src is None or dst is None or not src.children or not dst.children:
+                continue
+            head, tail = _node(src.children[0], "Out"), _node(dst.children[0], "In")
+            self.out.setdefault(head, []).append(tail)
+            self.into.setdefault(tail, []).append(head)
+
+    def upstream(self, node: tuple[str, int, int]) -> list[int]:
+        kind, n, _ = node
+        if kind == "S":
+            return [n]
+        if kind == "B":
+            found: list[int] = []
+            for (k, m, _), srcs in self.into.items():
+                if k == "B" and m == n:
+                    for s in srcs:
+                        found += self.upstream(s)
+            return found
+        return []
+
+    def downstream(self, node: tuple[str, int, int]) -> list[int] | None:
+        kind, n, _ = node
+        if kind == "S":
+            return [n]
+        if kind == "E":
+            return []
+        if kind == "B":
+            found: list[int] = []
+            for key in sorted(k for k in self.out if k[0] == "B" and k[1] == n):
+                for d in self.out[key]:
+                    got = self.downstream(d)
+                    if got:
+                        found += got
+            return found
+        return None
+
+    def sources(self, t: int) -> list[int]:
+        found: list[int] = []
+        for src in self.into.get(("T", t, 0), []):
+            found += self.upstream(src)
+        return found
+
+    def targets(self, t: int) -> list[int] | None:
+        dsts = self.out.get(("T", t, 0), [])
+        if not dsts:
+            return None
+        found: list[int] = []
+        for d in dsts:
+            got = self.downstream(d)
+            if got is None:
+                return None
+            found += got
+        return found
+
+    def branch_index(self, t: int) -> tuple[int, int] | None:
+        """(AltBegin number, Out index) of a transition that starts an alternative path."""
+        for src in self.into.get(("T", t, 0), []):
+            if src[0] == "B" and self.types.get(src[1]) == "AltBegin":
+                return src[1], src[2]
+        return None
+
+    def in_priority_order(self, trs: list[Transition]) -> list[Transition]:
+        """As written, except that the paths of each alternative branch take their places
+        in the order of the branch's outputs (leftmost first)."""
+        groups: dict[int, list[int]] = {}
+        for i, t in enumerate(trs):
+            b = self.branch_index(t.number)
+            if b is not None:
+                groups.setdefault(b[0], []).append(i)
+        out = list(trs)
+        for idxs in groups.values():
+            ordered = sorted(
+                (trs[i] for i in idxs), key=lambda t: self.branch_index(t.number) or (0, 0)
+            )
+            for i, t in zip(idxs, ordered, strict=True):
+                out[i] = t
+        return out
+
+
+def _component(c: Node) -> str:
+    """A tag path component; an array index (``AccessModifier="Array"``) as ``[i]``."""
+    index = [a.find("Constant", "ConstantValue") for a in c.all("Access")]
+    text = ",".join(i.text.strip() for i in index if i is not None)
+    return f"{c.get('Name')}[{text}]" if text else c.get("Name")
+
+
+def _operands(e: Expr) -> list[Operand]:
+    if isinstance(e, Operand):
+        return [e]
+    out: list[Operand] = []
+    for child in (
+        getattr(e, "left", None),
+        getattr(e, "right", None),
+        getattr(e, "operand", None),
+        *getattr(e, "args", ()),
+    ):
+        if child is not None:
+            out += _operands(child)
+    return out
+
+
+def _node(el: Node, port: str) -> tuple[str, int, int]:
+    if el.tag == "EndConnection":
+        return ("E", 0, 0)
+    kind = {"StepRef": "S", "TransitionRef": "T", "BranchRef": "B"}.get(el.tag, "?")
+    return (kind, int(el.get("Number", "0") or 0), int(el.get(port, "0") or 0))
+
+
+_GLOBAL = re.compile(r'"((?:[^"]|"")*)"((?:\.[A-Za-z_][A-Za-z0-9_]*|\[[^\]]*\])*)')
+_LOCAL = re.compile(r"#([A-Za-z_][A-Za-z0-9_]*)")
+_ABSOLUTE = re.compile(r"%([IQM][XBWD]?\d+(?:\.\d+)?)", re.IGNORECASE)
+
+
+def _graph_text(text: str) -> str:
+    """A TIA action row's operand text in `.s7g` spelling."""
+    text = _GLOBAL.sub(lambda m: '"' + m.group(1) + m.group(2) + '"', text)
+    text = _LOCAL.sub(lambda m: m.group(1), text)
+    return _ABSOLUTE.sub(lambda m: m.group(1), text)
+
+
+def _relocated(obj: object, loc: SourceLocation) -> object:
+    """``obj`` with every place set to ``loc`` (a row parsed from a TIA action's text)."""
+    import dataclasses
+
+    if isinstance(obj, SourceLocation):
+        return loc
+    if isinstance(obj, tuple):
+        return tuple(_relocated(x, loc) for x in obj)
+    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        return replace(
+            obj,
+            **{f.name: _relocated(getattr(obj, f.name), loc) for f in dataclasses.fields(obj)},
+        )
+    return obj
+
+
+def read_simaticml(root: Node, problems: Problems, symbols: SymbolTable | None = None) -> Chart:
+    """The GRAPH FB of a SimaticML document (raises ``ImportFailed``)."""
+    fbs = [
+        fb
+        for fb in root.iter("SW.Blocks.FB")
+        if (fb.find("AttributeList", "ProgrammingLanguage") or fb).text.strip() == "GRAPH"
+    ]
+    if not fbs:
+        problems.error("I004", "no S7-GRAPH FB in the document", root.loc(problems.file))
+        problems.fail_if_errors()
+    fb = fbs[0]
+    if len(fbs) > 1:
+        problems.warn(
+            "I005",
+            f"{len(fbs)} GRAPH FBs in the document; the first is imported",
+            fb.loc(problems.file),
+        )
+    graph = next(fb.iter("Graph"), None)
+    if graph is None:
+        problems.error("I004", "the FB has no GRAPH network source", fb.loc(problems.file))
+        problems.fail_if_errors()
+    assert graph is not None
+    reader = _Reader(fb, problems, symbols)
+    return reader.chart(graph)

@@ -1,0 +1,316 @@
+"""IEC 61131-3 structured text as an importer reads it: a small syntax tree with places.
+
+``parse_expression`` (a transition condition), ``parse_statements`` (an action body) and
+``parse_iec_file`` (textual SFC, in ``exchange.iec_text``) use one grammar, ``iec.lark``.
+Every node carries the line and column where it was written *in the text given*; an XML
+importer passes the place of that text in its file (``origin``) so that every problem is
+located in the file itself. A syntax error raises ``StSyntaxError`` with that place.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from functools import cache
+from pathlib import Path
+from typing import Any
+
+from lark import Lark, Token, Transformer, v_args
+from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken, VisitError
+
+from s7graph.engine.errors import S7Error, SourceLocation
+
+__all__ = [
+    "SAssign",
+    "SBinary",
+    "SCall",
+    "SCallStmt",
+    "SDirect",
+    "SExpr",
+    "SLiteral",
+    "SName",
+    "SOther",
+    "SSetReset",
+    "SStmt",
+    "SUnary",
+    "StSyntaxError",
+    "parse_expression",
+    "parse_statements",
+    "shift",
+]
+
+GRAMMAR = Path(__file__).with_name("iec.lark")
+
+
+@dataclass(frozen=True, slots=True)
+class SLiteral:
+    text: str
+    line: int = 0
+    col: int = 0
+
+
+@dataclass(frozen=True, slots=True)
+class SName:
+    """A variable: ``parts`` of a dotted name (``STEP1.X``, ``TON3.Q``); ``index`` the
+    literal indexes of an array element (``A[0, 1]`` → ("0", "1"); "?" for one that is
+    not a literal)."""
+
+    parts: tuple[str, ...]
+    line: int = 0
+    col: int = 0
+    index: tuple[str, ...] = ()
+
+    @property
+    def indexed(self) -> bool:
+        return bool(self.index)
+
+    @property
+    def text(self) -> str:
+        return ".".join(self.parts)
+
+
+@dataclass(frozen=True, slots=True)
+class SDirect:
+    """A directly represented variable ``%IX0.1``."""
+
+    text: str
+    line: int = 0
+    col: int = 0
+
+
+@dataclass(frozen=True, slots=True)
+class SCall:
+    """A function call in an expression; ``params`` are (formal name or "", value)."""
+
+    name: str
+    params: tuple[tuple[str, SExpr], ...]
+    line: int = 0
+    col: int = 0
+
+
+@dataclass(frozen=True, slots=True)
+class SUnary:
+    op: str  # NOT or -
+    operand: SExpr
+    line: int = 0
+    col: int = 0
+
+
+@dataclass(frozen=True, slots=True)
+class SBinary:
+    op: str  # OR XOR AND = <> < > <= >= + - * / MOD **
+    left: SExpr
+    right: SExpr
+    line: int = 0
+    col: int = 0
+
+
+SExpr = SLiteral | SName | SDirect | SCall | SUnary | SBinary
+
+
+@dataclass(frozen=True, slots=True)
+class SAssign:
+    target: SName | SDirect
+    expr: SExpr
+    line: int = 0
+    col: int = 0
+
+
+@dataclass(frozen=True, slots=True)
+class SSetReset:
+    """A set or reset coil of a network: ``kind`` S sets ``target`` when ``expr`` holds, R
+    resets it."""
+
+    kind: str
+    target: SName | SDirect
+    expr: SExpr
+    line: int = 0
+    col: int = 0
+
+
+@dataclass(frozen=True, slots=True)
+class SCallStmt:
+    """A function block call ``TON1(IN := x, PT := T#1S)`` (``outputs``: ``Q => y``)."""
+
+    name: str
+    inputs: tuple[tuple[str, SExpr], ...]
+    outputs: tuple[tuple[str, SName | SDirect], ...]
+    line: int = 0
+    col: int = 0
+
+
+@dataclass(frozen=True, slots=True)
+class SOther:
+    """A statement the importer does not map (``IF``, ``CASE``, ``FOR`` ...)."""
+
+    keyword: str
+    line: int = 0
+    col: int = 0
+
+
+SStmt = SAssign | SSetReset | SCallStmt | SOther
+
+
+class StSyntaxError(S7Error):
+    """Text that is not ST (or textual SFC); ``where`` is the place, in the file."""
+
+
+def shift(line: int, col: int, origin: tuple[int, int]) -> tuple[int, int]:
+    """A place in a text that starts at ``origin`` (line, col) of its file."""
+    if line <= 1:
+        return origin[0], origin[1] + max(col, 1) - 1
+    return origin[0] + line - 1, col
+
+
+def absolute(node: Any, origin: tuple[int, int]) -> Any:
+    """``node`` (and its children) with places in the file, for text that starts at
+    ``origin``; such nodes are then read with origin (1, 1)."""
+    if isinstance(node, tuple):
+        return tuple(absolute(x, origin) for x in node)
+    if not dataclasses.is_dataclass(node) or isinstance(node, type):
+        return node
+    changes: dict[str, Any] = {}
+    for f in dataclasses.fields(node):
+        value = getattr(node, f.name)
+        if f.name in ("line", "col"):
+            continue
+        changes[f.name] = absolute(value, origin)
+    line, col = shift(getattr(node, "line", 1) or 1, getattr(node, "col", 1) or 1, origin)
+    return dataclasses.replace(node, line=line, col=col, **changes)
+
+
+@cache
+def _parser(start: str) -> Lark:
+    return Lark(
+        GRAMMAR.read_text(encoding="utf-8"),
+        parser="lalr",
+        lexer="contextual",
+        start=start,
+        propagate_positions=True,
+        maybe_placeholders=True,
+    )
+
+
+def _pos(x: Any) -> tuple[int, int]:
+    if isinstance(x, Token):
+        return x.line or 0, x.column or 0
+    return getattr(x, "line", 0), getattr(x, "col", 0)
+
+
+@v_args(meta=True)
+class _Build(Transformer[Token, Any]):
+    """Parse tree → ST nodes (places relative to the parsed text)."""
+
+    def literal(self, meta: Any, ch: list[Token]) -> SLiteral:
+        return SLiteral(str(ch[0]), *_pos(ch[0]))
+
+    def direct(self, meta: Any, ch: list[Token]) -> SDirect:
+        return SDirect(str(ch[0]).upper(), *_pos(ch[0]))
+
+    def variable(self, meta: Any, ch: list[Any]) -> SName:
+        names = tuple(str(c) for c in ch if isinstance(c, Token) and c.type == "NAME")
+        index = tuple(
+            c.text if isinstance(c, SLiteral) and c.text.isdigit() else "?"
+            for c in ch
+            if not (isinstance(c, Token) and c.type == "NAME")
+        )
+        return SName(names, *_pos(ch[0]), index=index)
+
+    def func_call(self, meta: Any, ch: list[Any]) -> SCall:
+        params = tuple(p for p in ch[1:] if p is not None)
+        flat = tuple((p[1], p[2]) for p in params)
+        return SCall(str(ch[0]).upper(), flat, *_pos(ch[0]))
+
+    def in_param(self, meta: Any, ch: list[Any]) -> tuple[str, str, Any]:
+        return ("in", str(ch[0]), ch[1])
+
+    def out_param(self, meta: Any, ch: list[Any]) -> tuple[str, str, Any]:
+        return ("out", str(ch[0]), ch[1])
+
+    def positional_param(self, meta: Any, ch: list[Any]) -> tuple[str, str, Any]:
+        return ("in", "", ch[0])
+
+    def binary(self, meta: Any, ch: list[Any]) -> SBinary:
+        op = str(ch[1]).upper()
+        return SBinary("AND" if op == "&" else op, ch[0], ch[2], *_pos(ch[0]))
+
+    def not_expr(self, meta: Any, ch: list[Any]) -> SUnary:
+        return SUnary("NOT", ch[1], *_pos(ch[0]))
+
+    def neg_expr(self, meta: Any, ch: list[Any]) -> SExpr:
+        inner = ch[1]
+        if isinstance(inner, SLiteral) and inner.text[:1].isdigit():
+            return SLiteral("-" + inner.text, *_pos(ch[0]))
+        return SUnary("-", inner, *_pos(ch[0]))
+
+    def unary(self, meta: Any, ch: list[Any]) -> Any:  # unary plus
+        return ch[1]
+
+    def expression(self, meta: Any, ch: list[Any]) -> Any:
+        return ch[0]
+
+    def assignment(self, meta: Any, ch: list[Any]) -> SAssign:
+        return SAssign(ch[0], ch[1], *_pos(ch[0]))
+
+    def call_statement(self, meta: Any, ch: list[Any]) -> SCallStmt:
+        params = [p for p in ch[1:] if p is not None]
+        ins = tuple((n, v) for d, n, v in params if d == "in")
+        outs = tuple((n, v) for d, n, v in params if d == "out")
+        return SCallStmt(str(ch[0]), ins, outs, *_pos(ch[0]))
+
+    def other_statement(self, meta: Any, ch: list[Any]) -> SOther:
+        first = ch[0]
+        tok = first if isinstance(first, Token) else None
+        if tok is None and hasattr(first, "children"):
+            tok = next((c for c in first.children if isinstance(c, Token)), None)
+        word = str(tok).upper() if tok is not None else "statement"
+        return SOther(word, meta.line, meta.column)
+
+    def empty_statement(self, meta: Any, ch: list[Any]) -> None:
+        return None
+
+    def statements(self, meta: Any, ch: list[Any]) -> list[SStmt]:
+        return [c for c in ch if c is not None]
+
+
+def _fail(exc: UnexpectedInput, file: str, origin: tuple[int, int], what: str) -> StSyntaxError:
+    line, col = shift(exc.line or 1, exc.column or 1, origin)
+    if isinstance(exc, UnexpectedToken):
+        if exc.token.type == "$END":
+            msg = f"{what} does not parse: it ends too early"
+        else:
+            msg = f"{what} does not parse: unexpected {str(exc.token)!r}"
+    elif isinstance(exc, UnexpectedCharacters):
+        msg = f"{what} does not parse: unexpected character {exc.char!r}"
+    else:
+        msg = f"{what} does not parse"
+    return StSyntaxError(msg, SourceLocation(file, line, col))
+
+
+def parse_tree(text: str, start: str, file: str, origin: tuple[int, int], what: str) -> Any:
+    """The lark tree of ``text`` from rule ``start`` (raises ``StSyntaxError``)."""
+    try:
+        return _parser(start).parse(text)
+    except UnexpectedInput as exc:
+        raise _fail(exc, file, origin, what) from None
+
+
+def build(tree: Any) -> Any:
+    try:
+        return _Build().transform(tree)
+    except VisitError as exc:  # a bug in a transformer method, never bad input
+        raise exc.orig_exc from None
+
+
+def parse_expression(
+    text: str, file: str = "<input>", origin: tuple[int, int] = (1, 1), what: str = "condition"
+) -> SExpr:
+    """An ST expression (places relative to ``text``)."""
+    return build(parse_tree(text, "expression", file, origin, what))  # type: ignore[no-any-return]
+
+
+def parse_statements(
+    text: str, file: str = "<input>", origin: tuple[int, int] = (1, 1), what: str = "action"
+) -> list[SStmt]:
+    """ST statements (places relative to ``text``)."""
+    return build(parse_tree(text, "statements", file, origin, what))  # type: ignore[no-any-return]

@@ -1,0 +1,120 @@
+"""``s7graph import`` and ``s7graph export``: charts to and from TIA Portal SimaticML,
+PLCopen TC6 XML and IEC 61131-3 textual SFC.
+
+``import FILE [-o OUT.s7g] [--symbols-out FILE] [--symbols FILE] [--pou NAME] [--strict]``
+detects the format, writes the chart (stdout without ``-o``) and prints every problem on
+stderr, one a line (``file:line:col: warning[I021]: …``). The chart keeps its symbols in a
+``SYMBOLS`` section, or in a symbol file with ``--symbols-out`` (then ``s7graph check OUT
+--symbols FILE``). Exit status: 0 imported as it is, 1 imported with warnings (what was
+left out or changed is listed, and noted at the top of the chart), 2 no chart (the list
+says why) — with ``--strict`` also when anything was left out.
+
+``export CHART.s7g --to plcopen|simaticml -o FILE [--symbols FILE]`` writes the chart in
+that format; a chart that does not compile is its diagnostics and exit 2.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import sys
+from pathlib import Path
+
+from s7graph.engine.errors import S7Error
+from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer.diagnostics import format_diagnostic
+from s7graph.sequencer.exchange import FORMATS, Imported, ImportFailed, export_chart, import_file
+from s7graph.sequencer.format import format_chart, quote
+from s7graph.sequencer.model import Chart
+from s7graph.web.cli.report import fail
+from s7graph.web.harness.session import load_chart
+
+__all__ = ["export_command", "import_command"]
+
+_LEFT_OUT = ("I020", "I021", "I022", "I023", "I024")
+
+
+def _symbol_file(chart: Chart) -> str:
+    lines = [
+        f"{quote(s.name)} ; {s.address} ; {s.type} ; {s.comment}".rstrip(" ;")
+        for s in chart.symbols
+    ]
+    return "\n".join(lines) + "\n"
+
+
+def _header(source: Path, result: Imported) -> str:
+    head = f"Imported from {source.name} ({FORMATS[result.format]}) by s7graph import."
+    if not result.problems:
+        return head
+    lines = [head, "What the import reports (file:line:col of the source):"]
+    lines += [
+        "  " + format_diagnostic(d).replace(str(source), source.name) for d in result.problems
+    ]
+    return "\n".join(lines)
+
+
+def import_command(
+    source: Path,
+    *,
+    output: Path | None = None,
+    symbols_out: Path | None = None,
+    symbols: Path | None = None,
+    pou: str | None = None,
+    strict: bool = False,
+) -> int:
+    """Import ``source``; return the exit status (see the module docstring)."""
+    table: SymbolTable | None = None
+    try:
+        if symbols is not None:
+            table = SymbolTable.from_file(symbols)
+        result = import_file(source, pou=pou, symbols=table)
+    except ImportFailed as exc:
+        for d in exc.diagnostics:
+            print(format_diagnostic(d), file=sys.stderr)
+        print(f"{source}: not imported", file=sys.stderr)
+        return 2
+    except (OSError, S7Error) as exc:
+        return fail(exc)
+    for d in result.problems:
+        print(format_diagnostic(d), file=sys.stderr)
+    left_out = [d for d in result.problems if d.code in _LEFT_OUT]
+    if strict and left_out:
+        print(
+            f"{source}: not imported (--strict): {len(left_out)} construct(s) cannot be mapped",
+            file=sys.stderr,
+        )
+        return 2
+    chart = result.chart
+    try:
+        if symbols_out is not None:
+            symbols_out.write_text(_symbol_file(chart), encoding="utf-8")
+            chart = dataclasses.replace(chart, symbols=())
+        text = format_chart(chart, _header(source, result))
+        if output is None:
+            sys.stdout.write(text)
+        else:
+            output.write_text(text, encoding="utf-8")
+    except OSError as exc:
+        return fail(S7Error(f"cannot write: {exc}"))
+    n = len(result.problems)
+    print(
+        f"{source}: imported ({FORMATS[result.format]}), {n} warning{'s' * (n != 1)}",
+        file=sys.stderr,
+    )
+    return 1 if result.problems else 0
+
+
+def export_command(chart: Path, *, to: str, output: Path, symbols: Path | None = None) -> int:
+    """Export ``chart`` to ``output`` in format ``to``; return the exit status."""
+    if to not in ("plcopen", "simaticml"):
+        return fail(S7Error(f"--to must be plcopen or simaticml, not {to!r}"))
+    try:
+        _, table = load_chart(chart, symbols)
+        from s7graph.sequencer.parse import parse_file
+
+        model = parse_file(chart)
+        text = export_chart(model, to, table if symbols is not None else None)
+        output.write_text(text, encoding="utf-8")
+    except (S7Error, ValueError, OSError) as exc:
+        return fail(exc)
+    print(f"{chart}: exported to {output} ({FORMATS[to]})", file=sys.stderr)
+    return 0
