@@ -37,7 +37,7 @@ def step_names(records: list[dict], label: dict[str, str]) -> list[list[str]]:
 # ---------------------------------------------------------------- matiec SFC_TEST
 
 SFC_TEST_PATH = [
-    ["STEP1"],  # GO → STEP1 at once (IX1 = FALSE), in the first call
+    ["STEP1"],  # GO → STEP1 at once (IX1 = FALSE), in cycle 0: the startup call holds GO
     ["STEP2"],  # IX2 from outside
     ["A1"],
     ["STEP2"],
@@ -66,7 +66,9 @@ def test_matiec_sfc_test_drives_itself_except_ix2(relative: str, tmp_path: Path)
     records = sim(tmp_path, chart, watch=["QX1", "QX2", "QX3", "IX1", "IX2"], cycles=30,
                   stimulus=[{"at_ms": 50, "set": {"IX2": True}}])  # fmt: skip
     assert step_names(records, label) == SFC_TEST_PATH
-    assert [r["t_ms"] for r in records if r["events"]][:2] == [50, 60]
+    # GO is held by the startup call (an initial step is active for the call that activates
+    # it, docs/semantics.md) and switches in cycle 0; IX2 at 50 ms lets STEP1 go.
+    assert [r["t_ms"] for r in records if r["events"]][:2] == [0, 50]
     last = records[-1]["values"]
     assert last == {"QX1": True, "QX2": True, "QX3": True, "IX1": True, "IX2": True}
 
@@ -82,11 +84,12 @@ def counter_st(reset: bool, cnt: int, reset_value: int = 17) -> int:
 
 def test_first_steps_counter_sfc_counts_like_the_st_version(tmp_path: Path) -> None:
     """CounterSFC counts by CounterST's rule (as the FBD, IL and LD versions of the same
-    file do), call by call, except in the one call after Reset changes: the chart then
-    passes through its step Start, which has no action, so OUT keeps its value in that call
-    (as in matiec, which switches at most one transition per path and call); a change in
-    that very call takes Start's other way at once. Before the first change the two give
-    the very same counts."""
+    file do), call by call, except in a call spent in its step Start, which has no action,
+    so OUT keeps its value: the startup call (the initial step is active for the call that
+    activates it, docs/semantics.md), and the one call after Reset changes (as in matiec,
+    which switches at most one transition per path and call); a change in that very call
+    takes Start's other way at once. Before the first change the chart gives the very same
+    counts as CounterST, one call later."""
     rc, chart = import_to(tmp_path, corpus("plcopen/beremiz_first_steps.xml"))
     assert rc == 1  # the other POUs (the ST, FBD, IL, LD versions) are reported, not imported
     cycles = 40
@@ -94,9 +97,9 @@ def test_first_steps_counter_sfc_counts_like_the_st_version(tmp_path: Path) -> N
     stimulus = [{"at_ms": k * 10, "set": {"Reset": v}} for k, v in flips.items()]
     records = sim(tmp_path, chart, watch=["OUT", "Reset"], cycles=cycles, stimulus=stimulus)
     resets = [False] + [r["values"]["Reset"] for r in records]  # OB100's call comes first
-    outs = [1] + [r["values"]["OUT"] for r in records]  # OB100's call: Start → Count, 1
+    outs = [0] + [r["values"]["OUT"] for r in records]  # OB100's call: in Start, OUT stays 0
     st = [counter_st(False, 0)]
-    in_start = False  # Start is left in the call after it is entered: one of its two holds
+    in_start = True  # the startup call is spent in Start
     for k in range(1, cycles + 1):
         st.append(counter_st(resets[k], st[-1]))
         if resets[k] != resets[k - 1] and not in_start:
@@ -105,7 +108,7 @@ def test_first_steps_counter_sfc_counts_like_the_st_version(tmp_path: Path) -> N
         else:
             assert outs[k] == counter_st(resets[k], outs[k - 1]), k
             in_start = False
-    assert outs[:8] == st[:8] == list(range(1, 9))
+    assert outs[1:8] == st[:7] == list(range(1, 8))
     assert outs[9:13] == st[9:13] == [17, 17, 17, 17]
 
 
@@ -187,10 +190,12 @@ def with_switches(chart: Chart, tmp_path: Path) -> Path:
 
 def test_tia_empty_transitions_run_the_first_path_of_each_branch(tmp_path: Path) -> None:
     """An empty TIA transition (its coil on the power rail) holds: the chain switches once a
-    call, and at each alternative branch the first path (Out 0) wins; T43 jumps back."""
+    call (the initial step S1 is held by the startup call that activates it, so it leaves in
+    cycle 0), and at each alternative branch the first path (Out 0) wins; T43 jumps back."""
     chart_path, _ = tia(tmp_path, "GraphBranch2")
-    records = sim(tmp_path, chart_path, watch=[], cycles=5)
+    records = sim(tmp_path, chart_path, watch=[], cycles=6)
     assert [r["events"] for r in records] == [
+        [["S1", "S21"]],
         [["S21", "S27"]],
         [["S27", "S32"]],
         [["S32", "S43"]],
@@ -214,9 +219,9 @@ def test_tia_alternative_paths_jump_where_the_xml_says(tmp_path: Path) -> None:
 
 def test_tia_branch_stop_ends_the_chain(tmp_path: Path) -> None:
     chart_path, _ = tia(tmp_path, "GraphEnd")
-    records = sim(tmp_path, chart_path, watch=[], cycles=4)
-    assert [r["events"] for r in records][:3] == [[["S21", "S32"]], [["S32", "S43"]],
-                                                  [["S43", "STOP"]]]  # fmt: skip
+    records = sim(tmp_path, chart_path, watch=[], cycles=5)
+    assert [r["events"] for r in records][:4] == [[["S1", "S21"]], [["S21", "S32"]],
+                                                  [["S32", "S43"]], [["S43", "STOP"]]]  # fmt: skip
     assert records[-1]["active"] == []
 
 
