@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import base64
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, fields
+from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING, Any
 
 from s7graph.engine.address import Address, Area, Width, parse_address
@@ -435,10 +435,10 @@ class Memory:
         return {
             "markers": {"start": rm.start, "data": _b64(self.markers[rm.start : rm.stop])},
             "timers": {
-                str(i): asdict(self.timers[i]) for i in _within(self.retentive_timers, self.timers)
+                str(i): _cell(self.timers[i]) for i in _within(self.retentive_timers, self.timers)
             },
             "counters": {
-                str(i): asdict(self.counters[i])
+                str(i): _cell(self.counters[i])
                 for i in _within(self.retentive_counters, self.counters)
             },
             "dbs": {
@@ -493,3 +493,15 @@ def _restore_cells(
             fresh = kind(**values)
             for f in fields(fresh):
                 setattr(cells[i], f.name, getattr(fresh, f.name))
+
+
+_CELL_FIELDS: dict[type, tuple[str, ...]] = {}
+
+
+def _cell(cell: S5Timer | S5Counter) -> dict[str, Any]:
+    """A timer or counter cell as plain data (``asdict`` without its deep copies: the fields
+    are scalars), taken every scan by the state store."""
+    names = _CELL_FIELDS.get(type(cell))
+    if names is None:
+        names = _CELL_FIELDS[type(cell)] = tuple(f.name for f in fields(cell))
+    return {name: getattr(cell, name) for name in names}

@@ -46,6 +46,12 @@ def _positive_ms(value: float | None) -> float | None:
     return value
 
 
+def _restart_type(value: str | None) -> str | None:
+    if value is not None and value.lower() not in ("warm", "hot", "cold"):
+        raise typer.BadParameter("--restart must be warm, hot or cold")
+    return value.lower() if value is not None else None
+
+
 @app.command()
 def run(
     program: Annotated[
@@ -75,6 +81,19 @@ def run(
     record: Annotated[
         Path | None, typer.Option(help="Record the chart's run to a rerun .rrd file.")
     ] = None,
+    restart: Annotated[
+        str | None,
+        typer.Option(
+            callback=_restart_type,
+            help="The startup from a saved state: warm (OB100, the sequencer initialized; "
+            "the default), hot (OB101, it resumes where it was) or cold (OB102, everything "
+            "to its initial values). For a program, its CPU dict's restart, else warm.",
+        ),
+    ] = None,
+    fresh: Annotated[
+        bool,
+        typer.Option(help="Start anew: keep an existing state file as FILE.old-N."),
+    ] = False,
 ) -> None:
     """Run a program or a chart on the system clock until Ctrl-C."""
     if program.suffix.lower() == ".s7g":
@@ -92,6 +111,8 @@ def run(
                 web=web,
                 port=port,
                 record=record,
+                restart=restart or "warm",
+                fresh=fresh,
             )
         )
     from s7graph.web.cli.run_program import run_program
@@ -103,6 +124,8 @@ def run(
             cycle_ms=cycle_ms,
             max_cycle_ms=max_cycle_ms,
             duration_s=duration_s,
+            restart=restart,
+            fresh=fresh,
         )
     )
 
