@@ -448,6 +448,27 @@ class Memory:
             },
         }
 
+    def hot_snapshot(self) -> dict[str, Any]:
+        """What a hot restart keeps beyond ``snapshot()``: every marker byte, the output
+        image Q, and the timer and counter cells that are not at rest."""
+        return {
+            "markers": _b64(self.markers),
+            "outputs": _b64(self.outputs),
+            "timers": {str(i): _cell(c) for i, c in enumerate(self.timers) if _busy_timer(c)},
+            "counters": {
+                str(i): _cell(c) for i, c in enumerate(self.counters) if _busy_counter(c)
+            },
+        }
+
+    def restore_hot(self, data: dict[str, Any]) -> None:
+        """Apply a ``hot_snapshot()`` (before ``restore``, which then puts the retentive
+        parts on top)."""
+        for area, key in ((self.markers, "markers"), (self.outputs, "outputs")):
+            raw = base64.b64decode(data[key])
+            area[: len(raw)] = raw[: len(area)]
+        _restore_cells(self.timers, data.get("timers", {}), S5Timer)
+        _restore_cells(self.counters, data.get("counters", {}), S5Counter)
+
     def restore(self, data: dict[str, Any]) -> None:
         """Apply a ``snapshot()``: retentive parts come back; DBs are recreated if missing."""
         marks = data.get("markers")
@@ -470,6 +491,14 @@ class Memory:
 
 def _name(area: Area | str, byte: int, bit: int, db: int | None) -> str:
     return f"DB{db}.DBX{byte}.{bit}" if db is not None else f"{area}{byte}.{bit}"
+
+
+def _busy_timer(c: S5Timer) -> bool:
+    return bool(c.running or c.q or c.value_ms or c.s_edge or c.fr_edge or c.mode)
+
+
+def _busy_counter(c: S5Counter) -> bool:
+    return bool(c.value or c.q or c.cu_edge or c.cd_edge or c.s_edge or c.r_edge or c.fr_edge)
 
 
 def _within(keep: range, cells: Sequence[S5Timer | S5Counter]) -> range:

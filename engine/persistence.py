@@ -13,8 +13,10 @@ nothing did; ``write(batch)`` commits one batch as one transaction (in any threa
 runner's writer, ``engine/writer.py``). An instance DB is one row, its snapshot as
 compressed JSON (a 7-step chart: about 700 bytes, one page of the file's 1 KiB pages), so
 a step switch rewrites a page or two. Keys an OBJECT value names in its ``VOLATILE`` (a
-GRAPH FB's call counter and the clock time of its last call) are saved with every write of
-the row but never cause one.
+GRAPH FB's call counter and the clock time of its last call, which dates its running step
+times) are saved with every write of the row, but on their own cause one only every
+``time_mark_ms`` (500 ms): what a hot restart can lose of a running step time is bounded,
+so a supervision time cannot be outrun by restarts.
 
 **Trusted only when recognised.** The file carries a format mark, and each instance DB the
 label, name and fingerprint of its FB (``FB.state_format``, else its interface). ``load``
@@ -71,6 +73,10 @@ CREATE TABLE IF NOT EXISTS parts (name TEXT PRIMARY KEY, state TEXT NOT NULL);
 CREATE TABLE IF NOT EXISTS audit (
     id INTEGER PRIMARY KEY AUTOINCREMENT, t_ns INTEGER, user TEXT, action TEXT, detail TEXT);
 """
+TIME_MARK_MS = 500.0
+"""Default of ``StateStore.time_mark_ms``."""
+_NOT_KEPT = {"program download", "no hot restart image saved"}
+"""Hot-restart blockers that belong to one run, not to the state on disk."""
 _BUSY = (5, 6)  # SQLITE_BUSY, SQLITE_LOCKED: another connection holds the lock
 _OURS = {"meta", "instances", "diagnostics", "alarms", "parts", "audit"}
 _ALARM_COLUMNS = ("t_ns", "key", "state", "text", "user", "cpu_ns", "reason")
@@ -188,8 +194,21 @@ class StateStore:
     Opening checks the file (``StateFileError``); ``load`` restores a CPU from it; ``stage``
     and ``write`` keep it up to date; ``save`` does both at once."""
 
-    def __init__(self, path: Path | str, *, interval_ms: float | None = None) -> None:
+    def __init__(
+        self,
+        path: Path | str,
+        *,
+        interval_ms: float | None = None,
+        hot: bool = False,
+        time_mark_ms: float | None = TIME_MARK_MS,
+    ) -> None:
         self.path = Path(path)
+        self.hot = hot
+        self.time_mark_ns = None if time_mark_ms is None else int(time_mark_ms * 1_000_000)
+        """While only ``VOLATILE`` keys change (step times running), their row is written
+        at most this often: what a restart can lose of a running step time."""
+        """Also keep what only a hot restart needs (non-retentive M/T/C, the output image):
+        written when it changes, which a warm restart would clear anyway."""
         self.interval_ns = None if interval_ms is None else int(interval_ms * 1_000_000)
         existed = self.path.exists()
         if existed and self.path.is_file() and self.path.stat().st_size == 0:
@@ -212,7 +231,9 @@ class StateStore:
         self._parts: dict[str, tuple[Callable[[], object], Callable[[Any], None]]] = {}
         self._part_seen: dict[str, object] = {}
         self._seen: dict[int, object] = {}
+        self._volatile_seen: dict[int, object] = {}
         self._meta_seen: dict[str, str] = {}
+        self._marked_ns: int | None = None
         self._last_ns: int | None = None
         self._diag_saved = 0
         self._diag_seq = self._next_diag_seq()
@@ -290,14 +311,23 @@ class StateStore:
             "memory": _dumps(cpu.mem.snapshot()),
             "mode": str(cpu.mode),
             "last_restart": str(cpu.last_restart or ""),
-            "hot_blockers": _dumps(sorted(cpu.hot_blockers - {"program download"})),
+            "hot_blockers": _dumps(sorted(cpu.hot_blockers - _NOT_KEPT)),
         }
+        if self.hot:
+            meta["hot_memory"] = _dumps(cpu.mem.hot_snapshot())
         for key, value in meta.items():
             if full or self._meta_seen.get(key) != value:
                 batch.meta[key] = value
         self._meta_seen.update(batch.meta)
+        now = cpu.process_ns()
+        mark = full or (
+            self.time_mark_ns is not None
+            and (self._marked_ns is None or now - self._marked_ns >= self.time_mark_ns)
+        )
         for number, idb in cpu.instance_dbs.items():
-            self._stage_instance(number, idb, batch, full)
+            self._stage_instance(number, idb, batch, full, mark)
+        if batch.instances or self._marked_ns is None:
+            self._marked_ns = now
         for name, (snap, _) in self._parts.items():
             data = snap()
             seen = self._part_seen.get(name, _UNSEEN)
@@ -316,19 +346,28 @@ class StateStore:
             batch.meta["cycle"] = str(cpu.cycle)
         return batch
 
-    def _stage_instance(self, number: int, idb: InstanceDB, batch: Batch, full: bool) -> None:
+    def _stage_instance(
+        self, number: int, idb: InstanceDB, batch: Batch, full: bool, mark: bool
+    ) -> None:
         fb = idb.fb
         snapshot = idb.snapshot()
         steady: dict[str, object] = {}
+        volatile: dict[str, object] = {}
         for var in fb.interface:
             value = snapshot.get(var.name)
             skip = _volatile(idb.values[var.name]) if var.type == OBJECT else ()
             if skip and isinstance(value, dict):
+                volatile[var.name] = {k: value.get(k) for k in skip}
                 value = {k: v for k, v in value.items() if k not in skip}
             steady[var.name] = value
-        if not full and self._seen.get(number, _UNSEEN) == steady:
+        if (
+            not full
+            and self._seen.get(number, _UNSEEN) == steady
+            and not (mark and self._volatile_seen.get(number, _UNSEEN) != volatile)
+        ):
             return
         self._seen[number] = steady
+        self._volatile_seen[number] = volatile
         fmt = fb.state_format
         data = zlib.compress(_dumps(snapshot).encode(), 6)
         shape = _dumps(fmt.shape() if fmt is not None else None)
@@ -405,7 +444,9 @@ class StateStore:
                 with contextlib.suppress(sqlite3.Error):  # the first error is the one to name
                     db.execute("ROLLBACK")
             code = int(getattr(exc, "sqlite_errorcode", 0) or 0) & 0xFF
-            raise StateWriteError(self.path, str(exc), busy=code in _BUSY) from None
+            name = getattr(exc, "sqlite_errorname", "")
+            problem = f"{exc} ({name})" if name else str(exc)
+            raise StateWriteError(self.path, problem, busy=code in _BUSY) from None
         self.saves += 1
 
     def meta(self, key: str) -> str | None:
@@ -431,6 +472,12 @@ class StateStore:
         )
         if memory is None:
             raise StateFileError(self.path, "no memory image (an incomplete state)")
+        hot = self.meta("hot_memory")
+        if hot is not None:
+            self._restore_part("hot restart image",
+                               lambda: cpu.mem.restore_hot(json.loads(hot)))  # fmt: skip
+        else:
+            cpu.hot_blockers.add("no hot restart image saved")
         self._restore_part("memory image", lambda: cpu.mem.restore(json.loads(memory)))
         for number, label, name, fingerprint, shape, data in instances:
             self._load_instance(cpu, int(number), label, name, fingerprint, shape, data, report)
@@ -452,6 +499,8 @@ class StateStore:
                     _restore_json, part[1], str(state)))  # fmt: skip
         if not report.changed:
             cpu.hot_blockers.discard("program download")  # the very program that was running
+        if not self.hot:  # not kept up to date from now on
+            self._db.execute("DELETE FROM meta WHERE key='hot_memory'")
         return report
 
     def _restore_part(self, what: str, restore: Callable[[], object]) -> None:

@@ -130,6 +130,11 @@ class Runner:
             self._stop_at = time.monotonic()
         self._stop.set()
 
+    def on_stop_signal(self, signum: int, frame: FrameType | None) -> None:
+        """A handler for SIGTERM and SIGINT: ``request_stop`` (never interrupted by an abort
+        of the scan it interrupted)."""
+        self.request_stop()
+
     # ---- the loop ------------------------------------------------------------------------
 
     def run(self, *, duration_s: float | None = None) -> None:
@@ -327,9 +332,15 @@ class Runner:
         return previous
 
     def _on_abort_signal(self, signum: int, frame: FrameType | None) -> None:
-        if self._armed:
-            self._armed = False
-            raise ScanAborted
+        if not self._armed:
+            return
+        up = frame
+        while up is not None:  # inside the stop handler: abort at the next try instead
+            if up.f_code in _SHIELDED:
+                return
+            up = up.f_back
+        self._armed = False
+        raise ScanAborted
 
     def _end_hung(self, waited_s: float) -> None:
         """The scan did not return after a stop request: commit what is staged with an
@@ -347,6 +358,9 @@ class Runner:
             writer.close(timeout=2.0)
         print(f"s7graph: error: {message}", file=sys.stderr, flush=True)
         self._exit(EXIT_HUNG)
+
+
+_SHIELDED = {Runner.on_stop_signal.__code__, Runner.request_stop.__code__}
 
 
 def stop_reason(cpu: Cpu) -> str:

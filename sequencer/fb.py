@@ -8,9 +8,9 @@ with INIT_SQ = 1 (``startup_obs``), and so does OB102 after a cold restart. Seve
 GraphFBs may share one CPU. Each call emits the step events of ``GraphState.log`` into the
 scan's ``ScanRecord.events`` as ``StepEvent`` values.
 
-Restarts (``GraphFB.on_startup``, a CPU startup hook): before a warm or cold restart
-initializes the sequencer, its position — active steps with T and U, faults, the mode — is
-written to the diagnostic buffer; a hot restart (OB101) resumes it as it was, step times
+Restarts (``GraphFB.on_startup``, a CPU startup hook): the sequencer's position — active
+steps with T and U, faults, the mode — is written to the diagnostic buffer, before a warm or
+cold restart initializes it, or as a hot restart (OB101) resumes it as it was, step times
 included (the time the CPU was down or in STOP is not counted, as no call saw it). A
 restart never acknowledges a message: one whose fault the restart clears goes *outgoing*
 with the restart as its reason and stays listed until someone acknowledges it. The instance
@@ -131,16 +131,18 @@ class GraphFB:
         return rt
 
     def on_startup(self, cpu: Any, restart: RestartType) -> None:
-        """A CPU startup begins (``Cpu.add_startup_hook``): before a warm or cold restart the
-        position goes to the diagnostic buffer; the step times go on from where they were
-        at the first call, whatever the clock now says (another process, time in STOP)."""
+        """A CPU startup begins (``Cpu.add_startup_hook``): the position goes to the
+        diagnostic buffer — before a warm or cold restart initializes it, or as a hot
+        restart resumes it; the step times go on from where they were at the first call,
+        whatever the clock now says (another process, time in STOP)."""
         if self.idb is None:
             return
         st = self.state
-        if restart is not RestartType.HOT and st.calls:
+        if st.calls:
+            what = "resumes" if restart is RestartType.HOT else "initializes"
             cpu.diagnostics.record(
                 cpu.clock.now_ns(), EventId.SEQUENCER_POSITION, self.fb.label,
-                f"{restart} restart initializes {self.cc.name}/DB{self.db_number}: "
+                f"{restart} restart {what} {self.cc.name}/DB{self.db_number}, "
                 + position(self.cc, st),
             )  # fmt: skip
         st.last_ns = -1
@@ -260,7 +262,7 @@ def position(cc: CompiledChart, st: GraphState, limit: int = 8) -> str:
     if len(st.active) > limit:
         parts.append(f"and {len(st.active) - limit} more")
     where = "; ".join(parts) if parts else "no step active"
-    return f"it was in {where} (mode {st.mode})"
+    return f"in {where} (mode {st.mode})"
 
 
 def startup_obs(*fbs: GraphFB, extra_ob1: Any = None) -> tuple[OB, OB]:

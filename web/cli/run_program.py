@@ -20,7 +20,7 @@ import signal
 import sys
 from collections.abc import Callable
 from pathlib import Path
-from types import FrameType, ModuleType
+from types import ModuleType
 from typing import Any
 
 from s7graph.engine.blocks import DB, FB, FC, OB
@@ -133,7 +133,7 @@ def run_program(
         return _fail(path, str(exc))
     state_path = state if state is not None else path.with_suffix(".state.sqlite")
     try:
-        opened = open_state(state_path, cpu, fresh=fresh)
+        opened = open_state(state_path, cpu, fresh=fresh, hot=restart == "hot")
     except StateFileError as exc:
         print(refusal(exc), file=sys.stderr)
         return 2
@@ -165,13 +165,11 @@ def run_until_stopped(
     cpu = runner.cpu
     store = opened.store
 
-    def on_signal(signum: int, frame: FrameType | None) -> None:
-        runner.request_stop()
-
     runner.on_stop = lambda reason: print(
         f"s7graph: error: {what}: the CPU went to STOP: {reason}", file=sys.stderr, flush=True
     )
-    previous = {sig: signal.signal(sig, on_signal) for sig in (signal.SIGTERM, signal.SIGINT)}
+    stop = runner.on_stop_signal
+    previous = {sig: signal.signal(sig, stop) for sig in (signal.SIGTERM, signal.SIGINT)}
     try:
         record = runner.startup(restart)
         if on_start is not None:

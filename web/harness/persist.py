@@ -68,12 +68,13 @@ def keep_aside(path: Path) -> Path | None:
     return target
 
 
-def open_state(path: Path, cpu: Cpu, *, fresh: bool = False) -> OpenedState:
+def open_state(path: Path, cpu: Cpu, *, fresh: bool = False, hot: bool = False) -> OpenedState:
     """Open ``path`` and restore ``cpu`` (STOP) from it, with its message list; the notes
-    of a carried-over state go to the diagnostic buffer. ``StateFileError`` when the file
-    cannot be trusted (the store is closed again)."""
+    of a carried-over state go to the diagnostic buffer. ``hot``: the run restarts hot, so
+    the store keeps the hot restart image too. ``StateFileError`` when the file cannot be
+    trusted (the store is closed again)."""
     kept = keep_aside(path) if fresh else None
-    store = StateStore(path)
+    store = StateStore(path, hot=hot)
     try:
         persist_messages(store, cpu)
         report = store.load(cpu)

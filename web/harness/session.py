@@ -71,8 +71,8 @@ class ChartSession:
         self.cc = cc
         self.symbols = symbols
         self.clock = clock
-        self.cpu = Cpu(clock)
-        self.cpu.mem.symbols = symbols
+        self.cpu = Cpu(clock, keep_outputs_on_hot_restart=True)  # a hot restart resumes the
+        self.cpu.mem.symbols = symbols  # sequence: what its actions set stays set
         self.graph = GraphFB(cc)
         install_all(self.cpu, [self.graph])
 
