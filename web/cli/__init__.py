@@ -196,7 +196,7 @@ def main(argv: list[str] | None = None) -> int:
             return code if isinstance(code, int) else 2
         if type(exc).__name__ == "Abort":  # Ctrl-C at a prompt
             return 130
-        print(f"s7graph: error: {type(exc).__name__}: {exc}", file=sys.stderr)
+        print(f"s7graph: internal error: {type(exc).__name__}: {exc}", file=sys.stderr)
         return 2
     return rc if isinstance(rc, int) else 0
 
