@@ -158,12 +158,7 @@ def carry_over(
         raise ValueError("the state does not fit the chart shape saved with it")
     report = CarryReport()
     st = new_state(new)
-    step_of = {n: i for i, n in enumerate(old.step_numbers)}
-    for k, number in enumerate(new.step_numbers):
-        i = step_of.get(number)
-        if i is not None:
-            for name in _PER_STEP:
-                getattr(st, name)[k] = getattr(state, name)[i]
+    _by_number(old.step_numbers, new.step_numbers, _PER_STEP, state, st)
     for i in state.active:
         number = old.step_numbers[i]
         target = new.step_index.get(number)
@@ -175,12 +170,7 @@ def carry_over(
     for i, number in enumerate(old.step_numbers):
         if state.sv_err[i] and number not in new.step_index:
             report.faults_gone.append(number)
-    tr_of = {n: j for j, n in enumerate(old.transition_numbers)}
-    for k, number in enumerate(new.transition_numbers):
-        j = tr_of.get(number)
-        if j is not None:
-            for name in _PER_TRANSITION:
-                getattr(st, name)[k] = getattr(state, name)[j]
+    _by_number(old.transition_numbers, new.transition_numbers, _PER_TRANSITION, state, st)
     for name in _SCALARS:
         setattr(st, name, getattr(state, name))
     st.error = any(st.il_err[i] for i in st.active)
@@ -206,6 +196,23 @@ def carry_over(
     report.vars_new = sorted(set(new.var_types) - set(state.vars))
     st.display = _display(state.display, new)
     return st, report
+
+
+def _by_number(
+    old: tuple[int, ...],
+    new: tuple[int, ...],
+    fields: tuple[str, ...],
+    source: GraphState,
+    target: GraphState,
+) -> None:
+    """Copy the per-step (or per-transition) ``fields`` of ``source`` to ``target`` for every
+    number both charts have (old index → new index)."""
+    index = {n: i for i, n in enumerate(old)}
+    for k, number in enumerate(new):
+        i = index.get(number)
+        if i is not None:
+            for name in fields:
+                getattr(target, name)[k] = getattr(source, name)[i]
 
 
 def _display(display: dict[str, Any], new: CompiledChart) -> dict[str, Any]:
