@@ -499,8 +499,9 @@ class StateStore:
                     _restore_json, part[1], str(state)))  # fmt: skip
         if not report.changed:
             cpu.hot_blockers.discard("program download")  # the very program that was running
-        if not self.hot:  # not kept up to date from now on
-            self._db.execute("DELETE FROM meta WHERE key='hot_memory'")
+        if not self.hot:  # not kept up to date from now on (a read-only file fails later)
+            with contextlib.suppress(sqlite3.Error):
+                self._db.execute("DELETE FROM meta WHERE key='hot_memory'")
         return report
 
     def _restore_part(self, what: str, restore: Callable[[], object]) -> None:
