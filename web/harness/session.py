@@ -22,7 +22,7 @@ from s7graph.sequencer.compiled import CompiledChart
 from s7graph.sequencer.diagnostics import Diagnostic, format_diagnostic
 from s7graph.sequencer.fb import GraphFB, install_all
 from s7graph.sequencer.params import Direction, check_pin, is_pin
-from s7graph.sequencer.parse import ChartSyntaxError, parse_chart
+from s7graph.sequencer.parse import ChartSyntaxError, chart_text, parse_chart
 
 __all__ = ["ChartLoadError", "ChartSession", "load_chart"]
 
@@ -41,14 +41,14 @@ class ChartLoadError(S7Error):
 def load_chart(path: Path, symbols: Path | None = None) -> tuple[CompiledChart, SymbolTable]:
     """Parse, validate and compile a chart file (with an optional symbol table file)."""
     try:
-        text = Path(path).read_text(encoding="utf-8")
+        data = Path(path).read_bytes()
     except OSError as exc:
         raise ChartLoadError([f"s7graph: error: cannot read {path}: {exc.strerror}"]) from None
     table = SymbolTable()
     try:
         if symbols is not None:
-            table = SymbolTable.from_file(symbols)
-        chart = parse_chart(text, str(path))
+            table = _symbols(symbols)
+        chart = parse_chart(chart_text(data, str(path)), str(path))
         for s in chart.symbols:
             if table.lookup(s.name) is None:
                 table.add(s.name, s.address, s.type, s.comment, where=s.loc)
@@ -58,6 +58,13 @@ def load_chart(path: Path, symbols: Path | None = None) -> tuple[CompiledChart, 
     except S7Error as exc:
         raise ChartLoadError([f"{exc}"]) from None
     return cc, table
+
+
+def _symbols(path: Path) -> SymbolTable:
+    try:
+        return SymbolTable.from_file(path)
+    except OSError as exc:
+        raise S7Error(f"cannot read symbols {path}: {exc.strerror or exc}") from None
 
 
 def _fmt(d: Any) -> str:
@@ -71,8 +78,8 @@ class ChartSession:
         self.cc = cc
         self.symbols = symbols
         self.clock = clock
-        self.cpu = Cpu(clock)
-        self.cpu.mem.symbols = symbols
+        self.cpu = Cpu(clock, keep_outputs_on_hot_restart=True)  # a hot restart resumes the
+        self.cpu.mem.symbols = symbols  # sequence: what its actions set stays set
         self.graph = GraphFB(cc)
         install_all(self.cpu, [self.graph])
 
