@@ -120,8 +120,10 @@ def test_a_state_file_that_cannot_grow_stops_the_run_with_one_line(
     tmp_path: Path, web: bool
 ) -> None:
     state = tmp_path / "drill.sqlite"
+    # the disk fills; a loaded CI machine must not stop the CPU by a time error first
     cmd = [sys.executable, "-m", "s7graph", *CHART, "--plant", str(DRILL / "demo_plant.py"),
-           "--state", str(state), "--duration-s", "60"]  # fmt: skip
+           "--state", str(state), "--duration-s", "60",
+           "--max-cycle-ms", "5000"]  # fmt: skip
     if web:
         cmd += ["--web", "--port", str(_free_port())]
     # room for the start (with the view, the audit store's tables share the file and its

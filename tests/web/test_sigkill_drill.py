@@ -125,9 +125,11 @@ def _kill_runs(tmp_path: Path, restart: str, *, idle: int, slow: int, seed: int,
     plant.write_text(textwrap.dedent(PLANT.format(demo=str(DRILL / "demo_plant.py"),
                                                   idle=idle, slow=slow)))  # fmt: skip
     state = tmp_path / "drill.sqlite"
+    # kills are tested, not a loaded CI's time errors: a generous maximum cycle time
     cmd = [sys.executable, "-m", "s7graph", "run", str(DRILL / "drill.s7g"),
            "--symbols", str(DRILL / "symbols.txt"), "--plant", str(plant),
-           "--state", str(state), "--restart", restart]  # fmt: skip
+           "--state", str(state), "--restart", restart,
+           "--max-cycle-ms", "5000"]  # fmt: skip
     rng = random.Random(seed)
     seen: list[OnDisk] = []
     for k in range(KILLS + 1):
