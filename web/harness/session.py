@@ -21,10 +21,11 @@ from s7graph.sequencer.compile import ChartError, compile_chart
 from s7graph.sequencer.compiled import CompiledChart
 from s7graph.sequencer.diagnostics import Diagnostic, format_diagnostic
 from s7graph.sequencer.fb import GraphFB, install_all
+from s7graph.sequencer.model import Chart
 from s7graph.sequencer.params import Direction, check_pin, is_pin
 from s7graph.sequencer.parse import ChartSyntaxError, parse_chart
 
-__all__ = ["ChartLoadError", "ChartSession", "load_chart"]
+__all__ = ["ChartLoadError", "ChartSession", "compile_model", "compile_text", "load_chart"]
 
 _STEP_ATTR = re.compile(r"S(\d+)\.([XTU])", re.I)
 _TRANS_ATTR = re.compile(r"T(\d+)\.TT", re.I)
@@ -44,19 +45,46 @@ def load_chart(path: Path, symbols: Path | None = None) -> tuple[CompiledChart, 
         text = Path(path).read_text(encoding="utf-8")
     except OSError as exc:
         raise ChartLoadError([f"s7graph: error: cannot read {path}: {exc.strerror}"]) from None
-    table = SymbolTable()
     try:
-        if symbols is not None:
-            table = SymbolTable.from_file(symbols)
-        chart = parse_chart(text, str(path))
+        table = SymbolTable.from_file(symbols) if symbols is not None else SymbolTable()
+    except S7Error as exc:
+        raise ChartLoadError([f"{exc}"]) from None
+    return compile_text(text, str(path), table)
+
+
+def compile_text(
+    text: str, file: str, table: SymbolTable | None = None
+) -> tuple[CompiledChart, SymbolTable]:
+    """Parse, validate and compile chart ``text`` (named ``file`` in diagnostics) with the
+    symbol table ``table``, which gets the chart's own ``SYMBOLS`` added; ``ChartLoadError``
+    with every diagnostic when it does not compile."""
+    try:
+        chart = parse_chart(text, file)
+    except ChartSyntaxError as exc:
+        raise ChartLoadError([_fmt(d) for d in exc.diagnostics]) from None
+    except S7Error as exc:
+        raise ChartLoadError([f"{exc}"]) from None
+    except RecursionError:
+        raise ChartLoadError([f"{file}: the chart nests too deeply to compile"]) from None
+    return compile_model(chart, table)
+
+
+def compile_model(
+    chart: Chart, table: SymbolTable | None = None
+) -> tuple[CompiledChart, SymbolTable]:
+    """Validate and compile a parsed ``chart`` as :func:`compile_text` does."""
+    table = table if table is not None else SymbolTable()
+    try:
         for s in chart.symbols:
             if table.lookup(s.name) is None:
                 table.add(s.name, s.address, s.type, s.comment, where=s.loc)
         cc = compile_chart(chart, table)
-    except (ChartSyntaxError, ChartError) as exc:
+    except ChartError as exc:
         raise ChartLoadError([_fmt(d) for d in exc.diagnostics]) from None
     except S7Error as exc:
         raise ChartLoadError([f"{exc}"]) from None
+    except RecursionError:
+        raise ChartLoadError([f"{chart.file}: the chart nests too deeply to compile"]) from None
     return cc, table
 
 

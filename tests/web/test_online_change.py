@@ -1,0 +1,275 @@
+"""Online change through the virtual clock and a real zenoh bus on a unix socket: a changed
+chart is downloaded into the running GraphFB (issue 10) — compiled off the scan thread,
+swapped in at a scan boundary, the state carried over by step number
+(``sequencer.carry.carry_over``), the file rewritten with a numbered backup, every download
+audited — and undone the same way. Refusals leave the CPU running the old chart."""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+from s7graph.engine.clock import VirtualClock
+from s7graph.sequencer.fb import GraphFB
+from s7graph.web.access.audit import AuditStore, read_audit
+from s7graph.web.access.login import Authenticator
+from s7graph.web.access.users import UsersFile
+from s7graph.web.bus.gate import Gate
+from s7graph.web.bus.live import LiveGraph
+from s7graph.web.bus.online import OnlineChange
+from s7graph.web.bus.protocol import Command, CommandReply
+from s7graph.web.bus.zenoh_bus import BusClient, open_session
+from s7graph.web.harness.session import ChartSession, load_chart
+from s7graph.web.view.live_edge import LiveEdge
+from tests.web.helpers import wait_until
+
+pytestmark = pytest.mark.timeout(90)
+PASSWORD = "correct horse"
+
+CHART = """FUNCTION_BLOCK "Seq_fill" FB 1 DB 1
+VAR
+  go : BOOL;
+  full : BOOL;
+  empty : BOOL;
+  pieces : INT := 0;
+END_VAR
+SEQUENCE 1 "Fill"
+  INITIAL_STEP S1 "Idle":
+  END_STEP
+  STEP S2 "Fill":
+    S1 N pieces := pieces + 1;
+    N Q0.0;
+  END_STEP
+  STEP S3 "Drain":
+    N Q0.1;
+  END_STEP
+  TRANSITION T1 "Go" FROM S1 TO S2 := go;
+  TRANSITION T2 "Full" FROM S2 TO S3 := full;
+  TRANSITION T3 "Empty" FROM S3 TO S1 := empty;
+END_SEQUENCE
+END_FUNCTION_BLOCK
+"""
+
+
+WITHOUT_S2 = (
+    CHART.replace(
+        '  STEP S2 "Fill":\n    S1 N pieces := pieces + 1;\n    N Q0.0;\n  END_STEP\n', ""
+    )
+    .replace("FROM S1 TO S2 := go;", "FROM S1 TO S3 := go;")
+    .replace('  TRANSITION T2 "Full" FROM S2 TO S3 := full;\n', "")
+)
+
+
+@dataclass
+class Cpu:
+    session: ChartSession
+    client: BusClient
+    online: OnlineChange
+    path: Path
+    state: Path
+    token: str
+    scans: list[int]
+
+    def set(self, name: str, value: object) -> None:
+        self.session.set(name, value)
+
+    def active(self) -> list[int]:
+        g = self.session.graph
+        return [n for n, x in zip(g.cc.step_numbers, g.state.x, strict=True) if x]
+
+    def send(self, op: str, **args: object) -> CommandReply:
+        command = Command(op=op, fb="Seq_fill", user="eng", token=self.token, args=args)  # type: ignore[arg-type]
+        return self.client.send(command, timeout=20)
+
+
+@pytest.fixture
+def cpu(tmp_path: Path) -> Iterator[Cpu]:
+    path = tmp_path / "fill.s7g"
+    path.write_text(CHART, encoding="utf-8")
+    users = UsersFile(tmp_path / "users.json")
+    users.add("eng", "engineer", PASSWORD)
+    users.add("olga", "operator", PASSWORD)
+    state = tmp_path / "state.sqlite"
+    audit = AuditStore(state)
+    cc, table = load_chart(path)
+    session = ChartSession(cc, table, VirtualClock())
+    live = LiveGraph(session.graph, read=session.get)
+    gate = Gate(Authenticator(users), audit)
+    online = OnlineChange(session, live, gate, path=path)
+    endpoint = f"unixsock-stream/{tmp_path}/bus.sock"
+    stop = threading.Event()
+    scans: list[int] = []
+    session.start()
+    with LiveEdge(live, serve=False, bus=True, gate=gate, online=online,
+                  ends=_ends(endpoint)) as edge:  # fmt: skip
+
+        def scan_loop() -> None:
+            clock = session.clock
+            assert isinstance(clock, VirtualClock)
+            while not stop.is_set():
+                clock.advance(10)
+                record = session.scan()
+                edge.on_record(record)
+                scans.append(record.cycle)
+                time.sleep(0.002)
+
+        thread = threading.Thread(target=scan_loop, daemon=True)
+        thread.start()
+        try:
+            with open_session(connect=[endpoint]) as view, BusClient(view, "cpu1") as client:
+                assert wait_until(lambda: client.status() is not None)
+                login = client.login("eng", PASSWORD)
+                assert login.ok, login.reason
+                yield Cpu(session, client, online, path, state, login.token, scans)
+        finally:
+            stop.set()
+            thread.join(5)
+            audit.close()
+
+
+def _ends(endpoint: str):  # type: ignore[no-untyped-def]
+    from s7graph.web.view.edge import BusEnds
+
+    return BusEnds(listen=[endpoint])
+
+
+def test_download_swaps_the_chart_at_a_scan_boundary_keeping_the_active_step_and_its_time(
+    cpu: Cpu,
+) -> None:
+    cpu.set("go", True)
+    assert wait_until(lambda: cpu.active() == [2])
+    g: GraphFB = cpu.session.graph
+    before_t = g.state.step_t_ms(g.cc.step_index[2])
+    pieces = cpu.session.get("pieces")
+    edited = CHART.replace(":= full;", ":= full OR empty;").replace(
+        'STEP S3 "Drain":', 'STEP S3 "Drain it":'
+    )
+    preview = cpu.send("download", source=edited, preview=True)
+    assert preview.applied and preview.version == 1 and preview.removed == []
+    assert any("T2" in line and "condition" in line for line in preview.lines), preview.lines
+    assert cpu.active() == [2] and g.cc.name == "Seq_fill"  # a preview changes nothing
+
+    reply = cpu.send("download", source=edited, base=1)
+    assert reply.applied, reply.reason
+    assert reply.version == 2
+    assert cpu.active() == [2]  # the active step stays active ...
+    assert g.state.step_t_ms(g.cc.step_index[2]) >= before_t  # ... its time goes on
+    assert cpu.session.get("pieces") == pieces  # variables keep their values by name
+    assert cpu.path.read_text(encoding="utf-8") == edited
+    assert (cpu.path.parent / "fill.s7g.~1~").read_text(encoding="utf-8") == CHART
+    layout = cpu.client.chart("Seq_fill")
+    assert layout is not None and layout.version == 2
+    source = cpu.client.source("Seq_fill")
+    assert source is not None and source.version == 2 and source.text == edited
+
+    cpu.set("empty", True)  # the sequence follows the new condition: S2 -> S3 on empty
+    assert wait_until(lambda: cpu.active() in ([3], [1]))
+    rows = read_audit(cpu.state)
+    download = [r for r in rows if r.op == "download" and r.outcome == "applied"]
+    assert len(download) == 2  # the preview and the download, both as eng (engineer)
+    assert download[-1].user == "eng" and download[-1].role == "engineer"
+    assert "version 2 runs (was 1)" in download[-1].detail
+    assert "T2" in download[-1].detail and "sha256" in download[-1].args
+
+
+def test_a_removed_active_step_is_refused_without_a_choice_then_kept_or_initialized(
+    cpu: Cpu,
+) -> None:
+    cpu.set("go", True)
+    assert wait_until(lambda: cpu.active() == [2])
+    without_s2 = WITHOUT_S2
+    preview = cpu.send("download", source=without_s2, preview=True)
+    assert preview.applied and preview.removed == [2]
+    refused = cpu.send("download", source=without_s2)
+    assert not refused.applied and "S2" in refused.reason and "keep" in refused.reason
+    assert cpu.active() == [2] and cpu.path.read_text(encoding="utf-8") == CHART  # unchanged
+
+    kept = cpu.send("download", source=without_s2, removed="keep")
+    assert kept.applied, kept.reason
+    assert cpu.active() == []  # S2 went; the other steps (none) go on
+    assert any("S2" in line for line in kept.lines)
+
+    back = cpu.send("undo_download")
+    assert back.applied, back.reason  # the old chart again (nothing active to remove)
+    assert cpu.session.graph.cc.step_index.get(2) is not None and cpu.active() == []
+
+
+def test_initialize_when_an_active_step_is_removed(cpu: Cpu) -> None:
+    cpu.set("go", True)
+    assert wait_until(lambda: cpu.active() == [2])
+    cpu.set("go", False)
+    without_s2 = WITHOUT_S2
+    reply = cpu.send("download", source=without_s2, removed="init")
+    assert reply.applied, reply.reason
+    assert wait_until(lambda: cpu.active() == [1])  # INIT_SQ in the next call: S1 again
+
+
+def test_undo_download_restores_the_old_chart_with_its_state_carried_back(cpu: Cpu) -> None:
+    cpu.set("go", True)
+    assert wait_until(lambda: cpu.active() == [2])
+    added = CHART.replace(
+        '  TRANSITION T1 "Go"', '  STEP S4 "Spare":\n  END_STEP\n  TRANSITION T1 "Go"'
+    ).replace("END_SEQUENCE", '  TRANSITION T4 "Spare" FROM S4 TO S1 := FALSE;\nEND_SEQUENCE')
+    assert cpu.send("download", source=added).applied
+    assert cpu.session.graph.cc.step_index.get(4) is not None
+    undone = cpu.send("undo_download", base=2)
+    assert undone.applied, undone.reason
+    assert undone.version == 3
+    assert cpu.session.graph.cc.step_index.get(4) is None  # the old chart runs
+    assert cpu.active() == [2]  # with S2 still active
+    assert cpu.path.read_text(encoding="utf-8") == CHART
+    assert not cpu.send("undo_download").applied  # nothing more to undo
+
+
+def test_broken_or_hostile_downloads_are_refused_and_the_cpu_keeps_the_old_chart(
+    cpu: Cpu, tmp_path: Path
+) -> None:
+    cc = cpu.session.graph.cc
+    syntax = cpu.send("download", source=CHART.replace(":= full;", ":= full AND;"))
+    assert not syntax.applied and "does not parse" in syntax.reason
+    assert any("fill.s7g:19:49: error" in line for line in syntax.lines), syntax.lines
+    unknown = cpu.send("download", source=CHART.replace("N Q0.1;", "N Q99999.0;"))
+    assert not unknown.applied and "does not compile" in unknown.reason
+    steps = "".join(f"  STEP S{n}:\n  END_STEP\n" for n in range(10, 10_010))
+    many = cpu.send("download", source=CHART.replace("  TRANSITION T1", steps + "  TRANSITION T1"))
+    assert not many.applied and "at most 1,000" in many.reason, many.reason
+    paste = b'{"op":"download","fb":"Seq_fill","args":{"source":"' + b"x" * 10_000_000 + b'"}}'
+    raw = cpu.client.send_raw(paste, timeout=10)
+    assert raw is not None and not raw.applied and "too large" in raw.reason
+    stale = cpu.send("download", source=CHART.replace("full;", "empty;"), base=7)
+    assert not stale.applied and "version 1" in stale.reason
+    assert cpu.session.graph.cc is cc  # the CPU kept its chart through all of it
+    assert cpu.path.read_text(encoding="utf-8") == CHART
+    assert not list(tmp_path.glob("fill.s7g.~*~"))
+    count = len(cpu.scans)
+    assert wait_until(lambda: len(cpu.scans) > count + 5)  # and keeps scanning
+
+
+def test_an_operator_may_not_download_and_the_refusal_is_audited(cpu: Cpu) -> None:
+    login = cpu.client.login("olga", PASSWORD)
+    command = Command(op="download", fb="Seq_fill", user="olga", token=login.token,
+                      args={"source": CHART})  # fmt: skip
+    reply = cpu.client.send(command, timeout=20)
+    assert not reply.applied and "needs engineer" in reply.reason
+    rows = [r for r in read_audit(cpu.state) if r.op == "download"]
+    assert rows and rows[-1].user == "olga" and rows[-1].outcome == "refused"
+
+
+def test_save_and_open_use_the_project_directory_with_backups(cpu: Cpu) -> None:
+    saved = cpu.send("save", file="copy.s7g", source=CHART)
+    assert saved.applied, saved.reason
+    assert (cpu.path.parent / "copy.s7g").read_text(encoding="utf-8") == CHART
+    again = cpu.send("save", file="copy.s7g", source=CHART.replace("Idle", "Rest"))
+    assert again.applied and (cpu.path.parent / "copy.s7g.~1~").exists()
+    listed = cpu.client.project()
+    assert listed is not None and {"fill.s7g", "copy.s7g"} <= {f.name for f in listed.files}
+    opened = cpu.send("open", file="copy.s7g")
+    assert opened.applied and '"Rest"' in opened.text
+    for bad in ("../escape.s7g", ".hidden.s7g", "sub/x.s7g"):
+        assert not cpu.send("save", file=bad, source=CHART).applied, bad
+    assert not cpu.send("open", file="missing.s7g").applied
