@@ -6,30 +6,21 @@ audited — and undone the same way. Refusals leave the CPU running the old char
 
 from __future__ import annotations
 
-import threading
-import time
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
 
-from s7graph.engine.clock import VirtualClock
 from s7graph.sequencer.fb import GraphFB
-from s7graph.web.access.audit import AuditStore, read_audit
-from s7graph.web.access.login import Authenticator
-from s7graph.web.access.users import UsersFile
-from s7graph.web.bus.gate import Gate
-from s7graph.web.bus.live import LiveGraph
+from s7graph.web.access.audit import read_audit
 from s7graph.web.bus.online import OnlineChange
 from s7graph.web.bus.protocol import Command, CommandReply
 from s7graph.web.bus.zenoh_bus import BusClient, open_session
-from s7graph.web.harness.session import ChartSession, load_chart
-from s7graph.web.view.live_edge import LiveEdge
-from tests.web.helpers import wait_until
+from s7graph.web.harness.session import ChartSession
+from tests.web.helpers import PASSWORD, online_cpu, wait_until
 
 pytestmark = pytest.mark.timeout(90)
-PASSWORD = "correct horse"
 
 CHART = """FUNCTION_BLOCK "Seq_fill" FB 1 DB 1
 VAR
@@ -89,53 +80,16 @@ class Cpu:
 
 @pytest.fixture
 def cpu(tmp_path: Path) -> Iterator[Cpu]:
-    path = tmp_path / "fill.s7g"
-    path.write_text(CHART, encoding="utf-8")
-    users = UsersFile(tmp_path / "users.json")
-    users.add("eng", "engineer", PASSWORD)
-    users.add("olga", "operator", PASSWORD)
-    state = tmp_path / "state.sqlite"
-    audit = AuditStore(state)
-    cc, table = load_chart(path)
-    session = ChartSession(cc, table, VirtualClock())
-    live = LiveGraph(session.graph, read=session.get)
-    gate = Gate(Authenticator(users), audit)
-    online = OnlineChange(session, live, gate, path=path)
-    endpoint = f"unixsock-stream/{tmp_path}/bus.sock"
-    stop = threading.Event()
-    scans: list[int] = []
-    session.start()
-    with LiveEdge(live, serve=False, bus=True, gate=gate, online=online,
-                  ends=_ends(endpoint)) as edge:  # fmt: skip
-
-        def scan_loop() -> None:
-            clock = session.clock
-            assert isinstance(clock, VirtualClock)
-            while not stop.is_set():
-                clock.advance(10)
-                record = session.scan()
-                edge.on_record(record)
-                scans.append(record.cycle)
-                time.sleep(0.002)
-
-        thread = threading.Thread(target=scan_loop, daemon=True)
-        thread.start()
-        try:
-            with open_session(connect=[endpoint]) as view, BusClient(view, "cpu1") as client:
-                assert wait_until(lambda: client.status() is not None)
-                login = client.login("eng", PASSWORD)
-                assert login.ok, login.reason
-                yield Cpu(session, client, online, path, state, login.token, scans)
-        finally:
-            stop.set()
-            thread.join(5)
-            audit.close()
-
-
-def _ends(endpoint: str):  # type: ignore[no-untyped-def]
-    from s7graph.web.view.edge import BusEnds
-
-    return BusEnds(listen=[endpoint])
+    users = {"eng": "engineer", "olga": "operator"}
+    with (
+        online_cpu(tmp_path, CHART, serve=False, users=users, name="fill.s7g") as rig,
+        open_session(connect=[rig.endpoint]) as view,
+        BusClient(view, "cpu1") as client,
+    ):
+        assert wait_until(lambda: client.status() is not None)
+        login = client.login("eng", PASSWORD)
+        assert login.ok, login.reason
+        yield Cpu(rig.session, client, rig.online, rig.path, rig.state, login.token, rig.scans)
 
 
 def test_download_swaps_the_chart_at_a_scan_boundary_keeping_the_active_step_and_its_time(

@@ -520,25 +520,25 @@ def camera_for(
     offset: tuple[float, float] = (0.0, 0.0),
     fov: float = 1.309,
     aspect: float = 1.6,
-    panel: float = 0.28,
+    right: float = 0.28,
     height_px: float = 800.0,
     whole: bool = False,
 ) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
     """Camera position and look-at point showing ``pic`` (at ``offset``) left of the side
-    panel: the whole chart if its text stays readable (``READABLE_PX`` screen pixels per
-    scene unit on a page ``height_px`` high) or ``whole`` is asked for, else its top-left
-    part at that zoom."""
+    panel covering ``right`` of the canvas' width (``aspect``: width / height): the whole
+    chart if its text stays readable (``READABLE_PX`` screen pixels per scene unit on a
+    page ``height_px`` high) or ``whole`` is asked for, else its top-left part at that zoom."""
     x0, x1, y0, y1 = pic.bounds
     x0, x1, y0, y1 = x0 - 0.2, x1 + 0.2, y0 - 0.2, y1 + 0.2
     tan = math.tan(fov / 2)
-    usable = aspect * (1 - panel)
+    usable = aspect * (1 - right)
     fit = max((y1 - y0) / 2 / tan, (x1 - x0) / 2 / (tan * usable)) * 1.05
     readable = fit if whole else height_px / (READABLE_PX * 2 * tan)
     z = min(fit, readable)
     half_h, half_w = z * tan, z * tan * usable
     cx = (x0 + x1) / 2 if fit <= readable else x0 + half_w
     cy = (y0 + y1) / 2 if fit <= readable else y1 - half_h
-    cx += z * tan * aspect * panel  # the panel covers the right of the page
+    cx += z * tan * aspect * right  # the side panel covers the right of the canvas
     ox, oy = offset
     return (cx + ox, cy + oy, z), (cx + ox, cy + oy, 0.0)
 

@@ -54,6 +54,8 @@ if TYPE_CHECKING:
 __all__ = ["EDIT_OFFSET", "Editor"]
 
 EDIT_OFFSET: Final = (0.0, -2000.0)  # where a page draws the chart it edits (off the live one)
+EDITOR_WIDTH: Final = 400  # pixels of the editor's panel, docked left of the chart
+PAGE_WIDTH, PAGE_HEIGHT, PANEL_WIDTH = 1280, 800, 340  # the page the camera is aimed for
 DEBOUNCE_S: Final = 0.6  # typing pauses this long: the text is applied
 MAX_DIAGNOSTIC_BUTTONS: Final = 25
 NO_EVENT: Final = "(none)"
@@ -92,6 +94,7 @@ class Editor:
         self._form_handles: list[Any] = []
         self._inputs: dict[str, Any] = {}
         self._diag_buttons: list[Any] = []
+        self._diag_shown: list[Diagnostic] = []
         self._timers: dict[str, threading.Timer] = {}
         self._source_text = ""
         self._choices: dict[str, Ref | None] = {}
@@ -103,15 +106,11 @@ class Editor:
 
     def _build(self) -> None:
         gui = self.client.gui
-        with gui.add_folder("Edit chart", order=15.0) as self.folder:
+        order = float(self.panel.control_folder.order) - 0.5  # right under the login
+        with gui.add_folder("Edit chart", order=order) as self.folder:
             self.toggle = gui.add_button("Edit mode", hint="edit this chart and download it")
             self.status = gui.add_html(self._status_html())
             with gui.add_folder("Chart", visible=False) as self.tools:
-                self.file = gui.add_text("File", "", hint="the .s7g file Save writes")
-                self.save_button = gui.add_button("Save", hint="write the chart as the File")
-                self.open_choice = gui.add_dropdown("Open file", ["(none)"])
-                self.open_button = gui.add_button("Open", hint="open the chosen file")
-                self.new_button = gui.add_button("New", hint="a new chart: S1 and T1")
                 self.undo_button = gui.add_button("Undo", disabled=True)
                 self.redo_button = gui.add_button("Redo", disabled=True)
                 self.download_button = gui.add_button(
@@ -120,23 +119,34 @@ class Editor:
                 self.undo_download_button = gui.add_button(
                     "Undo download", hint="put the chart before the last download back"
                 )
-                self.element = gui.add_dropdown("Element", ["Chart"])
-            with gui.add_folder("Selection", visible=False) as self.form_folder:
+                self.file = gui.add_text("File", "", hint="the .s7g file Save writes")
+                self.save_button = gui.add_button("Save", hint="write the chart as the File")
+                self.open_choice = gui.add_dropdown("Open file", ["(none)"])
+                self.open_button = gui.add_button("Open", hint="open the chosen file")
+                self.new_button = gui.add_button("New", hint="a new chart: S1 and T1")
+        # The element's form, the problems and the source: a panel of their own, docked
+        # left of the chart while editing.
+        self.side = gui.add_panel(visible=False)
+        with self.side.add_tab("Element"):
+            self.element = gui.add_dropdown("Element", ["Chart"])
+            self.form_folder = gui.add_folder("Selection")
+            with self.form_folder:
                 self.form_html = gui.add_html("")
-            with gui.add_folder("Diagnostics", visible=False) as self.diag_folder:
+            self.diag_folder = gui.add_folder("Diagnostics")
+            with self.diag_folder:
                 self.diag_html = gui.add_html("")
-            with gui.add_folder("Source (.s7g)", visible=False, expand_by_default=False) as (
-                self.source_folder
-            ):
-                self.source = gui.add_text("Source", "", multiline=True)
-                uid = self.source._impl.uuid
-                rule = (
-                    f".mantine-Flex-root:has(label[for='{uid}']) textarea{{"
-                    "height:26em !important;max-height:none !important;"
-                    "font-family:monospace;font-size:0.75em;white-space:pre;"
-                    "overflow:auto !important}"
-                )
-                gui.add_html(f"<style>{rule}</style>")
+        with self.side.add_tab("Source (.s7g)"):
+            self.source = gui.add_text("Source", "", multiline=True)
+            uid = self.source._impl.uuid
+            rule = (
+                f".mantine-Flex-root:has(label[for='{uid}']) textarea{{"
+                "height:calc(100vh - 12em) !important;max-height:none !important;"
+                "font-family:monospace;font-size:0.75em;white-space:pre;"
+                "overflow:auto !important}"
+            )
+            gui.add_html(f"<style>{rule}</style>")
+        self.side.dock_left()
+        self.side.set_width(EDITOR_WIDTH)
         self.toggle.on_click(lambda _: self._toggle())
         self.save_button.on_click(lambda _: self._guarded(self.save))
         self.open_button.on_click(lambda _: self._guarded(self.open))
@@ -158,6 +168,8 @@ class Editor:
                 self.leave()
             with contextlib.suppress(Exception):
                 self.folder.remove()
+            with contextlib.suppress(Exception):
+                self.side.remove()
 
     def _click(self, action: Callable[[], object]) -> Callable[[Any], None]:
         """A click handler running ``action`` through :meth:`_guarded`."""
@@ -196,8 +208,8 @@ class Editor:
         self.file.value = source.file or f"{chart.name}.s7g"  # type: ignore[misc]
         self.editing = True
         self.toggle.label = "Leave edit mode"
-        for folder in (self.tools, self.form_folder, self.diag_folder, self.source_folder):
-            folder.visible = True
+        self.tools.visible = True
+        self.side.visible = True
         self._refresh_files()
         self.note = f"editing version {source.version} as the CPU runs it"
         self._show(source_changed=True)
@@ -207,8 +219,8 @@ class Editor:
         """Back to the live chart (the session is dropped; nothing is downloaded)."""
         self.editing = False
         self.toggle.label = "Edit mode"
-        for folder in (self.tools, self.form_folder, self.diag_folder, self.source_folder):
-            folder.visible = False
+        self.tools.visible = False
+        self.side.visible = False
         if self._drawing is not None:
             self._drawing.remove()
             self._drawing, self._drawn = None, None
@@ -224,7 +236,15 @@ class Editor:
         from s7graph.web.view.panel import aim_camera
 
         if self._picture is not None:
-            aim_camera(self.client, self._picture, whole=whole, offset=EDIT_OFFSET)
+            canvas = PAGE_WIDTH - EDITOR_WIDTH  # the docked editor narrows the canvas
+            aim_camera(
+                self.client,
+                self._picture,
+                whole=whole,
+                offset=EDIT_OFFSET,
+                aspect=canvas / PAGE_HEIGHT,
+                right=PANEL_WIDTH / canvas,
+            )
 
     def running_changed(self, layout: ChartLayout) -> None:
         """The CPU runs another chart version (a download, from here or elsewhere)."""
@@ -354,16 +374,20 @@ class Editor:
         refusal = s.refusal.reason if s.refusal is not None else ""
         shown = list(s.refusal.diagnostics) if s.refusal is not None else []
         shown += list(self.located.diagnostics)
-        self.diag_html.content = texts.diagnostics_html(self.located.diagnostics, refusal)
+        shown = shown[:MAX_DIAGNOSTIC_BUTTONS]
+        self.diag_html.content = texts.diagnostics_html(shown, refusal)
+        if shown == self._diag_shown:
+            return
+        self._diag_shown = shown
         for button in self._diag_buttons:
             button.remove()
         self._diag_buttons = []
         with self.diag_folder:
-            for d in shown[:MAX_DIAGNOSTIC_BUTTONS]:
+            for i, d in enumerate(shown, 1):
                 button = self.client.gui.add_button(
-                    texts.clip(texts.diagnostic_line(d), 160),
+                    texts.diagnostic_button(i, d),
                     color="red" if d.is_error else "yellow",
-                    hint=texts.diagnostic_line(d),
+                    hint=f"select it: {texts.diagnostic_line(d)}",
                 )
                 button.on_click(self._click(functools.partial(self.select_diagnostic, d)))
                 self._diag_buttons.append(button)

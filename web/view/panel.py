@@ -105,7 +105,7 @@ class ClientPanel:
             self.who = gui.add_html(texts.login_html("", "", True, w.demo))
         self.login_button.on_click(lambda _: self._log_in())
         self.logout_button.on_click(lambda _: self._log_out())
-        with gui.add_folder("Control Sequencer"):
+        with gui.add_folder("Control Sequencer") as self.control_folder:
             self.status = gui.add_html(texts.status_html(None, 0, "RUN", None))
             self.mode_buttons = {m: gui.add_button(m, hint=f"SW_{m}") for m in MODES}
             for mode, button in self.mode_buttons.items():
@@ -354,10 +354,17 @@ class ClientPanel:
 
 
 def aim_camera(
-    client: viser.ClientHandle, pic: Picture, *, whole: bool, offset: tuple[float, float] = (0, 0)
+    client: viser.ClientHandle,
+    pic: Picture,
+    *,
+    whole: bool,
+    offset: tuple[float, float] = (0, 0),
+    aspect: float = 1.6,
+    right: float = 0.28,
 ) -> None:
-    """Aim ``client``'s camera at ``pic``: the whole chart, or the default readable zoom."""
-    position, look = camera_for(pic, offset=offset, whole=whole)
+    """Aim ``client``'s camera at ``pic``: the whole chart, or the default readable zoom
+    (``aspect`` of the canvas, ``right``: the part of its width the side panel covers)."""
+    position, look = camera_for(pic, offset=offset, whole=whole, aspect=aspect, right=right)
     try:
         cam = client.camera
         cam.position = position

@@ -32,6 +32,7 @@ __all__ = [
     "clip",
     "describe",
     "detail_html",
+    "diagnostic_button",
     "diagnostic_line",
     "diagnostics_html",
     "editor_status_html",
@@ -290,8 +291,16 @@ def diagnostic_line(d: Diagnostic) -> str:
     return f"{where}{d.severity}[{d.code}] {d.message}{tail}"
 
 
+def diagnostic_button(i: int, d: Diagnostic) -> str:
+    """The short label of diagnostic ``i``'s button: ``2 · 20:50 E042 · transition T2``."""
+    where = f"{d.loc.line}:{d.loc.col} " if d.loc.line > 0 else ""
+    tail = f" · {d.element}" if d.element else ""
+    return clip(f"{i} · {where}{d.code}{tail}", 60)
+
+
 def diagnostics_html(diagnostics: Iterable[Diagnostic], refusal: str = "") -> str:
-    """The editor's problem list: the refused edit first, then errors and warnings."""
+    """The editor's problem list: the refused edit first, then each diagnostic in full,
+    numbered as its button (a click on the button selects its element)."""
     items = list(diagnostics)
     rows = []
     if refusal:
@@ -303,7 +312,8 @@ def diagnostics_html(diagnostics: Iterable[Diagnostic], refusal: str = "") -> st
     else:
         head = f"{errors} error{'s' * (errors != 1)}, {warnings} warning{'s' * (warnings != 1)}"
         colour = "#c00" if errors else "#a60"
-        rows.append(f'<span style="color:{colour}">{head}</span> (click one to select it)')
+        rows.append(f'<span style="color:{colour}">{head}</span> (a button selects its element)')
+        rows += [f"{i} · {html.escape(diagnostic_line(d))}" for i, d in enumerate(items, 1)]
     return small("<br>".join(rows))
 
 
