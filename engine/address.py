@@ -120,6 +120,8 @@ def _check(area: Area, width: Width, byte: int, bit: int, db: int | None) -> str
 @lru_cache(maxsize=4096)
 def _parse(norm: str) -> Address | str:
     """Parse normalized (upper-case, blank-free) text; a str result is the error reason."""
+    if len(norm) > 32:  # the longest, DB65535.DBX65535.7, has 18 characters
+        return f"not an S7 address ({len(norm)} characters)"
     if m := _CELL.fullmatch(norm):
         area = Area.T if m[1] == "T" else Area.C
         return _build(area, Width.WORD, int(m[2]), 0, None)

@@ -18,7 +18,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from datetime import date, datetime
 from enum import StrEnum
-from typing import Any
+from typing import Any, Protocol, runtime_checkable
 
 from s7graph.engine.datatypes import DT_MIN, check_value, decode, type_of
 from s7graph.engine.errors import BlockError, TypeMismatch
@@ -113,15 +113,37 @@ def _check_interface(owner: str, kind: BlockKind, interface: tuple[Var, ...]) ->
                 raise BlockError(f"{owner}: initial value of {var.name!r}: {exc.message}") from None
 
 
+@runtime_checkable
+class StateFormat(Protocol):
+    """How the data of an FB's instance DBs is recognised on disk (a GRAPH FB: by its
+    compiled chart, ``sequencer/carry.py``); ``engine/persistence.py`` reads it.
+
+    ``fingerprint`` names what the data describes; ``shape()`` is a JSON-able description
+    saved beside the data; ``adapt(shape, data)`` carries data written under another
+    fingerprint (described by its saved ``shape``) over to this one and returns it with
+    notes of what it could not keep — ValueError/KeyError/TypeError when it cannot."""
+
+    @property
+    def fingerprint(self) -> str: ...
+
+    def shape(self) -> object: ...
+
+    def adapt(
+        self, shape: object, data: dict[str, object]
+    ) -> tuple[dict[str, object], list[str]]: ...
+
+
 @dataclass(frozen=True, slots=True)
 class FB:
-    """A function block (or SFB): its interface and a body ``body(ctx, instance_db)``."""
+    """A function block (or SFB): its interface and a body ``body(ctx, instance_db)``;
+    ``state_format`` (optional) recognises its instance data on disk."""
 
     number: int
     name: str
     interface: tuple[Var, ...]
     body: FBBody
     kind: BlockKind = BlockKind.FB
+    state_format: StateFormat | None = field(default=None, repr=False, compare=False)
     params: dict[str, tuple[Decl, str]] = field(
         init=False, repr=False, compare=False, hash=False, default_factory=dict
     )
@@ -135,6 +157,13 @@ class FB:
     @property
     def label(self) -> str:
         return f"{self.kind}{self.number}"
+
+    def var(self, name: str) -> Var:
+        """The declared variable ``name``; BlockError if there is none."""
+        for var in self.interface:
+            if var.name == name:
+                return var
+        raise BlockError(f"{self.label} has no variable {name!r}")
 
     def __hash__(self) -> int:
         return hash((self.kind, self.number, self.name))
@@ -236,6 +265,16 @@ def _initial(var: Var, number: int) -> object:
     return check_value(var.type, var.init)
 
 
+def _plain(var: Var) -> bool:
+    """A variable of an elementary type (checked with ``check_value`` on a strict restore)."""
+    upper = var.type.upper()
+    return not (
+        _is_multi(var)
+        or upper == OBJECT
+        or upper.startswith(("ARRAY", "STRUCT", "DATE", "DT"))
+    )
+
+
 def _encode(var: Var, value: object) -> object:
     if isinstance(value, InstanceDB):
         return value.snapshot()
@@ -327,11 +366,27 @@ class InstanceDB:
             if var.decl is not Decl.TEMP
         }
 
-    def restore(self, data: Mapping[str, object]) -> None:
-        """Load a ``snapshot()``; names no longer declared are ignored, missing ones kept."""
+    def encode(self, var: Var) -> object:
+        """The JSON-ready value of the declared variable ``var`` (as in ``snapshot()``)."""
+        return _encode(var, self.values[var.name])
+
+    def restore(self, data: Mapping[str, object], *, strict: bool = False) -> None:
+        """Load a ``snapshot()``; names no longer declared are ignored, missing ones kept.
+
+        ``strict`` (a state file): an undeclared name or a value that does not fit its
+        type raises ValueError/TypeMismatch instead, and nothing is changed."""
+        decoded: dict[str, object] = {}
+        if strict:
+            unknown = sorted(set(data) - {v.name for v in self.fb.interface})
+            if unknown:
+                raise ValueError(f"undeclared variable(s) {', '.join(unknown)}")
         for var in self.fb.interface:
             if var.decl is not Decl.TEMP and var.name in data:
-                self.values[var.name] = _decode(var, self.values[var.name], data[var.name])
+                value = _decode(var, self.values[var.name], data[var.name])
+                if strict and _plain(var):
+                    value = check_value(var.type, value)
+                decoded[var.name] = value
+        self.values.update(decoded)
 
 
 # ---- decorators -------------------------------------------------------------------------

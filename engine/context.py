@@ -3,7 +3,9 @@
 ``CallContext.call`` binds the actual parameters (a ``str`` for a non-string parameter is an
 operand, behaviours 33, 34), runs the body one nesting level deeper (B-stack overflow →
 ``NestingOverflow``, behaviour 31) and tags an escaping exception with the innermost block
-(``_Fault``), which the CPU turns into OB121 or STOP.
+(``_Fault``), which the CPU turns into OB121 or STOP — ``SystemExit`` and
+``KeyboardInterrupt`` raised by a block included: a block error, never a process exit. The
+runner's ``ScanAborted`` passes through, naming the innermost block.
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ from s7graph.engine.blocks import DB, FB, FC, OB, Decl, InstanceDB, is_stringy
 from s7graph.engine.clock import Clock
 from s7graph.engine.datatypes import check_value
 from s7graph.engine.diagnostics import DiagnosticBuffer
-from s7graph.engine.errors import BlockError
+from s7graph.engine.errors import BlockError, ScanAborted
 from s7graph.engine.interrupts import CyclicScheduler
 from s7graph.engine.memory import Memory
 from s7graph.engine.rtc import RealTimeClock
@@ -171,7 +173,10 @@ class CallContext:
             return blk.body(self, arg)
         except _Fault:
             raise
-        except Exception as exc:
+        except ScanAborted as abort:
+            abort.block = abort.block or blk.label
+            raise
+        except (Exception, SystemExit, KeyboardInterrupt) as exc:
             raise _Fault(blk.label, exc) from exc
         finally:
             self.depth -= 1

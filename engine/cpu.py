@@ -25,11 +25,11 @@ from s7graph.engine.blocks import DB, FB, FC, OB, BlockKind, InstanceDB
 from s7graph.engine.clock import Clock
 from s7graph.engine.context import CallContext, NestingOverflow, _Fault
 from s7graph.engine.diagnostics import DiagnosticBuffer, EventId
-from s7graph.engine.errors import AddressError, BlockError, TypeMismatch
+from s7graph.engine.errors import AddressError, BlockError, ScanAborted, TypeMismatch
 from s7graph.engine.interrupts import CYCLIC_DEFAULT_MS, CyclicScheduler, priority
 from s7graph.engine.memory import AreaLengthError, Memory
 from s7graph.engine.modes import CpuMode, KeySwitch, ModeRequest, SetKeySwitch, resolve_requests
-from s7graph.engine.record import ScanRecord
+from s7graph.engine.record import DiagEntry, ScanRecord
 from s7graph.engine.restart import RESTART, RestartType, parse_restart
 from s7graph.engine.rtc import RealTimeClock
 from s7graph.engine.rtm import RuntimeMeters
@@ -45,6 +45,7 @@ __all__ = [
     "NestingOverflow",
     "Pending",
     "ScanHook",
+    "StartupHook",
     "add_os_scan_hook",
 ]
 
@@ -64,6 +65,9 @@ _MISSING_STOP = {
 
 ScanHook = Callable[["Cpu", int], None]
 """``hook(cpu, process_ns)``: an operating-system task run at the start of every cycle."""
+
+StartupHook = Callable[["Cpu", RestartType], None]
+"""``hook(cpu, restart)``: run when a startup begins, before anything is cleared."""
 
 OS_SCAN_HOOKS: list[ScanHook] = []
 """Scan hooks every CPU runs (registered by ``sfb`` at import, see ``add_os_scan_hook``)."""
@@ -121,6 +125,12 @@ class Cpu:
         self.ob_priority: dict[int, int] = {}
         """Parametrised OB priorities; others have the defaults of behaviour 18."""
         self._scan_hooks: list[ScanHook] = []
+        self._startup_hooks: list[StartupHook] = []
+        self.stop_entry: DiagEntry | None = None
+        """The diagnostic entry of the last transition to STOP (its cause is the entry
+        before it when a block error or time error caused it)."""
+        self.abort_reason = ""
+        """Set by the real-time runner before it raises ``ScanAborted`` into the scan."""
         self._airt_disabled = 0
         self._tod_seen: tuple[int, object] | None = None
         self.clock_memory = clock_memory
@@ -289,6 +299,33 @@ class Cpu:
         OB (idempotent). Process time stands still in HOLD, so hooks see frozen time."""
         if hook not in self._scan_hooks:
             self._scan_hooks.append(hook)
+
+    def add_startup_hook(self, hook: StartupHook) -> None:
+        """Run ``hook(cpu, restart)`` at the beginning of every startup, once the restart
+        type is settled and before memory or instance DBs are cleared (idempotent): how a
+        GRAPH FB writes its position to the diagnostic buffer before a warm or cold
+        restart initializes it."""
+        if hook not in self._startup_hooks:
+            self._startup_hooks.append(hook)
+
+    def stop_by_error(self, event: int, block: str, message: str) -> None:
+        """Go to STOP because of an error outside the program (the state file could not be
+        written): an entry with ``event`` naming it; outputs go to 0."""
+        if self.mode is not CpuMode.STOP:
+            self._go_stop(event, block, message)
+        else:
+            self.diagnostics.record(self.clock.now_ns(), event, block, message)
+
+    def abort(self, block: str) -> None:
+        """The runner aborted ``block`` (a block, the plant, the CPU itself) still running at
+        twice the maximum cycle time: a time error entry naming it, then STOP."""
+        limit = 2 * self.watchdog.max_cycle_ns // 1_000_000
+        why = self.abort_reason or f"still running at twice the maximum cycle time ({limit} ms)"
+        raw = self.clock.now_ns()
+        self.diagnostics.record(raw, EventId.CYCLE_TIME_EXCEEDED, block, f"aborted: {why}")
+        if self.mode is not CpuMode.STOP:
+            self._go_stop(EventId.STOP_CYCLE_TIME, block, "block aborted by cycle monitoring")
+        self.abort_reason = ""
 
     def _run_hooks(self, now: int) -> None:
         for hook in OS_SCAN_HOOKS:
@@ -513,7 +550,9 @@ class Cpu:
             block.body(ctx)
         except _Fault as fault:
             self._program_error(number, fault.block, fault.exc)
-        except Exception as exc:
+        except ScanAborted as abort:
+            self.abort(abort.block or block.label)
+        except (Exception, SystemExit, KeyboardInterrupt) as exc:  # a block error, never an exit
             self._program_error(number, block.label, exc)
         finally:
             self._airt_disabled = airt  # DIS_AIRT ends with its OB (behaviour 23)
@@ -538,7 +577,7 @@ class Cpu:
         self.meters.stop_cpu(self.clock.now_ns())
         self.delays.clear()
         self.mem.periph_out[:] = bytes(len(self.mem.periph_out))
-        self.diagnostics.record(self.clock.now_ns(), event, block, message)
+        self.stop_entry = self.diagnostics.record(self.clock.now_ns(), event, block, message)
 
     # ---- commands and startup ---------------------------------------------------------------
 
@@ -596,6 +635,8 @@ class Cpu:
                 raw, EventId.STARTUP_REFUSED, "", f"hot restart refused ({why}): warm restart"
             )
             restart = RestartType.WARM
+        for hook in self._startup_hooks:
+            hook(self, restart)
         rule = RESTART[restart]
         self.mode = CpuMode.STARTUP
         self.diagnostics.record(raw, EventId.STOP_TO_STARTUP, f"OB{rule.ob}", f"{restart} restart")

@@ -104,7 +104,7 @@ def _lookup(key: str) -> TypeSpec | None:
     spec = TYPES.get(key)
     if spec is not None:
         return spec
-    if m := _STRING.fullmatch(key):
+    if len(key) <= 16 and (m := _STRING.fullmatch(key)):
         n = int(m[1]) if m[1] is not None else 254
         if n <= 254:
             return TypeSpec(f"STRING[{n}]", (n + 2) * 8, False, None, None)

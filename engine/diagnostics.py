@@ -33,6 +33,10 @@ class EventId(IntEnum):
     STOP_OB85_MISSING = 0x4568
     STOP_OB87_MISSING = 0x4569
     STOP_OB86_MISSING = 0x456A
+    STOP_STATE_WRITE = 0x45F0
+    """Ours: the state file could not be written (disk full, I/O error)."""
+    STOP_HUNG = 0x45F1
+    """Ours: the process ended because a scan did not return after a stop request."""
     CYCLE_TIME_EXCEEDED = 0x3501
     OB_REQUEST_ERROR = 0x3502
     STACK_OVERFLOW = 0x3574
@@ -45,6 +49,10 @@ class EventId(IntEnum):
     TYPE_ERROR = 0x2521
     PYTHON_EXCEPTION = 0x25FF
     COMMAND_FAILED = 0x5FFF
+    SEQUENCER_POSITION = 0x5F01
+    """Ours: a GRAPH FB's position, written before a warm or cold restart initializes it."""
+    STATE_CARRIED_OVER = 0x5F02
+    """Ours: a state file written for another version of a block, carried over."""
 
 
 class DiagnosticBuffer:

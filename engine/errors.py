@@ -48,3 +48,15 @@ class BlockError(S7Error):
 
 class ProgramError(S7Error):
     """An error inside a user block during a scan (goes to OB121 / STOP, SPEC §1.5)."""
+
+
+class ScanAborted(BaseException):
+    """Raised into the scan thread by the real-time runner's monitor when a block, a plant
+    or an action is still running at twice the maximum cycle time (``engine/runner.py``).
+
+    A ``BaseException``, so that ``except Exception`` in a block does not swallow it; the
+    innermost block it escapes from names itself in ``block`` (``CallContext``), and the
+    CPU goes to STOP with a diagnostic entry naming it (``Cpu.abort``)."""
+
+    block: str = ""
+    """The innermost block (or ``plant``) the abort escaped from; empty until tagged."""

@@ -65,9 +65,21 @@ def parse_literal(text: str, where: SourceLocation | None = None) -> tuple[str, 
     """
     s = text.strip()
     try:
+        if not s.startswith("'") and (run := _LONG_DIGITS.search(s)):
+            raise _Bad(f"a number of {len(run[0])} digits is beyond every type")
         return _parse(s)
     except (_Bad, TypeMismatch, ValueError, OverflowError) as exc:
-        raise LiteralError(f"bad literal {text!r}: {exc}", where) from None
+        raise LiteralError(f"bad literal {clip(text)}: {exc}", where) from None
+
+
+def clip(text: str, limit: int = 40) -> str:
+    """``repr(text)``, shortened to about ``limit`` characters with "…" (for messages)."""
+    if len(text) <= limit:
+        return repr(text)
+    return repr(text[: limit - 10] + "…" + text[-5:]) + f" ({len(text)} characters)"
+
+
+_LONG_DIGITS = re.compile(r"(?:[0-9A-Fa-f]_*){40,}")
 
 
 def _parse(s: str) -> tuple[str, object]:

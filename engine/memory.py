@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import base64
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, fields
+from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING, Any
 
 from s7graph.engine.address import Address, Area, Width, parse_address
@@ -435,10 +435,10 @@ class Memory:
         return {
             "markers": {"start": rm.start, "data": _b64(self.markers[rm.start : rm.stop])},
             "timers": {
-                str(i): asdict(self.timers[i]) for i in _within(self.retentive_timers, self.timers)
+                str(i): _cell(self.timers[i]) for i in _within(self.retentive_timers, self.timers)
             },
             "counters": {
-                str(i): asdict(self.counters[i])
+                str(i): _cell(self.counters[i])
                 for i in _within(self.retentive_counters, self.counters)
             },
             "dbs": {
@@ -447,6 +447,27 @@ class Memory:
                 if db.retain
             },
         }
+
+    def hot_snapshot(self) -> dict[str, Any]:
+        """What a hot restart keeps beyond ``snapshot()``: every marker byte, the output
+        image Q, and the timer and counter cells that are not at rest."""
+        return {
+            "markers": _b64(self.markers),
+            "outputs": _b64(self.outputs),
+            "timers": {str(i): _cell(c) for i, c in enumerate(self.timers) if _busy_timer(c)},
+            "counters": {
+                str(i): _cell(c) for i, c in enumerate(self.counters) if _busy_counter(c)
+            },
+        }
+
+    def restore_hot(self, data: dict[str, Any]) -> None:
+        """Apply a ``hot_snapshot()`` (before ``restore``, which then puts the retentive
+        parts on top)."""
+        for area, key in ((self.markers, "markers"), (self.outputs, "outputs")):
+            raw = base64.b64decode(data[key])
+            area[: len(raw)] = raw[: len(area)]
+        _restore_cells(self.timers, data.get("timers", {}), S5Timer)
+        _restore_cells(self.counters, data.get("counters", {}), S5Counter)
 
     def restore(self, data: dict[str, Any]) -> None:
         """Apply a ``snapshot()``: retentive parts come back; DBs are recreated if missing."""
@@ -472,6 +493,14 @@ def _name(area: Area | str, byte: int, bit: int, db: int | None) -> str:
     return f"DB{db}.DBX{byte}.{bit}" if db is not None else f"{area}{byte}.{bit}"
 
 
+def _busy_timer(c: S5Timer) -> bool:
+    return bool(c.running or c.q or c.value_ms or c.s_edge or c.fr_edge or c.mode)
+
+
+def _busy_counter(c: S5Counter) -> bool:
+    return bool(c.value or c.q or c.cu_edge or c.cd_edge or c.s_edge or c.r_edge or c.fr_edge)
+
+
 def _within(keep: range, cells: Sequence[S5Timer | S5Counter]) -> range:
     return range(max(0, keep.start), min(keep.stop, len(cells)))
 
@@ -493,3 +522,15 @@ def _restore_cells(
             fresh = kind(**values)
             for f in fields(fresh):
                 setattr(cells[i], f.name, getattr(fresh, f.name))
+
+
+_CELL_FIELDS: dict[type, tuple[str, ...]] = {}
+
+
+def _cell(cell: S5Timer | S5Counter) -> dict[str, Any]:
+    """A timer or counter cell as plain data (``asdict`` without its deep copies: the fields
+    are scalars), taken every scan by the state store."""
+    names = _CELL_FIELDS.get(type(cell))
+    if names is None:
+        names = _CELL_FIELDS[type(cell)] = tuple(f.name for f in fields(cell))
+    return {name: getattr(cell, name) for name in names}

@@ -1,43 +1,110 @@
-"""Retentive state on disk: SQLite (DESIGN.md "Persistence"; SPEC.md §1.4).
+"""State on disk: one SQLite file per CPU (DESIGN.md "Persistence"; SPEC.md §1.4).
 
 Saved: retentive M/T/C and retain DBs (``Memory.snapshot()``), every instance DB
 (``InstanceDB.snapshot()``, OBJECT values through ``to_state()``), the diagnostic buffer,
-the restart type, and any extra named parts registered with ``add_part`` (the CPU's
-message list: the engine does not know its type). ``maybe_save`` writes after each scan that
-changed retentive data (or at most every ``interval_ms``); ``save`` on stop; all in one
-transaction. A killed process comes back through ``load`` + warm restart with every
-retentive value intact. Alarms (every message event, with the acknowledging user) and the
-audit log (who acknowledged or downloaded what, when) are append-only tables.
+the restart type, what would block a hot restart, and extra named parts registered with
+``add_part`` (the CPU's message list: the engine does not know its type). Alarms (every
+message event, with the acknowledging user) and the audit log (who did what, when) are
+append-only tables.
+
+**Written only when changed.** ``stage(cpu)`` (in the scan thread, cheap) compares the state
+with what was last staged and returns a :class:`Batch` of the rows that changed — None when
+nothing did; ``write(batch)`` commits one batch as one transaction (in any thread: the
+runner's writer, ``engine/writer.py``). An instance DB is one row, its snapshot as
+compressed JSON (a 7-step chart: about 700 bytes, one page of the file's 1 KiB pages), so
+a step switch rewrites a page or two. Keys an OBJECT value names in its ``VOLATILE`` (a
+GRAPH FB's call counter and the clock time of its last call, which dates its running step
+times) are saved with every write of the row, but on their own cause one only every
+``time_mark_ms`` (500 ms): what a hot restart can lose of a running step time is bounded,
+so a supervision time cannot be outrun by restarts.
+
+**Trusted only when recognised.** The file carries a format mark, and each instance DB the
+label, name and fingerprint of its FB (``FB.state_format``, else its interface). ``load``
+refuses — :class:`StateFileError` naming the problem — an empty, truncated, garbled or
+foreign file, an instance of another FB, a DB the program no longer has, and a malformed
+row; a changed fingerprint lets the FB's ``state_format.adapt`` carry the data over (a GRAPH
+FB: by step number, ``sequencer/carry.py``) and reports what it could not keep.
 """
 
 from __future__ import annotations
 
+import contextlib
+import functools
+import hashlib
 import json
 import sqlite3
+import zlib
 from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Protocol, runtime_checkable
 
+from s7graph.engine.blocks import FB, OBJECT, Decl, InstanceDB
 from s7graph.engine.cpu import Cpu
+from s7graph.engine.errors import S7Error
 from s7graph.engine.record import DiagEntry
+
+__all__ = [
+    "FORMAT",
+    "AlarmEvent",
+    "Batch",
+    "LoadReport",
+    "StateFileError",
+    "StateStore",
+    "StateWriteError",
+    "fingerprint_of",
+]
+
+FORMAT = "s7graph-state 2"
+"""The format mark in ``meta``: what this code writes and trusts."""
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
 CREATE TABLE IF NOT EXISTS instances (
-    number INTEGER PRIMARY KEY, fb TEXT NOT NULL, state TEXT NOT NULL);
+    number INTEGER PRIMARY KEY, fb TEXT NOT NULL, name TEXT NOT NULL,
+    fingerprint TEXT NOT NULL, shape TEXT NOT NULL, data BLOB NOT NULL);
 CREATE TABLE IF NOT EXISTS diagnostics (
     seq INTEGER PRIMARY KEY, t_ns INTEGER, event_id INTEGER, block TEXT, message TEXT,
     address TEXT);
 CREATE TABLE IF NOT EXISTS alarms (
     id INTEGER PRIMARY KEY AUTOINCREMENT, t_ns INTEGER, key TEXT, state TEXT, text TEXT,
-    user TEXT NOT NULL DEFAULT '', cpu_ns INTEGER);
+    user TEXT NOT NULL DEFAULT '', cpu_ns INTEGER, reason TEXT NOT NULL DEFAULT '');
 CREATE TABLE IF NOT EXISTS parts (name TEXT PRIMARY KEY, state TEXT NOT NULL);
 CREATE TABLE IF NOT EXISTS audit (
     id INTEGER PRIMARY KEY AUTOINCREMENT, t_ns INTEGER, user TEXT, action TEXT, detail TEXT);
 """
+TIME_MARK_MS = 500.0
+"""Default of ``StateStore.time_mark_ms``."""
+_NOT_KEPT = {"program download", "no hot restart image saved"}
+"""Hot-restart blockers that belong to one run, not to the state on disk."""
+_BUSY = (5, 6)  # SQLITE_BUSY, SQLITE_LOCKED: another connection holds the lock
+_OURS = {"meta", "instances", "diagnostics", "alarms", "parts", "audit"}
+_ALARM_COLUMNS = ("t_ns", "key", "state", "text", "user", "cpu_ns", "reason")
+_ADDED_ALARM_COLUMNS = (
+    ("user", "TEXT NOT NULL DEFAULT ''"),
+    ("cpu_ns", "INTEGER"),
+    ("reason", "TEXT NOT NULL DEFAULT ''"),
+)
 
 
-_ALARM_COLUMNS = ("t_ns", "key", "state", "text", "user", "cpu_ns")
+class StateFileError(S7Error):
+    """A state file that cannot be trusted for this program: ``path`` and ``problem``."""
+
+    def __init__(self, path: Path, problem: str) -> None:
+        self.path = path
+        self.problem = problem
+        super().__init__(f"{path}: {problem}")
+
+
+class StateWriteError(S7Error):
+    """Writing the state file failed (disk full, I/O error, locked): the first error;
+    ``busy`` when another connection holds the lock (worth a retry)."""
+
+    def __init__(self, path: Path, problem: str, *, busy: bool = False) -> None:
+        self.path = path
+        self.problem = problem
+        self.busy = busy
+        super().__init__(f"{path}: cannot write the state: {problem}")
 
 
 @runtime_checkable
@@ -55,29 +122,167 @@ def _dumps(data: object) -> str:
     return json.dumps(data, sort_keys=True, separators=(",", ":"), default=str)
 
 
-class StateStore:
-    """One SQLite file holding a CPU's retentive state, alarms and audit log."""
+def fingerprint_of(fb: FB) -> str:
+    """What an instance DB's data is recognised by: the FB's ``state_format.fingerprint``
+    (a GRAPH FB: its compiled chart), else a hash of its interface."""
+    fmt = fb.state_format
+    if fmt is not None:
+        return fmt.fingerprint
+    text = _dumps([[v.name, v.type, str(v.decl)] for v in fb.interface])
+    return "interface:" + hashlib.sha256(text.encode()).hexdigest()[:16]
 
-    def __init__(self, path: Path | str, *, interval_ms: float | None = None) -> None:
+
+@dataclass(slots=True)
+class Batch:
+    """The rows one or more scans changed: written as one transaction. ``upto`` is the mark
+    (the runner's scan number) of the last scan whose state it holds."""
+
+    upto: int = 0
+    meta: dict[str, str] = field(default_factory=dict)
+    instances: dict[int, tuple[str, str, str, str, bytes]] = field(default_factory=dict)
+    """DB number → (FB label, FB name, fingerprint, shape JSON, compressed snapshot)."""
+    parts: dict[str, str] = field(default_factory=dict)
+    diagnostics: list[tuple[int, int, int, str, str, str]] = field(default_factory=list)
+    alarms: list[tuple[int, str, str, str, str, int | None, str]] = field(default_factory=list)
+    audit: list[tuple[int, str, str, str]] = field(default_factory=list)
+
+    def __bool__(self) -> bool:
+        return bool(
+            self.meta or self.instances or self.parts or self.diagnostics
+            or self.alarms or self.audit
+        )  # fmt: skip
+
+    def merge(self, later: Batch) -> None:
+        """Fold a later batch into this one (the later rows win, appended rows add up)."""
+        self.upto = max(self.upto, later.upto)
+        self.meta.update(later.meta)
+        self.instances.update(later.instances)
+        self.parts.update(later.parts)
+        self.diagnostics.extend(later.diagnostics)
+        self.alarms.extend(later.alarms)
+        self.audit.extend(later.audit)
+
+    @property
+    def rows(self) -> int:
+        return (
+            len(self.meta) + len(self.instances) + len(self.parts)
+            + len(self.diagnostics) + len(self.alarms) + len(self.audit)
+        )  # fmt: skip
+
+
+@dataclass(slots=True)
+class LoadReport:
+    """What ``load`` found: the saved mode, whether the last run ended cleanly, and notes
+    (a chart changed since: what was carried over and what was not)."""
+
+    mode: str = ""
+    clean: bool = False
+    last_restart: str = ""
+    changed: list[int] = field(default_factory=list)
+    """Instance DBs whose FB changed since the file was written (carried over)."""
+    notes: list[str] = field(default_factory=list)
+
+
+def _volatile(value: object) -> tuple[str, ...]:
+    names = getattr(type(value), "VOLATILE", ())
+    return tuple(names) if isinstance(names, tuple) else ()
+
+
+class StateStore:
+    """One SQLite file holding a CPU's state, its alarm log and its audit log.
+
+    Opening checks the file (``StateFileError``); ``load`` restores a CPU from it; ``stage``
+    and ``write`` keep it up to date; ``save`` does both at once."""
+
+    def __init__(
+        self,
+        path: Path | str,
+        *,
+        interval_ms: float | None = None,
+        hot: bool = False,
+        time_mark_ms: float | None = TIME_MARK_MS,
+    ) -> None:
         self.path = Path(path)
+        self.hot = hot
+        self.time_mark_ns = None if time_mark_ms is None else int(time_mark_ms * 1_000_000)
+        """While only ``VOLATILE`` keys change (step times running), their row is written
+        at most this often: what a restart can lose of a running step time."""
+        """Also keep what only a hot restart needs (non-retentive M/T/C, the output image):
+        written when it changes, which a warm restart would clear anyway."""
         self.interval_ns = None if interval_ms is None else int(interval_ms * 1_000_000)
-        self._db = sqlite3.connect(self.path, check_same_thread=False, isolation_level=None)
-        self._db.execute("PRAGMA journal_mode=WAL")
-        self._db.execute("PRAGMA synchronous=NORMAL")
-        self._db.executescript(_SCHEMA)
-        columns = {row[1] for row in self._db.execute("PRAGMA table_info(alarms)")}
-        for column, decl in (("user", "TEXT NOT NULL DEFAULT ''"), ("cpu_ns", "INTEGER")):
-            if column not in columns:  # a state file from before the column existed
-                self._db.execute(f"ALTER TABLE alarms ADD COLUMN {column} {decl}")
+        existed = self.path.exists()
+        if existed and self.path.is_file() and self.path.stat().st_size == 0:
+            raise StateFileError(self.path, "empty file (0 bytes), not a state file")
+        try:
+            self._db = sqlite3.connect(
+                self.path, check_same_thread=False, isolation_level=None, timeout=5.0
+            )
+        except sqlite3.Error as exc:
+            raise StateFileError(self.path, f"cannot open: {exc}") from None
+        try:
+            self._open(existed)
+        except sqlite3.DatabaseError as exc:
+            self._db.close()
+            raise StateFileError(self.path, f"not a readable state file ({exc})") from None
+        except BaseException:
+            self._db.close()
+            raise
+        self._lock: Any = _NoLock()  # a writer's lock once one is attached (use_lock)
         self._parts: dict[str, tuple[Callable[[], object], Callable[[Any], None]]] = {}
-        self._parts_cache: tuple[tuple[int, ...], str, object] | None = None
-        self._last: tuple[str, str, str] | None = None
+        self._part_seen: dict[str, object] = {}
+        self._seen: dict[int, object] = {}
+        self._volatile_seen: dict[int, object] = {}
+        self._meta_seen: dict[str, str] = {}
+        self._marked_ns: int | None = None
         self._last_ns: int | None = None
         self._diag_saved = 0
+        self._diag_seq = self._next_diag_seq()
+        self._logs = Batch()
+        self.deferred = False
+        """Set by a writer: ``log_*`` rows wait for the next ``stage`` instead of being
+        written at once, so they commit with the scan's state (and off the scan thread)."""
         self.saves = 0
+
+    def _open(self, existed: bool) -> None:
+        db = self._db
+        tables = {r[0] for r in db.execute("SELECT name FROM sqlite_master WHERE type='table'")}
+        if existed:
+            check = db.execute("PRAGMA quick_check").fetchone()
+            if check is None or check[0] != "ok":
+                raise StateFileError(self.path, f"damaged file ({check[0] if check else '?'})")
+            if tables and not tables & _OURS:
+                raise StateFileError(self.path, "an SQLite file, but not an s7graph state file")
+            if "instances" in tables:
+                columns = {r[1] for r in db.execute("PRAGMA table_info(instances)")}
+                if "state" in columns:
+                    raise StateFileError(
+                        self.path, "written by an older s7graph (no fingerprints)"
+                    )
+            if "meta" in tables:
+                row = db.execute("SELECT value FROM meta WHERE key='format'").fetchone()
+                if row is not None and row[0] != FORMAT:
+                    raise StateFileError(self.path, f"unknown format {row[0]!r}")
+        if not existed or not tables:
+            db.execute("PRAGMA page_size=1024")  # a short row change writes one short page
+        db.execute("PRAGMA journal_mode=WAL")
+        db.execute("PRAGMA synchronous=NORMAL")
+        db.executescript(_SCHEMA)
+        columns = {row[1] for row in db.execute("PRAGMA table_info(alarms)")}
+        for column, decl in _ADDED_ALARM_COLUMNS:
+            if column not in columns:  # a state file from before the column existed
+                db.execute(f"ALTER TABLE alarms ADD COLUMN {column} {decl}")
+        db.execute("INSERT OR IGNORE INTO meta VALUES ('format', ?)", (FORMAT,))
+
+    def _next_diag_seq(self) -> int:
+        row = self._db.execute("SELECT MAX(seq) FROM diagnostics").fetchone()
+        return 0 if row is None or row[0] is None else int(row[0]) + 1
 
     def close(self) -> None:
         self._db.close()
+
+    def use_lock(self, lock: Any) -> None:
+        """The writer's lock guards the queued log rows (``log_*`` from other threads)."""
+        self._lock = lock
 
     def has_state(self) -> bool:
         row = self._db.execute("SELECT 1 FROM meta WHERE key='memory'").fetchone()
@@ -86,26 +291,97 @@ class StateStore:
     def add_part(
         self, name: str, snapshot: Callable[[], object], restore: Callable[[Any], None]
     ) -> None:
-        """Persist ``snapshot()`` (JSON-able plain data) under ``name`` with every save, in
-        the same transaction; ``load`` hands it back to ``restore``. Register before ``load``.
-        A ``snapshot`` returning the very same object as last time is not encoded again."""
+        """Persist ``snapshot()`` (JSON-able plain data) under ``name`` with the state;
+        ``load`` hands it back to ``restore``. Register before ``load``. A ``snapshot``
+        returning the very same object as last time is taken as unchanged."""
         self._parts[name] = (snapshot, restore)
 
-    def _state(self, cpu: Cpu) -> tuple[str, str, str]:
-        memory = _dumps(cpu.mem.snapshot())
-        inst = _dumps({str(n): [i.fb.label, i.snapshot()] for n, i in cpu.instance_dbs.items()})
-        return memory, inst, self._parts_json()
+    # ---- staging: what changed since the last stage -------------------------------------
 
-    def _parts_json(self) -> str:
-        snaps = [(name, snap()) for name, (snap, _) in self._parts.items()]
-        ids = tuple(id(data) for _, data in snaps)
-        if self._parts_cache is None or self._parts_cache[0] != ids:
-            # the snapshots are kept alive with their ids, so an id cannot be reused
-            self._parts_cache = (ids, _dumps(dict(snaps)), snaps)
-        return self._parts_cache[1]
+    def stage(self, cpu: Cpu, *, upto: int = 0, full: bool = False) -> Batch | None:
+        """The rows that changed since the last ``stage`` (all of them with ``full``), as a
+        batch marked ``upto``; None when nothing changed. Call in the scan thread, between
+        scans: it reads the CPU's state without locking it."""
+        batch = Batch(upto=upto)
+        with self._lock:
+            logs, self._logs = self._logs, Batch()
+        batch.merge(logs)
+        batch.upto = upto
+        meta = {
+            "memory": _dumps(cpu.mem.snapshot()),
+            "mode": str(cpu.mode),
+            "last_restart": str(cpu.last_restart or ""),
+            "hot_blockers": _dumps(sorted(cpu.hot_blockers - _NOT_KEPT)),
+        }
+        if self.hot:
+            meta["hot_memory"] = _dumps(cpu.mem.hot_snapshot())
+        for key, value in meta.items():
+            if full or self._meta_seen.get(key) != value:
+                batch.meta[key] = value
+        self._meta_seen.update(batch.meta)
+        now = cpu.process_ns()
+        mark = full or (
+            self.time_mark_ns is not None
+            and (self._marked_ns is None or now - self._marked_ns >= self.time_mark_ns)
+        )
+        for number, idb in cpu.instance_dbs.items():
+            self._stage_instance(number, idb, batch, full, mark)
+        if batch.instances or self._marked_ns is None:
+            self._marked_ns = now
+        for name, (snap, _) in self._parts.items():
+            data = snap()
+            seen = self._part_seen.get(name, _UNSEEN)
+            if full or (data is not seen and data != seen):
+                batch.parts[name] = _dumps(data)
+                self._part_seen[name] = data
+        for e in cpu.diagnostics.since(self._diag_saved):
+            batch.diagnostics.append(
+                (self._diag_seq, e.t_ns, e.event_id, e.block, e.message, e.address)
+            )
+            self._diag_seq += 1
+        self._diag_saved = cpu.diagnostics.total
+        if not batch:
+            return None
+        if full:
+            batch.meta["cycle"] = str(cpu.cycle)
+        return batch
+
+    def _stage_instance(
+        self, number: int, idb: InstanceDB, batch: Batch, full: bool, mark: bool
+    ) -> None:
+        fb = idb.fb
+        snapshot = idb.snapshot()
+        steady: dict[str, object] = {}
+        volatile: dict[str, object] = {}
+        for var in fb.interface:
+            value = snapshot.get(var.name)
+            skip = _volatile(idb.values[var.name]) if var.type == OBJECT else ()
+            if skip and isinstance(value, dict):
+                volatile[var.name] = {k: value.get(k) for k in skip}
+                value = {k: v for k, v in value.items() if k not in skip}
+            steady[var.name] = value
+        if (
+            not full
+            and self._seen.get(number, _UNSEEN) == steady
+            and not (mark and self._volatile_seen.get(number, _UNSEEN) != volatile)
+        ):
+            return
+        self._seen[number] = steady
+        self._volatile_seen[number] = volatile
+        fmt = fb.state_format
+        data = zlib.compress(_dumps(snapshot).encode(), 6)
+        shape = _dumps(fmt.shape() if fmt is not None else None)
+        batch.instances[number] = (fb.label, fb.name, fingerprint_of(fb), shape, data)
+
+    def diagnostic_row(self, entry: DiagEntry) -> tuple[int, int, int, str, str, str]:
+        """A diagnostics row for an entry written outside ``stage`` (the runner's last word
+        when the scan hangs)."""
+        seq = self._diag_seq
+        self._diag_seq += 1
+        return (seq, entry.t_ns, entry.event_id, entry.block, entry.message, entry.address)
 
     def maybe_save(self, cpu: Cpu) -> bool:
-        """Save if retentive data changed since the last save (and the interval has passed)."""
+        """Stage and write at once if something changed (and the interval has passed)."""
         now = cpu.process_ns()
         if (
             self.interval_ns is not None
@@ -113,85 +389,177 @@ class StateStore:
             and now - self._last_ns < self.interval_ns
         ):
             return False
-        state = self._state(cpu)
-        if state == self._last and cpu.diagnostics.total == self._diag_saved:
+        batch = self.stage(cpu)
+        if batch is None:
             return False
-        self._write(cpu, state)
+        self.write(batch)
         self._last_ns = now
         return True
 
-    def save(self, cpu: Cpu) -> None:
-        """Save unconditionally (on stop)."""
-        self._write(cpu, self._state(cpu))
+    def save(self, cpu: Cpu, *, clean: bool | None = None) -> None:
+        """Write everything now (at startup and on stop); ``clean`` marks whether the run
+        ended cleanly (True at a shutdown, False while running)."""
+        batch = self.stage(cpu, full=True) or Batch()
+        if clean is not None:
+            batch.meta["clean"] = "1" if clean else "0"
+        self.write(batch)
 
-    def _write(self, cpu: Cpu, state: tuple[str, str, str]) -> None:
-        memory, inst, parts = state
+    # ---- writing ---------------------------------------------------------------------------
+
+    def write(self, batch: Batch) -> None:
+        """Commit ``batch`` as one transaction; ``StateWriteError`` names the first error."""
+        if not batch:
+            return
         db = self._db
-        rows = json.loads(inst)
-        part_rows = [(name, _dumps(data)) for name, data in json.loads(parts).items()]
-        new_diag = cpu.diagnostics.since(self._diag_saved)
-        first_seq = cpu.diagnostics.total - len(new_diag)
-        db.execute("BEGIN")
         try:
-            meta = {
-                "memory": memory,
-                "mode": str(cpu.mode),
-                "cycle": str(cpu.cycle),
-                "last_restart": str(cpu.last_restart or ""),
-            }
-            db.executemany("INSERT OR REPLACE INTO meta VALUES (?, ?)", meta.items())
-            db.execute("DELETE FROM instances")
-            db.executemany(
-                "INSERT INTO instances VALUES (?, ?, ?)",
-                [(int(n), label, _dumps(snap)) for n, (label, snap) in rows.items()],
-            )
-            db.executemany("INSERT OR REPLACE INTO parts VALUES (?, ?)", part_rows)
-            db.executemany(
-                "INSERT OR REPLACE INTO diagnostics VALUES (?, ?, ?, ?, ?, ?)",
-                [
-                    (first_seq + i, e.t_ns, e.event_id, e.block, e.message, e.address)
-                    for i, e in enumerate(new_diag)
-                ],
-            )
+            db.execute("BEGIN IMMEDIATE")
+            if batch.meta:
+                db.executemany("INSERT OR REPLACE INTO meta VALUES (?, ?)", batch.meta.items())
+            if batch.instances:
+                db.executemany(
+                    "INSERT OR REPLACE INTO instances VALUES (?, ?, ?, ?, ?, ?)",
+                    [(n, *row) for n, row in batch.instances.items()],
+                )
+            if batch.parts:
+                db.executemany("INSERT OR REPLACE INTO parts VALUES (?, ?)", batch.parts.items())
+            if batch.diagnostics:
+                db.executemany(
+                    "INSERT OR REPLACE INTO diagnostics VALUES (?, ?, ?, ?, ?, ?)",
+                    batch.diagnostics,
+                )
+            if batch.alarms:
+                db.executemany(
+                    f"INSERT INTO alarms ({', '.join(_ALARM_COLUMNS)}) "
+                    "VALUES (?, ?, ?, ?, ?, ?, ?)",
+                    batch.alarms,
+                )
+            if batch.audit:
+                db.executemany(
+                    "INSERT INTO audit (t_ns, user, action, detail) VALUES (?, ?, ?, ?)",
+                    batch.audit,
+                )
             db.execute("COMMIT")
-        except BaseException:
-            db.execute("ROLLBACK")
-            raise
-        self._last = state
-        self._diag_saved = cpu.diagnostics.total
+        except sqlite3.Error as exc:
+            if db.in_transaction:
+                with contextlib.suppress(sqlite3.Error):  # the first error is the one to name
+                    db.execute("ROLLBACK")
+            code = int(getattr(exc, "sqlite_errorcode", 0) or 0) & 0xFF
+            name = getattr(exc, "sqlite_errorname", "")
+            problem = f"{exc} ({name})" if name else str(exc)
+            raise StateWriteError(self.path, problem, busy=code in _BUSY) from None
         self.saves += 1
 
     def meta(self, key: str) -> str | None:
         row = self._db.execute("SELECT value FROM meta WHERE key=?", (key,)).fetchone()
         return None if row is None else str(row[0])
 
-    def load(self, cpu: Cpu) -> bool:
-        """Restore retentive memory, DBs, instance DBs, diagnostics and the registered parts
-        into a STOPped CPU.
+    # ---- loading ---------------------------------------------------------------------------
 
-        Instance DBs are matched by number and FB label; returns False if the file is empty.
-        """
+    def load(self, cpu: Cpu) -> LoadReport | None:
+        """Restore memory, instance DBs, diagnostics and the registered parts into a
+        STOPped CPU; None when the file holds no state yet. ``StateFileError`` when it
+        holds a state this CPU cannot trust (see the module docstring)."""
         memory = self.meta("memory")
+        instances = self._db.execute(
+            "SELECT number, fb, name, fingerprint, shape, data FROM instances ORDER BY number"
+        ).fetchall()
+        if memory is None and not instances:
+            return None
+        report = LoadReport(
+            mode=self.meta("mode") or "",
+            clean=self.meta("clean") == "1",
+            last_restart=self.meta("last_restart") or "",
+        )
         if memory is None:
-            return False
-        cpu.mem.restore(json.loads(memory))
-        for number, label, state in self._db.execute("SELECT number, fb, state FROM instances"):
-            idb = cpu.instance_dbs.get(int(number))
-            if idb is not None and idb.fb.label == label:
-                idb.restore(json.loads(state))
+            raise StateFileError(self.path, "no memory image (an incomplete state)")
+        hot = self.meta("hot_memory")
+        if hot is not None:
+            self._restore_part("hot restart image",
+                               lambda: cpu.mem.restore_hot(json.loads(hot)))  # fmt: skip
+        else:
+            cpu.hot_blockers.add("no hot restart image saved")
+        self._restore_part("memory image", lambda: cpu.mem.restore(json.loads(memory)))
+        for number, label, name, fingerprint, shape, data in instances:
+            self._load_instance(cpu, int(number), label, name, fingerprint, shape, data, report)
+        blockers = self.meta("hot_blockers")
+        if blockers:
+            self._restore_part("hot restart blockers", lambda: cpu.hot_blockers.update(
+                str(b) for b in json.loads(blockers)))  # fmt: skip
         entries = self._db.execute(
             "SELECT t_ns, event_id, block, message, address FROM diagnostics ORDER BY seq"
         ).fetchall()
         for t_ns, event_id, block, message, address in entries[-cpu.diagnostics.capacity :]:
-            cpu.diagnostics.add(DiagEntry(t_ns, event_id, block, message, address))
+            cpu.diagnostics.add(DiagEntry(int(t_ns), int(event_id), str(block or ""),
+                                          str(message or ""), str(address or "")))  # fmt: skip
         self._diag_saved = cpu.diagnostics.total
-        for name, state in self._db.execute("SELECT name, state FROM parts"):
-            part = self._parts.get(str(name))
+        for part_name, state in self._db.execute("SELECT name, state FROM parts"):
+            part = self._parts.get(str(part_name))
             if part is not None:
-                part[1](json.loads(state))
-        return True
+                self._restore_part(f"part {part_name!r}", functools.partial(
+                    _restore_json, part[1], str(state)))  # fmt: skip
+        if not report.changed:
+            cpu.hot_blockers.discard("program download")  # the very program that was running
+        if not self.hot:  # not kept up to date from now on (a read-only file fails later)
+            with contextlib.suppress(sqlite3.Error):
+                self._db.execute("DELETE FROM meta WHERE key='hot_memory'")
+        return report
+
+    def _restore_part(self, what: str, restore: Callable[[], object]) -> None:
+        try:
+            restore()
+        except StateFileError:
+            raise
+        except Exception as exc:
+            raise StateFileError(self.path, f"malformed {what}: {_why(exc)}") from None
+
+    def _load_instance(
+        self,
+        cpu: Cpu,
+        number: int,
+        label: str,
+        name: str,
+        fingerprint: str,
+        shape: str,
+        blob: bytes,
+        report: LoadReport,
+    ) -> None:
+        idb = cpu.instance_dbs.get(number)
+        held = f"DB{number} holds an instance of {label} {name!r}"
+        if idb is None:
+            raise StateFileError(self.path, f"{held}, which this program does not have")
+        fb = idb.fb
+        if fb.label != label or fb.name != name:
+            raise StateFileError(self.path, f"{held}, not of {fb.label} {fb.name!r}")
+        try:
+            data = _decode_instance(blob)
+            described = json.loads(shape)
+        except (ValueError, TypeError, zlib.error) as exc:
+            raise StateFileError(self.path, f"malformed data of DB{number}: {_why(exc)}") from None
+        if fingerprint != fingerprint_of(fb):
+            fmt = fb.state_format
+            try:
+                if fmt is not None:
+                    data, notes = fmt.adapt(described, data)
+                else:
+                    notes = _by_name(fb, data)
+            except (ValueError, KeyError, TypeError, IndexError) as exc:
+                raise StateFileError(
+                    self.path, f"DB{number}: {fb.label} changed and its state cannot be "
+                    f"carried over: {_why(exc)}") from None  # fmt: skip
+            report.changed.append(number)
+            report.notes.extend(f"DB{number} {fb.label} {fb.name!r}: {n}" for n in notes)
+        self._restore_part(f"state of DB{number}", lambda: idb.restore(data, strict=True))
 
     # ---- alarms and audit (hooks for sfb/alarms and the web commands) ---------------------
+
+    def _log(self, table: str, row: tuple[Any, ...]) -> None:
+        if self.deferred:
+            with self._lock:
+                getattr(self._logs, table).append(row)
+            return
+        batch = Batch()
+        getattr(batch, table).append(row)
+        self.write(batch)
 
     def log_alarm(
         self,
@@ -201,34 +569,24 @@ class StateStore:
         text: str = "",
         user: str = "",
         cpu_ns: int | None = None,
+        reason: str = "",
     ) -> None:
-        self._db.execute(
-            "INSERT INTO alarms (t_ns, key, state, text, user, cpu_ns) VALUES (?, ?, ?, ?, ?, ?)",
-            (t_ns, key, state, text, user, cpu_ns),
-        )
+        self._log("alarms", (t_ns, key, state, text, user, cpu_ns, reason))
 
     def log_alarms(self, events: Iterable[object], wall_ns: int) -> int:
         """Append every message event among ``events`` (a ``ScanRecord.alarms``) at wall time
-        ``wall_ns``: kind as state, the acknowledging user, the CPU clock's time. Returns
-        how many were logged."""
-        rows = [
-            (wall_ns, str(e.msg_id), e.kind, e.text, e.user, e.t_ns)
-            for e in events
-            if isinstance(e, AlarmEvent)
-        ]
-        if rows:
-            self._db.executemany(
-                "INSERT INTO alarms (t_ns, key, state, text, user, cpu_ns) "
-                "VALUES (?, ?, ?, ?, ?, ?)",
-                rows,
-            )
-        return len(rows)
+        ``wall_ns``: kind as state, the acknowledging user, the CPU clock's time, and the
+        reason when a restart made it go. Returns how many were logged."""
+        n = 0
+        for e in events:
+            if isinstance(e, AlarmEvent):
+                reason = str(getattr(e, "reason", "") or "")
+                self.log_alarm(wall_ns, str(e.msg_id), e.kind, e.text, e.user, e.t_ns, reason)
+                n += 1
+        return n
 
     def log_audit(self, t_ns: int, user: str, action: str, detail: str = "") -> None:
-        self._db.execute(
-            "INSERT INTO audit (t_ns, user, action, detail) VALUES (?, ?, ?, ?)",
-            (t_ns, user, action, detail),
-        )
+        self._log("audit", (t_ns, user, action, detail))
 
     def alarms(self) -> list[dict[str, Any]]:
         cur = self._db.execute(f"SELECT {', '.join(_ALARM_COLUMNS)} FROM alarms ORDER BY id")
@@ -237,3 +595,61 @@ class StateStore:
     def audit(self) -> list[dict[str, Any]]:
         cur = self._db.execute("SELECT t_ns, user, action, detail FROM audit ORDER BY id")
         return [dict(zip(("t_ns", "user", "action", "detail"), r, strict=True)) for r in cur]
+
+    def instance_state(self, number: int) -> dict[str, Any] | None:
+        """The stored snapshot of instance DB ``number`` as plain data (None if none), for
+        tests and tools reading the file."""
+        row = self._db.execute("SELECT data FROM instances WHERE number=?", (number,)).fetchone()
+        return None if row is None else _decode_instance(row[0])
+
+
+class _NoLock:
+    """The lock of a store nobody writes from another thread."""
+
+    def __enter__(self) -> None:
+        return None
+
+    def __exit__(self, *exc: object) -> None:
+        return None
+
+
+class _Unseen:
+    def __repr__(self) -> str:
+        return "<unseen>"
+
+
+_UNSEEN = _Unseen()
+
+
+def _restore_json(restore: Callable[[Any], None], text: str) -> None:
+    restore(json.loads(text))
+
+
+def _decode_instance(blob: object) -> dict[str, Any]:
+    """An instance snapshot from its stored row (compressed JSON of an object)."""
+    if not isinstance(blob, bytes):
+        raise ValueError(f"the data is {type(blob).__name__}, not compressed JSON")
+    data = json.loads(zlib.decompress(blob))
+    if not isinstance(data, dict):
+        raise ValueError("the data is not an object")
+    return data
+
+
+def _by_name(fb: FB, data: dict[str, object]) -> list[str]:
+    """An FB whose interface changed: what restoring by name keeps and drops."""
+    names = {v.name for v in fb.interface if v.decl is not Decl.TEMP}
+    dropped = sorted(set(data) - names)
+    added = sorted(names - set(data))
+    for name in dropped:
+        del data[name]
+    notes = [f"interface changed; variables kept by name ({len(data)})"]
+    if dropped:
+        notes.append(f"dropped (no longer declared): {', '.join(dropped)}")
+    if added:
+        notes.append(f"new, at their initial values: {', '.join(added)}")
+    return notes
+
+
+def _why(exc: BaseException) -> str:
+    text = str(exc) or type(exc).__name__
+    return f"{type(exc).__name__}: {text}"[:300]

@@ -1,27 +1,66 @@
-"""Real-time pacing on the system clock (DESIGN.md "Process model").
+"""Real-time pacing on the system clock, with a monitor that aborts a scan that hangs
+(DESIGN.md "Process model"; SPEC.md §1.5).
 
-The only engine module allowed ``threading`` and sleeping: it calls ``cpu.scan()`` every
-``cycle_ms`` (a minimum cycle time: a late scan starts the next one at once), hands each
-``ScanRecord`` to ``on_record``, lets a ``StateStore`` save changed retentive data and log
-the scan's message events (``ScanRecord.alarms``, stamped with the wall clock), and keeps
-statistics of the scan execution time and of overruns.
+One of the three engine modules allowed threads and sleeping (with ``clock.py`` and
+``writer.py``). :class:`Runner` calls ``cpu.scan()`` every ``cycle_ms`` (a minimum cycle
+time: a late scan starts the next one at once), hands each ``ScanRecord`` to ``on_record``,
+logs the scan's message events and hands the state's changes to the store's writer
+(``engine/writer.py``: committed off the scan thread), and keeps statistics of the scan
+execution time and of overruns.
+
+**Cycle monitoring of the real thing.** The CPU judges a cycle's length only once it is
+over; a block, a plant or an action in an endless loop would never end it. A monitor
+thread watches the scan thread while it runs a section marked ``abortable`` (the scan; the
+chart runner marks the plant): still running at twice the maximum cycle time, it raises
+``ScanAborted`` into it — by a signal when the scan thread is the main thread (it also
+interrupts a sleep), else by ``PyThreadState_SetAsyncExc`` — and again every maximum cycle
+time while it is swallowed. The CPU goes to STOP with a time-error entry naming the block
+(``Cpu.abort``).
+
+**Stopping.** ``request_stop`` (the CLI's SIGTERM and Ctrl-C handlers) ends the loop after
+the current scan. If the scan thread does not come back within ``grace_s`` — code that
+swallows every abort — the monitor commits the state as of the last finished scan with a
+diagnostic entry saying so, and ends the process with exit status 3 (``EXIT_HUNG``).
 """
 
 from __future__ import annotations
 
+import contextlib
+import ctypes
+import os
+import signal
+import sys
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from types import FrameType
 
 from s7graph.engine.cpu import Cpu
+from s7graph.engine.diagnostics import EventId
+from s7graph.engine.errors import ScanAborted
 from s7graph.engine.modes import CpuMode
-from s7graph.engine.persistence import StateStore
-from s7graph.engine.record import ScanRecord
+from s7graph.engine.persistence import Batch, StateStore, StateWriteError
+from s7graph.engine.record import DiagEntry, ScanRecord
+from s7graph.engine.restart import RestartType
 from s7graph.engine.watchdog import CycleStatistics
+from s7graph.engine.writer import DurableCallback, StoreWriter
+
+__all__ = ["EXIT_HUNG", "GRACE_S", "Runner", "stop_reason"]
+
+GRACE_S = 3.0
+"""How long a stop request waits for a hanging scan before the process ends anyway."""
+EXIT_HUNG = 3
+"""Exit status of a process ended because its scan did not return after a stop request."""
+_ABORT_SIGNAL = signal.SIGUSR2
 
 
 class Runner:
-    """Paces one CPU in real time until ``duration_s`` has passed or ``stop()`` is called."""
+    """Paces one CPU in real time until ``duration_s`` has passed or ``stop()`` is called.
+
+    ``end_on_stop``: end the loop when the CPU goes to STOP by itself (a block error, a
+    time error, an abort); ``stopped`` then holds the reason. A write error of the state
+    file always ends it (``write_error``), with the CPU in STOP."""
 
     def __init__(
         self,
@@ -30,6 +69,9 @@ class Runner:
         cycle_ms: float = 10.0,
         store: StateStore | None = None,
         on_record: Callable[[ScanRecord], None] | None = None,
+        end_on_stop: bool = False,
+        grace_s: float = GRACE_S,
+        on_stop: Callable[[str], object] | None = None,
     ) -> None:
         if cycle_ms <= 0:
             raise ValueError("cycle time must be positive")
@@ -37,19 +79,80 @@ class Runner:
         self.cycle_s = cycle_ms / 1000.0
         self.store = store
         self.on_record = on_record
+        self.end_on_stop = end_on_stop
+        self.on_stop = on_stop
+        """Called with the reason (one line) when the CPU goes to STOP by itself."""
+        self.grace_s = grace_s
         self.exec_stats = CycleStatistics()
         """Wall time spent inside ``scan()`` (ns)."""
         self.overruns = 0
         self.scans = 0
+        self.aborts = 0
+        self.writer: StoreWriter | None = None
+        self.stopped = ""
+        """Why the CPU went to STOP by itself while running (one line), else empty."""
+        self.write_error: StateWriteError | None = None
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
+        self._lock = threading.Lock()
+        self._section: str | None = None
+        self._cycle_start = 0.0
+        self._armed = False
+        self._last_abort = 0.0
+        self._scan_tid: int | None = None
+        self._signal_abort = False
+        self._stop_at: float | None = None
+        self._monitor: threading.Thread | None = None
+        self._done = threading.Event()
+        self._exit: Callable[[int], object] = os._exit
+
+    # ---- starting and stopping ----------------------------------------------------------
+
+    def startup(self, restart: str | RestartType = "warm") -> ScanRecord:
+        """STOP → STARTUP → RUN with ``restart``; the state is written at once (marked as
+        a run that has not ended cleanly) and the writer starts."""
+        self._watch()
+        record = self.cpu.start(restart)
+        if self.store is not None:
+            self.log_alarms(record)
+            self.store.save(self.cpu, clean=False)
+            self.writer = StoreWriter(self.store)
+        return record
 
     def stop(self) -> None:
         """Ask the loop to end after the current scan (thread-safe)."""
         self._stop.set()
 
+    def request_stop(self) -> None:
+        """A stop from outside (SIGTERM, Ctrl-C): end after this scan, and if the scan does
+        not return within ``grace_s``, save what is saved and end the process."""
+        if self._stop_at is None:
+            self._stop_at = time.monotonic()
+        self._stop.set()
+
+    def on_stop_signal(self, signum: int, frame: FrameType | None) -> None:
+        """A handler for SIGTERM and SIGINT: ``request_stop`` (never interrupted by an abort
+        of the scan it interrupted)."""
+        self.request_stop()
+
+    # ---- the loop ------------------------------------------------------------------------
+
     def run(self, *, duration_s: float | None = None) -> None:
-        """Scan until stopped or ``duration_s`` elapsed (KeyboardInterrupt propagates)."""
+        """Scan until stopped or ``duration_s`` elapsed."""
+        self._scan_tid = threading.get_ident()
+        self._watch()
+        if self.store is not None and self.writer is None:
+            self.writer = StoreWriter(self.store)
+        previous = self._install_abort_signal()
+        try:
+            self._loop(duration_s)
+        finally:
+            if previous is not None:
+                signal.signal(_ABORT_SIGNAL, previous)
+            self._signal_abort = False
+
+    def _loop(self, duration_s: float | None) -> None:
+        cpu = self.cpu
         t0 = time.monotonic()
         deadline = None if duration_s is None else t0 + duration_s
         due = t0
@@ -57,16 +160,33 @@ class Runner:
             now = time.monotonic()
             if deadline is not None and now >= deadline:
                 break
+            was_running = cpu.mode is CpuMode.RUN
             started = time.perf_counter_ns()
-            record = self.cpu.scan()
+            self._cycle_start = now
+            record: ScanRecord | None = None
+            try:
+                with self.abortable("scan"):
+                    record = cpu.scan()
+            except ScanAborted as abort:
+                cpu.abort(abort.block or "CPU")
             self.exec_stats.add(time.perf_counter_ns() - started)
             self.scans += 1
-            if self.store is not None:
+            if record is not None:
                 self.log_alarms(record)
-                if self.cpu.mode is CpuMode.RUN:
-                    self.store.maybe_save(self.cpu)
-            if self.on_record is not None:
-                self.on_record(record)
+            self._persist()
+            if record is not None and self.on_record is not None:
+                try:
+                    self.on_record(record)
+                except ScanAborted as abort:
+                    cpu.abort(abort.block or "on_record")
+            if self.write_error is not None:
+                break
+            if was_running and cpu.mode is CpuMode.STOP and not self._stop.is_set():
+                self.stopped = stop_reason(cpu)
+                if self.on_stop is not None:
+                    self.on_stop(self.stopped)
+                if self.end_on_stop:
+                    break
             due += self.cycle_s
             delay = due - time.monotonic()
             if delay > 0:
@@ -75,10 +195,58 @@ class Runner:
                 self.overruns += 1
                 due = time.monotonic()
 
+    def _persist(self) -> None:
+        writer = self.writer
+        if self.store is None or writer is None:
+            return
+        writer.submit(self.store.stage(self.cpu, upto=self.scans), self.scans)
+        if writer.error is not None and self.write_error is None:
+            self.write_error = writer.error
+            self.cpu.stop_by_error(
+                EventId.STOP_STATE_WRITE, "", f"state file not written: {writer.error.problem}"
+            )
+
     def log_alarms(self, record: ScanRecord) -> None:
         """Append the message events of ``record`` to the store's alarm log (wall time)."""
         if self.store is not None and record.alarms:
             self.store.log_alarms(record.alarms, time.time_ns())
+
+    @contextlib.contextmanager
+    def abortable(self, what: str) -> Iterator[None]:
+        """Mark the scan thread's section ``what`` as one the monitor may abort once the
+        cycle (begun at the last scan's start) has run twice the maximum cycle time."""
+        with self._lock:
+            self._section = what
+            self._armed = False
+        try:
+            yield
+        finally:
+            with self._lock:
+                self._section = None
+                if self._armed and not self._signal_abort and self._scan_tid is not None:
+                    _set_async_exc(self._scan_tid, None)  # not delivered yet: withdrawn
+                self._armed = False
+
+    # ---- durability (for the command path) -------------------------------------------------
+
+    def durable_mark(self) -> int:
+        """The mark whose commit makes durable everything applied so far: a command applied
+        at this scan boundary acts (and is audited) in the next scan."""
+        return self.writer.next_mark() if self.writer is not None else self.scans + 1
+
+    def when_durable(self, mark: int, fn: DurableCallback) -> None:
+        """``fn(None)`` once scan ``mark`` is on disk, ``fn(error)`` if it never will be; at
+        once without a store (nothing to wait for)."""
+        if self.writer is None:
+            fn(None if self.store is None else "the state file is not open yet")
+            return
+        self.writer.when_durable(mark, fn)
+
+    def wait_durable(self, mark: int, timeout: float | None = None) -> bool:
+        """Block (never in the scan thread) until scan ``mark`` is on disk."""
+        return self.writer is None or self.writer.wait(mark, timeout)
+
+    # ---- threads ---------------------------------------------------------------------------
 
     def start_thread(self, *, duration_s: float | None = None) -> threading.Thread:
         """Run the loop in a daemon thread (for hosts that own the main thread)."""
@@ -94,7 +262,8 @@ class Runner:
             self._thread.join(timeout)
 
     def shutdown(self, reason: str = "runner stopped") -> ScanRecord:
-        """STOP the CPU (outputs 0), take a last record and save the state."""
+        """STOP the CPU (outputs 0), take a last record, save the state (marked clean) and
+        end the writer and the monitor."""
         self.stop()
         self.join()
         self.cpu.stop(reason)
@@ -102,6 +271,126 @@ class Runner:
         self.log_alarms(record)
         if self.on_record is not None:
             self.on_record(record)
-        if self.store is not None:
-            self.store.save(self.cpu)
+        writer, self.writer = self.writer, None
+        if writer is not None:
+            writer.close()  # commits what is pending
+            if writer.error is not None and self.write_error is None:
+                self.write_error = writer.error
+        if self.store is not None and self.write_error is None:
+            try:
+                self.store.save(self.cpu, clean=True)
+            except StateWriteError as exc:
+                self.write_error = exc
+        self._done.set()
         return record
+
+    def _watch(self) -> None:
+        if self._monitor is None:
+            self._monitor = threading.Thread(
+                target=self._monitor_loop, name="s7graph-monitor", daemon=True
+            )
+            self._monitor.start()
+
+    def _monitor_loop(self) -> None:
+        while not self._done.wait(self._poll_s()):
+            now = time.monotonic()
+            self._check_abort(now)
+            if self._stop_at is not None and now - self._stop_at >= self.grace_s:
+                self._end_hung(now - self._stop_at)
+                return
+
+    def _poll_s(self) -> float:
+        max_s = self.cpu.watchdog.max_cycle_ns / 1e9
+        return min(0.05, max(0.005, max_s / 4))
+
+    def _check_abort(self, now: float) -> None:
+        with self._lock:
+            if self._section is None or self._scan_tid is None:
+                return
+            limit = 2 * self.cpu.watchdog.max_cycle_ns / 1e9
+            elapsed = now - self._cycle_start
+            if elapsed < limit or now - self._last_abort < limit / 2:
+                return
+            self._last_abort = now
+            self.aborts += 1
+            where = _innermost(self._scan_tid)
+            self.cpu.abort_reason = (
+                f"still running {elapsed * 1000:.0f} ms into the cycle{where}, past twice "
+                f"the maximum cycle time ({limit * 1000:.0f} ms)"
+            )
+            self._armed = True
+            if self._signal_abort:
+                signal.pthread_kill(self._scan_tid, _ABORT_SIGNAL)
+            else:
+                _set_async_exc(self._scan_tid, ScanAborted)
+
+    def _install_abort_signal(self) -> signal.Handlers | Callable[..., object] | int | None:
+        if threading.current_thread() is not threading.main_thread():
+            return None
+        previous = signal.signal(_ABORT_SIGNAL, self._on_abort_signal)
+        self._signal_abort = True
+        return previous
+
+    def _on_abort_signal(self, signum: int, frame: FrameType | None) -> None:
+        if not self._armed:
+            return
+        up = frame
+        while up is not None:  # inside the stop handler: abort at the next try instead
+            if up.f_code in _SHIELDED:
+                return
+            up = up.f_back
+        self._armed = False
+        raise ScanAborted
+
+    def _end_hung(self, waited_s: float) -> None:
+        """The scan did not return after a stop request: commit what is staged with an
+        entry saying so, one line on stderr, and end the process (``EXIT_HUNG``)."""
+        where = _innermost(self._scan_tid) if self._scan_tid is not None else ""
+        message = (
+            f"the scan did not return{where} within {waited_s:.1f} s of the stop request: "
+            "process ended; the state is the last finished scan's"
+        )
+        entry = DiagEntry(self.cpu.clock.now_ns(), EventId.STOP_HUNG, "", message)
+        writer = self.writer
+        if writer is not None and self.store is not None:
+            batch = Batch(diagnostics=[self.store.diagnostic_row(entry)])
+            writer.submit(batch, 0)
+            writer.close(timeout=2.0)
+        print(f"s7graph: error: {message}", file=sys.stderr, flush=True)
+        self._exit(EXIT_HUNG)
+
+
+_SHIELDED = {Runner.on_stop_signal.__code__, Runner.request_stop.__code__}
+
+
+def stop_reason(cpu: Cpu) -> str:
+    """One line: why ``cpu`` went to STOP — the error entry that caused it, if any, and the
+    STOP entry (``Cpu.stop_entry``)."""
+    stop = cpu.stop_entry
+    if stop is None:
+        return "the CPU is in STOP"
+    entries = list(cpu.diagnostics)
+    cause: DiagEntry | None = None
+    for k, entry in enumerate(entries):
+        if entry is stop and k > 0 and entries[k - 1].event_id >> 12 in (0x2, 0x3):
+            cause = entries[k - 1]
+    if cause is None:
+        return f"{_at(stop)}{stop.message}"
+    return f"{_at(cause)}{cause.message} ({stop.message})"
+
+
+def _at(entry: DiagEntry) -> str:
+    return f"{entry.block}: " if entry.block else ""
+
+
+def _set_async_exc(tid: int, exc: type[BaseException] | None) -> None:
+    obj = ctypes.py_object(exc) if exc is not None else None
+    ctypes.pythonapi.PyThreadState_SetAsyncExc(ctypes.c_ulong(tid), obj)
+
+
+def _innermost(tid: int) -> str:
+    """`` (file.py:12 in f)``: where thread ``tid`` is running now, for the diagnostics."""
+    frame = sys._current_frames().get(tid)
+    if frame is None:
+        return ""
+    return f" ({Path(frame.f_code.co_filename).name}:{frame.f_lineno} in {frame.f_code.co_name})"

@@ -19,6 +19,7 @@ from pathlib import Path
 from s7graph.engine.address import Address, Area, Width, parse_address
 from s7graph.engine.datatypes import type_of
 from s7graph.engine.errors import AddressError, SourceLocation, SymbolError, TypeMismatch
+from s7graph.engine.text import read_utf8
 
 __all__ = ["Symbol", "SymbolTable", "default_type"]
 
@@ -144,7 +145,7 @@ class SymbolTable:
     def from_file(cls, path: str | Path) -> SymbolTable:
         """Load a symbol file (format detected, see the module docstring)."""
         p = Path(path)
-        return cls.from_text(p.read_text(encoding="utf-8-sig"), file=str(p))
+        return cls.from_text(read_utf8(p), file=str(p))
 
     @classmethod
     def from_text(cls, text: str, *, file: str = "<symbols>", line: int = 1) -> SymbolTable:

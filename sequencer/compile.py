@@ -178,9 +178,14 @@ def compile_chart(chart: Chart, symbols: Any = None) -> CompiledChart:
             res.problems.append(_Problem(exc.where or s.loc, f"S{s.number}: {exc.message}"))
             a_src = f"def _a{i}(st, R, ev, c_ok, zero):\n    pass\n"
             f_src = f"def _f{i}(st, R, ev):\n    pass\n"
-        parts += [a_src, f_src]
+        parts += [*_split(a_src), *_split(f_src)]
         plain = s.interlock is None and s.supervision is None
-        if a_body is not None and plain and all(len(tr_src[j]) == 1 for j in leaving[i]):
+        if (
+            a_body is not None
+            and plain
+            and all(len(tr_src[j]) == 1 for j in leaving[i])
+            and len(a_body) <= _SPLIT_LINES
+        ):
             parts.append(_gen_step(i, leaving[i], conds, a_body))
     parts.append(_gen_permanent("_before", chart.before, g, res))
     parts.append(_gen_permanent("_after", chart.after, g, res))
@@ -188,7 +193,9 @@ def compile_chart(chart: Chart, symbols: Any = None) -> CompiledChart:
     if res.problems:
         raise ChartError(res.problems)
     distinct, aliases = _share(parts)
-    code = compile("\n".join(distinct), f"<chart {chart.name}>", "exec")
+    code = tuple(
+        compile(src, f"<chart {chart.name}>", "exec") for src in _batches(distinct)
+    )
     source = "\n".join(_alias_source(src, aliases) for src in parts)
     var_inits = {
         v.name: (v.init.value if v.init is not None else _zero(v.type)) for v in chart.vars
@@ -265,6 +272,75 @@ _DEFAULT_VALUE = re.compile(r"=(\d+)")
 
 
 Alias = tuple[str, str, "tuple[int, ...] | None"]
+
+
+_SPLIT_LINES = 400
+"""A generated action function longer than this is split into functions of about this
+many lines (called in order), and its step gets no fused function: ``compile()`` then needs
+memory in proportion to the longest function, not to the rows of the chart."""
+_BATCH_CHARS = 200_000
+"""Generated source compiled at once, at most (as above, for charts of many steps)."""
+_PARAM_ASSIGNMENT = re.compile(r"    (c_ok|zero) = ")
+
+
+def _split(src: str) -> list[str]:
+    """``src`` (a ``def`` of ``st R ev …`` whose top-level statements share no locals but
+    its parameters) as itself, or — when longer than ``_SPLIT_LINES`` — as a function
+    calling parts of its body in order, and those parts. An assignment to a parameter
+    (``c_ok = True`` before the S0 rows of a final scan) stays in the caller."""
+    lines = src.rstrip("\n").split("\n")
+    if len(lines) <= _SPLIT_LINES:
+        return [src]
+    head, body = lines[0], lines[1:]
+    while body and body[0] in ("    X = st.x", "    V = st.vars"):
+        body = body[1:]  # with_locals binds them again where needed
+    name = head[4 : head.index("(")]
+    params = head[head.index("(") + 1 : head.rindex(")")]
+    args = ", ".join(p.split("=")[0].strip() for p in params.split(","))
+    statements: list[list[str]] = []
+    for ln in body:
+        top = ln.startswith("    ") and not ln.startswith("     ")
+        if (top and not ln.lstrip().startswith(("elif ", "else:"))) or not statements:
+            statements.append([ln])
+        else:
+            statements[-1].append(ln)
+    caller: list[str] = [head]
+    pieces: list[str] = []
+    chunk: list[str] = []
+
+    def flush() -> None:
+        if chunk:
+            k = len(pieces)
+            pieces.append(with_locals([f"def {name}__{k}({params}):", *chunk]))
+            caller.append(f"    {name}__{k}({args})")
+            chunk.clear()
+
+    for statement in statements:
+        if len(statement) == 1 and _PARAM_ASSIGNMENT.match(statement[0]):
+            flush()
+            caller.extend(statement)
+            continue
+        chunk.extend(statement)
+        if len(chunk) >= _SPLIT_LINES:
+            flush()
+    flush()
+    return [with_locals(caller), *pieces]
+
+
+def _batches(sources: list[str]) -> list[str]:
+    """``sources`` joined into pieces of at most about ``_BATCH_CHARS`` characters."""
+    out: list[str] = []
+    batch: list[str] = []
+    size = 0
+    for src in sources:
+        if batch and size + len(src) > _BATCH_CHARS:
+            out.append("\n".join(batch))
+            batch, size = [], 0
+        batch.append(src)
+        size += len(src) + 1
+    if batch:
+        out.append("\n".join(batch))
+    return out
 
 
 def _share(parts: list[str]) -> tuple[list[str], dict[str, Alias]]:

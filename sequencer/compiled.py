@@ -68,7 +68,7 @@ class CompiledChart:
     var_inits: dict[str, Any]
     var_types: dict[str, str]
     source: str
-    code: CodeType
+    code: tuple[CodeType, ...]  # the module, compiled in pieces (compile._batches)
     buffers: tuple[tuple[str, int | None], ...]
     consts: dict[str, Any]
     step_index: dict[int, int] = field(default_factory=dict)
@@ -99,7 +99,8 @@ class CompiledChart:
         ns.update(self.consts)
         for k, (area, db) in enumerate(self.buffers):
             ns[f"_m{k}"] = area_buffer(mem, area, db)
-        exec(self.code, ns)
+        for piece in self.code:
+            exec(piece, ns)
         for name, first, defaults in self.aliases:
             f = ns[first]
             if defaults is not None:

@@ -25,6 +25,7 @@ CODES: Final[dict[str, str]] = {
     "E003": "literal that does not parse or does not fit its type",
     "E004": "unknown header option or option value",
     "E005": "action row whose operand does not fit its qualifier",
+    "E006": "expression nested too deeply (more than 32 levels of operators)",
     # structure (sequencer/validate.py, rules in sequencer/rules_*.py)
     "E010": "unknown step in FROM / TO",
     "E011": "duplicate step number",

@@ -4,9 +4,17 @@ instance DB").
 The FB's interface is the chart's parameter set (``sequencer.params``: IN pins, OUT pins)
 plus one STAT ``G7_STATE`` of type OBJECT holding the ``GraphState`` — so snapshot/restore
 of the instance DB persists the whole sequencer. OB1 calls the FB every scan; OB100 calls it
-with INIT_SQ = 1 (``startup_obs``). Several GraphFBs may share one CPU. Each call emits
-the step events of ``GraphState.log`` into the scan's ``ScanRecord.events`` as
-``StepEvent`` values.
+with INIT_SQ = 1 (``startup_obs``), and so does OB102 after a cold restart. Several
+GraphFBs may share one CPU. Each call emits the step events of ``GraphState.log`` into the
+scan's ``ScanRecord.events`` as ``StepEvent`` values.
+
+Restarts (``GraphFB.on_startup``, a CPU startup hook): the sequencer's position — active
+steps with T and U, faults, the mode — is written to the diagnostic buffer, before a warm or
+cold restart initializes it, or as a hot restart (OB101) resumes it as it was, step times
+included (the time the CPU was down or in STOP is not counted, as no call saw it). A
+restart never acknowledges a message: one whose fault the restart clears goes *outgoing*
+with the restart as its reason and stays listed until someone acknowledges it. The instance
+data is recognised on disk by the compiled chart (``sequencer/carry.py``).
 """
 
 from __future__ import annotations
@@ -16,7 +24,10 @@ from dataclasses import replace
 from typing import Any, NamedTuple
 
 from s7graph.engine.blocks import FB, OB, Decl, InstanceDB, Var
+from s7graph.engine.diagnostics import EventId
 from s7graph.engine.errors import BlockError
+from s7graph.engine.restart import RestartType
+from s7graph.sequencer.carry import ChartFormat
 from s7graph.sequencer.compiled import CompiledChart, Program
 from s7graph.sequencer.cycle import GraphRuntime, new_state
 from s7graph.sequencer.messages import PROGRAM_USER, sync_messages
@@ -69,7 +80,8 @@ class GraphFB:
         decl = {Direction.IN: Decl.IN, Direction.OUT: Decl.OUT}
         interface = [Var(p.name, p.type, decl[p.direction], initial[p.name]) for p in pins]
         interface.append(Var(STATE_VAR, "OBJECT", Decl.STAT, self._fresh_state))
-        self.fb = FB(self.fb_number, cc.name, tuple(interface), self._body)
+        self.fb = FB(self.fb_number, cc.name, tuple(interface), self._body,
+                     state_format=ChartFormat(cc, STATE_VAR))  # fmt: skip
         self.idb: InstanceDB | None = None
         self._runtime: GraphRuntime | None = None
         self._prog: Program | None = None
@@ -80,6 +92,7 @@ class GraphFB:
         self._levels: dict[str, bool | None] = {}  # level overrides for the next call
         self._acting: tuple[str, int | None] | None = None  # who commanded (user, ACK_S step)
         self._copied: Any = None  # the instance-DB values the outputs were last copied to
+        self._restart = ""  # the reason a startup OB's call gives its messages
 
     def _fresh_state(self) -> GraphState:
         return new_state(self.cc)
@@ -127,6 +140,25 @@ class GraphFB:
         elif rt.st is not st:
             rt.rebind(st)
         return rt
+
+    def on_startup(self, cpu: Any, restart: RestartType) -> None:
+        """A CPU startup begins (``Cpu.add_startup_hook``): the position goes to the
+        diagnostic buffer — before a warm or cold restart initializes it, or as a hot
+        restart resumes it; the step times go on from where they were at the first call,
+        whatever the clock now says (another process, time in STOP)."""
+        if self.idb is None:
+            return
+        st = self.state
+        if st.calls:
+            what = "resumes" if restart is RestartType.HOT else "initializes"
+            cpu.diagnostics.record(
+                cpu.clock.now_ns(), EventId.SEQUENCER_POSITION, self.fb.label,
+                f"{restart} restart {what} {self.cc.name}/DB{self.db_number}, "
+                + position(self.cc, st),
+            )  # fmt: skip
+        st.last_ns = -1
+        ob = {RestartType.WARM: 100, RestartType.HOT: 101, RestartType.COLD: 102}[restart]
+        self._restart = f"{restart} restart (OB{ob})"
 
     def command(self, pin: str, step: int | None = None, *, user: str | None = None) -> None:
         """An operator command for the next call: ``pin`` (ACK_EF, ACK_S, INIT_SQ, OFF_SQ,
@@ -221,9 +253,11 @@ class GraphFB:
         ACK_S step) of this call's operator command, who acknowledges what it releases."""
         messages = message_list(ctx.cpu)
         user, target = acting if acting is not None else (PROGRAM_USER, None)
+        restart = self._restart if ctx.ob in (100, 102) else ""
         acks = sync_messages(
-            self.cc, st, messages, self.cc.name, idb.number, ctx.now_ns, user=user, step=target
-        )
+            self.cc, st, messages, self.cc.name, idb.number, ctx.now_ns,
+            user=user, step=target, restart=restart,
+        )  # fmt: skip
         if acks:
             rt.acknowledge(acks)
         alarm = getattr(ctx, "alarm", None)
@@ -277,6 +311,24 @@ def timer_row(cells: Any, op: str, number: int, value: Any, now_ns: int) -> None
         s5_timers.run(cell, fn, False, int(value), now_ns)
 
 
+def position(cc: CompiledChart, st: GraphState, limit: int = 8) -> str:
+    """Where a sequencer is, in one line: its active steps (number, name, T and U,
+    faults), the mode; ``limit`` steps at most."""
+    parts = []
+    for i in sorted(st.active, key=cc.step_numbers.__getitem__)[:limit]:
+        text = (f"S{cc.step_numbers[i]} {cc.step_names[i]!r} "
+                f"T={st.step_t_ms(i)} ms U={st.step_u_ms(i)} ms")  # fmt: skip
+        if st.sv_err[i]:
+            text += " supervision fault"
+        if st.il_err[i]:
+            text += " interlock error"
+        parts.append(text)
+    if len(st.active) > limit:
+        parts.append(f"and {len(st.active) - limit} more")
+    where = "; ".join(parts) if parts else "no step active"
+    return f"in {where} (mode {st.mode})"
+
+
 def startup_obs(*fbs: GraphFB, extra_ob1: Any = None) -> tuple[OB, OB]:
     """OB1 calling every GraphFB in order, and OB100 calling each with INIT_SQ = 1."""
 
@@ -299,9 +351,20 @@ def startup_obs(*fbs: GraphFB, extra_ob1: Any = None) -> tuple[OB, OB]:
     return OB(1, "OB1", ob1_body), OB(100, "OB100", ob100_body)
 
 
+def cold_restart_ob(*fbs: GraphFB) -> OB:
+    """OB102: after a cold restart (instance DBs at their initial values) each GraphFB is
+    called with INIT_SQ = 1, as OB100 does after a warm restart."""
+    ob100 = startup_obs(*fbs)[1]
+    return OB(102, "OB102", ob100.body)
+
+
 def install_all(cpu: Any, fbs: Iterable[GraphFB]) -> None:
-    """Install several GraphFBs and their OB1/OB100 in ``cpu``."""
+    """Install several GraphFBs and their OB1/OB100/OB102 in ``cpu``, each with its
+    startup hook (``GraphFB.on_startup``)."""
     items = list(fbs)
     for g in items:
         g.install(cpu)
-    cpu.load(*startup_obs(*items))
+        add_hook = getattr(cpu, "add_startup_hook", None)
+        if add_hook is not None:
+            add_hook(g.on_startup)
+    cpu.load(*startup_obs(*items), cold_restart_ob(*items))

@@ -30,6 +30,10 @@ Decisions (UNCERTAIN, pinned by tests/sequencer/test_messages.py):
 * Which occurrence was raised is remembered in ``GraphState.display["msg"]``
   (msg_id → event id) so a message acknowledged and removed from the list is not raised
   again while its latch lasts.
+* A restart acknowledges nothing (``restart``: the startup OB's call): a message whose
+  fault the restart cleared goes *outgoing* with the restart as its reason and stays listed
+  until someone acknowledges it — also one of this FB the cold-restarted state has
+  forgotten.
 """
 
 from __future__ import annotations
@@ -121,12 +125,14 @@ def sync_messages(
     *,
     user: str = PROGRAM_USER,
     step: int | None = None,
+    restart: str = "",
 ) -> list[int]:
     """Bring the message list in line with this call's fault latches and acknowledgement
     edges (``state.rose``); return ``remote_acks`` (steps the cycle acknowledges at its next
     call). What this call's edges release is acknowledged as ``user`` (an operator's
     command; the FB's own pins: ``program``), ACK_S on ``step`` if given, else S_NO.
-    No-op without MESSAGES."""
+    ``restart`` names the restart of a startup OB's call: nothing is acknowledged, what it
+    cleared goes outgoing with it as the reason. No-op without MESSAGES."""
     if not chart.options.messages:
         return []
     mem = _memory(state)
@@ -159,8 +165,9 @@ def sync_messages(
             current = message_list.get(mid)
             ours = current is not None and current.event_id == mem.get(mid)
             if ours and not cause and current is not None:
-                message_list.clear(mid, now_ns)  # no-op unless incoming
-            if ours and kind == "SV" and not latched:
+                # no-op unless incoming
+                message_list.clear(mid, now_ns, reason=restart if not latched else "")
+            if ours and kind == "SV" and not latched and not restart:
                 message_list.acknowledge(mid, user, now_ns)  # the FB released it
             if not latched:
                 mem.pop(mid, None)
@@ -171,8 +178,31 @@ def sync_messages(
             mid = message_id(fb_name, db_number, chart.step_numbers[i], "SV")
             if mid in mem:
                 marks[mid] = mem[mid]
-    _acknowledge_by_inputs(chart, state, message_list, fb_name, db_number, now_ns, user, step)
+    if restart:
+        _forgotten(message_list, fb_name, db_number, mem, now_ns, restart)
+    else:
+        _acknowledge_by_inputs(
+            chart, state, message_list, fb_name, db_number, now_ns, user, step
+        )
     return acks
+
+
+def _forgotten(
+    message_list: MessageList,
+    fb_name: str,
+    db_number: int,
+    raised: dict[str, int],
+    now_ns: int,
+    restart: str,
+) -> None:
+    """Messages of this FB still incoming although its state no longer knows them (a cold
+    restart reset it, a changed chart lost the step): outgoing, the restart as the reason."""
+    for msg in message_list.entries():
+        where = parse_message_id(msg.msg_id)
+        if where is None or where[:2] != (fb_name, db_number):
+            continue
+        if msg.msg_id not in raised:
+            message_list.clear(msg.msg_id, now_ns, reason=restart)
 
 
 def _acknowledge_by_inputs(

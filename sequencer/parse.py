@@ -39,6 +39,7 @@ from lark.parse_tree_builder import ParseTreeBuilder
 from lark.parsers.lalr_parser import _Parser
 
 from s7graph.engine.errors import S7Error, SourceLocation
+from s7graph.engine.text import NotUtf8, decode_utf8
 from s7graph.sequencer.diagnostics import Diagnostic, error, format_diagnostic
 from s7graph.sequencer.model import Chart
 from s7graph.sequencer.parse_build import _NEEDS_FIRST, _NEEDS_LAST, _Build
@@ -276,9 +277,30 @@ def _tables() -> _Tables:
 # ---------------------------------------------------------------- entry point
 
 
+_CODE_OR_NUMBER = re.compile(
+    r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"\n]|\"\")*\"|\(\*.*?\*\)|//[^\n]*|([0-9]{40,})", re.S
+)
+
+
+def _long_numbers(text: str, file: str) -> list[Diagnostic]:
+    """E003 for each run of 40 or more digits outside strings and comments: a number beyond
+    every type (and beyond what Python turns into an int without a limit)."""
+    out = []
+    for m in _CODE_OR_NUMBER.finditer(text):
+        if m[1] is not None:
+            line = text.count("\n", 0, m.start()) + 1
+            col = m.start() - (text.rfind("\n", 0, m.start()) + 1) + 1
+            where = SourceLocation(file, line, col)
+            out.append(error("E003", f"a number of {len(m[1])} digits is beyond every type",
+                             where))  # fmt: skip
+    return out
+
+
 def parse_chart(text: str, file: str = "<input>") -> Chart:
     """Parse one `.s7g` chart (SPEC §3). Raises :class:`ChartSyntaxError` with all syntax
     diagnostics (file:line:col, what was found and what was expected)."""
+    if long := _long_numbers(text, file):
+        raise ChartSyntaxError(long)
     diags: list[Diagnostic] = []
     comments: dict[int, tuple[int, str]] = {}
     seen: set[tuple[int, int]] = set()
@@ -336,6 +358,15 @@ def parse_chart(text: str, file: str = "<input>") -> Chart:
     return chart  # type: ignore[no-any-return]
 
 
+def chart_text(data: bytes, file: str) -> str:
+    """A chart file's bytes as text; ChartSyntaxError (E001 at the byte) if not UTF-8."""
+    try:
+        return decode_utf8(data, file)
+    except NotUtf8 as exc:
+        where = exc.where if isinstance(exc.where, SourceLocation) else SourceLocation(file)
+        raise ChartSyntaxError([error("E001", exc.message, where)]) from None
+
+
 def parse_file(path: Path) -> Chart:
-    """Read and parse a chart file (UTF-8)."""
-    return parse_chart(path.read_text(encoding="utf-8"), str(path))
+    """Read and parse a chart file (UTF-8; not UTF-8 is a located E001)."""
+    return parse_chart(chart_text(Path(path).read_bytes(), str(path)), str(path))

@@ -8,11 +8,12 @@ from __future__ import annotations
 
 import re
 from functools import lru_cache
-from typing import Any
+from typing import Any, TypeVar
 
 from lark import Token
 
 from s7graph.engine.errors import LiteralError, S7Error, SourceLocation
+from s7graph.engine.literals import clip
 from s7graph.sequencer.diagnostics import Diagnostic, error
 from s7graph.sequencer.model import (
     ActionRow,
@@ -40,6 +41,10 @@ from s7graph.sequencer.model import (
 from s7graph.steps.qualifiers import QUALIFIERS
 
 _NON_DIGITS = re.compile(r"\D")
+_E = TypeVar("_E", Binary, Unary, FuncCall)
+MAX_EXPR_DEPTH = 32
+"""Operators nested in one expression (an AND/OR/XOR chain counts about log2 of its
+length): what the generated code and the validator handle without deep recursion."""
 _BLANKS = re.compile(r"\s+")
 
 
@@ -99,6 +104,10 @@ class _Build:
         self.file = file
         self.comments = comments
         self.diags: list[Diagnostic] = []
+        self.chains: dict[int, tuple[Binary, str, tuple[tuple[int, Any, int], ...]]] = {}
+        """Open AND/OR/XOR chains: node id → (node, op, its balanced parts)."""
+        self.depths: dict[int, tuple[Any, int]] = {}
+        """Expressions not yet taken by a parent: node id → (node, nesting depth)."""
         self.first: Token = Token("$START", "")
         self.last: Token = self.first
 
@@ -116,7 +125,7 @@ class _Build:
         try:
             type_name, value = _literal(str(tok))
         except (LiteralError, S7Error) as exc:
-            self._err("E003", f"bad constant {str(tok)!r}: {exc.message}", loc)
+            self._err("E003", f"bad constant {clip(str(tok))}: {exc.message}", loc)
             return Const(0, "INT", str(tok), loc)
         return Const(value, type_name, str(tok), loc)
 
@@ -139,10 +148,10 @@ class _Build:
 
     def func_call(self, ch: list[Any]) -> FuncCall:
         args = tuple(a for a in ch[1:] if a is not None)
-        return FuncCall(str(ch[0]).upper(), args, self._loc(ch[0]))
+        return self._nested(FuncCall(str(ch[0]).upper(), args, self._loc(ch[0])), *args)
 
     def not_expr(self, ch: list[Any]) -> Unary:
-        return Unary("NOT", ch[1], self._loc(ch[0]))
+        return self._nested(Unary("NOT", ch[1], self._loc(ch[0])), ch[1])
 
     def neg_expr(self, ch: list[Any]) -> Expr:
         inner = ch[1]
@@ -158,14 +167,56 @@ class _Build:
             if type_name == "INT" and value < -32768:
                 type_name = "DINT"
             return Const(value, type_name, "-" + inner.text, loc)
-        return Unary("-", inner, loc)
+        return self._nested(Unary("-", inner, loc), inner)
 
     def _binary(self, ch: list[Any]) -> Binary:
         op = str(ch[1]).upper()
         op = "AND" if op == "&" else op
-        return Binary(op, ch[0], ch[2], self._expr_loc(ch[0]))
+        return self._nested(Binary(op, ch[0], ch[2], self._expr_loc(ch[0])), ch[0], ch[2])
 
-    or_expr = xor_expr = and_expr = cmp_expr = shift_expr = add_expr = mul_expr = _binary
+    def _chain(self, ch: list[Any]) -> Binary:
+        """``a AND b AND c …`` (also OR, XOR): associative, so built balanced — a chain of
+        n contacts is about log2(n) deep, not n, and nothing walking it recurses deeply.
+        The contacts stay in source order (the order of the criteria bits)."""
+        op = str(ch[1]).upper()
+        op = "AND" if op == "&" else op
+        left, right = ch[0], ch[2]
+        known = self.chains.pop(id(left), None)
+        if known is not None and known[0] is left and known[1] == op:
+            parts = list(known[2])
+            self.depths.pop(id(left), None)
+        else:
+            parts = [(1, left, self._depth_of(left))]
+        parts.append((1, right, self._depth_of(right)))
+        while len(parts) > 1 and parts[-1][0] == parts[-2][0]:  # a binary counter
+            (n, a, da), (m, b, db) = parts[-2], parts[-1]
+            parts[-2:] = [(n + m, Binary(op, a, b, self._expr_loc(a)), 1 + max(da, db))]
+        _, last, depth = parts[-1]
+        tree: Binary = last  # the right end of the fold (a lone part is a merged Binary)
+        for _, part, d in reversed(parts[:-1]):
+            tree, depth = Binary(op, part, tree, self._expr_loc(part)), 1 + max(d, depth)
+        self.chains[id(tree)] = (tree, op, tuple(parts))
+        return self._deep(tree, depth)
+
+    or_expr = xor_expr = and_expr = _chain
+    cmp_expr = shift_expr = add_expr = mul_expr = _binary
+
+    def _depth_of(self, e: object) -> int:
+        """The nesting depth of a finished child expression (taken once, by its parent)."""
+        known = self.depths.pop(id(e), None)
+        return known[1] if known is not None and known[0] is e else 0
+
+    def _nested(self, node: _E, *children: object) -> _E:
+        return self._deep(node, 1 + max((self._depth_of(c) for c in children), default=0))
+
+    def _deep(self, node: _E, depth: int) -> _E:
+        """Remember ``node``'s depth for its parent; past ``MAX_EXPR_DEPTH`` it is an error
+        (E006, once per expression: where it crosses the limit)."""
+        self.depths[id(node)] = (node, depth)
+        if depth == MAX_EXPR_DEPTH + 1:
+            self._err("E006", f"expression nested deeper than {MAX_EXPR_DEPTH} levels; "
+                      "split it into several assignments or transitions", node.loc)  # fmt: skip
+        return node
 
     @staticmethod
     def _expr_loc(e: Any) -> SourceLocation:

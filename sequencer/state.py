@@ -12,6 +12,14 @@ Field names are a contract with ``sequencer/display.py`` and ``sequencer/message
 
 Times are integer nanoseconds of the injected clock; ``step_t_ms``/``step_u_ms`` give the
 S7 TIME values (ms) that ``Sn.T``/``Sn.U`` read.
+
+On disk (``to_state``) a running step time is kept as its activation timestamp — the clock
+time at which it was 0 (``t_since``/``u_since``; ``t_ns``/``u_ns`` then ``None``) — and a frozen
+one (step inactive, U during a disturbance, HALT_TM) as its value, so a call that switched
+nothing leaves the snapshot as it was, but for the ``VOLATILE`` keys (the call counter and
+the clock time of the last call: saved with every write, never a reason for one).
+``from_state`` turns them back into the values they had at ``last_ns``, and checks every
+field (ValueError: a malformed state is refused, never half restored).
 """
 
 from __future__ import annotations
@@ -32,6 +40,9 @@ _LIST_FIELDS: Final = (
     "crit_loc", "crit_loc_err", "crit_sup", "ev",
     "tt", "crit", "crit_old", "crit_flt",
 )  # fmt: skip
+_STEP_LISTS: Final = _LIST_FIELDS[:12]
+_TRANSITION_LISTS: Final = _LIST_FIELDS[12:]
+_BOOL_LISTS: Final = frozenset(("x", "il_ok", "il_err", "sv_cond", "sv_err", "tt"))
 _SCALAR_FIELDS: Final = (
     "mode", "calls", "last_ns", "off", "halted", "tm_halted", "zeroed", "il_enabled",
     "sv_enabled", "ackreq_enabled", "sskip_enabled", "error", "fault", "err_flt",
@@ -94,6 +105,9 @@ class GraphState:
         "n_steps", "n_transitions", "active", "ev_steps", "fired", "entered", "left", "log",
         "inputs", "prev", "rose", "outputs", "vars", "diag", "display",
     )  # fmt: skip
+
+    VOLATILE: Final = ("calls", "last_ns")
+    """Keys of ``to_state`` that change with every call without changing the state."""
 
     def __init__(self, n_steps: int, n_transitions: int) -> None:
         self.n_steps = n_steps
@@ -163,12 +177,25 @@ class GraphState:
     # ------------------------------------------------------------ persistence
 
     def to_state(self) -> dict[str, Any]:
-        """A JSON-able snapshot; ``from_state`` restores it exactly."""
+        """A JSON-able snapshot (running times as activation timestamps, see the module
+        docstring); ``from_state`` restores it exactly."""
         data: dict[str, Any] = {"n_steps": self.n_steps, "n_transitions": self.n_transitions}
         for name in _LIST_FIELDS:
             data[name] = list(getattr(self, name))
         for name in _SCALAR_FIELDS:
             data[name] = getattr(self, name)
+        last = self.last_ns
+        t_ns, u_ns = data["t_ns"], data["u_ns"]
+        t_since: list[int | None] = [None] * self.n_steps
+        u_since: list[int | None] = [None] * self.n_steps
+        if last >= 0 and not self.tm_halted:
+            il_err, sv_err = self.il_err, self.sv_err
+            for i in self.active:
+                t_since[i], t_ns[i] = last - t_ns[i], None
+                if not (il_err[i] or sv_err[i]):
+                    u_since[i], u_ns[i] = last - u_ns[i], None
+        data["t_since"] = t_since
+        data["u_since"] = u_since
         data["active"] = list(self.active)
         data["inputs"] = dict(self.inputs)
         data["prev"] = dict(self.prev)
@@ -180,19 +207,49 @@ class GraphState:
 
     @classmethod
     def from_state(cls, data: dict[str, Any]) -> GraphState:
-        """Rebuild a state from ``to_state`` output (per-call lists start empty)."""
-        st = cls(int(data["n_steps"]), int(data["n_transitions"]))
+        """Rebuild a state from ``to_state`` output (per-call lists start empty); ValueError
+        (or TypeError) for a malformed one."""
+        if not isinstance(data, dict):
+            raise ValueError(f"a sequencer state is an object, not {type(data).__name__}")
+        n, m = _count(data, "n_steps"), _count(data, "n_transitions")
+        st = cls(n, m)
         for name in _LIST_FIELDS:
-            setattr(st, name, list(data[name]))
+            setattr(st, name, _list(data, name, n if name in _STEP_LISTS else m))
         for name in _SCALAR_FIELDS:
-            setattr(st, name, data[name])
-        st.active = [int(i) for i in data["active"]]
-        st.inputs = dict(data.get("inputs", {}))
-        st.prev = dict(data.get("prev", {}))
-        st.outputs = dict(data.get("outputs", {}))
-        st.vars = dict(data.get("vars", {}))
+            if name not in data:
+                raise ValueError(f"no {name!r}")
+            value = data[name]
+            if not isinstance(value, type(getattr(st, name))) and not (
+                isinstance(value, int) and isinstance(getattr(st, name), int)
+            ):
+                raise ValueError(f"{name!r} is {value!r}")
+            setattr(st, name, value)
+        if st.mode not in MODES:
+            raise ValueError(f"unknown mode {st.mode!r}")
+        last = st.last_ns
+        for times, key in ((st.t_ns, "t_since"), (st.u_ns, "u_since")):
+            since = data.get(key) or [None] * n
+            if not isinstance(since, list) or len(since) != n:
+                raise ValueError(f"{key!r} does not hold {n} entries")
+            for i, (value, mark) in enumerate(zip(times, since, strict=True)):
+                if mark is not None:
+                    times[i] = last - int(mark)
+                elif not isinstance(value, int):
+                    raise ValueError(f"{key[0]}_ns[{i}] is {value!r}")
+        active = data["active"]
+        if not isinstance(active, list) or any(
+            not isinstance(i, int) or not 0 <= i < n for i in active
+        ):
+            raise ValueError(f"'active' is {active!r}")
+        if sorted(active) != [i for i in range(n) if st.x[i]]:
+            raise ValueError("'active' and 'x' disagree")
+        st.active = [int(i) for i in active]
+        for name in ("inputs", "prev", "outputs", "vars", "display"):
+            value = data.get(name, {})
+            if not isinstance(value, dict):
+                raise ValueError(f"{name!r} is {value!r}")
+            setattr(st, name, dict(value))
         st.diag = list(data.get("diag", []))
-        st.display = dict(data.get("display", {}))
         return st
 
     def __eq__(self, other: object) -> bool:
@@ -202,3 +259,22 @@ class GraphState:
 
     def __repr__(self) -> str:
         return f"GraphState(active={self.active}, mode={self.mode}, calls={self.calls})"
+
+
+def _count(data: dict[str, Any], key: str) -> int:
+    value = data.get(key)
+    if not isinstance(value, int) or isinstance(value, bool) or not 0 <= value <= 1_000_000:
+        raise ValueError(f"{key!r} is {value!r}")
+    return value
+
+
+def _list(data: dict[str, Any], key: str, n: int) -> list[Any]:
+    value = data.get(key)
+    if not isinstance(value, list) or len(value) != n:
+        raise ValueError(f"{key!r} does not hold {n} entries")
+    if key in _BOOL_LISTS:
+        if any(not isinstance(v, bool) for v in value):
+            raise ValueError(f"{key!r} holds a non-boolean")
+    elif key not in ("t_ns", "u_ns") and any(not isinstance(v, int) for v in value):
+        raise ValueError(f"{key!r} holds a non-integer")
+    return list(value)

@@ -62,6 +62,8 @@ class Message:
     ack_user: str = ""
     ack_ns: int | None = None
     went_ns: int | None = None
+    reason: str = ""
+    """Why it went when not by its own cause (a restart that cleared the fault)."""
 
     @property
     def pending(self) -> bool:
@@ -79,6 +81,7 @@ class MessageEvent:
     t_ns: int
     user: str = ""
     text: str = ""
+    reason: str = ""
 
 
 class MessageList:
@@ -118,9 +121,15 @@ class MessageList:
         return msg
 
     def clear(
-        self, msg_id: MsgId, now_ns: int, *, values: Sequence[object] | None = None
+        self,
+        msg_id: MsgId,
+        now_ns: int,
+        *,
+        values: Sequence[object] | None = None,
+        reason: str = "",
     ) -> Message | None:
-        """Message ``msg_id`` goes; it leaves the list unless it still awaits acknowledgement."""
+        """Message ``msg_id`` goes; it leaves the list unless it still awaits acknowledgement.
+        ``reason``: why, when not by its own cause (``warm restart (OB100)``)."""
         current = self._active.get(msg_id)
         if current is None or current.state is MessageState.OUTGOING:
             return None
@@ -129,9 +138,12 @@ class MessageList:
             state=MessageState.OUTGOING,
             went_ns=now_ns,
             values=current.values if values is None else tuple(values),
+            reason=reason,
         )
         self._store(msg)
-        self._record(MessageEvent("outgoing", msg_id, msg.event_id, now_ns, text=msg.text))
+        self._record(
+            MessageEvent("outgoing", msg_id, msg.event_id, now_ns, text=msg.text, reason=reason)
+        )
         return msg
 
     def acknowledge(self, msg_id: MsgId, user: str, now_ns: int) -> Message | None:
@@ -171,13 +183,17 @@ class MessageList:
 
     # --- persistence --------------------------------------------------------------------
 
-    def snapshot(self) -> dict[str, object]:
-        return {
+    def snapshot(self, *, with_log: bool = True) -> dict[str, object]:
+        """Plain data for ``restore``; without the change log when ``with_log`` is False (a
+        state file keeps the log in its own append-only table)."""
+        data: dict[str, object] = {
             "next_event": self._next_event,
             "active": [asdict(m) for m in self.entries()],
             "sig": [[k, v] for k, v in self._sig.items()],
-            "log": [asdict(e) for e in self._log],
         }
+        if with_log:
+            data["log"] = [asdict(e) for e in self._log]
+        return data
 
     def restore(self, data: Mapping[str, Any]) -> None:
         """Load a ``snapshot()`` (plain data, e.g. read back from JSON)."""
@@ -191,7 +207,7 @@ class MessageList:
             self._active[msg.msg_id] = msg
         self._sig = {k: bool(v) for k, v in data["sig"]}
         self._log.clear()
-        self._log.extend(MessageEvent(**e) for e in data["log"])
+        self._log.extend(MessageEvent(**e) for e in data.get("log", ()))
         self._new = []
         self.changes += 1
 

@@ -8,12 +8,14 @@ Nothing here evaluates anything.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
 
 from s7graph.engine.errors import SourceLocation
 
 __all__ = [
+    "CHAIN_OPS",
     "NOWHERE",
     "ActionOperand",
     "ActionRow",
@@ -30,6 +32,8 @@ __all__ = [
     "StepTarget",
     "TransAttr",
     "Unary",
+    "chain",
+    "chain_parts",
 ]
 
 NOWHERE = SourceLocation()
@@ -182,3 +186,41 @@ class Coil:
 
 
 PermanentInstruction = Coil | Assignment | BlockCall
+
+
+# ---------------------------------------------------------------- chains of AND, OR, XOR
+
+CHAIN_OPS = frozenset({"AND", "OR", "XOR"})
+"""The associative operators: ``a AND b AND c`` is one chain of three parts."""
+
+
+def chain(op: str, parts: Sequence[Expr]) -> Expr:
+    """``parts[0] op parts[1] op …`` in the shape the parser gives a written chain: balanced
+    (a binary counter: two neighbours of the same size merge, the rest folds to the right),
+    so a chain of n parts is about log2(n) deep; the parts stay in order (the order of the
+    criteria bits). Importers build their chains with it, so that an imported chart is the
+    model its ``.s7g`` text parses to."""
+    stack: list[tuple[int, Expr]] = []
+    for part in parts:
+        stack.append((1, part))
+        while len(stack) > 1 and stack[-1][0] == stack[-2][0]:
+            (n, a), (m, b) = stack[-2], stack[-1]
+            stack[-2:] = [(n + m, Binary(op, a, b, a.loc))]
+    tree = stack[-1][1]
+    for _, part in reversed(stack[:-1]):
+        tree = Binary(op, part, tree, part.loc)
+    return tree
+
+
+def chain_parts(e: Binary) -> list[Expr]:
+    """The parts of the chain ``e`` is the root of: its operands under the same operator,
+    however nested, in order (iteratively: a chain may be thousands long)."""
+    out: list[Expr] = []
+    todo: list[Expr] = [e]
+    while todo:
+        x = todo.pop()
+        if isinstance(x, Binary) and x.op == e.op:
+            todo += (x.right, x.left)
+        else:
+            out.append(x)
+    return out

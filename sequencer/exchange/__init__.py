@@ -12,13 +12,15 @@ editor's *Open*).
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.diagnostics import Diagnostic, sort_key
 from s7graph.sequencer.exchange.problems import ImportFailed, Problems
-from s7graph.sequencer.model import Chart
+from s7graph.sequencer.model import Binary, Chart
+from s7graph.sequencer.walk import rewrite
+from s7graph.steps.syntax import CHAIN_OPS, chain, chain_parts
 
 __all__ = [
     "FORMATS",
@@ -53,6 +55,17 @@ class Imported:
     problems: list[Diagnostic] = field(default_factory=list)
 
 
+def canonical_chains(chart: Chart) -> Chart:
+    """``chart`` with every AND/OR/XOR chain rebuilt as ``steps.syntax.chain`` builds it."""
+
+    def one(node: object) -> object:
+        if isinstance(node, Binary) and node.op in CHAIN_OPS:
+            return chain(node.op, chain_parts(node))
+        return node
+
+    return rewrite(chart, one)
+
+
 def detect_format(data: bytes) -> str | None:
     """``simaticml`` | ``plcopen`` | ``iec-text`` | ``s7g`` | None, from the content."""
     head = data[:200_000].removeprefix(b"\xef\xbb\xbf")
@@ -79,6 +92,20 @@ def _text(data: bytes) -> str:
 
 
 def import_chart(
+    data: bytes,
+    file: str = "<input>",
+    *,
+    pou: str | None = None,
+    symbols: SymbolTable | None = None,
+) -> Imported:
+    """Import one chart from ``data`` (raises ``ImportFailed`` with located problems); its
+    AND/OR/XOR chains in the parser's shape (``steps.syntax.chain``), so that the chart is
+    the model its ``.s7g`` text parses to."""
+    found = _import_chart(data, file, pou=pou, symbols=symbols)
+    return replace(found, chart=canonical_chains(found.chart))
+
+
+def _import_chart(
     data: bytes,
     file: str = "<input>",
     *,

@@ -8,6 +8,7 @@ import os
 import signal
 import sqlite3
 import subprocess
+import zlib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -98,7 +99,7 @@ def test_alarm_and_audit_tables(tmp_path: Path) -> None:
     store.log_audit(7, "ann", "ack", "FB1 S3")
     assert store.alarms() == [
         {"t_ns": 5, "key": "FB1.S3.V", "state": "incoming", "text": "Step 3 supervision",
-         "user": "", "cpu_ns": None}
+         "user": "", "cpu_ns": None, "reason": ""}
     ]  # fmt: skip
     assert store.audit()[0]["user"] == "ann"
 
@@ -203,7 +204,7 @@ def _read(path: Path) -> dict[str, Any] | None:
         path,
         lambda con: (
             con.execute("SELECT value FROM meta WHERE key='memory'").fetchone(),
-            con.execute("SELECT state FROM instances WHERE number=2").fetchone(),
+            con.execute("SELECT data FROM instances WHERE number=2").fetchone(),
             con.execute("SELECT value FROM meta WHERE key='last_restart'").fetchone(),
         ),
     )
@@ -220,7 +221,7 @@ def _read(path: Path) -> dict[str, Any] | None:
         "restarts": int.from_bytes(db1[0:2], "big"),
         "MW2_at_restart": int.from_bytes(db1[2:4], "big"),
         "MW100_at_restart": int.from_bytes(db1[4:6], "big"),
-        "total": json.loads(inst[0])["total"],
+        "total": json.loads(zlib.decompress(inst[0]))["total"],
         "last_restart": restart[0] if restart else "",
     }
 

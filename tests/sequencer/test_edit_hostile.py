@@ -70,9 +70,14 @@ def test_a_step_holds_at_most_MAX_ROWS_rows() -> None:
 
 
 def test_a_condition_nested_too_deeply_is_refused() -> None:
-    deep = " AND ".join(["I0.0"] * (MAX_DEPTH + 10))
-    out = apply_edit(new_chart(), SetInterlock(1, deep))
-    assert out.refusal is not None and "nests deeper than 100 levels" in out.refusal.reason
+    """A chain of contacts is not nesting (the parser builds it balanced); operators nested
+    in each other beyond the parser's limit are refused, naming the place."""
+    long_chain = " AND ".join(["I0.0"] * (MAX_DEPTH + 10))
+    assert apply_edit(new_chart(), SetInterlock(1, long_chain)).made
+    nested = "".join(f"(I0.{k % 8} {'AND' if k % 2 else 'OR'} " for k in range(60))
+    out = apply_edit(new_chart(), SetInterlock(1, nested + "I0.0" + ")" * 60))
+    assert out.refusal is not None and "nested deeper than 32 levels" in out.refusal.reason
+    assert "line 1, column" in out.refusal.reason
     nested_parentheses = "(" * 2000 + "I0.0" + ")" * 2000
     assert apply_edit(new_chart(), SetInterlock(1, nested_parentheses)).made
 

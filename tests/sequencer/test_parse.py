@@ -19,6 +19,8 @@ from s7graph.sequencer.model import (
     TransAttr,
 )
 from s7graph.sequencer.parse import ChartSyntaxError, parse_chart
+from s7graph.sequencer.walk import unlocated
+from s7graph.steps.syntax import chain
 
 CHARTS = Path(__file__).parent / "charts"
 
@@ -202,3 +204,17 @@ def test_a_line_comment_may_follow_an_operand_before_the_semicolon() -> None:
     t1, t2 = parse_chart(text).all_transitions()
     assert isinstance(t1.condition, Operand) and t1.condition.name == "I0.0"
     assert isinstance(t2.condition, Binary) and t2.condition.op == ">"
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 4, 5, 7, 8, 9, 31, 64, 70])
+def test_a_written_chain_parses_to_the_shape_steps_syntax_chain_builds(n: int) -> None:
+    """Importers build chains with ``steps.syntax.chain``; it is the parser's shape."""
+    contacts = [f"I{k // 8}.{k % 8}" for k in range(n)]
+    text = (
+        'FUNCTION_BLOCK "T"\nSEQUENCE 1\n  INITIAL_STEP S1: END_STEP\n  STEP S2: END_STEP\n'
+        f"  TRANSITION T1 FROM S1 TO S2 := {' AND '.join(contacts)};\nEND_SEQUENCE\n"
+        "END_FUNCTION_BLOCK\n"
+    )
+    condition = parse_chart(text, "t.s7g").all_transitions()[0].condition
+    expected = chain("AND", [Operand(c) for c in contacts])
+    assert unlocated(condition) == unlocated(expected)

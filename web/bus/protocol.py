@@ -164,28 +164,28 @@ class ChartLayout(_Msg, frozen=True, kw_only=True):
         steps = [
             StepInfo(
                 number=s.number,
-                name=s.name,
+                name=_clip(s.name, 256),
                 initial=s.initial,
                 interlock=s.interlock is not None,
                 supervision=s.supervision is not None,
-                message=s.message,
+                message=_clip(s.message, 4096),
             )
             for s in chart.all_steps()
         ]
         transitions = [
             TransitionInfo(
                 number=t.number,
-                name=t.name,
+                name=_clip(t.name, 256),
                 sources=list(t.sources),
                 targets=list(t.targets),
-                condition=condition_text(t.condition),
+                condition=_clip(condition_text(t.condition), 4096),
             )
             for t in chart.all_transitions()
         ]
         sequences = [
             SequenceInfo(
                 number=q.number,
-                name=q.name,
+                name=_clip(q.name, 256),
                 steps=[s.number for s in q.steps],
                 transitions=[t.number for t in q.transitions],
             )
@@ -606,8 +606,23 @@ def decode(data: bytes | bytearray | memoryview | str, kind: type[T]) -> T:
         raise ProtocolError(f"invalid {kind.__name__}: {type(exc).__name__}") from None
 
 
+def layout_problem(layout: ChartLayout) -> str | None:
+    """Why a view would refuse ``layout`` as it comes over the bus (a limit of this
+    protocol: steps, numbers, names, size), or None when it decodes."""
+    try:
+        decode(encode(layout), ChartLayout)
+    except ProtocolError as exc:
+        return str(exc)
+    return None
+
+
+def _clip(text: str, limit: int) -> str:
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
 # ---------------------------------------------------------------- condition text
 
+_ASSOCIATIVE = ("AND", "OR", "XOR")  # a chain of them parses balanced (sequencer/parse_build.py)
 _PRECEDENCE = {"OR": 1, "XOR": 2, "AND": 3, "=": 4, "<>": 4, "<": 4, ">": 4, "<=": 4, ">=": 4}
 
 
@@ -633,7 +648,8 @@ def _text(e: Expr, outer: int) -> str:
             return f"NOT {inner}" if op == "NOT" else f"-{inner}"
         case Binary(op=op, left=left, right=right):
             prec = _PRECEDENCE.get(op, 5)
-            s = f"{_text(left, prec)} {op} {_text(right, prec + 1)}"
+            chained = op in _ASSOCIATIVE and isinstance(right, Binary) and right.op == op
+            s = f"{_text(left, prec)} {op} {_text(right, prec if chained else prec + 1)}"
             return f"({s})" if prec < outer else s
         case FuncCall(name=name, args=args):
             return f"{name}({', '.join(_text(a, 0) for a in args)})"

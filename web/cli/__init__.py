@@ -96,6 +96,12 @@ def _positive_ms(value: float | None) -> float | None:
     return value
 
 
+def _restart_type(value: str | None) -> str | None:
+    if value is not None and value.lower() not in ("warm", "hot", "cold"):
+        raise typer.BadParameter("--restart must be warm, hot or cold")
+    return value.lower() if value is not None else None
+
+
 @app.command()
 def run(
     program: Annotated[
@@ -134,6 +140,19 @@ def run(
     tls_cert: TlsCert = None,
     tls_key: TlsKey = None,
     origin: Origin = None,
+    restart: Annotated[
+        str | None,
+        typer.Option(
+            callback=_restart_type,
+            help="The startup from a saved state: warm (OB100, the sequencer initialized; "
+            "the default), hot (OB101, it resumes where it was) or cold (OB102, everything "
+            "to its initial values). For a program, its CPU dict's restart, else warm.",
+        ),
+    ] = None,
+    fresh: Annotated[
+        bool,
+        typer.Option(help="Start anew: keep an existing state file as FILE.old-N."),
+    ] = False,
 ) -> None:
     """Run a program or a chart on the system clock until Ctrl-C."""
     if program.suffix.lower() == ".s7g":
@@ -162,6 +181,8 @@ def run(
                 port=port,
                 record=record,
                 net=net,
+                restart=restart or "warm",
+                fresh=fresh,
             )
         )
     from s7graph.web.cli.run_program import run_program
@@ -173,6 +194,8 @@ def run(
             cycle_ms=cycle_ms,
             max_cycle_ms=max_cycle_ms,
             duration_s=duration_s,
+            restart=restart,
+            fresh=fresh,
         )
     )
 
@@ -489,7 +512,7 @@ def main(argv: list[str] | None = None) -> int:
             return code if isinstance(code, int) else 2
         if type(exc).__name__ == "Abort":  # Ctrl-C at a prompt
             return 130
-        print(f"s7graph: error: {type(exc).__name__}: {exc}", file=sys.stderr)
+        print(f"s7graph: internal error: {type(exc).__name__}: {exc}", file=sys.stderr)
         return 2
     return rc if isinstance(rc, int) else 0
 

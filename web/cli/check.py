@@ -12,28 +12,37 @@ from pathlib import Path
 
 from s7graph.engine.errors import S7Error
 from s7graph.engine.symbols import SymbolTable
-from s7graph.sequencer.diagnostics import Diagnostic, format_diagnostic
-from s7graph.sequencer.parse import ChartSyntaxError, parse_chart
+from s7graph.sequencer.diagnostics import Diagnostic, format_diagnostic, warning
+from s7graph.sequencer.model import Chart
+from s7graph.sequencer.parse import ChartSyntaxError, chart_text, parse_chart
 from s7graph.sequencer.validate import validate
+from s7graph.web.bus.protocol import ChartLayout, layout_problem
 
 
 def check_command(chart: Path, symbols: Path | None = None) -> int:
     """Parse and validate ``chart``; print diagnostics and a summary; return the exit code."""
     try:
-        text = chart.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        print(f"s7graph: error: cannot read {chart}: {exc}", file=sys.stderr)
+        data = chart.read_bytes()
+    except OSError as exc:
+        print(f"s7graph: error: cannot read {chart}: {exc.strerror or exc}", file=sys.stderr)
         return 2
     table: SymbolTable | None = None
     if symbols is not None:
         try:
             table = SymbolTable.from_file(symbols)
-        except (OSError, UnicodeDecodeError, S7Error) as exc:
+        except OSError as exc:
+            print(f"s7graph: error: cannot read symbols {symbols}: {exc.strerror or exc}",
+                  file=sys.stderr)  # fmt: skip
+            return 2
+        except S7Error as exc:
             print(f"s7graph: error: cannot read symbols {symbols}: {exc}", file=sys.stderr)
             return 2
     diags: list[Diagnostic]
     try:
-        diags = validate(parse_chart(text, str(chart)), table)
+        parsed = parse_chart(chart_text(data, str(chart)), str(chart))
+        diags = validate(parsed, table)
+        if not any(d.severity == "error" for d in diags):
+            diags += view_diagnostics(parsed)
     except ChartSyntaxError as exc:
         diags = exc.diagnostics
     for d in diags:
@@ -42,6 +51,16 @@ def check_command(chart: Path, symbols: Path | None = None) -> int:
     warnings = len(diags) - errors
     print(f"{chart}: {_plural(errors, 'error')}, {_plural(warnings, 'warning')}")
     return 2 if errors else 1 if warnings else 0
+
+
+def view_diagnostics(chart: Chart) -> list[Diagnostic]:
+    """W110 when the browser view cannot show ``chart`` (its layout breaks a limit of the
+    bus protocol: too many steps, an FB name the bus cannot carry, …)."""
+    problem = layout_problem(ChartLayout.from_chart(chart))
+    if problem is None:
+        return []
+    return [warning("W110", f"the browser view (--web) cannot show this chart: {problem}",
+                    chart.loc)]  # fmt: skip
 
 
 def _plural(n: int, word: str) -> str:

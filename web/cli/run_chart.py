@@ -1,10 +1,14 @@
 """``s7graph run CHART.s7g``: a chart as a GraphFB from OB1, on the system clock.
 
 The chart is compiled (exit 2 with diagnostics on stderr if it does not), installed with
-OB1/OB100 in one CPU, the state file restores the instance DB (the sequencer comes back by
-warm restart with its steps, times and mode) and the CPU's message list, and
-``engine.runner.Runner`` paces the scans.
-A plant (``--plant``) runs after every scan; a plant error ends the run with one line.
+OB1/OB100/OB102 in one CPU, the state file restores the instance DB and the CPU's message
+list (``web/harness/persist.py``: a file it cannot trust is refused, exit 2; ``--fresh``
+starts anew) and the CPU starts by ``--restart``: warm (OB100 initializes the sequencer,
+its position written to the diagnostic buffer first), hot (OB101: the sequencer resumes
+where it was) or cold (OB102); ``engine.runner.Runner`` paces the scans.
+A plant (``--plant``) runs after every scan; a plant error ends the run with one line, a
+plant still running at twice the maximum cycle time is aborted (STOP). Without ``--web`` a
+STOP by error ends the run: the reason on stderr, exit 1.
 ``--web`` serves the live browser view of the running FB on 127.0.0.1:``--port`` and its
 zenoh bus (``web/live_edge.py``): one state update per scan, operator commands applied
 between scans, acknowledgements in the state file's audit log. ``--record FILE.rrd``
@@ -21,16 +25,16 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from s7graph.engine.clock import SystemClock
-from s7graph.engine.errors import S7Error
+from s7graph.engine.errors import S7Error, ScanAborted
 from s7graph.engine.modes import CpuMode
-from s7graph.engine.persistence import StateStore
+from s7graph.engine.persistence import StateFileError, StateStore
 from s7graph.engine.record import ScanRecord
 from s7graph.engine.runner import Runner
 from s7graph.engine.watchdog import Watchdog
 from s7graph.sfb.alarms import message_list
 from s7graph.web.cli.report import fail
 from s7graph.web.cli.run_program import run_until_stopped
-from s7graph.web.harness.persist import persist_messages
+from s7graph.web.harness.persist import open_state, refusal
 from s7graph.web.harness.plant import LoadedPlant, PlantError, load_plant
 from s7graph.web.harness.session import ChartSession
 
@@ -55,13 +59,18 @@ def run_chart(
     port: int = 8080,
     record: Path | None = None,
     net: NetOptions | None = None,
+    restart: str = "warm",
+    fresh: bool = False,
 ) -> int:
-    """Run ``path`` until Ctrl-C/SIGTERM/``duration_s``; 0 clean, 1 plant error, 2 bad chart.
+    """Run ``path`` until Ctrl-C/SIGTERM/``duration_s``; 0 clean, 1 plant error, STOP by
+    error or state not written, 2 bad chart or a state file it cannot trust.
 
     ``net``: the bus and page options (``web.cli.net``); with endpoints the CPU is on the
     bus even without ``web``.
 
-    ``max_cycle_ms`` None: ``WEB_MAX_CYCLE_MS`` with ``web``, else ``DEFAULT_MAX_CYCLE_MS``."""
+    ``max_cycle_ms`` None: ``WEB_MAX_CYCLE_MS`` with ``web``, else ``DEFAULT_MAX_CYCLE_MS``.
+    ``restart``: the startup from a saved state (``--restart``); ``fresh``: keep the old
+    state file aside and start anew (``--fresh``)."""
     clock = SystemClock()
     try:
         session = ChartSession.load(path, symbols, clock)
@@ -74,12 +83,13 @@ def run_chart(
     cpu.watchdog = Watchdog(max_cycle_ms, cpu.watchdog.min_cycle_ns / 1e6)
     state_path = state if state is not None else path.with_suffix(".state.sqlite")
     try:
-        store = StateStore(state_path)
-        persist_messages(store, cpu)
-        restored = store.load(cpu)
-    except Exception as exc:
-        print(f"s7graph: error: {state_path}: cannot use state file: {exc}", file=sys.stderr)
+        opened = open_state(state_path, cpu, fresh=fresh, hot=restart == "hot")
+    except StateFileError as exc:
+        print(refusal(exc), file=sys.stderr)
         return 2
+    except OSError as exc:
+        return fail(f"{state_path}: cannot use the state file: {exc.strerror or exc}")
+    store = opened.store
     live: LiveEdge | None = None
     if web or record is not None or (net is not None and net.on_bus):
         try:
@@ -94,12 +104,16 @@ def run_chart(
     failure: list[str] = []
     last = [clock.now_ns()]
     runner: Runner
+    where = f"plant {plant.name}" if plant is not None else "plant"
 
     def on_record(record: ScanRecord) -> None:
         if loaded is not None and record.mode is CpuMode.RUN:
             now = record.t_ns
             try:
-                loaded.cycle(session, now // 1_000_000, (now - last[0]) // 1_000_000)
+                with runner.abortable("plant"):
+                    loaded.cycle(session, now // 1_000_000, (now - last[0]) // 1_000_000)
+            except ScanAborted:
+                cpu.abort(where)
             except PlantError as exc:
                 failure.append(str(exc))
                 runner.stop()
@@ -107,15 +121,14 @@ def run_chart(
         if live is not None:
             live.on_record(record, stats=cpu.stats, runner=runner)
 
-    runner = Runner(cpu, cycle_ms=cycle_ms, store=store, on_record=on_record)
-    run_until_stopped(
-        runner, store, what=f"{path.name} ({session.cc.name})", restored=restored,
-        state_path=state_path, duration_s=duration_s,
-        close=live.close if live is not None else None,
+    runner = Runner(cpu, cycle_ms=cycle_ms, store=store, on_record=on_record, end_on_stop=not web)
+    status = run_until_stopped(
+        runner, opened, what=f"{path.name} ({session.cc.name})", restart=restart,
+        duration_s=duration_s, close=live.close if live is not None else None,
     )  # fmt: skip
     if failure:
         return fail(failure[0], 1)
-    return 0
+    return status
 
 
 def _serve(

@@ -3,12 +3,14 @@
 Program convention: a Python file whose module-level ``@ob``/``@fb``/``@fc`` blocks (and
 ``DB`` definitions) are loaded; an optional ``CPU = {...}`` dict passes keyword options to
 ``Cpu`` (``max_cycle_ms``, ``clock_memory``, ...; ``--max-cycle-ms`` overrides its
-``max_cycle_ms``); an optional ``setup(cpu)`` creates
-instance DBs and configures interrupts. The state file restores retentive data and the
-CPU's message list (who acknowledged what, when; every message event is also appended to
-its alarm log) and the CPU comes back by warm restart; on Ctrl-C, SIGTERM or
-``--duration-s`` the CPU goes to STOP (outputs 0) and the state is saved. A broken program
-is one line on stderr and exit 2.
+``max_cycle_ms``; its ``restart`` chooses the startup from a saved state); an optional
+``setup(cpu)`` creates instance DBs and configures interrupts. The state file restores
+retentive data and the CPU's message list (who acknowledged what, when; every message event
+is also appended to its alarm log) and the CPU comes back by the chosen restart (warm by
+default); on Ctrl-C, SIGTERM or ``--duration-s`` the CPU goes to STOP (outputs 0) and the
+state is saved. A broken program or a state file it cannot trust is one line on stderr and
+exit 2; a STOP by error or a state file that cannot be written ends the run, one line,
+exit 1.
 """
 
 from __future__ import annotations
@@ -18,17 +20,18 @@ import signal
 import sys
 from collections.abc import Callable
 from pathlib import Path
-from types import FrameType, ModuleType
+from types import ModuleType
 from typing import Any
 
 from s7graph.engine.blocks import DB, FB, FC, OB
 from s7graph.engine.clock import SystemClock
 from s7graph.engine.cpu import Cpu
 from s7graph.engine.modes import CpuMode
-from s7graph.engine.persistence import StateStore
+from s7graph.engine.persistence import StateFileError
 from s7graph.engine.record import ScanRecord
+from s7graph.engine.restart import parse_restart
 from s7graph.engine.runner import Runner
-from s7graph.web.harness.persist import persist_messages
+from s7graph.web.harness.persist import OpenedState, open_state, refusal
 
 
 class ProgramLoadError(Exception):
@@ -61,13 +64,13 @@ def build_cpu(module: ModuleType, clock: Any, *, max_cycle_ms: float | None = No
     """A CPU with the module's blocks loaded and its ``setup(cpu)`` applied.
 
     ``max_cycle_ms`` (``--max-cycle-ms``) overrides the program's ``CPU`` option; None keeps
-    it (S7's 150 ms when the program sets none)."""
+    it (S7's 150 ms when the program sets none). The ``restart`` option is the run's, not
+    the CPU's (``program_restart``)."""
     blocks = [v for v in vars(module).values() if isinstance(v, OB | FB | FC | DB)]
     if not any(isinstance(b, OB) for b in blocks):
         raise ProgramLoadError("defines no OB (decorate a function with @ob(1) or @ob(35))")
-    options = getattr(module, "CPU", {})
-    if not isinstance(options, dict):
-        raise ProgramLoadError("CPU must be a dict of Cpu options")
+    options = dict(_options(module))
+    options.pop("restart", None)
     if max_cycle_ms is not None:
         options = {**options, "max_cycle_ms": max_cycle_ms}
     try:
@@ -81,14 +84,28 @@ def build_cpu(module: ModuleType, clock: Any, *, max_cycle_ms: float | None = No
     return cpu
 
 
+def _options(module: ModuleType) -> dict[str, Any]:
+    options = getattr(module, "CPU", {})
+    if not isinstance(options, dict):
+        raise ProgramLoadError("CPU must be a dict of Cpu options")
+    return options
+
+
+def program_restart(module: ModuleType) -> str | None:
+    """The program's ``CPU = {"restart": "warm" | "hot" | "cold"}``, None if it sets none."""
+    value = _options(module).get("restart")
+    if value is None:
+        return None
+    try:
+        return str(parse_restart(value))
+    except ValueError as exc:
+        raise ProgramLoadError(f"CPU option restart: {exc}") from None
+
+
 def _report(record: ScanRecord) -> None:
     for entry in record.diagnostics:
-        if entry.event_id >> 8 in (0x45, 0x25, 0x35):
+        if entry.event_id >> 8 in (0x25, 0x35):  # errors; a STOP is reported by the run
             print(f"s7graph: {entry}", file=sys.stderr)
-
-
-def _terminate(signum: int, frame: FrameType | None) -> None:
-    raise KeyboardInterrupt
 
 
 def run_program(
@@ -98,65 +115,81 @@ def run_program(
     cycle_ms: float,
     duration_s: float | None,
     max_cycle_ms: float | None = None,
+    restart: str | None = None,
+    fresh: bool = False,
 ) -> int:
-    """Run a program until Ctrl-C/SIGTERM/duration; 0 on a clean end, 2 on a broken program.
+    """Run a program until Ctrl-C/SIGTERM/duration; 0 on a clean end, 1 when the CPU went
+    to STOP by an error or the state could not be written, 2 on a broken program or a
+    state file it cannot trust.
 
-    ``max_cycle_ms``: the maximum cycle time; None keeps the program's (see ``build_cpu``)."""
+    ``max_cycle_ms``: the maximum cycle time; None keeps the program's (see ``build_cpu``).
+    ``restart`` (``--restart``): the startup from a saved state; None: the program's
+    ``CPU["restart"]``, else warm."""
     try:
         module = import_program(path)
         cpu = build_cpu(module, SystemClock(), max_cycle_ms=max_cycle_ms)
+        restart = restart or program_restart(module) or "warm"
     except ProgramLoadError as exc:
         return _fail(path, str(exc))
     state_path = state if state is not None else path.with_suffix(".state.sqlite")
     try:
-        store = StateStore(state_path)
-    except Exception as exc:
-        return _fail(state_path, f"cannot open state file: {exc}")
-    try:
-        persist_messages(store, cpu)
-        restored = store.load(cpu)
-    except Exception as exc:
-        store.close()
-        return _fail(state_path, f"state does not fit this program: {exc}")
-    runner = Runner(cpu, cycle_ms=cycle_ms, store=store, on_record=_report)
-    run_until_stopped(
-        runner, store, what=path.name, restored=restored, state_path=state_path,
-        duration_s=duration_s, on_start=_report,
+        opened = open_state(state_path, cpu, fresh=fresh, hot=restart == "hot")
+    except StateFileError as exc:
+        print(refusal(exc), file=sys.stderr)
+        return 2
+    except OSError as exc:
+        return _fail(state_path, f"cannot use the state file: {exc.strerror or exc}")
+    runner = Runner(cpu, cycle_ms=cycle_ms, store=opened.store, on_record=_report,
+                    end_on_stop=True)  # fmt: skip
+    return run_until_stopped(
+        runner, opened, what=path.name, restart=restart, duration_s=duration_s,
+        on_start=_report,
     )  # fmt: skip
-    return 0
 
 
 def run_until_stopped(
     runner: Runner,
-    store: StateStore,
+    opened: OpenedState,
     *,
     what: str,
-    restored: bool,
-    state_path: Path,
+    restart: str,
     duration_s: float | None,
     on_start: Callable[[ScanRecord], object] | None = None,
     close: Callable[[], object] | None = None,
-) -> None:
-    """Warm-start the runner's CPU (``on_start`` gets the startup record), say so on stderr
-    with ``what``, save the state, and scan until Ctrl-C/SIGTERM/``duration_s``. Always:
-    SIGTERM's handler back, the runner shut down, ``close()``, the store closed."""
+) -> int:
+    """Start the runner's CPU with ``restart`` (``on_start`` gets the startup record), say
+    how on stderr with ``what``, and scan until Ctrl-C/SIGTERM/``duration_s`` (or, with the
+    runner's ``end_on_stop``, a STOP by error). Always: the signal handlers back, the runner
+    shut down, ``close()``, the store closed. Returns the exit status: 0, or 1 (with one
+    line on stderr) when the CPU went to STOP by an error or the state was not written."""
     cpu = runner.cpu
-    previous = signal.signal(signal.SIGTERM, _terminate)
+    store = opened.store
+
+    runner.on_stop = lambda reason: print(
+        f"s7graph: error: {what}: the CPU went to STOP: {reason}", file=sys.stderr, flush=True
+    )
+    stop = runner.on_stop_signal
+    previous = {sig: signal.signal(sig, stop) for sig in (signal.SIGTERM, signal.SIGINT)}
     try:
-        record = cpu.start("warm")
-        runner.log_alarms(record)
+        record = runner.startup(restart)
         if on_start is not None:
             on_start(record)
-        how = f"warm restart from {state_path}" if restored else "fresh start"
-        print(f"s7graph: {what} in {cpu.mode} ({how})", file=sys.stderr)
-        store.save(cpu)
+        for note in opened.report.notes if opened.report is not None else ():
+            print(f"s7graph: note: {note}", file=sys.stderr)
+        done = str(cpu.last_restart or restart)
+        print(f"s7graph: {what} in {cpu.mode} ({opened.describe(done)})", file=sys.stderr)
         if cpu.mode is CpuMode.RUN:
             runner.run(duration_s=duration_s)
-    except KeyboardInterrupt:
-        pass
     finally:
-        signal.signal(signal.SIGTERM, previous)
-        runner.shutdown("s7graph run ended")
-        if close is not None:
-            close()
-        store.close()
+        try:
+            runner.shutdown("s7graph run ended")
+        finally:
+            for sig, handler in previous.items():
+                signal.signal(sig, handler)
+            if close is not None:
+                close()
+            store.close()
+    if runner.write_error is not None:
+        print(f"s7graph: error: {runner.write_error}; the CPU went to STOP", file=sys.stderr)
+        return 1
+    return 1 if runner.stopped else 0

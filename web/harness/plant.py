@@ -15,7 +15,7 @@ import traceback
 from pathlib import Path
 from typing import Any, Protocol
 
-from s7graph.engine.errors import S7Error
+from s7graph.engine.errors import S7Error, ScanAborted
 
 
 class PlantError(S7Error):
@@ -45,9 +45,11 @@ class LoadedPlant:
         """One plant cycle; ``s7graph sim`` passes floats when the cycle time is fractional."""
         try:
             self.plant.cycle(io, t_ms, dt_ms)
+        except ScanAborted:
+            raise  # the runner's cycle monitoring: the CPU goes to STOP
         except S7Error as exc:
             raise PlantError(f"plant: {exc.message}", _where(exc, self.path)) from None
-        except Exception as exc:
+        except (Exception, SystemExit, KeyboardInterrupt) as exc:  # a plant error, never an exit
             raise PlantError(
                 f"plant: {type(exc).__name__}: {exc}", _where(exc, self.path)
             ) from None

@@ -23,7 +23,7 @@ from s7graph.sequencer.diagnostics import Diagnostic, format_diagnostic
 from s7graph.sequencer.fb import GraphFB, install_all
 from s7graph.sequencer.model import Chart
 from s7graph.sequencer.params import Direction, check_pin, is_pin
-from s7graph.sequencer.parse import ChartSyntaxError, parse_chart
+from s7graph.sequencer.parse import ChartSyntaxError, chart_text, parse_chart
 
 __all__ = ["ChartLoadError", "ChartSession", "compile_model", "compile_text", "load_chart"]
 
@@ -42,11 +42,14 @@ class ChartLoadError(S7Error):
 def load_chart(path: Path, symbols: Path | None = None) -> tuple[CompiledChart, SymbolTable]:
     """Parse, validate and compile a chart file (with an optional symbol table file)."""
     try:
-        text = Path(path).read_text(encoding="utf-8")
+        data = Path(path).read_bytes()
     except OSError as exc:
         raise ChartLoadError([f"s7graph: error: cannot read {path}: {exc.strerror}"]) from None
     try:
-        table = SymbolTable.from_file(symbols) if symbols is not None else SymbolTable()
+        table = _symbols(symbols) if symbols is not None else SymbolTable()
+        text = chart_text(data, str(path))
+    except ChartSyntaxError as exc:
+        raise ChartLoadError([_fmt(d) for d in exc.diagnostics]) from None
     except S7Error as exc:
         raise ChartLoadError([f"{exc}"]) from None
     return compile_text(text, str(path), table)
@@ -88,6 +91,13 @@ def compile_model(
     return cc, table
 
 
+def _symbols(path: Path) -> SymbolTable:
+    try:
+        return SymbolTable.from_file(path)
+    except OSError as exc:
+        raise S7Error(f"cannot read symbols {path}: {exc.strerror or exc}") from None
+
+
 def _fmt(d: Any) -> str:
     return format_diagnostic(d) if isinstance(d, Diagnostic) else str(d)
 
@@ -99,8 +109,8 @@ class ChartSession:
         self.cc = cc
         self.symbols = symbols
         self.clock = clock
-        self.cpu = Cpu(clock)
-        self.cpu.mem.symbols = symbols
+        self.cpu = Cpu(clock, keep_outputs_on_hot_restart=True)  # a hot restart resumes the
+        self.cpu.mem.symbols = symbols  # sequence: what its actions set stays set
         self.graph = GraphFB(cc)
         install_all(self.cpu, [self.graph])
 

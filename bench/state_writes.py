@@ -1,0 +1,157 @@
+"""How much the state file is written for the drill demo (run as
+``python bench/state_writes.py``; see bench/README.md).
+
+The drill demo of the README (``examples/drill/drill.s7g`` with ``demo_plant.py``) runs for
+``--seconds`` (60) of plant time at a 10 ms cycle, with its state file written as by
+``s7graph run``: each scan's changes staged in the scan thread (``StateStore.stage``) and
+committed by the writer thread (``engine/writer.py``). Two workloads:
+
+* ``demo``: the demo as it is — it faults on its second piece and waits, red, for an
+  operator who never comes;
+* ``working``: the same with an operator who acknowledges every 9 s (ACK_EF), so the drill
+  goes on working piece after piece (about 30 state changes per piece).
+
+The virtual clock makes a 60 s run take a few seconds, so each workload is repeated
+(``--repeat``) and the figures are min / median / max. Bytes written are those the process
+passed to ``write()`` (``/proc/self/io`` ``wchar``) during the run, extrapolated to an
+hour; the target is at most 50 MB an hour. Also printed: commits, rows, and the time
+``stage`` takes in the scan thread. ``--real`` instead runs ``s7graph run`` for
+``--seconds`` of real time and reads the child's ``/proc/PID/io``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from s7graph.engine.clock import VirtualClock
+from s7graph.engine.writer import StoreWriter
+from s7graph.web.harness.persist import open_state
+from s7graph.web.harness.plant import load_plant
+from s7graph.web.harness.session import ChartSession
+
+ROOT = Path(__file__).resolve().parent.parent
+DRILL = ROOT / "examples" / "drill"
+CYCLE_MS = 10
+TARGET_MB_H = 50.0
+
+
+def _io(pid: str = "self") -> dict[str, int]:
+    out: dict[str, int] = {}
+    for line in Path(f"/proc/{pid}/io").read_text().splitlines():
+        key, _, value = line.partition(":")
+        out[key] = int(value)
+    return out
+
+
+def simulate(seconds: float, *, ack_every_ms: int | None) -> dict[str, float]:
+    """One run on the virtual clock; bytes written, commits, rows, stage times."""
+    with tempfile.TemporaryDirectory() as tmp:
+        clock = VirtualClock()
+        session = ChartSession.load(DRILL / "drill.s7g", DRILL / "symbols.txt", clock)
+        plant = load_plant(DRILL / "demo_plant.py")
+        opened = open_state(Path(tmp) / "drill.sqlite", session.cpu)
+        store = opened.store
+        cpu = session.cpu
+        cpu.start("warm")
+        store.save(cpu, clean=False)
+        writer = StoreWriter(store)
+        before = _io()
+        stage_ns: list[int] = []
+        cycles = int(seconds * 1000 / CYCLE_MS)
+        for k in range(cycles):
+            t_ms = k * CYCLE_MS
+            if ack_every_ms:
+                session.set("ACK_EF", t_ms % ack_every_ms < 100 and t_ms >= ack_every_ms)
+            cpu.scan()
+            plant.cycle(session, t_ms, CYCLE_MS)
+            started = time.perf_counter_ns()
+            batch = store.stage(cpu, upto=k + 1)
+            stage_ns.append(time.perf_counter_ns() - started)
+            writer.submit(batch, k + 1)
+            if batch is not None:
+                writer.flush(5.0)  # as in real time: committed before the next scan, one each
+            clock.advance(CYCLE_MS)
+        writer.close()
+        after = _io()
+        store.close()
+        written = after["wchar"] - before["wchar"]
+        return {
+            "mb_h": written * 3600 / seconds / 1e6,
+            "commits": writer.commits,
+            "rows": writer.rows,
+            "stage_median_us": statistics.median(stage_ns) / 1000,
+            "stage_max_us": max(stage_ns) / 1000,
+            "pieces": int(session.get("pieces")),
+        }
+
+
+def real(seconds: float) -> dict[str, float]:
+    """``s7graph run`` of the demo for ``seconds`` of real time; the child's bytes written."""
+    with tempfile.TemporaryDirectory() as tmp:
+        cmd = [sys.executable, "-m", "s7graph", "run", str(DRILL / "drill.s7g"),
+               "--plant", str(DRILL / "demo_plant.py"),
+               "--symbols", str(DRILL / "symbols.txt"),
+               "--state", str(Path(tmp) / "drill.sqlite"),
+               "--duration-s", str(seconds)]  # fmt: skip
+        proc = subprocess.Popen(cmd, cwd=ROOT, stderr=subprocess.DEVNULL)
+        pid = str(proc.pid)
+        first: dict[str, int] | None = None
+        last: dict[str, int] = {}
+        t0 = time.monotonic()
+        while proc.poll() is None:
+            try:
+                last = _io(pid)
+            except OSError:
+                break
+            if first is None and time.monotonic() - t0 > 3:  # after imports and startup
+                first, t_first = last, time.monotonic()
+            time.sleep(0.2)
+        proc.wait()
+        if first is None or not last:
+            raise SystemExit("the run ended too early to measure")
+        span = time.monotonic() - t_first
+        return {"mb_h": (last["wchar"] - first["wchar"]) * 3600 / span / 1e6, "span_s": span}
+
+
+def _row(name: str, runs: list[dict[str, float]], key: str, unit: str, fmt: str = ".1f") -> str:
+    values = sorted(r[key] for r in runs)
+    lo, mid, hi = values[0], statistics.median(values), values[-1]
+    return f"  {name:<22} {lo:{fmt}} / {mid:{fmt}} / {hi:{fmt}} {unit}"
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seconds", type=float, default=60.0)
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--real", action="store_true", help="run s7graph run in real time instead")
+    args = ap.parse_args()
+    if args.real:
+        got = real(args.seconds)
+        print(f"s7graph run, drill demo, {got['span_s']:.0f} s real time: "
+              f"{got['mb_h']:.2f} MB/hour written (target <= {TARGET_MB_H:.0f})")  # fmt: skip
+        return 0 if got["mb_h"] <= TARGET_MB_H else 1
+    worst = 0.0
+    print(f"drill demo, {args.seconds:.0f} s at {CYCLE_MS} ms, state file as in s7graph run; "
+          f"min / median / max of {args.repeat} runs")  # fmt: skip
+    for name, ack in (("demo", None), ("working", 9000)):
+        runs = [simulate(args.seconds, ack_every_ms=ack) for _ in range(args.repeat)]
+        print(f"{name} ({int(runs[0]['pieces'])} pieces):")
+        print(_row("written", runs, "mb_h", f"MB/hour (target <= {TARGET_MB_H:.0f})", ".2f"))
+        print(_row("commits", runs, "commits", "", ".0f"))
+        print(_row("rows", runs, "rows", "", ".0f"))
+        print(_row("stage, median", runs, "stage_median_us", "µs per scan"))
+        print(_row("stage, max", runs, "stage_max_us", "µs per scan"))
+        worst = max(worst, max(r["mb_h"] for r in runs))
+    return 0 if worst <= TARGET_MB_H else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,260 @@
+"""A GRAPH FB's state across versions of its chart (SPEC §2.1; DESIGN "State lives in the
+instance DB").
+
+``fingerprint(cc)`` names a compiled chart — its steps, transitions, generated code,
+variables, options and parameter set, not where things are written in the file; the state
+file records it beside the FB's state. ``ChartShape`` is what a state needs to be read
+without the chart that wrote it (step and transition numbers by index, variable types).
+
+``carry_over(old, state, new)`` is the one function that takes the state of one chart
+version to another — the state file of a changed chart, and the browser's online change
+(download) alike. Pure: old shape + old state + new chart → new state + report. By step
+number: an active step that still exists stays active with its times T and U, its fault
+latches and criteria; active steps that are gone are reported; transitions by number;
+variables by name (kept when their type is unchanged, else at their new initial value, and
+reported); the mode, the options latched from the pins and the edge memories as they were.
+
+``ChartFormat`` is the ``engine.blocks.StateFormat`` of a GraphFB: how
+``engine/persistence.py`` recognises (and carries over) its instance data.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass, field
+from typing import Any
+
+from s7graph.sequencer.compiled import CompiledChart
+from s7graph.sequencer.cycle import new_state
+from s7graph.sequencer.state import GraphState
+
+__all__ = ["CarryReport", "ChartFormat", "ChartShape", "carry_over", "fingerprint"]
+
+_PER_STEP = (
+    "x", "t_ns", "u_ns", "act_ns", "il_ok", "il_err", "sv_cond", "sv_err",
+    "crit_loc", "crit_loc_err", "crit_sup",
+)  # fmt: skip
+_PER_TRANSITION = ("tt", "crit", "crit_old", "crit_flt")
+_SCALARS = (
+    "mode", "calls", "last_ns", "off", "halted", "tm_halted", "zeroed", "il_enabled",
+    "sv_enabled", "ackreq_enabled", "sskip_enabled", "ov_count",
+)  # fmt: skip
+
+
+def fingerprint(cc: CompiledChart) -> str:
+    """``chart:`` and 16 hex digits of a hash of what the compiled chart does."""
+    chart = cc.chart
+    steps = [
+        [n, name, s.message, i in cc.initial]
+        for i, (n, name, s) in enumerate(
+            zip(cc.step_numbers, cc.step_names, chart.all_steps(), strict=True)
+        )
+    ]
+    described = {
+        "fb": [cc.name, chart.fb_number, chart.db_number],
+        "options": repr(cc.options),
+        "parameters": cc.parameters,
+        "steps": steps,
+        "sequences": [list(cc.seq_numbers), list(cc.seq_names), [list(s) for s in cc.seq_steps]],
+        "transitions": [
+            [n, name, list(src), list(dst)]
+            for n, name, src, dst in zip(
+                cc.transition_numbers, cc.transition_names, cc.tr_src, cc.tr_dst, strict=True
+            )
+        ],
+        "vars": sorted(cc.var_types.items()),
+        "inits": repr(sorted(cc.var_inits.items())),
+        "code": cc.source,
+        "consts": repr(sorted(cc.consts.items())),
+    }
+    text = json.dumps(described, sort_keys=True, default=str)
+    return "chart:" + hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+@dataclass(frozen=True, slots=True)
+class ChartShape:
+    """What a saved GraphState is read by: step and transition numbers by compiled index,
+    the variables' types, and the chart's name."""
+
+    name: str
+    step_numbers: tuple[int, ...]
+    transition_numbers: tuple[int, ...]
+    var_types: dict[str, str] = field(default_factory=dict)
+
+    @classmethod
+    def of(cls, cc: CompiledChart) -> ChartShape:
+        return cls(cc.name, cc.step_numbers, cc.transition_numbers, dict(cc.var_types))
+
+    def to_json(self) -> dict[str, Any]:
+        return {
+            "name": self.name,
+            "steps": list(self.step_numbers),
+            "transitions": list(self.transition_numbers),
+            "vars": dict(self.var_types),
+        }
+
+    @classmethod
+    def from_json(cls, data: object) -> ChartShape:
+        """ValueError for anything but a ``to_json`` result."""
+        if not isinstance(data, dict):
+            raise ValueError("no chart shape saved with the state")
+        steps, transitions = data.get("steps"), data.get("transitions")
+        variables = data.get("vars", {})
+        if not (
+            isinstance(data.get("name"), str)
+            and isinstance(steps, list)
+            and isinstance(transitions, list)
+            and all(isinstance(n, int) for n in steps + transitions)
+            and isinstance(variables, dict)
+        ):
+            raise ValueError("malformed chart shape")
+        return cls(str(data["name"]), tuple(steps), tuple(transitions),
+                   {str(k): str(v) for k, v in variables.items()})  # fmt: skip
+
+
+@dataclass(slots=True)
+class CarryReport:
+    """What ``carry_over`` kept and what it could not."""
+
+    kept: list[int] = field(default_factory=list)
+    """Numbers of the active steps that stay active."""
+    gone: list[int] = field(default_factory=list)
+    """Numbers of the active steps the new chart does not have (no longer active)."""
+    faults_gone: list[int] = field(default_factory=list)
+    """Steps with a latched supervision fault that no longer exist."""
+    vars_reset: list[str] = field(default_factory=list)
+    vars_dropped: list[str] = field(default_factory=list)
+    vars_new: list[str] = field(default_factory=list)
+
+    def lines(self) -> list[str]:
+        """The report as the CLI prints it (and the diagnostic buffer records it)."""
+        kept = ", ".join(f"S{n}" for n in self.kept) or "none"
+        out = [f"chart changed; carried over by step number: active steps kept: {kept}"]
+        if self.gone:
+            out.append("active steps gone (no longer active): "
+                       + ", ".join(f"S{n}" for n in self.gone))  # fmt: skip
+        if self.faults_gone:
+            out.append("latched supervision faults of steps gone: "
+                       + ", ".join(f"S{n}" for n in self.faults_gone))  # fmt: skip
+        if self.vars_reset:
+            out.append("variables of a changed type, at their initial values: "
+                       + ", ".join(self.vars_reset))  # fmt: skip
+        if self.vars_dropped:
+            out.append("variables no longer declared: " + ", ".join(self.vars_dropped))
+        if self.vars_new:
+            out.append("new variables, at their initial values: " + ", ".join(self.vars_new))
+        return out
+
+
+def carry_over(
+    old: ChartShape, state: GraphState, new: CompiledChart
+) -> tuple[GraphState, CarryReport]:
+    """``state`` of the chart ``old`` describes, as a state of ``new`` (see the module
+    docstring). Pure: ``state`` is not changed."""
+    if state.n_steps != len(old.step_numbers) or state.n_transitions != len(
+        old.transition_numbers
+    ):
+        raise ValueError("the state does not fit the chart shape saved with it")
+    report = CarryReport()
+    st = new_state(new)
+    _by_number(old.step_numbers, new.step_numbers, _PER_STEP, state, st)
+    for i in state.active:
+        number = old.step_numbers[i]
+        target = new.step_index.get(number)
+        if target is None:
+            report.gone.append(number)
+        else:
+            st.active.append(target)
+            report.kept.append(number)
+    for i, number in enumerate(old.step_numbers):
+        if state.sv_err[i] and number not in new.step_index:
+            report.faults_gone.append(number)
+    _by_number(old.transition_numbers, new.transition_numbers, _PER_TRANSITION, state, st)
+    for name in _SCALARS:
+        setattr(st, name, getattr(state, name))
+    st.error = any(st.il_err[i] for i in st.active)
+    st.fault = any(st.sv_err)
+    st.err_flt = st.error or st.fault
+    st.ov = False
+    st.diag = list(state.diag)
+    st.s_no = state.s_no if state.s_no in new.step_index else 0
+    st.t_no = state.t_no if state.t_no in new.transition_index else 0
+    for table in ("inputs", "outputs"):
+        mine = getattr(st, table)
+        for name, value in getattr(state, table).items():
+            if name in mine:
+                mine[name] = value
+    st.prev = {k: v for k, v in state.prev.items() if k in st.inputs}
+    for name, value in state.vars.items():
+        if name not in new.var_types:
+            report.vars_dropped.append(name)
+        elif old.var_types.get(name) == new.var_types[name]:
+            st.vars[name] = value
+        else:
+            report.vars_reset.append(name)
+    report.vars_new = sorted(set(new.var_types) - set(state.vars))
+    st.display = _display(state.display, new)
+    return st, report
+
+
+def _by_number(
+    old: tuple[int, ...],
+    new: tuple[int, ...],
+    fields: tuple[str, ...],
+    source: GraphState,
+    target: GraphState,
+) -> None:
+    """Copy the per-step (or per-transition) ``fields`` of ``source`` to ``target`` for every
+    number both charts have (old index → new index)."""
+    index = {n: i for i, n in enumerate(old)}
+    for k, number in enumerate(new):
+        i = index.get(number)
+        if i is not None:
+            for name in fields:
+                getattr(target, name)[k] = getattr(source, name)[i]
+
+
+def _display(display: dict[str, Any], new: CompiledChart) -> dict[str, Any]:
+    """The display scratch, but for raised-message memories of steps that are gone."""
+    out = dict(display)
+    raised = display.get("msg")
+    if isinstance(raised, dict):
+        kept = {}
+        for mid, event in raised.items():
+            step = str(mid).rsplit("/", 2)[-2] if str(mid).count("/") >= 2 else ""
+            if step[:1] == "S" and step[1:].isdigit() and int(step[1:]) in new.step_index:
+                kept[mid] = event
+        out["msg"] = kept
+    return out
+
+
+class ChartFormat:
+    """The ``StateFormat`` of a GraphFB's instance DB: recognised by ``fingerprint(cc)``,
+    carried over by ``carry_over`` (the STAT ``state_var`` holds the GraphState)."""
+
+    def __init__(self, cc: CompiledChart, state_var: str) -> None:
+        self.cc = cc
+        self.state_var = state_var
+        self._fingerprint = fingerprint(cc)
+        self._shape = ChartShape.of(cc).to_json()
+
+    @property
+    def fingerprint(self) -> str:
+        return self._fingerprint
+
+    def shape(self) -> object:
+        return self._shape
+
+    def adapt(
+        self, shape: object, data: dict[str, object]
+    ) -> tuple[dict[str, object], list[str]]:
+        old = ChartShape.from_json(shape)
+        raw = data.get(self.state_var)
+        if not isinstance(raw, dict):
+            raise ValueError(f"no {self.state_var} in the saved instance")
+        state, report = carry_over(old, GraphState.from_state(raw), self.cc)
+        names = {p for p in state.inputs} | {p for p in state.outputs}
+        out: dict[str, object] = {k: v for k, v in data.items() if k in names}
+        out[self.state_var] = state.to_state()
+        return out, report.lines()

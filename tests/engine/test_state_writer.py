@@ -1,0 +1,161 @@
+"""The state file's writer (engine/writer.py): committed off the scan thread, written only
+when something changed, durable marks for the command path, a foreign lock waited out and
+a full disk reported with its own error."""
+
+from __future__ import annotations
+
+import sqlite3
+import threading
+from pathlib import Path
+
+import pytest
+
+from s7graph.engine import CallContext, Cpu, CpuMode, EventId, SystemClock, VirtualClock, ob
+from s7graph.engine.persistence import StateStore
+from s7graph.engine.runner import Runner
+from s7graph.engine.writer import StoreWriter
+
+
+@ob(1)
+def counts(ctx: CallContext) -> None:
+    ctx.mem.set("MW0", (int(ctx.mem.get("MW0")) + 1) % 30000)  # type: ignore[call-overload]
+
+
+@ob(1)
+def idle(ctx: CallContext) -> None:
+    pass
+
+
+def _cpu(clock: object, body: object = idle) -> Cpu:
+    cpu = Cpu(clock)  # type: ignore[arg-type]
+    cpu.load(body)  # type: ignore[arg-type]
+    cpu.start()
+    return cpu
+
+
+def test_a_scan_that_changed_nothing_stages_nothing(clock: VirtualClock, tmp_path: Path) -> None:
+    store = StateStore(tmp_path / "s.sqlite")
+    cpu = _cpu(clock)
+    store.save(cpu)
+    for _ in range(5):
+        clock.advance(10)
+        cpu.scan()
+        assert store.stage(cpu) is None
+    cpu.mem.set("MW0", 7)  # retentive
+    batch = store.stage(cpu)
+    assert batch is not None and list(batch.meta) == ["memory"]
+
+
+def test_a_change_is_durable_once_its_scan_is_committed(
+    clock: VirtualClock, tmp_path: Path
+) -> None:
+    """``when_durable(mark, fn)``: fn(None) once the batch of scan ``mark`` is committed;
+    a scan that changed nothing is durable as soon as everything before it is."""
+    store = StateStore(tmp_path / "s.sqlite")
+    cpu = _cpu(clock, counts)
+    store.save(cpu)
+    writer = StoreWriter(store)
+    calls: list[tuple[int, str | None]] = []
+    try:
+        for mark in (1, 2, 3):
+            clock.advance(10)
+            cpu.scan()
+            writer.submit(store.stage(cpu, upto=mark), mark)
+        writer.when_durable(3, lambda error: calls.append((3, error)))
+        assert writer.wait(3, timeout=10)
+        assert writer.next_mark() == 4
+        writer.submit(None, 4)  # nothing changed in scan 4
+        writer.when_durable(4, lambda error: calls.append((4, error)))
+        assert writer.wait(4, timeout=10)
+    finally:
+        writer.close()
+    assert calls == [(3, None), (4, None)]
+    assert StateStore(tmp_path / "s.sqlite").meta("memory") == store.meta("memory")
+
+
+def test_a_foreign_lock_holds_up_the_writer_never_the_scan(
+    clock: VirtualClock, tmp_path: Path
+) -> None:
+    """Another connection holds the write lock: submissions go on (and merge), nothing is
+    committed; once the lock is released the writer catches up with the latest state."""
+    path = tmp_path / "s.sqlite"
+    store = StateStore(path)
+    cpu = _cpu(clock, counts)
+    store.save(cpu)
+    writer = StoreWriter(store)
+    foreign = sqlite3.connect(path, isolation_level=None)
+    try:
+        foreign.execute("BEGIN IMMEDIATE")
+        for mark in range(1, 201):
+            clock.advance(10)
+            cpu.scan()
+            writer.submit(store.stage(cpu, upto=mark), mark)  # never waits on the lock
+        assert writer.committed == 0 and writer.error is None
+        foreign.execute("ROLLBACK")
+        assert writer.wait(200, timeout=30)
+    finally:
+        foreign.close()
+        writer.close()
+    assert writer.commits < 200  # the scans that waited were committed together
+    again = Cpu(VirtualClock())
+    again.load(counts)
+    assert StateStore(path).load(again)
+    assert again.mem.get("MW0") == cpu.mem.get("MW0") == 200
+
+
+def _fill_up(store: StateStore) -> None:
+    """Make the file full: no page more may be added (SQLITE_FULL, as on a full disk)."""
+    pages = store._db.execute("PRAGMA page_count").fetchone()[0]
+    store._db.execute(f"PRAGMA max_page_count={pages + 1}")
+
+
+def test_a_full_disk_is_reported_with_its_own_error_and_waiters_hear_of_it(
+    clock: VirtualClock, tmp_path: Path
+) -> None:
+    store = StateStore(tmp_path / "s.sqlite")
+    cpu = _cpu(clock)
+    store.save(cpu)
+    _fill_up(store)
+    writer = StoreWriter(store)
+    heard: list[str | None] = []
+    try:
+        for mark in range(1, 400):
+            store.log_audit(mark, "ann", "ack", "x" * 500)  # rows the file has no room for
+            clock.advance(10)
+            cpu.scan()
+            writer.submit(store.stage(cpu, upto=mark), mark)
+            if writer.error is not None:
+                break
+        writer.when_durable(10_000, heard.append)
+        writer.flush(10)
+    finally:
+        writer.close()
+    assert writer.error is not None
+    assert "database or disk is full" in str(writer.error)
+    assert heard and heard[0] is not None and "database or disk is full" in heard[0]
+
+
+@pytest.mark.timeout(60)
+def test_a_run_whose_state_cannot_be_written_stops_the_cpu_naming_the_error(
+    tmp_path: Path,
+) -> None:
+    store = StateStore(tmp_path / "s.sqlite")
+    cpu = Cpu(SystemClock())
+    cpu.load(counts)
+    for n in range(16):  # retentive markers change every scan
+        cpu.mem.set(f"MB{n}", n)
+    runner = Runner(cpu, cycle_ms=5, store=store)
+    runner.startup("warm")
+    _fill_up(store)
+    store.log_audit(0, "ann", "ack", "y" * 4000)
+    done = threading.Event()
+    runner.run(duration_s=20)
+    done.set()
+    runner.shutdown()
+    assert runner.write_error is not None
+    assert "database or disk is full" in runner.write_error.problem
+    assert cpu.mode is CpuMode.STOP
+    assert any(
+        e.event_id == EventId.STOP_STATE_WRITE and "database or disk is full" in e.message
+        for e in cpu.diagnostics
+    )
