@@ -30,7 +30,7 @@ import threading
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Final
+from typing import Final, Protocol
 
 import msgspec
 
@@ -66,7 +66,7 @@ from s7graph.web.harness.project import (
 )
 from s7graph.web.harness.session import ChartLoadError, ChartSession, compile_model
 
-__all__ = ["ENGINEERING_OPS", "MAX_WAITING", "OnlineChange", "Version"]
+__all__ = ["ENGINEERING_OPS", "MAX_WAITING", "Durability", "OnlineChange", "Version"]
 
 ENGINEERING_OPS: Final = ("download", "undo_download", "save", "open")
 MAX_WAITING: Final = 4  # engineering commands queued at once; more are refused (busy)
@@ -97,6 +97,15 @@ class _Swap:
     report: SwapReport | None = None
     refusal: str = ""
     cancelled: bool = False
+    mark: int | None = None  # the scan whose commit makes the swap durable
+
+
+class Durability(Protocol):
+    """When the state of a scan is on disk (``engine.runner.Runner``)."""
+
+    def durable_mark(self) -> int: ...
+
+    def wait_durable(self, mark: int, timeout: float | None = None) -> bool: ...
 
 
 class _Refused(Exception):
@@ -137,6 +146,7 @@ class OnlineChange:
         self.current = Version(1, session.cc, session.symbols, text)
         self.history: list[Version] = []  # the charts before each download, oldest first
         self.publisher: BusPublisher | None = None
+        self.durability: Durability | None = None  # the runner: when a scan is on disk
         self._worker = ThreadPoolExecutor(max_workers=1, thread_name_prefix="s7graph-online")
         self._waiting = 0
         self._lock = threading.Lock()  # _waiting, _swap
@@ -308,6 +318,14 @@ class OnlineChange:
             ) from None
         except S7Error as exc:
             raise _Refused(f"the chart does not compile: {exc}") from None
+        running = self.current.cc.chart
+        same = (chart.name, chart.fb_number, chart.db_number)
+        was = (running.name, running.fb_number, running.db_number)
+        if same != was:
+            raise _Refused(
+                f"a download changes the chart of the running FB, not the block: keep "
+                f'FUNCTION_BLOCK "{was[0]}" FB {was[1] or 1} DB {was[2] or was[1] or 1}'
+            )
         return Version(self.current.number + 1, cc, table, text)
 
     def _download(
@@ -352,6 +370,11 @@ class OnlineChange:
         if self.publisher is not None:
             self.publisher.set_chart(self.live.fb, live.layout)
         lines = [*pending.report.lines(), *summary.lines()]
+        durability, mark = self.durability, pending.mark
+        if mark is not None and durability is not None and not durability.wait_durable(
+            mark, self._timeout
+        ):
+            lines.append("the state file has not confirmed the new state yet")
         where = f"; {self.path.name} written" if self.path is not None else ""
         kept = f", the old file kept as {backup.name}" if backup is not None else ""
         head = f"version {target.number} runs (was {old.number}){where}{kept}"
@@ -389,6 +412,8 @@ class OnlineChange:
                 session.cpu.mem.symbols = pending.target.table
                 self.live.switch(pending.live)
                 pending.report = report
+                if self.durability is not None:
+                    pending.mark = self.durability.durable_mark()
             except SwapRefused as exc:
                 pending.refusal = str(exc)
             except Exception as exc:  # the old chart keeps running

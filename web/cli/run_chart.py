@@ -122,6 +122,8 @@ def run_chart(
             live.on_record(record, stats=cpu.stats, runner=runner)
 
     runner = Runner(cpu, cycle_ms=cycle_ms, store=store, on_record=on_record, end_on_stop=not web)
+    if live is not None and live.online is not None:
+        live.online.durability = runner  # a download is applied once its state is on disk
     status = run_until_stopped(
         runner, opened, what=f"{path.name} ({session.cc.name})", restart=restart,
         duration_s=duration_s, close=live.close if live is not None else None,

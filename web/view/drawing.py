@@ -40,6 +40,7 @@ __all__ = [
     "SELECTED",
     "Drawing",
     "Picture",
+    "aim_camera",
     "camera_for",
     "contrast",
     "fit_text",
@@ -541,6 +542,27 @@ def camera_for(
     cx += z * tan * aspect * right  # the side panel covers the right of the canvas
     ox, oy = offset
     return (cx + ox, cy + oy, z), (cx + ox, cy + oy, 0.0)
+
+
+def aim_camera(
+    client: Any,
+    pic: Picture,
+    *,
+    whole: bool,
+    offset: tuple[float, float] = (0, 0),
+    aspect: float = 1.6,
+    right: float = 0.28,
+) -> None:
+    """Aim ``client``'s camera at ``pic``: the whole chart, or the default readable zoom
+    (``aspect`` of the canvas, ``right``: the part of its width the side panel covers)."""
+    position, look = camera_for(pic, offset=offset, whole=whole, aspect=aspect, right=right)
+    try:
+        cam = client.camera
+        cam.position = position
+        cam.look_at = look
+        cam.up_direction = (0.0, 1.0, 0.0)
+    except Exception:  # the page has not told its camera yet, or is gone
+        return
 
 
 def scale_px(z: float, fov: float = 1.309, height_px: float = 800.0) -> float:

@@ -28,7 +28,7 @@ import html
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Final
+from typing import Any, Final
 
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.diagnostics import Diagnostic
@@ -44,12 +44,10 @@ from s7graph.sequencer.validate import validate
 from s7graph.steps.qualifiers import EVENTS, QUALIFIERS
 from s7graph.web.bus.protocol import ChartLayout, ChartSource, CommandReply
 from s7graph.web.view import texts
-from s7graph.web.view.drawing import FLAWED, SELECTED, Drawing, Picture, picture
+from s7graph.web.view.drawing import FLAWED, SELECTED, Drawing, Picture, aim_camera, picture
 from s7graph.web.view.edit_forms import Field, Form, element_choices, form_for, row_fields
+from s7graph.web.view.engineering import EditorPage
 from s7graph.web.view.layout import place
-
-if TYPE_CHECKING:
-    from s7graph.web.view.panel import ClientPanel
 
 __all__ = ["EDIT_OFFSET", "Editor"]
 
@@ -73,7 +71,7 @@ class Located:
 class Editor:
     """The edit mode of ``panel``'s page (built only for a role that may download)."""
 
-    def __init__(self, panel: ClientPanel) -> None:
+    def __init__(self, panel: EditorPage) -> None:
         self.panel = panel
         self.client = panel.client
         wiring = panel.wiring
@@ -226,15 +224,11 @@ class Editor:
             self._drawing, self._drawn = None, None
         self._clear_form()
         self.status.content = self._status_html()
-        from s7graph.web.view.panel import aim_camera
-
         pic = getattr(self.host, "picture", None)
         if pic is not None:
             aim_camera(self.client, pic, whole=False)
 
     def aim(self, *, whole: bool) -> None:
-        from s7graph.web.view.panel import aim_camera
-
         if self._picture is not None:
             canvas = PAGE_WIDTH - EDITOR_WIDTH  # the docked editor narrows the canvas
             aim_camera(

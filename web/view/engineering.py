@@ -8,7 +8,9 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Any, Protocol
+
+import viser
 
 from s7graph.web.bus.protocol import (
     ChartLayout,
@@ -19,7 +21,7 @@ from s7graph.web.bus.protocol import (
     StepStateUpdate,
 )
 
-__all__ = ["Engineering", "ViewHost"]
+__all__ = ["EditorPage", "Engineering", "ViewHost"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -35,3 +37,15 @@ class ViewHost(Protocol):
     layout: ChartLayout
 
     def latest(self) -> StepStateUpdate | None: ...
+
+
+class EditorPage(Protocol):
+    """The page panel an editor belongs to (``web.view.panel.ClientPanel``)."""
+
+    client: viser.ClientHandle
+    control_folder: viser.GuiFolderHandle
+
+    @property
+    def wiring(self) -> Any: ...
+
+    def engineer_command(self, op: str, args: dict[str, object]) -> CommandReply: ...

@@ -13,7 +13,7 @@ from __future__ import annotations
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Final
+from typing import Any, Final
 
 import viser
 
@@ -26,13 +26,11 @@ from s7graph.web.bus.protocol import (
     LoginReply,
 )
 from s7graph.web.view import texts
-from s7graph.web.view.drawing import Picture, camera_for
+from s7graph.web.view.drawing import aim_camera
+from s7graph.web.view.editor import Editor
 from s7graph.web.view.engineering import Engineering, ViewHost
 
-__all__ = ["ClientPanel", "PageState", "Wiring", "aim_camera"]
-
-if TYPE_CHECKING:
-    from s7graph.web.view.editor import Editor
+__all__ = ["ClientPanel", "PageState", "Wiring"]
 
 MODES = ("AUTO", "MAN", "TAP", "TOP")
 CURRENT_MODE_COLOUR: Final = "green"
@@ -178,8 +176,6 @@ class ClientPanel:
         w = self.wiring
         wanted = allowed(role, "download") and w.engineering is not None and w.host is not None
         if wanted and self.editor is None:
-            from s7graph.web.view.editor import Editor  # only pages of engineers
-
             self.editor = Editor(self)
         elif not wanted and self.editor is not None:
             editor, self.editor = self.editor, None
@@ -351,27 +347,6 @@ class ClientPanel:
                     )  # fmt: skip
                     button.on_click(self._handler("ack_msg", msg_id=mid))
                     self._alarm_buttons[mid] = button
-
-
-def aim_camera(
-    client: viser.ClientHandle,
-    pic: Picture,
-    *,
-    whole: bool,
-    offset: tuple[float, float] = (0, 0),
-    aspect: float = 1.6,
-    right: float = 0.28,
-) -> None:
-    """Aim ``client``'s camera at ``pic``: the whole chart, or the default readable zoom
-    (``aspect`` of the canvas, ``right``: the part of its width the side panel covers)."""
-    position, look = camera_for(pic, offset=offset, whole=whole, aspect=aspect, right=right)
-    try:
-        cam = client.camera
-        cam.position = position
-        cam.look_at = look
-        cam.up_direction = (0.0, 1.0, 0.0)
-    except Exception:  # the page has not told its camera yet, or is gone
-        return
 
 
 def _origin(client: viser.ClientHandle) -> str:
