@@ -139,14 +139,15 @@ class ChartView:
         sc = self.server.scene
         sc.set_up_direction("+y")
         sc.world_axes.visible = False
-        self.picture = picture(self.placement)
+        pic = picture(self.placement)
         if self.drawing is not None:
             self.drawing.remove()
-        self.drawing = Drawing(
-            sc, self.picture, on_step=self._clicked_step, on_transition=self._clicked_transition
+        drawing = Drawing(
+            sc, pic, on_step=self._clicked_step, on_transition=self._clicked_transition
         )
+        self.picture, self.drawing = pic, drawing
         cam = self.server.initial_camera
-        cam.position, cam.look_at = camera_for(self.picture)
+        cam.position, cam.look_at = camera_for(pic)
         cam.up = (0.0, 1.0, 0.0)
 
     @property
