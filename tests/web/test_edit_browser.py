@@ -150,7 +150,13 @@ def test_an_engineer_changes_a_condition_downloads_and_the_sequence_follows(
     select(page, ed, "T1 Go", TransitionRef(1))
     type_into(page, "Condition", "full")
     assert wait_until(lambda: condition(ed, 1) == "full")
-    assert wait_until(lambda: "full;" in str(ed.source.value))  # the source view follows
+    assert wait_until(lambda: "FROM S1 TO S2 := full;" in str(ed.source.value))  # the source
+    page.get_by_role("tab", name="Source (.s7g)").click()  # view follows; and back:
+    box = page.locator("textarea").first
+    box.fill(box.input_value().replace("TO S1 := empty;", "TO S1 := empty OR go;"))
+    box.blur()
+    assert wait_until(lambda: condition(ed, 3) == "empty OR go")  # the text is the chart
+    page.get_by_role("tab", name="Element").click()
     click(page, "Download")
     page.get_by_text("What changes").first.wait_for(timeout=30_000)
     assert page.get_by_text("T1").count() >= 1

@@ -6,18 +6,25 @@ audited — and undone the same way. Refusals leave the CPU running the old char
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
 
+from s7graph.engine.clock import VirtualClock
+from s7graph.engine.persistence import StateStore
 from s7graph.sequencer.fb import GraphFB
+from s7graph.sequencer.online import swap
 from s7graph.web.access.audit import read_audit
 from s7graph.web.bus.online import OnlineChange
 from s7graph.web.bus.protocol import Command, CommandReply
 from s7graph.web.bus.zenoh_bus import BusClient, open_session
-from s7graph.web.harness.session import ChartSession
+from s7graph.web.harness.persist import open_state
+from s7graph.web.harness.session import ChartSession, compile_text, load_chart
 from tests.web.helpers import PASSWORD, online_cpu, wait_until
 
 pytestmark = pytest.mark.timeout(90)
@@ -227,3 +234,70 @@ def test_save_and_open_use_the_project_directory_with_backups(cpu: Cpu) -> None:
     for bad in ("../escape.s7g", ".hidden.s7g", "sub/x.s7g"):
         assert not cpu.send("save", file=bad, source=CHART).applied, bad
     assert not cpu.send("open", file="missing.s7g").applied
+
+
+def _shell(rig_endpoint: str, *args: str) -> subprocess.CompletedProcess[str]:
+    env = {**os.environ, "S7GRAPH_PASSWORD": PASSWORD}
+    return subprocess.run(
+        [sys.executable, "-m", "s7graph", *args, "--cpu", "cpu1", "--connect", rig_endpoint],
+        capture_output=True, text=True, timeout=60, env=env, stdin=subprocess.DEVNULL,
+    )  # fmt: skip
+
+
+def test_s7graph_download_shows_the_change_asks_and_downloads(cpu: Cpu, tmp_path: Path) -> None:
+    """``s7graph download CHART.s7g --cpu NAME``: the same path as the bus command."""
+    cpu.set("go", True)
+    assert wait_until(lambda: cpu.active() == [2])
+    endpoint = f"unixsock-stream/{cpu.path.parent}/bus.sock"
+    edited = tmp_path / "edited.s7g"
+    edited.write_text(WITHOUT_S2, encoding="utf-8")
+    asked = _shell(endpoint, "download", str(edited), "--user", "eng")
+    assert asked.returncode == 1 and "S2 would be removed" in asked.stderr, asked.stderr
+    assert "S2" in asked.stdout  # the change summary came first
+    unconfirmed = _shell(endpoint, "download", str(edited), "--user", "eng", "--removed", "keep")
+    assert unconfirmed.returncode == 1 and "not confirmed" in unconfirmed.stderr
+    assert cpu.active() == [2]  # nothing downloaded yet
+    done = _shell(endpoint, "download", str(edited), "--user", "eng", "--removed", "keep", "--yes")
+    assert done.returncode == 0, done.stderr
+    assert "version 2 runs" in done.stdout
+    assert cpu.session.graph.cc.step_index.get(2) is None
+    refused = _shell(endpoint, "download", str(edited), "--user", "olga", "--yes")
+    assert refused.returncode == 1 and "needs engineer" in refused.stderr
+
+
+def test_a_download_and_a_restart_with_the_downloaded_file_carry_the_state_alike(
+    tmp_path: Path,
+) -> None:
+    """Starting ``s7graph run`` with an edited chart and an old state file carries the
+    state over with the same function as a download (``sequencer.carry.carry_over``)."""
+    edited = CHART.replace(":= full;", ":= full OR empty;")
+    path = tmp_path / "fill.s7g"
+    path.write_text(CHART, encoding="utf-8")
+    cc, table = load_chart(path)
+
+    def in_s2() -> ChartSession:
+        session = ChartSession(cc, table, VirtualClock())
+        session.start()
+        session.set("go", True)
+        for _ in range(30):
+            session.clock.advance(10)  # type: ignore[attr-defined]
+            session.scan()
+        return session
+
+    online = in_s2()
+    store = StateStore(tmp_path / "state.sqlite")
+    store.save(online.cpu)
+    new_cc, _ = compile_text(edited, str(path))
+    swap(online.graph, new_cc, online.cpu)  # the download, at a scan boundary
+    store.close()
+
+    path.write_text(edited, encoding="utf-8")  # the restart with the edited file
+    restarted = ChartSession(*load_chart(path), VirtualClock())
+    opened = open_state(tmp_path / "state.sqlite", restarted.cpu)
+    try:
+        assert opened.report is not None and opened.report.changed == [1]
+        a, b = online.graph.state, restarted.graph.state
+        assert sorted(a.active) == sorted(b.active) == [new_cc.step_index[2]]
+        assert a.vars == b.vars and a.t_ns == b.t_ns and a.x == b.x
+    finally:
+        opened.store.close()
