@@ -147,7 +147,7 @@ class Placement:
 Node = tuple[str, int]
 MARK_OFFSET = 0.55  # how far below a transition a jump arrow or stop is drawn
 SEQUENCE_GAP = 0.5  # empty lanes between two sequence columns
-FOLD_ROWS = 20  # rows of one column of a long sequence (10 steps and their transitions)
+FOLD_ROWS = 16  # rows of one column of a long sequence (8 steps and their transitions)
 FOLD_GAP = 0.25  # empty lanes between two columns of one sequence
 
 
