@@ -8,7 +8,9 @@ FB variables and step/transition attributes (``Sn.X``, ``Sn.T``, ``Sn.U``, ``Tn.
 
 from __future__ import annotations
 
+import contextlib
 import re
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -45,13 +47,9 @@ def load_chart(path: Path, symbols: Path | None = None) -> tuple[CompiledChart, 
         data = Path(path).read_bytes()
     except OSError as exc:
         raise ChartLoadError([f"s7graph: error: cannot read {path}: {exc.strerror}"]) from None
-    try:
+    with _as_load_error(str(path)):
         table = _symbols(symbols) if symbols is not None else SymbolTable()
         text = chart_text(data, str(path))
-    except ChartSyntaxError as exc:
-        raise ChartLoadError([_fmt(d) for d in exc.diagnostics]) from None
-    except S7Error as exc:
-        raise ChartLoadError([f"{exc}"]) from None
     return compile_text(text, str(path), table)
 
 
@@ -61,14 +59,8 @@ def compile_text(
     """Parse, validate and compile chart ``text`` (named ``file`` in diagnostics) with the
     symbol table ``table``, which gets the chart's own ``SYMBOLS`` added; ``ChartLoadError``
     with every diagnostic when it does not compile."""
-    try:
+    with _as_load_error(file):
         chart = parse_chart(text, file)
-    except ChartSyntaxError as exc:
-        raise ChartLoadError([_fmt(d) for d in exc.diagnostics]) from None
-    except S7Error as exc:
-        raise ChartLoadError([f"{exc}"]) from None
-    except RecursionError:
-        raise ChartLoadError([f"{file}: the chart nests too deeply to compile"]) from None
     return compile_model(chart, table)
 
 
@@ -77,18 +69,25 @@ def compile_model(
 ) -> tuple[CompiledChart, SymbolTable]:
     """Validate and compile a parsed ``chart`` as :func:`compile_text` does."""
     table = table if table is not None else SymbolTable()
-    try:
+    with _as_load_error(chart.file):
         for s in chart.symbols:
             if table.lookup(s.name) is None:
                 table.add(s.name, s.address, s.type, s.comment, where=s.loc)
         cc = compile_chart(chart, table)
-    except ChartError as exc:
+    return cc, table
+
+
+@contextlib.contextmanager
+def _as_load_error(file: str) -> Iterator[None]:
+    """Any problem reading or compiling a chart as one ``ChartLoadError`` with its lines."""
+    try:
+        yield
+    except (ChartSyntaxError, ChartError) as exc:
         raise ChartLoadError([_fmt(d) for d in exc.diagnostics]) from None
     except S7Error as exc:
         raise ChartLoadError([f"{exc}"]) from None
     except RecursionError:
-        raise ChartLoadError([f"{chart.file}: the chart nests too deeply to compile"]) from None
-    return cc, table
+        raise ChartLoadError([f"{file}: the chart nests too deeply to compile"]) from None
 
 
 def _symbols(path: Path) -> SymbolTable:
