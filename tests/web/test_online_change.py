@@ -301,3 +301,12 @@ def test_a_download_and_a_restart_with_the_downloaded_file_carry_the_state_alike
         assert a.vars == b.vars and a.t_ns == b.t_ns and a.x == b.x
     finally:
         opened.store.close()
+
+
+def test_the_preview_reports_operands_left_set_by_s_rows_of_removed_steps(cpu: Cpu) -> None:
+    with_s = CHART.replace("    N Q0.0;\n", "    N Q0.0;\n    S Q0.2;\n")
+    assert cpu.send("download", source=with_s).applied
+    gone = WITHOUT_S2
+    preview = cpu.send("download", source=gone, preview=True)
+    assert preview.applied
+    assert any("Q0.2" in line and "S2" in line and "stay set" in line for line in preview.lines)

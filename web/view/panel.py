@@ -242,6 +242,9 @@ class ClientPanel:
 
     def forget(self) -> None:
         """The page went away: revoke its token (its GUI is gone, nothing to update)."""
+        editor, self.editor = self.editor, None
+        if editor is not None:
+            editor.close()
         with self._lock:
             token, user = self.token, self.user
             self.token = ""
