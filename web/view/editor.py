@@ -156,12 +156,15 @@ class Editor:
         self.element.on_update(self._element_chosen)
         self.source.on_update(self._source_typed)
 
-    def close(self) -> None:
-        """The page's role changed (or it logged out): leave edit mode, drop the panel."""
+    def close(self, *, page_gone: bool = False) -> None:
+        """The page's role changed (or it logged out): leave edit mode, drop the panel;
+        ``page_gone``: the page itself went, there is nothing left to update."""
         with self._lock:
             self._closed = True
             for timer in self._timers.values():
                 timer.cancel()
+            if page_gone:
+                return
             if self.editing:
                 self.leave()
             with contextlib.suppress(Exception):
@@ -198,7 +201,7 @@ class Editor:
             symbols = SymbolTable.from_text(source.symbols) if source.symbols else None
             chart = parse_source(source.text, source.file or "chart.s7g")
             session = Session.open(chart, symbols)
-        except (EditRefused, Exception) as exc:
+        except Exception as exc:  # EditRefused, a symbol table that does not load ...
             reason = exc.reason if isinstance(exc, EditRefused) else str(exc)
             self._notify("edit mode", f"cannot edit the running chart: {reason}", ok=False)
             return

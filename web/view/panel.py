@@ -244,7 +244,7 @@ class ClientPanel:
         """The page went away: revoke its token (its GUI is gone, nothing to update)."""
         editor, self.editor = self.editor, None
         if editor is not None:
-            editor.close()
+            editor.close(page_gone=True)
         with self._lock:
             token, user = self.token, self.user
             self.token = ""
