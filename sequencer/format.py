@@ -15,13 +15,10 @@ their default, ``PARAMETERS`` always.
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Callable
-from typing import Any, TypeVar
+from typing import TypeVar
 
-from s7graph.engine.errors import SourceLocation
 from s7graph.sequencer.model import (
-    NOWHERE,
     ActionRow,
     Assignment,
     Binary,
@@ -45,7 +42,7 @@ from s7graph.sequencer.model import (
     VarDecl,
 )
 
-__all__ = ["format_chart", "format_expr", "format_row", "quote", "row_body", "without_places"]
+__all__ = ["format_chart", "format_expr", "format_row", "quote", "row_body"]
 
 T = TypeVar("T")
 
@@ -253,42 +250,3 @@ def format_chart(chart: Chart, header: str = "") -> str:
         out += ["PERMANENT AFTER", *(f"  {_permanent(p)}" for p in chart.after), "END_PERMANENT"]
     out.append("END_FUNCTION_BLOCK")
     return "\n".join(out) + "\n"
-
-
-# ---------------------------------------------------------------- comparing models
-
-
-def without_places(obj: T) -> T:
-    """``obj`` with every source place set to nowhere and the file name to ``<input>``, so
-    that two models of the same chart compare equal whatever text they were read from."""
-    return _strip(obj)  # type: ignore[no-any-return]
-
-
-def _strip(obj: Any) -> Any:
-    if isinstance(obj, SourceLocation):
-        return NOWHERE
-    if isinstance(obj, tuple):
-        return tuple(_strip(x) for x in obj)
-    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
-        changes: dict[str, Any] = {}
-        for f in dataclasses.fields(obj):
-            value = getattr(obj, f.name)
-            if f.name in _PLACE_ONLY:
-                changes[f.name] = _PLACE_ONLY[f.name]
-            elif f.name == "file" and isinstance(obj, Chart):
-                changes[f.name] = "<input>"
-            elif isinstance(value, SourceLocation | tuple) or dataclasses.is_dataclass(value):
-                changes[f.name] = _strip(value)
-        return dataclasses.replace(obj, **changes)
-    return obj
-
-
-# Fields that only say where something was written (``INTERLOCK := ;`` has a place but no
-# condition, so these are dropped rather than compared).
-_PLACE_ONLY: dict[str, Any] = {
-    "option_locs": (),
-    "interlock_loc": None,
-    "supervision_loc": None,
-    "source_locs": (),
-    "target_locs": (),
-}

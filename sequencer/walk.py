@@ -14,7 +14,7 @@ from dataclasses import fields, is_dataclass, replace
 from typing import Any, TypeVar
 
 from s7graph.engine.errors import SourceLocation
-from s7graph.sequencer.model import NOWHERE, Step, Transition
+from s7graph.sequencer.model import NOWHERE, Chart, Step, Transition
 
 N = TypeVar("N")
 
@@ -67,6 +67,8 @@ def nodes(root: object) -> Iterator[Any]:
 def _forget_place(node: Any) -> Any:
     if isinstance(node, SourceLocation):
         return NOWHERE
+    if isinstance(node, Chart) and (node.option_locs or node.file != "<input>"):
+        return replace(node, option_locs=(), file="<input>")
     if isinstance(node, Step) and (node.interlock_loc or node.supervision_loc):
         return replace(node, interlock_loc=None, supervision_loc=None)
     if isinstance(node, Transition) and (node.source_locs or node.target_locs):
@@ -75,7 +77,9 @@ def _forget_place(node: Any) -> Any:
 
 
 def unlocated(node: N) -> N:
-    """``node`` with every place forgotten (locations, FROM/TO places): its content only."""
+    """``node`` with every place forgotten (locations, FROM/TO places, the file a chart was
+    read from): its content only, so that two models of the same chart compare equal
+    whatever text they were read from."""
     return rewrite(node, _forget_place)
 
 

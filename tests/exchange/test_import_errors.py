@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from s7graph.sequencer.exchange import ImportFailed, import_chart
-from s7graph.sequencer.format import without_places
+from s7graph.sequencer.walk import unlocated
 from s7graph.web.cli import main
 from tests.exchange.helpers import codes, corpus
 
@@ -24,7 +24,7 @@ def test_bom_and_crlf_change_nothing_in_textual_sfc() -> None:
     plain = corpus("iec-text/matiec_sfc.txt").read_bytes()
     dressed = b"\xef\xbb\xbf" + plain.replace(b"\n", b"\r\n")
     a, b = import_chart(plain, "f.txt"), import_chart(dressed, "f.txt")
-    assert without_places(a.chart) == without_places(b.chart)
+    assert unlocated(a.chart) == unlocated(b.chart)
     assert codes(a.problems) == codes(b.problems)
 
 
@@ -32,7 +32,7 @@ def test_bom_and_crlf_change_nothing_in_xml_and_lines_stay_right() -> None:
     plain = corpus("plcopen/matiec_SFC_TEST.xml").read_bytes()
     dressed = b"\xef\xbb\xbf" + plain.replace(b"\n", b"\r\n")
     a, b = import_chart(plain, "f.xml"), import_chart(dressed, "f.xml")
-    assert without_places(a.chart) == without_places(b.chart)
+    assert unlocated(a.chart) == unlocated(b.chart)
     assert codes(a.problems) == codes(b.problems) == [("I023", 40), ("I023", 53), ("I024", 783)]
 
 
@@ -43,7 +43,7 @@ def test_bom_and_crlf_change_nothing_in_xml_and_lines_stay_right() -> None:
 def test_every_plcopen_namespace_reads_the_same(namespace: str) -> None:
     old = corpus("plcopen/matiec_SFC_TEST.xml").read_bytes()  # the old tc6.xsd namespace
     new = old.replace(b"http://www.plcopen.org/xml/tc6.xsd", namespace.encode())
-    assert without_places(import_chart(new, "f.xml").chart) == without_places(
+    assert unlocated(import_chart(new, "f.xml").chart) == unlocated(
         import_chart(old, "f.xml").chart
     )
 
@@ -57,7 +57,7 @@ def test_a_namespace_prefix_on_every_element_reads_the_same() -> None:
     prefixed = prefixed.replace("</p:xhtml:", "</xhtml:")
     a = import_chart(text.encode(), "f.xml").chart
     b = import_chart(prefixed.encode(), "f.xml").chart
-    assert without_places(a) == without_places(b)
+    assert unlocated(a) == unlocated(b)
 
 
 def test_merge_conflict_markers_are_one_error_at_their_line() -> None:

@@ -11,9 +11,10 @@ import pytest
 
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.exchange import export_chart, import_chart
-from s7graph.sequencer.format import format_row, without_places
+from s7graph.sequencer.format import format_row
 from s7graph.sequencer.model import Chart
 from s7graph.sequencer.parse import parse_chart, parse_file
+from s7graph.sequencer.walk import unlocated
 from s7graph.web.cli import main
 
 EXAMPLES = sorted(Path(__file__).resolve().parents[2].glob("examples/*/*.s7g"))
@@ -31,7 +32,7 @@ def test_example_comes_back_the_same_through_the_format(path: Path, to: str) -> 
     back = import_chart(xml.encode(), f"{path.stem}.xml", symbols=table)
     assert back.format == to
     assert back.problems == []
-    assert without_places(back.chart) == without_places(chart)
+    assert unlocated(back.chart) == unlocated(chart)
 
 
 @pytest.mark.parametrize("to", ["plcopen", "simaticml"])
@@ -43,7 +44,7 @@ def test_export_then_import_on_the_command_line_round_trips(to: str, tmp_path: P
     assert main(["import", str(xml), "-o", str(back), "--symbols", str(symbols)]) == 0
     assert main(["check", str(back), "--symbols", str(symbols)]) == 0
     original = parse_file(path)
-    assert without_places(parse_chart(back.read_text())) == without_places(original)
+    assert unlocated(parse_chart(back.read_text())) == unlocated(original)
 
 
 def native_only(xml: str) -> bytes:
@@ -65,7 +66,7 @@ def test_plcopen_export_is_an_iec_sfc_with_the_same_steps_conditions_and_rows() 
         return [
             [(s.number, s.name, s.initial, [format_row(r) for r in s.actions])
              for s in c.all_steps()],
-            [(t.number, t.name, t.sources, t.targets, without_places(t.condition))
+            [(t.number, t.name, t.sources, t.targets, unlocated(t.condition))
              for t in c.all_transitions()],
         ]  # fmt: skip
 

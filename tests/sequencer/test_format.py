@@ -11,7 +11,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from s7graph.engine.literals import parse_literal
-from s7graph.sequencer.format import format_chart, format_expr, without_places
+from s7graph.sequencer.format import format_chart, format_expr
 from s7graph.sequencer.model import (
     ActionRow,
     Assignment,
@@ -35,6 +35,7 @@ from s7graph.sequencer.model import (
     VarDecl,
 )
 from s7graph.sequencer.parse import parse_chart
+from s7graph.sequencer.walk import unlocated
 
 ROOT = Path(__file__).resolve().parents[2]
 CHARTS = sorted(
@@ -45,7 +46,7 @@ CHARTS = sorted(
 
 def same_after_writing(chart: Chart) -> bool:
     text = format_chart(chart)
-    return without_places(parse_chart(text)) == without_places(chart)
+    return unlocated(parse_chart(text)) == unlocated(chart)
 
 
 @pytest.mark.parametrize("path", CHARTS, ids=lambda p: p.name)
