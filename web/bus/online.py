@@ -72,6 +72,7 @@ ENGINEERING_OPS: Final = ("download", "undo_download", "save", "open")
 MAX_WAITING: Final = 4  # engineering commands queued at once; more are refused (busy)
 BOUNDARY_TIMEOUT_S: Final = 5.0  # the scan loop takes a swap within this, or it is refused
 MAX_LINES: Final = 400  # lines of a reply (a change summary, diagnostics)
+MAX_HISTORY: Final = 20  # charts kept for undo_download (the oldest go first)
 
 
 @dataclass(frozen=True, slots=True)
@@ -273,7 +274,7 @@ class OnlineChange:
             )
         if op == "undo_download":
             if not self.history:
-                raise _Refused("no download to undo: the CPU runs the chart it started with")
+                raise _Refused("no download to undo (the charts of the last 20 downloads are kept)")
             target = self.history[-1]
             target = Version(self.current.number + 1, target.cc, target.table, target.text)
         else:
@@ -365,14 +366,16 @@ class OnlineChange:
         if command.op == "undo_download":
             self.history.pop()
         else:
-            self.history.append(old)
+            self.history = [*self.history, old][-MAX_HISTORY:]
         self.current = target
         if self.publisher is not None:
             self.publisher.set_chart(self.live.fb, live.layout)
         lines = [*pending.report.lines(), *summary.lines()]
         durability, mark = self.durability, pending.mark
-        if mark is not None and durability is not None and not durability.wait_durable(
-            mark, self._timeout
+        if (
+            mark is not None
+            and durability is not None
+            and not durability.wait_durable(mark, self._timeout)
         ):
             lines.append("the state file has not confirmed the new state yet")
         where = f"; {self.path.name} written" if self.path is not None else ""
