@@ -206,6 +206,19 @@ class Cpu:
         self.instance_dbs[number] = idb
         return idb
 
+    def replace_instance_db(
+        self, number: int, fb: FB, *, name: str | None = None
+    ) -> InstanceDB:
+        """Re-create instance DB ``number`` from ``fb``'s interface, replacing the one there
+        (a changed FB downloaded into a running CPU: the caller carries the values over)."""
+        if number not in self.instance_dbs:
+            raise BlockError(f"DB{number} is not an instance DB")
+        if fb.kind is BlockKind.FB and self.blocks.get(fb.label) != fb:
+            raise BlockError(f"{fb.label} {fb.name!r} must be loaded before its instance DB")
+        idb = InstanceDB(number, fb, name=name)
+        self.instance_dbs[number] = idb
+        return idb
+
     def instance_db(self, number: int) -> InstanceDB:
         try:
             return self.instance_dbs[number]

@@ -20,6 +20,7 @@ data is recognised on disk by the compiled chart (``sequencer/carry.py``).
 from __future__ import annotations
 
 from collections.abc import Iterable
+from dataclasses import replace
 from typing import Any, NamedTuple
 
 from s7graph.engine.blocks import FB, OB, Decl, InstanceDB, Var
@@ -177,6 +178,30 @@ class GraphFB:
     def levels(self) -> dict[str, bool]:
         """The level overrides in force."""
         return dict(self._runtime.levels) if self._runtime is not None else {}
+
+    def replace_chart(self, cc: CompiledChart, state: GraphState, cpu: Any) -> None:
+        """Online change: run ``cc`` from the next call on, with ``state`` (the running state
+        carried over to ``cc`` by ``sequencer.carry.carry_over``); call at a scan boundary.
+        The FB keeps its number and its instance DB number; the instance DB is made anew for
+        the new parameter set, each pin keeping its value by name. One-call commands queued
+        for the next call and the level overrides in force (HALT_SQ, EN_IL, EN_SV) stay."""
+        fresh = GraphFB(cc, fb_number=self.fb_number, db_number=self.db_number)
+        levels = {**self.levels, **self._levels}
+        old = self.idb
+        self.cc = cc
+        self.in_pins, self.out_pins = fresh.in_pins, fresh.out_pins
+        self.fb = replace(fresh.fb, body=self._body)
+        self._messages = cc.options.messages
+        cpu.load(self.fb)
+        idb = cpu.replace_instance_db(self.db_number, self.fb, name=cc.name)
+        if old is not None:
+            for name, value in old.values.items():
+                if name != STATE_VAR and name in idb.values:
+                    idb.values[name] = value
+        idb.values[STATE_VAR] = state
+        self.idb = idb
+        self._runtime, self._prog, self._mem, self._copied = None, None, None, None
+        self._levels = levels
 
     # ------------------------------------------------------------ the FB body
 

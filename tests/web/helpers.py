@@ -9,6 +9,7 @@ import threading
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -23,6 +24,7 @@ if TYPE_CHECKING:
     from playwright.sync_api import Locator, Page
 
     from s7graph.engine.record import ScanRecord
+    from s7graph.web.bus.online import OnlineChange
     from s7graph.web.view.live_edge import LiveEdge
 
 CHROMIUM = "/usr/bin/chromium"
@@ -126,3 +128,58 @@ def chart_session(
     session = ChartSession(cc, table, clock)
     store = StateStore(tmp_path / "state.sqlite")
     return session, table, clock, store
+
+
+PASSWORD = "correct horse"
+
+
+@dataclass
+class OnlineRig:
+    """A CPU running a chart file on the virtual clock, scanned in a thread, on a real bus
+    (``endpoint``) with its online change; ``edge.url`` is its page when served."""
+
+    session: ChartSession
+    edge: LiveEdge
+    online: OnlineChange
+    path: Path
+    state: Path
+    endpoint: str
+    scans: list[int]
+
+
+@contextmanager
+def online_cpu(
+    tmp_path: Path, chart: str, *, serve: bool, users: dict[str, str], name: str = "chart.s7g"
+) -> Iterator[OnlineRig]:
+    """``chart`` written to ``tmp_path / name`` and run with a users file (name → role,
+    password ``PASSWORD``), its bus on a unix socket, the view when ``serve``."""
+    from s7graph.web.access.audit import AuditStore
+    from s7graph.web.access.login import Authenticator
+    from s7graph.web.access.users import UsersFile
+    from s7graph.web.bus.gate import Gate
+    from s7graph.web.bus.live import LiveGraph
+    from s7graph.web.bus.online import OnlineChange
+    from s7graph.web.view.edge import BusEnds
+    from s7graph.web.view.live_edge import LiveEdge
+
+    path = tmp_path / name
+    path.write_text(chart, encoding="utf-8")
+    users_file = UsersFile(tmp_path / "users.json")
+    for user, role in users.items():
+        users_file.add(user, role, PASSWORD)
+    state = tmp_path / "state.sqlite"
+    audit = AuditStore(state)
+    cc, table = load_chart(path)
+    session = ChartSession(cc, table, VirtualClock())
+    live = LiveGraph(session.graph, read=session.get)
+    gate = Gate(Authenticator(users_file), audit)
+    online = OnlineChange(session, live, gate, path=path)
+    endpoint = f"unixsock-stream/{tmp_path}/bus.sock"
+    scans: list[int] = []
+    try:
+        edge = LiveEdge(live, port=0, serve=serve, bus=True, gate=gate, online=online,
+                        ends=BusEnds(listen=[endpoint]))  # fmt: skip
+        with edge, scanning(session, edge, lambda record: scans.append(record.cycle)):
+            yield OnlineRig(session, edge, online, path, state, endpoint, scans)
+    finally:
+        audit.close()

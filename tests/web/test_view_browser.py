@@ -157,3 +157,33 @@ def test_demo_feed_applies_commands_between_scans() -> None:
             Command(op="t_push", fb="MIXER", user="tom", token=login.token)
         )
         assert not refused.applied and "TAP and TOP" in refused.reason
+
+
+def screen_point(
+    view: object, x: float, y: float, width: int = 1280, height: int = 800
+) -> tuple[float, float]:
+    """Where the scene point ``(x, y)`` shows on the page, for the initial camera (a camera
+    looking straight down, viser's vertical field of view)."""
+    import math
+
+    cam = view.server.initial_camera  # type: ignore[attr-defined]
+    cx, cy, z = cam.position
+    half = z * math.tan(cam.fov / 2)
+    return width / 2 + (x - cx) / half * height / 2, height / 2 - (y - cy) / half * height / 2
+
+
+def test_a_click_on_a_transition_shows_its_whole_condition(page: Page, edge: WebEdge) -> None:
+    """Transitions are clickable like steps: the details show name and whole condition."""
+    view = edge.view
+    cx, cy, _, _ = view.picture.targets[2]
+    px, py = screen_point(view, cx, cy)
+    page.mouse.click(px, py)
+    assert wait_until(
+        lambda: any(int(p.detail_transition.value) == 2 for p in view.panels.values())
+    )
+    page.get_by_text('"Level_high"').first.wait_for(timeout=30_000)
+    page.get_by_text("from S2 to S3, S4").first.wait_for(timeout=30_000)
+    sx, sy = view.picture.steps[5]
+    page.mouse.click(*screen_point(view, sx, sy))  # a step again: its details
+    assert wait_until(lambda: any(int(p.detail_step.value) == 5 for p in view.panels.values()))
+    assert all(int(p.detail_transition.value) == 0 for p in view.panels.values())

@@ -63,12 +63,33 @@ COMMANDS: Final[tuple[CommandInfo, ...]] = (
         "download",
         "engineer",
         "",
-        "download a changed chart (not available yet)",
-        '{"source": "..."}',
+        "download a changed chart into the running FB (online change)",
+        '{"source": "...", "base": 1, "removed": "keep", "preview": true}',
+    ),
+    CommandInfo(
+        "undo_download",
+        "engineer",
+        "",
+        "put the chart before the last download back",
+        '{"base": 2, "removed": "keep", "preview": true}',
+    ),
+    CommandInfo(
+        "save",
+        "engineer",
+        "",
+        "write a chart into the CPU's project directory",
+        '{"file": "x.s7g", "source": "..."}',
+    ),
+    CommandInfo(
+        "open",
+        "engineer",
+        "",
+        "read a chart or importable file of the project directory",
+        '{"file": "x.xml"}',
     ),
 )
 # Ops the role table grants but this CPU does not carry out yet: refused after the role check.
-NOT_AVAILABLE: Final = frozenset({"force", "download"})
+NOT_AVAILABLE: Final = frozenset({"force"})
 
 _RANK: Final = {role: i for i, role in enumerate(ROLES)}
 _LOWEST: Final = {c.op: c.role for c in COMMANDS}
@@ -99,5 +120,6 @@ def role_table_markdown() -> str:
         args = f"`{c.args}`" if c.args else ""
         pin = f"`{c.pin}`" if c.pin else ""
         rows.append(f"| `{c.op}` | {args} | {pin} | {c.does} | {marks} |")
-    rows.append("| *read* (chart, state, status, alarms, history, audit) | | | | ✓ | ✓ | ✓ |")
+    reads = "chart, source, state, status, alarms, history, audit, project"
+    rows.append(f"| *read* ({reads}) | | | | ✓ | ✓ | ✓ |")
     return "\n".join(rows) + "\n"

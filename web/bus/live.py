@@ -46,10 +46,12 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Iterable
+from dataclasses import dataclass
 from typing import Any
 
 from s7graph.engine.modes import CpuMode
 from s7graph.engine.record import ScanRecord
+from s7graph.sequencer.compiled import CompiledChart
 from s7graph.sequencer.display import contact_bits
 from s7graph.sequencer.fb import GraphFB, StepEvent
 from s7graph.sequencer.messages import PROGRAM_USER, parse_message_id
@@ -69,7 +71,7 @@ from s7graph.web.bus.protocol import (
     TransitionCriteria,
 )
 
-__all__ = ["CONTROL_SEQUENCER", "MODE_PINS", "OP_PINS", "LiveGraph", "watch_names"]
+__all__ = ["CONTROL_SEQUENCER", "MODE_PINS", "OP_PINS", "LiveChart", "LiveGraph", "watch_names"]
 
 CONTROL_SEQUENCER = "S7-GRAPH Control Sequencer"
 OP_PINS: dict[str, str] = {
@@ -95,6 +97,17 @@ _GROUPS = {
     "mode": "mode", "step_on": "step", "step_off": "step", "ack_step": "step",
     "init": "init", "off": "init",
 }  # fmt: skip
+
+
+@dataclass(frozen=True, slots=True)
+class LiveChart:
+    """One chart version as :class:`LiveGraph` describes it (``LiveGraph.prepare``)."""
+
+    cc: CompiledChart
+    layout: ChartLayout
+    tr_neg: tuple[tuple[bool, ...], ...]
+    il_neg: tuple[tuple[bool, ...], ...]
+    sv_neg: tuple[tuple[bool, ...], ...]
 
 
 def _scalar(value: object) -> bool | int | float | str | None:
@@ -123,9 +136,8 @@ class LiveGraph:
     ) -> None:
         self.graph = graph
         self.messages = messages
-        self.cc = graph.cc
         self.fb = fb or graph.cc.name
-        self.layout = ChartLayout.from_chart(graph.cc.chart, fb=self.fb)
+        self.switch(self.prepare(graph.cc, version=1))
         self._read = read
         self.watch = tuple(dict.fromkeys(watch))[:MAX_WATCH]
         self._wall_ns = wall_ns
@@ -134,18 +146,36 @@ class LiveGraph:
         self._pending_mode: str | None = None  # a mode change queued for the next call
         self._pending: dict[str, str] = {}  # conflict group -> op queued for the next call
         self._t_ns = 0  # CPU time of the last scan
-        chart = graph.cc.chart
-        self._tr_neg = tuple(
-            _negations(t.condition, n)
-            for t, n in zip(chart.all_transitions(), self.cc.crit_labels, strict=True)
-        )
-        self._il_neg = tuple(
-            _negations(st.interlock, n)
-            for st, n in zip(chart.all_steps(), self.cc.il_labels, strict=True)
-        )
-        self._sv_neg = tuple(_negations(st.supervision, n) for st, n in zip(
-            chart.all_steps(), self.cc.sv_labels, strict=True))  # fmt: skip
         self._alarm_entries: tuple[Message, ...] | None = None
+
+    # ------------------------------------------------------------ the chart
+
+    def prepare(self, cc: CompiledChart, *, version: int) -> LiveChart:
+        """What this view of the FB needs of chart ``cc`` (its layout, which contacts are
+        negated); made off the scan thread before an online change."""
+        chart = cc.chart
+        return LiveChart(
+            cc=cc,
+            layout=ChartLayout.from_chart(chart, fb=self.fb, version=version),
+            tr_neg=tuple(
+                _negations(t.condition, n)
+                for t, n in zip(chart.all_transitions(), cc.crit_labels, strict=True)
+            ),
+            il_neg=tuple(
+                _negations(st.interlock, n)
+                for st, n in zip(chart.all_steps(), cc.il_labels, strict=True)
+            ),
+            sv_neg=tuple(
+                _negations(st.supervision, n)
+                for st, n in zip(chart.all_steps(), cc.sv_labels, strict=True)
+            ),
+        )
+
+    def switch(self, chart: LiveChart) -> None:
+        """Describe ``chart`` from now on (at the scan boundary of an online change)."""
+        self.cc = chart.cc
+        self.layout = chart.layout
+        self._tr_neg, self._il_neg, self._sv_neg = chart.tr_neg, chart.il_neg, chart.sv_neg
 
     # ------------------------------------------------------------ state out
 

@@ -14,6 +14,7 @@ from typing import Annotated, Any, Literal, TypeVar
 import msgspec
 from msgspec import Meta, Struct
 
+from s7graph.sequencer.edit_base import MAX_SOURCE
 from s7graph.sequencer.model import (
     Binary,
     Chart,
@@ -31,6 +32,7 @@ __all__ = [
     "MAX_MESSAGE_BYTES",
     "MODES",
     "OPS",
+    "REMOVED_CHOICES",
     "AlarmEntry",
     "AlarmEvent",
     "AlarmHistory",
@@ -38,6 +40,7 @@ __all__ = [
     "AuditEntry",
     "AuditList",
     "ChartLayout",
+    "ChartSource",
     "Command",
     "CommandReply",
     "Contact",
@@ -45,6 +48,8 @@ __all__ = [
     "CycleStats",
     "LoginReply",
     "LoginRequest",
+    "ProjectFile",
+    "ProjectFiles",
     "ProtocolError",
     "SequenceInfo",
     "StepDetail",
@@ -68,11 +73,11 @@ EVENTS: tuple[str, ...] = ("S1", "S0", "V1", "V0", "L1", "L0", "A1", "R1")
 # the ops of web.access.roles.COMMANDS (a test keeps the two equal)
 Op = Literal[
     "ack", "ack_step", "ack_msg", "mode", "init", "off", "halt", "t_push", "step_on", "step_off",
-    "en_il", "en_sv", "force", "download",
+    "en_il", "en_sv", "force", "download", "undo_download", "save", "open",
 ]  # fmt: skip
 OPS: tuple[str, ...] = (
     "ack", "ack_step", "ack_msg", "mode", "init", "off", "halt", "t_push", "step_on", "step_off",
-    "en_il", "en_sv", "force", "download",
+    "en_il", "en_sv", "force", "download", "undo_download", "save", "open",
 )  # fmt: skip
 
 # A name that is safe inside a zenoh key expression and in a scene node path.
@@ -151,9 +156,10 @@ class ChartLayout(_Msg, frozen=True, kw_only=True):
     transitions: Annotated[list[TransitionInfo], Meta(max_length=4096)]
     sequences: Annotated[list[SequenceInfo], Meta(max_length=256)]
     schema: int = SCHEMA
+    version: Count = 0  # the chart version the CPU runs (1 at start, +1 per download)
 
     @classmethod
-    def from_chart(cls, chart: Chart, *, fb: str | None = None) -> ChartLayout:
+    def from_chart(cls, chart: Chart, *, fb: str | None = None, version: int = 0) -> ChartLayout:
         """Describe ``chart`` for a view; ``fb`` defaults to the chart's name."""
         steps = [
             StepInfo(
@@ -185,11 +191,41 @@ class ChartLayout(_Msg, frozen=True, kw_only=True):
             )
             for q in chart.sequences
         ]
-        return cls(fb=fb or chart.name, steps=steps, transitions=transitions, sequences=sequences)
+        return cls(
+            fb=fb or chart.name, steps=steps, transitions=transitions, sequences=sequences,
+            version=version,
+        )  # fmt: skip
 
     def step(self, number: int) -> StepInfo | None:
         """The step with this number, or None."""
         return next((s for s in self.steps if s.number == number), None)
+
+
+class ChartSource(_Msg, frozen=True, kw_only=True):
+    """The running chart as ``.s7g`` text, for an editor (``fb/<name>/source``): its
+    ``version`` (as in :class:`ChartLayout`), the file it came from (a name, no directory),
+    and the text of the symbol table it was compiled with."""
+
+    fb: Name
+    version: Count = 0
+    file: ShortText = ""
+    text: Annotated[str, Meta(max_length=MAX_SOURCE)]
+    symbols: Annotated[str, Meta(max_length=MAX_SOURCE)] = ""
+
+
+class ProjectFile(_Msg, frozen=True, kw_only=True):
+    """A file of the CPU's project directory an editor can open, with its format
+    (``s7g``, ``simaticml``, ``plcopen``, ``iec-text``)."""
+
+    name: ShortText
+    format: ShortText
+
+
+class ProjectFiles(_Msg, frozen=True, kw_only=True):
+    """The charts and importable files of the CPU's project directory (``project``)."""
+
+    directory: Text = ""
+    files: Annotated[list[ProjectFile], Meta(max_length=4096)] = []
 
 
 # ---------------------------------------------------------------- per-scan state
@@ -353,7 +389,41 @@ _ARGS_BY_OP: dict[str, frozenset[str]] = {
     "en_sv": frozenset({"on"}),
     "force": frozenset({"address", "value"}),
     "download": frozenset({"source"}),
+    "undo_download": frozenset(),
+    "save": frozenset({"file", "source"}),
+    "open": frozenset({"file"}),
 }
+# Arguments an op may leave out (an online change: the chart version the sender saw, what to
+# do with active steps the change removes, and whether only to preview the change).
+_OPTIONAL_ARGS: dict[str, frozenset[str]] = {
+    "download": frozenset({"base", "removed", "preview"}),
+    "undo_download": frozenset({"base", "removed", "preview"}),
+}
+REMOVED_CHOICES: tuple[str, ...] = ("keep", "init")
+MAX_FILE_NAME = 128
+
+
+def _check_online_args(op: str, args: dict[str, Scalar]) -> None:
+    """The arguments of the engineering ops (download, undo_download, save, open)."""
+    source = args.get("source", "")
+    if not isinstance(source, str) or len(source) > MAX_SOURCE:
+        raise ValueError(
+            f"source must be chart text of at most {MAX_SOURCE:,} characters - at `$.args.source`"
+        )
+    if "file" in args:
+        name = args["file"]
+        if not isinstance(name, str) or not 0 < len(name) <= MAX_FILE_NAME:
+            raise ValueError(
+                f"file must be a file name of 1..{MAX_FILE_NAME} characters - at `$.args.file`"
+            )
+    if "base" in args:
+        base = args["base"]
+        if isinstance(base, bool) or not isinstance(base, int) or base < 0:
+            raise ValueError("base must be a chart version number - at `$.args.base`")
+    if "removed" in args and args["removed"] not in REMOVED_CHOICES:
+        raise ValueError("removed must be keep or init - at `$.args.removed`")
+    if "preview" in args and not isinstance(args["preview"], bool):
+        raise ValueError("preview must be true or false - at `$.args.preview`")
 
 
 class Command(_Msg, frozen=True, kw_only=True):
@@ -375,7 +445,8 @@ class Command(_Msg, frozen=True, kw_only=True):
 
     def __post_init__(self) -> None:
         expected = _ARGS_BY_OP[self.op]
-        extra = sorted(set(self.args) - expected)
+        optional = _OPTIONAL_ARGS.get(self.op, frozenset())
+        extra = sorted(set(self.args) - expected - optional)
         missing = sorted(expected - set(self.args))
         if extra:
             raise ValueError(f"op {self.op!r} takes no argument {extra[0]!r} - at `$.args`")
@@ -397,6 +468,9 @@ class Command(_Msg, frozen=True, kw_only=True):
                     "msg_id must be a message number or key (1..128 chars) - at `$.args.msg_id`"
                 )
 
+        if self.op in ("download", "undo_download", "save", "open"):
+            _check_online_args(self.op, self.args)
+
     @property
     def step(self) -> int | None:
         """The step of ``step_on``/``step_off``, else None."""
@@ -416,14 +490,24 @@ class Command(_Msg, frozen=True, kw_only=True):
         return value if isinstance(value, str) else None
 
 
+Lines = Annotated[list[Text], Meta(max_length=4096)]
+
+
 class CommandReply(_Msg, frozen=True, kw_only=True):
-    """The answer to a command: applied, or refused with a reason."""
+    """The answer to a command: applied, or refused with a reason. The engineering ops
+    (``download``, ``undo_download``, ``save``, ``open``) add ``lines`` (a change summary,
+    diagnostics, what the carry-over kept), ``version`` (the chart version running after a
+    download, or seen by a preview) and ``text`` (the chart ``open`` read)."""
 
     applied: bool
     reason: Text = ""
     op: ShortText = ""
     fb: ShortText = ""
     cycle: Count | None = None
+    lines: Lines = []
+    version: Count | None = None
+    removed: Steps = []  # active steps the change removes (the sender chooses keep or init)
+    text: Annotated[str, Meta(max_length=MAX_SOURCE)] = ""
 
 
 # ---------------------------------------------------------------- login, audit, history

@@ -52,12 +52,14 @@ from s7graph.web.bus.protocol import (
     AuditEntry,
     AuditList,
     ChartLayout,
+    ChartSource,
     Command,
     CommandReply,
     CpuStatus,
     CycleStats,
     LoginReply,
     LoginRequest,
+    ProjectFiles,
     ProtocolError,
     StepStateUpdate,
     decode,
@@ -213,6 +215,14 @@ class PendingCommand:
         _answer(self.query, self.reply)
         self.query = None
 
+    def answer(self, reply: CommandReply) -> None:
+        """Answer the sender once with ``reply`` (an engineering op's richer answer)."""
+        if self.reply is not None:
+            return
+        self.reply = reply
+        _answer(self.query, reply)
+        self.query = None
+
 
 def _answer(query: zenoh.Query | None, reply: CommandReply) -> None:
     _reply(query, reply)
@@ -264,6 +274,8 @@ class BusPublisher:
         self._alarms = AlarmList()
         self._declared: list[Any] = []
         self._delta_pubs: dict[str, zenoh.Publisher] = {}
+        self._chart_pubs: dict[str, zenoh.Publisher] = {}
+        self._routes: dict[str, Callable[[PendingCommand], None]] = {}
         try:
             for name in self._charts:
                 for leaf, read in (("chart", self._chart_of), ("state", self._state_of)):
@@ -275,6 +287,11 @@ class BusPublisher:
                 )
                 self._delta_pubs[name] = pub
                 self._declared.append(pub)
+                chart_pub = session.declare_publisher(
+                    self._keys.fb(name, "chart"), encoding=zenoh.Encoding.APPLICATION_JSON
+                )
+                self._chart_pubs[name] = chart_pub
+                self._declared.append(chart_pub)
             self._declared.append(session.declare_queryable(self._keys.cmd, self._on_cmd))
             self._declared.append(session.declare_queryable(self._keys.login, self._on_login))
             self._serve(self._keys.status, self._status_bytes)
@@ -340,6 +357,31 @@ class BusPublisher:
         """Carry ``stats`` in the next ``status`` (published at most once a second)."""
         with self._lock:
             self._status = msgspec.structs.replace(self._status, stats=stats)
+
+    def set_chart(self, fb: str, layout: ChartLayout) -> None:
+        """The FB runs another chart (an online change): serve ``layout`` on
+        ``fb/<fb>/chart`` and publish it there, so views redraw."""
+        if fb not in self._charts:
+            raise KeyError(f"unknown FB {fb!r}; known: {', '.join(self._charts)}")
+        data = encode(layout)
+        with self._lock:
+            self._charts[fb] = layout
+            self._chart_bytes[fb] = data
+        with contextlib.suppress(zenoh.ZError):
+            self._chart_pubs[fb].put(data)
+
+    def route(self, ops: Iterable[str], handler: Callable[[PendingCommand], None]) -> None:
+        """Commands with one of ``ops`` go to ``handler`` (on the zenoh thread: it must not
+        block) instead of the scan boundary's queue; it checks, applies, audits and
+        answers them itself (``web.bus.online``: the engineering ops)."""
+        for op in ops:
+            self._routes[op] = handler
+
+    def serve(self, leaf: str, read: Callable[[], bytes | None], *, fb: str | None = None) -> None:
+        """One more read-only queryable, ``s7graph/<cpu>/<leaf>`` or, with ``fb``,
+        ``s7graph/<cpu>/fb/<fb>/<leaf>``; ``read()`` gives the JSON (None: no answer)."""
+        key = self._keys.fb(fb, leaf) if fb is not None else f"{ROOT}/{self._keys.cpu}/{leaf}"
+        self._serve(key, read)
 
     def drain_commands(self) -> list[PendingCommand]:
         """Every command received since the last call, oldest first (call at a scan boundary).
@@ -481,6 +523,13 @@ class BusPublisher:
             reason = f"unknown FB {command.fb!r}; this CPU runs {', '.join(self._charts)}"
             self._refuse(query, command, reason)
             return
+        routed = self._routes.get(command.op)
+        if routed is not None:
+            try:
+                routed(PendingCommand(command, query))
+            except Exception as exc:  # never raise on a zenoh thread
+                self._refuse(query, command, f"command refused: {type(exc).__name__}: {exc}")
+            return
         try:
             self._commands.put_nowait(PendingCommand(command, query))
         except queue.Full:
@@ -518,6 +567,27 @@ class BusClient:
         """The FB's chart structure, or None if no CPU answers."""
         data = self._get_one(self._keys.fb(fb, "chart"))
         return None if data is None else decode(data, ChartLayout)
+
+    def source(self, fb: str) -> ChartSource | None:
+        """The ``.s7g`` source of the chart the FB runs, or None if no CPU answers."""
+        data = self._get_one(self._keys.fb(fb, "source"))
+        return None if data is None else decode(data, ChartSource)
+
+    def project(self) -> ProjectFiles | None:
+        """The charts and importable files of the CPU's project directory (None: no CPU
+        answers, or it has none)."""
+        data = self._get_one(f"{ROOT}/{self._keys.cpu}/project")
+        return None if data is None else decode(data, ProjectFiles)
+
+    def on_chart(self, fb: str, callback: Callable[[ChartLayout], None]) -> None:
+        """Call ``callback`` with the FB's chart each time the CPU runs another version."""
+
+        def on_sample(sample: zenoh.Sample) -> None:
+            with contextlib.suppress(ProtocolError):
+                callback(decode(sample.payload.to_bytes(), ChartLayout))
+
+        key = self._keys.fb(fb, "chart")
+        self._subscribers.append(self._session.declare_subscriber(key, on_sample))
 
     def state(self, fb: str) -> StepStateUpdate | None:
         """The FB's latest state, or None if no CPU answers or no scan ran yet."""

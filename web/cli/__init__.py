@@ -1,6 +1,6 @@
 """The ``s7graph`` command line: ``run``, ``sim``, ``check``, ``import``, ``export``,
 ``--version``; for the bus ``web``, ``router``, ``watch`` and the shell's commands (``ack``,
-``mode``, ...); ``users`` and ``audit``.
+``mode``, ..., ``download``); ``users`` and ``audit``.
 
 Each command lives in its own module (``web/cli/*.py``) and is imported only when used, so
 ``s7graph check`` never pays for zenoh or viser. Errors are one line on stderr and a
@@ -430,6 +430,28 @@ def t_push(
 ) -> None:  # fmt: skip
     """Switch a ready transition (TAP, TOP; T_PUSH)."""
     _remote("t_push", {}, cpu, connect, fb, user, tls_ca)
+
+
+@app.command()
+def download(
+    chart: Annotated[Path, typer.Argument(help="The changed chart (.s7g).")],
+    user: UserName, cpu: CpuName = "cpu1", connect: Connect = None, fb: FbName = None,
+    tls_ca: TlsCa = None,
+    removed: Annotated[
+        str | None,
+        typer.Option(help="Active steps the change removes: keep (the other steps go on) "
+                     "or init (initialize the sequencer)."),
+    ] = None,
+    yes: Annotated[bool, typer.Option("--yes", help="Download without asking.")] = False,
+) -> None:  # fmt: skip
+    """Download a changed chart into the running FB (online change): the change summary,
+    then the swap at a scan boundary with the state carried over by step number."""
+    from s7graph.web.cli.remote import download_command
+
+    if removed is not None and removed not in ("keep", "init"):
+        raise typer.BadParameter("--removed must be keep or init")
+    net = _net(cpu=cpu, connect=connect, tls_ca=tls_ca)
+    raise typer.Exit(download_command(net, chart, fb=fb, user=user, removed=removed, yes=yes))
 
 
 # ---------------------------------------------------------------- users and audit

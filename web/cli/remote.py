@@ -1,5 +1,5 @@
 """``s7graph watch`` and the shell's commands: ``ack``, ``mode``, ``init``, ``off``,
-``step-on``, ``step-off``, ``t-push`` for one CPU on the bus.
+``step-on``, ``step-off``, ``t-push`` and ``download`` for one CPU on the bus.
 
 A command logs in as ``--user`` (the password from ``S7GRAPH_PASSWORD``, else a prompt
 when the CPU checks passwords), sends the command with the token, logs out, and exits 0
@@ -10,21 +10,24 @@ one line each, until Ctrl-C or ``--duration-s``.
 
 from __future__ import annotations
 
+import contextlib
 import getpass
 import os
 import socket
 import sys
 import threading
+from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 import zenoh
 
-from s7graph.web.bus.protocol import Command, StepStateUpdate
+from s7graph.web.bus.protocol import Command, CommandReply, StepStateUpdate
 from s7graph.web.bus.zenoh_bus import BusClient, open_session
 from s7graph.web.cli.net import NetOptions
 from s7graph.web.cli.stopping import wait_until_stopped
 
-__all__ = ["PASSWORD_ENV", "send_command", "watch_command"]
+__all__ = ["PASSWORD_ENV", "download_command", "send_command", "watch_command"]
 
 PASSWORD_ENV = "S7GRAPH_PASSWORD"
 
@@ -52,42 +55,134 @@ def _join(net: NetOptions) -> zenoh.Session | str:
         return f"cannot join the bus: {type(exc).__name__}: {exc}"
 
 
-def send_command(
-    net: NetOptions, *, fb: str | None, user: str, op: str, args: dict[str, Any]
-) -> int:
-    """Log in, send one command, log out; 0 applied, 1 refused, 2 a usage or bus error."""
+@contextlib.contextmanager
+def _logged_in(net: NetOptions, *, fb: str | None, user: str) -> Iterator[_Shell | int]:
+    """A shell logged in at ``net.cpu`` as ``user`` (logged out again after), or the exit
+    status when that fails (the reason printed)."""
     session = _join(net)
     if isinstance(session, str):
-        return _fail(session)
+        yield _fail(session)
+        return
     try:
         with BusClient(session, net.cpu) as client:
             status = client.status()
             if status is None:
-                return _fail(f"CPU {net.cpu!r} does not answer", 1)
+                yield _fail(f"CPU {net.cpu!r} does not answer", 1)
+                return
             name = fb or (status.fbs[0] if status.fbs else "")
             password = os.environ.get(PASSWORD_ENV, "")
             if status.login == "users" and not password and sys.stdin.isatty():
                 password = getpass.getpass(f"Password for {user}: ")
             login = client.login(user, password, origin=_origin())
             if not login.ok:
-                return _fail(f"login refused: {login.reason}", 1)
+                yield _fail(f"login refused: {login.reason}", 1)
+                return
             try:
-                fields: dict[str, Any] = {"op": op, "args": args}
-                command = Command(
-                    fb=name, user=user, token=login.token, origin=_origin(), **fields
-                )
-                reply = client.send(command)
-            except (TypeError, ValueError) as exc:
-                return _fail(str(exc))
+                yield _Shell(client, name, user, login.token)
             finally:
                 client.logout(login.token, user=user, origin=_origin())
     finally:
         session.close()  # type: ignore[no-untyped-call]  # zenoh's stub
+
+
+class _Shell:
+    """One logged-in shell: sends commands as its user."""
+
+    def __init__(self, client: BusClient, fb: str, user: str, token: str) -> None:
+        self.client, self.fb, self.user, self.token = client, fb, user, token
+
+    def send(self, op: str, args: dict[str, Any], *, timeout: float | None = None) -> CommandReply:
+        fields: dict[str, Any] = {"op": op, "args": args}
+        command = Command(fb=self.fb, user=self.user, token=self.token, origin=_origin(), **fields)
+        return self.client.send(command, timeout=timeout)
+
+
+def send_command(
+    net: NetOptions, *, fb: str | None, user: str, op: str, args: dict[str, Any]
+) -> int:
+    """Log in, send one command, log out; 0 applied, 1 refused, 2 a usage or bus error."""
+    with _logged_in(net, fb=fb, user=user) as shell:
+        if isinstance(shell, int):
+            return shell
+        try:
+            reply = shell.send(op, args)
+        except (TypeError, ValueError) as exc:
+            return _fail(str(exc))
     if not reply.applied:
         print(f"s7graph: {op} refused: {reply.reason}", file=sys.stderr)
         return 1
-    print(f"s7graph: {op} applied on {net.cpu}/{name} (cycle {reply.cycle})")
+    print(f"s7graph: {op} applied on {net.cpu}/{shell.fb} (cycle {reply.cycle})")
     return 0
+
+
+def download_command(
+    net: NetOptions,
+    chart: Path,
+    *,
+    fb: str | None,
+    user: str,
+    removed: str | None = None,
+    yes: bool = False,
+    timeout: float = 30.0,
+) -> int:
+    """``s7graph download CHART.s7g``: the change summary, a confirmation (``yes`` skips
+    it), then the download into the running FB; 0 downloaded, 1 refused or not confirmed,
+    2 a usage or bus error."""
+    try:
+        source = chart.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        return _fail(f"cannot read {chart}: {getattr(exc, 'strerror', None) or exc}")
+    with _logged_in(net, fb=fb, user=user) as shell:
+        if isinstance(shell, int):
+            return shell
+        try:
+            preview = shell.send("download", {"source": source, "preview": True}, timeout=timeout)
+        except (TypeError, ValueError) as exc:
+            return _fail(str(exc))
+        if not preview.applied:
+            return _refused("download", preview)
+        print(f"s7graph: {chart.name} over version {preview.version} on {net.cpu}/{shell.fb}:")
+        for line in preview.lines:
+            print(f"  {line}")
+        if preview.removed and removed is None:
+            steps = ", ".join(f"S{n}" for n in preview.removed)
+            print(
+                f"s7graph: download refused: active steps {steps} would be removed; choose "
+                "--removed keep (the other steps go on) or --removed init",
+                file=sys.stderr,
+            )
+            return 1
+        if not yes and not _confirmed("Download into the running CPU?"):
+            print(
+                "s7graph: download not confirmed (--yes downloads without asking)",
+                file=sys.stderr,
+            )
+            return 1
+        args: dict[str, Any] = {"source": source}
+        if preview.version is not None:
+            args["base"] = preview.version
+        if removed is not None:
+            args["removed"] = removed
+        reply = shell.send("download", args, timeout=timeout)
+    if not reply.applied:
+        return _refused("download", reply)
+    for line in reply.lines:
+        print(f"s7graph: {line}")
+    print(f"s7graph: download applied on {net.cpu}/{shell.fb}: version {reply.version} runs")
+    return 0
+
+
+def _refused(op: str, reply: CommandReply) -> int:
+    print(f"s7graph: {op} refused: {reply.reason}", file=sys.stderr)
+    for line in reply.lines:
+        print(f"  {line}", file=sys.stderr)
+    return 1
+
+
+def _confirmed(question: str) -> bool:
+    if not sys.stdin.isatty():
+        return False
+    return input(f"{question} [y/N] ").strip().lower() in ("y", "yes")
 
 
 def _line(fb: str, update: StepStateUpdate) -> str:

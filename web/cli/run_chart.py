@@ -93,7 +93,10 @@ def run_chart(
     live: LiveEdge | None = None
     if web or record is not None or (net is not None and net.on_bus):
         try:
-            live = _serve(session, store, web=web, port=port, record=record, net=net)
+            live = _serve(
+                session, store, web=web, port=port, record=record, net=net, path=path,
+                symbols=symbols,
+            )  # fmt: skip
         except Exception as exc:  # port in use, no rerun-sdk, ...
             print(f"s7graph: error: cannot serve the view: {exc}", file=sys.stderr)
             store.close()
@@ -119,6 +122,8 @@ def run_chart(
             live.on_record(record, stats=cpu.stats, runner=runner)
 
     runner = Runner(cpu, cycle_ms=cycle_ms, store=store, on_record=on_record, end_on_stop=not web)
+    if live is not None and live.online is not None:
+        live.online.durability = runner  # a download is applied once its state is on disk
     status = run_until_stopped(
         runner, opened, what=f"{path.name} ({session.cc.name})", restart=restart,
         duration_s=duration_s, close=live.close if live is not None else None,
@@ -136,10 +141,14 @@ def _serve(
     port: int,
     record: Path | None,
     net: NetOptions | None = None,
+    path: Path | None = None,
+    symbols: Path | None = None,
 ) -> LiveEdge:
-    """The live view (and recording) of the session's GraphFB; prints where to look."""
+    """The live view (and recording) of the session's GraphFB, and its online change
+    (``path``: the chart file a download rewrites); prints where to look."""
     from s7graph.web.bus.gate import cpu_gate  # zenoh and viser only when asked for
     from s7graph.web.bus.live import LiveGraph, watch_names
+    from s7graph.web.bus.online import OnlineChange
     from s7graph.web.cli.net import NetOptions
     from s7graph.web.view.live_edge import LiveEdge
 
@@ -149,9 +158,11 @@ def _serve(
         messages=message_list(session.cpu),
     )  # fmt: skip
     gate = cpu_gate(net.users, store.path)
+    table = symbols.read_text(encoding="utf-8-sig") if symbols is not None else ""
+    online = OnlineChange(session, live, gate, path=path, symbols=table)
     edge = LiveEdge(
         live, port=port, record=record, serve=web, bus=net.on_bus, cpu=net.cpu, host=net.host,
-        ends=net.ends, gate=gate, allowed_origins=tuple(net.origins),
+        ends=net.ends, gate=gate, allowed_origins=tuple(net.origins), online=online,
     )  # fmt: skip
     if web:
         print(f"s7graph: view {edge.url} (bus {edge.endpoint}); Ctrl-C to stop", flush=True)

@@ -8,7 +8,9 @@ FB variables and step/transition attributes (``Sn.X``, ``Sn.T``, ``Sn.U``, ``Tn.
 
 from __future__ import annotations
 
+import contextlib
 import re
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -21,10 +23,11 @@ from s7graph.sequencer.compile import ChartError, compile_chart
 from s7graph.sequencer.compiled import CompiledChart
 from s7graph.sequencer.diagnostics import Diagnostic, format_diagnostic
 from s7graph.sequencer.fb import GraphFB, install_all
+from s7graph.sequencer.model import Chart
 from s7graph.sequencer.params import Direction, check_pin, is_pin
 from s7graph.sequencer.parse import ChartSyntaxError, chart_text, parse_chart
 
-__all__ = ["ChartLoadError", "ChartSession", "load_chart"]
+__all__ = ["ChartLoadError", "ChartSession", "compile_model", "compile_text", "load_chart"]
 
 _STEP_ATTR = re.compile(r"S(\d+)\.([XTU])", re.I)
 _TRANS_ATTR = re.compile(r"T(\d+)\.TT", re.I)
@@ -44,20 +47,47 @@ def load_chart(path: Path, symbols: Path | None = None) -> tuple[CompiledChart, 
         data = Path(path).read_bytes()
     except OSError as exc:
         raise ChartLoadError([f"s7graph: error: cannot read {path}: {exc.strerror}"]) from None
-    table = SymbolTable()
-    try:
-        if symbols is not None:
-            table = _symbols(symbols)
-        chart = parse_chart(chart_text(data, str(path)), str(path))
+    with _as_load_error(str(path)):
+        table = _symbols(symbols) if symbols is not None else SymbolTable()
+        text = chart_text(data, str(path))
+    return compile_text(text, str(path), table)
+
+
+def compile_text(
+    text: str, file: str, table: SymbolTable | None = None
+) -> tuple[CompiledChart, SymbolTable]:
+    """Parse, validate and compile chart ``text`` (named ``file`` in diagnostics) with the
+    symbol table ``table``, which gets the chart's own ``SYMBOLS`` added; ``ChartLoadError``
+    with every diagnostic when it does not compile."""
+    with _as_load_error(file):
+        chart = parse_chart(text, file)
+    return compile_model(chart, table)
+
+
+def compile_model(
+    chart: Chart, table: SymbolTable | None = None
+) -> tuple[CompiledChart, SymbolTable]:
+    """Validate and compile a parsed ``chart`` as :func:`compile_text` does."""
+    table = table if table is not None else SymbolTable()
+    with _as_load_error(chart.file):
         for s in chart.symbols:
             if table.lookup(s.name) is None:
                 table.add(s.name, s.address, s.type, s.comment, where=s.loc)
         cc = compile_chart(chart, table)
+    return cc, table
+
+
+@contextlib.contextmanager
+def _as_load_error(file: str) -> Iterator[None]:
+    """Any problem reading or compiling a chart as one ``ChartLoadError`` with its lines."""
+    try:
+        yield
     except (ChartSyntaxError, ChartError) as exc:
         raise ChartLoadError([_fmt(d) for d in exc.diagnostics]) from None
     except S7Error as exc:
         raise ChartLoadError([f"{exc}"]) from None
-    return cc, table
+    except RecursionError:
+        raise ChartLoadError([f"{file}: the chart nests too deeply to compile"]) from None
 
 
 def _symbols(path: Path) -> SymbolTable:

@@ -25,8 +25,12 @@ from s7graph.web.bus.gate import Apply, Gate
 from s7graph.web.bus.protocol import ChartLayout, Command, CpuStatus, StepStateUpdate
 from s7graph.web.bus.zenoh_bus import BusClient, BusPublisher, TlsFiles, open_session
 from s7graph.web.view.chart_view import ChartView, make_server
+from s7graph.web.view.engineering import Engineering
 
 __all__ = ["BusEnds", "CpuSide", "PortError", "ViewSide", "WebEdge", "check_port", "serve_view"]
+
+
+ENGINEERING_TIMEOUT_S = 30.0  # a download compiles, writes the file and waits for a scan
 
 
 class PortError(ValueError):
@@ -120,13 +124,21 @@ class ViewSide:
             if port and self.server.get_port() != port:  # viser moved on to the next port
                 raise PortError(f"port {port} on {host} is in use")
             client = self.client
+            name = self.fb
+            engineering = Engineering(
+                source=lambda: client.source(name),
+                project=client.project,
+                send=lambda command: client.send(command, timeout=ENGINEERING_TIMEOUT_S),
+            )
             self.view = ChartView(
                 self.server, layout, client.send, cpu=cpu, guard=guard,
                 login=lambda user, password, origin: client.login(user, password, origin=origin),
                 logout=lambda token, user, origin: client.logout(token, user=user, origin=origin),
                 demo=status is None or status.login == "demo", history=client.history,
+                engineering=engineering,
             )  # fmt: skip
             self._closers.append(self.view.close)
+            client.on_chart(self.fb, self.view.apply_chart)
             self.follower = client.follow(self.fb, self.view.apply)
             client.on_status(self.view.apply_status)
             client.on_alarms(self.view.apply_alarms)

@@ -8,18 +8,25 @@ Rows are the longest path from the top, so a convergence or a join sits below ev
 that reaches it. An edge back to a step already on the path, or to another sequence, is a
 jump: an arrow under the transition with the target number. ``TO STOP`` is a branch stop.
 
+A long sequence wraps into several columns side by side (at most ``FOLD_ROWS`` rows each,
+a column always starting with a step row), so a 250-step chart stays readable: a line that
+would cross from one column into the next ends in a :class:`Continuation` arrow naming
+where it goes, and the next column starts with one naming where it comes from.
+
 Coordinates are grid units: ``x`` is a lane (0, 1, 2 …), ``y`` a row growing downward;
 steps and transitions alternate rows. Views scale them.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 
 from s7graph.sequencer.model import Chart
 from s7graph.web.bus.protocol import ChartLayout, SequenceInfo, TransitionInfo
 
 __all__ = [
+    "FOLD_ROWS",
+    "Continuation",
     "IncomingJump",
     "Jump",
     "Link",
@@ -96,6 +103,25 @@ class Stop:
 
 
 @dataclass(frozen=True, slots=True)
+class Continuation:
+    """Where a line leaves one column of a wrapped sequence (``incoming`` False: an arrow
+    down at ``x, y`` under ``source``, labelled with the element it leads to) or enters the
+    next (``incoming`` True: an arrow from above into ``target``, labelled with where it
+    comes from). ``source`` and ``target`` are ``("S"|"T", number)``."""
+
+    x: float
+    y: float
+    source: tuple[str, int]
+    target: tuple[str, int]
+    incoming: bool
+
+    @property
+    def text(self) -> str:
+        kind, n = self.source if self.incoming else self.target
+        return f"{'from' if self.incoming else 'to'} {kind}{n}"
+
+
+@dataclass(frozen=True, slots=True)
 class PlacedSequence:
     number: int
     name: str
@@ -114,21 +140,26 @@ class Placement:
     sequences: tuple[PlacedSequence, ...]
     width: float
     height: float
+    continuations: tuple[Continuation, ...] = ()
 
 
 # Graph nodes: ("S", n) for a step, ("T", n) for a transition.
 Node = tuple[str, int]
 MARK_OFFSET = 0.55  # how far below a transition a jump arrow or stop is drawn
 SEQUENCE_GAP = 0.5  # empty lanes between two sequence columns
+FOLD_ROWS = 16  # rows of one column of a long sequence (8 steps and their transitions)
+FOLD_GAP = 0.25  # empty lanes between two columns of one sequence
 
 
-def place(chart: Chart | ChartLayout) -> Placement:
-    """Grid positions of every step, transition, line, jump and stop of ``chart``."""
+def place(chart: Chart | ChartLayout, *, fold: int = FOLD_ROWS) -> Placement:
+    """Grid positions of every step, transition, line, jump and stop of ``chart``; a
+    sequence longer than ``fold`` rows wraps into columns of ``fold`` rows (even, ≥ 4)."""
     layout = chart if isinstance(chart, ChartLayout) else ChartLayout.from_chart(chart)
+    fold = max(4, fold - fold % 2)
     parts = []
     x0 = 0.0
     for seq in layout.sequences:
-        part = _place_sequence(layout, seq, x0)
+        part = _fold(_place_sequence(layout, seq, x0), fold)
         parts.append(part)
         x0 = part.width_end + SEQUENCE_GAP
     steps = {s.number: s for p in parts for s in p.steps}
@@ -150,6 +181,7 @@ def place(chart: Chart | ChartLayout) -> Placement:
         sequences=tuple(p.column for p in parts),
         width=max(x0 - SEQUENCE_GAP, 0.0),
         height=height,
+        continuations=tuple(c for p in parts for c in p.continuations),
     )
 
 
@@ -163,6 +195,7 @@ class _Part:
     column: PlacedSequence
     width_end: float
     height: float
+    continuations: list[Continuation] = field(default_factory=list)
 
 
 def _place_sequence(layout: ChartLayout, seq: SequenceInfo, x0: float) -> _Part:
@@ -359,3 +392,63 @@ def _elbow(a: Point, b: Point, y_mid: float, double: bool, transition: int) -> L
     if ax == bx:
         return Link(((ax, ay), (bx, by)), False, transition)
     return Link(((ax, ay), (ax, y_mid), (bx, y_mid), (bx, by)), double, transition)
+
+
+def _fold(part: _Part, rows: int) -> _Part:
+    """``part`` wrapped into columns of ``rows`` rows, side by side (a column of the
+    sequence: its lanes, then ``FOLD_GAP``); a link between two columns becomes a
+    :class:`Continuation` pair."""
+    if part.height <= rows:
+        return part
+    x0 = part.column.x0
+    pitch = part.width_end - x0 + FOLD_GAP
+
+    def column(y: float) -> int:
+        return max(int(y // rows), 0)
+
+    def moved(x: float, y: float, k: int) -> Point:
+        return x + k * pitch, y - k * rows
+
+    steps = [replace(s, x=moved(s.x, s.y, column(s.y))[0], y=s.y - column(s.y) * rows)
+             for s in part.steps]  # fmt: skip
+    transitions = [
+        replace(t, x=moved(t.x, t.y, column(t.y))[0], y=t.y - column(t.y) * rows)
+        for t in part.transitions
+    ]
+    where: dict[tuple[float, float], tuple[str, int]] = {}
+    for s in part.steps:
+        where[(s.x, s.y)] = ("S", s.number)
+    for t in part.transitions:
+        where[(t.x, t.y)] = ("T", t.number)
+    links: list[Link] = []
+    continuations: list[Continuation] = []
+    for link in part.links:
+        (ax, ay), (bx, by) = link.points[0], link.points[-1]
+        ka, kb = column(ay), column(by)
+        if ka == kb:
+            pts = tuple(moved(x, y, ka) for x, y in link.points)
+            links.append(Link(pts, link.double, link.transition))
+            continue
+        source, target = where.get((ax, ay), ("S", 0)), where.get((bx, by), ("S", 0))
+        sx, sy = moved(ax, ay, ka)
+        tx, ty = moved(bx, by, kb)
+        links.append(Link(((sx, sy), (sx, sy + 0.55)), False, link.transition))
+        links.append(Link(((tx, ty - 0.55), (tx, ty)), False, link.transition))
+        continuations.append(Continuation(sx, sy + 0.55, source, target, False))
+        continuations.append(Continuation(tx, ty - 0.55, source, target, True))
+    jumps = [replace(j, x=j.x + column(j.y) * pitch, y=j.y - column(j.y) * rows)
+             for j in part.jumps]  # fmt: skip
+    stops = [replace(s, x=s.x + column(s.y) * pitch, y=s.y - column(s.y) * rows)
+             for s in part.stops]  # fmt: skip
+    columns = column(part.height - 1) + 1
+    return _Part(
+        steps=steps,
+        transitions=transitions,
+        links=links,
+        jumps=jumps,
+        stops=stops,
+        column=replace(part.column, x1=part.column.x1 + (columns - 1) * pitch),
+        width_end=x0 + columns * pitch - FOLD_GAP,
+        height=float(rows),
+        continuations=continuations,
+    )

@@ -26,6 +26,7 @@ from s7graph.web.bus.zenoh_bus import BusPublisher
 from s7graph.web.view.edge import BusEnds, CpuSide, WebEdge, serve_view
 
 if TYPE_CHECKING:
+    from s7graph.web.bus.online import OnlineChange
     from s7graph.web.recorder import Recorder
 
 __all__ = ["LiveEdge", "cycle_stats"]
@@ -62,8 +63,10 @@ class LiveEdge:
         gate: Gate | None = None,
         allowed_origins: tuple[str, ...] = (),
         bus: bool = False,
+        online: OnlineChange | None = None,
     ) -> None:
         self.live = live
+        self.online = online
         self.recorder: Recorder | None = None
         self.edge: WebEdge | None = None
         self.cpu_side: CpuSide | None = None
@@ -79,6 +82,8 @@ class LiveEdge:
                 {live.fb: live.layout}, cpu=cpu, ends=ends or BusEnds(), gate=gate
             )
             self.publisher = self.cpu_side.publisher
+        if online is not None and self.publisher is not None:
+            online.attach(self.publisher)
         try:
             if record is not None:
                 from s7graph.web.recorder import Recorder  # rerun-sdk only when recording
@@ -122,10 +127,14 @@ class LiveEdge:
         if alarms is not None:
             publisher.publish_alarms(alarms)
         publisher.apply_commands(self.live.apply, cycle=record.cycle)
+        if self.online is not None:
+            self.online.at_boundary()
         return update
 
     def close(self) -> None:
         """Close the recording, the view, the bus and both zenoh sessions."""
+        if self.online is not None:
+            self.online.close()
         if self.recorder is not None:
             with contextlib.suppress(Exception):
                 self.recorder.close()

@@ -26,6 +26,9 @@ from s7graph.web.bus.protocol import (
     LoginReply,
 )
 from s7graph.web.view import texts
+from s7graph.web.view.drawing import aim_camera
+from s7graph.web.view.editor import Editor
+from s7graph.web.view.engineering import Engineering, ViewHost
 
 __all__ = ["ClientPanel", "PageState", "Wiring"]
 
@@ -44,6 +47,8 @@ class Wiring:
     logout: Callable[[str, str, str], LoginReply]
     demo: bool
     on_reply: Callable[[CommandReply], None]
+    engineering: Engineering | None = None  # None: this view cannot edit (no bus for it)
+    host: ViewHost | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -98,7 +103,7 @@ class ClientPanel:
             self.who = gui.add_html(texts.login_html("", "", True, w.demo))
         self.login_button.on_click(lambda _: self._log_in())
         self.logout_button.on_click(lambda _: self._log_out())
-        with gui.add_folder("Control Sequencer"):
+        with gui.add_folder("Control Sequencer") as self.control_folder:
             self.status = gui.add_html(texts.status_html(None, 0, "RUN", None))
             self.mode_buttons = {m: gui.add_button(m, hint=f"SW_{m}") for m in MODES}
             for mode, button in self.mode_buttons.items():
@@ -127,20 +132,32 @@ class ClientPanel:
             self.history_html = gui.add_html(texts.history_html(None))
         with gui.add_folder("Audit", expand_by_default=False):
             self.audit_html = gui.add_html(texts.audit_html([]))
-        with gui.add_folder("Step details"):
+        with gui.add_folder("Details"):
             self.detail_step = gui.add_number(
                 "Show step", 0, min=0, max=65535, step=1,
                 hint="0: follow the first disturbed, else the first active step",
             )  # fmt: skip
+            self.detail_transition = gui.add_number(
+                "Show transition", 0, min=0, max=65535, step=1,
+                hint="a transition's whole condition (or click it on the chart); 0: none",
+            )  # fmt: skip
             self.detail_html = gui.add_html(texts.small("waiting for the CPU…"))
+            self.detail_step.on_update(lambda _: self._clear_transition())
+        with gui.add_folder("Chart view", expand_by_default=False):
+            whole = gui.add_button("Whole chart", hint="zoom out to the whole chart")
+            near = gui.add_button("Readable zoom", hint="back to the default zoom")
+            whole.on_click(lambda _: self.aim(whole=True))
+            near.on_click(lambda _: self.aim(whole=False))
+        self.editor: Editor | None = None
         with gui.add_folder("Events"):
             self.event_log = gui.add_html(texts.log_html([]))
         self._halted = False
         self._enable()
 
     def _enable(self) -> None:
-        """Enable exactly the buttons this page's role allows."""
+        """Enable exactly the buttons this page's role allows; an engineer gets the editor."""
         role = self.role if self.token else "viewer"
+        self._editor_for(role)
         for mode_button in self.mode_buttons.values():
             mode_button.disabled = not allowed(role, "mode")
         for op, button in {**self.buttons, **self.step_buttons}.items():
@@ -153,6 +170,51 @@ class ClientPanel:
         self.who.content = texts.login_html(
             self.user if self.token else "", self.role, self.verified, self.wiring.demo
         )
+
+    def _editor_for(self, role: str) -> None:
+        """Build the editor for a page whose role may download; drop it for any other."""
+        w = self.wiring
+        wanted = allowed(role, "download") and w.engineering is not None and w.host is not None
+        if wanted and self.editor is None:
+            self.editor = Editor(self)
+        elif not wanted and self.editor is not None:
+            editor, self.editor = self.editor, None
+            editor.close()
+
+    # ------------------------------------------------------------ the chart
+
+    def show_step(self, number: int) -> None:
+        """A click on step ``number``: it goes into the Step fields and the details."""
+        if self.editor is not None and self.editor.editing:
+            return
+        # viser defines the value setter apart from its getter: mypy sees no setter
+        self.step_number.value = number  # type: ignore[misc]
+        self.detail_step.value = number  # type: ignore[misc]
+        self.detail_transition.value = 0  # type: ignore[misc]
+
+    def show_transition(self, number: int) -> None:
+        """A click on transition ``number``: its whole condition goes into the details."""
+        if self.editor is not None and self.editor.editing:
+            return
+        self.detail_transition.value = number  # type: ignore[misc]
+
+    def _clear_transition(self) -> None:
+        self.detail_transition.value = 0  # type: ignore[misc]
+
+    def aim(self, *, whole: bool) -> None:
+        """Aim this page's camera at the live chart: the whole of it, or readably."""
+        host = self.wiring.host
+        pic = getattr(host, "picture", None)
+        if pic is None or (self.editor is not None and self.editor.editing):
+            if self.editor is not None and self.editor.editing:
+                self.editor.aim(whole=whole)
+            return
+        aim_camera(self.client, pic, whole=whole)
+
+    def chart_changed(self, layout: ChartLayout) -> None:
+        """The CPU runs another chart version (render thread)."""
+        if self.editor is not None:
+            self.editor.running_changed(layout)
 
     # ------------------------------------------------------------ login
 
@@ -180,6 +242,9 @@ class ClientPanel:
 
     def forget(self) -> None:
         """The page went away: revoke its token (its GUI is gone, nothing to update)."""
+        editor, self.editor = self.editor, None
+        if editor is not None:
+            editor.close(page_gone=True)
         with self._lock:
             token, user = self.token, self.user
             self.token = ""
@@ -205,6 +270,20 @@ class ClientPanel:
 
     def command(self, op: str, args: dict[str, object]) -> CommandReply:
         """Send one command as this page's user (runs in viser's callback threads)."""
+        reply = self._send(op, args, self.wiring.send)
+        verdict = "applied" if reply.applied else "refused"
+        self._notify(f"{op} {verdict}", reply.reason or "OK", ok=reply.applied)
+        return reply
+
+    def engineer_command(self, op: str, args: dict[str, object]) -> CommandReply:
+        """Send one engineering command (download, save …) as this page's user and wait
+        longer for its answer; the editor shows the verdict."""
+        eng = self.wiring.engineering
+        return self._send(op, args, eng.send if eng is not None else self.wiring.send)
+
+    def _send(
+        self, op: str, args: dict[str, object], send: Callable[[Command], CommandReply]
+    ) -> CommandReply:
         w = self.wiring
         with self._lock:
             user, token = self.user, self.token
@@ -214,10 +293,8 @@ class ClientPanel:
         except (TypeError, ValueError) as exc:
             reply = CommandReply(applied=False, reason=str(exc), op=op, fb=w.layout.fb)
         else:
-            reply = w.send(command)
+            reply = send(command)
         w.on_reply(reply)
-        verdict = "applied" if reply.applied else "refused"
-        self._notify(f"{op} {verdict}", reply.reason or "OK", ok=reply.applied)
         return reply
 
     def _notify(self, title: str, body: str, *, ok: bool) -> None:
@@ -232,7 +309,9 @@ class ClientPanel:
             handle.content = content
             self._shown[key] = content
 
-    def show(self, page: PageState, detail: Callable[[int], str], halted: bool) -> None:
+    def show(
+        self, page: PageState, detail: Callable[[tuple[str, int]], str], halted: bool
+    ) -> None:
         """Bring this page up to date (render thread; only what changed is sent)."""
         with self.client.atomic():
             self._set(self.banner, "banner", page.banner)
@@ -240,7 +319,9 @@ class ClientPanel:
             self._set(self.event_log, "events", page.events)
             self._set(self.history_html, "history", page.history)
             self._set(self.audit_html, "audit", page.audit)
-            self._set(self.detail_html, "detail", detail(int(self.detail_step.value)))
+            shown = int(self.detail_transition.value)
+            key = ("T", shown) if shown > 0 else ("S", int(self.detail_step.value))
+            self._set(self.detail_html, "detail", detail(key))
             if page.mode != self._mode:
                 self._mode = page.mode
                 for mode, button in self.mode_buttons.items():

@@ -9,7 +9,9 @@ from __future__ import annotations
 
 import html
 import time
+from collections.abc import Iterable
 
+from s7graph.sequencer.diagnostics import Diagnostic
 from s7graph.web.bus.protocol import (
     AlarmEntry,
     AlarmHistory,
@@ -30,14 +32,21 @@ __all__ = [
     "clip",
     "describe",
     "detail_html",
+    "diagnostic_button",
+    "diagnostic_line",
+    "diagnostics_html",
+    "editor_status_html",
     "history_html",
+    "lines_html",
     "log_html",
     "login_html",
+    "rows_html",
     "small",
     "status_html",
     "step_rows",
     "step_state",
     "title",
+    "transition_html",
 ]
 
 
@@ -111,7 +120,7 @@ def step_rows(d: StepDetail) -> list[str]:
         rows += [f"Supervision (V): {state}", *map(mark, d.supervision)]
     for t in d.transitions:
         holds = "holds" if t.holds else '<span style="color:#c00">does not hold</span>'
-        name = html.escape(title("T", t.number, t.name, 24))
+        name = html.escape(title("T", t.number, t.name, 10_000))
         rows += [f"<b>{name}</b>: {holds}", *map(mark, t.contacts)]
     if not d.transitions:
         rows.append("no valid transition leaves it (a step before it is inactive)")
@@ -214,7 +223,7 @@ def detail_html(layout: ChartLayout, update: StepStateUpdate | None, number: int
     info = layout.step(number)
     if info is None:
         return small(f"no step S{number} in {html.escape(layout.fb)}")
-    head = f"<b>{html.escape(title('S', number, info.name, 24))}</b>"
+    head = f"<b>{html.escape(title('S', number, info.name, 10_000))}</b>"
     if update is None:
         return small(f"{head}: waiting for the CPU…")
     detail = next((d for d in update.details if d.number == number), None)
@@ -223,10 +232,39 @@ def detail_html(layout: ChartLayout, update: StepStateUpdate | None, number: int
         for t in layout.transitions:
             if number in t.sources:
                 cond = html.escape(t.condition or "TRUE")
-                name = html.escape(title("T", t.number, t.name, 24))
+                name = html.escape(title("T", t.number, t.name, 10_000))
                 rows.append(f"{name}: {cond} <i>(evaluated while the step is active)</i>")
         return small("<br>".join(rows))
     return small("<br>".join([head + ": " + step_state(detail), *step_rows(detail)]))
+
+
+def transition_html(layout: ChartLayout, update: StepStateUpdate | None, number: int) -> str:
+    """The details of transition ``number``: its name, its whole condition, where it leads
+    and, while a step before it is active, whether it holds and each contact."""
+    t = next((x for x in layout.transitions if x.number == number), None)
+    if t is None:
+        return small(f"no transition T{number} in {html.escape(layout.fb)}")
+    head = f"<b>{html.escape(title('T', number, t.name, 10_000))}</b>"
+    steps = ", ".join(f"S{n}" for n in t.sources) or "-"
+    where = ", ".join(f"S{n}" for n in t.targets) or "STOP (branch stop)"
+    cond = html.escape(t.condition) if t.condition else "<i>empty: holds at once</i>"
+    rows = [
+        head,
+        f"from {html.escape(steps)} to {html.escape(where)}",
+        f'condition: <span style="font-family:monospace;white-space:pre-wrap;'
+        f'word-break:break-all">{cond}</span>',
+    ]
+    live = None
+    if update is not None:
+        live = next(
+            (c for d in update.details for c in d.transitions if c.number == number), None
+        )
+    if live is not None:
+        holds = "holds" if live.holds else '<span style="color:#c00">does not hold</span>'
+        rows += [f"now: {holds}", *map(mark, live.contacts)]
+    elif update is not None:
+        rows.append("<i>evaluated while the steps before it are active</i>")
+    return small("<br>".join(rows))
 
 
 def login_html(user: str, role: str, verified: bool, demo: bool) -> str:
@@ -240,3 +278,79 @@ def login_html(user: str, role: str, verified: bool, demo: bool) -> str:
         return small(f'<span style="color:#777">viewer: {how}</span>')
     shown = html.escape(user) + ("" if verified else " (unverified)")
     return small(f"logged in as <b>{shown}</b> ({html.escape(role)})")
+
+
+# ---------------------------------------------------------------- the editor
+
+
+def diagnostic_line(d: Diagnostic) -> str:
+    """``3:14 error[E040] unknown symbol … (transition T2)``: a diagnostic as the editor
+    lists it, located by line and column in the source view (plain text)."""
+    tail = f" ({d.element})" if d.element else ""
+    where = f"{d.loc.line}:{d.loc.col} " if d.loc.line > 0 else ""
+    return f"{where}{d.severity}[{d.code}] {d.message}{tail}"
+
+
+def diagnostic_button(i: int, d: Diagnostic) -> str:
+    """The short label of diagnostic ``i``'s button: ``2 · 20:50 E042 · transition T2``."""
+    where = f"{d.loc.line}:{d.loc.col} " if d.loc.line > 0 else ""
+    tail = f" · {d.element}" if d.element else ""
+    return clip(f"{i} · {where}{d.code}{tail}", 60)
+
+
+def diagnostics_html(diagnostics: Iterable[Diagnostic], refusal: str = "") -> str:
+    """The editor's problem list: the refused edit first, then each diagnostic in full,
+    numbered as its button (a click on the button selects its element)."""
+    items = list(diagnostics)
+    rows = []
+    if refusal:
+        rows.append(f'<b style="color:#c00">not made: {html.escape(refusal)}</b>')
+    errors = sum(1 for d in items if d.severity == "error")
+    warnings = len(items) - errors
+    if not items:
+        rows.append('<span style="color:#080">no problems: the chart compiles</span>')
+    else:
+        head = f"{errors} error{'s' * (errors != 1)}, {warnings} warning{'s' * (warnings != 1)}"
+        colour = "#c00" if errors else "#a60"
+        rows.append(f'<span style="color:{colour}">{head}</span> (a button selects its element)')
+        rows += [f"{i} · {html.escape(diagnostic_line(d))}" for i, d in enumerate(items, 1)]
+    return small("<br>".join(rows))
+
+
+def editor_status_html(
+    *, editing: bool, file: str, base: int | None, running: int, undo: str | None,
+    redo: str | None, note: str = "",
+) -> str:  # fmt: skip
+    """Where the editor stands: the file, the chart version it started from and the one the
+    CPU runs, what undo and redo would do, the last outcome."""
+    if not editing:
+        return small('<span style="color:#777">edit the chart here, then download it into '
+                     "the running CPU (online change)</span>")  # fmt: skip
+    parts = [f"file <b>{html.escape(file or '(new)')}</b>"]
+    if base is not None:
+        parts.append(f"edited from version {base}")
+    parts.append(f"the CPU runs version {running}")
+    rows = [" · ".join(parts)]
+    if undo:
+        rows.append(f"undo: {html.escape(clip(undo, 80))}")
+    if redo:
+        rows.append(f"redo: {html.escape(clip(redo, 80))}")
+    if note:
+        rows.append(html.escape(note))
+    return small("<br>".join(rows))
+
+
+def rows_html(lines: list[str]) -> str:
+    """A step's action rows, numbered as ``check`` numbers them."""
+    if not lines:
+        return small('<span style="color:#777">no action rows</span>')
+    body = "<br>".join(f"{i}: {html.escape(line)}" for i, line in enumerate(lines, 1))
+    return small(f'<span style="font-family:monospace">{body}</span>')
+
+
+def lines_html(lines: Iterable[str], *, heading: str = "") -> str:
+    """A list of lines (a change summary, a refusal's diagnostics), escaped."""
+    body = "<br>".join(html.escape(line) for line in lines) or "(nothing)"
+    head = f"<b>{html.escape(heading)}</b><br>" if heading else ""
+    style = "max-height:22em;overflow:auto;font-family:monospace;font-size:0.85em"
+    return f'{head}<div style="{style}">{body}</div>'

@@ -1,0 +1,91 @@
+"""Online change: a changed chart swapped into a running GRAPH FB (issue 10; DESIGN "State
+lives in the instance DB").
+
+:func:`preview` says what a download of ``new`` over the running chart changes (the change
+summary of ``sequencer.diff``, with the active steps it removes). :func:`swap`, called at a
+scan boundary, carries the FB's state over to ``new`` by step number with the one function
+that does so (``sequencer.carry.carry_over``: active steps stay active with T and U, faults
+and criteria, variables keep their values by name) and makes the FB run ``new`` from its
+next call (``GraphFB.replace_chart``). Active steps the new chart does not have are never
+dropped silently: without a choice the swap is refused naming them; ``keep`` lets the other
+steps go on, ``init`` initializes the sequencer (INIT_SQ in the next call). The way back —
+*Undo download* — is the same swap with the charts the other way round.
+
+Pure: no threads, no clock, no files; the caller (``web.bus.online``) compiles off the scan
+thread and calls :func:`swap` between two scans.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Final, Literal
+
+from s7graph.engine.errors import S7Error
+from s7graph.sequencer.carry import CarryReport, ChartShape, carry_over
+from s7graph.sequencer.compiled import CompiledChart
+from s7graph.sequencer.diff import ChangeSummary, active_steps, summarize
+from s7graph.sequencer.fb import GraphFB
+
+__all__ = ["REMOVED", "Removed", "SwapRefused", "SwapReport", "preview", "swap"]
+
+Removed = Literal["keep", "init"]
+REMOVED: Final = ("keep", "init")
+
+
+class SwapRefused(S7Error):
+    """A swap that would drop active steps without the user's choice (or a bad choice)."""
+
+
+@dataclass(frozen=True, slots=True)
+class SwapReport:
+    """What a swap did: the carry-over's report, the active steps that went, and whether
+    the sequencer was initialized."""
+
+    carry: CarryReport
+    removed_active: tuple[int, ...]
+    initialized: bool
+
+    def lines(self) -> list[str]:
+        out = list(self.carry.lines())
+        if self.removed_active:
+            shown = ", ".join(f"S{n}" for n in self.removed_active)
+            what = "the sequencer is initialized" if self.initialized else "the other steps go on"
+            out.append(f"active steps removed: {shown}; {what}")
+        return out
+
+
+def preview(graph: GraphFB, new: CompiledChart) -> ChangeSummary:
+    """What swapping ``new`` into ``graph`` would change, for its state now."""
+    running = graph.cc
+    return summarize(running.chart, new.chart, active_steps(running, graph.state))
+
+
+def swap(
+    graph: GraphFB,
+    new: CompiledChart,
+    cpu: Any,
+    *,
+    removed: str | None = None,
+    user: str | None = None,
+) -> SwapReport:
+    """Run ``new`` in ``graph`` from its next call, its state carried over by step number
+    (call at a scan boundary). Active steps ``new`` does not have: refused unless
+    ``removed`` is ``keep`` (the other steps go on) or ``init`` (INIT_SQ in the next call,
+    as ``user``)."""
+    if removed is not None and removed not in REMOVED:
+        raise SwapRefused(f"removed must be keep or init, not {removed!r}")
+    old = graph.cc
+    state = graph.state
+    gone = tuple(n for n in active_steps(old, state) if n not in new.step_index)
+    if gone and removed is None:
+        shown = ", ".join(f"S{n}" for n in gone)
+        raise SwapRefused(
+            f"active steps {shown} are not in the new chart: choose keep (the other steps "
+            "go on) or init (initialize the sequencer)"
+        )
+    carried, report = carry_over(ChartShape.of(old), state, new)
+    graph.replace_chart(new, carried, cpu)
+    initialize = removed == "init" and bool(gone)
+    if initialize:
+        graph.command("INIT_SQ", user=user)
+    return SwapReport(report, gone, initialize)

@@ -1,0 +1,113 @@
+"""The chart as the page draws it (``web.view.drawing``): texts fitted and wrapped, never cut
+nor spilling; black text readable on every state colour; a 250-step chart wrapped into
+columns and shown at a readable default zoom; the layout computed once per chart."""
+
+from __future__ import annotations
+
+import pytest
+
+from s7graph.sequencer.model import Chart, Operand, Sequence, Step, Transition
+from s7graph.web.bus.protocol import ChartLayout, StepStateUpdate
+from s7graph.web.view.chart_view import ChartView, make_server
+from s7graph.web.view.drawing import (
+    ACTIVE,
+    BOX_H,
+    BOX_W,
+    DISCONNECTED,
+    DISTURBED,
+    FLAWED,
+    INACTIVE,
+    LINE,
+    SELECTED,
+    STEP_SIZES,
+    TEXT_W,
+    TRANSITION_SIZE,
+    _width,
+    camera_for,
+    contrast,
+    fit_text,
+    picture,
+    scale_px,
+    wrap,
+)
+from s7graph.web.view.layout import FOLD_ROWS, place
+from tests.web.helpers import wait_until
+
+pytestmark = pytest.mark.timeout(60)
+
+
+def long_chart(n: int = 250, name: str = "Step number {i} of the long sequence") -> Chart:
+    steps = tuple(Step(i, name.format(i=i), initial=i == 1) for i in range(1, n + 1))
+    transitions = tuple(
+        Transition(i, f"T{i}", (i,), (i % n + 1,), Operand(f"Sensor_{i}_reached", quoted=True))
+        for i in range(1, n + 1)
+    )
+    return Chart("LONG", sequences=(Sequence(1, "Long", steps, transitions),))
+
+
+@pytest.mark.parametrize(
+    "name",
+    ["S1", "Fill", "Clamp work piece", "W" * 40, "x" * 128, " ".join(["Wide"] * 25)[:128]],
+)
+def test_a_step_name_fits_its_box_whole(name: str) -> None:
+    """Names are never cut at 12 characters nor spill out of the box (issue 10)."""
+    lines, size = fit_text(f"S12  {name}", BOX_W - 0.12, BOX_H - 0.08, STEP_SIZES)
+    assert "".join(lines).replace(" ", "") == f"S12{name}".replace(" ", "")  # nothing cut
+    assert all(_width(line, size) <= BOX_W - 0.12 for line in lines)  # nothing spills
+    assert len(lines) * size * LINE <= BOX_H - 0.08
+
+
+def test_a_long_condition_wraps_beside_its_bar_with_every_character() -> None:
+    condition = " AND ".join(f'"Sensor_{i}_is_really_there"' for i in range(12))
+    lines = wrap(condition, TEXT_W, TRANSITION_SIZE)
+    assert len(lines) > 3 and all(_width(line, TRANSITION_SIZE) <= TEXT_W for line in lines)
+    assert "".join(lines).replace(" ", "") == condition.replace(" ", "")
+
+
+def test_black_text_reads_on_every_state_colour() -> None:
+    """Text on red stays readable: WCAG contrast of at least 4.5 on every box colour."""
+    for colour in (ACTIVE, DISTURBED, INACTIVE, DISCONNECTED, SELECTED, FLAWED):
+        assert contrast((0, 0, 0), colour) >= 4.5, colour
+
+
+def test_a_250_step_chart_wraps_into_columns_readable_at_the_default_zoom() -> None:
+    p = place(long_chart())
+    assert all(s.y < FOLD_ROWS for s in p.steps.values())  # each column at most FOLD_ROWS
+    assert len({s.x for s in p.steps.values()}) >= 250 * 2 // FOLD_ROWS  # many columns
+    assert len({(s.x, s.y) for s in p.steps.values()}) == 250  # no two steps overlap
+    outs = {(c.source, c.target) for c in p.continuations if not c.incoming}
+    ins = {(c.source, c.target) for c in p.continuations if c.incoming}
+    assert outs == ins and len(outs) >= 250 * 2 // FOLD_ROWS - 1  # every line continues
+    pic = picture(p)
+    (_, _, z), _ = camera_for(pic)
+    assert scale_px(z) >= 55.0  # text of 10-12 screen pixels at the default zoom
+    (_, _, whole), _ = camera_for(pic, whole=True)
+    assert whole > z  # "Whole chart" zooms out to all of it
+    assert all(t.image.shape[1] <= 4096 for t in pic.tiles)  # WebGL-sized text images
+
+
+def test_a_small_chart_is_shown_whole() -> None:
+    pic = picture(place(long_chart(5)))
+    assert camera_for(pic) == camera_for(pic, whole=True)
+
+
+def test_the_layout_is_computed_once_per_chart_version() -> None:
+    chart = long_chart(12, "S{i}")
+    layout = ChartLayout.from_chart(chart, version=1)
+    server, _ = make_server(port=0)
+    view = ChartView(server, layout, lambda c: None)  # type: ignore[arg-type, return-value]
+    try:
+        first = view.picture
+        for cycle in range(1, 6):
+            view.apply(StepStateUpdate(cycle=cycle, t_ms=cycle * 10, mode="AUTO", active=[1]))
+        assert wait_until(lambda: view.boxes[1].color == ACTIVE)
+        assert view.picture is first  # the scans recolour; the layout stays
+        view.apply_chart(layout)  # the same version again: nothing to redraw
+        assert wait_until(lambda: view.boxes[1].color == ACTIVE) and view.picture is first
+        changed = ChartLayout.from_chart(long_chart(13, "S{i}"), version=2)
+        view.apply_chart(changed)
+        assert wait_until(lambda: view.picture is not first)
+        assert len(view.boxes) == 13 and view.layout.version == 2
+    finally:
+        view.close()
+        server.stop()

@@ -1,0 +1,312 @@
+"""Online change through the virtual clock and a real zenoh bus on a unix socket: a changed
+chart is downloaded into the running GraphFB (issue 10) — compiled off the scan thread,
+swapped in at a scan boundary, the state carried over by step number
+(``sequencer.carry.carry_over``), the file rewritten with a numbered backup, every download
+audited — and undone the same way. Refusals leave the CPU running the old chart."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+from s7graph.engine.clock import VirtualClock
+from s7graph.engine.persistence import StateStore
+from s7graph.sequencer.fb import GraphFB
+from s7graph.sequencer.online import swap
+from s7graph.web.access.audit import read_audit
+from s7graph.web.bus.online import OnlineChange
+from s7graph.web.bus.protocol import Command, CommandReply
+from s7graph.web.bus.zenoh_bus import BusClient, open_session
+from s7graph.web.harness.persist import open_state
+from s7graph.web.harness.session import ChartSession, compile_text, load_chart
+from tests.web.helpers import PASSWORD, online_cpu, wait_until
+
+pytestmark = pytest.mark.timeout(90)
+
+CHART = """FUNCTION_BLOCK "Seq_fill" FB 1 DB 1
+VAR
+  go : BOOL;
+  full : BOOL;
+  empty : BOOL;
+  pieces : INT := 0;
+END_VAR
+SEQUENCE 1 "Fill"
+  INITIAL_STEP S1 "Idle":
+  END_STEP
+  STEP S2 "Fill":
+    S1 N pieces := pieces + 1;
+    N Q0.0;
+  END_STEP
+  STEP S3 "Drain":
+    N Q0.1;
+  END_STEP
+  TRANSITION T1 "Go" FROM S1 TO S2 := go;
+  TRANSITION T2 "Full" FROM S2 TO S3 := full;
+  TRANSITION T3 "Empty" FROM S3 TO S1 := empty;
+END_SEQUENCE
+END_FUNCTION_BLOCK
+"""
+
+
+WITHOUT_S2 = (
+    CHART.replace(
+        '  STEP S2 "Fill":\n    S1 N pieces := pieces + 1;\n    N Q0.0;\n  END_STEP\n', ""
+    )
+    .replace("FROM S1 TO S2 := go;", "FROM S1 TO S3 := go;")
+    .replace('  TRANSITION T2 "Full" FROM S2 TO S3 := full;\n', "")
+)
+
+
+@dataclass
+class Cpu:
+    session: ChartSession
+    client: BusClient
+    online: OnlineChange
+    path: Path
+    state: Path
+    token: str
+    scans: list[int]
+
+    def set(self, name: str, value: object) -> None:
+        self.session.set(name, value)
+
+    def active(self) -> list[int]:
+        g = self.session.graph
+        return [n for n, x in zip(g.cc.step_numbers, g.state.x, strict=True) if x]
+
+    def send(self, op: str, **args: object) -> CommandReply:
+        command = Command(op=op, fb="Seq_fill", user="eng", token=self.token, args=args)  # type: ignore[arg-type]
+        return self.client.send(command, timeout=20)
+
+
+@pytest.fixture
+def cpu(tmp_path: Path) -> Iterator[Cpu]:
+    users = {"eng": "engineer", "olga": "operator"}
+    with (
+        online_cpu(tmp_path, CHART, serve=False, users=users, name="fill.s7g") as rig,
+        open_session(connect=[rig.endpoint]) as view,
+        BusClient(view, "cpu1") as client,
+    ):
+        assert wait_until(lambda: client.status() is not None)
+        login = client.login("eng", PASSWORD)
+        assert login.ok, login.reason
+        yield Cpu(rig.session, client, rig.online, rig.path, rig.state, login.token, rig.scans)
+
+
+def test_download_swaps_the_chart_at_a_scan_boundary_keeping_the_active_step_and_its_time(
+    cpu: Cpu,
+) -> None:
+    cpu.set("go", True)
+    assert wait_until(lambda: cpu.active() == [2])
+    g: GraphFB = cpu.session.graph
+    before_t = g.state.step_t_ms(g.cc.step_index[2])
+    pieces = cpu.session.get("pieces")
+    edited = CHART.replace(":= full;", ":= full OR empty;").replace(
+        'STEP S3 "Drain":', 'STEP S3 "Drain it":'
+    )
+    preview = cpu.send("download", source=edited, preview=True)
+    assert preview.applied and preview.version == 1 and preview.removed == []
+    assert any("T2" in line and "condition" in line for line in preview.lines), preview.lines
+    assert cpu.active() == [2] and g.cc.name == "Seq_fill"  # a preview changes nothing
+
+    reply = cpu.send("download", source=edited, base=1)
+    assert reply.applied, reply.reason
+    assert reply.version == 2
+    assert cpu.active() == [2]  # the active step stays active ...
+    assert g.state.step_t_ms(g.cc.step_index[2]) >= before_t  # ... its time goes on
+    assert cpu.session.get("pieces") == pieces  # variables keep their values by name
+    assert cpu.path.read_text(encoding="utf-8") == edited
+    assert (cpu.path.parent / "fill.s7g.~1~").read_text(encoding="utf-8") == CHART
+    layout = cpu.client.chart("Seq_fill")
+    assert layout is not None and layout.version == 2
+    source = cpu.client.source("Seq_fill")
+    assert source is not None and source.version == 2 and source.text == edited
+
+    cpu.set("empty", True)  # the sequence follows the new condition: S2 -> S3 on empty
+    assert wait_until(lambda: cpu.active() in ([3], [1]))
+    rows = read_audit(cpu.state)
+    download = [r for r in rows if r.op == "download" and r.outcome == "applied"]
+    assert len(download) == 2  # the preview and the download, both as eng (engineer)
+    assert download[-1].user == "eng" and download[-1].role == "engineer"
+    assert "version 2 runs (was 1)" in download[-1].detail
+    assert "T2" in download[-1].detail and "sha256" in download[-1].args
+
+
+def test_a_removed_active_step_is_refused_without_a_choice_then_kept_or_initialized(
+    cpu: Cpu,
+) -> None:
+    cpu.set("go", True)
+    assert wait_until(lambda: cpu.active() == [2])
+    without_s2 = WITHOUT_S2
+    preview = cpu.send("download", source=without_s2, preview=True)
+    assert preview.applied and preview.removed == [2]
+    refused = cpu.send("download", source=without_s2)
+    assert not refused.applied and "S2" in refused.reason and "keep" in refused.reason
+    assert cpu.active() == [2] and cpu.path.read_text(encoding="utf-8") == CHART  # unchanged
+
+    kept = cpu.send("download", source=without_s2, removed="keep")
+    assert kept.applied, kept.reason
+    assert cpu.active() == []  # S2 went; the other steps (none) go on
+    assert any("S2" in line for line in kept.lines)
+
+    back = cpu.send("undo_download")
+    assert back.applied, back.reason  # the old chart again (nothing active to remove)
+    assert cpu.session.graph.cc.step_index.get(2) is not None and cpu.active() == []
+
+
+def test_initialize_when_an_active_step_is_removed(cpu: Cpu) -> None:
+    cpu.set("go", True)
+    assert wait_until(lambda: cpu.active() == [2])
+    cpu.set("go", False)
+    without_s2 = WITHOUT_S2
+    reply = cpu.send("download", source=without_s2, removed="init")
+    assert reply.applied, reply.reason
+    assert wait_until(lambda: cpu.active() == [1])  # INIT_SQ in the next call: S1 again
+
+
+def test_undo_download_restores_the_old_chart_with_its_state_carried_back(cpu: Cpu) -> None:
+    cpu.set("go", True)
+    assert wait_until(lambda: cpu.active() == [2])
+    added = CHART.replace(
+        '  TRANSITION T1 "Go"', '  STEP S4 "Spare":\n  END_STEP\n  TRANSITION T1 "Go"'
+    ).replace("END_SEQUENCE", '  TRANSITION T4 "Spare" FROM S4 TO S1 := FALSE;\nEND_SEQUENCE')
+    assert cpu.send("download", source=added).applied
+    assert cpu.session.graph.cc.step_index.get(4) is not None
+    undone = cpu.send("undo_download", base=2)
+    assert undone.applied, undone.reason
+    assert undone.version == 3
+    assert cpu.session.graph.cc.step_index.get(4) is None  # the old chart runs
+    assert cpu.active() == [2]  # with S2 still active
+    assert cpu.path.read_text(encoding="utf-8") == CHART
+    assert not cpu.send("undo_download").applied  # nothing more to undo
+
+
+def test_broken_or_hostile_downloads_are_refused_and_the_cpu_keeps_the_old_chart(
+    cpu: Cpu, tmp_path: Path
+) -> None:
+    cc = cpu.session.graph.cc
+    syntax = cpu.send("download", source=CHART.replace(":= full;", ":= full AND;"))
+    assert not syntax.applied and "does not parse" in syntax.reason
+    assert any("fill.s7g:19:49: error" in line for line in syntax.lines), syntax.lines
+    unknown = cpu.send("download", source=CHART.replace("N Q0.1;", "N Q99999.0;"))
+    assert not unknown.applied and "does not compile" in unknown.reason
+    steps = "".join(f"  STEP S{n}:\n  END_STEP\n" for n in range(10, 10_010))
+    many = cpu.send("download", source=CHART.replace("  TRANSITION T1", steps + "  TRANSITION T1"))
+    assert not many.applied and "at most 1,000" in many.reason, many.reason
+    paste = b'{"op":"download","fb":"Seq_fill","args":{"source":"' + b"x" * 10_000_000 + b'"}}'
+    raw = cpu.client.send_raw(paste, timeout=10)
+    assert raw is not None and not raw.applied and "too large" in raw.reason
+    stale = cpu.send("download", source=CHART.replace("full;", "empty;"), base=7)
+    assert not stale.applied and "version 1" in stale.reason
+    assert cpu.session.graph.cc is cc  # the CPU kept its chart through all of it
+    assert cpu.path.read_text(encoding="utf-8") == CHART
+    assert not list(tmp_path.glob("fill.s7g.~*~"))
+    count = len(cpu.scans)
+    assert wait_until(lambda: len(cpu.scans) > count + 5)  # and keeps scanning
+
+
+def test_an_operator_may_not_download_and_the_refusal_is_audited(cpu: Cpu) -> None:
+    login = cpu.client.login("olga", PASSWORD)
+    command = Command(op="download", fb="Seq_fill", user="olga", token=login.token,
+                      args={"source": CHART})  # fmt: skip
+    reply = cpu.client.send(command, timeout=20)
+    assert not reply.applied and "needs engineer" in reply.reason
+    rows = [r for r in read_audit(cpu.state) if r.op == "download"]
+    assert rows and rows[-1].user == "olga" and rows[-1].outcome == "refused"
+
+
+def test_save_and_open_use_the_project_directory_with_backups(cpu: Cpu) -> None:
+    saved = cpu.send("save", file="copy.s7g", source=CHART)
+    assert saved.applied, saved.reason
+    assert (cpu.path.parent / "copy.s7g").read_text(encoding="utf-8") == CHART
+    again = cpu.send("save", file="copy.s7g", source=CHART.replace("Idle", "Rest"))
+    assert again.applied and (cpu.path.parent / "copy.s7g.~1~").exists()
+    listed = cpu.client.project()
+    assert listed is not None and {"fill.s7g", "copy.s7g"} <= {f.name for f in listed.files}
+    opened = cpu.send("open", file="copy.s7g")
+    assert opened.applied and '"Rest"' in opened.text
+    for bad in ("../escape.s7g", ".hidden.s7g", "sub/x.s7g"):
+        assert not cpu.send("save", file=bad, source=CHART).applied, bad
+    assert not cpu.send("open", file="missing.s7g").applied
+
+
+def _shell(rig_endpoint: str, *args: str) -> subprocess.CompletedProcess[str]:
+    env = {**os.environ, "S7GRAPH_PASSWORD": PASSWORD}
+    return subprocess.run(
+        [sys.executable, "-m", "s7graph", *args, "--cpu", "cpu1", "--connect", rig_endpoint],
+        capture_output=True, text=True, timeout=60, env=env, stdin=subprocess.DEVNULL,
+    )  # fmt: skip
+
+
+def test_s7graph_download_shows_the_change_asks_and_downloads(cpu: Cpu, tmp_path: Path) -> None:
+    """``s7graph download CHART.s7g --cpu NAME``: the same path as the bus command."""
+    cpu.set("go", True)
+    assert wait_until(lambda: cpu.active() == [2])
+    endpoint = f"unixsock-stream/{cpu.path.parent}/bus.sock"
+    edited = tmp_path / "edited.s7g"
+    edited.write_text(WITHOUT_S2, encoding="utf-8")
+    asked = _shell(endpoint, "download", str(edited), "--user", "eng")
+    assert asked.returncode == 1 and "S2 would be removed" in asked.stderr, asked.stderr
+    assert "S2" in asked.stdout  # the change summary came first
+    unconfirmed = _shell(endpoint, "download", str(edited), "--user", "eng", "--removed", "keep")
+    assert unconfirmed.returncode == 1 and "not confirmed" in unconfirmed.stderr
+    assert cpu.active() == [2]  # nothing downloaded yet
+    done = _shell(endpoint, "download", str(edited), "--user", "eng", "--removed", "keep", "--yes")
+    assert done.returncode == 0, done.stderr
+    assert "version 2 runs" in done.stdout
+    assert cpu.session.graph.cc.step_index.get(2) is None
+    refused = _shell(endpoint, "download", str(edited), "--user", "olga", "--yes")
+    assert refused.returncode == 1 and "needs engineer" in refused.stderr
+
+
+def test_a_download_and_a_restart_with_the_downloaded_file_carry_the_state_alike(
+    tmp_path: Path,
+) -> None:
+    """Starting ``s7graph run`` with an edited chart and an old state file carries the
+    state over with the same function as a download (``sequencer.carry.carry_over``)."""
+    edited = CHART.replace(":= full;", ":= full OR empty;")
+    path = tmp_path / "fill.s7g"
+    path.write_text(CHART, encoding="utf-8")
+    cc, table = load_chart(path)
+
+    def in_s2() -> ChartSession:
+        session = ChartSession(cc, table, VirtualClock())
+        session.start()
+        session.set("go", True)
+        for _ in range(30):
+            session.clock.advance(10)  # type: ignore[attr-defined]
+            session.scan()
+        return session
+
+    online = in_s2()
+    store = StateStore(tmp_path / "state.sqlite")
+    store.save(online.cpu)
+    new_cc, _ = compile_text(edited, str(path))
+    swap(online.graph, new_cc, online.cpu)  # the download, at a scan boundary
+    store.close()
+
+    path.write_text(edited, encoding="utf-8")  # the restart with the edited file
+    restarted = ChartSession(*load_chart(path), VirtualClock())
+    opened = open_state(tmp_path / "state.sqlite", restarted.cpu)
+    try:
+        assert opened.report is not None and opened.report.changed == [1]
+        a, b = online.graph.state, restarted.graph.state
+        assert sorted(a.active) == sorted(b.active) == [new_cc.step_index[2]]
+        assert a.vars == b.vars and a.t_ns == b.t_ns and a.x == b.x
+    finally:
+        opened.store.close()
+
+
+def test_the_preview_reports_operands_left_set_by_s_rows_of_removed_steps(cpu: Cpu) -> None:
+    with_s = CHART.replace("    N Q0.0;\n", "    N Q0.0;\n    S Q0.2;\n")
+    assert cpu.send("download", source=with_s).applied
+    gone = WITHOUT_S2
+    preview = cpu.send("download", source=gone, preview=True)
+    assert preview.applied
+    assert any("Q0.2" in line and "S2" in line and "stay set" in line for line in preview.lines)

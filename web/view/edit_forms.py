@@ -1,0 +1,178 @@
+"""What the editor's side panel offers for a selection, read off the one table of edit
+operations (``sequencer.edit.OPERATIONS``): every operation acting on the selected kind of
+element, with the fields its arguments need.
+
+An operation that sets one property of the element (its name, number, condition …) is a
+*property*: one field showing the current value, applied when it changes. Any other
+operation is an *action*: a field per argument and a button with the operation's title
+(S7-GRAPH's wording). Action rows get a row editor of their own (event, qualifier, C,
+operand, time/value). ``CURRENT`` is the table of how a property's current value is read;
+everything else comes from ``OPERATIONS``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from typing import Final
+
+from s7graph.sequencer.edit import OPERATIONS, Argument, Operation
+from s7graph.sequencer.edit_text import RowFields
+from s7graph.sequencer.elements import Ref, RowRef, SequenceRef, StepRef, TransitionRef, find
+from s7graph.sequencer.format import format_expr, row_body
+from s7graph.sequencer.model import ActionRow, Chart, Expr, Sequence, Step, Transition
+
+__all__ = [
+    "CURRENT",
+    "Field",
+    "Form",
+    "element_choices",
+    "form_for",
+    "kind_of",
+    "row_fields",
+]
+
+
+def _expr(e: Expr | None) -> str:
+    return "" if e is None else format_expr(e)
+
+
+def _step(f: Callable[[Step], object]) -> Callable[[object], object]:
+    return lambda x: f(x) if isinstance(x, Step) else None
+
+
+def _transition(f: Callable[[Transition], object]) -> Callable[[object], object]:
+    return lambda x: f(x) if isinstance(x, Transition) else None
+
+
+# How the current value of a property operation's one argument is read from its element.
+CURRENT: Final[dict[str, Callable[[object], object]]] = {
+    "rename_step": _step(lambda s: s.name),
+    "renumber_step": _step(lambda s: s.number),
+    "set_initial": _step(lambda s: s.initial),
+    "set_message": _step(lambda s: s.message),
+    "set_interlock": _step(lambda s: _expr(s.interlock)),
+    "set_supervision": _step(lambda s: _expr(s.supervision)),
+    "rename_transition": _transition(lambda t: t.name),
+    "renumber_transition": _transition(lambda t: t.number),
+    "set_condition": _transition(lambda t: _expr(t.condition)),
+    "rename_sequence": lambda q: q.name if isinstance(q, Sequence) else None,
+}
+# Operations the panel shows elsewhere: the source view, and the row editor.
+ELSEWHERE: Final = frozenset({"set_source", "add_row", "change_row", "remove_row", "move_row"})
+
+
+@dataclass(frozen=True, slots=True)
+class Field:
+    """One input: the operation's argument ``arg`` with its current or default value."""
+
+    op: Operation
+    arg: Argument
+    value: object
+
+    @property
+    def label(self) -> str:
+        return self.op.title if self.op.name in CURRENT else self.arg.name
+
+    @property
+    def hint(self) -> str:
+        extra = " (0: none - a branch stop)" if self.arg.type == "int | None" else ""
+        return self.op.doc + extra
+
+
+@dataclass(frozen=True, slots=True)
+class Form:
+    """The panel's form for one selection: properties, then actions (each a list of
+    fields and its button), and whether the row editor belongs to it."""
+
+    ref: Ref | None
+    properties: tuple[Field, ...]
+    actions: tuple[tuple[Operation, tuple[Field, ...]], ...]
+    rows: bool
+
+    @property
+    def key(self) -> tuple[object, ...]:
+        """What the form's shape depends on (the same key: update values in place)."""
+        return (
+            type(self.ref).__name__,
+            getattr(self.ref, "number", getattr(self.ref, "step", None)),
+            tuple(f.op.name for f in self.properties),
+            tuple((op.name, len(fs)) for op, fs in self.actions),
+            self.rows,
+        )
+
+
+def kind_of(ref: Ref | None) -> str:
+    """The kind of element a selection names: step, transition, sequence or chart."""
+    if isinstance(ref, StepRef | RowRef):
+        return "step"
+    if isinstance(ref, TransitionRef):
+        return "transition"
+    if isinstance(ref, SequenceRef):
+        return "sequence"
+    return "chart"
+
+
+def _element(chart: Chart, ref: Ref | None) -> object:
+    if isinstance(ref, RowRef):
+        ref = StepRef(ref.step)
+    if isinstance(ref, StepRef) and ref.part:
+        ref = StepRef(ref.number)
+    return find(chart, ref) if ref is not None else chart
+
+
+def _default(arg: Argument, element: object) -> object:
+    """A starting value for an action's argument: its default (None shows as 0), else the
+    element's own number or first target, else nothing."""
+    if not arg.required:
+        return 0 if arg.default is None else arg.default
+    if arg.type.startswith("int"):
+        if isinstance(element, Transition):
+            return element.targets[0] if element.targets else 1
+        return element.number if isinstance(element, Step) else 1
+    return False if arg.type == "bool" else ""
+
+
+def form_for(chart: Chart, ref: Ref | None) -> Form:
+    """The form of the selection ``ref`` (None: the chart) of ``chart``."""
+    kind = kind_of(ref)
+    element = _element(chart, ref)
+    target: Ref | None = ref
+    if kind == "chart":
+        target = None
+    elif isinstance(element, Step):
+        target = StepRef(element.number)
+    properties: list[Field] = []
+    actions: list[tuple[Operation, tuple[Field, ...]]] = []
+    for op in OPERATIONS:
+        if op.target != kind or op.name in ELSEWHERE:
+            continue
+        args = [a for a in op.arguments if a.name not in op.element_arguments]
+        if op.name in CURRENT and len(args) == 1:
+            properties.append(Field(op, args[0], CURRENT[op.name](element)))
+        else:
+            fields = tuple(Field(op, a, _default(a, element)) for a in args)
+            actions.append((op, fields))
+    return Form(target, tuple(properties), tuple(actions), kind == "step")
+
+
+def row_fields(row: ActionRow) -> RowFields:
+    """The editor's fields of an action row (the inverse of ``parse_row``)."""
+    value = "" if row.value is None else format_expr(row.value)
+    return RowFields(
+        qualifier=row.qualifier,
+        operand=row_body(replace(row, value=None)),
+        event=row.event or "",
+        interlocked=row.interlocked,
+        value=value,
+    )
+
+
+def element_choices(chart: Chart) -> list[tuple[str, Ref | None]]:
+    """The selection dropdown: the chart, each sequencer, step and transition, in order."""
+    out: list[tuple[str, Ref | None]] = [("Chart (block options, new sequencer)", None)]
+    for q in chart.sequences:
+        out.append((f"Sequencer {q.number} {q.name}".rstrip(), SequenceRef(q.number)))
+        out += [(f"S{s.number} {s.name}".rstrip(), StepRef(s.number)) for s in q.steps]
+        out += [(f"T{t.number} {t.name}".rstrip(), TransitionRef(t.number)) for t in q.transitions]
+    return out

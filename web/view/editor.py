@@ -1,0 +1,826 @@
+"""Edit mode of one browser page (an engineer's): the chart as an editing session
+(``sequencer.edit.Session``), drawn on the page's own scene, edited in the side panel and
+in its source view, checked live, saved, opened and downloaded into the running CPU.
+
+- **Select** a step or transition on the chart (or in *Element*); its form lists what the
+  table of edit operations offers for it (``web.view.edit_forms``): properties applied as
+  they change, actions as buttons, and for a step its action rows.
+- **Diagnostics** are ``s7graph check``'s, located by line and column in the source view
+  (the chart written as ``.s7g`` text); a click on one selects its element. A refused
+  edit says why and changes nothing.
+- **Source view**: the same chart as text; an edit there is applied once typing pauses
+  (the ``set_source`` edit), an edit anywhere else rewrites the text.
+- **Save** / **Open** / **New**, **Download** and **Undo download** are commands to the CPU
+  (the engineer's, checked and audited there): the CPU compiles the chart off its scan
+  thread and answers with the change summary first (a preview); the page asks for
+  confirmation — and, when active steps would be removed, whether to keep the other steps
+  or initialize the sequencer — before the real download.
+
+Everything here runs in viser's callback threads or the view's render thread, never in the
+CPU's scan; the editor's own lock keeps one page's actions in order.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import html
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, Final
+
+from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer.diagnostics import Diagnostic
+from s7graph.sequencer.edit import Operation, Session, make_edit, new_chart
+from s7graph.sequencer.edit_base import Edit, EditRefused, Refusal
+from s7graph.sequencer.edit_content import SetSource
+from s7graph.sequencer.edit_text import RowFields, parse_source
+from s7graph.sequencer.elements import Ref, RowRef, StepRef, TransitionRef, element_of, find
+from s7graph.sequencer.format import format_chart, format_row
+from s7graph.sequencer.model import Chart, Step
+from s7graph.sequencer.parse import ChartSyntaxError, parse_chart
+from s7graph.sequencer.validate import validate
+from s7graph.steps.qualifiers import EVENTS, QUALIFIERS
+from s7graph.web.bus.protocol import ChartLayout, ChartSource, CommandReply
+from s7graph.web.view import texts
+from s7graph.web.view.drawing import FLAWED, SELECTED, Drawing, Picture, aim_camera, picture
+from s7graph.web.view.edit_forms import Field, Form, element_choices, form_for, row_fields
+from s7graph.web.view.engineering import EditorPage
+from s7graph.web.view.layout import place
+
+__all__ = ["EDIT_OFFSET", "Editor"]
+
+EDIT_OFFSET: Final = (0.0, -2000.0)  # where a page draws the chart it edits (off the live one)
+EDITOR_WIDTH: Final = 400  # pixels of the editor's panel, docked left of the chart
+PAGE_WIDTH, PAGE_HEIGHT, PANEL_WIDTH = 1280, 800, 340  # the page the camera is aimed for
+DEBOUNCE_S: Final = 0.6  # typing pauses this long: the text is applied
+MAX_DIAGNOSTIC_BUTTONS: Final = 25
+NO_EVENT: Final = "(none)"
+
+
+@dataclass(frozen=True, slots=True)
+class Located:
+    """The diagnostics of the chart as the source view shows it (lines and columns of that
+    text), and the chart read back from it (to find the element of a diagnostic)."""
+
+    diagnostics: tuple[Diagnostic, ...]
+    chart: Chart | None
+
+
+class Editor:
+    """The edit mode of ``panel``'s page (built only for a role that may download)."""
+
+    def __init__(self, panel: EditorPage) -> None:
+        self.panel = panel
+        self.client = panel.client
+        wiring = panel.wiring
+        assert wiring.engineering is not None and wiring.host is not None
+        self.eng = wiring.engineering
+        self.host = wiring.host
+        self._lock = threading.RLock()
+        self.editing = False
+        self.session: Session | None = None
+        self.base: ChartSource | None = None
+        self.symbols: SymbolTable | None = None
+        self.located = Located((), None)
+        self.note = ""
+        self._drawing: Drawing | None = None
+        self._drawn: Chart | None = None
+        self._picture: Picture | None = None
+        self._form: Form | None = None
+        self._form_handles: list[Any] = []
+        self._inputs: dict[str, Any] = {}
+        self._diag_buttons: list[Any] = []
+        self._diag_shown: list[Diagnostic] = []
+        self._timers: dict[str, threading.Timer] = {}
+        self._source_text = ""
+        self._choices: dict[str, Ref | None] = {}
+        self._modal: Any = None
+        self._closed = False
+        self._build()
+
+    # ------------------------------------------------------------ building
+
+    def _build(self) -> None:
+        gui = self.client.gui
+        order = float(self.panel.control_folder.order) - 0.5  # right under the login
+        with gui.add_folder("Edit chart", order=order) as self.folder:
+            self.toggle = gui.add_button("Edit mode", hint="edit this chart and download it")
+            self.status = gui.add_html(self._status_html())
+            with gui.add_folder("Chart", visible=False) as self.tools:
+                self.undo_button = gui.add_button("Undo", disabled=True)
+                self.redo_button = gui.add_button("Redo", disabled=True)
+                self.download_button = gui.add_button(
+                    "Download", color="orange", hint="compile and download into the CPU"
+                )
+                self.undo_download_button = gui.add_button(
+                    "Undo download", hint="put the chart before the last download back"
+                )
+                self.file = gui.add_text("File", "", hint="the .s7g file Save writes")
+                self.save_button = gui.add_button("Save", hint="write the chart as the File")
+                self.open_choice = gui.add_dropdown("Open file", ["(none)"])
+                self.open_button = gui.add_button("Open", hint="open the chosen file")
+                self.new_button = gui.add_button("New", hint="a new chart: S1 and T1")
+        # The element's form, the problems and the source: a panel of their own, docked
+        # left of the chart while editing.
+        self.side = gui.add_panel(visible=False)
+        with self.side.add_tab("Element"):
+            self.element = gui.add_dropdown("Element", ["Chart"])
+            self.form_folder = gui.add_folder("Selection")
+            with self.form_folder:
+                self.form_html = gui.add_html("")
+            self.diag_folder = gui.add_folder("Diagnostics")
+            with self.diag_folder:
+                self.diag_html = gui.add_html("")
+        with self.side.add_tab("Source (.s7g)"):
+            self.source = gui.add_text("Source", "", multiline=True)
+            uid = self.source._impl.uuid
+            rule = (
+                f".mantine-Flex-root:has(label[for='{uid}']) textarea{{"
+                "height:calc(100vh - 12em) !important;max-height:none !important;"
+                "font-family:monospace;font-size:0.75em;white-space:pre;"
+                "overflow:auto !important}"
+            )
+            gui.add_html(f"<style>{rule}</style>")
+        self.side.dock_left()
+        self.side.set_width(EDITOR_WIDTH)
+        self.toggle.on_click(lambda _: self._toggle())
+        self.save_button.on_click(lambda _: self._guarded(self.save))
+        self.open_button.on_click(lambda _: self._guarded(self.open))
+        self.new_button.on_click(lambda _: self._guarded(self.new))
+        self.undo_button.on_click(lambda _: self._guarded(lambda: self.change(lambda s: s.undo())))
+        self.redo_button.on_click(lambda _: self._guarded(lambda: self.change(lambda s: s.redo())))
+        self.download_button.on_click(lambda _: self._guarded(self.download))
+        self.undo_download_button.on_click(lambda _: self._guarded(self.undo_download))
+        self.element.on_update(self._element_chosen)
+        self.source.on_update(self._source_typed)
+
+    def close(self, *, page_gone: bool = False) -> None:
+        """The page's role changed (or it logged out): leave edit mode, drop the panel;
+        ``page_gone``: the page itself went, there is nothing left to update."""
+        with self._lock:
+            self._closed = True
+            for timer in self._timers.values():
+                timer.cancel()
+            if page_gone:
+                return
+            if self.editing:
+                self.leave()
+            with contextlib.suppress(Exception):
+                self.folder.remove()
+            with contextlib.suppress(Exception):
+                self.side.remove()
+
+    def _click(self, action: Callable[[], object]) -> Callable[[Any], None]:
+        """A click handler running ``action`` through :meth:`_guarded`."""
+        return lambda _: self._guarded(action)
+
+    def _guarded(self, action: Callable[[], object]) -> None:
+        """Run one action of this page in order; an unexpected error is a notification,
+        never a dead callback."""
+        try:
+            with self._lock:
+                if not self._closed:
+                    action()
+        except Exception as exc:
+            self._notify("editor", f"{type(exc).__name__}: {exc}", ok=False)
+
+    # ------------------------------------------------------------ edit mode
+
+    def _toggle(self) -> None:
+        self._guarded(self.leave if self.editing else self.enter)
+
+    def enter(self) -> None:
+        """Start editing the chart the CPU runs."""
+        source = self.eng.source()
+        if source is None:
+            self._notify("edit mode", "the CPU does not answer with its chart", ok=False)
+            return
+        try:
+            symbols = SymbolTable.from_text(source.symbols) if source.symbols else None
+            chart = parse_source(source.text, source.file or "chart.s7g")
+            session = Session.open(chart, symbols)
+        except Exception as exc:  # EditRefused, a symbol table that does not load ...
+            reason = exc.reason if isinstance(exc, EditRefused) else str(exc)
+            self._notify("edit mode", f"cannot edit the running chart: {reason}", ok=False)
+            return
+        self.base, self.symbols, self.session = source, symbols, session
+        self.file.value = source.file or f"{chart.name}.s7g"  # type: ignore[misc]
+        self.editing = True
+        self.toggle.label = "Leave edit mode"
+        self.tools.visible = True
+        self.side.visible = True
+        self._refresh_files()
+        self.note = f"editing version {source.version} as the CPU runs it"
+        self._show(source_changed=True)
+        self.aim(whole=False)
+
+    def leave(self) -> None:
+        """Back to the live chart (the session is dropped; nothing is downloaded)."""
+        self.editing = False
+        self.toggle.label = "Edit mode"
+        self.tools.visible = False
+        self.side.visible = False
+        if self._drawing is not None:
+            self._drawing.remove()
+            self._drawing, self._drawn = None, None
+        self._clear_form()
+        self.status.content = self._status_html()
+        pic = getattr(self.host, "picture", None)
+        if pic is not None:
+            aim_camera(self.client, pic, whole=False)
+
+    def aim(self, *, whole: bool) -> None:
+        if self._picture is not None:
+            canvas = PAGE_WIDTH - EDITOR_WIDTH  # the docked editor narrows the canvas
+            aim_camera(
+                self.client,
+                self._picture,
+                whole=whole,
+                offset=EDIT_OFFSET,
+                aspect=canvas / PAGE_HEIGHT,
+                right=PANEL_WIDTH / canvas,
+            )
+
+    def running_changed(self, layout: ChartLayout) -> None:
+        """The CPU runs another chart version (a download, from here or elsewhere)."""
+        with self._lock:
+            if self.editing:
+                self.status.content = self._status_html()
+
+    # ------------------------------------------------------------ edits
+
+    def change(self, step: Callable[[Session], Session], *, from_source: bool = False) -> None:
+        """Move the session on by ``step`` (an edit, undo, redo, a selection) and show it."""
+        if self.session is None:
+            return
+        before = self.session
+        self.session = step(before)
+        if self.session.refusal is None:
+            self.note = ""
+        self._show(source_changed=self.session.chart is not before.chart and not from_source)
+
+    def apply(self, edit: Edit) -> None:
+        self.change(lambda s: s.apply(edit))
+
+    def select(self, ref: Ref | None) -> None:
+        self.change(lambda s: s.select(ref))
+
+    def _apply_op(self, op: Operation, ref: Ref | None, values: dict[str, object]) -> None:
+        try:
+            edit = op.on(ref, **values)
+        except EditRefused as exc:
+            if self.session is not None:
+                self.session = _refused(self.session, exc)
+            self._show(source_changed=False)
+            return
+        self.apply(edit)
+
+    # ------------------------------------------------------------ showing
+
+    def _status_html(self) -> str:
+        s = self.session
+        return texts.editor_status_html(
+            editing=self.editing,
+            file=str(self.file.value) if hasattr(self, "file") else "",
+            base=self.base.version if self.base is not None else None,
+            running=self.host.layout.version,
+            undo=s.undo_label if s is not None else None,
+            redo=s.redo_label if s is not None else None,
+            note=self.note,
+        )
+
+    def _show(self, *, source_changed: bool) -> None:
+        """Bring the page up to the session: chart drawing, form, diagnostics, source."""
+        s = self.session
+        if s is None or not self.editing:
+            return
+        chart = s.chart
+        if chart is not self._drawn:
+            self.located = _located(chart, self.symbols)
+            self._draw(chart)
+        self._colour()
+        with self.client.atomic():
+            self._form_of(chart, s.selection)
+            self._diagnostics(s)
+            self._choose_element(chart, s.selection)
+            if source_changed:
+                self._source_text = format_chart(chart)
+                self.source.value = self._source_text  # type: ignore[misc]
+            self.undo_button.disabled = s.undo_label is None
+            self.redo_button.disabled = s.redo_label is None
+            self.status.content = self._status_html()
+
+    def _draw(self, chart: Chart) -> None:
+        self._picture = picture(place(ChartLayout.from_chart(chart)))
+        if self._drawing is not None:
+            self._drawing.remove()
+        self._drawing = Drawing(
+            self.client.scene,
+            self._picture,
+            root="/edit",
+            offset=EDIT_OFFSET,
+            on_step=self._clicked_step,
+            on_transition=self._clicked_transition,
+        )
+        self._drawn = chart
+
+    def _clicked_step(self, number: int, _: Any) -> None:
+        self._guarded(functools.partial(self.select, StepRef(number)))
+
+    def _clicked_transition(self, number: int, _: Any) -> None:
+        self._guarded(functools.partial(self.select, TransitionRef(number)))
+
+    def _colour(self) -> None:
+        if self._drawing is None or self.session is None:
+            return
+        steps: dict[int, tuple[int, int, int]] = {}
+        transitions: dict[int, tuple[int, int, int]] = {}
+        for d in self.session.diagnostics:
+            ref = element_of(d)
+            if d.is_error and isinstance(ref, StepRef | RowRef):
+                steps[ref.number if isinstance(ref, StepRef) else ref.step] = FLAWED
+            elif d.is_error and isinstance(ref, TransitionRef):
+                transitions[ref.number] = FLAWED
+        sel = self.session.selection
+        if isinstance(sel, StepRef | RowRef):
+            steps[sel.number if isinstance(sel, StepRef) else sel.step] = SELECTED
+        elif isinstance(sel, TransitionRef):
+            transitions[sel.number] = SELECTED
+        self._drawing.paint(steps, transitions)
+
+    def _choose_element(self, chart: Chart, selection: Ref | None) -> None:
+        choices = element_choices(chart)
+        self._choices = {label: ref for label, ref in choices}
+        labels = [label for label, _ in choices]
+        if list(self.element.options) != labels:
+            self.element.options = labels
+        want = _key_ref(selection)
+        shown = next((label for label, ref in choices if ref == want), labels[0])
+        if self.element.value != shown:
+            self.element.value = shown  # type: ignore[misc]
+
+    def _element_chosen(self, event: Any) -> None:
+        if getattr(event, "client", None) is None:
+            return  # set from here
+        ref = self._choices.get(str(self.element.value))
+        self._guarded(lambda: self.select(ref))
+
+    def _diagnostics(self, s: Session) -> None:
+        refusal = s.refusal.reason if s.refusal is not None else ""
+        shown = list(s.refusal.diagnostics) if s.refusal is not None else []
+        shown += list(self.located.diagnostics)
+        shown = shown[:MAX_DIAGNOSTIC_BUTTONS]
+        self.diag_html.content = texts.diagnostics_html(shown, refusal)
+        if shown == self._diag_shown:
+            return
+        self._diag_shown = shown
+        for button in self._diag_buttons:
+            button.remove()
+        self._diag_buttons = []
+        with self.diag_folder:
+            for i, d in enumerate(shown, 1):
+                button = self.client.gui.add_button(
+                    texts.diagnostic_button(i, d),
+                    color="red" if d.is_error else "yellow",
+                    hint=f"select it: {texts.diagnostic_line(d)}",
+                )
+                button.on_click(self._click(functools.partial(self.select_diagnostic, d)))
+                self._diag_buttons.append(button)
+
+    def select_diagnostic(self, d: Diagnostic) -> None:
+        """Select the element diagnostic ``d`` concerns (a click in the list)."""
+        ref = element_of(d, self.located.chart)
+        if ref is None and self.session is not None:
+            ref = element_of(d, self.session.chart)
+        self.select(_key_ref(ref) if ref is not None else None)
+
+    # ------------------------------------------------------------ the form
+
+    def _clear_form(self) -> None:
+        for timer in self._timers.values():
+            timer.cancel()
+        self._timers.clear()
+        for handle in self._form_handles:
+            with contextlib.suppress(Exception):
+                handle.remove()
+        self._form_handles, self._inputs, self._form = [], {}, None
+
+    def _form_of(self, chart: Chart, selection: Ref | None) -> None:
+        form = form_for(chart, selection)
+        if self._form is not None and self._form.key == form.key:
+            for f in form.properties:  # the same fields: only their values
+                handle = self._inputs.get(f.op.name)
+                if handle is not None and handle.value != _shown(f):
+                    handle.value = _shown(f)
+            if form.rows:
+                self._rows_show(chart, form.ref)
+            self._form = form
+            return
+        self._clear_form()
+        self._form = form
+        gui = self.client.gui
+        what = form.ref
+        self.form_html.content = texts.small(f"<b>{html.escape(_title(chart, what))}</b>")
+        with self.form_folder:
+            for f in form.properties:
+                handle = self._input(f)
+                self._inputs[f.op.name] = handle
+                handle.on_update(self._property_handler(f))
+            if form.rows:
+                self._rows_form(chart, form.ref)
+            for op, fields in form.actions:
+                handles = [self._input(f) for f in fields]
+                button = gui.add_button(op.title, hint=op.doc)
+                self._form_handles.append(button)
+                button.on_click(self._action_handler(op, form.ref, fields, handles))
+
+    def _input(self, f: Field) -> Any:
+        gui = self.client.gui
+        value = _shown(f)
+        handle: Any
+        if f.arg.type == "bool":
+            handle = gui.add_checkbox(f.label, bool(value), hint=f.hint)
+        elif f.arg.type.startswith("int"):
+            low = 0 if f.arg.type == "int | None" else 1
+            handle = gui.add_number(f.label, int(value), min=low, max=32767, step=1, hint=f.hint)  # type: ignore[call-overload]
+        else:
+            handle = gui.add_text(f.label, str(value), hint=f.hint)
+        self._form_handles.append(handle)
+        return handle
+
+    def _property_handler(self, f: Field) -> Callable[[Any], None]:
+        def changed(event: Any) -> None:
+            if getattr(event, "client", None) is None:
+                return  # set from here
+            handle = event.target
+            ref = self._form.ref if self._form is not None else None
+            immediate = f.arg.type == "bool"
+            self._later(
+                f.op.name,
+                0.0 if immediate else DEBOUNCE_S,
+                lambda: self._apply_op(f.op, ref, {f.arg.name: _value(f, handle.value)}),
+            )
+
+        return changed
+
+    def _action_handler(
+        self, op: Operation, ref: Ref | None, fields: tuple[Field, ...], handles: list[Any]
+    ) -> Callable[[Any], None]:
+        def clicked(_: Any) -> None:
+            values = {f.arg.name: _value(f, h.value) for f, h in zip(fields, handles, strict=True)}
+            self._guarded(lambda: self._apply_op(op, ref, values))
+
+        return clicked
+
+    def _later(self, key: str, delay: float, action: Callable[[], None]) -> None:
+        """Run ``action`` once typing in ``key`` pauses ``delay`` s (the newest text wins)."""
+        with self._lock:
+            old = self._timers.pop(key, None)
+            if old is not None:
+                old.cancel()
+            if delay <= 0:
+                self._guarded(action)
+                return
+            timer = threading.Timer(delay, lambda: self._guarded(action))
+            timer.daemon = True
+            self._timers[key] = timer
+            timer.start()
+
+    # ------------------------------------------------------------ action rows
+
+    def _rows_form(self, chart: Chart, ref: Ref | None) -> None:
+        gui = self.client.gui
+        self.rows_html = gui.add_html("")
+        self.row_number = gui.add_number(
+            "Row", 1, min=1, max=256, step=1, hint="the action row the fields below show"
+        )
+        self.row_event = gui.add_dropdown("Event", [NO_EVENT, *EVENTS])
+        self.row_qualifier = gui.add_dropdown("Qualifier", list(QUALIFIERS))
+        self.row_c = gui.add_checkbox("C (interlocked)", False)
+        self.row_operand = gui.add_text("Operand", "", hint='Q0.0, "Motor_on", S4, n := n + 1')
+        self.row_value = gui.add_text("Time / value", "", hint="T#2S for D and L, C#10 for CS")
+        buttons = {
+            "add": gui.add_button("Add action row", hint="the fields above as a new last row"),
+            "change": gui.add_button("Change action row", hint="row Row becomes the fields"),
+            "remove": gui.add_button("Remove action row", hint="remove row Row"),
+            "up": gui.add_button("Move action row up"),
+            "down": gui.add_button("Move action row down"),
+        }
+        self._form_handles += [
+            self.rows_html,
+            self.row_number,
+            self.row_event,
+            self.row_qualifier,
+            self.row_c,
+            self.row_operand,
+            self.row_value,
+            *buttons.values(),
+        ]
+        for what, button in buttons.items():
+            button.on_click(self._click(functools.partial(self._row_action, what)))
+        self.row_number.on_update(self._row_chosen)
+        self._rows_show(chart, ref, fill=True)
+
+    def _step_of(self, chart: Chart, ref: Ref | None) -> Step | None:
+        number = ref.number if isinstance(ref, StepRef) else None
+        found = find(chart, StepRef(number)) if number is not None else None
+        return found if isinstance(found, Step) else None
+
+    def _rows_show(self, chart: Chart, ref: Ref | None, *, fill: bool = False) -> None:
+        step = self._step_of(chart, ref)
+        rows = step.actions if step is not None else ()
+        self.rows_html.content = texts.rows_html([format_row(r) for r in rows])
+        sel = self.session.selection if self.session is not None else None
+        if isinstance(sel, RowRef):
+            fill = True
+            if int(self.row_number.value) != sel.index + 1:
+                self.row_number.value = sel.index + 1  # type: ignore[misc]
+        if fill:
+            self._row_fill(rows)
+
+    def _row_fill(self, rows: tuple[Any, ...]) -> None:
+        i = int(self.row_number.value) - 1
+        if not 0 <= i < len(rows):
+            return
+        f = row_fields(rows[i])
+        self.row_event.value = f.event or NO_EVENT  # type: ignore[misc]
+        if f.qualifier in QUALIFIERS:
+            self.row_qualifier.value = f.qualifier  # type: ignore[misc]
+        self.row_c.value = f.interlocked  # type: ignore[misc]
+        self.row_operand.value = f.operand  # type: ignore[misc]
+        self.row_value.value = f.value  # type: ignore[misc]
+
+    def _row_chosen(self, event: Any) -> None:
+        if getattr(event, "client", None) is None or self.session is None:
+            return
+        step = self._step_of(self.session.chart, self._form.ref if self._form else None)
+        if step is not None:
+            self._guarded(lambda: self._row_fill(step.actions))
+
+    def _row_action(self, what: str) -> None:
+        if self.session is None or self._form is None or not isinstance(self._form.ref, StepRef):
+            return
+        n = self._form.ref.number
+        index = int(self.row_number.value) - 1
+        event = str(self.row_event.value)
+        fields = RowFields(
+            qualifier=str(self.row_qualifier.value),
+            operand=str(self.row_operand.value),
+            event="" if event == NO_EVENT else event,
+            interlocked=bool(self.row_c.value),
+            value=str(self.row_value.value),
+        )
+        args: dict[str, dict[str, object]] = {
+            "add": {"op": "add_row", "step": n, "row": fields},
+            "change": {"op": "change_row", "step": n, "index": index, "row": fields},
+            "remove": {"op": "remove_row", "step": n, "index": index},
+            "up": {"op": "move_row", "step": n, "index": index, "to": index - 1},
+            "down": {"op": "move_row", "step": n, "index": index, "to": index + 1},
+        }
+        chosen = dict(args[what])
+        name = str(chosen.pop("op"))
+        try:
+            edit = make_edit(name, chosen)
+        except EditRefused as exc:
+            self.session = _refused(self.session, exc)
+            self._show(source_changed=False)
+            return
+        self.apply(edit)
+        sel = self.session.selection
+        if isinstance(sel, RowRef):  # the row just made, moved or changed
+            self.row_number.value = sel.index + 1  # type: ignore[misc]
+
+    # ------------------------------------------------------------ the source view
+
+    def _source_typed(self, event: Any) -> None:
+        if getattr(event, "client", None) is None:
+            return
+        text = str(self.source.value)
+
+        def apply_text() -> None:
+            if text == self._source_text or self.session is None:
+                return
+            self._source_text = text
+            self.change(lambda s: s.apply(SetSource(text)), from_source=True)
+
+        self._later("source", DEBOUNCE_S, apply_text)
+
+    # ------------------------------------------------------------ files
+
+    def _refresh_files(self) -> None:
+        listed = self.eng.project()
+        names = [f.name for f in listed.files] if listed is not None else []
+        self.open_choice.options = names or ["(none)"]
+
+    def save(self) -> None:
+        if self.session is None:
+            return
+        name = str(self.file.value).strip()
+        reply = self._command("save", {"file": name, "source": format_chart(self.session.chart)})
+        self._report("save", reply)
+        if reply.applied:
+            self._refresh_files()
+
+    def open(self) -> None:
+        name = str(self.open_choice.value)
+        if name == "(none)":
+            self._refresh_files()
+            return
+        reply = self._command("open", {"file": name})
+        if not reply.applied:
+            self._report("open", reply)
+            return
+        try:
+            chart = parse_source(reply.text, name if name.endswith(".s7g") else f"{name}.s7g")
+            session = Session.open(chart, self.symbols)
+        except EditRefused as exc:
+            self._notify("open refused", exc.reason, ok=False)
+            return
+        self.session = session
+        stem = name.rsplit(".", 1)[0]
+        self.file.value = f"{stem}.s7g"  # type: ignore[misc]
+        self.note = "opened " + name + ("".join(f"; {x}" for x in reply.lines[:3]))
+        self._show(source_changed=True)
+
+    def new(self) -> None:
+        running = self.session.chart if self.session is not None else None
+        name = running.name if running is not None else self.host.layout.fb
+        try:
+            chart = new_chart(
+                name, running.fb_number if running else None, running.db_number if running else None
+            )
+            self.session = Session.open(chart, self.symbols)
+        except EditRefused as exc:
+            self._notify("new refused", exc.reason, ok=False)
+            return
+        self.note = "a new chart: S1 and T1 (Insert: select T1, Step + Transition)"
+        self._show(source_changed=True)
+
+    # ------------------------------------------------------------ download
+
+    def download(self) -> None:
+        """Compile (here: the diagnostics), ask the CPU for the change summary, confirm."""
+        s = self.session
+        if s is None:
+            return
+        if s.has_errors:
+            errors = [texts.diagnostic_line(d) for d in self.located.diagnostics if d.is_error]
+            self.note = f"download refused: the chart has {len(errors)} error(s)"
+            self._notify("download refused", "; ".join(errors[:3]) or self.note, ok=False)
+            self._show(source_changed=False)
+            return
+        text = format_chart(s.chart)
+        reply = self._command("download", {"source": text, "preview": True})
+        if not reply.applied:
+            self._report("download", reply)
+            return
+        self._confirm("Download into the CPU", reply, "download", {"source": text})
+
+    def undo_download(self) -> None:
+        reply = self._command("undo_download", {"preview": True})
+        if not reply.applied:
+            self._report("undo download", reply)
+            return
+        self._confirm("Undo the last download", reply, "undo_download", {})
+
+    def _confirm(self, title: str, preview: CommandReply, op: str, args: dict[str, object]) -> None:
+        """The change summary and the choice; the real command on confirmation."""
+        gui = self.client.gui
+        if self._modal is not None:
+            with contextlib.suppress(Exception):
+                self._modal.close()
+        base = preview.version
+        removed = list(preview.removed)
+        with gui.add_modal(title) as modal:
+            self._modal = modal
+            gui.add_html(texts.lines_html(preview.lines, heading="What changes"))
+            choices: list[tuple[str, str | None]] = (
+                [("Keep the other steps", "keep"), ("Initialize the sequencer", "init")]
+                if removed
+                else [("Download to the CPU" if op == "download" else "Undo the download", None)]
+            )
+            for label, choice in choices:
+                button = gui.add_button(label, color="orange")
+                button.on_click(
+                    self._click(functools.partial(self._confirmed, op, args, base, choice))
+                )
+            gui.add_button("Cancel").on_click(lambda _: modal.close())
+
+    def _confirmed(
+        self, op: str, args: dict[str, object], base: int | None, removed: str | None
+    ) -> None:
+        if self._modal is not None:
+            with contextlib.suppress(Exception):
+                self._modal.close()
+            self._modal = None
+        full = dict(args)
+        if base is not None:
+            full["base"] = base
+        if removed is not None:
+            full["removed"] = removed
+        reply = self._command(op, full)
+        self._report(op.replace("_", " "), reply)
+        if reply.applied:
+            source = self.eng.source()
+            if source is not None:
+                self.base = source
+                if op == "undo_download":
+                    with contextlib.suppress(EditRefused, ChartSyntaxError):
+                        chart = parse_source(source.text, source.file or "chart.s7g")
+                        self.session = Session.open(chart, self.symbols)
+            self.note = f"the CPU runs version {reply.version}" + (
+                f": {reply.lines[0]}" if reply.lines else ""
+            )
+            self._show(source_changed=op == "undo_download")
+
+    # ------------------------------------------------------------ talking
+
+    def _command(self, op: str, args: dict[str, object]) -> CommandReply:
+        return self.panel.engineer_command(op, args)
+
+    def _report(self, what: str, reply: CommandReply) -> None:
+        verdict = "applied" if reply.applied else "refused"
+        body = reply.reason or (reply.lines[0] if reply.lines else "OK")
+        self._notify(f"{what} {verdict}", body, ok=reply.applied)
+        if not reply.applied:
+            self.note = f"{what} refused: {reply.reason}"
+            if self.session is not None:
+                diags = reply.lines[:MAX_DIAGNOSTIC_BUTTONS]
+                self.session = _refused(
+                    self.session,
+                    EditRefused(
+                        f"{what} refused: {reply.reason}" + ("".join(f"; {x}" for x in diags[:5]))
+                    ),
+                )
+            self._show(source_changed=False)
+
+    def _notify(self, title: str, body: str, *, ok: bool) -> None:
+        with contextlib.suppress(Exception):
+            self.client.add_notification(
+                title,
+                texts.clip(body, 400),
+                auto_close_seconds=6.0,
+                color="green" if ok else "red",
+            )
+
+
+# ---------------------------------------------------------------- helpers
+
+
+def _located(chart: Chart, symbols: SymbolTable | None) -> Located:
+    """``check``'s diagnostics of ``chart`` as the source view writes it (line, column)."""
+    text = format_chart(chart)
+    try:
+        read = parse_chart(text, chart.file or "chart.s7g")
+    except ChartSyntaxError as exc:  # pragma: no cover - the writer's text parses
+        return Located(tuple(exc.diagnostics), None)
+    try:
+        return Located(tuple(validate(read, symbols)), read)
+    except RecursionError:  # pragma: no cover - the session bounds the nesting
+        return Located((), read)
+
+
+def _refused(session: Session, exc: EditRefused) -> Session:
+    from dataclasses import replace
+
+    return replace(session, refusal=Refusal(exc.reason, exc.diagnostics))
+
+
+def _key_ref(ref: Ref | None) -> Ref | None:
+    """The element the selection dropdown lists for ``ref`` (a row: its step)."""
+    if isinstance(ref, RowRef):
+        return StepRef(ref.step)
+    if isinstance(ref, StepRef) and ref.part:
+        return StepRef(ref.number)
+    return ref
+
+
+def _title(chart: Chart, ref: Ref | None) -> str:
+    if ref is None:
+        return f"chart {chart.name}"
+    element = find(chart, ref)
+    name = getattr(element, "name", "")
+    if isinstance(ref, StepRef):
+        return f"step S{ref.number} {name}".rstrip()
+    if isinstance(ref, TransitionRef):
+        return f"transition T{ref.number} {name}".rstrip()
+    return f"sequencer {getattr(ref, 'number', '')} {name}".rstrip()
+
+
+def _shown(f: Field) -> object:
+    """A field's value as its input shows it (None as 0)."""
+    if f.value is None:
+        return 0 if f.arg.type.startswith("int") else ""
+    return f.value
+
+
+def _value(f: Field, raw: object) -> object:
+    """An input's value as the edit takes it (0 for ``int | None``: None)."""
+    if f.arg.type.startswith("int"):
+        n = int(raw)  # type: ignore[call-overload]
+        return None if n == 0 and f.arg.type == "int | None" else n
+    if f.arg.type == "bool":
+        return bool(raw)
+    return str(raw)

@@ -1,0 +1,51 @@
+"""What an editor page needs of the CPU besides commands: the running chart's ``.s7g``
+source, the files of the CPU's project directory, and a sender for the engineering
+commands (``download``, ``undo_download``, ``save``, ``open``), which may take longer than
+an operator's (the CPU compiles the chart off its scan thread and writes the file first).
+``BusClient`` provides all three (``web.view.edge``)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+import viser
+
+from s7graph.web.bus.protocol import (
+    ChartLayout,
+    ChartSource,
+    Command,
+    CommandReply,
+    ProjectFiles,
+    StepStateUpdate,
+)
+
+__all__ = ["EditorPage", "Engineering", "ViewHost"]
+
+
+@dataclass(frozen=True, slots=True)
+class Engineering:
+    source: Callable[[], ChartSource | None]
+    project: Callable[[], ProjectFiles | None]
+    send: Callable[[Command], CommandReply]
+
+
+class ViewHost(Protocol):
+    """The view an editor page belongs to: the chart the CPU runs and its newest state."""
+
+    layout: ChartLayout
+
+    def latest(self) -> StepStateUpdate | None: ...
+
+
+class EditorPage(Protocol):
+    """The page panel an editor belongs to (``web.view.panel.ClientPanel``)."""
+
+    client: viser.ClientHandle
+    control_folder: viser.GuiFolderHandle
+
+    @property
+    def wiring(self) -> Any: ...
+
+    def engineer_command(self, op: str, args: dict[str, object]) -> CommandReply: ...
