@@ -63,8 +63,11 @@ class GraphRuntime(FastPath):
         call: BlockCaller = _no_calls,
         counter: CellOp = _no_cells,
         timer: CellOp = _no_cells,
+        fast: bool = True,
     ) -> None:
         self.cc = cc
+        # False forces the general path on every call (the differential test compares both)
+        self.fast = fast
         self.prog = prog
         self.st = state if state is not None else new_state(cc)
         self._call = call
@@ -108,7 +111,7 @@ class GraphRuntime(FastPath):
         self._none = (False,) * cc.n_steps
         self._tcond, self._act = prog.tcond, prog.act
         self._forcing = cc.options.ack_forces_switch
-        self._lean = not self.codesys  # execute may take _quiet_call
+        self._lean = fast and not self.codesys  # execute may take _quiet_call
         plan = self.display.plan
         self._live_pins = bool(plan.step_pins or plan.transition_pins)
         self.outs_changed = True  # st.outputs rewritten in the last call (GraphFB copies)
@@ -299,7 +302,8 @@ class GraphRuntime(FastPath):
         held = frozenset(st.entered) if st.entered and not self.codesys else frozenset()
         sw = (rule if mode != "AUTO" else None, "T_PUSH" in rose, blocked, forced, held)
         fast = (
-            mode == "AUTO"
+            self.fast
+            and mode == "AUTO"
             and not blocked
             and not forced
             and not held
@@ -666,6 +670,8 @@ class GraphRuntime(FastPath):
         st.error, st.fault = error, fault
         st.err_flt = error or fault
         disp = self.display
+        if not self.fast:  # the reference: every output recomputed and copied, every call
+            disp.dirty = True
         self.outs_changed = disp.dirty or bool(st.log) or self._live_pins
         disp.update(st)
 

@@ -55,8 +55,9 @@ class GraphFB:
     """A ``CompiledChart`` bound to an engine FB number and an instance DB number."""
 
     def __init__(self, cc: CompiledChart, *, fb_number: int | None = None,
-                 db_number: int | None = None) -> None:  # fmt: skip
+                 db_number: int | None = None, fast: bool = True) -> None:  # fmt: skip
         self.cc = cc
+        self.fast = fast  # False: every call takes the general path (GraphRuntime ``fast``)
         self.fb_number = fb_number or cc.chart.fb_number or 1
         self.db_number = db_number or cc.chart.db_number or self.fb_number
         pins = pins_for(cc.parameters)
@@ -119,7 +120,7 @@ class GraphFB:
             self._prog = self.cc.bind(mem)
             self._mem = mem
             rt = GraphRuntime(self.cc, self._prog, st, call=self._call_block,
-                              counter=self._counter, timer=self._timer)  # fmt: skip
+                              counter=self._counter, timer=self._timer, fast=self.fast)  # fmt: skip
             self._runtime = rt
         elif rt.st is not st:
             rt.rebind(st)
