@@ -159,6 +159,13 @@ class CallContext:
             raise BlockError(f"{idb.name} is an instance of {idb.fb.label}, not {blk.label}")
         self._invoke(blk, idb)
 
+    def tag_fault(self, block: str, exc: Exception) -> Exception:
+        """What ``call`` lets escape for ``exc`` escaping the body of block ``block``: ``exc``
+        tagged with the innermost block (a tagged one unchanged), for a caller that runs a
+        block's body inline one level deeper itself (the GRAPH FBs' quiet calls from OB1,
+        ``sequencer.fb.startup_obs``) and raises this."""
+        return exc if isinstance(exc, _Fault) else _Fault(block, exc)
+
     def _invoke(self, blk: FB | FC, arg: Any) -> Any:
         """``blk.body(self, arg)`` one nesting level deeper; an exception escaping it is
         tagged with the innermost block it escaped from (``_Fault``)."""

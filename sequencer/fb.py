@@ -76,8 +76,12 @@ class GraphFB:
         self._mem: Any = None
         self._ctx: Any = None
         self._messages = cc.options.messages
+        self._name, self._step_numbers = cc.name, cc.step_numbers  # of the step events
         self._commands: list[tuple[str, int | None]] = []
         self._copied: Any = None  # the instance-DB values the outputs were last copied to
+        # the next call may run flat from OB1 (startup_obs): the last one ran on ``_ctx``
+        # with its runtime, without a message list, and no command is queued since
+        self._flat = False
 
     def _fresh_state(self) -> GraphState:
         return new_state(self.cc)
@@ -122,6 +126,7 @@ class GraphFB:
             rt = GraphRuntime(self.cc, self._prog, st, call=self._call_block,
                               counter=self._counter, timer=self._timer, fast=self.fast)  # fmt: skip
             self._runtime = rt
+            self._flat = False
         elif rt.st is not st:
             rt.rebind(st)
         return rt
@@ -131,6 +136,7 @@ class GraphFB:
         S_OFF, T_PUSH, SW_*) as a one-call rising edge, whatever the parameter set; S_ON and
         S_OFF on step number ``step`` (``GraphRuntime.command``)."""
         self._commands.append((pin, step))
+        self._flat = False
 
     # ------------------------------------------------------------ the FB body
 
@@ -146,22 +152,30 @@ class GraphFB:
                 rt.command(pin, step)
             self._commands.clear()
         st = rt.execute(values, ctx.now_ns)
-        if rt.outs_changed or self._copied is not values:  # else st.outputs as last copied
-            out = st.outputs
-            for name in self.out_pins:
-                values[name] = out[name]
-            self._copied = values
+        self._copy_outputs(values, st, rt.outs_written)
         if self._messages:
             self._sync_messages(ctx, idb, rt, st)
+        else:
+            self._flat = True
         if st.log:
-            step_numbers = self.cc.step_numbers
-            name, number, cycle, emit = self.cc.name, idb.number, ctx.cycle, ctx.emit
-            for i, bit in st.log:  # tuple.__new__: a StepEvent without its Python __new__
-                emit(
-                    _tuple_new(
-                        StepEvent, (name, number, step_numbers[i], _EVENT_OF_BIT[bit], cycle)
-                    )
-                )
+            self._emit_events(ctx, idb, st)
+
+    def _copy_outputs(self, values: dict[str, Any], st: GraphState, names: tuple[str, ...]) -> None:
+        """The output pins ``names`` this call wrote into the instance DB (all of them into
+        another instance DB than last time)."""
+        if self._copied is not values:
+            names = self.out_pins
+            self._copied = values
+        out = st.outputs
+        for name in names:
+            values[name] = out[name]
+
+    def _emit_events(self, ctx: Any, idb: InstanceDB, st: GraphState) -> None:
+        """This call's step events into the scan record, as ``StepEvent`` values."""
+        step_numbers = self._step_numbers
+        name, number, cycle, emit = self._name, idb.number, ctx.cycle, ctx.emit
+        for i, bit in st.log:  # tuple.__new__: a StepEvent without its Python __new__
+            emit(_tuple_new(StepEvent, (name, number, step_numbers[i], _EVENT_OF_BIT[bit], cycle)))
 
     def _sync_messages(self, ctx: Any, idb: InstanceDB, rt: GraphRuntime, st: GraphState) -> None:
         """MESSAGES := TRUE (SPEC §2.10): bring the CPU's message list in line with this
@@ -223,15 +237,21 @@ def timer_row(cells: Any, op: str, number: int, value: Any, now_ns: int) -> None
 
 
 def startup_obs(*fbs: GraphFB, extra_ob1: Any = None) -> tuple[OB, OB]:
-    """OB1 calling every GraphFB in order, and OB100 calling each with INIT_SQ = 1."""
+    """OB1 calling every GraphFB in order, and OB100 calling each with INIT_SQ = 1.
+
+    OB1 runs an FB's quiet call flat (``_run_flat``); any other call goes through
+    ``CallContext.run_fb``."""
 
     def ob1_body(ctx: Any) -> None:
         run = getattr(ctx, "run_fb", None)  # engine.cpu.CallContext: no outputs dict
-        for g in fbs:
-            if run is not None and g.idb is not None:
-                run(g.fb, g.idb)
-            else:
+        if run is None:
+            for g in fbs:
                 ctx.call(g.fb, g.idb)
+        elif ctx.depth < ctx.cpu.max_nesting:
+            _run_flat(ctx, fbs, run)
+        else:  # too deep: run_fb raises NestingOverflow
+            for g in fbs:
+                run(g.fb, g.idb)
         if extra_ob1 is not None:
             extra_ob1(ctx)
 
@@ -242,6 +262,46 @@ def startup_obs(*fbs: GraphFB, extra_ob1: Any = None) -> tuple[OB, OB]:
             g.idb.values["INIT_SQ"] = False
 
     return OB(1, "OB1", ob1_body), OB(100, "OB100", ob100_body)
+
+
+def _run_flat(ctx: Any, fbs: tuple[GraphFB, ...], run: Any) -> None:
+    """OB1's calls of ``fbs``, each quiet call (``GraphRuntime.quiet``) straight from this
+    loop: what ``CallContext.run_fb`` and ``GraphFB._body`` do around it, without their
+    call layers — one nesting level deeper (a block a row calls nests as from the FB),
+    what escapes tagged with the FB (``CallContext.tag_fault``), then the written output
+    pins into the instance DB and the step events into the scan record. A call that is
+    not quiet, or an FB that has not run on this context, memory and state, or has a
+    command queued or a message list to bring in line (``_flat``), goes through
+    ``run_fb``."""
+    depth = ctx.depth
+    ctx.depth = depth + 1
+    try:
+        for g in fbs:
+            rt = g._runtime
+            if g._flat and rt is not None and g._ctx is ctx:
+                idb = g.idb
+                assert idb is not None
+                values = idb.values
+                if rt.st is values[STATE_VAR]:
+                    try:
+                        st = rt.quiet(values, ctx.now_ns)
+                        if st is not None:
+                            names = rt.outs_written
+                            if names or g._copied is not values:
+                                g._copy_outputs(values, st, names)
+                            if st.log:
+                                g._emit_events(ctx, idb, st)
+                            continue
+                    except Exception as exc:
+                        fault = ctx.tag_fault(g.fb.label, exc)
+                        if fault is exc:
+                            raise
+                        raise fault from exc
+            ctx.depth = depth
+            run(g.fb, g.idb)
+            ctx.depth = depth + 1
+    finally:
+        ctx.depth = depth
 
 
 def install_all(cpu: Any, fbs: Iterable[GraphFB]) -> None:
