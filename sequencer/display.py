@@ -34,7 +34,6 @@ from typing import Any, Final
 from s7graph.sequencer.compiled import CompiledChart
 from s7graph.sequencer.params import Direction, outputs_for
 from s7graph.sequencer.state import GraphState
-from s7graph.steps.qualifiers import EV_S0, EV_S1
 
 DISPLAY_SETS: Final = ("SACT", "SEF", "SALL")
 
@@ -224,9 +223,8 @@ _GROUP_PINS: Final[dict[str, Callable[[GraphState], bool]]] = {
     "TOP_ON": lambda st: st.mode == "TOP",
     "MAN_ON": lambda st: st.mode == "MAN",
 }
-# Group pins a step switching can change (the others follow options, the mode, the set).
+# Group pins step events can change (the others follow options, the mode, the set).
 _SWITCH_GROUPS: Final = frozenset({"ERROR", "FAULT", "ERR_FLT", "SQ_ISOFF"})
-_SWITCH_EVENTS: Final = EV_S0 | EV_S1  # the event bits of a step switching: the lowest two
 # Pins of the shown step / transition that change from call to call without a step switch,
 # fault change or display edge (times, criteria bits, events).
 _STEP_PINS: Final = ("S_TIME", "S_TIMEOK", "S_CRITLOC", "S_CRITLOCERR", "S_CRITSUP", "S_STATE")
@@ -363,8 +361,8 @@ class Display:
     The sets S_NO/T_NO page through are recomputed — from ``state.active`` and the leaving
     transitions, never all steps — only when the cycle reports a change (``dirty``: an
     input pin changed) or the call raised a step event (a step switched, a fault or
-    interlock changed), and not even then when only steps switched while S_NO pages
-    through the active steps (``_switched``); otherwise only the pins of the shown
+    interlock changed), and not even then while S_NO pages through the active steps
+    (``_switched``); otherwise only the pins of the shown
     step/transition that move by themselves (times, criteria, S_STATE) are refreshed, and
     with the STANDARD set nothing is. Results equal ``page`` + ``compute_outputs`` +
     ``settle`` of the pure functions (tests/sequencer/test_display.py; the differential
@@ -407,22 +405,20 @@ class Display:
             _transition_pins(state, j, plan.transition_pins, state.outputs)
         return plan.live_pins
 
-
     def _switched(self, state: GraphState) -> bool:
-        """``update`` after a call in which no input pin changed (not ``dirty``) and the only
-        events are steps switching (S0, S1), while S_NO pages through the active steps
-        (DISP_SACT) and T_NO is not shown (``_by_switch``, set by the last full update:
-        only a dirty call changes the display set): S_NO moves only if the shown step left
-        — to the first active step numbered at or above it, else the lowest, as ``_snap``,
-        found in one pass over the active steps instead of sorting them — then S_MORE,
-        S_ACTIVE, the shown step's pins and the group pins a switch can change
-        (``_SWITCH_GROUPS``); the others follow inputs and commands only, which make the
-        display ``dirty``. False, and nothing done, when it does not apply."""
+        """``update`` after a call in which no input pin changed (not ``dirty``) but step
+        events were raised, while S_NO pages through the active steps (DISP_SACT) and
+        T_NO is not shown (``_by_switch``, set by each full update: only a dirty call
+        changes the display set). Events change the active steps, the shown step's pins
+        and the group pins of ``_SWITCH_GROUPS``; the other pins follow inputs and
+        commands only, which make the display ``dirty``. So: S_NO moves only if the shown
+        step is no longer active (and not pinned by S_SEL) — to the first active step
+        numbered at or above it, else the lowest, as ``_snap``, found in one pass over the
+        active steps instead of sorting them — then S_MORE, S_ACTIVE, the shown step's
+        pins and those group pins are written. False, and nothing done, when it does not
+        apply."""
         if not self._by_switch:
             return False
-        for _, bit in state.log:
-            if bit > _SWITCH_EVENTS:
-                return False
         index = self.chart.step_index
         x = state.x
         active = state.active

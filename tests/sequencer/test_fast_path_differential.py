@@ -18,9 +18,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as hs
 
+from s7graph.engine.blocks import FC
 from s7graph.engine.clock import VirtualClock
 from s7graph.engine.cpu import Cpu
 from s7graph.sequencer.compile import compile_chart
@@ -178,7 +179,8 @@ def programs(draw: Any) -> Program:
             stim["I0"] = draw(hs.integers(0, 255))
         if pins and draw(hs.integers(0, 6)) == 0:
             pin = draw(hs.sampled_from(pins))
-            stim["pin"] = (pin, draw(hs.integers(0, 40)) if pin == "S_SEL" else draw(hs.booleans()))
+            sel = draw(hs.sampled_from([0, 7, 11, 12, 13, 21, 22, 31]))  # steps are 11.., 21..
+            stim["pin"] = (pin, sel if pin == "S_SEL" else draw(hs.booleans()))
         if draw(hs.integers(0, 15)) == 0:
             stim["command"] = draw(hs.sampled_from(["ACK_EF", "INIT_SQ", "SW_MAN", "SW_AUTO",
                                                     "S_ON", "T_PUSH", "OFF_SQ"]))  # fmt: skip
@@ -196,9 +198,10 @@ def _params(text: str) -> str:
 class Plant:
     """One CPU calling the program's FBs from OB1, on the fast or the general path."""
 
-    def __init__(self, program: Program, *, fast: bool) -> None:
+    def __init__(self, program: Program, *, fast: bool, blocks: tuple[Any, ...] = ()) -> None:
         self.clock = VirtualClock()
         self.cpu = Cpu(self.clock)
+        self.cpu.load(*blocks)
         self.fbs = [
             GraphFB(compile_chart(parse_chart(t, f"<R{k + 1}>")), fast=fast)
             for k, t in enumerate(program.charts)
@@ -235,6 +238,40 @@ def _call_lists(g: GraphFB) -> tuple[list[int], ...]:
     return st.fired, st.entered, st.left
 
 
+def _fb(body: str) -> str:
+    return (f'FUNCTION_BLOCK "R1" FB 1 DB 1\n  PARAMETERS := STANDARD;\n'
+            f"VAR v : INT := 0; w : INT := 0; END_VAR\n{body}END_FUNCTION_BLOCK\n")  # fmt: skip
+
+
+# corners the random charts reach rarely
+PINNED = _fb("""SEQUENCE 1 "s1"
+  INITIAL_STEP S11 "a": END_STEP
+  STEP S12 "b": END_STEP
+  STEP S13 "c": END_STEP
+  TRANSITION T1 FROM S11 TO S12 := I0.0;
+  TRANSITION T2 FROM S12 TO S11 := NOT I0.0;
+  TRANSITION T3 FROM S13 TO S11 := FALSE;
+END_SEQUENCE
+""")  # S_SEL shows an inactive step: S_MORE while the one active step switches
+JUMPS = _fb("""SEQUENCE 1 "s1"
+  INITIAL_STEP S11 "a": N Q0.0; END_STEP
+  STEP S12 "b": N Q0.1; S1 N v := 5; END_STEP
+  TRANSITION T1 FROM S11 TO S22 := I0.0 AND NOT I0.1;
+  TRANSITION T2 FROM S12 TO S11 := FALSE;
+END_SEQUENCE
+SEQUENCE 2 "s2"
+  INITIAL_STEP S21 "c": END_STEP
+  STEP S22 "d": S1 ON S23; N Q0.2; END_STEP
+  STEP S23 "e": N Q0.3; S1 N w := w + 1; END_STEP
+  TRANSITION T3 FROM S21 TO STOP := TRUE;
+  TRANSITION T4 FROM S22 TO S12 := I0.1;
+  TRANSITION T5 FROM S23 TO S21 := FALSE;
+END_SEQUENCE
+""")  # into a later sequencer (its S1 ON row appends a step), then into an earlier one
+
+
+@example(Program((PINNED,), ({}, {"pin": ("S_SEL", 13)}, {}, {"I0": 1}, {}, {"I0": 0}, {})))
+@example(Program((JUMPS,), ({}, {}, {"I0": 1}, {}, {"I0": 3}, {}, {})))
 @settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(programs())
 def test_fast_and_general_path_give_the_same_trace(program: Program) -> None:
@@ -242,3 +279,28 @@ def test_fast_and_general_path_give_the_same_trace(program: Program) -> None:
     for n, stim in enumerate(program.scans):
         a, b = fast.scan(stim), general.scan(stim)
         assert a == b, f"scan {n} ({stim}) differs:\n{program.charts[0]}"
+
+
+def test_a_block_called_from_a_quiet_call_nests_and_faults_as_from_the_general_path() -> None:
+    """The flat OB1 path runs a quiet call one nesting level below OB1, like the call layers
+    it leaves out: a block a row calls sees the same depth, and an exception escaping the
+    FB's body (here: a row calls a block that is not loaded) is reported with the FB, as on
+    the general path."""
+    text = _fb("""SEQUENCE 1 "s1"
+  INITIAL_STEP S11 "a": CALL FC 9; END_STEP
+  STEP S12 "b": CALL FC 8; END_STEP
+  TRANSITION T1 FROM S11 TO S12 := I0.0;
+  TRANSITION T2 FROM S12 TO S11 := FALSE;
+END_SEQUENCE
+""")
+    seen = {}
+    for fast in (True, False):
+        depths: list[int] = []
+        probe = FC(9, "Probe", (), lambda ctx, _, depths=depths: depths.append(ctx.depth))
+        plant = Plant(Program((text,), ()), fast=fast, blocks=(probe,))
+        trace = [plant.scan({}), plant.scan({}), plant.scan({"I0": 1})]
+        seen[fast] = (depths, trace)
+    depths, trace = seen[True]
+    assert seen[True] == seen[False]
+    assert depths == [2, 2, 2] and trace[-1]["mode"] == "STOP"
+    assert "FB1: BlockError: block FC8 is not loaded" in trace[-1]["diagnostics"][0]
