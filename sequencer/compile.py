@@ -17,6 +17,7 @@ from typing import Any
 
 from s7graph.engine.address import Area, Width
 from s7graph.engine.errors import S7Error, SourceLocation
+from s7graph.sequencer.collector import collector_paused
 from s7graph.sequencer.compiled import CompiledChart
 from s7graph.sequencer.model import BlockCall, Chart, Coil, Operand, Transition
 from s7graph.sequencer.names import resolve_operand
@@ -134,7 +135,13 @@ def _priority(seq_transitions: tuple[Transition, ...]) -> dict[int, int]:
 
 
 def compile_chart(chart: Chart, symbols: Any = None) -> CompiledChart:
-    """Validate and compile ``chart``; raise ``ChartError`` listing every error."""
+    """Validate and compile ``chart``; raise ``ChartError`` listing every error. The
+    garbage collector is paused meanwhile (``sequencer.collector``)."""
+    with collector_paused():
+        return _compile_chart(chart, symbols)
+
+
+def _compile_chart(chart: Chart, symbols: Any) -> CompiledChart:
     errors, warnings = _validate(chart, symbols)
     if errors:
         raise ChartError(errors)

@@ -39,6 +39,7 @@ from lark.parse_tree_builder import ParseTreeBuilder
 from lark.parsers.lalr_parser import _Parser
 
 from s7graph.engine.errors import S7Error, SourceLocation
+from s7graph.sequencer.collector import collector_paused
 from s7graph.sequencer.diagnostics import Diagnostic, error, format_diagnostic
 from s7graph.sequencer.model import Chart
 from s7graph.sequencer.parse_build import _NEEDS_FIRST, _NEEDS_LAST, _Build
@@ -278,7 +279,13 @@ def _tables() -> _Tables:
 
 def parse_chart(text: str, file: str = "<input>") -> Chart:
     """Parse one `.s7g` chart (SPEC §3). Raises :class:`ChartSyntaxError` with all syntax
-    diagnostics (file:line:col, what was found and what was expected)."""
+    diagnostics (file:line:col, what was found and what was expected). The garbage
+    collector is paused meanwhile (``sequencer.collector``)."""
+    with collector_paused():
+        return _parse_chart(text, file)
+
+
+def _parse_chart(text: str, file: str) -> Chart:
     diags: list[Diagnostic] = []
     comments: dict[int, tuple[int, str]] = {}
     seen: set[tuple[int, int]] = set()
