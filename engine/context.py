@@ -8,6 +8,7 @@ operand, behaviours 33, 34), runs the body one nesting level deeper (B-stack ove
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from functools import lru_cache
 from typing import Any, Protocol
 
@@ -116,6 +117,10 @@ class CallContext:
     def emit(self, event: object) -> None:
         """Add ``event`` to this scan's ``ScanRecord.events``."""
         self.cpu.scan_events.append(event)
+
+    def emit_all(self, events: Iterable[object]) -> None:
+        """Add ``events`` to this scan's ``ScanRecord.events``, in order (``emit`` each)."""
+        self.cpu.scan_events.extend(events)
 
     def alarm(self, alarm: object) -> None:
         """Add ``alarm`` to this scan's ``ScanRecord.alarms``."""

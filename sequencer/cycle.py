@@ -252,6 +252,15 @@ class GraphRuntime(FastPath):
         quiet = self.quiet(inputs, now_ns)
         if quiet is not None:
             return quiet
+        self._quiet = False  # until this call is done
+        try:
+            return self._general(inputs, now_ns)
+        except BaseException:  # a call cut short: the next one writes every output pin
+            self.display.cut_short()
+            raise
+
+    def _general(self, inputs: dict[str, Any], now_ns: int) -> GraphState:
+        """``execute`` when the call is not quiet: steps 1-6 of SPEC §2.2, in full."""
         st = self.st
         try:
             cur = self._getter(inputs)

@@ -369,13 +369,14 @@ class Display:
     test compares with a runtime that recomputes everything on every call). T_NO is
     tracked only when the set shows it."""
 
-    __slots__ = ("_by_switch", "chart", "dirty", "plan")
+    __slots__ = ("_by_switch", "_full", "chart", "dirty", "plan")
 
     def __init__(self, chart: CompiledChart) -> None:
         self.chart = chart
         self.plan = _plan(chart.parameters)
         self.dirty = True
         self._by_switch = False  # ``_switched`` applies (set by each full update)
+        self._full = False  # the next update writes every pin (``cut_short``)
 
     def page(self, state: GraphState, inputs: Mapping[str, Any], rose: set[str]) -> None:
         """``page`` when a display input acts (an edge, a new S_SEL) or the state changed."""
@@ -390,10 +391,10 @@ class Display:
         return the names of the pins written (the others keep their values)."""
         plan = self.plan
         chart = self.chart
-        if self.dirty or state.log:
-            if not self.dirty and self._switched(state):
+        if self.dirty or state.log or self._full:
+            if not (self.dirty or self._full) and self._switched(state):
                 return plan.switch_pins
-            self.dirty = False
+            self.dirty = self._full = False
             state.s_no, state.t_no = _outputs(chart, state, plan, state.active, state.outputs)
             self._by_switch = not plan.transition and display_set(state) == "SACT"
             return plan.wanted
@@ -404,6 +405,11 @@ class Display:
             j = chart.transition_index.get(state.t_no)
             _transition_pins(state, j, plan.transition_pins, state.outputs)
         return plan.live_pins
+
+    def cut_short(self) -> None:
+        """The call was cut short (an exception escaped it) before it wrote its pins: the
+        next ``update`` writes every pin, whatever that call changes."""
+        self._full = True
 
     def _switched(self, state: GraphState) -> bool:
         """``update`` after a call in which no input pin changed (not ``dirty``) but step

@@ -83,7 +83,9 @@ class FastPath:
         module docstring); clearing the per-call lists when the last call raised no event
         (they are empty); the group flags when this call raised none (unchanged); the
         disturbance test of U for every active step when no active step is disturbed
-        (``st.error``/``st.fault``). Step 4 is ``_fast_sequencers``."""
+        (``st.error``/``st.fault``). Step 4 is ``_fast_sequencers``. A call an exception
+        cuts short (a row calling a block that faults) makes the next one general, all its
+        output pins written (``Display.cut_short``)."""
         if not self._quiet:
             return None
         try:
@@ -93,58 +95,63 @@ class FastPath:
         if cur != self._last_in:
             return None
         st = self.st
-        if st.rose:
-            st.rose.clear()
-        if st.log:
-            self._new_call(st)
-        else:
-            st.ov = False
-        # 1. step times: T, and U unless the step is disturbed; HALT_TM freezes both
-        last = st.last_ns
-        st.last_ns = now_ns
-        if now_ns != last and not st.tm_halted:
-            dt = now_ns - last
-            t_ns, u_ns = st.t_ns, st.u_ns
-            if st.error or st.fault:
-                il_err, sv_err = st.il_err, st.sv_err
-                for i in st.active:
-                    t_ns[i] += dt
-                    if not (il_err[i] or sv_err[i]):
-                        u_ns[i] += dt
+        try:
+            if st.rose:
+                st.rose.clear()
+            if st.log:
+                self._new_call(st)
             else:
-                for i in st.active:
-                    t_ns[i] += dt
-                    u_ns[i] += dt
-        st.calls += 1
-        # 3.-5. permanent before, the sequencers, permanent after
-        if self._permanent:
-            self.prog.before(st, self)
-        active = st.active
-        if self.multi or len(active) != 1 or self._final or not self._plain[active[0]]:
-            self._fast_sequencers(st)
-        else:  # _fast_sequencers of the only sequencer, with one plain active step, inline
-            i = active[0]
-            j = self.prog.step[i](st, self, st.ev[i], True, st.zeroed)
-            if j >= 0 or len(active) > 1:
-                self._fused_done(-1, active, i, j)
-        if self._permanent:
-            self.prog.after(st, self)
-        # 6. group flags (only events change them) and the display
-        if st.log:
-            il_err, sv_err = st.il_err, st.sv_err
-            error = fault = False
-            for i in active:
-                if il_err[i]:
-                    error = True
-                if sv_err[i]:
-                    fault = True
-            st.error, st.fault = error, fault
-            st.err_flt = error or fault
-            self.outs_written = self.display.update(st)
-        elif self._live_pins:
-            self.outs_written = self.display.update(st)
-        elif self.outs_written:  # Display.update would write nothing: no event, no live pin
-            self.outs_written = ()
+                st.ov = False
+            # 1. step times: T, and U unless the step is disturbed; HALT_TM freezes both
+            last = st.last_ns
+            st.last_ns = now_ns
+            if now_ns != last and not st.tm_halted:
+                dt = now_ns - last
+                t_ns, u_ns = st.t_ns, st.u_ns
+                if st.error or st.fault:
+                    il_err, sv_err = st.il_err, st.sv_err
+                    for i in st.active:
+                        t_ns[i] += dt
+                        if not (il_err[i] or sv_err[i]):
+                            u_ns[i] += dt
+                else:
+                    for i in st.active:
+                        t_ns[i] += dt
+                        u_ns[i] += dt
+            st.calls += 1
+            # 3.-5. permanent before, the sequencers, permanent after
+            if self._permanent:
+                self.prog.before(st, self)
+            active = st.active
+            if self.multi or len(active) != 1 or self._final or not self._plain[active[0]]:
+                self._fast_sequencers(st)
+            else:  # _fast_sequencers of the only sequencer, with one plain active step, inline
+                i = active[0]
+                j = self.prog.step[i](st, self, st.ev[i], True, st.zeroed)
+                if j >= 0 or len(active) > 1:
+                    self._fused_done(-1, active, i, j)
+            if self._permanent:
+                self.prog.after(st, self)
+            # 6. group flags (only events change them) and the display
+            if st.log:
+                il_err, sv_err = st.il_err, st.sv_err
+                error = fault = False
+                for i in active:
+                    if il_err[i]:
+                        error = True
+                    if sv_err[i]:
+                        fault = True
+                st.error, st.fault = error, fault
+                st.err_flt = error or fault
+                self.outs_written = self.display.update(st)
+            elif self._live_pins:
+                self.outs_written = self.display.update(st)
+            elif self.outs_written:  # Display.update would write nothing
+                self.outs_written = ()
+        except BaseException:  # a call cut short: the next one takes the general path
+            self._quiet = False
+            self.display.cut_short()
+            raise
         return st
 
     def _fast_sequencers(self, st: GraphState) -> None:

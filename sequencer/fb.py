@@ -172,10 +172,11 @@ class GraphFB:
 
     def _emit_events(self, ctx: Any, idb: InstanceDB, st: GraphState) -> None:
         """This call's step events into the scan record, as ``StepEvent`` values."""
-        step_numbers = self._step_numbers
-        name, number, cycle, emit = self._name, idb.number, ctx.cycle, ctx.emit
-        for i, bit in st.log:  # tuple.__new__: a StepEvent without its Python __new__
-            emit(_tuple_new(StepEvent, (name, number, step_numbers[i], _EVENT_OF_BIT[bit], cycle)))
+        numbers, name, number, cycle = self._step_numbers, self._name, idb.number, ctx.cycle
+        ctx.emit_all(  # tuple.__new__: a StepEvent without its Python __new__
+            [_tuple_new(StepEvent, (name, number, numbers[i], _EVENT_OF_BIT[b], cycle))
+             for i, b in st.log]
+        )  # fmt: skip
 
     def _sync_messages(self, ctx: Any, idb: InstanceDB, rt: GraphRuntime, st: GraphState) -> None:
         """MESSAGES := TRUE (SPEC §2.10): bring the CPU's message list in line with this

@@ -21,7 +21,7 @@ from typing import Any
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as hs
 
-from s7graph.engine.blocks import FC
+from s7graph.engine.blocks import FC, OB
 from s7graph.engine.clock import VirtualClock
 from s7graph.engine.cpu import Cpu
 from s7graph.sequencer.compile import compile_chart
@@ -285,7 +285,9 @@ def test_a_block_called_from_a_quiet_call_nests_and_faults_as_from_the_general_p
     """The flat OB1 path runs a quiet call one nesting level below OB1, like the call layers
     it leaves out: a block a row calls sees the same depth, and an exception escaping the
     FB's body (here: a row calls a block that is not loaded) is reported with the FB, as on
-    the general path."""
+    the general path. With OB121 loaded the CPU goes on, and so do both paths alike: a call
+    an exception cut short (FC 9 raises while I0.2 is set) is not trusted by the next one
+    (the S_SEL it latched is shown; the interlock it lost in S21 holds U there)."""
     text = _fb("""SEQUENCE 1 "s1"
   INITIAL_STEP S11 "a": CALL FC 9; END_STEP
   STEP S12 "b": CALL FC 8; END_STEP
@@ -293,14 +295,35 @@ def test_a_block_called_from_a_quiet_call_nests_and_faults_as_from_the_general_p
   TRANSITION T2 FROM S12 TO S11 := FALSE;
 END_SEQUENCE
 """)
-    seen = {}
-    for fast in (True, False):
-        depths: list[int] = []
-        probe = FC(9, "Probe", (), lambda ctx, _, depths=depths: depths.append(ctx.depth))
-        plant = Plant(Program((text,), ()), fast=fast, blocks=(probe,))
-        trace = [plant.scan({}), plant.scan({}), plant.scan({"I0": 1})]
-        seen[fast] = (depths, trace)
-    depths, trace = seen[True]
-    assert seen[True] == seen[False]
-    assert depths == [2, 2, 2] and trace[-1]["mode"] == "STOP"
-    assert "FB1: BlockError: block FC8 is not loaded" in trace[-1]["diagnostics"][0]
+    guarded = (
+        'SEQUENCE 1 "s0"\n  INITIAL_STEP S21 "c": INTERLOCK := I0.1; END_STEP\n'
+        '  TRANSITION T3 FROM S21 TO S21 := FALSE;\nEND_SEQUENCE\nSEQUENCE 2 "s1"'
+    )
+    before = text.replace('SEQUENCE 1 "s1"', guarded)
+
+    def probe(ctx: Any, _: Any, depths: list[int]) -> None:
+        depths.append(ctx.depth)
+        if ctx.cpu.mem.inputs[0] & 4:
+            raise ValueError("probe")
+
+    cut_short = [{}, {}, {"pin": ("S_SEL", 12), "I0": 4}, {"I0": 0}, {}]
+    into_s12 = [{}, {}, {"I0": 1}, {}, {"I0": 0}, {}]
+    interlock_lost = [{"I0": 2}, {}, {"I0": 4}, {"I0": 0}, {}]  # quiet calls in AUTO
+    in_man = [{"pin": ("SW_MAN", True)}, {"I0": 2}, {"I0": 4}, {"I0": 0}, {}]  # general ones
+    for chart, scans in ((text, cut_short), (text, into_s12), (before, interlock_lost),
+                         (before, in_man)):  # fmt: skip
+        for ob121 in ((), (OB(121, "OB121", lambda ctx: None),)):
+            seen = {}
+            for fast in (True, False):
+                depths: list[int] = []
+                fc9 = FC(9, "Probe", (), lambda ctx, p, d=depths: probe(ctx, p, d))
+                plant = Plant(Program((chart,), ()), fast=fast, blocks=(fc9, *ob121))
+                seen[fast] = (depths, [plant.scan(stim) for stim in scans])
+            assert seen[True] == seen[False]
+            depths, trace = seen[True]
+            cut = next(n for n, t in enumerate(trace) if t["diagnostics"])
+            assert depths[:3] == [2, 2, 2] and trace[cut]["mode"] == ("RUN" if ob121 else "STOP")
+            fault = "FB1: BlockError: block FC8" if scans is into_s12 else "FC9: ValueError: probe"
+            assert fault in trace[cut]["diagnostics"][0]
+            if ob121 and scans is cut_short:
+                assert trace[-1]["fbs"][0][0]["S_NO"] == 12
