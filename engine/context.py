@@ -164,12 +164,15 @@ class CallContext:
             raise BlockError(f"{idb.name} is an instance of {idb.fb.label}, not {blk.label}")
         self._invoke(blk, idb)
 
-    def tag_fault(self, block: str, exc: Exception) -> Exception:
-        """What ``call`` lets escape for ``exc`` escaping the body of block ``block``: ``exc``
-        tagged with the innermost block (a tagged one unchanged), for a caller that runs a
-        block's body inline one level deeper itself (the GRAPH FBs' quiet calls from OB1,
-        ``sequencer.fb.startup_obs``) and raises this."""
-        return exc if isinstance(exc, _Fault) else _Fault(block, exc)
+    def tag_fault(self, block: str, exc: BaseException) -> BaseException:
+        """What ``call`` lets escape when ``exc`` escapes the body of block ``block`` (the
+        rule of ``_invoke``): an exception tagged with the innermost block, one tagged
+        already or one ``_invoke`` lets pass unchanged — for a caller that runs a block's
+        body inline one level deeper itself (the GRAPH FBs' quiet calls from OB1,
+        ``sequencer.fb.startup_obs``) and raises what this returns."""
+        if isinstance(exc, _Fault) or not isinstance(exc, Exception):
+            return exc
+        return _Fault(block, exc)
 
     def _invoke(self, blk: FB | FC, arg: Any) -> Any:
         """``blk.body(self, arg)`` one nesting level deeper; an exception escaping it is

@@ -105,7 +105,7 @@ class FastPath:
             # 1. step times: T, and U unless the step is disturbed; HALT_TM freezes both
             last = st.last_ns
             st.last_ns = now_ns
-            if now_ns != last and not st.tm_halted:
+            if now_ns != last and last >= 0 and not st.tm_halted:  # as _advance
                 dt = now_ns - last
                 t_ns, u_ns = st.t_ns, st.u_ns
                 if st.error or st.fault:

@@ -293,7 +293,7 @@ def _run_flat(ctx: Any, fbs: tuple[GraphFB, ...], run: Any) -> None:
                             if st.log:
                                 g._emit_events(ctx, idb, st)
                             continue
-                    except Exception as exc:
+                    except BaseException as exc:
                         fault = ctx.tag_fault(g.fb.label, exc)
                         if fault is exc:
                             raise
