@@ -1,12 +1,13 @@
 """Compile and start-up benchmark (run as ``python bench/compile.py``; see bench/README.md).
 
-Per-step cost of ``parse_chart`` (text → model) and ``compile_chart`` (model →
+Per-step cost (CPU time) of ``parse_chart`` (text → model) and ``compile_chart`` (model →
 ``CompiledChart``: validator, code generation, Python ``compile()``) for charts of 2,500
 and 25,000 steps — the target: the large chart costs per step what the small one does —
-and the start-up time of ``s7graph check`` on a chart. Each measurement runs in a fresh
-Python process (a process that has built one chart keeps its objects, which the garbage
-collector then walks); the sizes are measured in turn, round by round, so that load from
-other processes on the machine hits them alike; min/median/max over ``--repeat`` rounds.
+and the start-up (wall) time of ``s7graph check`` on a chart. Each measurement runs in a
+fresh Python process (a process that has built one chart keeps its objects, which the
+garbage collector would then walk); the sizes are measured in turn, round by round, so
+that load from other processes on the machine hits them alike; min/median/max over
+``--repeat`` rounds.
 
 The charts are those of ``bench/scan.py``: sequencers of 25-step loops, every step with an
 assignment, an S1 assignment, a D and an L row, every transition a comparison (so 2,500
@@ -32,35 +33,34 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
+from scan import STEPS, chart_source, spread  # noqa: E402 (bench/ on the path first)
+
 HEAVY = ("viser", "zenoh", "numpy")  # what ``s7graph check`` must not import
 
 
 def chart_text(n_steps: int) -> str:
     """One FB of ``n_steps // 25`` sequencers of ``bench/scan.py``'s 25-step loops."""
-    from scan import STEPS, chart_source
-
     return chart_source(1, 0, n_steps // STEPS)
 
 
 def check_text() -> str:
     """The chart ``s7graph check`` reads: one 250-step loop (S7-GRAPH's step limit)."""
-    from scan import chart_source
-
     return chart_source(1, 0, 1, 250)
 
 
 def child(n_steps: int) -> None:
     """Parse and compile one chart of ``n_steps`` steps in this (fresh) process; print the
-    seconds each took as JSON."""
+    CPU seconds each took as JSON (CPU time: what other processes on a shared machine do
+    not add to)."""
     from s7graph.sequencer.compile import compile_chart
     from s7graph.sequencer.parse import parse_chart
 
     text = chart_text(n_steps)
-    t0 = time.perf_counter()
+    t0 = time.process_time()
     chart = parse_chart(text, f"<bench {n_steps}>")
-    t1 = time.perf_counter()
+    t1 = time.process_time()
     cc = compile_chart(chart)
-    t2 = time.perf_counter()
+    t2 = time.process_time()
     assert cc.n_steps == n_steps
     print(json.dumps({"parse": t1 - t0, "compile": t2 - t1}))
 
@@ -97,11 +97,6 @@ def check_imports(chart: Path) -> list[str]:
     return last[1:]
 
 
-def _spread(values: list[float], fmt: str = "{:.1f}") -> str:
-    lo, mid, hi = min(values), statistics.median(values), max(values)
-    return "/".join(fmt.format(v) for v in (lo, mid, hi))
-
-
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--repeat", type=int, default=5, help="rounds; min/median/max (5)")
@@ -136,7 +131,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"{'chart':>14} {'parse us/step':>20} {'compile us/step':>20}")
     for n in sizes:
         p, c = per_step[n]["parse"], per_step[n]["compile"]
-        print(f"{n:>8} steps {_spread(p):>20} {_spread(c):>20}")
+        print(f"{n:>8} steps {spread(p, '{:.1f}'):>20} {spread(c, '{:.1f}'):>20}")
     if len(sizes) > 1:
         small, large = sizes[0], sizes[-1]
         for part in ("parse", "compile"):
@@ -146,7 +141,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{part}: {large} steps cost {ratio:.2f}x per step what {small} steps do")
     print("target: 1.0x (the per-step cost does not grow with the chart)")
     for name, ms in start.items():
-        print(f"start-up {name:16} {_spread(ms, '{:.0f}'):>16} ms")
+        print(f"start-up {name:16} {spread(ms, '{:.0f}'):>16} ms")
     print(f"s7graph check imports {', '.join(heavy) if heavy else 'none of'} {'/'.join(HEAVY)}")
     return 1 if heavy else 0
 

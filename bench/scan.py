@@ -464,7 +464,7 @@ def measure(workloads: list[Workload], scans: int, warmup: int) -> dict[str, lis
     return samples
 
 
-def _spread(values: list[float], fmt: str = "{:.3f}") -> str:
+def spread(values: list[float], fmt: str = "{:.3f}") -> str:
     """min / median / max of repeated runs."""
     lo, mid, hi = min(values), statistics.median(values), max(values)
     return "/".join(fmt.format(v) for v in (lo, mid, hi))
@@ -523,12 +523,12 @@ def main(argv: list[str] | None = None) -> int:
         per_step = [m * 1e3 / N_SEQUENCERS for m in ms]
         ratio = [m / r for m, r in zip(ms, means[ref], strict=True)]
         print(
-            f"{name:22} {_spread(ms):>20} {_spread(p50s[name]):>20} "
-            f"{_spread(per_step, '{:.2f}'):>18}   {_spread(ratio, '{:.2f}')}"
+            f"{name:22} {spread(ms):>20} {spread(p50s[name]):>20} "
+            f"{spread(per_step, '{:.2f}'):>18}   {spread(ratio, '{:.2f}')}"
         )
     for e_name in (n for n in means if n.startswith("engine")):
         ratio = [b / e for b, e in zip(means["transitions"], means[e_name], strict=True)]
-        print(f"transitions / {e_name}: {_spread(ratio, '{:.2f}')}x (min/median/max)")
+        print(f"transitions / {e_name}: {spread(ratio, '{:.2f}')}x (min/median/max)")
     print("targets: packed >= 4x transitions, single >= 3x")
     c = time_compile()
     print(

@@ -88,7 +88,8 @@ class GraphRuntime(FastPath):
         self.display = display.Display(cc)
         self._permanent = bool(cc.chart.before or cc.chart.after)
         # per sequencer: its active steps in activation order (multi-sequencer FBs only),
-        # rebuilt from ``st.active`` each call and kept in step by _activate/_deactivate
+        # rebuilt from ``st.active`` by each general call (_advance) and kept in step by
+        # _activate/_deactivate/_skip and the fast path's switches
         self._by_seq: list[list[int]] = [[] for _ in cc.seq_numbers] if self.multi else []
         self._seqs = self._by_seq if self.multi else [self.st.active]  # step 4's work lists
         # step 4: the sequencers before ``_done`` have run their rows in this call; a step

@@ -253,7 +253,7 @@ def _plan(set_name: str) -> _Plan:
     step = ("S_NO", "S_MORE", "S_ACTIVE", *_STEP_PINS)
     return _Plan(
         wanted=wanted,
-        step=bool({"S_NO", "S_MORE", "S_ACTIVE", *_STEP_PINS} & set(wanted)),
+        step=bool(set(step) & set(wanted)),
         step_pins=tuple(n for n in _STEP_PINS if n in wanted),
         transition=bool({"T_NO", "T_MORE", *_TRANSITION_PINS} & set(wanted)),
         transition_pins=tuple(n for n in _TRANSITION_PINS if n in wanted),
@@ -362,10 +362,10 @@ class Display:
     transitions, never all steps — only when the cycle reports a change (``dirty``: an
     input pin changed) or the call raised a step event (a step switched, a fault or
     interlock changed), and not even then while S_NO pages through the active steps
-    (``_switched``); otherwise only the pins of the shown
-    step/transition that move by themselves (times, criteria, S_STATE) are refreshed, and
-    with the STANDARD set nothing is. Results equal ``page`` + ``compute_outputs`` +
-    ``settle`` of the pure functions (tests/sequencer/test_display.py; the differential
+    (``_switched``); otherwise only the pins of the shown step/transition that move by
+    themselves (times, criteria, S_STATE) are refreshed, and with the STANDARD set nothing
+    is. ``update`` returns the pins it wrote. Results equal ``page`` + ``compute_outputs``
+    + ``settle`` of the pure functions (tests/sequencer/test_display.py; the differential
     test compares with a runtime that recomputes everything on every call). T_NO is
     tracked only when the set shows it."""
 

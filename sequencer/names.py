@@ -74,12 +74,13 @@ class _Declared:
             self.symbols.setdefault(s.name.casefold(), s)
 
 
-_declared: list[_Declared] = []  # the chart resolved last: its operands come in a row
+_declared: list[_Declared] = []  # the chart resolved last (its operands come in a row)
 
 
 def _declarations(chart: Chart) -> _Declared:
     """The declarations of ``chart``, indexed once per chart (not per operand: a chart of
-    thousands of sequencers has thousands of variables)."""
+    thousands of sequencers has thousands of variables). Only an index of the chart's own
+    declarations is remembered, so ``resolve_operand`` stays a function of its arguments."""
     if _declared and _declared[0].chart is chart:
         return _declared[0]
     found = _Declared(chart)
