@@ -399,6 +399,31 @@ def time_compile(steps: int = 250, repeat: int = 5) -> dict[str, float]:
     return {"parse": statistics.median(parse_ms), "compile": statistics.median(compile_ms)}
 
 
+def count_opcodes(layout: str, scans: int = 12) -> tuple[float, float]:
+    """Python opcodes and Python-level calls per scan of an engine workload (``sys.settrace``
+    with opcode events, after 100 unmeasured scans): deterministic, unlike the times."""
+    e = EngineWorkload(layout)
+    for _ in range(100):
+        e.scan()
+    ops = calls = 0
+
+    def trace(frame: Any, event: str, arg: Any) -> Any:
+        nonlocal ops, calls
+        if event == "call":
+            frame.f_trace_opcodes = True
+            calls += 1
+        elif event == "opcode":
+            ops += 1
+        return trace
+
+    for _ in range(scans):
+        e.clock.advance(CYCLE_MS)
+        sys.settrace(trace)
+        e.cpu.scan()
+        sys.settrace(None)
+    return ops / scans, calls / scans
+
+
 Workload = EngineWorkload | TransitionsWorkload | StatemachineWorkload | SismicWorkload | CReference
 
 
@@ -439,7 +464,7 @@ def measure(workloads: list[Workload], scans: int, warmup: int) -> dict[str, lis
     return samples
 
 
-def _spread(values: list[float], fmt: str = "{:.3f}") -> str:
+def spread(values: list[float], fmt: str = "{:.3f}") -> str:
     """min / median / max of repeated runs."""
     lo, mid, hi = min(values), statistics.median(values), max(values)
     return "/".join(fmt.format(v) for v in (lo, mid, hi))
@@ -457,6 +482,7 @@ def main(argv: list[str] | None = None) -> int:
         help="peers besides transitions (comma-separated; default all)",
     )
     ap.add_argument("--profile", action="store_true", help="cProfile the engine scans")
+    ap.add_argument("--count", action="store_true", help="opcodes and calls per scan, too")
     args = ap.parse_args(argv)
 
     print(
@@ -497,18 +523,22 @@ def main(argv: list[str] | None = None) -> int:
         per_step = [m * 1e3 / N_SEQUENCERS for m in ms]
         ratio = [m / r for m, r in zip(ms, means[ref], strict=True)]
         print(
-            f"{name:22} {_spread(ms):>20} {_spread(p50s[name]):>20} "
-            f"{_spread(per_step, '{:.2f}'):>18}   {_spread(ratio, '{:.2f}')}"
+            f"{name:22} {spread(ms):>20} {spread(p50s[name]):>20} "
+            f"{spread(per_step, '{:.2f}'):>18}   {spread(ratio, '{:.2f}')}"
         )
     for e_name in (n for n in means if n.startswith("engine")):
         ratio = [b / e for b, e in zip(means["transitions"], means[e_name], strict=True)]
-        print(f"transitions / {e_name}: {_spread(ratio, '{:.2f}')}x (min/median/max)")
+        print(f"transitions / {e_name}: {spread(ratio, '{:.2f}')}x (min/median/max)")
     print("targets: packed >= 4x transitions, single >= 3x")
     c = time_compile()
     print(
         f"250-step chart: parse {c['parse']:.1f} ms, compile {c['compile']:.1f} ms "
         f"(target: compile <= 100 ms)"
     )
+    if args.count:
+        for layout in layouts:
+            ops, calls = count_opcodes(layout)
+            print(f"engine {layout}: {ops:.0f} Python opcodes, {calls:.0f} Python calls per scan")
     if prof is not None:
         buf = io.StringIO()
         pstats.Stats(prof, stream=buf).sort_stats("tottime").print_stats(25)

@@ -10,6 +10,7 @@ runner's ``ScanAborted`` passes through, naming the innermost block.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from functools import lru_cache
 from typing import Any, Protocol
 
@@ -119,6 +120,10 @@ class CallContext:
         """Add ``event`` to this scan's ``ScanRecord.events``."""
         self.cpu.scan_events.append(event)
 
+    def emit_all(self, events: Iterable[object]) -> None:
+        """Add ``events`` to this scan's ``ScanRecord.events``, in order (``emit`` each)."""
+        self.cpu.scan_events.extend(events)
+
     def alarm(self, alarm: object) -> None:
         """Add ``alarm`` to this scan's ``ScanRecord.alarms``."""
         self.cpu.scan_alarms.append(alarm)
@@ -161,6 +166,21 @@ class CallContext:
             raise BlockError(f"{idb.name} is an instance of {idb.fb.label}, not {blk.label}")
         self._invoke(blk, idb)
 
+    def tag_fault(self, block: str, exc: BaseException) -> BaseException:
+        """What ``call`` lets escape when ``exc`` escapes the body of block ``block`` (the
+        rule of ``_invoke``): an exception tagged with the innermost block, one tagged
+        already or one ``_invoke`` lets pass unchanged — for a caller that runs a block's
+        body inline one level deeper itself (the GRAPH FBs' quiet calls from OB1,
+        ``sequencer.fb.startup_obs``) and raises what this returns."""
+        if isinstance(exc, _Fault):
+            return exc
+        if isinstance(exc, ScanAborted):
+            exc.block = exc.block or block
+            return exc
+        if isinstance(exc, Exception | SystemExit | KeyboardInterrupt):
+            return _Fault(block, exc)
+        return exc
+
     def _invoke(self, blk: FB | FC, arg: Any) -> Any:
         """``blk.body(self, arg)`` one nesting level deeper; an exception escaping it is
         tagged with the innermost block it escaped from (``_Fault``)."""
@@ -171,13 +191,11 @@ class CallContext:
         self.depth += 1
         try:
             return blk.body(self, arg)
-        except _Fault:
-            raise
-        except ScanAborted as abort:
-            abort.block = abort.block or blk.label
-            raise
-        except (Exception, SystemExit, KeyboardInterrupt) as exc:
-            raise _Fault(blk.label, exc) from exc
+        except BaseException as exc:
+            fault = self.tag_fault(blk.label, exc)
+            if fault is exc:
+                raise
+            raise fault from exc
         finally:
             self.depth -= 1
 

@@ -17,11 +17,12 @@ from typing import Any
 
 from s7graph.engine.address import Area, Width
 from s7graph.engine.errors import S7Error, SourceLocation
+from s7graph.sequencer.collector import collector_paused
 from s7graph.sequencer.compiled import CompiledChart
 from s7graph.sequencer.model import BlockCall, Chart, Coil, Operand, Transition
 from s7graph.sequencer.names import resolve_operand
 from s7graph.sequencer.params import pin as pin_info
-from s7graph.steps.actions import step_action_parts
+from s7graph.steps.actions import ActionParts, step_action_parts, uses_own_index
 from s7graph.steps.conditions import (
     condition_parts,
     condition_source,
@@ -134,7 +135,13 @@ def _priority(seq_transitions: tuple[Transition, ...]) -> dict[int, int]:
 
 
 def compile_chart(chart: Chart, symbols: Any = None) -> CompiledChart:
-    """Validate and compile ``chart``; raise ``ChartError`` listing every error."""
+    """Validate and compile ``chart``; raise ``ChartError`` listing every error. The
+    garbage collector is paused meanwhile (``sequencer.collector``)."""
+    with collector_paused():
+        return _compile_chart(chart, symbols)
+
+
+def _compile_chart(chart: Chart, symbols: Any) -> CompiledChart:
     errors, warnings = _validate(chart, symbols)
     if errors:
         raise ChartError(errors)
@@ -166,27 +173,33 @@ def compile_chart(chart: Chart, symbols: Any = None) -> CompiledChart:
     for j, t in enumerate(trans):
         conds.append(condition_parts(t.condition, g, res, res.step, res.transition))
         parts.append(condition_source(f"_t{j}", conds[j]))
+    rows: list[ActionParts | None] = []
     for i, s in enumerate(steps):
         if s.interlock is not None:
             parts.append(gen_condition(f"_il{i}", s.interlock, g, res, res.step, res.transition))
         if s.supervision is not None:
             parts.append(gen_condition(f"_sv{i}", s.supervision, g, res, res.step, res.transition))
-        a_body: list[str] | None = None
         try:
-            a_src, f_src, a_body = step_action_parts(i, s.actions, g, res, res.step, res.transition)
+            own = step_action_parts(i, s.actions, g, res, res.step, res.transition)
+            a_src, f_src = own.a_src, own.f_src
         except S7Error as exc:
             res.problems.append(_Problem(exc.where or s.loc, f"S{s.number}: {exc.message}"))
             a_src = f"def _a{i}(st, R, ev, c_ok, zero):\n    pass\n"
             f_src = f"def _f{i}(st, R, ev):\n    pass\n"
+            own = None
         parts += [*_split(a_src), *_split(f_src)]
-        plain = s.interlock is None and s.supervision is None
-        if (
-            a_body is not None
-            and plain
-            and all(len(tr_src[j]) == 1 for j in leaving[i])
-            and len(a_body) <= _SPLIT_LINES
-        ):
-            parts.append(_gen_step(i, leaving[i], conds, a_body))
+        # a step whose rows had to be split (100,000 rows) runs without the fused functions
+        small = own is not None and len(own.rows) + len(own.reset) + len(own.s0) <= _SPLIT_LINES
+        rows.append(own if small else None)
+    nochk = [s.interlock is None and s.supervision is None for s in steps]
+    for i, own in enumerate(rows):
+        if own is not None and nochk[i] and all(len(tr_src[j]) == 1 for j in leaving[i]):
+            parts.append(_gen_step(i, leaving[i], conds, own.rows))
+            for j in leaving[i]:  # the plain switches of the fast path (Program.enter)
+                d = tr_dst[j][0] if len(tr_dst[j]) == 1 else -1
+                target = rows[d] if d >= 0 and nochk[d] and step_seq[d] == step_seq[i] else None
+                if target is not None and not uses_own_index(own.s0):
+                    parts.append(_gen_enter(j, d, own, target))
     parts.append(_gen_permanent("_before", chart.before, g, res))
     parts.append(_gen_permanent("_after", chart.after, g, res))
 
@@ -264,6 +277,20 @@ def _gen_step(
         ]
     lines += a_body
     lines.append("    return -1")
+    return with_locals(lines)
+
+
+def _gen_enter(j: int, d: int, left: ActionParts, entered: ActionParts) -> str:
+    """``def _w<j>(st, R, ev, ev_d, zero, _i=d)`` (``Program.enter``): transition ``j``
+    has switched from its plain source step to its only target ``d`` (same sequencer, no
+    interlock, no supervision); the final scan of the source (N/D/L resets, then its S0
+    rows with ``ev`` its events, as ``_f``), then the rows of ``d`` with its events
+    ``ev_d`` and its interlock held (as ``_a``). ``_i`` is ``d``: a final scan never uses
+    its own index."""
+    lines = [f"def _w{j}(st, R, ev, ev_d, zero, _i={d}):", *left.reset]
+    if left.s0:
+        lines += ["    c_ok = True", "    _z = zero", "    zero = False", *left.s0, "    zero = _z"]
+    lines += ["    ev = ev_d", "    c_ok = True", *entered.rows]
     return with_locals(lines)
 
 

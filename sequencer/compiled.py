@@ -30,7 +30,10 @@ class Program:
     c_ok, zero) -> int`` (None for a step with an interlock, a supervision or a join): the
     leaving transitions of step ``i`` in priority order (``crit_old``/``crit``/``tt`` as
     each is evaluated) returning the first that holds, else -1 after running ``act[i]``'s
-    rows."""
+    rows; ``enter[j](st, R, ev, ev_d, zero)`` (None unless ``j`` leaves a step that has
+    ``step[i]`` for one target ``d`` of the same sequencer without interlock or
+    supervision): the final scan of the source step (``fin``, events ``ev``) and then the
+    rows of ``d`` (``act[d]``, events ``ev_d``, interlock held)."""
 
     tcond: tuple[Any, ...]
     ilc: tuple[Any, ...]
@@ -40,6 +43,7 @@ class Program:
     before: Any
     after: Any
     step: tuple[Any, ...] = ()
+    enter: tuple[Any, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -116,6 +120,7 @@ class CompiledChart:
             before=ns["_before"],
             after=ns["_after"],
             step=tuple(ns.get(f"_s{i}") for i in range(n)),
+            enter=tuple(ns.get(f"_w{j}") for j in range(m)),
         )
 
     def step_label(self, i: int) -> str:

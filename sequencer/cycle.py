@@ -63,8 +63,11 @@ class GraphRuntime(FastPath):
         call: BlockCaller = _no_calls,
         counter: CellOp = _no_cells,
         timer: CellOp = _no_cells,
+        fast: bool = True,
     ) -> None:
         self.cc = cc
+        # False forces the general path on every call (the differential test compares both)
+        self.fast = fast
         self.prog = prog
         self.st = state if state is not None else new_state(cc)
         self._call = call
@@ -86,8 +89,10 @@ class GraphRuntime(FastPath):
         self.display = display.Display(cc)
         self._permanent = bool(cc.chart.before or cc.chart.after)
         # per sequencer: its active steps in activation order (multi-sequencer FBs only),
-        # rebuilt from ``st.active`` each call and kept in step by _activate/_deactivate
+        # rebuilt from ``st.active`` by each general call (_advance) and kept in step by
+        # _activate/_deactivate/_skip and the fast path's switches
         self._by_seq: list[list[int]] = [[] for _ in cc.seq_numbers] if self.multi else []
+        self._seqs = self._by_seq if self.multi else [self.st.active]  # step 4's work lists
         # step 4: the sequencers before ``_done`` have run their rows in this call; a step
         # activated in one of them waits in ``_late`` (see _late_steps); with the CODESYS
         # order such steps are carried to the next call (``_carry``: S1 raised again there)
@@ -106,17 +111,24 @@ class GraphRuntime(FastPath):
             and fused[i] is not None
             for i in range(cc.n_steps)
         )
-        self._none = (False,) * cc.n_steps
-        self._tcond, self._act = prog.tcond, prog.act
+        # per transition: (its target, Program.enter) when it has a plain switch, else None
+        enter = prog.enter or (None,) * cc.n_transitions
+        self._enter = tuple(
+            None if w is None else (cc.tr_dst[j][0], w) for j, w in enumerate(enter)
+        )
         self._forcing = cc.options.ack_forces_switch
-        self._lean = not self.codesys  # execute may take _quiet_call
-        plan = self.display.plan
-        self._live_pins = bool(plan.step_pins or plan.transition_pins)
-        self.outs_changed = True  # st.outputs rewritten in the last call (GraphFB copies)
+        self._lean = fast and not self.codesys  # a call may be quiet (FastPath.quiet)
+        self._quiet = False  # the next call is quiet if its input pins are those latched
+        self._live_pins = bool(self.display.plan.live_pins)
+        # the pins of st.outputs the last call wrote (GraphFB copies them)
+        self.outs_written: tuple[str, ...] = ()
 
     def rebind(self, state: GraphState) -> None:
         """Run on another instance-DB content (restored snapshot, new instance)."""
         self.st = state
+        self._quiet = False
+        if not self.multi:
+            self._seqs = [state.active]
         self._final.clear()
         self._acked.clear()
         self._last_in = None
@@ -156,6 +168,7 @@ class GraphRuntime(FastPath):
         acknowledging the message, SPEC §2.10): the next call releases each step still
         latched exactly as ACK_S does (events A1, V0; the step may switch in that call)."""
         self._remote.extend(step_indices)
+        self._quiet = False
 
     def command(self, pin: str, step: int | None = None) -> None:
         """Queue an operator command (S7-GRAPH "Control Sequencer", SPEC §2.5/§2.6): ``pin``
@@ -163,6 +176,7 @@ class GraphRuntime(FastPath):
         pin's wiring (OFF_SQ: switched off for that call); S_ON/S_OFF act on step number
         ``step`` instead of S_NO."""
         self._commands.append((pin, step))
+        self._quiet = False
 
     def set_level(self, pin: str, value: bool | None) -> None:
         """Override the level pin HALT_SQ, EN_IL or EN_SV with ``value`` from the next call
@@ -244,22 +258,25 @@ class GraphRuntime(FastPath):
     # ------------------------------------------------------------ one FB call
 
     def execute(self, inputs: dict[str, Any], now_ns: int) -> GraphState:
-        """One FB call with the pin values ``inputs`` at clock time ``now_ns`` (SPEC §2.2)."""
+        """One FB call with the pin values ``inputs`` at clock time ``now_ns`` (SPEC §2.2):
+        the quiet call (``FastPath.quiet``) when it is one, else the general path."""
+        quiet = self.quiet(inputs, now_ns)
+        if quiet is not None:
+            return quiet
+        self._quiet = False  # until this call is done
+        try:
+            return self._general(inputs, now_ns)
+        except BaseException:  # a call cut short: the next one writes every output pin
+            self.display.cut_short()
+            raise
+
+    def _general(self, inputs: dict[str, Any], now_ns: int) -> GraphState:
+        """``execute`` when the call is not quiet: steps 1-6 of SPEC §2.2, in full."""
         st = self.st
         try:
             cur = self._getter(inputs)
         except KeyError:
             cur = None
-        if (
-            cur == self._last_in
-            and cur is not None
-            and self._lean
-            and st.mode == "AUTO"
-            and st.calls
-            and not (self._commands or self._remote or self.display.dirty)
-            and not (st.off or st.halted or st.sskip_enabled)
-        ):
-            return self._quiet_call(st, now_ns)
         prog = self.prog
         # 1. latch inputs, edges, per-call lists, times
         ins = st.inputs
@@ -309,7 +326,8 @@ class GraphRuntime(FastPath):
         held = frozenset(st.entered) if st.entered and not self.codesys else frozenset()
         sw = (rule if mode != "AUTO" else None, "T_PUSH" in rose, blocked, forced, held)
         fast = (
-            mode == "AUTO"
+            self.fast
+            and mode == "AUTO"
             and not blocked
             and not forced
             and not held
@@ -317,7 +335,7 @@ class GraphRuntime(FastPath):
             and not st.sskip_enabled
         )
         if fast:
-            self._fast_sequencers(self._by_seq if self.multi else [st.active], self.multi)
+            self._fast_sequencers(st)
         elif self.multi:
             by_seq = self._by_seq
             for k in range(len(by_seq)):
@@ -681,8 +699,14 @@ class GraphRuntime(FastPath):
         st.error, st.fault = error, fault
         st.err_flt = error or fault
         disp = self.display
-        self.outs_changed = disp.dirty or bool(st.log) or self._live_pins
-        disp.update(st)
+        if not self.fast:  # the reference: every output recomputed and copied, every call
+            disp.dirty = True
+        self.outs_written = disp.update(st)
+        self._quiet = (
+            self._lean
+            and st.mode == "AUTO"
+            and not (st.off or st.halted or st.sskip_enabled or self._commands or self._remote)
+        )
 
 
 def new_state(cc: CompiledChart) -> GraphState:

@@ -223,6 +223,8 @@ _GROUP_PINS: Final[dict[str, Callable[[GraphState], bool]]] = {
     "TOP_ON": lambda st: st.mode == "TOP",
     "MAN_ON": lambda st: st.mode == "MAN",
 }
+# Group pins step events can change (the others follow options, the mode, the set).
+_SWITCH_GROUPS: Final = frozenset({"ERROR", "FAULT", "ERR_FLT", "SQ_ISOFF"})
 # Pins of the shown step / transition that change from call to call without a step switch,
 # fault change or display edge (times, criteria bits, events).
 _STEP_PINS: Final = ("S_TIME", "S_TIMEOK", "S_CRITLOC", "S_CRITLOCERR", "S_CRITSUP", "S_STATE")
@@ -240,18 +242,25 @@ class _Plan:
     transition: bool
     transition_pins: tuple[str, ...]
     groups: tuple[tuple[str, Callable[[GraphState], bool]], ...]
+    switch_groups: tuple[tuple[str, Callable[[GraphState], bool]], ...]
+    switch_pins: tuple[str, ...]  # the pins ``Display._switched`` writes
+    live_pins: tuple[str, ...]  # step_pins + transition_pins
 
 
 @cache
 def _plan(set_name: str) -> _Plan:
     wanted = tuple(p.name for p in outputs_for(set_name) if p.direction is Direction.OUT)
+    step = ("S_NO", "S_MORE", "S_ACTIVE", *_STEP_PINS)
     return _Plan(
         wanted=wanted,
-        step=bool({"S_NO", "S_MORE", "S_ACTIVE", *_STEP_PINS} & set(wanted)),
+        step=bool(set(step) & set(wanted)),
         step_pins=tuple(n for n in _STEP_PINS if n in wanted),
         transition=bool({"T_NO", "T_MORE", *_TRANSITION_PINS} & set(wanted)),
         transition_pins=tuple(n for n in _TRANSITION_PINS if n in wanted),
         groups=tuple((n, _GROUP_PINS[n]) for n in wanted if n in _GROUP_PINS),
+        switch_groups=tuple((n, _GROUP_PINS[n]) for n in wanted if n in _SWITCH_GROUPS),
+        switch_pins=tuple(n for n in wanted if n in step or n in _SWITCH_GROUPS),
+        live_pins=tuple(n for n in wanted if n in _STEP_PINS or n in _TRANSITION_PINS),
     )
 
 
@@ -352,17 +361,22 @@ class Display:
     The sets S_NO/T_NO page through are recomputed — from ``state.active`` and the leaving
     transitions, never all steps — only when the cycle reports a change (``dirty``: an
     input pin changed) or the call raised a step event (a step switched, a fault or
-    interlock changed); otherwise only the pins of the shown step/transition that move by
+    interlock changed), and not even then while S_NO pages through the active steps
+    (``_switched``); otherwise only the pins of the shown step/transition that move by
     themselves (times, criteria, S_STATE) are refreshed, and with the STANDARD set nothing
-    is. Results equal ``page`` + ``compute_outputs`` + ``settle`` of the pure functions
-    (tests/sequencer/test_display.py). T_NO is tracked only when the set shows it."""
+    is. ``update`` returns the pins it wrote. Results equal ``page`` + ``compute_outputs``
+    + ``settle`` of the pure functions (tests/sequencer/test_display.py; the differential
+    test compares with a runtime that recomputes everything on every call). T_NO is
+    tracked only when the set shows it."""
 
-    __slots__ = ("chart", "dirty", "plan")
+    __slots__ = ("_by_switch", "_full", "chart", "dirty", "plan")
 
     def __init__(self, chart: CompiledChart) -> None:
         self.chart = chart
         self.plan = _plan(chart.parameters)
         self.dirty = True
+        self._by_switch = False  # ``_switched`` applies (set by each full update)
+        self._full = False  # the next update writes every pin (``cut_short``)
 
     def page(self, state: GraphState, inputs: Mapping[str, Any], rose: set[str]) -> None:
         """``page`` when a display input acts (an edge, a new S_SEL) or the state changed."""
@@ -372,20 +386,74 @@ class Display:
         page(self.chart, state, inputs, rose, state.active)
         self.dirty = True
 
-    def update(self, state: GraphState) -> None:
-        """Write this call's output pins into ``state.outputs`` and settle S_NO/T_NO."""
+    def update(self, state: GraphState) -> tuple[str, ...]:
+        """Write this call's output pins into ``state.outputs`` and settle S_NO/T_NO;
+        return the names of the pins written (the others keep their values)."""
         plan = self.plan
         chart = self.chart
-        if self.dirty or state.log:
-            self.dirty = False
+        if self.dirty or state.log or self._full:
+            if not (self.dirty or self._full) and self._switched(state):
+                return plan.switch_pins
+            self.dirty = self._full = False
             state.s_no, state.t_no = _outputs(chart, state, plan, state.active, state.outputs)
-            return
+            self._by_switch = not plan.transition and display_set(state) == "SACT"
+            return plan.wanted
         if plan.step_pins:
             i = chart.step_index.get(state.s_no)
             _step_pins(chart, state, i, plan.step_pins, state.outputs)
         if plan.transition_pins:
             j = chart.transition_index.get(state.t_no)
             _transition_pins(state, j, plan.transition_pins, state.outputs)
+        return plan.live_pins
+
+    def cut_short(self) -> None:
+        """The call was cut short (an exception escaped it) before it wrote its pins: the
+        next ``update`` writes every pin, whatever that call changes."""
+        self._full = True
+
+    def _switched(self, state: GraphState) -> bool:
+        """``update`` after a call in which no input pin changed (not ``dirty``) but step
+        events were raised, while S_NO pages through the active steps (DISP_SACT) and
+        T_NO is not shown (``_by_switch``, set by each full update: only a dirty call
+        changes the display set). Events change the active steps, the shown step's pins
+        and the group pins of ``_SWITCH_GROUPS``; the other pins follow inputs and
+        commands only, which make the display ``dirty``. So: S_NO moves only if the shown
+        step is no longer active (and not pinned by S_SEL) — to the first active step
+        numbered at or above it, else the lowest, as ``_snap``, found in one pass over the
+        active steps instead of sorting them — then S_MORE, S_ACTIVE, the shown step's
+        pins and those group pins are written. False, and nothing done, when it does not
+        apply."""
+        if not self._by_switch:
+            return False
+        index = self.chart.step_index
+        x = state.x
+        active = state.active
+        s_no = state.s_no
+        i = index.get(s_no)
+        if i is None or not (x[i] or state.display.get("pinned")):
+            numbers = self.chart.step_numbers
+            above = low = -1
+            for a in active:
+                n = numbers[a]
+                if n >= s_no and (above < 0 or n < above):
+                    above = n
+                if low < 0 or n < low:
+                    low = n
+            s_no = above if above >= 0 else max(low, 0)
+            state.s_no = s_no
+            i = index.get(s_no)
+        plan = self.plan
+        out = state.outputs
+        if plan.step:
+            shown = i is not None and x[i]
+            out["S_NO"] = s_no
+            out["S_MORE"] = len(active) > shown  # others than the shown one are active
+            out["S_ACTIVE"] = shown
+            if plan.step_pins:
+                _step_pins(self.chart, state, i, plan.step_pins, out)
+        for name, f in plan.switch_groups:
+            out[name] = f(state)
+        return True
 
 
 # ---------------------------------------------------------------- "why does it not switch?"

@@ -67,8 +67,9 @@ class GraphFB:
     """A ``CompiledChart`` bound to an engine FB number and an instance DB number."""
 
     def __init__(self, cc: CompiledChart, *, fb_number: int | None = None,
-                 db_number: int | None = None) -> None:  # fmt: skip
+                 db_number: int | None = None, fast: bool = True) -> None:  # fmt: skip
         self.cc = cc
+        self.fast = fast  # False: every call takes the general path (GraphRuntime ``fast``)
         self.fb_number = fb_number or cc.chart.fb_number or 1
         self.db_number = db_number or cc.chart.db_number or self.fb_number
         pins = pins_for(cc.parameters)
@@ -88,11 +89,15 @@ class GraphFB:
         self._mem: Any = None
         self._ctx: Any = None
         self._messages = cc.options.messages
+        self._name, self._step_numbers = cc.name, cc.step_numbers  # of the step events
         self._commands: list[tuple[str, int | None]] = []
         self._levels: dict[str, bool | None] = {}  # level overrides for the next call
         self._acting: tuple[str, int | None] | None = None  # who commanded (user, ACK_S step)
         self._copied: Any = None  # the instance-DB values the outputs were last copied to
         self._restart = ""  # the reason a startup OB's call gives its messages
+        # the next call may run flat from OB1 (startup_obs): the last one ran on ``_ctx``
+        # with its runtime, without a message list, and no command or level is queued since
+        self._flat = False
 
     def _fresh_state(self) -> GraphState:
         return new_state(self.cc)
@@ -135,8 +140,9 @@ class GraphFB:
             self._prog = self.cc.bind(mem)
             self._mem = mem
             rt = GraphRuntime(self.cc, self._prog, st, call=self._call_block,
-                              counter=self._counter, timer=self._timer)  # fmt: skip
+                              counter=self._counter, timer=self._timer, fast=self.fast)  # fmt: skip
             self._runtime = rt
+            self._flat = False
         elif rt.st is not st:
             rt.rebind(st)
         return rt
@@ -168,11 +174,13 @@ class GraphFB:
         self._commands.append((pin, step))
         if user is not None:
             self._acting = (user, step if pin == "ACK_S" else None)
+        self._flat = False
 
     def set_level(self, pin: str, value: bool | None) -> None:
         """Override HALT_SQ, EN_IL or EN_SV from the next call on (None: the pin decides
         again), whatever the parameter set (``GraphRuntime.set_level``)."""
         self._levels[pin] = value
+        self._flat = False
 
     @property
     def levels(self) -> dict[str, bool]:
@@ -202,6 +210,7 @@ class GraphFB:
         self.idb = idb
         self._runtime, self._prog, self._mem, self._copied = None, None, None, None
         self._levels = levels
+        self._flat = False
 
     # ------------------------------------------------------------ the FB body
 
@@ -222,22 +231,31 @@ class GraphFB:
             self._commands.clear()
         acting, self._acting = self._acting, None
         st = rt.execute(values, ctx.now_ns)
-        if rt.outs_changed or self._copied is not values:  # else st.outputs as last copied
-            out = st.outputs
-            for name in self.out_pins:
-                values[name] = out[name]
-            self._copied = values
+        self._copy_outputs(values, st, rt.outs_written)
         if self._messages:
             self._sync_messages(ctx, idb, rt, st, acting)
+        else:
+            self._flat = True
         if st.log:
-            step_numbers = self.cc.step_numbers
-            name, number, cycle, emit = self.cc.name, idb.number, ctx.cycle, ctx.emit
-            for i, bit in st.log:  # tuple.__new__: a StepEvent without its Python __new__
-                emit(
-                    _tuple_new(
-                        StepEvent, (name, number, step_numbers[i], _EVENT_OF_BIT[bit], cycle)
-                    )
-                )
+            self._emit_events(ctx, idb, st)
+
+    def _copy_outputs(self, values: dict[str, Any], st: GraphState, names: tuple[str, ...]) -> None:
+        """The output pins ``names`` this call wrote into the instance DB (all of them into
+        another instance DB than last time)."""
+        if self._copied is not values:
+            names = self.out_pins
+            self._copied = values
+        out = st.outputs
+        for name in names:
+            values[name] = out[name]
+
+    def _emit_events(self, ctx: Any, idb: InstanceDB, st: GraphState) -> None:
+        """This call's step events into the scan record, as ``StepEvent`` values."""
+        numbers, name, number, cycle = self._step_numbers, self._name, idb.number, ctx.cycle
+        ctx.emit_all(  # tuple.__new__: a StepEvent without its Python __new__
+            [_tuple_new(StepEvent, (name, number, numbers[i], _EVENT_OF_BIT[b], cycle))
+             for i, b in st.log]
+        )  # fmt: skip
 
     def _sync_messages(
         self,
@@ -330,15 +348,21 @@ def position(cc: CompiledChart, st: GraphState, limit: int = 8) -> str:
 
 
 def startup_obs(*fbs: GraphFB, extra_ob1: Any = None) -> tuple[OB, OB]:
-    """OB1 calling every GraphFB in order, and OB100 calling each with INIT_SQ = 1."""
+    """OB1 calling every GraphFB in order, and OB100 calling each with INIT_SQ = 1.
+
+    OB1 runs an FB's quiet call flat (``_run_flat``); any other call goes through
+    ``CallContext.run_fb``."""
 
     def ob1_body(ctx: Any) -> None:
         run = getattr(ctx, "run_fb", None)  # engine.cpu.CallContext: no outputs dict
-        for g in fbs:
-            if run is not None and g.idb is not None:
-                run(g.fb, g.idb)
-            else:
+        if run is None:
+            for g in fbs:
                 ctx.call(g.fb, g.idb)
+        elif ctx.depth < ctx.cpu.max_nesting:
+            _run_flat(ctx, fbs, run)
+        else:  # too deep: run_fb raises NestingOverflow
+            for g in fbs:
+                run(g.fb, g.idb)
         if extra_ob1 is not None:
             extra_ob1(ctx)
 
@@ -356,6 +380,46 @@ def cold_restart_ob(*fbs: GraphFB) -> OB:
     called with INIT_SQ = 1, as OB100 does after a warm restart."""
     ob100 = startup_obs(*fbs)[1]
     return OB(102, "OB102", ob100.body)
+
+
+def _run_flat(ctx: Any, fbs: tuple[GraphFB, ...], run: Any) -> None:
+    """OB1's calls of ``fbs``, each quiet call (``GraphRuntime.quiet``) straight from this
+    loop: what ``CallContext.run_fb`` and ``GraphFB._body`` do around it, without their
+    call layers — one nesting level deeper (a block a row calls nests as from the FB),
+    what escapes tagged with the FB (``CallContext.tag_fault``), then the written output
+    pins into the instance DB and the step events into the scan record. A call that is
+    not quiet, or an FB that has not run on this context, memory and state, or has a
+    command queued or a message list to bring in line (``_flat``), goes through
+    ``run_fb``."""
+    depth = ctx.depth
+    ctx.depth = depth + 1
+    try:
+        for g in fbs:
+            rt = g._runtime
+            if g._flat and rt is not None and g._ctx is ctx:
+                idb = g.idb
+                assert idb is not None
+                values = idb.values
+                if rt.st is values[STATE_VAR]:
+                    try:
+                        st = rt.quiet(values, ctx.now_ns)
+                        if st is not None:
+                            names = rt.outs_written
+                            if names or g._copied is not values:
+                                g._copy_outputs(values, st, names)
+                            if st.log:
+                                g._emit_events(ctx, idb, st)
+                            continue
+                    except BaseException as exc:
+                        fault = ctx.tag_fault(g.fb.label, exc)
+                        if fault is exc:
+                            raise
+                        raise fault from exc
+            ctx.depth = depth
+            run(g.fb, g.idb)
+            ctx.depth = depth + 1
+    finally:
+        ctx.depth = depth
 
 
 def install_all(cpu: Any, fbs: Iterable[GraphFB]) -> None:

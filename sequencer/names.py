@@ -26,7 +26,7 @@ from typing import Final, Literal
 from s7graph.engine.address import Address, parse_address
 from s7graph.engine.errors import SymbolError
 from s7graph.engine.symbols import SymbolTable, default_type
-from s7graph.sequencer.model import Chart, Operand
+from s7graph.sequencer.model import Chart, Operand, SymbolDecl, VarDecl
 from s7graph.sequencer.params import Direction, pin
 
 Kind = Literal["address", "symbol", "var", "pin"]
@@ -60,15 +60,43 @@ def looks_like_address(name: str) -> bool:
     return ADDRESS_SHAPE.fullmatch(re.sub(r"\s+", "", name)) is not None
 
 
+class _Declared:
+    """A chart's FB variables by upper-case name and its symbols by case-folded name, the
+    first of each name (a second one is an error of its own, E013)."""
+
+    def __init__(self, chart: Chart) -> None:
+        self.chart = chart
+        self.vars: dict[str, VarDecl] = {}
+        for v in chart.vars:
+            self.vars.setdefault(v.name.upper(), v)
+        self.symbols: dict[str, SymbolDecl] = {}
+        for s in chart.symbols:
+            self.symbols.setdefault(s.name.casefold(), s)
+
+
+_declared: list[_Declared] = []  # the chart resolved last (its operands come in a row)
+
+
+def _declarations(chart: Chart) -> _Declared:
+    """The declarations of ``chart``, indexed once per chart (not per operand: a chart of
+    thousands of sequencers has thousands of variables). Only an index of the chart's own
+    declarations is remembered, so ``resolve_operand`` stays a function of its arguments."""
+    if _declared and _declared[0].chart is chart:
+        return _declared[0]
+    found = _Declared(chart)
+    _declared[:] = [found]
+    return found
+
+
 def resolve_operand(op: Operand, chart: Chart, symbols: SymbolTable | None = None) -> Resolved:
     """Resolve one operand (rule in the module docstring). Raises ``SymbolError`` for an
     unknown name and ``AddressError`` for a malformed address, both with ``op.loc``."""
     if op.quoted:
         return _symbol(op, chart, symbols)
     key = op.name.upper()
-    for v in chart.vars:
-        if v.name.upper() == key:
-            return Resolved("var", None, v.type.upper())
+    v = _declarations(chart).vars.get(key)
+    if v is not None:
+        return Resolved("var", None, v.type.upper())
     p = pin(op.name)
     if p is not None:
         return Resolved("pin", None, p.type, writable=p.direction is Direction.IN)
@@ -86,11 +114,10 @@ def resolve_operand(op: Operand, chart: Chart, symbols: SymbolTable | None = Non
 
 
 def _symbol(op: Operand, chart: Chart, symbols: SymbolTable | None) -> Resolved:
-    key = op.name.casefold()
-    for s in chart.symbols:
-        if s.name.casefold() == key:
-            addr = parse_address(s.address, s.loc)
-            return Resolved("symbol", addr, s.type.upper())
+    s = _declarations(chart).symbols.get(op.name.casefold())
+    if s is not None:
+        addr = parse_address(s.address, s.loc)
+        return Resolved("symbol", addr, s.type.upper())
     if symbols is not None:
         sym = symbols.lookup(op.name)
         if sym is not None:

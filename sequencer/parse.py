@@ -40,6 +40,7 @@ from lark.parsers.lalr_parser import _Parser
 
 from s7graph.engine.errors import S7Error, SourceLocation
 from s7graph.engine.text import NotUtf8, decode_utf8
+from s7graph.sequencer.collector import collector_paused
 from s7graph.sequencer.diagnostics import Diagnostic, error, format_diagnostic
 from s7graph.sequencer.model import Chart
 from s7graph.sequencer.parse_build import _NEEDS_FIRST, _NEEDS_LAST, _Build
@@ -298,9 +299,15 @@ def _long_numbers(text: str, file: str) -> list[Diagnostic]:
 
 def parse_chart(text: str, file: str = "<input>") -> Chart:
     """Parse one `.s7g` chart (SPEC §3). Raises :class:`ChartSyntaxError` with all syntax
-    diagnostics (file:line:col, what was found and what was expected)."""
+    diagnostics (file:line:col, what was found and what was expected). The garbage
+    collector is paused meanwhile (``sequencer.collector``)."""
     if long := _long_numbers(text, file):
         raise ChartSyntaxError(long)
+    with collector_paused():
+        return _parse_chart(text, file)
+
+
+def _parse_chart(text: str, file: str) -> Chart:
     diags: list[Diagnostic] = []
     comments: dict[int, tuple[int, str]] = {}
     seen: set[tuple[int, int]] = set()

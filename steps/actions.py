@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable
+from typing import NamedTuple
 
 from s7graph.engine.errors import S7Error
 from s7graph.steps.conditions import with_locals
@@ -54,8 +55,21 @@ def gen_step_actions(
     tidx: StepIndex,
 ) -> tuple[str, str]:
     """Source of ``_a<i>`` and ``_f<i>`` for the action ``rows`` of step ``i``."""
-    a_src, f_src, _ = step_action_parts(i, rows, g, resolve, sidx, tidx)
-    return a_src, f_src
+    parts = step_action_parts(i, rows, g, resolve, sidx, tidx)
+    return parts.a_src, parts.f_src
+
+
+class ActionParts(NamedTuple):
+    """The two functions of a step's rows and their bodies (indented one level), for
+    functions that run the rows after other code: ``rows`` uses ``st R ev c_ok zero`` and
+    ``_i`` (the step's own index); ``reset`` (the final scan's N/D/L resets) and ``s0``
+    (its S0 rows) use ``st R ev c_ok zero`` and never ``_i``."""
+
+    a_src: str
+    f_src: str
+    rows: list[str]
+    reset: list[str]
+    s0: list[str]
 
 
 def step_action_parts(
@@ -65,9 +79,8 @@ def step_action_parts(
     resolve: Resolve,
     sidx: StepIndex,
     tidx: StepIndex,
-) -> tuple[str, str, list[str]]:
-    """``gen_step_actions`` and the body of ``_a<i>`` (indented one level; uses ``st R ev
-    c_ok zero`` and ``_i``), for a function that runs the rows after other code."""
+) -> ActionParts:
+    """``gen_step_actions`` and the bodies of ``_a<i>`` and ``_f<i>`` (``ActionParts``)."""
     body: list[str] = []
     final_reset: list[str] = []
     s0_rows: list[str] = []
@@ -106,7 +119,8 @@ def step_action_parts(
     f_body = f_body or ["    pass"]
     a_src = [f"def _a{i}(st, R, ev, c_ok, zero{_own(i, a_body)}):", *a_body]
     f_src = [f"def _f{i}(st, R, ev{_own(i, f_body)}):", *f_body]
-    return with_locals(a_src), with_locals(f_src), _indent(body)
+    return ActionParts(with_locals(a_src), with_locals(f_src), _indent(body),
+                       _indent(final_reset), _indent(s0_rows))  # fmt: skip
 
 
 def _nld_bit(row: ActionRow) -> Operand | None:
@@ -121,10 +135,15 @@ def _nld_bit(row: ActionRow) -> Operand | None:
 _OWN = re.compile(r"\b_i\b")
 
 
+def uses_own_index(body: list[str]) -> bool:
+    """Whether generated lines use ``_i``, the step's own index (D/L times, OFF S_ALL)."""
+    return any(_OWN.search(ln) for ln in body)
+
+
 def _own(i: int, body: list[str]) -> str:
-    """The parameter ``_i`` = the step's own index (D/L times, OFF S_ALL) when the body uses
-    it: the code then does not depend on ``i`` and the compiler shares it between steps."""
-    return f", _i={i}" if any(_OWN.search(ln) for ln in body) else ""
+    """The parameter ``_i`` = the step's own index when the body uses it: the code then
+    does not depend on ``i`` and the compiler shares it between steps."""
+    return f", _i={i}" if uses_own_index(body) else ""
 
 
 def _n_event(row: ActionRow, g: CodeGen, resolve: Resolve, cond: str) -> list[str]:

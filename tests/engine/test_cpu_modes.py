@@ -167,14 +167,16 @@ def test_stop_in_startup_ob_aborts_the_startup(clock: VirtualClock) -> None:
 
 
 def test_emitted_events_land_in_the_scan_record(clock: VirtualClock) -> None:
-    """Blocks report what happened through ``ctx.emit``; the record carries it."""
+    """Blocks report what happened through ``ctx.emit`` (or ``emit_all``, several in
+    order); the record carries it."""
 
     @ob(1)
     def main(ctx: CallContext) -> None:
         ctx.emit(("S1", ctx.cycle))
+        ctx.emit_all([("S0", ctx.cycle), ("V1", ctx.cycle)])
 
     cpu = Cpu(clock)
     cpu.load(main)
     cpu.start()
-    assert cpu.scan().events == (("S1", 1),)
-    assert cpu.scan().events == (("S1", 2),)
+    assert cpu.scan().events == (("S1", 1), ("S0", 1), ("V1", 1))
+    assert cpu.scan().events == (("S1", 2), ("S0", 2), ("V1", 2))

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from s7graph.sequencer.cycle import GraphRuntime
 from tests.sequencer.helpers import Chart, seq
 
 LINEAR = seq("""
@@ -261,12 +262,15 @@ def test_codesys_order_lets_a_new_step_act_in_the_next_call() -> None:
 
 
 def test_cost_visits_only_transitions_of_active_steps() -> None:
+    """On the general path (the fast path runs the active step's fused function, which
+    holds only that step's transitions)."""
     steps = "\n".join(f'STEP S{n} "s": END_STEP' for n in range(2, 50))
     trans = "\n".join(f"TRANSITION T{n} FROM S{n} TO S{n + 1} := TRUE;" for n in range(2, 49))
     first = 'INITIAL_STEP S1 "a": END_STEP\nTRANSITION T1 FROM S1 TO S2 := FALSE;'
     c = Chart(seq(f"{first}\n{steps}\n{trans}"))
     calls: list[int] = []
     prog = c.rt.prog
+    c.rt = GraphRuntime(c.cc, prog, fast=False)
 
     def spy(j: int, f: Any) -> Any:
         return lambda st: (calls.append(j), f(st))[1]
