@@ -43,7 +43,7 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from s7graph.engine.clock import VirtualClock
+from s7graph.engine.clock import Clock, VirtualClock
 from s7graph.engine.cpu import Cpu
 from s7graph.sequencer.compile import compile_chart
 from s7graph.sequencer.fb import GraphFB, install_all
@@ -118,11 +118,13 @@ def stats(samples_ns: list[int]) -> dict[str, float]:
 class EngineWorkload:
     """The sequencers as GraphFBs called from OB1 of one CPU on a virtual clock."""
 
-    def __init__(self, layout: str) -> None:
+    def __init__(self, layout: str, clock: Clock | None = None) -> None:
+        """``clock``: the virtual clock :meth:`scan` advances (default), or another one
+        (``bench/bus.py`` runs the workload on the system clock)."""
         per_fb = 8 if layout == "packed" else 1
         self.name = f"engine {layout}"
         self.clock = VirtualClock()
-        self.cpu = Cpu(self.clock)
+        self.cpu = Cpu(clock if clock is not None else self.clock)
         self.fbs = []
         for f in range(N_SEQUENCERS // per_fb):
             text = chart_source(f + 1, f * per_fb, per_fb)

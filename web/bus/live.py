@@ -31,8 +31,11 @@ Messages a command acknowledges (``ack``, ``ack_step``, ``init``) are acknowledg
 command's user, never as ``program``.
 
 Each update also carries a :class:`StepDetail` per active step (times to 0.1 s, interlock
-and supervision contacts, the contacts of its valid transitions: the CRIT bits), and
-:meth:`LiveGraph.alarms_changed` gives the message list whenever it changed.
+and supervision contacts, the contacts of its valid transitions: the CRIT bits; built
+only for the steps whose state changed, ``web.bus.step_details``), and
+:meth:`LiveGraph.alarms_changed` gives the message list whenever it changed. The events
+of a scan are grouped by instance DB once per scan record, for every LiveGraph of the CPU
+(``web.bus.scan_events``).
 
 Every command is refused while the CPU is not in RUN, and so is a second mode, step, or
 init/off command at the same scan boundary (one call would see both edges at once and
@@ -44,6 +47,7 @@ hostile command is refused with its reason, the scan loop goes on.
 
 from __future__ import annotations
 
+import operator
 import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
@@ -52,24 +56,22 @@ from typing import Any
 from s7graph.engine.modes import CpuMode
 from s7graph.engine.record import ScanRecord
 from s7graph.sequencer.compiled import CompiledChart
-from s7graph.sequencer.display import contact_bits
-from s7graph.sequencer.fb import GraphFB, StepEvent
+from s7graph.sequencer.fb import GraphFB
 from s7graph.sequencer.messages import PROGRAM_USER, parse_message_id
 from s7graph.sequencer.modes import SELECTORS
 from s7graph.sfb.alarms import Message, MessageList
 from s7graph.steps.conditions import contact_negations
 from s7graph.web.bus.protocol import (
-    EVENTS,
     MODES,
     AlarmEntry,
     AlarmList,
     ChartLayout,
     Command,
-    Contact,
     StepDetail,
     StepStateUpdate,
-    TransitionCriteria,
 )
+from s7graph.web.bus.scan_events import ScanEvents
+from s7graph.web.bus.step_details import StepDetails
 
 __all__ = ["CONTROL_SEQUENCER", "MODE_PINS", "OP_PINS", "LiveChart", "LiveGraph", "watch_names"]
 
@@ -109,6 +111,13 @@ class LiveChart:
     il_neg: tuple[tuple[bool, ...], ...]
     sv_neg: tuple[tuple[bool, ...], ...]
 
+    def step_details(self) -> StepDetails:
+        """A fresh builder of this chart's step details."""
+        return StepDetails(self.cc, self.tr_neg, self.il_neg, self.sv_neg)
+
+
+_PLAIN = frozenset({bool, int, float, str, type(None)})
+
 
 def _scalar(value: object) -> bool | int | float | str | None:
     if value is None or isinstance(value, bool | int | float | str):
@@ -122,7 +131,8 @@ class LiveGraph:
     ``read(name)`` gives the value of a watched operand (``ChartSession.get``);
     ``wall_ns`` turns CPU times into wall-clock times for the alarm list;
     ``messages`` is the CPU's message list (``sfb.alarms.message_list(cpu)``) for
-    ``ack_msg`` and :meth:`alarms_changed`."""
+    ``ack_msg`` and :meth:`alarms_changed`; ``events`` groups each scan's events by
+    instance DB — give every LiveGraph of a CPU the same one."""
 
     def __init__(
         self,
@@ -133,9 +143,11 @@ class LiveGraph:
         watch: Iterable[str] = (),
         wall_ns: Callable[[], int] = time.time_ns,
         messages: MessageList | None = None,
+        events: ScanEvents | None = None,
     ) -> None:
         self.graph = graph
         self.messages = messages
+        self.events = events if events is not None else ScanEvents()
         self.fb = fb or graph.cc.name
         self.switch(self.prepare(graph.cc, version=1))
         self._read = read
@@ -147,6 +159,8 @@ class LiveGraph:
         self._pending: dict[str, str] = {}  # conflict group -> op queued for the next call
         self._t_ns = 0  # CPU time of the last scan
         self._alarm_entries: tuple[Message, ...] | None = None
+        self._pins: tuple[str, ...] | None = None  # the output pins _pick reads
+        self._pick: Callable[[Any], tuple[Any, ...]] | None = None
 
     # ------------------------------------------------------------ the chart
 
@@ -175,7 +189,7 @@ class LiveGraph:
         """Describe ``chart`` from now on (at the scan boundary of an online change)."""
         self.cc = chart.cc
         self.layout = chart.layout
-        self._tr_neg, self._il_neg, self._sv_neg = chart.tr_neg, chart.il_neg, chart.sv_neg
+        self.step_details = chart.step_details()
 
     # ------------------------------------------------------------ state out
 
@@ -185,65 +199,39 @@ class LiveGraph:
         self.cycle = record.cycle
         self._t_ns = record.t_ns
         self._pending_mode = None  # the commands queued before this scan have acted
-        self._pending.clear()
+        if self._pending:
+            self._pending.clear()
         st = self.graph.state
         numbers = self.cc.step_numbers
-        active = sorted(numbers[i] for i in st.active)
-        disturbed = sorted(numbers[i] for i in st.active if st.il_err[i] or st.sv_err[i])
-        latched = sorted(numbers[i] for i in st.active if st.sv_err[i]) if st.ackreq_enabled else []
-        db = self.graph.db_number
-        events = [
-            (e.event, e.step)
-            for e in record.events
-            if isinstance(e, StepEvent) and e.db == db and e.event in EVENTS
-        ]
-        mode = st.mode if st.mode in MODES else "AUTO"
+        steps = st.active
+        active = sorted([numbers[i] for i in steps])
+        il_err, sv_err = st.il_err, st.sv_err
+        bad = [i for i in steps if il_err[i] or sv_err[i]]
+        if bad:
+            disturbed = sorted([numbers[i] for i in bad])
+            latched = sorted([numbers[i] for i in bad if sv_err[i]]) if st.ackreq_enabled else []
+        else:
+            disturbed, latched = [], []
+        mode = st.mode
         return StepStateUpdate(
-            cycle=max(record.cycle, 0),
+            cycle=record.cycle if record.cycle > 0 else 0,
             t_ms=max(record.t_ns // 1_000_000, 0),
-            mode=mode,  # type: ignore[arg-type]
+            mode=mode if mode in MODES else "AUTO",  # type: ignore[arg-type]
             active=active,
             disturbed=disturbed,
             latched=latched,
-            events=events,  # type: ignore[arg-type]
+            events=self.events.of(record, self.graph.db_number),  # type: ignore[arg-type]
             values=self.values(),
-            details=self.details(),
+            details=self.step_details.of(st),
             halted=bool(st.halted),
             il_enabled=bool(st.il_enabled),
             sv_enabled=bool(st.sv_enabled),
         )
 
     def details(self) -> list[StepDetail]:
-        """A :class:`StepDetail` per active step (cost proportional to the active steps)."""
-        st = self.graph.state
-        cc = self.cc
-        x, tt, crit = st.x, st.tt, st.crit
-        out = []
-        for i in sorted(st.active):
-            transitions = [
-                TransitionCriteria(
-                    number=cc.transition_numbers[j],
-                    name=cc.transition_names[j],
-                    holds=bool(tt[j]),
-                    contacts=_contacts(cc.crit_labels[j], crit[j], self._tr_neg[j]),
-                )
-                for j in cc.leaving[i]
-                if cc.tr_src[j] and all(x[s] for s in cc.tr_src[j])
-            ]
-            out.append(
-                StepDetail(
-                    number=cc.step_numbers[i],
-                    t_ms=st.t_ns[i] // 100_000_000 * 100,
-                    u_ms=st.u_ns[i] // 100_000_000 * 100,
-                    interlock_ok=bool(st.il_ok[i]),
-                    interlock_error=bool(st.il_err[i]),
-                    supervision_fault=bool(st.sv_err[i]),
-                    interlock=_contacts(cc.il_labels[i], st.crit_loc[i], self._il_neg[i]),
-                    supervision=_contacts(cc.sv_labels[i], st.crit_sup[i], self._sv_neg[i]),
-                    transitions=transitions,
-                )
-            )
-        return out
+        """A :class:`StepDetail` per active step (cost proportional to the active steps;
+        only a step whose state changed since the last call gets a new one)."""
+        return self.step_details.of(self.graph.state)
 
     def alarms_changed(self) -> AlarmList | None:
         """The message list if it changed since the last call (first call: always), else
@@ -286,7 +274,17 @@ class LiveGraph:
 
     def values(self) -> dict[str, bool | int | float | str | None]:
         """The FB outputs, then the watched operands (an unreadable one is left out)."""
-        out = {name: _scalar(v) for name, v in self.graph.outputs.items()}
+        graph = self.graph
+        pins = graph.out_pins
+        if pins is not self._pins:  # a chart with another parameter set (online change)
+            self._pins = pins
+            self._pick = operator.itemgetter(*pins) if len(pins) > 1 else None
+        if graph.idb is None or self._pick is None:
+            out = graph.outputs
+        else:
+            out = dict(zip(pins, self._pick(graph.idb.values), strict=True))
+        if not _PLAIN.issuperset(map(type, out.values())):
+            out = {name: _scalar(v) for name, v in out.items()}
         if self._read is not None:
             for name in self.watch:
                 try:
@@ -402,15 +400,6 @@ def _negations(condition: Any, labels: tuple[str, ...]) -> tuple[bool, ...]:
     """Which contacts of ``condition`` are negated; none if the walk does not match."""
     found = contact_negations(condition)
     return tuple(found) if len(found) == len(labels) else (False,) * len(labels)
-
-
-def _contacts(labels: tuple[str, ...], word: int, negated: tuple[bool, ...]) -> list[Contact]:
-    """Each contact as the operator reads it: ``NOT x`` for a negated one, ``ok`` when it
-    lets the condition through (the CRIT bit is the operand's value)."""
-    return [
-        Contact(text=f"NOT {text}"[:4096] if neg else text[:4096], ok=value != neg)
-        for (text, value), neg in zip(contact_bits(labels, int(word)), negated, strict=True)
-    ]
 
 
 def watch_names(symbols: Iterable[Any], limit: int = 16) -> list[str]:

@@ -265,13 +265,24 @@ class StepStateUpdate(_Msg, frozen=True, kw_only=True):
             or self.values != other.values
             or (self.halted, self.il_enabled, self.sv_enabled)
             != (other.halted, other.il_enabled, other.sv_enabled)
-            or _coarse(self.details) != _coarse(other.details)
+            or not _same_coarse(self.details, other.details)
         )
 
 
-def _coarse(details: list[StepDetail]) -> list[StepDetail]:
-    """Details with whole-second times: a step's T/U alone makes a delta once a second."""
-    return [msgspec.structs.replace(d, t_ms=d.t_ms // 1000, u_ms=d.u_ms // 1000) for d in details]
+def _same_coarse(a: list[StepDetail], b: list[StepDetail]) -> bool:
+    """Whether two scans' details are equal with whole-second times: a step's T/U alone
+    makes a delta once a second. A detail unchanged since the last scan is the same object
+    (``web.bus.step_details``): an identity test."""
+    if len(a) != len(b):
+        return False
+    for x, y in zip(a, b, strict=True):
+        if x is y:
+            continue
+        if x.t_ms // 1000 != y.t_ms // 1000 or x.u_ms // 1000 != y.u_ms // 1000:
+            return False
+        if msgspec.structs.replace(x, t_ms=y.t_ms, u_ms=y.u_ms) != y:
+            return False
+    return True
 
 
 class Contact(_Msg, frozen=True, kw_only=True):

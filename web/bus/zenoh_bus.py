@@ -8,7 +8,9 @@ Key space, all under ``s7graph/<cpu>/``:
 - ``fb/<name>/state`` — queryable: the latest :class:`StepStateUpdate` with its ``seq``;
 - ``fb/<name>/delta`` — the :class:`StepStateUpdate` of every scan that changed something;
   ``seq`` counts these, so a late joiner does ``get(state)`` and applies newer deltas only,
-  and a gap in ``seq`` means a missed delta;
+  and a gap in ``seq`` means a missed delta. The scan thread only decides and queues; the
+  publisher's :class:`~web.bus.outbox.Outbox` thread encodes and puts (deltas, status,
+  alarms), so a congested bus never holds up a scan;
 - ``alarms`` — the :class:`AlarmList` (the CPU's message list), published on change;
   ``alarms/list`` — queryable: the current one (``seq`` orders the two);
 - ``alarms/history`` — queryable: the last 200 message events (:class:`AlarmHistory`);
@@ -46,6 +48,7 @@ import msgspec
 import zenoh
 
 from s7graph.web.bus.gate import Apply, Gate
+from s7graph.web.bus.outbox import Outbox
 from s7graph.web.bus.protocol import (
     AlarmHistory,
     AlarmList,
@@ -83,6 +86,7 @@ ROOT = "s7graph"
 COMMAND_QUEUE_SIZE = 256
 COMMAND_MAX_AGE_S = 4.5  # older commands are refused: their sender (5 s timeout) gave up
 STATUS_PERIOD_S = 1.0
+STATUS_PERIOD_NS = int(STATUS_PERIOD_S * 1e9)
 
 
 @dataclass(frozen=True, slots=True)
@@ -263,14 +267,16 @@ class BusPublisher:
         self._lock = threading.Lock()
         self._charts = dict(charts)
         self._chart_bytes = {name: encode(layout) for name, layout in self._charts.items()}
-        self._state: dict[str, StepStateUpdate] = {}
+        self._state: dict[str, StepStateUpdate] = {}  # the latest scan (its seq: _seq)
         self._seq: dict[str, int] = dict.fromkeys(self._charts, 0)
+        self.outbox = Outbox()
         self._commands: queue.Queue[PendingCommand] = queue.Queue(maxsize=queue_size)
         self._max_age_ns = int(max_age_s * 1e9)
         self._status = CpuStatus(
             cpu=cpu, fbs=list(self._charts), login="demo" if self.gate.auth.demo else "users"
         )
         self._status_sent_ns = 0
+        self._cycle = (0, 0)  # the cycle and t_ms of the latest scan published
         self._alarms = AlarmList()
         self._declared: list[Any] = []
         self._delta_pubs: dict[str, zenoh.Publisher] = {}
@@ -322,19 +328,20 @@ class BusPublisher:
 
     def publish(self, fb: str, update: StepStateUpdate) -> bool:
         """Record one scan of ``fb``; publish a delta if something changed. Returns whether
-        a delta went out. ``update.seq`` is replaced by the bus's own change counter."""
+        a delta went out. ``update.seq`` is replaced by the bus's own change counter (the
+        delta is encoded and put by the outbox's thread)."""
         if fb not in self._charts:
             raise KeyError(f"unknown FB {fb!r}; known: {', '.join(self._charts)}")
         with self._lock:
-            previous = self._state.get(fb)
-            changed = update.changed_from(previous)
+            changed = update.changed_from(self._state.get(fb))
             if changed:
-                self._seq[fb] += 1
-            update = msgspec.structs.replace(update, seq=self._seq[fb])
+                seq = self._seq[fb] = self._seq[fb] + 1
             self._state[fb] = update
+            self._cycle = (update.cycle, update.t_ms)
         if changed:
-            self._delta_pubs[fb].put(encode(update))
-        self._publish_status(update)
+            self.outbox.post(self._delta_pubs[fb], update, seq)
+        if time.monotonic_ns() - self._status_sent_ns >= STATUS_PERIOD_NS:
+            self._publish_status()
         return changed
 
     def publish_alarms(self, alarms: AlarmList) -> AlarmList:
@@ -343,15 +350,14 @@ class BusPublisher:
         with self._lock:
             alarms = msgspec.structs.replace(alarms, seq=self._alarms.seq + 1)
             self._alarms = alarms
-        self._alarm_pub.put(encode(alarms))
+        self.outbox.post(self._alarm_pub, alarms)
         return alarms
 
     def set_cpu_state(self, state: str) -> None:
         """Report a CPU run state change (RUN/STOP/STARTUP) on ``status`` at once."""
         with self._lock:
             self._status = msgspec.structs.replace(self._status, state=state)
-            self._status_sent_ns = 0
-        self._publish_status(None)
+        self._publish_status()
 
     def set_cycle_stats(self, stats: CycleStats) -> None:
         """Carry ``stats`` in the next ``status`` (published at most once a second)."""
@@ -417,6 +423,7 @@ class BusPublisher:
         for p in self.drain_commands():
             p.resolve(False, "CPU bus closed")
         self.gate.on_audit = None
+        self.outbox.close()  # what the last scans published goes out first
         self._logins.shutdown(wait=False, cancel_futures=True)
         for d in reversed(self._declared):
             with contextlib.suppress(zenoh.ZError):
@@ -431,18 +438,15 @@ class BusPublisher:
 
     # ------------------------------------------------------------ zenoh callbacks
 
-    def _publish_status(self, update: StepStateUpdate | None) -> None:
-        now = time.monotonic_ns()
+    def _publish_status(self) -> None:
         with self._lock:
-            if update is not None:
-                self._status = msgspec.structs.replace(
-                    self._status, cycle=update.cycle, t_ms=update.t_ms
-                )
-            if now - self._status_sent_ns < STATUS_PERIOD_S * 1e9:
-                return
-            self._status_sent_ns = now
-            payload = encode(self._status)
-        self._status_pub.put(payload)
+            self._status_sent_ns = time.monotonic_ns()
+            status = self._status_now()
+        self.outbox.post(self._status_pub, status)
+
+    def _status_now(self) -> CpuStatus:
+        cycle, t_ms = self._cycle
+        return msgspec.structs.replace(self._status, cycle=cycle, t_ms=t_ms)
 
     def _publish_audit(self, entry: AuditEntry) -> None:
         with contextlib.suppress(zenoh.ZError):
@@ -467,8 +471,8 @@ class BusPublisher:
 
     def _state_of(self, fb: str) -> bytes | None:
         with self._lock:
-            state = self._state.get(fb)
-        return None if state is None else encode(state)
+            state, seq = self._state.get(fb), self._seq[fb]
+        return None if state is None else encode(msgspec.structs.replace(state, seq=seq))
 
     def _alarm_bytes(self) -> bytes:
         with self._lock:
@@ -476,7 +480,8 @@ class BusPublisher:
 
     def _status_bytes(self) -> bytes:
         with self._lock:
-            return encode(self._status)
+            status = self._status_now()
+        return encode(status)
 
     def _on_login(self, query: zenoh.Query) -> None:
         # Runs on a zenoh thread: only the exact key (never a wildcard), decode, and hand
