@@ -2,7 +2,8 @@
 
 Saved: retentive M/T/C and retain DBs (``Memory.snapshot()``), every instance DB
 (``InstanceDB.snapshot()``, OBJECT values through ``to_state()``), the diagnostic buffer,
-the restart type, what would block a hot restart, and extra named parts registered with
+the restart type, what would block a hot restart, the force jobs (``engine/force.py``: they
+outlive a restart and a power cycle, as on S7), and extra named parts registered with
 ``add_part`` (the CPU's message list: the engine does not know its type). Alarms (every
 message event, with the acknowledging user) and the audit log (who did what, when) are
 append-only tables.
@@ -312,6 +313,7 @@ class StateStore:
             "mode": str(cpu.mode),
             "last_restart": str(cpu.last_restart or ""),
             "hot_blockers": _dumps(sorted(cpu.hot_blockers - _NOT_KEPT)),
+            "forces": _dumps(cpu.forces.snapshot()) if cpu.forces else "[]",
         }
         if self.hot:
             meta["hot_memory"] = _dumps(cpu.mem.hot_snapshot())
@@ -485,6 +487,10 @@ class StateStore:
         if blockers:
             self._restore_part("hot restart blockers", lambda: cpu.hot_blockers.update(
                 str(b) for b in json.loads(blockers)))  # fmt: skip
+        forces = self.meta("forces")
+        if forces is not None:
+            self._restore_part("force table", lambda: cpu.forces.restore(json.loads(forces),
+                                                                         cpu.mem))  # fmt: skip
         entries = self._db.execute(
             "SELECT t_ns, event_id, block, message, address FROM diagnostics ORDER BY seq"
         ).fetchall()

@@ -12,6 +12,8 @@ Key space, all under ``s7graph/<cpu>/``:
 - ``alarms`` — the :class:`AlarmList` (the CPU's message list), published on change;
   ``alarms/list`` — queryable: the current one (``seq`` orders the two);
 - ``alarms/history`` — queryable: the last 200 message events (:class:`AlarmHistory`);
+- ``forces`` — the :class:`ForceList` (the CPU's force jobs), published on change and a
+  queryable; ``status`` counts them (the FRCE LED);
 - ``cmd`` — queryable: a :class:`Command` in, one :class:`CommandReply` out. Valid commands
   go on a thread-safe queue; the scan loop drains it at a scan boundary, where the
   :class:`~web.bus.gate.Gate` checks who sent each and whether their role allows it,
@@ -57,6 +59,7 @@ from s7graph.web.bus.protocol import (
     CommandReply,
     CpuStatus,
     CycleStats,
+    ForceList,
     LoginReply,
     LoginRequest,
     ProjectFiles,
@@ -162,6 +165,10 @@ class keys:
     @property
     def alarm_history(self) -> str:
         return f"{ROOT}/{self.cpu}/alarms/history"
+
+    @property
+    def forces(self) -> str:
+        return f"{ROOT}/{self.cpu}/forces"
 
     @property
     def cmd(self) -> str:
@@ -272,6 +279,7 @@ class BusPublisher:
         )
         self._status_sent_ns = 0
         self._alarms = AlarmList()
+        self._forces = ForceList()
         self._declared: list[Any] = []
         self._delta_pubs: dict[str, zenoh.Publisher] = {}
         self._chart_pubs: dict[str, zenoh.Publisher] = {}
@@ -306,6 +314,13 @@ class BusPublisher:
             )
             self._declared.append(self._alarm_pub)
             self._serve(self._keys.alarm_list, self._alarm_bytes)
+            self._force_pub = session.declare_publisher(
+                self._keys.forces,
+                encoding=zenoh.Encoding.APPLICATION_JSON,
+                congestion_control=zenoh.CongestionControl.BLOCK,
+            )
+            self._declared.append(self._force_pub)
+            self._serve(self._keys.forces, self._force_bytes)
             self._serve(self._keys.alarm_history, lambda: encode(self.gate.history()))
             self._serve(self._keys.audit_list, lambda: encode(self.gate.audit_list()))
             self._audit_pub = session.declare_publisher(
@@ -345,6 +360,18 @@ class BusPublisher:
             self._alarms = alarms
         self._alarm_pub.put(encode(alarms))
         return alarms
+
+    def publish_forces(self, forces: ForceList) -> ForceList:
+        """Publish a changed force table on ``forces`` (``seq`` is the bus's own counter),
+        serve it there, and put the number of jobs into ``status`` at once."""
+        with self._lock:
+            forces = msgspec.structs.replace(forces, seq=self._forces.seq + 1)
+            self._forces = forces
+            self._status = msgspec.structs.replace(self._status, forces=len(forces.entries))
+            self._status_sent_ns = 0
+        self._force_pub.put(encode(forces))
+        self._publish_status(None)
+        return forces
 
     def set_cpu_state(self, state: str) -> None:
         """Report a CPU run state change (RUN/STOP/STARTUP) on ``status`` at once."""
@@ -473,6 +500,10 @@ class BusPublisher:
     def _alarm_bytes(self) -> bytes:
         with self._lock:
             return encode(self._alarms)
+
+    def _force_bytes(self) -> bytes:
+        with self._lock:
+            return encode(self._forces)
 
     def _status_bytes(self) -> bytes:
         with self._lock:
@@ -606,25 +637,46 @@ class BusClient:
     def on_alarms(self, callback: Callable[[AlarmList], None]) -> None:
         """Call ``callback`` with the current message list, then with each newer one (by
         ``seq``; on a zenoh thread)."""
+        self._follow_seq(self._keys.alarms, AlarmList, self.alarms, callback)
+
+    def _follow_seq(
+        self,
+        key: str,
+        kind: type[Any],
+        current: Callable[[], Any],
+        callback: Callable[[Any], None],
+    ) -> None:
+        """Subscribe to ``key``'s publications of ``kind`` and fetch the current one:
+        ``callback`` sees each newer one (by ``seq``) once."""
         lock = threading.Lock()
         latest = [-1]
 
-        def offer(alarms: AlarmList) -> None:
+        def offer(message: Any) -> None:
             with lock:
-                if alarms.seq <= latest[0]:
+                if message.seq <= latest[0]:
                     return
-                latest[0] = alarms.seq
-                callback(alarms)
+                latest[0] = message.seq
+                callback(message)
 
         def on_sample(sample: zenoh.Sample) -> None:
             with contextlib.suppress(ProtocolError):
-                offer(decode(sample.payload.to_bytes(), AlarmList))
+                offer(decode(sample.payload.to_bytes(), kind))
 
-        self._subscribers.append(self._session.declare_subscriber(self._keys.alarms, on_sample))
+        self._subscribers.append(self._session.declare_subscriber(key, on_sample))
         with contextlib.suppress(ProtocolError, zenoh.ZError):
-            current = self.alarms()
-            if current is not None:
-                offer(current)
+            message = current()
+            if message is not None:
+                offer(message)
+
+    def forces(self) -> ForceList | None:
+        """The CPU's force jobs, or None if no CPU answers."""
+        data = self._get_one(self._keys.forces)
+        return None if data is None else decode(data, ForceList)
+
+    def on_forces(self, callback: Callable[[ForceList], None]) -> None:
+        """Call ``callback`` with the current force jobs, then with each newer list (by
+        ``seq``; on a zenoh thread)."""
+        self._follow_seq(self._keys.forces, ForceList, self.forces, callback)
 
     def send(self, command: Command, *, timeout: float | None = None) -> CommandReply:
         """Send a command and wait for the CPU's answer; no answer is a refusal too."""

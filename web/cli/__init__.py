@@ -1,6 +1,6 @@
 """The ``s7graph`` command line: ``run``, ``sim``, ``check``, ``import``, ``export``,
 ``--version``; for the bus ``web``, ``router``, ``watch`` and the shell's commands (``ack``,
-``mode``, ..., ``download``); ``users`` and ``audit``.
+``mode``, ..., ``force``, ``download``); ``users`` and ``audit``.
 
 Each command lives in its own module (``web/cli/*.py``) and is imported only when used, so
 ``s7graph check`` never pays for zenoh or viser. Errors are one line on stderr and a
@@ -430,6 +430,41 @@ def t_push(
 ) -> None:  # fmt: skip
     """Switch a ready transition (TAP, TOP; T_PUSH)."""
     _remote("t_push", {}, cpu, connect, fb, user, tls_ca)
+
+
+@app.command(context_settings={"ignore_unknown_options": True})  # MW10 -5: a value
+def force(
+    job: Annotated[
+        list[str] | None,
+        typer.Argument(metavar="ADDRESS VALUE|off",
+                       help="An I, Q or M address or a symbol, and TRUE/FALSE, a number or "
+                       "an S7 literal (16#00FF, T#5S); off unforces it."),
+    ] = None,
+    user: Annotated[str | None, typer.Option("--user", help="Log in as this user.")] = None,
+    cpu: CpuName = "cpu1", connect: Connect = None, fb: FbName = None, tls_ca: TlsCa = None,
+    list_: Annotated[bool, typer.Option("--list", help="Print the force jobs.")] = False,
+    all_: Annotated[bool, typer.Option("--all", help="With off: unforce every job.")] = False,
+) -> None:  # fmt: skip
+    """Force an input, output or flag until unforced (engineers), unforce it, or list the
+    force jobs."""
+    words = list(job or [])
+    if list_:
+        if words or all_:
+            raise typer.BadParameter("--list takes no address, value or --all")
+        from s7graph.web.cli.remote import list_forces
+
+        raise typer.Exit(list_forces(_net(cpu=cpu, connect=connect, tls_ca=tls_ca)))
+    if user is None:
+        raise typer.BadParameter("give the user to log in as with --user")
+    if all_:
+        if [w.lower() for w in words] != ["off"]:
+            raise typer.BadParameter("--all unforces every job: s7graph force --all off")
+        _remote("force", {"all": True}, cpu, connect, fb, user, tls_ca)
+    if len(words) != 2:
+        raise typer.BadParameter("give ADDRESS VALUE (or ADDRESS off), e.g. force I0.3 TRUE")
+    address, value = words
+    args = {"address": address, "value": None if value.lower() == "off" else value}
+    _remote("force", args, cpu, connect, fb, user, tls_ca)
 
 
 @app.command()

@@ -11,7 +11,8 @@ plant still running at twice the maximum cycle time is aborted (STOP). Without `
 STOP by error ends the run: the reason on stderr, exit 1.
 ``--web`` serves the live browser view of the running FB on 127.0.0.1:``--port`` and its
 zenoh bus (``web/live_edge.py``): one state update per scan, operator commands applied
-between scans, acknowledgements in the state file's audit log. ``--record FILE.rrd``
+between scans (an engineer's force jobs too: ``web/bus/forcing.py``), acknowledgements in
+the state file's audit log. ``--record FILE.rrd``
 records the same updates as a rerun timeline (extra ``[trace]``). The maximum cycle time is
 ``--max-cycle-ms``; by default S7's 150 ms, but 1 s with ``--web``: viser and zenoh share the
 process, and sending the scene to a new page can hold a scan up for longer than 150 ms (a
@@ -146,6 +147,7 @@ def _serve(
 ) -> LiveEdge:
     """The live view (and recording) of the session's GraphFB, and its online change
     (``path``: the chart file a download rewrites); prints where to look."""
+    from s7graph.web.bus.forcing import Forcing
     from s7graph.web.bus.gate import cpu_gate  # zenoh and viser only when asked for
     from s7graph.web.bus.live import LiveGraph, watch_names
     from s7graph.web.bus.online import OnlineChange
@@ -163,6 +165,7 @@ def _serve(
     edge = LiveEdge(
         live, port=port, record=record, serve=web, bus=net.on_bus, cpu=net.cpu, host=net.host,
         ends=net.ends, gate=gate, allowed_origins=tuple(net.origins), online=online,
+        forcing=Forcing(session.cpu),
     )  # fmt: skip
     if web:
         print(f"s7graph: view {edge.url} (bus {edge.endpoint}); Ctrl-C to stop", flush=True)

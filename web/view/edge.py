@@ -142,6 +142,7 @@ class ViewSide:
             self.follower = client.follow(self.fb, self.view.apply)
             client.on_status(self.view.apply_status)
             client.on_alarms(self.view.apply_alarms)
+            client.on_forces(self.view.apply_forces)
             client.on_audit(self.view.apply_audit)
             client.on_alive(self.view.set_connected)
             with contextlib.suppress(Exception):
