@@ -187,6 +187,7 @@ class GraphRuntime(FastPath):
         else:
             self.levels[pin] = value
         self._last_in = None  # the next call latches the pins again
+        self._quiet = False  # and is a general one, which applies the levels
 
     def _apply_commands(self) -> None:
         st = self.st
