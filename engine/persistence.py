@@ -79,6 +79,7 @@ _NOT_KEPT = {"program download", "no hot restart image saved"}
 """Hot-restart blockers that belong to one run, not to the state on disk."""
 _BUSY = (5, 6)  # SQLITE_BUSY, SQLITE_LOCKED: another connection holds the lock
 _OURS = {"meta", "instances", "diagnostics", "alarms", "parts", "audit"}
+_APPENDABLE = {"alarms", "audit"}
 _ALARM_COLUMNS = ("t_ns", "key", "state", "text", "user", "cpu_ns", "reason")
 _ADDED_ALARM_COLUMNS = (
     ("user", "TEXT NOT NULL DEFAULT ''"),
@@ -145,11 +146,14 @@ class Batch:
     diagnostics: list[tuple[int, int, int, str, str, str]] = field(default_factory=list)
     alarms: list[tuple[int, str, str, str, str, int | None, str]] = field(default_factory=list)
     audit: list[tuple[int, str, str, str]] = field(default_factory=list)
+    appended: list[tuple[str, tuple[str, ...], tuple[Any, ...]]] = field(default_factory=list)
+    """Rows of the append-only tables written by the edges (``StateStore.append``):
+    (table, columns, values)."""
 
     def __bool__(self) -> bool:
         return bool(
             self.meta or self.instances or self.parts or self.diagnostics
-            or self.alarms or self.audit
+            or self.alarms or self.audit or self.appended
         )  # fmt: skip
 
     def merge(self, later: Batch) -> None:
@@ -161,12 +165,13 @@ class Batch:
         self.diagnostics.extend(later.diagnostics)
         self.alarms.extend(later.alarms)
         self.audit.extend(later.audit)
+        self.appended.extend(later.appended)
 
     @property
     def rows(self) -> int:
         return (
             len(self.meta) + len(self.instances) + len(self.parts)
-            + len(self.diagnostics) + len(self.alarms) + len(self.audit)
+            + len(self.diagnostics) + len(self.alarms) + len(self.audit) + len(self.appended)
         )  # fmt: skip
 
 
@@ -438,6 +443,11 @@ class StateStore:
                     "INSERT INTO audit (t_ns, user, action, detail) VALUES (?, ?, ?, ?)",
                     batch.audit,
                 )
+            for (table, columns), rows in _grouped(batch.appended).items():
+                marks = ", ".join("?" * len(columns))
+                db.executemany(
+                    f"INSERT INTO {table} ({', '.join(columns)}) VALUES ({marks})", rows
+                )
             db.execute("COMMIT")
         except sqlite3.Error as exc:
             if db.in_transaction:
@@ -588,6 +598,20 @@ class StateStore:
     def log_audit(self, t_ns: int, user: str, action: str, detail: str = "") -> None:
         self._log("audit", (t_ns, user, action, detail))
 
+    def append(self, table: str, columns: tuple[str, ...], values: tuple[Any, ...]) -> bool:
+        """Queue one row of an append-only table (``audit``, ``alarms``) to commit with the
+        next scan's state — in the same transaction, so a durable mark covers it. False
+        (nothing queued) when no writer defers the rows: the caller writes it itself."""
+        if table not in _APPENDABLE or not all(c.isidentifier() for c in columns):
+            raise ValueError(f"cannot append to {table}({', '.join(columns)})")
+        if len(columns) != len(values):
+            raise ValueError(f"{len(columns)} columns, {len(values)} values")
+        with self._lock:
+            if not self.deferred:
+                return False
+            self._logs.appended.append((table, columns, values))
+        return True
+
     def alarms(self) -> list[dict[str, Any]]:
         cur = self._db.execute(f"SELECT {', '.join(_ALARM_COLUMNS)} FROM alarms ORDER BY id")
         return [dict(zip(_ALARM_COLUMNS, r, strict=True)) for r in cur]
@@ -619,6 +643,16 @@ class _Unseen:
 
 
 _UNSEEN = _Unseen()
+
+
+def _grouped(
+    rows: list[tuple[str, tuple[str, ...], tuple[Any, ...]]],
+) -> dict[tuple[str, tuple[str, ...]], list[tuple[Any, ...]]]:
+    """Appended rows by table and columns, each group in the order queued."""
+    out: dict[tuple[str, tuple[str, ...]], list[tuple[Any, ...]]] = {}
+    for table, columns, values in rows:
+        out.setdefault((table, columns), []).append(values)
+    return out
 
 
 def _restore_json(restore: Callable[[Any], None], text: str) -> None:

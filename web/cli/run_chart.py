@@ -148,7 +148,7 @@ def _serve(
         session.graph, read=session.get, watch=watch_names(session.symbols),
         messages=message_list(session.cpu),
     )  # fmt: skip
-    gate = cpu_gate(net.users, store.path)
+    gate = cpu_gate(net.users, store)
     edge = LiveEdge(
         live, port=port, record=record, serve=web, bus=net.on_bus, cpu=net.cpu, host=net.host,
         ends=net.ends, gate=gate, allowed_origins=tuple(net.origins),

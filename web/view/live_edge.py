@@ -121,7 +121,7 @@ class LiveEdge:
         alarms = self.live.alarms_changed()
         if alarms is not None:
             publisher.publish_alarms(alarms)
-        publisher.apply_commands(self.live.apply, cycle=record.cycle)
+        publisher.apply_commands(self.live.apply, cycle=record.cycle, durable=runner)
         return update
 
     def close(self) -> None:
