@@ -308,12 +308,17 @@ def web(
     tls_ca: TlsCa = None,
     origin: Origin = None,
     duration_s: Annotated[float | None, typer.Option(help="Stop after this many seconds.")] = None,
+    child: Annotated[
+        bool, typer.Option("--child", hidden=True, help="The view of a run --web.")
+    ] = False,
 ) -> None:
     """Serve the browser view of a CPU on the bus, as a process of its own."""
     from s7graph.web.cli.view import web_command
 
     net = _net(connect=connect, host=host, tls_ca=tls_ca, origins=origin)
-    raise typer.Exit(web_command(net, cpu=cpu, fb=fb, port=port, duration_s=duration_s))
+    raise typer.Exit(
+        web_command(net, cpu=cpu, fb=fb, port=port, duration_s=duration_s, child=child)
+    )
 
 
 @app.command()

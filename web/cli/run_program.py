@@ -160,8 +160,9 @@ def run_until_stopped(
     """Start the runner's CPU with ``restart`` (``on_start`` gets the startup record), say
     how on stderr with ``what``, and scan until Ctrl-C/SIGTERM/``duration_s`` (or, with the
     runner's ``end_on_stop``, a STOP by error). Always: the signal handlers back, the runner
-    shut down, ``close()``, the store closed. Returns the exit status: 0, or 1 (with one
-    line on stderr) when the CPU went to STOP by an error or the state was not written."""
+    shut down, ``close()``, the store closed. Returns the exit status: 0 (saying so in one
+    line on stderr), or 1 (with one line on stderr) when the CPU went to STOP by an error
+    or the state was not written."""
     cpu = runner.cpu
     store = opened.store
 
@@ -192,4 +193,7 @@ def run_until_stopped(
     if runner.write_error is not None:
         print(f"s7graph: error: {runner.write_error}; the CPU went to STOP", file=sys.stderr)
         return 1
-    return 1 if runner.stopped else 0
+    if runner.stopped:
+        return 1
+    print(f"s7graph: {what} stopped (state saved in {store.path})", file=sys.stderr)
+    return 0
