@@ -12,7 +12,8 @@ with what was last staged and returns a :class:`Batch` of the rows that changed 
 nothing did; ``write(batch)`` commits one batch as one transaction (in any thread: the
 runner's writer, ``engine/writer.py``). An instance DB is one row, its snapshot as
 compressed JSON (a 7-step chart: about 700 bytes, one page of the file's 1 KiB pages), so
-a step switch rewrites a page or two. Keys an OBJECT value names in its ``VOLATILE`` (a
+a step switch rewrites a page or two; ``stage`` only copies and compares, the writer encodes
+and compresses. Keys an OBJECT value names in its ``VOLATILE`` (a
 GRAPH FB's call counter and the clock time of its last call, which dates its running step
 times) are saved with every write of the row, but on their own cause one only every
 ``time_mark_ms`` (500 ms): what a hot restart can lose of a running step time is bounded,
@@ -140,8 +141,11 @@ class Batch:
 
     upto: int = 0
     meta: dict[str, str] = field(default_factory=dict)
-    instances: dict[int, tuple[str, str, str, str, bytes]] = field(default_factory=dict)
-    """DB number → (FB label, FB name, fingerprint, shape JSON, compressed snapshot)."""
+    instances: dict[int, tuple[str, str, str, str, dict[str, object]]] = field(
+        default_factory=dict
+    )
+    """DB number → (FB label, FB name, fingerprint, shape JSON, snapshot): the snapshot (a
+    copy) is encoded and compressed by ``write``, in the writer's thread."""
     parts: dict[str, str] = field(default_factory=dict)
     diagnostics: list[tuple[int, int, int, str, str, str]] = field(default_factory=list)
     alarms: list[tuple[int, str, str, str, str, int | None, str]] = field(default_factory=list)
@@ -237,6 +241,7 @@ class StateStore:
         self._part_seen: dict[str, object] = {}
         self._seen: dict[int, object] = {}
         self._volatile_seen: dict[int, object] = {}
+        self._shapes: dict[int, tuple[FB, str]] = {}
         self._meta_seen: dict[str, str] = {}
         self._marked_ns: int | None = None
         self._last_ns: int | None = None
@@ -373,10 +378,11 @@ class StateStore:
             return
         self._seen[number] = steady
         self._volatile_seen[number] = volatile
-        fmt = fb.state_format
-        data = zlib.compress(_dumps(snapshot).encode(), 6)
-        shape = _dumps(fmt.shape() if fmt is not None else None)
-        batch.instances[number] = (fb.label, fb.name, fingerprint_of(fb), shape, data)
+        shape = self._shapes.get(number)
+        if shape is None or shape[0] is not fb:
+            fmt = fb.state_format
+            shape = self._shapes[number] = (fb, _dumps(fmt.shape() if fmt is not None else None))
+        batch.instances[number] = (fb.label, fb.name, fingerprint_of(fb), shape[1], snapshot)
 
     def diagnostic_row(self, entry: DiagEntry) -> tuple[int, int, int, str, str, str]:
         """A diagnostics row for an entry written outside ``stage`` (the runner's last word
@@ -423,7 +429,7 @@ class StateStore:
             if batch.instances:
                 db.executemany(
                     "INSERT OR REPLACE INTO instances VALUES (?, ?, ?, ?, ?, ?)",
-                    [(n, *row) for n, row in batch.instances.items()],
+                    [(n, *row[:4], _packed(row[4])) for n, row in batch.instances.items()],
                 )
             if batch.parts:
                 db.executemany("INSERT OR REPLACE INTO parts VALUES (?, ?)", batch.parts.items())
@@ -657,6 +663,11 @@ def _grouped(
 
 def _restore_json(restore: Callable[[Any], None], text: str) -> None:
     restore(json.loads(text))
+
+
+def _packed(snapshot: dict[str, object]) -> bytes:
+    """An instance snapshot as it is stored: compressed JSON."""
+    return zlib.compress(_dumps(snapshot).encode(), 6)
 
 
 def _decode_instance(blob: object) -> dict[str, Any]:

@@ -164,3 +164,18 @@ def test_max_cycle_time_must_be_positive(tmp_path: Path, value: str) -> None:
                 "--duration-s", "0.2", "--max-cycle-ms", value)  # fmt: skip
     assert proc.returncode == 2
     assert "max-cycle-ms" in proc.stderr and "Traceback" not in proc.stderr
+
+
+@pytest.mark.parametrize("value", ["-1", "99"])
+def test_rt_priority_must_be_0_to_98(tmp_path: Path, value: str) -> None:
+    """``--rt-priority`` out of range is a usage error, exit 2, never a traceback."""
+    proc = _run(str(ROOT / "examples/blink.py"), "--state", str(tmp_path / "s.sqlite"),
+                "--duration-s", "0.2", "--rt-priority", value)  # fmt: skip
+    assert proc.returncode == 2
+    assert "rt-priority" in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_rt_priority_0_runs_at_the_normal_priority(tmp_path: Path) -> None:
+    proc = _run(str(ROOT / "examples/blink.py"), "--state", str(tmp_path / "s.sqlite"),
+                "--duration-s", "0.2", "--rt-priority", "0")  # fmt: skip
+    assert proc.returncode == 0, proc.stderr

@@ -30,7 +30,7 @@ from s7graph.engine.errors import S7Error, ScanAborted
 from s7graph.engine.modes import CpuMode
 from s7graph.engine.persistence import StateFileError, StateStore
 from s7graph.engine.record import ScanRecord
-from s7graph.engine.runner import Runner
+from s7graph.engine.runner import RT_PRIORITY, Runner
 from s7graph.engine.watchdog import Watchdog
 from s7graph.sfb.alarms import message_list
 from s7graph.web.cli.report import fail
@@ -65,6 +65,8 @@ def run_chart(
     restart: str = "warm",
     fresh: bool = False,
     view_in_process: bool = False,
+    session: ChartSession | None = None,
+    rt_priority: int | None = RT_PRIORITY,
 ) -> int:
     """Run ``path`` until Ctrl-C/SIGTERM/``duration_s``; 0 clean, 1 plant error, STOP by
     error or state not written, 2 bad chart or a state file it cannot trust.
@@ -75,10 +77,13 @@ def run_chart(
     ``max_cycle_ms`` None: ``DEFAULT_MAX_CYCLE_MS`` (``IN_PROCESS_VIEW_MAX_CYCLE_MS`` with
     ``web`` and ``view_in_process``). ``restart``: the startup from a saved state
     (``--restart``); ``fresh``: keep the old state file aside and start anew (``--fresh``).
-    ``view_in_process``: serve the view in this process (the benchmark's comparison)."""
-    clock = SystemClock()
+    ``view_in_process``: serve the view in this process (the benchmark's comparison);
+    ``session``: ``path`` already loaded, on the system clock (the benchmark's).
+    ``rt_priority``: the scan thread's real-time priority (None: normal scheduling)."""
+    clock = SystemClock() if session is None else session.clock
     try:
-        session = ChartSession.load(path, symbols, clock)
+        if session is None:
+            session = ChartSession.load(path, symbols, clock)
         loaded: LoadedPlant | None = load_plant(plant) if plant is not None else None
     except S7Error as exc:  # ChartLoadError included
         return fail(exc)
@@ -132,7 +137,8 @@ def run_chart(
         if live is not None:
             live.close()
 
-    runner = Runner(cpu, cycle_ms=cycle_ms, store=store, on_record=on_record, end_on_stop=not web)
+    runner = Runner(cpu, cycle_ms=cycle_ms, store=store, on_record=on_record, end_on_stop=not web,
+                    rt_priority=rt_priority)  # fmt: skip
     if view is not None:
         view.start()
     status = run_until_stopped(

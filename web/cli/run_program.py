@@ -30,7 +30,7 @@ from s7graph.engine.modes import CpuMode
 from s7graph.engine.persistence import StateFileError
 from s7graph.engine.record import ScanRecord
 from s7graph.engine.restart import parse_restart
-from s7graph.engine.runner import Runner
+from s7graph.engine.runner import RT_PRIORITY, Runner
 from s7graph.web.harness.persist import OpenedState, open_state, refusal
 
 
@@ -117,6 +117,7 @@ def run_program(
     max_cycle_ms: float | None = None,
     restart: str | None = None,
     fresh: bool = False,
+    rt_priority: int | None = RT_PRIORITY,
 ) -> int:
     """Run a program until Ctrl-C/SIGTERM/duration; 0 on a clean end, 1 when the CPU went
     to STOP by an error or the state could not be written, 2 on a broken program or a
@@ -124,7 +125,8 @@ def run_program(
 
     ``max_cycle_ms``: the maximum cycle time; None keeps the program's (see ``build_cpu``).
     ``restart`` (``--restart``): the startup from a saved state; None: the program's
-    ``CPU["restart"]``, else warm."""
+    ``CPU["restart"]``, else warm. ``rt_priority``: the scan thread's real-time priority
+    (None: normal scheduling)."""
     try:
         module = import_program(path)
         cpu = build_cpu(module, SystemClock(), max_cycle_ms=max_cycle_ms)
@@ -140,7 +142,7 @@ def run_program(
     except OSError as exc:
         return _fail(state_path, f"cannot use the state file: {exc.strerror or exc}")
     runner = Runner(cpu, cycle_ms=cycle_ms, store=opened.store, on_record=_report,
-                    end_on_stop=True)  # fmt: skip
+                    end_on_stop=True, rt_priority=rt_priority)  # fmt: skip
     return run_until_stopped(
         runner, opened, what=path.name, restart=restart, duration_s=duration_s,
         on_start=_report,
