@@ -211,12 +211,17 @@ def flood(url: str, endpoint: str, fb: str) -> Iterator[Callable[[], str]]:
     command = Command(op="halt", fb=fb, user="flood", token=login.token, args={"on": False})
     payload = encode(command)
 
+    refusals: dict[str, int] = {}
+
     def sender() -> None:
         while not stop.is_set():
             reply = client.send(command)
             with lock:
                 counts["answered"] += 1
                 counts["applied"] += reply.applied
+                if not reply.applied:
+                    why = reply.reason.split(":")[0][:40]
+                    refusals[why] = refusals.get(why, 0) + 1
 
     def on_reply(reply: zenoh.Reply) -> None:
         with lock:
@@ -243,8 +248,9 @@ def flood(url: str, endpoint: str, fb: str) -> Iterator[Callable[[], str]]:
         t.start()
     try:
         yield lambda: (
-            f"{counts['answered']} sent and answered ({counts['applied']} applied), "
-            f"{counts['fired']} fired ({counts['replies']} replies)"
+            f"{counts['answered']} sent and answered ({counts['applied']} applied"
+            + "".join(f"; {n} {why}" for why, n in sorted(refusals.items()))
+            + f"), {counts['fired']} fired ({counts['replies']} replies)"
         )
     finally:
         stop.set()

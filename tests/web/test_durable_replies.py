@@ -113,7 +113,7 @@ def _send_in_thread(rig: Rig, command: Command) -> tuple[threading.Thread, list[
 
 def _foreign_lock(state: Path) -> sqlite3.Connection:
     """Another connection holding the state file's write lock (a backup tool, a slow disk)."""
-    con = sqlite3.connect(state, timeout=0, isolation_level=None)
+    con = sqlite3.connect(state, timeout=10, isolation_level=None)  # between two commits
     con.execute("BEGIN IMMEDIATE")
     return con
 
