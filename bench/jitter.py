@@ -28,6 +28,7 @@ import functools
 import json
 import os
 import re
+import resource
 import socket
 import statistics
 import subprocess
@@ -95,11 +96,14 @@ def worker(workload: str, view: str, endpoint: str, port: int, state: Path) -> i
     Runner.run = kept_run  # type: ignore[method-assign]
     marks: dict[str, tuple[int, int]] = {}
 
+    faults: dict[str, int] = {}
+
     def control() -> None:
         for line in sys.stdin:
             word = line.strip()
             overruns = runners[0].overruns if runners else 0
             marks[word] = (len(ends), overruns)
+            faults[word] = resource.getrusage(resource.RUSAGE_SELF).ru_majflt
             if word == "end" and runners:
                 runners[0].request_stop()
 
@@ -120,8 +124,9 @@ def worker(workload: str, view: str, endpoint: str, port: int, state: Path) -> i
     cycles = [starts[i + 1] - starts[i] for i in range(a, min(b, len(starts)) - 1)]
     scans = [ends[i] - starts[i] for i in range(a, b)]
     stopped = runners[0].stopped if runners else "never ran"
+    majflt = faults.get("end", 0) - faults.get("start", 0)
     result = {"rc": rc, "cycles": cycles, "scans": scans, "overruns": over_b - over_a,
-              "stopped": stopped}  # fmt: skip
+              "stopped": stopped, "majflt": majflt}  # fmt: skip
     print(RESULT + json.dumps(result), flush=True)
     return 0
 
@@ -413,8 +418,8 @@ def main(argv: list[str] | None = None) -> int:
                               f"{result['stopped']}")  # fmt: skip
                     f = runs[(workload, view, load)][-1]
                     print(f"  {workload:8} {view:9} {load:6} p99.9 {f['p999']:.2f} max "
-                          f"{f['max']:.2f} overruns {f['overruns']:.0f}  ({result['load']})",
-                          flush=True)  # fmt: skip
+                          f"{f['max']:.2f} overruns {f['overruns']:.0f}, page faults "
+                          f"{result['majflt']}  ({result['load']})", flush=True)  # fmt: skip
     head = (f"{'workload':9} {'view':9} {'load':6} {'cycles':>6} {'p50':>17} {'p99':>17} "
             f"{'p99.9':>17} {'max':>17} {'overruns':>10} {'scan p50':>17} {'scan p99':>17} "
             f"{'load avg':>14}  target")  # fmt: skip

@@ -25,7 +25,14 @@ from s7graph.web.access.audit import read_audit
 from s7graph.web.bus.gate import cpu_gate
 from s7graph.web.bus.live import LiveGraph
 from s7graph.web.bus.protocol import AuditEntry, Command, CommandReply
-from s7graph.web.bus.zenoh_bus import BusClient, BusPublisher, open_session
+from s7graph.web.bus.zenoh_bus import (
+    CLIENT_TIMEOUT_S,
+    COMMAND_MAX_AGE_S,
+    REPLY_WITHIN_S,
+    BusClient,
+    BusPublisher,
+    open_session,
+)
 from s7graph.web.harness.session import ChartSession
 from tests.web.helpers import wait_until
 
@@ -169,3 +176,12 @@ def test_a_command_the_disk_has_not_confirmed_in_time_is_answered_as_not_confirm
     assert wait_until(
         lambda: ("tess (unverified)", "mode", "applied") in _audit_ops(rig.state), 10
     )
+
+
+def test_every_command_is_answered_within_its_senders_timeout() -> None:
+    """A command waits at most ``COMMAND_MAX_AGE_S`` for its scan boundary (else refused),
+    and is answered — confirmed or not — ``REPLY_WITHIN_S`` after it came at the latest,
+    before the sender's ``BusClient`` gives up."""
+    assert COMMAND_MAX_AGE_S < REPLY_WITHIN_S < CLIENT_TIMEOUT_S
+    assert CLIENT_TIMEOUT_S - REPLY_WITHIN_S >= 0.5  # the reply's way back over the bus
+    assert BusClient.__init__.__kwdefaults__ == {"timeout": CLIENT_TIMEOUT_S}
