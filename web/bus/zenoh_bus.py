@@ -17,8 +17,11 @@ Key space, all under ``s7graph/<cpu>/``:
 - ``cmd`` — queryable: a :class:`Command` in, one :class:`CommandReply` out. Valid commands
   go on a thread-safe queue; the scan loop drains it at a scan boundary, where the
   :class:`~web.bus.gate.Gate` checks who sent each and whether their role allows it,
-  applies and audits it, and resolves it, which sends the reply. Unreadable ones are
-  refused (and audited) at once with the reason;
+  applies and audits it. The reply leaves once the command's effect and its audit row
+  are durable (``apply_commands(..., durable=runner)``: from the writer thread's callback
+  when the next scan's state is committed; never does the scan thread wait), or, if the
+  state file has not confirmed it ``REPLY_WITHIN_S`` after the command came, as not
+  confirmed. Unreadable ones are refused (and audited) at once with the reason;
 - ``login`` — queryable: a :class:`LoginRequest` in, a :class:`LoginReply` (a token) out;
 - ``audit`` — each :class:`AuditEntry` as it is written; ``audit/list`` — queryable: the
   last 50 (:class:`AuditList`);
@@ -33,6 +36,7 @@ always be closed. docs/bus.md shows every message.
 
 from __future__ import annotations
 
+import collections
 import contextlib
 import functools
 import json
@@ -42,7 +46,7 @@ import time
 from collections.abc import Callable, Iterable, Mapping
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 import msgspec
 import zenoh
@@ -73,6 +77,7 @@ from s7graph.web.bus.protocol import (
 __all__ = [
     "BusClient",
     "BusPublisher",
+    "Durability",
     "PendingCommand",
     "StateFollower",
     "TlsFiles",
@@ -84,7 +89,14 @@ __all__ = [
 
 ROOT = "s7graph"
 COMMAND_QUEUE_SIZE = 256
-COMMAND_MAX_AGE_S = 4.5  # older commands are refused: their sender (5 s timeout) gave up
+CLIENT_TIMEOUT_S = 5.0
+"""How long a :class:`BusClient` waits for an answer."""
+COMMAND_MAX_AGE_S = 3.0
+"""Older commands are refused at the scan boundary: too little of their sender's wait would
+be left for the state file to confirm them."""
+REPLY_WITHIN_S = 4.5
+"""A command applied but not yet confirmed durable this long after it came is answered as
+not confirmed (before its sender's ``CLIENT_TIMEOUT_S`` runs out)."""
 STATUS_PERIOD_S = 1.0
 
 
@@ -231,6 +243,44 @@ class PendingCommand:
         self.query = None
 
 
+class Durability(Protocol):
+    """Who says when what was applied so far is on disk (``engine.runner.Runner``)."""
+
+    def durable_mark(self) -> int: ...
+
+    def when_durable(self, mark: int, fn: Callable[[str | None], None]) -> None: ...
+
+
+class _Awaiting:
+    """The commands of one scan boundary, applied and audited, waiting for their commit:
+    :meth:`durable` (the writer thread) or :meth:`overdue` (the scan thread, when the
+    oldest has waited ``REPLY_WITHIN_S``) answers them, whichever comes first."""
+
+    def __init__(
+        self, results: list[tuple[PendingCommand, bool, str]], cycle: int | None, within_ns: int
+    ) -> None:
+        self.results = results
+        self.cycle = cycle
+        self.deadline_ns = min(p.received_ns for p, _, _ in results) + within_ns
+        self._lock = threading.Lock()
+        self.answered = False
+
+    def durable(self, error: str | None) -> None:
+        with self._lock:
+            if self.answered:
+                return
+            self.answered = True
+        for p, applied, reason in self.results:
+            if error is None or not applied:
+                p.resolve(applied, reason, cycle=self.cycle)
+            else:
+                p.resolve(False, f"not confirmed: applied in cycle {self.cycle}, but {error}",
+                          cycle=self.cycle)  # fmt: skip
+
+    def overdue(self, why: str) -> None:
+        self.durable(why)
+
+
 def _answer(query: zenoh.Query | None, reply: CommandReply) -> None:
     _reply(query, reply)
 
@@ -261,6 +311,7 @@ class BusPublisher:
         *,
         queue_size: int = COMMAND_QUEUE_SIZE,
         max_age_s: float = COMMAND_MAX_AGE_S,
+        reply_within_s: float = REPLY_WITHIN_S,
         gate: Gate | None = None,
     ) -> None:
         self._keys = keys(cpu)
@@ -274,6 +325,8 @@ class BusPublisher:
         self._seq: dict[str, int] = dict.fromkeys(self._charts, 0)
         self._commands: queue.Queue[PendingCommand] = queue.Queue(maxsize=queue_size)
         self._max_age_ns = int(max_age_s * 1e9)
+        self._within_ns = int(reply_within_s * 1e9)
+        self._awaiting: collections.deque[_Awaiting] = collections.deque()
         self._status = CpuStatus(
             cpu=cpu, fbs=list(self._charts), login="demo" if self.gate.auth.demo else "users"
         )
@@ -428,21 +481,51 @@ class BusPublisher:
             else:
                 drained.append(p)
 
-    def apply_commands(self, apply: Apply, *, cycle: int | None = None) -> int:
+    def apply_commands(
+        self, apply: Apply, *, cycle: int | None = None, durable: Durability | None = None
+    ) -> int:
         """Drain the pending commands and pass each through the gate: who sent it, may
         their role, then ``apply(command) -> (applied, reason[, detail])`` as that user,
         then the audit row. An exception from ``apply`` refuses that command. Returns how
-        many were handled."""
+        many were handled.
+
+        With ``durable`` (the runner) the replies wait, off the scan thread, until what
+        was applied so far — these commands' effects and audit rows — is on disk
+        (``durable.when_durable(durable.durable_mark(), ...)``); without it they leave at
+        once. Commands still unconfirmed ``REPLY_WITHIN_S`` after they came are answered
+        here as not confirmed."""
+        self._answer_overdue()
         pending = self.drain_commands()
+        if not pending:
+            return 0
+        results = []
         for p in pending:
             applied, reason = self.gate.apply(p.command, apply, cycle=cycle)
-            p.resolve(applied, reason, cycle=cycle)
+            results.append((p, applied, reason))
+        if durable is None:
+            for p, applied, reason in results:
+                p.resolve(applied, reason, cycle=cycle)
+            return len(pending)
+        waiting = _Awaiting(results, cycle, self._within_ns)
+        self._awaiting.append(waiting)
+        durable.when_durable(durable.durable_mark(), waiting.durable)
         return len(pending)
+
+    def _answer_overdue(self) -> None:
+        now = time.monotonic_ns()
+        awaiting = self._awaiting
+        while awaiting and (awaiting[0].answered or awaiting[0].deadline_ns <= now):
+            waiting = awaiting.popleft()
+            waiting.overdue(
+                f"the state file has not committed it within {self._within_ns / 1e9:g} s"
+            )
 
     def close(self) -> None:
         """Undeclare queryables and publishers; refuse commands still waiting."""
         for p in self.drain_commands():
             p.resolve(False, "CPU bus closed")
+        while self._awaiting:
+            self._awaiting.popleft().overdue("the CPU bus closed before it was on disk")
         self.gate.on_audit = None
         self._logins.shutdown(wait=False, cancel_futures=True)
         for d in reversed(self._declared):
@@ -579,7 +662,9 @@ class BusPublisher:
 class BusClient:
     """A view's (or a test's) handle on one CPU over the bus."""
 
-    def __init__(self, session: zenoh.Session, cpu: str, *, timeout: float = 5.0) -> None:
+    def __init__(
+        self, session: zenoh.Session, cpu: str, *, timeout: float = CLIENT_TIMEOUT_S
+    ) -> None:
         self._keys = keys(cpu)
         self._session = session
         self._timeout = timeout

@@ -96,6 +96,38 @@ def _positive_ms(value: float | None) -> float | None:
     return value
 
 
+def _rt_priority(value: int | None) -> int | None:
+    if value is not None and not 0 <= value <= 98:
+        raise typer.BadParameter("--rt-priority must be 0 (normal scheduling) to 98")
+    return value
+
+
+def _scan_priority(value: int | None) -> int | None:
+    """The Runner's ``rt_priority`` for ``--rt-priority``: the default, or None for 0; a
+    priority asked for that the system refuses is one note on stderr."""
+    from s7graph.engine.runner import RT_PRIORITY, set_realtime
+
+    if value is None:
+        return RT_PRIORITY
+    if value == 0:
+        return None
+    import threading
+
+    allowed: list[bool] = []
+
+    def probe() -> None:
+        allowed.append(set_realtime(value))
+
+    thread = threading.Thread(target=probe)
+    thread.start()
+    thread.join()
+    if not allowed[0]:
+        print(f"s7graph: note: real-time priority {value} refused by the system (needs root, "
+              "CAP_SYS_NICE or an rtprio limit): the scan runs at normal priority",
+              file=sys.stderr)  # fmt: skip
+    return value
+
+
 def _restart_type(value: str | None) -> str | None:
     if value is not None and value.lower() not in ("warm", "hot", "cold"):
         raise typer.BadParameter("--restart must be warm, hot or cold")
@@ -153,8 +185,18 @@ def run(
         bool,
         typer.Option(help="Start anew: keep an existing state file as FILE.old-N."),
     ] = False,
+    rt_priority: Annotated[
+        int | None,
+        typer.Option(
+            callback=_rt_priority,
+            help="Real-time (SCHED_FIFO) priority of the scan thread, 1-98; 0: normal "
+            "scheduling. Default 40 where the system allows it (root, CAP_SYS_NICE, an "
+            "rtprio limit), else normal.",
+        ),
+    ] = None,
 ) -> None:
     """Run a program or a chart on the system clock until Ctrl-C."""
+    priority = _scan_priority(rt_priority)
     if program.suffix.lower() == ".s7g":
         from s7graph.web.cli.run_chart import run_chart
 
@@ -183,6 +225,7 @@ def run(
                 net=net,
                 restart=restart or "warm",
                 fresh=fresh,
+                rt_priority=priority,
             )
         )
     from s7graph.web.cli.run_program import run_program
@@ -196,6 +239,7 @@ def run(
             duration_s=duration_s,
             restart=restart,
             fresh=fresh,
+            rt_priority=priority,
         )
     )
 
@@ -308,12 +352,17 @@ def web(
     tls_ca: TlsCa = None,
     origin: Origin = None,
     duration_s: Annotated[float | None, typer.Option(help="Stop after this many seconds.")] = None,
+    child: Annotated[
+        bool, typer.Option("--child", hidden=True, help="The view of a run --web.")
+    ] = False,
 ) -> None:
     """Serve the browser view of a CPU on the bus, as a process of its own."""
     from s7graph.web.cli.view import web_command
 
     net = _net(connect=connect, host=host, tls_ca=tls_ca, origins=origin)
-    raise typer.Exit(web_command(net, cpu=cpu, fb=fb, port=port, duration_s=duration_s))
+    raise typer.Exit(
+        web_command(net, cpu=cpu, fb=fb, port=port, duration_s=duration_s, child=child)
+    )
 
 
 @app.command()

@@ -130,7 +130,7 @@ class LiveEdge:
         alarms = self.live.alarms_changed()
         if alarms is not None:
             publisher.publish_alarms(alarms)
-        publisher.apply_commands(self.apply, cycle=record.cycle)
+        publisher.apply_commands(self.apply, cycle=record.cycle, durable=runner)
         if self.forcing is not None:
             forces = self.forcing.changed()
             if forces is not None:
