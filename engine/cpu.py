@@ -5,7 +5,10 @@ last scan are applied, scan hooks run (``add_scan_hook``; the S5 timer update of
 cycle monitoring judges the previous cycle, PII is read from the module side, OB1 runs,
 due interrupt OBs run — time-of-day OB10–17, delay OB20–23, cyclic OB30–38 — highest
 priority first and, within one priority, in the order of their start events (behaviour
-17), PIQ is written to the modules. Outside RUN the module outputs are 0. A Python
+17), PIQ is written to the modules. Force jobs (``force``/``unforce``, ``engine/force.py``)
+are written into PII right after it is read, into the flags at the start of the cycle and
+into PIQ right before it is written; a change of the table goes to the diagnostic buffer at
+the start of the next scan, the one it acts in. Outside RUN the module outputs are 0. A Python
 exception in a user block is a programming error: OB121 if loaded, else STOP — the process
 never dies. All timing uses *process time*: the clock minus the time spent in HOLD, so HOLD
 freezes timers, interrupts and monitoring while the diagnostic time stamps and the
@@ -21,11 +24,13 @@ from dataclasses import dataclass
 from datetime import datetime, timedelta
 from typing import Any
 
+from s7graph.engine.address import Address, Area
 from s7graph.engine.blocks import DB, FB, FC, OB, BlockKind, InstanceDB
 from s7graph.engine.clock import Clock
 from s7graph.engine.context import CallContext, NestingOverflow, _Fault
 from s7graph.engine.diagnostics import DiagnosticBuffer, EventId
 from s7graph.engine.errors import AddressError, BlockError, ScanAborted, TypeMismatch
+from s7graph.engine.force import Force, ForceTable, apply_plan, force_target, make_force
 from s7graph.engine.interrupts import CYCLIC_DEFAULT_MS, CyclicScheduler, priority
 from s7graph.engine.memory import AreaLengthError, Memory
 from s7graph.engine.modes import CpuMode, KeySwitch, ModeRequest, SetKeySwitch, resolve_requests
@@ -145,6 +150,9 @@ class Cpu:
         self.hot_blockers: set[str] = {"program download"}
         """Why only a warm restart is possible now (behaviour 6); cleared by a warm restart."""
         self._commands: deque[Pending] = deque()
+        self.forces = ForceTable()
+        """The force jobs (``force``/``unforce``): kept until deleted, a memory reset included."""
+        self._force_notes: list[tuple[int, str, str]] = []  # diagnostic entries, next scan
         self._ctx = CallContext(self)
         self.scan_events: list[object] = []
         self.scan_alarms: list[object] = []
@@ -282,7 +290,13 @@ class Cpu:
         self.mem.reset_to_initial()
         self.hot_blockers.add("memory reset")
         self.cycle = 0
-        self.diagnostics.record(self.clock.now_ns(), EventId.MEMORY_RESET, "", "memory reset")
+        now = self.clock.now_ns()
+        self.diagnostics.record(now, EventId.MEMORY_RESET, "", "memory reset")
+        gone = self.forces.clear()
+        if gone:
+            self._force_notes.clear()
+            text = f"memory reset deletes {_jobs(len(gone))}: {_listed(gone)}"
+            self.diagnostics.record(now, EventId.FORCE_ENDED, "", text)
 
     def process_ns(self) -> int:
         """The clock minus time spent in HOLD: what timers, interrupts and monitoring see."""
@@ -357,15 +371,56 @@ class Cpu:
         return self._airt_disabled
 
     def update_pii(self) -> None:
-        """Read the module inputs into the process-image input table (also SFC26 UPDAT_PI)."""
-        n = len(self.mem.inputs)
-        self.mem.inputs[:] = self.mem.periph_in[:n]
+        """Read the module inputs into the process-image input table (also SFC26 UPDAT_PI),
+        then write the forced inputs over them."""
+        mem = self.mem
+        n = len(mem.inputs)
+        mem.inputs[:] = mem.periph_in[:n]
+        plan = self.forces.plan(Area.I)
+        if plan:
+            apply_plan(mem.inputs, plan)
 
     def update_piq(self) -> None:
-        """Write the process-image output table to the modules (also SFC27 UPDAT_PO)."""
-        n = len(self.mem.outputs)
+        """Write the forced outputs into the process-image output table, then the table to
+        the modules (also SFC27 UPDAT_PO)."""
+        mem = self.mem
+        n = len(mem.outputs)
         if self.mode is CpuMode.RUN:
-            self.mem.periph_out[:n] = self.mem.outputs
+            plan = self.forces.plan(Area.Q)
+            if plan:
+                apply_plan(mem.outputs, plan)
+            mem.periph_out[:n] = mem.outputs
+
+    # ---- forcing ---------------------------------------------------------------------------
+
+    def force(self, target: str | Address, value: object, *, user: str = "") -> Force:
+        """Force ``target`` — an I, Q or M address or a symbol — to ``value`` from the next
+        cycle on, until ``unforce`` (``engine/force.py``); call at a scan boundary. Replaces
+        the job of the same address; ``ForceError`` names what is wrong."""
+        force = make_force(self.mem, target, value, user=user)
+        old = self.forces.add(force)
+        was = f" (was {old.shown})" if old is not None else ""
+        by = f" by {user}" if user else ""
+        text = f"force {force}{was}{by}; {_jobs(len(self.forces))} active"
+        self._force_notes.append((EventId.FORCE_STARTED, str(force.address), text))
+        return force
+
+    def unforce(self, target: str | Address | None = None, *, user: str = "") -> list[Force]:
+        """Delete the force job of ``target`` (an address or symbol; None: every job) from
+        the next cycle on; the program and the modules decide again. Returns the jobs
+        deleted; ``ForceError`` when ``target`` is not forced."""
+        by = f" by {user}" if user else ""
+        if target is None:
+            gone = self.forces.clear()
+            if gone:
+                text = f"unforce all{by}: {_jobs(len(gone))} deleted ({_listed(gone)})"
+                self._force_notes.append((EventId.FORCE_ENDED, "", text))
+            return gone
+        force = self.forces.remove(force_target(self.mem, target)[0])
+        left = _jobs(len(self.forces)) if self.forces else "no force job"
+        text = f"unforce {force.address} (was {force.shown}){by}; {left} active"
+        self._force_notes.append((EventId.FORCE_ENDED, str(force.address), text))
+        return [force]
 
     def raise_async_error(self, ob: int, info: dict[str, Any] | None = None) -> None:
         """An asynchronous error event for OB80..OB87 (module fault, rack failure ...).
@@ -392,6 +447,10 @@ class Cpu:
         self._begin(raw)
         mark = self.diagnostics.total
         self._drain()
+        if self._force_notes:
+            for event, address, text in self._force_notes:
+                self.diagnostics.record(raw, event, "", text, address)
+            self._force_notes.clear()
         cycle_ns = 0
         if self.mode is CpuMode.RUN:
             cycle_ns = self._cycle(raw - self._held_ns)
@@ -456,6 +515,9 @@ class Cpu:
         if self.clock_memory is not None:
             self._clock_memory(now)
         self.update_pii()
+        plan = self.forces.plan(Area.M)
+        if plan:
+            apply_plan(self.mem.markers, plan)
         self._run_ob(1, self.stats.start_info_ms())
         if self.mode is CpuMode.RUN:
             self._interrupts(now)
@@ -687,6 +749,15 @@ class Cpu:
         cyclic = {ob for ob in self.obs if ob in CYCLIC_DEFAULT_MS}
         cyclic |= {ob for ob in CYCLIC_DEFAULT_MS if self.interrupts.is_configured(ob)}
         self.interrupts.arm(cyclic, t_run)
+
+
+def _jobs(n: int) -> str:
+    return f"{n} force job{'s' if n != 1 else ''}"
+
+
+def _listed(forces: list[Force], limit: int = 8) -> str:
+    shown = ", ".join(str(f.address) for f in forces[:limit])
+    return shown + (f" and {len(forces) - limit} more" if len(forces) > limit else "")
 
 
 def _classify(exc: BaseException) -> int:

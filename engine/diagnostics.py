@@ -53,6 +53,10 @@ class EventId(IntEnum):
     """Ours: a GRAPH FB's position, written before a warm or cold restart initializes it."""
     STATE_CARRIED_OVER = 0x5F02
     """Ours: a state file written for another version of a block, carried over."""
+    FORCE_STARTED = 0x5F03
+    """Ours: a force job set (or its value changed) on an address; it acts from this scan."""
+    FORCE_ENDED = 0x5F04
+    """Ours: force jobs deleted (unforce, or a memory reset); from this scan on they are gone."""
 
 
 class DiagnosticBuffer:

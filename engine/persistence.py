@@ -2,7 +2,8 @@
 
 Saved: retentive M/T/C and retain DBs (``Memory.snapshot()``), every instance DB
 (``InstanceDB.snapshot()``, OBJECT values through ``to_state()``), the diagnostic buffer,
-the restart type, what would block a hot restart, and extra named parts registered with
+the restart type, what would block a hot restart, the force jobs (``engine/force.py``: they
+outlive a restart and a power cycle, as on S7), and extra named parts registered with
 ``add_part`` (the CPU's message list: the engine does not know its type). Alarms (every
 message event, with the acknowledging user) and the audit log (who did what, when) are
 append-only tables.
@@ -12,7 +13,8 @@ with what was last staged and returns a :class:`Batch` of the rows that changed 
 nothing did; ``write(batch)`` commits one batch as one transaction (in any thread: the
 runner's writer, ``engine/writer.py``). An instance DB is one row, its snapshot as
 compressed JSON (a 7-step chart: about 700 bytes, one page of the file's 1 KiB pages), so
-a step switch rewrites a page or two. Keys an OBJECT value names in its ``VOLATILE`` (a
+a step switch rewrites a page or two; ``stage`` only copies and compares, the writer encodes
+and compresses. Keys an OBJECT value names in its ``VOLATILE`` (a
 GRAPH FB's call counter and the clock time of its last call, which dates its running step
 times) are saved with every write of the row, but on their own cause one only every
 ``time_mark_ms`` (500 ms): what a hot restart can lose of a running step time is bounded,
@@ -79,6 +81,7 @@ _NOT_KEPT = {"program download", "no hot restart image saved"}
 """Hot-restart blockers that belong to one run, not to the state on disk."""
 _BUSY = (5, 6)  # SQLITE_BUSY, SQLITE_LOCKED: another connection holds the lock
 _OURS = {"meta", "instances", "diagnostics", "alarms", "parts", "audit"}
+_APPENDABLE = {"alarms", "audit"}
 _ALARM_COLUMNS = ("t_ns", "key", "state", "text", "user", "cpu_ns", "reason")
 _ADDED_ALARM_COLUMNS = (
     ("user", "TEXT NOT NULL DEFAULT ''"),
@@ -139,17 +142,23 @@ class Batch:
 
     upto: int = 0
     meta: dict[str, str] = field(default_factory=dict)
-    instances: dict[int, tuple[str, str, str, str, bytes]] = field(default_factory=dict)
-    """DB number → (FB label, FB name, fingerprint, shape JSON, compressed snapshot)."""
+    instances: dict[int, tuple[str, str, str, str, dict[str, object]]] = field(
+        default_factory=dict
+    )
+    """DB number → (FB label, FB name, fingerprint, shape JSON, snapshot): the snapshot (a
+    copy) is encoded and compressed by ``write``, in the writer's thread."""
     parts: dict[str, str] = field(default_factory=dict)
     diagnostics: list[tuple[int, int, int, str, str, str]] = field(default_factory=list)
     alarms: list[tuple[int, str, str, str, str, int | None, str]] = field(default_factory=list)
     audit: list[tuple[int, str, str, str]] = field(default_factory=list)
+    appended: list[tuple[str, tuple[str, ...], tuple[Any, ...]]] = field(default_factory=list)
+    """Rows of the append-only tables written by the edges (``StateStore.append``):
+    (table, columns, values)."""
 
     def __bool__(self) -> bool:
         return bool(
             self.meta or self.instances or self.parts or self.diagnostics
-            or self.alarms or self.audit
+            or self.alarms or self.audit or self.appended
         )  # fmt: skip
 
     def merge(self, later: Batch) -> None:
@@ -161,12 +170,13 @@ class Batch:
         self.diagnostics.extend(later.diagnostics)
         self.alarms.extend(later.alarms)
         self.audit.extend(later.audit)
+        self.appended.extend(later.appended)
 
     @property
     def rows(self) -> int:
         return (
             len(self.meta) + len(self.instances) + len(self.parts)
-            + len(self.diagnostics) + len(self.alarms) + len(self.audit)
+            + len(self.diagnostics) + len(self.alarms) + len(self.audit) + len(self.appended)
         )  # fmt: skip
 
 
@@ -232,6 +242,7 @@ class StateStore:
         self._part_seen: dict[str, object] = {}
         self._seen: dict[int, object] = {}
         self._volatile_seen: dict[int, object] = {}
+        self._shapes: dict[int, tuple[FB, str]] = {}
         self._meta_seen: dict[str, str] = {}
         self._marked_ns: int | None = None
         self._last_ns: int | None = None
@@ -312,6 +323,7 @@ class StateStore:
             "mode": str(cpu.mode),
             "last_restart": str(cpu.last_restart or ""),
             "hot_blockers": _dumps(sorted(cpu.hot_blockers - _NOT_KEPT)),
+            "forces": _dumps(cpu.forces.snapshot()) if cpu.forces else "[]",
         }
         if self.hot:
             meta["hot_memory"] = _dumps(cpu.mem.hot_snapshot())
@@ -368,10 +380,11 @@ class StateStore:
             return
         self._seen[number] = steady
         self._volatile_seen[number] = volatile
-        fmt = fb.state_format
-        data = zlib.compress(_dumps(snapshot).encode(), 6)
-        shape = _dumps(fmt.shape() if fmt is not None else None)
-        batch.instances[number] = (fb.label, fb.name, fingerprint_of(fb), shape, data)
+        shape = self._shapes.get(number)
+        if shape is None or shape[0] is not fb:
+            fmt = fb.state_format
+            shape = self._shapes[number] = (fb, _dumps(fmt.shape() if fmt is not None else None))
+        batch.instances[number] = (fb.label, fb.name, fingerprint_of(fb), shape[1], snapshot)
 
     def diagnostic_row(self, entry: DiagEntry) -> tuple[int, int, int, str, str, str]:
         """A diagnostics row for an entry written outside ``stage`` (the runner's last word
@@ -418,7 +431,7 @@ class StateStore:
             if batch.instances:
                 db.executemany(
                     "INSERT OR REPLACE INTO instances VALUES (?, ?, ?, ?, ?, ?)",
-                    [(n, *row) for n, row in batch.instances.items()],
+                    [(n, *row[:4], _packed(row[4])) for n, row in batch.instances.items()],
                 )
             if batch.parts:
                 db.executemany("INSERT OR REPLACE INTO parts VALUES (?, ?)", batch.parts.items())
@@ -437,6 +450,11 @@ class StateStore:
                 db.executemany(
                     "INSERT INTO audit (t_ns, user, action, detail) VALUES (?, ?, ?, ?)",
                     batch.audit,
+                )
+            for (table, columns), rows in _grouped(batch.appended).items():
+                marks = ", ".join("?" * len(columns))
+                db.executemany(
+                    f"INSERT INTO {table} ({', '.join(columns)}) VALUES ({marks})", rows
                 )
             db.execute("COMMIT")
         except sqlite3.Error as exc:
@@ -485,6 +503,10 @@ class StateStore:
         if blockers:
             self._restore_part("hot restart blockers", lambda: cpu.hot_blockers.update(
                 str(b) for b in json.loads(blockers)))  # fmt: skip
+        forces = self.meta("forces")
+        if forces is not None:
+            self._restore_part("force table", lambda: cpu.forces.restore(json.loads(forces),
+                                                                         cpu.mem))  # fmt: skip
         entries = self._db.execute(
             "SELECT t_ns, event_id, block, message, address FROM diagnostics ORDER BY seq"
         ).fetchall()
@@ -588,6 +610,20 @@ class StateStore:
     def log_audit(self, t_ns: int, user: str, action: str, detail: str = "") -> None:
         self._log("audit", (t_ns, user, action, detail))
 
+    def append(self, table: str, columns: tuple[str, ...], values: tuple[Any, ...]) -> bool:
+        """Queue one row of an append-only table (``audit``, ``alarms``) to commit with the
+        next scan's state — in the same transaction, so a durable mark covers it. False
+        (nothing queued) when no writer defers the rows: the caller writes it itself."""
+        if table not in _APPENDABLE or not all(c.isidentifier() for c in columns):
+            raise ValueError(f"cannot append to {table}({', '.join(columns)})")
+        if len(columns) != len(values):
+            raise ValueError(f"{len(columns)} columns, {len(values)} values")
+        with self._lock:
+            if not self.deferred:
+                return False
+            self._logs.appended.append((table, columns, values))
+        return True
+
     def alarms(self) -> list[dict[str, Any]]:
         cur = self._db.execute(f"SELECT {', '.join(_ALARM_COLUMNS)} FROM alarms ORDER BY id")
         return [dict(zip(_ALARM_COLUMNS, r, strict=True)) for r in cur]
@@ -621,8 +657,23 @@ class _Unseen:
 _UNSEEN = _Unseen()
 
 
+def _grouped(
+    rows: list[tuple[str, tuple[str, ...], tuple[Any, ...]]],
+) -> dict[tuple[str, tuple[str, ...]], list[tuple[Any, ...]]]:
+    """Appended rows by table and columns, each group in the order queued."""
+    out: dict[tuple[str, tuple[str, ...]], list[tuple[Any, ...]]] = {}
+    for table, columns, values in rows:
+        out.setdefault((table, columns), []).append(values)
+    return out
+
+
 def _restore_json(restore: Callable[[Any], None], text: str) -> None:
     restore(json.loads(text))
+
+
+def _packed(snapshot: dict[str, object]) -> bytes:
+    """An instance snapshot as it is stored: compressed JSON."""
+    return zlib.compress(_dumps(snapshot).encode(), 6)
 
 
 def _decode_instance(blob: object) -> dict[str, Any]:

@@ -17,6 +17,21 @@ interrupts a sleep), else by ``PyThreadState_SetAsyncExc`` — and again every m
 time while it is swallowed. The CPU goes to STOP with a time-error entry naming the block
 (``Cpu.abort``).
 
+**Priority.** A scan must not wait for the processor behind a browser or a build on the
+same machine: while the loop runs, the scan thread is scheduled real-time (``SCHED_FIFO``
+at ``rt_priority``, its monitor one above, so that it can still abort a scan that never
+ends) when the system allows it — root, ``CAP_SYS_NICE`` or an rtprio limit — and at the
+normal priority otherwise (``realtime`` says which). The process's other threads (the
+bus, the writer) run real-time too, ``HELPERS_BELOW`` lower: each takes the interpreter's
+lock at times, and one that holds it must not wait for the processor while the scan waits
+for the lock. Processes they start (the view) are reset to the normal policy; the loop
+ends with every thread back at the normal policy.
+
+**The garbage collector** (:class:`IdleGc`) runs in the idle part of the cycle, never in
+the middle of a scan: when the loop starts, what the startup loaded is frozen (``gc.freeze``:
+never traversed again) and automatic collections are turned off; after each cycle's work,
+when the next cycle is not due for a while, the generations that are due are collected.
+
 **Stopping.** ``request_stop`` (the CLI's SIGTERM and Ctrl-C handlers) ends the loop after
 the current scan. If the scan thread does not come back within ``grace_s`` — code that
 swallows every abort — the monitor commits the state as of the last finished scan with a
@@ -27,6 +42,7 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import gc
 import os
 import signal
 import sys
@@ -46,13 +62,117 @@ from s7graph.engine.restart import RestartType
 from s7graph.engine.watchdog import CycleStatistics
 from s7graph.engine.writer import DurableCallback, StoreWriter
 
-__all__ = ["EXIT_HUNG", "GRACE_S", "Runner", "stop_reason"]
+__all__ = [
+    "EXIT_HUNG",
+    "GRACE_S",
+    "RT_PRIORITY",
+    "IdleGc",
+    "Runner",
+    "set_realtime",
+    "stop_reason",
+]
 
 GRACE_S = 3.0
 """How long a stop request waits for a hanging scan before the process ends anyway."""
 EXIT_HUNG = 3
 """Exit status of a process ended because its scan did not return after a stop request."""
 _ABORT_SIGNAL = signal.SIGUSR2
+RT_PRIORITY = 40
+"""The scan thread's ``SCHED_FIFO`` priority (1-98) when the system allows real-time."""
+
+
+HELPERS_BELOW = 10
+"""How far below the scan thread the process's other threads run real-time."""
+
+
+def set_realtime(priority: int | None, tid: int = 0) -> bool:
+    """Schedule thread ``tid`` (a native id; 0: the calling thread) ``SCHED_FIFO`` at
+    ``priority`` (reset in processes it forks), or back to the normal policy with None;
+    False when the system refuses (or the thread is gone)."""
+    try:
+        if priority is None:
+            os.sched_setscheduler(tid, os.SCHED_OTHER, os.sched_param(0))
+        else:
+            policy = os.SCHED_FIFO | os.SCHED_RESET_ON_FORK
+            os.sched_setscheduler(tid, policy, os.sched_param(priority))
+    except (OSError, AttributeError):  # no permission, gone, or not Linux
+        return False
+    return True
+
+
+def _threads() -> list[int]:
+    """The native ids of this process's threads (Linux), else none."""
+    try:
+        return [int(t) for t in os.listdir("/proc/self/task")]
+    except OSError:
+        return []
+
+
+class IdleGc:
+    """Garbage collection in the idle part of the cycle.
+
+    ``start()`` collects once, freezes what is there (the loaded program, the bus, the
+    view: ``gc.freeze``) and turns automatic collections off; ``idle(slack_s)``, called
+    when a cycle's work is done and the next is due in ``slack_s``, collects the youngest
+    generation due — only when the slack is at least ``min_idle_s`` and twice that
+    generation's longest collection so far, unless the garbage has piled up ``OVERDUE``
+    times past the threshold (a CPU that never idles must not grow without bound);
+    ``stop()`` gives the collector back as it was. Process-wide: nested starts count."""
+
+    OVERDUE = 20
+    _users = 0
+    _was_enabled = True
+    _lock = threading.Lock()
+
+    def __init__(self, *, min_idle_s: float = 0.002) -> None:
+        self.min_idle_s = min_idle_s
+        self.collections = [0, 0, 0]
+        self.longest_ns = [0, 0, 0]
+        self.started = False
+
+    def start(self) -> None:
+        with IdleGc._lock:
+            if IdleGc._users == 0:
+                IdleGc._was_enabled = gc.isenabled()
+                gc.collect()
+                gc.freeze()
+                gc.disable()
+            IdleGc._users += 1
+        self.started = True
+
+    def stop(self) -> None:
+        if not self.started:
+            return
+        self.started = False
+        with IdleGc._lock:
+            IdleGc._users -= 1
+            if IdleGc._users == 0:
+                gc.unfreeze()
+                if IdleGc._was_enabled:
+                    gc.enable()
+
+    def idle(self, slack_s: float) -> bool:
+        """Collect what is due if there is time for it; whether it collected."""
+        counts = gc.get_count()
+        thresholds = gc.get_threshold()
+        if counts[0] < thresholds[0]:
+            return False
+        generation = 0
+        while generation < 2 and counts[generation + 1] >= thresholds[generation + 1]:
+            generation += 1
+        overdue = counts[0] >= thresholds[0] * self.OVERDUE
+        while generation > 0 and slack_s * 1e9 < 2 * self.longest_ns[generation]:
+            generation -= 1  # a younger one fits
+        if not overdue and (
+            slack_s < self.min_idle_s or slack_s * 1e9 < 2 * self.longest_ns[generation]
+        ):
+            return False
+        started = time.perf_counter_ns()
+        gc.collect(generation)
+        took = time.perf_counter_ns() - started
+        self.collections[generation] += 1
+        self.longest_ns[generation] = max(self.longest_ns[generation], took)
+        return True
 
 
 class Runner:
@@ -72,9 +192,13 @@ class Runner:
         end_on_stop: bool = False,
         grace_s: float = GRACE_S,
         on_stop: Callable[[str], object] | None = None,
+        idle_gc: bool = True,
+        rt_priority: int | None = RT_PRIORITY,
     ) -> None:
         if cycle_ms <= 0:
             raise ValueError("cycle time must be positive")
+        if rt_priority is not None and not 1 <= rt_priority <= 98:
+            raise ValueError("real-time priority must be 1..98 (None: normal scheduling)")
         self.cpu = cpu
         self.cycle_s = cycle_ms / 1000.0
         self.store = store
@@ -92,6 +216,11 @@ class Runner:
         self.stopped = ""
         """Why the CPU went to STOP by itself while running (one line), else empty."""
         self.write_error: StateWriteError | None = None
+        self.rt_priority = rt_priority
+        self.realtime = False
+        """Whether the scan thread runs real-time (while ``run`` runs)."""
+        self.gc: IdleGc | None = IdleGc() if idle_gc else None
+        """The collector in the idle part of the cycle (``idle_gc``), while ``run`` runs."""
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._lock = threading.Lock()
@@ -144,9 +273,25 @@ class Runner:
         if self.store is not None and self.writer is None:
             self.writer = StoreWriter(self.store)
         previous = self._install_abort_signal()
+        if self.rt_priority is not None:
+            self.realtime = set_realtime(self.rt_priority)
+        if self.realtime and self.rt_priority is not None:
+            me = threading.get_native_id()
+            helpers = max(1, self.rt_priority - HELPERS_BELOW)
+            for tid in _threads():
+                if tid != me:
+                    set_realtime(helpers, tid)
+        if self.gc is not None:
+            self.gc.start()
         try:
             self._loop(duration_s)
         finally:
+            if self.gc is not None:
+                self.gc.stop()
+            if self.realtime:
+                self.realtime = False
+                for tid in _threads():
+                    set_realtime(None, tid)
             if previous is not None:
                 signal.signal(_ABORT_SIGNAL, previous)
             self._signal_abort = False
@@ -189,6 +334,8 @@ class Runner:
                     break
             due += self.cycle_s
             delay = due - time.monotonic()
+            if delay > 0 and self.gc is not None and self.gc.idle(delay):
+                delay = due - time.monotonic()
             if delay > 0:
                 self._stop.wait(delay)
             else:
@@ -292,7 +439,10 @@ class Runner:
             self._monitor.start()
 
     def _monitor_loop(self) -> None:
+        above = False
         while not self._done.wait(self._poll_s()):
+            if self.realtime and not above and self.rt_priority is not None:
+                above = set_realtime(self.rt_priority + 1)  # it must preempt a hung scan
             now = time.monotonic()
             self._check_abort(now)
             if self._stop_at is not None and now - self._stop_at >= self.grace_s:

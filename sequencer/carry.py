@@ -195,6 +195,7 @@ def carry_over(
             report.vars_reset.append(name)
     report.vars_new = sorted(set(new.var_types) - set(state.vars))
     st.display = _display(state.display, new)
+    st.levels = dict(state.levels)
     return st, report
 
 

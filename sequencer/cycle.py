@@ -82,7 +82,7 @@ class GraphRuntime(FastPath):
         self._remote: list[int] = []  # acknowledgements queued for the next call
         self._commands: list[tuple[str, int | None]] = []  # operator commands, next call
         self._target: int | None = None  # step of this call's S_ON/S_OFF/ACK_S command
-        self.levels: dict[str, bool] = {}  # operator overrides of HALT_SQ / EN_IL / EN_SV
+        self.levels = self.st.levels  # overrides of HALT_SQ / EN_IL / EN_SV (kept in the state)
         self._final: list[int] = []  # steps left, awaiting their final scan
         self._getter = operator.itemgetter(*self.input_names)
         self._last_in: Any = None  # the input pins of the previous call (fast path)
@@ -129,6 +129,7 @@ class GraphRuntime(FastPath):
         self._quiet = False
         if not self.multi:
             self._seqs = [state.active]
+        self.levels = state.levels
         self._final.clear()
         self._acked.clear()
         self._last_in = None
@@ -186,6 +187,7 @@ class GraphRuntime(FastPath):
         else:
             self.levels[pin] = value
         self._last_in = None  # the next call latches the pins again
+        self._quiet = False  # and is a general one, which applies the levels
 
     def _apply_commands(self) -> None:
         st = self.st

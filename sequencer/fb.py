@@ -184,8 +184,8 @@ class GraphFB:
 
     @property
     def levels(self) -> dict[str, bool]:
-        """The level overrides in force."""
-        return dict(self._runtime.levels) if self._runtime is not None else {}
+        """The level overrides in force (kept in the instance DB's ``GraphState``)."""
+        return dict(self.state.levels) if self.idb is not None else {}
 
     def replace_chart(self, cc: CompiledChart, state: GraphState, cpu: Any) -> None:
         """Online change: run ``cc`` from the next call on, with ``state`` (the running state

@@ -27,6 +27,8 @@ from __future__ import annotations
 from typing import Any, Final
 
 MODES: Final = ("AUTO", "MAN", "TAP", "TOP")
+LEVEL_PINS: Final = ("HALT_SQ", "EN_IL", "EN_SV")
+"""The level pins an operator or engineer may hold at a value (``GraphFB.set_level``)."""
 
 # Inputs whose rising edge (not level) counts (SPEC §2.2 step 1, §2.5, §2.6).
 EDGE_INPUTS: Final = (
@@ -98,12 +100,15 @@ class GraphState:
                           (-1 before the first)
       ``s_no`` ``t_no``   step / transition shown (owned by ``display.py``)
       ``display``         free scratch of ``display.py`` (persisted, JSON-able)
+      ``levels``          level overrides in force (``LEVEL_PINS`` → value): HALT_SQ, EN_IL or
+                          EN_SV held by a command whatever the pin; part of the instance DB, so
+                          a warm or hot restart keeps them and a cold restart clears them
     """
 
     __slots__ = (
         *_LIST_FIELDS, *_SCALAR_FIELDS,
         "n_steps", "n_transitions", "active", "ev_steps", "fired", "entered", "left", "log",
-        "inputs", "prev", "rose", "outputs", "vars", "diag", "display",
+        "inputs", "prev", "rose", "outputs", "vars", "diag", "display", "levels",
     )  # fmt: skip
 
     VOLATILE: Final = ("calls", "last_ns")
@@ -159,6 +164,7 @@ class GraphState:
         self.s_no = 0
         self.t_no = 0
         self.display: dict[str, Any] = {}
+        self.levels: dict[str, bool] = {}
 
     # ------------------------------------------------------------ reading times (S7 TIME, ms)
 
@@ -203,6 +209,7 @@ class GraphState:
         data["vars"] = dict(self.vars)
         data["diag"] = list(self.diag)
         data["display"] = dict(self.display)
+        data["levels"] = dict(self.levels)
         return data
 
     @classmethod
@@ -250,6 +257,12 @@ class GraphState:
                 raise ValueError(f"{name!r} is {value!r}")
             setattr(st, name, dict(value))
         st.diag = list(data.get("diag", []))
+        levels = data.get("levels", {})  # absent in a state written before overrides were kept
+        if not isinstance(levels, dict) or any(
+            pin not in LEVEL_PINS or not isinstance(v, bool) for pin, v in levels.items()
+        ):
+            raise ValueError(f"'levels' is {levels!r}")
+        st.levels = dict(levels)
         return st
 
     def __eq__(self, other: object) -> bool:

@@ -103,6 +103,34 @@ def test_a_foreign_lock_holds_up_the_writer_never_the_scan(
     assert again.mem.get("MW0") == cpu.mem.get("MW0") == 200
 
 
+def test_appended_rows_commit_with_the_next_scans_state(
+    clock: VirtualClock, tmp_path: Path
+) -> None:
+    """``append`` (the audit of the bus gate): while a writer runs, a row waits for the next
+    ``stage`` and commits in that scan's transaction; without one the caller writes it."""
+    path = tmp_path / "s.sqlite"
+    store = StateStore(path)
+    cpu = _cpu(clock, counts)
+    store.save(cpu)
+    columns = ("t_ns", "user", "action", "detail")
+    assert not store.append("audit", columns, (1, "ann", "ack", "before"))  # no writer
+    with pytest.raises(ValueError, match="cannot append to meta"):
+        store.append("meta", ("key", "value"), ("x", "y"))
+    writer = StoreWriter(store)
+    try:
+        assert store.append("audit", columns, (2, "ann", "ack", "queued"))
+        assert [r["detail"] for r in store.audit()] == []  # not written by append
+        clock.advance(10)
+        cpu.scan()
+        batch = store.stage(cpu, upto=1)
+        assert batch is not None and batch.appended and batch.meta  # the row with the state
+        writer.submit(batch, 1)
+        assert writer.wait(1, timeout=10)
+    finally:
+        writer.close()
+    assert [r["detail"] for r in StateStore(path).audit()] == ["queued"]
+
+
 def _fill_up(store: StateStore) -> None:
     """Make the file full: no page more may be added (SQLITE_FULL, as on a full disk)."""
     pages = store._db.execute("PRAGMA page_count").fetchone()[0]

@@ -152,10 +152,12 @@ def online_cpu(
     tmp_path: Path, chart: str, *, serve: bool, users: dict[str, str], name: str = "chart.s7g"
 ) -> Iterator[OnlineRig]:
     """``chart`` written to ``tmp_path / name`` and run with a users file (name → role,
-    password ``PASSWORD``), its bus on a unix socket, the view when ``serve``."""
+    password ``PASSWORD``), its bus on a unix socket, the view when ``serve``; the CPU
+    takes force jobs as ``s7graph run`` does."""
     from s7graph.web.access.audit import AuditStore
     from s7graph.web.access.login import Authenticator
     from s7graph.web.access.users import UsersFile
+    from s7graph.web.bus.forcing import Forcing
     from s7graph.web.bus.gate import Gate
     from s7graph.web.bus.live import LiveGraph
     from s7graph.web.bus.online import OnlineChange
@@ -178,7 +180,7 @@ def online_cpu(
     scans: list[int] = []
     try:
         edge = LiveEdge(live, port=0, serve=serve, bus=True, gate=gate, online=online,
-                        ends=BusEnds(listen=[endpoint]))  # fmt: skip
+                        ends=BusEnds(listen=[endpoint]), forcing=Forcing(session.cpu))  # fmt: skip
         with edge, scanning(session, edge, lambda record: scans.append(record.cycle)):
             yield OnlineRig(session, edge, online, path, state, endpoint, scans)
     finally:

@@ -179,6 +179,33 @@ def test_cold_restart_leaves_the_pending_message_listed_with_its_reason(tmp_path
     assert msg.reason == "cold restart (OB102)"
 
 
+@pytest.mark.parametrize(("restart", "kept"), [("warm", True), ("hot", True), ("cold", False)])
+def test_level_overrides_survive_a_warm_or_hot_restart_and_a_cold_one_clears_them(
+    tmp_path: Path, restart: str, kept: bool
+) -> None:
+    """An engineer switched supervisions and interlocks off (``en_sv``/``en_il`` hold EN_SV
+    and EN_IL at 0): the overrides live in the instance DB, so a restart from the state file
+    keeps them — but a cold restart, which resets every instance DB."""
+    plant = demo_plant(IDLE_MS=300, SLOW_EVERY=1)  # every piece would fault S2 at once
+    drill = Drill(tmp_path / "drill.sqlite", plant, restart="hot")
+    drill.session.graph.set_level("EN_SV", False)
+    drill.session.graph.set_level("EN_IL", False)
+    drill.run(100)
+    assert drill.persisted().levels == {"EN_SV": False, "EN_IL": False}
+    drill.kill()
+
+    again = Drill(tmp_path / "drill.sqlite", plant, restart=restart)
+    assert again.cpu.last_restart == restart
+    expected = {"EN_SV": False, "EN_IL": False} if kept else {}
+    assert again.session.graph.levels == expected
+    again.run(3000)  # S2 would fault after its supervision time
+    assert again.state.sv_enabled is not kept and again.state.il_enabled is not kept
+    assert any(again.state.sv_err) is not kept
+    again.session.graph.set_level("EN_SV", None)  # the pin decides again, and that is kept
+    again.run(20)
+    assert again.persisted().levels == ({"EN_IL": False} if kept else {})
+
+
 def _edited(tmp_path: Path, *pairs: tuple[str, str]) -> Path:
     text = (DRILL / "drill.s7g").read_text(encoding="utf-8")
     for old, new in pairs:

@@ -10,6 +10,12 @@ before, whose rows then read as applied. The alarm history is the last rows of t
 acknowledged, with the user). Tokens and passwords are never arguments: the gate passes
 only a command's ``args``.
 
+**Committed with the state.** Given the run's ``StateStore``, the store numbers each row
+itself and, while the store's writer runs, queues it there (``StateStore.append``): the row
+commits in the same transaction as the next scan's state — the effect of the command it
+records — off the scan thread, so a durable mark covers both and a slow disk never holds a
+scan up. Without a writer (before the run starts, after it ends) a row is written at once.
+
 The store has its own connection to the file (WAL), so the zenoh threads that answer
 queries never touch the scan thread's.
 """
@@ -23,7 +29,10 @@ import threading
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Final
+from typing import TYPE_CHECKING, Final
+
+if TYPE_CHECKING:
+    from s7graph.engine.persistence import StateStore
 
 __all__ = ["AlarmRecord", "AuditRecord", "AuditStore", "Facts", "read_audit"]
 
@@ -118,6 +127,14 @@ def _migrate(db: sqlite3.Connection) -> None:
             db.execute(f"ALTER TABLE audit ADD COLUMN {column} {decl}")
 
 
+def _last_id(db: sqlite3.Connection) -> int:
+    """The highest audit row id ever given (AUTOINCREMENT never reuses one)."""
+    row = db.execute("SELECT MAX(id) FROM audit").fetchone()
+    last = int(row[0] or 0) if row is not None else 0
+    seq = db.execute("SELECT seq FROM sqlite_sequence WHERE name='audit'").fetchone()
+    return max(last, int(seq[0] or 0) if seq is not None else 0)
+
+
 def _audit_rows(
     db: sqlite3.Connection, where: str, params: tuple[object, ...]
 ) -> list[AuditRecord]:
@@ -129,11 +146,18 @@ def _audit_rows(
     return [AuditRecord(int(r[0]), int(r[1] or 0), *(str(v or "") for v in r[2:])) for r in rows]
 
 
-class AuditStore:
-    """Append audit rows and read the audit trail and the alarm history of one state file."""
+_INSERT_COLUMNS: Final = (
+    "id", "t_ns", "user", "role", "origin", "action", "fb", "args", "outcome", "reason", "detail"
+)  # fmt: skip
 
-    def __init__(self, path: Path | str) -> None:
+
+class AuditStore:
+    """Append audit rows and read the audit trail and the alarm history of one state file;
+    ``state``: the run's store, whose writer commits the rows with the scan's state."""
+
+    def __init__(self, path: Path | str, *, state: StateStore | None = None) -> None:
         self.path = Path(path)
+        self.state = state
         self._lock = threading.Lock()
         self._db = sqlite3.connect(
             self.path, check_same_thread=False, isolation_level=None, timeout=5.0
@@ -142,22 +166,25 @@ class AuditStore:
         self._db.execute("PRAGMA synchronous=NORMAL")
         with self._lock:
             _migrate(self._db)
+            self._last_id = _last_id(self._db)
 
     def close(self) -> None:
         with self._lock:
             self._db.close()
 
     def record(self, t_ns: int, facts: Facts) -> AuditRecord:
-        """Append one row and return it."""
-        rec = facts.at(0, t_ns)
+        """Append one row and return it: queued to commit with the next scan's state while
+        the run's writer runs, else written now."""
         with self._lock:
-            cur = self._db.execute(
-                "INSERT INTO audit (t_ns, user, role, origin, action, fb, args, outcome, reason,"
-                " detail) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, ?)",
-                dataclasses.astuple(rec)[1:],
-            )
-            row_id = int(cur.lastrowid or 0)
-        return dataclasses.replace(rec, id=row_id)
+            self._last_id += 1
+            rec = facts.at(self._last_id, t_ns)
+            values = dataclasses.astuple(rec)
+            if self.state is None or not self.state.append("audit", _INSERT_COLUMNS, values):
+                marks = ", ".join("?" * len(values))
+                self._db.execute(
+                    f"INSERT INTO audit ({', '.join(_INSERT_COLUMNS)}) VALUES ({marks})", values
+                )
+        return rec
 
     def last(self, n: int = 50) -> list[AuditRecord]:
         """The last ``n`` audit rows, oldest first."""

@@ -56,8 +56,9 @@ COMMANDS: Final[tuple[CommandInfo, ...]] = (
         "force",
         "engineer",
         "",
-        "force an input, output or flag (not available yet)",
-        '{"address": "I0.0", ...}',
+        "force an input, output or flag (I, Q, M) until unforced: value null unforces it, "
+        '`{"all": true}` unforces every job',
+        '{"address": "I0.3", "value": true}',
     ),
     CommandInfo(
         "download",
@@ -89,7 +90,7 @@ COMMANDS: Final[tuple[CommandInfo, ...]] = (
     ),
 )
 # Ops the role table grants but this CPU does not carry out yet: refused after the role check.
-NOT_AVAILABLE: Final = frozenset({"force"})
+NOT_AVAILABLE: Final[frozenset[str]] = frozenset()
 
 _RANK: Final = {role: i for i, role in enumerate(ROLES)}
 _LOWEST: Final = {c.op: c.role for c in COMMANDS}

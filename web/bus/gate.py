@@ -14,7 +14,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from pathlib import Path
-from typing import TypeAlias
+from typing import TYPE_CHECKING, TypeAlias
 
 import msgspec
 
@@ -31,6 +31,9 @@ from s7graph.web.bus.protocol import (
     LoginReply,
     LoginRequest,
 )
+
+if TYPE_CHECKING:
+    from s7graph.engine.persistence import StateStore
 
 __all__ = ["Apply", "Gate", "audit_entry", "cpu_gate"]
 
@@ -188,13 +191,14 @@ class Gate:
         )
 
 
-def cpu_gate(users: Path | None, state: Path) -> Gate:
+def cpu_gate(users: Path | None, state: StateStore) -> Gate:
     """The gate of a CPU started from the command line: reading ``users`` (None: the
-    demo), auditing into the state file ``state``. A users file that is missing or cannot
-    be read raises ``UsersError`` here, at start."""
+    demo), auditing into the run's state file ``state`` (each row committed with the scan's
+    state by its writer). A users file that is missing or cannot be read raises
+    ``UsersError`` here, at start."""
     users_file = UsersFile(users) if users is not None else None
     if users_file is not None:
         if not users_file.path.is_file():
             raise UsersError(f"{users_file.path}: no such users file (s7graph users add ...)")
         users_file.load()
-    return Gate(Authenticator(users_file), AuditStore(state))
+    return Gate(Authenticator(users_file), AuditStore(state.path, state=state))

@@ -17,7 +17,9 @@ boundary and acts in the FB's next call as a one-call rising edge (``GraphFB.com
 - ``init`` → INIT_SQ; ``off`` → OFF_SQ for one call (the sequencer then stays off);
 - ``halt`` → HALT_SQ held on (``{"on": true}``) or left to the pin again (``false``);
   ``en_il`` / ``en_sv`` with ``{"on": false}`` hold EN_IL / EN_SV off (interlocks or
-  supervisions disabled), ``true`` leaves them to the pin again;
+  supervisions disabled), ``true`` leaves them to the pin again; these overrides live in
+  the FB's instance DB (``GraphState.levels``): a warm or hot restart keeps them, a cold
+  restart clears them, and each update shows them (``overrides``);
 - ``step_on`` / ``step_off`` → S_ON / S_OFF on ``step`` (not S_NO); refused outside MAN,
   for an unknown step, an active step (on) or an idle one (off);
 - ``t_push`` → T_PUSH; refused outside TAP and TOP;
@@ -226,6 +228,7 @@ class LiveGraph:
             halted=bool(st.halted),
             il_enabled=bool(st.il_enabled),
             sv_enabled=bool(st.sv_enabled),
+            overrides=dict(st.levels),  # type: ignore[arg-type]
         )
 
     def details(self) -> list[StepDetail]:

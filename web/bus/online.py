@@ -256,6 +256,9 @@ class OnlineChange:
         )
         with contextlib.suppress(Exception):  # the audit must not keep the answer back
             self.gate.record(facts)
+        durability = self.durability
+        if reply.applied and durability is not None:  # the row commits with the next scan
+            durability.wait_durable(durability.durable_mark(), self._timeout)
         pending.answer(reply)
 
     def _run(self, command: Command) -> tuple[CommandReply, str]:

@@ -46,6 +46,8 @@ __all__ = [
     "Contact",
     "CpuStatus",
     "CycleStats",
+    "ForceEntry",
+    "ForceList",
     "LoginReply",
     "LoginRequest",
     "ProjectFile",
@@ -100,6 +102,8 @@ UserName = Annotated[str, Meta(pattern=r"^([A-Za-z0-9._-]{1,32})?$")]
 Token = Annotated[str, Meta(pattern=r"^[A-Za-z0-9_-]{0,64}$")]
 Origin = Annotated[str, Meta(pattern=r"^[ -~]{0,160}$")]  # printable ASCII: safe in a log line
 Label = Annotated[str, Meta(max_length=80)]
+LevelPin = Literal["HALT_SQ", "EN_IL", "EN_SV"]
+MAX_FORCE_TEXT = 64  # an address or symbol, or a value's text, in a force command
 
 
 def valid_name(name: str) -> bool:
@@ -251,6 +255,8 @@ class StepStateUpdate(_Msg, frozen=True, kw_only=True):
     halted: bool = False  # HALT_SQ in force (a pin or a ``halt`` command)
     il_enabled: bool = True  # EN_IL
     sv_enabled: bool = True  # EN_SV
+    # the level pins a command holds (``halt``, ``en_il``, ``en_sv``), kept over restarts
+    overrides: Annotated[dict[LevelPin, bool], Meta(max_length=3)] = {}
 
     def changed_from(self, other: StepStateUpdate | None) -> bool:
         """Whether this scan differs from ``other`` in more than its cycle and time."""
@@ -263,8 +269,8 @@ class StepStateUpdate(_Msg, frozen=True, kw_only=True):
             or self.disturbed != other.disturbed
             or self.latched != other.latched
             or self.values != other.values
-            or (self.halted, self.il_enabled, self.sv_enabled)
-            != (other.halted, other.il_enabled, other.sv_enabled)
+            or (self.halted, self.il_enabled, self.sv_enabled, self.overrides)
+            != (other.halted, other.il_enabled, other.sv_enabled, other.overrides)
             or not _same_coarse(self.details, other.details)
         )
 
@@ -343,6 +349,25 @@ class CpuStatus(_Msg, frozen=True, kw_only=True):
     fbs: Annotated[list[Name], Meta(max_length=256)] = []
     stats: CycleStats | None = None
     login: Literal["users", "demo"] = "demo"  # demo: no users file, names are claimed
+    forces: Count = 0  # force jobs active: the CPU's FRCE LED is on when > 0
+
+
+class ForceEntry(_Msg, frozen=True, kw_only=True):
+    """One force job: the address, the value as shown (``TRUE``, ``-5``, ``W#16#00FF``),
+    the symbol it was given by and who forced it."""
+
+    address: Annotated[str, Meta(max_length=32)]
+    value: ShortText
+    symbol: ShortText = ""
+    user: Label = ""
+
+
+class ForceList(_Msg, frozen=True, kw_only=True):
+    """The CPU's force jobs (``forces`` on change, also a queryable), in area order (I, Q,
+    M); ``seq`` counts the changes."""
+
+    seq: Count = 0
+    entries: Annotated[list[ForceEntry], Meta(max_length=256)] = []
 
 
 # ---------------------------------------------------------------- messages (alarms)
@@ -398,7 +423,7 @@ _ARGS_BY_OP: dict[str, frozenset[str]] = {
     "ack_msg": frozenset({"msg_id"}),
     "en_il": frozenset({"on"}),
     "en_sv": frozenset({"on"}),
-    "force": frozenset({"address", "value"}),
+    "force": frozenset(),
     "download": frozenset({"source"}),
     "undo_download": frozenset(),
     "save": frozenset({"file", "source"}),
@@ -409,9 +434,34 @@ _ARGS_BY_OP: dict[str, frozenset[str]] = {
 _OPTIONAL_ARGS: dict[str, frozenset[str]] = {
     "download": frozenset({"base", "removed", "preview"}),
     "undo_download": frozenset({"base", "removed", "preview"}),
+    "force": frozenset({"address", "value", "all"}),  # address and value, or all
 }
 REMOVED_CHOICES: tuple[str, ...] = ("keep", "init")
 MAX_FILE_NAME = 128
+
+
+def _check_force_args(args: dict[str, Scalar]) -> None:
+    """``{"address": A, "value": V}`` (V null: unforce A) or ``{"all": true}``."""
+    if "all" in args:
+        if args["all"] is not True or len(args) != 1:
+            raise ValueError('unforce every job with {"all": true} alone - at `$.args.all`')
+        return
+    if "address" not in args or "value" not in args:
+        raise ValueError(
+            'force takes {"address": "I0.3", "value": true} (value null: unforce) or '
+            '{"all": true} - at `$.args`'
+        )
+    address, value = args["address"], args["value"]
+    if not isinstance(address, str) or not 0 < len(address) <= MAX_FORCE_TEXT:
+        raise ValueError(
+            f"address must be an S7 address or a symbol of 1..{MAX_FORCE_TEXT} characters"
+            " - at `$.args.address`"
+        )
+    if isinstance(value, str) and not 0 < len(value) <= MAX_FORCE_TEXT:
+        raise ValueError(
+            f"value must be true/false, a number or an S7 literal of 1..{MAX_FORCE_TEXT}"
+            " characters - at `$.args.value`"
+        )
 
 
 def _check_online_args(op: str, args: dict[str, Scalar]) -> None:
@@ -443,9 +493,11 @@ class Command(_Msg, frozen=True, kw_only=True):
     ``mode`` takes ``{"mode": "AUTO"|"MAN"|"TAP"|"TOP"}``; ``step_on``/``step_off``/
     ``ack_step`` take ``{"step": n}``; ``ack_msg`` takes ``{"msg_id": n | "text"}`` (a
     message of the ``alarms`` list); ``halt``/``en_il``/``en_sv`` take ``{"on": bool}``;
-    the other ops take no arguments (web.access.roles.COMMANDS). ``user`` and ``token``
-    come from a ``login``; ``origin`` says where the command was given (``page 3
-    (127.0.0.1)``, ``shell``, ``bus``) for the audit."""
+    ``force`` takes ``{"address": "I0.3", "value": true}`` (``value`` null unforces the
+    address) or ``{"all": true}`` (unforce every job); the other ops take no arguments
+    (web.access.roles.COMMANDS). ``user`` and ``token`` come from a ``login``; ``origin``
+    says where the command was given (``page 3 (127.0.0.1)``, ``shell``, ``bus``) for the
+    audit."""
 
     op: Op
     fb: Name
@@ -481,6 +533,8 @@ class Command(_Msg, frozen=True, kw_only=True):
 
         if self.op in ("download", "undo_download", "save", "open"):
             _check_online_args(self.op, self.args)
+        if self.op == "force":
+            _check_force_args(self.args)
 
     @property
     def step(self) -> int | None:

@@ -14,11 +14,16 @@ Key space, all under ``s7graph/<cpu>/``:
 - ``alarms`` — the :class:`AlarmList` (the CPU's message list), published on change;
   ``alarms/list`` — queryable: the current one (``seq`` orders the two);
 - ``alarms/history`` — queryable: the last 200 message events (:class:`AlarmHistory`);
+- ``forces`` — the :class:`ForceList` (the CPU's force jobs), published on change and a
+  queryable; ``status`` counts them (the FRCE LED);
 - ``cmd`` — queryable: a :class:`Command` in, one :class:`CommandReply` out. Valid commands
   go on a thread-safe queue; the scan loop drains it at a scan boundary, where the
   :class:`~web.bus.gate.Gate` checks who sent each and whether their role allows it,
-  applies and audits it, and resolves it, which sends the reply. Unreadable ones are
-  refused (and audited) at once with the reason;
+  applies and audits it. The reply leaves once the command's effect and its audit row
+  are durable (``apply_commands(..., durable=runner)``: from the writer thread's callback
+  when the next scan's state is committed; never does the scan thread wait), or, if the
+  state file has not confirmed it ``REPLY_WITHIN_S`` after the command came, as not
+  confirmed. Unreadable ones are refused (and audited) at once with the reason;
 - ``login`` — queryable: a :class:`LoginRequest` in, a :class:`LoginReply` (a token) out;
 - ``audit`` — each :class:`AuditEntry` as it is written; ``audit/list`` — queryable: the
   last 50 (:class:`AuditList`);
@@ -33,6 +38,7 @@ always be closed. docs/bus.md shows every message.
 
 from __future__ import annotations
 
+import collections
 import contextlib
 import functools
 import json
@@ -42,7 +48,7 @@ import time
 from collections.abc import Callable, Iterable, Mapping
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol
 
 import msgspec
 import zenoh
@@ -60,6 +66,7 @@ from s7graph.web.bus.protocol import (
     CommandReply,
     CpuStatus,
     CycleStats,
+    ForceList,
     LoginReply,
     LoginRequest,
     ProjectFiles,
@@ -73,6 +80,7 @@ from s7graph.web.bus.protocol import (
 __all__ = [
     "BusClient",
     "BusPublisher",
+    "Durability",
     "PendingCommand",
     "StateFollower",
     "TlsFiles",
@@ -84,7 +92,14 @@ __all__ = [
 
 ROOT = "s7graph"
 COMMAND_QUEUE_SIZE = 256
-COMMAND_MAX_AGE_S = 4.5  # older commands are refused: their sender (5 s timeout) gave up
+CLIENT_TIMEOUT_S = 5.0
+"""How long a :class:`BusClient` waits for an answer."""
+COMMAND_MAX_AGE_S = 3.0
+"""Older commands are refused at the scan boundary: too little of their sender's wait would
+be left for the state file to confirm them."""
+REPLY_WITHIN_S = 4.5
+"""A command applied but not yet confirmed durable this long after it came is answered as
+not confirmed (before its sender's ``CLIENT_TIMEOUT_S`` runs out)."""
 STATUS_PERIOD_S = 1.0
 STATUS_PERIOD_NS = int(STATUS_PERIOD_S * 1e9)
 
@@ -168,6 +183,10 @@ class keys:
         return f"{ROOT}/{self.cpu}/alarms/history"
 
     @property
+    def forces(self) -> str:
+        return f"{ROOT}/{self.cpu}/forces"
+
+    @property
     def cmd(self) -> str:
         return f"{ROOT}/{self.cpu}/cmd"
 
@@ -228,6 +247,44 @@ class PendingCommand:
         self.query = None
 
 
+class Durability(Protocol):
+    """Who says when what was applied so far is on disk (``engine.runner.Runner``)."""
+
+    def durable_mark(self) -> int: ...
+
+    def when_durable(self, mark: int, fn: Callable[[str | None], None]) -> None: ...
+
+
+class _Awaiting:
+    """The commands of one scan boundary, applied and audited, waiting for their commit:
+    :meth:`durable` (the writer thread) or :meth:`overdue` (the scan thread, when the
+    oldest has waited ``REPLY_WITHIN_S``) answers them, whichever comes first."""
+
+    def __init__(
+        self, results: list[tuple[PendingCommand, bool, str]], cycle: int | None, within_ns: int
+    ) -> None:
+        self.results = results
+        self.cycle = cycle
+        self.deadline_ns = min(p.received_ns for p, _, _ in results) + within_ns
+        self._lock = threading.Lock()
+        self.answered = False
+
+    def durable(self, error: str | None) -> None:
+        with self._lock:
+            if self.answered:
+                return
+            self.answered = True
+        for p, applied, reason in self.results:
+            if error is None or not applied:
+                p.resolve(applied, reason, cycle=self.cycle)
+            else:
+                p.resolve(False, f"not confirmed: applied in cycle {self.cycle}, but {error}",
+                          cycle=self.cycle)  # fmt: skip
+
+    def overdue(self, why: str) -> None:
+        self.durable(why)
+
+
 def _answer(query: zenoh.Query | None, reply: CommandReply) -> None:
     _reply(query, reply)
 
@@ -258,6 +315,7 @@ class BusPublisher:
         *,
         queue_size: int = COMMAND_QUEUE_SIZE,
         max_age_s: float = COMMAND_MAX_AGE_S,
+        reply_within_s: float = REPLY_WITHIN_S,
         gate: Gate | None = None,
     ) -> None:
         self._keys = keys(cpu)
@@ -272,12 +330,15 @@ class BusPublisher:
         self.outbox = Outbox()
         self._commands: queue.Queue[PendingCommand] = queue.Queue(maxsize=queue_size)
         self._max_age_ns = int(max_age_s * 1e9)
+        self._within_ns = int(reply_within_s * 1e9)
+        self._awaiting: collections.deque[_Awaiting] = collections.deque()
         self._status = CpuStatus(
             cpu=cpu, fbs=list(self._charts), login="demo" if self.gate.auth.demo else "users"
         )
         self._status_sent_ns = 0
         self._cycle = (0, 0)  # the cycle and t_ms of the latest scan published
         self._alarms = AlarmList()
+        self._forces = ForceList()
         self._declared: list[Any] = []
         self._delta_pubs: dict[str, zenoh.Publisher] = {}
         self._chart_pubs: dict[str, zenoh.Publisher] = {}
@@ -312,6 +373,13 @@ class BusPublisher:
             )
             self._declared.append(self._alarm_pub)
             self._serve(self._keys.alarm_list, self._alarm_bytes)
+            self._force_pub = session.declare_publisher(
+                self._keys.forces,
+                encoding=zenoh.Encoding.APPLICATION_JSON,
+                congestion_control=zenoh.CongestionControl.BLOCK,
+            )
+            self._declared.append(self._force_pub)
+            self._serve(self._keys.forces, self._force_bytes)
             self._serve(self._keys.alarm_history, lambda: encode(self.gate.history()))
             self._serve(self._keys.audit_list, lambda: encode(self.gate.audit_list()))
             self._audit_pub = session.declare_publisher(
@@ -352,6 +420,18 @@ class BusPublisher:
             self._alarms = alarms
         self.outbox.post(self._alarm_pub, alarms)
         return alarms
+
+    def publish_forces(self, forces: ForceList) -> ForceList:
+        """Publish a changed force table on ``forces`` (``seq`` is the bus's own counter),
+        serve it there, and put the number of jobs into ``status`` at once."""
+        with self._lock:
+            forces = msgspec.structs.replace(forces, seq=self._forces.seq + 1)
+            self._forces = forces
+            self._status = msgspec.structs.replace(self._status, forces=len(forces.entries))
+            self._status_sent_ns = 0
+        self.outbox.post(self._force_pub, forces)
+        self._publish_status()
+        return forces
 
     def set_cpu_state(self, state: str) -> None:
         """Report a CPU run state change (RUN/STOP/STARTUP) on ``status`` at once."""
@@ -407,21 +487,51 @@ class BusPublisher:
             else:
                 drained.append(p)
 
-    def apply_commands(self, apply: Apply, *, cycle: int | None = None) -> int:
+    def apply_commands(
+        self, apply: Apply, *, cycle: int | None = None, durable: Durability | None = None
+    ) -> int:
         """Drain the pending commands and pass each through the gate: who sent it, may
         their role, then ``apply(command) -> (applied, reason[, detail])`` as that user,
         then the audit row. An exception from ``apply`` refuses that command. Returns how
-        many were handled."""
+        many were handled.
+
+        With ``durable`` (the runner) the replies wait, off the scan thread, until what
+        was applied so far — these commands' effects and audit rows — is on disk
+        (``durable.when_durable(durable.durable_mark(), ...)``); without it they leave at
+        once. Commands still unconfirmed ``REPLY_WITHIN_S`` after they came are answered
+        here as not confirmed."""
+        self._answer_overdue()
         pending = self.drain_commands()
+        if not pending:
+            return 0
+        results = []
         for p in pending:
             applied, reason = self.gate.apply(p.command, apply, cycle=cycle)
-            p.resolve(applied, reason, cycle=cycle)
+            results.append((p, applied, reason))
+        if durable is None:
+            for p, applied, reason in results:
+                p.resolve(applied, reason, cycle=cycle)
+            return len(pending)
+        waiting = _Awaiting(results, cycle, self._within_ns)
+        self._awaiting.append(waiting)
+        durable.when_durable(durable.durable_mark(), waiting.durable)
         return len(pending)
+
+    def _answer_overdue(self) -> None:
+        now = time.monotonic_ns()
+        awaiting = self._awaiting
+        while awaiting and (awaiting[0].answered or awaiting[0].deadline_ns <= now):
+            waiting = awaiting.popleft()
+            waiting.overdue(
+                f"the state file has not committed it within {self._within_ns / 1e9:g} s"
+            )
 
     def close(self) -> None:
         """Undeclare queryables and publishers; refuse commands still waiting."""
         for p in self.drain_commands():
             p.resolve(False, "CPU bus closed")
+        while self._awaiting:
+            self._awaiting.popleft().overdue("the CPU bus closed before it was on disk")
         self.gate.on_audit = None
         self.outbox.close()  # what the last scans published goes out first
         self._logins.shutdown(wait=False, cancel_futures=True)
@@ -477,6 +587,10 @@ class BusPublisher:
     def _alarm_bytes(self) -> bytes:
         with self._lock:
             return encode(self._alarms)
+
+    def _force_bytes(self) -> bytes:
+        with self._lock:
+            return encode(self._forces)
 
     def _status_bytes(self) -> bytes:
         with self._lock:
@@ -553,7 +667,9 @@ class BusPublisher:
 class BusClient:
     """A view's (or a test's) handle on one CPU over the bus."""
 
-    def __init__(self, session: zenoh.Session, cpu: str, *, timeout: float = 5.0) -> None:
+    def __init__(
+        self, session: zenoh.Session, cpu: str, *, timeout: float = CLIENT_TIMEOUT_S
+    ) -> None:
         self._keys = keys(cpu)
         self._session = session
         self._timeout = timeout
@@ -611,25 +727,46 @@ class BusClient:
     def on_alarms(self, callback: Callable[[AlarmList], None]) -> None:
         """Call ``callback`` with the current message list, then with each newer one (by
         ``seq``; on a zenoh thread)."""
+        self._follow_seq(self._keys.alarms, AlarmList, self.alarms, callback)
+
+    def _follow_seq(
+        self,
+        key: str,
+        kind: type[Any],
+        current: Callable[[], Any],
+        callback: Callable[[Any], None],
+    ) -> None:
+        """Subscribe to ``key``'s publications of ``kind`` and fetch the current one:
+        ``callback`` sees each newer one (by ``seq``) once."""
         lock = threading.Lock()
         latest = [-1]
 
-        def offer(alarms: AlarmList) -> None:
+        def offer(message: Any) -> None:
             with lock:
-                if alarms.seq <= latest[0]:
+                if message.seq <= latest[0]:
                     return
-                latest[0] = alarms.seq
-                callback(alarms)
+                latest[0] = message.seq
+                callback(message)
 
         def on_sample(sample: zenoh.Sample) -> None:
             with contextlib.suppress(ProtocolError):
-                offer(decode(sample.payload.to_bytes(), AlarmList))
+                offer(decode(sample.payload.to_bytes(), kind))
 
-        self._subscribers.append(self._session.declare_subscriber(self._keys.alarms, on_sample))
+        self._subscribers.append(self._session.declare_subscriber(key, on_sample))
         with contextlib.suppress(ProtocolError, zenoh.ZError):
-            current = self.alarms()
-            if current is not None:
-                offer(current)
+            message = current()
+            if message is not None:
+                offer(message)
+
+    def forces(self) -> ForceList | None:
+        """The CPU's force jobs, or None if no CPU answers."""
+        data = self._get_one(self._keys.forces)
+        return None if data is None else decode(data, ForceList)
+
+    def on_forces(self, callback: Callable[[ForceList], None]) -> None:
+        """Call ``callback`` with the current force jobs, then with each newer list (by
+        ``seq``; on a zenoh thread)."""
+        self._follow_seq(self._keys.forces, ForceList, self.forces, callback)
 
     def send(self, command: Command, *, timeout: float | None = None) -> CommandReply:
         """Send a command and wait for the CPU's answer; no answer is a refusal too."""

@@ -1,6 +1,6 @@
 """The ``s7graph`` command line: ``run``, ``sim``, ``check``, ``import``, ``export``,
 ``--version``; for the bus ``web``, ``router``, ``watch`` and the shell's commands (``ack``,
-``mode``, ..., ``download``); ``users`` and ``audit``.
+``mode``, ..., ``force``, ``download``); ``users`` and ``audit``.
 
 Each command lives in its own module (``web/cli/*.py``) and is imported only when used, so
 ``s7graph check`` never pays for zenoh or viser. Errors are one line on stderr and a
@@ -96,6 +96,38 @@ def _positive_ms(value: float | None) -> float | None:
     return value
 
 
+def _rt_priority(value: int | None) -> int | None:
+    if value is not None and not 0 <= value <= 98:
+        raise typer.BadParameter("--rt-priority must be 0 (normal scheduling) to 98")
+    return value
+
+
+def _scan_priority(value: int | None) -> int | None:
+    """The Runner's ``rt_priority`` for ``--rt-priority``: the default, or None for 0; a
+    priority asked for that the system refuses is one note on stderr."""
+    from s7graph.engine.runner import RT_PRIORITY, set_realtime
+
+    if value is None:
+        return RT_PRIORITY
+    if value == 0:
+        return None
+    import threading
+
+    allowed: list[bool] = []
+
+    def probe() -> None:
+        allowed.append(set_realtime(value))
+
+    thread = threading.Thread(target=probe)
+    thread.start()
+    thread.join()
+    if not allowed[0]:
+        print(f"s7graph: note: real-time priority {value} refused by the system (needs root, "
+              "CAP_SYS_NICE or an rtprio limit): the scan runs at normal priority",
+              file=sys.stderr)  # fmt: skip
+    return value
+
+
 def _restart_type(value: str | None) -> str | None:
     if value is not None and value.lower() not in ("warm", "hot", "cold"):
         raise typer.BadParameter("--restart must be warm, hot or cold")
@@ -153,8 +185,18 @@ def run(
         bool,
         typer.Option(help="Start anew: keep an existing state file as FILE.old-N."),
     ] = False,
+    rt_priority: Annotated[
+        int | None,
+        typer.Option(
+            callback=_rt_priority,
+            help="Real-time (SCHED_FIFO) priority of the scan thread, 1-98; 0: normal "
+            "scheduling. Default 40 where the system allows it (root, CAP_SYS_NICE, an "
+            "rtprio limit), else normal.",
+        ),
+    ] = None,
 ) -> None:
     """Run a program or a chart on the system clock until Ctrl-C."""
+    priority = _scan_priority(rt_priority)
     if program.suffix.lower() == ".s7g":
         from s7graph.web.cli.run_chart import run_chart
 
@@ -183,6 +225,7 @@ def run(
                 net=net,
                 restart=restart or "warm",
                 fresh=fresh,
+                rt_priority=priority,
             )
         )
     from s7graph.web.cli.run_program import run_program
@@ -196,6 +239,7 @@ def run(
             duration_s=duration_s,
             restart=restart,
             fresh=fresh,
+            rt_priority=priority,
         )
     )
 
@@ -308,12 +352,17 @@ def web(
     tls_ca: TlsCa = None,
     origin: Origin = None,
     duration_s: Annotated[float | None, typer.Option(help="Stop after this many seconds.")] = None,
+    child: Annotated[
+        bool, typer.Option("--child", hidden=True, help="The view of a run --web.")
+    ] = False,
 ) -> None:
     """Serve the browser view of a CPU on the bus, as a process of its own."""
     from s7graph.web.cli.view import web_command
 
     net = _net(connect=connect, host=host, tls_ca=tls_ca, origins=origin)
-    raise typer.Exit(web_command(net, cpu=cpu, fb=fb, port=port, duration_s=duration_s))
+    raise typer.Exit(
+        web_command(net, cpu=cpu, fb=fb, port=port, duration_s=duration_s, child=child)
+    )
 
 
 @app.command()
@@ -430,6 +479,41 @@ def t_push(
 ) -> None:  # fmt: skip
     """Switch a ready transition (TAP, TOP; T_PUSH)."""
     _remote("t_push", {}, cpu, connect, fb, user, tls_ca)
+
+
+@app.command(context_settings={"ignore_unknown_options": True})  # MW10 -5: a value
+def force(
+    job: Annotated[
+        list[str] | None,
+        typer.Argument(metavar="ADDRESS VALUE|off",
+                       help="An I, Q or M address or a symbol, and TRUE/FALSE, a number or "
+                       "an S7 literal (16#00FF, T#5S); off unforces it."),
+    ] = None,
+    user: Annotated[str | None, typer.Option("--user", help="Log in as this user.")] = None,
+    cpu: CpuName = "cpu1", connect: Connect = None, fb: FbName = None, tls_ca: TlsCa = None,
+    list_: Annotated[bool, typer.Option("--list", help="Print the force jobs.")] = False,
+    all_: Annotated[bool, typer.Option("--all", help="With off: unforce every job.")] = False,
+) -> None:  # fmt: skip
+    """Force an input, output or flag until unforced (engineers), unforce it, or list the
+    force jobs."""
+    words = list(job or [])
+    if list_:
+        if words or all_:
+            raise typer.BadParameter("--list takes no address, value or --all")
+        from s7graph.web.cli.remote import list_forces
+
+        raise typer.Exit(list_forces(_net(cpu=cpu, connect=connect, tls_ca=tls_ca)))
+    if user is None:
+        raise typer.BadParameter("give the user to log in as with --user")
+    if all_:
+        if [w.lower() for w in words] != ["off"]:
+            raise typer.BadParameter("--all unforces every job: s7graph force --all off")
+        _remote("force", {"all": True}, cpu, connect, fb, user, tls_ca)
+    if len(words) != 2:
+        raise typer.BadParameter("give ADDRESS VALUE (or ADDRESS off), e.g. force I0.3 TRUE")
+    address, value = words
+    args = {"address": address, "value": None if value.lower() == "off" else value}
+    _remote("force", args, cpu, connect, fb, user, tls_ca)
 
 
 @app.command()

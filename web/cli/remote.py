@@ -1,11 +1,12 @@
 """``s7graph watch`` and the shell's commands: ``ack``, ``mode``, ``init``, ``off``,
-``step-on``, ``step-off``, ``t-push`` and ``download`` for one CPU on the bus.
+``step-on``, ``step-off``, ``t-push``, ``force`` and ``download`` for one CPU on the bus.
 
 A command logs in as ``--user`` (the password from ``S7GRAPH_PASSWORD``, else a prompt
 when the CPU checks passwords), sends the command with the token, logs out, and exits 0
 when the CPU applied it, 1 when it refused it (the reason on stderr) or did not answer.
 ``watch`` prints every change of the FBs' active steps, mode and errors, and the events,
-one line each, until Ctrl-C or ``--duration-s``.
+one line each, until Ctrl-C or ``--duration-s``. ``force --list`` prints the CPU's force
+jobs (a read: no login).
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ from s7graph.web.bus.zenoh_bus import BusClient, open_session
 from s7graph.web.cli.net import NetOptions
 from s7graph.web.cli.stopping import wait_until_stopped
 
-__all__ = ["PASSWORD_ENV", "download_command", "send_command", "watch_command"]
+__all__ = ["PASSWORD_ENV", "download_command", "list_forces", "send_command", "watch_command"]
 
 PASSWORD_ENV = "S7GRAPH_PASSWORD"
 
@@ -56,33 +57,43 @@ def _join(net: NetOptions) -> zenoh.Session | str:
 
 
 @contextlib.contextmanager
-def _logged_in(net: NetOptions, *, fb: str | None, user: str) -> Iterator[_Shell | int]:
-    """A shell logged in at ``net.cpu`` as ``user`` (logged out again after), or the exit
-    status when that fails (the reason printed)."""
+def _on_bus(net: NetOptions) -> Iterator[BusClient | str]:
+    """A client of ``net.cpu`` on the bus (its session closed after), or why there is none."""
     session = _join(net)
     if isinstance(session, str):
-        yield _fail(session)
+        yield session
         return
     try:
         with BusClient(session, net.cpu) as client:
-            status = client.status()
-            if status is None:
-                yield _fail(f"CPU {net.cpu!r} does not answer", 1)
-                return
-            name = fb or (status.fbs[0] if status.fbs else "")
-            password = os.environ.get(PASSWORD_ENV, "")
-            if status.login == "users" and not password and sys.stdin.isatty():
-                password = getpass.getpass(f"Password for {user}: ")
-            login = client.login(user, password, origin=_origin())
-            if not login.ok:
-                yield _fail(f"login refused: {login.reason}", 1)
-                return
-            try:
-                yield _Shell(client, name, user, login.token)
-            finally:
-                client.logout(login.token, user=user, origin=_origin())
+            yield client
     finally:
         session.close()  # type: ignore[no-untyped-call]  # zenoh's stub
+
+
+@contextlib.contextmanager
+def _logged_in(net: NetOptions, *, fb: str | None, user: str) -> Iterator[_Shell | int]:
+    """A shell logged in at ``net.cpu`` as ``user`` (logged out again after), or the exit
+    status when that fails (the reason printed)."""
+    with _on_bus(net) as client:
+        if isinstance(client, str):
+            yield _fail(client)
+            return
+        status = client.status()
+        if status is None:
+            yield _fail(f"CPU {net.cpu!r} does not answer", 1)
+            return
+        name = fb or (status.fbs[0] if status.fbs else "")
+        password = os.environ.get(PASSWORD_ENV, "")
+        if status.login == "users" and not password and sys.stdin.isatty():
+            password = getpass.getpass(f"Password for {user}: ")
+        login = client.login(user, password, origin=_origin())
+        if not login.ok:
+            yield _fail(f"login refused: {login.reason}", 1)
+            return
+        try:
+            yield _Shell(client, name, user, login.token)
+        finally:
+            client.logout(login.token, user=user, origin=_origin())
 
 
 class _Shell:
@@ -112,6 +123,26 @@ def send_command(
         print(f"s7graph: {op} refused: {reply.reason}", file=sys.stderr)
         return 1
     print(f"s7graph: {op} applied on {net.cpu}/{shell.fb} (cycle {reply.cycle})")
+    return 0
+
+
+def list_forces(net: NetOptions) -> int:
+    """``s7graph force --list``: the CPU's force jobs, one line each; 0, or 2 when the CPU
+    does not answer."""
+    with _on_bus(net) as client:
+        if isinstance(client, str):
+            return _fail(client)
+        forces = client.forces()
+    if forces is None:
+        return _fail(f"CPU {net.cpu!r} does not answer")
+    if not forces.entries:
+        print(f"no force job active on {net.cpu}")
+        return 0
+    width = max(len(e.address) for e in forces.entries)
+    for e in forces.entries:
+        symbol = f'  "{e.symbol}"' if e.symbol else ""
+        who = f"  ({e.user})" if e.user else ""
+        print(f"{e.address:<{width}} = {e.value}{symbol}{who}")
     return 0
 
 
@@ -199,33 +230,29 @@ def _line(fb: str, update: StepStateUpdate) -> str:
 def watch_command(net: NetOptions, *, fb: str | None, duration_s: float | None = None) -> int:
     """Print step changes of ``net.cpu`` live; 0 at the end, 2 when nothing can be watched."""
     lock = threading.Lock()
-    session = _join(net)
-    if isinstance(session, str):
-        return _fail(session)
-    try:
-        with BusClient(session, net.cpu) as client:
-            status = client.status()
-            if status is None:
-                return _fail(f"CPU {net.cpu!r} does not answer")
-            names = [fb] if fb else list(status.fbs)
-            last: dict[str, tuple[object, ...]] = {}
+    with _on_bus(net) as client:
+        if isinstance(client, str):
+            return _fail(client)
+        status = client.status()
+        if status is None:
+            return _fail(f"CPU {net.cpu!r} does not answer")
+        names = [fb] if fb else list(status.fbs)
+        last: dict[str, tuple[object, ...]] = {}
 
-            def show(name: str, update: StepStateUpdate) -> None:
-                key = (update.mode, update.active, update.disturbed, update.latched)
-                if last.get(name) == key and not update.events:
-                    return
-                last[name] = key
-                with lock:
-                    print(_line(name, update), flush=True)
+        def show(name: str, update: StepStateUpdate) -> None:
+            key = (update.mode, update.active, update.disturbed, update.latched)
+            if last.get(name) == key and not update.events:
+                return
+            last[name] = key
+            with lock:
+                print(_line(name, update), flush=True)
 
-            def alive(up: bool) -> None:
-                with lock:
-                    print(f"CPU {net.cpu} {'reachable' if up else 'disconnected'}", flush=True)
+        def alive(up: bool) -> None:
+            with lock:
+                print(f"CPU {net.cpu} {'reachable' if up else 'disconnected'}", flush=True)
 
-            client.on_alive(alive)
-            for name in names:
-                client.follow(name, lambda u, n=name: show(n, u))  # type: ignore[misc]
-            wait_until_stopped(duration_s)
-    finally:
-        session.close()  # type: ignore[no-untyped-call]  # zenoh's stub
+        client.on_alive(alive)
+        for name in names:
+            client.follow(name, lambda u, n=name: show(n, u))  # type: ignore[misc]
+        wait_until_stopped(duration_s)
     return 0

@@ -9,13 +9,15 @@ where it was) or cold (OB102); ``engine.runner.Runner`` paces the scans.
 A plant (``--plant``) runs after every scan; a plant error ends the run with one line, a
 plant still running at twice the maximum cycle time is aborted (STOP). Without ``--web`` a
 STOP by error ends the run: the reason on stderr, exit 1.
-``--web`` serves the live browser view of the running FB on 127.0.0.1:``--port`` and its
-zenoh bus (``web/live_edge.py``): one state update per scan, operator commands applied
-between scans, acknowledgements in the state file's audit log. ``--record FILE.rrd``
+``--web`` puts the running FB on the zenoh bus (``web/view/live_edge.py``: one state update
+per scan, operator commands applied between scans and answered once durable — an
+engineer's force jobs too, ``web/bus/forcing.py``, and downloads, ``web/bus/online.py`` —
+each audited in the state file) and serves its live browser view on ``--host:--port`` from
+a process of its own (``web/cli/view_process.py``: ``s7graph web`` as a child, restarted
+when it ends), so a page load never shares the scan's process. ``--record FILE.rrd``
 records the same updates as a rerun timeline (extra ``[trace]``). The maximum cycle time is
-``--max-cycle-ms``; by default S7's 150 ms, but 1 s with ``--web``: viser and zenoh share the
-process, and sending the scene to a new page can hold a scan up for longer than 150 ms (a
-time error → STOP).
+``--max-cycle-ms``, by default S7's 150 ms; ``view_in_process`` (for the jitter benchmark's
+comparison) serves the view in the CPU's process as before, with 1 s.
 """
 
 from __future__ import annotations
@@ -29,7 +31,7 @@ from s7graph.engine.errors import S7Error, ScanAborted
 from s7graph.engine.modes import CpuMode
 from s7graph.engine.persistence import StateFileError, StateStore
 from s7graph.engine.record import ScanRecord
-from s7graph.engine.runner import Runner
+from s7graph.engine.runner import RT_PRIORITY, Runner
 from s7graph.engine.watchdog import Watchdog
 from s7graph.sfb.alarms import message_list
 from s7graph.web.cli.report import fail
@@ -40,10 +42,12 @@ from s7graph.web.harness.session import ChartSession
 
 if TYPE_CHECKING:
     from s7graph.web.cli.net import NetOptions
+    from s7graph.web.cli.view_process import ViewProcess
     from s7graph.web.view.live_edge import LiveEdge
 
 DEFAULT_MAX_CYCLE_MS = 150.0  # S7's default maximum cycle time
-WEB_MAX_CYCLE_MS = 1000.0
+IN_PROCESS_VIEW_MAX_CYCLE_MS = 1000.0
+"""With ``view_in_process``: sending the scene to a new page holds the scan's process."""
 
 
 def run_chart(
@@ -61,6 +65,9 @@ def run_chart(
     net: NetOptions | None = None,
     restart: str = "warm",
     fresh: bool = False,
+    view_in_process: bool = False,
+    session: ChartSession | None = None,
+    rt_priority: int | None = RT_PRIORITY,
 ) -> int:
     """Run ``path`` until Ctrl-C/SIGTERM/``duration_s``; 0 clean, 1 plant error, STOP by
     error or state not written, 2 bad chart or a state file it cannot trust.
@@ -68,18 +75,23 @@ def run_chart(
     ``net``: the bus and page options (``web.cli.net``); with endpoints the CPU is on the
     bus even without ``web``.
 
-    ``max_cycle_ms`` None: ``WEB_MAX_CYCLE_MS`` with ``web``, else ``DEFAULT_MAX_CYCLE_MS``.
-    ``restart``: the startup from a saved state (``--restart``); ``fresh``: keep the old
-    state file aside and start anew (``--fresh``)."""
-    clock = SystemClock()
+    ``max_cycle_ms`` None: ``DEFAULT_MAX_CYCLE_MS`` (``IN_PROCESS_VIEW_MAX_CYCLE_MS`` with
+    ``web`` and ``view_in_process``). ``restart``: the startup from a saved state
+    (``--restart``); ``fresh``: keep the old state file aside and start anew (``--fresh``).
+    ``view_in_process``: serve the view in this process (the benchmark's comparison);
+    ``session``: ``path`` already loaded, on the system clock (the benchmark's).
+    ``rt_priority``: the scan thread's real-time priority (None: normal scheduling)."""
+    clock = SystemClock() if session is None else session.clock
     try:
-        session = ChartSession.load(path, symbols, clock)
+        if session is None:
+            session = ChartSession.load(path, symbols, clock)
         loaded: LoadedPlant | None = load_plant(plant) if plant is not None else None
     except S7Error as exc:  # ChartLoadError included
         return fail(exc)
     cpu = session.cpu
-    if max_cycle_ms is None:  # the view shares the process (and the GIL): a page load
-        max_cycle_ms = WEB_MAX_CYCLE_MS if web else DEFAULT_MAX_CYCLE_MS  # may hold a scan up
+    if max_cycle_ms is None:
+        inline = web and view_in_process  # a page load may hold a scan up
+        max_cycle_ms = IN_PROCESS_VIEW_MAX_CYCLE_MS if inline else DEFAULT_MAX_CYCLE_MS
     cpu.watchdog = Watchdog(max_cycle_ms, cpu.watchdog.min_cycle_ns / 1e6)
     state_path = state if state is not None else path.with_suffix(".state.sqlite")
     try:
@@ -91,11 +103,12 @@ def run_chart(
         return fail(f"{state_path}: cannot use the state file: {exc.strerror or exc}")
     store = opened.store
     live: LiveEdge | None = None
+    view: ViewProcess | None = None
     if web or record is not None or (net is not None and net.on_bus):
         try:
-            live = _serve(
+            live, view = _serve(
                 session, store, web=web, port=port, record=record, net=net, path=path,
-                symbols=symbols,
+                symbols=symbols, in_process=view_in_process,
             )  # fmt: skip
         except Exception as exc:  # port in use, no rerun-sdk, ...
             print(f"s7graph: error: cannot serve the view: {exc}", file=sys.stderr)
@@ -121,12 +134,21 @@ def run_chart(
         if live is not None:
             live.on_record(record, stats=cpu.stats, runner=runner)
 
-    runner = Runner(cpu, cycle_ms=cycle_ms, store=store, on_record=on_record, end_on_stop=not web)
+    def close() -> None:
+        if view is not None:
+            view.stop()
+        if live is not None:
+            live.close()
+
+    runner = Runner(cpu, cycle_ms=cycle_ms, store=store, on_record=on_record, end_on_stop=not web,
+                    rt_priority=rt_priority)  # fmt: skip
     if live is not None and live.online is not None:
         live.online.durability = runner  # a download is applied once its state is on disk
+    if view is not None:
+        view.start()
     status = run_until_stopped(
         runner, opened, what=f"{path.name} ({session.cc.name})", restart=restart,
-        duration_s=duration_s, close=live.close if live is not None else None,
+        duration_s=duration_s, close=close,
     )  # fmt: skip
     if failure:
         return fail(failure[0], 1)
@@ -143,31 +165,52 @@ def _serve(
     net: NetOptions | None = None,
     path: Path | None = None,
     symbols: Path | None = None,
-) -> LiveEdge:
-    """The live view (and recording) of the session's GraphFB, and its online change
-    (``path``: the chart file a download rewrites); prints where to look."""
+    in_process: bool = False,
+) -> tuple[LiveEdge, ViewProcess | None]:
+    """The CPU on the bus (and the recording) of the session's GraphFB, its online change
+    (``path``: the chart file a download rewrites), and the view's process (not started
+    yet) when ``web``; prints where to look."""
+    from s7graph.web.bus.forcing import Forcing
     from s7graph.web.bus.gate import cpu_gate  # zenoh and viser only when asked for
     from s7graph.web.bus.live import LiveGraph, watch_names
     from s7graph.web.bus.online import OnlineChange
     from s7graph.web.cli.net import NetOptions
+    from s7graph.web.cli.view_process import ViewProcess, view_endpoints
+    from s7graph.web.view.edge import check_port
     from s7graph.web.view.live_edge import LiveEdge
 
     net = net or NetOptions()
+    if web:
+        check_port(net.host, port)
     live = LiveGraph(
         session.graph, read=session.get, watch=watch_names(session.symbols),
         messages=message_list(session.cpu),
     )  # fmt: skip
-    gate = cpu_gate(net.users, store.path)
+    gate = cpu_gate(net.users, store)
     table = symbols.read_text(encoding="utf-8-sig") if symbols is not None else ""
     online = OnlineChange(session, live, gate, path=path, symbols=table)
+    inline = web and in_process
     edge = LiveEdge(
-        live, port=port, record=record, serve=web, bus=net.on_bus, cpu=net.cpu, host=net.host,
-        ends=net.ends, gate=gate, allowed_origins=tuple(net.origins), online=online,
+        live, port=port, record=record, serve=inline, bus=web or net.on_bus, cpu=net.cpu,
+        host=net.host, ends=net.ends, gate=gate, allowed_origins=tuple(net.origins),
+        online=online, forcing=Forcing(session.cpu),
     )  # fmt: skip
-    if web:
+    view = None
+    if inline:
         print(f"s7graph: view {edge.url} (bus {edge.endpoint}); Ctrl-C to stop", flush=True)
+    elif web:
+        bus = edge.endpoint
+
+        def served(url: str) -> None:
+            if view is not None and view.starts == 1:
+                print(f"s7graph: view {url} (bus {bus}); Ctrl-C to stop", flush=True)
+
+        view = ViewProcess(
+            connect=view_endpoints(net.listen, net.connect) or [bus], cpu=net.cpu,
+            host=net.host, port=port, origins=net.origins, tls_ca=net.tls_ca, on_url=served,
+        )  # fmt: skip
     elif edge.endpoint:
         print(f"s7graph: CPU {net.cpu} on the bus {edge.endpoint}; Ctrl-C to stop", flush=True)
     if record is not None:
         print(f"s7graph: recording to {record}", flush=True)
-    return edge
+    return edge, view

@@ -30,7 +30,7 @@ from s7graph.engine.modes import CpuMode
 from s7graph.engine.persistence import StateFileError
 from s7graph.engine.record import ScanRecord
 from s7graph.engine.restart import parse_restart
-from s7graph.engine.runner import Runner
+from s7graph.engine.runner import RT_PRIORITY, Runner
 from s7graph.web.harness.persist import OpenedState, open_state, refusal
 
 
@@ -117,6 +117,7 @@ def run_program(
     max_cycle_ms: float | None = None,
     restart: str | None = None,
     fresh: bool = False,
+    rt_priority: int | None = RT_PRIORITY,
 ) -> int:
     """Run a program until Ctrl-C/SIGTERM/duration; 0 on a clean end, 1 when the CPU went
     to STOP by an error or the state could not be written, 2 on a broken program or a
@@ -124,7 +125,8 @@ def run_program(
 
     ``max_cycle_ms``: the maximum cycle time; None keeps the program's (see ``build_cpu``).
     ``restart`` (``--restart``): the startup from a saved state; None: the program's
-    ``CPU["restart"]``, else warm."""
+    ``CPU["restart"]``, else warm. ``rt_priority``: the scan thread's real-time priority
+    (None: normal scheduling)."""
     try:
         module = import_program(path)
         cpu = build_cpu(module, SystemClock(), max_cycle_ms=max_cycle_ms)
@@ -140,7 +142,7 @@ def run_program(
     except OSError as exc:
         return _fail(state_path, f"cannot use the state file: {exc.strerror or exc}")
     runner = Runner(cpu, cycle_ms=cycle_ms, store=opened.store, on_record=_report,
-                    end_on_stop=True)  # fmt: skip
+                    end_on_stop=True, rt_priority=rt_priority)  # fmt: skip
     return run_until_stopped(
         runner, opened, what=path.name, restart=restart, duration_s=duration_s,
         on_start=_report,
@@ -160,8 +162,9 @@ def run_until_stopped(
     """Start the runner's CPU with ``restart`` (``on_start`` gets the startup record), say
     how on stderr with ``what``, and scan until Ctrl-C/SIGTERM/``duration_s`` (or, with the
     runner's ``end_on_stop``, a STOP by error). Always: the signal handlers back, the runner
-    shut down, ``close()``, the store closed. Returns the exit status: 0, or 1 (with one
-    line on stderr) when the CPU went to STOP by an error or the state was not written."""
+    shut down, ``close()``, the store closed. Returns the exit status: 0 (saying so in one
+    line on stderr), or 1 (with one line on stderr) when the CPU went to STOP by an error
+    or the state was not written."""
     cpu = runner.cpu
     store = opened.store
 
@@ -192,4 +195,7 @@ def run_until_stopped(
     if runner.write_error is not None:
         print(f"s7graph: error: {runner.write_error}; the CPU went to STOP", file=sys.stderr)
         return 1
-    return 1 if runner.stopped else 0
+    if runner.stopped:
+        return 1
+    print(f"s7graph: {what} stopped (state saved in {store.path})", file=sys.stderr)
+    return 0

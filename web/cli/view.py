@@ -3,13 +3,18 @@ its own, for any CPU on the bus.
 
 It lists the CPUs answering on the bus with their FBs, serves the view of ``--cpu`` (by
 default the first, by name) and ``--fb`` (by default its first FB) on ``--host:--port``,
-and knows the CPU only over the bus — as ``s7graph run --web`` does in one process. The
-page may leave this machine (``--host``) only when the CPU checks logins (a users file).
+and knows the CPU only over the bus. ``s7graph run --web`` starts it so, as its child
+(``--child``: it ends when its stdin closes — the CPU's process went — and yields the
+processor to the CPU). The page may leave this machine (``--host``) only when the CPU
+checks logins (a users file). Stopped, it says so in one line on stderr.
 """
 
 from __future__ import annotations
 
+import contextlib
+import os
 import sys
+import threading
 import time
 
 from s7graph.web.bus.zenoh_bus import find_cpus, open_session
@@ -33,7 +38,11 @@ def web_command(
     port: int,
     duration_s: float | None = None,
     wait_s: float = 10.0,
+    child: bool = False,
 ) -> int:
+    stop = threading.Event()
+    if child:
+        _as_child(stop)
     problem = NetOptions(**{**net.__dict__, "host": "127.0.0.1"}).problem()
     if problem is None and not net.connect:
         problem = "give the bus to join with --connect ENDPOINT"
@@ -74,7 +83,29 @@ def web_command(
         return _fail(f"cannot serve the view: {type(exc).__name__}: {exc}")
     print(f"s7graph: view {view.url} of {chosen.cpu}/{view.fb}; Ctrl-C to stop", flush=True)
     try:
-        wait_until_stopped(duration_s)
+        wait_until_stopped(duration_s, stop)
     finally:
         view.close()
+    print("s7graph: view stopped", file=sys.stderr, flush=True)
     return 0
+
+
+CHILD_NICE = 5
+"""How much a ``--child`` view lowers its priority below the CPU's process."""
+
+
+def _as_child(stop: threading.Event) -> None:
+    """The view of a ``run --web``: lower its priority, and set ``stop`` when stdin closes
+    (the CPU's process ended, even by SIGKILL)."""
+    with contextlib.suppress(OSError):
+        os.nice(CHILD_NICE)
+
+    def watch() -> None:
+        try:  # the raw descriptor: a buffered reader's lock would hold the exit up
+            while os.read(0, 4096):
+                pass
+        except OSError:
+            pass
+        stop.set()
+
+    threading.Thread(target=watch, name="s7graph-parent", daemon=True).start()

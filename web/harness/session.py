@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import contextlib
 import re
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -102,16 +102,26 @@ def _fmt(d: Any) -> str:
 
 
 class ChartSession:
-    """One CPU running one compiled chart as a GraphFB from OB1 (sim and run)."""
+    """One CPU running one compiled chart as a GraphFB from OB1 (sim and run); ``beside``:
+    more charts called after it from the same OB1 (the jitter benchmark's 200 sequencers),
+    their GraphFBs in ``others``."""
 
-    def __init__(self, cc: CompiledChart, symbols: SymbolTable, clock: Clock) -> None:
+    def __init__(
+        self,
+        cc: CompiledChart,
+        symbols: SymbolTable,
+        clock: Clock,
+        *,
+        beside: Sequence[CompiledChart] = (),
+    ) -> None:
         self.cc = cc
         self.symbols = symbols
         self.clock = clock
         self.cpu = Cpu(clock, keep_outputs_on_hot_restart=True)  # a hot restart resumes the
         self.cpu.mem.symbols = symbols  # sequence: what its actions set stays set
         self.graph = GraphFB(cc)
-        install_all(self.cpu, [self.graph])
+        self.others = [GraphFB(c) for c in beside]
+        install_all(self.cpu, [self.graph, *self.others])
 
     @classmethod
     def load(cls, path: Path, symbols: Path | None, clock: Clock) -> ChartSession:

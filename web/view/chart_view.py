@@ -6,9 +6,9 @@ it is coloured live (active green, disturbed or latched red, inactive grey) and 
 with a "disconnected" banner while the CPU is unreachable (its ``alive`` token gone).
 The scene is shared by every page; each page has its own side panel
 (``web.view.panel.ClientPanel``: login, Control Sequencer, alarms, alarm history, audit,
-step details, events), built when the page connects — a page whose websocket came from a
-foreign ``Origin`` gets none (``web.view.guard``). Every dynamic text is escaped
-(``web.view.texts``).
+step details, events; an engineer's Force folder), built when the page connects — a page
+whose websocket came from a foreign ``Origin`` gets none (``web.view.guard``). Every
+dynamic text is escaped (``web.view.texts``).
 """
 
 from __future__ import annotations
@@ -32,6 +32,7 @@ from s7graph.web.bus.protocol import (
     CommandReply,
     CpuStatus,
     CycleStats,
+    ForceList,
     LoginReply,
     StepStateUpdate,
 )
@@ -113,6 +114,8 @@ class ChartView:
         self._cpu_cycle = 0
         self._cpu_state = "RUN"
         self._cpu_stats: CycleStats | None = None
+        self._forces: ForceList | None = None
+        self._force_count = 0  # force jobs active: the status line's FORCE mark
         self.drawing: Drawing | None = None
         self._next_layout: ChartLayout | None = None
         self._alarms: AlarmList | None = None
@@ -254,6 +257,14 @@ class ChartView:
             self._cpu_cycle = status.cycle
             self._cpu_state = status.state
             self._cpu_stats = status.stats
+            self._force_count = status.forces
+        self._wake.set()
+
+    def apply_forces(self, forces: ForceList) -> None:
+        """Show the CPU's force jobs (the FORCE mark and an engineer's list)."""
+        with self._lock:
+            self._forces = forces
+            self._force_count = len(forces.entries)
         self._wake.set()
 
     def set_connected(self, connected: bool) -> None:
@@ -292,7 +303,7 @@ class ChartView:
             page = PageState(
                 banner=texts.banner_html(connected, self.cpu),
                 status=texts.status_html(
-                    update, self._cpu_cycle, self._cpu_state, self._cpu_stats
+                    update, self._cpu_cycle, self._cpu_state, self._cpu_stats, self._force_count
                 )
                 if connected
                 else texts.small("no live state"),
@@ -302,6 +313,7 @@ class ChartView:
                 history=texts.history_html(self._history),
                 audit=texts.audit_html(list(self._audit)),
                 events=texts.log_html(list(self._log)),
+                forces=texts.forces_html(self._forces),
             )
             panels = list(self.panels.values())
         self._switch_chart()

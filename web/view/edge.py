@@ -54,6 +54,9 @@ def check_port(host: str, port: int) -> None:
         return
     family = socket.AF_INET6 if ":" in host else socket.AF_INET
     with socket.socket(family, socket.SOCK_STREAM) as s:
+        # as the page's server binds: connections of a view that just ended (TIME_WAIT)
+        # do not make the port busy, a listening server does
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         try:
             s.bind((host, port))
         except OSError as exc:
@@ -142,6 +145,7 @@ class ViewSide:
             self.follower = client.follow(self.fb, self.view.apply)
             client.on_status(self.view.apply_status)
             client.on_alarms(self.view.apply_alarms)
+            client.on_forces(self.view.apply_forces)
             client.on_audit(self.view.apply_audit)
             client.on_alive(self.view.set_connected)
             with contextlib.suppress(Exception):

@@ -6,7 +6,8 @@
 scan's :class:`StepStateUpdate`, the CPU state and cycle statistics, the CPU's message
 list when it changed (``alarms``), optionally records
 the update to a rerun ``.rrd`` file, then applies the commands received since the last
-scan — the scan boundary.
+scan — the scan boundary: ``force`` to the CPU's force table (``web.bus.forcing``), the
+others to the FB — and publishes the force jobs when they changed (``forces``).
 """
 
 from __future__ import annotations
@@ -21,11 +22,12 @@ from s7graph.engine.runner import Runner
 from s7graph.engine.watchdog import CycleStatistics
 from s7graph.web.bus.gate import Gate
 from s7graph.web.bus.live import LiveGraph
-from s7graph.web.bus.protocol import CycleStats, StepStateUpdate
+from s7graph.web.bus.protocol import Command, CycleStats, StepStateUpdate
 from s7graph.web.bus.zenoh_bus import BusPublisher
 from s7graph.web.view.edge import BusEnds, CpuSide, WebEdge, serve_view
 
 if TYPE_CHECKING:
+    from s7graph.web.bus.forcing import Forcing
     from s7graph.web.bus.online import OnlineChange
     from s7graph.web.recorder import Recorder
 
@@ -64,9 +66,11 @@ class LiveEdge:
         allowed_origins: tuple[str, ...] = (),
         bus: bool = False,
         online: OnlineChange | None = None,
+        forcing: Forcing | None = None,
     ) -> None:
         self.live = live
         self.online = online
+        self.forcing = forcing
         self.recorder: Recorder | None = None
         self.edge: WebEdge | None = None
         self.cpu_side: CpuSide | None = None
@@ -126,10 +130,23 @@ class LiveEdge:
         alarms = self.live.alarms_changed()
         if alarms is not None:
             publisher.publish_alarms(alarms)
-        publisher.apply_commands(self.live.apply, cycle=record.cycle)
+        publisher.apply_commands(self.apply, cycle=record.cycle, durable=runner)
+        if self.forcing is not None:
+            forces = self.forcing.changed()
+            if forces is not None:
+                publisher.publish_forces(forces)
         if self.online is not None:
             self.online.at_boundary()
         return update
+
+    def apply(self, command: Command) -> tuple[bool, str, str]:
+        """One command the gate let through, at the scan boundary: ``force`` to the CPU's
+        force table, the others to the FB."""
+        if command.op != "force":
+            return self.live.apply(command)
+        if self.forcing is None:
+            return False, "this CPU takes no force jobs", ""
+        return self.forcing.apply(command)
 
     def close(self) -> None:
         """Close the recording, the view, the bus and both zenoh sessions."""

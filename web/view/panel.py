@@ -4,8 +4,10 @@ Every page is a session of its own (viser's per-client GUI, ``client.gui``): its
 and ``Password`` fields, ``Log in`` / ``Log out``, and the token the CPU gave it are never
 seen by another page. Until it logs in a page is a viewer: every command button is
 disabled (and the CPU refuses commands without a valid token anyway); after login the
-buttons its role allows (``web.access.roles``) are enabled. The current mode is
-highlighted on its button. Command verdicts come back as notifications on this page only.
+buttons its role allows (``web.access.roles``) are enabled, and a page whose role may
+``force`` gets a Force folder (address, value, Force / Unforce / Unforce all, the active
+jobs). The current mode is highlighted on its button. Command verdicts come back as
+notifications on this page only.
 """
 
 from __future__ import annotations
@@ -63,6 +65,7 @@ class PageState:
     history: str
     audit: str
     events: str
+    forces: str = ""
 
 
 class ClientPanel:
@@ -80,6 +83,7 @@ class ClientPanel:
         self._shown: dict[str, str] = {}
         self._mode: str | None = None
         self._alarms: AlarmList | None = None
+        self.force_folder: viser.GuiFolderHandle | None = None
         self.origin = _origin(client)
         self._build()
 
@@ -158,6 +162,7 @@ class ClientPanel:
         """Enable exactly the buttons this page's role allows; an engineer gets the editor."""
         role = self.role if self.token else "viewer"
         self._editor_for(role)
+        self._force_for(role)
         for mode_button in self.mode_buttons.values():
             mode_button.disabled = not allowed(role, "mode")
         for op, button in {**self.buttons, **self.step_buttons}.items():
@@ -180,6 +185,35 @@ class ClientPanel:
         elif not wanted and self.editor is not None:
             editor, self.editor = self.editor, None
             editor.close()
+
+    def _force_for(self, role: str) -> None:
+        """The Force folder for a page whose role may force; gone for any other."""
+        wanted = allowed(role, "force")
+        if wanted and self.force_folder is None:
+            gui = self.client.gui
+            with gui.add_folder("Force", expand_by_default=False) as self.force_folder:
+                self.force_address = gui.add_text(
+                    "Address", "", hint="I, Q or M: I0.3, QW4, M10.1, or a symbol"
+                )
+                self.force_value = gui.add_text(
+                    "Value", "", hint="TRUE/FALSE, a number or an S7 literal (16#00FF, T#5S)"
+                )
+                force = gui.add_button("Force", color="yellow", hint="hold it at the value")
+                unforce = gui.add_button("Unforce", hint="give it back to the program")
+                unforce_all = gui.add_button("Unforce all", hint="delete every force job")
+                self.force_html = gui.add_html(texts.forces_html(None))
+            self._shown.pop("forces", None)
+            force.on_click(lambda _: self._force(True))
+            unforce.on_click(lambda _: self._force(False))
+            unforce_all.on_click(self._handler("force", all=True))
+        elif not wanted and self.force_folder is not None:
+            folder, self.force_folder = self.force_folder, None
+            folder.remove()
+
+    def _force(self, on: bool) -> None:
+        address = str(self.force_address.value).strip()
+        value: object = str(self.force_value.value).strip() if on else None
+        self.command("force", {"address": address, "value": value})
 
     # ------------------------------------------------------------ the chart
 
@@ -319,6 +353,8 @@ class ClientPanel:
             self._set(self.event_log, "events", page.events)
             self._set(self.history_html, "history", page.history)
             self._set(self.audit_html, "audit", page.audit)
+            if self.force_folder is not None:
+                self._set(self.force_html, "forces", page.forces)
             shown = int(self.detail_transition.value)
             key = ("T", shown) if shown > 0 else ("S", int(self.detail_step.value))
             self._set(self.detail_html, "detail", detail(key))

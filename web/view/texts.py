@@ -20,6 +20,7 @@ from s7graph.web.bus.protocol import (
     ChartLayout,
     Contact,
     CycleStats,
+    ForceList,
     StepDetail,
     StepStateUpdate,
 )
@@ -36,6 +37,8 @@ __all__ = [
     "diagnostic_line",
     "diagnostics_html",
     "editor_status_html",
+    "force_mark",
+    "forces_html",
     "history_html",
     "lines_html",
     "log_html",
@@ -140,11 +143,17 @@ def log_html(lines: list[str]) -> str:
 
 
 def status_html(
-    update: StepStateUpdate | None, cpu_cycle: int, cpu_state: str, stats: CycleStats | None
+    update: StepStateUpdate | None,
+    cpu_cycle: int,
+    cpu_state: str,
+    stats: CycleStats | None,
+    forces: int = 0,
 ) -> str:
-    """The status line: mode, cycle, active steps, cycle time, errors, halts."""
+    """The status line: the FORCE mark, mode, cycle, active steps, cycle time, errors,
+    halts, and the level pins a command holds."""
+    mark = force_mark(forces)
     if update is None:
-        return '<div style="font-size:0.85em">waiting for the CPU…</div>'
+        return f'<div style="font-size:0.85em">{mark}waiting for the CPU…</div>'
     active = ", ".join(f"S{n}" for n in update.active) or "none"
     parts = [
         f"<b>{html.escape(update.mode)}</b>",
@@ -161,9 +170,35 @@ def status_html(
                        (not update.sv_enabled, "supervisions off")):  # fmt: skip
         if flag:
             parts.append(f'<b style="color:#a60">{text}</b>')
+    if update.overrides:
+        held = ", ".join(f"{pin} = {int(v)}" for pin, v in sorted(update.overrides.items()))
+        tip = "held by a command, whatever the pin; kept over a warm or hot restart"
+        parts.append(f'<span style="color:#a60" title="{tip}">held: {html.escape(held)}</span>')
     if cpu_state != "RUN":
         parts.insert(0, f'<b style="color:#c00">{html.escape(cpu_state)}</b>')
-    return f'<div style="font-size:0.85em">{" · ".join(parts)}</div>'
+    return f'<div style="font-size:0.85em">{mark}{" · ".join(parts)}</div>'
+
+
+def force_mark(forces: int) -> str:
+    """The CPU's FRCE LED: a yellow FORCE mark while force jobs are active, else nothing."""
+    if forces <= 0:
+        return ""
+    jobs = f"{forces} force job{'s' if forces != 1 else ''} active"
+    style = "background:#fd0;color:#000;font-weight:bold;padding:0 4px;border-radius:3px"
+    return f'<span style="{style}" title="{jobs}">FORCE</span> '
+
+
+def forces_html(forces: ForceList | None) -> str:
+    """The active force jobs: address (symbol) = value, and who forced it."""
+    if forces is None or not forces.entries:
+        return small('<span style="color:#777">no force job active</span>')
+    rows = []
+    for e in forces.entries:
+        name = f' "{html.escape(e.symbol)}"' if e.symbol else ""
+        who = f' <span style="color:#777">({html.escape(e.user)})</span>' if e.user else ""
+        rows.append(f"<b>{html.escape(e.address)}</b>{name} = {html.escape(e.value)}{who}")
+    style = "max-height:12em;overflow:auto"
+    return small(f'<div style="{style}">' + "<br>".join(rows) + "</div>")
 
 
 def banner_html(connected: bool, cpu: str) -> str:

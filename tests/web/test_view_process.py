@@ -1,0 +1,178 @@
+"""``s7graph run CHART --web``: the CPU in one process, the browser view in another
+(web/cli/view_process.py). Real processes: the drill demo with its plant, its view as a
+child ``s7graph web``; the view killed is restarted while the CPU scans on, a Ctrl-C stops
+both with one line each, and a CPU killed takes its view with it."""
+
+from __future__ import annotations
+
+import os
+import queue
+import re
+import signal
+import socket
+import subprocess
+import sys
+import threading
+import time
+import urllib.request
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from s7graph.web.bus.protocol import CpuStatus
+from s7graph.web.bus.zenoh_bus import BusClient, open_session
+from s7graph.web.cli.view_process import view_endpoints
+from tests.web.helpers import wait_until
+
+pytestmark = pytest.mark.timeout(180)
+ROOT = Path(__file__).resolve().parents[2]
+DRILL = ROOT / "examples" / "drill"
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+class Run:
+    """``s7graph run`` of the drill demo with ``--web``, in a session of its own (so that a
+    signal to its process group is what a Ctrl-C at its terminal sends)."""
+
+    def __init__(self, tmp_path: Path) -> None:
+        self.port = _free_port()
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "s7graph", "run", str(DRILL / "drill.s7g"),
+             "--symbols", str(DRILL / "symbols.txt"), "--plant", str(DRILL / "demo_plant.py"),
+             "--state", str(tmp_path / "drill.sqlite"), "--web", "--port", str(self.port),
+             "--duration-s", "150"],
+            cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+            start_new_session=True,
+        )  # fmt: skip
+        self.out: queue.Queue[str] = queue.Queue()
+        self.err: list[str] = []
+        assert self.proc.stdout is not None and self.proc.stderr is not None
+        out, err = self.proc.stdout, self.proc.stderr
+        threading.Thread(target=lambda: [self.out.put(x) for x in out], daemon=True).start()
+        threading.Thread(target=lambda: [self.err.append(x) for x in err], daemon=True).start()
+
+    def view_line(self, timeout: float = 60) -> re.Match[str]:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            try:
+                found = re.search(r"view (\S+) \(bus (\S+)\)", self.out.get(timeout=0.5))
+            except queue.Empty:
+                assert self.proc.poll() is None, "".join(self.err)
+                continue
+            if found:
+                return found
+        raise AssertionError(f"no view line; stderr: {''.join(self.err)}")
+
+    def children(self) -> list[int]:
+        pids: list[int] = []
+        for task in Path(f"/proc/{self.proc.pid}/task").iterdir():
+            with open(task / "children") as f:
+                pids += [int(p) for p in f.read().split()]
+        return pids
+
+    def stop(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.kill()
+        self.proc.wait(30)
+
+
+@pytest.fixture
+def run(tmp_path: Path) -> Iterator[Run]:
+    r = Run(tmp_path)
+    try:
+        yield r
+    finally:
+        for pid in r.children() if r.proc.poll() is None else []:
+            os.kill(pid, signal.SIGKILL)
+        r.stop()
+
+
+def _serves(url: str) -> bool:
+    try:
+        with urllib.request.urlopen(url, timeout=5) as page:
+            return page.status == 200 and b"<html" in page.read(2000).lower()
+    except OSError:
+        return False
+
+
+def _alive(pid: int) -> bool:
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().split(") ", 1)[1][0] != "Z"
+    except FileNotFoundError:
+        return False
+
+
+def test_the_view_killed_is_restarted_while_the_cpu_scans_on(run: Run) -> None:
+    url, endpoint = run.view_line().groups()
+    assert url == f"http://127.0.0.1:{run.port}/" and _serves(url)
+    (view,) = run.children()
+    with open_session(connect=[endpoint]) as session:
+        client = BusClient(session, "cpu1")
+
+        def status() -> CpuStatus:
+            got = client.status()
+            assert got is not None and got.stats is not None
+            return got
+
+        before = status()
+        assert before.state == "RUN"
+        os.kill(view, signal.SIGKILL)
+        assert wait_until(lambda: any("view process ended" in x for x in run.err), 30)
+        line = next(x for x in run.err if "view process ended" in x)
+        assert line == "s7graph: the view process ended (killed by SIGKILL); restarting it in 1 s\n"
+        assert wait_until(lambda: run.children() not in ([], [view]), 30)
+        assert wait_until(lambda: _serves(url), 60)  # the same page again, a new process
+        after = status()
+        client.close()
+    assert after.state == "RUN" and after.cycle > before.cycle
+    assert before.stats is not None and after.stats is not None
+    assert after.stats.overruns == before.stats.overruns  # no scan held up meanwhile
+    assert "Traceback" not in "".join(run.err)
+
+
+def test_ctrl_c_stops_the_cpu_and_its_view_with_one_line_each(run: Run) -> None:
+    url, _ = run.view_line().groups()
+    (view,) = run.children()
+    os.killpg(run.proc.pid, signal.SIGINT)  # what the terminal sends its foreground group
+    assert run.proc.wait(30) == 0
+    assert wait_until(lambda: not _alive(view), 30)
+    assert not _serves(url)
+    assert wait_until(lambda: len(run.err) >= 3, 10)
+    start, *stopped = run.err
+    assert "drill.s7g (Seq_drill) in RUN" in start
+    assert sorted(stopped) == sorted([
+        "s7graph: view stopped\n",
+        f"s7graph: drill.s7g (Seq_drill) stopped (state saved in {run_state(run)})\n",
+    ])  # fmt: skip
+
+
+def run_state(run: Run) -> str:
+    return str(run.proc.args[run.proc.args.index("--state") + 1])  # type: ignore[union-attr]
+
+
+def test_a_cpu_killed_takes_its_view_with_it(run: Run) -> None:
+    url, _ = run.view_line().groups()
+    (view,) = run.children()
+    run.proc.kill()
+    run.proc.wait(30)
+    assert wait_until(lambda: not _alive(view), 30)  # its stdin closed: it ended by itself
+    assert wait_until(lambda: not _serves(url), 10)
+
+
+def test_the_view_joins_the_bus_where_the_cpu_is() -> None:
+    assert view_endpoints(["tcp/0.0.0.0:7447"], []) == ["tcp/127.0.0.1:7447"]
+    assert view_endpoints(["tcp/[::]:7447", "tcp/10.0.0.1:7447"], []) == ["tcp/[::1]:7447"]
+    assert view_endpoints(["unixsock-stream//tmp/x/bus.sock"], []) == [
+        "unixsock-stream//tmp/x/bus.sock"
+    ]
+    assert view_endpoints([], ["tcp/router:7447", "tcp/backup:7447"]) == [
+        "tcp/router:7447",
+        "tcp/backup:7447",
+    ]
