@@ -23,7 +23,7 @@ processes share. In each round, per layout:
     and the process's CPU time beyond the scans (the bus all included: outbox thread,
     zenoh's threads), per scan.
 
-Targets (issue 12): ≥ 20,000 deltas/s; the bus costing at most as much as the scan; added
+Targets: ≥ 20,000 deltas/s; the bus costing at most as much as the scan; added
 p99 ≤ 2 ms over raw zenoh. ``--repeat`` rounds; min/median/max over them.
 """
 
