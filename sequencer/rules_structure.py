@@ -6,7 +6,8 @@ from __future__ import annotations
 from typing import Final
 
 from s7graph.engine.address import parse_address
-from s7graph.engine.errors import AddressError
+from s7graph.engine.errors import AddressError, LiteralError
+from s7graph.engine.literals import parse_literal
 from s7graph.sequencer.model import Binary, Expr, Step, StepTarget, Transition, Unary
 from s7graph.sequencer.rules_context import _Ctx, _step_el
 from s7graph.sequencer.rules_types import LOGIC, _conditions, _show, _type, _unify
@@ -67,6 +68,21 @@ def rule_declarations(ctx: _Ctx) -> None:
             if t is not None and _unify(v.type.upper(), t) is None:
                 ctx.err("E031", f"initial value {v.init.text} ({_show(t)}) does not fit "
                         f"{v.name} : {v.type}", v.init.loc, f"variable {v.name}")  # fmt: skip
+            elif t == "STRING" and _too_long(v.type, v.init.text):
+                ctx.err("E031", f"initial value {v.init.text} is longer than {v.type} "
+                        f"({v.name})", v.init.loc, f"variable {v.name}")  # fmt: skip
+
+
+def _too_long(declared: str, literal: str) -> bool:
+    """Whether the STRING literal ``literal`` has more characters than ``STRING[n]``."""
+    head, _, rest = declared.upper().replace(" ", "").partition("STRING[")
+    if head or not rest.endswith("]") or not rest[:-1].isdigit():
+        return False
+    try:
+        _, value = parse_literal(literal)
+    except LiteralError:
+        return False
+    return isinstance(value, str) and len(value) > int(rest[:-1])
 
 
 def rule_unknown_steps_in_from_to(ctx: _Ctx) -> None:

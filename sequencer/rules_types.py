@@ -170,9 +170,14 @@ def _as_number(t: str) -> str:
 
 
 def _unify(a: str, b: str) -> str | None:
-    """The common type of ``a`` and ``b`` (flexible types adapt), or None."""
+    """The common type of ``a`` and ``b`` (flexible types adapt), or None. A ``STRING[n]``
+    takes any STRING (the engine cuts a longer value to ``n`` characters, as S7 does)."""
     if a == b:
         return a
+    if a.startswith("STRING[") and b == "STRING":
+        return a
+    if b.startswith("STRING[") and a == "STRING":
+        return b
     fa, fb = _FLEX.get(a), _FLEX.get(b)
     if fa is not None and fb is not None:
         common = fa & fb

@@ -184,8 +184,11 @@ def gen_assigned(
     e: Expr, target: Ref, g: CodeGen, resolve: Resolve, sidx: StepIndex, tidx: StepIndex
 ) -> str:
     """The statement ``target := e``: a number target reads timer and counter cells of
-    ``e`` as values, a BOOL target as status bits (``gen_value``'s ``number``)."""
+    ``e`` as values, a BOOL target as status bits (``gen_value``'s ``number``). A
+    ``STRING[n]`` target keeps the value's first ``n`` characters, as S7 does."""
     value = gen_value(e, g, resolve, sidx, tidx, target.type != "BOOL")
+    if target.type.startswith("STRING[") and target.type.endswith("]"):
+        value = f"({value})[:{int(target.type[7:-1])}]"
     return g.write(target, value)
 
 
