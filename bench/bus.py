@@ -48,6 +48,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
 import zenoh  # noqa: E402
+from figures import pct, spread  # noqa: E402
 
 from s7graph.engine.clock import SystemClock  # noqa: E402
 from s7graph.engine.record import ScanRecord  # noqa: E402
@@ -62,17 +63,6 @@ RAW_KEY = "s7graph-bench/raw"
 CYCLE_MS = 10.0
 TARGET_RATE = 20_000
 TARGET_ADDED_P99_MS = 2.0
-
-
-def pct(values: list[float], q: float) -> float:
-    s = sorted(values)
-    return s[min(len(s) - 1, int(q * len(s)))] if s else float("nan")
-
-
-def spread(values: list[float], fmt: str = "{:.2f}") -> str:
-    """min / median / max of repeated runs."""
-    lo, mid, hi = min(values), statistics.median(values), max(values)
-    return "/".join(fmt.format(v) for v in (lo, mid, hi))
 
 
 # ---------------------------------------------------------------------------- the peer

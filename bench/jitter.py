@@ -29,14 +29,12 @@ import json
 import os
 import re
 import resource
-import socket
 import statistics
 import subprocess
 import sys
 import tempfile
 import threading
 import time
-import urllib.request
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -46,6 +44,8 @@ BENCH = Path(__file__).resolve().parent
 ROOT = BENCH.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(1, str(BENCH))
+
+from figures import free_port, serves, spread  # noqa: E402
 
 DRILL = ROOT / "examples" / "drill"
 CYCLE_MS = 10.0
@@ -271,25 +271,11 @@ LOAD_MAKERS = {"idle": no_load, "pages": pages, "flood": flood}
 # ---------------------------------------------------------------------------- one scenario
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
-def _serves(url: str) -> bool:
-    try:
-        with urllib.request.urlopen(url, timeout=5) as page:
-            return bool(page.status == 200)
-    except OSError:
-        return False
-
-
 def scenario(workload: str, view: str, load: str, seconds: float) -> dict[str, Any]:
     """One measured run: the CPU process up with its view, ``load`` on it for ``seconds``."""
     with tempfile.TemporaryDirectory(prefix="s7graph-jitter-") as tmp:
         endpoint = f"unixsock-stream/{tmp}/bus.sock"
-        port = _free_port()
+        port = free_port()
         errors = Path(tmp) / "stderr.txt"
         with errors.open("w") as err:
             proc = subprocess.Popen(
@@ -322,7 +308,7 @@ def _measure(
     if not url:
         raise RuntimeError("the CPU process ended before its view was up")
     deadline = time.monotonic() + 60
-    while not _serves(url) and time.monotonic() < deadline:
+    while not serves(url) and time.monotonic() < deadline:
         time.sleep(0.2)
     time.sleep(2.0)  # let the start settle
     fb = "Seq_drill" if workload == "drill" else "Bench_1"
@@ -374,9 +360,7 @@ def _column(runs: list[dict[str, float]], key: str) -> list[float]:
 
 
 def _cell(values: list[float], fmt: str = "{:.2f}") -> str:
-    if len(values) == 1:
-        return fmt.format(values[0])
-    return "/".join(fmt.format(v) for v in (min(values), statistics.median(values), max(values)))
+    return spread(values, fmt)
 
 
 def main(argv: list[str] | None = None) -> int:

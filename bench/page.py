@@ -43,14 +43,12 @@ import argparse
 import json
 import os
 import re
-import socket
 import statistics
 import subprocess
 import sys
 import tempfile
 import threading
 import time
-import urllib.request
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -59,6 +57,9 @@ from typing import Any
 BENCH = Path(__file__).resolve().parent
 ROOT = BENCH.parent
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(BENCH))
+
+from figures import free_port, pct, serves, spread  # noqa: E402
 
 DRILL = ROOT / "examples" / "drill"
 CYCLE_MS = 10.0
@@ -217,20 +218,6 @@ def worker(chart: str, path: Path, endpoint: str, port: int, state: Path) -> int
     return int(run_chart(path, **common))
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
-def _serves(url: str) -> bool:
-    try:
-        with urllib.request.urlopen(url, timeout=5) as page:
-            return bool(page.status == 200)
-    except OSError:
-        return False
-
-
 class Cpu:
     """The CPU process of one chart, its view served at ``url``."""
 
@@ -261,7 +248,7 @@ def cpu(chart: str) -> Iterator[Cpu]:
         with errors.open("w") as err:
             proc = subprocess.Popen(
                 [sys.executable, __file__, "--worker", chart, str(path),
-                 f"unixsock-stream/{tmp}/bus.sock", str(_free_port()),
+                 f"unixsock-stream/{tmp}/bus.sock", str(free_port()),
                  str(Path(tmp) / "state.sqlite")],
                 cwd=ROOT, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=err, text=True,
             )  # fmt: skip
@@ -276,7 +263,7 @@ def cpu(chart: str) -> Iterator[Cpu]:
                 if not url:
                     raise RuntimeError(f"the CPU process of {chart} ended before its view")
                 deadline = time.monotonic() + 60
-                while not _serves(url) and time.monotonic() < deadline:
+                while not serves(url) and time.monotonic() < deadline:
                     time.sleep(0.2)
                 time.sleep(1.0)  # let the start settle
                 yield Cpu(proc, url, path)
@@ -304,10 +291,10 @@ def empty_viser() -> Iterator[str]:
     import viser
 
     with redirect_stdout(io.StringIO()):  # its banner
-        server = viser.ViserServer(host="127.0.0.1", port=_free_port(), verbose=False)
+        server = viser.ViserServer(host="127.0.0.1", port=free_port(), verbose=False)
     try:
         url = f"http://127.0.0.1:{server.get_port()}/"
-        while not _serves(url):
+        while not serves(url):
             time.sleep(0.1)
         yield url
     finally:
@@ -415,20 +402,8 @@ def colour_latency(page: Any, machine: Cpu, changes: int) -> dict[str, list[floa
 # ---------------------------------------------------------------------------- figures
 
 
-def _pct(values: list[float], q: float) -> float:
-    if not values:
-        return float("nan")
-    s = sorted(values)
-    return s[min(len(s) - 1, int(q * len(s)))]
-
-
 def _cell(values: list[float], fmt: str = "{:.0f}") -> str:
-    values = [v for v in values if v == v]
-    if not values:
-        return "-"
-    if len(values) == 1:
-        return fmt.format(values[0])
-    return "/".join(fmt.format(v) for v in (min(values), statistics.median(values), max(values)))
+    return spread(values, fmt)
 
 
 def one_round(browser: Any, charts: list[str], changes: int) -> dict[str, Any]:
@@ -492,7 +467,7 @@ def main(argv: list[str] | None = None) -> int:
                 rounds.append(r)
                 paints = ", ".join(f"{k} {v[0]:.0f}/{v[1]:.0f}" for k, v in r["paint"].items())
                 colours = ", ".join(
-                    f"{k} p50 {_pct(v['colour'], 0.5):.0f} p99 {_pct(v['colour'], 0.99):.0f} "
+                    f"{k} p50 {pct(v['colour'], 0.5):.0f} p99 {pct(v['colour'], 0.99):.0f} "
                     f"({len(v['colour'])} seen, {len(v['missed'])} missed)"
                     for k, v in r["colour"].items()
                 )
@@ -511,8 +486,8 @@ def main(argv: list[str] | None = None) -> int:
                 continue
             n = [len(r.get(key, [])) for r in runs]
             missed = [len(r["missed"]) if key == "colour" else 0 for r in runs]
-            p50 = [_pct(r.get(key, []), 0.5) for r in runs]
-            p99 = [_pct(r.get(key, []), 0.99) for r in runs]
+            p50 = [pct(r.get(key, []), 0.5) for r in runs]
+            p99 = [pct(r.get(key, []), 0.99) for r in runs]
             target = ""
             if key == "colour":
                 target = "met" if all(v <= COLOUR_TARGET_MS for v in p99) else "MISSED"

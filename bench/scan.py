@@ -42,6 +42,9 @@ from pathlib import Path
 from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import figures
 
 from s7graph.engine.clock import Clock, VirtualClock
 from s7graph.engine.cpu import Cpu
@@ -468,8 +471,7 @@ def measure(workloads: list[Workload], scans: int, warmup: int) -> dict[str, lis
 
 def spread(values: list[float], fmt: str = "{:.3f}") -> str:
     """min / median / max of repeated runs."""
-    lo, mid, hi = min(values), statistics.median(values), max(values)
-    return "/".join(fmt.format(v) for v in (lo, mid, hi))
+    return figures.spread(values, fmt)
 
 
 def main(argv: list[str] | None = None) -> int:
