@@ -14,6 +14,7 @@ import pytest
 from s7graph.sequencer.model import Chart, Operand, Sequence, Step, Transition
 from s7graph.web.bus.protocol import ChartLayout, Command, StepStateUpdate
 from s7graph.web.view.chart_view import ACTIVE, DISTURBED, INACTIVE
+from s7graph.web.view.drawing import BOX_H, BOX_W
 from s7graph.web.view.edge import WebEdge, serve_view
 from tests.web.helpers import chromium_page, log_in, needs_chromium, wait_until
 from tests.web.toy_feed import ToySequencer
@@ -187,3 +188,33 @@ def test_a_click_on_a_transition_shows_its_whole_condition(page: Page, edge: Web
     page.mouse.click(*screen_point(view, sx, sy))  # a step again: its details
     assert wait_until(lambda: any(int(p.detail_step.value) == 5 for p in view.panels.values()))
     assert all(int(p.detail_transition.value) == 0 for p in view.panels.values())
+
+
+def test_every_step_shows_its_state_colour_itself_on_the_page(page: Page, edge: WebEdge) -> None:
+    """The chart is lit flat (``FLAT_LIGHT``: one ambient light, no shadows, no environment
+    map), so a box's pixels are its state's RGB — active, disturbed, inactive — not a shaded
+    or darkened version of it (each channel within 20 of the colour: the page's tone
+    mapping shifts it a little; with directional lights alone the boxes came out dark grey)."""
+    from io import BytesIO
+
+    from PIL import Image
+
+    view = edge.view
+    assert wait_until(lambda: view.boxes[4].color == ACTIVE)
+    wanted = {4: ACTIVE, 3: DISTURBED, 5: INACTIVE}  # S1's corner is under a notice
+    corners = {}
+    for n in wanted:
+        x, y = view.picture.steps[n]
+        px, py = screen_point(view, x - BOX_W / 2 + 0.06, y + BOX_H / 2 - 0.06)
+        corners[n] = (round(px), round(py))
+    seen: dict[int, tuple[int, ...]] = {}
+
+    def shown() -> bool:
+        shot = Image.open(BytesIO(page.screenshot())).convert("RGB")
+        seen.update({n: shot.getpixel(corners[n]) for n in wanted})
+        return all(
+            all(abs(a - b) <= 20 for a, b in zip(seen[n], rgb, strict=True))
+            for n, rgb in wanted.items()
+        )
+
+    assert wait_until(shown, 30, poll=0.5), seen

@@ -41,6 +41,7 @@ from s7graph.web.view.drawing import (
     ACTIVE,
     DISCONNECTED,
     DISTURBED,
+    FLAT_LIGHT,
     INACTIVE,
     Drawing,
     camera_for,
@@ -142,6 +143,9 @@ class ChartView:
         sc = self.server.scene
         sc.set_up_direction("+y")
         sc.world_axes.visible = False
+        sc.configure_default_lights(enabled=False, cast_shadow=False)  # a flat chart: FLAT_LIGHT
+        sc.configure_environment_map(None)
+        sc.add_light_ambient("/light", intensity=FLAT_LIGHT)
         pic = picture(self.placement)
         if self.drawing is not None:
             self.drawing.remove()
