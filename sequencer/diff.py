@@ -5,11 +5,12 @@ change).
 sequencers, steps, transitions, action rows, interlocks, supervisions, conditions,
 variables, symbols, permanent instructions — added, removed or changed, as data and as
 one readable line each. Steps and transitions are matched by number, since the CPU carries
-its state over by step number: a renumbered step is one removed and one added. Places are
-ignored (a chart read again from its text compares equal). Given the active steps of the
-running state, it also says which of them the edited chart removes (the user chooses: keep
-the other steps, or initialize the sequencer) and which operands ``S`` rows of removed
-steps or removed ``S`` rows may have set and nothing then resets (they stay set).
+its state over by step number: a renumbered step is one removed and one added. Places and
+comments are ignored (a chart read again from its text compares equal). Given the active
+steps of the running state, it also says which of them the edited chart removes (the user
+chooses: keep the other steps, or initialize the sequencer) and which operands ``S`` rows
+of removed steps or removed ``S`` rows may have set and nothing then resets (they stay
+set).
 """
 
 from __future__ import annotations
@@ -42,7 +43,7 @@ from s7graph.sequencer.model import (
     Transition,
 )
 from s7graph.sequencer.state import GraphState
-from s7graph.sequencer.walk import unlocated
+from s7graph.sequencer.walk import uncommented, unlocated
 from s7graph.steps.conditions import contact_text
 
 ChangeKind = Literal["added", "removed", "changed"]
@@ -362,7 +363,7 @@ def _stays_set(a: Chart, b: Chart) -> tuple[StaysSet, ...]:
 def summarize(running: Chart, edited: Chart, active: Iterable[int] = ()) -> ChangeSummary:
     """What a download of ``edited`` over ``running`` changes; ``active`` are the step
     numbers active in the running state (``active_steps``)."""
-    a, b = unlocated(running), unlocated(edited)
+    a, b = uncommented(unlocated(running)), uncommented(unlocated(edited))
     d = _Diff()
     d.header(a, b)
     d.sequences(a, b)

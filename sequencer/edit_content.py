@@ -219,6 +219,7 @@ class ChangeRow(Edit):
         s = step_of(chart, self.step)
         i = _row_index(s, self.index)
         row = parse_row(self.row, f"row {i + 1} of S{self.step}")
+        row = replace(row, comment=s.actions[i].comment)  # the row's comments stay with it
         actions = (*s.actions[:i], row, *s.actions[i + 1 :])
         return with_step(chart, replace(s, actions=actions)), RowRef(self.step, i)
 

@@ -2,8 +2,9 @@
 
 ``format_chart(chart)`` is the inverse of ``sequencer.parse.parse_chart``: for every chart
 the parser builds, ``parse_chart(format_chart(c))`` equals ``c`` once source places are set
-aside (``without_places``). Comments are not part of the model, except a symbol's trailing
-comment. The layout is the one of the examples: header and options, ``VAR``, ``SYMBOLS``,
+aside (``walk.unlocated``). Comments are kept with their elements (``sequencer.comments``)
+and written on lines of their own above them; a symbol's trailing comment stays trailing.
+The layout is the one of the examples: header and options, ``VAR``, ``SYMBOLS``,
 ``PERMANENT BEFORE``, the sequences (all steps, then all transitions, in model order — the
 written order of the transitions leaving a step is their priority), ``PERMANENT AFTER``.
 
@@ -18,6 +19,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TypeVar
 
+from s7graph.sequencer.comments import find_comments
 from s7graph.sequencer.model import (
     ActionRow,
     Assignment,
@@ -178,9 +180,15 @@ def _options(o: ChartOptions) -> list[str]:
     return out
 
 
-def _var(v: VarDecl) -> str:
+def _above(comment: str, indent: str) -> list[str]:
+    """An element's comments (``sequencer.comments``), one after the other on lines of their
+    own at ``indent``; a block comment's inner lines as written."""
+    return [indent + c.text for c in find_comments(comment)] if comment else []
+
+
+def _var(v: VarDecl) -> list[str]:
     init = f" := {v.init.text}" if v.init is not None else ""
-    return f"  {v.name} : {v.type}{init};"
+    return [*_above(v.comment, "  "), f"  {v.name} : {v.type}{init};"]
 
 
 def _symbol(s: SymbolDecl) -> str:
@@ -193,12 +201,13 @@ def _step(s: Step) -> list[str]:
     names = ""
     if s.name or s.message:
         names = f" {quote(s.name)}" + (f" {quote(s.message)}" if s.message else "")
-    out = [f"  {kw} S{s.number}{names}:"]
+    out = [*_above(s.comment, "  "), f"  {kw} S{s.number}{names}:"]
     if s.interlock is not None:
         out.append(f"    INTERLOCK := {format_expr(s.interlock)};")
     if s.supervision is not None:
         out.append(f"    SUPERVISION := {format_expr(s.supervision)};")
-    out += [f"    {format_row(r)}" for r in s.actions]
+    for r in s.actions:
+        out += [*_above(r.comment, "    "), f"    {format_row(r)}"]
     out.append("  END_STEP")
     return out
 
@@ -208,19 +217,21 @@ def _steps(numbers: tuple[int, ...]) -> str:
     return refs[0] if len(refs) == 1 else f"({', '.join(refs)})"
 
 
-def _transition(t: Transition) -> str:
+def _transition(t: Transition) -> list[str]:
     name = f" {quote(t.name)}" if t.name else ""
     to = _steps(t.targets) if t.targets else "STOP"
     cond = f" := {format_expr(t.condition)}" if t.condition is not None else ""
-    return f"  TRANSITION T{t.number}{name} FROM {_steps(t.sources)} TO {to}{cond};"
+    line = f"  TRANSITION T{t.number}{name} FROM {_steps(t.sources)} TO {to}{cond};"
+    return [*_above(t.comment, "  "), line]
 
 
 def _sequence(q: Sequence) -> list[str]:
     name = f" {quote(q.name)}" if q.name else ""
-    out = [f"SEQUENCE {q.number}{name}"]
+    out = [*_above(q.comment, ""), f"SEQUENCE {q.number}{name}"]
     for s in q.steps:
         out += _step(s)
-    out += [_transition(t) for t in q.transitions]
+    for t in q.transitions:
+        out += _transition(t)
     out.append("END_SEQUENCE")
     return out
 
@@ -230,6 +241,7 @@ def format_chart(chart: Chart, header: str = "") -> str:
     out: list[str] = []
     if header:
         out.append("(* " + header.replace("*)", "* )") + " *)")
+    out += _above(chart.comment, "")
     head = f"FUNCTION_BLOCK {quote(chart.name)}"
     if chart.fb_number is not None:
         head += f" FB {chart.fb_number}"
@@ -238,7 +250,7 @@ def format_chart(chart: Chart, header: str = "") -> str:
     out.append(head)
     out += _options(chart.options)
     if chart.vars:
-        out += ["VAR", *(_var(v) for v in chart.vars), "END_VAR"]
+        out += ["VAR", *(line for v in chart.vars for line in _var(v)), "END_VAR"]
     if chart.symbols:
         out += ["SYMBOLS", *(_symbol(s) for s in chart.symbols), "END_SYMBOLS"]
     for place, items in (("BEFORE", chart.before), ("AFTER", chart.after)):
@@ -249,4 +261,5 @@ def format_chart(chart: Chart, header: str = "") -> str:
     if chart.after:
         out += ["PERMANENT AFTER", *(f"  {_permanent(p)}" for p in chart.after), "END_PERMANENT"]
     out.append("END_FUNCTION_BLOCK")
+    out += _above(chart.end_comment, "")
     return "\n".join(out) + "\n"

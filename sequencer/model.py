@@ -73,6 +73,7 @@ class Step:
     loc: SourceLocation = NOWHERE
     interlock_loc: SourceLocation | None = None
     supervision_loc: SourceLocation | None = None
+    comment: str = ""  # the comments written with it, verbatim (sequencer.comments)
 
 
 @dataclass(frozen=True, slots=True)
@@ -90,6 +91,7 @@ class Transition:
     loc: SourceLocation = NOWHERE
     source_locs: tuple[SourceLocation, ...] = ()
     target_locs: tuple[SourceLocation, ...] = ()
+    comment: str = ""
 
 
 @dataclass(frozen=True, slots=True)
@@ -99,6 +101,7 @@ class Sequence:
     steps: tuple[Step, ...]
     transitions: tuple[Transition, ...]
     loc: SourceLocation = NOWHERE
+    comment: str = ""
 
 
 @dataclass(frozen=True, slots=True)
@@ -109,6 +112,7 @@ class VarDecl:
     type: str
     init: Const | None = None
     loc: SourceLocation = NOWHERE
+    comment: str = ""
 
 
 @dataclass(frozen=True, slots=True)
@@ -150,6 +154,8 @@ class Chart:
     after: tuple[PermanentInstruction, ...] = ()
     file: str = "<input>"
     loc: SourceLocation = NOWHERE
+    comment: str = ""  # what stands above FUNCTION_BLOCK
+    end_comment: str = ""  # the comments after the last element
 
     def all_steps(self) -> tuple[Step, ...]:
         return tuple(s for seq in self.sequences for s in seq.steps)

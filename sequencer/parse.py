@@ -41,6 +41,7 @@ from lark.parsers.lalr_parser import _Parser
 from s7graph.engine.errors import S7Error, SourceLocation
 from s7graph.engine.text import NotUtf8, decode_utf8
 from s7graph.sequencer.collector import collector_paused
+from s7graph.sequencer.comments import attach_comments
 from s7graph.sequencer.diagnostics import Diagnostic, error, format_diagnostic
 from s7graph.sequencer.model import Chart
 from s7graph.sequencer.parse_build import _NEEDS_FIRST, _NEEDS_LAST, _Build
@@ -304,7 +305,7 @@ def parse_chart(text: str, file: str = "<input>") -> Chart:
     if long := _long_numbers(text, file):
         raise ChartSyntaxError(long)
     with collector_paused():
-        return _parse_chart(text, file)
+        return attach_comments(_parse_chart(text, file), text)
 
 
 def _parse_chart(text: str, file: str) -> Chart:

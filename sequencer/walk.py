@@ -3,8 +3,9 @@
 ``rewrite`` rebuilds a tree bottom-up through a function of each node, sharing every
 subtree the function leaves alone (an edit copies only the path to what it changes);
 ``nodes`` yields every node without recursion; ``unlocated`` forgets where things were
-written, so two charts compare by content. The editor (``sequencer.edit``) renumbers and
-relocates with these; the change summary (``sequencer.diff``) compares with them.
+written, so two charts compare by content, and ``uncommented`` their comments. The
+editor (``sequencer.edit``) renumbers and relocates with these; the change summary
+(``sequencer.diff``) compares with them.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ from dataclasses import fields, is_dataclass, replace
 from typing import Any, TypeVar
 
 from s7graph.engine.errors import SourceLocation
-from s7graph.sequencer.model import NOWHERE, Chart, Step, Transition
+from s7graph.sequencer.model import NOWHERE, Chart, Step, SymbolDecl, Transition
 
 N = TypeVar("N")
 
@@ -81,6 +82,22 @@ def unlocated(node: N) -> N:
     read from): its content only, so that two models of the same chart compare equal
     whatever text they were read from."""
     return rewrite(node, _forget_place)
+
+
+_COMMENTED = ("comment", "end_comment")
+
+
+def _forget_comment(node: Any) -> Any:
+    if isinstance(node, SymbolDecl) or not _is_node(node):
+        return node  # a symbol's comment is part of its declaration
+    names = [n for n in _COMMENTED if n in _field_names(type(node)) and getattr(node, n)]
+    return replace(node, **dict.fromkeys(names, "")) if names else node
+
+
+def uncommented(node: N) -> N:
+    """``node`` without the comments kept with its elements (``sequencer.comments``): what
+    it does, for a change summary that must not call a reworded comment a changed step."""
+    return rewrite(node, _forget_comment)
 
 
 def relocated(node: N, file: str, line_offset: int) -> N:

@@ -169,6 +169,7 @@ class ActionRow:
     interlocked: bool = False
     value: Expr | None = None
     loc: SourceLocation = NOWHERE
+    comment: str = ""  # the comments written with the row, verbatim
 
 
 # ------------------------------------------------------- permanent instructions (SPEC §2.9)

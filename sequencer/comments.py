@@ -1,0 +1,121 @@
+"""The comments of a `.s7g` text, kept with the element they annotate.
+
+A chart's comments are part of its documentation: a chart read, edited in the browser and
+written again (``sequencer.format``) keeps them. ``attach_comments(chart, text)`` finds
+every ``// …`` and ``(* … *)`` comment of ``text`` (not inside a quoted name or a string
+literal) and gives each to one element, in this order of rules:
+
+- a comment on the line an element starts on, after it, is that element's (a trailing
+  comment: ``pieces : INT := 0;  // work pieces``); with several elements on the line, the
+  last one that starts before the comment;
+- any other comment belongs to the next element that starts after it (the comment lines
+  above a step, a transition, a row, a variable, a sequence, or ``FUNCTION_BLOCK``);
+- a comment after the last element is the chart's ``end_comment``.
+
+Elements: the block (``Chart.comment``: what stands above ``FUNCTION_BLOCK``), variables,
+sequences, steps, action rows and transitions. A symbol's trailing ``//`` comment stays its
+own (``SymbolDecl.comment``); comments among the symbols and the permanent instructions go
+to the next element. Each element keeps its comments verbatim, delimiters included, one
+after the other separated by a newline; ``format_chart`` writes them on lines of their own
+above the element, so a trailing comment comes back as the line above it, which reads back
+to the same element.
+"""
+
+from __future__ import annotations
+
+import bisect
+import re
+from dataclasses import dataclass, replace
+from typing import Any
+
+from s7graph.sequencer.model import Chart, Sequence, Step
+
+__all__ = ["Comment", "attach_comments", "find_comments"]
+
+_TOKENS = re.compile(r'"(?:[^"]|"")*"?|\'(?:[^\'$]|\$.)*\'?|//[^\n]*|\(\*.*?(?:\*\)|\Z)', re.S)
+
+
+@dataclass(frozen=True, slots=True)
+class Comment:
+    """One comment: where it starts (1-based line and column) and its text as written."""
+
+    line: int
+    col: int
+    text: str
+
+
+def find_comments(text: str) -> list[Comment]:
+    """The comments of ``text`` in order (quoted names and string literals skipped)."""
+    out: list[Comment] = []
+    starts = [0] + [m.end() for m in re.finditer("\n", text)]
+    for m in _TOKENS.finditer(text):
+        token = m.group()
+        if token.startswith(("//", "(*")):
+            line = bisect.bisect_right(starts, m.start())
+            out.append(Comment(line, m.start() - starts[line - 1] + 1, token.rstrip()))
+    return out
+
+
+def attach_comments(chart: Chart, text: str) -> Chart:
+    """``chart`` (parsed from ``text``) with each comment of ``text`` given to its element."""
+    comments = find_comments(text)
+    if not comments:
+        return chart
+    symbol_lines = {s.loc.line for s in chart.symbols if s.comment}
+    places: list[tuple[int, int, tuple[Any, ...]]] = [(chart.loc.line, chart.loc.col, ("chart",))]
+    places += [(v.loc.line, v.loc.col, ("var", k)) for k, v in enumerate(chart.vars)]
+    for q, seq in enumerate(chart.sequences):
+        places.append((seq.loc.line, seq.loc.col, ("seq", q)))
+        for s, step in enumerate(seq.steps):
+            places.append((step.loc.line, step.loc.col, ("step", q, s)))
+            for k, r in enumerate(step.actions):
+                places.append((r.loc.line, r.loc.col, ("row", q, s, k)))
+        for k, t in enumerate(seq.transitions):
+            places.append((t.loc.line, t.loc.col, ("trans", q, k)))
+    places = sorted(p for p in places if p[0] > 0)
+    keys = [(line, col) for line, col, _ in places]
+    given: dict[tuple[Any, ...], list[str]] = {}
+    for c in comments:
+        if c.line in symbol_lines and c.text.startswith("//"):
+            continue  # the symbol's own comment
+        at = bisect.bisect_left(keys, (c.line, c.col))
+        if at > 0 and places[at - 1][0] == c.line:
+            owner = places[at - 1][2]  # trailing: the last element begun on its line
+        elif at < len(places):
+            owner = places[at][2]  # leading: the next element
+        else:
+            owner = ("end",)
+        given.setdefault(owner, []).append(c.text)
+    return _with_comments(chart, {k: "\n".join(v) for k, v in given.items()})
+
+
+def _with_comments(chart: Chart, given: dict[tuple[Any, ...], str]) -> Chart:
+    def of(*key: Any) -> str:
+        return given.get(key, "")
+
+    sequences: list[Sequence] = []
+    for q, seq in enumerate(chart.sequences):
+        steps: list[Step] = []
+        for s, step in enumerate(seq.steps):
+            rows = tuple(
+                replace(r, comment=of("row", q, s, k)) if of("row", q, s, k) else r
+                for k, r in enumerate(step.actions)
+            )
+            steps.append(replace(step, comment=of("step", q, s), actions=rows))
+        transitions = tuple(
+            replace(t, comment=of("trans", q, k)) if of("trans", q, k) else t
+            for k, t in enumerate(seq.transitions)
+        )
+        sequences.append(
+            replace(seq, comment=of("seq", q), steps=tuple(steps), transitions=transitions)
+        )
+    variables = tuple(
+        replace(v, comment=of("var", k)) if of("var", k) else v for k, v in enumerate(chart.vars)
+    )
+    return replace(
+        chart,
+        comment=of("chart"),
+        end_comment=of("end"),
+        vars=variables,
+        sequences=tuple(sequences),
+    )

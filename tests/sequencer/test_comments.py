@@ -1,0 +1,109 @@
+"""A chart's comments stay with the element they annotate (``sequencer.comments``): read,
+edited and written again — by the editor, a download, ``s7graph import`` of a `.s7g` —
+the text keeps every comment, and a change summary does not call a comment a change."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from s7graph.sequencer.comments import find_comments
+from s7graph.sequencer.diff import summarize
+from s7graph.sequencer.edit import apply_edit
+from s7graph.sequencer.edit_content import ChangeRow, RenameStep, RenumberStep
+from s7graph.sequencer.edit_text import RowFields
+from s7graph.sequencer.format import format_chart
+from s7graph.sequencer.model import Chart
+from s7graph.sequencer.parse import parse_chart, parse_file
+from s7graph.sequencer.walk import uncommented, unlocated
+
+EXAMPLES = sorted(Path(__file__).resolve().parents[2].glob("examples/*/*.s7g"))
+
+ANNOTATED = """(* Filling station.
+   Two lines of block comment above the block. *)
+FUNCTION_BLOCK "Fill"
+  PARAMETERS := STANDARD;
+VAR
+  count : INT := 0;   // bottles since the last cold restart
+END_VAR
+// the one sequencer
+SEQUENCE 1 "Main"
+  INITIAL_STEP S1 "Wait // not a comment":
+  END_STEP
+  (* S2 opens the valve *)
+  STEP S2 "Fill":
+    N Q0.0;           // the valve
+    S1 N count := count + 1;
+  END_STEP
+  TRANSITION T1 FROM S1 TO S2 := I0.0;  // a bottle is there
+  // full
+  TRANSITION T2 FROM S2 TO S1 := I0.1;
+END_SEQUENCE
+END_FUNCTION_BLOCK
+// end of file
+"""
+
+
+def annotated() -> Chart:
+    return parse_chart(ANNOTATED, "fill.s7g")
+
+
+def texts(chart_text: str) -> list[str]:
+    return [c.text for c in find_comments(chart_text)]
+
+
+def test_every_comment_belongs_to_the_element_it_annotates() -> None:
+    """Above an element: the element's; at the end of its line: the element's too; after
+    the last element: the chart's end. A ``//`` inside a quoted name is no comment."""
+    c = annotated()
+    seq = c.sequences[0]
+    s1, s2 = seq.steps
+    t1, t2 = seq.transitions
+    assert c.comment.startswith("(* Filling station.") and c.comment.endswith("block. *)")
+    assert c.vars[0].comment == "// bottles since the last cold restart"
+    assert seq.comment == "// the one sequencer"
+    assert s1.name == "Wait // not a comment" and s1.comment == ""
+    assert s2.comment == "(* S2 opens the valve *)"
+    assert [r.comment for r in s2.actions] == ["// the valve", ""]
+    assert (t1.comment, t2.comment) == ("// a bottle is there", "// full")
+    assert c.end_comment == "// end of file"
+
+
+def test_a_chart_written_again_keeps_every_comment() -> None:
+    """``format_chart`` writes each comment on a line of its own above its element: the
+    same comments, verbatim, and the text reads back to the same model."""
+    c = annotated()
+    written = format_chart(c)
+    assert sorted(texts(written)) == sorted(texts(ANNOTATED))
+    again = parse_chart(written, "fill.s7g")
+    assert unlocated(again) == unlocated(c)
+    assert format_chart(again) == written
+
+
+def test_the_examples_keep_their_comments_through_the_writer() -> None:
+    for path in EXAMPLES:
+        text = path.read_text(encoding="utf-8")
+        written = format_chart(parse_file(path))
+        assert sorted(texts(written)) == sorted(texts(text)), path.name
+        assert unlocated(parse_chart(written, path.name)) == unlocated(parse_file(path))
+
+
+def test_an_edit_keeps_the_comments_of_what_it_changes() -> None:
+    """Renaming and renumbering a step, changing a row: the comments above them stay."""
+    c = annotated()
+    for edit in (
+        RenameStep(2, "Fill bottle"),
+        RenumberStep(2, 7),
+        ChangeRow(2, 0, RowFields(qualifier="N", operand="Q0.1")),
+    ):
+        out = apply_edit(c, edit)
+        assert out.refusal is None, out.refusal
+        assert sorted(texts(format_chart(out.chart))) == sorted(texts(ANNOTATED)), edit
+
+
+def test_a_change_summary_does_not_count_a_reworded_comment() -> None:
+    """A download whose chart differs only in its comments changes nothing in the CPU."""
+    c = annotated()
+    reworded = parse_chart(ANNOTATED.replace("// full", "// the bottle is full"), "fill.s7g")
+    assert reworded.sequences[0].transitions[1].comment == "// the bottle is full"
+    assert summarize(c, reworded).unchanged
+    assert uncommented(unlocated(reworded)) == uncommented(unlocated(c))
