@@ -33,7 +33,8 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
-from scan import STEPS, chart_source, spread  # noqa: E402 (bench/ on the path first)
+from figures import spread  # noqa: E402 (bench/ on the path first)
+from scan import STEPS, chart_source  # noqa: E402
 
 HEAVY = ("viser", "zenoh", "numpy")  # what ``s7graph check`` must not import
 

@@ -359,10 +359,6 @@ def _column(runs: list[dict[str, float]], key: str) -> list[float]:
     return [f[key] for f in runs]
 
 
-def _cell(values: list[float], fmt: str = "{:.2f}") -> str:
-    return spread(values, fmt)
-
-
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--seconds", type=float, default=60.0, help="measured per scenario (60)")
@@ -417,10 +413,10 @@ def main(argv: list[str] | None = None) -> int:
             met = met and ok
             target = "met" if ok else "MISSED"
         print(f"{workload:9} {view:9} {load:6} {int(statistics.median(col('n'))):>6} "
-              f"{_cell(col('p50')):>17} {_cell(col('p99')):>17} {_cell(col('p999')):>17} "
-              f"{_cell(col('max')):>17} {_cell(col('overruns'), '{:.0f}'):>10} "
-              f"{_cell(col('scan_p50'), '{:.3f}'):>17} {_cell(col('scan_p99'), '{:.3f}'):>17} "
-              f"{_cell(col('loadavg'), '{:.1f}'):>14}  {target}")  # fmt: skip
+              f"{spread(col('p50')):>17} {spread(col('p99')):>17} {spread(col('p999')):>17} "
+              f"{spread(col('max')):>17} {spread(col('overruns'), '{:.0f}'):>10} "
+              f"{spread(col('scan_p50'), '{:.3f}'):>17} {spread(col('scan_p99'), '{:.3f}'):>17} "
+              f"{spread(col('loadavg'), '{:.1f}'):>14}  {target}")  # fmt: skip
     print(f"target (view in its own process, pages and flood): p99.9 <= {CYCLE_MS + 2:g} ms, "
           f"no overrun: {'met' if met else 'MISSED'}")
     return 0

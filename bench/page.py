@@ -402,10 +402,6 @@ def colour_latency(page: Any, machine: Cpu, changes: int) -> dict[str, list[floa
 # ---------------------------------------------------------------------------- figures
 
 
-def _cell(values: list[float], fmt: str = "{:.0f}") -> str:
-    return spread(values, fmt)
-
-
 def one_round(browser: Any, charts: list[str], changes: int) -> dict[str, Any]:
     result: dict[str, Any] = {"paint": {}, "colour": {}}
 
@@ -492,7 +488,8 @@ def main(argv: list[str] | None = None) -> int:
             if key == "colour":
                 target = "met" if all(v <= COLOUR_TARGET_MS for v in p99) else "MISSED"
             seen = f"{statistics.median(n):.0f}" + (f"-{max(missed)}" if max(missed) else "")
-            print(f"{chart:8} {what:34} {seen:>9} {_cell(p50):>17} {_cell(p99):>17}  {target}")
+            p50s, p99s = spread(p50, "{:.0f}"), spread(p99, "{:.0f}")
+            print(f"{chart:8} {what:34} {seen:>9} {p50s:>17} {p99s:>17}  {target}")
     print(
         "\nfirst paint: page.goto -> painted frame with the whole chart, and with its panel's "
         "status line too (ms)"
@@ -502,7 +499,7 @@ def main(argv: list[str] | None = None) -> int:
         f"{'page':8} {'chart':>17} {'÷ empty':>14} {'with panel':>17} {'÷ empty':>14}  "
         f"target <= {PAINT_TARGET:g}x empty"
     )
-    print(f"{'empty':8} {_cell(empty):>17}")
+    print(f"{'empty':8} {spread(empty, '{:.0f}'):>17}")
     for chart in charts:
         cells = []
         met = True
@@ -510,9 +507,9 @@ def main(argv: list[str] | None = None) -> int:
             paint = [r["paint"][chart][i] for r in rounds]
             ratio = [r["paint"][chart][i] / r["paint"]["empty"][0] for r in rounds]
             met = met and all(v <= PAINT_TARGET for v in ratio)
-            cells += [f"{_cell(paint):>17}", f"{_cell(ratio, '{:.1f}'):>14}"]
+            cells += [f"{spread(paint, '{:.0f}'):>17}", f"{spread(ratio, '{:.1f}'):>14}"]
         print(f"{chart:8} {' '.join(cells)}  {'met' if met else 'MISSED'}")
-    print(f"\nload average during the rounds: {_cell(loads, '{:.1f}')}")
+    print(f"\nload average during the rounds: {spread(loads, '{:.1f}')}")
     return 0
 
 

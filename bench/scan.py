@@ -44,7 +44,7 @@ from typing import Any
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-import figures
+from figures import spread
 
 from s7graph.engine.clock import Clock, VirtualClock
 from s7graph.engine.cpu import Cpu
@@ -469,11 +469,6 @@ def measure(workloads: list[Workload], scans: int, warmup: int) -> dict[str, lis
     return samples
 
 
-def spread(values: list[float], fmt: str = "{:.3f}") -> str:
-    """min / median / max of repeated runs."""
-    return figures.spread(values, fmt)
-
-
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--scans", type=int, default=1000, help="measured scans per run (1000)")
@@ -527,7 +522,7 @@ def main(argv: list[str] | None = None) -> int:
         per_step = [m * 1e3 / N_SEQUENCERS for m in ms]
         ratio = [m / r for m, r in zip(ms, means[ref], strict=True)]
         print(
-            f"{name:22} {spread(ms):>20} {spread(p50s[name]):>20} "
+            f"{name:22} {spread(ms, '{:.3f}'):>20} {spread(p50s[name], '{:.3f}'):>20} "
             f"{spread(per_step, '{:.2f}'):>18}   {spread(ratio, '{:.2f}')}"
         )
     for e_name in (n for n in means if n.startswith("engine")):
