@@ -36,6 +36,7 @@ __all__ = [
     "layout",
     "ms_to_s5time",
     "s5time_to_ms",
+    "string_chars",
     "type_of",
 ]
 
@@ -120,6 +121,13 @@ def type_of(name: str) -> TypeSpec:
     if spec is None:
         raise TypeMismatch(f"unknown data type {name!r}")
     return spec
+
+
+def string_chars(name: str) -> int | None:
+    """``n`` for a ``STRING[n]`` written with its length (case and blanks as ``type_of``
+    takes them); None for any other type name, plain ``STRING`` included."""
+    m = _STRING.fullmatch("".join(name.split()).upper())
+    return int(m[1]) if m is not None and m[1] is not None else None
 
 
 def _bad(spec: TypeSpec, value: object, why: str = "out of range") -> TypeMismatch:

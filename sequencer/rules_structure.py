@@ -6,6 +6,7 @@ from __future__ import annotations
 from typing import Final
 
 from s7graph.engine.address import parse_address
+from s7graph.engine.datatypes import string_chars
 from s7graph.engine.errors import AddressError, LiteralError
 from s7graph.engine.literals import parse_literal
 from s7graph.sequencer.model import Binary, Expr, Step, StepTarget, Transition, Unary
@@ -75,14 +76,14 @@ def rule_declarations(ctx: _Ctx) -> None:
 
 def _too_long(declared: str, literal: str) -> bool:
     """Whether the STRING literal ``literal`` has more characters than ``STRING[n]``."""
-    head, _, rest = declared.upper().replace(" ", "").partition("STRING[")
-    if head or not rest.endswith("]") or not rest[:-1].isdigit():
+    n = string_chars(declared)
+    if n is None:
         return False
     try:
         _, value = parse_literal(literal)
     except LiteralError:
         return False
-    return isinstance(value, str) and len(value) > int(rest[:-1])
+    return isinstance(value, str) and len(value) > n
 
 
 def rule_unknown_steps_in_from_to(ctx: _Ctx) -> None:

@@ -17,6 +17,7 @@ from __future__ import annotations
 from collections.abc import Iterator
 from typing import Final
 
+from s7graph.engine.datatypes import string_chars
 from s7graph.engine.errors import AddressError, SourceLocation, SymbolError
 from s7graph.sequencer.model import (
     Binary,
@@ -174,9 +175,9 @@ def _unify(a: str, b: str) -> str | None:
     takes any STRING (the engine cuts a longer value to ``n`` characters, as S7 does)."""
     if a == b:
         return a
-    if a.startswith("STRING[") and b == "STRING":
+    if b == "STRING" and string_chars(a) is not None:
         return a
-    if b.startswith("STRING[") and a == "STRING":
+    if a == "STRING" and string_chars(b) is not None:
         return b
     fa, fb = _FLEX.get(a), _FLEX.get(b)
     if fa is not None and fb is not None:

@@ -14,6 +14,7 @@ import math
 from collections.abc import Callable
 from typing import Any
 
+from s7graph.engine.datatypes import string_chars
 from s7graph.engine.errors import TypeMismatch
 from s7graph.steps.operands import CELL_VALUE_TYPE, CELLS, CodeGen, Ref
 from s7graph.steps.syntax import (
@@ -187,8 +188,8 @@ def gen_assigned(
     ``e`` as values, a BOOL target as status bits (``gen_value``'s ``number``). A
     ``STRING[n]`` target keeps the value's first ``n`` characters, as S7 does."""
     value = gen_value(e, g, resolve, sidx, tidx, target.type != "BOOL")
-    if target.type.startswith("STRING[") and target.type.endswith("]"):
-        value = f"({value})[:{int(target.type[7:-1])}]"
+    if (n := string_chars(target.type)) is not None:
+        value = f"({value})[:{n}]"
     return g.write(target, value)
 
 
