@@ -26,11 +26,13 @@ from __future__ import annotations
 import bisect
 import re
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import Any, TypeVar
 
 from s7graph.sequencer.model import Chart, Sequence, Step
 
 __all__ = ["Comment", "attach_comments", "find_comments"]
+
+N = TypeVar("N")
 
 _TOKENS = re.compile(r'"(?:[^"]|"")*"?|\'(?:[^\'$]|\$.)*\'?|//[^\n]*|\(\*.*?(?:\*\)|\Z)', re.S)
 
@@ -90,32 +92,23 @@ def attach_comments(chart: Chart, text: str) -> Chart:
 
 
 def _with_comments(chart: Chart, given: dict[tuple[Any, ...], str]) -> Chart:
-    def of(*key: Any) -> str:
-        return given.get(key, "")
+    def commented(node: N, *key: Any) -> N:
+        text = given.get(key)
+        return replace(node, comment=text) if text else node  # type: ignore[type-var]
 
     sequences: list[Sequence] = []
     for q, seq in enumerate(chart.sequences):
         steps: list[Step] = []
         for s, step in enumerate(seq.steps):
-            rows = tuple(
-                replace(r, comment=of("row", q, s, k)) if of("row", q, s, k) else r
-                for k, r in enumerate(step.actions)
-            )
-            steps.append(replace(step, comment=of("step", q, s), actions=rows))
-        transitions = tuple(
-            replace(t, comment=of("trans", q, k)) if of("trans", q, k) else t
-            for k, t in enumerate(seq.transitions)
-        )
+            rows = tuple(commented(r, "row", q, s, k) for k, r in enumerate(step.actions))
+            steps.append(commented(replace(step, actions=rows), "step", q, s))
+        transitions = tuple(commented(t, "trans", q, k) for k, t in enumerate(seq.transitions))
         sequences.append(
-            replace(seq, comment=of("seq", q), steps=tuple(steps), transitions=transitions)
+            commented(replace(seq, steps=tuple(steps), transitions=transitions), "seq", q)
         )
-    variables = tuple(
-        replace(v, comment=of("var", k)) if of("var", k) else v for k, v in enumerate(chart.vars)
-    )
     return replace(
-        chart,
-        comment=of("chart"),
-        end_comment=of("end"),
-        vars=variables,
+        commented(chart, "chart"),
+        end_comment=given.get(("end",), ""),
+        vars=tuple(commented(v, "var", k) for k, v in enumerate(chart.vars)),
         sequences=tuple(sequences),
     )
