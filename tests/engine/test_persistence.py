@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import base64
 import json
+import math
 import os
 import signal
 import sqlite3
 import subprocess
-import zlib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -16,7 +16,7 @@ from typing import Any
 import pytest
 
 from s7graph.engine import DB, CallContext, Cpu, InstanceDB, VirtualClock, fb, ob
-from s7graph.engine.persistence import StateStore
+from s7graph.engine.persistence import StateStore, unpack_instance
 from tests.real_process import ROOT, query_store, run_command, wait_for
 
 
@@ -61,6 +61,40 @@ def test_state_round_trips_and_restarts_warm(clock: VirtualClock, tmp_path: Path
     assert again.mem.get("DB1.DBW2") == 1234
     assert again.instance_db(2).total == 5 and again.instance_db(2).note == "hello"
     assert [e.message for e in again.diagnostics][:2] == ["warm restart", "STARTUP → RUN (warm)"]
+
+
+@fb(3, STAT={"r": ("REAL", 0.0), "inf": ("REAL", 0.0), "big": ("OBJECT", None)})
+def holder(ctx: CallContext, db: InstanceDB) -> None:
+    pass
+
+
+def test_instance_values_come_back_exactly_nan_infinity_and_big_integers_included(
+    tmp_path: Path,
+) -> None:
+    """A REAL may hold NaN or infinity (a division by zero) and a plain OBJECT any integer:
+    the instance row keeps them as they were (MessagePack; JSON for an integer beyond 64
+    bits)."""
+    def program() -> Cpu:
+        cpu = Cpu(VirtualClock())
+        cpu.load(holder)
+        cpu.create_instance_db(3, holder)
+        cpu.create_instance_db(4, holder)
+        return cpu
+
+    cpu = program()
+    cpu.instance_db(3).values.update({"r": float("nan"), "inf": float("-inf")})
+    cpu.instance_db(4).values.update({"big": [2**70, -(2**63), "x"]})
+    store = StateStore(tmp_path / "s.sqlite")
+    store.save(cpu)
+    store.close()
+
+    again = program()
+    store = StateStore(tmp_path / "s.sqlite")
+    store.load(again)
+    store.close()
+    got = again.instance_db(3).values
+    assert math.isnan(got["r"]) and got["inf"] == float("-inf")  # type: ignore[arg-type]
+    assert again.instance_db(4).values["big"] == [2**70, -(2**63), "x"]
 
 
 def test_maybe_save_writes_only_when_retentive_data_changed(
@@ -221,7 +255,7 @@ def _read(path: Path) -> dict[str, Any] | None:
         "restarts": int.from_bytes(db1[0:2], "big"),
         "MW2_at_restart": int.from_bytes(db1[2:4], "big"),
         "MW100_at_restart": int.from_bytes(db1[4:6], "big"),
-        "total": json.loads(zlib.decompress(inst[0]))["total"],
+        "total": unpack_instance(inst[0])["total"],
         "last_restart": restart[0] if restart else "",
     }
 

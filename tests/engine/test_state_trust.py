@@ -10,10 +10,11 @@ import sqlite3
 import zlib
 from pathlib import Path
 
+import msgspec
 import pytest
 
 from s7graph.engine import CallContext, Cpu, InstanceDB, VirtualClock, fb, ob
-from s7graph.engine.persistence import StateFileError, StateStore
+from s7graph.engine.persistence import FORMAT, StateFileError, StateStore
 
 
 @fb(2, "acc", STAT={"total": ("DINT", 0)})
@@ -142,6 +143,9 @@ def test_an_instance_db_the_program_does_not_have_is_refused(tmp_path: Path) -> 
         (zlib.compress(b"[1, 2]"), "malformed data of DB2"),
         (zlib.compress(json.dumps({"total": "many"}).encode()), "malformed state of DB2"),
         (zlib.compress(json.dumps({"total": 1, "ghost": 2}).encode()), "malformed state of DB2"),
+        (zlib.compress(msgspec.msgpack.encode({"total": "many"})), "malformed state of DB2"),
+        (zlib.compress(msgspec.msgpack.encode({"total": 1})[:-1]), "malformed data of DB2"),
+        (zlib.compress(msgspec.msgpack.encode([1, 2])), "malformed data of DB2"),
     ],
 )
 def test_a_malformed_instance_is_refused(tmp_path: Path, data: bytes, fragment: str) -> None:
@@ -150,6 +154,33 @@ def test_a_malformed_instance_is_refused(tmp_path: Path, data: bytes, fragment: 
         con.execute("UPDATE instances SET data=? WHERE number=2", (data,))
     con.close()
     assert fragment in _refused(path)
+
+
+def test_a_file_of_format_2_is_read_and_marked_with_the_current_format(tmp_path: Path) -> None:
+    """Format 2 kept instance rows as compressed JSON: they are still read, and the file is
+    marked with the format it now holds rows of (an older s7graph refuses it by name)."""
+    path = _written(tmp_path / "s.sqlite")
+    with sqlite3.connect(path) as con:
+        con.execute("UPDATE meta SET value='s7graph-state 2' WHERE key='format'")
+        con.execute("UPDATE instances SET data=? WHERE number=2",
+                    (zlib.compress(json.dumps({"total": 41}).encode()),))  # fmt: skip
+    con.close()
+    store = StateStore(path)
+    cpu = _cpu()
+    store.load(cpu)
+    store.close()
+    assert cpu.instance_db(2).total == 41
+    with sqlite3.connect(path) as con:
+        assert con.execute("SELECT value FROM meta WHERE key='format'").fetchone() == (FORMAT,)
+    con.close()
+
+
+def test_a_file_of_an_unknown_format_is_refused_by_its_mark(tmp_path: Path) -> None:
+    path = _written(tmp_path / "s.sqlite")
+    with sqlite3.connect(path) as con:
+        con.execute("UPDATE meta SET value='s7graph-state 9' WHERE key='format'")
+    con.close()
+    assert _refused(path) == "unknown format 's7graph-state 9'"
 
 
 def test_a_malformed_memory_image_is_refused(tmp_path: Path) -> None:

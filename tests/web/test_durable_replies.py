@@ -6,10 +6,8 @@ bus on a unix socket; a foreign lock on the state file plays the slow disk."""
 
 from __future__ import annotations
 
-import json
 import sqlite3
 import threading
-import zlib
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -17,7 +15,7 @@ from pathlib import Path
 import pytest
 
 from s7graph.engine.clock import SystemClock
-from s7graph.engine.persistence import StateStore
+from s7graph.engine.persistence import StateStore, unpack_instance
 from s7graph.engine.record import ScanRecord
 from s7graph.engine.runner import Runner
 from s7graph.sfb.alarms import message_list
@@ -104,7 +102,7 @@ def _mode_on_disk(state: Path) -> str:
     with sqlite3.connect(f"file:{state}?mode=ro", uri=True) as con:
         (blob,) = con.execute("SELECT data FROM instances WHERE number=1").fetchone()
     con.close()
-    return str(json.loads(zlib.decompress(blob))["G7_STATE"]["mode"])
+    return str(unpack_instance(blob)["G7_STATE"]["mode"])
 
 
 def _audit_ops(state: Path) -> list[tuple[str, str, str]]:

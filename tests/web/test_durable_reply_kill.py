@@ -5,18 +5,17 @@ and the CPU restarted hot (``--restart hot``) shows the effect."""
 
 from __future__ import annotations
 
-import json
 import signal
 import sqlite3
 import subprocess
 import sys
-import zlib
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
 
+from s7graph.engine.persistence import unpack_instance
 from s7graph.web.access.audit import read_audit
 from s7graph.web.bus.protocol import Command
 from s7graph.web.bus.zenoh_bus import BusClient, open_session
@@ -78,7 +77,7 @@ def _disk(state: Path) -> tuple[str, list[tuple[str, str, str]]]:
         (blob,) = con.execute("SELECT data FROM instances WHERE number=1").fetchone()
         alarms = con.execute("SELECT key, state, user FROM alarms ORDER BY id").fetchall()
     con.close()
-    return str(json.loads(zlib.decompress(blob))["G7_STATE"]["mode"]), alarms
+    return str(unpack_instance(blob)["G7_STATE"]["mode"]), alarms
 
 
 def test_the_effect_and_the_audit_row_of_an_answered_command_survive_sigkill(

@@ -19,7 +19,7 @@ import pytest
 from s7graph.engine.clock import VirtualClock
 from s7graph.engine.diagnostics import EventId
 from s7graph.engine.modes import CpuMode
-from s7graph.engine.persistence import StateFileError
+from s7graph.engine.persistence import StateFileError, unpack_instance
 from s7graph.sequencer.state import GraphState
 from s7graph.sfb.alarms import MessageState, message_list
 from s7graph.web.harness.persist import OpenedState, open_state
@@ -289,7 +289,7 @@ def test_a_malformed_sequencer_state_is_refused(
     path = tmp_path / "drill.sqlite"
     with sqlite3.connect(path) as con:
         (blob,) = con.execute("SELECT data FROM instances WHERE number=1").fetchone()
-        data = json.loads(zlib.decompress(blob))
+        data = unpack_instance(blob)
         data["G7_STATE"][field] = value
         con.execute("UPDATE instances SET data=? WHERE number=1",
                     (zlib.compress(json.dumps(data).encode()),))  # fmt: skip

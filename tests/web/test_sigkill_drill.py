@@ -29,13 +29,13 @@ import subprocess
 import sys
 import textwrap
 import time
-import zlib
 from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
 
 from s7graph.engine.diagnostics import EventId
+from s7graph.engine.persistence import unpack_instance
 
 ROOT = Path(__file__).resolve().parents[2]
 DRILL = ROOT / "examples" / "drill"
@@ -98,7 +98,7 @@ def _read(path: Path) -> OnDisk:
         ).fetchall()
     finally:
         con.close()
-    st = json.loads(zlib.decompress(blob))["G7_STATE"]
+    st = unpack_instance(blob)["G7_STATE"]
     messages = json.loads(part)["active"]
     return OnDisk(
         active={i + 1 for i in st["active"]},  # the drill's step i is S(i+1)

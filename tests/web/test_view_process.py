@@ -5,6 +5,7 @@ both with one line each, and a CPU killed takes its view with it."""
 
 from __future__ import annotations
 
+import ctypes
 import os
 import queue
 import re
@@ -20,6 +21,7 @@ from pathlib import Path
 
 import pytest
 
+from s7graph.engine.runner import PR_SET_THP_DISABLE
 from s7graph.web.bus.protocol import CpuStatus
 from s7graph.web.bus.zenoh_bus import BusClient, open_session
 from s7graph.web.cli.view_process import view_endpoints
@@ -36,6 +38,12 @@ def _free_port() -> int:
         return int(s.getsockname()[1])
 
 
+def _as_from_a_shell() -> None:
+    """In the child before it runs s7graph: huge pages allowed again, as a shell starts it
+    (this test process may have kept small pages itself, and children inherit that)."""
+    ctypes.CDLL(None).prctl(PR_SET_THP_DISABLE, 0, 0, 0, 0)
+
+
 class Run:
     """``s7graph run`` of the drill demo with ``--web``, in a session of its own (so that a
     signal to its process group is what a Ctrl-C at its terminal sends)."""
@@ -48,7 +56,7 @@ class Run:
              "--state", str(tmp_path / "drill.sqlite"), "--web", "--port", str(self.port),
              "--duration-s", "150"],
             cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-            start_new_session=True,
+            start_new_session=True, preexec_fn=_as_from_a_shell,
         )  # fmt: skip
         self.out: queue.Queue[str] = queue.Queue()
         self.err: list[str] = []
@@ -155,6 +163,21 @@ def test_ctrl_c_stops_the_cpu_and_its_view_with_one_line_each(run: Run) -> None:
 
 def run_state(run: Run) -> str:
     return str(run.proc.args[run.proc.args.index("--state") + 1])  # type: ignore[union-attr]
+
+
+def _thp(pid: int) -> str:
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("THP_enabled:"):
+            return line.split()[1]
+    pytest.skip("this kernel does not say whether a process may use huge pages")
+
+
+def test_the_cpu_and_its_view_keep_their_memory_out_of_huge_pages(run: Run) -> None:
+    """The kernel merging a process's pages into huge ones held scans up for milliseconds
+    (engine.runner.keep_small_pages): the CPU process and the view it starts are kept out."""
+    run.view_line()
+    (view,) = run.children()
+    assert (_thp(run.proc.pid), _thp(view)) == ("0", "0")
 
 
 def test_a_cpu_killed_takes_its_view_with_it(run: Run) -> None:

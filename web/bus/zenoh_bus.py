@@ -559,8 +559,10 @@ class BusPublisher:
         return msgspec.structs.replace(self._status, cycle=cycle, t_ms=t_ms)
 
     def _publish_audit(self, entry: AuditEntry) -> None:
-        with contextlib.suppress(zenoh.ZError):
-            self._audit_pub.put(encode(entry))
+        """Queued for the outbox's thread like every other publication: a put from the
+        scan thread lets go of the interpreter lock, and getting it back behind the
+        threads that take the commands can cost the scan milliseconds."""
+        self.outbox.post(self._audit_pub, entry)
 
     def _serve(self, key: str, read: Callable[[], bytes | None]) -> None:
         """A read-only queryable on ``key`` answering ``read()`` under ``key`` itself, so a

@@ -31,7 +31,7 @@ from s7graph.engine.errors import S7Error, ScanAborted
 from s7graph.engine.modes import CpuMode
 from s7graph.engine.persistence import StateFileError, StateStore
 from s7graph.engine.record import ScanRecord
-from s7graph.engine.runner import RT_PRIORITY, Runner
+from s7graph.engine.runner import RT_PRIORITY, Runner, keep_small_pages
 from s7graph.engine.watchdog import Watchdog
 from s7graph.sfb.alarms import message_list
 from s7graph.web.cli.report import fail
@@ -81,6 +81,8 @@ def run_chart(
     ``view_in_process``: serve the view in this process (the benchmark's comparison);
     ``session``: ``path`` already loaded, on the system clock (the benchmark's).
     ``rt_priority``: the scan thread's real-time priority (None: normal scheduling)."""
+    if rt_priority is not None:
+        keep_small_pages()  # before the view starts: it inherits it
     clock = SystemClock() if session is None else session.clock
     try:
         if session is None:

@@ -30,7 +30,7 @@ from s7graph.engine.modes import CpuMode
 from s7graph.engine.persistence import StateFileError
 from s7graph.engine.record import ScanRecord
 from s7graph.engine.restart import parse_restart
-from s7graph.engine.runner import RT_PRIORITY, Runner
+from s7graph.engine.runner import RT_PRIORITY, Runner, keep_small_pages
 from s7graph.web.harness.persist import OpenedState, open_state, refusal
 
 
@@ -127,6 +127,8 @@ def run_program(
     ``restart`` (``--restart``): the startup from a saved state; None: the program's
     ``CPU["restart"]``, else warm. ``rt_priority``: the scan thread's real-time priority
     (None: normal scheduling)."""
+    if rt_priority is not None:
+        keep_small_pages()  # before the view starts: it inherits it
     try:
         module = import_program(path)
         cpu = build_cpu(module, SystemClock(), max_cycle_ms=max_cycle_ms)
