@@ -1,11 +1,13 @@
 /* The machine's own floor for bench/jitter.py: a cycle that does nothing, in C.
  *
- * One thread, SCHED_FIFO at the priority given (as the CPU's scan thread; none if the
- * system refuses), sleeps to absolute deadlines CYCLE_US apart (clock_nanosleep,
- * CLOCK_MONOTONIC) and stamps each wake-up; its memory kept out of transparent huge pages
- * as the CPU's is. Between a "start" and an "end" line on stdin it keeps the stamps; after
- * "end" it prints them (CLOCK_MONOTONIC nanoseconds, the clock of Python's perf_counter_ns)
- * as one JSON line: {"starts": [...], "realtime": 0|1}. A late wake-up here is the machine's
+ * One thread per processor, each bound to its processor and SCHED_FIFO at the priority
+ * given (bench/jitter.py: above the CPU's scan thread, so that no scan delays it; none if
+ * the system refuses), sleeps to absolute
+ * deadlines CYCLE_US apart (clock_nanosleep, CLOCK_MONOTONIC) and stamps each wake-up; the
+ * memory kept out of transparent huge pages as the CPU's is. Between a "start" and an "end"
+ * line on stdin they keep the stamps; after "end" it prints them (CLOCK_MONOTONIC
+ * nanoseconds, the clock of Python's perf_counter_ns), a list per processor, as one JSON
+ * line: {"realtime": 0|1, "starts": [[...], ...]}. A late wake-up here is the machine's
  * (the kernel, the hypervisor), not the interpreter's.
  *
  * usage: cycle_floor CYCLE_US PRIORITY
@@ -18,19 +20,26 @@
 #include <string.h>
 #include <sys/prctl.h>
 #include <time.h>
+#include <unistd.h>
 
 #ifndef PR_SET_THP_DISABLE
 #define PR_SET_THP_DISABLE 41
 #endif
 
+#define MAX_CPUS 64
+
 static volatile int recording = 0;
 static volatile int done = 0;
-static long long *stamps;
-static long count = 0;
-static const long capacity = 1L << 20;
+static const long capacity = 1L << 18;
 static long cycle_ns;
 static int priority;
-static int realtime = 0;
+static int realtime = 1;
+
+struct floor {
+    int cpu;
+    long count;
+    long long *stamps;
+};
 
 static long long now_ns(void) {
     struct timespec t;
@@ -39,14 +48,19 @@ static long long now_ns(void) {
 }
 
 static void *loop(void *arg) {
-    (void)arg;
+    struct floor *f = arg;
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    CPU_SET(f->cpu, &set);
+    pthread_setaffinity_np(pthread_self(), sizeof set, &set);
     struct sched_param sp = {.sched_priority = priority};
-    realtime = priority > 0 && pthread_setschedparam(pthread_self(), SCHED_FIFO, &sp) == 0;
+    if (!(priority > 0 && pthread_setschedparam(pthread_self(), SCHED_FIFO, &sp) == 0))
+        realtime = 0;
     struct timespec next;
     clock_gettime(CLOCK_MONOTONIC, &next);
     while (!done) {
         long long t = now_ns();
-        if (recording && count < capacity) stamps[count++] = t;
+        if (recording && f->count < capacity) f->stamps[f->count++] = t;
         next.tv_nsec += cycle_ns;
         while (next.tv_nsec >= 1000000000L) {
             next.tv_nsec -= 1000000000L;
@@ -65,10 +79,18 @@ int main(int argc, char **argv) {
     cycle_ns = atol(argv[1]) * 1000L;
     priority = atoi(argv[2]);
     prctl(PR_SET_THP_DISABLE, 1, 0, 0, 0);
-    stamps = malloc(capacity * sizeof *stamps);
-    if (stamps == NULL || cycle_ns <= 0) return 2;
-    pthread_t thread;
-    if (pthread_create(&thread, NULL, loop, NULL) != 0) return 2;
+    long cpus = sysconf(_SC_NPROCESSORS_ONLN);
+    if (cpus < 1) cpus = 1;
+    if (cpus > MAX_CPUS) cpus = MAX_CPUS;
+    if (cycle_ns <= 0) return 2;
+    static struct floor floors[MAX_CPUS];
+    pthread_t threads[MAX_CPUS];
+    for (long i = 0; i < cpus; i++) {
+        floors[i].cpu = (int)i;
+        floors[i].stamps = malloc(capacity * sizeof(long long));
+        if (floors[i].stamps == NULL) return 2;
+        if (pthread_create(&threads[i], NULL, loop, &floors[i]) != 0) return 2;
+    }
     char line[64];
     while (fgets(line, sizeof line, stdin)) {
         if (strncmp(line, "start", 5) == 0) recording = 1;
@@ -76,9 +98,14 @@ int main(int argc, char **argv) {
     }
     recording = 0;
     done = 1;
-    pthread_join(thread, NULL);
+    for (long i = 0; i < cpus; i++) pthread_join(threads[i], NULL);
     printf("{\"realtime\": %d, \"starts\": [", realtime);
-    for (long i = 0; i < count; i++) printf("%s%lld", i ? "," : "", stamps[i]);
+    for (long i = 0; i < cpus; i++) {
+        printf("%s[", i ? "," : "");
+        for (long k = 0; k < floors[i].count; k++)
+            printf("%s%lld", k ? "," : "", floors[i].stamps[k]);
+        printf("]");
+    }
     printf("]}\n");
     return 0;
 }
