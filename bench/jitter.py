@@ -26,12 +26,19 @@ a real-time thread at all. A cycle of the CPU over cycle + 2 ms, or an overrun, 
 which the floor woke 1 ms late or more is one the machine lost for both; the *own* figures
 set those aside (what s7graph itself lost). The load makers keep small pages, as the CPU
 does, unless ``--huge-pages``: they stand for clients on other machines.
+
+Each of the own long cycles is put down to a cause from the runner's breakdown of it
+(``engine/profile.py``, as ``s7graph status`` shows it): the phase that took longest
+(``scan``, ``stage``, ``edge``, ...), or a late start of the next scan — ``late: lock``
+when the scan thread was blocked (the interpreter's lock) more than it waited for a
+processor, else ``late: processor``. Each run's line also gives the mean of each phase.
 """
 
 from __future__ import annotations
 
 import argparse
 import bisect
+import collections
 import functools
 import itertools
 import json
@@ -84,6 +91,7 @@ def worker(workload: str, view: str, endpoint: str, port: int, state: Path) -> i
     ``end`` lines on stdin mark the measured window, ``end`` also stops the run. Prints the
     window's figures as one ``JITTER {json}`` line."""
     from s7graph.engine.cpu import Cpu
+    from s7graph.engine.profile import PHASE_NAMES
     from s7graph.engine.runner import Runner
     from s7graph.web.cli.net import NetOptions
     from s7graph.web.cli.run_chart import run_chart
@@ -105,6 +113,7 @@ def worker(workload: str, view: str, endpoint: str, port: int, state: Path) -> i
 
     def kept_run(self: Runner, **kw: Any) -> None:
         runners.append(self)
+        self.profile.recent = collections.deque(maxlen=100_000)  # every long cycle
         run(self, **kw)
 
     Cpu.scan = stamped_scan  # type: ignore[method-assign]
@@ -140,11 +149,18 @@ def worker(workload: str, view: str, endpoint: str, port: int, state: Path) -> i
     scans = [ends[i] - starts[i] for i in range(a, b)]
     overran = [(starts[i], starts[i + 1]) for i in range(a, min(b, len(starts)) - 1)
                if overruns_seen[i + 1] > overruns_seen[i]]  # fmt: skip
+    window = (starts[a], starts[min(b, len(starts)) - 1]) if b > a else (0, -1)
+    wall_to_perf = time.time_ns() - time.perf_counter_ns()
+    long = [{"start": c.at_ns - wall_to_perf, "cycle": c.cycle_ns, "parts": c.parts()}
+            for c in (runners[0].profile.recent if runners else ())
+            if window[0] <= c.at_ns - wall_to_perf <= window[1]]  # fmt: skip
     stopped = runners[0].stopped if runners else "never ran"
     majflt = faults.get("end", 0) - faults.get("start", 0)
     result = {"rc": rc, "cycles": cycles, "scans": scans, "overruns": over_b - over_a,
               "stopped": stopped, "majflt": majflt, "starts": starts[a:b],
-              "overran": overran}  # fmt: skip
+              "overran": overran, "long": long,
+              "means": {name: runners[0].profile.mean_ns(name) / 1e6 for name in PHASE_NAMES}
+              if runners else {}}  # fmt: skip
     print(RESULT + json.dumps(result), flush=True)
     return 0
 
@@ -428,6 +444,11 @@ def own_figures(result: dict[str, Any]) -> dict[str, float]:
         if not lost:
             own.append(b - a)
     own.sort()
+    why = collections.Counter(
+        cause(c["parts"]) for c in result.get("long") or []
+        if not machine_lost(late, c["start"], c["start"] + c["cycle"])
+    )  # fmt: skip
+    result["why"] = why
     # an overrun also follows from a start the machine made late: the cycle before counts
     before = int(CYCLE_MS * 1e6)
     overran = [machine_lost(late, a - before, b) for a, b in result.get("overran") or []]
@@ -438,6 +459,21 @@ def own_figures(result: dict[str, Any]) -> dict[str, float]:
         "own_max": own[-1] / 1e6 if own else float("nan"),
         "own_overruns": float(overran.count(False)),
     }
+
+
+WORK = ("scan", "alarms", "stage", "edge", "gc")
+
+
+def cause(parts: dict[str, int]) -> str:
+    """What made a long cycle long, from the runner's breakdown (``engine.profile``): the
+    late start of the next scan (``late: lock`` when the scan thread was blocked more than
+    it waited for a processor, else ``late: processor``), or the longest work phase."""
+    work = max(WORK, key=lambda name: parts.get(name, 0))
+    if parts.get("late", 0) >= parts.get(work, 0):
+        if "processor" not in parts:
+            return "late"
+        return "late: lock" if parts["lock"] >= parts["processor"] else "late: processor"
+    return work
 
 
 def figures(result: dict[str, Any]) -> dict[str, float]:
@@ -499,6 +535,7 @@ def main(argv: list[str] | None = None) -> int:
              if floor is not None else "no C compiler: no C floor"))  # fmt: skip
     runs: dict[tuple[str, str, str], list[dict[str, float]]] = {}
     notes: dict[tuple[str, str, str], str] = {}
+    whys: dict[tuple[str, str, str], collections.Counter[str]] = {}
     for _ in range(args.repeat):
         for workload in workloads:
             for view in views:
@@ -508,6 +545,9 @@ def main(argv: list[str] | None = None) -> int:
                         print(f"{workload} {view} {load}: no figures")
                         continue
                     runs.setdefault((workload, view, load), []).append(figures(result))
+                    whys.setdefault((workload, view, load), collections.Counter()).update(
+                        result["why"]
+                    )
                     notes[(workload, view, load)] = result["load"]
                     if result["stopped"]:
                         print(f"  {workload} {view} {load}: the CPU went to STOP: "
@@ -519,8 +559,9 @@ def main(argv: list[str] | None = None) -> int:
                           f"{f['floor_max']:.2f}; cycles over {LONG_MS:g} ms "
                           f"{f['long']:.0f}, {f['shared']:.0f} of them with the floor late "
                           f"too; without those p99.9 {f['own_p999']:.2f} max "
-                          f"{f['own_max']:.2f} overruns {f['own_overruns']:.0f}  "
-                          f"({result['load']})", flush=True)  # fmt: skip
+                          f"{f['own_max']:.2f} overruns {f['own_overruns']:.0f}; own long "
+                          f"cycles by cause: {_causes(result['why'])}; mean ms {_means(result)}"
+                          f"  ({result['load']})", flush=True)  # fmt: skip
     head = (f"{'workload':9} {'view':9} {'load':6} {'cycles':>6} {'p50':>17} {'p99':>17} "
             f"{'p99.9':>17} {'max':>17} {'overruns':>10} {'scan p50':>17} {'scan p99':>17} "
             f"{'load avg':>14} {'floor p99.9':>17} {'floor max':>17} {'>12 (floor)':>11} "
@@ -548,8 +589,22 @@ def main(argv: list[str] | None = None) -> int:
           f"machine lost for the C floor too set aside: {'met' if own_met else 'MISSED'}")
     print(f">12 (floor): cycles over {LONG_MS:g} ms in all runs (in brackets: of them, with the"
           f" C floor woken {FLOOR_LATE_MS:g} ms late or more in the same cycle)")  # fmt: skip
+    print(f"own long cycles (over {LONG_MS:g} ms, the floor on time) by cause, all runs, from"
+          " the runner's breakdown of each cycle (engine/profile.py):")  # fmt: skip
+    for key, why in whys.items():
+        print(f"  {' '.join(key):28} {_causes(why)}")
     build.cleanup()
     return 0
+
+
+def _means(result: dict[str, Any]) -> str:
+    """The mean of each phase of the cycle but the wait (``engine.profile``), in ms."""
+    means = result.get("means") or {}
+    return " ".join(f"{k} {v:.2f}" for k, v in means.items() if k != "idle") or "none"
+
+
+def _causes(why: collections.Counter[str]) -> str:
+    return ", ".join(f"{name} {n}" for name, n in why.most_common()) or "none"
 
 
 def _over(fs: list[dict[str, float]]) -> str:

@@ -148,11 +148,18 @@ class FB:
         init=False, repr=False, compare=False, hash=False, default_factory=dict
     )
     out_names: tuple[str, ...] = field(init=False, repr=False, compare=False, default=())
+    stored: tuple[Var, ...] = field(init=False, repr=False, compare=False, default=())
+    """The variables an instance DB stores (all but TEMP), in declaration order."""
+    objects: tuple[str, ...] = field(init=False, repr=False, compare=False, default=())
+    """The names of the stored OBJECT variables (a sequencer's state)."""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "params", _params(self.label, self.kind, self.interface))
         outs = tuple(v.name for v in self.interface if v.decl in (Decl.OUT, Decl.IN_OUT))
         object.__setattr__(self, "out_names", outs)
+        stored = tuple(v for v in self.interface if v.decl is not Decl.TEMP)
+        object.__setattr__(self, "stored", stored)
+        object.__setattr__(self, "objects", tuple(v.name for v in stored if v.type == OBJECT))
 
     @property
     def label(self) -> str:
@@ -275,6 +282,10 @@ def _plain(var: Var) -> bool:
     )
 
 
+_PLAIN = frozenset((bool, int, float, str, type(None)))
+"""Value types a snapshot takes as they are (what ``_encode`` would return unchanged)."""
+
+
 def _encode(var: Var, value: object) -> object:
     if isinstance(value, InstanceDB):
         return value.snapshot()
@@ -360,11 +371,12 @@ class InstanceDB:
 
     def snapshot(self) -> dict[str, object]:
         """A JSON-ready copy of every stored value (OBJECT via ``to_state()``)."""
-        return {
-            var.name: _encode(var, self.values[var.name])
-            for var in self.fb.interface
-            if var.decl is not Decl.TEMP
-        }
+        values = self.values
+        out: dict[str, object] = {}
+        for var in self.fb.stored:
+            value = values[var.name]
+            out[var.name] = value if type(value) in _PLAIN else _encode(var, value)
+        return out
 
     def encode(self, var: Var) -> object:
         """The JSON-ready value of the declared variable ``var`` (as in ``snapshot()``)."""

@@ -49,7 +49,7 @@ from typing import Any, Protocol, runtime_checkable
 
 import msgspec
 
-from s7graph.engine.blocks import FB, OBJECT, Decl, InstanceDB
+from s7graph.engine.blocks import FB, Decl, InstanceDB
 from s7graph.engine.cpu import Cpu
 from s7graph.engine.errors import S7Error
 from s7graph.engine.record import DiagEntry
@@ -377,15 +377,16 @@ class StateStore:
     ) -> None:
         fb = idb.fb
         snapshot = idb.snapshot()
-        steady: dict[str, object] = {}
+        steady = snapshot  # what a change is judged by: all but the VOLATILE keys
         volatile: dict[str, object] = {}
-        for var in fb.interface:
-            value = snapshot.get(var.name)
-            skip = _volatile(idb.values[var.name]) if var.type == OBJECT else ()
+        for name in fb.objects:
+            value = snapshot.get(name)
+            skip = _volatile(idb.values[name])
             if skip and isinstance(value, dict):
-                volatile[var.name] = {k: value.get(k) for k in skip}
-                value = {k: v for k, v in value.items() if k not in skip}
-            steady[var.name] = value
+                if steady is snapshot:
+                    steady = dict(snapshot)
+                volatile[name] = {k: value.get(k) for k in skip}
+                steady[name] = {k: v for k, v in value.items() if k not in skip}
         if (
             not full
             and self._seen.get(number, _UNSEEN) == steady

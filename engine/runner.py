@@ -33,6 +33,12 @@ the middle of a scan: when the loop starts, what the startup loaded is frozen (`
 never traversed again) and automatic collections are turned off; after each cycle's work,
 when the next cycle is not due for a while, the generations that are due are collected.
 
+**Where the time went** (``profile``, ``engine/profile.py``): each cycle is stamped at the
+end of each phase of the loop (scan, alarm log, staging, ``on_record``, collector, the wait
+and the late start of the next scan), with the scan thread's processor time and its time
+waiting for a processor; the longest cycle and the last long ones (over the cycle time +
+2 ms) are kept with their breakdowns, for ``status`` and ``s7graph status``.
+
 **Stopping.** ``request_stop`` (the CLI's SIGTERM and Ctrl-C handlers) ends the loop after
 the current scan. If the scan thread does not come back within ``grace_s`` — code that
 swallows every abort — the monitor commits the state as of the last finished scan with a
@@ -58,6 +64,7 @@ from s7graph.engine.diagnostics import EventId
 from s7graph.engine.errors import ScanAborted
 from s7graph.engine.modes import CpuMode
 from s7graph.engine.persistence import Batch, StateStore, StateWriteError
+from s7graph.engine.profile import CycleProfile, OpenCycle
 from s7graph.engine.record import DiagEntry, ScanRecord
 from s7graph.engine.restart import RestartType
 from s7graph.engine.watchdog import CycleStatistics
@@ -234,6 +241,9 @@ class Runner:
         self.exec_stats = CycleStatistics()
         """Wall time spent inside ``scan()`` (ns)."""
         self.overruns = 0
+        """Cycles whose work took the whole set cycle time (the next started at once)."""
+        self.profile = CycleProfile(int(self.cycle_s * 1e9))
+        """Where each cycle's time went, and the cycles that ran long (``engine.profile``)."""
         self.scans = 0
         self.aborts = 0
         self.writer: StoreWriter | None = None
@@ -323,49 +333,68 @@ class Runner:
 
     def _loop(self, duration_s: float | None) -> None:
         cpu = self.cpu
+        profile = self.profile
+        clock = time.perf_counter_ns
+        runq = _RunQueue()
         t0 = time.monotonic()
         deadline = None if duration_s is None else t0 + duration_s
         due = t0
-        while not self._stop.is_set():
-            now = time.monotonic()
-            if deadline is not None and now >= deadline:
-                break
-            was_running = cpu.mode is CpuMode.RUN
-            started = time.perf_counter_ns()
-            self._cycle_start = now
-            record: ScanRecord | None = None
-            try:
-                with self.abortable("scan"):
-                    record = cpu.scan()
-            except ScanAborted as abort:
-                cpu.abort(abort.block or "CPU")
-            self.exec_stats.add(time.perf_counter_ns() - started)
-            self.scans += 1
-            if record is not None:
-                self.log_alarms(record)
-            self._persist()
-            if record is not None and self.on_record is not None:
-                try:
-                    self.on_record(record)
-                except ScanAborted as abort:
-                    cpu.abort(abort.block or "on_record")
-            if self.write_error is not None:
-                break
-            if was_running and cpu.mode is CpuMode.STOP and not self._stop.is_set():
-                self.stopped = stop_reason(cpu)
-                if self.on_stop is not None:
-                    self.on_stop(self.stopped)
-                if self.end_on_stop:
+        open_cycle: OpenCycle | None = None
+        try:
+            while not self._stop.is_set():
+                now = time.monotonic()
+                started = clock()
+                cpu_ns, waited = time.thread_time_ns(), runq.read()
+                if open_cycle is not None:
+                    profile.add(open_cycle.close(started, cpu_ns, waited))
+                if deadline is not None and now >= deadline:
                     break
-            due += self.cycle_s
-            delay = due - time.monotonic()
-            if delay > 0 and self.gc is not None and self.gc.idle(delay):
+                at = time.time_ns()
+                was_running = cpu.mode is CpuMode.RUN
+                self._cycle_start = now
+                record: ScanRecord | None = None
+                try:
+                    with self.abortable("scan"):
+                        record = cpu.scan()
+                except ScanAborted as abort:
+                    cpu.abort(abort.block or "CPU")
+                scanned = clock()
+                self.exec_stats.add(scanned - started)
+                self.scans += 1
+                if record is not None:
+                    self.log_alarms(record)
+                logged = clock()
+                self._persist()
+                staged = clock()
+                if record is not None and self.on_record is not None:
+                    try:
+                        self.on_record(record)
+                    except ScanAborted as abort:
+                        cpu.abort(abort.block or "on_record")
+                edged = clock()
+                if self.write_error is not None:
+                    break
+                if was_running and cpu.mode is CpuMode.STOP and not self._stop.is_set():
+                    self.stopped = stop_reason(cpu)
+                    if self.on_stop is not None:
+                        self.on_stop(self.stopped)
+                    if self.end_on_stop:
+                        break
+                due += self.cycle_s
                 delay = due - time.monotonic()
-            if delay > 0:
-                self._stop.wait(delay)
-            else:
-                self.overruns += 1
-                due = time.monotonic()
+                if delay > 0 and self.gc is not None and self.gc.idle(delay):
+                    delay = due - time.monotonic()
+                collected = clock()
+                stamps = [started, scanned, logged, staged, edged, collected]
+                idle_ns = max(0, int(delay * 1e9))
+                open_cycle = OpenCycle(self.scans, at, stamps, cpu_ns, waited, idle_ns, delay <= 0)
+                if delay > 0:
+                    self._stop.wait(delay)
+                else:
+                    self.overruns += 1
+                    due = time.monotonic()
+        finally:
+            runq.close()
 
     def _persist(self) -> None:
         writer = self.writer
@@ -556,6 +585,30 @@ def stop_reason(cpu: Cpu) -> str:
 
 def _at(entry: DiagEntry) -> str:
     return f"{entry.block}: " if entry.block else ""
+
+
+class _RunQueue:
+    """The calling thread's time waiting for a processor (ns, ``run_delay`` of Linux
+    ``/proc/thread-self/schedstat``), or ``None`` where the system does not say."""
+
+    def __init__(self) -> None:
+        try:
+            self._fd: int | None = os.open("/proc/thread-self/schedstat", os.O_RDONLY)
+        except OSError:
+            self._fd = None
+
+    def read(self) -> int | None:
+        if self._fd is None:
+            return None
+        try:
+            return int(os.pread(self._fd, 96, 0).split()[1])
+        except (OSError, ValueError, IndexError):
+            return None
+
+    def close(self) -> None:
+        if self._fd is not None:
+            os.close(self._fd)
+            self._fd = None
 
 
 def _set_async_exc(tid: int, exc: type[BaseException] | None) -> None:

@@ -144,6 +144,17 @@ def test_router_two_cpus_one_web_view_and_shell_commands_as_processes(
         assert PASSWORD not in audit.stdout
         demo_audit = run("audit", "--state", str(tmp / "line2.sqlite"))
         assert "dan (unverified) (engineer)" in demo_audit.stdout
+
+        status = run("status", "--cpu", "line1", "--connect", endpoint)
+        assert status.returncode == 0, status.stderr
+        head, cycle, longest, *_ = status.stdout.splitlines()
+        assert re.match(r"CPU line1: RUN, cycle \d+, FBs Seq_drill, 0 force jobs$", head), head
+        assert re.match(r"cycle time: last [\d.]+ ms, min [\d.]+, max [\d.]+; scan [\d.]+ ms "
+                        r"on average; \d+ overruns; \d+ over 12.0 ms$", cycle), cycle
+        assert re.match(r"longest: cycle \d+ at \d\d:\d\d:\d\d(, overran)?, [\d.]+ ms: scan ",
+                        longest), longest  # fmt: skip
+        absent = run("status", "--cpu", "line9", "--connect", endpoint)
+        assert absent.returncode == 2 and "CPU 'line9' does not answer" in absent.stderr
     finally:
         for p in (watch, web):
             err = p.stop()

@@ -149,7 +149,7 @@ def test_ctrl_c_stops_the_cpu_and_its_view_with_one_line_each(run: Run) -> None:
     url, _ = run.view_line().groups()
     (view,) = run.children()
     os.killpg(run.proc.pid, signal.SIGINT)  # what the terminal sends its foreground group
-    assert run.proc.wait(30) == 0
+    assert run.proc.wait(30) == 0, run.err
     assert wait_until(lambda: not _alive(view), 30)
     assert not _serves(url)
     assert wait_until(lambda: len(run.err) >= 3, 10)

@@ -45,6 +45,7 @@ __all__ = [
     "CommandReply",
     "Contact",
     "CpuStatus",
+    "CycleReport",
     "CycleStats",
     "ForceEntry",
     "ForceList",
@@ -328,15 +329,38 @@ class StepDetail(_Msg, frozen=True, kw_only=True):
     transitions: Annotated[list[TransitionCriteria], Meta(max_length=256)] = []
 
 
+PartName = Annotated[str, Meta(max_length=16)]
+
+
+class CycleReport(_Msg, frozen=True, kw_only=True):
+    """Where one cycle's time went (``engine.profile``): the scan it began with, when (wall
+    ms since the epoch), its length, whether its work overran the set cycle time, and the
+    ms of each phase of the runner's loop (``scan``, ``alarms``, ``stage``, ``edge``,
+    ``gc``, ``idle``, ``late``), then ``cpu`` (the scan thread ran), ``processor`` (it
+    waited for one) and ``lock`` (it was blocked) where the system says."""
+
+    scan: Count = 0
+    at_ms: Count = 0
+    cycle_ms: Millis = 0.0
+    overrun: bool = False
+    parts: Annotated[dict[PartName, Millis], Meta(max_length=16)] = {}
+
+
 class CycleStats(_Msg, frozen=True, kw_only=True):
     """The CPU's cycle statistics in ms: cycle time (OB1 start to OB1 start: last, min,
-    max), mean scan execution time, and how many cycles overran the set cycle time."""
+    max), mean scan execution time, how many cycles overran the set cycle time, how many
+    ran long (over ``long_over_ms``), and the breakdowns of the longest and the last long
+    cycle."""
 
     last_ms: Millis = 0.0
     min_ms: Millis = 0.0
     max_ms: Millis = 0.0
     exec_ms: Millis = 0.0
     overruns: Count = 0
+    long: Count = 0
+    long_over_ms: Millis = 0.0
+    longest: CycleReport | None = None
+    last_long: CycleReport | None = None
 
 
 class CpuStatus(_Msg, frozen=True, kw_only=True):

@@ -1,6 +1,6 @@
 """The ``s7graph`` command line: ``run``, ``sim``, ``check``, ``import``, ``export``,
-``--version``; for the bus ``web``, ``router``, ``watch`` and the shell's commands (``ack``,
-``mode``, ..., ``force``, ``download``); ``users`` and ``audit``.
+``--version``; for the bus ``web``, ``router``, ``watch``, ``status`` and the shell's
+commands (``ack``, ``mode``, ..., ``force``, ``download``); ``users`` and ``audit``.
 
 Each command lives in its own module (``web/cli/*.py``) and is imported only when used, so
 ``s7graph check`` never pays for zenoh or viser. Errors are one line on stderr and a
@@ -396,6 +396,14 @@ def watch(
 
     net = _net(cpu=cpu, connect=connect, tls_ca=tls_ca)
     raise typer.Exit(watch_command(net, fb=fb, duration_s=duration_s))
+
+
+@app.command()
+def status(cpu: CpuName = "cpu1", connect: Connect = None, tls_ca: TlsCa = None) -> None:
+    """Print a CPU's state and cycle time, and where its longest cycles went."""
+    from s7graph.web.cli.remote import status_command
+
+    raise typer.Exit(status_command(_net(cpu=cpu, connect=connect, tls_ca=tls_ca)))
 
 
 def _remote(

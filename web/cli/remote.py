@@ -17,20 +17,30 @@ import os
 import socket
 import sys
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import zenoh
 
-from s7graph.web.bus.protocol import Command, CommandReply, StepStateUpdate
+from s7graph.web.bus.protocol import Command, CommandReply, CpuStatus, StepStateUpdate
 from s7graph.web.bus.zenoh_bus import BusClient, open_session
 from s7graph.web.cli.net import NetOptions
 from s7graph.web.cli.stopping import wait_until_stopped
+from s7graph.web.view.texts import cycle_lines
 
-__all__ = ["PASSWORD_ENV", "download_command", "list_forces", "send_command", "watch_command"]
+__all__ = [
+    "PASSWORD_ENV",
+    "download_command",
+    "list_forces",
+    "send_command",
+    "status_command",
+    "status_lines",
+    "watch_command",
+]
 
 PASSWORD_ENV = "S7GRAPH_PASSWORD"
+T = TypeVar("T")
 
 
 def _fail(message: str, code: int = 2) -> int:
@@ -126,15 +136,24 @@ def send_command(
     return 0
 
 
-def list_forces(net: NetOptions) -> int:
-    """``s7graph force --list``: the CPU's force jobs, one line each; 0, or 2 when the CPU
-    does not answer."""
+def _ask(net: NetOptions, query: Callable[[BusClient], T | None]) -> T | int:
+    """What ``query`` gets from ``net.cpu``, or the exit status (2, the reason printed)
+    when there is no bus or the CPU does not answer."""
     with _on_bus(net) as client:
         if isinstance(client, str):
             return _fail(client)
-        forces = client.forces()
-    if forces is None:
+        answer = query(client)
+    if answer is None:
         return _fail(f"CPU {net.cpu!r} does not answer")
+    return answer
+
+
+def list_forces(net: NetOptions) -> int:
+    """``s7graph force --list``: the CPU's force jobs, one line each; 0, or 2 when the CPU
+    does not answer."""
+    forces = _ask(net, BusClient.forces)
+    if isinstance(forces, int):
+        return forces
     if not forces.entries:
         print(f"no force job active on {net.cpu}")
         return 0
@@ -225,6 +244,33 @@ def _line(fb: str, update: StepStateUpdate) -> str:
     if update.events:
         parts.append("events " + " ".join(f"{e}:S{s}" for e, s in update.events))
     return "  ".join(parts)
+
+
+def status_lines(status: CpuStatus) -> list[str]:
+    """``s7graph status``: the CPU's state, its cycle statistics and where the longest and
+    the last long cycle went (as TIA Portal's cycle time page, with the why)."""
+    fbs = ", ".join(status.fbs) or "none"
+    lines = [f"CPU {status.cpu}: {status.state}, cycle {status.cycle}, FBs {fbs}, "
+             f"{status.forces} force job{'s' if status.forces != 1 else ''}"]  # fmt: skip
+    stats = status.stats
+    if stats is None:
+        return [*lines, "cycle time: not measured yet"]
+    lines.append(
+        f"cycle time: last {stats.last_ms:.1f} ms, min {stats.min_ms:.1f}, max {stats.max_ms:.1f};"
+        f" scan {stats.exec_ms:.2f} ms on average; {stats.overruns} overruns"
+        + (f"; {stats.long} over {stats.long_over_ms:.1f} ms" if stats.long_over_ms else "")
+    )
+    return lines + cycle_lines(stats)
+
+
+def status_command(net: NetOptions) -> int:
+    """Print ``status_lines`` of ``net.cpu``; 0, or 2 when it does not answer."""
+    status = _ask(net, BusClient.status)
+    if isinstance(status, int):
+        return status
+    for line in status_lines(status):
+        print(line)
+    return 0
 
 
 def watch_command(net: NetOptions, *, fb: str | None, duration_s: float | None = None) -> int:

@@ -13,16 +13,18 @@ others to the FB — and publishes the force jobs when they changed (``forces``)
 from __future__ import annotations
 
 import contextlib
+import functools
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from s7graph.engine.modes import CpuMode
+from s7graph.engine.profile import CycleBreakdown
 from s7graph.engine.record import ScanRecord
 from s7graph.engine.runner import Runner
 from s7graph.engine.watchdog import CycleStatistics
 from s7graph.web.bus.gate import Gate
 from s7graph.web.bus.live import LiveGraph
-from s7graph.web.bus.protocol import Command, CycleStats, StepStateUpdate
+from s7graph.web.bus.protocol import Command, CycleReport, CycleStats, StepStateUpdate
 from s7graph.web.bus.zenoh_bus import BusPublisher
 from s7graph.web.view.edge import BusEnds, CpuSide, WebEdge, serve_view
 
@@ -31,19 +33,41 @@ if TYPE_CHECKING:
     from s7graph.web.bus.online import OnlineChange
     from s7graph.web.recorder import Recorder
 
-__all__ = ["LiveEdge", "cycle_stats"]
+__all__ = ["LiveEdge", "cycle_report", "cycle_stats"]
 
 _MS = 1e6
 
 
 def cycle_stats(cpu: CycleStatistics, runner: Runner | None = None) -> CycleStats:
-    """The published statistics: the CPU's cycle time and the runner's execution time."""
+    """The published statistics: the CPU's cycle time, the runner's execution time, its
+    overruns and long cycles with the breakdowns of the longest and the last long one."""
+    if runner is None:
+        return CycleStats(last_ms=cpu.last_ns / _MS, min_ms=cpu.min_ns / _MS,
+                          max_ms=cpu.max_ns / _MS)  # fmt: skip
+    profile = runner.profile
+    recent = profile.recent
     return CycleStats(
         last_ms=cpu.last_ns / _MS,
         min_ms=cpu.min_ns / _MS,
         max_ms=cpu.max_ns / _MS,
-        exec_ms=runner.exec_stats.mean_ns / _MS if runner is not None else 0.0,
-        overruns=runner.overruns if runner is not None else 0,
+        exec_ms=runner.exec_stats.mean_ns / _MS,
+        overruns=runner.overruns,
+        long=profile.long,
+        long_over_ms=(profile.cycle_ns + profile.margin_ns) / _MS,
+        longest=cycle_report(profile.longest) if profile.longest is not None else None,
+        last_long=cycle_report(recent[-1]) if recent else None,
+    )
+
+
+@functools.lru_cache(maxsize=4)
+def cycle_report(cycle: CycleBreakdown) -> CycleReport:
+    """``cycle`` as published (made once: the same cycle is published at every scan)."""
+    return CycleReport(
+        scan=cycle.scan,
+        at_ms=cycle.at_ns // 1_000_000,
+        cycle_ms=cycle.cycle_ns / _MS,
+        overrun=cycle.overrun,
+        parts=cycle.parts_ms(),
     )
 
 

@@ -11,6 +11,7 @@ import html
 import time
 from collections.abc import Iterable
 
+from s7graph.engine.profile import describe as describe_cycle
 from s7graph.sequencer.diagnostics import Diagnostic
 from s7graph.web.bus.protocol import (
     AlarmEntry,
@@ -19,6 +20,7 @@ from s7graph.web.bus.protocol import (
     AuditEntry,
     ChartLayout,
     Contact,
+    CycleReport,
     CycleStats,
     ForceList,
     StepDetail,
@@ -31,6 +33,7 @@ __all__ = [
     "audit_html",
     "banner_html",
     "clip",
+    "cycle_lines",
     "describe",
     "detail_html",
     "diagnostic_button",
@@ -161,7 +164,9 @@ def status_html(
         f"active: {html.escape(active)}",
     ]
     if stats is not None and stats.max_ms > 0:
-        parts.append(f"cycle time {stats.last_ms:.1f} ms (max {stats.max_ms:.1f})")
+        shown = f"cycle time {stats.last_ms:.1f} ms (max {stats.max_ms:.1f})"
+        tip = "\n".join(cycle_lines(stats))
+        parts.append(f'<span title="{html.escape(tip)}">{shown}</span>' if tip else shown)
     bad = sorted(set(update.disturbed) | set(update.latched))
     if bad:
         errors = ", ".join(f"S{n}" for n in bad)
@@ -177,6 +182,25 @@ def status_html(
     if cpu_state != "RUN":
         parts.insert(0, f'<b style="color:#c00">{html.escape(cpu_state)}</b>')
     return f'<div style="font-size:0.85em">{mark}{" · ".join(parts)}</div>'
+
+
+def cycle_lines(stats: CycleStats) -> list[str]:
+    """Where the longest and the last long cycle went (``engine.profile``), one line each;
+    none before the runner has measured a cycle."""
+    lines = []
+    if stats.longest is not None:
+        lines.append(f"longest: {_cycle_line(stats.longest)}")
+    if stats.last_long is not None:
+        many = f"{stats.long} so far" if stats.long != 1 else "1 so far"
+        lines.append(f"last over {stats.long_over_ms:.1f} ms ({many}): "
+                     f"{_cycle_line(stats.last_long)}")  # fmt: skip
+    return lines
+
+
+def _cycle_line(report: CycleReport) -> str:
+    at = time.strftime("%H:%M:%S", time.localtime(report.at_ms / 1000))
+    over = ", overran" if report.overrun else ""
+    return f"cycle {report.scan} at {at}{over}, {describe_cycle(report.cycle_ms, report.parts)}"
 
 
 def force_mark(forces: int) -> str:
