@@ -282,7 +282,7 @@ def _plain(var: Var) -> bool:
     )
 
 
-_PLAIN = frozenset((bool, int, float, str, type(None)))
+_AS_IS = frozenset((bool, int, float, str, type(None)))
 """Value types a snapshot takes as they are (what ``_encode`` would return unchanged)."""
 
 
@@ -375,7 +375,7 @@ class InstanceDB:
         out: dict[str, object] = {}
         for var in self.fb.stored:
             value = values[var.name]
-            out[var.name] = value if type(value) in _PLAIN else _encode(var, value)
+            out[var.name] = value if type(value) in _AS_IS else _encode(var, value)
         return out
 
     def encode(self, var: Var) -> object:

@@ -191,16 +191,15 @@ def cycle_lines(stats: CycleStats) -> list[str]:
     if stats.longest is not None:
         lines.append(f"longest: {_cycle_line(stats.longest)}")
     if stats.last_long is not None:
-        many = f"{stats.long} so far" if stats.long != 1 else "1 so far"
-        lines.append(f"last over {stats.long_over_ms:.1f} ms ({many}): "
+        lines.append(f"last over {stats.long_over_ms:.1f} ms ({stats.long} so far): "
                      f"{_cycle_line(stats.last_long)}")  # fmt: skip
     return lines
 
 
 def _cycle_line(report: CycleReport) -> str:
-    at = time.strftime("%H:%M:%S", time.localtime(report.at_ms / 1000))
     over = ", overran" if report.overrun else ""
-    return f"cycle {report.scan} at {at}{over}, {describe_cycle(report.cycle_ms, report.parts)}"
+    parts = describe_cycle(report.cycle_ms, report.parts)
+    return f"cycle {report.scan} at {clock(report.at_ms)}{over}, {parts}"
 
 
 def force_mark(forces: int) -> str:
