@@ -454,10 +454,8 @@ class Memory:
         return {
             "markers": _b64(self.markers),
             "outputs": _b64(self.outputs),
-            "timers": {str(i): _cell(c) for i, c in enumerate(self.timers) if _busy_timer(c)},
-            "counters": {
-                str(i): _cell(c) for i, c in enumerate(self.counters) if _busy_counter(c)
-            },
+            "timers": {str(i): _cell(self.timers[i]) for i in _busy_timers(self.timers)},
+            "counters": {str(i): _cell(self.counters[i]) for i in _busy_counters(self.counters)},
         }
 
     def restore_hot(self, data: dict[str, Any]) -> None:
@@ -493,12 +491,20 @@ def _name(area: Area | str, byte: int, bit: int, db: int | None) -> str:
     return f"DB{db}.DBX{byte}.{bit}" if db is not None else f"{area}{byte}.{bit}"
 
 
-def _busy_timer(c: S5Timer) -> bool:
-    return bool(c.running or c.q or c.value_ms or c.s_edge or c.fr_edge or c.mode)
+def _busy_timers(cells: Sequence[S5Timer]) -> list[int]:
+    """The timer cells not at rest (one loop without a call per cell: runs every scan)."""
+    return [
+        i for i, c in enumerate(cells)
+        if c.running or c.q or c.value_ms or c.s_edge or c.fr_edge or c.mode
+    ]  # fmt: skip
 
 
-def _busy_counter(c: S5Counter) -> bool:
-    return bool(c.value or c.q or c.cu_edge or c.cd_edge or c.s_edge or c.r_edge or c.fr_edge)
+def _busy_counters(cells: Sequence[S5Counter]) -> list[int]:
+    """The counter cells not at rest."""
+    return [
+        i for i, c in enumerate(cells)
+        if c.value or c.q or c.cu_edge or c.cd_edge or c.s_edge or c.r_edge or c.fr_edge
+    ]  # fmt: skip
 
 
 def _within(keep: range, cells: Sequence[S5Timer | S5Counter]) -> range:

@@ -71,6 +71,7 @@ from s7graph.engine.watchdog import CycleStatistics
 from s7graph.engine.writer import DurableCallback, StoreWriter
 
 __all__ = [
+    "COMM_LOAD_PCT",
     "EXIT_HUNG",
     "GRACE_S",
     "RT_PRIORITY",
@@ -88,6 +89,10 @@ EXIT_HUNG = 3
 _ABORT_SIGNAL = signal.SIGUSR2
 RT_PRIORITY = 40
 """The scan thread's ``SCHED_FIFO`` priority (1-98) when the system allows real-time."""
+COMM_LOAD_PCT = 20
+"""The share of the cycle time the edge may spend on commands at each scan boundary, in
+per cent: S7's "scan cycle load from communication" (HW Config, Cycle/Clock Memory; 20 by
+default). Commands beyond it wait for the next boundary."""
 
 
 HELPERS_BELOW = 10
@@ -211,7 +216,8 @@ class Runner:
 
     ``end_on_stop``: end the loop when the CPU goes to STOP by itself (a block error, a
     time error, an abort); ``stopped`` then holds the reason. A write error of the state
-    file always ends it (``write_error``), with the CPU in STOP."""
+    file always ends it (``write_error``), with the CPU in STOP. ``comm_load_pct``: the
+    share of the cycle the edge's commands may take at a boundary (``comm_budget_ns``)."""
 
     def __init__(
         self,
@@ -225,9 +231,12 @@ class Runner:
         on_stop: Callable[[str], object] | None = None,
         idle_gc: bool = True,
         rt_priority: int | None = RT_PRIORITY,
+        comm_load_pct: float = COMM_LOAD_PCT,
     ) -> None:
         if cycle_ms <= 0:
             raise ValueError("cycle time must be positive")
+        if not 1 <= comm_load_pct <= 100:
+            raise ValueError("the communication load must be 1-100 % of the cycle")
         if rt_priority is not None and not 1 <= rt_priority <= 98:
             raise ValueError("real-time priority must be 1..98 (None: normal scheduling)")
         self.cpu = cpu
@@ -251,6 +260,9 @@ class Runner:
         """Why the CPU went to STOP by itself while running (one line), else empty."""
         self.write_error: StateWriteError | None = None
         self.rt_priority = rt_priority
+        self.comm_load_pct = comm_load_pct
+        self.comm_budget_ns = int(self.cycle_s * 1e9 * comm_load_pct / 100)
+        """What one scan boundary may spend on commands (``COMM_LOAD_PCT``)."""
         self.realtime = False
         """Whether the scan thread runs real-time (while ``run`` runs)."""
         self.gc: IdleGc | None = IdleGc() if idle_gc else None

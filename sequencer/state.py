@@ -251,6 +251,9 @@ class GraphState:
         if sorted(active) != [i for i in range(n) if st.x[i]]:
             raise ValueError("'active' and 'x' disagree")
         st.active = [int(i) for i in active]
+        # The event bits of the last call are cleared by the next, as without the restart
+        # (``ev_steps`` says which): left set, an S1 action would run again in every call.
+        st.ev_steps = [i for i, e in enumerate(st.ev) if e]
         for name in ("inputs", "prev", "outputs", "vars", "display"):
             value = data.get(name, {})
             if not isinstance(value, dict):

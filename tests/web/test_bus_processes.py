@@ -84,7 +84,8 @@ def run(*args: str, env: dict[str, str] | None = None) -> subprocess.CompletedPr
 
 @pytest.fixture
 def bus(tmp_path: Path) -> Iterator[tuple[str, Path, Path]]:
-    """A router and two CPUs on it: line1 with a users file, line2 the demo."""
+    """A router and two CPUs on it: line1 with a users file (and a quarter of the cycle for
+    commands), line2 the demo."""
     users = UsersFile(tmp_path / "users.json")
     users.add("olga", "operator", PASSWORD)
     users.add("vic", "viewer", PASSWORD)
@@ -93,7 +94,8 @@ def bus(tmp_path: Path) -> Iterator[tuple[str, Path, Path]]:
     try:
         procs[0].wait_for("router on")
         chart = [str(DRILL / "drill.s7g"), "--symbols", str(DRILL / "symbols.txt")]
-        for cpu, extra in (("line1", ["--users", str(users.path)]), ("line2", [])):
+        line1 = ["--users", str(users.path), "--comm-load", "25"]
+        for cpu, extra in (("line1", line1), ("line2", [])):
             procs.append(Proc(
                 "run", *chart, "--cpu", cpu, "--connect", endpoint, "--duration-s", "200",
                 "--max-cycle-ms", "5000",  # the bus is tested, not a loaded CI's time errors
@@ -153,6 +155,9 @@ def test_router_two_cpus_one_web_view_and_shell_commands_as_processes(
                         r"on average; \d+ overruns; \d+ over 12.0 ms$", cycle), cycle
         assert re.match(r"longest: cycle \d+ at \d\d:\d\d:\d\d(, overran)?, [\d.]+ ms: scan ",
                         longest), longest  # fmt: skip
+        assert status.stdout.splitlines()[-1].startswith(
+            "communication: up to 25 % of the cycle at each scan boundary; "
+        )
         absent = run("status", "--cpu", "line9", "--connect", endpoint)
         assert absent.returncode == 2 and "CPU 'line9' does not answer" in absent.stderr
     finally:

@@ -28,6 +28,18 @@ def test_the_status_carries_the_longest_and_the_last_long_cycle_with_their_phase
     assert lines[2].startswith("longest: cycle 4 at ") and ", overran, " in lines[2]
     assert "edge 3" in lines[2]  # 30 ms and more after the scan
     assert lines[3].startswith(f"last over 12.0 ms ({stats.long} so far): cycle ")
+    assert lines[4] == "communication: up to 20 % of the cycle at each scan boundary; never ran out"
+
+
+def test_the_status_says_how_often_the_share_for_communication_ran_out() -> None:
+    runner = runner_with({})
+    runner.run(duration_s=0.05)
+    stats = decode(encode(cycle_stats(runner.cpu.stats, runner, comm_limited=3)), CycleStats)
+    assert stats.comm_load == 20 and stats.comm_limited == 3
+    assert status_lines(CpuStatus(cpu="cpu1", stats=stats))[-1] == (
+        "communication: up to 20 % of the cycle at each scan boundary; ran out at 3 scan "
+        "boundaries (the commands left waited for the next)"
+    )
 
 
 def test_before_a_cycle_is_measured_the_status_says_so() -> None:

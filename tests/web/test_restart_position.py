@@ -145,6 +145,24 @@ def test_hot_restart_resumes_steps_times_faults_and_messages_as_persisted(tmp_pa
     assert _steps(again.state, again) == [2] and again.state.sv_err[1]
 
 
+def test_hot_restart_in_the_scan_a_step_began_runs_its_s1_action_once(tmp_path: Path) -> None:
+    """Killed right after the scan that entered S5 "Dwell" (``S1 N pieces := pieces + 1``):
+    that scan's event bits are on disk, and the first call after the restart clears them
+    as it would have without the kill — the piece is counted once, not in every call."""
+    plant = demo_plant()
+    drill = Drill(tmp_path / "drill.sqlite", plant, restart="hot")
+    drill.until(lambda d: d.state.x[4])
+    assert drill.session.graph.state.vars["pieces"] == 1
+    assert drill.persisted().ev[4]  # the S1 event of the last call, as persisted
+    drill.kill()
+
+    again = Drill(tmp_path / "drill.sqlite", plant, restart="hot")
+    assert _steps(again.state, again) == [5]
+    again.run(300)  # still dwelling (500 ms)
+    assert _steps(again.state, again) == [5]
+    assert again.state.vars["pieces"] == 1 and not again.state.ev[4]
+
+
 def test_warm_restart_writes_the_position_first_and_acknowledges_nothing(tmp_path: Path) -> None:
     drill, plant = _faulted(tmp_path)
     drill.kill()

@@ -350,7 +350,8 @@ class CycleStats(_Msg, frozen=True, kw_only=True):
     """The CPU's cycle statistics in ms: cycle time (OB1 start to OB1 start: last, min,
     max), mean scan execution time, how many cycles overran the set cycle time, how many
     ran long (over ``long_over_ms``), and the breakdowns of the longest and the last long
-    cycle."""
+    cycle; the share of the cycle commands may take at a scan boundary (``comm_load``, per
+    cent; 0: not limited) and at how many boundaries it ran out with commands waiting."""
 
     last_ms: Millis = 0.0
     min_ms: Millis = 0.0
@@ -361,6 +362,8 @@ class CycleStats(_Msg, frozen=True, kw_only=True):
     long_over_ms: Millis = 0.0
     longest: CycleReport | None = None
     last_long: CycleReport | None = None
+    comm_load: Annotated[float, Meta(ge=0, le=100)] = 0.0
+    comm_limited: Count = 0
 
 
 class CpuStatus(_Msg, frozen=True, kw_only=True):

@@ -332,6 +332,8 @@ class BusPublisher:
         self._max_age_ns = int(max_age_s * 1e9)
         self._within_ns = int(reply_within_s * 1e9)
         self._awaiting: collections.deque[_Awaiting] = collections.deque()
+        self.comm_limited = 0
+        """Scan boundaries whose share for communication ran out with commands waiting."""
         self._status = CpuStatus(
             cpu=cpu, fbs=list(self._charts), login="demo" if self.gate.auth.demo else "users"
         )
@@ -482,18 +484,28 @@ class BusPublisher:
             except queue.Empty:
                 return drained
             if now - p.received_ns > self._max_age_ns:
-                p.resolve(False, "expired before the scan boundary")
-                self.gate.refuse(p.command, "expired before the scan boundary")
+                self._expire(p)
             else:
                 drained.append(p)
 
     def apply_commands(
-        self, apply: Apply, *, cycle: int | None = None, durable: Durability | None = None
+        self,
+        apply: Apply,
+        *,
+        cycle: int | None = None,
+        durable: Durability | None = None,
+        until_ns: int | None = None,
     ) -> int:
-        """Drain the pending commands and pass each through the gate: who sent it, may
+        """Take the pending commands and pass each through the gate: who sent it, may
         their role, then ``apply(command) -> (applied, reason[, detail])`` as that user,
         then the audit row. An exception from ``apply`` refuses that command. Returns how
         many were handled.
+
+        ``until_ns`` (``time.perf_counter_ns``): the end of this boundary's share of the
+        cycle for communication (``engine.runner.COMM_LOAD_PCT``). Once it is past, the
+        commands still waiting stay queued for the next boundary, in order, and
+        ``comm_limited`` counts the boundary; one command is always handled, so a flood
+        slows the answers, never the scan, and never stops them.
 
         With ``durable`` (the runner) the replies wait, off the scan thread, until what
         was applied so far — these commands' effects and audit rows — is on disk
@@ -501,21 +513,38 @@ class BusPublisher:
         once. Commands still unconfirmed ``REPLY_WITHIN_S`` after they came are answered
         here as not confirmed."""
         self._answer_overdue()
-        pending = self.drain_commands()
-        if not pending:
-            return 0
         results = []
-        for p in pending:
+        taken = 0
+        now = time.monotonic_ns()
+        while True:
+            if taken and until_ns is not None and time.perf_counter_ns() >= until_ns:
+                if not self._commands.empty():
+                    self.comm_limited += 1
+                break
+            try:
+                p = self._commands.get_nowait()
+            except queue.Empty:
+                break
+            taken += 1
+            if now - p.received_ns > self._max_age_ns:
+                self._expire(p)
+                continue
             applied, reason = self.gate.apply(p.command, apply, cycle=cycle)
             results.append((p, applied, reason))
+        if not results:
+            return 0
         if durable is None:
             for p, applied, reason in results:
                 p.resolve(applied, reason, cycle=cycle)
-            return len(pending)
+            return len(results)
         waiting = _Awaiting(results, cycle, self._within_ns)
         self._awaiting.append(waiting)
         durable.when_durable(durable.durable_mark(), waiting.durable)
-        return len(pending)
+        return len(results)
+
+    def _expire(self, p: PendingCommand) -> None:
+        p.resolve(False, "expired before the scan boundary")
+        self.gate.refuse(p.command, "expired before the scan boundary")
 
     def _answer_overdue(self) -> None:
         now = time.monotonic_ns()

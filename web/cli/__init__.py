@@ -20,6 +20,7 @@ if TYPE_CHECKING:
 
 from s7graph import __version__
 from s7graph.engine.errors import S7Error
+from s7graph.engine.runner import COMM_LOAD_PCT
 
 app = typer.Typer(
     add_completion=False,
@@ -194,6 +195,16 @@ def run(
             "rtprio limit), else normal.",
         ),
     ] = None,
+    comm_load: Annotated[
+        float,
+        typer.Option(
+            min=1,
+            max=100,
+            help="Scan cycle load from communication, % (charts): the share of the cycle "
+            "commands may take at each scan boundary; the rest wait for the next. S7's "
+            "default: 20.",
+        ),
+    ] = COMM_LOAD_PCT,
 ) -> None:
     """Run a program or a chart on the system clock until Ctrl-C."""
     priority = _scan_priority(rt_priority)
@@ -226,6 +237,7 @@ def run(
                 restart=restart or "warm",
                 fresh=fresh,
                 rt_priority=priority,
+                comm_load_pct=comm_load,
             )
         )
     from s7graph.web.cli.run_program import run_program

@@ -31,7 +31,7 @@ from s7graph.engine.errors import S7Error, ScanAborted
 from s7graph.engine.modes import CpuMode
 from s7graph.engine.persistence import StateFileError, StateStore
 from s7graph.engine.record import ScanRecord
-from s7graph.engine.runner import RT_PRIORITY, Runner, keep_small_pages
+from s7graph.engine.runner import COMM_LOAD_PCT, RT_PRIORITY, Runner, keep_small_pages
 from s7graph.engine.watchdog import Watchdog
 from s7graph.sfb.alarms import message_list
 from s7graph.web.cli.report import fail
@@ -68,6 +68,7 @@ def run_chart(
     view_in_process: bool = False,
     session: ChartSession | None = None,
     rt_priority: int | None = RT_PRIORITY,
+    comm_load_pct: float = COMM_LOAD_PCT,
 ) -> int:
     """Run ``path`` until Ctrl-C/SIGTERM/``duration_s``; 0 clean, 1 plant error, STOP by
     error or state not written, 2 bad chart or a state file it cannot trust.
@@ -80,7 +81,8 @@ def run_chart(
     (``--restart``); ``fresh``: keep the old state file aside and start anew (``--fresh``).
     ``view_in_process``: serve the view in this process (the benchmark's comparison);
     ``session``: ``path`` already loaded, on the system clock (the benchmark's).
-    ``rt_priority``: the scan thread's real-time priority (None: normal scheduling)."""
+    ``rt_priority``: the scan thread's real-time priority (None: normal scheduling).
+    ``comm_load_pct``: the share of the cycle commands may take at a scan boundary."""
     if rt_priority is not None:
         keep_small_pages()  # before the view starts: it inherits it
     clock = SystemClock() if session is None else session.clock
@@ -143,7 +145,7 @@ def run_chart(
             live.close()
 
     runner = Runner(cpu, cycle_ms=cycle_ms, store=store, on_record=on_record, end_on_stop=not web,
-                    rt_priority=rt_priority)  # fmt: skip
+                    rt_priority=rt_priority, comm_load_pct=comm_load_pct)  # fmt: skip
     if live is not None and live.online is not None:
         live.online.durability = runner  # a download is applied once its state is on disk
     if view is not None:

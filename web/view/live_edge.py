@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -38,9 +39,12 @@ __all__ = ["LiveEdge", "cycle_report", "cycle_stats"]
 _MS = 1e6
 
 
-def cycle_stats(cpu: CycleStatistics, runner: Runner | None = None) -> CycleStats:
+def cycle_stats(
+    cpu: CycleStatistics, runner: Runner | None = None, comm_limited: int = 0
+) -> CycleStats:
     """The published statistics: the CPU's cycle time, the runner's execution time, its
-    overruns and long cycles with the breakdowns of the longest and the last long one."""
+    overruns and long cycles with the breakdowns of the longest and the last long one, its
+    share for communication and how often that ran out (``comm_limited``)."""
     if runner is None:
         return CycleStats(last_ms=cpu.last_ns / _MS, min_ms=cpu.min_ns / _MS,
                           max_ms=cpu.max_ns / _MS)  # fmt: skip
@@ -56,6 +60,8 @@ def cycle_stats(cpu: CycleStatistics, runner: Runner | None = None) -> CycleStat
         long_over_ms=(profile.cycle_ns + profile.margin_ns) / _MS,
         longest=cycle_report(profile.longest) if profile.longest is not None else None,
         last_long=cycle_report(recent[-1]) if recent else None,
+        comm_load=runner.comm_load_pct,
+        comm_limited=comm_limited,
     )
 
 
@@ -137,7 +143,9 @@ class LiveEdge:
         stats: CycleStatistics | None = None,
         runner: Runner | None = None,
     ) -> StepStateUpdate:
-        """Publish the scan ``record`` and apply the pending commands (call in the scan thread)."""
+        """Publish the scan ``record`` and apply the pending commands (call in the scan
+        thread); with ``runner``, within its share of the cycle for communication."""
+        until_ns = time.perf_counter_ns() + runner.comm_budget_ns if runner is not None else None
         update = self.live.update(record)
         if self.recorder is not None and record.mode is CpuMode.RUN:
             self.recorder.record(update)
@@ -149,12 +157,14 @@ class LiveEdge:
             self._cpu_state = state
             publisher.set_cpu_state(state)
         if stats is not None:
-            publisher.set_cycle_stats(cycle_stats(stats, runner))
+            publisher.set_cycle_stats(cycle_stats(stats, runner, publisher.comm_limited))
         publisher.publish(self.live.fb, update)
         alarms = self.live.alarms_changed()
         if alarms is not None:
             publisher.publish_alarms(alarms)
-        publisher.apply_commands(self.apply, cycle=record.cycle, durable=runner)
+        publisher.apply_commands(
+            self.apply, cycle=record.cycle, durable=runner, until_ns=until_ns
+        )
         if self.forcing is not None:
             forces = self.forcing.changed()
             if forces is not None:

@@ -185,15 +185,30 @@ def status_html(
 
 
 def cycle_lines(stats: CycleStats) -> list[str]:
-    """Where the longest and the last long cycle went (``engine.profile``), one line each;
-    none before the runner has measured a cycle."""
+    """Where the longest and the last long cycle went (``engine.profile``), one line each,
+    none before the runner has measured a cycle; then the share for communication."""
     lines = []
     if stats.longest is not None:
         lines.append(f"longest: {_cycle_line(stats.longest)}")
     if stats.last_long is not None:
         lines.append(f"last over {stats.long_over_ms:.1f} ms ({stats.long} so far): "
                      f"{_cycle_line(stats.last_long)}")  # fmt: skip
+    if stats.comm_load:
+        lines.append(comm_line(stats))
     return lines
+
+
+def comm_line(stats: CycleStats) -> str:
+    """The share of the cycle commands may take, and how often it ran out."""
+    n = stats.comm_limited
+    ran_out = (
+        f"ran out at {n} scan boundar{'ies' if n != 1 else 'y'} "
+        "(the commands left waited for the next)"
+        if n
+        else "never ran out"
+    )
+    share = f"up to {stats.comm_load:g} % of the cycle at each scan boundary"
+    return f"communication: {share}; {ran_out}"
 
 
 def _cycle_line(report: CycleReport) -> str:

@@ -1,0 +1,103 @@
+"""Scan cycle load from communication (S7 HW Config, Cycle/Clock Memory: 20 % by default):
+the commands applied at one scan boundary take at most that share of the cycle, the rest
+wait for the next boundary in order (web/bus/zenoh_bus.py ``apply_commands(until_ns=...)``,
+engine/runner.py ``COMM_LOAD_PCT``). A real zenoh bus on a unix socket."""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from s7graph.engine.clock import VirtualClock
+from s7graph.engine.cpu import Cpu
+from s7graph.engine.runner import COMM_LOAD_PCT, Runner
+from s7graph.web.bus.protocol import Command, CommandReply
+from s7graph.web.bus.zenoh_bus import BusClient, BusPublisher, open_session
+from tests.web.helpers import wait_until
+from tests.web.test_bus import layout
+
+pytestmark = pytest.mark.timeout(30)
+
+
+@pytest.fixture
+def bus(tmp_path: Path) -> Iterator[tuple[BusPublisher, BusClient]]:
+    endpoint = f"unixsock-stream/{tmp_path}/bus.sock"
+    with open_session(listen=[endpoint]) as cpu, open_session(connect=[endpoint]) as view:
+        publisher = BusPublisher(cpu, "cpu1", {"FILL": layout()})
+        client = BusClient(view, "cpu1")
+        try:
+            assert wait_until(lambda: client.chart("FILL") is not None, 5.0, poll=0.02)
+            yield publisher, client
+        finally:
+            client.close()
+            publisher.close()
+
+
+def _send_steps(
+    client: BusClient, steps: range
+) -> tuple[list[threading.Thread], list[CommandReply]]:
+    login = client.login("bob")
+    assert login.ok, login.reason
+    replies: list[CommandReply] = []
+    threads = [
+        threading.Thread(target=lambda n=n: replies.append(client.send(Command(
+            op="step_on", fb="FILL", user="bob", token=login.token, args={"step": n}))))
+        for n in steps
+    ]  # fmt: skip
+    for t in threads:
+        t.start()
+    return threads, replies
+
+
+def test_commands_beyond_the_share_of_the_cycle_wait_for_the_next_boundary_in_order(
+    bus: tuple[BusPublisher, BusClient],
+) -> None:
+    publisher, client = bus
+    threads, replies = _send_steps(client, range(1, 6))
+    assert wait_until(lambda: publisher._commands.qsize() == 5, 5.0, poll=0.01)
+    order = [p.command.step for p in list(publisher._commands.queue)]
+    applied: list[int | None] = []
+
+    def apply(command: Command) -> tuple[bool, str]:
+        applied.append(command.step)
+        return True, ""
+
+    spent = time.perf_counter_ns()  # the share is used up before the first command
+    assert publisher.apply_commands(apply, cycle=1, until_ns=spent) == 1
+    assert applied == order[:1] and publisher.comm_limited == 1
+    assert publisher.apply_commands(apply, cycle=2, until_ns=spent) == 1
+    assert publisher.comm_limited == 2
+    assert publisher.apply_commands(apply, cycle=3) == 3  # no limit: the rest at once
+    assert applied == order and publisher.comm_limited == 2
+    for t in threads:
+        t.join(5)
+    assert sorted(r.cycle for r in replies) == [1, 2, 3, 3, 3]
+    assert all(r.applied for r in replies)
+
+
+def test_a_boundary_within_its_share_takes_every_command_and_counts_nothing(
+    bus: tuple[BusPublisher, BusClient],
+) -> None:
+    publisher, client = bus
+    threads, replies = _send_steps(client, range(1, 4))
+    assert wait_until(lambda: publisher._commands.qsize() == 3, 5.0, poll=0.01)
+    later = time.perf_counter_ns() + 10_000_000_000
+    assert publisher.apply_commands(lambda c: (True, ""), cycle=7, until_ns=later) == 3
+    assert publisher.comm_limited == 0
+    for t in threads:
+        t.join(5)
+    assert [r.cycle for r in replies] == [7, 7, 7]
+
+
+def test_the_runner_gives_communication_its_share_of_the_cycle_time() -> None:
+    cpu = Cpu(VirtualClock())
+    assert COMM_LOAD_PCT == 20  # S7's default
+    assert Runner(cpu, cycle_ms=10).comm_budget_ns == 2_000_000
+    assert Runner(cpu, cycle_ms=100, comm_load_pct=50).comm_budget_ns == 50_000_000
+    for wrong in (0, 101):
+        with pytest.raises(ValueError, match="communication load must be 1-100 %"):
+            Runner(cpu, comm_load_pct=wrong)
