@@ -96,6 +96,8 @@ _NOT_KEPT = {"program download", "no hot restart image saved"}
 _BUSY = (5, 6)  # SQLITE_BUSY, SQLITE_LOCKED: another connection holds the lock
 _OURS = {"meta", "instances", "diagnostics", "alarms", "parts", "audit"}
 _APPENDABLE = {"alarms", "audit"}
+_APPENDED: set[tuple[str, tuple[str, ...]]] = set()
+"""(table, columns) pairs ``append`` has checked."""
 _ALARM_COLUMNS = ("t_ns", "key", "state", "text", "user", "cpu_ns", "reason")
 _ADDED_ALARM_COLUMNS = (
     ("user", "TEXT NOT NULL DEFAULT ''"),
@@ -642,8 +644,10 @@ class StateStore:
         """Queue one row of an append-only table (``audit``, ``alarms``) to commit with the
         next scan's state — in the same transaction, so a durable mark covers it. False
         (nothing queued) when no writer defers the rows: the caller writes it itself."""
-        if table not in _APPENDABLE or not all(c.isidentifier() for c in columns):
-            raise ValueError(f"cannot append to {table}({', '.join(columns)})")
+        if (table, columns) not in _APPENDED:  # checked once: a flood appends a row a command
+            if table not in _APPENDABLE or not all(c.isidentifier() for c in columns):
+                raise ValueError(f"cannot append to {table}({', '.join(columns)})")
+            _APPENDED.add((table, columns))
         if len(columns) != len(values):
             raise ValueError(f"{len(columns)} columns, {len(values)} values")
         with self._lock:

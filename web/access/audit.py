@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import operator
 import sqlite3
 import threading
 from collections.abc import Iterable, Mapping
@@ -149,6 +150,9 @@ def _audit_rows(
 _INSERT_COLUMNS: Final = (
     "id", "t_ns", "user", "role", "origin", "action", "fb", "args", "outcome", "reason", "detail"
 )  # fmt: skip
+_ROW: Final = operator.attrgetter(*(f.name for f in dataclasses.fields(AuditRecord)))
+"""An ``AuditRecord`` as the row of ``_INSERT_COLUMNS`` (``dataclasses.astuple`` deep-copies
+every field: 80 µs a command at the scan boundary, against 1)."""
 
 
 class AuditStore:
@@ -178,7 +182,7 @@ class AuditStore:
         with self._lock:
             self._last_id += 1
             rec = facts.at(self._last_id, t_ns)
-            values = dataclasses.astuple(rec)
+            values = _ROW(rec)
             if self.state is None or not self.state.append("audit", _INSERT_COLUMNS, values):
                 marks = ", ".join("?" * len(values))
                 self._db.execute(
