@@ -151,8 +151,8 @@ _INSERT_COLUMNS: Final = (
     "id", "t_ns", "user", "role", "origin", "action", "fb", "args", "outcome", "reason", "detail"
 )  # fmt: skip
 _ROW: Final = operator.attrgetter(*(f.name for f in dataclasses.fields(AuditRecord)))
-"""An ``AuditRecord`` as the row of ``_INSERT_COLUMNS`` (``dataclasses.astuple`` deep-copies
-every field: 80 µs a command at the scan boundary, against 1)."""
+"""An ``AuditRecord`` as the row of ``_INSERT_COLUMNS``: ``dataclasses.astuple`` deep-copies
+every field, half of what a command cost at the scan boundary (65 → 34 µs)."""
 
 
 class AuditStore:
