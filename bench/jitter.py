@@ -94,6 +94,7 @@ def worker(workload: str, view: str, endpoint: str, port: int, state: Path) -> i
     from s7graph.engine.cpu import Cpu
     from s7graph.engine.profile import PHASE_NAMES
     from s7graph.engine.runner import Runner
+    from s7graph.web.bus.zenoh_bus import BusPublisher
     from s7graph.web.cli.net import NetOptions
     from s7graph.web.cli.run_chart import run_chart
 
@@ -117,11 +118,21 @@ def worker(workload: str, view: str, endpoint: str, port: int, state: Path) -> i
         self.profile.recent = collections.deque(maxlen=100_000)  # every long cycle
         run(self, **kw)
 
+    publishers: list[BusPublisher] = []
+    publish = BusPublisher.publish
+
+    def kept_publish(self: BusPublisher, *args: Any) -> bool:
+        if not publishers:
+            publishers.append(self)
+        return publish(self, *args)
+
     Cpu.scan = stamped_scan  # type: ignore[method-assign]
     Runner.run = kept_run  # type: ignore[method-assign]
+    BusPublisher.publish = kept_publish  # type: ignore[method-assign]
     marks: dict[str, tuple[int, int]] = {}
 
     faults: dict[str, int] = {}
+    comm: dict[str, int] = {}  # the bus's count of boundaries whose share ran out, at a mark
 
     def control() -> None:
         for line in sys.stdin:
@@ -129,6 +140,7 @@ def worker(workload: str, view: str, endpoint: str, port: int, state: Path) -> i
             overruns = runners[0].overruns if runners else 0
             marks[word] = (len(ends), overruns)
             faults[word] = resource.getrusage(resource.RUSAGE_SELF).ru_majflt
+            comm[word] = publishers[0].comm_limited if publishers else 0
             if word == "end" and runners:
                 runners[0].request_stop()
 
@@ -160,6 +172,7 @@ def worker(workload: str, view: str, endpoint: str, port: int, state: Path) -> i
     result = {"rc": rc, "cycles": cycles, "scans": scans, "overruns": over_b - over_a,
               "stopped": stopped, "majflt": majflt, "starts": starts[a:b],
               "overran": overran, "long": long,
+              "comm_limited": comm.get("end", 0) - comm.get("start", 0),
               "means": {name: runners[0].profile.mean_ns(name) / 1e6 for name in PHASE_NAMES}
               if runners else {}}  # fmt: skip
     print(RESULT + json.dumps(result), flush=True)
@@ -564,8 +577,9 @@ def main(argv: list[str] | None = None) -> int:
                           f"{f['long']:.0f}, {f['shared']:.0f} of them with the floor late "
                           f"too; without those p99.9 {f['own_p999']:.2f} max "
                           f"{f['own_max']:.2f} overruns {f['own_overruns']:.0f}; own long "
-                          f"cycles by cause: {_causes(why)}; mean ms {_means(result)}"
-                          f"  ({result['load']})", flush=True)  # fmt: skip
+                          f"cycles by cause: {_causes(why)}; mean ms {_means(result)}; "
+                          f"communication share ran out at {result['comm_limited']} "
+                          f"boundaries  ({result['load']})", flush=True)  # fmt: skip
     head = (f"{'workload':9} {'view':9} {'load':6} {'cycles':>6} {'p50':>17} {'p99':>17} "
             f"{'p99.9':>17} {'max':>17} {'overruns':>10} {'scan p50':>17} {'scan p99':>17} "
             f"{'load avg':>14} {'floor p99.9':>17} {'floor max':>17} {'>12 (floor)':>11} "
