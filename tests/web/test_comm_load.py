@@ -38,18 +38,21 @@ def bus(tmp_path: Path) -> Iterator[tuple[BusPublisher, BusClient]]:
 
 
 def _send_steps(
-    client: BusClient, steps: range
+    publisher: BusPublisher, client: BusClient, steps: range
 ) -> tuple[list[threading.Thread], list[CommandReply]]:
+    """One command per step number, each sent once the one before is queued (so the queue
+    holds them in this order)."""
     login = client.login("bob")
     assert login.ok, login.reason
     replies: list[CommandReply] = []
-    threads = [
-        threading.Thread(target=lambda n=n: replies.append(client.send(Command(
-            op="step_on", fb="FILL", user="bob", token=login.token, args={"step": n}))))
-        for n in steps
-    ]  # fmt: skip
-    for t in threads:
-        t.start()
+    threads = []
+    for k, n in enumerate(steps, 1):
+        command = Command(op="step_on", fb="FILL", user="bob", token=login.token,
+                          args={"step": n})  # fmt: skip
+        thread = threading.Thread(target=lambda c=command: replies.append(client.send(c)))
+        thread.start()
+        threads.append(thread)
+        assert wait_until(lambda k=k: publisher.queued == k, 5.0, poll=0.005)
     return threads, replies
 
 
@@ -57,9 +60,7 @@ def test_commands_beyond_the_share_of_the_cycle_wait_for_the_next_boundary_in_or
     bus: tuple[BusPublisher, BusClient],
 ) -> None:
     publisher, client = bus
-    threads, replies = _send_steps(client, range(1, 6))
-    assert wait_until(lambda: publisher._commands.qsize() == 5, 5.0, poll=0.01)
-    order = [p.command.step for p in list(publisher._commands.queue)]
+    threads, replies = _send_steps(publisher, client, range(1, 6))
     applied: list[int | None] = []
 
     def apply(command: Command) -> tuple[bool, str]:
@@ -68,11 +69,11 @@ def test_commands_beyond_the_share_of_the_cycle_wait_for_the_next_boundary_in_or
 
     spent = time.perf_counter_ns()  # the share is used up before the first command
     assert publisher.apply_commands(apply, cycle=1, until_ns=spent) == 1
-    assert applied == order[:1] and publisher.comm_limited == 1
+    assert applied == [1] and publisher.comm_limited == 1 and publisher.queued == 4
     assert publisher.apply_commands(apply, cycle=2, until_ns=spent) == 1
     assert publisher.comm_limited == 2
     assert publisher.apply_commands(apply, cycle=3) == 3  # no limit: the rest at once
-    assert applied == order and publisher.comm_limited == 2
+    assert applied == [1, 2, 3, 4, 5] and publisher.comm_limited == 2
     for t in threads:
         t.join(5)
     assert sorted(r.cycle for r in replies) == [1, 2, 3, 3, 3]
@@ -83,8 +84,7 @@ def test_a_boundary_within_its_share_takes_every_command_and_counts_nothing(
     bus: tuple[BusPublisher, BusClient],
 ) -> None:
     publisher, client = bus
-    threads, replies = _send_steps(client, range(1, 4))
-    assert wait_until(lambda: publisher._commands.qsize() == 3, 5.0, poll=0.01)
+    threads, replies = _send_steps(publisher, client, range(1, 4))
     later = time.perf_counter_ns() + 10_000_000_000
     assert publisher.apply_commands(lambda c: (True, ""), cycle=7, until_ns=later) == 3
     assert publisher.comm_limited == 0

@@ -471,6 +471,11 @@ class BusPublisher:
         key = self._keys.fb(fb, leaf) if fb is not None else f"{ROOT}/{self._keys.cpu}/{leaf}"
         self._serve(key, read)
 
+    @property
+    def queued(self) -> int:
+        """Commands received and not yet taken at a scan boundary."""
+        return self._commands.qsize()
+
     def drain_commands(self) -> list[PendingCommand]:
         """Every command received since the last call, oldest first (call at a scan boundary).
 
