@@ -287,6 +287,7 @@ class StateStore:
         """Each instance DB's snapshot as last staged."""
         self._shapes: dict[int, tuple[FB, str]] = {}
         self._meta_seen: dict[str, str] = {}
+        self._images_seen: dict[str, dict[str, Any]] = {}  # the memory images last staged
         self._marked_ns: int | None = None
         self._last_ns: int | None = None
         self._diag_saved = 0
@@ -362,18 +363,23 @@ class StateStore:
         batch.merge(logs)
         batch.upto = upto
         meta = {
-            "memory": _dumps(cpu.mem.snapshot()),
             "mode": str(cpu.mode),
             "last_restart": str(cpu.last_restart or ""),
             "hot_blockers": _dumps(sorted(cpu.hot_blockers - _NOT_KEPT)),
             "forces": _dumps(cpu.forces.snapshot()) if cpu.forces else "[]",
         }
-        if self.hot:
-            meta["hot_memory"] = _dumps(cpu.mem.hot_snapshot())
         for key, value in meta.items():
             if full or self._meta_seen.get(key) != value:
                 batch.meta[key] = value
         self._meta_seen.update(batch.meta)
+        images = {"memory": cpu.mem.snapshot}
+        if self.hot:
+            images["hot_memory"] = cpu.mem.hot_snapshot
+        for key, take in images.items():
+            image = take()  # strings, integers and booleans: compared as they are, dumped
+            if full or self._images_seen.get(key) != image:  # only when they changed
+                batch.meta[key] = _dumps(image)
+                self._images_seen[key] = image
         now = cpu.process_ns()
         mark = full or (
             self.time_mark_ns is not None
