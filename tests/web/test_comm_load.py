@@ -7,8 +7,6 @@ from __future__ import annotations
 
 import threading
 import time
-from collections.abc import Iterator
-from pathlib import Path
 
 import pytest
 
@@ -16,25 +14,12 @@ from s7graph.engine.clock import VirtualClock
 from s7graph.engine.cpu import Cpu
 from s7graph.engine.runner import COMM_LOAD_PCT, Runner
 from s7graph.web.bus.protocol import Command, CommandReply
-from s7graph.web.bus.zenoh_bus import BusClient, BusPublisher, open_session
+from s7graph.web.bus.zenoh_bus import BusClient, BusPublisher
+from tests.web import test_bus
 from tests.web.helpers import wait_until
-from tests.web.test_bus import layout
 
 pytestmark = pytest.mark.timeout(30)
-
-
-@pytest.fixture
-def bus(tmp_path: Path) -> Iterator[tuple[BusPublisher, BusClient]]:
-    endpoint = f"unixsock-stream/{tmp_path}/bus.sock"
-    with open_session(listen=[endpoint]) as cpu, open_session(connect=[endpoint]) as view:
-        publisher = BusPublisher(cpu, "cpu1", {"FILL": layout()})
-        client = BusClient(view, "cpu1")
-        try:
-            assert wait_until(lambda: client.chart("FILL") is not None, 5.0, poll=0.02)
-            yield publisher, client
-        finally:
-            client.close()
-            publisher.close()
+bus = test_bus.bus  # the fixture: a CPU's bus and a view's client on one unix socket
 
 
 def _send_steps(
