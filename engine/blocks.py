@@ -286,12 +286,12 @@ _AS_IS = frozenset((bool, int, float, str, type(None)))
 """Value types a snapshot takes as they are (what ``_encode`` would return unchanged)."""
 
 
-def _encode(var: Var, value: object) -> object:
+def _encode(var: Var, value: object, live: bool = False) -> object:
     if isinstance(value, InstanceDB):
-        return value.snapshot()
+        return value.snapshot(live=live)
     if var.type == OBJECT:
-        to_state = getattr(value, "to_state", None)
-        return to_state() if to_state is not None else value
+        take = (live and getattr(value, "state_view", None)) or getattr(value, "to_state", None)
+        return take() if take is not None else value
     if isinstance(value, datetime | date):
         return value.isoformat()
     if isinstance(value, list):
@@ -369,13 +369,15 @@ class InstanceDB:
     def __repr__(self) -> str:
         return f"InstanceDB({self.name} of {self.fb.label} {self.fb.name!r}: {self.values!r})"
 
-    def snapshot(self) -> dict[str, object]:
-        """A JSON-ready copy of every stored value (OBJECT via ``to_state()``)."""
+    def snapshot(self, *, live: bool = False) -> dict[str, object]:
+        """A JSON-ready copy of every stored value (OBJECT via ``to_state()``); ``live``:
+        OBJECT values through ``state_view()`` where they have one, sharing their lists —
+        to be encoded at once, never kept (the state file's staging)."""
         values = self.values
         out: dict[str, object] = {}
         for var in self.fb.stored:
             value = values[var.name]
-            out[var.name] = value if type(value) in _AS_IS else _encode(var, value)
+            out[var.name] = value if type(value) in _AS_IS else _encode(var, value, live)
         return out
 
     def encode(self, var: Var) -> object:

@@ -13,12 +13,15 @@ with what was last staged and returns a :class:`Batch` of the rows that changed 
 nothing did; ``write(batch)`` commits one batch as one transaction (in any thread: the
 runner's writer, ``engine/writer.py``). An instance DB is one row, its snapshot as
 compressed MessagePack (a 7-step chart: about 600 bytes, one page of the file's 1 KiB pages),
-so a step switch rewrites a page or two; ``stage`` only copies and compares, the writer
-encodes and compresses. MessagePack (msgspec) rather than JSON because the writer shares the
-interpreter lock with the scan: encoding 25 instances of 8 sequencers took 4 ms with
-``json.dumps``, one unbroken hold of the lock a waking scan waited behind, and takes 0.3 ms
-with msgspec, whose floats keep NaN and infinity; zlib and SQLite let go of the lock while
-they work. Rows of format 2 (compressed JSON) are still read.
+so a step switch rewrites a page or two. ``stage`` encodes each instance as it stands
+(``InstanceDB.snapshot(live=True)``: a GRAPH FB's lists are read where they are, not copied)
+and compares the bytes with those last staged; the writer only compresses. MessagePack
+(msgspec) rather than JSON because encoding shares the interpreter lock with the scan: 25
+instances of 8 sequencers took 4 ms with ``json.dumps`` and take 0.5 ms with msgspec, whose
+floats keep NaN and infinity; zlib and SQLite let go of the lock while they work. A row of
+format 4 is a MessagePack pair: the snapshot without the ``VOLATILE`` keys, then those keys
+(object name → key → value). Rows of format 3 (one MessagePack map) and of format 2
+(compressed JSON, also what a value MessagePack cannot hold is written as) are still read.
 
 Keys an OBJECT value names in its ``VOLATILE`` (a GRAPH FB's call counter and the clock
 time of its last call, which dates its running step times) are saved with every write of
@@ -68,9 +71,10 @@ __all__ = [
     "unpack_instance",
 ]
 
-FORMAT = "s7graph-state 3"
-"""The format mark in ``meta``: what this code writes (instance rows as MessagePack)."""
-READABLE = ("s7graph-state 2", FORMAT)
+FORMAT = "s7graph-state 4"
+"""The format mark in ``meta``: what this code writes (instance rows as MessagePack pairs,
+the ``VOLATILE`` keys apart)."""
+READABLE = ("s7graph-state 2", "s7graph-state 3", FORMAT)
 """Format marks this code trusts; a file of an older one is marked ``FORMAT`` when opened
 (its JSON rows stay readable, new rows are MessagePack)."""
 
@@ -158,11 +162,9 @@ class Batch:
 
     upto: int = 0
     meta: dict[str, str] = field(default_factory=dict)
-    instances: dict[int, tuple[str, str, str, str, dict[str, object]]] = field(
-        default_factory=dict
-    )
-    """DB number → (FB label, FB name, fingerprint, shape JSON, snapshot): the snapshot (a
-    copy) is encoded and compressed by ``write``, in the writer's thread."""
+    instances: dict[int, tuple[str, str, str, str, bytes]] = field(default_factory=dict)
+    """DB number → (FB label, FB name, fingerprint, shape JSON, encoded snapshot): ``write``
+    compresses it, in the writer's thread."""
     parts: dict[str, str] = field(default_factory=dict)
     diagnostics: list[tuple[int, int, int, str, str, str]] = field(default_factory=list)
     alarms: list[tuple[int, str, str, str, str, int | None, str]] = field(default_factory=list)
@@ -214,31 +216,33 @@ def _volatile(value: object) -> tuple[str, ...]:
     return tuple(names) if isinstance(names, tuple) else ()
 
 
-def _changed(
-    idb: InstanceDB, snapshot: dict[str, object], seen: dict[str, object], mark: bool
-) -> bool:
-    """Whether ``snapshot`` differs from ``seen`` (the one last staged): in anything but an
-    OBJECT's ``VOLATILE`` keys, or in those too once a time mark is due (``mark``).
-
-    The volatile keys are compared by putting the seen values into the fresh snapshot for
-    the comparison and back afterwards: no copy of either (this runs for every instance
-    DB every scan)."""
-    swapped: list[tuple[dict[str, object], str, object, object]] = []
+def _take_volatile(idb: InstanceDB, snapshot: dict[str, object]) -> dict[str, object]:
+    """Take the ``VOLATILE`` keys of each OBJECT value out of ``snapshot`` (in place):
+    object name → {key: value}."""
+    taken: dict[str, object] = {}
     for name in idb.fb.objects:
-        skip = _volatile(idb.values[name])
-        now, then = snapshot.get(name), seen.get(name)
-        if skip and isinstance(now, dict) and isinstance(then, dict):
-            for key in skip:
-                if key in now and key in then:
-                    swapped.append((now, key, now[key], then[key]))
-                    now[key] = then[key]
-    try:
-        if snapshot != seen:
-            return True
-    finally:
-        for now, key, value, _ in swapped:
-            now[key] = value
-    return mark and any(value != old for _, _, value, old in swapped)
+        value = idb.values[name]
+        keys = _volatile(value)
+        state = snapshot.get(name)
+        if not keys or not isinstance(state, dict):
+            continue
+        if state is value:  # an object without to_state: never change it
+            state = snapshot[name] = dict(state)
+        part = {key: state.pop(key) for key in keys if key in state}
+        if part:
+            taken[name] = part
+    return taken
+
+
+def _json_row(snapshot: dict[str, object], volatile: dict[str, object]) -> tuple[bytes, bytes]:
+    """(what is compared, what is stored) of a snapshot MessagePack cannot hold (an integer
+    beyond 64 bits): its JSON without the volatile keys, and with them put back."""
+    key = _dumps(snapshot).encode()
+    for name, part in volatile.items():
+        state = snapshot[name]
+        if isinstance(state, dict) and isinstance(part, dict):
+            state.update(part)
+    return key, _dumps(snapshot).encode()
 
 
 class StateStore:
@@ -283,8 +287,9 @@ class StateStore:
         self._lock: Any = _NoLock()  # a writer's lock once one is attached (use_lock)
         self._parts: dict[str, tuple[Callable[[], object], Callable[[Any], None]]] = {}
         self._part_seen: dict[str, object] = {}
-        self._seen: dict[int, dict[str, object]] = {}
-        """Each instance DB's snapshot as last staged."""
+        self._seen: dict[int, tuple[bytes, dict[str, object]]] = {}
+        """Each instance DB as last staged: its encoded snapshot without the volatile keys,
+        and those."""
         self._shapes: dict[int, tuple[FB, str]] = {}
         self._meta_seen: dict[str, str] = {}
         self._images_seen: dict[str, dict[str, Any]] = {}  # the memory images last staged
@@ -411,16 +416,27 @@ class StateStore:
         self, number: int, idb: InstanceDB, batch: Batch, full: bool, mark: bool
     ) -> None:
         fb = idb.fb
-        snapshot = idb.snapshot()
+        snapshot = idb.snapshot(live=True)  # read where it is: encoded before anything runs
+        volatile = _take_volatile(idb, snapshot)
+        row: bytes | None = None
+        try:
+            key = _PACK.encode(snapshot)
+        except (OverflowError, TypeError):
+            key, row = _json_row(snapshot, volatile)
         seen = self._seen.get(number)
-        if not full and seen is not None and not _changed(idb, snapshot, seen, mark):
-            return
-        self._seen[number] = snapshot
+        if (
+            not full and seen is not None and key == seen[0]
+            and not (mark and volatile != seen[1])
+        ):  # fmt: skip
+            return  # unchanged, or only its volatile keys and no time mark due
+        if row is None:
+            row = _PAIR + key + _PACK.encode(volatile)
+        self._seen[number] = (key, volatile)
         shape = self._shapes.get(number)
         if shape is None or shape[0] is not fb:
             fmt = fb.state_format
             shape = self._shapes[number] = (fb, _dumps(fmt.shape() if fmt is not None else None))
-        batch.instances[number] = (fb.label, fb.name, fingerprint_of(fb), shape[1], snapshot)
+        batch.instances[number] = (fb.label, fb.name, fingerprint_of(fb), shape[1], row)
 
     def diagnostic_row(self, entry: DiagEntry) -> tuple[int, int, int, str, str, str]:
         """A diagnostics row for an entry written outside ``stage`` (the runner's last word
@@ -467,7 +483,7 @@ class StateStore:
             if batch.instances:
                 db.executemany(
                     "INSERT OR REPLACE INTO instances VALUES (?, ?, ?, ?, ?, ?)",
-                    [(n, *row[:4], pack_instance(row[4])) for n, row in batch.instances.items()],
+                    [(n, *row[:4], _compress(row[4])) for n, row in batch.instances.items()],
                 )
             if batch.parts:
                 db.executemany("INSERT OR REPLACE INTO parts VALUES (?, ?)", batch.parts.items())
@@ -713,14 +729,23 @@ _PACK = msgspec.msgpack.Encoder(enc_hook=str)  # str for what it cannot encode, 
 _UNPACK = msgspec.msgpack.Decoder()
 
 
+_PAIR = b"\x92"
+"""MessagePack's header of a two-element array: a format-4 row (a map never starts so)."""
+
+
+def _compress(raw: bytes) -> bytes:
+    return zlib.compress(raw, 1)  # level 1: half the time of 6, 3 % larger (bench/README.md)
+
+
 def pack_instance(snapshot: dict[str, object]) -> bytes:
-    """An instance snapshot as it is stored: compressed MessagePack; compressed JSON for one
-    MessagePack cannot hold (an integer beyond 64 bits)."""
+    """An instance snapshot as it is stored (whole: its volatile keys inside): compressed
+    MessagePack; compressed JSON for one MessagePack cannot hold (an integer beyond 64
+    bits). ``stage`` writes the format-4 pair instead; ``unpack_instance`` reads both."""
     try:
         raw = _PACK.encode(snapshot)
     except (OverflowError, TypeError):
         raw = _dumps(snapshot).encode()
-    return zlib.compress(raw, 1)  # level 1: half the time of 6, 3 % larger (bench/README.md)
+    return _compress(raw)
 
 
 def unpack_instance(blob: object) -> dict[str, Any]:
@@ -731,8 +756,24 @@ def unpack_instance(blob: object) -> dict[str, Any]:
         raise ValueError(f"the data is {type(blob).__name__}, not a compressed snapshot")
     raw = zlib.decompress(blob)
     data = json.loads(raw) if raw[:1] == b"{" else _UNPACK.decode(raw)
+    if isinstance(data, list):
+        data = _joined(data)
     if not isinstance(data, dict):
         raise ValueError("the data is not an object")
+    return data
+
+
+def _joined(pair: list[Any]) -> dict[str, Any]:
+    """A format-4 row's snapshot with its volatile keys put back."""
+    if len(pair) != 2 or not isinstance(pair[0], dict) or not isinstance(pair[1], dict):
+        raise ValueError("the data is neither an object nor a pair of them")
+    data: dict[str, Any] = pair[0]
+    volatile: dict[str, Any] = pair[1]
+    for name, part in volatile.items():
+        state = data.get(name)
+        if not isinstance(state, dict) or not isinstance(part, dict):
+            raise ValueError(f"volatile keys of {name!r}, which holds no object state")
+        state.update(part)
     return data
 
 

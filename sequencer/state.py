@@ -185,31 +185,44 @@ class GraphState:
     def to_state(self) -> dict[str, Any]:
         """A JSON-able snapshot (running times as activation timestamps, see the module
         docstring); ``from_state`` restores it exactly."""
+        return {
+            key: list(value) if type(value) is list else dict(value) if type(value) is dict
+            else value
+            for key, value in self.state_view().items()
+        }  # fmt: skip
+
+    def state_view(self) -> dict[str, Any]:
+        """What ``to_state`` returns, but sharing this state's lists and dicts (the step
+        times aside, which it computes): to be encoded at once and never kept, since the
+        next call changes it in place. What the state file's staging reads every scan: no
+        copies of per-step lists it only encodes."""
         data: dict[str, Any] = {"n_steps": self.n_steps, "n_transitions": self.n_transitions}
         for name in _LIST_FIELDS:
-            data[name] = list(getattr(self, name))
+            data[name] = getattr(self, name)
         for name in _SCALAR_FIELDS:
             data[name] = getattr(self, name)
         last = self.last_ns
-        t_ns, u_ns = data["t_ns"], data["u_ns"]
         t_since: list[int | None] = [None] * self.n_steps
         u_since: list[int | None] = [None] * self.n_steps
-        if last >= 0 and not self.tm_halted:
+        if last >= 0 and not self.tm_halted and self.active:
+            t_ns: list[int | None] = list(self.t_ns)
+            u_ns: list[int | None] = list(self.u_ns)
+            data["t_ns"], data["u_ns"] = t_ns, u_ns
             il_err, sv_err = self.il_err, self.sv_err
             for i in self.active:
-                t_since[i], t_ns[i] = last - t_ns[i], None
+                t_since[i], t_ns[i] = last - self.t_ns[i], None
                 if not (il_err[i] or sv_err[i]):
-                    u_since[i], u_ns[i] = last - u_ns[i], None
+                    u_since[i], u_ns[i] = last - self.u_ns[i], None
         data["t_since"] = t_since
         data["u_since"] = u_since
-        data["active"] = list(self.active)
-        data["inputs"] = dict(self.inputs)
-        data["prev"] = dict(self.prev)
-        data["outputs"] = dict(self.outputs)
-        data["vars"] = dict(self.vars)
-        data["diag"] = list(self.diag)
-        data["display"] = dict(self.display)
-        data["levels"] = dict(self.levels)
+        data["active"] = self.active
+        data["inputs"] = self.inputs
+        data["prev"] = self.prev
+        data["outputs"] = self.outputs
+        data["vars"] = self.vars
+        data["diag"] = self.diag
+        data["display"] = self.display
+        data["levels"] = self.levels
         return data
 
     @classmethod

@@ -146,6 +146,11 @@ def test_an_instance_db_the_program_does_not_have_is_refused(tmp_path: Path) -> 
         (zlib.compress(msgspec.msgpack.encode({"total": "many"})), "malformed state of DB2"),
         (zlib.compress(msgspec.msgpack.encode({"total": 1})[:-1]), "malformed data of DB2"),
         (zlib.compress(msgspec.msgpack.encode([1, 2])), "malformed data of DB2"),
+        (zlib.compress(msgspec.msgpack.encode([{"total": 1}, 5])), "malformed data of DB2"),
+        (
+            zlib.compress(msgspec.msgpack.encode([{"total": 1}, {"total": {"calls": 1}}])),
+            "malformed data of DB2",
+        ),
     ],
 )
 def test_a_malformed_instance_is_refused(tmp_path: Path, data: bytes, fragment: str) -> None:
@@ -156,14 +161,23 @@ def test_a_malformed_instance_is_refused(tmp_path: Path, data: bytes, fragment: 
     assert fragment in _refused(path)
 
 
-def test_a_file_of_format_2_is_read_and_marked_with_the_current_format(tmp_path: Path) -> None:
-    """Format 2 kept instance rows as compressed JSON: they are still read, and the file is
-    marked with the format it now holds rows of (an older s7graph refuses it by name)."""
+@pytest.mark.parametrize(
+    ("mark", "row"),
+    [
+        ("s7graph-state 2", json.dumps({"total": 41}).encode()),
+        ("s7graph-state 3", msgspec.msgpack.encode({"total": 41})),
+    ],
+)
+def test_a_file_of_an_older_readable_format_is_read_and_marked_with_the_current_one(
+    tmp_path: Path, mark: str, row: bytes
+) -> None:
+    """Format 2 kept instance rows as compressed JSON, format 3 as one MessagePack map (the
+    volatile keys inside): they are still read, and the file is marked with the format it
+    now holds rows of (an older s7graph refuses it by name)."""
     path = _written(tmp_path / "s.sqlite")
     with sqlite3.connect(path) as con:
-        con.execute("UPDATE meta SET value='s7graph-state 2' WHERE key='format'")
-        con.execute("UPDATE instances SET data=? WHERE number=2",
-                    (zlib.compress(json.dumps({"total": 41}).encode()),))  # fmt: skip
+        con.execute("UPDATE meta SET value=? WHERE key='format'", (mark,))
+        con.execute("UPDATE instances SET data=? WHERE number=2", (zlib.compress(row),))
     con.close()
     store = StateStore(path)
     cpu = _cpu()

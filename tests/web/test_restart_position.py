@@ -105,6 +105,24 @@ def _faulted(tmp_path: Path, restart: str = "warm") -> tuple[Drill, LoadedPlant]
     return drill, plant
 
 
+def test_a_staged_row_holds_its_scans_state_not_a_later_ones(tmp_path: Path) -> None:
+    """Staging encodes the sequencer's lists where they are, without copying them: the row
+    written later, after more scans switched steps, still holds the staged scan's state
+    (its call counter and clock time of the last call too)."""
+    drill = Drill(tmp_path / "drill.sqlite", demo_plant())
+    drill.run(3000)
+    staged = drill.state.to_state()
+    batch = drill.store.stage(drill.cpu, full=True)
+    assert batch is not None
+    for _ in range(400):  # on, unstaged, until the sequencer moved on
+        drill.cpu.scan()
+        drill.plant.cycle(drill.session, drill.clock.now_ns() // 1_000_000, 10)
+        drill.clock.advance(10)
+    assert drill.state.active != staged["active"] and drill.state.calls != staged["calls"]
+    drill.store.write(batch)
+    assert drill.store.instance_state(1)["G7_STATE"] == staged  # type: ignore[index]
+
+
 @pytest.mark.parametrize("restart", ["warm", "hot"])
 def test_quiet_scans_write_nothing_but_a_time_mark_every_half_second(
     tmp_path: Path, restart: str
