@@ -125,8 +125,9 @@ def condition_parts(
             return f"({combine(n.left)} != {combine(n.right)})"
         return f"({combine(n.left)} {op.lower()} {combine(n.right)})"
 
-    crit = " | ".join(f"c{k} << {k}" if k else "c0" for k in range(min(len(leaves), 32)))
-    return lines, combine(e), f"({crit or '0'})"
+    terms = [f"c{k} << {k}" if k else "c0" for k in range(min(len(leaves), 32))]
+    crit = " | ".join(terms) if len(terms) > 1 else f"+{terms[0]}" if terms else "0"
+    return lines, combine(e), f"({crit})"  # an int always: one contact's bool made 0 or 1
 
 
 _USES_X = re.compile(r"(?<![\w.])X\[")

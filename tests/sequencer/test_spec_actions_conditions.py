@@ -410,3 +410,16 @@ def test_a_permanent_coil_may_not_write_a_step_attribute() -> None:
     )
     codes = [d.code for d in validate(parse_chart(text, "c.s7g"))]
     assert codes == ["E045"]
+
+
+def test_the_criteria_word_of_a_single_contact_is_an_int_like_any_other() -> None:
+    """CRIT and CRIT_LOC are words (bit k = contact k): a condition of one contact stores
+    0 or 1, not its bool, so each word has one type in the instance DB and the state file
+    rewrites no row whose criteria did not change."""
+    run = two_steps("", interlock="I1.0")
+    enter(run)
+    run.set(I1_0=True).call(2)
+    st = run.st
+    words = [*st.crit, *st.crit_old, *st.crit_loc, *st.crit_loc_err, *st.crit_sup]
+    assert {type(w) for w in words} == {int}
+    assert st.crit_loc[run.idx(2)] == 1
