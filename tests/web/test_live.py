@@ -11,6 +11,7 @@ from typing import Any
 import pytest
 
 from s7graph.engine.clock import VirtualClock
+from s7graph.engine.errors import S7Error
 from s7graph.engine.persistence import StateStore
 from s7graph.web.bus.live import LiveGraph, watch_names
 from s7graph.web.bus.protocol import Command, StepStateUpdate
@@ -72,6 +73,7 @@ def rig(tmp_path: Path) -> Iterator[Rig]:
     live = LiveGraph(
         session.graph,
         read=session.get,
+        reader=session.reader,
         watch=[*watch_names(table), "no_such_operand"],
         wall_ns=lambda: 1_700_000_000_000_000_000,
     )
@@ -187,6 +189,38 @@ def test_values_hold_the_fb_outputs_and_the_watched_operands(rig: Rig) -> None:
     assert {"Start", "Full", "Door", "Pump"} <= set(values)
     assert "no_such_operand" not in values  # an unreadable watch is left out, not raised
     assert set(rig.session.graph.out_pins) <= set(values)
+
+
+def test_a_reader_gives_what_get_gives_with_the_name_resolved_once(rig: Rig) -> None:
+    session = rig.session
+    names = ["Start", "Pump", "I0.2", "MW10", "T3", "S1.X", "S2.T", "T1.TT", "INIT_SQ"]
+    readers = {name: session.reader(name) for name in names}
+    session.set("Start", True)
+    session.set("MW10", 1234)
+    rig.scans(3)
+    assert {n: r() for n, r in readers.items()} == {n: session.get(n) for n in names}
+    assert readers["Start"]() is True and readers["MW10"]() == 1234
+    with pytest.raises(S7Error, match="unknown name no_such_operand"):
+        session.reader("no_such_operand")
+
+
+def test_watched_operands_are_resolved_once_and_again_after_an_online_change(
+    rig: Rig,
+) -> None:
+    session = rig.session
+    resolved: list[str] = []
+
+    def reader(name: str) -> Any:
+        resolved.append(name)
+        return session.reader(name)
+
+    live = LiveGraph(session.graph, reader=reader, watch=["Start", "Pump"])
+    for _ in range(3):
+        live.update(rig.session.scan())
+    assert resolved == ["Start", "Pump"]  # once, not per scan
+    live.switch(live.prepare(session.cc, version=2))  # an online change: symbols may differ
+    assert live.update(rig.session.scan()).values["Start"] is False
+    assert resolved == ["Start", "Pump"] * 2
 
 
 def test_commands_are_refused_while_the_cpu_is_not_in_run(rig: Rig) -> None:

@@ -49,6 +49,7 @@ hostile command is refused with its reason, the scan loop goes on.
 
 from __future__ import annotations
 
+import functools
 import operator
 import time
 from collections.abc import Callable, Iterable
@@ -127,10 +128,15 @@ def _scalar(value: object) -> bool | int | float | str | None:
     return str(value)
 
 
+_Readers = tuple[tuple[str, Callable[[], object]], ...]
+
+
 class LiveGraph:
     """One GraphFB seen live: :meth:`update` after each scan, :meth:`apply` at the boundary.
 
-    ``read(name)`` gives the value of a watched operand (``ChartSession.get``);
+    ``read(name)`` gives the value of a watched operand (``ChartSession.get``), or
+    ``reader(name)`` a function that gives it, the name resolved once
+    (``ChartSession.reader``; resolved again after an online change, :meth:`switch`);
     ``wall_ns`` turns CPU times into wall-clock times for the alarm list;
     ``messages`` is the CPU's message list (``sfb.alarms.message_list(cpu)``) for
     ``ack_msg`` and :meth:`alarms_changed`; ``events`` groups each scan's events by
@@ -142,6 +148,7 @@ class LiveGraph:
         *,
         fb: str | None = None,
         read: Callable[[str], object] | None = None,
+        reader: Callable[[str], Callable[[], object]] | None = None,
         watch: Iterable[str] = (),
         wall_ns: Callable[[], int] = time.time_ns,
         messages: MessageList | None = None,
@@ -151,8 +158,9 @@ class LiveGraph:
         self.messages = messages
         self.events = events if events is not None else ScanEvents()
         self.fb = fb or graph.cc.name
-        self.switch(self.prepare(graph.cc, version=1))
         self._read = read
+        self._reader = reader
+        self.switch(self.prepare(graph.cc, version=1))
         self.watch = tuple(dict.fromkeys(watch))[:MAX_WATCH]
         self._wall_ns = wall_ns
         self.cpu_mode = CpuMode.STOP
@@ -192,6 +200,8 @@ class LiveGraph:
         self.cc = chart.cc
         self.layout = chart.layout
         self.step_details = chart.step_details()
+        self._readers: tuple[tuple[str, ...], _Readers] | None = None
+        """The watch list the readers were made for, and a reader per name."""
 
     # ------------------------------------------------------------ state out
 
@@ -288,13 +298,33 @@ class LiveGraph:
             out = dict(zip(pins, self._pick(graph.idb.values), strict=True))
         if not _PLAIN.issuperset(map(type, out.values())):
             out = {name: _scalar(v) for name, v in out.items()}
-        if self._read is not None:
-            for name in self.watch:
-                try:
-                    out[name] = _scalar(self._read(name))
-                except Exception:  # a watch must never stop the scan
-                    continue
+        made = self._readers
+        if made is None or made[0] is not self.watch:
+            made = self._readers = (self.watch, self._resolve())
+        for name, read in made[1]:
+            try:
+                out[name] = _scalar(read())
+            except Exception:  # a watch must never stop the scan
+                continue
         return out
+
+    def _resolve(self) -> _Readers:
+        """A reader per watched name (once, not per scan: a symbol's lookup and an
+        address's parse cost more than the read); a name ``reader`` cannot resolve is read
+        through ``read``, which leaves it out while it stays unreadable."""
+        out: list[tuple[str, Callable[[], object]]] = []
+        for name in self.watch:
+            fn: Callable[[], object] | None = None
+            if self._reader is not None:
+                try:
+                    fn = self._reader(name)
+                except Exception:  # unknown for now: through read, as before
+                    fn = None
+            if fn is None and self._read is not None:
+                fn = functools.partial(self._read, name)
+            if fn is not None:
+                out.append((name, fn))
+        return tuple(out)
 
     # ------------------------------------------------------------ commands in
 

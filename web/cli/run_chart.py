@@ -187,7 +187,8 @@ def _serve(
     if web:
         check_port(net.host, port)
     live = LiveGraph(
-        session.graph, read=session.get, watch=watch_names(session.symbols),
+        session.graph, read=session.get, reader=session.reader,
+        watch=watch_names(session.symbols),
         messages=message_list(session.cpu),
     )  # fmt: skip
     gate = cpu_gate(net.users, store)

@@ -9,12 +9,13 @@ FB variables and step/transition attributes (``Sn.X``, ``Sn.T``, ``Sn.U``, ``Tn.
 from __future__ import annotations
 
 import contextlib
+import functools
 import re
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
-from s7graph.engine.address import Address, Area, parse_address
+from s7graph.engine.address import Address, Area, Width, parse_address
 from s7graph.engine.clock import Clock
 from s7graph.engine.cpu import Cpu
 from s7graph.engine.errors import AddressError, S7Error
@@ -184,6 +185,32 @@ class ChartSession:
             cells = self.cpu.mem.timers if addr.area is Area.T else self.cpu.mem.counters
             return bool(cells[addr.byte].q)
         return _json(self.cpu.mem.read_as(addr, type_name))
+
+    def reader(self, name: str) -> Callable[[], Any]:
+        """A function that gives ``get(name)``, the name resolved now: an address or symbol
+        to its address and type, once instead of at every read (the view's watch list, read
+        every scan); anything else through ``get``. S7Error for an unknown name. Resolve
+        again once the symbol table changes."""
+        if (
+            _STEP_ATTR.fullmatch(name) or _TRANS_ATTR.fullmatch(name)
+            or name in self.cc.var_types or is_pin(name)
+        ):  # fmt: skip
+            return functools.partial(self.get, name)
+        found = self._address(name)
+        if found is None:
+            raise S7Error(f"unknown name {name}")
+        addr, type_name = found
+        mem = self.cpu.mem
+        if addr.area in (Area.T, Area.C):
+            cells = mem.timers if addr.area is Area.T else mem.counters
+            n = addr.byte
+            return lambda: bool(cells[n].q)
+        read_as = mem.read_as
+        read_as(addr, type_name)  # a type that does not fit the address: S7Error now
+        if addr.width is Width.BIT:  # a bit's type is BOOL: the memory's hot path
+            read = mem.read
+            return lambda: read(addr)
+        return lambda: _json(read_as(addr, type_name))
 
     def set(self, name: str, value: Any) -> None:
         """Write an input: module-side inputs, memory, an FB input pin or an FB variable."""
