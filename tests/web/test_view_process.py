@@ -30,6 +30,7 @@ from tests.web.helpers import wait_until
 pytestmark = pytest.mark.timeout(180)
 ROOT = Path(__file__).resolve().parents[2]
 DRILL = ROOT / "examples" / "drill"
+CYCLE_MS = 10  # s7graph run's default cycle
 
 
 def _free_port() -> int:
@@ -140,8 +141,12 @@ def test_the_view_killed_is_restarted_while_the_cpu_scans_on(run: Run) -> None:
         after = status()
         client.close()
     assert after.state == "RUN" and after.cycle > before.cycle
-    assert before.stats is not None and after.stats is not None
-    assert after.stats.overruns == before.stats.overruns  # no scan held up meanwhile
+    # The CPU scanned on at its 10 ms cycle while its view was dead and restarted: no scan
+    # waited for the view (one that did would lose its cycles for as long). Not "no
+    # overrun": a cycle the machine itself made late (a new process starting on two
+    # processors) is the machine's, and bench/jitter.py is where those are counted.
+    scanned_ms = (after.cycle - before.cycle) * CYCLE_MS
+    assert scanned_ms >= 0.9 * (after.t_ms - before.t_ms)
     assert "Traceback" not in "".join(run.err)
 
 
