@@ -67,7 +67,6 @@ __all__ = [
     "StateStore",
     "StateWriteError",
     "fingerprint_of",
-    "pack_instance",
     "unpack_instance",
 ]
 
@@ -737,21 +736,11 @@ def _compress(raw: bytes) -> bytes:
     return zlib.compress(raw, 1)  # level 1: half the time of 6, 3 % larger (bench/README.md)
 
 
-def pack_instance(snapshot: dict[str, object]) -> bytes:
-    """An instance snapshot as it is stored (whole: its volatile keys inside): compressed
-    MessagePack; compressed JSON for one MessagePack cannot hold (an integer beyond 64
-    bits). ``stage`` writes the format-4 pair instead; ``unpack_instance`` reads both."""
-    try:
-        raw = _PACK.encode(snapshot)
-    except (OverflowError, TypeError):
-        raw = _dumps(snapshot).encode()
-    return _compress(raw)
-
-
 def unpack_instance(blob: object) -> dict[str, Any]:
-    """An instance snapshot from its stored row: compressed MessagePack, or compressed JSON
-    (format 2, and what MessagePack cannot hold), told apart by the first byte (a JSON
-    object starts with ``{``, a MessagePack map never does)."""
+    """An instance snapshot from its stored row: compressed MessagePack (a format-4 pair,
+    its volatile keys put back, or a format-3 map), or compressed JSON (format 2, and what
+    MessagePack cannot hold), told apart by the first byte (a JSON object starts with
+    ``{``, MessagePack never does)."""
     if not isinstance(blob, bytes):
         raise ValueError(f"the data is {type(blob).__name__}, not a compressed snapshot")
     raw = zlib.decompress(blob)

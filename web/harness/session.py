@@ -177,14 +177,7 @@ class ChartSession:
             pin = check_pin(name, self.cc.parameters)
             assert self.graph.idb is not None
             return _json(self.graph.idb.values[pin.name])
-        found = self._address(name)
-        if found is None:
-            raise S7Error(f"unknown name {name}")
-        addr, type_name = found
-        if addr.area in (Area.T, Area.C):
-            cells = self.cpu.mem.timers if addr.area is Area.T else self.cpu.mem.counters
-            return bool(cells[addr.byte].q)
-        return _json(self.cpu.mem.read_as(addr, type_name))
+        return self._address_reader(name)()
 
     def reader(self, name: str) -> Callable[[], Any]:
         """A function that gives ``get(name)``, the name resolved now: an address or symbol
@@ -196,6 +189,11 @@ class ChartSession:
             or name in self.cc.var_types or is_pin(name)
         ):  # fmt: skip
             return functools.partial(self.get, name)
+        return self._address_reader(name)
+
+    def _address_reader(self, name: str) -> Callable[[], Any]:
+        """``reader`` of an address or symbol: a timer or counter's Q, else its value as its
+        type (S7Error now for an unknown name or a type that does not fit the address)."""
         found = self._address(name)
         if found is None:
             raise S7Error(f"unknown name {name}")
