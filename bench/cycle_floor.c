@@ -3,7 +3,8 @@
  * One thread per processor, each bound to its processor and SCHED_FIFO at the priority
  * given (bench/jitter.py: above the CPU's scan thread, so that no scan delays it; none if
  * the system refuses), sleeps to absolute
- * deadlines CYCLE_US apart (clock_nanosleep, CLOCK_MONOTONIC) and stamps each wake-up; the
+ * deadlines CYCLE_US apart (clock_nanosleep, CLOCK_MONOTONIC; bench/jitter.py: 1000) and
+ * stamps each wake-up (up to 2^18 a processor: 262 s at 1 ms); the
  * memory kept out of transparent huge pages as the CPU's is. Between a "start" and an "end"
  * line on stdin they keep the stamps; after "end" it prints them (CLOCK_MONOTONIC
  * nanoseconds, the clock of Python's perf_counter_ns), a list per processor, as one JSON

@@ -70,10 +70,11 @@ __all__ = [
     "unpack_instance",
 ]
 
-FORMAT = "s7graph-state 4"
+FORMAT = "s7graph-state 5"
 """The format mark in ``meta``: what this code writes (instance rows as MessagePack pairs,
-the ``VOLATILE`` keys apart)."""
-READABLE = ("s7graph-state 2", "s7graph-state 3", FORMAT)
+the ``VOLATILE`` keys apart; a GRAPH FB's lists that hold only their fill kept as the fill,
+``sequencer.state``)."""
+READABLE = ("s7graph-state 2", "s7graph-state 3", "s7graph-state 4", FORMAT)
 """Format marks this code trusts; a file of an older one is marked ``FORMAT`` when opened
 (its JSON rows stay readable, new rows are MessagePack)."""
 

@@ -20,6 +20,13 @@ nothing leaves the snapshot as it was, but for the ``VOLATILE`` keys (the call c
 the clock time of the last call: saved with every write, never a reason for one).
 ``from_state`` turns them back into the values they had at ``last_ns``, and checks every
 field (ValueError: a malformed state is refused, never half restored).
+
+The state file (``state_view``, since state file format 5) keeps a per-step or
+per-transition list that holds nothing but its fill (``_FILL``: False, 0, True for ``il_ok``)
+as ``{"fill": value}``, and the activation timestamps as ``{"fill": None, "at": [[step
+index, timestamp], ...]}``: most lists of a large chart say that nothing happened, and
+hundreds of entries saying so cost the encoding every scan. ``from_state`` reads both
+forms.
 """
 
 from __future__ import annotations
@@ -45,6 +52,8 @@ _LIST_FIELDS: Final = (
 _STEP_LISTS: Final = _LIST_FIELDS[:12]
 _TRANSITION_LISTS: Final = _LIST_FIELDS[12:]
 _BOOL_LISTS: Final = frozenset(("x", "il_ok", "il_err", "sv_cond", "sv_err", "tt"))
+_FILL: Final = {name: name == "il_ok" if name in _BOOL_LISTS else 0 for name in _LIST_FIELDS}
+"""What each per-step / per-transition list holds where nothing happened (a new state)."""
 _SCALAR_FIELDS: Final = (
     "mode", "calls", "last_ns", "off", "halted", "tm_halted", "zeroed", "il_enabled",
     "sv_enabled", "ackreq_enabled", "sskip_enabled", "error", "fault", "err_flt",
@@ -184,37 +193,48 @@ class GraphState:
 
     def to_state(self) -> dict[str, Any]:
         """A JSON-able snapshot (running times as activation timestamps, see the module
-        docstring); ``from_state`` restores it exactly."""
+        docstring), every list in full; ``from_state`` restores it exactly."""
         return {
             key: list(value) if type(value) is list else dict(value) if type(value) is dict
             else value
-            for key, value in self.state_view().items()
+            for key, value in self._view(compact=False).items()
         }  # fmt: skip
 
     def state_view(self) -> dict[str, Any]:
         """What ``to_state`` returns, but sharing this state's lists and dicts (the step
-        times aside, which it computes): to be encoded at once and never kept, since the
-        next call changes it in place. What the state file's staging reads every scan: no
-        copies of per-step lists it only encodes."""
+        times aside, which it computes) and with the lists that hold little kept compact
+        (``compact``): to be encoded at once and never kept, since the next call changes it
+        in place. What the state file's staging reads every scan: no copies of per-step
+        lists it only encodes, and no hundreds of entries that say nothing happened."""
+        return self._view(compact=True)
+
+    def _view(self, *, compact: bool) -> dict[str, Any]:
         data: dict[str, Any] = {"n_steps": self.n_steps, "n_transitions": self.n_transitions}
         for name in _LIST_FIELDS:
-            data[name] = getattr(self, name)
+            value = getattr(self, name)
+            data[name] = _compact(value, _FILL[name]) if compact else value
         for name in _SCALAR_FIELDS:
             data[name] = getattr(self, name)
         last = self.last_ns
-        t_since: list[int | None] = [None] * self.n_steps
-        u_since: list[int | None] = [None] * self.n_steps
+        t_since: list[list[int]] = []  # [step index, activation time] of the running steps
+        u_since: list[list[int]] = []
         if last >= 0 and not self.tm_halted and self.active:
             t_ns: list[int | None] = list(self.t_ns)
             u_ns: list[int | None] = list(self.u_ns)
             data["t_ns"], data["u_ns"] = t_ns, u_ns
             il_err, sv_err = self.il_err, self.sv_err
             for i in self.active:
-                t_since[i], t_ns[i] = last - self.t_ns[i], None
+                t_since.append([i, last - self.t_ns[i]])
+                t_ns[i] = None
                 if not (il_err[i] or sv_err[i]):
-                    u_since[i], u_ns[i] = last - self.u_ns[i], None
-        data["t_since"] = t_since
-        data["u_since"] = u_since
+                    u_since.append([i, last - self.u_ns[i]])
+                    u_ns[i] = None
+        if compact:
+            data["t_since"] = {"fill": None, "at": t_since}
+            data["u_since"] = {"fill": None, "at": u_since}
+        else:
+            data["t_since"] = _full(t_since, None, self.n_steps)
+            data["u_since"] = _full(u_since, None, self.n_steps)
         data["active"] = self.active
         data["inputs"] = self.inputs
         data["prev"] = self.prev
@@ -248,9 +268,11 @@ class GraphState:
             raise ValueError(f"unknown mode {st.mode!r}")
         last = st.last_ns
         for times, key in ((st.t_ns, "t_since"), (st.u_ns, "u_since")):
-            since = data.get(key) or [None] * n
+            since = _expand(data.get(key) or [None] * n, key, n)
             if not isinstance(since, list) or len(since) != n:
                 raise ValueError(f"{key!r} does not hold {n} entries")
+            if any(mark is not None and not isinstance(mark, int) for mark in since):
+                raise ValueError(f"{key!r} holds a non-integer")
             for i, (value, mark) in enumerate(zip(times, since, strict=True)):
                 if mark is not None:
                     times[i] = last - int(mark)
@@ -297,8 +319,43 @@ def _count(data: dict[str, Any], key: str) -> int:
     return value
 
 
+def _compact(value: list[Any], fill: object) -> list[Any] | dict[str, Any]:
+    """``value`` as the state file keeps it: ``{"fill": fill}`` when every entry is ``fill``
+    (False, 0, or True for ``il_ok``), else the list itself (read back by ``_expand``).
+    Looked at for every list of every sequencer each scan: the ends first (a list in use
+    seldom has ``fill`` at both), then ``count``, which compares by identity first."""
+    if not value or value[0] != fill or value[-1] != fill or value.count(fill) != len(value):
+        return value
+    return {"fill": fill}
+
+
+def _full(at: list[list[int]], fill: object, n: int) -> list[Any]:
+    out: list[Any] = [fill] * n
+    for i, v in at:
+        out[i] = v
+    return out
+
+
+def _expand(value: object, key: str, n: int) -> object:
+    """A list kept compact (``_compact``) in full; anything else as it is."""
+    if not isinstance(value, dict):
+        return value
+    at = value.get("at", [])
+    if set(value) - {"fill", "at"} or "fill" not in value or not isinstance(at, list):
+        raise ValueError(f"{key!r} is {value!r}")
+    out = [value["fill"]] * n
+    for pair in at:
+        if (
+            not isinstance(pair, list) or len(pair) != 2 or type(pair[0]) is not int
+            or not 0 <= pair[0] < n
+        ):  # fmt: skip
+            raise ValueError(f"{key!r} has an entry {pair!r}")
+        out[pair[0]] = pair[1]
+    return out
+
+
 def _list(data: dict[str, Any], key: str, n: int) -> list[Any]:
-    value = data.get(key)
+    value = _expand(data.get(key), key, n)
     if not isinstance(value, list) or len(value) != n:
         raise ValueError(f"{key!r} does not hold {n} entries")
     if key in _BOOL_LISTS:
