@@ -53,7 +53,8 @@ _STEP_LISTS: Final = _LIST_FIELDS[:12]
 _TRANSITION_LISTS: Final = _LIST_FIELDS[12:]
 _BOOL_LISTS: Final = frozenset(("x", "il_ok", "il_err", "sv_cond", "sv_err", "tt"))
 _FILL: Final = {name: name == "il_ok" if name in _BOOL_LISTS else 0 for name in _LIST_FIELDS}
-"""What each per-step / per-transition list holds where nothing happened (a new state)."""
+"""What each per-step / per-transition list holds where nothing happened (a new state); the
+state file keeps a list that holds only that as ``{"fill": value}`` (``state_view``)."""
 _SCALAR_FIELDS: Final = (
     "mode", "calls", "last_ns", "off", "halted", "tm_halted", "zeroed", "il_enabled",
     "sv_enabled", "ackreq_enabled", "sskip_enabled", "error", "fault", "err_flt",
@@ -210,9 +211,14 @@ class GraphState:
 
     def _view(self, *, compact: bool) -> dict[str, Any]:
         data: dict[str, Any] = {"n_steps": self.n_steps, "n_transitions": self.n_transitions}
-        for name in _LIST_FIELDS:
+        for name, fill in _FILL.items():
             value = getattr(self, name)
-            data[name] = _compact(value, _FILL[name]) if compact else value
+            if (  # the ends first (a list in use seldom has fill at both), then count
+                compact and value and value[0] == fill and value[-1] == fill
+                and value.count(fill) == len(value)
+            ):  # fmt: skip
+                value = {"fill": fill}
+            data[name] = value
         for name in _SCALAR_FIELDS:
             data[name] = getattr(self, name)
         last = self.last_ns
@@ -319,16 +325,6 @@ def _count(data: dict[str, Any], key: str) -> int:
     return value
 
 
-def _compact(value: list[Any], fill: object) -> list[Any] | dict[str, Any]:
-    """``value`` as the state file keeps it: ``{"fill": fill}`` when every entry is ``fill``
-    (False, 0, or True for ``il_ok``), else the list itself (read back by ``_expand``).
-    Looked at for every list of every sequencer each scan: the ends first (a list in use
-    seldom has ``fill`` at both), then ``count``, which compares by identity first."""
-    if not value or value[0] != fill or value[-1] != fill or value.count(fill) != len(value):
-        return value
-    return {"fill": fill}
-
-
 def _full(at: list[list[int]], fill: object, n: int) -> list[Any]:
     out: list[Any] = [fill] * n
     for i, v in at:
@@ -337,7 +333,8 @@ def _full(at: list[list[int]], fill: object, n: int) -> list[Any]:
 
 
 def _expand(value: object, key: str, n: int) -> object:
-    """A list kept compact (``_compact``) in full; anything else as it is."""
+    """A list kept compact (``state_view``: ``{"fill": v}``, or ``{"fill": v, "at": [[i,
+    v_i], ...]}``) in full; anything else as it is."""
     if not isinstance(value, dict):
         return value
     at = value.get("at", [])

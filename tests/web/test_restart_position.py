@@ -19,7 +19,7 @@ import pytest
 from s7graph.engine.clock import VirtualClock
 from s7graph.engine.diagnostics import EventId
 from s7graph.engine.modes import CpuMode
-from s7graph.engine.persistence import StateFileError, unpack_instance
+from s7graph.engine.persistence import FORMAT, StateFileError, unpack_instance
 from s7graph.sequencer.state import GraphState
 from s7graph.sfb.alarms import MessageState, message_list
 from s7graph.web.harness.persist import OpenedState, open_state
@@ -334,3 +334,30 @@ def test_a_malformed_sequencer_state_is_refused(
     with pytest.raises(StateFileError) as info:
         Drill(path, plant)
     assert "malformed state of DB1" in info.value.problem and fragment in info.value.problem
+
+
+def test_a_file_of_format_4_with_every_list_in_full_resumes_under_hot(tmp_path: Path) -> None:
+    """State file format 4 kept every list of the sequencer in full: such a file is read,
+    resumes the position, and is marked with the current format."""
+    drill, plant = _faulted(tmp_path, "hot")
+    on_disk = drill.persisted()
+    drill.kill()
+    path = tmp_path / "drill.sqlite"
+    with sqlite3.connect(path) as con:
+        (blob,) = con.execute("SELECT data FROM instances WHERE number=1").fetchone()
+        data = unpack_instance(blob)
+        data["G7_STATE"] = on_disk.to_state()
+        compact = on_disk.state_view()
+        assert any(isinstance(compact[k], dict) for k in ("il_err", "crit_flt", "t_since"))
+        assert all(isinstance(v, list) for k, v in data["G7_STATE"].items() if k in compact
+                   and isinstance(compact[k], dict) and "fill" in compact[k])  # fmt: skip
+        con.execute("UPDATE instances SET data=? WHERE number=1",
+                    (zlib.compress(json.dumps(data).encode()),))  # fmt: skip
+        con.execute("UPDATE meta SET value='s7graph-state 4' WHERE key='format'")
+    con.close()
+    again = Drill(path, plant, restart="hot")
+    assert _steps(again.state, again) == [2] and _times(again.state) == _times(on_disk)
+    with sqlite3.connect(path) as con:
+        (mark,) = con.execute("SELECT value FROM meta WHERE key='format'").fetchone()
+    con.close()
+    assert mark == FORMAT

@@ -36,6 +36,7 @@ import pytest
 
 from s7graph.engine.diagnostics import EventId
 from s7graph.engine.persistence import unpack_instance
+from s7graph.sequencer.state import GraphState
 
 ROOT = Path(__file__).resolve().parents[2]
 DRILL = ROOT / "examples" / "drill"
@@ -98,11 +99,11 @@ def _read(path: Path) -> OnDisk:
         ).fetchall()
     finally:
         con.close()
-    st = unpack_instance(blob)["G7_STATE"]
+    st = GraphState.from_state(unpack_instance(blob)["G7_STATE"])  # as a restart reads it
     messages = json.loads(part)["active"]
     return OnDisk(
-        active={i + 1 for i in st["active"]},  # the drill's step i is S(i+1)
-        faults={i + 1 for i, latched in enumerate(st["sv_err"]) if latched},
+        active={i + 1 for i in st.active},  # the drill's step i is S(i+1)
+        faults={i + 1 for i, latched in enumerate(st.sv_err) if latched},
         pending={m["event_id"]: m for m in messages if not m["acked"]},
         diagnostics=[tuple(r) for r in diagnostics],
         alarms=[tuple(r) for r in alarms],
