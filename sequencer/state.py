@@ -235,12 +235,9 @@ class GraphState:
                 if not (il_err[i] or sv_err[i]):
                     u_since.append([i, last - self.u_ns[i]])
                     u_ns[i] = None
-        if compact:
-            data["t_since"] = {"fill": None, "at": t_since}
-            data["u_since"] = {"fill": None, "at": u_since}
-        else:
-            data["t_since"] = _full(t_since, None, self.n_steps)
-            data["u_since"] = _full(u_since, None, self.n_steps)
+        for key, at in (("t_since", t_since), ("u_since", u_since)):
+            kept = {"fill": None, "at": at}
+            data[key] = kept if compact else _expand(kept, key, self.n_steps)
         data["active"] = self.active
         data["inputs"] = self.inputs
         data["prev"] = self.prev
@@ -323,13 +320,6 @@ def _count(data: dict[str, Any], key: str) -> int:
     if not isinstance(value, int) or isinstance(value, bool) or not 0 <= value <= 1_000_000:
         raise ValueError(f"{key!r} is {value!r}")
     return value
-
-
-def _full(at: list[list[int]], fill: object, n: int) -> list[Any]:
-    out: list[Any] = [fill] * n
-    for i, v in at:
-        out[i] = v
-    return out
 
 
 def _expand(value: object, key: str, n: int) -> object:
