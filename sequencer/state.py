@@ -274,11 +274,11 @@ class GraphState:
             since = _expand(data.get(key) or [None] * n, key, n)
             if not isinstance(since, list) or len(since) != n:
                 raise ValueError(f"{key!r} does not hold {n} entries")
-            if any(mark is not None and not isinstance(mark, int) for mark in since):
-                raise ValueError(f"{key!r} holds a non-integer")
             for i, (value, mark) in enumerate(zip(times, since, strict=True)):
-                if mark is not None:
-                    times[i] = last - int(mark)
+                if isinstance(mark, int):
+                    times[i] = last - mark
+                elif mark is not None:
+                    raise ValueError(f"{key!r} holds a non-integer")
                 elif not isinstance(value, int):
                     raise ValueError(f"{key[0]}_ns[{i}] is {value!r}")
         active = data["active"]
