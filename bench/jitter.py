@@ -26,7 +26,8 @@ a real-time thread at all. A wake-up of the floor 0.5 ms late or more is a stall
 machine (from its deadline to when it woke); the *own* figures take from each cycle of the
 CPU the time the machine stalled in it, and count an overrun as own only when the machine
 stalled neither it nor the cycle before (what s7graph itself lost). The load makers keep
-small pages, as the CPU does, unless ``--huge-pages``: they stand for clients on other
+small pages, as the CPU does, unless ``--huge-pages``, and keep off the processor the CPU
+keeps for its scan (``--core auto``, ``engine/cores.py``): they stand for clients on other
 machines.
 
 Each of the own long cycles is put down to a cause from the runner's breakdown of it
@@ -66,8 +67,9 @@ sys.path.insert(1, str(BENCH))
 
 from figures import free_port, serves, spread  # noqa: E402
 
+from s7graph.engine.cores import allowed_cpus, others, pin  # noqa: E402
 from s7graph.engine.profile import LONG_MARGIN_NS  # noqa: E402
-from s7graph.engine.runner import RT_PRIORITY, keep_small_pages  # noqa: E402
+from s7graph.engine.runner import RT_PRIORITY, core_for, keep_small_pages  # noqa: E402
 
 DRILL = ROOT / "examples" / "drill"
 CYCLE_MS = 10.0
@@ -331,6 +333,14 @@ def build_floor(build_dir: Path) -> Path | None:
     return exe
 
 
+EVERY_PROCESSOR = allowed_cpus()
+
+
+def _every_processor() -> None:
+    """In the CPU's process before it runs: every processor, as a shell starts it."""
+    pin(EVERY_PROCESSOR)
+
+
 def scenario(
     workload: str, view: str, load: str, seconds: float, floor: Path | None = None
 ) -> dict[str, Any]:
@@ -345,6 +355,7 @@ def scenario(
                 [sys.executable, __file__, "--worker", workload, view, endpoint, str(port),
                  str(Path(tmp) / "state.sqlite")],
                 cwd=ROOT, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=err, text=True,
+                preexec_fn=_every_processor,
             )  # fmt: skip
             beside = None
             if floor is not None:
@@ -560,6 +571,9 @@ def main(argv: list[str] | None = None) -> int:
         return worker(workload, view, endpoint, int(port), Path(state))
     if not args.huge_pages:
         keep_small_pages()  # the load makers (and the browsers they start) too
+    kept = core_for("auto", RT_PRIORITY)
+    if kept is not None:
+        pin(others(kept, EVERY_PROCESSOR))  # the load makers too; the CPU gets every one
     workloads = [w for w in args.workloads.split(",") if w]
     views = [v for v in args.views.split(",") if v]
     loads = [x for x in args.loads.split(",") if x]
@@ -575,6 +589,10 @@ def main(argv: list[str] | None = None) -> int:
           f"{' and the load makers' if not args.huge_pages else ''} keep small pages); "
           + ("the C floor (bench/cycle_floor.c) cycles beside each run"
              if floor is not None else "no C compiler: no C floor"))  # fmt: skip
+    print(f"the CPU keeps processor {kept} for its scan (--core auto; not with --rt-priority 0, "
+          "the normal view); the load makers run on the others"
+          if kept is not None else "no processor kept for the scan (--core auto: not "
+          "real-time, or one processor)")  # fmt: skip
     runs: dict[tuple[str, str, str], list[dict[str, float]]] = {}
     notes: dict[tuple[str, str, str], str] = {}
     whys: dict[tuple[str, str, str], collections.Counter[str]] = {}

@@ -27,6 +27,9 @@ lock at times, and one that holds it must not wait for the processor while the s
 for the lock. Processes they start (the view) are reset to the normal policy; the loop
 ends with every thread back at the normal policy. The process and the view it starts keep
 small pages (:func:`keep_small_pages`): the kernel merging huge pages held scans up.
+With ``core`` (``engine/cores.py``) the scan thread runs on that processor and the
+process's other threads on the rest while the loop runs; all of them get every processor
+back when it ends.
 
 **The garbage collector** (:class:`IdleGc`) runs in the idle part of the cycle, never in
 the middle of a scan: when the loop starts, what the startup loaded is frozen (``gc.freeze``:
@@ -59,6 +62,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from types import FrameType
 
+from s7graph.engine.cores import allowed_cpus, others, pin, scan_core
 from s7graph.engine.cpu import Cpu
 from s7graph.engine.diagnostics import EventId
 from s7graph.engine.errors import ScanAborted
@@ -112,6 +116,26 @@ def set_realtime(priority: int | None, tid: int = 0) -> bool:
     except (OSError, AttributeError):  # no permission, gone, or not Linux
         return False
     return True
+
+
+def realtime_allowed(priority: int) -> bool:
+    """Whether the system lets a thread of this process run ``SCHED_FIFO`` at
+    ``priority`` (tried on a thread of its own, which then ends)."""
+    allowed: list[bool] = []
+    probe = threading.Thread(target=lambda: allowed.append(set_realtime(priority)))
+    probe.start()
+    probe.join()
+    return bool(allowed and allowed[0])
+
+
+def core_for(choice: str | int | None, rt_priority: int | None) -> int | None:
+    """The processor to keep for a scan at ``rt_priority`` (None: normal scheduling) for the
+    ``--core`` ``choice`` (``engine.cores.scan_core``; ``auto`` keeps one only where the
+    system grants the priority); ValueError for a choice that cannot be."""
+    realtime = rt_priority is not None and (
+        choice not in (None, "auto") or realtime_allowed(rt_priority)
+    )
+    return scan_core(choice, realtime=realtime)
 
 
 PR_SET_THP_DISABLE = 41
@@ -217,7 +241,9 @@ class Runner:
     ``end_on_stop``: end the loop when the CPU goes to STOP by itself (a block error, a
     time error, an abort); ``stopped`` then holds the reason. A write error of the state
     file always ends it (``write_error``), with the CPU in STOP. ``comm_load_pct``: the
-    share of the cycle the edge's commands may take at a boundary (``comm_budget_ns``)."""
+    share of the cycle the edge's commands may take at a boundary (``comm_budget_ns``).
+    ``core``: the processor the scan thread keeps while the loop runs (``engine.cores``;
+    None: it and every other thread run anywhere)."""
 
     def __init__(
         self,
@@ -232,6 +258,7 @@ class Runner:
         idle_gc: bool = True,
         rt_priority: int | None = RT_PRIORITY,
         comm_load_pct: float = COMM_LOAD_PCT,
+        core: int | None = None,
     ) -> None:
         if cycle_ms <= 0:
             raise ValueError("cycle time must be positive")
@@ -265,6 +292,9 @@ class Runner:
         """What one scan boundary may spend on commands (``COMM_LOAD_PCT``)."""
         self.realtime = False
         """Whether the scan thread runs real-time (while ``run`` runs)."""
+        self.core = core
+        self.pinned = False
+        """Whether the scan thread runs on ``core`` alone (while ``run`` runs)."""
         self.gc: IdleGc | None = IdleGc() if idle_gc else None
         """The collector in the idle part of the cycle (``idle_gc``), while ``run`` runs."""
         self._stop = threading.Event()
@@ -328,6 +358,9 @@ class Runner:
             for tid in _threads():
                 if tid != me:
                     set_realtime(helpers, tid)
+        everywhere = allowed_cpus() | ({self.core} if self.core is not None else set())
+        if self.core is not None:  # (the calling thread may have kept off it already)
+            self.pinned = self._keep_core(self.core, everywhere)
         if self.gc is not None:
             self.gc.start()
         try:
@@ -339,9 +372,23 @@ class Runner:
                 self.realtime = False
                 for tid in _threads():
                     set_realtime(None, tid)
+            if self.pinned:
+                self.pinned = False
+                for tid in _threads():
+                    pin(everywhere, tid)
             if previous is not None:
                 signal.signal(_ABORT_SIGNAL, previous)
             self._signal_abort = False
+
+    @staticmethod
+    def _keep_core(core: int, everywhere: set[int]) -> bool:
+        """The calling (scan) thread on ``core``, the process's other threads off it."""
+        me = threading.get_native_id()
+        rest = others(core, everywhere)
+        for tid in _threads():
+            if tid != me:
+                pin(rest, tid)
+        return pin({core})
 
     def _loop(self, duration_s: float | None) -> None:
         cpu = self.cpu

@@ -49,13 +49,13 @@ class Run:
     """``s7graph run`` of the drill demo with ``--web``, in a session of its own (so that a
     signal to its process group is what a Ctrl-C at its terminal sends)."""
 
-    def __init__(self, tmp_path: Path) -> None:
+    def __init__(self, tmp_path: Path, *extra: str) -> None:
         self.port = _free_port()
         self.proc = subprocess.Popen(
             [sys.executable, "-m", "s7graph", "run", str(DRILL / "drill.s7g"),
              "--symbols", str(DRILL / "symbols.txt"), "--plant", str(DRILL / "demo_plant.py"),
              "--state", str(tmp_path / "drill.sqlite"), "--web", "--port", str(self.port),
-             "--duration-s", "150"],
+             "--duration-s", "150", *extra],
             cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
             start_new_session=True, preexec_fn=_as_from_a_shell,
         )  # fmt: skip
@@ -183,6 +183,53 @@ def test_the_cpu_and_its_view_keep_their_memory_out_of_huge_pages(run: Run) -> N
     run.view_line()
     (view,) = run.children()
     assert (_thp(run.proc.pid), _thp(view)) == ("0", "0")
+
+
+def _cpus(tid: int) -> set[int]:
+    return set(os.sched_getaffinity(tid))
+
+
+@pytest.mark.skipif(len(os.sched_getaffinity(0)) < 2, reason="one processor: none to keep")
+def test_the_scan_keeps_its_processor_and_the_bus_and_the_view_run_on_the_others(
+    tmp_path: Path,
+) -> None:
+    """``--core N`` (engine/cores.py): the scan thread (the CPU process's main thread) on
+    processor N alone, the process's other threads (bus, writer, monitor) and the view's
+    process on the rest."""
+    allowed = _cpus(0)
+    core = max(allowed)
+    run = Run(tmp_path, "--core", str(core))
+    try:
+        run.view_line()
+        (view,) = run.children()
+        pid = run.proc.pid
+        rest = allowed - {core}
+
+        def placed() -> bool:
+            threads = [int(t) for t in os.listdir(f"/proc/{pid}/task") if int(t) != pid]
+            return _cpus(pid) == {core} and all(_cpus(t) == rest for t in threads)
+
+        assert wait_until(placed, 30), run.err
+        assert _cpus(view) == rest
+    finally:
+        for pid in run.children() if run.proc.poll() is None else []:
+            os.kill(pid, signal.SIGKILL)
+        run.stop()
+
+
+def test_a_processor_that_is_not_there_is_refused_naming_the_option(tmp_path: Path) -> None:
+    proc = subprocess.run(
+        [sys.executable, "-m", "s7graph", "run", str(DRILL / "drill.s7g"),
+         "--symbols", str(DRILL / "symbols.txt"), "--state", str(tmp_path / "d.sqlite"),
+         "--duration-s", "1", "--core", "4096"],
+        cwd=ROOT, capture_output=True, text=True, timeout=60,
+    )  # fmt: skip
+    there = ", ".join(map(str, sorted(_cpus(0))))
+    assert proc.returncode == 2
+    assert proc.stderr == (
+        f"s7graph: error: --core: core 4096 is not a processor this process may use ({there})\n"
+    )
+    assert not (tmp_path / "d.sqlite").exists()  # refused before anything was opened
 
 
 def test_a_cpu_killed_takes_its_view_with_it(run: Run) -> None:

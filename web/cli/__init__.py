@@ -106,23 +106,13 @@ def _rt_priority(value: int | None) -> int | None:
 def _scan_priority(value: int | None) -> int | None:
     """The Runner's ``rt_priority`` for ``--rt-priority``: the default, or None for 0; a
     priority asked for that the system refuses is one note on stderr."""
-    from s7graph.engine.runner import RT_PRIORITY, set_realtime
+    from s7graph.engine.runner import RT_PRIORITY, realtime_allowed
 
     if value is None:
         return RT_PRIORITY
     if value == 0:
         return None
-    import threading
-
-    allowed: list[bool] = []
-
-    def probe() -> None:
-        allowed.append(set_realtime(value))
-
-    thread = threading.Thread(target=probe)
-    thread.start()
-    thread.join()
-    if not allowed[0]:
+    if not realtime_allowed(value):
         print(f"s7graph: note: real-time priority {value} refused by the system (needs root, "
               "CAP_SYS_NICE or an rtprio limit): the scan runs at normal priority",
               file=sys.stderr)  # fmt: skip
@@ -205,6 +195,15 @@ def run(
             "default: 20.",
         ),
     ] = COMM_LOAD_PCT,
+    core: Annotated[
+        str | None,
+        typer.Option(
+            help="The processor kept for the scan thread, as an S7-1500 software controller "
+            "keeps cores: auto (the last one, when the scan runs real-time on a machine of "
+            "two or more; the default), off, or a processor number. The bus, the view and "
+            "the writer run on the others. For a program, its CPU dict's core, else auto.",
+        ),
+    ] = None,
 ) -> None:
     """Run a program or a chart on the system clock until Ctrl-C."""
     priority = _scan_priority(rt_priority)
@@ -238,6 +237,7 @@ def run(
                 fresh=fresh,
                 rt_priority=priority,
                 comm_load_pct=comm_load,
+                core=core if core is not None else "auto",
             )
         )
     from s7graph.web.cli.run_program import run_program
@@ -252,6 +252,7 @@ def run(
             restart=restart,
             fresh=fresh,
             rt_priority=priority,
+            core=core,
         )
     )
 

@@ -27,11 +27,12 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from s7graph.engine.clock import SystemClock
+from s7graph.engine.cores import kept_free
 from s7graph.engine.errors import S7Error, ScanAborted
 from s7graph.engine.modes import CpuMode
 from s7graph.engine.persistence import StateFileError, StateStore
 from s7graph.engine.record import ScanRecord
-from s7graph.engine.runner import COMM_LOAD_PCT, RT_PRIORITY, Runner, keep_small_pages
+from s7graph.engine.runner import COMM_LOAD_PCT, RT_PRIORITY, Runner, core_for, keep_small_pages
 from s7graph.engine.watchdog import Watchdog
 from s7graph.sfb.alarms import message_list
 from s7graph.web.cli.report import fail
@@ -69,6 +70,7 @@ def run_chart(
     session: ChartSession | None = None,
     rt_priority: int | None = RT_PRIORITY,
     comm_load_pct: float = COMM_LOAD_PCT,
+    core: str | int | None = "auto",
 ) -> int:
     """Run ``path`` until Ctrl-C/SIGTERM/``duration_s``; 0 clean, 1 plant error, STOP by
     error or state not written, 2 bad chart or a state file it cannot trust.
@@ -82,9 +84,46 @@ def run_chart(
     ``view_in_process``: serve the view in this process (the benchmark's comparison);
     ``session``: ``path`` already loaded, on the system clock (the benchmark's).
     ``rt_priority``: the scan thread's real-time priority (None: normal scheduling).
-    ``comm_load_pct``: the share of the cycle commands may take at a scan boundary."""
+    ``comm_load_pct``: the share of the cycle commands may take at a scan boundary.
+    ``core``: the processor kept for the scan (``--core``: ``engine.cores``); the bus, the
+    view and the writer start off it."""
+    try:
+        kept = core_for(core, rt_priority)
+    except ValueError as exc:
+        return fail(f"--core: {exc}", 2)
     if rt_priority is not None:
         keep_small_pages()  # before the view starts: it inherits it
+    with kept_free(kept):  # before the bus and the view start: they inherit it
+        return _run_chart(
+            path, plant=plant, symbols=symbols, state=state, cycle_ms=cycle_ms,
+            max_cycle_ms=max_cycle_ms, duration_s=duration_s, web=web, port=port,
+            record=record, net=net, restart=restart, fresh=fresh,
+            view_in_process=view_in_process, session=session, rt_priority=rt_priority,
+            comm_load_pct=comm_load_pct, core=kept,
+        )  # fmt: skip
+
+
+def _run_chart(
+    path: Path,
+    *,
+    plant: Path | None,
+    symbols: Path | None,
+    state: Path | None,
+    cycle_ms: float,
+    max_cycle_ms: float | None,
+    duration_s: float | None,
+    web: bool,
+    port: int,
+    record: Path | None,
+    net: NetOptions | None,
+    restart: str,
+    fresh: bool,
+    view_in_process: bool,
+    session: ChartSession | None,
+    rt_priority: int | None,
+    comm_load_pct: float,
+    core: int | None,
+) -> int:
     clock = SystemClock() if session is None else session.clock
     try:
         if session is None:
@@ -145,7 +184,7 @@ def run_chart(
             live.close()
 
     runner = Runner(cpu, cycle_ms=cycle_ms, store=store, on_record=on_record, end_on_stop=not web,
-                    rt_priority=rt_priority, comm_load_pct=comm_load_pct)  # fmt: skip
+                    rt_priority=rt_priority, comm_load_pct=comm_load_pct, core=core)  # fmt: skip
     if live is not None and live.online is not None:
         live.online.durability = runner  # a download is applied once its state is on disk
     if view is not None:

@@ -30,7 +30,7 @@ from s7graph.engine.modes import CpuMode
 from s7graph.engine.persistence import StateFileError
 from s7graph.engine.record import ScanRecord
 from s7graph.engine.restart import parse_restart
-from s7graph.engine.runner import RT_PRIORITY, Runner, keep_small_pages
+from s7graph.engine.runner import RT_PRIORITY, Runner, core_for, keep_small_pages
 from s7graph.web.harness.persist import OpenedState, open_state, refusal
 
 
@@ -71,6 +71,7 @@ def build_cpu(module: ModuleType, clock: Any, *, max_cycle_ms: float | None = No
         raise ProgramLoadError("defines no OB (decorate a function with @ob(1) or @ob(35))")
     options = dict(_options(module))
     options.pop("restart", None)
+    options.pop("core", None)
     if max_cycle_ms is not None:
         options = {**options, "max_cycle_ms": max_cycle_ms}
     try:
@@ -102,6 +103,15 @@ def program_restart(module: ModuleType) -> str | None:
         raise ProgramLoadError(f"CPU option restart: {exc}") from None
 
 
+def program_core(module: ModuleType) -> str | int | None:
+    """The program's ``CPU = {"core": "auto" | "off" | n}`` (``engine.cores``), None if it
+    sets none."""
+    value = _options(module).get("core")
+    if value is None or (isinstance(value, str | int) and not isinstance(value, bool)):
+        return value
+    raise ProgramLoadError(f"CPU option core: {value!r} is none of auto, off or a number")
+
+
 def _report(record: ScanRecord) -> None:
     for entry in record.diagnostics:
         if entry.event_id >> 8 in (0x25, 0x35):  # errors; a STOP is reported by the run
@@ -118,6 +128,7 @@ def run_program(
     restart: str | None = None,
     fresh: bool = False,
     rt_priority: int | None = RT_PRIORITY,
+    core: str | int | None = None,
 ) -> int:
     """Run a program until Ctrl-C/SIGTERM/duration; 0 on a clean end, 1 when the CPU went
     to STOP by an error or the state could not be written, 2 on a broken program or a
@@ -126,15 +137,24 @@ def run_program(
     ``max_cycle_ms``: the maximum cycle time; None keeps the program's (see ``build_cpu``).
     ``restart`` (``--restart``): the startup from a saved state; None: the program's
     ``CPU["restart"]``, else warm. ``rt_priority``: the scan thread's real-time priority
-    (None: normal scheduling)."""
+    (None: normal scheduling). ``core`` (``--core``): the processor kept for the scan
+    (``engine.cores``); None: the program's ``CPU["core"]``, else auto."""
     if rt_priority is not None:
         keep_small_pages()  # before the view starts: it inherits it
     try:
         module = import_program(path)
         cpu = build_cpu(module, SystemClock(), max_cycle_ms=max_cycle_ms)
         restart = restart or program_restart(module) or "warm"
+        choice = core if core is not None else program_core(module)
     except ProgramLoadError as exc:
         return _fail(path, str(exc))
+    try:
+        kept = core_for(choice, rt_priority)
+    except ValueError as exc:
+        if core is None:
+            return _fail(path, f"CPU option core: {exc}")
+        print(f"s7graph: error: --core: {exc}", file=sys.stderr)
+        return 2
     state_path = state if state is not None else path.with_suffix(".state.sqlite")
     try:
         opened = open_state(state_path, cpu, fresh=fresh, hot=restart == "hot")
@@ -144,7 +164,7 @@ def run_program(
     except OSError as exc:
         return _fail(state_path, f"cannot use the state file: {exc.strerror or exc}")
     runner = Runner(cpu, cycle_ms=cycle_ms, store=opened.store, on_record=_report,
-                    end_on_stop=True, rt_priority=rt_priority)  # fmt: skip
+                    end_on_stop=True, rt_priority=rt_priority, core=kept)  # fmt: skip
     return run_until_stopped(
         runner, opened, what=path.name, restart=restart, duration_s=duration_s,
         on_start=_report,
