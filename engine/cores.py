@@ -30,10 +30,7 @@ import os
 from collections.abc import Iterator
 from contextlib import contextmanager
 
-__all__ = ["CORE_CHOICES", "allowed_cpus", "kept_free", "others", "pin", "scan_core"]
-
-CORE_CHOICES = ("auto", "off")
-"""The words ``--core`` takes besides a processor number."""
+__all__ = ["allowed_cpus", "kept_free", "others", "pin", "scan_core"]
 
 
 def allowed_cpus() -> set[int]:
