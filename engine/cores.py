@@ -53,9 +53,9 @@ def scan_core(
         return pool[-1] if realtime and len(pool) >= 2 else None
     if choice == "off":
         return None
-    if isinstance(choice, str) and not choice.isdigit():
-        raise ValueError(f"core {choice!r} is none of auto, off or a processor number")
-    if isinstance(choice, bool) or not isinstance(choice, int | str):
+    if isinstance(choice, bool) or not (
+        isinstance(choice, int) or (isinstance(choice, str) and choice.isdigit())
+    ):
         raise ValueError(f"core {choice!r} is none of auto, off or a processor number")
     core = int(choice)
     if core not in pool:

@@ -168,6 +168,12 @@ def _threads() -> list[int]:
         return []
 
 
+def _other_threads() -> list[int]:
+    """The native ids of this process's threads but the calling one (Linux), else none."""
+    me = threading.get_native_id()
+    return [tid for tid in _threads() if tid != me]
+
+
 class IdleGc:
     """Garbage collection in the idle part of the cycle.
 
@@ -353,11 +359,9 @@ class Runner:
             keep_small_pages()
             self.realtime = set_realtime(self.rt_priority)
         if self.realtime and self.rt_priority is not None:
-            me = threading.get_native_id()
             helpers = max(1, self.rt_priority - HELPERS_BELOW)
-            for tid in _threads():
-                if tid != me:
-                    set_realtime(helpers, tid)
+            for tid in _other_threads():
+                set_realtime(helpers, tid)
         everywhere = allowed_cpus() | ({self.core} if self.core is not None else set())
         if self.core is not None:  # (the calling thread may have kept off it already)
             self.pinned = self._keep_core(self.core, everywhere)
@@ -383,11 +387,9 @@ class Runner:
     @staticmethod
     def _keep_core(core: int, everywhere: set[int]) -> bool:
         """The calling (scan) thread on ``core``, the process's other threads off it."""
-        me = threading.get_native_id()
         rest = others(core, everywhere)
-        for tid in _threads():
-            if tid != me:
-                pin(rest, tid)
+        for tid in _other_threads():
+            pin(rest, tid)
         return pin({core})
 
     def _loop(self, duration_s: float | None) -> None:

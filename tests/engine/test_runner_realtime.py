@@ -11,6 +11,7 @@ import pytest
 
 from s7graph.engine import CallContext, Cpu, SystemClock, ob
 from s7graph.engine.runner import HELPERS_BELOW, Runner, set_realtime
+from tests.engine.bystander import bystander
 
 
 @ob(1)
@@ -42,34 +43,21 @@ needs_realtime = pytest.mark.skipif(
 def test_while_the_loop_runs_the_scan_is_real_time_above_its_helpers() -> None:
     cpu = Cpu(SystemClock())
     cpu.load(idle)
-    helper_ready = threading.Event()
-    done = threading.Event()
-    helper: list[int] = []
-
-    def bystander() -> None:  # another thread of the process (the bus, the writer)
-        helper.append(threading.get_native_id())
-        helper_ready.set()
-        done.wait(30)
-
-    other = threading.Thread(target=bystander)
-    other.start()
-    helper_ready.wait(5)
     seen: dict[str, tuple[int, int]] = {}
 
     def on_record(_: object) -> None:
         if runner.scans == 20 and "scan" not in seen:
             seen["scan"] = _policy(threading.get_native_id())
-            seen["helper"] = _policy(helper[0])
+            seen["helper"] = _policy(helper)
             runner.stop()
 
     runner = Runner(cpu, cycle_ms=5, rt_priority=40, on_record=on_record)
-    runner.startup()
-    try:
-        runner.run(duration_s=10)
-    finally:
-        runner.shutdown()
-        done.set()
-        other.join()
+    with bystander() as helper:
+        runner.startup()
+        try:
+            runner.run(duration_s=10)
+        finally:
+            runner.shutdown()
     assert seen["scan"] == (os.SCHED_FIFO, 40)
     assert seen["helper"] == (os.SCHED_FIFO, 40 - HELPERS_BELOW)
     me = threading.get_native_id()

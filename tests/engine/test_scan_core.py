@@ -12,6 +12,7 @@ import pytest
 from s7graph.engine import CallContext, Cpu, SystemClock, ob
 from s7graph.engine.cores import kept_free, others, scan_core
 from s7graph.engine.runner import Runner, core_for
+from tests.engine.bystander import bystander
 
 TWO = {0, 1}
 
@@ -90,33 +91,21 @@ def test_while_the_loop_runs_the_scan_has_its_core_and_the_other_threads_the_res
     core = min(allowed)
     cpu = Cpu(SystemClock())
     cpu.load(idle)
-    ready, done = threading.Event(), threading.Event()
-    helper: list[int] = []
-
-    def bystander() -> None:  # another thread of the process (the bus, the writer)
-        helper.append(threading.get_native_id())
-        ready.set()
-        done.wait(30)
-
-    other = threading.Thread(target=bystander)
-    other.start()
-    ready.wait(5)
     seen: dict[str, set[int]] = {}
 
     def on_record(_: object) -> None:
         if runner.scans == 5 and not seen:
             seen["scan"] = set(os.sched_getaffinity(0))
-            seen["helper"] = set(os.sched_getaffinity(helper[0]))
+            seen["helper"] = set(os.sched_getaffinity(helper))
             runner.stop()
 
     runner = Runner(cpu, cycle_ms=5, rt_priority=None, on_record=on_record, core=core)
-    runner.startup()
-    try:
-        runner.run(duration_s=10)
-        after = (set(os.sched_getaffinity(0)), set(os.sched_getaffinity(helper[0])))
-    finally:
-        runner.shutdown()
-        done.set()
-        other.join()
+    with bystander() as helper:
+        runner.startup()
+        try:
+            runner.run(duration_s=10)
+            after = (set(os.sched_getaffinity(0)), set(os.sched_getaffinity(helper)))
+        finally:
+            runner.shutdown()
     assert seen == {"scan": {core}, "helper": allowed - {core}}
     assert after == (allowed, allowed) and not runner.pinned
