@@ -513,7 +513,7 @@ def own_causes(result: dict[str, Any]) -> collections.Counter[str]:
     )  # fmt: skip
 
 
-WORK = ("scan", "alarms", "stage", "edge", "gc")
+WORK = ("encode", "scan", "alarms", "edge", "stage", "gc")
 
 
 def cause(parts: dict[str, int]) -> str:

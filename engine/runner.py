@@ -4,9 +4,11 @@
 One of the three engine modules allowed threads and sleeping (with ``clock.py`` and
 ``writer.py``). :class:`Runner` calls ``cpu.scan()`` every ``cycle_ms`` (a minimum cycle
 time: a late scan starts the next one at once), hands each ``ScanRecord`` to ``on_record``,
-logs the scan's message events and hands the state's changes to the store's writer
-(``engine/writer.py``: committed off the scan thread), and keeps statistics of the scan
-execution time and of overruns.
+logs the scan's message events and, after the scan boundary's commands, hands the state's
+changes to the store's writer (``engine/writer.py``: the instance DBs encoded in the idle
+part of the cycle, committed off the scan thread; what the writer has not encoded by the
+next scan, the scan thread encodes before it), and keeps statistics of the scan execution
+time and of overruns.
 
 **Cycle monitoring of the real thing.** The CPU judges a cycle's length only once it is
 over; a block, a plant or an action in an endless loop would never end it. A monitor
@@ -37,10 +39,11 @@ never traversed again) and automatic collections are turned off; after each cycl
 when the next cycle is not due for a while, the generations that are due are collected.
 
 **Where the time went** (``profile``, ``engine/profile.py``): each cycle is stamped at the
-end of each phase of the loop (scan, alarm log, staging, ``on_record``, collector, the wait
-and the late start of the next scan), with the scan thread's processor time and its time
-waiting for a processor; the longest cycle and the last long ones (over the cycle time +
-2 ms) are kept with their breakdowns, for ``status`` and ``s7graph status``.
+end of each phase of the loop (what was left of the last staging to encode, scan, alarm
+log, ``on_record``, staging, collector, the wait and the late start of the next scan), with
+the scan thread's processor time and its time waiting for a processor; the longest cycle
+and the last long ones (over the cycle time + 2 ms) are kept with their breakdowns, for
+``status`` and ``s7graph status``.
 
 **Stopping.** ``request_stop`` (the CLI's SIGTERM and Ctrl-C handlers) ends the loop after
 the current scan. If the scan thread does not come back within ``grace_s`` — code that
@@ -93,6 +96,10 @@ EXIT_HUNG = 3
 _ABORT_SIGNAL = signal.SIGUSR2
 RT_PRIORITY = 40
 """The scan thread's ``SCHED_FIFO`` priority (1-98) when the system allows real-time."""
+ENCODE_MARGIN_S = 0.0005
+"""How long before the next scan falls due the writer stops encoding the instance DBs of the
+last staging (``engine/writer.py``; it also keeps twice its longest recent encoding clear):
+the scan thread encodes what is left then, before its scan."""
 COMM_LOAD_PCT = 20
 """The share of the cycle time the edge may spend on commands at each scan boundary, in
 per cent: S7's "scan cycle load from communication" (HW Config, Cycle/Clock Memory; 20 by
@@ -370,6 +377,7 @@ class Runner:
         try:
             self._loop(duration_s)
         finally:
+            self._finish_staging()  # nothing left half-staged for the scans after the loop
             if self.gc is not None:
                 self.gc.stop()
             if self.realtime:
@@ -405,6 +413,8 @@ class Runner:
             while not self._stop.is_set():
                 now = time.monotonic()
                 started = clock()
+                self._finish_staging()  # first: the bookkeeping below counts with the scan
+                encoded = clock()
                 cpu_ns, waited = time.thread_time_ns(), runq.read()
                 if open_cycle is not None:
                     profile.add(open_cycle.close(started, cpu_ns, waited))
@@ -420,19 +430,20 @@ class Runner:
                 except ScanAborted as abort:
                     cpu.abort(abort.block or "CPU")
                 scanned = clock()
-                self.exec_stats.add(scanned - started)
+                self.exec_stats.add(scanned - encoded)
                 self.scans += 1
                 if record is not None:
                     self.log_alarms(record)
                 logged = clock()
-                self._persist()
-                staged = clock()
                 if record is not None and self.on_record is not None:
                     try:
                         self.on_record(record)
                     except ScanAborted as abort:
                         cpu.abort(abort.block or "on_record")
                 edged = clock()
+                due += self.cycle_s
+                self._persist(until=due - ENCODE_MARGIN_S)
+                staged = clock()
                 if self.write_error is not None:
                     break
                 if was_running and cpu.mode is CpuMode.STOP and not self._stop.is_set():
@@ -441,12 +452,11 @@ class Runner:
                         self.on_stop(self.stopped)
                     if self.end_on_stop:
                         break
-                due += self.cycle_s
                 delay = due - time.monotonic()
                 if delay > 0 and self.gc is not None and self.gc.idle(delay):
                     delay = due - time.monotonic()
                 collected = clock()
-                stamps = [started, scanned, logged, staged, edged, collected]
+                stamps = [started, encoded, scanned, logged, edged, staged, collected]
                 idle_ns = max(0, int(delay * 1e9))
                 open_cycle = OpenCycle(self.scans, at, stamps, cpu_ns, waited, idle_ns, delay <= 0)
                 if delay > 0:
@@ -457,16 +467,26 @@ class Runner:
         finally:
             runq.close()
 
-    def _persist(self) -> None:
+    def _persist(self, *, until: float | None = None) -> None:
+        """Stage this scan's changes (after the boundary's commands: one state) and hand
+        them to the writer, which encodes the instance DBs in the idle part of the cycle,
+        up to ``until`` (``time.monotonic``)."""
         writer = self.writer
         if self.store is None or writer is None:
             return
-        writer.submit(self.store.stage(self.cpu, upto=self.scans), self.scans)
+        batch = self.store.stage(self.cpu, upto=self.scans, defer=True)
+        writer.submit(batch, self.scans, until=until)
         if writer.error is not None and self.write_error is None:
             self.write_error = writer.error
             self.cpu.stop_by_error(
                 EventId.STOP_STATE_WRITE, "", f"state file not written: {writer.error.problem}"
             )
+
+    def _finish_staging(self) -> None:
+        """Encode what the writer left of the last staging (before the next scan changes
+        it); a failure is the writer's error, seen by the next ``_persist``."""
+        if self.writer is not None:
+            self.writer.finish()
 
     def log_alarms(self, record: ScanRecord) -> None:
         """Append the message events of ``record`` to the store's alarm log (wall time)."""
@@ -493,8 +513,10 @@ class Runner:
 
     def durable_mark(self) -> int:
         """The mark whose commit makes durable everything applied so far: a command applied
-        at this scan boundary acts (and is audited) in the next scan."""
-        return self.writer.next_mark() if self.writer is not None else self.scans + 1
+        at this scan boundary acts (and is audited) in the next scan — staged after the
+        boundary, so the scan done is not yet the writer's latest."""
+        later = self.scans + 1
+        return max(self.writer.next_mark(), later) if self.writer is not None else later
 
     def when_durable(self, mark: int, fn: DurableCallback) -> None:
         """``fn(None)`` once scan ``mark`` is on disk, ``fn(error)`` if it never will be; at

@@ -15,6 +15,16 @@ it either changed nothing or was committed. ``next_mark()`` is the mark whose co
 and is audited, in scan N + 1. ``when_durable(mark, fn)`` calls ``fn(None)`` once that scan
 is committed (at once if it already is) or ``fn(error)`` if writing failed; ``wait(mark,
 timeout)`` blocks a caller (never the scan thread) until then.
+
+**Encoded in the idle part of the cycle.** A batch staged with ``defer``
+(``StateStore.stage``) still holds its instance DBs unencoded — for large charts most of
+the staging's work. ``submit(batch, mark, until=t)`` leaves them to this thread, which
+encodes them one at a time while the scan thread idles, up to ``t`` (``time.monotonic``,
+the runner's next scan less a margin); ``finish()``, called by the scan thread before its
+next scan, encodes whatever is left (waiting for the one in hand), so no scan changes a
+state that is still being read, and no row holds a later scan's state. The interpreter's
+lock is still shared; what moves is when the work is done: in the scan thread's sleep,
+not between its scan and its deadline.
 """
 
 from __future__ import annotations
@@ -32,6 +42,9 @@ DurableCallback = Callable[[str | None], None]
 """``fn(error)``: None once the scan is durable, else why it never will be."""
 
 _BUSY_RETRY_S = 0.05
+_MARGIN_FACTOR = 2
+"""The writer starts encoding an instance DB only when twice the longest recent one
+(``encode_ns``) fits before ``until``: the scan thread should not have to wait for it."""
 
 
 class StoreWriter:
@@ -43,6 +56,18 @@ class StoreWriter:
         store.use_lock(self._cond)
         store.deferred = True
         self._pending: Batch | None = None
+        self._staging: Batch | None = None
+        """The batch whose instance DBs are still being encoded (``submit`` with
+        ``until``)."""
+        self._until = 0.0
+        self._encoding = threading.Lock()  # held while one instance DB is encoded
+        self.encode_ns = 0
+        """The longest recent encoding of one instance DB: each one's time, or the last
+        value less a sixteenth (one slow encoding, a stall of the machine, fades)."""
+        self.encoded_here = 0
+        """Instance DBs encoded in this thread (the rest: by the scan thread, ``finish``)."""
+        self.encoded_late = 0
+        """Instance DBs the scan thread had to encode itself before its scan."""
         self._writing = False
         self._closed = False
         self._latest = 0
@@ -60,9 +85,21 @@ class StoreWriter:
 
     # ---- the scan thread's side -------------------------------------------------------------
 
-    def submit(self, batch: Batch | None, mark: int) -> None:
+    def submit(self, batch: Batch | None, mark: int, *, until: float | None = None) -> None:
         """Hand over scan ``mark``'s changes (None: it changed nothing); never waits for
-        the disk."""
+        the disk. A batch with instance DBs still to encode (``stage(defer=True)``) is
+        encoded in this thread up to ``until`` (``time.monotonic``; None: not here), the
+        rest by ``finish()``, which must come before the next ``submit``."""
+        if batch is not None and batch.unencoded:
+            with self._cond:
+                if self._staging is not None:
+                    raise RuntimeError("submit before finish: a batch is still being encoded")
+                self._latest = max(self._latest, mark)
+                batch.upto = max(batch.upto, mark)
+                self._staging = batch
+                self._until = -1.0 if until is None else until
+                self._cond.notify_all()
+            return
         with self._cond:
             self._latest = max(self._latest, mark)
             if batch is not None:
@@ -72,10 +109,80 @@ class StoreWriter:
                 else:
                     self._pending.merge(batch)
                 self._cond.notify_all()
-            elif self._pending is None and not self._writing and self.error is None:
+            elif self._idle():
                 self.committed = self._latest  # nothing in flight: durable as it is
                 if self._waiters:
                     self._cond.notify_all()
+
+    def finish(self) -> int:
+        """Encode what is left of the batch being encoded, in the calling (scan) thread,
+        after the instance DB in hand; how many were left. Call before the next scan."""
+        staging = self._staging
+        if staging is None:
+            return 0
+        with self._encoding:
+            if self._staging is not staging:
+                return 0  # the writer was done meanwhile
+            left = len(staging.unencoded)
+            while self._encode_next(staging):
+                pass
+            self.encoded_late += left
+            self._staged(staging)
+        return left
+
+    def _staged(self, batch: Batch) -> None:
+        """``batch`` is encoded (``_encoding`` held): on to the commit."""
+        with self._cond:
+            self._staging = None
+            if not batch:
+                if self._idle():
+                    self.committed = self._latest
+            elif self._pending is None:
+                self._pending = batch
+            else:
+                self._pending.merge(batch)
+            self._cond.notify_all()
+
+    def _idle(self) -> bool:
+        """Nothing in flight (``_cond`` held): what was submitted is durable as it is."""
+        return (
+            self._pending is None and self._staging is None and not self._writing
+            and self.error is None
+        )  # fmt: skip
+
+    def _encode_one(self, staging: Batch) -> None:
+        """Encode the next instance DB of ``staging`` in this thread, if it is still the
+        one being encoded and there is still time."""
+        with self._encoding:
+            if self._staging is not staging or not staging.unencoded:
+                return
+            started = time.perf_counter_ns()
+            left = self._encode_next(staging)
+            took = time.perf_counter_ns() - started
+            self.encode_ns = max(took, self.encode_ns - self.encode_ns // 16)
+            self.encoded_here += 1
+            if not left:
+                self._staged(staging)
+
+    def _encode_next(self, staging: Batch) -> bool:
+        """``StateStore.encode_next``; a failure is a write error (nothing more is written),
+        never an exception in the scan thread or the end of this one."""
+        try:
+            return self.store.encode_next(staging)
+        except Exception as exc:
+            staging.unencoded.clear()
+            problem = f"cannot encode the state: {type(exc).__name__}: {exc}"
+            with self._cond:
+                self.error = self.error or StateWriteError(self.store.path, problem)
+            return False
+
+    def _may_encode(self) -> bool:
+        """Whether this thread may start on the next instance DB now (``_cond`` held)."""
+        margin = _MARGIN_FACTOR * self.encode_ns / 1e9
+        return (
+            self._staging is not None and self.error is None
+            and (self._closed or time.monotonic() + margin < self._until)
+        )  # fmt: skip
 
     # ---- durability ------------------------------------------------------------------------
 
@@ -111,8 +218,19 @@ class StoreWriter:
     def _loop(self) -> None:
         while True:
             with self._cond:
-                while self._pending is None and not self._closed and not self._due():
-                    self._cond.wait()
+                while True:
+                    encode = self._may_encode()
+                    if encode or self._pending is not None or self._closed or self._due():
+                        break
+                    if self._staging is not None and self._until > time.monotonic():
+                        self._cond.wait(self._until - time.monotonic())
+                    else:
+                        self._cond.wait()
+                staging = self._staging
+            if encode and staging is not None:
+                self._encode_one(staging)
+                continue
+            with self._cond:
                 if self.error is not None:
                     batch = None
                     self._pending = None
@@ -131,12 +249,15 @@ class StoreWriter:
                 elif error is not None:
                     self.error = self.error or error
                 elif batch is not None:
-                    self.committed = batch.upto if self._pending is not None else self._latest
-                elif self._pending is None and self.error is None:
+                    later = self._pending is not None or self._staging is not None
+                    self.committed = max(self.committed, batch.upto if later else self._latest)
+                elif self._pending is None and self._staging is None and self.error is None:
                     self.committed = self._latest
                 ready = self._take_ready()
                 self._cond.notify_all()
-                done = closing and self._pending is None
+                done = closing and self._pending is None and (
+                    self._staging is None or self.error is not None
+                )
                 busy = error is not None and error.busy and not closing
             self._call(ready)
             if done:

@@ -24,25 +24,25 @@ def _cycle(scan: int, stamps_ms: list[float], idle_ms: float) -> OpenCycle:
 
 
 def test_a_cycle_is_split_into_the_phases_of_the_loop_and_the_late_start() -> None:
-    # scan 0-2, alarms 2-2.1, stage 2.1-2.6, edge 2.6-3.6, gc 3.6-3.6; asked 6.4 idle; the
-    # next scan starts at 15 ms: 5 ms late
-    open_cycle = _cycle(7, [0, 2, 2.1, 2.6, 3.6, 3.6], idle_ms=6.4)
+    # encode 0-0, scan 0-2, alarms 2-2.1, edge 2.1-3.1, stage 3.1-3.6, gc 3.6-3.6; asked
+    # 6.4 idle; the next scan starts at 15 ms: 5 ms late
+    open_cycle = _cycle(7, [0, 0, 2, 2.1, 3.1, 3.6, 3.6], idle_ms=6.4)
     cycle = open_cycle.close(15 * _MS, cpu_ns=8 * _MS, runq_ns=4 * _MS)
     assert cycle.scan == 7 and cycle.cycle_ns == 15 * _MS and not cycle.overrun
     ms = {name: round(ns / _MS, 3) for name, ns in zip(PHASE_NAMES, cycle.phases, strict=True)}
-    assert ms == {"scan": 2, "alarms": 0.1, "stage": 0.5, "edge": 1, "gc": 0, "idle": 6.4,
-                  "late": 5}  # fmt: skip
+    assert ms == {"encode": 0, "scan": 2, "alarms": 0.1, "edge": 1, "stage": 0.5, "gc": 0,
+                  "idle": 6.4, "late": 5}  # fmt: skip
     assert cycle.busy_ns == round(8.6 * _MS)  # all but the wait asked for
     assert cycle.cpu_ns == 3 * _MS and cycle.runq_ns == 3 * _MS
     assert cycle.blocked_ns == round(2.6 * _MS)  # neither ran nor waited for a processor
     assert cycle.describe() == (
-        "15.0 ms: scan 2.0, alarms 0.1, stage 0.5, edge 1.0, late 5.0 "
+        "15.0 ms: scan 2.0, alarms 0.1, edge 1.0, stage 0.5, late 5.0 "
         "(ran 3.0, waited for a processor 3.0, blocked 2.6)"
     )
 
 
 def test_without_the_systems_figures_the_wait_is_not_guessed() -> None:
-    open_cycle = OpenCycle(1, 0, [0, 1, 1, 1, 1, 1], 0, None, 0, True)
+    open_cycle = OpenCycle(1, 0, [0, 0, 1, 1, 1, 1, 1], 0, None, 0, True)
     cycle = open_cycle.close(1 * _MS, cpu_ns=1 * _MS, runq_ns=None)
     assert cycle.overrun and cycle.runq_ns is None and cycle.blocked_ns is None
     assert "processor" not in cycle.parts() and "waited" not in cycle.describe()
@@ -54,7 +54,7 @@ def test_the_profile_keeps_the_longest_cycle_and_the_last_long_ones() -> None:
     lengths = [10, 11.9, 12.5, 10, 30, 10.2, 13]
     for scan, ms in enumerate(lengths, start=1):
         end = ms - 1
-        profile.add(_cycle(scan, [0, 1, 1, 1, 1, 1], end).close(int(ms * _MS), 0, 0))
+        profile.add(_cycle(scan, [0, 0, 1, 1, 1, 1, 1], end).close(int(ms * _MS), 0, 0))
     assert profile.count == 7
     assert profile.long == 3  # over 10 ms + 2 ms
     assert [c.scan for c in profile.recent] == [3, 5, 7]

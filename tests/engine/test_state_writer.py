@@ -4,13 +4,26 @@ a full disk reported with its own error."""
 
 from __future__ import annotations
 
+import contextlib
 import sqlite3
 import threading
+import time
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
-from s7graph.engine import CallContext, Cpu, CpuMode, EventId, SystemClock, VirtualClock, ob
+from s7graph.engine import (
+    CallContext,
+    Cpu,
+    CpuMode,
+    EventId,
+    InstanceDB,
+    SystemClock,
+    VirtualClock,
+    fb,
+    ob,
+)
 from s7graph.engine.persistence import StateStore
 from s7graph.engine.runner import Runner
 from s7graph.engine.writer import StoreWriter
@@ -187,3 +200,156 @@ def test_a_run_whose_state_cannot_be_written_stops_the_cpu_naming_the_error(
         e.event_id == EventId.STOP_STATE_WRITE and "database or disk is full" in e.message
         for e in cpu.diagnostics
     )
+
+
+# ---- the instance DBs encoded in the idle part of the cycle -------------------------------
+
+
+@fb(7, STAT={"total": ("DINT", 0)})
+def tally(ctx: CallContext, db: InstanceDB) -> None:
+    db.total = int(db.total) + 1  # type: ignore[call-overload]
+
+
+@ob(1)
+def calls_tally(ctx: CallContext) -> None:
+    for number in (7, 8, 9):
+        ctx.call(tally, number)
+
+
+def _tallies(clock: object) -> Cpu:
+    cpu = Cpu(clock)  # type: ignore[arg-type]
+    cpu.load(calls_tally, tally)
+    for number in (7, 8, 9):
+        cpu.create_instance_db(number, tally)
+    cpu.start()
+    return cpu
+
+
+@contextlib.contextmanager
+def _writing(clock: VirtualClock, path: Path) -> Iterator[tuple[Cpu, StateStore, StoreWriter]]:
+    """Three tallies saved in a fresh file, and a writer for it (closed at the end)."""
+    store = StateStore(path)
+    cpu = _tallies(clock)
+    store.save(cpu)
+    writer = StoreWriter(store)
+    try:
+        yield cpu, store, writer
+    finally:
+        writer.close()
+
+
+def _totals(path: Path) -> dict[int, object]:
+    store = StateStore(path)
+    try:
+        return {n: store.instance_state(n)["total"] for n in (7, 8, 9)}  # type: ignore[index]
+    finally:
+        store.close()
+
+
+def test_a_deferred_staging_is_encoded_by_the_writer_while_the_scan_thread_idles(
+    clock: VirtualClock, tmp_path: Path
+) -> None:
+    """``stage(defer=True)`` leaves the instance DBs to the writer, which encodes them
+    before ``until`` and commits them as ``stage`` would have: the scan thread's
+    ``finish`` then finds nothing left."""
+    with _writing(clock, tmp_path / "s.sqlite") as (cpu, store, writer):
+        clock.advance(10)
+        cpu.scan()
+        batch = store.stage(cpu, upto=1, defer=True)
+        assert batch is not None and [n for n, _ in batch.unencoded] == [7, 8, 9]
+        assert not batch.instances  # nothing encoded in the scan thread
+        writer.submit(batch, 1, until=time.monotonic() + 60)
+        assert writer.wait(1, timeout=10)
+        assert writer.finish() == 0
+    assert writer.encoded_here == 3 and writer.encoded_late == 0
+    assert _totals(tmp_path / "s.sqlite") == {7: 1, 8: 1, 9: 1}
+
+
+def test_what_the_writer_has_not_encoded_by_its_deadline_the_scan_thread_encodes_before_its_scan(
+    clock: VirtualClock, tmp_path: Path
+) -> None:
+    """The deadline passed (or the writer was busy): ``finish`` encodes the rest in the
+    calling thread, so the rows hold the state of the scan they were staged after, not
+    the one that follows; the mark is durable only once they are committed."""
+    with _writing(clock, tmp_path / "s.sqlite") as (cpu, store, writer):
+        clock.advance(10)
+        cpu.scan()
+        writer.submit(store.stage(cpu, upto=1, defer=True), 1, until=time.monotonic() - 1)
+        assert not writer.wait(1, timeout=0.2)  # nothing may be encoded past its deadline
+        assert writer.finish() == 3
+        clock.advance(10)
+        cpu.scan()  # changes every instance DB after they were encoded
+        assert writer.wait(1, timeout=10)
+    assert writer.encoded_here == 0 and writer.encoded_late == 3
+    assert _totals(tmp_path / "s.sqlite") == {7: 1, 8: 1, 9: 1}  # not 2: the scan after
+
+
+def test_a_deferred_staging_that_changed_nothing_is_durable_once_encoded(
+    clock: VirtualClock, tmp_path: Path
+) -> None:
+    with _writing(clock, tmp_path / "s.sqlite") as (cpu, store, writer):
+        batch = store.stage(cpu, upto=1, defer=True)  # no scan since the save: unchanged
+        assert batch is not None and batch.unencoded
+        writer.submit(batch, 1, until=time.monotonic() + 60)
+        assert writer.wait(1, timeout=10)
+    assert writer.commits == 0  # nothing to write
+
+
+def test_a_staging_is_finished_before_the_next_is_submitted(
+    clock: VirtualClock, tmp_path: Path
+) -> None:
+    with _writing(clock, tmp_path / "s.sqlite") as (cpu, store, writer):
+        clock.advance(10)
+        cpu.scan()
+        writer.submit(store.stage(cpu, upto=1, defer=True), 1)  # until None: not here
+        with pytest.raises(RuntimeError, match="submit before finish"):
+            writer.submit(store.stage(cpu, upto=2, defer=True), 2)
+        writer.finish()
+        assert writer.wait(1, timeout=10)
+
+
+def test_an_instance_db_that_cannot_be_encoded_is_a_write_error_not_an_exception(
+    clock: VirtualClock, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A failure while encoding, in the writer or in the scan thread's ``finish``, is kept
+    as the writer's error (the runner stops the CPU naming it); waiters hear of it."""
+
+    def broken(self: InstanceDB, *, live: bool = False) -> dict[str, object]:
+        raise RuntimeError("a value that cannot be read")
+
+    heard: list[str | None] = []
+    with _writing(clock, tmp_path / "s.sqlite") as (cpu, store, writer):
+        monkeypatch.setattr(InstanceDB, "snapshot", broken)
+        clock.advance(10)
+        cpu.scan()
+        writer.submit(store.stage(cpu, upto=1, defer=True), 1)
+        assert writer.finish() == 3  # no exception in the scan thread
+        writer.when_durable(1, heard.append)
+    assert writer.error is not None
+    assert "cannot encode the state: RuntimeError: a value that cannot be read" in str(
+        writer.error
+    )
+    assert heard and heard[0] is not None and "cannot encode" in heard[0]
+
+
+@pytest.mark.timeout(60)
+def test_a_running_cpu_leaves_its_instance_dbs_to_the_writer_and_finds_them_on_disk(
+    tmp_path: Path,
+) -> None:
+    """The runner stages after the scan boundary and the writer encodes in the idle part:
+    at a 20 ms cycle of three small FBs the scan thread encodes (almost) none itself; what
+    the file holds after the run is the last scan's state."""
+    path = tmp_path / "s.sqlite"
+    store = StateStore(path)
+    cpu = _tallies(SystemClock())
+    runner = Runner(cpu, cycle_ms=20, store=store, rt_priority=None)
+    runner.startup("warm")
+    runner.run(duration_s=1.0)
+    writer = runner.writer
+    assert writer is not None
+    assert runner.writer is not None and writer.flush(10)
+    assert writer.encoded_here > writer.encoded_late
+    assert runner.profile.mean_ns("encode") < runner.profile.mean_ns("scan") + 1_000_000
+    totals = {n: cpu.instance_db(n).total for n in (7, 8, 9)}
+    runner.shutdown()
+    assert _totals(path) == totals
