@@ -30,8 +30,9 @@ for the lock. Processes they start (the view) are reset to the normal policy; th
 ends with every thread back at the normal policy. The process and the view it starts keep
 small pages (:func:`keep_small_pages`): the kernel merging huge pages held scans up.
 With ``core`` (``engine/cores.py``) the scan thread runs on that processor and the
-process's other threads on the rest while the loop runs; all of them get every processor
-back when it ends.
+process's other threads on the rest while the loop runs — but the writer's encoder, which
+works only while the scan thread sleeps (``engine/writer.py``) and runs below it; all of
+them get every processor back when it ends.
 
 **The garbage collector** (:class:`IdleGc`) runs in the idle part of the cycle, never in
 the middle of a scan: when the loop starts, what the startup loaded is frozen (``gc.freeze``:
@@ -372,6 +373,9 @@ class Runner:
         everywhere = allowed_cpus() | ({self.core} if self.core is not None else set())
         if self.core is not None:  # (the calling thread may have kept off it already)
             self.pinned = self._keep_core(self.core, everywhere)
+            encoder = self.writer.encoder_id if self.writer is not None else None
+            if self.pinned and encoder is not None:
+                pin({self.core}, encoder)  # it works while the scan thread sleeps
         if self.gc is not None:
             self.gc.start()
         try:

@@ -18,13 +18,15 @@ timeout)`` blocks a caller (never the scan thread) until then.
 
 **Encoded in the idle part of the cycle.** A batch staged with ``defer``
 (``StateStore.stage``) still holds its instance DBs unencoded — for large charts most of
-the staging's work. ``submit(batch, mark, until=t)`` leaves them to this thread, which
+the staging's work. ``submit(batch, mark, until=t)`` leaves them to a second thread, the
+*encoder* (``encoder_id``; never held up by a commit or a checkpoint of the file), which
 encodes them one at a time while the scan thread idles, up to ``t`` (``time.monotonic``,
-the runner's next scan less a margin); ``finish()``, called by the scan thread before its
-next scan, encodes whatever is left (waiting for the one in hand), so no scan changes a
-state that is still being read, and no row holds a later scan's state. The interpreter's
-lock is still shared; what moves is when the work is done: in the scan thread's sleep,
-not between its scan and its deadline.
+the runner's next scan less a margin), and hands them on to the commit; ``finish()``,
+called by the scan thread before its next scan, encodes whatever is left (waiting for the
+one in hand), so no scan changes a state that is still being read, and no row holds a
+later scan's state. The interpreter's lock is still shared; what moves is when the work
+is done: in the scan thread's sleep, not between its scan and its deadline. The runner
+puts the encoder on the processor it keeps for the scan (``engine/cores.py``), idle then.
 """
 
 from __future__ import annotations
@@ -43,12 +45,13 @@ DurableCallback = Callable[[str | None], None]
 
 _BUSY_RETRY_S = 0.05
 _MARGIN_FACTOR = 2
-"""The writer starts encoding an instance DB only when twice the longest recent one
+"""The encoder starts on an instance DB only when twice the longest recent one
 (``encode_ns``) fits before ``until``: the scan thread should not have to wait for it."""
 
 
 class StoreWriter:
-    """Writes one ``StateStore`` in a thread of its own; ``close()`` flushes and ends it."""
+    """Writes one ``StateStore`` in a thread of its own (and encodes deferred stagings in
+    another); ``close()`` flushes and ends them."""
 
     def __init__(self, store: StateStore) -> None:
         self.store = store
@@ -65,7 +68,7 @@ class StoreWriter:
         """The longest recent encoding of one instance DB: each one's time, or the last
         value less a sixteenth (one slow encoding, a stall of the machine, fades)."""
         self.encoded_here = 0
-        """Instance DBs encoded in this thread (the rest: by the scan thread, ``finish``)."""
+        """Instance DBs encoded by the encoder thread (the rest: by the scan thread)."""
         self.encoded_late = 0
         """Instance DBs the scan thread had to encode itself before its scan."""
         self._writing = False
@@ -82,14 +85,23 @@ class StoreWriter:
         self.max_commit_ns = 0
         self._thread = threading.Thread(target=self._loop, name="s7graph-writer", daemon=True)
         self._thread.start()
+        self._encoder = threading.Thread(
+            target=self._encode_loop, name="s7graph-encoder", daemon=True
+        )
+        self._encoder.start()
+
+    @property
+    def encoder_id(self) -> int | None:
+        """The encoder thread's native id (for pinning it: ``engine/cores.py``)."""
+        return self._encoder.native_id
 
     # ---- the scan thread's side -------------------------------------------------------------
 
     def submit(self, batch: Batch | None, mark: int, *, until: float | None = None) -> None:
         """Hand over scan ``mark``'s changes (None: it changed nothing); never waits for
         the disk. A batch with instance DBs still to encode (``stage(defer=True)``) is
-        encoded in this thread up to ``until`` (``time.monotonic``; None: not here), the
-        rest by ``finish()``, which must come before the next ``submit``."""
+        encoded by the encoder thread up to ``until`` (``time.monotonic``; None: not
+        there), the rest by ``finish()``, which must come before the next ``submit``."""
         if batch is not None and batch.unencoded:
             with self._cond:
                 if self._staging is not None:
@@ -151,8 +163,8 @@ class StoreWriter:
         )  # fmt: skip
 
     def _encode_one(self, staging: Batch) -> None:
-        """Encode the next instance DB of ``staging`` in this thread, if it is still the
-        one being encoded and there is still time."""
+        """Encode the next instance DB of ``staging`` in the encoder thread, if it is still
+        the one being encoded."""
         with self._encoding:
             if self._staging is not staging or not staging.unencoded:
                 return
@@ -177,7 +189,8 @@ class StoreWriter:
             return False
 
     def _may_encode(self) -> bool:
-        """Whether this thread may start on the next instance DB now (``_cond`` held)."""
+        """Whether the encoder may start on the next instance DB now (``_cond`` held): in
+        time, or the writer closing (no scan follows)."""
         margin = _MARGIN_FACTOR * self.encode_ns / 1e9
         return (
             self._staging is not None and self.error is None
@@ -213,24 +226,31 @@ class StoreWriter:
             self._cond.wait_for(lambda: self.committed >= mark or self.error is not None, timeout)
             return self.committed >= mark and self.error is None
 
-    # ---- the writer thread -----------------------------------------------------------------
+    # ---- the encoder and writer threads -----------------------------------------------------
+
+    def _encode_loop(self) -> None:
+        while True:
+            with self._cond:
+                while not self._may_encode():
+                    if self._ending():
+                        return
+                    if self._staging is not None and self._until > time.monotonic():
+                        self._cond.wait(max(0.0, self._until - time.monotonic()))
+                    else:
+                        self._cond.wait()
+                staging = self._staging
+            if staging is not None:
+                self._encode_one(staging)
+
+    def _ending(self) -> bool:
+        """Closed, with nothing left to encode (``_cond`` held)."""
+        return self._closed and (self._staging is None or self.error is not None)
 
     def _loop(self) -> None:
         while True:
             with self._cond:
-                while True:
-                    encode = self._may_encode()
-                    if encode or self._pending is not None or self._closed or self._due():
-                        break
-                    if self._staging is not None and self._until > time.monotonic():
-                        self._cond.wait(self._until - time.monotonic())
-                    else:
-                        self._cond.wait()
-                staging = self._staging
-            if encode and staging is not None:
-                self._encode_one(staging)
-                continue
-            with self._cond:
+                while self._pending is None and not self._ending() and not self._due():
+                    self._cond.wait()
                 if self.error is not None:
                     batch = None
                     self._pending = None
@@ -255,9 +275,7 @@ class StoreWriter:
                     self.committed = self._latest
                 ready = self._take_ready()
                 self._cond.notify_all()
-                done = closing and self._pending is None and (
-                    self._staging is None or self.error is not None
-                )
+                done = self._ending() and self._pending is None
                 busy = error is not None and error.busy and not closing
             self._call(ready)
             if done:
@@ -312,6 +330,7 @@ class StoreWriter:
             self._closed = True
             self._cond.notify_all()
         self._thread.join(timeout)
+        self._encoder.join(timeout)
         with self._cond:
             left, self._waiters = self._waiters, []
         self._call([(fn, "the state file was closed first") for _, fn in left])

@@ -1,16 +1,20 @@
 """The processor kept for the scan (engine/cores.py, engine/runner.py): which one ``--core``
-chooses, and while the loop runs the scan thread on it alone and the process's other
-threads on the rest, every thread given all of them back when the loop ends."""
+chooses, and while the loop runs the scan thread on it (with the state writer's encoder,
+which works while the scan sleeps) and the process's other threads on the rest, every
+thread given all of them back when the loop ends."""
 
 from __future__ import annotations
 
 import os
 import threading
+from collections.abc import Callable
+from pathlib import Path
 
 import pytest
 
 from s7graph.engine import CallContext, Cpu, SystemClock, ob
 from s7graph.engine.cores import kept_free, others, scan_core
+from s7graph.engine.persistence import StateStore
 from s7graph.engine.runner import Runner, core_for
 from tests.engine.bystander import bystander
 
@@ -84,28 +88,63 @@ def test_kept_free_moves_the_thread_off_the_core_and_back() -> None:
     assert set(os.sched_getaffinity(0)) == before
 
 
-@needs_two
-@pytest.mark.timeout(30)
-def test_while_the_loop_runs_the_scan_has_its_core_and_the_other_threads_the_rest() -> None:
-    allowed = set(os.sched_getaffinity(0))
-    core = min(allowed)
+def _at_scan_5(
+    core: int, look: Callable[[Runner], dict[str, set[int]]], store: StateStore | None = None
+) -> tuple[Runner, dict[str, set[int]]]:
+    """Run an idle CPU with ``core`` kept, and ``look`` at the threads' processors in its
+    fifth scan; the runner (shut down) and what was seen."""
     cpu = Cpu(SystemClock())
     cpu.load(idle)
     seen: dict[str, set[int]] = {}
 
     def on_record(_: object) -> None:
         if runner.scans == 5 and not seen:
-            seen["scan"] = set(os.sched_getaffinity(0))
-            seen["helper"] = set(os.sched_getaffinity(helper))
+            seen.update(look(runner))
             runner.stop()
 
-    runner = Runner(cpu, cycle_ms=5, rt_priority=None, on_record=on_record, core=core)
+    runner = Runner(cpu, cycle_ms=5, rt_priority=None, on_record=on_record, core=core,
+                    store=store)  # fmt: skip
+    runner.startup()
+    try:
+        runner.run(duration_s=10)
+    finally:
+        runner.shutdown()
+    return runner, seen
+
+
+@needs_two
+@pytest.mark.timeout(30)
+def test_while_the_loop_runs_the_scan_has_its_core_and_the_other_threads_the_rest() -> None:
+    allowed = set(os.sched_getaffinity(0))
+    core = min(allowed)
+    after: list[set[int]] = []
     with bystander() as helper:
-        runner.startup()
-        try:
-            runner.run(duration_s=10)
-            after = (set(os.sched_getaffinity(0)), set(os.sched_getaffinity(helper)))
-        finally:
-            runner.shutdown()
+        runner, seen = _at_scan_5(core, lambda _: {
+            "scan": set(os.sched_getaffinity(0)), "helper": set(os.sched_getaffinity(helper))
+        })  # fmt: skip
+        after += [set(os.sched_getaffinity(0)), set(os.sched_getaffinity(helper))]
     assert seen == {"scan": {core}, "helper": allowed - {core}}
-    assert after == (allowed, allowed) and not runner.pinned
+    assert after == [allowed, allowed] and not runner.pinned
+
+
+@needs_two
+@pytest.mark.timeout(30)
+def test_the_writers_encoder_works_on_the_kept_core_while_the_scan_thread_sleeps(
+    tmp_path: Path,
+) -> None:
+    """The encoder thread (``engine/writer.py``) encodes the instance DBs only while the
+    scan thread idles, and runs below it: it shares the kept processor, which is idle then,
+    instead of the others' load; the writer that commits stays off it."""
+    allowed = set(os.sched_getaffinity(0))
+    core = min(allowed)
+
+    def look(runner: Runner) -> dict[str, set[int]]:
+        writer = runner.writer
+        assert writer is not None and writer.encoder_id is not None
+        return {
+            "encoder": set(os.sched_getaffinity(writer.encoder_id)),
+            "writer": set(os.sched_getaffinity(writer._thread.native_id or -1)),
+        }
+
+    _, seen = _at_scan_5(core, look, StateStore(tmp_path / "s.sqlite"))
+    assert seen == {"encoder": {core}, "writer": allowed - {core}}
