@@ -47,6 +47,8 @@ _BUSY_RETRY_S = 0.05
 _MARGIN_FACTOR = 2
 """The encoder starts on an instance DB only when twice the longest recent one
 (``encode_ns``) fits before ``until``: the scan thread should not have to wait for it."""
+_FADE = 16
+"""``encode_ns`` loses a sixteenth at every staging: one slow encoding fades."""
 
 
 class StoreWriter:
@@ -65,8 +67,9 @@ class StoreWriter:
         self._until = 0.0
         self._encoding = threading.Lock()  # held while one instance DB is encoded
         self.encode_ns = 0
-        """The longest recent encoding of one instance DB: each one's time, or the last
-        value less a sixteenth (one slow encoding, a stall of the machine, fades)."""
+        """The longest recent encoding of one instance DB, in the encoder's processor time
+        (a wait for the interpreter's lock or a processor is not the encoding's): each
+        one's, or the last value less ``1/_FADE`` at every staging."""
         self.encoded_here = 0
         """Instance DBs encoded by the encoder thread (the rest: by the scan thread)."""
         self.encoded_late = 0
@@ -110,6 +113,7 @@ class StoreWriter:
                 batch.upto = max(batch.upto, mark)
                 self._staging = batch
                 self._until = -1.0 if until is None else until
+                self.encode_ns -= self.encode_ns // _FADE
                 self._cond.notify_all()
             return
         with self._cond:
@@ -168,10 +172,9 @@ class StoreWriter:
         with self._encoding:
             if self._staging is not staging or not staging.unencoded:
                 return
-            started = time.perf_counter_ns()
+            started = time.thread_time_ns()
             left = self._encode_next(staging)
-            took = time.perf_counter_ns() - started
-            self.encode_ns = max(took, self.encode_ns - self.encode_ns // 16)
+            self.encode_ns = max(self.encode_ns, time.thread_time_ns() - started)
             self.encoded_here += 1
             if not left:
                 self._staged(staging)

@@ -353,3 +353,27 @@ def test_a_running_cpu_leaves_its_instance_dbs_to_the_writer_and_finds_them_on_d
     totals = {n: cpu.instance_db(n).total for n in (7, 8, 9)}
     runner.shutdown()
     assert _totals(path) == totals
+
+
+def test_one_slow_encoding_does_not_keep_the_encoder_out_for_good(
+    clock: VirtualClock, tmp_path: Path
+) -> None:
+    """The encoder starts on an instance DB only when twice the longest recent encoding
+    fits before the deadline; that figure fades at every staging, so after a stall of the
+    machine it takes its share again instead of leaving every encoding to the scan."""
+    with _writing(clock, tmp_path / "s.sqlite") as (cpu, store, writer):
+        writer.encode_ns = 2_000_000_000  # once took 2 s: nothing fits in a second
+        for mark in range(1, 121):
+            clock.advance(10)
+            cpu.scan()
+            writer.submit(store.stage(cpu, upto=mark, defer=True), mark,
+                          until=time.monotonic() + 1.0)  # fmt: skip
+            writer.finish()
+        assert writer.encoded_late > 0  # the scan thread did it while the figure was high
+        assert writer.encode_ns < 2_000_000  # faded: 2 s x (15/16)^120
+        before = writer.encoded_here
+        clock.advance(10)
+        cpu.scan()
+        writer.submit(store.stage(cpu, upto=121, defer=True), 121, until=time.monotonic() + 10)
+        assert writer.wait(121, timeout=10)
+    assert writer.encoded_here == before + 3
