@@ -57,7 +57,10 @@ class StoreWriter:
 
     def __init__(self, store: StateStore) -> None:
         self.store = store
-        self._cond = threading.Condition()
+        lock = threading.Lock()
+        self._cond = threading.Condition(lock)
+        self._wake_encoder = threading.Condition(lock)
+        """Notified when there is something to encode, or the end (not every commit)."""
         store.use_lock(self._cond)
         store.deferred = True
         self._pending: Batch | None = None
@@ -114,7 +117,7 @@ class StoreWriter:
                 self._staging = batch
                 self._until = -1.0 if until is None else until
                 self.encode_ns -= self.encode_ns // _FADE
-                self._cond.notify_all()
+                self._wake_encoder.notify()
             return
         with self._cond:
             self._latest = max(self._latest, mark)
@@ -138,7 +141,9 @@ class StoreWriter:
             return 0
         with self._encoding:
             if self._staging is not staging:
-                return 0  # the writer was done meanwhile
+                return 0  # the encoder was done meanwhile
+            if self.error is not None:
+                staging.unencoded.clear()  # nothing more is written
             left = len(staging.unencoded)
             while self._encode_next(staging):
                 pass
@@ -238,9 +243,9 @@ class StoreWriter:
                     if self._ending():
                         return
                     if self._staging is not None and self._until > time.monotonic():
-                        self._cond.wait(max(0.0, self._until - time.monotonic()))
+                        self._wake_encoder.wait(max(0.0, self._until - time.monotonic()))
                     else:
-                        self._cond.wait()
+                        self._wake_encoder.wait()
                 staging = self._staging
             if staging is not None:
                 self._encode_one(staging)
@@ -332,6 +337,7 @@ class StoreWriter:
         with self._cond:
             self._closed = True
             self._cond.notify_all()
+            self._wake_encoder.notify()
         self._thread.join(timeout)
         self._encoder.join(timeout)
         with self._cond:
