@@ -192,10 +192,13 @@ class Batch:
         )  # fmt: skip
 
     def merge(self, later: Batch) -> None:
-        """Fold a later batch into this one (the later rows win, appended rows add up);
-        neither may hold ``unencoded`` instance DBs."""
-        if self.unencoded or later.unencoded:
-            raise ValueError("a batch with instance DBs still to encode cannot be merged")
+        """Fold a later batch into this one (the later rows win, appended rows add up, the
+        later's ``unencoded`` instance DBs are this one's now); this one may hold none
+        still to encode."""
+        if self.unencoded:
+            raise ValueError("a batch with instance DBs still to encode cannot take another")
+        self.unencoded = later.unencoded
+        self.time_mark, self.staged_ns = later.time_mark, later.staged_ns
         self.upto = max(self.upto, later.upto)
         self.meta.update(later.meta)
         self.instances.update(later.instances)

@@ -381,7 +381,7 @@ class Runner:
         try:
             self._loop(duration_s)
         finally:
-            self._finish_staging()  # nothing left half-staged for the scans after the loop
+            self._finish_staging(carry=False)  # nothing half-staged after the loop
             if self.gc is not None:
                 self.gc.stop()
             if self.realtime:
@@ -486,11 +486,12 @@ class Runner:
                 EventId.STOP_STATE_WRITE, "", f"state file not written: {writer.error.problem}"
             )
 
-    def _finish_staging(self) -> None:
-        """Encode what the writer left of the last staging (before the next scan changes
-        it); a failure is the writer's error, seen by the next ``_persist``."""
+    def _finish_staging(self, *, carry: bool = True) -> None:
+        """Before the next scan changes it: the last staging encoded, or carried over to the
+        next (``StoreWriter.finish``); a failure is the writer's error, seen by the next
+        ``_persist``."""
         if self.writer is not None:
-            self.writer.finish()
+            self.writer.finish(carry=carry)
 
     def log_alarms(self, record: ScanRecord) -> None:
         """Append the message events of ``record`` to the store's alarm log (wall time)."""

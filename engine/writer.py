@@ -21,10 +21,14 @@ timeout)`` blocks a caller (never the scan thread) until then.
 the staging's work. ``submit(batch, mark, until=t)`` leaves them to a second thread, the
 *encoder* (``encoder_id``; never held up by a commit or a checkpoint of the file), which
 encodes them one at a time while the scan thread idles, up to ``t`` (``time.monotonic``,
-the runner's next scan less a margin), and hands them on to the commit; ``finish()``,
-called by the scan thread before its next scan, encodes whatever is left (waiting for the
-one in hand), so no scan changes a state that is still being read, and no row holds a
-later scan's state. The interpreter's lock is still shared; what moves is when the work
+the runner's next scan less a margin), and hands them on to the commit. ``finish()``,
+called by the scan thread before its next scan, makes sure no scan changes a state that is
+still being read and no row holds a later scan's state: a staging the encoder has not
+finished is *carried* — what it has encoded stays, under the next scan's staging, which
+stages every instance DB again, and nothing of it is committed (or counted durable) on
+its own — so the scan starts on time; the next one in a row is not carried but finished
+by the scan thread (waiting for the one in hand), so the file is never more than two
+scans behind. The interpreter's lock is still shared; what moves is when the work
 is done: in the scan thread's sleep, not between its scan and its deadline. The runner
 puts the encoder on the processor it keeps for the scan (``engine/cores.py``), idle then.
 """
@@ -77,6 +81,11 @@ class StoreWriter:
         """Instance DBs encoded by the encoder thread (the rest: by the scan thread)."""
         self.encoded_late = 0
         """Instance DBs the scan thread had to encode itself before its scan."""
+        self._carried: Batch | None = None
+        """A staging not encoded by its next scan, waiting for that scan's (``finish``)."""
+        self._carrying = False  # the last staging was carried over
+        self.carried = 0
+        """Stagings carried over to the next scan's."""
         self._writing = False
         self._closed = False
         self._latest = 0
@@ -114,6 +123,10 @@ class StoreWriter:
                     raise RuntimeError("submit before finish: a batch is still being encoded")
                 self._latest = max(self._latest, mark)
                 batch.upto = max(batch.upto, mark)
+                if self._carried is not None:  # what it encoded, under this staging
+                    self._carried.unencoded = []  # this one stages every instance DB
+                    self._carried.merge(batch)
+                    batch, self._carried = self._carried, None
                 self._staging = batch
                 self._until = -1.0 if until is None else until
                 self.encode_ns -= self.encode_ns // _FADE
@@ -133,17 +146,32 @@ class StoreWriter:
                 if self._waiters:
                     self._cond.notify_all()
 
-    def finish(self) -> int:
-        """Encode what is left of the batch being encoded, in the calling (scan) thread,
-        after the instance DB in hand; how many were left. Call before the next scan."""
+    def finish(self, *, carry: bool = True) -> int:
+        """Call before the next scan: the batch being encoded is done, or carried over to
+        the next scan's staging (``carry``, unless the last one was), or else encoded to the
+        end in the calling (scan) thread, after the instance DB in hand; how many the
+        calling thread encoded. ``carry=False``: no scan follows, so nothing is carried
+        and what was carried is encoded now."""
+        with self._cond:
+            if not carry and self._staging is None and self._carried is not None:
+                self._staging, self._carried = self._carried, None  # its state is still it
         staging = self._staging
         if staging is None:
+            self._carrying = False
             return 0
         with self._encoding:
             if self._staging is not staging:
+                self._carrying = False
                 return 0  # the encoder was done meanwhile
             if self.error is not None:
                 staging.unencoded.clear()  # nothing more is written
+            elif carry and staging.unencoded and not self._carrying:
+                with self._cond:
+                    self._staging, self._carried = None, staging
+                    self._carrying = True
+                    self.carried += 1
+                return 0
+            self._carrying = False
             left = len(staging.unencoded)
             while self._encode_next(staging):
                 pass
@@ -167,8 +195,8 @@ class StoreWriter:
     def _idle(self) -> bool:
         """Nothing in flight (``_cond`` held): what was submitted is durable as it is."""
         return (
-            self._pending is None and self._staging is None and not self._writing
-            and self.error is None
+            self._pending is None and self._staging is None and self._carried is None
+            and not self._writing and self.error is None
         )  # fmt: skip
 
     def _encode_one(self, staging: Batch) -> None:
@@ -277,9 +305,9 @@ class StoreWriter:
                 elif error is not None:
                     self.error = self.error or error
                 elif batch is not None:
-                    later = self._pending is not None or self._staging is not None
+                    later = not (self._pending is self._staging is self._carried is None)
                     self.committed = max(self.committed, batch.upto if later else self._latest)
-                elif self._pending is None and self._staging is None and self.error is None:
+                elif self._idle():
                     self.committed = self._latest
                 ready = self._take_ready()
                 self._cond.notify_all()

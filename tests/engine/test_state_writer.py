@@ -265,23 +265,43 @@ def test_a_deferred_staging_is_encoded_by_the_writer_while_the_scan_thread_idles
     assert _totals(tmp_path / "s.sqlite") == {7: 1, 8: 1, 9: 1}
 
 
-def test_what_the_writer_has_not_encoded_by_its_deadline_the_scan_thread_encodes_before_its_scan(
+def test_a_staging_not_encoded_by_its_next_scan_is_carried_under_that_scans_staging(
     clock: VirtualClock, tmp_path: Path
 ) -> None:
-    """The deadline passed (or the writer was busy): ``finish`` encodes the rest in the
-    calling thread, so the rows hold the state of the scan they were staged after, not
-    the one that follows; the mark is durable only once they are committed."""
+    """The deadline passed (or the encoder was held up): the next scan starts at once, and
+    what was encoded lies under its staging, which stages every instance DB again; scan 1
+    is not durable on its own. The next staging in a row not encoded by its scan is
+    encoded by the scan thread, so its rows hold that scan's state, not the one after."""
     with _writing(clock, tmp_path / "s.sqlite") as (cpu, store, writer):
         clock.advance(10)
         cpu.scan()
         writer.submit(store.stage(cpu, upto=1, defer=True), 1, until=time.monotonic() - 1)
-        assert not writer.wait(1, timeout=0.2)  # nothing may be encoded past its deadline
-        assert writer.finish() == 3
+        assert writer.finish() == 0 and writer.carried == 1  # the scan need not wait
+        assert not writer.wait(1, timeout=0.2)  # nothing committed of it on its own
         clock.advance(10)
-        cpu.scan()  # changes every instance DB after they were encoded
+        cpu.scan()  # scan 2 changes every instance DB
+        writer.submit(store.stage(cpu, upto=2, defer=True), 2, until=time.monotonic() - 1)
+        assert writer.finish() == 3  # the second in a row: encoded here, before the scan
+        clock.advance(10)
+        cpu.scan()  # scan 3, after the rows were encoded
+        assert writer.wait(2, timeout=10)
+    assert writer.encoded_here == 0 and writer.encoded_late == 3 and writer.carried == 1
+    assert _totals(tmp_path / "s.sqlite") == {7: 2, 8: 2, 9: 2}  # scan 2's, not scan 3's
+
+
+def test_at_the_end_of_the_loop_a_carried_staging_is_encoded_not_lost(
+    clock: VirtualClock, tmp_path: Path
+) -> None:
+    """``finish(carry=False)``: no scan follows, so a carried staging (its state unchanged
+    since) is encoded now and committed."""
+    with _writing(clock, tmp_path / "s.sqlite") as (cpu, store, writer):
+        clock.advance(10)
+        cpu.scan()
+        writer.submit(store.stage(cpu, upto=1, defer=True), 1, until=time.monotonic() - 1)
+        assert writer.finish() == 0 and writer.carried == 1
+        assert writer.finish(carry=False) == 3
         assert writer.wait(1, timeout=10)
-    assert writer.encoded_here == 0 and writer.encoded_late == 3
-    assert _totals(tmp_path / "s.sqlite") == {7: 1, 8: 1, 9: 1}  # not 2: the scan after
+    assert _totals(tmp_path / "s.sqlite") == {7: 1, 8: 1, 9: 1}
 
 
 def test_a_deferred_staging_that_changed_nothing_is_durable_once_encoded(
@@ -304,7 +324,7 @@ def test_a_staging_is_finished_before_the_next_is_submitted(
         writer.submit(store.stage(cpu, upto=1, defer=True), 1)  # until None: not here
         with pytest.raises(RuntimeError, match="submit before finish"):
             writer.submit(store.stage(cpu, upto=2, defer=True), 2)
-        writer.finish()
+        writer.finish(carry=False)
         assert writer.wait(1, timeout=10)
 
 
@@ -323,7 +343,7 @@ def test_an_instance_db_that_cannot_be_encoded_is_a_write_error_not_an_exception
         clock.advance(10)
         cpu.scan()
         writer.submit(store.stage(cpu, upto=1, defer=True), 1)
-        assert writer.finish() == 3  # no exception in the scan thread
+        assert writer.finish(carry=False) == 3  # no exception in the scan thread
         writer.when_durable(1, heard.append)
     assert writer.error is not None
     assert "cannot encode the state: RuntimeError: a value that cannot be read" in str(
