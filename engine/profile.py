@@ -32,8 +32,9 @@ __all__ = [
 ]
 
 PHASES: tuple[tuple[str, str], ...] = (
-    ("encode", "the instance DBs of the last staging the writer had not encoded in the idle"
-     " part, encoded before the scan changes them"),
+    ("encode", "the instance DBs of the last staging the writer's encoder had not encoded"
+     " in the idle part, encoded before the scan changes them (the second such staging in"
+     " a row; the first is carried over to the next)"),
     ("scan", "the scan: inputs, OBs (the program, the sequencers), the plant, outputs"),
     ("alarms", "the scan's message events appended to the alarm log"),
     ("edge", "after the scan: the bus, the view, the commands applied at the scan boundary"),
