@@ -13,8 +13,9 @@ the state with what was last staged and returns a :class:`Batch` of the rows tha
 None when nothing did; ``write(batch)`` commits one batch as one transaction (in any thread:
 the runner's writer, ``engine/writer.py``). ``stage(cpu, defer=True)`` leaves the instance
 DBs in the batch (``Batch.unencoded``) for ``encode_next(batch)``: the runner's writer
-encodes them while the scan thread sleeps, and the scan thread what is left before its next
-scan — for 25 FBs of 8 sequencers about 1.5 ms a cycle off the path from a scan to its
+encodes them while the scan thread sleeps (what it has not by the next scan is carried
+under that scan's staging, or encoded by the scan thread before it: ``engine/writer.py``)
+— for 25 FBs of 8 sequencers about 1.3 ms a cycle off the path from a scan to its
 deadline. An instance DB is one row, its snapshot as
 compressed MessagePack (a 7-step chart: about 600 bytes, one page of the file's 1 KiB pages),
 so a step switch rewrites a page or two. ``stage`` encodes each instance as it stands
@@ -385,8 +386,8 @@ class StateStore:
 
         ``defer`` (not with ``full``): the instance DBs — most of the work for large charts
         — are left in ``Batch.unencoded``, to be encoded (``encode_next``) by another
-        thread while the scan thread idles, and by the scan thread before its next scan
-        for whatever is left then; the batch is returned as long as any is left."""
+        thread while the scan thread idles, never while a scan runs; the batch is returned
+        as long as any is left."""
         batch = Batch(upto=upto)
         with self._lock:
             logs, self._logs = self._logs, Batch()

@@ -38,8 +38,8 @@ PHASES: tuple[tuple[str, str], ...] = (
     ("scan", "the scan: inputs, OBs (the program, the sequencers), the plant, outputs"),
     ("alarms", "the scan's message events appended to the alarm log"),
     ("edge", "after the scan: the bus, the view, the commands applied at the scan boundary"),
-    ("stage", "the state's changes staged for the writer (the instance DBs encoded by the"
-     " writer in the idle part, committed off the scan thread)"),
+    ("stage", "the state's changes staged for the writer (the instance DBs encoded by its"
+     " encoder in the idle part, committed off the scan thread)"),
     ("gc", "the garbage collector, in the idle part of the cycle"),
     ("idle", "waiting for the next cycle to fall due (the wait asked for)"),
     ("late", "the next scan starting after it fell due (the wake-up, the interpreter's lock)"),

@@ -7,8 +7,8 @@ time: a late scan starts the next one at once), hands each ``ScanRecord`` to ``o
 logs the scan's message events and, after the scan boundary's commands, hands the state's
 changes to the store's writer (``engine/writer.py``: the instance DBs encoded in the idle
 part of the cycle, committed off the scan thread; what the writer has not encoded by the
-next scan, the scan thread encodes before it), and keeps statistics of the scan execution
-time and of overruns.
+next scan is carried under that scan's staging, or encoded by the scan thread before it),
+and keeps statistics of the scan execution time and of overruns.
 
 **Cycle monitoring of the real thing.** The CPU judges a cycle's length only once it is
 over; a block, a plant or an action in an endless loop would never end it. A monitor
@@ -100,7 +100,7 @@ RT_PRIORITY = 40
 ENCODE_MARGIN_S = 0.0005
 """How long before the next scan falls due the writer stops encoding the instance DBs of the
 last staging (``engine/writer.py``; it also keeps twice its longest recent encoding clear):
-the scan thread encodes what is left then, before its scan."""
+what is left then is carried over to the next staging, or encoded by the scan thread."""
 COMM_LOAD_PCT = 20
 """The share of the cycle time the edge may spend on commands at each scan boundary, in
 per cent: S7's "scan cycle load from communication" (HW Config, Cycle/Clock Memory; 20 by

@@ -152,9 +152,10 @@ class StoreWriter:
         end in the calling (scan) thread, after the instance DB in hand; how many the
         calling thread encoded. ``carry=False``: no scan follows, so nothing is carried
         and what was carried is encoded now."""
-        with self._cond:
-            if not carry and self._staging is None and self._carried is not None:
-                self._staging, self._carried = self._carried, None  # its state is still it
+        if not carry:
+            with self._cond:
+                if self._staging is None and self._carried is not None:
+                    self._staging, self._carried = self._carried, None  # no scan since
         staging = self._staging
         if staging is None:
             self._carrying = False
