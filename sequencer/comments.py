@@ -1,24 +1,25 @@
-"""The comments of a `.s7g` text, kept with the element they annotate.
+"""The comments of a `.s7g` text, kept with the element they annotate, where they stood.
 
 A chart's comments are part of its documentation: a chart read, edited in the browser and
-written again (``sequencer.format``) keeps them. ``attach_comments(chart, text)`` finds
-every ``// …`` and ``(* … *)`` comment of ``text`` (not inside a quoted name or a string
-literal) and gives each to one element, in this order of rules:
+written again (``sequencer.format``) keeps them, each in its place. ``attach_comments(chart,
+text)`` finds every ``// …`` and ``(* … *)`` comment of ``text`` (not inside a quoted name
+or a string literal) and gives each to one element, in this order of rules:
 
-- a comment on the line an element starts on, after it, is that element's (a trailing
-  comment: ``pieces : INT := 0;  // work pieces``); with several elements on the line, the
+- a comment on the line an element starts on, after it, is that element's *trailing*
+  comment (``pieces : INT := 0;  // work pieces``); with several elements on the line, the
   last one that starts before the comment;
 - any other comment belongs to the next element that starts after it (the comment lines
   above a step, a transition, a row, a variable, a sequence, or ``FUNCTION_BLOCK``);
 - a comment after the last element is the chart's ``end_comment``.
 
 Elements: the block (``Chart.comment``: what stands above ``FUNCTION_BLOCK``), variables,
-sequences, steps, action rows and transitions. A symbol's trailing ``//`` comment stays its
-own (``SymbolDecl.comment``); comments among the symbols and the permanent instructions go
-to the next element. Each element keeps its comments verbatim, delimiters included, one
-after the other separated by a newline; ``format_chart`` writes them on lines of their own
-above the element, so a trailing comment comes back as the line above it, which reads back
-to the same element.
+sequences, steps, action rows and transitions. Each keeps the comments above it in
+``comment`` and those at the end of its first line in ``trailing``, verbatim, delimiters
+included, one after the other separated by a newline. ``format_chart`` writes the first on
+lines of their own above the element and the second at the end of its first line, so both
+read back to the same element and the same place. A symbol's trailing ``//`` comment stays
+its own (``SymbolDecl.comment``); comments among the symbols and the permanent instructions
+go to the next element.
 """
 
 from __future__ import annotations
@@ -82,7 +83,7 @@ def attach_comments(chart: Chart, text: str) -> Chart:
             continue  # the symbol's own comment
         at = bisect.bisect_left(keys, (c.line, c.col))
         if at > 0 and places[at - 1][0] == c.line:
-            owner = places[at - 1][2]  # trailing: the last element begun on its line
+            owner = ("trailing", *places[at - 1][2])  # the last element begun on its line
         elif at < len(places):
             owner = places[at][2]  # leading: the next element
         else:
@@ -93,8 +94,10 @@ def attach_comments(chart: Chart, text: str) -> Chart:
 
 def _with_comments(chart: Chart, given: dict[tuple[Any, ...], str]) -> Chart:
     def commented(node: N, *key: Any) -> N:
-        text = given.get(key)
-        return replace(node, comment=text) if text else node  # type: ignore[type-var]
+        above, trailing = given.get(key), given.get(("trailing", *key))
+        if above:
+            node = replace(node, comment=above)  # type: ignore[type-var]
+        return replace(node, trailing=trailing) if trailing else node  # type: ignore[type-var]
 
     sequences: list[Sequence] = []
     for q, seq in enumerate(chart.sequences):

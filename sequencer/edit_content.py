@@ -219,7 +219,8 @@ class ChangeRow(Edit):
         s = step_of(chart, self.step)
         i = _row_index(s, self.index)
         row = parse_row(self.row, f"row {i + 1} of S{self.step}")
-        row = replace(row, comment=s.actions[i].comment)  # the row's comments stay with it
+        old = s.actions[i]
+        row = replace(row, comment=old.comment, trailing=old.trailing)  # its comments stay
         actions = (*s.actions[:i], row, *s.actions[i + 1 :])
         return with_step(chart, replace(s, actions=actions)), RowRef(self.step, i)
 

@@ -3,7 +3,8 @@
 ``format_chart(chart)`` is the inverse of ``sequencer.parse.parse_chart``: for every chart
 the parser builds, ``parse_chart(format_chart(c))`` equals ``c`` once source places are set
 aside (``walk.unlocated``). Comments are kept with their elements (``sequencer.comments``)
-and written on lines of their own above them; a symbol's trailing comment stays trailing.
+and written where they stood: on lines of their own above an element, or at the end of its
+first line (a trailing comment, a symbol's too).
 The layout is the one of the examples: header and options, ``VAR``, ``SYMBOLS``,
 ``PERMANENT BEFORE``, the sequences (all steps, then all transitions, in model order — the
 written order of the transitions leaving a step is their priority), ``PERMANENT AFTER``.
@@ -186,9 +187,15 @@ def _above(comment: str, indent: str) -> list[str]:
     return [indent + c.text for c in find_comments(comment)] if comment else []
 
 
+def _after(trailing: str) -> str:
+    """An element's trailing comments, at the end of its first line as written (a ``//``
+    comment can only be the last on its line)."""
+    return "".join(" " + c.text for c in find_comments(trailing)) if trailing else ""
+
+
 def _var(v: VarDecl) -> list[str]:
     init = f" := {v.init.text}" if v.init is not None else ""
-    return [*_above(v.comment, "  "), f"  {v.name} : {v.type}{init};"]
+    return [*_above(v.comment, "  "), f"  {v.name} : {v.type}{init};{_after(v.trailing)}"]
 
 
 def _symbol(s: SymbolDecl) -> str:
@@ -201,13 +208,13 @@ def _step(s: Step) -> list[str]:
     names = ""
     if s.name or s.message:
         names = f" {quote(s.name)}" + (f" {quote(s.message)}" if s.message else "")
-    out = [*_above(s.comment, "  "), f"  {kw} S{s.number}{names}:"]
+    out = [*_above(s.comment, "  "), f"  {kw} S{s.number}{names}:{_after(s.trailing)}"]
     if s.interlock is not None:
         out.append(f"    INTERLOCK := {format_expr(s.interlock)};")
     if s.supervision is not None:
         out.append(f"    SUPERVISION := {format_expr(s.supervision)};")
     for r in s.actions:
-        out += [*_above(r.comment, "    "), f"    {format_row(r)}"]
+        out += [*_above(r.comment, "    "), f"    {format_row(r)}{_after(r.trailing)}"]
     out.append("  END_STEP")
     return out
 
@@ -222,12 +229,12 @@ def _transition(t: Transition) -> list[str]:
     to = _steps(t.targets) if t.targets else "STOP"
     cond = f" := {format_expr(t.condition)}" if t.condition is not None else ""
     line = f"  TRANSITION T{t.number}{name} FROM {_steps(t.sources)} TO {to}{cond};"
-    return [*_above(t.comment, "  "), line]
+    return [*_above(t.comment, "  "), line + _after(t.trailing)]
 
 
 def _sequence(q: Sequence) -> list[str]:
     name = f" {quote(q.name)}" if q.name else ""
-    out = [*_above(q.comment, ""), f"SEQUENCE {q.number}{name}"]
+    out = [*_above(q.comment, ""), f"SEQUENCE {q.number}{name}{_after(q.trailing)}"]
     for s in q.steps:
         out += _step(s)
     for t in q.transitions:
@@ -247,7 +254,7 @@ def format_chart(chart: Chart, header: str = "") -> str:
         head += f" FB {chart.fb_number}"
     if chart.db_number is not None:
         head += f" DB {chart.db_number}"
-    out.append(head)
+    out.append(head + _after(chart.trailing))
     out += _options(chart.options)
     if chart.vars:
         out += ["VAR", *(line for v in chart.vars for line in _var(v)), "END_VAR"]

@@ -74,6 +74,7 @@ class Step:
     interlock_loc: SourceLocation | None = None
     supervision_loc: SourceLocation | None = None
     comment: str = ""  # the comments written with it, verbatim (sequencer.comments)
+    trailing: str = ""  # the comments at the end of its first line, verbatim
 
 
 @dataclass(frozen=True, slots=True)
@@ -92,6 +93,7 @@ class Transition:
     source_locs: tuple[SourceLocation, ...] = ()
     target_locs: tuple[SourceLocation, ...] = ()
     comment: str = ""
+    trailing: str = ""
 
 
 @dataclass(frozen=True, slots=True)
@@ -102,6 +104,7 @@ class Sequence:
     transitions: tuple[Transition, ...]
     loc: SourceLocation = NOWHERE
     comment: str = ""
+    trailing: str = ""
 
 
 @dataclass(frozen=True, slots=True)
@@ -113,6 +116,7 @@ class VarDecl:
     init: Const | None = None
     loc: SourceLocation = NOWHERE
     comment: str = ""
+    trailing: str = ""
 
 
 @dataclass(frozen=True, slots=True)
@@ -155,6 +159,7 @@ class Chart:
     file: str = "<input>"
     loc: SourceLocation = NOWHERE
     comment: str = ""  # what stands above FUNCTION_BLOCK
+    trailing: str = ""  # the comments at the end of the FUNCTION_BLOCK line
     end_comment: str = ""  # the comments after the last element
 
     def all_steps(self) -> tuple[Step, ...]:

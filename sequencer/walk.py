@@ -84,7 +84,7 @@ def unlocated(node: N) -> N:
     return rewrite(node, _forget_place)
 
 
-_COMMENTED = ("comment", "end_comment")
+_COMMENTED = ("comment", "trailing", "end_comment")
 
 
 def _forget_comment(node: Any) -> Any:

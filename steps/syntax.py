@@ -169,7 +169,8 @@ class ActionRow:
     interlocked: bool = False
     value: Expr | None = None
     loc: SourceLocation = NOWHERE
-    comment: str = ""  # the comments written with the row, verbatim
+    comment: str = ""  # the comments written above the row, verbatim
+    trailing: str = ""  # the comments at the end of its line, verbatim
 
 
 # ------------------------------------------------------- permanent instructions (SPEC §2.9)

@@ -52,30 +52,67 @@ def texts(chart_text: str) -> list[str]:
 
 
 def test_every_comment_belongs_to_the_element_it_annotates() -> None:
-    """Above an element: the element's; at the end of its line: the element's too; after
-    the last element: the chart's end. A ``//`` inside a quoted name is no comment."""
+    """Above an element: the element's ``comment``; at the end of its first line: its
+    ``trailing``; after the last element: the chart's end. A ``//`` inside a quoted name is
+    no comment."""
     c = annotated()
     seq = c.sequences[0]
     s1, s2 = seq.steps
     t1, t2 = seq.transitions
     assert c.comment.startswith("(* Filling station.") and c.comment.endswith("block. *)")
-    assert c.vars[0].comment == "// bottles since the last cold restart"
+    assert c.vars[0].trailing == "// bottles since the last cold restart"
+    assert c.vars[0].comment == ""
     assert seq.comment == "// the one sequencer"
     assert s1.name == "Wait // not a comment" and s1.comment == ""
     assert s2.comment == "(* S2 opens the valve *)"
-    assert [r.comment for r in s2.actions] == ["// the valve", ""]
-    assert (t1.comment, t2.comment) == ("// a bottle is there", "// full")
+    assert [(r.comment, r.trailing) for r in s2.actions] == [("", "// the valve"), ("", "")]
+    assert (t1.trailing, t2.comment) == ("// a bottle is there", "// full")
+    assert (t1.comment, t2.trailing) == ("", "")
     assert c.end_comment == "// end of file"
 
 
 def test_a_chart_written_again_keeps_every_comment() -> None:
-    """``format_chart`` writes each comment on a line of its own above its element: the
-    same comments, verbatim, and the text reads back to the same model."""
+    """``format_chart`` writes each comment where it stood, above its element or at the end
+    of its first line: the same comments, verbatim, and the text reads back to the same
+    model."""
     c = annotated()
     written = format_chart(c)
     assert sorted(texts(written)) == sorted(texts(ANNOTATED))
     again = parse_chart(written, "fill.s7g")
     assert unlocated(again) == unlocated(c)
+    assert format_chart(again) == written
+
+
+def test_a_trailing_comment_comes_back_at_the_end_of_its_line() -> None:
+    """An engineer's end-of-line remark is not moved above its line by an edit in the
+    browser: every kind of element keeps it there, a block comment and a ``//`` after it
+    on one line included."""
+    text = (
+        'FUNCTION_BLOCK "T" FB 3  // the block\n'
+        "VAR\n  n : INT := 0;  (* pieces *)\nEND_VAR\n"
+        'SEQUENCE 1 "Main"  // one\n'
+        '  INITIAL_STEP S1 "Wait":  // waiting\n'
+        "    N Q0.0;  (* lamp *) // green\n"
+        "  END_STEP\n"
+        "  STEP S2:\n  END_STEP\n"
+        "  TRANSITION T1 FROM S1 TO S2 := I0.0;  // go\n"
+        "  TRANSITION T2 FROM S2 TO S1;\n"
+        "END_SEQUENCE\nEND_FUNCTION_BLOCK\n"
+    )
+    written = format_chart(parse_chart(text, "t.s7g"))
+    lines = written.splitlines()
+    for expected in (
+        'FUNCTION_BLOCK "T" FB 3 // the block',
+        "  n : INT := 0; (* pieces *)",
+        'SEQUENCE 1 "Main" // one',
+        '  INITIAL_STEP S1 "Wait": // waiting',
+        "    N Q0.0; (* lamp *) // green",
+        "  TRANSITION T1 FROM S1 TO S2 := I0.0; // go",
+    ):
+        assert expected in lines, (expected, written)
+    assert not any(line.lstrip().startswith(("//", "(*")) for line in lines), written
+    again = parse_chart(written, "t.s7g")
+    assert unlocated(again) == unlocated(parse_chart(text, "t.s7g"))
     assert format_chart(again) == written
 
 
@@ -88,7 +125,7 @@ def test_the_examples_keep_their_comments_through_the_writer() -> None:
 
 
 def test_an_edit_keeps_the_comments_of_what_it_changes() -> None:
-    """Renaming and renumbering a step, changing a row: the comments above them stay."""
+    """Renaming and renumbering a step, changing a row: their comments stay, in place."""
     c = annotated()
     for edit in (
         RenameStep(2, "Fill bottle"),
@@ -97,7 +134,9 @@ def test_an_edit_keeps_the_comments_of_what_it_changes() -> None:
     ):
         out = apply_edit(c, edit)
         assert out.refusal is None, out.refusal
-        assert sorted(texts(format_chart(out.chart))) == sorted(texts(ANNOTATED)), edit
+        written = format_chart(out.chart)
+        assert sorted(texts(written)) == sorted(texts(ANNOTATED)), edit
+        assert any(line.endswith("; // the valve") for line in written.splitlines()), edit
 
 
 def test_a_change_summary_does_not_count_a_reworded_comment() -> None:
