@@ -12,8 +12,9 @@ as alarm text) and bit coils of the permanent instructions are LAD networks
 (``"Tag"``, ``#variable``, ``%Q0.3``). Symbols are global tags with their address as
 informative data. What a GRAPH block has no field for — the instance DB number,
 ``ORDER``, ``ACK_FORCES_SWITCH`` — is kept in the block comment (``s7graph: …``), which
-the importer reads. Block calls, non-bit assignments in the permanent instructions and XOR
-in a condition have no form here (``ValueError``).
+the importer reads. ``XOR`` in a condition is drawn as (a AND NOT b) OR (NOT a AND b). Block
+calls and non-bit assignments in the permanent instructions have no form here: a
+``ValueError`` naming their place.
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ from s7graph.engine.address import parse_address
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.exchange.flgnet import write_network
 from s7graph.sequencer.exchange.shape import shape_of
-from s7graph.sequencer.format import row_body
+from s7graph.sequencer.format import format_row, row_body
 from s7graph.sequencer.model import (
     ActionRow,
     Assignment,
@@ -35,6 +36,7 @@ from s7graph.sequencer.model import (
     Const,
     Expr,
     Operand,
+    PermanentInstruction,
     Sequence,
     Step,
     StepAttr,
@@ -157,10 +159,11 @@ class _Export:
         except ValueError as exc:
             raise ValueError(f"{exc}: a SimaticML network cannot hold it") from None
 
-    def action(self, r: ActionRow) -> str:
+    def action(self, r: ActionRow, step: int) -> str:
         if isinstance(r.operand, BlockCall):
             raise ValueError(
-                f"step action CALL {r.operand.block}: CALL rows have no SimaticML form"
+                f"{r.loc}: S{step} row {format_row(r)!r}: CALL rows have no SimaticML form"
+                " here (the PLCopen export keeps them)"
             )
         attrs = f' Event="{r.event}"' if r.event else ""
         attrs += ' Interlock="true"' if r.interlocked else ""
@@ -169,7 +172,7 @@ class _Export:
         return f'<Action{attrs}><Token Text={quoteattr(text)} /><Token Text="&#xA;" /></Action>'
 
     def step(self, s: Step) -> str:
-        rows = "".join(self.action(r) for r in s.actions)
+        rows = "".join(self.action(r, s.number) for r in s.actions)
         alarm = f"<AlarmText>{_text(s.message)}</AlarmText>" if s.message else ""
         return (
             f'<Step Number="{s.number}" Init="{str(s.initial).lower()}" '
@@ -265,7 +268,7 @@ class _Export:
             "</Sequence>"
         )
 
-    def permanent(self, items: tuple[object, ...]) -> str:
+    def permanent(self, items: tuple[PermanentInstruction, ...]) -> str:
         out: list[str] = []
         for p in items:
             if isinstance(p, Coil):
@@ -275,8 +278,8 @@ class _Export:
                 net = self.network(p.expr, "Coil", p.target)
             else:
                 raise ValueError(
-                    "a permanent instruction that is not a bit coil (an arithmetic "
-                    "assignment or a CALL) has no SimaticML LAD form here"
+                    f"{p.loc}: a permanent instruction that is not a bit coil (an "
+                    "arithmetic assignment or a CALL) has no SimaticML LAD form here"
                 )
             out.append(f'<PermanentOperation ProgrammingLanguage="LAD">{net}</PermanentOperation>')
         return "".join(out)

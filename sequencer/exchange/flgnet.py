@@ -11,7 +11,9 @@ condition: an empty transition (holds), no interlock, no supervision.
 
 Writing (``network``): the inverse, in LAD — a sum of products as contacts in series
 (AND) and ``O`` boxes (OR), comparisons as boxes, ``NOT x`` as a negated contact,
-other NOTs as a ``Not`` part — ending in the coil given. Operands are written by the
+other NOTs as a ``Not`` part, which in LAD inverts all the power flow before it (so
+``a AND NOT (b OR c)`` is drawn NOT (NOT a OR b OR c)), ``a XOR b`` as (a AND NOT b) OR
+(NOT a AND b) — ending in the coil given. Operands are written by the
 caller (``Operands``): symbols as global ``Access`` es, FB variables and step/transition
 attributes as local ones, constants as literals.
 """
@@ -158,6 +160,9 @@ def read_network(net: Node, operand: Operand, file: str) -> list[tuple[Node, Exp
 # ---------------------------------------------------------------- writing
 
 
+_RAIL = "<Powerrail />"
+
+
 class _Writer:
     def __init__(self, access: Callable[[Expr, str], str], start: int = 21) -> None:
         self.access = access  # writes an operand's <Access UId=…> element, returns it
@@ -185,7 +190,7 @@ class _Writer:
 
     def flow(self, e: Expr, into: list[str]) -> None:
         """Wire the power flow of ``e`` into the pins ``into`` (NameCon elements)."""
-        self._flow(e, "<Powerrail />", into)
+        self._flow(e, _RAIL, into)
 
     def _flow(self, e: Expr, src: str, into: list[str]) -> None:
         if isinstance(e, Binary) and e.op == "AND":
@@ -220,14 +225,38 @@ class _Writer:
         if isinstance(e, Unary) and e.op == "NOT" and not isinstance(e.operand, Binary | Unary):
             return self._contact(e.operand, src, negated=True)
         if isinstance(e, Unary) and e.op == "NOT":
-            inner = self._series(e.operand, src)
-            box = self.next()
-            self.parts.append(f'<Part Name="Not" UId="{box}" />')
-            self.wire(inner, f'<NameCon UId="{box}" Name="in" />')
-            return f'<NameCon UId="{box}" Name="out" />'
+            if src == _RAIL:
+                return self._not(self._series(e.operand, _RAIL))
+            # LAD's NOT inverts all the power flow before it, so ``src AND NOT x`` is
+            # drawn as NOT (NOT src OR x), x fed from the rail (De Morgan)
+            box = self._or([self._not(src), self._series(e.operand, _RAIL)])
+            return self._not(box)
+        if isinstance(e, Binary) and e.op == "XOR":
+            a, b = e.left, e.right  # LAD has no XOR: (a AND NOT b) OR (NOT a AND b)
+            one = Binary("AND", a, Unary("NOT", b, e.loc), e.loc)
+            other = Binary("AND", Unary("NOT", a, e.loc), b, e.loc)
+            return self._series(Binary("OR", one, other, e.loc), src)
         if isinstance(e, Binary):
             raise ValueError(f"{e.op} has no LAD form")
         return self._contact(e, src, negated=False)
+
+    def _not(self, src: str) -> str:
+        """A ``Not`` part inverting the power flow ``src``; returns its output."""
+        box = self.next()
+        self.parts.append(f'<Part Name="Not" UId="{box}" />')
+        self.wire(src, f'<NameCon UId="{box}" Name="in" />')
+        return f'<NameCon UId="{box}" Name="out" />'
+
+    def _or(self, outputs: list[str]) -> str:
+        """An ``O`` box ORing the power flows ``outputs``; returns its output."""
+        box = self.next()
+        self.parts.append(
+            f'<Part Name="O" UId="{box}"><TemplateValue Name="Card" '
+            f'Type="Cardinality">{len(outputs)}</TemplateValue></Part>'
+        )
+        for i, out in enumerate(outputs, 1):
+            self.wire(out, f'<NameCon UId="{box}" Name="in{i}" />')
+        return f'<NameCon UId="{box}" Name="out" />'
 
     def _contact(self, e: Expr, src: str, *, negated: bool) -> str:
         op = self.operand(e)
@@ -252,7 +281,7 @@ def write_network(
     coil_operand: Expr | None = None,
 ) -> str:
     """A ``FlgNet`` computing ``cond`` (None: the rail alone) into part ``coil``; raises
-    ValueError for an operator LAD cannot draw (XOR)."""
+    ValueError for what LAD cannot draw (an operand that is an expression)."""
     w = _Writer(access)
     target = ""
     if coil_operand is not None:
@@ -261,7 +290,7 @@ def write_network(
     w.parts.append(f'<Part Name="{coil}" UId="{box}" />')
     into = [f'<NameCon UId="{box}" Name="in" />']
     if cond is None:
-        w.wire("<Powerrail />", *into)
+        w.wire(_RAIL, *into)
     else:
         w.flow(cond, into)
     if target:

@@ -86,15 +86,20 @@ def test_plcopen_export_of_rows_without_iec_form_is_reported_when_read_as_iec() 
     assert len(empty) == 5 + 5 + 3 + 1
 
 
-def test_a_condition_lad_cannot_draw_is_one_clear_export_error(tmp_path: Path) -> None:
-    chart = tmp_path / "xor.s7g"
+def test_a_row_simaticml_cannot_hold_is_one_clear_export_error(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A CALL row has no SimaticML form here: one located line, exit 2; PLCopen takes it."""
+    chart = tmp_path / "call.s7g"
     chart.write_text(
-        'FUNCTION_BLOCK "X"\nVAR a : BOOL; b : BOOL; END_VAR\nSEQUENCE 1\n'
-        "INITIAL_STEP S1: END_STEP\nSTEP S2: END_STEP\n"
-        "TRANSITION T1 FROM S1 TO S2 := a XOR b;\nTRANSITION T2 FROM S2 TO S1 := a;\n"
+        'FUNCTION_BLOCK "X"\nVAR a : BOOL; END_VAR\nSEQUENCE 1\n'
+        "INITIAL_STEP S1: END_STEP\nSTEP S2: CALL FC 9; END_STEP\n"
+        "TRANSITION T1 FROM S1 TO S2 := a;\nTRANSITION T2 FROM S2 TO S1 := NOT a;\n"
         "END_SEQUENCE\nEND_FUNCTION_BLOCK\n"
     )
     assert main(["export", str(chart), "--to", "simaticml", "-o", str(tmp_path / "x.xml")]) == 2
+    err = capsys.readouterr().err
+    assert "call.s7g:5:10: S2 row" in err and "CALL FC 9" in err, err
     assert main(["export", str(chart), "--to", "plcopen", "-o", str(tmp_path / "x.xml")]) == 0
 
 
