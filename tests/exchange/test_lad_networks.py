@@ -1,9 +1,11 @@
-"""A condition exported to a TIA LAD network (``exchange.flgnet``) means what it meant: read
-back, it has the same truth table. LAD's ``Not`` inverts all the power flow before it, and
-LAD has no XOR; the writer draws both so that TIA computes the chart's condition."""
+"""A condition exported means what it meant: read back from a TIA LAD network
+(``exchange.flgnet``) or from the inline ST another IEC tool reads in a PLCopen export, it
+has the same truth table. LAD's ``Not`` inverts all the power flow before it, and LAD has
+no XOR; the writer draws both so that TIA computes the chart's condition."""
 
 from __future__ import annotations
 
+import re
 from itertools import product
 
 from hypothesis import given, settings
@@ -82,9 +84,19 @@ CONDITIONS = st.recursive(
 )
 
 
+def through_iec(cond: str) -> Expr | None:
+    """The transition's condition read back as another IEC tool reads the PLCopen export
+    (without the ``.s7g`` source s7graph keeps in ``addData``)."""
+    chart = parse_chart(CHART.format(cond=cond), "t.s7g")
+    xml = re.sub(r"<addData>.*?</addData>", "", export_chart(chart, "plcopen"), flags=re.S)
+    return import_chart(xml.encode(), "t.xml").chart.sequences[0].transitions[0].condition
+
+
 @settings(max_examples=150, deadline=None)
 @given(CONDITIONS)
-def test_every_condition_keeps_its_truth_table_through_lad(cond: str) -> None:
+def test_every_condition_keeps_its_truth_table_through_lad_and_iec(cond: str) -> None:
     written, read, interlock = through_lad(cond)
     assert table(read) == table(written), cond
     assert table(interlock) == table(written), cond
+    iec = through_iec(cond)
+    assert iec is not None and table(iec) == table(written), cond
