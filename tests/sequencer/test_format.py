@@ -4,7 +4,9 @@ from every kind of element the parser makes."""
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -208,4 +210,37 @@ def charts(draw: st.DrawFn) -> Chart:
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(charts())
 def test_generated_charts_read_back_as_the_same_model(chart: Chart) -> None:
+    assert same_after_writing(chart)
+
+
+_ABOVE = st.sampled_from(["", "// a b", "(* c *)", "// d\n// e", "(* f\n   g *)"])
+_TRAILING = st.sampled_from(["", "// a b", "(* c *)", "(* d *)\n// e", "(* f\n   g *)"])
+
+
+@st.composite
+def commented_charts(draw: st.DrawFn) -> Chart:
+    """A generated chart with comments above and at the end of the line of every kind of
+    element that keeps them (``sequencer.comments``)."""
+
+    def note(node: Any) -> Any:
+        return replace(node, comment=draw(_ABOVE), trailing=draw(_TRAILING))
+
+    chart = draw(charts())
+    sequences = tuple(
+        note(replace(
+            q,
+            steps=tuple(note(replace(s, actions=tuple(note(r) for r in s.actions)))
+                        for s in q.steps),
+            transitions=tuple(note(t) for t in q.transitions),
+        ))
+        for q in chart.sequences
+    )  # fmt: skip
+    vars_ = tuple(note(v) for v in chart.vars)
+    return replace(note(chart), vars=vars_, sequences=sequences, end_comment=draw(_ABOVE))
+
+
+@settings(max_examples=100, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(commented_charts())
+def test_generated_charts_keep_every_comment_in_its_place(chart: Chart) -> None:
+    """Each comment comes back to its element, above it or at the end of its line."""
     assert same_after_writing(chart)
