@@ -29,7 +29,7 @@ from s7graph.engine.blocks import DB, FB, FC, OB, BlockKind, InstanceDB
 from s7graph.engine.clock import Clock
 from s7graph.engine.context import CallContext, NestingOverflow, _Fault
 from s7graph.engine.diagnostics import DiagnosticBuffer, EventId
-from s7graph.engine.errors import AddressError, BlockError, ScanAborted, TypeMismatch
+from s7graph.engine.errors import AddressError, BlockError, S7Error, ScanAborted, TypeMismatch
 from s7graph.engine.force import Force, ForceTable, apply_plan, force_target, make_force
 from s7graph.engine.interrupts import CYCLIC_DEFAULT_MS, CyclicScheduler, priority
 from s7graph.engine.memory import AreaLengthError, Memory
@@ -621,7 +621,9 @@ class Cpu:
 
     def _program_error(self, ob: int, block: str, exc: BaseException) -> None:
         event = _classify(exc)
-        message = f"{type(exc).__name__}: {exc}"
+        # the runtime's own errors say what went wrong; a Python error of a block's body
+        # keeps its class, which its author knows
+        message = str(exc) if isinstance(exc, S7Error) else f"{type(exc).__name__}: {exc}"
         self.diagnostics.record(self._raw, event, block, message, getattr(exc, "address", ""))
         if isinstance(exc, NestingOverflow | RecursionError):
             self.hot_blockers.add("stack overflow")

@@ -57,7 +57,7 @@ from typing import Any, Protocol, runtime_checkable
 
 import msgspec
 
-from s7graph.engine.blocks import FB, Decl, InstanceDB
+from s7graph.engine.blocks import FB, BlockKind, Decl, InstanceDB
 from s7graph.engine.cpu import Cpu
 from s7graph.engine.errors import S7Error
 from s7graph.engine.record import DiagEntry
@@ -640,6 +640,11 @@ class StateStore:
     ) -> None:
         idb = cpu.instance_dbs.get(number)
         held = f"DB{number} holds an instance of {label} {name!r}"
+        # a system block's instance the program no longer calls: kept, as S7 keeps DBs
+        system = cpu.blocks.get(label)
+        kept = isinstance(system, FB) and system.kind is BlockKind.SFB
+        if idb is None and kept and isinstance(system, FB) and number not in cpu.mem.dbs:
+            idb = cpu.create_instance_db(number, system)
         if idb is None:
             raise StateFileError(self.path, f"{held}, which this program does not have")
         fb = idb.fb

@@ -6,9 +6,11 @@ summary of ``sequencer.diff``, with the active steps it removes). :func:`swap`, 
 scan boundary, carries the FB's state over to ``new`` by step number with the one function
 that does so (``sequencer.carry.carry_over``: active steps stay active with T and U, faults
 and criteria, variables keep their values by name) and makes the FB run ``new`` from its
-next call (``GraphFB.replace_chart``). Active steps the new chart does not have are never
-dropped silently: without a choice the swap is refused naming them; ``keep`` lets the other
-steps go on, ``init`` initializes the sequencer (INIT_SQ in the next call). The way back —
+next call (``GraphFB.replace_chart``), the instance DBs of the system blocks it calls
+created first (``sequencer.calls``; a DB that is something else refuses the swap). Active
+steps the new chart does not have are never dropped silently: without a choice the swap is
+refused naming them; ``keep`` lets the other steps go on, ``init`` initializes the
+sequencer (INIT_SQ in the next call). The way back —
 *Undo download* — is the same swap with the charts the other way round.
 
 Pure: no threads, no clock, no files; the caller (``web.bus.online``) compiles off the scan
@@ -21,6 +23,7 @@ from dataclasses import dataclass
 from typing import Any, Final, Literal
 
 from s7graph.engine.errors import S7Error
+from s7graph.sequencer.calls import prepare_calls
 from s7graph.sequencer.carry import CarryReport, ChartShape, carry_over
 from s7graph.sequencer.compiled import CompiledChart
 from s7graph.sequencer.diff import ChangeSummary, active_steps, summarize
@@ -83,6 +86,9 @@ def swap(
             f"active steps {shown} are not in the new chart: choose keep (the other steps "
             "go on) or init (initialize the sequencer)"
         )
+    plan = prepare_calls(cpu, new.chart)  # the instance DBs of its new SFB calls
+    if plan.problems:
+        raise SwapRefused("; ".join(plan.problems))
     carried, report = carry_over(ChartShape.of(old), state, new)
     graph.replace_chart(new, carried, cpu)
     initialize = removed == "init" and bool(gone)

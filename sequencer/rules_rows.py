@@ -15,7 +15,17 @@ from s7graph.sequencer.model import (
     StepTarget,
 )
 from s7graph.sequencer.rules_context import _Ctx, _row_el
-from s7graph.sequencer.rules_types import _ADDRESS_FLEX, _loc, _resolve, _show, _type, _unify
+from s7graph.sequencer.rules_types import (
+    _ADDRESS_FLEX,
+    _as_bit,
+    _as_number,
+    _loc,
+    _resolve,
+    _show,
+    _type,
+    _unify,
+)
+from s7graph.sfb import catalogue
 from s7graph.steps.qualifiers import (
     COUNTER_QUALIFIERS,
     NEEDS_VALUE,
@@ -108,10 +118,41 @@ def _check_row_operand(ctx: _Ctx, r: ActionRow, op: Operand, el: str) -> None:
 
 
 def _check_call(ctx: _Ctx, call: BlockCall, el: str) -> None:
-    for _, e in call.inputs:
-        _type(ctx, e, el)
-    for _, o in call.outputs:
-        _resolve(ctx, o, el)
+    """Parameters are typed operands; a call of a system block (``CALL SFB 4, DB 10``)
+    names one s7graph has, with an instance DB exactly when it is an SFB, and its
+    parameters are pins of it, ``:=`` for inputs, ``=>`` for outputs, of the pin's type
+    (the catalogue, ``sfb.catalogue``). FB and FC calls name the user's blocks, which only
+    the program that loads them knows."""
+    types = [(name, _type(ctx, e, el), e) for name, e in call.inputs]
+    for name, o in call.outputs:
+        res = _resolve(ctx, o, el)
+        if res is not None and not res.writable:
+            ctx.err("E045", f"{name} => {o.name}: {o.name} is read-only; the chart cannot "
+                    "write it", o.loc, el)  # fmt: skip
+        elif res is not None:
+            types.append((name, _ADDRESS_FLEX.get(res.type, res.type) if res.is_untyped
+                          else res.type, o))  # fmt: skip
+    if call.kind not in ("SFB", "SFC"):
+        return
+    entry = catalogue.find(f"{call.kind}{call.block}")
+    if entry is None:
+        known = " ".join(e.key for e in catalogue.CATALOGUE if e.kind == call.kind)
+        ctx.err("E046", f"{call.kind} {call.block} is not a system block s7graph has "
+                f"({call.kind}s: {known})", call.loc, el)  # fmt: skip
+        return
+    problems = entry.check_call(
+        [n for n, _ in call.inputs], [n for n, _ in call.outputs],
+        has_instance=call.instance is not None,
+    )  # fmt: skip
+    for problem in problems:
+        ctx.err("E046", problem, call.loc, el)
+    for name, t, e in types:
+        pin = entry.pin(name)
+        if pin is None or t is None or pin.type == "ANY":
+            continue
+        if _unify(pin.type, _as_bit(t) if pin.type == "BOOL" else _as_number(t)) is None:
+            ctx.err("E046", f"{entry.key} {entry.name}: {pin.name} is {_show(pin.type)}, "
+                    f"{_show(t)} does not fit it", getattr(e, "loc", call.loc), el)  # fmt: skip
 
 
 def _check_assignment(ctx: _Ctx, a: Assignment, el: str, *, in_action: bool) -> None:

@@ -323,7 +323,7 @@ END_SEQUENCE
             depths, trace = seen[True]
             cut = next(n for n, t in enumerate(trace) if t["diagnostics"])
             assert depths[:3] == [2, 2, 2] and trace[cut]["mode"] == ("RUN" if ob121 else "STOP")
-            fault = "FB1: BlockError: block FC8" if scans is into_s12 else "FC9: ValueError: probe"
+            fault = "FB1: block FC8" if scans is into_s12 else "FC9: ValueError: probe"
             assert fault in trace[cut]["diagnostics"][0]
             if ob121 and scans is cut_short:
                 assert trace[-1]["fbs"][0][0]["S_NO"] == 12

@@ -131,6 +131,8 @@ def _run_chart(
         loaded: LoadedPlant | None = load_plant(plant) if plant is not None else None
     except S7Error as exc:  # ChartLoadError included
         return fail(exc)
+    for line in session.missing:
+        print(line, file=sys.stderr)
     cpu = session.cpu
     if max_cycle_ms is None:
         inline = web and view_in_process  # a page load may hold a scan up

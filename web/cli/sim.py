@@ -17,7 +17,10 @@ set, FB variables, ``Sn.X``/``Sn.T``/``Sn.U``, ``Tn.TT``.
 Stimulus names: addresses, symbols, FB *input* pins of the parameter set, FB variables.
 An input address (I…) is written on the module side (PI), so the CPU reads it at the start
 of the cycle. A chart that does not compile, an unknown name or a pin outside the parameter
-set: diagnostics on stderr, exit status 2.
+set: diagnostics on stderr, exit status 2. A call of a block the CPU does not have (a
+user FB or FC: a chart is simulated with the system blocks only) is a warning on stderr.
+When the CPU goes to STOP (a block error without OB121, as on S7), the trace ends with
+that cycle's line, the reason goes to stderr and the exit status is 1.
 """
 
 from __future__ import annotations
@@ -29,6 +32,7 @@ from typing import Any, TextIO
 
 from s7graph.engine.clock import VirtualClock
 from s7graph.engine.errors import S7Error
+from s7graph.engine.runner import stop_reason
 from s7graph.sequencer.compiled import CompiledChart
 from s7graph.web.cli.report import fail
 from s7graph.web.harness.plant import LoadedPlant, PlantError, load_plant
@@ -95,6 +99,8 @@ def sim_command(
         loaded: LoadedPlant | None = load_plant(plant) if plant is not None else None
     except S7Error as exc:  # ChartLoadError included
         return fail(exc)
+    for line in session.missing:
+        print(line, file=sys.stderr)
     out: TextIO = sys.stdout if trace is None else open(trace, "w", encoding="utf-8")  # noqa: SIM115
     try:
         return _run(session, stim, names, loaded, cycle_ms, cycles, out)
@@ -131,8 +137,6 @@ def _run(
         st = session.graph.state
         if plant is not None:
             plant.cycle(session, _ms(t_ms), _ms(cycle_ms))
-        if record.mode.name != "RUN" and k == 0:
-            pass
         line = {
             "cycle": k,
             "t_ms": _ms(t_ms),
@@ -144,5 +148,9 @@ def _run(
             "values": {name: session.get(name) for name in names},
         }
         out.write(json.dumps(line) + "\n")
+        if record.mode.name == "STOP":
+            why = stop_reason(session.cpu)
+            print(f"s7graph: error: cycle {k}: the CPU went to STOP: {why}", file=sys.stderr)
+            return 1
         clock.advance(cycle_ms)
     return 0

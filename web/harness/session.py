@@ -15,11 +15,13 @@ from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import Any
 
+from s7graph import sfb
 from s7graph.engine.address import Address, Area, Width, parse_address
 from s7graph.engine.clock import Clock
 from s7graph.engine.cpu import Cpu
 from s7graph.engine.errors import AddressError, S7Error
 from s7graph.engine.symbols import SymbolTable, default_type
+from s7graph.sequencer.calls import prepare_calls
 from s7graph.sequencer.compile import ChartError, compile_chart
 from s7graph.sequencer.compiled import CompiledChart
 from s7graph.sequencer.diagnostics import Diagnostic, format_diagnostic
@@ -123,6 +125,15 @@ class ChartSession:
         self.graph = GraphFB(cc)
         self.others = [GraphFB(c) for c in beside]
         install_all(self.cpu, [self.graph, *self.others])
+        sfb.install(self.cpu)  # the operating system's blocks, as on S7
+        self.missing: list[str] = []
+        """Calls of blocks this CPU does not have (``sequencer.calls``): they stop it when
+        reached; ``sim`` and ``run`` print them as warnings."""
+        for c in (cc, *beside):
+            plan = prepare_calls(self.cpu, c.chart)
+            if plan.problems:
+                raise ChartLoadError(list(plan.problems))
+            self.missing += plan.missing
 
     @classmethod
     def load(cls, path: Path, symbols: Path | None, clock: Clock) -> ChartSession:

@@ -1,0 +1,102 @@
+"""The blocks a chart calls, and the instance DBs its calls of system blocks need.
+
+A chart calls blocks from action rows (``CALL SFB 4, DB 10 (IN := …)``) and permanent
+instructions, FBs, FCs, SFBs and SFCs alike (seed 000:5501). A system block belongs to
+the CPU's operating system, as on S7; the instance DB an SFB call names is created with
+the chart, as the SCL compiler creates the DB a call names when it does not exist (seed
+000:4036). So
+``prepare_calls(cpu, chart)`` runs before a chart is first called — at load, and at an
+online change before the swap: it creates each missing instance DB of an SFB call, and
+refuses (nothing created) when a named DB is already something else: a global DB, or the
+instance of another block. A call of a user block (``CALL FC 9``, ``CALL FB 5, DB 5``)
+that the CPU has not loaded is reported in ``missing``: a chart run by itself has the
+system blocks only, and the call stops the CPU when it is reached (a programming error
+without OB121, as on S7).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from s7graph.engine.errors import BlockError
+from s7graph.sequencer.model import BlockCall, Chart
+
+__all__ = ["CallPlan", "call_sites", "prepare_calls"]
+
+
+@dataclass(frozen=True, slots=True)
+class CallSite:
+    """One call of the chart and the element it is in (``step S2 row 1``)."""
+
+    call: BlockCall
+    element: str
+
+    def line(self, severity: str, problem: str) -> str:
+        """One diagnostic line: ``file:line:col: error: CALL SFB 4, DB 10: …(step S2 row 1)``."""
+        c = self.call
+        block = f"{c.kind} {c.block}" if c.kind else f'"{c.block}"'
+        if c.instance is not None:
+            block += f", DB {c.instance}" if isinstance(c.instance, int) else f', "{c.instance}"'
+        return f"{c.loc}: {severity}: CALL {block}: {problem} ({self.element})"
+
+
+@dataclass(slots=True)
+class CallPlan:
+    """What ``prepare_calls`` found: ``problems`` refuse the chart, ``missing`` are user
+    blocks it calls that the CPU does not have, ``created`` the instance DBs it made."""
+
+    problems: list[str] = field(default_factory=list)
+    missing: list[str] = field(default_factory=list)
+    created: list[int] = field(default_factory=list)
+
+
+def call_sites(chart: Chart) -> list[CallSite]:
+    """Every block call of ``chart``, in written order: permanent instructions before, the
+    steps' rows, permanent instructions after."""
+    out = [CallSite(p, "permanent before") for p in chart.before if isinstance(p, BlockCall)]
+    for seq in chart.sequences:
+        for step in seq.steps:
+            for k, row in enumerate(step.actions, 1):
+                if isinstance(row.operand, BlockCall):
+                    out.append(CallSite(row.operand, f"step S{step.number} row {k}"))
+    out += [CallSite(p, "permanent after") for p in chart.after if isinstance(p, BlockCall)]
+    return out
+
+
+def prepare_calls(cpu: Any, chart: Chart) -> CallPlan:
+    """Create the instance DBs ``chart``'s SFB calls name in ``cpu`` (an ``engine.Cpu``);
+    nothing is created when one of them cannot be (``problems``)."""
+    plan = CallPlan()
+    wanted: dict[int, Any] = {}
+    for site in call_sites(chart):
+        c = site.call
+        label = f"{c.kind}{c.block}" if c.kind else str(c.block)
+        try:
+            block = cpu.block(label)
+        except BlockError:  # not loaded
+            block = None
+        if block is None:
+            plan.missing.append(
+                site.line("warning", f"{label} is not in this CPU; reached, the call stops it")
+            )
+            continue
+        if c.kind != "SFB":
+            continue
+        if not isinstance(c.instance, int):
+            plan.problems.append(site.line("error", "name the instance DB by its number"))
+            continue
+        held = cpu.instance_dbs.get(c.instance)
+        if held is not None and held.fb is not block:
+            why = f"DB{c.instance} is the instance DB of {held.fb.label} {held.fb.name!r}"
+            plan.problems.append(site.line("error", why))
+        elif held is None and c.instance in cpu.mem.dbs:
+            plan.problems.append(site.line("error", f"DB{c.instance} is a global DB"))
+        elif held is None and wanted.setdefault(c.instance, block) is not block:
+            why = f"DB{c.instance} is named as the instance of another block too"
+            plan.problems.append(site.line("error", why))
+    if not plan.problems:
+        for number, block in wanted.items():
+            cpu.create_instance_db(number, block)
+            plan.created.append(number)
+    return plan

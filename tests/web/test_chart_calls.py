@@ -1,0 +1,136 @@
+"""A chart calls system blocks as a GRAPH step does on S7 (``sequencer/calls.py``): the
+CPU has SFB0–5 and the SFCs, the instance DB a ``CALL SFB 4, DB 10`` names is created
+with the chart (at load and at an online change), kept with the state, and kept when a
+later chart no longer calls it. A call of a block the CPU lacks is a warning at load and,
+reached, a STOP that ``sim`` reports with its reason and exit status 1."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from s7graph.engine.clock import VirtualClock
+from s7graph.engine.modes import CpuMode
+from s7graph.sequencer.online import SwapRefused, swap
+from s7graph.web.cli import main
+from s7graph.web.harness.persist import open_state
+from s7graph.web.harness.session import ChartSession, compile_text
+
+CHART = """FUNCTION_BLOCK "Timed" FB 3 DB 3
+VAR done : BOOL; waited : TIME; END_VAR
+SEQUENCE 1 "Main"
+  INITIAL_STEP S1 "Wait":
+    {call}
+  END_STEP
+  STEP S2 "Go":
+  END_STEP
+  TRANSITION T1 FROM S1 TO S2 := done;
+  TRANSITION T2 FROM S2 TO S1 := NOT I0.0;
+END_SEQUENCE
+END_FUNCTION_BLOCK
+"""
+TON = "CALL SFB 4, DB 10 (IN := I0.0, PT := T#2S, Q => done, ET => waited);"
+
+
+def chart(tmp_path: Path, call: str, name: str = "timed.s7g") -> Path:
+    path = tmp_path / name
+    path.write_text(CHART.format(call=call), encoding="utf-8")
+    return path
+
+
+def sim(
+    path: Path, capsys: pytest.CaptureFixture[str], *args: str
+) -> tuple[int, list[dict[str, object]], str]:
+    stim = path.with_suffix(".jsonl")
+    stim.write_text('{"at_ms": 0, "set": {"I0.0": true}}\n', encoding="utf-8")
+    rc = main(["sim", str(path), "--stimulus", str(stim), *args])
+    out, err = capsys.readouterr()
+    return rc, [json.loads(line) for line in out.splitlines()], err
+
+
+def test_a_ton_called_in_a_step_times_out_and_switches_the_sequence(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    rc, trace, err = sim(chart(tmp_path, TON), capsys, "--cycles", "205", "--watch", "waited")
+    assert rc == 0 and err == ""
+    assert trace[150]["values"] == {"waited": 1500}
+    first = next(line["cycle"] for line in trace if line["active"] == ["S2"])
+    assert first == 201  # Q at 2000 ms, T1 in the next cycle
+
+
+def test_a_call_of_a_block_the_cpu_lacks_is_a_warning_and_reached_a_reported_stop(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    text = CHART.format(call="").replace('STEP S2 "Go":', 'STEP S2 "Go":\n    CALL FC 9;')
+    path = tmp_path / "fc.s7g"
+    path.write_text(text.replace("done;", "I0.0;"), encoding="utf-8")
+    rc, trace, err = sim(path, capsys, "--cycles", "20")
+    assert rc == 1
+    assert [line["active"] for line in trace] == [["S2"]]  # S2's call in cycle 0: the end
+    warning, stop = err.splitlines()
+    assert warning.startswith(f"{path}:8:5: warning: CALL FC 9: FC9 is not in this CPU")
+    assert stop.startswith("s7graph: error: cycle 0: the CPU went to STOP: FB3: block FC9")
+    assert "BlockError" not in err
+
+
+def test_an_instance_db_that_is_something_else_refuses_the_chart(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = chart(tmp_path, TON.replace("DB 10", "DB 3"))
+    rc, trace, err = sim(path, capsys, "--cycles", "2")
+    assert rc == 2 and trace == []
+    assert err == (
+        f"{path}:5:5: error: CALL SFB 4, DB 3: DB3 is the instance DB of FB3 'Timed' "
+        "(step S1 row 1)\n"
+    )
+
+
+def test_an_online_change_that_adds_a_timer_creates_its_instance_db(tmp_path: Path) -> None:
+    clock = VirtualClock()
+    session = ChartSession.load(chart(tmp_path, ""), None, clock)
+    session.start()
+    session.set("I0.0", True)
+    session.scan()
+    assert 10 not in session.cpu.instance_dbs
+    new, _ = compile_text(CHART.format(call=TON), "timed.s7g")
+    swap(session.graph, new, session.cpu)
+    for _ in range(202):  # the timer starts in the first scan after the swap
+        clock.advance(10)
+        session.scan()
+    assert session.cpu.mode is CpuMode.RUN
+    assert session.get("S2.X") is True
+    clash, _ = compile_text(CHART.format(call=TON.replace("DB 10", "DB 3")), "timed.s7g")
+    with pytest.raises(SwapRefused, match="DB3 is the instance DB of FB3"):
+        swap(session.graph, clash, session.cpu)
+
+
+def test_the_timer_instance_is_kept_with_the_state_and_outlives_its_call(tmp_path: Path) -> None:
+    """Saved while the timer has run 1.5 s; restarted hot its DB holds the same; a chart
+    that no longer calls it still loads the file, the DB kept as S7 keeps DBs."""
+    state = tmp_path / "timed.state.sqlite"
+    session = ChartSession.load(chart(tmp_path, TON), None, VirtualClock())
+    opened = open_state(state, session.cpu)
+    session.cpu.start("warm")
+    session.set("I0.0", True)
+    for _ in range(151):
+        session.scan()
+        batch = opened.store.stage(session.cpu)
+        if batch is not None:
+            opened.store.write(batch)
+        session.clock.advance(10)  # type: ignore[attr-defined]
+    saved = dict(session.cpu.instance_db(10).values)
+    assert saved["ET"] == 1500
+    opened.store.close()
+
+    again = ChartSession.load(chart(tmp_path, TON), None, VirtualClock(10**12))
+    reopened = open_state(state, again.cpu, hot=True)
+    assert reopened.report is not None
+    assert dict(again.cpu.instance_db(10).values) == saved
+    reopened.store.close()
+
+    without = ChartSession.load(chart(tmp_path, ""), None, VirtualClock())
+    kept = open_state(state, without.cpu)
+    assert dict(without.cpu.instance_db(10).values) == saved
+    kept.store.close()
