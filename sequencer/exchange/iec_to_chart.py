@@ -8,8 +8,10 @@
   whose condition holds (matiec, GRAFCET rule 4): the GRAPH rule applies.
 * Variables become FB variables; a located one a symbol at its S7 address, unless that
   would change what it does (an initial value on an I/Q location, an input the chart
-  writes): then an FB variable, reported. FB instances are not called (GRAPH calls blocks
-  with instance DBs); a read of ``INST.Q`` reads the FB variable ``INST_Q``, reported.
+  writes): then an FB variable, reported. A call of an instance of an IEC timer or counter
+  (TON TOF TP CTU CTD CTUD) is ``CALL SFB n`` with an instance DB of its own (``_SFB_OF``),
+  its outputs written to FB variables: ``INST.Q`` reads ``INST_Q``. Other FB instances
+  (R_TRIG, SR …) are not called, and a read of their outputs is reported.
 * Action rows by qualifier and statement (``mapping``); a bit assigned from an expression
   goes to PERMANENT AFTER, gated by the step (GRAPH writes bits from conditions only in
   permanent instructions); statements of a textual POU body beside its SFC elements go
@@ -60,6 +62,7 @@ from s7graph.sequencer.model import (
     ActionRow,
     Assignment,
     Binary,
+    BlockCall,
     Chart,
     ChartOptions,
     Coil,
@@ -76,6 +79,7 @@ from s7graph.sequencer.model import (
     VarDecl,
 )
 from s7graph.sequencer.validate import validate
+from s7graph.sfb import catalogue
 
 __all__ = ["const", "iec_to_chart"]
 
@@ -92,6 +96,11 @@ _FB_MEMBERS: dict[str, dict[str, str]] = {
     "SR": {"Q1": "BOOL"},
     "RS": {"Q1": "BOOL"},
 }
+# The IEC standard FBs the CPU has as system blocks (``sfb.catalogue``): an instance called
+# in an action or the POU body is ``CALL SFB n, DB m``, each instance with a DB of its own
+# from ``_FIRST_DB`` on, every output written to the FB variable ``INST_OUT``.
+_SFB_OF: dict[str, int] = {"CTU": 0, "CTD": 1, "CTUD": 2, "TP": 3, "TON": 4, "TOF": 5}
+_FIRST_DB = 100
 _COMPARE = {"=", "<>", "<", ">", "<=", ">="}
 
 
@@ -162,6 +171,8 @@ class _Convert:
         self.decls: list[VarDecl] = []
         self.symbols: list[SymbolDecl] = []
         self.instances: dict[str, tuple[str, str, SourceLocation]] = {}
+        self.instance_dbs: dict[str, int] = {}  # called instances: name → instance DB
+        self.members_read: dict[str, tuple[str, str]] = {}  # instance → (member, variable)
         self.taken: set[str] = set()
         self.steps: dict[str, Step] = {}
         self.step_numbers: dict[str, int] = {}
@@ -338,20 +349,69 @@ class _Convert:
         return Operand(graph, False, loc)
 
     def instance_member(self, head: str, member: str, loc: SourceLocation) -> Operand:
-        name, fb_type, decl_loc = self.instances[head]
+        name, fb_type, _ = self.instances[head]
         members = _FB_MEMBERS.get(fb_type, {})
         if member not in members:
             raise _NoMap(f"{name}.{member} is not an output of {fb_type}", loc)
         graph = self.helper(f"{name}_{member}", members[member])
+        self.members_read.setdefault(head, (member, graph))
+        return Operand(graph, False, loc)
+
+    def fb_call(self, st: SCallStmt, origin: tuple[int, int]) -> BlockCall:
+        """``TON1(IN := x, PT := T#2S)`` as ``CALL SFB 4, DB 100 (IN := x, PT := T#2S,
+        Q => TON1_Q, ET => TON1_ET)`` (``_SFB_OF``); the call of any other block is not
+        mapped."""
+        loc = self.loc(st, origin)
+        found = self.instances.get(st.name.upper())
+        if found is None:
+            raise _NoMap(f"call of {st.name} not imported: not an FB instance of the POU", loc)
+        name, fb_type, decl_loc = found
+        number = _SFB_OF.get(fb_type)
+        if number is None:
+            known = ", ".join(_SFB_OF)
+            raise _NoMap(
+                f"call of {name} : {fb_type} not imported: the CPU's system blocks are the "
+                f"IEC FBs {known}",
+                loc,
+            )
+        pins = [pin for pin, _ in st.inputs], [pin for pin, _ in st.outputs]
+        problems = catalogue.lookup(f"SFB{number}").check_call(*pins, has_instance=True)
+        if problems:
+            raise _NoMap(f"call of {name} not imported: {problems[0]}", loc)
+        inputs = tuple((pin.upper(), self.expr(e, origin)) for pin, e in st.inputs)
+        given = {pin.upper() for pin, _ in st.outputs}
+        outputs: list[tuple[str, Operand]] = []
+        for pin, target in st.outputs:
+            op = self.operand(target, origin)
+            assert isinstance(op, Operand)
+            outputs.append((pin.upper(), op))
+        for member, type_name in _FB_MEMBERS[fb_type].items():
+            if member not in given:
+                outputs.append((member, Operand(self.helper(f"{name}_{member}", type_name))))
+        head = st.name.upper()
+        db = self.instance_dbs.setdefault(head, _FIRST_DB + len(self.instance_dbs))
         self.warn_once(
-            (name, "instance"),
-            "I022",
-            f"{name} : {fb_type} is not called by the "
-            f"chart (GRAPH calls blocks with an instance DB); {name}.{member} reads "
-            f"the FB variable {graph}, which nothing in the chart writes",
+            (name, "called"),
+            "I031",
+            f"{name} : {fb_type} is called as SFB {number} with instance DB {db}; its "
+            f"outputs are the FB variables {name}_… (in an IEC action it is called once "
+            "more when the step ends, in GRAPH only while the step is active)",
             decl_loc,
         )
-        return Operand(graph, False, loc)
+        return BlockCall("SFB", number, db, inputs, tuple(outputs), loc)
+
+    def uncalled_instances(self) -> None:
+        """An instance whose outputs the chart reads but which it never calls: reported."""
+        for head, (member, graph) in self.members_read.items():
+            if head in self.instance_dbs:
+                continue
+            name, fb_type, decl_loc = self.instances[head]
+            self.p.warn(
+                "I022",
+                f"{name} : {fb_type} is not called by the chart; {name}.{member} reads the "
+                f"FB variable {graph}, which nothing in the chart writes",
+                decl_loc,
+            )
 
     def type_of(self, e: Expr) -> str | None:
         if isinstance(e, Const):
@@ -485,6 +545,9 @@ class _Convert:
             for st in body:
                 if isinstance(st, SAssign | SSetReset) and isinstance(st.target, SName):
                     self.written.add(st.target.parts[0].upper())
+                elif isinstance(st, SCallStmt):
+                    targets = [t for _, t in st.outputs if isinstance(t, SName)]
+                    self.written.update(t.parts[0].upper() for t in targets)
 
     def step_actions(self, step: IecStep, number: int) -> list[ActionRow]:
         rows: list[ActionRow] = []
@@ -603,10 +666,9 @@ class _Convert:
                         f"{st.keyword} statement not imported (a GRAPH row is one instruction)", loc
                     )
                 if isinstance(st, SCallStmt):
-                    raise _NoMap(
-                        f"call of {st.name} not imported: GRAPH calls blocks with an instance DB",
-                        loc,
-                    )
+                    call = self.fb_call(st, action.origin)
+                    rows.append(ActionRow("CALL", call, ev, False, None, loc))
+                    continue
                 target = self.operand(st.target, action.origin)
                 assert isinstance(target, Operand)
                 ttype = self.type_of(target)
@@ -673,9 +735,11 @@ class _Convert:
         for st in self.src.prelude:
             loc = self.loc(st, (1, 1))
             try:
-                if isinstance(st, SOther | SCallStmt):
-                    what = st.keyword if isinstance(st, SOther) else f"call of {st.name}"
-                    raise _NoMap(f"{what} in the POU body not imported", loc)
+                if isinstance(st, SCallStmt):
+                    self.before.append(self.fb_call(st, (1, 1)))
+                    continue
+                if isinstance(st, SOther):
+                    raise _NoMap(f"{st.keyword} in the POU body not imported", loc)
                 target = self.operand(st.target, (1, 1))
                 assert isinstance(target, Operand)
                 value = self.assigned(st.expr, self.type_of(target), (1, 1))
@@ -704,6 +768,7 @@ class _Convert:
             s, st = steps[number]
             steps[number] = (s, dataclasses.replace(st, actions=(*extra, *st.actions)))
         self.prelude()
+        self.uncalled_instances()
         self.check_shared_variables()
         used = {a.action.upper() for s in self.src.steps for a in s.associations}
         for name, act in self.src.actions.items():

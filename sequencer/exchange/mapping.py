@@ -211,10 +211,16 @@ CONSTRUCTS: Final[tuple[tuple[str, str, str], ...]] = (
         "run every call, before the chart",
     ),
     (
-        "FB instance (TON, CTU, R_TRIG, SR …) and its calls",
+        "call of a TON, TOF, TP, CTU, CTD or CTUD instance (ST, and FBD action bodies)",
+        "`CALL SFB n, DB m (…)` (in the action's row, or PERMANENT BEFORE from the POU body)",
+        "each instance an instance DB of its own from DB 100; every output written to an FB "
+        "variable: `TON3.Q` reads `TON3_Q`",
+    ),
+    (
+        "other FB instances (R_TRIG, SR …), and calls in FBD networks of the POU body",
         "not imported",
-        "GRAPH calls blocks with instance DBs; `TON3.Q` reads the FB variable `TON3_Q`, "
-        "which nothing writes; an array element `A[1]` is the FB variable `A_1`",
+        "the CPU's system blocks are the IEC timers and counters; a read of an output of an "
+        "instance never called is reported; an array element `A[1]` is the FB variable `A_1`",
     ),
     ("IF, CASE, FOR, WHILE, REPEAT", "not imported", "GRAPH rows are single instructions"),
     ("IL action bodies", "not imported", ""),

@@ -17,8 +17,8 @@ from tests.exchange.helpers import codes, corpus, import_to, imported
 EXPECTED: dict[str, tuple[str, list[tuple[str, int]]]] = {
     "iec-text/ironplc_first_steps_counter_sfc.st": ("iec-text", [("I023", 12)]),
     "iec-text/matiec_annexF_gravel.txt": ("iec-text", [
-        ("I022", 34), ("I022", 37), ("I022", 40), ("I021", 76), ("I021", 77), ("I021", 91),
-        ("I021", 92), ("I021", 94), ("I021", 95), ("I021", 97), ("I024", 102)]),
+        ("I022", 34), ("I031", 36), ("I022", 37), ("I031", 38), ("I022", 40), ("I021", 76),
+        ("I021", 77), ("I031", 85), ("I021", 92), ("I021", 96), ("I021", 97), ("I024", 102)]),
     "iec-text/matiec_sfc.txt": ("iec-text", [("I023", 3), ("I023", 6), ("I024", 158)]),
     "plcopen/beremiz_first_steps.xml": ("plcopen", [
         ("I024", 20), ("I024", 72), ("I024", 451), ("I024", 494), ("I024", 910),
@@ -28,8 +28,8 @@ EXPECTED: dict[str, tuple[str, list[tuple[str, int]]]] = {
         ("I024", 1557), ("I023", 1971), ("I023", 1976), ("I021", 1994), ("I020", 2678),
         ("I024", 2693)]),
     "plcopen/beremiz_traffic_light.xml": ("plcopen", [
-        ("I022", 97), ("I022", 102), ("I022", 107), ("I021", 143), ("I021", 186),
-        ("I021", 266), ("I021", 288), ("I031", 490), ("I022", 932), ("I022", 1091),
+        ("I031", 62), ("I031", 67), ("I022", 97), ("I022", 102), ("I022", 107), ("I021", 266),
+        ("I021", 288), ("I031", 490), ("I031", 494), ("I022", 932), ("I022", 1091),
         ("I024", 1214), ("I024", 1419)]),
     "plcopen/iec_checker_example.xml": ("plcopen", [
         ("I024", 26), ("I024", 260), ("I024", 400), ("I021", 496), ("I020", 799),

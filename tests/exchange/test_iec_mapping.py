@@ -69,12 +69,41 @@ def test_a_pulse_body_assigning_a_bit_is_gated_by_a_one_call_pulse(tmp_path: Pat
 
 def test_statements_beyond_assignments_are_reported_where_they_are() -> None:
     body = ("STEP B: ACT(N); END_STEP\nACTION ACT:\n IF x THEN y := TRUE; END_IF;\n"
-            " T1(IN := x, PT := T#1s);\nEND_ACTION")  # fmt: skip
-    result = import_chart(program(body, "x : BOOL; y : BOOL; T1 : TON;"), "p.st")
+            " E1(CLK := x);\nEND_ACTION")  # fmt: skip
+    result = import_chart(program(body, "x : BOOL; y : BOOL; E1 : R_TRIG;"), "p.st")
     assert rows_of(result.chart, "B") == []
     assert [(d.code, d.loc.line, d.loc.col) for d in result.problems] == [
         ("I021", 7, 2), ("I021", 8, 2)]  # fmt: skip
     assert "IF statement" in result.problems[0].message
+    assert "call of E1 : R_TRIG not imported" in result.problems[1].message
+
+
+def test_an_iec_timer_called_in_an_action_is_a_call_of_its_system_block(tmp_path: Path) -> None:
+    """``T1(IN := x, PT := T#50ms)`` in an N action is ``CALL SFB 4, DB 100`` with its
+    outputs in FB variables, so ``T1.Q`` in a transition switches when the time is up;
+    a counter called in the POU body is a permanent call, with a DB of its own."""
+    text = (
+        "PROGRAM P\nVAR x : BOOL; T1 : TON; C1 : CTU; END_VAR\n"
+        "C1(CU := x, PV := 3);\n"
+        "INITIAL_STEP A:\nEND_STEP\nSTEP B: WAIT(N); END_STEP\nSTEP C:\nEND_STEP\n"
+        "ACTION WAIT:\n T1(IN := TRUE, PT := T#50ms);\nEND_ACTION\n"
+        "TRANSITION FROM A TO B := x; END_TRANSITION\n"
+        "TRANSITION FROM B TO C := T1.Q; END_TRANSITION\n"
+        "TRANSITION FROM C TO A := NOT x; END_TRANSITION\nEND_PROGRAM\n"
+    )
+    result = import_chart(text.encode(), "p.st")
+    assert rows_of(result.chart, "B") == [
+        "CALL SFB 4, DB 100 (IN := TRUE, PT := T#50ms, Q => T1_Q, ET => T1_ET);"]  # fmt: skip
+    written = format_chart(result.chart)
+    assert "CALL SFB 0, DB 101 (CU := x, PV := 3, Q => C1_Q, CV => C1_CV);" in written
+    assert [d.code for d in result.problems] == ["I031", "I031"]  # called, no final call
+    chart = tmp_path / "p.s7g"
+    chart.write_text(written)
+    records = sim(tmp_path, chart, watch=["C1_CV"], cycles=12,
+                  stimulus=[{"at_ms": 10, "set": {"x": True}}])  # fmt: skip
+    active = [r["active"] for r in records]
+    assert active[1] == ["S2"] and active[6] == ["S2"] and active[7] == ["S3"]
+    assert records[-1]["values"]["C1_CV"] == 1
 
 
 def test_priority_orders_the_paths_of_an_alternative() -> None:
