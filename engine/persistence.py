@@ -642,9 +642,9 @@ class StateStore:
         held = f"DB{number} holds an instance of {label} {name!r}"
         # a system block's instance the program no longer calls: kept, as S7 keeps DBs
         system = cpu.blocks.get(label)
-        kept = isinstance(system, FB) and system.kind is BlockKind.SFB
-        if idb is None and kept and isinstance(system, FB) and number not in cpu.mem.dbs:
-            idb = cpu.create_instance_db(number, system)
+        sfb = system if isinstance(system, FB) and system.kind is BlockKind.SFB else None
+        if idb is None and sfb is not None and number not in cpu.mem.dbs:
+            idb = cpu.create_instance_db(number, sfb)
         if idb is None:
             raise StateFileError(self.path, f"{held}, which this program does not have")
         fb = idb.fb

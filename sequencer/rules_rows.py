@@ -146,6 +146,9 @@ def _check_call(ctx: _Ctx, call: BlockCall, el: str) -> None:
     )  # fmt: skip
     for problem in problems:
         ctx.err("E046", problem, call.loc, el)
+    if entry.needs_instance and isinstance(call.instance, str):
+        ctx.err("E046", f"{entry.key} {entry.name}: name its instance DB by number "
+                f"(DB 10), not {call.instance!r}", call.loc, el)  # fmt: skip
     for name, t, e in types:
         pin = entry.pin(name)
         if pin is None or t is None or pin.type == "ANY":
