@@ -9,8 +9,10 @@ order (after a ``selectionDivergence`` when there are several), ``simultaneousDi
 before a step several transitions lead to, and a ``jumpStep`` for a transition that leads
 back up. Conditions are inline ST. Action rows with an IEC equivalent (``exchange.mapping``
 read backwards) become actions: ``N S R D L`` on a bit as Boolean actions, ``S1``/``S0``
-rows as ``P``/``P0`` actions, assignments as inline ST; the others (interlocked rows, other
-events, calls, counters, timers) an inline ST comment holding the GRAPH row. Symbols are
+rows as ``P``/``P0`` actions, assignments as inline ST, a call of an IEC timer or counter
+(``CALL SFB 4, DB 10 (…)``) as the call of an FB instance ``TON_DB10`` the POU declares;
+the others (interlocked rows, other events, other calls, S5 counters and timers) an inline
+ST comment holding the GRAPH row. Symbols are
 global variables of the configuration at their IEC address. Interlocks, supervisions,
 options, permanent instructions and ``TO STOP`` live in the `.s7g` source only.
 """
@@ -27,6 +29,7 @@ from s7graph.sequencer.format import format_chart, format_expr, format_row
 from s7graph.sequencer.model import (
     ActionRow,
     Assignment,
+    BlockCall,
     Chart,
     Const,
     Expr,
@@ -36,11 +39,13 @@ from s7graph.sequencer.model import (
     StepAttr,
     TransAttr,
 )
+from s7graph.sfb import catalogue
 
 __all__ = ["export_plcopen"]
 
 _NS = "http://www.plcopen.org/xml/tc6_0201"
 _TYPES = {"TIME_OF_DAY": "TOD", "DATE_AND_TIME": "DT"}
+_IEC_FBS = ("CTU", "CTD", "CTUD", "TP", "TON", "TOF")  # SFB0–5: the IEC standard FBs
 
 
 def _ident(name: str) -> str:
@@ -53,6 +58,7 @@ class _Export:
         self.chart = chart
         self.table = symbols
         self.ids = 0
+        self.instances: dict[str, str] = {}  # IEC FB instances the calls name → their type
         names = [s.name for s in chart.all_steps()]
         self.step_name: dict[int, str] = {}
         for s in chart.all_steps():
@@ -107,7 +113,23 @@ class _Export:
             return self.inline(qualifier, body)
         if plain and qualifier == "P" and r.qualifier == "N" and isinstance(op, Operand):
             return self.bool_action("P", op)
+        if plain and qualifier is not None and r.qualifier == "CALL" and isinstance(op, BlockCall):
+            call = self.fb_call(op)
+            if call is not None:
+                return self.inline(qualifier or "N", call)
         return self.inline("N", f"(* s7graph: {format_row(r).replace('*)', '* )')} *)")
+
+    def fb_call(self, c: BlockCall) -> str | None:
+        """``CALL SFB 4, DB 10 (IN := x, …)`` as the call of the IEC FB instance
+        ``TON_DB10`` (declared in the POU), for the IEC timers and counters; else None."""
+        entry = catalogue.find(f"SFB{c.block}") if c.kind == "SFB" else None
+        if entry is None or entry.name not in _IEC_FBS or not isinstance(c.instance, int):
+            return None
+        name = f"{entry.name}_DB{c.instance}"
+        self.instances[name] = entry.name
+        params = [f"{pin} := {self.st(e)}" for pin, e in c.inputs]
+        params += [f"{pin} => {self.st(o)}" for pin, o in c.outputs]
+        return f"{name}({', '.join(params)});"
 
     def bool_action(self, qualifier: str, op: Operand, duration: str = "") -> str:
         dur = f" duration={quoteattr(duration)}" if duration else ""
@@ -223,6 +245,9 @@ class _Export:
                 else ""
             )
             local.append(f"<variable name={quoteattr(v.name)}>{_type(v.type)}{init}</variable>")
+        for name, fb in self.instances.items():
+            derived = f"<type><derived name={quoteattr(fb)}/></type>"
+            local.append(f"<variable name={quoteattr(name)}>{derived}</variable>")
         external, globals_ = [], []
         for name, address, type_name in self.symbols():
             ident = _ident(name)

@@ -9,8 +9,8 @@
 * Variables become FB variables; a located one a symbol at its S7 address, unless that
   would change what it does (an initial value on an I/Q location, an input the chart
   writes): then an FB variable, reported. A call of an instance of an IEC timer or counter
-  (TON TOF TP CTU CTD CTUD) is ``CALL SFB n`` with an instance DB of its own (``_SFB_OF``),
-  its outputs written to FB variables: ``INST.Q`` reads ``INST_Q``. Other FB instances
+  (TON TOF TP CTU CTD CTUD) is ``CALL SFB n`` with an instance DB of its own (``_SFB_OF``,
+  ``instance_db``), its outputs written to FB variables: ``INST.Q`` reads ``INST_Q``. Other FB instances
   (R_TRIG, SR …) are not called, and a read of their outputs is reported.
 * Action rows by qualifier and statement (``mapping``); a bit assigned from an expression
   goes to PERMANENT AFTER, gated by the step (GRAPH writes bits from conditions only in
@@ -385,20 +385,36 @@ class _Convert:
             op = self.operand(target, origin)
             assert isinstance(op, Operand)
             outputs.append((pin.upper(), op))
+        helpers: list[str] = []
         for member, type_name in _FB_MEMBERS[fb_type].items():
             if member not in given:
-                outputs.append((member, Operand(self.helper(f"{name}_{member}", type_name))))
-        head = st.name.upper()
-        db = self.instance_dbs.setdefault(head, _FIRST_DB + len(self.instance_dbs))
+                helpers.append(self.helper(f"{name}_{member}", type_name))
+                outputs.append((member, Operand(helpers[-1])))
+        db = self.instance_db(st.name)
+        into = f"; its outputs go to the FB variables {', '.join(helpers)}" if helpers else ""
         self.warn_once(
             (name, "called"),
             "I031",
-            f"{name} : {fb_type} is called as SFB {number} with instance DB {db}; its "
-            f"outputs are the FB variables {name}_… (in an IEC action it is called once "
-            "more when the step ends, in GRAPH only while the step is active)",
+            f"{name} : {fb_type} is called as SFB {number} with instance DB {db}{into} (in "
+            "an IEC action it is called once more when the step ends, in GRAPH only while "
+            "the step is active)",
             decl_loc,
         )
         return BlockCall("SFB", number, db, inputs, tuple(outputs), loc)
+
+    def instance_db(self, name: str) -> int:
+        """The instance DB of FB instance ``name``: the number its name ends in when it is
+        ``…_DB<n>`` (s7graph's PLCopen export names them so) and free, else the next free
+        one from ``_FIRST_DB``."""
+        head = name.upper()
+        if head not in self.instance_dbs:
+            used = set(self.instance_dbs.values())
+            m = re.fullmatch(r"\w+_DB(\d{1,5})", name, re.I)
+            number = int(m.group(1)) if m else 0
+            if not 0 < number < 65536 or number in used:
+                number = next(n for n in range(_FIRST_DB, _FIRST_DB + 65536) if n not in used)
+            self.instance_dbs[head] = number
+        return self.instance_dbs[head]
 
     def uncalled_instances(self) -> None:
         """An instance whose outputs the chart reads but which it never calls: reported."""

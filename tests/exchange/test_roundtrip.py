@@ -86,6 +86,27 @@ def test_plcopen_export_of_rows_without_iec_form_is_reported_when_read_as_iec() 
     assert len(empty) == 5 + 5 + 3 + 1
 
 
+def test_an_iec_timer_call_goes_to_plcopen_as_an_fb_instance_and_comes_back() -> None:
+    """``CALL SFB 4, DB 10 (…)`` is the call of the POU's instance ``TON_DB10`` in the SFC
+    other IEC tools read (``Q => done`` included), and reads back as the same row; a call
+    with no IEC form stays a comment."""
+    text = (
+        'FUNCTION_BLOCK "T"\nVAR done : BOOL; waited : TIME; END_VAR\nSEQUENCE 1\n'
+        "INITIAL_STEP S1:\n  CALL SFB 4, DB 10 (IN := I0.0, PT := T#2S, Q => done, ET => waited);"
+        "\n  CALL SFC 46;\nEND_STEP\nSTEP S2: END_STEP\n"
+        "TRANSITION T1 FROM S1 TO S2 := done;\nTRANSITION T2 FROM S2 TO S1 := NOT I0.0;\n"
+        "END_SEQUENCE\nEND_FUNCTION_BLOCK\n"
+    )
+    chart = parse_chart(text, "t.s7g")
+    xml = export_chart(chart, "plcopen")
+    assert '<variable name="TON_DB10"><type><derived name="TON"/></type></variable>' in xml
+    assert "TON_DB10(IN := %IX0.0, PT := T#2S, Q => done, ET => waited);" in xml
+    assert "(* s7graph: CALL SFC 46; *)" in xml
+    back = import_chart(native_only(xml), "t.xml").chart
+    assert [format_row(r) for r in back.all_steps()[0].actions] == [
+        "CALL SFB 4, DB 10 (IN := I0.0, PT := T#2S, Q => done, ET => waited);"]  # fmt: skip
+
+
 def test_a_row_simaticml_cannot_hold_is_one_clear_export_error(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
