@@ -137,7 +137,9 @@ class CallContext:
         """Call an FB/SFB (with its instance DB) or an FC/SFC; return its outputs by name.
 
         A ``str`` actual for a non-string parameter is an operand (``"MW10"``); OUT and
-        IN_OUT operands receive the values after the call (behaviours 33, 34).
+        IN_OUT operands receive the values after the call (behaviours 33, 34). ``None`` for
+        an OUT gives it without an operand: its value is only returned (a GRAPH row's
+        ``CDT => t`` writes it to an FB variable the engine does not address).
         """
         if isinstance(block, FB) and isinstance(instance, InstanceDB) and instance.fb is block:
             return self._call_fb(block, instance, params)  # the common case, checks below
@@ -221,6 +223,8 @@ class CallContext:
                 raise BlockError(f"{blk.label} has no parameter {name!r}")
             decl, type_name = spec
             if decl is Decl.OUT:
+                if actual is None:  # only returned (a GRAPH row writes it): see _call_fc
+                    continue
                 if not isinstance(actual, str):
                     raise BlockError(f"{blk.label}.{name}: an OUT needs an operand, not {actual!r}")
                 writes = writes or []
@@ -246,11 +250,15 @@ class CallContext:
             raise BlockError(f"{blk.label} {blk.name!r}: parameter(s) {', '.join(missing)} missing")
         args: dict[str, object] = {}
         refs: list[tuple[str, str, str]] = []
+        returned: list[str] = []
         for name, actual in params.items():
             spec = table.get(name)
             if spec is None:
                 raise BlockError(f"{blk.label} has no parameter {name!r}")
             decl, type_name = spec
+            if actual is None and decl is Decl.OUT:
+                returned.append(name)  # given, its value only returned: the caller writes it
+                continue
             if isinstance(actual, str) and not is_stringy(type_name):
                 if decl is not Decl.OUT:  # an OUT is written, never read in
                     args[name] = self.mem.read_as(_addr(actual), type_name)
@@ -262,6 +270,7 @@ class CallContext:
                 args[name] = check_value(type_name, actual)
         ret = self._invoke(blk, args)
         out = self._write_back(refs, args)
+        out.update((name, args[name]) for name in returned if name in args)
         if blk.ret_type is not None:
             out["RET_VAL"] = ret
         return out

@@ -436,7 +436,10 @@ def _gen_permanent(name: str, instrs: tuple[Any, ...], g: CodeGen, res: _Resolve
                 lines.append(f"    if {cond}:")
                 lines.append("        " + g.set_bit(ref, ins.kind == "S"))
         elif isinstance(ins, BlockCall):
-            inputs = ", ".join(f"{n!r}: {val(e)}" for n, e in ins.inputs)
+            pairs = [f"{n!r}: {val(e)}" for n, e in ins.inputs]
+            # an OUT given without an operand: returned, and written below (RET_VAL always is)
+            pairs += [f"{n!r}: None" for n, _ in ins.outputs if n.upper() != "RET_VAL"]
+            inputs = ", ".join(pairs)
             lines.append(
                 f"    _o = R.call({ins.kind!r}, {ins.block!r}, {ins.instance!r}, {{{inputs}}})"
             )

@@ -119,10 +119,10 @@ def _check_row_operand(ctx: _Ctx, r: ActionRow, op: Operand, el: str) -> None:
 
 def _check_call(ctx: _Ctx, call: BlockCall, el: str) -> None:
     """Parameters are typed operands; a call of a system block (``CALL SFB 4, DB 10``)
-    names one s7graph has, with an instance DB exactly when it is an SFB, and its
-    parameters are pins of it, ``:=`` for inputs, ``=>`` for outputs, of the pin's type
-    (the catalogue, ``sfb.catalogue``). FB and FC calls name the user's blocks, which only
-    the program that loads them knows."""
+    names one s7graph has, with an instance DB (by number) exactly when it is an SFB, and
+    its parameters are pins of it, ``:=`` for inputs, ``=>`` for outputs, of the pin's
+    type, all of them for an SFC (the catalogue, ``sfb.catalogue``). FB and FC calls name
+    the user's blocks, which only the program that loads them knows."""
     types = [(name, _type(ctx, e, el), e) for name, e in call.inputs]
     for name, o in call.outputs:
         res = _resolve(ctx, o, el)
@@ -146,6 +146,11 @@ def _check_call(ctx: _Ctx, call: BlockCall, el: str) -> None:
     )  # fmt: skip
     for problem in problems:
         ctx.err("E046", problem, call.loc, el)
+    given = {n.upper() for n, _ in (*call.inputs, *call.outputs)}
+    missing = [p.name for p in entry.pins if p.name not in given]
+    if not entry.needs_instance and missing:  # an FC's parameters all are given (S7)
+        ctx.err("E046", f"{entry.key} {entry.name}: an SFC takes every parameter; "
+                f"{', '.join(missing)} missing", call.loc, el)  # fmt: skip
     if entry.needs_instance and isinstance(call.instance, str):
         ctx.err("E046", f"{entry.key} {entry.name}: name its instance DB by number "
                 f"(DB 10), not {call.instance!r}", call.loc, el)  # fmt: skip

@@ -191,7 +191,10 @@ def _row(
     if q == "CALL":
         if not isinstance(op, BlockCall):
             raise ActionError("CALL needs a block", row.loc)
-        ins = ", ".join(f"{name!r}: {val(e)}" for name, e in op.inputs)
+        pairs = [f"{name!r}: {val(e)}" for name, e in op.inputs]
+        # an OUT given without an operand: returned, and written below (RET_VAL always is)
+        pairs += [f"{name!r}: None" for name, _ in op.outputs if name.upper() != "RET_VAL"]
+        ins = ", ".join(pairs)
         lines = [f"_o = R.call({op.kind!r}, {op.block!r}, {op.instance!r}, {{{ins}}})"]
         lines = ["if not zero:", f"    {lines[0]}"]
         for name, target in op.outputs:

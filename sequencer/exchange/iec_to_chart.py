@@ -10,8 +10,9 @@
   would change what it does (an initial value on an I/Q location, an input the chart
   writes): then an FB variable, reported. A call of an instance of an IEC timer or counter
   (TON TOF TP CTU CTD CTUD) is ``CALL SFB n`` with an instance DB of its own (``_SFB_OF``,
-  ``instance_db``), its outputs written to FB variables: ``INST.Q`` reads ``INST_Q``. Other FB instances
-  (R_TRIG, SR …) are not called, and a read of their outputs is reported.
+  ``instance_db``), its outputs written to FB variables: ``INST.Q`` reads ``INST_Q``.
+  Other FB instances (R_TRIG, SR …) are not called, and a read of their outputs is
+  reported.
 * Action rows by qualifier and statement (``mapping``); a bit assigned from an expression
   goes to PERMANENT AFTER, gated by the step (GRAPH writes bits from conditions only in
   permanent instructions); statements of a textual POU body beside its SFC elements go

@@ -1,8 +1,9 @@
 """A chart calls system blocks as a GRAPH step does on S7 (``sequencer/calls.py``): the
 CPU has SFB0–5 and the SFCs, the instance DB a ``CALL SFB 4, DB 10`` names is created
 with the chart (at load and at an online change), kept with the state, and kept when a
-later chart no longer calls it. A call of a block the CPU lacks is a warning at load and,
-reached, a STOP that ``sim`` reports with its reason and exit status 1."""
+later chart no longer calls it; an SFC's outputs reach the FB variables they name. A call
+of a block the CPU lacks is a warning at load and, reached, a STOP that ``sim`` reports
+with its reason and exit status 1."""
 
 from __future__ import annotations
 
@@ -134,3 +135,41 @@ def test_the_timer_instance_is_kept_with_the_state_and_outlives_its_call(tmp_pat
     kept = open_state(state, without.cpu)
     assert dict(without.cpu.instance_db(10).values) == saved
     kept.store.close()
+
+
+CLOCK = """FUNCTION_BLOCK "Clock" FB 3
+VAR now : DATE_AND_TIME; ret : INT; ticks : TIME; END_VAR
+SEQUENCE 1
+  INITIAL_STEP S1:
+    CALL SFC 1 (RET_VAL => ret, CDT => now);
+  END_STEP
+  TRANSITION T1 FROM S1 TO S1 := FALSE;
+END_SEQUENCE
+PERMANENT AFTER
+  CALL SFC 64 (RET_VAL => ticks);
+END_PERMANENT
+END_FUNCTION_BLOCK
+"""
+
+
+def test_an_sfc_writes_its_outputs_to_fb_variables(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """READ_CLK's CDT (an OUT) and TIME_TCK's RET_VAL reach the FB variables they name,
+    from a step's row and from a permanent instruction."""
+    path = tmp_path / "clock.s7g"
+    path.write_text(CLOCK, encoding="utf-8")
+    rc, trace, err = sim(path, capsys, "--cycles", "3", "--watch", "now,ret,ticks")
+    assert rc == 0 and err == ""
+    assert trace[2]["values"] == {"now": "1990-01-01 00:00:00.020000", "ret": 0, "ticks": 20}
+
+
+def test_an_sfc_call_without_all_its_parameters_is_refused_by_check(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "clock.s7g"
+    path.write_text(CLOCK.replace("RET_VAL => ret, ", ""), encoding="utf-8")
+    assert main(["check", str(path)]) == 2
+    assert "E046]: SFC1 READ_CLK: an SFC takes every parameter; RET_VAL missing" in (
+        capsys.readouterr().out
+    )
