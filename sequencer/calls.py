@@ -10,7 +10,8 @@ call, and refuses (nothing created) when a named DB is already something else: a
 DB, or the instance of another block. A call of a user block (``CALL FC 9``, ``CALL FB 5,
 DB 5``) that the CPU has not loaded is reported in ``missing``: a chart run by itself has
 the system blocks only, and the call stops the CPU when it is reached (a programming
-error without OB121, as on S7).
+error without OB121, as on S7). A download into the running CPU may not add such a call:
+``swap`` refuses it.
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from typing import Any
 from s7graph.engine.errors import BlockError
 from s7graph.sequencer.model import BlockCall, Chart
 
-__all__ = ["CallPlan", "call_sites", "prepare_calls"]
+__all__ = ["CallPlan", "call_sites", "missing_blocks", "prepare_calls"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -48,6 +49,7 @@ class CallPlan:
     problems: list[str] = field(default_factory=list)
     missing: list[str] = field(default_factory=list)
     created: list[int] = field(default_factory=list)
+    missing_blocks: set[str] = field(default_factory=set)  # their labels: FC9, FB5
 
 
 def call_sites(chart: Chart) -> list[CallSite]:
@@ -63,22 +65,28 @@ def call_sites(chart: Chart) -> list[CallSite]:
     return out
 
 
-def prepare_calls(cpu: Any, chart: Chart) -> CallPlan:
+def prepare_calls(cpu: Any, chart: Chart, *, allowed_missing: set[str] | None = None) -> CallPlan:
     """Create the instance DBs ``chart``'s SFB calls name in ``cpu`` (an ``engine.Cpu``);
-    nothing is created when one of them cannot be (``problems``)."""
+    nothing is created when one of them cannot be (``problems``). With ``allowed_missing``
+    (a download into a running CPU: the blocks the running chart already lacks), a call of
+    any other block the CPU lacks is a problem too: reached, it would stop the plant."""
     plan = CallPlan()
     wanted: dict[int, Any] = {}
     for site in call_sites(chart):
         c = site.call
-        label = f"{c.kind}{c.block}" if c.kind else str(c.block)
+        label = _label(c)
         try:
             block = cpu.block(label)
         except BlockError:  # not loaded
             block = None
         if block is None:
-            plan.missing.append(
-                site.line("warning", f"{label} is not in this CPU; reached, the call stops it")
-            )
+            plan.missing_blocks.add(label)
+            if allowed_missing is not None and label not in allowed_missing:
+                why = f"{label} is not in this CPU; reached, the call would stop it"
+                plan.problems.append(site.line("error", why))
+            else:
+                why = f"{label} is not in this CPU; reached, the call stops it"
+                plan.missing.append(site.line("warning", why))
             continue
         if c.kind != "SFB":
             continue
@@ -99,3 +107,19 @@ def prepare_calls(cpu: Any, chart: Chart) -> CallPlan:
             cpu.create_instance_db(number, block)
             plan.created.append(number)
     return plan
+
+
+def missing_blocks(cpu: Any, chart: Chart) -> set[str]:
+    """The labels of the blocks ``chart`` calls that ``cpu`` does not have."""
+    out: set[str] = set()
+    for site in call_sites(chart):
+        try:
+            cpu.block(_label(site.call))
+        except BlockError:
+            out.add(_label(site.call))
+    return out
+
+
+def _label(c: BlockCall) -> str:
+    """``FC9``, ``SFB4`` or a symbolic name: what ``Cpu.block`` looks up."""
+    return f"{c.kind}{c.block}" if c.kind else str(c.block)

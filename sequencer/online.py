@@ -7,11 +7,11 @@ scan boundary, carries the FB's state over to ``new`` by step number with the on
 that does so (``sequencer.carry.carry_over``: active steps stay active with T and U, faults
 and criteria, variables keep their values by name) and makes the FB run ``new`` from its
 next call (``GraphFB.replace_chart``), the instance DBs of the system blocks it calls
-created first (``sequencer.calls``; a DB that is something else refuses the swap). Active
-steps the new chart does not have are never dropped silently: without a choice the swap is
-refused naming them; ``keep`` lets the other steps go on, ``init`` initializes the
-sequencer (INIT_SQ in the next call). The way back —
-*Undo download* — is the same swap with the charts the other way round.
+created first (``sequencer.calls``; a DB that is something else, or a new call of a block
+the CPU lacks, refuses the swap). Active steps the new chart does not have are never
+dropped silently: without a choice the swap is refused naming them; ``keep`` lets the
+other steps go on, ``init`` initializes the sequencer (INIT_SQ in the next call). The way
+back — *Undo download* — is the same swap with the charts the other way round.
 
 Pure: no threads, no clock, no files; the caller (``web.bus.online``) compiles off the scan
 thread and calls :func:`swap` between two scans.
@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from typing import Any, Final, Literal
 
 from s7graph.engine.errors import S7Error
-from s7graph.sequencer.calls import prepare_calls
+from s7graph.sequencer.calls import missing_blocks, prepare_calls
 from s7graph.sequencer.carry import CarryReport, ChartShape, carry_over
 from s7graph.sequencer.compiled import CompiledChart
 from s7graph.sequencer.diff import ChangeSummary, active_steps, summarize
@@ -86,7 +86,8 @@ def swap(
             f"active steps {shown} are not in the new chart: choose keep (the other steps "
             "go on) or init (initialize the sequencer)"
         )
-    plan = prepare_calls(cpu, new.chart)  # the instance DBs of its new SFB calls
+    # the instance DBs of its new SFB calls; no new call of a block the CPU lacks
+    plan = prepare_calls(cpu, new.chart, allowed_missing=missing_blocks(cpu, old.chart))
     if plan.problems:
         raise SwapRefused("; ".join(plan.problems))
     carried, report = carry_over(ChartShape.of(old), state, new)

@@ -3,7 +3,7 @@ CPU has SFB0–5 and the SFCs, the instance DB a ``CALL SFB 4, DB 10`` names is 
 with the chart (at load and at an online change), kept with the state, and kept when a
 later chart no longer calls it; an SFC's outputs reach the FB variables they name. A call
 of a block the CPU lacks is a warning at load and, reached, a STOP that ``sim`` reports
-with its reason and exit status 1."""
+with its reason and exit status 1; a download may not add one."""
 
 from __future__ import annotations
 
@@ -173,3 +173,20 @@ def test_an_sfc_call_without_all_its_parameters_is_refused_by_check(
     assert "E046]: SFC1 READ_CLK: an SFC takes every parameter; RET_VAL missing" in (
         capsys.readouterr().out
     )
+
+
+def test_a_download_may_not_add_a_call_of_a_block_the_cpu_lacks(tmp_path: Path) -> None:
+    """Reached, the call would stop a running plant: the swap is refused, the old chart runs
+    on. A chart that already had the call may still be changed."""
+    session = ChartSession.load(chart(tmp_path, ""), None, VirtualClock())
+    session.start()
+    session.scan()
+    calling, _ = compile_text(CHART.format(call="CALL FC 9;"), "timed.s7g")
+    with pytest.raises(SwapRefused, match=r"CALL FC 9: FC9 is not in this CPU"):
+        swap(session.graph, calling, session.cpu)
+    assert session.graph.cc is not calling
+    had = ChartSession.load(chart(tmp_path, "CALL FC 9;", "had.s7g"), None, VirtualClock())
+    had.start()
+    changed, _ = compile_text(CHART.format(call="CALL FC 9;").replace('"Go"', '"Went"'), "t")
+    swap(had.graph, changed, had.cpu)
+    assert had.graph.cc is changed
