@@ -22,6 +22,7 @@ from __future__ import annotations
 from xml.sax.saxutils import escape, quoteattr
 
 from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer.exchange.iec_to_chart import S7_PIN
 from s7graph.sequencer.exchange.naming import s7_to_iec
 from s7graph.sequencer.exchange.plcopen import S7GRAPH_DATA
 from s7graph.sequencer.exchange.shape import shape_of
@@ -127,7 +128,8 @@ class _Export:
             return None
         name = f"{entry.name}_DB{c.instance}"
         self.instances[name] = entry.name
-        params = [f"{pin} := {self.st(e)}" for pin, e in c.inputs]
+        iec_pin = {s7: iec for iec, s7 in S7_PIN.items()}
+        params = [f"{iec_pin.get(pin.upper(), pin)} := {self.st(e)}" for pin, e in c.inputs]
         params += [f"{pin} => {self.st(o)}" for pin, o in c.outputs]
         return f"{name}({', '.join(params)});"
 

@@ -101,6 +101,7 @@ _FB_MEMBERS: dict[str, dict[str, str]] = {
 # in an action or the POU body is ``CALL SFB n, DB m``, each instance with a DB of its own
 # from ``_FIRST_DB`` on, every output written to the FB variable ``INST_OUT``.
 _SFB_OF: dict[str, int] = {"CTU": 0, "CTD": 1, "CTUD": 2, "TP": 3, "TON": 4, "TOF": 5}
+S7_PIN: dict[str, str] = {"LD": "LOAD"}  # IEC's name of a counter's load input → S7's
 _FIRST_DB = 100
 _COMPARE = {"=", "<>", "<", ">", "<=", ">="}
 
@@ -375,11 +376,12 @@ class _Convert:
                 f"IEC FBs {known}",
                 loc,
             )
-        pins = [pin for pin, _ in st.inputs], [pin for pin, _ in st.outputs]
+        ins = [(S7_PIN.get(pin.upper(), pin.upper()), e) for pin, e in st.inputs]
+        pins = [pin for pin, _ in ins], [pin for pin, _ in st.outputs]
         problems = catalogue.lookup(f"SFB{number}").check_call(*pins, has_instance=True)
         if problems:
             raise _NoMap(f"call of {name} not imported: {problems[0]}", loc)
-        inputs = tuple((pin.upper(), self.expr(e, origin)) for pin, e in st.inputs)
+        inputs = tuple((pin, self.expr(e, origin)) for pin, e in ins)
         given = {pin.upper() for pin, _ in st.outputs}
         outputs: list[tuple[str, Operand]] = []
         for pin, target in st.outputs:

@@ -214,8 +214,9 @@ CONSTRUCTS: Final[tuple[tuple[str, str, str], ...]] = (
         "call of a TON, TOF, TP, CTU, CTD or CTUD instance (ST, and FBD action bodies)",
         "`CALL SFB n, DB m (…)` (in the action's row, or PERMANENT BEFORE from the POU body)",
         "each instance an instance DB of its own: the `n` of a name `…_DB<n>` (as "
-        "s7graph's PLCopen export writes them), else the next free from DB 100; every "
-        "output not given with `=>` written to an FB variable: `TON3.Q` reads `TON3_Q`",
+        "s7graph's PLCopen export writes them), else the next free from DB 100; IEC's `LD` "
+        "is S7's `LOAD`; every output not given with `=>` written to an FB variable: "
+        "`TON3.Q` reads `TON3_Q`",
     ),
     (
         "other FB instances (R_TRIG, SR …), and calls in FBD networks of the POU body",

@@ -93,6 +93,7 @@ def test_an_iec_timer_call_goes_to_plcopen_as_an_fb_instance_and_comes_back() ->
     text = (
         'FUNCTION_BLOCK "T"\nVAR done : BOOL; waited : TIME; END_VAR\nSEQUENCE 1\n'
         "INITIAL_STEP S1:\n  CALL SFB 4, DB 10 (IN := I0.0, PT := T#2S, Q => done, ET => waited);"
+        "\n  CALL SFB 1, DB 11 (CD := I0.1, LOAD := I0.2, PV := 3);"
         "\n  CALL SFC 46;\nEND_STEP\nSTEP S2: END_STEP\n"
         "TRANSITION T1 FROM S1 TO S2 := done;\nTRANSITION T2 FROM S2 TO S1 := NOT I0.0;\n"
         "END_SEQUENCE\nEND_FUNCTION_BLOCK\n"
@@ -101,10 +102,13 @@ def test_an_iec_timer_call_goes_to_plcopen_as_an_fb_instance_and_comes_back() ->
     xml = export_chart(chart, "plcopen")
     assert '<variable name="TON_DB10"><type><derived name="TON"/></type></variable>' in xml
     assert "TON_DB10(IN := %IX0.0, PT := T#2S, Q => done, ET => waited);" in xml
+    assert "CTD_DB11(CD := %IX0.1, LD := %IX0.2, PV := 3);" in xml  # IEC's LD is S7's LOAD
     assert "(* s7graph: CALL SFC 46; *)" in xml
     back = import_chart(native_only(xml), "t.xml").chart
     assert [format_row(r) for r in back.all_steps()[0].actions] == [
-        "CALL SFB 4, DB 10 (IN := I0.0, PT := T#2S, Q => done, ET => waited);"]  # fmt: skip
+        "CALL SFB 4, DB 10 (IN := I0.0, PT := T#2S, Q => done, ET => waited);",
+        "CALL SFB 1, DB 11 (CD := I0.1, LOAD := I0.2, PV := 3, Q => CTD_DB11_Q, "
+        "CV => CTD_DB11_CV);"]  # fmt: skip
 
 
 def test_a_row_simaticml_cannot_hold_is_one_clear_export_error(
