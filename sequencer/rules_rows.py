@@ -132,6 +132,8 @@ def _check_call(ctx: _Ctx, call: BlockCall, el: str) -> None:
         elif res is not None:
             types.append((name, _ADDRESS_FLEX.get(res.type, res.type) if res.is_untyped
                           else res.type, o))  # fmt: skip
+    if isinstance(call.instance, int) and not 1 <= call.instance <= 65535:
+        ctx.err("E046", f"DB {call.instance}: a DB number is 1 to 65535", call.loc, el)
     if call.kind not in ("SFB", "SFC"):
         return
     entry = catalogue.find(f"{call.kind}{call.block}")
@@ -154,6 +156,7 @@ def _check_call(ctx: _Ctx, call: BlockCall, el: str) -> None:
     if entry.needs_instance and isinstance(call.instance, str):
         ctx.err("E046", f"{entry.key} {entry.name}: name its instance DB by number "
                 f"(DB 10), not {call.instance!r}", call.loc, el)  # fmt: skip
+
     for name, t, e in types:
         pin = entry.pin(name)
         if pin is None or t is None or pin.type == "ANY":

@@ -56,8 +56,12 @@ def rule_duplicate_declarations(ctx: _Ctx) -> None:
 
 
 def rule_declarations(ctx: _Ctx) -> None:
-    """Chart symbols name valid addresses (E041); a variable's initial value fits its
-    type (E031)."""
+    """The header's FB and DB numbers are block numbers, 1 to 65535 (E004); chart symbols
+    name valid addresses (E041); a variable's initial value fits its type (E031)."""
+    c = ctx.chart
+    for kind, number in (("FB", c.fb_number), ("DB", c.db_number)):
+        if number is not None and not 1 <= number <= 65535:
+            ctx.err("E004", f"{kind} {number}: a block number is 1 to 65535", c.loc)
     for s in ctx.chart.symbols:
         try:
             parse_address(s.address, s.loc)

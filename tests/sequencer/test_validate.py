@@ -103,3 +103,12 @@ def test_alternative_transitions_with_identical_conditions_are_fine() -> None:
 
 def test_fb_pins_are_readable_operands() -> None:
     assert codes(one_step(cond="ERR_FLT OR NOT AUTO_ON")) == []
+
+
+@pytest.mark.parametrize(("numbers", "expected"), [
+    ("FB 1 DB 65535", []), ("FB 0 DB 1", ["E004"]), ("FB 1 DB 0", ["E004"]),
+    ("FB 70000 DB 70000", ["E004", "E004"]),
+])  # fmt: skip
+def test_the_header_fb_and_db_numbers_are_block_numbers(numbers: str, expected: list[str]) -> None:
+    text = one_step().replace('FUNCTION_BLOCK "V"', f'FUNCTION_BLOCK "V" {numbers}')
+    assert codes(text) == expected

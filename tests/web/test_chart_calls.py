@@ -190,3 +190,12 @@ def test_a_download_may_not_add_a_call_of_a_block_the_cpu_lacks(tmp_path: Path) 
     changed, _ = compile_text(CHART.format(call="CALL FC 9;").replace('"Go"', '"Went"'), "t")
     swap(had.graph, changed, had.cpu)
     assert had.graph.cc is changed
+
+
+@pytest.mark.parametrize("db", ["0", "65536"])
+def test_an_instance_db_number_outside_1_to_65535_is_refused_by_check(
+    db: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = chart(tmp_path, TON.replace("DB 10", f"DB {db}"))
+    assert main(["check", str(path)]) == 2
+    assert f"error[E046]: DB {db}: a DB number is 1 to 65535" in capsys.readouterr().out
