@@ -54,6 +54,8 @@ class S5Timer:
     mode: str = ""  # SP SE SD SS SF: the function last started
     s_edge: bool = False  # last RLO at the start input (edge memory)
     fr_edge: bool = False  # last RLO at FR (enable)
+    resume: bool = False  # restored running: ``start_ns`` is another clock's until the next
+    # tick rebases it on the time left (``sfb.s5_timers.tick``)
 
     def binary(self) -> int:
         """``L T n``: remaining time in time-base units, binary (seeds-runtime.md §5.1)."""
@@ -528,6 +530,9 @@ def _restore_cells(
             fresh = kind(**values)
             for f in fields(fresh):
                 setattr(cells[i], f.name, getattr(fresh, f.name))
+            cell = cells[i]
+            if isinstance(cell, S5Timer):
+                cell.resume = cell.running
 
 
 _CELL_FIELDS: dict[type, tuple[str, ...]] = {}

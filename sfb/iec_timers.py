@@ -9,7 +9,7 @@ round-trips through ``to_state()``/``from_state()``.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from typing import TYPE_CHECKING, NamedTuple, Self, cast
 
 from s7graph.engine import blocks
@@ -48,9 +48,12 @@ class _IecTimer:
     ET: int = 0
     running: bool = False
     start_ns: int = 0
+    resume: bool = field(default=False, compare=False)  # restored running: ``_rebase``
 
     def to_state(self) -> dict[str, object]:
-        return asdict(self)
+        data = asdict(self)
+        del data["resume"]
+        return data
 
     @classmethod
     def from_state(cls, data: dict[str, object]) -> Self:
@@ -59,9 +62,18 @@ class _IecTimer:
         return obj
 
     def restore(self, data: dict[str, object]) -> None:
+        """Take ``data`` (``to_state``); a running time resumes from its ET at the next
+        call, since ``start_ns`` was on the clock of the process that saved it (a hot
+        restart resumes times as persisted, as a GRAPH FB's step times do)."""
         for name, value in data.items():
-            if name in self.__dataclass_fields__:
+            if name in self.__dataclass_fields__ and name != "resume":
                 setattr(self, name, value)
+        self.resume = self.running
+
+    def _rebase(self, now_ns: int) -> None:
+        if self.resume:
+            self.resume = False
+            self.start_ns = now_ns - self.ET * NS_PER_MS
 
     def reset(self) -> None:
         """Cold-restart initialisation (the OS resets SFB0-5 instances only on cold restart)."""
@@ -77,6 +89,7 @@ class TP(_IecTimer):
     """
 
     def __call__(self, IN: bool, PT: int, now_ns: int) -> TimerOut:
+        self._rebase(now_ns)
         pt = _clamp_pt(PT)
         rising = IN and not self.IN
         self.IN, self.PT = bool(IN), pt
@@ -97,6 +110,7 @@ class TON(_IecTimer):
     """SFB4 TON: Q = 1 once IN has been 1 for PT; IN = 0 resets Q and ET (seeds-runtime §5.3)."""
 
     def __call__(self, IN: bool, PT: int, now_ns: int) -> TimerOut:
+        self._rebase(now_ns)
         pt = _clamp_pt(PT)
         if IN and not self.IN:
             self.start_ns = now_ns
@@ -119,6 +133,7 @@ class TOF(_IecTimer):
     """
 
     def __call__(self, IN: bool, PT: int, now_ns: int) -> TimerOut:
+        self._rebase(now_ns)
         pt = _clamp_pt(PT)
         falling = self.IN and not IN
         self.IN, self.PT = bool(IN), pt

@@ -86,6 +86,9 @@ def tick(cell: S5Timer, now_ns: int) -> None:
     """The OS update of one cell: count down on the time-base grid; handle expiry."""
     if not cell.running:
         return
+    if cell.resume:  # restored from a state file: its start was on another process's clock
+        cell.resume = False
+        cell.start_ns = now_ns - (cell.preset_ms - cell.value_ms) * NS_PER_MS
     count = _remaining_count(cell, now_ns)
     cell.value_ms = count * cell.time_base_ms
     if count == 0:

@@ -104,4 +104,26 @@ def test_an_iec_timer_instance_round_trips_through_its_state(cls: type[TON]) -> 
     timer(False, 100, 20 * MS)
     copy = cls.from_state(timer.to_state())
     assert copy == timer
-    assert copy(True, 100, 300 * MS) == timer(True, 100, 300 * MS)
+    if not timer.running:  # a running one resumes from its ET (the next test)
+        assert copy(True, 100, 300 * MS) == timer(True, 100, 300 * MS)
+
+
+@pytest.mark.parametrize("kind", [TON, TP, TOF])
+def test_a_running_timer_restored_on_another_clock_resumes_its_elapsed_time(
+    kind: type[TP] | type[TON] | type[TOF],
+) -> None:
+    """A hot restart in a new process: the saved start time is on the old process's clock
+    (here 1000 s ahead of the new one); the time resumes from ET, as persisted."""
+    timer = kind()
+    if kind is TOF:
+        drive(timer, 5000, [(1_000_000, True, True, 0), (1_000_000, False, True, 0)])
+    else:
+        drive(timer, 5000, [(1_000_000, True, kind is TP, 0)])
+    timer(kind is not TOF, 5000, (1_000_000 + 2000) * MS)
+    assert timer.ET == 2000
+    again = kind.from_state(timer.to_state())
+    assert "resume" not in timer.to_state()
+    on = kind is not TOF
+    assert again(on, 5000, 10 * MS).et == 2000  # not 0 (a clock behind), not PT (ahead)
+    assert again(on, 5000, 1010 * MS).et == 3000
+    assert again(on, 5000, 3010 * MS).et == 5000

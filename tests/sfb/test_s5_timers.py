@@ -207,3 +207,19 @@ def test_sd_timer_started_once_expires_after_the_right_number_of_scans_without_m
             q_at.append(scan)
     assert started == [1]
     assert q_at[0] == 5 and cell.value_ms == 0 and not cell.running
+
+
+def test_a_running_timer_restored_on_another_clock_keeps_its_time_left() -> None:
+    """The hot memory image of a new process: T3 had 7 s left of 10 s on the old clock;
+    it has 7 s left on the new one, whatever the two clocks' origins."""
+    old = Memory()
+    cell = old.timers[3]
+    s5.run(cell, "SE", True, 10_000, 10**15)
+    s5.tick(cell, 10**15 + 3000 * MS)
+    assert cell.value_ms == 7000
+    new = Memory()
+    new.restore_hot(old.hot_snapshot())
+    s5.tick(new.timers[3], 5 * MS)
+    assert new.timers[3].value_ms == 7000 and new.timers[3].running
+    s5.tick(new.timers[3], 7005 * MS)
+    assert new.timers[3].value_ms == 0 and not new.timers[3].running

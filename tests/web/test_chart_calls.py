@@ -108,11 +108,12 @@ def test_an_online_change_that_adds_a_timer_creates_its_instance_db(tmp_path: Pa
 
 
 def test_the_timer_instance_is_kept_with_the_state_and_outlives_its_call(tmp_path: Path) -> None:
-    """Saved while the timer has run 1.5 s; restarted hot its DB holds the same; a chart
-    that no longer calls it still loads the file, the DB kept as S7 keeps DBs."""
+    """Saved while the timer has run 1.5 s; restarted hot (another process, another clock)
+    its DB holds the same and the time runs on from 1.5 s; a chart that no longer calls it
+    still loads the file, the DB kept as S7 keeps DBs."""
     state = tmp_path / "timed.state.sqlite"
     session = ChartSession.load(chart(tmp_path, TON), None, VirtualClock())
-    opened = open_state(state, session.cpu)
+    opened = open_state(state, session.cpu, hot=True)  # keeps the hot restart image
     session.cpu.start("warm")
     session.set("I0.0", True)
     for _ in range(151):
@@ -125,10 +126,19 @@ def test_the_timer_instance_is_kept_with_the_state_and_outlives_its_call(tmp_pat
     assert saved["ET"] == 1500
     opened.store.close()
 
-    again = ChartSession.load(chart(tmp_path, TON), None, VirtualClock(10**12))
+    clock = VirtualClock(10**12)  # another process's clock: far from the first one's
+    again = ChartSession.load(chart(tmp_path, TON), None, clock)
     reopened = open_state(state, again.cpu, hot=True)
     assert reopened.report is not None
     assert dict(again.cpu.instance_db(10).values) == saved
+    again.cpu.start("hot")
+    again.set("I0.0", True)
+    again.scan()
+    assert again.cpu.instance_db(10).values["ET"] == 1500  # resumed as persisted
+    for _ in range(50):
+        clock.advance(10)
+        again.scan()
+    assert again.cpu.instance_db(10).values["ET"] == 2000 and again.get("done") is True
     reopened.store.close()
 
     without = ChartSession.load(chart(tmp_path, ""), None, VirtualClock())
