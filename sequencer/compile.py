@@ -22,7 +22,7 @@ from s7graph.sequencer.compiled import CompiledChart
 from s7graph.sequencer.model import BlockCall, Chart, Coil, Operand, Transition
 from s7graph.sequencer.names import resolve_operand
 from s7graph.sequencer.params import pin as pin_info
-from s7graph.steps.actions import ActionParts, step_action_parts, uses_own_index
+from s7graph.steps.actions import ActionParts, call_code, step_action_parts, uses_own_index
 from s7graph.steps.conditions import (
     condition_parts,
     condition_source,
@@ -436,13 +436,7 @@ def _gen_permanent(name: str, instrs: tuple[Any, ...], g: CodeGen, res: _Resolve
                 lines.append(f"    if {cond}:")
                 lines.append("        " + g.set_bit(ref, ins.kind == "S"))
         elif isinstance(ins, BlockCall):
-            pairs = [f"{n!r}: {val(e)}" for n, e in ins.inputs]
-            # an OUT given without an operand: returned, and written below (RET_VAL always is)
-            pairs += [f"{n!r}: None" for n, _ in ins.outputs if n.upper() != "RET_VAL"]
-            inputs = ", ".join(pairs)
-            lines.append(
-                f"    _o = R.call({ins.kind!r}, {ins.block!r}, {ins.instance!r}, {{{inputs}}})"
-            )
+            lines.append("    " + call_code(ins, val))
             for pname, target in ins.outputs:
                 lines.append(f"    if {pname!r} in _o:")
                 lines.append("        " + g.write(res(target), f"_o[{pname!r}]"))

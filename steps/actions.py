@@ -162,6 +162,16 @@ def _bit(row: ActionRow, resolve: Resolve) -> Ref:
     return ref
 
 
+def call_code(call: BlockCall, val: Callable[[Expr], str]) -> str:
+    """``_o = R.call(kind, block, instance, {params})`` for a CALL row or permanent
+    instruction: its inputs' values, and each output without an operand (``None``: the
+    block returns it and the code after the call writes it to the row's operand; RET_VAL
+    always comes back)."""
+    pairs = [f"{name!r}: {val(e)}" for name, e in call.inputs]
+    pairs += [f"{name!r}: None" for name, _ in call.outputs if name.upper() != "RET_VAL"]
+    return f"_o = R.call({call.kind!r}, {call.block!r}, {call.instance!r}, {{{', '.join(pairs)}}})"
+
+
 def _row(
     i: int,
     row: ActionRow,
@@ -191,11 +201,7 @@ def _row(
     if q == "CALL":
         if not isinstance(op, BlockCall):
             raise ActionError("CALL needs a block", row.loc)
-        pairs = [f"{name!r}: {val(e)}" for name, e in op.inputs]
-        # an OUT given without an operand: returned, and written below (RET_VAL always is)
-        pairs += [f"{name!r}: None" for name, _ in op.outputs if name.upper() != "RET_VAL"]
-        ins = ", ".join(pairs)
-        lines = [f"_o = R.call({op.kind!r}, {op.block!r}, {op.instance!r}, {{{ins}}})"]
+        lines = [call_code(op, val)]
         lines = ["if not zero:", f"    {lines[0]}"]
         for name, target in op.outputs:
             lines.append(f"    if {name!r} in _o:")

@@ -12,9 +12,9 @@ read backwards) become actions: ``N S R D L`` on a bit as Boolean actions, ``S1`
 rows as ``P``/``P0`` actions, assignments as inline ST, a call of an IEC timer or counter
 (``CALL SFB 4, DB 10 (…)``) as the call of an FB instance ``TON_DB10`` the POU declares;
 the others (interlocked rows, other events, other calls, S5 counters and timers) an inline
-ST comment holding the GRAPH row. Symbols are
-global variables of the configuration at their IEC address. Interlocks, supervisions,
-options, permanent instructions and ``TO STOP`` live in the `.s7g` source only.
+ST comment holding the GRAPH row. Symbols are global variables of the configuration at
+their IEC address. Interlocks, supervisions, options, permanent instructions and ``TO
+STOP`` live in the `.s7g` source only.
 """
 
 from __future__ import annotations
