@@ -359,7 +359,7 @@ class _Convert:
         self.members_read.setdefault(head, (member, graph))
         return Operand(graph, False, loc)
 
-    def fb_call(self, st: SCallStmt, origin: tuple[int, int]) -> BlockCall:
+    def fb_call(self, st: SCallStmt, origin: tuple[int, int], *, action: bool) -> BlockCall:
         """``TON1(IN := x, PT := T#2S)`` as ``CALL SFB 4, DB 100 (IN := x, PT := T#2S,
         Q => TON1_Q, ET => TON1_ET)`` (``_SFB_OF``); the call of any other block is not
         mapped."""
@@ -395,12 +395,15 @@ class _Convert:
                 outputs.append((member, Operand(helpers[-1])))
         db = self.instance_db(st.name)
         into = f"; its outputs go to the FB variables {', '.join(helpers)}" if helpers else ""
+        final = (
+            " (in an IEC action it is called once more when the step ends, in GRAPH only "
+            "while the step is active)"
+        )
         self.warn_once(
             (name, "called"),
             "I031",
-            f"{name} : {fb_type} is called as SFB {number} with instance DB {db}{into} (in "
-            "an IEC action it is called once more when the step ends, in GRAPH only while "
-            "the step is active)",
+            f"{name} : {fb_type} is called as SFB {number} with instance DB {db}{into}"
+            + (final if action else ""),
             decl_loc,
         )
         return BlockCall("SFB", number, db, inputs, tuple(outputs), loc)
@@ -685,7 +688,7 @@ class _Convert:
                         f"{st.keyword} statement not imported (a GRAPH row is one instruction)", loc
                     )
                 if isinstance(st, SCallStmt):
-                    call = self.fb_call(st, action.origin)
+                    call = self.fb_call(st, action.origin, action=True)
                     rows.append(ActionRow("CALL", call, ev, False, None, loc))
                     continue
                 target = self.operand(st.target, action.origin)
@@ -755,7 +758,7 @@ class _Convert:
             loc = self.loc(st, (1, 1))
             try:
                 if isinstance(st, SCallStmt):
-                    self.before.append(self.fb_call(st, (1, 1)))
+                    self.before.append(self.fb_call(st, (1, 1), action=False))
                     continue
                 if isinstance(st, SOther):
                     raise _NoMap(f"{st.keyword} in the POU body not imported", loc)

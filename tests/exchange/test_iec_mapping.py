@@ -96,7 +96,9 @@ def test_an_iec_timer_called_in_an_action_is_a_call_of_its_system_block(tmp_path
         "CALL SFB 4, DB 100 (IN := TRUE, PT := T#50ms, Q => T1_Q, ET => T1_ET);"]  # fmt: skip
     written = format_chart(result.chart)
     assert "CALL SFB 0, DB 101 (CU := x, PV := 3, Q => C1_Q, CV => C1_CV);" in written
-    assert [d.code for d in result.problems] == ["I031", "I031"]  # called, no final call
+    assert [d.code for d in result.problems] == ["I031", "I031"]  # called as SFB n, DB m
+    # the action's call has no final execution in GRAPH; the body's needs none
+    assert ["once more" in d.message for d in result.problems] == [True, False]
     chart = tmp_path / "p.s7g"
     chart.write_text(written)
     records = sim(tmp_path, chart, watch=["C1_CV"], cycles=12,
