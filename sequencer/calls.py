@@ -88,7 +88,7 @@ def prepare_calls(cpu: Any, chart: Chart, *, allowed_missing: set[str] | None = 
                 why = f"{label} is not in this CPU; reached, the call stops it"
                 plan.missing.append(site.line("warning", why))
             continue
-        if c.kind != "SFB":
+        if getattr(block, "kind", None) != "SFB":  # an SFB by number or by name ("TON")
             continue
         if not isinstance(c.instance, int):
             plan.problems.append(site.line("error", "name the instance DB by its number"))

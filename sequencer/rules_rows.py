@@ -118,11 +118,12 @@ def _check_row_operand(ctx: _Ctx, r: ActionRow, op: Operand, el: str) -> None:
 
 
 def _check_call(ctx: _Ctx, call: BlockCall, el: str) -> None:
-    """Parameters are typed operands; a call of a system block (``CALL SFB 4, DB 10``)
-    names one s7graph has, with an instance DB (by number) exactly when it is an SFB, and
-    its parameters are pins of it, ``:=`` for inputs, ``=>`` for outputs, of the pin's
-    type, all of them for an SFC (the catalogue, ``sfb.catalogue``). FB and FC calls name
-    the user's blocks, which only the program that loads them knows."""
+    """Parameters are typed operands; a call of a system block (``CALL SFB 4, DB 10``, or
+    by its name, ``CALL "TON", DB 10``) names one s7graph has, with an instance DB (by
+    number) exactly when it is an SFB, and its parameters are pins of it, ``:=`` for
+    inputs, ``=>`` for outputs, of the pin's type, all of them for an SFC (the catalogue,
+    ``sfb.catalogue``). FB and FC calls name the user's blocks, which only the program
+    that loads them knows."""
     types = [(name, _type(ctx, e, el), e) for name, e in call.inputs]
     for name, o in call.outputs:
         res = _resolve(ctx, o, el)
@@ -134,9 +135,11 @@ def _check_call(ctx: _Ctx, call: BlockCall, el: str) -> None:
                           else res.type, o))  # fmt: skip
     if isinstance(call.instance, int) and not 1 <= call.instance <= 65535:
         ctx.err("E046", f"DB {call.instance}: a DB number is 1 to 65535", call.loc, el)
-    if call.kind not in ("SFB", "SFC"):
+    if call.kind not in ("SFB", "SFC", ""):
         return
-    entry = catalogue.find(f"{call.kind}{call.block}")
+    entry = catalogue.find(f"{call.kind}{call.block}")  # by number, or by name ("TON")
+    if entry is None and call.kind == "":
+        return  # a user block's symbol
     if entry is None:
         known = " ".join(e.key for e in catalogue.CATALOGUE if e.kind == call.kind)
         ctx.err("E046", f"{call.kind} {call.block} is not a system block s7graph has "

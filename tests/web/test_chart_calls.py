@@ -209,3 +209,16 @@ def test_an_instance_db_number_outside_1_to_65535_is_refused_by_check(
     path = chart(tmp_path, TON.replace("DB 10", f"DB {db}"))
     assert main(["check", str(path)]) == 2
     assert f"error[E046]: DB {db}: a DB number is 1 to 65535" in capsys.readouterr().out
+
+
+def test_a_system_block_called_by_its_name_is_that_block(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``CALL "TON", DB 10 (…)`` is SFB 4, checked and given its instance DB the same way."""
+    path = chart(tmp_path, TON.replace("SFB 4", '"TON"'))
+    rc, trace, err = sim(path, capsys, "--cycles", "205")
+    assert rc == 0 and err == ""
+    assert next(line["cycle"] for line in trace if line["active"] == ["S2"]) == 201
+    path.write_text(CHART.format(call='CALL "TON" (IN := I0.0);'), encoding="utf-8")
+    assert main(["check", str(path)]) == 2
+    assert "SFB4 TON is an SFB and needs an instance DB" in capsys.readouterr().out
