@@ -193,12 +193,13 @@ class StoreWriter:
                 self._pending.merge(batch)
             self._cond.notify_all()
 
+    def _in_flight(self) -> bool:
+        """A batch waiting for its commit, being encoded or carried (``_cond`` held)."""
+        return not (self._pending is None and self._staging is None and self._carried is None)
+
     def _idle(self) -> bool:
         """Nothing in flight (``_cond`` held): what was submitted is durable as it is."""
-        return (
-            self._pending is None and self._staging is None and self._carried is None
-            and not self._writing and self.error is None
-        )  # fmt: skip
+        return not self._in_flight() and not self._writing and self.error is None
 
     def _encode_one(self, staging: Batch) -> None:
         """Encode the next instance DB of ``staging`` in the encoder thread, if it is still
@@ -306,7 +307,7 @@ class StoreWriter:
                 elif error is not None:
                     self.error = self.error or error
                 elif batch is not None:
-                    later = not (self._pending is self._staging is self._carried is None)
+                    later = self._in_flight()
                     self.committed = max(self.committed, batch.upto if later else self._latest)
                 elif self._idle():
                     self.committed = self._latest

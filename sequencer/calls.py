@@ -112,11 +112,11 @@ def prepare_calls(cpu: Any, chart: Chart, *, allowed_missing: set[str] | None = 
 def missing_blocks(cpu: Any, chart: Chart) -> set[str]:
     """The labels of the blocks ``chart`` calls that ``cpu`` does not have."""
     out: set[str] = set()
-    for site in call_sites(chart):
+    for label in {_label(site.call) for site in call_sites(chart)}:
         try:
-            cpu.block(_label(site.call))
+            cpu.block(label)
         except BlockError:
-            out.add(_label(site.call))
+            out.add(label)
     return out
 
 

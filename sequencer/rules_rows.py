@@ -16,10 +16,10 @@ from s7graph.sequencer.model import (
 )
 from s7graph.sequencer.rules_context import _Ctx, _row_el
 from s7graph.sequencer.rules_types import (
-    _ADDRESS_FLEX,
     _as_bit,
     _as_number,
     _loc,
+    _operand_type,
     _resolve,
     _show,
     _type,
@@ -131,8 +131,7 @@ def _check_call(ctx: _Ctx, call: BlockCall, el: str) -> None:
             ctx.err("E045", f"{name} => {o.name}: {o.name} is read-only; the chart cannot "
                     "write it", o.loc, el)  # fmt: skip
         elif res is not None:
-            types.append((name, _ADDRESS_FLEX.get(res.type, res.type) if res.is_untyped
-                          else res.type, o))  # fmt: skip
+            types.append((name, _operand_type(res), o))
     if isinstance(call.instance, int) and not 1 <= call.instance <= 65535:
         ctx.err("E046", f"DB {call.instance}: a DB number is 1 to 65535", call.loc, el)
     if call.kind not in ("SFB", "SFC", ""):
@@ -178,7 +177,7 @@ def _check_assignment(ctx: _Ctx, a: Assignment, el: str, *, in_action: bool) -> 
         ctx.err("E045", f"{a.target.name} is an FB output; the chart cannot write it",
                 a.target.loc, el)  # fmt: skip
         return
-    target = _ADDRESS_FLEX.get(res.type, res.type) if res.is_untyped else res.type
+    target = _operand_type(res)
     if in_action and target == "BOOL":
         ctx.err("E035", f"{a.target.name} := ... writes a bit: a coil belongs in the permanent "
                 "instructions; in a step use N, S or R", a.target.loc, el)  # fmt: skip

@@ -209,6 +209,11 @@ def _resolve(ctx: _Ctx, op: Operand, el: str) -> Resolved | None:
     return None
 
 
+def _operand_type(res: Resolved) -> str:
+    """A resolved operand's type; an untyped address's is flexible (``MW10``: any word)."""
+    return _ADDRESS_FLEX.get(res.type, res.type) if res.is_untyped else res.type
+
+
 def _type(ctx: _Ctx, e: Expr, el: str) -> str | None:
     """The type of ``e`` (a flexible one for untyped addresses and integer literals), or
     None when a diagnostic has already been given."""
@@ -222,7 +227,7 @@ def _type(ctx: _Ctx, e: Expr, el: str) -> str | None:
             return None
         if res.type in _CELL_FLEX:
             return _CELL_FLEX[res.type]
-        return _ADDRESS_FLEX.get(res.type, res.type) if res.is_untyped else res.type
+        return _operand_type(res)
     if isinstance(e, StepAttr):
         if e.step not in ctx.steps:
             ctx.err("E043", f"S{e.step}.{e.attr} names an unknown step", e.loc, el)

@@ -22,7 +22,7 @@ from __future__ import annotations
 from xml.sax.saxutils import escape, quoteattr
 
 from s7graph.engine.symbols import SymbolTable
-from s7graph.sequencer.exchange.iec_to_chart import S7_PIN
+from s7graph.sequencer.exchange.iec_to_chart import S7_PIN, SFB_OF
 from s7graph.sequencer.exchange.naming import s7_to_iec
 from s7graph.sequencer.exchange.plcopen import S7GRAPH_DATA
 from s7graph.sequencer.exchange.shape import shape_of
@@ -46,7 +46,7 @@ __all__ = ["export_plcopen"]
 
 _NS = "http://www.plcopen.org/xml/tc6_0201"
 _TYPES = {"TIME_OF_DAY": "TOD", "DATE_AND_TIME": "DT"}
-_IEC_FBS = ("CTU", "CTD", "CTUD", "TP", "TON", "TOF")  # SFB0–5: the IEC standard FBs
+_IEC_PIN = {s7: iec for iec, s7 in S7_PIN.items()}  # S7's LOAD → IEC's LD
 
 
 def _ident(name: str) -> str:
@@ -124,12 +124,11 @@ class _Export:
         """``CALL SFB 4, DB 10 (IN := x, …)`` as the call of the IEC FB instance
         ``TON_DB10`` (declared in the POU), for the IEC timers and counters; else None."""
         entry = catalogue.find(f"SFB{c.block}") if c.kind == "SFB" else None
-        if entry is None or entry.name not in _IEC_FBS or not isinstance(c.instance, int):
+        if entry is None or entry.name not in SFB_OF or not isinstance(c.instance, int):
             return None
         name = f"{entry.name}_DB{c.instance}"
         self.instances[name] = entry.name
-        iec_pin = {s7: iec for iec, s7 in S7_PIN.items()}
-        params = [f"{iec_pin.get(pin.upper(), pin)} := {self.st(e)}" for pin, e in c.inputs]
+        params = [f"{_IEC_PIN.get(pin.upper(), pin)} := {self.st(e)}" for pin, e in c.inputs]
         params += [f"{pin} => {self.st(o)}" for pin, o in c.outputs]
         return f"{name}({', '.join(params)});"
 

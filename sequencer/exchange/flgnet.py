@@ -206,11 +206,7 @@ class _Writer:
             return self._series(e.right, self._series(e.left, src))
         if isinstance(e, Binary) and e.op == "OR":
             terms = _or_terms(e)
-            box = self.next()
-            self.parts.append(
-                f'<Part Name="O" UId="{box}"><TemplateValue Name="Card" '
-                f'Type="Cardinality">{len(terms)}</TemplateValue></Part>'
-            )
+            box = self._o_part(len(terms))
             for i, t in enumerate(terms, 1):
                 self._flow(t, src, [f'<NameCon UId="{box}" Name="in{i}" />'])
             return f'<NameCon UId="{box}" Name="out" />'
@@ -247,13 +243,18 @@ class _Writer:
         self.wire(src, f'<NameCon UId="{box}" Name="in" />')
         return f'<NameCon UId="{box}" Name="out" />'
 
-    def _or(self, outputs: list[str]) -> str:
-        """An ``O`` box ORing the power flows ``outputs``; returns its output."""
+    def _o_part(self, inputs: int) -> str:
+        """A new ``O`` box of ``inputs`` inputs (``in1``…); returns its UId."""
         box = self.next()
         self.parts.append(
             f'<Part Name="O" UId="{box}"><TemplateValue Name="Card" '
-            f'Type="Cardinality">{len(outputs)}</TemplateValue></Part>'
+            f'Type="Cardinality">{inputs}</TemplateValue></Part>'
         )
+        return box
+
+    def _or(self, outputs: list[str]) -> str:
+        """An ``O`` box ORing the power flows ``outputs``; returns its output."""
+        box = self._o_part(len(outputs))
         for i, out in enumerate(outputs, 1):
             self.wire(out, f'<NameCon UId="{box}" Name="in{i}" />')
         return f'<NameCon UId="{box}" Name="out" />'

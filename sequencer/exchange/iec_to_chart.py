@@ -9,7 +9,7 @@
 * Variables become FB variables; a located one a symbol at its S7 address, unless that
   would change what it does (an initial value on an I/Q location, an input the chart
   writes): then an FB variable, reported. A call of an instance of an IEC timer or counter
-  (TON TOF TP CTU CTD CTUD) is ``CALL SFB n`` with an instance DB of its own (``_SFB_OF``,
+  (TON TOF TP CTU CTD CTUD) is ``CALL SFB n`` with an instance DB of its own (``SFB_OF``,
   ``instance_db``), its outputs written to FB variables: ``INST.Q`` reads ``INST_Q``.
   Other FB instances (R_TRIG, SR …) are not called, and a read of their outputs is
   reported.
@@ -100,7 +100,7 @@ _FB_MEMBERS: dict[str, dict[str, str]] = {
 # The IEC standard FBs the CPU has as system blocks (``sfb.catalogue``): an instance called
 # in an action or the POU body is ``CALL SFB n, DB m``, each instance with a DB of its own
 # from ``_FIRST_DB`` on, every output written to the FB variable ``INST_OUT``.
-_SFB_OF: dict[str, int] = {"CTU": 0, "CTD": 1, "CTUD": 2, "TP": 3, "TON": 4, "TOF": 5}
+SFB_OF: dict[str, int] = {"CTU": 0, "CTD": 1, "CTUD": 2, "TP": 3, "TON": 4, "TOF": 5}
 S7_PIN: dict[str, str] = {"LD": "LOAD"}  # IEC's name of a counter's load input → S7's
 _FIRST_DB = 100
 _COMPARE = {"=", "<>", "<", ">", "<=", ">="}
@@ -361,16 +361,16 @@ class _Convert:
 
     def fb_call(self, st: SCallStmt, origin: tuple[int, int], *, action: bool) -> BlockCall:
         """``TON1(IN := x, PT := T#2S)`` as ``CALL SFB 4, DB 100 (IN := x, PT := T#2S,
-        Q => TON1_Q, ET => TON1_ET)`` (``_SFB_OF``); the call of any other block is not
+        Q => TON1_Q, ET => TON1_ET)`` (``SFB_OF``); the call of any other block is not
         mapped."""
         loc = self.loc(st, origin)
         found = self.instances.get(st.name.upper())
         if found is None:
             raise _NoMap(f"call of {st.name} not imported: not an FB instance of the POU", loc)
         name, fb_type, decl_loc = found
-        number = _SFB_OF.get(fb_type)
+        number = SFB_OF.get(fb_type)
         if number is None:
-            known = ", ".join(_SFB_OF)
+            known = ", ".join(SFB_OF)
             raise _NoMap(
                 f"call of {name} : {fb_type} not imported: the CPU's system blocks are the "
                 f"IEC FBs {known}",
