@@ -200,6 +200,7 @@ class GraphFB:
         self.in_pins, self.out_pins = fresh.in_pins, fresh.out_pins
         self.fb = replace(fresh.fb, body=self._body)
         self._messages = cc.options.messages
+        self._name, self._step_numbers = cc.name, cc.step_numbers
         cpu.load(self.fb)
         idb = cpu.replace_instance_db(self.db_number, self.fb, name=cc.name)
         if old is not None:
