@@ -20,7 +20,6 @@ data is recognised on disk by the compiled chart (``sequencer/carry.py``).
 from __future__ import annotations
 
 from collections.abc import Iterable
-from dataclasses import replace
 from typing import Any, NamedTuple
 
 from s7graph.engine.blocks import FB, OB, Decl, InstanceDB, Var
@@ -63,15 +62,19 @@ class StepEvent(NamedTuple):
         return f"{self.fb}/DB{self.db} S{self.step} {self.event} @{self.cycle}"
 
 
-class GraphFB:
-    """A ``CompiledChart`` bound to an engine FB number and an instance DB number."""
+class LoadedChart:
+    """Everything a :class:`GraphFB` derives from the chart it runs: the compiled chart, the
+    engine FB (its interface is the chart's parameter set), the pins, the step numbers of
+    its events, whether it keeps a message list, and the runtime bound to the CPU's memory
+    (the cycle's tables, display and fast path) with what the flat call of OB1 relies on.
+    One object: an online change replaces it whole, so nothing of the old chart stays
+    beside the new one."""
 
-    def __init__(self, cc: CompiledChart, *, fb_number: int | None = None,
-                 db_number: int | None = None, fast: bool = True) -> None:  # fmt: skip
+    __slots__ = ("cc", "copied", "fb", "flat", "in_pins", "mem", "messages", "name",
+                 "out_pins", "prog", "runtime", "step_numbers")  # fmt: skip
+
+    def __init__(self, cc: CompiledChart, fb_number: int, body: Any) -> None:
         self.cc = cc
-        self.fast = fast  # False: every call takes the general path (GraphRuntime ``fast``)
-        self.fb_number = fb_number or cc.chart.fb_number or 1
-        self.db_number = db_number or cc.chart.db_number or self.fb_number
         pins = pins_for(cc.parameters)
         self.in_pins = tuple(p for p in pins if p.direction is Direction.IN)
         self.out_pins = tuple(p.name for p in pins if p.direction is Direction.OUT)
@@ -80,27 +83,55 @@ class GraphFB:
         initial.update(output_defaults(cc.parameters, cc.options))
         decl = {Direction.IN: Decl.IN, Direction.OUT: Decl.OUT}
         interface = [Var(p.name, p.type, decl[p.direction], initial[p.name]) for p in pins]
-        interface.append(Var(STATE_VAR, "OBJECT", Decl.STAT, self._fresh_state))
-        self.fb = FB(self.fb_number, cc.name, tuple(interface), self._body,
+        interface.append(Var(STATE_VAR, "OBJECT", Decl.STAT, lambda: new_state(cc)))
+        self.fb = FB(fb_number, cc.name, tuple(interface), body,
                      state_format=ChartFormat(cc, STATE_VAR))  # fmt: skip
+        self.messages = cc.options.messages
+        self.name, self.step_numbers = cc.name, cc.step_numbers  # of the step events
+        self.runtime: GraphRuntime | None = None  # built at the first call (GraphFB.runtime)
+        self.prog: Program | None = None
+        self.mem: Any = None  # the memory ``runtime`` is bound to
+        self.copied: Any = None  # the instance-DB values the outputs were last copied to
+        # the next call may run flat from OB1 (startup_obs): the last one ran on the FB's
+        # context with this runtime, without a message list, and no command or level is
+        # queued since
+        self.flat = False
+
+
+class GraphFB:
+    """A ``CompiledChart`` bound to an engine FB number and an instance DB number; what it
+    derives from the chart is one :class:`LoadedChart` (``loaded``)."""
+
+    def __init__(self, cc: CompiledChart, *, fb_number: int | None = None,
+                 db_number: int | None = None, fast: bool = True) -> None:  # fmt: skip
+        self.fast = fast  # False: every call takes the general path (GraphRuntime ``fast``)
+        self.fb_number = fb_number or cc.chart.fb_number or 1
+        self.db_number = db_number or cc.chart.db_number or self.fb_number
+        self.loaded = LoadedChart(cc, self.fb_number, self._body)
         self.idb: InstanceDB | None = None
-        self._runtime: GraphRuntime | None = None
-        self._prog: Program | None = None
-        self._mem: Any = None
         self._ctx: Any = None
-        self._messages = cc.options.messages
-        self._name, self._step_numbers = cc.name, cc.step_numbers  # of the step events
         self._commands: list[tuple[str, int | None]] = []
         self._levels: dict[str, bool | None] = {}  # level overrides for the next call
         self._acting: tuple[str, int | None] | None = None  # who commanded (user, ACK_S step)
-        self._copied: Any = None  # the instance-DB values the outputs were last copied to
         self._restart = ""  # the reason a startup OB's call gives its messages
-        # the next call may run flat from OB1 (startup_obs): the last one ran on ``_ctx``
-        # with its runtime, without a message list, and no command or level is queued since
-        self._flat = False
 
-    def _fresh_state(self) -> GraphState:
-        return new_state(self.cc)
+    @property
+    def cc(self) -> CompiledChart:
+        """The compiled chart this FB runs."""
+        return self.loaded.cc
+
+    @property
+    def fb(self) -> FB:
+        """The engine FB: its interface is the chart's parameter set and ``G7_STATE``."""
+        return self.loaded.fb
+
+    @property
+    def in_pins(self) -> tuple[Any, ...]:
+        return self.loaded.in_pins
+
+    @property
+    def out_pins(self) -> tuple[str, ...]:
+        return self.loaded.out_pins
 
     # ------------------------------------------------------------ engine wiring
 
@@ -135,14 +166,15 @@ class GraphFB:
     def runtime(self, mem: Any) -> GraphRuntime:
         """The runtime of this FB bound to ``mem`` (built once, rebound on a new state)."""
         st = self.state
-        rt = self._runtime
-        if rt is None or self._mem is not mem:
-            self._prog = self.cc.bind(mem)
-            self._mem = mem
-            rt = GraphRuntime(self.cc, self._prog, st, call=self._call_block,
+        c = self.loaded
+        rt = c.runtime
+        if rt is None or c.mem is not mem:
+            c.prog = c.cc.bind(mem)
+            c.mem = mem
+            rt = GraphRuntime(c.cc, c.prog, st, call=self._call_block,
                               counter=self._counter, timer=self._timer, fast=self.fast)  # fmt: skip
-            self._runtime = rt
-            self._flat = False
+            c.runtime = rt
+            c.flat = False
         elif rt.st is not st:
             rt.rebind(st)
         return rt
@@ -174,13 +206,13 @@ class GraphFB:
         self._commands.append((pin, step))
         if user is not None:
             self._acting = (user, step if pin == "ACK_S" else None)
-        self._flat = False
+        self.loaded.flat = False
 
     def set_level(self, pin: str, value: bool | None) -> None:
         """Override HALT_SQ, EN_IL or EN_SV from the next call on (None: the pin decides
         again), whatever the parameter set (``GraphRuntime.set_level``)."""
         self._levels[pin] = value
-        self._flat = False
+        self.loaded.flat = False
 
     @property
     def levels(self) -> dict[str, bool]:
@@ -190,28 +222,23 @@ class GraphFB:
     def replace_chart(self, cc: CompiledChart, state: GraphState, cpu: Any) -> None:
         """Online change: run ``cc`` from the next call on, with ``state`` (the running state
         carried over to ``cc`` by ``sequencer.carry.carry_over``); call at a scan boundary.
-        The FB keeps its number and its instance DB number; the instance DB is made anew for
-        the new parameter set, each pin keeping its value by name. One-call commands queued
-        for the next call and the level overrides in force (HALT_SQ, EN_IL, EN_SV) stay."""
-        fresh = GraphFB(cc, fb_number=self.fb_number, db_number=self.db_number)
+        Everything derived from the old chart goes with its :class:`LoadedChart`. The FB
+        keeps its number and its instance DB number; the instance DB is made anew for the
+        new parameter set, each pin keeping its value by name. One-call commands queued for
+        the next call and the level overrides in force (HALT_SQ, EN_IL, EN_SV) stay."""
+        loaded = LoadedChart(cc, self.fb_number, self._body)
         levels = {**self.levels, **self._levels}
         old = self.idb
-        self.cc = cc
-        self.in_pins, self.out_pins = fresh.in_pins, fresh.out_pins
-        self.fb = replace(fresh.fb, body=self._body)
-        self._messages = cc.options.messages
-        self._name, self._step_numbers = cc.name, cc.step_numbers
-        cpu.load(self.fb)
-        idb = cpu.replace_instance_db(self.db_number, self.fb, name=cc.name)
+        cpu.load(loaded.fb)
+        idb = cpu.replace_instance_db(self.db_number, loaded.fb, name=cc.name)
         if old is not None:
             for name, value in old.values.items():
                 if name != STATE_VAR and name in idb.values:
                     idb.values[name] = value
         idb.values[STATE_VAR] = state
+        self.loaded = loaded
         self.idb = idb
-        self._runtime, self._prog, self._mem, self._copied = None, None, None, None
         self._levels = levels
-        self._flat = False
 
     # ------------------------------------------------------------ the FB body
 
@@ -219,8 +246,9 @@ class GraphFB:
         self.idb = idb
         self._ctx = ctx
         values = idb.values
-        rt = self._runtime
-        if rt is None or self._mem is not ctx.mem or rt.st is not values[STATE_VAR]:
+        c = self.loaded
+        rt = c.runtime
+        if rt is None or c.mem is not ctx.mem or rt.st is not values[STATE_VAR]:
             rt = self.runtime(ctx.mem)
         if self._levels:
             for pin, value in self._levels.items():
@@ -233,26 +261,28 @@ class GraphFB:
         acting, self._acting = self._acting, None
         st = rt.execute(values, ctx.now_ns)
         self._copy_outputs(values, st, rt.outs_written)
-        if self._messages:
+        if c.messages:
             self._sync_messages(ctx, idb, rt, st, acting)
         else:
-            self._flat = True
+            c.flat = True
         if st.log:
             self._emit_events(ctx, idb, st)
 
     def _copy_outputs(self, values: dict[str, Any], st: GraphState, names: tuple[str, ...]) -> None:
         """The output pins ``names`` this call wrote into the instance DB (all of them into
         another instance DB than last time)."""
-        if self._copied is not values:
-            names = self.out_pins
-            self._copied = values
+        c = self.loaded
+        if c.copied is not values:
+            names = c.out_pins
+            c.copied = values
         out = st.outputs
         for name in names:
             values[name] = out[name]
 
     def _emit_events(self, ctx: Any, idb: InstanceDB, st: GraphState) -> None:
         """This call's step events into the scan record, as ``StepEvent`` values."""
-        numbers, name, number, cycle = self._step_numbers, self._name, idb.number, ctx.cycle
+        c = self.loaded
+        numbers, name, number, cycle = c.step_numbers, c.name, idb.number, ctx.cycle
         ctx.emit_all(  # tuple.__new__: a StepEvent without its Python __new__
             [_tuple_new(StepEvent, (name, number, numbers[i], _EVENT_OF_BIT[b], cycle))
              for i, b in st.log]
@@ -294,10 +324,10 @@ class GraphFB:
         return self._ctx.call(ref, inst, **params)
 
     def _counter(self, op: str, number: int, value: Any) -> None:
-        counter_row(self._mem.counters, op, number, value)
+        counter_row(self.loaded.mem.counters, op, number, value)
 
     def _timer(self, op: str, number: int, value: Any) -> None:
-        timer_row(self._mem.timers, op, number, value, self._ctx.now_ns)
+        timer_row(self.loaded.mem.timers, op, number, value, self._ctx.now_ns)
 
 
 def counter_row(cells: Any, op: str, number: int, value: Any) -> None:
@@ -396,8 +426,9 @@ def _run_flat(ctx: Any, fbs: tuple[GraphFB, ...], run: Any) -> None:
     ctx.depth = depth + 1
     try:
         for g in fbs:
-            rt = g._runtime
-            if g._flat and rt is not None and g._ctx is ctx:
+            c = g.loaded
+            rt = c.runtime
+            if c.flat and rt is not None and g._ctx is ctx:
                 idb = g.idb
                 assert idb is not None
                 values = idb.values
@@ -406,7 +437,7 @@ def _run_flat(ctx: Any, fbs: tuple[GraphFB, ...], run: Any) -> None:
                         st = rt.quiet(values, ctx.now_ns)
                         if st is not None:
                             names = rt.outs_written
-                            if names or g._copied is not values:
+                            if names or c.copied is not values:
                                 g._copy_outputs(values, st, names)
                             if st.log:
                                 g._emit_events(ctx, idb, st)

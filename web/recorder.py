@@ -89,8 +89,12 @@ class Recorder:
     def _step_path(self, number: int) -> str:
         return f"{self._root}/step/S{number}"
 
-    def record(self, update: StepStateUpdate) -> None:
-        """Add one scan to the timeline (only what changed is logged)."""
+    def record(self, update: StepStateUpdate, layout: ChartLayout | None = None) -> None:
+        """Add one scan to the timeline (only what changed is logged); ``layout``: the chart
+        the FB runs now, logged again when an online change brought another."""
+        if layout is not None and layout is not self.layout:
+            self.layout = layout
+            self._log_chart()
         rr, rec = self._rr, self._rec
         rec.set_time("cycle", sequence=update.cycle)
         rec.set_time("plc_time", duration=update.t_ms / 1000.0)

@@ -287,3 +287,28 @@ def test_en_sv_off_disables_supervision_and_ack_step_acknowledges_one_step(rig: 
     assert rig.cmd("ack_step", step=9) == (False, "no step S9 in Live")
     assert rig.cmd("ack_step", step=2) == (True, "")
     assert ("A1", 2) in rig.scan().events  # released as ACK_S would (the cause persists)
+
+
+def test_a_chart_swapped_under_the_live_view_is_followed_with_its_own_steps(rig: Rig) -> None:
+    """The live view reads the chart from the GraphFB: a swap it was not told of (no
+    ``switch``) still gives the new chart's steps, details and a newer layout version."""
+    from s7graph.sequencer.online import swap
+    from s7graph.web.harness.session import compile_text
+
+    rig.session.set("Start", True)
+    rig.session.set("Door", True)
+    assert rig.scans(2)[-1].active == [2]
+    inserted = CHART.replace(
+        '  STEP S3 "Done":', '  STEP S8 "Check":\n  END_STEP\n  STEP S3 "Done":'
+    ).replace(
+        'FROM S2 TO S3 := "Full";',
+        'FROM S2 TO S8 := "Full";\n  TRANSITION T4 "Checked" FROM S8 TO S3 := "Full";',
+    )
+    version = rig.live.layout.version
+    cc, _ = compile_text(inserted, "live.s7g")
+    swap(rig.session.graph, cc, rig.session.cpu)
+    rig.session.set("Full", True)
+    seen = rig.scans(2)
+    assert events(seen)[:4] == [("S0", 2), ("S1", 8), ("S0", 8), ("S1", 3)]
+    assert rig.live.cc is cc and rig.live.layout.version == version + 1
+    assert [s.number for s in rig.live.layout.steps] == [1, 2, 8, 3]

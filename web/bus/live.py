@@ -197,11 +197,25 @@ class LiveGraph:
 
     def switch(self, chart: LiveChart) -> None:
         """Describe ``chart`` from now on (at the scan boundary of an online change)."""
-        self.cc = chart.cc
-        self.layout = chart.layout
+        self._chart = chart
         self.step_details = chart.step_details()
         self._readers: tuple[tuple[str, ...], _Readers] | None = None
         """The watch list the readers were made for, and a reader per name."""
+
+    @property
+    def cc(self) -> CompiledChart:
+        """The chart the FB runs (never a copy: read from the GraphFB)."""
+        return self.graph.cc
+
+    @property
+    def layout(self) -> ChartLayout:
+        """The layout of the chart described now."""
+        return self._chart.layout
+
+    def _follow(self) -> None:
+        """The FB runs another chart than the one described (swapped without
+        :meth:`switch`): describe it, as the next layout version."""
+        self.switch(self.prepare(self.graph.cc, version=self._chart.layout.version + 1))
 
     # ------------------------------------------------------------ state out
 
@@ -213,8 +227,10 @@ class LiveGraph:
         self._pending_mode = None  # the commands queued before this scan have acted
         if self._pending:
             self._pending.clear()
+        if self._chart.cc is not self.graph.cc:
+            self._follow()
         st = self.graph.state
-        numbers = self.cc.step_numbers
+        numbers = self.graph.cc.step_numbers
         steps = st.active
         active = sorted([numbers[i] for i in steps])
         il_err, sv_err = st.il_err, st.sv_err
@@ -244,6 +260,8 @@ class LiveGraph:
     def details(self) -> list[StepDetail]:
         """A :class:`StepDetail` per active step (cost proportional to the active steps;
         only a step whose state changed since the last call gets a new one)."""
+        if self._chart.cc is not self.graph.cc:
+            self._follow()
         return self.step_details.of(self.graph.state)
 
     def alarms_changed(self) -> AlarmList | None:

@@ -413,9 +413,7 @@ class OnlineChange:
                     removed=pending.removed,
                     user=pending.user,
                 )
-                session.cc = pending.target.cc
                 session.symbols = pending.target.table
-                session.cpu.mem.symbols = pending.target.table
                 self.live.switch(pending.live)
                 pending.report = report
                 if self.durability is not None:

@@ -117,8 +117,6 @@ class ChartSession:
         *,
         beside: Sequence[CompiledChart] = (),
     ) -> None:
-        self.cc = cc
-        self.symbols = symbols
         self.clock = clock
         self.cpu = Cpu(clock, keep_outputs_on_hot_restart=True)  # a hot restart resumes the
         self.cpu.mem.symbols = symbols  # sequence: what its actions set stays set
@@ -134,6 +132,22 @@ class ChartSession:
             if plan.problems:
                 raise ChartLoadError(list(plan.problems))
             self.missing += plan.missing
+
+    @property
+    def cc(self) -> CompiledChart:
+        """The chart the GraphFB runs now (an online change swaps it there)."""
+        return self.graph.cc
+
+    @property
+    def symbols(self) -> SymbolTable:
+        """The CPU's symbol table (an online change may bring another)."""
+        table = self.cpu.mem.symbols
+        assert table is not None  # set by __init__
+        return table
+
+    @symbols.setter
+    def symbols(self, table: SymbolTable) -> None:
+        self.cpu.mem.symbols = table
 
     @classmethod
     def load(cls, path: Path, symbols: Path | None, clock: Clock) -> ChartSession:

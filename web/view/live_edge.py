@@ -148,7 +148,7 @@ class LiveEdge:
         until_ns = time.perf_counter_ns() + runner.comm_budget_ns if runner is not None else None
         update = self.live.update(record)
         if self.recorder is not None and record.mode is CpuMode.RUN:
-            self.recorder.record(update)
+            self.recorder.record(update, self.live.layout)
         publisher = self.publisher
         if publisher is None:
             return update
