@@ -130,6 +130,7 @@ class ChartView:
         self._wiring = Wiring(
             layout, cpu, send, login, logout, demo, self.replies.append, engineering, self
         )
+        self._set_scene()
         self._draw_chart()
         server.on_client_connect(self._connect)
         server.on_client_disconnect(self._disconnect)
@@ -138,14 +139,21 @@ class ChartView:
 
     # ------------------------------------------------------------ scene
 
-    def _draw_chart(self) -> None:
-        """Draw the current chart (once per chart version) and aim new pages' camera at it."""
+    def _set_scene(self) -> None:
+        """Up, lights and axes of the scene, once: viser puts every page's camera back to
+        its initial pose when the up direction is set, so a redraw must not set it again
+        (an editor's page, aimed at the chart it edits, would be turned to the live one)."""
         sc = self.server.scene
         sc.set_up_direction("+y")
         sc.world_axes.visible = False
         sc.configure_default_lights(enabled=False, cast_shadow=False)  # a flat chart: FLAT_LIGHT
         sc.configure_environment_map(None)
         sc.add_light_ambient("/light", intensity=FLAT_LIGHT)
+
+    def _draw_chart(self) -> None:
+        """Draw the current chart (once per chart version) and aim new pages' camera at it
+        (a page already open keeps its camera)."""
+        sc = self.server.scene
         pic = picture(self.placement)
         if self.drawing is not None:
             self.drawing.remove()
