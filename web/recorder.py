@@ -86,6 +86,16 @@ class Recorder:
             style = rr.SeriesLines(colors=[40, 170, 60], names=f"S{s.number} {s.name}".strip())
             self._rec.log(self._step_path(s.number), style, static=True)
 
+    def chart_changed(self, layout: ChartLayout) -> None:
+        """The FB runs another chart (an online change): record its steps from now on
+        (the chart text and a style for each step again; a step gone ends inactive)."""
+        gone = {s.number for s in self.layout.steps} - {s.number for s in layout.steps}
+        for number in sorted(gone):
+            if self._active.pop(number, False):
+                self._rec.log(self._step_path(number), self._rr.Scalars(0.0))
+        self.layout = layout
+        self._log_chart()
+
     def _step_path(self, number: int) -> str:
         return f"{self._root}/step/S{number}"
 

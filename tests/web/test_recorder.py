@@ -93,3 +93,21 @@ def test_a_memory_recording_returns_rrd_bytes() -> None:
         recorder.record(update)
     data = recorder.close()
     assert data is not None and data.startswith(b"RRF2") and len(data) > 1000
+
+
+def test_after_an_online_change_the_new_chart_s_steps_are_recorded(tmp_path: Path) -> None:
+    path = tmp_path / "run.rrd"
+    steps = (Step(1, "Idle", initial=True), Step(3, "New"), Step(2, "Run"))
+    transitions = (Transition(1, "", (1,), (3,)), Transition(3, "", (3,), (2,)),
+                   Transition(2, "", (2,), (1,)))  # fmt: skip
+    inserted = ChartLayout.from_chart(
+        Chart("FILL", sequences=(Sequence(1, "M", steps, transitions),)), version=2
+    )
+    with Recorder(layout(), path) as recorder:
+        recorder.record(StepStateUpdate(cycle=0, t_ms=0, mode="AUTO", active=[1]))
+        recorder.chart_changed(inserted)  # S3 inserted between S1 and S2
+        recorder.record(
+            StepStateUpdate(cycle=1, t_ms=10, mode="AUTO", active=[3], events=[("S1", 3)])  # type: ignore[list-item]
+        )
+    s3 = chunks_by_entity(path)["/s7graph/FILL/step/S3"]
+    assert column(s3, "cycle") == [1] and column(s3, "Scalars:scalars") == [[1.0]]
