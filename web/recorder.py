@@ -86,15 +86,21 @@ class Recorder:
             style = rr.SeriesLines(colors=[40, 170, 60], names=f"S{s.number} {s.name}".strip())
             self._rec.log(self._step_path(s.number), style, static=True)
 
+    def chart_changed(self, layout: ChartLayout) -> None:
+        """The FB runs another chart (an online change): record its steps from now on
+        (the chart text and a style for each step again; a step gone ends inactive)."""
+        gone = {s.number for s in self.layout.steps} - {s.number for s in layout.steps}
+        for number in sorted(gone):
+            if self._active.pop(number, False):
+                self._rec.log(self._step_path(number), self._rr.Scalars(0.0))
+        self.layout = layout
+        self._log_chart()
+
     def _step_path(self, number: int) -> str:
         return f"{self._root}/step/S{number}"
 
-    def record(self, update: StepStateUpdate, layout: ChartLayout | None = None) -> None:
-        """Add one scan to the timeline (only what changed is logged); ``layout``: the chart
-        the FB runs now, logged again when an online change brought another."""
-        if layout is not None and layout is not self.layout:
-            self.layout = layout
-            self._log_chart()
+    def record(self, update: StepStateUpdate) -> None:
+        """Add one scan to the timeline (only what changed is logged)."""
         rr, rec = self._rr, self._rec
         rec.set_time("cycle", sequence=update.cycle)
         rec.set_time("plc_time", duration=update.t_ms / 1000.0)

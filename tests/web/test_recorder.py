@@ -95,17 +95,19 @@ def test_a_memory_recording_returns_rrd_bytes() -> None:
     assert data is not None and data.startswith(b"RRF2") and len(data) > 1000
 
 
-def test_a_step_an_online_change_adds_gets_its_own_timeline(tmp_path: Path) -> None:
+def test_after_an_online_change_the_new_chart_s_steps_are_recorded(tmp_path: Path) -> None:
     path = tmp_path / "run.rrd"
-    steps = (Step(1, "Idle", initial=True), Step(8, "New"))
-    moves = (Transition(1, "", (1,), (8,)), Transition(2, "", (8,), (1,)))
-    changed = ChartLayout.from_chart(
-        Chart("FILL", sequences=(Sequence(1, "M", steps, moves),)), version=2
+    steps = (Step(1, "Idle", initial=True), Step(3, "New"), Step(2, "Run"))
+    transitions = (Transition(1, "", (1,), (3,)), Transition(3, "", (3,), (2,)),
+                   Transition(2, "", (2,), (1,)))  # fmt: skip
+    inserted = ChartLayout.from_chart(
+        Chart("FILL", sequences=(Sequence(1, "M", steps, transitions),)), version=2
     )
     with Recorder(layout(), path) as recorder:
         recorder.record(StepStateUpdate(cycle=0, t_ms=0, mode="AUTO", active=[1]))
-        recorder.record(StepStateUpdate(cycle=1, t_ms=10, mode="AUTO", active=[8]), changed)
-    s8 = chunks_by_entity(path)["/s7graph/FILL/step/S8"]
-    assert list(zip(column(s8, "cycle"), column(s8, "Scalars:scalars"), strict=True)) == [
-        (1, [1.0])
-    ]
+        recorder.chart_changed(inserted)  # S3 inserted between S1 and S2
+        recorder.record(
+            StepStateUpdate(cycle=1, t_ms=10, mode="AUTO", active=[3], events=[("S1", 3)])  # type: ignore[list-item]
+        )
+    s3 = chunks_by_entity(path)["/s7graph/FILL/step/S3"]
+    assert column(s3, "cycle") == [1] and column(s3, "Scalars:scalars") == [[1.0]]

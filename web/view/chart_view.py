@@ -19,6 +19,7 @@ import threading
 import time
 from collections import deque
 from collections.abc import Callable, Iterable
+from dataclasses import dataclass, replace
 from typing import Any
 
 import viser
@@ -79,6 +80,25 @@ def _refuse_login(user: str, password: str, origin: str) -> LoginReply:
     return LoginReply(ok=False, reason="this view cannot log in")
 
 
+@dataclass(frozen=True, slots=True)
+class _Logged:
+    """One line of the event list: a step event and the step's name (None: a step the
+    chart known when it came does not have, named when its chart comes)."""
+
+    cycle: int
+    event: str
+    step: int
+    name: str | None = None
+
+    def named(self, layout: ChartLayout) -> _Logged:
+        info = layout.step(self.step)
+        return self if info is None else replace(self, name=info.name)
+
+    def line(self) -> str:
+        name = f" {self.name}" if self.name else ""
+        return f"cycle {self.cycle}: {self.event} S{self.step}{name}"
+
+
 class ChartView:
     """Draws one FB's chart in ``server``'s scene and gives every page its own panel.
 
@@ -111,7 +131,7 @@ class ChartView:
         self._latest: StepStateUpdate | None = None
         self._wake = threading.Event()
         self._closed = False
-        self._log: deque[str] = deque(maxlen=LOG_LINES)
+        self._log: deque[_Logged] = deque(maxlen=LOG_LINES)  # newest first
         self._cpu_cycle = 0
         self._cpu_state = "RUN"
         self._cpu_stats: CycleStats | None = None
@@ -130,6 +150,7 @@ class ChartView:
         self._wiring = Wiring(
             layout, cpu, send, login, logout, demo, self.replies.append, engineering, self
         )
+        self._set_scene()
         self._draw_chart()
         server.on_client_connect(self._connect)
         server.on_client_disconnect(self._disconnect)
@@ -138,14 +159,21 @@ class ChartView:
 
     # ------------------------------------------------------------ scene
 
-    def _draw_chart(self) -> None:
-        """Draw the current chart (once per chart version) and aim new pages' camera at it."""
+    def _set_scene(self) -> None:
+        """Up, lights and axes of the scene, once: viser puts every page's camera back to
+        its initial pose when the up direction is set, so a redraw must not set it again
+        (an editor's page, aimed at the chart it edits, would be turned to the live one)."""
         sc = self.server.scene
         sc.set_up_direction("+y")
         sc.world_axes.visible = False
         sc.configure_default_lights(enabled=False, cast_shadow=False)  # a flat chart: FLAT_LIGHT
         sc.configure_environment_map(None)
         sc.add_light_ambient("/light", intensity=FLAT_LIGHT)
+
+    def _draw_chart(self) -> None:
+        """Draw the current chart (once per chart version) and aim new pages' camera at it
+        (a page already open keeps its camera)."""
+        sc = self.server.scene
         pic = picture(self.placement)
         if self.drawing is not None:
             self.drawing.remove()
@@ -179,18 +207,23 @@ class ChartView:
             self._wake.set()
 
     def apply_chart(self, layout: ChartLayout) -> None:
-        """The CPU runs another chart (a download): draw it (in the render thread)."""
+        """The CPU runs another chart (a download): draw it (in the render thread). Events
+        of steps the old chart did not have (the CPU may publish the new chart's first
+        scans before its layout) are named from it."""
         with self._lock:
             if layout.fb == self.layout.fb and layout.version != self.layout.version:
                 self._next_layout = layout
+                if any(e.name is None for e in self._log):
+                    named = [e if e.name is not None else e.named(layout) for e in self._log]
+                    self._log = deque(named, maxlen=LOG_LINES)
         self._wake.set()
 
     def _switch_chart(self) -> None:
         with self._lock:
             layout, self._next_layout = self._next_layout, None
-        if layout is None:
-            return
-        self.layout = layout
+            if layout is None:
+                return
+            self.layout = layout  # with _next_layout: apply names events from one of them
         self.placement = place(layout)
         with self.server.atomic():
             self._draw_chart()
@@ -226,11 +259,18 @@ class ChartView:
         """Show ``update`` (thread-safe; the newest one wins, drawn at most ``MAX_FPS``/s)."""
         with self._lock:
             self._latest = update
+            layout = self._next_layout or self.layout  # the newest chart known
             for event, step in update.events:
-                info = self.layout.step(step)
-                name = f" {info.name}" if info and info.name else ""
-                self._log.appendleft(f"cycle {update.cycle}: {event} S{step}{name}")
+                self._log.appendleft(_Logged(update.cycle, event, step).named(layout))
         self._wake.set()
+
+    def events(self) -> list[str]:
+        """The event list as the pages show it, newest first."""
+        with self._lock:
+            return self._event_lines()
+
+    def _event_lines(self) -> list[str]:
+        return [e.line() for e in self._log]
 
     def apply_alarms(self, alarms: AlarmList) -> None:
         """Show the CPU's message list (thread-safe; drawn by the render thread)."""
@@ -316,7 +356,7 @@ class ChartView:
                 alarms_html=self._alarms_html,
                 history=texts.history_html(self._history),
                 audit=texts.audit_html(list(self._audit)),
-                events=texts.log_html(list(self._log)),
+                events=texts.log_html(self._event_lines()),
                 forces=texts.forces_html(self._forces),
             )
             panels = list(self.panels.values())

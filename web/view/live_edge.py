@@ -148,7 +148,9 @@ class LiveEdge:
         until_ns = time.perf_counter_ns() + runner.comm_budget_ns if runner is not None else None
         update = self.live.update(record)
         if self.recorder is not None and record.mode is CpuMode.RUN:
-            self.recorder.record(update, self.live.layout)
+            if self.recorder.layout is not self.live.layout:  # an online change
+                self.recorder.chart_changed(self.live.layout)
+            self.recorder.record(update)
         publisher = self.publisher
         if publisher is None:
             return update
@@ -162,9 +164,7 @@ class LiveEdge:
         alarms = self.live.alarms_changed()
         if alarms is not None:
             publisher.publish_alarms(alarms)
-        publisher.apply_commands(
-            self.apply, cycle=record.cycle, durable=runner, until_ns=until_ns
-        )
+        publisher.apply_commands(self.apply, cycle=record.cycle, durable=runner, until_ns=until_ns)
         if self.forcing is not None:
             forces = self.forcing.changed()
             if forces is not None:
