@@ -306,9 +306,10 @@ class StateStore:
         self._lock: Any = _NoLock()  # a writer's lock once one is attached (use_lock)
         self._parts: dict[str, tuple[Callable[[], object], Callable[[Any], None]]] = {}
         self._part_seen: dict[str, object] = {}
-        self._seen: dict[int, tuple[bytes, dict[str, object]]] = {}
+        self._seen: dict[int, tuple[bytes, dict[str, object], FB]] = {}
         """Each instance DB as last staged: its encoded snapshot without the volatile keys,
-        and those."""
+        those, and its FB (an online change makes a new one: the row is written again,
+        with the new fingerprint, even when its data did not change)."""
         self._shapes: dict[int, tuple[FB, str]] = {}
         self._meta_seen: dict[str, str] = {}
         self._images_seen: dict[str, dict[str, Any]] = {}  # the memory images last staged
@@ -344,7 +345,7 @@ class StateStore:
         if not existed or not tables:
             db.execute("PRAGMA page_size=1024")  # a short row change writes one short page
         db.execute("PRAGMA journal_mode=WAL")
-        db.execute("PRAGMA synchronous=NORMAL")
+        db.execute("PRAGMA synchronous=FULL")  # a commit is on the disk (fsync) when it returns
         db.executescript(_SCHEMA)
         columns = {row[1] for row in db.execute("PRAGMA table_info(alarms)")}
         for column, decl in _ADDED_ALARM_COLUMNS:
@@ -466,13 +467,13 @@ class StateStore:
             key, row = _json_row(snapshot, volatile)
         seen = self._seen.get(number)
         if (
-            not full and seen is not None and key == seen[0]
+            not full and seen is not None and key == seen[0] and seen[2] is fb
             and not (mark and volatile != seen[1])
         ):  # fmt: skip
             return  # unchanged, or only its volatile keys and no time mark due
         if row is None:
             row = _PAIR + key + _PACK.encode(volatile)
-        self._seen[number] = (key, volatile)
+        self._seen[number] = (key, volatile, fb)
         shape = self._shapes.get(number)
         if shape is None or shape[0] is not fb:
             fmt = fb.state_format

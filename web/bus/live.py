@@ -366,11 +366,15 @@ class LiveGraph:
             return True, "", f"{mode} -> {new}"
         user = command.user or "?"
         if op == "ack":
-            waiting = [cc.step_numbers[i] for i in st.active if st.sv_err[i]]
+            waiting = [i for i in st.active if st.sv_err[i]]
             if not waiting:
                 return False, "no supervision fault waits for an acknowledgement", ""
+            stays = [i for i in waiting if self._relatches(i)]
+            if len(stays) == len(waiting):
+                return False, _CAUSE_PERSISTS.format(_steps(cc, stays)), ""
             self.graph.command(OP_PINS[op], user=user)
-            return True, "", "steps " + ", ".join(f"S{n}" for n in sorted(waiting))
+            note = f"{_steps(cc, stays)} stays latched: its cause persists" if stays else ""
+            return True, note, "steps " + _steps(cc, [i for i in waiting if i not in stays])
         if op == "ack_step":
             step = command.step
             i = cc.step_index.get(step) if isinstance(step, int) else None
@@ -378,6 +382,8 @@ class LiveGraph:
                 return False, f"no step S{step} in {self.fb}", ""
             if not (st.x[i] and st.sv_err[i]):
                 return False, f"S{step} waits for no acknowledgement", ""
+            if self._relatches(i):
+                return False, _CAUSE_PERSISTS.format(f"S{step}"), ""
             self.graph.command(OP_PINS[op], step=step, user=user)
             return True, "", f"S{step}"
         if op == "ack_msg":
@@ -413,6 +419,16 @@ class LiveGraph:
             return True, "", f"S{step}"
         return False, f"unknown command {op!r}", ""
 
+    def _relatches(self, i: int) -> bool:
+        """Whether step ``i``'s supervision fault, acknowledged now, would latch again at
+        once (its condition still holds) without the step switching on: no forced switching
+        (``ack_forces_switch``) and, in AUTO, no leaving transition satisfied."""
+        st, cc = self.graph.state, self.cc
+        if not st.sv_cond[i] or cc.options.ack_forces_switch:
+            return False
+        mode = self._pending_mode or st.mode
+        return not (mode == "AUTO" and any(st.tt[j] for j in cc.leaving[i]))
+
     def _ack_msg(self, command: Command) -> tuple[bool, str, str]:
         mid, user = command.msg_id, command.user or "?"
         if self.messages is None:
@@ -426,7 +442,25 @@ class LiveGraph:
             how = f" by {msg.ack_user}" if msg.ack_user else ""
             return False, f"message {mid!r} is already acknowledged{how}", ""
         self.messages.acknowledge(msg.msg_id, user, self._t_ns)
-        return True, "", f"message {mid}: {msg.text}"
+        where = parse_message_id(msg.msg_id)
+        step = where[2] if where is not None and where[3] == "SV" else None
+        i = self.cc.step_index.get(step) if step is not None else None
+        st = self.graph.state
+        note = ""
+        if i is not None and st.x[i] and st.sv_err[i] and self._relatches(i):
+            note = f"acknowledged; the cause of S{step} persists: it comes again as a new message"
+        return True, note, f"message {mid}: {msg.text}"
+
+
+_CAUSE_PERSISTS = (
+    "the cause of {}'s supervision fault persists (its condition still holds): "
+    "acknowledged now the fault would latch again at once and its message stay "
+    "unacknowledged; remove the cause, then acknowledge"
+)
+
+
+def _steps(cc: CompiledChart, steps: Iterable[int]) -> str:
+    return ", ".join(f"S{n}" for n in sorted(cc.step_numbers[i] for i in steps))
 
 
 def _negations(condition: Any, labels: tuple[str, ...]) -> tuple[bool, ...]:
