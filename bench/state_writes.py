@@ -20,6 +20,15 @@ hour; the target is at most 50 MB an hour. Also printed: commits, rows, and the 
 10 ms cycle, where it finds its caches cold (on this machine about five times the
 back-to-back time). ``--real`` instead runs ``s7graph run`` for ``--seconds`` of real time
 and reads the child's ``/proc/PID/io``.
+
+``--synchronous FULL,NORMAL`` (the default) runs each workload with the state file's
+``PRAGMA synchronous`` at each value: FULL (what ``s7graph run`` uses: the write-ahead log
+synced at every commit, so an answered command survives a power cut) against NORMAL (in
+WAL mode not durable across a power cut). Printed per value: the commit time (one
+transaction, ``StateStore.write``, in the writer thread: what a command's reply waits
+for, never the scan) as min / median / max over all commits, and the wall time of the
+run. ``--dir`` puts the files on the disk to measure (default: the system's temporary
+directory; a tmpfs there makes every sync free).
 """
 
 from __future__ import annotations
@@ -31,12 +40,14 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from s7graph.engine.clock import VirtualClock
+from s7graph.engine.persistence import SYNCHRONOUS, StateStore
 from s7graph.engine.writer import StoreWriter
-from s7graph.web.harness.persist import open_state
+from s7graph.web.harness.persist import persist_messages
 from s7graph.web.harness.plant import load_plant
 from s7graph.web.harness.session import ChartSession
 
@@ -55,19 +66,29 @@ def _io(pid: str = "self") -> dict[str, int]:
     return out
 
 
-def simulate(seconds: float, *, ack_every_ms: int | None, nap_s: float = 0.0) -> dict[str, float]:
-    """One run on the virtual clock; bytes written, commits, rows, stage times; ``nap_s``:
-    the scan thread sleeps that long (real time) after each scan's commit."""
-    with tempfile.TemporaryDirectory() as tmp:
+def simulate(
+    seconds: float,
+    *,
+    ack_every_ms: int | None,
+    nap_s: float = 0.0,
+    synchronous: str = SYNCHRONOUS,
+    where: str | None = None,
+) -> dict[str, float]:
+    """One run on the virtual clock; bytes written, commits, rows, stage and commit times;
+    ``nap_s``: the scan thread sleeps that long (real time) after each scan's commit."""
+    with tempfile.TemporaryDirectory(dir=where) as tmp:
         clock = VirtualClock()
         session = ChartSession.load(DRILL / "drill.s7g", DRILL / "symbols.txt", clock)
         plant = load_plant(DRILL / "demo_plant.py")
-        opened = open_state(Path(tmp) / "drill.sqlite", session.cpu)
-        store = opened.store
+        store = StateStore(Path(tmp) / "drill.sqlite", synchronous=synchronous)
+        persist_messages(store, session.cpu)
+        commit_ns = _timed_writes(store)
         cpu = session.cpu
         cpu.start("warm")
         store.save(cpu, clean=False)
         writer = StoreWriter(store)
+        commit_ns.clear()  # the runs' commits, not the first full save
+        t0 = time.perf_counter()
         before = _io()
         stage_ns: list[int] = []
         cycles = int(seconds * 1000 / CYCLE_MS)
@@ -88,9 +109,15 @@ def simulate(seconds: float, *, ack_every_ms: int | None, nap_s: float = 0.0) ->
             clock.advance(CYCLE_MS)
         writer.close()
         after = _io()
+        wall_s = time.perf_counter() - t0
         store.close()
         written = after["wchar"] - before["wchar"]
+        commits = sorted(commit_ns) or [0]
         return {
+            "commit_min_ms": commits[0] / 1e6,
+            "commit_median_ms": statistics.median(commits) / 1e6,
+            "commit_max_ms": commits[-1] / 1e6,
+            "wall_s": wall_s,
             "mb_h": written * 3600 / seconds / 1e6,
             "commits": writer.commits,
             "rows": writer.rows,
@@ -98,6 +125,21 @@ def simulate(seconds: float, *, ack_every_ms: int | None, nap_s: float = 0.0) ->
             "stage_max_us": max(stage_ns) / 1000,
             "pieces": int(session.get("pieces")),
         }
+
+
+def _timed_writes(store: StateStore) -> list[int]:
+    """Time every ``store.write`` (one transaction and its commit) from now on."""
+    times: list[int] = []
+    write = store.write
+
+    def timed(batch: Any) -> None:
+        started = time.perf_counter_ns()
+        write(batch)
+        if batch:
+            times.append(time.perf_counter_ns() - started)
+
+    store.write = timed  # type: ignore[method-assign]
+    return times
 
 
 def real(seconds: float) -> dict[str, float]:
@@ -141,6 +183,9 @@ def main() -> int:
     ap.add_argument("--cold-seconds", type=float, default=10.0,
                     help="the run with a 9 ms sleep after each scan (0: none)")  # fmt: skip
     ap.add_argument("--real", action="store_true", help="run s7graph run in real time instead")
+    ap.add_argument("--synchronous", default="FULL,NORMAL",
+                    help="PRAGMA synchronous values to compare, comma-separated")  # fmt: skip
+    ap.add_argument("--dir", default=None, help="where the state files go (the disk measured)")
     args = ap.parse_args()
     if args.real:
         got = real(args.seconds)
@@ -151,16 +196,24 @@ def main() -> int:
     print(f"drill demo, {args.seconds:.0f} s at {CYCLE_MS} ms, state file as in s7graph run; "
           f"min / median / max of {args.repeat} runs")  # fmt: skip
     for name, ack in (("demo", None), ("working", 9000)):
-        runs = [simulate(args.seconds, ack_every_ms=ack) for _ in range(args.repeat)]
-        print(f"{name} ({int(runs[0]['pieces'])} pieces):")
-        print(_row("written", runs, "mb_h", f"MB/hour (target <= {TARGET_MB_H:.0f})", ".2f"))
-        print(_row("commits", runs, "commits", "", ".0f"))
-        print(_row("rows", runs, "rows", "", ".0f"))
-        print(_row("stage, median", runs, "stage_median_us", "µs per scan"))
-        print(_row("stage, max", runs, "stage_max_us", "µs per scan"))
-        worst = max(worst, max(r["mb_h"] for r in runs))
+        for sync in args.synchronous.split(","):
+            runs = [
+                simulate(args.seconds, ack_every_ms=ack, synchronous=sync, where=args.dir)
+                for _ in range(args.repeat)
+            ]
+            print(f"{name} ({int(runs[0]['pieces'])} pieces), synchronous={sync}:")
+            print(_row("written", runs, "mb_h", f"MB/hour (target <= {TARGET_MB_H:.0f})", ".2f"))
+            print(_row("commits", runs, "commits", "", ".0f"))
+            print(_row("rows", runs, "rows", "", ".0f"))
+            print(_row("stage, median", runs, "stage_median_us", "µs per scan"))
+            print(_row("stage, max", runs, "stage_max_us", "µs per scan"))
+            print(_row("commit, min", runs, "commit_min_ms", "ms", ".2f"))
+            print(_row("commit, median", runs, "commit_median_ms", "ms", ".2f"))
+            print(_row("commit, max", runs, "commit_max_ms", "ms", ".2f"))
+            print(_row("run, wall time", runs, "wall_s", "s", ".2f"))
+            worst = max(worst, max(r["mb_h"] for r in runs))
     if args.cold_seconds > 0:
-        cold = simulate(args.cold_seconds, ack_every_ms=None, nap_s=NAP_S)
+        cold = simulate(args.cold_seconds, ack_every_ms=None, nap_s=NAP_S, where=args.dir)
         print(f"demo, {args.cold_seconds:.0f} s, the scan thread asleep {NAP_S * 1000:.0f} ms "
               f"after each scan (caches cold, as in a real cycle):")  # fmt: skip
         print(f"  {'stage, median':<22} {cold['stage_median_us']:.1f} µs per scan (one run)")

@@ -65,6 +65,7 @@ from s7graph.engine.record import DiagEntry
 __all__ = [
     "FORMAT",
     "READABLE",
+    "SYNCHRONOUS",
     "AlarmEvent",
     "Batch",
     "LoadReport",
@@ -98,6 +99,10 @@ CREATE TABLE IF NOT EXISTS parts (name TEXT PRIMARY KEY, state TEXT NOT NULL);
 CREATE TABLE IF NOT EXISTS audit (
     id INTEGER PRIMARY KEY AUTOINCREMENT, t_ns INTEGER, user TEXT, action TEXT, detail TEXT);
 """
+SYNCHRONOUS = "FULL"
+"""SQLite's ``synchronous`` for the state file: FULL syncs the write-ahead log at every
+commit, so a commit that returned survives a power cut (NORMAL, in WAL mode, may lose the
+last ones); ``bench/state_writes.py`` measures the cost."""
 TIME_MARK_MS = 500.0
 """Default of ``StateStore.time_mark_ms``."""
 _NOT_KEPT = {"program download", "no hot restart image saved"}
@@ -277,9 +282,13 @@ class StateStore:
         interval_ms: float | None = None,
         hot: bool = False,
         time_mark_ms: float | None = TIME_MARK_MS,
+        synchronous: str = SYNCHRONOUS,
     ) -> None:
         self.path = Path(path)
         self.hot = hot
+        if synchronous not in ("EXTRA", "FULL", "NORMAL", "OFF"):
+            raise ValueError(f"synchronous must be EXTRA, FULL, NORMAL or OFF, not {synchronous!r}")
+        self.synchronous = synchronous
         self.time_mark_ns = None if time_mark_ms is None else int(time_mark_ms * 1_000_000)
         """While only ``VOLATILE`` keys change (step times running), their row is written
         at most this often: what a restart can lose of a running step time."""
@@ -345,7 +354,7 @@ class StateStore:
         if not existed or not tables:
             db.execute("PRAGMA page_size=1024")  # a short row change writes one short page
         db.execute("PRAGMA journal_mode=WAL")
-        db.execute("PRAGMA synchronous=FULL")  # a commit is on the disk (fsync) when it returns
+        db.execute(f"PRAGMA synchronous={self.synchronous}")  # FULL: fsync at every commit
         db.executescript(_SCHEMA)
         columns = {row[1] for row in db.execute("PRAGMA table_info(alarms)")}
         for column, decl in _ADDED_ALARM_COLUMNS:
