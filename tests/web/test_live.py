@@ -169,6 +169,13 @@ def test_t_push_needs_tap_or_top_and_switches_in_tap(rig: Rig) -> None:
     applied, reason = rig.cmd("t_push")
     assert not applied and "TAP or TOP" in reason
     rig.cmd("mode", mode="TAP")
+    rig.scan()
+    assert rig.cmd("t_push") == (  # said, not silently lost
+        True,
+        "no transition of the active steps was satisfied in the last call: in TAP the push "
+        "switches only one satisfied in the next",
+    )
+    assert rig.scan().active == [1]
     rig.session.set("Start", True)
     assert rig.scans(3)[-1].active == [1]  # TAP: condition AND push
     assert rig.cmd("t_push") == (True, "")

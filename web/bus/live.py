@@ -11,8 +11,12 @@ whatever the chart's parameter set (a MINIMUM FB has no ACK_EF pin, yet can be
 acknowledged) and whatever the program wires to the pins. Each is applied at the scan
 boundary and acts in the FB's next call as a one-call rising edge (``GraphFB.command``):
 
-- ``ack`` → ACK_EF; refused when no step waits for an acknowledgement;
-- ``ack_step`` → ACK_S on ``step`` (not S_NO); refused unless that step waits;
+- ``ack`` → ACK_EF; refused when no step waits for an acknowledgement, or when each
+  waiting fault's cause persists and the acknowledgement would not let its step switch
+  (the fault would latch again in the same call, its message stay unacknowledged): the
+  reason says so; steps that stay latched beside released ones are named in the reply;
+- ``ack_step`` → ACK_S on ``step`` (not S_NO); refused unless that step waits, and, as
+  ``ack``, when its cause persists;
 - ``mode`` → SW_AUTO / SW_MAN / SW_TAP / SW_TOP;
 - ``init`` → INIT_SQ; ``off`` → OFF_SQ for one call (the sequencer then stays off);
 - ``halt`` → HALT_SQ held on (``{"on": true}``) or left to the pin again (``false``);
@@ -22,12 +26,14 @@ boundary and acts in the FB's next call as a one-call rising edge (``GraphFB.com
   restart clears them, and each update shows them (``overrides``);
 - ``step_on`` / ``step_off`` → S_ON / S_OFF on ``step`` (not S_NO); refused outside MAN,
   for an unknown step, an active step (on) or an idle one (off);
-- ``t_push`` → T_PUSH; refused outside TAP and TOP;
+- ``t_push`` → T_PUSH; refused outside TAP and TOP; in TAP with no satisfied transition
+  applied with a reason saying the push switches nothing unless one is satisfied;
 - ``ack_msg`` → acknowledges one message of the CPU's message list as the command's user
   at once (``MessageList.acknowledge``); refused for an unknown or already acknowledged
   message and for the user name ``program`` (reserved for ACK_EF). A supervision message
   acknowledged while its fault is latched releases the step at the FB's next call as ACK_S
-  would, whether or not its cause has gone (``sequencer.messages.remote_acks``).
+  would, whether or not its cause has gone (``sequencer.messages.remote_acks``); if it
+  has not, the reply says the fault comes again as a new message.
 
 Messages a command acknowledges (``ack``, ``ack_step``, ``init``) are acknowledged as the
 command's user, never as ``program``.
@@ -403,7 +409,9 @@ class LiveGraph:
             if mode not in ("TAP", "TOP"):
                 return False, f"t_push needs mode TAP or TOP ({CONTROL_SEQUENCER})", ""
             self.graph.command(OP_PINS[op])
-            return True, "", ""
+            ready = any(st.tt[j] for i in st.active for j in cc.leaving[i])
+            note = "" if ready or mode == "TOP" else _NOT_SATISFIED
+            return True, note, ""
         if op in ("step_on", "step_off"):
             step = command.step
             if mode != "MAN":
@@ -456,6 +464,12 @@ _CAUSE_PERSISTS = (
     "the cause of {}'s supervision fault persists (its condition still holds): "
     "acknowledged now the fault would latch again at once and its message stay "
     "unacknowledged; remove the cause, then acknowledge"
+)
+
+
+_NOT_SATISFIED = (
+    "no transition of the active steps was satisfied in the last call: in TAP the push "
+    "switches only one satisfied in the next"
 )
 
 
