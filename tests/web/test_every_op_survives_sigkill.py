@@ -258,3 +258,25 @@ def test_after_a_download_a_hot_restart_resumes_the_new_chart(drill: Path) -> No
         assert source is not None and source.text == new
     audited = _audited(state)
     assert ("download", "applied") in audited and ("undo_download", "applied") in audited
+
+
+def test_a_download_the_disk_has_not_confirmed_is_answered_not_confirmed(drill: Path) -> None:
+    """Another connection holds the state file's lock (a backup tool, a stalled disk): the
+    CPU runs the new chart, but the reply does not say *applied* before the commit."""
+    state, path = drill / "drill.sqlite", drill / "drill.s7g"
+    new = path.read_text(encoding="utf-8").replace("T#2S;", "T#3S;")
+    with run(drill) as cpu:
+        lock = sqlite3.connect(state, timeout=10, isolation_level=None)
+        lock.execute("BEGIN IMMEDIATE")
+        try:
+            reply = cpu.client.send(cpu.command("download", source=new, base=1), timeout=20)
+        finally:
+            lock.rollback()
+            lock.close()
+        assert not reply.applied
+        assert reply.reason.startswith("not confirmed: version 2 runs (was 1)"), reply.reason
+        assert reply.reason.endswith("but the state file has not committed it within 5 s")
+        assert wait_until(lambda: ("download", "applied") in _audited(state), 20)
+        cpu.proc.send_signal(signal.SIGKILL)
+        cpu.proc.wait(30)
+    assert _row_fingerprint(state) == fingerprint(load_chart(path, drill / "symbols.txt")[0])
