@@ -28,7 +28,10 @@ WAL mode not durable across a power cut). Printed per value: the commit time (on
 transaction, ``StateStore.write``, in the writer thread: what a command's reply waits
 for, never the scan) as min / median / max over all commits, and the wall time of the
 run. ``--dir`` puts the files on the disk to measure (default: the system's temporary
-directory; a tmpfs there makes every sync free).
+directory; a tmpfs there makes every sync free). ``--replies N`` instead times N commands
+(``halt`` on and off) sent over a real zenoh bus to the drill chart run by a real
+``Runner`` on the system clock at a 10 ms cycle, each answered once its commit is durable:
+the round trip a sender sees, per ``synchronous`` value.
 """
 
 from __future__ import annotations
@@ -170,6 +173,57 @@ def real(seconds: float) -> dict[str, float]:
         return {"mb_h": (last["wchar"] - first["wchar"]) * 3600 / span / 1e6, "span_s": span}
 
 
+def replies(n: int, synchronous: str, where: str | None) -> list[float]:
+    """Round trips (ms) of ``n`` commands answered once durable, as ``s7graph run`` does."""
+    from s7graph.engine.clock import SystemClock
+    from s7graph.engine.runner import Runner
+    from s7graph.sfb.alarms import message_list
+    from s7graph.web.bus.gate import cpu_gate
+    from s7graph.web.bus.live import LiveGraph
+    from s7graph.web.bus.protocol import Command
+    from s7graph.web.bus.zenoh_bus import BusClient, BusPublisher, open_session
+
+    fb = "Seq_drill"
+    with tempfile.TemporaryDirectory(dir=where) as tmp:
+        session = ChartSession.load(DRILL / "drill.s7g", DRILL / "symbols.txt", SystemClock())
+        store = StateStore(Path(tmp) / "drill.sqlite", synchronous=synchronous)
+        live = LiveGraph(session.graph, read=session.get, messages=message_list(session.cpu))
+        endpoint = f"unixsock-stream/{tmp}/bus.sock"
+        cpu_bus = open_session(listen=[endpoint])
+        publisher = BusPublisher(cpu_bus, "cpu1", {fb: live.layout}, gate=cpu_gate(None, store))
+        runner: Runner
+
+        def on_record(record: Any) -> None:
+            publisher.publish(fb, live.update(record))
+            publisher.apply_commands(live.apply, cycle=record.cycle, durable=runner)
+
+        runner = Runner(session.cpu, cycle_ms=CYCLE_MS, store=store, on_record=on_record)
+        view_bus = open_session(connect=[endpoint])
+        client = BusClient(view_bus, "cpu1")
+        times: list[float] = []
+        try:
+            runner.startup("warm")
+            runner.start_thread()
+            token = client.login("bench").token
+            for k in range(n):
+                command = Command(op="halt", fb=fb, user="bench", token=token,
+                                  args={"on": k % 2 == 0})  # fmt: skip
+                started = time.perf_counter()
+                reply = client.send(command)
+                times.append((time.perf_counter() - started) * 1000)
+                if not reply.applied:
+                    raise SystemExit(f"refused: {reply.reason}")
+        finally:
+            runner.request_stop()
+            runner.shutdown()
+            client.close()
+            publisher.close()
+            view_bus.close()  # type: ignore[no-untyped-call]
+            cpu_bus.close()  # type: ignore[no-untyped-call]
+            store.close()
+        return times
+
+
 def _row(name: str, runs: list[dict[str, float]], key: str, unit: str, fmt: str = ".1f") -> str:
     values = sorted(r[key] for r in runs)
     lo, mid, hi = values[0], statistics.median(values), values[-1]
@@ -186,7 +240,22 @@ def main() -> int:
     ap.add_argument("--synchronous", default="FULL,NORMAL",
                     help="PRAGMA synchronous values to compare, comma-separated")  # fmt: skip
     ap.add_argument("--dir", default=None, help="where the state files go (the disk measured)")
+    ap.add_argument("--replies", type=int, default=0,
+                    help="time this many durable command replies instead")  # fmt: skip
     args = ap.parse_args()
+    if args.replies:
+        print(f"{args.replies} commands answered once durable, drill chart at {CYCLE_MS} ms; "
+              f"min / median / max of {args.repeat} runs")  # fmt: skip
+        for sync in args.synchronous.split(","):
+            runs = []
+            for _ in range(args.repeat):
+                times = sorted(replies(args.replies, sync, args.dir))
+                runs.append({"median": statistics.median(times), "max": times[-1],
+                             "p90": times[int(0.9 * (len(times) - 1))]})  # fmt: skip
+            print(f"synchronous={sync}:")
+            for key in ("median", "p90", "max"):
+                print(_row(f"reply, {key}", runs, key, "ms", ".1f"))
+        return 0
     if args.real:
         got = real(args.seconds)
         print(f"s7graph run, drill demo, {got['span_s']:.0f} s real time: "
