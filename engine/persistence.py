@@ -34,6 +34,12 @@ the row, but on their own cause one only every ``time_mark_ms`` (500 ms): what a
 can lose of a running step time is bounded, so a supervision time cannot be outrun by
 restarts.
 
+**Synced.** The file is in WAL mode with ``synchronous=FULL`` (``SYNCHRONOUS``): a commit
+is on the disk when ``write`` returns, so what a command's reply waited for survives a
+power cut, not only a killed process (docs/durability.md). A row is also written again
+when its FB changed (an online change) though its data did not: it carries the new
+fingerprint.
+
 **Trusted only when recognised.** The file carries a format mark, and each instance DB the
 label, name and fingerprint of its FB (``FB.state_format``, else its interface). ``load``
 refuses — :class:`StateFileError` naming the problem — an empty, truncated, garbled or
