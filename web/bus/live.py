@@ -451,7 +451,8 @@ class LiveGraph:
             return False, f"message {mid!r} is already acknowledged{how}", ""
         self.messages.acknowledge(msg.msg_id, user, self._t_ns)
         where = parse_message_id(msg.msg_id)
-        step = where[2] if where is not None and where[3] == "SV" else None
+        ours = where is not None and where[:2] == (self.cc.name, self.graph.db_number)
+        step = where[2] if where is not None and ours and where[3] == "SV" else None
         i = self.cc.step_index.get(step) if step is not None else None
         st = self.graph.state
         note = ""
