@@ -34,6 +34,12 @@ the row, but on their own cause one only every ``time_mark_ms`` (500 ms): what a
 can lose of a running step time is bounded, so a supervision time cannot be outrun by
 restarts.
 
+**Synced.** The file is in WAL mode with ``synchronous=FULL`` (``SYNCHRONOUS``): a commit
+is on the disk when ``write`` returns, so what a command's reply waited for survives a
+power cut, not only a killed process (docs/durability.md). A row is also written again
+when its FB changed (an online change) though its data did not: it carries the new
+fingerprint.
+
 **Trusted only when recognised.** The file carries a format mark, and each instance DB the
 label, name and fingerprint of its FB (``FB.state_format``, else its interface). ``load``
 refuses — :class:`StateFileError` naming the problem — an empty, truncated, garbled or
@@ -65,6 +71,7 @@ from s7graph.engine.record import DiagEntry
 __all__ = [
     "FORMAT",
     "READABLE",
+    "SYNCHRONOUS",
     "AlarmEvent",
     "Batch",
     "LoadReport",
@@ -98,6 +105,10 @@ CREATE TABLE IF NOT EXISTS parts (name TEXT PRIMARY KEY, state TEXT NOT NULL);
 CREATE TABLE IF NOT EXISTS audit (
     id INTEGER PRIMARY KEY AUTOINCREMENT, t_ns INTEGER, user TEXT, action TEXT, detail TEXT);
 """
+SYNCHRONOUS = "FULL"
+"""SQLite's ``synchronous`` for the state file: FULL syncs the write-ahead log at every
+commit, so a commit that returned survives a power cut (NORMAL, in WAL mode, may lose the
+last ones); ``bench/state_writes.py`` measures the cost."""
 TIME_MARK_MS = 500.0
 """Default of ``StateStore.time_mark_ms``."""
 _NOT_KEPT = {"program download", "no hot restart image saved"}
@@ -277,9 +288,13 @@ class StateStore:
         interval_ms: float | None = None,
         hot: bool = False,
         time_mark_ms: float | None = TIME_MARK_MS,
+        synchronous: str = SYNCHRONOUS,
     ) -> None:
         self.path = Path(path)
         self.hot = hot
+        if synchronous not in ("EXTRA", "FULL", "NORMAL", "OFF"):
+            raise ValueError(f"synchronous must be EXTRA, FULL, NORMAL or OFF, not {synchronous!r}")
+        self.synchronous = synchronous
         self.time_mark_ns = None if time_mark_ms is None else int(time_mark_ms * 1_000_000)
         """While only ``VOLATILE`` keys change (step times running), their row is written
         at most this often: what a restart can lose of a running step time."""
@@ -306,9 +321,10 @@ class StateStore:
         self._lock: Any = _NoLock()  # a writer's lock once one is attached (use_lock)
         self._parts: dict[str, tuple[Callable[[], object], Callable[[Any], None]]] = {}
         self._part_seen: dict[str, object] = {}
-        self._seen: dict[int, tuple[bytes, dict[str, object]]] = {}
+        self._seen: dict[int, tuple[bytes, dict[str, object], FB]] = {}
         """Each instance DB as last staged: its encoded snapshot without the volatile keys,
-        and those."""
+        those, and its FB (an online change makes a new one: the row is written again,
+        with the new fingerprint, even when its data did not change)."""
         self._shapes: dict[int, tuple[FB, str]] = {}
         self._meta_seen: dict[str, str] = {}
         self._images_seen: dict[str, dict[str, Any]] = {}  # the memory images last staged
@@ -344,7 +360,7 @@ class StateStore:
         if not existed or not tables:
             db.execute("PRAGMA page_size=1024")  # a short row change writes one short page
         db.execute("PRAGMA journal_mode=WAL")
-        db.execute("PRAGMA synchronous=NORMAL")
+        db.execute(f"PRAGMA synchronous={self.synchronous}")  # FULL: fsync at every commit
         db.executescript(_SCHEMA)
         columns = {row[1] for row in db.execute("PRAGMA table_info(alarms)")}
         for column, decl in _ADDED_ALARM_COLUMNS:
@@ -466,13 +482,13 @@ class StateStore:
             key, row = _json_row(snapshot, volatile)
         seen = self._seen.get(number)
         if (
-            not full and seen is not None and key == seen[0]
+            not full and seen is not None and key == seen[0] and seen[2] is fb
             and not (mark and volatile != seen[1])
         ):  # fmt: skip
             return  # unchanged, or only its volatile keys and no time mark due
         if row is None:
             row = _PAIR + key + _PACK.encode(volatile)
-        self._seen[number] = (key, volatile)
+        self._seen[number] = (key, volatile, fb)
         shape = self._shapes.get(number)
         if shape is None or shape[0] is not fb:
             fmt = fb.state_format

@@ -169,6 +169,13 @@ def test_t_push_needs_tap_or_top_and_switches_in_tap(rig: Rig) -> None:
     applied, reason = rig.cmd("t_push")
     assert not applied and "TAP or TOP" in reason
     rig.cmd("mode", mode="TAP")
+    rig.scan()
+    assert rig.cmd("t_push") == (  # said, not silently lost
+        True,
+        "no transition of the active steps was satisfied in the last call: in TAP the push "
+        "switches only one satisfied in the next",
+    )
+    assert rig.scan().active == [1]
     rig.session.set("Start", True)
     assert rig.scans(3)[-1].active == [1]  # TAP: condition AND push
     assert rig.cmd("t_push") == (True, "")
@@ -285,8 +292,33 @@ def test_en_sv_off_disables_supervision_and_ack_step_acknowledges_one_step(rig: 
     latched = rig.scans(3)[-1]
     assert latched.latched == [2] and latched.sv_enabled
     assert rig.cmd("ack_step", step=9) == (False, "no step S9 in Live")
+    rig.session.set("Full", True)  # the cause persists, but T2 may switch once released
+    rig.scan()
     assert rig.cmd("ack_step", step=2) == (True, "")
-    assert ("A1", 2) in rig.scan().events  # released as ACK_S would (the cause persists)
+    assert ("A1", 2) in rig.scan().events  # released as ACK_S would
+
+
+def test_an_ack_whose_cause_persists_is_refused_saying_why_and_changes_nothing(
+    rig: Rig,
+) -> None:
+    """S2.U stays over 1 s and T2 is not satisfied: acknowledged, the fault would latch
+    again in the same call and its message stay unacknowledged, so the command says so."""
+    rig.session.set("Start", True)
+    rig.session.set("Door", True)
+    assert rig.scans(115)[-1].latched == [2]
+    persists = (
+        "the cause of S2's supervision fault persists (its condition still holds): "
+        "acknowledged now the fault would latch again at once and its message stay "
+        "unacknowledged; remove the cause, then acknowledge"
+    )
+    assert rig.cmd("ack") == (False, persists)
+    assert rig.cmd("ack_step", step=2) == (False, persists)
+    after = rig.scans(3)
+    assert ("A1", 2) not in events(after) and after[-1].latched == [2]
+    rig.session.set("Full", True)  # T2 satisfied: the acknowledgement lets S2 switch on
+    rig.scan()
+    assert rig.cmd("ack") == (True, "")
+    assert rig.scan().active == [3]
 
 
 def test_a_chart_swapped_under_the_live_view_is_followed_with_its_own_steps(rig: Rig) -> None:

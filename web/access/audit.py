@@ -167,7 +167,7 @@ class AuditStore:
             self.path, check_same_thread=False, isolation_level=None, timeout=5.0
         )
         self._db.execute("PRAGMA journal_mode=WAL")
-        self._db.execute("PRAGMA synchronous=NORMAL")
+        self._db.execute("PRAGMA synchronous=FULL")  # as the state store: durable commits
         with self._lock:
             _migrate(self._db)
             self._last_id = _last_id(self._db)

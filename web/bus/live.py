@@ -11,8 +11,12 @@ whatever the chart's parameter set (a MINIMUM FB has no ACK_EF pin, yet can be
 acknowledged) and whatever the program wires to the pins. Each is applied at the scan
 boundary and acts in the FB's next call as a one-call rising edge (``GraphFB.command``):
 
-- ``ack`` → ACK_EF; refused when no step waits for an acknowledgement;
-- ``ack_step`` → ACK_S on ``step`` (not S_NO); refused unless that step waits;
+- ``ack`` → ACK_EF; refused when no step waits for an acknowledgement, or when each
+  waiting fault's cause persists and the acknowledgement would not let its step switch
+  (the fault would latch again in the same call, its message stay unacknowledged): the
+  reason says so; steps that stay latched beside released ones are named in the reply;
+- ``ack_step`` → ACK_S on ``step`` (not S_NO); refused unless that step waits, and, as
+  ``ack``, when its cause persists;
 - ``mode`` → SW_AUTO / SW_MAN / SW_TAP / SW_TOP;
 - ``init`` → INIT_SQ; ``off`` → OFF_SQ for one call (the sequencer then stays off);
 - ``halt`` → HALT_SQ held on (``{"on": true}``) or left to the pin again (``false``);
@@ -22,12 +26,14 @@ boundary and acts in the FB's next call as a one-call rising edge (``GraphFB.com
   restart clears them, and each update shows them (``overrides``);
 - ``step_on`` / ``step_off`` → S_ON / S_OFF on ``step`` (not S_NO); refused outside MAN,
   for an unknown step, an active step (on) or an idle one (off);
-- ``t_push`` → T_PUSH; refused outside TAP and TOP;
+- ``t_push`` → T_PUSH; refused outside TAP and TOP; in TAP with no satisfied transition
+  applied with a reason saying the push switches nothing unless one is satisfied;
 - ``ack_msg`` → acknowledges one message of the CPU's message list as the command's user
   at once (``MessageList.acknowledge``); refused for an unknown or already acknowledged
   message and for the user name ``program`` (reserved for ACK_EF). A supervision message
   acknowledged while its fault is latched releases the step at the FB's next call as ACK_S
-  would, whether or not its cause has gone (``sequencer.messages.remote_acks``).
+  would, whether or not its cause has gone (``sequencer.messages.remote_acks``); if it
+  has not, the reply says the fault comes again as a new message.
 
 Messages a command acknowledges (``ack``, ``ack_step``, ``init``) are acknowledged as the
 command's user, never as ``program``.
@@ -384,11 +390,15 @@ class LiveGraph:
             return True, "", f"{mode} -> {new}"
         user = command.user or "?"
         if op == "ack":
-            waiting = [cc.step_numbers[i] for i in st.active if st.sv_err[i]]
+            waiting = [i for i in st.active if st.sv_err[i]]
             if not waiting:
                 return False, "no supervision fault waits for an acknowledgement", ""
+            stays = [i for i in waiting if self._relatches(i)]
+            if len(stays) == len(waiting):
+                return False, _CAUSE_PERSISTS.format(_steps(cc, stays)), ""
             self.graph.command(OP_PINS[op], user=user)
-            return True, "", "steps " + ", ".join(f"S{n}" for n in sorted(waiting))
+            note = f"{_steps(cc, stays)} stays latched: its cause persists" if stays else ""
+            return True, note, "steps " + _steps(cc, [i for i in waiting if i not in stays])
         if op == "ack_step":
             step = command.step
             i = cc.step_index.get(step) if isinstance(step, int) else None
@@ -396,6 +406,8 @@ class LiveGraph:
                 return False, f"no step S{step} in {self.fb}", ""
             if not (st.x[i] and st.sv_err[i]):
                 return False, f"S{step} waits for no acknowledgement", ""
+            if self._relatches(i):
+                return False, _CAUSE_PERSISTS.format(f"S{step}"), ""
             self.graph.command(OP_PINS[op], step=step, user=user)
             return True, "", f"S{step}"
         if op == "ack_msg":
@@ -415,7 +427,9 @@ class LiveGraph:
             if mode not in ("TAP", "TOP"):
                 return False, f"t_push needs mode TAP or TOP ({CONTROL_SEQUENCER})", ""
             self.graph.command(OP_PINS[op])
-            return True, "", ""
+            ready = any(st.tt[j] for i in st.active for j in cc.leaving[i])
+            note = "" if ready or mode == "TOP" else _NOT_SATISFIED
+            return True, note, ""
         if op in ("step_on", "step_off"):
             step = command.step
             if mode != "MAN":
@@ -431,6 +445,16 @@ class LiveGraph:
             return True, "", f"S{step}"
         return False, f"unknown command {op!r}", ""
 
+    def _relatches(self, i: int) -> bool:
+        """Whether step ``i``'s supervision fault, acknowledged now, would latch again at
+        once (its condition still holds) without the step switching on: no forced switching
+        (``ack_forces_switch``) and, in AUTO, no leaving transition satisfied."""
+        st, cc = self.graph.state, self.cc
+        if not st.sv_cond[i] or cc.options.ack_forces_switch:
+            return False
+        mode = self._pending_mode or st.mode
+        return not (mode == "AUTO" and any(st.tt[j] for j in cc.leaving[i]))
+
     def _ack_msg(self, command: Command) -> tuple[bool, str, str]:
         mid, user = command.msg_id, command.user or "?"
         if self.messages is None:
@@ -444,7 +468,32 @@ class LiveGraph:
             how = f" by {msg.ack_user}" if msg.ack_user else ""
             return False, f"message {mid!r} is already acknowledged{how}", ""
         self.messages.acknowledge(msg.msg_id, user, self._t_ns)
-        return True, "", f"message {mid}: {msg.text}"
+        where = parse_message_id(msg.msg_id)
+        ours = where is not None and where[:2] == (self.cc.name, self.graph.db_number)
+        step = where[2] if where is not None and ours and where[3] == "SV" else None
+        i = self.cc.step_index.get(step) if step is not None else None
+        st = self.graph.state
+        note = ""
+        if i is not None and st.x[i] and st.sv_err[i] and self._relatches(i):
+            note = f"acknowledged; the cause of S{step} persists: it comes again as a new message"
+        return True, note, f"message {mid}: {msg.text}"
+
+
+_CAUSE_PERSISTS = (
+    "the cause of {}'s supervision fault persists (its condition still holds): "
+    "acknowledged now the fault would latch again at once and its message stay "
+    "unacknowledged; remove the cause, then acknowledge"
+)
+
+
+_NOT_SATISFIED = (
+    "no transition of the active steps was satisfied in the last call: in TAP the push "
+    "switches only one satisfied in the next"
+)
+
+
+def _steps(cc: CompiledChart, steps: Iterable[int]) -> str:
+    return ", ".join(f"S{n}" for n in sorted(cc.step_numbers[i] for i in steps))
 
 
 def _negations(condition: Any, labels: tuple[str, ...]) -> tuple[bool, ...]:

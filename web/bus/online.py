@@ -257,8 +257,13 @@ class OnlineChange:
         with contextlib.suppress(Exception):  # the audit must not keep the answer back
             self.gate.record(facts)
         durability = self.durability
-        if reply.applied and durability is not None:  # the row commits with the next scan
-            durability.wait_durable(durability.durable_mark(), self._timeout)
+        # the row commits with the next scan, after the swap's: one wait covers both
+        if (
+            reply.applied
+            and durability is not None
+            and not durability.wait_durable(durability.durable_mark(), self._timeout)
+        ):
+            reply = _unconfirmed(reply, self._timeout)
         pending.answer(reply)
 
     def _run(self, command: Command) -> tuple[CommandReply, str]:
@@ -374,13 +379,6 @@ class OnlineChange:
         if self.publisher is not None:
             self.publisher.set_chart(self.live.fb, live.layout)
         lines = [*pending.report.lines(), *summary.lines()]
-        durability, mark = self.durability, pending.mark
-        if (
-            mark is not None
-            and durability is not None
-            and not durability.wait_durable(mark, self._timeout)
-        ):
-            lines.append("the state file has not confirmed the new state yet")
         where = f"; {self.path.name} written" if self.path is not None else ""
         kept = f", the old file kept as {backup.name}" if backup is not None else ""
         head = f"version {target.number} runs (was {old.number}){where}{kept}"
@@ -472,6 +470,14 @@ class OnlineChange:
         kept = f" (the old file kept as {backup.name})" if backup is not None else ""
         line = f"{name} written{kept}"
         return CommandReply(applied=True, lines=[line]), line
+
+
+def _unconfirmed(reply: CommandReply, timeout_s: float) -> CommandReply:
+    """``reply`` of a command that acts, but whose commit the state file has not confirmed
+    in time: not *applied* (a restart might not see it), as the bus answers the others."""
+    head = reply.lines[0] if reply.lines else "applied"
+    reason = f"not confirmed: {head}, but the state file has not committed it within "
+    return msgspec.structs.replace(reply, applied=False, reason=f"{reason}{timeout_s:g} s")
 
 
 def _audited_args(command: Command) -> dict[str, object]:

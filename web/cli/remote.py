@@ -130,9 +130,10 @@ def send_command(
         except (TypeError, ValueError) as exc:
             return _fail(str(exc))
     if not reply.applied:
-        print(f"s7graph: {op} refused: {reply.reason}", file=sys.stderr)
-        return 1
+        return _refused(op, reply)
     print(f"s7graph: {op} applied on {net.cpu}/{shell.fb} (cycle {reply.cycle})")
+    if reply.reason:  # what an applied command will not do (a fault that stays latched)
+        print(f"s7graph: {reply.reason}")
     return 0
 
 
@@ -223,7 +224,10 @@ def download_command(
 
 
 def _refused(op: str, reply: CommandReply) -> int:
-    print(f"s7graph: {op} refused: {reply.reason}", file=sys.stderr)
+    """A reply not *applied*: refused, or applied but not confirmed durable (its reason
+    starts so)."""
+    how = "" if reply.reason.startswith("not confirmed: ") else "refused: "
+    print(f"s7graph: {op} {how}{reply.reason}", file=sys.stderr)
     for line in reply.lines:
         print(f"  {line}", file=sys.stderr)
     return 1
