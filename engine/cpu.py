@@ -32,6 +32,7 @@ from s7graph.engine.diagnostics import DiagnosticBuffer, EventId
 from s7graph.engine.errors import AddressError, BlockError, S7Error, ScanAborted, TypeMismatch
 from s7graph.engine.force import Force, ForceTable, apply_plan, force_target, make_force
 from s7graph.engine.interrupts import CYCLIC_DEFAULT_MS, CyclicScheduler, priority
+from s7graph.engine.marks import ScanMarks
 from s7graph.engine.memory import AreaLengthError, Memory
 from s7graph.engine.modes import CpuMode, KeySwitch, ModeRequest, SetKeySwitch, resolve_requests
 from s7graph.engine.record import DiagEntry, ScanRecord
@@ -214,9 +215,7 @@ class Cpu:
         self.instance_dbs[number] = idb
         return idb
 
-    def replace_instance_db(
-        self, number: int, fb: FB, *, name: str | None = None
-    ) -> InstanceDB:
+    def replace_instance_db(self, number: int, fb: FB, *, name: str | None = None) -> InstanceDB:
         """Re-create instance DB ``number`` from ``fb``'s interface, replacing the one there
         (a changed FB downloaded into a running CPU: the caller carries the values over)."""
         if number not in self.instance_dbs:
@@ -321,6 +320,10 @@ class Cpu:
         restart initializes it."""
         if hook not in self._startup_hooks:
             self._startup_hooks.append(hook)
+
+    def mark_blocks(self, marks: ScanMarks | None) -> None:
+        """Mark each OB, FB and FC as it runs in ``marks`` (``engine.marks``; None: stop)."""
+        self._ctx.marks = marks
 
     def stop_by_error(self, event: int, block: str, message: str) -> None:
         """Go to STOP because of an error outside the program (the state file could not be
@@ -608,6 +611,8 @@ class Cpu:
         ctx.start_info = start_info
         self._ran.append(number)
         airt = self._airt_disabled
+        marks = ctx.marks
+        before = marks.enter(block) if marks is not None else 0
         try:
             block.body(ctx)
         except _Fault as fault:
@@ -618,6 +623,8 @@ class Cpu:
             self._program_error(number, block.label, exc)
         finally:
             self._airt_disabled = airt  # DIS_AIRT ends with its OB (behaviour 23)
+            if marks is not None:
+                marks.leave(before)
 
     def _program_error(self, ob: int, block: str, exc: BaseException) -> None:
         event = _classify(exc)
