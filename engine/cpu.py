@@ -215,7 +215,9 @@ class Cpu:
         self.instance_dbs[number] = idb
         return idb
 
-    def replace_instance_db(self, number: int, fb: FB, *, name: str | None = None) -> InstanceDB:
+    def replace_instance_db(
+        self, number: int, fb: FB, *, name: str | None = None
+    ) -> InstanceDB:
         """Re-create instance DB ``number`` from ``fb``'s interface, replacing the one there
         (a changed FB downloaded into a running CPU: the caller carries the values over)."""
         if number not in self.instance_dbs:

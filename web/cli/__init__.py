@@ -1,6 +1,7 @@
 """The ``s7graph`` command line: ``run``, ``sim``, ``check``, ``import``, ``export``,
 ``--version``; for the bus ``web``, ``router``, ``watch``, ``status`` and the shell's
-commands (``ack``, ``mode``, ..., ``force``, ``download``); ``users`` and ``audit``.
+commands (``ack``, ``mode``, ..., ``force``, ``download``, ``stop``, ``start``); ``users``
+and ``audit``.
 
 Each command lives in its own module (``web/cli/*.py``) and is imported only when used, so
 ``s7graph check`` never pays for zenoh or viser. Errors are one line on stderr and a
@@ -489,6 +490,24 @@ def off(
 ) -> None:  # fmt: skip
     """Switch the sequencer off (OFF_SQ)."""
     _remote("off", {}, cpu, connect, fb, user, tls_ca)
+
+
+@app.command("stop")
+def stop_cpu(
+    user: UserName, cpu: CpuName = "cpu1", connect: Connect = None, fb: FbName = None,
+    tls_ca: TlsCa = None,
+) -> None:  # fmt: skip
+    """Put the CPU in STOP, as its RUN/STOP switch (engineer; outputs to 0)."""
+    _remote("stop", {}, cpu, connect, fb, user, tls_ca)
+
+
+@app.command("start")
+def start_cpu(
+    user: UserName, cpu: CpuName = "cpu1", connect: Connect = None, fb: FbName = None,
+    tls_ca: TlsCa = None,
+) -> None:  # fmt: skip
+    """Start the CPU from STOP with its configured restart (--restart of its run; engineer)."""
+    _remote("start", {}, cpu, connect, fb, user, tls_ca)
 
 
 @app.command("step-on")

@@ -188,7 +188,8 @@ def _run_chart(
         if live is not None:
             live.close()
 
-    runner = Runner(cpu, cycle_ms=cycle_ms, store=store, on_record=on_record, end_on_stop=not web,
+    stays = web or (recovered is not None and live is not None and bool(live.endpoint))
+    runner = Runner(cpu, cycle_ms=cycle_ms, store=store, on_record=on_record, end_on_stop=not stays,
                     rt_priority=rt_priority, comm_load_pct=comm_load_pct, core=core,
                     marks=child_marks())  # fmt: skip
     if live is not None:
