@@ -87,7 +87,7 @@ def child_marks() -> ScanMarks | None:
     if not fd.isdigit():
         return None
     try:
-        return ScanMarks(mmap.mmap(int(fd), MARKS_SIZE))
+        return ScanMarks(memoryview(mmap.mmap(int(fd), MARKS_SIZE)))
     except (OSError, ValueError):
         return None
 
@@ -117,7 +117,8 @@ class Supervisor:
         self._fd = os.memfd_create("s7graph-scan-marks")
         os.ftruncate(self._fd, MARKS_SIZE)
         self._page = mmap.mmap(self._fd, MARKS_SIZE)
-        self.marks = MarkReader(self._page)
+        self._view = memoryview(self._page)
+        self.marks = MarkReader(self._view)
         self._proc: subprocess.Popen[bytes] | None = None
         self._stop_at: float | None = None
         self._killed = False
@@ -145,6 +146,7 @@ class Supervisor:
             for sig, handler in handlers.items():
                 signal.signal(sig, handler)
             self.marks.release()
+            self._view.release()
             self._page.close()
             os.close(self._fd)
 

@@ -160,8 +160,9 @@ class LiveEdge:
         state = str(record.mode)
         if state != self._cpu_state:
             self._cpu_state = state
-            stopped = record.mode is CpuMode.STOP and runner is not None
-            publisher.set_cpu_state(state, stop_reason(runner.cpu) if stopped else "")
+            stopped = record.mode is CpuMode.STOP
+            reason = stop_reason(runner.cpu) if runner is not None and stopped else ""
+            publisher.set_cpu_state(state, reason)
         if stats is not None:
             publisher.set_cycle_stats(cycle_stats(stats, runner, publisher.comm_limited))
         publisher.publish(self.live.fb, update)
