@@ -139,11 +139,10 @@ def _run_chart(
         inline = web and view_in_process  # a page load may hold a scan up
         max_cycle_ms = IN_PROCESS_VIEW_MAX_CYCLE_MS if inline else DEFAULT_MAX_CYCLE_MS
     cpu.watchdog = Watchdog(max_cycle_ms, cpu.watchdog.min_cycle_ns / 1e6)
-    recovered = recovered_cause()
-    fresh = fresh and recovered is None  # never anew after a hang: its last state
+    recovered = recovered_cause()  # never anew after a hang (--fresh): from its last state
     state_path = state if state is not None else path.with_suffix(".state.sqlite")
     try:
-        opened = open_state(state_path, cpu, fresh=fresh, hot=restart == "hot")
+        opened = open_state(state_path, cpu, fresh=fresh and not recovered, hot=restart == "hot")
     except StateFileError as exc:
         print(refusal(exc), file=sys.stderr)
         return 2
@@ -188,14 +187,14 @@ def _run_chart(
         if live is not None:
             live.close()
 
-    stays = web or (recovered is not None and live is not None and bool(live.endpoint))
+    stays = web or bool(recovered and live is not None and live.endpoint)  # on the bus
     runner = Runner(cpu, cycle_ms=cycle_ms, store=store, on_record=on_record, end_on_stop=not stays,
                     rt_priority=rt_priority, comm_load_pct=comm_load_pct, core=core,
                     marks=child_marks())  # fmt: skip
     if live is not None:
         live.restart = restart  # what the RUN/STOP switch's start does
-    if live is not None and live.online is not None:
-        live.online.durability = runner  # a download is applied once its state is on disk
+        if live.online is not None:
+            live.online.durability = runner  # a download is applied once its state is on disk
     if view is not None:
         view.start()
     status = run_until_stopped(
