@@ -228,3 +228,36 @@ def test_sigterm_to_the_supervisor_reaches_the_cpu_which_ends_cleanly(tmp_path: 
     _, err = proc.communicate(timeout=30)
     assert proc.returncode == 0, err
     assert "stopped (state saved in" in err
+
+
+CRASHING_BLOCK = """
+import ctypes
+from s7graph.engine import fc, ob
+
+calls = [0]
+
+@fc(8, name="driver")
+def driver(ctx, params):
+    ctypes.string_at(0)  # a crash in C code: SIGSEGV
+
+@ob(1)
+def main(ctx):
+    calls[0] += 1
+    if calls[0] == 30:
+        ctx.call(driver)
+"""
+
+
+@pytest.mark.timeout(60)
+def test_a_block_crashing_in_c_code_brings_the_cpu_back_in_stop_naming_the_signal(
+    tmp_path: Path,
+) -> None:
+    program = tmp_path / "crash.py"
+    program.write_text(textwrap.dedent(CRASHING_BLOCK))
+    state = tmp_path / "crash.sqlite"
+    proc = _s7graph("run", str(program), "--state", str(state), "--cycle-ms", "5")
+    _, err = proc.communicate(timeout=45)
+    assert proc.returncode == 1, err
+    assert 'the CPU\'s process ended by SIGSEGV in FC8 "driver"; starting it again in STOP' in err
+    event, block, message = _diagnostics(state)[-1]
+    assert (event, block) == (EventId.STOP_KILLED, 'FC8 "driver"') and "SIGSEGV" in message

@@ -166,9 +166,10 @@ class Supervisor:
     def _watch(self, proc: subprocess.Popen[bytes]) -> int | tuple[str, str]:
         """Until ``proc`` ends: its exit status, or (place, cause) to start it again in STOP."""
         while True:
-            with contextlib.suppress(subprocess.TimeoutExpired):
-                code = proc.wait(POLL_S)
+            code = proc.poll()
+            if code is not None:
                 return self._ended(code)
+            time.sleep(POLL_S)  # one wake-up per look (Popen.wait polls far more often)
             now = time.monotonic()
             if self._stop_at is not None:
                 if now - self._stop_at >= GRACE_S + STOP_EXTRA_S:
