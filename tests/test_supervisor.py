@@ -261,3 +261,25 @@ def test_a_block_crashing_in_c_code_brings_the_cpu_back_in_stop_naming_the_signa
     assert 'the CPU\'s process ended by SIGSEGV in FC8 "driver"; starting it again in STOP' in err
     event, block, message = _diagnostics(state)[-1]
     assert (event, block) == (EventId.STOP_KILLED, 'FC8 "driver"') and "SIGSEGV" in message
+
+
+@pytest.mark.timeout(90)
+def test_sigterm_while_the_hung_cpu_is_restarted_ends_the_run_with_the_cause_on_record(
+    tmp_path: Path,
+) -> None:
+    plant = tmp_path / "hangplant.py"
+    plant.write_text(textwrap.dedent(HANGING_PLANT))
+    state = tmp_path / "drill.sqlite"
+    endpoint = f"tcp/127.0.0.1:{_free_port()}"
+    proc = _s7graph("run", str(DRILL / "drill.s7g"), "--symbols", str(DRILL / "symbols.txt"),
+                    "--plant", str(plant), "--state", str(state), "--listen", endpoint)  # fmt: skip
+    _wait_line(proc, "starting it again in STOP")
+    proc.send_signal(signal.SIGTERM)  # the new CPU is not listening yet: it gets it once it is
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 1, err  # it ended in STOP by an error
+    assert "in STOP (from its last durable state" in err
+    assert [r for r in _diagnostics(state) if r[0] == EventId.STOP_KILLED]
+    with sqlite3.connect(state) as con:
+        clean = con.execute("SELECT value FROM meta WHERE key='clean'").fetchone()
+    con.close()
+    assert clean == ("1",)  # the new CPU ended as by Ctrl-C: its state saved

@@ -122,6 +122,9 @@ class Supervisor:
         self._proc: subprocess.Popen[bytes] | None = None
         self._stop_at: float | None = None
         self._killed = False
+        self._recovering = False
+        self._pending: int | None = None
+        """A signal that came between two CPUs: for the next, once its loop runs."""
 
     def run(self) -> int:
         """Supervise until the CPU ends; its exit status (``EXIT_HUNG``: killed after a stop
@@ -157,6 +160,7 @@ class Supervisor:
         if recovered is not None:
             env[RECOVER_ENV] = _SEP.join(recovered)
         self._killed = False
+        self._recovering = recovered is not None
         self._proc = subprocess.Popen(
             [sys.executable, "-m", "s7graph", *self.args], env=env, pass_fds=(self._fd,),
             preexec_fn=_die_with_parent,
@@ -171,6 +175,11 @@ class Supervisor:
                 return self._ended(code)
             time.sleep(POLL_S)  # one wake-up per look (Popen.wait polls far more often)
             now = time.monotonic()
+            if self._pending is not None and self.marks.max_cycle_ns:  # its handlers are in
+                signum, self._pending = self._pending, None
+                self._stop_at = now
+                with contextlib.suppress(ProcessLookupError):
+                    proc.send_signal(signum)
             if self._stop_at is not None:
                 if now - self._stop_at >= GRACE_S + STOP_EXTRA_S:
                     self._kill(proc)
@@ -228,12 +237,15 @@ class Supervisor:
         proc.wait()
 
     def _on_signal(self, signum: int, frame: FrameType | None) -> None:
+        proc = self._proc
+        listening = not self._recovering or self.marks.max_cycle_ns  # its loop runs
+        if proc is None or self._killed or not listening or proc.poll() is not None:
+            self._pending = signum  # between two CPUs, or the next not listening yet
+            return
         if self._stop_at is None:
             self._stop_at = time.monotonic()
-        proc = self._proc
-        if proc is not None and proc.poll() is None:
-            with contextlib.suppress(ProcessLookupError):
-                proc.send_signal(signum)
+        with contextlib.suppress(ProcessLookupError):
+            proc.send_signal(signum)
 
     def _end_orphans(self) -> None:
         """End what the last CPU started (its view, now this process's child) and reap it."""
