@@ -21,6 +21,7 @@ from s7graph.engine.datatypes import check_value
 from s7graph.engine.diagnostics import DiagnosticBuffer
 from s7graph.engine.errors import BlockError, ScanAborted
 from s7graph.engine.interrupts import CyclicScheduler
+from s7graph.engine.marks import ScanMarks
 from s7graph.engine.memory import Memory
 from s7graph.engine.rtc import RealTimeClock
 from s7graph.engine.rtm import RuntimeMeters
@@ -105,7 +106,7 @@ def _addr(text: str) -> Address:
 class CallContext:
     """What a block body sees during a scan: the CPU, memory, process time, cycle number."""
 
-    __slots__ = ("cpu", "cycle", "depth", "mem", "now_ns", "ob", "start_info")
+    __slots__ = ("cpu", "cycle", "depth", "marks", "mem", "now_ns", "ob", "start_info")
 
     def __init__(self, cpu: BlockHost) -> None:
         self.cpu = cpu
@@ -115,6 +116,8 @@ class CallContext:
         self.ob = 0
         self.depth = 0
         self.start_info: dict[str, Any] = {}
+        self.marks: ScanMarks | None = None
+        """Where the block being run is marked for a watchdog outside the process."""
 
     def emit(self, event: object) -> None:
         """Add ``event`` to this scan's ``ScanRecord.events``."""
@@ -191,6 +194,8 @@ class CallContext:
                 f"block nesting deeper than {self.cpu.max_nesting} at {blk.label}"
             )
         self.depth += 1
+        marks = self.marks
+        before = marks.enter(blk) if marks is not None else 0
         try:
             return blk.body(self, arg)
         except BaseException as exc:
@@ -200,6 +205,8 @@ class CallContext:
             raise fault from exc
         finally:
             self.depth -= 1
+            if marks is not None:
+                marks.leave(before)
 
     def _write_back(
         self, refs: list[tuple[str, str, str]], values: dict[str, object]

@@ -32,6 +32,7 @@ from s7graph.engine.diagnostics import DiagnosticBuffer, EventId
 from s7graph.engine.errors import AddressError, BlockError, S7Error, ScanAborted, TypeMismatch
 from s7graph.engine.force import Force, ForceTable, apply_plan, force_target, make_force
 from s7graph.engine.interrupts import CYCLIC_DEFAULT_MS, CyclicScheduler, priority
+from s7graph.engine.marks import ScanMarks
 from s7graph.engine.memory import AreaLengthError, Memory
 from s7graph.engine.modes import CpuMode, KeySwitch, ModeRequest, SetKeySwitch, resolve_requests
 from s7graph.engine.record import DiagEntry, ScanRecord
@@ -322,6 +323,10 @@ class Cpu:
         if hook not in self._startup_hooks:
             self._startup_hooks.append(hook)
 
+    def mark_blocks(self, marks: ScanMarks | None) -> None:
+        """Mark each OB, FB and FC as it runs in ``marks`` (``engine.marks``; None: stop)."""
+        self._ctx.marks = marks
+
     def stop_by_error(self, event: int, block: str, message: str) -> None:
         """Go to STOP because of an error outside the program (the state file could not be
         written): an entry with ``event`` naming it; outputs go to 0."""
@@ -608,6 +613,8 @@ class Cpu:
         ctx.start_info = start_info
         self._ran.append(number)
         airt = self._airt_disabled
+        marks = ctx.marks
+        before = marks.enter(block) if marks is not None else 0
         try:
             block.body(ctx)
         except _Fault as fault:
@@ -618,6 +625,8 @@ class Cpu:
             self._program_error(number, block.label, exc)
         finally:
             self._airt_disabled = airt  # DIS_AIRT ends with its OB (behaviour 23)
+            if marks is not None:
+                marks.leave(before)
 
     def _program_error(self, ob: int, block: str, exc: BaseException) -> None:
         event = _classify(exc)

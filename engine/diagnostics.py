@@ -37,6 +37,8 @@ class EventId(IntEnum):
     """Ours: the state file could not be written (disk full, I/O error)."""
     STOP_HUNG = 0x45F1
     """Ours: the process ended because a scan did not return after a stop request."""
+    STOP_KILLED = 0x45F2
+    """Ours: the supervisor ended a CPU process whose scan hung and brought it back in STOP."""
     CYCLE_TIME_EXCEEDED = 0x3501
     OB_REQUEST_ERROR = 0x3502
     STACK_OVERFLOW = 0x3574

@@ -70,7 +70,8 @@ from s7graph.engine.cores import allowed_cpus, others, pin, scan_core
 from s7graph.engine.cpu import Cpu
 from s7graph.engine.diagnostics import EventId
 from s7graph.engine.errors import ScanAborted
-from s7graph.engine.modes import CpuMode
+from s7graph.engine.marks import ScanMarks
+from s7graph.engine.modes import CpuMode, ModeRequest
 from s7graph.engine.persistence import Batch, StateStore, StateWriteError
 from s7graph.engine.profile import CycleProfile, OpenCycle
 from s7graph.engine.record import DiagEntry, ScanRecord
@@ -273,6 +274,7 @@ class Runner:
         rt_priority: int | None = RT_PRIORITY,
         comm_load_pct: float = COMM_LOAD_PCT,
         core: int | None = None,
+        marks: ScanMarks | None = None,
     ) -> None:
         if cycle_ms <= 0:
             raise ValueError("cycle time must be positive")
@@ -324,6 +326,9 @@ class Runner:
         self._monitor: threading.Thread | None = None
         self._done = threading.Event()
         self._exit: Callable[[int], object] = os._exit
+        self.marks = marks
+        """Each cycle, section and block marked for the supervisor (``engine.marks``)."""
+        self._switched = False
 
     # ---- starting and stopping ----------------------------------------------------------
 
@@ -354,6 +359,39 @@ class Runner:
         of the scan it interrupted)."""
         self.request_stop()
 
+    # ---- the RUN/STOP switch, and a start in STOP after a hang -----------------------------
+
+    def switch_stop(self, reason: str) -> None:
+        """RUN → STOP by the switch (at a scan boundary, in the scan thread): outputs to 0,
+        and not a STOP by itself (the loop goes on, ``stopped`` stays as it was)."""
+        self._switched = True
+        self.cpu.stop(reason)
+
+    def switch_start(self, restart: str | RestartType) -> None:
+        """STOP → RUN by the switch: the startup ``restart`` at the next scan boundary; a
+        STOP by itself before it is no longer how the run ends (``stopped`` cleared)."""
+        self.cpu.submit(ModeRequest(CpuMode.RUN, restart=str(restart)))
+        self.stopped = ""
+
+    def recover(self, block: str, message: str) -> None:
+        """Instead of ``startup``: the CPU stays in STOP as restored from the state file,
+        with an entry ``EventId.STOP_KILLED`` naming ``block`` (the supervisor ended the
+        process before, its scan hung); the state is written at once, the writer starts."""
+        self._watch()
+        cpu = self.cpu
+        cpu.stop_entry = cpu.diagnostics.record(
+            cpu.clock.now_ns(), EventId.STOP_KILLED, block, message
+        )
+        self.stopped = stop_reason(cpu)
+        if self.store is not None:
+            self.store.save(cpu, clean=False)
+            self.writer = StoreWriter(self.store)
+
+    def _stopped_by_itself(self, was_running: bool) -> bool:
+        switched, self._switched = self._switched, False
+        stopped = was_running and self.cpu.mode is CpuMode.STOP
+        return stopped and not switched and not self._stop.is_set()
+
     # ---- the loop ------------------------------------------------------------------------
 
     def run(self, *, duration_s: float | None = None) -> None:
@@ -363,6 +401,9 @@ class Runner:
         if self.store is not None and self.writer is None:
             self.writer = StoreWriter(self.store)
         previous = self._install_abort_signal()
+        if self.marks is not None:
+            self.marks.max_cycle(self.cpu.watchdog.max_cycle_ns)
+            self.cpu.mark_blocks(self.marks)
         if self.rt_priority is not None:
             keep_small_pages()
             self.realtime = set_realtime(self.rt_priority)
@@ -413,8 +454,11 @@ class Runner:
         deadline = None if duration_s is None else t0 + duration_s
         due = t0
         open_cycle: OpenCycle | None = None
+        marks = self.marks
         try:
             while not self._stop.is_set():
+                if marks is not None:
+                    marks.begin(time.monotonic_ns())
                 now = time.monotonic()
                 started = clock()
                 self._finish_staging()  # first: the bookkeeping below counts with the scan
@@ -450,12 +494,14 @@ class Runner:
                 staged = clock()
                 if self.write_error is not None:
                     break
-                if was_running and cpu.mode is CpuMode.STOP and not self._stop.is_set():
+                if self._stopped_by_itself(was_running):
                     self.stopped = stop_reason(cpu)
                     if self.on_stop is not None:
                         self.on_stop(self.stopped)
                     if self.end_on_stop:
                         break
+                if marks is not None:
+                    marks.end()
                 delay = due - time.monotonic()
                 if delay > 0 and self.gc is not None and self.gc.idle(delay):
                     delay = due - time.monotonic()
@@ -470,6 +516,8 @@ class Runner:
                     due = time.monotonic()
         finally:
             runq.close()
+            if marks is not None:
+                marks.end()
 
     def _persist(self, *, until: float | None = None) -> None:
         """Stage this scan's changes (after the boundary's commands: one state) and hand
@@ -505,9 +553,13 @@ class Runner:
         with self._lock:
             self._section = what
             self._armed = False
+        if self.marks is not None:
+            self.marks.section(what)
         try:
             yield
         finally:
+            if self.marks is not None:
+                self.marks.section(None)
             with self._lock:
                 self._section = None
                 if self._armed and not self._signal_abort and self._scan_tid is not None:

@@ -45,6 +45,14 @@ def _as_from_a_shell() -> None:
     ctypes.CDLL(None).prctl(PR_SET_THP_DISABLE, 0, 0, 0, 0)
 
 
+def _children(parent: int) -> list[int]:
+    pids: list[int] = []
+    for task in Path(f"/proc/{parent}/task").iterdir():
+        with open(task / "children") as f:
+            pids += [int(p) for p in f.read().split()]
+    return pids
+
+
 class Run:
     """``s7graph run`` of the drill demo with ``--web``, in a session of its own (so that a
     signal to its process group is what a Ctrl-C at its terminal sends)."""
@@ -78,12 +86,15 @@ class Run:
                 return found
         raise AssertionError(f"no view line; stderr: {''.join(self.err)}")
 
+    @property
+    def cpu(self) -> int:
+        """The CPU's process: the child of ``s7graph run``, its supervisor."""
+        (pid,) = _children(self.proc.pid)
+        return pid
+
     def children(self) -> list[int]:
-        pids: list[int] = []
-        for task in Path(f"/proc/{self.proc.pid}/task").iterdir():
-            with open(task / "children") as f:
-                pids += [int(p) for p in f.read().split()]
-        return pids
+        """The processes the CPU started (its view)."""
+        return _children(self.cpu)
 
     def stop(self) -> None:
         if self.proc.poll() is None:
@@ -182,7 +193,7 @@ def test_the_cpu_and_its_view_keep_their_memory_out_of_huge_pages(run: Run) -> N
     (engine.runner.keep_small_pages): the CPU process and the view it starts are kept out."""
     run.view_line()
     (view,) = run.children()
-    assert (_thp(run.proc.pid), _thp(view)) == ("0", "0")
+    assert (_thp(run.cpu), _thp(view)) == ("0", "0")
 
 
 def _cpus(tid: int) -> set[int]:
@@ -202,7 +213,7 @@ def test_the_scan_keeps_its_processor_and_the_bus_and_the_view_run_on_the_others
     try:
         run.view_line()
         (view,) = run.children()
-        pid = run.proc.pid
+        pid = run.cpu
         rest = allowed - {core}
 
         def placed() -> bool:

@@ -88,6 +88,10 @@ COMMANDS: Final[tuple[CommandInfo, ...]] = (
         "read a chart or importable file of the project directory",
         '{"file": "x.xml"}',
     ),
+    CommandInfo("stop", "engineer", "", "the CPU's RUN/STOP switch to STOP (outputs to 0)"),
+    CommandInfo(
+        "start", "engineer", "", "the switch to RUN: the CPU's configured restart (`--restart`)"
+    ),
 )
 # Ops the role table grants but this CPU does not carry out yet: refused after the role check.
 NOT_AVAILABLE: Final[frozenset[str]] = frozenset()

@@ -76,11 +76,11 @@ EVENTS: tuple[str, ...] = ("S1", "S0", "V1", "V0", "L1", "L0", "A1", "R1")
 # the ops of web.access.roles.COMMANDS (a test keeps the two equal)
 Op = Literal[
     "ack", "ack_step", "ack_msg", "mode", "init", "off", "halt", "t_push", "step_on", "step_off",
-    "en_il", "en_sv", "force", "download", "undo_download", "save", "open",
+    "en_il", "en_sv", "force", "download", "undo_download", "save", "open", "stop", "start",
 ]  # fmt: skip
 OPS: tuple[str, ...] = (
     "ack", "ack_step", "ack_msg", "mode", "init", "off", "halt", "t_push", "step_on", "step_off",
-    "en_il", "en_sv", "force", "download", "undo_download", "save", "open",
+    "en_il", "en_sv", "force", "download", "undo_download", "save", "open", "stop", "start",
 )  # fmt: skip
 
 # A name that is safe inside a zenoh key expression and in a scene node path.
@@ -377,6 +377,7 @@ class CpuStatus(_Msg, frozen=True, kw_only=True):
     stats: CycleStats | None = None
     login: Literal["users", "demo"] = "demo"  # demo: no users file, names are claimed
     forces: Count = 0  # force jobs active: the CPU's FRCE LED is on when > 0
+    reason: Text = ""  # why the CPU is in STOP (its STOP entry and the error before it)
 
 
 class ForceEntry(_Msg, frozen=True, kw_only=True):
@@ -455,6 +456,8 @@ _ARGS_BY_OP: dict[str, frozenset[str]] = {
     "undo_download": frozenset(),
     "save": frozenset({"file", "source"}),
     "open": frozenset({"file"}),
+    "stop": frozenset(),
+    "start": frozenset(),
 }
 # Arguments an op may leave out (an online change: the chart version the sender saw, what to
 # do with active steps the change removes, and whether only to preview the change).

@@ -435,10 +435,11 @@ class BusPublisher:
         self._publish_status()
         return forces
 
-    def set_cpu_state(self, state: str) -> None:
-        """Report a CPU run state change (RUN/STOP/STARTUP) on ``status`` at once."""
+    def set_cpu_state(self, state: str, reason: str = "") -> None:
+        """Report a CPU run state change (RUN/STOP/STARTUP) on ``status`` at once, with
+        ``reason``: why it is in STOP."""
         with self._lock:
-            self._status = msgspec.structs.replace(self._status, state=state)
+            self._status = msgspec.structs.replace(self._status, state=state, reason=reason)
         self._publish_status()
 
     def set_cycle_stats(self, stats: CycleStats) -> None:

@@ -1,6 +1,7 @@
 """The ``s7graph`` command line: ``run``, ``sim``, ``check``, ``import``, ``export``,
 ``--version``; for the bus ``web``, ``router``, ``watch``, ``status`` and the shell's
-commands (``ack``, ``mode``, ..., ``force``, ``download``); ``users`` and ``audit``.
+commands (``ack``, ``mode``, ..., ``force``, ``download``, ``stop``, ``start``); ``users``
+and ``audit``.
 
 Each command lives in its own module (``web/cli/*.py``) and is imported only when used, so
 ``s7graph check`` never pays for zenoh or viser. Errors are one line on stderr and a
@@ -9,6 +10,7 @@ non-zero exit, never a traceback.
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
@@ -125,6 +127,19 @@ def _restart_type(value: str | None) -> str | None:
     return value.lower() if value is not None else None
 
 
+_ENTRY_ARGS: list[str] | None = None
+"""The command line of ``main()`` run as the program (not called with ``argv``)."""
+
+
+def _supervised() -> bool:
+    """Whether this ``run`` becomes the supervisor of a CPU process of its own
+    (``web/cli/supervisor.py``): as the program, on Linux, not yet the supervised CPU."""
+    from s7graph.web.cli.supervisor import MARKS_ENV
+
+    child = MARKS_ENV in os.environ
+    return _ENTRY_ARGS is not None and hasattr(os, "memfd_create") and not child
+
+
 @app.command()
 def run(
     program: Annotated[
@@ -206,6 +221,10 @@ def run(
     ] = None,
 ) -> None:
     """Run a program or a chart on the system clock until Ctrl-C."""
+    if _supervised():
+        from s7graph.web.cli.supervisor import supervise
+
+        raise typer.Exit(supervise(_ENTRY_ARGS or []))
     priority = _scan_priority(rt_priority)
     if program.suffix.lower() == ".s7g":
         from s7graph.web.cli.run_chart import run_chart
@@ -473,6 +492,24 @@ def off(
     _remote("off", {}, cpu, connect, fb, user, tls_ca)
 
 
+@app.command("stop")
+def stop_cpu(
+    user: UserName, cpu: CpuName = "cpu1", connect: Connect = None, fb: FbName = None,
+    tls_ca: TlsCa = None,
+) -> None:  # fmt: skip
+    """Put the CPU in STOP, as its RUN/STOP switch (engineer; outputs to 0)."""
+    _remote("stop", {}, cpu, connect, fb, user, tls_ca)
+
+
+@app.command("start")
+def start_cpu(
+    user: UserName, cpu: CpuName = "cpu1", connect: Connect = None, fb: FbName = None,
+    tls_ca: TlsCa = None,
+) -> None:  # fmt: skip
+    """Start the CPU from STOP with its configured restart (--restart of its run; engineer)."""
+    _remote("start", {}, cpu, connect, fb, user, tls_ca)
+
+
 @app.command("step-on")
 def step_on(
     step: Annotated[int, typer.Argument(help="The step number.")],
@@ -621,7 +658,12 @@ def audit(
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the console script; turns every known error into one stderr line."""
+    """Entry point of the console script; turns every known error into one stderr line.
+
+    Run as the program (``argv`` None), ``s7graph run`` supervises its CPU as a process of
+    its own (``web.cli.supervisor``); called with ``argv`` it runs in this process."""
+    global _ENTRY_ARGS
+    _ENTRY_ARGS = sys.argv[1:] if argv is None else None
     try:
         rc = app(args=argv, standalone_mode=False)
     except S7Error as exc:

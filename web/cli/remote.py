@@ -256,6 +256,8 @@ def status_lines(status: CpuStatus) -> list[str]:
     fbs = ", ".join(status.fbs) or "none"
     lines = [f"CPU {status.cpu}: {status.state}, cycle {status.cycle}, FBs {fbs}, "
              f"{status.forces} force job{'s' if status.forces != 1 else ''}"]  # fmt: skip
+    if status.reason:
+        lines.append(f"STOP: {status.reason}")
     stats = status.stats
     if stats is None:
         return [*lines, "cycle time: not measured yet"]

@@ -37,6 +37,7 @@ from s7graph.engine.watchdog import Watchdog
 from s7graph.sfb.alarms import message_list
 from s7graph.web.cli.report import fail
 from s7graph.web.cli.run_program import run_until_stopped
+from s7graph.web.cli.supervisor import child_marks, recovered_cause
 from s7graph.web.harness.persist import open_state, refusal
 from s7graph.web.harness.plant import LoadedPlant, PlantError, load_plant
 from s7graph.web.harness.session import ChartSession
@@ -138,9 +139,10 @@ def _run_chart(
         inline = web and view_in_process  # a page load may hold a scan up
         max_cycle_ms = IN_PROCESS_VIEW_MAX_CYCLE_MS if inline else DEFAULT_MAX_CYCLE_MS
     cpu.watchdog = Watchdog(max_cycle_ms, cpu.watchdog.min_cycle_ns / 1e6)
+    recovered = recovered_cause()  # never anew after a hang (--fresh): from its last state
     state_path = state if state is not None else path.with_suffix(".state.sqlite")
     try:
-        opened = open_state(state_path, cpu, fresh=fresh, hot=restart == "hot")
+        opened = open_state(state_path, cpu, fresh=fresh and not recovered, hot=restart == "hot")
     except StateFileError as exc:
         print(refusal(exc), file=sys.stderr)
         return 2
@@ -168,7 +170,7 @@ def _run_chart(
         if loaded is not None and record.mode is CpuMode.RUN:
             now = record.t_ns
             try:
-                with runner.abortable("plant"):
+                with runner.abortable(where):
                     loaded.cycle(session, now // 1_000_000, (now - last[0]) // 1_000_000)
             except ScanAborted:
                 cpu.abort(where)
@@ -185,15 +187,19 @@ def _run_chart(
         if live is not None:
             live.close()
 
-    runner = Runner(cpu, cycle_ms=cycle_ms, store=store, on_record=on_record, end_on_stop=not web,
-                    rt_priority=rt_priority, comm_load_pct=comm_load_pct, core=core)  # fmt: skip
-    if live is not None and live.online is not None:
-        live.online.durability = runner  # a download is applied once its state is on disk
+    stays = web or bool(recovered and live is not None and live.endpoint)  # on the bus
+    runner = Runner(cpu, cycle_ms=cycle_ms, store=store, on_record=on_record, end_on_stop=not stays,
+                    rt_priority=rt_priority, comm_load_pct=comm_load_pct, core=core,
+                    marks=child_marks())  # fmt: skip
+    if live is not None:
+        live.restart = restart  # what the RUN/STOP switch's start does
+        if live.online is not None:
+            live.online.durability = runner  # a download is applied once its state is on disk
     if view is not None:
         view.start()
     status = run_until_stopped(
         runner, opened, what=f"{path.name} ({session.cc.name})", restart=restart,
-        duration_s=duration_s, close=close,
+        duration_s=duration_s, close=close, recovered=recovered,
     )  # fmt: skip
     if failure:
         return fail(failure[0], 1)

@@ -31,6 +31,7 @@ from s7graph.engine.persistence import StateFileError
 from s7graph.engine.record import ScanRecord
 from s7graph.engine.restart import parse_restart
 from s7graph.engine.runner import RT_PRIORITY, Runner, core_for, keep_small_pages
+from s7graph.web.cli.supervisor import child_marks, recovered_cause
 from s7graph.web.harness.persist import OpenedState, open_state, refusal
 
 
@@ -152,8 +153,10 @@ def run_program(
             return _fail(path, f"CPU option core: {exc}")
         print(f"s7graph: error: --core: {exc}", file=sys.stderr)
         return 2
+    recovered = recovered_cause()
     state_path = state if state is not None else path.with_suffix(".state.sqlite")
     try:
+        fresh = fresh and recovered is None  # never anew after a hang: its last state
         opened = open_state(state_path, cpu, fresh=fresh, hot=restart == "hot")
     except StateFileError as exc:
         print(refusal(exc), file=sys.stderr)
@@ -161,11 +164,20 @@ def run_program(
     except OSError as exc:
         return _fail(state_path, f"cannot use the state file: {exc.strerror or exc}")
     runner = Runner(cpu, cycle_ms=cycle_ms, store=opened.store, on_record=_report,
-                    end_on_stop=True, rt_priority=rt_priority, core=kept)  # fmt: skip
+                    end_on_stop=True, rt_priority=rt_priority, core=kept,
+                    marks=child_marks())  # fmt: skip
     return run_until_stopped(
         runner, opened, what=path.name, restart=restart, duration_s=duration_s,
-        on_start=_report,
+        on_start=_report, recovered=recovered,
     )  # fmt: skip
+
+
+def _recover(runner: Runner, opened: OpenedState, what: str, recovered: tuple[str, str]) -> None:
+    runner.recover(*recovered)
+    print(f"s7graph: error: {what}: the CPU went to STOP: {runner.stopped}", file=sys.stderr)
+    how = "start it with 's7graph start'" if not runner.end_on_stop else "the run ends"
+    print(f"s7graph: {what} in STOP (from its last durable state in {opened.store.path}; "
+          f"{how})", file=sys.stderr, flush=True)  # fmt: skip
 
 
 def run_until_stopped(
@@ -177,13 +189,19 @@ def run_until_stopped(
     duration_s: float | None,
     on_start: Callable[[ScanRecord], object] | None = None,
     close: Callable[[], object] | None = None,
+    recovered: tuple[str, str] | None = None,
 ) -> int:
     """Start the runner's CPU with ``restart`` (``on_start`` gets the startup record), say
     how on stderr with ``what``, and scan until Ctrl-C/SIGTERM/``duration_s`` (or, with the
     runner's ``end_on_stop``, a STOP by error). Always: the signal handlers back, the runner
     shut down, ``close()``, the store closed. Returns the exit status: 0 (saying so in one
     line on stderr), or 1 (with one line on stderr) when the CPU went to STOP by an error
-    or the state was not written."""
+    or the state was not written.
+
+    ``recovered`` (place, cause): the supervisor killed the process before, whose scan hung
+    (``web.cli.supervisor``): no startup; the CPU stays in STOP with the cause in its
+    diagnostic buffer, and scans in STOP (without ``end_on_stop``) until an engineer's
+    ``start``, or ends the run (exit 1)."""
     cpu = runner.cpu
     store = opened.store
 
@@ -193,14 +211,17 @@ def run_until_stopped(
     stop = runner.on_stop_signal
     previous = {sig: signal.signal(sig, stop) for sig in (signal.SIGTERM, signal.SIGINT)}
     try:
-        record = runner.startup(restart)
-        if on_start is not None:
-            on_start(record)
-        for note in opened.report.notes if opened.report is not None else ():
-            print(f"s7graph: note: {note}", file=sys.stderr)
-        done = str(cpu.last_restart or restart)
-        print(f"s7graph: {what} in {cpu.mode} ({opened.describe(done)})", file=sys.stderr)
-        if cpu.mode is CpuMode.RUN:
+        if recovered is not None:
+            _recover(runner, opened, what, recovered)
+        else:
+            record = runner.startup(restart)
+            if on_start is not None:
+                on_start(record)
+            for note in opened.report.notes if opened.report is not None else ():
+                print(f"s7graph: note: {note}", file=sys.stderr)
+            done = str(cpu.last_restart or restart)
+            print(f"s7graph: {what} in {cpu.mode} ({opened.describe(done)})", file=sys.stderr)
+        if cpu.mode is CpuMode.RUN or (recovered is not None and not runner.end_on_stop):
             runner.run(duration_s=duration_s)
     finally:
         try:

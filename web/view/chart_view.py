@@ -134,6 +134,7 @@ class ChartView:
         self._log: deque[_Logged] = deque(maxlen=LOG_LINES)  # newest first
         self._cpu_cycle = 0
         self._cpu_state = "RUN"
+        self._cpu_reason = ""
         self._cpu_stats: CycleStats | None = None
         self._forces: ForceList | None = None
         self._force_count = 0  # force jobs active: the status line's FORCE mark
@@ -300,6 +301,7 @@ class ChartView:
         with self._lock:
             self._cpu_cycle = status.cycle
             self._cpu_state = status.state
+            self._cpu_reason = status.reason
             self._cpu_stats = status.stats
             self._force_count = status.forces
         self._wake.set()
@@ -347,7 +349,12 @@ class ChartView:
             page = PageState(
                 banner=texts.banner_html(connected, self.cpu),
                 status=texts.status_html(
-                    update, self._cpu_cycle, self._cpu_state, self._cpu_stats, self._force_count
+                    update,
+                    self._cpu_cycle,
+                    self._cpu_state,
+                    self._cpu_stats,
+                    self._force_count,
+                    self._cpu_reason,
                 )
                 if connected
                 else texts.small("no live state"),

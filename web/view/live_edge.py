@@ -6,8 +6,9 @@
 scan's :class:`StepStateUpdate`, the CPU state and cycle statistics, the CPU's message
 list when it changed (``alarms``), optionally records
 the update to a rerun ``.rrd`` file, then applies the commands received since the last
-scan — the scan boundary: ``force`` to the CPU's force table (``web.bus.forcing``), the
-others to the FB — and publishes the force jobs when they changed (``forces``).
+scan — the scan boundary: ``force`` to the CPU's force table (``web.bus.forcing``),
+``stop`` and ``start`` to the CPU's RUN/STOP switch (``Runner.switch_stop``/``switch_start``),
+the others to the FB — and publishes the force jobs when they changed (``forces``).
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from typing import TYPE_CHECKING
 from s7graph.engine.modes import CpuMode
 from s7graph.engine.profile import CycleBreakdown
 from s7graph.engine.record import ScanRecord
-from s7graph.engine.runner import Runner
+from s7graph.engine.runner import Runner, stop_reason
 from s7graph.engine.watchdog import CycleStatistics
 from s7graph.web.bus.gate import Gate
 from s7graph.web.bus.live import LiveGraph
@@ -135,6 +136,9 @@ class LiveEdge:
             else ""
         )
         self._cpu_state: str | None = None
+        self.restart = "warm"
+        """The startup the switch's ``start`` does (``--restart``)."""
+        self._runner: Runner | None = None
 
     def on_record(
         self,
@@ -146,6 +150,7 @@ class LiveEdge:
         """Publish the scan ``record`` and apply the pending commands (call in the scan
         thread); with ``runner``, within its share of the cycle for communication."""
         until_ns = time.perf_counter_ns() + runner.comm_budget_ns if runner is not None else None
+        self._runner = runner
         update = self.live.update(record)
         if self.recorder is not None and record.mode is CpuMode.RUN:
             if self.recorder.layout is not self.live.layout:  # an online change
@@ -157,7 +162,9 @@ class LiveEdge:
         state = str(record.mode)
         if state != self._cpu_state:
             self._cpu_state = state
-            publisher.set_cpu_state(state)
+            stopped = record.mode is CpuMode.STOP
+            reason = stop_reason(runner.cpu) if runner is not None and stopped else ""
+            publisher.set_cpu_state(state, reason)
         if stats is not None:
             publisher.set_cycle_stats(cycle_stats(stats, runner, publisher.comm_limited))
         publisher.publish(self.live.fb, update)
@@ -176,11 +183,30 @@ class LiveEdge:
     def apply(self, command: Command) -> tuple[bool, str, str]:
         """One command the gate let through, at the scan boundary: ``force`` to the CPU's
         force table, the others to the FB."""
+        if command.op in ("stop", "start"):
+            return self._switch(command)
         if command.op != "force":
             return self.live.apply(command)
         if self.forcing is None:
             return False, "this CPU takes no force jobs", ""
         return self.forcing.apply(command)
+
+    def _switch(self, command: Command) -> tuple[bool, str, str]:
+        """The CPU's RUN/STOP switch: ``stop`` now (outputs to 0), ``start`` from STOP by
+        the configured restart at the next scan boundary (as S7's mode switch)."""
+        runner = self._runner
+        if runner is None:
+            return False, "this CPU has no RUN/STOP switch", ""
+        mode = runner.cpu.mode
+        if command.op == "stop":
+            if mode is CpuMode.STOP:
+                return False, "the CPU is in STOP already", ""
+            runner.switch_stop(f"STOP by the switch ({command.user or 'no user'})")
+            return True, "", f"{mode} → STOP"
+        if mode is not CpuMode.STOP:
+            return False, f"the CPU is in {mode}, not in STOP", ""
+        runner.switch_start(self.restart)
+        return True, "", f"STOP → RUN ({self.restart} restart)"
 
     def close(self) -> None:
         """Close the recording, the view, the bus and both zenoh sessions."""

@@ -118,6 +118,8 @@ class ClientPanel:
                 "ack": gui.add_button("Acknowledge", color="red", hint="ACK_EF"),
                 "t_push": gui.add_button("T_PUSH (Continue)", hint="Switch a ready transition"),
                 "halt": gui.add_button("Halt", hint="HALT_SQ: hold / resume the sequencer"),
+                "stop": gui.add_button("CPU to STOP", hint="the CPU's RUN/STOP switch: STOP"),
+                "start": gui.add_button("CPU to RUN", hint="the switch to RUN: its restart"),
             }
             for op, button in self.buttons.items():
                 button.on_click(self._handler(op) if op != "halt" else lambda _: self._halt())

@@ -151,9 +151,11 @@ def status_html(
     cpu_state: str,
     stats: CycleStats | None,
     forces: int = 0,
+    reason: str = "",
 ) -> str:
     """The status line: the FORCE mark, mode, cycle, active steps, cycle time, errors,
-    halts, and the level pins a command holds."""
+    halts, and the level pins a command holds; the CPU's state when not RUN, with
+    ``reason`` (why it is in STOP) below."""
     mark = force_mark(forces)
     if update is None:
         return f'<div style="font-size:0.85em">{mark}waiting for the CPU…</div>'
@@ -181,7 +183,8 @@ def status_html(
         parts.append(f'<span style="color:#a60" title="{tip}">held: {html.escape(held)}</span>')
     if cpu_state != "RUN":
         parts.insert(0, f'<b style="color:#c00">{html.escape(cpu_state)}</b>')
-    return f'<div style="font-size:0.85em">{mark}{" · ".join(parts)}</div>'
+    why = f'<div style="color:#c00">{html.escape(reason)}</div>' if reason else ""
+    return f'<div style="font-size:0.85em">{mark}{" · ".join(parts)}{why}</div>'
 
 
 def cycle_lines(stats: CycleStats) -> list[str]:
