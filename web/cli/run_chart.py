@@ -140,7 +140,7 @@ def _run_chart(
     cpu.watchdog = Watchdog(max_cycle_ms, cpu.watchdog.min_cycle_ns / 1e6)
     state_path = state if state is not None else path.with_suffix(".state.sqlite")
     try:
-        opened = open_state(state_path, cpu, fresh=fresh, hot=restart == "hot")
+        opened = open_state(state_path, cpu, fresh=fresh, restart=restart)
     except StateFileError as exc:
         print(refusal(exc), file=sys.stderr)
         return 2

@@ -154,7 +154,7 @@ def run_program(
         return 2
     state_path = state if state is not None else path.with_suffix(".state.sqlite")
     try:
-        opened = open_state(state_path, cpu, fresh=fresh, hot=restart == "hot")
+        opened = open_state(state_path, cpu, fresh=fresh, restart=restart)
     except StateFileError as exc:
         print(refusal(exc), file=sys.stderr)
         return 2
