@@ -15,6 +15,7 @@ import msgspec
 import pytest
 
 from s7graph.engine import CallContext, Cpu, InstanceDB, VirtualClock, fb, ob
+from s7graph.engine.modes import CpuMode
 from s7graph.engine.persistence import FORMAT, StateFileError, StateStore
 
 
@@ -356,3 +357,39 @@ def test_a_file_locked_by_another_connection_is_refused_as_in_use_not_unreadable
     assert info.value.problem.startswith("in use by another process (database is locked)")
     assert "stop the process that holds it" in info.value.way_out
     assert "fresh" not in info.value.way_out
+
+
+@ob(1)
+def failing(ctx: CallContext) -> None:
+    raise RuntimeError("boom")  # no OB121: STOP
+
+
+@pytest.mark.parametrize(
+    ("stop", "blocked"),
+    [
+        (lambda cpu: cpu.stop("s7graph run ended"), None),
+        (lambda cpu: (cpu.load(failing), cpu.hot_blockers.clear(), cpu.scan()), None),
+        (lambda cpu: cpu.abort("OB1"), "STOP by an error (block aborted by cycle monitoring)"),
+    ],
+    ids=["a stop request", "an OB not loaded", "cycle monitoring"],
+)
+def test_the_stop_on_disk_decides_whether_a_hot_restart_is_possible(
+    tmp_path: Path, stop: Any, blocked: str | None
+) -> None:
+    """S7-400 resumes hot after a STOP by the mode selector, a programming device, a
+    programmed STOP or an OB not loaded; not after one by an error such as a block aborted
+    by cycle monitoring."""
+    path = tmp_path / "s.sqlite"
+    store = StateStore(path, hot=True)
+    cpu = _cpu()
+    store.load(cpu)
+    cpu.start()
+    cpu.scan()
+    stop(cpu)
+    assert cpu.mode is CpuMode.STOP
+    store.save(cpu, clean=True)
+    store.close()
+    again = _cpu()
+    StateStore(path, hot=True).load(again)
+    stops = {b for b in again.hot_blockers if b.startswith("STOP")}
+    assert stops == (set() if blocked is None else {blocked})
