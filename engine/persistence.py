@@ -37,8 +37,10 @@ restarts.
 **Trusted only when recognised.** The file carries a format mark, and each instance DB the
 label, name and fingerprint of its FB (``FB.state_format``, else its interface). ``load``
 refuses — :class:`StateFileError` naming the problem — an empty, truncated, garbled or
-foreign file, an instance of another FB, a DB the program no longer has, and a malformed
-row; a changed fingerprint lets the FB's ``state_format.adapt`` carry the data over (a GRAPH
+foreign file, one without a table (copied without its write-ahead log), one locked by
+another process, a dropped instances table, an instance of another FB, a DB the program no
+longer has, a malformed row or memory image (``engine/state_checks.py``); a changed
+fingerprint lets the FB's ``state_format.adapt`` carry the data over (a GRAPH
 FB: by step number, ``sequencer/carry.py``) and reports what it could not keep.
 """
 
@@ -523,7 +525,8 @@ class StateStore:
 
     def save(self, cpu: Cpu, *, clean: bool | None = None) -> None:
         """Write everything now (at startup and on stop); ``clean`` marks whether the run
-        ended cleanly (True at a shutdown, False while running)."""
+        ended cleanly (True at a shutdown, False while running). A clean end writes the
+        hot-restart image too: S7-400 may restart hot after a STOP by hand."""
         batch = self.stage(cpu, full=True) or Batch()
         if clean is not None:
             batch.meta["clean"] = "1" if clean else "0"
@@ -605,9 +608,9 @@ class StateStore:
         if memory is None:
             raise StateFileError(self.path, "no memory image (an incomplete state)")
         hot = self.meta("hot_memory")
-        image = self._checked("memory image", memory, check_memory_image, cpu)
+        image = _checked(self.path, "memory image", memory, check_memory_image, cpu)
         if hot is not None:
-            hot_image = self._checked("hot restart image", hot, check_hot_image, cpu)
+            hot_image = _checked(self.path, "hot restart image", hot, check_hot_image, cpu)
             self._restore_part("hot restart image", lambda: cpu.mem.restore_hot(hot_image))
         else:
             cpu.hot_blockers.add("no hot restart image saved")
@@ -644,15 +647,6 @@ class StateStore:
             with contextlib.suppress(sqlite3.Error):
                 self._db.execute("DELETE FROM meta WHERE key='hot_memory'")
         return report
-
-    def _checked(self, what: str, text: str, check: Callable[[object, Any], None], cpu: Cpu) -> Any:
-        """The JSON ``text`` of a memory image, checked (``engine/state_checks.py``)."""
-        try:
-            data = json.loads(text)
-            check(data, cpu.mem)
-        except ValueError as exc:
-            raise StateFileError(self.path, f"malformed {what}: {_why(exc)}") from None
-        return data
 
     def _restore_part(self, what: str, restore: Callable[[], object]) -> None:
         try:
@@ -867,6 +861,18 @@ def _by_name(fb: FB, data: dict[str, object]) -> list[str]:
     if added:
         notes.append(f"new, at their initial values: {', '.join(added)}")
     return notes
+
+
+def _checked(
+    path: Path, what: str, text: str, check: Callable[[object, Any], None], cpu: Cpu
+) -> Any:
+    """The JSON ``text`` of a memory image, checked (``engine/state_checks.py``)."""
+    try:
+        data = json.loads(text)
+        check(data, cpu.mem)
+    except ValueError as exc:
+        raise StateFileError(path, f"malformed {what}: {_why(exc)}") from None
+    return data
 
 
 def _diag_entry(row: tuple[Any, ...]) -> DiagEntry:

@@ -393,3 +393,9 @@ def test_the_stop_on_disk_decides_whether_a_hot_restart_is_possible(
     StateStore(path, hot=True).load(again)
     stops = {b for b in again.hot_blockers if b.startswith("STOP")}
     assert stops == (set() if blocked is None else {blocked})
+
+
+def test_instance_rows_without_a_memory_image_are_refused(tmp_path: Path) -> None:
+    path = _written(tmp_path / "s.sqlite")
+    _edit(path, ("DELETE FROM meta WHERE key='memory'", ()))
+    assert _refused(path) == "no memory image (an incomplete state)"
