@@ -154,9 +154,9 @@ def test_restart_hot_that_cannot_be_honoured_is_one_line_exit_2_and_never_a_warm
     assert main([*CHART, "--state", str(state), "--duration-s", "0.1", "--restart", "hot"]) == 2
     assert capsys.readouterr().err.splitlines() == [
         f"s7graph: error: {state}: cannot restart hot: the last run kept no hot-restart image "
-        "(it was not started with --restart hot and did not stop cleanly); restart warm with "
-        "--restart warm (each sequencer starts in its initial steps; where it was goes to the "
-        "diagnostic buffer)"
+        "(a run keeps one when started with --restart hot, or when it stops cleanly); restart "
+        "warm with --restart warm (each sequencer starts in its initial steps; where it was "
+        "goes to the diagnostic buffer)"
     ]
     with sqlite3.connect(state) as con:
         assert con.execute("SELECT count(*) FROM diagnostics").fetchone() == entries

@@ -118,8 +118,8 @@ def test_hot_after_an_unclean_end_of_a_warm_run_is_refused_not_turned_warm(
     error = _refused(drill.store.path, "hot")
     assert isinstance(error, HotRestartRefused)
     assert error.problem == (
-        "cannot restart hot: the last run kept no hot-restart image (it was not started with "
-        "--restart hot and did not stop cleanly)"
+        "cannot restart hot: the last run kept no hot-restart image (a run keeps one when "
+        "started with --restart hot, or when it stops cleanly)"
     )
     line = f"s7graph: error: {drill.store.path}: {error.problem}; {HOT_WAY_OUT}"
     assert refusal(error) == line

@@ -34,8 +34,8 @@ HOT_WAY_OUT = (
 )
 _BLOCKERS = {
     "program download": "the program changed since the state was saved (a download)",
-    "no hot restart image saved": "the last run kept no hot-restart image (it was not started "
-    "with --restart hot and did not stop cleanly)",
+    "no hot restart image saved": "the last run kept no hot-restart image (a run keeps one "
+    "when started with --restart hot, or when it stops cleanly)",
     "memory reset": "a memory reset since",
     "stack overflow": "the last run stopped on a block stack overflow",
     "aborted warm restart": "the last warm restart was aborted",
