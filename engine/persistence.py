@@ -47,9 +47,11 @@ FB: by step number, ``sequencer/carry.py``) and reports what it could not keep.
 from __future__ import annotations
 
 import contextlib
+import fcntl
 import functools
 import hashlib
 import json
+import os
 import sqlite3
 import zlib
 from collections.abc import Callable, Iterable
@@ -119,6 +121,8 @@ _WAL_WAY_OUT = (
     "copy it again together with {0}-wal (or copy it once the run that writes it has "
     "stopped), or start anew with --fresh (keeps this file as {0}.old-N)"
 )
+_HELD: dict[tuple[int, int], list[int]] = {}
+"""The state files this process holds, by device and inode: [descriptor, stores open]."""
 _IN_USE_WAY_OUT = "stop the process that holds it (or wait until it ends), then run again"
 _ALARM_COLUMNS = ("t_ns", "key", "state", "text", "user", "cpu_ns", "reason")
 _ADDED_ALARM_COLUMNS = (
@@ -311,12 +315,15 @@ class StateStore:
         except sqlite3.Error as exc:
             raise StateFileError(self.path, f"cannot open: {exc}") from None
         try:
+            self._held = _hold(self.path)
             self._open(existed)
         except sqlite3.DatabaseError as exc:
             self._db.close()
+            _let_go(self._held)
             raise _unreadable(self.path, exc) from None
         except BaseException:
             self._db.close()
+            _let_go(getattr(self, "_held", None))
             raise
         self._lock: Any = _NoLock()  # a writer's lock once one is attached (use_lock)
         self._parts: dict[str, tuple[Callable[[], object], Callable[[Any], None]]] = {}
@@ -379,6 +386,8 @@ class StateStore:
 
     def close(self) -> None:
         self._db.close()
+        _let_go(self._held)  # after the connection: closing a descriptor drops its locks
+        self._held = None
 
     def use_lock(self, lock: Any) -> None:
         """The writer's lock guards the queued log rows (``log_*`` from other threads)."""
@@ -684,13 +693,9 @@ class StateStore:
             described = json.loads(shape)
         except (ValueError, TypeError, zlib.error) as exc:
             raise StateFileError(self.path, f"malformed data of DB{number}: {_why(exc)}") from None
-        lacking = [v.name for v in fb.stored if v.name not in data]
-        if lacking and fingerprint == fingerprint_of(fb):  # written whole, by this very FB
-            what = " (its sequencer state)" if set(lacking) & set(fb.objects) else ""
-            raise StateFileError(
-                self.path, f"malformed state of DB{number}: no {', '.join(lacking)}{what}"
-            )
-        if fingerprint != fingerprint_of(fb):
+        if fingerprint == fingerprint_of(fb):
+            _whole(self.path, number, fb, data)
+        else:
             fmt = fb.state_format
             try:
                 if fmt is not None:
@@ -863,6 +868,14 @@ def _by_name(fb: FB, data: dict[str, object]) -> list[str]:
     return notes
 
 
+def _whole(path: Path, number: int, fb: FB, data: dict[str, Any]) -> None:
+    """A row written by this very FB holds every stored variable, its sequencer state too."""
+    lacking = [v.name for v in fb.stored if v.name not in data]
+    if lacking:
+        what = " (its sequencer state)" if set(lacking) & set(fb.objects) else ""
+        raise StateFileError(path, f"malformed state of DB{number}: no {', '.join(lacking)}{what}")
+
+
 def _checked(
     path: Path, what: str, text: str, check: Callable[[object, Any], None], cpu: Cpu
 ) -> Any:
@@ -891,6 +904,41 @@ def _unsaved(cpu: Cpu, saved: set[int], report: LoadReport) -> list[int]:
                             "initial values")  # fmt: skip
         cpu.hot_blockers.add(f"no state saved for DB{number}")
     return unsaved
+
+
+def _hold(path: Path) -> tuple[int, int] | None:
+    """Take the file's lock for this process (an exclusive ``flock``, which SQLite's own
+    locks neither use nor notice); StateFileError when another process holds it: two runs
+    writing one state file. None where the file system has no such locks."""
+    st = path.stat()
+    key = (st.st_dev, st.st_ino)
+    held = _HELD.get(key)
+    if held is not None:  # another store of this process: the lock is ours already
+        held[1] += 1
+        return key
+    fd = os.open(path, os.O_RDONLY | os.O_CLOEXEC)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        os.close(fd)  # before this store's connection has locked anything
+        raise StateFileError(
+            path, "in use by another process (another run holds it)", way_out=_IN_USE_WAY_OUT
+        ) from None
+    except OSError:
+        os.close(fd)
+        return None
+    _HELD[key] = [fd, 1]
+    return key
+
+
+def _let_go(key: tuple[int, int] | None) -> None:
+    """One store of this process less on the file; the last one lets the lock go."""
+    held = _HELD.get(key) if key is not None else None
+    if key is not None and held is not None:
+        held[1] -= 1
+        if held[1] == 0:
+            del _HELD[key]
+            os.close(held[0])
 
 
 def _unreadable(path: Path, exc: sqlite3.DatabaseError) -> StateFileError:

@@ -192,3 +192,25 @@ def test_a_state_file_locked_by_another_process_is_refused_as_in_use_not_unreada
         f"s7graph: error: {state}: in use by another process (database is locked): it was not "
         "read; stop the process that holds it (or wait until it ends), then run again"
     ]
+
+
+@pytest.mark.timeout(90)
+def test_a_second_run_on_a_state_file_another_run_writes_is_refused_as_in_use(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """SQLite locks the file only while a transaction is written: without a lock of its own
+    a second run would read the first's state and both would write it."""
+    state = tmp_path / "drill.sqlite"
+    first = subprocess.Popen([sys.executable, "-m", "s7graph", *CHART, "--state", str(state)],
+                             cwd=ROOT, stderr=subprocess.PIPE, text=True)  # fmt: skip
+    try:
+        assert first.stderr is not None and " in RUN (" in first.stderr.readline()
+        assert main([*CHART, "--state", str(state), "--duration-s", "0.1"]) == 2
+    finally:
+        first.send_signal(signal.SIGTERM)
+        assert first.wait(30) == 0
+    assert capsys.readouterr().err.splitlines() == [
+        f"s7graph: error: {state}: in use by another process (another run holds it); stop the "
+        "process that holds it (or wait until it ends), then run again"
+    ]
+    assert main([*CHART, "--state", str(state), "--duration-s", "0.1"]) == 0  # its turn now

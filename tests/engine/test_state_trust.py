@@ -399,3 +399,13 @@ def test_instance_rows_without_a_memory_image_are_refused(tmp_path: Path) -> Non
     path = _written(tmp_path / "s.sqlite")
     _edit(path, ("DELETE FROM meta WHERE key='memory'", ()))
     assert _refused(path) == "no memory image (an incomplete state)"
+
+
+def test_two_stores_of_one_process_may_share_a_file(tmp_path: Path) -> None:
+    """The lock keeps other processes out; a tool of the same process (a test, the view's
+    audit) reads on."""
+    path = _written(tmp_path / "s.sqlite")
+    first, second = StateStore(path), StateStore(path)
+    assert first.has_state() and second.has_state()
+    first.close()
+    second.close()
