@@ -43,17 +43,21 @@ fingerprint.
 **Trusted only when recognised.** The file carries a format mark, and each instance DB the
 label, name and fingerprint of its FB (``FB.state_format``, else its interface). ``load``
 refuses — :class:`StateFileError` naming the problem — an empty, truncated, garbled or
-foreign file, an instance of another FB, a DB the program no longer has, and a malformed
-row; a changed fingerprint lets the FB's ``state_format.adapt`` carry the data over (a GRAPH
+foreign file, one without a table (copied without its write-ahead log), one locked by
+another process, a dropped instances table, an instance of another FB, a DB the program no
+longer has, a malformed row or memory image (``engine/state_checks.py``); a changed
+fingerprint lets the FB's ``state_format.adapt`` carry the data over (a GRAPH
 FB: by step number, ``sequencer/carry.py``) and reports what it could not keep.
 """
 
 from __future__ import annotations
 
 import contextlib
+import fcntl
 import functools
 import hashlib
 import json
+import os
 import sqlite3
 import zlib
 from collections.abc import Callable, Iterable
@@ -67,6 +71,8 @@ from s7graph.engine.blocks import FB, BlockKind, Decl, InstanceDB
 from s7graph.engine.cpu import Cpu
 from s7graph.engine.errors import S7Error
 from s7graph.engine.record import DiagEntry
+from s7graph.engine.restart import stop_blocker
+from s7graph.engine.state_checks import check_hot_image, check_memory_image
 
 __all__ = [
     "FORMAT",
@@ -118,6 +124,17 @@ _OURS = {"meta", "instances", "diagnostics", "alarms", "parts", "audit"}
 _APPENDABLE = {"alarms", "audit"}
 _APPENDED: set[tuple[str, tuple[str, ...]]] = set()
 """(table, columns) pairs ``append`` has checked."""
+_NO_TABLES = (
+    "an SQLite file without a single table: its content may be in a write-ahead log that is "
+    "missing (copied without its -wal file?)"
+)
+_WAL_WAY_OUT = (
+    "copy it again together with {0}-wal (or copy it once the run that writes it has "
+    "stopped), or start anew with --fresh (keeps this file as {0}.old-N)"
+)
+_HELD: dict[tuple[int, int], list[int]] = {}
+"""The state files this process holds, by device and inode: [descriptor, stores open]."""
+_IN_USE_WAY_OUT = "stop the process that holds it (or wait until it ends), then run again"
 _ALARM_COLUMNS = ("t_ns", "key", "state", "text", "user", "cpu_ns", "reason")
 _ADDED_ALARM_COLUMNS = (
     ("user", "TEXT NOT NULL DEFAULT ''"),
@@ -127,11 +144,13 @@ _ADDED_ALARM_COLUMNS = (
 
 
 class StateFileError(S7Error):
-    """A state file that cannot be trusted for this program: ``path`` and ``problem``."""
+    """A state file that cannot be trusted for this program: ``path`` and ``problem``;
+    ``way_out`` what to do when it is not starting anew (``--fresh``)."""
 
-    def __init__(self, path: Path, problem: str) -> None:
+    def __init__(self, path: Path, problem: str, *, way_out: str = "") -> None:
         self.path = path
         self.problem = problem
+        self.way_out = way_out
         super().__init__(f"{path}: {problem}")
 
 
@@ -311,12 +330,15 @@ class StateStore:
         except sqlite3.Error as exc:
             raise StateFileError(self.path, f"cannot open: {exc}") from None
         try:
+            self._held = _hold(self.path)
             self._open(existed)
         except sqlite3.DatabaseError as exc:
             self._db.close()
-            raise StateFileError(self.path, f"not a readable state file ({exc})") from None
+            _let_go(self._held)
+            raise _unreadable(self.path, exc) from None
         except BaseException:
             self._db.close()
+            _let_go(getattr(self, "_held", None))
             raise
         self._lock: Any = _NoLock()  # a writer's lock once one is attached (use_lock)
         self._parts: dict[str, tuple[Callable[[], object], Callable[[Any], None]]] = {}
@@ -345,19 +367,25 @@ class StateStore:
             check = db.execute("PRAGMA quick_check").fetchone()
             if check is None or check[0] != "ok":
                 raise StateFileError(self.path, f"damaged file ({check[0] if check else '?'})")
-            if tables and not tables & _OURS:
+            if not tables:
+                raise StateFileError(self.path, _NO_TABLES, way_out=_WAL_WAY_OUT.format(self.path))
+            if not tables & _OURS:
                 raise StateFileError(self.path, "an SQLite file, but not an s7graph state file")
+            if "instances" not in tables and _holds_state(db, tables):
+                raise StateFileError(
+                    self.path, "the instances table is gone (the instance DBs, a sequencer's "
+                    "position among them): an incomplete state")  # fmt: skip
             if "instances" in tables:
                 columns = {r[1] for r in db.execute("PRAGMA table_info(instances)")}
                 if "state" in columns:
                     raise StateFileError(
                         self.path, "written by an older s7graph (no fingerprints)"
-                    )
+                    )  # fmt: skip
             if "meta" in tables:
                 row = db.execute("SELECT value FROM meta WHERE key='format'").fetchone()
                 if row is not None and row[0] not in READABLE:
                     raise StateFileError(self.path, f"unknown format {row[0]!r}")
-        if not existed or not tables:
+        if not existed:
             db.execute("PRAGMA page_size=1024")  # a short row change writes one short page
         db.execute("PRAGMA journal_mode=WAL")
         db.execute(f"PRAGMA synchronous={self.synchronous}")  # FULL: fsync at every commit
@@ -374,6 +402,8 @@ class StateStore:
 
     def close(self) -> None:
         self._db.close()
+        _let_go(self._held)  # after the connection: closing a descriptor drops its locks
+        self._held = None
 
     def use_lock(self, lock: Any) -> None:
         """The writer's lock guards the queued log rows (``log_*`` from other threads)."""
@@ -520,10 +550,13 @@ class StateStore:
 
     def save(self, cpu: Cpu, *, clean: bool | None = None) -> None:
         """Write everything now (at startup and on stop); ``clean`` marks whether the run
-        ended cleanly (True at a shutdown, False while running)."""
+        ended cleanly (True at a shutdown, False while running). A clean end writes the
+        hot-restart image too: S7-400 may restart hot after a STOP by hand."""
         batch = self.stage(cpu, full=True) or Batch()
         if clean is not None:
             batch.meta["clean"] = "1" if clean else "0"
+        if clean and not self.hot:  # a clean STOP allows a manual hot restart (as on S7-400)
+            batch.meta["hot_memory"] = _dumps(cpu.mem.hot_snapshot())
         self.write(batch)
 
     # ---- writing ---------------------------------------------------------------------------
@@ -564,7 +597,7 @@ class StateStore:
                 marks = ", ".join("?" * len(columns))
                 db.executemany(
                     f"INSERT INTO {table} ({', '.join(columns)}) VALUES ({marks})", rows
-                )
+                )  # fmt: skip
             db.execute("COMMIT")
         except sqlite3.Error as exc:
             if db.in_transaction:
@@ -600,14 +633,16 @@ class StateStore:
         if memory is None:
             raise StateFileError(self.path, "no memory image (an incomplete state)")
         hot = self.meta("hot_memory")
+        image = _checked(self.path, "memory image", memory, check_memory_image, cpu)
         if hot is not None:
-            self._restore_part("hot restart image",
-                               lambda: cpu.mem.restore_hot(json.loads(hot)))  # fmt: skip
+            hot_image = _checked(self.path, "hot restart image", hot, check_hot_image, cpu)
+            self._restore_part("hot restart image", lambda: cpu.mem.restore_hot(hot_image))
         else:
             cpu.hot_blockers.add("no hot restart image saved")
-        self._restore_part("memory image", lambda: cpu.mem.restore(json.loads(memory)))
+        self._restore_part("memory image", lambda: cpu.mem.restore(image))
         for number, label, name, fingerprint, shape, data in instances:
             self._load_instance(cpu, int(number), label, name, fingerprint, shape, data, report)
+        unsaved = _unsaved(cpu, {int(row[0]) for row in instances}, report)
         blockers = self.meta("hot_blockers")
         if blockers:
             self._restore_part("hot restart blockers", lambda: cpu.hot_blockers.update(
@@ -619,16 +654,19 @@ class StateStore:
         entries = self._db.execute(
             "SELECT t_ns, event_id, block, message, address FROM diagnostics ORDER BY seq"
         ).fetchall()
-        for t_ns, event_id, block, message, address in entries[-cpu.diagnostics.capacity :]:
-            cpu.diagnostics.add(DiagEntry(int(t_ns), int(event_id), str(block or ""),
-                                          str(message or ""), str(address or "")))  # fmt: skip
+        saved = [_diag_entry(row) for row in entries[-cpu.diagnostics.capacity :]]
+        for entry in saved:
+            cpu.diagnostics.add(entry)
+        stopped = stop_blocker(saved)
+        if stopped is not None:
+            cpu.hot_blockers.add(stopped)
         self._diag_saved = cpu.diagnostics.total
         for part_name, state in self._db.execute("SELECT name, state FROM parts"):
             part = self._parts.get(str(part_name))
             if part is not None:
                 self._restore_part(f"part {part_name!r}", functools.partial(
                     _restore_json, part[1], str(state)))  # fmt: skip
-        if not report.changed:
+        if not report.changed and not unsaved:
             cpu.hot_blockers.discard("program download")  # the very program that was running
         if not self.hot:  # not kept up to date from now on (a read-only file fails later)
             with contextlib.suppress(sqlite3.Error):
@@ -671,7 +709,9 @@ class StateStore:
             described = json.loads(shape)
         except (ValueError, TypeError, zlib.error) as exc:
             raise StateFileError(self.path, f"malformed data of DB{number}: {_why(exc)}") from None
-        if fingerprint != fingerprint_of(fb):
+        if fingerprint == fingerprint_of(fb):
+            _whole(self.path, number, fb, data)
+        else:
             fmt = fb.state_format
             try:
                 if fmt is not None:
@@ -842,6 +882,96 @@ def _by_name(fb: FB, data: dict[str, object]) -> list[str]:
     if added:
         notes.append(f"new, at their initial values: {', '.join(added)}")
     return notes
+
+
+def _whole(path: Path, number: int, fb: FB, data: dict[str, Any]) -> None:
+    """A row written by this very FB holds every stored variable, its sequencer state too."""
+    lacking = [v.name for v in fb.stored if v.name not in data]
+    if lacking:
+        what = " (its sequencer state)" if set(lacking) & set(fb.objects) else ""
+        raise StateFileError(path, f"malformed state of DB{number}: no {', '.join(lacking)}{what}")
+
+
+def _checked(
+    path: Path, what: str, text: str, check: Callable[[object, Any], None], cpu: Cpu
+) -> Any:
+    """The JSON ``text`` of a memory image, checked (``engine/state_checks.py``)."""
+    try:
+        data = json.loads(text)
+        check(data, cpu.mem)
+    except ValueError as exc:
+        raise StateFileError(path, f"malformed {what}: {_why(exc)}") from None
+    return data
+
+
+def _diag_entry(row: tuple[Any, ...]) -> DiagEntry:
+    t_ns, event_id, block, message, address = row
+    return DiagEntry(int(t_ns), int(event_id), str(block or ""), str(message or ""),
+                     str(address or ""))  # fmt: skip
+
+
+def _unsaved(cpu: Cpu, saved: set[int], report: LoadReport) -> list[int]:
+    """The CPU's instance DBs the file holds no row of (new in the program): noted, at their
+    initial values, and no hot restart (a download)."""
+    unsaved = sorted(set(cpu.instance_dbs) - saved)
+    for number in unsaved:
+        fb = cpu.instance_dbs[number].fb
+        report.notes.append(f"DB{number} {fb.label} {fb.name!r}: no state saved, at its "
+                            "initial values")  # fmt: skip
+        cpu.hot_blockers.add(f"no state saved for DB{number}")
+    return unsaved
+
+
+def _hold(path: Path) -> tuple[int, int] | None:
+    """Take the file's lock for this process (an exclusive ``flock``, which SQLite's own
+    locks neither use nor notice); StateFileError when another process holds it: two runs
+    writing one state file. None where the file system has no such locks."""
+    st = path.stat()
+    key = (st.st_dev, st.st_ino)
+    held = _HELD.get(key)
+    if held is not None:  # another store of this process: the lock is ours already
+        held[1] += 1
+        return key
+    fd = os.open(path, os.O_RDONLY | os.O_CLOEXEC)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        os.close(fd)  # before this store's connection has locked anything
+        raise StateFileError(
+            path, "in use by another process (another run holds it)", way_out=_IN_USE_WAY_OUT
+        ) from None
+    except OSError:
+        os.close(fd)
+        return None
+    _HELD[key] = [fd, 1]
+    return key
+
+
+def _let_go(key: tuple[int, int] | None) -> None:
+    """One store of this process less on the file; the last one lets the lock go."""
+    held = _HELD.get(key) if key is not None else None
+    if key is not None and held is not None:
+        held[1] -= 1
+        if held[1] == 0:
+            del _HELD[key]
+            os.close(held[0])
+
+
+def _unreadable(path: Path, exc: sqlite3.DatabaseError) -> StateFileError:
+    """The refusal of a file SQLite could not open: in use by another process (locked), or
+    not readable."""
+    if int(getattr(exc, "sqlite_errorcode", 0) or 0) & 0xFF in _BUSY:
+        return StateFileError(
+            path, f"in use by another process ({exc}): it was not read", way_out=_IN_USE_WAY_OUT
+        )
+    return StateFileError(path, f"not a readable state file ({exc})")
+
+
+def _holds_state(db: sqlite3.Connection, tables: set[str]) -> bool:
+    """Whether the file's ``meta`` holds a saved state (a memory image)."""
+    if "meta" not in tables:
+        return False
+    return db.execute("SELECT 1 FROM meta WHERE key='memory'").fetchone() is not None
 
 
 def _why(exc: BaseException) -> str:

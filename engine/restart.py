@@ -6,8 +6,12 @@ the area is reset; DBs are "reloaded" from their load-memory initial values.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 from enum import StrEnum
+
+from s7graph.engine.diagnostics import EventId
+from s7graph.engine.record import DiagEntry
 
 
 class RestartType(StrEnum):
@@ -75,6 +79,35 @@ HOT_RESTART_BLOCKERS: tuple[str, ...] = (
     "aborted warm restart",
 )
 """Causes after which only a warm restart is allowed (behaviour 6, [002:L2722-2730])."""
+
+
+HOT_AFTER_STOP: frozenset[int] = frozenset(
+    {
+        EventId.STOP_BY_SWITCH, EventId.STOP_BY_REQUEST, EventId.STOP_OB121_MISSING,
+        EventId.STOP_OB80_MISSING, EventId.STOP_OB82_MISSING, EventId.STOP_OB83_MISSING,
+        EventId.STOP_OB84_MISSING, EventId.STOP_OB85_MISSING, EventId.STOP_OB86_MISSING,
+        EventId.STOP_OB87_MISSING,
+    }
+)  # fmt: skip
+"""STOPs after which a manual hot restart is possible (S7-400, "Programming with STEP 7",
+Operating Modes: the mode selector, a programmed STOP, an OB not loaded, a programming
+device's or a communication function's STOP)."""
+NO_HOT_AFTER_STOP: frozenset[int] = frozenset(
+    {EventId.STOP_CYCLE_TIME, EventId.STACK_OVERFLOW, EventId.STOP_STATE_WRITE, EventId.STOP_HUNG}
+)
+"""STOPs by an error after which only a warm restart is possible: a block aborted by cycle
+monitoring, a stack overflow, a state file not written, a scan that did not return."""
+
+
+def stop_blocker(entries: Iterable[DiagEntry]) -> str | None:
+    """Why the last STOP in ``entries`` (a diagnostic buffer, oldest first) allows no hot
+    restart, or None: it allows one, or the CPU was in RUN (a power cut)."""
+    for entry in reversed(list(entries)):
+        if entry.event_id == EventId.STARTUP_TO_RUN or entry.event_id in HOT_AFTER_STOP:
+            return None
+        if entry.event_id in NO_HOT_AFTER_STOP:
+            return f"STOP by an error ({entry.message})"
+    return None
 
 
 def parse_restart(text: str | RestartType) -> RestartType:

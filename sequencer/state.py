@@ -34,6 +34,10 @@ from __future__ import annotations
 from typing import Any, Final
 
 MODES: Final = ("AUTO", "MAN", "TAP", "TOP")
+STEP_TIME_LIMIT_NS: Final = 10 * 36525 * 86_400 * 10**9 // 100
+"""The longest step time (T, U) a saved state may hold: 10 years. More is no run's count
+but a garbled value (S7's own TIME ends at T#24D20H31M23S647MS; the runtime counts on past
+it, so a step may wait longer than that and still be restarted)."""
 LEVEL_PINS: Final = ("HALT_SQ", "EN_IL", "EN_SV")
 """The level pins an operator or engineer may hold at a value (``GraphFB.set_level``)."""
 
@@ -281,6 +285,8 @@ class GraphState:
                     raise ValueError(f"{key!r} holds a non-integer")
                 elif not isinstance(value, int):
                     raise ValueError(f"{key[0]}_ns[{i}] is {value!r}")
+                if not 0 <= times[i] <= STEP_TIME_LIMIT_NS:
+                    raise ValueError(f"step index {i}: {key[0].upper()} = {_span(times[i])}")
         active = data["active"]
         if not isinstance(active, list) or any(
             not isinstance(i, int) or not 0 <= i < n for i in active
@@ -313,6 +319,14 @@ class GraphState:
 
     def __repr__(self) -> str:
         return f"GraphState(active={self.active}, mode={self.mode}, calls={self.calls})"
+
+
+def _span(ns: int) -> str:
+    """A step time for a refusal: in days or years when that long."""
+    days = ns / 86_400e9
+    if abs(days) >= 365.25:
+        return f"{days / 365.25:.1f} years"
+    return f"{days:.1f} days" if abs(days) >= 1 else f"{ns // 1_000_000} ms"
 
 
 def _count(data: dict[str, Any], key: str) -> int:

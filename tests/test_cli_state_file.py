@@ -136,3 +136,81 @@ def test_a_state_file_that_cannot_grow_stops_the_run_with_one_line(
     assert line.startswith(f"s7graph: error: {state}: cannot write the state: ")
     assert "disk I/O error" in line or "database or disk is full" in line
     assert line.endswith("; the CPU went to STOP") and "Traceback" not in proc.stderr
+
+
+def test_restart_hot_that_cannot_be_honoured_is_one_line_exit_2_and_never_a_warm_start(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A warm run killed (no hot-restart image on disk), then ``--restart hot``: why, and
+    what to do, in one line; nothing started, nothing written."""
+    state = tmp_path / "drill.sqlite"
+    assert main([*CHART, "--state", str(state), "--duration-s", "0.1"]) == 0
+    with sqlite3.connect(state) as con:  # as a warm run leaves its file when killed
+        con.execute("DELETE FROM meta WHERE key='hot_memory'")
+        con.execute("UPDATE meta SET value='0' WHERE key='clean'")
+        entries = con.execute("SELECT count(*) FROM diagnostics").fetchone()
+    con.close()
+    capsys.readouterr()
+    assert main([*CHART, "--state", str(state), "--duration-s", "0.1", "--restart", "hot"]) == 2
+    assert capsys.readouterr().err.splitlines() == [
+        f"s7graph: error: {state}: cannot restart hot: the last run kept no hot-restart image "
+        "(a run keeps one when started with --restart hot, or when it stops cleanly); restart "
+        "warm with --restart warm (each sequencer starts in its initial steps; where it was "
+        "goes to the diagnostic buffer)"
+    ]
+    with sqlite3.connect(state) as con:
+        assert con.execute("SELECT count(*) FROM diagnostics").fetchone() == entries
+    con.close()
+
+
+HOLDER = """
+import sqlite3, sys
+con = sqlite3.connect(sys.argv[1], isolation_level=None)
+con.execute("PRAGMA locking_mode=EXCLUSIVE")
+con.execute("BEGIN EXCLUSIVE")
+con.execute("UPDATE meta SET value=value WHERE key='format'")
+print("locked", flush=True)
+sys.stdin.read()
+"""
+
+
+@pytest.mark.timeout(60)
+def test_a_state_file_locked_by_another_process_is_refused_as_in_use_not_unreadable(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    state = tmp_path / "drill.sqlite"
+    assert main([*CHART, "--state", str(state), "--duration-s", "0.1"]) == 0
+    capsys.readouterr()
+    holder = subprocess.Popen([sys.executable, "-c", HOLDER, str(state)], stdin=subprocess.PIPE,
+                              stdout=subprocess.PIPE, text=True)  # fmt: skip
+    try:
+        assert holder.stdout is not None and holder.stdout.readline() == "locked\n"
+        assert main([*CHART, "--state", str(state), "--duration-s", "0.1"]) == 2
+    finally:
+        holder.communicate("")
+    assert capsys.readouterr().err.splitlines() == [
+        f"s7graph: error: {state}: in use by another process (database is locked): it was not "
+        "read; stop the process that holds it (or wait until it ends), then run again"
+    ]
+
+
+@pytest.mark.timeout(90)
+def test_a_second_run_on_a_state_file_another_run_writes_is_refused_as_in_use(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """SQLite locks the file only while a transaction is written: without a lock of its own
+    a second run would read the first's state and both would write it."""
+    state = tmp_path / "drill.sqlite"
+    first = subprocess.Popen([sys.executable, "-m", "s7graph", *CHART, "--state", str(state)],
+                             cwd=ROOT, stderr=subprocess.PIPE, text=True)  # fmt: skip
+    try:
+        assert first.stderr is not None and " in RUN (" in first.stderr.readline()
+        assert main([*CHART, "--state", str(state), "--duration-s", "0.1"]) == 2
+    finally:
+        first.send_signal(signal.SIGTERM)
+        assert first.wait(30) == 0
+    assert capsys.readouterr().err.splitlines() == [
+        f"s7graph: error: {state}: in use by another process (another run holds it); stop the "
+        "process that holds it (or wait until it ends), then run again"
+    ]
+    assert main([*CHART, "--state", str(state), "--duration-s", "0.1"]) == 0  # its turn now

@@ -9,11 +9,13 @@ import os
 import sqlite3
 import zlib
 from pathlib import Path
+from typing import Any
 
 import msgspec
 import pytest
 
 from s7graph.engine import CallContext, Cpu, InstanceDB, VirtualClock, fb, ob
+from s7graph.engine.modes import CpuMode
 from s7graph.engine.persistence import FORMAT, StateFileError, StateStore
 
 
@@ -222,3 +224,188 @@ def test_the_same_program_may_restart_hot(tmp_path: Path) -> None:
     report = StateStore(path).load(cpu)
     assert report is not None and not report.changed
     assert "program download" not in cpu.hot_blockers
+
+
+# ---- what was still taken silently ---------------------------------------------------------
+
+
+def _edit(path: Path, *statements: tuple[str, tuple[object, ...]]) -> None:
+    with sqlite3.connect(path) as con:
+        for sql, args in statements:
+            con.execute(sql, args)
+    con.close()
+
+
+def test_a_state_file_whose_instances_table_is_gone_is_refused(tmp_path: Path) -> None:
+    """Not taken for a state without instance DBs: the table would come back empty and every
+    FB (a sequencer's position with it) start at its initial values."""
+    path = _written(tmp_path / "s.sqlite")
+    _edit(path, ("DROP TABLE instances", ()))
+    assert "the instances table is gone" in _refused(path)
+    with sqlite3.connect(path) as con:  # not recreated
+        tables = {r[0] for r in con.execute("SELECT name FROM sqlite_master")}
+    con.close()
+    assert "instances" not in tables
+
+
+def test_an_instance_row_without_one_of_its_variables_is_refused(tmp_path: Path) -> None:
+    path = _written(tmp_path / "s.sqlite")
+    _edit(path, ("UPDATE instances SET data=? WHERE number=2",
+                 (zlib.compress(msgspec.msgpack.encode([{}, {}])),)))  # fmt: skip
+    assert _refused(path) == "malformed state of DB2: no total"
+
+
+def test_an_instance_db_the_file_holds_no_row_of_is_noted_and_blocks_a_hot_restart(
+    tmp_path: Path,
+) -> None:
+    """A DB new in the program starts at its initial values, said so; as after a download,
+    only a warm restart."""
+    path = _written(tmp_path / "s.sqlite")
+    _edit(path, ("DELETE FROM instances", ()))
+    cpu = _cpu()
+    report = StateStore(path).load(cpu)
+    assert report is not None
+    assert report.notes == ["DB2 FB2 'acc': no state saved, at its initial values"]
+    assert {"program download", "no state saved for DB2"} <= cpu.hot_blockers
+
+
+def test_a_copy_without_its_write_ahead_log_is_refused_not_started_fresh(tmp_path: Path) -> None:
+    """A run's commits sit in FILE-wal until a checkpoint: the main file alone, copied while
+    the run is on, holds no table at all, and was taken for a new file."""
+    path = tmp_path / "s.sqlite"
+    store = StateStore(path)
+    cpu = _cpu()
+    store.load(cpu)
+    cpu.start()
+    store.save(cpu, clean=False)
+    copy = tmp_path / "copy.sqlite"
+    copy.write_bytes(path.read_bytes())  # what `cp s.sqlite copy.sqlite` takes
+    store.close()
+    with pytest.raises(StateFileError) as info:
+        StateStore(copy)
+    assert "without a single table" in info.value.problem
+    assert f"{copy}-wal" in info.value.way_out and "--fresh" in info.value.way_out
+    assert not Path(f"{copy}-wal").exists()
+
+
+def _image(path: Path, key: str) -> dict[str, Any]:
+    with sqlite3.connect(path) as con:
+        (text,) = con.execute("SELECT value FROM meta WHERE key=?", (key,)).fetchone()
+    con.close()
+    return dict(json.loads(text))
+
+
+@pytest.mark.parametrize(
+    ("change", "fragment"),
+    [
+        (lambda m: m.update(markers={"start": 0, "data": "!!not base64!!"}), "not valid base64"),
+        (lambda m: m.update(markers={"start": 250, "data": "AAAAAAAAAAAAAAAAAAAAAA=="}),
+         "beyond the CPU's 256 marker bytes"),
+        (lambda m: m.update(markers={"start": -4, "data": "AAAA"}), "'markers' starts at -4"),
+        (lambda m: m.update(counters={"9999": {"value": 3}}), "the CPU has 256 cells"),
+        (lambda m: m.update(counters={"0": {"value": "many"}}), "'value' is 'many'"),
+        (lambda m: m.update(counters={"0": {"ghost": 1}}), "unknown key(s) 'ghost'"),
+        (lambda m: m.update(spare=1), "unknown key(s) 'spare'"),
+        (lambda m: m.update(dbs={"7": {"data": 5, "initial": "", "created": False}}),
+         "DB '7' data is 5"),
+        (lambda m: m.update(dbs=[]), "'dbs' is list"),
+    ],
+)  # fmt: skip
+def test_a_malformed_retentive_memory_image_is_refused_not_taken(
+    tmp_path: Path, change: Any, fragment: str
+) -> None:
+    """Taken unchecked, invalid base64 read as fewer bytes, a marker span past the area grew
+    it, a cell the CPU does not have was skipped and a field of the wrong type set."""
+    path = _written(tmp_path / "s.sqlite")
+    image = _image(path, "memory")
+    change(image)
+    _edit(path, ("UPDATE meta SET value=? WHERE key='memory'", (json.dumps(image),)))
+    problem = _refused(path)
+    assert problem.startswith("malformed memory image: ValueError: ") and fragment in problem
+
+
+def test_a_hot_restart_image_of_another_size_is_refused(tmp_path: Path) -> None:
+    path = tmp_path / "s.sqlite"
+    store = StateStore(path, hot=True)
+    cpu = _cpu()
+    store.load(cpu)
+    cpu.start()
+    store.save(cpu)
+    store.close()
+    image = _image(path, "hot_memory")
+    image["outputs"] = "AAAA"
+    _edit(path, ("UPDATE meta SET value=? WHERE key='hot_memory'", (json.dumps(image),)))
+    problem = _refused(path)
+    assert "malformed hot restart image" in problem and "'outputs' holds 3 bytes" in problem
+
+
+def test_a_file_locked_by_another_connection_is_refused_as_in_use_not_unreadable(
+    tmp_path: Path,
+) -> None:
+    """Locked is not garbled: the way out is to stop the other process, never --fresh."""
+    path = _written(tmp_path / "s.sqlite")
+    holder = sqlite3.connect(path, isolation_level=None)
+    holder.execute("PRAGMA locking_mode=EXCLUSIVE")
+    holder.execute("BEGIN EXCLUSIVE")
+    holder.execute("UPDATE meta SET value=value WHERE key='format'")
+    try:
+        with pytest.raises(StateFileError) as info:
+            StateStore(path)
+    finally:
+        holder.execute("ROLLBACK")
+        holder.close()
+    assert info.value.problem.startswith("in use by another process (database is locked)")
+    assert "stop the process that holds it" in info.value.way_out
+    assert "fresh" not in info.value.way_out
+
+
+@ob(1)
+def failing(ctx: CallContext) -> None:
+    raise RuntimeError("boom")  # no OB121: STOP
+
+
+@pytest.mark.parametrize(
+    ("stop", "blocked"),
+    [
+        (lambda cpu: cpu.stop("s7graph run ended"), None),
+        (lambda cpu: (cpu.load(failing), cpu.hot_blockers.clear(), cpu.scan()), None),
+        (lambda cpu: cpu.abort("OB1"), "STOP by an error (block aborted by cycle monitoring)"),
+    ],
+    ids=["a stop request", "an OB not loaded", "cycle monitoring"],
+)
+def test_the_stop_on_disk_decides_whether_a_hot_restart_is_possible(
+    tmp_path: Path, stop: Any, blocked: str | None
+) -> None:
+    """S7-400 resumes hot after a STOP by the mode selector, a programming device, a
+    programmed STOP or an OB not loaded; not after one by an error such as a block aborted
+    by cycle monitoring."""
+    path = tmp_path / "s.sqlite"
+    store = StateStore(path, hot=True)
+    cpu = _cpu()
+    store.load(cpu)
+    cpu.start()
+    cpu.scan()
+    stop(cpu)
+    assert cpu.mode is CpuMode.STOP
+    store.save(cpu, clean=True)
+    store.close()
+    again = _cpu()
+    StateStore(path, hot=True).load(again)
+    stops = {b for b in again.hot_blockers if b.startswith("STOP")}
+    assert stops == (set() if blocked is None else {blocked})
+
+
+def test_instance_rows_without_a_memory_image_are_refused(tmp_path: Path) -> None:
+    path = _written(tmp_path / "s.sqlite")
+    _edit(path, ("DELETE FROM meta WHERE key='memory'", ()))
+    assert _refused(path) == "no memory image (an incomplete state)"
+
+
+def test_two_stores_of_one_process_may_share_a_file(tmp_path: Path) -> None:
+    """The lock keeps other processes out; a tool of the same process (a test, the view's
+    audit) reads on."""
+    path = _written(tmp_path / "s.sqlite")
+    first, second = StateStore(path), StateStore(path)
+    assert first.has_state() and second.has_state()
+    first.close()
+    second.close()

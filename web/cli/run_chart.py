@@ -5,7 +5,8 @@ OB1/OB100/OB102 in one CPU, the state file restores the instance DB and the CPU'
 list (``web/harness/persist.py``: a file it cannot trust is refused, exit 2; ``--fresh``
 starts anew) and the CPU starts by ``--restart``: warm (OB100 initializes the sequencer,
 its position written to the diagnostic buffer first), hot (OB101: the sequencer resumes
-where it was) or cold (OB102); ``engine.runner.Runner`` paces the scans.
+where it was; refused, exit 2, when the saved state allows none) or cold (OB102);
+``engine.runner.Runner`` paces the scans.
 A plant (``--plant``) runs after every scan; a plant error ends the run with one line, a
 plant still running at twice the maximum cycle time is aborted (STOP). Without ``--web`` a
 STOP by error ends the run: the reason on stderr, exit 1.
@@ -142,7 +143,10 @@ def _run_chart(
     recovered = recovered_cause()  # never anew after a hang (--fresh): from its last state
     state_path = state if state is not None else path.with_suffix(".state.sqlite")
     try:
-        opened = open_state(state_path, cpu, fresh=fresh and not recovered, hot=restart == "hot")
+        opened = open_state(
+            state_path, cpu, fresh=fresh and not recovered, hot=restart == "hot",
+            restart=None if recovered else restart,  # recovered: STOP until started
+        )  # fmt: skip
     except StateFileError as exc:
         print(refusal(exc), file=sys.stderr)
         return 2

@@ -3,7 +3,9 @@
 ``open_state`` opens the state file of a run and restores the CPU from it: a file it cannot
 trust is refused (``StateFileError``: the CLI prints one line naming the file and the
 problem and exits 2), never taken for a fresh start; ``fresh`` keeps an existing file as
-``FILE.old-N`` and starts anew. ``persist_messages`` adds the CPU's message list to it.
+``FILE.old-N`` and starts anew. A hot restart the saved state does not allow is refused the
+same way (``HotRestartRefused``), never turned into a warm one. ``persist_messages`` adds the
+CPU's message list to it.
 """
 
 from __future__ import annotations
@@ -16,7 +18,45 @@ from s7graph.engine.diagnostics import EventId
 from s7graph.engine.persistence import LoadReport, StateFileError, StateStore
 from s7graph.sfb.alarms import message_list
 
-__all__ = ["OpenedState", "keep_aside", "open_state", "persist_messages", "refusal"]
+__all__ = [
+    "HotRestartRefused",
+    "OpenedState",
+    "hot_refusal",
+    "keep_aside",
+    "open_state",
+    "persist_messages",
+    "refusal",
+]
+
+HOT_WAY_OUT = (
+    "restart warm with --restart warm (each sequencer starts in its initial steps; where it "
+    "was goes to the diagnostic buffer)"
+)
+_BLOCKERS = {
+    "program download": "the program changed since the state was saved (a download)",
+    "no hot restart image saved": "the last run kept no hot-restart image (a run keeps one "
+    "when started with --restart hot, or when it stops cleanly)",
+    "memory reset": "a memory reset since",
+    "stack overflow": "the last run stopped on a block stack overflow",
+    "aborted warm restart": "the last warm restart was aborted",
+}
+
+
+class HotRestartRefused(StateFileError):
+    """``--restart hot`` that the saved state does not allow: why, and to restart warm."""
+
+    def __init__(self, path: Path, why: str) -> None:
+        super().__init__(path, f"cannot restart hot: {why}", way_out=HOT_WAY_OUT)
+
+
+def hot_refusal(cpu: Cpu) -> str | None:
+    """Why ``cpu``, restored from a state file, cannot restart hot (None: it can): its hot
+    restart blockers in words, or its parameters."""
+    if not cpu.hot_restart_enabled:
+        return "the CPU is not parametrised for hot restarts (hot_restart_enabled off)"
+    if not cpu.hot_blockers:
+        return None
+    return "; ".join(_BLOCKERS.get(b, b) for b in sorted(cpu.hot_blockers))
 
 
 def persist_messages(store: StateStore, cpu: Cpu) -> None:
@@ -68,16 +108,23 @@ def keep_aside(path: Path) -> Path | None:
     return target
 
 
-def open_state(path: Path, cpu: Cpu, *, fresh: bool = False, hot: bool = False) -> OpenedState:
+def open_state(
+    path: Path, cpu: Cpu, *, fresh: bool = False, hot: bool = False, restart: str | None = None
+) -> OpenedState:
     """Open ``path`` and restore ``cpu`` (STOP) from it, with its message list; the notes
     of a carried-over state go to the diagnostic buffer. ``hot``: the run restarts hot, so
-    the store keeps the hot restart image too. ``StateFileError`` when the file cannot be
-    trusted (the store is closed again)."""
+    the store keeps the hot restart image too. ``restart``: the startup the run makes (implies
+    ``hot`` when hot); a saved state that allows no hot restart is refused
+    (``HotRestartRefused``). ``StateFileError`` when the file cannot be trusted (the store is
+    closed again)."""
     kept = keep_aside(path) if fresh else None
-    store = StateStore(path, hot=hot)
+    store = StateStore(path, hot=hot or restart == "hot")
     try:
         persist_messages(store, cpu)
         report = store.load(cpu)
+        why = hot_refusal(cpu) if restart == "hot" and report is not None else None
+        if why is not None:
+            raise HotRestartRefused(store.path, why)
     except BaseException:
         store.close()
         raise
@@ -89,8 +136,6 @@ def open_state(path: Path, cpu: Cpu, *, fresh: bool = False, hot: bool = False) 
 
 
 def refusal(exc: StateFileError) -> str:
-    """The one line of a refused state file, with the way out."""
-    return (
-        f"s7graph: error: {exc.path}: {exc.problem}; start anew with --fresh "
-        f"(keeps this file as {exc.path}.old-N)"
-    )
+    """The one line of a refused state file, with the way out (by default ``--fresh``)."""
+    way_out = exc.way_out or f"start anew with --fresh (keeps this file as {exc.path}.old-N)"
+    return f"s7graph: error: {exc.path}: {exc.problem}; {way_out}"

@@ -1,0 +1,103 @@
+"""Checks of a state file's memory images before any of it is restored (``engine/
+persistence.py``): ValueError naming what is malformed, so a file is refused rather than
+half taken.
+
+The retentive image (``Memory.snapshot``) and the hot-restart image
+(``Memory.hot_snapshot``) are JSON objects of base64 byte areas and S5 timer and counter
+cells. Taken unchecked, a garbled image is read as something else: invalid base64 decodes
+to fewer bytes, a marker span beyond the CPU's marker area grows it, a cell number the CPU
+does not have is skipped, a cell field of the wrong type is set as it is.
+"""
+
+from __future__ import annotations
+
+import base64
+import binascii
+from dataclasses import fields
+from typing import Any
+
+from s7graph.engine.memory import Memory, S5Counter, S5Timer
+
+__all__ = ["check_hot_image", "check_memory_image"]
+
+_IMAGE_KEYS = frozenset({"markers", "timers", "counters", "dbs"})
+_HOT_KEYS = frozenset({"markers", "outputs", "timers", "counters"})
+_DB_KEYS = frozenset({"data", "initial", "created"})
+
+
+def check_memory_image(data: object, mem: Memory) -> None:
+    """``data`` is a retentive image ``mem.restore`` can take as it is; ValueError if not."""
+    image = _object(data, "the image")
+    _known(image, _IMAGE_KEYS, "the image")
+    marks = image.get("markers")
+    if marks:
+        span = _object(marks, "'markers'")
+        _known(span, frozenset({"start", "data"}), "'markers'")
+        start = span.get("start")
+        if type(start) is not int or start < 0:
+            raise ValueError(f"'markers' starts at {start!r}")
+        raw = _bytes(span.get("data"), "'markers'")
+        if start + len(raw) > len(mem.markers):
+            raise ValueError(
+                f"'markers' MB{start}..MB{start + len(raw) - 1} beyond the CPU's "
+                f"{len(mem.markers)} marker bytes"
+            )
+    _cells(image.get("timers", {}), S5Timer, len(mem.timers), "timers")
+    _cells(image.get("counters", {}), S5Counter, len(mem.counters), "counters")
+    for key, item in _object(image.get("dbs", {}), "'dbs'").items():
+        what = f"DB {key!r}"
+        if not key.isdigit() or not 1 <= int(key) <= 65535:
+            raise ValueError(f"{what}: not a DB number")
+        db = _object(item, what)
+        _known(db, _DB_KEYS, what)
+        _bytes(db.get("data"), f"{what} data")
+        _bytes(db.get("initial", ""), f"{what} initial values")
+        if type(db.get("created", False)) is not bool:
+            raise ValueError(f"{what}: 'created' is {db.get('created')!r}")
+
+
+def check_hot_image(data: object, mem: Memory) -> None:
+    """``data`` is a hot-restart image ``mem.restore_hot`` can take as it is; ValueError if
+    not."""
+    image = _object(data, "the image")
+    _known(image, _HOT_KEYS, "the image")
+    for key, area in (("markers", mem.markers), ("outputs", mem.outputs)):
+        raw = _bytes(image.get(key), f"{key!r}")
+        if len(raw) != len(area):
+            raise ValueError(f"{key!r} holds {len(raw)} bytes, the CPU {len(area)}")
+    _cells(image.get("timers", {}), S5Timer, len(mem.timers), "timers")
+    _cells(image.get("counters", {}), S5Counter, len(mem.counters), "counters")
+
+
+def _object(value: object, what: str) -> dict[str, Any]:
+    if not isinstance(value, dict):
+        raise ValueError(f"{what} is {type(value).__name__}, not an object")
+    return value
+
+
+def _known(value: dict[str, Any], keys: frozenset[str], what: str) -> None:
+    unknown = sorted(set(value) - keys)
+    if unknown:
+        raise ValueError(f"{what} holds unknown key(s) {', '.join(map(repr, unknown))}")
+
+
+def _bytes(value: object, what: str) -> bytes:
+    if not isinstance(value, str):
+        raise ValueError(f"{what} is {value!r}, not base64 text")
+    try:
+        return base64.b64decode(value, validate=True)
+    except (binascii.Error, ValueError):
+        raise ValueError(f"{what} is not valid base64") from None
+
+
+def _cells(value: object, kind: type[S5Timer | S5Counter], count: int, what: str) -> None:
+    """Each cell number within the CPU's ``count`` cells, each field of the cell's type."""
+    types = {f.name: type(f.default) for f in fields(kind)}
+    for key, cell in _object(value, f"{what!r}").items():
+        if not key.isdigit() or int(key) >= count:
+            raise ValueError(f"{what} {key!r}: the CPU has {count} cells")
+        state = _object(cell, f"{what} {key}")
+        _known(state, frozenset(types), f"{what} {key}")
+        for name, item in state.items():
+            if type(item) is not types[name]:
+                raise ValueError(f"{what} {key}: {name!r} is {item!r}")
