@@ -143,10 +143,13 @@ def _run_chart(
     recovered = recovered_cause()  # never anew after a hang (--fresh): from its last state
     state_path = state if state is not None else path.with_suffix(".state.sqlite")
     try:
-        opened = open_state(
-            state_path, cpu, fresh=fresh and not recovered, hot=restart == "hot",
-            restart=None if recovered else restart,  # recovered: STOP until started
-        )  # fmt: skip
+        opened = open_state(  # a recovered CPU stays in STOP until started
+            state_path,
+            cpu,
+            fresh=fresh and not recovered,
+            hot=restart == "hot",
+            restart=None if recovered else restart,
+        )
     except StateFileError as exc:
         print(refusal(exc), file=sys.stderr)
         return 2

@@ -157,10 +157,13 @@ def run_program(
     state_path = state if state is not None else path.with_suffix(".state.sqlite")
     try:
         fresh = fresh and recovered is None  # never anew after a hang: its last state
-        opened = open_state(
-            state_path, cpu, fresh=fresh, hot=restart == "hot",
-            restart=None if recovered else restart,  # recovered: STOP until started
-        )  # fmt: skip
+        opened = open_state(  # a recovered CPU stays in STOP until started
+            state_path,
+            cpu,
+            fresh=fresh,
+            hot=restart == "hot",
+            restart=None if recovered else restart,
+        )
     except StateFileError as exc:
         print(refusal(exc), file=sys.stderr)
         return 2
