@@ -62,7 +62,10 @@ __all__ = [
     "Summary",
 ]  # fmt: skip
 
-TIME_LIMIT_S: Final = 30.0  # a request the child has not answered by then is refused
+TIME_LIMIT_S: Final = 20.0
+"""A request the child has not answered by then is refused (and the child replaced): well
+within the 30 s the view and ``s7graph download`` wait for a download's answer, which also
+writes the file and waits for a scan boundary."""
 START_LIMIT_S: Final = 120.0  # a fresh child imports s7graph within this
 MAX_SUMMARY_LINES: Final = 1000  # lines of a change summary brought back
 _HEADER = struct.Struct("<Q")
