@@ -24,11 +24,13 @@ from s7graph.sequencer.exchange import ImportFailed, import_file
 from s7graph.sequencer.format import format_chart
 from s7graph.sequencer.model import Chart
 from s7graph.sequencer.parse import parse_chart
-from s7graph.web.bus.compiler import MAX_SUMMARY_LINES, dumps_in_pieces
 from s7graph.web.bus.live import prepare_chart
+from s7graph.web.bus.pieces import dumps_in_pieces
 from s7graph.web.harness.session import ChartLoadError, compile_model
 
-__all__ = ["answer"]
+__all__ = ["MAX_SUMMARY_LINES", "answer"]
+
+MAX_SUMMARY_LINES: Final = 1000  # lines of a change summary sent back
 
 SOURCE_PIECE: Final = 1 << 18
 _KEPT: Final = 4  # running charts kept parsed (by the hash of their text)
@@ -86,7 +88,7 @@ def _running_chart(text: str) -> Chart:
 
 def _compile(request: dict[str, Any], *, preview: bool) -> tuple[dict[str, Any], list[bytes]]:
     """Parse, check and compile; the change summary; for a download the compiled chart
-    and the view's description of it, pickled in pieces (``dumps_in_pieces``) without its
+    and the view's description of it, pickled in pieces (``web.bus.pieces``) without its
     code objects, which follow marshalled batch by batch, and its generated source, which
     follows in pieces of ``SOURCE_PIECE`` characters."""
     chart = _parse(str(request["text"]), str(request["file"]), "the chart does not parse")
@@ -123,11 +125,11 @@ def _compile(request: dict[str, Any], *, preview: bool) -> tuple[dict[str, Any],
     object.__setattr__(cc, "code", ())
     object.__setattr__(cc, "source", "")
     live = prepare_chart(cc, fb=str(request["fb"]), version=int(request["version"]))
-    chart = dumps_in_pieces((cc, table, live))
-    out["parts"] = (len(chart), len(code))
+    pieces = dumps_in_pieces((cc, table, live))
+    out["parts"] = (len(pieces), len(code))
     step = SOURCE_PIECE
     text = [source[k : k + step].encode() for k in range(0, len(source), step)]
-    return out, [*chart, *code, *text]
+    return out, [*pieces, *code, *text]
 
 
 def _open(path: Path, symbols: str) -> dict[str, Any]:

@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import contextlib
 import gc
-import io
 import marshal
 import os
 import pickle
@@ -49,8 +48,10 @@ from s7graph.sequencer.collector import collector_paused
 from s7graph.sequencer.compiled import CompiledChart
 from s7graph.sequencer.diff import ChangeSummary
 from s7graph.sequencer.edit_base import MAX_SOURCE
-from s7graph.sequencer.model import Step, Transition
+from s7graph.web.bus import compile_jobs
+from s7graph.web.bus.compile_jobs import MAX_SUMMARY_LINES
 from s7graph.web.bus.live import LiveChart
+from s7graph.web.bus.pieces import loads_in_pieces
 
 __all__ = [
     "MAX_SOURCE",
@@ -67,7 +68,6 @@ TIME_LIMIT_S: Final = 20.0
 within the 30 s the view and ``s7graph download`` wait for a download's answer, which also
 writes the file and waits for a scan boundary."""
 START_LIMIT_S: Final = 120.0  # a fresh child imports s7graph within this
-MAX_SUMMARY_LINES: Final = 1000  # lines of a change summary brought back
 _HEADER = struct.Struct("<Q")
 _READY = b"s7graph-compiler ready"
 
@@ -259,7 +259,7 @@ def _size_limit(text: str, what: str) -> None:
 
 def _loaded(blobs: list[bytes], parts: tuple[int, int], summary: Summary) -> Compiled:
     """The child's compiled chart in this process (``blobs``: ``parts`` pickled pieces of
-    it, ``dumps_in_pieces``; as many code objects, marshalled; its generated source in
+    it, ``web.bus.pieces``; as many code objects, marshalled; its generated source in
     pieces, UTF-8): unpickled piece by piece with the collector paused, and frozen when
     the runner keeps automatic collections off (see the module). Between two pieces the
     interpreter may switch to the scan thread, and does so within ``SWITCH_S`` of its
@@ -292,53 +292,6 @@ def _switching(interval_s: float) -> Iterator[None]:
         yield
     finally:
         sys.setswitchinterval(before)
-
-
-PIECES: Final = (Step, Transition)
-"""The objects pickled apart (:func:`dumps_in_pieces`): each a few kB to some 100 kB."""
-
-
-def dumps_in_pieces(obj: object, kinds: tuple[type, ...] = PIECES) -> list[bytes]:
-    """``obj`` pickled as many small pickles: every object of a type in ``kinds`` on its
-    own (referred to by its index), ``obj`` itself last. Unpickling one piece is one C call
-    that holds the interpreter's lock; small pieces keep each such call short."""
-    pieces: list[bytes] = []
-    index: dict[int, int] = {}
-
-    class _Pickler(pickle.Pickler):
-        def __init__(self, file: io.BytesIO, root: object) -> None:
-            super().__init__(file, protocol=pickle.HIGHEST_PROTOCOL)
-            self.root = root
-
-        def persistent_id(self, o: object) -> int | None:
-            if o is self.root or type(o) not in kinds:
-                return None
-            k = index.get(id(o))
-            if k is None:
-                k = index[id(o)] = _dump(o)
-            return k
-
-    def _dump(o: object) -> int:
-        buf = io.BytesIO()
-        _Pickler(buf, o).dump(o)
-        pieces.append(buf.getvalue())
-        return len(pieces) - 1
-
-    _dump(obj)
-    return pieces
-
-
-def loads_in_pieces(pieces: list[bytes]) -> Any:
-    """What :func:`dumps_in_pieces` pickled (each piece refers to earlier ones only)."""
-    done: list[object] = []
-
-    class _Unpickler(pickle.Unpickler):
-        def persistent_load(self, pid: object) -> object:
-            return done[int(pid)]  # type: ignore[call-overload]
-
-    for piece in pieces:
-        done.append(_Unpickler(io.BytesIO(piece)).load())
-    return done[-1]
 
 
 def _child_env() -> dict[str, str]:
@@ -395,8 +348,6 @@ def _read(stream: IO[bytes], limit_s: float) -> bytes:
 def _serve(cpus: str) -> int:
     """The child: requests from stdin, answers to stdout, one at a time, until stdin ends."""
     _own_processor(cpus)
-    from s7graph.web.bus import compile_jobs  # the chart packages: imported once, warm
-
     inp, out = sys.stdin.buffer, sys.stdout.buffer
     out.write(_HEADER.pack(len(_READY)) + _READY)
     out.flush()

@@ -281,12 +281,13 @@ class OnlineChange:
                 f"the CPU runs chart version {self.current.number} now, not {base}: "
                 "look at the change again"
             )
+        target: Version | None
         if op == "undo_download":
             if not self.history:
                 raise _Refused("no download to undo (the charts of the last 20 downloads are kept)")
-            target = self.history[-1]
-            target = Version(self.current.number + 1, target.cc, target.table, target.text)
-            summary = Summary.of(summarize(self.current.cc.chart, target.cc.chart, self._active()))
+            back = self.history[-1]
+            target = Version(self.current.number + 1, back.cc, back.table, back.text)
+            summary = Summary.of(summarize(self.current.cc.chart, back.cc.chart, self._active()))
         else:
             target, summary = self._compile(str(command.args["source"]), preview=preview)
         lines = list(summary.lines()) or ["no change: the CPU runs this chart"]
