@@ -1,9 +1,10 @@
 """What the compiler process (``web.bus.compiler``) does with one request.
 
 ``answer(request)`` parses, validates and compiles a chart (``compile``; ``preview``: the
-same, only the change summary goes back), checks that a text parses (``check``: a save),
-or imports a file (``open``). Every refusal is ``{"refused": reason, "lines": diagnostics}``
-with one line naming the place; nothing a request holds makes it raise.
+same, only the change summary goes back), compares two charts (``summary``: an undo),
+checks that a text parses (``check``: a save), or imports a file (``open``). Every
+refusal is ``{"refused": reason, "lines": diagnostics}`` with one line naming the place;
+nothing a request holds makes it raise.
 """
 
 from __future__ import annotations
@@ -50,6 +51,8 @@ def answer(request: dict[str, Any]) -> tuple[dict[str, Any], list[bytes]]:
     try:
         if op in ("compile", "preview"):
             return _compile(request, preview=op == "preview")
+        if op == "summary":
+            return _summary(request), []
         if op == "check":
             _parse(str(request["text"]), str(request["file"]), "not saved")
             return {}, []
@@ -130,6 +133,16 @@ def _compile(request: dict[str, Any], *, preview: bool) -> tuple[dict[str, Any],
     step = SOURCE_PIECE
     text = [source[k : k + step].encode() for k in range(0, len(source), step)]
     return out, [*pieces, *code, *text]
+
+
+def _summary(request: dict[str, Any]) -> dict[str, Any]:
+    """The change summary from the ``running`` chart's text to the ``target``'s (both kept
+    parsed for the next request): an undo of a download."""
+    running = _running_chart(str(request["running"]))
+    target = _running_chart(str(request["target"]))
+    summary = summarize(running, target, tuple(request.get("active", ())))
+    return {"summary": (summary.lines()[:MAX_SUMMARY_LINES], summary.removed_active,
+                        len(summary.changes))}  # fmt: skip
 
 
 def _open(path: Path, symbols: str) -> dict[str, Any]:

@@ -46,10 +46,8 @@ from s7graph.engine.cores import allowed_cpus
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.collector import collector_paused
 from s7graph.sequencer.compiled import CompiledChart
-from s7graph.sequencer.diff import ChangeSummary
 from s7graph.sequencer.edit_base import MAX_SOURCE
 from s7graph.web.bus import compile_jobs
-from s7graph.web.bus.compile_jobs import MAX_SUMMARY_LINES
 from s7graph.web.bus.live import LiveChart
 from s7graph.web.bus.pieces import loads_in_pieces
 
@@ -90,12 +88,6 @@ class Summary:
     text: tuple[str, ...]
     removed_active: tuple[int, ...]
     count: int
-
-    @classmethod
-    def of(cls, summary: ChangeSummary) -> Summary:
-        return cls(
-            summary.lines()[:MAX_SUMMARY_LINES], summary.removed_active, len(summary.changes)
-        )
 
     @property
     def unchanged(self) -> bool:
@@ -236,6 +228,13 @@ class Compiler:
         if preview:
             return summary
         return _loaded(blobs, reply["parts"], summary)
+
+    def summarize(self, *, running: str, target: str, active: tuple[int, ...]) -> Summary:
+        """The change summary from the ``running`` chart's text to ``target``'s, with the
+        ``active`` steps (an undo: the target compiled before)."""
+        request = {"op": "summary", "running": running, "target": target, "active": active}
+        reply, _ = self._call(request, "undo_download")
+        return Summary(*reply["summary"])
 
     def check(self, text: str, file: str) -> None:
         """``text`` parses as a chart within the editor's limits (CompileRefused if not)."""

@@ -37,7 +37,6 @@ import msgspec
 
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.compiled import CompiledChart
-from s7graph.sequencer.diff import summarize
 from s7graph.sequencer.format import format_chart
 from s7graph.sequencer.online import SwapRefused, SwapReport, swap
 from s7graph.web.access.audit import Facts
@@ -154,7 +153,7 @@ class OnlineChange:
         self._swap: _Swap | None = None
         self._closed = False
         self.compiler = compiler if compiler is not None else Compiler()
-        self._formatted: tuple[Version, str] | None = None  # _running_text of version 1
+        self._formatted: tuple[Version, str] | None = None  # _source_of version 1
 
     # ------------------------------------------------------------ the bus
 
@@ -287,7 +286,10 @@ class OnlineChange:
                 raise _Refused("no download to undo (the charts of the last 20 downloads are kept)")
             back = self.history[-1]
             target = Version(self.current.number + 1, back.cc, back.table, back.text)
-            summary = Summary.of(summarize(self.current.cc.chart, back.cc.chart, self._active()))
+            summary = self.compiler.summarize(
+                running=self._source_of(self.current), target=self._source_of(back),
+                active=self._active(),
+            )  # fmt: skip
         else:
             target, summary = self._compile(str(command.args["source"]), preview=preview)
         lines = list(summary.lines()) or ["no change: the CPU runs this chart"]
@@ -316,17 +318,16 @@ class OnlineChange:
         v = self.current
         file = self.path.name if self.path is not None else f"{v.cc.name}.s7g"
         done = self.compiler.compile(
-            text, file, symbols=self.symbols_text, running=self._running_text(),
+            text, file, symbols=self.symbols_text, running=self._source_of(v),
             active=self._active(), fb=self.live.fb, version=v.number + 1, preview=preview,
         )  # fmt: skip
         if not isinstance(done, Compiled):
             return None, done
         return Version(v.number + 1, done.cc, done.table, text, done.live), done.summary
 
-    def _running_text(self) -> str:
-        """The running chart as ``.s7g`` text (a chart imported from another format as the
-        text it formats to; made once per version)."""
-        v = self.current
+    def _source_of(self, v: Version) -> str:
+        """Chart version ``v`` as ``.s7g`` text (the first, when imported from another
+        format, as the text it formats to, made once)."""
         if v.number > 1 or self.path is None or self.path.suffix == ".s7g":
             return v.text
         if self._formatted is None or self._formatted[0] is not v:
