@@ -182,11 +182,46 @@ def test_the_compiler_runs_off_the_processor_kept_for_the_scan_at_the_normal_pol
     assert pid is not None and not _alive(pid)
 
 
+def test_the_compiler_process_ends_with_the_cpus_even_in_the_middle_of_a_compile(
+    tmp_path: Path,
+) -> None:
+    script = tmp_path / "cpu.py"
+    script.write_text(
+        "from bench.big_charts import huge_chart\n"
+        "from s7graph.web.bus.compiler import Compiler\n"
+        "c = Compiler(time_limit_s=600)\n"
+        "c.start()\n"
+        "print(c.pid, flush=True)\n"
+        "c.compile(huge_chart(), 'd.s7g', symbols='', running=huge_chart(), active=(),\n"
+        "          fb='Seq_drill', version=2)\n"
+    )
+    cpu = subprocess.Popen([sys.executable, str(script)], cwd=ROOT, stdout=subprocess.PIPE,
+                           text=True, env={**os.environ, "PYTHONPATH": os.pathsep.join(
+                               [os.environ.get("PYTHONPATH", ""), str(ROOT)])})  # fmt: skip
+    assert cpu.stdout is not None
+    child = int(cpu.stdout.readline())
+    assert wait_until(lambda: _busy(child), 90)  # compiling
+    cpu.kill()
+    cpu.wait(30)
+    cpu.stdout.close()
+    assert wait_until(lambda: not _alive(child), 2)  # not when its compile is done
+
+
 def test_a_chart_pickled_in_small_pieces_comes_back_equal() -> None:
     cc, _ = compile_text(contact_chain(200), "chain.s7g")
     pieces = dumps_in_pieces(cc.chart)
     assert len(pieces) == 1 + len(cc.chart.all_steps()) + len(cc.chart.all_transitions())
     assert loads_in_pieces(pieces) == cc.chart
+
+
+def _busy(pid: int) -> bool:
+    """``pid`` has used 2 s of processor time (it imported, and compiles: 8 s or more)."""
+    try:
+        with open(f"/proc/{pid}/stat", encoding="ascii") as f:
+            fields = f.read().rsplit(")", 1)[1].split()
+    except OSError:
+        return False
+    return int(fields[11]) + int(fields[12]) > 2 * os.sysconf("SC_CLK_TCK")
 
 
 def _alive(pid: int) -> bool:

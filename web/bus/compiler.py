@@ -32,6 +32,7 @@ import marshal
 import os
 import pickle
 import select
+import signal
 import struct
 import subprocess
 import sys
@@ -67,6 +68,7 @@ within the 30 s the view and ``s7graph download`` wait for a download's answer, 
 writes the file and waits for a scan boundary."""
 START_LIMIT_S: Final = 120.0  # a fresh child imports s7graph within this
 _HEADER = struct.Struct("<Q")
+_PR_SET_PDEATHSIG = 1
 _READY = b"s7graph-compiler ready"
 
 
@@ -365,7 +367,14 @@ def _serve(cpus: str) -> int:
 
 def _own_processor(cpus: str) -> None:
     """The normal scheduling policy (a real-time parent thread's is inherited) on
-    ``cpus`` (comma-separated processor numbers)."""
+    ``cpus`` (comma-separated processor numbers); killed when the CPU's process ends, even
+    in the middle of a compile (Linux: ``PR_SET_PDEATHSIG``)."""
+    with contextlib.suppress(OSError, AttributeError):
+        import ctypes
+
+        ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGKILL)
+    if os.getppid() == 1:  # the parent ended before the line above
+        sys.exit(0)
     with contextlib.suppress(OSError, AttributeError):
         os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
     wanted = {int(c) for c in cpus.split(",") if c.strip().isdigit()}
