@@ -111,8 +111,9 @@ class Compiled:
 
 
 class Compiler:
-    """The warm compiler process of one CPU (see the module). Call from one thread; only
-    :meth:`close` may come from another. ``time_limit_s``: the longest a request may take;
+    """The warm compiler process of one CPU (see the module). Call from one long-lived
+    thread (the child is killed when the thread that started it ends); only :meth:`close`
+    may come from another. ``time_limit_s``: the longest a request may take;
     ``cpus``: the processors the child runs on (default: the calling thread's now)."""
 
     def __init__(
