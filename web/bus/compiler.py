@@ -17,8 +17,8 @@ lock. The rules:
   the code objects marshalled one batch at a time (``sequencer.compile._batches``), and
   the view's layout of it (``web.bus.live.prepare_chart``): the CPU's process never
   compiles source; it unpickles with the cyclic collector paused and, when the runner
-  collects in the scan's idle time (automatic collections off), freezes what it loaded
-  (``gc.freeze``) so that the scan's idle collections do not walk the new chart;
+  collects in the scan's idle time (automatic collections off), freezes each piece as it
+  comes (``gc.freeze``) so that the scan's idle collections do not walk the new chart;
 - a preview, a save and an open bring back text only (the change summary, the chart).
 
 Used by ``web.bus.online.OnlineChange`` from its one worker thread.
@@ -262,13 +262,16 @@ def _size_limit(text: str, what: str) -> None:
 def _loaded(blobs: list[bytes], parts: tuple[int, int], summary: Summary) -> Compiled:
     """The child's compiled chart in this process (``blobs``: ``parts`` pickled pieces of
     it, ``web.bus.pieces``; as many code objects, marshalled; its generated source in
-    pieces, UTF-8): unpickled piece by piece with the collector paused, and frozen when
-    the runner keeps automatic collections off (see the module). Between two pieces the
-    interpreter may switch to the scan thread, and does so within ``SWITCH_S`` of its
-    asking (not the interpreter's usual 5 ms)."""
+    pieces, UTF-8), loaded piece by piece with the collector paused. Between two pieces the
+    interpreter may switch to the scan thread, and does so within ``SWITCH_S`` of its asking
+    (not the interpreter's usual 5 ms). Where the runner keeps automatic collections off and
+    collects in the scan's idle time, each piece is frozen (``gc.freeze``) as it comes: an
+    idle-time collection of the scan thread between two pieces would otherwise walk the
+    chart loaded so far (13 ms seen for a 1,000-step chart)."""
     n_chart, n_code = parts
+    settle = gc.freeze if not gc.isenabled() else None
     with collector_paused(), _switching(SWITCH_S):
-        cc, table, live = loads_in_pieces(blobs[:n_chart])
+        cc, table, live = loads_in_pieces(blobs[:n_chart], settle)
         code = []
         for piece in blobs[n_chart : n_chart + n_code]:
             code.append(marshal.loads(piece))
@@ -277,8 +280,8 @@ def _loaded(blobs: list[bytes], parts: tuple[int, int], summary: Summary) -> Com
             source.append(piece.decode())
         object.__setattr__(cc, "code", tuple(code))
         object.__setattr__(cc, "source", "".join(source))
-    if not gc.isenabled():
-        gc.freeze()
+    if settle is not None:
+        settle()
     return Compiled(cc, table, live, summary)
 
 

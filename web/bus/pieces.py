@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import io
 import pickle
+from collections.abc import Callable
 from typing import Any, Final
 
 from s7graph.sequencer.model import Step, Transition
@@ -53,8 +54,9 @@ def dumps_in_pieces(obj: object, kinds: tuple[type, ...] = PIECES) -> list[bytes
     return pieces
 
 
-def loads_in_pieces(pieces: list[bytes]) -> Any:
-    """What :func:`dumps_in_pieces` pickled (each piece refers to earlier ones only)."""
+def loads_in_pieces(pieces: list[bytes], after_each: Callable[[], object] | None = None) -> Any:
+    """What :func:`dumps_in_pieces` pickled (each piece refers to earlier ones only);
+    ``after_each`` is called after each piece."""
     done: list[object] = []
 
     class _Unpickler(pickle.Unpickler):
@@ -63,4 +65,6 @@ def loads_in_pieces(pieces: list[bytes]) -> Any:
 
     for piece in pieces:
         done.append(_Unpickler(io.BytesIO(piece)).load())
+        if after_each is not None:
+            after_each()
     return done[-1]
