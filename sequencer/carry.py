@@ -43,7 +43,12 @@ _SCALARS = (
 
 
 def fingerprint(cc: CompiledChart) -> str:
-    """``chart:`` and 16 hex digits of a hash of what the compiled chart does."""
+    """``chart:`` and 16 hex digits of a hash of what the compiled chart does; computed
+    once per compiled chart and kept with it (it goes with the chart when pickled, so the
+    process that compiled it pays for it, not the scan boundary of an online change)."""
+    known = cc.__dict__.get("_fingerprint")
+    if isinstance(known, str):
+        return known
     chart = cc.chart
     steps = [
         [n, name, s.message, i in cc.initial]
@@ -69,7 +74,9 @@ def fingerprint(cc: CompiledChart) -> str:
         "consts": repr(sorted(cc.consts.items())),
     }
     text = json.dumps(described, sort_keys=True, default=str)
-    return "chart:" + hashlib.sha256(text.encode()).hexdigest()[:16]
+    found = "chart:" + hashlib.sha256(text.encode()).hexdigest()[:16]
+    object.__setattr__(cc, "_fingerprint", found)  # frozen: not a field, kept beside them
+    return found
 
 
 @dataclass(frozen=True, slots=True)
@@ -152,9 +159,7 @@ def carry_over(
 ) -> tuple[GraphState, CarryReport]:
     """``state`` of the chart ``old`` describes, as a state of ``new`` (see the module
     docstring). Pure: ``state`` is not changed."""
-    if state.n_steps != len(old.step_numbers) or state.n_transitions != len(
-        old.transition_numbers
-    ):
+    if state.n_steps != len(old.step_numbers) or state.n_transitions != len(old.transition_numbers):
         raise ValueError("the state does not fit the chart shape saved with it")
     report = CarryReport()
     st = new_state(new)
@@ -247,9 +252,7 @@ class ChartFormat:
     def shape(self) -> object:
         return self._shape
 
-    def adapt(
-        self, shape: object, data: dict[str, object]
-    ) -> tuple[dict[str, object], list[str]]:
+    def adapt(self, shape: object, data: dict[str, object]) -> tuple[dict[str, object], list[str]]:
         old = ChartShape.from_json(shape)
         raw = data.get(self.state_var)
         if not isinstance(raw, dict):

@@ -82,7 +82,10 @@ from s7graph.web.bus.protocol import (
 from s7graph.web.bus.scan_events import ScanEvents
 from s7graph.web.bus.step_details import StepDetails
 
-__all__ = ["CONTROL_SEQUENCER", "MODE_PINS", "OP_PINS", "LiveChart", "LiveGraph", "watch_names"]
+__all__ = [
+    "CONTROL_SEQUENCER", "MODE_PINS", "OP_PINS", "LiveChart", "LiveGraph", "prepare_chart",
+    "watch_names",
+]  # fmt: skip
 
 CONTROL_SEQUENCER = "S7-GRAPH Control Sequencer"
 OP_PINS: dict[str, str] = {
@@ -123,6 +126,29 @@ class LiveChart:
     def step_details(self) -> StepDetails:
         """A fresh builder of this chart's step details."""
         return StepDetails(self.cc, self.tr_neg, self.il_neg, self.sv_neg)
+
+
+def prepare_chart(cc: CompiledChart, *, fb: str, version: int) -> LiveChart:
+    """What a view of FB ``fb`` needs of chart ``cc`` (its layout, which contacts are
+    negated); made off the scan thread before an online change (``web.bus.compiler``
+    makes it in the compiler's process)."""
+    chart = cc.chart
+    return LiveChart(
+        cc=cc,
+        layout=ChartLayout.from_chart(chart, fb=fb, version=version),
+        tr_neg=tuple(
+            _negations(t.condition, n)
+            for t, n in zip(chart.all_transitions(), cc.crit_labels, strict=True)
+        ),
+        il_neg=tuple(
+            _negations(st.interlock, n)
+            for st, n in zip(chart.all_steps(), cc.il_labels, strict=True)
+        ),
+        sv_neg=tuple(
+            _negations(st.supervision, n)
+            for st, n in zip(chart.all_steps(), cc.sv_labels, strict=True)
+        ),
+    )
 
 
 _PLAIN = frozenset({bool, int, float, str, type(None)})
@@ -181,25 +207,8 @@ class LiveGraph:
     # ------------------------------------------------------------ the chart
 
     def prepare(self, cc: CompiledChart, *, version: int) -> LiveChart:
-        """What this view of the FB needs of chart ``cc`` (its layout, which contacts are
-        negated); made off the scan thread before an online change."""
-        chart = cc.chart
-        return LiveChart(
-            cc=cc,
-            layout=ChartLayout.from_chart(chart, fb=self.fb, version=version),
-            tr_neg=tuple(
-                _negations(t.condition, n)
-                for t, n in zip(chart.all_transitions(), cc.crit_labels, strict=True)
-            ),
-            il_neg=tuple(
-                _negations(st.interlock, n)
-                for st, n in zip(chart.all_steps(), cc.il_labels, strict=True)
-            ),
-            sv_neg=tuple(
-                _negations(st.supervision, n)
-                for st, n in zip(chart.all_steps(), cc.sv_labels, strict=True)
-            ),
-        )
+        """What this view of the FB needs of chart ``cc`` (:func:`prepare_chart`)."""
+        return prepare_chart(cc, fb=self.fb, version=version)
 
     def switch(self, chart: LiveChart) -> None:
         """Describe ``chart`` from now on (at the scan boundary of an online change)."""

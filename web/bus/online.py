@@ -6,7 +6,8 @@ The bus routes these commands here (``BusPublisher.route``) instead of the scan 
 queue. One worker thread takes them in order: the gate establishes who sent each and
 whether their role allows it (refusals audited like every command), the chart is parsed,
 checked against the editor's limits and compiled with the CPU's symbol table, and the
-change summary made — all off the scan thread. ``preview`` answers with that summary and
+change summary made — all in the compiler's process (``web.bus.compiler``: a size limit
+before parsing, a time limit), never in the CPU's. ``preview`` answers with that summary and
 stops there. A real download first writes the chart file (the old one kept as a numbered
 backup, the new one flushed to the disk: ``web.harness.project``), then hands the compiled
 chart to the scan thread, which swaps it in between two scans (:meth:`OnlineChange.at_boundary`,
@@ -34,17 +35,12 @@ from typing import Final, Protocol
 
 import msgspec
 
-from s7graph.engine.errors import S7Error
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.compiled import CompiledChart
-from s7graph.sequencer.diagnostics import format_diagnostic
-from s7graph.sequencer.diff import ChangeSummary, summarize
-from s7graph.sequencer.edit_base import EditRefused
-from s7graph.sequencer.edit_text import parse_source
-from s7graph.sequencer.exchange import ImportFailed, import_file
 from s7graph.sequencer.format import format_chart
 from s7graph.sequencer.online import SwapRefused, SwapReport, swap
 from s7graph.web.access.audit import Facts
+from s7graph.web.bus.compiler import Compiled, Compiler, CompileRefused, Summary
 from s7graph.web.bus.gate import Gate
 from s7graph.web.bus.live import LiveChart, LiveGraph
 from s7graph.web.bus.protocol import (
@@ -64,7 +60,7 @@ from s7graph.web.harness.project import (
     restore_backup,
     write_chart,
 )
-from s7graph.web.harness.session import ChartLoadError, ChartSession, compile_model
+from s7graph.web.harness.session import ChartSession
 
 __all__ = ["ENGINEERING_OPS", "MAX_WAITING", "Durability", "OnlineChange", "Version"]
 
@@ -84,6 +80,7 @@ class Version:
     cc: CompiledChart
     table: SymbolTable
     text: str
+    live: LiveChart | None = None  # the view's description, when the compiler made it
 
 
 @dataclass(eq=False)
@@ -120,8 +117,9 @@ class OnlineChange:
     """Online change of the GraphFB of ``session`` (viewed by ``live``), its commands
     checked and audited by ``gate``; ``path`` is the chart file (None: no file: a download
     writes nothing, there is no project directory), ``symbols`` the text of the symbol
-    table file the chart was compiled with. :meth:`attach` puts it on a bus publisher;
-    call :meth:`at_boundary` between two scans (the scan thread)."""
+    table file the chart was compiled with; ``compiler``: the process that compiles (by
+    default one of its own, started by :meth:`attach`). :meth:`attach` puts it on a bus
+    publisher; call :meth:`at_boundary` between two scans (the scan thread)."""
 
     def __init__(
         self,
@@ -132,6 +130,7 @@ class OnlineChange:
         path: Path | None,
         symbols: str = "",
         boundary_timeout_s: float = BOUNDARY_TIMEOUT_S,
+        compiler: Compiler | None = None,
     ) -> None:
         self.session = session
         self.live = live
@@ -153,6 +152,8 @@ class OnlineChange:
         self._lock = threading.Lock()  # _waiting, _swap
         self._swap: _Swap | None = None
         self._closed = False
+        self.compiler = compiler if compiler is not None else Compiler()
+        self._formatted: tuple[Version, str] | None = None  # _source_of version 1
 
     # ------------------------------------------------------------ the bus
 
@@ -163,6 +164,8 @@ class OnlineChange:
         publisher.route(ENGINEERING_OPS, self.submit)
         publisher.serve("source", self._source_bytes, fb=self.live.fb)
         publisher.serve("project", self._project_bytes)
+        with contextlib.suppress(RuntimeError):  # warm before the first download
+            self._worker.submit(self.compiler.start)
 
     def _source_bytes(self) -> bytes:
         v = self.current
@@ -211,6 +214,7 @@ class OnlineChange:
             swap_ = self._swap
         if swap_ is not None:
             swap_.done.set()
+        self.compiler.close()
         self._worker.shutdown(wait=True, cancel_futures=True)
 
     # ------------------------------------------------------------ the worker
@@ -225,8 +229,9 @@ class OnlineChange:
             as_user = msgspec.structs.replace(command, user=who.label, token="")
             try:
                 reply, detail = self._run(as_user)
-            except _Refused as exc:
-                reply, detail = CommandReply(applied=False, reason=exc.reason, lines=exc.lines), ""
+            except (_Refused, CompileRefused) as exc:
+                lines = exc.lines[:MAX_LINES]
+                reply, detail = CommandReply(applied=False, reason=exc.reason, lines=lines), ""
             except Exception as exc:  # a bad command must never stop the worker
                 reason = f"{command.op} refused: {type(exc).__name__}: {exc}"[:4096]
                 reply, detail = CommandReply(applied=False, reason=reason), ""
@@ -280,14 +285,18 @@ class OnlineChange:
                 f"the CPU runs chart version {self.current.number} now, not {base}: "
                 "look at the change again"
             )
+        target: Version | None
         if op == "undo_download":
             if not self.history:
                 raise _Refused("no download to undo (the charts of the last 20 downloads are kept)")
-            target = self.history[-1]
-            target = Version(self.current.number + 1, target.cc, target.table, target.text)
+            back = self.history[-1]
+            target = Version(self.current.number + 1, back.cc, back.table, back.text)
+            summary = self.compiler.summarize(
+                running=self._source_of(self.current), target=self._source_of(back),
+                active=self._active(),
+            )  # fmt: skip
         else:
-            target = self._compile(str(command.args["source"]))
-        summary = summarize(self.current.cc.chart, target.cc.chart, self._active())
+            target, summary = self._compile(str(command.args["source"]), preview=preview)
         lines = list(summary.lines()) or ["no change: the CPU runs this chart"]
         if preview:
             reply = CommandReply(
@@ -296,49 +305,42 @@ class OnlineChange:
                 version=self.current.number,
                 removed=list(summary.removed_active),
             )
-            return reply, f"preview of version {target.number}: {len(summary.changes)} changes"
+            return reply, f"preview of version {self.current.number + 1}: {summary.count} changes"
         if op == "download" and summary.unchanged:
             raise _Refused(
                 f"nothing changes: the CPU runs this chart (version {self.current.number})"
             )
+        assert target is not None  # compiled: not a preview
         return self._download(command, target, summary, str(removed) if removed else None)
 
     def _active(self) -> tuple[int, ...]:
         cc, st = self.current.cc, self.session.graph.state
         return tuple(n for n, x in zip(cc.step_numbers, list(st.x), strict=False) if x)
 
-    def _compile(self, text: str) -> Version:
-        """``text`` compiled with the CPU's symbol table (the editor's limits first)."""
-        file = self.path.name if self.path is not None else f"{self.current.cc.name}.s7g"
-        try:
-            chart = parse_source(text, file)
-        except EditRefused as exc:
-            lines = [format_diagnostic(d) for d in exc.diagnostics]
-            raise _Refused(f"the chart does not parse: {exc.reason}", lines) from None
-        try:
-            table = SymbolTable.from_text(self.symbols_text) if self.symbols_text else None
-            cc, table = compile_model(chart, table)
-        except ChartLoadError as exc:
-            errors = [line for line in exc.lines if ": error[" in line] or exc.lines
-            raise _Refused(
-                f"the chart does not compile: {len(errors)} error(s); "
-                f"{errors[0] if errors else ''}",
-                exc.lines,
-            ) from None
-        except S7Error as exc:
-            raise _Refused(f"the chart does not compile: {exc}") from None
-        running = self.current.cc.chart
-        same = (chart.name, chart.fb_number, chart.db_number)
-        was = (running.name, running.fb_number, running.db_number)
-        if same != was:
-            raise _Refused(
-                f"a download changes the chart of the running FB, not the block: keep "
-                f'FUNCTION_BLOCK "{was[0]}" FB {was[1] or 1} DB {was[2] or was[1] or 1}'
-            )
-        return Version(self.current.number + 1, cc, table, text)
+    def _compile(self, text: str, *, preview: bool) -> tuple[Version | None, Summary]:
+        """``text`` compiled with the CPU's symbol table in the compiler's process, and its
+        change summary (a preview: the summary only)."""
+        v = self.current
+        file = self.path.name if self.path is not None else f"{v.cc.name}.s7g"
+        done = self.compiler.compile(
+            text, file, symbols=self.symbols_text, running=self._source_of(v),
+            active=self._active(), fb=self.live.fb, version=v.number + 1, preview=preview,
+        )  # fmt: skip
+        if not isinstance(done, Compiled):
+            return None, done
+        return Version(v.number + 1, done.cc, done.table, text, done.live), done.summary
+
+    def _source_of(self, v: Version) -> str:
+        """Chart version ``v`` as ``.s7g`` text (the first, when imported from another
+        format, as the text it formats to, made once)."""
+        if v.number > 1 or self.path is None or self.path.suffix == ".s7g":
+            return v.text
+        if self._formatted is None or self._formatted[0] is not v:
+            self._formatted = (v, format_chart(v.cc.chart))
+        return self._formatted[1]
 
     def _download(
-        self, command: Command, target: Version, summary: ChangeSummary, removed: str | None
+        self, command: Command, target: Version, summary: Summary, removed: str | None
     ) -> tuple[CommandReply, str]:
         """Write the file, swap at the boundary, keep the old version; undo when refused."""
         backup = None
@@ -351,7 +353,7 @@ class OnlineChange:
                 raise _Refused(
                     f"{command.op} refused: {exc}; the CPU keeps the old chart"
                 ) from None
-        live = self.live.prepare(target.cc, version=target.number)
+        live = target.live or self.live.prepare(target.cc, version=target.number)
         pending = _Swap(target, live, removed, command.user)
         with self._lock:
             self._swap = pending
@@ -441,28 +443,16 @@ class OnlineChange:
                 raise _Refused(
                     f"{name} has {path.stat().st_size:,} bytes; at most {MAX_READ:,} are read"
                 )
-            table = SymbolTable.from_text(self.symbols_text) if self.symbols_text else None
-            imported = import_file(path, symbols=table)
-        except ImportFailed as exc:
-            lines = [format_diagnostic(d) for d in exc.diagnostics]
-            raise _Refused(
-                f"{name} does not import: {lines[0] if lines else 'no chart'}", lines
-            ) from None
-        except (OSError, S7Error) as exc:
+        except OSError as exc:
             raise _Refused(f"cannot open {name}: {exc}") from None
-        text = format_chart(imported.chart)
-        lines = [format_diagnostic(d) for d in imported.problems]
+        text, lines = self.compiler.open(path, symbols=self.symbols_text)
         return CommandReply(applied=True, text=text, lines=lines[:MAX_LINES])
 
     def _save(self, name: str, text: str) -> tuple[CommandReply, str]:
         if not name.endswith(".s7g"):
             raise _Refused(f"{name!r}: Save writes .s7g charts (a name ending in .s7g)")
         path = self._file(name)
-        try:
-            parse_source(text, name)
-        except EditRefused as exc:
-            lines = [format_diagnostic(d) for d in exc.diagnostics]
-            raise _Refused(f"not saved: {exc.reason}", lines) from None
+        self.compiler.check(text, name)
         try:
             backup = write_chart(path, text)
         except ProjectError as exc:

@@ -1,0 +1,161 @@
+"""What the compiler process (``web.bus.compiler``) does with one request.
+
+``answer(request)`` parses, validates and compiles a chart (``compile``; ``preview``: the
+same, only the change summary goes back), compares two charts (``summary``: an undo),
+checks that a text parses (``check``: a save), or imports a file (``open``). Every
+refusal is ``{"refused": reason, "lines": diagnostics}`` with one line naming the place;
+nothing a request holds makes it raise.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import marshal
+from pathlib import Path
+from typing import Any, Final
+
+from s7graph.engine.errors import S7Error
+from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer.carry import fingerprint
+from s7graph.sequencer.diagnostics import format_diagnostic
+from s7graph.sequencer.diff import summarize
+from s7graph.sequencer.edit_base import EditRefused
+from s7graph.sequencer.edit_text import parse_source
+from s7graph.sequencer.exchange import ImportFailed, import_file
+from s7graph.sequencer.format import format_chart
+from s7graph.sequencer.model import Chart
+from s7graph.sequencer.parse import parse_chart
+from s7graph.web.bus.live import prepare_chart
+from s7graph.web.bus.pieces import dumps_in_pieces
+from s7graph.web.harness.session import ChartLoadError, compile_model
+
+__all__ = ["MAX_SUMMARY_LINES", "answer"]
+
+MAX_SUMMARY_LINES: Final = 1000  # lines of a change summary sent back
+
+SOURCE_PIECE: Final = 1 << 18
+_KEPT: Final = 4  # running charts kept parsed (by the hash of their text)
+_running: dict[str, Chart] = {}
+
+
+class _Refused(Exception):
+    def __init__(self, reason: str, lines: list[str] | tuple[str, ...] = ()) -> None:
+        super().__init__(reason)
+        self.reason = reason
+        self.lines = list(lines)
+
+
+def answer(request: dict[str, Any]) -> tuple[dict[str, Any], list[bytes]]:
+    """The answer to one request (see the module), and the raw pieces sent after it."""
+    op = str(request.get("op"))
+    try:
+        if op in ("compile", "preview"):
+            return _compile(request, preview=op == "preview")
+        if op == "summary":
+            return _summary(request), []
+        if op == "check":
+            _parse(str(request["text"]), str(request["file"]), "not saved")
+            return {}, []
+        if op == "open":
+            return _open(Path(str(request["path"])), str(request.get("symbols", ""))), []
+        return {"refused": f"the compiler has no request {op!r}"}, []
+    except _Refused as exc:
+        return {"refused": exc.reason, "lines": exc.lines[:MAX_SUMMARY_LINES]}, []
+    except RecursionError:
+        return {"refused": f"{op} refused: the chart nests too deeply to compile"}, []
+    except MemoryError:
+        return {"refused": f"{op} refused: the chart needs more memory than there is"}, []
+    except Exception as exc:  # a bad request is refused, the process goes on
+        return {"refused": f"{op} refused: {type(exc).__name__}: {exc}"[:4096]}, []
+
+
+def _parse(text: str, file: str, refused: str) -> Chart:
+    try:
+        return parse_source(text, file)
+    except EditRefused as exc:
+        lines = [format_diagnostic(d) for d in exc.diagnostics]
+        raise _Refused(f"{refused}: {exc.reason}", lines) from None
+
+
+def _running_chart(text: str) -> Chart:
+    """The running chart parsed from its text (kept for the next request)."""
+    key = hashlib.sha256(text.encode()).hexdigest()
+    chart = _running.get(key)
+    if chart is None:
+        chart = parse_chart(text, "<running chart>")
+        while len(_running) >= _KEPT:
+            _running.pop(next(iter(_running)))
+        _running[key] = chart
+    return chart
+
+
+def _compile(request: dict[str, Any], *, preview: bool) -> tuple[dict[str, Any], list[bytes]]:
+    """Parse, check and compile; the change summary; for a download the compiled chart
+    and the view's description of it, pickled in pieces (``web.bus.pieces``) without its
+    code objects, which follow marshalled batch by batch, and its generated source, which
+    follows in pieces of ``SOURCE_PIECE`` characters."""
+    chart = _parse(str(request["text"]), str(request["file"]), "the chart does not parse")
+    symbols = str(request.get("symbols", ""))
+    try:
+        table = SymbolTable.from_text(symbols) if symbols else None
+        cc, table = compile_model(chart, table)
+    except ChartLoadError as exc:
+        errors = [line for line in exc.lines if ": error[" in line] or exc.lines
+        raise _Refused(
+            f"the chart does not compile: {len(errors)} error(s); {errors[0] if errors else ''}",
+            exc.lines,
+        ) from None
+    except S7Error as exc:
+        raise _Refused(f"the chart does not compile: {exc}") from None
+    running = _running_chart(str(request["running"]))
+    same = (chart.name, chart.fb_number, chart.db_number)
+    was = (running.name, running.fb_number, running.db_number)
+    if same != was:
+        raise _Refused(
+            f"a download changes the chart of the running FB, not the block: keep "
+            f'FUNCTION_BLOCK "{was[0]}" FB {was[1] or 1} DB {was[2] or was[1] or 1}'
+        )
+    summary = summarize(running, chart, tuple(request.get("active", ())))
+    lines = summary.lines()
+    out: dict[str, Any] = {
+        "summary": (lines[:MAX_SUMMARY_LINES], summary.removed_active, len(summary.changes))
+    }
+    if preview:
+        return out, []
+    fingerprint(cc)  # kept with the chart: the scan boundary does not compute it
+    code = [marshal.dumps(piece) for piece in cc.code]
+    source = cc.source
+    object.__setattr__(cc, "code", ())
+    object.__setattr__(cc, "source", "")
+    live = prepare_chart(cc, fb=str(request["fb"]), version=int(request["version"]))
+    pieces = dumps_in_pieces((cc, table, live))
+    out["parts"] = (len(pieces), len(code))
+    step = SOURCE_PIECE
+    text = [source[k : k + step].encode() for k in range(0, len(source), step)]
+    return out, [*pieces, *code, *text]
+
+
+def _summary(request: dict[str, Any]) -> dict[str, Any]:
+    """The change summary from the ``running`` chart's text to the ``target``'s (both kept
+    parsed for the next request): an undo of a download."""
+    running = _running_chart(str(request["running"]))
+    target = _running_chart(str(request["target"]))
+    summary = summarize(running, target, tuple(request.get("active", ())))
+    return {"summary": (summary.lines()[:MAX_SUMMARY_LINES], summary.removed_active,
+                        len(summary.changes))}  # fmt: skip
+
+
+def _open(path: Path, symbols: str) -> dict[str, Any]:
+    name = path.name
+    try:
+        table = SymbolTable.from_text(symbols) if symbols else None
+        imported = import_file(path, symbols=table)
+    except ImportFailed as exc:
+        lines = [format_diagnostic(d) for d in exc.diagnostics]
+        raise _Refused(
+            f"{name} does not import: {lines[0] if lines else 'no chart'}", lines
+        ) from None
+    except (OSError, S7Error) as exc:
+        raise _Refused(f"cannot open {name}: {exc}") from None
+    text = format_chart(imported.chart)
+    return {"text": text, "lines": [format_diagnostic(d) for d in imported.problems]}

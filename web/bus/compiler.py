@@ -1,0 +1,391 @@
+"""Charts parsed, checked and compiled in a process of their own, never in the CPU's.
+
+A chart sent to the CPU (a download, its preview, a save, an open) is parsed, validated
+and compiled by a warm child process (``python -m s7graph.web.bus.compiler``): compiling
+holds the interpreter's lock in long C calls (``compile()``, the parser), and a thread of
+the CPU's process would hold the scan up for as long; a second process does not share the
+lock. The rules:
+
+- the size limit first: a text over ``MAX_SOURCE`` characters is refused before anything
+  parses it (and before it is sent to the child);
+- the time limit: a request the child has not answered within ``time_limit_s`` is refused
+  and the child killed and replaced (a fresh one starts at once, warm for the next);
+- the child runs on the processors of the thread that made the :class:`Compiler` (the chart
+  runner makes it off the processor it keeps for the scan: ``engine.cores.kept_free``), at
+  the normal scheduling policy even when started from a real-time thread;
+- what comes back for a download is the compiled chart without its code objects (pickled),
+  the code objects marshalled one batch at a time (``sequencer.compile._batches``), and
+  the view's layout of it (``web.bus.live.prepare_chart``): the CPU's process never
+  compiles source; it unpickles with the cyclic collector paused and, when the runner
+  collects in the scan's idle time (automatic collections off), freezes each piece as it
+  comes (``gc.freeze``) so that the scan's idle collections do not walk the new chart;
+- a preview, a save and an open bring back text only (the change summary, the chart).
+
+Used by ``web.bus.online.OnlineChange`` from its one worker thread.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import gc
+import marshal
+import os
+import pickle
+import select
+import signal
+import struct
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import IO, Any, Final
+
+from s7graph.engine.cores import allowed_cpus
+from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer.collector import collector_paused
+from s7graph.sequencer.compiled import CompiledChart
+from s7graph.sequencer.edit_base import MAX_SOURCE
+from s7graph.web.bus import compile_jobs
+from s7graph.web.bus.live import LiveChart
+from s7graph.web.bus.pieces import loads_in_pieces
+
+__all__ = [
+    "MAX_SOURCE",
+    "START_LIMIT_S",
+    "TIME_LIMIT_S",
+    "CompileRefused",
+    "Compiled",
+    "Compiler",
+    "Summary",
+]  # fmt: skip
+
+TIME_LIMIT_S: Final = 20.0
+"""A request the child has not answered by then is refused (and the child replaced): well
+within the 30 s the view and ``s7graph download`` wait for a download's answer, which also
+writes the file and waits for a scan boundary."""
+START_LIMIT_S: Final = 120.0  # a fresh child imports s7graph within this
+_HEADER = struct.Struct("<Q")
+_PR_SET_PDEATHSIG = 1
+_READY = b"s7graph-compiler ready"
+
+
+class CompileRefused(Exception):
+    """A request refused: ``reason`` (one line naming the limit or the place) and the
+    diagnostics (``lines``)."""
+
+    def __init__(self, reason: str, lines: list[str] | tuple[str, ...] = ()) -> None:
+        super().__init__(reason)
+        self.reason = reason
+        self.lines = list(lines)
+
+
+@dataclass(frozen=True, slots=True)
+class Summary:
+    """A change summary as text (``sequencer.diff.ChangeSummary`` without the model values):
+    its lines, the active steps the change removes, and how many changes."""
+
+    text: tuple[str, ...]
+    removed_active: tuple[int, ...]
+    count: int
+
+    @property
+    def unchanged(self) -> bool:
+        return self.count == 0
+
+    def lines(self) -> tuple[str, ...]:
+        return self.text
+
+
+@dataclass(frozen=True, slots=True)
+class Compiled:
+    """A chart compiled by the child: the compiled chart, its symbol table, the view's
+    description of it and the change summary against the running chart."""
+
+    cc: CompiledChart
+    table: SymbolTable
+    live: LiveChart
+    summary: Summary
+
+
+class Compiler:
+    """The warm compiler process of one CPU (see the module). Call from one long-lived
+    thread (the child is killed when the thread that started it ends); only :meth:`close`
+    may come from another. ``time_limit_s``: the longest a request may take;
+    ``cpus``: the processors the child runs on (default: the calling thread's now)."""
+
+    def __init__(
+        self,
+        *,
+        time_limit_s: float = TIME_LIMIT_S,
+        start_limit_s: float = START_LIMIT_S,
+        cpus: set[int] | None = None,
+    ) -> None:
+        self.time_limit_s = time_limit_s
+        self.start_limit_s = start_limit_s
+        self.cpus = set(cpus) if cpus is not None else allowed_cpus()
+        self.started = 0  # children started (a replacement counts)
+        self._proc: subprocess.Popen[bytes] | None = None
+        self._ready = False
+        self._lock = threading.Lock()  # _proc against close()
+        self._closed = False
+
+    # ------------------------------------------------------------ the child
+
+    @property
+    def pid(self) -> int | None:
+        proc = self._proc
+        return proc.pid if proc is not None and proc.poll() is None else None
+
+    def start(self) -> None:
+        """Start the child unless one runs (it imports while the caller goes on)."""
+        with self._lock:
+            if self._closed or (self._proc is not None and self._proc.poll() is None):
+                return
+            cpus = ",".join(map(str, sorted(self.cpus)))
+            self._proc = subprocess.Popen(
+                [sys.executable, "-m", "s7graph.web.bus.compiler", "--cpus", cpus],
+                stdin=subprocess.PIPE, stdout=subprocess.PIPE, close_fds=True,
+                env=_child_env(),
+            )  # fmt: skip
+            self._ready = False
+            self.started += 1
+
+    def close(self) -> None:
+        """End the child (its input closed; killed if it does not end at once)."""
+        with self._lock:
+            self._closed = True
+            proc, self._proc = self._proc, None
+        if proc is not None:
+            _end(proc)
+
+    def _replace(self) -> None:
+        """Kill the child and start a fresh one, warm for the next request."""
+        with self._lock:
+            proc, self._proc = self._proc, None
+        if proc is not None:
+            _end(proc, at_once=True)
+        self.start()
+
+    def _call(self, request: dict[str, Any], what: str) -> tuple[dict[str, Any], list[bytes]]:
+        """Send ``request``, wait for the answer (a small header, then as many raw pieces
+        as it says) within the time limit."""
+        self.start()
+        proc = self._proc
+        if proc is None or proc.stdin is None or proc.stdout is None:
+            raise CompileRefused(f"{what} refused: the CPU's compiler is closed")
+        try:
+            if not self._ready:
+                if _read(proc.stdout, self.start_limit_s) != _READY:
+                    raise EOFError("it did not start")
+                self._ready = True
+            data = pickle.dumps(request, protocol=pickle.HIGHEST_PROTOCOL)
+            proc.stdin.write(_HEADER.pack(len(data)) + data)
+            proc.stdin.flush()
+            deadline = time.monotonic() + self.time_limit_s
+            reply: dict[str, Any] = pickle.loads(_read(proc.stdout, self.time_limit_s))
+            blobs = [
+                _read(proc.stdout, deadline - time.monotonic())
+                for _ in range(int(reply.get("blobs", 0)))
+            ]
+        except TimeoutError:
+            self._replace()
+            raise CompileRefused(
+                f"{what} refused: not compiled within {self.time_limit_s:g} s (the time "
+                "limit); the compiler process was stopped"
+            ) from None
+        except (OSError, EOFError, ValueError) as exc:
+            self._replace()
+            raise CompileRefused(f"{what} refused: the compiler process ended ({exc})") from None
+        if "refused" in reply:
+            raise CompileRefused(str(reply["refused"]), list(reply.get("lines", ())))
+        return reply, blobs
+
+    # ------------------------------------------------------------ requests
+
+    def compile(
+        self,
+        text: str,
+        file: str,
+        *,
+        symbols: str,
+        running: str,
+        active: tuple[int, ...],
+        fb: str,
+        version: int,
+        preview: bool = False,
+    ) -> Compiled | Summary:
+        """``text`` compiled as version ``version`` of FB ``fb`` with the symbol table text
+        ``symbols``, its change summary against the ``running`` chart's text with the
+        ``active`` steps; a ``preview`` brings back the summary only."""
+        _size_limit(text, "the chart")
+        request = {
+            "op": "preview" if preview else "compile", "text": text, "file": file,
+            "symbols": symbols, "running": running, "active": active, "fb": fb,
+            "version": version,
+        }  # fmt: skip
+        reply, blobs = self._call(request, "download")
+        summary = Summary(*reply["summary"])
+        if preview:
+            return summary
+        return _loaded(blobs, reply["parts"], summary)
+
+    def summarize(self, *, running: str, target: str, active: tuple[int, ...]) -> Summary:
+        """The change summary from the ``running`` chart's text to ``target``'s, with the
+        ``active`` steps (an undo: the target compiled before)."""
+        request = {"op": "summary", "running": running, "target": target, "active": active}
+        reply, _ = self._call(request, "undo_download")
+        return Summary(*reply["summary"])
+
+    def check(self, text: str, file: str) -> None:
+        """``text`` parses as a chart within the editor's limits (CompileRefused if not)."""
+        _size_limit(text, "the chart")
+        self._call({"op": "check", "text": text, "file": file}, "save")
+
+    def open(self, path: Path, *, symbols: str) -> tuple[str, list[str]]:
+        """The chart of file ``path`` (any format ``sequencer.exchange`` imports) as
+        ``.s7g`` text, and the import's notes."""
+        reply, _ = self._call({"op": "open", "path": str(path), "symbols": symbols}, "open")
+        return str(reply["text"]), list(reply["lines"])
+
+
+def _size_limit(text: str, what: str) -> None:
+    if len(text) > MAX_SOURCE:
+        raise CompileRefused(
+            f"{what} has {len(text):,} characters; at most {MAX_SOURCE:,} are compiled "
+            "(the size limit)"
+        )
+
+
+def _loaded(blobs: list[bytes], parts: tuple[int, int], summary: Summary) -> Compiled:
+    """The child's compiled chart in this process (``blobs``: ``parts`` pickled pieces of
+    it, ``web.bus.pieces``; as many code objects, marshalled; its generated source in
+    pieces, UTF-8), loaded piece by piece with the collector paused. Between two pieces the
+    interpreter may switch to the scan thread, and does so within ``SWITCH_S`` of its asking
+    (not the interpreter's usual 5 ms). Where the runner keeps automatic collections off and
+    collects in the scan's idle time, each piece is frozen (``gc.freeze``) as it comes: an
+    idle-time collection of the scan thread between two pieces would otherwise walk the
+    chart loaded so far (13 ms seen for a 1,000-step chart)."""
+    n_chart, n_code = parts
+    settle = gc.freeze if not gc.isenabled() else None
+    with collector_paused(), _switching(SWITCH_S):
+        cc, table, live = loads_in_pieces(blobs[:n_chart], settle)
+        code = []
+        for piece in blobs[n_chart : n_chart + n_code]:
+            code.append(marshal.loads(piece))
+        source = []
+        for piece in blobs[n_chart + n_code :]:
+            source.append(piece.decode())
+        object.__setattr__(cc, "code", tuple(code))
+        object.__setattr__(cc, "source", "".join(source))
+    if settle is not None:
+        settle()
+    return Compiled(cc, table, live, summary)
+
+
+SWITCH_S: Final = 0.0005
+
+
+@contextlib.contextmanager
+def _switching(interval_s: float) -> Iterator[None]:
+    """The interpreter's switch interval at most ``interval_s`` for the ``with`` block."""
+    before = sys.getswitchinterval()
+    sys.setswitchinterval(min(before, interval_s))
+    try:
+        yield
+    finally:
+        sys.setswitchinterval(before)
+
+
+def _child_env() -> dict[str, str]:
+    """The environment with this process's ``s7graph`` first on the child's path."""
+    import s7graph
+
+    env = dict(os.environ)
+    roots = [str(Path(p).resolve().parent) for p in s7graph.__path__]
+    env["PYTHONPATH"] = os.pathsep.join([*roots, *filter(None, [env.get("PYTHONPATH")])])
+    return env
+
+
+def _end(proc: subprocess.Popen[bytes], *, at_once: bool = False) -> None:
+    with contextlib.suppress(OSError, ValueError):
+        if proc.stdin is not None:
+            proc.stdin.close()
+    if at_once:
+        proc.kill()
+    try:
+        proc.wait(2.0)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
+    if proc.stdout is not None:
+        proc.stdout.close()
+
+
+def _read(stream: IO[bytes], limit_s: float) -> bytes:
+    """One message (length, then bytes) from ``stream`` within ``limit_s``: TimeoutError
+    when it does not come, EOFError when the child ended."""
+    fd = stream.fileno()
+    deadline = time.monotonic() + limit_s
+    buf = bytearray()
+    need = _HEADER.size
+    size: int | None = None
+    while True:
+        while len(buf) < need:
+            left = deadline - time.monotonic()
+            if left <= 0 or not select.select([fd], [], [], left)[0]:
+                raise TimeoutError
+            chunk = os.read(fd, min(1 << 20, need - len(buf)))
+            if not chunk:
+                raise EOFError("no answer")
+            buf += chunk
+        if size is not None:
+            return bytes(buf[_HEADER.size :])
+        (size,) = _HEADER.unpack_from(buf)
+        need = _HEADER.size + size
+
+
+# ---------------------------------------------------------------------------- the child
+
+
+def _serve(cpus: str) -> int:
+    """The child: requests from stdin, answers to stdout, one at a time, until stdin ends."""
+    _own_processor(cpus)
+    inp, out = sys.stdin.buffer, sys.stdout.buffer
+    out.write(_HEADER.pack(len(_READY)) + _READY)
+    out.flush()
+    while True:
+        head = inp.read(_HEADER.size)
+        if len(head) < _HEADER.size:
+            return 0
+        (size,) = _HEADER.unpack(head)
+        request = pickle.loads(inp.read(size))
+        answer, blobs = compile_jobs.answer(request)
+        data = pickle.dumps({**answer, "blobs": len(blobs)}, protocol=pickle.HIGHEST_PROTOCOL)
+        for message in (data, *blobs):
+            out.write(_HEADER.pack(len(message)) + message)
+        out.flush()
+
+
+def _own_processor(cpus: str) -> None:
+    """The normal scheduling policy (a real-time parent thread's is inherited) on
+    ``cpus`` (comma-separated processor numbers); killed when the CPU's process ends, even
+    in the middle of a compile (Linux: ``PR_SET_PDEATHSIG``)."""
+    with contextlib.suppress(OSError, AttributeError):
+        import ctypes
+
+        ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGKILL)
+    if os.getppid() == 1:  # the parent ended before the line above
+        sys.exit(0)
+    with contextlib.suppress(OSError, AttributeError):
+        os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
+    wanted = {int(c) for c in cpus.split(",") if c.strip().isdigit()}
+    if wanted:
+        with contextlib.suppress(OSError, AttributeError, ValueError):
+            os.sched_setaffinity(0, wanted)
+
+
+if __name__ == "__main__":
+    sys.exit(_serve(sys.argv[sys.argv.index("--cpus") + 1] if "--cpus" in sys.argv else ""))
