@@ -1,7 +1,7 @@
 """The README is a front door (issue 28): at most 300 lines, its first lines the two
 commands that work (``.ci/run`` runs exactly the second), what s7graph is not, and links
-into ``docs/`` that resolve — files and the headings they point at; the docs pages' own
-links resolve too."""
+into ``docs/`` that resolve — files and the headings they point at; the links of the docs
+pages and of bench/README.md resolve too."""
 
 from __future__ import annotations
 
@@ -72,7 +72,10 @@ def test_every_docs_link_of_the_readme_resolves() -> None:
     assert "docs/status-view.png" in docs
 
 
-@pytest.mark.parametrize("page", sorted((ROOT / "docs").glob("*.md")), ids=lambda p: p.name)
+PAGES = [*sorted((ROOT / "docs").glob("*.md")), ROOT / "bench" / "README.md"]
+
+
+@pytest.mark.parametrize("page", PAGES, ids=lambda p: str(p.relative_to(ROOT)))
 def test_the_links_of_every_docs_page_resolve(page: Path) -> None:
     assert broken_links(page) == []
 
