@@ -1,5 +1,5 @@
 """Editing a chart: the table of edit operations, applying one, and an editing session
-with undo and redo (README "Editing charts (core)").
+with undo and redo (docs/online-change.md, "Editing charts (core)").
 
 The model is the source of truth: a chart is immutable, an edit gives a new chart (sharing
 what it does not change) validated by the same rules as ``s7graph check``

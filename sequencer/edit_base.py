@@ -20,7 +20,7 @@ from s7graph.sequencer.diagnostics import Diagnostic
 from s7graph.sequencer.elements import Ref
 from s7graph.sequencer.model import Chart, Sequence, Step, Transition
 
-# ---------------------------------------------------------------- limits (README "Editing charts")
+# ---------------------------------------------------------------- limits (docs/online-change.md)
 # S7-GRAPH's own limits (SPEC §2.1: 250 steps, 250 transitions, 8 sequencers) only warn
 # (W110); the editor refuses beyond four times them, so that every edit and its validation
 # stay in milliseconds and a hostile chart or paste cannot exhaust the view or the CPU.

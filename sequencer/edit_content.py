@@ -319,7 +319,7 @@ class RenameSequence(Edit):
 @dataclass(frozen=True, slots=True)
 class SetOption(Edit):
     """Set the header option ``option`` to ``value`` (``SKIP_STEPS``, ``TRUE``), as the
-    ``.s7g`` header writes it (README "The .s7g chart format")."""
+    ``.s7g`` header writes it (docs/chart-format.md)."""
 
     option: str
     value: str

@@ -7,7 +7,7 @@ ACK_S, REG_S, T_PREV, T_NEXT under Standard; per the errata they belong to USER 
 
 Everything that needs to know which pins exist reads this table: the FB interface
 (``sequencer/fb.py``), the ``sim`` stimulus and watch names (SPEC §4), programs that write
-pins, and the README (``markdown_table``).
+pins, and docs/semantics.md (``markdown_table``).
 """
 
 from __future__ import annotations
@@ -229,7 +229,7 @@ def _defaults(pins: Iterable[Pin], options: ChartOptions | None) -> dict[str, ob
 
 
 def markdown_table() -> str:
-    """The pin table as Markdown, for the README (one row per pin, ✓ per set)."""
+    """The pin table as Markdown, for docs/semantics.md (one row per pin, ✓ per set)."""
     head = "| Pin | Dir | Type | " + " | ".join(PARAMETER_SETS) + " | Default | Meaning |"
     rule = "|---|---|---|" + "---|" * len(PARAMETER_SETS) + "---|---|"
     rows = [head, rule]

@@ -1,5 +1,5 @@
 """What an IEC 61131-3 SFC construct becomes in GRAPH: the tables the importer reads and
-the README's "Importing and exporting charts" section shows (``markdown_tables``).
+docs/import-export.md shows (``markdown_tables``).
 
 Sources: IEC 61131-3 ed.3 §6.7.4 (action qualifiers); matiec's runtime
 (``stage4/generate_c/generate_c_sfc.cc``: an action is active in the call its association
@@ -162,7 +162,7 @@ FUNCTIONS: Final[dict[str, str]] = {
     "DINT_TO_REAL": "DINT_TO_REAL",
 }
 
-# Everything else, for the README: (IEC construct, GRAPH, note).
+# Everything else, for docs/import-export.md: (IEC construct, GRAPH, note).
 CONSTRUCTS: Final[tuple[tuple[str, str, str], ...]] = (
     (
         "step, initial step",
@@ -240,7 +240,7 @@ def _row(cells: tuple[str, ...]) -> str:
 
 
 def markdown_tables() -> str:
-    """The README tables: qualifiers, then the other constructs."""
+    """The tables of docs/import-export.md: qualifiers, then the other constructs."""
     lines = [
         "| IEC qualifier | meaning | Boolean action variable | action body |",
         "|---|---|---|---|",

@@ -1,5 +1,6 @@
 """IEC qualifiers and constructs map to GRAPH where an exact equivalent exists and are
-otherwise reported at their place (``exchange.mapping``, the README's table; issue 11)."""
+otherwise reported at their place (``exchange.mapping``, the table of docs/import-export.md;
+issue 11)."""
 
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ from s7graph.sequencer.format import format_chart, format_row
 from s7graph.sequencer.model import Chart
 from tests.exchange.helpers import codes, sim
 
-README = Path(__file__).resolve().parents[2] / "README.md"
+DOC = Path(__file__).resolve().parents[2] / "docs" / "import-export.md"
 
 
 def program(body: str, decls: str = "x : BOOL; y : BOOL; n : INT;") -> bytes:
@@ -207,6 +208,6 @@ def test_codesys_step_actions_and_evaluation_order() -> None:
     assert result.problems == []
 
 
-def test_the_readme_table_is_the_mapping_table() -> None:
-    assert markdown_tables() in README.read_text(encoding="utf-8")
+def test_the_import_export_doc_table_is_the_mapping_table() -> None:
+    assert markdown_tables() in DOC.read_text(encoding="utf-8")
     assert set(QUALIFIERS) == {"N", "S", "R", "P", "P1", "P0", "D", "L", "SD", "DS", "SL"}

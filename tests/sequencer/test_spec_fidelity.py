@@ -102,7 +102,7 @@ def test_the_instance_db_starts_with_every_option_in_its_pins(options: str) -> N
 
 
 def test_the_pin_table_names_the_option_as_the_default() -> None:
-    """The README's pin table (params.markdown_table) says "option …" for those pins."""
+    """The pin table of docs/semantics.md (params.markdown_table) says "option …" for those pins."""
     table = markdown_table()
     assert "| option SKIP_STEPS (FALSE) | Skip steps |" in table
     assert "| option ACK_REQUIRED (TRUE) | Faults must be acknowledged |" in table

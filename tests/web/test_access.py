@@ -1,5 +1,5 @@
 """Users, roles and logins without a network: the users file (scrypt, 0600, the name
-rule), the one role table (and that README.md and docs/bus.md show it as it is), tokens,
+rule), the one role table (and that docs/security.md and docs/bus.md show it as it is), tokens,
 expiry, logout and the lockout after five wrong passwords."""
 
 from __future__ import annotations
@@ -82,7 +82,7 @@ def test_the_role_table_is_the_one_the_protocol_and_the_docs_show() -> None:
     assert not allowed("operator", "en_il") and allowed("engineer", "en_il")
     assert allowed("engineer", "download") and not allowed("nobody", "ack")
     table = role_table_markdown()
-    for doc in ("README.md", "docs/bus.md"):
+    for doc in ("docs/security.md", "docs/bus.md"):
         assert table in (ROOT / doc).read_text(encoding="utf-8"), f"{doc}: role table differs"
 
 

@@ -4,7 +4,7 @@
 the lowest role allowed to, the S7-GRAPH pin it acts as and what it does. ``ROLES`` orders
 the roles, each including the rights of those before it; :func:`allowed` is the only
 question the CPU asks (at the scan boundary); :func:`role_table_markdown` renders the table
-for README.md and docs/bus.md (a test keeps both equal to it).
+for docs/security.md and docs/bus.md (a test keeps both equal to it).
 """
 
 from __future__ import annotations
