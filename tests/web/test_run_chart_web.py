@@ -49,7 +49,7 @@ def running_edge() -> Iterator[tuple[LiveEdge, ChartSession]]:
 def test_live_edge_publishes_each_scan_and_applies_bus_commands_between_scans(
     running_edge: tuple[LiveEdge, ChartSession],
 ) -> None:
-    edge, _ = running_edge
+    edge, session = running_edge
     assert edge.edge is not None
     client = edge.edge.client
     follower = edge.edge.follower
@@ -73,7 +73,16 @@ def test_live_edge_publishes_each_scan_and_applies_bus_commands_between_scans(
     assert (unknown.applied, unknown.reason) == (False, f"no step S42 in {FB}")
     # S2's supervision (S2.U > 500 ms) trips: disturbed and latched until acknowledged
     assert wait_until(lambda: follower.latest is not None and follower.latest.latched == [2])
-    ack = client.send(as_bob("ack"))
+    # its cause (S2.U > 500 ms) persists: acknowledged in MAN it would latch again at once
+    persists = client.send(as_bob("ack"))
+    assert not persists.applied and "persists" in persists.reason
+    for name in ("Cl_press_ok", "Dr_mot_running", "Coolant_sel"):  # T2 holds
+        session.set(name, True)
+    assert client.send(as_bob("mode", mode="AUTO")).applied
+    assert wait_until(lambda: follower.latest is not None and follower.latest.mode == "AUTO")
+    cycle = follower.latest.cycle
+    assert wait_until(lambda: follower.latest is not None and follower.latest.cycle > cycle + 1)
+    ack = client.send(as_bob("ack"))  # in AUTO the acknowledgement lets S2 switch on T2
     assert ack.applied and ack.cycle is not None
 
     status = client.status()

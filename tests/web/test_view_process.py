@@ -53,6 +53,13 @@ def _children(parent: int) -> list[int]:
     return pids
 
 
+def _cmdline(pid: int) -> list[str]:
+    try:
+        return Path(f"/proc/{pid}/cmdline").read_bytes().decode().split("\0")
+    except OSError:  # ended meanwhile
+        return []
+
+
 class Run:
     """``s7graph run`` of the drill demo with ``--web``, in a session of its own (so that a
     signal to its process group is what a Ctrl-C at its terminal sends)."""
@@ -93,8 +100,8 @@ class Run:
         return pid
 
     def children(self) -> list[int]:
-        """The processes the CPU started (its view)."""
-        return _children(self.cpu)
+        """The view processes the CPU started (not its compiler process)."""
+        return [pid for pid in _children(self.cpu) if "--child" in _cmdline(pid)]
 
     def stop(self) -> None:
         if self.proc.poll() is None:
@@ -108,7 +115,7 @@ def run(tmp_path: Path) -> Iterator[Run]:
     try:
         yield r
     finally:
-        for pid in r.children() if r.proc.poll() is None else []:
+        for pid in _children(r.cpu) if r.proc.poll() is None else []:
             os.kill(pid, signal.SIGKILL)
         r.stop()
 

@@ -145,11 +145,14 @@ class Compiler:
             if self._closed or (self._proc is not None and self._proc.poll() is None):
                 return
             cpus = ",".join(map(str, sorted(self.cpus)))
-            self._proc = subprocess.Popen(
+            self._proc = subprocess.Popen(  # a Ctrl-C at the terminal is the CPU's to handle
                 [sys.executable, "-m", "s7graph.web.bus.compiler", "--cpus", cpus],
-                stdin=subprocess.PIPE, stdout=subprocess.PIPE, close_fds=True,
+                stdin=subprocess.PIPE,
+                stdout=subprocess.PIPE,
+                close_fds=True,
                 env=_child_env(),
-            )  # fmt: skip
+                start_new_session=True,
+            )
             self._ready = False
             self.started += 1
 
