@@ -1,7 +1,7 @@
 """The soft CPU: modes, startup, the scan cycle and error handling (SPEC.md §1.4–1.6).
 
 ``scan()`` reads the clock once and runs one cycle in S7 order: commands queued since the
-last scan are applied, scan hooks run (``add_scan_hook``; the S5 timer update of ``sfb``),
+last scan are applied, scan hooks run (``add_os_scan_hook``; the S5 timer update of ``sfb``),
 cycle monitoring judges the previous cycle, PII is read from the module side, OB1 runs,
 due interrupt OBs run — time-of-day OB10–17, delay OB20–23, cyclic OB30–38 — highest
 priority first and, within one priority, in the order of their start events (behaviour
@@ -130,7 +130,6 @@ class Cpu:
         self.meters = RuntimeMeters()
         self.ob_priority: dict[int, int] = {}
         """Parametrised OB priorities; others have the defaults of behaviour 18."""
-        self._scan_hooks: list[ScanHook] = []
         self._startup_hooks: list[StartupHook] = []
         self.stop_entry: DiagEntry | None = None
         """The diagnostic entry of the last transition to STOP (its cause is the entry
@@ -267,7 +266,7 @@ class Cpu:
             raw = self.clock.now_ns()
             self._hold_since = raw
             self.mode = CpuMode.HOLD
-            self.mem.periph_out[:] = bytes(len(self.mem.periph_out))
+            self.mem.clear_outputs(image=False)
             self.diagnostics.record(raw, EventId.HOLD_ENTERED, "", "RUN → HOLD")
 
     def resume(self) -> None:
@@ -309,12 +308,6 @@ class Cpu:
         """SFC43 RE_TRIGR: restart cycle-time monitoring for this cycle."""
         self.watchdog.retrigger()
 
-    def add_scan_hook(self, hook: ScanHook) -> None:
-        """Run ``hook(cpu, process_ns)`` at the start of every cycle and before the startup
-        OB (idempotent). Process time stands still in HOLD, so hooks see frozen time."""
-        if hook not in self._scan_hooks:
-            self._scan_hooks.append(hook)
-
     def add_startup_hook(self, hook: StartupHook) -> None:
         """Run ``hook(cpu, restart)`` at the beginning of every startup, once the restart
         type is settled and before memory or instance DBs are cleared (idempotent): how a
@@ -348,8 +341,6 @@ class Cpu:
 
     def _run_hooks(self, now: int) -> None:
         for hook in OS_SCAN_HOOKS:
-            hook(self, now)
-        for hook in self._scan_hooks:
             hook(self, now)
 
     def priority_of(self, ob: int) -> int:
@@ -490,7 +481,7 @@ class Cpu:
         self._now = now
         ctx = self._ctx
         ctx.now_ns = now
-        if OS_SCAN_HOOKS or self._scan_hooks:
+        if OS_SCAN_HOOKS:
             self._run_hooks(now)
         last = self._last_ob1
         if last is not None and now - last < self.watchdog.min_cycle_ns:
@@ -649,7 +640,7 @@ class Cpu:
         self._hold_since = None
         self.meters.stop_cpu(self.clock.now_ns())
         self.delays.clear()
-        self.mem.periph_out[:] = bytes(len(self.mem.periph_out))
+        self.mem.clear_outputs(image=False)
         self.stop_entry = self.diagnostics.record(self.clock.now_ns(), event, block, message)
 
     # ---- commands and startup ---------------------------------------------------------------
@@ -720,11 +711,9 @@ class Cpu:
                 idb.reset()
         elif rule.clear_nonretentive_mtc:
             mem.clear_non_retentive()
-        if rule.clear_piq and not rule.residual_cycle:
-            mem.outputs[:] = bytes(len(mem.outputs))
+        mem.clear_outputs(image=rule.clear_piq and not rule.residual_cycle)
         if rule.clear_pii:
             mem.inputs[:] = bytes(len(mem.inputs))
-        mem.periph_out[:] = bytes(len(mem.periph_out))
         self._held_ns = 0
         self._hold_since = None
         self._last_ob1 = None
@@ -739,7 +728,7 @@ class Cpu:
         self.tod.startup(self.rtc.read(raw), hot=hot)
         self._tod_seen = None
         self._airt_disabled = 0
-        if OS_SCAN_HOOKS or self._scan_hooks:
+        if OS_SCAN_HOOKS:
             self._run_hooks(raw)  # S5 timers keep running in STARTUP (behaviour 8)
         self._run_ob(rule.ob, {"RESTART": str(restart)})
         if self.mode is not CpuMode.STARTUP:
@@ -749,7 +738,7 @@ class Cpu:
         if restart is RestartType.HOT and self.keep_outputs_on_hot_restart:
             pass
         elif restart is RestartType.HOT:
-            mem.outputs[:] = bytes(len(mem.outputs))
+            mem.clear_outputs(modules=False)
         self.update_pii()
         t_run = self.clock.now_ns()  # STOP→RUN instant, after the (unmonitored) startup program
         self.mode = CpuMode.RUN

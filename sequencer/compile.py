@@ -19,7 +19,7 @@ from s7graph.engine.address import Area, Width
 from s7graph.engine.errors import S7Error, SourceLocation
 from s7graph.sequencer.collector import collector_paused
 from s7graph.sequencer.compiled import CompiledChart
-from s7graph.sequencer.model import BlockCall, Chart, Coil, Operand, Transition
+from s7graph.sequencer.model import BlockCall, Chart, Coil, Operand
 from s7graph.sequencer.names import resolve_operand
 from s7graph.sequencer.params import pin as pin_info
 from s7graph.steps.actions import ActionParts, call_code, step_action_parts, uses_own_index
@@ -128,10 +128,6 @@ def _addr_ref(addr: Any, type_name: str | None, name: str) -> Ref:
         t = "BOOL"
     return Ref("mem", t, name=name, area=str(addr.area), db=addr.db, byte=addr.byte,
                bit=addr.bit)  # fmt: skip
-
-
-def _priority(seq_transitions: tuple[Transition, ...]) -> dict[int, int]:
-    return {t.number: k for k, t in enumerate(seq_transitions)}
 
 
 def compile_chart(chart: Chart, symbols: Any = None) -> CompiledChart:
