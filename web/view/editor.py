@@ -27,7 +27,6 @@ import functools
 import html
 import threading
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any, Final
 
 from s7graph.engine.symbols import SymbolTable
@@ -45,7 +44,7 @@ from s7graph.web.bus.protocol import ChartLayout, ChartSource
 from s7graph.web.view import texts
 from s7graph.web.view.drawing import FLAWED, SELECTED, Drawing, Picture, aim_camera, picture
 from s7graph.web.view.edit_forms import Field, Form, element_choices, form_for
-from s7graph.web.view.editor_cpu import MAX_DIAGNOSTIC_BUTTONS, CpuCommands, refused
+from s7graph.web.view.editor_cpu import MAX_DIAGNOSTIC_BUTTONS, CpuCommands, Located, refused
 from s7graph.web.view.editor_rows import RowEditing
 from s7graph.web.view.engineering import EditorPage
 from s7graph.web.view.layout import place
@@ -56,15 +55,6 @@ EDIT_OFFSET: Final = (0.0, -2000.0)  # where a page draws the chart it edits (of
 EDITOR_WIDTH: Final = 400  # pixels of the editor's panel, docked left of the chart
 PAGE_WIDTH, PAGE_HEIGHT, PANEL_WIDTH = 1280, 800, 340  # the page the camera is aimed for
 DEBOUNCE_S: Final = 0.6  # typing pauses this long: the text is applied
-
-
-@dataclass(frozen=True, slots=True)
-class Located:
-    """The diagnostics of the chart as the source view shows it (lines and columns of that
-    text), and the chart read back from it (to find the element of a diagnostic)."""
-
-    diagnostics: tuple[Diagnostic, ...]
-    chart: Chart | None
 
 
 class Editor(CpuCommands, RowEditing):

@@ -10,27 +10,35 @@ from __future__ import annotations
 import contextlib
 import functools
 from collections.abc import Callable
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any, Final
 
 import viser
 
 from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer.diagnostics import Diagnostic
 from s7graph.sequencer.edit import Session, new_chart
 from s7graph.sequencer.edit_base import EditRefused, Refusal
 from s7graph.sequencer.edit_text import parse_source
 from s7graph.sequencer.format import format_chart
+from s7graph.sequencer.model import Chart
 from s7graph.sequencer.parse import ChartSyntaxError
 from s7graph.web.bus.protocol import ChartSource, CommandReply
 from s7graph.web.view import texts
 from s7graph.web.view.engineering import EditorPage
 
-if TYPE_CHECKING:
-    from s7graph.web.view.editor import Located
-
-__all__ = ["MAX_DIAGNOSTIC_BUTTONS", "CpuCommands", "refused"]
+__all__ = ["MAX_DIAGNOSTIC_BUTTONS", "CpuCommands", "Located", "refused"]
 
 MAX_DIAGNOSTIC_BUTTONS: Final = 25
+
+
+@dataclass(frozen=True, slots=True)
+class Located:
+    """The diagnostics of the chart as the source view shows it (lines and columns of that
+    text), and the chart read back from it (to find the element of a diagnostic)."""
+
+    diagnostics: tuple[Diagnostic, ...]
+    chart: Chart | None
 
 
 class CpuCommands:
