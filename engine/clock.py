@@ -34,6 +34,7 @@ class VirtualClock:
         self._now += step
         return self._now
 
+
 class SystemClock:
     """Monotonic time for live runs (never the wall clock, which may jump)."""
 

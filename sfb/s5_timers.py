@@ -186,4 +186,3 @@ def run(
     if r:
         reset(cell)
     return cell.q
-

@@ -100,4 +100,3 @@ def check(event: str | None, qualifier: str, interlocked: bool, kind: str) -> Ru
             False, f"{event} {qualifier}C: the interlock mark C is allowed only with S1 V1 A1 R1"
         )
     return Rule(True)
-
