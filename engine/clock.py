@@ -34,11 +34,6 @@ class VirtualClock:
         self._now += step
         return self._now
 
-    def set_ns(self, now_ns: int) -> None:
-        if now_ns < self._now:
-            raise ValueError("a virtual clock never goes back")
-        self._now = now_ns
-
 
 class SystemClock:
     """Monotonic time for live runs (never the wall clock, which may jump)."""

@@ -1,7 +1,7 @@
 """The soft CPU: modes, startup, the scan cycle and error handling (SPEC.md §1.4–1.6).
 
 ``scan()`` reads the clock once and runs one cycle in S7 order: commands queued since the
-last scan are applied, scan hooks run (``add_scan_hook``; the S5 timer update of ``sfb``),
+last scan are applied, scan hooks run (``add_os_scan_hook``; the S5 timer update of ``sfb``),
 cycle monitoring judges the previous cycle, PII is read from the module side, OB1 runs,
 due interrupt OBs run — time-of-day OB10–17, delay OB20–23, cyclic OB30–38 — highest
 priority first and, within one priority, in the order of their start events (behaviour
@@ -19,18 +19,20 @@ lives in ``engine/context.py``.
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Callable, Iterable
+from collections.abc import Callable
 from dataclasses import dataclass
-from datetime import datetime, timedelta
 from typing import Any
 
-from s7graph.engine.address import Address, Area
-from s7graph.engine.blocks import DB, FB, FC, OB, BlockKind, InstanceDB
+from s7graph.engine.address import Area
+from s7graph.engine.blocks import DB, FB, FC, OB, InstanceDB
 from s7graph.engine.clock import Clock
 from s7graph.engine.context import CallContext, NestingOverflow, _Fault
+from s7graph.engine.cpu_forcing import Forcing, jobs_text, listed
+from s7graph.engine.cpu_interrupts import MISSING_STOP, InterruptDispatch
+from s7graph.engine.cpu_program import ProgramBlocks
 from s7graph.engine.diagnostics import DiagnosticBuffer, EventId
 from s7graph.engine.errors import AddressError, BlockError, S7Error, ScanAborted, TypeMismatch
-from s7graph.engine.force import Force, ForceTable, apply_plan, force_target, make_force
+from s7graph.engine.force import ForceTable, apply_plan
 from s7graph.engine.interrupts import CYCLIC_DEFAULT_MS, CyclicScheduler, priority
 from s7graph.engine.marks import ScanMarks
 from s7graph.engine.memory import AreaLengthError, Memory
@@ -57,16 +59,6 @@ __all__ = [
 
 CLOCK_MEMORY_HALF_MS = (50, 100, 200, 250, 400, 500, 800, 1000)
 """Half periods of clock-memory bits 0..7 (periods 0.1 … 2.0 s, behaviour 15)."""
-
-_MISSING_STOP = {
-    80: EventId.STOP_OB80_MISSING,
-    82: EventId.STOP_OB82_MISSING,
-    83: EventId.STOP_OB83_MISSING,
-    84: EventId.STOP_OB84_MISSING,
-    85: EventId.STOP_OB85_MISSING,
-    86: EventId.STOP_OB86_MISSING,
-    87: EventId.STOP_OB87_MISSING,
-}
 
 
 ScanHook = Callable[["Cpu", int], None]
@@ -96,7 +88,7 @@ class Pending:
     error: str = ""
 
 
-class Cpu:
+class Cpu(ProgramBlocks, Forcing, InterruptDispatch):
     """One soft CPU (docs/contracts.md). Power-on leaves it in STOP (behaviour 1)."""
 
     def __init__(
@@ -130,7 +122,6 @@ class Cpu:
         self.meters = RuntimeMeters()
         self.ob_priority: dict[int, int] = {}
         """Parametrised OB priorities; others have the defaults of behaviour 18."""
-        self._scan_hooks: list[ScanHook] = []
         self._startup_hooks: list[StartupHook] = []
         self.stop_entry: DiagEntry | None = None
         """The diagnostic entry of the last transition to STOP (its cause is the entry
@@ -165,75 +156,6 @@ class Cpu:
         self._raw = 0
         self._pq_seen = bytes(self.mem.periph_out)
 
-    # ---- program ---------------------------------------------------------------------------
-
-    def load(self, *blocks: OB | FB | FC | DB | Iterable[Any]) -> None:
-        """Download blocks (a later block replaces one with the same label); DBs are created."""
-        for item in blocks:
-            if isinstance(item, OB | FB | FC | DB):
-                self._load_one(item)
-            elif isinstance(item, Iterable) and not isinstance(item, str | bytes):
-                self.load(*item)
-            else:
-                raise BlockError(f"cannot load {item!r}: not a block")
-        self.hot_blockers.add("program download")
-
-    def _load_one(self, block: OB | FB | FC | DB) -> None:
-        self.blocks[block.label] = block
-        if isinstance(block, OB):
-            self.obs[block.number] = block
-        elif isinstance(block, DB):
-            if block.number in self.instance_dbs:
-                raise BlockError(f"DB{block.number} is already an instance DB")
-            self.mem.dbs.pop(block.number, None)
-            self.mem.create_db(
-                block.number, block.size, init=block.init, retain=block.retain, name=block.name
-            )
-
-    def block(self, ref: str | int) -> OB | FB | FC | DB:
-        """A loaded block by label (``'FC2'``, ``'SFB4'``), name, or FB/FC number."""
-        if isinstance(ref, int):
-            found = self.blocks.get(f"FB{ref}") or self.blocks.get(f"FC{ref}")
-        else:
-            key = "".join(ref.split()).upper()
-            found = self.blocks.get(key)
-            if found is None:
-                found = next(
-                    (b for b in self.blocks.values() if getattr(b, "name", "") == ref), None
-                )
-        if found is None:
-            raise BlockError(f"block {ref} is not loaded")
-        return found
-
-    def create_instance_db(self, number: int, fb: FB, *, name: str | None = None) -> InstanceDB:
-        """Create instance DB ``number`` from a loaded FB's interface (or an SFB's)."""
-        if fb.kind is BlockKind.FB and self.blocks.get(fb.label) != fb:
-            raise BlockError(f"{fb.label} {fb.name!r} must be loaded before its instance DB")
-        if number in self.instance_dbs or number in self.mem.dbs:
-            raise BlockError(f"DB{number} already exists")
-        idb = InstanceDB(number, fb, name=name)
-        self.instance_dbs[number] = idb
-        return idb
-
-    def replace_instance_db(
-        self, number: int, fb: FB, *, name: str | None = None
-    ) -> InstanceDB:
-        """Re-create instance DB ``number`` from ``fb``'s interface, replacing the one there
-        (a changed FB downloaded into a running CPU: the caller carries the values over)."""
-        if number not in self.instance_dbs:
-            raise BlockError(f"DB{number} is not an instance DB")
-        if fb.kind is BlockKind.FB and self.blocks.get(fb.label) != fb:
-            raise BlockError(f"{fb.label} {fb.name!r} must be loaded before its instance DB")
-        idb = InstanceDB(number, fb, name=name)
-        self.instance_dbs[number] = idb
-        return idb
-
-    def instance_db(self, number: int) -> InstanceDB:
-        try:
-            return self.instance_dbs[number]
-        except KeyError:
-            raise BlockError(f"instance DB{number} is not loaded") from None
-
     # ---- modes -----------------------------------------------------------------------------
 
     def submit(self, command: object) -> Pending:
@@ -267,7 +189,7 @@ class Cpu:
             raw = self.clock.now_ns()
             self._hold_since = raw
             self.mode = CpuMode.HOLD
-            self.mem.periph_out[:] = bytes(len(self.mem.periph_out))
+            self.mem.clear_outputs(image=False)
             self.diagnostics.record(raw, EventId.HOLD_ENTERED, "", "RUN → HOLD")
 
     def resume(self) -> None:
@@ -296,7 +218,7 @@ class Cpu:
         gone = self.forces.clear()
         if gone:
             self._force_notes.clear()
-            text = f"memory reset deletes {_jobs(len(gone))}: {_listed(gone)}"
+            text = f"memory reset deletes {jobs_text(len(gone))}: {listed(gone)}"
             self.diagnostics.record(now, EventId.FORCE_ENDED, "", text)
 
     def process_ns(self) -> int:
@@ -308,12 +230,6 @@ class Cpu:
     def retrigger(self) -> None:
         """SFC43 RE_TRIGR: restart cycle-time monitoring for this cycle."""
         self.watchdog.retrigger()
-
-    def add_scan_hook(self, hook: ScanHook) -> None:
-        """Run ``hook(cpu, process_ns)`` at the start of every cycle and before the startup
-        OB (idempotent). Process time stands still in HOLD, so hooks see frozen time."""
-        if hook not in self._scan_hooks:
-            self._scan_hooks.append(hook)
 
     def add_startup_hook(self, hook: StartupHook) -> None:
         """Run ``hook(cpu, restart)`` at the beginning of every startup, once the restart
@@ -348,8 +264,6 @@ class Cpu:
 
     def _run_hooks(self, now: int) -> None:
         for hook in OS_SCAN_HOOKS:
-            hook(self, now)
-        for hook in self._scan_hooks:
             hook(self, now)
 
     def priority_of(self, ob: int) -> int:
@@ -396,37 +310,6 @@ class Cpu:
                 apply_plan(mem.outputs, plan)
             mem.periph_out[:n] = mem.outputs
 
-    # ---- forcing ---------------------------------------------------------------------------
-
-    def force(self, target: str | Address, value: object, *, user: str = "") -> Force:
-        """Force ``target`` — an I, Q or M address or a symbol — to ``value`` from the next
-        cycle on, until ``unforce`` (``engine/force.py``); call at a scan boundary. Replaces
-        the job of the same address; ``ForceError`` names what is wrong."""
-        force = make_force(self.mem, target, value, user=user)
-        old = self.forces.add(force)
-        was = f" (was {old.shown})" if old is not None else ""
-        by = f" by {user}" if user else ""
-        text = f"force {force}{was}{by}; {_jobs(len(self.forces))} active"
-        self._force_notes.append((EventId.FORCE_STARTED, str(force.address), text))
-        return force
-
-    def unforce(self, target: str | Address | None = None, *, user: str = "") -> list[Force]:
-        """Delete the force job of ``target`` (an address or symbol; None: every job) from
-        the next cycle on; the program and the modules decide again. Returns the jobs
-        deleted; ``ForceError`` when ``target`` is not forced."""
-        by = f" by {user}" if user else ""
-        if target is None:
-            gone = self.forces.clear()
-            if gone:
-                text = f"unforce all{by}: {_jobs(len(gone))} deleted ({_listed(gone)})"
-                self._force_notes.append((EventId.FORCE_ENDED, "", text))
-            return gone
-        force = self.forces.remove(force_target(self.mem, target)[0])
-        left = _jobs(len(self.forces)) if self.forces else "no force job"
-        text = f"unforce {force.address} (was {force.shown}){by}; {left} active"
-        self._force_notes.append((EventId.FORCE_ENDED, str(force.address), text))
-        return [force]
-
     def raise_async_error(self, ob: int, info: dict[str, Any] | None = None) -> None:
         """An asynchronous error event for OB80..OB87 (module fault, rack failure ...).
 
@@ -442,7 +325,7 @@ class Cpu:
             self._ctx.now_ns = self.process_ns()
             self._run_ob(ob, dict(info or {}))
         elif ob != 81:
-            self._go_stop(_MISSING_STOP.get(ob, EventId.STOP_OB85_MISSING), f"OB{ob}", "not loaded")
+            self._go_stop(MISSING_STOP.get(ob, EventId.STOP_OB85_MISSING), f"OB{ob}", "not loaded")
 
     # ---- the scan --------------------------------------------------------------------------
 
@@ -490,7 +373,7 @@ class Cpu:
         self._now = now
         ctx = self._ctx
         ctx.now_ns = now
-        if OS_SCAN_HOOKS or self._scan_hooks:
+        if OS_SCAN_HOOKS:
             self._run_hooks(now)
         last = self._last_ob1
         if last is not None and now - last < self.watchdog.min_cycle_ns:
@@ -538,71 +421,6 @@ class Cpu:
             value |= ((ms // half) & 1) << bit
         self.mem.markers[self.clock_memory] = value
 
-    def _interrupts(self, now: int) -> None:
-        """Run due interrupt OBs: priority first, then the order of their start events."""
-        queue: list[tuple[int, int, int, dict[str, Any], int]] = []
-        for ob, lost, at in self.interrupts.due_events(now):
-            if lost:
-                self.diagnostics.record(
-                    self._raw, EventId.OB_REQUEST_ERROR, f"OB{ob}", f"{lost} start event(s) lost"
-                )
-            period = self.interrupts.active[ob]
-            info = {"PHASE_OFFSET": period.phase_ns // 1_000_000, "LOST": lost}
-            queue.append((ob, at, 85, info, 0))
-        if self.delays.pending:
-            for d in self.delays.due(now):
-                queue.append((d.ob, d.due_ns, 80, {"SIGN": d.sign}, 0))
-        if self.tod.table:
-            queue.extend(self._tod_due(now))
-        else:
-            self._tod_seen = None
-        if not queue or self.mode is not CpuMode.RUN:
-            return
-        queue.sort(key=lambda e: (-self.priority_of(e[0]), e[1], e[0]))
-        for ob, _, error_ob, info, _ in queue:
-            if self.mode is not CpuMode.RUN:
-                return
-            if ob in self.obs:
-                self._run_ob(ob, info)
-                continue
-            self.diagnostics.record(
-                self._raw, EventId.INTERRUPT_OB_MISSING, f"OB{ob}", "not loaded"
-            )
-            if error_ob in self.obs:
-                self._run_ob(error_ob, {"OB": ob})
-            else:
-                event = _MISSING_STOP[error_ob]
-                self._go_stop(event, f"OB{error_ob}", f"not loaded (event for OB{ob})")
-
-    def _tod_due(self, now: int) -> list[tuple[int, int, int, dict[str, Any], int]]:
-        """Due time-of-day interrupts on the RTC; a clock set forward over some calls OB80
-        (FLT_ID 16#05) first, then each skipped OB runs once unless OB80 cancelled it
-        (behaviour 22, [002:L1373-1384])."""
-        dt = self.rtc.read(self._raw)
-        seen, self._tod_seen = self._tod_seen, (self.rtc.version, dt)
-        jumped_from = None
-        if seen is not None and seen[0] != self.rtc.version and isinstance(seen[1], datetime):
-            jumped_from = seen[1] if dt > seen[1] else None
-        events = self.tod.due(dt, jumped_from)
-        skipped = sorted({e.ob for e in events if e.skipped})
-        if skipped:
-            self.diagnostics.record(
-                self._raw, EventId.ASYNC_ERROR, "OB80", f"TOD interrupt(s) skipped: {skipped}"
-            )
-            info = {"FLT_ID": 0x05, "SKIPPED": tuple(skipped)}
-            info["SKIPPED_MASK"] = sum(1 << (ob - 10) for ob in skipped)
-            if 80 in self.obs:
-                self._run_ob(80, info)
-            else:
-                self._go_stop(EventId.STOP_OB80_MISSING, "OB80", "not loaded (TOD skipped)")
-                return []
-        out: list[tuple[int, int, int, dict[str, Any], int]] = []
-        for e in events:
-            if self.tod.consume(e.ob, dt):
-                at = now - (dt - e.due) // timedelta(microseconds=1) * 1000
-                out.append((e.ob, at, 80, {"DATE_TIME": e.due, "SKIPPED": e.skipped}, 0))
-        return out
-
     def _run_ob(self, number: int, start_info: dict[str, Any]) -> None:
         block = self.obs.get(number)
         if block is None:
@@ -649,7 +467,7 @@ class Cpu:
         self._hold_since = None
         self.meters.stop_cpu(self.clock.now_ns())
         self.delays.clear()
-        self.mem.periph_out[:] = bytes(len(self.mem.periph_out))
+        self.mem.clear_outputs(image=False)
         self.stop_entry = self.diagnostics.record(self.clock.now_ns(), event, block, message)
 
     # ---- commands and startup ---------------------------------------------------------------
@@ -720,11 +538,9 @@ class Cpu:
                 idb.reset()
         elif rule.clear_nonretentive_mtc:
             mem.clear_non_retentive()
-        if rule.clear_piq and not rule.residual_cycle:
-            mem.outputs[:] = bytes(len(mem.outputs))
+        mem.clear_outputs(image=rule.clear_piq and not rule.residual_cycle)
         if rule.clear_pii:
             mem.inputs[:] = bytes(len(mem.inputs))
-        mem.periph_out[:] = bytes(len(mem.periph_out))
         self._held_ns = 0
         self._hold_since = None
         self._last_ob1 = None
@@ -739,7 +555,7 @@ class Cpu:
         self.tod.startup(self.rtc.read(raw), hot=hot)
         self._tod_seen = None
         self._airt_disabled = 0
-        if OS_SCAN_HOOKS or self._scan_hooks:
+        if OS_SCAN_HOOKS:
             self._run_hooks(raw)  # S5 timers keep running in STARTUP (behaviour 8)
         self._run_ob(rule.ob, {"RESTART": str(restart)})
         if self.mode is not CpuMode.STARTUP:
@@ -749,7 +565,7 @@ class Cpu:
         if restart is RestartType.HOT and self.keep_outputs_on_hot_restart:
             pass
         elif restart is RestartType.HOT:
-            mem.outputs[:] = bytes(len(mem.outputs))
+            mem.clear_outputs(modules=False)
         self.update_pii()
         t_run = self.clock.now_ns()  # STOP→RUN instant, after the (unmonitored) startup program
         self.mode = CpuMode.RUN
@@ -760,15 +576,6 @@ class Cpu:
         cyclic = {ob for ob in self.obs if ob in CYCLIC_DEFAULT_MS}
         cyclic |= {ob for ob in CYCLIC_DEFAULT_MS if self.interrupts.is_configured(ob)}
         self.interrupts.arm(cyclic, t_run)
-
-
-def _jobs(n: int) -> str:
-    return f"{n} force job{'s' if n != 1 else ''}"
-
-
-def _listed(forces: list[Force], limit: int = 8) -> str:
-    shown = ", ".join(str(f.address) for f in forces[:limit])
-    return shown + (f" and {len(forces) - limit} more" if len(forces) > limit else "")
 
 
 def _classify(exc: BaseException) -> int:

@@ -414,10 +414,14 @@ class Memory:
         _reset_cells(self.counters, self.retentive_counters)
         self.local[:] = bytes(len(self.local))
 
-    def clear_outputs(self) -> None:
-        """Zero the output image Q and the module side PQ (STOP/STARTUP, SPEC.md §1.4)."""
-        self.outputs[:] = bytes(len(self.outputs))
-        self.periph_out[:] = bytes(len(self.periph_out))
+    def clear_outputs(self, *, image: bool = True, modules: bool = True) -> None:
+        """The safe output state (SPEC.md §1.4): zero the output image Q (``image``) and the
+        module side PQ (``modules``). STOP and HOLD zero only the modules, a startup both or
+        as its restart type says; the one way the CPU resets outputs."""
+        if image:
+            self.outputs[:] = bytes(len(self.outputs))
+        if modules:
+            self.periph_out[:] = bytes(len(self.periph_out))
 
     def reset_to_initial(self) -> None:
         """Cold restart: every M/T/C/L/I/Q/PQ zeroed, run-time DBs deleted, other DBs back

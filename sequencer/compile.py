@@ -19,7 +19,7 @@ from s7graph.engine.address import Area, Width
 from s7graph.engine.errors import S7Error, SourceLocation
 from s7graph.sequencer.collector import collector_paused
 from s7graph.sequencer.compiled import CompiledChart
-from s7graph.sequencer.model import BlockCall, Chart, Coil, Operand, Transition
+from s7graph.sequencer.model import BlockCall, Chart, Coil, Operand, Step
 from s7graph.sequencer.names import resolve_operand
 from s7graph.sequencer.params import pin as pin_info
 from s7graph.steps.actions import ActionParts, call_code, step_action_parts, uses_own_index
@@ -130,10 +130,6 @@ def _addr_ref(addr: Any, type_name: str | None, name: str) -> Ref:
                bit=addr.bit)  # fmt: skip
 
 
-def _priority(seq_transitions: tuple[Transition, ...]) -> dict[int, int]:
-    return {t.number: k for k, t in enumerate(seq_transitions)}
-
-
 def compile_chart(chart: Chart, symbols: Any = None) -> CompiledChart:
     """Validate and compile ``chart``; raise ``ChartError`` listing every error. The
     garbage collector is paused meanwhile (``sequencer.collector``)."""
@@ -173,42 +169,19 @@ def _compile_chart(chart: Chart, symbols: Any) -> CompiledChart:
     for j, t in enumerate(trans):
         conds.append(condition_parts(t.condition, g, res, res.step, res.transition))
         parts.append(condition_source(f"_t{j}", conds[j]))
-    rows: list[ActionParts | None] = []
-    for i, s in enumerate(steps):
-        if s.interlock is not None:
-            parts.append(gen_condition(f"_il{i}", s.interlock, g, res, res.step, res.transition))
-        if s.supervision is not None:
-            parts.append(gen_condition(f"_sv{i}", s.supervision, g, res, res.step, res.transition))
-        try:
-            own = step_action_parts(i, s.actions, g, res, res.step, res.transition)
-            a_src, f_src = own.a_src, own.f_src
-        except S7Error as exc:
-            res.problems.append(_Problem(exc.where or s.loc, f"S{s.number}: {exc.message}"))
-            a_src = f"def _a{i}(st, R, ev, c_ok, zero):\n    pass\n"
-            f_src = f"def _f{i}(st, R, ev):\n    pass\n"
-            own = None
-        parts += [*_split(a_src), *_split(f_src)]
-        # a step whose rows had to be split (100,000 rows) runs without the fused functions
-        small = own is not None and len(own.rows) + len(own.reset) + len(own.s0) <= _SPLIT_LINES
-        rows.append(own if small else None)
+    rows = _step_functions(steps, g, res, parts)
     nochk = [s.interlock is None and s.supervision is None for s in steps]
     for i, own in enumerate(rows):
         if own is not None and nochk[i] and all(len(tr_src[j]) == 1 for j in leaving[i]):
             parts.append(_gen_step(i, leaving[i], conds, own.rows))
-            for j in leaving[i]:  # the plain switches of the fast path (Program.enter)
-                d = tr_dst[j][0] if len(tr_dst[j]) == 1 else -1
-                target = rows[d] if d >= 0 and nochk[d] and step_seq[d] == step_seq[i] else None
-                if target is not None and not uses_own_index(own.s0):
-                    parts.append(_gen_enter(j, d, own, target))
+            parts += _enter_functions(i, own, rows, nochk, leaving[i], tr_dst, step_seq)
     parts.append(_gen_permanent("_before", chart.before, g, res))
     parts.append(_gen_permanent("_after", chart.after, g, res))
 
     if res.problems:
         raise ChartError(res.problems)
     distinct, aliases = _share(parts)
-    code = tuple(
-        compile(src, f"<chart {chart.name}>", "exec") for src in _batches(distinct)
-    )
+    code = tuple(compile(src, f"<chart {chart.name}>", "exec") for src in _batches(distinct))
     source = "\n".join(_alias_source(src, aliases) for src in parts)
     var_inits = {
         v.name: (v.init.value if v.init is not None else _zero(v.type)) for v in chart.vars
@@ -250,6 +223,52 @@ def _compile_chart(chart: Chart, symbols: Any) -> CompiledChart:
         warnings=tuple(str(w) for w in warnings),
         aliases=tuple(aliases.values()),
     )
+
+
+def _step_functions(
+    steps: tuple[Step, ...], g: CodeGen, res: _Resolver, parts: list[str]
+) -> list[ActionParts | None]:
+    """Append the interlock, supervision and action functions of every step to ``parts``;
+    each step's rows for the fused functions, None for a step that runs without them."""
+    rows: list[ActionParts | None] = []
+    for i, s in enumerate(steps):
+        if s.interlock is not None:
+            parts.append(gen_condition(f"_il{i}", s.interlock, g, res, res.step, res.transition))
+        if s.supervision is not None:
+            parts.append(gen_condition(f"_sv{i}", s.supervision, g, res, res.step, res.transition))
+        own: ActionParts | None
+        try:
+            own = step_action_parts(i, s.actions, g, res, res.step, res.transition)
+            a_src, f_src = own.a_src, own.f_src
+        except S7Error as exc:
+            res.problems.append(_Problem(exc.where or s.loc, f"S{s.number}: {exc.message}"))
+            a_src = f"def _a{i}(st, R, ev, c_ok, zero):\n    pass\n"
+            f_src = f"def _f{i}(st, R, ev):\n    pass\n"
+            own = None
+        parts += [*_split(a_src), *_split(f_src)]
+        # a step whose rows had to be split (100,000 rows) runs without the fused functions
+        small = own is not None and len(own.rows) + len(own.reset) + len(own.s0) <= _SPLIT_LINES
+        rows.append(own if small else None)
+    return rows
+
+
+def _enter_functions(
+    i: int,
+    own: ActionParts,
+    rows: list[ActionParts | None],
+    nochk: list[bool],
+    leaving: list[int],
+    tr_dst: tuple[tuple[int, ...], ...],
+    step_seq: list[int],
+) -> list[str]:
+    """The plain switches of the fast path out of step ``i`` (``Program.enter``)."""
+    out: list[str] = []
+    for j in leaving:
+        d = tr_dst[j][0] if len(tr_dst[j]) == 1 else -1
+        target = rows[d] if d >= 0 and nochk[d] and step_seq[d] == step_seq[i] else None
+        if target is not None and not uses_own_index(own.s0):
+            out.append(_gen_enter(j, d, own, target))
+    return out
 
 
 def _gen_step(

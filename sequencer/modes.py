@@ -24,12 +24,6 @@ MODE_RULES: Final[dict[str, Callable[[bool, bool], bool]]] = {
 SELECTORS: Final = (("SW_AUTO", "AUTO"), ("SW_TAP", "TAP"), ("SW_TOP", "TOP"), ("SW_MAN", "MAN"))
 
 # output pin of each mode
-MODE_OUTPUTS: Final = {"AUTO": "AUTO_ON", "TAP": "TAP_ON", "TOP": "TOP_ON", "MAN": "MAN_ON"}
-
-
-def may_switch(mode: str, condition: bool, push: bool) -> bool:
-    """The switching rule of ``mode`` (SPEC §2.2 4b)."""
-    return MODE_RULES[mode](condition, push)
 
 
 def select_mode(mode: str, rose: set[str]) -> str:

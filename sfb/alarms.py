@@ -156,10 +156,6 @@ class MessageList:
         self._record(MessageEvent("acknowledged", msg_id, msg.event_id, now_ns, user, msg.text))
         return msg
 
-    def acknowledge_all(self, user: str, now_ns: int) -> list[Message]:
-        acked = (self.acknowledge(m.msg_id, user, now_ns) for m in self.entries())
-        return [m for m in acked if m is not None]
-
     # --- queries ------------------------------------------------------------------------
 
     def entries(self) -> tuple[Message, ...]:
@@ -168,9 +164,6 @@ class MessageList:
 
     def get(self, msg_id: MsgId) -> Message | None:
         return self._active.get(msg_id)
-
-    def unacknowledged(self) -> tuple[Message, ...]:
-        return tuple(m for m in self.entries() if not m.acked)
 
     def log(self) -> tuple[MessageEvent, ...]:
         """The last ``log_size`` changes, oldest first."""

@@ -25,7 +25,6 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from enum import StrEnum
-from typing import NamedTuple
 
 from s7graph.engine.cpu import Cpu, add_os_scan_hook
 from s7graph.engine.datatypes import S5_BASES_MS as TIME_BASES_MS
@@ -187,41 +186,3 @@ def run(
     if r:
         reset(cell)
     return cell.q
-
-
-def s_pulse(cell: S5Timer, s: bool, tv_ms: int, now_ns: int, *, r: bool = False) -> TimerBox:
-    """S_PULSE box (SP)."""
-    return _box(cell, TimerFunction.SP, s, tv_ms, now_ns, r)
-
-
-def s_pext(cell: S5Timer, s: bool, tv_ms: int, now_ns: int, *, r: bool = False) -> TimerBox:
-    """S_PEXT box (SE)."""
-    return _box(cell, TimerFunction.SE, s, tv_ms, now_ns, r)
-
-
-def s_odt(cell: S5Timer, s: bool, tv_ms: int, now_ns: int, *, r: bool = False) -> TimerBox:
-    """S_ODT box (SD)."""
-    return _box(cell, TimerFunction.SD, s, tv_ms, now_ns, r)
-
-
-def s_odts(cell: S5Timer, s: bool, tv_ms: int, now_ns: int, *, r: bool = False) -> TimerBox:
-    """S_ODTS box (SS)."""
-    return _box(cell, TimerFunction.SS, s, tv_ms, now_ns, r)
-
-
-def s_offdt(cell: S5Timer, s: bool, tv_ms: int, now_ns: int, *, r: bool = False) -> TimerBox:
-    """S_OFFDT box (SF)."""
-    return _box(cell, TimerFunction.SF, s, tv_ms, now_ns, r)
-
-
-class TimerBox(NamedTuple):
-    """A timer box result: Q, BI (remaining count, binary) and the function value (BCD)."""
-
-    q: bool
-    bi: int
-    bcd: int
-
-
-def _box(cell: S5Timer, fn: TimerFunction, s: bool, tv_ms: int, now_ns: int, r: bool) -> TimerBox:
-    q = run(cell, fn, s, tv_ms, now_ns, r=r)
-    return TimerBox(q, cell.binary(), cell.bcd())

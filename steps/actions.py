@@ -46,19 +46,6 @@ def _indent(lines: list[str], n: int = 1) -> list[str]:
     return ["    " * n + ln for ln in lines]
 
 
-def gen_step_actions(
-    i: int,
-    rows: tuple[ActionRow, ...],
-    g: CodeGen,
-    resolve: Resolve,
-    sidx: StepIndex,
-    tidx: StepIndex,
-) -> tuple[str, str]:
-    """Source of ``_a<i>`` and ``_f<i>`` for the action ``rows`` of step ``i``."""
-    parts = step_action_parts(i, rows, g, resolve, sidx, tidx)
-    return parts.a_src, parts.f_src
-
-
 class ActionParts(NamedTuple):
     """The two functions of a step's rows and their bodies (indented one level), for
     functions that run the rows after other code: ``rows`` uses ``st R ev c_ok zero`` and
@@ -80,7 +67,8 @@ def step_action_parts(
     sidx: StepIndex,
     tidx: StepIndex,
 ) -> ActionParts:
-    """``gen_step_actions`` and the bodies of ``_a<i>`` and ``_f<i>`` (``ActionParts``)."""
+    """The sources of ``_a<i>`` and ``_f<i>`` for the action ``rows`` of step ``i``, and
+    their bodies (``ActionParts``)."""
     body: list[str] = []
     final_reset: list[str] = []
     s0_rows: list[str] = []

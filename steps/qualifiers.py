@@ -1,6 +1,6 @@
 """Which qualifier may follow which event: the one table (SPEC §2.8, seed 000:5674-5792).
 
-Code reads ``ALLOWED``; the validator, the compiler and docs/chart-format.md's table are derived
+Code reads ``ALLOWED``; the validator and the compiler are derived
 from it. A row is ``(event, qualifier, interlocked, operand kind)``; an operand kind is one of
 ``bit`` (N S R on a bit), ``assign`` (N with ``:=``), ``call``, ``step`` (ON/OFF Sx),
 ``s_all`` (OFF S_ALL), ``counter`` (CS CU CD CR), ``timer`` (TL TD TF TR), ``timed`` (D, L).
@@ -100,17 +100,3 @@ def check(event: str | None, qualifier: str, interlocked: bool, kind: str) -> Ru
             False, f"{event} {qualifier}C: the interlock mark C is allowed only with S1 V1 A1 R1"
         )
     return Rule(True)
-
-
-def table_rows() -> list[tuple[str, str, str]]:
-    """The table as (events, instructions, note) rows, for the docs and ``s7graph check``."""
-    return [
-        ("(none)", "N S R CALL [C]; D L (time); N x := expr [C]", "every cycle while active"),
-        (
-            "S1 V1 A1 R1",
-            "N S R CALL ON OFF [C]; OFF S_ALL [C] with S1 V1",
-            "once, in the event call",
-        ),
-        ("S0 V0 L0 L1", "N S R CALL ON OFF (no C); OFF S_ALL with L1", "once"),
-        ("any event", "CS CU CD CR (counters); TL TD TF TR (timers); x := expr", "once"),
-    ]

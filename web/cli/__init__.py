@@ -140,35 +140,82 @@ def _supervised() -> bool:
     return _ENTRY_ARGS is not None and hasattr(os, "memfd_create") and not child
 
 
+# The options of ``run`` (``s7graph run --help``).
+ProgramArg = Annotated[
+    Path, typer.Argument(help="A Python program of blocks (.py) or a chart (.s7g).")
+]
+StateFile = Annotated[
+    Path | None,
+    typer.Option(help="SQLite file for retentive data (default: beside the program)."),
+]
+MaxCycleMs = Annotated[
+    float | None,
+    typer.Option(
+        callback=_positive_ms,
+        help="Maximum cycle time in ms; a longer scan is a time error (OB80, else STOP). "
+        "Default: 150 (S7's), 1000 with --web (the view shares the process); "
+        "for a program, its CPU dict's max_cycle_ms, else 150.",
+    ),
+]
+Duration = Annotated[
+    float | None, typer.Option(help="Stop after this many seconds (default: until Ctrl-C).")
+]
+Record = Annotated[Path | None, typer.Option(help="Record the chart's run to a rerun .rrd file.")]
+Restart = Annotated[
+    str | None,
+    typer.Option(
+        callback=_restart_type,
+        help="The startup from a saved state: warm (OB100, the sequencer initialized; "
+        "the default), hot (OB101, it resumes where it was) or cold (OB102, everything "
+        "to its initial values). For a program, its CPU dict's restart, else warm.",
+    ),
+]
+Fresh = Annotated[
+    bool,
+    typer.Option(help="Start anew: keep an existing state file as FILE.old-N."),
+]
+RtPriority = Annotated[
+    int | None,
+    typer.Option(
+        callback=_rt_priority,
+        help="Real-time (SCHED_FIFO) priority of the scan thread, 1-98; 0: normal "
+        "scheduling. Default 40 where the system allows it (root, CAP_SYS_NICE, an "
+        "rtprio limit), else normal.",
+    ),
+]
+CommLoad = Annotated[
+    float,
+    typer.Option(
+        min=1,
+        max=100,
+        help="Scan cycle load from communication, % (charts): the share of the cycle "
+        "commands may take at each scan boundary; the rest wait for the next. S7's "
+        "default: 20.",
+    ),
+]
+Core = Annotated[
+    str | None,
+    typer.Option(
+        help="The processor kept for the scan thread, as an S7-1500 software controller "
+        "keeps cores: auto (the last one, when the scan runs real-time on a machine of "
+        "two or more; the default), off, or a processor number. The bus, the view and "
+        "the writer run on the others. For a program, its CPU dict's core, else auto.",
+    ),
+]
+
+
 @app.command()
 def run(
-    program: Annotated[
-        Path, typer.Argument(help="A Python program of blocks (.py) or a chart (.s7g).")
-    ],
+    program: ProgramArg,
     plant: Annotated[Path | None, typer.Option(help="A simulated plant (.py) for a chart.")] = None,
     symbols: Annotated[Path | None, typer.Option(help="A symbol table file for a chart.")] = None,
-    state: Annotated[
-        Path | None,
-        typer.Option(help="SQLite file for retentive data (default: beside the program)."),
-    ] = None,
+    state: StateFile = None,
     cycle_ms: Annotated[float, typer.Option(help="Minimum cycle time in ms.")] = 10.0,
-    max_cycle_ms: Annotated[
-        float | None,
-        typer.Option(
-            callback=_positive_ms,
-            help="Maximum cycle time in ms; a longer scan is a time error (OB80, else STOP). "
-            "Default: 150 (S7's), 1000 with --web (the view shares the process); "
-            "for a program, its CPU dict's max_cycle_ms, else 150.",
-        ),
-    ] = None,
-    duration_s: Annotated[
-        float | None, typer.Option(help="Stop after this many seconds (default: until Ctrl-C).")
-    ] = None,
+    max_cycle_ms: MaxCycleMs = None,
+    duration_s: Duration = None,
     web: Annotated[bool, typer.Option(help="Serve the browser view (charts only).")] = False,
     port: Annotated[int, typer.Option(help="Port of the browser view.")] = 8080,
-    record: Annotated[
-        Path | None, typer.Option(help="Record the chart's run to a rerun .rrd file.")
-    ] = None,
+    record: Record = None,
     cpu: CpuName = "cpu1",
     listen: Listen = None,
     connect: Connect = None,
@@ -178,47 +225,11 @@ def run(
     tls_cert: TlsCert = None,
     tls_key: TlsKey = None,
     origin: Origin = None,
-    restart: Annotated[
-        str | None,
-        typer.Option(
-            callback=_restart_type,
-            help="The startup from a saved state: warm (OB100, the sequencer initialized; "
-            "the default), hot (OB101, it resumes where it was) or cold (OB102, everything "
-            "to its initial values). For a program, its CPU dict's restart, else warm.",
-        ),
-    ] = None,
-    fresh: Annotated[
-        bool,
-        typer.Option(help="Start anew: keep an existing state file as FILE.old-N."),
-    ] = False,
-    rt_priority: Annotated[
-        int | None,
-        typer.Option(
-            callback=_rt_priority,
-            help="Real-time (SCHED_FIFO) priority of the scan thread, 1-98; 0: normal "
-            "scheduling. Default 40 where the system allows it (root, CAP_SYS_NICE, an "
-            "rtprio limit), else normal.",
-        ),
-    ] = None,
-    comm_load: Annotated[
-        float,
-        typer.Option(
-            min=1,
-            max=100,
-            help="Scan cycle load from communication, % (charts): the share of the cycle "
-            "commands may take at each scan boundary; the rest wait for the next. S7's "
-            "default: 20.",
-        ),
-    ] = COMM_LOAD_PCT,
-    core: Annotated[
-        str | None,
-        typer.Option(
-            help="The processor kept for the scan thread, as an S7-1500 software controller "
-            "keeps cores: auto (the last one, when the scan runs real-time on a machine of "
-            "two or more; the default), off, or a processor number. The bus, the view and "
-            "the writer run on the others. For a program, its CPU dict's core, else auto.",
-        ),
-    ] = None,
+    restart: Restart = None,
+    fresh: Fresh = False,
+    rt_priority: RtPriority = None,
+    comm_load: CommLoad = COMM_LOAD_PCT,
+    core: Core = None,
 ) -> None:
     """Run a program or a chart on the system clock until Ctrl-C."""
     if _supervised():

@@ -39,7 +39,7 @@ from s7graph.sfb.alarms import message_list
 from s7graph.web.cli.report import fail
 from s7graph.web.cli.run_program import run_until_stopped
 from s7graph.web.cli.supervisor import child_marks, recovered_cause
-from s7graph.web.harness.persist import open_state, refusal
+from s7graph.web.harness.persist import OpenedState, open_state, refusal
 from s7graph.web.harness.plant import LoadedPlant, PlantError, load_plant
 from s7graph.web.harness.session import ChartSession
 
@@ -142,19 +142,10 @@ def _run_chart(
     cpu.watchdog = Watchdog(max_cycle_ms, cpu.watchdog.min_cycle_ns / 1e6)
     recovered = recovered_cause()  # never anew after a hang (--fresh): from its last state
     state_path = state if state is not None else path.with_suffix(".state.sqlite")
-    try:
-        opened = open_state(  # a recovered CPU stays in STOP until started
-            state_path,
-            cpu,
-            fresh=fresh and not recovered,
-            hot=restart == "hot",
-            restart=None if recovered else restart,
-        )
-    except StateFileError as exc:
-        print(refusal(exc), file=sys.stderr)
-        return 2
-    except OSError as exc:
-        return fail(f"{state_path}: cannot use the state file: {exc.strerror or exc}")
+    opened = _open_chart_state(state_path, session, fresh=fresh, recovered=recovered,
+                               restart=restart)  # fmt: skip
+    if isinstance(opened, int):
+        return opened
     store = opened.store
     live: LiveEdge | None = None
     view: ViewProcess | None = None
@@ -211,6 +202,31 @@ def _run_chart(
     if failure:
         return fail(failure[0], 1)
     return status
+
+
+def _open_chart_state(
+    state_path: Path,
+    session: ChartSession,
+    *,
+    fresh: bool,
+    recovered: tuple[str, str] | None,
+    restart: str,
+) -> OpenedState | int:
+    """The chart's state file opened and the CPU restored from it, or the exit status
+    when it cannot be used. A recovered CPU stays in STOP until started."""
+    try:
+        return open_state(
+            state_path,
+            session.cpu,
+            fresh=fresh and not recovered,
+            hot=restart == "hot",
+            restart=None if recovered else restart,
+        )
+    except StateFileError as exc:
+        print(refusal(exc), file=sys.stderr)
+        return 2
+    except OSError as exc:
+        return fail(f"{state_path}: cannot use the state file: {exc.strerror or exc}")
 
 
 def _serve(

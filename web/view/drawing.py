@@ -225,6 +225,34 @@ class _Rows:
 def picture(placement: Placement) -> Picture:
     """The scene geometry and rendered texts of ``placement``."""
     p = placement
+    trans_text, rows = _transition_texts(p)
+    d = _Drawing(rows)
+    d.links(p)
+    d.steps(p)
+    d.transitions(p, trans_text)
+    d.jumps(p)
+    d.incoming_jumps(p)
+    d.continuations(p)
+    d.stops(p)
+    for q in p.sequences:
+        x, _ = d.xy(q.x0, 0)
+        title = f"Sequence {q.number}  {q.name}".rstrip()
+        d.text_at([title], x - BOX_W / 2, 0.75, "bottom-left", 0.22)
+    return Picture(
+        placement=p,
+        steps=d.step_xy,
+        transitions=d.transition_xy,
+        targets=d.targets,
+        segments=np.array(d.segments, np.float32).reshape(-1, 2, 3),
+        double=np.array(d.double, np.float32).reshape(-1, 2, 3),
+        tiles=tuple(_tiles(d.text_items)),
+        bounds=d.bounds(),
+    )
+
+
+def _transition_texts(p: Placement) -> tuple[dict[int, tuple[list[str], float]], _Rows]:
+    """Each transition's wrapped title and condition with its text size, and the rows, each
+    as high as the longest transition text on it needs."""
     trans_text: dict[int, tuple[list[str], float]] = {}
     extra: dict[int, float] = {}
     for t in p.transitions.values():
@@ -239,132 +267,136 @@ def picture(placement: Placement) -> Picture:
         if need > 0:
             row = int(t.y)
             extra[row] = max(extra.get(row, 0.0), need)
-    rows = _Rows(extra)
+    return trans_text, _Rows(extra)
 
-    def xy(x: float, y: float, *, from_above: bool = False) -> tuple[float, float]:
-        return x * LANE, rows.at(y, from_above=from_above)
 
-    text_items: list[Text] = []
+class _Drawing:
+    """The line segments and texts of a picture as they are drawn, element kind by kind."""
 
-    def text_at(lines: list[str], x: float, y: float, anchor: str, size: float) -> None:
+    def __init__(self, rows: _Rows) -> None:
+        self.rows = rows
+        self.text_items: list[Text] = []
+        self.segments: list[list[list[float]]] = []
+        self.double: list[list[list[float]]] = []
+        self.step_xy: dict[int, tuple[float, float]] = {}
+        self.transition_xy: dict[int, tuple[float, float]] = {}
+        self.targets: dict[int, tuple[float, float, float, float]] = {}
+
+    def xy(self, x: float, y: float, *, from_above: bool = False) -> tuple[float, float]:
+        return x * LANE, self.rows.at(y, from_above=from_above)
+
+    def text_at(self, lines: list[str], x: float, y: float, anchor: str, size: float) -> None:
         w = max((_width(line, size) for line in lines), default=0.0)
         h = size * LINE * len(lines)
         vertical, _, horizontal = anchor.partition("-")
         left = x - {"left": 0.0, "center": w / 2, "right": w}[horizontal]
         top = y + {"top": 0.0, "center": h / 2, "bottom": h}[vertical]
-        text_items.append(Text(tuple(lines), left, top, size))
+        self.text_items.append(Text(tuple(lines), left, top, size))
 
-    segments: list[list[list[float]]] = []
-    double: list[list[list[float]]] = []
-    for link in p.links:
-        pts = [xy(x, y) for x, y in link.points]
-        for (ax, ay), (bx, by) in itertools.pairwise(pts):
-            if link.double and ay == by:
-                for d in (-0.035, 0.035):
-                    double.append([[ax, ay + d, 0.0], [bx, by + d, 0.0]])
+    def links(self, p: Placement) -> None:
+        for link in p.links:
+            pts = [self.xy(x, y) for x, y in link.points]
+            for (ax, ay), (bx, by) in itertools.pairwise(pts):
+                if link.double and ay == by:
+                    for d in (-0.035, 0.035):
+                        self.double.append([[ax, ay + d, 0.0], [bx, by + d, 0.0]])
+                else:
+                    self.segments.append([[ax, ay, 0.0], [bx, by, 0.0]])
+
+    def steps(self, p: Placement) -> None:
+        for s in p.steps.values():
+            x, y = self.xy(s.x, s.y)
+            self.step_xy[s.number] = (x, y)
+            self.segments += _rect(x, y, BOX_W, BOX_H)
+            if s.initial:  # S7-GRAPH draws the initial step with a double frame
+                self.segments += _rect(x, y, BOX_W + 0.12, BOX_H + 0.12)
+            label = texts.title("S", s.number, s.name, 10_000)
+            lines, size = fit_text(label, BOX_W - 0.12, BOX_H - 0.08, STEP_SIZES)
+            self.text_at(lines, x, y, "center-center", size)
+            if s.interlock:
+                self.segments += _rect(x - BOX_W / 2 - 0.14, y, 0.22, 0.28)
+                self.text_at(["C"], x - BOX_W / 2 - 0.14, y, "center-center", 0.2)
+            if s.supervision:
+                self.segments += _rect(x + BOX_W / 2 + 0.14, y, 0.22, 0.28)
+                self.text_at(["V"], x + BOX_W / 2 + 0.14, y, "center-center", 0.2)
+
+    def transitions(self, p: Placement, trans_text: dict[int, tuple[list[str], float]]) -> None:
+        for t in p.transitions.values():
+            x, y = self.xy(t.x, t.y)
+            self.transition_xy[t.number] = (x, y)
+            lines, size = trans_text[t.number]
+            left, top = x + BAR_W / 2 + 0.08, y + TEXT_TOP
+            self.text_at(lines, left, top, "top-left", size)
+            h = max(size * LINE * len(lines), 0.3)
+            x0, x1 = x - BAR_W / 2 - 0.05, left + TEXT_W
+            y0, y1 = min(top - h, y - 0.15), max(top, y + 0.15)
+            self.targets[t.number] = ((x0 + x1) / 2, (y0 + y1) / 2, x1 - x0, y1 - y0)
+
+    def jumps(self, p: Placement) -> None:
+        for j in p.jumps:
+            x, y = self.xy(j.x, j.y, from_above=True)
+            tip = y - 0.32
+            self.segments += [
+                [[x, y + 0.35, 0.0], [x, tip, 0.0]],
+                [[x - 0.1, tip + 0.14, 0.0], [x, tip, 0.0]],
+                [[x + 0.1, tip + 0.14, 0.0], [x, tip, 0.0]],
+            ]
+            self.text_at([f"S{j.target}"], x + 0.12, tip + 0.05, "center-left", 0.22)
+
+    def incoming_jumps(self, p: Placement) -> None:
+        sources: dict[int, list[int]] = {}
+        for inc in p.incoming_jumps:
+            sources.setdefault(inc.step, []).append(inc.transition)
+        for number, ts in sources.items():
+            target = p.steps[number]
+            sx, y = self.step_xy[number]
+            end = sx - BOX_W / 2 - (0.3 if target.interlock else 0.04)
+            start = end - 0.55
+            self.segments += [
+                [[start, y, 0.0], [end, y, 0.0]],
+                [[end - 0.12, y + 0.08, 0.0], [end, y, 0.0]],
+                [[end - 0.12, y - 0.08, 0.0], [end, y, 0.0]],
+            ]
+            names = ", ".join(f"T{t}" for t in sorted(set(ts)))
+            self.text_at([names], start - 0.04, y, "center-right", 0.19)
+
+    def continuations(self, p: Placement) -> None:
+        for c in p.continuations:
+            x, y = self.xy(c.x, c.y, from_above=not c.incoming)
+            if c.incoming:  # an arrowhead into the line going down to the target
+                self.segments += [
+                    [[x - 0.1, y - 0.02, 0.0], [x, y - 0.16, 0.0]],
+                    [[x + 0.1, y - 0.02, 0.0], [x, y - 0.16, 0.0]],
+                ]
+                self.text_at([c.text], x + 0.12, y, "center-left", 0.18)
             else:
-                segments.append([[ax, ay, 0.0], [bx, by, 0.0]])
+                self.segments += [
+                    [[x - 0.1, y + 0.14, 0.0], [x, y, 0.0]],
+                    [[x + 0.1, y + 0.14, 0.0], [x, y, 0.0]],
+                ]
+                self.text_at([c.text], x + 0.12, y + 0.05, "center-left", 0.18)
 
-    steps: dict[int, tuple[float, float]] = {}
-    for s in p.steps.values():
-        x, y = xy(s.x, s.y)
-        steps[s.number] = (x, y)
-        segments += _rect(x, y, BOX_W, BOX_H)
-        if s.initial:  # S7-GRAPH draws the initial step with a double frame
-            segments += _rect(x, y, BOX_W + 0.12, BOX_H + 0.12)
-        label = texts.title("S", s.number, s.name, 10_000)
-        lines, size = fit_text(label, BOX_W - 0.12, BOX_H - 0.08, STEP_SIZES)
-        text_at(lines, x, y, "center-center", size)
-        if s.interlock:
-            segments += _rect(x - BOX_W / 2 - 0.14, y, 0.22, 0.28)
-            text_at(["C"], x - BOX_W / 2 - 0.14, y, "center-center", 0.2)
-        if s.supervision:
-            segments += _rect(x + BOX_W / 2 + 0.14, y, 0.22, 0.28)
-            text_at(["V"], x + BOX_W / 2 + 0.14, y, "center-center", 0.2)
-
-    transitions: dict[int, tuple[float, float]] = {}
-    targets: dict[int, tuple[float, float, float, float]] = {}
-    for t in p.transitions.values():
-        x, y = xy(t.x, t.y)
-        transitions[t.number] = (x, y)
-        lines, size = trans_text[t.number]
-        left, top = x + BAR_W / 2 + 0.08, y + TEXT_TOP
-        text_at(lines, left, top, "top-left", size)
-        h = max(size * LINE * len(lines), 0.3)
-        x0, x1 = x - BAR_W / 2 - 0.05, left + TEXT_W
-        y0, y1 = min(top - h, y - 0.15), max(top, y + 0.15)
-        targets[t.number] = ((x0 + x1) / 2, (y0 + y1) / 2, x1 - x0, y1 - y0)
-
-    for j in p.jumps:
-        x, y = xy(j.x, j.y, from_above=True)
-        tip = y - 0.32
-        segments += [
-            [[x, y + 0.35, 0.0], [x, tip, 0.0]],
-            [[x - 0.1, tip + 0.14, 0.0], [x, tip, 0.0]],
-            [[x + 0.1, tip + 0.14, 0.0], [x, tip, 0.0]],
-        ]
-        text_at([f"S{j.target}"], x + 0.12, tip + 0.05, "center-left", 0.22)
-    sources: dict[int, list[int]] = {}
-    for inc in p.incoming_jumps:
-        sources.setdefault(inc.step, []).append(inc.transition)
-    for number, ts in sources.items():
-        target = p.steps[number]
-        sx, y = steps[number]
-        end = sx - BOX_W / 2 - (0.3 if target.interlock else 0.04)
-        start = end - 0.55
-        segments += [
-            [[start, y, 0.0], [end, y, 0.0]],
-            [[end - 0.12, y + 0.08, 0.0], [end, y, 0.0]],
-            [[end - 0.12, y - 0.08, 0.0], [end, y, 0.0]],
-        ]
-        names = ", ".join(f"T{t}" for t in sorted(set(ts)))
-        text_at([names], start - 0.04, y, "center-right", 0.19)
-    for c in p.continuations:
-        x, y = xy(c.x, c.y, from_above=not c.incoming)
-        if c.incoming:  # an arrowhead into the line going down to the target
-            segments += [
-                [[x - 0.1, y - 0.02, 0.0], [x, y - 0.16, 0.0]],
-                [[x + 0.1, y - 0.02, 0.0], [x, y - 0.16, 0.0]],
+    def stops(self, p: Placement) -> None:
+        for stop in p.stops:
+            x, y = self.xy(stop.x, stop.y, from_above=True)
+            self.segments += [
+                [[x, y + 0.4, 0.0], [x, y - 0.1, 0.0]],
+                [[x - 0.2, y - 0.1, 0.0], [x + 0.2, y - 0.1, 0.0]],
             ]
-            text_at([c.text], x + 0.12, y, "center-left", 0.18)
-        else:
-            segments += [
-                [[x - 0.1, y + 0.14, 0.0], [x, y, 0.0]],
-                [[x + 0.1, y + 0.14, 0.0], [x, y, 0.0]],
-            ]
-            text_at([c.text], x + 0.12, y + 0.05, "center-left", 0.18)
-    for stop in p.stops:
-        x, y = xy(stop.x, stop.y, from_above=True)
-        segments += [
-            [[x, y + 0.4, 0.0], [x, y - 0.1, 0.0]],
-            [[x - 0.2, y - 0.1, 0.0], [x + 0.2, y - 0.1, 0.0]],
-        ]
-        text_at(["STOP"], x + 0.25, y - 0.1, "center-left", 0.18)
-    for q in p.sequences:
-        x, _ = xy(q.x0, 0)
-        title = f"Sequence {q.number}  {q.name}".rstrip()
-        text_at([title], x - BOX_W / 2, 0.75, "bottom-left", 0.22)
+            self.text_at(["STOP"], x + 0.25, y - 0.1, "center-left", 0.18)
 
-    xs = [v for x, _ in steps.values() for v in (x - BOX_W / 2 - 0.9, x + BOX_W / 2 + 0.3)]
-    xs += [x + BAR_W / 2 + 0.08 + TEXT_W for x, _ in transitions.values()]
-    ys = [y for _, y in steps.values()] + [y for _, y in transitions.values()]
-    ys += [t.y - t.size * LINE * len(t.lines) for t in text_items] + [1.0]
-    bounds = (
-        min(xs, default=0.0),
-        max(xs, default=1.0),
-        min(ys, default=0.0) - BOX_H,
-        max(ys, default=0.0),
-    )
-    return Picture(
-        placement=p,
-        steps=steps,
-        transitions=transitions,
-        targets=targets,
-        segments=np.array(segments, np.float32).reshape(-1, 2, 3),
-        double=np.array(double, np.float32).reshape(-1, 2, 3),
-        tiles=tuple(_tiles(text_items)),
-        bounds=bounds,
-    )
+    def bounds(self) -> tuple[float, float, float, float]:
+        steps, transitions = self.step_xy.values(), self.transition_xy.values()
+        xs = [v for x, _ in steps for v in (x - BOX_W / 2 - 0.9, x + BOX_W / 2 + 0.3)]
+        xs += [x + BAR_W / 2 + 0.08 + TEXT_W for x, _ in transitions]
+        ys = [y for _, y in steps] + [y for _, y in transitions]
+        ys += [t.y - t.size * LINE * len(t.lines) for t in self.text_items] + [1.0]
+        return (
+            min(xs, default=0.0),
+            max(xs, default=1.0),
+            min(ys, default=0.0) - BOX_H,
+            max(ys, default=0.0),
+        )
 
 
 def _tiles(items: list[Text]) -> list[Tile]:

@@ -27,25 +27,25 @@ import functools
 import html
 import threading
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any, Final
 
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.diagnostics import Diagnostic
-from s7graph.sequencer.edit import Operation, Session, make_edit, new_chart
-from s7graph.sequencer.edit_base import Edit, EditRefused, Refusal
+from s7graph.sequencer.edit import Operation, Session
+from s7graph.sequencer.edit_base import Edit, EditRefused
 from s7graph.sequencer.edit_content import SetSource
-from s7graph.sequencer.edit_text import RowFields, parse_source
+from s7graph.sequencer.edit_text import parse_source
 from s7graph.sequencer.elements import Ref, RowRef, StepRef, TransitionRef, element_of, find
-from s7graph.sequencer.format import format_chart, format_row
-from s7graph.sequencer.model import Chart, Step
+from s7graph.sequencer.format import format_chart
+from s7graph.sequencer.model import Chart
 from s7graph.sequencer.parse import ChartSyntaxError, parse_chart
 from s7graph.sequencer.validate import validate
-from s7graph.steps.qualifiers import EVENTS, QUALIFIERS
-from s7graph.web.bus.protocol import ChartLayout, ChartSource, CommandReply
+from s7graph.web.bus.protocol import ChartLayout, ChartSource
 from s7graph.web.view import texts
 from s7graph.web.view.drawing import FLAWED, SELECTED, Drawing, Picture, aim_camera, picture
-from s7graph.web.view.edit_forms import Field, Form, element_choices, form_for, row_fields
+from s7graph.web.view.edit_forms import Field, Form, element_choices, form_for
+from s7graph.web.view.editor_cpu import MAX_DIAGNOSTIC_BUTTONS, CpuCommands, Located, refused
+from s7graph.web.view.editor_rows import RowEditing
 from s7graph.web.view.engineering import EditorPage
 from s7graph.web.view.layout import place
 
@@ -55,20 +55,9 @@ EDIT_OFFSET: Final = (0.0, -2000.0)  # where a page draws the chart it edits (of
 EDITOR_WIDTH: Final = 400  # pixels of the editor's panel, docked left of the chart
 PAGE_WIDTH, PAGE_HEIGHT, PANEL_WIDTH = 1280, 800, 340  # the page the camera is aimed for
 DEBOUNCE_S: Final = 0.6  # typing pauses this long: the text is applied
-MAX_DIAGNOSTIC_BUTTONS: Final = 25
-NO_EVENT: Final = "(none)"
 
 
-@dataclass(frozen=True, slots=True)
-class Located:
-    """The diagnostics of the chart as the source view shows it (lines and columns of that
-    text), and the chart read back from it (to find the element of a diagnostic)."""
-
-    diagnostics: tuple[Diagnostic, ...]
-    chart: Chart | None
-
-
-class Editor:
+class Editor(CpuCommands, RowEditing):
     """The edit mode of ``panel``'s page (built only for a role that may download)."""
 
     def __init__(self, panel: EditorPage) -> None:
@@ -272,7 +261,7 @@ class Editor:
             edit = op.on(ref, **values)
         except EditRefused as exc:
             if self.session is not None:
-                self.session = _refused(self.session, exc)
+                self.session = refused(self.session, exc)
             self._show(source_changed=False)
             return
         self.apply(edit)
@@ -488,110 +477,6 @@ class Editor:
             self._timers[key] = timer
             timer.start()
 
-    # ------------------------------------------------------------ action rows
-
-    def _rows_form(self, chart: Chart, ref: Ref | None) -> None:
-        gui = self.client.gui
-        self.rows_html = gui.add_html("")
-        self.row_number = gui.add_number(
-            "Row", 1, min=1, max=256, step=1, hint="the action row the fields below show"
-        )
-        self.row_event = gui.add_dropdown("Event", [NO_EVENT, *EVENTS])
-        self.row_qualifier = gui.add_dropdown("Qualifier", list(QUALIFIERS))
-        self.row_c = gui.add_checkbox("C (interlocked)", False)
-        self.row_operand = gui.add_text("Operand", "", hint='Q0.0, "Motor_on", S4, n := n + 1')
-        self.row_value = gui.add_text("Time / value", "", hint="T#2S for D and L, C#10 for CS")
-        buttons = {
-            "add": gui.add_button("Add action row", hint="the fields above as a new last row"),
-            "change": gui.add_button("Change action row", hint="row Row becomes the fields"),
-            "remove": gui.add_button("Remove action row", hint="remove row Row"),
-            "up": gui.add_button("Move action row up"),
-            "down": gui.add_button("Move action row down"),
-        }
-        self._form_handles += [
-            self.rows_html,
-            self.row_number,
-            self.row_event,
-            self.row_qualifier,
-            self.row_c,
-            self.row_operand,
-            self.row_value,
-            *buttons.values(),
-        ]
-        for what, button in buttons.items():
-            button.on_click(self._click(functools.partial(self._row_action, what)))
-        self.row_number.on_update(self._row_chosen)
-        self._rows_show(chart, ref, fill=True)
-
-    def _step_of(self, chart: Chart, ref: Ref | None) -> Step | None:
-        number = ref.number if isinstance(ref, StepRef) else None
-        found = find(chart, StepRef(number)) if number is not None else None
-        return found if isinstance(found, Step) else None
-
-    def _rows_show(self, chart: Chart, ref: Ref | None, *, fill: bool = False) -> None:
-        step = self._step_of(chart, ref)
-        rows = step.actions if step is not None else ()
-        self.rows_html.content = texts.rows_html([format_row(r) for r in rows])
-        sel = self.session.selection if self.session is not None else None
-        if isinstance(sel, RowRef):
-            fill = True
-            if int(self.row_number.value) != sel.index + 1:
-                self.row_number.value = sel.index + 1  # type: ignore[misc]
-        if fill:
-            self._row_fill(rows)
-
-    def _row_fill(self, rows: tuple[Any, ...]) -> None:
-        i = int(self.row_number.value) - 1
-        if not 0 <= i < len(rows):
-            return
-        f = row_fields(rows[i])
-        self.row_event.value = f.event or NO_EVENT  # type: ignore[misc]
-        if f.qualifier in QUALIFIERS:
-            self.row_qualifier.value = f.qualifier  # type: ignore[misc]
-        self.row_c.value = f.interlocked  # type: ignore[misc]
-        self.row_operand.value = f.operand  # type: ignore[misc]
-        self.row_value.value = f.value  # type: ignore[misc]
-
-    def _row_chosen(self, event: Any) -> None:
-        if getattr(event, "client", None) is None or self.session is None:
-            return
-        step = self._step_of(self.session.chart, self._form.ref if self._form else None)
-        if step is not None:
-            self._guarded(lambda: self._row_fill(step.actions))
-
-    def _row_action(self, what: str) -> None:
-        if self.session is None or self._form is None or not isinstance(self._form.ref, StepRef):
-            return
-        n = self._form.ref.number
-        index = int(self.row_number.value) - 1
-        event = str(self.row_event.value)
-        fields = RowFields(
-            qualifier=str(self.row_qualifier.value),
-            operand=str(self.row_operand.value),
-            event="" if event == NO_EVENT else event,
-            interlocked=bool(self.row_c.value),
-            value=str(self.row_value.value),
-        )
-        args: dict[str, dict[str, object]] = {
-            "add": {"op": "add_row", "step": n, "row": fields},
-            "change": {"op": "change_row", "step": n, "index": index, "row": fields},
-            "remove": {"op": "remove_row", "step": n, "index": index},
-            "up": {"op": "move_row", "step": n, "index": index, "to": index - 1},
-            "down": {"op": "move_row", "step": n, "index": index, "to": index + 1},
-        }
-        chosen = dict(args[what])
-        name = str(chosen.pop("op"))
-        try:
-            edit = make_edit(name, chosen)
-        except EditRefused as exc:
-            self.session = _refused(self.session, exc)
-            self._show(source_changed=False)
-            return
-        self.apply(edit)
-        sel = self.session.selection
-        if isinstance(sel, RowRef):  # the row just made, moved or changed
-            self.row_number.value = sel.index + 1  # type: ignore[misc]
-
     # ------------------------------------------------------------ the source view
 
     def _source_typed(self, event: Any) -> None:
@@ -606,164 +491,6 @@ class Editor:
             self.change(lambda s: s.apply(SetSource(text)), from_source=True)
 
         self._later("source", DEBOUNCE_S, apply_text)
-
-    # ------------------------------------------------------------ files
-
-    def _refresh_files(self) -> None:
-        listed = self.eng.project()
-        names = [f.name for f in listed.files] if listed is not None else []
-        self.open_choice.options = names or ["(none)"]
-
-    def save(self) -> None:
-        if self.session is None:
-            return
-        name = str(self.file.value).strip()
-        reply = self._command("save", {"file": name, "source": format_chart(self.session.chart)})
-        self._report("save", reply)
-        if reply.applied:
-            self._refresh_files()
-
-    def open(self) -> None:
-        name = str(self.open_choice.value)
-        if name == "(none)":
-            self._refresh_files()
-            return
-        reply = self._command("open", {"file": name})
-        if not reply.applied:
-            self._report("open", reply)
-            return
-        try:
-            chart = parse_source(reply.text, name if name.endswith(".s7g") else f"{name}.s7g")
-            session = Session.open(chart, self.symbols)
-        except EditRefused as exc:
-            self._notify("open refused", exc.reason, ok=False)
-            return
-        self.session = session
-        stem = name.rsplit(".", 1)[0]
-        self.file.value = f"{stem}.s7g"  # type: ignore[misc]
-        self.note = "opened " + name + ("".join(f"; {x}" for x in reply.lines[:3]))
-        self._show(source_changed=True)
-
-    def new(self) -> None:
-        running = self.session.chart if self.session is not None else None
-        name = running.name if running is not None else self.host.layout.fb
-        try:
-            chart = new_chart(
-                name, running.fb_number if running else None, running.db_number if running else None
-            )
-            self.session = Session.open(chart, self.symbols)
-        except EditRefused as exc:
-            self._notify("new refused", exc.reason, ok=False)
-            return
-        self.note = "a new chart: S1 and T1 (Insert: select T1, Step + Transition)"
-        self._show(source_changed=True)
-
-    # ------------------------------------------------------------ download
-
-    def download(self) -> None:
-        """Compile (here: the diagnostics), ask the CPU for the change summary, confirm."""
-        s = self.session
-        if s is None:
-            return
-        if s.has_errors:
-            errors = [texts.diagnostic_line(d) for d in self.located.diagnostics if d.is_error]
-            self.note = f"download refused: the chart has {len(errors)} error(s)"
-            self._notify("download refused", "; ".join(errors[:3]) or self.note, ok=False)
-            self._show(source_changed=False)
-            return
-        text = format_chart(s.chart)
-        reply = self._command("download", {"source": text, "preview": True})
-        if not reply.applied:
-            self._report("download", reply)
-            return
-        self._confirm("Download into the CPU", reply, "download", {"source": text})
-
-    def undo_download(self) -> None:
-        reply = self._command("undo_download", {"preview": True})
-        if not reply.applied:
-            self._report("undo download", reply)
-            return
-        self._confirm("Undo the last download", reply, "undo_download", {})
-
-    def _confirm(self, title: str, preview: CommandReply, op: str, args: dict[str, object]) -> None:
-        """The change summary and the choice; the real command on confirmation."""
-        gui = self.client.gui
-        if self._modal is not None:
-            with contextlib.suppress(Exception):
-                self._modal.close()
-        base = preview.version
-        removed = list(preview.removed)
-        with gui.add_modal(title) as modal:
-            self._modal = modal
-            gui.add_html(texts.lines_html(preview.lines, heading="What changes"))
-            choices: list[tuple[str, str | None]] = (
-                [("Keep the other steps", "keep"), ("Initialize the sequencer", "init")]
-                if removed
-                else [("Download to the CPU" if op == "download" else "Undo the download", None)]
-            )
-            for label, choice in choices:
-                button = gui.add_button(label, color="orange")
-                button.on_click(
-                    self._click(functools.partial(self._confirmed, op, args, base, choice))
-                )
-            gui.add_button("Cancel").on_click(lambda _: modal.close())
-
-    def _confirmed(
-        self, op: str, args: dict[str, object], base: int | None, removed: str | None
-    ) -> None:
-        if self._modal is not None:
-            with contextlib.suppress(Exception):
-                self._modal.close()
-            self._modal = None
-        full = dict(args)
-        if base is not None:
-            full["base"] = base
-        if removed is not None:
-            full["removed"] = removed
-        reply = self._command(op, full)
-        self._report(op.replace("_", " "), reply)
-        if reply.applied:
-            source = self.eng.source()
-            if source is not None:
-                self.base = source
-                if op == "undo_download":
-                    with contextlib.suppress(EditRefused, ChartSyntaxError):
-                        chart = parse_source(source.text, source.file or "chart.s7g")
-                        self.session = Session.open(chart, self.symbols)
-            self.note = f"the CPU runs version {reply.version}" + (
-                f": {reply.lines[0]}" if reply.lines else ""
-            )
-            self._show(source_changed=op == "undo_download")
-
-    # ------------------------------------------------------------ talking
-
-    def _command(self, op: str, args: dict[str, object]) -> CommandReply:
-        return self.panel.engineer_command(op, args)
-
-    def _report(self, what: str, reply: CommandReply) -> None:
-        verdict = "applied" if reply.applied else "refused"
-        body = reply.reason or (reply.lines[0] if reply.lines else "OK")
-        self._notify(f"{what} {verdict}", body, ok=reply.applied)
-        if not reply.applied:
-            self.note = f"{what} refused: {reply.reason}"
-            if self.session is not None:
-                diags = reply.lines[:MAX_DIAGNOSTIC_BUTTONS]
-                self.session = _refused(
-                    self.session,
-                    EditRefused(
-                        f"{what} refused: {reply.reason}" + ("".join(f"; {x}" for x in diags[:5]))
-                    ),
-                )
-            self._show(source_changed=False)
-
-    def _notify(self, title: str, body: str, *, ok: bool) -> None:
-        with contextlib.suppress(Exception):
-            self.client.add_notification(
-                title,
-                texts.clip(body, 400),
-                auto_close_seconds=6.0,
-                color="green" if ok else "red",
-            )
 
 
 # ---------------------------------------------------------------- helpers
@@ -780,12 +507,6 @@ def _located(chart: Chart, symbols: SymbolTable | None) -> Located:
         return Located(tuple(validate(read, symbols)), read)
     except RecursionError:  # pragma: no cover - the session bounds the nesting
         return Located((), read)
-
-
-def _refused(session: Session, exc: EditRefused) -> Session:
-    from dataclasses import replace
-
-    return replace(session, refusal=Refusal(exc.reason, exc.diagnostics))
 
 
 def _key_ref(ref: Ref | None) -> Ref | None:

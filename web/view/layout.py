@@ -199,191 +199,227 @@ class _Part:
 
 
 def _place_sequence(layout: ChartLayout, seq: SequenceInfo, x0: float) -> _Part:
-    step_info = {s.number: s for s in layout.steps if s.number in set(seq.steps)}
-    trans = {t.number: t for t in layout.transitions if t.number in set(seq.transitions)}
-    own_steps = [n for n in seq.steps if n in step_info]
-    out: dict[int, list[TransitionInfo]] = {n: [] for n in own_steps}
-    for number in seq.transitions:
-        found = trans.get(number)
-        if found is None:
-            continue
-        for s in found.sources:
-            if s in out:
-                out[s].append(found)
+    return _SequencePlacer(layout, seq).place(x0)
 
-    def successors(node: Node) -> list[Node]:
+
+class _SequencePlacer:
+    """One sequence's graph, walked depth first from its initial step: rows, lanes, lines."""
+
+    def __init__(self, layout: ChartLayout, seq: SequenceInfo) -> None:
+        self.seq = seq
+        self.step_info = {s.number: s for s in layout.steps if s.number in set(seq.steps)}
+        self.trans = {t.number: t for t in layout.transitions if t.number in set(seq.transitions)}
+        self.own_steps = [n for n in seq.steps if n in self.step_info]
+        self.out: dict[int, list[TransitionInfo]] = {n: [] for n in self.own_steps}
+        for number in seq.transitions:
+            found = self.trans.get(number)
+            if found is None:
+                continue
+            for s in found.sources:
+                if s in self.out:
+                    self.out[s].append(found)
+        # Depth-first walk: classify edges (tree / forward / back), record discovery order.
+        self.tree_children: dict[Node, list[Node]] = {}
+        self.dag_preds: dict[Node, list[Node]] = {}
+        self.back_edges: set[tuple[Node, Node]] = set()
+        self.postorder: list[Node] = []
+        self.roots: list[Node] = []
+        self._state: dict[Node, int] = {}  # 1 on the stack, 2 finished
+        self.lane: dict[Node, float] = {}
+        self.jump_lane: dict[tuple[int, int], float] = {}
+
+    def place(self, x0: float) -> _Part:
+        seq, trans = self.seq, self.trans
+        self._walk()
+        row = self._rows()
+        self._lanes(x0)
+        lane = self.lane
+        placed_steps = [
+            PlacedStep(
+                number=n,
+                name=self.step_info[n].name,
+                x=lane[("S", n)],
+                y=float(row[("S", n)]),
+                initial=self.step_info[n].initial,
+                interlock=self.step_info[n].interlock,
+                supervision=self.step_info[n].supervision,
+                sequence=seq.number,
+            )
+            for n in self.own_steps
+        ]
+        placed_trans = [
+            PlacedTransition(
+                number=n,
+                name=trans[n].name,
+                x=lane[("T", n)],
+                y=float(row[("T", n)]),
+                condition=trans[n].condition,
+                sequence=seq.number,
+            )
+            for n in seq.transitions
+            if n in trans
+        ]
+        links, jumps, stops = self._lines(placed_steps, placed_trans)
+        lanes_used = [*lane.values(), *self.jump_lane.values()]
+        x_end = max(lanes_used, default=x0) + 1
+        height = max((float(r) for r in row.values()), default=0.0) + 1
+        return _Part(
+            steps=placed_steps,
+            transitions=placed_trans,
+            links=links,
+            jumps=jumps,
+            stops=stops,
+            column=PlacedSequence(seq.number, seq.name, x0, x_end - 1),
+            width_end=x_end,
+            height=height,
+        )
+
+    def _successors(self, node: Node) -> list[Node]:
         kind, n = node
         if kind == "S":
-            return [("T", t.number) for t in out.get(n, [])]
-        return [("S", s) for s in trans[n].targets if s in step_info]
+            return [("T", t.number) for t in self.out.get(n, [])]
+        return [("S", s) for s in self.trans[n].targets if s in self.step_info]
 
-    # Depth-first walk: classify edges (tree / forward / back), record discovery order.
-    tree_children: dict[Node, list[Node]] = {}
-    dag_preds: dict[Node, list[Node]] = {}
-    back_edges: set[tuple[Node, Node]] = set()
-    postorder: list[Node] = []
-    roots: list[Node] = []
-    state: dict[Node, int] = {}  # 1 on the stack, 2 finished
+    def _walk(self) -> None:
+        seq, own_steps = self.seq, self.own_steps
+        starts = [("S", n) for n in own_steps if self.step_info[n].initial]
+        starts += [("S", n) for n in own_steps]
+        starts += [("T", n) for n in seq.transitions if n in self.trans]
+        for node in starts:
+            if node not in self._state:
+                self.roots.append(node)
+                self._visit(node)
 
-    def visit(root: Node) -> None:
+    def _visit(self, root: Node) -> None:
+        state, tree_children = self._state, self.tree_children
         state[root] = 1
         tree_children[root] = []
-        stack: list[tuple[Node, list[Node]]] = [(root, successors(root))]
+        stack: list[tuple[Node, list[Node]]] = [(root, self._successors(root))]
         while stack:
             node, todo = stack[-1]
             if not todo:
                 state[node] = 2
-                postorder.append(node)
+                self.postorder.append(node)
                 stack.pop()
                 continue
             nxt = todo.pop(0)
             if state.get(nxt) == 1:
-                back_edges.add((node, nxt))
+                self.back_edges.add((node, nxt))
                 continue
-            dag_preds.setdefault(nxt, []).append(node)
+            self.dag_preds.setdefault(nxt, []).append(node)
             if nxt not in state:
                 state[nxt] = 1
                 tree_children[node].append(nxt)
                 tree_children[nxt] = []
-                stack.append((nxt, successors(nxt)))
+                stack.append((nxt, self._successors(nxt)))
 
-    starts = [("S", n) for n in own_steps if step_info[n].initial]
-    starts += [("S", n) for n in own_steps]
-    starts += [("T", n) for n in seq.transitions if n in trans]
-    for node in starts:
-        if node not in state:
-            roots.append(node)
-            visit(node)
+    def _rows(self) -> dict[Node, int]:
+        """Rows: longest path over the DAG (reverse postorder is a topological order)."""
+        row: dict[Node, int] = {}
+        for node in reversed(self.postorder):
+            preds = self.dag_preds.get(node, [])
+            row[node] = max((row[p] + 1 for p in preds if p in row), default=0)
+            if node[0] == "T" and row[node] % 2 == 0:
+                row[node] += 1  # transitions always sit on odd rows, steps on even rows
+            elif node[0] == "S" and row[node] % 2 == 1:
+                row[node] += 1
+        return row
 
-    # Rows: longest path over the DAG (reverse postorder is a topological order).
-    row: dict[Node, int] = {}
-    for node in reversed(postorder):
-        preds = dag_preds.get(node, [])
-        row[node] = max((row[p] + 1 for p in preds if p in row), default=0)
-        if node[0] == "T" and row[node] % 2 == 0:
-            row[node] += 1  # transitions always sit on odd rows, steps on even rows
-        elif node[0] == "S" and row[node] % 2 == 1:
-            row[node] += 1
-
-    # Lanes: tree children side by side; jumps in a simultaneous divergence take a lane.
-    def jump_targets(node: Node) -> list[int]:
+    def _jump_targets(self, node: Node) -> list[int]:
         if node[0] != "T":
             return []
-        t = trans[node[1]]
-        return [s for s in t.targets if s not in step_info or (node, ("S", s)) in back_edges]
+        t = self.trans[node[1]]
+        return [
+            s for s in t.targets if s not in self.step_info or (node, ("S", s)) in self.back_edges
+        ]
 
-    width: dict[Node, int] = {}
-    for node in postorder:
-        own = sum(width[c] for c in tree_children[node])
-        if node[0] == "T" and len(trans[node[1]].targets) > 1:
-            own += len(jump_targets(node))
-        width[node] = max(1, own)
+    def _is_divergence(self, node: Node) -> bool:
+        return node[0] == "T" and len(self.trans[node[1]].targets) > 1
 
-    lane: dict[Node, float] = {}
-    jump_lane: dict[tuple[int, int], float] = {}
-    next_lane = x0
-    for root in roots:
-        lane[root] = next_lane
-        stack = [root]
-        while stack:
-            node = stack.pop()
-            x = lane[node]
-            children = tree_children[node]
-            if node[0] == "T" and len(trans[node[1]].targets) > 1:
-                # Keep written target order across real steps and jumps.
-                tree = {c[1]: c for c in children}
-                jumped = set(jump_targets(node))
-                for target in trans[node[1]].targets:
-                    if target in tree:
-                        lane[tree[target]] = x
-                        stack.append(tree[target])
-                        x += width[tree[target]]
-                    elif target in jumped:
-                        jump_lane[(node[1], target)] = x
-                        x += 1
-            else:
-                for child in children:
-                    lane[child] = x
-                    stack.append(child)
-                    x += width[child]
-        next_lane += width[root]
+    def _lanes(self, x0: float) -> None:
+        """Lanes: tree children side by side; jumps in a simultaneous divergence take a lane."""
+        width: dict[Node, int] = {}
+        for node in self.postorder:
+            own = sum(width[c] for c in self.tree_children[node])
+            if self._is_divergence(node):
+                own += len(self._jump_targets(node))
+            width[node] = max(1, own)
+        lane = self.lane
+        next_lane = x0
+        for root in self.roots:
+            lane[root] = next_lane
+            stack = [root]
+            while stack:
+                node = stack.pop()
+                x = lane[node]
+                children = self.tree_children[node]
+                if self._is_divergence(node):
+                    # Keep written target order across real steps and jumps.
+                    tree = {c[1]: c for c in children}
+                    jumped = set(self._jump_targets(node))
+                    for target in self.trans[node[1]].targets:
+                        if target in tree:
+                            lane[tree[target]] = x
+                            stack.append(tree[target])
+                            x += width[tree[target]]
+                        elif target in jumped:
+                            self.jump_lane[(node[1], target)] = x
+                            x += 1
+                else:
+                    for child in children:
+                        lane[child] = x
+                        stack.append(child)
+                        x += width[child]
+            next_lane += width[root]
 
-    placed_steps = [
-        PlacedStep(
-            number=n,
-            name=step_info[n].name,
-            x=lane[("S", n)],
-            y=float(row[("S", n)]),
-            initial=step_info[n].initial,
-            interlock=step_info[n].interlock,
-            supervision=step_info[n].supervision,
-            sequence=seq.number,
-        )
-        for n in own_steps
-    ]
-    placed_trans = [
-        PlacedTransition(
-            number=n,
-            name=trans[n].name,
-            x=lane[("T", n)],
-            y=float(row[("T", n)]),
-            condition=trans[n].condition,
-            sequence=seq.number,
-        )
-        for n in seq.transitions
-        if n in trans
-    ]
-    pos = {("S", s.number): (s.x, s.y) for s in placed_steps}
-    pos.update({("T", t.number): (t.x, t.y) for t in placed_trans})
+    def _lines(
+        self, placed_steps: list[PlacedStep], placed_trans: list[PlacedTransition]
+    ) -> tuple[list[Link], list[Jump], list[Stop]]:
+        pos = {("S", s.number): (s.x, s.y) for s in placed_steps}
+        pos.update({("T", t.number): (t.x, t.y) for t in placed_trans})
+        links: list[Link] = []
+        jumps: list[Jump] = []
+        stops: list[Stop] = []
+        for t in placed_trans:
+            info = self.trans[t.number]
+            links += self._lines_in(t, info, pos)
+            if not info.targets:
+                stops.append(Stop(t.number, t.x, t.y + MARK_OFFSET))
+            jumps_here = set(self._jump_targets(("T", t.number)))
+            for target in info.targets:
+                if target in jumps_here:
+                    jx = self.jump_lane.get((t.number, target), t.x)
+                    if jx != t.x:
+                        links.append(_elbow((t.x, t.y), (jx, t.y + 1), t.y + 0.5, True, t.number))
+                        jumps.append(Jump(t.number, target, jx, t.y + 1 - 0.45))
+                    else:
+                        jumps.append(Jump(t.number, target, t.x, t.y + MARK_OFFSET))
+                    continue
+                tx, ty = pos[("S", target)]
+                if len(info.targets) > 1:  # simultaneous divergence: double line under the bar
+                    links.append(_elbow((t.x, t.y), (tx, ty), t.y + 0.5, True, t.number))
+                else:  # a plain line, or an alternative convergence just above the step
+                    links.append(_elbow((t.x, t.y), (tx, ty), ty - 0.5, False, t.number))
+        return links, jumps, stops
 
-    links: list[Link] = []
-    jumps: list[Jump] = []
-    stops: list[Stop] = []
-    for t in placed_trans:
-        info = trans[t.number]
+    def _lines_in(
+        self, t: PlacedTransition, info: TransitionInfo, pos: dict[Node, Point]
+    ) -> list[Link]:
+        """The lines from the steps before transition ``t`` into it."""
+        links: list[Link] = []
         node = ("T", t.number)
         for s in info.sources:
             src: Node = ("S", s)
-            if src not in pos or (src, node) in back_edges:
+            if src not in pos or (src, node) in self.back_edges:
                 continue
             sx, sy = pos[src]
             if len(info.sources) > 1:  # simultaneous join: double line just above the bar
                 links.append(_elbow((sx, sy), (t.x, t.y), t.y - 0.5, True, t.number))
-            elif len(out.get(s, [])) > 1:  # alternative divergence: line under the step
+            elif len(self.out.get(s, [])) > 1:  # alternative divergence: line under the step
                 links.append(_elbow((sx, sy), (t.x, t.y), sy + 0.5, False, t.number))
             else:
                 links.append(_elbow((sx, sy), (t.x, t.y), t.y - 0.5, False, t.number))
-        if not info.targets:
-            stops.append(Stop(t.number, t.x, t.y + MARK_OFFSET))
-        jumps_here = set(jump_targets(node))
-        for target in info.targets:
-            if target in jumps_here:
-                jx = jump_lane.get((t.number, target), t.x)
-                if jx != t.x:
-                    links.append(_elbow((t.x, t.y), (jx, t.y + 1), t.y + 0.5, True, t.number))
-                    jumps.append(Jump(t.number, target, jx, t.y + 1 - 0.45))
-                else:
-                    jumps.append(Jump(t.number, target, t.x, t.y + MARK_OFFSET))
-                continue
-            tx, ty = pos[("S", target)]
-            if len(info.targets) > 1:  # simultaneous divergence: double line under the bar
-                links.append(_elbow((t.x, t.y), (tx, ty), t.y + 0.5, True, t.number))
-            else:  # a plain line, or an alternative convergence just above the step
-                links.append(_elbow((t.x, t.y), (tx, ty), ty - 0.5, False, t.number))
-
-    lanes_used = [*lane.values(), *jump_lane.values()]
-    x_end = max(lanes_used, default=x0) + 1
-    height = max((float(r) for r in row.values()), default=0.0) + 1
-    return _Part(
-        steps=placed_steps,
-        transitions=placed_trans,
-        links=links,
-        jumps=jumps,
-        stops=stops,
-        column=PlacedSequence(seq.number, seq.name, x0, x_end - 1),
-        width_end=x_end,
-        height=height,
-    )
+        return links
 
 
 def _elbow(a: Point, b: Point, y_mid: float, double: bool, transition: int) -> Link:

@@ -1,0 +1,221 @@
+"""The editor's commands to the CPU: Save, Open, New, Download and Undo download.
+
+Each is the engineer's command on the bus (checked and audited in the CPU); a download and
+its undo ask the CPU for the change summary first and confirm it in a modal. ``CpuCommands``
+is a part of ``web.view.editor.Editor``, which owns the attributes it declares.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING, Any, Final
+
+import viser
+
+from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer.diagnostics import Diagnostic
+from s7graph.sequencer.edit import Session, new_chart
+from s7graph.sequencer.edit_base import EditRefused, Refusal
+from s7graph.sequencer.edit_text import parse_source
+from s7graph.sequencer.format import format_chart
+from s7graph.sequencer.model import Chart
+from s7graph.sequencer.parse import ChartSyntaxError
+from s7graph.web.bus.protocol import ChartSource, CommandReply
+from s7graph.web.view import texts
+from s7graph.web.view.engineering import EditorPage
+
+__all__ = ["MAX_DIAGNOSTIC_BUTTONS", "CpuCommands", "Located", "refused"]
+
+MAX_DIAGNOSTIC_BUTTONS: Final = 25
+
+
+@dataclass(frozen=True, slots=True)
+class Located:
+    """The diagnostics of the chart as the source view shows it (lines and columns of that
+    text), and the chart read back from it (to find the element of a diagnostic)."""
+
+    diagnostics: tuple[Diagnostic, ...]
+    chart: Chart | None
+
+
+class CpuCommands:
+    """Files and downloads of the chart being edited, and how the CPU's answers show."""
+
+    panel: EditorPage
+    client: viser.ClientHandle
+    eng: Any
+    host: Any
+    session: Session | None
+    base: ChartSource | None
+    symbols: SymbolTable | None
+    located: Located
+    note: str
+    file: viser.GuiTextHandle
+    open_choice: viser.GuiDropdownHandle[Any]
+    _modal: Any
+
+    if TYPE_CHECKING:
+
+        def _show(self, *, source_changed: bool) -> None: ...
+
+        def _click(self, action: Callable[[], object]) -> Callable[[Any], None]: ...
+
+    def _refresh_files(self) -> None:
+        listed = self.eng.project()
+        names = [f.name for f in listed.files] if listed is not None else []
+        self.open_choice.options = names or ["(none)"]
+
+    def save(self) -> None:
+        if self.session is None:
+            return
+        name = str(self.file.value).strip()
+        reply = self._command("save", {"file": name, "source": format_chart(self.session.chart)})
+        self._report("save", reply)
+        if reply.applied:
+            self._refresh_files()
+
+    def open(self) -> None:
+        name = str(self.open_choice.value)
+        if name == "(none)":
+            self._refresh_files()
+            return
+        reply = self._command("open", {"file": name})
+        if not reply.applied:
+            self._report("open", reply)
+            return
+        try:
+            chart = parse_source(reply.text, name if name.endswith(".s7g") else f"{name}.s7g")
+            session = Session.open(chart, self.symbols)
+        except EditRefused as exc:
+            self._notify("open refused", exc.reason, ok=False)
+            return
+        self.session = session
+        stem = name.rsplit(".", 1)[0]
+        self.file.value = f"{stem}.s7g"  # type: ignore[misc]
+        self.note = "opened " + name + ("".join(f"; {x}" for x in reply.lines[:3]))
+        self._show(source_changed=True)
+
+    def new(self) -> None:
+        running = self.session.chart if self.session is not None else None
+        name = running.name if running is not None else self.host.layout.fb
+        try:
+            chart = new_chart(
+                name, running.fb_number if running else None, running.db_number if running else None
+            )
+            self.session = Session.open(chart, self.symbols)
+        except EditRefused as exc:
+            self._notify("new refused", exc.reason, ok=False)
+            return
+        self.note = "a new chart: S1 and T1 (Insert: select T1, Step + Transition)"
+        self._show(source_changed=True)
+
+    def download(self) -> None:
+        """Compile (here: the diagnostics), ask the CPU for the change summary, confirm."""
+        s = self.session
+        if s is None:
+            return
+        if s.has_errors:
+            errors = [texts.diagnostic_line(d) for d in self.located.diagnostics if d.is_error]
+            self.note = f"download refused: the chart has {len(errors)} error(s)"
+            self._notify("download refused", "; ".join(errors[:3]) or self.note, ok=False)
+            self._show(source_changed=False)
+            return
+        text = format_chart(s.chart)
+        reply = self._command("download", {"source": text, "preview": True})
+        if not reply.applied:
+            self._report("download", reply)
+            return
+        self._confirm("Download into the CPU", reply, "download", {"source": text})
+
+    def undo_download(self) -> None:
+        reply = self._command("undo_download", {"preview": True})
+        if not reply.applied:
+            self._report("undo download", reply)
+            return
+        self._confirm("Undo the last download", reply, "undo_download", {})
+
+    def _confirm(self, title: str, preview: CommandReply, op: str, args: dict[str, object]) -> None:
+        """The change summary and the choice; the real command on confirmation."""
+        gui = self.client.gui
+        if self._modal is not None:
+            with contextlib.suppress(Exception):
+                self._modal.close()
+        base = preview.version
+        removed = list(preview.removed)
+        with gui.add_modal(title) as modal:
+            self._modal = modal
+            gui.add_html(texts.lines_html(preview.lines, heading="What changes"))
+            choices: list[tuple[str, str | None]] = (
+                [("Keep the other steps", "keep"), ("Initialize the sequencer", "init")]
+                if removed
+                else [("Download to the CPU" if op == "download" else "Undo the download", None)]
+            )
+            for label, choice in choices:
+                button = gui.add_button(label, color="orange")
+                button.on_click(
+                    self._click(functools.partial(self._confirmed, op, args, base, choice))
+                )
+            gui.add_button("Cancel").on_click(lambda _: modal.close())
+
+    def _confirmed(
+        self, op: str, args: dict[str, object], base: int | None, removed: str | None
+    ) -> None:
+        if self._modal is not None:
+            with contextlib.suppress(Exception):
+                self._modal.close()
+            self._modal = None
+        full = dict(args)
+        if base is not None:
+            full["base"] = base
+        if removed is not None:
+            full["removed"] = removed
+        reply = self._command(op, full)
+        self._report(op.replace("_", " "), reply)
+        if reply.applied:
+            source = self.eng.source()
+            if source is not None:
+                self.base = source
+                if op == "undo_download":
+                    with contextlib.suppress(EditRefused, ChartSyntaxError):
+                        chart = parse_source(source.text, source.file or "chart.s7g")
+                        self.session = Session.open(chart, self.symbols)
+            self.note = f"the CPU runs version {reply.version}" + (
+                f": {reply.lines[0]}" if reply.lines else ""
+            )
+            self._show(source_changed=op == "undo_download")
+
+    def _command(self, op: str, args: dict[str, object]) -> CommandReply:
+        return self.panel.engineer_command(op, args)
+
+    def _report(self, what: str, reply: CommandReply) -> None:
+        verdict = "applied" if reply.applied else "refused"
+        body = reply.reason or (reply.lines[0] if reply.lines else "OK")
+        self._notify(f"{what} {verdict}", body, ok=reply.applied)
+        if not reply.applied:
+            self.note = f"{what} refused: {reply.reason}"
+            if self.session is not None:
+                diags = reply.lines[:MAX_DIAGNOSTIC_BUTTONS]
+                self.session = refused(
+                    self.session,
+                    EditRefused(
+                        f"{what} refused: {reply.reason}" + ("".join(f"; {x}" for x in diags[:5]))
+                    ),
+                )
+            self._show(source_changed=False)
+
+    def _notify(self, title: str, body: str, *, ok: bool) -> None:
+        with contextlib.suppress(Exception):
+            self.client.add_notification(
+                title,
+                texts.clip(body, 400),
+                auto_close_seconds=6.0,
+                color="green" if ok else "red",
+            )
+
+
+def refused(session: Session, exc: EditRefused) -> Session:
+    """``session`` with ``exc`` as its refusal (the edit or command changed nothing)."""
+    return replace(session, refusal=Refusal(exc.reason, exc.diagnostics))
