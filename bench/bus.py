@@ -54,10 +54,12 @@ from s7graph.engine.clock import SystemClock  # noqa: E402
 from s7graph.engine.record import ScanRecord  # noqa: E402
 from s7graph.engine.runner import Runner  # noqa: E402
 from s7graph.engine.watchdog import Watchdog  # noqa: E402
+from s7graph.web.bus.client import BusClient  # noqa: E402
 from s7graph.web.bus.live import LiveGraph  # noqa: E402
 from s7graph.web.bus.protocol import StepStateUpdate, encode  # noqa: E402
+from s7graph.web.bus.publisher import BusPublisher  # noqa: E402
 from s7graph.web.bus.scan_events import ScanEvents  # noqa: E402
-from s7graph.web.bus.zenoh_bus import BusClient, BusPublisher, open_session  # noqa: E402
+from s7graph.web.bus.session import open_session  # noqa: E402
 
 RAW_KEY = "s7graph-bench/raw"
 CYCLE_MS = 10.0

@@ -104,7 +104,7 @@ def worker(workload: str, view: str, endpoint: str, port: int, state: Path) -> i
     from s7graph.engine.cpu import Cpu
     from s7graph.engine.profile import PHASE_NAMES
     from s7graph.engine.runner import Runner
-    from s7graph.web.bus.zenoh_bus import BusPublisher
+    from s7graph.web.bus.publisher import BusPublisher
     from s7graph.web.cli.net import NetOptions
     from s7graph.web.cli.run_chart import run_chart
 
@@ -259,8 +259,10 @@ def flood(url: str, endpoint: str, fb: str) -> Iterator[Callable[[], str]]:
     """Four clients commanding back to back, and a fire hose of queries answered or not."""
     import zenoh
 
+    from s7graph.web.bus.client import BusClient
+    from s7graph.web.bus.keys import keys
     from s7graph.web.bus.protocol import Command, encode
-    from s7graph.web.bus.zenoh_bus import BusClient, keys, open_session
+    from s7graph.web.bus.session import open_session
 
     stop = threading.Event()
     counts = {"answered": 0, "applied": 0, "fired": 0, "replies": 0}
@@ -329,8 +331,9 @@ def downloads(url: str, endpoint: str, fb: str) -> Iterator[Callable[[], str]]:
     nothing)."""
     from big_charts import contact_chain, huge_chart
 
+    from s7graph.web.bus.client import BusClient
     from s7graph.web.bus.protocol import Command
-    from s7graph.web.bus.zenoh_bus import BusClient, open_session
+    from s7graph.web.bus.session import open_session
 
     stop = threading.Event()
     charts = itertools.cycle([("1 MB", huge_chart(name=fb)), ("chain", contact_chain(name=fb))])

@@ -178,10 +178,12 @@ def replies(n: int, synchronous: str, where: str | None) -> list[float]:
     from s7graph.engine.clock import SystemClock
     from s7graph.engine.runner import Runner
     from s7graph.sfb.alarms import message_list
+    from s7graph.web.bus.client import BusClient
     from s7graph.web.bus.gate import cpu_gate
     from s7graph.web.bus.live import LiveGraph
     from s7graph.web.bus.protocol import Command
-    from s7graph.web.bus.zenoh_bus import BusClient, BusPublisher, open_session
+    from s7graph.web.bus.publisher import BusPublisher
+    from s7graph.web.bus.session import open_session
 
     fb = "Seq_drill"
     with tempfile.TemporaryDirectory(dir=where) as tmp:

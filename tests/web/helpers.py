@@ -25,7 +25,7 @@ if TYPE_CHECKING:
 
     from s7graph.engine.record import ScanRecord
     from s7graph.web.bus.online import OnlineChange
-    from s7graph.web.view.live_edge import LiveEdge
+    from s7graph.web.wiring.live_edge import LiveEdge
 
 CHROMIUM = "/usr/bin/chromium"
 ARGS = [
@@ -161,8 +161,8 @@ def online_cpu(
     from s7graph.web.bus.gate import Gate
     from s7graph.web.bus.live import LiveGraph
     from s7graph.web.bus.online import OnlineChange
-    from s7graph.web.view.edge import BusEnds
-    from s7graph.web.view.live_edge import LiveEdge
+    from s7graph.web.bus.session import BusEnds
+    from s7graph.web.wiring.live_edge import LiveEdge
 
     path = tmp_path / name
     path.write_text(chart, encoding="utf-8")

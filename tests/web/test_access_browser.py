@@ -28,7 +28,7 @@ from s7graph.web.bus.live import LiveGraph
 from s7graph.web.bus.protocol import Command
 from s7graph.web.harness.session import ChartSession, load_chart
 from s7graph.web.view.chart_view import DISCONNECTED
-from s7graph.web.view.live_edge import LiveEdge
+from s7graph.web.wiring.live_edge import LiveEdge
 from tests.web.helpers import ARGS, CHROMIUM, log_in, needs_chromium, scanning, wait_until
 
 if TYPE_CHECKING:

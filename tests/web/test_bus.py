@@ -9,8 +9,10 @@ from pathlib import Path
 import pytest
 
 from s7graph.sequencer.model import Chart, Sequence, Step, Transition
+from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import ChartLayout, Command, CommandReply, StepStateUpdate
-from s7graph.web.bus.zenoh_bus import BusClient, BusPublisher, open_session
+from s7graph.web.bus.publisher import BusPublisher
+from s7graph.web.bus.session import open_session
 from tests.web import helpers
 
 pytestmark = pytest.mark.timeout(30)

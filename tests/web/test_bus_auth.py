@@ -18,9 +18,11 @@ from s7graph.sequencer.model import Chart, Sequence, Step, Transition
 from s7graph.web.access.audit import AuditStore, read_audit
 from s7graph.web.access.login import Authenticator
 from s7graph.web.access.users import UsersFile
+from s7graph.web.bus.client import BusClient, find_cpus
 from s7graph.web.bus.gate import Gate
 from s7graph.web.bus.protocol import ChartLayout, Command, CommandReply, StepStateUpdate
-from s7graph.web.bus.zenoh_bus import BusClient, BusPublisher, TlsFiles, find_cpus, open_session
+from s7graph.web.bus.publisher import BusPublisher
+from s7graph.web.bus.session import TlsFiles, open_session
 from tests.web.helpers import wait_until
 
 pytestmark = pytest.mark.timeout(60)

@@ -16,8 +16,9 @@ import pytest
 
 from s7graph.engine.diagnostics import EventId
 from s7graph.web.access.audit import read_audit
+from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import Command, CommandReply
-from s7graph.web.bus.zenoh_bus import BusClient, open_session
+from s7graph.web.bus.session import open_session
 from tests.web.helpers import PASSWORD, OnlineRig, online_cpu, wait_until
 
 pytestmark = pytest.mark.timeout(90)

@@ -1,6 +1,6 @@
 """Scan cycle load from communication (S7 HW Config, Cycle/Clock Memory: 20 % by default):
 the commands applied at one scan boundary take at most that share of the cycle, the rest
-wait for the next boundary in order (web/bus/zenoh_bus.py ``apply_commands(until_ns=...)``,
+wait for the next boundary in order (web/bus/publisher.py ``apply_commands(until_ns=...)``,
 engine/runner.py ``COMM_LOAD_PCT``). A real zenoh bus on a unix socket."""
 
 from __future__ import annotations
@@ -13,8 +13,9 @@ import pytest
 from s7graph.engine.clock import VirtualClock
 from s7graph.engine.cpu import Cpu
 from s7graph.engine.runner import COMM_LOAD_PCT, Runner
+from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import Command, CommandReply
-from s7graph.web.bus.zenoh_bus import BusClient, BusPublisher
+from s7graph.web.bus.publisher import BusPublisher
 from tests.web import test_bus
 from tests.web.helpers import wait_until
 

@@ -1,5 +1,5 @@
 """The cycle statistics as published in ``status`` and shown: the longest and the last long
-cycle with where their time went (web/view/live_edge.py ``cycle_stats``, web/view/texts.py,
+cycle with where their time went (web/bus/scan_edge.py ``cycle_stats``, web/view/texts.py,
 ``s7graph status``)."""
 
 from __future__ import annotations
@@ -7,8 +7,8 @@ from __future__ import annotations
 import pytest
 
 from s7graph.web.bus.protocol import CpuStatus, CycleStats, StepStateUpdate, decode, encode
+from s7graph.web.bus.scan_edge import cycle_stats
 from s7graph.web.cli.remote import status_lines
-from s7graph.web.view.live_edge import cycle_stats
 from s7graph.web.view.texts import status_html
 from tests.engine.test_cycle_profile import runner_with, spin
 

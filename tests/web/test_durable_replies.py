@@ -1,5 +1,5 @@
 """Durable before answered: a command's reply leaves only once its effect and its audit row
-are committed to the state file (web/bus/zenoh_bus.py ``apply_commands(durable=...)``,
+are committed to the state file (web/bus/publisher.py ``apply_commands(durable=...)``,
 engine/runner.py ``when_durable``), from the writer thread — never by the scan thread
 waiting. The drill chart on the system clock in a real Runner with its writer, a real zenoh
 bus on a unix socket; a foreign lock on the state file plays the slow disk."""
@@ -20,17 +20,12 @@ from s7graph.engine.record import ScanRecord
 from s7graph.engine.runner import Runner
 from s7graph.sfb.alarms import message_list
 from s7graph.web.access.audit import read_audit
+from s7graph.web.bus.client import CLIENT_TIMEOUT_S, BusClient
 from s7graph.web.bus.gate import cpu_gate
 from s7graph.web.bus.live import LiveGraph
 from s7graph.web.bus.protocol import AuditEntry, Command, CommandReply
-from s7graph.web.bus.zenoh_bus import (
-    CLIENT_TIMEOUT_S,
-    COMMAND_MAX_AGE_S,
-    REPLY_WITHIN_S,
-    BusClient,
-    BusPublisher,
-    open_session,
-)
+from s7graph.web.bus.publisher import COMMAND_MAX_AGE_S, REPLY_WITHIN_S, BusPublisher
+from s7graph.web.bus.session import open_session
 from s7graph.web.harness.session import ChartSession
 from tests.web.helpers import wait_until
 

@@ -17,8 +17,9 @@ import pytest
 
 from s7graph.engine.persistence import unpack_instance
 from s7graph.web.access.audit import read_audit
+from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import Command
-from s7graph.web.bus.zenoh_bus import BusClient, open_session
+from s7graph.web.bus.session import open_session
 from tests.web.helpers import wait_until
 
 pytestmark = pytest.mark.timeout(180)

@@ -24,8 +24,9 @@ import pytest
 
 from s7graph.sequencer.carry import fingerprint
 from s7graph.web.access.audit import read_audit
+from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import Command, CommandReply, StepStateUpdate
-from s7graph.web.bus.zenoh_bus import BusClient, open_session
+from s7graph.web.bus.session import open_session
 from s7graph.web.harness.session import load_chart
 from tests.web.helpers import wait_until
 

@@ -17,7 +17,7 @@ from s7graph.sfb.alarms import message_list
 from s7graph.web.bus.live import LiveGraph
 from s7graph.web.bus.protocol import AlarmList, Command, StepStateUpdate
 from s7graph.web.harness.session import ChartSession
-from s7graph.web.view.live_edge import LiveEdge
+from s7graph.web.wiring.live_edge import LiveEdge
 from tests.web.helpers import chart_session, wait_until
 
 pytestmark = pytest.mark.timeout(60)

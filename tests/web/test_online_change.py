@@ -20,9 +20,10 @@ from s7graph.engine.persistence import StateStore
 from s7graph.sequencer.fb import GraphFB
 from s7graph.sequencer.online import swap
 from s7graph.web.access.audit import read_audit
+from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.online import OnlineChange
 from s7graph.web.bus.protocol import Command, CommandReply
-from s7graph.web.bus.zenoh_bus import BusClient, open_session
+from s7graph.web.bus.session import open_session
 from s7graph.web.harness.persist import open_state
 from s7graph.web.harness.session import ChartSession, compile_text, load_chart
 from tests.web.helpers import PASSWORD, online_cpu, wait_until

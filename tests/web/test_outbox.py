@@ -11,9 +11,11 @@ from pathlib import Path
 import pytest
 
 from s7graph.sequencer.model import Chart, Sequence, Step, Transition
+from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.outbox import Outbox
 from s7graph.web.bus.protocol import ChartLayout, StepStateUpdate, decode
-from s7graph.web.bus.zenoh_bus import BusClient, BusPublisher, open_session
+from s7graph.web.bus.publisher import BusPublisher
+from s7graph.web.bus.session import open_session
 from tests.web.helpers import wait_until
 
 pytestmark = pytest.mark.timeout(60)

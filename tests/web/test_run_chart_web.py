@@ -23,11 +23,12 @@ from pathlib import Path
 import pytest
 
 from s7graph.engine.clock import VirtualClock
+from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.live import LiveGraph
 from s7graph.web.bus.protocol import Command, CommandReply
-from s7graph.web.bus.zenoh_bus import BusClient, open_session
+from s7graph.web.bus.session import open_session
 from s7graph.web.harness.session import ChartSession, load_chart
-from s7graph.web.view.live_edge import LiveEdge
+from s7graph.web.wiring.live_edge import LiveEdge
 from tests.web.helpers import chromium_page, log_in, needs_chromium, scanning, wait_until
 
 ROOT = Path(__file__).resolve().parents[2]

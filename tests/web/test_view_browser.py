@@ -15,7 +15,7 @@ from s7graph.sequencer.model import Chart, Operand, Sequence, Step, Transition
 from s7graph.web.bus.protocol import ChartLayout, Command, StepStateUpdate
 from s7graph.web.view.chart_view import ACTIVE, DISTURBED, INACTIVE
 from s7graph.web.view.drawing import BOX_H, BOX_W
-from s7graph.web.view.edge import WebEdge, serve_view
+from s7graph.web.wiring.web_edge import WebEdge, serve_view
 from tests.web.helpers import chromium_page, log_in, needs_chromium, wait_until
 from tests.web.toy_feed import ToySequencer
 

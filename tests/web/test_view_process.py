@@ -22,8 +22,9 @@ from pathlib import Path
 import pytest
 
 from s7graph.engine.runner import PR_SET_THP_DISABLE
+from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import CpuStatus
-from s7graph.web.bus.zenoh_bus import BusClient, open_session
+from s7graph.web.bus.session import open_session
 from s7graph.web.cli.view_process import view_endpoints
 from tests.web.helpers import wait_until
 

@@ -51,7 +51,7 @@ from s7graph.web.bus.protocol import (
     ProjectFiles,
     encode,
 )
-from s7graph.web.bus.zenoh_bus import BusPublisher, PendingCommand
+from s7graph.web.bus.publisher import BusPublisher, PendingCommand
 from s7graph.web.harness.project import (
     MAX_READ,
     ProjectError,

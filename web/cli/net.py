@@ -15,8 +15,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from s7graph.web.bus.protocol import valid_name
-from s7graph.web.bus.zenoh_bus import TlsFiles
-from s7graph.web.view.edge import BusEnds
+from s7graph.web.bus.session import BusEnds, TlsFiles
 
 __all__ = ["NetOptions", "is_loopback_endpoint", "is_loopback_host"]
 

@@ -23,8 +23,9 @@ from typing import Any, TypeVar
 
 import zenoh
 
+from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import Command, CommandReply, CpuStatus, StepStateUpdate
-from s7graph.web.bus.zenoh_bus import BusClient, open_session
+from s7graph.web.bus.session import open_session
 from s7graph.web.cli.net import NetOptions
 from s7graph.web.cli.stopping import wait_until_stopped
 from s7graph.web.view.texts import cycle_lines

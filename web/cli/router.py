@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import sys
 
-from s7graph.web.bus.zenoh_bus import open_session
+from s7graph.web.bus.session import open_session
 from s7graph.web.cli.net import NetOptions
 from s7graph.web.cli.stopping import wait_until_stopped
 

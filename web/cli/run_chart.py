@@ -10,7 +10,7 @@ where it was; refused, exit 2, when the saved state allows none) or cold (OB102)
 A plant (``--plant``) runs after every scan; a plant error ends the run with one line, a
 plant still running at twice the maximum cycle time is aborted (STOP). Without ``--web`` a
 STOP by error ends the run: the reason on stderr, exit 1.
-``--web`` puts the running FB on the zenoh bus (``web/view/live_edge.py``: one state update
+``--web`` puts the running FB on the zenoh bus (``web/bus/scan_edge.py``: one state update
 per scan, operator commands applied between scans and answered once durable — an
 engineer's force jobs too, ``web/bus/forcing.py``, and downloads, ``web/bus/online.py`` —
 each audited in the state file) and serves its live browser view on ``--host:--port`` from
@@ -46,7 +46,7 @@ from s7graph.web.harness.session import ChartSession
 if TYPE_CHECKING:
     from s7graph.web.cli.net import NetOptions
     from s7graph.web.cli.view_process import ViewProcess
-    from s7graph.web.view.live_edge import LiveEdge
+    from s7graph.web.wiring.live_edge import LiveEdge
 
 DEFAULT_MAX_CYCLE_MS = 150.0  # S7's default maximum cycle time
 IN_PROCESS_VIEW_MAX_CYCLE_MS = 1000.0
@@ -251,7 +251,7 @@ def _serve(
     from s7graph.web.cli.net import NetOptions
     from s7graph.web.cli.view_process import ViewProcess, view_endpoints
     from s7graph.web.view.edge import check_port
-    from s7graph.web.view.live_edge import LiveEdge
+    from s7graph.web.wiring.live_edge import LiveEdge
 
     net = net or NetOptions()
     if web:

@@ -17,7 +17,8 @@ import sys
 import threading
 import time
 
-from s7graph.web.bus.zenoh_bus import find_cpus, open_session
+from s7graph.web.bus.client import find_cpus
+from s7graph.web.bus.session import open_session
 from s7graph.web.cli.net import NetOptions, is_loopback_host
 from s7graph.web.cli.stopping import wait_until_stopped
 from s7graph.web.view.edge import PortError, ViewSide

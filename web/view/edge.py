@@ -1,33 +1,24 @@
-"""Wire a chart, a feed of scans, the bus and the browser view together.
-
-:class:`CpuSide` is the CPU's end of the bus: a zenoh session listening on (or connecting
-to) the given endpoints — a unix socket in a temporary folder by default — and its
-:class:`BusPublisher` with the :class:`Gate`. :class:`ViewSide` is a view's end: its own
-session connecting to the bus, a :class:`BusClient`, a viser server and the
-:class:`ChartView` — all it knows of the CPU comes over the bus, so it runs as well in
-another process (``s7graph web``) as beside the CPU (``s7graph run --web``).
-``serve_view(chart, updates)`` starts both, as ``run --web`` does.
+"""The view's end of the bus: :class:`ViewSide` is a browser view's own session connecting
+to the bus, a :class:`BusClient`, a viser server and the :class:`ChartView` — all it knows
+of the CPU comes over the bus, so it runs as well in another process (``s7graph web``, the
+view of ``s7graph run --web``) as beside the CPU (``web.wiring``). :func:`check_port` says
+whether the page's port is free.
 """
 
 from __future__ import annotations
 
 import contextlib
-import shutil
 import socket
-import tempfile
-import threading
 import time
-from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Iterable
 
-from s7graph.sequencer.model import Chart
-from s7graph.web.bus.gate import Apply, Gate
-from s7graph.web.bus.protocol import ChartLayout, Command, CpuStatus, StepStateUpdate
-from s7graph.web.bus.zenoh_bus import BusClient, BusPublisher, TlsFiles, open_session
+from s7graph.web.bus.client import BusClient
+from s7graph.web.bus.protocol import ChartLayout, CpuStatus
+from s7graph.web.bus.session import BusEnds, open_session
 from s7graph.web.view.chart_view import ChartView, make_server
 from s7graph.web.view.engineering import Engineering
 
-__all__ = ["BusEnds", "CpuSide", "PortError", "ViewSide", "WebEdge", "check_port", "serve_view"]
+__all__ = ["PortError", "ViewSide", "check_port"]
 
 
 ENGINEERING_TIMEOUT_S = 30.0  # a download compiles, writes the file and waits for a scan
@@ -35,15 +26,6 @@ ENGINEERING_TIMEOUT_S = 30.0  # a download compiles, writes the file and waits f
 
 class PortError(ValueError):
     """A page port out of range or taken."""
-
-
-@dataclass(frozen=True, slots=True)
-class BusEnds:
-    """Where a session meets the bus: endpoints to listen on and to connect to, and TLS."""
-
-    listen: Sequence[str] = ()
-    connect: Sequence[str] = ()
-    tls: TlsFiles | None = None
 
 
 def check_port(host: str, port: int) -> None:
@@ -61,41 +43,6 @@ def check_port(host: str, port: int) -> None:
             s.bind((host, port))
         except OSError as exc:
             raise PortError(f"port {port} on {host} is in use ({exc.strerror})") from None
-
-
-class CpuSide:
-    """The CPU's end of the bus; ``endpoint`` is where a view connects."""
-
-    def __init__(
-        self,
-        charts: dict[str, ChartLayout],
-        *,
-        cpu: str,
-        ends: BusEnds = BusEnds(),
-        gate: Gate | None = None,
-    ) -> None:
-        self._tmp = None
-        listen = list(ends.listen)
-        if not listen and not ends.connect:
-            self._tmp = tempfile.mkdtemp(prefix="s7graph-bus-")
-            listen = [f"unixsock-stream/{self._tmp}/bus.sock"]
-        self.endpoint = listen[0] if listen else ends.connect[0]
-        self.session = open_session(listen=listen, connect=ends.connect, tls=ends.tls)
-        try:
-            self.publisher = BusPublisher(self.session, cpu, charts, gate=gate)
-        except BaseException:
-            self.close()
-            raise
-
-    def close(self) -> None:
-        with contextlib.suppress(Exception):
-            if hasattr(self, "publisher"):
-                self.publisher.close()
-        with contextlib.suppress(Exception):
-            self.session.close()  # type: ignore[no-untyped-call]  # zenoh's stub
-        if self._tmp:
-            shutil.rmtree(self._tmp, ignore_errors=True)
-            self._tmp = None
 
 
 class ViewSide:
@@ -177,118 +124,3 @@ class ViewSide:
         while self._closers:
             with contextlib.suppress(Exception):  # keep closing the rest
                 self._closers.pop()()
-
-
-class WebEdge:
-    """A running view beside its CPU: ``publisher`` is the CPU's side of the bus, ``url``
-    the page, ``client``/``view``/``follower`` the view's side."""
-
-    def __init__(
-        self,
-        chart: Chart | ChartLayout,
-        *,
-        host: str,
-        port: int,
-        cpu: str,
-        fb: str | None,
-        endpoint: str | None = None,
-        ends: BusEnds | None = None,
-        gate: Gate | None = None,
-        allowed_origins: Iterable[str] = (),
-    ) -> None:
-        layout = chart if isinstance(chart, ChartLayout) else ChartLayout.from_chart(chart, fb=fb)
-        self.fb = layout.fb
-        self._stop = threading.Event()
-        self._pump: threading.Thread | None = None
-        if ends is None:
-            ends = BusEnds(listen=[endpoint] if endpoint else [])
-        self.cpu_side = CpuSide({self.fb: layout}, cpu=cpu, ends=ends, gate=gate)
-        self.endpoint = self.cpu_side.endpoint
-        self.publisher = self.cpu_side.publisher
-        try:
-            connect = list(ends.connect) or [self.endpoint]
-            self.view_side = ViewSide(
-                cpu=cpu, fb=self.fb, ends=BusEnds(connect=connect, tls=ends.tls),
-                host=host, port=port, allowed_origins=allowed_origins,
-            )  # fmt: skip
-        except BaseException:
-            self.cpu_side.close()
-            raise
-        self.client = self.view_side.client
-        self.view = self.view_side.view
-        self.follower = self.view_side.follower
-        self.server = self.view_side.server
-        self.url = self.view_side.url
-
-    def pump(self, updates: Iterable[StepStateUpdate], apply: Apply | None) -> None:
-        """Publish ``updates`` in a thread; between two of them, apply pending commands."""
-
-        def refuse(command: Command) -> tuple[bool, str]:
-            return False, "this CPU takes no commands"
-
-        def run() -> None:
-            for update in updates:
-                if self._stop.is_set():
-                    return
-                self.publisher.publish(self.fb, update)
-                self.publisher.apply_commands(apply or refuse, cycle=update.cycle)
-
-        self._pump = threading.Thread(target=run, name="s7graph-feed", daemon=True)
-        self._pump.start()
-
-    def wait(self) -> None:
-        """Block until the feed ends or Ctrl-C."""
-        try:
-            while self._pump is not None and self._pump.is_alive():
-                self._pump.join(0.2)
-            if self._pump is None:
-                while True:
-                    time.sleep(1.0)
-        except KeyboardInterrupt:
-            pass
-
-    def close(self) -> None:
-        """Stop the feed, the view, the bus and the server; close both sessions."""
-        self._stop.set()
-        if self._pump is not None:
-            self._pump.join(timeout=2.0)
-        self.view_side.close()
-        self.cpu_side.close()
-
-    def __enter__(self) -> WebEdge:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
-
-
-def serve_view(
-    chart: Chart | ChartLayout,
-    updates_source: Iterable[StepStateUpdate] | None,
-    *,
-    host: str = "127.0.0.1",
-    port: int = 8080,
-    cpu: str = "cpu1",
-    fb: str | None = None,
-    apply_command: Apply | None = None,
-    endpoint: str | None = None,
-    ends: BusEnds | None = None,
-    gate: Gate | None = None,
-    allowed_origins: Iterable[str] = (),
-) -> WebEdge:
-    """Serve the browser view of ``chart`` and return the running edge (close it when done).
-
-    ``updates_source`` yields one :class:`StepStateUpdate` per scan (it may block to pace
-    the scans); between two of them, ``apply_command(command) -> (applied, reason)`` runs
-    for each command from the view that the gate lets through — a scan boundary when the
-    iterator runs the scan. With ``updates_source=None`` the caller drives
-    ``edge.publisher`` itself. ``endpoint`` (or ``ends``) is where the bus listens
-    (default: a unix socket in a temporary directory); ``gate`` who may command (default:
-    the demo)."""
-    edge = WebEdge(
-        chart, host=host, port=port, cpu=cpu, fb=fb, endpoint=endpoint, ends=ends, gate=gate,
-        allowed_origins=allowed_origins,
-    )  # fmt: skip
-    if updates_source is not None:
-        edge.pump(updates_source, apply_command)
-    return edge

@@ -2,7 +2,7 @@
 source, the files of the CPU's project directory, and a sender for the engineering
 commands (``download``, ``undo_download``, ``save``, ``open``), which may take longer than
 an operator's (the CPU compiles the chart off its scan thread and writes the file first).
-``BusClient`` provides all three (``web.view.edge``)."""
+``BusClient`` provides all three (``web.view.edge``'s ``ViewSide``)."""
 
 from __future__ import annotations
 

@@ -1,14 +1,14 @@
-"""``s7graph run CHART --web``: the browser view and the bus fed by the real scan loop.
+"""The CPU's side of the bus at the scan boundary, for one running GraphFB.
 
-:class:`LiveEdge` serves the view of one :class:`~web.live.LiveGraph` (``web.demo``'s
-:class:`~web.demo.WebEdge`: a CPU-side and a view-side zenoh session, a viser server on
-127.0.0.1) and is called back after each scan, in the scan thread: it publishes the
-scan's :class:`StepStateUpdate`, the CPU state and cycle statistics, the CPU's message
-list when it changed (``alarms``), optionally records
-the update to a rerun ``.rrd`` file, then applies the commands received since the last
-scan — the scan boundary: ``force`` to the CPU's force table (``web.bus.forcing``),
-``stop`` and ``start`` to the CPU's RUN/STOP switch (``Runner.switch_stop``/``switch_start``),
-the others to the FB — and publishes the force jobs when they changed (``forces``).
+:class:`ScanEdge` is called back after each scan, in the scan thread: it publishes the
+scan's :class:`StepStateUpdate` (of a :class:`~web.bus.live.LiveGraph`), the CPU state and
+cycle statistics, the CPU's message list when it changed (``alarms``), optionally records
+the update (a :class:`Recording`: ``web.recorder``'s rerun ``.rrd`` file), then applies the
+commands received since the last scan — the scan boundary: ``force`` to the CPU's force
+table (``web.bus.forcing``), ``stop`` and ``start`` to the CPU's RUN/STOP switch
+(``Runner.switch_stop``/``switch_start``), the others to the FB — and publishes the force
+jobs when they changed (``forces``). ``web.wiring.live_edge`` gives it its bus, its
+recording and, in one process, the view.
 """
 
 from __future__ import annotations
@@ -16,26 +16,28 @@ from __future__ import annotations
 import contextlib
 import functools
 import time
-from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Protocol
 
 from s7graph.engine.modes import CpuMode
 from s7graph.engine.profile import CycleBreakdown
 from s7graph.engine.record import ScanRecord
 from s7graph.engine.runner import Runner, stop_reason
 from s7graph.engine.watchdog import CycleStatistics
-from s7graph.web.bus.gate import Gate
 from s7graph.web.bus.live import LiveGraph
-from s7graph.web.bus.protocol import Command, CycleReport, CycleStats, StepStateUpdate
-from s7graph.web.bus.zenoh_bus import BusPublisher
-from s7graph.web.view.edge import BusEnds, CpuSide, WebEdge, serve_view
+from s7graph.web.bus.protocol import (
+    ChartLayout,
+    Command,
+    CycleReport,
+    CycleStats,
+    StepStateUpdate,
+)
+from s7graph.web.bus.publisher import BusPublisher
 
 if TYPE_CHECKING:
     from s7graph.web.bus.forcing import Forcing
     from s7graph.web.bus.online import OnlineChange
-    from s7graph.web.recorder import Recorder
 
-__all__ = ["LiveEdge", "cycle_report", "cycle_stats"]
+__all__ = ["Recording", "ScanEdge", "cycle_report", "cycle_stats"]
 
 _MS = 1e6
 
@@ -78,63 +80,37 @@ def cycle_report(cycle: CycleBreakdown) -> CycleReport:
     )
 
 
-class LiveEdge:
-    """The view and bus (``serve``), or the bus alone (``bus``), and the recording
-    (``record``) of one running GraphFB; close it when done."""
+class Recording(Protocol):
+    """Where the updates are recorded (``web.recorder.Recorder``)."""
+
+    layout: ChartLayout
+
+    def chart_changed(self, layout: ChartLayout) -> None: ...
+
+    def record(self, update: StepStateUpdate) -> None: ...
+
+    def close(self) -> object: ...
+
+
+class ScanEdge:
+    """What the scan thread does with the bus (``publisher``; None: no bus) and the
+    recording after each scan of one running GraphFB; close it when done."""
 
     def __init__(
         self,
         live: LiveGraph,
+        publisher: BusPublisher | None,
         *,
-        host: str = "127.0.0.1",
-        port: int = 8080,
-        cpu: str = "cpu1",
-        record: Path | None = None,
-        endpoint: str | None = None,
-        serve: bool = True,
-        ends: BusEnds | None = None,
-        gate: Gate | None = None,
-        allowed_origins: tuple[str, ...] = (),
-        bus: bool = False,
         online: OnlineChange | None = None,
         forcing: Forcing | None = None,
     ) -> None:
         self.live = live
         self.online = online
         self.forcing = forcing
-        self.recorder: Recorder | None = None
-        self.edge: WebEdge | None = None
-        self.cpu_side: CpuSide | None = None
-        self.publisher: BusPublisher | None = None
-        if serve:
-            self.edge = serve_view(
-                live.layout, None, host=host, port=port, cpu=cpu, endpoint=endpoint, ends=ends,
-                gate=gate, allowed_origins=allowed_origins,
-            )  # fmt: skip
-            self.publisher = self.edge.publisher
-        elif bus:
-            self.cpu_side = CpuSide(
-                {live.fb: live.layout}, cpu=cpu, ends=ends or BusEnds(), gate=gate
-            )
-            self.publisher = self.cpu_side.publisher
-        if online is not None and self.publisher is not None:
-            online.attach(self.publisher)
-        try:
-            if record is not None:
-                from s7graph.web.recorder import Recorder  # rerun-sdk only when recording
-
-                self.recorder = Recorder(live.layout, record)
-        except BaseException:
-            self.close()
-            raise
-        self.url = self.edge.url if self.edge is not None else ""
-        self.endpoint = (
-            self.edge.endpoint
-            if self.edge is not None
-            else self.cpu_side.endpoint
-            if self.cpu_side is not None
-            else ""
-        )
+        self.recorder: Recording | None = None
+        self.publisher = publisher
+        if online is not None and publisher is not None:
+            online.attach(publisher)
         self._cpu_state: str | None = None
         self.restart = "warm"
         """The startup the switch's ``start`` does (``--restart``)."""
@@ -209,22 +185,15 @@ class LiveEdge:
         return True, "", f"STOP → RUN ({self.restart} restart)"
 
     def close(self) -> None:
-        """Close the recording, the view, the bus and both zenoh sessions."""
+        """Close the online change and the recording."""
         if self.online is not None:
             self.online.close()
         if self.recorder is not None:
             with contextlib.suppress(Exception):
                 self.recorder.close()
             self.recorder = None
-        if self.edge is not None:
-            self.edge.close()
-            self.edge = None
-        if self.cpu_side is not None:
-            self.cpu_side.close()
-            self.cpu_side = None
-        self.publisher = None
 
-    def __enter__(self) -> LiveEdge:
+    def __enter__(self) -> ScanEdge:
         return self
 
     def __exit__(self, *exc: object) -> None:

@@ -1,39 +1,15 @@
-"""The zenoh bus between a CPU and its views (DESIGN.md "Edges").
+"""The CPU's side of the zenoh bus: :class:`BusPublisher` serves charts and state,
+publishes deltas, status, alarms, force jobs and audit rows, and takes commands and logins
+(the key space: :mod:`web.bus.keys`).
 
-Key space, all under ``s7graph/<cpu>/``:
-
-- ``status`` — :class:`CpuStatus`, published on change and at most once a second
-  (also a queryable, for late joiners);
-- ``fb/<name>/chart`` — queryable: the :class:`ChartLayout`;
-- ``fb/<name>/state`` — queryable: the latest :class:`StepStateUpdate` with its ``seq``;
-- ``fb/<name>/delta`` — the :class:`StepStateUpdate` of every scan that changed something;
-  ``seq`` counts these, so a late joiner does ``get(state)`` and applies newer deltas only,
-  and a gap in ``seq`` means a missed delta. The scan thread only decides and queues; the
-  publisher's :class:`~web.bus.outbox.Outbox` thread encodes and puts (deltas, status,
-  alarms), so a congested bus never holds up a scan;
-- ``alarms`` — the :class:`AlarmList` (the CPU's message list), published on change;
-  ``alarms/list`` — queryable: the current one (``seq`` orders the two);
-- ``alarms/history`` — queryable: the last 200 message events (:class:`AlarmHistory`);
-- ``forces`` — the :class:`ForceList` (the CPU's force jobs), published on change and a
-  queryable; ``status`` counts them (the FRCE LED);
-- ``cmd`` — queryable: a :class:`Command` in, one :class:`CommandReply` out. Valid commands
-  go on a thread-safe queue; the scan loop drains it at a scan boundary, where the
-  :class:`~web.bus.gate.Gate` checks who sent each and whether their role allows it,
-  applies and audits it. The reply leaves once the command's effect and its audit row
-  are durable (``apply_commands(..., durable=runner)``: from the writer thread's callback
-  when the next scan's state is committed; never does the scan thread wait), or, if the
-  state file has not confirmed it ``REPLY_WITHIN_S`` after the command came, as not
-  confirmed. Unreadable ones are refused (and audited) at once with the reason;
-- ``login`` — queryable: a :class:`LoginRequest` in, a :class:`LoginReply` (a token) out;
-- ``audit`` — each :class:`AuditEntry` as it is written; ``audit/list`` — queryable: the
-  last 50 (:class:`AuditList`);
-- ``alive`` — a liveliness token while the CPU's bus is up (a view greys its chart when it
-  goes).
-
-A wildcard query (``s7graph/**``) gets the read-only answers, each under its own key;
-``cmd`` and ``login`` answer only a query for their exact key. Sessions talk only to the
-given endpoints (multicast and gossip scouting off; TLS with ``TlsFiles``) and must
-always be closed. docs/bus.md shows every message.
+Valid commands go on a thread-safe queue; the scan loop drains it at a scan boundary,
+where the :class:`~web.bus.gate.Gate` checks who sent each and whether their role allows
+it, applies and audits it. The reply leaves once the command's effect and its audit row
+are durable (``apply_commands(..., durable=runner)``: from the writer thread's callback
+when the next scan's state is committed; never does the scan thread wait), or, if the
+state file has not confirmed it ``REPLY_WITHIN_S`` after the command came, as not
+confirmed. The scan thread only decides and queues; the publisher's
+:class:`~web.bus.outbox.Outbox` thread encodes and puts.
 """
 
 from __future__ import annotations
@@ -41,7 +17,6 @@ from __future__ import annotations
 import collections
 import contextlib
 import functools
-import json
 import queue
 import threading
 import time
@@ -54,14 +29,12 @@ import msgspec
 import zenoh
 
 from s7graph.web.bus.gate import Apply, Gate
+from s7graph.web.bus.keys import ROOT, keys
 from s7graph.web.bus.outbox import Outbox
 from s7graph.web.bus.protocol import (
-    AlarmHistory,
     AlarmList,
     AuditEntry,
-    AuditList,
     ChartLayout,
-    ChartSource,
     Command,
     CommandReply,
     CpuStatus,
@@ -69,150 +42,23 @@ from s7graph.web.bus.protocol import (
     ForceList,
     LoginReply,
     LoginRequest,
-    ProjectFiles,
     ProtocolError,
     StepStateUpdate,
     decode,
     encode,
-    valid_name,
 )
 
-__all__ = [
-    "BusClient",
-    "BusPublisher",
-    "Durability",
-    "PendingCommand",
-    "StateFollower",
-    "TlsFiles",
-    "find_cpus",
-    "keys",
-    "loopback_config",
-    "open_session",
-]
+__all__ = ["BusPublisher", "Durability", "PendingCommand"]
 
-ROOT = "s7graph"
 COMMAND_QUEUE_SIZE = 256
-CLIENT_TIMEOUT_S = 5.0
-"""How long a :class:`BusClient` waits for an answer."""
 COMMAND_MAX_AGE_S = 3.0
 """Older commands are refused at the scan boundary: too little of their sender's wait would
 be left for the state file to confirm them."""
 REPLY_WITHIN_S = 4.5
 """A command applied but not yet confirmed durable this long after it came is answered as
-not confirmed (before its sender's ``CLIENT_TIMEOUT_S`` runs out)."""
+not confirmed (before its sender's ``web.bus.client.CLIENT_TIMEOUT_S`` runs out)."""
 STATUS_PERIOD_S = 1.0
 STATUS_PERIOD_NS = int(STATUS_PERIOD_S * 1e9)
-
-
-@dataclass(frozen=True, slots=True)
-class TlsFiles:
-    """PEM files for zenoh's ``tls/`` endpoints: the CA that signed the peers'
-    certificates, and this node's certificate and key (needed to listen)."""
-
-    ca: str
-    cert: str | None = None
-    key: str | None = None
-
-
-def loopback_config(
-    listen: Iterable[str] = (),
-    connect: Iterable[str] = (),
-    *,
-    mode: str | None = None,
-    tls: TlsFiles | None = None,
-) -> zenoh.Config:
-    """A zenoh config that talks only to the given endpoints, never multicasts or gossips.
-
-    Endpoints look like ``tcp/127.0.0.1:7447``, ``tls/localhost:7447`` or
-    ``unixsock-stream/<dir>/z.sock``. With no endpoints at all, the session only reaches
-    itself (useful in one process). ``mode`` None: ``peer`` when listening (or with no
-    endpoints), else ``client`` — a client reaches everyone through the peer or router it
-    connects to."""
-    listen, connect = list(listen), list(connect)
-    if mode is None:
-        mode = "client" if connect and not listen else "peer"
-    config = zenoh.Config()
-    config.insert_json5("mode", json.dumps(mode))
-    config.insert_json5("listen/endpoints", json.dumps(listen))
-    config.insert_json5("connect/endpoints", json.dumps(connect))
-    config.insert_json5("scouting/multicast/enabled", "false")
-    config.insert_json5("scouting/gossip/enabled", "false")
-    if tls is not None:
-        config.insert_json5("transport/link/tls/root_ca_certificate", json.dumps(tls.ca))
-        if tls.cert and tls.key:
-            config.insert_json5("transport/link/tls/listen_certificate", json.dumps(tls.cert))
-            config.insert_json5("transport/link/tls/listen_private_key", json.dumps(tls.key))
-    return config
-
-
-def open_session(
-    listen: Iterable[str] = (),
-    connect: Iterable[str] = (),
-    *,
-    mode: str | None = None,
-    tls: TlsFiles | None = None,
-) -> zenoh.Session:
-    """Open a session on the given endpoints; the caller closes it (``with open_session(...)``)."""
-    return zenoh.open(loopback_config(listen, connect, mode=mode, tls=tls))
-
-
-@dataclass(frozen=True, slots=True)
-class keys:
-    """Key expressions of one CPU."""
-
-    cpu: str
-
-    def __post_init__(self) -> None:
-        if not valid_name(self.cpu):
-            raise ValueError(f"invalid CPU name {self.cpu!r} for a key expression")
-
-    @property
-    def status(self) -> str:
-        return f"{ROOT}/{self.cpu}/status"
-
-    @property
-    def alarms(self) -> str:
-        return f"{ROOT}/{self.cpu}/alarms"
-
-    @property
-    def alarm_list(self) -> str:
-        return f"{ROOT}/{self.cpu}/alarms/list"
-
-    @property
-    def alarm_history(self) -> str:
-        return f"{ROOT}/{self.cpu}/alarms/history"
-
-    @property
-    def forces(self) -> str:
-        return f"{ROOT}/{self.cpu}/forces"
-
-    @property
-    def cmd(self) -> str:
-        return f"{ROOT}/{self.cpu}/cmd"
-
-    @property
-    def login(self) -> str:
-        return f"{ROOT}/{self.cpu}/login"
-
-    @property
-    def audit(self) -> str:
-        return f"{ROOT}/{self.cpu}/audit"
-
-    @property
-    def audit_list(self) -> str:
-        return f"{ROOT}/{self.cpu}/audit/list"
-
-    @property
-    def alive(self) -> str:
-        return f"{ROOT}/{self.cpu}/alive"
-
-    def fb(self, name: str, leaf: str) -> str:
-        if not valid_name(name):
-            raise ValueError(f"invalid FB name {name!r} for a key expression")
-        return f"{ROOT}/{self.cpu}/fb/{name}/{leaf}"
-
-
-# ---------------------------------------------------------------- CPU side
 
 
 @dataclass(eq=False)
@@ -696,274 +542,3 @@ class BusPublisher:
         _answer(query, CommandReply(applied=False, reason=reason, op=op, fb=fb))
         with contextlib.suppress(Exception):  # the audit must not raise on a zenoh thread
             self.gate.refuse(command, reason, origin="bus")
-
-
-# ---------------------------------------------------------------- view side
-
-
-class BusClient:
-    """A view's (or a test's) handle on one CPU over the bus."""
-
-    def __init__(
-        self, session: zenoh.Session, cpu: str, *, timeout: float = CLIENT_TIMEOUT_S
-    ) -> None:
-        self._keys = keys(cpu)
-        self._session = session
-        self._timeout = timeout
-        self._subscribers: list[zenoh.Subscriber[Any]] = []
-
-    def _get_one(
-        self, key: str, payload: bytes | None = None, timeout: float | None = None
-    ) -> bytes | None:
-        replies = self._session.get(key, payload=payload, timeout=timeout or self._timeout)
-        for reply in replies:
-            if reply.ok is not None:
-                return reply.ok.payload.to_bytes()
-        return None
-
-    def chart(self, fb: str) -> ChartLayout | None:
-        """The FB's chart structure, or None if no CPU answers."""
-        data = self._get_one(self._keys.fb(fb, "chart"))
-        return None if data is None else decode(data, ChartLayout)
-
-    def source(self, fb: str) -> ChartSource | None:
-        """The ``.s7g`` source of the chart the FB runs, or None if no CPU answers."""
-        data = self._get_one(self._keys.fb(fb, "source"))
-        return None if data is None else decode(data, ChartSource)
-
-    def project(self) -> ProjectFiles | None:
-        """The charts and importable files of the CPU's project directory (None: no CPU
-        answers, or it has none)."""
-        data = self._get_one(f"{ROOT}/{self._keys.cpu}/project")
-        return None if data is None else decode(data, ProjectFiles)
-
-    def on_chart(self, fb: str, callback: Callable[[ChartLayout], None]) -> None:
-        """Call ``callback`` with the FB's chart each time the CPU runs another version."""
-
-        def on_sample(sample: zenoh.Sample) -> None:
-            with contextlib.suppress(ProtocolError):
-                callback(decode(sample.payload.to_bytes(), ChartLayout))
-
-        key = self._keys.fb(fb, "chart")
-        self._subscribers.append(self._session.declare_subscriber(key, on_sample))
-
-    def state(self, fb: str) -> StepStateUpdate | None:
-        """The FB's latest state, or None if no CPU answers or no scan ran yet."""
-        data = self._get_one(self._keys.fb(fb, "state"))
-        return None if data is None else decode(data, StepStateUpdate)
-
-    def status(self) -> CpuStatus | None:
-        data = self._get_one(self._keys.status)
-        return None if data is None else decode(data, CpuStatus)
-
-    def alarms(self) -> AlarmList | None:
-        """The CPU's current message list, or None if no CPU answers."""
-        data = self._get_one(self._keys.alarm_list)
-        return None if data is None else decode(data, AlarmList)
-
-    def on_alarms(self, callback: Callable[[AlarmList], None]) -> None:
-        """Call ``callback`` with the current message list, then with each newer one (by
-        ``seq``; on a zenoh thread)."""
-        self._follow_seq(self._keys.alarms, AlarmList, self.alarms, callback)
-
-    def _follow_seq(
-        self,
-        key: str,
-        kind: type[Any],
-        current: Callable[[], Any],
-        callback: Callable[[Any], None],
-    ) -> None:
-        """Subscribe to ``key``'s publications of ``kind`` and fetch the current one:
-        ``callback`` sees each newer one (by ``seq``) once."""
-        lock = threading.Lock()
-        latest = [-1]
-
-        def offer(message: Any) -> None:
-            with lock:
-                if message.seq <= latest[0]:
-                    return
-                latest[0] = message.seq
-                callback(message)
-
-        def on_sample(sample: zenoh.Sample) -> None:
-            with contextlib.suppress(ProtocolError):
-                offer(decode(sample.payload.to_bytes(), kind))
-
-        self._subscribers.append(self._session.declare_subscriber(key, on_sample))
-        with contextlib.suppress(ProtocolError, zenoh.ZError):
-            message = current()
-            if message is not None:
-                offer(message)
-
-    def forces(self) -> ForceList | None:
-        """The CPU's force jobs, or None if no CPU answers."""
-        data = self._get_one(self._keys.forces)
-        return None if data is None else decode(data, ForceList)
-
-    def on_forces(self, callback: Callable[[ForceList], None]) -> None:
-        """Call ``callback`` with the current force jobs, then with each newer list (by
-        ``seq``; on a zenoh thread)."""
-        self._follow_seq(self._keys.forces, ForceList, self.forces, callback)
-
-    def send(self, command: Command, *, timeout: float | None = None) -> CommandReply:
-        """Send a command and wait for the CPU's answer; no answer is a refusal too."""
-        wait = timeout or self._timeout
-        try:
-            data = self._get_one(self._keys.cmd, encode(command), wait)
-        except zenoh.ZError as exc:
-            return CommandReply(applied=False, reason=f"bus error: {type(exc).__name__}")
-        if data is None:
-            reason = f"no answer from CPU {self._keys.cpu!r} within {wait:g} s"
-            return CommandReply(applied=False, reason=reason, op=command.op, fb=command.fb)
-        try:
-            return decode(data, CommandReply)
-        except ProtocolError as exc:
-            return CommandReply(applied=False, reason=f"unreadable answer: {exc}")
-
-    def login(self, user: str, password: str = "", *, origin: str = "") -> LoginReply:
-        """Log in at the CPU (no password needed without a users file); the reply holds the
-        token to put in each :class:`Command`. No answer is a refusal too."""
-        try:
-            request = LoginRequest(op="login", user=user, password=password, origin=origin)
-        except (TypeError, ValueError) as exc:
-            return LoginReply(ok=False, reason=str(exc))
-        return self._ask_login(request)
-
-    def logout(self, token: str, *, user: str = "", origin: str = "") -> LoginReply:
-        """Revoke ``token`` at the CPU."""
-        return self._ask_login(LoginRequest(op="logout", user=user, token=token, origin=origin))
-
-    def _ask_login(self, request: LoginRequest) -> LoginReply:
-        try:
-            data = self._get_one(self._keys.login, encode(request))
-        except (ProtocolError, zenoh.ZError) as exc:
-            return LoginReply(ok=False, reason=f"bus error: {type(exc).__name__}")
-        if data is None:
-            return LoginReply(ok=False, reason=f"no answer from CPU {self._keys.cpu!r}")
-        try:
-            return decode(data, LoginReply)
-        except ProtocolError as exc:
-            return LoginReply(ok=False, reason=f"unreadable answer: {exc}")
-
-    def audit(self) -> AuditList | None:
-        """The CPU's last 50 audit rows, or None if no CPU answers."""
-        data = self._get_one(self._keys.audit_list)
-        return None if data is None else decode(data, AuditList)
-
-    def history(self) -> AlarmHistory | None:
-        """The CPU's last 200 message events, or None if no CPU answers."""
-        data = self._get_one(self._keys.alarm_history)
-        return None if data is None else decode(data, AlarmHistory)
-
-    def on_audit(self, callback: Callable[[AuditEntry], None]) -> None:
-        """Call ``callback`` with each audit row as the CPU writes it (on a zenoh thread)."""
-
-        def on_sample(sample: zenoh.Sample) -> None:
-            with contextlib.suppress(ProtocolError):
-                callback(decode(sample.payload.to_bytes(), AuditEntry))
-
-        self._subscribers.append(self._session.declare_subscriber(self._keys.audit, on_sample))
-
-    def on_alive(self, callback: Callable[[bool], None]) -> None:
-        """Call ``callback(True)`` when the CPU's bus appears (also if it is up already) and
-        ``callback(False)`` when it goes (closed, crashed, or the link lost)."""
-
-        def on_sample(sample: zenoh.Sample) -> None:
-            callback(sample.kind == zenoh.SampleKind.PUT)
-
-        sub = self._session.liveliness().declare_subscriber(
-            self._keys.alive, on_sample, history=True
-        )
-        self._subscribers.append(sub)
-
-    def send_raw(self, payload: bytes, *, timeout: float | None = None) -> CommandReply | None:
-        """Send raw bytes to ``cmd`` (for tests of hostile input); None if nobody answered."""
-        data = self._get_one(self._keys.cmd, payload, timeout)
-        return None if data is None else decode(data, CommandReply)
-
-    def follow(self, fb: str, on_update: Callable[[StepStateUpdate], None]) -> StateFollower:
-        """Subscribe to deltas, then fetch the state: ``on_update`` sees each newer state once,
-        in ``seq`` order (it runs on a zenoh thread; keep it short)."""
-        follower = StateFollower(on_update)
-        sub = self._session.declare_subscriber(self._keys.fb(fb, "delta"), follower.on_sample)
-        self._subscribers.append(sub)
-        follower.resync = lambda: self.state(fb)  # type: ignore[method-assign]
-        follower.start()
-        return follower
-
-    def on_status(self, callback: Callable[[CpuStatus], None]) -> None:
-        """Call ``callback`` with every published status."""
-
-        def on_sample(sample: zenoh.Sample) -> None:
-            with contextlib.suppress(ProtocolError):
-                callback(decode(sample.payload.to_bytes(), CpuStatus))
-
-        self._subscribers.append(self._session.declare_subscriber(self._keys.status, on_sample))
-
-    def close(self) -> None:
-        """Undeclare every subscriber (the session stays the caller's)."""
-        for sub in self._subscribers:
-            with contextlib.suppress(zenoh.ZError):
-                sub.undeclare()  # type: ignore[no-untyped-call]  # zenoh's stub: no annotations
-        self._subscribers.clear()
-
-    def __enter__(self) -> BusClient:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
-
-
-def find_cpus(session: zenoh.Session, *, timeout: float = 2.0) -> list[CpuStatus]:
-    """The status of every CPU answering on the bus (a wildcard query), sorted by name."""
-    found: dict[str, CpuStatus] = {}
-    replies = session.get(
-        f"{ROOT}/*/status",
-        timeout=timeout,
-        target=zenoh.QueryTarget.ALL,
-        consolidation=zenoh.ConsolidationMode.NONE,
-    )
-    for reply in replies:
-        if reply.ok is None:
-            continue
-        with contextlib.suppress(ProtocolError):
-            status = decode(reply.ok.payload.to_bytes(), CpuStatus)
-            found[status.cpu] = status
-    return [found[name] for name in sorted(found)]
-
-
-class StateFollower:
-    """Keeps the newest state of one FB from a snapshot plus ``seq``-numbered deltas."""
-
-    def __init__(self, on_update: Callable[[StepStateUpdate], None]) -> None:
-        self._on_update = on_update
-        self._lock = threading.Lock()
-        self.latest: StepStateUpdate | None = None
-        self.gaps = 0  # deltas missed (a resync fetched the state again)
-
-    def resync(self) -> StepStateUpdate | None:  # replaced by BusClient.follow
-        return None
-
-    def start(self) -> None:
-        snapshot = self.resync()
-        if snapshot is not None:
-            self._offer(snapshot)
-
-    def on_sample(self, sample: zenoh.Sample) -> None:
-        try:
-            update = decode(sample.payload.to_bytes(), StepStateUpdate)
-        except ProtocolError:
-            return
-        latest = self.latest
-        if latest is not None and update.seq > latest.seq + 1:
-            self.gaps += 1
-        self._offer(update)
-
-    def _offer(self, update: StepStateUpdate) -> None:
-        with self._lock:
-            latest = self.latest
-            if latest is not None and (update.seq, update.cycle) <= (latest.seq, latest.cycle):
-                return  # stale, or the same scan seen twice (snapshot and delta)
-            self.latest = update
-            # Called under the lock so updates reach the view in order.
-            self._on_update(update)

@@ -1,0 +1,106 @@
+"""The key space of the zenoh bus between a CPU and its views (DESIGN.md "Edges").
+
+The CPU serves and publishes these keys (:class:`~web.bus.publisher.BusPublisher`), a view
+or a command line reads and commands through them (:class:`~web.bus.client.BusClient`); a
+session meets the bus as :mod:`web.bus.session` configures it.
+
+Key space, all under ``s7graph/<cpu>/``:
+
+- ``status`` — :class:`CpuStatus`, published on change and at most once a second
+  (also a queryable, for late joiners);
+- ``fb/<name>/chart`` — queryable: the :class:`ChartLayout`;
+- ``fb/<name>/state`` — queryable: the latest :class:`StepStateUpdate` with its ``seq``;
+- ``fb/<name>/delta`` — the :class:`StepStateUpdate` of every scan that changed something;
+  ``seq`` counts these, so a late joiner does ``get(state)`` and applies newer deltas only,
+  and a gap in ``seq`` means a missed delta. The scan thread only decides and queues; the
+  publisher's :class:`~web.bus.outbox.Outbox` thread encodes and puts (deltas, status,
+  alarms), so a congested bus never holds up a scan;
+- ``alarms`` — the :class:`AlarmList` (the CPU's message list), published on change;
+  ``alarms/list`` — queryable: the current one (``seq`` orders the two);
+- ``alarms/history`` — queryable: the last 200 message events (:class:`AlarmHistory`);
+- ``forces`` — the :class:`ForceList` (the CPU's force jobs), published on change and a
+  queryable; ``status`` counts them (the FRCE LED);
+- ``cmd`` — queryable: a :class:`Command` in, one :class:`CommandReply` out. Valid commands
+  go on a thread-safe queue; the scan loop drains it at a scan boundary, where the
+  :class:`~web.bus.gate.Gate` checks who sent each and whether their role allows it,
+  applies and audits it. The reply leaves once the command's effect and its audit row
+  are durable (``apply_commands(..., durable=runner)``: from the writer thread's callback
+  when the next scan's state is committed; never does the scan thread wait), or, if the
+  state file has not confirmed it ``REPLY_WITHIN_S`` after the command came, as not
+  confirmed. Unreadable ones are refused (and audited) at once with the reason;
+- ``login`` — queryable: a :class:`LoginRequest` in, a :class:`LoginReply` (a token) out;
+- ``audit`` — each :class:`AuditEntry` as it is written; ``audit/list`` — queryable: the
+  last 50 (:class:`AuditList`);
+- ``alive`` — a liveliness token while the CPU's bus is up (a view greys its chart when it
+  goes).
+
+A wildcard query (``s7graph/**``) gets the read-only answers, each under its own key;
+``cmd`` and ``login`` answer only a query for their exact key. Sessions talk only to the
+given endpoints (``web.bus.session``). docs/bus.md shows every message.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from s7graph.web.bus.protocol import valid_name
+
+__all__ = ["ROOT", "keys"]
+
+ROOT = "s7graph"
+
+
+@dataclass(frozen=True, slots=True)
+class keys:
+    """Key expressions of one CPU."""
+
+    cpu: str
+
+    def __post_init__(self) -> None:
+        if not valid_name(self.cpu):
+            raise ValueError(f"invalid CPU name {self.cpu!r} for a key expression")
+
+    @property
+    def status(self) -> str:
+        return f"{ROOT}/{self.cpu}/status"
+
+    @property
+    def alarms(self) -> str:
+        return f"{ROOT}/{self.cpu}/alarms"
+
+    @property
+    def alarm_list(self) -> str:
+        return f"{ROOT}/{self.cpu}/alarms/list"
+
+    @property
+    def alarm_history(self) -> str:
+        return f"{ROOT}/{self.cpu}/alarms/history"
+
+    @property
+    def forces(self) -> str:
+        return f"{ROOT}/{self.cpu}/forces"
+
+    @property
+    def cmd(self) -> str:
+        return f"{ROOT}/{self.cpu}/cmd"
+
+    @property
+    def login(self) -> str:
+        return f"{ROOT}/{self.cpu}/login"
+
+    @property
+    def audit(self) -> str:
+        return f"{ROOT}/{self.cpu}/audit"
+
+    @property
+    def audit_list(self) -> str:
+        return f"{ROOT}/{self.cpu}/audit/list"
+
+    @property
+    def alive(self) -> str:
+        return f"{ROOT}/{self.cpu}/alive"
+
+    def fb(self, name: str, leaf: str) -> str:
+        if not valid_name(name):
+            raise ValueError(f"invalid FB name {name!r} for a key expression")
+        return f"{ROOT}/{self.cpu}/fb/{name}/{leaf}"
