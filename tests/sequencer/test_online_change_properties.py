@@ -26,7 +26,7 @@ from s7graph.engine.cpu import CpuMode
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.edit import OPERATIONS, Argument, Session, make_edit
 from s7graph.sequencer.model import Chart
-from s7graph.sequencer.online import SwapRefused, SwapReport, swap
+from s7graph.sequencer.online import SwapRefused, swap
 from s7graph.sequencer.parse import parse_chart
 from s7graph.sfb.alarms import message_list
 from s7graph.web.harness.session import ChartSession, compile_model
@@ -68,15 +68,35 @@ ROWS = [
     {"qualifier": "S", "operand": "M0.2", "event": "V1"},
     {"qualifier": "R", "operand": "M0.2", "event": "L1"},
 ]
+
+
+def chain(n: int, header: str = "") -> str:
+    """A chain of ``n`` steps whose transitions are all ``TRUE``, back to S1 (FB 1)."""
+    steps = "".join(
+        f"  {'INITIAL_STEP' if k == 1 else 'STEP'} S{k}:\n  END_STEP\n" for k in range(1, n + 1)
+    )
+    arcs = "".join(
+        f"  TRANSITION T{k} FROM S{k} TO S{k % n + 1} := TRUE;\n" for k in range(1, n + 1)
+    )
+    return (
+        f'FUNCTION_BLOCK "Chain" FB 1 DB 1\n{header}SEQUENCE 1\n{steps}{arcs}'
+        "END_SEQUENCE\nEND_FUNCTION_BLOCK\n"
+    )
+
+
 TEXTS: dict[str, list[str]] = {
     "name": ["", "Clamp"],
     "message": ["", "Work piece not clamped"],
     "condition": CONDITIONS,
-    "option": ["SKIP_STEPS", "ACK_REQUIRED", "ORDER"],
-    "value": ["TRUE", "FALSE", "CODESYS", "S7GRAPH"],
+    "option": ["SKIP_STEPS", "ACK_REQUIRED", "ORDER", "PARAMETERS", "MESSAGES"],
+    "value": ["TRUE", "FALSE", "CODESYS", "MINIMUM", "STANDARD", "MAXIMUM"],
+    "text": [
+        chain(20),
+        chain(20, "  PARAMETERS := STANDARD; MESSAGES := TRUE; ACK_REQUIRED := TRUE;\n"),
+        chain(3, "  PARAMETERS := MAXIMUM;\n"),
+    ],
 }
-LEFT_OUT = {"set_source"}  # a whole text: the other operations make every chart it could
-EDITS = [op for op in OPERATIONS if op.name not in LEFT_OUT]
+EDITS = list(OPERATIONS)
 COMMANDS = ["ACK_EF", "INIT_SQ", "SW_MAN", "SW_AUTO", "SW_TAP", "T_PUSH", "S_ON", "S_OFF"]
 
 
@@ -127,11 +147,11 @@ def _scan(cpu: ChartSession) -> Scan:
     return Scan(record.mode, active, events, tuple(sorted(g.outputs.items())), operands)
 
 
-def twin(plant: ChartSession, report: SwapReport) -> ChartSession:
+def twin(plant: ChartSession, queued: list[tuple[str, int | None]]) -> ChartSession:
     """A second CPU running a fresh GraphFB of the chart ``plant`` runs now, started from
     its carried-over state: the instance DB (state and pins), the memory, the message list
     and the cycle count copied, nothing run at its startup (an OB100 without the INIT_SQ
-    call)."""
+    call); the commands ``queued`` for the FB's next call queued there too."""
     g = plant.graph
     fresh = ChartSession(g.cc, plant.symbols, plant.clock)
     fresh.cpu.load(OB(100, "OB100", lambda ctx: None))
@@ -146,8 +166,8 @@ def twin(plant: ChartSession, report: SwapReport) -> ChartSession:
     assert g.idb is not None and fresh.graph.idb is not None
     for name, value in g.idb.values.items():
         fresh.graph.idb.values[name] = copy.deepcopy(value)
-    if report.initialized:
-        fresh.graph.command("INIT_SQ")
+    for pin, step in queued:
+        fresh.graph.command(pin, step)
     return fresh
 
 
@@ -160,6 +180,7 @@ class OnlineChange(RuleBasedStateMachine):
         self.plant: ChartSession | None = None
         self.twin: ChartSession | None = None
         self.edits: list[str] = []
+        self.queued: list[tuple[str, int | None]] = []  # commands for the next call
         self.downloads = 0
 
     @initialize(start=st.sampled_from(STARTS))
@@ -199,7 +220,7 @@ class OnlineChange(RuleBasedStateMachine):
         assert plant is not None
         new, table = compile_model(self.editor.chart, plant.symbols)
         g = plant.graph
-        active = [g.cc.step_numbers[i] for i in g.state.active]
+        active = sorted(g.cc.step_numbers[i] for i in g.state.active)
         gone = tuple(n for n in active if n not in new.step_index)
         try:
             report = swap(g, new, plant.cpu, removed=removed, user="eng")
@@ -211,7 +232,9 @@ class OnlineChange(RuleBasedStateMachine):
         plant.cc, plant.symbols = new, table
         self.downloads += 1
         self.edits.append(f"download removed={removed}")
-        self.twin = twin(plant, report)
+        if report.initialized:
+            self.queued.append(("INIT_SQ", None))
+        self.twin = twin(plant, self.queued)
 
     @rule(data=st.data(), scans=st.integers(1, 12))
     def run(self, data: st.DataObject, scans: int) -> None:
@@ -224,6 +247,7 @@ class OnlineChange(RuleBasedStateMachine):
                 if cpu is not None:
                     cpu.set("IB0", contacts)
             got = _scan(self.plant)
+            self.queued.clear()
             assert got.mode is CpuMode.RUN, self._why()
             if self.twin is not None:
                 assert got == _scan(self.twin), self.edits
@@ -240,9 +264,11 @@ class OnlineChange(RuleBasedStateMachine):
         self.run(data, 1)
 
     @invariant()
-    def runs(self) -> None:
+    def runs_with_one_list_of_active_steps(self) -> None:
         if self.plant is not None:
             assert self.plant.cpu.mode is CpuMode.RUN, self._why()
+            state = self.plant.graph.state
+            assert sorted(state.active) == [i for i, x in enumerate(state.x) if x], self.edits
 
     def _why(self) -> str:
         assert self.plant is not None
