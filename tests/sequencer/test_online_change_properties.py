@@ -12,6 +12,7 @@ events (with their step numbers), FB outputs and watched operands."""
 from __future__ import annotations
 
 import copy
+import json
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -25,6 +26,7 @@ from s7graph.engine.clock import VirtualClock
 from s7graph.engine.cpu import CpuMode
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.edit import OPERATIONS, Argument, Session, make_edit
+from s7graph.sequencer.fb import STATE_VAR
 from s7graph.sequencer.model import Chart
 from s7graph.sequencer.online import SwapRefused, swap
 from s7graph.sequencer.parse import parse_chart
@@ -149,9 +151,10 @@ def _scan(cpu: ChartSession) -> Scan:
 
 def twin(plant: ChartSession, queued: list[tuple[str, int | None]]) -> ChartSession:
     """A second CPU running a fresh GraphFB of the chart ``plant`` runs now, started from
-    its carried-over state: the instance DB (state and pins), the memory, the message list
-    and the cycle count copied, nothing run at its startup (an OB100 without the INIT_SQ
-    call); the commands ``queued`` for the FB's next call queued there too."""
+    its carried-over state: the instance DB (state and pins, restored from a snapshot as
+    from a state file), the memory, the message list and the cycle count copied, nothing
+    run at its startup (an OB100 without the INIT_SQ call); the commands ``queued`` for
+    the FB's next call queued there too."""
     g = plant.graph
     fresh = ChartSession(g.cc, plant.symbols, plant.clock)
     fresh.cpu.load(OB(100, "OB100", lambda ctx: None))
@@ -164,8 +167,7 @@ def twin(plant: ChartSession, queued: list[tuple[str, int | None]]) -> ChartSess
     mine.counters[:] = copy.deepcopy(theirs.counters)
     message_list(fresh.cpu).restore(message_list(plant.cpu).snapshot())
     assert g.idb is not None and fresh.graph.idb is not None
-    for name, value in g.idb.values.items():
-        fresh.graph.idb.values[name] = copy.deepcopy(value)
+    fresh.graph.idb.restore(json.loads(json.dumps(g.idb.snapshot())), strict=True)
     for pin, step in queued:
         fresh.graph.command(pin, step)
     return fresh
@@ -220,15 +222,29 @@ class OnlineChange(RuleBasedStateMachine):
         assert plant is not None
         new, table = compile_model(self.editor.chart, plant.symbols)
         g = plant.graph
-        active = sorted(g.cc.step_numbers[i] for i in g.state.active)
+        old, before = g.cc, g.state
+        active = sorted(old.step_numbers[i] for i in before.active)
         gone = tuple(n for n in active if n not in new.step_index)
+        times = {n: before.step_t_ms(old.step_index[n]) for n in active}
+        pins = {k: v for k, v in g.idb.values.items() if k != STATE_VAR} if g.idb else {}
+        variables = dict(before.vars)
         try:
             report = swap(g, new, plant.cpu, removed=removed, user="eng")
         except SwapRefused:
             assert gone and removed is None
             self.edits.append(f"download refused, removed={removed}")
             return
-        assert report.removed_active == gone
+        assert sorted(report.removed_active) == list(gone), (report.removed_active, gone)
+        after = g.state  # carried by step number, variables and pins by name
+        kept = [n for n in active if n not in gone]
+        assert sorted(new.step_numbers[i] for i in after.active) == kept
+        assert {n: after.step_t_ms(new.step_index[n]) for n in kept} == {n: times[n] for n in kept}
+        assert after.vars == {
+            k: variables.get(k, v) if new.var_types[k] == old.var_types.get(k) else v
+            for k, v in after.vars.items()
+        }
+        assert g.idb is not None
+        assert all(g.idb.values[k] == v for k, v in pins.items() if k in g.idb.values)
         plant.cc, plant.symbols = new, table
         self.downloads += 1
         self.edits.append(f"download removed={removed}")
@@ -263,6 +279,14 @@ class OnlineChange(RuleBasedStateMachine):
                 cpu.graph.command(pin, step, user="olga")
         self.run(data, 1)
 
+    @rule(data=st.data(), pin=st.sampled_from(["HALT_SQ", "EN_IL", "EN_SV"]), value=st.booleans())
+    def level(self, data: st.DataObject, pin: str, value: bool) -> None:
+        """A level override (HALT_SQ, EN_IL, EN_SV), and the scan whose call takes it."""
+        for cpu in (self.plant, self.twin):
+            if cpu is not None:
+                cpu.graph.set_level(pin, value)
+        self.run(data, 1)
+
     @invariant()
     def runs_with_one_list_of_active_steps(self) -> None:
         if self.plant is not None:
@@ -277,8 +301,8 @@ class OnlineChange(RuleBasedStateMachine):
 
 
 OnlineChange.TestCase.settings = settings(
-    max_examples=60,
-    stateful_step_count=30,
+    max_examples=100,
+    stateful_step_count=40,
     deadline=None,
     suppress_health_check=[HealthCheck.too_slow, HealthCheck.filter_too_much],
 )
