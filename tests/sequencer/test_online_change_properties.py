@@ -27,6 +27,7 @@ from s7graph.engine.cpu import CpuMode
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.edit import OPERATIONS, Argument, Session, make_edit
 from s7graph.sequencer.fb import STATE_VAR
+from s7graph.sequencer.format import quote
 from s7graph.sequencer.model import Chart
 from s7graph.sequencer.online import SwapRefused, swap
 from s7graph.sequencer.parse import parse_chart
@@ -69,6 +70,7 @@ ROWS = [
     {"qualifier": "N", "operand": "Q0.4", "interlocked": True},
     {"qualifier": "S", "operand": "M0.2", "event": "V1"},
     {"qualifier": "R", "operand": "M0.2", "event": "L1"},
+    {"qualifier": "CALL", "operand": "SFB 4, DB 10 (IN := I0.1, PT := T#50MS, Q => M1.0)"},
 ]
 
 
@@ -120,6 +122,10 @@ def _argument(c: Chart, a: Argument) -> st.SearchStrategy[Any]:
         return st.sampled_from(ROWS)
     if a.type == "bool":
         return st.booleans()
+    if a.name == "text":  # a whole chart for the same block (a download keeps the block)
+        block = f"{quote(c.name)}{f' FB {c.fb_number}' if c.fb_number else ''}"
+        block += f" DB {c.db_number}" if c.db_number else ""
+        return st.sampled_from(TEXTS["text"]).map(lambda t: t.replace('"Chain" FB 1 DB 1', block))
     if a.type == "str":
         return st.sampled_from(TEXTS[a.name])
     numbers = st.sampled_from(_numbers(c, a.name))
@@ -151,10 +157,11 @@ def _scan(cpu: ChartSession) -> Scan:
 
 def twin(plant: ChartSession, queued: list[tuple[str, int | None]]) -> ChartSession:
     """A second CPU running a fresh GraphFB of the chart ``plant`` runs now, started from
-    its carried-over state: the instance DB (state and pins, restored from a snapshot as
-    from a state file), the memory, the message list and the cycle count copied, nothing
-    run at its startup (an OB100 without the INIT_SQ call); the commands ``queued`` for
-    the FB's next call queued there too."""
+    its carried-over state: the instance DBs (the FB's with its state and pins, and those
+    of the blocks its rows call, restored from a snapshot as from a state file), the
+    memory, the message list and the cycle count copied, nothing run at its startup (an
+    OB100 without the INIT_SQ call); the commands ``queued`` for the FB's next call queued
+    there too."""
     g = plant.graph
     fresh = ChartSession(g.cc, plant.symbols, plant.clock)
     fresh.cpu.load(OB(100, "OB100", lambda ctx: None))
@@ -167,7 +174,8 @@ def twin(plant: ChartSession, queued: list[tuple[str, int | None]]) -> ChartSess
     mine.counters[:] = copy.deepcopy(theirs.counters)
     message_list(fresh.cpu).restore(message_list(plant.cpu).snapshot())
     assert g.idb is not None and fresh.graph.idb is not None
-    fresh.graph.idb.restore(json.loads(json.dumps(g.idb.snapshot())), strict=True)
+    for number, idb in plant.cpu.instance_dbs.items():  # the FB's and its SFB calls'
+        fresh.cpu.instance_dbs[number].restore(json.loads(json.dumps(idb.snapshot())), strict=True)
     for pin, step in queued:
         fresh.graph.command(pin, step)
     return fresh
