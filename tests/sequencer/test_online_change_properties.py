@@ -174,8 +174,9 @@ def twin(plant: ChartSession, queued: list[tuple[str, int | None]]) -> ChartSess
     mine.counters[:] = copy.deepcopy(theirs.counters)
     message_list(fresh.cpu).restore(message_list(plant.cpu).snapshot())
     assert g.idb is not None and fresh.graph.idb is not None
-    for number, idb in plant.cpu.instance_dbs.items():  # the FB's and its SFB calls'
-        fresh.cpu.instance_dbs[number].restore(json.loads(json.dumps(idb.snapshot())), strict=True)
+    for number, idb in fresh.cpu.instance_dbs.items():  # the FB's and its SFB calls'
+        data = json.loads(json.dumps(plant.cpu.instance_dbs[number].snapshot()))
+        idb.restore(data, strict=True)
     for pin, step in queued:
         fresh.graph.command(pin, step)
     return fresh
