@@ -3,11 +3,13 @@ from the editor's table of operations are applied to it and downloaded into the 
 FB (``sequencer.online.swap``) with every choice for removed active steps; the CPU runs on
 with random contacts, clock steps and operator commands.
 
-Oracle: the CPU never leaves RUN (no exception in any call); a download is refused only
-when it would drop active steps without a choice; and after each download the running FB
-scans exactly as a fresh FB of the new chart started from the carried-over state (the
-instance DB and the memory copied into a second CPU): per scan the same active steps, step
-events (with their step numbers), FB outputs and watched operands."""
+Oracle: the CPU never leaves RUN (no exception in any call) and its active steps are one
+list; a download is refused only when it would drop active steps without a choice, and
+carries the active steps by number with their times, variables and pins by name; after
+each download the running FB scans exactly as a fresh FB of the new chart started from
+the carried-over state (``twin``: a second CPU on the same clock and contacts): per scan
+the same active steps, step events (with their step numbers), FB outputs and watched
+operands (outputs, markers, a counter, a timer)."""
 
 from __future__ import annotations
 
@@ -174,7 +176,7 @@ def twin(plant: ChartSession, queued: list[tuple[str, int | None]]) -> ChartSess
     mine.counters[:] = copy.deepcopy(theirs.counters)
     message_list(fresh.cpu).restore(message_list(plant.cpu).snapshot())
     assert g.idb is not None and fresh.graph.idb is not None
-    for number, idb in fresh.cpu.instance_dbs.items():  # the FB's and its SFB calls'
+    for number, idb in fresh.cpu.instance_dbs.items():  # the FB's and its SFB calls
         data = json.loads(json.dumps(plant.cpu.instance_dbs[number].snapshot()))
         idb.restore(data, strict=True)
     for pin, step in queued:
@@ -192,7 +194,6 @@ class OnlineChange(RuleBasedStateMachine):
         self.twin: ChartSession | None = None
         self.edits: list[str] = []
         self.queued: list[tuple[str, int | None]] = []  # commands for the next call
-        self.downloads = 0
 
     @initialize(start=st.sampled_from(STARTS))
     def run_a_chart(self, start: Path) -> None:
@@ -255,7 +256,6 @@ class OnlineChange(RuleBasedStateMachine):
         assert g.idb is not None
         assert all(g.idb.values[k] == v for k, v in pins.items() if k in g.idb.values)
         plant.cc, plant.symbols = new, table
-        self.downloads += 1
         self.edits.append(f"download removed={removed}")
         if report.initialized:
             self.queued.append(("INIT_SQ", None))
