@@ -162,20 +162,32 @@ def test_downloads_through_the_bus_keep_the_cpu_running_as_a_local_simulation(
         local.command("SW_MAN")
         agrees()
         applied = 0
+        history: list[str] = []  # the texts the downloads replaced, for Undo download
         for _ in range(DOWNLOADS):
             running_chart = editor.chart
-            for _ in range(rng.randint(1, 4)):
-                editor = _edit(rng, editor)
-            if summarize(running_chart, editor.chart, ()).unchanged:
-                continue  # refused: nothing changes
-            source = format_chart(editor.chart)
             removed = rng.choice([None, "keep", "init"])
-            reply = send("download", source=source, **({"removed": removed} if removed else {}))
+            chosen = {"removed": removed} if removed else {}
+            undo = bool(history) and rng.random() < 0.25
+            if undo:  # Undo download: the same swap, the other way round
+                source = history[-1]
+                reply = send("undo_download", **chosen)
+                editor = Session.open(parse_chart(source, "chart.s7g"))
+            else:
+                for _ in range(rng.randint(1, 4)):
+                    editor = _edit(rng, editor)
+                if summarize(running_chart, editor.chart, ()).unchanged:
+                    continue  # refused: nothing changes
+                source = format_chart(editor.chart)
+                reply = send("download", source=source, **chosen)
             assert reply.applied == local.download(source, removed), reply.reason
             applied += reply.applied
             if not reply.applied:
                 assert "keep" in reply.reason, reply.reason
                 editor = Session.open(running_chart)
+            elif undo:
+                history.pop()
+            else:
+                history.append(format_chart(running_chart))
             agrees()
             for _ in range(rng.randint(0, 3)):
                 on = rng.random() < 0.6 or not local.active
