@@ -99,7 +99,7 @@ class CodeGen:
         if t in ("WORD", "S5TIME", "DATE"):
             return f"({b}[{n}] << 8 | {b}[{n + 1}])"
         if t == "INT":
-            return f"_s16({b}[{n}] << 8 | {b}[{n + 1}])"
+            return f"_signed_word({b}[{n}] << 8 | {b}[{n + 1}])"
         if t == "DWORD":
             return f"int.from_bytes({b}[{n}:{n + 4}], 'big')"
         if t in ("DINT", "TIME", "TIME_OF_DAY", "TOD"):
@@ -155,7 +155,7 @@ class CodeGen:
 # ------------------------------------------------------------ runtime helpers (bound globals)
 
 
-def _s16(v: int) -> int:
+def _signed_word(v: int) -> int:
     return v - 65536 if v & 0x8000 else v
 
 
@@ -208,7 +208,7 @@ def _with_defaults(f: Any, values: tuple[int, ...]) -> Any:
 RUNTIME: dict[str, Any] = {
     "_with_index": _with_index,
     "_with_defaults": _with_defaults,
-    "_s16": _s16,
+    "_signed_word": _signed_word,
     "_unpack_f": _unpack_f,
     "_pack_f": _pack_f,
     "_pin": _pin,

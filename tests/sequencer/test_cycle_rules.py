@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 from s7graph.sequencer.cycle import GraphRuntime
@@ -279,3 +280,24 @@ def test_cost_visits_only_transitions_of_active_steps() -> None:
     object.__setattr__(prog, "tcond", wrapped)
     c.call(5)
     assert set(calls) == {0}
+
+
+def test_a_condition_reading_a_word_works_in_a_chart_of_seventeen_steps() -> None:
+    """The functions generated per step share one namespace with the runtime's helpers:
+    step 17's (index 16) once replaced the helper that reads a signed word."""
+    steps = "".join(f"  STEP S{n}: END_STEP\n" for n in range(2, 18))
+    arcs = "".join(f"  TRANSITION T{n} FROM S{n} TO S{n + 1} := TRUE;\n" for n in range(2, 17))
+    c = Chart(seq(f"  INITIAL_STEP S1: END_STEP\n{steps}"
+                  f"  TRANSITION T1 FROM S1 TO S2 := MW4 > 3;\n{arcs}"))  # fmt: skip
+    c.call()
+    c.set(MW4=5)
+    c.call()
+    assert c.active == ["S2"]
+
+
+def test_no_runtime_helper_is_named_like_a_generated_function() -> None:
+    """Generated names are a letter prefix and an element index (``_t3``, ``_s16``)."""
+    from s7graph.steps.expressions import RUNTIME as EXPRESSIONS
+    from s7graph.steps.operands import RUNTIME as OPERANDS
+
+    assert not [name for name in (*EXPRESSIONS, *OPERANDS) if re.fullmatch(r"_[a-z]+\d+", name)]
