@@ -26,8 +26,9 @@ from s7graph.sequencer.edit import Session, make_edit
 from s7graph.sequencer.format import format_chart
 from s7graph.sequencer.online import SwapRefused, swap
 from s7graph.sequencer.parse import parse_chart
+from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import Command, CommandReply
-from s7graph.web.bus.zenoh_bus import BusClient, open_session
+from s7graph.web.bus.session import open_session
 from s7graph.web.harness.session import ChartSession, compile_text
 from tests.sequencer.test_online_change_properties import EDITS, ROWS, TEXTS, _numbers
 from tests.web.helpers import wait_until
@@ -117,7 +118,7 @@ class Local:
             swap(self.session.graph, new, self.session.cpu, removed=removed)
         except SwapRefused:
             return False
-        self.session.cc, self.session.symbols = new, table
+        self.session.symbols = table  # the chart is the GraphFB's own
         self.scan()
         return True
 
