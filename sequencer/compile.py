@@ -6,7 +6,7 @@ them. Then every operand is resolved once (symbol → address, FB variable, FB p
 transition attribute), and all conditions and action rows are rendered into one Python
 module compiled with ``compile()``; nothing is interpreted per scan.
 
-Name resolution (SPEC §2.9) is ``sequencer.names.resolve_operand``, shared with the
+Name resolution (SPEC §2.9) is ``sequencer.text.names.resolve_operand``, shared with the
 validator: ``"quoted"`` → symbol; otherwise FB static variable, FB pin, S7 address.
 """
 
@@ -19,9 +19,9 @@ from s7graph.engine.address import Area, Width
 from s7graph.engine.errors import S7Error, SourceLocation
 from s7graph.sequencer.collector import collector_paused
 from s7graph.sequencer.compiled import CompiledChart
-from s7graph.sequencer.model import BlockCall, Chart, Coil, Operand, Transition
-from s7graph.sequencer.names import resolve_operand
 from s7graph.sequencer.params import pin as pin_info
+from s7graph.sequencer.text.model import BlockCall, Chart, Coil, Operand, Transition
+from s7graph.sequencer.text.names import resolve_operand
 from s7graph.steps.actions import ActionParts, call_code, step_action_parts, uses_own_index
 from s7graph.steps.conditions import (
     condition_parts,
@@ -57,9 +57,9 @@ class _Problem:
 
 
 def _validate(chart: Chart, symbols: Any) -> tuple[list[Any], list[Any]]:
-    """Run ``sequencer.validate`` when present; return (errors, warnings)."""
+    """Run ``sequencer.checks.validate`` when present; return (errors, warnings)."""
     try:
-        from s7graph.sequencer.validate import validate  # written by H4
+        from s7graph.sequencer.checks.validate import validate  # written by H4
     except ImportError:
         return [], []
     diags = list(validate(chart, symbols))
@@ -93,7 +93,7 @@ class _Resolver:
 
     def _resolve(self, op: Operand) -> Ref:
         """The operand as the generated code addresses it; the lookup order is the one rule
-        of ``sequencer.names.resolve_operand`` (SPEC §1.1, §2.7)."""
+        of ``sequencer.text.names.resolve_operand`` (SPEC §1.1, §2.7)."""
         r = resolve_operand(op, self.chart, self.symbols)
         if r.kind == "var":
             return Ref("var", r.type, name=self.vars[op.name.upper()].name)

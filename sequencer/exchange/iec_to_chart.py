@@ -33,7 +33,8 @@ from typing import Literal
 from s7graph.engine.errors import LiteralError, S7Error, SourceLocation
 from s7graph.engine.literals import format_literal, parse_literal
 from s7graph.engine.symbols import SymbolTable
-from s7graph.sequencer.diagnostics import Diagnostic
+from s7graph.sequencer.checks.diagnostics import Diagnostic
+from s7graph.sequencer.checks.validate import validate
 from s7graph.sequencer.exchange.iec_model import (
     IecAction,
     IecAssociation,
@@ -58,7 +59,7 @@ from s7graph.sequencer.exchange.st import (
     SUnary,
     shift,
 )
-from s7graph.sequencer.model import (
+from s7graph.sequencer.text.model import (
     NOWHERE,
     ActionRow,
     Assignment,
@@ -79,7 +80,6 @@ from s7graph.sequencer.model import (
     Unary,
     VarDecl,
 )
-from s7graph.sequencer.validate import validate
 from s7graph.sfb import catalogue
 
 __all__ = ["const", "iec_to_chart"]
@@ -140,7 +140,7 @@ def iec_literal(text: str) -> str:
 @cache
 def _s7g_literal() -> re.Pattern[str]:
     """The `.s7g` grammar's LITERAL terminal (a constant written so reads back as one)."""
-    from s7graph.sequencer.parse import _parser
+    from s7graph.sequencer.text.parse import _parser
 
     return re.compile(_parser().get_terminal("LITERAL").pattern.to_regexp())
 
@@ -482,7 +482,7 @@ class _Convert:
         if e.name == "NOT" and len(args) == 1:
             return Unary("NOT", args[0], loc)
         if e.name in FUNCTIONS and len(args) == 1:
-            from s7graph.sequencer.model import FuncCall
+            from s7graph.sequencer.text.model import FuncCall
 
             return FuncCall(FUNCTIONS[e.name], (args[0],), loc)
         raise _NoMap(f"function {e.name} has no exact GRAPH equivalent", loc)
@@ -861,7 +861,7 @@ def _permanent_assignment(
     target: Operand, value: Expr, loc: SourceLocation
 ) -> PermanentInstruction:
     """A coil on an absolute bit address, else an assignment (the parser's reading)."""
-    from s7graph.sequencer.parse_build import _BIT_ADDRESS
+    from s7graph.sequencer.text.build import _BIT_ADDRESS
 
     if not target.quoted and _BIT_ADDRESS.fullmatch(target.name):
         return Coil("=", target, value, loc)

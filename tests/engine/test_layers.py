@@ -238,7 +238,7 @@ def test_the_cycle_check_finds_a_two_way_tie_and_a_type_only_one() -> None:
 def test_the_layer_check_finds_an_upward_a_sideways_and_a_bare_import() -> None:
     graph = _graph_of(
         {
-            "s7graph.steps.x": "from s7graph.sequencer.model import Step\n"
+            "s7graph.steps.x": "from s7graph.sequencer.text.model import Step\n"
             "from s7graph.sfb.alarms import Message\n",
             "s7graph.web.bus.y": "from s7graph.web.view.layout import place\n",
             "s7graph.sequencer.z": "from engine.cpu import Cpu\n",

@@ -10,7 +10,7 @@ change summary made — all off the scan thread. ``preview`` answers with that s
 stops there. A real download first writes the chart file (the old one kept as a numbered
 backup, the new one flushed to the disk: ``web.harness.project``), then hands the compiled
 chart to the scan thread, which swaps it in between two scans (:meth:`OnlineChange.at_boundary`,
-``sequencer.online.swap``: the state carried over by step number); only then does the
+``sequencer.change.online.swap``: the state carried over by step number); only then does the
 reply say *applied* — the CPU runs the new chart and a restart would too. A swap refused at
 the boundary (active steps removed without a choice, the CPU not scanning) puts the old file
 back. Every outcome is one audit row with the user, the chart version and the change
@@ -36,14 +36,14 @@ import msgspec
 
 from s7graph.engine.errors import S7Error
 from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer.change.base import EditRefused
+from s7graph.sequencer.change.diff import ChangeSummary, summarize
+from s7graph.sequencer.change.online import SwapRefused, SwapReport, swap
+from s7graph.sequencer.change.typed import parse_source
+from s7graph.sequencer.checks.diagnostics import format_diagnostic
 from s7graph.sequencer.compiled import CompiledChart
-from s7graph.sequencer.diagnostics import format_diagnostic
-from s7graph.sequencer.diff import ChangeSummary, summarize
-from s7graph.sequencer.edit_base import EditRefused
-from s7graph.sequencer.edit_text import parse_source
 from s7graph.sequencer.exchange import ImportFailed, import_file
-from s7graph.sequencer.format import format_chart
-from s7graph.sequencer.online import SwapRefused, SwapReport, swap
+from s7graph.sequencer.text.format import format_chart
 from s7graph.web.access.audit import Facts
 from s7graph.web.bus.gate import Gate
 from s7graph.web.bus.live import LiveChart, LiveGraph

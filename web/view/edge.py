@@ -20,7 +20,7 @@ import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 
-from s7graph.sequencer.model import Chart
+from s7graph.sequencer.text.model import Chart
 from s7graph.web.bus.gate import Apply, Gate
 from s7graph.web.bus.protocol import ChartLayout, Command, CpuStatus, StepStateUpdate
 from s7graph.web.bus.zenoh_bus import BusClient, BusPublisher, TlsFiles, open_session

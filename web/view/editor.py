@@ -1,5 +1,5 @@
 """Edit mode of one browser page (an engineer's): the chart as an editing session
-(``sequencer.edit.Session``), drawn on the page's own scene, edited in the side panel and
+(``sequencer.change.edit.Session``), drawn on the page's own scene, edited in the side panel and
 in its source view, checked live, saved, opened and downloaded into the running CPU.
 
 - **Select** a step or transition on the chart (or in *Element*); its form lists what the
@@ -31,16 +31,16 @@ from dataclasses import dataclass
 from typing import Any, Final
 
 from s7graph.engine.symbols import SymbolTable
-from s7graph.sequencer.diagnostics import Diagnostic
-from s7graph.sequencer.edit import Operation, Session, make_edit, new_chart
-from s7graph.sequencer.edit_base import Edit, EditRefused, Refusal
-from s7graph.sequencer.edit_content import SetSource
-from s7graph.sequencer.edit_text import RowFields, parse_source
-from s7graph.sequencer.elements import Ref, RowRef, StepRef, TransitionRef, element_of, find
-from s7graph.sequencer.format import format_chart, format_row
-from s7graph.sequencer.model import Chart, Step
-from s7graph.sequencer.parse import ChartSyntaxError, parse_chart
-from s7graph.sequencer.validate import validate
+from s7graph.sequencer.change.base import Edit, EditRefused, Refusal
+from s7graph.sequencer.change.content import SetSource
+from s7graph.sequencer.change.edit import Operation, Session, make_edit, new_chart
+from s7graph.sequencer.change.typed import RowFields, parse_source
+from s7graph.sequencer.checks.diagnostics import Diagnostic
+from s7graph.sequencer.checks.validate import validate
+from s7graph.sequencer.text.elements import Ref, RowRef, StepRef, TransitionRef, element_of, find
+from s7graph.sequencer.text.format import format_chart, format_row
+from s7graph.sequencer.text.model import Chart, Step
+from s7graph.sequencer.text.parse import ChartSyntaxError, parse_chart
 from s7graph.steps.qualifiers import EVENTS, QUALIFIERS
 from s7graph.web.bus.protocol import ChartLayout, ChartSource, CommandReply
 from s7graph.web.view import texts
