@@ -3,7 +3,7 @@ the surgery that replaces one step, transition or sequencer in an immutable char
 
 An edit (``Edit``) is data — the element it names and the new values — and ``apply``
 gives the edited chart and the element to select next, or raises ``EditRefused`` naming
-the problem. The operations themselves live in ``sequencer.edit_steps`` (what a step,
+the problem. The operations themselves live in ``sequencer.change.content`` (what a step,
 transition or row holds) and ``sequencer.change.structure`` (inserting and deleting); the
 table of them and the editing session in ``sequencer.change.edit``.
 """
