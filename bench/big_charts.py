@@ -6,7 +6,7 @@ within the CPU's 256 bytes of markers so that it runs them."""
 
 from __future__ import annotations
 
-from s7graph.sequencer.edit_base import MAX_SOURCE, MAX_STEPS
+from s7graph.sequencer.change.base import MAX_SOURCE, MAX_STEPS
 
 
 def _head(name: str) -> list[str]:

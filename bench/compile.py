@@ -54,7 +54,7 @@ def child(n_steps: int) -> None:
     CPU seconds each took as JSON (CPU time: what other processes on a shared machine do
     not add to)."""
     from s7graph.sequencer.compile import compile_chart
-    from s7graph.sequencer.parse import parse_chart
+    from s7graph.sequencer.text.parse import parse_chart
 
     text = chart_text(n_steps)
     t0 = time.process_time()

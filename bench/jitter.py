@@ -195,7 +195,7 @@ def _scan200_session() -> Any:
     from s7graph.engine.clock import SystemClock
     from s7graph.engine.symbols import SymbolTable
     from s7graph.sequencer.compile import compile_chart
-    from s7graph.sequencer.parse import parse_chart
+    from s7graph.sequencer.text.parse import parse_chart
     from s7graph.web.harness.session import ChartSession
 
     per_fb = 8

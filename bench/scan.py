@@ -50,7 +50,7 @@ from s7graph.engine.clock import Clock, VirtualClock
 from s7graph.engine.cpu import Cpu
 from s7graph.sequencer.compile import compile_chart
 from s7graph.sequencer.fb import GraphFB, install_all
-from s7graph.sequencer.parse import parse_chart
+from s7graph.sequencer.text.parse import parse_chart
 
 N_SEQUENCERS = 200
 STEPS = 25

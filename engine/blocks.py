@@ -116,7 +116,7 @@ def _check_interface(owner: str, kind: BlockKind, interface: tuple[Var, ...]) ->
 @runtime_checkable
 class StateFormat(Protocol):
     """How the data of an FB's instance DBs is recognised on disk (a GRAPH FB: by its
-    compiled chart, ``sequencer/carry.py``); ``engine/persistence.py`` reads it.
+    compiled chart, ``sequencer/change/carry.py``); ``engine/persistence.py`` reads it.
 
     ``fingerprint`` names what the data describes; ``shape()`` is a JSON-able description
     saved beside the data; ``adapt(shape, data)`` carries data written under another

@@ -47,7 +47,7 @@ foreign file, one without a table (copied without its write-ahead log), one lock
 another process, a dropped instances table, an instance of another FB, a DB the program no
 longer has, a malformed row or memory image (``engine/state_checks.py``); a changed
 fingerprint lets the FB's ``state_format.adapt`` carry the data over (a GRAPH
-FB: by step number, ``sequencer/carry.py``) and reports what it could not keep.
+FB: by step number, ``sequencer/change/carry.py``) and reports what it could not keep.
 """
 
 from __future__ import annotations

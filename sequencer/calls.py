@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from s7graph.engine.errors import BlockError
-from s7graph.sequencer.model import BlockCall, Chart
+from s7graph.sequencer.text.model import BlockCall, Chart
 
 __all__ = ["CallPlan", "call_sites", "missing_blocks", "prepare_calls"]
 

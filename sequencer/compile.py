@@ -19,9 +19,9 @@ from s7graph.engine.address import Area, Width
 from s7graph.engine.errors import S7Error, SourceLocation
 from s7graph.sequencer.collector import collector_paused
 from s7graph.sequencer.compiled import CompiledChart
-from s7graph.sequencer.model import BlockCall, Chart, Coil, Operand, Step
-from s7graph.sequencer.names import resolve_operand
 from s7graph.sequencer.params import pin as pin_info
+from s7graph.sequencer.text.model import BlockCall, Chart, Coil, Operand, Step
+from s7graph.sequencer.text.names import resolve_operand
 from s7graph.steps.actions import ActionParts, call_code, step_action_parts, uses_own_index
 from s7graph.steps.conditions import (
     condition_parts,
@@ -59,7 +59,7 @@ class _Problem:
 def _validate(chart: Chart, symbols: Any) -> tuple[list[Any], list[Any]]:
     """Run ``sequencer.validate`` when present; return (errors, warnings)."""
     try:
-        from s7graph.sequencer.validate import validate  # written by H4
+        from s7graph.sequencer.checks.validate import validate  # written by H4
     except ImportError:
         return [], []
     diags = list(validate(chart, symbols))

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from types import CodeType, FunctionType
 from typing import Any
 
-from s7graph.sequencer.model import Chart, ChartOptions
+from s7graph.sequencer.text.model import Chart, ChartOptions
 from s7graph.steps.expressions import RUNTIME as EXPR_RUNTIME
 from s7graph.steps.operands import RUNTIME as OPERAND_RUNTIME
 from s7graph.steps.operands import area_buffer

@@ -16,7 +16,9 @@
 5. permanent *after* instructions;
 6. group flags and FB outputs.
 
-The quiet call and the fast path of step 4 are in ``sequencer/fastpath.py``.
+The quiet call and the fast path of step 4 are ``sequencer/fastpath.py``'s ``FastPath``, a part of
+the runtime (``GraphRuntime.fastpath``); steps 4a–4c of the general path (evaluate, decide,
+switch, skip steps) are ``sequencer/switching.py``.
 The option ``order = "codesys"`` runs d) and e) before a)–c): new steps act in the next call
 (their S1 rows once: a step whose rows ran in its activation call is not carried).
 Work is proportional to the active steps: only ``st.active`` is visited.
@@ -31,9 +33,11 @@ from typing import Any
 from s7graph.sequencer import display
 from s7graph.sequencer.compiled import CompiledChart, Program
 from s7graph.sequencer.fastpath import FastPath
+from s7graph.sequencer.latch import advance, latch
 from s7graph.sequencer.modes import MODE_RULES, select_mode
 from s7graph.sequencer.params import input_defaults, inputs_for, output_defaults
 from s7graph.sequencer.state import EDGE_INPUTS, GraphState
+from s7graph.sequencer.switching import switch
 from s7graph.steps.qualifiers import EV_A1, EV_L0, EV_L1, EV_R1, EV_S0, EV_S1, EV_V0, EV_V1
 
 BlockCaller = Callable[[str, Any, Any, dict[str, Any]], dict[str, Any]]
@@ -48,11 +52,12 @@ def _no_cells(op: str, number: int, value: Any) -> None:
     raise RuntimeError(f"{op} {number}: no timer/counter cells bound to this sequencer")
 
 
-class GraphRuntime(FastPath):
+class GraphRuntime:
     """A compiled chart bound to its state and the engine: ``execute`` is one FB call.
 
     Generated action code calls back ``on``/``off``/``off_all`` (ON/OFF Sx, OFF S_ALL),
-    ``call`` (CALL of a block) and ``counter``/``timer`` (CS CU CD CR / TL TD TF TR)."""
+    ``call`` (CALL of a block) and ``counter``/``timer`` (CS CU CD CR / TL TD TF TR).
+    ``quiet`` is the quiet call of its ``fastpath`` (``FastPath.quiet``)."""
 
     def __init__(
         self,
@@ -84,55 +89,41 @@ class GraphRuntime(FastPath):
         self._target: int | None = None  # step of this call's S_ON/S_OFF/ACK_S command
         self.levels = self.st.levels  # overrides of HALT_SQ / EN_IL / EN_SV (kept in the state)
         self._final: list[int] = []  # steps left, awaiting their final scan
-        self._getter = operator.itemgetter(*self.input_names)
-        self._last_in: Any = None  # the input pins of the previous call (fast path)
+        self._getter: Callable[[Any], Any] = operator.itemgetter(*self.input_names)
         self.display = display.Display(cc)
         self._permanent = bool(cc.chart.before or cc.chart.after)
         # per sequencer: its active steps in activation order (multi-sequencer FBs only),
-        # rebuilt from ``st.active`` by each general call (_advance) and kept in step by
-        # _activate/_deactivate/_skip and the fast path's switches
+        # rebuilt from ``st.active`` by each general call (latch.advance) and kept in step
+        # by _activate/_deactivate, switching.skip and the fast path's switches
         self._by_seq: list[list[int]] = [[] for _ in cc.seq_numbers] if self.multi else []
-        self._seqs = self._by_seq if self.multi else [self.st.active]  # step 4's work lists
         # step 4: the sequencers before ``_done`` have run their rows in this call; a step
         # activated in one of them waits in ``_late`` (see _late_steps); with the CODESYS
         # order such steps are carried to the next call (``_carry``: S1 raised again there)
         self._done = 0
         self._late: list[int] = []
         self._carry: list[int] = []
-        # fast path of step 4 (AUTO, no HALT/OFF, no skip steps, default order): per step,
-        # ``nochk`` = no interlock and no supervision; ``plain`` = nochk and every leaving
-        # transition has this step as its only source (no join)
-        self._nochk = tuple(prog.ilc[i] is None and prog.svc[i] is None for i in range(cc.n_steps))
-        fused = prog.step  # per plain step: its transitions, then its rows (Program.step)
-        self._plain = tuple(
-            self._nochk[i]
-            and all(len(cc.tr_src[j]) == 1 for j in cc.leaving[i])
-            and i < len(fused)
-            and fused[i] is not None
-            for i in range(cc.n_steps)
-        )
-        # per transition: (its target, Program.enter) when it has a plain switch, else None
-        enter = prog.enter or (None,) * cc.n_transitions
-        self._enter = tuple(
-            None if w is None else (cc.tr_dst[j][0], w) for j, w in enumerate(enter)
-        )
         self._forcing = cc.options.ack_forces_switch
         self._lean = fast and not self.codesys  # a call may be quiet (FastPath.quiet)
-        self._quiet = False  # the next call is quiet if its input pins are those latched
         self._live_pins = bool(self.display.plan.live_pins)
         # the pins of st.outputs the last call wrote (GraphFB copies them)
         self.outs_written: tuple[str, ...] = ()
+        # the quiet call and the fast path of step 4 (AUTO, no HALT/OFF, no skip steps,
+        # default order); its quiet call is this runtime's own, one lookup from OB1
+        self.fastpath = FastPath(self)
+        self.quiet = self.fastpath.quiet
 
     def rebind(self, state: GraphState) -> None:
         """Run on another instance-DB content (restored snapshot, new instance)."""
         self.st = state
-        self._quiet = False
+        fp = self.fastpath
+        fp.st = state
+        fp.armed = False
         if not self.multi:
-            self._seqs = [state.active]
+            fp.seqs = [state.active]
         self.levels = state.levels
         self._final.clear()
         self._acked.clear()
-        self._last_in = None
+        fp.last_in = None
         self._remote.clear()
         self._commands.clear()
         self._late.clear()
@@ -169,7 +160,7 @@ class GraphRuntime(FastPath):
         acknowledging the message, SPEC §2.10): the next call releases each step still
         latched exactly as ACK_S does (events A1, V0; the step may switch in that call)."""
         self._remote.extend(step_indices)
-        self._quiet = False
+        self.fastpath.armed = False
 
     def command(self, pin: str, step: int | None = None) -> None:
         """Queue an operator command (S7-GRAPH "Control Sequencer", SPEC §2.5/§2.6): ``pin``
@@ -177,7 +168,7 @@ class GraphRuntime(FastPath):
         pin's wiring (OFF_SQ: switched off for that call); S_ON/S_OFF act on step number
         ``step`` instead of S_NO."""
         self._commands.append((pin, step))
-        self._quiet = False
+        self.fastpath.armed = False
 
     def set_level(self, pin: str, value: bool | None) -> None:
         """Override the level pin HALT_SQ, EN_IL or EN_SV with ``value`` from the next call
@@ -186,8 +177,8 @@ class GraphRuntime(FastPath):
             self.levels.pop(pin, None)
         else:
             self.levels[pin] = value
-        self._last_in = None  # the next call latches the pins again
-        self._quiet = False  # and is a general one, which applies the levels
+        self.fastpath.last_in = None  # the next call latches the pins again
+        self.fastpath.armed = False  # and is a general one, which applies the levels
 
     def _apply_commands(self) -> None:
         st = self.st
@@ -199,7 +190,7 @@ class GraphRuntime(FastPath):
             if step is not None:
                 self._target = step
         self._commands.clear()
-        self._last_in = None  # the next call latches the pins again (ends OFF_SQ)
+        self.fastpath.last_in = None  # the next call latches the pins again (ends OFF_SQ)
         self.display.dirty = True
 
     # ------------------------------------------------------------ state changes
@@ -265,7 +256,7 @@ class GraphRuntime(FastPath):
         quiet = self.quiet(inputs, now_ns)
         if quiet is not None:
             return quiet
-        self._quiet = False  # until this call is done
+        self.fastpath.armed = False  # until this call is done
         try:
             return self._general(inputs, now_ns)
         except BaseException:  # a call cut short: the next one writes every output pin
@@ -285,11 +276,12 @@ class GraphRuntime(FastPath):
         rose = st.rose
         if rose:
             rose.clear()
-        if cur is None or cur != self._last_in:
-            self._last_in = cur
-            self._latch(inputs)
+        fp = self.fastpath
+        if cur is None or cur != fp.last_in:
+            fp.last_in = cur
+            latch(self, inputs)
             self.display.dirty = True
-        self._advance(now_ns)
+        advance(self, now_ns)
         self._target = None
         if self._commands:
             self._apply_commands()
@@ -337,7 +329,7 @@ class GraphRuntime(FastPath):
             and not st.sskip_enabled
         )
         if fast:
-            self._fast_sequencers(st)
+            fp.sequencers(st, self)
         elif self.multi:
             by_seq = self._by_seq
             for k in range(len(by_seq)):
@@ -376,69 +368,6 @@ class GraphRuntime(FastPath):
         if st.left:
             st.left.clear()
         st.ov = False
-
-    def _advance(self, now_ns: int) -> None:
-        """The active steps by sequencer, and the step times (T; U unless disturbed; HALT_TM
-        freezes both), in one pass over the active steps."""
-        st = self.st
-        last = st.last_ns
-        dt = now_ns - last if last >= 0 else 0
-        st.last_ns = now_ns
-        active = st.active
-        if dt and not st.tm_halted:
-            t_ns, u_ns, il_err, sv_err = st.t_ns, st.u_ns, st.il_err, st.sv_err
-            if self.multi:
-                by_seq = self._by_seq
-                for lst in by_seq:
-                    if lst:
-                        lst.clear()
-                step_seq = self.cc.step_seq
-                for i in active:
-                    by_seq[step_seq[i]].append(i)
-                    t_ns[i] += dt
-                    if not (il_err[i] or sv_err[i]):
-                        u_ns[i] += dt
-            else:
-                for i in active:
-                    t_ns[i] += dt
-                    if not (il_err[i] or sv_err[i]):
-                        u_ns[i] += dt
-        elif self.multi:
-            by_seq = self._by_seq
-            for lst in by_seq:
-                if lst:
-                    lst.clear()
-            step_seq = self.cc.step_seq
-            for i in active:
-                by_seq[step_seq[i]].append(i)
-
-    def _latch(self, inputs: dict[str, Any]) -> None:
-        """Step 1 when an input changed: latch, detect rising edges, level options."""
-        st = self.st
-        ins = st.inputs
-        for name in self.input_names:
-            if name in inputs:
-                ins[name] = inputs[name]
-        rose = st.rose
-        prev = st.prev
-        for name in self.edge_names:
-            v = bool(ins[name])
-            if v and not prev.get(name, False):
-                rose.add(name)
-            prev[name] = v
-        st.off = bool(ins["OFF_SQ"])
-        st.halted = bool(ins["HALT_SQ"])
-        st.tm_halted = bool(ins["HALT_TM"])
-        st.zeroed = bool(ins["ZERO_OP"])
-        st.il_enabled = bool(ins["EN_IL"])
-        st.sv_enabled = bool(ins["EN_SV"])
-        if self.levels:
-            levels = self.levels
-            st.halted = levels.get("HALT_SQ", st.halted)
-            st.il_enabled = levels.get("EN_IL", st.il_enabled)
-            st.sv_enabled = levels.get("EN_SV", st.sv_enabled)
-        st.ackreq_enabled = bool(ins["EN_ACKREQ"])
-        st.sskip_enabled = bool(ins["EN_SSKIP"])
 
     def _requests(self, rose: set[str]) -> None:
         st = self.st
@@ -481,125 +410,14 @@ class GraphRuntime(FastPath):
         self, k: int, steps: list[int], sw: tuple[Any, ...], rule: Callable[[bool, bool], bool]
     ) -> None:
         """Sequencer ``k`` (-1: the only one) whose active steps are ``steps``; ``sw`` holds
-        this call's switching options (see ``_switch``)."""
+        this call's switching options (see ``switching.switch``)."""
         if self.codesys:
             self._conditions_and_actions(k, steps)
             self._done = max(k, 0) + 1  # a step its transitions activate acts in the next call
-            self._switch(steps, sw, rule)
+            switch(self, steps, sw, rule)
         else:
-            self._switch(steps, sw, rule)
+            switch(self, steps, sw, rule)
             self._conditions_and_actions(k, steps)
-
-    def _switch(
-        self, steps: list[int], sw: tuple[Any, ...], rule: Callable[[bool, bool], bool]
-    ) -> None:
-        """Steps a–c: evaluate, decide, switch (SPEC §2.2 4a–4c) for one sequencer's active
-        ``steps``. ``sw`` = (mode rule, None in AUTO; T_PUSH edge; switching blocked by
-        HALT_SQ/OFF_SQ; steps whose acknowledgement forces their transition; steps ``held``
-        for this call because step 2 activated them)."""
-        st = self.st
-        cc = self.cc
-        x = st.x
-        leaving = cc.leaving
-        tr_src = cc.tr_src
-        tcond = self.prog.tcond
-        tt, crit, crit_old = st.tt, st.crit, st.crit_old
-        mode_rule, push, blocked, forced, held = sw
-        sv_err = st.sv_err
-        # a+b: on the state at the start of this step
-        fire: list[int] = []
-        taken: set[int] | None = None
-        joins: set[int] | None = None
-        for i in steps:
-            for j in leaving[i]:
-                srcs = tr_src[j]
-                single = len(srcs) == 1
-                if not single:  # simultaneous join: all preceding steps active, once
-                    if not all(x[s] for s in srcs):
-                        continue
-                    if joins is None:
-                        joins = set()
-                    elif j in joins:
-                        continue
-                    joins.add(j)
-                v, c = tcond[j](st)
-                crit_old[j] = crit[j]
-                crit[j] = c
-                tt[j] = v
-                if blocked or (held and not held.isdisjoint(srcs)):
-                    continue
-                if forced and i in forced:
-                    v = True
-                if mode_rule is not None:
-                    v = mode_rule(v, push)
-                if not v:
-                    continue
-                if single:
-                    if sv_err[i]:
-                        continue
-                elif any(sv_err[s] for s in srcs):
-                    continue
-                if taken is None:
-                    taken = set(srcs)
-                else:
-                    if (i in taken) if single else any(s in taken for s in srcs):
-                        continue
-                    taken.update(srcs)
-                fire.append(j)
-                break  # alternative divergence: the first-listed switchable path wins
-        # c: switch
-        if not fire:
-            return
-        tr_dst = cc.tr_dst
-        for j in fire:
-            st.fired.append(j)
-            for s in tr_src[j]:
-                if x[s]:
-                    self._deactivate(s)
-            for d in tr_dst[j]:
-                if not x[d]:
-                    self._activate(d)
-        if st.sskip_enabled:
-            self._skip(rule, held)
-
-    def _skip(self, rule: Callable[[bool, bool], bool], held: frozenset[int]) -> None:
-        """Skip steps: a step entered in this call whose leaving transition already holds is
-        passed through without being active (no S1, no actions; graph-semantics §A.3). A
-        step ``held`` (activated by INIT_SQ, the first call or S_ON) is never passed through."""
-        st = self.st
-        cc = self.cc
-        for _ in range(st.n_steps):
-            moved = False
-            for i in list(st.entered):
-                if not st.x[i] or i in held:
-                    continue
-                for j in cc.leaving[i]:
-                    srcs = cc.tr_src[j]
-                    if not all(st.x[s] for s in srcs) or not held.isdisjoint(srcs):
-                        continue
-                    v, c = self.prog.tcond[j](st)
-                    st.crit_old[j], st.crit[j], st.tt[j] = st.crit[j], c, v
-                    if not rule(v, False):
-                        continue
-                    for s in srcs:
-                        if s in st.entered:  # passed through: never active
-                            st.x[s] = False
-                            st.active.remove(s)
-                            if self.multi:
-                                self._by_seq[cc.step_seq[s]].remove(s)
-                            st.entered.remove(s)
-                            st.ev[s] &= ~EV_S1
-                            st.log = [e for e in st.log if e != (s, EV_S1)]
-                        elif st.x[s]:
-                            self._deactivate(s)
-                    st.fired.append(j)
-                    for d in cc.tr_dst[j]:
-                        if not st.x[d]:
-                            self._activate(d)
-                    moved = True
-                    break
-            if not moved:
-                return
 
     def _late_steps(self) -> None:
         """The steps activated in a sequencer whose rows had already run in this call — a
@@ -704,7 +522,7 @@ class GraphRuntime(FastPath):
         if not self.fast:  # the reference: every output recomputed and copied, every call
             disp.dirty = True
         self.outs_written = disp.update(st)
-        self._quiet = (
+        self.fastpath.armed = (
             self._lean
             and st.mode == "AUTO"
             and not (st.off or st.halted or st.sskip_enabled or self._commands or self._remote)

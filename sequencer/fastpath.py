@@ -1,11 +1,13 @@
 """The fast path of one GRAPH FB call (SPEC §2.2): the quiet call and step 4 in AUTO.
 
-``FastPath`` is a mixin of ``sequencer.cycle.GraphRuntime``: its methods are the runtime's
-own (no extra call per step), kept here because they inline the general path's effects
-for the common case — AUTO, no HALT_SQ/OFF_SQ/skip steps, default order — and must have
-the same effects as it. ``tests/sequencer/test_fast_path_differential.py`` runs random
-charts through both (``GraphRuntime(fast=False)`` forces the general path) and compares
-every scan.
+``FastPath`` is a part of ``sequencer.cycle.GraphRuntime`` (``GraphRuntime.fastpath``,
+its ``quiet`` also the runtime's own ``quiet``): it holds references to the runtime's
+tables and work lists, owns the quiet call's latch (``armed``, ``last_in``) and inlines
+the general path's effects for the common case — AUTO, no HALT_SQ/OFF_SQ/skip steps,
+default order — which must be the same as the general path's.
+``tests/sequencer/test_fast_path_differential.py`` runs random charts through both
+(``GraphRuntime(fast=False)`` forces the general path) and compares every scan. The
+generated code it calls gets the runtime (``rt``), as from the general path.
 
 Invariants the fast path relies on (every call keeps them, whichever path it takes):
 
@@ -18,15 +20,15 @@ Invariants the fast path relies on (every call keeps them, whichever path it tak
   ``sv_err`` (activation, deactivation, an interlock lost or returned, a fault coming,
   going or acknowledged each raise one), and then leaves the per-call lists ``fired``,
   ``entered``, ``left`` and ``ev_steps`` empty like ``log``;
-* ``_by_seq`` holds each sequencer's active steps in activation order: ``_activate``,
-  ``_deactivate``, ``_skip`` and the switches below keep it, the general path rebuilds it
-  from ``st.active`` on every call.
+* ``_by_seq`` holds each sequencer's active steps in activation order: the runtime's
+  ``_activate`` and ``_deactivate``, ``switching.skip`` and the switches below keep it, the
+  general path rebuilds it from ``st.active`` on every call (``latch.advance``).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 from s7graph.sequencer.modes import MODE_RULES
 from s7graph.sequencer.state import GraphState
@@ -40,40 +42,101 @@ _AUTO_SW: tuple[Any, ...] = (None, False, False, (), frozenset())  # _switch opt
 _AUTO_RULE = MODE_RULES["AUTO"]
 
 
-class FastPath:
-    """The fast-path methods of ``GraphRuntime`` (which defines the attributes below)."""
+class Runtime(Protocol):
+    """What the fast path uses of ``sequencer.cycle.GraphRuntime`` beyond its tables."""
 
-    if TYPE_CHECKING:
-        cc: CompiledChart
-        prog: Program
-        st: GraphState
-        multi: bool
-        display: Display
-        outs_written: tuple[str, ...]
-        _quiet: bool
-        _getter: Callable[[Any], Any]
-        _last_in: Any
-        _seqs: list[list[int]]
-        _by_seq: list[list[int]]
-        _done: int
-        _late: list[int]
-        _final: list[int]
-        _permanent: bool
-        _plain: tuple[bool, ...]
-        _nochk: tuple[bool, ...]
-        _enter: tuple[tuple[int, Any] | None, ...]
-        _live_pins: bool
-        _new_call: Callable[[GraphState], None]
-        _sequencer: Callable[[int, list[int], tuple[Any, ...], Callable[[bool, bool], bool]], None]
-        _conditions_and_actions: Callable[[int, list[int]], None]
-        _late_steps: Callable[[], None]
+    cc: CompiledChart
+    prog: Program
+    st: GraphState
+    multi: bool
+    display: Display
+    outs_written: tuple[str, ...]
+    _getter: Callable[[Any], Any]
+    _permanent: bool
+    _live_pins: bool
+    _final: list[int]
+    _late: list[int]
+    _by_seq: list[list[int]]
+    _done: int
+
+    def _new_call(self, st: GraphState) -> None: ...
+
+    def _sequencer(
+        self, k: int, steps: list[int], sw: tuple[Any, ...], rule: Callable[[bool, bool], bool]
+    ) -> None: ...
+
+    def _conditions_and_actions(self, k: int, steps: list[int]) -> None: ...
+
+    def _late_steps(self) -> None: ...
+
+
+class FastPath:
+    """The quiet call and step 4 in AUTO of one ``GraphRuntime`` (``rt``)."""
+
+    __slots__ = (
+        "_by_seq",
+        "_enter",
+        "_final",
+        "_getter",
+        "_late",
+        "_live_pins",
+        "_nochk",
+        "_permanent",
+        "_plain",
+        "armed",
+        "cc",
+        "display",
+        "last_in",
+        "multi",
+        "prog",
+        "rt",
+        "seqs",
+        "st",
+    )
+
+    def __init__(self, rt: Runtime) -> None:
+        self.rt = rt
+        cc = self.cc = rt.cc
+        prog = self.prog = rt.prog
+        self.st = rt.st  # the runtime's state (``GraphRuntime.rebind`` sets both)
+        self.multi = rt.multi
+        self.display = rt.display
+        self._getter = rt._getter
+        self._permanent = rt._permanent
+        self._live_pins = rt._live_pins
+        # the runtime's work lists (changed in place, never rebound)
+        self._final = rt._final
+        self._late = rt._late
+        self._by_seq = rt._by_seq
+        self.seqs = rt._by_seq if rt.multi else [rt.st.active]  # step 4's work lists
+        # the next call is quiet if its input pins are those latched (``last_in``, the
+        # input pins of the previous call) and ``armed`` (set by the general path's
+        # ``_outputs``, cleared by commands, acknowledgements and ``rebind``)
+        self.armed = False
+        self.last_in: Any = None
+        # per step: ``nochk`` = no interlock and no supervision; ``plain`` = nochk and every
+        # leaving transition has this step as its only source (no join)
+        self._nochk = tuple(prog.ilc[i] is None and prog.svc[i] is None for i in range(cc.n_steps))
+        fused = prog.step  # per plain step: its transitions, then its rows (Program.step)
+        self._plain = tuple(
+            self._nochk[i]
+            and all(len(cc.tr_src[j]) == 1 for j in cc.leaving[i])
+            and i < len(fused)
+            and fused[i] is not None
+            for i in range(cc.n_steps)
+        )
+        # per transition: (its target, Program.enter) when it has a plain switch, else None
+        enter = prog.enter or (None,) * cc.n_transitions
+        self._enter = tuple(
+            None if w is None else (cc.tr_dst[j][0], w) for j, w in enumerate(enter)
+        )
 
     def quiet(self, inputs: Any, now_ns: int) -> GraphState | None:
         """The call ``execute(inputs, now_ns)`` if it is a quiet one, else None (and nothing
         done): quiet = the input pins equal those latched by the last call (no edge, no
         level change, same S_SEL) and the last call left the FB in AUTO without
         HALT_SQ/OFF_SQ/skip steps, default order, no operator command or remote
-        acknowledgement queued, the display clean (``_quiet``, cleared by ``command``,
+        acknowledgement queued, the display clean (``armed``, cleared by ``command``,
         ``acknowledge`` and ``rebind``).
 
         What it leaves out, and why that is equivalent: latching and edges (nothing
@@ -83,23 +146,24 @@ class FastPath:
         module docstring); clearing the per-call lists when the last call raised no event
         (they are empty); the group flags when this call raised none (unchanged); the
         disturbance test of U for every active step when no active step is disturbed
-        (``st.error``/``st.fault``). Step 4 is ``_fast_sequencers``. A call an exception
+        (``st.error``/``st.fault``). Step 4 is ``sequencers``. A call an exception
         cuts short (a row calling a block that faults) makes the next one general, all its
         output pins written (``Display.cut_short``)."""
-        if not self._quiet:
+        if not self.armed:
             return None
         try:
             cur = self._getter(inputs)
         except KeyError:
             return None
-        if cur != self._last_in:
+        if cur != self.last_in:
             return None
         st = self.st
+        rt = self.rt
         try:
             if st.rose:
                 st.rose.clear()
             if st.log:
-                self._new_call(st)
+                rt._new_call(st)
             else:
                 st.ov = False
             # 1. step times: T, and U unless the step is disturbed; HALT_TM freezes both
@@ -121,17 +185,17 @@ class FastPath:
             st.calls += 1
             # 3.-5. permanent before, the sequencers, permanent after
             if self._permanent:
-                self.prog.before(st, self)
+                self.prog.before(st, rt)
             active = st.active
             if self.multi or len(active) != 1 or self._final or not self._plain[active[0]]:
-                self._fast_sequencers(st)
-            else:  # _fast_sequencers of the only sequencer, with one plain active step, inline
+                self.sequencers(st, rt)
+            else:  # sequencers() of the only sequencer, with one plain active step, inline
                 i = active[0]
-                j = self.prog.step[i](st, self, st.ev[i], True, st.zeroed)
+                j = self.prog.step[i](st, rt, st.ev[i], True, st.zeroed)
                 if j >= 0 or len(active) > 1:
-                    self._fused_done(-1, active, i, j)
+                    self._fused_done(rt, -1, active, i, j)
             if self._permanent:
-                self.prog.after(st, self)
+                self.prog.after(st, rt)
             # 6. group flags (only events change them) and the display
             if st.log:
                 il_err, sv_err = st.il_err, st.sv_err
@@ -143,42 +207,42 @@ class FastPath:
                         fault = True
                 st.error, st.fault = error, fault
                 st.err_flt = error or fault
-                self.outs_written = self.display.update(st)
+                rt.outs_written = self.display.update(st)
             elif self._live_pins:
-                self.outs_written = self.display.update(st)
-            elif self.outs_written:  # Display.update would write nothing
-                self.outs_written = ()
+                rt.outs_written = self.display.update(st)
+            elif rt.outs_written:  # Display.update would write nothing
+                rt.outs_written = ()
         except BaseException:  # a call cut short: the next one takes the general path
-            self._quiet = False
+            self.armed = False
             self.display.cut_short()
             raise
         return st
 
-    def _fast_sequencers(self, st: GraphState) -> None:
+    def sequencers(self, st: GraphState, rt: Runtime) -> None:
         """Step 4 in the common case (AUTO, no HALT_SQ/OFF_SQ, no forced acknowledgement,
         no skip steps, default order): per sequencer, the same effects as ``_sequencer``.
         A sequencer whose only active step ``i`` has no interlock, supervision or join,
         with no final scan pending, runs the fused function ``Program.step[i]``: its
         transitions in priority order, then (none holding) its rows; the rest is
-        ``_fused_done``. Any other sequencer takes ``_sequencer``."""
+        ``_fused_done``. Any other sequencer takes the runtime's ``_sequencer``."""
         fused = self.prog.step
         plain = self._plain
         final = self._final
         ev = st.ev
         zero = st.zeroed
         multi = self.multi
-        for k, steps in enumerate(self._seqs):
-            self._done = k
+        for k, steps in enumerate(self.seqs):
+            rt._done = k
             if len(steps) == 1 and plain[i := steps[0]] and not final:
-                j = fused[i](st, self, ev[i], True, zero)
+                j = fused[i](st, rt, ev[i], True, zero)
                 if j >= 0 or len(steps) > 1:
-                    self._fused_done(k if multi else -1, steps, i, j)
+                    self._fused_done(rt, k if multi else -1, steps, i, j)
             elif steps or final or not multi:
-                self._sequencer(k if multi else -1, steps, _AUTO_SW, _AUTO_RULE)
+                rt._sequencer(k if multi else -1, steps, _AUTO_SW, _AUTO_RULE)
         if self._late:
-            self._late_steps()
+            rt._late_steps()
 
-    def _fused_done(self, kk: int, steps: list[int], i: int, j: int) -> None:
+    def _fused_done(self, rt: Runtime, kk: int, steps: list[int], i: int, j: int) -> None:
         """After the fused function of step ``i``, the only active step of sequencer ``kk``
         (-1: the only one) whose active steps are ``steps``, returned ``j``: transition
         ``j`` holds (``j`` >= 0) — the switch — or ``i``'s rows ran and appended steps to
@@ -190,14 +254,14 @@ class FastPath:
         leaving out what ``_deactivate``/``_activate`` and step e) do for nothing then:
         ``il_err``/``il_ok``/``sv_err`` of ``i`` and ``d`` already hold the values they
         write (module docstring), ``d`` is not in an earlier sequencer (no late step),
-        ``_final`` is empty before and after. Any other switch is ``_fast_switch``."""
+        ``_final`` is empty before and after. Any other switch is ``_switch``."""
         st = self.st
         ev = st.ev
         zero = st.zeroed
         if j >= 0:
             plan = self._enter[j]
             if plan is None:
-                self._fast_switch(kk, steps, i, j, self.multi)
+                self._switch(rt, kk, steps, i, j, self.multi)
                 return
             d, rows = plan
             # c) _deactivate(i), _activate(d), inline
@@ -227,16 +291,16 @@ class FastPath:
             ev[d] = e = e | EV_S1
             log.append((d, EV_S1))
             # e) the final scan of i, then the rows of d
-            rows(st, self, ev[i], e, zero)
+            rows(st, rt, ev[i], e, zero)
         if len(steps) > 1:  # steps an ON Sx row appended: their rows, in order
             act, il_ok = self.prog.act, st.il_ok
             n = 1
             while n < len(steps):
                 i = steps[n]
                 n += 1
-                act[i](st, self, ev[i], il_ok[i], zero)
+                act[i](st, rt, ev[i], il_ok[i], zero)
 
-    def _fast_switch(self, kk: int, steps: list[int], i: int, j: int, multi: bool) -> None:
+    def _switch(self, rt: Runtime, kk: int, steps: list[int], i: int, j: int, multi: bool) -> None:
         """The fast path's switch of sequencer ``kk`` (-1: the only one) whose only active
         step ``i`` (plain, no fault) leaves by transition ``j`` (its fused function returned
         ``j``) without a plain switch: c) deactivate ``i``, activate the targets (events S0,
@@ -282,7 +346,7 @@ class FastPath:
                 if multi:
                     k = self.cc.step_seq[d]
                     self._by_seq[k].append(d)
-                    if k < self._done:  # a jump into an earlier sequencer (_late_steps)
+                    if k < rt._done:  # a jump into an earlier sequencer (_late_steps)
                         self._late.append(d)
                 st.entered.append(d)
                 if not ev[d]:
@@ -292,7 +356,7 @@ class FastPath:
         nochk = self._nochk
         if not (nochk[steps[0]] if len(steps) == 1 else all(nochk[s] for s in steps)):
             # d: a new step has an interlock or a supervision
-            self._conditions_and_actions(kk, steps)
+            rt._conditions_and_actions(kk, steps)
             return
         # e: the final scan of the step left (this sequencer's), then the rows
         keep: list[int] = []
@@ -302,10 +366,10 @@ class FastPath:
             if kk >= 0 and step_seq[f] != kk:
                 keep.append(f)
             else:
-                fin[f](st, self, ev[f] | EV_S0)
+                fin[f](st, rt, ev[f] | EV_S0)
         final[:] = keep
         n = 0
         while n < len(steps):  # ON Sx in a row may append a step to this sequencer
             i = steps[n]
             n += 1
-            act[i](st, self, ev[i], il_ok[i], zero)
+            act[i](st, rt, ev[i], il_ok[i], zero)

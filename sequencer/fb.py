@@ -14,7 +14,7 @@ cold restart initializes it, or as a hot restart (OB101) resumes it as it was, s
 included (the time the CPU was down or in STOP is not counted, as no call saw it). A
 restart never acknowledges a message: one whose fault the restart clears goes *outgoing*
 with the restart as its reason and stays listed until someone acknowledges it. The instance
-data is recognised on disk by the compiled chart (``sequencer/carry.py``).
+data is recognised on disk by the compiled chart (``sequencer/change/carry.py``).
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ from s7graph.engine.blocks import FB, OB, Decl, InstanceDB, Var
 from s7graph.engine.diagnostics import EventId
 from s7graph.engine.errors import BlockError
 from s7graph.engine.restart import RestartType
-from s7graph.sequencer.carry import ChartFormat
+from s7graph.sequencer.change.carry import ChartFormat
 from s7graph.sequencer.compiled import CompiledChart, Program
 from s7graph.sequencer.cycle import GraphRuntime, new_state
 from s7graph.sequencer.messages import PROGRAM_USER, sync_messages
@@ -221,7 +221,7 @@ class GraphFB:
 
     def replace_chart(self, cc: CompiledChart, state: GraphState, cpu: Any) -> None:
         """Online change: run ``cc`` from the next call on, with ``state`` (the running state
-        carried over to ``cc`` by ``sequencer.carry.carry_over``); call at a scan boundary.
+        carried over to ``cc`` by ``sequencer.change.carry.carry_over``); call at a scan boundary.
         Everything derived from the old chart goes with its :class:`LoadedChart`. The FB
         keeps its number and its instance DB number; the instance DB is made anew for the
         new parameter set, each pin keeping its value by name. One-call commands queued for

@@ -18,7 +18,7 @@ from enum import StrEnum
 from typing import Final
 
 from s7graph.engine.errors import SourceLocation, SymbolError
-from s7graph.sequencer.model import ChartOptions
+from s7graph.sequencer.text.model import ChartOptions
 
 PARAMETER_SETS: Final = ("MINIMUM", "STANDARD", "MAXIMUM", "USER")
 

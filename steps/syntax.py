@@ -2,7 +2,7 @@
 written, with the place of every element (SPEC §2.8, §2.9).
 
 The parser builds these nodes; ``steps`` compiles them to Python and the chart model
-(``sequencer.model``) holds them in its steps, transitions and permanent instructions.
+(``sequencer.text.model``) holds them in its steps, transitions and permanent instructions.
 Nothing here evaluates anything.
 """
 

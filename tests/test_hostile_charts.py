@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pytest
 
-from s7graph.sequencer.parse import ChartSyntaxError, chart_text, parse_chart
+from s7graph.sequencer.text.parse import ChartSyntaxError, chart_text, parse_chart
 from s7graph.web.bus.protocol import ChartLayout, layout_problem
 from s7graph.web.cli import main
 

@@ -16,10 +16,10 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from s7graph.engine.symbols import SymbolTable
-from s7graph.sequencer.diagnostics import Diagnostic, sort_key
+from s7graph.sequencer.checks.diagnostics import Diagnostic, sort_key
 from s7graph.sequencer.exchange.problems import ImportFailed, Problems
-from s7graph.sequencer.model import Binary, Chart
-from s7graph.sequencer.walk import rewrite
+from s7graph.sequencer.text.model import Binary, Chart
+from s7graph.sequencer.text.walk import rewrite
 from s7graph.steps.syntax import CHAIN_OPS, chain, chain_parts
 
 __all__ = [
@@ -120,7 +120,7 @@ def _import_chart(
     from s7graph.sequencer.exchange.plcopen import read_plcopen
     from s7graph.sequencer.exchange.simaticml import read_simaticml
     from s7graph.sequencer.exchange.xmltree import parse_xml
-    from s7graph.sequencer.parse import ChartSyntaxError, parse_chart
+    from s7graph.sequencer.text.parse import ChartSyntaxError, parse_chart
 
     problems = Problems(file)
     found_fmt = detect_format(data)

@@ -26,8 +26,8 @@ from s7graph.sequencer.exchange.iec_to_chart import S7_PIN, SFB_OF
 from s7graph.sequencer.exchange.naming import s7_to_iec
 from s7graph.sequencer.exchange.plcopen import S7GRAPH_DATA
 from s7graph.sequencer.exchange.shape import shape_of
-from s7graph.sequencer.format import format_chart, format_expr, format_row
-from s7graph.sequencer.model import (
+from s7graph.sequencer.text.format import format_chart, format_expr, format_row
+from s7graph.sequencer.text.model import (
     ActionRow,
     Assignment,
     BlockCall,

@@ -26,8 +26,9 @@ from s7graph.engine.address import parse_address
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.exchange.flgnet import write_network
 from s7graph.sequencer.exchange.shape import shape_of
-from s7graph.sequencer.format import format_row, row_body
-from s7graph.sequencer.model import (
+from s7graph.sequencer.params import Direction, pins_for
+from s7graph.sequencer.text.format import format_row, row_body
+from s7graph.sequencer.text.model import (
     ActionRow,
     Assignment,
     BlockCall,
@@ -42,7 +43,6 @@ from s7graph.sequencer.model import (
     StepAttr,
     TransAttr,
 )
-from s7graph.sequencer.params import Direction, pins_for
 
 __all__ = ["S7GRAPH_COMMENT", "export_simaticml"]
 

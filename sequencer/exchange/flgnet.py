@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 
 from s7graph.engine.errors import SourceLocation
 from s7graph.sequencer.exchange.xmltree import ElementError, Node
-from s7graph.sequencer.model import Binary, Const, Expr, Unary
+from s7graph.sequencer.text.model import Binary, Const, Expr, Unary
 
 __all__ = ["COMPARE_PARTS", "read_network", "write_network"]
 

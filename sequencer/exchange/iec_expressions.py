@@ -31,7 +31,7 @@ from s7graph.sequencer.exchange.st import (
     SUnary,
     shift,
 )
-from s7graph.sequencer.model import (
+from s7graph.sequencer.text.model import (
     NOWHERE,
     ActionRow,
     Binary,
@@ -110,7 +110,7 @@ def iec_literal(text: str) -> str:
 @cache
 def _s7g_literal() -> re.Pattern[str]:
     """The `.s7g` grammar's LITERAL terminal (a constant written so reads back as one)."""
-    from s7graph.sequencer.parse import _parser
+    from s7graph.sequencer.text.parse import _parser
 
     return re.compile(_parser().get_terminal("LITERAL").pattern.to_regexp())
 
@@ -471,7 +471,7 @@ class IecExpressions:
         if e.name == "NOT" and len(args) == 1:
             return Unary("NOT", args[0], loc)
         if e.name in FUNCTIONS and len(args) == 1:
-            from s7graph.sequencer.model import FuncCall
+            from s7graph.sequencer.text.model import FuncCall
 
             return FuncCall(FUNCTIONS[e.name], (args[0],), loc)
         raise _NoMap(f"function {e.name} has no exact GRAPH equivalent", loc)

@@ -30,7 +30,8 @@ from typing import Literal
 
 from s7graph.engine.errors import LiteralError, S7Error, SourceLocation
 from s7graph.engine.symbols import SymbolTable
-from s7graph.sequencer.diagnostics import Diagnostic
+from s7graph.sequencer.checks.diagnostics import Diagnostic
+from s7graph.sequencer.checks.validate import validate
 from s7graph.sequencer.exchange.iec_expressions import (
     S7_PIN,
     SFB_OF,
@@ -59,7 +60,7 @@ from s7graph.sequencer.exchange.st import (
     SOther,
     SSetReset,
 )
-from s7graph.sequencer.model import (
+from s7graph.sequencer.text.model import (
     ActionRow,
     Assignment,
     Binary,
@@ -76,7 +77,6 @@ from s7graph.sequencer.model import (
     Transition,
     Unary,
 )
-from s7graph.sequencer.validate import validate
 
 __all__ = ["S7_PIN", "SFB_OF", "const", "iec_literal", "iec_to_chart"]
 
@@ -438,7 +438,7 @@ def _permanent_assignment(
     target: Operand, value: Expr, loc: SourceLocation
 ) -> PermanentInstruction:
     """A coil on an absolute bit address, else an assignment (the parser's reading)."""
-    from s7graph.sequencer.parse_build import _BIT_ADDRESS
+    from s7graph.sequencer.text.build import _BIT_ADDRESS
 
     if not target.quoted and _BIT_ADDRESS.fullmatch(target.name):
         return Coil("=", target, value, loc)

@@ -11,7 +11,7 @@ from __future__ import annotations
 from typing import Final
 
 from s7graph.engine.errors import S7Error, SourceLocation
-from s7graph.sequencer.diagnostics import Diagnostic, error, format_diagnostic, warning
+from s7graph.sequencer.checks.diagnostics import Diagnostic, error, format_diagnostic, warning
 
 __all__ = ["CODES", "ImportFailed", "Problems"]
 

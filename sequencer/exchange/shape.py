@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from s7graph.sequencer.model import Sequence
+from s7graph.sequencer.text.model import Sequence
 
 __all__ = ["Shape", "shape_of"]
 

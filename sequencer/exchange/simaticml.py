@@ -31,7 +31,8 @@ from s7graph.sequencer.exchange.flgnet import read_network
 from s7graph.sequencer.exchange.iec_to_chart import accepted, const
 from s7graph.sequencer.exchange.problems import Problems
 from s7graph.sequencer.exchange.xmltree import ElementError, Node
-from s7graph.sequencer.model import (
+from s7graph.sequencer.params import PARAMETER_SETS, pins_for
+from s7graph.sequencer.text.model import (
     ActionRow,
     Assignment,
     Chart,
@@ -49,8 +50,7 @@ from s7graph.sequencer.model import (
     Transition,
     VarDecl,
 )
-from s7graph.sequencer.params import PARAMETER_SETS, pins_for
-from s7graph.sequencer.parse import ChartSyntaxError, parse_chart
+from s7graph.sequencer.text.parse import ChartSyntaxError, parse_chart
 
 __all__ = ["TIA_TYPES", "read_simaticml"]
 

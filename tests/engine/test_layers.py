@@ -7,6 +7,11 @@ the core is pure.
   own layer or below.
 - No import cycle between modules, whether the import runs at import time, inside a
   function or only for the type checker (``TYPE_CHECKING``): every import is an edge.
+- Inside ``sequencer`` the jobs keep their order: the chart's text (``text``) and its
+  checking (``checks``) stand without the runtime — of the root they use only the pin
+  table (``params``) and ``collector`` — and without the chart's change (``change``) or
+  ``exchange``; the runtime at the root uses of ``change`` only the carry-over, and
+  nothing but ``exchange`` itself imports ``exchange``.
 - Every import of the project names it ``s7graph.…`` (the folders are not packages of
   their own once installed).
 - Nothing under engine/ sfb/ steps/ sequencer/ imports viser, zenoh, rerun or threading,
@@ -196,6 +201,43 @@ def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
     return out
 
 
+SEQ = "s7graph.sequencer"
+JOBS = ("text", "checks", "change", "exchange")  # sub-packages; the rest is the runtime
+# what the chart's text and checking may use of the root, and the runtime of ``change``
+TEXT_USES_OF_ROOT = {f"{SEQ}.params", f"{SEQ}.collector"}
+ROOT_USES_OF_CHANGE = {f"{SEQ}.change.carry"}
+
+
+def job(module: str) -> str | None:
+    """The job of a ``sequencer`` module: its sub-package, ``root`` (the runtime), or None
+    outside ``sequencer``."""
+    parts = module.split(".")
+    if parts[:2] != SEQ.split("."):
+        return None
+    return parts[2] if len(parts) > 2 and parts[2] in JOBS else "root"
+
+
+def out_of_order(graph: dict[str, set[str]]) -> list[str]:
+    """Imports between ``sequencer``'s jobs that break their order (module docstring)."""
+    found: list[str] = []
+    for module, targets in sorted(graph.items()):
+        mine = job(module)
+        for target in sorted(targets):
+            theirs = job(target)
+            if mine is None or theirs is None or theirs == mine:
+                continue
+            bad = (
+                theirs == "exchange"
+                or (mine in ("text", "checks") and theirs == "change")
+                or (mine in ("text", "checks") and theirs == "root"
+                    and target not in TEXT_USES_OF_ROOT)
+                or (mine == "root" and theirs == "change" and target not in ROOT_USES_OF_CHANGE)
+            )  # fmt: skip
+            if bad:
+                found.append(f"{module} ({mine}) imports {target} ({theirs})")
+    return found
+
+
 def _graph_of(sources: dict[str, str]) -> dict[str, set[str]]:
     known = set(sources)
     return {m: imports_of(src, m, False, known) for m, src in sources.items()}
@@ -239,13 +281,26 @@ def test_the_cycle_check_finds_a_two_way_tie_and_a_type_only_one() -> None:
 def test_the_layer_check_finds_an_upward_a_sideways_and_a_bare_import() -> None:
     graph = _graph_of(
         {
-            "s7graph.steps.x": "from s7graph.sequencer.model import Step\n"
+            "s7graph.steps.x": "from s7graph.sequencer.text.model import Step\n"
             "from s7graph.sfb.alarms import Message\n",
             "s7graph.web.bus.y": "from s7graph.web.view.layout import place\n",
             "s7graph.sequencer.z": "from engine.cpu import Cpu\n",
         }
     )
     assert len(upward(graph)) == 4
+
+
+def test_the_job_check_finds_text_using_the_runtime_and_the_runtime_using_an_edit() -> None:
+    graph = _graph_of(
+        {
+            "s7graph.sequencer.text.a": "from s7graph.sequencer.cycle import GraphRuntime\n"
+            "from s7graph.sequencer.params import PINS\n",
+            "s7graph.sequencer.fb": "from s7graph.sequencer.change.edit import apply\n"
+            "from s7graph.sequencer.change.carry import carry_over\n",
+            "s7graph.sequencer.change.b": "from s7graph.sequencer.exchange import import_chart\n",
+        }
+    )
+    assert len(out_of_order(graph)) == 3
 
 
 # ---------------------------------------------------------------- the rules
@@ -265,3 +320,7 @@ def test_no_import_cycle_between_modules() -> None:
 
 def test_imports_point_down_the_layers() -> None:
     assert _lines(upward(import_graph())) == ""
+
+
+def test_the_jobs_of_sequencer_keep_their_order() -> None:
+    assert _lines(out_of_order(import_graph())) == ""

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from s7graph.sequencer.diagnostics import Diagnostic
+from s7graph.sequencer.checks.diagnostics import Diagnostic
 from s7graph.sequencer.exchange import Imported, import_file
 from s7graph.web.cli import main
 

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from s7graph.sequencer.format import format_chart, format_expr, format_row
-from s7graph.sequencer.model import Chart
+from s7graph.sequencer.text.format import format_chart, format_expr, format_row
+from s7graph.sequencer.text.model import Chart
 from s7graph.web.cli import main
 from tests.exchange.helpers import codes, corpus, import_to, imported
 

@@ -13,8 +13,8 @@ from pathlib import Path
 import pytest
 
 from s7graph.sequencer.exchange import import_file
-from s7graph.sequencer.format import format_chart
-from s7graph.sequencer.model import Chart, Operand, VarDecl
+from s7graph.sequencer.text.format import format_chart
+from s7graph.sequencer.text.model import Chart, Operand, VarDecl
 from tests.exchange.helpers import changes, corpus, import_to, sim
 
 

@@ -10,8 +10,8 @@ import pytest
 
 from s7graph.sequencer.exchange import import_chart
 from s7graph.sequencer.exchange.mapping import QUALIFIERS, markdown_tables
-from s7graph.sequencer.format import format_chart, format_row
-from s7graph.sequencer.model import Chart
+from s7graph.sequencer.text.format import format_chart, format_row
+from s7graph.sequencer.text.model import Chart
 from tests.exchange.helpers import codes, sim
 
 DOC = Path(__file__).resolve().parents[2] / "docs" / "import-export.md"

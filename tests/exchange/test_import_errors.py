@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from s7graph.sequencer.exchange import ImportFailed, import_chart
-from s7graph.sequencer.walk import unlocated
+from s7graph.sequencer.text.walk import unlocated
 from s7graph.web.cli import main
 from tests.exchange.helpers import codes, corpus
 

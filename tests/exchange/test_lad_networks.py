@@ -12,9 +12,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from s7graph.sequencer.exchange import export_chart, import_chart
-from s7graph.sequencer.format import format_expr
-from s7graph.sequencer.model import Binary, Expr, Unary
-from s7graph.sequencer.parse import parse_chart
+from s7graph.sequencer.text.format import format_expr
+from s7graph.sequencer.text.model import Binary, Expr, Unary
+from s7graph.sequencer.text.parse import parse_chart
 
 ATOMS = ("I0.0", "I0.1", "I0.2", "M1.0", "MW2 > 5")
 CHART = """FUNCTION_BLOCK "T" FB 3

@@ -11,10 +11,10 @@ import pytest
 
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.exchange import export_chart, import_chart
-from s7graph.sequencer.format import format_row
-from s7graph.sequencer.model import Chart
-from s7graph.sequencer.parse import parse_chart, parse_file
-from s7graph.sequencer.walk import uncommented, unlocated
+from s7graph.sequencer.text.format import format_row
+from s7graph.sequencer.text.model import Chart
+from s7graph.sequencer.text.parse import parse_chart, parse_file
+from s7graph.sequencer.text.walk import uncommented, unlocated
 from s7graph.web.cli import main
 
 EXAMPLES = sorted(Path(__file__).resolve().parents[2].glob("examples/*/*.s7g"))

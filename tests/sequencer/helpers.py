@@ -29,8 +29,8 @@ from s7graph.sequencer.cycle import GraphRuntime
 from s7graph.sequencer.fb import counter_row, timer_row
 from s7graph.sequencer.messages import sync_messages
 from s7graph.sequencer.params import Direction, check_pin, is_pin
-from s7graph.sequencer.parse import parse_chart
 from s7graph.sequencer.state import GraphState
+from s7graph.sequencer.text.parse import parse_chart
 from s7graph.sfb.alarms import MessageList
 from s7graph.steps.qualifiers import EVENT_BITS
 from s7graph.web.cli.sim import sim_command

@@ -1,4 +1,4 @@
-"""``carry_over`` (sequencer/carry.py): the one function taking a GRAPH FB's state to a
+"""``carry_over`` (sequencer/change/carry.py): the one function taking a GRAPH FB's state to a
 changed chart — by step number, transitions by number, variables by name — pure, with a
 report of what it could not keep; and the chart fingerprint it is chosen by."""
 
@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from s7graph.sequencer.carry import ChartShape, carry_over, fingerprint
+from s7graph.sequencer.change.carry import ChartShape, carry_over, fingerprint
 from s7graph.sequencer.compiled import CompiledChart
 from s7graph.sequencer.cycle import new_state
 from s7graph.web.harness.session import load_chart

@@ -1,4 +1,4 @@
-"""A chart's comments stay with the element they annotate (``sequencer.comments``): read,
+"""A chart's comments stay with the element they annotate (``sequencer.text.comments``): read,
 edited and written again — by the editor, a download, ``s7graph import`` of a `.s7g` —
 the text keeps every comment, and a change summary does not call a comment a change."""
 
@@ -6,15 +6,15 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from s7graph.sequencer.comments import find_comments
-from s7graph.sequencer.diff import summarize
-from s7graph.sequencer.edit import apply_edit
-from s7graph.sequencer.edit_content import ChangeRow, RenameStep, RenumberStep
-from s7graph.sequencer.edit_text import RowFields
-from s7graph.sequencer.format import format_chart
-from s7graph.sequencer.model import Chart
-from s7graph.sequencer.parse import parse_chart, parse_file
-from s7graph.sequencer.walk import uncommented, unlocated
+from s7graph.sequencer.change.content import ChangeRow, RenameStep, RenumberStep
+from s7graph.sequencer.change.diff import summarize
+from s7graph.sequencer.change.edit import apply_edit
+from s7graph.sequencer.change.typed import RowFields
+from s7graph.sequencer.text.comments import find_comments
+from s7graph.sequencer.text.format import format_chart
+from s7graph.sequencer.text.model import Chart
+from s7graph.sequencer.text.parse import parse_chart, parse_file
+from s7graph.sequencer.text.walk import uncommented, unlocated
 
 EXAMPLES = sorted(Path(__file__).resolve().parents[2].glob("examples/*/*.s7g"))
 

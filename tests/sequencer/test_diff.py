@@ -1,4 +1,4 @@
-"""The change summary of a download (``sequencer.diff``): what the edited chart changes
+"""The change summary of a download (``sequencer.change.diff``): what the edited chart changes
 against the running one, keyed by step and transition number, the active steps it would
 remove and the operands that may stay set."""
 
@@ -7,13 +7,13 @@ from __future__ import annotations
 from pathlib import Path
 
 from s7graph.engine.memory import Memory
+from s7graph.sequencer.change.diff import Change, StaysSet, active_steps, row_text, summarize
+from s7graph.sequencer.change.edit import Session, make_edit
 from s7graph.sequencer.compile import compile_chart
 from s7graph.sequencer.cycle import GraphRuntime
-from s7graph.sequencer.diff import Change, StaysSet, active_steps, row_text, summarize
-from s7graph.sequencer.edit import Session, make_edit
-from s7graph.sequencer.elements import DeclRef, RowRef, StepRef, TransitionRef
-from s7graph.sequencer.model import Chart
-from s7graph.sequencer.parse import parse_chart
+from s7graph.sequencer.text.elements import DeclRef, RowRef, StepRef, TransitionRef
+from s7graph.sequencer.text.model import Chart
+from s7graph.sequencer.text.parse import parse_chart
 
 ROOT = Path(__file__).resolve().parents[2]
 DRILL_TEXT = (ROOT / "examples" / "drill" / "drill.s7g").read_text(encoding="utf-8")

@@ -18,7 +18,9 @@ from s7graph.sequencer.display import (
     settle,
     shown_step,
 )
-from s7graph.sequencer.model import (
+from s7graph.sequencer.params import outputs_for
+from s7graph.sequencer.state import GraphState
+from s7graph.sequencer.text.model import (
     Binary,
     Chart,
     ChartOptions,
@@ -30,8 +32,6 @@ from s7graph.sequencer.model import (
     Transition,
     VarDecl,
 )
-from s7graph.sequencer.params import outputs_for
-from s7graph.sequencer.state import GraphState
 from s7graph.steps.qualifiers import EV_L1, EV_S1
 
 

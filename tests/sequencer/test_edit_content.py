@@ -1,4 +1,4 @@
-"""Editing what a step, transition, row or the header holds (``sequencer.edit_content``):
+"""Editing what a step, transition, row or the header holds (``sequencer.change.content``):
 every edit gives a chart the validator checks, or a refusal naming the problem."""
 
 from __future__ import annotations
@@ -7,8 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from s7graph.sequencer.edit import Session, apply_edit, make_edit
-from s7graph.sequencer.edit_content import (
+from s7graph.sequencer.change.content import (
     AddRow,
     ChangeRow,
     MoveRow,
@@ -24,12 +23,13 @@ from s7graph.sequencer.edit_content import (
     SetSource,
     SetSupervision,
 )
-from s7graph.sequencer.edit_text import RowFields
-from s7graph.sequencer.elements import RowRef, StepRef, TransitionRef, references
-from s7graph.sequencer.model import Chart, Operand, StepTarget
-from s7graph.sequencer.parse import parse_chart
-from s7graph.sequencer.validate import validate
-from s7graph.sequencer.walk import unlocated
+from s7graph.sequencer.change.edit import Session, apply_edit, make_edit
+from s7graph.sequencer.change.typed import RowFields
+from s7graph.sequencer.checks.validate import validate
+from s7graph.sequencer.text.elements import RowRef, StepRef, TransitionRef, references
+from s7graph.sequencer.text.model import Chart, Operand, StepTarget
+from s7graph.sequencer.text.parse import parse_chart
+from s7graph.sequencer.text.walk import unlocated
 from tests.sequencer.helpers import seq, source
 
 CHARTS = Path(__file__).parent / "charts"

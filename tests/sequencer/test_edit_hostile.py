@@ -1,6 +1,6 @@
 """Broken and hostile input to the editor — a 10 MB paste, a chart of 10,000 steps, an
 unknown address, invalid text, nonsense from a bus — gives diagnostics or a clear refusal
-naming the problem, never an exception, within the limits of ``sequencer.edit_base``."""
+naming the problem, never an exception, within the limits of ``sequencer.change.base``."""
 
 from __future__ import annotations
 
@@ -11,12 +11,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from s7graph.sequencer.edit import OPERATIONS, Session, apply_edit, make_edit, new_chart
-from s7graph.sequencer.edit_base import MAX_DEPTH, MAX_ROWS, MAX_STEPS, MAX_TEXT, EditRefused
-from s7graph.sequencer.edit_content import AddRow, SetCondition, SetInterlock, SetSource
-from s7graph.sequencer.edit_structure import InsertStep
-from s7graph.sequencer.edit_text import RowFields
-from s7graph.sequencer.model import Chart, Sequence, Step, Transition
+from s7graph.sequencer.change.base import MAX_DEPTH, MAX_ROWS, MAX_STEPS, MAX_TEXT, EditRefused
+from s7graph.sequencer.change.content import AddRow, SetCondition, SetInterlock, SetSource
+from s7graph.sequencer.change.edit import OPERATIONS, Session, apply_edit, make_edit, new_chart
+from s7graph.sequencer.change.structure import InsertStep
+from s7graph.sequencer.change.typed import RowFields
+from s7graph.sequencer.text.model import Chart, Sequence, Step, Transition
 
 
 def big_chart(n: int) -> Chart:

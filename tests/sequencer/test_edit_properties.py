@@ -11,14 +11,21 @@ from typing import Any
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from s7graph.sequencer.edit import OPERATIONS, Argument, Operation, Session, make_edit, new_chart
-from s7graph.sequencer.edit_content import RenumberStep
-from s7graph.sequencer.edit_structure import DeleteStep, InsertStep
-from s7graph.sequencer.elements import element_of, find
-from s7graph.sequencer.model import Chart
-from s7graph.sequencer.parse import parse_chart
-from s7graph.sequencer.validate import validate
-from s7graph.sequencer.walk import unlocated
+from s7graph.sequencer.change.content import RenumberStep
+from s7graph.sequencer.change.edit import (
+    OPERATIONS,
+    Argument,
+    Operation,
+    Session,
+    make_edit,
+    new_chart,
+)
+from s7graph.sequencer.change.structure import DeleteStep, InsertStep
+from s7graph.sequencer.checks.validate import validate
+from s7graph.sequencer.text.elements import element_of, find
+from s7graph.sequencer.text.model import Chart
+from s7graph.sequencer.text.parse import parse_chart
+from s7graph.sequencer.text.walk import unlocated
 
 CHARTS = Path(__file__).parent / "charts"
 STARTS = {

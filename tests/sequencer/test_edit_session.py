@@ -1,6 +1,6 @@
 """The table of edit operations, edits built from data, the editing session with undo and
 redo, a new chart, and diagnostics mapped to the elements they concern
-(``sequencer.edit``, ``sequencer.elements``)."""
+(``sequencer.change.edit``, ``sequencer.text.elements``)."""
 
 from __future__ import annotations
 
@@ -9,9 +9,12 @@ from pathlib import Path
 
 import pytest
 
-from s7graph.sequencer import edit_base, edit_content, edit_structure
-from s7graph.sequencer.diagnostics import Diagnostic, warning
-from s7graph.sequencer.edit import (
+from s7graph.sequencer.change import base as edit_base
+from s7graph.sequencer.change import content as edit_content
+from s7graph.sequencer.change import structure as edit_structure
+from s7graph.sequencer.change.base import MAX_UNDO, Edit, EditRefused
+from s7graph.sequencer.change.content import AddRow, RenameStep, SetCondition
+from s7graph.sequencer.change.edit import (
     BY_NAME,
     OPERATIONS,
     Session,
@@ -21,11 +24,11 @@ from s7graph.sequencer.edit import (
     new_chart,
     operations_for,
 )
-from s7graph.sequencer.edit_base import MAX_UNDO, Edit, EditRefused
-from s7graph.sequencer.edit_content import AddRow, RenameStep, SetCondition
-from s7graph.sequencer.edit_structure import InsertStep
-from s7graph.sequencer.edit_text import RowFields
-from s7graph.sequencer.elements import (
+from s7graph.sequencer.change.structure import InsertStep
+from s7graph.sequencer.change.typed import RowFields
+from s7graph.sequencer.checks.diagnostics import Diagnostic, warning
+from s7graph.sequencer.checks.validate import validate
+from s7graph.sequencer.text.elements import (
     DeclRef,
     Ref,
     RowRef,
@@ -37,9 +40,8 @@ from s7graph.sequencer.elements import (
     label,
     parse_label,
 )
-from s7graph.sequencer.model import Chart
-from s7graph.sequencer.parse import ChartSyntaxError, parse_chart
-from s7graph.sequencer.validate import validate
+from s7graph.sequencer.text.model import Chart
+from s7graph.sequencer.text.parse import ChartSyntaxError, parse_chart
 
 HERE = Path(__file__).parent
 BROKEN = sorted((HERE / "broken").glob("*.s7g"))

@@ -1,5 +1,5 @@
 """Inserting and deleting steps, transitions, branches and sequencers as S7-GRAPH's editor
-does (``sequencer.edit_structure``): the chart stays consistent, or the edit is refused
+does (``sequencer.change.structure``): the chart stays consistent, or the edit is refused
 naming why."""
 
 from __future__ import annotations
@@ -7,11 +7,9 @@ from __future__ import annotations
 from pathlib import Path
 
 from s7graph.engine.memory import Memory
-from s7graph.sequencer.compile import compile_chart
-from s7graph.sequencer.cycle import GraphRuntime
-from s7graph.sequencer.edit import Session, apply_edit, make_edit, new_chart
-from s7graph.sequencer.edit_base import Edit
-from s7graph.sequencer.edit_structure import (
+from s7graph.sequencer.change.base import Edit
+from s7graph.sequencer.change.edit import Session, apply_edit, make_edit, new_chart
+from s7graph.sequencer.change.structure import (
     BranchStop,
     DeleteAlternativeBranch,
     DeleteSequence,
@@ -24,11 +22,13 @@ from s7graph.sequencer.edit_structure import (
     InsertStep,
     Jump,
 )
-from s7graph.sequencer.elements import SequenceRef, StepRef, TransitionRef
-from s7graph.sequencer.model import Chart
-from s7graph.sequencer.parse import parse_chart
-from s7graph.sequencer.validate import validate
-from s7graph.sequencer.walk import unlocated
+from s7graph.sequencer.checks.validate import validate
+from s7graph.sequencer.compile import compile_chart
+from s7graph.sequencer.cycle import GraphRuntime
+from s7graph.sequencer.text.elements import SequenceRef, StepRef, TransitionRef
+from s7graph.sequencer.text.model import Chart
+from s7graph.sequencer.text.parse import parse_chart
+from s7graph.sequencer.text.walk import unlocated
 
 CHARTS = Path(__file__).parent / "charts"
 

@@ -27,7 +27,7 @@ from s7graph.engine.cpu import Cpu
 from s7graph.sequencer.compile import compile_chart
 from s7graph.sequencer.fb import GraphFB, StepEvent, install_all
 from s7graph.sequencer.params import inputs_for
-from s7graph.sequencer.parse import parse_chart
+from s7graph.sequencer.text.parse import parse_chart
 
 IN_BITS = tuple(f"I0.{b}" for b in range(8))
 OUT_BITS = tuple(f"Q0.{b}" for b in range(8)) + tuple(f"M1.{b}" for b in range(8))

@@ -7,8 +7,8 @@ from s7graph.engine.clock import VirtualClock
 from s7graph.engine.cpu import Cpu
 from s7graph.sequencer.compile import compile_chart
 from s7graph.sequencer.fb import GraphFB, StepEvent, install_all
-from s7graph.sequencer.parse import parse_chart
 from s7graph.sequencer.state import GraphState
+from s7graph.sequencer.text.parse import parse_chart
 
 TEXT = """FUNCTION_BLOCK "Seq" FB 3 DB 4
 SEQUENCE 1 "s"

@@ -1,4 +1,4 @@
-"""``sequencer.format.format_chart`` writes the model back as `.s7g` text that parses to the
+"""``sequencer.text.format.format_chart`` writes the model back as `.s7g` text that parses to the
 same model (SPEC §3): for every example, every test chart, and charts hypothesis builds
 from every kind of element the parser makes."""
 
@@ -13,8 +13,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from s7graph.engine.literals import parse_literal
-from s7graph.sequencer.format import format_chart, format_expr
-from s7graph.sequencer.model import (
+from s7graph.sequencer.text.format import format_chart, format_expr
+from s7graph.sequencer.text.model import (
     ActionRow,
     Assignment,
     Binary,
@@ -36,8 +36,8 @@ from s7graph.sequencer.model import (
     Unary,
     VarDecl,
 )
-from s7graph.sequencer.parse import parse_chart
-from s7graph.sequencer.walk import unlocated
+from s7graph.sequencer.text.parse import parse_chart
+from s7graph.sequencer.text.walk import unlocated
 
 ROOT = Path(__file__).resolve().parents[2]
 CHARTS = sorted(
@@ -220,7 +220,7 @@ _TRAILING = st.sampled_from(["", "// a b", "(* c *)", "(* d *)\n// e", "(* f\n  
 @st.composite
 def commented_charts(draw: st.DrawFn) -> Chart:
     """A generated chart with comments above and at the end of the line of every kind of
-    element that keeps them (``sequencer.comments``)."""
+    element that keeps them (``sequencer.text.comments``)."""
 
     def note(node: Any) -> Any:
         return replace(node, comment=draw(_ABOVE), trailing=draw(_TRAILING))

@@ -9,8 +9,8 @@ from s7graph.engine.record import ScanRecord
 from s7graph.sequencer.compile import compile_chart
 from s7graph.sequencer.fb import GraphFB, install_all
 from s7graph.sequencer.messages import PROGRAM_USER, message_id, remote_acks, sync_messages
-from s7graph.sequencer.parse import parse_chart
 from s7graph.sequencer.state import GraphState
+from s7graph.sequencer.text.parse import parse_chart
 from s7graph.sfb.alarms import MessageList, MessageState, message_list
 from tests.sequencer.helpers import Run, chart_text
 

@@ -27,12 +27,12 @@ from s7graph.engine.blocks import OB
 from s7graph.engine.clock import VirtualClock
 from s7graph.engine.cpu import CpuMode
 from s7graph.engine.symbols import SymbolTable
-from s7graph.sequencer.edit import OPERATIONS, Argument, Session, make_edit
+from s7graph.sequencer.change.edit import OPERATIONS, Argument, Session, make_edit
+from s7graph.sequencer.change.online import SwapRefused, swap
 from s7graph.sequencer.fb import STATE_VAR
-from s7graph.sequencer.format import quote
-from s7graph.sequencer.model import Chart
-from s7graph.sequencer.online import SwapRefused, swap
-from s7graph.sequencer.parse import parse_chart
+from s7graph.sequencer.text.format import quote
+from s7graph.sequencer.text.model import Chart
+from s7graph.sequencer.text.parse import parse_chart
 from s7graph.sfb.alarms import message_list
 from s7graph.web.harness.session import ChartSession, compile_model
 
@@ -256,7 +256,7 @@ class OnlineChange(RuleBasedStateMachine):
         }
         assert g.idb is not None
         assert all(g.idb.values[k] == v for k, v in pins.items() if k in g.idb.values)
-        plant.cc, plant.symbols = new, table
+        plant.symbols = table  # the chart is the GraphFB's own
         self.edits.append(f"download removed={removed}")
         if report.initialized:
             self.queued.append(("INIT_SQ", None))

@@ -1,7 +1,7 @@
 """An online change swaps everything the running GraphFB derives from its chart at once:
 after a download the step events, the FB's interface, the display and the fast path are
 those of the new chart, whatever it adds, removes or renumbers (``sequencer.fb.LoadedChart``,
-``sequencer.online.swap``)."""
+``sequencer.change.online.swap``)."""
 
 from __future__ import annotations
 
@@ -11,11 +11,11 @@ from s7graph.engine.clock import VirtualClock
 from s7graph.engine.cpu import Cpu
 from s7graph.engine.modes import CpuMode
 from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer.change.online import swap
 from s7graph.sequencer.compile import compile_chart
 from s7graph.sequencer.compiled import CompiledChart
 from s7graph.sequencer.fb import GraphFB, install_all
-from s7graph.sequencer.online import swap
-from s7graph.sequencer.parse import parse_chart
+from s7graph.sequencer.text.parse import parse_chart
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -8,7 +8,6 @@ from pathlib import Path
 import pytest
 
 from s7graph.engine.errors import SourceLocation
-from s7graph.sequencer.model import ChartOptions
 from s7graph.sequencer.params import (
     PARAMETER_SETS,
     PINS,
@@ -21,6 +20,7 @@ from s7graph.sequencer.params import (
     pin,
     pins_for,
 )
+from s7graph.sequencer.text.model import ChartOptions
 
 
 def words(text: str) -> list[str]:

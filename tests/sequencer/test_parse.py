@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from s7graph.sequencer.model import (
+from s7graph.sequencer.text.model import (
     ActionRow,
     Assignment,
     Binary,
@@ -18,8 +18,8 @@ from s7graph.sequencer.model import (
     StepTarget,
     TransAttr,
 )
-from s7graph.sequencer.parse import ChartSyntaxError, parse_chart
-from s7graph.sequencer.walk import unlocated
+from s7graph.sequencer.text.parse import ChartSyntaxError, parse_chart
+from s7graph.sequencer.text.walk import unlocated
 from s7graph.steps.syntax import chain
 
 CHARTS = Path(__file__).parent / "charts"

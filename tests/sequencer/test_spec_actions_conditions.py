@@ -11,10 +11,10 @@ import pytest
 from s7graph.engine.blocks import fc
 from s7graph.engine.clock import VirtualClock
 from s7graph.engine.cpu import Cpu
+from s7graph.sequencer.checks.validate import validate
 from s7graph.sequencer.compile import compile_chart
 from s7graph.sequencer.fb import GraphFB, install_all
-from s7graph.sequencer.parse import parse_chart
-from s7graph.sequencer.validate import validate
+from s7graph.sequencer.text.parse import parse_chart
 from tests.sequencer.helpers import chart, enter, leave, seq, source, two_steps
 
 # ---------------------------------------------------------------- §2.8 qualifiers

@@ -11,7 +11,7 @@ from s7graph.engine.clock import VirtualClock
 from s7graph.engine.cpu import Cpu
 from s7graph.sequencer.compile import compile_chart
 from s7graph.sequencer.fb import GraphFB, install_all
-from s7graph.sequencer.parse import parse_chart
+from s7graph.sequencer.text.parse import parse_chart
 from tests.sequencer.helpers import chart, enter, seq, source, two_steps
 
 # ---------------------------------------------------------------- §2.3 interlock

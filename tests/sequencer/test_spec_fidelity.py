@@ -14,7 +14,7 @@ from s7graph.engine.clock import VirtualClock
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.compile import compile_chart
 from s7graph.sequencer.params import markdown_table
-from s7graph.sequencer.parse import parse_chart
+from s7graph.sequencer.text.parse import parse_chart
 from s7graph.web.harness.session import ChartSession
 from tests.sequencer.helpers import Chart, chart, enter, seq, sim_trace, source, two_steps
 

@@ -7,8 +7,8 @@ from __future__ import annotations
 
 import pytest
 
-from s7graph.sequencer.parse import parse_chart
-from s7graph.sequencer.validate import validate
+from s7graph.sequencer.checks.validate import validate
+from s7graph.sequencer.text.parse import parse_chart
 from tests.sequencer.helpers import chart, enter, leave, seq, source, two_steps
 
 # ---------------------------------------------------------------- §2.1 structure

@@ -6,8 +6,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from s7graph.sequencer.parse import parse_chart
-from s7graph.sequencer.validate import validate
+from s7graph.sequencer.checks.validate import validate
+from s7graph.sequencer.text.parse import parse_chart
 from tests.sequencer.helpers import seq, sim_trace, source
 
 NAMED = seq("""

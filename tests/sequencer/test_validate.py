@@ -6,8 +6,8 @@ from pathlib import Path
 
 import pytest
 
-from s7graph.sequencer.parse import parse_chart
-from s7graph.sequencer.validate import validate
+from s7graph.sequencer.checks.validate import validate
+from s7graph.sequencer.text.parse import parse_chart
 
 CHARTS = Path(__file__).parent / "charts"
 

@@ -8,9 +8,9 @@ from pathlib import Path
 
 import pytest
 
-from s7graph.sequencer.diagnostics import CODES, Diagnostic
-from s7graph.sequencer.parse import ChartSyntaxError, parse_chart
-from s7graph.sequencer.validate import validate
+from s7graph.sequencer.checks.diagnostics import CODES, Diagnostic
+from s7graph.sequencer.checks.validate import validate
+from s7graph.sequencer.text.parse import ChartSyntaxError, parse_chart
 
 BROKEN = Path(__file__).parent / "broken"
 FILES = sorted(BROKEN.glob("*.s7g"))

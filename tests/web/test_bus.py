@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from s7graph.sequencer.model import Chart, Sequence, Step, Transition
+from s7graph.sequencer.text.model import Chart, Sequence, Step, Transition
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import ChartLayout, Command, CommandReply, StepStateUpdate
 from s7graph.web.bus.publisher import BusPublisher

@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 import zenoh
 
-from s7graph.sequencer.model import Chart, Sequence, Step, Transition
+from s7graph.sequencer.text.model import Chart, Sequence, Step, Transition
 from s7graph.web.access.audit import AuditStore, read_audit
 from s7graph.web.access.login import Authenticator
 from s7graph.web.access.users import UsersFile

@@ -14,7 +14,7 @@ import pytest
 
 from s7graph.engine.clock import VirtualClock
 from s7graph.engine.modes import CpuMode
-from s7graph.sequencer.online import SwapRefused, swap
+from s7graph.sequencer.change.online import SwapRefused, swap
 from s7graph.web.cli import main
 from s7graph.web.harness.persist import open_state
 from s7graph.web.harness.session import ChartSession, compile_text

@@ -19,7 +19,7 @@ import pytest
 
 from bench.big_charts import contact_chain, huge_chart
 from s7graph.engine.cores import allowed_cpus, kept_free, others
-from s7graph.sequencer.edit_base import MAX_SOURCE
+from s7graph.sequencer.change.base import MAX_SOURCE
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.compiler import Compiled, Compiler, CompileRefused, Summary
 from s7graph.web.bus.pieces import dumps_in_pieces, loads_in_pieces

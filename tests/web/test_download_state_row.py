@@ -9,8 +9,8 @@ from pathlib import Path
 
 from s7graph.engine.clock import VirtualClock
 from s7graph.engine.persistence import StateStore
-from s7graph.sequencer.carry import fingerprint
-from s7graph.sequencer.online import swap
+from s7graph.sequencer.change.carry import fingerprint
+from s7graph.sequencer.change.online import swap
 from s7graph.web.harness.persist import open_state
 from s7graph.web.harness.session import ChartSession, compile_text, load_chart
 from tests.web.test_online_change import CHART

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import pytest
 
-from s7graph.sequencer.model import Chart, Operand, Sequence, Step, Transition
+from s7graph.sequencer.text.model import Chart, Operand, Sequence, Step, Transition
 from s7graph.web.bus.protocol import ChartLayout, StepStateUpdate
 from s7graph.web.view.chart_view import ChartView, make_server
 from s7graph.web.view.drawing import (

@@ -16,9 +16,9 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from s7graph.sequencer.elements import StepRef, TransitionRef, find
-from s7graph.sequencer.format import format_expr
-from s7graph.sequencer.model import Transition
+from s7graph.sequencer.text.elements import StepRef, TransitionRef, find
+from s7graph.sequencer.text.format import format_expr
+from s7graph.sequencer.text.model import Transition
 from s7graph.web.view.editor import Editor
 from tests.web.helpers import (
     PASSWORD,

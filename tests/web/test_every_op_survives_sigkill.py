@@ -22,7 +22,7 @@ from pathlib import Path
 
 import pytest
 
-from s7graph.sequencer.carry import fingerprint
+from s7graph.sequencer.change.carry import fingerprint
 from s7graph.web.access.audit import read_audit
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import Command, CommandReply, StepStateUpdate

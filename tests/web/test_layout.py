@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from s7graph.sequencer.model import Chart, Sequence, Step, Transition
+from s7graph.sequencer.text.model import Chart, Sequence, Step, Transition
 from s7graph.web.bus.protocol import ChartLayout
 from s7graph.web.view.layout import place
 

@@ -324,7 +324,7 @@ def test_an_ack_whose_cause_persists_is_refused_saying_why_and_changes_nothing(
 def test_a_chart_swapped_under_the_live_view_is_followed_with_its_own_steps(rig: Rig) -> None:
     """The live view reads the chart from the GraphFB: a swap it was not told of (no
     ``switch``) still gives the new chart's steps, details and a newer layout version."""
-    from s7graph.sequencer.online import swap
+    from s7graph.sequencer.change.online import swap
     from s7graph.web.harness.session import compile_text
 
     rig.session.set("Start", True)

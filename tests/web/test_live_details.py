@@ -14,7 +14,7 @@ from s7graph.engine.clock import VirtualClock
 from s7graph.engine.cpu import Cpu
 from s7graph.sequencer.compile import compile_chart
 from s7graph.sequencer.fb import GraphFB, StepEvent, install_all
-from s7graph.sequencer.parse import parse_chart
+from s7graph.sequencer.text.parse import parse_chart
 from s7graph.web.bus.live import LiveGraph
 from s7graph.web.bus.protocol import EVENTS, StepStateUpdate
 from s7graph.web.bus.scan_events import ScanEvents

@@ -1,7 +1,7 @@
 """Online change through the virtual clock and a real zenoh bus on a unix socket: a changed
 chart is downloaded into the running GraphFB (issue 10) — compiled off the scan thread,
 swapped in at a scan boundary, the state carried over by step number
-(``sequencer.carry.carry_over``), the file rewritten with a numbered backup, every download
+(``sequencer.change.carry.carry_over``), the file rewritten with a numbered backup, every download
 audited — and undone the same way. Refusals leave the CPU running the old chart."""
 
 from __future__ import annotations
@@ -17,8 +17,8 @@ import pytest
 
 from s7graph.engine.clock import VirtualClock
 from s7graph.engine.persistence import StateStore
+from s7graph.sequencer.change.online import swap
 from s7graph.sequencer.fb import GraphFB
-from s7graph.sequencer.online import swap
 from s7graph.web.access.audit import read_audit
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.online import OnlineChange
@@ -270,7 +270,7 @@ def test_a_download_and_a_restart_with_the_downloaded_file_carry_the_state_alike
     tmp_path: Path,
 ) -> None:
     """Starting ``s7graph run`` with an edited chart and an old state file carries the
-    state over with the same function as a download (``sequencer.carry.carry_over``)."""
+    state over with the same function as a download (``sequencer.change.carry.carry_over``)."""
     edited = CHART.replace(":= full;", ":= full OR empty;")
     path = tmp_path / "fill.s7g"
     path.write_text(CHART, encoding="utf-8")

@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from s7graph.sequencer.elements import StepRef, TransitionRef
+from s7graph.sequencer.text.elements import StepRef, TransitionRef
 from s7graph.web.access.audit import read_audit
 from s7graph.web.view.chart_view import ChartView
 from s7graph.web.view.drawing import ACTIVE, BOX_H, BOX_W, INACTIVE, SELECTED, Drawing

@@ -21,11 +21,11 @@ from typing import Any
 import pytest
 
 from s7graph.engine.clock import VirtualClock
-from s7graph.sequencer.diff import summarize
-from s7graph.sequencer.edit import Session, make_edit
-from s7graph.sequencer.format import format_chart
-from s7graph.sequencer.online import SwapRefused, swap
-from s7graph.sequencer.parse import parse_chart
+from s7graph.sequencer.change.diff import summarize
+from s7graph.sequencer.change.edit import Session, make_edit
+from s7graph.sequencer.change.online import SwapRefused, swap
+from s7graph.sequencer.text.format import format_chart
+from s7graph.sequencer.text.parse import parse_chart
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import Command, CommandReply
 from s7graph.web.bus.session import open_session

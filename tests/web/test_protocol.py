@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from s7graph.sequencer.model import (
+from s7graph.sequencer.text.model import (
     Binary,
     Chart,
     Const,

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from s7graph.sequencer.model import Chart, Sequence, Step, Transition
+from s7graph.sequencer.text.model import Chart, Sequence, Step, Transition
 from s7graph.web.bus.protocol import ChartLayout, StepStateUpdate
 from s7graph.web.recorder import Recorder, available
 

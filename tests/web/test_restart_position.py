@@ -1,4 +1,4 @@
-"""A restart that keeps the position (sequencer/fb.py, sequencer/carry.py, web/harness/
+"""A restart that keeps the position (sequencer/fb.py, sequencer/change/carry.py, web/harness/
 persist.py): the drill demo in one CPU on the virtual clock with its state file, as
 ``s7graph run`` keeps it; "killed" after the last commit, restarted from the file.
 

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from s7graph.sequencer.model import Chart, Operand, Sequence, Step, Transition
+from s7graph.sequencer.text.model import Chart, Operand, Sequence, Step, Transition
 from s7graph.web.bus.protocol import ChartLayout, Command, StepStateUpdate
 from s7graph.web.view.chart_view import ACTIVE, DISTURBED, INACTIVE
 from s7graph.web.view.drawing import BOX_H, BOX_W

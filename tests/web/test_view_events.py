@@ -4,7 +4,7 @@ CPU publishes the chart after the swap, the scan thread its next scan at once)."
 
 from __future__ import annotations
 
-from s7graph.sequencer.model import Chart, Sequence, Step, Transition
+from s7graph.sequencer.text.model import Chart, Sequence, Step, Transition
 from s7graph.web.bus.protocol import ChartLayout, StepStateUpdate
 from s7graph.web.view.chart_view import ChartView, make_server
 from tests.web.helpers import wait_until

@@ -16,15 +16,15 @@ from typing import Any, Final
 
 from s7graph.engine.errors import S7Error
 from s7graph.engine.symbols import SymbolTable
-from s7graph.sequencer.carry import fingerprint
-from s7graph.sequencer.diagnostics import format_diagnostic
-from s7graph.sequencer.diff import summarize
-from s7graph.sequencer.edit_base import EditRefused
-from s7graph.sequencer.edit_text import parse_source
+from s7graph.sequencer.change.base import EditRefused
+from s7graph.sequencer.change.carry import fingerprint
+from s7graph.sequencer.change.diff import summarize
+from s7graph.sequencer.change.typed import parse_source
+from s7graph.sequencer.checks.diagnostics import format_diagnostic
 from s7graph.sequencer.exchange import ImportFailed, import_file
-from s7graph.sequencer.format import format_chart
-from s7graph.sequencer.model import Chart
-from s7graph.sequencer.parse import parse_chart
+from s7graph.sequencer.text.format import format_chart
+from s7graph.sequencer.text.model import Chart
+from s7graph.sequencer.text.parse import parse_chart
 from s7graph.web.bus.live import prepare_chart
 from s7graph.web.bus.pieces import dumps_in_pieces
 from s7graph.web.harness.session import ChartLoadError, compile_model

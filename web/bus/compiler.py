@@ -45,9 +45,9 @@ from typing import IO, Any, Final
 
 from s7graph.engine.cores import allowed_cpus
 from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer.change.base import MAX_SOURCE
 from s7graph.sequencer.collector import collector_paused
 from s7graph.sequencer.compiled import CompiledChart
-from s7graph.sequencer.edit_base import MAX_SOURCE
 from s7graph.web.bus import compile_jobs
 from s7graph.web.bus.live import LiveChart
 from s7graph.web.bus.pieces import loads_in_pieces

@@ -36,9 +36,9 @@ from typing import Final, Protocol
 import msgspec
 
 from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer.change.online import SwapRefused, SwapReport, swap
 from s7graph.sequencer.compiled import CompiledChart
-from s7graph.sequencer.format import format_chart
-from s7graph.sequencer.online import SwapRefused, SwapReport, swap
+from s7graph.sequencer.text.format import format_chart
 from s7graph.web.access.audit import Facts
 from s7graph.web.bus.compiler import Compiled, Compiler, CompileRefused, Summary
 from s7graph.web.bus.gate import Gate

@@ -16,7 +16,7 @@ import pickle
 from collections.abc import Callable
 from typing import Any, Final
 
-from s7graph.sequencer.model import Step, Transition
+from s7graph.sequencer.text.model import Step, Transition
 
 __all__ = ["PIECES", "dumps_in_pieces", "loads_in_pieces"]
 

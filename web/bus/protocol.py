@@ -14,8 +14,8 @@ from typing import Annotated, Any, Literal, TypeVar
 import msgspec
 from msgspec import Meta, Struct
 
-from s7graph.sequencer.edit_base import MAX_SOURCE
-from s7graph.sequencer.model import (
+from s7graph.sequencer.change.base import MAX_SOURCE
+from s7graph.sequencer.text.model import (
     Binary,
     Chart,
     Const,
@@ -717,7 +717,7 @@ def _clip(text: str, limit: int) -> str:
 
 # ---------------------------------------------------------------- condition text
 
-_ASSOCIATIVE = ("AND", "OR", "XOR")  # a chain of them parses balanced (sequencer/parse_build.py)
+_ASSOCIATIVE = ("AND", "OR", "XOR")  # a chain of them parses balanced (sequencer/text/build.py)
 _PRECEDENCE = {"OR": 1, "XOR": 2, "AND": 3, "=": 4, "<>": 4, "<": 4, ">": 4, "<=": 4, ">=": 4}
 
 

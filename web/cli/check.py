@@ -12,10 +12,10 @@ from pathlib import Path
 
 from s7graph.engine.errors import S7Error
 from s7graph.engine.symbols import SymbolTable
-from s7graph.sequencer.diagnostics import Diagnostic, format_diagnostic, warning
-from s7graph.sequencer.model import Chart
-from s7graph.sequencer.parse import ChartSyntaxError, chart_text, parse_chart
-from s7graph.sequencer.validate import validate
+from s7graph.sequencer.checks.diagnostics import Diagnostic, format_diagnostic, warning
+from s7graph.sequencer.checks.validate import validate
+from s7graph.sequencer.text.model import Chart
+from s7graph.sequencer.text.parse import ChartSyntaxError, chart_text, parse_chart
 from s7graph.web.bus.protocol import ChartLayout, layout_problem
 
 

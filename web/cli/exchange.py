@@ -21,10 +21,10 @@ from pathlib import Path
 
 from s7graph.engine.errors import S7Error
 from s7graph.engine.symbols import SymbolTable
-from s7graph.sequencer.diagnostics import format_diagnostic
+from s7graph.sequencer.checks.diagnostics import format_diagnostic
 from s7graph.sequencer.exchange import FORMATS, Imported, ImportFailed, export_chart, import_file
-from s7graph.sequencer.format import format_chart, quote
-from s7graph.sequencer.model import Chart
+from s7graph.sequencer.text.format import format_chart, quote
+from s7graph.sequencer.text.model import Chart
 from s7graph.web.cli.report import fail
 from s7graph.web.harness.session import load_chart
 
@@ -109,7 +109,7 @@ def export_command(chart: Path, *, to: str, output: Path, symbols: Path | None =
         return fail(S7Error(f"--to must be plcopen or simaticml, not {to!r}"))
     try:
         _, table = load_chart(chart, symbols)
-        from s7graph.sequencer.parse import parse_file
+        from s7graph.sequencer.text.parse import parse_file
 
         model = parse_file(chart)
         text = export_chart(model, to, table if symbols is not None else None)

@@ -22,13 +22,13 @@ from s7graph.engine.cpu import Cpu
 from s7graph.engine.errors import AddressError, S7Error
 from s7graph.engine.symbols import SymbolTable, default_type
 from s7graph.sequencer.calls import prepare_calls
+from s7graph.sequencer.checks.diagnostics import Diagnostic, format_diagnostic
 from s7graph.sequencer.compile import ChartError, compile_chart
 from s7graph.sequencer.compiled import CompiledChart
-from s7graph.sequencer.diagnostics import Diagnostic, format_diagnostic
 from s7graph.sequencer.fb import GraphFB, install_all
-from s7graph.sequencer.model import Chart
 from s7graph.sequencer.params import Direction, check_pin, is_pin
-from s7graph.sequencer.parse import ChartSyntaxError, chart_text, parse_chart
+from s7graph.sequencer.text.model import Chart
+from s7graph.sequencer.text.parse import ChartSyntaxError, chart_text, parse_chart
 
 __all__ = ["ChartLoadError", "ChartSession", "compile_model", "compile_text", "load_chart"]
 

@@ -1,5 +1,5 @@
 """What the editor's side panel offers for a selection, read off the one table of edit
-operations (``sequencer.edit.OPERATIONS``): every operation acting on the selected kind of
+operations (``sequencer.change.edit.OPERATIONS``): every operation acting on the selected kind of
 element, with the fields its arguments need.
 
 An operation that sets one property of the element (its name, number, condition …) is a
@@ -16,11 +16,11 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Final
 
-from s7graph.sequencer.edit import OPERATIONS, Argument, Operation
-from s7graph.sequencer.edit_text import RowFields
-from s7graph.sequencer.elements import Ref, RowRef, SequenceRef, StepRef, TransitionRef, find
-from s7graph.sequencer.format import format_expr, row_body
-from s7graph.sequencer.model import ActionRow, Chart, Expr, Sequence, Step, Transition
+from s7graph.sequencer.change.edit import OPERATIONS, Argument, Operation
+from s7graph.sequencer.change.typed import RowFields
+from s7graph.sequencer.text.elements import Ref, RowRef, SequenceRef, StepRef, TransitionRef, find
+from s7graph.sequencer.text.format import format_expr, row_body
+from s7graph.sequencer.text.model import ActionRow, Chart, Expr, Sequence, Step, Transition
 
 __all__ = [
     "CURRENT",

@@ -30,16 +30,16 @@ from collections.abc import Callable
 from typing import Any, Final
 
 from s7graph.engine.symbols import SymbolTable
-from s7graph.sequencer.diagnostics import Diagnostic
-from s7graph.sequencer.edit import Operation, Session
-from s7graph.sequencer.edit_base import Edit, EditRefused
-from s7graph.sequencer.edit_content import SetSource
-from s7graph.sequencer.edit_text import parse_source
-from s7graph.sequencer.elements import Ref, RowRef, StepRef, TransitionRef, element_of, find
-from s7graph.sequencer.format import format_chart
-from s7graph.sequencer.model import Chart
-from s7graph.sequencer.parse import ChartSyntaxError, parse_chart
-from s7graph.sequencer.validate import validate
+from s7graph.sequencer.change.base import Edit, EditRefused
+from s7graph.sequencer.change.content import SetSource
+from s7graph.sequencer.change.edit import Operation, Session
+from s7graph.sequencer.change.typed import parse_source
+from s7graph.sequencer.checks.diagnostics import Diagnostic
+from s7graph.sequencer.checks.validate import validate
+from s7graph.sequencer.text.elements import Ref, RowRef, StepRef, TransitionRef, element_of, find
+from s7graph.sequencer.text.format import format_chart
+from s7graph.sequencer.text.model import Chart
+from s7graph.sequencer.text.parse import ChartSyntaxError, parse_chart
 from s7graph.web.bus.protocol import ChartLayout, ChartSource
 from s7graph.web.view import texts
 from s7graph.web.view.drawing import FLAWED, SELECTED, Drawing, Picture, aim_camera, picture

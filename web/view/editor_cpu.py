@@ -16,13 +16,13 @@ from typing import TYPE_CHECKING, Any, Final
 import viser
 
 from s7graph.engine.symbols import SymbolTable
-from s7graph.sequencer.diagnostics import Diagnostic
-from s7graph.sequencer.edit import Session, new_chart
-from s7graph.sequencer.edit_base import EditRefused, Refusal
-from s7graph.sequencer.edit_text import parse_source
-from s7graph.sequencer.format import format_chart
-from s7graph.sequencer.model import Chart
-from s7graph.sequencer.parse import ChartSyntaxError
+from s7graph.sequencer.change.base import EditRefused, Refusal
+from s7graph.sequencer.change.edit import Session, new_chart
+from s7graph.sequencer.change.typed import parse_source
+from s7graph.sequencer.checks.diagnostics import Diagnostic
+from s7graph.sequencer.text.format import format_chart
+from s7graph.sequencer.text.model import Chart
+from s7graph.sequencer.text.parse import ChartSyntaxError
 from s7graph.web.bus.protocol import ChartSource, CommandReply
 from s7graph.web.view import texts
 from s7graph.web.view.engineering import EditorPage

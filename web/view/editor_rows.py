@@ -11,12 +11,12 @@ from typing import TYPE_CHECKING, Any, Final
 
 import viser
 
-from s7graph.sequencer.edit import Session, make_edit
-from s7graph.sequencer.edit_base import Edit, EditRefused
-from s7graph.sequencer.edit_text import RowFields
-from s7graph.sequencer.elements import Ref, RowRef, StepRef, find
-from s7graph.sequencer.format import format_row
-from s7graph.sequencer.model import Chart, Step
+from s7graph.sequencer.change.base import Edit, EditRefused
+from s7graph.sequencer.change.edit import Session, make_edit
+from s7graph.sequencer.change.typed import RowFields
+from s7graph.sequencer.text.elements import Ref, RowRef, StepRef, find
+from s7graph.sequencer.text.format import format_row
+from s7graph.sequencer.text.model import Chart, Step
 from s7graph.steps.qualifiers import EVENTS, QUALIFIERS
 from s7graph.web.view import texts
 from s7graph.web.view.edit_forms import Form, row_fields

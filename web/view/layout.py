@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 
-from s7graph.sequencer.model import Chart
+from s7graph.sequencer.text.model import Chart
 from s7graph.web.bus.protocol import ChartLayout, SequenceInfo, TransitionInfo
 
 __all__ = [

@@ -12,7 +12,7 @@ import time
 from collections.abc import Iterable
 
 from s7graph.engine.profile import describe as describe_cycle
-from s7graph.sequencer.diagnostics import Diagnostic
+from s7graph.sequencer.checks.diagnostics import Diagnostic
 from s7graph.web.bus.protocol import (
     AlarmEntry,
     AlarmHistory,

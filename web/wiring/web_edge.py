@@ -11,7 +11,7 @@ import threading
 import time
 from collections.abc import Iterable
 
-from s7graph.sequencer.model import Chart
+from s7graph.sequencer.text.model import Chart
 from s7graph.web.bus.cpu_side import CpuSide
 from s7graph.web.bus.gate import Apply, Gate
 from s7graph.web.bus.protocol import ChartLayout, Command, StepStateUpdate

@@ -3,9 +3,9 @@ the surgery that replaces one step, transition or sequencer in an immutable char
 
 An edit (``Edit``) is data — the element it names and the new values — and ``apply``
 gives the edited chart and the element to select next, or raises ``EditRefused`` naming
-the problem. The operations themselves live in ``sequencer.edit_steps`` (what a step,
-transition or row holds) and ``sequencer.edit_structure`` (inserting and deleting); the
-table of them and the editing session in ``sequencer.edit``.
+the problem. The operations themselves live in ``sequencer.change.content`` (what a step,
+transition or row holds) and ``sequencer.change.structure`` (inserting and deleting); the
+table of them and the editing session in ``sequencer.change.edit``.
 """
 
 from __future__ import annotations
@@ -16,9 +16,9 @@ from dataclasses import dataclass, replace
 from typing import Final
 
 from s7graph.engine.errors import S7Error
-from s7graph.sequencer.diagnostics import Diagnostic
-from s7graph.sequencer.elements import Ref
-from s7graph.sequencer.model import Chart, Sequence, Step, Transition
+from s7graph.sequencer.checks.diagnostics import Diagnostic
+from s7graph.sequencer.text.elements import Ref
+from s7graph.sequencer.text.model import Chart, Sequence, Step, Transition
 
 # ---------------------------------------------------------------- limits (docs/online-change.md)
 # S7-GRAPH's own limits (SPEC §2.1: 250 steps, 250 transitions, 8 sequencers) only warn

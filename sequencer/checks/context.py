@@ -7,8 +7,8 @@ from dataclasses import dataclass, field
 
 from s7graph.engine.errors import SourceLocation
 from s7graph.engine.symbols import SymbolTable
-from s7graph.sequencer.diagnostics import Diagnostic, error, warning
-from s7graph.sequencer.model import Chart, Step, Transition
+from s7graph.sequencer.checks.diagnostics import Diagnostic, error, warning
+from s7graph.sequencer.text.model import Chart, Step, Transition
 
 
 @dataclass

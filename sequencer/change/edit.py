@@ -3,7 +3,7 @@ with undo and redo (docs/online-change.md, "Editing charts (core)").
 
 The model is the source of truth: a chart is immutable, an edit gives a new chart (sharing
 what it does not change) validated by the same rules as ``s7graph check``
-(``sequencer.validate``), or a refusal naming the problem while the chart stays as it
+(``sequencer.checks.validate``), or a refusal naming the problem while the chart stays as it
 was. The source view is the chart written as text; a text typed there comes back through
 the ``set_source`` operation. ``OPERATIONS`` is the one table of what can be done, to which
 element, with which arguments; a user interface or a bus command builds edits from it
@@ -17,8 +17,7 @@ from dataclasses import MISSING, dataclass, fields, replace
 from typing import Any, Final, Literal
 
 from s7graph.engine.symbols import SymbolTable
-from s7graph.sequencer.diagnostics import Diagnostic
-from s7graph.sequencer.edit_base import (
+from s7graph.sequencer.change.base import (
     MAX_NAME,
     MAX_UNDO,
     Edit,
@@ -27,7 +26,7 @@ from s7graph.sequencer.edit_base import (
     checked_number,
     checked_text,
 )
-from s7graph.sequencer.edit_content import (
+from s7graph.sequencer.change.content import (
     AddRow,
     ChangeRow,
     MoveRow,
@@ -45,7 +44,7 @@ from s7graph.sequencer.edit_content import (
     SetSource,
     SetSupervision,
 )
-from s7graph.sequencer.edit_structure import (
+from s7graph.sequencer.change.structure import (
     BranchStop,
     DeleteAlternativeBranch,
     DeleteSequence,
@@ -60,8 +59,10 @@ from s7graph.sequencer.edit_structure import (
     new_step,
     new_transition,
 )
-from s7graph.sequencer.edit_text import RowFields, check_bounds
-from s7graph.sequencer.elements import (
+from s7graph.sequencer.change.typed import RowFields, check_bounds
+from s7graph.sequencer.checks.diagnostics import Diagnostic
+from s7graph.sequencer.checks.validate import validate
+from s7graph.sequencer.text.elements import (
     Ref,
     RowRef,
     SequenceRef,
@@ -71,8 +72,7 @@ from s7graph.sequencer.elements import (
     find,
     label,
 )
-from s7graph.sequencer.model import Chart, Sequence
-from s7graph.sequencer.validate import validate
+from s7graph.sequencer.text.model import Chart, Sequence
 
 Target = Literal["step", "row", "transition", "sequence", "chart"]
 
@@ -363,7 +363,7 @@ class Session:
     @classmethod
     def open(cls, chart: Chart, symbols: SymbolTable | None = None) -> Session:
         """A session on ``chart``; raises ``EditRefused`` when the chart is beyond the
-        editor's limits (``edit_base``: steps, transitions, rows, nesting)."""
+        editor's limits (``change.base``: steps, transitions, rows, nesting)."""
         return cls(chart, _checked(chart, symbols), symbols)
 
     @property

@@ -2,11 +2,11 @@
 
 ``validate(chart, symbols)`` runs each rule of ``RULES`` (one small function per rule) and
 returns all diagnostics sorted by place; errors stop compilation, warnings do not. Codes and
-their meaning are listed in ``sequencer.diagnostics.CODES``. The rules live by topic in
-``sequencer.rules_structure`` (numbers, declarations, FROM/TO, initial steps, ways in and
-out, limits, joins), ``sequencer.rules_rows`` (action rows, permanent instructions) and
-``sequencer.rules_types`` (conditions, operands, typing); they share a
-``sequencer.rules_context._Ctx``.
+their meaning are listed in ``sequencer.checks.diagnostics.CODES``. The rules live by topic in
+``sequencer.checks.structure`` (numbers, declarations, FROM/TO, initial steps, ways in and
+out, limits, joins), ``sequencer.checks.rows`` (action rows, permanent instructions) and
+``sequencer.checks.types`` (conditions, operands, typing); they share a
+``sequencer.checks.context._Ctx``.
 """
 
 from __future__ import annotations
@@ -15,15 +15,14 @@ from collections.abc import Callable
 from typing import Final
 
 from s7graph.engine.symbols import SymbolTable
-from s7graph.sequencer.diagnostics import Diagnostic, sort_key
-from s7graph.sequencer.model import Chart
-from s7graph.sequencer.rules_context import _Ctx
-from s7graph.sequencer.rules_rows import (
+from s7graph.sequencer.checks.context import _Ctx
+from s7graph.sequencer.checks.diagnostics import Diagnostic, sort_key
+from s7graph.sequencer.checks.rows import (
     rule_action_rows,
     rule_c_without_interlock,
     rule_permanent_instructions,
 )
-from s7graph.sequencer.rules_structure import (
+from s7graph.sequencer.checks.structure import (
     MAX_ALTERNATIVE_PATHS,
     MAX_CONDITION_ELEMENTS,
     MAX_MARKINGS,
@@ -40,7 +39,7 @@ from s7graph.sequencer.rules_structure import (
     rule_unknown_steps_in_from_to,
     rule_ways_in_and_out,
 )
-from s7graph.sequencer.rules_types import (
+from s7graph.sequencer.checks.types import (
     COMPARABLE,
     COMPARISONS,
     FUNCTIONS,
@@ -48,6 +47,7 @@ from s7graph.sequencer.rules_types import (
     rule_conditions,
     rule_empty_conditions,
 )
+from s7graph.sequencer.text.model import Chart
 
 __all__ = [
     "COMPARABLE",

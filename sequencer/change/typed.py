@@ -1,4 +1,4 @@
-"""Texts typed into the editor, read by the real `.s7g` parser (``sequencer.parse``).
+"""Texts typed into the editor, read by the real `.s7g` parser (``sequencer.text.parse``).
 
 A condition, an action row or an option is parsed inside a minimal chart around it, so it
 means exactly what it would mean in a file; its syntax errors come back located in the
@@ -15,8 +15,7 @@ import re
 from dataclasses import dataclass, replace
 from typing import Final
 
-from s7graph.sequencer.diagnostics import Diagnostic
-from s7graph.sequencer.edit_base import (
+from s7graph.sequencer.change.base import (
     MAX_DEPTH,
     MAX_ROWS,
     MAX_SEQUENCES,
@@ -26,9 +25,10 @@ from s7graph.sequencer.edit_base import (
     MAX_TRANSITIONS,
     EditRefused,
 )
-from s7graph.sequencer.model import ActionRow, Chart, Expr
-from s7graph.sequencer.parse import ChartSyntaxError, parse_chart
-from s7graph.sequencer.walk import depth, relocated
+from s7graph.sequencer.checks.diagnostics import Diagnostic
+from s7graph.sequencer.text.model import ActionRow, Chart, Expr
+from s7graph.sequencer.text.parse import ChartSyntaxError, parse_chart
+from s7graph.sequencer.text.walk import depth, relocated
 from s7graph.steps.qualifiers import EVENTS, QUALIFIERS
 
 # The minimal charts around a typed text: (text before, text after). The typed text starts

@@ -4,8 +4,8 @@
 subtree the function leaves alone (an edit copies only the path to what it changes);
 ``nodes`` yields every node without recursion; ``unlocated`` forgets where things were
 written, so two charts compare by content, and ``uncommented`` their comments. The
-editor (``sequencer.edit``) renumbers and relocates with these; the change summary
-(``sequencer.diff``) compares with them.
+editor (``sequencer.change.edit``) renumbers and relocates with these; the change summary
+(``sequencer.change.diff``) compares with them.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from dataclasses import fields, is_dataclass, replace
 from typing import Any, TypeVar
 
 from s7graph.engine.errors import SourceLocation
-from s7graph.sequencer.model import NOWHERE, Chart, Step, SymbolDecl, Transition
+from s7graph.sequencer.text.model import NOWHERE, Chart, Step, SymbolDecl, Transition
 
 N = TypeVar("N")
 
@@ -95,7 +95,7 @@ def _forget_comment(node: Any) -> Any:
 
 
 def uncommented(node: N) -> N:
-    """``node`` without the comments kept with its elements (``sequencer.comments``): what
+    """``node`` without the comments kept with its elements (``sequencer.text.comments``): what
     it does, for a change summary that must not call a reworded comment a changed step."""
     return rewrite(node, _forget_comment)
 

@@ -5,17 +5,8 @@ The event × qualifier table is read from ``steps.qualifiers`` (never re-encoded
 
 from __future__ import annotations
 
-from s7graph.sequencer.model import (
-    ActionRow,
-    Assignment,
-    BlockCall,
-    Coil,
-    Operand,
-    Step,
-    StepTarget,
-)
-from s7graph.sequencer.rules_context import _Ctx, _row_el
-from s7graph.sequencer.rules_types import (
+from s7graph.sequencer.checks.context import _Ctx, _row_el
+from s7graph.sequencer.checks.types import (
     _as_bit,
     _as_number,
     _loc,
@@ -24,6 +15,15 @@ from s7graph.sequencer.rules_types import (
     _show,
     _type,
     _unify,
+)
+from s7graph.sequencer.text.model import (
+    ActionRow,
+    Assignment,
+    BlockCall,
+    Coil,
+    Operand,
+    Step,
+    StepTarget,
 )
 from s7graph.sfb import catalogue
 from s7graph.steps.qualifiers import (

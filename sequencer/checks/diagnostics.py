@@ -19,14 +19,14 @@ from s7graph.engine.errors import SourceLocation
 Severity = Literal["error", "warning"]
 
 CODES: Final[dict[str, str]] = {
-    # parser (sequencer/parse.py)
+    # parser (sequencer/text/parse.py)
     "E001": "syntax error: unexpected token or character",
     "E002": "unexpected end of file",
     "E003": "literal that does not parse or does not fit its type",
     "E004": "unknown header option or option value",
     "E005": "action row whose operand does not fit its qualifier",
     "E006": "expression nested too deeply (more than 32 levels of operators)",
-    # structure (sequencer/validate.py, rules in sequencer/rules_*.py)
+    # structure (sequencer/checks/validate.py, rules in sequencer/checks/)
     "E010": "unknown step in FROM / TO",
     "E011": "duplicate step number",
     "E012": "duplicate transition number",

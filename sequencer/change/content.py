@@ -2,9 +2,9 @@
 interlock, supervision and action rows; a transition's name, number and condition; a
 sequencer's name; the header options; the whole chart as text (the source view).
 
-Each edit is a frozen dataclass naming its element by number (``sequencer.edit_base``).
+Each edit is a frozen dataclass naming its element by number (``sequencer.change.base``).
 Conditions and rows are typed as ``.s7g`` text and read by the real parser
-(``sequencer.edit_text``). Renumbering keeps every reference to the number consistent:
+(``sequencer.change.typed``). Renumbering keeps every reference to the number consistent:
 FROM / TO, ``ON`` / ``OFF Sn``, ``Sn.X`` ``Sn.T`` ``Sn.U``, ``Tn.TT`` wherever they stand.
 """
 
@@ -14,7 +14,7 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 from s7graph.engine.errors import SourceLocation
-from s7graph.sequencer.edit_base import (
+from s7graph.sequencer.change.base import (
     MAX_MESSAGE,
     MAX_NAME,
     MAX_ROWS,
@@ -29,14 +29,14 @@ from s7graph.sequencer.edit_base import (
     with_step,
     with_transition,
 )
-from s7graph.sequencer.edit_text import (
+from s7graph.sequencer.change.typed import (
     RowFields,
     parse_condition,
     parse_option,
     parse_row,
     parse_source,
 )
-from s7graph.sequencer.elements import (
+from s7graph.sequencer.text.elements import (
     Ref,
     RowRef,
     SequenceRef,
@@ -44,7 +44,7 @@ from s7graph.sequencer.elements import (
     StepRef,
     TransitionRef,
 )
-from s7graph.sequencer.model import (
+from s7graph.sequencer.text.model import (
     NOWHERE,
     Chart,
     Step,
@@ -53,7 +53,7 @@ from s7graph.sequencer.model import (
     TransAttr,
     Transition,
 )
-from s7graph.sequencer.walk import rewrite
+from s7graph.sequencer.text.walk import rewrite
 
 # ---------------------------------------------------------------- steps
 

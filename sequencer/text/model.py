@@ -73,7 +73,7 @@ class Step:
     loc: SourceLocation = NOWHERE
     interlock_loc: SourceLocation | None = None
     supervision_loc: SourceLocation | None = None
-    comment: str = ""  # the comments written with it, verbatim (sequencer.comments)
+    comment: str = ""  # the comments written with it, verbatim (sequencer.text.comments)
     trailing: str = ""  # the comments at the end of its first line, verbatim
 
 

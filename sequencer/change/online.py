@@ -2,9 +2,9 @@
 lives in the instance DB").
 
 :func:`preview` says what a download of ``new`` over the running chart changes (the change
-summary of ``sequencer.diff``, with the active steps it removes). :func:`swap`, called at a
+summary of ``sequencer.change.diff``, with the active steps it removes). :func:`swap`, called at a
 scan boundary, carries the FB's state over to ``new`` by step number with the one function
-that does so (``sequencer.carry.carry_over``: active steps stay active with T and U, faults
+that does so (``sequencer.change.carry.carry_over``: active steps stay active with T and U, faults
 and criteria, variables keep their values by name) and makes the FB run ``new`` from its
 next call (``GraphFB.replace_chart``), the instance DBs of the system blocks it calls
 created first (``sequencer.calls``; a DB that is something else, or a new call of a block
@@ -24,9 +24,9 @@ from typing import Any, Final, Literal
 
 from s7graph.engine.errors import S7Error
 from s7graph.sequencer.calls import missing_blocks, prepare_calls
-from s7graph.sequencer.carry import CarryReport, ChartShape, carry_over
+from s7graph.sequencer.change.carry import CarryReport, ChartShape, carry_over
+from s7graph.sequencer.change.diff import ChangeSummary, active_steps, summarize
 from s7graph.sequencer.compiled import CompiledChart
-from s7graph.sequencer.diff import ChangeSummary, active_steps, summarize
 from s7graph.sequencer.fb import GraphFB
 
 __all__ = ["REMOVED", "Removed", "SwapRefused", "SwapReport", "preview", "swap"]

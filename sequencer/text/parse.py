@@ -1,10 +1,10 @@
 """Parse `.s7g` source text into the chart model (SPEC.md §3).
 
-``parse_chart(text, file)`` returns a :class:`~sequencer.model.Chart` or raises
+``parse_chart(text, file)`` returns a :class:`~sequencer.text.model.Chart` or raises
 :class:`ChartSyntaxError` carrying every syntax diagnostic found: the parser recovers at the
 next ``;`` (or the next step / transition / END_ keyword) and goes on, so one run shows all
 syntax errors, each with ``file:line:col`` and what was expected there. The model is built
-while the parser reduces, by ``sequencer.parse_build._Build``.
+while the parser reduces, by ``sequencer.text.build._Build``.
 
 Decisions the format leaves open (documented for chart writers):
 
@@ -40,12 +40,12 @@ from lark.parsers.lalr_parser import _Parser
 
 from s7graph.engine.errors import S7Error, SourceLocation
 from s7graph.engine.text import NotUtf8, decode_utf8
+from s7graph.sequencer.checks.diagnostics import Diagnostic, error, format_diagnostic
 from s7graph.sequencer.collector import collector_paused
-from s7graph.sequencer.comments import attach_comments
-from s7graph.sequencer.diagnostics import Diagnostic, error, format_diagnostic
-from s7graph.sequencer.model import Chart
-from s7graph.sequencer.parse_build import _NEEDS_FIRST, _NEEDS_LAST, _Build
-from s7graph.sequencer.parse_fast import _fast_parse, _GiveUp, _Tables
+from s7graph.sequencer.text.build import _NEEDS_FIRST, _NEEDS_LAST, _Build
+from s7graph.sequencer.text.comments import attach_comments
+from s7graph.sequencer.text.lalr import _fast_parse, _GiveUp, _Tables
+from s7graph.sequencer.text.model import Chart
 
 GRAMMAR = Path(__file__).with_name("grammar.lark")
 MAX_SYNTAX_ERRORS = 20
@@ -229,7 +229,7 @@ _RESYNC = re.compile(
 
 
 # ---------------------------------------------------------------- tree → model
-# (the builder itself: sequencer/parse_build.py)
+# (the builder itself: sequencer/text/build.py)
 
 
 @cache
@@ -268,7 +268,7 @@ def _with_last(builder: _Build, f: Callable[[list[Any]], Any]) -> Callable[[list
 
 
 # ---------------------------------------------------------------- fast path
-# (the loop itself: sequencer/parse_fast.py)
+# (the loop itself: sequencer/text/lalr.py)
 
 
 @cache

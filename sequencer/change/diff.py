@@ -21,7 +21,8 @@ from difflib import SequenceMatcher
 from typing import Literal
 
 from s7graph.sequencer.compiled import CompiledChart
-from s7graph.sequencer.elements import (
+from s7graph.sequencer.state import GraphState
+from s7graph.sequencer.text.elements import (
     DeclRef,
     Ref,
     RowRef,
@@ -30,7 +31,7 @@ from s7graph.sequencer.elements import (
     TransitionRef,
     label,
 )
-from s7graph.sequencer.model import (
+from s7graph.sequencer.text.model import (
     ActionRow,
     Assignment,
     BlockCall,
@@ -42,8 +43,7 @@ from s7graph.sequencer.model import (
     StepTarget,
     Transition,
 )
-from s7graph.sequencer.state import GraphState
-from s7graph.sequencer.walk import uncommented, unlocated
+from s7graph.sequencer.text.walk import uncommented, unlocated
 from s7graph.steps.conditions import contact_text
 
 ChangeKind = Literal["added", "removed", "changed"]

@@ -26,8 +26,8 @@ from typing import Final, Literal
 from s7graph.engine.address import Address, parse_address
 from s7graph.engine.errors import SymbolError
 from s7graph.engine.symbols import SymbolTable, default_type
-from s7graph.sequencer.model import Chart, Operand, SymbolDecl, VarDecl
 from s7graph.sequencer.params import Direction, pin
+from s7graph.sequencer.text.model import Chart, Operand, SymbolDecl, VarDecl
 
 Kind = Literal["address", "symbol", "var", "pin"]
 

@@ -15,7 +15,7 @@
   transition, a branch or a sequencer is refused, naming why, when it would cut a path or
   leave a reference to what it removes.
 
-New elements get the next free number (``edit_base.next_number``) and S7-GRAPH's default
+New elements get the next free number (``base.next_number``) and S7-GRAPH's default
 names ``Step<n>`` / ``Trans<n>``; their conditions are empty (they hold, W120).
 """
 
@@ -24,7 +24,7 @@ from __future__ import annotations
 from collections.abc import Set as AbstractSet
 from dataclasses import dataclass, replace
 
-from s7graph.sequencer.edit_base import (
+from s7graph.sequencer.change.base import (
     MAX_NAME,
     Edit,
     EditRefused,
@@ -43,7 +43,7 @@ from s7graph.sequencer.edit_base import (
     with_sequence,
     with_transitions,
 )
-from s7graph.sequencer.elements import (
+from s7graph.sequencer.text.elements import (
     Ref,
     SequenceRef,
     StepRef,
@@ -51,8 +51,8 @@ from s7graph.sequencer.elements import (
     label,
     references,
 )
-from s7graph.sequencer.model import Chart, Sequence, Step, StepTarget, Transition
-from s7graph.sequencer.walk import nodes
+from s7graph.sequencer.text.model import Chart, Sequence, Step, StepTarget, Transition
+from s7graph.sequencer.text.walk import nodes
 
 
 def new_step(n: int, *, initial: bool = False) -> Step:

@@ -9,9 +9,9 @@ from s7graph.engine.address import parse_address
 from s7graph.engine.datatypes import string_chars
 from s7graph.engine.errors import AddressError, LiteralError
 from s7graph.engine.literals import parse_literal
-from s7graph.sequencer.model import Binary, Expr, Step, StepTarget, Transition, Unary
-from s7graph.sequencer.rules_context import _Ctx, _step_el
-from s7graph.sequencer.rules_types import LOGIC, _conditions, _show, _type, _unify
+from s7graph.sequencer.checks.context import _Ctx, _step_el
+from s7graph.sequencer.checks.types import LOGIC, _conditions, _show, _type, _unify
+from s7graph.sequencer.text.model import Binary, Expr, Step, StepTarget, Transition, Unary
 
 # Limits that warn (SPEC §2.1).
 MAX_STEPS: Final = 250

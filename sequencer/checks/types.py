@@ -9,7 +9,7 @@ INT and DINT. A timer or counter cell (``T5``, ``C1``) is a contact (its status 
 BOOL is expected, and its INT value in comparisons, arithmetic, function arguments and
 assignments (``steps.operands.CELLS``; seed 003:1599-1604). Conditions hold only contacts,
 NOT AND OR XOR and comparisons (SPEC §2.9).
-Operand resolution is ``sequencer.names.resolve_operand``.
+Operand resolution is ``sequencer.text.names.resolve_operand``.
 """
 
 from __future__ import annotations
@@ -19,7 +19,8 @@ from typing import Final
 
 from s7graph.engine.datatypes import string_chars
 from s7graph.engine.errors import AddressError, SourceLocation, SymbolError
-from s7graph.sequencer.model import (
+from s7graph.sequencer.checks.context import _Ctx
+from s7graph.sequencer.text.model import (
     Binary,
     Coil,
     Const,
@@ -30,8 +31,7 @@ from s7graph.sequencer.model import (
     TransAttr,
     Unary,
 )
-from s7graph.sequencer.names import Resolved, resolve_operand
-from s7graph.sequencer.rules_context import _Ctx
+from s7graph.sequencer.text.names import Resolved, resolve_operand
 
 COMPARABLE: Final = frozenset({"INT", "DINT", "REAL", "TIME"})
 COMPARISONS: Final = frozenset({"=", "<>", "<", ">", "<=", ">="})

@@ -17,8 +17,8 @@ from dataclasses import dataclass
 from typing import Final, Literal
 
 from s7graph.engine.errors import SourceLocation
-from s7graph.sequencer.diagnostics import Diagnostic
-from s7graph.sequencer.model import (
+from s7graph.sequencer.checks.diagnostics import Diagnostic
+from s7graph.sequencer.text.model import (
     ActionRow,
     Chart,
     Sequence,
@@ -30,7 +30,7 @@ from s7graph.sequencer.model import (
     Transition,
     VarDecl,
 )
-from s7graph.sequencer.walk import nodes
+from s7graph.sequencer.text.walk import nodes
 
 StepPart = Literal["", "interlock", "supervision"]
 DeclKind = Literal["variable", "symbol", "permanent"]

@@ -1,7 +1,7 @@
 """The comments of a `.s7g` text, kept with the element they annotate, where they stood.
 
 A chart's comments are part of its documentation: a chart read, edited in the browser and
-written again (``sequencer.format``) keeps them, each in its place. ``attach_comments(chart,
+written again (``sequencer.text.format``) keeps them, each in its place. ``attach_comments(chart,
 text)`` finds every ``// …`` and ``(* … *)`` comment of ``text`` (not inside a quoted name
 or a string literal) and gives each to one element, in this order of rules:
 
@@ -29,7 +29,7 @@ import re
 from dataclasses import dataclass, replace
 from typing import Any, TypeVar
 
-from s7graph.sequencer.model import Chart, Sequence, Step
+from s7graph.sequencer.text.model import Chart, Sequence, Step
 
 __all__ = ["Comment", "attach_comments", "find_comments"]
 

@@ -1,8 +1,8 @@
 """Write the chart model back as `.s7g` source text (SPEC.md §3).
 
-``format_chart(chart)`` is the inverse of ``sequencer.parse.parse_chart``: for every chart
+``format_chart(chart)`` is the inverse of ``sequencer.text.parse.parse_chart``: for every chart
 the parser builds, ``parse_chart(format_chart(c))`` equals ``c`` once source places are set
-aside (``walk.unlocated``). Comments are kept with their elements (``sequencer.comments``)
+aside (``walk.unlocated``). Comments are kept with their elements (``sequencer.text.comments``)
 and written where they stood: on lines of their own above an element, or at the end of its
 first line (a trailing comment, a symbol's too).
 The layout is the one of the examples: header and options, ``VAR``, ``SYMBOLS``,
@@ -20,8 +20,8 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TypeVar
 
-from s7graph.sequencer.comments import find_comments
-from s7graph.sequencer.model import (
+from s7graph.sequencer.text.comments import find_comments
+from s7graph.sequencer.text.model import (
     ActionRow,
     Assignment,
     Binary,
@@ -182,7 +182,7 @@ def _options(o: ChartOptions) -> list[str]:
 
 
 def _above(comment: str, indent: str) -> list[str]:
-    """An element's comments (``sequencer.comments``), one after the other on lines of their
+    """An element's comments (``sequencer.text.comments``), one after the other on lines of their
     own at ``indent``; a block comment's inner lines as written."""
     return [indent + c.text for c in find_comments(comment)] if comment else []
 

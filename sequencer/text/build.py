@@ -1,7 +1,7 @@
 """Build the chart model while the LALR parser reduces (SPEC.md §3): :class:`_Build` has one
-method per grammar rule; ``sequencer.parse`` wires it into the parser (``_callbacks``).
+method per grammar rule; ``sequencer.text.parse`` wires it into the parser (``_callbacks``).
 
-Decisions the format leaves open are listed in ``sequencer.parse``.
+Decisions the format leaves open are listed in ``sequencer.text.parse``.
 """
 
 from __future__ import annotations
@@ -14,8 +14,8 @@ from lark import Token
 
 from s7graph.engine.errors import LiteralError, S7Error, SourceLocation
 from s7graph.engine.literals import clip
-from s7graph.sequencer.diagnostics import Diagnostic, error
-from s7graph.sequencer.model import (
+from s7graph.sequencer.checks.diagnostics import Diagnostic, error
+from s7graph.sequencer.text.model import (
     ActionRow,
     Assignment,
     Binary,

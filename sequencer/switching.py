@@ -1,0 +1,147 @@
+"""Steps 4a–4c of a general GRAPH FB call (SPEC §2.2; graph-semantics §A.2, §A.3): per
+sequencer, evaluate the transitions leaving its active steps, decide which switch (mode
+rule, HALT_SQ, supervision faults, at an alternative divergence the first-listed, steps
+held for this call) and switch (events S0/S1 through the runtime's ``_deactivate`` and
+``_activate``), then pass through skip steps.
+
+Functions of a ``sequencer.cycle.GraphRuntime`` (``rt``), called by its ``_sequencer``;
+the fast path's switches (``sequencer.fastpath``) inline what they do in the common case.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any, Protocol
+
+from s7graph.sequencer.state import GraphState
+from s7graph.steps.qualifiers import EV_S1
+
+if TYPE_CHECKING:
+    from s7graph.sequencer.compiled import CompiledChart, Program
+
+
+class _Runtime(Protocol):
+    """What switching uses of ``sequencer.cycle.GraphRuntime``."""
+
+    cc: CompiledChart
+    prog: Program
+    st: GraphState
+    multi: bool
+    _by_seq: list[list[int]]
+
+    def _activate(self, i: int) -> None: ...
+
+    def _deactivate(self, i: int) -> None: ...
+
+
+def switch(
+    rt: _Runtime, steps: list[int], sw: tuple[Any, ...], rule: Callable[[bool, bool], bool]
+) -> None:
+    """Steps a–c: evaluate, decide, switch (SPEC §2.2 4a–4c) for one sequencer's active
+    ``steps``. ``sw`` = (mode rule, None in AUTO; T_PUSH edge; switching blocked by
+    HALT_SQ/OFF_SQ; steps whose acknowledgement forces their transition; steps ``held``
+    for this call because step 2 activated them)."""
+    st = rt.st
+    cc = rt.cc
+    x = st.x
+    leaving = cc.leaving
+    tr_src = cc.tr_src
+    tcond = rt.prog.tcond
+    tt, crit, crit_old = st.tt, st.crit, st.crit_old
+    mode_rule, push, blocked, forced, held = sw
+    sv_err = st.sv_err
+    # a+b: on the state at the start of this step
+    fire: list[int] = []
+    taken: set[int] | None = None
+    joins: set[int] | None = None
+    for i in steps:
+        for j in leaving[i]:
+            srcs = tr_src[j]
+            single = len(srcs) == 1
+            if not single:  # simultaneous join: all preceding steps active, once
+                if not all(x[s] for s in srcs):
+                    continue
+                if joins is None:
+                    joins = set()
+                elif j in joins:
+                    continue
+                joins.add(j)
+            v, c = tcond[j](st)
+            crit_old[j] = crit[j]
+            crit[j] = c
+            tt[j] = v
+            if blocked or (held and not held.isdisjoint(srcs)):
+                continue
+            if forced and i in forced:
+                v = True
+            if mode_rule is not None:
+                v = mode_rule(v, push)
+            if not v:
+                continue
+            if single:
+                if sv_err[i]:
+                    continue
+            elif any(sv_err[s] for s in srcs):
+                continue
+            if taken is None:
+                taken = set(srcs)
+            else:
+                if (i in taken) if single else any(s in taken for s in srcs):
+                    continue
+                taken.update(srcs)
+            fire.append(j)
+            break  # alternative divergence: the first-listed switchable path wins
+    # c: switch
+    if not fire:
+        return
+    tr_dst = cc.tr_dst
+    for j in fire:
+        st.fired.append(j)
+        for s in tr_src[j]:
+            if x[s]:
+                rt._deactivate(s)
+        for d in tr_dst[j]:
+            if not x[d]:
+                rt._activate(d)
+    if st.sskip_enabled:
+        skip(rt, rule, held)
+
+
+def skip(rt: _Runtime, rule: Callable[[bool, bool], bool], held: frozenset[int]) -> None:
+    """Skip steps: a step entered in this call whose leaving transition already holds is
+    passed through without being active (no S1, no actions; graph-semantics §A.3). A
+    step ``held`` (activated by INIT_SQ, the first call or S_ON) is never passed through."""
+    st = rt.st
+    cc = rt.cc
+    for _ in range(st.n_steps):
+        moved = False
+        for i in list(st.entered):
+            if not st.x[i] or i in held:
+                continue
+            for j in cc.leaving[i]:
+                srcs = cc.tr_src[j]
+                if not all(st.x[s] for s in srcs) or not held.isdisjoint(srcs):
+                    continue
+                v, c = rt.prog.tcond[j](st)
+                st.crit_old[j], st.crit[j], st.tt[j] = st.crit[j], c, v
+                if not rule(v, False):
+                    continue
+                for s in srcs:
+                    if s in st.entered:  # passed through: never active
+                        st.x[s] = False
+                        st.active.remove(s)
+                        if rt.multi:
+                            rt._by_seq[cc.step_seq[s]].remove(s)
+                        st.entered.remove(s)
+                        st.ev[s] &= ~EV_S1
+                        st.log = [e for e in st.log if e != (s, EV_S1)]
+                    elif st.x[s]:
+                        rt._deactivate(s)
+                st.fired.append(j)
+                for d in cc.tr_dst[j]:
+                    if not st.x[d]:
+                        rt._activate(d)
+                moved = True
+                break
+        if not moved:
+            return
