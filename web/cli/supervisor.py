@@ -61,7 +61,7 @@ RECOVER_ENV = "S7GRAPH_RECOVERED"
 KILL_AFTER_S = 1.0
 """How long past twice the maximum cycle time a cycle may run before the CPU is killed."""
 POLL_S = 0.05
-STOP_EXTRA_S = 2.0
+STOP_EXTRA_S = 5.0
 """Beyond the CPU's own ``GRACE_S`` after a stop request, before it is killed."""
 END_VIEW_S = 10.0
 _PR_SET_PDEATHSIG = 1
