@@ -5,6 +5,8 @@ the virtual clock."""
 from __future__ import annotations
 
 import os
+import subprocess
+import sys
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -24,9 +26,11 @@ if TYPE_CHECKING:
     from playwright.sync_api import Locator, Page
 
     from s7graph.engine.record import ScanRecord
+    from s7graph.web.bus.client import BusClient
     from s7graph.web.bus.online import OnlineChange
     from s7graph.web.wiring.live_edge import LiveEdge
 
+ROOT = Path(__file__).resolve().parents[2]
 CHROMIUM = "/usr/bin/chromium"
 ARGS = [
     "--no-sandbox",
@@ -185,3 +189,48 @@ def online_cpu(
             yield OnlineRig(session, edge, online, path, state, endpoint, scans)
     finally:
         audit.close()
+
+
+@contextmanager
+def cpu_process(
+    tmp_path: Path,
+    args: list[str],
+    *,
+    fb: str | None = None,
+    user: str | None = None,
+    terminate: bool = False,
+) -> Iterator[tuple[subprocess.Popen[str], BusClient, str]]:
+    """``s7graph run ARGS --listen`` on a unix socket in ``tmp_path`` as a real process,
+    with a bus client once it is on the bus; with ``fb``, once that FB's state is served,
+    and with ``user``, logged in as that user: (process, client, token or ""). Killed at the
+    end if still running (``terminate``: ended as by SIGTERM); its pipes stay readable."""
+    from s7graph.web.bus.client import BusClient
+    from s7graph.web.bus.session import open_session
+
+    endpoint = f"unixsock-stream/{tmp_path}/bus.sock"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "s7graph", "run", *args, "--listen", endpoint],
+        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    session = None
+    try:
+        assert proc.stdout is not None
+        line = proc.stdout.readline()
+        assert "on the bus" in line, (line, proc.stderr.read() if proc.stderr else "")
+        session = open_session(connect=[endpoint])
+        client = BusClient(session, "cpu1")
+        if fb is not None:
+            assert wait_until(lambda: client.state(fb) is not None, 30)
+        token = ""
+        if user is not None:
+            login = client.login(user)
+            assert login.ok, login.reason
+            token = login.token
+        yield proc, client, token
+        client.close()
+    finally:
+        if session is not None:
+            session.close()  # type: ignore[no-untyped-call]
+        if proc.poll() is None:
+            proc.terminate() if terminate else proc.kill()
+        proc.wait(30)

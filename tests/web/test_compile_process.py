@@ -24,9 +24,8 @@ from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.compiler import Compiled, Compiler, CompileRefused, Summary
 from s7graph.web.bus.pieces import dumps_in_pieces, loads_in_pieces
 from s7graph.web.bus.protocol import Command, CommandReply
-from s7graph.web.bus.session import open_session
 from s7graph.web.harness.session import compile_text
-from tests.web.helpers import wait_until
+from tests.web.helpers import cpu_process, wait_until
 
 pytestmark = pytest.mark.timeout(300)
 ROOT = Path(__file__).resolve().parents[2]
@@ -43,37 +42,11 @@ def drill(tmp_path: Path) -> Iterator[tuple[subprocess.Popen[str], BusClient, st
     """``s7graph run`` of a copy of the drill demo on a unix socket; a client logged in."""
     for name in ("drill.s7g", "symbols.txt"):
         shutil.copy(DRILL / name, tmp_path / name)
-    endpoint = f"unixsock-stream/{tmp_path}/bus.sock"
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "s7graph", "run", str(tmp_path / "drill.s7g"),
-         "--symbols", str(tmp_path / "symbols.txt"), "--plant", str(DRILL / "demo_plant.py"),
-         "--state", str(tmp_path / "state.sqlite"), "--listen", endpoint,
-         "--duration-s", "280", *CORE],
-        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )  # fmt: skip
-    session = None
-    try:
-        assert proc.stdout is not None
-        line = proc.stdout.readline()
-        assert "on the bus" in line, (line, proc.stderr.read() if proc.stderr else "")
-        session = open_session(connect=[endpoint])
-        client = BusClient(session, "cpu1")
-        assert wait_until(lambda: client.state(FB) is not None, 30)
-        login = client.login("tess")
-        assert login.ok, login.reason
-        yield proc, client, login.token
-        client.close()
-    finally:
-        if session is not None:
-            session.close()  # type: ignore[no-untyped-call]
-        proc.kill()
-        proc.wait(30)
-        if proc.stderr is not None:
-            said = proc.stderr.read()
-            assert "Traceback" not in said and "STOP" not in said, said[-2000:]
-        for stream in (proc.stdout, proc.stderr):
-            if stream is not None:
-                stream.close()
+    args = [str(tmp_path / "drill.s7g"), "--symbols", str(tmp_path / "symbols.txt"),
+            "--plant", str(DRILL / "demo_plant.py"), "--state", str(tmp_path / "state.sqlite"),
+            "--duration-s", "280", *CORE]  # fmt: skip
+    with cpu_process(tmp_path, args, fb=FB, user="tess") as running:
+        yield running
 
 
 def test_a_huge_chart_and_a_5000_contact_chain_compile_without_any_scan_over_the_limit(

@@ -8,7 +8,6 @@ from __future__ import annotations
 import signal
 import sqlite3
 import subprocess
-import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -19,8 +18,7 @@ from s7graph.engine.persistence import unpack_instance
 from s7graph.web.access.audit import read_audit
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import Command
-from s7graph.web.bus.session import open_session
-from tests.web.helpers import wait_until
+from tests.web.helpers import cpu_process, wait_until
 
 pytestmark = pytest.mark.timeout(180)
 ROOT = Path(__file__).resolve().parents[2]
@@ -32,37 +30,11 @@ USER = "tess (unverified)"
 @contextmanager
 def cpu(tmp_path: Path, state: Path) -> Iterator[tuple[subprocess.Popen[str], BusClient, str]]:
     """The drill demo restarted hot from ``state``, on a unix socket; a client logged in."""
-    endpoint = f"unixsock-stream/{tmp_path}/bus.sock"
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "s7graph", "run", str(DRILL / "drill.s7g"),
-         "--symbols", str(DRILL / "symbols.txt"), "--plant", str(DRILL / "demo_plant.py"),
-         "--state", str(state), "--restart", "hot", "--listen", endpoint,
-         "--duration-s", "120"],
-        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )  # fmt: skip
-    session = None
-    try:
-        assert proc.stdout is not None
-        line = proc.stdout.readline()
-        assert "on the bus" in line, (line, proc.stderr.read() if proc.stderr else "")
-        session = open_session(connect=[endpoint])
-        client = BusClient(session, "cpu1")
-        assert wait_until(lambda: client.state(FB) is not None, 30)
-        login = client.login("tess")
-        assert login.ok, login.reason
-        yield proc, client, login.token
-        client.close()
-    finally:
-        if session is not None:
-            session.close()  # type: ignore[no-untyped-call]
-        if proc.poll() is None:
-            proc.kill()
-        proc.wait(30)
-        if proc.stdout is not None:
-            proc.stdout.close()
-        if proc.stderr is not None:
-            assert "Traceback" not in proc.stderr.read()
-            proc.stderr.close()
+    args = [str(DRILL / "drill.s7g"), "--symbols", str(DRILL / "symbols.txt"),
+            "--plant", str(DRILL / "demo_plant.py"), "--state", str(state),
+            "--restart", "hot", "--duration-s", "120"]  # fmt: skip
+    with cpu_process(tmp_path, args, fb=FB, user="tess") as running:
+        yield running
 
 
 def _send_and_kill(proc: subprocess.Popen[str], client: BusClient, command: Command) -> None:

@@ -14,7 +14,6 @@ import shutil
 import signal
 import sqlite3
 import subprocess
-import sys
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -26,9 +25,8 @@ from s7graph.sequencer.change.carry import fingerprint
 from s7graph.web.access.audit import read_audit
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import Command, CommandReply, StepStateUpdate
-from s7graph.web.bus.session import open_session
 from s7graph.web.harness.session import load_chart
-from tests.web.helpers import wait_until
+from tests.web.helpers import cpu_process, wait_until
 
 pytestmark = pytest.mark.timeout(600)
 ROOT = Path(__file__).resolve().parents[2]
@@ -88,37 +86,16 @@ class Cpu:
 @contextmanager
 def run(tmp_path: Path) -> Iterator[Cpu]:
     """The drill chart of ``tmp_path`` restarted hot from its state file."""
-    endpoint = f"unixsock-stream/{tmp_path}/bus.sock"
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "s7graph", "run", str(tmp_path / "drill.s7g"),
-         "--symbols", str(tmp_path / "symbols.txt"), "--state", str(tmp_path / "drill.sqlite"),
-         "--restart", "hot", "--listen", endpoint, "--duration-s", "300",
-         "--max-cycle-ms", "5000"],
-        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )  # fmt: skip
-    session = None
-    try:
-        assert proc.stdout is not None
-        line = proc.stdout.readline()
-        assert "on the bus" in line, (line, proc.stderr.read() if proc.stderr else "")
-        session = open_session(connect=[endpoint])
-        client = BusClient(session, "cpu1")
-        assert wait_until(lambda: client.state(FB) is not None, 30)
-        login = client.login("tess")
-        assert login.ok, login.reason
-        yield Cpu(proc, client, login.token)
-        client.close()
-    finally:
-        if session is not None:
-            session.close()  # type: ignore[no-untyped-call]
-        if proc.poll() is None:
-            proc.kill()
-        proc.wait(30)
-        for stream in (proc.stdout, proc.stderr):
-            if stream is not None:
-                if stream is proc.stderr:
-                    assert "Traceback" not in stream.read()
-                stream.close()
+    args = [str(tmp_path / "drill.s7g"), "--symbols", str(tmp_path / "symbols.txt"),
+            "--state", str(tmp_path / "drill.sqlite"), "--restart", "hot",
+            "--duration-s", "300", "--max-cycle-ms", "5000"]  # fmt: skip
+    with cpu_process(tmp_path, args, fb=FB, user="tess") as (proc, client, token):
+        yield Cpu(proc, client, token)
+    for stream in (proc.stdout, proc.stderr):
+        if stream is not None:
+            if stream is proc.stderr:
+                assert "Traceback" not in stream.read()
+            stream.close()
 
 
 @pytest.fixture

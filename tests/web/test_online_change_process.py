@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import random
 import subprocess
-import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -28,10 +27,9 @@ from s7graph.sequencer.text.format import format_chart
 from s7graph.sequencer.text.parse import parse_chart
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import Command, CommandReply
-from s7graph.web.bus.session import open_session
 from s7graph.web.harness.session import ChartSession, compile_text
 from tests.sequencer.test_online_change_properties import EDITS, ROWS, TEXTS, _numbers
-from tests.web.helpers import wait_until
+from tests.web.helpers import cpu_process, wait_until
 
 pytestmark = pytest.mark.timeout(120)
 ROOT = Path(__file__).resolve().parents[2]
@@ -67,32 +65,14 @@ def running(
     the process wrote to stderr into ``stderr`` once it ended."""
     path = tmp_path / "chart.s7g"
     path.write_text(text, encoding="utf-8")
-    endpoint = f"unixsock-stream/{tmp_path}/bus.sock"
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "s7graph", "run", str(path), "--state", str(tmp_path / "s.sqlite"),
-         "--listen", endpoint, "--duration-s", "110"],
-        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )  # fmt: skip
-    session = None
-    try:
-        assert proc.stdout is not None
-        line = proc.stdout.readline()
-        assert "on the bus" in line, (line, proc.stderr.read() if proc.stderr else "")
-        session = open_session(connect=[endpoint])
-        client = BusClient(session, "cpu1")
+    args = [str(path), "--state", str(tmp_path / "s.sqlite"), "--duration-s", "110"]
+    with cpu_process(tmp_path, args, terminate=True) as (proc, client, _):
         yield proc, client
-        client.close()
-    finally:
-        if session is not None:
-            session.close()  # type: ignore[no-untyped-call]
-        if proc.poll() is None:
-            proc.terminate()
-        proc.wait(30)
-        if proc.stderr is not None:
-            stderr.append(proc.stderr.read())
-        for pipe in (proc.stdout, proc.stderr):
-            if pipe is not None:
-                pipe.close()
+    if proc.stderr is not None:
+        stderr.append(proc.stderr.read())
+    for pipe in (proc.stdout, proc.stderr):
+        if pipe is not None:
+            pipe.close()
 
 
 class Local:
