@@ -10,7 +10,7 @@ loop of 25 steps (5000 steps, 200 active at any time). Every step holds
 
 so a sequencer advances every ``p`` calls (phases drift, about 1/3 of the sequencers switch
 per scan) and its D and L bits toggle inside every step at the 10 ms virtual cycle. Layout
-(``--layout``): ``packed`` = 25 FBs of 8 sequencers each (SPEC §2.1 allows 1..8 per FB; the
+(``--layout``): ``packed`` = 25 FBs of 8 sequencers each (S7-GRAPH allows 1..8 per FB, docs/semantics.md, "Structure"; the
 default), ``single`` = 200 FBs of one sequencer each. The FBs are called from OB1 of one
 ``engine.cpu.Cpu`` driven by a ``VirtualClock`` advanced 10 ms per scan; the wall time of
 ``Cpu.scan()`` is measured with ``perf_counter_ns``.
@@ -72,7 +72,7 @@ def marker_bits(g: int) -> tuple[str, str]:
 
 
 def chart_source(fb: int, first_g: int, n_seq: int, steps: int = STEPS) -> str:
-    """The ``.s7g`` text (SPEC §3) of FB ``fb`` holding sequencers ``first_g ..``."""
+    """The ``.s7g`` text (docs/chart-format.md) of FB ``fb`` holding sequencers ``first_g ..``."""
     out = [
         f'FUNCTION_BLOCK "Bench_{fb}" FB {fb} DB {fb}',
         "  PARAMETERS := STANDARD;",

@@ -1,4 +1,4 @@
-"""User and system blocks: OB, FB, FC, SFB, SFC, DB and instance DBs (SPEC.md §1.3).
+"""User and system blocks: OB, FB, FC, SFB, SFC, DB and instance DBs (docs/runtime.md, "Programs of blocks in Python").
 
 A decorator declares a block's interface (seeds-runtime §1.2, Table 2-2)::
 

@@ -1,4 +1,4 @@
-"""What a block body sees during a scan, and how one block calls another (SPEC.md §1.3–1.4).
+"""What a block body sees during a scan, and how one block calls another (docs/runtime.md, "Programs of blocks in Python" and "Restarts: warm, hot, cold").
 
 ``CallContext.call`` binds the actual parameters (a ``str`` for a non-string parameter is an
 operand, behaviours 33, 34), runs the body one nesting level deeper (B-stack overflow →

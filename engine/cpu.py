@@ -1,4 +1,4 @@
-"""The soft CPU: modes, startup, the scan cycle and error handling (SPEC.md §1.4–1.6).
+"""The soft CPU: modes, startup, the scan cycle and error handling (docs/runtime.md, "Restarts: warm, hot, cold"; docs/architecture.md, "The core is a function").
 
 ``scan()`` reads the clock once and runs one cycle in S7 order: commands queued since the
 last scan are applied, scan hooks run (``add_os_scan_hook``; the S5 timer update of ``sfb``),

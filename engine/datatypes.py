@@ -1,4 +1,4 @@
-"""S7 data types: sizes, ranges, big-endian encodings and DB layout (SPEC.md §1.2).
+"""S7 data types: sizes, ranges, big-endian encodings and DB layout (docs/runtime.md, "The block runtime").
 
 Encodings (seeds-runtime.md §4.3-4.5, §5.1): integers two's complement big-endian; REAL IEEE 754
 single; TIME = DINT ms; DATE = WORD days since 1990-01-01; TIME_OF_DAY = DWORD ms since

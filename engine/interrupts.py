@@ -1,4 +1,4 @@
-"""OB priorities and cyclic interrupts OB30–OB38 (SPEC.md §1.5; behaviours 17, 18, 19, 23).
+"""OB priorities and cyclic interrupts OB30–OB38 (docs/runtime.md, "When a scan hangs or fails"; behaviours 17, 18, 19, 23).
 
 A cyclic OB runs every ``period`` measured on the CPU's process time from the STOP→RUN
 transition, delayed by its phase offset (0 <= phase < period). Only loaded OBs have a

@@ -1,4 +1,4 @@
-"""S7 literals both ways: text → (type, value) and canonical text (SPEC.md §1.2).
+"""S7 literals both ways: text → (type, value) and canonical text (docs/runtime.md, "The block runtime").
 
 Forms follow seeds-runtime.md §4.3 (Table C-1, ``002:L5199-5222``; SCL ``000:L3275-3312``).
 Prefixes and units are case-insensitive; ``_`` may separate digits. Values follow
@@ -61,7 +61,7 @@ def parse_literal(text: str, where: SourceLocation | None = None) -> tuple[str, 
 
     Bare integers are INT, or DINT beyond INT; bare ``16#``/``8#``/``2#`` are WORD (DWORD
     beyond 16 bits); ``C#26`` is the BCD counter value ``('WORD', 0x0026)``. Syntax errors and
-    values outside the type's range raise LiteralError naming ``text`` (SPEC.md §1.2).
+    values outside the type's range raise LiteralError naming ``text`` (docs/runtime.md, "The block runtime").
     """
     s = text.strip()
     try:

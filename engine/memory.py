@@ -1,10 +1,10 @@
-"""CPU operand memory: I/Q process images, PI/PQ module side, M, L, T, C and DBs (SPEC.md §1.1).
+"""CPU operand memory: I/Q process images, PI/PQ module side, M, L, T, C and DBs (docs/runtime.md, "The block runtime").
 
 Every area is a big-endian ``bytearray`` (MB10 is the high byte of MW10, seeds-runtime.md
 §4.2); timers and counters are cells (``S5Timer``/``S5Counter``) whose logic lives in sfb/.
 Retentivity follows seeds-runtime.md §3.3: by default MB0..MB15, no timers and C0..C7 are
 retentive; DBs keep their contents on warm restart and reload initial values on cold restart
-(SPEC.md §1.4).
+(docs/runtime.md, "Restarts: warm, hot, cold").
 """
 
 from __future__ import annotations
@@ -121,7 +121,7 @@ class DataBlock:
         return len(self.data)
 
     def reset(self) -> None:
-        """Reload the initial values (cold restart, SPEC.md §1.4)."""
+        """Reload the initial values (cold restart, docs/runtime.md, "Restarts: warm, hot, cold")."""
         self.data[:] = self.initial.ljust(len(self.data), b"\0")[: len(self.data)]
 
     def field_address(self, name: str) -> Address:
@@ -399,7 +399,7 @@ class Memory:
         if self.dbs.pop(number, None) is None:
             raise BlockError(f"DB{number} does not exist")
 
-    # ---- restart and persistence (SPEC.md §1.4, seeds-runtime.md §3.3) ---------------------
+    # ---- restart and persistence (docs/runtime.md, "Restarts: warm, hot, cold", seeds-runtime.md §3.3) ---------------------
 
     def clear_non_retentive(self) -> None:
         """Warm restart: zero non-retentive M, reset non-retentive T/C cells, clear L.
@@ -415,7 +415,7 @@ class Memory:
         self.local[:] = bytes(len(self.local))
 
     def clear_outputs(self, *, image: bool = True, modules: bool = True) -> None:
-        """The safe output state (SPEC.md §1.4): zero the output image Q (``image``) and the
+        """The safe output state (docs/runtime.md, "Restarts: warm, hot, cold"): zero the output image Q (``image``) and the
         module side PQ (``modules``). STOP and HOLD zero only the modules, a startup both or
         as its restart type says; the one way the CPU resets outputs."""
         if image:

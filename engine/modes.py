@@ -1,4 +1,4 @@
-"""CPU operating modes and mode requests (SPEC.md §1.4; seeds-runtime §3.1, Table 9-1).
+"""CPU operating modes and mode requests (docs/runtime.md, "Restarts: warm, hot, cold"; seeds-runtime §3.1, Table 9-1).
 
 Simultaneous requests resolve to the highest priority: STOP > HOLD > STARTUP > RUN
 (behaviour 2). The key switch gates every start: with the key on STOP a RUN request is

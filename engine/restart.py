@@ -1,4 +1,4 @@
-"""One table: restart type → startup OB and what each keeps or clears (SPEC.md §1.4).
+"""One table: restart type → startup OB and what each keeps or clears (docs/runtime.md, "Restarts: warm, hot, cold").
 
 Seeds-runtime §3.2 / Table 9-4 and behaviours 3–6. ``True`` in a ``clear_*`` column means
 the area is reset; DBs are "reloaded" from their load-memory initial values.

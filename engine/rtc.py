@@ -1,4 +1,4 @@
-"""The CPU's real-time clock over the injected clock (SPEC.md §1.6; seeds-runtime §6.2).
+"""The CPU's real-time clock over the injected clock (docs/architecture.md, "The core is a function"; seeds-runtime §6.2).
 
 ``date_and_time = epoch + (now_ns + offset)`` — never the wall clock. Setting the clock
 (SFC0 SET_CLK) changes only the offset, so the monotonic clock that drives scans, timers

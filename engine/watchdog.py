@@ -1,4 +1,4 @@
-"""Cycle-time monitoring and cycle statistics (SPEC.md §1.5; behaviours 12, 13, 14).
+"""Cycle-time monitoring and cycle statistics (docs/runtime.md, "When a scan hangs or fails"; behaviours 12, 13, 14).
 
 The cycle time is the process time between two OB1 starts. Above the maximum (default
 150 ms) OB80 is called (FLT_ID 16#01) or, without OB80, the CPU stops; at twice the

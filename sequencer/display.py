@@ -1,8 +1,8 @@
 """Display outputs of a GRAPH FB: S_NO paging, step/transition status, group bits
-(SPEC §2.6, §2.7; graph-semantics §D.3, §D.4).
+(docs/semantics.md, "FB pins"; graph-semantics §D.3, §D.4).
 
 S_PREV/S_NEXT and T_PREV/T_NEXT only page the step/transition *shown*; they never move the
-sequence (SPEC §2.6 — seed 000:6007-6008 says otherwise and is wrong, TIA-V21 comments).
+sequence (docs/semantics.md, "FB pins" — seed 000:6007-6008 says otherwise and is wrong, TIA-V21 comments).
 
 The cursor lives in the instance DB: ``GraphState.s_no``/``t_no`` and ``GraphState.display``
 (``set``: "SACT" | "SEF" | "SALL"; ``pinned``: S_NO shows a step chosen with S_SEL even if
@@ -355,7 +355,7 @@ def compute_outputs(
 
 
 class Display:
-    """The display of one runtime (SPEC §2.6, §2.7), incremental: the cycle calls ``page``
+    """The display of one runtime (docs/semantics.md, "FB pins"), incremental: the cycle calls ``page``
     after latching the inputs and ``update`` at the end of the call.
 
     The sets S_NO/T_NO page through are recomputed — from ``state.active`` and the leaving

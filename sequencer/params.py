@@ -1,4 +1,4 @@
-"""The FB pins of a GRAPH FB and the parameter sets holding them: the one table (SPEC §2.7).
+"""The FB pins of a GRAPH FB and the parameter sets holding them: the one table (docs/semantics.md, "FB pins").
 
 Sources: graph-semantics §D.2 (seed 000:6083-6118 for the User-defined set, 000:5942-5961
 and TIA "Standard" for STANDARD, 000:6033-6062 for MAXIMUM). The sets nest:
@@ -6,7 +6,7 @@ MINIMUM ⊂ STANDARD ⊂ MAXIMUM ⊂ USER. The seed's table at 000:6001-6017 als
 ACK_S, REG_S, T_PREV, T_NEXT under Standard; per the errata they belong to USER only.
 
 Everything that needs to know which pins exist reads this table: the FB interface
-(``sequencer/fb.py``), the ``sim`` stimulus and watch names (SPEC §4), programs that write
+(``sequencer/fb.py``), the ``sim`` stimulus and watch names (docs/cli.md, "s7graph sim"), programs that write
 pins, and docs/semantics.md (``markdown_table``).
 """
 

@@ -1,4 +1,4 @@
-"""The CPU message list, SFC17 ALARM_SQ / SFC18 ALARM_S / SFC19 ALARM_SC (SPEC.md §1.7, §2.10).
+"""The CPU message list, SFC17 ALARM_SQ / SFC18 ALARM_S / SFC19 ALARM_SC (docs/runtime.md, "The block runtime"; docs/semantics.md, "Messages").
 
 A ``MessageList`` holds the messages the CPU currently shows: each has a message number
 ``msg_id`` (EV_ID for the SFCs, any hashable-as-text key for the sequencer's interlock and

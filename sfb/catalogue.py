@@ -1,4 +1,4 @@
-"""The one catalogue of system blocks, and the RET_VAL conventions (SPEC.md §1.7; seeds §6.1).
+"""The one catalogue of system blocks, and the RET_VAL conventions (docs/runtime.md, "The block runtime"; seeds §6.1).
 
 ``CATALOGUE`` lists every SFB/SFC s7graph emulates: number, name, kind, and the pins with
 direction and S7 type in the order Siemens documents them. Code reads it — to declare the

@@ -1,4 +1,4 @@
-"""Diagnostic buffer read (SFC51 RDSYSST) and SFC52 WR_USMSG (SPEC.md §1.7; seeds §6.6, §7.2).
+"""Diagnostic buffer read (SFC51 RDSYSST) and SFC52 WR_USMSG (docs/runtime.md, "The block runtime"; seeds §6.6, §7.2).
 
 SZL ``W#16#00A0`` lists every entry of the diagnostic buffer, **newest first** (No. 1 =
 newest, as a programming device shows it); ``W#16#01A0`` lists the newest ``INDEX``

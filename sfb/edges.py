@@ -1,4 +1,4 @@
-"""Edge detection FP / FN and the R_TRIG / F_TRIG one-shots (SPEC.md §1.7; seeds-runtime §5.4).
+"""Edge detection FP / FN and the R_TRIG / F_TRIG one-shots (docs/runtime.md, "The block runtime"; seeds-runtime §5.4).
 
 The previous RLO lives in an edge-memory bit (M, DB bit or FB STAT — never TEMP). Rule:
 ``FP: edge := RLO AND NOT mem; mem := RLO`` and ``FN: edge := NOT RLO AND mem; mem := RLO``.

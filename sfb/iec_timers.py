@@ -1,4 +1,4 @@
-"""IEC timers SFB3 TP, SFB4 TON, SFB5 TOF (SPEC.md §1.7; seeds-runtime §5.3, behaviour 49).
+"""IEC timers SFB3 TP, SFB4 TON, SFB5 TOF (docs/runtime.md, "The block runtime"; seeds-runtime §5.3, behaviour 49).
 
 Each timer is a small state machine over its own instance data and ``(IN, PT, now_ns)``:
 TIME is integer milliseconds with 1 ms resolution up to ``T#24D20H31M23S647MS``; time runs

@@ -1,4 +1,4 @@
-"""S5 timers SP SE SD SS SF on the T area, and the S5TIME codec (SPEC.md §1.7; seeds §5.1).
+"""S5 timers SP SE SD SS SF on the T area, and the S5TIME codec (docs/runtime.md, "The block runtime"; seeds §5.1).
 
 S5TIME (16 bit): bits 0-11 three BCD digits 0..999, bits 12-13 the time base (10 ms, 100 ms,
 1 s, 10 s); a preset in ms is encoded with the smallest base that fits (``S5T#2S`` =

@@ -1,4 +1,4 @@
-"""SFC0 SET_CLK, SFC1 READ_CLK, SFC64 TIME_TCK over the injected clock (SPEC.md §1.6, §1.7).
+"""SFC0 SET_CLK, SFC1 READ_CLK, SFC64 TIME_TCK over the injected clock (docs/architecture.md, "The core is a function"; docs/runtime.md, "The block runtime").
 
 The CPU's real-time clock is the injected clock plus a settable offset — never the wall clock:
 ``date_and_time = epoch + (now_ns + offset)``. SET_CLK changes only the offset, so the

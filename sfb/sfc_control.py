@@ -1,4 +1,4 @@
-"""SFC46 STP, SFC47 WAIT, SFC43 RE_TRIGR (SPEC.md §1.7; seeds-runtime §6.3, behaviour 30).
+"""SFC46 STP, SFC47 WAIT, SFC43 RE_TRIGR (docs/runtime.md, "The block runtime"; seeds-runtime §6.3, behaviour 30).
 
 * STP puts the CPU into STOP from any OB, OB100 included (behaviour 30): ``cpu.stop``.
 * WAIT(WT) busy-waits WT µs (INT, max 32767) on a real CPU and has no RET_VAL. Here time is

@@ -1,4 +1,4 @@
-"""SFC22 CREAT_DB, SFC23 DEL_DB, SFC24 TEST_DB (SPEC.md §1.7; seeds-runtime §6.4;
+"""SFC22 CREAT_DB, SFC23 DEL_DB, SFC24 TEST_DB (docs/runtime.md, "The block runtime"; seeds-runtime §6.4;
 behaviours 37, 38; [000:L652-734]).
 
 * CREAT_DB creates the *lowest free* number in LOW_LIMIT..UP_LIMIT with COUNT bytes; COUNT

@@ -1,5 +1,5 @@
 """Interrupt SFCs: time-of-day SFC28–31, delay SFC32–34, DIS_AIRT/EN_AIRT SFC41/42
-(SPEC.md §1.7; seeds-runtime §6.5; behaviours 20, 21, 23).
+(docs/runtime.md, "The block runtime"; seeds-runtime §6.5; behaviours 20, 21, 23).
 
 The schedules live in the CPU (``engine.timed``: ``cpu.tod``, ``cpu.delays``); these are the
 thin SFC adapters. Time of day is the CPU's real-time clock on the injected clock

@@ -1,4 +1,4 @@
-"""SFC20 BLKMOV and SFC21 FILL over ANY-like areas (SPEC.md §1.7; seeds §6.4, behaviour 39).
+"""SFC20 BLKMOV and SFC21 FILL over ANY-like areas (docs/runtime.md, "The block runtime"; seeds §6.4, behaviour 39).
 
 An ``AnyPointer`` is ``P#<address> <type> <count>`` (``P#DB1.DBX0.0 BYTE 10``): a start
 address plus a length in elements. Rules (seeds-runtime §6.1/§6.4):

@@ -1,4 +1,4 @@
-"""Run-time meters: SFC2 SET_RTM, SFC3 CTRL_RTM, SFC4 READ_RTM, SFC101 RTM (SPEC.md §1.7;
+"""Run-time meters: SFC2 SET_RTM, SFC3 CTRL_RTM, SFC4 READ_RTM, SFC101 RTM (docs/runtime.md, "The block runtime";
 seeds-runtime §6.2; behaviour 55; [000:L536-630], [002:L2346-2357]).
 
 The meters belong to the CPU (``engine.rtm``, ``cpu.meters``): they stop in STOP, keep their

@@ -1,6 +1,6 @@
 """Operands of conditions and actions, resolved once at compile time into code snippets.
 
-A ``Ref`` says what a name means (SPEC §2.9): an S7 address (I Q M DB PI PQ, T/C cells), an
+A ``Ref`` says what a name means (docs/semantics.md, "Conditions"): an S7 address (I Q M DB PI PQ, T/C cells), an
 FB static variable, an FB pin, a step attribute ``Sn.X/T/U`` or ``Tn.TT``. ``CodeGen`` turns a
 ``Ref`` into a Python expression over names bound once per FB instance (``bind``): memory
 areas are bound as ``bytearray`` objects (``_m0`` ``_m1`` ...), so a bit read is one index and

@@ -21,7 +21,7 @@ from s7graph.sequencer.text.elements import Ref
 from s7graph.sequencer.text.model import Chart, Sequence, Step, Transition
 
 # ---------------------------------------------------------------- limits (docs/online-change.md)
-# S7-GRAPH's own limits (SPEC §2.1: 250 steps, 250 transitions, 8 sequencers) only warn
+# S7-GRAPH's own limits (docs/semantics.md, "Structure": 250 steps, 250 transitions, 8 sequencers) only warn
 # (W110); the editor refuses beyond four times them, so that every edit and its validation
 # stay in milliseconds and a hostile chart or paste cannot exhaust the view or the CPU.
 MAX_STEPS: Final = 1_000

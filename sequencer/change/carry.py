@@ -1,4 +1,4 @@
-"""A GRAPH FB's state across versions of its chart (SPEC §2.1; DESIGN "State lives in the
+"""A GRAPH FB's state across versions of its chart (docs/semantics.md, "Structure"; DESIGN "State lives in the
 instance DB").
 
 ``fingerprint(cc)`` names a compiled chart — its steps, transitions, generated code,

@@ -1,6 +1,6 @@
-"""Validation rules for conditions, operands and types (SPEC.md §2.8, §2.9, §3).
+"""Validation rules for conditions, operands and types (docs/semantics.md, "Actions" and "Conditions"; docs/chart-format.md).
 
-Typing (SPEC §2.8, §2.9; seed 000:5838-5884): comparisons need the same type on both sides,
+Typing (docs/semantics.md, "Actions" and "Conditions"; seed 000:5838-5884): comparisons need the same type on both sides,
 one of INT DINT REAL TIME; ``+ - * /`` on INT DINT REAL (``+ -`` also on TIME); ``MOD`` on
 DINT; ``AND OR XOR`` on BOOL (logic) or WORD/DWORD (bitwise, assignments only); ``SHL SHR``
 on WORD/DWORD, ``SSR`` on INT/DINT, ``ROL ROR`` on DWORD, shift count INT. An untyped absolute
@@ -8,7 +8,7 @@ address adapts (WORD address ~ INT, DWORD address ~ DINT REAL TIME); an integer 
 INT and DINT. A timer or counter cell (``T5``, ``C1``) is a contact (its status bit) where a
 BOOL is expected, and its INT value in comparisons, arithmetic, function arguments and
 assignments (``steps.operands.CELLS``; seed 003:1599-1604). Conditions hold only contacts,
-NOT AND OR XOR and comparisons (SPEC §2.9).
+NOT AND OR XOR and comparisons (docs/semantics.md, "Conditions").
 Operand resolution is ``sequencer.text.names.resolve_operand``.
 """
 
@@ -90,14 +90,14 @@ _SHIFT_LEFT: Final = {
 
 
 def rule_empty_conditions(ctx: _Ctx) -> None:
-    """An empty transition condition always holds (W120, SPEC §2.9)."""
+    """An empty transition condition always holds (W120, docs/semantics.md, "Conditions")."""
     for t in ctx.chart.all_transitions():
         if t.condition is None:
             ctx.warn("W120", f"transition T{t.number} has no condition; it switches at once",
                      t.loc, f"transition T{t.number}")  # fmt: skip
 
 
-# ---------------------------------------------------------------- conditions (SPEC §2.9)
+# ---------------------------------------------------------------- conditions (docs/semantics.md, "Conditions")
 
 
 def _conditions(ctx: _Ctx) -> Iterator[tuple[Expr, SourceLocation, str]]:

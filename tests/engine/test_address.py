@@ -1,4 +1,4 @@
-"""S7 address syntax (SPEC.md §1.1, seeds-runtime.md §4.2)."""
+"""S7 address syntax (docs/runtime.md, "The block runtime", seeds-runtime.md §4.2)."""
 
 from __future__ import annotations
 

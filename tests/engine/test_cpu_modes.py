@@ -1,4 +1,4 @@
-"""CPU modes, key switch, mode requests, HOLD and memory reset (SPEC.md §1.4, seeds §3.1)."""
+"""CPU modes, key switch, mode requests, HOLD and memory reset (docs/runtime.md, "Restarts: warm, hot, cold", seeds §3.1)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Data types: sizes, ranges, encodings, layout (SPEC.md §1.2, seeds-runtime.md §4.3-4.5, §5.1)."""
+"""Data types: sizes, ranges, encodings, layout (docs/runtime.md, "The block runtime", seeds-runtime.md §4.3-4.5, §5.1)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Cyclic interrupts OB30–OB38 and OB priorities (SPEC.md §1.5; behaviours 18, 19, 23–25)."""
+"""Cyclic interrupts OB30–OB38 and OB priorities (docs/runtime.md, "When a scan hangs or fails"; behaviours 18, 19, 23–25)."""
 
 from __future__ import annotations
 

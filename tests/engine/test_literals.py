@@ -1,4 +1,4 @@
-"""Literals (SPEC.md §1.2, seeds-runtime.md §4.3 Table C-1)."""
+"""Literals (docs/runtime.md, "The block runtime", seeds-runtime.md §4.3 Table C-1)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Operand memory (SPEC.md §1.1, §1.4; seeds-runtime.md §3.3, §4.2, §10)."""
+"""Operand memory (docs/runtime.md, "The block runtime" and "Restarts: warm, hot, cold"; seeds-runtime.md §3.3, §4.2, §10)."""
 
 from __future__ import annotations
 
@@ -138,7 +138,7 @@ def test_counter_value_saturates_and_q_means_nonzero() -> None:
 
 
 def test_peripheral_access_goes_to_the_module_side_not_the_process_image(mem: Memory) -> None:
-    """SPEC.md §1.1: PI/PQ are the module side; I is only the process image."""
+    """docs/runtime.md, "The block runtime": PI/PQ are the module side; I is only the process image."""
     mem.periph_in[0:2] = b"\x12\x34"
     assert mem.read(A("PIW0")) == 0x1234
     assert mem.read(A("IW0")) == 0

@@ -1,4 +1,4 @@
-"""Round trips: address text, literals, encodings, memory (hypothesis; SPEC.md §1.1-1.2)."""
+"""Round trips: address text, literals, encodings, memory (hypothesis; docs/runtime.md, "The block runtime")."""
 
 from __future__ import annotations
 

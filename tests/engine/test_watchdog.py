@@ -1,4 +1,4 @@
-"""Cycle-time monitoring (SPEC.md §1.5; behaviour 12)."""
+"""Cycle-time monitoring (docs/runtime.md, "When a scan hangs or fails"; behaviour 12)."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """The automatic drill of seed 000 §14.6 example 2 (000:6176-6225), run through ``s7graph sim``
-(SPEC §4) with its plant (``examples/drill/plant.py``) and stimulus."""
+(docs/cli.md, "s7graph sim") with its plant (``examples/drill/plant.py``) and stimulus."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""``s7graph check`` prints one line per diagnostic plus a summary; exit 0/1/2 (SPEC.md §3)."""
+"""``s7graph check`` prints one line per diagnostic plus a summary; exit 0/1/2 (docs/chart-format.md)."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """Interlock, supervision, acknowledgement, modes and control inputs in the cycle
-(SPEC §2.2 1-2, 4b, 4d; §2.3-§2.6)."""
+(docs/semantics.md, "One FB call", step 1-2, 4b, 4d; §2.3-§2.6)."""
 
 from __future__ import annotations
 

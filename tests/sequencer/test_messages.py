@@ -1,4 +1,4 @@
-"""Interlock and supervision messages in the CPU's message list (SPEC §2.10; seed
+"""Interlock and supervision messages in the CPU's message list (docs/semantics.md, "Messages"; seed
 000_94874053f3a39f87.txt:6226-6300). Chart: scenarios/messages.s7g (FB 1, DB 1)."""
 
 from __future__ import annotations
@@ -63,7 +63,7 @@ def test_interlock_error_message_comes_goes_and_is_acknowledged_by_ack_ef() -> N
     assert msg.text == "S7GRAPH Interlock Error: FB1, DB1, S001 material is missing"
     run.set(I1_0=True).call()
     assert run.messages.get(IL1).state is MessageState.OUTGOING  # type: ignore[union-attr]
-    assert not run.out("ERR_FLT")  # the step's error cleared itself (SPEC §2.3)
+    assert not run.out("ERR_FLT")  # the step's error cleared itself (docs/semantics.md, "Interlock")
     run.set(M10_2=True).call()
     assert run.messages.entries() == ()
     assert run.messages.log()[-1].user == PROGRAM_USER

@@ -1,4 +1,4 @@
-"""The FB pin table and parameter sets (SPEC §2.7, graph-semantics §D.2)."""
+"""The FB pin table and parameter sets (docs/semantics.md, "FB pins", graph-semantics §D.2)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The validator reports all problems at once, with types and the limits of SPEC.md §2.1."""
+"""The validator reports all problems at once, with types and the limits of docs/semantics.md, "Structure"."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """System blocks called through the engine: SFB instances, STP, WAIT, clock, BLKMOV, alarms
-(SPEC.md §1.3, §1.7; behaviours 30, 40, 49)."""
+(docs/runtime.md, "Programs of blocks in Python" and "The block runtime"; behaviours 30, 40, 49)."""
 
 from __future__ import annotations
 
@@ -109,7 +109,7 @@ def test_sfcs_return_ret_val_and_blkmov_rejects_a_bool_any_not_a_multiple_of_8(
 
 
 def test_set_clk_and_read_clk_use_the_injected_clock(clock: VirtualClock) -> None:
-    """SPEC §1.6: the CPU clock is the injected clock plus an offset set by SET_CLK."""
+    """docs/architecture.md, "The core is a function": the CPU clock is the injected clock plus an offset set by SET_CLK."""
     read: list[dict[str, object]] = []
 
     def main(ctx: CallContext) -> None:

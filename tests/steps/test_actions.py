@@ -1,4 +1,4 @@
-"""Action rows (SPEC §2.8) and arithmetic with overflow (seed 000:5838-5884)."""
+"""Action rows (docs/semantics.md, "Actions") and arithmetic with overflow (seed 000:5838-5884)."""
 
 from __future__ import annotations
 
