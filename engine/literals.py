@@ -1,6 +1,6 @@
 """S7 literals both ways: text → (type, value) and canonical text (docs/runtime.md, "The block runtime").
 
-Forms follow seeds-runtime.md §4.3 (Table C-1, ``002:L5199-5222``; SCL ``000:L3275-3312``).
+Forms follow Siemens' Program Design for S7-300/400, appendix C, table C-1, Siemens' Program Design for S7-300/400; SCL (STEP7 comprehensive guide vol. 2, ch. 13)).
 Prefixes and units are case-insensitive; ``_`` may separate digits. Values follow
 docs/contracts.md "Values" (TIME/S5TIME/TOD in ms, DATE ``date``, DT ``datetime``).
 """
@@ -307,7 +307,7 @@ def format_literal(type_name: str, value: object) -> str:
     """Canonical upper-case literal: ``('TIME', 1200)`` → ``'T#1S200MS'``, WORD → ``W#16#FFF0``.
 
     ``parse_literal(format_literal(t, v))`` gives back ``(t, v)`` (STRING[n] as STRING);
-    a value outside the type raises TypeMismatch (seeds-runtime.md §4.3).
+    a value outside the type raises TypeMismatch (Siemens' Program Design for S7-300/400, appendix C).
     """
     spec = type_of(type_name)
     v = check_value(spec.name, value)

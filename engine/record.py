@@ -13,7 +13,7 @@ from s7graph.engine.modes import CpuMode
 
 @dataclass(frozen=True, slots=True)
 class DiagEntry:
-    """One diagnostic-buffer entry: time, event id 16#xxxx, block, message (seeds-runtime §7.2)."""
+    """One diagnostic-buffer entry: time, event id 16#xxxx, block, message (Siemens' Program Design for S7-300/400, ch. 10)."""
 
     t_ns: int
     event_id: int

@@ -2,7 +2,7 @@
 (docs/semantics.md, "FB pins"; graph-semantics §D.3, §D.4).
 
 S_PREV/S_NEXT and T_PREV/T_NEXT only page the step/transition *shown*; they never move the
-sequence (docs/semantics.md, "FB pins" — seed 000:6007-6008 says otherwise and is wrong, TIA-V21 comments).
+sequence (docs/semantics.md, "FB pins" — STEP7 comprehensive guide vol. 2, ch. 14 says otherwise and is wrong, TIA-V21 comments).
 
 The cursor lives in the instance DB: ``GraphState.s_no``/``t_no`` and ``GraphState.display``
 (``set``: "SACT" | "SEF" | "SALL"; ``pinned``: S_NO shows a step chosen with S_SEL even if

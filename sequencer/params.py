@@ -1,8 +1,8 @@
 """The FB pins of a GRAPH FB and the parameter sets holding them: the one table (docs/semantics.md, "FB pins").
 
-Sources: graph-semantics §D.2 (seed 000:6083-6118 for the User-defined set, 000:5942-5961
-and TIA "Standard" for STANDARD, 000:6033-6062 for MAXIMUM). The sets nest:
-MINIMUM ⊂ STANDARD ⊂ MAXIMUM ⊂ USER. The seed's table at 000:6001-6017 also lists REG_EF,
+Sources: graph-semantics §D.2 (STEP7 comprehensive guide vol. 2, ch. 14 for the User-defined set, STEP7 comprehensive guide vol. 2, ch. 14
+and TIA "Standard" for STANDARD, STEP7 comprehensive guide vol. 2, ch. 14 for MAXIMUM). The sets nest:
+MINIMUM ⊂ STANDARD ⊂ MAXIMUM ⊂ USER. The seed's table at STEP7 comprehensive guide vol. 2, ch. 14 also lists REG_EF,
 ACK_S, REG_S, T_PREV, T_NEXT under Standard; per the errata they belong to USER only.
 
 Everything that needs to know which pins exist reads this table: the FB interface
@@ -59,7 +59,7 @@ _I, _O = Direction.IN, Direction.OUT
 MIN, STD, MAX, USR = PARAMETER_SETS
 
 # (name, direction, type, smallest set, default, comment). Order = the FB interface order of
-# seed 000:6083-6118 (inputs first, then outputs).
+# STEP7 comprehensive guide vol. 2, ch. 14 (inputs first, then outputs).
 _TABLE: Final[tuple[tuple[str, Direction, str, str, object, str], ...]] = (
     ("OFF_SQ", _I, "BOOL", STD, False, "Sequencer off: all steps deactivated while 1"),
     ("INIT_SQ", _I, "BOOL", MIN, False, "Rising edge: initial steps on, all others off"),

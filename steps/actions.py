@@ -115,7 +115,7 @@ def _nld_bit(row: ActionRow) -> Operand | None:
     """The bit of an N, D or L row (else None): the final scan resets it, and the row gates it by
     writing ``operand = c_ok and …`` (C off writes 0). Every other row marked C — the
     assignment ``N C x := expr`` included — runs only while the interlock holds (S7-GRAPH
-    manual 14-8: all actions marked C; seed 000:5794-5799)."""
+    manual 14-8: all actions marked C; STEP7 comprehensive guide vol. 2, ch. 14)."""
     nld = row.qualifier.upper() in ("N", "D", "L")
     return row.operand if nld and isinstance(row.operand, Operand) else None
 

@@ -23,7 +23,7 @@ from s7graph.engine.errors import SourceLocation, SymbolError
 # S5 timer and counter cells (``T n``, ``C n``): a contact reads the status bit, a number
 # (a comparison, arithmetic, an assignment to a number) reads the value as an INT — the
 # count, or the remaining time in units of the time base, as ``L C n`` / ``L T n`` load it
-# (seed 003:1599-1604: "used at the same address as a BOOL state or as the current value").
+# (El-Shahat's S7-300/400 course: "used at the same address as a BOOL state or as the current value").
 CELLS = frozenset({"timer", "counter"})
 CELL_VALUE_TYPE = "INT"
 # The default type of an absolute address by width, when no symbol says otherwise.

@@ -1,4 +1,4 @@
-"""Simulated pair of belts for ``examples/conveyor/conveyor.s7g`` (seed 000:6160-6174).
+"""Simulated pair of belts for ``examples/conveyor/conveyor.s7g`` (STEP7 comprehensive guide vol. 2, ch. 14).
 
 Belt A drops material onto belt B, and belt B needs ``TRANSIT_MS`` (7 s) to carry a load off
 its end. That is why the seed starts B before A and stops A 7 s before B. The model keeps

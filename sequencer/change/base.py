@@ -96,7 +96,7 @@ def checked_number(n: object, what: str) -> int:
 def next_number(used: Iterable[int]) -> int:
     """The number S7-GRAPH gives a new step, transition or sequencer: the next one after
     the highest in use (S7-GRAPH numbers steps and transitions itself and lets the user
-    change the numbers, seed 000:5458); past ``MAX_NUMBER``, the lowest free one."""
+    change the numbers, STEP7 comprehensive guide vol. 2, ch. 14); past ``MAX_NUMBER``, the lowest free one."""
     taken = set(used)
     top = max(taken, default=0) + 1
     if top <= MAX_NUMBER:

@@ -142,7 +142,7 @@ class Operation:
         return make_edit(self.name, {**dict(zip(names, got, strict=True)), **values})
 
 
-# The one table of edit operations, by the element they act on (seed 000:5432-5489 for
+# The one table of edit operations, by the element they act on (STEP7 comprehensive guide vol. 2, ch. 14 for
 # S7-GRAPH's Insert menu: Step + Transition, Alternative/Simultaneous branch, Jump, Branch
 # stop, Sequencer).
 OPERATIONS: Final[tuple[Operation, ...]] = (

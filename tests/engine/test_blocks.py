@@ -1,4 +1,4 @@
-"""Blocks, interfaces, instance DBs and calls (docs/runtime.md, "Programs of blocks in Python"; seeds-runtime §1.2–1.3)."""
+"""Blocks, interfaces, instance DBs and calls (docs/runtime.md, "Programs of blocks in Python"; Siemens' Program Design for S7-300/400, ch. 2)."""
 
 from __future__ import annotations
 

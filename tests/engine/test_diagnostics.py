@@ -1,4 +1,4 @@
-"""The diagnostic buffer (seeds-runtime §7.2; behaviour 52)."""
+"""The diagnostic buffer (Siemens' Program Design for S7-300/400, ch. 10)."""
 
 from __future__ import annotations
 

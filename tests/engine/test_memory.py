@@ -1,4 +1,4 @@
-"""Operand memory (docs/runtime.md, "The block runtime" and "Restarts: warm, hot, cold"; seeds-runtime.md §3.3, §4.2, §10)."""
+"""Operand memory (docs/runtime.md, "The block runtime" and "Restarts: warm, hot, cold"; Siemens' Program Design for S7-300/400, ch. 9; Siemens' Program Design for S7-300/400, ch. 5)."""
 
 from __future__ import annotations
 
@@ -36,7 +36,7 @@ def test_bit_0_of_the_first_byte_is_bit_8_of_the_word(mem: Memory) -> None:
 
 
 def test_dword_spans_four_bytes_most_significant_first(mem: Memory) -> None:
-    """seeds-runtime.md §4.2: MD100 = MB100..MB103."""
+    """Siemens' Program Design for S7-300/400, ch. 5: MD100 = MB100..MB103."""
     mem.write(A("MD100"), 0x01020304)
     assert [mem.read(A(f"MB{n}")) for n in range(100, 104)] == [1, 2, 3, 4]
     assert mem.read(A("MW101")) == 0x0203
@@ -118,7 +118,7 @@ def test_timer_or_counter_number_beyond_the_cells_is_an_address_error() -> None:
 
 
 def test_timer_reads_status_as_bool_and_binary_value_as_word(mem: Memory) -> None:
-    """seeds-runtime.md §5.1: ``A T n`` status bit, ``L T n`` binary without time base."""
+    """El-Shahat's S7-300/400 course, timers and counters: ``A T n`` status bit, ``L T n`` binary without time base."""
     mem.timers[5] = S5Timer(value_ms=1230, time_base_ms=10, q=True)
     assert mem.read_as(A("T5"), "BOOL") is True
     assert mem.read(A("T5")) == 123
@@ -129,7 +129,7 @@ def test_timer_reads_status_as_bool_and_binary_value_as_word(mem: Memory) -> Non
 
 
 def test_counter_value_saturates_and_q_means_nonzero() -> None:
-    """seeds-runtime.md §5.2: 0..999, Q = value > 0."""
+    """El-Shahat's S7-300/400 course, timers and counters: 0..999, Q = value > 0."""
     cell = S5Counter()
     cell.set_value(1200)
     assert (cell.value, cell.q, cell.bcd()) == (999, True, 0x999)
@@ -147,7 +147,7 @@ def test_peripheral_access_goes_to_the_module_side_not_the_process_image(mem: Me
 
 
 def test_peripheral_output_inside_the_q_image_updates_q_too(mem: Memory) -> None:
-    """seeds-runtime.md §4.2 [K]: PQx within the PIQ range also updates the PIQ."""
+    """Siemens' Program Design for S7-300/400, ch. 5 [K]: PQx within the PIQ range also updates the PIQ."""
     mem.write(A("PQW0"), 0xBEEF)
     assert mem.read(A("QW0")) == 0xBEEF
     quiet = Memory(pq_updates_q=False)

@@ -1,4 +1,4 @@
-"""Warm, hot and cold restart: what each keeps and clears (docs/runtime.md, "Restarts: warm, hot, cold"; seeds §3.2)."""
+"""Warm, hot and cold restart: what each keeps and clears (docs/runtime.md, "Restarts: warm, hot, cold"; Siemens' Program Design for S7-300/400, ch. 9)."""
 
 from __future__ import annotations
 

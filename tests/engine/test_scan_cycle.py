@@ -1,4 +1,4 @@
-"""The scan cycle: process images, outputs, programming errors (docs/runtime.md, "When a scan hangs or fails", seeds §3.4)."""
+"""The scan cycle: process images, outputs, programming errors (docs/runtime.md, "When a scan hangs or fails", Siemens' Program Design for S7-300/400, ch. 3)."""
 
 from __future__ import annotations
 

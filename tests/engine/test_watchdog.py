@@ -1,4 +1,4 @@
-"""Cycle-time monitoring (docs/runtime.md, "When a scan hangs or fails"; behaviour 12)."""
+"""Cycle-time monitoring (docs/runtime.md, "When a scan hangs or fails")."""
 
 from __future__ import annotations
 

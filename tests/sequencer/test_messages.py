@@ -1,5 +1,5 @@
 """Interlock and supervision messages in the CPU's message list (docs/semantics.md, "Messages"; seed
-000_94874053f3a39f87.txt:6226-6300). Chart: scenarios/messages.s7g (FB 1, DB 1)."""
+STEP7 comprehensive guide vol. 2, ch. 14). Chart: scenarios/messages.s7g (FB 1, DB 1)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The seed's exercises 1-4 on the FB parameters (seed 000_94874053f3a39f87.txt:6021-6122),
+"""The seed's exercises 1-4 on the FB parameters (STEP7 comprehensive guide vol. 2, ch. 14),
 run through the real cycle with the pins wired to markers as in ``CALL FB 2, DB 2``.
 Charts: tests/sequencer/scenarios/exercise_*.s7g."""
 

@@ -1,4 +1,4 @@
-"""FP / FN edge detection with an edge-memory bit (seeds-runtime §5.4, behaviour 50)."""
+"""FP / FN edge detection with an edge-memory bit (El-Shahat's S7-300/400 course, timers and counters)."""
 
 from __future__ import annotations
 

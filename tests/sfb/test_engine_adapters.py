@@ -1,5 +1,5 @@
 """System blocks called through the engine: SFB instances, STP, WAIT, clock, BLKMOV, alarms
-(docs/runtime.md, "Programs of blocks in Python" and "The block runtime"; behaviours 30, 40, 49)."""
+(docs/runtime.md, "Programs of blocks in Python" and "The block runtime")."""
 
 from __future__ import annotations
 

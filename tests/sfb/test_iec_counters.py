@@ -1,4 +1,4 @@
-"""SFB0 CTU, SFB1 CTD, SFB2 CTUD (seeds-runtime §5.3, behaviour 48)."""
+"""SFB0 CTU, SFB1 CTD, SFB2 CTUD (STEP7 comprehensive guide vol. 2, ch. 12)."""
 
 from __future__ import annotations
 

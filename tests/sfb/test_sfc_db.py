@@ -1,4 +1,4 @@
-"""SFC22 CREAT_DB, SFC23 DEL_DB, SFC24 TEST_DB (seeds-runtime §6.4; behaviours 4, 37, 38)."""
+"""SFC22 CREAT_DB, SFC23 DEL_DB, SFC24 TEST_DB (STEP7 comprehensive guide vol. 2, ch. 12)."""
 
 from __future__ import annotations
 

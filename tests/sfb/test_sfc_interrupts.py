@@ -1,5 +1,5 @@
 """Delay and time-of-day interrupts, DIS_AIRT/EN_AIRT, equal-priority queueing (seeds-runtime
-§2, §6.5; behaviours 9, 17, 20, 21, 22, 23)."""
+§2, §6.5)."""
 
 from __future__ import annotations
 
@@ -105,7 +105,7 @@ def test_tod_interrupt_set_is_inactive_until_act_tint_and_repeats_each_minute(
 
 def test_activated_tod_interrupts_are_inactive_after_a_warm_restart(clock: VirtualClock) -> None:
     """Behaviour 21: after a warm restart program-activated TOD interrupts stay inactive
-    until re-activated [002:L1394]; a HW-configured active one comes back by itself."""
+    until re-activated (Siemens' Program Design for S7-300/400); a HW-configured active one comes back by itself."""
     log: list[tuple[int, dict[str, Any]]] = []
     at = datetime(2026, 3, 2, 10, 0, 0)
 
@@ -202,7 +202,7 @@ def test_equal_priority_tod_interrupts_run_in_the_order_of_their_start_events(
     clock: VirtualClock,
 ) -> None:
     """Behaviour 17: OB10..OB17 share priority 2 and queue in order of their start events
-    [002:L1365], not by OB number."""
+    (Siemens' Program Design for S7-300/400), not by OB number."""
     log: list[tuple[int, dict[str, Any]]] = []
     cpu = make_cpu(clock, OB(1, "OB1", lambda c: None), recorder(10, log), recorder(11, log))
     cpu.start()
@@ -238,7 +238,7 @@ def test_dis_airt_delays_interrupts_instead_of_dropping_them(clock: VirtualClock
 
 
 def test_next_occurrence_skips_months_without_the_start_day() -> None:
-    """Behaviour 21: monthly from 31 Jan runs only in months with 31 days [002:L1386];
+    """Behaviour 21: monthly from 31 Jan runs only in months with 31 days (Siemens' Program Design for S7-300/400);
     ``W#16#2001`` runs at each month's end."""
     start = datetime(2026, 1, 31, 8, 0)
     assert next_occurrence(start, Period.MONTH, datetime(2026, 2, 1)) == datetime(2026, 3, 31, 8)

@@ -1,4 +1,4 @@
-"""SFC20 BLKMOV and SFC21 FILL over ANY areas (seeds §6.1, §6.4; behaviours 39, 40)."""
+"""SFC20 BLKMOV and SFC21 FILL over ANY areas (STEP7 comprehensive guide vol. 2, ch. 12)."""
 
 from __future__ import annotations
 

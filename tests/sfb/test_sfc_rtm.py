@@ -1,4 +1,4 @@
-"""Run-time meters SFC2/3/4 and SFC101 (seeds-runtime §6.2; behaviour 55)."""
+"""Run-time meters SFC2/3/4 and SFC101 (STEP7 comprehensive guide vol. 2, ch. 12)."""
 
 from __future__ import annotations
 
