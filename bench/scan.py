@@ -1,7 +1,7 @@
 """Scan-time benchmark: 200 GRAPH sequencers on the soft CPU vs. the same workload in
 ``transitions`` (run as ``python bench/scan.py``; see bench/README.md).
 
-Workload (DESIGN "a scan costs in proportion to the active steps"): 200 sequencers, each a
+Workload (docs/architecture.md, "The core is a function"): 200 sequencers, each a
 loop of 25 steps (5000 steps, 200 active at any time). Every step holds
 
     S1 N c := 0;  N c := c + 1;      // an assignment every call (reset on activation)

@@ -1,4 +1,4 @@
-"""Errors as values with places: every error names where it happened (DESIGN.md "Errors")."""
+"""Errors as values with places: every error names where it happened (docs/architecture.md, "Seams")."""
 
 from __future__ import annotations
 

@@ -2,7 +2,7 @@
 
 Forms follow Siemens' Program Design for S7-300/400, appendix C, table C-1, Siemens' Program Design for S7-300/400; SCL (STEP7 comprehensive guide vol. 2, ch. 13)).
 Prefixes and units are case-insensitive; ``_`` may separate digits. Values follow
-docs/contracts.md "Values" (TIME/S5TIME/TOD in ms, DATE ``date``, DT ``datetime``).
+docs/architecture.md, "Seams" (TIME/S5TIME/TOD in ms, DATE ``date``, DT ``datetime``).
 """
 
 from __future__ import annotations

@@ -140,7 +140,7 @@ def _b64(data: bytes | bytearray) -> str:
 
 
 class Memory:
-    """All operand areas of one CPU, addressed by ``Address`` (docs/contracts.md).
+    """All operand areas of one CPU, addressed by ``Address`` (docs/architecture.md, "Seams").
 
     ``read``/``write`` move raw unsigned values (BIT → bool); ``read_as``/``write_as``
     convert S7 types. Fast paths for compiled code: ``read_bit``/``write_bit`` and

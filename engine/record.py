@@ -1,4 +1,4 @@
-"""The one trace format: what a scan did (DESIGN.md "The core is a pure function").
+"""The one trace format: what a scan did (docs/architecture.md, "The core is a function").
 
 ``ScanRecord`` is frozen and cheap (slots, tuples, no copies of memory); everybody — tests,
 the web view, the bus, the recorder, persistence — reads the same record.

@@ -1,5 +1,4 @@
-"""Compile a source ``Chart`` into a ``CompiledChart`` (DESIGN "A compiled chart is
-immutable data"; docs/semantics.md, "Structure" and "Actions" and "Conditions").
+"""Compile a source ``Chart`` into a ``CompiledChart`` (docs/architecture.md, "The core is a function"; docs/semantics.md, "Structure" and "Actions" and "Conditions").
 
 The validator runs first; any error-severity diagnostic raises ``ChartError`` carrying all of
 them. Then every operand is resolved once (symbol → address, FB variable, FB pin, step or

@@ -1,5 +1,5 @@
 """CompiledChart: a chart as immutable, int-indexed data plus one compiled code object
-(DESIGN "A compiled chart is immutable data"; docs/semantics.md, "Structure").
+(docs/architecture.md, "The core is a function"; docs/semantics.md, "Structure").
 
 Steps and transitions are numbered ``0..n-1`` in definition order (sequence by sequence).
 ``leaving[i]`` lists the transitions leaving step ``i`` in priority order (written order,

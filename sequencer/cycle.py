@@ -1,4 +1,4 @@
-"""One call of a GRAPH FB: the algorithm of docs/semantics.md, "One FB call", in that order (graph-semantics §A.2).
+"""One call of a GRAPH FB: the algorithm of docs/semantics.md, "One FB call", in that order (docs/semantics.md, "Decisions").
 
 1. latch the FB inputs, detect rising edges, advance step times (T; U unless disturbed;
    both frozen by HALT_TM);

@@ -1,5 +1,4 @@
-"""GraphFB: a compiled chart as an engine FB (docs/semantics.md, "One FB call" and "FB pins"; DESIGN "State lives in the
-instance DB").
+"""GraphFB: a compiled chart as an engine FB (docs/semantics.md, "One FB call" and "FB pins"; docs/architecture.md, "The core is a function").
 
 The FB's interface is the chart's parameter set (``sequencer.params``: IN pins, OUT pins)
 plus one STAT ``G7_STATE`` of type OBJECT holding the ``GraphState`` — so snapshot/restore

@@ -1,6 +1,6 @@
 """The FB pins of a GRAPH FB and the parameter sets holding them: the one table (docs/semantics.md, "FB pins").
 
-Sources: graph-semantics §D.2 (STEP7 comprehensive guide vol. 2, ch. 14 for the User-defined set, STEP7 comprehensive guide vol. 2, ch. 14
+Sources: docs/semantics.md, "Decisions" (STEP7 comprehensive guide vol. 2, ch. 14 for the User-defined set, STEP7 comprehensive guide vol. 2, ch. 14
 and TIA "Standard" for STANDARD, STEP7 comprehensive guide vol. 2, ch. 14 for MAXIMUM). The sets nest:
 MINIMUM ⊂ STANDARD ⊂ MAXIMUM ⊂ USER. The seed's table at STEP7 comprehensive guide vol. 2, ch. 14 also lists REG_EF,
 ACK_S, REG_S, T_PREV, T_NEXT under Standard; per the errata they belong to USER only.
@@ -126,7 +126,7 @@ _TABLE: Final[tuple[tuple[str, Direction, str, str, object, str], ...]] = (
 
 # The block options that are the defaults of run-time pins (S7-GRAPH block settings "Skip
 # steps" and "Acknowledge errors" with their pins EN_SSKIP / EN_ACKREQ and the outputs
-# SSKIP_ENABLED / ACKREQ_ENABLED; graph-semantics §A.3, §C): pin → (``.s7g`` option,
+# SSKIP_ENABLED / ACKREQ_ENABLED; docs/semantics.md, "Decisions", §C): pin → (``.s7g`` option,
 # ``ChartOptions`` field). The instance DB starts with the option's value in the pin, so an
 # unwired pin follows the option and a value written to the pin wins from then on.
 OPTION_DEFAULTS: Final[dict[str, tuple[str, str]]] = {

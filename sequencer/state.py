@@ -1,5 +1,4 @@
-"""GraphState: the content of a GRAPH FB's instance DB (docs/semantics.md, "One FB call" and "FB pins", DESIGN "State lives
-in the instance DB").
+"""GraphState: the content of a GRAPH FB's instance DB (docs/semantics.md, "One FB call" and "FB pins", docs/architecture.md, "The core is a function").
 
 Everything the cycle remembers between calls lives here, in flat lists indexed by the
 compiled step index ``i`` (``0 .. n_steps-1``, see ``CompiledChart.step_numbers``) and the

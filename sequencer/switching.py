@@ -1,4 +1,4 @@
-"""Steps 4a–4c of a general GRAPH FB call (docs/semantics.md, "One FB call"; graph-semantics §A.2, §A.3): per
+"""Steps 4a–4c of a general GRAPH FB call (docs/semantics.md, "One FB call"; docs/semantics.md, "Decisions"): per
 sequencer, evaluate the transitions leaving its active steps, decide which switch (mode
 rule, HALT_SQ, supervision faults, at an alternative divergence the first-listed, steps
 held for this call) and switch (events S0/S1 through the runtime's ``_deactivate`` and
@@ -109,7 +109,7 @@ def switch(
 
 def skip(rt: _Runtime, rule: Callable[[bool, bool], bool], held: frozenset[int]) -> None:
     """Skip steps: a step entered in this call whose leaving transition already holds is
-    passed through without being active (no S1, no actions; graph-semantics §A.3). A
+    passed through without being active (no S1, no actions; docs/semantics.md, "Decisions"). A
     step ``held`` (activated by INIT_SQ, the first call or S_ON) is never passed through."""
     st = rt.st
     cc = rt.cc

@@ -7,7 +7,7 @@ areas are bound as ``bytearray`` objects (``_m0`` ``_m1`` ...), so a bit read is
 one shift, never a dict lookup or an Address parse.
 
 Inside generated functions these locals exist: ``st`` (GraphState), ``V`` (``st.vars``),
-``X`` (``st.x``). Values follow docs/contracts.md: BOOL → bool/int 0/1, INT/DINT signed int,
+``X`` (``st.x``). Values follow docs/architecture.md, "Seams": BOOL → bool/int 0/1, INT/DINT signed int,
 WORD/DWORD unsigned int, REAL float, TIME ms.
 """
 

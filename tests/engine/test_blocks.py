@@ -52,7 +52,7 @@ def _cpu(clock: VirtualClock, body: Any) -> Cpu:
 
 
 def test_fb_stat_and_out_persist_between_calls(clock: VirtualClock) -> None:
-    """Behaviour 32: STAT and OUT values stay in the instance DB; TEMP is never stored."""
+    """STAT and OUT values stay in the instance DB; TEMP is never stored."""
     outs: list[dict[str, object]] = []
     cpu = _cpu(clock, lambda ctx: outs.append(ctx.call(motor, 1, start=True)))
     for _ in range(3):
@@ -65,7 +65,7 @@ def test_fb_stat_and_out_persist_between_calls(clock: VirtualClock) -> None:
 
 
 def test_omitted_fb_input_keeps_its_last_value(clock: VirtualClock) -> None:
-    """Behaviour 33: an IN omitted at the call keeps the value stored in the instance DB."""
+    """An IN omitted at the call keeps the value stored in the instance DB."""
     calls = iter([{"start": True, "speed": 50}, {}])
     cpu = _cpu(clock, lambda ctx: ctx.call(motor, 1, **next(calls)))
     cpu.scan()
@@ -75,7 +75,7 @@ def test_omitted_fb_input_keeps_its_last_value(clock: VirtualClock) -> None:
 
 
 def test_fb_actuals_may_be_operands(clock: VirtualClock) -> None:
-    """Behaviour 33: an address string is an operand: IN read from it, OUT written to it."""
+    """An address string is an operand: IN read from it, OUT written to it."""
     cpu = _cpu(clock, lambda ctx: ctx.call(motor, 1, start="I0.3", running="Q0.2", calls="MW4"))
     cpu.mem.periph_in[0] = 0b1000
     cpu.scan()
@@ -90,7 +90,7 @@ def test_calling_an_fb_without_instance_db_is_an_error(clock: VirtualClock) -> N
 
 
 def test_fc_must_get_every_parameter_and_writes_to_the_actual_operand(clock: VirtualClock) -> None:
-    """Behaviour 34: an FC needs all parameters; its OUT goes straight to the actual operand."""
+    """An FC needs all parameters; its OUT goes straight to the actual operand."""
 
     @fc(2, IN={"a": "INT", "b": "INT"}, OUT={"sum": "INT"}, RET="BOOL")
     def add(ctx: CallContext, p: dict[str, object]) -> object:
@@ -109,7 +109,7 @@ def test_fc_must_get_every_parameter_and_writes_to_the_actual_operand(clock: Vir
 
 
 def test_two_multi_instances_are_independent(clock: VirtualClock) -> None:
-    """Behaviour 35: FBs declared as STAT store their data in the caller's instance DB."""
+    """FBs declared as STAT store their data in the caller's instance DB."""
 
     @fb(3, STAT={"m1": motor, "m2": motor})
     def line(ctx: CallContext, db: InstanceDB) -> None:
@@ -174,7 +174,7 @@ def test_unknown_variable_and_parameter_are_errors(clock: VirtualClock) -> None:
 
 
 def test_fc_out_operand_is_written_not_read_and_left_alone_when_unassigned() -> None:
-    """Behaviour 34: an FC OUT refers to the actual operand and is only written — a zeroed
+    """An FC OUT refers to the actual operand and is only written — a zeroed
     DB (no valid DATE_AND_TIME bytes) is a fine OUT; an OUT the FC does not assign keeps
     the operand's value."""
     from datetime import datetime

@@ -55,7 +55,7 @@ def test_unknown_type_is_a_type_mismatch() -> None:
 
 
 def test_string_n_occupies_n_plus_two_bytes_and_plain_string_is_254() -> None:
-    """Behaviour 41: STRING[10] occupies 12 bytes; STRING = STRING[254] = 256 bytes."""
+    """STRING[10] occupies 12 bytes; STRING = STRING[254] = 256 bytes."""
     assert type_of("STRING[10]").size == 12
     assert type_of("STRING").size == 256
     with pytest.raises(TypeMismatch):
@@ -63,7 +63,7 @@ def test_string_n_occupies_n_plus_two_bytes_and_plain_string_is_254() -> None:
 
 
 def test_string_bytes_hold_max_length_then_current_length_then_chars() -> None:
-    """Behaviour 41: I_STRNG(205) = '+205' in a STRING[10]: byte 0 = 10, byte 1 = 4."""
+    """I_STRNG(205) = '+205' in a STRING[10]: byte 0 = 10, byte 1 = 4."""
     data = encode("STRING[10]", "+205")
     assert data == bytes([10, 4]) + b"+205" + bytes(6)
     assert decode("STRING[10]", data) == "+205"
@@ -91,7 +91,7 @@ def test_string_longer_than_its_declared_length_is_a_type_mismatch() -> None:
     ],
 )
 def test_values_encode_big_endian_and_decode_back(name: str, value: object, data: bytes) -> None:
-    """Behaviour 43: multi-byte values are big-endian, highest byte first."""
+    """Multi-byte values are big-endian, highest byte first."""
     assert encode(name, value) == data
     assert decode(name, data) == value
 
@@ -137,7 +137,7 @@ def test_bcd_conversions_reject_invalid_nibbles() -> None:
 
 
 def test_date_and_time_is_eight_bcd_bytes_with_sunday_as_weekday_one() -> None:
-    """Behaviour 42: DT = YY MM DD hh mm ss, ms (3 digits), weekday (1 = Sunday)."""
+    """DT = YY MM DD hh mm ss, ms (3 digits), weekday (1 = Sunday)."""
     sunday = datetime(2026, 11, 22, 12, 34, 56, 789_000)
     assert encode("DT", sunday) == bytes([0x26, 0x11, 0x22, 0x12, 0x34, 0x56, 0x78, 0x91])
     monday = datetime(1995, 1, 2)
@@ -147,7 +147,7 @@ def test_date_and_time_is_eight_bcd_bytes_with_sunday_as_weekday_one() -> None:
 
 
 def test_date_and_time_years_90_to_99_are_1990s_and_00_to_89_are_2000s() -> None:
-    """Behaviour 42 (Siemens' Program Design for S7-300/400, appendix C): year byte 16#90 → 1990, 16#89 → 2089."""
+    """Year byte (Siemens' Program Design for S7-300/400, appendix C): 16#90 → 1990, 16#89 → 2089."""
     assert decode("DT", bytes([0x90, 1, 1, 0, 0, 0, 0, 0x02])).year == 1990
     assert decode("DT", bytes([0x89, 1, 1, 0, 0, 0, 0, 0x02])).year == 2089
 

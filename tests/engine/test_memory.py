@@ -23,13 +23,13 @@ def mem() -> Memory:
 
 
 def test_word_is_big_endian_with_high_byte_at_the_lower_address(mem: Memory) -> None:
-    """Behaviour 43: L W#16#1234; T MW10 → MB10 = 16#12, MB11 = 16#34."""
+    """L W#16#1234; T MW10 → MB10 = 16#12, MB11 = 16#34."""
     mem.write(A("MW10"), 0x1234)
     assert (mem.read(A("MB10")), mem.read(A("MB11"))) == (0x12, 0x34)
 
 
 def test_bit_0_of_the_first_byte_is_bit_8_of_the_word(mem: Memory) -> None:
-    """Behaviour 43: M10.0 is bit 0 of MB10 = bit 8 of MW10."""
+    """M10.0 is bit 0 of MB10 = bit 8 of MW10."""
     mem.write(A("M10.0"), True)
     assert mem.read(A("MW10")) == 0x0100
     assert mem.read(A("MB10")) == 0x01
@@ -55,7 +55,7 @@ def test_typed_access_converts_s7_types(mem: Memory) -> None:
 
 
 def test_long_types_are_read_from_the_first_byte(mem: Memory) -> None:
-    """Behaviour 41/42: STRING[n] and DT live at a start byte and span n+2 / 8 bytes."""
+    """STRING[n] and DT live at a start byte and span n+2 / 8 bytes."""
     db = mem.create_db(5, 20)
     mem.write_as(A("DB5.DBB0"), "STRING[6]", "+205")
     mem.write_as(A("DB5.DBB8"), "DT", datetime(2026, 11, 22, 8, 30, 1, 999_000))
@@ -88,7 +88,7 @@ def test_typed_write_out_of_range_is_a_type_mismatch(mem: Memory) -> None:
 
 
 def test_reading_beyond_a_db_is_an_area_length_error(mem: Memory) -> None:
-    """Behaviour 36: DB access beyond its length is an area-length error (SW_FLT 16#22/23)."""
+    """DB access beyond its length is an area-length error (SW_FLT 16#22/23)."""
     mem.create_db(1, 10)
     assert mem.read(A("DB1.DBW8")) == 0
     with pytest.raises(AreaLengthError, match=r"DB1\.DBD8") as read_err:
@@ -99,7 +99,7 @@ def test_reading_beyond_a_db_is_an_area_length_error(mem: Memory) -> None:
 
 
 def test_area_length_error_is_an_address_error(mem: Memory) -> None:
-    """Behaviour 36: callers catching AddressError also see area-length errors."""
+    """Callers catching AddressError also see area-length errors."""
     with pytest.raises(AddressError, match="MW255"):
         mem.read(A("MW255"))
 
@@ -199,7 +199,7 @@ def test_db_field_address_uses_the_layout(mem: Memory) -> None:
 def test_warm_restart_clears_non_retentive_markers_timers_counters_and_keeps_dbs(
     mem: Memory,
 ) -> None:
-    """Behaviour 3: non-retentive M/T/C zeroed, retentive M (MB0..15) and C (C0..7) and DBs kept."""
+    """Non-retentive M/T/C zeroed, retentive M (MB0..15) and C (C0..7) and DBs kept."""
     mem.write(A("MB15"), 1)
     mem.write(A("MB16"), 2)
     mem.counters[7].set_value(5)
@@ -215,7 +215,7 @@ def test_warm_restart_clears_non_retentive_markers_timers_counters_and_keeps_dbs
 
 
 def test_cold_restart_resets_everything_and_reloads_db_initial_values(mem: Memory) -> None:
-    """Behaviour 4: all M/T/C zeroed incl. retentive; runtime DBs deleted; DBs re-initialised."""
+    """All M/T/C zeroed incl. retentive; runtime DBs deleted; DBs re-initialised."""
     mem.write(A("MB0"), 1)
     mem.counters[0].set_value(3)
     db = mem.create_db(1, 2, init=b"\x05\x06")

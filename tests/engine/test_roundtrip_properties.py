@@ -82,7 +82,7 @@ def test_s5time_keeps_three_significant_digits_and_never_grows(ms: int) -> None:
 
 @given(st.integers(0, 124), st.integers(0, 0xFFFF_FFFF))
 def test_dword_bytes_read_back_most_significant_first(byte: int, value: int) -> None:
-    """Behaviour 43 for any dword: MB n is bits 31..24 of MD n."""
+    """For any dword: MB n is bits 31..24 of MD n."""
     mem = Memory()
     mem.write(Address(Area.M, Width.DWORD, byte), value)
     assert mem.read(Address(Area.M, Width.BYTE, byte)) == value >> 24

@@ -1,5 +1,5 @@
 """GraphFB in a CPU: OB1 calls, OB100 with INIT_SQ, step events in the ScanRecord, state in
-the instance DB (docs/semantics.md, "One FB call", DESIGN "State lives in the instance DB")."""
+the instance DB (docs/semantics.md, "One FB call", docs/architecture.md, "The core is a function")."""
 
 from __future__ import annotations
 

@@ -53,7 +53,7 @@ def test_check_call_validates_pins_directions_and_instance() -> None:
 
 
 def test_ret_val_words_are_negative_ints_on_error() -> None:
-    """Behaviour 40: bit 15 set <=> RET_VAL < 0 <=> BR = 0."""
+    """Bit 15 set <=> RET_VAL < 0 <=> BR = 0."""
     assert general_error(1, 0x22) == as_int(0x8122) == -32478
     assert as_word(-32478) == 0x8122
     assert is_error(-1) and not br_of(-1)

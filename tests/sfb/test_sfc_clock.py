@@ -25,7 +25,7 @@ def test_read_clk_is_the_epoch_plus_injected_time_until_set_clk_moves_it() -> No
 
 
 def test_set_clk_outside_dt_range_is_refused_with_a_negative_ret_val() -> None:
-    """Behaviour 40: RET_VAL < 0 on error; the clock is unchanged."""
+    """RET_VAL < 0 on error; the clock is unchanged."""
     rtc = RealTimeClock()
     assert set_clk(rtc, datetime(2090, 1, 1), 0) == RET_DT_RANGE < 0
     assert rtc.read(0) == datetime(1990, 1, 1)
