@@ -1,7 +1,7 @@
 """CPU operand memory: I/Q process images, PI/PQ module side, M, L, T, C and DBs (docs/runtime.md, "The block runtime").
 
-Every area is a big-endian ``bytearray`` (MB10 is the high byte of MW10, seeds-runtime.md
-§4.2); timers and counters are cells (``S5Timer``/``S5Counter``) whose logic lives in sfb/.
+Every area is a big-endian ``bytearray`` (MB10 is the high byte of MW10, Siemens'
+Program Design for S7-300/400, ch. 5); timers and counters are cells (``S5Timer``/``S5Counter``) whose logic lives in sfb/.
 Retentivity follows Siemens' Program Design for S7-300/400, ch. 9: by default MB0..MB15, no timers and C0..C7 are
 retentive; DBs keep their contents on warm restart and reload initial values on cold restart
 (docs/runtime.md, "Restarts: warm, hot, cold").

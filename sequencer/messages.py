@@ -2,7 +2,7 @@
 docs/semantics.md, "Messages"; STEP7 comprehensive guide vol. 2, ch. 14).
 
 With ``MESSAGES := TRUE`` every interlock error and supervision fault of a step becomes a
-message in ``sfb.alarms.MessageList`` with the seed's text template
+message in ``sfb.alarms.MessageList`` with the book's text template
 (``S7GRAPH Supervision Error: FB1, DB1, S001 material is missing``), coming and going with
 the fault and acknowledgeable. The cycle calls ``sync_messages`` once per FB call, after the
 fault latches are up to date; it diffs the latches in ``GraphState`` against what was

@@ -2,7 +2,7 @@
 
 Sources: docs/semantics.md, "Decisions" (STEP7 comprehensive guide vol. 2, ch. 14 for the User-defined set, STEP7 comprehensive guide vol. 2, ch. 14
 and TIA "Standard" for STANDARD, STEP7 comprehensive guide vol. 2, ch. 14 for MAXIMUM). The sets nest:
-MINIMUM ⊂ STANDARD ⊂ MAXIMUM ⊂ USER. The seed's table at STEP7 comprehensive guide vol. 2, ch. 14 also lists REG_EF,
+MINIMUM ⊂ STANDARD ⊂ MAXIMUM ⊂ USER. The book's table at STEP7 comprehensive guide vol. 2, ch. 14 also lists REG_EF,
 ACK_S, REG_S, T_PREV, T_NEXT under Standard; per the errata they belong to USER only.
 
 Everything that needs to know which pins exist reads this table: the FB interface

@@ -106,7 +106,7 @@ class Binary:
 
 @dataclass(frozen=True, slots=True)
 class FuncCall:
-    """A function of seed 000 lines 5838-5884: ``ABS(x)``, ``INT_TO_DINT(x)``, ``SQRT(x)`` ..."""
+    """A function of STEP7 comprehensive guide vol. 2, ch. 14: ``ABS(x)``, ``INT_TO_DINT(x)``, ``SQRT(x)`` ..."""
 
     name: str
     args: tuple[Expr, ...]

@@ -1,4 +1,4 @@
-"""The two conveyor belts of seed 000 §14.6 example 1 (STEP7 comprehensive guide vol. 2, ch. 14), run through
+"""The two conveyor belts of STEP7 comprehensive guide vol. 2, section 14.6, example 1, run through
 ``s7graph sim`` (docs/cli.md, "s7graph sim") with the example's stimulus (the operator's buttons) and plant
 (material on belt B)."""
 

@@ -36,7 +36,7 @@ def faulted(options: str = "") -> Run:
     return run
 
 
-# ---------------------------------------------------------------- §2.3 interlock
+# ---------------------------------------------------------------- interlock
 
 
 def test_interlock_lost_stops_only_the_c_rows() -> None:
@@ -101,7 +101,7 @@ def test_en_il_zero_treats_every_interlock_as_held() -> None:
     assert run.get("Q0.0") is True and not run.out("ERROR") and not run.out("IL_ENABLED")
 
 
-# ---------------------------------------------------------------- §2.4 supervision
+# ---------------------------------------------------------------- supervision
 
 
 def test_supervision_fault_raises_v1_and_sets_fault_and_err_flt() -> None:
@@ -215,7 +215,7 @@ def test_ack_releases_a_time_supervision_frozen_by_its_own_fault() -> None:
     assert run.active == [2]
 
 
-# ---------------------------------------------------------------- §2.5 modes
+# ---------------------------------------------------------------- modes
 
 
 def test_mode_is_chosen_by_sw_edges_and_kept_in_the_instance_db() -> None:
@@ -266,7 +266,7 @@ def test_man_never_switches_a_transition() -> None:
     assert run.active == [1, 11]
 
 
-# ---------------------------------------------------------------- §2.6 control inputs
+# ---------------------------------------------------------------- control inputs
 
 
 def test_off_sq_switches_every_step_off_while_set() -> None:

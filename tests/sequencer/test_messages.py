@@ -47,7 +47,7 @@ def test_message_goes_with_the_cause_but_the_step_waits_for_ack_ef() -> None:
     run.set(M3_1=False, I0_1=True).call(3)
     (msg,) = run.messages.entries()
     assert msg.state is MessageState.OUTGOING and not msg.acked
-    assert run.active == [1]  # seed 6297: no transition until acknowledged
+    assert run.active == [1]  # STEP7 comprehensive guide vol. 2, ch. 14: no transition until acknowledged
     run.set(M10_2=True).call()
     assert run.active == [2] and run.messages.entries() == ()
     kinds = [(e.kind, e.user) for e in run.messages.log()]

@@ -17,7 +17,7 @@ from s7graph.sequencer.fb import GraphFB, install_all
 from s7graph.sequencer.text.parse import parse_chart
 from tests.sequencer.helpers import chart, enter, leave, seq, source, two_steps
 
-# ---------------------------------------------------------------- §2.8 qualifiers
+# ---------------------------------------------------------------- qualifiers
 
 
 def test_plain_s_row_re_issues_the_set_every_cycle_while_s1_s_sets_once() -> None:
@@ -184,7 +184,7 @@ def test_s1_call_row_calls_the_block_once_per_activation() -> None:
     assert cpu.mem.get("MW20") == 1
 
 
-# ---------------------------------------------------------------- §2.8 ON / OFF
+# ---------------------------------------------------------------- ON / OFF
 
 
 def test_on_and_off_reach_steps_of_another_sequencer() -> None:
@@ -235,7 +235,7 @@ def test_off_s_all_clears_every_sequencer_but_keeps_the_step_holding_it() -> Non
     assert run.active == [2]
 
 
-# ---------------------------------------------------------------- §2.8 allowed rows
+# ---------------------------------------------------------------- allowed rows
 
 ALLOWED = [
     "S1 NC Q0.0;", "V1 SC Q0.0;", "A1 RC Q0.0;", "R1 ONC S1;", "S1 OFFC S1;",
@@ -284,7 +284,7 @@ def test_rows_outside_the_table_are_compile_errors_naming_step_and_row(row, code
     assert errors[0].element == "step S2 row 2"
 
 
-# ---------------------------------------------------------------- §2.9 conditions
+# ---------------------------------------------------------------- conditions
 
 
 def test_xor_in_a_transition() -> None:

@@ -14,7 +14,7 @@ from s7graph.sequencer.fb import GraphFB, install_all
 from s7graph.sequencer.text.parse import parse_chart
 from tests.sequencer.helpers import chart, enter, seq, source, two_steps
 
-# ---------------------------------------------------------------- §2.3 interlock
+# ---------------------------------------------------------------- interlock
 
 
 def test_l1_row_runs_once_while_the_interlock_stays_lost_and_l0_once_on_return() -> None:
@@ -55,7 +55,7 @@ def test_interlock_lost_stops_u_so_a_supervision_on_u_waits() -> None:
     assert run.out("ERR_FLT") is True  # U passed 50 ms: a supervision fault
 
 
-# ---------------------------------------------------------------- §2.4 supervision
+# ---------------------------------------------------------------- supervision
 
 
 def test_a_fault_present_on_activation_raises_v1_and_holds_the_step() -> None:
@@ -117,7 +117,7 @@ def test_a_supervision_fault_sets_fault_and_acknowledgement_clears_it() -> None:
     assert run.out("FAULT") is False and run.out("ERR_FLT") is False
 
 
-# ---------------------------------------------------------------- §2.5 modes
+# ---------------------------------------------------------------- modes
 
 CPU_CHART = source(
     seq("""
@@ -180,7 +180,7 @@ def test_tap_push_without_the_condition_does_not_switch() -> None:
     assert run.active == [1]
 
 
-# ---------------------------------------------------------------- §2.6 control inputs
+# ---------------------------------------------------------------- control inputs
 
 
 def test_halt_tm_freezes_u_so_a_time_supervision_waits() -> None:

@@ -112,7 +112,7 @@ def test_the_pin_table_names_the_option_as_the_default() -> None:
 
 
 def test_a_tl_timer_contact_keeps_the_step_while_the_timer_runs(tmp_path: Path) -> None:
-    """Seed STEP7 comprehensive guide vol. 2, ch. 14: TL T0 started when Step1 is left; Step2 sets Q0.0 and stays active
+    """STEP7 comprehensive guide vol. 2, ch. 14: TL T0 started when Step1 is left; Step2 sets Q0.0 and stays active
     while the timer runs (``NOT T0``), then resets Q0.0 on leaving."""
     text = """FUNCTION_BLOCK "Tl"
   PARAMETERS := STANDARD;
@@ -141,7 +141,7 @@ CELL_CONDITIONS = ["T5", "NOT T0", "C1 AND I0.0", "Z1 OR T5", '"Tmr"', 'NOT "Cnt
 def test_timer_and_counter_status_bits_are_contacts_in_every_kind_of_condition(
     where: str, cond: str
 ) -> None:
-    """Seed El-Shahat's S7-300/400 course: a timer or counter is used "at the same address as a BOOL state";
+    """El-Shahat's S7-300/400 course: a timer or counter is used "at the same address as a BOOL state";
     in S7-GRAPH conditions that is the status bit — in transitions, interlocks,
     supervisions and permanent instructions (absolute, German ``Z``, or a symbol)."""
     il = f"INTERLOCK := {cond};" if where == "interlock" else ""
@@ -180,7 +180,7 @@ def test_counter_and_timer_contacts_follow_their_cells() -> None:
 
 
 def test_a_counter_in_a_comparison_or_an_assignment_reads_its_count() -> None:
-    """Seed El-Shahat's S7-300/400 course: a counter is also "the value of the current count" — where a number is
+    """El-Shahat's S7-300/400 course: a counter is also "the value of the current count" — where a number is
     expected (a comparison, arithmetic, an assignment to an INT) it reads as ``L C n``."""
     run = chart(seq("""
       INITIAL_STEP S1 "a": S1 CS C1, C#2; S1 CU C1; END_STEP
@@ -320,7 +320,7 @@ END_FUNCTION_BLOCK
 def test_an_initial_step_whose_transition_holds_runs_its_rows_once_before_it_switches(
     tmp_path: Path, options: str
 ) -> None:
-    """Seed STEP7 comprehensive guide vol. 2, ch. 14 (the counter example): as soon as Step1 is active C1 is set to 26, then
+    """STEP7 comprehensive guide vol. 2, ch. 14 (the counter example): as soon as Step1 is active C1 is set to 26, then
     the sequence goes on to Step2 (STEP7 comprehensive guide vol. 2, ch. 14: a step is active for at least one cycle). The
     startup call (OB100, INIT_SQ) activates Step1 and runs its S1 and N rows; the next call
     switches. An INIT_SQ edge later does the same again; skip steps never passes an

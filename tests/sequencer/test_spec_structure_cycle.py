@@ -11,7 +11,7 @@ from s7graph.sequencer.checks.validate import validate
 from s7graph.sequencer.text.parse import parse_chart
 from tests.sequencer.helpers import chart, enter, leave, seq, source, two_steps
 
-# ---------------------------------------------------------------- §2.1 structure
+# ---------------------------------------------------------------- structure
 
 
 def test_every_initial_step_of_a_sequencer_is_active_after_the_first_call() -> None:
@@ -170,7 +170,7 @@ def test_more_than_250_transitions_warns_with_fewer_steps() -> None:
     assert any("transitions" in d.message for d in diags)
 
 
-# ---------------------------------------------------------------- §2.2 one FB call
+# ---------------------------------------------------------------- one FB call
 
 
 def test_a_step_activated_by_a_jump_cannot_switch_on_in_the_same_call() -> None:

@@ -43,4 +43,4 @@ def test_time_tck_counts_ms_and_wraps_to_zero_after_2_pow_31_minus_1() -> None:
     assert time_tck(1234 * MS + 999_999) == 1234
     assert time_tck((2**31 - 1) * MS) == 2**31 - 1
     assert time_tck(2**31 * MS) == 0
-    assert tick_diff(5, 2**31 - 10) == 15  # the seed's overflow compensation
+    assert tick_diff(5, 2**31 - 10) == 15  # the book's overflow compensation

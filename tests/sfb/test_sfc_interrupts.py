@@ -1,5 +1,5 @@
-"""Delay and time-of-day interrupts, DIS_AIRT/EN_AIRT, equal-priority queueing (seeds-runtime
-§2, §6.5)."""
+"""Delay and time-of-day interrupts, DIS_AIRT/EN_AIRT, equal-priority queueing (Siemens'
+Program Design for S7-300/400, ch. 4; STEP7 comprehensive guide vol. 2, ch. 12)."""
 
 from __future__ import annotations
 
