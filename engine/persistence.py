@@ -726,7 +726,7 @@ class StateStore:
             report.notes.extend(f"DB{number} {fb.label} {fb.name!r}: {n}" for n in notes)
         self._restore_part(f"state of DB{number}", lambda: idb.restore(data, strict=True))
 
-    # ---- alarms and audit (hooks for sfb/alarms and the web commands) ---------------------
+    # ---- alarms and audit (hooks for sfb/alarms.py and the web commands) ---------------------
 
     def _log(self, table: str, row: tuple[Any, ...]) -> None:
         if self.deferred:

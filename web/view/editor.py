@@ -1,5 +1,5 @@
 """Edit mode of one browser page (an engineer's): the chart as an editing session
-(``sequencer.edit.Session``), drawn on the page's own scene, edited in the side panel and
+(``sequencer.change.edit.Session``), drawn on the page's own scene, edited in the side panel and
 in its source view, checked live, saved, opened and downloaded into the running CPU.
 
 - **Select** a step or transition on the chart (or in *Element*); its form lists what the
