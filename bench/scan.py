@@ -10,7 +10,8 @@ loop of 25 steps (5000 steps, 200 active at any time). Every step holds
 
 so a sequencer advances every ``p`` calls (phases drift, about 1/3 of the sequencers switch
 per scan) and its D and L bits toggle inside every step at the 10 ms virtual cycle. Layout
-(``--layout``): ``packed`` = 25 FBs of 8 sequencers each (S7-GRAPH allows 1..8 per FB, docs/semantics.md, "Structure"; the
+(``--layout``): ``packed`` = 25 FBs of 8 sequencers each (S7-GRAPH allows 1..8 per FB,
+docs/semantics.md, "Structure"; the
 default), ``single`` = 200 FBs of one sequencer each. The FBs are called from OB1 of one
 ``engine.cpu.Cpu`` driven by a ``VirtualClock`` advanced 10 ms per scan; the wall time of
 ``Cpu.scan()`` is measured with ``perf_counter_ns``.

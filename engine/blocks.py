@@ -1,6 +1,8 @@
-"""User and system blocks: OB, FB, FC, SFB, SFC, DB and instance DBs (docs/runtime.md, "Programs of blocks in Python").
+"""User and system blocks: OB, FB, FC, SFB, SFC, DB and instance DBs (docs/runtime.md, "Programs of
+blocks in Python").
 
-A decorator declares a block's interface (Siemens' Program Design for S7-300/400, ch. 2, Table 2-2)::
+A decorator declares a block's interface (Siemens' Program Design for S7-300/400, ch. 2, Table
+2-2)::
 
     @fb(1, IN={"start": "BOOL"}, OUT={"busy": "BOOL"}, STAT={"n": ("INT", 0)})
     def motor(ctx, db): ...
@@ -203,7 +205,8 @@ class FC:
 
 @dataclass(frozen=True, slots=True)
 class OB:
-    """An organization block, called only by the CPU: ``body(ctx)`` (Siemens' Program Design for S7-300/400, ch. 3-4)."""
+    """An organization block, called only by the CPU: ``body(ctx)`` (Siemens' Program Design for
+    S7-300/400, ch. 3-4)."""
 
     number: int
     name: str

@@ -1,4 +1,5 @@
-"""What a block body sees during a scan, and how one block calls another (docs/runtime.md, "Programs of blocks in Python" and "Restarts: warm, hot, cold").
+"""What a block body sees during a scan, and how one block calls another (docs/runtime.md, "Programs
+of blocks in Python" and "Restarts: warm, hot, cold").
 
 ``CallContext.call`` binds the actual parameters (a ``str`` for a non-string parameter is an
 operand), runs the body one nesting level deeper (B-stack overflow →

@@ -1,4 +1,5 @@
-"""The soft CPU: modes, startup, the scan cycle and error handling (docs/runtime.md, "Restarts: warm, hot, cold"; docs/architecture.md, "The core is a function").
+"""The soft CPU: modes, startup, the scan cycle and error handling (docs/runtime.md, "Restarts:
+warm, hot, cold"; docs/architecture.md, "The core is a function").
 
 ``scan()`` reads the clock once and runs one cycle in S7 order: commands queued since the
 last scan are applied, scan hooks run (``add_os_scan_hook``; the S5 timer update of ``sfb``),
@@ -73,7 +74,8 @@ OS_SCAN_HOOKS: list[ScanHook] = []
 
 def add_os_scan_hook(hook: ScanHook) -> None:
     """Register ``hook`` for every CPU (idempotent): how ``sfb`` makes the S5 timers tick
-    once per scan without the engine importing it (El-Shahat's S7-300/400 course, timers and counters)."""
+    once per scan without the engine importing it (El-Shahat's S7-300/400 course, timers and
+    counters)."""
     if hook not in OS_SCAN_HOOKS:
         OS_SCAN_HOOKS.append(hook)
 
@@ -580,7 +582,8 @@ class Cpu(ProgramBlocks, Forcing, InterruptDispatch):
 
 
 def _classify(exc: BaseException) -> int:
-    """Event id 16#25xx of a programming error (Siemens' Program Design for S7-300/400, ch. 3-4 OB121 SW_FLT)."""
+    """Event id 16#25xx of a programming error (Siemens' Program Design for S7-300/400, ch. 3-4
+    OB121 SW_FLT)."""
     if isinstance(exc, AreaLengthError):
         return 0x2500 | exc.sw_flt
     if isinstance(exc, AddressError):

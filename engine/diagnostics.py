@@ -14,7 +14,8 @@ from s7graph.engine.record import DiagEntry
 
 
 class EventId(IntEnum):
-    """Event ids 16#CEnn used by the runtime (Siemens' Program Design for S7-300/400, ch. 10; 16#25FF is ours)."""
+    """Event ids 16#CEnn used by the runtime (Siemens' Program Design for S7-300/400, ch. 10;
+    16#25FF is ours)."""
 
     STOP_TO_STARTUP = 0x4301
     STARTUP_TO_RUN = 0x4302

@@ -1,8 +1,11 @@
-"""CPU operand memory: I/Q process images, PI/PQ module side, M, L, T, C and DBs (docs/runtime.md, "The block runtime").
+"""CPU operand memory: I/Q process images, PI/PQ module side, M, L, T, C and DBs (docs/runtime.md,
+"The block runtime").
 
 Every area is a big-endian ``bytearray`` (MB10 is the high byte of MW10, Siemens'
-Program Design for S7-300/400, ch. 5); timers and counters are cells (``S5Timer``/``S5Counter``) whose logic lives in sfb/.
-Retentivity follows Siemens' Program Design for S7-300/400, ch. 9: by default MB0..MB15, no timers and C0..C7 are
+Program Design for S7-300/400, ch. 5); timers and counters are cells (``S5Timer``/``S5Counter``)
+whose logic lives in sfb/.
+Retentivity follows Siemens' Program Design for S7-300/400, ch. 9: by default MB0..MB15, no timers
+and C0..C7 are
 retentive; DBs keep their contents on warm restart and reload initial values on cold restart
 (docs/runtime.md, "Restarts: warm, hot, cold").
 """
@@ -40,7 +43,8 @@ class AreaLengthError(AddressError):
 
 @dataclass(slots=True)
 class S5Timer:
-    """One S5 timer cell ``T n`` (El-Shahat's S7-300/400 course, timers and counters); sfb/ runs the timer functions.
+    """One S5 timer cell ``T n`` (El-Shahat's S7-300/400 course, timers and counters); sfb/ runs the
+    timer functions.
 
     ``value_ms`` is the remaining time, counted in steps of ``time_base_ms``.
     """
@@ -58,11 +62,13 @@ class S5Timer:
     # tick rebases it on the time left (``sfb.s5_timers.tick``)
 
     def binary(self) -> int:
-        """``L T n``: remaining time in time-base units, binary (El-Shahat's S7-300/400 course, timers and counters)."""
+        """``L T n``: remaining time in time-base units, binary (El-Shahat's S7-300/400 course,
+        timers and counters)."""
         return self.value_ms // self.time_base_ms
 
     def bcd(self) -> int:
-        """``LC T n``: remaining time as an S5TIME word (BCD + time base, El-Shahat's S7-300/400 course, timers and counters)."""
+        """``LC T n``: remaining time as an S5TIME word (BCD + time base, El-Shahat's S7-300/400
+        course, timers and counters)."""
         code = {10: 0, 100: 1, 1000: 2, 10000: 3}.get(self.time_base_ms)
         if code is None:
             return ms_to_s5time(self.value_ms)
@@ -77,7 +83,8 @@ class S5Timer:
 
 @dataclass(slots=True)
 class S5Counter:
-    """One S5 counter cell ``C n`` / ``Z n``: value 0..999, ``q`` = value > 0 (El-Shahat's S7-300/400 course, timers and counters)."""
+    """One S5 counter cell ``C n`` / ``Z n``: value 0..999, ``q`` = value > 0 (El-Shahat's
+    S7-300/400 course, timers and counters)."""
 
     value: int = 0
     q: bool = False
@@ -88,7 +95,8 @@ class S5Counter:
     fr_edge: bool = False
 
     def set_value(self, value: int) -> None:
-        """Set the count clamped to 0..999 and update ``q`` (no wrap, El-Shahat's S7-300/400 course, timers and counters)."""
+        """Set the count clamped to 0..999 and update ``q`` (no wrap, El-Shahat's S7-300/400 course,
+        timers and counters)."""
         self.value = max(0, min(999, value))
         self.q = self.value > 0
 
@@ -121,7 +129,8 @@ class DataBlock:
         return len(self.data)
 
     def reset(self) -> None:
-        """Reload the initial values (cold restart, docs/runtime.md, "Restarts: warm, hot, cold")."""
+        """Reload the initial values (cold restart, docs/runtime.md, "Restarts: warm, hot,
+        cold")."""
         self.data[:] = self.initial.ljust(len(self.data), b"\0")[: len(self.data)]
 
     def field_address(self, name: str) -> Address:
@@ -176,7 +185,8 @@ class Memory:
         self.retentive_timers = retentive_timers
         self.retentive_counters = retentive_counters
         self.pq_updates_q = pq_updates_q
-        """Writing PQ inside the Q image also updates Q (Siemens' Program Design for S7-300/400, ch. 5)."""
+        """Writing PQ inside the Q image also updates Q (Siemens' Program Design for S7-300/400, ch.
+        5)."""
         self.symbols: SymbolTable | None = None
         self._areas: dict[str, bytearray] = {
             Area.I: self.inputs,
@@ -399,7 +409,8 @@ class Memory:
         if self.dbs.pop(number, None) is None:
             raise BlockError(f"DB{number} does not exist")
 
-    # ---- restart and persistence (docs/runtime.md, "Restarts: warm, hot, cold", Siemens' Program Design for S7-300/400, ch. 9) ---------------------
+    # ---- restart and persistence (docs/runtime.md, "Restarts: warm, hot, cold", Siemens' Program
+    # Design for S7-300/400, ch. 9) ---------------------
 
     def clear_non_retentive(self) -> None:
         """Warm restart: zero non-retentive M, reset non-retentive T/C cells, clear L.
@@ -415,7 +426,8 @@ class Memory:
         self.local[:] = bytes(len(self.local))
 
     def clear_outputs(self, *, image: bool = True, modules: bool = True) -> None:
-        """The safe output state (docs/runtime.md, "Restarts: warm, hot, cold"): zero the output image Q (``image``) and the
+        """The safe output state (docs/runtime.md, "Restarts: warm, hot, cold"): zero the output
+        image Q (``image``) and the
         module side PQ (``modules``). STOP and HOLD zero only the modules, a startup both or
         as its restart type says; the one way the CPU resets outputs."""
         if image:

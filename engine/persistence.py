@@ -1,4 +1,5 @@
-"""State on disk: one SQLite file per CPU (docs/state-file.md; docs/runtime.md, "Restarts: warm, hot, cold").
+"""State on disk: one SQLite file per CPU (docs/state-file.md; docs/runtime.md, "Restarts: warm,
+hot, cold").
 
 Saved: retentive M/T/C and retain DBs (``Memory.snapshot()``), every instance DB
 (``InstanceDB.snapshot()``, OBJECT values through ``to_state()``), the diagnostic buffer,

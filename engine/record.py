@@ -13,7 +13,8 @@ from s7graph.engine.modes import CpuMode
 
 @dataclass(frozen=True, slots=True)
 class DiagEntry:
-    """One diagnostic-buffer entry: time, event id 16#xxxx, block, message (Siemens' Program Design for S7-300/400, ch. 10)."""
+    """One diagnostic-buffer entry: time, event id 16#xxxx, block, message (Siemens' Program Design
+    for S7-300/400, ch. 10)."""
 
     t_ns: int
     event_id: int

@@ -1,4 +1,5 @@
-"""One table: restart type → startup OB and what each keeps or clears (docs/runtime.md, "Restarts: warm, hot, cold").
+"""One table: restart type → startup OB and what each keeps or clears (docs/runtime.md, "Restarts:
+warm, hot, cold").
 
 Siemens' Program Design for S7-300/400, ch. 9 / Table 9-4. ``True`` in a ``clear_*`` column means
 the area is reset; DBs are "reloaded" from their load-memory initial values.

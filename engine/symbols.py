@@ -1,4 +1,5 @@
-"""The global symbol table: name → address, type, comment (docs/runtime.md, "The block runtime", docs/architecture.md, "Seams").
+"""The global symbol table: name → address, type, comment (docs/runtime.md, "The block runtime",
+docs/architecture.md, "Seams").
 
 Accepted text forms, one per file (detected from the content):
 ``"Name" ; I0.7 ; BOOL ; comment`` lines; ``,``-separated CSV with a header row (columns

@@ -1,15 +1,18 @@
-"""Delay interrupts OB20–OB23 and time-of-day interrupts OB10–OB17 (Siemens' Program Design for S7-300/400, ch. 3-4; STEP7 comprehensive guide vol. 2, ch. 12).
+"""Delay interrupts OB20–OB23 and time-of-day interrupts OB10–OB17 (Siemens' Program Design for
+S7-300/400, ch. 3-4; STEP7 comprehensive guide vol. 2, ch. 12).
 
 Delay interrupts (STEP7 comprehensive guide vol. 2, ch. 12): SFC32 SRT_DINT starts a one-shot delay
 on the CPU's *process* time (frozen in HOLD); when it elapses the OB runs once with the
 caller's SIGN; SFC33 cancels; SFC34 status bit 2 is 1 while pending.
 
-Time-of-day interrupts (STEP7 comprehensive guide vol. 2, ch. 12; Siemens' Program Design for S7-300/400) run on the
+Time-of-day interrupts (STEP7 comprehensive guide vol. 2, ch. 12; Siemens' Program Design for
+S7-300/400) run on the
 CPU's real-time clock (``engine.rtc``), never the wall clock. SFC28 SET_TINT sets start and
 period but does not activate; SFC30 ACT_TINT activates; a warm or cold restart deactivates
 program-activated interrupts (``configure(..., active=True)`` ones — the HW-config "Active"
 box — come back by themselves). A periodic interrupt whose start day does not exist in a
-month/year is skipped there (Siemens' Program Design for S7-300/400). The CPU checks due interrupts only in RUN, so one
+month/year is skipped there (Siemens' Program Design for S7-300/400). The CPU checks due interrupts
+only in RUN, so one
 due during STARTUP runs after the transition to RUN.
 """
 
@@ -67,7 +70,7 @@ def _month_shift(start: datetime, months: int, *, month_end: bool) -> datetime |
     if month_end:
         return start.replace(year=year, month=month, day=last)
     if start.day > last:
-        return None  # 31 Jan monthly: only months with 31 days (Siemens' Program Design for S7-300/400)
+        return None  # 31 Jan monthly: only months with 31 days (Program Design)
     return start.replace(year=year, month=month)
 
 
@@ -215,7 +218,8 @@ class TodInterrupts:
         return ST_PENDING if tod is not None and tod.active else 0
 
     def startup(self, now: datetime, *, hot: bool) -> None:
-        """Warm/cold restart: program-activated interrupts become inactive (Siemens' Program Design for S7-300/400);
+        """Warm/cold restart: program-activated interrupts become inactive (Siemens' Program Design
+        for S7-300/400);
         HW-configured active ones are (re)activated. A hot restart keeps everything."""
         if hot:
             return

@@ -2,7 +2,8 @@
 (docs/semantics.md, "FB pins"; docs/semantics.md, "Decisions").
 
 S_PREV/S_NEXT and T_PREV/T_NEXT only page the step/transition *shown*; they never move the
-sequence (docs/semantics.md, "FB pins" — STEP7 comprehensive guide vol. 2, ch. 14 says otherwise and is wrong, TIA-V21 comments).
+sequence (docs/semantics.md, "FB pins" — STEP7 comprehensive guide vol. 2, ch. 14 says otherwise and
+is wrong, TIA-V21 comments).
 
 The cursor lives in the instance DB: ``GraphState.s_no``/``t_no`` and ``GraphState.display``
 (``set``: "SACT" | "SEF" | "SALL"; ``pinned``: S_NO shows a step chosen with S_SEL even if
@@ -355,7 +356,8 @@ def compute_outputs(
 
 
 class Display:
-    """The display of one runtime (docs/semantics.md, "FB pins"), incremental: the cycle calls ``page``
+    """The display of one runtime (docs/semantics.md, "FB pins"), incremental: the cycle calls
+    ``page``
     after latching the inputs and ``update`` at the end of the call.
 
     The sets S_NO/T_NO page through are recomputed — from ``state.active`` and the leaving

@@ -1,4 +1,5 @@
-"""The fast path of one GRAPH FB call (docs/semantics.md, "One FB call"): the quiet call and step 4 in AUTO.
+"""The fast path of one GRAPH FB call (docs/semantics.md, "One FB call"): the quiet call and step 4
+in AUTO.
 
 ``FastPath`` is a part of ``sequencer.cycle.GraphRuntime`` (``GraphRuntime.fastpath``,
 its ``quiet`` also the runtime's own ``quiet``): it holds references to the runtime's

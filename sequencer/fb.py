@@ -1,4 +1,5 @@
-"""GraphFB: a compiled chart as an engine FB (docs/semantics.md, "One FB call" and "FB pins"; docs/architecture.md, "The core is a function").
+"""GraphFB: a compiled chart as an engine FB (docs/semantics.md, "One FB call" and "FB pins";
+docs/architecture.md, "The core is a function").
 
 The FB's interface is the chart's parameter set (``sequencer.params``: IN pins, OUT pins)
 plus one STAT ``G7_STATE`` of type OBJECT holding the ``GraphState`` — so snapshot/restore
@@ -295,7 +296,8 @@ class GraphFB:
         st: GraphState,
         acting: tuple[str, int | None] | None = None,
     ) -> None:
-        """MESSAGES := TRUE (docs/semantics.md, "Messages"): bring the CPU's message list in line with this
+        """MESSAGES := TRUE (docs/semantics.md, "Messages"): bring the CPU's message list in line
+        with this
         call's faults, queue the steps a user acknowledged there for the next call, and
         forward the list's new events into the scan record. ``acting``: the user (and
         ACK_S step) of this call's operator command, who acknowledges what it releases."""

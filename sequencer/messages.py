@@ -1,4 +1,5 @@
-"""Interlock and supervision messages of a GRAPH FB in the CPU's message list (docs/semantics.md, "Messages";
+"""Interlock and supervision messages of a GRAPH FB in the CPU's message list (docs/semantics.md,
+"Messages";
 docs/semantics.md, "Messages"; STEP7 comprehensive guide vol. 2, ch. 14).
 
 With ``MESSAGES := TRUE`` every interlock error and supervision fault of a step becomes a
@@ -18,7 +19,8 @@ Decisions (UNCERTAIN, pinned by tests/sequencer/test_messages.py):
 * An interlock message comes and goes with ``il_err``; with EN_ACKREQ it needs
   acknowledgement too (ALARM_SQ, as in V5) and is acknowledged as ``program`` by an
   ACK_EF or INIT_SQ edge, or an ACK_S edge for the step shown in S_NO. Acknowledging it
-  changes nothing in the sequence (an interlock error clears itself, docs/semantics.md, "Interlock").
+  changes nothing in the sequence (an interlock error clears itself, docs/semantics.md,
+  "Interlock").
 * A supervision message acknowledged in the list by a user while the step is still latched
   is an acknowledgement of the step, whether or not its cause has gone: ``sync_messages``
   and ``remote_acks`` return those step indices (each occurrence once), and the cycle

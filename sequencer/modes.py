@@ -1,4 +1,5 @@
-"""The operating modes and the one switching-rule table (docs/semantics.md, "One FB call", step 4.2 and "Modes"; docs/semantics.md, "Modes").
+"""The operating modes and the one switching-rule table (docs/semantics.md, "One FB call", step 4.2
+and "Modes"; docs/semantics.md, "Modes").
 
 ``MODE_RULES[mode](condition, push)`` says whether a valid transition whose condition is
 ``condition`` may switch when ``push`` is a rising edge of T_PUSH in this call:

@@ -1,12 +1,17 @@
-"""The FB pins of a GRAPH FB and the parameter sets holding them: the one table (docs/semantics.md, "FB pins").
+"""The FB pins of a GRAPH FB and the parameter sets holding them: the one table (docs/semantics.md,
+"FB pins").
 
-Sources: docs/semantics.md, "Decisions" (STEP7 comprehensive guide vol. 2, ch. 14 for the User-defined set, STEP7 comprehensive guide vol. 2, ch. 14
-and TIA "Standard" for STANDARD, STEP7 comprehensive guide vol. 2, ch. 14 for MAXIMUM). The sets nest:
-MINIMUM ⊂ STANDARD ⊂ MAXIMUM ⊂ USER. The book's table at STEP7 comprehensive guide vol. 2, ch. 14 also lists REG_EF,
+Sources: docs/semantics.md, "Decisions" (STEP7 comprehensive guide vol. 2, ch. 14 for the
+User-defined set, STEP7 comprehensive guide vol. 2, ch. 14
+and TIA "Standard" for STANDARD, STEP7 comprehensive guide vol. 2, ch. 14 for MAXIMUM). The sets
+nest:
+MINIMUM ⊂ STANDARD ⊂ MAXIMUM ⊂ USER. The book's table at STEP7 comprehensive guide vol. 2, ch. 14
+also lists REG_EF,
 ACK_S, REG_S, T_PREV, T_NEXT under Standard; per the errata they belong to USER only.
 
 Everything that needs to know which pins exist reads this table: the FB interface
-(``sequencer/fb.py``), the ``sim`` stimulus and watch names (docs/cli.md, "s7graph sim"), programs that write
+(``sequencer/fb.py``), the ``sim`` stimulus and watch names (docs/cli.md, "s7graph sim"), programs
+that write
 pins, and docs/semantics.md (``markdown_table``).
 """
 

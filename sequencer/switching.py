@@ -1,4 +1,5 @@
-"""Steps 4a–4c of a general GRAPH FB call (docs/semantics.md, "One FB call"; docs/semantics.md, "Decisions"): per
+"""Steps 4a–4c of a general GRAPH FB call (docs/semantics.md, "One FB call"; docs/semantics.md,
+"Decisions"): per
 sequencer, evaluate the transitions leaving its active steps, decide which switch (mode
 rule, HALT_SQ, supervision faults, at an alternative divergence the first-listed, steps
 held for this call) and switch (events S0/S1 through the runtime's ``_deactivate`` and
@@ -37,7 +38,8 @@ class _Runtime(Protocol):
 def switch(
     rt: _Runtime, steps: list[int], sw: tuple[Any, ...], rule: Callable[[bool, bool], bool]
 ) -> None:
-    """Steps a–c: evaluate, decide, switch (docs/semantics.md, "One FB call", steps 4.1–4.3) for one sequencer's active
+    """Steps a–c: evaluate, decide, switch (docs/semantics.md, "One FB call", steps 4.1–4.3) for one
+    sequencer's active
     ``steps``. ``sw`` = (mode rule, None in AUTO; T_PUSH edge; switching blocked by
     HALT_SQ/OFF_SQ; steps whose acknowledgement forces their transition; steps ``held``
     for this call because step 2 activated them)."""

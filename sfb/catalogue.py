@@ -1,4 +1,5 @@
-"""The one catalogue of system blocks, and the RET_VAL conventions (docs/runtime.md, "The block runtime"; STEP7 comprehensive guide vol. 2, ch. 12).
+"""The one catalogue of system blocks, and the RET_VAL conventions (docs/runtime.md, "The block
+runtime"; STEP7 comprehensive guide vol. 2, ch. 12).
 
 ``CATALOGUE`` lists every SFB/SFC s7graph emulates: number, name, kind, and the pins with
 direction and S7 type in the order Siemens documents them. Code reads it — to declare the
@@ -22,7 +23,8 @@ from s7graph.engine.errors import BlockError
 # --- RET_VAL -----------------------------------------------------------------------------
 
 OK = 0
-# General error events (low byte ``yy``; the parameter number goes into ``x``), STEP7 comprehensive guide vol. 2, ch. 12.
+# General error events (low byte ``yy``; the parameter number goes into ``x``), STEP7 comprehensive
+# guide vol. 2, ch. 12.
 AREA_LENGTH_READ = 0x22
 AREA_LENGTH_WRITE = 0x23
 AREA_READ = 0x24

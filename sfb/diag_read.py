@@ -1,4 +1,5 @@
-"""Diagnostic buffer read (SFC51 RDSYSST) and SFC52 WR_USMSG (docs/runtime.md, "The block runtime"; STEP7 comprehensive guide vol. 2, ch. 12; Siemens' Program Design for S7-300/400, ch. 10).
+"""Diagnostic buffer read (SFC51 RDSYSST) and SFC52 WR_USMSG (docs/runtime.md, "The block runtime";
+STEP7 comprehensive guide vol. 2, ch. 12; Siemens' Program Design for S7-300/400, ch. 10).
 
 SZL ``W#16#00A0`` lists every entry of the diagnostic buffer, **newest first** (No. 1 =
 newest, as a programming device shows it); ``W#16#01A0`` lists the newest ``INDEX``

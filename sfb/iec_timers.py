@@ -1,4 +1,5 @@
-"""IEC timers SFB3 TP, SFB4 TON, SFB5 TOF (docs/runtime.md, "The block runtime"; STEP7 comprehensive guide vol. 2, ch. 12).
+"""IEC timers SFB3 TP, SFB4 TON, SFB5 TOF (docs/runtime.md, "The block runtime"; STEP7 comprehensive
+guide vol. 2, ch. 12).
 
 Each timer is a small state machine over its own instance data and ``(IN, PT, now_ns)``:
 TIME is integer milliseconds with 1 ms resolution up to ``T#24D20H31M23S647MS``; time runs
@@ -107,7 +108,8 @@ class TP(_IecTimer):
 
 @dataclass(slots=True)
 class TON(_IecTimer):
-    """SFB4 TON: Q = 1 once IN has been 1 for PT; IN = 0 resets Q and ET (STEP7 comprehensive guide vol. 2, ch. 12)."""
+    """SFB4 TON: Q = 1 once IN has been 1 for PT; IN = 0 resets Q and ET (STEP7 comprehensive guide
+    vol. 2, ch. 12)."""
 
     def __call__(self, IN: bool, PT: int, now_ns: int) -> TimerOut:
         self._rebase(now_ns)

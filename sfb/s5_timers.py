@@ -1,4 +1,5 @@
-"""S5 timers SP SE SD SS SF on the T area, and the S5TIME codec (docs/runtime.md, "The block runtime"; El-Shahat's S7-300/400 course, timers and counters).
+"""S5 timers SP SE SD SS SF on the T area, and the S5TIME codec (docs/runtime.md, "The block
+runtime"; El-Shahat's S7-300/400 course, timers and counters).
 
 S5TIME (16 bit): bits 0-11 three BCD digits 0..999, bits 12-13 the time base (10 ms, 100 ms,
 1 s, 10 s); a preset in ms is encoded with the smallest base that fits (``S5T#2S`` =
@@ -56,7 +57,8 @@ class TimerFunction(StrEnum):
     SF = "SF"  # SA, S_OFFDT
 
 
-# German STL and SCL/LAD box names for the same functions (El-Shahat's S7-300/400 course, timers and counters table).
+# German STL and SCL/LAD box names for the same functions (El-Shahat's S7-300/400 course, timers and
+# counters table).
 FUNCTION_ALIASES: dict[str, TimerFunction] = {
     "S_PULSE": TimerFunction.SP, "SI": TimerFunction.SP,
     "S_PEXT": TimerFunction.SE, "SV": TimerFunction.SE,

@@ -1,4 +1,5 @@
-"""SFC46 STP, SFC47 WAIT, SFC43 RE_TRIGR (docs/runtime.md, "The block runtime"; STEP7 comprehensive guide vol. 2, ch. 12).
+"""SFC46 STP, SFC47 WAIT, SFC43 RE_TRIGR (docs/runtime.md, "The block runtime"; STEP7 comprehensive
+guide vol. 2, ch. 12).
 
 * STP puts the CPU into STOP from any OB, OB100 included: ``cpu.stop``.
 * WAIT(WT) busy-waits WT µs (INT, max 32767) on a real CPU and has no RET_VAL. Here time is

@@ -1,4 +1,5 @@
-"""SFC20 BLKMOV and SFC21 FILL over ANY-like areas (docs/runtime.md, "The block runtime"; STEP7 comprehensive guide vol. 2, ch. 12).
+"""SFC20 BLKMOV and SFC21 FILL over ANY-like areas (docs/runtime.md, "The block runtime"; STEP7
+comprehensive guide vol. 2, ch. 12).
 
 An ``AnyPointer`` is ``P#<address> <type> <count>`` (``P#DB1.DBX0.0 BYTE 10``): a start
 address plus a length in elements. Rules (STEP7 comprehensive guide vol. 2, ch. 12):

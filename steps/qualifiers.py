@@ -1,4 +1,5 @@
-"""Which qualifier may follow which event: the one table (docs/semantics.md, "Actions", STEP7 comprehensive guide vol. 2, ch. 14).
+"""Which qualifier may follow which event: the one table (docs/semantics.md, "Actions", STEP7
+comprehensive guide vol. 2, ch. 14).
 
 Code reads ``ALLOWED``; the validator and the compiler are derived
 from it. A row is ``(event, qualifier, interlocked, operand kind)``; an operand kind is one of

@@ -38,7 +38,8 @@ __all__ = [
 
 NOWHERE = SourceLocation()
 
-# ---------------------------------------------------------------- expressions (docs/semantics.md, "Conditions" and "Actions")
+# ---------------------------------------------------------------- expressions (docs/semantics.md,
+# "Conditions" and "Actions")
 
 
 @dataclass(frozen=True, slots=True)
@@ -106,7 +107,8 @@ class Binary:
 
 @dataclass(frozen=True, slots=True)
 class FuncCall:
-    """A function of STEP7 comprehensive guide vol. 2, ch. 14: ``ABS(x)``, ``INT_TO_DINT(x)``, ``SQRT(x)`` ..."""
+    """A function of STEP7 comprehensive guide vol. 2, ch. 14: ``ABS(x)``, ``INT_TO_DINT(x)``,
+    ``SQRT(x)`` ..."""
 
     name: str
     args: tuple[Expr, ...]
@@ -115,7 +117,8 @@ class FuncCall:
 
 Expr = Const | Operand | StepAttr | TransAttr | Unary | Binary | FuncCall
 
-# ---------------------------------------------------------------- action rows (docs/semantics.md, "Actions")
+# ---------------------------------------------------------------- action rows (docs/semantics.md,
+# "Actions")
 
 
 @dataclass(frozen=True, slots=True)
@@ -173,7 +176,8 @@ class ActionRow:
     trailing: str = ""  # the comments at the end of its line, verbatim
 
 
-# ------------------------------------------------------- permanent instructions (docs/semantics.md, "Conditions")
+# ------------------------------------------------------- permanent instructions (docs/semantics.md,
+# "Conditions")
 
 
 @dataclass(frozen=True, slots=True)

@@ -1,4 +1,5 @@
-"""Simulated pair of belts for ``examples/conveyor/conveyor.s7g`` (STEP7 comprehensive guide vol. 2, ch. 14).
+"""Simulated pair of belts for ``examples/conveyor/conveyor.s7g`` (STEP7 comprehensive guide vol. 2,
+ch. 14).
 
 Belt A drops material onto belt B, and belt B needs ``TRANSIT_MS`` (7 s) to carry a load off
 its end. That is why the book starts B before A and stops A 7 s before B. The model keeps

@@ -1,4 +1,5 @@
-"""A GRAPH FB's state across versions of its chart (docs/semantics.md, "Structure"; docs/architecture.md, "The core is a function").
+"""A GRAPH FB's state across versions of its chart (docs/semantics.md, "Structure";
+docs/architecture.md, "The core is a function").
 
 ``fingerprint(cc)`` names a compiled chart — its steps, transitions, generated code,
 variables, options and parameter set, not where things are written in the file; the state

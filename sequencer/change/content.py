@@ -73,7 +73,8 @@ class RenameStep(Edit):
 
 @dataclass(frozen=True, slots=True)
 class SetMessage(Edit):
-    """Give step ``step`` the message text ``message`` ("" for none, docs/semantics.md, "Messages")."""
+    """Give step ``step`` the message text ``message`` ("" for none, docs/semantics.md,
+    "Messages")."""
 
     step: int
     message: str
@@ -86,7 +87,8 @@ class SetMessage(Edit):
 
 @dataclass(frozen=True, slots=True)
 class SetInitial(Edit):
-    """Make step ``step`` an initial step or not (active after INIT_SQ, docs/semantics.md, "Structure")."""
+    """Make step ``step`` an initial step or not (active after INIT_SQ, docs/semantics.md,
+    "Structure")."""
 
     step: int
     initial: bool

@@ -39,7 +39,8 @@ CODES: Final[dict[str, str]] = {
     "E024": "operand of the wrong kind for the qualifier (bit, timer, counter)",
     "E025": "OFF S_ALL misuse",
     "E026": "ON / OFF of an unknown step",
-    # types (docs/semantics.md, "Actions" and "Conditions"; STEP7 comprehensive guide vol. 2, ch. 14)
+    # types (docs/semantics.md, "Actions" and "Conditions"; STEP7 comprehensive guide vol. 2, ch.
+    # 14)
     "E030": "comparison of different or non-comparable types",
     "E031": "assignment of a value of another type",
     "E032": "operator not allowed for the operand type",

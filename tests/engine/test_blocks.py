@@ -1,4 +1,5 @@
-"""Blocks, interfaces, instance DBs and calls (docs/runtime.md, "Programs of blocks in Python"; Siemens' Program Design for S7-300/400, ch. 2)."""
+"""Blocks, interfaces, instance DBs and calls (docs/runtime.md, "Programs of blocks in Python";
+Siemens' Program Design for S7-300/400, ch. 2)."""
 
 from __future__ import annotations
 
@@ -83,7 +84,8 @@ def test_fb_actuals_may_be_operands(clock: VirtualClock) -> None:
 
 
 def test_calling_an_fb_without_instance_db_is_an_error(clock: VirtualClock) -> None:
-    """docs/runtime.md, "Programs of blocks in Python": calling an FB without an instance DB raises BlockError."""
+    """docs/runtime.md, "Programs of blocks in Python": calling an FB without an instance DB raises
+    BlockError."""
     ctx = Cpu(clock)._ctx
     with pytest.raises(BlockError, match="without an instance DB"):
         ctx.call(motor)
@@ -129,7 +131,8 @@ def test_two_multi_instances_are_independent(clock: VirtualClock) -> None:
 
 
 def test_object_stat_round_trips_through_snapshot(clock: VirtualClock) -> None:
-    """docs/runtime.md, "Programs of blocks in Python": a STAT of type OBJECT persists through to_state()/from_state()."""
+    """docs/runtime.md, "Programs of blocks in Python": a STAT of type OBJECT persists through
+    to_state()/from_state()."""
     a = InstanceDB(1, motor)
     b = InstanceDB(2, motor)
     assert a.tally is not b.tally  # each instance gets its own object
@@ -160,7 +163,8 @@ def test_interface_declaration_rules() -> None:
 
 
 def test_unknown_variable_and_parameter_are_errors(clock: VirtualClock) -> None:
-    """docs/runtime.md, "The block runtime" spirit: no silent zeroes — unknown names raise BlockError."""
+    """docs/runtime.md, "The block runtime" spirit: no silent zeroes — unknown names raise
+    BlockError."""
     idb = InstanceDB(1, motor)
     with pytest.raises(BlockError):
         idb.nope = 1

@@ -1,4 +1,5 @@
-"""CPU modes, key switch, mode requests, HOLD and memory reset (docs/runtime.md, "Restarts: warm, hot, cold", Siemens' Program Design for S7-300/400, ch. 9)."""
+"""CPU modes, key switch, mode requests, HOLD and memory reset (docs/runtime.md, "Restarts: warm,
+hot, cold", Siemens' Program Design for S7-300/400, ch. 9)."""
 
 from __future__ import annotations
 

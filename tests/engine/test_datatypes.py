@@ -1,4 +1,5 @@
-"""Data types: sizes, ranges, encodings, layout (docs/runtime.md, "The block runtime", Siemens' Program Design for S7-300/400, appendix C; El-Shahat's S7-300/400 course, timers and counters)."""
+"""Data types: sizes, ranges, encodings, layout (docs/runtime.md, "The block runtime", Siemens'
+Program Design for S7-300/400, appendix C; El-Shahat's S7-300/400 course, timers and counters)."""
 
 from __future__ import annotations
 
@@ -109,7 +110,8 @@ def test_values_encode_big_endian_and_decode_back(name: str, value: object, data
     ],
 )
 def test_s5time_picks_the_finest_time_base_that_fits(ms: int, word: int) -> None:
-    """El-Shahat's S7-300/400 course, timers and counters: S5T#2S = W#16#0200, S5T#1M20S = W#16#1800, max = W#16#3999."""
+    """El-Shahat's S7-300/400 course, timers and counters: S5T#2S = W#16#0200, S5T#1M20S =
+    W#16#1800, max = W#16#3999."""
     assert ms_to_s5time(ms) == word
     assert s5time_to_ms(word) == ms
 
@@ -147,7 +149,8 @@ def test_date_and_time_is_eight_bcd_bytes_with_sunday_as_weekday_one() -> None:
 
 
 def test_date_and_time_years_90_to_99_are_1990s_and_00_to_89_are_2000s() -> None:
-    """Year byte (Siemens' Program Design for S7-300/400, appendix C): 16#90 → 1990, 16#89 → 2089."""
+    """Year byte (Siemens' Program Design for S7-300/400, appendix C): 16#90 → 1990, 16#89 →
+    2089."""
     assert decode("DT", bytes([0x90, 1, 1, 0, 0, 0, 0, 0x02])).year == 1990
     assert decode("DT", bytes([0x89, 1, 1, 0, 0, 0, 0, 0x02])).year == 2089
 
@@ -188,7 +191,8 @@ def test_char_accepts_a_code_and_gives_the_character() -> None:
 
 
 def test_layout_of_seed_db10_puts_words_on_even_bytes() -> None:
-    """Siemens' Program Design for S7-300/400, appendix C (STEP7 comprehensive guide vol. 2, ch. 13): ARRAY[1..100] OF INT, BOOL, WORD, BYTE, S5TIME."""
+    """Siemens' Program Design for S7-300/400, appendix C (STEP7 comprehensive guide vol. 2, ch.
+    13): ARRAY[1..100] OF INT, BOOL, WORD, BYTE, S5TIME."""
     lay = layout(
         [
             ("a", "ARRAY[1..100] OF INT"),
@@ -209,7 +213,8 @@ def test_layout_of_seed_db10_puts_words_on_even_bytes() -> None:
 
 
 def test_layout_of_seed_struct_rounds_the_total_up_to_even() -> None:
-    """Siemens' Program Design for S7-300/400, appendix C (Siemens' Program Design for S7-300/400): INT, BYTE, CHAR, REAL, BOOL ends at 10.0."""
+    """Siemens' Program Design for S7-300/400, appendix C (Siemens' Program Design for S7-300/400):
+    INT, BYTE, CHAR, REAL, BOOL ends at 10.0."""
     lay = layout({"i": "INT", "b": "BYTE", "c": "CHAR", "r": "REAL", "x": "BOOL"})
     assert (lay["b"], lay["c"], lay["r"], lay["x"], lay.size) == (
         (2, 0),
@@ -221,7 +226,8 @@ def test_layout_of_seed_struct_rounds_the_total_up_to_even() -> None:
 
 
 def test_layout_packs_consecutive_bools_into_bits_of_one_byte() -> None:
-    """Siemens' Program Design for S7-300/400, appendix C (Siemens' Program Design for S7-300/400): FC1 params at 0.0, 0.1, 2.0, 2.1, 4.0."""
+    """Siemens' Program Design for S7-300/400, appendix C (Siemens' Program Design for S7-300/400):
+    FC1 params at 0.0, 0.1, 2.0, 2.1, 4.0."""
     lay = layout(
         [("a", "BOOL"), ("b", "BOOL"), ("i", "INT"), ("c", "BOOL"), ("d", "BOOL"), ("e", "INT")]
     )

@@ -134,7 +134,8 @@ def test_equal_priority_cyclic_obs_run_in_the_order_of_their_start_events(
     clock: VirtualClock,
 ) -> None:
     """OBs of equal priority never interrupt each other and queue in order
-    of their start events (Siemens' Program Design for S7-300/400) — here OB35 (due at 60 ms) before OB36 (due at
+    of their start events (Siemens' Program Design for S7-300/400) — here OB35 (due at 60 ms) before
+    OB36 (due at
     100 ms) although OB36 has the higher default priority."""
     cpu = Cpu(clock, max_cycle_ms=10_000)
     cpu.load(ob(1)(lambda ctx: None), _cyclic(35), _cyclic(36))  # type: ignore[arg-type]

@@ -1,4 +1,5 @@
-"""Operand memory (docs/runtime.md, "The block runtime" and "Restarts: warm, hot, cold"; Siemens' Program Design for S7-300/400, ch. 9; Siemens' Program Design for S7-300/400, ch. 5)."""
+"""Operand memory (docs/runtime.md, "The block runtime" and "Restarts: warm, hot, cold"; Siemens'
+Program Design for S7-300/400, ch. 9; Siemens' Program Design for S7-300/400, ch. 5)."""
 
 from __future__ import annotations
 
@@ -118,7 +119,8 @@ def test_timer_or_counter_number_beyond_the_cells_is_an_address_error() -> None:
 
 
 def test_timer_reads_status_as_bool_and_binary_value_as_word(mem: Memory) -> None:
-    """El-Shahat's S7-300/400 course, timers and counters: ``A T n`` status bit, ``L T n`` binary without time base."""
+    """El-Shahat's S7-300/400 course, timers and counters: ``A T n`` status bit, ``L T n`` binary
+    without time base."""
     mem.timers[5] = S5Timer(value_ms=1230, time_base_ms=10, q=True)
     assert mem.read_as(A("T5"), "BOOL") is True
     assert mem.read(A("T5")) == 123
@@ -138,7 +140,8 @@ def test_counter_value_saturates_and_q_means_nonzero() -> None:
 
 
 def test_peripheral_access_goes_to_the_module_side_not_the_process_image(mem: Memory) -> None:
-    """docs/runtime.md, "The block runtime": PI/PQ are the module side; I is only the process image."""
+    """docs/runtime.md, "The block runtime": PI/PQ are the module side; I is only the process
+    image."""
     mem.periph_in[0:2] = b"\x12\x34"
     assert mem.read(A("PIW0")) == 0x1234
     assert mem.read(A("IW0")) == 0
@@ -147,7 +150,8 @@ def test_peripheral_access_goes_to_the_module_side_not_the_process_image(mem: Me
 
 
 def test_peripheral_output_inside_the_q_image_updates_q_too(mem: Memory) -> None:
-    """Siemens' Program Design for S7-300/400, ch. 5 [K]: PQx within the PIQ range also updates the PIQ."""
+    """Siemens' Program Design for S7-300/400, ch. 5 [K]: PQx within the PIQ range also updates the
+    PIQ."""
     mem.write(A("PQW0"), 0xBEEF)
     assert mem.read(A("QW0")) == 0xBEEF
     quiet = Memory(pq_updates_q=False)

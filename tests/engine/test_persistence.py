@@ -1,4 +1,5 @@
-"""Retentive state in SQLite; a killed CPU process comes back by warm restart (docs/state-file.md)."""
+"""Retentive state in SQLite; a killed CPU process comes back by warm restart
+(docs/state-file.md)."""
 
 from __future__ import annotations
 

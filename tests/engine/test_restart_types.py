@@ -1,4 +1,5 @@
-"""Warm, hot and cold restart: what each keeps and clears (docs/runtime.md, "Restarts: warm, hot, cold"; Siemens' Program Design for S7-300/400, ch. 9)."""
+"""Warm, hot and cold restart: what each keeps and clears (docs/runtime.md, "Restarts: warm, hot,
+cold"; Siemens' Program Design for S7-300/400, ch. 9)."""
 
 from __future__ import annotations
 
@@ -159,7 +160,8 @@ def test_startup_has_no_monitoring_interrupts_or_outputs(clock: VirtualClock) ->
 
 
 def test_restart_table_names_the_startup_obs() -> None:
-    """docs/runtime.md, "Restarts: warm, hot, cold": warm OB100, hot OB101, cold OB102; only cold clears retentive data."""
+    """docs/runtime.md, "Restarts: warm, hot, cold": warm OB100, hot OB101, cold OB102; only cold
+    clears retentive data."""
     assert {t: r.ob for t, r in RESTART.items()} == {
         RestartType.WARM: 100,
         RestartType.HOT: 101,

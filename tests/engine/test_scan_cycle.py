@@ -1,4 +1,5 @@
-"""The scan cycle: process images, outputs, programming errors (docs/runtime.md, "When a scan hangs or fails", Siemens' Program Design for S7-300/400, ch. 3)."""
+"""The scan cycle: process images, outputs, programming errors (docs/runtime.md, "When a scan hangs
+or fails", Siemens' Program Design for S7-300/400, ch. 3)."""
 
 from __future__ import annotations
 
@@ -30,7 +31,8 @@ class CountingClock(VirtualClock):
 
 
 def test_scan_reads_the_clock_once() -> None:
-    """docs/architecture.md, "The core is a function": every time-dependent rule reads one clock, once per scan."""
+    """docs/architecture.md, "The core is a function": every time-dependent rule reads one clock,
+    once per scan."""
     clock = CountingClock()
 
     @ob(1)
@@ -94,7 +96,8 @@ def test_direct_peripheral_reads_see_the_module_mid_cycle(clock: VirtualClock) -
 
 
 def test_outputs_are_zero_outside_run(clock: VirtualClock) -> None:
-    """docs/runtime.md, "Restarts: warm, hot, cold": module outputs are 0 in STOP; the record reports the change."""
+    """docs/runtime.md, "Restarts: warm, hot, cold": module outputs are 0 in STOP; the record
+    reports the change."""
 
     @ob(1)
     def main(ctx: CallContext) -> None:

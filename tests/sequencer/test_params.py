@@ -1,4 +1,5 @@
-"""The FB pin table and parameter sets (docs/semantics.md, "FB pins", docs/semantics.md, "Decisions")."""
+"""The FB pin table and parameter sets (docs/semantics.md, "FB pins", docs/semantics.md,
+"Decisions")."""
 
 from __future__ import annotations
 

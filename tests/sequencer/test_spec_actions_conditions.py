@@ -21,7 +21,8 @@ from tests.sequencer.helpers import chart, enter, leave, seq, source, two_steps
 
 
 def test_plain_s_row_re_issues_the_set_every_cycle_while_s1_s_sets_once() -> None:
-    """docs/semantics.md, "One FB call", step 4.5 and "Actions": a plain S row runs every cycle while the step is active; an
+    """docs/semantics.md, "One FB call", step 4.5 and "Actions": a plain S row runs every cycle
+    while the step is active; an
     S1 S row only in the activation call."""
     run = two_steps("S M0.0; S1 S M0.1;")
     enter(run)
@@ -40,7 +41,8 @@ def test_n_operand_is_zero_after_the_step_is_left_but_s_stays_set() -> None:
 
 
 def test_d_operand_is_never_set_when_the_step_is_left_before_its_time() -> None:
-    """docs/semantics.md, "Actions" D: never set if left earlier — also not after a re-entry that is again
+    """docs/semantics.md, "Actions" D: never set if left earlier — also not after a re-entry that is
+    again
     shorter than the time (the delay restarts at each activation)."""
     run = two_steps("D Q0.0, T#50MS;")
     enter(run)
@@ -65,7 +67,8 @@ def test_d_time_may_be_a_time_variable() -> None:
 
 
 def test_l_operand_is_one_from_activation_and_zero_after_its_time_while_active() -> None:
-    """docs/semantics.md, "Actions" L: 1 from activation for the time, then 0 (the step stays active)."""
+    """docs/semantics.md, "Actions" L: 1 from activation for the time, then 0 (the step stays
+    active)."""
     run = two_steps("L Q0.0, T#50MS;")
     enter(run)
     assert run.get("Q0.0") is True
@@ -76,7 +79,8 @@ def test_l_operand_is_one_from_activation_and_zero_after_its_time_while_active()
 
 
 def test_halt_tm_keeps_a_d_operand_from_being_set() -> None:
-    """docs/semantics.md, "FB pins" HALT_TM: D timing frozen — D does not come while the time is halted."""
+    """docs/semantics.md, "FB pins" HALT_TM: D timing frozen — D does not come while the time is
+    halted."""
     run = two_steps("D Q0.0, T#50MS;")
     enter(run)
     run.set(HALT_TM=True).call(20)
@@ -86,7 +90,8 @@ def test_halt_tm_keeps_a_d_operand_from_being_set() -> None:
 
 
 def test_zero_op_forces_d_and_l_operands_to_zero_and_they_return_after() -> None:
-    """docs/semantics.md, "FB pins" ZERO_OP: N, D, L operands forced to 0 while set; S rows still run."""
+    """docs/semantics.md, "FB pins" ZERO_OP: N, D, L operands forced to 0 while set; S rows still
+    run."""
     run = two_steps("N Q0.0; D Q0.1, T#20MS; L Q0.2, T#1S; S Q0.3;")
     enter(run)
     run.call(3)
@@ -99,7 +104,8 @@ def test_zero_op_forces_d_and_l_operands_to_zero_and_they_return_after() -> None
 
 
 def test_time_assignment_every_cycle() -> None:
-    """docs/semantics.md, "Actions": `N A := expr` with TIME runs every cycle while the step is active."""
+    """docs/semantics.md, "Actions": `N A := expr` with TIME runs every cycle while the step is
+    active."""
     run = two_steps("N t := t + T#10MS;", header="VAR t : TIME := T#0MS; END_VAR")
     enter(run)
     run.call(4)
@@ -118,7 +124,8 @@ def test_dint_and_real_assignments() -> None:
 
 
 def test_int_overflow_in_an_assignment_leaves_the_sequencer_running() -> None:
-    """docs/semantics.md, "Actions": INT overflow sets the overflow status; the chart keeps switching."""
+    """docs/semantics.md, "Actions": INT overflow sets the overflow status; the chart keeps
+    switching."""
     run = two_steps("N x := x + 20000;", header="VAR x : INT := 20000; END_VAR")
     enter(run)
     assert run.st.ov
@@ -188,7 +195,8 @@ def test_s1_call_row_calls_the_block_once_per_activation() -> None:
 
 
 def test_on_and_off_reach_steps_of_another_sequencer() -> None:
-    """docs/semantics.md, "Actions": `ON Sx` / `OFF Sx` (de)activate another step — of any sequencer."""
+    """docs/semantics.md, "Actions": `ON Sx` / `OFF Sx` (de)activate another step — of any
+    sequencer."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": END_STEP
@@ -215,7 +223,8 @@ def test_on_and_off_reach_steps_of_another_sequencer() -> None:
 
 
 def test_off_s_all_clears_every_sequencer_but_keeps_the_step_holding_it() -> None:
-    """docs/semantics.md, "Actions": `OFF S_ALL` deactivates every step except the one holding the action
+    """docs/semantics.md, "Actions": `OFF S_ALL` deactivates every step except the one holding the
+    action
     (here V1 OFF S_ALL, steps of two sequencers)."""
     run = chart(
         seq("""
@@ -278,7 +287,8 @@ def test_rows_of_the_allowed_table_compile(row: str) -> None:
 
 @pytest.mark.parametrize(("row", "code"), REFUSED)
 def test_rows_outside_the_table_are_compile_errors_naming_step_and_row(row, code) -> None:
-    """docs/semantics.md, "Actions": any other combination is a compile error naming the step and row."""
+    """docs/semantics.md, "Actions": any other combination is a compile error naming the step and
+    row."""
     errors = [d for d in validate(parse_chart(_row_chart(row), "r.s7g")) if d.is_error]
     assert [d.code for d in errors] == [code]
     assert errors[0].element == "step S2 row 2"
@@ -322,7 +332,8 @@ def test_time_comparison_with_a_step_time_and_a_time_variable() -> None:
 
 
 def test_comparisons_of_int_dint_and_real() -> None:
-    """docs/semantics.md, "Conditions": comparisons (= <> < > <= >=) of same-typed INT, DINT, REAL."""
+    """docs/semantics.md, "Conditions": comparisons (= <> < > <= >=) of same-typed INT, DINT,
+    REAL."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": END_STEP
@@ -346,7 +357,8 @@ def test_comparisons_of_int_dint_and_real() -> None:
 
 
 def test_tt_says_that_the_transition_condition_holds() -> None:
-    """docs/semantics.md, "Conditions": `T2.TT` (condition holds) — read here while TAP holds the switch back."""
+    """docs/semantics.md, "Conditions": `T2.TT` (condition holds) — read here while TAP holds the
+    switch back."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": END_STEP
@@ -394,7 +406,8 @@ def test_empty_transition_condition_holds_and_warns() -> None:
 
 
 def test_an_action_row_may_not_write_with_a_coil() -> None:
-    """docs/semantics.md, "Conditions": only permanent instructions may write with coils (E035 in a step)."""
+    """docs/semantics.md, "Conditions": only permanent instructions may write with coils (E035 in a
+    step)."""
     codes = [d.code for d in validate(parse_chart(_row_chart("N M0.0 := I0.1;"), "c.s7g"))]
     assert "E035" in codes
 

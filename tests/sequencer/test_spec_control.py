@@ -1,4 +1,5 @@
-"""docs/semantics.md, "Interlock" (interlock), §2.4 (supervision), §2.5 (modes), §2.6 (control inputs): the
+"""docs/semantics.md, "Interlock" (interlock), §2.4 (supervision), §2.5 (modes), §2.6 (control
+inputs): the
 rules not pinned in ``test_interlock_supervision_modes.py`` / ``test_cycle_modes.py``.
 
 Driven through the real cycle (``GraphRuntime``) by the scenario harness, 10 ms per call;
@@ -18,7 +19,8 @@ from tests.sequencer.helpers import chart, enter, seq, source, two_steps
 
 
 def test_l1_row_runs_once_while_the_interlock_stays_lost_and_l0_once_on_return() -> None:
-    """docs/semantics.md, "Interlock" and "Actions": L1 fires when the interlock is lost, L0 when it returns — once each."""
+    """docs/semantics.md, "Interlock" and "Actions": L1 fires when the interlock is lost, L0 when it
+    returns — once each."""
     run = two_steps(
         "L1 N lost := lost + 1; L0 N back := back + 1;",
         header="VAR lost : INT := 0; back : INT := 0; END_VAR",
@@ -34,7 +36,8 @@ def test_l1_row_runs_once_while_the_interlock_stays_lost_and_l0_once_on_return()
 
 
 def test_interlock_lost_stops_u_so_a_supervision_on_u_waits() -> None:
-    """docs/semantics.md, "Interlock": while the interlock does not hold U stops counting (a supervision
+    """docs/semantics.md, "Interlock": while the interlock does not hold U stops counting (a
+    supervision
     `S2.U > T#50MS` is then not reached)."""
     run = chart(
         seq("""
@@ -59,7 +62,8 @@ def test_interlock_lost_stops_u_so_a_supervision_on_u_waits() -> None:
 
 
 def test_a_fault_present_on_activation_raises_v1_and_holds_the_step() -> None:
-    """docs/semantics.md, "Supervision": a supervision fault raises V1 (also when already present as the step
+    """docs/semantics.md, "Supervision": a supervision fault raises V1 (also when already present as
+    the step
     becomes active) and stops that step from switching."""
     run = chart(
         seq("""
@@ -81,7 +85,8 @@ def test_a_fault_present_on_activation_raises_v1_and_holds_the_step() -> None:
 
 
 def test_a_fault_in_one_path_blocks_the_join_of_a_simultaneous_branch() -> None:
-    """docs/semantics.md, "One FB call", step 4.2 and "Supervision": no preceding step of a switching transition may hold an
+    """docs/semantics.md, "One FB call", step 4.2 and "Supervision": no preceding step of a
+    switching transition may hold an
     unacknowledged supervision error — also at a join."""
     run = chart(
         seq("""
@@ -102,7 +107,8 @@ def test_a_fault_in_one_path_blocks_the_join_of_a_simultaneous_branch() -> None:
 
 
 def test_a_supervision_fault_sets_fault_and_acknowledgement_clears_it() -> None:
-    """docs/semantics.md, "Supervision": a fault sets FAULT and ERR_FLT (USER set) until acknowledged."""
+    """docs/semantics.md, "Supervision": a fault sets FAULT and ERR_FLT (USER set) until
+    acknowledged."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": SUPERVISION := I0.6; END_STEP
@@ -154,7 +160,8 @@ def test_the_mode_survives_a_warm_restart_of_the_cpu() -> None:
 
 
 def test_top_push_at_an_alternative_divergence_switches_only_the_first_listed_path() -> None:
-    """docs/semantics.md, "One FB call", step 4.2 and "Modes": in TOP a T_PUSH edge switches, but at an alternative
+    """docs/semantics.md, "One FB call", step 4.2 and "Modes": in TOP a T_PUSH edge switches, but at
+    an alternative
     divergence at most one path — the first-listed."""
     run = chart(
         seq("""
@@ -184,7 +191,8 @@ def test_tap_push_without_the_condition_does_not_switch() -> None:
 
 
 def test_halt_tm_freezes_u_so_a_time_supervision_waits() -> None:
-    """docs/semantics.md, "FB pins": HALT_TM freezes the step times (a supervision on S2.U does not fire)."""
+    """docs/semantics.md, "FB pins": HALT_TM freezes the step times (a supervision on S2.U does not
+    fire)."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": END_STEP
@@ -213,7 +221,8 @@ def test_halt_sq_keeps_the_steps_and_their_actions() -> None:
 
 
 def test_off_sq_runs_the_s0_rows_of_the_steps_it_switches_off() -> None:
-    """docs/semantics.md, "FB pins" OFF_SQ: all steps off — as deactivation, with the final scan (N to 0)."""
+    """docs/semantics.md, "FB pins" OFF_SQ: all steps off — as deactivation, with the final scan (N
+    to 0)."""
     run = two_steps("N Q0.0; S0 S M0.7;")
     enter(run)
     run.set(OFF_SQ=True).call()
@@ -221,7 +230,8 @@ def test_off_sq_runs_the_s0_rows_of_the_steps_it_switches_off() -> None:
 
 
 def test_a_t_push_in_top_does_not_switch_a_step_with_a_latched_fault() -> None:
-    """docs/semantics.md, "One FB call", step 4.2 and "Supervision": an unacknowledged supervision error blocks switching in any
+    """docs/semantics.md, "One FB call", step 4.2 and "Supervision": an unacknowledged supervision
+    error blocks switching in any
     mode — also a TOP push."""
     run = chart(
         seq("""
@@ -251,7 +261,8 @@ def test_man_s_on_raises_the_s1_event_of_the_step() -> None:
 
 
 def test_rows_marked_c_do_not_run_while_the_interlock_does_not_hold() -> None:
-    """docs/semantics.md, "Interlock": while the interlock does not hold, rows marked C (N, S, D) do not run;
+    """docs/semantics.md, "Interlock": while the interlock does not hold, rows marked C (N, S, D) do
+    not run;
     they run once it holds."""
     run = two_steps("NC Q0.0; SC Q0.1; D C Q0.2, T#20MS; N Q0.3;", interlock="I0.5")
     enter(run)
@@ -262,7 +273,8 @@ def test_rows_marked_c_do_not_run_while_the_interlock_does_not_hold() -> None:
 
 
 def test_l1_off_s_all_switches_every_other_step_off() -> None:
-    """docs/semantics.md, "Actions": `L1 OFF S_ALL` — on losing the interlock every other step goes off."""
+    """docs/semantics.md, "Actions": `L1 OFF S_ALL` — on losing the interlock every other step goes
+    off."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": END_STEP

@@ -1,4 +1,5 @@
-"""The validator reports all problems at once, with types and the limits of docs/semantics.md, "Structure"."""
+"""The validator reports all problems at once, with types and the limits of docs/semantics.md,
+"Structure"."""
 
 from __future__ import annotations
 

@@ -1,4 +1,5 @@
-"""The CPU message list and SFC17 ALARM_SQ / SFC18 ALARM_S / SFC19 ALARM_SC (docs/runtime.md, "The block runtime"; docs/semantics.md, "Messages")."""
+"""The CPU message list and SFC17 ALARM_SQ / SFC18 ALARM_S / SFC19 ALARM_SC (docs/runtime.md, "The
+block runtime"; docs/semantics.md, "Messages")."""
 
 from __future__ import annotations
 

@@ -1,4 +1,5 @@
-"""The one catalogue of system blocks and the RET_VAL conventions (STEP7 comprehensive guide vol. 2, ch. 12)."""
+"""The one catalogue of system blocks and the RET_VAL conventions (STEP7 comprehensive guide vol. 2,
+ch. 12)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,5 @@
-"""Diagnostic buffer read (SFC51 RDSYSST, SZL 0x00A0) and SFC52 WR_USMSG (STEP7 comprehensive guide vol. 2, ch. 12; Siemens' Program Design for S7-300/400, ch. 10)."""
+"""Diagnostic buffer read (SFC51 RDSYSST, SZL 0x00A0) and SFC52 WR_USMSG (STEP7 comprehensive guide
+vol. 2, ch. 12; Siemens' Program Design for S7-300/400, ch. 10)."""
 
 from __future__ import annotations
 

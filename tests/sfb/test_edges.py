@@ -1,4 +1,5 @@
-"""FP / FN edge detection with an edge-memory bit (El-Shahat's S7-300/400 course, timers and counters)."""
+"""FP / FN edge detection with an edge-memory bit (El-Shahat's S7-300/400 course, timers and
+counters)."""
 
 from __future__ import annotations
 

@@ -109,7 +109,8 @@ def test_sfcs_return_ret_val_and_blkmov_rejects_a_bool_any_not_a_multiple_of_8(
 
 
 def test_set_clk_and_read_clk_use_the_injected_clock(clock: VirtualClock) -> None:
-    """docs/architecture.md, "The core is a function": the CPU clock is the injected clock plus an offset set by SET_CLK."""
+    """docs/architecture.md, "The core is a function": the CPU clock is the injected clock plus an
+    offset set by SET_CLK."""
     read: list[dict[str, object]] = []
 
     def main(ctx: CallContext) -> None:

@@ -1,4 +1,5 @@
-"""SFB3 TP, SFB4 TON, SFB5 TOF against their timing diagrams (STEP7 comprehensive guide vol. 2, ch. 12).
+"""SFB3 TP, SFB4 TON, SFB5 TOF against their timing diagrams (STEP7 comprehensive guide vol. 2, ch.
+12).
 
 Each table row is ``(t_ms, IN, expected Q, expected ET)``; the timer is called once per row
 with ``now_ns = t_ms * 1e6``.
@@ -87,7 +88,8 @@ def test_iec_timers_count_in_milliseconds_up_to_t_24d20h31m23s647ms() -> None:
 
 
 def test_tp_with_q_fed_back_to_in_toggles_every_pt() -> None:
-    """Seed example (STEP7 comprehensive guide vol. 2, ch. 12): a TP whose Q is fed back (negated) to IN pulses."""
+    """Seed example (STEP7 comprehensive guide vol. 2, ch. 12): a TP whose Q is fed back (negated)
+    to IN pulses."""
     tp = TP()
     seen = []
     q = False

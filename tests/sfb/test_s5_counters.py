@@ -41,7 +41,8 @@ def test_s_loads_the_bcd_preset_on_a_rising_edge_and_q_is_value_above_zero() -> 
 
 
 def test_a_non_bcd_preset_is_a_programming_error() -> None:
-    """El-Shahat's S7-300/400 course, timers and counters: loading a non-BCD preset can stop the PLC."""
+    """El-Shahat's S7-300/400 course, timers and counters: loading a non-BCD preset can stop the
+    PLC."""
     with pytest.raises(ProgramError, match="BCD"):
         c.set_preset(S5Counter(), True, 0x00A1)
 

@@ -100,7 +100,8 @@ def test_off_delay_starts_on_the_falling_edge() -> None:
 
 @pytest.mark.parametrize("fn", list(TimerFunction))
 def test_r_clears_value_and_q_for_every_function(fn: TimerFunction) -> None:
-    """El-Shahat's S7-300/400 course, timers and counters: R = 1 sets the time value to 0 and Q to 0 for all five functions."""
+    """El-Shahat's S7-300/400 course, timers and counters: R = 1 sets the time value to 0 and Q to 0
+    for all five functions."""
     cell = S5Timer()
     s5.run(cell, fn, True, 1000, 0)
     s5.run(cell, fn, fn is not TimerFunction.SF, 1000, 10 * MS)
@@ -154,7 +155,8 @@ def test_a_timer_number_beyond_the_area_is_a_programming_error() -> None:
 
 
 def test_the_s5time_literals_of_the_seeds_encode_with_the_smallest_base() -> None:
-    """El-Shahat's S7-300/400 course, timers and counters: S5T#2S = 16#0200, S5T#1M20S = 16#1800, S5T#2M = 16#2120, max 16#3999."""
+    """El-Shahat's S7-300/400 course, timers and counters: S5T#2S = 16#0200, S5T#1M20S = 16#1800,
+    S5T#2M = 16#2120, max 16#3999."""
     assert s5.s5time_encode(2000) == 0x0200
     assert s5.s5time_encode(80_000) == 0x1800
     assert s5.s5time_encode(120_000) == 0x2120

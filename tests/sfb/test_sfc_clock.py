@@ -1,4 +1,5 @@
-"""SFC0 SET_CLK, SFC1 READ_CLK, SFC64 TIME_TCK on the injected clock (docs/architecture.md, "The core is a function", STEP7 comprehensive guide vol. 2, ch. 12)."""
+"""SFC0 SET_CLK, SFC1 READ_CLK, SFC64 TIME_TCK on the injected clock (docs/architecture.md, "The
+core is a function", STEP7 comprehensive guide vol. 2, ch. 12)."""
 
 from __future__ import annotations
 

@@ -105,7 +105,8 @@ def test_tod_interrupt_set_is_inactive_until_act_tint_and_repeats_each_minute(
 
 def test_activated_tod_interrupts_are_inactive_after_a_warm_restart(clock: VirtualClock) -> None:
     """After a warm restart program-activated TOD interrupts stay inactive
-    until re-activated (Siemens' Program Design for S7-300/400); a HW-configured active one comes back by itself."""
+    until re-activated (Siemens' Program Design for S7-300/400); a HW-configured active one comes
+    back by itself."""
     log: list[tuple[int, dict[str, Any]]] = []
     at = datetime(2026, 3, 2, 10, 0, 0)
 
@@ -238,7 +239,8 @@ def test_dis_airt_delays_interrupts_instead_of_dropping_them(clock: VirtualClock
 
 
 def test_next_occurrence_skips_months_without_the_start_day() -> None:
-    """Monthly from 31 Jan runs only in months with 31 days (Siemens' Program Design for S7-300/400);
+    """Monthly from 31 Jan runs only in months with 31 days (Siemens' Program Design for
+    S7-300/400);
     ``W#16#2001`` runs at each month's end."""
     start = datetime(2026, 1, 31, 8, 0)
     assert next_occurrence(start, Period.MONTH, datetime(2026, 2, 1)) == datetime(2026, 3, 31, 8)

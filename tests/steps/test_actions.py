@@ -1,4 +1,5 @@
-"""Action rows (docs/semantics.md, "Actions") and arithmetic with overflow (STEP7 comprehensive guide vol. 2, ch. 14)."""
+"""Action rows (docs/semantics.md, "Actions") and arithmetic with overflow (STEP7 comprehensive
+guide vol. 2, ch. 14)."""
 
 from __future__ import annotations
 

@@ -1,5 +1,6 @@
 """Edit mode in a real headless Chromium against a chart running on the virtual clock, with
-a users file, a real zenoh bus and the CPU's online change (docs/online-change.md): an operator and a
+a users file, a real zenoh bus and the CPU's online change (docs/online-change.md): an operator and
+a
 viewer get no edit mode; an invalid edit shows its diagnostic with line and column while
 the CPU keeps its chart; an engineer changes a transition condition, downloads, and the
 running sequence follows the new condition; a chart built from scratch in the browser

@@ -1,4 +1,5 @@
-"""``s7graph sim``: run a chart on the virtual clock — the black-box contract of docs/cli.md, "s7graph sim".
+"""``s7graph sim``: run a chart on the virtual clock — the black-box contract of docs/cli.md,
+"s7graph sim".
 
 Each cycle (``k`` = 0, 1, …, at ``t_ms = k * cycle_ms``): apply the stimuli with
 ``at_ms <= t_ms`` (values stay until set again), read inputs, call the FB from OB1, write

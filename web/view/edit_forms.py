@@ -77,7 +77,7 @@ class Field:
     @property
     def hint(self) -> str:
         extra = " (0: none - a branch stop)" if self.arg.type == "int | None" else ""
-        return self.op.doc + extra
+        return self.op.hint + extra
 
 
 @dataclass(frozen=True, slots=True)

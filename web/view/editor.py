@@ -421,7 +421,7 @@ class Editor(CpuCommands, RowEditing):
                 self._rows_form(chart, form.ref)
             for op, fields in form.actions:
                 handles = [self._input(f) for f in fields]
-                button = gui.add_button(op.title, hint=op.doc)
+                button = gui.add_button(op.title, hint=op.hint)
                 self._form_handles.append(button)
                 button.on_click(self._action_handler(op, form.ref, fields, handles))
 
