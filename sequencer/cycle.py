@@ -19,7 +19,7 @@
 6. group flags and FB outputs.
 
 The quiet call and the fast path of step 4 are ``sequencer/fastpath.py``'s ``FastPath``, a part of
-the runtime (``GraphRuntime.fastpath``); steps 4a–4c of the general path (evaluate, decide,
+the runtime (``GraphRuntime.fastpath``); steps 4.1–4.3 of the general path (evaluate, decide,
 switch, skip steps) are ``sequencer/switching.py``.
 The option ``order = "codesys"`` runs d) and e) before a)–c): new steps act in the next call
 (their S1 rows once: a step whose rows ran in its activation call is not carried).

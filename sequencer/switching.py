@@ -1,4 +1,4 @@
-"""Steps 4a–4c of a general GRAPH FB call (docs/semantics.md, "One FB call"; docs/semantics.md,
+"""Steps 4.1–4.3 of a general GRAPH FB call (docs/semantics.md, "One FB call"; docs/semantics.md,
 "Decisions"): per
 sequencer, evaluate the transitions leaving its active steps, decide which switch (mode
 rule, HALT_SQ, supervision faults, at an alternative divergence the first-listed, steps

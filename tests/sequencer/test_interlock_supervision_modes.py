@@ -1,5 +1,4 @@
-"""One test per rule of docs/semantics.md, "Interlock" (interlock), §2.4 (supervision), §2.5 (modes)
-and §2.6
+"""One test per rule of docs/semantics.md, "Interlock", "Supervision", "Modes" and "FB pins"
 (control inputs), through the real cycle. Chart: scenarios/rules.s7g — S2 is guarded
 (interlock I0.0, supervision I0.6, a row per event: L1→M1.1 L0→M1.0 V1→M1.2 V0→M1.3
 A1→M1.4 R1→M1.5), S4 the parallel path, S11/S12 a second sequencer."""

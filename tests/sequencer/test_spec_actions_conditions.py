@@ -1,4 +1,4 @@
-"""docs/semantics.md, "Actions" (actions) and §2.9 (conditions): the rules not pinned elsewhere.
+"""docs/semantics.md, "Actions" and "Conditions": the rules not pinned elsewhere.
 
 Driven through the real cycle (``GraphRuntime``) by the scenario harness, 10 ms per call;
 the CALL rules through a CPU (OB1 calls the GraphFB, which calls an FC).

@@ -1,5 +1,4 @@
-"""docs/semantics.md, "Interlock" (interlock), §2.4 (supervision), §2.5 (modes), §2.6 (control
-inputs): the
+"""docs/semantics.md, "Interlock", "Supervision", "Modes" and "FB pins" (control inputs): the
 rules not pinned in ``test_interlock_supervision_modes.py`` / ``test_cycle_modes.py``.
 
 Driven through the real cycle (``GraphRuntime``) by the scenario harness, 10 ms per call;

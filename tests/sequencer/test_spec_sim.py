@@ -88,7 +88,8 @@ def test_values_stay_until_set_again(tmp_path: Path) -> None:
 
 
 def test_int_overflow_in_an_assignment_does_not_stop_the_simulation(tmp_path: Path) -> None:
-    """docs/cli.md, "s7graph sim" with §2.8: an INT overflow sets the overflow status; sim runs to
+    """docs/cli.md, "s7graph sim", and semantics.md, "Actions": an INT overflow sets the overflow
+    status; sim runs to
     the end."""
     rc, lines = sim(tmp_path, [{"at_ms": 0, "set": {"I0.2": True}}], cycles=10, watch="x")
     assert rc == 0 and len(lines) == 10
@@ -107,8 +108,8 @@ def test_a_pin_outside_a_minimum_parameter_set_is_refused(tmp_path: Path, capsys
 
 
 def test_a_syntax_error_exits_2_with_its_place_on_stderr(tmp_path: Path, capsys) -> None:
-    """docs/cli.md, "s7graph sim": a chart that does not compile exits 2, diagnostics on stderr (§3:
-    `file:line:column`), no trace."""
+    """docs/cli.md, "s7graph sim": a chart that does not compile exits 2, diagnostics on stderr
+    (`file:line:column`), no trace."""
     rc, lines = sim(tmp_path, [], chart=CHART.replace('N "Lamp";', 'N "Lamp"'))
     captured = capsys.readouterr()
     assert rc == 2 and lines == []

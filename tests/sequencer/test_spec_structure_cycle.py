@@ -1,4 +1,4 @@
-"""docs/semantics.md, "Structure" (structure) and §2.2 (one FB call): the rules not pinned
+"""docs/semantics.md, "Structure" and "One FB call": the rules not pinned
 elsewhere.
 
 Driven through the real cycle (``GraphRuntime``) by the scenario harness, 10 ms per call.
@@ -32,7 +32,8 @@ def test_every_initial_step_of_a_sequencer_is_active_after_the_first_call() -> N
 
 
 def test_a_step_may_be_the_target_of_several_transitions() -> None:
-    """docs/semantics.md, "Structure" alternative branches / §3 alternative join: both paths reach
+    """docs/semantics.md, "Structure": alternative branches and
+    joins (docs/chart-format.md): both paths reach
     S4."""
     body = seq("""
       INITIAL_STEP S1 "a": END_STEP
