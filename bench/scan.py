@@ -8,13 +8,12 @@ loop of 25 steps (5000 steps, 200 active at any time). Every step holds
     D Mb.d, T#20MS;  L Mb.l, T#20MS; // an on-delay and a pulse bit
     TRANSITION ... := c >= p;        // a comparison; p = 2, 3, 4 by sequencer
 
-so a sequencer advances every ``p`` calls (phases drift, about 1/3 of the sequencers switch
-per scan) and its D and L bits toggle inside every step at the 10 ms virtual cycle. Layout
+so a sequencer advances every ``p`` calls (phases drift, about 1/3 of the sequencers switch per
+scan) and its D and L bits toggle inside every step at the 10 ms virtual cycle. Layout
 (``--layout``): ``packed`` = 25 FBs of 8 sequencers each (S7-GRAPH allows 1..8 per FB,
-docs/semantics.md, "Structure"; the
-default), ``single`` = 200 FBs of one sequencer each. The FBs are called from OB1 of one
-``engine.cpu.Cpu`` driven by a ``VirtualClock`` advanced 10 ms per scan; the wall time of
-``Cpu.scan()`` is measured with ``perf_counter_ns``.
+docs/semantics.md, "Structure"; the default), ``single`` = 200 FBs of one sequencer each. The FBs
+are called from OB1 of one ``engine.cpu.Cpu`` driven by a ``VirtualClock`` advanced 10 ms per scan;
+the wall time of ``Cpu.scan()`` is measured with ``perf_counter_ns``.
 
 Baseline: one ``transitions.Machine`` per sequencer (25 states, one ``scan`` trigger per scan
 whose condition is a model callback ``c >= p``, ``after_state_change`` resets ``c`` and the

@@ -1,10 +1,9 @@
 """S7 absolute addresses: parsing and canonical text (docs/runtime.md, "The block runtime", Siemens'
 Program Design for S7-300/400, ch. 5).
 
-An address is area + width + first byte (+ bit 0..7 for BIT). Multi-byte operands start at
-their lowest byte (``MD100`` = MB100..MB103, Siemens' Program Design for S7-300/400, ch. 5).
-``T5``/``C3`` name a
-timer/counter cell: area T/C, width WORD, ``byte`` = the cell number. German mnemonics
+An address is area + width + first byte (+ bit 0..7 for BIT). Multi-byte operands start at their
+lowest byte (``MD100`` = MB100..MB103, Siemens' Program Design for S7-300/400, ch. 5). ``T5``/``C3``
+name a timer/counter cell: area T/C, width WORD, ``byte`` = the cell number. German mnemonics
 (E/A/PE/PA/Z) and blanks are accepted; ``str()`` always gives canonical English text.
 """
 
@@ -21,8 +20,7 @@ __all__ = ["Address", "Area", "Width", "parse_address"]
 
 
 class Area(StrEnum):
-    """Operand areas (Siemens' Program Design for S7-300/400, ch. 5, Siemens' Program Design for
-    S7-300/400, table 5-2)."""
+    """Operand areas (Siemens' Program Design for S7-300/400, ch. 5, table 5-2)."""
 
     I = "I"  # noqa: E741 - the S7 mnemonic
     Q = "Q"

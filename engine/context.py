@@ -2,11 +2,10 @@
 of blocks in Python" and "Restarts: warm, hot, cold").
 
 ``CallContext.call`` binds the actual parameters (a ``str`` for a non-string parameter is an
-operand), runs the body one nesting level deeper (B-stack overflow →
-``NestingOverflow``) and tags an escaping exception with the innermost block
-(``_Fault``), which the CPU turns into OB121 or STOP — ``SystemExit`` and
-``KeyboardInterrupt`` raised by a block included: a block error, never a process exit. The
-runner's ``ScanAborted`` passes through, naming the innermost block.
+operand), runs the body one nesting level deeper (B-stack overflow → ``NestingOverflow``) and tags
+an escaping exception with the innermost block (``_Fault``), which the CPU turns into OB121 or STOP
+— ``SystemExit`` and ``KeyboardInterrupt`` raised by a block included: a block error, never a
+process exit. The runner's ``ScanAborted`` passes through, naming the innermost block.
 """
 
 from __future__ import annotations
@@ -140,10 +139,10 @@ class CallContext:
     ) -> dict[str, object]:
         """Call an FB/SFB (with its instance DB) or an FC/SFC; return its outputs by name.
 
-        A ``str`` actual for a non-string parameter is an operand (``"MW10"``); OUT and
-        IN_OUT operands receive the values after the call. ``None`` for
-        an OUT gives it without an operand: its value is only returned (a GRAPH row's
-        ``CDT => t`` writes it to an FB variable the engine does not address).
+        A ``str`` actual for a non-string parameter is an operand (``"MW10"``); OUT and IN_OUT
+        operands receive the values after the call. ``None`` for an OUT gives it without an operand:
+        its value is only returned (a GRAPH row's ``CDT => t`` writes it to an FB variable the
+        engine does not address).
         """
         if isinstance(block, FB) and isinstance(instance, InstanceDB) and instance.fb is block:
             return self._call_fb(block, instance, params)  # the common case, checks below

@@ -123,8 +123,8 @@ class Cpu(ProgramBlocks, Forcing, InterruptDispatch):
         """The CPU's date and time on the injected clock (SFC0/SFC1, TOD interrupts)."""
         self.meters = RuntimeMeters()
         self.ob_priority: dict[int, int] = {}
-        """Parametrised OB priorities; others have the S7
-        defaults (``engine.interrupts.priority``)."""
+        """Parametrised OB priorities; others have the S7 defaults
+        (``engine.interrupts.priority``)."""
         self._startup_hooks: list[StartupHook] = []
         self.stop_entry: DiagEntry | None = None
         """The diagnostic entry of the last transition to STOP (its cause is the entry

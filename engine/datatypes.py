@@ -2,11 +2,10 @@
 runtime").
 
 Encodings (Siemens' Program Design for S7-300/400, appendix C; El-Shahat's S7-300/400 course, timers
-and counters): integers two's complement big-endian; REAL IEEE 754
-single; TIME = DINT ms; DATE = WORD days since 1990-01-01; TIME_OF_DAY = DWORD ms since
-midnight; DATE_AND_TIME = 8 BCD bytes (YY MM DD hh mm ss, 3 ms digits, weekday 1 = Sunday);
-S5TIME = 3 BCD digits + time base in bits 12-13; STRING[n] = n + 2 bytes (max, current, chars).
-Python values follow docs/architecture.md, "Seams".
+and counters): integers two's complement big-endian; REAL IEEE 754 single; TIME = DINT ms; DATE =
+WORD days since 1990-01-01; TIME_OF_DAY = DWORD ms since midnight; DATE_AND_TIME = 8 BCD bytes (YY
+MM DD hh mm ss, 3 ms digits, weekday 1 = Sunday); S5TIME = 3 BCD digits + time base in bits 12-13;
+STRING[n] = n + 2 bytes (max, current, chars). Python values follow docs/architecture.md, "Seams".
 """
 
 from __future__ import annotations

@@ -1,13 +1,11 @@
 """CPU operand memory: I/Q process images, PI/PQ module side, M, L, T, C and DBs (docs/runtime.md,
 "The block runtime").
 
-Every area is a big-endian ``bytearray`` (MB10 is the high byte of MW10, Siemens'
-Program Design for S7-300/400, ch. 5); timers and counters are cells (``S5Timer``/``S5Counter``)
-whose logic lives in sfb/.
-Retentivity follows Siemens' Program Design for S7-300/400, ch. 9: by default MB0..MB15, no timers
-and C0..C7 are
-retentive; DBs keep their contents on warm restart and reload initial values on cold restart
-(docs/runtime.md, "Restarts: warm, hot, cold").
+Every area is a big-endian ``bytearray`` (MB10 is the high byte of MW10, Siemens' Program Design for
+S7-300/400, ch. 5); timers and counters are cells (``S5Timer``/``S5Counter``) whose logic lives in
+sfb/. Retentivity follows Siemens' Program Design for S7-300/400, ch. 9: by default MB0..MB15, no
+timers and C0..C7 are retentive; DBs keep their contents on warm restart and reload initial values
+on cold restart (docs/runtime.md, "Restarts: warm, hot, cold").
 """
 
 from __future__ import annotations
@@ -427,9 +425,8 @@ class Memory:
 
     def clear_outputs(self, *, image: bool = True, modules: bool = True) -> None:
         """The safe output state (docs/runtime.md, "Restarts: warm, hot, cold"): zero the output
-        image Q (``image``) and the
-        module side PQ (``modules``). STOP and HOLD zero only the modules, a startup both or
-        as its restart type says; the one way the CPU resets outputs."""
+        image Q (``image``) and the module side PQ (``modules``). STOP and HOLD zero only the
+        modules, a startup both or as its restart type says; the one way the CPU resets outputs."""
         if image:
             self.outputs[:] = bytes(len(self.outputs))
         if modules:

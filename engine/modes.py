@@ -1,9 +1,8 @@
 """CPU operating modes and mode requests (docs/runtime.md, "Restarts: warm, hot, cold"; Siemens'
 Program Design for S7-300/400, ch. 9, Table 9-1).
 
-Simultaneous requests resolve to the highest priority: STOP > HOLD > STARTUP > RUN
-. The key switch gates every start: with the key on STOP a RUN request is
-refused.
+Simultaneous requests resolve to the highest priority: STOP > HOLD > STARTUP > RUN . The key switch
+gates every start: with the key on STOP a RUN request is refused.
 """
 
 from __future__ import annotations

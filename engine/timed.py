@@ -6,14 +6,12 @@ on the CPU's *process* time (frozen in HOLD); when it elapses the OB runs once w
 caller's SIGN; SFC33 cancels; SFC34 status bit 2 is 1 while pending.
 
 Time-of-day interrupts (STEP7 comprehensive guide vol. 2, ch. 12; Siemens' Program Design for
-S7-300/400) run on the
-CPU's real-time clock (``engine.rtc``), never the wall clock. SFC28 SET_TINT sets start and
-period but does not activate; SFC30 ACT_TINT activates; a warm or cold restart deactivates
-program-activated interrupts (``configure(..., active=True)`` ones — the HW-config "Active"
-box — come back by themselves). A periodic interrupt whose start day does not exist in a
+S7-300/400) run on the CPU's real-time clock (``engine.rtc``), never the wall clock. SFC28 SET_TINT
+sets start and period but does not activate; SFC30 ACT_TINT activates; a warm or cold restart
+deactivates program-activated interrupts (``configure(..., active=True)`` ones — the HW-config
+"Active" box — come back by themselves). A periodic interrupt whose start day does not exist in a
 month/year is skipped there (Siemens' Program Design for S7-300/400). The CPU checks due interrupts
-only in RUN, so one
-due during STARTUP runs after the transition to RUN.
+only in RUN, so one due during STARTUP runs after the transition to RUN.
 """
 
 from __future__ import annotations
@@ -219,8 +217,8 @@ class TodInterrupts:
 
     def startup(self, now: datetime, *, hot: bool) -> None:
         """Warm/cold restart: program-activated interrupts become inactive (Siemens' Program Design
-        for S7-300/400);
-        HW-configured active ones are (re)activated. A hot restart keeps everything."""
+        for S7-300/400); HW-configured active ones are (re)activated. A hot restart keeps
+        everything."""
         if hot:
             return
         for tod in self.table.values():

@@ -7,8 +7,7 @@ transition attribute), and all conditions and action rows are rendered into one 
 module compiled with ``compile()``; nothing is interpreted per scan.
 
 Name resolution (docs/semantics.md, "Conditions") is ``sequencer.names.resolve_operand``, shared
-with the
-validator: ``"quoted"`` → symbol; otherwise FB static variable, FB pin, S7 address.
+with the validator: ``"quoted"`` → symbol; otherwise FB static variable, FB pin, S7 address.
 """
 
 from __future__ import annotations

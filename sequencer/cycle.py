@@ -20,10 +20,10 @@
 
 The quiet call and the fast path of step 4 are ``sequencer/fastpath.py``'s ``FastPath``, a part of
 the runtime (``GraphRuntime.fastpath``); steps 4.1–4.3 of the general path (evaluate, decide,
-switch, skip steps) are ``sequencer/switching.py``.
-The option ``order = "codesys"`` runs d) and e) before a)–c): new steps act in the next call
-(their S1 rows once: a step whose rows ran in its activation call is not carried).
-Work is proportional to the active steps: only ``st.active`` is visited.
+switch, skip steps) are ``sequencer/switching.py``. The option ``order = "codesys"`` runs d) and e)
+before a)–c): new steps act in the next call (their S1 rows once: a step whose rows ran in its
+activation call is not carried). Work is proportional to the active steps: only ``st.active`` is
+visited.
 """
 
 from __future__ import annotations
@@ -160,16 +160,14 @@ class GraphRuntime:
     def acknowledge(self, step_indices: Iterable[int]) -> None:
         """Queue acknowledgements of steps' supervision faults from outside the FB (a user
         acknowledging the message, docs/semantics.md, "Messages"): the next call releases each step
-        still
-        latched exactly as ACK_S does (events A1, V0; the step may switch in that call)."""
+        still latched exactly as ACK_S does (events A1, V0; the step may switch in that call)."""
         self._remote.extend(step_indices)
         self.fastpath.armed = False
 
     def command(self, pin: str, step: int | None = None) -> None:
         """Queue an operator command (S7-GRAPH "Control Sequencer", docs/semantics.md, "Modes" and
-        "FB pins"): ``pin``
-        acts in the next call as a one-call rising edge whatever the parameter set and the
-        pin's wiring (OFF_SQ: switched off for that call); S_ON/S_OFF act on step number
+        "FB pins"): ``pin`` acts in the next call as a one-call rising edge whatever the parameter
+        set and the pin's wiring (OFF_SQ: switched off for that call); S_ON/S_OFF act on step number
         ``step`` instead of S_NO."""
         self._commands.append((pin, step))
         self.fastpath.armed = False
@@ -256,8 +254,8 @@ class GraphRuntime:
 
     def execute(self, inputs: dict[str, Any], now_ns: int) -> GraphState:
         """One FB call with the pin values ``inputs`` at clock time ``now_ns`` (docs/semantics.md,
-        "One FB call"):
-        the quiet call (``FastPath.quiet``) when it is one, else the general path."""
+        "One FB call"): the quiet call (``FastPath.quiet``) when it is one, else the general
+        path."""
         quiet = self.quiet(inputs, now_ns)
         if quiet is not None:
             return quiet
@@ -451,8 +449,8 @@ class GraphRuntime:
 
     def _conditions_and_actions(self, k: int, steps: list[int]) -> None:
         """Steps d–e: interlock and supervision, final scans, action rows (docs/semantics.md, "One
-        FB call", steps 4.4–4.5)
-        of sequencer ``k`` (-1: the only one) whose active steps are ``steps``."""
+        FB call", steps 4.4–4.5) of sequencer ``k`` (-1: the only one) whose active steps are
+        ``steps``."""
         st = self.st
         cc = self.cc
         prog = self.prog

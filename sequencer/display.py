@@ -357,8 +357,7 @@ def compute_outputs(
 
 class Display:
     """The display of one runtime (docs/semantics.md, "FB pins"), incremental: the cycle calls
-    ``page``
-    after latching the inputs and ``update`` at the end of the call.
+    ``page`` after latching the inputs and ``update`` at the end of the call.
 
     The sets S_NO/T_NO page through are recomputed — from ``state.active`` and the leaving
     transitions, never all steps — only when the cycle reports a change (``dirty``: an

@@ -297,10 +297,9 @@ class GraphFB:
         acting: tuple[str, int | None] | None = None,
     ) -> None:
         """MESSAGES := TRUE (docs/semantics.md, "Messages"): bring the CPU's message list in line
-        with this
-        call's faults, queue the steps a user acknowledged there for the next call, and
-        forward the list's new events into the scan record. ``acting``: the user (and
-        ACK_S step) of this call's operator command, who acknowledges what it releases."""
+        with this call's faults, queue the steps a user acknowledged there for the next call, and
+        forward the list's new events into the scan record. ``acting``: the user (and ACK_S step) of
+        this call's operator command, who acknowledges what it releases."""
         messages = message_list(ctx.cpu)
         user, target = acting if acting is not None else (PROGRAM_USER, None)
         restart = self._restart if ctx.ob in (100, 102) else ""

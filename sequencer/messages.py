@@ -1,15 +1,13 @@
 """Interlock and supervision messages of a GRAPH FB in the CPU's message list (docs/semantics.md,
-"Messages";
-docs/semantics.md, "Messages"; STEP7 comprehensive guide vol. 2, ch. 14).
+"Messages"; docs/semantics.md, "Messages"; STEP7 comprehensive guide vol. 2, ch. 14).
 
-With ``MESSAGES := TRUE`` every interlock error and supervision fault of a step becomes a
-message in ``sfb.alarms.MessageList`` with the book's text template
-(``S7GRAPH Supervision Error: FB1, DB1, S001 material is missing``), coming and going with
-the fault and acknowledgeable. The cycle calls ``sync_messages`` once per FB call, after the
-fault latches are up to date; it diffs the latches in ``GraphState`` against what was
-already raised, so the cycle needs no other hook. The list records who acknowledged and when
-(``program`` for ACK_EF / ACK_S / INIT_SQ, a user name for a remote acknowledgement) and is
-persisted through ``MessageList.snapshot``.
+With ``MESSAGES := TRUE`` every interlock error and supervision fault of a step becomes a message in
+``sfb.alarms.MessageList`` with the book's text template (``S7GRAPH Supervision Error: FB1, DB1,
+S001 material is missing``), coming and going with the fault and acknowledgeable. The cycle calls
+``sync_messages`` once per FB call, after the fault latches are up to date; it diffs the latches in
+``GraphState`` against what was already raised, so the cycle needs no other hook. The list records
+who acknowledged and when (``program`` for ACK_EF / ACK_S / INIT_SQ, a user name for a remote
+acknowledgement) and is persisted through ``MessageList.snapshot``.
 
 Decisions (UNCERTAIN, pinned by tests/sequencer/test_messages.py):
 * A supervision message comes when the step's fault latches (``sv_err``) and goes when the

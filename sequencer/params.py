@@ -11,8 +11,7 @@ ACK_S, REG_S, T_PREV, T_NEXT under Standard; per the errata they belong to USER 
 
 Everything that needs to know which pins exist reads this table: the FB interface
 (``sequencer/fb.py``), the ``sim`` stimulus and watch names (docs/cli.md, "s7graph sim"), programs
-that write
-pins, and docs/semantics.md (``markdown_table``).
+that write pins, and docs/semantics.md (``markdown_table``).
 """
 
 from __future__ import annotations

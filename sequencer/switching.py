@@ -1,9 +1,8 @@
 """Steps 4.1–4.3 of a general GRAPH FB call (docs/semantics.md, "One FB call"; docs/semantics.md,
-"Decisions"): per
-sequencer, evaluate the transitions leaving its active steps, decide which switch (mode
-rule, HALT_SQ, supervision faults, at an alternative divergence the first-listed, steps
-held for this call) and switch (events S0/S1 through the runtime's ``_deactivate`` and
-``_activate``), then pass through skip steps.
+"Decisions"): per sequencer, evaluate the transitions leaving its active steps, decide which switch
+(mode rule, HALT_SQ, supervision faults, at an alternative divergence the first-listed, steps held
+for this call) and switch (events S0/S1 through the runtime's ``_deactivate`` and ``_activate``),
+then pass through skip steps.
 
 Functions of a ``sequencer.cycle.GraphRuntime`` (``rt``), called by its ``_sequencer``;
 the fast path's switches (``sequencer.fastpath``) inline what they do in the common case.
@@ -39,10 +38,9 @@ def switch(
     rt: _Runtime, steps: list[int], sw: tuple[Any, ...], rule: Callable[[bool, bool], bool]
 ) -> None:
     """Steps a–c: evaluate, decide, switch (docs/semantics.md, "One FB call", steps 4.1–4.3) for one
-    sequencer's active
-    ``steps``. ``sw`` = (mode rule, None in AUTO; T_PUSH edge; switching blocked by
-    HALT_SQ/OFF_SQ; steps whose acknowledgement forces their transition; steps ``held``
-    for this call because step 2 activated them)."""
+    sequencer's active ``steps``. ``sw`` = (mode rule, None in AUTO; T_PUSH edge; switching blocked
+    by HALT_SQ/OFF_SQ; steps whose acknowledgement forces their transition; steps ``held`` for this
+    call because step 2 activated them)."""
     st = rt.st
     cc = rt.cc
     x = st.x

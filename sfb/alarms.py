@@ -11,10 +11,9 @@ injected clock's ``now_ns``. Every change is also appended to a bounded log and 
 ``pop_events()`` (what a scan reports). ``snapshot()``/``restore()`` persist it as plain data.
 
 The SFCs (STEP7 comprehensive guide vol. 2, ch. 12, ``[K]`` Siemens system-function manual): a
-message is generated
-on each **edge** of SIG (1 = incoming, 0 = outgoing); a call with an unchanged SIG returns
-``W#16#8084``; EV_ID 0 is illegal (``8081``); an associated value above 12 bytes is cut and
-reported with warning ``0001``. ALARM_S messages are acknowledged implicitly.
+message is generated on each **edge** of SIG (1 = incoming, 0 = outgoing); a call with an unchanged
+SIG returns ``W#16#8084``; EV_ID 0 is illegal (``8081``); an associated value above 12 bytes is cut
+and reported with warning ``0001``. ALARM_S messages are acknowledged implicitly.
 """
 
 from __future__ import annotations

@@ -7,9 +7,9 @@ engine interfaces and to let the sequencer's ``CALL`` validate parameters — so
 named once, here. ``lookup("SFB4")``, ``lookup("SFB 4")`` and ``lookup("TON")`` give the
 same entry.
 
-RET_VAL: ``>= 0`` success (BR = 1), ``< 0`` error (bit 15 set, BR = 0).
-Error words are ``W#16#8xyy``: general errors carry the parameter number in ``x``, specific
-errors have ``x = 0``. As an INT a word ``W#16#8122`` is ``-32478``.
+RET_VAL: ``>= 0`` success (BR = 1), ``< 0`` error (bit 15 set, BR = 0). Error words are
+``W#16#8xyy``: general errors carry the parameter number in ``x``, specific errors have ``x = 0``.
+As an INT a word ``W#16#8122`` is ``-32478``.
 """
 
 from __future__ import annotations

@@ -1,6 +1,5 @@
 """SFC22 CREAT_DB, SFC23 DEL_DB, SFC24 TEST_DB (docs/runtime.md, "The block runtime"; STEP7
-comprehensive guide
-vol. 2, ch. 12).
+comprehensive guide vol. 2, ch. 12).
 
 * CREAT_DB creates the *lowest free* number in LOW_LIMIT..UP_LIMIT with COUNT bytes; COUNT
   must be even and non-zero (``W#16#80A2``), a bad range is ``80A1``, no free number

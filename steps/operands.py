@@ -1,15 +1,13 @@
 """Operands of conditions and actions, resolved once at compile time into code snippets.
 
 A ``Ref`` says what a name means (docs/semantics.md, "Conditions"): an S7 address (I Q M DB PI PQ,
-T/C cells), an
-FB static variable, an FB pin, a step attribute ``Sn.X/T/U`` or ``Tn.TT``. ``CodeGen`` turns a
-``Ref`` into a Python expression over names bound once per FB instance (``bind``): memory
-areas are bound as ``bytearray`` objects (``_m0`` ``_m1`` ...), so a bit read is one index and
-one shift, never a dict lookup or an Address parse.
+T/C cells), an FB static variable, an FB pin, a step attribute ``Sn.X/T/U`` or ``Tn.TT``.
+``CodeGen`` turns a ``Ref`` into a Python expression over names bound once per FB instance
+(``bind``): memory areas are bound as ``bytearray`` objects (``_m0`` ``_m1`` ...), so a bit read is
+one index and one shift, never a dict lookup or an Address parse.
 
-Inside generated functions these locals exist: ``st`` (GraphState), ``V`` (``st.vars``),
-``X`` (``st.x``). Values follow docs/architecture.md, "Seams": BOOL → bool/int 0/1, INT/DINT signed
-int,
+Inside generated functions these locals exist: ``st`` (GraphState), ``V`` (``st.vars``), ``X``
+(``st.x``). Values follow docs/architecture.md, "Seams": BOOL → bool/int 0/1, INT/DINT signed int,
 WORD/DWORD unsigned int, REAL float, TIME ms.
 """
 

@@ -1,7 +1,7 @@
-"""The README is a front door: at most 300 lines, its first lines the two
-commands that work (``.ci/run`` runs exactly the second), what s7graph is not, and links
-into ``docs/`` that resolve — files and the headings they point at; the links of the docs
-pages and of bench/README.md resolve too."""
+"""The README is a front door: at most 300 lines, its first lines the two commands that work
+(``.ci/run`` runs exactly the second), what s7graph is not, and links into ``docs/`` that resolve —
+files and the headings they point at; the links of the docs pages and of bench/README.md resolve
+too."""
 
 from __future__ import annotations
 

@@ -126,9 +126,8 @@ def parse_condition(text: str, what: str = "condition") -> Expr | None:
 class RowFields:
     """An action row as the editor's fields, ``[event] qualifier[C] operand [, value]``
     (docs/semantics.md, "Actions"): ``event`` "" for none, ``operand`` e.g. ``Q0.0``,
-    ``"Motor_on"``,
-    ``S4``, ``S_ALL``, ``pieces := pieces + 1``, ``FB 5, DB 5 (IN1 := I0.0)``; ``value``
-    the time of D/L, the preset of CS, the S5TIME of TL/TD/TF."""
+    ``"Motor_on"``, ``S4``, ``S_ALL``, ``pieces := pieces + 1``, ``FB 5, DB 5 (IN1 := I0.0)``;
+    ``value`` the time of D/L, the preset of CS, the S5TIME of TL/TD/TF."""
 
     qualifier: str
     operand: str

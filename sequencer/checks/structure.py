@@ -1,6 +1,6 @@
 """Validation rules for the chart's structure (docs/semantics.md, "Structure";
-docs/chart-format.md): numbers, declarations,
-FROM/TO, initial steps, ways in and out, limits and joins."""
+docs/chart-format.md): numbers, declarations, FROM/TO, initial steps, ways in and out, limits and
+joins."""
 
 from __future__ import annotations
 

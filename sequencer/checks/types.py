@@ -2,17 +2,15 @@
 "Conditions"; docs/chart-format.md).
 
 Typing (docs/semantics.md, "Actions" and "Conditions"; STEP7 comprehensive guide vol. 2, ch. 14):
-comparisons need the same type on both sides,
-one of INT DINT REAL TIME; ``+ - * /`` on INT DINT REAL (``+ -`` also on TIME); ``MOD`` on
-DINT; ``AND OR XOR`` on BOOL (logic) or WORD/DWORD (bitwise, assignments only); ``SHL SHR``
-on WORD/DWORD, ``SSR`` on INT/DINT, ``ROL ROR`` on DWORD, shift count INT. An untyped absolute
-address adapts (WORD address ~ INT, DWORD address ~ DINT REAL TIME); an integer literal fits
-INT and DINT. A timer or counter cell (``T5``, ``C1``) is a contact (its status bit) where a
-BOOL is expected, and its INT value in comparisons, arithmetic, function arguments and
+comparisons need the same type on both sides, one of INT DINT REAL TIME; ``+ - * /`` on INT DINT
+REAL (``+ -`` also on TIME); ``MOD`` on DINT; ``AND OR XOR`` on BOOL (logic) or WORD/DWORD (bitwise,
+assignments only); ``SHL SHR`` on WORD/DWORD, ``SSR`` on INT/DINT, ``ROL ROR`` on DWORD, shift count
+INT. An untyped absolute address adapts (WORD address ~ INT, DWORD address ~ DINT REAL TIME); an
+integer literal fits INT and DINT. A timer or counter cell (``T5``, ``C1``) is a contact (its status
+bit) where a BOOL is expected, and its INT value in comparisons, arithmetic, function arguments and
 assignments (``steps.operands.CELLS``; El-Shahat's S7-300/400 course). Conditions hold only
-contacts,
-NOT AND OR XOR and comparisons (docs/semantics.md, "Conditions").
-Operand resolution is ``sequencer.text.names.resolve_operand``.
+contacts, NOT AND OR XOR and comparisons (docs/semantics.md, "Conditions"). Operand resolution is
+``sequencer.text.names.resolve_operand``.
 """
 
 from __future__ import annotations

@@ -300,9 +300,8 @@ def _long_numbers(text: str, file: str) -> list[Diagnostic]:
 
 def parse_chart(text: str, file: str = "<input>") -> Chart:
     """Parse one `.s7g` chart (docs/chart-format.md). Raises :class:`ChartSyntaxError` with all
-    syntax
-    diagnostics (file:line:col, what was found and what was expected). The garbage
-    collector is paused meanwhile (``sequencer.collector``)."""
+    syntax diagnostics (file:line:col, what was found and what was expected). The garbage collector
+    is paused meanwhile (``sequencer.collector``)."""
     if long := _long_numbers(text, file):
         raise ChartSyntaxError(long)
     with collector_paused():

@@ -62,8 +62,8 @@ def test_due_interrupts_run_highest_priority_first(clock: VirtualClock) -> None:
 
 
 def test_default_priorities() -> None:
-    """OB1 = 1, OB10–17 = 2, OB20..23 = 3..6, OB30..38 = 7..15,
-    OB40..47 = 16..23, OB80–87 = 26, OB100/101 = 27."""
+    """OB1 = 1, OB10–17 = 2, OB20..23 = 3..6, OB30..38 = 7..15, OB40..47 = 16..23, OB80–87 = 26,
+    OB100/101 = 27."""
     assert priority(1) == 1 and priority(17) == 2
     assert [priority(n) for n in (20, 23, 30, 38, 40, 47)] == [3, 6, 7, 15, 16, 23]
     assert priority(80) == priority(87) == 26 and priority(100) == priority(101) == 27
@@ -133,10 +133,9 @@ def test_scheduler_arms_only_given_obs() -> None:
 def test_equal_priority_cyclic_obs_run_in_the_order_of_their_start_events(
     clock: VirtualClock,
 ) -> None:
-    """OBs of equal priority never interrupt each other and queue in order
-    of their start events (Siemens' Program Design for S7-300/400) — here OB35 (due at 60 ms) before
-    OB36 (due at
-    100 ms) although OB36 has the higher default priority."""
+    """OBs of equal priority never interrupt each other and queue in order of their start events
+    (Siemens' Program Design for S7-300/400) — here OB35 (due at 60 ms) before OB36 (due at 100 ms)
+    although OB36 has the higher default priority."""
     cpu = Cpu(clock, max_cycle_ms=10_000)
     cpu.load(ob(1)(lambda ctx: None), _cyclic(35), _cyclic(36))  # type: ignore[arg-type]
     cpu.interrupts.configure(35, 60)

@@ -1,5 +1,5 @@
 """Operand memory (docs/runtime.md, "The block runtime" and "Restarts: warm, hot, cold"; Siemens'
-Program Design for S7-300/400, ch. 9; Siemens' Program Design for S7-300/400, ch. 5)."""
+Program Design for S7-300/400, ch. 5 and 9)."""
 
 from __future__ import annotations
 

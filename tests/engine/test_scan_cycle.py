@@ -54,8 +54,8 @@ def test_scan_reads_the_clock_once() -> None:
 
 
 def test_inputs_are_read_once_per_cycle_and_outputs_written_once(clock: VirtualClock) -> None:
-    """PII updated once before OB1; input changes during OB1 are invisible
-    until the next cycle; PIQ reaches the modules once, after OB1."""
+    """PII updated once before OB1; input changes during OB1 are invisible until the next cycle; PIQ
+    reaches the modules once, after OB1."""
     seen: list[bool] = []
 
     @ob(1)

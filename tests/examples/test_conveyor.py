@@ -1,7 +1,6 @@
 """The two conveyor belts of STEP7 comprehensive guide vol. 2, section 14.6, example 1, run through
 ``s7graph sim`` (docs/cli.md, "s7graph sim") with the example's stimulus (the operator's buttons)
-and plant
-(material on belt B)."""
+and plant (material on belt B)."""
 
 from __future__ import annotations
 

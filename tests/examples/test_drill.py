@@ -1,6 +1,6 @@
 """The automatic drill of STEP7 comprehensive guide vol. 2, section 14.6, example 2, run through
-``s7graph sim``
-(docs/cli.md, "s7graph sim") with its plant (``examples/drill/plant.py``) and stimulus."""
+``s7graph sim`` (docs/cli.md, "s7graph sim") with its plant (``examples/drill/plant.py``) and
+stimulus."""
 
 from __future__ import annotations
 

@@ -69,8 +69,7 @@ def test_several_graph_fbs_share_one_cpu() -> None:
 
 def test_a_program_calling_a_pin_outside_the_parameter_set_stops_with_the_set_named() -> None:
     """docs/semantics.md, "FB pins": HALT_SQ is a MAXIMUM pin; a program passing it to a STANDARD FB
-    is a
-    programming error naming the parameter set (OB121 absent: STOP, diagnostic entry)."""
+    is a programming error naming the parameter set (OB121 absent: STOP, diagnostic entry)."""
     from s7graph.engine.blocks import ob
 
     graph = GraphFB(compile_chart(parse_chart(TEXT, "seq.s7g")))

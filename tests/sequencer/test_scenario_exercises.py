@@ -64,8 +64,7 @@ def test_exercise_3_top_switches_on_condition_or_push() -> None:
 
 def test_exercise_3_top_is_standard_here_but_user_pins_are_refused_in_standard() -> None:
     """The guide (V5) needs the User-defined set for SW_TOP; docs/semantics.md, "FB pins" follows
-    TIA, whose
-    STANDARD set has SW_TOP/TOP_ON. Pins of the larger sets are refused by name."""
+    TIA, whose STANDARD set has SW_TOP/TOP_ON. Pins of the larger sets are refused by name."""
     run = started("exercise_modes").wire(SW_TOP="M1.0")
     run.set(M1_0=True).call()
     assert run.out("TOP_ON")

@@ -22,8 +22,7 @@ from tests.sequencer.helpers import chart, enter, leave, seq, source, two_steps
 
 def test_plain_s_row_re_issues_the_set_every_cycle_while_s1_s_sets_once() -> None:
     """docs/semantics.md, "One FB call", step 4.5 and "Actions": a plain S row runs every cycle
-    while the step is active; an
-    S1 S row only in the activation call."""
+    while the step is active; an S1 S row only in the activation call."""
     run = two_steps("S M0.0; S1 S M0.1;")
     enter(run)
     assert run.get("M0.0") is True and run.get("M0.1") is True
@@ -42,8 +41,7 @@ def test_n_operand_is_zero_after_the_step_is_left_but_s_stays_set() -> None:
 
 def test_d_operand_is_never_set_when_the_step_is_left_before_its_time() -> None:
     """docs/semantics.md, "Actions" D: never set if left earlier — also not after a re-entry that is
-    again
-    shorter than the time (the delay restarts at each activation)."""
+    again shorter than the time (the delay restarts at each activation)."""
     run = two_steps("D Q0.0, T#50MS;")
     enter(run)
     run.call(2)
@@ -224,8 +222,7 @@ def test_on_and_off_reach_steps_of_another_sequencer() -> None:
 
 def test_off_s_all_clears_every_sequencer_but_keeps_the_step_holding_it() -> None:
     """docs/semantics.md, "Actions": `OFF S_ALL` deactivates every step except the one holding the
-    action
-    (here V1 OFF S_ALL, steps of two sequencers)."""
+    action (here V1 OFF S_ALL, steps of two sequencers)."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": END_STEP

@@ -36,8 +36,7 @@ def test_l1_row_runs_once_while_the_interlock_stays_lost_and_l0_once_on_return()
 
 def test_interlock_lost_stops_u_so_a_supervision_on_u_waits() -> None:
     """docs/semantics.md, "Interlock": while the interlock does not hold U stops counting (a
-    supervision
-    `S2.U > T#50MS` is then not reached)."""
+    supervision `S2.U > T#50MS` is then not reached)."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": END_STEP
@@ -62,8 +61,7 @@ def test_interlock_lost_stops_u_so_a_supervision_on_u_waits() -> None:
 
 def test_a_fault_present_on_activation_raises_v1_and_holds_the_step() -> None:
     """docs/semantics.md, "Supervision": a supervision fault raises V1 (also when already present as
-    the step
-    becomes active) and stops that step from switching."""
+    the step becomes active) and stops that step from switching."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": END_STEP
@@ -85,8 +83,7 @@ def test_a_fault_present_on_activation_raises_v1_and_holds_the_step() -> None:
 
 def test_a_fault_in_one_path_blocks_the_join_of_a_simultaneous_branch() -> None:
     """docs/semantics.md, "One FB call", step 4.2 and "Supervision": no preceding step of a
-    switching transition may hold an
-    unacknowledged supervision error — also at a join."""
+    switching transition may hold an unacknowledged supervision error — also at a join."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": END_STEP
@@ -160,8 +157,7 @@ def test_the_mode_survives_a_warm_restart_of_the_cpu() -> None:
 
 def test_top_push_at_an_alternative_divergence_switches_only_the_first_listed_path() -> None:
     """docs/semantics.md, "One FB call", step 4.2 and "Modes": in TOP a T_PUSH edge switches, but at
-    an alternative
-    divergence at most one path — the first-listed."""
+    an alternative divergence at most one path — the first-listed."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": END_STEP
@@ -230,8 +226,7 @@ def test_off_sq_runs_the_s0_rows_of_the_steps_it_switches_off() -> None:
 
 def test_a_t_push_in_top_does_not_switch_a_step_with_a_latched_fault() -> None:
     """docs/semantics.md, "One FB call", step 4.2 and "Supervision": an unacknowledged supervision
-    error blocks switching in any
-    mode — also a TOP push."""
+    error blocks switching in any mode — also a TOP push."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": SUPERVISION := I0.6; END_STEP
@@ -261,8 +256,7 @@ def test_man_s_on_raises_the_s1_event_of_the_step() -> None:
 
 def test_rows_marked_c_do_not_run_while_the_interlock_does_not_hold() -> None:
     """docs/semantics.md, "Interlock": while the interlock does not hold, rows marked C (N, S, D) do
-    not run;
-    they run once it holds."""
+    not run; they run once it holds."""
     run = two_steps("NC Q0.0; SC Q0.1; D C Q0.2, T#20MS; N Q0.3;", interlock="I0.5")
     enter(run)
     run.call(3)

@@ -89,8 +89,7 @@ def test_values_stay_until_set_again(tmp_path: Path) -> None:
 
 def test_int_overflow_in_an_assignment_does_not_stop_the_simulation(tmp_path: Path) -> None:
     """docs/cli.md, "s7graph sim", and semantics.md, "Actions": an INT overflow sets the overflow
-    status; sim runs to
-    the end."""
+    status; sim runs to the end."""
     rc, lines = sim(tmp_path, [{"at_ms": 0, "set": {"I0.2": True}}], cycles=10, watch="x")
     assert rc == 0 and len(lines) == 10
     assert all(-32768 <= line["values"]["x"] <= 32767 for line in lines)
@@ -120,8 +119,7 @@ def test_a_syntax_error_exits_2_with_its_place_on_stderr(tmp_path: Path, capsys)
 @pytest.mark.parametrize("name", ["S2.X", "T1.TT", "AUTO_ON", "Lamp", "Q0.0", "x"])
 def test_every_watched_name_has_a_value_in_every_line(tmp_path: Path, name: str) -> None:
     """docs/cli.md, "s7graph sim": `values` for every watched name (addresses, symbols, pins,
-    variables,
-    step and transition operands)."""
+    variables, step and transition operands)."""
     rc, lines = sim(tmp_path, [], cycles=3, watch=name)
     assert rc == 0 and all(set(line["values"]) == {name} for line in lines)
 

@@ -1,5 +1,4 @@
-"""docs/semantics.md, "Structure" and "One FB call": the rules not pinned
-elsewhere.
+"""docs/semantics.md, "Structure" and "One FB call": the rules not pinned elsewhere.
 
 Driven through the real cycle (``GraphRuntime``) by the scenario harness, 10 ms per call.
 """
@@ -32,9 +31,8 @@ def test_every_initial_step_of_a_sequencer_is_active_after_the_first_call() -> N
 
 
 def test_a_step_may_be_the_target_of_several_transitions() -> None:
-    """docs/semantics.md, "Structure": alternative branches and
-    joins (docs/chart-format.md): both paths reach
-    S4."""
+    """docs/semantics.md, "Structure": alternative branches and joins (docs/chart-format.md): both
+    paths reach S4."""
     body = seq("""
       INITIAL_STEP S1 "a": END_STEP
       STEP S2 "b": END_STEP
@@ -161,8 +159,7 @@ def _w110(text: str) -> int:
 )
 def test_limits_warn_only_above_the_s7_graph_maximum(build, limit: int) -> None:
     """docs/semantics.md, "Structure": limits that warn — 250 steps / transitions, 125 alternative
-    paths,
-    249 simultaneous paths."""
+    paths, 249 simultaneous paths."""
     assert _w110(source(build(limit))) == 0
     assert _w110(source(build(limit + 1))) >= 1
 
@@ -183,8 +180,8 @@ def test_more_than_250_transitions_warns_with_fewer_steps() -> None:
 
 def test_a_step_activated_by_a_jump_cannot_switch_on_in_the_same_call() -> None:
     """docs/semantics.md, "One FB call", step 4.1: transitions are evaluated on the state at the
-    start of the call —
-    S2 entered in this call does not leave through its (true) transition T2 in it."""
+    start of the call — S2 entered in this call does not leave through its (true) transition T2 in
+    it."""
     run = two_steps("N Q0.0;")
     run.call()
     run.set(I0_0=True, I0_1=True).call()
@@ -195,8 +192,8 @@ def test_a_step_activated_by_a_jump_cannot_switch_on_in_the_same_call() -> None:
 
 def test_a_later_sequencer_sees_the_switch_of_an_earlier_one_in_the_same_call() -> None:
     """docs/semantics.md, "One FB call", step 4: per sequencer in definition order — sequencer 2
-    starts from the state
-    sequencer 1 left, so it sees S2 active; sequencer 1 sees sequencer 2 only next call."""
+    starts from the state sequencer 1 left, so it sees S2 active; sequencer 1 sees sequencer 2 only
+    next call."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": END_STEP
@@ -223,8 +220,8 @@ def test_a_later_sequencer_sees_the_switch_of_an_earlier_one_in_the_same_call() 
 
 def test_a_step_left_and_a_step_entered_with_the_same_n_operand_keep_it_on() -> None:
     """docs/semantics.md, "One FB call", step 4.5: the final scan resets the N operands of the left
-    step, the rows of
-    the active steps run; an operand N in both steps stays 1 in the switching call."""
+    step, the rows of the active steps run; an operand N in both steps stays 1 in the switching
+    call."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": N Q0.0; END_STEP
@@ -296,8 +293,7 @@ def test_init_sq_held_high_initializes_once_and_the_sequence_then_runs() -> None
 
 def test_s_on_held_high_activates_only_on_its_rising_edge() -> None:
     """docs/semantics.md, "One FB call", step 1 and "Modes": S_ON acts on its rising edge; after
-    S_OFF, a held S_ON does not
-    bring the step back."""
+    S_OFF, a held S_ON does not bring the step back."""
     run = two_steps("N Q0.0;")
     run.call()
     run.set(SW_MAN=True).call()
@@ -341,8 +337,7 @@ def test_en_sskip_turns_skip_steps_on_at_runtime() -> None:
 
 def test_codesys_order_runs_actions_before_transitions() -> None:
     """docs/semantics.md, "One FB call" (CODESYS order option): actions run before transitions, so a
-    transition
-    sees the action rows of its own step from the same call."""
+    transition sees the action rows of its own step from the same call."""
     body = seq("""
       INITIAL_STEP S1 "a": N M0.0; END_STEP
       STEP S2 "b": END_STEP
@@ -370,8 +365,7 @@ def test_off_sq_is_applied_before_the_transitions_of_the_same_call() -> None:
 
 def test_sequencers_run_in_definition_order_not_number_order() -> None:
     """docs/semantics.md, "One FB call", step 4: per sequencer, in *definition* order — SEQUENCE 2
-    written first runs
-    first, so SEQUENCE 1 sees its action in the same call."""
+    written first runs first, so SEQUENCE 1 sees its action in the same call."""
     run = chart(
         seq(
             """
@@ -394,8 +388,8 @@ def test_sequencers_run_in_definition_order_not_number_order() -> None:
 
 def test_permanent_instructions_run_once_per_call_around_all_sequencers() -> None:
     """docs/semantics.md, "Structure" and "One FB call", steps 3 and 5: permanent *before* once
-    before the sequencers, *after* once
-    after all of them (it sees the actions of the last sequencer of this call)."""
+    before the sequencers, *after* once after all of them (it sees the actions of the last sequencer
+    of this call)."""
     run = chart(
         seq('INITIAL_STEP S1 "a": END_STEP\nTRANSITION T1 FROM S1 TO STOP := FALSE;')
         + seq('INITIAL_STEP S11 "x": N M1.1; END_STEP\nTRANSITION T11 FROM S11 TO STOP := M9.0;', 2)

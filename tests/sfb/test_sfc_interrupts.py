@@ -72,8 +72,8 @@ def test_srt_dint_runs_ob20_once_after_dtime_with_its_sign(clock: VirtualClock) 
 def test_tod_interrupt_set_is_inactive_until_act_tint_and_repeats_each_minute(
     clock: VirtualClock,
 ) -> None:
-    """SET_TINT sets but does not activate; ACT_TINT activates; PERIOD
-    W#16#0201 repeats every minute on the CPU's real-time clock; CAN_TINT stops it."""
+    """SET_TINT sets but does not activate; ACT_TINT activates; PERIOD W#16#0201 repeats every
+    minute on the CPU's real-time clock; CAN_TINT stops it."""
     log: list[tuple[int, dict[str, Any]]] = []
     start = datetime(2026, 3, 2, 10, 0, 0)
 
@@ -104,9 +104,8 @@ def test_tod_interrupt_set_is_inactive_until_act_tint_and_repeats_each_minute(
 
 
 def test_activated_tod_interrupts_are_inactive_after_a_warm_restart(clock: VirtualClock) -> None:
-    """After a warm restart program-activated TOD interrupts stay inactive
-    until re-activated (Siemens' Program Design for S7-300/400); a HW-configured active one comes
-    back by itself."""
+    """After a warm restart program-activated TOD interrupts stay inactive until re-activated
+    (Siemens' Program Design for S7-300/400); a HW-configured active one comes back by itself."""
     log: list[tuple[int, dict[str, Any]]] = []
     at = datetime(2026, 3, 2, 10, 0, 0)
 
@@ -150,9 +149,9 @@ def test_tod_interrupt_due_during_startup_runs_only_after_the_transition_to_run(
 def test_clock_set_forward_calls_ob80_then_runs_the_first_skipped_one_once(
     clock: VirtualClock,
 ) -> None:
-    """Setting the clock forward past pending TOD interrupts calls OB80
-    (FLT_ID 16#05) with the skipped ones; one not cancelled there runs exactly once; one
-    OB80 cancels does not run; setting the clock back never repeats an executed one."""
+    """Setting the clock forward past pending TOD interrupts calls OB80 (FLT_ID 16#05) with the
+    skipped ones; one not cancelled there runs exactly once; one OB80 cancels does not run; setting
+    the clock back never repeats an executed one."""
     log: list[tuple[int, dict[str, Any]]] = []
     jump: list[datetime] = []
 
@@ -240,8 +239,7 @@ def test_dis_airt_delays_interrupts_instead_of_dropping_them(clock: VirtualClock
 
 def test_next_occurrence_skips_months_without_the_start_day() -> None:
     """Monthly from 31 Jan runs only in months with 31 days (Siemens' Program Design for
-    S7-300/400);
-    ``W#16#2001`` runs at each month's end."""
+    S7-300/400); ``W#16#2001`` runs at each month's end."""
     start = datetime(2026, 1, 31, 8, 0)
     assert next_occurrence(start, Period.MONTH, datetime(2026, 2, 1)) == datetime(2026, 3, 31, 8)
     end = next_occurrence(datetime(2026, 1, 15, 8), Period.MONTH_END, datetime(2026, 2, 1))
