@@ -106,6 +106,11 @@ FORBIDDEN = {
 }
 DOC_SECTION = re.compile(r"(docs/[\w-]+\.md)((?:(?:,| and) \"[^\"\n]+\")*)")
 DOTTED = re.compile(r"(?<![\w.])s7graph((?:\.[A-Za-z_]\w*)+)")
+QUOTED = re.compile(r"`{1,2}((?:engine|sfb|steps|sequencer|web)(?:\.[A-Za-z_]\w*)+)(?:\(\))?`{1,2}")
+FILE = re.compile(
+    r"(?<![\w./-])((?:engine|sfb|steps|sequencer|web|tests|docs|examples|bench)/[\w/.-]*"
+    r"\.(?:py|md|s7g|txt|lark))\b"
+)
 PACKAGES = ("engine", "sfb", "steps", "sequencer", "web")
 
 
@@ -175,16 +180,24 @@ def test_every_docs_page_and_section_cited_exists() -> None:
 
 
 def test_every_s7graph_module_cited_exists() -> None:
-    """A dotted ``s7graph.`` name is a module of the tree (or a name in one); the layer
-    test's made-up modules are its fixtures."""
+    """A dotted ``s7graph.`` name, or one of a package in backticks, is a module of the
+    tree (or a name in one), and a file path cited is a file; the layer test's made-up
+    modules are its fixtures."""
     broken = []
     for path in tracked():
         if path.name in ("test_layers.py", "test_docs.py"):
             continue
         for n, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
+            where = f"{path.relative_to(ROOT)}:{n}"
             for m in DOTTED.finditer(line):
                 if not resolves(m[1]):
-                    broken.append(f"{path.relative_to(ROOT)}:{n}: s7graph{m[1]}")
+                    broken.append(f"{where}: s7graph{m[1]}")
+            for m in QUOTED.finditer(line):
+                if not resolves("." + m[1]):
+                    broken.append(f"{where}: {m[1]}")
+            for m in FILE.finditer(line):
+                if not (ROOT / m[1]).exists():
+                    broken.append(f"{where}: {m[1]}")
     assert not broken, "\n".join(broken)
 
 
