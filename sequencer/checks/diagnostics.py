@@ -60,7 +60,7 @@ CODES: Final[dict[str, str]] = {
     "W101": "step without a way in",
     "W102": "step without a way out",
     "W103": "sequencer without an initial step",
-    "W110": "more steps, transitions, paths or sequencers than S7-GRAPH allows",
+    "W110": "more steps, transitions, paths, sequencers or condition elements than S7-GRAPH allows",
     "W120": "empty transition condition (always holds)",
     "W122": "rows marked C on a step without an interlock",
     "W130": "simultaneous branch that can never join",
