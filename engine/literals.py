@@ -1,10 +1,9 @@
 """S7 literals both ways: text → (type, value) and canonical text (docs/runtime.md, "The block
 runtime").
 
-Forms follow Siemens' Program Design for S7-300/400, appendix C, table C-1 (SCL: STEP7
-comprehensive guide vol. 2, ch. 13). Prefixes and units are
-case-insensitive; ``_`` may separate digits. Values follow docs/architecture.md, "Seams"
-(TIME/S5TIME/TOD in ms, DATE ``date``, DT ``datetime``).
+Forms follow Siemens' Program Design for S7-300/400, appendix C, table C-1 (SCL: STEP7 comprehensive
+guide vol. 2, ch. 13). Prefixes and units are case-insensitive; ``_`` may separate digits. Values
+follow docs/architecture.md, "Seams" (TIME/S5TIME/TOD in ms, DATE ``date``, DT ``datetime``).
 """
 
 from __future__ import annotations

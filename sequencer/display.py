@@ -1,5 +1,5 @@
 """Display outputs of a GRAPH FB: S_NO paging, step/transition status, group bits
-(docs/semantics.md, "FB pins"; docs/semantics.md, "Decisions").
+(docs/semantics.md, "FB pins" and "Decisions").
 
 S_PREV/S_NEXT and T_PREV/T_NEXT only page the step/transition *shown*; they never move the
 sequence (docs/semantics.md, "FB pins" — STEP7 comprehensive guide vol. 2, ch. 14 says otherwise and

@@ -1,5 +1,5 @@
 """Interlock and supervision messages of a GRAPH FB in the CPU's message list (docs/semantics.md,
-"Messages"; docs/semantics.md, "Messages"; STEP7 comprehensive guide vol. 2, ch. 14).
+"Messages"; STEP7 comprehensive guide vol. 2, ch. 14).
 
 With ``MESSAGES := TRUE`` every interlock error and supervision fault of a step becomes a message in
 ``sfb.alarms.MessageList`` with the book's text template (``S7GRAPH Supervision Error: FB1, DB1,

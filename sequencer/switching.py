@@ -1,5 +1,5 @@
-"""Steps 4.1–4.3 of a general GRAPH FB call (docs/semantics.md, "One FB call"; docs/semantics.md,
-"Decisions"): per sequencer, evaluate the transitions leaving its active steps, decide which switch
+"""Steps 4.1–4.3 of a general GRAPH FB call (docs/semantics.md, "One FB call" and "Decisions"): per
+sequencer, evaluate the transitions leaving its active steps, decide which switch
 (mode rule, HALT_SQ, supervision faults, at an alternative divergence the first-listed, steps held
 for this call) and switch (events S0/S1 through the runtime's ``_deactivate`` and ``_activate``),
 then pass through skip steps.

@@ -1,5 +1,5 @@
-"""Action rows of a step → two generated Python functions (docs/semantics.md, "Actions",
-docs/semantics.md, "Decisions").
+"""Action rows of a step → two generated Python functions (docs/semantics.md, "Actions" and
+"Decisions").
 
 ``def _a<i>(st, R, ev, c_ok, zero)`` runs while step ``i`` is active, rows top to bottom:
   N bit      operand = 1 (0 while C does not hold, or ZERO_OP); an event N row writes

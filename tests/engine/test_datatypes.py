@@ -213,8 +213,8 @@ def test_layout_of_seed_db10_puts_words_on_even_bytes() -> None:
 
 
 def test_layout_of_seed_struct_rounds_the_total_up_to_even() -> None:
-    """Siemens' Program Design for S7-300/400, appendix C:
-    INT, BYTE, CHAR, REAL, BOOL ends at 10.0."""
+    """Siemens' Program Design for S7-300/400, appendix C: INT, BYTE, CHAR, REAL, BOOL ends at
+    10.0."""
     lay = layout({"i": "INT", "b": "BYTE", "c": "CHAR", "r": "REAL", "x": "BOOL"})
     assert (lay["b"], lay["c"], lay["r"], lay["x"], lay.size) == (
         (2, 0),
@@ -226,8 +226,7 @@ def test_layout_of_seed_struct_rounds_the_total_up_to_even() -> None:
 
 
 def test_layout_packs_consecutive_bools_into_bits_of_one_byte() -> None:
-    """Siemens' Program Design for S7-300/400, appendix C:
-    FC1 params at 0.0, 0.1, 2.0, 2.1, 4.0."""
+    """Siemens' Program Design for S7-300/400, appendix C: FC1 params at 0.0, 0.1, 2.0, 2.1, 4.0."""
     lay = layout(
         [("a", "BOOL"), ("b", "BOOL"), ("i", "INT"), ("c", "BOOL"), ("d", "BOOL"), ("e", "INT")]
     )

@@ -1,5 +1,4 @@
-"""The FB pin table and parameter sets (docs/semantics.md, "FB pins", docs/semantics.md,
-"Decisions")."""
+"""The FB pin table and parameter sets (docs/semantics.md, "FB pins" and "Decisions")."""
 
 from __future__ import annotations
 
