@@ -140,7 +140,7 @@ def check_value(type_name: str, value: object) -> object:
     """Check ``value`` fits ``type_name`` and return it (CHAR codes become 1-char str).
 
     Raises TypeMismatch for a wrong Python type or a value outside the S7 range
-    (Siemens' Program Design for S7-300/400, appendix C, table C-1.
+    (Siemens' Program Design for S7-300/400, appendix C, table C-1).
     """
     spec = type_of(type_name)
     name = spec.name
@@ -325,8 +325,7 @@ def decode(type_name: str, data: bytes | bytearray | memoryview) -> object:
     return raw[2 : 2 + length].decode("latin-1")
 
 
-# ---- layout of STRUCT / ARRAY / DB images (Siemens' Program Design for S7-300/400, appendix C)
-# -------------------------
+# ---- layout of STRUCT / ARRAY / DB images (Program Design for S7-300/400, appendix C) -----
 
 FieldType = str | Sequence[tuple[str, "FieldType"]]
 """A field's type: a type name (``'INT'``, ``'STRING[10]'``, ``'ARRAY[1..5] OF INT'``) or a

@@ -38,8 +38,7 @@ __all__ = [
 
 NOWHERE = SourceLocation()
 
-# ---------------------------------------------------------------- expressions (docs/semantics.md,
-# "Conditions" and "Actions")
+# ------------------------------------- expressions (docs/semantics.md, "Conditions" and "Actions")
 
 
 @dataclass(frozen=True, slots=True)
@@ -117,8 +116,7 @@ class FuncCall:
 
 Expr = Const | Operand | StepAttr | TransAttr | Unary | Binary | FuncCall
 
-# ---------------------------------------------------------------- action rows (docs/semantics.md,
-# "Actions")
+# ------------------------------------------------------ action rows (docs/semantics.md, "Actions")
 
 
 @dataclass(frozen=True, slots=True)
@@ -176,8 +174,7 @@ class ActionRow:
     trailing: str = ""  # the comments at the end of its line, verbatim
 
 
-# ------------------------------------------------------- permanent instructions (docs/semantics.md,
-# "Conditions")
+# ---------------------------------------- permanent instructions (docs/semantics.md, "Conditions")
 
 
 @dataclass(frozen=True, slots=True)

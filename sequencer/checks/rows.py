@@ -49,8 +49,7 @@ def rule_c_without_interlock(ctx: _Ctx) -> None:
                          "mark has no effect", r.loc, _row_el(s, i))  # fmt: skip
 
 
-# ---------------------------------------------------------------- action rows (docs/semantics.md,
-# "Actions")
+# ------------------------------------------------------ action rows (docs/semantics.md, "Actions")
 
 
 def rule_action_rows(ctx: _Ctx) -> None:

@@ -99,8 +99,7 @@ def rule_empty_conditions(ctx: _Ctx) -> None:
                      t.loc, f"transition T{t.number}")  # fmt: skip
 
 
-# ---------------------------------------------------------------- conditions (docs/semantics.md,
-# "Conditions")
+# ---------------------------------------------------- conditions (docs/semantics.md, "Conditions")
 
 
 def _conditions(ctx: _Ctx) -> Iterator[tuple[Expr, SourceLocation, str]]:

@@ -59,8 +59,7 @@ __all__ = [  # the structure, and the step language it holds (``steps.syntax``)
     "VarDecl",
 ]
 
-# ---------------------------------------------------------------- structure (docs/semantics.md,
-# "Structure")
+# ------------------------------------------------------ structure (docs/semantics.md, "Structure")
 
 
 @dataclass(frozen=True, slots=True)

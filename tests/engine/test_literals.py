@@ -1,5 +1,5 @@
 """Literals (docs/runtime.md, "The block runtime", Siemens' Program Design for S7-300/400, appendix
-C, table C-1."""
+C, table C-1)."""
 
 from __future__ import annotations
 
