@@ -202,7 +202,7 @@ def test_every_s7graph_module_cited_exists() -> None:
 
 
 def test_the_editor_tooltips_are_written_for_users() -> None:
-    """The edit panel's tooltips: no reStructuredText, no citations, no argument names."""
+    """The edit panel's tooltips: plain text, no reStructuredText, no citations."""
     from s7graph.sequencer.change.edit import OPERATIONS
 
     for op in OPERATIONS:
