@@ -1,19 +1,19 @@
 """Scan-time benchmark: 200 GRAPH sequencers on the soft CPU vs. the same workload in
 ``transitions`` (run as ``python bench/scan.py``; see bench/README.md).
 
-Workload (DESIGN "a scan costs in proportion to the active steps"): 200 sequencers, each a
+Workload (docs/architecture.md, "The core is a function"): 200 sequencers, each a
 loop of 25 steps (5000 steps, 200 active at any time). Every step holds
 
     S1 N c := 0;  N c := c + 1;      // an assignment every call (reset on activation)
     D Mb.d, T#20MS;  L Mb.l, T#20MS; // an on-delay and a pulse bit
     TRANSITION ... := c >= p;        // a comparison; p = 2, 3, 4 by sequencer
 
-so a sequencer advances every ``p`` calls (phases drift, about 1/3 of the sequencers switch
-per scan) and its D and L bits toggle inside every step at the 10 ms virtual cycle. Layout
-(``--layout``): ``packed`` = 25 FBs of 8 sequencers each (SPEC §2.1 allows 1..8 per FB; the
-default), ``single`` = 200 FBs of one sequencer each. The FBs are called from OB1 of one
-``engine.cpu.Cpu`` driven by a ``VirtualClock`` advanced 10 ms per scan; the wall time of
-``Cpu.scan()`` is measured with ``perf_counter_ns``.
+so a sequencer advances every ``p`` calls (phases drift, about 1/3 of the sequencers switch per
+scan) and its D and L bits toggle inside every step at the 10 ms virtual cycle. Layout
+(``--layout``): ``packed`` = 25 FBs of 8 sequencers each (S7-GRAPH allows 1..8 per FB,
+docs/semantics.md, "Structure"; the default), ``single`` = 200 FBs of one sequencer each. The FBs
+are called from OB1 of one ``engine.cpu.Cpu`` driven by a ``VirtualClock`` advanced 10 ms per scan;
+the wall time of ``Cpu.scan()`` is measured with ``perf_counter_ns``.
 
 Baseline: one ``transitions.Machine`` per sequencer (25 states, one ``scan`` trigger per scan
 whose condition is a model callback ``c >= p``, ``after_state_change`` resets ``c`` and the
@@ -72,7 +72,7 @@ def marker_bits(g: int) -> tuple[str, str]:
 
 
 def chart_source(fb: int, first_g: int, n_seq: int, steps: int = STEPS) -> str:
-    """The ``.s7g`` text (SPEC §3) of FB ``fb`` holding sequencers ``first_g ..``."""
+    """The ``.s7g`` text (docs/chart-format.md) of FB ``fb`` holding sequencers ``first_g ..``."""
     out = [
         f'FUNCTION_BLOCK "Bench_{fb}" FB {fb} DB {fb}',
         "  PARAMETERS := STANDARD;",

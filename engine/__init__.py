@@ -1,4 +1,4 @@
-"""The soft CPU: memory, types, blocks, modes, the scan cycle and diagnostics (SPEC.md §1)."""
+"""The soft CPU: memory, types, blocks, modes, the scan cycle and diagnostics (docs/runtime.md)."""
 
 from __future__ import annotations
 

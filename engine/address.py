@@ -1,8 +1,9 @@
-"""S7 absolute addresses: parsing and canonical text (SPEC.md §1.1, seeds-runtime.md §4.2).
+"""S7 absolute addresses: parsing and canonical text (docs/runtime.md, "The block runtime", Siemens'
+Program Design for S7-300/400, ch. 5).
 
-An address is area + width + first byte (+ bit 0..7 for BIT). Multi-byte operands start at
-their lowest byte (``MD100`` = MB100..MB103, seeds-runtime.md §4.2). ``T5``/``C3`` name a
-timer/counter cell: area T/C, width WORD, ``byte`` = the cell number. German mnemonics
+An address is area + width + first byte (+ bit 0..7 for BIT). Multi-byte operands start at their
+lowest byte (``MD100`` = MB100..MB103, Siemens' Program Design for S7-300/400, ch. 5). ``T5``/``C3``
+name a timer/counter cell: area T/C, width WORD, ``byte`` = the cell number. German mnemonics
 (E/A/PE/PA/Z) and blanks are accepted; ``str()`` always gives canonical English text.
 """
 
@@ -19,7 +20,7 @@ __all__ = ["Address", "Area", "Width", "parse_address"]
 
 
 class Area(StrEnum):
-    """Operand areas (seeds-runtime.md §4.2, Table 5-2 ``002:L1584-1597``)."""
+    """Operand areas (Siemens' Program Design for S7-300/400, ch. 5, table 5-2)."""
 
     I = "I"  # noqa: E741 - the S7 mnemonic
     Q = "Q"
@@ -99,7 +100,8 @@ class Address:
 
 
 def _check(area: Area, width: Width, byte: int, bit: int, db: int | None) -> str:
-    """Return why the parts do not form a valid address, or '' (SPEC.md §1.1)."""
+    """Return why the parts do not form a valid address, or '' (docs/runtime.md, "The block
+    runtime")."""
     if not 0 <= byte <= MAX_BYTE:
         return f"byte/number {byte} outside 0..{MAX_BYTE}"
     if not 0 <= bit <= 7:
@@ -149,7 +151,8 @@ def parse_address(text: str, where: SourceLocation | None = None) -> Address:
     """Parse S7 address text (``I 0.0``, ``QX4.1``, ``EW2``, ``DB1.DBW2``, ``Z3`` …).
 
     Raises AddressError naming ``text`` (and ``where``) for unknown syntax, a bit outside
-    0..7, a bit number on a byte/word/dword (``MW10.3``) or a bit on PI/PQ (SPEC.md §1.1).
+    0..7, a bit number on a byte/word/dword (``MW10.3``) or a bit on PI/PQ (docs/runtime.md, "The
+    block runtime").
     """
     result = _parse("".join(text.split()).upper())
     if isinstance(result, str):

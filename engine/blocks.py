@@ -1,6 +1,8 @@
-"""User and system blocks: OB, FB, FC, SFB, SFC, DB and instance DBs (SPEC.md §1.3).
+"""User and system blocks: OB, FB, FC, SFB, SFC, DB and instance DBs (docs/runtime.md, "Programs of
+blocks in Python").
 
-A decorator declares a block's interface (seeds-runtime §1.2, Table 2-2)::
+A decorator declares a block's interface (Siemens' Program Design for S7-300/400, ch. 2, Table
+2-2)::
 
     @fb(1, IN={"start": "BOOL"}, OUT={"busy": "BOOL"}, STAT={"n": ("INT", 0)})
     def motor(ctx, db): ...
@@ -8,7 +10,7 @@ A decorator declares a block's interface (seeds-runtime §1.2, Table 2-2)::
 An FB keeps IN, OUT, IN_OUT and STAT in an ``InstanceDB`` (TEMP never); an FC has no
 memory, STAT is refused and its locals take no initial values. A STAT of type ``OBJECT``
 holds any object with ``to_state()``/``from_state()`` (e.g. a GraphFB state); a STAT whose
-value is an FB is a multi-instance stored inside the caller's instance DB (behaviour 35).
+value is an FB is a multi-instance stored inside the caller's instance DB.
 """
 
 from __future__ import annotations
@@ -28,7 +30,7 @@ OBJECT = "OBJECT"
 
 
 class Decl(StrEnum):
-    """Declaration types of block variables (Table 2-2 [002:L546-557])."""
+    """Declaration types of block variables (Siemens' Program Design for S7-300/400, table 2-2)."""
 
     IN = "IN"
     OUT = "OUT"
@@ -203,7 +205,8 @@ class FC:
 
 @dataclass(frozen=True, slots=True)
 class OB:
-    """An organization block, called only by the CPU: ``body(ctx)`` (seeds-runtime §2)."""
+    """An organization block, called only by the CPU: ``body(ctx)`` (Siemens' Program Design for
+    S7-300/400, ch. 3-4)."""
 
     number: int
     name: str
@@ -337,7 +340,7 @@ class InstanceDB:
         self.reset()
 
     def reset(self) -> None:
-        """Every variable back to its initial value (cold restart, behaviour 4)."""
+        """Every variable back to its initial value (cold restart)."""
         self.values.clear()
         for var in self.fb.interface:
             if var.decl is not Decl.TEMP:

@@ -1,4 +1,4 @@
-"""The one clock every time-dependent rule reads (SPEC §1.6).
+"""The one clock every time-dependent rule reads (docs/architecture.md, "The core is a function").
 
 The CPU reads ``now_ns()`` once per scan. ``VirtualClock`` moves only when told, so every
 scan is reproducible; ``SystemClock`` follows the monotonic clock for live runs.

@@ -1,11 +1,11 @@
-"""What a block body sees during a scan, and how one block calls another (SPEC.md §1.3–1.4).
+"""What a block body sees during a scan, and how one block calls another (docs/runtime.md, "Programs
+of blocks in Python" and "Restarts: warm, hot, cold").
 
 ``CallContext.call`` binds the actual parameters (a ``str`` for a non-string parameter is an
-operand, behaviours 33, 34), runs the body one nesting level deeper (B-stack overflow →
-``NestingOverflow``, behaviour 31) and tags an escaping exception with the innermost block
-(``_Fault``), which the CPU turns into OB121 or STOP — ``SystemExit`` and
-``KeyboardInterrupt`` raised by a block included: a block error, never a process exit. The
-runner's ``ScanAborted`` passes through, naming the innermost block.
+operand), runs the body one nesting level deeper (B-stack overflow → ``NestingOverflow``) and tags
+an escaping exception with the innermost block (``_Fault``), which the CPU turns into OB121 or STOP
+— ``SystemExit`` and ``KeyboardInterrupt`` raised by a block included: a block error, never a
+process exit. The runner's ``ScanAborted`` passes through, naming the innermost block.
 """
 
 from __future__ import annotations
@@ -65,7 +65,7 @@ class BlockHost(Protocol):
 
 
 class NestingOverflow(BlockError):
-    """Block nesting deeper than the CPU allows (B-stack overflow → STOP, behaviour 31)."""
+    """Block nesting deeper than the CPU allows (B-stack overflow → STOP)."""
 
 
 class _Fault(Exception):
@@ -139,10 +139,10 @@ class CallContext:
     ) -> dict[str, object]:
         """Call an FB/SFB (with its instance DB) or an FC/SFC; return its outputs by name.
 
-        A ``str`` actual for a non-string parameter is an operand (``"MW10"``); OUT and
-        IN_OUT operands receive the values after the call (behaviours 33, 34). ``None`` for
-        an OUT gives it without an operand: its value is only returned (a GRAPH row's
-        ``CDT => t`` writes it to an FB variable the engine does not address).
+        A ``str`` actual for a non-string parameter is an operand (``"MW10"``); OUT and IN_OUT
+        operands receive the values after the call. ``None`` for an OUT gives it without an operand:
+        its value is only returned (a GRAPH row's ``CDT => t`` writes it to an FB variable the
+        engine does not address).
         """
         if isinstance(block, FB) and isinstance(instance, InstanceDB) and instance.fb is block:
             return self._call_fb(block, instance, params)  # the common case, checks below

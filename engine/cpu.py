@@ -1,4 +1,5 @@
-"""The soft CPU: modes, startup, the scan cycle and error handling (SPEC.md §1.4–1.6).
+"""The soft CPU: modes, startup, the scan cycle and error handling (docs/runtime.md, "Restarts:
+warm, hot, cold"; docs/architecture.md, "The core is a function").
 
 ``scan()`` reads the clock once and runs one cycle in S7 order: commands queued since the
 last scan are applied, scan hooks run (``add_os_scan_hook``; the S5 timer update of ``sfb``),
@@ -58,7 +59,7 @@ __all__ = [
 ]
 
 CLOCK_MEMORY_HALF_MS = (50, 100, 200, 250, 400, 500, 800, 1000)
-"""Half periods of clock-memory bits 0..7 (periods 0.1 … 2.0 s, behaviour 15)."""
+"""Half periods of clock-memory bits 0..7 (periods 0.1 … 2.0 s)."""
 
 
 ScanHook = Callable[["Cpu", int], None]
@@ -73,7 +74,8 @@ OS_SCAN_HOOKS: list[ScanHook] = []
 
 def add_os_scan_hook(hook: ScanHook) -> None:
     """Register ``hook`` for every CPU (idempotent): how ``sfb`` makes the S5 timers tick
-    once per scan without the engine importing it (seeds-runtime §5.1, behaviour 46)."""
+    once per scan without the engine importing it (El-Shahat's S7-300/400 course, timers and
+    counters)."""
     if hook not in OS_SCAN_HOOKS:
         OS_SCAN_HOOKS.append(hook)
 
@@ -89,7 +91,7 @@ class Pending:
 
 
 class Cpu(ProgramBlocks, Forcing, InterruptDispatch):
-    """One soft CPU (docs/contracts.md). Power-on leaves it in STOP (behaviour 1)."""
+    """One soft CPU (docs/architecture.md, "Seams"). Power-on leaves it in STOP."""
 
     def __init__(
         self,
@@ -121,7 +123,8 @@ class Cpu(ProgramBlocks, Forcing, InterruptDispatch):
         """The CPU's date and time on the injected clock (SFC0/SFC1, TOD interrupts)."""
         self.meters = RuntimeMeters()
         self.ob_priority: dict[int, int] = {}
-        """Parametrised OB priorities; others have the defaults of behaviour 18."""
+        """Parametrised OB priorities; others have the S7 defaults
+        (``engine.interrupts.priority``)."""
         self._startup_hooks: list[StartupHook] = []
         self.stop_entry: DiagEntry | None = None
         """The diagnostic entry of the last transition to STOP (its cause is the entry
@@ -140,7 +143,7 @@ class Cpu(ProgramBlocks, Forcing, InterruptDispatch):
         self.cycle = 0
         self.last_restart: RestartType | None = None
         self.hot_blockers: set[str] = {"program download"}
-        """Why only a warm restart is possible now (behaviour 6); cleared by a warm restart."""
+        """Why only a warm restart is possible now; cleared by a warm restart."""
         self._commands: deque[Pending] = deque()
         self.forces = ForceTable()
         """The force jobs (``force``/``unforce``): kept until deleted, a memory reset included."""
@@ -172,7 +175,7 @@ class Cpu(ProgramBlocks, Forcing, InterruptDispatch):
             self._go_stop(EventId.STOP_BY_SWITCH, "", "key switch turned to STOP")
 
     def start(self, restart: str | RestartType = "warm") -> ScanRecord:
-        """STOP → STARTUP (OB100/101/102) → RUN; refused with the key in STOP (behaviour 1)."""
+        """STOP → STARTUP (OB100/101/102) → RUN; refused with the key in STOP."""
         self._begin(self.clock.now_ns())
         mark = self.diagnostics.total
         self._startup(parse_restart(restart))
@@ -193,7 +196,7 @@ class Cpu(ProgramBlocks, Forcing, InterruptDispatch):
             self.diagnostics.record(raw, EventId.HOLD_ENTERED, "", "RUN → HOLD")
 
     def resume(self) -> None:
-        """HOLD → RUN: the frozen process time continues where it stopped (behaviour 51)."""
+        """HOLD → RUN: the frozen process time continues where it stopped."""
         if self.mode is CpuMode.HOLD and self._hold_since is not None:
             raw = self.clock.now_ns()
             self._held_ns += raw - self._hold_since
@@ -203,7 +206,7 @@ class Cpu(ProgramBlocks, Forcing, InterruptDispatch):
 
     def memory_reset(self) -> None:
         """MRES (STOP only): program and operand areas cleared; diagnostics and key kept
-        (behaviour 54)."""
+       ."""
         if self.mode is not CpuMode.STOP:
             raise BlockError("memory reset is possible only in STOP")
         self.blocks.clear()
@@ -273,7 +276,7 @@ class Cpu(ProgramBlocks, Forcing, InterruptDispatch):
 
     def dis_airt(self) -> int:
         """SFC41 DIS_AIRT: delay higher-priority interrupts until EN_AIRT or the end of the
-        current OB — delayed, never lost (behaviour 23); returns the number of delays."""
+        current OB — delayed, never lost; returns the number of delays."""
         self._airt_disabled += 1
         return self._airt_disabled
 
@@ -313,7 +316,7 @@ class Cpu(ProgramBlocks, Forcing, InterruptDispatch):
     def raise_async_error(self, ob: int, info: dict[str, Any] | None = None) -> None:
         """An asynchronous error event for OB80..OB87 (module fault, rack failure ...).
 
-        Runs the OB if loaded; without it the CPU stops, except OB81 (behaviour 28).
+        Runs the OB if loaded; without it the CPU stops, except OB81.
         """
         raw = self.clock.now_ns()
         self.diagnostics.record(
@@ -442,7 +445,7 @@ class Cpu(ProgramBlocks, Forcing, InterruptDispatch):
         except (Exception, SystemExit, KeyboardInterrupt) as exc:  # a block error, never an exit
             self._program_error(number, block.label, exc)
         finally:
-            self._airt_disabled = airt  # DIS_AIRT ends with its OB (behaviour 23)
+            self._airt_disabled = airt  # DIS_AIRT ends with its OB
             if marks is not None:
                 marks.leave(before)
 
@@ -496,7 +499,7 @@ class Cpu(ProgramBlocks, Forcing, InterruptDispatch):
             self._apply_mode(requests)
 
     def _apply_mode(self, requests: list[ModeRequest]) -> None:
-        """Several requests at one boundary: the highest priority wins (behaviour 2)."""
+        """Several requests at one boundary: the highest priority wins."""
         winner = resolve_requests(r.mode for r in requests)
         request = next(r for r in requests if r.mode is winner)
         if winner is CpuMode.STOP:
@@ -556,7 +559,7 @@ class Cpu(ProgramBlocks, Forcing, InterruptDispatch):
         self._tod_seen = None
         self._airt_disabled = 0
         if OS_SCAN_HOOKS:
-            self._run_hooks(raw)  # S5 timers keep running in STARTUP (behaviour 8)
+            self._run_hooks(raw)  # S5 timers keep running in STARTUP
         self._run_ob(rule.ob, {"RESTART": str(restart)})
         if self.mode is not CpuMode.STARTUP:
             if restart is RestartType.WARM:
@@ -579,7 +582,8 @@ class Cpu(ProgramBlocks, Forcing, InterruptDispatch):
 
 
 def _classify(exc: BaseException) -> int:
-    """Event id 16#25xx of a programming error (seeds-runtime §2.1 OB121 SW_FLT)."""
+    """Event id 16#25xx of a programming error (Siemens' Program Design for S7-300/400, ch. 3-4
+    OB121 SW_FLT)."""
     if isinstance(exc, AreaLengthError):
         return 0x2500 | exc.sw_flt
     if isinstance(exc, AddressError):

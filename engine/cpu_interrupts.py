@@ -1,4 +1,4 @@
-"""Which interrupt OBs are due in a cycle, and running them in S7 order (behaviours 17, 22).
+"""Which interrupt OBs are due in a cycle, and running them in S7 order.
 
 Time-of-day OB10–17, delay OB20–23 and cyclic OB30–38 run highest priority first and,
 within one priority, in the order of their start events; a missing OB calls its error OB
@@ -95,7 +95,7 @@ class InterruptDispatch:
     def _tod_due(self, now: int) -> list[Due]:
         """Due time-of-day interrupts on the RTC; a clock set forward over some calls OB80
         (FLT_ID 16#05) first, then each skipped OB runs once unless OB80 cancelled it
-        (behaviour 22, [002:L1373-1384])."""
+        (Siemens' Program Design for S7-300/400)."""
         dt = self.rtc.read(self._raw)
         seen, self._tod_seen = self._tod_seen, (self.rtc.version, dt)
         jumped_from = None

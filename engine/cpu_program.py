@@ -1,4 +1,5 @@
-"""The CPU's program: downloading blocks, finding them, and its instance DBs (SPEC.md §1.4).
+"""The CPU's program: downloading blocks, finding them, and its instance DBs (docs/runtime.md,
+"Restarts: warm, hot, cold").
 
 ``ProgramBlocks`` is a part of ``engine.cpu.Cpu``, which owns the attributes it declares.
 """

@@ -1,10 +1,11 @@
-"""S7 data types: sizes, ranges, big-endian encodings and DB layout (SPEC.md §1.2).
+"""S7 data types: sizes, ranges, big-endian encodings and DB layout (docs/runtime.md, "The block
+runtime").
 
-Encodings (seeds-runtime.md §4.3-4.5, §5.1): integers two's complement big-endian; REAL IEEE 754
-single; TIME = DINT ms; DATE = WORD days since 1990-01-01; TIME_OF_DAY = DWORD ms since
-midnight; DATE_AND_TIME = 8 BCD bytes (YY MM DD hh mm ss, 3 ms digits, weekday 1 = Sunday);
-S5TIME = 3 BCD digits + time base in bits 12-13; STRING[n] = n + 2 bytes (max, current, chars).
-Python values follow docs/contracts.md "Values".
+Encodings (Siemens' Program Design for S7-300/400, appendix C; El-Shahat's S7-300/400 course, timers
+and counters): integers two's complement big-endian; REAL IEEE 754 single; TIME = DINT ms; DATE =
+WORD days since 1990-01-01; TIME_OF_DAY = DWORD ms since midnight; DATE_AND_TIME = 8 BCD bytes (YY
+MM DD hh mm ss, 3 ms digits, weekday 1 = Sunday); S5TIME = 3 BCD digits + time base in bits 12-13;
+STRING[n] = n + 2 bytes (max, current, chars). Python values follow docs/architecture.md, "Seams".
 """
 
 from __future__ import annotations
@@ -45,7 +46,8 @@ DATE_MAX = date(2168, 12, 31)
 DT_MIN = datetime(1990, 1, 1)
 DT_MAX = datetime(2089, 12, 31, 23, 59, 59, 999000)
 S5_BASES_MS = (10, 100, 1000, 10000)
-"""S5TIME time bases for bits 12-13 = 00, 01, 10, 11 (seeds-runtime.md §5.1)."""
+"""S5TIME time bases for bits 12-13 = 00, 01, 10, 11 (El-Shahat's S7-300/400 course, timers and
+counters)."""
 S5TIME_MAX_MS = 999 * 10000
 TOD_MAX_MS = 86_400_000 - 1
 REAL_MAX = 3.4028234663852886e38
@@ -115,7 +117,7 @@ def _lookup(key: str) -> TypeSpec | None:
 def type_of(name: str) -> TypeSpec:
     """The TypeSpec for ``name`` (case-insensitive; ``STRING`` = ``STRING[254]``, n ≤ 254).
 
-    Raises TypeMismatch for an unknown type (seeds-runtime.md §4.3-4.4).
+    Raises TypeMismatch for an unknown type (Siemens' Program Design for S7-300/400, appendix C).
     """
     spec = _lookup("".join(name.split()).upper())
     if spec is None:
@@ -138,7 +140,7 @@ def check_value(type_name: str, value: object) -> object:
     """Check ``value`` fits ``type_name`` and return it (CHAR codes become 1-char str).
 
     Raises TypeMismatch for a wrong Python type or a value outside the S7 range
-    (seeds-runtime.md §4.3 Table C-1).
+    (Siemens' Program Design for S7-300/400, appendix C, table C-1).
     """
     spec = type_of(type_name)
     name = spec.name
@@ -190,7 +192,8 @@ def check_value(type_name: str, value: object) -> object:
 
 
 def int_to_bcd(value: int, digits: int = 3) -> int:
-    """Binary 0..10**digits-1 → packed BCD (``C#26`` = 16#0026, seeds-runtime.md §5.2)."""
+    """Binary 0..10**digits-1 → packed BCD (``C#26`` = 16#0026, El-Shahat's S7-300/400 course,
+    timers and counters)."""
     if not 0 <= value < 10**digits:
         raise TypeMismatch(f"{value} does not fit {digits} BCD digits")
     out = 0
@@ -200,7 +203,8 @@ def int_to_bcd(value: int, digits: int = 3) -> int:
 
 
 def bcd_to_int(bcd: int, digits: int = 3) -> int:
-    """Packed BCD → binary; a nibble above 9 is a BCD error (TypeMismatch, seeds §5.2)."""
+    """Packed BCD → binary; a nibble above 9 is a BCD error (TypeMismatch, El-Shahat's S7-300/400
+    course, timers and counters)."""
     out = 0
     for shift in reversed(range(digits)):
         nibble = (bcd >> (4 * shift)) & 0xF
@@ -211,7 +215,8 @@ def bcd_to_int(bcd: int, digits: int = 3) -> int:
 
 
 def ms_to_s5time(ms: int) -> int:
-    """Milliseconds → S5TIME word, finest base that fits (S5T#2S = W#16#0200, seeds §5.1).
+    """Milliseconds → S5TIME word, finest base that fits (S5T#2S = W#16#0200, El-Shahat's S7-300/400
+    course, timers and counters).
 
     The count is truncated to the chosen base; above 9990 s raises TypeMismatch.
     """
@@ -238,7 +243,7 @@ def _unbcd2(byte: int) -> int:
 
 def _encode_dt(value: datetime) -> bytes:
     ms = value.microsecond // 1000
-    weekday = value.isoweekday() % 7 + 1  # 1 = Sunday (seeds-runtime.md §4.4)
+    weekday = value.isoweekday() % 7 + 1  # 1 = Sunday (Program Design, appendix C)
     parts = (value.year % 100, value.month, value.day, value.hour, value.minute, value.second)
     return bytes([*(_bcd2(p) for p in parts), _bcd2(ms // 10), ((ms % 10) << 4) | weekday])
 
@@ -320,7 +325,7 @@ def decode(type_name: str, data: bytes | bytearray | memoryview) -> object:
     return raw[2 : 2 + length].decode("latin-1")
 
 
-# ---- layout of STRUCT / ARRAY / DB images (seeds-runtime.md §4.5) -------------------------
+# ---- layout of STRUCT / ARRAY / DB images (Program Design for S7-300/400, appendix C) -----
 
 FieldType = str | Sequence[tuple[str, "FieldType"]]
 """A field's type: a type name (``'INT'``, ``'STRING[10]'``, ``'ARRAY[1..5] OF INT'``) or a
@@ -368,7 +373,8 @@ class _Cursor:
 
 
 def _place(cur: _Cursor, name: str, ftype: FieldType, out: dict[str, Slot]) -> None:
-    """Place one field at ``cur`` following the rules of seeds-runtime.md §4.5."""
+    """Place one field at ``cur`` following the rules of Siemens' Program Design for S7-300/400,
+    appendix C."""
     if not isinstance(ftype, str):
         cur.even()
         start = cur.byte
@@ -432,7 +438,8 @@ def _layout_into(fields: Sequence[tuple[str, FieldType]], out: dict[str, Slot]) 
 
 
 def layout(fields: Sequence[tuple[str, FieldType]] | Mapping[str, FieldType]) -> Layout:
-    """Lay out fields as S7 does in DBs and instance DBs (seeds-runtime.md §4.5).
+    """Lay out fields as S7 does in DBs and instance DBs (Siemens' Program Design for S7-300/400,
+    appendix C).
 
     Consecutive BOOLs pack into one byte; BYTE/CHAR take the next byte; every other type,
     ARRAY, STRUCT and STRING starts on an even byte; the total is rounded up to even.

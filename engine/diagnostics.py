@@ -1,4 +1,4 @@
-"""The diagnostic buffer (seeds-runtime §7.2, behaviour 52).
+"""The diagnostic buffer (Siemens' Program Design for S7-300/400, ch. 10).
 
 A ring of fixed length: the newest entry overwrites the oldest. The user program cannot
 clear it; it survives restarts and memory reset (it belongs to the CPU, not to memory).
@@ -14,7 +14,8 @@ from s7graph.engine.record import DiagEntry
 
 
 class EventId(IntEnum):
-    """Event ids 16#CEnn used by the runtime (seeds-runtime §7.4; 16#25FF is ours)."""
+    """Event ids 16#CEnn used by the runtime (Siemens' Program Design for S7-300/400, ch. 10;
+    16#25FF is ours)."""
 
     STOP_TO_STARTUP = 0x4301
     STARTUP_TO_RUN = 0x4302

@@ -1,4 +1,5 @@
-"""Errors as values with places: every error names where it happened (DESIGN.md "Errors")."""
+"""Errors as values with places: every error names where it happened (docs/architecture.md,
+"Seams")."""
 
 from __future__ import annotations
 
@@ -27,11 +28,13 @@ class S7Error(Exception):
 
 
 class AddressError(S7Error):
-    """An S7 address that does not parse, is out of range or is misaligned (SPEC §1.1)."""
+    """An S7 address that does not parse, is out of range or is misaligned (docs/runtime.md, "The
+    block runtime")."""
 
 
 class LiteralError(S7Error):
-    """A literal that does not parse or does not fit its type (SPEC §1.2)."""
+    """A literal that does not parse or does not fit its type (docs/runtime.md, "The block
+    runtime")."""
 
 
 class TypeMismatch(S7Error):
@@ -43,11 +46,13 @@ class SymbolError(S7Error):
 
 
 class BlockError(S7Error):
-    """A block that is missing, badly declared or wrongly called (SPEC §1.3)."""
+    """A block that is missing, badly declared or wrongly called (docs/runtime.md, "Programs of
+    blocks in Python")."""
 
 
 class ProgramError(S7Error):
-    """An error inside a user block during a scan (goes to OB121 / STOP, SPEC §1.5)."""
+    """An error inside a user block during a scan (goes to OB121 / STOP, docs/runtime.md, "When a
+    scan hangs or fails")."""
 
 
 class ScanAborted(BaseException):

@@ -1,4 +1,5 @@
-"""Forcing: the CPU's force table, as STEP 7's "Force Values" keeps it (SPEC.md §1.5).
+"""Forcing: the CPU's force table, as STEP 7's "Force Values" keeps it (docs/runtime.md, "When a
+scan hangs or fails").
 
 A force job holds an input (I), output (Q) or flag (M) — a bit, byte, word or double word —
 at a value until it is deleted (``unforce``), whatever the modules or the program say.

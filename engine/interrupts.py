@@ -1,4 +1,4 @@
-"""OB priorities and cyclic interrupts OB30–OB38 (SPEC.md §1.5; behaviours 17, 18, 19, 23).
+"""OB priorities and cyclic interrupts OB30–OB38 (docs/runtime.md, "When a scan hangs or fails").
 
 A cyclic OB runs every ``period`` measured on the CPU's process time from the STOP→RUN
 transition, delayed by its phase offset (0 <= phase < period). Only loaded OBs have a
@@ -23,13 +23,13 @@ CYCLIC_DEFAULT_MS: dict[int, int] = {
     37: 20,
     38: 10,
 }
-"""Default periods of OB30..OB38 [002:L1439-1446]."""
+"""Default periods of OB30..OB38 (Siemens' Program Design for S7-300/400)."""
 
 _MS = 1_000_000
 
 
 def priority(ob: int) -> int:
-    """Default priority class of an OB (behaviour 18); OB121/122 take the faulting OB's class."""
+    """Default priority class of an OB; OB121/122 take the faulting OB's class."""
     if ob == 1:
         return 1
     if 10 <= ob <= 17:
@@ -87,7 +87,7 @@ class CyclicScheduler:
         return {ob for ob, (period, _) in self._config.items() if period == 0}
 
     def arm(self, obs: Iterable[int], t_run_ns: int) -> None:
-        """Start the schedule at the STOP→RUN transition for the given OBs (behaviour 19)."""
+        """Start the schedule at the STOP→RUN transition for the given OBs."""
         self.active.clear()
         for ob in sorted(set(obs)):
             period, phase = self._config.get(ob, (CYCLIC_DEFAULT_MS.get(ob, 0), 0))
@@ -97,7 +97,7 @@ class CyclicScheduler:
             self.active[ob] = CyclicInterrupt(ob, period * _MS, phase * _MS, first)
 
     def disable(self, ob: int) -> None:
-        """SFC39 DIS_IRT mode 2: start events of ``ob`` are discarded (behaviour 23)."""
+        """SFC39 DIS_IRT mode 2: start events of ``ob`` are discarded."""
         if ob in self.active:
             self.active[ob].enabled = False
 
@@ -112,7 +112,7 @@ class CyclicScheduler:
 
     def due_events(self, now_ns: int) -> list[tuple[int, int, int]]:
         """OBs due at ``now_ns`` as ``(ob, lost_events, first_event_ns)``, highest OB first;
-        the event time lets the CPU queue equal priorities in event order (behaviour 17)."""
+        the event time lets the CPU queue equal priorities in event order."""
         out: list[tuple[int, int, int]] = []
         for ob in sorted(self.active, reverse=True):
             ci = self.active[ob]

@@ -1,8 +1,9 @@
-"""S7 literals both ways: text → (type, value) and canonical text (SPEC.md §1.2).
+"""S7 literals both ways: text → (type, value) and canonical text (docs/runtime.md, "The block
+runtime").
 
-Forms follow seeds-runtime.md §4.3 (Table C-1, ``002:L5199-5222``; SCL ``000:L3275-3312``).
-Prefixes and units are case-insensitive; ``_`` may separate digits. Values follow
-docs/contracts.md "Values" (TIME/S5TIME/TOD in ms, DATE ``date``, DT ``datetime``).
+Forms follow Siemens' Program Design for S7-300/400, appendix C, table C-1 (SCL: STEP7 comprehensive
+guide vol. 2, ch. 13). Prefixes and units are case-insensitive; ``_`` may separate digits. Values
+follow docs/architecture.md, "Seams" (TIME/S5TIME/TOD in ms, DATE ``date``, DT ``datetime``).
 """
 
 from __future__ import annotations
@@ -61,7 +62,8 @@ def parse_literal(text: str, where: SourceLocation | None = None) -> tuple[str, 
 
     Bare integers are INT, or DINT beyond INT; bare ``16#``/``8#``/``2#`` are WORD (DWORD
     beyond 16 bits); ``C#26`` is the BCD counter value ``('WORD', 0x0026)``. Syntax errors and
-    values outside the type's range raise LiteralError naming ``text`` (SPEC.md §1.2).
+    values outside the type's range raise LiteralError naming ``text`` (docs/runtime.md, "The block
+    runtime").
     """
     s = text.strip()
     try:
@@ -307,7 +309,8 @@ def format_literal(type_name: str, value: object) -> str:
     """Canonical upper-case literal: ``('TIME', 1200)`` → ``'T#1S200MS'``, WORD → ``W#16#FFF0``.
 
     ``parse_literal(format_literal(t, v))`` gives back ``(t, v)`` (STRING[n] as STRING);
-    a value outside the type raises TypeMismatch (seeds-runtime.md §4.3).
+    a value outside the type raises TypeMismatch (Siemens' Program Design for S7-300/400, appendix
+    C).
     """
     spec = type_of(type_name)
     v = check_value(spec.name, value)

@@ -1,10 +1,11 @@
-"""CPU operand memory: I/Q process images, PI/PQ module side, M, L, T, C and DBs (SPEC.md §1.1).
+"""CPU operand memory: I/Q process images, PI/PQ module side, M, L, T, C and DBs (docs/runtime.md,
+"The block runtime").
 
-Every area is a big-endian ``bytearray`` (MB10 is the high byte of MW10, seeds-runtime.md
-§4.2); timers and counters are cells (``S5Timer``/``S5Counter``) whose logic lives in sfb/.
-Retentivity follows seeds-runtime.md §3.3: by default MB0..MB15, no timers and C0..C7 are
-retentive; DBs keep their contents on warm restart and reload initial values on cold restart
-(SPEC.md §1.4).
+Every area is a big-endian ``bytearray`` (MB10 is the high byte of MW10, Siemens' Program Design for
+S7-300/400, ch. 5); timers and counters are cells (``S5Timer``/``S5Counter``) whose logic lives in
+sfb/. Retentivity follows Siemens' Program Design for S7-300/400, ch. 9: by default MB0..MB15, no
+timers and C0..C7 are retentive; DBs keep their contents on warm restart and reload initial values
+on cold restart (docs/runtime.md, "Restarts: warm, hot, cold").
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ __all__ = ["AreaLengthError", "DataBlock", "Memory", "S5Counter", "S5Timer"]
 
 
 class AreaLengthError(AddressError):
-    """Access beyond an area or DB length: the S7 area-length error (Behaviour 36, ``[K]``
+    """Access beyond an area or DB length: the S7 area-length error (``[K]``
     SW_FLT 16#22 read / 16#23 write); ``write`` says which."""
 
     def __init__(self, message: str, *, write: bool) -> None:
@@ -40,7 +41,8 @@ class AreaLengthError(AddressError):
 
 @dataclass(slots=True)
 class S5Timer:
-    """One S5 timer cell ``T n`` (seeds-runtime.md §5.1); sfb/ runs the timer functions.
+    """One S5 timer cell ``T n`` (El-Shahat's S7-300/400 course, timers and counters); sfb/ runs the
+    timer functions.
 
     ``value_ms`` is the remaining time, counted in steps of ``time_base_ms``.
     """
@@ -58,11 +60,13 @@ class S5Timer:
     # tick rebases it on the time left (``sfb.s5_timers.tick``)
 
     def binary(self) -> int:
-        """``L T n``: remaining time in time-base units, binary (seeds-runtime.md §5.1)."""
+        """``L T n``: remaining time in time-base units, binary (El-Shahat's S7-300/400 course,
+        timers and counters)."""
         return self.value_ms // self.time_base_ms
 
     def bcd(self) -> int:
-        """``LC T n``: remaining time as an S5TIME word (BCD + time base, seeds §5.1)."""
+        """``LC T n``: remaining time as an S5TIME word (BCD + time base, El-Shahat's S7-300/400
+        course, timers and counters)."""
         code = {10: 0, 100: 1, 1000: 2, 10000: 3}.get(self.time_base_ms)
         if code is None:
             return ms_to_s5time(self.value_ms)
@@ -77,7 +81,8 @@ class S5Timer:
 
 @dataclass(slots=True)
 class S5Counter:
-    """One S5 counter cell ``C n`` / ``Z n``: value 0..999, ``q`` = value > 0 (seeds §5.2)."""
+    """One S5 counter cell ``C n`` / ``Z n``: value 0..999, ``q`` = value > 0 (El-Shahat's
+    S7-300/400 course, timers and counters)."""
 
     value: int = 0
     q: bool = False
@@ -88,7 +93,8 @@ class S5Counter:
     fr_edge: bool = False
 
     def set_value(self, value: int) -> None:
-        """Set the count clamped to 0..999 and update ``q`` (no wrap, seeds §5.2)."""
+        """Set the count clamped to 0..999 and update ``q`` (no wrap, El-Shahat's S7-300/400 course,
+        timers and counters)."""
         self.value = max(0, min(999, value))
         self.q = self.value > 0
 
@@ -106,7 +112,7 @@ class DataBlock:
     """A global or instance DB: ``data`` is the live image, ``initial`` the load-memory values.
 
     ``retain`` DBs are kept by snapshot/restore; ``created`` marks DBs made at run time
-    (SFC22), which a cold restart deletes (Behaviour 4).
+    (SFC22), which a cold restart deletes.
     """
 
     number: int
@@ -121,7 +127,8 @@ class DataBlock:
         return len(self.data)
 
     def reset(self) -> None:
-        """Reload the initial values (cold restart, SPEC.md §1.4)."""
+        """Reload the initial values (cold restart, docs/runtime.md, "Restarts: warm, hot,
+        cold")."""
         self.data[:] = self.initial.ljust(len(self.data), b"\0")[: len(self.data)]
 
     def field_address(self, name: str) -> Address:
@@ -140,7 +147,7 @@ def _b64(data: bytes | bytearray) -> str:
 
 
 class Memory:
-    """All operand areas of one CPU, addressed by ``Address`` (docs/contracts.md).
+    """All operand areas of one CPU, addressed by ``Address`` (docs/architecture.md, "Seams").
 
     ``read``/``write`` move raw unsigned values (BIT → bool); ``read_as``/``write_as``
     convert S7 types. Fast paths for compiled code: ``read_bit``/``write_bit`` and
@@ -176,7 +183,8 @@ class Memory:
         self.retentive_timers = retentive_timers
         self.retentive_counters = retentive_counters
         self.pq_updates_q = pq_updates_q
-        """Writing PQ inside the Q image also updates Q (seeds-runtime.md §4.2 ``[K]``)."""
+        """Writing PQ inside the Q image also updates Q (Siemens' Program Design for S7-300/400, ch.
+        5)."""
         self.symbols: SymbolTable | None = None
         self._areas: dict[str, bytearray] = {
             Area.I: self.inputs,
@@ -201,7 +209,7 @@ class Memory:
         raise AddressError(f"area {area} has no byte image")
 
     def read_bit(self, area: Area | str, byte: int, bit: int, db: int | None = None) -> bool:
-        """One bit (``I0.3`` = bit 3 of IB0, seeds-runtime.md §4.2)."""
+        """One bit (``I0.3`` = bit 3 of IB0, Siemens' Program Design for S7-300/400, ch. 5)."""
         buf = self.area_bytes(area, db)
         if not 0 <= byte < len(buf):
             raise AreaLengthError(f"{_name(area, byte, bit, db)} is outside the area", write=False)
@@ -399,12 +407,13 @@ class Memory:
         if self.dbs.pop(number, None) is None:
             raise BlockError(f"DB{number} does not exist")
 
-    # ---- restart and persistence (SPEC.md §1.4, seeds-runtime.md §3.3) ---------------------
+    # ---- restart and persistence (docs/runtime.md, "Restarts: warm, hot, cold", Siemens' Program
+    # Design for S7-300/400, ch. 9) ---------------------
 
     def clear_non_retentive(self) -> None:
         """Warm restart: zero non-retentive M, reset non-retentive T/C cells, clear L.
 
-        Retentive ranges and all DBs are kept (Behaviour 3).
+        Retentive ranges and all DBs are kept.
         """
         keep = self.retentive_markers
         for i in range(len(self.markers)):
@@ -415,9 +424,9 @@ class Memory:
         self.local[:] = bytes(len(self.local))
 
     def clear_outputs(self, *, image: bool = True, modules: bool = True) -> None:
-        """The safe output state (SPEC.md §1.4): zero the output image Q (``image``) and the
-        module side PQ (``modules``). STOP and HOLD zero only the modules, a startup both or
-        as its restart type says; the one way the CPU resets outputs."""
+        """The safe output state (docs/runtime.md, "Restarts: warm, hot, cold"): zero the output
+        image Q (``image``) and the module side PQ (``modules``). STOP and HOLD zero only the
+        modules, a startup both or as its restart type says; the one way the CPU resets outputs."""
         if image:
             self.outputs[:] = bytes(len(self.outputs))
         if modules:
@@ -425,7 +434,7 @@ class Memory:
 
     def reset_to_initial(self) -> None:
         """Cold restart: every M/T/C/L/I/Q/PQ zeroed, run-time DBs deleted, other DBs back
-        to their initial values (Behaviour 4)."""
+        to their initial values."""
         for buf in self._areas.values():
             buf[:] = bytes(len(buf))
         _reset_cells(self.timers, range(0))

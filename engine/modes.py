@@ -1,8 +1,8 @@
-"""CPU operating modes and mode requests (SPEC.md §1.4; seeds-runtime §3.1, Table 9-1).
+"""CPU operating modes and mode requests (docs/runtime.md, "Restarts: warm, hot, cold"; Siemens'
+Program Design for S7-300/400, ch. 9, Table 9-1).
 
-Simultaneous requests resolve to the highest priority: STOP > HOLD > STARTUP > RUN
-(behaviour 2). The key switch gates every start: with the key on STOP a RUN request is
-refused (behaviour 1).
+Simultaneous requests resolve to the highest priority: STOP > HOLD > STARTUP > RUN . The key switch
+gates every start: with the key on STOP a RUN request is refused.
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ REQUEST_PRIORITY: dict[CpuMode, int] = {
     CpuMode.STARTUP: 2,
     CpuMode.RUN: 1,
 }
-"""Mode-request priority, highest wins [002:L2673-2680]."""
+"""Mode-request priority, highest wins (Siemens' Program Design for S7-300/400)."""
 
 TRANSITIONS: frozenset[tuple[CpuMode, CpuMode]] = frozenset(
     {
@@ -50,11 +50,11 @@ TRANSITIONS: frozenset[tuple[CpuMode, CpuMode]] = frozenset(
         (CpuMode.HOLD, CpuMode.RUN),  # 10
     }
 )
-"""Allowed mode transitions, Table 9-1 [002:L2628-2680]."""
+"""Allowed mode transitions, Siemens' Program Design for S7-300/400, table 9-1."""
 
 
 def resolve_requests(requests: Iterable[CpuMode]) -> CpuMode | None:
-    """The winning request of several made at once (behaviour 2), or None if none."""
+    """The winning request of several made at once, or None if none."""
     best: CpuMode | None = None
     for mode in requests:
         if best is None or REQUEST_PRIORITY[mode] > REQUEST_PRIORITY[best]:

@@ -1,4 +1,5 @@
-"""State on disk: one SQLite file per CPU (DESIGN.md "Persistence"; SPEC.md §1.4).
+"""State on disk: one SQLite file per CPU (docs/state-file.md; docs/runtime.md, "Restarts: warm,
+hot, cold").
 
 Saved: retentive M/T/C and retain DBs (``Memory.snapshot()``), every instance DB
 (``InstanceDB.snapshot()``, OBJECT values through ``to_state()``), the diagnostic buffer,
@@ -726,7 +727,7 @@ class StateStore:
             report.notes.extend(f"DB{number} {fb.label} {fb.name!r}: {n}" for n in notes)
         self._restore_part(f"state of DB{number}", lambda: idb.restore(data, strict=True))
 
-    # ---- alarms and audit (hooks for sfb/alarms and the web commands) ---------------------
+    # ---- alarms and audit (hooks for sfb/alarms.py and the web commands) ---------------------
 
     def _log(self, table: str, row: tuple[Any, ...]) -> None:
         if self.deferred:

@@ -1,4 +1,4 @@
-"""The one trace format: what a scan did (DESIGN.md "The core is a pure function").
+"""The one trace format: what a scan did (docs/architecture.md, "The core is a function").
 
 ``ScanRecord`` is frozen and cheap (slots, tuples, no copies of memory); everybody — tests,
 the web view, the bus, the recorder, persistence — reads the same record.
@@ -13,7 +13,8 @@ from s7graph.engine.modes import CpuMode
 
 @dataclass(frozen=True, slots=True)
 class DiagEntry:
-    """One diagnostic-buffer entry: time, event id 16#xxxx, block, message (seeds-runtime §7.2)."""
+    """One diagnostic-buffer entry: time, event id 16#xxxx, block, message (Siemens' Program Design
+    for S7-300/400, ch. 10)."""
 
     t_ns: int
     event_id: int

@@ -1,6 +1,7 @@
-"""One table: restart type → startup OB and what each keeps or clears (SPEC.md §1.4).
+"""One table: restart type → startup OB and what each keeps or clears (docs/runtime.md, "Restarts:
+warm, hot, cold").
 
-Seeds-runtime §3.2 / Table 9-4 and behaviours 3–6. ``True`` in a ``clear_*`` column means
+Siemens' Program Design for S7-300/400, ch. 9 / Table 9-4. ``True`` in a ``clear_*`` column means
 the area is reset; DBs are "reloaded" from their load-memory initial values.
 """
 
@@ -78,7 +79,7 @@ HOT_RESTART_BLOCKERS: tuple[str, ...] = (
     "stack overflow",
     "aborted warm restart",
 )
-"""Causes after which only a warm restart is allowed (behaviour 6, [002:L2722-2730])."""
+"""Causes after which only a warm restart is allowed (Siemens' Program Design for S7-300/400)."""
 
 
 HOT_AFTER_STOP: frozenset[int] = frozenset(

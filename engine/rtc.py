@@ -1,9 +1,10 @@
-"""The CPU's real-time clock over the injected clock (SPEC.md §1.6; seeds-runtime §6.2).
+"""The CPU's real-time clock over the injected clock (docs/architecture.md, "The core is a
+function"; STEP7 comprehensive guide vol. 2, ch. 12).
 
-``date_and_time = epoch + (now_ns + offset)`` — never the wall clock. Setting the clock
-(SFC0 SET_CLK) changes only the offset, so the monotonic clock that drives scans, timers
-and cycle monitoring is untouched; the RTC runs on in HOLD (behaviour 51) and survives
-MRES (behaviour 54). Time-of-day interrupts OB10–OB17 fire on this clock (behaviour 21).
+``date_and_time = epoch + (now_ns + offset)`` — never the wall clock. Setting the clock (SFC0
+SET_CLK) changes only the offset, so the monotonic clock that drives scans, timers and cycle
+monitoring is untouched; the RTC runs on in HOLD and survives MRES. Time-of-day interrupts OB10–OB17
+fire on this clock.
 """
 
 from __future__ import annotations

@@ -1,10 +1,10 @@
-"""Run-time meters (operating-hours counters) of the CPU (seeds-runtime §6.2, behaviour 55).
+"""Run-time meters (operating-hours counters) of the CPU (STEP7 comprehensive guide vol. 2, ch. 12).
 
-A meter counts whole hours of the injected clock while it is started *and* the CPU is not
-in STOP: in STOP it stops, it keeps its value across MRES [002:L2348-2352]; after a warm or
-cold restart the program must start it again, after a hot restart it continues if it was
-running. SFC2/3/4 see meters 0..7 as INT hours (0..32767, saturating), SFC101 RTM sees
-meters 0..15 as DINT hours, stopping at 2^31 - 1 [000:L536-630].
+A meter counts whole hours of the injected clock while it is started *and* the CPU is not in STOP:
+in STOP it stops, it keeps its value across MRES (Siemens' Program Design for S7-300/400); after a
+warm or cold restart the program must start it again, after a hot restart it continues if it was
+running. SFC2/3/4 see meters 0..7 as INT hours (0..32767, saturating), SFC101 RTM sees meters 0..15
+as DINT hours, stopping at 2^31 - 1 (STEP7 comprehensive guide vol. 2, ch. 12).
 """
 
 from __future__ import annotations

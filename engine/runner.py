@@ -1,5 +1,5 @@
 """Real-time pacing on the system clock, with a monitor that aborts a scan that hangs
-(DESIGN.md "Process model"; SPEC.md §1.5).
+(docs/architecture.md, "Processes and threads"; docs/runtime.md, "When a scan hangs or fails").
 
 One of the three engine modules allowed threads and sleeping (with ``clock.py`` and
 ``writer.py``). :class:`Runner` calls ``cpu.scan()`` every ``cycle_ms`` (a minimum cycle

@@ -1,10 +1,11 @@
-"""The global symbol table: name → address, type, comment (SPEC.md §1.1, docs/contracts.md).
+"""The global symbol table: name → address, type, comment (docs/runtime.md, "The block runtime",
+docs/architecture.md, "Seams").
 
-Accepted text forms, one per file (detected from the content):
-``"Name" ; I0.7 ; BOOL ; comment`` lines; ``,``-separated CSV with a header row (columns
-named symbol/name, address, type, comment); ``"Name" : I0.7 : BOOL;`` entries as in the
-``.s7g`` SYMBOLS section (SPEC.md §3). ``//`` and ``#`` start comment lines. Names are
-unique regardless of case (as in the STEP 7 symbol editor ``[K]``).
+Accepted text forms, one per file (detected from the content): ``"Name" ; I0.7 ; BOOL ; comment``
+lines; ``,``-separated CSV with a header row (columns named symbol/name, address, type, comment);
+``"Name" : I0.7 : BOOL;`` entries as in the ``.s7g`` SYMBOLS section (docs/chart-format.md). ``//``
+and ``#`` start comment lines. Names are unique regardless of case (as in the STEP 7 symbol editor
+``[K]``).
 """
 
 from __future__ import annotations
@@ -42,7 +43,7 @@ def default_type(address: Address) -> str:
 
 @dataclass(frozen=True, slots=True)
 class Symbol:
-    """One symbol table row (SPEC.md §1.1)."""
+    """One symbol table row (docs/runtime.md, "The block runtime")."""
 
     name: str
     address: Address

@@ -1,16 +1,17 @@
-"""Delay interrupts OB20–OB23 and time-of-day interrupts OB10–OB17 (seeds-runtime §2, §6.5).
+"""Delay interrupts OB20–OB23 and time-of-day interrupts OB10–OB17 (Siemens' Program Design for
+S7-300/400, ch. 3-4; STEP7 comprehensive guide vol. 2, ch. 12).
 
-Delay interrupts (behaviour 20, [000:L1073-1094]): SFC32 SRT_DINT starts a one-shot delay
+Delay interrupts (STEP7 comprehensive guide vol. 2, ch. 12): SFC32 SRT_DINT starts a one-shot delay
 on the CPU's *process* time (frozen in HOLD); when it elapses the OB runs once with the
 caller's SIGN; SFC33 cancels; SFC34 status bit 2 is 1 while pending.
 
-Time-of-day interrupts (behaviours 9, 21, 22, [000:L965-1025], [002:L1365-1394]) run on the
-CPU's real-time clock (``engine.rtc``), never the wall clock. SFC28 SET_TINT sets start and
-period but does not activate; SFC30 ACT_TINT activates; a warm or cold restart deactivates
-program-activated interrupts (``configure(..., active=True)`` ones — the HW-config "Active"
-box — come back by themselves). A periodic interrupt whose start day does not exist in a
-month/year is skipped there [002:L1386]. The CPU checks due interrupts only in RUN, so one
-due during STARTUP runs after the transition to RUN (behaviour 9).
+Time-of-day interrupts (STEP7 comprehensive guide vol. 2, ch. 12; Siemens' Program Design for
+S7-300/400) run on the CPU's real-time clock (``engine.rtc``), never the wall clock. SFC28 SET_TINT
+sets start and period but does not activate; SFC30 ACT_TINT activates; a warm or cold restart
+deactivates program-activated interrupts (``configure(..., active=True)`` ones — the HW-config
+"Active" box — come back by themselves). A periodic interrupt whose start day does not exist in a
+month/year is skipped there (Siemens' Program Design for S7-300/400). The CPU checks due interrupts
+only in RUN, so one due during STARTUP runs after the transition to RUN.
 """
 
 from __future__ import annotations
@@ -33,14 +34,14 @@ WRONG_PERIOD = 0x8092
 NOT_SET = 0x80A0  # CAN_DINT: not started; ACT_TINT/CAN_TINT: no start time set
 IN_THE_PAST = 0x80A1  # ACT_TINT: once-only start time already passed
 
-# Status bits of SFC31 QRY_TINT / SFC34 QRY_DINT [000:L1040-1094].
+# Status bits of SFC31 QRY_TINT / SFC34 QRY_DINT (STEP7 comprehensive guide vol. 2, ch. 12).
 ST_DISABLED = 0x01
 ST_PENDING = 0x04
 ST_LOADED = 0x10
 
 
 class Period(IntEnum):
-    """SFC28 PERIOD codes [000:L985-990]."""
+    """SFC28 PERIOD codes (STEP7 comprehensive guide vol. 2, ch. 12)."""
 
     ONCE = 0x0000
     MINUTE = 0x0201
@@ -67,7 +68,7 @@ def _month_shift(start: datetime, months: int, *, month_end: bool) -> datetime |
     if month_end:
         return start.replace(year=year, month=month, day=last)
     if start.day > last:
-        return None  # 31 Jan monthly: only months with 31 days [002:L1386]
+        return None  # 31 Jan monthly: only months with 31 days (Program Design)
     return start.replace(year=year, month=month)
 
 
@@ -107,7 +108,7 @@ class DelayInterrupt:
 
 
 class DelayInterrupts:
-    """OB20–OB23 started by SFC32, cancelled by SFC33, queried by SFC34 (behaviour 20)."""
+    """OB20–OB23 started by SFC32, cancelled by SFC33, queried by SFC34."""
 
     def __init__(self) -> None:
         self.pending: dict[int, DelayInterrupt] = {}
@@ -164,7 +165,7 @@ class TodEvent:
 
 
 class TodInterrupts:
-    """OB10–OB17 on the real-time clock (behaviours 9, 21, 22)."""
+    """OB10–OB17 on the real-time clock."""
 
     def __init__(self) -> None:
         self.table: dict[int, TodInterrupt] = {}
@@ -176,7 +177,7 @@ class TodInterrupts:
         self.table[ob] = TodInterrupt(ob, start, Period(period), static=active)
 
     def set(self, ob: int, start: datetime, period: int) -> int:
-        """SFC28 SET_TINT: new start and period, *not* active (behaviour 21)."""
+        """SFC28 SET_TINT: new start and period, *not* active."""
         if ob not in TOD_OBS:
             return WRONG_OB
         try:
@@ -215,8 +216,9 @@ class TodInterrupts:
         return ST_PENDING if tod is not None and tod.active else 0
 
     def startup(self, now: datetime, *, hot: bool) -> None:
-        """Warm/cold restart: program-activated interrupts become inactive [002:L1394];
-        HW-configured active ones are (re)activated. A hot restart keeps everything."""
+        """Warm/cold restart: program-activated interrupts become inactive (Siemens' Program Design
+        for S7-300/400); HW-configured active ones are (re)activated. A hot restart keeps
+        everything."""
         if hot:
             return
         for tod in self.table.values():
@@ -228,7 +230,7 @@ class TodInterrupts:
         """Active interrupts due at ``now``, in order of their due time (no state change).
 
         ``jumped_from`` is the clock reading before it was set forward: an occurrence in
-        between is ``skipped`` (behaviour 22) — the CPU reports it to OB80 first, then runs
+        between is ``skipped`` — the CPU reports it to OB80 first, then runs
         it once unless OB80 cancelled it, and ``consume`` moves on past ``now``.
         """
         out: list[TodEvent] = []

@@ -1,4 +1,4 @@
-"""Cycle-time monitoring and cycle statistics (SPEC.md §1.5; behaviours 12, 13, 14).
+"""Cycle-time monitoring and cycle statistics (docs/runtime.md, "When a scan hangs or fails").
 
 The cycle time is the process time between two OB1 starts. Above the maximum (default
 150 ms) OB80 is called (FLT_ID 16#01) or, without OB80, the CPU stops; at twice the
@@ -41,7 +41,7 @@ class CycleStatistics:
         self.count = self.last_ns = self.min_ns = self.max_ns = self.total_ns = 0
 
     def start_info_ms(self) -> dict[str, int]:
-        """OB1 start info PREV_CYCLE / MIN_CYCLE / MAX_CYCLE in ms (behaviour 14)."""
+        """OB1 start info PREV_CYCLE / MIN_CYCLE / MAX_CYCLE in ms."""
         return {
             "PREV_CYCLE": self.last_ns // _MS,
             "MIN_CYCLE": self.min_ns // _MS,

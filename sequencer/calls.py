@@ -1,17 +1,16 @@
 """The blocks a chart calls, and the instance DBs its calls of system blocks need.
 
-A chart calls blocks from action rows (``CALL SFB 4, DB 10 (IN := …)``) and permanent
-instructions, FBs, FCs, SFBs and SFCs alike (seed 000:5501). A system block belongs to
-the CPU's operating system, as on S7; the instance DB an SFB call names is created with
-the chart, as the SCL compiler creates the DB a call names when it does not exist (seed
-000:4036). So ``prepare_calls(cpu, chart)`` runs before a chart is first called — at load,
-and at an online change before the swap: it creates each missing instance DB of an SFB
-call, and refuses (nothing created) when a named DB is already something else: a global
-DB, or the instance of another block. A call of a user block (``CALL FC 9``, ``CALL FB 5,
-DB 5``) that the CPU has not loaded is reported in ``missing``: a chart run by itself has
-the system blocks only, and the call stops the CPU when it is reached (a programming
-error without OB121, as on S7). A download into the running CPU may not add such a call:
-``swap`` refuses it.
+A chart calls blocks from action rows (``CALL SFB 4, DB 10 (IN := …)``) and permanent instructions,
+FBs, FCs, SFBs and SFCs alike (STEP7 comprehensive guide vol. 2, ch. 14). A system block belongs to
+the CPU's operating system, as on S7; the instance DB an SFB call names is created with the chart,
+as the SCL compiler creates the DB a call names when it does not exist (STEP7 comprehensive guide
+vol. 2, ch. 13). So ``prepare_calls(cpu, chart)`` runs before a chart is first called — at load, and
+at an online change before the swap: it creates each missing instance DB of an SFB call, and refuses
+(nothing created) when a named DB is already something else: a global DB, or the instance of another
+block. A call of a user block (``CALL FC 9``, ``CALL FB 5, DB 5``) that the CPU has not loaded is
+reported in ``missing``: a chart run by itself has the system blocks only, and the call stops the
+CPU when it is reached (a programming error without OB121, as on S7). A download into the running
+CPU may not add such a call: ``swap`` refuses it.
 """
 
 from __future__ import annotations

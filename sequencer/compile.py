@@ -1,13 +1,13 @@
-"""Compile a source ``Chart`` into a ``CompiledChart`` (DESIGN "A compiled chart is
-immutable data"; SPEC §2.1, §2.8, §2.9).
+"""Compile a source ``Chart`` into a ``CompiledChart`` (docs/architecture.md, "The core is a
+function"; docs/semantics.md, "Structure" and "Actions" and "Conditions").
 
 The validator runs first; any error-severity diagnostic raises ``ChartError`` carrying all of
 them. Then every operand is resolved once (symbol → address, FB variable, FB pin, step or
 transition attribute), and all conditions and action rows are rendered into one Python
 module compiled with ``compile()``; nothing is interpreted per scan.
 
-Name resolution (SPEC §2.9) is ``sequencer.names.resolve_operand``, shared with the
-validator: ``"quoted"`` → symbol; otherwise FB static variable, FB pin, S7 address.
+Name resolution (docs/semantics.md, "Conditions") is ``sequencer.names.resolve_operand``, shared
+with the validator: ``"quoted"`` → symbol; otherwise FB static variable, FB pin, S7 address.
 """
 
 from __future__ import annotations
@@ -93,7 +93,8 @@ class _Resolver:
 
     def _resolve(self, op: Operand) -> Ref:
         """The operand as the generated code addresses it; the lookup order is the one rule
-        of ``sequencer.names.resolve_operand`` (SPEC §1.1, §2.7)."""
+        of ``sequencer.names.resolve_operand`` (docs/runtime.md, "The block runtime";
+        docs/semantics.md, "FB pins")."""
         r = resolve_operand(op, self.chart, self.symbols)
         if r.kind == "var":
             return Ref("var", r.type, name=self.vars[op.name.upper()].name)
@@ -159,7 +160,8 @@ def _compile_chart(chart: Chart, symbols: Any) -> CompiledChart:
 
     tr_src = tuple(tuple(res.step(s, t.loc) for s in t.sources) for t in trans)
     tr_dst = tuple(tuple(res.step(s, t.loc) for s in t.targets) for t in trans)
-    # leaving transitions per step in written order (SPEC §2.2 4b: leftmost/first-listed wins)
+    # leaving transitions per step in written order (docs/semantics.md, "One FB call", step 4.2:
+    # leftmost/first-listed wins)
     leaving: list[list[int]] = [[] for _ in steps]
     for j, srcs in enumerate(tr_src):
         for i in srcs:
@@ -439,7 +441,8 @@ def _zero(type_name: str) -> Any:
 
 
 def _gen_permanent(name: str, instrs: tuple[Any, ...], g: CodeGen, res: _Resolver) -> str:
-    """``def name(st, R)``: permanent instructions, in order (SPEC §2.2 steps 3 and 5)."""
+    """``def name(st, R)``: permanent instructions, in order (docs/semantics.md, "One FB call",
+    steps 3 and 5)."""
     lines = [f"def {name}(st, R):"]
 
     def val(e: Any) -> str:

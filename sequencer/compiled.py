@@ -1,11 +1,12 @@
 """CompiledChart: a chart as immutable, int-indexed data plus one compiled code object
-(DESIGN "A compiled chart is immutable data"; SPEC §2.1).
+(docs/architecture.md, "The core is a function"; docs/semantics.md, "Structure").
 
 Steps and transitions are numbered ``0..n-1`` in definition order (sequence by sequence).
 ``leaving[i]`` lists the transitions leaving step ``i`` in priority order (written order,
-SPEC §2.2 4b, §3). All conditions and action programs of the chart are one generated Python
-module (``source``), compiled once; ``bind(mem)`` executes it against one CPU's memory and
-returns the ``Program`` (tuples of functions indexed like the steps/transitions).
+docs/semantics.md, "One FB call", step 4.2; docs/chart-format.md). All conditions and action
+programs of the chart are one generated Python module (``source``), compiled once; ``bind(mem)``
+executes it against one CPU's memory and returns the ``Program`` (tuples of functions indexed like
+the steps/transitions).
 """
 
 from __future__ import annotations

@@ -1,4 +1,5 @@
-"""One call of a GRAPH FB: the algorithm of SPEC §2.2, in that order (graph-semantics §A.2).
+"""One call of a GRAPH FB: the algorithm of docs/semantics.md, "One FB call", in that order
+(docs/semantics.md, "Decisions").
 
 1. latch the FB inputs, detect rising edges, advance step times (T; U unless disturbed;
    both frozen by HALT_TM);
@@ -8,7 +9,8 @@
 4. per sequencer, in definition order: a) evaluate the transitions leaving active steps
    (criteria bits), b) decide which switch (mode rule, HALT_SQ, supervision faults, at an
    alternative divergence the first-listed; a step activated in step 2 — INIT_SQ, the
-   first call, S_ON — stays for this call, seed 000:5759, 000:5901), c) switch (S0/S1,
+   first call, S_ON — stays for this call, STEP7 comprehensive guide vol. 2, ch. 14), c) switch
+   (S0/S1,
    skip steps), d) interlock and supervision of the active steps, e) final scans of the
    steps left, then the action rows of the active steps; then d) and e) of the steps a
    later sequencer activated in an earlier one (``_late_steps``: every activation runs
@@ -17,11 +19,11 @@
 6. group flags and FB outputs.
 
 The quiet call and the fast path of step 4 are ``sequencer/fastpath.py``'s ``FastPath``, a part of
-the runtime (``GraphRuntime.fastpath``); steps 4a–4c of the general path (evaluate, decide,
-switch, skip steps) are ``sequencer/switching.py``.
-The option ``order = "codesys"`` runs d) and e) before a)–c): new steps act in the next call
-(their S1 rows once: a step whose rows ran in its activation call is not carried).
-Work is proportional to the active steps: only ``st.active`` is visited.
+the runtime (``GraphRuntime.fastpath``); steps 4.1–4.3 of the general path (evaluate, decide,
+switch, skip steps) are ``sequencer/switching.py``. The option ``order = "codesys"`` runs d) and e)
+before a)–c): new steps act in the next call (their S1 rows once: a step whose rows ran in its
+activation call is not carried). Work is proportional to the active steps: only ``st.active`` is
+visited.
 """
 
 from __future__ import annotations
@@ -157,15 +159,15 @@ class GraphRuntime:
 
     def acknowledge(self, step_indices: Iterable[int]) -> None:
         """Queue acknowledgements of steps' supervision faults from outside the FB (a user
-        acknowledging the message, SPEC §2.10): the next call releases each step still
-        latched exactly as ACK_S does (events A1, V0; the step may switch in that call)."""
+        acknowledging the message, docs/semantics.md, "Messages"): the next call releases each step
+        still latched exactly as ACK_S does (events A1, V0; the step may switch in that call)."""
         self._remote.extend(step_indices)
         self.fastpath.armed = False
 
     def command(self, pin: str, step: int | None = None) -> None:
-        """Queue an operator command (S7-GRAPH "Control Sequencer", SPEC §2.5/§2.6): ``pin``
-        acts in the next call as a one-call rising edge whatever the parameter set and the
-        pin's wiring (OFF_SQ: switched off for that call); S_ON/S_OFF act on step number
+        """Queue an operator command (S7-GRAPH "Control Sequencer", docs/semantics.md, "Modes" and
+        "FB pins"): ``pin`` acts in the next call as a one-call rising edge whatever the parameter
+        set and the pin's wiring (OFF_SQ: switched off for that call); S_ON/S_OFF act on step number
         ``step`` instead of S_NO."""
         self._commands.append((pin, step))
         self.fastpath.armed = False
@@ -251,8 +253,9 @@ class GraphRuntime:
     # ------------------------------------------------------------ one FB call
 
     def execute(self, inputs: dict[str, Any], now_ns: int) -> GraphState:
-        """One FB call with the pin values ``inputs`` at clock time ``now_ns`` (SPEC §2.2):
-        the quiet call (``FastPath.quiet``) when it is one, else the general path."""
+        """One FB call with the pin values ``inputs`` at clock time ``now_ns`` (docs/semantics.md,
+        "One FB call"): the quiet call (``FastPath.quiet``) when it is one, else the general
+        path."""
         quiet = self.quiet(inputs, now_ns)
         if quiet is not None:
             return quiet
@@ -264,7 +267,8 @@ class GraphRuntime:
             raise
 
     def _general(self, inputs: dict[str, Any], now_ns: int) -> GraphState:
-        """``execute`` when the call is not quiet: steps 1-6 of SPEC §2.2, in full."""
+        """``execute`` when the call is not quiet: steps 1-6 of docs/semantics.md, "One FB call", in
+        full."""
         st = self.st
         try:
             cur = self._getter(inputs)
@@ -398,7 +402,8 @@ class GraphRuntime:
 
     def _release(self, acks: Iterable[int]) -> None:
         """Acknowledge the supervision faults of ``acks``: releases each step for this call's
-        switching (SPEC §2.4); a cause that persists raises V1 again in step 4d."""
+        switching (docs/semantics.md, "Supervision"); a cause that persists raises V1 again in step
+        4d."""
         st = self.st
         for i in acks:
             st.sv_err[i] = False
@@ -443,8 +448,9 @@ class GraphRuntime:
             late.clear()
 
     def _conditions_and_actions(self, k: int, steps: list[int]) -> None:
-        """Steps d–e: interlock and supervision, final scans, action rows (SPEC §2.2 4d–4e)
-        of sequencer ``k`` (-1: the only one) whose active steps are ``steps``."""
+        """Steps d–e: interlock and supervision, final scans, action rows (docs/semantics.md, "One
+        FB call", steps 4.4–4.5) of sequencer ``k`` (-1: the only one) whose active steps are
+        ``steps``."""
         st = self.st
         cc = self.cc
         prog = self.prog
@@ -508,7 +514,8 @@ class GraphRuntime:
             act[i](st, self, ev[i], il_ok[i], zero)
 
     def _outputs(self) -> None:
-        """Group flags and the FB outputs of SPEC §2.2 step 6 (display pins: display.py)."""
+        """Group flags and the FB outputs of docs/semantics.md, "One FB call", step 6 (display pins:
+        display.py)."""
         st = self.st
         error = fault = False
         for i in st.active:
@@ -531,7 +538,8 @@ class GraphRuntime:
 
 def new_state(cc: CompiledChart) -> GraphState:
     """A fresh instance-DB content for ``cc``: pins at their defaults, variables at their
-    initial values, no step active (the first call initializes, SPEC §2.6 INIT_SQ)."""
+    initial values, no step active (the first call initializes, docs/semantics.md, "FB pins"
+    INIT_SQ)."""
     st = GraphState(cc.n_steps, cc.n_transitions)
     st.inputs.update(input_defaults(cc.parameters, cc.options))
     st.outputs.update(output_defaults(cc.parameters, cc.options))

@@ -1,8 +1,9 @@
 """Display outputs of a GRAPH FB: S_NO paging, step/transition status, group bits
-(SPEC §2.6, §2.7; graph-semantics §D.3, §D.4).
+(docs/semantics.md, "FB pins" and "Decisions").
 
 S_PREV/S_NEXT and T_PREV/T_NEXT only page the step/transition *shown*; they never move the
-sequence (SPEC §2.6 — seed 000:6007-6008 says otherwise and is wrong, TIA-V21 comments).
+sequence (docs/semantics.md, "FB pins" — STEP7 comprehensive guide vol. 2, ch. 14 says otherwise and
+is wrong, TIA-V21 comments).
 
 The cursor lives in the instance DB: ``GraphState.s_no``/``t_no`` and ``GraphState.display``
 (``set``: "SACT" | "SEF" | "SALL"; ``pinned``: S_NO shows a step chosen with S_SEL even if
@@ -11,7 +12,7 @@ calls ``page`` once per call right after latching the inputs (so ACK_S, REG_S an
 S_ON/S_OFF act on the step the operator sees), ``compute_outputs`` at the end and then
 ``settle`` to store what was shown.
 
-Decisions (UNCERTAIN in graph-semantics, pinned by tests/sequencer/test_display.py):
+Decisions (where S7-GRAPH's documentation is silent, pinned by tests/sequencer/test_display.py):
 * DISP_SACT/DISP_SEF/DISP_SALL: a rising edge selects the display set, kept until another
   edge; default SACT (TIA start value of MOP.SACT_DISP).
 * S_SEL applies when its value changes to an existing step number (or again on an S_SELOK
@@ -37,7 +38,7 @@ from s7graph.sequencer.state import GraphState
 
 DISPLAY_SETS: Final = ("SACT", "SEF", "SALL")
 
-# S_STATE (WORD) bit layout — engine-defined (graph-semantics §D.4: not in any public source).
+# S_STATE (WORD) bit layout — engine-defined (Siemens publishes none; docs/semantics.md, "FB pins").
 S_STATE_BITS: Final[tuple[tuple[int, str, str], ...]] = (
     (0, "X", "step active"),
     (1, "LA", "interlock error: active and interlock not held (C rows off, red)"),
@@ -355,8 +356,8 @@ def compute_outputs(
 
 
 class Display:
-    """The display of one runtime (SPEC §2.6, §2.7), incremental: the cycle calls ``page``
-    after latching the inputs and ``update`` at the end of the call.
+    """The display of one runtime (docs/semantics.md, "FB pins"), incremental: the cycle calls
+    ``page`` after latching the inputs and ``update`` at the end of the call.
 
     The sets S_NO/T_NO page through are recomputed — from ``state.active`` and the leaving
     transitions, never all steps — only when the cycle reports a change (``dirty``: an

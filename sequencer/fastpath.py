@@ -1,4 +1,5 @@
-"""The fast path of one GRAPH FB call (SPEC §2.2): the quiet call and step 4 in AUTO.
+"""The fast path of one GRAPH FB call (docs/semantics.md, "One FB call"): the quiet call and step 4
+in AUTO.
 
 ``FastPath`` is a part of ``sequencer.cycle.GraphRuntime`` (``GraphRuntime.fastpath``,
 its ``quiet`` also the runtime's own ``quiet``): it holds references to the runtime's
@@ -12,7 +13,7 @@ generated code it calls gets the runtime (``rt``), as from the general path.
 Invariants the fast path relies on (every call keeps them, whichever path it takes):
 
 * a step without interlock has ``il_ok`` True and ``il_err`` False, a step without
-  supervision ``sv_err`` False (only the checks of step 4d write them, and only for steps
+  supervision ``sv_err`` False (only the checks of step 4.4 write them, and only for steps
   that have the condition; activation and deactivation reset them);
 * ``st.error``/``st.fault`` (set at the end of every call) say whether some active step
   has an interlock error / a supervision fault;

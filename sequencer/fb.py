@@ -1,5 +1,5 @@
-"""GraphFB: a compiled chart as an engine FB (SPEC §2.2, §2.7; DESIGN "State lives in the
-instance DB").
+"""GraphFB: a compiled chart as an engine FB (docs/semantics.md, "One FB call" and "FB pins";
+docs/architecture.md, "The core is a function").
 
 The FB's interface is the chart's parameter set (``sequencer.params``: IN pins, OUT pins)
 plus one STAT ``G7_STATE`` of type OBJECT holding the ``GraphState`` — so snapshot/restore
@@ -157,7 +157,7 @@ class GraphFB:
 
     def call(self, ctx: Any, **params: Any) -> dict[str, Any]:
         """Call the FB from an OB body (``ctx.call`` with its instance DB). A pin outside the
-        chart's parameter set is refused, naming the set (SPEC §2.7)."""
+        chart's parameter set is refused, naming the set (docs/semantics.md, "FB pins")."""
         for name in params:
             if is_pin(name):
                 check_pin(name, self.cc.parameters, direction=Direction.IN)
@@ -296,10 +296,10 @@ class GraphFB:
         st: GraphState,
         acting: tuple[str, int | None] | None = None,
     ) -> None:
-        """MESSAGES := TRUE (SPEC §2.10): bring the CPU's message list in line with this
-        call's faults, queue the steps a user acknowledged there for the next call, and
-        forward the list's new events into the scan record. ``acting``: the user (and
-        ACK_S step) of this call's operator command, who acknowledges what it releases."""
+        """MESSAGES := TRUE (docs/semantics.md, "Messages"): bring the CPU's message list in line
+        with this call's faults, queue the steps a user acknowledged there for the next call, and
+        forward the list's new events into the scan record. ``acting``: the user (and ACK_S step) of
+        this call's operator command, who acknowledges what it releases."""
         messages = message_list(ctx.cpu)
         user, target = acting if acting is not None else (PROGRAM_USER, None)
         restart = self._restart if ctx.ob in (100, 102) else ""

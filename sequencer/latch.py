@@ -1,7 +1,7 @@
-"""Step 1 of a general GRAPH FB call (SPEC §2.2; graph-semantics §A.2): the input pins
-latched with their rising edges and level options when one changed (``latch``), the step
-times advanced — T; U unless the step is disturbed; HALT_TM freezes both — and each
-sequencer's active steps listed again (``advance``).
+"""Step 1 of a general GRAPH FB call (docs/semantics.md, "One FB call" and "Decisions"): the input
+pins latched with their rising edges and level options when one changed (``latch``), the step times
+advanced — T; U unless the step is disturbed; HALT_TM freezes both — and each sequencer's active
+steps listed again (``advance``).
 
 Functions of a ``sequencer.cycle.GraphRuntime`` (``rt``), called by its ``_general``; the
 quiet call (``sequencer.fastpath``) advances the times itself and latches nothing.

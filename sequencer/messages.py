@@ -1,14 +1,13 @@
-"""Interlock and supervision messages of a GRAPH FB in the CPU's message list (SPEC §2.10;
-graph-semantics §C "Messages"; seed 000:6226-6300).
+"""Interlock and supervision messages of a GRAPH FB in the CPU's message list (docs/semantics.md,
+"Messages"; STEP7 comprehensive guide vol. 2, ch. 14).
 
-With ``MESSAGES := TRUE`` every interlock error and supervision fault of a step becomes a
-message in ``sfb.alarms.MessageList`` with the seed's text template
-(``S7GRAPH Supervision Error: FB1, DB1, S001 material is missing``), coming and going with
-the fault and acknowledgeable. The cycle calls ``sync_messages`` once per FB call, after the
-fault latches are up to date; it diffs the latches in ``GraphState`` against what was
-already raised, so the cycle needs no other hook. The list records who acknowledged and when
-(``program`` for ACK_EF / ACK_S / INIT_SQ, a user name for a remote acknowledgement) and is
-persisted through ``MessageList.snapshot``.
+With ``MESSAGES := TRUE`` every interlock error and supervision fault of a step becomes a message in
+``sfb.alarms.MessageList`` with the book's text template (``S7GRAPH Supervision Error: FB1, DB1,
+S001 material is missing``), coming and going with the fault and acknowledgeable. The cycle calls
+``sync_messages`` once per FB call, after the fault latches are up to date; it diffs the latches in
+``GraphState`` against what was already raised, so the cycle needs no other hook. The list records
+who acknowledged and when (``program`` for ACK_EF / ACK_S / INIT_SQ, a user name for a remote
+acknowledgement) and is persisted through ``MessageList.snapshot``.
 
 Decisions (UNCERTAIN, pinned by tests/sequencer/test_messages.py):
 * A supervision message comes when the step's fault latches (``sv_err``) and goes when the
@@ -18,7 +17,8 @@ Decisions (UNCERTAIN, pinned by tests/sequencer/test_messages.py):
 * An interlock message comes and goes with ``il_err``; with EN_ACKREQ it needs
   acknowledgement too (ALARM_SQ, as in V5) and is acknowledged as ``program`` by an
   ACK_EF or INIT_SQ edge, or an ACK_S edge for the step shown in S_NO. Acknowledging it
-  changes nothing in the sequence (an interlock error clears itself, SPEC §2.3).
+  changes nothing in the sequence (an interlock error clears itself, docs/semantics.md,
+  "Interlock").
 * A supervision message acknowledged in the list by a user while the step is still latched
   is an acknowledgement of the step, whether or not its cause has gone: ``sync_messages``
   and ``remote_acks`` return those step indices (each occurrence once), and the cycle

@@ -1,5 +1,5 @@
-"""The operating modes and the one switching-rule table (SPEC §2.2 4b, §2.5; graph-semantics
-§D.1).
+"""The operating modes and the one switching-rule table (docs/semantics.md, "One FB call", step 4.2
+and "Modes"; docs/semantics.md, "Modes").
 
 ``MODE_RULES[mode](condition, push)`` says whether a valid transition whose condition is
 ``condition`` may switch when ``push`` is a rising edge of T_PUSH in this call:
@@ -27,7 +27,7 @@ SELECTORS: Final = (("SW_AUTO", "AUTO"), ("SW_TAP", "TAP"), ("SW_TOP", "TOP"), (
 
 
 def select_mode(mode: str, rose: set[str]) -> str:
-    """The mode after this call's rising edges of the SW_* inputs (SPEC §2.5)."""
+    """The mode after this call's rising edges of the SW_* inputs (docs/semantics.md, "Modes")."""
     for pin, new in SELECTORS:
         if pin in rose:
             mode = new

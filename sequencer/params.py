@@ -1,13 +1,17 @@
-"""The FB pins of a GRAPH FB and the parameter sets holding them: the one table (SPEC §2.7).
+"""The FB pins of a GRAPH FB and the parameter sets holding them: the one table (docs/semantics.md,
+"FB pins").
 
-Sources: graph-semantics §D.2 (seed 000:6083-6118 for the User-defined set, 000:5942-5961
-and TIA "Standard" for STANDARD, 000:6033-6062 for MAXIMUM). The sets nest:
-MINIMUM ⊂ STANDARD ⊂ MAXIMUM ⊂ USER. The seed's table at 000:6001-6017 also lists REG_EF,
+Sources: docs/semantics.md, "Decisions" (STEP7 comprehensive guide vol. 2, ch. 14 for the
+User-defined set, STEP7 comprehensive guide vol. 2, ch. 14
+and TIA "Standard" for STANDARD, STEP7 comprehensive guide vol. 2, ch. 14 for MAXIMUM). The sets
+nest:
+MINIMUM ⊂ STANDARD ⊂ MAXIMUM ⊂ USER. The book's table at STEP7 comprehensive guide vol. 2, ch. 14
+also lists REG_EF,
 ACK_S, REG_S, T_PREV, T_NEXT under Standard; per the errata they belong to USER only.
 
 Everything that needs to know which pins exist reads this table: the FB interface
-(``sequencer/fb.py``), the ``sim`` stimulus and watch names (SPEC §4), programs that write
-pins, and docs/semantics.md (``markdown_table``).
+(``sequencer/fb.py``), the ``sim`` stimulus and watch names (docs/cli.md, "s7graph sim"), programs
+that write pins, and docs/semantics.md (``markdown_table``).
 """
 
 from __future__ import annotations
@@ -59,7 +63,7 @@ _I, _O = Direction.IN, Direction.OUT
 MIN, STD, MAX, USR = PARAMETER_SETS
 
 # (name, direction, type, smallest set, default, comment). Order = the FB interface order of
-# seed 000:6083-6118 (inputs first, then outputs).
+# STEP7 comprehensive guide vol. 2, ch. 14 (inputs first, then outputs).
 _TABLE: Final[tuple[tuple[str, Direction, str, str, object, str], ...]] = (
     ("OFF_SQ", _I, "BOOL", STD, False, "Sequencer off: all steps deactivated while 1"),
     ("INIT_SQ", _I, "BOOL", MIN, False, "Rising edge: initial steps on, all others off"),
@@ -126,7 +130,7 @@ _TABLE: Final[tuple[tuple[str, Direction, str, str, object, str], ...]] = (
 
 # The block options that are the defaults of run-time pins (S7-GRAPH block settings "Skip
 # steps" and "Acknowledge errors" with their pins EN_SSKIP / EN_ACKREQ and the outputs
-# SSKIP_ENABLED / ACKREQ_ENABLED; graph-semantics §A.3, §C): pin → (``.s7g`` option,
+# SSKIP_ENABLED / ACKREQ_ENABLED; docs/semantics.md, "Decisions", §C): pin → (``.s7g`` option,
 # ``ChartOptions`` field). The instance DB starts with the option's value in the pin, so an
 # unwired pin follows the option and a value written to the pin wins from then on.
 OPTION_DEFAULTS: Final[dict[str, tuple[str, str]]] = {

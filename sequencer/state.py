@@ -1,5 +1,5 @@
-"""GraphState: the content of a GRAPH FB's instance DB (SPEC §2.2-§2.6, DESIGN "State lives
-in the instance DB").
+"""GraphState: the content of a GRAPH FB's instance DB (docs/semantics.md, "One FB call" and "FB
+pins", docs/architecture.md, "The core is a function").
 
 Everything the cycle remembers between calls lives here, in flat lists indexed by the
 compiled step index ``i`` (``0 .. n_steps-1``, see ``CompiledChart.step_numbers``) and the
@@ -41,7 +41,8 @@ it, so a step may wait longer than that and still be restarted)."""
 LEVEL_PINS: Final = ("HALT_SQ", "EN_IL", "EN_SV")
 """The level pins an operator or engineer may hold at a value (``GraphFB.set_level``)."""
 
-# Inputs whose rising edge (not level) counts (SPEC §2.2 step 1, §2.5, §2.6).
+# Inputs whose rising edge (not level) counts (docs/semantics.md, "One FB call", step 1 and "Modes"
+# and "FB pins").
 EDGE_INPUTS: Final = (
     "INIT_SQ", "ACK_EF", "ACK_S", "REG_EF", "REG_S", "S_ON", "S_OFF", "T_PUSH",
     "SW_AUTO", "SW_MAN", "SW_TAP", "SW_TOP", "S_PREV", "S_NEXT", "T_PREV", "T_NEXT",

@@ -1,8 +1,8 @@
-"""Steps 4a–4c of a general GRAPH FB call (SPEC §2.2; graph-semantics §A.2, §A.3): per
-sequencer, evaluate the transitions leaving its active steps, decide which switch (mode
-rule, HALT_SQ, supervision faults, at an alternative divergence the first-listed, steps
-held for this call) and switch (events S0/S1 through the runtime's ``_deactivate`` and
-``_activate``), then pass through skip steps.
+"""Steps 4.1–4.3 of a general GRAPH FB call (docs/semantics.md, "One FB call" and "Decisions"): per
+sequencer, evaluate the transitions leaving its active steps, decide which switch
+(mode rule, HALT_SQ, supervision faults, at an alternative divergence the first-listed, steps held
+for this call) and switch (events S0/S1 through the runtime's ``_deactivate`` and ``_activate``),
+then pass through skip steps.
 
 Functions of a ``sequencer.cycle.GraphRuntime`` (``rt``), called by its ``_sequencer``;
 the fast path's switches (``sequencer.fastpath``) inline what they do in the common case.
@@ -37,10 +37,10 @@ class _Runtime(Protocol):
 def switch(
     rt: _Runtime, steps: list[int], sw: tuple[Any, ...], rule: Callable[[bool, bool], bool]
 ) -> None:
-    """Steps a–c: evaluate, decide, switch (SPEC §2.2 4a–4c) for one sequencer's active
-    ``steps``. ``sw`` = (mode rule, None in AUTO; T_PUSH edge; switching blocked by
-    HALT_SQ/OFF_SQ; steps whose acknowledgement forces their transition; steps ``held``
-    for this call because step 2 activated them)."""
+    """Steps a–c: evaluate, decide, switch (docs/semantics.md, "One FB call", steps 4.1–4.3) for one
+    sequencer's active ``steps``. ``sw`` = (mode rule, None in AUTO; T_PUSH edge; switching blocked
+    by HALT_SQ/OFF_SQ; steps whose acknowledgement forces their transition; steps ``held`` for this
+    call because step 2 activated them)."""
     st = rt.st
     cc = rt.cc
     x = st.x
@@ -109,7 +109,7 @@ def switch(
 
 def skip(rt: _Runtime, rule: Callable[[bool, bool], bool], held: frozenset[int]) -> None:
     """Skip steps: a step entered in this call whose leaving transition already holds is
-    passed through without being active (no S1, no actions; graph-semantics §A.3). A
+    passed through without being active (no S1, no actions; docs/semantics.md, "Decisions"). A
     step ``held`` (activated by INIT_SQ, the first call or S_ON) is never passed through."""
     st = rt.st
     cc = rt.cc

@@ -1,6 +1,6 @@
 """System blocks: SFB0-5, S5 timers/counters, edges, clock/memory/control SFCs, alarms,
-RDSYSST/WR_USMSG
-(SPEC.md §1.7; seeds-runtime §5-7).
+RDSYSST/WR_USMSG (docs/runtime.md, "The block runtime"; El-Shahat's S7-300/400 course, timers and
+counters).
 
 The semantics are pure state machines over ``(inputs, now_ns)``; thin adapters declare them
 as engine SFBs/SFCs from the one ``catalogue``. ``install(cpu)`` loads every system block so

@@ -1,4 +1,5 @@
-"""The CPU message list, SFC17 ALARM_SQ / SFC18 ALARM_S / SFC19 ALARM_SC (SPEC.md §1.7, §2.10).
+"""The CPU message list, SFC17 ALARM_SQ / SFC18 ALARM_S / SFC19 ALARM_SC (docs/runtime.md, "The
+block runtime"; docs/semantics.md, "Messages").
 
 A ``MessageList`` holds the messages the CPU currently shows: each has a message number
 ``msg_id`` (EV_ID for the SFCs, any hashable-as-text key for the sequencer's interlock and
@@ -9,10 +10,10 @@ acknowledges it; ``acknowledge(msg_id, user, now_ns)`` records who and when. Tim
 injected clock's ``now_ns``. Every change is also appended to a bounded log and to
 ``pop_events()`` (what a scan reports). ``snapshot()``/``restore()`` persist it as plain data.
 
-The SFCs (seeds-runtime §6.6, ``[K]`` Siemens system-function manual): a message is generated
-on each **edge** of SIG (1 = incoming, 0 = outgoing); a call with an unchanged SIG returns
-``W#16#8084``; EV_ID 0 is illegal (``8081``); an associated value above 12 bytes is cut and
-reported with warning ``0001``. ALARM_S messages are acknowledged implicitly.
+The SFCs (STEP7 comprehensive guide vol. 2, ch. 12, ``[K]`` Siemens system-function manual): a
+message is generated on each **edge** of SIG (1 = incoming, 0 = outgoing); a call with an unchanged
+SIG returns ``W#16#8084``; EV_ID 0 is illegal (``8081``); an associated value above 12 bytes is cut
+and reported with warning ``0001``. ALARM_S messages are acknowledged implicitly.
 """
 
 from __future__ import annotations

@@ -1,4 +1,5 @@
-"""The one catalogue of system blocks, and the RET_VAL conventions (SPEC.md §1.7; seeds §6.1).
+"""The one catalogue of system blocks, and the RET_VAL conventions (docs/runtime.md, "The block
+runtime"; STEP7 comprehensive guide vol. 2, ch. 12).
 
 ``CATALOGUE`` lists every SFB/SFC s7graph emulates: number, name, kind, and the pins with
 direction and S7 type in the order Siemens documents them. Code reads it — to declare the
@@ -6,9 +7,9 @@ engine interfaces and to let the sequencer's ``CALL`` validate parameters — so
 named once, here. ``lookup("SFB4")``, ``lookup("SFB 4")`` and ``lookup("TON")`` give the
 same entry.
 
-RET_VAL (behaviour 40): ``>= 0`` success (BR = 1), ``< 0`` error (bit 15 set, BR = 0).
-Error words are ``W#16#8xyy``: general errors carry the parameter number in ``x``, specific
-errors have ``x = 0``. As an INT a word ``W#16#8122`` is ``-32478``.
+RET_VAL: ``>= 0`` success (BR = 1), ``< 0`` error (bit 15 set, BR = 0). Error words are
+``W#16#8xyy``: general errors carry the parameter number in ``x``, specific errors have ``x = 0``.
+As an INT a word ``W#16#8122`` is ``-32478``.
 """
 
 from __future__ import annotations
@@ -22,7 +23,8 @@ from s7graph.engine.errors import BlockError
 # --- RET_VAL -----------------------------------------------------------------------------
 
 OK = 0
-# General error events (low byte ``yy``; the parameter number goes into ``x``), seeds §6.1.
+# General error events (low byte ``yy``; the parameter number goes into ``x``), STEP7 comprehensive
+# guide vol. 2, ch. 12.
 AREA_LENGTH_READ = 0x22
 AREA_LENGTH_WRITE = 0x23
 AREA_READ = 0x24

@@ -1,4 +1,5 @@
-"""Diagnostic buffer read (SFC51 RDSYSST) and SFC52 WR_USMSG (SPEC.md §1.7; seeds §6.6, §7.2).
+"""Diagnostic buffer read (SFC51 RDSYSST) and SFC52 WR_USMSG (docs/runtime.md, "The block runtime";
+STEP7 comprehensive guide vol. 2, ch. 12; Siemens' Program Design for S7-300/400, ch. 10).
 
 SZL ``W#16#00A0`` lists every entry of the diagnostic buffer, **newest first** (No. 1 =
 newest, as a programming device shows it); ``W#16#01A0`` lists the newest ``INDEX``
@@ -12,7 +13,7 @@ A record is the entry's event id (WORD), priority and OB number (bytes), DATID, 
 
 WR_USMSG writes a user entry with the clock's time stamp; user event ids are ``W#16#8000``
 .. ``W#16#BFFF`` (``A1xx`` incoming, ``A0xx`` outgoing); the entry is written even when
-sending to a display device is impossible (behaviour 53): no display is modelled, so
+sending to a display device is impossible: no display is modelled, so
 SEND = TRUE writes it and returns the warning ``W#16#0091`` (no partner registered).
 
 ``SFC51`` / ``SFC52`` are the engine adapters (``ctx.call("RDSYSST", ...)``): SZL_HEADER,

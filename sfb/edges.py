@@ -1,8 +1,9 @@
-"""Edge detection FP / FN and the R_TRIG / F_TRIG one-shots (SPEC.md §1.7; seeds-runtime §5.4).
+"""Edge detection FP / FN and the R_TRIG / F_TRIG one-shots (docs/runtime.md, "The block runtime";
+El-Shahat's S7-300/400 course, timers and counters).
 
 The previous RLO lives in an edge-memory bit (M, DB bit or FB STAT — never TEMP). Rule:
 ``FP: edge := RLO AND NOT mem; mem := RLO`` and ``FN: edge := NOT RLO AND mem; mem := RLO``.
-The result is TRUE for exactly one call per edge and instance (behaviour 50).
+The result is TRUE for exactly one call per edge and instance.
 """
 
 from __future__ import annotations

@@ -1,4 +1,5 @@
-"""IEC counters SFB0 CTU, SFB1 CTD, SFB2 CTUD (SPEC.md §1.7; seeds-runtime §5.3, behaviour 48).
+"""IEC counters SFB0 CTU, SFB1 CTD, SFB2 CTUD (docs/runtime.md, "The block runtime"; STEP7
+comprehensive guide vol. 2, ch. 12).
 
 Counters count INT on **rising edges** of CU/CD (the previous input level is kept in the
 instance), saturate at 32767 / -32768, and are pure functions of their instance data and

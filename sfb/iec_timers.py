@@ -1,8 +1,9 @@
-"""IEC timers SFB3 TP, SFB4 TON, SFB5 TOF (SPEC.md §1.7; seeds-runtime §5.3, behaviour 49).
+"""IEC timers SFB3 TP, SFB4 TON, SFB5 TOF (docs/runtime.md, "The block runtime"; STEP7 comprehensive
+guide vol. 2, ch. 12).
 
 Each timer is a small state machine over its own instance data and ``(IN, PT, now_ns)``:
 TIME is integer milliseconds with 1 ms resolution up to ``T#24D20H31M23S647MS``; time runs
-on the injected clock and ``Q``/``ET`` change only when the instance is called (behaviour 49).
+on the injected clock and ``Q``/``ET`` change only when the instance is called.
 The state fields mirror the instance DB (``IN PT Q ET`` plus the start time), so an instance
 round-trips through ``to_state()``/``from_state()``.
 """
@@ -85,7 +86,7 @@ class TP(_IecTimer):
     """SFB3 TP: a rising IN starts a pulse of length PT; not retriggerable.
 
     Q = 1 for PT from the rising edge regardless of IN; ET runs to PT, holds there while IN = 1
-    and returns to 0 once the pulse is over and IN = 0 (seeds-runtime §5.3).
+    and returns to 0 once the pulse is over and IN = 0 (STEP7 comprehensive guide vol. 2, ch. 12).
     """
 
     def __call__(self, IN: bool, PT: int, now_ns: int) -> TimerOut:
@@ -107,7 +108,8 @@ class TP(_IecTimer):
 
 @dataclass(slots=True)
 class TON(_IecTimer):
-    """SFB4 TON: Q = 1 once IN has been 1 for PT; IN = 0 resets Q and ET (seeds-runtime §5.3)."""
+    """SFB4 TON: Q = 1 once IN has been 1 for PT; IN = 0 resets Q and ET (STEP7 comprehensive guide
+    vol. 2, ch. 12)."""
 
     def __call__(self, IN: bool, PT: int, now_ns: int) -> TimerOut:
         self._rebase(now_ns)
@@ -129,7 +131,7 @@ class TOF(_IecTimer):
     """SFB5 TOF: IN = 1 gives Q = 1 and ET = 0; a falling IN starts the delay, Q falls after PT.
 
     A rising IN during the delay resets ET to 0 and keeps Q = 1; after expiry ET holds PT while
-    IN stays 0 (seeds-runtime §5.3).
+    IN stays 0 (STEP7 comprehensive guide vol. 2, ch. 12).
     """
 
     def __call__(self, IN: bool, PT: int, now_ns: int) -> TimerOut:

@@ -1,4 +1,5 @@
-"""S5 counters on the C area cells (SPEC.md §1.7; seeds-runtime §5.2, behaviour 47).
+"""S5 counters on the C area cells (docs/runtime.md, "The block runtime"; El-Shahat's S7-300/400
+course, timers and counters).
 
 A counter C n (``engine.memory.S5Counter``) holds 0..999 and never wraps: CU stays at 999,
 CD stays at 0. CU, CD and S act on the **rising edge** of their condition (the cell keeps

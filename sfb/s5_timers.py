@@ -1,11 +1,12 @@
-"""S5 timers SP SE SD SS SF on the T area, and the S5TIME codec (SPEC.md §1.7; seeds §5.1).
+"""S5 timers SP SE SD SS SF on the T area, and the S5TIME codec (docs/runtime.md, "The block
+runtime"; El-Shahat's S7-300/400 course, timers and counters).
 
-S5TIME (16 bit): bits 0-11 three BCD digits 0..999, bits 12-13 the time base (10 ms, 100 ms,
-1 s, 10 s); a preset in ms is encoded with the smallest base that fits (``S5T#2S`` =
-``W#16#0200``). A timer cell counts its value down **at its time base on the CPU's tick
-grid** (``now_ns // base``), asynchronously to the program, so a started timer expires
-between TV - 1 base and TV after the start (behaviour 46). ``L T n`` reads the count
-binary, ``LC T n`` reads it BCD with the time base. The five functions (behaviours 44, 45):
+S5TIME (16 bit): bits 0-11 three BCD digits 0..999, bits 12-13 the time base (10 ms, 100 ms, 1 s, 10
+s); a preset in ms is encoded with the smallest base that fits (``S5T#2S`` = ``W#16#0200``). A timer
+cell counts its value down **at its time base on the CPU's tick grid** (``now_ns // base``),
+asynchronously to the program, so a started timer expires between TV - 1 base and TV after the
+start. ``L T n`` reads the count binary, ``LC T n`` reads it BCD with the time base. The five
+functions:
 
 * SP pulse: rising S starts; Q = 1 while S = 1 and time runs; S = 0 stops it.
 * SE extended pulse: rising S starts; Q = 1 for the full time; a rising S retriggers.
@@ -16,9 +17,8 @@ binary, ``LC T n`` reads it BCD with the time base. The five functions (behaviou
 R = 1 clears value and Q for all five (R dominates). A rising FR with S = 1 restarts.
 
 The OS updates the T area once per scan: importing this module registers ``scan_hook`` with
-``engine.cpu.add_os_scan_hook``, so every CPU ticks its timers at the start of each cycle on
-the process time (frozen in HOLD, running in STARTUP; behaviours 8, 46, 51) without any
-further timer instruction.
+``engine.cpu.add_os_scan_hook``, so every CPU ticks its timers at the start of each cycle on the
+process time (frozen in HOLD, running in STARTUP) without any further timer instruction.
 """
 
 from __future__ import annotations
@@ -56,7 +56,8 @@ class TimerFunction(StrEnum):
     SF = "SF"  # SA, S_OFFDT
 
 
-# German STL and SCL/LAD box names for the same functions (seeds-runtime §5.1 table).
+# German STL and SCL/LAD box names for the same functions (El-Shahat's S7-300/400 course, timers and
+# counters table).
 FUNCTION_ALIASES: dict[str, TimerFunction] = {
     "S_PULSE": TimerFunction.SP, "SI": TimerFunction.SP,
     "S_PEXT": TimerFunction.SE, "SV": TimerFunction.SE,
@@ -113,7 +114,7 @@ add_os_scan_hook(scan_hook)
 
 
 def shift(timers: Sequence[S5Timer], delta_ns: int) -> None:
-    """Freeze running timers for ``delta_ns`` (HOLD: timers stop, the RTC runs; behaviour 51)."""
+    """Freeze running timers for ``delta_ns`` (HOLD: timers stop, the RTC runs)."""
     for cell in timers:
         if cell.running:
             cell.start_ns += delta_ns

@@ -1,12 +1,13 @@
-"""SFC0 SET_CLK, SFC1 READ_CLK, SFC64 TIME_TCK over the injected clock (SPEC.md §1.6, §1.7).
+"""SFC0 SET_CLK, SFC1 READ_CLK, SFC64 TIME_TCK over the injected clock (docs/architecture.md, "The
+core is a function"; docs/runtime.md, "The block runtime").
 
 The CPU's real-time clock is the injected clock plus a settable offset — never the wall clock:
-``date_and_time = epoch + (now_ns + offset)``. SET_CLK changes only the offset, so the
-monotonic clock that drives scans, timers and cycle monitoring is untouched (behaviour 51:
-the RTC keeps running while timers are frozen). DATE_AND_TIME has ms resolution and the
-range 1990-01-01 .. 2089-12-31 (seeds-runtime §4.3); a date outside it gives RET_VAL
-``W#16#8080``. TIME_TCK is the injected clock in ms since its origin, wrapping from
-2^31 - 1 to 0 (seeds-runtime §6.2).
+``date_and_time = epoch + (now_ns + offset)``. SET_CLK changes only the offset, so the monotonic
+clock that drives scans, timers and cycle monitoring is untouched (the RTC keeps running while
+timers are frozen). DATE_AND_TIME has ms resolution and the range 1990-01-01 .. 2089-12-31 (Siemens'
+Program Design for S7-300/400, appendix C); a date outside it gives RET_VAL ``W#16#8080``. TIME_TCK
+is the injected clock in ms since its origin, wrapping from 2^31 - 1 to 0 (STEP7 comprehensive guide
+vol. 2, ch. 12).
 """
 
 from __future__ import annotations
@@ -49,7 +50,8 @@ def time_tck(now_ns: int) -> int:
 
 
 def tick_diff(now_ms: int, last_ms: int) -> int:
-    """Elapsed ms between two TIME_TCK values across at most one wrap (seeds §6.2 pattern)."""
+    """Elapsed ms between two TIME_TCK values across at most one wrap (STEP7 comprehensive guide
+    vol. 2, ch. 12 pattern)."""
     return (now_ms - last_ms) % TICK_MODULUS
 
 

@@ -1,6 +1,7 @@
-"""SFC46 STP, SFC47 WAIT, SFC43 RE_TRIGR (SPEC.md §1.7; seeds-runtime §6.3, behaviour 30).
+"""SFC46 STP, SFC47 WAIT, SFC43 RE_TRIGR (docs/runtime.md, "The block runtime"; STEP7 comprehensive
+guide vol. 2, ch. 12).
 
-* STP puts the CPU into STOP from any OB, OB100 included (behaviour 30): ``cpu.stop``.
+* STP puts the CPU into STOP from any OB, OB100 included: ``cpu.stop``.
 * WAIT(WT) busy-waits WT µs (INT, max 32767) on a real CPU and has no RET_VAL. Here time is
   the injected clock, so nothing advances: the wait is recorded as a ``Waited`` event in
   the scan's record; a negative WT waits 0 µs (``[K]``).
@@ -38,7 +39,7 @@ class Waited:
 
 
 def stp(cpu: CpuControl) -> None:
-    """SFC46 STP: go to STOP now (behaviour 30)."""
+    """SFC46 STP: go to STOP now."""
     cpu.stop("SFC46 STP")
 
 

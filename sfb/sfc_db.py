@@ -1,13 +1,13 @@
-"""SFC22 CREAT_DB, SFC23 DEL_DB, SFC24 TEST_DB (SPEC.md §1.7; seeds-runtime §6.4;
-behaviours 37, 38; [000:L652-734]).
+"""SFC22 CREAT_DB, SFC23 DEL_DB, SFC24 TEST_DB (docs/runtime.md, "The block runtime"; STEP7
+comprehensive guide vol. 2, ch. 12).
 
 * CREAT_DB creates the *lowest free* number in LOW_LIMIT..UP_LIMIT with COUNT bytes; COUNT
   must be even and non-zero (``W#16#80A2``), a bad range is ``80A1``, no free number
   ``80B1``. So unguarded calls every scan create DB10, DB11, … until the range is used up.
   The contents are not initialised on a real CPU (here: zero). Such DBs are marked
-  ``created``: a cold restart deletes them (behaviour 4).
+  ``created``: a cold restart deletes them.
 * DEL_DB deletes a DB (``80B1`` missing); instance DBs are refused (``80B2``) ``[K]``.
-* TEST_DB returns DB_LENGTH and WRITE_PROT; a missing DB is ``W#16#80B1`` (behaviour 38).
+* TEST_DB returns DB_LENGTH and WRITE_PROT; a missing DB is ``W#16#80B1``.
 """
 
 from __future__ import annotations

@@ -1,13 +1,13 @@
 """Interrupt SFCs: time-of-day SFC28–31, delay SFC32–34, DIS_AIRT/EN_AIRT SFC41/42
-(SPEC.md §1.7; seeds-runtime §6.5; behaviours 20, 21, 23).
+(docs/runtime.md, "The block runtime"; STEP7 comprehensive guide vol. 2, ch. 12).
 
-The schedules live in the CPU (``engine.timed``: ``cpu.tod``, ``cpu.delays``); these are the
-thin SFC adapters. Time of day is the CPU's real-time clock on the injected clock
-(``cpu.rtc``), delays run on the process time (frozen in HOLD). STATUS of QRY_TINT/QRY_DINT
-[000:L1040-1094]: bit 2 = activated and not yet elapsed, bit 4 = OB loaded, bit 0 = the OB
-is disabled (DIS_IRT). RET_VAL ``W#16#8090`` wrong OB_NR, ``8091`` bad DTIME, ``8092`` bad
-PERIOD, ``80A0`` nothing set/started, ``80A1`` a once-only start time already passed
-``[K]``; EN_AIRT without DIS_AIRT ``8080`` ``[K]``.
+The schedules live in the CPU (``engine.timed``: ``cpu.tod``, ``cpu.delays``); these are the thin
+SFC adapters. Time of day is the CPU's real-time clock on the injected clock (``cpu.rtc``), delays
+run on the process time (frozen in HOLD). STATUS of QRY_TINT/QRY_DINT (STEP7 comprehensive guide
+vol. 2, ch. 12): bit 2 = activated and not yet elapsed, bit 4 = OB loaded, bit 0 = the OB is
+disabled (DIS_IRT). RET_VAL ``W#16#8090`` wrong OB_NR, ``8091`` bad DTIME, ``8092`` bad PERIOD,
+``80A0`` nothing set/started, ``80A1`` a once-only start time already passed ``[K]``; EN_AIRT
+without DIS_AIRT ``8080`` ``[K]``.
 """
 
 from __future__ import annotations

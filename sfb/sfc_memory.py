@@ -1,7 +1,8 @@
-"""SFC20 BLKMOV and SFC21 FILL over ANY-like areas (SPEC.md §1.7; seeds §6.4, behaviour 39).
+"""SFC20 BLKMOV and SFC21 FILL over ANY-like areas (docs/runtime.md, "The block runtime"; STEP7
+comprehensive guide vol. 2, ch. 12).
 
 An ``AnyPointer`` is ``P#<address> <type> <count>`` (``P#DB1.DBX0.0 BYTE 10``): a start
-address plus a length in elements. Rules (seeds-runtime §6.1/§6.4):
+address plus a length in elements. Rules (STEP7 comprehensive guide vol. 2, ch. 12):
 
 * areas I, Q, M, PI, PQ, L and DBs are allowed; T/C are area errors (8x24 read / 8x25 write);
 * a BOOL ANY must start at bit 0 and count a multiple of 8 bits (8x22 / 8x23), any other

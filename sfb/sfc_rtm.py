@@ -1,5 +1,5 @@
-"""Run-time meters: SFC2 SET_RTM, SFC3 CTRL_RTM, SFC4 READ_RTM, SFC101 RTM (SPEC.md §1.7;
-seeds-runtime §6.2; behaviour 55; [000:L536-630], [002:L2346-2357]).
+"""Run-time meters: SFC2 SET_RTM, SFC3 CTRL_RTM, SFC4 READ_RTM, SFC101 RTM (docs/runtime.md, "The
+block runtime"; STEP7 comprehensive guide vol. 2, ch. 12; Siemens' Program Design for S7-300/400).
 
 The meters belong to the CPU (``engine.rtm``, ``cpu.meters``): they stop in STOP, keep their
 value across MRES, resume after a hot restart. SFC2–4 address meters 0..7 with INT hours

@@ -1,4 +1,5 @@
-"""Action rows of a step → two generated Python functions (SPEC §2.8, graph-semantics §E).
+"""Action rows of a step → two generated Python functions (docs/semantics.md, "Actions" and
+"Decisions").
 
 ``def _a<i>(st, R, ev, c_ok, zero)`` runs while step ``i`` is active, rows top to bottom:
   N bit      operand = 1 (0 while C does not hold, or ZERO_OP); an event N row writes
@@ -115,7 +116,7 @@ def _nld_bit(row: ActionRow) -> Operand | None:
     """The bit of an N, D or L row (else None): the final scan resets it, and the row gates it by
     writing ``operand = c_ok and …`` (C off writes 0). Every other row marked C — the
     assignment ``N C x := expr`` included — runs only while the interlock holds (S7-GRAPH
-    manual 14-8: all actions marked C; seed 000:5794-5799)."""
+    manual 14-8: all actions marked C; STEP7 comprehensive guide vol. 2, ch. 14)."""
     nld = row.qualifier.upper() in ("N", "D", "L")
     return row.operand if nld and isinstance(row.operand, Operand) else None
 

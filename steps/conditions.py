@@ -1,5 +1,5 @@
 """Conditions (transitions, interlocks, supervisions, permanent coils) → Python source
-(SPEC §2.9, graph-semantics §E.3).
+(docs/semantics.md, "Conditions" and "Decisions").
 
 A condition is a boolean expression of *contacts*: an address / symbol / variable contact,
 ``Sn.X``, ``Tn.TT``, or a comparison box (``S3.U > T#10S`` is one contact). Every contact is

@@ -1,5 +1,6 @@
 """Arithmetic of action rows and comparisons of conditions, compiled to Python source
-(SPEC §2.8 last row, seed 000:5838-5884, graph-semantics §E.2).
+(docs/semantics.md, "Actions" last row, STEP7 comprehensive guide vol. 2, ch. 14, docs/semantics.md,
+"Decisions").
 
 Operators ``+ - * /`` on INT DINT REAL (TIME counts as DINT ms), ``MOD`` (DINT),
 ``AND OR XOR`` on WORD/DWORD, ``SHL SHR SSR ROL ROR``; the functions of ``FUNCTIONS``.

@@ -1,13 +1,13 @@
 """Operands of conditions and actions, resolved once at compile time into code snippets.
 
-A ``Ref`` says what a name means (SPEC §2.9): an S7 address (I Q M DB PI PQ, T/C cells), an
-FB static variable, an FB pin, a step attribute ``Sn.X/T/U`` or ``Tn.TT``. ``CodeGen`` turns a
-``Ref`` into a Python expression over names bound once per FB instance (``bind``): memory
-areas are bound as ``bytearray`` objects (``_m0`` ``_m1`` ...), so a bit read is one index and
-one shift, never a dict lookup or an Address parse.
+A ``Ref`` says what a name means (docs/semantics.md, "Conditions"): an S7 address (I Q M DB PI PQ,
+T/C cells), an FB static variable, an FB pin, a step attribute ``Sn.X/T/U`` or ``Tn.TT``.
+``CodeGen`` turns a ``Ref`` into a Python expression over names bound once per FB instance
+(``bind``): memory areas are bound as ``bytearray`` objects (``_m0`` ``_m1`` ...), so a bit read is
+one index and one shift, never a dict lookup or an Address parse.
 
-Inside generated functions these locals exist: ``st`` (GraphState), ``V`` (``st.vars``),
-``X`` (``st.x``). Values follow docs/contracts.md: BOOL → bool/int 0/1, INT/DINT signed int,
+Inside generated functions these locals exist: ``st`` (GraphState), ``V`` (``st.vars``), ``X``
+(``st.x``). Values follow docs/architecture.md, "Seams": BOOL → bool/int 0/1, INT/DINT signed int,
 WORD/DWORD unsigned int, REAL float, TIME ms.
 """
 
@@ -23,7 +23,8 @@ from s7graph.engine.errors import SourceLocation, SymbolError
 # S5 timer and counter cells (``T n``, ``C n``): a contact reads the status bit, a number
 # (a comparison, arithmetic, an assignment to a number) reads the value as an INT — the
 # count, or the remaining time in units of the time base, as ``L C n`` / ``L T n`` load it
-# (seed 003:1599-1604: "used at the same address as a BOOL state or as the current value").
+# (El-Shahat's S7-300/400 course: "used at the same address as a BOOL state or as the current
+# value").
 CELLS = frozenset({"timer", "counter"})
 CELL_VALUE_TYPE = "INT"
 # The default type of an absolute address by width, when no symbol says otherwise.

@@ -1,4 +1,5 @@
-"""Which qualifier may follow which event: the one table (SPEC §2.8, seed 000:5674-5792).
+"""Which qualifier may follow which event: the one table (docs/semantics.md, "Actions", STEP7
+comprehensive guide vol. 2, ch. 14).
 
 Code reads ``ALLOWED``; the validator and the compiler are derived
 from it. A row is ``(event, qualifier, interlocked, operand kind)``; an operand kind is one of
@@ -70,7 +71,7 @@ def operand_kind(qualifier: str, *, assignment: bool = False, s_all: bool = Fals
 
 
 def check(event: str | None, qualifier: str, interlocked: bool, kind: str) -> Rule:
-    """Apply the table of SPEC §2.8 to one action row."""
+    """Apply the table of docs/semantics.md, "Actions" to one action row."""
     if qualifier not in QUALIFIERS:
         return Rule(False, f"unknown qualifier {qualifier!r}")
     if event is not None and event not in EVENTS:

@@ -1,5 +1,5 @@
 """The language inside a step: expressions, action rows and permanent instructions as
-written, with the place of every element (SPEC §2.8, §2.9).
+written, with the place of every element (docs/semantics.md, "Actions" and "Conditions").
 
 The parser builds these nodes; ``steps`` compiles them to Python and the chart model
 (``sequencer.text.model``) holds them in its steps, transitions and permanent instructions.
@@ -38,7 +38,7 @@ __all__ = [
 
 NOWHERE = SourceLocation()
 
-# ---------------------------------------------------------------- expressions (SPEC §2.9, §2.8)
+# ------------------------------------- expressions (docs/semantics.md, "Conditions" and "Actions")
 
 
 @dataclass(frozen=True, slots=True)
@@ -106,7 +106,8 @@ class Binary:
 
 @dataclass(frozen=True, slots=True)
 class FuncCall:
-    """A function of seed 000 lines 5838-5884: ``ABS(x)``, ``INT_TO_DINT(x)``, ``SQRT(x)`` ..."""
+    """A function of STEP7 comprehensive guide vol. 2, ch. 14: ``ABS(x)``, ``INT_TO_DINT(x)``,
+    ``SQRT(x)`` ..."""
 
     name: str
     args: tuple[Expr, ...]
@@ -115,7 +116,7 @@ class FuncCall:
 
 Expr = Const | Operand | StepAttr | TransAttr | Unary | Binary | FuncCall
 
-# ---------------------------------------------------------------- action rows (SPEC §2.8)
+# ------------------------------------------------------ action rows (docs/semantics.md, "Actions")
 
 
 @dataclass(frozen=True, slots=True)
@@ -173,7 +174,7 @@ class ActionRow:
     trailing: str = ""  # the comments at the end of its line, verbatim
 
 
-# ------------------------------------------------------- permanent instructions (SPEC §2.9)
+# ---------------------------------------- permanent instructions (docs/semantics.md, "Conditions")
 
 
 @dataclass(frozen=True, slots=True)

@@ -1,4 +1,4 @@
-"""``s7graph run PROGRAM.py`` (web/cmd_run.py): runs, stops cleanly, fails in one line."""
+"""``s7graph run PROGRAM.py`` (web/cli/run_program.py): runs, stops cleanly, fails in one line."""
 
 from __future__ import annotations
 

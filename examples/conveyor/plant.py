@@ -1,7 +1,8 @@
-"""Simulated pair of belts for ``examples/conveyor/conveyor.s7g`` (seed 000:6160-6174).
+"""Simulated pair of belts for ``examples/conveyor/conveyor.s7g`` (STEP7 comprehensive guide vol. 2,
+ch. 14).
 
 Belt A drops material onto belt B, and belt B needs ``TRANSIT_MS`` (7 s) to carry a load off
-its end. That is why the seed starts B before A and stops A 7 s before B. The model keeps
+its end. That is why the book starts B before A and stops A 7 s before B. The model keeps
 the load on belt B as milliseconds of material: it grows while both belts run (up to a
 full belt, ``TRANSIT_MS``) and shrinks while only B runs. Inputs written back:
 "Spill" latches when A runs while B stands; "Belt_B_empty" is true when B carries nothing.

@@ -1,4 +1,5 @@
-"""Simulated drilling machine for ``examples/drill/drill.s7g`` (seed 000:6176-6225).
+"""Simulated drilling machine for ``examples/drill/drill.s7g`` (STEP7 comprehensive guide vol. 2,
+ch. 14).
 
 Loaded by ``s7graph sim --plant``: ``Plant.cycle(io, t_ms, dt_ms)`` runs once per cycle after
 the FB has written its outputs; it reads outputs with ``io.get`` and writes the module side

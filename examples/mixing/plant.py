@@ -1,5 +1,5 @@
-"""Simulated mixing tank for ``examples/mixing/mixing.s7g`` (seed 002 ch.1 and appendix A,
-``reference/seeds-runtime.md`` §8.1).
+"""Simulated mixing tank for ``examples/mixing/mixing.s7g`` (Siemens' Program Design for S7-300/400,
+ch. 1 and appendix A, Siemens' Program Design for S7-300/400, appendix A).
 
 Each feed pump delivers ``PUMP_L_S`` litres a second (400 l/min, seed 002 Table 1-2) into
 the tank while the pump runs and both its inlet and feed valve are open; its flow sensor

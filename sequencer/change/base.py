@@ -21,7 +21,8 @@ from s7graph.sequencer.text.elements import Ref
 from s7graph.sequencer.text.model import Chart, Sequence, Step, Transition
 
 # ---------------------------------------------------------------- limits (docs/online-change.md)
-# S7-GRAPH's own limits (SPEC §2.1: 250 steps, 250 transitions, 8 sequencers) only warn
+# S7-GRAPH's own limits (docs/semantics.md, "Structure": 250 steps, 250 transitions, 8 sequencers)
+# only warn
 # (W110); the editor refuses beyond four times them, so that every edit and its validation
 # stay in milliseconds and a hostile chart or paste cannot exhaust the view or the CPU.
 MAX_STEPS: Final = 1_000
@@ -96,7 +97,8 @@ def checked_number(n: object, what: str) -> int:
 def next_number(used: Iterable[int]) -> int:
     """The number S7-GRAPH gives a new step, transition or sequencer: the next one after
     the highest in use (S7-GRAPH numbers steps and transitions itself and lets the user
-    change the numbers, seed 000:5458); past ``MAX_NUMBER``, the lowest free one."""
+    change the numbers, STEP7 comprehensive guide vol. 2, ch. 14); past ``MAX_NUMBER``, the lowest
+    free one."""
     taken = set(used)
     top = max(taken, default=0) + 1
     if top <= MAX_NUMBER:

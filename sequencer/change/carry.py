@@ -1,5 +1,5 @@
-"""A GRAPH FB's state across versions of its chart (SPEC §2.1; DESIGN "State lives in the
-instance DB").
+"""A GRAPH FB's state across versions of its chart (docs/semantics.md, "Structure";
+docs/architecture.md, "The core is a function").
 
 ``fingerprint(cc)`` names a compiled chart — its steps, transitions, generated code,
 variables, options and parameter set, not where things are written in the file; the state

@@ -73,7 +73,8 @@ class RenameStep(Edit):
 
 @dataclass(frozen=True, slots=True)
 class SetMessage(Edit):
-    """Give step ``step`` the message text ``message`` ("" for none, SPEC §2.10)."""
+    """Give step ``step`` the message text ``message`` ("" for none, docs/semantics.md,
+    "Messages")."""
 
     step: int
     message: str
@@ -86,7 +87,8 @@ class SetMessage(Edit):
 
 @dataclass(frozen=True, slots=True)
 class SetInitial(Edit):
-    """Make step ``step`` an initial step or not (active after INIT_SQ, SPEC §2.1)."""
+    """Make step ``step`` an initial step or not (active after INIT_SQ, docs/semantics.md,
+    "Structure")."""
 
     step: int
     initial: bool
@@ -157,7 +159,7 @@ def _step_condition(chart: Chart, n: int, text: str, part: StepPart) -> tuple[Ch
 @dataclass(frozen=True, slots=True)
 class SetInterlock(Edit):
     """Give step ``step`` the interlock condition ``condition`` ("" removes it); rows
-    marked C run only while it holds (SPEC §2.3)."""
+    marked C run only while it holds (docs/semantics.md, "Interlock")."""
 
     step: int
     condition: str
@@ -169,7 +171,7 @@ class SetInterlock(Edit):
 @dataclass(frozen=True, slots=True)
 class SetSupervision(Edit):
     """Give step ``step`` the supervision condition ``condition`` ("" removes it): while
-    it holds the step is faulted (SPEC §2.4)."""
+    it holds the step is faulted (docs/semantics.md, "Supervision")."""
 
     step: int
     condition: str
@@ -242,7 +244,7 @@ class RemoveRow(Edit):
 @dataclass(frozen=True, slots=True)
 class MoveRow(Edit):
     """Move action row ``index`` of step ``step`` to index ``to`` (rows run top to bottom,
-    SPEC §2.2)."""
+    docs/semantics.md, "One FB call")."""
 
     step: int
     index: int

@@ -1,5 +1,5 @@
-"""What a download changes: the running chart against the edited one (issue 10, online
-change).
+"""What a download changes: the running chart against the edited one (online
+change, docs/online-change.md).
 
 ``summarize(running, edited, active)`` lists every change — the block, its options,
 sequencers, steps, transitions, action rows, interlocks, supervisions, conditions,

@@ -113,6 +113,11 @@ class Operation:
         return " ".join((self.edit.__doc__ or "").split())
 
     @property
+    def hint(self) -> str:
+        """What the operation does, for the editor's user (its tooltip): ``HINTS``."""
+        return HINTS[self.name]
+
+    @property
     def element_arguments(self) -> tuple[str, ...]:
         """The leading arguments that name the element (filled from the selection)."""
         return _ELEMENT_ARGS[self.target]
@@ -142,7 +147,52 @@ class Operation:
         return make_edit(self.name, {**dict(zip(names, got, strict=True)), **values})
 
 
-# The one table of edit operations, by the element they act on (seed 000:5432-5489 for
+# The editor's tooltip of each operation, written for its user (the docstrings are for
+# developers); the selected step, transition or sequencer is "this".
+HINTS: Final[dict[str, str]] = {
+    "rename_step": "The step's name, shown in its box.",
+    "renumber_step": "The step's number; every transition, ON/OFF row and condition naming the"
+    " step follows.",
+    "set_initial": "An initial step is active after the sequencer is initialized (INIT_SQ).",
+    "set_message": "The text of this step's interlock and supervision messages; empty: none.",
+    "set_interlock": "While this condition does not hold, the rows marked C do not run and the"
+    " step shows an interlock error; empty: no interlock.",
+    "set_supervision": "While this condition holds the step is faulted and does not switch,"
+    " e.g. S2.U > T#10S; empty: no supervision.",
+    "add_row": "Add an action row to this step.",
+    "insert_alternative_branch": "A new transition leaving this step, with the lowest priority,"
+    " leading to the step numbered here.",
+    "delete_step": "Delete this step and its following transition; what led to the step then"
+    " leads where that transition led.",
+    "delete_simultaneous_branch": "Delete the simultaneous path that starts with this step, up"
+    " to its join, branch stop or jump.",
+    "change_row": "Replace the selected action row by the fields.",
+    "remove_row": "Remove the selected action row.",
+    "move_row": "Move the selected action row; rows run top to bottom.",
+    "rename_transition": "The transition's name, shown beside it.",
+    "renumber_transition": "The transition's number; every condition reading Tn.TT follows.",
+    "set_condition": "The condition for the transition to switch; empty: it holds at once"
+    " (warning W120).",
+    "insert_step": "Insert a new step and transition after this transition.",
+    "insert_simultaneous_branch": "This transition also activates a new step, whose path joins"
+    " the transition numbered here.",
+    "jump": "End the path after this transition with a jump to the step numbered here, in any"
+    " sequencer of the block.",
+    "branch_stop": "End the path after this transition: a branch stop.",
+    "delete_transition": "Delete this transition (an alternative path without steps, a jump or"
+    " a branch stop) when every step keeps a way in and out.",
+    "delete_alternative_branch": "Delete the alternative path that starts with this transition,"
+    " up to where it ends or joins another path.",
+    "rename_sequence": "The sequencer's name.",
+    "delete_sequence": "Delete this sequencer with its steps and transitions (not the only one,"
+    " nor one that others jump into).",
+    "insert_sequence": "Add a sequencer: an initial step and a transition back to it.",
+    "set_option": "A block option, e.g. SKIP_STEPS := TRUE, as the chart's header writes it.",
+    "set_source": "Replace the whole chart by the text of the source view.",
+}
+
+# The one table of edit operations, by the element they act on (STEP7 comprehensive guide vol. 2,
+# ch. 14 for
 # S7-GRAPH's Insert menu: Step + Transition, Alternative/Simultaneous branch, Jump, Branch
 # stop, Sequencer).
 OPERATIONS: Final[tuple[Operation, ...]] = (

@@ -1,5 +1,5 @@
-"""Online change: a changed chart swapped into a running GRAPH FB (issue 10; DESIGN "State
-lives in the instance DB").
+"""Online change: a changed chart swapped into a running GRAPH FB (docs/online-change.md;
+the state lives in the instance DB, docs/architecture.md, "The core is a function").
 
 :func:`preview` says what a download of ``new`` over the running chart changes (the change
 summary of ``sequencer.change.diff``, with the active steps it removes). :func:`swap`, called at a

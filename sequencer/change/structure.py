@@ -1,5 +1,5 @@
-"""Edits of how steps and transitions connect, as S7-GRAPH's editor makes them (seed 000
-§14, lines 5432-5489; SPEC §2.1):
+"""Edits of how steps and transitions connect, as S7-GRAPH's editor makes them (STEP7
+comprehensive guide vol. 2, ch. 14; docs/semantics.md, "Structure"):
 
 - *Step + Transition* after a selected transition: the transition leads to a new step,
   and a new transition from it leads where the selected one led.
@@ -198,7 +198,7 @@ class InsertSimultaneousBranch(Edit):
 @dataclass(frozen=True, slots=True)
 class Jump(Edit):
     """End the path after transition ``transition`` with a jump to step ``to`` (of any
-    sequencer of the FB, SPEC §2.1)."""
+    sequencer of the FB, docs/semantics.md, "Structure")."""
 
     transition: int
     to: int

@@ -113,7 +113,8 @@ def _check_depth(node: object, what: str) -> None:
 
 
 def parse_condition(text: str, what: str = "condition") -> Expr | None:
-    """The condition ``text`` (``.s7g`` condition syntax, SPEC §2.9); None when blank."""
+    """The condition ``text`` (``.s7g`` condition syntax, docs/semantics.md, "Conditions"); None
+    when blank."""
     text = _typed(text, what)
     if not text.strip():
         return None
@@ -124,9 +125,9 @@ def parse_condition(text: str, what: str = "condition") -> Expr | None:
 @dataclass(frozen=True, slots=True)
 class RowFields:
     """An action row as the editor's fields, ``[event] qualifier[C] operand [, value]``
-    (SPEC §2.8): ``event`` "" for none, ``operand`` e.g. ``Q0.0``, ``"Motor_on"``,
-    ``S4``, ``S_ALL``, ``pieces := pieces + 1``, ``FB 5, DB 5 (IN1 := I0.0)``; ``value``
-    the time of D/L, the preset of CS, the S5TIME of TL/TD/TF."""
+    (docs/semantics.md, "Actions"): ``event`` "" for none, ``operand`` e.g. ``Q0.0``,
+    ``"Motor_on"``, ``S4``, ``S_ALL``, ``pieces := pieces + 1``, ``FB 5, DB 5 (IN1 := I0.0)``;
+    ``value`` the time of D/L, the preset of CS, the S5TIME of TL/TD/TF."""
 
     qualifier: str
     operand: str

@@ -1,5 +1,5 @@
 """The state the validation rules share: the chart, its symbols, the steps and transitions by
-number and the diagnostics found so far (SPEC.md §3)."""
+number and the diagnostics found so far (docs/chart-format.md)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Compile diagnostics of a chart: what is wrong, where, and which element (SPEC.md §3).
+"""Compile diagnostics of a chart: what is wrong, where, and which element (docs/chart-format.md).
 
 Every diagnostic carries ``file:line:col`` and the step / transition / row it concerns;
 ``format_diagnostic`` prints it the way compilers do::
@@ -32,14 +32,15 @@ CODES: Final[dict[str, str]] = {
     "E012": "duplicate transition number",
     "E013": "duplicate declaration (FB variable or symbol)",
     # action rows
-    "E020": "event / qualifier / C combination outside the table of SPEC §2.8",
+    "E020": "event / qualifier / C combination that S7-GRAPH does not allow",
     "E021": "missing value (D L CS TL TD TF need one)",
     "E022": "D / L time is not a TIME",
     "E023": "value given to a qualifier that takes none, or of the wrong type",
     "E024": "operand of the wrong kind for the qualifier (bit, timer, counter)",
     "E025": "OFF S_ALL misuse",
     "E026": "ON / OFF of an unknown step",
-    # types (SPEC §2.8, §2.9; seed 000:5838-5884)
+    # types (docs/semantics.md, "Actions" and "Conditions"; STEP7 comprehensive guide vol. 2, ch.
+    # 14)
     "E030": "comparison of different or non-comparable types",
     "E031": "assignment of a value of another type",
     "E032": "operator not allowed for the operand type",
@@ -59,7 +60,7 @@ CODES: Final[dict[str, str]] = {
     "W101": "step without a way in",
     "W102": "step without a way out",
     "W103": "sequencer without an initial step",
-    "W110": "limit exceeded (SPEC §2.1)",
+    "W110": "more steps, transitions, paths, sequencers or condition elements than S7-GRAPH allows",
     "W120": "empty transition condition (always holds)",
     "W122": "rows marked C on a step without an interlock",
     "W130": "simultaneous branch that can never join",

@@ -1,4 +1,5 @@
-"""Validation rules for action rows and permanent instructions (SPEC.md §2.3, §2.8, §3).
+"""Validation rules for action rows and permanent instructions (docs/semantics.md, "Interlock" and
+"Actions"; docs/chart-format.md).
 
 The event × qualifier table is read from ``steps.qualifiers`` (never re-encoded here).
 """
@@ -37,7 +38,8 @@ from s7graph.steps.qualifiers import (
 
 
 def rule_c_without_interlock(ctx: _Ctx) -> None:
-    """Rows marked C on a step without INTERLOCK always run (W122, SPEC §2.3)."""
+    """Rows marked C on a step without INTERLOCK always run (W122, docs/semantics.md,
+    "Interlock")."""
     for s in ctx.chart.all_steps():
         if s.interlock is not None:
             continue
@@ -47,7 +49,7 @@ def rule_c_without_interlock(ctx: _Ctx) -> None:
                          "mark has no effect", r.loc, _row_el(s, i))  # fmt: skip
 
 
-# ---------------------------------------------------------------- action rows (SPEC §2.8)
+# ------------------------------------------------------ action rows (docs/semantics.md, "Actions")
 
 
 def rule_action_rows(ctx: _Ctx) -> None:

@@ -1,5 +1,6 @@
-"""Validation rules for the chart's structure (SPEC.md §2.1, §3): numbers, declarations,
-FROM/TO, initial steps, ways in and out, limits and joins."""
+"""Validation rules for the chart's structure (docs/semantics.md, "Structure";
+docs/chart-format.md): numbers, declarations, FROM/TO, initial steps, ways in and out, limits and
+joins."""
 
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ from s7graph.sequencer.checks.context import _Ctx, _step_el
 from s7graph.sequencer.checks.types import LOGIC, _conditions, _show, _type, _unify
 from s7graph.sequencer.text.model import Binary, Expr, Step, StepTarget, Transition, Unary
 
-# Limits that warn (SPEC §2.1).
+# Limits that warn (docs/semantics.md, "Structure").
 MAX_STEPS: Final = 250
 MAX_TRANSITIONS: Final = 250
 MAX_ALTERNATIVE_PATHS: Final = 125
@@ -133,7 +134,7 @@ def rule_ways_in_and_out(ctx: _Ctx) -> None:
 
 
 def rule_limits(ctx: _Ctx) -> None:
-    """The limits of SPEC §2.1 warn (W110)."""
+    """The limits of docs/semantics.md, "Structure" warn (W110)."""
     c = ctx.chart
     steps, trans = c.all_steps(), c.all_transitions()
     if len(c.sequences) > MAX_SEQUENCES:

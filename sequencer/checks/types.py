@@ -1,15 +1,16 @@
-"""Validation rules for conditions, operands and types (SPEC.md §2.8, §2.9, §3).
+"""Validation rules for conditions, operands and types (docs/semantics.md, "Actions" and
+"Conditions"; docs/chart-format.md).
 
-Typing (SPEC §2.8, §2.9; seed 000:5838-5884): comparisons need the same type on both sides,
-one of INT DINT REAL TIME; ``+ - * /`` on INT DINT REAL (``+ -`` also on TIME); ``MOD`` on
-DINT; ``AND OR XOR`` on BOOL (logic) or WORD/DWORD (bitwise, assignments only); ``SHL SHR``
-on WORD/DWORD, ``SSR`` on INT/DINT, ``ROL ROR`` on DWORD, shift count INT. An untyped absolute
-address adapts (WORD address ~ INT, DWORD address ~ DINT REAL TIME); an integer literal fits
-INT and DINT. A timer or counter cell (``T5``, ``C1``) is a contact (its status bit) where a
-BOOL is expected, and its INT value in comparisons, arithmetic, function arguments and
-assignments (``steps.operands.CELLS``; seed 003:1599-1604). Conditions hold only contacts,
-NOT AND OR XOR and comparisons (SPEC §2.9).
-Operand resolution is ``sequencer.text.names.resolve_operand``.
+Typing (docs/semantics.md, "Actions" and "Conditions"; STEP7 comprehensive guide vol. 2, ch. 14):
+comparisons need the same type on both sides, one of INT DINT REAL TIME; ``+ - * /`` on INT DINT
+REAL (``+ -`` also on TIME); ``MOD`` on DINT; ``AND OR XOR`` on BOOL (logic) or WORD/DWORD (bitwise,
+assignments only); ``SHL SHR`` on WORD/DWORD, ``SSR`` on INT/DINT, ``ROL ROR`` on DWORD, shift count
+INT. An untyped absolute address adapts (WORD address ~ INT, DWORD address ~ DINT REAL TIME); an
+integer literal fits INT and DINT. A timer or counter cell (``T5``, ``C1``) is a contact (its status
+bit) where a BOOL is expected, and its INT value in comparisons, arithmetic, function arguments and
+assignments (``steps.operands.CELLS``; El-Shahat's S7-300/400 course). Conditions hold only
+contacts, NOT AND OR XOR and comparisons (docs/semantics.md, "Conditions"). Operand resolution is
+``sequencer.text.names.resolve_operand``.
 """
 
 from __future__ import annotations
@@ -49,7 +50,8 @@ _FLEX_DEFAULT: Final = {"@8": "BYTE", "@16": "INT", "@32": "DINT", "#INT": "INT"
                         "@T": "BOOL", "@C": "BOOL"}  # fmt: skip
 _CELL_FLEX: Final = {"TIMER": "@T", "COUNTER": "@C"}
 _ADDRESS_FLEX: Final = {"BYTE": "@8", "WORD": "@16", "DWORD": "@32"}
-# Built-in functions of seed 000:5861-5884: name → {argument type: result type}.
+# Built-in functions of STEP7 comprehensive guide vol. 2, ch. 14: name → {argument type: result
+# type}.
 FUNCTIONS: Final[dict[str, dict[str, str]]] = {
     "BCD_TO_NUM": {"WORD": "INT", "DWORD": "DINT"},
     "NUM_TO_BCD": {"INT": "WORD", "DINT": "DWORD"},
@@ -90,14 +92,14 @@ _SHIFT_LEFT: Final = {
 
 
 def rule_empty_conditions(ctx: _Ctx) -> None:
-    """An empty transition condition always holds (W120, SPEC §2.9)."""
+    """An empty transition condition always holds (W120, docs/semantics.md, "Conditions")."""
     for t in ctx.chart.all_transitions():
         if t.condition is None:
             ctx.warn("W120", f"transition T{t.number} has no condition; it switches at once",
                      t.loc, f"transition T{t.number}")  # fmt: skip
 
 
-# ---------------------------------------------------------------- conditions (SPEC §2.9)
+# ---------------------------------------------------- conditions (docs/semantics.md, "Conditions")
 
 
 def _conditions(ctx: _Ctx) -> Iterator[tuple[Expr, SourceLocation, str]]:

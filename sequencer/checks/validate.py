@@ -1,4 +1,5 @@
-"""Check a parsed chart and report every problem at once (SPEC.md §2.1, §2.8, §2.9, §3).
+"""Check a parsed chart and report every problem at once (docs/semantics.md, "Structure" and
+"Actions" and "Conditions"; docs/chart-format.md).
 
 ``validate(chart, symbols)`` runs each rule of ``RULES`` (one small function per rule) and
 returns all diagnostics sorted by place; errors stop compilation, warnings do not. Codes and

@@ -2,11 +2,11 @@
 docs/import-export.md shows (``markdown_tables``).
 
 Sources: IEC 61131-3 ed.3 §6.7.4 (action qualifiers); matiec's runtime
-(``stage4/generate_c/generate_c_sfc.cc``: an action is active in the call its association
-says, its body runs while it is active, a Boolean action variable is written from the
-action's state); S7-GRAPH action rows (SPEC §2.8: the event × qualifier table of
-``steps.qualifiers``). A construct is mapped only where GRAPH has an exact equivalent;
-otherwise the importer leaves it out and says so, with its place in the file.
+(``stage4/generate_c/generate_c_sfc.cc``: an action is active in the call its association says, its
+body runs while it is active, a Boolean action variable is written from the action's state);
+S7-GRAPH action rows (docs/semantics.md, "Actions": the event × qualifier table of
+``steps.qualifiers``). A construct is mapped only where GRAPH has an exact equivalent; otherwise the
+importer leaves it out and says so, with its place in the file.
 """
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
-"""Build the chart model while the LALR parser reduces (SPEC.md §3): :class:`_Build` has one
-method per grammar rule; ``sequencer.text.parse`` wires it into the parser (``_callbacks``).
+"""Build the chart model while the LALR parser reduces (docs/chart-format.md): :class:`_Build` has
+one method per grammar rule; ``sequencer.text.parse`` wires it into the parser (``_callbacks``).
 
 Decisions the format leaves open are listed in ``sequencer.text.parse``.
 """

@@ -1,4 +1,4 @@
-"""Write the chart model back as `.s7g` source text (SPEC.md §3).
+"""Write the chart model back as `.s7g` source text (docs/chart-format.md).
 
 ``format_chart(chart)`` is the inverse of ``sequencer.text.parse.parse_chart``: for every chart
 the parser builds, ``parse_chart(format_chart(c))`` equals ``c`` once source places are set

@@ -1,4 +1,5 @@
-"""The fast LALR loop of the chart parser (SPEC.md §3; called by ``sequencer/text/parse.py``).
+"""The fast LALR loop of the chart parser (docs/chart-format.md; called by
+``sequencer/text/parse.py``).
 
 A chart without syntax errors is parsed by the loop below: the same LALR table and the
 same per-state scanners as lark's parser and contextual lexer, without lark's per-token

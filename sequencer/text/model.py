@@ -1,4 +1,5 @@
-"""The source chart: what a `.s7g` file says, with the place of every element (SPEC §3).
+"""The source chart: what a `.s7g` file says, with the place of every element
+(docs/chart-format.md).
 
 The parser builds this model; the validator reads it and reports diagnostics; the compiler
 turns it into an immutable, int-indexed ``CompiledChart``. Nothing here evaluates anything.
@@ -58,7 +59,7 @@ __all__ = [  # the structure, and the step language it holds (``steps.syntax``)
     "VarDecl",
 ]
 
-# ---------------------------------------------------------------- structure (SPEC §2.1)
+# ------------------------------------------------------ structure (docs/semantics.md, "Structure")
 
 
 @dataclass(frozen=True, slots=True)
@@ -66,7 +67,7 @@ class Step:
     number: int
     name: str
     initial: bool = False
-    message: str = ""  # second string after the name: the step's message text (SPEC §2.10)
+    message: str = ""  # the second string after the name (docs/semantics.md, "Messages")
     interlock: Expr | None = None
     supervision: Expr | None = None
     actions: tuple[ActionRow, ...] = ()
@@ -132,7 +133,8 @@ class SymbolDecl:
 
 @dataclass(frozen=True, slots=True)
 class ChartOptions:
-    """FB header options (SPEC §3). ``order``: "graph" (SPEC §2.2 default) or "codesys"."""
+    """FB header options (docs/chart-format.md). ``order``: "graph" (docs/semantics.md, "One FB
+    call" default) or "codesys"."""
 
     parameters: str = "STANDARD"  # MINIMUM | STANDARD | MAXIMUM | USER
     skip_steps: bool = False

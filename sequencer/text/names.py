@@ -1,4 +1,5 @@
-"""What an operand written in a chart stands for (SPEC.md §1.1, §2.7, §2.9).
+"""What an operand written in a chart stands for (docs/runtime.md, "The block runtime";
+docs/semantics.md, "FB pins" and "Conditions").
 
 ``resolve_operand(op, chart, symbols)`` is pure: it reads the chart's declarations, the FB
 pin table (``sequencer.params``, the one table of pins) and an optional symbol table, and

@@ -1,4 +1,4 @@
-"""Parse `.s7g` source text into the chart model (SPEC.md §3).
+"""Parse `.s7g` source text into the chart model (docs/chart-format.md).
 
 ``parse_chart(text, file)`` returns a :class:`~sequencer.text.model.Chart` or raises
 :class:`ChartSyntaxError` carrying every syntax diagnostic found: the parser recovers at the
@@ -299,9 +299,9 @@ def _long_numbers(text: str, file: str) -> list[Diagnostic]:
 
 
 def parse_chart(text: str, file: str = "<input>") -> Chart:
-    """Parse one `.s7g` chart (SPEC §3). Raises :class:`ChartSyntaxError` with all syntax
-    diagnostics (file:line:col, what was found and what was expected). The garbage
-    collector is paused meanwhile (``sequencer.collector``)."""
+    """Parse one `.s7g` chart (docs/chart-format.md). Raises :class:`ChartSyntaxError` with all
+    syntax diagnostics (file:line:col, what was found and what was expected). The garbage collector
+    is paused meanwhile (``sequencer.collector``)."""
     if long := _long_numbers(text, file):
         raise ChartSyntaxError(long)
     with collector_paused():

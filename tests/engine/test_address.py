@@ -1,4 +1,5 @@
-"""S7 address syntax (SPEC.md §1.1, seeds-runtime.md §4.2)."""
+"""S7 address syntax (docs/runtime.md, "The block runtime", Siemens' Program Design for S7-300/400,
+ch. 5)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,5 @@
-"""Blocks, interfaces, instance DBs and calls (SPEC.md §1.3; seeds-runtime §1.2–1.3)."""
+"""Blocks, interfaces, instance DBs and calls (docs/runtime.md, "Programs of blocks in Python";
+Siemens' Program Design for S7-300/400, ch. 2)."""
 
 from __future__ import annotations
 
@@ -52,7 +53,7 @@ def _cpu(clock: VirtualClock, body: Any) -> Cpu:
 
 
 def test_fb_stat_and_out_persist_between_calls(clock: VirtualClock) -> None:
-    """Behaviour 32: STAT and OUT values stay in the instance DB; TEMP is never stored."""
+    """STAT and OUT values stay in the instance DB; TEMP is never stored."""
     outs: list[dict[str, object]] = []
     cpu = _cpu(clock, lambda ctx: outs.append(ctx.call(motor, 1, start=True)))
     for _ in range(3):
@@ -65,7 +66,7 @@ def test_fb_stat_and_out_persist_between_calls(clock: VirtualClock) -> None:
 
 
 def test_omitted_fb_input_keeps_its_last_value(clock: VirtualClock) -> None:
-    """Behaviour 33: an IN omitted at the call keeps the value stored in the instance DB."""
+    """An IN omitted at the call keeps the value stored in the instance DB."""
     calls = iter([{"start": True, "speed": 50}, {}])
     cpu = _cpu(clock, lambda ctx: ctx.call(motor, 1, **next(calls)))
     cpu.scan()
@@ -75,7 +76,7 @@ def test_omitted_fb_input_keeps_its_last_value(clock: VirtualClock) -> None:
 
 
 def test_fb_actuals_may_be_operands(clock: VirtualClock) -> None:
-    """Behaviour 33: an address string is an operand: IN read from it, OUT written to it."""
+    """An address string is an operand: IN read from it, OUT written to it."""
     cpu = _cpu(clock, lambda ctx: ctx.call(motor, 1, start="I0.3", running="Q0.2", calls="MW4"))
     cpu.mem.periph_in[0] = 0b1000
     cpu.scan()
@@ -83,14 +84,15 @@ def test_fb_actuals_may_be_operands(clock: VirtualClock) -> None:
 
 
 def test_calling_an_fb_without_instance_db_is_an_error(clock: VirtualClock) -> None:
-    """SPEC §1.3: calling an FB without an instance DB raises BlockError."""
+    """docs/runtime.md, "Programs of blocks in Python": calling an FB without an instance DB raises
+    BlockError."""
     ctx = Cpu(clock)._ctx
     with pytest.raises(BlockError, match="without an instance DB"):
         ctx.call(motor)
 
 
 def test_fc_must_get_every_parameter_and_writes_to_the_actual_operand(clock: VirtualClock) -> None:
-    """Behaviour 34: an FC needs all parameters; its OUT goes straight to the actual operand."""
+    """An FC needs all parameters; its OUT goes straight to the actual operand."""
 
     @fc(2, IN={"a": "INT", "b": "INT"}, OUT={"sum": "INT"}, RET="BOOL")
     def add(ctx: CallContext, p: dict[str, object]) -> object:
@@ -109,7 +111,7 @@ def test_fc_must_get_every_parameter_and_writes_to_the_actual_operand(clock: Vir
 
 
 def test_two_multi_instances_are_independent(clock: VirtualClock) -> None:
-    """Behaviour 35: FBs declared as STAT store their data in the caller's instance DB."""
+    """FBs declared as STAT store their data in the caller's instance DB."""
 
     @fb(3, STAT={"m1": motor, "m2": motor})
     def line(ctx: CallContext, db: InstanceDB) -> None:
@@ -129,7 +131,8 @@ def test_two_multi_instances_are_independent(clock: VirtualClock) -> None:
 
 
 def test_object_stat_round_trips_through_snapshot(clock: VirtualClock) -> None:
-    """SPEC §1.3: a STAT of type OBJECT persists through to_state()/from_state()."""
+    """docs/runtime.md, "Programs of blocks in Python": a STAT of type OBJECT persists through
+    to_state()/from_state()."""
     a = InstanceDB(1, motor)
     b = InstanceDB(2, motor)
     assert a.tally is not b.tally  # each instance gets its own object
@@ -160,7 +163,8 @@ def test_interface_declaration_rules() -> None:
 
 
 def test_unknown_variable_and_parameter_are_errors(clock: VirtualClock) -> None:
-    """SPEC §1.1 spirit: no silent zeroes — unknown names raise BlockError."""
+    """docs/runtime.md, "The block runtime" spirit: no silent zeroes — unknown names raise
+    BlockError."""
     idb = InstanceDB(1, motor)
     with pytest.raises(BlockError):
         idb.nope = 1
@@ -174,7 +178,7 @@ def test_unknown_variable_and_parameter_are_errors(clock: VirtualClock) -> None:
 
 
 def test_fc_out_operand_is_written_not_read_and_left_alone_when_unassigned() -> None:
-    """Behaviour 34: an FC OUT refers to the actual operand and is only written — a zeroed
+    """An FC OUT refers to the actual operand and is only written — a zeroed
     DB (no valid DATE_AND_TIME bytes) is a fine OUT; an OUT the FC does not assign keeps
     the operand's value."""
     from datetime import datetime

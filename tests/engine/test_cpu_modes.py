@@ -1,4 +1,5 @@
-"""CPU modes, key switch, mode requests, HOLD and memory reset (SPEC.md §1.4, seeds §3.1)."""
+"""CPU modes, key switch, mode requests, HOLD and memory reset (docs/runtime.md, "Restarts: warm,
+hot, cold", Siemens' Program Design for S7-300/400, ch. 9)."""
 
 from __future__ import annotations
 
@@ -28,7 +29,7 @@ def _counting_cpu(clock: VirtualClock, **kw: object) -> Cpu:
 
 
 def test_power_on_enters_stop_and_runs_nothing(clock: VirtualClock) -> None:
-    """Behaviour 1: power-on always enters STOP first; scans in STOP run no OB."""
+    """Power-on always enters STOP first; scans in STOP run no OB."""
     cpu = _counting_cpu(clock)
     assert cpu.mode is CpuMode.STOP
     clock.advance(10)
@@ -38,7 +39,7 @@ def test_power_on_enters_stop_and_runs_nothing(clock: VirtualClock) -> None:
 
 
 def test_run_request_with_key_in_stop_is_refused(clock: VirtualClock) -> None:
-    """Behaviour 1: STOP→STARTUP only with the key on RUN/RUN-P; a PG RUN request is refused."""
+    """STOP→STARTUP only with the key on RUN/RUN-P; a PG RUN request is refused."""
     cpu = _counting_cpu(clock, key=KeySwitch.STOP)
     record = cpu.start()
     assert cpu.mode is CpuMode.STOP
@@ -49,7 +50,7 @@ def test_run_request_with_key_in_stop_is_refused(clock: VirtualClock) -> None:
 
 
 def test_key_switch_to_stop_stops_a_running_cpu(clock: VirtualClock) -> None:
-    """Behaviour 1 (transition 8): turning the key to STOP stops the CPU."""
+    """Turning the key to STOP stops the CPU."""
     cpu = _counting_cpu(clock)
     cpu.start()
     cpu.set_key(KeySwitch.STOP)
@@ -68,7 +69,7 @@ def test_key_switch_to_stop_stops_a_running_cpu(clock: VirtualClock) -> None:
 def test_simultaneous_mode_requests_resolve_by_priority(
     clock: VirtualClock, requests: list[CpuMode], expected: CpuMode
 ) -> None:
-    """Behaviour 2: requests at one scan boundary resolve STOP > HOLD > STARTUP > RUN."""
+    """Requests at one scan boundary resolve STOP > HOLD > STARTUP > RUN."""
     cpu = _counting_cpu(clock)
     cpu.start()
     for mode in requests:
@@ -92,7 +93,7 @@ def test_commands_apply_at_the_scan_boundary(clock: VirtualClock) -> None:
 
 
 def test_run_request_in_stop_starts_with_a_warm_restart(clock: VirtualClock) -> None:
-    """Behaviour 1: a RUN request from STOP goes STOP→STARTUP→RUN."""
+    """A RUN request from STOP goes STOP→STARTUP→RUN."""
     cpu = _counting_cpu(clock)
     cpu.submit(ModeRequest(CpuMode.RUN))
     record = cpu.scan()
@@ -104,7 +105,7 @@ def test_run_request_in_stop_starts_with_a_warm_restart(clock: VirtualClock) -> 
 
 
 def test_hold_freezes_timers_while_the_clock_runs(clock: VirtualClock) -> None:
-    """Behaviour 51: in HOLD timers are frozen, the real-time clock keeps running."""
+    """In HOLD timers are frozen, the real-time clock keeps running."""
     seen: list[int] = []
 
     @ob(1)
@@ -132,7 +133,7 @@ def test_hold_freezes_timers_while_the_clock_runs(clock: VirtualClock) -> None:
 
 
 def test_memory_reset_clears_program_and_areas_but_keeps_diagnostics(clock: VirtualClock) -> None:
-    """Behaviour 54: MRES clears program and operand areas; the diagnostic buffer survives."""
+    """MRES clears program and operand areas; the diagnostic buffer survives."""
     cpu = _counting_cpu(clock)
     cpu.start()
     cpu.mem.set("MW0", 7)  # retentive
@@ -145,7 +146,7 @@ def test_memory_reset_clears_program_and_areas_but_keeps_diagnostics(clock: Virt
 
 
 def test_memory_reset_is_refused_in_run(clock: VirtualClock) -> None:
-    """Behaviour 54: MRES is possible only in STOP."""
+    """MRES is possible only in STOP."""
     cpu = _counting_cpu(clock)
     cpu.start()
     with pytest.raises(BlockError):
@@ -153,7 +154,7 @@ def test_memory_reset_is_refused_in_run(clock: VirtualClock) -> None:
 
 
 def test_stop_in_startup_ob_aborts_the_startup(clock: VirtualClock) -> None:
-    """Behaviour 30: a STOP (SFC46 STP) in OB100 moves the CPU to STOP instead of RUN."""
+    """A STOP (SFC46 STP) in OB100 moves the CPU to STOP instead of RUN."""
 
     @ob(100)
     def startup(ctx: CallContext) -> None:

@@ -1,4 +1,5 @@
-"""Data types: sizes, ranges, encodings, layout (SPEC.md §1.2, seeds-runtime.md §4.3-4.5, §5.1)."""
+"""Data types: sizes, ranges, encodings, layout (docs/runtime.md, "The block runtime", Siemens'
+Program Design for S7-300/400, appendix C; El-Shahat's S7-300/400 course, timers and counters)."""
 
 from __future__ import annotations
 
@@ -55,7 +56,7 @@ def test_unknown_type_is_a_type_mismatch() -> None:
 
 
 def test_string_n_occupies_n_plus_two_bytes_and_plain_string_is_254() -> None:
-    """Behaviour 41: STRING[10] occupies 12 bytes; STRING = STRING[254] = 256 bytes."""
+    """STRING[10] occupies 12 bytes; STRING = STRING[254] = 256 bytes."""
     assert type_of("STRING[10]").size == 12
     assert type_of("STRING").size == 256
     with pytest.raises(TypeMismatch):
@@ -63,7 +64,7 @@ def test_string_n_occupies_n_plus_two_bytes_and_plain_string_is_254() -> None:
 
 
 def test_string_bytes_hold_max_length_then_current_length_then_chars() -> None:
-    """Behaviour 41: I_STRNG(205) = '+205' in a STRING[10]: byte 0 = 10, byte 1 = 4."""
+    """I_STRNG(205) = '+205' in a STRING[10]: byte 0 = 10, byte 1 = 4."""
     data = encode("STRING[10]", "+205")
     assert data == bytes([10, 4]) + b"+205" + bytes(6)
     assert decode("STRING[10]", data) == "+205"
@@ -91,7 +92,7 @@ def test_string_longer_than_its_declared_length_is_a_type_mismatch() -> None:
     ],
 )
 def test_values_encode_big_endian_and_decode_back(name: str, value: object, data: bytes) -> None:
-    """Behaviour 43: multi-byte values are big-endian, highest byte first."""
+    """Multi-byte values are big-endian, highest byte first."""
     assert encode(name, value) == data
     assert decode(name, data) == value
 
@@ -109,7 +110,8 @@ def test_values_encode_big_endian_and_decode_back(name: str, value: object, data
     ],
 )
 def test_s5time_picks_the_finest_time_base_that_fits(ms: int, word: int) -> None:
-    """seeds-runtime.md §5.1: S5T#2S = W#16#0200, S5T#1M20S = W#16#1800, max = W#16#3999."""
+    """El-Shahat's S7-300/400 course, timers and counters: S5T#2S = W#16#0200, S5T#1M20S =
+    W#16#1800, max = W#16#3999."""
     assert ms_to_s5time(ms) == word
     assert s5time_to_ms(word) == ms
 
@@ -137,7 +139,7 @@ def test_bcd_conversions_reject_invalid_nibbles() -> None:
 
 
 def test_date_and_time_is_eight_bcd_bytes_with_sunday_as_weekday_one() -> None:
-    """Behaviour 42: DT = YY MM DD hh mm ss, ms (3 digits), weekday (1 = Sunday)."""
+    """DT = YY MM DD hh mm ss, ms (3 digits), weekday (1 = Sunday)."""
     sunday = datetime(2026, 11, 22, 12, 34, 56, 789_000)
     assert encode("DT", sunday) == bytes([0x26, 0x11, 0x22, 0x12, 0x34, 0x56, 0x78, 0x91])
     monday = datetime(1995, 1, 2)
@@ -147,7 +149,8 @@ def test_date_and_time_is_eight_bcd_bytes_with_sunday_as_weekday_one() -> None:
 
 
 def test_date_and_time_years_90_to_99_are_1990s_and_00_to_89_are_2000s() -> None:
-    """Behaviour 42 (seeds-runtime.md §4.4): year byte 16#90 → 1990, 16#89 → 2089."""
+    """Year byte (Siemens' Program Design for S7-300/400, appendix C): 16#90 → 1990, 16#89 →
+    2089."""
     assert decode("DT", bytes([0x90, 1, 1, 0, 0, 0, 0, 0x02])).year == 1990
     assert decode("DT", bytes([0x89, 1, 1, 0, 0, 0, 0, 0x02])).year == 2089
 
@@ -188,7 +191,8 @@ def test_char_accepts_a_code_and_gives_the_character() -> None:
 
 
 def test_layout_of_seed_db10_puts_words_on_even_bytes() -> None:
-    """seeds-runtime.md §4.5 (000:L3208-3232): ARRAY[1..100] OF INT, BOOL, WORD, BYTE, S5TIME."""
+    """Siemens' Program Design for S7-300/400, appendix C (STEP7 comprehensive guide vol. 2, ch.
+    13): ARRAY[1..100] OF INT, BOOL, WORD, BYTE, S5TIME."""
     lay = layout(
         [
             ("a", "ARRAY[1..100] OF INT"),
@@ -209,7 +213,8 @@ def test_layout_of_seed_db10_puts_words_on_even_bytes() -> None:
 
 
 def test_layout_of_seed_struct_rounds_the_total_up_to_even() -> None:
-    """seeds-runtime.md §4.5 (002:L5387-5420): INT, BYTE, CHAR, REAL, BOOL ends at 10.0."""
+    """Siemens' Program Design for S7-300/400, appendix C: INT, BYTE, CHAR, REAL, BOOL ends at
+    10.0."""
     lay = layout({"i": "INT", "b": "BYTE", "c": "CHAR", "r": "REAL", "x": "BOOL"})
     assert (lay["b"], lay["c"], lay["r"], lay["x"], lay.size) == (
         (2, 0),
@@ -221,7 +226,7 @@ def test_layout_of_seed_struct_rounds_the_total_up_to_even() -> None:
 
 
 def test_layout_packs_consecutive_bools_into_bits_of_one_byte() -> None:
-    """seeds-runtime.md §4.5 (002:L3926-3932): FC1 params at 0.0, 0.1, 2.0, 2.1, 4.0."""
+    """Siemens' Program Design for S7-300/400, appendix C: FC1 params at 0.0, 0.1, 2.0, 2.1, 4.0."""
     lay = layout(
         [("a", "BOOL"), ("b", "BOOL"), ("i", "INT"), ("c", "BOOL"), ("d", "BOOL"), ("e", "INT")]
     )

@@ -1,4 +1,4 @@
-"""The diagnostic buffer (seeds-runtime §7.2; behaviour 52)."""
+"""The diagnostic buffer (Siemens' Program Design for S7-300/400, ch. 10)."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ from s7graph.engine import Cpu, CpuMode, DiagnosticBuffer, EventId, VirtualClock
 
 
 def test_mode_transitions_are_entered_with_time(clock: VirtualClock) -> None:
-    """Behaviour 52: every mode transition creates an entry with its time stamp."""
+    """Every mode transition creates an entry with its time stamp."""
     cpu = Cpu(clock)
     clock.advance(1000)
     cpu.start()
@@ -22,7 +22,7 @@ def test_mode_transitions_are_entered_with_time(clock: VirtualClock) -> None:
 
 
 def test_ring_buffer_overwrites_the_oldest() -> None:
-    """Behaviour 52: a ring of fixed length, newest overwrites oldest; newest is No. 1."""
+    """A ring of fixed length, newest overwrites oldest; newest is No. 1."""
     buf = DiagnosticBuffer(3)
     for i in range(5):
         buf.record(i, 0xA100 + i, "OB1", f"user {i}")
@@ -33,7 +33,7 @@ def test_ring_buffer_overwrites_the_oldest() -> None:
 
 
 def test_buffer_survives_restart_and_memory_reset(clock: VirtualClock) -> None:
-    """Behaviour 52: the program cannot clear it; it survives restarts and MRES."""
+    """The program cannot clear it; it survives restarts and MRES."""
     cpu = Cpu(clock, diag_capacity=50)
     for kind in ("warm", "cold", "hot"):
         cpu.start(kind)

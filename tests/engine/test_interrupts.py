@@ -1,4 +1,4 @@
-"""Cyclic interrupts OB30–OB38 and OB priorities (SPEC.md §1.5; behaviours 18, 19, 23–25)."""
+"""Cyclic interrupts OB30–OB38 and OB priorities (docs/runtime.md, "When a scan hangs or fails")."""
 
 from __future__ import annotations
 
@@ -29,7 +29,7 @@ def _cyclic(number: int) -> object:
 def test_cyclic_ob_runs_at_its_default_period_from_stop_to_run(
     clock: VirtualClock, number: int, period: int
 ) -> None:
-    """Behaviour 19: OB30..OB38 default 5000/…/10 ms, measured from the STOP→RUN transition."""
+    """OB30..OB38 default 5000/…/10 ms, measured from the STOP→RUN transition."""
     clock.advance(3)  # the time reference is the transition, not zero
     cpu = Cpu(clock, max_cycle_ms=10_000)
     cpu.load(_cyclic(number))  # type: ignore[arg-type]
@@ -40,7 +40,7 @@ def test_cyclic_ob_runs_at_its_default_period_from_stop_to_run(
 
 
 def test_phase_offset_delays_each_call(clock: VirtualClock) -> None:
-    """Behaviour 19: a phase offset m (0 <= m < n) delays every start by m ms."""
+    """A phase offset m (0 <= m < n) delays every start by m ms."""
     cpu = Cpu(clock)
     cpu.interrupts.configure(35, 100, phase_ms=30)
     cpu.load(_cyclic(35))  # type: ignore[arg-type]
@@ -51,7 +51,7 @@ def test_phase_offset_delays_each_call(clock: VirtualClock) -> None:
 
 
 def test_due_interrupts_run_highest_priority_first(clock: VirtualClock) -> None:
-    """Behaviour 18: OB38 (priority 15) before OB35 (12) before OB30 (7)."""
+    """OB38 (priority 15) before OB35 (12) before OB30 (7)."""
     cpu = Cpu(clock)
     cpu.interrupts.configure(30, 100)
     cpu.interrupts.configure(38, 100)
@@ -62,8 +62,8 @@ def test_due_interrupts_run_highest_priority_first(clock: VirtualClock) -> None:
 
 
 def test_default_priorities() -> None:
-    """Behaviour 18: OB1 = 1, OB10–17 = 2, OB20..23 = 3..6, OB30..38 = 7..15,
-    OB40..47 = 16..23, OB80–87 = 26, OB100/101 = 27."""
+    """OB1 = 1, OB10–17 = 2, OB20..23 = 3..6, OB30..38 = 7..15, OB40..47 = 16..23, OB80–87 = 26,
+    OB100/101 = 27."""
     assert priority(1) == 1 and priority(17) == 2
     assert [priority(n) for n in (20, 23, 30, 38, 40, 47)] == [3, 6, 7, 15, 16, 23]
     assert priority(80) == priority(87) == 26 and priority(100) == priority(101) == 27
@@ -72,7 +72,7 @@ def test_default_priorities() -> None:
 
 
 def test_disabled_cyclic_interrupt_events_are_lost(clock: VirtualClock) -> None:
-    """Behaviour 23: DIS_IRT(MODE 2, OB35) suppresses OB35 events; they are not queued."""
+    """DIS_IRT(MODE 2, OB35) suppresses OB35 events; they are not queued."""
     cpu = Cpu(clock)
     cpu.load(_cyclic(35))  # type: ignore[arg-type]
     cpu.start()
@@ -83,7 +83,7 @@ def test_disabled_cyclic_interrupt_events_are_lost(clock: VirtualClock) -> None:
 
 
 def test_late_scan_runs_the_ob_once_and_reports_lost_events(clock: VirtualClock) -> None:
-    """Behaviour 19: events missed by a late scan are lost (diag entry), not repeated."""
+    """Events missed by a late scan are lost (diag entry), not repeated."""
     cpu = Cpu(clock, max_cycle_ms=1000)
     cpu.load(_cyclic(35))  # type: ignore[arg-type]
     cpu.start()
@@ -95,7 +95,7 @@ def test_late_scan_runs_the_ob_once_and_reports_lost_events(clock: VirtualClock)
 
 
 def test_configured_but_unloaded_interrupt_ob_goes_to_ob85_or_stop(clock: VirtualClock) -> None:
-    """Behaviour 24: an event for a configured, unloaded OB: diag entry + OB85, else STOP."""
+    """An event for a configured, unloaded OB: diag entry + OB85, else STOP."""
     cpu = Cpu(clock)
     cpu.interrupts.configure(36, 50)
     cpu.start()
@@ -113,7 +113,7 @@ def test_configured_but_unloaded_interrupt_ob_goes_to_ob85_or_stop(clock: Virtua
 
 
 def test_loaded_but_deselected_ob_aborts_the_startup(clock: VirtualClock) -> None:
-    """Behaviour 25: a deselected (period 0) OB in the program makes the startup abort."""
+    """A deselected (period 0) OB in the program makes the startup abort."""
     cpu = Cpu(clock)
     cpu.interrupts.configure(35, 0)
     cpu.load(_cyclic(35))  # type: ignore[arg-type]
@@ -123,7 +123,7 @@ def test_loaded_but_deselected_ob_aborts_the_startup(clock: VirtualClock) -> Non
 
 
 def test_scheduler_arms_only_given_obs() -> None:
-    """Behaviour 19: only loaded OBs get their default period."""
+    """Only loaded OBs get their default period."""
     sched = CyclicScheduler()
     sched.arm([35, 1, 100], 0)
     assert list(sched.active) == [35]
@@ -133,9 +133,9 @@ def test_scheduler_arms_only_given_obs() -> None:
 def test_equal_priority_cyclic_obs_run_in_the_order_of_their_start_events(
     clock: VirtualClock,
 ) -> None:
-    """Behaviour 17: OBs of equal priority never interrupt each other and queue in order
-    of their start events [002:L1037-1038] — here OB35 (due at 60 ms) before OB36 (due at
-    100 ms) although OB36 has the higher default priority."""
+    """OBs of equal priority never interrupt each other and queue in order of their start events
+    (Siemens' Program Design for S7-300/400) — here OB35 (due at 60 ms) before OB36 (due at 100 ms)
+    although OB36 has the higher default priority."""
     cpu = Cpu(clock, max_cycle_ms=10_000)
     cpu.load(ob(1)(lambda ctx: None), _cyclic(35), _cyclic(36))  # type: ignore[arg-type]
     cpu.interrupts.configure(35, 60)

@@ -1,4 +1,5 @@
-"""Literals (SPEC.md §1.2, seeds-runtime.md §4.3 Table C-1)."""
+"""Literals (docs/runtime.md, "The block runtime", Siemens' Program Design for S7-300/400, appendix
+C, table C-1)."""
 
 from __future__ import annotations
 

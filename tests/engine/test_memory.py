@@ -1,4 +1,5 @@
-"""Operand memory (SPEC.md §1.1, §1.4; seeds-runtime.md §3.3, §4.2, §10)."""
+"""Operand memory (docs/runtime.md, "The block runtime" and "Restarts: warm, hot, cold"; Siemens'
+Program Design for S7-300/400, ch. 5 and 9)."""
 
 from __future__ import annotations
 
@@ -23,20 +24,20 @@ def mem() -> Memory:
 
 
 def test_word_is_big_endian_with_high_byte_at_the_lower_address(mem: Memory) -> None:
-    """Behaviour 43: L W#16#1234; T MW10 → MB10 = 16#12, MB11 = 16#34."""
+    """L W#16#1234; T MW10 → MB10 = 16#12, MB11 = 16#34."""
     mem.write(A("MW10"), 0x1234)
     assert (mem.read(A("MB10")), mem.read(A("MB11"))) == (0x12, 0x34)
 
 
 def test_bit_0_of_the_first_byte_is_bit_8_of_the_word(mem: Memory) -> None:
-    """Behaviour 43: M10.0 is bit 0 of MB10 = bit 8 of MW10."""
+    """M10.0 is bit 0 of MB10 = bit 8 of MW10."""
     mem.write(A("M10.0"), True)
     assert mem.read(A("MW10")) == 0x0100
     assert mem.read(A("MB10")) == 0x01
 
 
 def test_dword_spans_four_bytes_most_significant_first(mem: Memory) -> None:
-    """seeds-runtime.md §4.2: MD100 = MB100..MB103."""
+    """Siemens' Program Design for S7-300/400, ch. 5: MD100 = MB100..MB103."""
     mem.write(A("MD100"), 0x01020304)
     assert [mem.read(A(f"MB{n}")) for n in range(100, 104)] == [1, 2, 3, 4]
     assert mem.read(A("MW101")) == 0x0203
@@ -55,7 +56,7 @@ def test_typed_access_converts_s7_types(mem: Memory) -> None:
 
 
 def test_long_types_are_read_from_the_first_byte(mem: Memory) -> None:
-    """Behaviour 41/42: STRING[n] and DT live at a start byte and span n+2 / 8 bytes."""
+    """STRING[n] and DT live at a start byte and span n+2 / 8 bytes."""
     db = mem.create_db(5, 20)
     mem.write_as(A("DB5.DBB0"), "STRING[6]", "+205")
     mem.write_as(A("DB5.DBB8"), "DT", datetime(2026, 11, 22, 8, 30, 1, 999_000))
@@ -88,7 +89,7 @@ def test_typed_write_out_of_range_is_a_type_mismatch(mem: Memory) -> None:
 
 
 def test_reading_beyond_a_db_is_an_area_length_error(mem: Memory) -> None:
-    """Behaviour 36: DB access beyond its length is an area-length error (SW_FLT 16#22/23)."""
+    """DB access beyond its length is an area-length error (SW_FLT 16#22/23)."""
     mem.create_db(1, 10)
     assert mem.read(A("DB1.DBW8")) == 0
     with pytest.raises(AreaLengthError, match=r"DB1\.DBD8") as read_err:
@@ -99,7 +100,7 @@ def test_reading_beyond_a_db_is_an_area_length_error(mem: Memory) -> None:
 
 
 def test_area_length_error_is_an_address_error(mem: Memory) -> None:
-    """Behaviour 36: callers catching AddressError also see area-length errors."""
+    """Callers catching AddressError also see area-length errors."""
     with pytest.raises(AddressError, match="MW255"):
         mem.read(A("MW255"))
 
@@ -118,7 +119,8 @@ def test_timer_or_counter_number_beyond_the_cells_is_an_address_error() -> None:
 
 
 def test_timer_reads_status_as_bool_and_binary_value_as_word(mem: Memory) -> None:
-    """seeds-runtime.md §5.1: ``A T n`` status bit, ``L T n`` binary without time base."""
+    """El-Shahat's S7-300/400 course, timers and counters: ``A T n`` status bit, ``L T n`` binary
+    without time base."""
     mem.timers[5] = S5Timer(value_ms=1230, time_base_ms=10, q=True)
     assert mem.read_as(A("T5"), "BOOL") is True
     assert mem.read(A("T5")) == 123
@@ -129,7 +131,7 @@ def test_timer_reads_status_as_bool_and_binary_value_as_word(mem: Memory) -> Non
 
 
 def test_counter_value_saturates_and_q_means_nonzero() -> None:
-    """seeds-runtime.md §5.2: 0..999, Q = value > 0."""
+    """El-Shahat's S7-300/400 course, timers and counters: 0..999, Q = value > 0."""
     cell = S5Counter()
     cell.set_value(1200)
     assert (cell.value, cell.q, cell.bcd()) == (999, True, 0x999)
@@ -138,7 +140,8 @@ def test_counter_value_saturates_and_q_means_nonzero() -> None:
 
 
 def test_peripheral_access_goes_to_the_module_side_not_the_process_image(mem: Memory) -> None:
-    """SPEC.md §1.1: PI/PQ are the module side; I is only the process image."""
+    """docs/runtime.md, "The block runtime": PI/PQ are the module side; I is only the process
+    image."""
     mem.periph_in[0:2] = b"\x12\x34"
     assert mem.read(A("PIW0")) == 0x1234
     assert mem.read(A("IW0")) == 0
@@ -147,7 +150,8 @@ def test_peripheral_access_goes_to_the_module_side_not_the_process_image(mem: Me
 
 
 def test_peripheral_output_inside_the_q_image_updates_q_too(mem: Memory) -> None:
-    """seeds-runtime.md §4.2 [K]: PQx within the PIQ range also updates the PIQ."""
+    """Siemens' Program Design for S7-300/400, ch. 5 [K]: PQx within the PIQ range also updates the
+    PIQ."""
     mem.write(A("PQW0"), 0xBEEF)
     assert mem.read(A("QW0")) == 0xBEEF
     quiet = Memory(pq_updates_q=False)
@@ -199,7 +203,7 @@ def test_db_field_address_uses_the_layout(mem: Memory) -> None:
 def test_warm_restart_clears_non_retentive_markers_timers_counters_and_keeps_dbs(
     mem: Memory,
 ) -> None:
-    """Behaviour 3: non-retentive M/T/C zeroed, retentive M (MB0..15) and C (C0..7) and DBs kept."""
+    """Non-retentive M/T/C zeroed, retentive M (MB0..15) and C (C0..7) and DBs kept."""
     mem.write(A("MB15"), 1)
     mem.write(A("MB16"), 2)
     mem.counters[7].set_value(5)
@@ -215,7 +219,7 @@ def test_warm_restart_clears_non_retentive_markers_timers_counters_and_keeps_dbs
 
 
 def test_cold_restart_resets_everything_and_reloads_db_initial_values(mem: Memory) -> None:
-    """Behaviour 4: all M/T/C zeroed incl. retentive; runtime DBs deleted; DBs re-initialised."""
+    """All M/T/C zeroed incl. retentive; runtime DBs deleted; DBs re-initialised."""
     mem.write(A("MB0"), 1)
     mem.counters[0].set_value(3)
     db = mem.create_db(1, 2, init=b"\x05\x06")

@@ -1,4 +1,5 @@
-"""Retentive state in SQLite; a killed CPU process comes back by warm restart (DESIGN.md)."""
+"""Retentive state in SQLite; a killed CPU process comes back by warm restart
+(docs/state-file.md)."""
 
 from __future__ import annotations
 
@@ -40,7 +41,7 @@ def _cpu(clock: VirtualClock) -> Cpu:
 
 
 def test_state_round_trips_and_restarts_warm(clock: VirtualClock, tmp_path: Path) -> None:
-    """Behaviour 3: after load + warm restart retentive M, DBs and instance DBs are intact,
+    """After load + warm restart retentive M, DBs and instance DBs are intact,
     non-retentive M is cleared; the diagnostic buffer comes back too."""
     store = StateStore(tmp_path / "s.sqlite")
     cpu = _cpu(clock)
@@ -263,7 +264,7 @@ def _read(path: Path) -> dict[str, Any] | None:
 @pytest.mark.timeout(90)
 @pytest.mark.skipif(os.name != "posix", reason="SIGKILL")
 def test_killed_cpu_process_comes_back_by_warm_restart(tmp_path: Path) -> None:
-    """Behaviour 3: a SIGKILLed CPU process restarts warm with every retentive value intact
+    """A SIGKILLed CPU process restarts warm with every retentive value intact
     (retentive MW, DB and instance DB) and non-retentive MW cleared."""
     cmd, state = run_command(tmp_path, PROGRAM)
 

@@ -1,4 +1,5 @@
-"""Warm, hot and cold restart: what each keeps and clears (SPEC.md §1.4; seeds §3.2)."""
+"""Warm, hot and cold restart: what each keeps and clears (docs/runtime.md, "Restarts: warm, hot,
+cold"; Siemens' Program Design for S7-300/400, ch. 9)."""
 
 from __future__ import annotations
 
@@ -54,7 +55,7 @@ def _cpu(clock: VirtualClock) -> Cpu:
 def test_warm_restart_clears_non_retentive_and_keeps_retentive_and_dbs(
     clock: VirtualClock,
 ) -> None:
-    """Behaviour 3: OB100; non-retentive M/C zeroed, retentive M/C and DBs kept, PIQ cleared."""
+    """OB100; non-retentive M/C zeroed, retentive M/C and DBs kept, PIQ cleared."""
     cpu = _cpu(clock)
     cpu.start("warm")
     mem = cpu.mem
@@ -67,7 +68,7 @@ def test_warm_restart_clears_non_retentive_and_keeps_retentive_and_dbs(
 
 
 def test_cold_restart_resets_everything_to_initial_values(clock: VirtualClock) -> None:
-    """Behaviour 4: OB102; all M/T/C zeroed, DBs reloaded, SFC22 DBs deleted."""
+    """OB102; all M/T/C zeroed, DBs reloaded, SFC22 DBs deleted."""
     cpu = _cpu(clock)
     cpu.start("cold")
     mem = cpu.mem
@@ -78,7 +79,7 @@ def test_cold_restart_resets_everything_to_initial_values(clock: VirtualClock) -
 
 
 def test_hot_restart_clears_nothing_but_the_outputs(clock: VirtualClock) -> None:
-    """Behaviour 5: OB101; M/T/C and DBs kept; PIQ cleared unless parametrised to keep."""
+    """OB101; M/T/C and DBs kept; PIQ cleared unless parametrised to keep."""
     cpu = _cpu(clock)
     cpu.start("hot")
     mem = cpu.mem
@@ -93,7 +94,7 @@ def test_hot_restart_clears_nothing_but_the_outputs(clock: VirtualClock) -> None
 
 
 def test_hot_restart_is_refused_after_a_download(clock: VirtualClock) -> None:
-    """Behaviour 6: after a block download in STOP only a warm restart is possible."""
+    """After a block download in STOP only a warm restart is possible."""
     cpu = _cpu(clock)
     cpu.load(ob100)
     record = cpu.start("hot")
@@ -103,7 +104,7 @@ def test_hot_restart_is_refused_after_a_download(clock: VirtualClock) -> None:
 
 
 def test_hot_restart_is_refused_after_memory_reset(clock: VirtualClock) -> None:
-    """Behaviour 6: after MRES only a warm restart is possible."""
+    """After MRES only a warm restart is possible."""
     cpu = _cpu(clock)
     cpu.memory_reset()
     cpu.start("hot")
@@ -111,7 +112,7 @@ def test_hot_restart_is_refused_after_memory_reset(clock: VirtualClock) -> None:
 
 
 def test_the_first_start_after_loading_is_never_hot(clock: VirtualClock) -> None:
-    """Behaviour 6: a freshly downloaded program starts warm even if hot is asked for."""
+    """A freshly downloaded program starts warm even if hot is asked for."""
     cpu = Cpu(clock)
     cpu.load(ob100, ob101)
     ran.clear()
@@ -120,7 +121,7 @@ def test_the_first_start_after_loading_is_never_hot(clock: VirtualClock) -> None
 
 
 def test_missing_startup_ob_is_not_an_error(clock: VirtualClock) -> None:
-    """Behaviour 7: without OB100/101/102 the startup proceeds to RUN."""
+    """Without OB100/101/102 the startup proceeds to RUN."""
     cpu = Cpu(clock)
     for kind in ("warm", "cold"):
         record = cpu.start(kind)
@@ -130,7 +131,7 @@ def test_missing_startup_ob_is_not_an_error(clock: VirtualClock) -> None:
 
 
 def test_startup_has_no_monitoring_interrupts_or_outputs(clock: VirtualClock) -> None:
-    """Behaviour 8: a long OB100 never times out, no OB35 runs, PIQ bits do not reach the
+    """A long OB100 never times out, no OB35 runs, PIQ bits do not reach the
     modules, direct PQ writes do."""
     calls: list[int] = []
 
@@ -159,7 +160,8 @@ def test_startup_has_no_monitoring_interrupts_or_outputs(clock: VirtualClock) ->
 
 
 def test_restart_table_names_the_startup_obs() -> None:
-    """SPEC §1.4: warm OB100, hot OB101, cold OB102; only cold clears retentive data."""
+    """docs/runtime.md, "Restarts: warm, hot, cold": warm OB100, hot OB101, cold OB102; only cold
+    clears retentive data."""
     assert {t: r.ob for t, r in RESTART.items()} == {
         RestartType.WARM: 100,
         RestartType.HOT: 101,

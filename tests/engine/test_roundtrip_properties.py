@@ -1,4 +1,5 @@
-"""Round trips: address text, literals, encodings, memory (hypothesis; SPEC.md §1.1-1.2)."""
+"""Round trips: address text, literals, encodings, memory (hypothesis; docs/runtime.md, "The block
+runtime")."""
 
 from __future__ import annotations
 
@@ -73,7 +74,8 @@ def test_encode_then_decode_gives_back_the_value(tv: tuple[str, object]) -> None
 
 @given(st.integers(0, 9_990_000))
 def test_s5time_keeps_three_significant_digits_and_never_grows(ms: int) -> None:
-    """seeds-runtime.md §5.1: the actual value is between TV − 1 time base and TV."""
+    """El-Shahat's S7-300/400 course, timers and counters: the actual value is between TV − 1 time
+    base and TV."""
     back = s5time_to_ms(ms_to_s5time(ms))
     base = (10, 100, 1000, 10000)[ms_to_s5time(ms) >> 12]
     assert back <= ms < back + base
@@ -82,7 +84,7 @@ def test_s5time_keeps_three_significant_digits_and_never_grows(ms: int) -> None:
 
 @given(st.integers(0, 124), st.integers(0, 0xFFFF_FFFF))
 def test_dword_bytes_read_back_most_significant_first(byte: int, value: int) -> None:
-    """Behaviour 43 for any dword: MB n is bits 31..24 of MD n."""
+    """For any dword: MB n is bits 31..24 of MD n."""
     mem = Memory()
     mem.write(Address(Area.M, Width.DWORD, byte), value)
     assert mem.read(Address(Area.M, Width.BYTE, byte)) == value >> 24

@@ -1,4 +1,5 @@
-"""The scan cycle: process images, outputs, programming errors (SPEC.md §1.5, seeds §3.4)."""
+"""The scan cycle: process images, outputs, programming errors (docs/runtime.md, "When a scan hangs
+or fails", Siemens' Program Design for S7-300/400, ch. 3)."""
 
 from __future__ import annotations
 
@@ -30,7 +31,8 @@ class CountingClock(VirtualClock):
 
 
 def test_scan_reads_the_clock_once() -> None:
-    """SPEC §1.6: every time-dependent rule reads one clock, once per scan."""
+    """docs/architecture.md, "The core is a function": every time-dependent rule reads one clock,
+    once per scan."""
     clock = CountingClock()
 
     @ob(1)
@@ -52,8 +54,8 @@ def test_scan_reads_the_clock_once() -> None:
 
 
 def test_inputs_are_read_once_per_cycle_and_outputs_written_once(clock: VirtualClock) -> None:
-    """Behaviour 10: PII updated once before OB1; input changes during OB1 are invisible
-    until the next cycle; PIQ reaches the modules once, after OB1."""
+    """PII updated once before OB1; input changes during OB1 are invisible until the next cycle; PIQ
+    reaches the modules once, after OB1."""
     seen: list[bool] = []
 
     @ob(1)
@@ -75,7 +77,7 @@ def test_inputs_are_read_once_per_cycle_and_outputs_written_once(clock: VirtualC
 
 
 def test_direct_peripheral_reads_see_the_module_mid_cycle(clock: VirtualClock) -> None:
-    """Behaviour 11: PIW returns the module value at once; update_pii (SFC26) refreshes I."""
+    """PIW returns the module value at once; update_pii (SFC26) refreshes I."""
     seen: list[object] = []
 
     @ob(1)
@@ -94,7 +96,8 @@ def test_direct_peripheral_reads_see_the_module_mid_cycle(clock: VirtualClock) -
 
 
 def test_outputs_are_zero_outside_run(clock: VirtualClock) -> None:
-    """SPEC §1.4: module outputs are 0 in STOP; the record reports the change."""
+    """docs/runtime.md, "Restarts: warm, hot, cold": module outputs are 0 in STOP; the record
+    reports the change."""
 
     @ob(1)
     def main(ctx: CallContext) -> None:
@@ -111,7 +114,7 @@ def test_outputs_are_zero_outside_run(clock: VirtualClock) -> None:
 
 
 def test_scan_record_is_frozen(clock: VirtualClock) -> None:
-    """DESIGN: a ScanRecord is an immutable value."""
+    """A ScanRecord is an immutable value (docs/architecture.md, "The core is a function")."""
     cpu = Cpu(clock)
     record = cpu.start()
     assert isinstance(record, ScanRecord)
@@ -120,7 +123,7 @@ def test_scan_record_is_frozen(clock: VirtualClock) -> None:
 
 
 def test_ob1_start_info_reports_cycle_times(clock: VirtualClock) -> None:
-    """Behaviour 14: OB1 start info gives previous, minimum and maximum cycle time in ms."""
+    """OB1 start info gives previous, minimum and maximum cycle time in ms."""
     infos: list[dict[str, object]] = []
 
     @ob(1)
@@ -138,7 +141,7 @@ def test_ob1_start_info_reports_cycle_times(clock: VirtualClock) -> None:
 
 
 def test_minimum_cycle_time_delays_ob1_but_not_interrupts(clock: VirtualClock) -> None:
-    """Behaviour 13: OB1 does not restart before T_min; interrupt OBs run during the wait."""
+    """OB1 does not restart before T_min; interrupt OBs run during the wait."""
 
     @ob(1)
     def main(ctx: CallContext) -> None:
@@ -162,7 +165,7 @@ def test_minimum_cycle_time_delays_ob1_but_not_interrupts(clock: VirtualClock) -
 
 
 def test_clock_memory_bits_toggle_with_their_periods(clock: VirtualClock) -> None:
-    """Behaviour 15: clock-memory bits 0..7 have periods 0.1/0.2/0.4/0.5/0.8/1/1.6/2 s."""
+    """Clock-memory bits 0..7 have periods 0.1/0.2/0.4/0.5/0.8/1/1.6/2 s."""
     cpu = Cpu(clock, clock_memory=100)
     cpu.start()
     samples = []
@@ -178,7 +181,7 @@ def test_clock_memory_bits_toggle_with_their_periods(clock: VirtualClock) -> Non
 
 
 def test_python_exception_goes_to_stop_without_ob121(clock: VirtualClock) -> None:
-    """Behaviour 26: a programming error without OB121 → STOP with block and message."""
+    """A programming error without OB121 → STOP with block and message."""
 
     @fc(3, IN={"x": "INT"}, RET="INT")
     def divide(ctx: CallContext, p: dict[str, object]) -> object:
@@ -202,7 +205,7 @@ def test_python_exception_goes_to_stop_without_ob121(clock: VirtualClock) -> Non
 
 
 def test_python_exception_calls_ob121_and_the_cpu_keeps_running(clock: VirtualClock) -> None:
-    """Behaviour 26: with OB121 loaded the error is handled and the CPU stays in RUN."""
+    """With OB121 loaded the error is handled and the CPU stays in RUN."""
     faults: list[object] = []
 
     @ob(1)
@@ -227,7 +230,7 @@ def test_python_exception_calls_ob121_and_the_cpu_keeps_running(clock: VirtualCl
 
 
 def test_error_inside_ob121_stops_the_cpu(clock: VirtualClock) -> None:
-    """Behaviour 26: OB121 that fails itself cannot recover: STOP."""
+    """OB121 that fails itself cannot recover: STOP."""
 
     @ob(1)
     def main(ctx: CallContext) -> None:
@@ -244,7 +247,7 @@ def test_error_inside_ob121_stops_the_cpu(clock: VirtualClock) -> None:
 
 
 def test_nesting_overflow_stops_and_allows_only_warm_restart(clock: VirtualClock) -> None:
-    """Behaviour 31: block-stack overflow → STOP; afterwards only a warm restart."""
+    """Block-stack overflow → STOP; afterwards only a warm restart."""
 
     @fb(1)
     def recurse(ctx: CallContext, db: InstanceDB) -> None:
@@ -274,7 +277,7 @@ def test_nesting_overflow_stops_and_allows_only_warm_restart(clock: VirtualClock
 def test_missing_async_error_ob_stops_except_ob81(
     clock: VirtualClock, ob_number: int, stops: bool
 ) -> None:
-    """Behaviour 28: OB82–OB87 missing → STOP on the event; OB81 missing → diag entry only."""
+    """OB82–OB87 missing → STOP on the event; OB81 missing → diag entry only."""
     cpu = Cpu(clock)
     cpu.start()
     cpu.raise_async_error(ob_number)
@@ -283,7 +286,7 @@ def test_missing_async_error_ob_stops_except_ob81(
 
 
 def test_loaded_async_error_ob_handles_the_event(clock: VirtualClock) -> None:
-    """Behaviour 28: with OB82 loaded the CPU stays in RUN."""
+    """With OB82 loaded the CPU stays in RUN."""
     got: list[object] = []
 
     @ob(82)

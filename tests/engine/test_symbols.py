@@ -1,4 +1,4 @@
-"""Symbol table (SPEC.md §1.1, docs/contracts.md engine.symbols)."""
+"""Symbol table (docs/runtime.md, "The block runtime", docs/architecture.md, "Seams")."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Cycle-time monitoring (SPEC.md §1.5; behaviour 12)."""
+"""Cycle-time monitoring (docs/runtime.md, "When a scan hangs or fails")."""
 
 from __future__ import annotations
 
@@ -33,7 +33,7 @@ def _run(clock: VirtualClock, *blocks: object, cycles_ms: tuple[int, ...]) -> Cp
 
 
 def test_cycle_over_150ms_without_ob80_stops(clock: VirtualClock) -> None:
-    """Behaviour 12: default maximum 150 ms; exceeded without OB80 → STOP."""
+    """Default maximum 150 ms; exceeded without OB80 → STOP."""
     cpu = _run(clock, cycles_ms=(150,))
     assert cpu.mode is CpuMode.RUN
     clock.advance(151)
@@ -46,19 +46,19 @@ def test_cycle_over_150ms_without_ob80_stops(clock: VirtualClock) -> None:
 
 
 def test_cycle_over_max_calls_ob80_with_flt_id_1(clock: VirtualClock) -> None:
-    """Behaviour 12: with OB80 loaded it is called with FLT_ID 16#01 and the CPU runs on."""
+    """With OB80 loaded it is called with FLT_ID 16#01 and the CPU runs on."""
     cpu = _run(clock, time_error, cycles_ms=(200,))
     assert cpu.mode is CpuMode.RUN and flt == [0x01]
 
 
 def test_twice_the_maximum_stops_even_with_ob80(clock: VirtualClock) -> None:
-    """Behaviour 12 [K]: exceeding 2 × T_max in one cycle → STOP even with OB80."""
+    """Exceeding 2 × T_max in one cycle → STOP even with OB80."""
     cpu = _run(clock, time_error, cycles_ms=(301,))
     assert cpu.mode is CpuMode.STOP and flt == []
 
 
 def test_re_trigr_restarts_the_monitoring(clock: VirtualClock) -> None:
-    """Behaviour 12 [K]: SFC43 RE_TRIGR in a long cycle grants it another T_max."""
+    """SFC43 RE_TRIGR in a long cycle grants it another T_max."""
 
     @ob(1)
     def long_loop(ctx: CallContext) -> None:
@@ -69,7 +69,7 @@ def test_re_trigr_restarts_the_monitoring(clock: VirtualClock) -> None:
 
 
 def test_configured_maximum_applies(clock: VirtualClock) -> None:
-    """Behaviour 12: the maximum cycle time is a parameter."""
+    """The maximum cycle time is a parameter."""
     cpu = Cpu(clock, max_cycle_ms=20)
     cpu.load(main)
     cpu.start()
@@ -79,7 +79,7 @@ def test_configured_maximum_applies(clock: VirtualClock) -> None:
 
 
 def test_watchdog_verdicts() -> None:
-    """Behaviour 12: OK up to T_max, OB80 above, STOP above 2 × T_max or without OB80."""
+    """OK up to T_max, OB80 above, STOP above 2 × T_max or without OB80."""
     wd = Watchdog(100)
     assert wd.check(100_000_000, has_ob80=True) is Verdict.OK
     assert wd.check(150_000_000, has_ob80=True) is Verdict.OB80
@@ -90,7 +90,7 @@ def test_watchdog_verdicts() -> None:
 
 
 def test_cycle_statistics_keep_last_min_max_mean() -> None:
-    """Behaviour 14: cycle statistics as reported in OB1 start info."""
+    """Cycle statistics as reported in OB1 start info."""
     stats = CycleStatistics()
     for ns in (30, 10, 20):
         stats.add(ns * 1_000_000)

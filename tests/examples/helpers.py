@@ -1,6 +1,6 @@
 """Shared drivers of the example tests (``tests/examples/test_*.py``), imported as
-``tests.examples.helpers``: run an example's ``s7graph sim`` command (SPEC §4) and read
-edges and paths out of its trace records."""
+``tests.examples.helpers``: run an example's ``s7graph sim`` command (docs/cli.md, "s7graph sim")
+and read edges and paths out of its trace records."""
 
 from __future__ import annotations
 

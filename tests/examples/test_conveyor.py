@@ -1,6 +1,6 @@
-"""The two conveyor belts of seed 000 §14.6 example 1 (000:6160-6174), run through
-``s7graph sim`` (SPEC §4) with the example's stimulus (the operator's buttons) and plant
-(material on belt B)."""
+"""The two conveyor belts of STEP7 comprehensive guide vol. 2, section 14.6, example 1, run through
+``s7graph sim`` (docs/cli.md, "s7graph sim") with the example's stimulus (the operator's buttons)
+and plant (material on belt B)."""
 
 from __future__ import annotations
 
@@ -34,13 +34,13 @@ def value_at(records: list[dict], name: str, t_ms: int) -> object:
 
 def test_start_runs_belt_b_at_once_and_belt_a_five_seconds_later(records: list[dict]) -> None:
     b_on, a_on = edges(records, "Belt_B")[0], edges(records, "Belt_A")[0]
-    assert b_on == 500  # Start pressed at 500 ms acts in that cycle (SPEC §4)
+    assert b_on == 500  # Start pressed at 500 ms acts in that cycle (docs/cli.md, "s7graph sim")
     assert 5000 <= a_on - b_on <= 5010
 
 
 def test_stop_halts_belt_a_at_once_and_belt_b_seven_seconds_later(records: list[dict]) -> None:
     a_off, b_off = edges(records, "Belt_A", False)[0], edges(records, "Belt_B", False)[0]
-    assert a_off == 12000  # Stop pressed at 12 s acts in that cycle (SPEC §4)
+    assert a_off == 12000  # Stop pressed at 12 s acts in that cycle (docs/cli.md, "s7graph sim")
     assert 7000 <= b_off - a_off <= 7010
     # the run-on carried everything off belt B, and belt A never fed a standing belt
     assert value_at(records, "Belt_B_empty", b_off + 100) is True

@@ -1,5 +1,6 @@
-"""The automatic drill of seed 000 §14.6 example 2 (000:6176-6225), run through ``s7graph sim``
-(SPEC §4) with its plant (``examples/drill/plant.py``) and stimulus."""
+"""The automatic drill of STEP7 comprehensive guide vol. 2, section 14.6, example 2, run through
+``s7graph sim`` (docs/cli.md, "s7graph sim") with its plant (``examples/drill/plant.py``) and
+stimulus."""
 
 from __future__ import annotations
 
@@ -48,7 +49,7 @@ def test_drill_clamps_lowers_dwells_raises_and_releases(records: list[dict]) -> 
         entered(records, s) for s in ("S2", "S4", "S5", "S6", "S7")
     )
     assert 1000 < s2 <= 1020  # the plant presses Start at 1000 ms, read in the next cycle
-    assert 500 <= s6 - s5 <= 510  # the dwell of 0.5 s at the lower limit (000:6186)
+    assert 500 <= s6 - s5 <= 510  # the dwell of 0.5 s at the lower limit
     assert 2000 <= s5 - s4 <= 2030  # 100 mm at 50 mm/s
     assert 2000 <= s7 - s6 <= 2030
     assert not any(rec["values"]["ERR_FLT"] for rec in records)
@@ -86,7 +87,7 @@ def test_drill_halts_with_a_supervision_fault_when_clamping_takes_over_500_ms(
     (s2,) = entered(records, "S2")
     fault = [rec["t_ms"] for rec in records if rec["values"]["ERR_FLT"]]
     assert fault, "no supervision fault"
-    assert s2 + 500 <= fault[0] <= s2 + 520  # S2.U > T#500MS (000:6201)
+    assert s2 + 500 <= fault[0] <= s2 + 520  # S2.U > T#500MS
     # the pressure arrives at about s2 + 1500, but the step waits for the acknowledgement
     (s3,) = entered(records, "S3")
     assert 4000 <= s3 <= 4030

@@ -1,5 +1,6 @@
 """The README demo's plant (``examples/drill/demo_plant.py``): the drill works piece after
-piece and a slow clamp now and then faults S2 until someone acknowledges (SPEC §2.4)."""
+piece and a slow clamp now and then faults S2 until someone acknowledges (docs/semantics.md,
+"Supervision")."""
 
 from __future__ import annotations
 

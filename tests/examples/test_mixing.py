@@ -1,6 +1,6 @@
-"""The industrial mixing process of seed 002 (ch.1 and appendix A; digest in
-``reference/seeds-runtime.md`` §8.1) as a GRAPH sequence, run through ``s7graph sim``
-(SPEC §4) with its plant (``examples/mixing/plant.py``) and stimulus, 50 ms cycles."""
+"""The industrial mixing process of Siemens' Program Design for S7-300/400 (ch. 1 and appendix A) as
+a GRAPH sequence, run through ``s7graph sim`` (docs/cli.md, "s7graph sim") with its plant
+(``examples/mixing/plant.py``) and stimulus, 50 ms cycles."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """``s7graph import`` and ``s7graph export`` on the command line: exit status, where the
-chart and its symbols go, what is printed (issue 11); ``importable_files`` for the
+chart and its symbols go, what is printed (docs/import-export.md); ``importable_files`` for the
 editor's Open."""
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """Every corpus file imports into a chart ``s7graph check`` accepts, and reports exactly
-what it could not map, at its line in the file (issue 11). The corpus is read in place
+what it could not map, at its line in the file (docs/import-export.md). The corpus is read in place
 (``../shared/corpus``); the tests skip when it is absent."""
 
 from __future__ import annotations

@@ -1,9 +1,9 @@
-"""The corpus charts that can run run as their origin runs them, checked through
-``s7graph sim`` (issue 11). matiec's cycle (``generate_c_sfc.cc``) is GRAPH's order: the
-transitions are tested on the state at the start of the call, then the steps switch,
-then the actions of the active steps run, newly activated ones included; a D action
-becomes active in the call its step has been active for its time. The FB's first call is
-OB100's (with INIT_SQ), before sim's cycle 0: it is the origin's first cycle."""
+"""The corpus charts that can run run as their origin runs them, checked through ``s7graph sim``
+(docs/import-export.md). matiec's cycle (``generate_c_sfc.cc``) is GRAPH's order: the transitions
+are tested on the state at the start of the call, then the steps switch, then the actions of the
+active steps run, newly activated ones included; a D action becomes active in the call its step has
+been active for its time. The FB's first call is OB100's (with INIT_SQ), before sim's cycle 0: it is
+the origin's first cycle."""
 
 from __future__ import annotations
 

@@ -1,6 +1,5 @@
-"""IEC qualifiers and constructs map to GRAPH where an exact equivalent exists and are
-otherwise reported at their place (``exchange.mapping``, the table of docs/import-export.md;
-issue 11)."""
+"""IEC qualifiers and constructs map to GRAPH where an exact equivalent exists and are otherwise
+reported at their place (``exchange.mapping``, the table of docs/import-export.md)."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """Bad input is one clear, located error, never a traceback; byte order marks, CRLF line
 ends, namespaces and their prefixes, the old ``tc6.xsd`` schema read as the rest
-(issue 11)."""
+(docs/import-export.md)."""
 
 from __future__ import annotations
 

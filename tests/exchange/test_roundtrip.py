@@ -1,5 +1,5 @@
-"""For the charts under ``examples/``, import(export(chart)) gives back the same model,
-through PLCopen TC6 XML and through TIA SimaticML (issue 11); the PLCopen export is an SFC
+"""For the charts under ``examples/``, import(export(chart)) gives back the same model, through
+PLCopen TC6 XML and through TIA SimaticML (docs/import-export.md); the PLCopen export is an SFC
 other IEC tools read, and SimaticML holds GRAPH natively."""
 
 from __future__ import annotations

@@ -4,13 +4,15 @@
   no S5 cells, no message list), 10 ms per call; ``active`` gives step labels.
 - ``Run``: one GRAPH FB through the real cycle (``sequencer.cycle.GraphRuntime``) on an
   engine ``Memory``, paced by a ``VirtualClock``. FB input pins are held like the ``sim``
-  stimuli (SPEC §4): a value stays until set again. After every call the driver runs
+  stimuli (docs/cli.md, "s7graph sim"): a value stays until set again. After every call the driver
+  runs
   ``sequencer.messages.sync_messages`` into its own ``MessageList`` — the integration the
   FB is meant to do (see messages.py). ``Run.scenario(name)`` loads
   ``tests/sequencer/scenarios/<name>.s7g``.
 - ``source``/``seq``/``chart``/``two_steps``/``enter``/``leave``: the chart builders of the
-  SPEC conformance tests (``tests/sequencer/test_spec_*.py``), driven with ``Run``.
-- ``write_sim_inputs``/``read_trace``: the files of one ``s7graph sim`` run (SPEC §4);
+  Conformance tests (``tests/sequencer/test_spec_*.py``), driven with ``Run``.
+- ``write_sim_inputs``/``read_trace``: the files of one ``s7graph sim`` run (docs/cli.md, "s7graph
+sim");
   ``sim_trace`` runs one and returns its exit status and trace.
 """
 
@@ -220,7 +222,7 @@ class Run:
         timer_row(self.mem.timers, op, number, value, self.clock.now_ns())
 
 
-# ---------------------------------------------------------------- SPEC conformance builders
+# ---------------------------------------------------------------- Conformance builders
 
 
 def chart(sequences: str, *, header: str = "", params: str = "MAXIMUM") -> Run:

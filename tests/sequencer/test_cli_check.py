@@ -1,4 +1,5 @@
-"""``s7graph check`` prints one line per diagnostic plus a summary; exit 0/1/2 (SPEC.md §3)."""
+"""``s7graph check`` prints one line per diagnostic plus a summary; exit 0/1/2
+(docs/chart-format.md)."""
 
 from __future__ import annotations
 
@@ -59,7 +60,8 @@ def test_symbol_file_resolves_quoted_names(
 
 
 def test_a_waiting_step_without_actions_is_clean(tmp_path: Path) -> None:
-    """A step may hold no action rows (seed 000:5447): waiting steps are idiomatic."""
+    """A step may hold no action rows (STEP7 comprehensive guide vol. 2, ch. 14): waiting steps are
+    idiomatic."""
     chart = tmp_path / "wait.s7g"
     chart.write_text(
         'FUNCTION_BLOCK "W"\nSEQUENCE 1\n  INITIAL_STEP S1: N Q0.0; END_STEP\n'

@@ -1,5 +1,6 @@
 """Interlock, supervision, acknowledgement, modes and control inputs in the cycle
-(SPEC §2.2 1-2, 4b, 4d; §2.3-§2.6)."""
+(docs/semantics.md, "One FB call", steps 1-2, 4.2 and 4.4; "Interlock", "Supervision",
+"Modes" and "FB pins")."""
 
 from __future__ import annotations
 

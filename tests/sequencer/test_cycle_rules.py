@@ -1,4 +1,5 @@
-"""The per-call algorithm of SPEC §2.1/§2.2, one test per rule, on the virtual clock."""
+"""The per-call algorithm of docs/semantics.md, "Structure" and "One FB call", one test per rule, on
+the virtual clock."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Display outputs and the S_NO/T_NO cursor (SPEC §2.6, §2.7; graph-semantics §D.3, §D.4).
+"""Display outputs and the S_NO/T_NO cursor (docs/semantics.md, "FB pins" and "Decisions").
 
 The state is set by hand here (the cycle is tested elsewhere): these tests pin what the
 display computes from a given instance-DB content.

@@ -282,7 +282,7 @@ def test_apply_edit_refuses_what_is_not_an_edit() -> None:
 
 
 def test_the_online_change_doc_names_every_operation_and_limit() -> None:
-    """docs/online-change.md, "Editing charts (core)" (the README's section until issue 28)."""
+    """docs/online-change.md, "Editing charts (core)" (once a section of the README)."""
     doc = (HERE.parents[1] / "docs" / "online-change.md").read_text(encoding="utf-8")
     section = doc.split("## Editing charts (core)")[1].split("\n## ")[0]
     assert [op.name for op in OPERATIONS if f"`{op.name}`" not in section] == []

@@ -1,5 +1,6 @@
 """GraphFB in a CPU: OB1 calls, OB100 with INIT_SQ, step events in the ScanRecord, state in
-the instance DB (SPEC §2.2, DESIGN "State lives in the instance DB")."""
+the instance DB (docs/semantics.md, "One FB call", docs/architecture.md, "The core is a
+function")."""
 
 from __future__ import annotations
 
@@ -67,8 +68,8 @@ def test_several_graph_fbs_share_one_cpu() -> None:
 
 
 def test_a_program_calling_a_pin_outside_the_parameter_set_stops_with_the_set_named() -> None:
-    """SPEC §2.7: HALT_SQ is a MAXIMUM pin; a program passing it to a STANDARD FB is a
-    programming error naming the parameter set (OB121 absent: STOP, diagnostic entry)."""
+    """docs/semantics.md, "FB pins": HALT_SQ is a MAXIMUM pin; a program passing it to a STANDARD FB
+    is a programming error naming the parameter set (OB121 absent: STOP, diagnostic entry)."""
     from s7graph.engine.blocks import ob
 
     graph = GraphFB(compile_chart(parse_chart(TEXT, "seq.s7g")))

@@ -1,5 +1,5 @@
 """``sequencer.text.format.format_chart`` writes the model back as `.s7g` text that parses to the
-same model (SPEC §3): for every example, every test chart, and charts hypothesis builds
+same model (docs/chart-format.md): for every example, every test chart, and charts hypothesis builds
 from every kind of element the parser makes."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""One test per rule of SPEC §2.3 (interlock), §2.4 (supervision), §2.5 (modes) and §2.6
+"""One test per rule of docs/semantics.md, "Interlock", "Supervision", "Modes" and "FB pins"
 (control inputs), through the real cycle. Chart: scenarios/rules.s7g — S2 is guarded
 (interlock I0.0, supervision I0.6, a row per event: L1→M1.1 L0→M1.0 V1→M1.2 V0→M1.3
 A1→M1.4 R1→M1.5), S4 the parallel path, S11/S12 a second sequencer."""
@@ -36,7 +36,7 @@ def faulted(options: str = "") -> Run:
     return run
 
 
-# ---------------------------------------------------------------- §2.3 interlock
+# ---------------------------------------------------------------- interlock
 
 
 def test_interlock_lost_stops_only_the_c_rows() -> None:
@@ -101,7 +101,7 @@ def test_en_il_zero_treats_every_interlock_as_held() -> None:
     assert run.get("Q0.0") is True and not run.out("ERROR") and not run.out("IL_ENABLED")
 
 
-# ---------------------------------------------------------------- §2.4 supervision
+# ---------------------------------------------------------------- supervision
 
 
 def test_supervision_fault_raises_v1_and_sets_fault_and_err_flt() -> None:
@@ -202,7 +202,7 @@ def test_en_sv_zero_disables_supervision() -> None:
 
 def test_ack_releases_a_time_supervision_frozen_by_its_own_fault() -> None:
     """``S1.U > limit`` stays true once the fault froze U: the acknowledgement must still
-    release the step for the call's switching (SPEC §2.4)."""
+    release the step for the call's switching (docs/semantics.md, "Supervision")."""
     run = Run(
         'FUNCTION_BLOCK "U" PARAMETERS := STANDARD; SEQUENCE 1 "s"\n'
         'INITIAL_STEP S1 "a": SUPERVISION := S1.U > T#50MS; END_STEP\n'
@@ -215,7 +215,7 @@ def test_ack_releases_a_time_supervision_frozen_by_its_own_fault() -> None:
     assert run.active == [2]
 
 
-# ---------------------------------------------------------------- §2.5 modes
+# ---------------------------------------------------------------- modes
 
 
 def test_mode_is_chosen_by_sw_edges_and_kept_in_the_instance_db() -> None:
@@ -266,7 +266,7 @@ def test_man_never_switches_a_transition() -> None:
     assert run.active == [1, 11]
 
 
-# ---------------------------------------------------------------- §2.6 control inputs
+# ---------------------------------------------------------------- control inputs
 
 
 def test_off_sq_switches_every_step_off_while_set() -> None:

@@ -1,5 +1,5 @@
-"""Interlock and supervision messages in the CPU's message list (SPEC §2.10; seed
-000_94874053f3a39f87.txt:6226-6300). Chart: scenarios/messages.s7g (FB 1, DB 1)."""
+"""Interlock and supervision messages in the CPU's message list (docs/semantics.md, "Messages"; seed
+STEP7 comprehensive guide vol. 2, ch. 14). Chart: scenarios/messages.s7g (FB 1, DB 1)."""
 
 from __future__ import annotations
 
@@ -47,7 +47,7 @@ def test_message_goes_with_the_cause_but_the_step_waits_for_ack_ef() -> None:
     run.set(M3_1=False, I0_1=True).call(3)
     (msg,) = run.messages.entries()
     assert msg.state is MessageState.OUTGOING and not msg.acked
-    assert run.active == [1]  # seed 6297: no transition until acknowledged
+    assert run.active == [1]  # no transition until acknowledged (guide ch. 14)
     run.set(M10_2=True).call()
     assert run.active == [2] and run.messages.entries() == ()
     kinds = [(e.kind, e.user) for e in run.messages.log()]
@@ -63,7 +63,7 @@ def test_interlock_error_message_comes_goes_and_is_acknowledged_by_ack_ef() -> N
     assert msg.text == "S7GRAPH Interlock Error: FB1, DB1, S001 material is missing"
     run.set(I1_0=True).call()
     assert run.messages.get(IL1).state is MessageState.OUTGOING  # type: ignore[union-attr]
-    assert not run.out("ERR_FLT")  # the step's error cleared itself (SPEC §2.3)
+    assert not run.out("ERR_FLT")  # the error cleared itself (semantics.md, "Interlock")
     run.set(M10_2=True).call()
     assert run.messages.entries() == ()
     assert run.messages.log()[-1].user == PROGRAM_USER

@@ -1,4 +1,4 @@
-"""The FB pin table and parameter sets (SPEC §2.7, graph-semantics §D.2)."""
+"""The FB pin table and parameter sets (docs/semantics.md, "FB pins" and "Decisions")."""
 
 from __future__ import annotations
 
@@ -143,7 +143,7 @@ def test_markdown_table_has_a_row_per_pin_with_set_marks() -> None:
 
 def test_the_semantics_doc_holds_the_pin_table_of_the_code() -> None:
     """The one pin table is the code's: docs/semantics.md prints it verbatim (the README's
-    copy moved there with issue 28)."""
+    copy moved there)."""
     root = Path(__file__).resolve().parents[2]
     for doc in (root / "docs" / "semantics.md",):
         assert markdown_table() in doc.read_text(encoding="utf-8"), doc.name

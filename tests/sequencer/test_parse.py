@@ -1,4 +1,5 @@
-"""The `.s7g` parser builds the chart model of SPEC.md §3 with a place on every element."""
+"""The `.s7g` parser builds the chart model of docs/chart-format.md with a place on every
+element."""
 
 from __future__ import annotations
 

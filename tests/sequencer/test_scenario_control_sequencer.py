@@ -1,4 +1,4 @@
-"""The seed's "Control Sequencer" checks 1-9 (seed 000_94874053f3a39f87.txt:6136-6154),
+"""The book's "Control Sequencer" checks 1-9 (STEP7 comprehensive guide vol. 2, ch. 14),
 each through the FB pins that dialog drives. Chart: scenarios/control_sequencer.s7g."""
 
 from __future__ import annotations

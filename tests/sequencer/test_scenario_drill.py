@@ -1,5 +1,5 @@
 """The drill with clamping-pressure supervision: fault, acknowledgement, completion
-(SPEC §2.4, §2.10; seed 000_94874053f3a39f87.txt:6176-6225, 6297).
+(docs/semantics.md, "Supervision" and "Messages"; STEP7 comprehensive guide vol. 2, ch. 14).
 Chart: scenarios/drill_supervised.s7g; the plant is played by setting the inputs."""
 
 from __future__ import annotations

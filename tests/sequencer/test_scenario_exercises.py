@@ -1,4 +1,4 @@
-"""The seed's exercises 1-4 on the FB parameters (seed 000_94874053f3a39f87.txt:6021-6122),
+"""The book's exercises 1-4 on the FB parameters (STEP7 comprehensive guide vol. 2, ch. 14),
 run through the real cycle with the pins wired to markers as in ``CALL FB 2, DB 2``.
 Charts: tests/sequencer/scenarios/exercise_*.s7g."""
 
@@ -18,7 +18,7 @@ def started(name: str) -> Run:
 
 
 def test_exercise_1_tap_holds_a_satisfied_transition_until_t_push() -> None:
-    """Ex. 1 (seed 6021): SW_TAP := M0.0, T_PUSH := M0.1."""
+    """Ex. 1: SW_TAP := M0.0, T_PUSH := M0.1."""
     run = started("exercise_modes").wire(SW_TAP="M0.0", T_PUSH="M0.1")
     run.set(I0_1=True).call()
     assert run.active == [2] and run.out("AUTO_ON")  # M0.0 = 0: AUTO, normal processing
@@ -33,7 +33,7 @@ def test_exercise_1_tap_holds_a_satisfied_transition_until_t_push() -> None:
 
 
 def test_exercise_2_sw_edges_select_a_mode_that_stays() -> None:
-    """Ex. 2 (seed 6023): SW_AUTO, SW_MAN, SW_TAP on M0.0, M0.1, M0.2, toggled in turn."""
+    """Ex. 2: SW_AUTO, SW_MAN, SW_TAP on M0.0, M0.1, M0.2, toggled in turn."""
     run = started("exercise_modes").wire(SW_AUTO="M0.0", SW_MAN="M0.1", SW_TAP="M0.2")
 
     def mode() -> list[str]:
@@ -50,7 +50,7 @@ def test_exercise_2_sw_edges_select_a_mode_that_stays() -> None:
 
 
 def test_exercise_3_top_switches_on_condition_or_push() -> None:
-    """Ex. 3 (seed 6120): User-defined set, SW_TOP := M1.0, T_PUSH := M0.1."""
+    """Ex. 3: User-defined set, SW_TOP := M1.0, T_PUSH := M0.1."""
     run = started("exercise_top").wire(SW_TOP="M1.0", T_PUSH="M0.1")
     run.set(M1_0=True).call()
     assert run.out("TOP_ON")
@@ -63,8 +63,8 @@ def test_exercise_3_top_switches_on_condition_or_push() -> None:
 
 
 def test_exercise_3_top_is_standard_here_but_user_pins_are_refused_in_standard() -> None:
-    """The seed (V5) needs the User-defined set for SW_TOP; SPEC §2.7 follows TIA, whose
-    STANDARD set has SW_TOP/TOP_ON. Pins of the larger sets are refused by name."""
+    """The guide (V5) needs the User-defined set for SW_TOP; docs/semantics.md, "FB pins" follows
+    TIA, whose STANDARD set has SW_TOP/TOP_ON. Pins of the larger sets are refused by name."""
     run = started("exercise_modes").wire(SW_TOP="M1.0")
     run.set(M1_0=True).call()
     assert run.out("TOP_ON")
@@ -75,7 +75,7 @@ def test_exercise_3_top_is_standard_here_but_user_pins_are_refused_in_standard()
 
 
 def test_exercise_4_reg_ef_runs_the_r1_row_of_a_disturbed_step() -> None:
-    """Ex. 4 (seed 6122): REG_EF := M0.0, interlock I0.0, ``R1 S Q0.0``."""
+    """Ex. 4: REG_EF := M0.0, interlock I0.0, ``R1 S Q0.0``."""
     run = started("exercise_registration").wire(REG_EF="M0.0")
     run.set(I0_0=True, I0_1=True).call(2)
     assert run.active == [2] and run.get("Q0.1") is True and run.get("Q0.0") is False

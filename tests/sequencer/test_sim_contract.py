@@ -1,4 +1,4 @@
-"""``s7graph sim`` exactly per SPEC §4 (the public black-box contract)."""
+"""``s7graph sim`` exactly per docs/cli.md, "s7graph sim" (the public black-box contract)."""
 
 from __future__ import annotations
 

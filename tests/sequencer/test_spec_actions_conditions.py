@@ -1,4 +1,4 @@
-"""SPEC §2.8 (actions) and §2.9 (conditions): the rules not pinned elsewhere.
+"""docs/semantics.md, "Actions" and "Conditions": the rules not pinned elsewhere.
 
 Driven through the real cycle (``GraphRuntime``) by the scenario harness, 10 ms per call;
 the CALL rules through a CPU (OB1 calls the GraphFB, which calls an FC).
@@ -17,12 +17,12 @@ from s7graph.sequencer.fb import GraphFB, install_all
 from s7graph.sequencer.text.parse import parse_chart
 from tests.sequencer.helpers import chart, enter, leave, seq, source, two_steps
 
-# ---------------------------------------------------------------- §2.8 qualifiers
+# ---------------------------------------------------------------- qualifiers
 
 
 def test_plain_s_row_re_issues_the_set_every_cycle_while_s1_s_sets_once() -> None:
-    """SPEC §2.2 4e / §2.8: a plain S row runs every cycle while the step is active; an
-    S1 S row only in the activation call."""
+    """docs/semantics.md, "One FB call", step 4.5 and "Actions": a plain S row runs every cycle
+    while the step is active; an S1 S row only in the activation call."""
     run = two_steps("S M0.0; S1 S M0.1;")
     enter(run)
     assert run.get("M0.0") is True and run.get("M0.1") is True
@@ -31,7 +31,7 @@ def test_plain_s_row_re_issues_the_set_every_cycle_while_s1_s_sets_once() -> Non
 
 
 def test_n_operand_is_zero_after_the_step_is_left_but_s_stays_set() -> None:
-    """SPEC §2.8: N is 0 after the step is left; S / R latch."""
+    """docs/semantics.md, "Actions": N is 0 after the step is left; S / R latch."""
     run = two_steps("N Q0.0; S Q0.1;")
     enter(run)
     leave(run)
@@ -40,8 +40,8 @@ def test_n_operand_is_zero_after_the_step_is_left_but_s_stays_set() -> None:
 
 
 def test_d_operand_is_never_set_when_the_step_is_left_before_its_time() -> None:
-    """SPEC §2.8 D: never set if left earlier — also not after a re-entry that is again
-    shorter than the time (the delay restarts at each activation)."""
+    """docs/semantics.md, "Actions" D: never set if left earlier — also not after a re-entry that is
+    again shorter than the time (the delay restarts at each activation)."""
     run = two_steps("D Q0.0, T#50MS;")
     enter(run)
     run.call(2)
@@ -55,7 +55,7 @@ def test_d_operand_is_never_set_when_the_step_is_left_before_its_time() -> None:
 
 
 def test_d_time_may_be_a_time_variable() -> None:
-    """SPEC §2.8: D takes a bit and a TIME (here an FB variable)."""
+    """docs/semantics.md, "Actions": D takes a bit and a TIME (here an FB variable)."""
     run = two_steps("D Q0.0, dwell;", header="VAR dwell : TIME := T#40MS; END_VAR")
     enter(run)
     run.call(2)
@@ -65,7 +65,8 @@ def test_d_time_may_be_a_time_variable() -> None:
 
 
 def test_l_operand_is_one_from_activation_and_zero_after_its_time_while_active() -> None:
-    """SPEC §2.8 L: 1 from activation for the time, then 0 (the step stays active)."""
+    """docs/semantics.md, "Actions" L: 1 from activation for the time, then 0 (the step stays
+    active)."""
     run = two_steps("L Q0.0, T#50MS;")
     enter(run)
     assert run.get("Q0.0") is True
@@ -76,7 +77,8 @@ def test_l_operand_is_one_from_activation_and_zero_after_its_time_while_active()
 
 
 def test_halt_tm_keeps_a_d_operand_from_being_set() -> None:
-    """SPEC §2.6 HALT_TM: D timing frozen — D does not come while the time is halted."""
+    """docs/semantics.md, "FB pins" HALT_TM: D timing frozen — D does not come while the time is
+    halted."""
     run = two_steps("D Q0.0, T#50MS;")
     enter(run)
     run.set(HALT_TM=True).call(20)
@@ -86,7 +88,8 @@ def test_halt_tm_keeps_a_d_operand_from_being_set() -> None:
 
 
 def test_zero_op_forces_d_and_l_operands_to_zero_and_they_return_after() -> None:
-    """SPEC §2.6 ZERO_OP: N, D, L operands forced to 0 while set; S rows still run."""
+    """docs/semantics.md, "FB pins" ZERO_OP: N, D, L operands forced to 0 while set; S rows still
+    run."""
     run = two_steps("N Q0.0; D Q0.1, T#20MS; L Q0.2, T#1S; S Q0.3;")
     enter(run)
     run.call(3)
@@ -99,7 +102,8 @@ def test_zero_op_forces_d_and_l_operands_to_zero_and_they_return_after() -> None
 
 
 def test_time_assignment_every_cycle() -> None:
-    """SPEC §2.8: `N A := expr` with TIME runs every cycle while the step is active."""
+    """docs/semantics.md, "Actions": `N A := expr` with TIME runs every cycle while the step is
+    active."""
     run = two_steps("N t := t + T#10MS;", header="VAR t : TIME := T#0MS; END_VAR")
     enter(run)
     run.call(4)
@@ -107,7 +111,7 @@ def test_time_assignment_every_cycle() -> None:
 
 
 def test_dint_and_real_assignments() -> None:
-    """SPEC §2.8: assignments of DINT and REAL values."""
+    """docs/semantics.md, "Actions": assignments of DINT and REAL values."""
     run = two_steps(
         "S1 N d := d * 1000; S1 N r := r / 4.0;",
         header="VAR d : DINT := L#70000; r : REAL := 1.0; END_VAR",
@@ -118,7 +122,8 @@ def test_dint_and_real_assignments() -> None:
 
 
 def test_int_overflow_in_an_assignment_leaves_the_sequencer_running() -> None:
-    """SPEC §2.8: INT overflow sets the overflow status; the chart keeps switching."""
+    """docs/semantics.md, "Actions": INT overflow sets the overflow status; the chart keeps
+    switching."""
     run = two_steps("N x := x + 20000;", header="VAR x : INT := 20000; END_VAR")
     enter(run)
     assert run.st.ov
@@ -158,7 +163,7 @@ def _scan(cpu: Cpu, clock: VirtualClock, n: int = 1, **inputs: bool) -> None:
 
 
 def test_call_row_calls_the_block_every_cycle_while_the_step_is_active() -> None:
-    """SPEC §2.8 CALL: called every cycle (and not once the step is left)."""
+    """docs/semantics.md, "Actions" CALL: called every cycle (and not once the step is left)."""
     cpu, clock, _ = _cpu_with_fc("CALL FC 1;")
     _scan(cpu, clock, 2)
     assert cpu.mem.get("MW20") == 0
@@ -175,7 +180,7 @@ def test_call_row_calls_the_block_every_cycle_while_the_step_is_active() -> None
 
 
 def test_s1_call_row_calls_the_block_once_per_activation() -> None:
-    """SPEC §2.8: an event row (S1 CALL) runs once, in the call of its event."""
+    """docs/semantics.md, "Actions": an event row (S1 CALL) runs once, in the call of its event."""
     cpu, clock, _ = _cpu_with_fc("S1 CALL FC 1;")
     cpu.mem.periph_in[0] = 1
     _scan(cpu, clock, 1)
@@ -184,11 +189,12 @@ def test_s1_call_row_calls_the_block_once_per_activation() -> None:
     assert cpu.mem.get("MW20") == 1
 
 
-# ---------------------------------------------------------------- §2.8 ON / OFF
+# ---------------------------------------------------------------- ON / OFF
 
 
 def test_on_and_off_reach_steps_of_another_sequencer() -> None:
-    """SPEC §2.8: `ON Sx` / `OFF Sx` (de)activate another step — of any sequencer."""
+    """docs/semantics.md, "Actions": `ON Sx` / `OFF Sx` (de)activate another step — of any
+    sequencer."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": END_STEP
@@ -215,8 +221,8 @@ def test_on_and_off_reach_steps_of_another_sequencer() -> None:
 
 
 def test_off_s_all_clears_every_sequencer_but_keeps_the_step_holding_it() -> None:
-    """SPEC §2.8: `OFF S_ALL` deactivates every step except the one holding the action
-    (here V1 OFF S_ALL, steps of two sequencers)."""
+    """docs/semantics.md, "Actions": `OFF S_ALL` deactivates every step except the one holding the
+    action (here V1 OFF S_ALL, steps of two sequencers)."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": END_STEP
@@ -235,7 +241,7 @@ def test_off_s_all_clears_every_sequencer_but_keeps_the_step_holding_it() -> Non
     assert run.active == [2]
 
 
-# ---------------------------------------------------------------- §2.8 allowed rows
+# ---------------------------------------------------------------- allowed rows
 
 ALLOWED = [
     "S1 NC Q0.0;", "V1 SC Q0.0;", "A1 RC Q0.0;", "R1 ONC S1;", "S1 OFFC S1;",
@@ -271,24 +277,25 @@ def _row_chart(row: str) -> str:
 
 @pytest.mark.parametrize("row", ALLOWED)
 def test_rows_of_the_allowed_table_compile(row: str) -> None:
-    """SPEC §2.8 table of allowed event / qualifier / C combinations."""
+    """docs/semantics.md, "Actions" table of allowed event / qualifier / C combinations."""
     errors = [d for d in validate(parse_chart(_row_chart(row), "r.s7g")) if d.is_error]
     assert errors == []
 
 
 @pytest.mark.parametrize(("row", "code"), REFUSED)
 def test_rows_outside_the_table_are_compile_errors_naming_step_and_row(row, code) -> None:
-    """SPEC §2.8: any other combination is a compile error naming the step and row."""
+    """docs/semantics.md, "Actions": any other combination is a compile error naming the step and
+    row."""
     errors = [d for d in validate(parse_chart(_row_chart(row), "r.s7g")) if d.is_error]
     assert [d.code for d in errors] == [code]
     assert errors[0].element == "step S2 row 2"
 
 
-# ---------------------------------------------------------------- §2.9 conditions
+# ---------------------------------------------------------------- conditions
 
 
 def test_xor_in_a_transition() -> None:
-    """SPEC §2.9: XOR of contacts."""
+    """docs/semantics.md, "Conditions": XOR of contacts."""
     body = seq("""
       INITIAL_STEP S1 "a": END_STEP
       STEP S2 "b": END_STEP
@@ -302,7 +309,7 @@ def test_xor_in_a_transition() -> None:
 
 
 def test_time_comparison_with_a_step_time_and_a_time_variable() -> None:
-    """SPEC §2.9: comparisons of TIME (`S2.T >= dwell`)."""
+    """docs/semantics.md, "Conditions": comparisons of TIME (`S2.T >= dwell`)."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": END_STEP
@@ -322,7 +329,8 @@ def test_time_comparison_with_a_step_time_and_a_time_variable() -> None:
 
 
 def test_comparisons_of_int_dint_and_real() -> None:
-    """SPEC §2.9: comparisons (= <> < > <= >=) of same-typed INT, DINT, REAL."""
+    """docs/semantics.md, "Conditions": comparisons (= <> < > <= >=) of same-typed INT, DINT,
+    REAL."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": END_STEP
@@ -346,7 +354,8 @@ def test_comparisons_of_int_dint_and_real() -> None:
 
 
 def test_tt_says_that_the_transition_condition_holds() -> None:
-    """SPEC §2.9: `T2.TT` (condition holds) — read here while TAP holds the switch back."""
+    """docs/semantics.md, "Conditions": `T2.TT` (condition holds) — read here while TAP holds the
+    switch back."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": END_STEP
@@ -365,7 +374,7 @@ def test_tt_says_that_the_transition_condition_holds() -> None:
 
 
 def test_permanent_s_and_r_coils_latch() -> None:
-    """SPEC §2.9: permanent instructions write with coils `:=`, `S`, `R`."""
+    """docs/semantics.md, "Conditions": permanent instructions write with coils `:=`, `S`, `R`."""
     run = chart(
         seq('INITIAL_STEP S1 "a": END_STEP\nTRANSITION T1 FROM S1 TO STOP := FALSE;'),
         header="PERMANENT BEFORE\n  S M0.2 := I0.3;\n  R M0.2 := I0.4;\n"
@@ -381,7 +390,7 @@ def test_permanent_s_and_r_coils_latch() -> None:
 
 
 def test_empty_transition_condition_holds_and_warns() -> None:
-    """SPEC §2.9: an empty transition condition holds (compile warning)."""
+    """docs/semantics.md, "Conditions": an empty transition condition holds (compile warning)."""
     body = seq("""
       INITIAL_STEP S1 "a": END_STEP
       STEP S2 "b": N Q0.0; END_STEP
@@ -394,13 +403,14 @@ def test_empty_transition_condition_holds_and_warns() -> None:
 
 
 def test_an_action_row_may_not_write_with_a_coil() -> None:
-    """SPEC §2.9: only permanent instructions may write with coils (E035 in a step)."""
+    """docs/semantics.md, "Conditions": only permanent instructions may write with coils (E035 in a
+    step)."""
     codes = [d.code for d in validate(parse_chart(_row_chart("N M0.0 := I0.1;"), "c.s7g"))]
     assert "E035" in codes
 
 
 def test_a_permanent_coil_may_not_write_a_step_attribute() -> None:
-    """SPEC §2.9: `S3.X` is a read-only operand (E045)."""
+    """docs/semantics.md, "Conditions": `S3.X` is a read-only operand (E045)."""
     text = source(
         seq("""
       INITIAL_STEP S1 "a": END_STEP

@@ -1,4 +1,4 @@
-"""SPEC §2.3 (interlock), §2.4 (supervision), §2.5 (modes), §2.6 (control inputs): the
+"""docs/semantics.md, "Interlock", "Supervision", "Modes" and "FB pins" (control inputs): the
 rules not pinned in ``test_interlock_supervision_modes.py`` / ``test_cycle_modes.py``.
 
 Driven through the real cycle (``GraphRuntime``) by the scenario harness, 10 ms per call;
@@ -14,11 +14,12 @@ from s7graph.sequencer.fb import GraphFB, install_all
 from s7graph.sequencer.text.parse import parse_chart
 from tests.sequencer.helpers import chart, enter, seq, source, two_steps
 
-# ---------------------------------------------------------------- §2.3 interlock
+# ---------------------------------------------------------------- interlock
 
 
 def test_l1_row_runs_once_while_the_interlock_stays_lost_and_l0_once_on_return() -> None:
-    """SPEC §2.3/§2.8: L1 fires when the interlock is lost, L0 when it returns — once each."""
+    """docs/semantics.md, "Interlock" and "Actions": L1 fires when the interlock is lost, L0 when it
+    returns — once each."""
     run = two_steps(
         "L1 N lost := lost + 1; L0 N back := back + 1;",
         header="VAR lost : INT := 0; back : INT := 0; END_VAR",
@@ -34,8 +35,8 @@ def test_l1_row_runs_once_while_the_interlock_stays_lost_and_l0_once_on_return()
 
 
 def test_interlock_lost_stops_u_so_a_supervision_on_u_waits() -> None:
-    """SPEC §2.3: while the interlock does not hold U stops counting (a supervision
-    `S2.U > T#50MS` is then not reached)."""
+    """docs/semantics.md, "Interlock": while the interlock does not hold U stops counting (a
+    supervision `S2.U > T#50MS` is then not reached)."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": END_STEP
@@ -55,12 +56,12 @@ def test_interlock_lost_stops_u_so_a_supervision_on_u_waits() -> None:
     assert run.out("ERR_FLT") is True  # U passed 50 ms: a supervision fault
 
 
-# ---------------------------------------------------------------- §2.4 supervision
+# ---------------------------------------------------------------- supervision
 
 
 def test_a_fault_present_on_activation_raises_v1_and_holds_the_step() -> None:
-    """SPEC §2.4: a supervision fault raises V1 (also when already present as the step
-    becomes active) and stops that step from switching."""
+    """docs/semantics.md, "Supervision": a supervision fault raises V1 (also when already present as
+    the step becomes active) and stops that step from switching."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": END_STEP
@@ -81,8 +82,8 @@ def test_a_fault_present_on_activation_raises_v1_and_holds_the_step() -> None:
 
 
 def test_a_fault_in_one_path_blocks_the_join_of_a_simultaneous_branch() -> None:
-    """SPEC §2.2 4b/§2.4: no preceding step of a switching transition may hold an
-    unacknowledged supervision error — also at a join."""
+    """docs/semantics.md, "One FB call", step 4.2 and "Supervision": no preceding step of a
+    switching transition may hold an unacknowledged supervision error — also at a join."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": END_STEP
@@ -102,7 +103,8 @@ def test_a_fault_in_one_path_blocks_the_join_of_a_simultaneous_branch() -> None:
 
 
 def test_a_supervision_fault_sets_fault_and_acknowledgement_clears_it() -> None:
-    """SPEC §2.4: a fault sets FAULT and ERR_FLT (USER set) until acknowledged."""
+    """docs/semantics.md, "Supervision": a fault sets FAULT and ERR_FLT (USER set) until
+    acknowledged."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": SUPERVISION := I0.6; END_STEP
@@ -117,7 +119,7 @@ def test_a_supervision_fault_sets_fault_and_acknowledgement_clears_it() -> None:
     assert run.out("FAULT") is False and run.out("ERR_FLT") is False
 
 
-# ---------------------------------------------------------------- §2.5 modes
+# ---------------------------------------------------------------- modes
 
 CPU_CHART = source(
     seq("""
@@ -129,7 +131,7 @@ CPU_CHART = source(
 
 
 def test_the_mode_survives_a_warm_restart_of_the_cpu() -> None:
-    """SPEC §2.5: the mode is kept in the instance DB (survives warm restart)."""
+    """docs/semantics.md, "Modes": the mode is kept in the instance DB (survives warm restart)."""
     clock = VirtualClock()
     cpu = Cpu(clock)
     g = GraphFB(compile_chart(parse_chart(CPU_CHART, "m.s7g")))
@@ -154,8 +156,8 @@ def test_the_mode_survives_a_warm_restart_of_the_cpu() -> None:
 
 
 def test_top_push_at_an_alternative_divergence_switches_only_the_first_listed_path() -> None:
-    """SPEC §2.2 4b/§2.5: in TOP a T_PUSH edge switches, but at an alternative
-    divergence at most one path — the first-listed."""
+    """docs/semantics.md, "One FB call", step 4.2 and "Modes": in TOP a T_PUSH edge switches, but at
+    an alternative divergence at most one path — the first-listed."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": END_STEP
@@ -172,7 +174,7 @@ def test_top_push_at_an_alternative_divergence_switches_only_the_first_listed_pa
 
 
 def test_tap_push_without_the_condition_does_not_switch() -> None:
-    """SPEC §2.2 4b: TAP is condition AND a T_PUSH edge."""
+    """docs/semantics.md, "One FB call", step 4.2: TAP is condition AND a T_PUSH edge."""
     run = two_steps("N Q0.0;")
     run.call()
     run.pulse("SW_TAP")
@@ -180,11 +182,12 @@ def test_tap_push_without_the_condition_does_not_switch() -> None:
     assert run.active == [1]
 
 
-# ---------------------------------------------------------------- §2.6 control inputs
+# ---------------------------------------------------------------- control inputs
 
 
 def test_halt_tm_freezes_u_so_a_time_supervision_waits() -> None:
-    """SPEC §2.6: HALT_TM freezes the step times (a supervision on S2.U does not fire)."""
+    """docs/semantics.md, "FB pins": HALT_TM freezes the step times (a supervision on S2.U does not
+    fire)."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": END_STEP
@@ -202,7 +205,7 @@ def test_halt_tm_freezes_u_so_a_time_supervision_waits() -> None:
 
 
 def test_halt_sq_keeps_the_steps_and_their_actions() -> None:
-    """SPEC §2.6: HALT_SQ: no switching, steps stay active (and keep acting)."""
+    """docs/semantics.md, "FB pins": HALT_SQ: no switching, steps stay active (and keep acting)."""
     run = two_steps("N Q0.0; N n := n + 1;", header="VAR n : INT := 0; END_VAR")
     enter(run)
     run.set(HALT_SQ=True, I0_1=True).call(4)
@@ -213,7 +216,8 @@ def test_halt_sq_keeps_the_steps_and_their_actions() -> None:
 
 
 def test_off_sq_runs_the_s0_rows_of_the_steps_it_switches_off() -> None:
-    """SPEC §2.6 OFF_SQ: all steps off — as deactivation, with the final scan (N to 0)."""
+    """docs/semantics.md, "FB pins" OFF_SQ: all steps off — as deactivation, with the final scan (N
+    to 0)."""
     run = two_steps("N Q0.0; S0 S M0.7;")
     enter(run)
     run.set(OFF_SQ=True).call()
@@ -221,8 +225,8 @@ def test_off_sq_runs_the_s0_rows_of_the_steps_it_switches_off() -> None:
 
 
 def test_a_t_push_in_top_does_not_switch_a_step_with_a_latched_fault() -> None:
-    """SPEC §2.2 4b/§2.4: an unacknowledged supervision error blocks switching in any
-    mode — also a TOP push."""
+    """docs/semantics.md, "One FB call", step 4.2 and "Supervision": an unacknowledged supervision
+    error blocks switching in any mode — also a TOP push."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": SUPERVISION := I0.6; END_STEP
@@ -241,7 +245,7 @@ def test_a_t_push_in_top_does_not_switch_a_step_with_a_latched_fault() -> None:
 
 
 def test_man_s_on_raises_the_s1_event_of_the_step() -> None:
-    """SPEC §2.5/§2.8: a step activated by S_ON runs its S1 rows."""
+    """docs/semantics.md, "Modes" and "Actions": a step activated by S_ON runs its S1 rows."""
     run = two_steps("S1 S M4.0;")
     run.call()
     run.pulse("SW_MAN")
@@ -251,8 +255,8 @@ def test_man_s_on_raises_the_s1_event_of_the_step() -> None:
 
 
 def test_rows_marked_c_do_not_run_while_the_interlock_does_not_hold() -> None:
-    """SPEC §2.3: while the interlock does not hold, rows marked C (N, S, D) do not run;
-    they run once it holds."""
+    """docs/semantics.md, "Interlock": while the interlock does not hold, rows marked C (N, S, D) do
+    not run; they run once it holds."""
     run = two_steps("NC Q0.0; SC Q0.1; D C Q0.2, T#20MS; N Q0.3;", interlock="I0.5")
     enter(run)
     run.call(3)
@@ -262,7 +266,8 @@ def test_rows_marked_c_do_not_run_while_the_interlock_does_not_hold() -> None:
 
 
 def test_l1_off_s_all_switches_every_other_step_off() -> None:
-    """SPEC §2.8: `L1 OFF S_ALL` — on losing the interlock every other step goes off."""
+    """docs/semantics.md, "Actions": `L1 OFF S_ALL` — on losing the interlock every other step goes
+    off."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": END_STEP
@@ -278,7 +283,7 @@ def test_l1_off_s_all_switches_every_other_step_off() -> None:
 
 
 def test_counter_rows_on_events_preset_and_count() -> None:
-    """SPEC §2.8: counters with any event — `S1 CS C 1, C#5` then `S0 CU C 1`."""
+    """docs/semantics.md, "Actions": counters with any event — `S1 CS C 1, C#5` then `S0 CU C 1`."""
     run = two_steps("S1 CS C 1, C#5; S0 CU C 1;")
     enter(run)
     assert run.mem.counters[1].value == 5

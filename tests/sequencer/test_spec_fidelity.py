@@ -32,8 +32,9 @@ BOTH_HOLD = [{"at_ms": 10, "set": {"I0.0": True, "I0.1": True}}]
 
 
 def test_block_option_skip_steps_is_the_default_of_en_sskip(tmp_path: Path) -> None:
-    """S7-GRAPH block setting "Skip steps" with the run-time pin EN_SSKIP (seed 000:5901,
-    000:6081): with the USER set and EN_SSKIP unwired, SKIP_STEPS := TRUE skips S2."""
+    """S7-GRAPH block setting "Skip steps" with the run-time pin EN_SSKIP (STEP7 comprehensive guide
+    vol. 2, ch. 14, STEP7 comprehensive guide vol. 2, ch. 14): with the USER set and EN_SSKIP
+    unwired, SKIP_STEPS := TRUE skips S2."""
     text = source(SKIPPING, header="SKIP_STEPS := TRUE;", params="USER")
     rc, lines = sim_trace(tmp_path, text, BOTH_HOLD, cycles=3,
                           watch="EN_SSKIP,SSKIP_ENABLED,Q0.2")  # fmt: skip
@@ -45,7 +46,7 @@ def test_block_option_skip_steps_is_the_default_of_en_sskip(tmp_path: Path) -> N
 
 def test_a_stimulus_on_en_sskip_wins_over_the_option(tmp_path: Path) -> None:
     """The pin's initial value is the option; a value written to the pin wins from then on
-    (docs/semantics.md, "block options and their pins")."""
+    (docs/semantics.md, "Block options")."""
     text = source(SKIPPING, header="SKIP_STEPS := TRUE;", params="USER")
     stim = [{"at_ms": 0, "set": {"EN_SSKIP": False}}, *BOTH_HOLD]
     rc, lines = sim_trace(tmp_path, text, stim, cycles=3, watch="SSKIP_ENABLED,Q0.2")
@@ -112,8 +113,8 @@ def test_the_pin_table_names_the_option_as_the_default() -> None:
 
 
 def test_a_tl_timer_contact_keeps_the_step_while_the_timer_runs(tmp_path: Path) -> None:
-    """Seed 000:5775: TL T0 started when Step1 is left; Step2 sets Q0.0 and stays active
-    while the timer runs (``NOT T0``), then resets Q0.0 on leaving."""
+    """STEP7 comprehensive guide vol. 2, ch. 14: TL T0 started when Step1 is left; Step2 sets Q0.0
+    and stays active while the timer runs (``NOT T0``), then resets Q0.0 on leaving."""
     text = """FUNCTION_BLOCK "Tl"
   PARAMETERS := STANDARD;
 SEQUENCE 1 "s"
@@ -141,9 +142,9 @@ CELL_CONDITIONS = ["T5", "NOT T0", "C1 AND I0.0", "Z1 OR T5", '"Tmr"', 'NOT "Cnt
 def test_timer_and_counter_status_bits_are_contacts_in_every_kind_of_condition(
     where: str, cond: str
 ) -> None:
-    """Seed 003:1599-1604: a timer or counter is used "at the same address as a BOOL state";
-    in S7-GRAPH conditions that is the status bit — in transitions, interlocks,
-    supervisions and permanent instructions (absolute, German ``Z``, or a symbol)."""
+    """El-Shahat's S7-300/400 course: a timer or counter is used "at the same address as a BOOL
+    state"; in S7-GRAPH conditions that is the status bit — in transitions, interlocks, supervisions
+    and permanent instructions (absolute, German ``Z``, or a symbol)."""
     il = f"INTERLOCK := {cond};" if where == "interlock" else ""
     sv = f"SUPERVISION := {cond};" if where == "supervision" else ""
     t2 = cond if where == "transition" else "FALSE"
@@ -160,8 +161,8 @@ def test_timer_and_counter_status_bits_are_contacts_in_every_kind_of_condition(
 
 
 def test_counter_and_timer_contacts_follow_their_cells() -> None:
-    """The status bit of a counter is "count > 0" (seed 003:1604), read live in an interlock
-    (C rows), a transition and a permanent coil."""
+    """The status bit of a counter is "count > 0" (El-Shahat's S7-300/400 course), read live in an
+    interlock (C rows), a transition and a permanent coil."""
     run = chart(seq("""
       INITIAL_STEP S1 "a": S1 CS C1, C#2; END_STEP
       STEP S2 "b": INTERLOCK := C1; N C Q1.0; S1 CD C1; END_STEP
@@ -180,8 +181,8 @@ def test_counter_and_timer_contacts_follow_their_cells() -> None:
 
 
 def test_a_counter_in_a_comparison_or_an_assignment_reads_its_count() -> None:
-    """Seed 003:1604: a counter is also "the value of the current count" — where a number is
-    expected (a comparison, arithmetic, an assignment to an INT) it reads as ``L C n``."""
+    """El-Shahat's S7-300/400 course: a counter is also "the value of the current count" — where a
+    number is expected (a comparison, arithmetic, an assignment to an INT) it reads as ``L C n``."""
     run = chart(seq("""
       INITIAL_STEP S1 "a": S1 CS C1, C#2; S1 CU C1; END_STEP
       STEP S2 "b": S1 N n := C1 * 10 + C1; END_STEP
@@ -320,11 +321,11 @@ END_FUNCTION_BLOCK
 def test_an_initial_step_whose_transition_holds_runs_its_rows_once_before_it_switches(
     tmp_path: Path, options: str
 ) -> None:
-    """Seed 000:5759 (the counter example): as soon as Step1 is active C1 is set to 26, then
-    the sequence goes on to Step2 (000:5901: a step is active for at least one cycle). The
-    startup call (OB100, INIT_SQ) activates Step1 and runs its S1 and N rows; the next call
-    switches. An INIT_SQ edge later does the same again; skip steps never passes an
-    initialized step."""
+    """STEP7 comprehensive guide vol. 2, ch. 14 (the counter example): as soon as Step1 is active C1
+    is set to 26, then the sequence goes on to Step2 (STEP7 comprehensive guide vol. 2, ch. 14: a
+    step is active for at least one cycle). The startup call (OB100, INIT_SQ) activates Step1 and
+    runs its S1 and N rows; the next call switches. An INIT_SQ edge later does the same again; skip
+    steps never passes an initialized step."""
     text = COUNTER_EXAMPLE.format(options=options)
     stim = [{"at_ms": 30, "set": {"INIT_SQ": True}}, {"at_ms": 50, "set": {"INIT_SQ": False}}]
     rc, lines = sim_trace(tmp_path, text, stim, cycles=6, watch="n,preset,C1,Q0.1")
@@ -354,8 +355,8 @@ def test_the_first_call_of_a_bare_runtime_holds_the_initial_step_too() -> None:
 
 
 def test_an_n_c_assignment_does_not_run_while_the_interlock_is_lost() -> None:
-    """S7-GRAPH manual 14-8, seed 000:5794-5799: ``N[C] A := B`` — like every row marked C,
-    an assignment marked C runs only while the interlock holds (an event one too)."""
+    """S7-GRAPH manual 14-8, STEP7 comprehensive guide vol. 2, ch. 14: ``N[C] A := B`` — like every
+    row marked C, an assignment marked C runs only while the interlock holds (an event one too)."""
     run = two_steps("N C n := n + 1; S1 N C m := m + 1;", interlock="I0.5",
                     header="VAR n : INT := 0; m : INT := 0; END_VAR")  # fmt: skip
     run.set(I0_5=True)

@@ -1,4 +1,4 @@
-"""SPEC §4: the black-box contract of ``s7graph sim`` — the details not pinned in
+"""docs/cli.md, "s7graph sim": the black-box contract of ``s7graph sim`` — the details not pinned in
 ``test_sim_contract.py``. Driven through the command line entry point ``web.cli.main``."""
 
 from __future__ import annotations
@@ -45,7 +45,7 @@ def sim(tmp_path: Path, stim: list[dict], *, cycles: int = 8, watch: str = "Lamp
 
 
 def test_active_is_sorted_by_step_number_not_by_name(tmp_path: Path) -> None:
-    """SPEC §4: `active` sorted by step number (S2 before S10)."""
+    """docs/cli.md, "s7graph sim": `active` sorted by step number (S2 before S10)."""
     rc, lines = sim(tmp_path, [{"at_ms": 0, "set": {"Go": True}}], cycles=3)
     assert rc == 0
     assert lines[0]["active"] == ["S1", "S2", "S3"]  # T1 holds already in cycle 0
@@ -54,7 +54,8 @@ def test_active_is_sorted_by_step_number_not_by_name(tmp_path: Path) -> None:
 
 
 def test_a_stimulus_between_two_cycles_is_applied_before_the_next_cycle(tmp_path: Path) -> None:
-    """SPEC §4: each cycle applies the stimuli with at_ms <= now, then calls the FB."""
+    """docs/cli.md, "s7graph sim": each cycle applies the stimuli with at_ms <= now, then calls the
+    FB."""
     rc, lines = sim(tmp_path, [{"at_ms": 15, "set": {"Go": True}}], cycles=4)
     assert rc == 0
     assert [line["active"] for line in lines[:3]] == [
@@ -64,7 +65,8 @@ def test_a_stimulus_between_two_cycles_is_applied_before_the_next_cycle(tmp_path
 
 
 def test_a_stimulus_at_exactly_now_acts_in_that_cycle(tmp_path: Path) -> None:
-    """SPEC §4: at_ms <= now — a stimulus at 30 ms acts in the cycle with t_ms 30."""
+    """docs/cli.md, "s7graph sim": at_ms <= now — a stimulus at 30 ms acts in the cycle with t_ms
+    30."""
     rc, lines = sim(tmp_path, [{"at_ms": 30, "set": {"Go": True}}], cycles=5)
     assert rc == 0
     switched = [line["t_ms"] for line in lines if line["events"]]
@@ -73,7 +75,8 @@ def test_a_stimulus_at_exactly_now_acts_in_that_cycle(tmp_path: Path) -> None:
 
 
 def test_values_stay_until_set_again(tmp_path: Path) -> None:
-    """SPEC §4: stimulus values stay until set again — I0.1 set once at 40 ms is still 1."""
+    """docs/cli.md, "s7graph sim": stimulus values stay until set again — I0.1 set once at 40 ms is
+    still 1."""
     stim = [{"at_ms": 0, "set": {"Go": True}}, {"at_ms": 10, "set": {"Go": False}},
             {"at_ms": 40, "set": {"I0.1": True}}]  # fmt: skip
     rc, lines = sim(tmp_path, stim, cycles=8, watch="I0.1,Go")
@@ -85,7 +88,8 @@ def test_values_stay_until_set_again(tmp_path: Path) -> None:
 
 
 def test_int_overflow_in_an_assignment_does_not_stop_the_simulation(tmp_path: Path) -> None:
-    """SPEC §4 with §2.8: an INT overflow sets the overflow status; sim runs to the end."""
+    """docs/cli.md, "s7graph sim", and semantics.md, "Actions": an INT overflow sets the overflow
+    status; sim runs to the end."""
     rc, lines = sim(tmp_path, [{"at_ms": 0, "set": {"I0.2": True}}], cycles=10, watch="x")
     assert rc == 0 and len(lines) == 10
     assert all(-32768 <= line["values"]["x"] <= 32767 for line in lines)
@@ -93,7 +97,8 @@ def test_int_overflow_in_an_assignment_does_not_stop_the_simulation(tmp_path: Pa
 
 
 def test_a_pin_outside_a_minimum_parameter_set_is_refused(tmp_path: Path, capsys) -> None:
-    """SPEC §4/§2.7: FB input pins of the chart's parameter set only (MINIMUM: INIT_SQ)."""
+    """docs/cli.md, "s7graph sim"; docs/semantics.md, "FB pins": FB input pins of the chart's
+    parameter set only (MINIMUM: INIT_SQ)."""
     chart = CHART.replace("STANDARD", "MINIMUM")
     rc, _ = sim(tmp_path, [{"at_ms": 0, "set": {"SW_MAN": True}}], chart=chart)
     assert rc == 2 and "SW_MAN" in capsys.readouterr().err
@@ -102,8 +107,8 @@ def test_a_pin_outside_a_minimum_parameter_set_is_refused(tmp_path: Path, capsys
 
 
 def test_a_syntax_error_exits_2_with_its_place_on_stderr(tmp_path: Path, capsys) -> None:
-    """SPEC §4: a chart that does not compile exits 2, diagnostics on stderr (§3:
-    `file:line:column`), no trace."""
+    """docs/cli.md, "s7graph sim": a chart that does not compile exits 2, diagnostics on stderr
+    (`file:line:column`), no trace."""
     rc, lines = sim(tmp_path, [], chart=CHART.replace('N "Lamp";', 'N "Lamp"'))
     captured = capsys.readouterr()
     assert rc == 2 and lines == []
@@ -113,8 +118,8 @@ def test_a_syntax_error_exits_2_with_its_place_on_stderr(tmp_path: Path, capsys)
 
 @pytest.mark.parametrize("name", ["S2.X", "T1.TT", "AUTO_ON", "Lamp", "Q0.0", "x"])
 def test_every_watched_name_has_a_value_in_every_line(tmp_path: Path, name: str) -> None:
-    """SPEC §4: `values` for every watched name (addresses, symbols, pins, variables,
-    step and transition operands)."""
+    """docs/cli.md, "s7graph sim": `values` for every watched name (addresses, symbols, pins,
+    variables, step and transition operands)."""
     rc, lines = sim(tmp_path, [], cycles=3, watch=name)
     assert rc == 0 and all(set(line["values"]) == {name} for line in lines)
 
@@ -122,7 +127,8 @@ def test_every_watched_name_has_a_value_in_every_line(tmp_path: Path, name: str)
 def test_stimuli_written_out_of_time_order_are_still_applied_by_their_time(
     tmp_path: Path,
 ) -> None:
-    """SPEC §4: every stimulus with at_ms <= now is applied, whatever its line."""
+    """docs/cli.md, "s7graph sim": every stimulus with at_ms <= now is applied, whatever its
+    line."""
     stim = [{"at_ms": 50, "set": {"I0.1": True}}, {"at_ms": 10, "set": {"Go": True}}]
     rc, lines = sim(tmp_path, stim, cycles=8)
     assert rc == 0

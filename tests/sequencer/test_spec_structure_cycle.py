@@ -1,4 +1,4 @@
-"""SPEC §2.1 (structure) and §2.2 (one FB call): the rules not pinned elsewhere.
+"""docs/semantics.md, "Structure" and "One FB call": the rules not pinned elsewhere.
 
 Driven through the real cycle (``GraphRuntime``) by the scenario harness, 10 ms per call.
 """
@@ -11,11 +11,11 @@ from s7graph.sequencer.checks.validate import validate
 from s7graph.sequencer.text.parse import parse_chart
 from tests.sequencer.helpers import chart, enter, leave, seq, source, two_steps
 
-# ---------------------------------------------------------------- §2.1 structure
+# ---------------------------------------------------------------- structure
 
 
 def test_every_initial_step_of_a_sequencer_is_active_after_the_first_call() -> None:
-    """SPEC §2.1: one or more initial steps per sequencer."""
+    """docs/semantics.md, "Structure": one or more initial steps per sequencer."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": N Q0.1; END_STEP
@@ -31,7 +31,8 @@ def test_every_initial_step_of_a_sequencer_is_active_after_the_first_call() -> N
 
 
 def test_a_step_may_be_the_target_of_several_transitions() -> None:
-    """SPEC §2.1 alternative branches / §3 alternative join: both paths reach S4."""
+    """docs/semantics.md, "Structure": alternative branches and joins (docs/chart-format.md): both
+    paths reach S4."""
     body = seq("""
       INITIAL_STEP S1 "a": END_STEP
       STEP S2 "b": END_STEP
@@ -52,7 +53,8 @@ def test_a_step_may_be_the_target_of_several_transitions() -> None:
 
 
 def test_a_branch_stop_in_one_simultaneous_path_ends_only_that_path() -> None:
-    """SPEC §2.1 branch stops: `TO STOP` ends the path, the other path carries on."""
+    """docs/semantics.md, "Structure" branch stops: `TO STOP` ends the path, the other path carries
+    on."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": END_STEP
@@ -73,7 +75,8 @@ def test_a_branch_stop_in_one_simultaneous_path_ends_only_that_path() -> None:
 
 
 def test_a_simultaneous_join_of_three_paths_waits_for_the_last_one() -> None:
-    """SPEC §2.1: a join transition needs the last step of every path active."""
+    """docs/semantics.md, "Structure": a join transition needs the last step of every path
+    active."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": END_STEP
@@ -97,7 +100,8 @@ def test_a_simultaneous_join_of_three_paths_waits_for_the_last_one() -> None:
 
 
 def test_a_jump_from_a_later_sequencer_into_an_earlier_one_activates_the_target() -> None:
-    """SPEC §2.1 jumps: to any step of any sequencer of the FB (here backwards)."""
+    """docs/semantics.md, "Structure" jumps: to any step of any sequencer of the FB (here
+    backwards)."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": END_STEP
@@ -154,14 +158,15 @@ def _w110(text: str) -> int:
     ids=["steps_and_transitions", "alternative_paths", "simultaneous_paths"],
 )
 def test_limits_warn_only_above_the_s7_graph_maximum(build, limit: int) -> None:
-    """SPEC §2.1: limits that warn — 250 steps / transitions, 125 alternative paths,
-    249 simultaneous paths."""
+    """docs/semantics.md, "Structure": limits that warn — 250 steps / transitions, 125 alternative
+    paths, 249 simultaneous paths."""
     assert _w110(source(build(limit))) == 0
     assert _w110(source(build(limit + 1))) >= 1
 
 
 def test_more_than_250_transitions_warns_with_fewer_steps() -> None:
-    """SPEC §2.1: 250 transitions is a limit of its own (here 200 steps, 251 transitions)."""
+    """docs/semantics.md, "Structure": 250 transitions is a limit of its own (here 200 steps, 251
+    transitions)."""
     steps = "\n".join(f'STEP S{k} "s": END_STEP' for k in range(2, 201))
     trans = "\n".join(f"TRANSITION T{k} FROM S1 TO S{(k % 199) + 2} := I0.{k % 8};"
                       for k in range(1, 252))  # fmt: skip
@@ -170,12 +175,13 @@ def test_more_than_250_transitions_warns_with_fewer_steps() -> None:
     assert any("transitions" in d.message for d in diags)
 
 
-# ---------------------------------------------------------------- §2.2 one FB call
+# ---------------------------------------------------------------- one FB call
 
 
 def test_a_step_activated_by_a_jump_cannot_switch_on_in_the_same_call() -> None:
-    """SPEC §2.2 4a: transitions are evaluated on the state at the start of the call —
-    S2 entered in this call does not leave through its (true) transition T2 in it."""
+    """docs/semantics.md, "One FB call", step 4.1: transitions are evaluated on the state at the
+    start of the call — S2 entered in this call does not leave through its (true) transition T2 in
+    it."""
     run = two_steps("N Q0.0;")
     run.call()
     run.set(I0_0=True, I0_1=True).call()
@@ -185,8 +191,9 @@ def test_a_step_activated_by_a_jump_cannot_switch_on_in_the_same_call() -> None:
 
 
 def test_a_later_sequencer_sees_the_switch_of_an_earlier_one_in_the_same_call() -> None:
-    """SPEC §2.2 4: per sequencer in definition order — sequencer 2 starts from the state
-    sequencer 1 left, so it sees S2 active; sequencer 1 sees sequencer 2 only next call."""
+    """docs/semantics.md, "One FB call", step 4: per sequencer in definition order — sequencer 2
+    starts from the state sequencer 1 left, so it sees S2 active; sequencer 1 sees sequencer 2 only
+    next call."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": END_STEP
@@ -212,8 +219,9 @@ def test_a_later_sequencer_sees_the_switch_of_an_earlier_one_in_the_same_call() 
 
 
 def test_a_step_left_and_a_step_entered_with_the_same_n_operand_keep_it_on() -> None:
-    """SPEC §2.2 4e: the final scan resets the N operands of the left step, the rows of
-    the active steps run; an operand N in both steps stays 1 in the switching call."""
+    """docs/semantics.md, "One FB call", step 4.5: the final scan resets the N operands of the left
+    step, the rows of the active steps run; an operand N in both steps stays 1 in the switching
+    call."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": N Q0.0; END_STEP
@@ -230,7 +238,7 @@ def test_a_step_left_and_a_step_entered_with_the_same_n_operand_keep_it_on() -> 
 
 
 def test_action_rows_run_top_to_bottom() -> None:
-    """SPEC §2.2 4e: run action rows of active steps top to bottom."""
+    """docs/semantics.md, "One FB call", step 4.5: run action rows of active steps top to bottom."""
     run = two_steps("N x := 1; N x := x * 5;", header="VAR x : INT := 0; END_VAR")
     enter(run)
     assert run.st.vars["x"] == 5
@@ -240,7 +248,8 @@ def test_action_rows_run_top_to_bottom() -> None:
 
 
 def test_s0_rows_of_the_left_step_run_in_the_switching_call_only() -> None:
-    """SPEC §2.2 4e: steps deactivated in (c) run their S0 rows (once)."""
+    """docs/semantics.md, "One FB call", step 4.5: steps deactivated in (c) run their S0 rows
+    (once)."""
     run = two_steps("S0 N n := n + 1;", header="VAR n : INT := 0; END_VAR")
     enter(run)
     run.call(3)
@@ -252,7 +261,8 @@ def test_s0_rows_of_the_left_step_run_in_the_switching_call_only() -> None:
 
 
 def test_step_time_u_restarts_at_zero_on_activation() -> None:
-    """SPEC §2.2 4c: activation restarts T and U at 0 (T keeps its last value after exit)."""
+    """docs/semantics.md, "One FB call", step 4.3: activation restarts T and U at 0 (T keeps its
+    last value after exit)."""
     run = two_steps("N Q0.0;")
     enter(run)
     run.call(20)
@@ -269,7 +279,8 @@ def test_step_time_u_restarts_at_zero_on_activation() -> None:
 
 
 def test_init_sq_held_high_initializes_once_and_the_sequence_then_runs() -> None:
-    """SPEC §2.2 1 / §2.6: INIT_SQ acts on its rising edge, not while it is held."""
+    """docs/semantics.md, "One FB call", step 1 and "FB pins": INIT_SQ acts on its rising edge, not
+    while it is held."""
     run = two_steps("N Q0.0;")
     enter(run)
     run.set(INIT_SQ=True).call()
@@ -281,8 +292,8 @@ def test_init_sq_held_high_initializes_once_and_the_sequence_then_runs() -> None
 
 
 def test_s_on_held_high_activates_only_on_its_rising_edge() -> None:
-    """SPEC §2.2 1 / §2.5: S_ON acts on its rising edge; after S_OFF, a held S_ON does not
-    bring the step back."""
+    """docs/semantics.md, "One FB call", step 1 and "Modes": S_ON acts on its rising edge; after
+    S_OFF, a held S_ON does not bring the step back."""
     run = two_steps("N Q0.0;")
     run.call()
     run.set(SW_MAN=True).call()
@@ -294,7 +305,8 @@ def test_s_on_held_high_activates_only_on_its_rising_edge() -> None:
 
 
 def test_t_push_held_high_in_tap_switches_only_one_transition() -> None:
-    """SPEC §2.5/§2.2 4b: TAP needs a T_PUSH *edge*; held high it allows one switch."""
+    """docs/semantics.md, "Modes" and "One FB call", step 4.2: TAP needs a T_PUSH *edge*; held high
+    it allows one switch."""
     run = two_steps("N Q0.0;")
     run.call()
     run.set(SW_TAP=True).call()
@@ -305,7 +317,8 @@ def test_t_push_held_high_in_tap_switches_only_one_transition() -> None:
 
 
 def test_en_sskip_turns_skip_steps_on_at_runtime() -> None:
-    """SPEC §2.2 4c: skip steps is an option (default off) with the runtime pin EN_SSKIP."""
+    """docs/semantics.md, "One FB call", step 4.3: skip steps is an option (default off) with the
+    runtime pin EN_SSKIP."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": END_STEP
@@ -323,8 +336,8 @@ def test_en_sskip_turns_skip_steps_on_at_runtime() -> None:
 
 
 def test_codesys_order_runs_actions_before_transitions() -> None:
-    """SPEC §2.2 (CODESYS order option): actions run before transitions, so a transition
-    sees the action rows of its own step from the same call."""
+    """docs/semantics.md, "One FB call" (CODESYS order option): actions run before transitions, so a
+    transition sees the action rows of its own step from the same call."""
     body = seq("""
       INITIAL_STEP S1 "a": N M0.0; END_STEP
       STEP S2 "b": END_STEP
@@ -341,7 +354,8 @@ def test_codesys_order_runs_actions_before_transitions() -> None:
 
 
 def test_off_sq_is_applied_before_the_transitions_of_the_same_call() -> None:
-    """SPEC §2.2 2 before 4: with OFF_SQ set nothing switches even if a transition holds."""
+    """docs/semantics.md, "One FB call", step 2 before 4: with OFF_SQ set nothing switches even if a
+    transition holds."""
     run = two_steps("N Q0.0;", params="USER")
     run.call()
     run.set(OFF_SQ=True, I0_0=True).call()
@@ -350,8 +364,8 @@ def test_off_sq_is_applied_before_the_transitions_of_the_same_call() -> None:
 
 
 def test_sequencers_run_in_definition_order_not_number_order() -> None:
-    """SPEC §2.2 4: per sequencer, in *definition* order — SEQUENCE 2 written first runs
-    first, so SEQUENCE 1 sees its action in the same call."""
+    """docs/semantics.md, "One FB call", step 4: per sequencer, in *definition* order — SEQUENCE 2
+    written first runs first, so SEQUENCE 1 sees its action in the same call."""
     run = chart(
         seq(
             """
@@ -373,8 +387,9 @@ def test_sequencers_run_in_definition_order_not_number_order() -> None:
 
 
 def test_permanent_instructions_run_once_per_call_around_all_sequencers() -> None:
-    """SPEC §2.1/§2.2 3 and 5: permanent *before* once before the sequencers, *after* once
-    after all of them (it sees the actions of the last sequencer of this call)."""
+    """docs/semantics.md, "Structure" and "One FB call", steps 3 and 5: permanent *before* once
+    before the sequencers, *after* once after all of them (it sees the actions of the last sequencer
+    of this call)."""
     run = chart(
         seq('INITIAL_STEP S1 "a": END_STEP\nTRANSITION T1 FROM S1 TO STOP := FALSE;')
         + seq('INITIAL_STEP S11 "x": N M1.1; END_STEP\nTRANSITION T11 FROM S11 TO STOP := M9.0;', 2)
@@ -389,7 +404,8 @@ def test_permanent_instructions_run_once_per_call_around_all_sequencers() -> Non
 
 
 def test_a_step_time_read_after_exit_is_its_last_activation_time() -> None:
-    """SPEC §2.9 `S3.T` (activation time, or the last one after exit) in a condition."""
+    """docs/semantics.md, "Conditions" `S3.T` (activation time, or the last one after exit) in a
+    condition."""
     run = chart(
         seq("""
       INITIAL_STEP S1 "a": END_STEP
@@ -410,7 +426,7 @@ def test_a_step_time_read_after_exit_is_its_last_activation_time() -> None:
 
 
 def test_not_of_a_parenthesised_or() -> None:
-    """SPEC §2.9: NOT, OR and parentheses."""
+    """docs/semantics.md, "Conditions": NOT, OR and parentheses."""
     body = seq("""
       INITIAL_STEP S1 "a": END_STEP
       STEP S2 "b": END_STEP

@@ -1,4 +1,5 @@
-"""The validator reports all problems at once, with types and the limits of SPEC.md §2.1."""
+"""The validator reports all problems at once, with types and the limits of docs/semantics.md,
+"Structure"."""
 
 from __future__ import annotations
 
@@ -51,7 +52,7 @@ def test_words_compare_only_as_int_dint_real_time() -> None:
     assert codes(one_step(cond="w = w", header="VAR w : WORD; END_VAR")) == ["E030"]
 
 
-def test_bitwise_word_operators_and_functions_per_seed_table() -> None:
+def test_bitwise_word_operators_and_functions_per_book_table() -> None:
     header = "VAR w : WORD; d : DWORD; i : INT; r : REAL; END_VAR"
     rows = "S1 N w := w AND 16#FF; S1 N d := d ROL 3; S1 N i := BCD_TO_NUM(w); S1 N r := SIN(r);"
     assert codes(one_step(rows=rows, header=header)) == []

@@ -1,4 +1,5 @@
-"""The CPU message list and SFC17 ALARM_SQ / SFC18 ALARM_S / SFC19 ALARM_SC (SPEC §1.7, §2.10)."""
+"""The CPU message list and SFC17 ALARM_SQ / SFC18 ALARM_S / SFC19 ALARM_SC (docs/runtime.md, "The
+block runtime"; docs/semantics.md, "Messages")."""
 
 from __future__ import annotations
 
@@ -49,7 +50,7 @@ def test_alarm_sc_reports_signal_and_acknowledgement_state() -> None:
 
 
 def test_ret_val_conventions_of_the_alarm_sfcs() -> None:
-    """Behaviour 40: errors are negative (8081 EV_ID 0), warnings positive (0001 SD > 12 B)."""
+    """Errors are negative (8081 EV_ID 0), warnings positive (0001 SD > 12 B)."""
     ml = MessageList()
     assert ml.alarm(True, 0, 0) == RET_EV_ID_RANGE < 0
     assert ml.alarm(True, 1, 0, sd_bytes=16) == RET_SD_TOO_LONG > 0

@@ -1,4 +1,5 @@
-"""The one catalogue of system blocks and the RET_VAL conventions (seeds §6.1, behaviour 40)."""
+"""The one catalogue of system blocks and the RET_VAL conventions (STEP7 comprehensive guide vol. 2,
+ch. 12)."""
 
 from __future__ import annotations
 
@@ -53,7 +54,7 @@ def test_check_call_validates_pins_directions_and_instance() -> None:
 
 
 def test_ret_val_words_are_negative_ints_on_error() -> None:
-    """Behaviour 40: bit 15 set <=> RET_VAL < 0 <=> BR = 0."""
+    """Bit 15 set <=> RET_VAL < 0 <=> BR = 0."""
     assert general_error(1, 0x22) == as_int(0x8122) == -32478
     assert as_word(-32478) == 0x8122
     assert is_error(-1) and not br_of(-1)

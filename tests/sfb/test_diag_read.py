@@ -1,4 +1,5 @@
-"""Diagnostic buffer read (SFC51 RDSYSST, SZL 0x00A0) and SFC52 WR_USMSG (seeds §6.6, §7.2)."""
+"""Diagnostic buffer read (SFC51 RDSYSST, SZL 0x00A0) and SFC52 WR_USMSG (STEP7 comprehensive guide
+vol. 2, ch. 12; Siemens' Program Design for S7-300/400, ch. 10)."""
 
 from __future__ import annotations
 
@@ -52,7 +53,7 @@ def test_a_short_destination_gets_what_fits_and_an_unknown_szl_id_fails() -> Non
 
 
 def test_wr_usmsg_adds_a_user_entry_with_the_clock_time_even_without_a_display() -> None:
-    """Behaviour 53: WR_USMSG(SEND := FALSE, EVENTN := W#16#A101) adds a time-stamped entry."""
+    """WR_USMSG(SEND := FALSE, EVENTN := W#16#A101) adds a time-stamped entry."""
     buf = DiagnosticBuffer()
     assert wr_usmsg(buf, 0xA101, 123_000_000) == 0
     (entry,) = buf.latest()
@@ -88,7 +89,7 @@ def record(cpu: Cpu, n: int) -> bytes:
 def test_a_program_writes_a_user_message_and_reads_it_back_newest_first(
     clock: VirtualClock,
 ) -> None:
-    """Behaviour 53 end to end: WR_USMSG(SEND := FALSE, EVENTN := W#16#A101) then RDSYSST
+    """End to end: WR_USMSG(SEND := FALSE, EVENTN := W#16#A101) then RDSYSST
     W#16#01A0 INDEX 2 gives the user entry as record 1 with the clock's time stamp."""
     outs: list[dict[str, object]] = []
 

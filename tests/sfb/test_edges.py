@@ -1,4 +1,5 @@
-"""FP / FN edge detection with an edge-memory bit (seeds-runtime §5.4, behaviour 50)."""
+"""FP / FN edge detection with an edge-memory bit (El-Shahat's S7-300/400 course, timers and
+counters)."""
 
 from __future__ import annotations
 
@@ -17,7 +18,7 @@ def test_fp_and_fn_follow_the_edge_memory_algorithm() -> None:
 
 
 def test_fp_on_a_stat_bit_gives_exactly_one_true_per_rising_edge_per_instance() -> None:
-    """Behaviour 50: two instances (mixing FB1 start counter) each see one pulse per edge."""
+    """Two instances (mixing FB1 start counter) each see one pulse per edge."""
     a, b = R_TRIG(), R_TRIG()
     start = [False, True, True, True, False, True, True]
     pulses_a = [a(s) for s in start]

@@ -1,5 +1,5 @@
 """System blocks called through the engine: SFB instances, STP, WAIT, clock, BLKMOV, alarms
-(SPEC.md §1.3, §1.7; behaviours 30, 40, 49)."""
+(docs/runtime.md, "Programs of blocks in Python" and "The block runtime")."""
 
 from __future__ import annotations
 
@@ -24,7 +24,7 @@ def make_cpu(clock: VirtualClock, body: object, *extra: object) -> Cpu:
 
 
 def test_ton_as_sfb4_with_an_instance_db_follows_the_scan_clock(clock: VirtualClock) -> None:
-    """Behaviour 49: ``CALL SFB4, DB10 (IN := I0.0, PT := T#50MS, Q => Q4.0)``."""
+    """``CALL SFB4, DB10 (IN := I0.0, PT := T#50MS, Q => Q4.0)``."""
 
     def main(ctx: CallContext) -> None:
         ctx.call("SFB4", 10, IN="I0.0", PT=50, Q="Q4.0")
@@ -48,7 +48,7 @@ def test_ton_as_sfb4_with_an_instance_db_follows_the_scan_clock(clock: VirtualCl
 
 
 def test_stp_in_ob1_puts_the_cpu_into_stop(clock: VirtualClock) -> None:
-    """Behaviour 30: SFC46 STP moves the CPU to STOP."""
+    """SFC46 STP moves the CPU to STOP."""
 
     def main(ctx: CallContext) -> None:
         if ctx.cycle >= 2:
@@ -66,7 +66,7 @@ def test_stp_in_ob1_puts_the_cpu_into_stop(clock: VirtualClock) -> None:
 
 
 def test_stp_in_ob100_stops_the_startup(clock: VirtualClock) -> None:
-    """Behaviour 30: STP works from OB100 too."""
+    """STP works from OB100 too."""
 
     def startup(ctx: CallContext) -> None:
         ctx.call("STP")
@@ -90,7 +90,7 @@ def test_wait_is_recorded_without_advancing_time(clock: VirtualClock) -> None:
 def test_sfcs_return_ret_val_and_blkmov_rejects_a_bool_any_not_a_multiple_of_8(
     clock: VirtualClock,
 ) -> None:
-    """Behaviours 39, 40: RET_VAL >= 0 on success, < 0 (8x22) on error."""
+    """RET_VAL >= 0 on success, < 0 (8x22) on error."""
     results: list[dict[str, object]] = []
 
     def main(ctx: CallContext) -> None:
@@ -109,7 +109,8 @@ def test_sfcs_return_ret_val_and_blkmov_rejects_a_bool_any_not_a_multiple_of_8(
 
 
 def test_set_clk_and_read_clk_use_the_injected_clock(clock: VirtualClock) -> None:
-    """SPEC §1.6: the CPU clock is the injected clock plus an offset set by SET_CLK."""
+    """docs/architecture.md, "The core is a function": the CPU clock is the injected clock plus an
+    offset set by SET_CLK."""
     read: list[dict[str, object]] = []
 
     def main(ctx: CallContext) -> None:

@@ -1,4 +1,4 @@
-"""SFB0 CTU, SFB1 CTD, SFB2 CTUD (seeds-runtime §5.3, behaviour 48)."""
+"""SFB0 CTU, SFB1 CTD, SFB2 CTUD (STEP7 comprehensive guide vol. 2, ch. 12)."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ from s7graph.sfb.iec_counters import CTD, CTU, CTUD, INT_MAX, INT_MIN, CounterOu
 
 
 def test_ctu_counts_rising_edges_and_q_is_cv_at_least_pv() -> None:
-    """Behaviour 48: Q = (CV >= PV); a held CU counts once."""
+    """Q = (CV >= PV); a held CU counts once."""
     ctu = CTU()
     rows = [  # (CU, R, Q, CV) with PV = 2
         (False, False, False, 0),
@@ -25,7 +25,7 @@ def test_ctu_counts_rising_edges_and_q_is_cv_at_least_pv() -> None:
 
 
 def test_ctu_stops_at_32767() -> None:
-    """Behaviour 48: CTU counts to 32767 and no further."""
+    """CTU counts to 32767 and no further."""
     ctu = CTU(CV=INT_MAX - 1)
     ctu(False, False, 0)
     assert ctu(True, False, 0).cv == INT_MAX

@@ -1,4 +1,5 @@
-"""SFB3 TP, SFB4 TON, SFB5 TOF against their timing diagrams (seeds-runtime §5.3, behaviour 49).
+"""SFB3 TP, SFB4 TON, SFB5 TOF against their timing diagrams (STEP7 comprehensive guide vol. 2, ch.
+12).
 
 Each table row is ``(t_ms, IN, expected Q, expected ET)``; the timer is called once per row
 with ``now_ns = t_ms * 1e6``.
@@ -20,7 +21,7 @@ def drive(timer: TP | TON | TOF, pt: int, rows: list[Row]) -> None:
 
 
 def test_ton_sets_q_after_in_was_true_for_pt_and_in_false_resets_q_and_et() -> None:
-    """Behaviour 49: TON, PT = T#100MS."""
+    """TON, PT = T#100MS."""
     drive(TON(), 100, [
         (0, False, False, 0),
         (10, True, False, 0),
@@ -36,7 +37,7 @@ def test_ton_sets_q_after_in_was_true_for_pt_and_in_false_resets_q_and_et() -> N
 
 
 def test_tp_gives_a_pulse_of_pt_that_is_not_retriggerable() -> None:
-    """Behaviour 49: TP, PT = T#100MS; IN falling or rising during the pulse changes nothing."""
+    """TP, PT = T#100MS; IN falling or rising during the pulse changes nothing."""
     drive(TP(), 100, [
         (0, True, True, 0),
         (30, False, True, 30),
@@ -52,7 +53,7 @@ def test_tp_gives_a_pulse_of_pt_that_is_not_retriggerable() -> None:
 
 
 def test_tof_keeps_q_for_pt_after_in_falls_and_a_rising_in_resets_et() -> None:
-    """Behaviour 49: TOF, PT = T#100MS."""
+    """TOF, PT = T#100MS."""
     drive(TOF(), 100, [
         (0, False, False, 0),
         (10, True, True, 0),
@@ -67,7 +68,7 @@ def test_tof_keeps_q_for_pt_after_in_falls_and_a_rising_in_resets_et() -> None:
 
 
 def test_time_advances_only_when_the_instance_is_called() -> None:
-    """Behaviour 49: ET/Q are computed at call time; skipping calls just jumps ET."""
+    """ET/Q are computed at call time; skipping calls just jumps ET."""
     ton = TON()
     ton(True, 1000, 0)
     assert (ton.Q, ton.ET) == (False, 0)  # nothing changed between calls
@@ -75,7 +76,7 @@ def test_time_advances_only_when_the_instance_is_called() -> None:
 
 
 def test_iec_timers_count_in_milliseconds_up_to_t_24d20h31m23s647ms() -> None:
-    """Behaviour 49: 1 ms resolution and the TIME maximum as PT."""
+    """1 ms resolution and the TIME maximum as PT."""
     assert TIME_MAX_MS == 24 * 86_400_000 + 20 * 3_600_000 + 31 * 60_000 + 23_000 + 647
     ton = TON()
     ton(True, TIME_MAX_MS, 0)
@@ -87,7 +88,8 @@ def test_iec_timers_count_in_milliseconds_up_to_t_24d20h31m23s647ms() -> None:
 
 
 def test_tp_with_q_fed_back_to_in_toggles_every_pt() -> None:
-    """Seed example [000:L810-812]: a TP whose Q is fed back (negated) to IN pulses."""
+    """Seed example (STEP7 comprehensive guide vol. 2, ch. 12): a TP whose Q is fed back (negated)
+    to IN pulses."""
     tp = TP()
     seen = []
     q = False

@@ -1,4 +1,4 @@
-"""S5 counters on C-area cells (seeds-runtime §5.2, behaviour 47)."""
+"""S5 counters on C-area cells (El-Shahat's S7-300/400 course, timers and counters)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from s7graph.sfb import s5_counters as c
 
 
 def test_counters_count_rising_edges_and_saturate_at_0_and_999() -> None:
-    """Behaviour 47: CU/CD count on the 0->1 transition; no wrap at 0 or 999."""
+    """CU/CD count on the 0->1 transition; no wrap at 0 or 999."""
     cell = S5Counter()
     assert [c.count_up(cell, x) for x in [True, True, False, True]] == [True, True, True, True]
     assert cell.value == 2
@@ -27,7 +27,7 @@ def test_counters_count_rising_edges_and_saturate_at_0_and_999() -> None:
 
 
 def test_s_loads_the_bcd_preset_on_a_rising_edge_and_q_is_value_above_zero() -> None:
-    """Behaviour 47: ``L C#26 / S C n`` loads 26; R clears; Q = value > 0."""
+    """``L C#26 / S C n`` loads 26; R clears; Q = value > 0."""
     mem = Memory(counters=8)
     cell = c.cell_of(mem.counters, 3)
     assert c.set_preset(cell, True, 0x0026) is True
@@ -41,7 +41,8 @@ def test_s_loads_the_bcd_preset_on_a_rising_edge_and_q_is_value_above_zero() -> 
 
 
 def test_a_non_bcd_preset_is_a_programming_error() -> None:
-    """Seeds §5.2: loading a non-BCD preset can stop the PLC."""
+    """El-Shahat's S7-300/400 course, timers and counters: loading a non-BCD preset can stop the
+    PLC."""
     with pytest.raises(ProgramError, match="BCD"):
         c.set_preset(S5Counter(), True, 0x00A1)
 

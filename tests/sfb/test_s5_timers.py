@@ -1,4 +1,4 @@
-"""S5 timers SP SE SD SS SF on T-area cells (seeds-runtime §5.1, behaviours 44, 45, 46, 51).
+"""S5 timers SP SE SD SS SF on T-area cells (El-Shahat's S7-300/400 course, timers and counters).
 
 Rows are ``(t_ms, S, R, expected Q)``; every row is one timer instruction at ``t_ms``.
 """
@@ -27,7 +27,7 @@ def drive(fn: str, tv_ms: int, rows: list[Row], cell: S5Timer | None = None) -> 
 
 
 def test_on_delay_sets_q_7_s_after_the_rising_edge_and_s_false_resets_it() -> None:
-    """Behaviour 44: SD (German SE, S_ODT) with S5T#7S, the mixing FB1 feedback supervision."""
+    """SD (German SE, S_ODT) with S5T#7S, the mixing FB1 feedback supervision."""
     drive("SD", 7000, [
         (0, True, False, False),
         (6990, True, False, False),
@@ -41,7 +41,7 @@ def test_on_delay_sets_q_7_s_after_the_rising_edge_and_s_false_resets_it() -> No
 
 
 def test_extended_pulse_is_retriggered_by_a_new_rising_edge() -> None:
-    """Behaviour 45: SE (German SV, S_PEXT) keeps Q for TV even when S falls; retriggers."""
+    """SE (German SV, S_PEXT) keeps Q for TV even when S falls; retriggers."""
     drive("S_PEXT", 100, [
         (0, True, False, True),
         (20, False, False, True),    # S fell: pulse continues
@@ -54,7 +54,7 @@ def test_extended_pulse_is_retriggered_by_a_new_rising_edge() -> None:
 
 
 def test_pulse_ends_early_when_s_goes_false() -> None:
-    """Behaviour 45: SP (German SI, S_PULSE) — Q only while S = 1 and the time runs."""
+    """SP (German SI, S_PULSE) — Q only while S = 1 and the time runs."""
     cell = drive("SP", 100, [
         (0, True, False, True),
         (50, True, False, True),
@@ -67,7 +67,7 @@ def test_pulse_ends_early_when_s_goes_false() -> None:
 
 
 def test_retentive_on_delay_stays_set_until_r() -> None:
-    """Behaviour 45: SS (S_ODTS) runs on after S falls; Q = 1 after TV until R."""
+    """SS (S_ODTS) runs on after S falls; Q = 1 after TV until R."""
     drive("SS", 100, [
         (0, True, False, False),
         (10, False, False, False),   # keeps running
@@ -85,7 +85,7 @@ def test_retentive_on_delay_stays_set_until_r() -> None:
 
 
 def test_off_delay_starts_on_the_falling_edge() -> None:
-    """Behaviour 45: SF (German SA, S_OFFDT): Q = 1 with S, drops TV after S falls."""
+    """SF (German SA, S_OFFDT): Q = 1 with S, drops TV after S falls."""
     drive("SF", 100, [
         (0, False, False, False),
         (10, True, False, True),
@@ -100,7 +100,8 @@ def test_off_delay_starts_on_the_falling_edge() -> None:
 
 @pytest.mark.parametrize("fn", list(TimerFunction))
 def test_r_clears_value_and_q_for_every_function(fn: TimerFunction) -> None:
-    """Seeds §5.1: R = 1 sets the time value to 0 and Q to 0 for all five functions."""
+    """El-Shahat's S7-300/400 course, timers and counters: R = 1 sets the time value to 0 and Q to 0
+    for all five functions."""
     cell = S5Timer()
     s5.run(cell, fn, True, 1000, 0)
     s5.run(cell, fn, fn is not TimerFunction.SF, 1000, 10 * MS)
@@ -109,7 +110,7 @@ def test_r_clears_value_and_q_for_every_function(fn: TimerFunction) -> None:
 
 
 def test_l_t_reads_the_count_binary_and_lc_t_reads_bcd_with_time_base() -> None:
-    """Behaviour 46: S5T#1M20S = W#16#1800 (800 x 100 ms); L T strips the base."""
+    """S5T#1M20S = W#16#1800 (800 x 100 ms); L T strips the base."""
     cell = S5Timer()
     s5.run(cell, "SE", True, 80_000, 0)
     assert cell.bcd() == 0x1800
@@ -121,7 +122,7 @@ def test_l_t_reads_the_count_binary_and_lc_t_reads_bcd_with_time_base() -> None:
 
 
 def test_s5_timers_tick_at_their_time_base_so_accuracy_is_minus_one_base() -> None:
-    """Behaviour 46: started mid-base, an S5T#1S timer (100 x 10 ms) expires after 990..1000 ms."""
+    """Started mid-base, an S5T#1S timer (100 x 10 ms) expires after 990..1000 ms."""
     cell = S5Timer()
     s5.run(cell, "SD", True, 1000, 7 * MS)  # 7 ms into the first 10 ms base
     s5.tick(cell, 996 * MS)
@@ -135,7 +136,7 @@ def test_s5_timers_tick_at_their_time_base_so_accuracy_is_minus_one_base() -> No
 
 
 def test_timers_are_frozen_in_hold_by_shifting_their_start() -> None:
-    """Behaviour 51: timer update stops during HOLD while the clock runs."""
+    """Timer update stops during HOLD while the clock runs."""
     mem = Memory(timers=4)
     cell = s5.cell_of(mem.timers, 2)
     s5.run(cell, "SD", True, 100, 0)
@@ -154,7 +155,8 @@ def test_a_timer_number_beyond_the_area_is_a_programming_error() -> None:
 
 
 def test_the_s5time_literals_of_the_seeds_encode_with_the_smallest_base() -> None:
-    """Seeds §5.1: S5T#2S = 16#0200, S5T#1M20S = 16#1800, S5T#2M = 16#2120, max 16#3999."""
+    """El-Shahat's S7-300/400 course, timers and counters: S5T#2S = 16#0200, S5T#1M20S = 16#1800,
+    S5T#2M = 16#2120, max 16#3999."""
     assert s5.s5time_encode(2000) == 0x0200
     assert s5.s5time_encode(80_000) == 0x1800
     assert s5.s5time_encode(120_000) == 0x2120
@@ -173,7 +175,7 @@ def test_s5time_decode_then_encode_gives_the_finest_equivalent_word(base: int, c
 
 
 def test_sd_timer_started_once_expires_after_the_right_number_of_scans_without_more_calls() -> None:
-    """Behaviours 44, 46, 51: the OS ticks the T area once per scan on the process time.
+    """The OS ticks the T area once per scan on the process time.
 
     An SD timer with S5T#50MS started in the first scan (no instruction after that) sets Q
     in the scan at 50 ms; HOLD freezes it, STARTUP does not."""

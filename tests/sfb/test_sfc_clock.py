@@ -1,4 +1,5 @@
-"""SFC0 SET_CLK, SFC1 READ_CLK, SFC64 TIME_TCK on the injected clock (SPEC §1.6, seeds §6.2)."""
+"""SFC0 SET_CLK, SFC1 READ_CLK, SFC64 TIME_TCK on the injected clock (docs/architecture.md, "The
+core is a function", STEP7 comprehensive guide vol. 2, ch. 12)."""
 
 from __future__ import annotations
 
@@ -25,7 +26,7 @@ def test_read_clk_is_the_epoch_plus_injected_time_until_set_clk_moves_it() -> No
 
 
 def test_set_clk_outside_dt_range_is_refused_with_a_negative_ret_val() -> None:
-    """Behaviour 40: RET_VAL < 0 on error; the clock is unchanged."""
+    """RET_VAL < 0 on error; the clock is unchanged."""
     rtc = RealTimeClock()
     assert set_clk(rtc, datetime(2090, 1, 1), 0) == RET_DT_RANGE < 0
     assert rtc.read(0) == datetime(1990, 1, 1)
@@ -43,4 +44,4 @@ def test_time_tck_counts_ms_and_wraps_to_zero_after_2_pow_31_minus_1() -> None:
     assert time_tck(1234 * MS + 999_999) == 1234
     assert time_tck((2**31 - 1) * MS) == 2**31 - 1
     assert time_tck(2**31 * MS) == 0
-    assert tick_diff(5, 2**31 - 10) == 15  # the seed's overflow compensation
+    assert tick_diff(5, 2**31 - 10) == 15  # the book's overflow compensation

@@ -1,4 +1,4 @@
-"""SFC22 CREAT_DB, SFC23 DEL_DB, SFC24 TEST_DB (seeds-runtime §6.4; behaviours 4, 37, 38)."""
+"""SFC22 CREAT_DB, SFC23 DEL_DB, SFC24 TEST_DB (STEP7 comprehensive guide vol. 2, ch. 12)."""
 
 from __future__ import annotations
 
@@ -19,8 +19,8 @@ def make_cpu(clock: VirtualClock, main: object) -> Cpu:
 def test_unguarded_creat_db_creates_the_lowest_free_numbers_until_the_range_is_used_up(
     clock: VirtualClock,
 ) -> None:
-    """Behaviour 37: CREAT_DB(LOW_LIMIT:=10, UP_LIMIT:=14, COUNT:=200) called every scan
-    creates DB10, DB11, DB13, DB14 (DB12 exists) with 200 bytes, then W#16#80B1."""
+    """CREAT_DB(LOW_LIMIT:=10, UP_LIMIT:=14, COUNT:=200) called every scan creates DB10, DB11, DB13,
+    DB14 (DB12 exists) with 200 bytes, then W#16#80B1."""
     rets: list[dict[str, object]] = []
 
     def main(ctx: CallContext) -> None:
@@ -36,7 +36,7 @@ def test_unguarded_creat_db_creates_the_lowest_free_numbers_until_the_range_is_u
 
 
 def test_creat_db_needs_an_even_non_zero_count_and_a_valid_range(clock: VirtualClock) -> None:
-    """Behaviour 37: COUNT must be even (W#16#80A2); LOW_LIMIT > UP_LIMIT is W#16#80A1."""
+    """COUNT must be even (W#16#80A2); LOW_LIMIT > UP_LIMIT is W#16#80A1."""
     rets: list[object] = []
 
     def main(ctx: CallContext) -> None:
@@ -54,8 +54,8 @@ def test_creat_db_needs_an_even_non_zero_count_and_a_valid_range(clock: VirtualC
 
 
 def test_test_db_on_a_missing_db_returns_80b1_and_del_db_deletes(clock: VirtualClock) -> None:
-    """Behaviour 38: TEST_DB on a missing DB gives RET_VAL W#16#80B1; on an existing one
-    DB_LENGTH; DEL_DB removes a DB, a second DEL_DB is W#16#80B1."""
+    """TEST_DB on a missing DB gives RET_VAL W#16#80B1; on an existing one DB_LENGTH; DEL_DB removes
+    a DB, a second DEL_DB is W#16#80B1."""
     got: list[dict[str, object]] = []
 
     def main(ctx: CallContext) -> None:
@@ -75,7 +75,7 @@ def test_test_db_on_a_missing_db_returns_80b1_and_del_db_deletes(clock: VirtualC
 def test_dbs_created_by_creat_db_survive_a_warm_restart_but_not_a_cold_one(
     clock: VirtualClock,
 ) -> None:
-    """Behaviour 4: a cold restart deletes SFC22-created DBs; a warm restart keeps them."""
+    """A cold restart deletes SFC22-created DBs; a warm restart keeps them."""
 
     def main(ctx: CallContext) -> None:
         if ctx.cycle == 1 and 30 not in ctx.mem.dbs:

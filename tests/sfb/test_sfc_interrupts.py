@@ -1,5 +1,5 @@
-"""Delay and time-of-day interrupts, DIS_AIRT/EN_AIRT, equal-priority queueing (seeds-runtime
-§2, §6.5; behaviours 9, 17, 20, 21, 22, 23)."""
+"""Delay and time-of-day interrupts, DIS_AIRT/EN_AIRT, equal-priority queueing (Siemens'
+Program Design for S7-300/400, ch. 4; STEP7 comprehensive guide vol. 2, ch. 12)."""
 
 from __future__ import annotations
 
@@ -45,7 +45,7 @@ def once(action: Callable[[CallContext], None]) -> OB:
 
 
 def test_srt_dint_runs_ob20_once_after_dtime_with_its_sign(clock: VirtualClock) -> None:
-    """Behaviour 20: SRT_DINT(OB_NR:=20, DTIME:=T#20S, SIGN:=w) calls OB20 once after 20 s
+    """SRT_DINT(OB_NR:=20, DTIME:=T#20S, SIGN:=w) calls OB20 once after 20 s
     with OB20_SIGN = w; QRY_DINT bit 2 is 1 while pending; CAN_DINT cancels."""
     log: list[tuple[int, dict[str, Any]]] = []
     status: list[int] = []
@@ -72,8 +72,8 @@ def test_srt_dint_runs_ob20_once_after_dtime_with_its_sign(clock: VirtualClock) 
 def test_tod_interrupt_set_is_inactive_until_act_tint_and_repeats_each_minute(
     clock: VirtualClock,
 ) -> None:
-    """Behaviour 21: SET_TINT sets but does not activate; ACT_TINT activates; PERIOD
-    W#16#0201 repeats every minute on the CPU's real-time clock; CAN_TINT stops it."""
+    """SET_TINT sets but does not activate; ACT_TINT activates; PERIOD W#16#0201 repeats every
+    minute on the CPU's real-time clock; CAN_TINT stops it."""
     log: list[tuple[int, dict[str, Any]]] = []
     start = datetime(2026, 3, 2, 10, 0, 0)
 
@@ -104,8 +104,8 @@ def test_tod_interrupt_set_is_inactive_until_act_tint_and_repeats_each_minute(
 
 
 def test_activated_tod_interrupts_are_inactive_after_a_warm_restart(clock: VirtualClock) -> None:
-    """Behaviour 21: after a warm restart program-activated TOD interrupts stay inactive
-    until re-activated [002:L1394]; a HW-configured active one comes back by itself."""
+    """After a warm restart program-activated TOD interrupts stay inactive until re-activated
+    (Siemens' Program Design for S7-300/400); a HW-configured active one comes back by itself."""
     log: list[tuple[int, dict[str, Any]]] = []
     at = datetime(2026, 3, 2, 10, 0, 0)
 
@@ -129,7 +129,7 @@ def test_activated_tod_interrupts_are_inactive_after_a_warm_restart(clock: Virtu
 def test_tod_interrupt_due_during_startup_runs_only_after_the_transition_to_run(
     clock: VirtualClock,
 ) -> None:
-    """Behaviour 9: a TOD interrupt due during STARTUP runs after STARTUP → RUN."""
+    """A TOD interrupt due during STARTUP runs after STARTUP → RUN."""
     log: list[tuple[int, dict[str, Any]]] = []
 
     def ob100(ctx: CallContext) -> None:
@@ -149,9 +149,9 @@ def test_tod_interrupt_due_during_startup_runs_only_after_the_transition_to_run(
 def test_clock_set_forward_calls_ob80_then_runs_the_first_skipped_one_once(
     clock: VirtualClock,
 ) -> None:
-    """Behaviour 22: setting the clock forward past pending TOD interrupts calls OB80
-    (FLT_ID 16#05) with the skipped ones; one not cancelled there runs exactly once; one
-    OB80 cancels does not run; setting the clock back never repeats an executed one."""
+    """Setting the clock forward past pending TOD interrupts calls OB80 (FLT_ID 16#05) with the
+    skipped ones; one not cancelled there runs exactly once; one OB80 cancels does not run; setting
+    the clock back never repeats an executed one."""
     log: list[tuple[int, dict[str, Any]]] = []
     jump: list[datetime] = []
 
@@ -188,7 +188,7 @@ def test_clock_set_forward_calls_ob80_then_runs_the_first_skipped_one_once(
 
 
 def test_clock_set_forward_without_ob80_stops_the_cpu(clock: VirtualClock) -> None:
-    """Behaviour 22/24: the skipped-TOD time error needs OB80; without it the CPU stops."""
+    """The skipped-TOD time error needs OB80; without it the CPU stops."""
     cpu = make_cpu(clock, OB(1, "OB1", lambda c: None), recorder(10, []))
     cpu.start()
     cpu.tod.set(10, datetime(2026, 3, 2, 10, 0), Period.ONCE)
@@ -201,8 +201,8 @@ def test_clock_set_forward_without_ob80_stops_the_cpu(clock: VirtualClock) -> No
 def test_equal_priority_tod_interrupts_run_in_the_order_of_their_start_events(
     clock: VirtualClock,
 ) -> None:
-    """Behaviour 17: OB10..OB17 share priority 2 and queue in order of their start events
-    [002:L1365], not by OB number."""
+    """OB10..OB17 share priority 2 and queue in order of their start events
+    (Siemens' Program Design for S7-300/400), not by OB number."""
     log: list[tuple[int, dict[str, Any]]] = []
     cpu = make_cpu(clock, OB(1, "OB1", lambda c: None), recorder(10, log), recorder(11, log))
     cpu.start()
@@ -217,7 +217,7 @@ def test_equal_priority_tod_interrupts_run_in_the_order_of_their_start_events(
 
 
 def test_dis_airt_delays_interrupts_instead_of_dropping_them(clock: VirtualClock) -> None:
-    """Behaviour 23: SFC41 DIS_AIRT delays (never discards) interrupt OBs until EN_AIRT or
+    """SFC41 DIS_AIRT delays (never discards) interrupt OBs until EN_AIRT or
     the end of the OB; RET_VAL counts the delays in force, EN_AIRT without one is 8080."""
     rets: list[int] = []
 
@@ -238,8 +238,8 @@ def test_dis_airt_delays_interrupts_instead_of_dropping_them(clock: VirtualClock
 
 
 def test_next_occurrence_skips_months_without_the_start_day() -> None:
-    """Behaviour 21: monthly from 31 Jan runs only in months with 31 days [002:L1386];
-    ``W#16#2001`` runs at each month's end."""
+    """Monthly from 31 Jan runs only in months with 31 days (Siemens' Program Design for
+    S7-300/400); ``W#16#2001`` runs at each month's end."""
     start = datetime(2026, 1, 31, 8, 0)
     assert next_occurrence(start, Period.MONTH, datetime(2026, 2, 1)) == datetime(2026, 3, 31, 8)
     end = next_occurrence(datetime(2026, 1, 15, 8), Period.MONTH_END, datetime(2026, 2, 1))

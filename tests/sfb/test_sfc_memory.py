@@ -1,4 +1,4 @@
-"""SFC20 BLKMOV and SFC21 FILL over ANY areas (seeds §6.1, §6.4; behaviours 39, 40)."""
+"""SFC20 BLKMOV and SFC21 FILL over ANY areas (STEP7 comprehensive guide vol. 2, ch. 12)."""
 
 from __future__ import annotations
 
@@ -44,7 +44,7 @@ def test_blkmov_with_overlap_copies_the_source_as_it_was(mem: Memory) -> None:
 @pytest.mark.parametrize(
     ("src", "dst", "word"),
     [
-        ("P#M0.0 BOOL 7", "P#M10.0 BYTE 1", 0x8122),  # behaviour 39: BOOL not multiple of 8
+        ("P#M0.0 BOOL 7", "P#M10.0 BYTE 1", 0x8122),  # BOOL not multiple of 8
         ("P#M0.0 BYTE 1", "P#M10.0 BOOL 12", 0x8323),
         ("P#M0.1 BYTE 1", "P#M10.0 BYTE 1", 0x8128),  # bit address not 0
         ("P#DB9.DBX0.0 BYTE 1", "P#M10.0 BYTE 1", 0x813A),  # DB not loaded
@@ -56,7 +56,7 @@ def test_blkmov_with_overlap_copies_the_source_as_it_was(mem: Memory) -> None:
 def test_blkmov_errors_are_8xyy_with_the_parameter_number(
     mem: Memory, src: str, dst: str, word: int
 ) -> None:
-    """Behaviour 40: error RET_VALs have bit 15 set and BR = 0."""
+    """Error RET_VALs have bit 15 set and BR = 0."""
     ret = blkmov(mem, parse_any(src), parse_any(dst))
     assert as_word(ret) == word
     assert br_of(ret) is (word == 0)

@@ -1,4 +1,4 @@
-"""Run-time meters SFC2/3/4 and SFC101 (seeds-runtime §6.2; behaviour 55)."""
+"""Run-time meters SFC2/3/4 and SFC101 (STEP7 comprehensive guide vol. 2, ch. 12)."""
 
 from __future__ import annotations
 
@@ -32,8 +32,8 @@ def _call(cpu: Cpu, block: str, **params: object) -> dict[str, object]:
 def test_run_time_meter_stops_in_stop_keeps_its_value_across_mres_and_restarts(
     clock: VirtualClock,
 ) -> None:
-    """Behaviour 55: SET_RTM/CTRL_RTM/READ_RTM count hours only outside STOP; the value
-    survives MRES; a warm restart leaves the meter stopped, a hot restart resumes it."""
+    """SET_RTM/CTRL_RTM/READ_RTM count hours only outside STOP; the value survives MRES; a warm
+    restart leaves the meter stopped, a hot restart resumes it."""
     reads: list[dict[str, object]] = []
     cpu = make_cpu(clock, reads)
     cpu.start()
@@ -64,8 +64,8 @@ def test_run_time_meter_stops_in_stop_keeps_its_value_across_mres_and_restarts(
 def test_sixteen_bit_meters_saturate_at_32767_hours_and_sfc101_counts_on(
     clock: VirtualClock,
 ) -> None:
-    """Behaviour 55: READ_RTM (INT) saturates at 32767 h; SFC101 RTM (DINT) counts on;
-    meter numbers beyond 0..7 are W#16#8080 for SFC2-4."""
+    """READ_RTM (INT) saturates at 32767 h; SFC101 RTM (DINT) counts on; meter numbers beyond 0..7
+    are W#16#8080 for SFC2-4."""
     reads: list[dict[str, object]] = []
     cpu = make_cpu(clock, reads)
     cpu.start()

@@ -1,4 +1,5 @@
-"""Action rows (SPEC §2.8) and arithmetic with overflow (seed 000:5838-5884)."""
+"""Action rows (docs/semantics.md, "Actions") and arithmetic with overflow (STEP7 comprehensive
+guide vol. 2, ch. 14)."""
 
 from __future__ import annotations
 

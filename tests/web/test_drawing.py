@@ -50,7 +50,7 @@ def long_chart(n: int = 250, name: str = "Step number {i} of the long sequence")
     ["S1", "Fill", "Clamp work piece", "W" * 40, "x" * 128, " ".join(["Wide"] * 25)[:128]],
 )
 def test_a_step_name_fits_its_box_whole(name: str) -> None:
-    """Names are never cut at 12 characters nor spill out of the box (issue 10)."""
+    """Names are never cut at 12 characters nor spill out of the box."""
     lines, size = fit_text(f"S12  {name}", BOX_W - 0.12, BOX_H - 0.08, STEP_SIZES)
     assert "".join(lines).replace(" ", "") == f"S12{name}".replace(" ", "")  # nothing cut
     assert all(_width(line, size) <= BOX_W - 0.12 for line in lines)  # nothing spills

@@ -1,10 +1,10 @@
-"""Edit mode in a real headless Chromium against a chart running on the virtual clock, with
-a users file, a real zenoh bus and the CPU's online change (issue 10): an operator and a
-viewer get no edit mode; an invalid edit shows its diagnostic with line and column while
-the CPU keeps its chart; an engineer changes a transition condition, downloads, and the
-running sequence follows the new condition; a chart built from scratch in the browser
-(three steps, an alternative branch, a jump) downloads and runs. One browser, one page for
-the module (CI has 2 cores); the tests run in order on it."""
+"""Edit mode in a real headless Chromium against a chart running on the virtual clock, with a users
+file, a real zenoh bus and the CPU's online change (docs/online-change.md): an operator and a viewer
+get no edit mode; an invalid edit shows its diagnostic with line and column while the CPU keeps its
+chart; an engineer changes a transition condition, downloads, and the running sequence follows the
+new condition; a chart built from scratch in the browser (three steps, an alternative branch, a
+jump) downloads and runs. One browser, one page for the module (CI has 2 cores); the tests run in
+order on it."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""web/live.py: a real compiled chart on the virtual clock, seen live and commanded."""
+"""web/bus/live.py: a real compiled chart on the virtual clock, seen live and commanded."""
 
 from __future__ import annotations
 

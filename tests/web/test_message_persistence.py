@@ -1,5 +1,5 @@
 """The CPU's message list and its acknowledgement log survive a killed ``s7graph run``
-process (issue 4: who acknowledged, when, persisted)."""
+process (who acknowledged, when, persisted)."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
-"""Online change through the virtual clock and a real zenoh bus on a unix socket: a changed
-chart is downloaded into the running GraphFB (issue 10) — compiled off the scan thread,
-swapped in at a scan boundary, the state carried over by step number
+"""Online change through the virtual clock and a real zenoh bus on a unix socket: a changed chart is
+downloaded into the running GraphFB (docs/online-change.md) — compiled off the scan thread, swapped
+in at a scan boundary, the state carried over by step number
 (``sequencer.change.carry.carry_over``), the file rewritten with a numbered backup, every download
 audited — and undone the same way. Refusals leave the CPU running the old chart."""
 

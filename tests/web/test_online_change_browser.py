@@ -1,5 +1,5 @@
 """A download that inserts a step, and an undo of it, through a real zenoh bus, a real
-headless Chromium page and ``s7graph watch`` (issue 27): an engineer inserts S8 between
+headless Chromium page and ``s7graph watch``: an engineer inserts S8 between
 S6 and S7 of the running chain S1 … S7 in the browser and downloads it; the sequence then
 runs S6 → S8 → S7, and the events, ``watch``, the page (its step colours, its event list,
 a click on the new step) and the audit name S8 and those switches. After *Undo download*

@@ -1,4 +1,4 @@
-"""The key space of the zenoh bus between a CPU and its views (DESIGN.md "Edges").
+"""The key space of the zenoh bus between a CPU and its views (docs/bus.md, "Keys").
 
 The CPU serves and publishes these keys (:class:`~web.bus.publisher.BusPublisher`), a view
 or a command line reads and commands through them (:class:`~web.bus.client.BusClient`); a

@@ -317,7 +317,7 @@ def sim(
         Path | None, typer.Option(help="A simulated plant (.py) run each cycle.")
     ] = None,
 ) -> None:
-    """Run a chart on the virtual clock: stimulus in, one JSON line per cycle out (SPEC §4)."""
+    """Run a chart on the virtual clock: stimulus in, one JSON line per cycle out."""
     from s7graph.web.cli.sim import sim_command
 
     raise typer.Exit(

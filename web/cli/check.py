@@ -1,4 +1,4 @@
-"""``s7graph check CHART.s7g [--symbols FILE]``: print a chart's diagnostics (SPEC.md §3).
+"""``s7graph check CHART.s7g [--symbols FILE]``: print a chart's diagnostics (docs/chart-format.md).
 
 One diagnostic a line on stdout (``file:line:col: error[E010]: message (element)``), then a
 summary line. Exit status: 0 clean, 1 warnings only, 2 errors (syntax errors included). An

@@ -1,4 +1,5 @@
-"""``s7graph sim``: run a chart on the virtual clock — the black-box contract of SPEC §4.
+"""``s7graph sim``: run a chart on the virtual clock — the black-box contract of docs/cli.md,
+"s7graph sim".
 
 Each cycle (``k`` = 0, 1, …, at ``t_ms = k * cycle_ms``): apply the stimuli with
 ``at_ms <= t_ms`` (values stay until set again), read inputs, call the FB from OB1, write
@@ -86,7 +87,7 @@ def sim_command(
     symbols: Path | None = None,
     plant: Path | None = None,
 ) -> int:
-    """Run ``chart`` for ``cycles`` cycles; return the exit status (SPEC §4)."""
+    """Run ``chart`` for ``cycles`` cycles; return the exit status (docs/cli.md, "s7graph sim")."""
     try:
         session = ChartSession.load(chart, symbols, VirtualClock())
         stim = _read_stimulus(stimulus)

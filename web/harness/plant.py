@@ -1,4 +1,4 @@
-"""Simulated plants for ``s7graph sim`` / ``s7graph run`` (SPEC §4).
+"""Simulated plants for ``s7graph sim`` / ``s7graph run`` (docs/cli.md, "s7graph sim").
 
 A plant file is a Python module defining ``class Plant`` with
 ``cycle(self, io, t_ms: int, dt_ms: int) -> None``, called once per CPU cycle after the

@@ -76,8 +76,9 @@ class Field:
 
     @property
     def hint(self) -> str:
-        extra = " (0: none - a branch stop)" if self.arg.type == "int | None" else ""
-        return self.op.doc + extra
+        if self.arg.type == "int | None":
+            return self.op.hint.removesuffix(".") + " (0: none, a branch stop)."
+        return self.op.hint
 
 
 @dataclass(frozen=True, slots=True)

@@ -1,5 +1,5 @@
 """Edit mode of one browser page (an engineer's): the chart as an editing session
-(``sequencer.edit.Session``), drawn on the page's own scene, edited in the side panel and
+(``sequencer.change.edit.Session``), drawn on the page's own scene, edited in the side panel and
 in its source view, checked live, saved, opened and downloaded into the running CPU.
 
 - **Select** a step or transition on the chart (or in *Element*); its form lists what the
@@ -421,7 +421,7 @@ class Editor(CpuCommands, RowEditing):
                 self._rows_form(chart, form.ref)
             for op, fields in form.actions:
                 handles = [self._input(f) for f in fields]
-                button = gui.add_button(op.title, hint=op.doc)
+                button = gui.add_button(op.title, hint=op.hint)
                 self._form_handles.append(button)
                 button.on_click(self._action_handler(op, form.ref, fields, handles))
 
