@@ -15,17 +15,8 @@ import msgspec
 from msgspec import Meta, Struct
 
 from s7graph.sequencer.change.base import MAX_SOURCE
-from s7graph.sequencer.text.model import (
-    Binary,
-    Chart,
-    Const,
-    Expr,
-    FuncCall,
-    Operand,
-    StepAttr,
-    TransAttr,
-    Unary,
-)
+from s7graph.sequencer.text.format import format_expr
+from s7graph.sequencer.text.model import Chart, Expr
 
 __all__ = [
     "EVENTS",
@@ -717,35 +708,11 @@ def _clip(text: str, limit: int) -> str:
 
 # ---------------------------------------------------------------- condition text
 
-_ASSOCIATIVE = ("AND", "OR", "XOR")  # a chain of them parses balanced (sequencer/text/build.py)
-_PRECEDENCE = {"OR": 1, "XOR": 2, "AND": 3, "=": 4, "<>": 4, "<": 4, ">": 4, "<=": 4, ">=": 4}
-
 
 def condition_text(expr: Expr | None) -> str:
-    """An expression as S7 text (``"Start" AND NOT S3.X``); "" for an empty condition."""
+    """An expression as S7 text (``"Start" AND NOT S3.X``); "" for an empty condition.
+    The chart writer's printer (``sequencer.text.format``, one precedence table), a chain
+    of AND, OR or XOR written without inner parentheses."""
     if expr is None:
         return ""
-    return _text(expr, 0)
-
-
-def _text(e: Expr, outer: int) -> str:
-    match e:
-        case Const(text=text, value=value):
-            return text or str(value)
-        case Operand(name=name, quoted=quoted):
-            return f'"{name}"' if quoted else name
-        case StepAttr(step=step, attr=attr):
-            return f"S{step}.{attr}"
-        case TransAttr(transition=t, attr=attr):
-            return f"T{t}.{attr}"
-        case Unary(op=op, operand=operand):
-            inner = _text(operand, 9)
-            return f"NOT {inner}" if op == "NOT" else f"-{inner}"
-        case Binary(op=op, left=left, right=right):
-            prec = _PRECEDENCE.get(op, 5)
-            chained = op in _ASSOCIATIVE and isinstance(right, Binary) and right.op == op
-            s = f"{_text(left, prec)} {op} {_text(right, prec if chained else prec + 1)}"
-            return f"({s})" if prec < outer else s
-        case FuncCall(name=name, args=args):
-            return f"{name}({', '.join(_text(a, 0) for a in args)})"
-    return "?"
+    return format_expr(expr, chains=True)
