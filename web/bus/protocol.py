@@ -537,11 +537,18 @@ def decode(data: bytes | bytearray | memoryview | str, kind: type[T]) -> T:
         return decoder.decode(data)  # type: ignore[no-any-return]
     except msgspec.ValidationError as exc:
         reason = explain(_op_of(data), str(exc)) if kind is Command else str(exc)
-        raise ProtocolError(f"invalid {kind.__name__}: {reason}") from None
+        raise ProtocolError(f"invalid {kind.__name__}: {_one_line(reason)}") from None
     except msgspec.DecodeError as exc:
         raise ProtocolError(f"malformed JSON: {exc}") from None
     except (RecursionError, UnicodeDecodeError, ValueError, TypeError) as exc:
         raise ProtocolError(f"invalid {kind.__name__}: {type(exc).__name__}") from None
+
+
+def _one_line(text: str) -> str:
+    """``text`` with what it quotes of a hostile message escaped (``\\n``): one log line."""
+    if text.isprintable():
+        return text
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
 
 
 class _OpOnly(Struct):
