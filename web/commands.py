@@ -189,9 +189,15 @@ class Command(
     Class attributes of each op: ``role`` the lowest role allowed, ``pin`` the pin it acts
     as (shown in the role table), ``kind`` how (``edge``: a one-call edge of ``pin``;
     ``level``: ``pin`` held at ``held``; ``mode``: a mode selector; "" no pin), ``does``
-    and ``example`` (its arguments) for the documentation."""
+    and ``example`` (its arguments) for the documentation; ``where`` it is carried out
+    (``fb``: the FB at the scan boundary, ``web.bus.live``; ``cpu``: the RUN/STOP switch;
+    ``force``: the force table; ``online``: the online change, ``web.bus.online``) and its
+    ``group``: two commands of one group at the same scan boundary would act as
+    simultaneous edges of one call, so the second is refused."""
 
     role: ClassVar[str] = ""
+    where: ClassVar[Literal["fb", "cpu", "force", "online"]] = "fb"
+    group: ClassVar[str] = ""
     pin: ClassVar[str] = ""
     kind: ClassVar[Literal["edge", "level", "mode", ""]] = ""
     held: ClassVar[bool] = False
@@ -235,6 +241,7 @@ class Ack(Command, tag="ack", frozen=True, kw_only=True):
 
 
 class AckStep(Command, tag="ack_step", frozen=True, kw_only=True):
+    group = "step"
     role, pin, kind = "operator", "ACK_S", "edge"
     does, example = "acknowledge one step's fault", '{"step": n}'
     args: StepArgs
@@ -247,18 +254,21 @@ class AckMsg(Command, tag="ack_msg", frozen=True, kw_only=True):
 
 
 class SetMode(Command, tag="mode", frozen=True, kw_only=True):
+    group = "mode"
     role, pin, kind = "operator", "SW_AUTO/MAN/TAP/TOP", "mode"
     does, example = "switch the mode", '{"mode": "MAN"}'
     args: ModeArgs
 
 
 class Init(Command, tag="init", frozen=True, kw_only=True):
+    group = "init"
     role, pin, kind = "operator", "INIT_SQ", "edge"
     does = "activate the initial steps"
     args: NoArgs = NoArgs()
 
 
 class Off(Command, tag="off", frozen=True, kw_only=True):
+    group = "init"
     role, pin, kind = "operator", "OFF_SQ", "edge"
     does = "deactivate every step"
     args: NoArgs = NoArgs()
@@ -277,12 +287,14 @@ class TPush(Command, tag="t_push", frozen=True, kw_only=True):
 
 
 class StepOn(Command, tag="step_on", frozen=True, kw_only=True):
+    group = "step"
     role, pin, kind = "operator", "S_ON", "edge"
     does, example = "activate a step (MAN)", '{"step": n}'
     args: StepArgs
 
 
 class StepOff(Command, tag="step_off", frozen=True, kw_only=True):
+    group = "step"
     role, pin, kind = "operator", "S_OFF", "edge"
     does, example = "deactivate a step (MAN)", '{"step": n}'
     args: StepArgs
@@ -301,6 +313,7 @@ class EnSv(Command, tag="en_sv", frozen=True, kw_only=True):
 
 
 class Force(Command, tag="force", frozen=True, kw_only=True):
+    where = "force"
     role = "engineer"
     does = (
         "force an input, output or flag (I, Q, M) until unforced: value null unforces it, "
@@ -311,6 +324,7 @@ class Force(Command, tag="force", frozen=True, kw_only=True):
 
 
 class Download(Command, tag="download", frozen=True, kw_only=True):
+    where = "online"
     role = "engineer"
     does = "download a changed chart into the running FB (online change)"
     example = '{"source": "...", "base": 1, "removed": "keep", "preview": true}'
@@ -318,6 +332,7 @@ class Download(Command, tag="download", frozen=True, kw_only=True):
 
 
 class UndoDownload(Command, tag="undo_download", frozen=True, kw_only=True):
+    where = "online"
     role = "engineer"
     does = "put the chart before the last download back"
     example = '{"base": 2, "removed": "keep", "preview": true}'
@@ -325,6 +340,7 @@ class UndoDownload(Command, tag="undo_download", frozen=True, kw_only=True):
 
 
 class Save(Command, tag="save", frozen=True, kw_only=True):
+    where = "online"
     role = "engineer"
     does, example = (
         "write a chart into the CPU's project directory",
@@ -334,6 +350,7 @@ class Save(Command, tag="save", frozen=True, kw_only=True):
 
 
 class Open(Command, tag="open", frozen=True, kw_only=True):
+    where = "online"
     role = "engineer"
     does = "read a chart or importable file of the project directory"
     example = '{"file": "x.xml"}'
@@ -341,12 +358,14 @@ class Open(Command, tag="open", frozen=True, kw_only=True):
 
 
 class Stop(Command, tag="stop", frozen=True, kw_only=True):
+    where = "cpu"
     role = "engineer"
     does = "the CPU's RUN/STOP switch to STOP (outputs to 0)"
     args: NoArgs = NoArgs()
 
 
 class Start(Command, tag="start", frozen=True, kw_only=True):
+    where = "cpu"
     role = "engineer"
     does = "the switch to RUN: the CPU's configured restart (`--restart`)"
     args: NoArgs = NoArgs()

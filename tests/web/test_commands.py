@@ -195,3 +195,27 @@ def test_the_pages_buttons_send_the_vocabularys_ops() -> None:
     sent |= _string_args(ROOT / "web/view/panel.py", "command")
     assert {"ack", "init", "off", "t_push", "halt", "step_on", "ack_step", "ack_msg"} <= sent
     assert sent <= set(OPS)
+
+
+def test_who_carries_each_op_out_and_which_conflict() -> None:
+    from s7graph.web.bus import live
+    from s7graph.web.bus.online import ENGINEERING_OPS
+
+    assert ENGINEERING_OPS == ("download", "undo_download", "save", "open")
+    assert {op_of(c) for c in COMMAND_TYPES if c.where == "cpu"} == {"stop", "start"}
+    assert {op_of(c) for c in COMMAND_TYPES if c.where == "force"} == {"force"}
+    assert live._GROUPS == {
+        "mode": "mode", "step_on": "step", "step_off": "step", "ack_step": "step",
+        "init": "init", "off": "init",
+    }  # fmt: skip
+
+
+def test_the_role_tables_argument_examples_name_the_structs_fields() -> None:
+    """The ``args`` column (docs/bus.md, docs/security.md) shows each op's arguments."""
+    import re
+
+    for kind in COMMAND_TYPES:
+        args = next(f.type for f in msgspec.structs.fields(kind) if f.name == "args")
+        fields = msgspec.structs.fields(args)
+        shown = set(re.findall(r'"(\w+)":', kind.example))
+        assert {f.name for f in fields if f.required} <= shown <= {f.name for f in fields}

@@ -99,10 +99,7 @@ LEVEL_PINS: dict[str, tuple[str, bool]] = {
 MAX_WATCH = 64
 # Commands of one group queued at the same scan boundary would act as simultaneous edges
 # in one call (the FB resolves them by priority, not by order), so the second is refused.
-_GROUPS = {
-    "mode": "mode", "step_on": "step", "step_off": "step", "ack_step": "step",
-    "init": "init", "off": "init",
-}  # fmt: skip
+_GROUPS = {op_of(c): c.group for c in COMMAND_TYPES if c.group}
 
 
 @dataclass(frozen=True, slots=True)
