@@ -18,8 +18,9 @@ msgspec and the layers below ``web``.
 
 from __future__ import annotations
 
+import json
 import re
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from typing import Annotated, Any, ClassVar, Literal, get_args
 
 import msgspec
@@ -36,6 +37,7 @@ __all__ = [
     "AnyCommand",
     "Args",
     "Command",
+    "command_args",
     "command_type",
     "explain",
     "make_command",
@@ -430,3 +432,23 @@ def explain(op: object, message: str) -> str:
         if choices:
             return f"{m[1]} must be one of {', '.join(choices)} - at `$.args.{m[1]}`"
     return message
+
+
+def command_args(op: str, words: Iterable[str]) -> dict[str, Any]:
+    """The shell's ``NAME=VALUE`` words as the arguments of ``op`` (``s7graph send``): a
+    value reads as JSON where it is JSON (``3``, ``true``, ``null``), else as text.
+    ``ValueError`` with a one-line reason for an unknown op or arguments its struct refuses,
+    before anything is sent."""
+    if command_type(op) is None:
+        raise ValueError(f"unknown op {op!r}; one of {', '.join(OPS)}")
+    args: dict[str, Any] = {}
+    for word in words:
+        name, eq, value = word.partition("=")
+        if not eq or not name:
+            raise ValueError(f"give each argument as NAME=VALUE, not {word!r}")
+        try:
+            args[name] = json.loads(value)
+        except ValueError:
+            args[name] = value
+    make_command(op=op, fb="_", args=args)  # refused here, not by the CPU
+    return args

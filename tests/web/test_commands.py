@@ -23,6 +23,7 @@ from s7graph.web.commands import (
     Force,
     ForceArgs,
     StepOn,
+    command_args,
     command_type,
     op_of,
 )
@@ -168,8 +169,9 @@ def _string_args(path: Path, call: str) -> set[str]:
     return out
 
 
-# Ops without a shell command of their own: the levels (the page's Halt, a bus client), and
-# the engineering ops an editor sends (the shell has `download`, which previews first).
+# Ops without a shell command of their own (``s7graph send`` sends them): the levels (the
+# page's Halt, a bus client), and the engineering ops an editor sends (the shell has
+# ``download``, which previews first).
 NOT_IN_THE_SHELL = {"halt", "en_il", "en_sv", "undo_download", "save", "open"}
 
 
@@ -178,6 +180,26 @@ def test_the_shell_sends_the_vocabularys_ops() -> None:
     sent |= _string_args(ROOT / "web/cli/remote.py", "send")
     assert sent <= set(OPS)
     assert set(OPS) - sent == NOT_IN_THE_SHELL
+
+
+def test_the_shells_send_reads_any_ops_arguments_before_sending() -> None:
+    assert command_args("halt", ["on=true"]) == {"on": True}
+    assert command_args("ack_msg", ["msg_id=17"]) == {"msg_id": 17}
+    assert command_args("ack_msg", ["msg_id=FILL/DB1/S2/SV"]) == {"msg_id": "FILL/DB1/S2/SV"}
+    assert command_args("force", ["address=I0.3", "value=null"]) == {
+        "address": "I0.3", "value": None,
+    }  # fmt: skip
+    assert command_args("undo_download", ["preview=true"]) == {"preview": True}
+    for op, words, reason in [
+        ("nope", [], "unknown op 'nope'; one of ack,"),
+        ("halt", ["on"], "NAME=VALUE"),
+        ("halt", ["on=yes"], "$.args.on"),
+        ("mode", ["mode=FAST"], "mode must be one of"),
+        ("init", ["step=1"], "takes no argument 'step'"),
+    ]:
+        with pytest.raises(ValueError) as err:
+            command_args(op, words)
+        assert reason in str(err.value)
 
 
 def test_the_pages_buttons_send_the_vocabularys_ops() -> None:
