@@ -24,6 +24,7 @@ from collections.abc import Iterable, Iterator
 from typing import Annotated, Any, ClassVar, Literal, get_args
 
 import msgspec
+import msgspec.inspect as mi
 from msgspec import UNSET, Meta, Struct, UnsetType
 
 from s7graph.sequencer.change.base import MAX_SOURCE
@@ -37,6 +38,7 @@ __all__ = [
     "AnyCommand",
     "Args",
     "Command",
+    "arguments_markdown",
     "command_args",
     "command_type",
     "explain",
@@ -452,3 +454,36 @@ def command_args(op: str, words: Iterable[str]) -> dict[str, Any]:
             args[name] = value
     make_command(op=op, fb="_", args=args)  # refused here, not by the CPU
     return args
+
+
+def _type_text(t: mi.Type) -> str:
+    """An argument's type as the documentation says it (``int 1..65535``, ``text (1..64)``)."""
+    if isinstance(t, mi.UnionType):
+        return " or ".join(_type_text(x) for x in t.types)
+    if isinstance(t, mi.LiteralType):
+        return "one of " + ", ".join(f"`{v}`" for v in sorted(map(str, t.values)))
+    if isinstance(t, mi.IntType):
+        if t.ge is not None and t.le is not None and t.le < 2**63 - 1:
+            return f"int {t.ge}..{t.le}"
+        return f"int ≥ {t.ge}" if t.ge is not None else "int"
+    if isinstance(t, mi.StrType):
+        if t.max_length is None:
+            return "text"
+        return f"text ({t.min_length or 0}..{t.max_length:,} chars)"
+    names = {mi.BoolType: "bool", mi.FloatType: "number", mi.NoneType: "null"}
+    return names.get(type(t), type(t).__name__)
+
+
+def arguments_markdown() -> str:
+    """Each op's arguments as Markdown, read from its struct (docs/bus.md; a test keeps the
+    two equal): name, type, and ``?`` for one that may be left out."""
+    rows = ["| op | arguments |", "|---|---|"]
+    for kind in COMMAND_TYPES:
+        args = next(f.type for f in msgspec.structs.fields(kind) if f.name == "args")
+        info = mi.type_info(args)
+        assert isinstance(info, mi.StructType)
+        shown = [
+            f"`{f.name}`{'' if f.required else '?'}: {_type_text(f.type)}" for f in info.fields
+        ]
+        rows.append(f"| `{op_of(kind)}` | {'; '.join(shown) or 'none'} |")
+    return "\n".join(rows) + "\n"

@@ -241,3 +241,11 @@ def test_the_role_tables_argument_examples_name_the_structs_fields() -> None:
         fields = msgspec.structs.fields(args)
         shown = set(re.findall(r'"(\w+)":', kind.example))
         assert {f.name for f in fields if f.required} <= shown <= {f.name for f in fields}
+
+
+def test_docs_bus_md_shows_each_ops_arguments_as_the_union_says() -> None:
+    from s7graph.web.commands import arguments_markdown
+
+    table = arguments_markdown()
+    assert "| `step_on` | `step`: int 1..65535 |" in table
+    assert table in (ROOT / "docs" / "bus.md").read_text(encoding="utf-8")
