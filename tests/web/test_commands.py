@@ -203,20 +203,15 @@ def test_the_shells_send_reads_any_ops_arguments_before_sending() -> None:
 
 
 def test_the_pages_buttons_send_the_vocabularys_ops() -> None:
-    tree = ast.parse((ROOT / "web/view/panel.py").read_text(encoding="utf-8"))
-    keys = {
-        k.value
-        for node in ast.walk(tree)
-        if isinstance(node, ast.Dict)
-        for k in node.keys
-        if isinstance(k, ast.Constant) and isinstance(k.value, str) and node.values
-        and isinstance(node.values[0], ast.Call)
-        and getattr(node.values[0].func, "attr", None) == "add_button"
-    }  # fmt: skip
-    sent = keys | _string_args(ROOT / "web/view/panel.py", "_handler")
+    from s7graph.web.view.panel import _CONTROL_BUTTONS, _STEP_BUTTONS, _hint
+
+    buttons = [kind for kind, *_ in (*_CONTROL_BUTTONS, *_STEP_BUTTONS)]
+    sent = {op_of(kind) for kind in buttons}
+    sent |= _string_args(ROOT / "web/view/panel.py", "_handler")
     sent |= _string_args(ROOT / "web/view/panel.py", "command")
     assert {"ack", "init", "off", "t_push", "halt", "step_on", "ack_step", "ack_msg"} <= sent
     assert sent <= set(OPS)
+    assert _hint(buttons[0]) == "INIT_SQ: activate the initial steps"  # the pin, the row
 
 
 def test_who_carries_each_op_out_and_which_conflict() -> None:
