@@ -404,7 +404,10 @@ def make_command(**fields: Any) -> Command:
     try:
         made: Command = msgspec.convert(fields, AnyCommand)
     except msgspec.ValidationError as exc:
-        raise ValueError(explain(op, str(exc))) from None
+        reason = explain(op, str(exc))
+        if not reason.isprintable():  # what it quotes of the fields: one line
+            reason = "".join(c if c.isprintable() else repr(c)[1:-1] for c in reason)
+        raise ValueError(reason) from None
     return made
 
 
@@ -425,6 +428,10 @@ def explain(op: object, message: str) -> str:
         required = [f.name for f in msgspec.structs.fields(args) if f.required]
         if required:
             return f"op {op!r} needs argument {required[0]!r} - at `$.args`"
+        try:  # no argument is required, yet none is not enough (force): say why
+            msgspec.convert({}, args)
+        except msgspec.ValidationError as exc:
+            return f"{exc} - at `$.args`"
     if m := _MISSING.match(message):
         return f"op {op!r} needs argument {m[1]!r} - at `$.args`"
     if m := _UNKNOWN.match(message):

@@ -109,6 +109,7 @@ def test_a_command_built_the_old_way_is_the_typed_struct() -> None:
     [
         (b'{"op":"force","fb":"F","args":{"address":"I0.1"}}', "force takes"),
         (b'{"op":"force","fb":"F","args":{"all":false}}', "alone"),
+        (b'{"op":"force","fb":"F"}', 'force takes {"address"'),
         (b'{"op":"force","fb":"F","args":{"address":"","value":1}}', "$.args.address"),
         (b'{"op":"force","fb":"F","args":{"address":"I0.1","value":[1]}}', "$.args.value"),
         (b'{"op":"download","fb":"F","args":{"source":"x","base":-1}}', "$.args.base"),
