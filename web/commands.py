@@ -5,7 +5,10 @@ with typed arguments (``args``) and, as class attributes, what the rest of the s
 derives from it: the lowest role allowed (``web.access.roles`` builds its table, and
 docs/bus.md and docs/security.md, from these), the S7-GRAPH pin it acts as
 (``web.bus.live`` builds its pin maps from them), what it does and an example of its
-arguments. The wire format is the one of the former ``Command(op, fb, args: dict)``:
+arguments, its conflict group and where it is carried out (the FB, the RUN/STOP switch,
+the force table, the online change); the shell's ``s7graph send`` (:func:`command_args`),
+the page's buttons and docs/bus.md's argument table (:func:`arguments_markdown`) read them
+too. The wire format is the one of the former ``Command(op, fb, args: dict)``:
 ``{"op": "step_on", "fb": "FILL", "user": ..., "token": ..., "origin": ..., "args":
 {"step": 3}}`` decodes to :class:`StepOn`. ``Command(op=..., fb=..., args={...})`` still
 builds a command: it returns the struct of that op, or raises ``ValueError`` with a
