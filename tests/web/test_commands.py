@@ -245,3 +245,30 @@ def test_docs_bus_md_shows_each_ops_arguments_as_the_union_says() -> None:
     table = arguments_markdown()
     assert "| `step_on` | `step`: int 1..65535 |" in table
     assert table in (ROOT / "docs" / "bus.md").read_text(encoding="utf-8")
+
+
+def test_every_op_the_shell_and_the_page_spell_is_the_unions_with_its_arguments() -> None:
+    """Where web/view and web/cli send an op by name with a dict of arguments, the op is
+    one of the union and the keys are fields of its argument struct."""
+    senders = {"_remote", "send", "command", "_command", "engineer_command", "_handler"}
+    seen = 0
+    for path in sorted([*(ROOT / "web/view").glob("*.py"), *(ROOT / "web/cli").glob("*.py")]):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if not isinstance(node, ast.Call) or not node.args:
+                continue
+            name = getattr(node.func, "id", None) or getattr(node.func, "attr", None)
+            first = node.args[0]
+            owner = getattr(getattr(node.func, "value", None), "id", "")
+            if name not in senders or not isinstance(first, ast.Constant) or owner.endswith("app"):
+                continue  # not a send, or a typer command's name (@app.command("import"))
+            kind = command_type(str(first.value))
+            assert kind is not None, f"{path.name}:{node.lineno}: unknown op {first.value!r}"
+            args = next(f.type for f in msgspec.structs.fields(kind) if f.name == "args")
+            fields = {f.name for f in msgspec.structs.fields(args)}
+            given = node.args[1] if len(node.args) > 1 else None
+            keys = [k.value for k in given.keys if isinstance(k, ast.Constant)] if isinstance(
+                given, ast.Dict
+            ) else [k.arg for k in node.keywords if name == "_handler"]  # fmt: skip
+            assert set(keys) <= fields, f"{path.name}:{node.lineno}: {keys} not in {fields}"
+            seen += 1
+    assert seen >= 20
