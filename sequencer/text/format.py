@@ -44,6 +44,7 @@ from s7graph.sequencer.text.model import (
     Unary,
     VarDecl,
 )
+from s7graph.steps.syntax import CHAIN_OPS
 
 __all__ = ["format_chart", "format_expr", "format_row", "quote", "row_body"]
 
@@ -82,15 +83,21 @@ def _level(e: Expr) -> int:
     return _PRIMARY
 
 
-def format_expr(e: Expr, operand: Callable[[Expr], str | None] | None = None) -> str:
+def format_expr(
+    e: Expr, operand: Callable[[Expr], str | None] | None = None, *, chains: bool = False
+) -> str:
     """An expression in `.s7g` syntax; ``operand`` may spell operands, constants and
-    step attributes another way (a TIA action's text), returning None to keep ours."""
+    step attributes another way (a TIA action's text), returning None to keep ours.
+    ``chains`` writes a chain of one associative operator (``a AND (b AND c)``, the
+    balanced shape the parser builds) without its inner parentheses, for a reader
+    (``web.bus.protocol.condition_text``); the text then parses to an equal condition,
+    not necessarily to the same tree."""
     if operand is not None and not isinstance(e, Binary | Unary | FuncCall):
         spelled = operand(e)
         if spelled is not None:
             return spelled
     if isinstance(e, Const):
-        return e.text
+        return e.text or str(e.value)
     if isinstance(e, Operand):
         return quote(e.name) if e.quoted else e.name
     if isinstance(e, StepAttr):
@@ -98,20 +105,27 @@ def format_expr(e: Expr, operand: Callable[[Expr], str | None] | None = None) ->
     if isinstance(e, TransAttr):
         return f"T{e.transition}.TT"
     if isinstance(e, FuncCall):
-        return f"{e.name}({', '.join(format_expr(a, operand) for a in e.args)})"
+        return f"{e.name}({', '.join(format_expr(a, operand, chains=chains) for a in e.args)})"
     if isinstance(e, Unary):
-        inner = _wrap(e.operand, _UNARY, operand)
+        inner = _wrap(e.operand, _UNARY, operand, chains)
         return f"NOT {inner}" if e.op == "NOT" else f"-{inner}"
     level = _LEVEL[e.op]
     if level == _COMPARISON:  # comparison sides are shift expressions
-        left, right = _wrap(e.left, level + 1, operand), _wrap(e.right, level + 1, operand)
-    else:  # left-associative
-        left, right = _wrap(e.left, level, operand), _wrap(e.right, level + 1, operand)
+        left = _wrap(e.left, level + 1, operand, chains)
+        right = _wrap(e.right, level + 1, operand, chains)
+    else:  # left-associative (a chain's right part, when ``chains``, needs no parentheses)
+        chained = (
+            chains and e.op in CHAIN_OPS and isinstance(e.right, Binary) and e.right.op == e.op
+        )
+        left = _wrap(e.left, level, operand, chains)
+        right = _wrap(e.right, level if chained else level + 1, operand, chains)
     return f"{left} {e.op} {right}"
 
 
-def _wrap(e: Expr, at_least: int, operand: Callable[[Expr], str | None] | None) -> str:
-    text = format_expr(e, operand)
+def _wrap(
+    e: Expr, at_least: int, operand: Callable[[Expr], str | None] | None, chains: bool
+) -> str:
+    text = format_expr(e, operand, chains=chains)
     return text if _level(e) >= at_least else f"({text})"
 
 

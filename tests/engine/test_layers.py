@@ -55,6 +55,7 @@ RANKS: dict[str, float] = {
     "s7graph.steps": 2,
     "s7graph.sequencer": 3,
     "s7graph.web": 4,
+    "s7graph.web.commands": 4.05,  # the command vocabulary: under every role of web
     "s7graph.web.harness": 4.1,
     "s7graph.web.access": 4.15,
     "s7graph.web.bus": 4.2,

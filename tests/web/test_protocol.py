@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import pytest
 
+from s7graph.sequencer.text.format import format_expr
 from s7graph.sequencer.text.model import (
     Binary,
     Chart,
@@ -139,6 +140,20 @@ def test_condition_text_keeps_precedence_with_parentheses() -> None:
     expr = Binary("AND", Binary("OR", Operand("a"), Operand("b")), Const(5, "INT", "5"))
     assert condition_text(expr) == "(a OR b) AND 5"
     assert condition_text(None) == ""
+
+
+def test_condition_text_is_the_chart_writers_printer_with_flat_chains() -> None:
+    """One precedence table (``sequencer.text.format``): a chain reads without inner
+    parentheses, arithmetic keeps the grammar's precedence, otherwise the writer's text."""
+    a, b, c = Operand("a"), Operand("b"), Operand("c")
+    chain = Binary("AND", a, Binary("AND", b, c))
+    assert condition_text(chain) == "a AND b AND c"
+    assert format_expr(chain) == "a AND (b AND c)"  # the writer keeps the tree
+    assert condition_text(Binary("*", Binary("+", a, b), c)) == "(a + b) * c"
+    assert condition_text(Binary("+", a, Binary("*", b, c))) == "a + b * c"
+    mixed = Binary("OR", Unary("NOT", Binary("AND", a, b)), Binary("=", c, Const(5, "INT", "5")))
+    assert condition_text(mixed) == format_expr(mixed) == "NOT (a AND b) OR c = 5"
+    assert condition_text(Const(7, "INT", "")) == "7"
 
 
 @pytest.mark.parametrize(

@@ -12,6 +12,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Final
 
+from s7graph.web.commands import COMMAND_TYPES, op_of
+
 __all__ = [
     "COMMANDS",
     "NOT_AVAILABLE",
@@ -37,62 +39,10 @@ class CommandInfo:
     args: str = ""
 
 
-COMMANDS: Final[tuple[CommandInfo, ...]] = (
-    CommandInfo("ack", "operator", "ACK_EF", "acknowledge every supervision fault of the FB"),
-    CommandInfo("ack_step", "operator", "ACK_S", "acknowledge one step's fault", '{"step": n}'),
-    CommandInfo(
-        "ack_msg", "operator", "", "acknowledge one message of the alarm list", '{"msg_id": id}'
-    ),
-    CommandInfo("mode", "operator", "SW_AUTO/MAN/TAP/TOP", "switch the mode", '{"mode": "MAN"}'),
-    CommandInfo("init", "operator", "INIT_SQ", "activate the initial steps"),
-    CommandInfo("off", "operator", "OFF_SQ", "deactivate every step"),
-    CommandInfo("halt", "operator", "HALT_SQ", "halt / resume the sequencer", '{"on": true}'),
-    CommandInfo("t_push", "operator", "T_PUSH", "switch a ready transition (TAP, TOP)"),
-    CommandInfo("step_on", "operator", "S_ON", "activate a step (MAN)", '{"step": n}'),
-    CommandInfo("step_off", "operator", "S_OFF", "deactivate a step (MAN)", '{"step": n}'),
-    CommandInfo("en_il", "engineer", "EN_IL", "enable / disable interlocks", '{"on": false}'),
-    CommandInfo("en_sv", "engineer", "EN_SV", "enable / disable supervisions", '{"on": false}'),
-    CommandInfo(
-        "force",
-        "engineer",
-        "",
-        "force an input, output or flag (I, Q, M) until unforced: value null unforces it, "
-        '`{"all": true}` unforces every job',
-        '{"address": "I0.3", "value": true}',
-    ),
-    CommandInfo(
-        "download",
-        "engineer",
-        "",
-        "download a changed chart into the running FB (online change)",
-        '{"source": "...", "base": 1, "removed": "keep", "preview": true}',
-    ),
-    CommandInfo(
-        "undo_download",
-        "engineer",
-        "",
-        "put the chart before the last download back",
-        '{"base": 2, "removed": "keep", "preview": true}',
-    ),
-    CommandInfo(
-        "save",
-        "engineer",
-        "",
-        "write a chart into the CPU's project directory",
-        '{"file": "x.s7g", "source": "..."}',
-    ),
-    CommandInfo(
-        "open",
-        "engineer",
-        "",
-        "read a chart or importable file of the project directory",
-        '{"file": "x.xml"}',
-    ),
-    CommandInfo("stop", "engineer", "", "the CPU's RUN/STOP switch to STOP (outputs to 0)"),
-    CommandInfo(
-        "start", "engineer", "", "the switch to RUN: the CPU's configured restart (`--restart`)"
-    ),
+COMMANDS: Final[tuple[CommandInfo, ...]] = tuple(
+    CommandInfo(op_of(c), c.role, c.pin, c.does, c.example) for c in COMMAND_TYPES
 )
+"""Read from the command vocabulary (``web.commands``): each op's struct says its role."""
 # Ops the role table grants but this CPU does not carry out yet: refused after the role check.
 NOT_AVAILABLE: Final[frozenset[str]] = frozenset()
 

@@ -62,7 +62,7 @@ def audit_entry(r: AuditRecord) -> AuditEntry:
 def _facts(
     command: Command, user: str, role: str, applied: bool, reason: str, detail: str = ""
 ) -> Facts:
-    return Facts(user, role, command.origin, command.op, command.fb, command.args, applied,
+    return Facts(user, role, command.origin, command.op, command.fb, command.args.given(), applied,
                  reason, detail)  # fmt: skip
 
 

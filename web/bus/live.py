@@ -81,6 +81,7 @@ from s7graph.web.bus.protocol import (
 )
 from s7graph.web.bus.scan_events import ScanEvents
 from s7graph.web.bus.step_details import StepDetails
+from s7graph.web.commands import COMMAND_TYPES, op_of
 
 __all__ = [
     "CONTROL_SEQUENCER", "MODE_PINS", "OP_PINS", "LiveChart", "LiveGraph", "prepare_chart",
@@ -88,29 +89,17 @@ __all__ = [
 ]  # fmt: skip
 
 CONTROL_SEQUENCER = "S7-GRAPH Control Sequencer"
-OP_PINS: dict[str, str] = {
-    "ack": "ACK_EF",
-    "ack_step": "ACK_S",
-    "init": "INIT_SQ",
-    "off": "OFF_SQ",
-    "step_on": "S_ON",
-    "step_off": "S_OFF",
-    "t_push": "T_PUSH",
-}
+# The pins the commands act as, read from the command vocabulary (web.commands): an edge
+# op's pin; a level op's pin, and the value a command holds it at (the other value frees it).
+OP_PINS: dict[str, str] = {op_of(c): c.pin for c in COMMAND_TYPES if c.kind == "edge"}
 MODE_PINS: dict[str, str] = {mode: pin for pin, mode in SELECTORS}
-# level commands: the pin, and the value a command holds it at (the other value frees it)
 LEVEL_PINS: dict[str, tuple[str, bool]] = {
-    "halt": ("HALT_SQ", True),
-    "en_il": ("EN_IL", False),
-    "en_sv": ("EN_SV", False),
+    op_of(c): (c.pin, c.held) for c in COMMAND_TYPES if c.kind == "level"
 }
 MAX_WATCH = 64
 # Commands of one group queued at the same scan boundary would act as simultaneous edges
 # in one call (the FB resolves them by priority, not by order), so the second is refused.
-_GROUPS = {
-    "mode": "mode", "step_on": "step", "step_off": "step", "ack_step": "step",
-    "init": "init", "off": "init",
-}  # fmt: skip
+_GROUPS = {op_of(c): c.group for c in COMMAND_TYPES if c.group}
 
 
 @dataclass(frozen=True, slots=True)

@@ -52,6 +52,7 @@ from s7graph.web.bus.protocol import (
     encode,
 )
 from s7graph.web.bus.publisher import BusPublisher, PendingCommand
+from s7graph.web.commands import COMMAND_TYPES, op_of
 from s7graph.web.harness.project import (
     MAX_READ,
     ProjectError,
@@ -64,7 +65,8 @@ from s7graph.web.harness.session import ChartSession
 
 __all__ = ["ENGINEERING_OPS", "MAX_WAITING", "Durability", "OnlineChange", "Version"]
 
-ENGINEERING_OPS: Final = ("download", "undo_download", "save", "open")
+# the ops the online change carries out (web.commands: ``where`` is ``online``)
+ENGINEERING_OPS: Final = tuple(op_of(c) for c in COMMAND_TYPES if c.where == "online")
 MAX_WAITING: Final = 4  # engineering commands queued at once; more are refused (busy)
 BOUNDARY_TIMEOUT_S: Final = 5.0  # the scan loop takes a swap within this, or it is refused
 MAX_LINES: Final = 400  # lines of a reply (a change summary, diagnostics)

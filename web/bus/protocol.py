@@ -15,16 +15,24 @@ import msgspec
 from msgspec import Meta, Struct
 
 from s7graph.sequencer.change.base import MAX_SOURCE
-from s7graph.sequencer.text.model import (
-    Binary,
-    Chart,
-    Const,
-    Expr,
-    FuncCall,
-    Operand,
-    StepAttr,
-    TransAttr,
-    Unary,
+from s7graph.sequencer.text.format import format_expr
+from s7graph.sequencer.text.model import Chart, Expr
+from s7graph.web.commands import (
+    MODES,
+    NAME_PATTERN,
+    OPS,
+    REMOVED_CHOICES,
+    AnyCommand,
+    Command,
+    Mode,
+    MsgId,
+    MsgKey,
+    Name,
+    Origin,
+    Scalar,
+    Token,
+    UserName,
+    explain,
 )
 
 __all__ = [
@@ -69,42 +77,19 @@ __all__ = [
 SCHEMA = 1
 MAX_MESSAGE_BYTES = 1 << 20  # refuse anything larger before decoding it
 
-Mode = Literal["AUTO", "MAN", "TAP", "TOP"]
-MODES: tuple[str, ...] = ("AUTO", "MAN", "TAP", "TOP")
 Event = Literal["S1", "S0", "V1", "V0", "L1", "L0", "A1", "R1"]
 EVENTS: tuple[str, ...] = ("S1", "S0", "V1", "V0", "L1", "L0", "A1", "R1")
-# the ops of web.access.roles.COMMANDS (a test keeps the two equal)
-Op = Literal[
-    "ack", "ack_step", "ack_msg", "mode", "init", "off", "halt", "t_push", "step_on", "step_off",
-    "en_il", "en_sv", "force", "download", "undo_download", "save", "open", "stop", "start",
-]  # fmt: skip
-OPS: tuple[str, ...] = (
-    "ack", "ack_step", "ack_msg", "mode", "init", "off", "halt", "t_push", "step_on", "step_off",
-    "en_il", "en_sv", "force", "download", "undo_download", "save", "open", "stop", "start",
-)  # fmt: skip
-
-# A name that is safe inside a zenoh key expression and in a scene node path.
-NAME_PATTERN = r"^[A-Za-z_][A-Za-z0-9_.\-]{0,63}$"
 _NAME_RE = re.compile(NAME_PATTERN)
 
 StepNo = Annotated[int, Meta(ge=0, le=65535)]
 Count = Annotated[int, Meta(ge=0, le=2**63 - 1)]
-Name = Annotated[str, Meta(pattern=NAME_PATTERN)]
 Text = Annotated[str, Meta(max_length=4096)]
 ShortText = Annotated[str, Meta(max_length=256)]
 Steps = Annotated[list[StepNo], Meta(max_length=4096)]
-Scalar = bool | int | float | str | None
 ValueName = Annotated[str, Meta(min_length=1, max_length=128)]
 Millis = Annotated[float, Meta(ge=0.0, le=1e12)]
-MsgKey = Annotated[str, Meta(min_length=1, max_length=128)]
-MsgId = Annotated[int, Meta(ge=1, le=0xFFFFFFFF)] | MsgKey
-# who and from where (web.access.users.USER_PATTERN; "" = nobody claimed a name)
-UserName = Annotated[str, Meta(pattern=r"^([A-Za-z0-9._-]{1,32})?$")]
-Token = Annotated[str, Meta(pattern=r"^[A-Za-z0-9_-]{0,64}$")]
-Origin = Annotated[str, Meta(pattern=r"^[ -~]{0,160}$")]  # printable ASCII: safe in a log line
 Label = Annotated[str, Meta(max_length=80)]
 LevelPin = Literal["HALT_SQ", "EN_IL", "EN_SV"]
-MAX_FORCE_TEXT = 64  # an address or symbol, or a value's text, in a force command
 
 
 def valid_name(name: str) -> bool:
@@ -438,152 +423,8 @@ class AlarmList(_Msg, frozen=True, kw_only=True):
 
 # ---------------------------------------------------------------- commands
 
-_ARGS_BY_OP: dict[str, frozenset[str]] = {
-    "ack": frozenset(),
-    "ack_step": frozenset({"step"}),
-    "mode": frozenset({"mode"}),
-    "init": frozenset(),
-    "off": frozenset(),
-    "halt": frozenset({"on"}),
-    "step_on": frozenset({"step"}),
-    "step_off": frozenset({"step"}),
-    "t_push": frozenset(),
-    "ack_msg": frozenset({"msg_id"}),
-    "en_il": frozenset({"on"}),
-    "en_sv": frozenset({"on"}),
-    "force": frozenset(),
-    "download": frozenset({"source"}),
-    "undo_download": frozenset(),
-    "save": frozenset({"file", "source"}),
-    "open": frozenset({"file"}),
-    "stop": frozenset(),
-    "start": frozenset(),
-}
-# Arguments an op may leave out (an online change: the chart version the sender saw, what to
-# do with active steps the change removes, and whether only to preview the change).
-_OPTIONAL_ARGS: dict[str, frozenset[str]] = {
-    "download": frozenset({"base", "removed", "preview"}),
-    "undo_download": frozenset({"base", "removed", "preview"}),
-    "force": frozenset({"address", "value", "all"}),  # address and value, or all
-}
-REMOVED_CHOICES: tuple[str, ...] = ("keep", "init")
-MAX_FILE_NAME = 128
-
-
-def _check_force_args(args: dict[str, Scalar]) -> None:
-    """``{"address": A, "value": V}`` (V null: unforce A) or ``{"all": true}``."""
-    if "all" in args:
-        if args["all"] is not True or len(args) != 1:
-            raise ValueError('unforce every job with {"all": true} alone - at `$.args.all`')
-        return
-    if "address" not in args or "value" not in args:
-        raise ValueError(
-            'force takes {"address": "I0.3", "value": true} (value null: unforce) or '
-            '{"all": true} - at `$.args`'
-        )
-    address, value = args["address"], args["value"]
-    if not isinstance(address, str) or not 0 < len(address) <= MAX_FORCE_TEXT:
-        raise ValueError(
-            f"address must be an S7 address or a symbol of 1..{MAX_FORCE_TEXT} characters"
-            " - at `$.args.address`"
-        )
-    if isinstance(value, str) and not 0 < len(value) <= MAX_FORCE_TEXT:
-        raise ValueError(
-            f"value must be true/false, a number or an S7 literal of 1..{MAX_FORCE_TEXT}"
-            " characters - at `$.args.value`"
-        )
-
-
-def _check_online_args(op: str, args: dict[str, Scalar]) -> None:
-    """The arguments of the engineering ops (download, undo_download, save, open)."""
-    source = args.get("source", "")
-    if not isinstance(source, str) or len(source) > MAX_SOURCE:
-        raise ValueError(
-            f"source must be chart text of at most {MAX_SOURCE:,} characters - at `$.args.source`"
-        )
-    if "file" in args:
-        name = args["file"]
-        if not isinstance(name, str) or not 0 < len(name) <= MAX_FILE_NAME:
-            raise ValueError(
-                f"file must be a file name of 1..{MAX_FILE_NAME} characters - at `$.args.file`"
-            )
-    if "base" in args:
-        base = args["base"]
-        if isinstance(base, bool) or not isinstance(base, int) or base < 0:
-            raise ValueError("base must be a chart version number - at `$.args.base`")
-    if "removed" in args and args["removed"] not in REMOVED_CHOICES:
-        raise ValueError("removed must be keep or init - at `$.args.removed`")
-    if "preview" in args and not isinstance(args["preview"], bool):
-        raise ValueError("preview must be true or false - at `$.args.preview`")
-
-
-class Command(_Msg, frozen=True, kw_only=True):
-    """An operator command (``cmd`` queryable), applied at a scan boundary.
-
-    ``mode`` takes ``{"mode": "AUTO"|"MAN"|"TAP"|"TOP"}``; ``step_on``/``step_off``/
-    ``ack_step`` take ``{"step": n}``; ``ack_msg`` takes ``{"msg_id": n | "text"}`` (a
-    message of the ``alarms`` list); ``halt``/``en_il``/``en_sv`` take ``{"on": bool}``;
-    ``force`` takes ``{"address": "I0.3", "value": true}`` (``value`` null unforces the
-    address) or ``{"all": true}`` (unforce every job); the other ops take no arguments
-    (web.access.roles.COMMANDS). ``user`` and ``token`` come from a ``login``; ``origin``
-    says where the command was given (``page 3 (127.0.0.1)``, ``shell``, ``bus``) for the
-    audit."""
-
-    op: Op
-    fb: Name
-    user: UserName = ""
-    token: Token = ""
-    origin: Origin = ""
-    args: Annotated[dict[Annotated[str, Meta(max_length=32)], Scalar], Meta(max_length=8)] = {}
-
-    def __post_init__(self) -> None:
-        expected = _ARGS_BY_OP[self.op]
-        optional = _OPTIONAL_ARGS.get(self.op, frozenset())
-        extra = sorted(set(self.args) - expected - optional)
-        missing = sorted(expected - set(self.args))
-        if extra:
-            raise ValueError(f"op {self.op!r} takes no argument {extra[0]!r} - at `$.args`")
-        if missing:
-            raise ValueError(f"op {self.op!r} needs argument {missing[0]!r} - at `$.args`")
-        if self.op == "mode" and self.args["mode"] not in MODES:
-            raise ValueError(f"mode must be one of {', '.join(MODES)} - at `$.args.mode`")
-        if self.op in ("halt", "en_il", "en_sv") and not isinstance(self.args["on"], bool):
-            raise ValueError("on must be true or false - at `$.args.on`")
-        if self.op in ("step_on", "step_off", "ack_step"):
-            step = self.args["step"]
-            if isinstance(step, bool) or not isinstance(step, int) or not 0 < step <= 65535:
-                raise ValueError("step must be a step number 1..65535 - at `$.args.step`")
-        if self.op == "ack_msg":
-            mid = self.args["msg_id"]
-            number = isinstance(mid, int) and not isinstance(mid, bool) and 0 < mid <= 0xFFFFFFFF
-            if not number and not (isinstance(mid, str) and 0 < len(mid) <= 128):
-                raise ValueError(
-                    "msg_id must be a message number or key (1..128 chars) - at `$.args.msg_id`"
-                )
-
-        if self.op in ("download", "undo_download", "save", "open"):
-            _check_online_args(self.op, self.args)
-        if self.op == "force":
-            _check_force_args(self.args)
-
-    @property
-    def step(self) -> int | None:
-        """The step of ``step_on``/``step_off``, else None."""
-        value = self.args.get("step")
-        return value if isinstance(value, int) and not isinstance(value, bool) else None
-
-    @property
-    def msg_id(self) -> int | str | None:
-        """The message of an ``ack_msg`` command, else None."""
-        value = self.args.get("msg_id")
-        return value if isinstance(value, int | str) and not isinstance(value, bool) else None
-
-    @property
-    def mode(self) -> str | None:
-        """The mode of a ``mode`` command, else None."""
-        value = self.args.get("mode")
-        return value if isinstance(value, str) else None
-
+# The commands are the tagged union of ``web.commands`` (one struct per op, typed
+# arguments); ``Command`` is their base, and ``decode(data, Command)`` decodes any of them.
 
 Lines = Annotated[list[Text], Meta(max_length=4096)]
 
@@ -690,15 +531,36 @@ def decode(data: bytes | bytearray | memoryview | str, kind: type[T]) -> T:
         raise ProtocolError(f"message too large: {size} bytes (limit {MAX_MESSAGE_BYTES})")
     decoder = _DECODERS.get(kind)
     if decoder is None:
-        decoder = _DECODERS[kind] = msgspec.json.Decoder(kind)
+        target: Any = AnyCommand if kind is Command else kind  # any op's struct
+        decoder = _DECODERS[kind] = msgspec.json.Decoder(target)
     try:
         return decoder.decode(data)  # type: ignore[no-any-return]
     except msgspec.ValidationError as exc:
-        raise ProtocolError(f"invalid {kind.__name__}: {exc}") from None
+        reason = explain(_op_of(data), str(exc)) if kind is Command else str(exc)
+        raise ProtocolError(f"invalid {kind.__name__}: {_one_line(reason)}") from None
     except msgspec.DecodeError as exc:
         raise ProtocolError(f"malformed JSON: {exc}") from None
     except (RecursionError, UnicodeDecodeError, ValueError, TypeError) as exc:
         raise ProtocolError(f"invalid {kind.__name__}: {type(exc).__name__}") from None
+
+
+def _one_line(text: str) -> str:
+    """``text`` with what it quotes of a hostile message escaped (``\\n``): one log line."""
+    if text.isprintable():
+        return text
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
+
+
+class _OpOnly(Struct):
+    op: Any = None
+
+
+def _op_of(data: bytes | bytearray | memoryview | str) -> object:
+    """The ``op`` of a command that did not decode, to say what it lacks (None: unknown)."""
+    try:
+        return msgspec.json.decode(data, type=_OpOnly).op
+    except (msgspec.MsgspecError, RecursionError, ValueError, TypeError):
+        return None
 
 
 def layout_problem(layout: ChartLayout) -> str | None:
@@ -717,35 +579,11 @@ def _clip(text: str, limit: int) -> str:
 
 # ---------------------------------------------------------------- condition text
 
-_ASSOCIATIVE = ("AND", "OR", "XOR")  # a chain of them parses balanced (sequencer/text/build.py)
-_PRECEDENCE = {"OR": 1, "XOR": 2, "AND": 3, "=": 4, "<>": 4, "<": 4, ">": 4, "<=": 4, ">=": 4}
-
 
 def condition_text(expr: Expr | None) -> str:
-    """An expression as S7 text (``"Start" AND NOT S3.X``); "" for an empty condition."""
+    """An expression as S7 text (``"Start" AND NOT S3.X``); "" for an empty condition.
+    The chart writer's printer (``sequencer.text.format``, one precedence table), a chain
+    of AND, OR or XOR written without inner parentheses."""
     if expr is None:
         return ""
-    return _text(expr, 0)
-
-
-def _text(e: Expr, outer: int) -> str:
-    match e:
-        case Const(text=text, value=value):
-            return text or str(value)
-        case Operand(name=name, quoted=quoted):
-            return f'"{name}"' if quoted else name
-        case StepAttr(step=step, attr=attr):
-            return f"S{step}.{attr}"
-        case TransAttr(transition=t, attr=attr):
-            return f"T{t}.{attr}"
-        case Unary(op=op, operand=operand):
-            inner = _text(operand, 9)
-            return f"NOT {inner}" if op == "NOT" else f"-{inner}"
-        case Binary(op=op, left=left, right=right):
-            prec = _PRECEDENCE.get(op, 5)
-            chained = op in _ASSOCIATIVE and isinstance(right, Binary) and right.op == op
-            s = f"{_text(left, prec)} {op} {_text(right, prec if chained else prec + 1)}"
-            return f"({s})" if prec < outer else s
-        case FuncCall(name=name, args=args):
-            return f"{name}({', '.join(_text(a, 0) for a in args)})"
-    return "?"
+    return format_expr(expr, chains=True)

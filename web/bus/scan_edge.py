@@ -159,9 +159,10 @@ class ScanEdge:
     def apply(self, command: Command) -> tuple[bool, str, str]:
         """One command the gate let through, at the scan boundary: ``force`` to the CPU's
         force table, the others to the FB."""
-        if command.op in ("stop", "start"):
+        where = type(command).where  # web.commands: who carries the op out
+        if where == "cpu":
             return self._switch(command)
-        if command.op != "force":
+        if where != "force":
             return self.live.apply(command)
         if self.forcing is None:
             return False, "this CPU takes no force jobs", ""

@@ -23,6 +23,7 @@ if TYPE_CHECKING:
 from s7graph import __version__
 from s7graph.engine.errors import S7Error
 from s7graph.engine.runner import COMM_LOAD_PCT
+from s7graph.web.commands import OPS
 
 app = typer.Typer(
     add_completion=False,
@@ -548,6 +549,27 @@ def t_push(
 ) -> None:  # fmt: skip
     """Switch a ready transition (TAP, TOP; T_PUSH)."""
     _remote("t_push", {}, cpu, connect, fb, user, tls_ca)
+
+
+@app.command("send", context_settings={"ignore_unknown_options": True})
+def send(
+    op: Annotated[str, typer.Argument(metavar="OP", help="One of " + ", ".join(OPS) + ".")],
+    arguments: Annotated[
+        list[str] | None, typer.Argument(metavar="[NAME=VALUE]...", help="Its arguments.")
+    ] = None,
+    user: Annotated[str | None, typer.Option("--user", help="Log in as this user.")] = None,
+    cpu: CpuName = "cpu1", connect: Connect = None, fb: FbName = None, tls_ca: TlsCa = None,
+) -> None:  # fmt: skip
+    """Send any command of the vocabulary with its arguments (s7graph send halt on=true)."""
+    from s7graph.web.commands import command_args
+
+    try:
+        args = command_args(op, arguments or [])
+    except ValueError as exc:
+        raise typer.BadParameter(str(exc)) from None
+    if user is None:
+        raise typer.BadParameter("give the user to log in as with --user")
+    _remote(op, args, cpu, connect, fb, user, tls_ca)
 
 
 @app.command(context_settings={"ignore_unknown_options": True})  # MW10 -5: a value

@@ -27,6 +27,20 @@ from s7graph.web.bus.protocol import (
     CommandReply,
     LoginReply,
 )
+from s7graph.web.commands import (
+    MODES,
+    Ack,
+    AckStep,
+    Halt,
+    Init,
+    Off,
+    Start,
+    StepOff,
+    StepOn,
+    Stop,
+    TPush,
+    op_of,
+)
 from s7graph.web.view import texts
 from s7graph.web.view.drawing import aim_camera
 from s7graph.web.view.editor import Editor
@@ -34,8 +48,28 @@ from s7graph.web.view.engineering import Engineering, ViewHost
 
 __all__ = ["ClientPanel", "PageState", "Wiring"]
 
-MODES = ("AUTO", "MAN", "TAP", "TOP")
 CURRENT_MODE_COLOUR: Final = "green"
+# The Control Sequencer's buttons: the op's struct, the label (and a colour).
+_CONTROL_BUTTONS: Final[tuple[tuple[type[Command], str, dict[str, Any]], ...]] = (
+    (Init, "Initialize", {}),
+    (Off, "Disable (OFF)", {}),
+    (Ack, "Acknowledge", {"color": "red"}),
+    (TPush, "T_PUSH (Continue)", {}),
+    (Halt, "Halt", {}),
+    (Stop, "CPU to STOP", {}),
+    (Start, "CPU to RUN", {}),
+)
+_STEP_BUTTONS: Final[tuple[tuple[type[Command], str], ...]] = (
+    (StepOn, "Activate"),
+    (StepOff, "Deactivate"),
+    (AckStep, "Acknowledge step"),
+)
+
+
+def _hint(kind: type[Command]) -> str:
+    """A button's hint: the op's pin and what it does, as the role table says."""
+    does = kind.does.replace("`", "")
+    return f"{kind.pin}: {does}" if kind.pin else does
 
 
 @dataclass(frozen=True, slots=True)
@@ -112,23 +146,18 @@ class ClientPanel:
             self.mode_buttons = {m: gui.add_button(m, hint=f"SW_{m}") for m in MODES}
             for mode, button in self.mode_buttons.items():
                 button.on_click(self._handler("mode", mode=mode))
+            # a button per op (web.commands): its hint is the op's pin and what it does
             self.buttons: dict[str, viser.GuiButtonHandle] = {
-                "init": gui.add_button("Initialize", hint="INIT_SQ: activate the initial steps"),
-                "off": gui.add_button("Disable (OFF)", hint="OFF_SQ: deactivate every step"),
-                "ack": gui.add_button("Acknowledge", color="red", hint="ACK_EF"),
-                "t_push": gui.add_button("T_PUSH (Continue)", hint="Switch a ready transition"),
-                "halt": gui.add_button("Halt", hint="HALT_SQ: hold / resume the sequencer"),
-                "stop": gui.add_button("CPU to STOP", hint="the CPU's RUN/STOP switch: STOP"),
-                "start": gui.add_button("CPU to RUN", hint="the switch to RUN: its restart"),
+                op_of(kind): gui.add_button(label, hint=_hint(kind), **style)
+                for kind, label, style in _CONTROL_BUTTONS
             }
             for op, button in self.buttons.items():
                 button.on_click(self._handler(op) if op != "halt" else lambda _: self._halt())
             first = w.layout.steps[0].number if w.layout.steps else 1
             self.step_number = gui.add_number("Step", first, min=1, max=65535, step=1)
             self.step_buttons = {
-                "step_on": gui.add_button("Activate", hint="S_ON: activate the step (MAN)"),
-                "step_off": gui.add_button("Deactivate", hint="S_OFF: deactivate the step"),
-                "ack_step": gui.add_button("Acknowledge step", hint="ACK_S on this step"),
+                op_of(kind): gui.add_button(label, hint=_hint(kind))
+                for kind, label in _STEP_BUTTONS
             }
             for op, button in self.step_buttons.items():
                 button.on_click(self._step_handler(op))

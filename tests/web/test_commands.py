@@ -1,0 +1,274 @@
+"""The command vocabulary (web.commands): one struct per op, and everything that names an
+op — the role table, the pin maps, the protocol, the CLI, the page — reads it or is checked
+against it here. Hostile commands are refused with a one-line ProtocolError."""
+
+from __future__ import annotations
+
+import ast
+import json
+from pathlib import Path
+
+import msgspec
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from s7graph.web.access.roles import COMMANDS, ROLES, lowest_role
+from s7graph.web.bus.live import LEVEL_PINS, MODE_PINS, OP_PINS
+from s7graph.web.bus.protocol import OPS, Command, ProtocolError, decode, encode
+from s7graph.web.commands import (
+    COMMAND_TYPES,
+    Args,
+    DownloadArgs,
+    Force,
+    ForceArgs,
+    StepOn,
+    command_args,
+    command_type,
+    op_of,
+)
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_every_op_is_one_struct_with_a_role_and_a_row() -> None:
+    assert tuple(op_of(c) for c in COMMAND_TYPES) == OPS
+    assert len(set(OPS)) == len(OPS) == len(COMMANDS)
+    for kind in COMMAND_TYPES:
+        assert issubclass(kind, Command) and kind.role in ROLES and kind.role != "viewer"
+        assert lowest_role(op_of(kind)) == kind.role
+        assert command_type(op_of(kind)) is kind
+        args = next(f.type for f in msgspec.structs.fields(kind) if f.name == "args")
+        assert isinstance(args, type) and issubclass(args, Args), op_of(kind)
+    assert command_type("format_disk") is None
+
+
+def test_the_pin_maps_are_the_vocabularys() -> None:
+    assert OP_PINS == {
+        "ack": "ACK_EF", "ack_step": "ACK_S", "init": "INIT_SQ", "off": "OFF_SQ",
+        "step_on": "S_ON", "step_off": "S_OFF", "t_push": "T_PUSH",
+    }  # fmt: skip
+    assert LEVEL_PINS == {
+        "halt": ("HALT_SQ", True), "en_il": ("EN_IL", False), "en_sv": ("EN_SV", False),
+    }  # fmt: skip
+    assert set(MODE_PINS) == {"AUTO", "MAN", "TAP", "TOP"}
+    assert {c.op: c.pin for c in COMMANDS if c.pin} == {
+        **OP_PINS, **{op: pin for op, (pin, _) in LEVEL_PINS.items()},
+        "mode": "SW_AUTO/MAN/TAP/TOP",
+    }  # fmt: skip
+
+
+# What clients sent before the union (Command(op, args: dict)): each decodes to its op's
+# struct and encodes to the same bytes.
+WIRE = [
+    b'{"op":"ack","fb":"FILL","user":"alice","token":"","origin":"","args":{}}',
+    b'{"op":"ack_step","fb":"FILL","user":"","token":"","origin":"","args":{"step":2}}',
+    b'{"op":"ack_msg","fb":"FILL","user":"","token":"","origin":"","args":{"msg_id":"a/b"}}',
+    b'{"op":"mode","fb":"FILL","user":"","token":"t-1","origin":"shell","args":{"mode":"MAN"}}',
+    b'{"op":"halt","fb":"FILL","user":"","token":"","origin":"","args":{"on":false}}',
+    b'{"op":"force","fb":"FILL","user":"","token":"","origin":"","args":{"address":"I0.3","value":null}}',
+    b'{"op":"force","fb":"FILL","user":"","token":"","origin":"","args":{"address":"MW10","value":-5}}',
+    b'{"op":"force","fb":"FILL","user":"","token":"","origin":"","args":{"all":true}}',
+    b'{"op":"download","fb":"FILL","user":"","token":"","origin":"","args":{"source":"x","base":3,"removed":"keep","preview":true}}',
+    b'{"op":"undo_download","fb":"FILL","user":"","token":"","origin":"","args":{}}',
+    b'{"op":"save","fb":"FILL","user":"","token":"","origin":"","args":{"file":"a.s7g","source":""}}',
+    b'{"op":"open","fb":"FILL","user":"","token":"","origin":"","args":{"file":"a.xml"}}',
+    b'{"op":"stop","fb":"FILL","user":"","token":"","origin":"","args":{}}',
+]  # fmt: skip
+
+
+@pytest.mark.parametrize("data", WIRE)
+def test_the_wire_format_is_the_one_clients_send(data: bytes) -> None:
+    command = decode(data, Command)
+    raw = json.loads(data)
+    assert type(command) is command_type(raw["op"]) and command.op == raw["op"]
+    assert encode(command) == data
+    assert dict(command.args) == raw["args"]
+    assert Command(**raw) == command  # the former constructor builds the same struct
+
+
+def test_a_command_built_the_old_way_is_the_typed_struct() -> None:
+    c = Command(op="step_on", fb="FILL", user="bob", args={"step": 3})
+    assert isinstance(c, StepOn) and c.step == 3 and c.args.step == 3 and c.mode is None
+    d = Command(op="download", fb="FILL", args={"source": "x", "preview": True})
+    assert isinstance(d.args, DownloadArgs) and "base" not in d.args and d.args.preview
+    assert msgspec.structs.replace(c, token="x").op == "step_on"
+    assert Command(op="ack", fb="FILL") == Command(op="ack", fb="FILL", args={})
+    with pytest.raises(ValueError, match="takes no argument 'step'"):
+        Command(op="ack", fb="FILL", args={"step": 1})
+    with pytest.raises(ValueError, match="removed must be one of keep, init"):
+        Command(op="undo_download", fb="FILL", args={"removed": "all"})
+    with pytest.raises(ValueError, match=r"alone - at `\$\.args`"):
+        Command(op="force", fb="FILL", args={"all": True, "address": "I0.1"})
+    with pytest.raises(ValueError, match="alone"):  # a struct built directly checks too
+        Force(fb="FILL", args=ForceArgs(all=True, address="I0.1"))
+
+
+@pytest.mark.parametrize(
+    ("payload", "reason"),
+    [
+        (b'{"op":"force","fb":"F","args":{"address":"I0.1"}}', "force takes"),
+        (b'{"op":"force","fb":"F","args":{"all":false}}', "alone"),
+        (b'{"op":"force","fb":"F"}', 'force takes {"address"'),
+        (b'{"op":"force","fb":"F","args":{"address":"","value":1}}', "$.args.address"),
+        (b'{"op":"force","fb":"F","args":{"address":"I0.1","value":[1]}}', "$.args.value"),
+        (b'{"op":"download","fb":"F","args":{"source":"x","base":-1}}', "$.args.base"),
+        (b'{"op":"download","fb":"F","args":{"source":"x","preview":1}}', "$.args.preview"),
+        (b'{"op":"download","fb":"F","args":{"source":"x","removed":"zap"}}', "must be one of"),
+        (b'{"op":"undo_download","fb":"F","args":{"source":"x"}}', "no argument 'source'"),
+        (b'{"op":"save","fb":"F","args":{"file":"a.s7g"}}', "needs argument 'source'"),
+        (b'{"op":"open","fb":"F","args":{"file":""}}', "$.args.file"),
+        (b'{"op":"halt","fb":"F","args":{"on":"yes"}}', "$.args.on"),
+        (b'{"op":"halt","fb":"F"}', "needs argument 'on'"),
+        (b'{"op":7,"fb":"F"}', "$.op"),
+        (b'{"fb":"F"}', "op"),
+        (b'{"op":"ack","fb":"F","args":[]}', "$.args"),
+    ],
+)
+def test_hostile_arguments_are_refused_in_one_line(payload: bytes, reason: str) -> None:
+    with pytest.raises(ProtocolError) as err:
+        decode(payload, Command)
+    assert reason in str(err.value) and "\n" not in str(err.value)
+
+
+_JSON = st.recursive(
+    st.none() | st.booleans() | st.integers() | st.floats() | st.text(max_size=8),
+    lambda inner: st.lists(inner, max_size=3) | st.dictionaries(st.text(max_size=8), inner),
+    max_leaves=8,
+)
+_KEYS = st.sampled_from(["step", "mode", "on", "msg_id", "address", "value", "all", "source",
+                         "base", "removed", "preview", "file", "x"])  # fmt: skip
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    op=st.sampled_from([*OPS, "nope"]) | st.text(max_size=8),
+    args=st.dictionaries(_KEYS, _JSON, max_size=4) | _JSON,
+    extra=st.dictionaries(st.sampled_from(["user", "token", "sudo", "fb"]), _JSON, max_size=2),
+)
+def test_any_message_decodes_or_is_refused_with_a_protocol_error(
+    op: str, args: object, extra: dict[str, object]
+) -> None:
+    data = json.dumps({"op": op, "fb": "F", "args": args, **extra}).encode()
+    try:
+        command = decode(data, Command)
+    except ProtocolError as exc:
+        assert "\n" not in str(exc)
+        return
+    assert command.op == op and encode(command) is not None
+
+
+def _string_args(path: Path, call: str) -> set[str]:
+    """The first string argument of every call to ``call`` in ``path``."""
+    out = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if not isinstance(node, ast.Call) or not node.args:
+            continue
+        name = getattr(node.func, "id", None) or getattr(node.func, "attr", None)
+        if name == call and isinstance(node.args[0], ast.Constant):
+            out.add(node.args[0].value)
+    return out
+
+
+# Ops without a shell command of their own (``s7graph send`` sends them): the levels (the
+# page's Halt, a bus client), and the engineering ops an editor sends (the shell has
+# ``download``, which previews first).
+NOT_IN_THE_SHELL = {"halt", "en_il", "en_sv", "undo_download", "save", "open"}
+
+
+def test_the_shell_sends_the_vocabularys_ops() -> None:
+    sent = _string_args(ROOT / "web/cli/__init__.py", "_remote")
+    sent |= _string_args(ROOT / "web/cli/remote.py", "send")
+    assert sent <= set(OPS)
+    assert set(OPS) - sent == NOT_IN_THE_SHELL
+
+
+def test_the_shells_send_reads_any_ops_arguments_before_sending() -> None:
+    assert command_args("halt", ["on=true"]) == {"on": True}
+    assert command_args("ack_msg", ["msg_id=17"]) == {"msg_id": 17}
+    assert command_args("ack_msg", ["msg_id=FILL/DB1/S2/SV"]) == {"msg_id": "FILL/DB1/S2/SV"}
+    assert command_args("force", ["address=I0.3", "value=null"]) == {
+        "address": "I0.3", "value": None,
+    }  # fmt: skip
+    assert command_args("undo_download", ["preview=true"]) == {"preview": True}
+    for op, words, reason in [
+        ("nope", [], "unknown op 'nope'; one of ack,"),
+        ("halt", ["on"], "NAME=VALUE"),
+        ("halt", ["on=yes"], "$.args.on"),
+        ("mode", ["mode=FAST"], "mode must be one of"),
+        ("init", ["step=1"], "takes no argument 'step'"),
+    ]:
+        with pytest.raises(ValueError) as err:
+            command_args(op, words)
+        assert reason in str(err.value)
+
+
+def test_the_pages_buttons_send_the_vocabularys_ops() -> None:
+    from s7graph.web.view.panel import _CONTROL_BUTTONS, _STEP_BUTTONS, _hint
+
+    buttons = [kind for kind, *_ in (*_CONTROL_BUTTONS, *_STEP_BUTTONS)]
+    sent = {op_of(kind) for kind in buttons}
+    sent |= _string_args(ROOT / "web/view/panel.py", "_handler")
+    sent |= _string_args(ROOT / "web/view/panel.py", "command")
+    assert {"ack", "init", "off", "t_push", "halt", "step_on", "ack_step", "ack_msg"} <= sent
+    assert sent <= set(OPS)
+    assert _hint(buttons[0]) == "INIT_SQ: activate the initial steps"  # the pin, the row
+
+
+def test_who_carries_each_op_out_and_which_conflict() -> None:
+    from s7graph.web.bus import live
+    from s7graph.web.bus.online import ENGINEERING_OPS
+
+    assert ENGINEERING_OPS == ("download", "undo_download", "save", "open")
+    assert {op_of(c) for c in COMMAND_TYPES if c.where == "cpu"} == {"stop", "start"}
+    assert {op_of(c) for c in COMMAND_TYPES if c.where == "force"} == {"force"}
+    assert live._GROUPS == {
+        "mode": "mode", "step_on": "step", "step_off": "step", "ack_step": "step",
+        "init": "init", "off": "init",
+    }  # fmt: skip
+
+
+def test_the_role_tables_argument_examples_name_the_structs_fields() -> None:
+    """The ``args`` column (docs/bus.md, docs/security.md) shows each op's arguments."""
+    import re
+
+    for kind in COMMAND_TYPES:
+        args = next(f.type for f in msgspec.structs.fields(kind) if f.name == "args")
+        fields = msgspec.structs.fields(args)
+        shown = set(re.findall(r'"(\w+)":', kind.example))
+        assert {f.name for f in fields if f.required} <= shown <= {f.name for f in fields}
+
+
+def test_docs_bus_md_shows_each_ops_arguments_as_the_union_says() -> None:
+    from s7graph.web.commands import arguments_markdown
+
+    table = arguments_markdown()
+    assert "| `step_on` | `step`: int 1..65535 |" in table
+    assert table in (ROOT / "docs" / "bus.md").read_text(encoding="utf-8")
+
+
+def test_every_op_the_shell_and_the_page_spell_is_the_unions_with_its_arguments() -> None:
+    """Where web/view and web/cli send an op by name with a dict of arguments, the op is
+    one of the union and the keys are fields of its argument struct."""
+    senders = {"_remote", "send", "command", "_command", "engineer_command", "_handler"}
+    seen = 0
+    for path in sorted([*(ROOT / "web/view").glob("*.py"), *(ROOT / "web/cli").glob("*.py")]):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if not isinstance(node, ast.Call) or not node.args:
+                continue
+            name = getattr(node.func, "id", None) or getattr(node.func, "attr", None)
+            first = node.args[0]
+            owner = getattr(getattr(node.func, "value", None), "id", "")
+            if name not in senders or not isinstance(first, ast.Constant) or owner.endswith("app"):
+                continue  # not a send, or a typer command's name (@app.command("import"))
+            kind = command_type(str(first.value))
+            assert kind is not None, f"{path.name}:{node.lineno}: unknown op {first.value!r}"
+            args = next(f.type for f in msgspec.structs.fields(kind) if f.name == "args")
+            fields = {f.name for f in msgspec.structs.fields(args)}
+            given = node.args[1] if len(node.args) > 1 else None
+            keys = [k.value for k in given.keys if isinstance(k, ast.Constant)] if isinstance(
+                given, ast.Dict
+            ) else [k.arg for k in node.keywords if name == "_handler"]  # fmt: skip
+            assert set(keys) <= fields, f"{path.name}:{node.lineno}: {keys} not in {fields}"
+            seen += 1
+    assert seen >= 20

@@ -1,0 +1,499 @@
+"""The command vocabulary: one msgspec struct per operation, a tagged union on ``op``.
+
+Every remote command a page, a shell or a bus client can send a CPU is one struct here,
+with typed arguments (``args``) and, as class attributes, what the rest of the system
+derives from it: the lowest role allowed (``web.access.roles`` builds its table, and
+docs/bus.md and docs/security.md, from these), the S7-GRAPH pin it acts as
+(``web.bus.live`` builds its pin maps from them), what it does and an example of its
+arguments, its conflict group and where it is carried out (the FB, the RUN/STOP switch,
+the force table, the online change); the shell's ``s7graph send`` (:func:`command_args`),
+the page's buttons and docs/bus.md's argument table (:func:`arguments_markdown`) read them
+too. The wire format is the one of the former ``Command(op, fb, args: dict)``:
+``{"op": "step_on", "fb": "FILL", "user": ..., "token": ..., "origin": ..., "args":
+{"step": 3}}`` decodes to :class:`StepOn`. ``Command(op=..., fb=..., args={...})`` still
+builds a command: it returns the struct of that op, or raises ``ValueError`` with a
+one-line reason. An argument struct reads like the dict it was (``args.get("step")``,
+``dict(args)``: the arguments given).
+
+This module sits at the root of ``web`` (below ``access`` and ``bus``): it imports only
+msgspec and the layers below ``web``.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from collections.abc import Iterable, Iterator
+from typing import Annotated, Any, ClassVar, Literal, get_args
+
+import msgspec
+import msgspec.inspect as mi
+from msgspec import UNSET, Meta, Struct, UnsetType
+
+from s7graph.sequencer.change.base import MAX_SOURCE
+
+__all__ = [
+    "COMMAND_TYPES",
+    "MODES",
+    "NAME_PATTERN",
+    "OPS",
+    "REMOVED_CHOICES",
+    "AnyCommand",
+    "Args",
+    "Command",
+    "arguments_markdown",
+    "command_args",
+    "command_type",
+    "explain",
+    "make_command",
+    "op_of",
+]
+
+Mode = Literal["AUTO", "MAN", "TAP", "TOP"]
+MODES: tuple[str, ...] = get_args(Mode)
+Removed = Literal["keep", "init"]
+REMOVED_CHOICES: tuple[str, ...] = get_args(Removed)
+
+# A name that is safe inside a zenoh key expression and in a scene node path.
+NAME_PATTERN = r"^[A-Za-z_][A-Za-z0-9_.\-]{0,63}$"
+Name = Annotated[str, Meta(pattern=NAME_PATTERN)]
+# who and from where (web.access.users.USER_PATTERN; "" = nobody claimed a name)
+UserName = Annotated[str, Meta(pattern=r"^([A-Za-z0-9._-]{1,32})?$")]
+Token = Annotated[str, Meta(pattern=r"^[A-Za-z0-9_-]{0,64}$")]
+Origin = Annotated[str, Meta(pattern=r"^[ -~]{0,160}$")]  # printable ASCII: safe in a log line
+Scalar = bool | int | float | str | None
+StepNumber = Annotated[int, Meta(ge=1, le=65535)]
+MsgKey = Annotated[str, Meta(min_length=1, max_length=128)]
+MsgId = Annotated[int, Meta(ge=1, le=0xFFFFFFFF)] | MsgKey
+Version = Annotated[int, Meta(ge=0, le=2**63 - 1)]
+Source = Annotated[str, Meta(max_length=MAX_SOURCE)]
+MAX_FILE_NAME = 128
+FileName = Annotated[str, Meta(min_length=1, max_length=MAX_FILE_NAME)]
+MAX_FORCE_TEXT = 64  # an address or symbol, or a value's text, in a force command
+ForceText = Annotated[str, Meta(min_length=1, max_length=MAX_FORCE_TEXT)]
+ForceValue = bool | int | float | ForceText | None
+
+
+# ---------------------------------------------------------------- arguments
+
+
+class Args(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
+    """The arguments of one op; reads like the dict of the arguments given (an optional
+    argument left out is not there)."""
+
+    def given(self) -> dict[str, Any]:
+        return {f: v for f in self.__struct_fields__ if (v := getattr(self, f)) is not UNSET}
+
+    def keys(self) -> list[str]:
+        return list(self.given())
+
+    def get(self, name: str, default: Any = None) -> Any:
+        return self.given().get(name, default)
+
+    def __getitem__(self, name: str) -> Any:
+        return self.given()[name]
+
+    def __contains__(self, name: object) -> bool:
+        return name in self.given()
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self.given())
+
+    def __len__(self) -> int:
+        return len(self.given())
+
+
+class NoArgs(Args, frozen=True, kw_only=True):
+    """No argument: ``{}``."""
+
+
+class StepArgs(Args, frozen=True, kw_only=True):
+    step: StepNumber
+
+
+class ModeArgs(Args, frozen=True, kw_only=True):
+    mode: Mode
+
+
+class OnArgs(Args, frozen=True, kw_only=True):
+    on: bool
+
+
+class MessageArgs(Args, frozen=True, kw_only=True):
+    msg_id: MsgId
+
+
+class ForceArgs(Args, frozen=True, kw_only=True):
+    """``{"address": "I0.3", "value": true}`` (value null: unforce) or ``{"all": true}``."""
+
+    address: ForceText | UnsetType = UNSET
+    value: ForceValue | UnsetType = UNSET
+    all: bool | UnsetType = UNSET
+
+    def __post_init__(self) -> None:
+        if self.all is not UNSET:
+            if self.all is not True or self.address is not UNSET or self.value is not UNSET:
+                raise ValueError('unforce every job with {"all": true} alone')
+            return
+        if self.address is UNSET or self.value is UNSET:
+            raise ValueError(
+                'force takes {"address": "I0.3", "value": true} (value null: unforce) or '
+                '{"all": true}'
+            )
+
+
+class DownloadArgs(Args, frozen=True, kw_only=True):
+    """The chart text; the chart version the sender saw, what to do with active steps the
+    change removes, and whether only to preview the change."""
+
+    source: Source
+    base: Version | UnsetType = UNSET
+    removed: Removed | UnsetType = UNSET
+    preview: bool | UnsetType = UNSET
+
+
+class UndoArgs(Args, frozen=True, kw_only=True):
+    base: Version | UnsetType = UNSET
+    removed: Removed | UnsetType = UNSET
+    preview: bool | UnsetType = UNSET
+
+
+class SaveArgs(Args, frozen=True, kw_only=True):
+    file: FileName
+    source: Source
+
+
+class OpenArgs(Args, frozen=True, kw_only=True):
+    file: FileName
+
+
+# ---------------------------------------------------------------- commands
+
+
+class _CommandMeta(msgspec.StructMeta):
+    """``Command(op=..., ...)`` builds the struct of that op (:func:`make_command`)."""
+
+    def __call__(cls, *args: Any, **kwargs: Any) -> Any:
+        if cls is Command:
+            if args:
+                raise TypeError("Command takes keyword arguments only")
+            return make_command(**kwargs)
+        return super().__call__(*args, **kwargs)
+
+
+class Command(
+    Struct,
+    frozen=True,
+    kw_only=True,
+    forbid_unknown_fields=True,
+    tag_field="op",
+    metaclass=_CommandMeta,
+):
+    """An operator command (``cmd`` queryable), applied at a scan boundary: the base of
+    every op's struct. ``user`` and ``token`` come from a ``login``; ``origin`` says where
+    the command was given (``page 3 (127.0.0.1)``, ``shell``, ``bus``) for the audit.
+
+    Class attributes of each op: ``role`` the lowest role allowed, ``pin`` the pin it acts
+    as (shown in the role table), ``kind`` how (``edge``: a one-call edge of ``pin``;
+    ``level``: ``pin`` held at ``held``; ``mode``: a mode selector; "" no pin), ``does``
+    and ``example`` (its arguments) for the documentation; ``where`` it is carried out
+    (``fb``: the FB at the scan boundary, ``web.bus.live``; ``cpu``: the RUN/STOP switch;
+    ``force``: the force table; ``online``: the online change, ``web.bus.online``) and its
+    ``group``: two commands of one group at the same scan boundary would act as
+    simultaneous edges of one call, so the second is refused."""
+
+    role: ClassVar[str] = ""
+    where: ClassVar[Literal["fb", "cpu", "force", "online"]] = "fb"
+    group: ClassVar[str] = ""
+    pin: ClassVar[str] = ""
+    kind: ClassVar[Literal["edge", "level", "mode", ""]] = ""
+    held: ClassVar[bool] = False
+    does: ClassVar[str] = ""
+    example: ClassVar[str] = ""
+
+    fb: Name
+    user: UserName = ""
+    token: Token = ""
+    origin: Origin = ""
+    args: Args = NoArgs()
+
+    @property
+    def op(self) -> str:
+        """The op's name on the bus (the tag)."""
+        return op_of(type(self))
+
+    @property
+    def step(self) -> int | None:
+        """The step of ``step_on``/``step_off``/``ack_step``, else None."""
+        value = getattr(self.args, "step", None)
+        return value if isinstance(value, int) and not isinstance(value, bool) else None
+
+    @property
+    def msg_id(self) -> int | str | None:
+        """The message of an ``ack_msg`` command, else None."""
+        value = getattr(self.args, "msg_id", None)
+        return value if isinstance(value, int | str) and not isinstance(value, bool) else None
+
+    @property
+    def mode(self) -> str | None:
+        """The mode of a ``mode`` command, else None."""
+        value = getattr(self.args, "mode", None)
+        return value if isinstance(value, str) else None
+
+
+class Ack(Command, tag="ack", frozen=True, kw_only=True):
+    role, pin, kind = "operator", "ACK_EF", "edge"
+    does = "acknowledge every supervision fault of the FB"
+    args: NoArgs = NoArgs()
+
+
+class AckStep(Command, tag="ack_step", frozen=True, kw_only=True):
+    group = "step"
+    role, pin, kind = "operator", "ACK_S", "edge"
+    does, example = "acknowledge one step's fault", '{"step": n}'
+    args: StepArgs
+
+
+class AckMsg(Command, tag="ack_msg", frozen=True, kw_only=True):
+    role = "operator"
+    does, example = "acknowledge one message of the alarm list", '{"msg_id": id}'
+    args: MessageArgs
+
+
+class SetMode(Command, tag="mode", frozen=True, kw_only=True):
+    group = "mode"
+    role, pin, kind = "operator", "SW_AUTO/MAN/TAP/TOP", "mode"
+    does, example = "switch the mode", '{"mode": "MAN"}'
+    args: ModeArgs
+
+
+class Init(Command, tag="init", frozen=True, kw_only=True):
+    group = "init"
+    role, pin, kind = "operator", "INIT_SQ", "edge"
+    does = "activate the initial steps"
+    args: NoArgs = NoArgs()
+
+
+class Off(Command, tag="off", frozen=True, kw_only=True):
+    group = "init"
+    role, pin, kind = "operator", "OFF_SQ", "edge"
+    does = "deactivate every step"
+    args: NoArgs = NoArgs()
+
+
+class Halt(Command, tag="halt", frozen=True, kw_only=True):
+    role, pin, kind, held = "operator", "HALT_SQ", "level", True
+    does, example = "halt / resume the sequencer", '{"on": true}'
+    args: OnArgs
+
+
+class TPush(Command, tag="t_push", frozen=True, kw_only=True):
+    role, pin, kind = "operator", "T_PUSH", "edge"
+    does = "switch a ready transition (TAP, TOP)"
+    args: NoArgs = NoArgs()
+
+
+class StepOn(Command, tag="step_on", frozen=True, kw_only=True):
+    group = "step"
+    role, pin, kind = "operator", "S_ON", "edge"
+    does, example = "activate a step (MAN)", '{"step": n}'
+    args: StepArgs
+
+
+class StepOff(Command, tag="step_off", frozen=True, kw_only=True):
+    group = "step"
+    role, pin, kind = "operator", "S_OFF", "edge"
+    does, example = "deactivate a step (MAN)", '{"step": n}'
+    args: StepArgs
+
+
+class EnIl(Command, tag="en_il", frozen=True, kw_only=True):
+    role, pin, kind, held = "engineer", "EN_IL", "level", False
+    does, example = "enable / disable interlocks", '{"on": false}'
+    args: OnArgs
+
+
+class EnSv(Command, tag="en_sv", frozen=True, kw_only=True):
+    role, pin, kind, held = "engineer", "EN_SV", "level", False
+    does, example = "enable / disable supervisions", '{"on": false}'
+    args: OnArgs
+
+
+class Force(Command, tag="force", frozen=True, kw_only=True):
+    where = "force"
+    role = "engineer"
+    does = (
+        "force an input, output or flag (I, Q, M) until unforced: value null unforces it, "
+        '`{"all": true}` unforces every job'
+    )
+    example = '{"address": "I0.3", "value": true}'
+    args: ForceArgs
+
+
+class Download(Command, tag="download", frozen=True, kw_only=True):
+    where = "online"
+    role = "engineer"
+    does = "download a changed chart into the running FB (online change)"
+    example = '{"source": "...", "base": 1, "removed": "keep", "preview": true}'
+    args: DownloadArgs
+
+
+class UndoDownload(Command, tag="undo_download", frozen=True, kw_only=True):
+    where = "online"
+    role = "engineer"
+    does = "put the chart before the last download back"
+    example = '{"base": 2, "removed": "keep", "preview": true}'
+    args: UndoArgs = UndoArgs()
+
+
+class Save(Command, tag="save", frozen=True, kw_only=True):
+    where = "online"
+    role = "engineer"
+    does, example = (
+        "write a chart into the CPU's project directory",
+        ('{"file": "x.s7g", "source": "..."}'),
+    )
+    args: SaveArgs
+
+
+class Open(Command, tag="open", frozen=True, kw_only=True):
+    where = "online"
+    role = "engineer"
+    does = "read a chart or importable file of the project directory"
+    example = '{"file": "x.xml"}'
+    args: OpenArgs
+
+
+class Stop(Command, tag="stop", frozen=True, kw_only=True):
+    where = "cpu"
+    role = "engineer"
+    does = "the CPU's RUN/STOP switch to STOP (outputs to 0)"
+    args: NoArgs = NoArgs()
+
+
+class Start(Command, tag="start", frozen=True, kw_only=True):
+    where = "cpu"
+    role = "engineer"
+    does = "the switch to RUN: the CPU's configured restart (`--restart`)"
+    args: NoArgs = NoArgs()
+
+
+# The union, in the order of the role table.
+AnyCommand = (
+    Ack | AckStep | AckMsg | SetMode | Init | Off | Halt | TPush | StepOn | StepOff | EnIl
+    | EnSv | Force | Download | UndoDownload | Save | Open | Stop | Start
+)  # fmt: skip
+COMMAND_TYPES: tuple[type[Command], ...] = get_args(AnyCommand)
+
+
+def op_of(kind: type[Command]) -> str:
+    """The op (the tag) of a command struct."""
+    return str(kind.__struct_config__.tag)
+
+
+OPS: tuple[str, ...] = tuple(op_of(c) for c in COMMAND_TYPES)
+_BY_OP: dict[str, type[Command]] = {op_of(c): c for c in COMMAND_TYPES}
+
+
+def command_type(op: str) -> type[Command] | None:
+    """The struct of ``op``; None for an unknown op."""
+    return _BY_OP.get(op)
+
+
+def make_command(**fields: Any) -> Command:
+    """The command of ``fields["op"]`` (the fields of the wire format); ``ValueError`` with
+    a one-line reason for anything the bus would refuse."""
+    op = fields.get("op")
+    try:
+        made: Command = msgspec.convert(fields, AnyCommand)
+    except msgspec.ValidationError as exc:
+        reason = explain(op, str(exc))
+        if not reason.isprintable():  # what it quotes of the fields: one line
+            reason = "".join(c if c.isprintable() else repr(c)[1:-1] for c in reason)
+        raise ValueError(reason) from None
+    return made
+
+
+_MISSING_ARGS = re.compile(r"^Object missing required field `args`$")
+_MISSING = re.compile(r"^Object missing required field `(\w+)` - at `\$\.args`$")
+_UNKNOWN = re.compile(r"^Object contains unknown field `(.+)` - at `\$\.args`$")
+_ENUM = re.compile(r"^Invalid enum value .* - at `\$\.args\.(\w+)`$")
+
+
+def explain(op: object, message: str) -> str:
+    """A msgspec validation message of a command in the words of the vocabulary (``op
+    'mode' needs argument 'mode'``, ``takes no argument``, ``mode must be one of``)."""
+    kind = command_type(op) if isinstance(op, str) else None
+    if kind is None:
+        return message
+    args = next(f.type for f in msgspec.structs.fields(kind) if f.name == "args")
+    if _MISSING_ARGS.match(message) and isinstance(args, type) and issubclass(args, Args):
+        required = [f.name for f in msgspec.structs.fields(args) if f.required]
+        if required:
+            return f"op {op!r} needs argument {required[0]!r} - at `$.args`"
+        try:  # no argument is required, yet none is not enough (force): say why
+            msgspec.convert({}, args)
+        except msgspec.ValidationError as exc:
+            return f"{exc} - at `$.args`"
+    if m := _MISSING.match(message):
+        return f"op {op!r} needs argument {m[1]!r} - at `$.args`"
+    if m := _UNKNOWN.match(message):
+        return f"op {op!r} takes no argument {m[1]!r} - at `$.args`"
+    if m := _ENUM.match(message):
+        choices = {"mode": MODES, "removed": REMOVED_CHOICES}.get(m[1])
+        if choices:
+            return f"{m[1]} must be one of {', '.join(choices)} - at `$.args.{m[1]}`"
+    return message
+
+
+def command_args(op: str, words: Iterable[str]) -> dict[str, Any]:
+    """The shell's ``NAME=VALUE`` words as the arguments of ``op`` (``s7graph send``): a
+    value reads as JSON where it is JSON (``3``, ``true``, ``null``), else as text.
+    ``ValueError`` with a one-line reason for an unknown op or arguments its struct refuses,
+    before anything is sent."""
+    if command_type(op) is None:
+        raise ValueError(f"unknown op {op!r}; one of {', '.join(OPS)}")
+    args: dict[str, Any] = {}
+    for word in words:
+        name, eq, value = word.partition("=")
+        if not eq or not name:
+            raise ValueError(f"give each argument as NAME=VALUE, not {word!r}")
+        try:
+            args[name] = json.loads(value)
+        except ValueError:
+            args[name] = value
+    make_command(op=op, fb="_", args=args)  # refused here, not by the CPU
+    return args
+
+
+def _type_text(t: mi.Type) -> str:
+    """An argument's type as the documentation says it (``int 1..65535``, ``text (1..64)``)."""
+    if isinstance(t, mi.UnionType):
+        return " or ".join(_type_text(x) for x in t.types)
+    if isinstance(t, mi.LiteralType):
+        return "one of " + ", ".join(f"`{v}`" for v in sorted(map(str, t.values)))
+    if isinstance(t, mi.IntType):
+        if t.ge is not None and t.le is not None and t.le < 2**63 - 1:
+            return f"int {t.ge}..{t.le}"
+        return f"int ≥ {t.ge}" if t.ge is not None else "int"
+    if isinstance(t, mi.StrType):
+        if t.max_length is None:
+            return "text"
+        return f"text ({t.min_length or 0}..{t.max_length:,} chars)"
+    names = {mi.BoolType: "bool", mi.FloatType: "number", mi.NoneType: "null"}
+    return names.get(type(t), type(t).__name__)
+
+
+def arguments_markdown() -> str:
+    """Each op's arguments as Markdown, read from its struct (docs/bus.md; a test keeps the
+    two equal): name, type, and ``?`` for one that may be left out."""
+    rows = ["| op | arguments |", "|---|---|"]
+    for kind in COMMAND_TYPES:
+        args = next(f.type for f in msgspec.structs.fields(kind) if f.name == "args")
+        info = mi.type_info(args)
+        assert isinstance(info, mi.StructType)
+        shown = [
+            f"`{f.name}`{'' if f.required else '?'}: {_type_text(f.type)}" for f in info.fields
+        ]
+        rows.append(f"| `{op_of(kind)}` | {'; '.join(shown) or 'none'} |")
+    return "\n".join(rows) + "\n"
