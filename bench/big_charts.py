@@ -34,8 +34,20 @@ def huge_chart(chars: int = MAX_SOURCE - 10_000, name: str = "Seq_drill") -> str
 def contact_chain(contacts: int = 5_000, name: str = "Seq_drill") -> str:
     """Two steps, the first left by one transition of ``contacts`` ANDed contacts."""
     cond = " AND ".join(f"M{i // 8 % 250}.{i % 8}" for i in range(contacts))
-    return "\n".join([
-        *_head(name), 'SEQUENCE 1 "Chain"', '  INITIAL_STEP S1 "Ready":', "  END_STEP",
-        '  STEP S2 "Go":', "  END_STEP", f"  TRANSITION T1 FROM S1 TO S2 := {cond};",
-        "  TRANSITION T2 FROM S2 TO S1 := M0.0;", "END_SEQUENCE", "END_FUNCTION_BLOCK",
-    ]) + "\n"  # fmt: skip
+    return (
+        "\n".join(
+            [
+                *_head(name),
+                'SEQUENCE 1 "Chain"',
+                '  INITIAL_STEP S1 "Ready":',
+                "  END_STEP",
+                '  STEP S2 "Go":',
+                "  END_STEP",
+                f"  TRANSITION T1 FROM S1 TO S2 := {cond};",
+                "  TRANSITION T2 FROM S2 TO S1 := M0.0;",
+                "END_SEQUENCE",
+                "END_FUNCTION_BLOCK",
+            ]
+        )
+        + "\n"
+    )

@@ -122,8 +122,10 @@ class Peer:
     def __init__(self, endpoint: str, cpus: dict[str, list[str]]) -> None:
         self.proc = subprocess.Popen(
             [sys.executable, __file__, "--peer", endpoint, "--cpus", json.dumps(cpus)],
-            stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
-        )  # fmt: skip
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            text=True,
+        )
         assert self.proc.stdout is not None
         line = self.proc.stdout.readline()
         if line.strip() != "ready":
@@ -416,15 +418,21 @@ def main(argv: list[str] | None = None) -> int:
     print()
     print(f"{'min/median/max':26}" + "".join(f"{lay:>26}" for lay in layouts))
     rows = [
-        ("raw zenoh p50 ms", "raw p50", "{:.3f}"), ("raw zenoh p99 ms", "raw p99", "{:.3f}"),
-        ("CPU→delta p50 ms", "cpu p50", "{:.3f}"), ("CPU→delta p99 ms", "cpu p99", "{:.3f}"),
-        ("added p50 ms", "added p50", "{:.3f}"), ("added p99 ms", "added p99", "{:.3f}"),
-        ("deltas/s", "rate", "{:,.0f}"), ("deltas per scan", "deltas/scan", "{:.0f}"),
-        ("scan µs", "scan_us", "{:.0f}"), ("bus µs (scan thread)", "bus_us", "{:.0f}"),
+        ("raw zenoh p50 ms", "raw p50", "{:.3f}"),
+        ("raw zenoh p99 ms", "raw p99", "{:.3f}"),
+        ("CPU→delta p50 ms", "cpu p50", "{:.3f}"),
+        ("CPU→delta p99 ms", "cpu p99", "{:.3f}"),
+        ("added p50 ms", "added p50", "{:.3f}"),
+        ("added p99 ms", "added p99", "{:.3f}"),
+        ("deltas/s", "rate", "{:,.0f}"),
+        ("deltas per scan", "deltas/scan", "{:.0f}"),
+        ("scan µs", "scan_us", "{:.0f}"),
+        ("bus µs (scan thread)", "bus_us", "{:.0f}"),
         ("bus ÷ scan (scan thread)", "bus/scan", "{:.2f}"),
-        ("CPU µs beyond the scan", "cpu_us", "{:.0f}"), ("that ÷ scan", "cpu/scan", "{:.2f}"),
+        ("CPU µs beyond the scan", "cpu_us", "{:.0f}"),
+        ("that ÷ scan", "cpu/scan", "{:.2f}"),
         ("deltas lost", "lost", "{:.0f}"),
-    ]  # fmt: skip
+    ]
     for label, key, fmt in rows:
         print(f"{label:26}" + "".join(f"{spread(res[lay][key], fmt):>26}" for lay in layouts))
     print()

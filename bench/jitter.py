@@ -89,8 +89,13 @@ PAGE_LIFE_S = 5.0
 FLOOD_SENDERS = 4
 FIREHOSE_PER_S = 1000
 CHROMIUM = "/usr/bin/chromium"
-CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader",
-                 "--use-angle=swiftshader"]  # fmt: skip
+CHROMIUM_ARGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--enable-unsafe-swiftshader",
+    "--use-angle=swiftshader",
+]
 RESULT = "JITTER "
 
 
@@ -156,34 +161,56 @@ def worker(workload: str, view: str, endpoint: str, port: int, state: Path) -> i
     threading.Thread(target=control, daemon=True).start()
     net = NetOptions(listen=[endpoint])
     common: dict[str, Any] = {
-        "state": state, "cycle_ms": CYCLE_MS, "web": True, "port": port, "net": net,
+        "state": state,
+        "cycle_ms": CYCLE_MS,
+        "web": True,
+        "port": port,
+        "net": net,
         "view_in_process": view == "inline",
         "rt_priority": None if view == "normal" else RT_PRIORITY,
-    }  # fmt: skip
+    }
     if workload == "drill":
-        rc = run_chart(DRILL / "drill.s7g", plant=DRILL / "demo_plant.py",
-                       symbols=DRILL / "symbols.txt", **common)  # fmt: skip
+        rc = run_chart(
+            DRILL / "drill.s7g",
+            plant=DRILL / "demo_plant.py",
+            symbols=DRILL / "symbols.txt",
+            **common,
+        )
     else:
         rc = run_chart(Path("scan200.s7g"), session=_scan200_session(), **common)
     a, over_a = marks.get("start", (0, 0))
     b, over_b = marks.get("end", (len(ends), runners[0].overruns if runners else 0))
     cycles = [starts[i + 1] - starts[i] for i in range(a, min(b, len(starts)) - 1)]
     scans = [ends[i] - starts[i] for i in range(a, b)]
-    overran = [(starts[i], starts[i + 1]) for i in range(a, min(b, len(starts)) - 1)
-               if overruns_seen[i + 1] > overruns_seen[i]]  # fmt: skip
+    overran = [
+        (starts[i], starts[i + 1])
+        for i in range(a, min(b, len(starts)) - 1)
+        if overruns_seen[i + 1] > overruns_seen[i]
+    ]
     window = (starts[a], starts[min(b, len(starts)) - 1]) if b > a else (0, -1)
     wall_to_perf = time.time_ns() - time.perf_counter_ns()
-    long = [{"start": c.at_ns - wall_to_perf, "cycle": c.cycle_ns, "parts": c.parts()}
-            for c in (runners[0].profile.recent if runners else ())
-            if window[0] <= c.at_ns - wall_to_perf <= window[1]]  # fmt: skip
+    long = [
+        {"start": c.at_ns - wall_to_perf, "cycle": c.cycle_ns, "parts": c.parts()}
+        for c in (runners[0].profile.recent if runners else ())
+        if window[0] <= c.at_ns - wall_to_perf <= window[1]
+    ]
     stopped = runners[0].stopped if runners else "never ran"
     majflt = faults.get("end", 0) - faults.get("start", 0)
-    result = {"rc": rc, "cycles": cycles, "scans": scans, "overruns": over_b - over_a,
-              "stopped": stopped, "majflt": majflt, "starts": starts[a:b],
-              "overran": overran, "long": long,
-              "comm_limited": comm.get("end", 0) - comm.get("start", 0),
-              "means": {name: runners[0].profile.mean_ns(name) / 1e6 for name in PHASE_NAMES}
-              if runners else {}}  # fmt: skip
+    result = {
+        "rc": rc,
+        "cycles": cycles,
+        "scans": scans,
+        "overruns": over_b - over_a,
+        "stopped": stopped,
+        "majflt": majflt,
+        "starts": starts[a:b],
+        "overran": overran,
+        "long": long,
+        "comm_limited": comm.get("end", 0) - comm.get("start", 0),
+        "means": {name: runners[0].profile.mean_ns(name) / 1e6 for name in PHASE_NAMES}
+        if runners
+        else {},
+    }
     print(RESULT + json.dumps(result), flush=True)
     return 0
 
@@ -348,8 +375,9 @@ def downloads(url: str, endpoint: str, fb: str) -> Iterator[Callable[[], str]]:
             kind, text = next(charts)
             args = {"source": text, "preview": True}
             begun = time.monotonic()
-            reply = client.send(Command(op="download", fb=fb, user="engineer", token=token,
-                                        args=args), timeout=120)  # fmt: skip
+            reply = client.send(
+                Command(op="download", fb=fb, user="engineer", token=token, args=args), timeout=120
+            )
             took.append(time.monotonic() - begun)
             done[f"{kind} {'previewed' if reply.applied else 'refused: ' + reply.reason[:60]}"] += 1
             stop.wait(max(0.0, 1.0 - (time.monotonic() - begun)))
@@ -406,17 +434,31 @@ def scenario(
         errors = Path(tmp) / "stderr.txt"
         with errors.open("w") as err:
             proc = subprocess.Popen(
-                [sys.executable, __file__, "--worker", workload, view, endpoint, str(port),
-                 str(Path(tmp) / "state.sqlite")],
-                cwd=ROOT, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=err, text=True,
+                [
+                    sys.executable,
+                    __file__,
+                    "--worker",
+                    workload,
+                    view,
+                    endpoint,
+                    str(port),
+                    str(Path(tmp) / "state.sqlite"),
+                ],
+                cwd=ROOT,
+                stdin=subprocess.PIPE,
+                stdout=subprocess.PIPE,
+                stderr=err,
+                text=True,
                 preexec_fn=_every_processor,
-            )  # fmt: skip
+            )
             beside = None
             if floor is not None:
                 beside = subprocess.Popen(
                     [str(floor), str(int(FLOOR_PERIOD_MS * 1000)), str(FLOOR_PRIORITY)],
-                    stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
-                )  # fmt: skip
+                    stdin=subprocess.PIPE,
+                    stdout=subprocess.PIPE,
+                    text=True,
+                )
             try:
                 result = _measure(proc, load, seconds, endpoint, workload, beside)
                 if beside is not None:
@@ -509,7 +551,7 @@ def floor_stalls(floor: list[list[int]]) -> list[list[tuple[int, int]]]:
     return [
         [(int(prev + period), t) for prev, t in itertools.pairwise(one) if t - prev >= limit]
         for one in floor
-    ]  # fmt: skip
+    ]
 
 
 def machine_share(stalls: list[list[tuple[int, int]]], a: int, b: int) -> int:
@@ -561,10 +603,10 @@ def own_causes(result: dict[str, Any]) -> collections.Counter[str]:
     aside, by ``cause``."""
     stalls = floor_stalls(result.get("floor") or [])
     return collections.Counter(
-        cause(c["parts"]) for c in result.get("long") or []
-        if c["cycle"] - machine_share(stalls, c["start"], c["start"] + c["cycle"])
-        > LONG_MS * 1e6
-    )  # fmt: skip
+        cause(c["parts"])
+        for c in result.get("long") or []
+        if c["cycle"] - machine_share(stalls, c["start"], c["start"] + c["cycle"]) > LONG_MS * 1e6
+    )
 
 
 WORK = ("encode", "scan", "alarms", "edge", "stage", "gc")
@@ -615,10 +657,17 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--workloads", default=",".join(WORKLOADS))
     ap.add_argument("--views", default=",".join(VIEWS))
     ap.add_argument("--loads", default=",".join(LOADS))
-    ap.add_argument("--huge-pages", action="store_true",
-                    help="leave the load makers' memory to transparent huge pages")  # fmt: skip
-    ap.add_argument("--worker", nargs=5, metavar=("WORKLOAD", "VIEW", "EP", "PORT", "STATE"),
-                    help=argparse.SUPPRESS)  # fmt: skip
+    ap.add_argument(
+        "--huge-pages",
+        action="store_true",
+        help="leave the load makers' memory to transparent huge pages",
+    )
+    ap.add_argument(
+        "--worker",
+        nargs=5,
+        metavar=("WORKLOAD", "VIEW", "EP", "PORT", "STATE"),
+        help=argparse.SUPPRESS,
+    )
     args = ap.parse_args(argv)
     if args.worker:
         workload, view, endpoint, port, state = args.worker
@@ -636,17 +685,26 @@ def main(argv: list[str] | None = None) -> int:
         loads.remove("pages")
     build = tempfile.TemporaryDirectory(prefix="s7graph-floor-")
     floor = build_floor(Path(build.name))
-    print(f"python {sys.version.split()[0]}, {os.cpu_count()} cores, cycle {CYCLE_MS:g} ms, "
-          f"{args.seconds:g} s per scenario, {args.repeat} run(s); cycle = start to start of "
-          "two scans, ms; min/median/max over runs")  # fmt: skip
-    print(f"transparent huge pages: {_thp_setting()} (the CPU, its view"
-          f"{' and the load makers' if not args.huge_pages else ''} keep small pages); "
-          + ("the C floor (bench/cycle_floor.c) cycles beside each run"
-             if floor is not None else "no C compiler: no C floor"))  # fmt: skip
-    print(f"the CPU keeps processor {kept} for its scan (--core auto; not with --rt-priority 0, "
-          "the normal view); the load makers run on the others"
-          if kept is not None else "no processor kept for the scan (--core auto: not "
-          "real-time, or one processor)")  # fmt: skip
+    print(
+        f"python {sys.version.split()[0]}, {os.cpu_count()} cores, cycle {CYCLE_MS:g} ms, "
+        f"{args.seconds:g} s per scenario, {args.repeat} run(s); cycle = start to start of "
+        "two scans, ms; min/median/max over runs"
+    )
+    print(
+        f"transparent huge pages: {_thp_setting()} (the CPU, its view"
+        f"{' and the load makers' if not args.huge_pages else ''} keep small pages); "
+        + (
+            "the C floor (bench/cycle_floor.c) cycles beside each run"
+            if floor is not None
+            else "no C compiler: no C floor"
+        )
+    )
+    print(
+        f"the CPU keeps processor {kept} for its scan (--core auto; not with --rt-priority 0, "
+        "the normal view); the load makers run on the others"
+        if kept is not None
+        else "no processor kept for the scan (--core auto: not real-time, or one processor)"
+    )
     runs: dict[tuple[str, str, str], list[dict[str, float]]] = {}
     notes: dict[tuple[str, str, str], str] = {}
     whys: dict[tuple[str, str, str], collections.Counter[str]] = {}
@@ -669,23 +727,29 @@ def main(argv: list[str] | None = None) -> int:
                         result["stopped"]
                     )
                     if result["stopped"]:
-                        print(f"  {workload} {view} {load}: the CPU went to STOP: "
-                              f"{result['stopped']}")  # fmt: skip
+                        print(
+                            f"  {workload} {view} {load}: the CPU went to STOP: {result['stopped']}"
+                        )
                     f = runs[(workload, view, load)][-1]
-                    print(f"  {workload:8} {view:9} {load:6} p99.9 {f['p999']:.2f} max "
-                          f"{f['max']:.2f} overruns {f['overruns']:.0f}, page faults "
-                          f"{result['majflt']}; C floor late p99.9 {f['floor_p999']:.2f} max "
-                          f"{f['floor_max']:.2f}; cycles over {LONG_MS:g} ms "
-                          f"{f['long']:.0f}, {f['shared']:.0f} of them within {LONG_MS:g} "
-                          f"ms less the machine's stalls; own p99.9 {f['own_p999']:.2f} max "
-                          f"{f['own_max']:.2f} overruns {f['own_overruns']:.0f}; own long "
-                          f"cycles by cause: {_causes(why)}; mean ms {_means(result)}; "
-                          f"communication share ran out at {result['comm_limited']} "
-                          f"boundaries  ({result['load']})", flush=True)  # fmt: skip
-    head = (f"{'workload':9} {'view':9} {'load':6} {'cycles':>6} {'p50':>17} {'p99':>17} "
-            f"{'p99.9':>17} {'max':>17} {'overruns':>10} {'scan p50':>17} {'scan p99':>17} "
-            f"{'load avg':>14} {'floor late p99.9':>17} {'floor late max':>17} {'>12 (floor)':>11} "
-            f"{'own p99.9':>17} {'own max':>17} {'own over':>10}  target  own target")  # fmt: skip
+                    print(
+                        f"  {workload:8} {view:9} {load:6} p99.9 {f['p999']:.2f} max "
+                        f"{f['max']:.2f} overruns {f['overruns']:.0f}, page faults "
+                        f"{result['majflt']}; C floor late p99.9 {f['floor_p999']:.2f} max "
+                        f"{f['floor_max']:.2f}; cycles over {LONG_MS:g} ms "
+                        f"{f['long']:.0f}, {f['shared']:.0f} of them within {LONG_MS:g} "
+                        f"ms less the machine's stalls; own p99.9 {f['own_p999']:.2f} max "
+                        f"{f['own_max']:.2f} overruns {f['own_overruns']:.0f}; own long "
+                        f"cycles by cause: {_causes(why)}; mean ms {_means(result)}; "
+                        f"communication share ran out at {result['comm_limited']} "
+                        f"boundaries  ({result['load']})",
+                        flush=True,
+                    )
+    head = (
+        f"{'workload':9} {'view':9} {'load':6} {'cycles':>6} {'p50':>17} {'p99':>17} "
+        f"{'p99.9':>17} {'max':>17} {'overruns':>10} {'scan p50':>17} {'scan p99':>17} "
+        f"{'load avg':>14} {'floor late p99.9':>17} {'floor late max':>17} {'>12 (floor)':>11} "
+        f"{'own p99.9':>17} {'own max':>17} {'own over':>10}  target  own target"
+    )
     print(head)
     met = own_met = True
     for (workload, view, load), fs in runs.items():
@@ -696,26 +760,32 @@ def main(argv: list[str] | None = None) -> int:
             own_ok = all(f["own_p999"] <= LONG_MS and f["own_overruns"] == 0 for f in fs)
             met, own_met = met and ok, own_met and own_ok
             target, own_target = ("met" if ok else "MISSED"), ("met" if own_ok else "MISSED")
-        print(f"{workload:9} {view:9} {load:6} {int(statistics.median(col('n'))):>6} "
-              f"{spread(col('p50')):>17} {spread(col('p99')):>17} {spread(col('p999')):>17} "
-              f"{spread(col('max')):>17} {spread(col('overruns'), '{:.0f}'):>10} "
-              f"{spread(col('scan_p50'), '{:.3f}'):>17} {spread(col('scan_p99'), '{:.3f}'):>17} "
-              f"{spread(col('loadavg'), '{:.1f}'):>14} {spread(col('floor_p999')):>17} "
-              f"{spread(col('floor_max')):>17} {_over(fs):>11} {spread(col('own_p999')):>17} "
-              f"{spread(col('own_max')):>17} {spread(col('own_overruns'), '{:.0f}'):>10}  "
-              f"{target:6}  {own_target}")  # fmt: skip
+        print(
+            f"{workload:9} {view:9} {load:6} {int(statistics.median(col('n'))):>6} "
+            f"{spread(col('p50')):>17} {spread(col('p99')):>17} {spread(col('p999')):>17} "
+            f"{spread(col('max')):>17} {spread(col('overruns'), '{:.0f}'):>10} "
+            f"{spread(col('scan_p50'), '{:.3f}'):>17} {spread(col('scan_p99'), '{:.3f}'):>17} "
+            f"{spread(col('loadavg'), '{:.1f}'):>14} {spread(col('floor_p999')):>17} "
+            f"{spread(col('floor_max')):>17} {_over(fs):>11} {spread(col('own_p999')):>17} "
+            f"{spread(col('own_max')):>17} {spread(col('own_overruns'), '{:.0f}'):>10}  "
+            f"{target:6}  {own_target}"
+        )
     print(
         f"target (view in its own process, pages and flood): p99.9 <= {LONG_MS:g} ms, no "
         f"overrun: {'met' if met else 'MISSED'}; own target, the same with each cycle less "
         f"the time the machine stalled the C floor in it: {'met' if own_met else 'MISSED'}"
     )
-    print(f"floor late: how late the C floor woke, every {FLOOR_PERIOD_MS:g} ms on each "
-          f"processor; >12 (floor): cycles over {LONG_MS:g} ms in all runs (in brackets: of "
-          f"them, those within {LONG_MS:g} ms less the machine's stalls, the C floor "
-          f"{FLOOR_LATE_MS:g} ms late or more)")  # fmt: skip
-    print(f"own long cycles (over {LONG_MS:g} ms with the machine's stalls set aside) by cause,"
-          " all runs, from"
-          " the runner's breakdown of each cycle (engine/profile.py):")  # fmt: skip
+    print(
+        f"floor late: how late the C floor woke, every {FLOOR_PERIOD_MS:g} ms on each "
+        f"processor; >12 (floor): cycles over {LONG_MS:g} ms in all runs (in brackets: of "
+        f"them, those within {LONG_MS:g} ms less the machine's stalls, the C floor "
+        f"{FLOOR_LATE_MS:g} ms late or more)"
+    )
+    print(
+        f"own long cycles (over {LONG_MS:g} ms with the machine's stalls set aside) by cause,"
+        " all runs, from"
+        " the runner's breakdown of each cycle (engine/profile.py):"
+    )
     for key, why in whys.items():
         print(f"  {' '.join(key):28} {_causes(why)}")
     _compare_downloads(works, stops)
@@ -746,10 +816,12 @@ def _compare_downloads(
             continue
         a, b = statistics.median(without), statistics.median(with_downloads)
         met = b <= a * DOWNLOADS_MARGIN and not stops.get((workload, view, load))
-        print(f"downloads target, {workload} {view}: scan thread's work per cycle idle "
-              f"{spread(without, '{:.3f}')} ms, downloads {spread(with_downloads, '{:.3f}')} "
-              f"ms; STOPs {stops.get((workload, view, load), 0)}: "
-              f"{'met' if met else 'MISSED'}")  # fmt: skip
+        print(
+            f"downloads target, {workload} {view}: scan thread's work per cycle idle "
+            f"{spread(without, '{:.3f}')} ms, downloads {spread(with_downloads, '{:.3f}')} "
+            f"ms; STOPs {stops.get((workload, view, load), 0)}: "
+            f"{'met' if met else 'MISSED'}"
+        )
 
 
 def _means(result: dict[str, Any]) -> str:

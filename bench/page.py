@@ -73,9 +73,16 @@ MEASURES = (
     ("status", "the status line painted"),
 )
 CHROMIUM = "/usr/bin/chromium"
-CHROMIUM_ARGS = ["--no-sandbox", "--headless", "--enable-unsafe-swiftshader",
-                 "--use-angle=swiftshader", "--disable-background-networking",
-                 "--disable-component-update", "--disable-sync", "--no-first-run"]  # fmt: skip
+CHROMIUM_ARGS = [
+    "--no-sandbox",
+    "--headless",
+    "--enable-unsafe-swiftshader",
+    "--use-angle=swiftshader",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--no-first-run",
+]
 ACTIVE = "40,170,60"  # web.view.drawing.ACTIVE as the page receives it
 QUIET_S = 2.0  # no new chart node for this long: the chart is drawn
 RESULT = "PAGE "
@@ -155,8 +162,11 @@ HOOK = r"""
 def loop_source(steps: int) -> str:
     """The ``.s7g`` text of one sequence of ``steps`` steps in a loop, each leaving on its
     own step time of 150–249 ms (varied: the changes fall at every phase of the view)."""
-    out = ['FUNCTION_BLOCK "Bench_loop" FB 1 DB 1', "  PARAMETERS := STANDARD;",
-           'SEQUENCE 1 "Loop"']  # fmt: skip
+    out = [
+        'FUNCTION_BLOCK "Bench_loop" FB 1 DB 1',
+        "  PARAMETERS := STANDARD;",
+        'SEQUENCE 1 "Loop"',
+    ]
     for k in range(1, steps + 1):
         kw = "INITIAL_STEP" if k == 1 else "STEP"
         out += [f'  {kw} S{k} "Step {k}":', "  END_STEP"]
@@ -210,9 +220,13 @@ def worker(chart: str, path: Path, endpoint: str, port: int, state: Path) -> int
 
     threading.Thread(target=control, daemon=True).start()
     common: dict[str, Any] = {
-        "state": state, "cycle_ms": CYCLE_MS, "web": True, "port": port,
-        "net": NetOptions(listen=[endpoint]), "rt_priority": RT_PRIORITY,
-    }  # fmt: skip
+        "state": state,
+        "cycle_ms": CYCLE_MS,
+        "web": True,
+        "port": port,
+        "net": NetOptions(listen=[endpoint]),
+        "rt_priority": RT_PRIORITY,
+    }
     if chart == "drill":
         common.update(plant=DRILL / "demo_plant.py", symbols=DRILL / "symbols.txt")
     return int(run_chart(path, **common))
@@ -247,11 +261,22 @@ def cpu(chart: str) -> Iterator[Cpu]:
         errors = Path(tmp) / "stderr.txt"
         with errors.open("w") as err:
             proc = subprocess.Popen(
-                [sys.executable, __file__, "--worker", chart, str(path),
-                 f"unixsock-stream/{tmp}/bus.sock", str(free_port()),
-                 str(Path(tmp) / "state.sqlite")],
-                cwd=ROOT, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=err, text=True,
-            )  # fmt: skip
+                [
+                    sys.executable,
+                    __file__,
+                    "--worker",
+                    chart,
+                    str(path),
+                    f"unixsock-stream/{tmp}/bus.sock",
+                    str(free_port()),
+                    str(Path(tmp) / "state.sqlite"),
+                ],
+                cwd=ROOT,
+                stdin=subprocess.PIPE,
+                stdout=subprocess.PIPE,
+                stderr=err,
+                text=True,
+            )
             try:
                 url = ""
                 assert proc.stdout is not None and proc.stdin is not None
@@ -373,8 +398,14 @@ def colour_latency(page: Any, machine: Cpu, changes: int) -> dict[str, list[floa
                 colour.setdefault(int(step), []).append(r)
         else:
             status.setdefault(r["key"], []).append(r)
-    out: dict[str, list[float]] = {"colour": [], "ws": [], "main": [], "frame": [],
-                                   "status": [], "missed": []}  # fmt: skip
+    out: dict[str, list[float]] = {
+        "colour": [],
+        "ws": [],
+        "main": [],
+        "frame": [],
+        "status": [],
+        "missed": [],
+    }
     prev: set[int] = set()
     before = [c for c in machine.changes() if c[0] <= start + 0.5]
     if before:
@@ -436,8 +467,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--repeat", type=int, default=1, help="rounds; min/median/max over them")
     ap.add_argument("--changes", type=int, default=100, help="step changes watched per chart")
     ap.add_argument("--charts", default=",".join(CHARTS))
-    ap.add_argument("--worker", nargs=5, metavar=("CHART", "PATH", "EP", "PORT", "STATE"),
-                    help=argparse.SUPPRESS)  # fmt: skip
+    ap.add_argument(
+        "--worker",
+        nargs=5,
+        metavar=("CHART", "PATH", "EP", "PORT", "STATE"),
+        help=argparse.SUPPRESS,
+    )
     args = ap.parse_args(argv)
     if args.worker:
         chart, path, endpoint, port, state = args.worker
@@ -448,9 +483,11 @@ def main(argv: list[str] | None = None) -> int:
     from playwright.sync_api import sync_playwright
 
     charts = [c for c in args.charts.split(",") if c]
-    print(f"python {sys.version.split()[0]}, {os.cpu_count()} cores, cycle {CYCLE_MS:g} ms, "
-          f"{args.changes} changes per chart, {args.repeat} round(s); ms, min/median/max "
-          "over rounds")  # fmt: skip
+    print(
+        f"python {sys.version.split()[0]}, {os.cpu_count()} cores, cycle {CYCLE_MS:g} ms, "
+        f"{args.changes} changes per chart, {args.repeat} round(s); ms, min/median/max "
+        "over rounds"
+    )
     rounds: list[dict[str, Any]] = []
     loads: list[float] = []
     with sync_playwright() as p:
@@ -467,14 +504,19 @@ def main(argv: list[str] | None = None) -> int:
                     f"({len(v['colour'])} seen, {len(v['missed'])} missed)"
                     for k, v in r["colour"].items()
                 )
-                print(f"  round {i + 1}: first paint {paints}; colour {colours}; "
-                      f"load {loads[-1]:.1f}", flush=True)  # fmt: skip
+                print(
+                    f"  round {i + 1}: first paint {paints}; colour {colours}; "
+                    f"load {loads[-1]:.1f}",
+                    flush=True,
+                )
         finally:
             browser.close()
 
     print("\ncolour: from the CPU's scan of the change to ... (ms)")
-    print(f"{'chart':8} {'to':34} {'n':>9} {'p50':>17} {'p99':>17}  target p99 <= "
-          f"{COLOUR_TARGET_MS:.0f}")  # fmt: skip
+    print(
+        f"{'chart':8} {'to':34} {'n':>9} {'p50':>17} {'p99':>17}  target p99 <= "
+        f"{COLOUR_TARGET_MS:.0f}"
+    )
     for chart in [c for c in charts if c in COLOUR_CHARTS]:
         runs = [r["colour"][chart] for r in rounds if chart in r["colour"]]
         for key, what in MEASURES:

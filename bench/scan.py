@@ -212,16 +212,26 @@ class TransitionsWorkload:
 
         states = [f"s{k}" for k in range(STEPS)]
         table = [
-            {"trigger": "scan", "source": states[k], "dest": states[(k + 1) % STEPS],
-             "conditions": "ready"}
+            {
+                "trigger": "scan",
+                "source": states[k],
+                "dest": states[(k + 1) % STEPS],
+                "conditions": "ready",
+            }
             for k in range(STEPS)
-        ]  # fmt: skip
+        ]
         self.mem = bytearray(64)
         self.seqs = []
         for g in range(N_SEQUENCERS):
             m = _Seq(g, self.mem)
-            Machine(model=m, states=states, transitions=table, initial=states[0],
-                    auto_transitions=False, after_state_change="entered")  # fmt: skip
+            Machine(
+                model=m,
+                states=states,
+                transitions=table,
+                initial=states[0],
+                auto_transitions=False,
+                after_state_change="entered",
+            )
             self.seqs.append(m)
         self.now = 0
         for m in self.seqs:  # as the engine's startup call: the initial steps' rows once
@@ -299,12 +309,23 @@ class SismicWorkload:
         from sismic.interpreter import Interpreter
         from sismic.io import import_from_yaml
 
-        lines = ["statechart:", "  name: loop", "  root state:", "    name: root",
-                 "    initial: s0", "    states:"]  # fmt: skip
+        lines = [
+            "statechart:",
+            "  name: loop",
+            "  root state:",
+            "    name: root",
+            "    initial: s0",
+            "    states:",
+        ]
         for k in range(STEPS):
-            lines += [f"    - name: s{k}", "      on entry: c = 0", "      transitions:",
-                      f"      - target: s{(k + 1) % STEPS}", "        event: scan",
-                      "        guard: c >= p"]  # fmt: skip
+            lines += [
+                f"    - name: s{k}",
+                "      on entry: c = 0",
+                "      transitions:",
+                f"      - target: s{(k + 1) % STEPS}",
+                "        event: scan",
+                "        guard: c >= p",
+            ]
         chart = import_from_yaml("\n".join(lines))
         self.mem = bytearray(64)
         self.seqs = [_Seq(g, self.mem) for g in range(N_SEQUENCERS)]
@@ -515,8 +536,10 @@ def main(argv: list[str] | None = None) -> int:
                 if (w.positions(), w.markers()) != (base.positions(), base.markers()):
                     agree = False
                     print(f"{w.name}: final steps or D/L bits DIFFER FROM transitions")
-    print(f"{'workload':22} {'mean ms':>20} {'p50 ms':>20} {'us/active step':>18}   "
-          "time ÷ engine packed")  # fmt: skip
+    print(
+        f"{'workload':22} {'mean ms':>20} {'p50 ms':>20} {'us/active step':>18}   "
+        "time ÷ engine packed"
+    )
     ref = "engine packed" if "engine packed" in means else f"engine {layouts[0]}"
     for name, ms in means.items():
         per_step = [m * 1e3 / N_SEQUENCERS for m in ms]

@@ -148,11 +148,21 @@ def _timed_writes(store: StateStore) -> list[int]:
 def real(seconds: float) -> dict[str, float]:
     """``s7graph run`` of the demo for ``seconds`` of real time; the child's bytes written."""
     with tempfile.TemporaryDirectory() as tmp:
-        cmd = [sys.executable, "-m", "s7graph", "run", str(DRILL / "drill.s7g"),
-               "--plant", str(DRILL / "demo_plant.py"),
-               "--symbols", str(DRILL / "symbols.txt"),
-               "--state", str(Path(tmp) / "drill.sqlite"),
-               "--duration-s", str(seconds)]  # fmt: skip
+        cmd = [
+            sys.executable,
+            "-m",
+            "s7graph",
+            "run",
+            str(DRILL / "drill.s7g"),
+            "--plant",
+            str(DRILL / "demo_plant.py"),
+            "--symbols",
+            str(DRILL / "symbols.txt"),
+            "--state",
+            str(Path(tmp) / "drill.sqlite"),
+            "--duration-s",
+            str(seconds),
+        ]
         proc = subprocess.Popen(cmd, cwd=ROOT, stderr=subprocess.DEVNULL)
         pid = str(proc.pid)
         first: dict[str, int] | None = None
@@ -208,8 +218,9 @@ def replies(n: int, synchronous: str, where: str | None) -> list[float]:
             runner.start_thread()
             token = client.login("bench").token
             for k in range(n):
-                command = Command(op="halt", fb=fb, user="bench", token=token,
-                                  args={"on": k % 2 == 0})  # fmt: skip
+                command = Command(
+                    op="halt", fb=fb, user="bench", token=token, args={"on": k % 2 == 0}
+                )
                 started = time.perf_counter()
                 reply = client.send(command)
                 times.append((time.perf_counter() - started) * 1000)
@@ -236,36 +247,55 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seconds", type=float, default=60.0)
     ap.add_argument("--repeat", type=int, default=3)
-    ap.add_argument("--cold-seconds", type=float, default=10.0,
-                    help="the run with a 9 ms sleep after each scan (0: none)")  # fmt: skip
+    ap.add_argument(
+        "--cold-seconds",
+        type=float,
+        default=10.0,
+        help="the run with a 9 ms sleep after each scan (0: none)",
+    )
     ap.add_argument("--real", action="store_true", help="run s7graph run in real time instead")
-    ap.add_argument("--synchronous", default="FULL,NORMAL",
-                    help="PRAGMA synchronous values to compare, comma-separated")  # fmt: skip
+    ap.add_argument(
+        "--synchronous",
+        default="FULL,NORMAL",
+        help="PRAGMA synchronous values to compare, comma-separated",
+    )
     ap.add_argument("--dir", default=None, help="where the state files go (the disk measured)")
-    ap.add_argument("--replies", type=int, default=0,
-                    help="time this many durable command replies instead")  # fmt: skip
+    ap.add_argument(
+        "--replies", type=int, default=0, help="time this many durable command replies instead"
+    )
     args = ap.parse_args()
     if args.replies:
-        print(f"{args.replies} commands answered once durable, drill chart at {CYCLE_MS} ms; "
-              f"min / median / max of {args.repeat} runs")  # fmt: skip
+        print(
+            f"{args.replies} commands answered once durable, drill chart at {CYCLE_MS} ms; "
+            f"min / median / max of {args.repeat} runs"
+        )
         for sync in args.synchronous.split(","):
             runs = []
             for _ in range(args.repeat):
                 times = sorted(replies(args.replies, sync, args.dir))
-                runs.append({"median": statistics.median(times), "max": times[-1],
-                             "p90": times[int(0.9 * (len(times) - 1))]})  # fmt: skip
+                runs.append(
+                    {
+                        "median": statistics.median(times),
+                        "max": times[-1],
+                        "p90": times[int(0.9 * (len(times) - 1))],
+                    }
+                )
             print(f"synchronous={sync}:")
             for key in ("median", "p90", "max"):
                 print(_row(f"reply, {key}", runs, key, "ms", ".1f"))
         return 0
     if args.real:
         got = real(args.seconds)
-        print(f"s7graph run, drill demo, {got['span_s']:.0f} s real time: "
-              f"{got['mb_h']:.2f} MB/hour written (target <= {TARGET_MB_H:.0f})")  # fmt: skip
+        print(
+            f"s7graph run, drill demo, {got['span_s']:.0f} s real time: "
+            f"{got['mb_h']:.2f} MB/hour written (target <= {TARGET_MB_H:.0f})"
+        )
         return 0 if got["mb_h"] <= TARGET_MB_H else 1
     worst = 0.0
-    print(f"drill demo, {args.seconds:.0f} s at {CYCLE_MS} ms, state file as in s7graph run; "
-          f"min / median / max of {args.repeat} runs")  # fmt: skip
+    print(
+        f"drill demo, {args.seconds:.0f} s at {CYCLE_MS} ms, state file as in s7graph run; "
+        f"min / median / max of {args.repeat} runs"
+    )
     for name, ack in (("demo", None), ("working", 9000)):
         for sync in args.synchronous.split(","):
             runs = [
@@ -285,8 +315,10 @@ def main() -> int:
             worst = max(worst, max(r["mb_h"] for r in runs))
     if args.cold_seconds > 0:
         cold = simulate(args.cold_seconds, ack_every_ms=None, nap_s=NAP_S, where=args.dir)
-        print(f"demo, {args.cold_seconds:.0f} s, the scan thread asleep {NAP_S * 1000:.0f} ms "
-              f"after each scan (caches cold, as in a real cycle):")  # fmt: skip
+        print(
+            f"demo, {args.cold_seconds:.0f} s, the scan thread asleep {NAP_S * 1000:.0f} ms "
+            f"after each scan (caches cold, as in a real cycle):"
+        )
         print(f"  {'stage, median':<22} {cold['stage_median_us']:.1f} µs per scan (one run)")
         print(f"  {'stage, max':<22} {cold['stage_max_us']:.1f} µs per scan")
     return 0 if worst <= TARGET_MB_H else 1

@@ -279,9 +279,7 @@ def _plain(var: Var) -> bool:
     """A variable of an elementary type (checked with ``check_value`` on a strict restore)."""
     upper = var.type.upper()
     return not (
-        _is_multi(var)
-        or upper == OBJECT
-        or upper.startswith(("ARRAY", "STRUCT", "DATE", "DT"))
+        _is_multi(var) or upper == OBJECT or upper.startswith(("ARRAY", "STRUCT", "DATE", "DT"))
     )
 
 

@@ -206,7 +206,7 @@ class Cpu(ProgramBlocks, Forcing, InterruptDispatch):
 
     def memory_reset(self) -> None:
         """MRES (STOP only): program and operand areas cleared; diagnostics and key kept
-       ."""
+        ."""
         if self.mode is not CpuMode.STOP:
             raise BlockError("memory reset is possible only in STOP")
         self.blocks.clear()

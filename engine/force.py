@@ -116,8 +116,13 @@ class Force:
         return {a.byte + k: (0xFF, b) for k, b in enumerate(data)}
 
     def to_json(self) -> dict[str, Any]:
-        return {"address": str(self.address), "value": self.value, "shown": self.shown,
-                "symbol": self.symbol, "user": self.user}  # fmt: skip
+        return {
+            "address": str(self.address),
+            "value": self.value,
+            "shown": self.shown,
+            "symbol": self.symbol,
+            "user": self.user,
+        }
 
     @classmethod
     def from_json(cls, data: object) -> Force:
@@ -196,8 +201,10 @@ def _encode(address: Address, type_name: str, name: str, value: object) -> tuple
             bits = type_of(literal_type).size_bits
             fits = bits == width if type_name in _UNSIGNED else literal_type == type_name
             if not fits:
-                raise ForceError(f"{format_literal(literal_type, value)} is a {literal_type} "
-                                 f"({bits} bits), not a value for {what}")  # fmt: skip
+                raise ForceError(
+                    f"{format_literal(literal_type, value)} is a {literal_type} "
+                    f"({bits} bits), not a value for {what}"
+                )
             return _typed(address, literal_type, value, what)
     if width is Width.BIT:
         if isinstance(value, bool) or (isinstance(value, int) and value in (0, 1)):

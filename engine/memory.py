@@ -509,17 +509,19 @@ def _name(area: Area | str, byte: int, bit: int, db: int | None) -> str:
 def _busy_timers(cells: Sequence[S5Timer]) -> list[int]:
     """The timer cells not at rest (one loop without a call per cell: runs every scan)."""
     return [
-        i for i, c in enumerate(cells)
+        i
+        for i, c in enumerate(cells)
         if c.running or c.q or c.value_ms or c.s_edge or c.fr_edge or c.mode
-    ]  # fmt: skip
+    ]
 
 
 def _busy_counters(cells: Sequence[S5Counter]) -> list[int]:
     """The counter cells not at rest."""
     return [
-        i for i, c in enumerate(cells)
+        i
+        for i, c in enumerate(cells)
         if c.value or c.q or c.cu_edge or c.cd_edge or c.s_edge or c.r_edge or c.fr_edge
-    ]  # fmt: skip
+    ]
 
 
 def _within(keep: range, cells: Sequence[S5Timer | S5Counter]) -> range:

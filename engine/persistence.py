@@ -219,9 +219,15 @@ class Batch:
 
     def __bool__(self) -> bool:
         return bool(
-            self.meta or self.instances or self.parts or self.diagnostics
-            or self.alarms or self.audit or self.appended or self.unencoded
-        )  # fmt: skip
+            self.meta
+            or self.instances
+            or self.parts
+            or self.diagnostics
+            or self.alarms
+            or self.audit
+            or self.appended
+            or self.unencoded
+        )
 
     def merge(self, later: Batch) -> None:
         """Fold a later batch into this one (the later rows win, appended rows add up, the
@@ -243,9 +249,14 @@ class Batch:
     @property
     def rows(self) -> int:
         return (
-            len(self.meta) + len(self.instances) + len(self.parts)
-            + len(self.diagnostics) + len(self.alarms) + len(self.audit) + len(self.appended)
-        )  # fmt: skip
+            len(self.meta)
+            + len(self.instances)
+            + len(self.parts)
+            + len(self.diagnostics)
+            + len(self.alarms)
+            + len(self.audit)
+            + len(self.appended)
+        )
 
 
 @dataclass(slots=True)
@@ -374,14 +385,14 @@ class StateStore:
                 raise StateFileError(self.path, "an SQLite file, but not an s7graph state file")
             if "instances" not in tables and _holds_state(db, tables):
                 raise StateFileError(
-                    self.path, "the instances table is gone (the instance DBs, a sequencer's "
-                    "position among them): an incomplete state")  # fmt: skip
+                    self.path,
+                    "the instances table is gone (the instance DBs, a sequencer's "
+                    "position among them): an incomplete state",
+                )
             if "instances" in tables:
                 columns = {r[1] for r in db.execute("PRAGMA table_info(instances)")}
                 if "state" in columns:
-                    raise StateFileError(
-                        self.path, "written by an older s7graph (no fingerprints)"
-                    )  # fmt: skip
+                    raise StateFileError(self.path, "written by an older s7graph (no fingerprints)")
             if "meta" in tables:
                 row = db.execute("SELECT value FROM meta WHERE key='format'").fetchone()
                 if row is not None and row[0] not in READABLE:
@@ -513,9 +524,12 @@ class StateStore:
             key, row = _json_row(snapshot, volatile)
         seen = self._seen.get(number)
         if (
-            not full and seen is not None and key == seen[0] and seen[2] is fb
+            not full
+            and seen is not None
+            and key == seen[0]
+            and seen[2] is fb
             and not (mark and volatile != seen[1])
-        ):  # fmt: skip
+        ):
             return  # unchanged, or only its volatile keys and no time mark due
         if row is None:
             row = _PAIR + key + _PACK.encode(volatile)
@@ -596,9 +610,7 @@ class StateStore:
                 )
             for (table, columns), rows in _grouped(batch.appended).items():
                 marks = ", ".join("?" * len(columns))
-                db.executemany(
-                    f"INSERT INTO {table} ({', '.join(columns)}) VALUES ({marks})", rows
-                )  # fmt: skip
+                db.executemany(f"INSERT INTO {table} ({', '.join(columns)}) VALUES ({marks})", rows)
             db.execute("COMMIT")
         except sqlite3.Error as exc:
             if db.in_transaction:
@@ -637,21 +649,27 @@ class StateStore:
         image = _checked(self.path, "memory image", memory, check_memory_image, cpu)
         if hot is not None:
             hot_image = _checked(self.path, "hot restart image", hot, check_hot_image, cpu)
-            self._restore_part("hot restart image", lambda: cpu.mem.restore_hot(hot_image))
+            _restore_part(self.path, "hot restart image", lambda: cpu.mem.restore_hot(hot_image))
         else:
             cpu.hot_blockers.add("no hot restart image saved")
-        self._restore_part("memory image", lambda: cpu.mem.restore(image))
+        _restore_part(self.path, "memory image", lambda: cpu.mem.restore(image))
         for number, label, name, fingerprint, shape, data in instances:
-            self._load_instance(cpu, int(number), label, name, fingerprint, shape, data, report)
+            _load_instance(
+                self.path, cpu, int(number), label, name, fingerprint, shape, data, report
+            )
         unsaved = _unsaved(cpu, {int(row[0]) for row in instances}, report)
         blockers = self.meta("hot_blockers")
         if blockers:
-            self._restore_part("hot restart blockers", lambda: cpu.hot_blockers.update(
-                str(b) for b in json.loads(blockers)))  # fmt: skip
+            _restore_part(
+                self.path,
+                "hot restart blockers",
+                lambda: cpu.hot_blockers.update(str(b) for b in json.loads(blockers)),
+            )
         forces = self.meta("forces")
         if forces is not None:
-            self._restore_part("force table", lambda: cpu.forces.restore(json.loads(forces),
-                                                                         cpu.mem))  # fmt: skip
+            _restore_part(
+                self.path, "force table", lambda: cpu.forces.restore(json.loads(forces), cpu.mem)
+            )
         entries = self._db.execute(
             "SELECT t_ns, event_id, block, message, address FROM diagnostics ORDER BY seq"
         ).fetchall()
@@ -665,67 +683,17 @@ class StateStore:
         for part_name, state in self._db.execute("SELECT name, state FROM parts"):
             part = self._parts.get(str(part_name))
             if part is not None:
-                self._restore_part(f"part {part_name!r}", functools.partial(
-                    _restore_json, part[1], str(state)))  # fmt: skip
+                _restore_part(
+                    self.path,
+                    f"part {part_name!r}",
+                    functools.partial(_restore_json, part[1], str(state)),
+                )
         if not report.changed and not unsaved:
             cpu.hot_blockers.discard("program download")  # the very program that was running
         if not self.hot:  # not kept up to date from now on (a read-only file fails later)
             with contextlib.suppress(sqlite3.Error):
                 self._db.execute("DELETE FROM meta WHERE key='hot_memory'")
         return report
-
-    def _restore_part(self, what: str, restore: Callable[[], object]) -> None:
-        try:
-            restore()
-        except StateFileError:
-            raise
-        except Exception as exc:
-            raise StateFileError(self.path, f"malformed {what}: {_why(exc)}") from None
-
-    def _load_instance(
-        self,
-        cpu: Cpu,
-        number: int,
-        label: str,
-        name: str,
-        fingerprint: str,
-        shape: str,
-        blob: bytes,
-        report: LoadReport,
-    ) -> None:
-        idb = cpu.instance_dbs.get(number)
-        held = f"DB{number} holds an instance of {label} {name!r}"
-        # a system block's instance the program no longer calls: kept, as S7 keeps DBs
-        system = cpu.blocks.get(label)
-        sfb = system if isinstance(system, FB) and system.kind is BlockKind.SFB else None
-        if idb is None and sfb is not None and number not in cpu.mem.dbs:
-            idb = cpu.create_instance_db(number, sfb)
-        if idb is None:
-            raise StateFileError(self.path, f"{held}, which this program does not have")
-        fb = idb.fb
-        if fb.label != label or fb.name != name:
-            raise StateFileError(self.path, f"{held}, not of {fb.label} {fb.name!r}")
-        try:
-            data = unpack_instance(blob)
-            described = json.loads(shape)
-        except (ValueError, TypeError, zlib.error) as exc:
-            raise StateFileError(self.path, f"malformed data of DB{number}: {_why(exc)}") from None
-        if fingerprint == fingerprint_of(fb):
-            _whole(self.path, number, fb, data)
-        else:
-            fmt = fb.state_format
-            try:
-                if fmt is not None:
-                    data, notes = fmt.adapt(described, data)
-                else:
-                    notes = _by_name(fb, data)
-            except (ValueError, KeyError, TypeError, IndexError) as exc:
-                raise StateFileError(
-                    self.path, f"DB{number}: {fb.label} changed and its state cannot be "
-                    f"carried over: {_why(exc)}") from None  # fmt: skip
-            report.changed.append(number)
-            report.notes.extend(f"DB{number} {fb.label} {fb.name!r}: {n}" for n in notes)
-        self._restore_part(f"state of DB{number}", lambda: idb.restore(data, strict=True))
 
     # ---- alarms and audit (hooks for sfb/alarms.py and the web commands) ---------------------
 
@@ -885,6 +853,65 @@ def _by_name(fb: FB, data: dict[str, object]) -> list[str]:
     return notes
 
 
+def _restore_part(path: Path, what: str, restore: Callable[[], object]) -> None:
+    """``restore()``; anything but a ``StateFileError`` it raises is a malformed ``what``."""
+    try:
+        restore()
+    except StateFileError:
+        raise
+    except Exception as exc:
+        raise StateFileError(path, f"malformed {what}: {_why(exc)}") from None
+
+
+def _load_instance(
+    path: Path,
+    cpu: Cpu,
+    number: int,
+    label: str,
+    name: str,
+    fingerprint: str,
+    shape: str,
+    blob: bytes,
+    report: LoadReport,
+) -> None:
+    """Restore instance DB ``number`` from its row (a changed FB's data carried over, noted
+    in ``report``); ``StateFileError`` when the row cannot be trusted."""
+    idb = cpu.instance_dbs.get(number)
+    held = f"DB{number} holds an instance of {label} {name!r}"
+    # a system block's instance the program no longer calls: kept, as S7 keeps DBs
+    system = cpu.blocks.get(label)
+    sfb = system if isinstance(system, FB) and system.kind is BlockKind.SFB else None
+    if idb is None and sfb is not None and number not in cpu.mem.dbs:
+        idb = cpu.create_instance_db(number, sfb)
+    if idb is None:
+        raise StateFileError(path, f"{held}, which this program does not have")
+    fb = idb.fb
+    if fb.label != label or fb.name != name:
+        raise StateFileError(path, f"{held}, not of {fb.label} {fb.name!r}")
+    try:
+        data = unpack_instance(blob)
+        described = json.loads(shape)
+    except (ValueError, TypeError, zlib.error) as exc:
+        raise StateFileError(path, f"malformed data of DB{number}: {_why(exc)}") from None
+    if fingerprint == fingerprint_of(fb):
+        _whole(path, number, fb, data)
+    else:
+        fmt = fb.state_format
+        try:
+            if fmt is not None:
+                data, notes = fmt.adapt(described, data)
+            else:
+                notes = _by_name(fb, data)
+        except (ValueError, KeyError, TypeError, IndexError) as exc:
+            raise StateFileError(
+                path,
+                f"DB{number}: {fb.label} changed and its state cannot be carried over: {_why(exc)}",
+            ) from None
+        report.changed.append(number)
+        report.notes.extend(f"DB{number} {fb.label} {fb.name!r}: {n}" for n in notes)
+    _restore_part(path, f"state of DB{number}", lambda: idb.restore(data, strict=True))
+
+
 def _whole(path: Path, number: int, fb: FB, data: dict[str, Any]) -> None:
     """A row written by this very FB holds every stored variable, its sequencer state too."""
     lacking = [v.name for v in fb.stored if v.name not in data]
@@ -907,8 +934,9 @@ def _checked(
 
 def _diag_entry(row: tuple[Any, ...]) -> DiagEntry:
     t_ns, event_id, block, message, address = row
-    return DiagEntry(int(t_ns), int(event_id), str(block or ""), str(message or ""),
-                     str(address or ""))  # fmt: skip
+    return DiagEntry(
+        int(t_ns), int(event_id), str(block or ""), str(message or ""), str(address or "")
+    )
 
 
 def _unsaved(cpu: Cpu, saved: set[int], report: LoadReport) -> list[int]:
@@ -917,8 +945,9 @@ def _unsaved(cpu: Cpu, saved: set[int], report: LoadReport) -> list[int]:
     unsaved = sorted(set(cpu.instance_dbs) - saved)
     for number in unsaved:
         fb = cpu.instance_dbs[number].fb
-        report.notes.append(f"DB{number} {fb.label} {fb.name!r}: no state saved, at its "
-                            "initial values")  # fmt: skip
+        report.notes.append(
+            f"DB{number} {fb.label} {fb.name!r}: no state saved, at its initial values"
+        )
         cpu.hot_blockers.add(f"no state saved for DB{number}")
     return unsaved
 

@@ -32,14 +32,20 @@ __all__ = [
 ]
 
 PHASES: tuple[tuple[str, str], ...] = (
-    ("encode", "the instance DBs of the last staging the writer's encoder had not encoded"
-     " in the idle part, encoded before the scan changes them (the second such staging in"
-     " a row; the first is carried over to the next)"),
+    (
+        "encode",
+        "the instance DBs of the last staging the writer's encoder had not encoded"
+        " in the idle part, encoded before the scan changes them (the second such staging in"
+        " a row; the first is carried over to the next)",
+    ),
     ("scan", "the scan: inputs, OBs (the program, the sequencers), the plant, outputs"),
     ("alarms", "the scan's message events appended to the alarm log"),
     ("edge", "after the scan: the bus, the view, the commands applied at the scan boundary"),
-    ("stage", "the state's changes staged for the writer (the instance DBs encoded by its"
-     " encoder in the idle part, committed off the scan thread)"),
+    (
+        "stage",
+        "the state's changes staged for the writer (the instance DBs encoded by its"
+        " encoder in the idle part, committed off the scan thread)",
+    ),
     ("gc", "the garbage collector, in the idle part of the cycle"),
     ("idle", "waiting for the next cycle to fall due (the wait asked for)"),
     ("late", "the next scan starting after it fell due (the wake-up, the interpreter's lock)"),

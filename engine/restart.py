@@ -84,12 +84,18 @@ HOT_RESTART_BLOCKERS: tuple[str, ...] = (
 
 HOT_AFTER_STOP: frozenset[int] = frozenset(
     {
-        EventId.STOP_BY_SWITCH, EventId.STOP_BY_REQUEST, EventId.STOP_OB121_MISSING,
-        EventId.STOP_OB80_MISSING, EventId.STOP_OB82_MISSING, EventId.STOP_OB83_MISSING,
-        EventId.STOP_OB84_MISSING, EventId.STOP_OB85_MISSING, EventId.STOP_OB86_MISSING,
+        EventId.STOP_BY_SWITCH,
+        EventId.STOP_BY_REQUEST,
+        EventId.STOP_OB121_MISSING,
+        EventId.STOP_OB80_MISSING,
+        EventId.STOP_OB82_MISSING,
+        EventId.STOP_OB83_MISSING,
+        EventId.STOP_OB84_MISSING,
+        EventId.STOP_OB85_MISSING,
+        EventId.STOP_OB86_MISSING,
         EventId.STOP_OB87_MISSING,
     }
-)  # fmt: skip
+)
 """STOPs after which a manual hot restart is possible (S7-400, "Programming with STEP 7",
 Operating Modes: the mode selector, a programmed STOP, an OB not loaded, a programming
 device's or a communication function's STOP)."""

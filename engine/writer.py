@@ -231,9 +231,10 @@ class StoreWriter:
         time, or the writer closing (no scan follows)."""
         margin = _MARGIN_FACTOR * self.encode_ns / 1e9
         return (
-            self._staging is not None and self.error is None
+            self._staging is not None
+            and self.error is None
             and (self._closed or time.monotonic() + margin < self._until)
-        )  # fmt: skip
+        )
 
     # ---- durability ------------------------------------------------------------------------
 
@@ -343,9 +344,7 @@ class StoreWriter:
         error = str(self.error) if self.error is not None else None
         ready = [(fn, error) for mark, fn in self._waiters if error or mark <= self.committed]
         if ready:
-            self._waiters = [
-                (m, f) for m, f in self._waiters if not (error or m <= self.committed)
-            ]
+            self._waiters = [(m, f) for m, f in self._waiters if not (error or m <= self.committed)]
         return ready
 
     @staticmethod

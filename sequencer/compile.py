@@ -69,8 +69,9 @@ def _validate(chart: Chart, symbols: Any) -> tuple[list[Any], list[Any]]:
 
 
 class _Resolver:
-    def __init__(self, chart: Chart, symbols: Any, step_index: dict[int, int],
-                 tr_index: dict[int, int]) -> None:  # fmt: skip
+    def __init__(
+        self, chart: Chart, symbols: Any, step_index: dict[int, int], tr_index: dict[int, int]
+    ) -> None:
         self.chart = chart
         self.symbols = symbols
         self.step_index = step_index
@@ -122,13 +123,13 @@ class _Resolver:
 
 def _addr_ref(addr: Any, type_name: str | None, name: str) -> Ref:
     if addr.area in (Area.T, Area.C):
-        return Ref("timer" if addr.area is Area.T else "counter", "BOOL", name=name,
-                   number=addr.byte)  # fmt: skip
+        return Ref(
+            "timer" if addr.area is Area.T else "counter", "BOOL", name=name, number=addr.byte
+        )
     t = type_name or WIDTH_TYPE[int(addr.width)]
     if addr.width is Width.BIT:
         t = "BOOL"
-    return Ref("mem", t, name=name, area=str(addr.area), db=addr.db, byte=addr.byte,
-               bit=addr.bit)  # fmt: skip
+    return Ref("mem", t, name=name, area=str(addr.area), db=addr.db, byte=addr.byte, bit=addr.bit)
 
 
 def compile_chart(chart: Chart, symbols: Any = None) -> CompiledChart:

@@ -70,8 +70,20 @@ class LoadedChart:
     One object: an online change replaces it whole, so nothing of the old chart stays
     beside the new one."""
 
-    __slots__ = ("cc", "copied", "fb", "flat", "in_pins", "mem", "messages", "name",
-                 "out_pins", "prog", "runtime", "step_numbers")  # fmt: skip
+    __slots__ = (
+        "cc",
+        "copied",
+        "fb",
+        "flat",
+        "in_pins",
+        "mem",
+        "messages",
+        "name",
+        "out_pins",
+        "prog",
+        "runtime",
+        "step_numbers",
+    )
 
     def __init__(self, cc: CompiledChart, fb_number: int, body: Any) -> None:
         self.cc = cc
@@ -84,8 +96,9 @@ class LoadedChart:
         decl = {Direction.IN: Decl.IN, Direction.OUT: Decl.OUT}
         interface = [Var(p.name, p.type, decl[p.direction], initial[p.name]) for p in pins]
         interface.append(Var(STATE_VAR, "OBJECT", Decl.STAT, lambda: new_state(cc)))
-        self.fb = FB(fb_number, cc.name, tuple(interface), body,
-                     state_format=ChartFormat(cc, STATE_VAR))  # fmt: skip
+        self.fb = FB(
+            fb_number, cc.name, tuple(interface), body, state_format=ChartFormat(cc, STATE_VAR)
+        )
         self.messages = cc.options.messages
         self.name, self.step_numbers = cc.name, cc.step_numbers  # of the step events
         self.runtime: GraphRuntime | None = None  # built at the first call (GraphFB.runtime)
@@ -102,8 +115,14 @@ class GraphFB:
     """A ``CompiledChart`` bound to an engine FB number and an instance DB number; what it
     derives from the chart is one :class:`LoadedChart` (``loaded``)."""
 
-    def __init__(self, cc: CompiledChart, *, fb_number: int | None = None,
-                 db_number: int | None = None, fast: bool = True) -> None:  # fmt: skip
+    def __init__(
+        self,
+        cc: CompiledChart,
+        *,
+        fb_number: int | None = None,
+        db_number: int | None = None,
+        fast: bool = True,
+    ) -> None:
         self.fast = fast  # False: every call takes the general path (GraphRuntime ``fast``)
         self.fb_number = fb_number or cc.chart.fb_number or 1
         self.db_number = db_number or cc.chart.db_number or self.fb_number
@@ -171,8 +190,15 @@ class GraphFB:
         if rt is None or c.mem is not mem:
             c.prog = c.cc.bind(mem)
             c.mem = mem
-            rt = GraphRuntime(c.cc, c.prog, st, call=self._call_block,
-                              counter=self._counter, timer=self._timer, fast=self.fast)  # fmt: skip
+            rt = GraphRuntime(
+                c.cc,
+                c.prog,
+                st,
+                call=self._call_block,
+                counter=self._counter,
+                timer=self._timer,
+                fast=self.fast,
+            )
             c.runtime = rt
             c.flat = False
         elif rt.st is not st:
@@ -190,10 +216,12 @@ class GraphFB:
         if st.calls:
             what = "resumes" if restart is RestartType.HOT else "initializes"
             cpu.diagnostics.record(
-                cpu.clock.now_ns(), EventId.SEQUENCER_POSITION, self.fb.label,
+                cpu.clock.now_ns(),
+                EventId.SEQUENCER_POSITION,
+                self.fb.label,
                 f"{restart} restart {what} {self.cc.name}/DB{self.db_number}, "
                 + position(self.cc, st),
-            )  # fmt: skip
+            )
         st.last_ns = -1
         ob = {RestartType.WARM: 100, RestartType.HOT: 101, RestartType.COLD: 102}[restart]
         self._restart = f"{restart} restart (OB{ob})"
@@ -284,9 +312,11 @@ class GraphFB:
         c = self.loaded
         numbers, name, number, cycle = c.step_numbers, c.name, idb.number, ctx.cycle
         ctx.emit_all(  # tuple.__new__: a StepEvent without its Python __new__
-            [_tuple_new(StepEvent, (name, number, numbers[i], _EVENT_OF_BIT[b], cycle))
-             for i, b in st.log]
-        )  # fmt: skip
+            [
+                _tuple_new(StepEvent, (name, number, numbers[i], _EVENT_OF_BIT[b], cycle))
+                for i, b in st.log
+            ]
+        )
 
     def _sync_messages(
         self,
@@ -304,9 +334,16 @@ class GraphFB:
         user, target = acting if acting is not None else (PROGRAM_USER, None)
         restart = self._restart if ctx.ob in (100, 102) else ""
         acks = sync_messages(
-            self.cc, st, messages, self.cc.name, idb.number, ctx.now_ns,
-            user=user, step=target, restart=restart,
-        )  # fmt: skip
+            self.cc,
+            st,
+            messages,
+            self.cc.name,
+            idb.number,
+            ctx.now_ns,
+            user=user,
+            step=target,
+            restart=restart,
+        )
         if acks:
             rt.acknowledge(acks)
         alarm = getattr(ctx, "alarm", None)
@@ -365,8 +402,10 @@ def position(cc: CompiledChart, st: GraphState, limit: int = 8) -> str:
     faults), the mode; ``limit`` steps at most."""
     parts = []
     for i in sorted(st.active, key=cc.step_numbers.__getitem__)[:limit]:
-        text = (f"S{cc.step_numbers[i]} {cc.step_names[i]!r} "
-                f"T={st.step_t_ms(i)} ms U={st.step_u_ms(i)} ms")  # fmt: skip
+        text = (
+            f"S{cc.step_numbers[i]} {cc.step_names[i]!r} "
+            f"T={st.step_t_ms(i)} ms U={st.step_u_ms(i)} ms"
+        )
         if st.sv_err[i]:
             text += " supervision fault"
         if st.il_err[i]:

@@ -181,9 +181,7 @@ def sync_messages(
     if restart:
         _forgotten(message_list, fb_name, db_number, mem, now_ns, restart)
     else:
-        _acknowledge_by_inputs(
-            chart, state, message_list, fb_name, db_number, now_ns, user, step
-        )
+        _acknowledge_by_inputs(chart, state, message_list, fb_name, db_number, now_ns, user, step)
     return acks
 
 

@@ -44,16 +44,46 @@ LEVEL_PINS: Final = ("HALT_SQ", "EN_IL", "EN_SV")
 # Inputs whose rising edge (not level) counts (docs/semantics.md, "One FB call", step 1 and "Modes"
 # and "FB pins").
 EDGE_INPUTS: Final = (
-    "INIT_SQ", "ACK_EF", "ACK_S", "REG_EF", "REG_S", "S_ON", "S_OFF", "T_PUSH",
-    "SW_AUTO", "SW_MAN", "SW_TAP", "SW_TOP", "S_PREV", "S_NEXT", "T_PREV", "T_NEXT",
-    "S_SELOK", "DISP_SACT", "DISP_SEF", "DISP_SALL",
-)  # fmt: skip
+    "INIT_SQ",
+    "ACK_EF",
+    "ACK_S",
+    "REG_EF",
+    "REG_S",
+    "S_ON",
+    "S_OFF",
+    "T_PUSH",
+    "SW_AUTO",
+    "SW_MAN",
+    "SW_TAP",
+    "SW_TOP",
+    "S_PREV",
+    "S_NEXT",
+    "T_PREV",
+    "T_NEXT",
+    "S_SELOK",
+    "DISP_SACT",
+    "DISP_SEF",
+    "DISP_SALL",
+)
 
 _LIST_FIELDS: Final = (
-    "x", "t_ns", "u_ns", "act_ns", "il_ok", "il_err", "sv_cond", "sv_err",
-    "crit_loc", "crit_loc_err", "crit_sup", "ev",
-    "tt", "crit", "crit_old", "crit_flt",
-)  # fmt: skip
+    "x",
+    "t_ns",
+    "u_ns",
+    "act_ns",
+    "il_ok",
+    "il_err",
+    "sv_cond",
+    "sv_err",
+    "crit_loc",
+    "crit_loc_err",
+    "crit_sup",
+    "ev",
+    "tt",
+    "crit",
+    "crit_old",
+    "crit_flt",
+)
 _STEP_LISTS: Final = _LIST_FIELDS[:12]
 _TRANSITION_LISTS: Final = _LIST_FIELDS[12:]
 _BOOL_LISTS: Final = frozenset(("x", "il_ok", "il_err", "sv_cond", "sv_err", "tt"))
@@ -61,10 +91,25 @@ _FILL: Final = {name: name == "il_ok" if name in _BOOL_LISTS else 0 for name in 
 """What each per-step / per-transition list holds where nothing happened (a new state); the
 state file keeps a list that holds only that as ``{"fill": value}`` (``state_view``)."""
 _SCALAR_FIELDS: Final = (
-    "mode", "calls", "last_ns", "off", "halted", "tm_halted", "zeroed", "il_enabled",
-    "sv_enabled", "ackreq_enabled", "sskip_enabled", "error", "fault", "err_flt",
-    "ov", "ov_count", "s_no", "t_no",
-)  # fmt: skip
+    "mode",
+    "calls",
+    "last_ns",
+    "off",
+    "halted",
+    "tm_halted",
+    "zeroed",
+    "il_enabled",
+    "sv_enabled",
+    "ackreq_enabled",
+    "sskip_enabled",
+    "error",
+    "fault",
+    "err_flt",
+    "ov",
+    "ov_count",
+    "s_no",
+    "t_no",
+)
 
 
 class GraphState:
@@ -121,10 +166,25 @@ class GraphState:
     """
 
     __slots__ = (
-        *_LIST_FIELDS, *_SCALAR_FIELDS,
-        "n_steps", "n_transitions", "active", "ev_steps", "fired", "entered", "left", "log",
-        "inputs", "prev", "rose", "outputs", "vars", "diag", "display", "levels",
-    )  # fmt: skip
+        *_LIST_FIELDS,
+        *_SCALAR_FIELDS,
+        "n_steps",
+        "n_transitions",
+        "active",
+        "ev_steps",
+        "fired",
+        "entered",
+        "left",
+        "log",
+        "inputs",
+        "prev",
+        "rose",
+        "outputs",
+        "vars",
+        "diag",
+        "display",
+        "levels",
+    )
 
     VOLATILE: Final = ("calls", "last_ns")
     """Keys of ``to_state`` that change with every call without changing the state."""
@@ -201,10 +261,13 @@ class GraphState:
         """A JSON-able snapshot (running times as activation timestamps, see the module
         docstring), every list in full; ``from_state`` restores it exactly."""
         return {
-            key: list(value) if type(value) is list else dict(value) if type(value) is dict
+            key: list(value)
+            if type(value) is list
+            else dict(value)
+            if type(value) is dict
             else value
             for key, value in self._view(compact=False).items()
-        }  # fmt: skip
+        }
 
     def state_view(self) -> dict[str, Any]:
         """What ``to_state`` returns, but sharing this state's lists and dicts (the step
@@ -219,9 +282,12 @@ class GraphState:
         for name, fill in _FILL.items():
             value = getattr(self, name)
             if (  # the ends first (a list in use seldom has fill at both), then count
-                compact and value and value[0] == fill and value[-1] == fill
+                compact
+                and value
+                and value[0] == fill
+                and value[-1] == fill
                 and value.count(fill) == len(value)
-            ):  # fmt: skip
+            ):
                 value = {"fill": fill}
             data[name] = value
         for name in _SCALAR_FIELDS:
@@ -348,9 +414,11 @@ def _expand(value: object, key: str, n: int) -> object:
     out = [value["fill"]] * n
     for pair in at:
         if (
-            not isinstance(pair, list) or len(pair) != 2 or type(pair[0]) is not int
+            not isinstance(pair, list)
+            or len(pair) != 2
+            or type(pair[0]) is not int
             or not 0 <= pair[0] < n
-        ):  # fmt: skip
+        ):
             raise ValueError(f"{key!r} has an entry {pair!r}")
         out[pair[0]] = pair[1]
     return out

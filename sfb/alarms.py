@@ -113,9 +113,16 @@ class MessageList:
         if current is not None and current.state is MessageState.INCOMING:
             return current
         msg = Message(
-            msg_id, self._next_event, MessageState.INCOMING, now_ns, text, source,
-            tuple(values), ack_required, acked=not ack_required,
-        )  # fmt: skip
+            msg_id,
+            self._next_event,
+            MessageState.INCOMING,
+            now_ns,
+            text,
+            source,
+            tuple(values),
+            ack_required,
+            acked=not ack_required,
+        )
         self._next_event += 1
         self._active[msg_id] = msg
         self._record(MessageEvent("incoming", msg_id, msg.event_id, now_ns, text=text))

@@ -110,8 +110,12 @@ class CTUD(_IecCounter):
         up = CU and not self.CU
         down = CD and not self.CD
         self.CU, self.CD, self.R, self.LOAD, self.PV = (
-            bool(CU), bool(CD), bool(R), bool(LOAD), _int(PV),
-        )  # fmt: skip
+            bool(CU),
+            bool(CD),
+            bool(R),
+            bool(LOAD),
+            _int(PV),
+        )
         if self.R:
             self.CV = 0
         elif self.LOAD:

@@ -59,12 +59,15 @@ class TimerFunction(StrEnum):
 # German STL and SCL/LAD box names for the same functions (El-Shahat's S7-300/400 course, timers and
 # counters table).
 FUNCTION_ALIASES: dict[str, TimerFunction] = {
-    "S_PULSE": TimerFunction.SP, "SI": TimerFunction.SP,
-    "S_PEXT": TimerFunction.SE, "SV": TimerFunction.SE,
+    "S_PULSE": TimerFunction.SP,
+    "SI": TimerFunction.SP,
+    "S_PEXT": TimerFunction.SE,
+    "SV": TimerFunction.SE,
     "S_ODT": TimerFunction.SD,
     "S_ODTS": TimerFunction.SS,
-    "S_OFFDT": TimerFunction.SF, "SA": TimerFunction.SF,
-}  # fmt: skip
+    "S_OFFDT": TimerFunction.SF,
+    "SA": TimerFunction.SF,
+}
 
 
 def _function(name: TimerFunction | str) -> TimerFunction:

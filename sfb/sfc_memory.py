@@ -59,9 +59,11 @@ class AnyPointer:
     count: int = 1
 
     def __str__(self) -> str:
-        where = f"DB{self.db}.DBX{self.byte}.{self.bit}" if self.db is not None else (
-            f"{self.area}{self.byte}.{self.bit}"
-        )  # fmt: skip
+        where = (
+            f"DB{self.db}.DBX{self.byte}.{self.bit}"
+            if self.db is not None
+            else (f"{self.area}{self.byte}.{self.bit}")
+        )
         return f"P#{where} {self.type} {self.count}"
 
     @property

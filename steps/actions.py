@@ -108,8 +108,13 @@ def step_action_parts(
     f_body = f_body or ["    pass"]
     a_src = [f"def _a{i}(st, R, ev, c_ok, zero{_own(i, a_body)}):", *a_body]
     f_src = [f"def _f{i}(st, R, ev{_own(i, f_body)}):", *f_body]
-    return ActionParts(with_locals(a_src), with_locals(f_src), _indent(body),
-                       _indent(final_reset), _indent(s0_rows))  # fmt: skip
+    return ActionParts(
+        with_locals(a_src),
+        with_locals(f_src),
+        _indent(body),
+        _indent(final_reset),
+        _indent(s0_rows),
+    )
 
 
 def _nld_bit(row: ActionRow) -> Operand | None:

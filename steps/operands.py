@@ -31,9 +31,20 @@ CELL_VALUE_TYPE = "INT"
 WIDTH_TYPE = {1: "BOOL", 8: "BYTE", 16: "INT", 32: "DINT"}
 # Bytes of each value type in memory.
 TYPE_BYTES = {
-    "BOOL": 0, "BYTE": 1, "CHAR": 1, "WORD": 2, "INT": 2, "S5TIME": 2, "DATE": 2,
-    "DWORD": 4, "DINT": 4, "REAL": 4, "TIME": 4, "TIME_OF_DAY": 4, "TOD": 4,
-}  # fmt: skip
+    "BOOL": 0,
+    "BYTE": 1,
+    "CHAR": 1,
+    "WORD": 2,
+    "INT": 2,
+    "S5TIME": 2,
+    "DATE": 2,
+    "DWORD": 4,
+    "DINT": 4,
+    "REAL": 4,
+    "TIME": 4,
+    "TIME_OF_DAY": 4,
+    "TOD": 4,
+}
 
 
 @dataclass(frozen=True, slots=True)

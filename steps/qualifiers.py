@@ -14,9 +14,23 @@ from typing import Final
 
 EVENTS: Final = ("S1", "S0", "V1", "V0", "L1", "L0", "A1", "R1")
 QUALIFIERS: Final = (
-    "N", "S", "R", "D", "L", "CALL", "ON", "OFF",
-    "CS", "CU", "CD", "CR", "TL", "TD", "TF", "TR",
-)  # fmt: skip
+    "N",
+    "S",
+    "R",
+    "D",
+    "L",
+    "CALL",
+    "ON",
+    "OFF",
+    "CS",
+    "CU",
+    "CD",
+    "CR",
+    "TL",
+    "TD",
+    "TF",
+    "TR",
+)
 
 # Step event bits (``GraphState.ev[i]`` of the sequencer), in the order of ``EVENTS``.
 EV_S1: Final = 1  # step activated in this call
@@ -28,9 +42,15 @@ EV_L0: Final = 32  # interlock returned
 EV_A1: Final = 64  # fault acknowledged
 EV_R1: Final = 128  # registration (REG_EF / REG_S)
 EVENT_BITS: Final = {
-    "S1": EV_S1, "S0": EV_S0, "V1": EV_V1, "V0": EV_V0,
-    "L1": EV_L1, "L0": EV_L0, "A1": EV_A1, "R1": EV_R1,
-}  # fmt: skip
+    "S1": EV_S1,
+    "S0": EV_S0,
+    "V1": EV_V1,
+    "V0": EV_V0,
+    "L1": EV_L1,
+    "L0": EV_L0,
+    "A1": EV_A1,
+    "R1": EV_R1,
+}
 EVENT_NAMES: Final = tuple(EVENT_BITS)
 
 # Events whose rows may carry the interlock mark C.

@@ -15,7 +15,8 @@ from s7graph.web.cli import main
 
 def _program(tmp_path: Path, core: object) -> Path:
     program = tmp_path / "prog.py"
-    program.write_text(textwrap.dedent(f"""
+    program.write_text(
+        textwrap.dedent(f"""
         import os
         from s7graph.engine import ob
         CPU = {{"core": {core!r}}}
@@ -24,7 +25,8 @@ def _program(tmp_path: Path, core: object) -> Path:
         def main(ctx):
             with open({str(tmp_path / "seen.txt")!r}, "w") as f:
                 f.write(",".join(map(str, sorted(os.sched_getaffinity(0)))))
-    """))
+    """)
+    )
     return program
 
 
@@ -54,8 +56,9 @@ def test_the_command_lines_core_overrides_the_programs(
 ) -> None:
     program = _program(tmp_path, "fast")
     state = str(tmp_path / "s.sqlite")
-    assert main(["run", str(program), "--state", state, "--duration-s", "0.1",
-                 "--core", "off"]) == 0  # fmt: skip
+    assert (
+        main(["run", str(program), "--state", state, "--duration-s", "0.1", "--core", "off"]) == 0
+    )
     assert (tmp_path / "seen.txt").exists()
     capsys.readouterr()
     assert main(["run", str(program), "--state", state, "--core", "4096"]) == 2

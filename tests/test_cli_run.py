@@ -32,8 +32,15 @@ def test_blink_example_runs_for_a_duration_and_saves_its_count(tmp_path: Path) -
     for _ in range(2):
         # a generous maximum cycle time: a loaded CI machine must not stop the blink by a
         # time error before its 1.2 s are up
-        proc = _run(str(ROOT / "examples/blink.py"), "--state", str(state), "--duration-s", "1.2",
-                    "--max-cycle-ms", "5000")  # fmt: skip
+        proc = _run(
+            str(ROOT / "examples/blink.py"),
+            "--state",
+            str(state),
+            "--duration-s",
+            "1.2",
+            "--max-cycle-ms",
+            "5000",
+        )
         assert proc.returncode == 0, proc.stderr
         assert "Traceback" not in proc.stderr
     from s7graph.engine import Cpu, VirtualClock
@@ -153,30 +160,57 @@ def test_max_cycle_time_reaches_the_cpu_of_a_chart_run(
     monkeypatch.setattr(s7graph.web.cli.run_chart, "_serve", lambda *args, **kwargs: (None, None))
     drill = ROOT / "examples/drill"
     rc = main(
-        ["run", str(drill / "drill.s7g"), "--symbols", str(drill / "symbols.txt"),
-         "--state", str(tmp_path / "drill.sqlite"), "--duration-s", "0.2", *options]
-    )  # fmt: skip
+        [
+            "run",
+            str(drill / "drill.s7g"),
+            "--symbols",
+            str(drill / "symbols.txt"),
+            "--state",
+            str(tmp_path / "drill.sqlite"),
+            "--duration-s",
+            "0.2",
+            *options,
+        ]
+    )
     assert rc == 0
     assert max_cycle_seen == [expected]
 
 
 @pytest.mark.parametrize(
     ("option", "value"),
-    [("--max-cycle-ms", "0"), ("--max-cycle-ms", "-5"), ("--rt-priority", "-1"),
-     ("--rt-priority", "99")],
-)  # fmt: skip
+    [
+        ("--max-cycle-ms", "0"),
+        ("--max-cycle-ms", "-5"),
+        ("--rt-priority", "-1"),
+        ("--rt-priority", "99"),
+    ],
+)
 def test_max_cycle_time_and_rt_priority_out_of_range_are_usage_errors(
     tmp_path: Path, option: str, value: str
 ) -> None:
     """A maximum cycle time of 0 ms or less, a real-time priority outside 0..98: a usage
     error, exit 2, never a traceback."""
-    proc = _run(str(ROOT / "examples/blink.py"), "--state", str(tmp_path / "s.sqlite"),
-                "--duration-s", "0.2", option, value)  # fmt: skip
+    proc = _run(
+        str(ROOT / "examples/blink.py"),
+        "--state",
+        str(tmp_path / "s.sqlite"),
+        "--duration-s",
+        "0.2",
+        option,
+        value,
+    )
     assert proc.returncode == 2
     assert option.lstrip("-") in proc.stderr and "Traceback" not in proc.stderr
 
 
 def test_rt_priority_0_runs_at_the_normal_priority(tmp_path: Path) -> None:
-    proc = _run(str(ROOT / "examples/blink.py"), "--state", str(tmp_path / "s.sqlite"),
-                "--duration-s", "0.2", "--rt-priority", "0")  # fmt: skip
+    proc = _run(
+        str(ROOT / "examples/blink.py"),
+        "--state",
+        str(tmp_path / "s.sqlite"),
+        "--duration-s",
+        "0.2",
+        "--rt-priority",
+        "0",
+    )
     assert proc.returncode == 0, proc.stderr

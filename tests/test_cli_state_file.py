@@ -46,8 +46,21 @@ def test_the_state_file_of_another_chart_is_refused_and_kept(
 ) -> None:
     state = tmp_path / "s.sqlite"
     mixing = ROOT / "examples" / "mixing"
-    assert main(["run", str(mixing / "mixing.s7g"), "--symbols", str(mixing / "symbols.txt"),
-                 "--state", str(state), "--duration-s", "0.1"]) == 0  # fmt: skip
+    assert (
+        main(
+            [
+                "run",
+                str(mixing / "mixing.s7g"),
+                "--symbols",
+                str(mixing / "symbols.txt"),
+                "--state",
+                str(state),
+                "--duration-s",
+                "0.1",
+            ]
+        )
+        == 0
+    )
     capsys.readouterr()
     assert main([*CHART, "--state", str(state), "--duration-s", "0.1"]) == 2
     (line,) = capsys.readouterr().err.splitlines()
@@ -82,23 +95,23 @@ def test_a_programs_cpu_dict_chooses_its_restart(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     program = tmp_path / "prog.py"
-    program.write_text(textwrap.dedent("""
+    program.write_text(
+        textwrap.dedent("""
         from s7graph.engine import ob
         CPU = {"restart": "hot"}
 
         @ob(1)
         def main(ctx):
             ctx.mem.set("MW100", ctx.mem.get("MW100") + 1)   # not retentive
-    """))
+    """)
+    )
     state = str(tmp_path / "s.sqlite")
     for _ in range(2):
         assert main(["run", str(program), "--state", state, "--duration-s", "0.2"]) == 0
     err = capsys.readouterr().err
     assert f"in RUN (hot restart from {state})" in err
     with sqlite3.connect(state) as con:
-        assert con.execute("SELECT value FROM meta WHERE key='last_restart'").fetchone() == (
-            "hot",
-        )
+        assert con.execute("SELECT value FROM meta WHERE key='last_restart'").fetchone() == ("hot",)
     con.close()
 
 
@@ -121,16 +134,33 @@ def test_a_state_file_that_cannot_grow_stops_the_run_with_one_line(
 ) -> None:
     state = tmp_path / "drill.sqlite"
     # the disk fills; a loaded CI machine must not stop the CPU by a time error first
-    cmd = [sys.executable, "-m", "s7graph", *CHART, "--plant", str(DRILL / "demo_plant.py"),
-           "--state", str(state), "--duration-s", "60",
-           "--max-cycle-ms", "5000"]  # fmt: skip
+    cmd = [
+        sys.executable,
+        "-m",
+        "s7graph",
+        *CHART,
+        "--plant",
+        str(DRILL / "demo_plant.py"),
+        "--state",
+        str(state),
+        "--duration-s",
+        "60",
+        "--max-cycle-ms",
+        "5000",
+    ]
     if web:
         cmd += ["--web", "--port", str(_free_port())]
     # room for the start (with the view, the audit store's tables share the file and its
     # write-ahead log), none for an hour of running
     room = 80_000 if web else 40_000
-    proc = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=100,
-                          preexec_fn=lambda: _no_room(room))  # fmt: skip
+    proc = subprocess.run(
+        cmd,
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=100,
+        preexec_fn=lambda: _no_room(room),
+    )
     assert proc.returncode == 1, proc.stderr
     (line,) = _errors(proc.stderr)
     assert line.startswith(f"s7graph: error: {state}: cannot write the state: ")
@@ -181,8 +211,12 @@ def test_a_state_file_locked_by_another_process_is_refused_as_in_use_not_unreada
     state = tmp_path / "drill.sqlite"
     assert main([*CHART, "--state", str(state), "--duration-s", "0.1"]) == 0
     capsys.readouterr()
-    holder = subprocess.Popen([sys.executable, "-c", HOLDER, str(state)], stdin=subprocess.PIPE,
-                              stdout=subprocess.PIPE, text=True)  # fmt: skip
+    holder = subprocess.Popen(
+        [sys.executable, "-c", HOLDER, str(state)],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
     try:
         assert holder.stdout is not None and holder.stdout.readline() == "locked\n"
         assert main([*CHART, "--state", str(state), "--duration-s", "0.1"]) == 2
@@ -201,8 +235,12 @@ def test_a_second_run_on_a_state_file_another_run_writes_is_refused_as_in_use(
     """SQLite locks the file only while a transaction is written: without a lock of its own
     a second run would read the first's state and both would write it."""
     state = tmp_path / "drill.sqlite"
-    first = subprocess.Popen([sys.executable, "-m", "s7graph", *CHART, "--state", str(state)],
-                             cwd=ROOT, stderr=subprocess.PIPE, text=True)  # fmt: skip
+    first = subprocess.Popen(
+        [sys.executable, "-m", "s7graph", *CHART, "--state", str(state)],
+        cwd=ROOT,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     try:
         assert first.stderr is not None and " in RUN (" in first.stderr.readline()
         assert main([*CHART, "--state", str(state), "--duration-s", "0.1"]) == 2

@@ -64,10 +64,22 @@ def test_every_docs_link_of_the_readme_resolves() -> None:
     pages = {t.partition("#")[0] for t in docs if t.partition("#")[0].endswith(".md")}
     assert pages >= {
         f"docs/{name}.md"
-        for name in ("cli", "chart-format", "semantics", "runtime", "online-change",
-                     "import-export", "security", "performance", "architecture", "bus",
-                     "durability", "state-file", "supervisor")
-    }  # fmt: skip
+        for name in (
+            "cli",
+            "chart-format",
+            "semantics",
+            "runtime",
+            "online-change",
+            "import-export",
+            "security",
+            "performance",
+            "architecture",
+            "bus",
+            "durability",
+            "state-file",
+            "supervisor",
+        )
+    }
     assert broken_links(README) == []
     assert "docs/status-view.png" in docs
 
@@ -83,9 +95,15 @@ def test_the_links_of_every_docs_page_resolve(page: Path) -> None:
 def test_the_readme_says_what_s7graph_is_not() -> None:
     text = README.read_text(encoding="utf-8")
     section = text.split("## What s7graph is not")[1].split("\n## ")[0]
-    for words in ("not a fail-safe controller", "no safety function may depend on it",
-                  "emergency stop", "guard interlocks", "outside the PLC", "safety relay",
-                  "mixing plant"):  # fmt: skip
+    for words in (
+        "not a fail-safe controller",
+        "no safety function may depend on it",
+        "emergency stop",
+        "guard interlocks",
+        "outside the PLC",
+        "safety relay",
+        "mixing plant",
+    ):
         assert words in section.replace("\n", " ").lower() or words in section, words
 
 
@@ -175,7 +193,7 @@ def test_every_docs_page_and_section_cited_exists() -> None:
                     continue
                 for title in re.findall(r"\"([^\"]+)\"", m[2]):
                     if not any(title in h for h in headings(page)):
-                        broken.append(f"{where}: {m[1]}, \"{title}\"")
+                        broken.append(f'{where}: {m[1]}, "{title}"')
     assert not broken, "\n".join(broken)
 
 

@@ -42,8 +42,7 @@ def two_steps(condition: str, actions: str = "") -> str:
     return chart(
         "Hostile",
         f'  INITIAL_STEP S1 "A": {actions} END_STEP\n  STEP S2 "B": END_STEP',
-        f"  TRANSITION T1 FROM S1 TO S2 := {condition};\n"
-        "  TRANSITION T2 FROM S2 TO S1 := TRUE;",
+        f"  TRANSITION T1 FROM S1 TO S2 := {condition};\n  TRANSITION T2 FROM S2 TO S1 := TRUE;",
     )
 
 
@@ -76,8 +75,9 @@ def test_a_flat_chain_of_10000_contacts_compiles_and_runs(
 def test_a_chain_keeps_its_contacts_in_source_order_for_the_criteria_bits() -> None:
     from s7graph.steps.conditions import contact_negations
 
-    text = two_steps(" AND ".join(f"{'NOT ' if i % 3 == 0 else ''}M{i // 8}.{i % 8}"
-                                  for i in range(40)))  # fmt: skip
+    text = two_steps(
+        " AND ".join(f"{'NOT ' if i % 3 == 0 else ''}M{i // 8}.{i % 8}" for i in range(40))
+    )
     (t1, _) = parse_chart(text).all_transitions()
     assert contact_negations(t1.condition) == [i % 3 == 0 for i in range(40)]
 
@@ -98,8 +98,11 @@ def test_an_expression_nested_too_deeply_is_a_located_error(
     for command in (["check"], ["sim", "--cycles", "1"]):
         rc, out, err = _cli(capsys, command[0], str(path), *command[1:])
         assert rc == 2
-        assert re.search(rf"{re.escape(str(path))}:\d+:\d+: error\[E006\]: expression nested "
-                         "deeper than 32 levels", out + err)  # fmt: skip
+        assert re.search(
+            rf"{re.escape(str(path))}:\d+:\d+: error\[E006\]: expression nested "
+            "deeper than 32 levels",
+            out + err,
+        )
 
 
 def test_a_number_beyond_its_type_is_a_located_error(
@@ -126,8 +129,15 @@ def test_bytes_that_are_not_utf8_are_a_located_error_in_sim_as_in_check(
     assert rc == 2 and err.splitlines() == [expected]
     symbols = tmp_path / "symbols.txt"
     symbols.write_bytes(b'"K\xfchlung" ; Q0.1 ; BOOL ; coolant\n')
-    rc, _, err = _cli(capsys, "sim", str(EXAMPLES / "drill" / "drill.s7g"), "--symbols",
-                      str(symbols), "--cycles", "1")  # fmt: skip
+    rc, _, err = _cli(
+        capsys,
+        "sim",
+        str(EXAMPLES / "drill" / "drill.s7g"),
+        "--symbols",
+        str(symbols),
+        "--cycles",
+        "1",
+    )
     assert rc == 2 and f"{symbols}:1:3: not UTF-8: byte 0xfc" in err
 
 
@@ -159,8 +169,13 @@ def test_100000_action_rows_compile_and_run_under_500_mb(tmp_path: Path, layout:
         )
     path = tmp_path / "rows.s7g"
     path.write_text(chart("Rows", steps, transitions))
-    proc = subprocess.run([sys.executable, "-c", ROWS, str(path), str(tmp_path / "t.jsonl")],
-                          cwd=ROOT, capture_output=True, text=True, timeout=280)  # fmt: skip
+    proc = subprocess.run(
+        [sys.executable, "-c", ROWS, str(path), str(tmp_path / "t.jsonl")],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=280,
+    )
     rc, max_rss_kb = (int(v) for v in proc.stdout.split())
     assert rc == 0, proc.stderr
     assert max_rss_kb < 500 * 1024
@@ -170,10 +185,12 @@ def test_100000_action_rows_compile_and_run_under_500_mb(tmp_path: Path, layout:
 def test_a_chart_the_view_cannot_show_is_reported_by_check(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    many = "\n".join(f'  {"INITIAL_STEP" if s == 1 else "STEP"} S{s}: END_STEP'
-                     for s in range(1, 5001))  # fmt: skip
-    loop = "\n".join(f"  TRANSITION T{s} FROM S{s} TO S{s % 5000 + 1} := TRUE;"
-                     for s in range(1, 5001))  # fmt: skip
+    many = "\n".join(
+        f"  {'INITIAL_STEP' if s == 1 else 'STEP'} S{s}: END_STEP" for s in range(1, 5001)
+    )
+    loop = "\n".join(
+        f"  TRANSITION T{s} FROM S{s} TO S{s % 5000 + 1} := TRUE;" for s in range(1, 5001)
+    )
     path = tmp_path / "many.s7g"
     path.write_text(chart("Many", many, loop))
     rc, out, _ = _cli(capsys, "check", str(path))
@@ -188,14 +205,78 @@ def test_a_chart_the_view_cannot_show_is_reported_by_check(
 # ---- seeded mutation of the examples ------------------------------------------------------
 
 TOKENS = [
-    b"AND", b"OR", b"NOT", b"XOR", b"(", b")", b";", b":=", b",", b'"', b"'", b"(*", b"*)",
-    b"//", b"S1", b"S99", b"S0", b"T1", b"T999999", b"S2.T", b"S3.U", b"T#5S", b"T#99999D",
-    b"S5T#2H", b"C#1000", b"16#FFFFFFFFF", b"9" * 60, b"-", b"+", b"*", b"/", b"MOD", b">=",
-    b"M0.0", b"M9999.9", b"DB1.DBX0.0", b"I0.7", b"MW1", b"Q0.8", b"STEP", b"END_STEP",
-    b"INITIAL_STEP", b"TRANSITION", b"FROM", b"TO", b"STOP", b"SEQUENCE", b"END_SEQUENCE",
-    b"VAR", b"END_VAR", b"PERMANENT", b"BEFORE", b"INTERLOCK", b"SUPERVISION", b"S1 S", b"N C",
-    b"D", b"L", b"CALL FB 5, DB 5", b"ON S_ALL", b"OFF S_ALL", b"CU C 5", b"TL T 3, S5T#1S",
-    b"\xff", b"\xc3", b"\x00", "ä€".encode(), b"\n", b" ", b"TRUE", b"FALSE", b"REAL#1.5e39",
+    b"AND",
+    b"OR",
+    b"NOT",
+    b"XOR",
+    b"(",
+    b")",
+    b";",
+    b":=",
+    b",",
+    b'"',
+    b"'",
+    b"(*",
+    b"*)",
+    b"//",
+    b"S1",
+    b"S99",
+    b"S0",
+    b"T1",
+    b"T999999",
+    b"S2.T",
+    b"S3.U",
+    b"T#5S",
+    b"T#99999D",
+    b"S5T#2H",
+    b"C#1000",
+    b"16#FFFFFFFFF",
+    b"9" * 60,
+    b"-",
+    b"+",
+    b"*",
+    b"/",
+    b"MOD",
+    b">=",
+    b"M0.0",
+    b"M9999.9",
+    b"DB1.DBX0.0",
+    b"I0.7",
+    b"MW1",
+    b"Q0.8",
+    b"STEP",
+    b"END_STEP",
+    b"INITIAL_STEP",
+    b"TRANSITION",
+    b"FROM",
+    b"TO",
+    b"STOP",
+    b"SEQUENCE",
+    b"END_SEQUENCE",
+    b"VAR",
+    b"END_VAR",
+    b"PERMANENT",
+    b"BEFORE",
+    b"INTERLOCK",
+    b"SUPERVISION",
+    b"S1 S",
+    b"N C",
+    b"D",
+    b"L",
+    b"CALL FB 5, DB 5",
+    b"ON S_ALL",
+    b"OFF S_ALL",
+    b"CU C 5",
+    b"TL T 3, S5T#1S",
+    b"\xff",
+    b"\xc3",
+    b"\x00",
+    "ä€".encode(),
+    b"\n",
+    b" ",
+    b"TRUE",
+    b"FALSE",
+    b"REAL#1.5e39",
 ]
 
 
@@ -216,8 +297,9 @@ def _mutate(data: bytes, rng: random.Random) -> bytes:
             pos = rng.randint(0, len(line))
             lines[at] = line[:pos] + b" " + rng.choice(TOKENS) + b" " + line[pos:]
         elif kind == 4:
-            lines[at] = re.sub(rb"\d+", lambda m: rng.choice([b"0", b"65536", b"9" * 30]),
-                               lines[at], count=1)  # fmt: skip
+            lines[at] = re.sub(
+                rb"\d+", lambda m: rng.choice([b"0", b"65536", b"9" * 30]), lines[at], count=1
+            )
         elif kind == 5:
             data = b"\n".join(lines)
             cut = rng.randrange(len(data) + 1)
@@ -250,8 +332,17 @@ def test_check_and_sim_of_mutated_examples_never_end_in_an_internal_error(
         symbols = str(seed.with_name("symbols.txt"))
         rc, out, _ = _cli(capsys, "check", str(path), "--symbols", symbols)
         outcomes.add(rc)
-        src, _, _ = _cli(capsys, "sim", str(path), "--symbols", symbols, "--cycles", "20",
-                         "--trace", str(tmp_path / "trace.jsonl"))  # fmt: skip
+        src, _, _ = _cli(
+            capsys,
+            "sim",
+            str(path),
+            "--symbols",
+            symbols,
+            "--cycles",
+            "20",
+            "--trace",
+            str(tmp_path / "trace.jsonl"),
+        )
         assert rc == 2 or src == 0, (path, rc, src)  # what check accepts, sim runs
         if rc < 2 and "cannot show this chart" not in out:
             try:

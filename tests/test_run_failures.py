@@ -43,8 +43,10 @@ def main(ctx):
 def _start(*args: str) -> subprocess.Popen[str]:
     return subprocess.Popen(
         [sys.executable, "-m", "s7graph", "run", *args],
-        cwd=ROOT, stderr=subprocess.PIPE, text=True,
-    )  # fmt: skip
+        cwd=ROOT,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
 
 
 @pytest.mark.timeout(60)
@@ -90,9 +92,17 @@ class Plant:
 def test_a_chart_run_whose_plant_hangs_goes_to_stop_says_why_and_exits_1(tmp_path: Path) -> None:
     plant = tmp_path / "endless.py"
     plant.write_text(textwrap.dedent(ENDLESS_PLANT))
-    proc = _start(str(DRILL / "drill.s7g"), "--symbols", str(DRILL / "symbols.txt"),
-                  "--plant", str(plant), "--state", str(tmp_path / "s.sqlite"),
-                  "--max-cycle-ms", "50")  # fmt: skip
+    proc = _start(
+        str(DRILL / "drill.s7g"),
+        "--symbols",
+        str(DRILL / "symbols.txt"),
+        "--plant",
+        str(plant),
+        "--state",
+        str(tmp_path / "s.sqlite"),
+        "--max-cycle-ms",
+        "50",
+    )
     code = proc.wait(40)
     assert proc.stderr is not None
     err = proc.stderr.read()
@@ -108,8 +118,15 @@ def test_a_plant_raising_system_exit_ends_the_run_with_one_line(tmp_path: Path) 
     plant.write_text(
         "class Plant:\n    def cycle(self, io, t_ms, dt_ms):\n        raise SystemExit(0)\n"
     )
-    proc = _start(str(DRILL / "drill.s7g"), "--symbols", str(DRILL / "symbols.txt"),
-                  "--plant", str(plant), "--state", str(tmp_path / "s.sqlite"))  # fmt: skip
+    proc = _start(
+        str(DRILL / "drill.s7g"),
+        "--symbols",
+        str(DRILL / "symbols.txt"),
+        "--plant",
+        str(plant),
+        "--state",
+        str(tmp_path / "s.sqlite"),
+    )
     code = proc.wait(40)
     assert proc.stderr is not None
     err = proc.stderr.read()

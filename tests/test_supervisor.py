@@ -60,9 +60,13 @@ class Plant:
 
 def _s7graph(*args: str, **kw: object) -> subprocess.Popen[str]:
     return subprocess.Popen(
-        [sys.executable, "-m", "s7graph", *args], cwd=ROOT, stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE, text=True, **kw,  # type: ignore[call-overload]
-    )  # fmt: skip
+        [sys.executable, "-m", "s7graph", *args],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        **kw,  # type: ignore[call-overload]
+    )
 
 
 def _diagnostics(state: Path) -> list[tuple[int, str, str]]:
@@ -106,8 +110,13 @@ def _users(tmp_path: Path) -> Path:
     users = tmp_path / "users.json"
     for name, role in (("olga", "operator"), ("eng", "engineer")):
         add = ["users", "add", name, "--role", role, "--file", str(users), "--password-stdin"]
-        done = subprocess.run([sys.executable, "-m", "s7graph", *add], cwd=ROOT,
-                              input=PASSWORD + "\n", capture_output=True, text=True)  # fmt: skip
+        done = subprocess.run(
+            [sys.executable, "-m", "s7graph", *add],
+            cwd=ROOT,
+            input=PASSWORD + "\n",
+            capture_output=True,
+            text=True,
+        )
         assert done.returncode == 0, done.stderr
     return users
 
@@ -115,9 +124,13 @@ def _users(tmp_path: Path) -> Path:
 def _shell(endpoint: str, *args: str) -> subprocess.CompletedProcess[str]:
     env = dict(os.environ, S7GRAPH_PASSWORD=PASSWORD)
     return subprocess.run(
-        [sys.executable, "-m", "s7graph", *args, "--connect", endpoint], cwd=ROOT, env=env,
-        capture_output=True, text=True, timeout=30,
-    )  # fmt: skip
+        [sys.executable, "-m", "s7graph", *args, "--connect", endpoint],
+        cwd=ROOT,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=30,
+    )
 
 
 def _wait_line(proc: subprocess.Popen[str], text: str) -> list[str]:
@@ -139,9 +152,20 @@ def test_a_plant_hanging_in_c_code_comes_back_in_stop_on_the_bus_and_an_engineer
     state = tmp_path / "drill.sqlite"
     endpoint = f"tcp/127.0.0.1:{_free_port()}"
     users = _users(tmp_path)
-    proc = _s7graph("run", str(DRILL / "drill.s7g"), "--symbols", str(DRILL / "symbols.txt"),
-                    "--plant", str(plant), "--state", str(state), "--listen", endpoint,
-                    "--users", str(users))  # fmt: skip
+    proc = _s7graph(
+        "run",
+        str(DRILL / "drill.s7g"),
+        "--symbols",
+        str(DRILL / "symbols.txt"),
+        "--plant",
+        str(plant),
+        "--state",
+        str(state),
+        "--listen",
+        endpoint,
+        "--users",
+        str(users),
+    )
     try:
         seen = _wait_line(proc, "in STOP (from its last durable state")
         assert any("the scan hung in plant hangplant.py" in line for line in seen)
@@ -271,8 +295,18 @@ def test_sigterm_while_the_hung_cpu_is_restarted_ends_the_run_with_the_cause_on_
     plant.write_text(textwrap.dedent(HANGING_PLANT))
     state = tmp_path / "drill.sqlite"
     endpoint = f"tcp/127.0.0.1:{_free_port()}"
-    proc = _s7graph("run", str(DRILL / "drill.s7g"), "--symbols", str(DRILL / "symbols.txt"),
-                    "--plant", str(plant), "--state", str(state), "--listen", endpoint)  # fmt: skip
+    proc = _s7graph(
+        "run",
+        str(DRILL / "drill.s7g"),
+        "--symbols",
+        str(DRILL / "symbols.txt"),
+        "--plant",
+        str(plant),
+        "--state",
+        str(state),
+        "--listen",
+        endpoint,
+    )
     _wait_line(proc, "starting it again in STOP")
     proc.send_signal(signal.SIGTERM)  # the new CPU is not listening yet: it gets it once it is
     _, err = proc.communicate(timeout=60)

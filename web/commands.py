@@ -380,9 +380,26 @@ class Start(Command, tag="start", frozen=True, kw_only=True):
 
 # The union, in the order of the role table.
 AnyCommand = (
-    Ack | AckStep | AckMsg | SetMode | Init | Off | Halt | TPush | StepOn | StepOff | EnIl
-    | EnSv | Force | Download | UndoDownload | Save | Open | Stop | Start
-)  # fmt: skip
+    Ack
+    | AckStep
+    | AckMsg
+    | SetMode
+    | Init
+    | Off
+    | Halt
+    | TPush
+    | StepOn
+    | StepOff
+    | EnIl
+    | EnSv
+    | Force
+    | Download
+    | UndoDownload
+    | Save
+    | Open
+    | Stop
+    | Start
+)
 COMMAND_TYPES: tuple[type[Command], ...] = get_args(AnyCommand)
 
 

@@ -32,14 +32,33 @@ from s7graph.sequencer.state import GraphState
 __all__ = ["CarryReport", "ChartFormat", "ChartShape", "carry_over", "fingerprint"]
 
 _PER_STEP = (
-    "x", "t_ns", "u_ns", "act_ns", "il_ok", "il_err", "sv_cond", "sv_err",
-    "crit_loc", "crit_loc_err", "crit_sup",
-)  # fmt: skip
+    "x",
+    "t_ns",
+    "u_ns",
+    "act_ns",
+    "il_ok",
+    "il_err",
+    "sv_cond",
+    "sv_err",
+    "crit_loc",
+    "crit_loc_err",
+    "crit_sup",
+)
 _PER_TRANSITION = ("tt", "crit", "crit_old", "crit_flt")
 _SCALARS = (
-    "mode", "calls", "last_ns", "off", "halted", "tm_halted", "zeroed", "il_enabled",
-    "sv_enabled", "ackreq_enabled", "sskip_enabled", "ov_count",
-)  # fmt: skip
+    "mode",
+    "calls",
+    "last_ns",
+    "off",
+    "halted",
+    "tm_halted",
+    "zeroed",
+    "il_enabled",
+    "sv_enabled",
+    "ackreq_enabled",
+    "sskip_enabled",
+    "ov_count",
+)
 
 
 def fingerprint(cc: CompiledChart) -> str:
@@ -116,8 +135,12 @@ class ChartShape:
             and isinstance(variables, dict)
         ):
             raise ValueError("malformed chart shape")
-        return cls(str(data["name"]), tuple(steps), tuple(transitions),
-                   {str(k): str(v) for k, v in variables.items()})  # fmt: skip
+        return cls(
+            str(data["name"]),
+            tuple(steps),
+            tuple(transitions),
+            {str(k): str(v) for k, v in variables.items()},
+        )
 
 
 @dataclass(slots=True)
@@ -139,14 +162,19 @@ class CarryReport:
         kept = ", ".join(f"S{n}" for n in self.kept) or "none"
         out = [f"chart changed; carried over by step number: active steps kept: {kept}"]
         if self.gone:
-            out.append("active steps gone (no longer active): "
-                       + ", ".join(f"S{n}" for n in self.gone))  # fmt: skip
+            out.append(
+                "active steps gone (no longer active): " + ", ".join(f"S{n}" for n in self.gone)
+            )
         if self.faults_gone:
-            out.append("latched supervision faults of steps gone: "
-                       + ", ".join(f"S{n}" for n in self.faults_gone))  # fmt: skip
+            out.append(
+                "latched supervision faults of steps gone: "
+                + ", ".join(f"S{n}" for n in self.faults_gone)
+            )
         if self.vars_reset:
-            out.append("variables of a changed type, at their initial values: "
-                       + ", ".join(self.vars_reset))  # fmt: skip
+            out.append(
+                "variables of a changed type, at their initial values: "
+                + ", ".join(self.vars_reset)
+            )
         if self.vars_dropped:
             out.append("variables no longer declared: " + ", ".join(self.vars_dropped))
         if self.vars_new:

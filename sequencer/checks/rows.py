@@ -45,8 +45,12 @@ def rule_c_without_interlock(ctx: _Ctx) -> None:
             continue
         for i, r in enumerate(s.actions):
             if r.interlocked:
-                ctx.warn("W122", f"row marked C but step S{s.number} has no INTERLOCK; the "
-                         "mark has no effect", r.loc, _row_el(s, i))  # fmt: skip
+                ctx.warn(
+                    "W122",
+                    f"row marked C but step S{s.number} has no INTERLOCK; the mark has no effect",
+                    r.loc,
+                    _row_el(s, i),
+                )
 
 
 # ------------------------------------------------------ action rows (docs/semantics.md, "Actions")
@@ -130,8 +134,12 @@ def _check_call(ctx: _Ctx, call: BlockCall, el: str) -> None:
     for name, o in call.outputs:
         res = _resolve(ctx, o, el)
         if res is not None and not res.writable:
-            ctx.err("E045", f"{name} => {o.name}: {o.name} is read-only; the chart cannot "
-                    "write it", o.loc, el)  # fmt: skip
+            ctx.err(
+                "E045",
+                f"{name} => {o.name}: {o.name} is read-only; the chart cannot write it",
+                o.loc,
+                el,
+            )
         elif res is not None:
             types.append((name, _operand_type(res), o))
     if isinstance(call.instance, int) and not 1 <= call.instance <= 65535:
@@ -143,31 +151,50 @@ def _check_call(ctx: _Ctx, call: BlockCall, el: str) -> None:
         return  # a user block's symbol
     if entry is None:
         known = " ".join(e.key for e in catalogue.CATALOGUE if e.kind == call.kind)
-        ctx.err("E046", f"{call.kind} {call.block} is not a system block s7graph has "
-                f"({call.kind}s: {known})", call.loc, el)  # fmt: skip
+        ctx.err(
+            "E046",
+            f"{call.kind} {call.block} is not a system block s7graph has ({call.kind}s: {known})",
+            call.loc,
+            el,
+        )
         return
     problems = entry.check_call(
-        [n for n, _ in call.inputs], [n for n, _ in call.outputs],
+        [n for n, _ in call.inputs],
+        [n for n, _ in call.outputs],
         has_instance=call.instance is not None,
-    )  # fmt: skip
+    )
     for problem in problems:
         ctx.err("E046", problem, call.loc, el)
     given = {n.upper() for n, _ in (*call.inputs, *call.outputs)}
     missing = [p.name for p in entry.pins if p.name not in given]
     if not entry.needs_instance and missing:  # an FC's parameters all are given (S7)
-        ctx.err("E046", f"{entry.key} {entry.name}: an SFC takes every parameter; "
-                f"{', '.join(missing)} missing", call.loc, el)  # fmt: skip
+        ctx.err(
+            "E046",
+            f"{entry.key} {entry.name}: an SFC takes every parameter; {', '.join(missing)} missing",
+            call.loc,
+            el,
+        )
     if entry.needs_instance and isinstance(call.instance, str):
-        ctx.err("E046", f"{entry.key} {entry.name}: name its instance DB by number "
-                f"(DB 10), not {call.instance!r}", call.loc, el)  # fmt: skip
+        ctx.err(
+            "E046",
+            f"{entry.key} {entry.name}: name its instance DB by number "
+            f"(DB 10), not {call.instance!r}",
+            call.loc,
+            el,
+        )
 
     for name, t, e in types:
         pin = entry.pin(name)
         if pin is None or t is None or pin.type == "ANY":
             continue
         if _unify(pin.type, _as_bit(t) if pin.type == "BOOL" else _as_number(t)) is None:
-            ctx.err("E046", f"{entry.key} {entry.name}: {pin.name} is {_show(pin.type)}, "
-                    f"{_show(t)} does not fit it", getattr(e, "loc", call.loc), el)  # fmt: skip
+            ctx.err(
+                "E046",
+                f"{entry.key} {entry.name}: {pin.name} is {_show(pin.type)}, "
+                f"{_show(t)} does not fit it",
+                getattr(e, "loc", call.loc),
+                el,
+            )
 
 
 def _check_assignment(ctx: _Ctx, a: Assignment, el: str, *, in_action: bool) -> None:
@@ -176,17 +203,27 @@ def _check_assignment(ctx: _Ctx, a: Assignment, el: str, *, in_action: bool) -> 
     if res is None:
         return
     if not res.writable:
-        ctx.err("E045", f"{a.target.name} is an FB output; the chart cannot write it",
-                a.target.loc, el)  # fmt: skip
+        ctx.err(
+            "E045", f"{a.target.name} is an FB output; the chart cannot write it", a.target.loc, el
+        )
         return
     target = _operand_type(res)
     if in_action and target == "BOOL":
-        ctx.err("E035", f"{a.target.name} := ... writes a bit: a coil belongs in the permanent "
-                "instructions; in a step use N, S or R", a.target.loc, el)  # fmt: skip
+        ctx.err(
+            "E035",
+            f"{a.target.name} := ... writes a bit: a coil belongs in the permanent "
+            "instructions; in a step use N, S or R",
+            a.target.loc,
+            el,
+        )
         return
     if t is not None and _unify(target, t) is None:
-        ctx.err("E031", f"cannot assign {_show(t)} to {a.target.name} ({_show(target)})",
-                a.target.loc, el)  # fmt: skip
+        ctx.err(
+            "E031",
+            f"cannot assign {_show(t)} to {a.target.name} ({_show(target)})",
+            a.target.loc,
+            el,
+        )
 
 
 # ---------------------------------------------------------------- permanent instructions
@@ -200,11 +237,19 @@ def rule_permanent_instructions(ctx: _Ctx) -> None:
             if isinstance(it, Coil):
                 res = _resolve(ctx, it.target, el)
                 if res is not None and res.type != "BOOL":
-                    ctx.err("E031", f"a coil writes a bit; {it.target.name} is {res.type}",
-                            it.target.loc, el)  # fmt: skip
+                    ctx.err(
+                        "E031",
+                        f"a coil writes a bit; {it.target.name} is {res.type}",
+                        it.target.loc,
+                        el,
+                    )
                 elif res is not None and not res.writable:
-                    ctx.err("E045", f"{it.target.name} is an FB output; the chart cannot "
-                            "write it", it.target.loc, el)  # fmt: skip
+                    ctx.err(
+                        "E045",
+                        f"{it.target.name} is an FB output; the chart cannot write it",
+                        it.target.loc,
+                        el,
+                    )
             elif isinstance(it, Assignment):
                 _check_assignment(ctx, it, el, in_action=False)
             elif isinstance(it, BlockCall):

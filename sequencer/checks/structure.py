@@ -30,15 +30,23 @@ def rule_duplicate_numbers(ctx: _Ctx) -> None:
     for s in ctx.chart.all_steps():
         if s.number in seen_s:
             first = seen_s[s.number].loc
-            ctx.err("E011", f"step S{s.number} is defined twice (first at line {first.line})",
-                    s.loc, _step_el(s.number))  # fmt: skip
+            ctx.err(
+                "E011",
+                f"step S{s.number} is defined twice (first at line {first.line})",
+                s.loc,
+                _step_el(s.number),
+            )
         seen_s.setdefault(s.number, s)
     seen_t: dict[int, Transition] = {}
     for t in ctx.chart.all_transitions():
         if t.number in seen_t:
             first = seen_t[t.number].loc
-            ctx.err("E012", f"transition T{t.number} is defined twice (first at line "
-                    f"{first.line})", t.loc, f"transition T{t.number}")  # fmt: skip
+            ctx.err(
+                "E012",
+                f"transition T{t.number} is defined twice (first at line {first.line})",
+                t.loc,
+                f"transition T{t.number}",
+            )
         seen_t.setdefault(t.number, t)
 
 
@@ -72,11 +80,19 @@ def rule_declarations(ctx: _Ctx) -> None:
         if v.init is not None:
             t = _type(ctx, v.init, f"variable {v.name}")
             if t is not None and _unify(v.type.upper(), t) is None:
-                ctx.err("E031", f"initial value {v.init.text} ({_show(t)}) does not fit "
-                        f"{v.name} : {v.type}", v.init.loc, f"variable {v.name}")  # fmt: skip
+                ctx.err(
+                    "E031",
+                    f"initial value {v.init.text} ({_show(t)}) does not fit {v.name} : {v.type}",
+                    v.init.loc,
+                    f"variable {v.name}",
+                )
             elif t == "STRING" and _too_long(v.type, v.init.text):
-                ctx.err("E031", f"initial value {v.init.text} is longer than {v.type} "
-                        f"({v.name})", v.init.loc, f"variable {v.name}")  # fmt: skip
+                ctx.err(
+                    "E031",
+                    f"initial value {v.init.text} is longer than {v.type} ({v.name})",
+                    v.init.loc,
+                    f"variable {v.name}",
+                )
 
 
 def _too_long(declared: str, literal: str) -> bool:
@@ -94,8 +110,10 @@ def _too_long(declared: str, literal: str) -> bool:
 def rule_unknown_steps_in_from_to(ctx: _Ctx) -> None:
     """Every step named in FROM / TO exists in the FB (E010); the column is the step's own."""
     for t in ctx.chart.all_transitions():
-        for part, numbers, locs in (("FROM", t.sources, t.source_locs),
-                                    ("TO", t.targets, t.target_locs)):  # fmt: skip
+        for part, numbers, locs in (
+            ("FROM", t.sources, t.source_locs),
+            ("TO", t.targets, t.target_locs),
+        ):
             for i, n in enumerate(numbers):
                 if n not in ctx.steps:
                     loc = locs[i] if i < len(locs) else t.loc
@@ -106,8 +124,12 @@ def rule_initial_steps(ctx: _Ctx) -> None:
     """Each sequencer has at least one initial step, else it never starts (W103)."""
     for seq in ctx.chart.sequences:
         if seq.steps and not any(s.initial for s in seq.steps):
-            ctx.warn("W103", f"sequence {seq.number} has no initial step; it starts only by "
-                     "ON or MAN mode", seq.loc, f"sequence {seq.number}")  # fmt: skip
+            ctx.warn(
+                "W103",
+                f"sequence {seq.number} has no initial step; it starts only by ON or MAN mode",
+                seq.loc,
+                f"sequence {seq.number}",
+            )
 
 
 def _on_targets(ctx: _Ctx) -> set[int]:
@@ -126,11 +148,19 @@ def rule_ways_in_and_out(ctx: _Ctx) -> None:
     out = {n for t in ctx.chart.all_transitions() for n in t.sources}
     for s in ctx.chart.all_steps():
         if not s.initial and s.number not in into:
-            ctx.warn("W101", f"no transition leads to step S{s.number}; it can never become "
-                     "active", s.loc, _step_el(s.number))  # fmt: skip
+            ctx.warn(
+                "W101",
+                f"no transition leads to step S{s.number}; it can never become active",
+                s.loc,
+                _step_el(s.number),
+            )
         if s.number not in out:
-            ctx.warn("W102", f"no transition leaves step S{s.number}; once active it stays "
-                     "active", s.loc, _step_el(s.number))  # fmt: skip
+            ctx.warn(
+                "W102",
+                f"no transition leaves step S{s.number}; once active it stays active",
+                s.loc,
+                _step_el(s.number),
+            )
 
 
 def rule_limits(ctx: _Ctx) -> None:
@@ -138,21 +168,31 @@ def rule_limits(ctx: _Ctx) -> None:
     c = ctx.chart
     steps, trans = c.all_steps(), c.all_transitions()
     if len(c.sequences) > MAX_SEQUENCES:
-        ctx.warn("W110", f"{len(c.sequences)} sequencers; S7-GRAPH allows {MAX_SEQUENCES}",
-                 c.sequences[MAX_SEQUENCES].loc)  # fmt: skip
+        ctx.warn(
+            "W110",
+            f"{len(c.sequences)} sequencers; S7-GRAPH allows {MAX_SEQUENCES}",
+            c.sequences[MAX_SEQUENCES].loc,
+        )
     if len(steps) > MAX_STEPS:
         ctx.warn("W110", f"{len(steps)} steps; S7-GRAPH allows {MAX_STEPS}", steps[MAX_STEPS].loc)
     if len(trans) > MAX_TRANSITIONS:
-        ctx.warn("W110", f"{len(trans)} transitions; S7-GRAPH allows {MAX_TRANSITIONS}",
-                 trans[MAX_TRANSITIONS].loc)  # fmt: skip
+        ctx.warn(
+            "W110",
+            f"{len(trans)} transitions; S7-GRAPH allows {MAX_TRANSITIONS}",
+            trans[MAX_TRANSITIONS].loc,
+        )
     leaving: dict[int, list[Transition]] = {}
     for t in trans:
         for n in t.sources:
             leaving.setdefault(n, []).append(t)
         paths = max(len(t.sources), len(t.targets))
         if paths > MAX_SIMULTANEOUS_PATHS:
-            ctx.warn("W110", f"{paths} simultaneous paths; S7-GRAPH allows "
-                     f"{MAX_SIMULTANEOUS_PATHS}", t.loc, f"transition T{t.number}")  # fmt: skip
+            ctx.warn(
+                "W110",
+                f"{paths} simultaneous paths; S7-GRAPH allows {MAX_SIMULTANEOUS_PATHS}",
+                t.loc,
+                f"transition T{t.number}",
+            )
     for n, ts in leaving.items():
         if len(ts) > MAX_ALTERNATIVE_PATHS:
             msg = f"{len(ts)} alternative paths leave S{n}; S7-GRAPH allows {MAX_ALTERNATIVE_PATHS}"
@@ -160,8 +200,12 @@ def rule_limits(ctx: _Ctx) -> None:
     for expr, loc, el in _conditions(ctx):
         k = _elements(expr)
         if k > MAX_CONDITION_ELEMENTS:
-            ctx.warn("W110", f"condition has {k} elements; S7-GRAPH allows "
-                     f"{MAX_CONDITION_ELEMENTS}", loc, el)  # fmt: skip
+            ctx.warn(
+                "W110",
+                f"condition has {k} elements; S7-GRAPH allows {MAX_CONDITION_ELEMENTS}",
+                loc,
+                el,
+            )
 
 
 def _elements(e: Expr) -> int:
@@ -205,5 +249,9 @@ def rule_joins(ctx: _Ctx) -> None:
             continue
         if not any(all(n in m for n in t.sources) for m in seen):
             names = ", ".join(f"S{n}" for n in t.sources)
-            ctx.warn("W130", f"steps {names} are never active together: transition "
-                     f"T{t.number} can never switch", t.loc, f"transition T{t.number}")  # fmt: skip
+            ctx.warn(
+                "W130",
+                f"steps {names} are never active together: transition T{t.number} can never switch",
+                t.loc,
+                f"transition T{t.number}",
+            )

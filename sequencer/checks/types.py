@@ -46,8 +46,14 @@ _FLEX: Final[dict[str, frozenset[str]]] = {
     "@T": frozenset({"BOOL", "INT"}),  # a timer: status bit or value
     "@C": frozenset({"BOOL", "INT"}),  # a counter: status bit or value
 }
-_FLEX_DEFAULT: Final = {"@8": "BYTE", "@16": "INT", "@32": "DINT", "#INT": "INT",
-                        "@T": "BOOL", "@C": "BOOL"}  # fmt: skip
+_FLEX_DEFAULT: Final = {
+    "@8": "BYTE",
+    "@16": "INT",
+    "@32": "DINT",
+    "#INT": "INT",
+    "@T": "BOOL",
+    "@C": "BOOL",
+}
 _CELL_FLEX: Final = {"TIMER": "@T", "COUNTER": "@C"}
 _ADDRESS_FLEX: Final = {"BYTE": "@8", "WORD": "@16", "DWORD": "@32"}
 # Built-in functions of STEP7 comprehensive guide vol. 2, ch. 14: name → {argument type: result
@@ -95,8 +101,12 @@ def rule_empty_conditions(ctx: _Ctx) -> None:
     """An empty transition condition always holds (W120, docs/semantics.md, "Conditions")."""
     for t in ctx.chart.all_transitions():
         if t.condition is None:
-            ctx.warn("W120", f"transition T{t.number} has no condition; it switches at once",
-                     t.loc, f"transition T{t.number}")  # fmt: skip
+            ctx.warn(
+                "W120",
+                f"transition T{t.number} has no condition; it switches at once",
+                t.loc,
+                f"transition T{t.number}",
+            )
 
 
 # ---------------------------------------------------- conditions (docs/semantics.md, "Conditions")
@@ -124,8 +134,9 @@ def rule_conditions(ctx: _Ctx) -> None:
         _check_condition_shape(ctx, expr, el)
         t = _type(ctx, expr, el)
         if t is not None and _as_bit(t) != "BOOL":
-            ctx.err("E034", f"a condition must be TRUE or FALSE, this is {_show(t)}",
-                    _loc(expr), el)  # fmt: skip
+            ctx.err(
+                "E034", f"a condition must be TRUE or FALSE, this is {_show(t)}", _loc(expr), el
+            )
 
 
 def _check_condition_shape(ctx: _Ctx, e: Expr, el: str) -> None:
@@ -137,13 +148,21 @@ def _check_condition_shape(ctx: _Ctx, e: Expr, el: str) -> None:
     elif isinstance(e, Binary) and e.op in COMPARISONS:
         for side in (e.left, e.right):
             if not isinstance(side, Operand | Const | StepAttr | TransAttr):
-                ctx.err("E034", "a comparison in a condition compares operands and constants "
-                        "only; compute values in an action or permanent instruction",
-                        _loc(side), el)  # fmt: skip
+                ctx.err(
+                    "E034",
+                    "a comparison in a condition compares operands and constants "
+                    "only; compute values in an action or permanent instruction",
+                    _loc(side),
+                    el,
+                )
     elif isinstance(e, Binary | Unary | FuncCall):
         what = e.op if isinstance(e, Binary | Unary) else f"{e.name}()"
-        ctx.err("E034", f"{what} is not allowed in a condition (contacts, NOT AND OR XOR and "
-                "comparisons only)", _loc(e), el)  # fmt: skip
+        ctx.err(
+            "E034",
+            f"{what} is not allowed in a condition (contacts, NOT AND OR XOR and comparisons only)",
+            _loc(e),
+            el,
+        )
 
 
 # ---------------------------------------------------------------- typing
@@ -154,8 +173,14 @@ def _loc(e: object) -> SourceLocation:
     return loc if isinstance(loc, SourceLocation) else SourceLocation()
 
 
-_SHOW: Final = {"@8": "BYTE", "@16": "WORD", "@32": "DWORD", "#INT": "INT", "@T": "TIMER",
-                "@C": "COUNTER"}  # fmt: skip
+_SHOW: Final = {
+    "@8": "BYTE",
+    "@16": "WORD",
+    "@32": "DWORD",
+    "#INT": "INT",
+    "@T": "TIMER",
+    "@C": "COUNTER",
+}
 
 
 def _show(t: str) -> str:
@@ -296,8 +321,12 @@ def _type_binary(ctx: _Ctx, e: Binary, el: str) -> str | None:
     if op in COMPARISONS:
         u = _unify(lt, rt)
         if u is None:
-            ctx.err("E030", f"cannot compare {_show(lt)} with {_show(rt)}; both sides need "
-                    "the same type", e.loc, el)  # fmt: skip
+            ctx.err(
+                "E030",
+                f"cannot compare {_show(lt)} with {_show(rt)}; both sides need the same type",
+                e.loc,
+                el,
+            )
         elif _concrete(u) not in COMPARABLE:
             ctx.err("E030", f"only INT DINT REAL TIME can be compared, not {_show(u)}", e.loc, el)
         return "BOOL"
@@ -307,16 +336,20 @@ def _type_binary(ctx: _Ctx, e: Binary, el: str) -> str | None:
         if left is None:
             ctx.err("E032", f"{op} works on {' '.join(allowed)}, not {_show(lt)}", e.loc, el)
         if _unify("INT", rt) != "INT":
-            ctx.err("E032", f"the count of {op} is an INT (0..255), not {_show(rt)}",
-                    _loc(e.right), el)  # fmt: skip
+            ctx.err(
+                "E032", f"the count of {op} is an INT (0..255), not {_show(rt)}", _loc(e.right), el
+            )
         elif isinstance(e.right, Const) and not 0 <= int(e.right.value) <= 255:  # type: ignore[call-overload]
             ctx.err("E032", f"the count of {op} must be 0..255", _loc(e.right), el)
         return left
     u = _unify(lt, rt)
     if u is None:
-        ctx.err("E030" if op in COMPARISONS else "E032",
-                f"{op} of {_show(lt)} and {_show(rt)}: both sides need the same type",
-                e.loc, el)  # fmt: skip
+        ctx.err(
+            "E030" if op in COMPARISONS else "E032",
+            f"{op} of {_show(lt)} and {_show(rt)}: both sides need the same type",
+            e.loc,
+            el,
+        )
         return None
     if op in LOGIC:
         if u == "BOOL":
@@ -325,11 +358,21 @@ def _type_binary(ctx: _Ctx, e: Binary, el: str) -> str | None:
         if word is None:
             ctx.err("E032", f"{op} works on BOOL, WORD or DWORD, not {_show(u)}", e.loc, el)
         return word
-    allowed_arith = {"+": "INT DINT REAL TIME", "-": "INT DINT REAL TIME", "*": "INT DINT REAL",
-                     "/": "INT DINT REAL", "MOD": "DINT"}.get(op, "")  # fmt: skip
+    allowed_arith = {
+        "+": "INT DINT REAL TIME",
+        "-": "INT DINT REAL TIME",
+        "*": "INT DINT REAL",
+        "/": "INT DINT REAL",
+        "MOD": "DINT",
+    }.get(op, "")
     ok = allowed_arith.split()
-    c = u if u in ok else next((x for x in ("INT", "DINT", "REAL", "TIME") if
-                                x in ok and _unify(x, u) == x), None)  # fmt: skip
+    c = (
+        u
+        if u in ok
+        else next(
+            (x for x in ("INT", "DINT", "REAL", "TIME") if x in ok and _unify(x, u) == x), None
+        )
+    )
     if c is None:
         ctx.err("E032", f"{op} works on {allowed_arith}, not {_show(u)}", e.loc, el)
     return c

@@ -214,8 +214,12 @@ class _Build:
         (E006, once per expression: where it crosses the limit)."""
         self.depths[id(node)] = (node, depth)
         if depth == MAX_EXPR_DEPTH + 1:
-            self._err("E006", f"expression nested deeper than {MAX_EXPR_DEPTH} levels; "
-                      "split it into several assignments or transitions", node.loc)  # fmt: skip
+            self._err(
+                "E006",
+                f"expression nested deeper than {MAX_EXPR_DEPTH} levels; "
+                "split it into several assignments or transitions",
+                node.loc,
+            )
         return node
 
     @staticmethod

@@ -117,9 +117,19 @@ _TERMINAL_WORDS = {
 # Tokens after which a statement is complete, and tokens that start the next one.
 _STATEMENT_END = {"SEMICOLON"}
 _BOUNDARY = {
-    "END_STEP", "END_SEQUENCE", "END_PERMANENT", "END_VAR", "END_SYMBOLS",
-    "END_FUNCTION_BLOCK", "STEP_KW", "TRANSITION", "SEQUENCE", "PERMANENT", "VAR", "SYMBOLS",
-}  # fmt: skip
+    "END_STEP",
+    "END_SEQUENCE",
+    "END_PERMANENT",
+    "END_VAR",
+    "END_SYMBOLS",
+    "END_FUNCTION_BLOCK",
+    "STEP_KW",
+    "TRANSITION",
+    "SEQUENCE",
+    "PERMANENT",
+    "VAR",
+    "SYMBOLS",
+}
 # Terminals accepted only where the parser waits between statements (recovery points).
 _SYNC = _BOUNDARY | {"QUAL", "EVENT", "INTERLOCK", "SUPERVISION"}
 
@@ -293,8 +303,7 @@ def _long_numbers(text: str, file: str) -> list[Diagnostic]:
             line = text.count("\n", 0, m.start()) + 1
             col = m.start() - (text.rfind("\n", 0, m.start()) + 1) + 1
             where = SourceLocation(file, line, col)
-            out.append(error("E003", f"a number of {len(m[1])} digits is beyond every type",
-                             where))  # fmt: skip
+            out.append(error("E003", f"a number of {len(m[1])} digits is beyond every type", where))
     return out
 
 

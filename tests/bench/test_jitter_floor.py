@@ -56,8 +56,7 @@ def test_a_cycle_the_machine_stalled_is_counted_less_the_stall(jitter: ModuleTyp
 
 def test_a_long_cycle_the_machine_did_not_stall_stays_own(jitter: ModuleType) -> None:
     starts = [0, 10 * MS, 24 * MS, 34 * MS]
-    result = {"starts": starts, "floor": [floor_waking((60, 4.0))],
-              "overran": [(10 * MS, 21 * MS)]}  # fmt: skip
+    result = {"starts": starts, "floor": [floor_waking((60, 4.0))], "overran": [(10 * MS, 21 * MS)]}
     own = jitter.own_figures(result)
     assert (own["shared"], own["own_max"], own["own_overruns"]) == (0.0, 14.0, 1.0)
 

@@ -62,8 +62,9 @@ def _cpu(*blocks: object) -> Cpu:
 def _run(cpu: Cpu, *, in_thread: bool = False) -> tuple[Runner, list[tuple[float, ScanRecord]]]:
     hang.__init__()  # type: ignore[misc]
     seen: list[tuple[float, ScanRecord]] = []
-    runner = Runner(cpu, cycle_ms=5, end_on_stop=True,
-                    on_record=lambda r: seen.append((time.monotonic(), r)))  # fmt: skip
+    runner = Runner(
+        cpu, cycle_ms=5, end_on_stop=True, on_record=lambda r: seen.append((time.monotonic(), r))
+    )
     runner.startup("warm")
     if in_thread:
         runner.start_thread(duration_s=20)

@@ -30,8 +30,16 @@ def test_a_cycle_is_split_into_the_phases_of_the_loop_and_the_late_start() -> No
     cycle = open_cycle.close(15 * _MS, cpu_ns=8 * _MS, runq_ns=4 * _MS)
     assert cycle.scan == 7 and cycle.cycle_ns == 15 * _MS and not cycle.overrun
     ms = {name: round(ns / _MS, 3) for name, ns in zip(PHASE_NAMES, cycle.phases, strict=True)}
-    assert ms == {"encode": 0, "scan": 2, "alarms": 0.1, "edge": 1, "stage": 0.5, "gc": 0,
-                  "idle": 6.4, "late": 5}  # fmt: skip
+    assert ms == {
+        "encode": 0,
+        "scan": 2,
+        "alarms": 0.1,
+        "edge": 1,
+        "stage": 0.5,
+        "gc": 0,
+        "idle": 6.4,
+        "late": 5,
+    }
     assert cycle.busy_ns == round(8.6 * _MS)  # all but the wait asked for
     assert cycle.cpu_ns == 3 * _MS and cycle.runq_ns == 3 * _MS
     assert cycle.blocked_ns == round(2.6 * _MS)  # neither ran nor waited for a processor

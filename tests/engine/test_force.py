@@ -124,8 +124,10 @@ def test_forcing_starts_and_ends_with_a_diagnostic_entry_in_the_scan_it_acts_in(
     cpu.force("MW10", 300)
     clock.advance(10)
     texts = [e.message for e in cpu.scan().diagnostics]
-    assert texts == ["force I0.3 = FALSE (was TRUE) by eng; 1 force job active",
-                     "force MW10 = 300; 2 force jobs active"]  # fmt: skip
+    assert texts == [
+        "force I0.3 = FALSE (was TRUE) by eng; 1 force job active",
+        "force MW10 = 300; 2 force jobs active",
+    ]
     cpu.unforce("MW10", user="eng")
     cpu.unforce(user="eng")
     clock.advance(10)
@@ -269,8 +271,10 @@ def test_a_malformed_force_table_in_the_state_file_is_refused(
     store = StateStore(tmp_path / "s.sqlite")
     store.save(cpu)
     with sqlite3.connect(tmp_path / "s.sqlite") as db:
-        db.execute("UPDATE meta SET value=? WHERE key='forces'",
-                   ('[{"address": "DB1.DBX0.0", "value": 1}]',))  # fmt: skip
+        db.execute(
+            "UPDATE meta SET value=? WHERE key='forces'",
+            ('[{"address": "DB1.DBX0.0", "value": 1}]',),
+        )
     store.close()
     with pytest.raises(StateFileError, match=r"malformed force table: .*cannot be forced"):
         StateStore(tmp_path / "s.sqlite").load(Cpu(clock))

@@ -230,10 +230,13 @@ def out_of_order(graph: dict[str, set[str]]) -> list[str]:
             bad = (
                 theirs == "exchange"
                 or (mine in ("text", "checks") and theirs == "change")
-                or (mine in ("text", "checks") and theirs == "root"
-                    and target not in TEXT_USES_OF_ROOT)
+                or (
+                    mine in ("text", "checks")
+                    and theirs == "root"
+                    and target not in TEXT_USES_OF_ROOT
+                )
                 or (mine == "root" and theirs == "change" and target not in ROOT_USES_OF_CHANGE)
-            )  # fmt: skip
+            )
             if bad:
                 found.append(f"{module} ({mine}) imports {target} ({theirs})")
     return found

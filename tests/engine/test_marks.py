@@ -20,8 +20,10 @@ def test_marks_written_on_one_mapping_are_read_on_another() -> None:
     marks.begin(123_456)
     marks.section("plant p.py")
     assert (reader.busy_since_ns, reader.section, reader.max_cycle_ns) == (
-        123_456, "plant p.py", 150_000_000,
-    )  # fmt: skip
+        123_456,
+        "plant p.py",
+        150_000_000,
+    )
     marks.section(None)
     marks.end()
     assert (reader.busy_since_ns, reader.scans, reader.section) == (0, 1, "")

@@ -75,6 +75,7 @@ def test_instance_values_come_back_exactly_nan_infinity_and_big_integers_include
     """A REAL may hold NaN or infinity (a division by zero) and a plain OBJECT any integer:
     the instance row keeps them as they were (MessagePack; JSON for an integer beyond 64
     bits)."""
+
     def program() -> Cpu:
         cpu = Cpu(VirtualClock())
         cpu.load(holder)
@@ -133,9 +134,16 @@ def test_alarm_and_audit_tables(tmp_path: Path) -> None:
     store.log_alarm(5, "FB1.S3.V", "incoming", "Step 3 supervision")
     store.log_audit(7, "ann", "ack", "FB1 S3")
     assert store.alarms() == [
-        {"t_ns": 5, "key": "FB1.S3.V", "state": "incoming", "text": "Step 3 supervision",
-         "user": "", "cpu_ns": None, "reason": ""}
-    ]  # fmt: skip
+        {
+            "t_ns": 5,
+            "key": "FB1.S3.V",
+            "state": "incoming",
+            "text": "Step 3 supervision",
+            "user": "",
+            "cpu_ns": None,
+            "reason": "",
+        }
+    ]
     assert store.audit()[0]["user"] == "ann"
 
 

@@ -70,9 +70,11 @@ def test_without_a_priority_the_scan_keeps_the_normal_policy() -> None:
     cpu.load(idle)
     seen: list[tuple[int, int]] = []
     runner = Runner(
-        cpu, cycle_ms=5, rt_priority=None,
+        cpu,
+        cycle_ms=5,
+        rt_priority=None,
         on_record=lambda _: seen.append(_policy(threading.get_native_id())),
-    )  # fmt: skip
+    )
     runner.startup()
     runner.run(duration_s=0.1)
     runner.shutdown()

@@ -102,8 +102,7 @@ def _at_scan_5(
             seen.update(look(runner))
             runner.stop()
 
-    runner = Runner(cpu, cycle_ms=5, rt_priority=None, on_record=on_record, core=core,
-                    store=store)  # fmt: skip
+    runner = Runner(cpu, cycle_ms=5, rt_priority=None, on_record=on_record, core=core, store=store)
     runner.startup()
     try:
         runner.run(duration_s=10)
@@ -119,9 +118,13 @@ def test_while_the_loop_runs_the_scan_has_its_core_and_the_other_threads_the_res
     core = min(allowed)
     after: list[set[int]] = []
     with bystander() as helper:
-        runner, seen = _at_scan_5(core, lambda _: {
-            "scan": set(os.sched_getaffinity(0)), "helper": set(os.sched_getaffinity(helper))
-        })  # fmt: skip
+        runner, seen = _at_scan_5(
+            core,
+            lambda _: {
+                "scan": set(os.sched_getaffinity(0)),
+                "helper": set(os.sched_getaffinity(helper)),
+            },
+        )
         after += [set(os.sched_getaffinity(0)), set(os.sched_getaffinity(helper))]
     assert seen == {"scan": {core}, "helper": allowed - {core}}
     assert after == [allowed, allowed] and not runner.pinned

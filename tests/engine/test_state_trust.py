@@ -91,8 +91,10 @@ def test_a_truncated_file_is_refused(tmp_path: Path) -> None:
     path = _written(tmp_path / "s.sqlite")
     for n in range(50):
         with sqlite3.connect(path) as con:  # some history, so the file spans many pages
-            con.execute("INSERT INTO audit (t_ns, user, action, detail) VALUES (?, ?, ?, ?)",
-                        (n, "ann", "ack", "x" * 900))  # fmt: skip
+            con.execute(
+                "INSERT INTO audit (t_ns, user, action, detail) VALUES (?, ?, ?, ?)",
+                (n, "ann", "ack", "x" * 900),
+            )
         con.close()
     data = path.read_bytes()
     path.write_bytes(data[: len(data) // 2])
@@ -250,8 +252,13 @@ def test_a_state_file_whose_instances_table_is_gone_is_refused(tmp_path: Path) -
 
 def test_an_instance_row_without_one_of_its_variables_is_refused(tmp_path: Path) -> None:
     path = _written(tmp_path / "s.sqlite")
-    _edit(path, ("UPDATE instances SET data=? WHERE number=2",
-                 (zlib.compress(msgspec.msgpack.encode([{}, {}])),)))  # fmt: skip
+    _edit(
+        path,
+        (
+            "UPDATE instances SET data=? WHERE number=2",
+            (zlib.compress(msgspec.msgpack.encode([{}, {}])),),
+        ),
+    )
     assert _refused(path) == "malformed state of DB2: no total"
 
 
@@ -299,18 +306,22 @@ def _image(path: Path, key: str) -> dict[str, Any]:
     ("change", "fragment"),
     [
         (lambda m: m.update(markers={"start": 0, "data": "!!not base64!!"}), "not valid base64"),
-        (lambda m: m.update(markers={"start": 250, "data": "AAAAAAAAAAAAAAAAAAAAAA=="}),
-         "beyond the CPU's 256 marker bytes"),
+        (
+            lambda m: m.update(markers={"start": 250, "data": "AAAAAAAAAAAAAAAAAAAAAA=="}),
+            "beyond the CPU's 256 marker bytes",
+        ),
         (lambda m: m.update(markers={"start": -4, "data": "AAAA"}), "'markers' starts at -4"),
         (lambda m: m.update(counters={"9999": {"value": 3}}), "the CPU has 256 cells"),
         (lambda m: m.update(counters={"0": {"value": "many"}}), "'value' is 'many'"),
         (lambda m: m.update(counters={"0": {"ghost": 1}}), "unknown key(s) 'ghost'"),
         (lambda m: m.update(spare=1), "unknown key(s) 'spare'"),
-        (lambda m: m.update(dbs={"7": {"data": 5, "initial": "", "created": False}}),
-         "DB '7' data is 5"),
+        (
+            lambda m: m.update(dbs={"7": {"data": 5, "initial": "", "created": False}}),
+            "DB '7' data is 5",
+        ),
         (lambda m: m.update(dbs=[]), "'dbs' is list"),
     ],
-)  # fmt: skip
+)
 def test_a_malformed_retentive_memory_image_is_refused_not_taken(
     tmp_path: Path, change: Any, fragment: str
 ) -> None:

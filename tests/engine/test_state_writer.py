@@ -346,9 +346,7 @@ def test_an_instance_db_that_cannot_be_encoded_is_a_write_error_not_an_exception
         assert writer.finish(carry=False) == 3  # no exception in the scan thread
         writer.when_durable(1, heard.append)
     assert writer.error is not None
-    assert "cannot encode the state: RuntimeError: a value that cannot be read" in str(
-        writer.error
-    )
+    assert "cannot encode the state: RuntimeError: a value that cannot be read" in str(writer.error)
     assert heard and heard[0] is not None and "cannot encode" in heard[0]
 
 
@@ -386,8 +384,9 @@ def test_one_slow_encoding_does_not_keep_the_encoder_out_for_good(
         for mark in range(1, 121):
             clock.advance(10)
             cpu.scan()
-            writer.submit(store.stage(cpu, upto=mark, defer=True), mark,
-                          until=time.monotonic() + 1.0)  # fmt: skip
+            writer.submit(
+                store.stage(cpu, upto=mark, defer=True), mark, until=time.monotonic() + 1.0
+            )
             writer.finish()
         assert writer.encoded_late > 0  # the scan thread did it while the figure was high
         assert writer.encode_ns < 2_000_000  # faded: 2 s x (15/16)^120

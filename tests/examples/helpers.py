@@ -31,12 +31,26 @@ def sim_example(
     with ``every_cycle`` — that the trace has one record a cycle; return the records."""
     folder = EXAMPLES / example
     trace = tmp_path / "trace.jsonl"
-    rc = main([
-        "sim", str(folder / f"{example}.s7g"), "--symbols", str(folder / "symbols.txt"),
-        "--plant", str(plant or folder / "plant.py"), "--stimulus", str(stimulus),
-        "--cycle-ms", str(cycle_ms), "--cycles", str(cycles), "--watch", ",".join(watch),
-        "--trace", str(trace),
-    ])  # fmt: skip
+    rc = main(
+        [
+            "sim",
+            str(folder / f"{example}.s7g"),
+            "--symbols",
+            str(folder / "symbols.txt"),
+            "--plant",
+            str(plant or folder / "plant.py"),
+            "--stimulus",
+            str(stimulus),
+            "--cycle-ms",
+            str(cycle_ms),
+            "--cycles",
+            str(cycles),
+            "--watch",
+            ",".join(watch),
+            "--trace",
+            str(trace),
+        ]
+    )
     assert rc == 0
     records = [json.loads(line) for line in trace.read_text().splitlines()]
     if every_cycle:

@@ -13,9 +13,17 @@ from tests.examples.helpers import EXAMPLES, entered, path_of, sim_example, stim
 
 EXAMPLE = EXAMPLES / "drill"
 WATCH = (
-    "Dr_mot_on", "Cool_pump_on", "Lower_drill", "Raise_drill", "Clamp_workp",
-    "Cl_press_ok", "Drill_down", "Drill_up", "ERR_FLT", "S_NO",
-)  # fmt: skip
+    "Dr_mot_on",
+    "Cool_pump_on",
+    "Lower_drill",
+    "Raise_drill",
+    "Clamp_workp",
+    "Cl_press_ok",
+    "Drill_down",
+    "Drill_up",
+    "ERR_FLT",
+    "S_NO",
+)
 
 
 def run_sim(
@@ -28,9 +36,14 @@ def run_sim(
 ) -> list[dict]:
     """Run the example's ``s7graph sim`` command; return the trace records."""
     return sim_example(
-        tmp_path, "drill", watch=WATCH, plant=plant, stimulus=stimulus, cycles=cycles,
+        tmp_path,
+        "drill",
+        watch=WATCH,
+        plant=plant,
+        stimulus=stimulus,
+        cycles=cycles,
         cycle_ms=cycle_ms,
-    )  # fmt: skip
+    )
 
 
 @pytest.fixture(scope="module")

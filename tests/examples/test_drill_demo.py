@@ -13,10 +13,14 @@ EXAMPLE = EXAMPLES / "drill"
 
 def _sim(tmp_path: Path, stimulus: list[dict[str, object]], cycles: int) -> list[dict]:
     return sim_example(
-        tmp_path, "drill", plant=EXAMPLE / "demo_plant.py",
-        stimulus=stimulus_file(tmp_path, *stimulus), cycles=cycles,
-        watch=("ERR_FLT", "pieces"), every_cycle=False,
-    )  # fmt: skip
+        tmp_path,
+        "drill",
+        plant=EXAMPLE / "demo_plant.py",
+        stimulus=stimulus_file(tmp_path, *stimulus),
+        cycles=cycles,
+        watch=("ERR_FLT", "pieces"),
+        every_cycle=False,
+    )
 
 
 def test_demo_drill_faults_on_a_slow_clamp_and_holds_s2_without_acknowledgement(
@@ -30,8 +34,11 @@ def test_demo_drill_faults_on_a_slow_clamp_and_holds_s2_without_acknowledgement(
 
 
 def test_demo_drill_goes_on_working_after_each_acknowledgement(tmp_path: Path) -> None:
-    acks = [{"at_ms": t, "set": {"ACK_EF": on}} for k in range(1, 8)
-            for t, on in ((k * 9000, True), (k * 9000 + 100, False))]  # fmt: skip
+    acks = [
+        {"at_ms": t, "set": {"ACK_EF": on}}
+        for k in range(1, 8)
+        for t, on in ((k * 9000, True), (k * 9000 + 100, False))
+    ]
     records = _sim(tmp_path, acks, 7000)
     assert any(r["values"]["ERR_FLT"] for r in records)
     assert records[-1]["values"]["pieces"] >= 5

@@ -13,10 +13,21 @@ from tests.examples.helpers import EXAMPLES, first, on, path_of, sim_example, st
 
 EXAMPLE = EXAMPLES / "mixing"
 WATCH = (
-    "Speisepumpe_A", "Einlassventil_A", "Speiseventil_A", "Speisepumpe_A_Fehler",
-    "Speisepumpe_A_Ein", "Speisepumpe_B", "Einlassventil_B", "Speiseventil_B", "Ruehrwerk",
-    "Abfluss", "Durchfluss_A", "Behaelter_nicht_Leer", "Behaelter_Leer_Anz", "ERR_FLT",
-)  # fmt: skip
+    "Speisepumpe_A",
+    "Einlassventil_A",
+    "Speiseventil_A",
+    "Speisepumpe_A_Fehler",
+    "Speisepumpe_A_Ein",
+    "Speisepumpe_B",
+    "Einlassventil_B",
+    "Speiseventil_B",
+    "Ruehrwerk",
+    "Abfluss",
+    "Durchfluss_A",
+    "Behaelter_nicht_Leer",
+    "Behaelter_Leer_Anz",
+    "ERR_FLT",
+)
 
 
 def run_sim(
@@ -28,9 +39,14 @@ def run_sim(
 ) -> list[dict]:
     """Run the example's ``s7graph sim`` command; return the trace records."""
     return sim_example(
-        tmp_path, "mixing", watch=WATCH, plant=plant, stimulus=stimulus, cycles=cycles,
+        tmp_path,
+        "mixing",
+        watch=WATCH,
+        plant=plant,
+        stimulus=stimulus,
+        cycles=cycles,
         cycle_ms=50,
-    )  # fmt: skip
+    )
 
 
 @pytest.fixture(scope="module")
@@ -43,15 +59,24 @@ def plant_variant(tmp_path: Path, **attrs: object) -> Path:
     return helpers.plant_variant(tmp_path, "mixing", **attrs)
 
 
-START = ({"at_ms": 0, "set": {"NOT_AUS_aus": True}},
-         {"at_ms": 1000, "set": {"Batch_start": True}},
-         {"at_ms": 1500, "set": {"Batch_start": False}})  # fmt: skip
+START = (
+    {"at_ms": 0, "set": {"NOT_AUS_aus": True}},
+    {"at_ms": 1000, "set": {"Batch_start": True}},
+    {"at_ms": 1500, "set": {"Batch_start": False}},
+)
 
 
 def test_mixing_feeds_a_and_b_together_then_mixes_then_drains(records: list[dict]) -> None:
     assert path_of(records) == [
-        ["S1"], ["S2", "S4"], ["S2", "S5"], ["S3", "S5"], ["S6"], ["S7"], ["S8"], ["S1"]
-    ]  # fmt: skip
+        ["S1"],
+        ["S2", "S4"],
+        ["S2", "S5"],
+        ["S3", "S5"],
+        ["S6"],
+        ["S7"],
+        ["S8"],
+        ["S1"],
+    ]
     # both feeds start in the same cycle (simultaneous branch), B (9 s) ends before A (15 s)
     pump_a, pump_b = first(records, on("Speisepumpe_A")), first(records, on("Speisepumpe_B"))
     assert pump_a == pump_b == 1000

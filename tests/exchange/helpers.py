@@ -39,14 +39,31 @@ def import_to(tmp_path: Path, source: Path, *extra: str) -> tuple[int, Path]:
     return main(["import", str(source), "-o", str(out), *extra]), out
 
 
-def sim(tmp_path: Path, chart: Path, *, watch: list[str], stimulus: list[dict] = (),  # type: ignore[assignment]
-        cycles: int, cycle_ms: int = 10) -> list[dict]:  # fmt: skip
+def sim(
+    tmp_path: Path,
+    chart: Path,
+    *,
+    watch: list[str],
+    stimulus: list[dict] = (),  # type: ignore[assignment]
+    cycles: int,
+    cycle_ms: int = 10,
+) -> list[dict]:
     """``s7graph sim`` on ``chart``: one record a cycle."""
     stim = tmp_path / "stimulus.jsonl"
     stim.write_text("".join(json.dumps(s) + "\n" for s in stimulus))
     trace = tmp_path / "trace.jsonl"
-    args = ["sim", str(chart), "--stimulus", str(stim), "--cycles", str(cycles),
-            "--cycle-ms", str(cycle_ms), "--trace", str(trace)]  # fmt: skip
+    args = [
+        "sim",
+        str(chart),
+        "--stimulus",
+        str(stim),
+        "--cycles",
+        str(cycles),
+        "--cycle-ms",
+        str(cycle_ms),
+        "--trace",
+        str(trace),
+    ]
     if watch:
         args += ["--watch", ",".join(watch)]
     assert main(args) == 0

@@ -37,9 +37,11 @@ def test_symbols_out_moves_the_symbols_to_a_table_check_reads(tmp_path: Path) ->
     assert rc == 1
     assert "SYMBOLS" not in out.read_text()
     assert table.read_text().splitlines() == [
-        '"QX2" ; Q0.2 ; BOOL ; IEC %QX2', '"QX3" ; Q0.3 ; BOOL ; IEC %QX3',
-        '"IX2" ; I0.2 ; BOOL ; IEC %IX2', '"IX3" ; I0.3 ; BOOL ; IEC %IX3',
-    ]  # fmt: skip
+        '"QX2" ; Q0.2 ; BOOL ; IEC %QX2',
+        '"QX3" ; Q0.3 ; BOOL ; IEC %QX3',
+        '"IX2" ; I0.2 ; BOOL ; IEC %IX2',
+        '"IX3" ; I0.3 ; BOOL ; IEC %IX3',
+    ]
     assert main(["check", str(out)]) == 2  # the symbols are not in the chart any more
     assert main(["check", str(out), "--symbols", str(table)]) == 0
 
@@ -73,13 +75,18 @@ def test_export_refuses_an_unknown_format_and_a_chart_that_does_not_compile(
 
 
 def test_importable_files_lists_what_import_reads_with_its_format(tmp_path: Path) -> None:
-    for relative in ("plcopen/matiec_SFC_TEST.xml", "simaticml/GraphEnd.xml",
-                     "iec-text/matiec_sfc.txt"):  # fmt: skip
+    for relative in (
+        "plcopen/matiec_SFC_TEST.xml",
+        "simaticml/GraphEnd.xml",
+        "iec-text/matiec_sfc.txt",
+    ):
         (tmp_path / Path(relative).name).write_bytes(corpus(relative).read_bytes())
     (tmp_path / "chart.s7g").write_text((ROOT / "examples/drill/drill.s7g").read_text())
     (tmp_path / "notes.txt").write_text("nothing to see\n")
     (tmp_path / "page.xml").write_text("<html/>")
     assert [(p.name, f) for p, f in importable_files(tmp_path)] == [
-        ("GraphEnd.xml", "simaticml"), ("chart.s7g", "s7g"),
-        ("matiec_SFC_TEST.xml", "plcopen"), ("matiec_sfc.txt", "iec-text"),
-    ]  # fmt: skip
+        ("GraphEnd.xml", "simaticml"),
+        ("chart.s7g", "s7g"),
+        ("matiec_SFC_TEST.xml", "plcopen"),
+        ("matiec_sfc.txt", "iec-text"),
+    ]

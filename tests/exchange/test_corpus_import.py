@@ -16,30 +16,90 @@ from tests.exchange.helpers import codes, corpus, import_to, imported
 # file → (format, [(code, line) of every problem the import reports])
 EXPECTED: dict[str, tuple[str, list[tuple[str, int]]]] = {
     "iec-text/ironplc_first_steps_counter_sfc.st": ("iec-text", [("I023", 12)]),
-    "iec-text/matiec_annexF_gravel.txt": ("iec-text", [
-        ("I022", 34), ("I031", 36), ("I022", 37), ("I031", 38), ("I022", 40), ("I021", 76),
-        ("I021", 77), ("I031", 85), ("I021", 92), ("I021", 96), ("I021", 97), ("I024", 102)]),
+    "iec-text/matiec_annexF_gravel.txt": (
+        "iec-text",
+        [
+            ("I022", 34),
+            ("I031", 36),
+            ("I022", 37),
+            ("I031", 38),
+            ("I022", 40),
+            ("I021", 76),
+            ("I021", 77),
+            ("I031", 85),
+            ("I021", 92),
+            ("I021", 96),
+            ("I021", 97),
+            ("I024", 102),
+        ],
+    ),
     "iec-text/matiec_sfc.txt": ("iec-text", [("I023", 3), ("I023", 6), ("I024", 158)]),
-    "plcopen/beremiz_first_steps.xml": ("plcopen", [
-        ("I024", 20), ("I024", 72), ("I024", 451), ("I024", 494), ("I024", 910),
-        ("I024", 963), ("I024", 1141)]),
-    "plcopen/beremiz_test_svgui.xml": ("plcopen", [
-        ("I023", 29), ("I023", 73), ("I024", 93), ("I024", 1157), ("I024", 1306),
-        ("I024", 1557), ("I023", 1971), ("I023", 1976), ("I021", 1994), ("I020", 2678),
-        ("I024", 2693)]),
-    "plcopen/beremiz_traffic_light.xml": ("plcopen", [
-        ("I031", 62), ("I031", 67), ("I022", 97), ("I022", 102), ("I022", 107), ("I021", 266),
-        ("I021", 288), ("I031", 490), ("I031", 494), ("I022", 932), ("I022", 1091),
-        ("I024", 1214), ("I024", 1419)]),
-    "plcopen/iec_checker_example.xml": ("plcopen", [
-        ("I024", 26), ("I024", 260), ("I024", 400), ("I021", 496), ("I020", 799),
-        ("I031", 802), ("I024", 809), ("I024", 868), ("I024", 895)]),
+    "plcopen/beremiz_first_steps.xml": (
+        "plcopen",
+        [
+            ("I024", 20),
+            ("I024", 72),
+            ("I024", 451),
+            ("I024", 494),
+            ("I024", 910),
+            ("I024", 963),
+            ("I024", 1141),
+        ],
+    ),
+    "plcopen/beremiz_test_svgui.xml": (
+        "plcopen",
+        [
+            ("I023", 29),
+            ("I023", 73),
+            ("I024", 93),
+            ("I024", 1157),
+            ("I024", 1306),
+            ("I024", 1557),
+            ("I023", 1971),
+            ("I023", 1976),
+            ("I021", 1994),
+            ("I020", 2678),
+            ("I024", 2693),
+        ],
+    ),
+    "plcopen/beremiz_traffic_light.xml": (
+        "plcopen",
+        [
+            ("I031", 62),
+            ("I031", 67),
+            ("I022", 97),
+            ("I022", 102),
+            ("I022", 107),
+            ("I021", 266),
+            ("I021", 288),
+            ("I031", 490),
+            ("I031", 494),
+            ("I022", 932),
+            ("I022", 1091),
+            ("I024", 1214),
+            ("I024", 1419),
+        ],
+    ),
+    "plcopen/iec_checker_example.xml": (
+        "plcopen",
+        [
+            ("I024", 26),
+            ("I024", 260),
+            ("I024", 400),
+            ("I021", 496),
+            ("I020", 799),
+            ("I031", 802),
+            ("I024", 809),
+            ("I024", 868),
+            ("I024", 895),
+        ],
+    ),
     "plcopen/matiec_SFC_TEST.xml": ("plcopen", [("I023", 40), ("I023", 53), ("I024", 783)]),
     "simaticml/GraphBranch2.xml": ("simaticml", []),
     "simaticml/GraphBranchAbortOption.xml": ("simaticml", []),
     "simaticml/GraphEnd.xml": ("simaticml", []),
     "simaticml/StepSequence.xml": ("simaticml", [("I032", 34)]),
-}  # fmt: skip
+}
 
 
 def edges(chart: Chart) -> list[tuple[int, tuple[int, ...], tuple[int, ...]]]:
@@ -74,7 +134,11 @@ def test_matiec_sfc_test_keeps_its_four_way_alternative_and_three_way_branch() -
     n = steps(chart)
     out_of_step2 = [t for t in chart.all_transitions() if t.sources == (n["STEP2"],)]
     assert [t.targets for t in out_of_step2] == [
-        (n["A1"],), (n["A2"],), (n["A3"],), (n["D1"], n["D2"], n["D3"])]  # fmt: skip
+        (n["A1"],),
+        (n["A2"],),
+        (n["A3"],),
+        (n["D1"], n["D2"], n["D3"]),
+    ]
     join = next(t for t in chart.all_transitions() if len(t.sources) == 3)
     assert join.sources == (n["E1"], n["E2"], n["E3"]) and join.targets == (n["GO"],)
 
@@ -85,8 +149,10 @@ def test_xml_and_textual_twins_of_sfc_test_give_the_same_chart_shape() -> None:
 
     def shape(chart: Chart) -> set[tuple[tuple[str, ...], tuple[str, ...]]]:
         name = {s.number: s.name for s in chart.all_steps()}
-        return {(tuple(name[s] for s in t.sources), tuple(name[s] for s in t.targets))
-                for t in chart.all_transitions()}  # fmt: skip
+        return {
+            (tuple(name[s] for s in t.sources), tuple(name[s] for s in t.targets))
+            for t in chart.all_transitions()
+        }
 
     assert shape(xml) == shape(text)
 
@@ -117,9 +183,14 @@ def test_tia_branch_export_keeps_numbers_names_alternatives_and_jumps() -> None:
     assert chart.name == "FB_SEQ_One" and chart.fb_number == 1234
     assert steps(chart) == {"Step 1": 1, "Step 21": 21, "Step 27": 27, "Step 32": 32, "Step 43": 43}
     assert edges(chart) == [
-        (1, (1,), (21,)), (21, (21,), (27,)), (121, (21,), (32,)), (27, (27,), (32,)),
-        (127, (27,), (43,)), (32, (32,), (43,)), (43, (43,), (1,)),
-    ]  # fmt: skip
+        (1, (1,), (21,)),
+        (21, (21,), (27,)),
+        (121, (21,), (32,)),
+        (27, (27,), (32,)),
+        (127, (27,), (43,)),
+        (32, (32,), (43,)),
+        (43, (43,), (1,)),
+    ]
     assert chart.all_transitions()[2].name == "Abort Step (121)"
     assert all(t.condition is None for t in chart.all_transitions())  # coil on the rail
 
@@ -127,7 +198,10 @@ def test_tia_branch_export_keeps_numbers_names_alternatives_and_jumps() -> None:
 def test_tia_three_way_alternative_lists_its_paths_in_branch_order() -> None:
     chart = imported("simaticml/GraphBranchAbortOption.xml").chart
     assert [(t.number, t.targets) for t in chart.all_transitions() if t.sources == (21,)] == [
-        (21, (27,)), (121, (32,)), (221, (43,))]  # fmt: skip
+        (21, (27,)),
+        (121, (32,)),
+        (221, (43,)),
+    ]
 
 
 def test_tia_end_connection_is_a_branch_stop() -> None:

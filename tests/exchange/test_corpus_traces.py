@@ -63,8 +63,13 @@ def test_matiec_sfc_test_drives_itself_except_ix2(relative: str, tmp_path: Path)
     label = names(source)
     idle = sim(tmp_path, chart, watch=["QX1", "IX1"], cycles=20)
     assert step_names(idle, label) == [["STEP1"]]
-    records = sim(tmp_path, chart, watch=["QX1", "QX2", "QX3", "IX1", "IX2"], cycles=30,
-                  stimulus=[{"at_ms": 50, "set": {"IX2": True}}])  # fmt: skip
+    records = sim(
+        tmp_path,
+        chart,
+        watch=["QX1", "QX2", "QX3", "IX1", "IX2"],
+        cycles=30,
+        stimulus=[{"at_ms": 50, "set": {"IX2": True}}],
+    )
     assert step_names(records, label) == SFC_TEST_PATH
     # GO is held by the startup call (an initial step is active for the call that activates
     # it, docs/semantics.md) and switches in cycle 0; IX2 at 50 ms lets STEP1 go.
@@ -114,8 +119,13 @@ def test_first_steps_counter_sfc_counts_like_the_st_version(tmp_path: Path) -> N
 
 # ---------------------------------------------------------------- Beremiz traffic light
 
-LIGHTS = ["RED_LIGHT", "ORANGE_LIGHT", "GREEN_LIGHT", "PEDESTRIAN_RED_LIGHT",
-          "PEDESTRIAN_GREEN_LIGHT"]  # fmt: skip
+LIGHTS = [
+    "RED_LIGHT",
+    "ORANGE_LIGHT",
+    "GREEN_LIGHT",
+    "PEDESTRIAN_RED_LIGHT",
+    "PEDESTRIAN_GREEN_LIGHT",
+]
 
 
 def traffic_light(tmp_path: Path, stimulus: list[dict], cycles: int) -> tuple[list[dict], dict]:
@@ -132,10 +142,12 @@ def test_traffic_light_cycles_through_its_d_timed_steps_until_stop(tmp_path: Pat
     in the next call; STOP (SWITCH_BUTTON off) jumps back to Standstill from any step."""
     records, label = traffic_light(
         tmp_path,
-        [{"at_ms": 0, "set": {"SWITCH_BUTTON": True}},
-         {"at_ms": 50_000, "set": {"SWITCH_BUTTON": False}}],
+        [
+            {"at_ms": 0, "set": {"SWITCH_BUTTON": True}},
+            {"at_ms": 50_000, "set": {"SWITCH_BUTTON": False}},
+        ],
         520,
-    )  # fmt: skip
+    )
     seen = [(t, [label[s] for s in active], lit) for t, active, lit in changes(records, *LIGHTS)]
     assert seen == [
         (0, ["ORANGE"], ["ORANGE_LIGHT", "PEDESTRIAN_RED_LIGHT"]),
@@ -157,10 +169,12 @@ def test_traffic_light_alternative_without_priority_takes_the_left_path(tmp_path
     import writes them in that order, and the GRAPH rule applies."""
     records, label = traffic_light(
         tmp_path,
-        [{"at_ms": 0, "set": {"SWITCH_BUTTON": True}},
-         {"at_ms": 2100, "set": {"SWITCH_BUTTON": False}}],
+        [
+            {"at_ms": 0, "set": {"SWITCH_BUTTON": True}},
+            {"at_ms": 2100, "set": {"SWITCH_BUTTON": False}},
+        ],
         25,
-    )  # fmt: skip
+    )
     at = next(r for r in records if r["t_ms"] == 2100)
     assert [label[s] for s in at["active"]] == ["Standstill"]
 
@@ -178,10 +192,14 @@ def tia(tmp_path: Path, name: str) -> tuple[Path, Chart]:
 def with_switches(chart: Chart, tmp_path: Path) -> Path:
     """The chart with each transition's condition replaced by an FB variable ``go<n>``."""
     seqs = tuple(
-        dataclasses.replace(q, transitions=tuple(
-            dataclasses.replace(t, condition=Operand(f"go{t.number}")) for t in q.transitions))
+        dataclasses.replace(
+            q,
+            transitions=tuple(
+                dataclasses.replace(t, condition=Operand(f"go{t.number}")) for t in q.transitions
+            ),
+        )
         for q in chart.sequences
-    )  # fmt: skip
+    )
     decls = tuple(VarDecl(f"go{t.number}", "BOOL") for t in chart.all_transitions())
     path = tmp_path / "switches.s7g"
     path.write_text(format_chart(dataclasses.replace(chart, sequences=seqs, vars=decls)))
@@ -211,8 +229,9 @@ def test_tia_alternative_paths_jump_where_the_xml_says(tmp_path: Path) -> None:
     path = with_switches(chart, tmp_path)
     enable = {"go1": True, "go27": True, "go32": True, "go43": True}
     for go, expected in (("go121", ["S21", "S32"]), ("go221", ["S21", "S43"])):
-        records = sim(tmp_path, path, watch=[], cycles=4,
-                      stimulus=[{"at_ms": 0, "set": {**enable, go: True}}])  # fmt: skip
+        records = sim(
+            tmp_path, path, watch=[], cycles=4, stimulus=[{"at_ms": 0, "set": {**enable, go: True}}]
+        )
         events = [e for r in records for e in r["events"]]
         assert events[:2] == [["S1", "S21"], expected]
 
@@ -220,8 +239,12 @@ def test_tia_alternative_paths_jump_where_the_xml_says(tmp_path: Path) -> None:
 def test_tia_branch_stop_ends_the_chain(tmp_path: Path) -> None:
     chart_path, _ = tia(tmp_path, "GraphEnd")
     records = sim(tmp_path, chart_path, watch=[], cycles=5)
-    assert [r["events"] for r in records][:4] == [[["S1", "S21"]], [["S21", "S32"]],
-                                                  [["S32", "S43"]], [["S43", "STOP"]]]  # fmt: skip
+    assert [r["events"] for r in records][:4] == [
+        [["S1", "S21"]],
+        [["S21", "S32"]],
+        [["S32", "S43"]],
+        [["S43", "STOP"]],
+    ]
     assert records[-1]["active"] == []
 
 
@@ -230,10 +253,14 @@ def test_tia_v16_sequence_switches_on_its_lad_condition_and_stops(tmp_path: Path
     or single step) leads to Step2, whose N row writes CurrentStep := 2; Trans2 ends it."""
     chart_path, _ = tia(tmp_path, "StepSequence")
     watch = ['"StepData.Values.CurrentStep"']
-    tags = {"StepData.Values.CylcleState": 1, "StepData.Values.StepMode": 0,
-            "StepData.Values.CurrentTime": 5}  # fmt: skip
-    records = sim(tmp_path, chart_path, watch=watch, cycles=6,
-                  stimulus=[{"at_ms": 20, "set": tags}])  # fmt: skip
+    tags = {
+        "StepData.Values.CylcleState": 1,
+        "StepData.Values.StepMode": 0,
+        "StepData.Values.CurrentTime": 5,
+    }
+    records = sim(
+        tmp_path, chart_path, watch=watch, cycles=6, stimulus=[{"at_ms": 20, "set": tags}]
+    )
     assert [r["values"][watch[0]] for r in records[:2]] == [1, 1]
     assert records[2]["events"] == [["S1", "S2"]] and records[2]["values"][watch[0]] == 2
     assert records[3]["events"] == [["S2", "STOP"]]

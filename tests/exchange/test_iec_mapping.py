@@ -17,9 +17,11 @@ DOC = Path(__file__).resolve().parents[2] / "docs" / "import-export.md"
 
 
 def program(body: str, decls: str = "x : BOOL; y : BOOL; n : INT;") -> bytes:
-    return (f"PROGRAM P\nVAR {decls} END_VAR\nINITIAL_STEP A:\nEND_STEP\n{body}\n"
-            "TRANSITION FROM A TO B := x; END_TRANSITION\n"
-            "TRANSITION FROM B TO A := NOT x; END_TRANSITION\nEND_PROGRAM\n").encode()  # fmt: skip
+    return (
+        f"PROGRAM P\nVAR {decls} END_VAR\nINITIAL_STEP A:\nEND_STEP\n{body}\n"
+        "TRANSITION FROM A TO B := x; END_TRANSITION\n"
+        "TRANSITION FROM B TO A := NOT x; END_TRANSITION\nEND_PROGRAM\n"
+    ).encode()
 
 
 def rows_of(chart: Chart, step: str) -> list[str]:
@@ -29,9 +31,16 @@ def rows_of(chart: Chart, step: str) -> list[str]:
 
 @pytest.mark.parametrize(
     ("association", "row"),
-    [("y(N)", "N y;"), ("y(S)", "S y;"), ("y(R)", "R y;"), ("y(P)", "S1 N y;"),
-     ("y(P1)", "S1 N y;"), ("y(D, T#2s)", "D y, T#2s;"), ("y(L, T#500ms)", "L y, T#500ms;")],
-)  # fmt: skip
+    [
+        ("y(N)", "N y;"),
+        ("y(S)", "S y;"),
+        ("y(R)", "R y;"),
+        ("y(P)", "S1 N y;"),
+        ("y(P1)", "S1 N y;"),
+        ("y(D, T#2s)", "D y, T#2s;"),
+        ("y(L, T#500ms)", "L y, T#500ms;"),
+    ],
+)
 def test_boolean_action_variable_maps_to_its_graph_row(association: str, row: str) -> None:
     result = import_chart(program(f"STEP B: {association}; END_STEP"), "p.st")
     assert rows_of(result.chart, "B") == [row]
@@ -46,8 +55,10 @@ def test_qualifier_without_equivalent_on_a_variable_is_reported_at_its_line(qual
 
 
 def test_st_body_statements_become_rows_or_gated_permanent_coils() -> None:
-    body = ("STEP B: ACT(N); END_STEP\nACTION ACT:\n y := TRUE;\n n := n + 1;\n"
-            " x := y AND NOT x;\nEND_ACTION")  # fmt: skip
+    body = (
+        "STEP B: ACT(N); END_STEP\nACTION ACT:\n y := TRUE;\n n := n + 1;\n"
+        " x := y AND NOT x;\nEND_ACTION"
+    )
     result = import_chart(program(body), "p.st")
     assert rows_of(result.chart, "B") == ["S y;", "N n := n + 1;"]
     assert "x := S2.X AND y AND NOT x OR NOT S2.X AND x;" in format_chart(result.chart)
@@ -62,18 +73,23 @@ def test_a_pulse_body_assigning_a_bit_is_gated_by_a_one_call_pulse(tmp_path: Pat
     assert rows_of(result.chart, "B") == ["S1 N B_P1;"]
     chart = tmp_path / "p.s7g"
     chart.write_text(format_chart(result.chart))
-    records = sim(tmp_path, chart, watch=["y"], cycles=6,
-                  stimulus=[{"at_ms": 10, "set": {"x": True}}])  # fmt: skip
+    records = sim(
+        tmp_path, chart, watch=["y"], cycles=6, stimulus=[{"at_ms": 10, "set": {"x": True}}]
+    )
     assert [r["values"]["y"] for r in records] == [False, True, True, True, True, True]
 
 
 def test_statements_beyond_assignments_are_reported_where_they_are() -> None:
-    body = ("STEP B: ACT(N); END_STEP\nACTION ACT:\n IF x THEN y := TRUE; END_IF;\n"
-            " E1(CLK := x);\nEND_ACTION")  # fmt: skip
+    body = (
+        "STEP B: ACT(N); END_STEP\nACTION ACT:\n IF x THEN y := TRUE; END_IF;\n"
+        " E1(CLK := x);\nEND_ACTION"
+    )
     result = import_chart(program(body, "x : BOOL; y : BOOL; E1 : R_TRIG;"), "p.st")
     assert rows_of(result.chart, "B") == []
     assert [(d.code, d.loc.line, d.loc.col) for d in result.problems] == [
-        ("I021", 7, 2), ("I021", 8, 2)]  # fmt: skip
+        ("I021", 7, 2),
+        ("I021", 8, 2),
+    ]
     assert "IF statement" in result.problems[0].message
     assert "call of E1 : R_TRIG not imported" in result.problems[1].message
 
@@ -93,7 +109,8 @@ def test_an_iec_timer_called_in_an_action_is_a_call_of_its_system_block(tmp_path
     )
     result = import_chart(text.encode(), "p.st")
     assert rows_of(result.chart, "B") == [
-        "CALL SFB 4, DB 100 (IN := TRUE, PT := T#50ms, Q => T1_Q, ET => T1_ET);"]  # fmt: skip
+        "CALL SFB 4, DB 100 (IN := TRUE, PT := T#50ms, Q => T1_Q, ET => T1_ET);"
+    ]
     written = format_chart(result.chart)
     assert "CALL SFB 0, DB 101 (CU := x, PV := 3, Q => C1_Q, CV => C1_CV);" in written
     assert [d.code for d in result.problems] == ["I031", "I031"]  # called as SFB n, DB m
@@ -101,8 +118,9 @@ def test_an_iec_timer_called_in_an_action_is_a_call_of_its_system_block(tmp_path
     assert ["once more" in d.message for d in result.problems] == [True, False]
     chart = tmp_path / "p.s7g"
     chart.write_text(written)
-    records = sim(tmp_path, chart, watch=["C1_CV"], cycles=12,
-                  stimulus=[{"at_ms": 10, "set": {"x": True}}])  # fmt: skip
+    records = sim(
+        tmp_path, chart, watch=["C1_CV"], cycles=12, stimulus=[{"at_ms": 10, "set": {"x": True}}]
+    )
     active = [r["active"] for r in records]
     assert active[1] == ["S2"] and active[6] == ["S2"] and active[7] == ["S3"]
     assert records[-1]["values"]["C1_CV"] == 1
@@ -119,21 +137,27 @@ def test_priority_orders_the_paths_of_an_alternative() -> None:
 
 
 def test_located_variables_are_symbols_unless_s7_would_change_them() -> None:
-    text = (b"PROGRAM P\nVAR\n a AT %IX0.1 : BOOL;\n q AT %QX0.2 : BOOL := TRUE;\n"
-            b" w AT %MW4 : INT;\n i AT %IX1.0 : BOOL;\nEND_VAR\nINITIAL_STEP A: END_STEP\n"
-            b"STEP B: i(S); END_STEP\nTRANSITION FROM A TO B := a AND q AND w > 0; "
-            b"END_TRANSITION\nEND_PROGRAM\n")  # fmt: skip
+    text = (
+        b"PROGRAM P\nVAR\n a AT %IX0.1 : BOOL;\n q AT %QX0.2 : BOOL := TRUE;\n"
+        b" w AT %MW4 : INT;\n i AT %IX1.0 : BOOL;\nEND_VAR\nINITIAL_STEP A: END_STEP\n"
+        b"STEP B: i(S); END_STEP\nTRANSITION FROM A TO B := a AND q AND w > 0; "
+        b"END_TRANSITION\nEND_PROGRAM\n"
+    )
     result = import_chart(text, "p.st")
     assert [(s.name, s.address, s.type) for s in result.chart.symbols] == [
-        ("a", "I0.1", "BOOL"), ("w", "MW4", "INT")]  # fmt: skip
+        ("a", "I0.1", "BOOL"),
+        ("w", "MW4", "INT"),
+    ]
     assert [v.name for v in result.chart.vars] == ["q", "i"]
     assert codes(result.problems) == [("I023", 4), ("I023", 6)]
 
 
 def test_names_graph_reserves_are_renamed_and_reported() -> None:
-    text = (b"PROGRAM P\nVAR STOP : BOOL; S_NO : INT; END_VAR\nINITIAL_STEP A: END_STEP\n"
-            b"STEP B: END_STEP\nTRANSITION FROM A TO B := STOP AND S_NO > 1; END_TRANSITION\n"
-            b"END_PROGRAM\n")  # fmt: skip
+    text = (
+        b"PROGRAM P\nVAR STOP : BOOL; S_NO : INT; END_VAR\nINITIAL_STEP A: END_STEP\n"
+        b"STEP B: END_STEP\nTRANSITION FROM A TO B := STOP AND S_NO > 1; END_TRANSITION\n"
+        b"END_PROGRAM\n"
+    )
     result = import_chart(text, "p.st")
     assert [v.name for v in result.chart.vars] == ["STOP_", "S_NO_"]
     assert "STOP_ AND S_NO_ > 1" in format_chart(result.chart)

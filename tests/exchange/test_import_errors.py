@@ -73,9 +73,11 @@ def test_malformed_xml_is_one_error_where_the_parser_stopped() -> None:
 
 
 def test_entities_are_refused_not_expanded() -> None:
-    bomb = (b'<?xml version="1.0"?>\n<!DOCTYPE project [<!ENTITY a "aaaaaaaaaa">'
-            b'<!ENTITY b "&a;&a;&a;&a;&a;&a;&a;&a;">]>\n'
-            b'<project xmlns="http://www.plcopen.org/xml/tc6_0201">&b;</project>')  # fmt: skip
+    bomb = (
+        b'<?xml version="1.0"?>\n<!DOCTYPE project [<!ENTITY a "aaaaaaaaaa">'
+        b'<!ENTITY b "&a;&a;&a;&a;&a;&a;&a;&a;">]>\n'
+        b'<project xmlns="http://www.plcopen.org/xml/tc6_0201">&b;</project>'
+    )
     assert [c for c, _, _ in failure(bomb)] == ["I002"]
 
 
@@ -93,9 +95,11 @@ def test_textual_sfc_syntax_error_is_located() -> None:
 
 
 def test_an_il_condition_or_an_unknown_step_means_no_chart() -> None:
-    text = (b"PROGRAM P\nVAR a : BOOL; END_VAR\nINITIAL_STEP S: END_STEP\nSTEP T: END_STEP\n"
-            b"TRANSITION FROM S TO T : LD a\nEND_TRANSITION\n"
-            b"TRANSITION FROM T TO Nowhere := a; END_TRANSITION\nEND_PROGRAM\n")  # fmt: skip
+    text = (
+        b"PROGRAM P\nVAR a : BOOL; END_VAR\nINITIAL_STEP S: END_STEP\nSTEP T: END_STEP\n"
+        b"TRANSITION FROM S TO T : LD a\nEND_TRANSITION\n"
+        b"TRANSITION FROM T TO Nowhere := a; END_TRANSITION\nEND_PROGRAM\n"
+    )
     assert [(c, line) for c, line, _ in failure(text, "p.st")] == [("I012", 5), ("I010", 7)]
 
 

@@ -64,11 +64,15 @@ def test_plcopen_export_is_an_iec_sfc_with_the_same_steps_conditions_and_rows() 
 
     def shape(c: Chart) -> list[object]:
         return [
-            [(s.number, s.name, s.initial, [format_row(r) for r in s.actions])
-             for s in c.all_steps()],
-            [(t.number, t.name, t.sources, t.targets, unlocated(t.condition))
-             for t in c.all_transitions()],
-        ]  # fmt: skip
+            [
+                (s.number, s.name, s.initial, [format_row(r) for r in s.actions])
+                for s in c.all_steps()
+            ],
+            [
+                (t.number, t.name, t.sources, t.targets, unlocated(t.condition))
+                for t in c.all_transitions()
+            ],
+        ]
 
     assert shape(back) == shape(chart)
     assert {s.name: s.address for s in back.symbols} == {s.name: str(s.address) for s in table}
@@ -108,7 +112,8 @@ def test_an_iec_timer_call_goes_to_plcopen_as_an_fb_instance_and_comes_back() ->
     assert [format_row(r) for r in back.all_steps()[0].actions] == [
         "CALL SFB 4, DB 10 (IN := I0.0, PT := T#2S, Q => done, ET => waited);",
         "CALL SFB 1, DB 11 (CD := I0.1, LOAD := I0.2, PV := 3, Q => CTD_DB11_Q, "
-        "CV => CTD_DB11_CV);"]  # fmt: skip
+        "CV => CTD_DB11_CV);",
+    ]
 
 
 def test_a_row_simaticml_cannot_hold_is_one_clear_export_error(
@@ -146,4 +151,8 @@ def test_a_jump_into_another_chart_keeps_both_charts_when_read_as_iec() -> None:
         ["Wait", "Other"],
     ]
     assert [(t.sources, t.targets) for t in back.all_transitions()] == [
-        ((1,), (2,)), ((2,), (4,)), ((3,), (4,)), ((4,), (3,))]  # fmt: skip
+        ((1,), (2,)),
+        ((2,), (4,)),
+        ((3,), (4,)),
+        ((4,), (3,)),
+    ]

@@ -278,9 +278,14 @@ def read_trace(out: Path) -> list[dict]:
 
 
 def sim_trace(
-    tmp_path: Path, chart: str, stim: list[dict], *, cycles: int, watch: str = "",
+    tmp_path: Path,
+    chart: str,
+    stim: list[dict],
+    *,
+    cycles: int,
+    watch: str = "",
     cycle_ms: float = 10,
-) -> tuple[int, list[dict]]:  # fmt: skip
+) -> tuple[int, list[dict]]:
     """One ``s7graph sim`` run of ``chart`` with the stimuli ``stim``: (exit status, trace)."""
     c, s, out = write_sim_inputs(tmp_path, chart, stim)
     rc = sim_command(c, stimulus=s, cycle_ms=cycle_ms, cycles=cycles, watch=watch, trace=out)

@@ -25,7 +25,7 @@ def _drill(tmp_path: Path, *edits: tuple[str, str]) -> CompiledChart:
 
 
 def test_the_fingerprint_names_what_the_chart_does_not_how_it_is_written(tmp_path: Path) -> None:
-    same = _drill(tmp_path, ("STEP S2 \"Clamp\"", "STEP   S2   \"Clamp\""), ("(*", "(* moved"))
+    same = _drill(tmp_path, ('STEP S2 "Clamp"', 'STEP   S2   "Clamp"'), ("(*", "(* moved"))
     other = _drill(tmp_path, ("S5.T >= dwell", "S5.T > dwell"))
     assert fingerprint(same) == fingerprint(_drill(tmp_path))
     assert fingerprint(other) != fingerprint(same)
@@ -35,12 +35,15 @@ def test_active_steps_keep_their_times_and_what_is_gone_is_reported(tmp_path: Pa
     old = _drill(tmp_path)
     new = _drill(
         tmp_path,
-        ('STEP S3 "Coolant" "No coolant pressure":\n    SUPERVISION := S3.U > T#2S;\n'
-         '    S1 S "Cool_pump_on";\n  END_STEP\n', ""),
+        (
+            'STEP S3 "Coolant" "No coolant pressure":\n    SUPERVISION := S3.U > T#2S;\n'
+            '    S1 S "Cool_pump_on";\n  END_STEP\n',
+            "",
+        ),
         ('"Clamped, coolant" FROM S2 TO S3', '"Clamped, coolant" FROM S2 TO S4'),
         ('TRANSITION T4 "Coolant flows" FROM S3 TO S4 := "Cool_press_ok";\n', ""),
         ("pieces : INT := 0;", "pieces : DINT := 0;  spare : BOOL := TRUE;"),
-    )  # fmt: skip
+    )
     st = new_state(old)
     for i, t_ms in ((2, 700), (3, 1200)):  # S3 and S4, a simultaneous pair for the test
         st.x[i] = True

@@ -288,8 +288,11 @@ def test_a_condition_reading_a_word_works_in_a_chart_of_seventeen_steps() -> Non
     step 17's (index 16) once replaced the helper that reads a signed word."""
     steps = "".join(f"  STEP S{n}: END_STEP\n" for n in range(2, 18))
     arcs = "".join(f"  TRANSITION T{n} FROM S{n} TO S{n + 1} := TRUE;\n" for n in range(2, 17))
-    c = Chart(seq(f"  INITIAL_STEP S1: END_STEP\n{steps}"
-                  f"  TRANSITION T1 FROM S1 TO S2 := MW4 > 3;\n{arcs}"))  # fmt: skip
+    c = Chart(
+        seq(
+            f"  INITIAL_STEP S1: END_STEP\n{steps}  TRANSITION T1 FROM S1 TO S2 := MW4 > 3;\n{arcs}"
+        )
+    )
     c.call()
     c.set(MW4=5)
     c.call()

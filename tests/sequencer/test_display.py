@@ -198,8 +198,11 @@ def test_group_bits_options_and_modes_come_from_the_state() -> None:
     assert (out["IL_ENABLED"], out["SV_ENABLED"]) == (False, False)
     assert (out["ACKREQ_ENABLED"], out["SSKIP_ENABLED"]) == (False, True)
     assert [out[m] for m in ("AUTO_ON", "TAP_ON", "TOP_ON", "MAN_ON")] == [
-        False, False, True, False,
-    ]  # fmt: skip
+        False,
+        False,
+        True,
+        False,
+    ]
 
 
 def test_outputs_are_exactly_those_of_the_charts_parameter_set() -> None:

@@ -116,16 +116,25 @@ def charts(draw: Any, fb: int) -> str:
     tr_numbers = list(range(1, sum(sizes) + 1))  # one leaving each step, at least
     params = draw(hs.sampled_from(["STANDARD", "STANDARD", "MAXIMUM", "USER", "MINIMUM"]))
     options = [f"  PARAMETERS := {params};"]
-    for option, percent in (("SKIP_STEPS", (0, 10, 20)), ("ORDER := CODESYS", (0, 10, 20)),
-                            ("ACK_REQUIRED := FALSE", (20, 30, 30)),
-                            ("ACK_FORCES_SWITCH", (0, 10, 20))):  # fmt: skip
+    for option, percent in (
+        ("SKIP_STEPS", (0, 10, 20)),
+        ("ORDER := CODESYS", (0, 10, 20)),
+        ("ACK_REQUIRED := FALSE", (20, 30, 30)),
+        ("ACK_FORCES_SWITCH", (0, 10, 20)),
+    ):
         if chance(*percent):
             options.append(f"  {option if ':=' in option else option + ' := TRUE'};")
-    text = [f'FUNCTION_BLOCK "R{fb}" FB {fb} DB {fb}', *options,
-            "VAR v : INT := 0; w : INT := 0; END_VAR"]  # fmt: skip
+    text = [
+        f'FUNCTION_BLOCK "R{fb}" FB {fb} DB {fb}',
+        *options,
+        "VAR v : INT := 0; w : INT := 0; END_VAR",
+    ]
     if chance(10, 20, 20):
-        text += ["PERMANENT BEFORE", f"  M1.0 := {draw(hs.sampled_from(IN_BITS))};",
-                 "END_PERMANENT"]  # fmt: skip
+        text += [
+            "PERMANENT BEFORE",
+            f"  M1.0 := {draw(hs.sampled_from(IN_BITS))};",
+            "END_PERMANENT",
+        ]
     if chance(10, 20, 20):
         text += ["PERMANENT AFTER", "  S M1.2 := M1.1;", "END_PERMANENT"]
     tr = iter(range(1, 4 * len(every) + 1))
@@ -182,8 +191,11 @@ def programs(draw: Any) -> Program:
             sel = draw(hs.sampled_from([0, 7, 11, 12, 13, 21, 22, 31]))  # steps are 11.., 21..
             stim["pin"] = (pin, sel if pin == "S_SEL" else draw(hs.booleans()))
         if draw(hs.integers(0, 15)) == 0:
-            stim["command"] = draw(hs.sampled_from(["ACK_EF", "INIT_SQ", "SW_MAN", "SW_AUTO",
-                                                    "S_ON", "T_PUSH", "OFF_SQ"]))  # fmt: skip
+            stim["command"] = draw(
+                hs.sampled_from(
+                    ["ACK_EF", "INIT_SQ", "SW_MAN", "SW_AUTO", "S_ON", "T_PUSH", "OFF_SQ"]
+                )
+            )
             stim["step"] = draw(hs.sampled_from([None, 11, 12, 21]))
         if draw(hs.integers(0, 8)) == 0:
             stim["ms"] = draw(hs.sampled_from([0, 1, 25]))
@@ -239,8 +251,10 @@ def _call_lists(g: GraphFB) -> tuple[list[int], ...]:
 
 
 def _fb(body: str) -> str:
-    return (f'FUNCTION_BLOCK "R1" FB 1 DB 1\n  PARAMETERS := STANDARD;\n'
-            f"VAR v : INT := 0; w : INT := 0; END_VAR\n{body}END_FUNCTION_BLOCK\n")  # fmt: skip
+    return (
+        f'FUNCTION_BLOCK "R1" FB 1 DB 1\n  PARAMETERS := STANDARD;\n'
+        f"VAR v : INT := 0; w : INT := 0; END_VAR\n{body}END_FUNCTION_BLOCK\n"
+    )
 
 
 # corners the random charts reach rarely
@@ -310,8 +324,12 @@ END_SEQUENCE
     into_s12 = [{}, {}, {"I0": 1}, {}, {"I0": 0}, {}]
     interlock_lost = [{"I0": 2}, {}, {"I0": 4}, {"I0": 0}, {}]  # quiet calls in AUTO
     in_man = [{"pin": ("SW_MAN", True)}, {"I0": 2}, {"I0": 4}, {"I0": 0}, {}]  # general ones
-    for chart, scans in ((text, cut_short), (text, into_s12), (before, interlock_lost),
-                         (before, in_man)):  # fmt: skip
+    for chart, scans in (
+        (text, cut_short),
+        (text, into_s12),
+        (before, interlock_lost),
+        (before, in_man),
+    ):
         for ob121 in ((), (OB(121, "OB121", lambda ctx: None),)):
             seen = {}
             for fast in (True, False):

@@ -69,8 +69,23 @@ def test_the_writer_adds_parentheses_only_where_precedence_needs_them() -> None:
 
 # ---------------------------------------------------------------- generated charts
 
-_LITERALS = ["TRUE", "FALSE", "0", "5", "40000", "-7", "1.5", "T#2S", "T#500MS", "T#1H2M",
-             "W#16#FF", "DW#16#1", "C#5", "S5T#2S", "'text'"]  # fmt: skip
+_LITERALS = [
+    "TRUE",
+    "FALSE",
+    "0",
+    "5",
+    "40000",
+    "-7",
+    "1.5",
+    "T#2S",
+    "T#500MS",
+    "T#1H2M",
+    "W#16#FF",
+    "DW#16#1",
+    "C#5",
+    "S5T#2S",
+    "'text'",
+]
 _VARS = ["count", "dwell", "flag", "IX1", "T5_done"]
 _BITS = ["M0.1", "Q1.2"]
 _ADDRESSES = ["I0.7", "Q4.1", "M10.3", "MW10", "MD12", "DB1.DBX0.0", "DB2.DBW4", "T5", "C3"]
@@ -97,8 +112,24 @@ leaves = st.one_of(
     st.builds(StepAttr, st.integers(1, 300), st.sampled_from(["X", "T", "U"])),
     st.builds(TransAttr, st.integers(1, 300), st.just("TT")),
 )
-_OPS = ["OR", "XOR", "AND", "=", "<>", "<", ">", "<=", ">=", "SHL", "ROR", "+", "-", "*", "/",
-        "MOD"]  # fmt: skip
+_OPS = [
+    "OR",
+    "XOR",
+    "AND",
+    "=",
+    "<>",
+    "<",
+    ">",
+    "<=",
+    ">=",
+    "SHL",
+    "ROR",
+    "+",
+    "-",
+    "*",
+    "/",
+    "MOD",
+]
 
 
 def _unary(x: Expr) -> st.SearchStrategy[Expr]:
@@ -156,10 +187,15 @@ calls = st.one_of(
 permanent = st.one_of(
     st.builds(Coil, st.just("="), st.builds(Operand, st.sampled_from(_BITS)), expressions),
     st.builds(Coil, st.sampled_from(["S", "R"]), operands, expressions),
-    st.builds(Assignment, st.one_of(st.builds(Operand, st.sampled_from(_VARS)),
-                                    st.builds(Operand, _TEXT, st.just(True))), expressions),
+    st.builds(
+        Assignment,
+        st.one_of(
+            st.builds(Operand, st.sampled_from(_VARS)), st.builds(Operand, _TEXT, st.just(True))
+        ),
+        expressions,
+    ),
     calls,
-)  # fmt: skip
+)
 
 
 @st.composite
@@ -172,39 +208,60 @@ def charts(draw: st.DrawFn) -> Chart:
         if not group:
             continue
         steps = tuple(
-            Step(n, draw(_TEXT), draw(st.booleans()), draw(_TEXT),
-                 draw(st.one_of(st.none(), expressions)), draw(st.one_of(st.none(), expressions)),
-                 tuple(draw(st.lists(rows(), max_size=3))))
+            Step(
+                n,
+                draw(_TEXT),
+                draw(st.booleans()),
+                draw(_TEXT),
+                draw(st.one_of(st.none(), expressions)),
+                draw(st.one_of(st.none(), expressions)),
+                tuple(draw(st.lists(rows(), max_size=3))),
+            )
             for n in group
-        )  # fmt: skip
+        )
         trs = []
         for _ in range(draw(st.integers(0, 3))):
             src = tuple(draw(st.lists(st.sampled_from(numbers), min_size=1, max_size=2)))
             dst = tuple(draw(st.lists(st.sampled_from(numbers), max_size=2)))
-            trs.append(Transition(next(tnum), draw(_TEXT), src, dst,
-                                  draw(st.one_of(st.none(), expressions))))  # fmt: skip
+            trs.append(
+                Transition(
+                    next(tnum), draw(_TEXT), src, dst, draw(st.one_of(st.none(), expressions))
+                )
+            )
         seqs.append(Sequence(i + 1, draw(_TEXT), steps, tuple(trs)))
     options = ChartOptions(
-        draw(st.sampled_from(["MINIMUM", "STANDARD", "MAXIMUM", "USER"])), draw(st.booleans()),
-        draw(st.booleans()), draw(st.booleans()), draw(st.booleans()),
+        draw(st.sampled_from(["MINIMUM", "STANDARD", "MAXIMUM", "USER"])),
+        draw(st.booleans()),
+        draw(st.booleans()),
+        draw(st.booleans()),
+        draw(st.booleans()),
         draw(st.sampled_from(["graph", "codesys"])),
-    )  # fmt: skip
+    )
     types = ["INT", "BOOL", "TIME", "REAL", "STRING[10]"]
     var_decls = tuple(
-        VarDecl(v, draw(st.sampled_from(types)),
-                draw(st.one_of(st.none(), st.sampled_from(_LITERALS).map(_const))))
+        VarDecl(
+            v,
+            draw(st.sampled_from(types)),
+            draw(st.one_of(st.none(), st.sampled_from(_LITERALS).map(_const))),
+        )
         for v in draw(st.lists(st.sampled_from(_VARS), unique=True, max_size=3))
-    )  # fmt: skip
+    )
     symbols = tuple(
         SymbolDecl(name, draw(st.sampled_from(_ADDRESSES)), "BOOL", draw(_COMMENT))
         for name in draw(st.lists(_TEXT, unique=True, max_size=3))
     )
     return Chart(
-        draw(_TEXT), draw(st.one_of(st.none(), st.integers(0, 999))),
-        draw(st.one_of(st.none(), st.integers(0, 999))), options, (), var_decls, symbols,
-        tuple(draw(st.lists(permanent, max_size=2))), tuple(seqs),
+        draw(_TEXT),
+        draw(st.one_of(st.none(), st.integers(0, 999))),
+        draw(st.one_of(st.none(), st.integers(0, 999))),
+        options,
+        (),
+        var_decls,
+        symbols,
         tuple(draw(st.lists(permanent, max_size=2))),
-    )  # fmt: skip
+        tuple(seqs),
+        tuple(draw(st.lists(permanent, max_size=2))),
+    )
 
 
 @settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
@@ -227,14 +284,17 @@ def commented_charts(draw: st.DrawFn) -> Chart:
 
     chart = draw(charts())
     sequences = tuple(
-        note(replace(
-            q,
-            steps=tuple(note(replace(s, actions=tuple(note(r) for r in s.actions)))
-                        for s in q.steps),
-            transitions=tuple(note(t) for t in q.transitions),
-        ))
+        note(
+            replace(
+                q,
+                steps=tuple(
+                    note(replace(s, actions=tuple(note(r) for r in s.actions))) for s in q.steps
+                ),
+                transitions=tuple(note(t) for t in q.transitions),
+            )
+        )
         for q in chart.sequences
-    )  # fmt: skip
+    )
     vars_ = tuple(note(v) for v in chart.vars)
     return replace(note(chart), vars=vars_, sequences=sequences, end_comment=draw(_ABOVE))
 

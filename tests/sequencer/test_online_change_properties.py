@@ -57,8 +57,15 @@ STARTS = [
 # action rows on outputs, markers, a marker word, a counter and a timer. All valid in every
 # start chart, so an edited chart that does not compile is a bug of the editor.
 CONDITIONS = [
-    "TRUE", "FALSE", "I0.0", "NOT I0.1", "I0.2 AND M0.1", "I0.3 OR MW4 > 3", "C1 > 2", "I0.4",
-]  # fmt: skip
+    "TRUE",
+    "FALSE",
+    "I0.0",
+    "NOT I0.1",
+    "I0.2 AND M0.1",
+    "I0.3 OR MW4 > 3",
+    "C1 > 2",
+    "I0.4",
+]
 ROWS = [
     {"qualifier": "N", "operand": "Q0.0"},
     {"qualifier": "S", "operand": "Q0.1", "event": "S1"},
@@ -152,8 +159,11 @@ def _scan(cpu: ChartSession) -> Scan:
     events = tuple((e.step, e.event, e.cycle) for e in record.events if hasattr(e, "step"))
     mem = cpu.cpu.mem
     operands = (
-        bytes(mem.outputs[:2]), bytes(mem.markers[:8]), mem.counters[1].value, mem.timers[1].q
-    )  # fmt: skip
+        bytes(mem.outputs[:2]),
+        bytes(mem.markers[:8]),
+        mem.counters[1].value,
+        mem.timers[1].q,
+    )
     return Scan(record.mode, active, events, tuple(sorted(g.outputs.items())), operands)
 
 

@@ -77,8 +77,15 @@ def test_a_step_inserted_by_a_download_is_named_in_the_events_and_left_without_a
     swap(g, _cc(WITH_S8), cpu)
     events = _steps_of(cpu, clock, 4)
     assert events == [
-        "S6 S0", "S8 S1", "S8 S0", "S7 S1", "S7 S0", "S1 S1", "S1 S0", "S6 S1",
-    ]  # fmt: skip
+        "S6 S0",
+        "S8 S1",
+        "S8 S0",
+        "S7 S1",
+        "S7 S0",
+        "S1 S1",
+        "S1 S0",
+        "S6 S1",
+    ]
     assert cpu.mode is CpuMode.RUN
 
 

@@ -49,11 +49,19 @@ def test_standard_set_is_exactly_the_spec_list() -> None:
 
 def test_maximum_set_adds_halt_zero_and_enables_to_standard() -> None:
     assert names("MAXIMUM", Direction.IN) - names("STANDARD", Direction.IN) == {
-        "HALT_SQ", "HALT_TM", "ZERO_OP", "EN_IL", "EN_SV",
-    }  # fmt: skip
+        "HALT_SQ",
+        "HALT_TM",
+        "ZERO_OP",
+        "EN_IL",
+        "EN_SV",
+    }
     assert names("MAXIMUM", Direction.OUT) - names("STANDARD", Direction.OUT) == {
-        "SQ_HALTED", "TM_HALTED", "OP_ZEROED", "IL_ENABLED", "SV_ENABLED",
-    }  # fmt: skip
+        "SQ_HALTED",
+        "TM_HALTED",
+        "OP_ZEROED",
+        "IL_ENABLED",
+        "SV_ENABLED",
+    }
 
 
 def test_user_set_is_every_pin_of_graph_semantics_d2() -> None:
@@ -124,9 +132,15 @@ def test_enables_default_true_and_options_set_ack_and_skip_defaults() -> None:
 
 def test_output_defaults_cover_only_the_set() -> None:
     assert output_defaults("STANDARD") == {
-        "S_NO": 0, "S_MORE": False, "S_ACTIVE": False, "ERR_FLT": False,
-        "AUTO_ON": True, "TAP_ON": False, "TOP_ON": False, "MAN_ON": False,
-    }  # fmt: skip
+        "S_NO": 0,
+        "S_MORE": False,
+        "S_ACTIVE": False,
+        "ERR_FLT": False,
+        "AUTO_ON": True,
+        "TAP_ON": False,
+        "TOP_ON": False,
+        "MAN_ON": False,
+    }
     assert output_defaults("MINIMUM") == {}
 
 

@@ -46,8 +46,11 @@ def test_spec_section_3_example_parses_verbatim() -> None:
     s2 = chart.sequences[0].steps[1]
     assert (s2.number, s2.name, s2.message) == (2, "Clamp", "Work piece not clamped")
     assert [(r.event, r.qualifier) for r in s2.actions] == [
-        (None, "N"), ("S1", "N"), ("V1", "S"), (None, "D"),
-    ]  # fmt: skip
+        (None, "N"),
+        ("S1", "N"),
+        ("V1", "S"),
+        (None, "D"),
+    ]
     t = {t.number: t for t in chart.sequences[0].transitions}
     assert t[2].targets == (3, 6) and t[3].sources == (5, 7) and t[5].targets == ()
     assert (t[1].loc.line, t[1].loc.col) == (23, 3)
@@ -62,15 +65,23 @@ def test_every_sample_chart_parses(path: Path) -> None:
 def test_interlock_mark_joined_or_apart_means_the_same() -> None:
     rows = chart_with_rows("    NC Q0.0; N C Q0.1; S1 RC Q1.0; S1 SC Q1.1; CALLC FC 2;")
     assert [(r.qualifier, r.interlocked) for r in rows] == [
-        ("N", True), ("N", True), ("R", True), ("S", True), ("CALL", True),
-    ]  # fmt: skip
+        ("N", True),
+        ("N", True),
+        ("R", True),
+        ("S", True),
+        ("CALL", True),
+    ]
 
 
 def test_counter_qualifiers_are_not_s_or_r_with_the_mark() -> None:
     rows = chart_with_rows("    S1 CS C 5, C#5; S1 CU C 5; S1 CU C C 6; S1 CR C2; S1 CD C3;")
     assert [(r.qualifier, r.interlocked) for r in rows] == [
-        ("CS", False), ("CU", False), ("CU", True), ("CR", False), ("CD", False),
-    ]  # fmt: skip
+        ("CS", False),
+        ("CU", False),
+        ("CU", True),
+        ("CR", False),
+        ("CD", False),
+    ]
     assert [r.operand.name for r in rows] == ["C5", "C5", "C6", "C2", "C3"]  # type: ignore[union-attr]
     assert rows[0].value == Const(5, "WORD", "C#5", rows[0].value.loc)  # type: ignore[union-attr]
 
@@ -110,8 +121,10 @@ def test_call_forms_give_kind_block_instance_and_parameters() -> None:
     )
     calls = parse_chart(text).before
     assert [(c.kind, c.block, c.instance) for c in calls] == [  # type: ignore[union-attr]
-        ("FB", 5, 6), ("", "Mixer", "MixerDB"), ("SFC", 46, None),
-    ]  # fmt: skip
+        ("FB", 5, 6),
+        ("", "Mixer", "MixerDB"),
+        ("SFC", 46, None),
+    ]
     assert calls[0].inputs[0][0] == "IN1" and calls[0].outputs[0][1].name == "Q0.1"  # type: ignore[union-attr]
 
 

@@ -24,8 +24,13 @@ END_FUNCTION_BLOCK
 """
 
 
-def run(tmp_path: Path, stim: list[dict], cycles: int = 6, watch: str = "Q0.0,S_NO,ERR_FLT",
-        chart: str = CHART) -> tuple[int, list[dict]]:  # fmt: skip
+def run(
+    tmp_path: Path,
+    stim: list[dict],
+    cycles: int = 6,
+    watch: str = "Q0.0,S_NO,ERR_FLT",
+    chart: str = CHART,
+) -> tuple[int, list[dict]]:
     c, s, out = write_sim_inputs(tmp_path, chart, stim)
     rc = sim_command(c, stimulus=s, cycle_ms=10, cycles=cycles, watch=watch, trace=out)
     return rc, read_trace(out)
@@ -34,16 +39,23 @@ def run(tmp_path: Path, stim: list[dict], cycles: int = 6, watch: str = "Q0.0,S_
 def test_sim_writes_one_line_per_cycle_with_the_contract_fields(tmp_path: Path) -> None:
     rc, lines = run(tmp_path, [{"at_ms": 20, "set": {"Start": True}}])
     assert rc == 0 and len(lines) == 6
-    assert lines[0] == {"cycle": 0, "t_ms": 0, "active": ["S1"], "events": [], "mode": "AUTO",
-                        "values": {"Q0.0": False, "S_NO": 1, "ERR_FLT": False}}  # fmt: skip
+    assert lines[0] == {
+        "cycle": 0,
+        "t_ms": 0,
+        "active": ["S1"],
+        "events": [],
+        "mode": "AUTO",
+        "values": {"Q0.0": False, "S_NO": 1, "ERR_FLT": False},
+    }
     assert lines[2]["events"] == [["S1", "S2"], ["S1", "S3"]]
     assert lines[2]["active"] == ["S2", "S3"] and lines[2]["values"]["Q0.0"] is True
     assert lines[3]["events"] == []
 
 
 def test_sim_stimulus_pins_switch_the_mode(tmp_path: Path) -> None:
-    rc, lines = run(tmp_path, [{"at_ms": 0, "set": {"SW_MAN": True}},
-                               {"at_ms": 10, "set": {"Start": True}}])  # fmt: skip
+    rc, lines = run(
+        tmp_path, [{"at_ms": 0, "set": {"SW_MAN": True}}, {"at_ms": 10, "set": {"Start": True}}]
+    )
     assert rc == 0 and lines[-1]["mode"] == "MAN" and lines[-1]["active"] == ["S1"]
 
 
@@ -61,8 +73,12 @@ def test_sim_exits_2_with_diagnostics_for_a_chart_that_does_not_compile(
 
 
 @settings(max_examples=25, deadline=None)
-@given(hs.lists(hs.tuples(hs.integers(0, 150), hs.sampled_from(["Start", "I0.1"]), hs.booleans()),
-                max_size=12))  # fmt: skip
+@given(
+    hs.lists(
+        hs.tuples(hs.integers(0, 150), hs.sampled_from(["Start", "I0.1"]), hs.booleans()),
+        max_size=12,
+    )
+)
 def test_the_same_inputs_always_give_the_same_trace(tmp_path_factory, stim) -> None:
     rows = [{"at_ms": t, "set": {n: v}} for t, n, v in stim]
     a = run(tmp_path_factory.mktemp("a"), rows, cycles=20)

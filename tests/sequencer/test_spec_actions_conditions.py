@@ -244,20 +244,42 @@ def test_off_s_all_clears_every_sequencer_but_keeps_the_step_holding_it() -> Non
 # ---------------------------------------------------------------- allowed rows
 
 ALLOWED = [
-    "S1 NC Q0.0;", "V1 SC Q0.0;", "A1 RC Q0.0;", "R1 ONC S1;", "S1 OFFC S1;",
-    "S1 OFF S_ALL;", "V1 OFF S_ALL;", "L1 OFF S_ALL;",
-    "S0 N Q0.0;", "V0 S Q0.0;", "L0 R Q0.0;", "L1 ON S1;", "S0 OFF S1;",
-    "S0 CS C 1, C#5;", "L0 CU C 1;", "V0 CD C 1;", "A1 CR C 1;",
-    "R1 TL T 1, S5T#1S;", "S0 TD T 1, S5T#1S;", "L1 TF T 1, S5T#1S;", "V1 TR T 1;",
+    "S1 NC Q0.0;",
+    "V1 SC Q0.0;",
+    "A1 RC Q0.0;",
+    "R1 ONC S1;",
+    "S1 OFFC S1;",
+    "S1 OFF S_ALL;",
+    "V1 OFF S_ALL;",
+    "L1 OFF S_ALL;",
+    "S0 N Q0.0;",
+    "V0 S Q0.0;",
+    "L0 R Q0.0;",
+    "L1 ON S1;",
+    "S0 OFF S1;",
+    "S0 CS C 1, C#5;",
+    "L0 CU C 1;",
+    "V0 CD C 1;",
+    "A1 CR C 1;",
+    "R1 TL T 1, S5T#1S;",
+    "S0 TD T 1, S5T#1S;",
+    "L1 TF T 1, S5T#1S;",
+    "V1 TR T 1;",
     "L0 N x := x + 1;",
-]  # fmt: skip
+]
 
 REFUSED = [
-    ("S0 NC Q0.0;", "E020"), ("V0 SC Q0.0;", "E020"), ("L0 RC Q0.0;", "E020"),
-    ("L1 ONC S1;", "E020"), ("S1 D Q0.0, T#1S;", "E020"), ("V1 L Q0.0, T#1S;", "E020"),
-    ("A1 OFF S_ALL;", "E025"), ("R1 OFF S_ALL;", "E025"), ("L0 OFF S_ALL;", "E025"),
+    ("S0 NC Q0.0;", "E020"),
+    ("V0 SC Q0.0;", "E020"),
+    ("L0 RC Q0.0;", "E020"),
+    ("L1 ONC S1;", "E020"),
+    ("S1 D Q0.0, T#1S;", "E020"),
+    ("V1 L Q0.0, T#1S;", "E020"),
+    ("A1 OFF S_ALL;", "E025"),
+    ("R1 OFF S_ALL;", "E025"),
+    ("L0 OFF S_ALL;", "E025"),
     ("V0 OFF S_ALL;", "E025"),
-]  # fmt: skip
+]
 
 
 def _row_chart(row: str) -> str:
@@ -301,8 +323,12 @@ def test_xor_in_a_transition() -> None:
       STEP S2 "b": END_STEP
       TRANSITION T1 FROM S1 TO S2 := I0.0 XOR I0.1;
     """)
-    for a, b, switched in ((True, True, False), (False, False, False), (True, False, True),
-                           (False, True, True)):  # fmt: skip
+    for a, b, switched in (
+        (True, True, False),
+        (False, False, False),
+        (True, False, True),
+        (False, True, True),
+    ):
         run = chart(body)
         run.set(I0_0=a, I0_1=b).call(2)
         assert (run.active == [2]) is switched, (a, b)

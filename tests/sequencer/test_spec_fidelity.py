@@ -36,8 +36,7 @@ def test_block_option_skip_steps_is_the_default_of_en_sskip(tmp_path: Path) -> N
     vol. 2, ch. 14, STEP7 comprehensive guide vol. 2, ch. 14): with the USER set and EN_SSKIP
     unwired, SKIP_STEPS := TRUE skips S2."""
     text = source(SKIPPING, header="SKIP_STEPS := TRUE;", params="USER")
-    rc, lines = sim_trace(tmp_path, text, BOTH_HOLD, cycles=3,
-                          watch="EN_SSKIP,SSKIP_ENABLED,Q0.2")  # fmt: skip
+    rc, lines = sim_trace(tmp_path, text, BOTH_HOLD, cycles=3, watch="EN_SSKIP,SSKIP_ENABLED,Q0.2")
     assert rc == 0
     assert lines[0]["values"] == {"EN_SSKIP": True, "SSKIP_ENABLED": True, "Q0.2": False}
     assert lines[1]["events"] == [["S1", "S2"], ["S2", "S3"]] and lines[1]["active"] == ["S3"]
@@ -72,8 +71,9 @@ def test_block_option_ack_required_false_is_the_default_of_en_ackreq(tmp_path: P
     """S7-GRAPH block setting "Acknowledge errors" with the pin EN_ACKREQ (manual 7-25):
     with ACK_REQUIRED := FALSE and EN_ACKREQ unwired a fault clears with its cause."""
     text = source(SUPERVISED, header="ACK_REQUIRED := FALSE;", params="USER")
-    rc, lines = sim_trace(tmp_path, text, FAULT_COMES_AND_GOES, cycles=7,
-                          watch="EN_ACKREQ,ACKREQ_ENABLED,FAULT")  # fmt: skip
+    rc, lines = sim_trace(
+        tmp_path, text, FAULT_COMES_AND_GOES, cycles=7, watch="EN_ACKREQ,ACKREQ_ENABLED,FAULT"
+    )
     assert rc == 0
     assert lines[0]["values"] == {"EN_ACKREQ": False, "ACKREQ_ENABLED": False, "FAULT": False}
     assert [line["values"]["FAULT"] for line in lines] == [False] * 3 + [True] * 2 + [False] * 2
@@ -95,11 +95,16 @@ def test_the_instance_db_starts_with_every_option_in_its_pins(options: str) -> N
     text = source(SKIPPING, header=options, params="USER")
     cc = compile_chart(parse_chart(text, "options.s7g"))
     session = ChartSession(cc, SymbolTable(), VirtualClock())
-    values = {n: session.get(n) for n in ("EN_SSKIP", "EN_ACKREQ", "SSKIP_ENABLED",
-                                          "ACKREQ_ENABLED")}  # fmt: skip
+    values = {
+        n: session.get(n) for n in ("EN_SSKIP", "EN_ACKREQ", "SSKIP_ENABLED", "ACKREQ_ENABLED")
+    }
     skip, ack = bool(options), not options
-    assert values == {"EN_SSKIP": skip, "EN_ACKREQ": ack, "SSKIP_ENABLED": skip,
-                      "ACKREQ_ENABLED": ack}  # fmt: skip
+    assert values == {
+        "EN_SSKIP": skip,
+        "EN_ACKREQ": ack,
+        "SSKIP_ENABLED": skip,
+        "ACKREQ_ENABLED": ack,
+    }
 
 
 def test_the_pin_table_names_the_option_as_the_default() -> None:
@@ -150,12 +155,15 @@ def test_timer_and_counter_status_bits_are_contacts_in_every_kind_of_condition(
     t2 = cond if where == "transition" else "FALSE"
     perm = f"PERMANENT BEFORE M9.0 := {cond}; END_PERMANENT" if where == "permanent" else ""
     header = f'SYMBOLS "Tmr" : T6 : TIMER; "Cnt" : C2 : COUNTER; END_SYMBOLS\n{perm}'
-    run = chart(seq(f"""
+    run = chart(
+        seq(f"""
       INITIAL_STEP S1 "a": END_STEP
       STEP S2 "b": {il} {sv} N Q1.0; END_STEP
       TRANSITION T1 FROM S1 TO S2 := I0.2;
       TRANSITION T2 FROM S2 TO S1 := {t2};
-    """), header=header)  # fmt: skip
+    """),
+        header=header,
+    )
     run.call()
     assert run.active == [1]
 
@@ -163,14 +171,17 @@ def test_timer_and_counter_status_bits_are_contacts_in_every_kind_of_condition(
 def test_counter_and_timer_contacts_follow_their_cells() -> None:
     """The status bit of a counter is "count > 0" (El-Shahat's S7-300/400 course), read live in an
     interlock (C rows), a transition and a permanent coil."""
-    run = chart(seq("""
+    run = chart(
+        seq("""
       INITIAL_STEP S1 "a": S1 CS C1, C#2; END_STEP
       STEP S2 "b": INTERLOCK := C1; N C Q1.0; S1 CD C1; END_STEP
       STEP S3 "c": S1 CD C1; END_STEP
       TRANSITION T1 FROM S1 TO S2 := C1 AND I0.0;
       TRANSITION T2 FROM S2 TO S3 := I0.1;
       TRANSITION T3 FROM S3 TO S2 := NOT C1;
-    """), header="PERMANENT AFTER M9.0 := NOT C1; END_PERMANENT")  # fmt: skip
+    """),
+        header="PERMANENT AFTER M9.0 := NOT C1; END_PERMANENT",
+    )
     run.call()
     run.set(I0_0=True).call()  # C1 = 2: T1 switches; S2 counts down to 1
     assert run.active == [2] and run.get("Q1.0") is True and run.get("M9.0") is False
@@ -183,12 +194,15 @@ def test_counter_and_timer_contacts_follow_their_cells() -> None:
 def test_a_counter_in_a_comparison_or_an_assignment_reads_its_count() -> None:
     """El-Shahat's S7-300/400 course: a counter is also "the value of the current count" — where a
     number is expected (a comparison, arithmetic, an assignment to an INT) it reads as ``L C n``."""
-    run = chart(seq("""
+    run = chart(
+        seq("""
       INITIAL_STEP S1 "a": S1 CS C1, C#2; S1 CU C1; END_STEP
       STEP S2 "b": S1 N n := C1 * 10 + C1; END_STEP
       TRANSITION T1 FROM S1 TO S2 := C1 >= 3 AND C1 < MW0;
       TRANSITION T2 FROM S2 TO S1 := FALSE;
-    """), header="VAR n : INT := 0; END_VAR")  # fmt: skip
+    """),
+        header="VAR n : INT := 0; END_VAR",
+    )
     run.set(MW0=3).call(2)
     assert run.active == [1]  # C1 = 3 is not < 3
     run.set(MW0=4).call()
@@ -198,12 +212,15 @@ def test_a_counter_in_a_comparison_or_an_assignment_reads_its_count() -> None:
 def test_a_timer_in_a_comparison_reads_its_remaining_time_in_time_base_units() -> None:
     """``L T n`` loads the remaining time in units of its time base (S5T#2S: 200 × 10 ms),
     so ``T4 > 150`` holds for the first half second of a 2 s timer."""
-    run = chart(seq("""
+    run = chart(
+        seq("""
       INITIAL_STEP S1 "a": S1 TD T4, S5T#2S; END_STEP
       STEP S2 "b": S1 N v := T4; END_STEP
       TRANSITION T1 FROM S1 TO S2 := T4 > 150;
       TRANSITION T2 FROM S2 TO S1 := FALSE;
-    """), header="VAR v : INT := 0; END_VAR")  # fmt: skip
+    """),
+        header="VAR v : INT := 0; END_VAR",
+    )
     run.call(2)
     assert run.active == [2] and run.st.vars["v"] == 200  # no time base tick without a CPU
 
@@ -357,8 +374,11 @@ def test_the_first_call_of_a_bare_runtime_holds_the_initial_step_too() -> None:
 def test_an_n_c_assignment_does_not_run_while_the_interlock_is_lost() -> None:
     """S7-GRAPH manual 14-8, STEP7 comprehensive guide vol. 2, ch. 14: ``N[C] A := B`` — like every
     row marked C, an assignment marked C runs only while the interlock holds (an event one too)."""
-    run = two_steps("N C n := n + 1; S1 N C m := m + 1;", interlock="I0.5",
-                    header="VAR n : INT := 0; m : INT := 0; END_VAR")  # fmt: skip
+    run = two_steps(
+        "N C n := n + 1; S1 N C m := m + 1;",
+        interlock="I0.5",
+        header="VAR n : INT := 0; m : INT := 0; END_VAR",
+    )
     run.set(I0_5=True)
     enter(run)
     assert run.st.vars == {"n": 1, "m": 1}
@@ -377,8 +397,11 @@ def test_sq_isoff_means_no_step_active_from_off_sq_until_init_sq(tmp_path: Path)
     """SQ_ISOFF "sequencer is off (no step active)": TRUE after an OFF_SQ pulse, and it
     stays TRUE once OFF_SQ is released, until INIT_SQ activates the initial steps."""
     text = source(SKIPPING, params="USER")
-    stim = [{"at_ms": 20, "set": {"OFF_SQ": True}}, {"at_ms": 30, "set": {"OFF_SQ": False}},
-            {"at_ms": 60, "set": {"INIT_SQ": True}}]  # fmt: skip
+    stim = [
+        {"at_ms": 20, "set": {"OFF_SQ": True}},
+        {"at_ms": 30, "set": {"OFF_SQ": False}},
+        {"at_ms": 60, "set": {"INIT_SQ": True}},
+    ]
     rc, lines = sim_trace(tmp_path, text, stim, cycles=8, watch="SQ_ISOFF")
     assert rc == 0
     assert [line["values"]["SQ_ISOFF"] for line in lines] == [False] * 2 + [True] * 4 + [False] * 2

@@ -30,11 +30,22 @@ END_FUNCTION_BLOCK
 """
 
 
-def sim(tmp_path: Path, stim: list[dict], *, cycles: int = 8, watch: str = "Lamp",
-        chart: str = CHART) -> tuple[int, list[dict]]:  # fmt: skip
+def sim(
+    tmp_path: Path, stim: list[dict], *, cycles: int = 8, watch: str = "Lamp", chart: str = CHART
+) -> tuple[int, list[dict]]:
     c, s, out = write_sim_inputs(tmp_path, chart, stim)
-    argv = ["sim", str(c), "--stimulus", str(s),
-            "--cycle-ms", "10", "--cycles", str(cycles), "--trace", str(out)]  # fmt: skip
+    argv = [
+        "sim",
+        str(c),
+        "--stimulus",
+        str(s),
+        "--cycle-ms",
+        "10",
+        "--cycles",
+        str(cycles),
+        "--trace",
+        str(out),
+    ]
     if watch:
         argv += ["--watch", watch]
     try:
@@ -59,8 +70,10 @@ def test_a_stimulus_between_two_cycles_is_applied_before_the_next_cycle(tmp_path
     rc, lines = sim(tmp_path, [{"at_ms": 15, "set": {"Go": True}}], cycles=4)
     assert rc == 0
     assert [line["active"] for line in lines[:3]] == [
-        ["S1", "S10"], ["S1", "S10"], ["S1", "S2", "S3"],
-    ]  # fmt: skip
+        ["S1", "S10"],
+        ["S1", "S10"],
+        ["S1", "S2", "S3"],
+    ]
     assert lines[2]["t_ms"] == 20 and lines[2]["values"] == {"Lamp": True}
 
 
@@ -77,8 +90,11 @@ def test_a_stimulus_at_exactly_now_acts_in_that_cycle(tmp_path: Path) -> None:
 def test_values_stay_until_set_again(tmp_path: Path) -> None:
     """docs/cli.md, "s7graph sim": stimulus values stay until set again — I0.1 set once at 40 ms is
     still 1."""
-    stim = [{"at_ms": 0, "set": {"Go": True}}, {"at_ms": 10, "set": {"Go": False}},
-            {"at_ms": 40, "set": {"I0.1": True}}]  # fmt: skip
+    stim = [
+        {"at_ms": 0, "set": {"Go": True}},
+        {"at_ms": 10, "set": {"Go": False}},
+        {"at_ms": 40, "set": {"I0.1": True}},
+    ]
     rc, lines = sim(tmp_path, stim, cycles=8, watch="I0.1,Go")
     assert rc == 0
     assert [line["values"]["I0.1"] for line in lines] == [False] * 4 + [True] * 4

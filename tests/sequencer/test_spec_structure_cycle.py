@@ -168,8 +168,9 @@ def test_more_than_250_transitions_warns_with_fewer_steps() -> None:
     """docs/semantics.md, "Structure": 250 transitions is a limit of its own (here 200 steps, 251
     transitions)."""
     steps = "\n".join(f'STEP S{k} "s": END_STEP' for k in range(2, 201))
-    trans = "\n".join(f"TRANSITION T{k} FROM S1 TO S{(k % 199) + 2} := I0.{k % 8};"
-                      for k in range(1, 252))  # fmt: skip
+    trans = "\n".join(
+        f"TRANSITION T{k} FROM S1 TO S{(k % 199) + 2} := I0.{k % 8};" for k in range(1, 252)
+    )
     text = source(seq(f'INITIAL_STEP S1 "a": END_STEP\n{steps}\n{trans}'))
     diags = [d for d in validate(parse_chart(text, "v.s7g")) if d.code == "W110"]
     assert any("transitions" in d.message for d in diags)

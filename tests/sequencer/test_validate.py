@@ -106,10 +106,15 @@ def test_fb_pins_are_readable_operands() -> None:
     assert codes(one_step(cond="ERR_FLT OR NOT AUTO_ON")) == []
 
 
-@pytest.mark.parametrize(("numbers", "expected"), [
-    ("FB 1 DB 65535", []), ("FB 0 DB 1", ["E004"]), ("FB 1 DB 0", ["E004"]),
-    ("FB 70000 DB 70000", ["E004", "E004"]),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    ("numbers", "expected"),
+    [
+        ("FB 1 DB 65535", []),
+        ("FB 0 DB 1", ["E004"]),
+        ("FB 1 DB 0", ["E004"]),
+        ("FB 70000 DB 70000", ["E004", "E004"]),
+    ],
+)
 def test_the_header_fb_and_db_numbers_are_block_numbers(numbers: str, expected: list[str]) -> None:
     text = one_step().replace('FUNCTION_BLOCK "V"', f'FUNCTION_BLOCK "V" {numbers}')
     assert codes(text) == expected

@@ -35,8 +35,26 @@ def test_lookup_by_key_with_or_without_blank_and_by_name() -> None:
 
 def test_the_catalogue_covers_spec_1_7() -> None:
     keys = {e.key for e in CATALOGUE}
-    wanted = {"SFB0", "SFB1", "SFB2", "SFB3", "SFB4", "SFB5", "SFC0", "SFC1", "SFC17", "SFC18",
-              "SFC20", "SFC21", "SFC43", "SFC46", "SFC47", "SFC51", "SFC52", "SFC64"}  # fmt: skip
+    wanted = {
+        "SFB0",
+        "SFB1",
+        "SFB2",
+        "SFB3",
+        "SFB4",
+        "SFB5",
+        "SFC0",
+        "SFC1",
+        "SFC17",
+        "SFC18",
+        "SFC20",
+        "SFC21",
+        "SFC43",
+        "SFC46",
+        "SFC47",
+        "SFC51",
+        "SFC52",
+        "SFC64",
+    }
     assert wanted <= keys
     assert len(keys) == len(CATALOGUE)
 

@@ -99,10 +99,15 @@ def test_a_program_writes_a_user_message_and_reads_it_back_newest_first(
             outs.append(ctx.call("SFC52", SEND=False, EVENTN=0xA101, INFO1="", INFO2=""))
             outs.append(
                 ctx.call(
-                    "SFC51", REQ=True, SZL_ID=0x01A0, INDEX=2, BUSY="M0.0",
-                    SZL_HEADER=HEADER, DR="P#DB1.DBX4.0 BYTE 40",
+                    "SFC51",
+                    REQ=True,
+                    SZL_ID=0x01A0,
+                    INDEX=2,
+                    BUSY="M0.0",
+                    SZL_HEADER=HEADER,
+                    DR="P#DB1.DBX4.0 BYTE 40",
                 )
-            )  # fmt: skip
+            )
 
     cpu = cpu_with(clock, main)
     cpu.start()

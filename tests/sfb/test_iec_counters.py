@@ -16,10 +16,10 @@ def test_ctu_counts_rising_edges_and_q_is_cv_at_least_pv() -> None:
         (True, False, True, 2),
         (False, False, True, 2),
         (True, False, True, 3),
-        (True, True, False, 0),   # R resets
+        (True, True, False, 0),  # R resets
         (False, False, False, 0),
-        (True, True, False, 0),   # R blocks counting
-    ]  # fmt: skip
+        (True, True, False, 0),  # R blocks counting
+    ]
     for cu, r, q, cv in rows:
         assert ctu(cu, r, 2) == CounterOut(q, cv)
 

@@ -22,49 +22,61 @@ def drive(timer: TP | TON | TOF, pt: int, rows: list[Row]) -> None:
 
 def test_ton_sets_q_after_in_was_true_for_pt_and_in_false_resets_q_and_et() -> None:
     """TON, PT = T#100MS."""
-    drive(TON(), 100, [
-        (0, False, False, 0),
-        (10, True, False, 0),
-        (60, True, False, 50),
-        (109, True, False, 99),
-        (110, True, True, 100),
-        (500, True, True, 100),
-        (501, False, False, 0),
-        (510, True, False, 0),
-        (550, False, False, 0),   # IN fell before PT: no Q
-        (700, False, False, 0),
-    ])  # fmt: skip
+    drive(
+        TON(),
+        100,
+        [
+            (0, False, False, 0),
+            (10, True, False, 0),
+            (60, True, False, 50),
+            (109, True, False, 99),
+            (110, True, True, 100),
+            (500, True, True, 100),
+            (501, False, False, 0),
+            (510, True, False, 0),
+            (550, False, False, 0),  # IN fell before PT: no Q
+            (700, False, False, 0),
+        ],
+    )
 
 
 def test_tp_gives_a_pulse_of_pt_that_is_not_retriggerable() -> None:
     """TP, PT = T#100MS; IN falling or rising during the pulse changes nothing."""
-    drive(TP(), 100, [
-        (0, True, True, 0),
-        (30, False, True, 30),
-        (40, True, True, 40),     # rising edge during the pulse: no retrigger
-        (99, True, True, 99),
-        (100, True, False, 100),  # pulse over, ET holds PT while IN = 1
-        (150, True, False, 100),
-        (151, False, False, 0),   # IN = 0 after the pulse: ET = 0
-        (200, True, True, 0),     # new rising edge: new pulse
-        (250, False, True, 50),
-        (300, False, False, 0),   # pulse ends with IN = 0: ET back to 0
-    ])  # fmt: skip
+    drive(
+        TP(),
+        100,
+        [
+            (0, True, True, 0),
+            (30, False, True, 30),
+            (40, True, True, 40),  # rising edge during the pulse: no retrigger
+            (99, True, True, 99),
+            (100, True, False, 100),  # pulse over, ET holds PT while IN = 1
+            (150, True, False, 100),
+            (151, False, False, 0),  # IN = 0 after the pulse: ET = 0
+            (200, True, True, 0),  # new rising edge: new pulse
+            (250, False, True, 50),
+            (300, False, False, 0),  # pulse ends with IN = 0: ET back to 0
+        ],
+    )
 
 
 def test_tof_keeps_q_for_pt_after_in_falls_and_a_rising_in_resets_et() -> None:
     """TOF, PT = T#100MS."""
-    drive(TOF(), 100, [
-        (0, False, False, 0),
-        (10, True, True, 0),
-        (50, False, True, 0),
-        (100, False, True, 50),
-        (120, True, True, 0),     # rising IN during the delay: ET = 0, Q stays 1
-        (130, False, True, 0),
-        (229, False, True, 99),
-        (230, False, False, 100),
-        (400, False, False, 100),
-    ])  # fmt: skip
+    drive(
+        TOF(),
+        100,
+        [
+            (0, False, False, 0),
+            (10, True, True, 0),
+            (50, False, True, 0),
+            (100, False, True, 50),
+            (120, True, True, 0),  # rising IN during the delay: ET = 0, Q stays 1
+            (130, False, True, 0),
+            (229, False, True, 99),
+            (230, False, False, 100),
+            (400, False, False, 100),
+        ],
+    )
 
 
 def test_time_advances_only_when_the_instance_is_called() -> None:

@@ -28,74 +28,94 @@ def drive(fn: str, tv_ms: int, rows: list[Row], cell: S5Timer | None = None) -> 
 
 def test_on_delay_sets_q_7_s_after_the_rising_edge_and_s_false_resets_it() -> None:
     """SD (German SE, S_ODT) with S5T#7S, the mixing FB1 feedback supervision."""
-    drive("SD", 7000, [
-        (0, True, False, False),
-        (6990, True, False, False),
-        (7000, True, False, True),
-        (9000, True, False, True),
-        (9001, False, False, False),   # S -> 0: Q and value reset
-        (10000, True, False, False),
-        (15000, False, False, False),  # S fell before 7 s: never set
-        (30000, False, False, False),
-    ])  # fmt: skip
+    drive(
+        "SD",
+        7000,
+        [
+            (0, True, False, False),
+            (6990, True, False, False),
+            (7000, True, False, True),
+            (9000, True, False, True),
+            (9001, False, False, False),  # S -> 0: Q and value reset
+            (10000, True, False, False),
+            (15000, False, False, False),  # S fell before 7 s: never set
+            (30000, False, False, False),
+        ],
+    )
 
 
 def test_extended_pulse_is_retriggered_by_a_new_rising_edge() -> None:
     """SE (German SV, S_PEXT) keeps Q for TV even when S falls; retriggers."""
-    drive("S_PEXT", 100, [
-        (0, True, False, True),
-        (20, False, False, True),    # S fell: pulse continues
-        (60, True, False, True),     # new edge: restart with TV from 60
-        (150, False, False, True),   # the first pulse would have ended at 100
-        (159, False, False, True),
-        (160, False, False, False),
-        (300, False, False, False),
-    ])  # fmt: skip
+    drive(
+        "S_PEXT",
+        100,
+        [
+            (0, True, False, True),
+            (20, False, False, True),  # S fell: pulse continues
+            (60, True, False, True),  # new edge: restart with TV from 60
+            (150, False, False, True),  # the first pulse would have ended at 100
+            (159, False, False, True),
+            (160, False, False, False),
+            (300, False, False, False),
+        ],
+    )
 
 
 def test_pulse_ends_early_when_s_goes_false() -> None:
     """SP (German SI, S_PULSE) — Q only while S = 1 and the time runs."""
-    cell = drive("SP", 100, [
-        (0, True, False, True),
-        (50, True, False, True),
-        (60, False, False, False),   # ends early
-        (70, True, False, True),     # new pulse
-        (170, True, False, False),   # expired although S = 1
-        (200, True, False, False),
-    ])  # fmt: skip
+    cell = drive(
+        "SP",
+        100,
+        [
+            (0, True, False, True),
+            (50, True, False, True),
+            (60, False, False, False),  # ends early
+            (70, True, False, True),  # new pulse
+            (170, True, False, False),  # expired although S = 1
+            (200, True, False, False),
+        ],
+    )
     assert cell.binary() == 0
 
 
 def test_retentive_on_delay_stays_set_until_r() -> None:
     """SS (S_ODTS) runs on after S falls; Q = 1 after TV until R."""
-    drive("SS", 100, [
-        (0, True, False, False),
-        (10, False, False, False),   # keeps running
-        (100, False, False, True),
-        (500, False, False, True),
-        (510, True, False, True),    # an edge after expiry changes nothing
-        (520, False, True, False),   # R
-        (530, False, False, False),
-        (540, True, False, False),   # start again
-        (580, False, False, False),
-        (590, True, False, False),   # rising while running: restart at 590
-        (689, True, False, False),
-        (690, True, False, True),
-    ])  # fmt: skip
+    drive(
+        "SS",
+        100,
+        [
+            (0, True, False, False),
+            (10, False, False, False),  # keeps running
+            (100, False, False, True),
+            (500, False, False, True),
+            (510, True, False, True),  # an edge after expiry changes nothing
+            (520, False, True, False),  # R
+            (530, False, False, False),
+            (540, True, False, False),  # start again
+            (580, False, False, False),
+            (590, True, False, False),  # rising while running: restart at 590
+            (689, True, False, False),
+            (690, True, False, True),
+        ],
+    )
 
 
 def test_off_delay_starts_on_the_falling_edge() -> None:
     """SF (German SA, S_OFFDT): Q = 1 with S, drops TV after S falls."""
-    drive("SF", 100, [
-        (0, False, False, False),
-        (10, True, False, True),
-        (500, True, False, True),    # held: no timing while S = 1
-        (510, False, False, True),   # falling edge starts
-        (560, True, False, True),    # S rises while running: timer stops, Q stays 1
-        (570, False, False, True),   # falls again: restart from 570
-        (669, False, False, True),
-        (670, False, False, False),
-    ])  # fmt: skip
+    drive(
+        "SF",
+        100,
+        [
+            (0, False, False, False),
+            (10, True, False, True),
+            (500, True, False, True),  # held: no timing while S = 1
+            (510, False, False, True),  # falling edge starts
+            (560, True, False, True),  # S rises while running: timer stops, Q stays 1
+            (570, False, False, True),  # falls again: restart from 570
+            (669, False, False, True),
+            (670, False, False, False),
+        ],
+    )
 
 
 @pytest.mark.parametrize("fn", list(TimerFunction))

@@ -163,8 +163,9 @@ def test_clock_set_forward_calls_ob80_then_runs_the_first_skipped_one_once(
         log.append((80, dict(ctx.start_info)))
         ctx.call("CAN_TINT", OB_NR=11)
 
-    cpu = make_cpu(clock, OB(1, "OB1", main), OB(80, "OB80", ob80), recorder(10, log),
-                   recorder(11, log))  # fmt: skip
+    cpu = make_cpu(
+        clock, OB(1, "OB1", main), OB(80, "OB80", ob80), recorder(10, log), recorder(11, log)
+    )
     cpu.start()
     cpu.tod.set(10, datetime(2026, 3, 2, 10, 0), Period.MINUTE)
     cpu.tod.set(11, datetime(2026, 3, 2, 10, 0), Period.ONCE)

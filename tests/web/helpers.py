@@ -183,8 +183,16 @@ def online_cpu(
     endpoint = f"unixsock-stream/{tmp_path}/bus.sock"
     scans: list[int] = []
     try:
-        edge = LiveEdge(live, port=0, serve=serve, bus=True, gate=gate, online=online,
-                        ends=BusEnds(listen=[endpoint]), forcing=Forcing(session.cpu))  # fmt: skip
+        edge = LiveEdge(
+            live,
+            port=0,
+            serve=serve,
+            bus=True,
+            gate=gate,
+            online=online,
+            ends=BusEnds(listen=[endpoint]),
+            forcing=Forcing(session.cpu),
+        )
         with edge, scanning(session, edge, lambda record: scans.append(record.cycle)):
             yield OnlineRig(session, edge, online, path, state, endpoint, scans)
     finally:
@@ -210,8 +218,11 @@ def cpu_process(
     endpoint = f"unixsock-stream/{tmp_path}/bus.sock"
     proc = subprocess.Popen(
         [sys.executable, "-m", "s7graph", "run", *args, "--listen", endpoint],
-        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-    )  # fmt: skip
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     session = None
     try:
         assert proc.stdout is not None

@@ -125,8 +125,9 @@ def test_a_removed_user_or_changed_role_acts_at_once(users: UsersFile) -> None:
     token = auth.login("olga", PASSWORD).token
     data = json.loads(users.path.read_text())
     data["users"]["olga"]["role"] = "viewer"
-    users._save({n: type(u)(n, data["users"][n]["role"], u.password)
-                 for n, u in users.load().items()})  # fmt: skip
+    users._save(
+        {n: type(u)(n, data["users"][n]["role"], u.password) for n, u in users.load().items()}
+    )
     who = auth.identify("olga", token)
     assert not isinstance(who, str) and who.role == "viewer"
     users.remove("olga")
@@ -147,8 +148,9 @@ def test_audit_store_migrates_an_old_state_file(tmp_path: Path) -> None:
     old = StateStore(tmp_path / "state.sqlite")
     old.log_audit(7, "ann", "ack", "FB1 S3")  # a row from before the new columns
     store = AuditStore(tmp_path / "state.sqlite")
-    store.record(9, Facts("bob", "operator", "shell", "mode", "FB1", {"mode": "MAN"}, False,
-                          "role viewer"))  # fmt: skip
+    store.record(
+        9, Facts("bob", "operator", "shell", "mode", "FB1", {"mode": "MAN"}, False, "role viewer")
+    )
     rows = read_audit(tmp_path / "state.sqlite")
     assert [(r.user, r.op, r.outcome) for r in rows] == [
         ("ann", "ack", "applied"),
@@ -188,7 +190,16 @@ def test_every_message_example_in_docs_bus_md_decodes() -> None:
     text = (ROOT / "docs" / "bus.md").read_text(encoding="utf-8")
     found = re.findall(r"#### `(\w+)[^`]*`\n```json\n(.*?)\n```", text, re.S)
     kinds = {name for name, _ in found}
-    assert {"Command", "CommandReply", "LoginRequest", "LoginReply", "AuditEntry",
-            "AlarmHistory", "StepStateUpdate", "ChartLayout", "CpuStatus"} <= kinds  # fmt: skip
+    assert {
+        "Command",
+        "CommandReply",
+        "LoginRequest",
+        "LoginReply",
+        "AuditEntry",
+        "AlarmHistory",
+        "StepStateUpdate",
+        "ChartLayout",
+        "CpuStatus",
+    } <= kinds
     for name, body in found:
         protocol.decode(body, getattr(protocol, name))

@@ -122,8 +122,9 @@ def test_two_pages_as_two_users_are_audited_apart_and_the_alarm_ack_names_its_us
     # a supervision fault: S2 active in MAN, its supervision (S2.U > 500 ms) latches
     client = edge.edge.client
     login = client.login("olga", PASSWORD)
-    reply = client.send(Command(op="step_on", fb=FB, user="olga", token=login.token,
-                                args={"step": 2}))  # fmt: skip
+    reply = client.send(
+        Command(op="step_on", fb=FB, user="olga", token=login.token, args={"step": 2})
+    )
     assert reply.applied or reply.reason == "S2 is already active", reply.reason
     follower = edge.edge.follower
     assert wait_until(lambda: follower.latest is not None and 2 in follower.latest.latched, 30)

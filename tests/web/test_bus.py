@@ -100,9 +100,7 @@ def test_command_round_trip_is_applied_at_the_scan_boundary(
     publisher, client = bus
     replies: list[CommandReply] = []
     sender = threading.Thread(
-        target=lambda: replies.append(
-            client.send(cmd(client, "step_on", step=2))
-        )
+        target=lambda: replies.append(client.send(cmd(client, "step_on", step=2)))
     )
     sender.start()
     pending = []
@@ -119,9 +117,7 @@ def test_command_refused_by_the_cpu_carries_its_reason(
 ) -> None:
     publisher, client = bus
     replies: list[CommandReply] = []
-    sender = threading.Thread(
-        target=lambda: replies.append(client.send(cmd(client, "ack")))
-    )
+    sender = threading.Thread(target=lambda: replies.append(client.send(cmd(client, "ack"))))
     sender.start()
 
     def apply(command: Command) -> tuple[bool, str]:
@@ -158,9 +154,7 @@ def test_an_exception_while_applying_refuses_that_command_only(
 ) -> None:
     publisher, client = bus
     replies: list[CommandReply] = []
-    sender = threading.Thread(
-        target=lambda: replies.append(client.send(cmd(client, "off")))
-    )
+    sender = threading.Thread(target=lambda: replies.append(client.send(cmd(client, "off"))))
     sender.start()
 
     def apply(command: Command) -> tuple[bool, str]:

@@ -155,9 +155,12 @@ def test_hostile_names_and_tokens_are_refused_and_never_reach_the_scan(
 def test_wildcard_queries_are_answered_or_ignored_cleanly(rig: Rig) -> None:
     session = rig.client._session
     everything = session.get(
-        "s7graph/**", payload=b'{"op":"init","fb":"FILL"}', timeout=2,
-        target=zenoh.QueryTarget.ALL, consolidation=zenoh.ConsolidationMode.NONE,
-    )  # fmt: skip
+        "s7graph/**",
+        payload=b'{"op":"init","fb":"FILL"}',
+        timeout=2,
+        target=zenoh.QueryTarget.ALL,
+        consolidation=zenoh.ConsolidationMode.NONE,
+    )
     replies = list(everything)
     keys = sorted(str(r.ok.key_expr) for r in replies if r.ok is not None)
     assert "s7graph/cpu1/status" in keys and "s7graph/cpu1/fb/FILL/chart" in keys
@@ -186,23 +189,31 @@ def _certificates(folder: Path) -> TlsFiles:
 
     ca_key = ec.generate_private_key(ec.SECP256R1())
     ca = (
-        x509.CertificateBuilder().subject_name(name("s7graph test CA")).issuer_name(
-            name("s7graph test CA")).public_key(ca_key.public_key())
-        .serial_number(x509.random_serial_number()).not_valid_before(life[0])
+        x509.CertificateBuilder()
+        .subject_name(name("s7graph test CA"))
+        .issuer_name(name("s7graph test CA"))
+        .public_key(ca_key.public_key())
+        .serial_number(x509.random_serial_number())
+        .not_valid_before(life[0])
         .not_valid_after(life[1])
         .add_extension(x509.BasicConstraints(ca=True, path_length=None), critical=True)
         .sign(ca_key, hashes.SHA256())
-    )  # fmt: skip
+    )
     key = ec.generate_private_key(ec.SECP256R1())
     alt = x509.SubjectAlternativeName(
         [x509.DNSName("localhost"), x509.IPAddress(ipaddress.ip_address("127.0.0.1"))]
     )
     cert = (
-        x509.CertificateBuilder().subject_name(name("localhost")).issuer_name(ca.subject)
-        .public_key(key.public_key()).serial_number(x509.random_serial_number())
-        .not_valid_before(life[0]).not_valid_after(life[1]).add_extension(alt, critical=False)
+        x509.CertificateBuilder()
+        .subject_name(name("localhost"))
+        .issuer_name(ca.subject)
+        .public_key(key.public_key())
+        .serial_number(x509.random_serial_number())
+        .not_valid_before(life[0])
+        .not_valid_after(life[1])
+        .add_extension(alt, critical=False)
         .sign(ca_key, hashes.SHA256())
-    )  # fmt: skip
+    )
     pem = serialization.Encoding.PEM
     (folder / "ca.pem").write_bytes(ca.public_bytes(pem))
     (folder / "cert.pem").write_bytes(cert.public_bytes(pem))

@@ -49,8 +49,14 @@ class Bus:
     tokens: dict[str, str]
 
     def send(self, user: str, op: str, **args: object) -> CommandReply:
-        command = Command(op=op, fb="Seq_lamp", user=user, token=self.tokens[user],  # type: ignore[arg-type]
-                          origin="shell test", args=args)  # fmt: skip
+        command = Command(
+            op=op,
+            fb="Seq_lamp",
+            user=user,
+            token=self.tokens[user],  # type: ignore[arg-type]
+            origin="shell test",
+            args=args,
+        )
         return self.client.send(command)
 
     def active(self) -> list[int]:
@@ -109,8 +115,7 @@ def test_an_engineers_force_acts_in_the_scan_and_shows_in_the_status_until_unfor
     ] == [("I0.0", "TRUE", "Start", "eng")]
     assert wait_until(lambda: listed and listed[-1].entries)
     cpu = bus.rig.session.cpu
-    assert any(e.event_id == EventId.FORCE_STARTED and e.address == "I0.0"
-               for e in cpu.diagnostics)  # fmt: skip
+    assert any(e.event_id == EventId.FORCE_STARTED and e.address == "I0.0" for e in cpu.diagnostics)
     assert bus.send("eng", "force", address="QB1", value="B#16#00").applied  # Lamp off
     assert wait_until(lambda: cpu.mem.periph_out[1] == 0)
     assert bus.active() == [2]  # S2 still sets "Lamp": the module gets the force value
@@ -154,13 +159,19 @@ def test_bad_force_commands_are_refused_naming_the_problem_and_audited(
     [
         (b'{"op":"force","fb":"Seq_lamp","args":{"address":"I0.0"}}', "force takes"),
         (b'{"op":"force","fb":"Seq_lamp","args":{"all":false}}', '{"all": true} alone'),
-        (b'{"op":"force","fb":"Seq_lamp","args":{"address":"' + b"I" * 65 + b'","value":1}}',
-         "at `$.args.address`"),
-        (b'{"op":"force","fb":"Seq_lamp","args":{"address":"I0.0","value":"' + b"1" * 65 + b'"}}',
-         "at `$.args.value`"),
+        (
+            b'{"op":"force","fb":"Seq_lamp","args":{"address":"' + b"I" * 65 + b'","value":1}}',
+            "at `$.args.address`",
+        ),
+        (
+            b'{"op":"force","fb":"Seq_lamp","args":{"address":"I0.0","value":"'
+            + b"1" * 65
+            + b'"}}',
+            "at `$.args.value`",
+        ),
         (b'{"op":"force","fb":"Seq_lamp","args":{"address":"I0.0","value":[1]}}', "$.args"),
     ],
-)  # fmt: skip
+)
 def test_hostile_force_messages_are_refused_before_the_scan(
     bus: Bus, payload: bytes, reason: str
 ) -> None:
@@ -178,23 +189,37 @@ def test_level_overrides_show_in_the_fb_state(bus: Bus) -> None:
     def held() -> bool:
         state[0] = bus.client.state("Seq_lamp")  # type: ignore[assignment]
         return state[0] is not None and state[0].overrides == {  # type: ignore[attr-defined]
-            "EN_IL": False, "HALT_SQ": True}  # fmt: skip
+            "EN_IL": False,
+            "HALT_SQ": True,
+        }
 
     assert wait_until(held)
     assert bus.send("olga", "halt", on=False).applied
-    assert wait_until(lambda: (s := bus.client.state("Seq_lamp")) is not None
-                      and s.overrides == {"EN_IL": False})  # fmt: skip
+    assert wait_until(
+        lambda: (s := bus.client.state("Seq_lamp")) is not None and s.overrides == {"EN_IL": False}
+    )
 
 
 def _shell(
     rig: OnlineRig, *args: str, password: str = PASSWORD
 ) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
-        [sys.executable, "-m", "s7graph", "force", *args, "--cpu", "cpu1", "--connect",
-         rig.endpoint],
-        capture_output=True, text=True, timeout=60,
+        [
+            sys.executable,
+            "-m",
+            "s7graph",
+            "force",
+            *args,
+            "--cpu",
+            "cpu1",
+            "--connect",
+            rig.endpoint,
+        ],
+        capture_output=True,
+        text=True,
+        timeout=60,
         env={**os.environ, "S7GRAPH_PASSWORD": password},
-    )  # fmt: skip
+    )
 
 
 def test_the_force_command_forces_lists_and_unforces_from_a_shell(bus: Bus) -> None:
@@ -208,8 +233,10 @@ def test_the_force_command_forces_lists_and_unforces_from_a_shell(bus: Bus) -> N
     assert wait_until(lambda: bus.active() == [2])
     listed = _shell(rig, "--list")
     assert listed.returncode == 0, listed.stderr
-    assert listed.stdout.splitlines() == ['I0.0 = TRUE  "Start"  (eng)',
-                                          'MW20 = -5  "Speed"  (eng)']  # fmt: skip
+    assert listed.stdout.splitlines() == [
+        'I0.0 = TRUE  "Start"  (eng)',
+        'MW20 = -5  "Speed"  (eng)',
+    ]
     bad = _shell(rig, "Speed", "1.5", "--user", "eng")
     assert bad.returncode == 1
     assert '1.5 is not an integer for INT (to force the INT "Speed" (MW20))' in bad.stderr

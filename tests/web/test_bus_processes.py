@@ -40,9 +40,13 @@ class Proc:
     def __init__(self, *args: str, env: dict[str, str] | None = None) -> None:
         self.args = args
         self.proc = subprocess.Popen(
-            [sys.executable, "-m", "s7graph", *args], cwd=ROOT, stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE, text=True, env={**os.environ, **(env or {})},
-        )  # fmt: skip
+            [sys.executable, "-m", "s7graph", *args],
+            cwd=ROOT,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            env={**os.environ, **(env or {})},
+        )
         self.lines: queue.Queue[str] = queue.Queue()
         self.seen: list[str] = []
         out = self.proc.stdout
@@ -77,9 +81,13 @@ class Proc:
 
 def run(*args: str, env: dict[str, str] | None = None) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
-        [sys.executable, "-m", "s7graph", *args], cwd=ROOT, capture_output=True, text=True,
-        timeout=90, env={**os.environ, **(env or {})},
-    )  # fmt: skip
+        [sys.executable, "-m", "s7graph", *args],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=90,
+        env={**os.environ, **(env or {})},
+    )
 
 
 @pytest.fixture
@@ -96,11 +104,23 @@ def bus(tmp_path: Path) -> Iterator[tuple[str, Path, Path]]:
         chart = [str(DRILL / "drill.s7g"), "--symbols", str(DRILL / "symbols.txt")]
         line1 = ["--users", str(users.path), "--comm-load", "25"]
         for cpu, extra in (("line1", line1), ("line2", [])):
-            procs.append(Proc(
-                "run", *chart, "--cpu", cpu, "--connect", endpoint, "--duration-s", "200",
-                "--max-cycle-ms", "5000",  # the bus is tested, not a loaded CI's time errors
-                "--state", str(tmp_path / f"{cpu}.sqlite"), *extra,
-            ))  # fmt: skip
+            procs.append(
+                Proc(
+                    "run",
+                    *chart,
+                    "--cpu",
+                    cpu,
+                    "--connect",
+                    endpoint,
+                    "--duration-s",
+                    "200",
+                    "--max-cycle-ms",
+                    "5000",  # the bus is tested, not a loaded CI's time errors
+                    "--state",
+                    str(tmp_path / f"{cpu}.sqlite"),
+                    *extra,
+                )
+            )
         for p in procs[1:]:
             p.wait_for(r"CPU line\d on the bus")
         yield endpoint, users.path, tmp_path
@@ -114,8 +134,9 @@ def test_router_two_cpus_one_web_view_and_shell_commands_as_processes(
 ) -> None:
     endpoint, _, tmp = bus
     port = free_port()
-    web = Proc("web", "--connect", endpoint, "--cpu", "line2", "--port", str(port),
-               "--duration-s", "200")  # fmt: skip
+    web = Proc(
+        "web", "--connect", endpoint, "--cpu", "line2", "--port", str(port), "--duration-s", "200"
+    )
     watch = Proc("watch", "--connect", endpoint, "--cpu", "line1", "--duration-s", "200")
     try:
         web.wait_for(r"CPU line1 \(RUN, logins: users\): Seq_drill")
@@ -151,11 +172,16 @@ def test_router_two_cpus_one_web_view_and_shell_commands_as_processes(
         assert status.returncode == 0, status.stderr
         head, cycle, longest, *_ = status.stdout.splitlines()
         assert re.match(r"CPU line1: RUN, cycle \d+, FBs Seq_drill, 0 force jobs$", head), head
-        assert re.match(r"cycle time: last [\d.]+ ms, min [\d.]+, max [\d.]+; scan [\d.]+ ms "
-                        r"on average; \d+ overruns; \d+ over 12.0 ms$", cycle), cycle
-        assert re.match(r"longest: cycle \d+ at \d\d:\d\d:\d\d(, overran)?, [\d.]+ ms: "
-                        r"(encode [\d.]+, )?scan ",
-                        longest), longest  # fmt: skip
+        assert re.match(
+            r"cycle time: last [\d.]+ ms, min [\d.]+, max [\d.]+; scan [\d.]+ ms "
+            r"on average; \d+ overruns; \d+ over 12.0 ms$",
+            cycle,
+        ), cycle
+        assert re.match(
+            r"longest: cycle \d+ at \d\d:\d\d:\d\d(, overran)?, [\d.]+ ms: "
+            r"(encode [\d.]+, )?scan ",
+            longest,
+        ), longest
         assert status.stdout.splitlines()[-1].startswith(
             "communication: up to 25 % of the cycle at each scan boundary; "
         )
@@ -175,8 +201,17 @@ def test_the_command_line_refuses_a_busy_port_and_an_open_bus_without_users(
         taken.bind(("127.0.0.1", 0))
         taken.listen()
         port = taken.getsockname()[1]
-        busy = run("run", *chart, "--web", "--port", str(port), "--duration-s", "5",
-                   "--state", str(tmp_path / "s.sqlite"))  # fmt: skip
+        busy = run(
+            "run",
+            *chart,
+            "--web",
+            "--port",
+            str(port),
+            "--duration-s",
+            "5",
+            "--state",
+            str(tmp_path / "s.sqlite"),
+        )
     assert busy.returncode == 2
     assert "is in use" in busy.stderr
     assert len(busy.stderr.strip().splitlines()) == 1, busy.stderr

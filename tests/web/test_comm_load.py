@@ -33,8 +33,7 @@ def _send_steps(
     replies: list[CommandReply] = []
     threads = []
     for k, n in enumerate(steps, 1):
-        command = Command(op="step_on", fb="FILL", user="bob", token=login.token,
-                          args={"step": n})  # fmt: skip
+        command = Command(op="step_on", fb="FILL", user="bob", token=login.token, args={"step": n})
         thread = threading.Thread(target=lambda c=command: replies.append(client.send(c)))
         thread.start()
         threads.append(thread)

@@ -45,17 +45,25 @@ def test_every_op_is_one_struct_with_a_role_and_a_row() -> None:
 
 def test_the_pin_maps_are_the_vocabularys() -> None:
     assert OP_PINS == {
-        "ack": "ACK_EF", "ack_step": "ACK_S", "init": "INIT_SQ", "off": "OFF_SQ",
-        "step_on": "S_ON", "step_off": "S_OFF", "t_push": "T_PUSH",
-    }  # fmt: skip
+        "ack": "ACK_EF",
+        "ack_step": "ACK_S",
+        "init": "INIT_SQ",
+        "off": "OFF_SQ",
+        "step_on": "S_ON",
+        "step_off": "S_OFF",
+        "t_push": "T_PUSH",
+    }
     assert LEVEL_PINS == {
-        "halt": ("HALT_SQ", True), "en_il": ("EN_IL", False), "en_sv": ("EN_SV", False),
-    }  # fmt: skip
+        "halt": ("HALT_SQ", True),
+        "en_il": ("EN_IL", False),
+        "en_sv": ("EN_SV", False),
+    }
     assert set(MODE_PINS) == {"AUTO", "MAN", "TAP", "TOP"}
     assert {c.op: c.pin for c in COMMANDS if c.pin} == {
-        **OP_PINS, **{op: pin for op, (pin, _) in LEVEL_PINS.items()},
+        **OP_PINS,
+        **{op: pin for op, (pin, _) in LEVEL_PINS.items()},
         "mode": "SW_AUTO/MAN/TAP/TOP",
-    }  # fmt: skip
+    }
 
 
 # What clients sent before the union (Command(op, args: dict)): each decodes to its op's
@@ -74,7 +82,7 @@ WIRE = [
     b'{"op":"save","fb":"FILL","user":"","token":"","origin":"","args":{"file":"a.s7g","source":""}}',
     b'{"op":"open","fb":"FILL","user":"","token":"","origin":"","args":{"file":"a.xml"}}',
     b'{"op":"stop","fb":"FILL","user":"","token":"","origin":"","args":{}}',
-]  # fmt: skip
+]
 
 
 @pytest.mark.parametrize("data", WIRE)
@@ -136,8 +144,23 @@ _JSON = st.recursive(
     lambda inner: st.lists(inner, max_size=3) | st.dictionaries(st.text(max_size=8), inner),
     max_leaves=8,
 )
-_KEYS = st.sampled_from(["step", "mode", "on", "msg_id", "address", "value", "all", "source",
-                         "base", "removed", "preview", "file", "x"])  # fmt: skip
+_KEYS = st.sampled_from(
+    [
+        "step",
+        "mode",
+        "on",
+        "msg_id",
+        "address",
+        "value",
+        "all",
+        "source",
+        "base",
+        "removed",
+        "preview",
+        "file",
+        "x",
+    ]
+)
 
 
 @settings(max_examples=300, deadline=None)
@@ -188,8 +211,9 @@ def test_the_shells_send_reads_any_ops_arguments_before_sending() -> None:
     assert command_args("ack_msg", ["msg_id=17"]) == {"msg_id": 17}
     assert command_args("ack_msg", ["msg_id=FILL/DB1/S2/SV"]) == {"msg_id": "FILL/DB1/S2/SV"}
     assert command_args("force", ["address=I0.3", "value=null"]) == {
-        "address": "I0.3", "value": None,
-    }  # fmt: skip
+        "address": "I0.3",
+        "value": None,
+    }
     assert command_args("undo_download", ["preview=true"]) == {"preview": True}
     for op, words, reason in [
         ("nope", [], "unknown op 'nope'; one of ack,"),
@@ -223,9 +247,13 @@ def test_who_carries_each_op_out_and_which_conflict() -> None:
     assert {op_of(c) for c in COMMAND_TYPES if c.where == "cpu"} == {"stop", "start"}
     assert {op_of(c) for c in COMMAND_TYPES if c.where == "force"} == {"force"}
     assert live._GROUPS == {
-        "mode": "mode", "step_on": "step", "step_off": "step", "ack_step": "step",
-        "init": "init", "off": "init",
-    }  # fmt: skip
+        "mode": "mode",
+        "step_on": "step",
+        "step_off": "step",
+        "ack_step": "step",
+        "init": "init",
+        "off": "init",
+    }
 
 
 def test_the_role_tables_argument_examples_name_the_structs_fields() -> None:
@@ -266,9 +294,11 @@ def test_every_op_the_shell_and_the_page_spell_is_the_unions_with_its_arguments(
             args = next(f.type for f in msgspec.structs.fields(kind) if f.name == "args")
             fields = {f.name for f in msgspec.structs.fields(args)}
             given = node.args[1] if len(node.args) > 1 else None
-            keys = [k.value for k in given.keys if isinstance(k, ast.Constant)] if isinstance(
-                given, ast.Dict
-            ) else [k.arg for k in node.keywords if name == "_handler"]  # fmt: skip
+            keys = (
+                [k.value for k in given.keys if isinstance(k, ast.Constant)]
+                if isinstance(given, ast.Dict)
+                else [k.arg for k in node.keywords if name == "_handler"]
+            )
             assert set(keys) <= fields, f"{path.name}:{node.lineno}: {keys} not in {fields}"
             seen += 1
     assert seen >= 20

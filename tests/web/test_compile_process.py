@@ -42,9 +42,18 @@ def drill(tmp_path: Path) -> Iterator[tuple[subprocess.Popen[str], BusClient, st
     """``s7graph run`` of a copy of the drill demo on a unix socket; a client logged in."""
     for name in ("drill.s7g", "symbols.txt"):
         shutil.copy(DRILL / name, tmp_path / name)
-    args = [str(tmp_path / "drill.s7g"), "--symbols", str(tmp_path / "symbols.txt"),
-            "--plant", str(DRILL / "demo_plant.py"), "--state", str(tmp_path / "state.sqlite"),
-            "--duration-s", "280", *CORE]  # fmt: skip
+    args = [
+        str(tmp_path / "drill.s7g"),
+        "--symbols",
+        str(tmp_path / "symbols.txt"),
+        "--plant",
+        str(DRILL / "demo_plant.py"),
+        "--state",
+        str(tmp_path / "state.sqlite"),
+        "--duration-s",
+        "280",
+        *CORE,
+    ]
     with cpu_process(tmp_path, args, fb=FB, user="tess") as running:
         yield running
 
@@ -91,15 +100,23 @@ def test_the_time_limit_kills_a_runaway_compile_and_a_fresh_compiler_takes_the_n
         compiler.check(running, "drill.s7g")  # started and warm
         first = compiler.pid
         with pytest.raises(CompileRefused) as refused:
-            compiler.compile(huge_chart(), "drill.s7g", symbols=symbols, running=running,
-                             active=(1,), fb=FB, version=2)  # fmt: skip
+            compiler.compile(
+                huge_chart(),
+                "drill.s7g",
+                symbols=symbols,
+                running=running,
+                active=(1,),
+                fb=FB,
+                version=2,
+            )
         assert "time limit" in refused.value.reason and "0.3 s" in refused.value.reason
         assert first is not None and not _alive(first)
         assert compiler.started == 2  # replaced at once, warm for the next request
         edited = running.replace('"Ready"', '"Ready to drill"')
         compiler.time_limit_s = 60.0
-        done = compiler.compile(edited, "drill.s7g", symbols=symbols, running=running,
-                                active=(1,), fb=FB, version=2)  # fmt: skip
+        done = compiler.compile(
+            edited, "drill.s7g", symbols=symbols, running=running, active=(1,), fb=FB, version=2
+        )
         assert isinstance(done, Compiled) and done.cc.step_names[0] == "Ready to drill"
         assert done.live.layout.version == 2 and done.summary.count == 1
     finally:
@@ -111,8 +128,9 @@ def test_the_size_limit_refuses_before_anything_is_parsed() -> None:
     too_big = "(*" + "x" * MAX_SOURCE + "*)"
     try:
         with pytest.raises(CompileRefused) as refused:
-            compiler.compile(too_big, "big.s7g", symbols="", running="", active=(), fb=FB,
-                             version=2)  # fmt: skip
+            compiler.compile(
+                too_big, "big.s7g", symbols="", running="", active=(), fb=FB, version=2
+            )
         assert f"at most {MAX_SOURCE:,}" in refused.value.reason
         assert "size limit" in refused.value.reason
         with pytest.raises(CompileRefused, match="size limit"):
@@ -128,13 +146,27 @@ def test_a_refused_chart_comes_back_with_its_diagnostics_and_a_preview_with_its_
     symbols = (DRILL / "symbols.txt").read_text(encoding="utf-8")
     try:
         with pytest.raises(CompileRefused) as refused:
-            compiler.compile(running.replace("S1 S", "S1 Q"), "drill.s7g", symbols=symbols,
-                             running=running, active=(1,), fb=FB, version=2)  # fmt: skip
+            compiler.compile(
+                running.replace("S1 S", "S1 Q"),
+                "drill.s7g",
+                symbols=symbols,
+                running=running,
+                active=(1,),
+                fb=FB,
+                version=2,
+            )
         assert "does not parse" in refused.value.reason
         assert any("drill.s7g:" in line for line in refused.value.lines)
-        summary = compiler.compile(contact_chain(), "drill.s7g", symbols=symbols,
-                                   running=running, active=(1,), fb=FB, version=2,
-                                   preview=True)  # fmt: skip
+        summary = compiler.compile(
+            contact_chain(),
+            "drill.s7g",
+            symbols=symbols,
+            running=running,
+            active=(1,),
+            fb=FB,
+            version=2,
+            preview=True,
+        )
         assert isinstance(summary, Summary) and summary.count > 0
     finally:
         compiler.close()
@@ -169,9 +201,16 @@ def test_the_compiler_process_ends_with_the_cpus_even_in_the_middle_of_a_compile
         "c.compile(huge_chart(), 'd.s7g', symbols='', running=huge_chart(), active=(),\n"
         "          fb='Seq_drill', version=2)\n"
     )
-    cpu = subprocess.Popen([sys.executable, str(script)], cwd=ROOT, stdout=subprocess.PIPE,
-                           text=True, env={**os.environ, "PYTHONPATH": os.pathsep.join(
-                               [os.environ.get("PYTHONPATH", ""), str(ROOT)])})  # fmt: skip
+    cpu = subprocess.Popen(
+        [sys.executable, str(script)],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        text=True,
+        env={
+            **os.environ,
+            "PYTHONPATH": os.pathsep.join([os.environ.get("PYTHONPATH", ""), str(ROOT)]),
+        },
+    )
     assert cpu.stdout is not None
     child = int(cpu.stdout.readline())
     assert wait_until(lambda: _busy(child), 90)  # compiling

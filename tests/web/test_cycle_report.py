@@ -44,15 +44,16 @@ def test_the_status_says_how_often_the_share_for_communication_ran_out() -> None
 
 def test_before_a_cycle_is_measured_the_status_says_so() -> None:
     lines = status_lines(CpuStatus(cpu="cpu1"))
-    assert lines == ["CPU cpu1: RUN, cycle 0, FBs none, 0 force jobs",
-                     "cycle time: not measured yet"]  # fmt: skip
+    assert lines == [
+        "CPU cpu1: RUN, cycle 0, FBs none, 0 force jobs",
+        "cycle time: not measured yet",
+    ]
 
 
 def test_the_status_line_of_the_view_explains_the_longest_cycle_on_hover() -> None:
     runner = runner_with({3: lambda: spin(0.020)})
     runner.run(duration_s=0.1)
     update = StepStateUpdate(cycle=9, t_ms=90, mode="AUTO", active=[1])
-    html = status_html(update, 9, "RUN",
-                       cycle_stats(runner.cpu.stats, runner))  # fmt: skip
+    html = status_html(update, 9, "RUN", cycle_stats(runner.cpu.stats, runner))
     assert '<span title="longest: cycle 3 at ' in html
     assert "edge 2" in html and "cycle time " in html

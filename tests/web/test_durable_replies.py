@@ -54,8 +54,13 @@ def _rig(tmp_path: Path, reply_within_s: float) -> Iterator[Rig]:
     live = LiveGraph(session.graph, read=session.get, messages=message_list(session.cpu))
     endpoint = f"unixsock-stream/{tmp_path}/bus.sock"
     cpu_bus = open_session(listen=[endpoint])
-    publisher = BusPublisher(cpu_bus, "cpu1", {FB: live.layout}, gate=cpu_gate(None, store),
-                             reply_within_s=reply_within_s)  # fmt: skip
+    publisher = BusPublisher(
+        cpu_bus,
+        "cpu1",
+        {FB: live.layout},
+        gate=cpu_gate(None, store),
+        reply_within_s=reply_within_s,
+    )
     runner: Runner
 
     def on_record(record: ScanRecord) -> None:  # what LiveEdge.on_record does on the bus
@@ -166,9 +171,7 @@ def test_a_command_the_disk_has_not_confirmed_in_time_is_answered_as_not_confirm
     assert reply.reason.endswith("but the state file has not committed it within 0.5 s")
     # it was applied, and lands once the lock is gone
     assert wait_until(lambda: _mode_on_disk(rig.state) == "MAN", 10)
-    assert wait_until(
-        lambda: ("tess (unverified)", "mode", "applied") in _audit_ops(rig.state), 10
-    )
+    assert wait_until(lambda: ("tess (unverified)", "mode", "applied") in _audit_ops(rig.state), 10)
 
 
 def test_every_command_is_answered_within_its_senders_timeout() -> None:

@@ -30,9 +30,19 @@ USER = "tess (unverified)"
 @contextmanager
 def cpu(tmp_path: Path, state: Path) -> Iterator[tuple[subprocess.Popen[str], BusClient, str]]:
     """The drill demo restarted hot from ``state``, on a unix socket; a client logged in."""
-    args = [str(DRILL / "drill.s7g"), "--symbols", str(DRILL / "symbols.txt"),
-            "--plant", str(DRILL / "demo_plant.py"), "--state", str(state),
-            "--restart", "hot", "--duration-s", "120"]  # fmt: skip
+    args = [
+        str(DRILL / "drill.s7g"),
+        "--symbols",
+        str(DRILL / "symbols.txt"),
+        "--plant",
+        str(DRILL / "demo_plant.py"),
+        "--state",
+        str(state),
+        "--restart",
+        "hot",
+        "--duration-s",
+        "120",
+    ]
     with cpu_process(tmp_path, args, fb=FB, user="tess") as running:
         yield running
 

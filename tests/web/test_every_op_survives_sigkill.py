@@ -86,9 +86,19 @@ class Cpu:
 @contextmanager
 def run(tmp_path: Path) -> Iterator[Cpu]:
     """The drill chart of ``tmp_path`` restarted hot from its state file."""
-    args = [str(tmp_path / "drill.s7g"), "--symbols", str(tmp_path / "symbols.txt"),
-            "--state", str(tmp_path / "drill.sqlite"), "--restart", "hot",
-            "--duration-s", "300", "--max-cycle-ms", "5000"]  # fmt: skip
+    args = [
+        str(tmp_path / "drill.s7g"),
+        "--symbols",
+        str(tmp_path / "symbols.txt"),
+        "--state",
+        str(tmp_path / "drill.sqlite"),
+        "--restart",
+        "hot",
+        "--duration-s",
+        "300",
+        "--max-cycle-ms",
+        "5000",
+    ]
     with cpu_process(tmp_path, args, fb=FB, user="tess") as (proc, client, token):
         yield Cpu(proc, client, token)
     for stream in (proc.stdout, proc.stderr):
@@ -156,8 +166,9 @@ def test_every_applied_command_survives_sigkill_and_a_hot_restart(drill: Path) -
         forces = cpu.client.forces()
         assert forces is not None
         assert {(f.address, f.value) for f in forces.entries} == {
-            ("I0.0", "TRUE"), ("I0.4", "TRUE")
-        }  # fmt: skip
+            ("I0.0", "TRUE"),
+            ("I0.4", "TRUE"),
+        }
         assert cpu.until(lambda s: s.latched == [2]).values["Cl_press_ok"] is True
         cpu.send("mode", mode="AUTO")
         cpu.send_until_applied("ack_step", step=2)  # released, S2 switches by T3
@@ -202,8 +213,21 @@ def test_every_applied_command_survives_sigkill_and_a_hot_restart(drill: Path) -
         assert snapshot.overrides == {"HALT_SQ": True, "EN_IL": False, "EN_SV": False}
         assert not snapshot.il_enabled and not snapshot.sv_enabled
         assert snapshot.active == [2] and snapshot.mode == "TOP"
-    ops = ["mode", "step_on", "step_off", "ack_msg", "force", "ack_step", "ack", "init",
-           "off", "t_push", "halt", "en_il", "en_sv"]  # fmt: skip
+    ops = [
+        "mode",
+        "step_on",
+        "step_off",
+        "ack_msg",
+        "force",
+        "ack_step",
+        "ack",
+        "init",
+        "off",
+        "t_push",
+        "halt",
+        "en_il",
+        "en_sv",
+    ]
     assert {op for op, outcome in _audited(state) if outcome == "applied"} >= set(ops)
 
 

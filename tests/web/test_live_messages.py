@@ -207,8 +207,9 @@ def test_live_edge_serves_alarms_and_criteria_over_the_bus(rig: Rig) -> None:
         login = client.login("dora")
         assert login.ok and login.role == "engineer" and not login.verified
         replies = []
-        command = Command(op="ack_msg", fb="Msg", user="dora", token=login.token,
-                          args={"msg_id": SV})  # fmt: skip
+        command = Command(
+            op="ack_msg", fb="Msg", user="dora", token=login.token, args={"msg_id": SV}
+        )
         sender = threading.Thread(target=lambda: replies.append(client.send(command)))
         sender.start()
         assert wait_until(lambda: step() or bool(replies), 5)

@@ -214,8 +214,9 @@ def test_broken_or_hostile_downloads_are_refused_and_the_cpu_keeps_the_old_chart
 
 def test_an_operator_may_not_download_and_the_refusal_is_audited(cpu: Cpu) -> None:
     login = cpu.client.login("olga", PASSWORD)
-    command = Command(op="download", fb="Seq_fill", user="olga", token=login.token,
-                      args={"source": CHART})  # fmt: skip
+    command = Command(
+        op="download", fb="Seq_fill", user="olga", token=login.token, args={"source": CHART}
+    )
     reply = cpu.client.send(command, timeout=20)
     assert not reply.applied and "needs engineer" in reply.reason
     rows = [r for r in read_audit(cpu.state) if r.op == "download"]
@@ -241,8 +242,12 @@ def _shell(rig_endpoint: str, *args: str) -> subprocess.CompletedProcess[str]:
     env = {**os.environ, "S7GRAPH_PASSWORD": PASSWORD}
     return subprocess.run(
         [sys.executable, "-m", "s7graph", *args, "--cpu", "cpu1", "--connect", rig_endpoint],
-        capture_output=True, text=True, timeout=60, env=env, stdin=subprocess.DEVNULL,
-    )  # fmt: skip
+        capture_output=True,
+        text=True,
+        timeout=60,
+        env=env,
+        stdin=subprocess.DEVNULL,
+    )
 
 
 def test_s7graph_download_shows_the_change_asks_and_downloads(cpu: Cpu, tmp_path: Path) -> None:

@@ -69,11 +69,24 @@ class Watch:
     def __init__(self, endpoint: str) -> None:
         self.lines: list[str] = []
         self.proc = subprocess.Popen(
-            [sys.executable, "-m", "s7graph", "watch", "--cpu", "cpu1", "--connect", endpoint,
-             "--duration-s", "280"],
-            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL,
-            text=True, env=dict(os.environ),
-        )  # fmt: skip
+            [
+                sys.executable,
+                "-m",
+                "s7graph",
+                "watch",
+                "--cpu",
+                "cpu1",
+                "--connect",
+                endpoint,
+                "--duration-s",
+                "280",
+            ],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.DEVNULL,
+            stdin=subprocess.DEVNULL,
+            text=True,
+            env=dict(os.environ),
+        )
         self._reader = threading.Thread(target=self._read, daemon=True)
         self._reader.start()
 

@@ -134,8 +134,10 @@ def test_downloads_through_the_bus_keep_the_cpu_running_as_a_local_simulation(
 
         def agrees() -> None:
             assert wait_until(lambda: published() == local.active, 10), (
-                published(), local.active, format_chart(editor.chart),
-            )  # fmt: skip
+                published(),
+                local.active,
+                format_chart(editor.chart),
+            )
             status = client.status()
             assert proc.poll() is None and status is not None and status.state == "RUN"
 

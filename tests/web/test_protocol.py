@@ -96,7 +96,9 @@ SAMPLES = [
                 interlock=[Contact(text="ok", ok=False)],
                 transitions=[
                     TransitionCriteria(
-                        number=2, name="Full", holds=False,
+                        number=2,
+                        name="Full",
+                        holds=False,
                         contacts=[Contact(text='"A"', ok=True), Contact(text='NOT "B"', ok=False)],
                     )
                 ],
@@ -108,15 +110,25 @@ SAMPLES = [
         cycle=9,
         entries=[
             AlarmEntry(
-                msg_id="FILL/DB1/S2/SV", event_id=1, state="outgoing", text="<b>late</b>",
-                source="S7-Graph", came_ms=1_700_000_000_000, went_ms=1_700_000_000_500,
-                acked=True, ack_user="bob", ack_ms=1_700_000_000_900, fb="FILL", db=1, step=2,
+                msg_id="FILL/DB1/S2/SV",
+                event_id=1,
+                state="outgoing",
+                text="<b>late</b>",
+                source="S7-Graph",
+                came_ms=1_700_000_000_000,
+                went_ms=1_700_000_000_500,
+                acked=True,
+                ack_user="bob",
+                ack_ms=1_700_000_000_900,
+                fb="FILL",
+                db=1,
+                step=2,
                 kind="SV",
             ),
             AlarmEntry(msg_id=17, event_id=2, state="incoming", came_ms=5),
         ],
     ),
-]  # fmt: skip
+]
 
 
 @pytest.mark.parametrize("message", SAMPLES, ids=lambda m: type(m).__name__)

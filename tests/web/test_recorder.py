@@ -98,8 +98,11 @@ def test_a_memory_recording_returns_rrd_bytes() -> None:
 def test_after_an_online_change_the_new_chart_s_steps_are_recorded(tmp_path: Path) -> None:
     path = tmp_path / "run.rrd"
     steps = (Step(1, "Idle", initial=True), Step(3, "New"), Step(2, "Run"))
-    transitions = (Transition(1, "", (1,), (3,)), Transition(3, "", (3,), (2,)),
-                   Transition(2, "", (2,), (1,)))  # fmt: skip
+    transitions = (
+        Transition(1, "", (1,), (3,)),
+        Transition(3, "", (3,), (2,)),
+        Transition(2, "", (2,), (1,)),
+    )
     inserted = ChartLayout.from_chart(
         Chart("FILL", sequences=(Sequence(1, "M", steps, transitions),)), version=2
     )

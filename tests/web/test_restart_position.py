@@ -46,8 +46,9 @@ class Drill:
         self, state: Path, plant: LoadedPlant, *, restart: str = "warm", chart: Path | None = None
     ) -> None:
         self.clock = VirtualClock(10**12)  # another run's clock: far from the last one's
-        self.session = ChartSession.load(chart or DRILL / "drill.s7g", DRILL / "symbols.txt",
-                                         self.clock)  # fmt: skip
+        self.session = ChartSession.load(
+            chart or DRILL / "drill.s7g", DRILL / "symbols.txt", self.clock
+        )
         self.cpu = self.session.cpu
         self.plant = plant
         self.opened: OpenedState = open_state(state, self.cpu, hot=restart == "hot")
@@ -328,8 +329,10 @@ def test_a_malformed_sequencer_state_is_refused(
         (blob,) = con.execute("SELECT data FROM instances WHERE number=1").fetchone()
         data = unpack_instance(blob)
         data["G7_STATE"][field] = value
-        con.execute("UPDATE instances SET data=? WHERE number=1",
-                    (zlib.compress(json.dumps(data).encode()),))  # fmt: skip
+        con.execute(
+            "UPDATE instances SET data=? WHERE number=1",
+            (zlib.compress(json.dumps(data).encode()),),
+        )
     con.close()
     with pytest.raises(StateFileError) as info:
         Drill(path, plant)
@@ -349,10 +352,15 @@ def test_a_file_of_format_4_with_every_list_in_full_resumes_under_hot(tmp_path: 
         data["G7_STATE"] = on_disk.to_state()
         compact = on_disk.state_view()
         assert any(isinstance(compact[k], dict) for k in ("il_err", "crit_flt", "t_since"))
-        assert all(isinstance(v, list) for k, v in data["G7_STATE"].items() if k in compact
-                   and isinstance(compact[k], dict) and "fill" in compact[k])  # fmt: skip
-        con.execute("UPDATE instances SET data=? WHERE number=1",
-                    (zlib.compress(json.dumps(data).encode()),))  # fmt: skip
+        assert all(
+            isinstance(v, list)
+            for k, v in data["G7_STATE"].items()
+            if k in compact and isinstance(compact[k], dict) and "fill" in compact[k]
+        )
+        con.execute(
+            "UPDATE instances SET data=? WHERE number=1",
+            (zlib.compress(json.dumps(data).encode()),),
+        )
         con.execute("UPDATE meta SET value='s7graph-state 4' WHERE key='format'")
     con.close()
     again = Drill(path, plant, restart="hot")

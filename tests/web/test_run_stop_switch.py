@@ -23,8 +23,10 @@ def test_the_switch_stops_without_an_error_and_starts_with_the_configured_restar
     modes: list[CpuMode] = []
     runner = runner_with({})
     runner.end_on_stop = True  # as a run without a view: a STOP by an error would end it
-    actions = {5: lambda: runner.switch_stop("STOP by the switch (eng)"),
-               10: lambda: runner.switch_start("cold")}  # fmt: skip
+    actions = {
+        5: lambda: runner.switch_stop("STOP by the switch (eng)"),
+        10: lambda: runner.switch_start("cold"),
+    }
 
     def on_record(record: object) -> None:
         modes.append(runner.cpu.mode)

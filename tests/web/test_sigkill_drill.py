@@ -118,19 +118,34 @@ def _position(diagnostics: list[tuple[int, int, str]], after: int) -> tuple[str,
     return entries[-1], {int(n) for n, _ in found}, {int(n) for n, f in found if f}
 
 
-def _kill_runs(tmp_path: Path, restart: str, *, idle: int, slow: int, seed: int,
-               upto_s: float) -> list[tuple[OnDisk, OnDisk]]:  # fmt: skip
+def _kill_runs(
+    tmp_path: Path, restart: str, *, idle: int, slow: int, seed: int, upto_s: float
+) -> list[tuple[OnDisk, OnDisk]]:
     """KILLS runs, each SIGKILLed at a random moment, restarted with ``restart``; the last
     ends by SIGTERM. Returns (state on disk after kill k, after kill k + 1) pairs."""
     plant = tmp_path / "plant.py"
-    plant.write_text(textwrap.dedent(PLANT.format(demo=str(DRILL / "demo_plant.py"),
-                                                  idle=idle, slow=slow)))  # fmt: skip
+    plant.write_text(
+        textwrap.dedent(PLANT.format(demo=str(DRILL / "demo_plant.py"), idle=idle, slow=slow))
+    )
     state = tmp_path / "drill.sqlite"
     # kills are tested, not a loaded CI's time errors: a generous maximum cycle time
-    cmd = [sys.executable, "-m", "s7graph", "run", str(DRILL / "drill.s7g"),
-           "--symbols", str(DRILL / "symbols.txt"), "--plant", str(plant),
-           "--state", str(state), "--restart", restart,
-           "--max-cycle-ms", "5000"]  # fmt: skip
+    cmd = [
+        sys.executable,
+        "-m",
+        "s7graph",
+        "run",
+        str(DRILL / "drill.s7g"),
+        "--symbols",
+        str(DRILL / "symbols.txt"),
+        "--plant",
+        str(plant),
+        "--state",
+        str(state),
+        "--restart",
+        restart,
+        "--max-cycle-ms",
+        "5000",
+    ]
     rng = random.Random(seed)
     seen: list[OnDisk] = []
     for k in range(KILLS + 1):

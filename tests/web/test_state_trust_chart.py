@@ -37,8 +37,10 @@ def _row(path: Path) -> dict[str, Any]:
 
 def _put_row(path: Path, data: dict[str, Any]) -> None:
     with sqlite3.connect(path) as con:
-        con.execute("UPDATE instances SET data=? WHERE number=1",
-                    (zlib.compress(msgspec.msgpack.encode(data)),))  # fmt: skip
+        con.execute(
+            "UPDATE instances SET data=? WHERE number=1",
+            (zlib.compress(msgspec.msgpack.encode(data)),),
+        )
     con.close()
 
 

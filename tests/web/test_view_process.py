@@ -68,13 +68,32 @@ class Run:
     def __init__(self, tmp_path: Path, *extra: str) -> None:
         self.port = _free_port()
         self.proc = subprocess.Popen(
-            [sys.executable, "-m", "s7graph", "run", str(DRILL / "drill.s7g"),
-             "--symbols", str(DRILL / "symbols.txt"), "--plant", str(DRILL / "demo_plant.py"),
-             "--state", str(tmp_path / "drill.sqlite"), "--web", "--port", str(self.port),
-             "--duration-s", "150", *extra],
-            cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-            start_new_session=True, preexec_fn=_as_from_a_shell,
-        )  # fmt: skip
+            [
+                sys.executable,
+                "-m",
+                "s7graph",
+                "run",
+                str(DRILL / "drill.s7g"),
+                "--symbols",
+                str(DRILL / "symbols.txt"),
+                "--plant",
+                str(DRILL / "demo_plant.py"),
+                "--state",
+                str(tmp_path / "drill.sqlite"),
+                "--web",
+                "--port",
+                str(self.port),
+                "--duration-s",
+                "150",
+                *extra,
+            ],
+            cwd=ROOT,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            start_new_session=True,
+            preexec_fn=_as_from_a_shell,
+        )
         self.out: queue.Queue[str] = queue.Queue()
         self.err: list[str] = []
         assert self.proc.stdout is not None and self.proc.stderr is not None
@@ -179,10 +198,12 @@ def test_ctrl_c_stops_the_cpu_and_its_view_with_one_line_each(run: Run) -> None:
     assert wait_until(lambda: len(run.err) >= 3, 10)
     start, *stopped = run.err
     assert "drill.s7g (Seq_drill) in RUN" in start
-    assert sorted(stopped) == sorted([
-        "s7graph: view stopped\n",
-        f"s7graph: drill.s7g (Seq_drill) stopped (state saved in {run_state(run)})\n",
-    ])  # fmt: skip
+    assert sorted(stopped) == sorted(
+        [
+            "s7graph: view stopped\n",
+            f"s7graph: drill.s7g (Seq_drill) stopped (state saved in {run_state(run)})\n",
+        ]
+    )
 
 
 def run_state(run: Run) -> str:
@@ -239,11 +260,26 @@ def test_the_scan_keeps_its_processor_and_the_bus_and_the_view_run_on_the_others
 
 def test_a_processor_that_is_not_there_is_refused_naming_the_option(tmp_path: Path) -> None:
     proc = subprocess.run(
-        [sys.executable, "-m", "s7graph", "run", str(DRILL / "drill.s7g"),
-         "--symbols", str(DRILL / "symbols.txt"), "--state", str(tmp_path / "d.sqlite"),
-         "--duration-s", "1", "--core", "4096"],
-        cwd=ROOT, capture_output=True, text=True, timeout=60,
-    )  # fmt: skip
+        [
+            sys.executable,
+            "-m",
+            "s7graph",
+            "run",
+            str(DRILL / "drill.s7g"),
+            "--symbols",
+            str(DRILL / "symbols.txt"),
+            "--state",
+            str(tmp_path / "d.sqlite"),
+            "--duration-s",
+            "1",
+            "--core",
+            "4096",
+        ],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
     there = ", ".join(map(str, sorted(_cpus(0))))
     assert proc.returncode == 2
     assert proc.stderr == (

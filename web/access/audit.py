@@ -103,9 +103,18 @@ class Facts:
         args = json.dumps(dict(self.args), sort_keys=True, default=str)[:4096]
         outcome = "applied" if self.applied else "refused"
         return AuditRecord(
-            row_id, t_ns, self.user[:80], self.role[:16], self.origin[:160], self.op[:32],
-            self.fb[:64], args, outcome, self.reason[:4096], self.detail[:4096],
-        )  # fmt: skip
+            row_id,
+            t_ns,
+            self.user[:80],
+            self.role[:16],
+            self.origin[:160],
+            self.op[:32],
+            self.fb[:64],
+            args,
+            outcome,
+            self.reason[:4096],
+            self.detail[:4096],
+        )
 
 
 @dataclass(frozen=True, slots=True)
@@ -148,8 +157,18 @@ def _audit_rows(
 
 
 _INSERT_COLUMNS: Final = (
-    "id", "t_ns", "user", "role", "origin", "action", "fb", "args", "outcome", "reason", "detail"
-)  # fmt: skip
+    "id",
+    "t_ns",
+    "user",
+    "role",
+    "origin",
+    "action",
+    "fb",
+    "args",
+    "outcome",
+    "reason",
+    "detail",
+)
 _ROW: Final = operator.attrgetter(*(f.name for f in dataclasses.fields(AuditRecord)))
 """An ``AuditRecord`` as the row of ``_INSERT_COLUMNS``: ``dataclasses.astuple`` deep-copies
 every field, half of what a command cost at the scan boundary (65 → 34 µs)."""

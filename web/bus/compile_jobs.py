@@ -141,8 +141,13 @@ def _summary(request: dict[str, Any]) -> dict[str, Any]:
     running = _running_chart(str(request["running"]))
     target = _running_chart(str(request["target"]))
     summary = summarize(running, target, tuple(request.get("active", ())))
-    return {"summary": (summary.lines()[:MAX_SUMMARY_LINES], summary.removed_active,
-                        len(summary.changes))}  # fmt: skip
+    return {
+        "summary": (
+            summary.lines()[:MAX_SUMMARY_LINES],
+            summary.removed_active,
+            len(summary.changes),
+        )
+    }
 
 
 def _open(path: Path, symbols: str) -> dict[str, Any]:

@@ -60,7 +60,7 @@ __all__ = [
     "Compiled",
     "Compiler",
     "Summary",
-]  # fmt: skip
+]
 
 TIME_LIMIT_S: Final = 20.0
 """A request the child has not answered by then is refused (and the child replaced): well
@@ -225,10 +225,15 @@ class Compiler:
         ``active`` steps; a ``preview`` brings back the summary only."""
         _size_limit(text, "the chart")
         request = {
-            "op": "preview" if preview else "compile", "text": text, "file": file,
-            "symbols": symbols, "running": running, "active": active, "fb": fb,
+            "op": "preview" if preview else "compile",
+            "text": text,
+            "file": file,
+            "symbols": symbols,
+            "running": running,
+            "active": active,
+            "fb": fb,
             "version": version,
-        }  # fmt: skip
+        }
         reply, blobs = self._call(request, "download")
         summary = Summary(*reply["summary"])
         if preview:

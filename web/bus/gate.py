@@ -62,8 +62,17 @@ def audit_entry(r: AuditRecord) -> AuditEntry:
 def _facts(
     command: Command, user: str, role: str, applied: bool, reason: str, detail: str = ""
 ) -> Facts:
-    return Facts(user, role, command.origin, command.op, command.fb, command.args.given(), applied,
-                 reason, detail)  # fmt: skip
+    return Facts(
+        user,
+        role,
+        command.origin,
+        command.op,
+        command.fb,
+        command.args.given(),
+        applied,
+        reason,
+        detail,
+    )
 
 
 class Gate:
@@ -96,8 +105,11 @@ class Gate:
         result = self.auth.login(request.user, request.password)
         shown = request.user if result.ok or len(request.user) <= 32 else request.user[:32]
         label = Identity(shown, result.role, result.verified).label if result.ok else shown
-        self.record(Facts(label or "?", result.role, request.origin, "login", "", {}, result.ok,
-                          result.reason))  # fmt: skip
+        self.record(
+            Facts(
+                label or "?", result.role, request.origin, "login", "", {}, result.ok, result.reason
+            )
+        )
         if not result.ok:
             return LoginReply(ok=False, reason=result.reason)
         return LoginReply(

@@ -84,9 +84,14 @@ from s7graph.web.bus.step_details import StepDetails
 from s7graph.web.commands import COMMAND_TYPES, op_of
 
 __all__ = [
-    "CONTROL_SEQUENCER", "MODE_PINS", "OP_PINS", "LiveChart", "LiveGraph", "prepare_chart",
+    "CONTROL_SEQUENCER",
+    "MODE_PINS",
+    "OP_PINS",
+    "LiveChart",
+    "LiveGraph",
+    "prepare_chart",
     "watch_names",
-]  # fmt: skip
+]
 
 CONTROL_SEQUENCER = "S7-GRAPH Control Sequencer"
 # The pins the commands act as, read from the command vocabulary (web.commands): an edge

@@ -294,9 +294,10 @@ class OnlineChange:
             back = self.history[-1]
             target = Version(self.current.number + 1, back.cc, back.table, back.text)
             summary = self.compiler.summarize(
-                running=self._source_of(self.current), target=self._source_of(back),
+                running=self._source_of(self.current),
+                target=self._source_of(back),
                 active=self._active(),
-            )  # fmt: skip
+            )
         else:
             target, summary = self._compile(str(command.args["source"]), preview=preview)
         lines = list(summary.lines()) or ["no change: the CPU runs this chart"]
@@ -325,9 +326,15 @@ class OnlineChange:
         v = self.current
         file = self.path.name if self.path is not None else f"{v.cc.name}.s7g"
         done = self.compiler.compile(
-            text, file, symbols=self.symbols_text, running=self._source_of(v),
-            active=self._active(), fb=self.live.fb, version=v.number + 1, preview=preview,
-        )  # fmt: skip
+            text,
+            file,
+            symbols=self.symbols_text,
+            running=self._source_of(v),
+            active=self._active(),
+            fb=self.live.fb,
+            version=v.number + 1,
+            preview=preview,
+        )
         if not isinstance(done, Compiled):
             return None, done
         return Version(v.number + 1, done.cc, done.table, text, done.live), done.summary

@@ -182,9 +182,12 @@ class ChartLayout(_Msg, frozen=True, kw_only=True):
             for q in chart.sequences
         ]
         return cls(
-            fb=fb or chart.name, steps=steps, transitions=transitions, sequences=sequences,
+            fb=fb or chart.name,
+            steps=steps,
+            transitions=transitions,
+            sequences=sequences,
             version=version,
-        )  # fmt: skip
+        )
 
     def step(self, number: int) -> StepInfo | None:
         """The step with this number, or None."""

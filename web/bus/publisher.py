@@ -124,8 +124,11 @@ class _Awaiting:
             if error is None or not applied:
                 p.resolve(applied, reason, cycle=self.cycle)
             else:
-                p.resolve(False, f"not confirmed: applied in cycle {self.cycle}, but {error}",
-                          cycle=self.cycle)  # fmt: skip
+                p.resolve(
+                    False,
+                    f"not confirmed: applied in cycle {self.cycle}, but {error}",
+                    cycle=self.cycle,
+                )
 
     def overdue(self, why: str) -> None:
         self.durable(why)

@@ -49,8 +49,9 @@ def cycle_stats(
     overruns and long cycles with the breakdowns of the longest and the last long one, its
     share for communication and how often that ran out (``comm_limited``)."""
     if runner is None:
-        return CycleStats(last_ms=cpu.last_ns / _MS, min_ms=cpu.min_ns / _MS,
-                          max_ms=cpu.max_ns / _MS)  # fmt: skip
+        return CycleStats(
+            last_ms=cpu.last_ns / _MS, min_ms=cpu.min_ns / _MS, max_ms=cpu.max_ns / _MS
+        )
     profile = runner.profile
     recent = profile.recent
     return CycleStats(

@@ -77,9 +77,16 @@ class StepDetails:
             else:
                 transitions = tuple([(tt[j], crit[j]) for j in valid])
             key = (
-                t_ns[i] // TENTH_NS, u_ns[i] // TENTH_NS, il_ok[i], il_err[i], sv_err[i],
-                crit_loc[i], crit_sup[i], valid, transitions,
-            )  # fmt: skip
+                t_ns[i] // TENTH_NS,
+                u_ns[i] // TENTH_NS,
+                il_ok[i],
+                il_err[i],
+                sv_err[i],
+                crit_loc[i],
+                crit_sup[i],
+                valid,
+                transitions,
+            )
             known = seen[i]
             detail = known.get(key)
             if detail is None:

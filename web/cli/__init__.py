@@ -116,9 +116,11 @@ def _scan_priority(value: int | None) -> int | None:
     if value == 0:
         return None
     if not realtime_allowed(value):
-        print(f"s7graph: note: real-time priority {value} refused by the system (needs root, "
-              "CAP_SYS_NICE or an rtprio limit): the scan runs at normal priority",
-              file=sys.stderr)  # fmt: skip
+        print(
+            f"s7graph: note: real-time priority {value} refused by the system (needs root, "
+            "CAP_SYS_NICE or an rtprio limit): the scan runs at normal priority",
+            file=sys.stderr,
+        )
     return value
 
 
@@ -241,8 +243,17 @@ def run(
     if program.suffix.lower() == ".s7g":
         from s7graph.web.cli.run_chart import run_chart
 
-        net = _net(cpu=cpu, listen=listen, connect=connect, host=host, users=users,
-                   tls_ca=tls_ca, tls_cert=tls_cert, tls_key=tls_key, origins=origin)  # fmt: skip
+        net = _net(
+            cpu=cpu,
+            listen=listen,
+            connect=connect,
+            host=host,
+            users=users,
+            tls_ca=tls_ca,
+            tls_cert=tls_cert,
+            tls_key=tls_key,
+            origins=origin,
+        )
         problem = net.problem(listening=web)
         if problem:
             print(f"s7graph: error: {problem}", file=sys.stderr)
@@ -364,10 +375,14 @@ def import_(
 
     raise typer.Exit(
         import_command(
-            source, output=output, symbols_out=symbols_out, symbols=symbols, pou=pou,
+            source,
+            output=output,
+            symbols_out=symbols_out,
+            symbols=symbols,
+            pou=pou,
             strict=strict,
         )
-    )  # fmt: skip
+    )
 
 
 @app.command()
@@ -422,8 +437,14 @@ def router(
     """Run a zenoh router where CPUs and views on several machines meet."""
     from s7graph.web.cli.router import router_command
 
-    net = _net(listen=listen, connect=connect, users=users, tls_ca=tls_ca, tls_cert=tls_cert,
-               tls_key=tls_key)  # fmt: skip
+    net = _net(
+        listen=listen,
+        connect=connect,
+        users=users,
+        tls_ca=tls_ca,
+        tls_cert=tls_cert,
+        tls_key=tls_key,
+    )
     raise typer.Exit(router_command(net, duration_s))
 
 
@@ -451,9 +472,14 @@ def status(cpu: CpuName = "cpu1", connect: Connect = None, tls_ca: TlsCa = None)
 
 
 def _remote(
-    op: str, args: dict[str, Any], cpu: str, connect: list[str] | None, fb: str | None,
-    user: str, tls_ca: Path | None,
-) -> None:  # fmt: skip
+    op: str,
+    args: dict[str, Any],
+    cpu: str,
+    connect: list[str] | None,
+    fb: str | None,
+    user: str,
+    tls_ca: Path | None,
+) -> None:
     from s7graph.web.cli.remote import send_command
 
     net = _net(cpu=cpu, connect=connect, tls_ca=tls_ca)
@@ -462,11 +488,14 @@ def _remote(
 
 @app.command()
 def ack(
-    user: UserName, cpu: CpuName = "cpu1", connect: Connect = None, fb: FbName = None,
+    user: UserName,
+    cpu: CpuName = "cpu1",
+    connect: Connect = None,
+    fb: FbName = None,
     tls_ca: TlsCa = None,
     step: Annotated[int | None, typer.Option(help="Only this step (ACK_S).")] = None,
     message: Annotated[str | None, typer.Option(help="One message of the alarm list.")] = None,
-) -> None:  # fmt: skip
+) -> None:
     """Acknowledge the FB's supervision faults (ACK_EF), one step's or one message."""
     if message is not None:
         msg_id: int | str = int(message) if message.isdigit() else message
@@ -479,45 +508,60 @@ def ack(
 @app.command()
 def mode(
     new_mode: Annotated[str, typer.Argument(metavar="MODE", help="AUTO, MAN, TAP or TOP.")],
-    user: UserName, cpu: CpuName = "cpu1", connect: Connect = None, fb: FbName = None,
+    user: UserName,
+    cpu: CpuName = "cpu1",
+    connect: Connect = None,
+    fb: FbName = None,
     tls_ca: TlsCa = None,
-) -> None:  # fmt: skip
+) -> None:
     """Switch the FB's mode."""
     _remote("mode", {"mode": new_mode.upper()}, cpu, connect, fb, user, tls_ca)
 
 
 @app.command()
 def init(
-    user: UserName, cpu: CpuName = "cpu1", connect: Connect = None, fb: FbName = None,
+    user: UserName,
+    cpu: CpuName = "cpu1",
+    connect: Connect = None,
+    fb: FbName = None,
     tls_ca: TlsCa = None,
-) -> None:  # fmt: skip
+) -> None:
     """Initialize the sequencer (INIT_SQ)."""
     _remote("init", {}, cpu, connect, fb, user, tls_ca)
 
 
 @app.command()
 def off(
-    user: UserName, cpu: CpuName = "cpu1", connect: Connect = None, fb: FbName = None,
+    user: UserName,
+    cpu: CpuName = "cpu1",
+    connect: Connect = None,
+    fb: FbName = None,
     tls_ca: TlsCa = None,
-) -> None:  # fmt: skip
+) -> None:
     """Switch the sequencer off (OFF_SQ)."""
     _remote("off", {}, cpu, connect, fb, user, tls_ca)
 
 
 @app.command("stop")
 def stop_cpu(
-    user: UserName, cpu: CpuName = "cpu1", connect: Connect = None, fb: FbName = None,
+    user: UserName,
+    cpu: CpuName = "cpu1",
+    connect: Connect = None,
+    fb: FbName = None,
     tls_ca: TlsCa = None,
-) -> None:  # fmt: skip
+) -> None:
     """Put the CPU in STOP, as its RUN/STOP switch (engineer; outputs to 0)."""
     _remote("stop", {}, cpu, connect, fb, user, tls_ca)
 
 
 @app.command("start")
 def start_cpu(
-    user: UserName, cpu: CpuName = "cpu1", connect: Connect = None, fb: FbName = None,
+    user: UserName,
+    cpu: CpuName = "cpu1",
+    connect: Connect = None,
+    fb: FbName = None,
     tls_ca: TlsCa = None,
-) -> None:  # fmt: skip
+) -> None:
     """Start the CPU from STOP with its configured restart (--restart of its run; engineer)."""
     _remote("start", {}, cpu, connect, fb, user, tls_ca)
 
@@ -525,9 +569,12 @@ def start_cpu(
 @app.command("step-on")
 def step_on(
     step: Annotated[int, typer.Argument(help="The step number.")],
-    user: UserName, cpu: CpuName = "cpu1", connect: Connect = None, fb: FbName = None,
+    user: UserName,
+    cpu: CpuName = "cpu1",
+    connect: Connect = None,
+    fb: FbName = None,
     tls_ca: TlsCa = None,
-) -> None:  # fmt: skip
+) -> None:
     """Activate a step (MAN, S_ON)."""
     _remote("step_on", {"step": step}, cpu, connect, fb, user, tls_ca)
 
@@ -535,18 +582,24 @@ def step_on(
 @app.command("step-off")
 def step_off(
     step: Annotated[int, typer.Argument(help="The step number.")],
-    user: UserName, cpu: CpuName = "cpu1", connect: Connect = None, fb: FbName = None,
+    user: UserName,
+    cpu: CpuName = "cpu1",
+    connect: Connect = None,
+    fb: FbName = None,
     tls_ca: TlsCa = None,
-) -> None:  # fmt: skip
+) -> None:
     """Deactivate a step (MAN, S_OFF)."""
     _remote("step_off", {"step": step}, cpu, connect, fb, user, tls_ca)
 
 
 @app.command("t-push")
 def t_push(
-    user: UserName, cpu: CpuName = "cpu1", connect: Connect = None, fb: FbName = None,
+    user: UserName,
+    cpu: CpuName = "cpu1",
+    connect: Connect = None,
+    fb: FbName = None,
     tls_ca: TlsCa = None,
-) -> None:  # fmt: skip
+) -> None:
     """Switch a ready transition (TAP, TOP; T_PUSH)."""
     _remote("t_push", {}, cpu, connect, fb, user, tls_ca)
 
@@ -558,8 +611,11 @@ def send(
         list[str] | None, typer.Argument(metavar="[NAME=VALUE]...", help="Its arguments.")
     ] = None,
     user: Annotated[str | None, typer.Option("--user", help="Log in as this user.")] = None,
-    cpu: CpuName = "cpu1", connect: Connect = None, fb: FbName = None, tls_ca: TlsCa = None,
-) -> None:  # fmt: skip
+    cpu: CpuName = "cpu1",
+    connect: Connect = None,
+    fb: FbName = None,
+    tls_ca: TlsCa = None,
+) -> None:
     """Send any command of the vocabulary with its arguments (s7graph send halt on=true)."""
     from s7graph.web.commands import command_args
 
@@ -576,15 +632,20 @@ def send(
 def force(
     job: Annotated[
         list[str] | None,
-        typer.Argument(metavar="ADDRESS VALUE|off",
-                       help="An I, Q or M address or a symbol, and TRUE/FALSE, a number or "
-                       "an S7 literal (16#00FF, T#5S); off unforces it."),
+        typer.Argument(
+            metavar="ADDRESS VALUE|off",
+            help="An I, Q or M address or a symbol, and TRUE/FALSE, a number or "
+            "an S7 literal (16#00FF, T#5S); off unforces it.",
+        ),
     ] = None,
     user: Annotated[str | None, typer.Option("--user", help="Log in as this user.")] = None,
-    cpu: CpuName = "cpu1", connect: Connect = None, fb: FbName = None, tls_ca: TlsCa = None,
+    cpu: CpuName = "cpu1",
+    connect: Connect = None,
+    fb: FbName = None,
+    tls_ca: TlsCa = None,
     list_: Annotated[bool, typer.Option("--list", help="Print the force jobs.")] = False,
     all_: Annotated[bool, typer.Option("--all", help="With off: unforce every job.")] = False,
-) -> None:  # fmt: skip
+) -> None:
     """Force an input, output or flag until unforced (engineers), unforce it, or list the
     force jobs."""
     words = list(job or [])
@@ -610,15 +671,20 @@ def force(
 @app.command()
 def download(
     chart: Annotated[Path, typer.Argument(help="The changed chart (.s7g).")],
-    user: UserName, cpu: CpuName = "cpu1", connect: Connect = None, fb: FbName = None,
+    user: UserName,
+    cpu: CpuName = "cpu1",
+    connect: Connect = None,
+    fb: FbName = None,
     tls_ca: TlsCa = None,
     removed: Annotated[
         str | None,
-        typer.Option(help="Active steps the change removes: keep (the other steps go on) "
-                     "or init (initialize the sequencer)."),
+        typer.Option(
+            help="Active steps the change removes: keep (the other steps go on) "
+            "or init (initialize the sequencer)."
+        ),
     ] = None,
     yes: Annotated[bool, typer.Option("--yes", help="Download without asking.")] = False,
-) -> None:  # fmt: skip
+) -> None:
     """Download a changed chart into the running FB (online change): the change summary,
     then the swap at a scan boundary with the state carried over by step number."""
     from s7graph.web.cli.remote import download_command

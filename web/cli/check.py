@@ -31,8 +31,10 @@ def check_command(chart: Path, symbols: Path | None = None) -> int:
         try:
             table = SymbolTable.from_file(symbols)
         except OSError as exc:
-            print(f"s7graph: error: cannot read symbols {symbols}: {exc.strerror or exc}",
-                  file=sys.stderr)  # fmt: skip
+            print(
+                f"s7graph: error: cannot read symbols {symbols}: {exc.strerror or exc}",
+                file=sys.stderr,
+            )
             return 2
         except S7Error as exc:
             print(f"s7graph: error: cannot read symbols {symbols}: {exc}", file=sys.stderr)
@@ -59,8 +61,9 @@ def view_diagnostics(chart: Chart) -> list[Diagnostic]:
     problem = layout_problem(ChartLayout.from_chart(chart))
     if problem is None:
         return []
-    return [warning("W110", f"the browser view (--web) cannot show this chart: {problem}",
-                    chart.loc)]  # fmt: skip
+    return [
+        warning("W110", f"the browser view (--web) cannot show this chart: {problem}", chart.loc)
+    ]
 
 
 def _plural(n: int, word: str) -> str:

@@ -255,8 +255,10 @@ def status_lines(status: CpuStatus) -> list[str]:
     """``s7graph status``: the CPU's state, its cycle statistics and where the longest and
     the last long cycle went (as TIA Portal's cycle time page, with the why)."""
     fbs = ", ".join(status.fbs) or "none"
-    lines = [f"CPU {status.cpu}: {status.state}, cycle {status.cycle}, FBs {fbs}, "
-             f"{status.forces} force job{'s' if status.forces != 1 else ''}"]  # fmt: skip
+    lines = [
+        f"CPU {status.cpu}: {status.state}, cycle {status.cycle}, FBs {fbs}, "
+        f"{status.forces} force job{'s' if status.forces != 1 else ''}"
+    ]
     if status.reason:
         lines.append(f"STOP: {status.reason}")
     stats = status.stats

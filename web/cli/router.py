@@ -22,8 +22,9 @@ def router_command(net: NetOptions, duration_s: float | None = None) -> int:
     try:
         session = open_session(net.listen, net.connect, mode="router", tls=net.tls)
     except Exception as exc:
-        print(f"s7graph: error: cannot open the router: {type(exc).__name__}: {exc}",
-              file=sys.stderr)  # fmt: skip
+        print(
+            f"s7graph: error: cannot open the router: {type(exc).__name__}: {exc}", file=sys.stderr
+        )
         return 2
     print(f"s7graph: router on {', '.join(net.listen)}; Ctrl-C to stop", flush=True)
     try:

@@ -23,9 +23,10 @@ comparison) serves the view in the CPU's process as before, with 1 s.
 
 from __future__ import annotations
 
+import functools
 import sys
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from s7graph.engine.clock import SystemClock
 from s7graph.engine.cores import kept_free
@@ -44,6 +45,7 @@ from s7graph.web.harness.plant import LoadedPlant, PlantError, load_plant
 from s7graph.web.harness.session import ChartSession
 
 if TYPE_CHECKING:
+    from s7graph.engine.cpu import Cpu
     from s7graph.web.cli.net import NetOptions
     from s7graph.web.cli.view_process import ViewProcess
     from s7graph.web.wiring.live_edge import LiveEdge
@@ -97,12 +99,25 @@ def run_chart(
         keep_small_pages()  # before the view starts: it inherits it
     with kept_free(kept):  # before the bus and the view start: they inherit it
         return _run_chart(
-            path, plant=plant, symbols=symbols, state=state, cycle_ms=cycle_ms,
-            max_cycle_ms=max_cycle_ms, duration_s=duration_s, web=web, port=port,
-            record=record, net=net, restart=restart, fresh=fresh,
-            view_in_process=view_in_process, session=session, rt_priority=rt_priority,
-            comm_load_pct=comm_load_pct, core=kept,
-        )  # fmt: skip
+            path,
+            plant=plant,
+            symbols=symbols,
+            state=state,
+            cycle_ms=cycle_ms,
+            max_cycle_ms=max_cycle_ms,
+            duration_s=duration_s,
+            web=web,
+            port=port,
+            record=record,
+            net=net,
+            restart=restart,
+            fresh=fresh,
+            view_in_process=view_in_process,
+            session=session,
+            rt_priority=rt_priority,
+            comm_load_pct=comm_load_pct,
+            core=kept,
+        )
 
 
 def _run_chart(
@@ -126,39 +141,37 @@ def _run_chart(
     comm_load_pct: float,
     core: int | None,
 ) -> int:
-    clock = SystemClock() if session is None else session.clock
-    try:
-        if session is None:
-            session = ChartSession.load(path, symbols, clock)
-        loaded: LoadedPlant | None = load_plant(plant) if plant is not None else None
-    except S7Error as exc:  # ChartLoadError included
-        return fail(exc)
-    for line in session.missing:
-        print(line, file=sys.stderr)
-    cpu = session.cpu
-    if max_cycle_ms is None:
-        inline = web and view_in_process  # a page load may hold a scan up
-        max_cycle_ms = IN_PROCESS_VIEW_MAX_CYCLE_MS if inline else DEFAULT_MAX_CYCLE_MS
-    cpu.watchdog = Watchdog(max_cycle_ms, cpu.watchdog.min_cycle_ns / 1e6)
+    made = _load(path, symbols, plant, session)
+    if isinstance(made, int):
+        return made
+    session, loaded = made
+    clock, cpu = session.clock, session.cpu
+    _watch(cpu, max_cycle_ms, inline=web and view_in_process)
     recovered = recovered_cause()  # never anew after a hang (--fresh): from its last state
     state_path = state if state is not None else path.with_suffix(".state.sqlite")
-    opened = _open_chart_state(state_path, session, fresh=fresh, recovered=recovered,
-                               restart=restart)  # fmt: skip
+    opened = _open_chart_state(
+        state_path, session, fresh=fresh, recovered=recovered, restart=restart
+    )
     if isinstance(opened, int):
         return opened
     store = opened.store
     live: LiveEdge | None = None
     view: ViewProcess | None = None
     if web or record is not None or (net is not None and net.on_bus):
-        try:
-            live, view = _serve(
-                session, store, web=web, port=port, record=record, net=net, path=path,
-                symbols=symbols, in_process=view_in_process,
-            )  # fmt: skip
-        except Exception as exc:  # port in use, no rerun-sdk, ...
-            print(f"s7graph: error: cannot serve the view: {exc}", file=sys.stderr)
-            store.close()
-            return 2
+        edges = _edges(
+            session,
+            store,
+            web=web,
+            port=port,
+            record=record,
+            net=net,
+            path=path,
+            symbols=symbols,
+            in_process=view_in_process,
+        )
+        if isinstance(edges, int):
+            return edges
+        live, view = edges
     failure: list[str] = []
     last = [clock.now_ns()]
     runner: Runner
@@ -179,29 +192,86 @@ def _run_chart(
         if live is not None:
             live.on_record(record, stats=cpu.stats, runner=runner)
 
-    def close() -> None:
-        if view is not None:
-            view.stop()
-        if live is not None:
-            live.close()
-
     stays = web or bool(recovered and live is not None and live.endpoint)  # on the bus
-    runner = Runner(cpu, cycle_ms=cycle_ms, store=store, on_record=on_record, end_on_stop=not stays,
-                    rt_priority=rt_priority, comm_load_pct=comm_load_pct, core=core,
-                    marks=child_marks())  # fmt: skip
-    if live is not None:
-        live.restart = restart  # what the RUN/STOP switch's start does
-        if live.online is not None:
-            live.online.durability = runner  # a download is applied once its state is on disk
+    runner = Runner(
+        cpu,
+        cycle_ms=cycle_ms,
+        store=store,
+        on_record=on_record,
+        end_on_stop=not stays,
+        rt_priority=rt_priority,
+        comm_load_pct=comm_load_pct,
+        core=core,
+        marks=child_marks(),
+    )
+    _wire(live, runner, restart)
     if view is not None:
         view.start()
     status = run_until_stopped(
-        runner, opened, what=f"{path.name} ({session.cc.name})", restart=restart,
-        duration_s=duration_s, close=close, recovered=recovered,
-    )  # fmt: skip
+        runner,
+        opened,
+        what=f"{path.name} ({session.cc.name})",
+        restart=restart,
+        duration_s=duration_s,
+        close=functools.partial(_close, view, live),
+        recovered=recovered,
+    )
     if failure:
         return fail(failure[0], 1)
     return status
+
+
+def _watch(cpu: Cpu, max_cycle_ms: float | None, *, inline: bool) -> None:
+    """Cycle monitoring at ``max_cycle_ms``, by default longer with the view in the CPU's
+    process (``inline``: a page load may hold a scan up)."""
+    if max_cycle_ms is None:
+        max_cycle_ms = IN_PROCESS_VIEW_MAX_CYCLE_MS if inline else DEFAULT_MAX_CYCLE_MS
+    cpu.watchdog = Watchdog(max_cycle_ms, cpu.watchdog.min_cycle_ns / 1e6)
+
+
+def _wire(live: LiveEdge | None, runner: Runner, restart: str) -> None:
+    """The bus end learns what the RUN/STOP switch's start does, and that a download is
+    applied once its state is on disk (the runner's durability)."""
+    if live is not None:
+        live.restart = restart
+        if live.online is not None:
+            live.online.durability = runner
+
+
+def _close(view: ViewProcess | None, live: LiveEdge | None) -> None:
+    if view is not None:
+        view.stop()
+    if live is not None:
+        live.close()
+
+
+def _load(
+    path: Path, symbols: Path | None, plant: Path | None, session: ChartSession | None
+) -> tuple[ChartSession, LoadedPlant | None] | int:
+    """The chart's session (on the system clock unless given) and its plant, the calls of
+    blocks the CPU lacks printed as warnings; an exit status when either cannot load."""
+    try:
+        if session is None:
+            session = ChartSession.load(path, symbols, SystemClock())
+        loaded = load_plant(plant) if plant is not None else None
+    except S7Error as exc:  # ChartLoadError included
+        return fail(exc)
+    for line in session.missing:
+        print(line, file=sys.stderr)
+    return session, loaded
+
+
+def _edges(
+    session: ChartSession, store: StateStore, **options: Any
+) -> tuple[LiveEdge | None, ViewProcess | None] | int:
+    """``_serve``, or exit status 2 with one line when the view cannot be served (a port in
+    use, no rerun-sdk …); the state file is closed then."""
+    try:
+        return _serve(session, store, **options)
+    except Exception as exc:
+        print(f"s7graph: error: cannot serve the view: {exc}", file=sys.stderr)
+        store.close()
+        return 2
 
 
 def _open_chart_state(
@@ -257,19 +327,30 @@ def _serve(
     if web:
         check_port(net.host, port)
     live = LiveGraph(
-        session.graph, read=session.get, reader=session.reader,
+        session.graph,
+        read=session.get,
+        reader=session.reader,
         watch=watch_names(session.symbols),
         messages=message_list(session.cpu),
-    )  # fmt: skip
+    )
     gate = cpu_gate(net.users, store)
     table = symbols.read_text(encoding="utf-8-sig") if symbols is not None else ""
     online = OnlineChange(session, live, gate, path=path, symbols=table)
     inline = web and in_process
     edge = LiveEdge(
-        live, port=port, record=record, serve=inline, bus=web or net.on_bus, cpu=net.cpu,
-        host=net.host, ends=net.ends, gate=gate, allowed_origins=tuple(net.origins),
-        online=online, forcing=Forcing(session.cpu),
-    )  # fmt: skip
+        live,
+        port=port,
+        record=record,
+        serve=inline,
+        bus=web or net.on_bus,
+        cpu=net.cpu,
+        host=net.host,
+        ends=net.ends,
+        gate=gate,
+        allowed_origins=tuple(net.origins),
+        online=online,
+        forcing=Forcing(session.cpu),
+    )
     view = None
     if inline:
         print(f"s7graph: view {edge.url} (bus {edge.endpoint}); Ctrl-C to stop", flush=True)
@@ -281,9 +362,14 @@ def _serve(
                 print(f"s7graph: view {url} (bus {bus}); Ctrl-C to stop", flush=True)
 
         view = ViewProcess(
-            connect=view_endpoints(net.listen, net.connect) or [bus], cpu=net.cpu,
-            host=net.host, port=port, origins=net.origins, tls_ca=net.tls_ca, on_url=served,
-        )  # fmt: skip
+            connect=view_endpoints(net.listen, net.connect) or [bus],
+            cpu=net.cpu,
+            host=net.host,
+            port=port,
+            origins=net.origins,
+            tls_ca=net.tls_ca,
+            on_url=served,
+        )
     elif edge.endpoint:
         print(f"s7graph: CPU {net.cpu} on the bus {edge.endpoint}; Ctrl-C to stop", flush=True)
     if record is not None:

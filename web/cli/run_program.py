@@ -169,21 +169,36 @@ def run_program(
         return 2
     except OSError as exc:
         return _fail(state_path, f"cannot use the state file: {exc.strerror or exc}")
-    runner = Runner(cpu, cycle_ms=cycle_ms, store=opened.store, on_record=_report,
-                    end_on_stop=True, rt_priority=rt_priority, core=kept,
-                    marks=child_marks())  # fmt: skip
+    runner = Runner(
+        cpu,
+        cycle_ms=cycle_ms,
+        store=opened.store,
+        on_record=_report,
+        end_on_stop=True,
+        rt_priority=rt_priority,
+        core=kept,
+        marks=child_marks(),
+    )
     return run_until_stopped(
-        runner, opened, what=path.name, restart=restart, duration_s=duration_s,
-        on_start=_report, recovered=recovered,
-    )  # fmt: skip
+        runner,
+        opened,
+        what=path.name,
+        restart=restart,
+        duration_s=duration_s,
+        on_start=_report,
+        recovered=recovered,
+    )
 
 
 def _recover(runner: Runner, opened: OpenedState, what: str, recovered: tuple[str, str]) -> None:
     runner.recover(*recovered)
     print(f"s7graph: error: {what}: the CPU went to STOP: {runner.stopped}", file=sys.stderr)
     how = "start it with 's7graph start'" if not runner.end_on_stop else "the run ends"
-    print(f"s7graph: {what} in STOP (from its last durable state in {opened.store.path}; "
-          f"{how})", file=sys.stderr, flush=True)  # fmt: skip
+    print(
+        f"s7graph: {what} in STOP (from its last durable state in {opened.store.path}; {how})",
+        file=sys.stderr,
+        flush=True,
+    )
 
 
 def run_until_stopped(

@@ -142,8 +142,11 @@ class Supervisor:
                 if isinstance(outcome, int):
                     return outcome if outcome >= 0 else _die_as(-outcome)
                 recovered = outcome
-                print(f"s7graph: error: {self.note}; starting it again in STOP", file=sys.stderr,
-                      flush=True)  # fmt: skip
+                print(
+                    f"s7graph: error: {self.note}; starting it again in STOP",
+                    file=sys.stderr,
+                    flush=True,
+                )
                 self.restarts += 1
         finally:
             for sig, handler in handlers.items():
@@ -162,9 +165,11 @@ class Supervisor:
         self._killed = False
         self._recovering = recovered is not None
         self._proc = subprocess.Popen(
-            [sys.executable, "-m", "s7graph", *self.args], env=env, pass_fds=(self._fd,),
+            [sys.executable, "-m", "s7graph", *self.args],
+            env=env,
+            pass_fds=(self._fd,),
             preexec_fn=_die_with_parent,
-        )  # fmt: skip
+        )
         return self._proc
 
     def _watch(self, proc: subprocess.Popen[bytes]) -> int | tuple[str, str]:
@@ -184,9 +189,13 @@ class Supervisor:
                 if now - self._stop_at >= GRACE_S + STOP_EXTRA_S:
                     self._kill(proc)
                     waited = GRACE_S + STOP_EXTRA_S
-                    print(f"s7graph: error: the CPU did not end within {waited:g} s of the "
-                          "stop request (a hang in C code?): killed; the state is the last "
-                          "durable scan's", file=sys.stderr, flush=True)  # fmt: skip
+                    print(
+                        f"s7graph: error: the CPU did not end within {waited:g} s of the "
+                        "stop request (a hang in C code?): killed; the state is the last "
+                        "durable scan's",
+                        file=sys.stderr,
+                        flush=True,
+                    )
                     return EXIT_HUNG
                 continue
             hung = self._hung(time.monotonic_ns())

@@ -61,8 +61,11 @@ def web_command(
     if not cpus:
         return _fail(f"no CPU answers on {', '.join(net.connect)}")
     for status in cpus:
-        print(f"s7graph: CPU {status.cpu} ({status.state}, logins: {status.login}): "
-              f"{', '.join(status.fbs) or 'no FB'}", flush=True)  # fmt: skip
+        print(
+            f"s7graph: CPU {status.cpu} ({status.state}, logins: {status.login}): "
+            f"{', '.join(status.fbs) or 'no FB'}",
+            flush=True,
+        )
     chosen = next((s for s in cpus if s.cpu == cpu), None) if cpu else cpus[0]
     if chosen is None:
         return _fail(f"no CPU {cpu!r} on the bus; found {', '.join(s.cpu for s in cpus)}")
@@ -75,9 +78,13 @@ def web_command(
         )
     try:
         view = ViewSide(
-            cpu=chosen.cpu, fb=fb, ends=net.ends, host=net.host, port=port,
+            cpu=chosen.cpu,
+            fb=fb,
+            ends=net.ends,
+            host=net.host,
+            port=port,
             allowed_origins=net.origins,
-        )  # fmt: skip
+        )
     except (PortError, TimeoutError) as exc:
         return _fail(str(exc))
     except Exception as exc:

@@ -92,8 +92,19 @@ class ViewProcess:
 
     def command(self) -> list[str]:
         """The child's command line."""
-        cmd = [sys.executable, "-m", "s7graph", "web", "--cpu", self.cpu, "--host", self.host,
-               "--port", str(self.port), "--child"]  # fmt: skip
+        cmd = [
+            sys.executable,
+            "-m",
+            "s7graph",
+            "web",
+            "--cpu",
+            self.cpu,
+            "--host",
+            self.host,
+            "--port",
+            str(self.port),
+            "--child",
+        ]
         for endpoint in self.connect:
             cmd += ["--connect", endpoint]
         for origin in self.origins:
@@ -131,8 +142,11 @@ class ViewProcess:
                 return
             if time.monotonic() - started >= STABLE_S:
                 backoff = self.first_backoff_s
-            print(f"s7graph: the view process ended ({_ended(code)}); restarting it in "
-                  f"{backoff:g} s", file=sys.stderr, flush=True)  # fmt: skip
+            print(
+                f"s7graph: the view process ended ({_ended(code)}); restarting it in {backoff:g} s",
+                file=sys.stderr,
+                flush=True,
+            )
             if self._stop.wait(backoff):
                 return
             backoff = min(backoff * 2, MAX_BACKOFF_S)
@@ -144,9 +158,12 @@ class ViewProcess:
                 return None
             try:
                 proc = subprocess.Popen(
-                    self.command(), stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                    text=True, start_new_session=True,
-                )  # fmt: skip
+                    self.command(),
+                    stdin=subprocess.PIPE,
+                    stdout=subprocess.PIPE,
+                    text=True,
+                    start_new_session=True,
+                )
             except OSError as exc:
                 print(f"s7graph: error: cannot start the view: {exc}", file=sys.stderr)
                 return None

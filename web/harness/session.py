@@ -176,8 +176,7 @@ class ChartSession:
         if name in self.cc.var_types:
             return
         if is_pin(name):
-            check_pin(name, self.cc.parameters,
-                      direction=Direction.IN if writing else None)  # fmt: skip
+            check_pin(name, self.cc.parameters, direction=Direction.IN if writing else None)
             return
         if self._address(name) is None:
             raise S7Error(f"unknown name {name}: not an address, symbol, FB pin or variable")
@@ -210,9 +209,11 @@ class ChartSession:
         every scan); anything else through ``get``. S7Error for an unknown name. Resolve
         again once the symbol table changes."""
         if (
-            _STEP_ATTR.fullmatch(name) or _TRANS_ATTR.fullmatch(name)
-            or name in self.cc.var_types or is_pin(name)
-        ):  # fmt: skip
+            _STEP_ATTR.fullmatch(name)
+            or _TRANS_ATTR.fullmatch(name)
+            or name in self.cc.var_types
+            or is_pin(name)
+        ):
             return functools.partial(self.get, name)
         return self._address_reader(name)
 

@@ -81,12 +81,17 @@ class ViewSide:
                 send=lambda command: client.send(command, timeout=ENGINEERING_TIMEOUT_S),
             )
             self.view = ChartView(
-                self.server, layout, client.send, cpu=cpu, guard=guard,
+                self.server,
+                layout,
+                client.send,
+                cpu=cpu,
+                guard=guard,
                 login=lambda user, password, origin: client.login(user, password, origin=origin),
                 logout=lambda token, user, origin: client.logout(token, user=user, origin=origin),
-                demo=status is None or status.login == "demo", history=client.history,
+                demo=status is None or status.login == "demo",
+                history=client.history,
                 engineering=engineering,
-            )  # fmt: skip
+            )
             self._closers.append(self.view.close)
             client.on_chart(self.fb, self.view.apply_chart)
             self.follower = client.follow(self.fb, self.view.apply)

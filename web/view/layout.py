@@ -445,8 +445,10 @@ def _fold(part: _Part, rows: int) -> _Part:
     def moved(x: float, y: float, k: int) -> Point:
         return x + k * pitch, y - k * rows
 
-    steps = [replace(s, x=moved(s.x, s.y, column(s.y))[0], y=s.y - column(s.y) * rows)
-             for s in part.steps]  # fmt: skip
+    steps = [
+        replace(s, x=moved(s.x, s.y, column(s.y))[0], y=s.y - column(s.y) * rows)
+        for s in part.steps
+    ]
     transitions = [
         replace(t, x=moved(t.x, t.y, column(t.y))[0], y=t.y - column(t.y) * rows)
         for t in part.transitions
@@ -472,10 +474,12 @@ def _fold(part: _Part, rows: int) -> _Part:
         links.append(Link(((tx, ty - 0.55), (tx, ty)), False, link.transition))
         continuations.append(Continuation(sx, sy + 0.55, source, target, False))
         continuations.append(Continuation(tx, ty - 0.55, source, target, True))
-    jumps = [replace(j, x=j.x + column(j.y) * pitch, y=j.y - column(j.y) * rows)
-             for j in part.jumps]  # fmt: skip
-    stops = [replace(s, x=s.x + column(s.y) * pitch, y=s.y - column(s.y) * rows)
-             for s in part.stops]  # fmt: skip
+    jumps = [
+        replace(j, x=j.x + column(j.y) * pitch, y=j.y - column(j.y) * rows) for j in part.jumps
+    ]
+    stops = [
+        replace(s, x=s.x + column(s.y) * pitch, y=s.y - column(s.y) * rows) for s in part.stops
+    ]
     columns = column(part.height - 1) + 1
     return _Part(
         steps=steps,

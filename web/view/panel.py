@@ -169,13 +169,21 @@ class ClientPanel:
             self.audit_html = gui.add_html(texts.audit_html([]))
         with gui.add_folder("Details"):
             self.detail_step = gui.add_number(
-                "Show step", 0, min=0, max=65535, step=1,
+                "Show step",
+                0,
+                min=0,
+                max=65535,
+                step=1,
                 hint="0: follow the first disturbed, else the first active step",
-            )  # fmt: skip
+            )
             self.detail_transition = gui.add_number(
-                "Show transition", 0, min=0, max=65535, step=1,
+                "Show transition",
+                0,
+                min=0,
+                max=65535,
+                step=1,
                 hint="a transition's whole condition (or click it on the chart); 0: none",
-            )  # fmt: skip
+            )
             self.detail_html = gui.add_html(texts.small("waiting for the CPU…"))
             self.detail_step.on_update(lambda _: self._clear_transition())
         with gui.add_folder("Chart view", expand_by_default=False):
@@ -374,9 +382,7 @@ class ClientPanel:
             handle.content = content
             self._shown[key] = content
 
-    def show(
-        self, page: PageState, detail: Callable[[tuple[str, int]], str], halted: bool
-    ) -> None:
+    def show(self, page: PageState, detail: Callable[[tuple[str, int]], str], halted: bool) -> None:
         """Bring this page up to date (render thread; only what changed is sent)."""
         with self.client.atomic():
             self._set(self.banner, "banner", page.banner)
@@ -412,9 +418,11 @@ class ClientPanel:
             for mid, entry in wanted.items():
                 if mid not in self._alarm_buttons:
                     button = self.client.gui.add_button(
-                        texts.ack_label(entry), color="red", hint=texts.clip(entry.text, 200),
+                        texts.ack_label(entry),
+                        color="red",
+                        hint=texts.clip(entry.text, 200),
                         disabled=not allowed(role, "ack_msg"),
-                    )  # fmt: skip
+                    )
                     button.on_click(self._handler("ack_msg", msg_id=mid))
                     self._alarm_buttons[mid] = button
 

@@ -173,8 +173,11 @@ def status_html(
     if bad:
         errors = ", ".join(f"S{n}" for n in bad)
         parts.append(f'<span style="color:#c00">error: {html.escape(errors)}</span>')
-    for flag, text in ((update.halted, "HALTED"), (not update.il_enabled, "interlocks off"),
-                       (not update.sv_enabled, "supervisions off")):  # fmt: skip
+    for flag, text in (
+        (update.halted, "HALTED"),
+        (not update.il_enabled, "interlocks off"),
+        (not update.sv_enabled, "supervisions off"),
+    ):
         if flag:
             parts.append(f'<b style="color:#a60">{text}</b>')
     if update.overrides:
@@ -194,8 +197,10 @@ def cycle_lines(stats: CycleStats) -> list[str]:
     if stats.longest is not None:
         lines.append(f"longest: {_cycle_line(stats.longest)}")
     if stats.last_long is not None:
-        lines.append(f"last over {stats.long_over_ms:.1f} ms ({stats.long} so far): "
-                     f"{_cycle_line(stats.last_long)}")  # fmt: skip
+        lines.append(
+            f"last over {stats.long_over_ms:.1f} ms ({stats.long} so far): "
+            f"{_cycle_line(stats.last_long)}"
+        )
     if stats.comm_load:
         lines.append(comm_line(stats))
     return lines
@@ -267,9 +272,7 @@ def audit_html(entries: list[AuditEntry]) -> str:
         who = html.escape(e.user) + (f" ({html.escape(e.role)})" if e.role else "")
         args = "" if e.args in ("", "{}") else " " + html.escape(e.args)
         origin = f" · {html.escape(e.origin)}" if e.origin else ""
-        rows.append(
-            f"{clock(e.t_ms)} <b>{who}</b>{origin}: {html.escape(e.op)}{args} — {verdict}"
-        )
+        rows.append(f"{clock(e.t_ms)} <b>{who}</b>{origin}: {html.escape(e.op)}{args} — {verdict}")
     style = "max-height:16em;overflow:auto"
     return small(f'<div style="{style}">' + "<br>".join(rows) + "</div>")
 
@@ -332,9 +335,7 @@ def transition_html(layout: ChartLayout, update: StepStateUpdate | None, number:
     ]
     live = None
     if update is not None:
-        live = next(
-            (c for d in update.details for c in d.transitions if c.number == number), None
-        )
+        live = next((c for d in update.details for c in d.transitions if c.number == number), None)
     if live is not None:
         holds = "holds" if live.holds else '<span style="color:#c00">does not hold</span>'
         rows += [f"now: {holds}", *map(mark, live.contacts)]
@@ -394,14 +395,22 @@ def diagnostics_html(diagnostics: Iterable[Diagnostic], refusal: str = "") -> st
 
 
 def editor_status_html(
-    *, editing: bool, file: str, base: int | None, running: int, undo: str | None,
-    redo: str | None, note: str = "",
-) -> str:  # fmt: skip
+    *,
+    editing: bool,
+    file: str,
+    base: int | None,
+    running: int,
+    undo: str | None,
+    redo: str | None,
+    note: str = "",
+) -> str:
     """Where the editor stands: the file, the chart version it started from and the one the
     CPU runs, what undo and redo would do, the last outcome."""
     if not editing:
-        return small('<span style="color:#777">edit the chart here, then download it into '
-                     "the running CPU (online change)</span>")  # fmt: skip
+        return small(
+            '<span style="color:#777">edit the chart here, then download it into '
+            "the running CPU (online change)</span>"
+        )
     parts = [f"file <b>{html.escape(file or '(new)')}</b>"]
     if base is not None:
         parts.append(f"edited from version {base}")

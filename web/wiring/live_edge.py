@@ -55,9 +55,16 @@ class LiveEdge(ScanEdge):
         publisher: BusPublisher | None = None
         if serve:
             self.edge = serve_view(
-                live.layout, None, host=host, port=port, cpu=cpu, endpoint=endpoint, ends=ends,
-                gate=gate, allowed_origins=allowed_origins,
-            )  # fmt: skip
+                live.layout,
+                None,
+                host=host,
+                port=port,
+                cpu=cpu,
+                endpoint=endpoint,
+                ends=ends,
+                gate=gate,
+                allowed_origins=allowed_origins,
+            )
             publisher = self.edge.publisher
         elif bus:
             self.cpu_side = CpuSide(

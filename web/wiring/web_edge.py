@@ -50,9 +50,13 @@ class WebEdge:
         try:
             connect = list(ends.connect) or [self.endpoint]
             self.view_side = ViewSide(
-                cpu=cpu, fb=self.fb, ends=BusEnds(connect=connect, tls=ends.tls),
-                host=host, port=port, allowed_origins=allowed_origins,
-            )  # fmt: skip
+                cpu=cpu,
+                fb=self.fb,
+                ends=BusEnds(connect=connect, tls=ends.tls),
+                host=host,
+                port=port,
+                allowed_origins=allowed_origins,
+            )
         except BaseException:
             self.cpu_side.close()
             raise
@@ -128,9 +132,16 @@ def serve_view(
     (default: a unix socket in a temporary directory); ``gate`` who may command (default:
     the demo)."""
     edge = WebEdge(
-        chart, host=host, port=port, cpu=cpu, fb=fb, endpoint=endpoint, ends=ends, gate=gate,
+        chart,
+        host=host,
+        port=port,
+        cpu=cpu,
+        fb=fb,
+        endpoint=endpoint,
+        ends=ends,
+        gate=gate,
         allowed_origins=allowed_origins,
-    )  # fmt: skip
+    )
     if updates_source is not None:
         edge.pump(updates_source, apply_command)
     return edge
