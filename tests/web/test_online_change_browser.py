@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from s7graph.sequencer.text.elements import StepRef, TransitionRef
+from s7graph.sequencer.text.elements import StepRef, TransitionRef, find
 from s7graph.web.access.audit import read_audit
 from s7graph.web.view.chart_view import ChartView
 from s7graph.web.view.drawing import ACTIVE, BOX_H, BOX_W, INACTIVE, SELECTED, Drawing
@@ -217,8 +217,9 @@ def test_an_inserted_step_is_named_by_events_watch_the_page_and_the_audit(
     assert wait_until(lambda: ed.session is not None and ed.session.selection == StepRef(8))
     page.get_by_text("step S8 Step8", exact=True).first.wait_for(timeout=30_000)  # its form
     type_into(page, "Name", "Eight")
+    select(page, ed, "T8 Trans8", TransitionRef(8))  # at once: what was typed is not lost
     assert wait_until(lambda: ed.session is not None and "Eight" in str(ed.source.value))
-    select(page, ed, "T8 Trans8", TransitionRef(8))
+    assert ed.session is not None and find(ed.session.chart, StepRef(8)).name == "Eight"
     type_into(page, "Condition", "g8")
     assert wait_until(lambda: condition(ed, 8) == "g8")
     click(page, "Download")

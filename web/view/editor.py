@@ -82,7 +82,7 @@ class Editor(CpuCommands, RowEditing):
         self._inputs: dict[str, Any] = {}
         self._diag_buttons: list[Any] = []
         self._diag_shown: list[Diagnostic] = []
-        self._timers: dict[str, threading.Timer] = {}
+        self._timers: dict[str, tuple[threading.Timer, Callable[[], None]]] = {}
         self._source_text = ""
         self._choices: dict[str, Ref | None] = {}
         self._modal: Any = None
@@ -150,7 +150,7 @@ class Editor(CpuCommands, RowEditing):
         ``page_gone``: the page itself went, there is nothing left to update."""
         with self._lock:
             self._closed = True
-            for timer in self._timers.values():
+            for timer, _ in self._timers.values():
                 timer.cancel()
             if page_gone:
                 return
@@ -254,6 +254,9 @@ class Editor(CpuCommands, RowEditing):
         self.change(lambda s: s.apply(edit))
 
     def select(self, ref: Ref | None) -> None:
+        """Select ``ref``; what was typed in the form and not applied yet (its pause not
+        over) is applied first, to the element it was typed for."""
+        self._flush_typing()
         self.change(lambda s: s.select(ref))
 
     def _apply_op(self, op: Operation, ref: Ref | None, values: dict[str, object]) -> None:
@@ -388,7 +391,7 @@ class Editor(CpuCommands, RowEditing):
     # ------------------------------------------------------------ the form
 
     def _clear_form(self) -> None:
-        for timer in self._timers.values():
+        for timer, _ in self._timers.values():
             timer.cancel()
         self._timers.clear()
         for handle in self._form_handles:
@@ -468,14 +471,29 @@ class Editor(CpuCommands, RowEditing):
         with self._lock:
             old = self._timers.pop(key, None)
             if old is not None:
-                old.cancel()
+                old[0].cancel()
             if delay <= 0:
                 self._guarded(action)
                 return
-            timer = threading.Timer(delay, lambda: self._guarded(action))
+            timer = threading.Timer(delay, lambda: self._guarded(lambda: self._fire(key, timer)))
             timer.daemon = True
-            self._timers[key] = timer
+            self._timers[key] = (timer, action)
             timer.start()
+
+    def _fire(self, key: str, timer: threading.Timer) -> None:
+        """The pause in ``key`` is over: its action, unless it ran already (flushed)."""
+        pending = self._timers.get(key)
+        if pending is not None and pending[0] is timer:
+            del self._timers[key]
+            pending[1]()
+
+    def _flush_typing(self) -> None:
+        """Apply now what was typed and waits for its pause (a click elsewhere came first)."""
+        with self._lock:
+            pending, self._timers = list(self._timers.values()), {}
+            for timer, action in pending:
+                timer.cancel()
+                action()
 
     # ------------------------------------------------------------ the source view
 
