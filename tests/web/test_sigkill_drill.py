@@ -118,6 +118,33 @@ def _position(diagnostics: list[tuple[int, int, str]], after: int) -> tuple[str,
     return entries[-1], {int(n) for n, _ in found}, {int(n) for n, f in found if f}
 
 
+def _descendants(pid: int) -> list[int]:
+    """The processes below ``pid`` (``s7graph run``'s CPU, its view and compiler)."""
+    found: list[int] = []
+    for task in Path(f"/proc/{pid}/task").glob("*"):
+        try:
+            children = (task / "children").read_text().split()
+        except OSError:
+            continue
+        for child in map(int, children):
+            found += [child, *_descendants(child)]
+    return found
+
+
+def _wait_gone(pids: list[int], timeout: float = 30.0) -> None:
+    """Until none of ``pids`` runs any more (a zombie counts as gone)."""
+    deadline = time.monotonic() + timeout
+    for pid in pids:
+        while time.monotonic() < deadline:
+            try:
+                state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+            except (OSError, IndexError):
+                break
+            if state == "Z":
+                break
+            time.sleep(0.01)
+
+
 def _kill_runs(
     tmp_path: Path, restart: str, *, idle: int, slow: int, seed: int, upto_s: float
 ) -> list[tuple[OnDisk, OnDisk]]:
@@ -164,8 +191,10 @@ def _kill_runs(
             assert proc.wait(30) == 0, proc.stderr.read()
         else:
             time.sleep(rng.uniform(0.0, upto_s))
+            cpus = _descendants(proc.pid)  # the supervised CPU
             proc.kill()
             proc.wait(30)
+            _wait_gone(cpus)  # killed with its supervisor: its last commit may still land
         proc.stderr.close()
         seen.append(_read(state))
     return list(itertools.pairwise(seen))
