@@ -66,7 +66,7 @@ EDGE_INPUTS: Final = (
     "DISP_SALL",
 )
 
-_LIST_FIELDS: Final = (
+STEP_LISTS: Final = (
     "x",
     "t_ns",
     "u_ns",
@@ -78,14 +78,13 @@ _LIST_FIELDS: Final = (
     "crit_loc",
     "crit_loc_err",
     "crit_sup",
-    "ev",
-    "tt",
-    "crit",
-    "crit_old",
-    "crit_flt",
 )
-_STEP_LISTS: Final = _LIST_FIELDS[:12]
-_TRANSITION_LISTS: Final = _LIST_FIELDS[12:]
+"""The per-step lists that hold from one call to the next: ``carry_over`` takes them to
+another chart version by step number. The other per-step list, ``ev``, is this call's."""
+TRANSITION_LISTS: Final = ("tt", "crit", "crit_old", "crit_flt")
+"""The per-transition lists (``carry_over`` takes them over by transition number)."""
+_STEP_LISTS: Final = (*STEP_LISTS, "ev")
+_LIST_FIELDS: Final = (*_STEP_LISTS, *TRANSITION_LISTS)
 _BOOL_LISTS: Final = frozenset(("x", "il_ok", "il_err", "sv_cond", "sv_err", "tt"))
 _FILL: Final = {name: name == "il_ok" if name in _BOOL_LISTS else 0 for name in _LIST_FIELDS}
 """What each per-step / per-transition list holds where nothing happened (a new state); the

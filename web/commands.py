@@ -6,14 +6,20 @@ derives from it: the lowest role allowed (``web.access.roles`` builds its table,
 docs/bus.md and docs/security.md, from these), the S7-GRAPH pin it acts as
 (``web.bus.live`` builds its pin maps from them), what it does and an example of its
 arguments, its conflict group and where it is carried out (the FB, the RUN/STOP switch,
-the force table, the online change); the shell's ``s7graph send`` (:func:`command_args`),
-the page's buttons and docs/bus.md's argument table (:func:`arguments_markdown`) read them
-too. The wire format is the one of the former ``Command(op, fb, args: dict)``:
-``{"op": "step_on", "fb": "FILL", "user": ..., "token": ..., "origin": ..., "args":
-{"step": 3}}`` decodes to :class:`StepOn`. ``Command(op=..., fb=..., args={...})`` still
-builds a command: it returns the struct of that op, or raises ``ValueError`` with a
-one-line reason. An argument struct reads like the dict it was (``args.get("step")``,
-``dict(args)``: the arguments given).
+the force table, the online change) and how a shell gives it (``shell``: ``web.cli``
+builds its sub-commands from it, docs/cli.md lists them, :func:`shell_markdown`); the
+shell's ``s7graph send`` (:func:`command_args`), the page's buttons and docs/bus.md's
+argument table (:func:`arguments_markdown`) read them too. The wire format is the one of
+the former ``Command(op, fb, args: dict)``: ``{"op": "step_on", "fb": "FILL", "user": ...,
+"token": ..., "origin": ..., "args": {"step": 3}}`` decodes to :class:`StepOn`.
+``Command(op=..., fb=..., args={...})`` still builds a command: it returns the struct of
+that op, or raises ``ValueError`` with a one-line reason. An argument struct reads like the
+dict it was (``args.get("step")``, ``dict(args)``: the arguments given).
+
+A page or a shell builds the struct of its op (``StepOn(fb=..., args=StepArgs(step=3))``),
+so a misspelt op or argument is a type error; msgspec checks the constraints (a step from
+1, the names' patterns) only when it decodes, so a sender passes the struct through
+:func:`checked` before sending it.
 
 This module sits at the root of ``web`` (below ``access`` and ``bus``): it imports only
 msgspec and the layers below ``web``.
@@ -23,8 +29,9 @@ from __future__ import annotations
 
 import json
 import re
-from collections.abc import Iterable, Iterator
-from typing import Annotated, Any, ClassVar, Literal, get_args
+from collections.abc import Iterable, Iterator, Mapping
+from dataclasses import dataclass
+from typing import Annotated, Any, ClassVar, Literal, TypeVar, cast, get_args
 
 import msgspec
 import msgspec.inspect as mi
@@ -41,16 +48,23 @@ __all__ = [
     "AnyCommand",
     "Args",
     "Command",
+    "Mode",
+    "Shell",
+    "args_of",
+    "argument_field",
     "arguments_markdown",
+    "checked",
     "command_args",
     "command_type",
     "explain",
     "make_command",
     "op_of",
+    "shell_markdown",
+    "shell_usage",
 ]
 
 Mode = Literal["AUTO", "MAN", "TAP", "TOP"]
-MODES: tuple[str, ...] = get_args(Mode)
+MODES: tuple[Mode, ...] = get_args(Mode)
 Removed = Literal["keep", "init"]
 REMOVED_CHOICES: tuple[str, ...] = get_args(Removed)
 
@@ -170,6 +184,24 @@ class OpenArgs(Args, frozen=True, kw_only=True):
 # ---------------------------------------------------------------- commands
 
 
+@dataclass(frozen=True, slots=True)
+class Shell:
+    """How a shell gives an op: ``s7graph NAME [ARGUMENT] --user U ...`` (``web.cli`` builds
+    the sub-command, docs/cli.md lists it). ``help`` is the command's ``--help`` text; the
+    op's one argument, if it has one, is the positional (``argument`` its help, else its
+    choices; ``metavar`` its placeholder). With ``option`` the op is that option of command
+    ``name`` (``ack --step N``, ``help`` the option's): given, it is sent instead of the
+    command's own op. ``by_hand``: ``web.cli`` writes the command itself (it does more than
+    send the op)."""
+
+    name: str
+    help: str = ""
+    argument: str = ""
+    metavar: str = ""
+    option: str = ""
+    by_hand: bool = False
+
+
 class _CommandMeta(msgspec.StructMeta):
     """``Command(op=..., ...)`` builds the struct of that op (:func:`make_command`)."""
 
@@ -200,7 +232,8 @@ class Command(
     (``fb``: the FB at the scan boundary, ``web.bus.live``; ``cpu``: the RUN/STOP switch;
     ``force``: the force table; ``online``: the online change, ``web.bus.online``) and its
     ``group``: two commands of one group at the same scan boundary would act as
-    simultaneous edges of one call, so the second is refused."""
+    simultaneous edges of one call, so the second is refused; ``shell`` how a shell gives
+    it (None: only by ``s7graph send``)."""
 
     role: ClassVar[str] = ""
     where: ClassVar[Literal["fb", "cpu", "force", "online"]] = "fb"
@@ -210,6 +243,7 @@ class Command(
     held: ClassVar[bool] = False
     does: ClassVar[str] = ""
     example: ClassVar[str] = ""
+    shell: ClassVar[Shell | None] = None
 
     fb: Name
     user: UserName = ""
@@ -244,6 +278,9 @@ class Command(
 class Ack(Command, tag="ack", frozen=True, kw_only=True):
     role, pin, kind = "operator", "ACK_EF", "edge"
     does = "acknowledge every supervision fault of the FB"
+    shell = Shell(
+        "ack", "Acknowledge the FB's supervision faults (ACK_EF), one step's or one message."
+    )
     args: NoArgs = NoArgs()
 
 
@@ -251,12 +288,14 @@ class AckStep(Command, tag="ack_step", frozen=True, kw_only=True):
     group = "step"
     role, pin, kind = "operator", "ACK_S", "edge"
     does, example = "acknowledge one step's fault", '{"step": n}'
+    shell = Shell("ack", "Only this step (ACK_S).", metavar="N", option="--step")
     args: StepArgs
 
 
 class AckMsg(Command, tag="ack_msg", frozen=True, kw_only=True):
     role = "operator"
     does, example = "acknowledge one message of the alarm list", '{"msg_id": id}'
+    shell = Shell("ack", "One message of the alarm list.", metavar="ID", option="--message")
     args: MessageArgs
 
 
@@ -264,6 +303,7 @@ class SetMode(Command, tag="mode", frozen=True, kw_only=True):
     group = "mode"
     role, pin, kind = "operator", "SW_AUTO/MAN/TAP/TOP", "mode"
     does, example = "switch the mode", '{"mode": "MAN"}'
+    shell = Shell("mode", "Switch the FB's mode.", metavar="MODE")
     args: ModeArgs
 
 
@@ -271,6 +311,7 @@ class Init(Command, tag="init", frozen=True, kw_only=True):
     group = "init"
     role, pin, kind = "operator", "INIT_SQ", "edge"
     does = "activate the initial steps"
+    shell = Shell("init", "Initialize the sequencer (INIT_SQ).")
     args: NoArgs = NoArgs()
 
 
@@ -278,6 +319,7 @@ class Off(Command, tag="off", frozen=True, kw_only=True):
     group = "init"
     role, pin, kind = "operator", "OFF_SQ", "edge"
     does = "deactivate every step"
+    shell = Shell("off", "Switch the sequencer off (OFF_SQ).")
     args: NoArgs = NoArgs()
 
 
@@ -290,6 +332,7 @@ class Halt(Command, tag="halt", frozen=True, kw_only=True):
 class TPush(Command, tag="t_push", frozen=True, kw_only=True):
     role, pin, kind = "operator", "T_PUSH", "edge"
     does = "switch a ready transition (TAP, TOP)"
+    shell = Shell("t-push", "Switch a ready transition (TAP, TOP; T_PUSH).")
     args: NoArgs = NoArgs()
 
 
@@ -297,6 +340,7 @@ class StepOn(Command, tag="step_on", frozen=True, kw_only=True):
     group = "step"
     role, pin, kind = "operator", "S_ON", "edge"
     does, example = "activate a step (MAN)", '{"step": n}'
+    shell = Shell("step-on", "Activate a step (MAN, S_ON).", "The step number.")
     args: StepArgs
 
 
@@ -304,6 +348,7 @@ class StepOff(Command, tag="step_off", frozen=True, kw_only=True):
     group = "step"
     role, pin, kind = "operator", "S_OFF", "edge"
     does, example = "deactivate a step (MAN)", '{"step": n}'
+    shell = Shell("step-off", "Deactivate a step (MAN, S_OFF).", "The step number.")
     args: StepArgs
 
 
@@ -327,6 +372,7 @@ class Force(Command, tag="force", frozen=True, kw_only=True):
         '`{"all": true}` unforces every job'
     )
     example = '{"address": "I0.3", "value": true}'
+    shell = Shell("force", metavar="ADDRESS VALUE|off", by_hand=True)
     args: ForceArgs
 
 
@@ -335,6 +381,7 @@ class Download(Command, tag="download", frozen=True, kw_only=True):
     role = "engineer"
     does = "download a changed chart into the running FB (online change)"
     example = '{"source": "...", "base": 1, "removed": "keep", "preview": true}'
+    shell = Shell("download", metavar="CHART.s7g", by_hand=True)
     args: DownloadArgs
 
 
@@ -368,6 +415,7 @@ class Stop(Command, tag="stop", frozen=True, kw_only=True):
     where = "cpu"
     role = "engineer"
     does = "the CPU's RUN/STOP switch to STOP (outputs to 0)"
+    shell = Shell("stop", "Put the CPU in STOP, as its RUN/STOP switch (engineer; outputs to 0).")
     args: NoArgs = NoArgs()
 
 
@@ -375,6 +423,10 @@ class Start(Command, tag="start", frozen=True, kw_only=True):
     where = "cpu"
     role = "engineer"
     does = "the switch to RUN: the CPU's configured restart (`--restart`)"
+    shell = Shell(
+        "start",
+        "Start the CPU from STOP with its configured restart (--restart of its run; engineer).",
+    )
     args: NoArgs = NoArgs()
 
 
@@ -408,6 +460,24 @@ def op_of(kind: type[Command]) -> str:
     return str(kind.__struct_config__.tag)
 
 
+def _args_type(kind: type[Command]) -> Any:
+    """The argument struct of ``kind``."""
+    return next(f.type for f in msgspec.structs.fields(kind) if f.name == "args")
+
+
+def _args_info(kind: type[Command]) -> mi.StructType:
+    info = mi.type_info(_args_type(kind))
+    assert isinstance(info, mi.StructType)
+    return info
+
+
+def argument_field(kind: type[Command]) -> mi.Field | None:
+    """The one argument of ``kind`` (the only field of its argument struct), else None: what
+    its shell command takes as the positional or the option's value."""
+    fields = _args_info(kind).fields
+    return fields[0] if len(fields) == 1 else None
+
+
 OPS: tuple[str, ...] = tuple(op_of(c) for c in COMMAND_TYPES)
 _BY_OP: dict[str, type[Command]] = {op_of(c): c for c in COMMAND_TYPES}
 
@@ -431,6 +501,22 @@ def make_command(**fields: Any) -> Command:
     return made
 
 
+C = TypeVar("C", bound=Command)
+
+
+def checked(command: C) -> C:
+    """``command`` as the bus decodes it: a struct built in Python is not checked against its
+    constraints (a step from 1, the names' patterns, the lengths), so a sender checks it
+    here first; ``ValueError`` with the one-line reason the bus would give."""
+    return cast(C, make_command(**msgspec.to_builtins(command)))
+
+
+def args_of(kind: type[Command], given: Mapping[str, Any]) -> Args:
+    """``given`` as the checked argument struct of ``kind``; ``ValueError`` with a one-line
+    reason."""
+    return make_command(op=op_of(kind), fb="_", args=dict(given)).args
+
+
 _MISSING_ARGS = re.compile(r"^Object missing required field `args`$")
 _MISSING = re.compile(r"^Object missing required field `(\w+)` - at `\$\.args`$")
 _UNKNOWN = re.compile(r"^Object contains unknown field `(.+)` - at `\$\.args`$")
@@ -443,7 +529,7 @@ def explain(op: object, message: str) -> str:
     kind = command_type(op) if isinstance(op, str) else None
     if kind is None:
         return message
-    args = next(f.type for f in msgspec.structs.fields(kind) if f.name == "args")
+    args = _args_type(kind)
     if _MISSING_ARGS.match(message) and isinstance(args, type) and issubclass(args, Args):
         required = [f.name for f in msgspec.structs.fields(args) if f.required]
         if required:
@@ -468,7 +554,8 @@ def command_args(op: str, words: Iterable[str]) -> dict[str, Any]:
     value reads as JSON where it is JSON (``3``, ``true``, ``null``), else as text.
     ``ValueError`` with a one-line reason for an unknown op or arguments its struct refuses,
     before anything is sent."""
-    if command_type(op) is None:
+    kind = command_type(op)
+    if kind is None:
         raise ValueError(f"unknown op {op!r}; one of {', '.join(OPS)}")
     args: dict[str, Any] = {}
     for word in words:
@@ -479,7 +566,7 @@ def command_args(op: str, words: Iterable[str]) -> dict[str, Any]:
             args[name] = json.loads(value)
         except ValueError:
             args[name] = value
-    make_command(op=op, fb="_", args=args)  # refused here, not by the CPU
+    args_of(kind, args)  # refused here, not by the CPU
     return args
 
 
@@ -506,11 +593,31 @@ def arguments_markdown() -> str:
     two equal): name, type, and ``?`` for one that may be left out."""
     rows = ["| op | arguments |", "|---|---|"]
     for kind in COMMAND_TYPES:
-        args = next(f.type for f in msgspec.structs.fields(kind) if f.name == "args")
-        info = mi.type_info(args)
-        assert isinstance(info, mi.StructType)
         shown = [
-            f"`{f.name}`{'' if f.required else '?'}: {_type_text(f.type)}" for f in info.fields
+            f"`{f.name}`{'' if f.required else '?'}: {_type_text(f.type)}"
+            for f in _args_info(kind).fields
         ]
         rows.append(f"| `{op_of(kind)}` | {'; '.join(shown) or 'none'} |")
+    return "\n".join(rows) + "\n"
+
+
+def shell_usage(kind: type[Command]) -> str:
+    """How a shell gives ``kind``: its command (``kind.shell``) with the placeholder of its
+    argument, else ``s7graph send OP`` with its arguments (``[...]``: may be left out)."""
+    shell = kind.shell
+    if shell is None:
+        words = [f"{f.name}=…" if f.required else f"[{f.name}=…]" for f in _args_info(kind).fields]
+        return " ".join(["s7graph send", op_of(kind), *words])
+    field = argument_field(kind)
+    placeholder = shell.metavar or (field.name.upper() if field is not None else "")
+    return " ".join(w for w in ("s7graph", shell.name, shell.option, placeholder) if w)
+
+
+def shell_markdown() -> str:
+    """Every op as a shell gives it, as Markdown (docs/cli.md; a test keeps the two equal):
+    the command, the op, the lowest role, what it does."""
+    rows = ["| from a shell | op | role | what it does |", "|---|---|---|---|"]
+    for kind in COMMAND_TYPES:
+        usage = shell_usage(kind).replace("|", "\\|")
+        rows.append(f"| `{usage}` | `{op_of(kind)}` | {kind.role} | {kind.does} |")
     return "\n".join(rows) + "\n"

@@ -27,24 +27,10 @@ from typing import Any
 
 from s7graph.sequencer.compiled import CompiledChart
 from s7graph.sequencer.cycle import new_state
-from s7graph.sequencer.state import GraphState
+from s7graph.sequencer.state import STEP_LISTS, TRANSITION_LISTS, GraphState
 
 __all__ = ["CarryReport", "ChartFormat", "ChartShape", "carry_over", "fingerprint"]
 
-_PER_STEP = (
-    "x",
-    "t_ns",
-    "u_ns",
-    "act_ns",
-    "il_ok",
-    "il_err",
-    "sv_cond",
-    "sv_err",
-    "crit_loc",
-    "crit_loc_err",
-    "crit_sup",
-)
-_PER_TRANSITION = ("tt", "crit", "crit_old", "crit_flt")
 _SCALARS = (
     "mode",
     "calls",
@@ -191,7 +177,7 @@ def carry_over(
         raise ValueError("the state does not fit the chart shape saved with it")
     report = CarryReport()
     st = new_state(new)
-    _by_number(old.step_numbers, new.step_numbers, _PER_STEP, state, st)
+    _by_number(old.step_numbers, new.step_numbers, STEP_LISTS, state, st)
     for i in state.active:
         number = old.step_numbers[i]
         target = new.step_index.get(number)
@@ -203,7 +189,7 @@ def carry_over(
     for i, number in enumerate(old.step_numbers):
         if state.sv_err[i] and number not in new.step_index:
             report.faults_gone.append(number)
-    _by_number(old.transition_numbers, new.transition_numbers, _PER_TRANSITION, state, st)
+    _by_number(old.transition_numbers, new.transition_numbers, TRANSITION_LISTS, state, st)
     for name in _SCALARS:
         setattr(st, name, getattr(state, name))
     st.error = any(st.il_err[i] for i in st.active)

@@ -45,9 +45,11 @@ only for the steps whose state changed, ``web.bus.step_details``), and
 of a scan are grouped by instance DB once per scan record, for every LiveGraph of the CPU
 (``web.bus.scan_events``).
 
-Every command is refused while the CPU is not in RUN, and so is a second mode, step, or
-init/off command at the same scan boundary (one call would see both edges at once and
-resolve them by priority, not by order). Who may send what, and the audit, are the bus
+Each op the FB carries out has one handler, found by the op's struct (:data:`HANDLERS`; a
+test checks that every such op of ``web.commands`` has one). Every command is refused
+while the CPU is not in RUN, and so is a second mode, step, or init/off command at the
+same scan boundary (one call would see both edges at once and resolve them by priority,
+not by order). Who may send what, and the audit, are the bus
 gate's (``web.bus.gate``): :meth:`LiveGraph.apply` sees commands already checked, under
 the established user's name, and returns ``(applied, reason, detail)``. It never raises: a
 hostile command is refused with its reason, the scan loop goes on.
@@ -60,7 +62,7 @@ import operator
 import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Final
 
 from s7graph.engine.modes import CpuMode
 from s7graph.engine.record import ScanRecord
@@ -81,10 +83,26 @@ from s7graph.web.bus.protocol import (
 )
 from s7graph.web.bus.scan_events import ScanEvents
 from s7graph.web.bus.step_details import StepDetails
-from s7graph.web.commands import COMMAND_TYPES, op_of
+from s7graph.web.commands import (
+    COMMAND_TYPES,
+    Ack,
+    AckMsg,
+    AckStep,
+    EnIl,
+    EnSv,
+    Halt,
+    Init,
+    Off,
+    SetMode,
+    StepOff,
+    StepOn,
+    TPush,
+    op_of,
+)
 
 __all__ = [
     "CONTROL_SEQUENCER",
+    "HANDLERS",
     "MODE_PINS",
     "OP_PINS",
     "LiveChart",
@@ -105,6 +123,7 @@ MAX_WATCH = 64
 # Commands of one group queued at the same scan boundary would act as simultaneous edges
 # in one call (the FB resolves them by priority, not by order), so the second is refused.
 _GROUPS = {op_of(c): c.group for c in COMMAND_TYPES if c.group}
+Result = tuple[bool, str, str]  # applied, the reason, what it acted on (for the audit)
 
 
 @dataclass(frozen=True, slots=True)
@@ -253,7 +272,7 @@ class LiveGraph:
         return StepStateUpdate(
             cycle=record.cycle if record.cycle > 0 else 0,
             t_ms=max(record.t_ns // 1_000_000, 0),
-            mode=mode if mode in MODES else "AUTO",  # type: ignore[arg-type]
+            mode=mode if mode in MODES else "AUTO",
             active=active,
             disturbed=disturbed,
             latched=latched,
@@ -367,7 +386,7 @@ class LiveGraph:
         except Exception as exc:
             return False, f"command refused: {type(exc).__name__}: {exc}"[:4096], ""
 
-    def _check(self, command: Command) -> tuple[bool, str, str]:
+    def _check(self, command: Command) -> Result:
         op = getattr(command, "op", None)
         if self.cpu_mode is not CpuMode.RUN:
             return False, f"the CPU is in {self.cpu_mode}, not RUN", ""
@@ -380,73 +399,84 @@ class LiveGraph:
             self._pending[group] = f"{op} {detail}".strip()
         return applied, reason, detail
 
-    def _queue(self, command: Command, op: object) -> tuple[bool, str, str]:
-        st = self.graph.state
-        mode = self._pending_mode or st.mode
-        cc = self.cc
-        if op == "mode":
-            new = command.mode
-            if new not in MODE_PINS:
-                return False, f"mode must be one of {', '.join(MODES)}", ""
-            self.graph.command(MODE_PINS[new])
-            self._pending_mode = new
-            return True, "", f"{mode} -> {new}"
-        user = command.user or "?"
-        if op == "ack":
-            waiting = [i for i in st.active if st.sv_err[i]]
-            if not waiting:
-                return False, "no supervision fault waits for an acknowledgement", ""
-            stays = [i for i in waiting if self._relatches(i)]
-            if len(stays) == len(waiting):
-                return False, _CAUSE_PERSISTS.format(_steps(cc, stays)), ""
-            self.graph.command(OP_PINS[op], user=user)
-            note = f"{_steps(cc, stays)} stays latched: its cause persists" if stays else ""
-            return True, note, "steps " + _steps(cc, [i for i in waiting if i not in stays])
-        if op == "ack_step":
-            step = command.step
-            i = cc.step_index.get(step) if isinstance(step, int) else None
-            if i is None:
-                return False, f"no step S{step} in {self.fb}", ""
-            if not (st.x[i] and st.sv_err[i]):
-                return False, f"S{step} waits for no acknowledgement", ""
-            if self._relatches(i):
-                return False, _CAUSE_PERSISTS.format(f"S{step}"), ""
-            self.graph.command(OP_PINS[op], step=step, user=user)
-            return True, "", f"S{step}"
-        if op == "ack_msg":
-            return self._ack_msg(command)
-        if op in ("init", "off"):
-            self.graph.command(OP_PINS[op], user=user)
-            return True, "", ""
-        if op in LEVEL_PINS:
-            pin, held = LEVEL_PINS[op]
-            on = command.args.get("on")
-            if not isinstance(on, bool):
-                return False, f"{op} needs on: true or false", ""
-            hold = on == held
-            self.graph.set_level(pin, held if hold else None)
-            return True, "", f"{pin} {'held at ' + str(int(held)) if hold else 'back to its pin'}"
-        if op == "t_push":
-            if mode not in ("TAP", "TOP"):
-                return False, f"t_push needs mode TAP or TOP ({CONTROL_SEQUENCER})", ""
-            self.graph.command(OP_PINS[op])
-            ready = any(st.tt[j] for i in st.active for j in cc.leaving[i])
-            note = "" if ready or mode == "TOP" else _NOT_SATISFIED
-            return True, note, ""
-        if op in ("step_on", "step_off"):
-            step = command.step
-            if mode != "MAN":
-                return False, f"{op} needs mode MAN ({CONTROL_SEQUENCER})", ""
-            i = cc.step_index.get(step) if isinstance(step, int) else None
-            if i is None:
-                return False, f"no step S{step} in {self.fb}", ""
-            if op == "step_on" and st.x[i]:
-                return False, f"S{step} is already active", ""
-            if op == "step_off" and not st.x[i]:
-                return False, f"S{step} is not active", ""
-            self.graph.command(OP_PINS[op], step=step)
-            return True, "", f"S{step}"
-        return False, f"unknown command {op!r}", ""
+    def _queue(self, command: Command, op: object) -> Result:
+        """``command`` to its op's handler (:data:`HANDLERS`, by its struct)."""
+        handler = HANDLERS.get(type(command))
+        if handler is None:
+            return False, f"unknown command {op!r}", ""
+        return handler(self, command, self._pending_mode or self.graph.state.mode)
+
+    def _mode(self, command: SetMode, mode: str) -> Result:
+        new = command.mode
+        if new not in MODE_PINS:
+            return False, f"mode must be one of {', '.join(MODES)}", ""
+        self.graph.command(MODE_PINS[new])
+        self._pending_mode = new
+        return True, "", f"{mode} -> {new}"
+
+    def _ack(self, command: Ack, mode: str) -> Result:
+        st, cc = self.graph.state, self.cc
+        waiting = [i for i in st.active if st.sv_err[i]]
+        if not waiting:
+            return False, "no supervision fault waits for an acknowledgement", ""
+        stays = [i for i in waiting if self._relatches(i)]
+        if len(stays) == len(waiting):
+            return False, _CAUSE_PERSISTS.format(_steps(cc, stays)), ""
+        self.graph.command(OP_PINS[command.op], user=command.user or "?")
+        note = f"{_steps(cc, stays)} stays latched: its cause persists" if stays else ""
+        return True, note, "steps " + _steps(cc, [i for i in waiting if i not in stays])
+
+    def _ack_step(self, command: AckStep, mode: str) -> Result:
+        st, step = self.graph.state, command.step
+        i = self.cc.step_index.get(step) if isinstance(step, int) else None
+        if i is None:
+            return False, f"no step S{step} in {self.fb}", ""
+        if not (st.x[i] and st.sv_err[i]):
+            return False, f"S{step} waits for no acknowledgement", ""
+        if self._relatches(i):
+            return False, _CAUSE_PERSISTS.format(f"S{step}"), ""
+        self.graph.command(OP_PINS[command.op], step=step, user=command.user or "?")
+        return True, "", f"S{step}"
+
+    def _edge(self, command: Init | Off, mode: str) -> Result:
+        """INIT_SQ, OFF_SQ: one call, as the command's user."""
+        self.graph.command(OP_PINS[command.op], user=command.user or "?")
+        return True, "", ""
+
+    def _level(self, command: Halt | EnIl | EnSv, mode: str) -> Result:
+        """HALT_SQ, EN_IL, EN_SV held at the op's value, or left to the pin again."""
+        op = command.op
+        pin, held = LEVEL_PINS[op]
+        on = command.args.get("on")
+        if not isinstance(on, bool):
+            return False, f"{op} needs on: true or false", ""
+        hold = on == held
+        self.graph.set_level(pin, held if hold else None)
+        return True, "", f"{pin} {'held at ' + str(int(held)) if hold else 'back to its pin'}"
+
+    def _t_push(self, command: TPush, mode: str) -> Result:
+        if mode not in ("TAP", "TOP"):
+            return False, f"t_push needs mode TAP or TOP ({CONTROL_SEQUENCER})", ""
+        self.graph.command(OP_PINS[command.op])
+        st, cc = self.graph.state, self.cc
+        ready = any(st.tt[j] for i in st.active for j in cc.leaving[i])
+        return True, "" if ready or mode == "TOP" else _NOT_SATISFIED, ""
+
+    def _step(self, command: StepOn | StepOff, mode: str) -> Result:
+        """S_ON / S_OFF on the command's step (not S_NO), in MAN."""
+        op, step = command.op, command.step
+        if mode != "MAN":
+            return False, f"{op} needs mode MAN ({CONTROL_SEQUENCER})", ""
+        i = self.cc.step_index.get(step) if isinstance(step, int) else None
+        if i is None:
+            return False, f"no step S{step} in {self.fb}", ""
+        active = self.graph.state.x[i]
+        if isinstance(command, StepOn) and active:
+            return False, f"S{step} is already active", ""
+        if isinstance(command, StepOff) and not active:
+            return False, f"S{step} is not active", ""
+        self.graph.command(OP_PINS[op], step=step)
+        return True, "", f"S{step}"
 
     def _relatches(self, i: int) -> bool:
         """Whether step ``i``'s supervision fault, acknowledged now, would latch again at
@@ -458,7 +488,7 @@ class LiveGraph:
         mode = self._pending_mode or st.mode
         return not (mode == "AUTO" and any(st.tt[j] for j in cc.leaving[i]))
 
-    def _ack_msg(self, command: Command) -> tuple[bool, str, str]:
+    def _ack_msg(self, command: AckMsg, mode: str) -> Result:
         mid, user = command.msg_id, command.user or "?"
         if self.messages is None:
             return False, "this view has no message list", ""
@@ -480,6 +510,24 @@ class LiveGraph:
         if i is not None and st.x[i] and st.sv_err[i] and self._relatches(i):
             note = f"acknowledged; the cause of S{step} persists: it comes again as a new message"
         return True, note, f"message {mid}: {msg.text}"
+
+
+# The FB's handler of each op the FB carries out (``where == "fb"``), by the op's struct:
+# an op of the union without one is refused as unknown (a test checks that none is).
+HANDLERS: Final[dict[type[Command], Callable[[LiveGraph, Any, str], Result]]] = {
+    Ack: LiveGraph._ack,
+    AckStep: LiveGraph._ack_step,
+    AckMsg: LiveGraph._ack_msg,
+    SetMode: LiveGraph._mode,
+    Init: LiveGraph._edge,
+    Off: LiveGraph._edge,
+    Halt: LiveGraph._level,
+    TPush: LiveGraph._t_push,
+    StepOn: LiveGraph._step,
+    StepOff: LiveGraph._step,
+    EnIl: LiveGraph._level,
+    EnSv: LiveGraph._level,
+}
 
 
 _CAUSE_PERSISTS = (

@@ -3,6 +3,10 @@
 commands (``ack``, ``mode``, ..., ``force``, ``download``, ``stop``, ``start``); ``users``
 and ``audit``.
 
+The shell's command of an op is built from the op's struct (``shell`` in
+``web.commands``): one loop makes ``ack``, ``mode``, ``init`` ... with the op's argument
+as the positional; ``send`` gives any op; ``force`` and ``download`` are written here.
+
 Each command lives in its own module (``web/cli/*.py``) and is imported only when used, so
 ``s7graph check`` never pays for zenoh or viser. Errors are one line on stderr and a
 non-zero exit, never a traceback.
@@ -10,11 +14,14 @@ non-zero exit, never a traceback.
 
 from __future__ import annotations
 
+import functools
 import os
 import sys
+from inspect import Parameter, Signature
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
+import msgspec.inspect as mi
 import typer
 
 if TYPE_CHECKING:
@@ -23,7 +30,19 @@ if TYPE_CHECKING:
 from s7graph import __version__
 from s7graph.engine.errors import S7Error
 from s7graph.engine.runner import COMM_LOAD_PCT
-from s7graph.web.commands import OPS
+from s7graph.web.commands import (
+    COMMAND_TYPES,
+    OPS,
+    Args,
+    Command,
+    Force,
+    ForceArgs,
+    Shell,
+    args_of,
+    argument_field,
+    command_args,
+    command_type,
+)
 
 app = typer.Typer(
     add_completion=False,
@@ -472,8 +491,9 @@ def status(cpu: CpuName = "cpu1", connect: Connect = None, tls_ca: TlsCa = None)
 
 
 def _remote(
-    op: str,
-    args: dict[str, Any],
+    kind: type[Command],
+    args: Args,
+    *,
     cpu: str,
     connect: list[str] | None,
     fb: str | None,
@@ -483,125 +503,107 @@ def _remote(
     from s7graph.web.cli.remote import send_command
 
     net = _net(cpu=cpu, connect=connect, tls_ca=tls_ca)
-    raise typer.Exit(send_command(net, fb=fb, user=user, op=op, args=args))
+    raise typer.Exit(send_command(net, fb=fb, user=user, kind=kind, args=args))
 
 
-@app.command()
-def ack(
-    user: UserName,
-    cpu: CpuName = "cpu1",
-    connect: Connect = None,
-    fb: FbName = None,
-    tls_ca: TlsCa = None,
-    step: Annotated[int | None, typer.Option(help="Only this step (ACK_S).")] = None,
-    message: Annotated[str | None, typer.Option(help="One message of the alarm list.")] = None,
-) -> None:
-    """Acknowledge the FB's supervision faults (ACK_EF), one step's or one message."""
-    if message is not None:
-        msg_id: int | str = int(message) if message.isdigit() else message
-        _remote("ack_msg", {"msg_id": msg_id}, cpu, connect, fb, user, tls_ca)
-    if step is not None:
-        _remote("ack_step", {"step": step}, cpu, connect, fb, user, tls_ca)
-    _remote("ack", {}, cpu, connect, fb, user, tls_ca)
+# ---------------------------------------------------------------- the ops' own commands
+
+# What every op's command takes besides its argument: who logs in, where.
+_BUS_PARAMETERS = (
+    Parameter("user", Parameter.KEYWORD_ONLY, annotation=UserName),
+    Parameter("cpu", Parameter.KEYWORD_ONLY, annotation=CpuName, default="cpu1"),
+    Parameter("connect", Parameter.KEYWORD_ONLY, annotation=Connect, default=None),
+    Parameter("fb", Parameter.KEYWORD_ONLY, annotation=FbName, default=None),
+    Parameter("tls_ca", Parameter.KEYWORD_ONLY, annotation=TlsCa, default=None),
+)
 
 
-@app.command()
-def mode(
-    new_mode: Annotated[str, typer.Argument(metavar="MODE", help="AUTO, MAN, TAP or TOP.")],
-    user: UserName,
-    cpu: CpuName = "cpu1",
-    connect: Connect = None,
-    fb: FbName = None,
-    tls_ca: TlsCa = None,
-) -> None:
-    """Switch the FB's mode."""
-    _remote("mode", {"mode": new_mode.upper()}, cpu, connect, fb, user, tls_ca)
+def _word(field: mi.Field, value: object) -> object:
+    """A shell word as the type of the argument ``field``: a choice whatever its case
+    (``mode man``), digits as a number where a number may go (``--message 17``)."""
+    if not isinstance(value, str):
+        return value
+    t = field.type
+    if isinstance(t, mi.LiteralType):
+        return {str(c).lower(): c for c in t.values}.get(value.lower(), value)
+    types = t.types if isinstance(t, mi.UnionType) else (t,)
+    if value.isdigit() and any(isinstance(x, mi.IntType) for x in types):
+        return int(value)
+    return value
 
 
-@app.command()
-def init(
-    user: UserName,
-    cpu: CpuName = "cpu1",
-    connect: Connect = None,
-    fb: FbName = None,
-    tls_ca: TlsCa = None,
-) -> None:
-    """Initialize the sequencer (INIT_SQ)."""
-    _remote("init", {}, cpu, connect, fb, user, tls_ca)
+def _option_name(shell: Shell) -> str:
+    """The parameter name of an op's option (``--step``: ``step``)."""
+    return shell.option.lstrip("-").replace("-", "_")
 
 
-@app.command()
-def off(
-    user: UserName,
-    cpu: CpuName = "cpu1",
-    connect: Connect = None,
-    fb: FbName = None,
-    tls_ca: TlsCa = None,
-) -> None:
-    """Switch the sequencer off (OFF_SQ)."""
-    _remote("off", {}, cpu, connect, fb, user, tls_ca)
+def _parameter(kind: type[Command], field: mi.Field) -> Parameter:
+    """The parameter that gives ``kind``'s one argument ``field``: the positional of its own
+    command, or its option (``kind.shell.option``) of another op's command."""
+    shell = kind.shell
+    assert shell is not None
+    hint: Any = Annotated  # the argument's type is known at run time only
+    number = isinstance(field.type, mi.IntType)
+    if shell.option:
+        option = typer.Option(shell.option, help=shell.help)
+        typed = hint[int | None if number else str | None, option]
+        return Parameter(
+            _option_name(shell), Parameter.KEYWORD_ONLY, annotation=typed, default=None
+        )
+    values = [str(v) for v in getattr(field.type, "values", ())]  # a choice's: AUTO, MAN ...
+    choices = f"{', '.join(values[:-1])} or {values[-1]}." if values else ""
+    argument = typer.Argument(metavar=shell.metavar or None, help=shell.argument or choices)
+    return Parameter(
+        field.name, Parameter.KEYWORD_ONLY, annotation=hint[int if number else str, argument]
+    )
 
 
-@app.command("stop")
-def stop_cpu(
-    user: UserName,
-    cpu: CpuName = "cpu1",
-    connect: Connect = None,
-    fb: FbName = None,
-    tls_ca: TlsCa = None,
-) -> None:
-    """Put the CPU in STOP, as its RUN/STOP switch (engineer; outputs to 0)."""
-    _remote("stop", {}, cpu, connect, fb, user, tls_ca)
+def _op_command(kind: type[Command], options: tuple[type[Command], ...]) -> None:
+    """Add ``s7graph NAME`` (``kind.shell``): it sends ``kind`` with its one argument as the
+    positional, or, when one of ``options`` is given, that option's op (the later one in
+    the union when several are: ``ack --message`` before ``ack --step``). Its arguments are
+    checked as the bus checks them before anything is sent."""
+    shell, field = kind.shell, argument_field(kind)
+    assert shell is not None
+    params = [_parameter(kind, field)] if field is not None else []
+    params += [*_BUS_PARAMETERS, *(_parameter(o, f) for o in options if (f := argument_field(o)))]
+
+    def send_op(**given: Any) -> None:
+        bus = {name: given.pop(name) for name in ("user", "cpu", "connect", "fb", "tls_ca")}
+        chosen, value = kind, given.get(field.name) if field is not None else None
+        for other in reversed(options):
+            assert other.shell is not None
+            option = given.get(_option_name(other.shell))
+            if option is not None:
+                chosen, value = other, option
+                break
+        of = argument_field(chosen)
+        try:
+            args = args_of(chosen, {of.name: _word(of, value)} if of is not None else {})
+        except ValueError as exc:
+            raise typer.BadParameter(str(exc)) from None
+        _remote(chosen, args, **bus)
+
+    send_op.__signature__ = Signature(params)  # type: ignore[attr-defined]  # typer reads it
+    send_op.__name__ = shell.name.replace("-", "_")
+    send_op.__doc__ = shell.help
+    app.command(shell.name)(send_op)
 
 
-@app.command("start")
-def start_cpu(
-    user: UserName,
-    cpu: CpuName = "cpu1",
-    connect: Connect = None,
-    fb: FbName = None,
-    tls_ca: TlsCa = None,
-) -> None:
-    """Start the CPU from STOP with its configured restart (--restart of its run; engineer)."""
-    _remote("start", {}, cpu, connect, fb, user, tls_ca)
+def _op_commands() -> None:
+    """A command for each op whose ``shell`` (web.commands) asks for one, in the union's
+    order; ``force`` and ``download`` are written below (they do more than send the op)."""
+    for kind in COMMAND_TYPES:
+        shell = kind.shell
+        if shell is None or shell.by_hand or shell.option:
+            continue
+        options = tuple(
+            o for o in COMMAND_TYPES if o.shell and o.shell.option and o.shell.name == shell.name
+        )
+        _op_command(kind, options)
 
 
-@app.command("step-on")
-def step_on(
-    step: Annotated[int, typer.Argument(help="The step number.")],
-    user: UserName,
-    cpu: CpuName = "cpu1",
-    connect: Connect = None,
-    fb: FbName = None,
-    tls_ca: TlsCa = None,
-) -> None:
-    """Activate a step (MAN, S_ON)."""
-    _remote("step_on", {"step": step}, cpu, connect, fb, user, tls_ca)
-
-
-@app.command("step-off")
-def step_off(
-    step: Annotated[int, typer.Argument(help="The step number.")],
-    user: UserName,
-    cpu: CpuName = "cpu1",
-    connect: Connect = None,
-    fb: FbName = None,
-    tls_ca: TlsCa = None,
-) -> None:
-    """Deactivate a step (MAN, S_OFF)."""
-    _remote("step_off", {"step": step}, cpu, connect, fb, user, tls_ca)
-
-
-@app.command("t-push")
-def t_push(
-    user: UserName,
-    cpu: CpuName = "cpu1",
-    connect: Connect = None,
-    fb: FbName = None,
-    tls_ca: TlsCa = None,
-) -> None:
-    """Switch a ready transition (TAP, TOP; T_PUSH)."""
-    _remote("t_push", {}, cpu, connect, fb, user, tls_ca)
+_op_commands()
 
 
 @app.command("send", context_settings={"ignore_unknown_options": True})
@@ -617,15 +619,16 @@ def send(
     tls_ca: TlsCa = None,
 ) -> None:
     """Send any command of the vocabulary with its arguments (s7graph send halt on=true)."""
-    from s7graph.web.commands import command_args
-
     try:
-        args = command_args(op, arguments or [])
+        given = command_args(op, arguments or [])  # an unknown op is refused here
+        kind = command_type(op)
+        assert kind is not None
+        args = args_of(kind, given)
     except ValueError as exc:
         raise typer.BadParameter(str(exc)) from None
     if user is None:
         raise typer.BadParameter("give the user to log in as with --user")
-    _remote(op, args, cpu, connect, fb, user, tls_ca)
+    _remote(kind, args, cpu=cpu, connect=connect, fb=fb, user=user, tls_ca=tls_ca)
 
 
 @app.command(context_settings={"ignore_unknown_options": True})  # MW10 -5: a value
@@ -657,15 +660,18 @@ def force(
         raise typer.Exit(list_forces(_net(cpu=cpu, connect=connect, tls_ca=tls_ca)))
     if user is None:
         raise typer.BadParameter("give the user to log in as with --user")
+    send_force = functools.partial(
+        _remote, Force, cpu=cpu, connect=connect, fb=fb, user=user, tls_ca=tls_ca
+    )
     if all_:
         if [w.lower() for w in words] != ["off"]:
             raise typer.BadParameter("--all unforces every job: s7graph force --all off")
-        _remote("force", {"all": True}, cpu, connect, fb, user, tls_ca)
+        send_force(ForceArgs(all=True))
     if len(words) != 2:
         raise typer.BadParameter("give ADDRESS VALUE (or ADDRESS off), e.g. force I0.3 TRUE")
     address, value = words
-    args = {"address": address, "value": None if value.lower() == "off" else value}
-    _remote("force", args, cpu, connect, fb, user, tls_ca)
+    args = ForceArgs(address=address, value=None if value.lower() == "off" else value)
+    send_force(args)
 
 
 @app.command()

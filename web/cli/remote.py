@@ -19,8 +19,9 @@ import sys
 import threading
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import TypeVar
 
+import msgspec
 import zenoh
 
 from s7graph.web.bus.client import BusClient
@@ -28,6 +29,7 @@ from s7graph.web.bus.protocol import Command, CommandReply, CpuStatus, StepState
 from s7graph.web.bus.session import open_session
 from s7graph.web.cli.net import NetOptions
 from s7graph.web.cli.stopping import wait_until_stopped
+from s7graph.web.commands import Args, Download, DownloadArgs, checked, op_of
 from s7graph.web.view.texts import cycle_lines
 
 __all__ = [
@@ -108,26 +110,31 @@ def _logged_in(net: NetOptions, *, fb: str | None, user: str) -> Iterator[_Shell
 
 
 class _Shell:
-    """One logged-in shell: sends commands as its user."""
+    """One logged-in shell: sends commands as its user, to its FB."""
 
     def __init__(self, client: BusClient, fb: str, user: str, token: str) -> None:
         self.client, self.fb, self.user, self.token = client, fb, user, token
 
-    def send(self, op: str, args: dict[str, Any], *, timeout: float | None = None) -> CommandReply:
-        fields: dict[str, Any] = {"op": op, "args": args}
-        command = Command(fb=self.fb, user=self.user, token=self.token, origin=_origin(), **fields)
-        return self.client.send(command, timeout=timeout)
+    def send(
+        self, kind: type[Command], args: Args, *, timeout: float | None = None
+    ) -> CommandReply:
+        """Send op ``kind`` with ``args``; ``ValueError`` (nothing sent) for what the bus
+        would refuse to decode."""
+        made = kind(fb=self.fb, user=self.user, token=self.token, origin=_origin(), args=args)
+        return self.client.send(checked(made), timeout=timeout)
 
 
 def send_command(
-    net: NetOptions, *, fb: str | None, user: str, op: str, args: dict[str, Any]
+    net: NetOptions, *, fb: str | None, user: str, kind: type[Command], args: Args
 ) -> int:
-    """Log in, send one command, log out; 0 applied, 1 refused, 2 a usage or bus error."""
+    """Log in, send op ``kind`` with ``args``, log out; 0 applied, 1 refused, 2 a usage or
+    bus error."""
+    op = op_of(kind)
     with _logged_in(net, fb=fb, user=user) as shell:
         if isinstance(shell, int):
             return shell
         try:
-            reply = shell.send(op, args)
+            reply = shell.send(kind, args)
         except (TypeError, ValueError) as exc:
             return _fail(str(exc))
     if not reply.applied:
@@ -188,7 +195,8 @@ def download_command(
         if isinstance(shell, int):
             return shell
         try:
-            preview = shell.send("download", {"source": source, "preview": True}, timeout=timeout)
+            asked = DownloadArgs(source=source, preview=True)
+            preview = shell.send(Download, asked, timeout=timeout)
         except (TypeError, ValueError) as exc:
             return _fail(str(exc))
         if not preview.applied:
@@ -210,12 +218,15 @@ def download_command(
                 file=sys.stderr,
             )
             return 1
-        args: dict[str, Any] = {"source": source}
+        args = DownloadArgs(source=source)
         if preview.version is not None:
-            args["base"] = preview.version
+            args = msgspec.structs.replace(args, base=preview.version)
         if removed is not None:
-            args["removed"] = removed
-        reply = shell.send("download", args, timeout=timeout)
+            args = msgspec.structs.replace(args, removed=removed)
+        try:
+            reply = shell.send(Download, args, timeout=timeout)
+        except (TypeError, ValueError) as exc:
+            return _fail(str(exc))
     if not reply.applied:
         return _refused("download", reply)
     for line in reply.lines:

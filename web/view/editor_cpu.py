@@ -13,6 +13,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any, Final
 
+import msgspec
 import viser
 
 from s7graph.engine.symbols import SymbolTable
@@ -24,6 +25,17 @@ from s7graph.sequencer.text.format import format_chart
 from s7graph.sequencer.text.model import Chart
 from s7graph.sequencer.text.parse import ChartSyntaxError
 from s7graph.web.bus.protocol import ChartSource, CommandReply
+from s7graph.web.commands import (
+    Command,
+    Download,
+    DownloadArgs,
+    Open,
+    OpenArgs,
+    Save,
+    SaveArgs,
+    UndoArgs,
+    UndoDownload,
+)
 from s7graph.web.view import texts
 from s7graph.web.view.engineering import EditorPage
 
@@ -72,7 +84,8 @@ class CpuCommands:
         if self.session is None:
             return
         name = str(self.file.value).strip()
-        reply = self._command("save", {"file": name, "source": format_chart(self.session.chart)})
+        source = format_chart(self.session.chart)
+        reply = self._command(Save(fb=self.panel.fb, args=SaveArgs(file=name, source=source)))
         self._report("save", reply)
         if reply.applied:
             self._refresh_files()
@@ -82,7 +95,7 @@ class CpuCommands:
         if name == "(none)":
             self._refresh_files()
             return
-        reply = self._command("open", {"file": name})
+        reply = self._command(Open(fb=self.panel.fb, args=OpenArgs(file=name)))
         if not reply.applied:
             self._report("open", reply)
             return
@@ -124,21 +137,26 @@ class CpuCommands:
             self._show(source_changed=False)
             return
         text = format_chart(s.chart)
-        reply = self._command("download", {"source": text, "preview": True})
+        fb = self.panel.fb
+        reply = self._command(Download(fb=fb, args=DownloadArgs(source=text, preview=True)))
         if not reply.applied:
             self._report("download", reply)
             return
-        self._confirm("Download into the CPU", reply, "download", {"source": text})
+        self._confirm(
+            "Download into the CPU", reply, Download(fb=fb, args=DownloadArgs(source=text))
+        )
 
     def undo_download(self) -> None:
-        reply = self._command("undo_download", {"preview": True})
+        fb = self.panel.fb
+        reply = self._command(UndoDownload(fb=fb, args=UndoArgs(preview=True)))
         if not reply.applied:
             self._report("undo download", reply)
             return
-        self._confirm("Undo the last download", reply, "undo_download", {})
+        self._confirm("Undo the last download", reply, UndoDownload(fb=fb))
 
-    def _confirm(self, title: str, preview: CommandReply, op: str, args: dict[str, object]) -> None:
-        """The change summary and the choice; the real command on confirmation."""
+    def _confirm(self, title: str, preview: CommandReply, command: Download | UndoDownload) -> None:
+        """The change summary and the choice; ``command`` (with the version the summary is
+        of, and the choice) on confirmation."""
         gui = self.client.gui
         if self._modal is not None:
             with contextlib.suppress(Exception):
@@ -148,47 +166,48 @@ class CpuCommands:
         with gui.add_modal(title) as modal:
             self._modal = modal
             gui.add_html(texts.lines_html(preview.lines, heading="What changes"))
+            done = "Download to the CPU" if isinstance(command, Download) else "Undo the download"
             choices: list[tuple[str, str | None]] = (
                 [("Keep the other steps", "keep"), ("Initialize the sequencer", "init")]
                 if removed
-                else [("Download to the CPU" if op == "download" else "Undo the download", None)]
+                else [(done, None)]
             )
             for label, choice in choices:
                 button = gui.add_button(label, color="orange")
                 button.on_click(
-                    self._click(functools.partial(self._confirmed, op, args, base, choice))
+                    self._click(functools.partial(self._confirmed, command, base, choice))
                 )
             gui.add_button("Cancel").on_click(lambda _: modal.close())
 
     def _confirmed(
-        self, op: str, args: dict[str, object], base: int | None, removed: str | None
+        self, command: Download | UndoDownload, base: int | None, removed: str | None
     ) -> None:
         if self._modal is not None:
             with contextlib.suppress(Exception):
                 self._modal.close()
             self._modal = None
-        full = dict(args)
+        args = command.args
         if base is not None:
-            full["base"] = base
+            args = msgspec.structs.replace(args, base=base)
         if removed is not None:
-            full["removed"] = removed
-        reply = self._command(op, full)
-        self._report(op.replace("_", " "), reply)
+            args = msgspec.structs.replace(args, removed=removed)
+        reply = self._command(msgspec.structs.replace(command, args=args))
+        self._report(command.op.replace("_", " "), reply)
         if reply.applied:
             source = self.eng.source()
             if source is not None:
                 self.base = source
-                if op == "undo_download":
+                if isinstance(command, UndoDownload):
                     with contextlib.suppress(EditRefused, ChartSyntaxError):
                         chart = parse_source(source.text, source.file or "chart.s7g")
                         self.session = Session.open(chart, self.symbols)
             self.note = f"the CPU runs version {reply.version}" + (
                 f": {reply.lines[0]}" if reply.lines else ""
             )
-            self._show(source_changed=op == "undo_download")
+            self._show(source_changed=isinstance(command, UndoDownload))
 
-    def _command(self, op: str, args: dict[str, object]) -> CommandReply:
-        return self.panel.engineer_command(op, args)
+    def _command(self, command: Command) -> CommandReply:
+        return self.panel.engineer_command(command)
 
     def _report(self, what: str, reply: CommandReply) -> None:
         verdict = "applied" if reply.applied else "refused"

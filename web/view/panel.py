@@ -12,11 +12,13 @@ notifications on this page only.
 
 from __future__ import annotations
 
+import functools
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Final
 
+import msgspec
 import viser
 
 from s7graph.web.access.roles import allowed
@@ -30,15 +32,25 @@ from s7graph.web.bus.protocol import (
 from s7graph.web.commands import (
     MODES,
     Ack,
+    AckMsg,
     AckStep,
+    Force,
+    ForceArgs,
     Halt,
     Init,
+    MessageArgs,
+    Mode,
+    ModeArgs,
     Off,
+    OnArgs,
+    SetMode,
     Start,
+    StepArgs,
     StepOff,
     StepOn,
     Stop,
     TPush,
+    checked,
     op_of,
 )
 from s7graph.web.view import texts
@@ -49,7 +61,8 @@ from s7graph.web.view.engineering import Engineering, ViewHost
 __all__ = ["ClientPanel", "PageState", "Wiring"]
 
 CURRENT_MODE_COLOUR: Final = "green"
-# The Control Sequencer's buttons: the op's struct, the label (and a colour).
+# The Control Sequencer's buttons: the op's struct, the label (and a colour); Halt's
+# argument is the button's state, the others take none.
 _CONTROL_BUTTONS: Final[tuple[tuple[type[Command], str, dict[str, Any]], ...]] = (
     (Init, "Initialize", {}),
     (Off, "Disable (OFF)", {}),
@@ -59,6 +72,7 @@ _CONTROL_BUTTONS: Final[tuple[tuple[type[Command], str, dict[str, Any]], ...]] =
     (Stop, "CPU to STOP", {}),
     (Start, "CPU to RUN", {}),
 )
+# The step buttons: the op's struct (its argument: the Step field), the label.
 _STEP_BUTTONS: Final[tuple[tuple[type[Command], str], ...]] = (
     (StepOn, "Activate"),
     (StepOff, "Deactivate"),
@@ -145,22 +159,24 @@ class ClientPanel:
             self.status = gui.add_html(texts.status_html(None, 0, "RUN", None))
             self.mode_buttons = {m: gui.add_button(m, hint=f"SW_{m}") for m in MODES}
             for mode, button in self.mode_buttons.items():
-                button.on_click(self._handler("mode", mode=mode))
+                button.on_click(self._on_click(functools.partial(self._switch_mode, mode)))
             # a button per op (web.commands): its hint is the op's pin and what it does
             self.buttons: dict[str, viser.GuiButtonHandle] = {
                 op_of(kind): gui.add_button(label, hint=_hint(kind), **style)
                 for kind, label, style in _CONTROL_BUTTONS
             }
-            for op, button in self.buttons.items():
-                button.on_click(self._handler(op) if op != "halt" else lambda _: self._halt())
+            for kind, _, _ in _CONTROL_BUTTONS:
+                make = self._halt if kind is Halt else functools.partial(self._plain, kind)
+                self.buttons[op_of(kind)].on_click(self._on_click(make))
             first = w.layout.steps[0].number if w.layout.steps else 1
             self.step_number = gui.add_number("Step", first, min=1, max=65535, step=1)
             self.step_buttons = {
                 op_of(kind): gui.add_button(label, hint=_hint(kind))
                 for kind, label in _STEP_BUTTONS
             }
-            for op, button in self.step_buttons.items():
-                button.on_click(self._step_handler(op))
+            for kind, _ in _STEP_BUTTONS:
+                make = functools.partial(self._step, kind)
+                self.step_buttons[op_of(kind)].on_click(self._on_click(make))
         with gui.add_folder("Alarms") as self.alarm_folder:
             self.alarm_html = gui.add_html(texts.alarms_html(None))
         with gui.add_folder("Alarm history", expand_by_default=False):
@@ -244,15 +260,15 @@ class ClientPanel:
             self._shown.pop("forces", None)
             force.on_click(lambda _: self._force(True))
             unforce.on_click(lambda _: self._force(False))
-            unforce_all.on_click(self._handler("force", all=True))
+            unforce_all.on_click(self._on_click(self._unforce_all))
         elif not wanted and self.force_folder is not None:
             folder, self.force_folder = self.force_folder, None
             folder.remove()
 
     def _force(self, on: bool) -> None:
         address = str(self.force_address.value).strip()
-        value: object = str(self.force_value.value).strip() if on else None
-        self.command("force", {"address": address, "value": value})
+        value = str(self.force_value.value).strip() if on else None
+        self.command(Force(fb=self.fb, args=ForceArgs(address=address, value=value)))
 
     # ------------------------------------------------------------ the chart
 
@@ -326,47 +342,67 @@ class ClientPanel:
 
     # ------------------------------------------------------------ commands
 
-    def _handler(self, op: str, **args: object) -> Callable[[Any], None]:
+    @property
+    def fb(self) -> str:
+        """The FB this page commands."""
+        return self.wiring.layout.fb
+
+    def _on_click(self, make: Callable[[], Command]) -> Callable[[Any], None]:
+        """A button's handler: send the command ``make`` builds at the click."""
+
         def click(_: Any) -> None:
-            self.command(op, dict(args))
+            self.command(make())
 
         return click
 
-    def _step_handler(self, op: str) -> Callable[[Any], None]:
-        def click(_: Any) -> None:
-            self.command(op, {"step": int(self.step_number.value)})
+    def _plain(self, kind: type[Command]) -> Command:
+        """The command of an op without arguments."""
+        return kind(fb=self.fb)
 
-        return click
+    def _step(self, kind: type[Command]) -> Command:
+        """A step button's command: the step of the Step field."""
+        return kind(fb=self.fb, args=StepArgs(step=int(self.step_number.value)))
 
-    def _halt(self) -> None:
-        self.command("halt", {"on": not self._halted})
+    def _switch_mode(self, mode: Mode) -> SetMode:
+        return SetMode(fb=self.fb, args=ModeArgs(mode=mode))
 
-    def command(self, op: str, args: dict[str, object]) -> CommandReply:
-        """Send one command as this page's user (runs in viser's callback threads)."""
-        reply = self._send(op, args, self.wiring.send)
+    def _halt(self) -> Halt:
+        """Halt, or resume when halted (the button shows which)."""
+        return Halt(fb=self.fb, args=OnArgs(on=not self._halted))
+
+    def _ack_msg(self, msg_id: int | str) -> AckMsg:
+        return AckMsg(fb=self.fb, args=MessageArgs(msg_id=msg_id))
+
+    def _unforce_all(self) -> Force:
+        return Force(fb=self.fb, args=ForceArgs(all=True))
+
+    def command(self, command: Command) -> CommandReply:
+        """Send ``command`` as this page's user (runs in viser's callback threads)."""
+        reply = self._send(command, self.wiring.send)
         verdict = "applied" if reply.applied else "refused"
-        self._notify(f"{op} {verdict}", reply.reason or "OK", ok=reply.applied)
+        self._notify(f"{command.op} {verdict}", reply.reason or "OK", ok=reply.applied)
         return reply
 
-    def engineer_command(self, op: str, args: dict[str, object]) -> CommandReply:
+    def engineer_command(self, command: Command) -> CommandReply:
         """Send one engineering command (download, save …) as this page's user and wait
         longer for its answer; the editor shows the verdict."""
         eng = self.wiring.engineering
-        return self._send(op, args, eng.send if eng is not None else self.wiring.send)
+        return self._send(command, eng.send if eng is not None else self.wiring.send)
 
-    def _send(
-        self, op: str, args: dict[str, object], send: Callable[[Command], CommandReply]
-    ) -> CommandReply:
+    def _send(self, command: Command, send: Callable[[Command], CommandReply]) -> CommandReply:
+        """Send ``command`` as this page's user, checked as the bus checks it: what the bus
+        would refuse to decode is refused here, with its reason."""
         w = self.wiring
         with self._lock:
             user, token = self.user, self.token
         try:
-            fields: dict[str, Any] = {"op": op, "args": args}
-            command = Command(fb=w.layout.fb, user=user, token=token, origin=self.origin, **fields)
+            mine = checked(
+                msgspec.structs.replace(command, user=user, token=token, origin=self.origin)
+            )
         except (TypeError, ValueError) as exc:
-            reply = CommandReply(applied=False, reason=str(exc), op=op, fb=w.layout.fb)
+            reply = CommandReply(applied=False, reason=str(exc), op=command.op, fb=command.fb)
         else:
-            reply = send(command)
+            reply = send(mine)
         w.on_reply(reply)
         return reply
 
@@ -423,7 +459,8 @@ class ClientPanel:
                         hint=texts.clip(entry.text, 200),
                         disabled=not allowed(role, "ack_msg"),
                     )
-                    button.on_click(self._handler("ack_msg", msg_id=mid))
+                    make = functools.partial(self._ack_msg, mid)
+                    button.on_click(self._on_click(make))
                     self._alarm_buttons[mid] = button
 
 
