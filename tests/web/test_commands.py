@@ -27,8 +27,7 @@ from s7graph.web.commands import (
     command_type,
     op_of,
 )
-
-ROOT = Path(__file__).resolve().parents[2]
+from tests.paths import ROOT
 
 
 def test_every_op_is_one_struct_with_a_role_and_a_row() -> None:
