@@ -1,6 +1,6 @@
 """Shared helpers of the tests that run ``s7graph run`` as a real process and read its
 SQLite state store from outside while it runs, imported as ``tests.real_process``
-(tests/engine/test_persistence.py, tests/web/test_message_persistence.py)."""
+(tests/engine/test_persistence.py, tests/web/harness/test_message_persistence.py)."""
 
 from __future__ import annotations
 

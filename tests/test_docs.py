@@ -10,7 +10,8 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parent.parent
+from tests.paths import ROOT
+
 README = ROOT / "README.md"
 RUN = "pip install -e . && s7graph run examples/drill/drill.s7g --plant examples/drill/demo_plant.py --symbols examples/drill/symbols.txt --web"  # noqa: E501
 TEST = "bash .ci/install && python -m pytest"

@@ -1,4 +1,5 @@
-"""The code stays ruff-clean and mypy-clean, mypy strict on every package."""
+"""The code stays ruff-clean and mypy-clean, mypy strict on every package; the tests are
+laid out like the packages they test."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parent.parent
+from tests.paths import ROOT
 
 
 @pytest.mark.timeout(300)
@@ -89,3 +90,45 @@ def test_mypy_is_clean_and_strict_on_every_package(tmp_path: Path) -> None:
         text=True,
     )
     assert proc.returncode == 0, proc.stdout[-5000:] + proc.stderr[-2000:]
+
+
+# ---- the tests are laid out like the packages ---------------------------------------------
+# A test module of one package sits in tests/ at the package's path: tests/engine/ for
+# engine/, tests/sequencer/change/ for sequencer/change/, tests/web/ for web/commands.py
+# and web/recorder.py. One that covers every layer or the project (the layer rules, the
+# wheel, the docs, this file) sits in tests/ itself. The folders that mirror no package:
+ELSEWHERE = {
+    "examples": "the examples' commands run as docs/cli.md describes them (examples/)",
+    "bench": "what the benchmarks' measurements rest on (bench/)",
+}
+DATA = {  # the charts the tests read, named in tests/sequencer/helpers.py; no test modules
+    "sequencer/charts",
+    "sequencer/broken",
+    "sequencer/scenarios",
+}
+
+
+def test_the_tests_are_laid_out_like_the_packages() -> None:
+    """Every folder under ``tests/`` is a package's (``tests/<layer>/<sub>/`` with
+    ``<layer>/<sub>/__init__.py`` in the source), one of ``ELSEWHERE`` or a data folder;
+    a data folder holds no Python, so a test module cannot hide there."""
+    tests = ROOT / "tests"
+    wrong = []
+    for folder in sorted(p for p in tests.rglob("*") if p.is_dir()):
+        rel = folder.relative_to(tests)
+        if any(part == "__pycache__" or part.startswith(".") for part in rel.parts):
+            continue
+        if all("__pycache__" in f.parts for f in folder.rglob("*") if f.is_file()):
+            continue  # left behind by a module that moved: only bytecode, or nothing
+        name = rel.as_posix()
+        if name in DATA:
+            modules = sorted(folder.glob("*.py"))
+            wrong += [f"tests/{name}/{p.name}: Python in a data folder" for p in modules]
+        elif rel.parts[0] in ELSEWHERE:
+            if len(rel.parts) > 1:
+                wrong.append(f"tests/{name}: a folder inside tests/{rel.parts[0]}/")
+        elif not (ROOT / rel / "__init__.py").is_file():
+            wrong.append(f"tests/{name}: no package {name}/ in the source")
+    assert wrong == [], "\n".join(wrong)
+    assert set(ELSEWHERE) <= {p.name for p in tests.iterdir() if p.is_dir()}
+    assert all((tests / name).is_dir() for name in DATA)

@@ -17,7 +17,8 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parent.parent
+from tests.paths import ROOT
+
 LAYERS = ("engine", "sfb", "steps", "sequencer", "web")
 
 pytestmark = pytest.mark.timeout(600)

@@ -14,6 +14,9 @@
 - ``write_sim_inputs``/``read_trace``: the files of one ``s7graph sim`` run (docs/cli.md, "s7graph
 sim");
   ``sim_trace`` runs one and returns its exit status and trace.
+- ``SCENARIOS``, ``CHARTS``, ``BROKEN``: the data folders beside this module, named here for
+  the tests in the sub-folders (``text/``, ``checks/``, ``change/``) and elsewhere
+  (``tests/web/cli/``), so that no test finds them relative to its own place.
 """
 
 from __future__ import annotations
@@ -39,6 +42,8 @@ from s7graph.web.cli.sim import sim_command
 
 HERE = Path(__file__).resolve().parent
 SCENARIOS = HERE / "scenarios"
+CHARTS = HERE / "charts"  # valid charts of the parser, validator and editor tests
+BROKEN = HERE / "broken"  # one broken chart per diagnostic, its expectation in its first line
 
 
 # ---------------------------------------------------------------- chart source text

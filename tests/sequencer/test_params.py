@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import itertools
-from pathlib import Path
 
 import pytest
 
@@ -21,6 +20,7 @@ from s7graph.sequencer.params import (
     pins_for,
 )
 from s7graph.sequencer.text.model import ChartOptions
+from tests.paths import ROOT
 
 
 def words(text: str) -> list[str]:
@@ -158,6 +158,6 @@ def test_markdown_table_has_a_row_per_pin_with_set_marks() -> None:
 def test_the_semantics_doc_holds_the_pin_table_of_the_code() -> None:
     """The one pin table is the code's: docs/semantics.md prints it verbatim (the README's
     copy moved there)."""
-    root = Path(__file__).resolve().parents[2]
+    root = ROOT
     for doc in (root / "docs" / "semantics.md",):
         assert markdown_table() in doc.read_text(encoding="utf-8"), doc.name

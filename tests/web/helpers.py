@@ -21,6 +21,7 @@ from s7graph.engine.clock import VirtualClock
 from s7graph.engine.persistence import StateStore
 from s7graph.engine.symbols import SymbolTable
 from s7graph.web.harness.session import ChartSession, load_chart
+from tests.paths import ROOT
 
 if TYPE_CHECKING:
     from playwright.sync_api import Locator, Page
@@ -30,7 +31,6 @@ if TYPE_CHECKING:
     from s7graph.web.bus.online import OnlineChange
     from s7graph.web.wiring.live_edge import LiveEdge
 
-ROOT = Path(__file__).resolve().parents[2]
 CHROMIUM = "/usr/bin/chromium"
 ARGS = [
     "--no-sandbox",

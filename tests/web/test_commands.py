@@ -46,8 +46,7 @@ from s7graph.web.commands import (
     op_of,
     shell_markdown,
 )
-
-ROOT = Path(__file__).resolve().parents[2]
+from tests.paths import ROOT
 
 
 def test_every_op_is_one_struct_with_a_role_and_a_row() -> None:

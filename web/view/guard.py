@@ -9,7 +9,7 @@ viser's share-URL tunnel (it would publish the page through a third-party server
 
 viser 1.1.1 has no hook for the handshake, so the check is the first of its connect
 callbacks (``_websock_server._client_connect_cb``), which run before any message is sent;
-viser is pinned, and tests/web/test_access_browser.py holds this to a real websocket.
+viser is pinned, and tests/web/access/test_access_browser.py holds this to a real websocket.
 """
 
 from __future__ import annotations

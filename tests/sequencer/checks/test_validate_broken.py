@@ -1,0 +1,51 @@
+"""Each broken chart in ``broken/`` states its expected diagnostic in its first line
+(``// expect: CODE line:col``); the front end must report exactly that code there."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+
+from s7graph.sequencer.checks.diagnostics import CODES, Diagnostic
+from s7graph.sequencer.checks.validate import validate
+from s7graph.sequencer.text.parse import ChartSyntaxError, parse_chart
+from tests.sequencer.helpers import BROKEN
+
+FILES = sorted(BROKEN.glob("*.s7g"))
+
+
+def diagnostics_of(path: Path) -> list[Diagnostic]:
+    try:
+        return validate(parse_chart(path.read_text(encoding="utf-8"), path.name))
+    except ChartSyntaxError as exc:
+        return exc.diagnostics
+
+
+def expectation(path: Path) -> tuple[str, int, int]:
+    m = re.match(r"// expect: (\w+) (\d+):(\d+)", path.read_text(encoding="utf-8"))
+    assert m, f"{path.name} lacks its '// expect: CODE line:col' header"
+    return m.group(1), int(m.group(2)), int(m.group(3))
+
+
+@pytest.mark.parametrize("path", FILES, ids=[p.stem for p in FILES])
+def test_broken_chart_reports_its_code_at_its_line_and_column(path: Path) -> None:
+    code, line, col = expectation(path)
+    found = [(d.code, d.loc.line, d.loc.col) for d in diagnostics_of(path)]
+    assert (code, line, col) in found, found
+    assert all(d.loc.file == path.name for d in diagnostics_of(path))
+
+
+def test_every_diagnostic_code_has_a_broken_chart() -> None:
+    covered = {expectation(p)[0] for p in FILES}
+    assert set(CODES) - covered == {"W110"}  # limits: see test_validate.py
+
+
+def test_broken_chart_code_matches_its_severity() -> None:
+    for path in FILES:
+        code, line, col = expectation(path)
+        d = next(
+            d for d in diagnostics_of(path) if (d.code, d.loc.line, d.loc.col) == (code, line, col)
+        )
+        assert d.severity == ("error" if code.startswith("E") else "warning")

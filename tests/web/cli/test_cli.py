@@ -1,0 +1,47 @@
+"""The command line: usage errors are one line on stderr naming the problem, exit 2."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+from s7graph.web.cli import main
+from tests.paths import EXAMPLES
+
+
+@pytest.mark.parametrize(
+    ("argv", "expected"),
+    [
+        (["run", "--max-cycle-ms", "abc", "x.py"], "Invalid value for '--max-cycle-ms'"),
+        (["frob"], "No such command 'frob'"),
+        (["sim"], "Missing argument 'chart'"),
+    ],
+)
+def test_a_usage_error_is_one_stderr_line_and_exit_2(
+    argv: list[str], expected: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(argv) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith("s7graph: error: ") and expected in err[0]
+
+
+def test_version_prints_the_distribution_version(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["--version"]) == 0
+    assert capsys.readouterr().out.startswith("s7graph ")
+
+
+def test_check_loads_no_viser_zenoh_or_numpy() -> None:
+    """``s7graph check`` starts fast: it imports only what checking a chart needs (the
+    view's and the bus's libraries are imported by ``run`` alone)."""
+    drill = EXAMPLES / "drill"
+    args = [str(drill / "drill.s7g"), "--symbols", str(drill / "symbols.txt")]
+    probe = (
+        "import sys\n"
+        "from s7graph.web.cli import main\n"
+        f"rc = main(['check', *{args!r}])\n"
+        "print(rc, *(m for m in ('viser', 'zenoh', 'numpy') if m in sys.modules))\n"
+    )
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True)
+    assert out.stdout.splitlines()[-1] == "0"

@@ -1,0 +1,71 @@
+"""``s7graph check`` prints one line per diagnostic plus a summary; exit 0/1/2
+(docs/chart-format.md)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from s7graph.web.cli.check import check_command
+from tests.sequencer.helpers import BROKEN, CHARTS
+
+
+def test_clean_chart_exits_0_with_a_summary(capsys: pytest.CaptureFixture[str]) -> None:
+    path = CHARTS / "linear.s7g"
+    assert check_command(path, None) == 0
+    assert capsys.readouterr().out.splitlines() == [f"{path}: 0 errors, 0 warnings"]
+
+
+def test_warnings_only_exit_1(capsys: pytest.CaptureFixture[str]) -> None:
+    path = BROKEN / "W120_empty_condition.s7g"
+    assert check_command(path, None) == 1
+    lines = capsys.readouterr().out.splitlines()
+    assert lines == [
+        f"{path}:5:3: warning[W120]: transition T1 has no condition; it switches at once "
+        "(transition T1)",
+        f"{path}: 0 errors, 1 warning",
+    ]
+
+
+def test_errors_exit_2_syntax_errors_included(capsys: pytest.CaptureFixture[str]) -> None:
+    assert check_command(BROKEN / "E010_unknown_step_in_to.s7g", None) == 2
+    assert check_command(BROKEN / "E001_missing_semicolon.s7g", None) == 2
+    out = capsys.readouterr().out
+    assert "error[E010]" in out and "error[E001]" in out
+
+
+def test_unreadable_file_is_one_stderr_line_and_exit_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert check_command(tmp_path / "missing.s7g", None) == 2
+    captured = capsys.readouterr()
+    assert captured.out == "" and len(captured.err.splitlines()) == 1
+
+
+def test_symbol_file_resolves_quoted_names(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    chart = tmp_path / "c.s7g"
+    chart.write_text(
+        'FUNCTION_BLOCK "C"\nSEQUENCE 1\n  INITIAL_STEP S1: N "Lamp"; END_STEP\n'
+        '  TRANSITION T1 FROM S1 TO S1 := "Go";\nEND_SEQUENCE\nEND_FUNCTION_BLOCK\n',
+        encoding="utf-8",
+    )
+    syms = tmp_path / "s.txt"
+    syms.write_text('"Go" ; I0.0 ; BOOL ; go\n"Lamp" ; Q0.0 ; BOOL ; lamp\n', encoding="utf-8")
+    assert check_command(chart, None) == 2
+    assert check_command(chart, syms) == 0
+
+
+def test_a_waiting_step_without_actions_is_clean(tmp_path: Path) -> None:
+    """A step may hold no action rows (STEP7 comprehensive guide vol. 2, ch. 14): waiting steps are
+    idiomatic."""
+    chart = tmp_path / "wait.s7g"
+    chart.write_text(
+        'FUNCTION_BLOCK "W"\nSEQUENCE 1\n  INITIAL_STEP S1: N Q0.0; END_STEP\n'
+        "  STEP S2: END_STEP\n  TRANSITION T1 FROM S1 TO S2 := I0.0;\n"
+        "  TRANSITION T2 FROM S2 TO S1 := I0.1;\nEND_SEQUENCE\nEND_FUNCTION_BLOCK\n",
+        encoding="utf-8",
+    )
+    assert check_command(chart, None) == 0

@@ -1,0 +1,135 @@
+"""``s7graph run`` when things go wrong (real processes): a scan that swallows every abort
+cannot hold the process against SIGTERM; a chart run that goes to STOP by an error says why
+and exits non-zero; a plant's SystemExit is a plant error, not an exit."""
+
+from __future__ import annotations
+
+import signal
+import sqlite3
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import pytest
+
+from s7graph.engine.diagnostics import EventId
+from s7graph.engine.runner import EXIT_HUNG, GRACE_S
+from tests.paths import ROOT
+
+DRILL = ROOT / "examples" / "drill"
+
+SWALLOWER = """
+from s7graph.engine import ob
+
+CPU = {"max_cycle_ms": 50}
+calls = [0]
+
+@ob(1)
+def main(ctx):
+    calls[0] += 1
+    if calls[0] < 20:
+        return
+    while True:          # hangs, and swallows every abort the runner raises
+        try:
+            while True:
+                pass
+        except BaseException:
+            pass
+"""
+
+
+def _start(*args: str) -> subprocess.Popen[str]:
+    return subprocess.Popen(
+        [sys.executable, "-m", "s7graph", "run", *args],
+        cwd=ROOT,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+
+
+@pytest.mark.timeout(60)
+def test_a_scan_swallowing_every_abort_cannot_hold_the_process_against_sigterm(
+    tmp_path: Path,
+) -> None:
+    program = tmp_path / "hang.py"
+    program.write_text(textwrap.dedent(SWALLOWER))
+    state = tmp_path / "hang.sqlite"
+    proc = _start(str(program), "--state", str(state), "--cycle-ms", "5")
+    assert proc.stderr is not None
+    assert "in RUN" in proc.stderr.readline()
+    time.sleep(0.5)  # scan 20 starts hanging, aborts are raised and swallowed
+    assert proc.poll() is None
+    sent = time.monotonic()
+    proc.send_signal(signal.SIGTERM)
+    code = proc.wait(GRACE_S + 20)
+    waited = time.monotonic() - sent
+    err = proc.stderr.read()
+    assert code == EXIT_HUNG, err
+    assert waited >= GRACE_S
+    lines = [line for line in err.splitlines() if line.startswith("s7graph: error")]
+    assert len(lines) == 1 and "did not return" in lines[0] and "hang.py" in lines[0]
+    with sqlite3.connect(state) as con:
+        rows = con.execute("SELECT event_id, message FROM diagnostics ORDER BY seq").fetchall()
+        clean = con.execute("SELECT value FROM meta WHERE key='clean'").fetchone()
+    con.close()
+    assert rows[-1][0] == EventId.STOP_HUNG and "did not return" in rows[-1][1]
+    assert clean == ("0",)  # the run did not end cleanly, and the file says so
+
+
+ENDLESS_PLANT = """
+class Plant:
+    n = 0
+    def cycle(self, io, t_ms, dt_ms):
+        self.n += 1
+        while self.n > 10:
+            pass
+"""
+
+
+@pytest.mark.timeout(60)
+def test_a_chart_run_whose_plant_hangs_goes_to_stop_says_why_and_exits_1(tmp_path: Path) -> None:
+    plant = tmp_path / "endless.py"
+    plant.write_text(textwrap.dedent(ENDLESS_PLANT))
+    proc = _start(
+        str(DRILL / "drill.s7g"),
+        "--symbols",
+        str(DRILL / "symbols.txt"),
+        "--plant",
+        str(plant),
+        "--state",
+        str(tmp_path / "s.sqlite"),
+        "--max-cycle-ms",
+        "50",
+    )
+    code = proc.wait(40)
+    assert proc.stderr is not None
+    err = proc.stderr.read()
+    assert code == 1, err
+    (line,) = [x for x in err.splitlines() if "error" in x]
+    assert "the CPU went to STOP: plant endless.py: aborted: still running" in line
+    assert "endless.py:6 in cycle" in line and "Traceback" not in err
+
+
+@pytest.mark.timeout(60)
+def test_a_plant_raising_system_exit_ends_the_run_with_one_line(tmp_path: Path) -> None:
+    plant = tmp_path / "quits.py"
+    plant.write_text(
+        "class Plant:\n    def cycle(self, io, t_ms, dt_ms):\n        raise SystemExit(0)\n"
+    )
+    proc = _start(
+        str(DRILL / "drill.s7g"),
+        "--symbols",
+        str(DRILL / "symbols.txt"),
+        "--plant",
+        str(plant),
+        "--state",
+        str(tmp_path / "s.sqlite"),
+    )
+    code = proc.wait(40)
+    assert proc.stderr is not None
+    err = proc.stderr.read()
+    assert code == 1, err
+    (line,) = [x for x in err.splitlines() if "error" in x]
+    assert "SystemExit" in line and "quits.py:3" in line

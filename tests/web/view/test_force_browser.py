@@ -1,0 +1,91 @@
+"""The page's Force folder in a real headless Chromium, against a chart on the virtual clock
+on a real bus: an engineer forces an input from the page, every page shows the yellow FORCE
+mark and the engineer's the active job, Unforce gives it back; an operator's page has no
+Force folder."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import TYPE_CHECKING
+
+import pytest
+
+from s7graph.web.access.audit import read_audit
+from tests.web.bus.test_bus_force import CHART
+from tests.web.helpers import (
+    PASSWORD,
+    OnlineRig,
+    chromium_page,
+    field,
+    log_in,
+    needs_chromium,
+    online_cpu,
+    wait_until,
+)
+
+if TYPE_CHECKING:
+    from playwright.sync_api import Page
+
+pytestmark = [pytest.mark.timeout(240), needs_chromium]
+pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
+USERS = {"eng": "engineer", "olga": "operator"}
+
+
+@pytest.fixture
+def cpu(tmp_path_factory: pytest.TempPathFactory) -> Iterator[OnlineRig]:
+    tmp = tmp_path_factory.mktemp("force")
+    with online_cpu(tmp, CHART, serve=True, users=USERS, name="lamp.s7g") as rig:
+        yield rig
+
+
+@contextmanager
+def _open(url: str) -> Iterator[Page]:
+    with chromium_page(url) as page:
+        page.get_by_role("button", name="Log in", exact=True).wait_for(timeout=30_000)
+        yield page
+
+
+def _active(cpu: OnlineRig) -> list[int]:
+    g = cpu.session.graph
+    return [n for n, x in zip(g.cc.step_numbers, g.state.x, strict=True) if x]
+
+
+def test_an_engineer_forces_from_the_page_and_every_page_shows_force(cpu: OnlineRig) -> None:
+    with _open(cpu.edge.url) as page:
+        log_in(page, "eng", PASSWORD)
+        page.get_by_text("Force", exact=True).first.click()  # open the folder
+        for label, text in (("Address", "Start"), ("Value", "TRUE")):
+            box = field(page, label)
+            box.fill(text)
+            box.press("Tab")
+        page.get_by_role("button", name="Force", exact=True).click()
+        page.get_by_text("force applied").first.wait_for(timeout=30_000)
+        assert wait_until(lambda: _active(cpu) == [2], 20)  # OB1 read the forced input
+        page.get_by_text("FORCE", exact=True).first.wait_for(timeout=30_000)  # the FRCE LED
+        page.get_by_text('"Start" = TRUE').first.wait_for(timeout=30_000)  # the list
+        rows = [(r.user, r.outcome) for r in read_audit(cpu.state) if r.op == "force"]
+        assert rows == [("eng", "applied")]
+
+        field(page, "Value").fill("")
+        page.get_by_role("button", name="Unforce", exact=True).click()
+        page.get_by_text("no force job active").first.wait_for(timeout=30_000)
+        assert wait_until(lambda: _active(cpu) == [1], 20)
+        assert page.get_by_text("FORCE", exact=True).count() == 0
+
+        field(page, "Address").fill("DB1.DBX0.0")
+        field(page, "Value").fill("TRUE")
+        field(page, "Value").press("Tab")
+        page.get_by_role("button", name="Force", exact=True).click()
+        page.get_by_text("DB1.DBX0.0 cannot be forced").first.wait_for(timeout=30_000)
+
+
+def test_an_operators_page_has_no_force_folder(cpu: OnlineRig) -> None:
+    with _open(cpu.edge.url) as page:
+        log_in(page, "olga", PASSWORD)
+        page.get_by_role("button", name="Initialize", exact=True).wait_for(timeout=30_000)
+        assert page.get_by_role("button", name="Unforce all", exact=True).count() == 0
+        view = cpu.edge.edge.view if cpu.edge.edge is not None else None
+        assert view is not None
+        assert wait_until(lambda: all(p.role == "operator" for p in view.panels.values()))
+        assert all(p.force_folder is None for p in view.panels.values())
