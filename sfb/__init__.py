@@ -1,6 +1,6 @@
-"""System blocks: SFB0-5, S5 timers/counters, edges, clock/memory/control SFCs, alarms,
-RDSYSST/WR_USMSG (docs/runtime.md, "The block runtime"; El-Shahat's S7-300/400 course, timers and
-counters).
+"""System blocks: SFB0-5, the process-control SFB41-43, S5 timers/counters, edges,
+clock/memory/control SFCs, alarms, RDSYSST/WR_USMSG (docs/runtime.md, "The block runtime";
+El-Shahat's S7-300/400 course, timers and counters).
 
 The semantics are pure state machines over ``(inputs, now_ns)``; thin adapters declare them
 as engine SFBs/SFCs from the one ``catalogue``. ``install(cpu)`` loads every system block so
@@ -14,9 +14,12 @@ from typing import Protocol
 from s7graph.engine.blocks import FB, FC
 from s7graph.sfb import (
     alarms,
+    cont_c,
+    cont_s,
     diag_read,
     iec_counters,
     iec_timers,
+    pulsegen,
     s5_timers,  # noqa: F401  (importing it registers the S5 timer tick)
     sfc_clock,
     sfc_control,
@@ -27,10 +30,13 @@ from s7graph.sfb import (
 )
 from s7graph.sfb.alarms import Message, MessageEvent, MessageList, MessageState, message_list
 from s7graph.sfb.catalogue import CATALOGUE, Direction, Entry, Kind, Pin, find, lookup
+from s7graph.sfb.cont_c import ContC, ContCIn
+from s7graph.sfb.cont_s import ContS, ContSIn
 from s7graph.sfb.diag_read import rdsysst, wr_usmsg
 from s7graph.sfb.edges import F_TRIG, R_TRIG, fn, fp
 from s7graph.sfb.iec_counters import CTD, CTU, CTUD
 from s7graph.sfb.iec_timers import TOF, TON, TP
+from s7graph.sfb.pulsegen import PulseGen, PulseGenIn
 from s7graph.sfb.sfc_clock import RealTimeClock, rtc_of
 from s7graph.sfb.sfc_memory import AnyPointer, parse_any
 
@@ -46,6 +52,10 @@ __all__ = [
     "TON",
     "TP",
     "AnyPointer",
+    "ContC",
+    "ContCIn",
+    "ContS",
+    "ContSIn",
     "Direction",
     "Entry",
     "Kind",
@@ -54,6 +64,8 @@ __all__ = [
     "MessageList",
     "MessageState",
     "Pin",
+    "PulseGen",
+    "PulseGenIn",
     "RealTimeClock",
     "find",
     "fn",
@@ -70,6 +82,9 @@ __all__ = [
 SYSTEM_BLOCKS: tuple[FB | FC, ...] = (
     *iec_counters.BLOCKS,
     *iec_timers.BLOCKS,
+    *cont_c.BLOCKS,
+    *cont_s.BLOCKS,
+    *pulsegen.BLOCKS,
     *sfc_clock.BLOCKS,
     *sfc_rtm.BLOCKS,
     *alarms.BLOCKS,

@@ -2,9 +2,9 @@
 runtime"; STEP7 comprehensive guide vol. 2, ch. 12).
 
 ``CATALOGUE`` lists every SFB/SFC s7graph emulates: number, name, kind, and the pins with
-direction and S7 type in the order Siemens documents them. Code reads it — to declare the
-engine interfaces and to let the sequencer's ``CALL`` validate parameters — so a pin is
-named once, here. ``lookup("SFB4")``, ``lookup("SFB 4")`` and ``lookup("TON")`` give the
+direction, S7 type and (an SFB's) default in the order Siemens documents them. Code reads it —
+to declare the engine interfaces and to let the sequencer's ``CALL`` validate parameters — so
+a pin is named once, here. ``lookup("SFB4")``, ``lookup("SFB 4")`` and ``lookup("TON")`` give the
 same entry.
 
 RET_VAL: ``>= 0`` success (BR = 1), ``< 0`` error (bit 15 set, BR = 0). Error words are
@@ -18,7 +18,9 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 from enum import StrEnum
 
+from s7graph.engine.blocks import default_value
 from s7graph.engine.errors import BlockError
+from s7graph.engine.literals import format_literal, parse_literal
 
 # --- RET_VAL -----------------------------------------------------------------------------
 
@@ -81,12 +83,19 @@ class Direction(StrEnum):
 
 @dataclass(frozen=True, slots=True)
 class Pin:
-    """One formal parameter: name, direction and S7 type (``ANY`` for an area pointer)."""
+    """One formal parameter: name, direction and S7 type (``ANY`` for an area pointer), and
+    the initial value of an SFB's instance DB where Siemens gives one other than zero."""
 
     name: str
     direction: Direction
     type: str
     comment: str = ""
+    default: object = None
+
+    @property
+    def initial(self) -> object:
+        """The value the pin has in a new instance DB: its default, else the type's zero."""
+        return default_value(self.type) if self.default is None else self.default
 
     @property
     def is_input(self) -> bool:
@@ -169,13 +178,19 @@ class Entry:
 
 
 def _pins(spec: str) -> tuple[Pin, ...]:
-    """``"IN CU:BOOL R:BOOL; OUT Q:BOOL"`` -> pins (the compact notation of the table below)."""
+    """``"IN CU:BOOL GAIN:REAL=2.0; OUT Q:BOOL"`` -> pins (the compact notation of the table
+    below; ``=literal`` is a default, an S7 literal of the pin's type)."""
     pins: list[Pin] = []
     for section in filter(None, (s.strip() for s in spec.split(";"))):
         direction, *items = section.split()
         for item in items:
-            name, type_ = item.split(":")
-            pins.append(Pin(name, Direction(direction), type_))
+            name, typed = item.split(":", 1)
+            type_, _, literal = typed.partition("=")
+            default = None
+            if literal:
+                kind, default = parse_literal(literal)
+                assert kind == type_, f"{name}: {literal} is not a {type_}"
+            pins.append(Pin(name, Direction(direction), type_, default=default))
     return tuple(pins)
 
 
@@ -210,6 +225,39 @@ CATALOGUE: tuple[Entry, ...] = (
     _e(_SFB, 3, "TP", "IN IN:BOOL PT:TIME; OUT Q:BOOL ET:TIME", "pulse of length PT"),
     _e(_SFB, 4, "TON", "IN IN:BOOL PT:TIME; OUT Q:BOOL ET:TIME", "on delay"),
     _e(_SFB, 5, "TOF", "IN IN:BOOL PT:TIME; OUT Q:BOOL ET:TIME", "off delay"),
+    _e(
+        _SFB,
+        41,
+        "CONT_C",
+        "IN COM_RST:BOOL MAN_ON:BOOL=TRUE PVPER_ON:BOOL P_SEL:BOOL=TRUE I_SEL:BOOL=TRUE"
+        " INT_HOLD:BOOL I_ITL_ON:BOOL D_SEL:BOOL CYCLE:TIME=T#1S SP_INT:REAL PV_IN:REAL"
+        " PV_PER:WORD MAN:REAL GAIN:REAL=2.0 TI:TIME=T#20S TD:TIME=T#10S TM_LAG:TIME=T#2S"
+        " DEADB_W:REAL LMN_HLM:REAL=100.0 LMN_LLM:REAL PV_FAC:REAL=1.0 PV_OFF:REAL"
+        " LMN_FAC:REAL=1.0 LMN_OFF:REAL I_ITLVAL:REAL DISV:REAL;"
+        " OUT LMN:REAL LMN_PER:WORD QLMN_HLM:BOOL QLMN_LLM:BOOL LMN_P:REAL LMN_I:REAL"
+        " LMN_D:REAL PV:REAL ER:REAL",
+        "continuous PID controller: P, I, D parts, dead band, limits, manual mode",
+    ),
+    _e(
+        _SFB,
+        42,
+        "CONT_S",
+        "IN COM_RST:BOOL LMNR_HS:BOOL LMNR_LS:BOOL LMNS_ON:BOOL LMNUP:BOOL LMNDN:BOOL"
+        " PVPER_ON:BOOL CYCLE:TIME=T#1S SP_INT:REAL PV_IN:REAL PV_PER:WORD GAIN:REAL=2.0"
+        " TI:TIME=T#20S DEADB_W:REAL=1.0 PV_FAC:REAL=1.0 PV_OFF:REAL PULSE_TM:TIME=T#3S"
+        " BREAK_TM:TIME=T#3S MTR_TM:TIME=T#30S DISV:REAL;"
+        " OUT QLMNUP:BOOL QLMNDN:BOOL PV:REAL ER:REAL",
+        "PI step controller for an integrating actuator: up/down pulses",
+    ),
+    _e(
+        _SFB,
+        43,
+        "PULSEGEN",
+        "IN INV:REAL PER_TM:TIME=T#1S P_B_TM:TIME=T#50MS RATIOFAC:REAL=1.0 STEP3_ON:BOOL=TRUE"
+        " ST2BI_ON:BOOL MAN_ON:BOOL POS_P_ON:BOOL NEG_P_ON:BOOL SYN_ON:BOOL=TRUE COM_RST:BOOL"
+        " CYCLE:TIME=T#10MS; OUT QPOS_P:BOOL QNEG_P:BOOL",
+        "pulse-width modulation of INV: two-step or three-step pulses",
+    ),
     _e(_SFC, 0, "SET_CLK", "IN PDT:DATE_AND_TIME; OUT RET_VAL:INT", "set the CPU clock"),
     _e(_SFC, 1, "READ_CLK", "OUT RET_VAL:INT CDT:DATE_AND_TIME", "read the CPU clock"),
     _e(
@@ -366,18 +414,34 @@ ANY_AS = "STRING[254]"
 """How an ANY pin is declared to the engine: the pointer text ``P#M0.0 BYTE 10``."""
 
 
-def engine_sections(entry: Entry) -> tuple[dict[str, dict[str, str]], str | None]:
+def engine_sections(
+    entry: Entry,
+) -> tuple[dict[str, dict[str, str | tuple[str, object]]], str | None]:
     """The ``engine.blocks`` sections for ``entry`` and the RET type of an SFC.
 
     RET_VAL becomes the SFC's return value; an ANY pin is passed as pointer text and is
-    therefore an IN for the engine even when it names a destination (DSTBLK, BLK, DR).
+    therefore an IN for the engine even when it names a destination (DSTBLK, BLK, DR). A pin
+    with a default is declared ``(type, default)``: the initial value of a new instance DB.
     """
-    sections: dict[str, dict[str, str]] = {}
+    sections: dict[str, dict[str, str | tuple[str, object]]] = {}
     ret: str | None = None
     for pin in entry.pins:
         if pin.name == "RET_VAL":
             ret = pin.type
             continue
         decl = "IN" if pin.type == "ANY" else pin.direction.value
-        sections.setdefault(decl, {})[pin.name] = ANY_AS if pin.type == "ANY" else pin.type
+        type_ = ANY_AS if pin.type == "ANY" else pin.type
+        spec = type_ if pin.default is None else (type_, pin.default)
+        sections.setdefault(decl, {})[pin.name] = spec
     return sections, ret
+
+
+def pin_table(entry: Entry) -> str:
+    """``entry``'s pins as a Markdown table: pin, direction, S7 type, initial value (the
+    tables of docs/runtime.md, "Process control: CONT_C, CONT_S, PULSEGEN", are these)."""
+    rows = ["| Pin | Direction | Type | Initial |", "| --- | --- | --- | --- |"]
+    for p in entry.pins:
+        rows.append(
+            f"| `{p.name}` | {p.direction} | {p.type} | `{format_literal(p.type, p.initial)}` |"
+        )
+    return "\n".join(rows)

@@ -23,6 +23,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
+from s7graph import sfb
 from s7graph.engine.blocks import DB, FB, FC, OB
 from s7graph.engine.clock import SystemClock
 from s7graph.engine.cpu import Cpu
@@ -77,6 +78,7 @@ def build_cpu(module: ModuleType, clock: Any, *, max_cycle_ms: float | None = No
         options = {**options, "max_cycle_ms": max_cycle_ms}
     try:
         cpu = Cpu(clock, **options)
+        sfb.install(cpu)  # the system blocks belong to the CPU, as on S7: ctx.call("SFB41", 41)
         cpu.load(*blocks)
         setup: Callable[[Cpu], object] | None = getattr(module, "setup", None)
         if setup is not None:
