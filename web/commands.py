@@ -69,12 +69,17 @@ Removed = Literal["keep", "init"]
 REMOVED_CHOICES: tuple[str, ...] = get_args(Removed)
 
 # A name that is safe inside a zenoh key expression and in a scene node path.
-NAME_PATTERN = r"^[A-Za-z_][A-Za-z0-9_.\-]{0,63}$"
+NAME_PATTERN = r"^[A-Za-z_][A-Za-z0-9_.\-]{0,63}\Z"
 Name = Annotated[str, Meta(pattern=NAME_PATTERN)]
-# who and from where (web.access.users.USER_PATTERN; "" = nobody claimed a name)
-UserName = Annotated[str, Meta(pattern=r"^([A-Za-z0-9._-]{1,32})?$")]
-Token = Annotated[str, Meta(pattern=r"^[A-Za-z0-9_-]{0,64}$")]
-Origin = Annotated[str, Meta(pattern=r"^[ -~]{0,160}$")]  # printable ASCII: safe in a log line
+# who and from where (web.access.users.USER_PATTERN; "" = nobody claimed a name). ``\Z``,
+# not ``$``: a ``$`` matches before a final newline, and ``olga\n`` is not ``olga``.
+UserName = Annotated[str, Meta(pattern=r"^([A-Za-z0-9._-]{1,32})?\Z")]
+Token = Annotated[str, Meta(pattern=r"^[A-Za-z0-9_-]{0,64}\Z")]
+Origin = Annotated[str, Meta(pattern=r"^[ -~]{0,160}\Z")]  # printable ASCII: safe in a log line
+# a command's number in its session (1, 2, ...) and its signature, the session key's
+# HMAC-SHA256 in hex (web.access.scram)
+Seq = Annotated[int, Meta(ge=0, le=2**63 - 1)]
+Mac = Annotated[str, Meta(pattern=r"^([0-9a-f]{64})?\Z")]
 Scalar = bool | int | float | str | None
 StepNumber = Annotated[int, Meta(ge=1, le=65535)]
 MsgKey = Annotated[str, Meta(min_length=1, max_length=128)]
@@ -223,7 +228,10 @@ class Command(
 ):
     """An operator command (``cmd`` queryable), applied at a scan boundary: the base of
     every op's struct. ``user`` and ``token`` come from a ``login``; ``origin`` says where
-    the command was given (``page 3 (127.0.0.1)``, ``shell``, ``bus``) for the audit.
+    the command was given (``page 3 (127.0.0.1)``, ``shell``, ``bus``) for the audit;
+    ``seq`` numbers the commands of a session and ``mac`` signs each with the session key
+    (``web.access.scram.Signer``), so a captured command is refused when replayed and a
+    changed one when it arrives (both required with a users file; unset in the demo).
 
     Class attributes of each op: ``role`` the lowest role allowed, ``pin`` the pin it acts
     as (shown in the role table), ``kind`` how (``edge``: a one-call edge of ``pin``;
@@ -249,6 +257,8 @@ class Command(
     user: UserName = ""
     token: Token = ""
     origin: Origin = ""
+    seq: Seq | UnsetType = UNSET  # left out of the JSON when not set: the wire format
+    mac: Mac | UnsetType = UNSET  # of a command without them is the one it always was
     args: Args = NoArgs()
 
     @property
@@ -521,11 +531,18 @@ _MISSING_ARGS = re.compile(r"^Object missing required field `args`$")
 _MISSING = re.compile(r"^Object missing required field `(\w+)` - at `\$\.args`$")
 _UNKNOWN = re.compile(r"^Object contains unknown field `(.+)` - at `\$\.args`$")
 _ENUM = re.compile(r"^Invalid enum value .* - at `\$\.args\.(\w+)`$")
+_USER = re.compile(r"^Expected `str` matching regex .* - at `\$\.user`$", re.S)
 
 
 def explain(op: object, message: str) -> str:
     """A msgspec validation message of a command in the words of the vocabulary (``op
-    'mode' needs argument 'mode'``, ``takes no argument``, ``mode must be one of``)."""
+    'mode' needs argument 'mode'``, ``takes no argument``, ``mode must be one of``, the
+    name rule of ``user``)."""
+    if _USER.match(message):
+        return (
+            "invalid user name: use 1-32 of A-Z a-z 0-9 . _ - (no whitespace around it, "
+            "no control character) - at `$.user`"
+        )
     kind = command_type(op) if isinstance(op, str) else None
     if kind is None:
         return message

@@ -1,19 +1,35 @@
-"""Logins on the CPU side: user + password in, a random expiring token out.
+"""Logins on the CPU side: a SCRAM-SHA-256 exchange in, a token and a session key out.
 
-:class:`Authenticator` answers the bus's ``login``/``logout`` and tells the command gate who
-sent a command (:meth:`Authenticator.identify`). Tokens are 256-bit random strings, kept
-only as their SHA-256 (a dump of this object shows no usable token), valid for ``ttl_s``
-(8 h) until logout; five wrong passwords in a row lock that name out for a minute. The
-users file is read again whenever it changes, so a removed user's tokens stop working and
-a changed role acts at once.
+:class:`Authenticator` answers the bus's ``login`` in two steps — :meth:`~Authenticator.login`
+takes the client-first message and gives a challenge (server-first) under a login id,
+:meth:`~Authenticator.prove` takes the proof and gives the server's signature, a token and
+the role (``web.access.scram``: the password never travels). A login not finished within
+10 s is forgotten, and at most 256 wait at once. A name nobody has gets a challenge like
+any other (the same salt at every try) and fails at the proof: the answers do not tell
+which names exist.
 
-Without a users file (the demo) any valid name logs in without a password as an
-*unverified* engineer: ``alice (unverified)`` in the audit and the alarm log.
+A session is the token (256 random bits, kept only as its SHA-256; valid for ``ttl_s``,
+8 h, until logout) and the session key both ends derived from the exchange. Every
+command of the session carries a ``seq`` and a ``mac`` (``web.access.scram.Signer``):
+:meth:`~Authenticator.verify` refuses one the key did not sign and one whose ``seq`` it
+has seen, or that is 64 or more below the highest seen — numbers may arrive a little out
+of order (a page's buttons, the engineering worker beside the scan boundary), never
+twice. :meth:`~Authenticator.identify` tells who holds a token. Wrong passwords lock the
+*source* that sent them out for that user, with back-off (``web.access.lockout``), never
+the user. The users file is read again whenever it changes, so a removed user's tokens
+stop working and a changed role acts at once.
+
+Without a users file (the demo) any valid name logs in in one step, without a password,
+as an *unverified* engineer: ``alice (unverified)`` in the audit and the alarm log;
+commands are then not signed.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
+import hmac
+import math
 import secrets
 import threading
 import time
@@ -21,25 +37,37 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Final
 
-from s7graph.web.access.users import (
-    RESERVED_NAMES,
-    User,
-    UsersError,
-    UsersFile,
-    valid_user_name,
-    verify_password,
+from s7graph.web.access.lockout import LOCKOUT_S, LONGEST_LOCKOUT_S, MAX_FAILURES, Lockout
+from s7graph.web.access.scram import (
+    LoginError,
+    ServerLogin,
+    Signer,
+    fake_verifier,
+    log_in,
+    sign,
 )
+from s7graph.web.access.users import User, UsersError, UsersFile, name_problem
 
-__all__ = ["DEMO_ROLE", "Authenticator", "Identity", "LoginResult"]
+__all__ = [
+    "DEMO_ROLE",
+    "NOT_SIGNED",
+    "Authenticator",
+    "Identity",
+    "LoginResult",
+    "password_login",
+]
 
 DEMO_ROLE: Final = "engineer"
 TOKEN_TTL_S: Final = 8 * 3600.0
-MAX_FAILURES: Final = 5
-LOCKOUT_S: Final = 60.0
 MAX_TOKEN: Final = 64
+LOGIN_WINDOW_S: Final = 10.0
+MAX_PENDING: Final = 256
+REPLAY_WINDOW: Final = 64
 _MAX_SESSIONS: Final = 4096
-_MAX_TRACKED: Final = 4096
 _WRONG: Final = "wrong user name or password"
+NOT_SIGNED: Final = (
+    "not signed by the session: changed on the way, or a token used without its session key"
+)
 
 
 @dataclass(frozen=True, slots=True)
@@ -58,12 +86,22 @@ class Identity:
 
 @dataclass(frozen=True, slots=True)
 class LoginResult:
+    """One step's answer: logged in (``ok``, a token), a challenge (``login_id`` and the
+    server-first in ``scram``: send the proof), or a refusal and why."""
+
     ok: bool
     reason: str = ""
     token: str = ""
     role: str = ""
     expires_ms: int = 0  # wall clock, ms since the epoch
     verified: bool = True
+    login_id: str = ""
+    scram: str = ""  # server-first (a challenge) or server-final (logged in)
+
+    @property
+    def challenge(self) -> bool:
+        """A first step answered: the client sends its proof under ``login_id``."""
+        return bool(self.login_id) and not self.ok
 
 
 @dataclass(slots=True)
@@ -71,6 +109,32 @@ class _Session:
     user: str
     expires: float  # monotonic
     role: str  # the demo's role; with a users file the file's current role wins
+    key: bytes = b""  # the session key (the demo: none)
+    top: int = 0  # the highest seq accepted
+    seen: int = 0  # bit i: seq top - i was accepted
+
+    def fresh(self, seq: int) -> bool:
+        """Whether ``seq`` is new to this session (then it counts as seen)."""
+        if seq < 1:
+            return False
+        if seq > self.top:
+            shift = seq - self.top
+            self.seen = ((self.seen << shift) | 1) & ((1 << REPLAY_WINDOW) - 1)
+            self.top = seq
+            return True
+        bit = 1 << (self.top - seq)
+        if self.top - seq >= REPLAY_WINDOW or self.seen & bit:
+            return False
+        self.seen |= bit
+        return True
+
+
+@dataclass(slots=True)
+class _Pending:
+    user: str
+    source: str
+    exchange: ServerLogin
+    started: float  # monotonic
 
 
 def _digest(token: str) -> str:
@@ -78,7 +142,7 @@ def _digest(token: str) -> str:
 
 
 class Authenticator:
-    """Logins, tokens and lockouts of one CPU; thread-safe."""
+    """Logins, sessions and lockouts of one CPU; thread-safe."""
 
     def __init__(
         self,
@@ -86,20 +150,25 @@ class Authenticator:
         *,
         ttl_s: float = TOKEN_TTL_S,
         lockout_s: float = LOCKOUT_S,
+        longest_lockout_s: float = LONGEST_LOCKOUT_S,
         max_failures: int = MAX_FAILURES,
         clock: Callable[[], float] = time.monotonic,
         wall: Callable[[], float] = time.time,
     ) -> None:
         self.users_file = users
         self.ttl_s = ttl_s
-        self.lockout_s = lockout_s
-        self.max_failures = max_failures
+        self.lockout = Lockout(
+            max_failures=max_failures,
+            lockout_s=lockout_s,
+            longest_s=longest_lockout_s,
+            clock=clock,
+        )
         self._clock = clock
         self._wall = wall
         self._lock = threading.Lock()
+        self._secret = secrets.token_bytes(32)  # the unknown names' fake salts
         self._sessions: dict[str, _Session] = {}
-        self._failures: dict[str, int] = {}
-        self._locked_until: dict[str, float] = {}
+        self._pending: dict[str, _Pending] = {}
         self._users: dict[str, User] = {}
         self._mtime: int | None = -1
         if users is not None:
@@ -122,55 +191,98 @@ class Authenticator:
             return
         self._mtime = mtime
 
+    def _user(self, name: str) -> User | None:
+        with self._lock:
+            self._reload()
+            return self._users.get(name)
+
     # ------------------------------------------------------------ login / logout
 
-    def login(self, user: str, password: str = "") -> LoginResult:
-        """A token for ``user`` if the password is right (demo: any valid name)."""
-        if not valid_user_name(user) or user in RESERVED_NAMES:
-            return LoginResult(False, "invalid user name: use 1-32 of A-Z a-z 0-9 . _ -")
+    def login(self, user: str, scram: str = "", *, source: str = "") -> LoginResult:
+        """The first step from ``source``: ``scram`` is the client-first message; the
+        answer a challenge (or a refusal). Demo: the token at once, ``scram`` unused."""
+        refused = self._refused(user, source)
+        if refused is not None:
+            return refused
+        if self.users_file is None:
+            return self._open(user, DEMO_ROLE, b"", verified=False)
+        known = self._user(user)
+        if not scram:
+            return LoginResult(False, "this CPU checks passwords: log in with a password")
+        if known is not None and known.legacy:
+            return LoginResult(
+                False,
+                f"the password of {user} is stored in the old form (scrypt), which cannot "
+                f"log in without sending it: set it again with s7graph users passwd {user}",
+            )
+        verifier = known.verifier if known is not None else None
+        exchange = ServerLogin(user, verifier or fake_verifier(self._secret, user))
+        try:
+            server_first = exchange.first(scram)
+        except LoginError as exc:
+            return LoginResult(False, str(exc))
+        login_id = secrets.token_urlsafe(16)
         now = self._clock()
         with self._lock:
-            until = self._locked_until.get(user, 0.0)
-            if until > now:
-                return LoginResult(False, f"{user} is locked out for {until - now:.0f} s more")
-            if user in self._locked_until:
-                del self._locked_until[user]
-                self._failures.pop(user, None)
-            if self.users_file is not None:
-                self._reload()
-                known = self._users.get(user)
-                stored = known.password if known is not None else None
-            else:
-                known, stored = None, None
-        if self.users_file is not None:
-            # scrypt outside the lock (it releases the GIL): other logins are not held up
-            ok = verify_password(password, stored) if stored else _burn(password)
-            if not ok or known is None:
-                return self._failed(user)
-            role, verified = known.role, True
-        else:
-            role, verified = DEMO_ROLE, False
-        token = secrets.token_urlsafe(32)
+            self._forget_pending(now)
+            self._pending[login_id] = _Pending(user, source, exchange, now)
+        return LoginResult(False, login_id=login_id, scram=server_first)
+
+    def prove(self, login_id: str, user: str, scram: str, *, source: str = "") -> LoginResult:
+        """The second step from ``source``: ``scram`` is the client-final message (the
+        proof) of the login ``login_id``; the answer a token and the server-final message,
+        or a refusal (a wrong proof counts against ``source``)."""
         with self._lock:
-            self._failures.pop(user, None)
+            self._forget_pending(self._clock())
+            pending = self._pending.pop(login_id, None)
+        if pending is None or (pending.user, pending.source) != (user, source):
+            return LoginResult(False, "no such login (unfinished after 10 s?): log in again")
+        refused = self._refused(user, source)
+        if refused is not None:
+            return refused
+        try:
+            server_final, key = pending.exchange.final(scram)
+        except LoginError:
+            return self._failed(user, source)
+        known = self._user(user)
+        if known is None or known.legacy:  # a fake challenge, or removed meanwhile
+            return self._failed(user, source)
+        self.lockout.succeeded(user, source)
+        return dataclasses.replace(self._open(user, known.role, key), scram=server_final)
+
+    def _refused(self, user: str, source: str) -> LoginResult | None:
+        """Why ``user`` may not try from ``source`` now (None: they may)."""
+        problem = name_problem(user)
+        if problem:
+            return LoginResult(False, problem)
+        left = self.lockout.locked_for(user, source)
+        if left > 0:
+            return LoginResult(False, f"{user} is locked out for {math.ceil(left)} s more here")
+        return None
+
+    def _open(self, user: str, role: str, key: bytes, *, verified: bool = True) -> LoginResult:
+        token = secrets.token_urlsafe(32)
+        now = self._clock()
+        with self._lock:
             self._evict(now)
-            self._sessions[_digest(token)] = _Session(user, now + self.ttl_s, role)
+            self._sessions[_digest(token)] = _Session(user, now + self.ttl_s, role, key)
         expires_ms = int((self._wall() + self.ttl_s) * 1000)
         return LoginResult(True, "", token, role, expires_ms, verified)
 
-    def _failed(self, user: str) -> LoginResult:
-        with self._lock:
-            if len(self._failures) > _MAX_TRACKED:
-                self._failures.clear()
-            count = self._failures.get(user, 0) + 1
-            self._failures[user] = count
-            if count >= self.max_failures:
-                self._locked_until[user] = self._clock() + self.lockout_s
-                return LoginResult(
-                    False,
-                    f"{_WRONG}; {count} failures: {user} is locked out for {self.lockout_s:.0f} s",
-                )
+    def _failed(self, user: str, source: str) -> LoginResult:
+        length = self.lockout.failed(user, source)
+        if length:
+            return LoginResult(False, f"{_WRONG}; {user} is locked out for {length:.0f} s here")
         return LoginResult(False, _WRONG)
+
+    def _forget_pending(self, now: float) -> None:
+        """Drop logins older than 10 s, and the oldest beyond 256 (under the lock)."""
+        pending = self._pending
+        while pending:
+            oldest = next(iter(pending))
+            if pending[oldest].started > now - LOGIN_WINDOW_S and len(pending) < MAX_PENDING:
+                break
+            del pending[oldest]
 
     def logout(self, token: str) -> bool:
         """Revoke ``token``; whether it was a live one."""
@@ -188,7 +300,7 @@ class Authenticator:
     # ------------------------------------------------------------ commands
 
     def identify(self, user: str, token: str) -> Identity | str:
-        """Who sent a command with ``user`` and ``token``, or why it is refused."""
+        """Who holds ``token`` (it must be ``user``'s), or why it is refused."""
         if not token:
             return "not logged in: log in first (no token)"
         if len(token) > MAX_TOKEN or not token.isascii():
@@ -212,8 +324,40 @@ class Authenticator:
                 return f"user {user} no longer exists"
             return Identity(user, known.role)
 
+    def verify(self, token: str, mac: str, message: bytes, *, seq: int | None = None) -> str:
+        """Why a message of ``token``'s session is refused ("": it is not): ``mac`` must be
+        the session key's HMAC of ``message`` and ``seq`` (if given) new to the session —
+        then it counts as seen. Demo: nothing is signed, nothing refused here."""
+        if self.users_file is None:
+            return ""
+        with self._lock:
+            session = self._sessions.get(_digest(token)) if token.isascii() else None
+            if session is None:
+                return "invalid token: log in again"
+            good = bool(session.key) and mac.isascii() and len(mac) == 64
+            if not good or not hmac.compare_digest(sign(session.key, message), mac):
+                return NOT_SIGNED
+            if seq is not None and not session.fresh(seq):
+                return f"replayed or out of order: seq {seq}"
+        return ""
 
-def _burn(password: str) -> bool:
-    """As long as checking a real password, so an unknown name answers no faster."""
-    verify_password(password, "scrypt$16384$8$1$AAAAAAAAAAAAAAAAAAAAAA==$" + "A" * 43 + "=")
-    return False
+
+def password_login(
+    auth: Authenticator, user: str, password: str = "", *, source: str = ""
+) -> tuple[LoginResult, Signer | None]:
+    """Log ``user`` in at ``auth`` in this process, as a client would over the bus (the
+    whole SCRAM exchange: for tests and tools beside the CPU); the answer and, once
+    logged in, the session's signer."""
+
+    def ask(scram: str, login_id: str) -> LoginResult:
+        if login_id:
+            return auth.prove(login_id, user, scram, source=source)
+        return auth.login(user, scram, source=source)
+
+    problem = name_problem(user)
+    if problem:
+        return LoginResult(False, problem), None
+    answer, signer = log_in(user, password, ask)
+    if isinstance(answer, str):
+        return LoginResult(False, answer), None
+    return answer, signer

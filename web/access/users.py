@@ -1,21 +1,24 @@
-"""The users file: names, roles and salted scrypt password hashes, JSON, mode 0600.
+"""The users file: names, roles and SCRAM-SHA-256 verifiers, JSON, mode 0600.
 
-``{"version": 1, "users": {"alice": {"role": "operator", "password": "scrypt$…"}}}``, the
-hash as ``scrypt$n$r$p$<salt>$<hash>`` (base64).
+``{"version": 2, "users": {"alice": {"role": "operator", "password":
+"SCRAM-SHA-256$100000:<salt>$<StoredKey>:<ServerKey>"}}}`` — the verifier in PostgreSQL's
+form (``web.access.scram``): enough to check a login and to prove the CPU to the client,
+never enough to log in. A version-1 file (salted scrypt hashes, ``scrypt$n$r$p$salt$hash``)
+still loads, unchanged: its users keep their roles but cannot log in — a scrypt check
+needs the password on the wire — until ``s7graph users passwd NAME`` sets the password
+again (in the new form; the file is then version 2).
 
 A name is 1-32 of ``A-Z a-z 0-9 . _ -`` (safe in a log line, a key expression and a
-page); the name ``program`` is reserved for the FB's own acknowledgement pins. The file is
-written atomically (a temporary file in the same folder, renamed) with mode 0600 and
-refused when others may read it, as ssh refuses a readable key. Passwords are hashed with
-``hashlib.scrypt`` (n=2^14, r=8, p=1, 16-byte salt) and compared in constant time.
+page), the whole string: no whitespace around it, no control character in it (a name
+``olga\\n`` is refused, not read as ``olga``). The name ``program`` is reserved for the
+FB's own acknowledgement pins. The file is written atomically (a temporary file in the
+same folder, renamed) with mode 0600 and refused when others may read it, as ssh refuses a
+readable key.
 """
 
 from __future__ import annotations
 
-import base64
 import contextlib
-import hashlib
-import hmac
 import json
 import os
 import re
@@ -26,8 +29,16 @@ from pathlib import Path
 from typing import Final
 
 from s7graph.web.access.roles import ROLES
+from s7graph.web.access.scram import (
+    DEFAULT_ITERATIONS,
+    LoginError,
+    Verifier,
+    make_verifier,
+    password_matches,
+)
 
 __all__ = [
+    "LEGACY_PREFIX",
     "RESERVED_NAMES",
     "USER_PATTERN",
     "User",
@@ -35,17 +46,20 @@ __all__ = [
     "UsersFile",
     "check_name",
     "hash_password",
+    "name_problem",
     "valid_user_name",
     "verify_password",
 ]
 
-USER_PATTERN: Final = r"^[A-Za-z0-9._-]{1,32}$"
+USER_PATTERN: Final = r"[A-Za-z0-9._-]{1,32}"  # the whole name (``re.fullmatch``)
 _USER_RE: Final = re.compile(USER_PATTERN)
+NAME_RULE: Final = "use 1-32 of A-Z a-z 0-9 . _ -"
 RESERVED_NAMES: Final = frozenset({"program"})
-_N, _R, _P = 2**14, 8, 1
+LEGACY_PREFIX: Final = "scrypt$"
 MIN_PASSWORD: Final = 8
 MAX_PASSWORD: Final = 1024
-VERSION: Final = 1
+VERSION: Final = 2
+_READS: Final = (1, 2)
 
 
 class UsersError(ValueError):
@@ -53,59 +67,69 @@ class UsersError(ValueError):
 
 
 def valid_user_name(name: object) -> bool:
-    """Whether ``name`` follows the name rule (reserved names included)."""
-    return isinstance(name, str) and bool(_USER_RE.match(name))
+    """Whether ``name`` follows the name rule, as a whole (reserved names included)."""
+    return isinstance(name, str) and _USER_RE.fullmatch(name) is not None
+
+
+def name_problem(name: object) -> str:
+    """Why ``name`` may not be a user's name ("": it may), in one line."""
+    if not isinstance(name, str):
+        return "invalid user name: not text"
+    shown = ascii(name)[:40]
+    if any(not c.isprintable() for c in name):
+        return f"invalid user name {shown}: it holds a control character; {NAME_RULE}"
+    if name != name.strip():
+        return f"invalid user name {shown}: whitespace around it; {NAME_RULE}"
+    if not valid_user_name(name):
+        return f"invalid user name {shown}: {NAME_RULE}"
+    if name in RESERVED_NAMES:
+        return f"the name {name!r} is reserved (the FB's own acknowledgement)"
+    return ""
 
 
 def check_name(name: str) -> str:
     """``name`` if it may be a user's name, else :class:`UsersError` saying why."""
-    if not valid_user_name(name):
-        shown = ascii(name)[:40]
-        raise UsersError(f"invalid user name {shown}: use 1-32 of A-Z a-z 0-9 . _ -")
-    if name in RESERVED_NAMES:
-        raise UsersError(f"the name {name!r} is reserved (the FB's own acknowledgement)")
+    problem = name_problem(name)
+    if problem:
+        raise UsersError(problem)
     return name
 
 
-def _b64(data: bytes) -> str:
-    return base64.b64encode(data).decode()
-
-
-def hash_password(password: str, *, salt: bytes | None = None) -> str:
-    """A salted scrypt hash of ``password`` as ``scrypt$n$r$p$salt$hash``."""
+def hash_password(password: str, *, iterations: int = DEFAULT_ITERATIONS) -> str:
+    """The SCRAM-SHA-256 verifier of ``password`` in PostgreSQL's form (a fresh salt)."""
     if not MIN_PASSWORD <= len(password) <= MAX_PASSWORD:
         raise UsersError(f"a password has {MIN_PASSWORD} to {MAX_PASSWORD} characters")
-    salt = salt or secrets.token_bytes(16)
-    digest = hashlib.scrypt(password.encode(), salt=salt, n=_N, r=_R, p=_P, dklen=32)
-    return f"scrypt${_N}${_R}${_P}${_b64(salt)}${_b64(digest)}"
+    try:
+        return make_verifier(password, iterations=iterations).text
+    except LoginError as exc:
+        raise UsersError(str(exc)) from None
 
 
 def verify_password(password: str, stored: str) -> bool:
-    """Whether ``password`` matches ``stored`` (constant-time; a malformed hash: never)."""
+    """Whether ``password`` gives the verifier ``stored`` (a local check, constant-time;
+    an old scrypt hash or a malformed entry: never)."""
     try:
-        scheme, n, r, p, salt, digest = stored.split("$")
-        if scheme != "scrypt" or len(password) > MAX_PASSWORD:
-            return False
-        want = base64.b64decode(digest, validate=True)
-        got = hashlib.scrypt(
-            password.encode(),
-            salt=base64.b64decode(salt, validate=True),
-            n=int(n),
-            r=int(r),
-            p=int(p),
-            dklen=len(want),
-            maxmem=64 * 1024 * 1024,
-        )
-    except (ValueError, TypeError):
+        verifier = Verifier.parse(stored)
+    except ValueError:
         return False
-    return hmac.compare_digest(got, want)
+    return len(password) <= MAX_PASSWORD and password_matches(password, verifier)
 
 
 @dataclass(frozen=True, slots=True)
 class User:
     name: str
     role: str
-    password: str  # the hash, never the password
+    password: str  # the verifier (or a version-1 scrypt hash), never the password
+
+    @property
+    def legacy(self) -> bool:
+        """A version-1 scrypt hash: this user cannot log in until ``users passwd``."""
+        return self.password.startswith(LEGACY_PREFIX)
+
+    @property
+    def verifier(self) -> Verifier | None:
+        """The SCRAM verifier (None: a legacy hash)."""
+        return None if self.legacy else Verifier.parse(self.password)
 
 
 class UsersFile:
@@ -130,15 +154,9 @@ class UsersFile:
         try:
             data = json.loads(self.path.read_text(encoding="utf-8"))
             raw = data["users"]
-            if data.get("version") != VERSION or not isinstance(raw, dict):
+            if data.get("version") not in _READS or not isinstance(raw, dict):
                 raise ValueError("unknown version")
-            users = {}
-            for name, entry in raw.items():
-                check_name(name)
-                role, password = entry["role"], entry["password"]
-                if role not in ROLES or not isinstance(password, str):
-                    raise ValueError(f"bad entry for {name!r}")
-                users[name] = User(name, role, password)
+            users = {name: _entry(name, entry) for name, entry in raw.items()}
         except UsersError:
             raise
         except (OSError, ValueError, KeyError, TypeError) as exc:
@@ -154,12 +172,15 @@ class UsersFile:
 
     # ------------------------------------------------------------ changing
 
-    def add(self, name: str, role: str, password: str) -> User:
+    def add(
+        self, name: str, role: str, password: str, *, iterations: int = DEFAULT_ITERATIONS
+    ) -> User:
+        """Add ``name`` with ``role``; ``iterations`` of PBKDF2 (fewer only for tests)."""
         users = self.load()
         check_name(name)
         if name in users:
             raise UsersError(f"user {name!r} exists (users passwd changes the password)")
-        user = User(name, _check_role(role), hash_password(password))
+        user = User(name, _check_role(role), hash_password(password, iterations=iterations))
         users[name] = user
         self._save(users)
         return user
@@ -170,12 +191,13 @@ class UsersFile:
             raise UsersError(f"no user {name!r} in {self.path}")
         self._save(users)
 
-    def passwd(self, name: str, password: str) -> None:
+    def passwd(self, name: str, password: str, *, iterations: int = DEFAULT_ITERATIONS) -> None:
+        """Set ``name``'s password (in the SCRAM form, whatever form it had)."""
         users = self.load()
         user = users.get(name)
         if user is None:
             raise UsersError(f"no user {name!r} in {self.path}")
-        users[name] = User(name, user.role, hash_password(password))
+        users[name] = User(name, user.role, hash_password(password, iterations=iterations))
         self._save(users)
 
     def _save(self, users: dict[str, User]) -> None:
@@ -198,6 +220,23 @@ class UsersFile:
             with contextlib.suppress(OSError):
                 os.unlink(tmp)
             raise
+
+
+def _entry(name: str, entry: object) -> User:
+    """One user of the file: a valid name and role, a verifier or a legacy scrypt hash."""
+    check_name(name)
+    if not isinstance(entry, dict):
+        raise ValueError(f"bad entry for {name!r}")
+    role, password = entry["role"], entry["password"]
+    if role not in ROLES or not isinstance(password, str):
+        raise ValueError(f"bad entry for {name!r}")
+    user = User(name, role, password)
+    if not user.legacy:
+        try:
+            Verifier.parse(password)
+        except ValueError as exc:
+            raise ValueError(f"bad password entry for {name!r}: {exc}") from None
+    return user
 
 
 def _check_role(role: str) -> str:

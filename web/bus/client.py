@@ -8,10 +8,12 @@ from __future__ import annotations
 import contextlib
 import threading
 from collections.abc import Callable
-from typing import Any
+from typing import Any, Literal
 
 import zenoh
 
+from s7graph.web.access.scram import Signer, log_in
+from s7graph.web.access.users import name_problem
 from s7graph.web.bus.keys import ROOT, keys
 from s7graph.web.bus.protocol import (
     AlarmHistory,
@@ -37,6 +39,8 @@ __all__ = ["BusClient", "StateFollower", "find_cpus"]
 
 CLIENT_TIMEOUT_S = 5.0
 """How long a :class:`BusClient` waits for an answer."""
+MAX_SESSIONS = 4096
+"""Logins one client keeps the session keys of (a view: one per page logged in)."""
 
 
 class BusClient:
@@ -49,6 +53,8 @@ class BusClient:
         self._session = session
         self._timeout = timeout
         self._subscribers: list[zenoh.Subscriber[Any]] = []
+        self._lock = threading.Lock()
+        self._signers: dict[str, Signer] = {}  # token -> its session's key and seq
 
     def _get_one(
         self, key: str, payload: bytes | None = None, timeout: float | None = None
@@ -144,8 +150,13 @@ class BusClient:
         self._follow_seq(self._keys.forces, ForceList, self.forces, callback)
 
     def send(self, command: Command, *, timeout: float | None = None) -> CommandReply:
-        """Send a command and wait for the CPU's answer; no answer is a refusal too."""
+        """Send a command and wait for the CPU's answer; no answer is a refusal too. A
+        command with the token of a login of this client is numbered and signed with
+        its session key first (unless it carries a ``mac`` already)."""
         wait = timeout or self._timeout
+        signer = self._signer(command.token)
+        if signer is not None and not command.mac:
+            command = signer.sign(command)
         try:
             data = self._get_one(self._keys.cmd, encode(command), wait)
         except zenoh.ZError as exc:
@@ -159,17 +170,42 @@ class BusClient:
             return CommandReply(applied=False, reason=f"unreadable answer: {exc}")
 
     def login(self, user: str, password: str = "", *, origin: str = "") -> LoginReply:
-        """Log in at the CPU (no password needed without a users file); the reply holds the
-        token to put in each :class:`Command`. No answer is a refusal too."""
-        try:
-            request = LoginRequest(op="login", user=user, password=password, origin=origin)
-        except (TypeError, ValueError) as exc:
-            return LoginReply(ok=False, reason=str(exc))
-        return self._ask_login(request)
+        """Log in at the CPU (no password needed without a users file) by SCRAM-SHA-256:
+        the password never leaves this process, and the CPU must prove it holds the user's
+        verifier. The reply holds the token to put in each :class:`Command`; this client
+        keeps the session key and signs those commands in :meth:`send`. No answer is a
+        refusal too."""
+        problem = name_problem(user)
+        if problem:
+            return LoginReply(ok=False, reason=problem)
+
+        def ask(scram: str, login_id: str) -> LoginReply:
+            op: Literal["login", "proof"] = "proof" if login_id else "login"
+            return self._ask_login(
+                LoginRequest(op=op, user=user, scram=scram, login_id=login_id, origin=origin)
+            )
+
+        answer, signer = log_in(user, password, ask)
+        if isinstance(answer, str):
+            return LoginReply(ok=False, reason=answer)
+        if signer is not None:
+            with self._lock:
+                while len(self._signers) >= MAX_SESSIONS:  # the oldest go first
+                    del self._signers[next(iter(self._signers))]
+                self._signers[signer.token] = signer
+        return answer
 
     def logout(self, token: str, *, user: str = "", origin: str = "") -> LoginReply:
-        """Revoke ``token`` at the CPU."""
-        return self._ask_login(LoginRequest(op="logout", user=user, token=token, origin=origin))
+        """Revoke ``token`` at the CPU (signed with its session key) and forget its key."""
+        with self._lock:
+            signer = self._signers.pop(token, None)
+        mac = signer.logout_mac() if signer is not None else ""
+        request = LoginRequest(op="logout", user=user, token=token, mac=mac, origin=origin)
+        return self._ask_login(request)
+
+    def _signer(self, token: str) -> Signer | None:
+        with self._lock:
+            return self._signers.get(token) if token else None
 
     def _ask_login(self, request: LoginRequest) -> LoginReply:
         try:

@@ -5,8 +5,10 @@ and for every command drained at the scan boundary establishes who sent it (user
 token), checks the role table (``web.access.roles``), hands allowed commands to the FB's
 ``apply`` as that user — ``alice``, or ``alice (unverified)`` without a users file — with
 the token stripped, and writes one audit row per command, applied or refused, with its
-origin. Rows also go to ``on_audit`` (the bus publishes them on ``audit``).
-Tokens and passwords reach neither ``apply`` nor the audit nor any log.
+origin. With a users file a command must be signed by its session and new to it
+(``seq``): a changed or replayed one is refused, and audited. Rows also go to ``on_audit``
+(the bus publishes them on ``audit``). Tokens, passwords, proofs and session keys reach
+neither ``apply`` nor the audit nor any log.
 """
 
 from __future__ import annotations
@@ -17,10 +19,12 @@ from pathlib import Path
 from typing import TYPE_CHECKING, TypeAlias
 
 import msgspec
+from msgspec import UNSET
 
 from s7graph.web.access.audit import AuditRecord, AuditStore, Facts
-from s7graph.web.access.login import Authenticator, Identity
+from s7graph.web.access.login import NOT_SIGNED, Authenticator, Identity
 from s7graph.web.access.roles import NOT_AVAILABLE, allowed, lowest_role
+from s7graph.web.access.scram import command_bytes, logout_bytes
 from s7graph.web.access.users import UsersError, UsersFile
 from s7graph.web.bus.protocol import (
     AlarmEvent,
@@ -94,20 +98,31 @@ class Gate:
 
     # ------------------------------------------------------------ login
 
-    def login(self, request: LoginRequest) -> LoginReply:
-        """Answer a login or logout (runs on a worker thread: scrypt takes a while)."""
+    def login(self, request: LoginRequest, source: str = "") -> LoginReply:
+        """Answer one step of a login, or a logout, from ``source`` (where the bus says it
+        came from: failed logins lock that source out, not the user). One audit row per
+        login — refused or done — and per logout; none for a challenge."""
         if request.op == "logout":
-            known = self.auth.logout(request.token)
-            why = "" if known else "no such session"
-            who = request.user or "?"
-            self.record(Facts(who, "", request.origin, "logout", "", {}, known, why))
-            return LoginReply(ok=known, reason="" if known else "no such session")
-        result = self.auth.login(request.user, request.password)
-        shown = request.user if result.ok or len(request.user) <= 32 else request.user[:32]
-        label = Identity(shown, result.role, result.verified).label if result.ok else shown
+            return self._logout(request)
+        if request.op == "proof":
+            result = self.auth.prove(request.login_id, request.user, request.scram, source=source)
+        else:
+            result = self.auth.login(request.user, request.scram, source=source)
+        if result.challenge:
+            return LoginReply(
+                ok=False, user=request.user, login_id=result.login_id, scram=result.scram
+            )
+        label = Identity(request.user, result.role, result.verified).label if result.ok else ""
         self.record(
             Facts(
-                label or "?", result.role, request.origin, "login", "", {}, result.ok, result.reason
+                label or request.user or "?",
+                result.role,
+                request.origin,
+                "login",
+                "",
+                {},
+                result.ok,
+                result.reason,
             )
         )
         if not result.ok:
@@ -119,16 +134,31 @@ class Gate:
             token=result.token,
             expires_ms=result.expires_ms,
             verified=result.verified,
+            scram=result.scram,
         )
+
+    def _logout(self, request: LoginRequest) -> LoginReply:
+        """Revoke a token: with a users file only when its session key signed the logout
+        (a listener who saw the token cannot end the session)."""
+        why = self.auth.verify(request.token, request.mac, logout_bytes(request.token))
+        known = why != NOT_SIGNED and self.auth.logout(request.token)
+        why = why if why == NOT_SIGNED else "" if known else "no such session"
+        self.record(Facts(request.user or "?", "", request.origin, "logout", "", {}, known, why))
+        return LoginReply(ok=known, reason=why)
 
     # ------------------------------------------------------------ commands
 
     def check(self, command: Command) -> tuple[Identity | None, str]:
         """Who sent ``command`` (None: nobody we know) and why it may not be applied ("":
-        it may)."""
+        it may). With a users file the session key must have signed it and its ``seq``
+        must be new (it then counts as seen: a command is checked once)."""
         who = self.auth.identify(command.user, command.token)
         if isinstance(who, str):
             return None, who
+        signed = command_bytes(command)
+        problem = self.auth.verify(command.token, command.mac or "", signed, seq=command.seq or 0)
+        if problem:
+            return None, problem
         if not allowed(who.role, command.op):
             need = lowest_role(command.op) or "?"
             return who, f"role {who.role} may not {command.op} (needs {need})"
@@ -146,7 +176,7 @@ class Gate:
             name, role = (who.label, who.role) if who is not None else (command.user or "?", "")
             self.record(_facts(command, name, role, False, refusal))
             return False, refusal
-        as_user = msgspec.structs.replace(command, user=who.label, token="")
+        as_user = msgspec.structs.replace(command, user=who.label, token="", mac=UNSET)
         try:
             result = apply(as_user)
             applied, reason = result[0], result[1]
@@ -159,11 +189,20 @@ class Gate:
         return applied, reason
 
     def refuse(self, command: Command | None, reason: str, origin: str = "") -> None:
-        """Audit a command refused before the scan boundary (unreadable, unknown FB, ...)."""
+        """Audit a command refused before the scan boundary (unreadable, unknown FB, ...).
+        A signed one's ``seq`` counts as seen: replayed later, it stays refused."""
         if command is None:
             self.record(Facts("?", "", origin, "?", "", {}, False, reason))
         else:
+            self.consume(command)
             self.record(_facts(command, command.user or "?", "", False, reason))
+
+    def consume(self, command: Command) -> None:
+        """Count a signed command's ``seq`` as seen though it is refused before its check
+        (queue full, expired, busy): sent again later, it is refused as replayed."""
+        if command.mac:
+            signed = command_bytes(command)
+            self.auth.verify(command.token, command.mac, signed, seq=command.seq or 0)
 
     # ------------------------------------------------------------ audit
 

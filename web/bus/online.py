@@ -200,6 +200,7 @@ class OnlineChange:
                 self._waiting += 1
         if busy:
             reason = "the CPU is busy with other engineering commands; retry"
+            self.gate.consume(pending.command)  # never applied later, if sent again
             self._finish(pending, None, "", CommandReply(applied=False, reason=reason))
             return
         try:

@@ -24,6 +24,7 @@ from s7graph.web.commands import (
     REMOVED_CHOICES,
     AnyCommand,
     Command,
+    Mac,
     Mode,
     MsgId,
     MsgKey,
@@ -452,20 +453,32 @@ class CommandReply(_Msg, frozen=True, kw_only=True):
 # ---------------------------------------------------------------- login, audit, history
 
 
-class LoginRequest(_Msg, frozen=True, kw_only=True):
-    """``login`` queryable: ``login`` with user and password (none without a users file),
-    or ``logout`` with the token to revoke."""
+# A SCRAM message (RFC 5802): printable ASCII without spaces, bounded; a login's id.
+ScramMessage = Annotated[str, Meta(pattern=r"^[!-~]{0,512}\Z")]
+LoginId = Annotated[str, Meta(pattern=r"^[A-Za-z0-9_-]{0,32}\Z")]
 
-    op: Literal["login", "logout"]
+
+class LoginRequest(_Msg, frozen=True, kw_only=True):
+    """``login`` queryable, a SCRAM-SHA-256 exchange (no password on the wire): ``login``
+    with the user and the client-first message in ``scram`` (nothing more without a users
+    file), then ``proof`` with the ``login_id`` answered and the client-final message; or
+    ``logout`` with the token to revoke, signed (``mac``) with the session key."""
+
+    op: Literal["login", "proof", "logout"]
     user: UserName = ""
-    password: Annotated[str, Meta(max_length=1024)] = ""
+    scram: ScramMessage = ""
+    login_id: LoginId = ""
     token: Token = ""
+    mac: Mac = ""
     origin: Origin = ""
 
 
 class LoginReply(_Msg, frozen=True, kw_only=True):
-    """The answer to a login: a token valid until ``expires_ms`` (wall clock), the role,
-    ``verified`` False for a name claimed without a users file; or a refusal and why."""
+    """The answer to one step. A challenge: ``ok`` false, a ``login_id`` and the
+    server-first message in ``scram`` (send the proof). Logged in: a token valid until
+    ``expires_ms`` (wall clock), the role, the server-final message in ``scram`` (the
+    client checks the CPU's signature), ``verified`` False for a name claimed without a
+    users file. Or a refusal and why."""
 
     ok: bool
     reason: Text = ""
@@ -474,6 +487,8 @@ class LoginReply(_Msg, frozen=True, kw_only=True):
     token: Token = ""
     expires_ms: Count = 0
     verified: bool = True
+    login_id: LoginId = ""
+    scram: ScramMessage = ""
 
 
 class AuditEntry(_Msg, frozen=True, kw_only=True):
@@ -539,7 +554,7 @@ def decode(data: bytes | bytearray | memoryview | str, kind: type[T]) -> T:
     try:
         return decoder.decode(data)  # type: ignore[no-any-return]
     except msgspec.ValidationError as exc:
-        reason = explain(_op_of(data), str(exc)) if kind is Command else str(exc)
+        reason = explain(_op_of(data) if kind is Command else None, str(exc))
         raise ProtocolError(f"invalid {kind.__name__}: {_one_line(reason)}") from None
     except msgspec.DecodeError as exc:
         raise ProtocolError(f"malformed JSON: {exc}") from None

@@ -485,7 +485,7 @@ class BusPublisher:
 
     def _on_login(self, query: zenoh.Query) -> None:
         # Runs on a zenoh thread: only the exact key (never a wildcard), decode, and hand
-        # the password check (scrypt, tens of ms) to the login worker, which replies.
+        # the step (a users file read, the SCRAM exchange) to the login worker, which replies.
         if str(query.key_expr) != self._keys.login:
             return
         try:
@@ -503,7 +503,9 @@ class BusPublisher:
 
     def _login(self, request: LoginRequest, query: zenoh.Query) -> None:
         try:
-            reply = self.gate.login(request)
+            # the source failed logins are counted against: the origin the client gives,
+            # the best this transport tells (its queries carry no peer identity)
+            reply = self.gate.login(request, source=request.origin)
         except Exception as exc:
             reply = LoginReply(ok=False, reason=f"login failed: {type(exc).__name__}")
         _reply(query, reply)

@@ -743,7 +743,7 @@ def users_remove(name: str, file: UsersFileArg = Path("users.json")) -> None:
 def users_passwd(
     name: str, file: UsersFileArg = Path("users.json"), password_stdin: PasswordStdin = False
 ) -> None:
-    """Change a user's password."""
+    """Change a user's password (and move an old scrypt entry to SCRAM-SHA-256)."""
     from s7graph.web.cli import users as cmd
 
     raise typer.Exit(cmd.users_passwd(file, name, password_stdin=password_stdin))

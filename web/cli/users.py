@@ -45,7 +45,8 @@ def users_list(path: Path) -> int:
     except UsersError as exc:
         return _fail(str(exc))
     for user in sorted(users.values(), key=lambda u: u.name):
-        print(f"{user.name}\t{user.role}")
+        old = f"\tcannot log in: s7graph users passwd {user.name}" if user.legacy else ""
+        print(f"{user.name}\t{user.role}{old}")
     return 0
 
 

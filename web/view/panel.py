@@ -2,12 +2,14 @@
 
 Every page is a session of its own (viser's per-client GUI, ``client.gui``): its ``User``
 and ``Password`` fields, ``Log in`` / ``Log out``, and the token the CPU gave it are never
-seen by another page. Until it logs in a page is a viewer: every command button is
-disabled (and the CPU refuses commands without a valid token anyway); after login the
-buttons its role allows (``web.access.roles``) are enabled, and a page whose role may
-``force`` gets a Force folder (address, value, Force / Unforce / Unforce all, the active
-jobs). The current mode is highlighted on its button. Command verdicts come back as
-notifications on this page only.
+seen by another page. The password goes from the page to this view process only, which
+logs in at the CPU by SCRAM-SHA-256 and signs the page's commands with the session key
+(``web.bus.client.BusClient``); the CPU never sees it. Until it logs in a page is a
+viewer: every command button is disabled (and the CPU refuses commands without a valid
+token anyway); after login the buttons its role allows (``web.access.roles``) are
+enabled, and a page whose role may ``force`` gets a Force folder (address, value, Force /
+Unforce / Unforce all, the active jobs). The current mode is highlighted on its button.
+Command verdicts come back as notifications on this page only.
 """
 
 from __future__ import annotations
@@ -308,7 +310,7 @@ class ClientPanel:
     # ------------------------------------------------------------ login
 
     def _log_in(self) -> None:
-        user = str(self.user_field.value).strip()
+        user = str(self.user_field.value)  # as typed: "olga " is refused, not trimmed
         password = str(self.password.value)
         self.password.value = ""  # type: ignore[misc]  # never left on the page
         reply = self.wiring.login(user, password, self.origin)

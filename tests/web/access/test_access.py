@@ -1,6 +1,6 @@
-"""Users, roles and logins without a network: the users file (scrypt, 0600, the name
-rule), the one role table (and that docs/security.md and docs/bus.md show it as it is), tokens,
-expiry, logout and the lockout after five wrong passwords."""
+"""Users, roles and logins without a network: the users file (SCRAM verifiers, 0600, the
+name rule), the one role table (and that docs/security.md and docs/bus.md show it as it is),
+tokens, expiry, logout and the lockout after five wrong passwords."""
 
 from __future__ import annotations
 
@@ -14,8 +14,9 @@ from pathlib import Path
 import pytest
 
 from s7graph.web.access.audit import AuditStore, Facts, read_audit
-from s7graph.web.access.login import Authenticator
+from s7graph.web.access.login import Authenticator, LoginResult, password_login
 from s7graph.web.access.roles import COMMANDS, ROLES, allowed, ops_of, role_table_markdown
+from s7graph.web.access.scram import MIN_ITERATIONS
 from s7graph.web.access.users import UsersError, UsersFile, check_name, verify_password
 from s7graph.web.bus.protocol import OPS
 from tests.paths import ROOT
@@ -35,17 +36,18 @@ class Clock:
 @pytest.fixture
 def users(tmp_path: Path) -> UsersFile:
     f = UsersFile(tmp_path / "users.json")
-    f.add("olga", "operator", PASSWORD)
-    f.add("vic", "viewer", PASSWORD)
-    f.add("eng", "engineer", PASSWORD)
+    f.add("olga", "operator", PASSWORD, iterations=MIN_ITERATIONS)
+    f.add("vic", "viewer", PASSWORD, iterations=MIN_ITERATIONS)
+    f.add("eng", "engineer", PASSWORD, iterations=MIN_ITERATIONS)
     return f
 
 
-def test_users_file_holds_salted_scrypt_hashes_with_mode_0600(users: UsersFile) -> None:
+def test_users_file_holds_salted_scram_verifiers_with_mode_0600(users: UsersFile) -> None:
     assert stat.S_IMODE(users.path.stat().st_mode) == 0o600
     data = json.loads(users.path.read_text())
     olga = data["users"]["olga"]
-    assert olga["role"] == "operator" and olga["password"].startswith("scrypt$16384$8$1$")
+    assert olga["role"] == "operator" and olga["password"].startswith("SCRAM-SHA-256$4096:")
+    assert data["version"] == 2
     assert PASSWORD not in users.path.read_text()
     assert olga["password"] != data["users"]["vic"]["password"]  # salted
     assert verify_password(PASSWORD, olga["password"])
@@ -91,7 +93,7 @@ def test_login_gives_a_token_that_identifies_its_user_until_logout_or_expiry(
 ) -> None:
     clock = Clock()
     auth = Authenticator(users, clock=clock, ttl_s=60)
-    result = auth.login("olga", PASSWORD)
+    result, _ = password_login(auth, "olga", PASSWORD)
     assert result.ok and result.role == "operator" and len(result.token) >= 40
     who = auth.identify("olga", result.token)
     assert not isinstance(who, str) and (who.label, who.role) == ("olga", "operator")
@@ -101,28 +103,32 @@ def test_login_gives_a_token_that_identifies_its_user_until_logout_or_expiry(
     assert result.token not in repr(vars(auth))  # only digests are kept
     clock.t += 61
     assert auth.identify("olga", result.token) == "token expired: log in again"
-    again = auth.login("olga", PASSWORD)
+    again, _ = password_login(auth, "olga", PASSWORD)
     assert auth.logout(again.token) and auth.identify("olga", again.token) != "ok"
     assert isinstance(auth.identify("olga", again.token), str)
 
 
-def test_five_wrong_passwords_lock_the_user_out_for_a_minute(users: UsersFile) -> None:
+def test_five_wrong_passwords_lock_that_source_out_for_a_minute(users: UsersFile) -> None:
     clock = Clock()
     auth = Authenticator(users, clock=clock)
+
+    def login(user: str, password: str) -> LoginResult:
+        return password_login(auth, user, password)[0]
+
     for _ in range(4):
-        assert auth.login("olga", "wrong!!!").reason == "wrong user name or password"
-    fifth = auth.login("olga", "wrong!!!")
+        assert login("olga", "wrong!!!").reason == "wrong user name or password"
+    fifth = login("olga", "wrong!!!")
     assert not fifth.ok and "locked out for 60 s" in fifth.reason
-    locked = auth.login("olga", PASSWORD)  # even the right password
+    locked = login("olga", PASSWORD)  # even the right password
     assert not locked.ok and "locked out" in locked.reason
-    assert auth.login("eng", PASSWORD).ok  # only that user
+    assert login("eng", PASSWORD).ok  # only that user
     clock.t += 61
-    assert auth.login("olga", PASSWORD).ok
+    assert login("olga", PASSWORD).ok
 
 
 def test_a_removed_user_or_changed_role_acts_at_once(users: UsersFile) -> None:
     auth = Authenticator(users)
-    token = auth.login("olga", PASSWORD).token
+    token = password_login(auth, "olga", PASSWORD)[0].token
     data = json.loads(users.path.read_text())
     data["users"]["olga"]["role"] = "viewer"
     users._save(
