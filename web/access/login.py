@@ -122,6 +122,11 @@ class Authenticator:
             return
         self._mtime = mtime
 
+    def knows(self, user: str) -> bool:
+        """Whether ``user`` is a user of the users file (as last read)."""
+        with self._lock:
+            return user in self._users
+
     # ------------------------------------------------------------ login / logout
 
     def login(self, user: str, password: str = "") -> LoginResult:
