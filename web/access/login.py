@@ -9,12 +9,19 @@ a changed role acts at once.
 
 Without a users file (the demo) any valid name logs in without a password as an
 *unverified* engineer: ``alice (unverified)`` in the audit and the alarm log.
+
+A users file that others may read (group or world bits, as ``UsersFile.load`` refuses at
+start) is noticed at the next login or command, ``chmod`` included — the mode is checked
+with every look at the mtime, and a chmod changes no mtime: logins are refused (``users
+file is readable by others: chmod 600 FILE``) until it is fixed, sessions already open go
+on, and ``on_users_file`` is called once when it happens and once when it is fixed.
 """
 
 from __future__ import annotations
 
 import hashlib
 import secrets
+import stat
 import threading
 import time
 from collections.abc import Callable
@@ -80,6 +87,13 @@ def _digest(token: str) -> str:
 class Authenticator:
     """Logins, tokens and lockouts of one CPU; thread-safe."""
 
+    exposed: str = ""
+    """Why logins are refused while the users file is readable by others ("": it is not)."""
+    on_users_file: Callable[[bool, str], None] | None = None
+    """Called (exposed, text) when the users file becomes readable by others and when it
+    is fixed; under the authenticator's lock: it must not block (``web.bus.gate``'s
+    queues a diagnostic buffer entry)."""
+
     def __init__(
         self,
         users: UsersFile | None,
@@ -113,7 +127,7 @@ class Authenticator:
     def _reload(self) -> None:
         """Read the users file again if it changed (a broken file keeps the last good one)."""
         assert self.users_file is not None
-        mtime = self.users_file.mtime_ns()
+        mtime = self._look()
         if mtime == self._mtime:
             return
         try:
@@ -121,6 +135,23 @@ class Authenticator:
         except UsersError:
             return
         self._mtime = mtime
+
+    def _look(self) -> int | None:
+        """The users file's mtime (None: no file), noting a change of whether others may
+        read it (one stat for both)."""
+        assert self.users_file is not None
+        path = self.users_file.path
+        try:
+            info = path.stat()
+        except FileNotFoundError:
+            info = None
+        exposed = info is not None and bool(info.st_mode & (stat.S_IRWXG | stat.S_IRWXO))
+        if exposed != bool(self.exposed):
+            self.exposed = f"users file is readable by others: chmod 600 {path}" if exposed else ""
+            if self.on_users_file is not None:
+                fixed = f"users file {path} is no longer readable by others: logins taken again"
+                self.on_users_file(exposed, self.exposed or fixed)
+        return info.st_mtime_ns if info is not None else None
 
     def knows(self, user: str) -> bool:
         """Whether ``user`` is a user of the users file (as last read)."""
@@ -143,6 +174,8 @@ class Authenticator:
                 self._failures.pop(user, None)
             if self.users_file is not None:
                 self._reload()
+                if self.exposed:
+                    return LoginResult(False, self.exposed)
                 known = self._users.get(user)
                 stored = known.password if known is not None else None
             else:

@@ -43,6 +43,7 @@ from s7graph.web.bus.protocol import (
 )
 
 if TYPE_CHECKING:
+    from s7graph.engine.cpu import Cpu
     from s7graph.engine.persistence import StateStore
 
 __all__ = ["Apply", "Gate", "audit_entry", "cpu_gate"]
@@ -270,14 +271,36 @@ class Gate:
         )
 
 
-def cpu_gate(users: Path | None, state: StateStore) -> Gate:
+def cpu_gate(users: Path | None, state: StateStore, *, cpu: Cpu | None = None) -> Gate:
     """The gate of a CPU started from the command line: reading ``users`` (None: the
     demo), auditing into the run's state file ``state`` (each row committed with the scan's
-    state by its writer). A users file that is missing or cannot be read raises
-    ``UsersError`` here, at start."""
+    state by its writer); with ``cpu``, a users file that becomes readable by others, and
+    one that is fixed, are entries of its diagnostic buffer. A users file that is missing or
+    cannot be read raises ``UsersError`` here, at start."""
     users_file = UsersFile(users) if users is not None else None
     if users_file is not None:
         if not users_file.path.is_file():
             raise UsersError(f"{users_file.path}: no such users file (s7graph users add ...)")
         users_file.load()
-    return Gate(Authenticator(users_file), AuditStore(state.path, state=state))
+    auth = Authenticator(users_file)
+    if cpu is not None:
+        auth.on_users_file = users_file_diagnostics(cpu)
+    return Gate(auth, AuditStore(state.path, state=state))
+
+
+def users_file_diagnostics(cpu: Cpu) -> Callable[[bool, str], None]:
+    """An ``Authenticator.on_users_file`` for ``cpu``: one diagnostic buffer entry when the
+    users file becomes readable by others (``USERS_FILE_EXPOSED``) and one when it is fixed
+    (``USERS_FILE_PROTECTED``), each added at the next scan boundary (``Cpu.submit``: the
+    buffer is the scan thread's)."""
+    from s7graph.engine.diagnostics import EventId
+
+    def note(exposed: bool, text: str) -> None:
+        event = EventId.USERS_FILE_EXPOSED if exposed else EventId.USERS_FILE_PROTECTED
+
+        def add(c: Cpu) -> None:
+            c.diagnostics.record(c.clock.now_ns(), event, "", text)
+
+        cpu.submit(add)
+
+    return note
