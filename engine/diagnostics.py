@@ -60,6 +60,10 @@ class EventId(IntEnum):
     """Ours: a force job set (or its value changed) on an address; it acts from this scan."""
     FORCE_ENDED = 0x5F04
     """Ours: force jobs deleted (unforce, or a memory reset); from this scan on they are gone."""
+    USERS_FILE_EXPOSED = 0x5F05
+    """Ours: the users file became readable by others; logins are refused until it is not."""
+    USERS_FILE_PROTECTED = 0x5F06
+    """Ours: the users file is no longer readable by others; logins are taken again."""
 
 
 class DiagnosticBuffer:

@@ -7,7 +7,8 @@ the restart type, what would block a hot restart, the force jobs (``engine/force
 outlive a restart and a power cycle, as on S7), and extra named parts registered with
 ``add_part`` (the CPU's message list: the engine does not know its type). Alarms (every
 message event, with the acknowledging user) and the audit log (who did what, when) are
-append-only tables.
+append-only tables, bounded: their oldest rows are summed into a summary table per day
+(``engine/rollup.py``; docs/state-file.md, "Bounded logs").
 
 **Written only when changed.** ``stage(cpu)`` (in the scan thread, between scans) compares
 the state with what was last staged and returns a :class:`Batch` of the rows that changed —
@@ -73,6 +74,7 @@ from s7graph.engine.cpu import Cpu
 from s7graph.engine.errors import S7Error
 from s7graph.engine.record import DiagEntry
 from s7graph.engine.restart import stop_blocker
+from s7graph.engine.rollup import ALARM_ROWS, ALARM_SUMMARY, Job, low_water, roll_alarms
 from s7graph.engine.state_checks import check_hot_image, check_memory_image
 
 __all__ = [
@@ -97,7 +99,8 @@ READABLE = ("s7graph-state 2", "s7graph-state 3", "s7graph-state 4", FORMAT)
 """Format marks this code trusts; a file of an older one is marked ``FORMAT`` when opened
 (its JSON rows stay readable, new rows are MessagePack)."""
 
-_SCHEMA = """
+_SCHEMA = (
+    """
 CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
 CREATE TABLE IF NOT EXISTS instances (
     number INTEGER PRIMARY KEY, fb TEXT NOT NULL, name TEXT NOT NULL,
@@ -112,6 +115,8 @@ CREATE TABLE IF NOT EXISTS parts (name TEXT PRIMARY KEY, state TEXT NOT NULL);
 CREATE TABLE IF NOT EXISTS audit (
     id INTEGER PRIMARY KEY AUTOINCREMENT, t_ns INTEGER, user TEXT, action TEXT, detail TEXT);
 """
+    + ALARM_SUMMARY
+)
 SYNCHRONOUS = "FULL"
 """SQLite's ``synchronous`` for the state file: FULL syncs the write-ahead log at every
 commit, so a commit that returned survives a power cut (NORMAL, in WAL mode, may lose the
@@ -208,6 +213,9 @@ class Batch:
     appended: list[tuple[str, tuple[str, ...], tuple[Any, ...]]] = field(default_factory=list)
     """Rows of the append-only tables written by the edges (``StateStore.append``):
     (table, columns, values)."""
+    jobs: list[Job] = field(default_factory=list)
+    """Work of the edges on their own tables (``StateStore.queue``), run in order after the
+    rows above, in the same transaction: an audit row's count, the roll-up of old rows."""
     unencoded: list[tuple[int, InstanceDB]] = field(default_factory=list)
     """Instance DBs staged with ``defer`` whose rows are still to be found
     (``StateStore.encode_next``), in order: before the next scan changes them."""
@@ -226,6 +234,7 @@ class Batch:
             or self.alarms
             or self.audit
             or self.appended
+            or self.jobs
             or self.unencoded
         )
 
@@ -245,6 +254,7 @@ class Batch:
         self.alarms.extend(later.alarms)
         self.audit.extend(later.audit)
         self.appended.extend(later.appended)
+        self.jobs.extend(later.jobs)
 
     @property
     def rows(self) -> int:
@@ -256,6 +266,7 @@ class Batch:
             + len(self.alarms)
             + len(self.audit)
             + len(self.appended)
+            + len(self.jobs)
         )
 
 
@@ -367,6 +378,10 @@ class StateStore:
         self._diag_saved = 0
         self._diag_seq = self._next_diag_seq()
         self._logs = Batch()
+        self.alarm_limit = ALARM_ROWS
+        """Message events kept in ``alarms``; older ones are summed into ``alarm_summary``
+        (``engine/rollup.py``) in the transaction that adds the one over the limit."""
+        self._alarm_rows = int(self._db.execute("SELECT COUNT(*) FROM alarms").fetchone()[0])
         self.deferred = False
         """Set by a writer: ``log_*`` rows wait for the next ``stage`` instead of being
         written at once, so they commit with the scan's state (and off the scan thread)."""
@@ -611,6 +626,9 @@ class StateStore:
             for (table, columns), rows in _grouped(batch.appended).items():
                 marks = ", ".join("?" * len(columns))
                 db.executemany(f"INSERT INTO {table} ({', '.join(columns)}) VALUES ({marks})", rows)
+            for job in batch.jobs:
+                _run_job(db, job)
+            alarms = self._bound_alarms(batch)
             db.execute("COMMIT")
         except sqlite3.Error as exc:
             if db.in_transaction:
@@ -620,7 +638,17 @@ class StateStore:
             name = getattr(exc, "sqlite_errorname", "")
             problem = f"{exc} ({name})" if name else str(exc)
             raise StateWriteError(self.path, problem, busy=code in _BUSY) from None
+        self._alarm_rows = alarms
         self.saves += 1
+
+    def _bound_alarms(self, batch: Batch) -> int:
+        """Roll the oldest message events into ``alarm_summary`` if ``batch`` takes the log
+        over ``alarm_limit`` (in its transaction); the rows the log holds then."""
+        added = len(batch.alarms) + sum(1 for row in batch.appended if row[0] == "alarms")
+        rows = self._alarm_rows + added
+        if added and rows > self.alarm_limit:
+            rows -= roll_alarms(self._db, low_water(self.alarm_limit))
+        return rows
 
     def meta(self, key: str) -> str | None:
         row = self._db.execute("SELECT value FROM meta WHERE key=?", (key,)).fetchone()
@@ -749,6 +777,17 @@ class StateStore:
             self._logs.appended.append((table, columns, values))
         return True
 
+    def queue(self, job: Job) -> bool:
+        """Queue ``job(connection)`` to run in the transaction of the next scan's state,
+        after its rows (``StateStore.append``); an exception other than SQLite's undoes
+        what the job did, nothing else. False (nothing queued) when no writer defers the
+        rows: the caller runs it itself."""
+        with self._lock:
+            if not self.deferred:
+                return False
+            self._logs.jobs.append(job)
+        return True
+
     def alarms(self) -> list[dict[str, Any]]:
         cur = self._db.execute(f"SELECT {', '.join(_ALARM_COLUMNS)} FROM alarms ORDER BY id")
         return [dict(zip(_ALARM_COLUMNS, r, strict=True)) for r in cur]
@@ -780,6 +819,18 @@ class _Unseen:
 
 
 _UNSEEN = _Unseen()
+
+
+def _run_job(db: sqlite3.Connection, job: Job) -> None:
+    """``job`` in a savepoint: its own failure (not the file's) undoes only its work."""
+    db.execute("SAVEPOINT job")
+    try:
+        job(db)
+    except sqlite3.Error:
+        raise
+    except Exception:
+        db.execute("ROLLBACK TO job")
+    db.execute("RELEASE job")
 
 
 def _grouped(

@@ -18,6 +18,16 @@ scan up. Without a writer (before the run starts, after it ends) a row is writte
 
 The store has its own connection to the file (WAL), so the zenoh threads that answer
 queries never touch the scan thread's.
+
+**A count, and a bound.** A row's ``count`` says how many commands it stands for: 1, or
+for refusals of senders the CPU did not authenticate, every one of a minute from one
+source for one reason (``web/access/tally.py``; the count is set by a job, ``queue``, that
+the state writer runs with a later scan's state). The table keeps at most ``max_rows`` rows
+and ``max_bytes`` of text (``AUDIT_ROWS``, ``AUDIT_BYTES``); the row that takes it over
+queues a roll-up of the oldest rows into ``audit_summary`` — per UTC day, user, op and
+outcome: the count and the first and last time, refusals of unauthenticated senders under
+``UNAUTHENTICATED`` — in the same transaction (``engine/rollup.py``): the trail loses
+detail, never a count. Rows of refusal windows still counting are not rolled.
 """
 
 from __future__ import annotations
@@ -32,10 +42,33 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Final
 
+from s7graph.engine.rollup import Job, day_of, low_water, roll
+
 if TYPE_CHECKING:
     from s7graph.engine.persistence import StateStore
 
-__all__ = ["AlarmRecord", "AuditRecord", "AuditStore", "Facts", "read_audit"]
+__all__ = [
+    "AUDIT_BYTES",
+    "AUDIT_ROWS",
+    "UNAUTHENTICATED",
+    "AlarmRecord",
+    "AuditRecord",
+    "AuditStore",
+    "Facts",
+    "SummaryRecord",
+    "read_audit",
+    "read_summary",
+    "write_count",
+]
+
+AUDIT_ROWS: Final = 100_000
+"""The most rows the ``audit`` table keeps; older ones are summed into ``audit_summary``."""
+AUDIT_BYTES: Final = 64 * 1024 * 1024
+"""The most text (``row_size``: its characters + 64 a row) the table keeps: 100,000 rows of
+4 KiB arguments would be 400 MB."""
+UNAUTHENTICATED: Final = "(unauthenticated)"
+"""The user of the summary's rows for refusals of senders the CPU did not authenticate: the
+names they gave are claims (the rows they came from had them)."""
 
 _NEW_COLUMNS: Final = (
     ("role", "TEXT NOT NULL DEFAULT ''"),
@@ -44,6 +77,7 @@ _NEW_COLUMNS: Final = (
     ("args", "TEXT NOT NULL DEFAULT ''"),
     ("outcome", "TEXT NOT NULL DEFAULT 'applied'"),
     ("reason", "TEXT NOT NULL DEFAULT ''"),
+    ("count", "INTEGER NOT NULL DEFAULT 1"),
 )
 _CREATE: Final = """
 CREATE TABLE IF NOT EXISTS audit (
@@ -51,6 +85,10 @@ CREATE TABLE IF NOT EXISTS audit (
 CREATE TABLE IF NOT EXISTS alarms (
     id INTEGER PRIMARY KEY AUTOINCREMENT, t_ns INTEGER, key TEXT, state TEXT, text TEXT,
     user TEXT NOT NULL DEFAULT '', cpu_ns INTEGER);
+CREATE TABLE IF NOT EXISTS audit_summary (
+    day TEXT NOT NULL, user TEXT NOT NULL, op TEXT NOT NULL, outcome TEXT NOT NULL,
+    count INTEGER NOT NULL, first_ns INTEGER NOT NULL, last_ns INTEGER NOT NULL,
+    PRIMARY KEY (day, user, op, outcome));
 """
 _AUDIT_COLUMNS: Final = (
     "id",
@@ -64,7 +102,20 @@ _AUDIT_COLUMNS: Final = (
     "outcome",
     "reason",
     "detail",
+    "count",
 )
+_DEFAULTS: Final = {"outcome": "'applied'", "count": "1"}
+"""What a column missing from an older file reads as (others: '')."""
+_TEXT: Final = ("user", "role", "origin", "action", "fb", "args", "reason", "detail")
+_SIZE: Final = "64 + " + " + ".join(f"length(ifnull({c}, ''))" for c in _TEXT)
+"""SQL of ``row_size``."""
+_SUMMARY_KEYS: Final = {
+    "day": day_of("t_ns"),
+    "user": f"CASE WHEN outcome = 'refused' AND role = '' THEN '{UNAUTHENTICATED}' "
+    "ELSE ifnull(user, '') END",
+    "op": "ifnull(action, '')",
+    "outcome": "outcome",
+}
 
 
 @dataclass(frozen=True, slots=True)
@@ -82,6 +133,13 @@ class AuditRecord:
     outcome: str
     reason: str
     detail: str = ""
+    count: int = 1
+    """How many commands the row stands for: 1, or the refusals an aggregated row counts."""
+
+
+def row_size(r: AuditRecord) -> int:
+    """What a row weighs against ``max_bytes``: the characters of its text, plus 64."""
+    return 64 + sum(map(len, (r.user, r.role, r.origin, r.op, r.fb, r.args, r.reason, r.detail)))
 
 
 @dataclass(frozen=True, slots=True)
@@ -98,9 +156,10 @@ class Facts:
     reason: str = ""
     detail: str = ""
 
-    def at(self, row_id: int, t_ns: int) -> AuditRecord:
-        """The row, its fields cut to their column sizes and the arguments as JSON."""
-        args = json.dumps(dict(self.args), sort_keys=True, default=str)[:4096]
+    def at(self, row_id: int, t_ns: int, *, text: int = 4096) -> AuditRecord:
+        """The row, its fields cut to their column sizes (arguments, reason and detail to
+        ``text`` characters) and the arguments as JSON."""
+        args = json.dumps(dict(self.args), sort_keys=True, default=str)[:text]
         outcome = "applied" if self.applied else "refused"
         return AuditRecord(
             row_id,
@@ -112,8 +171,8 @@ class Facts:
             self.fb[:64],
             args,
             outcome,
-            self.reason[:4096],
-            self.detail[:4096],
+            self.reason[:text],
+            self.detail[:text],
         )
 
 
@@ -127,6 +186,19 @@ class AlarmRecord:
     state: str
     text: str
     user: str
+
+
+@dataclass(frozen=True, slots=True)
+class SummaryRecord:
+    """Audit rows rolled into the summary: one UTC day, user, op and outcome."""
+
+    day: str
+    user: str
+    op: str
+    outcome: str
+    count: int
+    first_ns: int
+    last_ns: int
 
 
 def _migrate(db: sqlite3.Connection) -> None:
@@ -149,11 +221,53 @@ def _audit_rows(
     db: sqlite3.Connection, where: str, params: tuple[object, ...]
 ) -> list[AuditRecord]:
     have = {row[1] for row in db.execute("PRAGMA table_info(audit)")}
-    cols = ", ".join(
-        c if c in have else "''" if c != "outcome" else "'applied'" for c in _AUDIT_COLUMNS
-    )
+    cols = ", ".join(c if c in have else _DEFAULTS.get(c, "''") for c in _AUDIT_COLUMNS)
     rows = db.execute(f"SELECT {cols} FROM audit {where}", params).fetchall()
-    return [AuditRecord(int(r[0]), int(r[1] or 0), *(str(v or "") for v in r[2:])) for r in rows]
+    return [_record(r) for r in rows]
+
+
+def _record(r: tuple[object, ...]) -> AuditRecord:
+    """An ``AuditRecord`` of a row of ``_AUDIT_COLUMNS`` (an older file's NULLs as '')."""
+    text = [str(v or "") for v in r[2:-1]]
+    user, role, origin, op, fb, args, outcome, reason, detail = text
+    return AuditRecord(
+        int(str(r[0])),
+        int(str(r[1] or 0)),
+        user,
+        role,
+        origin,
+        op,
+        fb,
+        args,
+        outcome,
+        reason,
+        detail,
+        int(str(r[-1] or 1)),
+    )
+
+
+def _summary_rows(db: sqlite3.Connection) -> list[SummaryRecord]:
+    tables = {r[0] for r in db.execute("SELECT name FROM sqlite_master WHERE type='table'")}
+    if "audit_summary" not in tables:
+        return []
+    rows = db.execute(
+        "SELECT day, user, op, outcome, count, first_ns, last_ns FROM audit_summary "
+        "ORDER BY day, first_ns, user, op, outcome"
+    ).fetchall()
+    return [
+        SummaryRecord(str(r[0]), str(r[1]), str(r[2]), str(r[3]), int(r[4]), int(r[5]), int(r[6]))
+        for r in rows
+    ]
+
+
+def write_count(db: sqlite3.Connection, r: AuditRecord) -> None:
+    """Set the count of row ``r.id`` — and the fields an aggregated row may have changed
+    (``*`` once its refusals differed in them) — to ``r``'s."""
+    db.execute(
+        "UPDATE audit SET count = ?, user = ?, origin = ?, action = ?, fb = ?, args = ?, "
+        "reason = ? WHERE id = ?",
+        (r.count, r.user, r.origin, r.op, r.fb, r.args, r.reason, r.id),
+    )
 
 
 _ROW: Final = operator.attrgetter(*(f.name for f in dataclasses.fields(AuditRecord)))
@@ -163,48 +277,137 @@ every field, half of what a command cost at the scan boundary (65 → 34 µs).""
 
 class AuditStore:
     """Append audit rows and read the audit trail and the alarm history of one state file;
-    ``state``: the run's store, whose writer commits the rows with the scan's state."""
+    ``state``: the run's store, whose writer commits the rows with the scan's state;
+    ``max_rows``/``max_bytes``: the bound of the table (module docstring)."""
 
-    def __init__(self, path: Path | str, *, state: StateStore | None = None) -> None:
+    def __init__(
+        self,
+        path: Path | str,
+        *,
+        state: StateStore | None = None,
+        max_rows: int = AUDIT_ROWS,
+        max_bytes: int = AUDIT_BYTES,
+    ) -> None:
         self.path = Path(path)
         self.state = state
-        self._lock = threading.Lock()
+        self.max_rows = max_rows
+        self.max_bytes = max_bytes
+        self.lock = threading.RLock()
+        """Guards the store; ``web/access/tally.py`` counts under it too (one lock: no
+        order to get wrong between the two)."""
         self._db = sqlite3.connect(
             self.path, check_same_thread=False, isolation_level=None, timeout=5.0
         )
         self._db.execute("PRAGMA journal_mode=WAL")
         self._db.execute("PRAGMA synchronous=FULL")  # as the state store: durable commits
-        with self._lock:
+        self._kept: set[int] = set()  # rows not to roll up (refusal windows still counting)
+        self._rolling = False  # a roll-up is queued
+        self.rolled = 0
+        """Rows rolled into the summary since the store opened."""
+        with self.lock:
             _migrate(self._db)
             self._last_id = _last_id(self._db)
+            rows, size = self._db.execute(f"SELECT COUNT(*), SUM({_SIZE}) FROM audit").fetchone()
+            self._rows, self._bytes = int(rows or 0), int(size or 0)
 
     def close(self) -> None:
-        with self._lock:
+        with self.lock:
             self._db.close()
 
-    def record(self, t_ns: int, facts: Facts) -> AuditRecord:
+    @property
+    def deferred(self) -> bool:
+        """Rows go to the run's writer (committed with a scan's state), not straight in."""
+        return self.state is not None and self.state.deferred
+
+    def record(self, t_ns: int, facts: Facts, *, text: int = 4096) -> AuditRecord:
         """Append one row and return it: queued to commit with the next scan's state while
-        the run's writer runs, else written now."""
-        with self._lock:
+        the run's writer runs, else written now. ``text``: see ``Facts.at``."""
+        with self.lock:
             self._last_id += 1
-            rec = facts.at(self._last_id, t_ns)
+            rec = facts.at(self._last_id, t_ns, text=text)
             values = _ROW(rec)
             if self.state is None or not self.state.append("audit", _AUDIT_COLUMNS, values):
                 marks = ", ".join("?" * len(values))
                 self._db.execute(
                     f"INSERT INTO audit ({', '.join(_AUDIT_COLUMNS)}) VALUES ({marks})", values
                 )
+            self._rows += 1
+            self._bytes += row_size(rec)
+            if not self._rolling and (self._rows > self.max_rows or self._bytes > self.max_bytes):
+                self._rolling = True
+                self.queue(self._roll)
         return rec
+
+    def queue(self, job: Job) -> None:
+        """Run ``job(connection)`` in the transaction of the next scan's state (the run's
+        writer), or now in a transaction of its own."""
+        with self.lock:
+            if self.state is not None and self.state.queue(job):
+                return
+            self._db.execute("BEGIN IMMEDIATE")
+            try:
+                job(self._db)
+            except BaseException:
+                self._db.execute("ROLLBACK")
+                raise
+            self._db.execute("COMMIT")
+
+    def resized(self, delta: int) -> None:
+        """A row's text changed by ``delta`` characters (an aggregated row's ``*``)."""
+        with self.lock:
+            self._bytes += delta
+
+    def keep(self, row_id: int, kept: bool = True) -> None:
+        """Whether row ``row_id`` is kept out of roll-ups (its count is still changing)."""
+        with self.lock:
+            if kept:
+                self._kept.add(row_id)
+            else:
+                self._kept.discard(row_id)
+
+    def _roll(self, db: sqlite3.Connection) -> None:
+        """Sum the oldest rows into ``audit_summary`` until the table is a tenth below its
+        bounds (a job: in the writer's transaction, after the rows it commits)."""
+        with self.lock:
+            rows, size, kept = self._rows, self._bytes, set(self._kept)
+            self._rolling = False
+        keep_rows, keep_bytes = low_water(self.max_rows), low_water(self.max_bytes)
+        last, gone_rows, gone_bytes = None, 0, 0
+        cursor = db.execute(f"SELECT id, {_SIZE} FROM audit ORDER BY id")
+        for row_id, weight in cursor:
+            if rows - gone_rows <= keep_rows and size - gone_bytes <= keep_bytes:
+                break
+            if row_id in kept:
+                continue
+            last, gone_rows, gone_bytes = row_id, gone_rows + 1, gone_bytes + int(weight)
+        cursor.close()
+        if last is None:
+            return
+        skip = sorted(k for k in kept if k < last)
+        where = "id <= ?" + (f" AND id NOT IN ({', '.join('?' * len(skip))})" if skip else "")
+        keys = _SUMMARY_KEYS
+        rolled = roll(
+            db, "audit", "audit_summary", keys, count="count", where=where, params=(last, *skip)
+        )
+        with self.lock:
+            self._rows -= rolled
+            self._bytes -= gone_bytes
+            self.rolled += rolled
 
     def last(self, n: int = 50) -> list[AuditRecord]:
         """The last ``n`` audit rows, oldest first."""
-        with self._lock:
+        with self.lock:
             rows = _audit_rows(self._db, "ORDER BY id DESC LIMIT ?", (max(n, 0),))
         return rows[::-1]
 
+    def summary(self) -> list[SummaryRecord]:
+        """The rows rolled into the summary, oldest day first."""
+        with self.lock:
+            return _summary_rows(self._db)
+
     def alarm_history(self, n: int = 200) -> list[AlarmRecord]:
         """The last ``n`` message events (came, went, acknowledged), oldest first."""
-        with self._lock:
+        with self.lock:
             rows = self._db.execute(
                 "SELECT id, t_ns, key, state, text, user FROM alarms ORDER BY id DESC LIMIT ?",
                 (max(n, 0),),
@@ -217,10 +420,14 @@ class AuditStore:
         ]
 
 
+def _read(path: Path | str) -> sqlite3.Connection:
+    uri = f"file:{Path(path)}?mode=ro"
+    return sqlite3.connect(uri, uri=True, timeout=5.0)
+
+
 def read_audit(path: Path | str, *, since_ns: int | None = None) -> list[AuditRecord]:
     """The audit rows of a state file (read-only; a file from before reads too)."""
-    uri = f"file:{Path(path)}?mode=ro"
-    db = sqlite3.connect(uri, uri=True, timeout=5.0)
+    db = _read(path)
     try:
         tables = {r[0] for r in db.execute("SELECT name FROM sqlite_master WHERE type='table'")}
         if "audit" not in tables:
@@ -232,14 +439,26 @@ def read_audit(path: Path | str, *, since_ns: int | None = None) -> list[AuditRe
         db.close()
 
 
+def read_summary(path: Path | str) -> list[SummaryRecord]:
+    """The audit rows a state file rolled into its summary (read-only; none in a file from
+    before)."""
+    db = _read(path)
+    try:
+        return _summary_rows(db)
+    finally:
+        db.close()
+
+
 def lines(records: Iterable[AuditRecord]) -> list[str]:
-    """Audit rows as text lines (``s7graph audit``)."""
+    """Audit rows as text lines (``s7graph audit``); a row that counts several refusals
+    says how many (``refused ×1,234: …``)."""
     import time
 
     out = []
     for r in records:
         when = time.strftime("%Y-%m-%d %H:%M:%S", time.localtime(r.t_ns / 1e9))
-        verdict = r.outcome if r.outcome == "applied" else f"refused: {r.reason}"
+        times = f" ×{r.count:,}" if r.count != 1 else ""
+        verdict = f"{r.outcome}{times}" if r.outcome == "applied" else f"refused{times}: {r.reason}"
         args = "" if r.args in ("", "{}") else f" {r.args}"
         fb = f" {r.fb}" if r.fb else ""
         who = f"{r.user} ({r.role})" if r.role else r.user
@@ -247,3 +466,17 @@ def lines(records: Iterable[AuditRecord]) -> list[str]:
         detail = f" - {r.detail}" if r.detail and r.outcome == "applied" else ""
         out.append(f"{when}  {who}{origin}: {r.op}{fb}{args}: {verdict}{detail}")
     return out
+
+
+def summary_lines(records: Iterable[SummaryRecord]) -> list[str]:
+    """Summary rows as text lines (``s7graph audit --summary``), times in UTC."""
+    import time
+
+    def hms(t_ns: int) -> str:
+        return time.strftime("%H:%M:%S", time.gmtime(t_ns / 1e9))
+
+    return [
+        f"{r.day}  {r.user}: {r.op} {r.outcome} ×{r.count:,} "
+        f"({hms(r.first_ns)}–{hms(r.last_ns)} UTC)"
+        for r in records
+    ]

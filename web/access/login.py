@@ -22,6 +22,12 @@ stop working and a changed role acts at once.
 Without a users file (the demo) any valid name logs in in one step, without a password,
 as an *unverified* engineer: ``alice (unverified)`` in the audit and the alarm log;
 commands are then not signed.
+
+A users file that others may read (group or world bits, as ``UsersFile.load`` refuses at
+start) is noticed at the next login or command, ``chmod`` included — the mode is checked
+with every look at the mtime, and a chmod changes no mtime: logins are refused (``users
+file is readable by others: chmod 600 FILE``) until it is fixed, sessions already open go
+on, and ``on_users_file`` is called once when it happens and once when it is fixed.
 """
 
 from __future__ import annotations
@@ -31,6 +37,7 @@ import hashlib
 import hmac
 import math
 import secrets
+import stat
 import threading
 import time
 from collections.abc import Callable
@@ -144,6 +151,13 @@ def _digest(token: str) -> str:
 class Authenticator:
     """Logins, sessions and lockouts of one CPU; thread-safe."""
 
+    exposed: str = ""
+    """Why logins are refused while the users file is readable by others ("": it is not)."""
+    on_users_file: Callable[[bool, str], None] | None = None
+    """Called (exposed, text) when the users file becomes readable by others and when it
+    is fixed; under the authenticator's lock: it must not block (``web.bus.gate``'s
+    queues a diagnostic buffer entry)."""
+
     def __init__(
         self,
         users: UsersFile | None,
@@ -182,7 +196,7 @@ class Authenticator:
     def _reload(self) -> None:
         """Read the users file again if it changed (a broken file keeps the last good one)."""
         assert self.users_file is not None
-        mtime = self.users_file.mtime_ns()
+        mtime = self._look()
         if mtime == self._mtime:
             return
         try:
@@ -196,6 +210,28 @@ class Authenticator:
             self._reload()
             return self._users.get(name)
 
+    def _look(self) -> int | None:
+        """The users file's mtime (None: no file), noting a change of whether others may
+        read it (one stat for both)."""
+        assert self.users_file is not None
+        path = self.users_file.path
+        try:
+            info = path.stat()
+        except FileNotFoundError:
+            info = None
+        exposed = info is not None and bool(info.st_mode & (stat.S_IRWXG | stat.S_IRWXO))
+        if exposed != bool(self.exposed):
+            self.exposed = f"users file is readable by others: chmod 600 {path}" if exposed else ""
+            if self.on_users_file is not None:
+                fixed = f"users file {path} is no longer readable by others: logins taken again"
+                self.on_users_file(exposed, self.exposed or fixed)
+        return info.st_mtime_ns if info is not None else None
+
+    def knows(self, user: str) -> bool:
+        """Whether ``user`` is a user of the users file (as last read)."""
+        with self._lock:
+            return user in self._users
+
     # ------------------------------------------------------------ login / logout
 
     def login(self, user: str, scram: str = "", *, source: str = "") -> LoginResult:
@@ -207,6 +243,8 @@ class Authenticator:
         if self.users_file is None:
             return self._open(user, DEMO_ROLE, b"", verified=False)
         known = self._user(user)
+        if self.exposed:
+            return LoginResult(False, self.exposed)
         if not scram:
             return LoginResult(False, "this CPU checks passwords: log in with a password")
         if known is not None and known.legacy:

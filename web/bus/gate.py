@@ -9,12 +9,20 @@ origin. With a users file a command must be signed by its session and new to it
 (``seq``): a changed or replayed one is refused, and audited. Rows also go to ``on_audit``
 (the bus publishes them on ``audit``). Tokens, passwords, proofs and session keys reach
 neither ``apply`` nor the audit nor any log.
+A refusal of a sender the gate did not authenticate — no identity: a missing, malformed,
+unknown or expired token, or one of another user or of a removed one; a message nobody
+could read; a failed login, whatever the name; a logout of no session — is *anonymous*:
+counted per minute, source and reason by ``web.access.tally`` (one row, a count), so a
+flood of them cannot fill the disk. A refusal of an authenticated sender, every applied
+command and every login that succeeds stay one row each (docs/security.md, "The audit
+cannot fill the disk").
 """
 
 from __future__ import annotations
 
+import functools
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import TYPE_CHECKING, TypeAlias
 
@@ -25,6 +33,7 @@ from s7graph.web.access.audit import AuditRecord, AuditStore, Facts
 from s7graph.web.access.login import NOT_SIGNED, Authenticator, Identity
 from s7graph.web.access.roles import NOT_AVAILABLE, allowed, lowest_role
 from s7graph.web.access.scram import command_bytes, logout_bytes
+from s7graph.web.access.tally import FLUSH_S, MAX_KINDS, TEXT, RefusalTally
 from s7graph.web.access.users import UsersError, UsersFile
 from s7graph.web.bus.protocol import (
     AlarmEvent,
@@ -37,6 +46,7 @@ from s7graph.web.bus.protocol import (
 )
 
 if TYPE_CHECKING:
+    from s7graph.engine.cpu import Cpu
     from s7graph.engine.persistence import StateStore
 
 __all__ = ["Apply", "Gate", "audit_entry", "cpu_gate"]
@@ -60,6 +70,7 @@ def audit_entry(r: AuditRecord) -> AuditEntry:
         args=r.args[:4096],
         outcome="applied" if r.outcome == "applied" else "refused",
         reason=r.reason[:4096],
+        count=max(r.count, 1),
     )
 
 
@@ -80,7 +91,8 @@ def _facts(
 
 
 class Gate:
-    """Logins, role checks and the audit of one CPU (``audit`` None: no audit kept)."""
+    """Logins, role checks and the audit of one CPU (``audit`` None: no audit kept, the
+    last rows in memory); ``flush_s``, ``max_kinds``: see ``web.access.tally``."""
 
     def __init__(
         self,
@@ -88,12 +100,16 @@ class Gate:
         audit: AuditStore | None = None,
         *,
         wall_ns: Callable[[], int] = time.time_ns,
+        flush_s: float | None = FLUSH_S,
+        max_kinds: int = MAX_KINDS,
     ) -> None:
         self.auth = auth if auth is not None else Authenticator(None)
         self.audit = audit
         self._wall_ns = wall_ns
         self.on_audit: Callable[[AuditEntry], None] | None = None
-        self._recent: list[AuditEntry] = []  # without a store: the last rows in memory
+        self.tally = RefusalTally(audit, max_kinds=max_kinds, flush_s=flush_s)
+        self.tally.on_flush = self.flush
+        self._recent: list[AuditRecord] = []  # without a store: the last rows in memory
         self._count = 0
 
     # ------------------------------------------------------------ login
@@ -123,7 +139,8 @@ class Gate:
                 {},
                 result.ok,
                 result.reason,
-            )
+            ),
+            anonymous=not result.ok,
         )
         if not result.ok:
             return LoginReply(ok=False, reason=result.reason)
@@ -143,7 +160,8 @@ class Gate:
         why = self.auth.verify(request.token, request.mac, logout_bytes(request.token))
         known = why != NOT_SIGNED and self.auth.logout(request.token)
         why = why if why == NOT_SIGNED else "" if known else "no such session"
-        self.record(Facts(request.user or "?", "", request.origin, "logout", "", {}, known, why))
+        facts = Facts(request.user or "?", "", request.origin, "logout", "", {}, known, why)
+        self.record(facts, anonymous=not known)
         return LoginReply(ok=known, reason=why)
 
     # ------------------------------------------------------------ commands
@@ -166,6 +184,13 @@ class Gate:
             return who, f"{command.op} is not available yet on this CPU"
         return who, ""
 
+    def sender(self, command: Command) -> Identity | None:
+        """Who sent ``command``, if its token says so (None: nobody authenticated)."""
+        if not command.token:
+            return None
+        who = self.auth.identify(command.user, command.token)
+        return None if isinstance(who, str) else who
+
     def apply(
         self, command: Command, apply: Apply, *, cycle: int | None = None
     ) -> tuple[bool, str]:
@@ -174,7 +199,7 @@ class Gate:
         who, refusal = self.check(command)
         if who is None or refusal:
             name, role = (who.label, who.role) if who is not None else (command.user or "?", "")
-            self.record(_facts(command, name, role, False, refusal))
+            self.record(_facts(command, name, role, False, refusal), anonymous=who is None)
             return False, refusal
         as_user = msgspec.structs.replace(command, user=who.label, token="", mac=UNSET)
         try:
@@ -189,13 +214,16 @@ class Gate:
         return applied, reason
 
     def refuse(self, command: Command | None, reason: str, origin: str = "") -> None:
-        """Audit a command refused before the scan boundary (unreadable, unknown FB, ...).
-        A signed one's ``seq`` counts as seen: replayed later, it stays refused."""
+        """Audit a command refused before the scan boundary (unreadable, unknown FB, ...):
+        as its sender's if the token authenticates one, else as anonymous. A signed one's
+        ``seq`` counts as seen: replayed later, it stays refused."""
         if command is None:
-            self.record(Facts("?", "", origin, "?", "", {}, False, reason))
-        else:
-            self.consume(command)
-            self.record(_facts(command, command.user or "?", "", False, reason))
+            self.record(Facts("?", "", origin, "?", "", {}, False, reason), anonymous=True)
+            return
+        self.consume(command)
+        who = self.sender(command)
+        name, role = (who.label, who.role) if who is not None else (command.user or "?", "")
+        self.record(_facts(command, name, role, False, reason), anonymous=who is None)
 
     def consume(self, command: Command) -> None:
         """Count a signed command's ``seq`` as seen though it is refused before its check
@@ -206,23 +234,62 @@ class Gate:
 
     # ------------------------------------------------------------ audit
 
-    def record(self, facts: Facts) -> AuditEntry:
-        """One audit row (and its ``on_audit`` message)."""
+    def record(self, facts: Facts, *, anonymous: bool = False) -> AuditEntry | None:
+        """One audit row (and its ``on_audit`` message); an ``anonymous`` refusal is
+        counted in its minute's row instead when one is open (None returned)."""
         t_ns = self._wall_ns()
-        if self.audit is not None:
-            entry = audit_entry(self.audit.record(t_ns, facts))
+        if anonymous and not facts.applied:
+            name = facts.user if self.auth.knows(facts.user) else ""
+            kind = (facts.origin[:160], facts.reason[:TEXT], name)
+            write = functools.partial(self._write, t_ns, text=TEXT)
+            with self.tally.lock:
+                row, changed = self.tally.refuse(t_ns, kind, facts, write)
+            self._publish(changed)
+            if row is None:
+                return None
         else:
-            self._count += 1
-            entry = audit_entry(facts.at(self._count, t_ns))
-            self._recent = [*self._recent[-(AUDIT_PANEL - 1) :], entry]
+            with self.tally.lock:
+                row = self._write(t_ns, facts)
+        entry = audit_entry(row)
         if self.on_audit is not None:
             self.on_audit(entry)
         return entry
 
+    def _write(self, t_ns: int, facts: Facts, *, text: int = 4096) -> AuditRecord:
+        if self.audit is not None:
+            return self.audit.record(t_ns, facts, text=text)
+        self._count += 1
+        row = facts.at(self._count, t_ns, text=text)
+        self._recent = [*self._recent[-(AUDIT_PANEL - 1) :], row]
+        return row
+
+    def flush(self) -> None:
+        """Close the refusal windows of past minutes, write the counts no state writer will
+        and publish those that changed (the tally's timer calls it, at most every
+        ``flush_s``)."""
+        with self.tally.lock:
+            changed = self.tally.flush(self._wall_ns())
+        self._publish(changed)
+
+    def close(self) -> None:
+        """Stop the timer; counts written and published as they stand."""
+        self.tally.cancel()
+        self.flush()
+
+    def _publish(self, rows: Iterable[AuditRecord]) -> None:
+        """Rows whose count changed: in memory (without a store) and on ``audit``."""
+        for row in rows:
+            if self.audit is None:
+                with self.tally.lock:
+                    self._recent = [row if r.id == row.id else r for r in self._recent]
+            if self.on_audit is not None:
+                self.on_audit(audit_entry(row))
+
     def audit_list(self, n: int = AUDIT_PANEL) -> AuditList:
-        if self.audit is None:
-            return AuditList(entries=self._recent[-n:])
-        return AuditList(entries=[audit_entry(r) for r in self.audit.last(n)])
+        rows = self.audit.last(n) if self.audit is not None else self._recent[-n:]
+        with self.tally.lock:
+            rows = self.tally.live(rows)
+        return AuditList(entries=[audit_entry(r) for r in rows])
 
     def history(self, n: int = HISTORY) -> AlarmHistory:
         if self.audit is None:
@@ -242,14 +309,36 @@ class Gate:
         )
 
 
-def cpu_gate(users: Path | None, state: StateStore) -> Gate:
+def cpu_gate(users: Path | None, state: StateStore, *, cpu: Cpu | None = None) -> Gate:
     """The gate of a CPU started from the command line: reading ``users`` (None: the
     demo), auditing into the run's state file ``state`` (each row committed with the scan's
-    state by its writer). A users file that is missing or cannot be read raises
-    ``UsersError`` here, at start."""
+    state by its writer); with ``cpu``, a users file that becomes readable by others, and
+    one that is fixed, are entries of its diagnostic buffer. A users file that is missing or
+    cannot be read raises ``UsersError`` here, at start."""
     users_file = UsersFile(users) if users is not None else None
     if users_file is not None:
         if not users_file.path.is_file():
             raise UsersError(f"{users_file.path}: no such users file (s7graph users add ...)")
         users_file.load()
-    return Gate(Authenticator(users_file), AuditStore(state.path, state=state))
+    auth = Authenticator(users_file)
+    if cpu is not None:
+        auth.on_users_file = users_file_diagnostics(cpu)
+    return Gate(auth, AuditStore(state.path, state=state))
+
+
+def users_file_diagnostics(cpu: Cpu) -> Callable[[bool, str], None]:
+    """An ``Authenticator.on_users_file`` for ``cpu``: one diagnostic buffer entry when the
+    users file becomes readable by others (``USERS_FILE_EXPOSED``) and one when it is fixed
+    (``USERS_FILE_PROTECTED``), each added at the next scan boundary (``Cpu.submit``: the
+    buffer is the scan thread's)."""
+    from s7graph.engine.diagnostics import EventId
+
+    def note(exposed: bool, text: str) -> None:
+        event = EventId.USERS_FILE_EXPOSED if exposed else EventId.USERS_FILE_PROTECTED
+
+        def add(c: Cpu) -> None:
+            c.diagnostics.record(c.clock.now_ns(), event, "", text)
+
+        cpu.submit(add)
+
+    return note

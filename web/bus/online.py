@@ -249,6 +249,8 @@ class OnlineChange:
         """Audit the command (applied or refused) and answer its sender."""
         command = pending.command
         reply = msgspec.structs.replace(reply, op=command.op, fb=command.fb)
+        if who is None:  # refused before its sender was checked (busy), or not authenticated
+            who = self.gate.sender(command)
         label = getattr(who, "label", command.user or "?")
         role = getattr(who, "role", "")
         facts = Facts(
@@ -262,8 +264,9 @@ class OnlineChange:
             reply.reason,
             detail,
         )
+        anonymous = who is None and not reply.applied
         with contextlib.suppress(Exception):  # the audit must not keep the answer back
-            self.gate.record(facts)
+            self.gate.record(facts, anonymous=anonymous)
         durability = self.durability
         # the row commits with the next scan, after the swap's: one wait covers both
         if (

@@ -492,7 +492,9 @@ class LoginReply(_Msg, frozen=True, kw_only=True):
 
 
 class AuditEntry(_Msg, frozen=True, kw_only=True):
-    """One command as the CPU audited it (``audit``, ``audit/list``)."""
+    """One command as the CPU audited it (``audit``, ``audit/list``); ``count``: how many
+    refusals of unauthenticated senders the row stands for (one minute, one source and
+    reason) — published again, with the same ``id``, as it grows."""
 
     id: Count
     t_ms: Count
@@ -504,6 +506,7 @@ class AuditEntry(_Msg, frozen=True, kw_only=True):
     args: Text = ""
     outcome: Literal["applied", "refused"]
     reason: Text = ""
+    count: Annotated[int, Meta(ge=1, le=2**63 - 1)] = 1
 
 
 class AuditList(_Msg, frozen=True, kw_only=True):

@@ -416,6 +416,8 @@ class BusPublisher:
             p.resolve(False, "CPU bus closed")
         while self._awaiting:
             self._awaiting.popleft().overdue("the CPU bus closed before it was on disk")
+        with contextlib.suppress(Exception):  # the refusals counted so far: written, published
+            self.gate.flush()
         self.gate.on_audit = None
         self.outbox.close()  # what the last scans published goes out first
         self._logins.shutdown(wait=False, cancel_futures=True)

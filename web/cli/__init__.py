@@ -755,11 +755,17 @@ def audit(
     since: Annotated[
         str | None, typer.Option(help="From this time (2026-11-22T08:30, 08:30) or age (2h).")
     ] = None,
+    summary: Annotated[
+        bool,
+        typer.Option(
+            "--summary", help="The rows rolled into the summary: per day, user, op, outcome."
+        ),
+    ] = False,
 ) -> None:
     """Print who commanded what, when, from where, applied or refused."""
     from s7graph.web.cli.audit import audit_command
 
-    raise typer.Exit(audit_command(state, since))
+    raise typer.Exit(audit_command(state, since, summary=summary))
 
 
 def main(argv: list[str] | None = None) -> int:

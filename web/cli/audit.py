@@ -1,7 +1,9 @@
-"""``s7graph audit --state FILE [--since WHEN]``: the audit trail of a CPU's state file.
+"""``s7graph audit --state FILE [--since WHEN] [--summary]``: the audit trail of a CPU's
+state file.
 
 ``--since`` takes a time (``2026-11-22``, ``2026-11-22T08:30``, ``08:30`` today) or an age
-(``90s``, ``15m``, ``2h``, ``3d``).
+(``90s``, ``15m``, ``2h``, ``3d``). ``--summary`` prints the rows the bounded table rolled
+into its summary instead (per UTC day, user, op and outcome: count, first and last time).
 """
 
 from __future__ import annotations
@@ -13,7 +15,7 @@ import sys
 import time
 from pathlib import Path
 
-from s7graph.web.access.audit import lines, read_audit
+from s7graph.web.access.audit import lines, read_audit, read_summary, summary_lines
 
 __all__ = ["audit_command", "parse_since"]
 
@@ -40,17 +42,23 @@ def parse_since(text: str, now: float | None = None) -> int:
     return int(when.timestamp() * 1e9)
 
 
-def audit_command(state: Path, since: str | None) -> int:
-    """Print the audit rows (oldest first); exit 2 for a missing file or a bad --since."""
+def audit_command(state: Path, since: str | None, *, summary: bool = False) -> int:
+    """Print the audit rows (oldest first), or with ``summary`` the summary's; exit 2 for a
+    missing file or a bad --since."""
     if not state.is_file():
         print(f"s7graph: error: {state}: no such state file", file=sys.stderr)
         return 2
     try:
-        since_ns = parse_since(since) if since else None
-        rows = read_audit(state, since_ns=since_ns)
+        if summary:
+            if since:
+                raise ValueError("--summary takes no --since: it prints every day it holds")
+            text = summary_lines(read_summary(state))
+        else:
+            since_ns = parse_since(since) if since else None
+            text = lines(read_audit(state, since_ns=since_ns))
     except (ValueError, sqlite3.Error) as exc:
         print(f"s7graph: error: {exc}", file=sys.stderr)
         return 2
-    for line in lines(rows):
+    for line in text:
         print(line)
     return 0

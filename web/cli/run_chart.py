@@ -333,7 +333,7 @@ def _serve(
         watch=watch_names(session.symbols),
         messages=message_list(session.cpu),
     )
-    gate = cpu_gate(net.users, store)
+    gate = cpu_gate(net.users, store, cpu=session.cpu)
     table = symbols.read_text(encoding="utf-8-sig") if symbols is not None else ""
     online = OnlineChange(session, live, gate, path=path, symbols=table)
     inline = web and in_process

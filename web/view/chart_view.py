@@ -282,16 +282,25 @@ class ChartView:
         self._wake.set()
 
     def apply_audit(self, entry: AuditEntry) -> None:
-        """Add one audit row (the CPU publishes each as it writes it)."""
+        """Add one audit row (the CPU publishes each as it writes it), or count it up: a
+        row of refusals is published again, with its ``id``, as its count grows."""
         with self._lock:
             if not self._audit or entry.id > self._audit[-1].id:
                 self._audit.append(entry)
+            else:
+                for i, shown in enumerate(self._audit):
+                    if shown.id == entry.id and entry.count > shown.count:
+                        self._audit[i] = entry
         self._wake.set()
 
     def apply_audit_list(self, entries: Iterable[AuditEntry]) -> None:
-        """Start the Audit panel from the CPU's last rows."""
+        """Start the Audit panel from the CPU's last rows (of two of one row: the higher
+        count)."""
         with self._lock:
-            merged = {e.id: e for e in [*entries, *self._audit]}
+            merged: dict[int, AuditEntry] = {}
+            for e in [*entries, *self._audit]:
+                if e.id not in merged or e.count > merged[e.id].count:
+                    merged[e.id] = e
             self._audit.clear()
             self._audit.extend(merged[k] for k in sorted(merged)[-AUDIT_ROWS:])
         self._wake.set()

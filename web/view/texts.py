@@ -259,15 +259,17 @@ def banner_html(connected: bool, cpu: str) -> str:
 
 
 def audit_html(entries: list[AuditEntry]) -> str:
-    """The last audit rows, newest first: when, who (role), from where, what, verdict."""
+    """The last audit rows, newest first: when, who (role), from where, what, verdict (a
+    row of several refusals: how many, ``refused ×1,234``)."""
     if not entries:
         return small('<span style="color:#777">no commands yet</span>')
     rows = []
     for e in reversed(entries):
+        times = f" ×{e.count:,}" if e.count != 1 else ""
         verdict = (
-            '<span style="color:#080">applied</span>'
+            f'<span style="color:#080">applied{times}</span>'
             if e.outcome == "applied"
-            else f'<span style="color:#c00">refused: {html.escape(e.reason)}</span>'
+            else f'<span style="color:#c00">refused{times}: {html.escape(e.reason)}</span>'
         )
         who = html.escape(e.user) + (f" ({html.escape(e.role)})" if e.role else "")
         args = "" if e.args in ("", "{}") else " " + html.escape(e.args)
