@@ -5,7 +5,9 @@ and for every command drained at the scan boundary establishes who sent it (user
 token), checks the role table (``web.access.roles``), hands allowed commands to the FB's
 ``apply`` as that user — ``alice``, or ``alice (unverified)`` without a users file — with
 the token stripped, and writes one audit row per command, applied or refused, with its
-origin. Rows also go to ``on_audit`` (the bus publishes them on ``audit``).
+origin. On the bus the origin is the transport's (``web.bus.origin``: the link's identity
+and remote locator, the ``source`` of a login); what the sender claims is kept as a note
+in the row's detail. Rows also go to ``on_audit`` (the bus publishes them on ``audit``).
 Tokens and passwords reach neither ``apply`` nor the audit nor any log.
 """
 
@@ -35,7 +37,7 @@ from s7graph.web.bus.protocol import (
 if TYPE_CHECKING:
     from s7graph.engine.persistence import StateStore
 
-__all__ = ["Apply", "Gate", "audit_entry", "cpu_gate"]
+__all__ = ["Apply", "Gate", "audit_entry", "claimed_note", "cpu_gate", "with_note"]
 
 ApplyResult: TypeAlias = tuple[bool, str] | tuple[bool, str, str]
 Apply: TypeAlias = Callable[[Command], ApplyResult]
@@ -57,6 +59,16 @@ def audit_entry(r: AuditRecord) -> AuditEntry:
         outcome="applied" if r.outcome == "applied" else "refused",
         reason=r.reason[:4096],
     )
+
+
+def claimed_note(claimed: str) -> str:
+    """The note an audit row keeps of the origin its sender claimed ("" when none)."""
+    return f"claimed origin: {claimed}" if claimed else ""
+
+
+def with_note(detail: str, note: str) -> str:
+    """``detail`` and ``note`` in one detail column ("; " between them)."""
+    return "; ".join(part for part in (detail, note) if part)
 
 
 def _facts(
@@ -94,20 +106,26 @@ class Gate:
 
     # ------------------------------------------------------------ login
 
-    def login(self, request: LoginRequest) -> LoginReply:
-        """Answer a login or logout (runs on a worker thread: scrypt takes a while)."""
+    def login(self, request: LoginRequest, source: str = "") -> LoginReply:
+        """Answer a login or logout (runs on a worker thread: scrypt takes a while).
+
+        ``source``: where it came from by the transport (``web.bus.origin``), the audit
+        row's origin; the origin the request claims is then only a note. Without it (no
+        bus) the claimed origin is the row's."""
+        origin = source or request.origin
+        note = claimed_note(request.origin) if source else ""
         if request.op == "logout":
             known = self.auth.logout(request.token)
             why = "" if known else "no such session"
             who = request.user or "?"
-            self.record(Facts(who, "", request.origin, "logout", "", {}, known, why))
+            self.record(Facts(who, "", origin, "logout", "", {}, known, why, note))
             return LoginReply(ok=known, reason="" if known else "no such session")
         result = self.auth.login(request.user, request.password)
         shown = request.user if result.ok or len(request.user) <= 32 else request.user[:32]
         label = Identity(shown, result.role, result.verified).label if result.ok else shown
         self.record(
             Facts(
-                label or "?", result.role, request.origin, "login", "", {}, result.ok, result.reason
+                label or "?", result.role, origin, "login", "", {}, result.ok, result.reason, note
             )
         )
         if not result.ok:
@@ -137,14 +155,15 @@ class Gate:
         return who, ""
 
     def apply(
-        self, command: Command, apply: Apply, *, cycle: int | None = None
+        self, command: Command, apply: Apply, *, cycle: int | None = None, note: str = ""
     ) -> tuple[bool, str]:
         """Check, apply (as the established user, without the token) and audit ``command``;
-        (applied, reason). ``apply`` raising refuses the command."""
+        (applied, reason). ``apply`` raising refuses the command. ``note`` goes to the
+        row's detail (the origin the sender claimed)."""
         who, refusal = self.check(command)
         if who is None or refusal:
             name, role = (who.label, who.role) if who is not None else (command.user or "?", "")
-            self.record(_facts(command, name, role, False, refusal))
+            self.record(_facts(command, name, role, False, refusal, note))
             return False, refusal
         as_user = msgspec.structs.replace(command, user=who.label, token="")
         try:
@@ -155,15 +174,17 @@ class Gate:
             applied, reason, detail = False, f"{type(exc).__name__}: {exc}", ""
         if cycle is not None and applied:
             detail = f"cycle {cycle}" + (f": {detail}" if detail else "")
-        self.record(_facts(command, who.label, who.role, applied, reason, detail))
+        self.record(_facts(command, who.label, who.role, applied, reason, with_note(detail, note)))
         return applied, reason
 
-    def refuse(self, command: Command | None, reason: str, origin: str = "") -> None:
+    def refuse(
+        self, command: Command | None, reason: str, origin: str = "", note: str = ""
+    ) -> None:
         """Audit a command refused before the scan boundary (unreadable, unknown FB, ...)."""
         if command is None:
-            self.record(Facts("?", "", origin, "?", "", {}, False, reason))
+            self.record(Facts("?", "", origin, "?", "", {}, False, reason, note))
         else:
-            self.record(_facts(command, command.user or "?", "", False, reason))
+            self.record(_facts(command, command.user or "?", "", False, reason, note))
 
     # ------------------------------------------------------------ audit
 
