@@ -2,11 +2,16 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 
 from s7graph.engine.clock import VirtualClock
+
+if TYPE_CHECKING:
+    from s7graph.web.bus.session import TlsFiles
 
 ROOT = Path(__file__).resolve().parent.parent
 SHARED = ROOT.parent / "shared"
@@ -15,3 +20,56 @@ SHARED = ROOT.parent / "shared"
 @pytest.fixture
 def clock() -> VirtualClock:
     return VirtualClock()
+
+
+BUS_NODES = (
+    ("cpu", "cpu1"),
+    ("cpu", "line1"),
+    ("cpu", "line2"),
+    ("router", "hub"),
+    ("view", "desk"),
+    ("client", "olga"),
+    ("client", "rogue"),
+)
+"""The nodes ``bus_certs`` issues certificates for (``s7graph certs issue``)."""
+
+
+@dataclass(frozen=True)
+class BusCerts:
+    """A plant's CA and one certificate per node of ``BUS_NODES``, made once per session."""
+
+    folder: Path
+
+    @property
+    def ca(self) -> Path:
+        return self.folder / "ca.pem"
+
+    def cert(self, cn: str) -> tuple[Path, Path]:
+        """The certificate and key of common name ``cn`` (``client.olga``)."""
+        return self.folder / f"{cn}.pem", self.folder / f"{cn}.key"
+
+    def tls(self, cn: str | None = None) -> TlsFiles:
+        """The TLS files of node ``cn`` (None: the CA only, no certificate of its own)."""
+        from s7graph.web.bus.session import TlsFiles
+
+        if cn is None:
+            return TlsFiles(str(self.ca))
+        cert, key = self.cert(cn)
+        return TlsFiles(str(self.ca), str(cert), str(key))
+
+    def args(self, cn: str) -> list[str]:
+        """The command-line options of node ``cn``: ``--tls-ca``, ``--tls-cert``, ``--tls-key``."""
+        cert, key = self.cert(cn)
+        return ["--tls-ca", str(self.ca), "--tls-cert", str(cert), "--tls-key", str(key)]
+
+
+@pytest.fixture(scope="session")
+def bus_certs(tmp_path_factory: pytest.TempPathFactory) -> BusCerts:
+    """Certificates for the bus's mutual TLS, made with ``web.access.certs`` (EC keys: fast)."""
+    from s7graph.web.access.certs import init_ca, issue
+
+    folder = tmp_path_factory.mktemp("bus-certs")
+    init_ca(folder)
+    for kind, name in BUS_NODES:
+        issue(folder, name, kind)
+    return BusCerts(folder)

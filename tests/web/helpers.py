@@ -29,7 +29,9 @@ if TYPE_CHECKING:
     from s7graph.engine.record import ScanRecord
     from s7graph.web.bus.client import BusClient
     from s7graph.web.bus.online import OnlineChange
+    from s7graph.web.bus.session import TlsFiles
     from s7graph.web.wiring.live_edge import LiveEdge
+    from tests.conftest import BusCerts
 
 CHROMIUM = "/usr/bin/chromium"
 ARGS = [
@@ -140,7 +142,8 @@ PASSWORD = "correct horse"
 @dataclass
 class OnlineRig:
     """A CPU running a chart file on the virtual clock, scanned in a thread, on a real bus
-    (``endpoint``) with its online change; ``edge.url`` is its page when served."""
+    (``endpoint``) with its online change; ``edge.url`` is its page when served. A client
+    joins with ``tls`` (open_session) or the options ``bus`` (a shell's)."""
 
     session: ChartSession
     edge: LiveEdge
@@ -149,15 +152,33 @@ class OnlineRig:
     state: Path
     endpoint: str
     scans: list[int]
+    tls: TlsFiles
+    bus: list[str]
+
+
+def free_port() -> int:
+    """A TCP port free on 127.0.0.1 now."""
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
 
 
 @contextmanager
 def online_cpu(
-    tmp_path: Path, chart: str, *, serve: bool, users: dict[str, str], name: str = "chart.s7g"
+    tmp_path: Path,
+    chart: str,
+    *,
+    serve: bool,
+    users: dict[str, str],
+    certs: BusCerts,
+    name: str = "chart.s7g",
 ) -> Iterator[OnlineRig]:
     """``chart`` written to ``tmp_path / name`` and run with a users file (name → role,
-    password ``PASSWORD``), its bus on a unix socket, the view when ``serve``; the CPU
-    takes force jobs as ``s7graph run`` does."""
+    password ``PASSWORD``), its bus on TLS on loopback with the certificates ``certs`` (as
+    ``s7graph run`` insists with a users file: a client joins as ``client.olga``), the view
+    when ``serve``; the CPU takes force jobs as ``s7graph run`` does."""
     from s7graph.web.access.audit import AuditStore
     from s7graph.web.access.login import Authenticator
     from s7graph.web.access.users import UsersFile
@@ -180,7 +201,8 @@ def online_cpu(
     live = LiveGraph(session.graph, read=session.get)
     gate = Gate(Authenticator(users_file), audit)
     online = OnlineChange(session, live, gate, path=path)
-    endpoint = f"unixsock-stream/{tmp_path}/bus.sock"
+    endpoint = f"tls/localhost:{free_port()}"
+    bus = ["--connect", endpoint, *certs.args("client.olga")]
     scans: list[int] = []
     try:
         edge = LiveEdge(
@@ -190,11 +212,12 @@ def online_cpu(
             bus=True,
             gate=gate,
             online=online,
-            ends=BusEnds(listen=[endpoint]),
+            ends=BusEnds(listen=[endpoint], tls=certs.tls("cpu.cpu1")),
             forcing=Forcing(session.cpu),
         )
         with edge, scanning(session, edge, lambda record: scans.append(record.cycle)):
-            yield OnlineRig(session, edge, online, path, state, endpoint, scans)
+            client = certs.tls("client.olga")
+            yield OnlineRig(session, edge, online, path, state, endpoint, scans, client, bus)
     finally:
         audit.close()
 

@@ -15,6 +15,7 @@ import zenoh
 from s7graph.web.access.scram import Signer, log_in
 from s7graph.web.access.users import name_problem
 from s7graph.web.bus.keys import ROOT, keys
+from s7graph.web.bus.origin import stamp
 from s7graph.web.bus.protocol import (
     AlarmHistory,
     AlarmList,
@@ -59,7 +60,12 @@ class BusClient:
     def _get_one(
         self, key: str, payload: bytes | None = None, timeout: float | None = None
     ) -> bytes | None:
-        replies = self._session.get(key, payload=payload, timeout=timeout or self._timeout)
+        replies = self._session.get(
+            key,
+            payload=payload,
+            timeout=timeout or self._timeout,
+            source_info=stamp(self._session),  # the CPU audits the link it came over
+        )
         for reply in replies:
             if reply.ok is not None:
                 return reply.ok.payload.to_bytes()

@@ -1,6 +1,11 @@
 """The CPU's end of the bus: :class:`CpuSide` is a zenoh session listening on (or
 connecting to) the given endpoints — a unix socket in a temporary folder by default — and
-its :class:`BusPublisher` with the :class:`Gate`."""
+its :class:`BusPublisher` with the :class:`Gate`.
+
+The session proves the CPU's identity with the credentials of ``ends`` and always runs
+zenoh's access control for its own keys (``web.bus.acl``): another node that declares a
+queryable, publishes or holds a liveliness token on ``s7graph/<cpu>/…`` through this
+session is refused by zenoh, so a login or a command reaches this CPU and nobody else."""
 
 from __future__ import annotations
 
@@ -33,7 +38,9 @@ class CpuSide:
             self._tmp = tempfile.mkdtemp(prefix="s7graph-bus-")
             listen = [f"unixsock-stream/{self._tmp}/bus.sock"]
         self.endpoint = listen[0] if listen else ends.connect[0]
-        self.session = open_session(listen=listen, connect=ends.connect, tls=ends.tls)
+        self.session = open_session(
+            listen=listen, connect=ends.connect, tls=ends.tls, login=ends.login, guard=(cpu,)
+        )
         try:
             self.publisher = BusPublisher(self.session, cpu, charts, gate=gate)
         except BaseException:

@@ -5,10 +5,13 @@ and for every command drained at the scan boundary establishes who sent it (user
 token), checks the role table (``web.access.roles``), hands allowed commands to the FB's
 ``apply`` as that user — ``alice``, or ``alice (unverified)`` without a users file — with
 the token stripped, and writes one audit row per command, applied or refused, with its
-origin. With a users file a command must be signed by its session and new to it
-(``seq``): a changed or replayed one is refused, and audited. Rows also go to ``on_audit``
-(the bus publishes them on ``audit``). Tokens, passwords, proofs and session keys reach
-neither ``apply`` nor the audit nor any log.
+origin. On the bus the origin is the transport's (``web.bus.origin``: the link's identity
+and remote locator, the ``source`` of a login); what the sender claims is kept as a note
+in the row's detail. With a users file a command must be signed by its session and new
+to it (``seq``): a changed or replayed one is refused, and audited. Rows also go to
+``on_audit`` (the bus publishes them on ``audit``). Tokens, passwords, proofs and
+session keys reach neither ``apply`` nor the audit nor any log.
+
 A refusal of a sender the gate did not authenticate — no identity: a missing, malformed,
 unknown or expired token, or one of another user or of a removed one; a message nobody
 could read; a failed login, whatever the name; a logout of no session — is *anonymous*:
@@ -35,6 +38,7 @@ from s7graph.web.access.roles import NOT_AVAILABLE, allowed, lowest_role
 from s7graph.web.access.scram import command_bytes, logout_bytes
 from s7graph.web.access.tally import FLUSH_S, MAX_KINDS, TEXT, RefusalTally
 from s7graph.web.access.users import UsersError, UsersFile
+from s7graph.web.bus.origin import lockout_source
 from s7graph.web.bus.protocol import (
     AlarmEvent,
     AlarmHistory,
@@ -49,7 +53,7 @@ if TYPE_CHECKING:
     from s7graph.engine.cpu import Cpu
     from s7graph.engine.persistence import StateStore
 
-__all__ = ["Apply", "Gate", "audit_entry", "cpu_gate"]
+__all__ = ["Apply", "Gate", "audit_entry", "claimed_note", "cpu_gate", "with_note"]
 
 ApplyResult: TypeAlias = tuple[bool, str] | tuple[bool, str, str]
 Apply: TypeAlias = Callable[[Command], ApplyResult]
@@ -72,6 +76,16 @@ def audit_entry(r: AuditRecord) -> AuditEntry:
         reason=r.reason[:4096],
         count=max(r.count, 1),
     )
+
+
+def claimed_note(claimed: str) -> str:
+    """The note an audit row keeps of the origin its sender claimed ("" when none)."""
+    return f"claimed origin: {claimed}" if claimed else ""
+
+
+def with_note(detail: str, note: str) -> str:
+    """``detail`` and ``note`` in one detail column ("; " between them)."""
+    return "; ".join(part for part in (detail, note) if part)
 
 
 def _facts(
@@ -115,15 +129,21 @@ class Gate:
     # ------------------------------------------------------------ login
 
     def login(self, request: LoginRequest, source: str = "") -> LoginReply:
-        """Answer one step of a login, or a logout, from ``source`` (where the bus says it
-        came from: failed logins lock that source out, not the user). One audit row per
-        login — refused or done — and per logout; none for a challenge."""
+        """Answer one step of a login, or a logout. ``source``: where it came from by the
+        transport (``web.bus.origin``), the audit row's origin — the origin the request
+        claims is then only a note; without it (no bus) the claim is the row's origin.
+        Failed logins lock out the source (``lockout_source``: the transport, and the page a
+        trusted view names), never the user. One audit row per login — refused or done —
+        and per logout; none for a challenge."""
+        origin = source or request.origin
+        note = claimed_note(request.origin) if source else ""
         if request.op == "logout":
-            return self._logout(request)
+            return self._logout(request, origin, note)
+        lock = lockout_source(source, request.origin) if source else request.origin
         if request.op == "proof":
-            result = self.auth.prove(request.login_id, request.user, request.scram, source=source)
+            result = self.auth.prove(request.login_id, request.user, request.scram, source=lock)
         else:
-            result = self.auth.login(request.user, request.scram, source=source)
+            result = self.auth.login(request.user, request.scram, source=lock)
         if result.challenge:
             return LoginReply(
                 ok=False, user=request.user, login_id=result.login_id, scram=result.scram
@@ -133,12 +153,13 @@ class Gate:
             Facts(
                 label or request.user or "?",
                 result.role,
-                request.origin,
+                origin,
                 "login",
                 "",
                 {},
                 result.ok,
                 result.reason,
+                note,
             ),
             anonymous=not result.ok,
         )
@@ -154,13 +175,13 @@ class Gate:
             scram=result.scram,
         )
 
-    def _logout(self, request: LoginRequest) -> LoginReply:
+    def _logout(self, request: LoginRequest, origin: str, note: str) -> LoginReply:
         """Revoke a token: with a users file only when its session key signed the logout
         (a listener who saw the token cannot end the session)."""
         why = self.auth.verify(request.token, request.mac, logout_bytes(request.token))
         known = why != NOT_SIGNED and self.auth.logout(request.token)
         why = why if why == NOT_SIGNED else "" if known else "no such session"
-        facts = Facts(request.user or "?", "", request.origin, "logout", "", {}, known, why)
+        facts = Facts(request.user or "?", "", origin, "logout", "", {}, known, why, note)
         self.record(facts, anonymous=not known)
         return LoginReply(ok=known, reason=why)
 
@@ -192,14 +213,15 @@ class Gate:
         return None if isinstance(who, str) else who
 
     def apply(
-        self, command: Command, apply: Apply, *, cycle: int | None = None
+        self, command: Command, apply: Apply, *, cycle: int | None = None, note: str = ""
     ) -> tuple[bool, str]:
         """Check, apply (as the established user, without the token) and audit ``command``;
-        (applied, reason). ``apply`` raising refuses the command."""
+        (applied, reason). ``apply`` raising refuses the command. ``note`` goes to the
+        row's detail (the origin the sender claimed)."""
         who, refusal = self.check(command)
         if who is None or refusal:
             name, role = (who.label, who.role) if who is not None else (command.user or "?", "")
-            self.record(_facts(command, name, role, False, refusal), anonymous=who is None)
+            self.record(_facts(command, name, role, False, refusal, note), anonymous=who is None)
             return False, refusal
         as_user = msgspec.structs.replace(command, user=who.label, token="", mac=UNSET)
         try:
@@ -210,20 +232,22 @@ class Gate:
             applied, reason, detail = False, f"{type(exc).__name__}: {exc}", ""
         if cycle is not None and applied:
             detail = f"cycle {cycle}" + (f": {detail}" if detail else "")
-        self.record(_facts(command, who.label, who.role, applied, reason, detail))
+        self.record(_facts(command, who.label, who.role, applied, reason, with_note(detail, note)))
         return applied, reason
 
-    def refuse(self, command: Command | None, reason: str, origin: str = "") -> None:
+    def refuse(
+        self, command: Command | None, reason: str, origin: str = "", note: str = ""
+    ) -> None:
         """Audit a command refused before the scan boundary (unreadable, unknown FB, ...):
         as its sender's if the token authenticates one, else as anonymous. A signed one's
         ``seq`` counts as seen: replayed later, it stays refused."""
         if command is None:
-            self.record(Facts("?", "", origin, "?", "", {}, False, reason), anonymous=True)
+            self.record(Facts("?", "", origin, "?", "", {}, False, reason, note), anonymous=True)
             return
         self.consume(command)
         who = self.sender(command)
         name, role = (who.label, who.role) if who is not None else (command.user or "?", "")
-        self.record(_facts(command, name, role, False, reason), anonymous=who is None)
+        self.record(_facts(command, name, role, False, reason, note), anonymous=who is None)
 
     def consume(self, command: Command) -> None:
         """Count a signed command's ``seq`` as seen though it is refused before its check

@@ -36,7 +36,8 @@ Key space, all under ``s7graph/<cpu>/``:
 
 A wildcard query (``s7graph/**``) gets the read-only answers, each under its own key;
 ``cmd`` and ``login`` answer only a query for their exact key. Sessions talk only to the
-given endpoints (``web.bus.session``). docs/bus.md shows every message.
+given endpoints (``web.bus.session``), and only the CPU's own identity may serve or publish
+its keys (``web.bus.acl``). docs/bus.md shows every message.
 """
 
 from __future__ import annotations

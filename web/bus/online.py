@@ -41,7 +41,7 @@ from s7graph.sequencer.compiled import CompiledChart
 from s7graph.sequencer.text.format import format_chart
 from s7graph.web.access.audit import Facts
 from s7graph.web.bus.compiler import Compiled, Compiler, CompileRefused, Summary
-from s7graph.web.bus.gate import Gate
+from s7graph.web.bus.gate import Gate, with_note
 from s7graph.web.bus.live import LiveChart, LiveGraph
 from s7graph.web.bus.protocol import (
     ChartSource,
@@ -262,7 +262,7 @@ class OnlineChange:
             _audited_args(command),
             reply.applied,
             reply.reason,
-            detail,
+            with_note(detail, pending.note),
         )
         anonymous = who is None and not reply.applied
         with contextlib.suppress(Exception):  # the audit must not keep the answer back

@@ -28,8 +28,9 @@ from typing import Any, Protocol
 import msgspec
 import zenoh
 
-from s7graph.web.bus.gate import Apply, Gate
+from s7graph.web.bus.gate import Apply, Gate, claimed_note
 from s7graph.web.bus.keys import ROOT, keys
+from s7graph.web.bus.origin import transport_origin
 from s7graph.web.bus.outbox import Outbox
 from s7graph.web.bus.protocol import (
     AlarmList,
@@ -69,6 +70,9 @@ class PendingCommand:
     query: zenoh.Query | None = None
     received_ns: int = field(default_factory=time.monotonic_ns)
     reply: CommandReply | None = None
+    note: str = ""
+    """The audit row's note: the origin the sender claimed (``command.origin`` is the
+    transport's, ``web.bus.origin``)."""
 
     def resolve(self, applied: bool, reason: str = "", *, cycle: int | None = None) -> None:
         """Answer the sender once: applied, or refused and why."""
@@ -384,7 +388,7 @@ class BusPublisher:
             if now - p.received_ns > self._max_age_ns:
                 self._expire(p)
                 continue
-            applied, reason = self.gate.apply(p.command, apply, cycle=cycle)
+            applied, reason = self.gate.apply(p.command, apply, cycle=cycle, note=p.note)
             results.append((p, applied, reason))
         if not results:
             return 0
@@ -399,7 +403,7 @@ class BusPublisher:
 
     def _expire(self, p: PendingCommand) -> None:
         p.resolve(False, "expired before the scan boundary")
-        self.gate.refuse(p.command, "expired before the scan boundary")
+        self.gate.refuse(p.command, "expired before the scan boundary", note=p.note)
 
     def _answer_overdue(self) -> None:
         now = time.monotonic_ns()
@@ -498,25 +502,28 @@ class BusPublisher:
         except ProtocolError as exc:
             _reply(query, LoginReply(ok=False, reason=str(exc)))
             return
+        source = transport_origin(self._session, query.source_info)
         try:
-            self._logins.submit(self._login, request, query)
+            self._logins.submit(self._login, request, query, source)
         except RuntimeError:  # shut down
             _reply(query, LoginReply(ok=False, reason="CPU bus closed"))
 
-    def _login(self, request: LoginRequest, query: zenoh.Query) -> None:
+    def _login(self, request: LoginRequest, query: zenoh.Query, source: str) -> None:
+        """Answer a login on the login worker; ``source``: where it came from by the
+        transport (``web.bus.origin``)."""
         try:
-            # the source failed logins are counted against: the origin the client gives,
-            # the best this transport tells (its queries carry no peer identity)
-            reply = self.gate.login(request, source=request.origin)
+            reply = self.gate.login(request, source=source)
         except Exception as exc:
             reply = LoginReply(ok=False, reason=f"login failed: {type(exc).__name__}")
         _reply(query, reply)
 
     def _on_cmd(self, query: zenoh.Query) -> None:
         # Runs on a zenoh thread: validate, enqueue, never block and never raise. A wildcard
-        # query is no command: ignored.
+        # query is no command: ignored. The command's origin becomes the transport's; the
+        # one it claims is kept as the audit row's note.
         if str(query.key_expr) != self._keys.cmd:
             return
+        source = transport_origin(self._session, query.source_info)
         try:
             payload = query.payload
             if payload is None:
@@ -524,28 +531,38 @@ class BusPublisher:
             command = decode(payload.to_bytes(), Command)
         except Exception as exc:
             reason = str(exc) if isinstance(exc, ProtocolError) else f"bad command: {exc}"
-            self._refuse(query, None, reason[:4096])
+            self._refuse(query, None, reason[:4096], source)
             return
-        if not command.origin:
-            command = msgspec.structs.replace(command, origin="bus")
+        note = claimed_note(command.origin)
+        command = msgspec.structs.replace(command, origin=source)
         if command.fb not in self._charts:
             reason = f"unknown FB {command.fb!r}; this CPU runs {', '.join(self._charts)}"
-            self._refuse(query, command, reason)
+            self._refuse(query, command, reason, source, note)
             return
+        pending = PendingCommand(command, query, note=note)
         routed = self._routes.get(command.op)
         if routed is not None:
             try:
-                routed(PendingCommand(command, query))
+                routed(pending)
             except Exception as exc:  # never raise on a zenoh thread
-                self._refuse(query, command, f"command refused: {type(exc).__name__}: {exc}")
+                reason = f"command refused: {type(exc).__name__}: {exc}"
+                self._refuse(query, command, reason, source, note)
             return
         try:
-            self._commands.put_nowait(PendingCommand(command, query))
+            self._commands.put_nowait(pending)
         except queue.Full:
-            self._refuse(query, command, "command queue full; the CPU is not draining commands")
+            reason = "command queue full; the CPU is not draining commands"
+            self._refuse(query, command, reason, source, note)
 
-    def _refuse(self, query: zenoh.Query, command: Command | None, reason: str) -> None:
+    def _refuse(
+        self,
+        query: zenoh.Query,
+        command: Command | None,
+        reason: str,
+        source: str = "",
+        note: str = "",
+    ) -> None:
         op, fb = (command.op, command.fb) if command is not None else ("", "")
         _answer(query, CommandReply(applied=False, reason=reason, op=op, fb=fb))
         with contextlib.suppress(Exception):  # the audit must not raise on a zenoh thread
-            self.gate.refuse(command, reason, origin="bus")
+            self.gate.refuse(command, reason, origin=source, note=note)

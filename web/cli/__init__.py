@@ -1,7 +1,7 @@
 """The ``s7graph`` command line: ``run``, ``sim``, ``check``, ``import``, ``export``,
 ``--version``; for the bus ``web``, ``router``, ``watch``, ``status`` and the shell's
-commands (``ack``, ``mode``, ..., ``force``, ``download``, ``stop``, ``start``); ``users``
-and ``audit``.
+commands (``ack``, ``mode``, ..., ``force``, ``download``, ``stop``, ``start``); ``users``,
+``audit`` and ``certs``.
 
 The shell's command of an op is built from the op's struct (``shell`` in
 ``web.commands``): one loop makes ``ack``, ``mode``, ``init`` ... with the op's argument
@@ -14,9 +14,12 @@ non-zero exit, never a traceback.
 
 from __future__ import annotations
 
+import contextvars
 import functools
+import inspect
 import os
 import sys
+from collections.abc import Callable
 from inspect import Parameter, Signature
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
@@ -89,8 +92,29 @@ Users = Annotated[
     Path | None, typer.Option(help="The users file (s7graph users add); without it: the demo.")
 ]
 TlsCa = Annotated[Path | None, typer.Option(help="CA certificate (PEM) for tls/ endpoints.")]
-TlsCert = Annotated[Path | None, typer.Option(help="This node's certificate (PEM), to listen.")]
-TlsKey = Annotated[Path | None, typer.Option(help="This node's private key (PEM), to listen.")]
+TlsCert = Annotated[
+    Path | None,
+    typer.Option(help="This node's certificate (PEM; s7graph certs issue): mutual TLS."),
+]
+TlsKey = Annotated[Path | None, typer.Option(help="This node's private key (PEM).")]
+BusUser = Annotated[
+    str | None,
+    typer.Option(
+        "--bus-user",
+        help="This node's user name on the bus (zenoh usrpwd; a CPU's: cpu.NAME), its "
+        "password from --bus-password-file or S7GRAPH_BUS_PASSWORD.",
+    ),
+]
+BusPasswordFile = Annotated[
+    Path | None,
+    typer.Option("--bus-password-file", help="The file whose first line is --bus-user's password."),
+]
+BusUsers = Annotated[
+    Path | None,
+    typer.Option(
+        "--bus-users", help="Who may join where this node listens: user:password lines (0600)."
+    ),
+]
 Origin = Annotated[
     list[str] | None,
     typer.Option(
@@ -105,12 +129,74 @@ UserName = Annotated[str, typer.Option("--user", help="Log in as this user.")]
 UsersFileArg = Annotated[Path, typer.Option("--file", help="The users file.")]
 
 
+_CREDENTIALS: contextvars.ContextVar[tuple[tuple[str, Any], ...]] = contextvars.ContextVar(
+    "s7graph_credentials", default=()
+)
+"""The bus credentials given to the command running now (``_with_credentials``)."""
+
+
 def _net(**kw: Any) -> NetOptions:
+    """The command's network options; the credential options it did not name itself come
+    from ``_with_credentials``."""
     from s7graph.web.cli.net import NetOptions
 
-    for key in ("listen", "connect", "origins"):
+    for key in ("listen", "connect", "origins", "relays"):
         kw[key] = tuple(kw.get(key) or ())
+    for key, value in _CREDENTIALS.get():
+        if kw.get(key) is None:
+            kw[key] = value
     return NetOptions(**kw)
+
+
+_CREDENTIAL_OPTIONS: dict[str, Any] = {
+    "tls_cert": TlsCert,
+    "tls_key": TlsKey,
+    "bus_user": BusUser,
+    "bus_password_file": BusPasswordFile,
+}
+_LISTENER_OPTIONS: dict[str, Any] = {"bus_users": BusUsers}
+
+
+def _with_credentials(fn: Callable[..., Any]) -> Callable[..., Any]:
+    """``fn`` with the bus-credential options it lacks when it joins the bus (it has a
+    ``--connect``): ``--tls-cert``, ``--tls-key``, ``--bus-user``, ``--bus-password-file``,
+    and ``--bus-users`` where it listens; their values reach ``_net`` while it runs. So
+    every command on the bus proves who it is the same way, the shell's included."""
+    signature = inspect.signature(fn, eval_str=True)
+    have = signature.parameters
+    wanted = dict(_CREDENTIAL_OPTIONS, **(_LISTENER_OPTIONS if "listen" in have else {}))
+    extra = {name: kind for name, kind in wanted.items() if name not in have}
+    if "connect" not in have or not extra:
+        return fn
+
+    @functools.wraps(fn)
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        given = tuple((name, kwargs.pop(name, None)) for name in extra)
+        token = _CREDENTIALS.set(given)
+        try:
+            return fn(*args, **kwargs)
+        finally:
+            _CREDENTIALS.reset(token)
+
+    added = [
+        inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=None, annotation=kind)
+        for name, kind in extra.items()
+    ]
+    params = list(have.values())
+    wrapper.__signature__ = signature.replace(parameters=[*params, *added])  # type: ignore[attr-defined]
+    wrapper.__annotations__ = {
+        **{p.name: p.annotation for p in params},
+        **extra,
+        "return": signature.return_annotation,
+    }
+    return wrapper
+
+
+def _credentials_everywhere() -> None:
+    """Give every command registered so far that joins the bus the credential options."""
+    for info in app.registered_commands:
+        if info.callback is not None:
+            info.callback = _with_credentials(info.callback)
 
 
 def _positive_ms(value: float | None) -> float | None:
@@ -273,7 +359,7 @@ def run(
             tls_key=tls_key,
             origins=origin,
         )
-        problem = net.problem(listening=web)
+        problem = net.problem(listening=web, role="cpu")
         if problem:
             print(f"s7graph: error: {problem}", file=sys.stderr)
             raise typer.Exit(2)
@@ -452,6 +538,12 @@ def router(
     tls_cert: TlsCert = None,
     tls_key: TlsKey = None,
     duration_s: Annotated[float | None, typer.Option(help="Stop after this many seconds.")] = None,
+    cpu: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--cpu", help="A CPU whose keys its identity cpu.NAME alone may serve (several)."
+        ),
+    ] = None,
 ) -> None:
     """Run a zenoh router where CPUs and views on several machines meet."""
     from s7graph.web.cli.router import router_command
@@ -463,6 +555,7 @@ def router(
         tls_ca=tls_ca,
         tls_cert=tls_cert,
         tls_key=tls_key,
+        relays=cpu,
     )
     raise typer.Exit(router_command(net, duration_s))
 
@@ -701,6 +794,41 @@ def download(
     raise typer.Exit(download_command(net, chart, fb=fb, user=user, removed=removed, yes=yes))
 
 
+# ---------------------------------------------------------------- certificates
+
+certs_app = typer.Typer(
+    no_args_is_help=True, help="The plant's CA and node certificates for the bus (mutual TLS)."
+)
+app.add_typer(certs_app, name="certs")
+CertsDir = Annotated[Path, typer.Argument(help="The folder of the CA and the certificates.")]
+Overwrite = Annotated[bool, typer.Option("--force", help="Replace files that are there.")]
+
+
+@certs_app.command("init")
+def certs_init(directory: CertsDir, force: Overwrite = False) -> None:
+    """Make the plant's CA: DIR/ca.pem (for every node) and DIR/ca.key (0600, stays here)."""
+    from s7graph.web.cli import certs as cmd
+
+    raise typer.Exit(cmd.certs_init(directory, force=force))
+
+
+@certs_app.command("issue")
+def certs_issue(
+    directory: CertsDir,
+    name: Annotated[str, typer.Argument(help="The node's name: a CPU's is its --cpu.")],
+    kind: Annotated[str, typer.Option(help="cpu, router, view or client.")],
+    host: Annotated[
+        list[str] | None,
+        typer.Option("--host", help="An address or DNS name the node is reached at (several)."),
+    ] = None,
+    force: Overwrite = False,
+) -> None:
+    """Issue node KIND.NAME's certificate and key (0600) with the CA of DIR."""
+    from s7graph.web.cli import certs as cmd
+
+    raise typer.Exit(cmd.certs_issue(directory, name, kind, host or [], force=force))
+
+
 # ---------------------------------------------------------------- users and audit
 
 users_app = typer.Typer(no_args_is_help=True, help="The users file: add, list, remove, passwd.")
@@ -775,6 +903,7 @@ def main(argv: list[str] | None = None) -> int:
     its own (``web.cli.supervisor``); called with ``argv`` it runs in this process."""
     global _ENTRY_ARGS
     _ENTRY_ARGS = sys.argv[1:] if argv is None else None
+    _credentials_everywhere()
     try:
         rc = app(args=argv, standalone_mode=False)
     except S7Error as exc:

@@ -64,9 +64,9 @@ def _join(net: NetOptions) -> zenoh.Session | str:
     if problem:
         return problem
     try:
-        return open_session(connect=net.connect, tls=net.tls)
+        return open_session(connect=net.connect, tls=net.tls, login=net.login)
     except Exception as exc:
-        return f"cannot join the bus: {type(exc).__name__}: {exc}"
+        return f"cannot join the bus: {type(exc).__name__}: {exc}{net.join_hint()}"
 
 
 @contextlib.contextmanager

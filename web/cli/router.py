@@ -1,5 +1,11 @@
 """``s7graph router --listen ENDPOINT ...``: a zenoh router in Python, where CPUs and views
-on several machines meet (no extra binary). Runs until Ctrl-C or SIGTERM."""
+on several machines meet (no extra binary). Runs until Ctrl-C or SIGTERM.
+
+With credentials (a certificate, or ``--bus-user`` and ``--bus-users``) the router lets
+in only nodes that prove who they are, and runs zenoh's access control for the CPUs named
+with ``--cpu`` (``web.bus.acl``): each CPU's identity ``cpu.<name>`` alone may serve and
+publish on ``s7graph/<name>/**``, every other node may only ask and listen. Without
+credentials it stays on loopback and relays anything (the demo)."""
 
 from __future__ import annotations
 
@@ -13,20 +19,24 @@ __all__ = ["router_command"]
 
 
 def router_command(net: NetOptions, duration_s: float | None = None) -> int:
-    problem = net.problem(listening=False)
+    problem = net.problem(listening=False, role="router")
     if problem is None and not net.listen:
         problem = "a router needs at least one --listen endpoint"
     if problem:
         print(f"s7graph: error: {problem}", file=sys.stderr)
         return 2
+    guard = tuple(net.relays) if net.has_credentials else ()
     try:
-        session = open_session(net.listen, net.connect, mode="router", tls=net.tls)
+        session = open_session(
+            net.listen, net.connect, mode="router", tls=net.tls, login=net.login, guard=guard
+        )
     except Exception as exc:
         print(
             f"s7graph: error: cannot open the router: {type(exc).__name__}: {exc}", file=sys.stderr
         )
         return 2
-    print(f"s7graph: router on {', '.join(net.listen)}; Ctrl-C to stop", flush=True)
+    serves = f"; CPUs {', '.join(guard)}" if guard else ""
+    print(f"s7graph: router on {', '.join(net.listen)}{serves}; Ctrl-C to stop", flush=True)
     try:
         wait_until_stopped(duration_s)
     finally:

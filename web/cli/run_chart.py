@@ -367,7 +367,7 @@ def _serve(
             host=net.host,
             port=port,
             origins=net.origins,
-            tls_ca=net.tls_ca,
+            bus_args=net.credential_args(),
             on_url=served,
         )
     elif edge.endpoint:

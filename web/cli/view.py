@@ -50,14 +50,14 @@ def web_command(
     if problem:
         return _fail(problem)
     try:
-        with open_session(connect=net.connect, tls=net.tls) as probe:
+        with open_session(connect=net.connect, tls=net.tls, login=net.login) as probe:
             deadline = time.monotonic() + wait_s
             cpus = find_cpus(probe)
             while not cpus and time.monotonic() < deadline:
                 time.sleep(0.2)
                 cpus = find_cpus(probe)
     except Exception as exc:
-        return _fail(f"cannot join the bus: {type(exc).__name__}: {exc}")
+        return _fail(f"cannot join the bus: {type(exc).__name__}: {exc}{net.join_hint()}")
     if not cpus:
         return _fail(f"no CPU answers on {', '.join(net.connect)}")
     for status in cpus:

@@ -59,6 +59,10 @@ def _ended(code: int) -> str:
 class ViewProcess:
     """``s7graph web`` for CPU ``cpu`` at ``connect``, kept running until :meth:`stop`.
 
+    ``bus_args``: the credential options the view joins the bus with — the CPU's own
+    (``NetOptions.credential_args``: its certificate, or its bus user), so a CPU that lets
+    in only nodes with credentials lets its view in.
+
     ``on_url(url)`` is called (in the supervising thread) each time a view serves its page;
     ``port`` 0 picks a free port the first time and keeps it for the restarts."""
 
@@ -71,6 +75,7 @@ class ViewProcess:
         port: int = 8080,
         origins: Sequence[str] = (),
         tls_ca: Path | None = None,
+        bus_args: Sequence[str] = (),
         on_url: Callable[[str], object] | None = None,
         first_backoff_s: float = FIRST_BACKOFF_S,
     ) -> None:
@@ -80,6 +85,7 @@ class ViewProcess:
         self.port = port
         self.origins = list(origins)
         self.tls_ca = tls_ca
+        self.bus_args = list(bus_args)
         self.on_url = on_url
         self.first_backoff_s = first_backoff_s
         self.url = ""
@@ -109,9 +115,9 @@ class ViewProcess:
             cmd += ["--connect", endpoint]
         for origin in self.origins:
             cmd += ["--origin", origin]
-        if self.tls_ca is not None:
+        if self.tls_ca is not None and "--tls-ca" not in self.bus_args:
             cmd += ["--tls-ca", str(self.tls_ca)]
-        return cmd
+        return cmd + self.bus_args
 
     def start(self) -> None:
         self._thread.start()

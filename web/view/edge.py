@@ -62,7 +62,7 @@ class ViewSide:
         self._closers: list[Callable[[], object]] = []
         try:
             check_port(host, port)
-            session = open_session(connect=ends.connect, tls=ends.tls)
+            session = open_session(connect=ends.connect, tls=ends.tls, login=ends.login)
             self._closers.append(session.close)
             self.session = session
             self.client = BusClient(session, cpu)

@@ -52,7 +52,7 @@ class WebEdge:
             self.view_side = ViewSide(
                 cpu=cpu,
                 fb=self.fb,
-                ends=BusEnds(connect=connect, tls=ends.tls),
+                ends=ends.joining(connect),
                 host=host,
                 port=port,
                 allowed_origins=allowed_origins,

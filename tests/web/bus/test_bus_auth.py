@@ -3,13 +3,13 @@ loopback): the CPU side checks every command at the scan boundary and audits it.
 
 from __future__ import annotations
 
-import datetime
-import ipaddress
+import re
 import socket
 import threading
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 import zenoh
@@ -22,8 +22,11 @@ from s7graph.web.bus.client import BusClient, find_cpus
 from s7graph.web.bus.gate import Gate
 from s7graph.web.bus.protocol import ChartLayout, Command, CommandReply, StepStateUpdate
 from s7graph.web.bus.publisher import BusPublisher
-from s7graph.web.bus.session import TlsFiles, open_session
+from s7graph.web.bus.session import open_session
 from tests.web.helpers import wait_until
+
+if TYPE_CHECKING:
+    from tests.conftest import BusCerts
 
 pytestmark = pytest.mark.timeout(60)
 PASSWORD = "correct horse"
@@ -41,6 +44,7 @@ class Rig:
     client: BusClient
     state: Path
     applied: list[Command]
+    cpu: zenoh.Session
 
 
 def _scan_loop(publisher: BusPublisher, applied: list[Command], stop: threading.Event) -> None:
@@ -74,7 +78,7 @@ def rig(tmp_path: Path) -> Iterator[Rig]:
         scanner.start()
         try:
             assert wait_until(lambda: client.status() is not None)
-            yield Rig(publisher, client, state, applied)
+            yield Rig(publisher, client, state, applied, cpu)
         finally:
             stop.set()
             scanner.join(5)
@@ -102,10 +106,13 @@ def test_a_viewer_is_refused_and_an_operator_applied_each_audited_under_its_name
     assert applied.applied, applied.reason
     assert [(c.op, c.user, c.token) for c in rig.applied] == [("mode", "olga", "")]  # no token
     rows = [r for r in read_audit(rig.state) if r.op == "mode"]
+    (link,) = rig.cpu.info.links()  # the origin is the transport's: the view's link
     assert [(r.user, r.role, r.origin, r.outcome) for r in rows] == [
-        ("vic", "viewer", "shell test", "refused"),
-        ("olga", "operator", "shell test", "applied"),
+        ("vic", "viewer", str(link.dst), "refused"),
+        ("olga", "operator", str(link.dst), "applied"),
     ]
+    assert rows[0].detail == "claimed origin: shell test"  # the claim: a note only
+    assert re.fullmatch(r"cycle \d+: FB FILL; claimed origin: shell test", rows[1].detail)
     assert rows[0].reason.startswith("role viewer") and '"MAN"' in rows[1].args
     listed = rig.client.audit()
     assert listed is not None and [e.user for e in listed.entries if e.op == "mode"] == [
@@ -175,55 +182,6 @@ def test_wildcard_queries_are_answered_or_ignored_cleanly(rig: Rig) -> None:
 # ---------------------------------------------------------------- TLS on loopback
 
 
-def _certificates(folder: Path) -> TlsFiles:
-    """A throwaway CA and a certificate for localhost / 127.0.0.1 signed by it."""
-    x509 = pytest.importorskip("cryptography.x509")
-    from cryptography.hazmat.primitives import hashes, serialization
-    from cryptography.hazmat.primitives.asymmetric import ec
-    from cryptography.x509.oid import NameOID
-
-    now = datetime.datetime.now(datetime.UTC)
-    life = (now - datetime.timedelta(minutes=5), now + datetime.timedelta(days=1))
-
-    def name(cn: str) -> x509.Name:
-        return x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, cn)])
-
-    ca_key = ec.generate_private_key(ec.SECP256R1())
-    ca = (
-        x509.CertificateBuilder()
-        .subject_name(name("s7graph test CA"))
-        .issuer_name(name("s7graph test CA"))
-        .public_key(ca_key.public_key())
-        .serial_number(x509.random_serial_number())
-        .not_valid_before(life[0])
-        .not_valid_after(life[1])
-        .add_extension(x509.BasicConstraints(ca=True, path_length=None), critical=True)
-        .sign(ca_key, hashes.SHA256())
-    )
-    key = ec.generate_private_key(ec.SECP256R1())
-    alt = x509.SubjectAlternativeName(
-        [x509.DNSName("localhost"), x509.IPAddress(ipaddress.ip_address("127.0.0.1"))]
-    )
-    cert = (
-        x509.CertificateBuilder()
-        .subject_name(name("localhost"))
-        .issuer_name(ca.subject)
-        .public_key(key.public_key())
-        .serial_number(x509.random_serial_number())
-        .not_valid_before(life[0])
-        .not_valid_after(life[1])
-        .add_extension(alt, critical=False)
-        .sign(ca_key, hashes.SHA256())
-    )
-    pem = serialization.Encoding.PEM
-    (folder / "ca.pem").write_bytes(ca.public_bytes(pem))
-    (folder / "cert.pem").write_bytes(cert.public_bytes(pem))
-    (folder / "key.pem").write_bytes(
-        key.private_bytes(pem, serialization.PrivateFormat.PKCS8, serialization.NoEncryption())
-    )
-    return TlsFiles(str(folder / "ca.pem"), str(folder / "cert.pem"), str(folder / "key.pem"))
-
-
 def _free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
@@ -231,17 +189,16 @@ def _free_port() -> int:
 
 
 def test_tls_on_loopback_carries_login_and_commands_and_refuses_a_stranger(
-    tmp_path: Path,
+    tmp_path: Path, bus_certs: BusCerts
 ) -> None:
-    tls = _certificates(tmp_path)
     endpoint = f"tls/localhost:{_free_port()}"
     users = UsersFile(tmp_path / "users.json")
     users.add("olga", "operator", PASSWORD)
     gate = Gate(Authenticator(users))
-    with open_session(listen=[endpoint], tls=tls) as cpu:
+    with open_session(listen=[endpoint], tls=bus_certs.tls("cpu.cpu1")) as cpu:
         publisher = BusPublisher(cpu, "cpu1", {"FILL": layout()}, gate=gate)
         try:
-            with open_session(connect=[endpoint], tls=TlsFiles(tls.ca)) as view:
+            with open_session(connect=[endpoint], tls=bus_certs.tls("client.olga")) as view:
                 client = BusClient(view, "cpu1")
                 assert wait_until(lambda: client.chart("FILL") is not None)
                 login = client.login("olga", PASSWORD)
@@ -254,8 +211,10 @@ def test_tls_on_loopback_carries_login_and_commands_and_refuses_a_stranger(
                 sender.join(5)
                 assert replies and replies[0].applied
                 client.close()
-            # a node without the CA cannot even connect
+            # a node without the CA cannot even connect, nor one without a certificate
             with pytest.raises(zenoh.ZError):
                 open_session(connect=[endpoint], mode="client").close()
+            with pytest.raises(zenoh.ZError):
+                open_session(connect=[endpoint], tls=bus_certs.tls()).close()
         finally:
             publisher.close()

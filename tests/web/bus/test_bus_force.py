@@ -11,6 +11,7 @@ import sys
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 
@@ -20,6 +21,9 @@ from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import Command, CommandReply
 from s7graph.web.bus.session import open_session
 from tests.web.helpers import PASSWORD, OnlineRig, online_cpu, wait_until
+
+if TYPE_CHECKING:
+    from tests.conftest import BusCerts
 
 pytestmark = pytest.mark.timeout(90)
 
@@ -65,11 +69,13 @@ class Bus:
 
 
 @pytest.fixture
-def bus(tmp_path: Path) -> Iterator[Bus]:
+def bus(tmp_path: Path, bus_certs: BusCerts) -> Iterator[Bus]:
     users = {"olga": "operator", "eng": "engineer", "vic": "viewer"}
     with (
-        online_cpu(tmp_path, CHART, serve=False, users=users, name="lamp.s7g") as rig,
-        open_session(connect=[rig.endpoint]) as view,
+        online_cpu(
+            tmp_path, CHART, serve=False, users=users, certs=bus_certs, name="lamp.s7g"
+        ) as rig,
+        open_session(connect=[rig.endpoint], tls=rig.tls) as view,
         BusClient(view, "cpu1") as client,
     ):
         assert wait_until(lambda: client.status() is not None)
@@ -212,8 +218,7 @@ def _shell(
             *args,
             "--cpu",
             "cpu1",
-            "--connect",
-            rig.endpoint,
+            *rig.bus,
         ],
         capture_output=True,
         text=True,

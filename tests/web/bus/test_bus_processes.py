@@ -1,6 +1,7 @@
 """The bus across processes: ``s7graph router``, two CPUs (``s7graph run --cpu``, one with a
 users file, one the demo), ``s7graph web`` serving one of them, ``s7graph watch`` and the
-shell's commands, each a process of its own on loopback; and the command line's refusals
+shell's commands, each a process of its own on loopback with its own certificate (mutual
+TLS, the router's access control for line1 and line2); and the command line's refusals
 (a busy or out-of-range --port, a non-loopback --listen without users)."""
 
 from __future__ import annotations
@@ -17,11 +18,15 @@ import time
 import urllib.request
 from collections.abc import Iterator
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 
 from s7graph.web.access.users import UsersFile
 from tests.paths import ROOT
+
+if TYPE_CHECKING:
+    from tests.conftest import BusCerts
 
 pytestmark = pytest.mark.timeout(240)
 DRILL = ROOT / "examples" / "drill"
@@ -91,14 +96,15 @@ def run(*args: str, env: dict[str, str] | None = None) -> subprocess.CompletedPr
 
 
 @pytest.fixture
-def bus(tmp_path: Path) -> Iterator[tuple[str, Path, Path]]:
-    """A router and two CPUs on it: line1 with a users file (and a quarter of the cycle for
-    commands), line2 the demo."""
+def bus(tmp_path: Path, bus_certs: BusCerts) -> Iterator[tuple[str, Path, Path, BusCerts]]:
+    """A router and two CPUs on it, every node with its certificate: line1 with a users file
+    (and a quarter of the cycle for commands), line2 the demo."""
     users = UsersFile(tmp_path / "users.json")
     users.add("olga", "operator", PASSWORD)
     users.add("vic", "viewer", PASSWORD)
-    endpoint = f"tcp/127.0.0.1:{free_port()}"
-    procs = [Proc("router", "--listen", endpoint)]
+    endpoint = f"tls/localhost:{free_port()}"
+    relays = ["--cpu", "line1", "--cpu", "line2"]
+    procs = [Proc("router", "--listen", endpoint, *relays, *bus_certs.args("router.hub"))]
     try:
         procs[0].wait_for("router on")
         chart = [str(DRILL / "drill.s7g"), "--symbols", str(DRILL / "symbols.txt")]
@@ -110,6 +116,7 @@ def bus(tmp_path: Path) -> Iterator[tuple[str, Path, Path]]:
                     *chart,
                     "--cpu",
                     cpu,
+                    *bus_certs.args(f"cpu.{cpu}"),
                     "--connect",
                     endpoint,
                     "--duration-s",
@@ -123,21 +130,21 @@ def bus(tmp_path: Path) -> Iterator[tuple[str, Path, Path]]:
             )
         for p in procs[1:]:
             p.wait_for(r"CPU line\d on the bus")
-        yield endpoint, users.path, tmp_path
+        yield endpoint, users.path, tmp_path, bus_certs
     finally:
         errors = [p.stop() for p in reversed(procs)]
         assert not any("Traceback" in e for e in errors), errors
 
 
 def test_router_two_cpus_one_web_view_and_shell_commands_as_processes(
-    bus: tuple[str, Path, Path],
+    bus: tuple[str, Path, Path, BusCerts],
 ) -> None:
-    endpoint, _, tmp = bus
+    endpoint, _, tmp, certs = bus
     port = free_port()
-    web = Proc(
-        "web", "--connect", endpoint, "--cpu", "line2", "--port", str(port), "--duration-s", "200"
-    )
-    watch = Proc("watch", "--connect", endpoint, "--cpu", "line1", "--duration-s", "200")
+    view = ["--connect", endpoint, *certs.args("view.desk")]
+    web = Proc("web", *view, "--cpu", "line2", "--port", str(port), "--duration-s", "200")
+    olga = ["--connect", endpoint, *certs.args("client.olga")]
+    watch = Proc("watch", *olga, "--cpu", "line1", "--duration-s", "200")
     try:
         web.wait_for(r"CPU line1 \(RUN, logins: users\): Seq_drill")
         web.wait_for(r"CPU line2 \(RUN, logins: demo\): Seq_drill")
@@ -147,7 +154,7 @@ def test_router_two_cpus_one_web_view_and_shell_commands_as_processes(
         watch.wait_for(r"cycle \d+  Seq_drill  AUTO  active S\d")
 
         env = {"S7GRAPH_PASSWORD": PASSWORD}
-        shell = ["--cpu", "line1", "--connect", endpoint]
+        shell = ["--cpu", "line1", *olga]
         done = run("mode", "MAN", *shell, "--user", "olga", env=env)
         assert done.returncode == 0, done.stderr
         assert "mode applied on line1/Seq_drill" in done.stdout
@@ -157,18 +164,23 @@ def test_router_two_cpus_one_web_view_and_shell_commands_as_processes(
         assert "ack refused: role viewer may not ack (needs operator)" in refused.stderr
         wrong = run("init", *shell, "--user", "olga", env={"S7GRAPH_PASSWORD": "not it"})
         assert wrong.returncode == 1 and "wrong user name or password" in wrong.stderr
-        demo = run("mode", "AUTO", "--cpu", "line2", "--connect", endpoint, "--user", "dan")
+        demo = run("mode", "AUTO", "--cpu", "line2", *olga, "--user", "dan")
         assert demo.returncode == 0, demo.stderr
 
         audit = run("audit", "--state", str(tmp / "line1.sqlite"), "--since", "1h")
         assert audit.returncode == 0, audit.stderr
-        assert re.search(r"olga \(operator\) from shell .*: mode Seq_drill .*applied", audit.stdout)
+        # from the transport: the router's link (the shell is behind it); the claim a note
+        relayed = r"from router\.hub@tls/127\.0\.0\.1:\d+ \(relayed\)"
+        assert re.search(
+            rf"olga \(operator\) {relayed}: mode Seq_drill .*applied - .*claimed origin: shell ",
+            audit.stdout,
+        )
         assert re.search(r"vic \(viewer\) .*: ack Seq_drill: refused: role viewer", audit.stdout)
         assert PASSWORD not in audit.stdout
         demo_audit = run("audit", "--state", str(tmp / "line2.sqlite"))
         assert "dan (unverified) (engineer)" in demo_audit.stdout
 
-        status = run("status", "--cpu", "line1", "--connect", endpoint)
+        status = run("status", "--cpu", "line1", *olga)
         assert status.returncode == 0, status.stderr
         head, cycle, longest, *_ = status.stdout.splitlines()
         assert re.match(r"CPU line1: RUN, cycle \d+, FBs Seq_drill, 0 force jobs$", head), head
@@ -185,7 +197,7 @@ def test_router_two_cpus_one_web_view_and_shell_commands_as_processes(
         assert status.stdout.splitlines()[-1].startswith(
             "communication: up to 25 % of the cycle at each scan boundary; "
         )
-        absent = run("status", "--cpu", "line9", "--connect", endpoint)
+        absent = run("status", "--cpu", "line9", *olga)
         assert absent.returncode == 2 and "CPU 'line9' does not answer" in absent.stderr
     finally:
         for p in (watch, web):

@@ -12,6 +12,7 @@ import sys
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 
@@ -27,6 +28,9 @@ from s7graph.web.bus.session import open_session
 from s7graph.web.harness.persist import open_state
 from s7graph.web.harness.session import ChartSession, compile_text, load_chart
 from tests.web.helpers import PASSWORD, online_cpu, wait_until
+
+if TYPE_CHECKING:
+    from tests.conftest import BusCerts
 
 pytestmark = pytest.mark.timeout(90)
 
@@ -73,6 +77,7 @@ class Cpu:
     state: Path
     token: str
     scans: list[int]
+    bus: list[str]
 
     def set(self, name: str, value: object) -> None:
         self.session.set(name, value)
@@ -87,17 +92,21 @@ class Cpu:
 
 
 @pytest.fixture
-def cpu(tmp_path: Path) -> Iterator[Cpu]:
+def cpu(tmp_path: Path, bus_certs: BusCerts) -> Iterator[Cpu]:
     users = {"eng": "engineer", "olga": "operator"}
     with (
-        online_cpu(tmp_path, CHART, serve=False, users=users, name="fill.s7g") as rig,
-        open_session(connect=[rig.endpoint]) as view,
+        online_cpu(
+            tmp_path, CHART, serve=False, users=users, certs=bus_certs, name="fill.s7g"
+        ) as rig,
+        open_session(connect=[rig.endpoint], tls=rig.tls) as view,
         BusClient(view, "cpu1") as client,
     ):
         assert wait_until(lambda: client.status() is not None)
         login = client.login("eng", PASSWORD)
         assert login.ok, login.reason
-        yield Cpu(rig.session, client, rig.online, rig.path, rig.state, login.token, rig.scans)
+        yield Cpu(
+            rig.session, client, rig.online, rig.path, rig.state, login.token, rig.scans, rig.bus
+        )
 
 
 def test_download_swaps_the_chart_at_a_scan_boundary_keeping_the_active_step_and_its_time(
@@ -238,10 +247,10 @@ def test_save_and_open_use_the_project_directory_with_backups(cpu: Cpu) -> None:
     assert not cpu.send("open", file="missing.s7g").applied
 
 
-def _shell(rig_endpoint: str, *args: str) -> subprocess.CompletedProcess[str]:
+def _shell(bus: list[str], *args: str) -> subprocess.CompletedProcess[str]:
     env = {**os.environ, "S7GRAPH_PASSWORD": PASSWORD}
     return subprocess.run(
-        [sys.executable, "-m", "s7graph", *args, "--cpu", "cpu1", "--connect", rig_endpoint],
+        [sys.executable, "-m", "s7graph", *args, "--cpu", "cpu1", *bus],
         capture_output=True,
         text=True,
         timeout=60,
@@ -254,20 +263,19 @@ def test_s7graph_download_shows_the_change_asks_and_downloads(cpu: Cpu, tmp_path
     """``s7graph download CHART.s7g --cpu NAME``: the same path as the bus command."""
     cpu.set("go", True)
     assert wait_until(lambda: cpu.active() == [2])
-    endpoint = f"unixsock-stream/{cpu.path.parent}/bus.sock"
     edited = tmp_path / "edited.s7g"
     edited.write_text(WITHOUT_S2, encoding="utf-8")
-    asked = _shell(endpoint, "download", str(edited), "--user", "eng")
+    asked = _shell(cpu.bus, "download", str(edited), "--user", "eng")
     assert asked.returncode == 1 and "S2 would be removed" in asked.stderr, asked.stderr
     assert "S2" in asked.stdout  # the change summary came first
-    unconfirmed = _shell(endpoint, "download", str(edited), "--user", "eng", "--removed", "keep")
+    unconfirmed = _shell(cpu.bus, "download", str(edited), "--user", "eng", "--removed", "keep")
     assert unconfirmed.returncode == 1 and "not confirmed" in unconfirmed.stderr
     assert cpu.active() == [2]  # nothing downloaded yet
-    done = _shell(endpoint, "download", str(edited), "--user", "eng", "--removed", "keep", "--yes")
+    done = _shell(cpu.bus, "download", str(edited), "--user", "eng", "--removed", "keep", "--yes")
     assert done.returncode == 0, done.stderr
     assert "version 2 runs" in done.stdout
     assert cpu.session.graph.cc.step_index.get(2) is None
-    refused = _shell(endpoint, "download", str(edited), "--user", "olga", "--yes")
+    refused = _shell(cpu.bus, "download", str(edited), "--user", "olga", "--yes")
     assert refused.returncode == 1 and "needs engineer" in refused.stderr
 
 

@@ -15,6 +15,7 @@ import sys
 import textwrap
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 
@@ -22,6 +23,9 @@ from s7graph.engine.diagnostics import EventId
 from s7graph.engine.runner import EXIT_HUNG, GRACE_S
 from s7graph.web.cli.supervisor import KILL_AFTER_S, STOP_EXTRA_S
 from tests.paths import ROOT
+
+if TYPE_CHECKING:
+    from tests.conftest import BusCerts
 
 DRILL = ROOT / "examples" / "drill"
 PASSWORD = "correct horse battery"
@@ -121,10 +125,10 @@ def _users(tmp_path: Path) -> Path:
     return users
 
 
-def _shell(endpoint: str, *args: str) -> subprocess.CompletedProcess[str]:
+def _shell(bus: list[str], *args: str) -> subprocess.CompletedProcess[str]:
     env = dict(os.environ, S7GRAPH_PASSWORD=PASSWORD)
     return subprocess.run(
-        [sys.executable, "-m", "s7graph", *args, "--connect", endpoint],
+        [sys.executable, "-m", "s7graph", *args, *bus],
         cwd=ROOT,
         env=env,
         capture_output=True,
@@ -145,12 +149,13 @@ def _wait_line(proc: subprocess.Popen[str], text: str) -> list[str]:
 
 @pytest.mark.timeout(120)
 def test_a_plant_hanging_in_c_code_comes_back_in_stop_on_the_bus_and_an_engineer_starts_it(
-    tmp_path: Path,
+    tmp_path: Path, bus_certs: BusCerts
 ) -> None:
     plant = tmp_path / "hangplant.py"
     plant.write_text(textwrap.dedent(HANGING_PLANT))
     state = tmp_path / "drill.sqlite"
-    endpoint = f"tcp/127.0.0.1:{_free_port()}"
+    endpoint = f"tls/localhost:{_free_port()}"  # a users file: every node has a certificate
+    bus = ["--connect", endpoint, *bus_certs.args("client.olga")]
     users = _users(tmp_path)
     proc = _s7graph(
         "run",
@@ -165,25 +170,26 @@ def test_a_plant_hanging_in_c_code_comes_back_in_stop_on_the_bus_and_an_engineer
         endpoint,
         "--users",
         str(users),
+        *bus_certs.args("cpu.cpu1"),
     )
     try:
         seen = _wait_line(proc, "in STOP (from its last durable state")
         assert any("the scan hung in plant hangplant.py" in line for line in seen)
-        status = _shell(endpoint, "status")
+        status = _shell(bus, "status")
         assert status.returncode == 0, status.stderr
         lines = status.stdout.splitlines()
         assert lines[0].startswith("CPU cpu1: STOP")
         assert lines[1].startswith("STOP: plant hangplant.py: no scan ended for")
-        refused = _shell(endpoint, "start", "--user", "olga")
+        refused = _shell(bus, "start", "--user", "olga")
         assert refused.returncode == 1 and "start refused" in refused.stderr
-        assert _shell(endpoint, "status").stdout.startswith("CPU cpu1: STOP")
-        started = _shell(endpoint, "start", "--user", "eng")
+        assert _shell(bus, "status").stdout.startswith("CPU cpu1: STOP")
+        started = _shell(bus, "start", "--user", "eng")
         assert started.returncode == 0, started.stderr
         deadline = time.monotonic() + 10
-        while not _shell(endpoint, "status").stdout.startswith("CPU cpu1: RUN"):
+        while not _shell(bus, "status").stdout.startswith("CPU cpu1: RUN"):
             assert time.monotonic() < deadline, "the CPU did not go to RUN"
-        assert _shell(endpoint, "stop", "--user", "eng").returncode == 0
-        assert _shell(endpoint, "status").stdout.startswith("CPU cpu1: STOP")
+        assert _shell(bus, "stop", "--user", "eng").returncode == 0
+        assert _shell(bus, "status").stdout.startswith("CPU cpu1: STOP")
     finally:
         proc.send_signal(signal.SIGTERM)
         _, rest = proc.communicate(timeout=30)

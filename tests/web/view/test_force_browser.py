@@ -27,15 +27,17 @@ from tests.web.helpers import (
 if TYPE_CHECKING:
     from playwright.sync_api import Page
 
+    from tests.conftest import BusCerts
+
 pytestmark = [pytest.mark.timeout(240), needs_chromium]
 pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
 USERS = {"eng": "engineer", "olga": "operator"}
 
 
 @pytest.fixture
-def cpu(tmp_path_factory: pytest.TempPathFactory) -> Iterator[OnlineRig]:
+def cpu(tmp_path_factory: pytest.TempPathFactory, bus_certs: BusCerts) -> Iterator[OnlineRig]:
     tmp = tmp_path_factory.mktemp("force")
-    with online_cpu(tmp, CHART, serve=True, users=USERS, name="lamp.s7g") as rig:
+    with online_cpu(tmp, CHART, serve=True, users=USERS, certs=bus_certs, name="lamp.s7g") as rig:
         yield rig
 
 

@@ -39,6 +39,8 @@ from tests.web.view.test_edit_browser import click, condition, select, type_into
 if TYPE_CHECKING:
     from playwright.sync_api import Page
 
+    from tests.conftest import BusCerts
+
 pytestmark = [pytest.mark.timeout(300), needs_chromium]
 pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
 
@@ -66,7 +68,7 @@ CHAIN = "\n".join(
 class Watch:
     """``s7graph watch`` on the CPU's bus, its lines collected as they come."""
 
-    def __init__(self, endpoint: str) -> None:
+    def __init__(self, bus: list[str]) -> None:
         self.lines: list[str] = []
         self.proc = subprocess.Popen(
             [
@@ -76,8 +78,7 @@ class Watch:
                 "watch",
                 "--cpu",
                 "cpu1",
-                "--connect",
-                endpoint,
+                *bus,
                 "--duration-s",
                 "280",
             ],
@@ -109,15 +110,16 @@ class Watch:
 
 
 @pytest.fixture(scope="module")
-def cpu(tmp_path_factory: pytest.TempPathFactory) -> Iterator[OnlineRig]:
+def cpu(tmp_path_factory: pytest.TempPathFactory, bus_certs: BusCerts) -> Iterator[OnlineRig]:
     tmp = tmp_path_factory.mktemp("insert")
-    with online_cpu(tmp, CHAIN, serve=True, users={"eng": "engineer"}, name="chain.s7g") as rig:
+    users = {"eng": "engineer"}
+    with online_cpu(tmp, CHAIN, serve=True, users=users, certs=bus_certs, name="chain.s7g") as rig:
         yield rig
 
 
 @pytest.fixture(scope="module")
 def watch(cpu: OnlineRig) -> Iterator[Watch]:
-    w = Watch(cpu.endpoint)
+    w = Watch(cpu.bus)
     try:
         assert wait_until(lambda: w.saw("Seq_chain", "active S1"), timeout=60), w.lines
         yield w
@@ -261,8 +263,10 @@ def test_an_inserted_step_is_named_by_events_watch_the_page_and_the_audit(
     rows = read_audit(cpu.state)
     download = [r for r in rows if r.op == "download" and r.outcome == "applied"][-1]
     assert "S8" in download.detail and download.user == "eng"
-    steps = [(r.op, r.detail.split(": ", 1)[-1]) for r in rows if r.op in ("step_on", "step_off")]
+    moves = [r for r in rows if r.op in ("step_on", "step_off")]
+    steps = [(r.op, r.detail.split(": ", 1)[-1].split("; ")[0]) for r in moves]
     assert steps == [("step_on", "FB Seq_chain: S8"), ("step_off", "FB Seq_chain: S8")]
+    assert all(r.detail.endswith(")") and "; claimed origin: page " in r.detail for r in moves)
     audit = panel.audit_html  # the page's Audit panel
     assert wait_until(lambda: "step_off" in audit.content and "8" in audit.content)
 

@@ -129,7 +129,8 @@ def test_acknowledge_click_reaches_the_cpu_queue_and_is_answered(
     (pending,) = received
     command = pending.command
     assert (command.op, command.fb, command.user) == ("ack", "MIXER", "olga")
-    assert command.token and command.origin.startswith("page ")
+    assert command.token and command.origin.startswith("unixsock-stream/")  # the transport's
+    assert pending.note.startswith("claimed origin: page ")  # what the page's view says
     pending.resolve(True, cycle=4)
     assert wait_until(lambda: bool(edge.view.replies))
     assert edge.view.replies[-1].applied

@@ -1,0 +1,38 @@
+"""Failed logins are counted per source (web/bus/origin.py ``lockout_source``): the
+transport's identity and host, never its port, and a page's name only where one link
+relays many pages."""
+
+from __future__ import annotations
+
+import pytest
+
+from s7graph.web.bus.origin import lockout_source
+
+
+@pytest.mark.parametrize(
+    ("transport", "claimed", "source"),
+    [
+        # a client that connects again from another port is the same source ...
+        ("client.olga@tls/10.0.0.7:38574", "shell olga@pc pid 1", "client.olga@tls/10.0.0.7"),
+        ("client.olga@tls/10.0.0.7:41000", "shell olga@pc pid 2", "client.olga@tls/10.0.0.7"),
+        # ... whatever it claims: a claim it may change at every try is not believed
+        ("client.rogue@tls/10.0.0.9:5000", "page 1 (10.0.0.7)", "client.rogue@tls/10.0.0.9"),
+        # a view (or the CPU's own view) relays many pages: the page it names counts
+        (
+            "view.desk@tls/10.0.0.5:6000",
+            "page 3 (10.0.0.7)",
+            "view.desk@tls/10.0.0.5 / page 3 (10.0.0.7)",
+        ),
+        ("cpu.line1@tls/[::1]:6000", "page 4 (::1)", "cpu.line1@tls/[::1] / page 4 (::1)"),
+        ("unixsock-stream/6c1f", "page 2 (127.0.0.1)", "unixsock-stream / page 2 (127.0.0.1)"),
+        ("this process", "page 1", "this process / page 1"),
+        # behind a router every client is the router's link
+        ("router.hub@tls/10.0.0.1:7447 (relayed)", "shell", "router.hub@tls/10.0.0.1 (relayed)"),
+        ("tcp/127.0.0.1:4545", "shell", "tcp/127.0.0.1"),
+        ("unknown transport", "shell", "unknown transport"),
+    ],
+)
+def test_failed_logins_count_against_the_transport_and_a_relayed_page(
+    transport: str, claimed: str, source: str
+) -> None:
+    assert lockout_source(transport, claimed) == source

@@ -1,0 +1,93 @@
+"""Where a login or a command came from, as the transport says — not as its sender claims.
+
+A client names its session in each query (``source_info``: its zenoh id, :func:`stamp`);
+the CPU looks that id up among its own links (``session.info.links()``) and describes the
+link: ``<identity>@<remote locator>`` — ``client.olga@tls/127.0.0.1:38574`` (the
+certificate's common name or the usrpwd user name, the address it connects from) — or the
+locator alone when the link proved nobody. The rule (:func:`transport_origin`):
+
+1. the claimed id is one of this session's links: that link;
+2. else exactly one link, or exactly one link to a router: that link, ``(relayed)`` when
+   it is a router's (the sender is behind it);
+3. else ``unknown transport``.
+
+The limits: the id is the sender's claim, so a peer with valid credentials connected to the
+same CPU could name another connected peer's id and be described as that peer's link;
+through a router the CPU sees the router's link, not the sender's. The origin the sender
+claims itself (``page 3 (10.0.0.7)``, ``shell olga@host pid 42``) stays in the audit row
+as a note (``web.bus.gate.claimed_note``), never as its origin.
+"""
+
+from __future__ import annotations
+
+import itertools
+from typing import Any
+
+import zenoh
+
+__all__ = ["RELAYS", "UNKNOWN", "lockout_source", "stamp", "transport_origin"]
+
+UNKNOWN = "unknown transport"
+RELAYS = ("cpu.", "view.")
+"""Identities that relay many people over one link (a view serves many pages; ``run
+--web`` gives its view the CPU's certificate, or meets it on a unix socket in a folder
+only its own user may open): the page such a link names is believed."""
+_SN = itertools.count(1)
+
+
+def stamp(session: zenoh.Session) -> zenoh.SourceInfo:
+    """The ``source_info`` a client sends with a login or a command: its session's id."""
+    return zenoh.SourceInfo(session.id, next(_SN) & 0xFFFFFFFF)
+
+
+def _describe(link: Any, relayed: bool = False) -> str:
+    who = link.auth_identifier
+    where = f"{who}@{link.dst}" if who else str(link.dst)
+    return f"{where} (relayed)" if relayed else where
+
+
+def transport_origin(session: zenoh.Session, source_info: zenoh.SourceInfo | None) -> str:
+    """Where a query with ``source_info`` came from by this session's links (the module's
+    rule); never raises (a failure is :data:`UNKNOWN`)."""
+    try:
+        claimed = str(source_info.source_id.zid) if source_info is not None else ""
+        if claimed and claimed == str(session.zid()):
+            return "this process"
+        links = list(session.info.links())
+        for link in links:
+            if claimed and str(link.zid) == claimed:
+                return _describe(link)
+        routers = {
+            str(t.zid) for t in session.info.transports() if t.whatami == zenoh.WhatAmI.ROUTER
+        }
+        via = [link for link in links if str(link.zid) in routers]
+        if len(via) == 1:
+            return _describe(via[0], relayed=True)
+        if len(links) == 1:
+            return _describe(links[0])
+    except Exception:  # never raise on a zenoh thread
+        return UNKNOWN
+    return UNKNOWN
+
+
+def lockout_source(transport: str, claimed: str) -> str:
+    """Where failed logins are counted from: the transport's identity and host, without
+    the port (a client that connects again is the same source); for a link of a
+    :data:`RELAYS` identity, a unix socket, or this process, also the page it names, so one bad page
+    locks out itself and not every page of that view. Any other claim is ignored: a client
+    could change it at every try to dodge the lockout."""
+    who, at, where = transport.partition("@")
+    if not at:
+        who, where = "", transport
+    relayed = where.endswith(" (relayed)")
+    host = where.removesuffix(" (relayed)")
+    if host.startswith("unixsock-stream/"):
+        host = "unixsock-stream"  # each connection has its own name: the socket is one place
+    elif host.count(":") and not host.endswith("]"):
+        host = host.rsplit(":", 1)[0]
+    key = f"{who}@{host}" if who else host
+    key += " (relayed)" if relayed else ""
+    local = transport == "this process" or host == "unixsock-stream"
+    if claimed and (local or who.startswith(RELAYS)):
+        return f"{key} / {claimed}"
+    return key
