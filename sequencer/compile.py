@@ -469,7 +469,7 @@ def _gen_permanent(name: str, instrs: tuple[Any, ...], g: CodeGen, res: _Resolve
                 lines.append(f"    if {cond}:")
                 lines.append("        " + g.set_bit(ref, ins.kind == "S"))
         elif isinstance(ins, BlockCall):
-            lines.append("    " + call_code(ins, val))
+            lines.append("    " + call_code(ins, val, res))
             for pname, target in ins.outputs:
                 lines.append(f"    if {pname!r} in _o:")
                 lines.append("        " + g.write(res(target), f"_o[{pname!r}]"))

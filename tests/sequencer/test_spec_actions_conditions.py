@@ -189,6 +189,33 @@ def test_s1_call_row_calls_the_block_once_per_activation() -> None:
     assert cpu.mem.get("MW20") == 1
 
 
+def test_a_timer_or_counter_given_to_a_call_arrives_as_its_parameter_type_asks() -> None:
+    """docs/semantics.md, "Decisions", timers and counters as operands: a CALL passes a timer or
+    counter as an operand, so a TIMER or COUNTER parameter gets its number (S7 passes the
+    cell, not its value), a BOOL its status bit and an INT its value."""
+    text = source(
+        seq("""
+      INITIAL_STEP S1 "a": S1 CS C1, C#3; CALL FC 2 (tmr := "Tmr", cnt := C1, bit := C1, num := C1);
+      END_STEP
+      TRANSITION T1 FROM S1 TO S1 := FALSE;
+    """),
+        header='SYMBOLS "Tmr" : T12 : TIMER; END_SYMBOLS',
+    )
+    seen: list[dict[str, object]] = []
+
+    @fc(2, "Probe", IN={"tmr": "TIMER", "cnt": "COUNTER", "bit": "BOOL", "num": "INT"})
+    def probe(ctx, params) -> None:
+        seen.append(dict(params))
+
+    clock = VirtualClock()
+    cpu = Cpu(clock)
+    cpu.load(probe)
+    install_all(cpu, [GraphFB(compile_chart(parse_chart(text, "call.s7g")))])
+    cpu.start("warm")
+    _scan(cpu, clock, 2)
+    assert seen[-1] == {"tmr": 12, "cnt": 1, "bit": True, "num": 3}
+
+
 # ---------------------------------------------------------------- ON / OFF
 
 
