@@ -26,6 +26,7 @@ class EventId(IntEnum):
     MEMORY_RESET = 0x4307
     STARTUP_REFUSED = 0x4309
     STOP_OB121_MISSING = 0x4562
+    STOP_OB122_MISSING = 0x4563
     STOP_OB80_MISSING = 0x4564
     STOP_CYCLE_TIME = 0x4580
     STOP_OB82_MISSING = 0x4565
@@ -46,6 +47,9 @@ class EventId(IntEnum):
     ASYNC_ERROR = 0x3900
     INTERRUPT_OB_MISSING = 0x35A1
     AREA_ERROR = 0x2524
+    AREA_WRITE_ERROR = 0x2525
+    IO_ACCESS_READ = 0x2942
+    IO_ACCESS_WRITE = 0x2943
     DB_NOT_LOADED = 0x253A
     FC_NOT_LOADED = 0x253C
     FB_NOT_LOADED = 0x253E
@@ -65,7 +69,7 @@ class EventId(IntEnum):
 class DiagnosticBuffer:
     """A fixed-length ring of ``DiagEntry``: iteration oldest first, ``latest()`` newest first."""
 
-    __slots__ = ("_entries", "capacity", "total")
+    __slots__ = ("_entries", "capacity", "ob", "total")
 
     def __init__(self, capacity: int = 100) -> None:
         if capacity < 1:
@@ -74,6 +78,8 @@ class DiagnosticBuffer:
         self._entries: deque[DiagEntry] = deque(maxlen=capacity)
         self.total = 0
         """Entries ever added (a sequence number: the last ``total - n`` are new)."""
+        self.ob = 0
+        """The OB running now (the CPU sets it around every OB); 0 outside every OB."""
 
     def add(self, entry: DiagEntry) -> DiagEntry:
         self._entries.append(entry)

@@ -486,3 +486,20 @@ def test_the_criteria_word_of_a_single_contact_is_an_int_like_any_other() -> Non
     words = [*st.crit, *st.crit_old, *st.crit_loc, *st.crit_loc_err, *st.crit_sup]
     assert {type(w) for w in words} == {int}
     assert st.crit_loc[run.idx(2)] == 1
+
+
+def test_a_chart_may_not_write_the_peripheral_inputs() -> None:
+    """docs/semantics.md, "Decisions", I/O access error: PI is the modules' side, read-only to
+    the program — an assignment, a permanent instruction or a call output writing it is E045
+    (reading it is fine)."""
+    text = source(
+        seq("""
+      INITIAL_STEP S1 "a": N PIW0 := 5; CALL FC 9 (X := PIW2, Y => "In_word"); END_STEP
+      TRANSITION T1 FROM S1 TO STOP := PIW4 > 3;
+    """),
+        header='SYMBOLS "In_word" : PIW6 : INT; END_SYMBOLS\n'
+        "PERMANENT BEFORE\n  PIW8 := MW0;\nEND_PERMANENT\n",
+    )
+    found = [(d.code, d.message) for d in validate(parse_chart(text, "c.s7g"))]
+    assert [c for c, _ in found] == ["E045"] * 3, found
+    assert all("peripheral input" in m for _, m in found), found
