@@ -428,15 +428,15 @@ class Cpu(ProgramBlocks, Forcing, InterruptDispatch, SyncErrors):
         self.mem.markers[self.clock_memory] = value
 
     def _run_ob(self, number: int, start_info: dict[str, Any], *, nested: bool = False) -> None:
-        """Run OB ``number``; PI is read-only to it. ``nested``: inside a block of another OB
-        (OB122), which an abort escapes to."""
+        """Run OB ``number`` in its priority class (``priority_class``); PI is read-only to
+        it. ``nested``: inside a block of another OB (OB122), which an abort escapes to."""
         block = self.obs.get(number)
         if block is None:
             return
         ctx = self._ctx
         diag, mem = self.diagnostics, self.mem
-        outer = diag.ob, mem.pi_locked
-        diag.ob = number
+        outer = diag.ob, diag.priority, mem.pi_locked
+        diag.ob, diag.priority = number, self.priority_class(number)
         mem.pi_locked = True
         ctx.ob = number
         ctx.depth = 0
@@ -457,7 +457,7 @@ class Cpu(ProgramBlocks, Forcing, InterruptDispatch, SyncErrors):
             self._program_error(number, block.label, exc)
         finally:
             self._airt_disabled = airt  # DIS_AIRT ends with its OB
-            diag.ob, mem.pi_locked = outer
+            diag.ob, diag.priority, mem.pi_locked = outer
             if marks is not None:
                 marks.leave(before)
 

@@ -1,15 +1,18 @@
-"""Synchronous errors: a programming error (OB121), an I/O access error (OB122)
-(docs/runtime.md, "When a scan hangs or fails"; Siemens' Program Design for S7-300/400,
-ch. 3-4).
+"""Synchronous errors — a programming error (OB121), an I/O access error (OB122) — and the
+priority class an OB runs in (docs/runtime.md, "When a scan hangs or fails"; Siemens' Program
+Design for S7-300/400, ch. 3-4 and 10).
 
 * An exception escaping a block is a programming error: the diagnostic buffer records it,
   then OB121 runs (the faulting block has ended) or, without OB121, the CPU stops.
 * A direct access to a peripheral address no module answers (``IOAccessError``: PI/PQ
   beyond the modules) is an I/O access error, and synchronous: with OB122 loaded the CPU
-  runs OB122 at once, inside the access. SFC44 REPL_VAL
+  runs OB122 at once, inside the access, in the faulting OB's priority class. SFC44 REPL_VAL
   there sets the value the failed read returns (its low bytes; 0 without REPL_VAL), a failed
   write is not made, and the block goes on. Without OB122, or in OB122 itself, the error
   escapes the block and the CPU stops (16#4563).
+* OB121 and OB122 run in the priority class of the OB that caused them; OB80–OB87 in 28
+  during startup (26 in RUN); every other OB in its own (``Cpu.priority_of``). The
+  diagnostic buffer stamps each entry with the running OB and its class.
 
 ``SyncErrors`` is a part of ``engine.cpu.Cpu``, which owns the attributes it declares.
 """
@@ -29,7 +32,7 @@ __all__ = ["SyncErrors", "classify"]
 
 
 class SyncErrors:
-    """OB121 and OB122."""
+    """OB121, OB122 and the priority class of a running OB."""
 
     mode: CpuMode
     obs: dict[int, OB]
@@ -40,11 +43,26 @@ class SyncErrors:
 
     if TYPE_CHECKING:
 
+        def priority_of(self, ob: int) -> int: ...
+
         def _run_ob(
             self, number: int, start_info: dict[str, Any], *, nested: bool = False
         ) -> None: ...
 
         def _go_stop(self, event: int, block: str, message: str) -> None: ...
+
+    def priority_class(self, ob: int) -> int:
+        """The class OB ``ob`` runs in when it starts now: OB121/OB122 that of the running
+        (faulting) OB, OB80–OB87 28 during startup, else ``priority_of`` (0 for an OB
+        without a class)."""
+        if ob in (121, 122):
+            return self.diagnostics.priority
+        if 80 <= ob <= 87 and self.mode is CpuMode.STARTUP:
+            return 28
+        try:
+            return self.priority_of(ob)
+        except ValueError:
+            return 0
 
     def _program_error(self, ob: int, block: str, exc: BaseException) -> None:
         event = classify(exc)
