@@ -69,6 +69,7 @@ OBBody = Callable[[Any], None]
 SectionSpec = Mapping[str, "str | tuple[Any, ...] | Var | FB"]
 
 _STRINGY = ("STRING", "CHAR", OBJECT)
+_CELL_TYPES = {"TIMER": "TIMER", "COUNTER": "COUNTER"}
 
 
 def is_stringy(type_name: str) -> bool:
@@ -90,9 +91,14 @@ def _check_type(owner: str, var: Var) -> None:
 
 
 def _params(label: str, kind: BlockKind, interface: tuple[Var, ...]) -> dict[str, tuple[Decl, str]]:
-    """The checked interface's stored parameters by name (all but TEMP): ``(decl, type)``."""
+    """The checked interface's stored parameters by name (all but TEMP): ``(decl, type)``;
+    the parameter types TIMER and COUNTER in capitals (the call passes their number)."""
     _check_interface(label, kind, interface)
-    return {v.name: (v.decl, v.type) for v in interface if v.decl is not Decl.TEMP}
+    return {
+        v.name: (v.decl, _CELL_TYPES.get(v.type.upper(), v.type))
+        for v in interface
+        if v.decl is not Decl.TEMP
+    }
 
 
 def _check_interface(owner: str, kind: BlockKind, interface: tuple[Var, ...]) -> None:

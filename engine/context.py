@@ -2,8 +2,9 @@
 of blocks in Python" and "Restarts: warm, hot, cold").
 
 ``CallContext.call`` binds the actual parameters (a ``str`` for a non-string parameter is an
-operand), runs the body one nesting level deeper (B-stack overflow → ``NestingOverflow``) and tags
-an escaping exception with the innermost block (``_Fault``), which the CPU turns into OB121 or STOP
+operand; a TIMER or COUNTER parameter takes the cell's number, ``T12`` → 12), runs the body
+one nesting level deeper (B-stack overflow → ``NestingOverflow``) and tags an escaping
+exception with the innermost block (``_Fault``), which the CPU turns into OB121 or STOP
 — ``SystemExit`` and ``KeyboardInterrupt`` raised by a block included: a block error, never a
 process exit. The runner's ``ScanAborted`` passes through, naming the innermost block.
 """
@@ -14,7 +15,7 @@ from collections.abc import Iterable
 from functools import lru_cache
 from typing import Any, Protocol
 
-from s7graph.engine.address import Address, parse_address
+from s7graph.engine.address import Address, Area, parse_address
 from s7graph.engine.blocks import DB, FB, FC, OB, Decl, InstanceDB, is_stringy
 from s7graph.engine.clock import Clock
 from s7graph.engine.datatypes import check_value
@@ -101,6 +102,27 @@ def _fits(type_name: str, value: object) -> bool:
 @lru_cache(maxsize=4096)
 def _addr(text: str) -> Address:
     return parse_address(text)
+
+
+# Block parameter types that name an S5 cell (Siemens' Program Design for S7-300/400, ch. 2 and
+# appendix C: the parameter types TIMER and COUNTER).
+_CELL_PARAMS = {"TIMER": Area.T, "COUNTER": Area.C}
+
+
+def _cell_number(where: str, type_name: str, actual: object) -> int:
+    """The actual of a TIMER or COUNTER parameter: the cell's number, as S7 passes it — ``T12``
+    arrives as 12, never as the timer's value, and the block runs that timer (``s5_timers``
+    ``cell_of(ctx.mem.timers, n)``). An ``int`` actual is the number itself."""
+    want = "a timer like T12" if type_name == "TIMER" else "a counter like C3"
+    if isinstance(actual, str):
+        addr = _addr(actual)
+        if addr.area is not _CELL_PARAMS[type_name]:
+            raise BlockError(f"{where}: a {type_name} parameter takes {want}, not {actual!r}")
+        return addr.byte
+    if isinstance(actual, bool) or not isinstance(actual, int):
+        raise BlockError(f"{where}: a {type_name} parameter takes {want}, not {actual!r}")
+    check_value(type_name, actual)
+    return actual
 
 
 class CallContext:
@@ -237,7 +259,9 @@ class CallContext:
                 writes = writes or []
                 writes.append((name, actual, type_name))
                 continue
-            if isinstance(actual, str) and not is_stringy(type_name):
+            if type_name in _CELL_PARAMS:
+                actual = _cell_number(f"{blk.label}.{name}", type_name, actual)
+            elif isinstance(actual, str) and not is_stringy(type_name):
                 if decl is Decl.IN_OUT:
                     writes = writes or []
                     writes.append((name, actual, type_name))
@@ -266,7 +290,9 @@ class CallContext:
             if actual is None and decl is Decl.OUT:
                 returned.append(name)  # given, its value only returned: the caller writes it
                 continue
-            if isinstance(actual, str) and not is_stringy(type_name):
+            if type_name in _CELL_PARAMS and decl is Decl.IN:
+                args[name] = _cell_number(f"{blk.label}.{name}", type_name, actual)
+            elif isinstance(actual, str) and not is_stringy(type_name):
                 if decl is not Decl.OUT:  # an OUT is written, never read in
                     args[name] = self.mem.read_as(_addr(actual), type_name)
                 if decl is not Decl.IN:

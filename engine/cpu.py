@@ -11,9 +11,10 @@ are written into PII right after it is read, into the flags at the start of the 
 into PIQ right before it is written; a change of the table goes to the diagnostic buffer at
 the start of the next scan, the one it acts in. Outside RUN the module outputs are 0. A Python
 exception in a user block is a programming error: OB121 if loaded, else STOP — the process
-never dies. All timing uses *process time*: the clock minus the time spent in HOLD, so HOLD
-freezes timers, interrupts and monitoring while the diagnostic time stamps and the
-real-time clock keep the real clock. What a block body sees (``CallContext``, block calls)
+never dies; a direct access to a missing peripheral address runs OB122 inside the access
+(``engine/cpu_errors.py``). All timing uses *process time*: the clock minus the time spent
+in HOLD, so HOLD freezes timers, interrupts and monitoring while the diagnostic time stamps
+and the real-time clock keep the real clock. What a block body sees (``CallContext``, block calls)
 lives in ``engine/context.py``.
 """
 
@@ -28,15 +29,16 @@ from s7graph.engine.address import Area
 from s7graph.engine.blocks import DB, FB, FC, OB, InstanceDB
 from s7graph.engine.clock import Clock
 from s7graph.engine.context import CallContext, NestingOverflow, _Fault
+from s7graph.engine.cpu_errors import SyncErrors
 from s7graph.engine.cpu_forcing import Forcing, jobs_text, listed
 from s7graph.engine.cpu_interrupts import MISSING_STOP, InterruptDispatch
 from s7graph.engine.cpu_program import ProgramBlocks
 from s7graph.engine.diagnostics import DiagnosticBuffer, EventId
-from s7graph.engine.errors import AddressError, BlockError, S7Error, ScanAborted, TypeMismatch
+from s7graph.engine.errors import BlockError, ScanAborted
 from s7graph.engine.force import ForceTable, apply_plan
 from s7graph.engine.interrupts import CYCLIC_DEFAULT_MS, CyclicScheduler, priority
 from s7graph.engine.marks import ScanMarks
-from s7graph.engine.memory import AreaLengthError, Memory
+from s7graph.engine.memory import Memory
 from s7graph.engine.modes import CpuMode, KeySwitch, ModeRequest, SetKeySwitch, resolve_requests
 from s7graph.engine.record import DiagEntry, ScanRecord
 from s7graph.engine.restart import RESTART, RestartType, parse_restart
@@ -90,7 +92,7 @@ class Pending:
     error: str = ""
 
 
-class Cpu(ProgramBlocks, Forcing, InterruptDispatch):
+class Cpu(ProgramBlocks, Forcing, InterruptDispatch, SyncErrors):
     """One soft CPU (docs/architecture.md, "Seams"). Power-on leaves it in STOP."""
 
     def __init__(
@@ -110,6 +112,7 @@ class Cpu(ProgramBlocks, Forcing, InterruptDispatch):
     ) -> None:
         self.clock = clock
         self.mem = memory if memory is not None else Memory()
+        self.mem.io_error = self._io_access_error  # OB122 (engine/cpu_errors.py)
         self.name = name
         self.mode = CpuMode.STOP
         self.key = key
@@ -424,11 +427,17 @@ class Cpu(ProgramBlocks, Forcing, InterruptDispatch):
             value |= ((ms // half) & 1) << bit
         self.mem.markers[self.clock_memory] = value
 
-    def _run_ob(self, number: int, start_info: dict[str, Any]) -> None:
+    def _run_ob(self, number: int, start_info: dict[str, Any], *, nested: bool = False) -> None:
+        """Run OB ``number`` in its priority class (``priority_class``); PI is read-only to
+        it. ``nested``: inside a block of another OB (OB122), which an abort escapes to."""
         block = self.obs.get(number)
         if block is None:
             return
         ctx = self._ctx
+        diag, mem = self.diagnostics, self.mem
+        outer = diag.ob, diag.priority, mem.pi_locked
+        diag.ob, diag.priority = number, self.priority_class(number)
+        mem.pi_locked = True
         ctx.ob = number
         ctx.depth = 0
         ctx.start_info = start_info
@@ -441,29 +450,16 @@ class Cpu(ProgramBlocks, Forcing, InterruptDispatch):
         except _Fault as fault:
             self._program_error(number, fault.block, fault.exc)
         except ScanAborted as abort:
+            if nested:
+                raise
             self.abort(abort.block or block.label)
         except (Exception, SystemExit, KeyboardInterrupt) as exc:  # a block error, never an exit
             self._program_error(number, block.label, exc)
         finally:
             self._airt_disabled = airt  # DIS_AIRT ends with its OB
+            diag.ob, diag.priority, mem.pi_locked = outer
             if marks is not None:
                 marks.leave(before)
-
-    def _program_error(self, ob: int, block: str, exc: BaseException) -> None:
-        event = _classify(exc)
-        # the runtime's own errors say what went wrong; a Python error of a block's body
-        # keeps its class, which its author knows
-        message = str(exc) if isinstance(exc, S7Error) else f"{type(exc).__name__}: {exc}"
-        self.diagnostics.record(self._raw, event, block, message, getattr(exc, "address", ""))
-        if isinstance(exc, NestingOverflow | RecursionError):
-            self.hot_blockers.add("stack overflow")
-            self._go_stop(EventId.STACK_OVERFLOW, block, "block stack overflow")
-        elif ob == 121 or 121 not in self.obs:
-            self._go_stop(EventId.STOP_OB121_MISSING, block, "programming error, OB121 not loaded")
-        else:
-            info = {"SW_FLT": event & 0xFF, "BLOCK": block, "MESSAGE": message, "FAULT_OB": ob}
-            info["EXCEPTION"] = exc
-            self._run_ob(121, info)
 
     def _go_stop(self, event: int, block: str, message: str) -> None:
         self.mode = CpuMode.STOP
@@ -579,28 +575,6 @@ class Cpu(ProgramBlocks, Forcing, InterruptDispatch):
         cyclic = {ob for ob in self.obs if ob in CYCLIC_DEFAULT_MS}
         cyclic |= {ob for ob in CYCLIC_DEFAULT_MS if self.interrupts.is_configured(ob)}
         self.interrupts.arm(cyclic, t_run)
-
-
-def _classify(exc: BaseException) -> int:
-    """Event id 16#25xx of a programming error (Siemens' Program Design for S7-300/400, ch. 3-4
-    OB121 SW_FLT)."""
-    if isinstance(exc, AreaLengthError):
-        return 0x2500 | exc.sw_flt
-    if isinstance(exc, AddressError):
-        return EventId.AREA_ERROR
-    if isinstance(exc, TypeMismatch):
-        return EventId.TYPE_ERROR
-    if isinstance(exc, BlockError):
-        text = str(exc)
-        for kind, event in (
-            ("FC", EventId.FC_NOT_LOADED),
-            ("FB", EventId.FB_NOT_LOADED),
-            ("DB", EventId.DB_NOT_LOADED),
-        ):
-            if f"block {kind}" in text or f"instance {kind}" in text:
-                return event
-        return EventId.PYTHON_EXCEPTION
-    return EventId.PYTHON_EXCEPTION
 
 
 CommandFn = Callable[[Cpu], object]

@@ -1,7 +1,10 @@
 """The diagnostic buffer (Siemens' Program Design for S7-300/400, ch. 10).
 
-A ring of fixed length: the newest entry overwrites the oldest. The user program cannot
-clear it; it survives restarts and memory reset (it belongs to the CPU, not to memory).
+Every entry carries the OB in which its event happened and that OB's priority class
+(OB121/OB122 the class of the OB that caused them; 0 for the operating system's own
+events outside every OB). A ring of fixed length: the newest entry overwrites the oldest.
+The user program cannot clear it; it survives restarts and memory reset (it belongs to
+the CPU, not to memory).
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ class EventId(IntEnum):
     MEMORY_RESET = 0x4307
     STARTUP_REFUSED = 0x4309
     STOP_OB121_MISSING = 0x4562
+    STOP_OB122_MISSING = 0x4563
     STOP_OB80_MISSING = 0x4564
     STOP_CYCLE_TIME = 0x4580
     STOP_OB82_MISSING = 0x4565
@@ -46,6 +50,9 @@ class EventId(IntEnum):
     ASYNC_ERROR = 0x3900
     INTERRUPT_OB_MISSING = 0x35A1
     AREA_ERROR = 0x2524
+    AREA_WRITE_ERROR = 0x2525
+    IO_ACCESS_READ = 0x2942
+    IO_ACCESS_WRITE = 0x2943
     DB_NOT_LOADED = 0x253A
     FC_NOT_LOADED = 0x253C
     FB_NOT_LOADED = 0x253E
@@ -69,7 +76,7 @@ class EventId(IntEnum):
 class DiagnosticBuffer:
     """A fixed-length ring of ``DiagEntry``: iteration oldest first, ``latest()`` newest first."""
 
-    __slots__ = ("_entries", "capacity", "total")
+    __slots__ = ("_entries", "capacity", "ob", "priority", "total")
 
     def __init__(self, capacity: int = 100) -> None:
         if capacity < 1:
@@ -78,6 +85,10 @@ class DiagnosticBuffer:
         self._entries: deque[DiagEntry] = deque(maxlen=capacity)
         self.total = 0
         """Entries ever added (a sequence number: the last ``total - n`` are new)."""
+        self.ob = 0
+        self.priority = 0
+        """The OB running now and its priority class (the CPU sets both around every OB):
+        ``record`` stamps them on the entry; 0 outside every OB."""
 
     def add(self, entry: DiagEntry) -> DiagEntry:
         self._entries.append(entry)
@@ -87,8 +98,10 @@ class DiagnosticBuffer:
     def record(
         self, t_ns: int, event_id: int, block: str = "", message: str = "", address: str = ""
     ) -> DiagEntry:
-        """Append an entry built from its fields and return it."""
-        return self.add(DiagEntry(t_ns, int(event_id), block, message, address))
+        """Append an entry built from its fields, stamped with the running OB and its priority
+        class, and return it."""
+        entry = DiagEntry(t_ns, int(event_id), block, message, address, self.ob, self.priority)
+        return self.add(entry)
 
     def since(self, total: int) -> tuple[DiagEntry, ...]:
         """Entries added after the buffer's ``total`` was ``total`` (at most ``capacity``)."""

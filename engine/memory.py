@@ -22,7 +22,15 @@ from s7graph.engine.errors import AddressError, BlockError, TypeMismatch
 if TYPE_CHECKING:
     from s7graph.engine.symbols import SymbolTable
 
-__all__ = ["AreaLengthError", "DataBlock", "Memory", "S5Counter", "S5Timer"]
+__all__ = [
+    "AreaLengthError",
+    "AreaWriteError",
+    "DataBlock",
+    "IOAccessError",
+    "Memory",
+    "S5Counter",
+    "S5Timer",
+]
 
 
 class AreaLengthError(AddressError):
@@ -37,6 +45,34 @@ class AreaLengthError(AddressError):
     def sw_flt(self) -> int:
         """OB121 fault id: 16#22 area-length error on read, 16#23 on write."""
         return 0x23 if self.write else 0x22
+
+
+class AreaWriteError(AddressError):
+    """A write the program may not make: the peripheral inputs (PI) are the modules' side,
+    read-only to blocks (``[K]`` OB121 SW_FLT 16#25, area error on write)."""
+
+    write = True
+    sw_flt = 0x25
+
+
+class IOAccessError(AddressError):
+    """Direct access to a peripheral address no module answers (PI/PQ outside the modules):
+    the S7 I/O access error, OB122 (``[K]`` SW_FLT 16#42 on read, 16#43 on write; Siemens'
+    Program Design for S7-300/400, ch. 3-4). ``address`` names the operand."""
+
+    def __init__(self, message: str, *, write: bool, address: str) -> None:
+        super().__init__(message)
+        self.write = write
+        self.address = address
+
+    @property
+    def sw_flt(self) -> int:
+        """OB122 fault id: 16#42 I/O access error on read, 16#43 on write."""
+        return 0x43 if self.write else 0x42
+
+
+IOErrorHandler = Callable[[IOAccessError], int]
+"""``handler(error) -> replacement``: what ``Memory.io_error`` calls (the CPU's OB122)."""
 
 
 @dataclass(slots=True)
@@ -186,6 +222,13 @@ class Memory:
         """Writing PQ inside the Q image also updates Q (Siemens' Program Design for S7-300/400, ch.
         5)."""
         self.symbols: SymbolTable | None = None
+        self.io_error: IOErrorHandler | None = None
+        """Called for an I/O access error (``IOAccessError``) instead of raising it: the CPU
+        runs OB122 there; a read returns what it returns (the REPL_VAL replacement value), a
+        write is not made. None: the error is raised."""
+        self.pi_locked = False
+        """True while the program runs (the CPU sets it around every OB): a write to PI is
+        then an ``AreaWriteError``. The modules' side — a plant, a stimulus — writes PI."""
         self._areas: dict[str, bytearray] = {
             Area.I: self.inputs,
             Area.Q: self.outputs,
@@ -235,7 +278,14 @@ class Memory:
             buf = self.area_bytes(addr.area, addr.db)
         except AddressError:
             raise AddressError(f"{addr}: DB{addr.db} does not exist") from None
+        if write and self.pi_locked and addr.area is Area.PI:
+            raise AreaWriteError(f"{addr}: the peripheral inputs are read-only to the program")
         if addr.byte + size > len(buf):
+            if addr.area is Area.PI or addr.area is Area.PQ:
+                where = f"{addr.area} ends at byte {len(buf) - 1}"
+                raise IOAccessError(
+                    f"{addr}: no module at this address ({where})", write=write, address=str(addr)
+                )
             what = f"DB{addr.db} length {len(buf)}" if addr.db else f"{addr.area} size {len(buf)}"
             raise AreaLengthError(f"{addr} is outside {what}", write=write)
         return buf
@@ -256,7 +306,10 @@ class Memory:
         if addr.area is Area.T or addr.area is Area.C:
             cell = self._cell(addr)
             return cell.binary() if isinstance(cell, S5Timer) else cell.value
-        buf = self._span(addr, addr.size, write=False)
+        try:
+            buf = self._span(addr, addr.size, write=False)
+        except IOAccessError as err:
+            return self._replacement(err, addr.size)
         if addr.width is Width.BIT:
             return bool(buf[addr.byte] >> addr.bit & 1)
         return int.from_bytes(buf[addr.byte : addr.byte + addr.size], "big")
@@ -276,8 +329,19 @@ class Memory:
             raise TypeMismatch(f"{value!r} does not fit {addr} (0..{(1 << addr.width) - 1})")
         self._store(addr, value.to_bytes(addr.size, "big"))
 
+    def _replacement(self, err: IOAccessError, size: int) -> int:
+        """An I/O access error: the handler's replacement value for a read of ``size``
+        bytes (its low bytes), 0 for a write; raised when there is no handler."""
+        if self.io_error is None:
+            raise err
+        return self.io_error(err) & ((1 << 8 * size) - 1)
+
     def _store(self, addr: Address, data: bytes) -> None:
-        buf = self._span(addr, len(data), write=True)
+        try:
+            buf = self._span(addr, len(data), write=True)
+        except IOAccessError as err:
+            self._replacement(err, 0)  # OB122 ran; the write is not made
+            return
         end = addr.byte + len(data)
         buf[addr.byte : end] = data
         if addr.area is Area.PQ and self.pq_updates_q and end <= len(self.outputs):
@@ -306,7 +370,10 @@ class Memory:
         if addr.width is Width.BIT:
             return self.read(addr)
         spec = type_of(name)
-        buf = self._span(addr, spec.size, write=False)
+        try:
+            buf = self._span(addr, spec.size, write=False)
+        except IOAccessError as err:
+            return decode(name, self._replacement(err, spec.size).to_bytes(spec.size, "big"))
         return decode(name, buf[addr.byte : addr.byte + spec.size])
 
     def write_as(self, addr: Address, type_name: str, value: object) -> None:

@@ -107,7 +107,7 @@ CREATE TABLE IF NOT EXISTS instances (
     fingerprint TEXT NOT NULL, shape TEXT NOT NULL, data BLOB NOT NULL);
 CREATE TABLE IF NOT EXISTS diagnostics (
     seq INTEGER PRIMARY KEY, t_ns INTEGER, event_id INTEGER, block TEXT, message TEXT,
-    address TEXT);
+    address TEXT, ob INTEGER NOT NULL DEFAULT 0, priority INTEGER NOT NULL DEFAULT 0);
 CREATE TABLE IF NOT EXISTS alarms (
     id INTEGER PRIMARY KEY AUTOINCREMENT, t_ns INTEGER, key TEXT, state TEXT, text TEXT,
     user TEXT NOT NULL DEFAULT '', cpu_ns INTEGER, reason TEXT NOT NULL DEFAULT '');
@@ -147,6 +147,12 @@ _ADDED_ALARM_COLUMNS = (
     ("cpu_ns", "INTEGER"),
     ("reason", "TEXT NOT NULL DEFAULT ''"),
 )
+_ADDED_DIAG_COLUMNS = (
+    ("ob", "INTEGER NOT NULL DEFAULT 0"),
+    ("priority", "INTEGER NOT NULL DEFAULT 0"),
+)
+DiagRow = tuple[int, int, int, str, str, str, int, int]
+"""A diagnostics row: seq, t_ns, event_id, block, message, address, OB, priority class."""
 
 
 class StateFileError(S7Error):
@@ -207,7 +213,7 @@ class Batch:
     """DB number → (FB label, FB name, fingerprint, shape JSON, encoded snapshot): ``write``
     compresses it, in the writer's thread."""
     parts: dict[str, str] = field(default_factory=dict)
-    diagnostics: list[tuple[int, int, int, str, str, str]] = field(default_factory=list)
+    diagnostics: list[DiagRow] = field(default_factory=list)
     alarms: list[tuple[int, str, str, str, str, int | None, str]] = field(default_factory=list)
     audit: list[tuple[int, str, str, str]] = field(default_factory=list)
     appended: list[tuple[str, tuple[str, ...], tuple[Any, ...]]] = field(default_factory=list)
@@ -421,6 +427,10 @@ class StateStore:
         for column, decl in _ADDED_ALARM_COLUMNS:
             if column not in columns:  # a state file from before the column existed
                 db.execute(f"ALTER TABLE alarms ADD COLUMN {column} {decl}")
+        columns = {row[1] for row in db.execute("PRAGMA table_info(diagnostics)")}
+        for column, decl in _ADDED_DIAG_COLUMNS:
+            if column not in columns:  # entries written before it: 0, the OS's
+                db.execute(f"ALTER TABLE diagnostics ADD COLUMN {column} {decl}")
         db.execute("INSERT OR REPLACE INTO meta VALUES ('format', ?)", (FORMAT,))
 
     def _next_diag_seq(self) -> int:
@@ -505,7 +515,16 @@ class StateStore:
                 self._part_seen[name] = data
         for e in cpu.diagnostics.since(self._diag_saved):
             batch.diagnostics.append(
-                (self._diag_seq, e.t_ns, e.event_id, e.block, e.message, e.address)
+                (
+                    self._diag_seq,
+                    e.t_ns,
+                    e.event_id,
+                    e.block,
+                    e.message,
+                    e.address,
+                    e.ob,
+                    e.priority,
+                )
             )
             self._diag_seq += 1
         self._diag_saved = cpu.diagnostics.total
@@ -555,12 +574,13 @@ class StateStore:
             shape = self._shapes[number] = (fb, _dumps(fmt.shape() if fmt is not None else None))
         batch.instances[number] = (fb.label, fb.name, fingerprint_of(fb), shape[1], row)
 
-    def diagnostic_row(self, entry: DiagEntry) -> tuple[int, int, int, str, str, str]:
+    def diagnostic_row(self, entry: DiagEntry) -> DiagRow:
         """A diagnostics row for an entry written outside ``stage`` (the runner's last word
         when the scan hangs)."""
         seq = self._diag_seq
         self._diag_seq += 1
-        return (seq, entry.t_ns, entry.event_id, entry.block, entry.message, entry.address)
+        e = entry
+        return (seq, e.t_ns, e.event_id, e.block, e.message, e.address, e.ob, e.priority)
 
     def maybe_save(self, cpu: Cpu) -> bool:
         """Stage and write at once if something changed (and the interval has passed)."""
@@ -609,7 +629,8 @@ class StateStore:
                 db.executemany("INSERT OR REPLACE INTO parts VALUES (?, ?)", batch.parts.items())
             if batch.diagnostics:
                 db.executemany(
-                    "INSERT OR REPLACE INTO diagnostics VALUES (?, ?, ?, ?, ?, ?)",
+                    "INSERT OR REPLACE INTO diagnostics (seq, t_ns, event_id, block, message, "
+                    "address, ob, priority) VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
                     batch.diagnostics,
                 )
             if batch.alarms:
@@ -699,7 +720,8 @@ class StateStore:
                 self.path, "force table", lambda: cpu.forces.restore(json.loads(forces), cpu.mem)
             )
         entries = self._db.execute(
-            "SELECT t_ns, event_id, block, message, address FROM diagnostics ORDER BY seq"
+            "SELECT t_ns, event_id, block, message, address, ob, priority FROM diagnostics "
+            "ORDER BY seq"
         ).fetchall()
         saved = [_diag_entry(row) for row in entries[-cpu.diagnostics.capacity :]]
         for entry in saved:
@@ -984,9 +1006,15 @@ def _checked(
 
 
 def _diag_entry(row: tuple[Any, ...]) -> DiagEntry:
-    t_ns, event_id, block, message, address = row
+    t_ns, event_id, block, message, address, ob, priority = row
     return DiagEntry(
-        int(t_ns), int(event_id), str(block or ""), str(message or ""), str(address or "")
+        int(t_ns),
+        int(event_id),
+        str(block or ""),
+        str(message or ""),
+        str(address or ""),
+        int(ob or 0),
+        int(priority or 0),
     )
 
 

@@ -14,13 +14,17 @@ from s7graph.engine.modes import CpuMode
 @dataclass(frozen=True, slots=True)
 class DiagEntry:
     """One diagnostic-buffer entry: time, event id 16#xxxx, block, message (Siemens' Program Design
-    for S7-300/400, ch. 10)."""
+    for S7-300/400, ch. 10); ``ob`` and ``priority`` are the OB in which the event happened
+    and its priority class (OB121/OB122: the faulting OB's class), 0 for an event of the
+    operating system outside every OB."""
 
     t_ns: int
     event_id: int
     block: str = ""
     message: str = ""
     address: str = ""
+    ob: int = 0
+    priority: int = 0
 
     def __str__(self) -> str:
         where = f" {self.block}" if self.block else ""

@@ -161,12 +161,7 @@ def _compile_chart(chart: Chart, symbols: Any) -> CompiledChart:
 
     tr_src = tuple(tuple(res.step(s, t.loc) for s in t.sources) for t in trans)
     tr_dst = tuple(tuple(res.step(s, t.loc) for s in t.targets) for t in trans)
-    # leaving transitions per step in written order (docs/semantics.md, "One FB call", step 4.2:
-    # leftmost/first-listed wins)
-    leaving: list[list[int]] = [[] for _ in steps]
-    for j, srcs in enumerate(tr_src):
-        for i in srcs:
-            leaving[i].append(j)
+    leaving = alternative_priority(tr_src, tuple(t.number for t in trans), len(steps))
 
     conds: list[tuple[list[str], str, str]] = []
     for j, t in enumerate(trans):
@@ -226,6 +221,21 @@ def _compile_chart(chart: Chart, symbols: Any) -> CompiledChart:
         warnings=tuple(str(w) for w in warnings),
         aliases=tuple(aliases.values()),
     )
+
+
+def alternative_priority(
+    tr_src: tuple[tuple[int, ...], ...], numbers: tuple[int, ...], n_steps: int
+) -> list[list[int]]:
+    """The transitions leaving each step in priority order (docs/semantics.md, "Decisions",
+    alternative divergence): the one directly below the step — the first written — then the
+    others by transition number, lowest first (manual 6-7)."""
+    leaving: list[list[int]] = [[] for _ in range(n_steps)]
+    for j, srcs in enumerate(tr_src):
+        for i in srcs:
+            leaving[i].append(j)
+    for out in leaving:
+        out[1:] = sorted(out[1:], key=numbers.__getitem__)
+    return leaving
 
 
 def _step_functions(
@@ -459,7 +469,7 @@ def _gen_permanent(name: str, instrs: tuple[Any, ...], g: CodeGen, res: _Resolve
                 lines.append(f"    if {cond}:")
                 lines.append("        " + g.set_bit(ref, ins.kind == "S"))
         elif isinstance(ins, BlockCall):
-            lines.append("    " + call_code(ins, val))
+            lines.append("    " + call_code(ins, val, res))
             for pname, target in ins.outputs:
                 lines.append(f"    if {pname!r} in _o:")
                 lines.append("        " + g.write(res(target), f"_o[{pname!r}]"))

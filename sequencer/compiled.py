@@ -2,11 +2,11 @@
 (docs/architecture.md, "The core is a function"; docs/semantics.md, "Structure").
 
 Steps and transitions are numbered ``0..n-1`` in definition order (sequence by sequence).
-``leaving[i]`` lists the transitions leaving step ``i`` in priority order (written order,
-docs/semantics.md, "One FB call", step 4.2; docs/chart-format.md). All conditions and action
-programs of the chart are one generated Python module (``source``), compiled once; ``bind(mem)``
-executes it against one CPU's memory and returns the ``Program`` (tuples of functions indexed like
-the steps/transitions).
+``leaving[i]`` lists the transitions leaving step ``i`` in priority order (the first written,
+then by number: docs/semantics.md, "One FB call", step 4.2; ``compile.alternative_priority``).
+All conditions and action programs of the chart are one generated Python module
+(``source``), compiled once; ``bind(mem)`` executes it against one CPU's memory and returns
+the ``Program`` (tuples of functions indexed like the steps/transitions).
 """
 
 from __future__ import annotations

@@ -8,11 +8,11 @@
 3. permanent *before* instructions;
 4. per sequencer, in definition order: a) evaluate the transitions leaving active steps
    (criteria bits), b) decide which switch (mode rule, HALT_SQ, supervision faults, at an
-   alternative divergence the first-listed; a step activated in step 2 — INIT_SQ, the
-   first call, S_ON — stays for this call, STEP7 comprehensive guide vol. 2, ch. 14), c) switch
-   (S0/S1,
-   skip steps), d) interlock and supervision of the active steps, e) final scans of the
-   steps left, then the action rows of the active steps; then d) and e) of the steps a
+   alternative divergence the first written, then the lowest number; a step activated in
+   step 2 — INIT_SQ, the first call, S_ON — stays for this call, STEP7 comprehensive guide
+   vol. 2, ch. 14), c) switch (S0/S1, skip steps), d) interlock and supervision of the
+   active steps, e) final scans of the steps left, then the action rows of the active
+   steps; then d) and e) of the steps a
    later sequencer activated in an earlier one (``_late_steps``: every activation runs
    its S1 rows, S7-GRAPH manual 6-2, 6-4);
 5. permanent *after* instructions;

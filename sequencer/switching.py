@@ -1,6 +1,6 @@
 """Steps 4.1–4.3 of a general GRAPH FB call (docs/semantics.md, "One FB call" and "Decisions"): per
 sequencer, evaluate the transitions leaving its active steps, decide which switch
-(mode rule, HALT_SQ, supervision faults, at an alternative divergence the first-listed, steps held
+(mode rule, HALT_SQ, supervision faults, at an alternative divergence by priority, steps held
 for this call) and switch (events S0/S1 through the runtime's ``_deactivate`` and ``_activate``),
 then pass through skip steps.
 
@@ -90,7 +90,7 @@ def switch(
                     continue
                 taken.update(srcs)
             fire.append(j)
-            break  # alternative divergence: the first-listed switchable path wins
+            break  # alternative divergence: the first switchable path in priority order wins
     # c: switch
     if not fire:
         return

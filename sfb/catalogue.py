@@ -365,6 +365,13 @@ CATALOGUE: tuple[Entry, ...] = (
         "undo one DIS_AIRT; RET_VAL = delays still in force (W#16#8080: none)",
     ),
     _e(_SFC, 43, "RE_TRIGR", "", "restart cycle-time monitoring"),
+    _e(
+        _SFC,
+        44,
+        "REPL_VAL",
+        "IN VAL:DWORD; OUT RET_VAL:INT",
+        "in OB122: the value the failed peripheral read returns",
+    ),
     _e(_SFC, 46, "STP", "", "put the CPU into STOP"),
     _e(_SFC, 47, "WAIT", "IN WT:INT", "busy-wait WT microseconds (recorded, time not advanced)"),
     _e(

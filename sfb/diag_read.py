@@ -119,10 +119,12 @@ def wr_usmsg(
 
 
 def encode_record(entry: DiagEntry, stamp: datetime) -> bytes:
-    """The 20-byte SZL 0x00A0 record of ``entry`` with its time stamp ``stamp``."""
+    """The 20-byte SZL 0x00A0 record of ``entry`` with its time stamp ``stamp``: the priority
+    class of the OB in which the event happened, and the OB the entry names (else that
+    OB)."""
     match = _OB.match(entry.block)
-    ob_nr = int(match.group(1)) & 0xFF if match else 0
-    head = (entry.event_id & 0xFFFF).to_bytes(2, "big") + bytes([0, ob_nr])
+    ob_nr = (int(match.group(1)) if match else entry.ob) & 0xFF
+    head = (entry.event_id & 0xFFFF).to_bytes(2, "big") + bytes([entry.priority & 0xFF, ob_nr])
     return head + bytes(8) + encode("DATE_AND_TIME", stamp)
 
 

@@ -25,7 +25,7 @@ from typing import NamedTuple
 from s7graph.engine.errors import S7Error
 from s7graph.steps.conditions import with_locals
 from s7graph.steps.expressions import Resolve, StepIndex, gen_assigned, gen_value
-from s7graph.steps.operands import CodeGen, Ref
+from s7graph.steps.operands import CELLS, CodeGen, Ref
 from s7graph.steps.qualifiers import EVENT_BITS
 from s7graph.steps.syntax import (
     ActionRow,
@@ -156,14 +156,25 @@ def _bit(row: ActionRow, resolve: Resolve) -> Ref:
     return ref
 
 
-def call_code(call: BlockCall, val: Callable[[Expr], str]) -> str:
+def call_code(call: BlockCall, val: Callable[[Expr], str], resolve: Resolve) -> str:
     """``_o = R.call(kind, block, instance, {params})`` for a CALL row or permanent
     instruction: its inputs' values, and each output without an operand (``None``: the
     block returns it and the code after the call writes it to the row's operand; RET_VAL
-    always comes back)."""
-    pairs = [f"{name!r}: {val(e)}" for name, e in call.inputs]
+    always comes back). A bare timer or counter goes as its operand (``'T12'``), so the
+    parameter's type decides what arrives: a TIMER or COUNTER parameter its number, a BOOL
+    its status bit, a number its value (``engine.context``)."""
+    pairs = [f"{name!r}: {_actual(e, val, resolve)}" for name, e in call.inputs]
     pairs += [f"{name!r}: None" for name, _ in call.outputs if name.upper() != "RET_VAL"]
     return f"_o = R.call({call.kind!r}, {call.block!r}, {call.instance!r}, {{{', '.join(pairs)}}})"
+
+
+def _actual(e: Expr, val: Callable[[Expr], str], resolve: Resolve) -> str:
+    """The code of one CALL input: ``val(e)``, or a timer or counter cell's operand text."""
+    if isinstance(e, Operand):
+        ref = resolve(e)
+        if ref.kind in CELLS:
+            return repr(f"{'T' if ref.kind == 'timer' else 'C'}{ref.number}")
+    return val(e)
 
 
 def _row(
@@ -195,7 +206,7 @@ def _row(
     if q == "CALL":
         if not isinstance(op, BlockCall):
             raise ActionError("CALL needs a block", row.loc)
-        lines = [call_code(op, val)]
+        lines = [call_code(op, val, resolve)]
         lines = ["if not zero:", f"    {lines[0]}"]
         for name, target in op.outputs:
             lines.append(f"    if {name!r} in _o:")

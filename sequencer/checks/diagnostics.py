@@ -53,7 +53,7 @@ CODES: Final[dict[str, str]] = {
     "E042": "unknown FB variable or name",
     "E043": "Sn.X / Sn.T / Sn.U of an unknown step",
     "E044": "Tn.TT of an unknown transition",
-    "E045": "write to a read-only operand (FB output pin, step or transition attribute)",
+    "E045": "write to a read-only operand (FB output, PI, step or transition attribute)",
     # calls
     "E046": "CALL of a system block s7graph lacks, or with a wrong instance or parameter",
     # warnings

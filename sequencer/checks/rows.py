@@ -26,6 +26,7 @@ from s7graph.sequencer.text.model import (
     Step,
     StepTarget,
 )
+from s7graph.sequencer.text.names import Resolved
 from s7graph.sfb import catalogue
 from s7graph.steps.qualifiers import (
     COUNTER_QUALIFIERS,
@@ -120,7 +121,7 @@ def _check_row_operand(ctx: _Ctx, r: ActionRow, op: Operand, el: str) -> None:
     if res.type != want:
         ctx.err("E024", f"{q} needs {what}, not {op.name} ({res.type})", op.loc, el)
     elif not res.writable:
-        ctx.err("E045", f"{op.name} is an FB output; the chart cannot write it", op.loc, el)
+        ctx.err("E045", _read_only(op.name, res), op.loc, el)
 
 
 def _check_call(ctx: _Ctx, call: BlockCall, el: str) -> None:
@@ -136,7 +137,7 @@ def _check_call(ctx: _Ctx, call: BlockCall, el: str) -> None:
         if res is not None and not res.writable:
             ctx.err(
                 "E045",
-                f"{name} => {o.name}: {o.name} is read-only; the chart cannot write it",
+                f"{name} => {o.name}: {_read_only(o.name, res)}",
                 o.loc,
                 el,
             )
@@ -197,15 +198,20 @@ def _check_call(ctx: _Ctx, call: BlockCall, el: str) -> None:
             )
 
 
+def _read_only(name: str, res: Resolved) -> str:
+    """Why the chart cannot write ``name``: an FB output, or a peripheral input (PI)."""
+    if res.address is not None:
+        return f"{name} is a peripheral input, read by the program only; the chart cannot write it"
+    return f"{name} is an FB output; the chart cannot write it"
+
+
 def _check_assignment(ctx: _Ctx, a: Assignment, el: str, *, in_action: bool) -> None:
     res = _resolve(ctx, a.target, el)
     t = _type(ctx, a.expr, el)
     if res is None:
         return
     if not res.writable:
-        ctx.err(
-            "E045", f"{a.target.name} is an FB output; the chart cannot write it", a.target.loc, el
-        )
+        ctx.err("E045", _read_only(a.target.name, res), a.target.loc, el)
         return
     target = _operand_type(res)
     if in_action and target == "BOOL":
@@ -246,7 +252,7 @@ def rule_permanent_instructions(ctx: _Ctx) -> None:
                 elif res is not None and not res.writable:
                     ctx.err(
                         "E045",
-                        f"{it.target.name} is an FB output; the chart cannot write it",
+                        _read_only(it.target.name, res),
                         it.target.loc,
                         el,
                     )

@@ -25,7 +25,7 @@ from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.exchange.iec_to_chart import S7_PIN, SFB_OF
 from s7graph.sequencer.exchange.naming import s7_to_iec
 from s7graph.sequencer.exchange.plcopen import S7GRAPH_DATA
-from s7graph.sequencer.exchange.shape import shape_of
+from s7graph.sequencer.exchange.shape import priority, shape_of
 from s7graph.sequencer.text.format import format_chart, format_expr, format_row
 from s7graph.sequencer.text.model import (
     ActionRow,
@@ -192,7 +192,7 @@ class _Export:
             if len(srcs) > 1:
                 srcs = [self.branch("simultaneousConvergence", srcs, 1, out)]
             first = t.sources[0]
-            rank = leaving.get(first, [t.number]).index(t.number)
+            rank = priority(leaving.get(first, [t.number])).index(t.number)
             x = x0 + rank * 160
             y = 60 + order.get(first, 0) * 120 + 80
             cond = self.st(t.condition) if t.condition is not None else "TRUE"

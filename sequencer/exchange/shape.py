@@ -1,5 +1,6 @@
 """How a sequence is drawn, for the exporters: which transitions leave each step (in
-written order: their priority), which reach a step going down the chart, which are jumps.
+written order; ``priority`` gives GRAPH's order of them), which reach a step going down
+the chart, which are jumps.
 
 A link from a transition to a step is a jump when the step is in another sequence, is an
 initial step, or stands above (or level with) every step the transition leaves — as a
@@ -13,7 +14,13 @@ from dataclasses import dataclass, field
 
 from s7graph.sequencer.text.model import Sequence
 
-__all__ = ["Shape", "shape_of"]
+__all__ = ["Shape", "priority", "shape_of"]
+
+
+def priority(leaving: list[int]) -> list[int]:
+    """Transition numbers leaving one step (written order) in S7-GRAPH's priority: the first
+    written (directly below the step), then the others by number, lowest first (manual 6-7)."""
+    return leaving[:1] + sorted(leaving[1:])
 
 
 @dataclass

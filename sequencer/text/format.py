@@ -7,7 +7,7 @@ and written where they stood: on lines of their own above an element, or at the 
 first line (a trailing comment, a symbol's too).
 The layout is the one of the examples: header and options, ``VAR``, ``SYMBOLS``,
 ``PERMANENT BEFORE``, the sequences (all steps, then all transitions, in model order — the
-written order of the transitions leaving a step is their priority), ``PERMANENT AFTER``.
+first written transition leaving a step has priority, the others go by number), ``PERMANENT AFTER``.
 
 Expressions are written with the fewest parentheses the grammar's precedence needs
 (``OR`` < ``XOR`` < ``AND`` < comparison < shift < ``+ -`` < ``* / MOD`` < ``NOT``/``-``);

@@ -24,7 +24,7 @@ import re
 from dataclasses import dataclass
 from typing import Final, Literal
 
-from s7graph.engine.address import Address, parse_address
+from s7graph.engine.address import Address, Area, parse_address
 from s7graph.engine.errors import SymbolError
 from s7graph.engine.symbols import SymbolTable, default_type
 from s7graph.sequencer.params import Direction, pin
@@ -43,7 +43,8 @@ ADDRESS_SHAPE: Final = re.compile(
 class Resolved:
     """An operand resolved: ``kind`` address | symbol | var | pin; ``address`` for addresses
     and symbols (None for FB variables and pins); ``type`` the S7 type name (upper case);
-    ``writable`` is False for FB output pins (the FB itself writes them)."""
+    ``writable`` is False for FB output pins (the FB itself writes them) and for the
+    peripheral inputs (PI: the modules write them)."""
 
     kind: Kind
     address: Address | None
@@ -103,7 +104,7 @@ def resolve_operand(op: Operand, chart: Chart, symbols: SymbolTable | None = Non
         return Resolved("pin", None, p.type, writable=p.direction is Direction.IN)
     if looks_like_address(op.name):
         addr = parse_address(op.name, op.loc)
-        return Resolved("address", addr, default_type(addr))
+        return Resolved("address", addr, default_type(addr), writable=addr.area is not Area.PI)
     hint = ""
     if (symbols is not None and symbols.lookup(op.name) is not None) or any(
         s.name.upper() == key for s in chart.symbols
@@ -118,9 +119,10 @@ def _symbol(op: Operand, chart: Chart, symbols: SymbolTable | None) -> Resolved:
     s = _declarations(chart).symbols.get(op.name.casefold())
     if s is not None:
         addr = parse_address(s.address, s.loc)
-        return Resolved("symbol", addr, s.type.upper())
+        return Resolved("symbol", addr, s.type.upper(), writable=addr.area is not Area.PI)
     if symbols is not None:
         sym = symbols.lookup(op.name)
         if sym is not None:
-            return Resolved("symbol", sym.address, sym.type.upper())
+            writable = sym.address.area is not Area.PI
+            return Resolved("symbol", sym.address, sym.type.upper(), writable=writable)
     raise SymbolError(f'unknown symbol "{op.name}"', op.loc)

@@ -9,6 +9,7 @@ import pytest
 
 from s7graph.engine import BlockError, CallContext, Cpu, InstanceDB, Var, VirtualClock, fb, fc, ob
 from s7graph.engine.blocks import Decl
+from s7graph.sfb import s5_timers
 
 
 class Tally:
@@ -205,3 +206,84 @@ def test_fc_out_operand_is_written_not_read_and_left_alone_when_unassigned() -> 
     assert record.mode == "RUN", record.diagnostics
     assert cpu.mem.read_as(parse_address("DB1.DBB0"), "DATE_AND_TIME") == stamp
     assert cpu.mem.get("MW10") == 77
+
+
+# The motor block of the mixing process (Siemens' Program Design for S7-300/400, appendix A, FB1
+# "Motor"): one FB for pump A (DB1, timer T12) and the agitator (DB3, timer T16).
+@fb(
+    31,
+    "Motor",
+    IN={
+        "Start": "BOOL",
+        "Stop": "BOOL",
+        "Ruec": "BOOL",
+        "Zeit_Nr": "TIMER",
+        "Ruec_Zeit": ("S5TIME", 0),
+    },
+    OUT={"Fehler": "BOOL", "Start_Anz": "BOOL", "Stop_Anz": "BOOL", "Wartung": "BOOL"},
+    IN_OUT={"Motor": "BOOL"},
+    STAT={"Starts": ("INT", 0), "Start_Flanke": ("BOOL", False)},
+)
+def seed_motor(ctx: CallContext, db: InstanceDB) -> None:
+    db.Motor = bool((db.Start or db.Motor) and not db.Stop)  # network 1
+    cell = s5_timers.cell_of(ctx.mem.timers, int(db.Zeit_Nr))  # type: ignore[call-overload]
+    s5_timers.run(cell, "SD", bool(db.Motor), int(db.Ruec_Zeit), ctx.now_ns)  # type: ignore[call-overload]
+    if cell.q and not db.Ruec:  # network 2: no feedback in time
+        db.Fehler, db.Motor = True, False
+    db.Start_Anz = db.Ruec  # network 3
+    if db.Ruec:
+        db.Fehler = False
+    db.Stop_Anz = not db.Ruec  # network 4
+
+
+def test_a_timer_parameter_carries_the_timer_number_so_each_instance_runs_its_own_timer(
+    clock: VirtualClock,
+) -> None:
+    """A TIMER parameter passes the timer's number (``T12`` arrives as 12, not as its value):
+    the mixing process's FB1 supervises pump A on T12 (7 s) and the agitator on T16 (10 s),
+    each motor switched off by its own timer (Siemens' Program Design for S7-300/400,
+    appendix A)."""
+    seen: list[tuple[object, object]] = []
+
+    def main(ctx: CallContext) -> None:
+        t = ctx.now_ns // 1_000_000
+        pump = ctx.call(seed_motor, 1, Start=t == 0, Zeit_Nr="T12", Ruec_Zeit=7000, Motor="Q8.4")
+        mix = ctx.call(
+            seed_motor, 3, Start=t == 3000, Zeit_Nr="T16", Ruec_Zeit=10000, Motor="Q10.0"
+        )
+        seen.append((pump["Fehler"], mix["Fehler"]))
+
+    cpu = Cpu(clock)
+    cpu.load(ob(1)(main), seed_motor)
+    cpu.create_instance_db(1, seed_motor)
+    cpu.create_instance_db(3, seed_motor)
+    cpu.start()
+    states: dict[int, tuple[object, ...]] = {}
+    for t in range(0, 15000, 100):
+        cpu.scan()
+        states[t] = (cpu.mem.get("Q8.4"), cpu.mem.get("Q10.0"), *seen[-1])
+        clock.advance(100)
+    assert cpu.instance_db(1).values["Zeit_Nr"] == 12 and cpu.instance_db(3).values["Zeit_Nr"] == 16
+    assert states[6900] == (True, True, False, False)
+    assert states[7000] == (False, True, True, False)  # T12 ran out: pump A off, fault
+    assert states[12900] == (False, True, True, False)
+    assert states[13000] == (False, False, True, True)  # T16 ran out 10 s after its start
+
+
+def test_a_timer_parameter_refuses_an_operand_that_is_not_a_timer(clock: VirtualClock) -> None:
+    """A TIMER parameter takes a timer (``T n``), a COUNTER parameter a counter (``C n``)."""
+    errors: list[str] = []
+
+    def main(ctx: CallContext) -> None:
+        for actual in ("MW10", "C12", True):
+            try:
+                ctx.call(seed_motor, 1, Zeit_Nr=actual)
+            except BlockError as exc:
+                errors.append(str(exc))
+
+    cpu = Cpu(clock)
+    cpu.load(ob(1)(main), seed_motor)
+    cpu.create_instance_db(1, seed_motor)
+    cpu.start()
+    cpu.scan()
+    assert len(errors) == 3 and all("takes a timer like T12" in e for e in errors), errors

@@ -136,6 +136,45 @@ def test_mixing_missing_flow_of_a_faults_feed_a_only_until_acknowledged(tmp_path
     assert path_of(records)[-4:] == [["S6"], ["S7"], ["S8"], ["S1"]]
 
 
+def test_mixing_switches_pump_a_and_its_valves_off_during_its_no_flow_fault(
+    tmp_path: Path,
+) -> None:
+    """The book's motor block (FB1, network 2) resets the motor when the feedback is missing
+    after its time: pump A and its valves are off from the fault (8 s) until the
+    acknowledgement lets S2 go (20 s), while feed B runs its own course."""
+    plant = plant_variant(tmp_path, FLOW_A_BROKEN_UNTIL_MS=12000)
+    stim = stimulus_file(
+        tmp_path,
+        *START,
+        {"at_ms": 20000, "set": {"ACK_EF": True}},
+        {"at_ms": 20500, "set": {"ACK_EF": False}},
+    )
+    records = run_sim(tmp_path, plant=plant, stimulus=stim)
+    fault = first(records, on("Speisepumpe_A_Fehler"))
+    left = first(records, lambda r: r["t_ms"] >= 1000 and "S2" not in r["active"])
+    assert 8000 <= fault <= 8100 and 20000 <= left <= 20100
+    for rec in records:
+        v = rec["values"]
+        if fault <= rec["t_ms"] < left:
+            assert "S2" in rec["active"], rec
+            assert not (v["Speisepumpe_A"] or v["Einlassventil_A"] or v["Speiseventil_A"]), rec
+            assert v["Speisepumpe_A_Ein"] is False, rec
+    assert all(r["values"]["Speisepumpe_B"] for r in records if 1000 <= r["t_ms"] < 10000)
+
+
+def test_mixing_switches_the_agitator_off_when_it_never_reaches_speed(tmp_path: Path) -> None:
+    """No "at speed" feedback 10 s after the agitator started: fault lamp on, agitator off
+    (FB1 network 2 for the agitator's instance), the sequence holds in S6."""
+    plant = plant_variant(tmp_path, AGITATOR_RUNUP_MS=10**9)
+    records = run_sim(tmp_path, plant=plant, cycles=800)
+    start = first(records, on("Ruehrwerk"))
+    fault = first(records, on("ERR_FLT"))
+    assert 10000 <= fault - start <= 10100
+    after = [r for r in records if r["t_ms"] >= fault]
+    assert after and all(r["active"] == ["S6"] for r in after)
+    assert not any(r["values"]["Ruehrwerk"] for r in after)
+
+
 def test_mixing_emergency_stop_switches_the_feeds_off_without_moving_the_sequence(
     tmp_path: Path,
 ) -> None:

@@ -3,6 +3,7 @@ the virtual clock."""
 
 from __future__ import annotations
 
+import itertools
 import re
 from typing import Any
 
@@ -75,6 +76,36 @@ def test_alternative_divergence_takes_a_later_path_when_the_first_is_false() -> 
     c.set(I0_0=True)
     c.call()
     assert c.active == ["S2"]
+
+
+ALT3 = seq("""
+  INITIAL_STEP S1 "a": END_STEP
+  STEP S2 "b": END_STEP
+  STEP S3 "c": END_STEP
+  STEP S4 "d": END_STEP
+  TRANSITION T5 FROM S1 TO S2 := I0.0;
+  TRANSITION T9 FROM S1 TO S3 := I0.1;
+  TRANSITION T3 FROM S1 TO S4 := I0.2;
+""")
+
+
+def test_alternative_branch_takes_the_path_below_the_step_then_the_lowest_number() -> None:
+    """Manual 6-7: the transition directly below the step (the first written) has priority 1,
+    the other paths go by transition number, lowest first — not by written order. The fast
+    path and the general path agree."""
+    cases = (
+        ({"I0_0": True, "I0_1": True, "I0_2": True}, ["S2"], ["T5"]),
+        ({"I0_1": True, "I0_2": True}, ["S4"], ["T3"]),  # written order would take T9
+        ({"I0_0": True, "I0_2": True}, ["S2"], ["T5"]),  # T5 wins though T3 is lower
+        ({"I0_1": True}, ["S3"], ["T9"]),
+    )
+    for (inputs, active, fired), fast in itertools.product(cases, (True, False)):
+        c = Chart(ALT3)
+        c.rt = GraphRuntime(c.cc, c.cc.bind(c.mem), fast=fast)
+        c.call()
+        c.set(**inputs)
+        c.call()
+        assert (c.active, c.fired) == (active, fired), inputs
 
 
 SIM = seq("""

@@ -189,6 +189,33 @@ def test_s1_call_row_calls_the_block_once_per_activation() -> None:
     assert cpu.mem.get("MW20") == 1
 
 
+def test_a_timer_or_counter_given_to_a_call_arrives_as_its_parameter_type_asks() -> None:
+    """docs/semantics.md, "Decisions", timers and counters as operands: a CALL passes a timer or
+    counter as an operand, so a TIMER or COUNTER parameter gets its number (S7 passes the
+    cell, not its value), a BOOL its status bit and an INT its value."""
+    text = source(
+        seq("""
+      INITIAL_STEP S1 "a": S1 CS C1, C#3; CALL FC 2 (tmr := "Tmr", cnt := C1, bit := C1, num := C1);
+      END_STEP
+      TRANSITION T1 FROM S1 TO S1 := FALSE;
+    """),
+        header='SYMBOLS "Tmr" : T12 : TIMER; END_SYMBOLS',
+    )
+    seen: list[dict[str, object]] = []
+
+    @fc(2, "Probe", IN={"tmr": "TIMER", "cnt": "COUNTER", "bit": "BOOL", "num": "INT"})
+    def probe(ctx, params) -> None:
+        seen.append(dict(params))
+
+    clock = VirtualClock()
+    cpu = Cpu(clock)
+    cpu.load(probe)
+    install_all(cpu, [GraphFB(compile_chart(parse_chart(text, "call.s7g")))])
+    cpu.start("warm")
+    _scan(cpu, clock, 2)
+    assert seen[-1] == {"tmr": 12, "cnt": 1, "bit": True, "num": 3}
+
+
 # ---------------------------------------------------------------- ON / OFF
 
 
@@ -459,3 +486,20 @@ def test_the_criteria_word_of_a_single_contact_is_an_int_like_any_other() -> Non
     words = [*st.crit, *st.crit_old, *st.crit_loc, *st.crit_loc_err, *st.crit_sup]
     assert {type(w) for w in words} == {int}
     assert st.crit_loc[run.idx(2)] == 1
+
+
+def test_a_chart_may_not_write_the_peripheral_inputs() -> None:
+    """docs/semantics.md, "Decisions", I/O access error: PI is the modules' side, read-only to
+    the program — an assignment, a permanent instruction or a call output writing it is E045
+    (reading it is fine)."""
+    text = source(
+        seq("""
+      INITIAL_STEP S1 "a": N PIW0 := 5; CALL FC 9 (X := PIW2, Y => "In_word"); END_STEP
+      TRANSITION T1 FROM S1 TO STOP := PIW4 > 3;
+    """),
+        header='SYMBOLS "In_word" : PIW6 : INT; END_SYMBOLS\n'
+        "PERMANENT BEFORE\n  PIW8 := MW0;\nEND_PERMANENT\n",
+    )
+    found = [(d.code, d.message) for d in validate(parse_chart(text, "c.s7g"))]
+    assert [c for c, _ in found] == ["E045"] * 3, found
+    assert all("peripheral input" in m for _, m in found), found

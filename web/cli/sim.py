@@ -11,7 +11,9 @@ outputs, run the plant (if any), write one JSON line, advance the clock by ``cyc
 ``active``: the active steps sorted by number. ``events``: the transitions switched in this
 cycle, in switching order, as ``[from, to]`` step pairs — one pair per preceding × following
 step (a divergence from S1 to S2, S3 gives ``["S1","S2"], ["S1","S3"]``; a branch stop gives
-``[from, "STOP"]``). The CPU's startup (OB100 with INIT_SQ) happens before cycle 0.
+``[from, "STOP"]``). The CPU's startup (OB100 with INIT_SQ) happens before cycle 0; a
+switch in it (with ``ORDER := CODESYS`` a step activated there may switch in that call)
+opens cycle 0's ``events``.
 ``values``: every ``--watch`` name — S7 addresses, symbols, FB pins of the chart's parameter
 set, FB variables, ``Sn.X``/``Sn.T``/``Sn.U``, ``Tn.TT``.
 
@@ -127,6 +129,7 @@ def _run(
     clock = session.clock
     assert isinstance(clock, VirtualClock)
     session.start()
+    startup = list(session.graph.state.fired)  # the startup call's switches: in line 0
     nxt = 0
     for k in range(cycles):
         t_ms = k * cycle_ms
@@ -144,7 +147,7 @@ def _run(
             "active": [
                 cc.step_label(i) for i in sorted(st.active, key=cc.step_numbers.__getitem__)
             ],
-            "events": _events(cc, st.fired),
+            "events": _events(cc, startup + st.fired if k == 0 else st.fired),
             "mode": st.mode,
             "values": {name: session.get(name) for name in names},
         }

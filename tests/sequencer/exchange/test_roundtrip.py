@@ -157,3 +157,29 @@ def test_a_jump_into_another_chart_keeps_both_charts_when_read_as_iec() -> None:
         ((3,), (4,)),
         ((4,), (3,)),
     ]
+
+
+def test_plcopen_export_draws_an_alternative_branch_left_to_right_in_graph_priority() -> None:
+    """GRAPH's priority (the first written, then the lowest number) goes out as IEC's left to
+    right, so an IEC tool reading the export takes the same path: written T5, T9, T3 is
+    drawn T5, T3, T9, and reads back in that order."""
+    chart = parse_chart(
+        """FUNCTION_BLOCK "Alt"
+SEQUENCE 1 "Alt"
+  INITIAL_STEP S1 "Start": END_STEP
+  STEP S2 "Fill": END_STEP
+  STEP S3 "Heat": END_STEP
+  STEP S4 "Drain": END_STEP
+  TRANSITION T5 FROM S1 TO S2 := I0.0;
+  TRANSITION T9 FROM S1 TO S3 := I0.1;
+  TRANSITION T3 FROM S1 TO S4 := I0.2;
+END_SEQUENCE
+END_FUNCTION_BLOCK
+""",
+        "alt.s7g",
+    )
+    back = import_chart(native_only(export_chart(chart, "plcopen")), "alt.xml").chart
+    names = {s.number: s.name for s in back.all_steps()}
+    start = next(s.number for s in back.all_steps() if s.name == "Start")
+    out = [names[t.targets[0]] for t in back.all_transitions() if t.sources == (start,)]
+    assert out == ["Fill", "Drain", "Heat"]

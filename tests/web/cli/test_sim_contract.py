@@ -84,3 +84,19 @@ def test_the_same_inputs_always_give_the_same_trace(tmp_path_factory, stim) -> N
     a = run(tmp_path_factory.mktemp("a"), rows, cycles=20)
     b = run(tmp_path_factory.mktemp("b"), rows, cycles=20)
     assert a == b and a[0] == 0
+
+
+def test_a_switch_in_the_startup_call_is_in_the_first_lines_events(tmp_path: Path) -> None:
+    """With ``ORDER := CODESYS`` the initial step runs its rows and may switch inside the
+    startup call (docs/semantics.md, "One FB call"): that switch opens cycle 0's ``events``,
+    so every switch is in some line (docs/cli.md, "s7graph sim"), as GRAPH's, made in
+    cycle 0's call, is."""
+    chart = CHART.replace("PARAMETERS := STANDARD;", "PARAMETERS := STANDARD; ORDER := CODESYS;")
+    chart = chart.replace('TO (S2, S3) := "Start";', "TO (S2, S3) := TRUE;")
+    (tmp_path / "graph").mkdir()
+    rc_graph, graph = run(tmp_path / "graph", [], cycles=2, chart=chart.replace("CODESYS", "GRAPH"))
+    rc, lines = run(tmp_path, [], cycles=2, chart=chart)
+    assert rc == rc_graph == 0
+    assert lines[0]["events"] == [["S1", "S2"], ["S1", "S3"]] and lines[1]["events"] == []
+    assert lines[0]["active"] == ["S2", "S3"]
+    assert graph[0]["events"] == lines[0]["events"]  # GRAPH switches in cycle 0's own call
