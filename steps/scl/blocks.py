@@ -26,7 +26,7 @@ from s7graph.steps.scl import types as ty
 from s7graph.steps.scl.compile import Generated, translate
 from s7graph.steps.scl.consts import Consts, adapt
 from s7graph.steps.scl.declare import BlockInfo, Program, struct_initial
-from s7graph.steps.scl.diagnostics import Diagnostic, Problem, SclError, error
+from s7graph.steps.scl.diagnostics import Diagnostic, Problem, SclError, error, sort_key
 from s7graph.steps.scl.runtime import _encode
 
 
@@ -83,7 +83,7 @@ def compile_scl(
         raise SclError(diags)
     out, problems = _build(source, prog, generated)
     if problems:
-        raise SclError(problems + diags)
+        raise SclError(sorted(problems + diags, key=sort_key))
     out.diagnostics = diags
     return out
 

@@ -228,9 +228,6 @@ def _instance_of(path: m.Path, prog: Program) -> None:
     first = path.selectors[0]
     if not isinstance(first, m.Member):
         return
-    db = prog.block(first.name)
-    number = db.number if db is not None and db.kind == "DB" else None
-    if number is None and first.name.upper().startswith("DB") and first.name[2:].isdigit():
-        number = int(first.name[2:])
+    number = prog.db_number(first.name)
     if number is not None:
         prog.instances.setdefault(number, fb.label)

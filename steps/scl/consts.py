@@ -65,7 +65,7 @@ def adapt(c: Constant, t: ty.SclType) -> object | None:
     if c.untyped and ty.literal_fits(t, c.value):
         if t.kind == "BOOL":
             return bool(c.value)
-        return float(c.value) if t.kind == "REAL" else c.value  # type: ignore[arg-type]
+        return _round32(float(c.value)) if t.kind == "REAL" else c.value  # type: ignore[arg-type]
     if c.type.kind == "TIME" and t.kind == "S5TIME" and isinstance(c.value, int):
         return c.value if 0 <= c.value <= 9_990_000 else None
     if ty.widens(c.type, t) and not t.aggregate and t.kind != "ANY":

@@ -102,6 +102,14 @@ class Program:
             found = self.blocks.get(self.names[key])
         return found
 
+    def db_number(self, name: str) -> int | None:
+        """The number of a DB named by label (``DB10``), by a block symbol or declared."""
+        found = self.block(name)
+        if found is not None:
+            return found.number if found.kind == "DB" else None
+        label = split_label(name) or split_label(self.names.get(name.upper(), ""))
+        return label[1] if label is not None and label[0] == "DB" else None
+
     def problem(self, p: Problem, block: str = "") -> None:
         self.diags.append(error(p.code, p.message, p.loc, block))
 

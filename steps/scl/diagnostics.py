@@ -89,8 +89,9 @@ def format_diagnostic(d: Diagnostic) -> str:
     return f"{d.loc}: {d.severity}[{d.code}]: {d.message}{tail}"
 
 
-def sort_key(d: Diagnostic) -> tuple[str, int, int, str]:
-    return (d.loc.file, d.loc.line, d.loc.col, d.code)
+def sort_key(d: Diagnostic) -> tuple[bool, str, int, int, str]:
+    """Errors before warnings, each in source order."""
+    return (not d.is_error, d.loc.file, d.loc.line, d.loc.col, d.code)
 
 
 class SclError(S7Error):

@@ -134,17 +134,23 @@ _WORDS = {
     "SEMICOLON": "';'",
     "$END": "the end of the source",
 }
-_OPENERS = {
-    "END_IF": "IF",
-    "END_CASE": "CASE",
-    "END_FOR": "FOR",
-    "END_WHILE": "WHILE",
-    "END_REPEAT": "REPEAT",
-    "END_STRUCT": "STRUCT",
-    "END_VAR": "VAR_KW",
-    "END_CONST": "CONST",
-    "END_LABEL": "LABEL",
+_CLOSERS = {
+    "IF": "END_IF",
+    "CASE": "END_CASE",
+    "FOR": "END_FOR",
+    "WHILE": "END_WHILE",
+    "REPEAT": "END_REPEAT",
+    "STRUCT": "END_STRUCT",
+    "VAR_KW": "END_VAR",
+    "CONST": "END_CONST",
+    "LABEL": "END_LABEL",
+    "FB_KW": "END_FUNCTION_BLOCK",
+    "FUNCTION": "END_FUNCTION",
+    "ORGANIZATION_BLOCK": "END_ORGANIZATION_BLOCK",
+    "DATA_BLOCK": "END_DATA_BLOCK",
+    "TYPE": "END_TYPE",
 }
+"""The keyword that closes each construct the parser may hold open."""
 
 
 def _describe(name: str) -> str:
@@ -174,23 +180,30 @@ def _syntax(exc: UnexpectedInput, file: str, text: str) -> Diagnostic:
     if not isinstance(exc, UnexpectedToken):
         return error("E201", str(exc), loc)
     tok, expected = exc.token, set(exc.expected)
-    closers = sorted(n for n in expected if n.startswith("END_") and n in _OPENERS)
-    if closers and (tok.type == "$END" or str(tok).upper().startswith("END_")):
-        opener = _open_construct(exc, _OPENERS[closers[0]])
-        where = f" for the {opener[0]} at line {opener[1]}" if opener else ""
-        code = "E202" if tok.type == "$END" else "E201"
+    history = list(getattr(exc, "token_history", None) or ())
+    prev = history[-1] if history else None
+    if "SEMICOLON" in expected and prev is not None and str(prev).upper().startswith("END_"):
+        return _missing_semicolon(file, prev, loc)
+    closing = tok.type == "$END" or str(tok).upper().startswith("END_")
+    opener = _open_construct(exc) if closing else None
+    if opener is not None:
+        keyword, line, closer = opener
         if tok.type == "$END":
-            loc = _end_of(file, text)
-        return error(code, f"missing {closers[0]}{where}", loc)
+            return error(
+                "E202", f"missing {closer} for the {keyword} at line {line}", _end_of(file, text)
+            )
+        return error("E201", f"missing {closer} for the {keyword} at line {line}", loc)
     if tok.type == "$END":
         return error("E202", f"the source ends too early; expected {_expected(expected)}", loc)
-    if "SEMICOLON" in expected and not expected & {"RPAR", "RSQB"}:
-        history = list(getattr(exc, "token_history", None) or ())
-        prev = history[-1] if history else None
-        if prev is not None and prev.end_line is not None and prev.end_column is not None:
-            after = SourceLocation(file, prev.end_line, prev.end_column)
-            return error("E201", f"missing ';' after '{_short(prev)}'", after)
+    if "SEMICOLON" in expected and prev is not None and tok.line != prev.end_line:
+        return _missing_semicolon(file, prev, loc)
     return error("E201", f"unexpected '{_short(tok)}'; expected {_expected(expected)}", loc)
+
+
+def _missing_semicolon(file: str, prev: Token, loc: SourceLocation) -> Diagnostic:
+    if prev.end_line is not None and prev.end_column is not None:
+        loc = SourceLocation(file, prev.end_line, prev.end_column)
+    return error("E201", f"missing ';' after '{_short(prev)}'", loc)
 
 
 def _short(tok: Token) -> str:
@@ -203,13 +216,14 @@ def _end_of(file: str, text: str) -> SourceLocation:
     return SourceLocation(file, body.count("\n") + 1, len(body) - (body.rfind("\n") + 1) + 1)
 
 
-def _open_construct(exc: UnexpectedToken, opener: str) -> tuple[str, int] | None:
-    """The keyword and line of the innermost construct the parser holds open."""
+def _open_construct(exc: UnexpectedToken) -> tuple[str, int, str] | None:
+    """The keyword, line and closing keyword of the innermost construct the parser holds
+    open (its opening token is still on the parser's stack)."""
     parser = getattr(exc, "interactive_parser", None)
     stack = getattr(getattr(parser, "parser_state", None), "value_stack", None) or []
     for value in reversed(stack):
-        if isinstance(value, Token) and value.type == opener:
-            return str(value).upper(), value.line or 0
+        if isinstance(value, Token) and value.type in _CLOSERS:
+            return str(value).upper(), value.line or 0, _CLOSERS[value.type]
     return None
 
 

@@ -110,6 +110,8 @@ class Places:
         blk = b.prog.block(text)
         if blk is not None:
             return self._block_path(blk, sels, path)
+        if key in b.prog.names:
+            return self._block(b.prog.names[key], sels, path)
         found = _INDEXED.fullmatch(text.lstrip("%"))
         if found and sels and isinstance(sels[0], m.Index):
             area, letter = found[1].upper(), found[2].upper()
@@ -125,9 +127,7 @@ class Places:
         if key == "ENO" and not sels:
             return Place(ty.BOOL, "_eno[0]", None, "ENO")
         unit = b.info.unit
-        if b.kind == "FC" and unit is not None and key == unit.name.upper():
-            if sels:
-                raise Problem("E224", "a function's own name takes no selectors", loc)
+        if b.kind == "FC" and unit is not None and key == unit.name.upper() and not sels:
             if b.info.ret is None:
                 raise Problem("E223", f"{unit.name} is VOID: it has no value to set", loc)
             return Place(b.info.ret, "_ret", f"_ret = {HOLE}", unit.name)
@@ -141,6 +141,9 @@ class Places:
     # ---- blocks and instances
 
     def _block(self, text: str, sels: list[m.Selector], path: m.Path) -> Resolved:
+        own = self._special(text.upper(), sels, path.loc)
+        if own is not None:
+            return own
         blk = self.b.prog.block(text)
         if blk is not None:
             return self._block_path(blk, sels, path)
@@ -162,10 +165,7 @@ class Places:
             if not sels or not isinstance(sels[0], m.Member):
                 raise Problem("E233", f"{blk.label} is called with an instance: FB.DB(…)", loc)
             inst = sels[0].name
-            db = self.b.prog.block(inst)
-            number = db.number if db is not None and db.kind == "DB" else None
-            if number is None and inst.upper().startswith("DB") and inst[2:].isdigit():
-                number = int(inst[2:])
+            number = self.b.prog.db_number(inst)
             if number is None:
                 raise Problem("E233", f"{inst} is not a DB for an instance of {blk.label}", loc)
             self.b.prog.instances.setdefault(number, blk.label)

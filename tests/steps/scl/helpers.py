@@ -17,8 +17,11 @@ from s7graph.engine import Cpu, VirtualClock
 from s7graph.steps.scl import SclProgram, check_scl, compile_scl
 
 
-def build(src: str, *, names: Mapping[str, str] | None = None, **kw: Any) -> SclProgram:
-    return compile_scl(src, "t.scl", blocks=sfb.SYSTEM_BLOCKS, names=names, **kw)
+def build(
+    src: str, *, names: Mapping[str, str] | None = None, blocks: Any = (), **kw: Any
+) -> SclProgram:
+    every = (*sfb.SYSTEM_BLOCKS, *blocks)
+    return compile_scl(src, "t.scl", blocks=every, names=names, **kw)
 
 
 def cpu_with(program: SclProgram, **kw: Any) -> tuple[Cpu, VirtualClock]:
