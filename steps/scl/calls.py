@@ -21,6 +21,10 @@ from s7graph.steps.scl.declare import BlockInfo, Param
 from s7graph.steps.scl.diagnostics import Problem
 from s7graph.steps.scl.gen import Block, Place, Target, X
 
+S5_TIMERS = {"S_PULSE": "SP", "S_PEXT": "SE", "S_ODT": "SD", "S_ODTS": "SS", "S_OFFDT": "SF"}
+S5_COUNTERS = {"S_CU": ("CU",), "S_CD": ("CD",), "S_CUD": ("CU", "CD")}
+_S5_OUTPUTS = {"BI": ty.WORD, "CV": ty.WORD, "Q": ty.BOOL}
+
 
 class Calls:
     """The call translator of one block."""
@@ -36,6 +40,8 @@ class Calls:
     def value(self, target: Target) -> X:
         """A function value: a built-in function, or an FC given inputs only."""
         if target.kind == "builtin":
+            if target.name in S5_TIMERS or target.name in S5_COUNTERS:
+                return self._s5(target, None, value=True)
             if target.name not in BUILTINS:
                 raise Problem("E232", f"{target.name} is called as a statement", target.loc)
             spec = BUILTINS[target.name]
@@ -58,6 +64,9 @@ class Calls:
     def statement(self, target: Target, result: Place | None = None) -> None:
         """Emit the call; ``result`` receives an FC's value (``v := FC1(…)``)."""
         if target.kind == "builtin":
+            if target.name in S5_TIMERS or target.name in S5_COUNTERS:
+                self._s5(target, result)
+                return
             raise Problem("E232", f"the value of {target.name} must be used", target.loc)
         info = target.info
         assert info is not None
@@ -192,3 +201,57 @@ class Calls:
             b.indent -= 1
             b.emit("else:")
             b.emit("    _eno[0] = False")
+
+    # ---- S5 timers and counters
+
+    def _s5(self, target: Target, result: Place | None, value: bool = False) -> X:
+        """``S_ODT(T_NO := T10, S := x, TV := T#1S, R := r, BI := w, Q := q)`` and the
+        counters ``S_CUD(C_NO := C3, CU := …, CD := …, S := …, PV := …, R := …, CV := w,
+        Q := q)``: the function value is the remaining time (S5TIME) or the count (BCD)."""
+        b, name = self.b, target.name
+        timer = name in S5_TIMERS
+        ins = ("S", "TV", "R") if timer else ("CU", "CD", "S", "PV", "R")
+        allowed = ins if timer else (*S5_COUNTERS[name], "S", "PV", "R")
+        number = "T_NO" if timer else "C_NO"
+        given: dict[str, str] = {}
+        outs: list[tuple[ty.SclType, int, Place]] = []
+        for arg in target.args.items:
+            key = arg.name.upper()
+            if key in given or (key not in (number, *allowed) and key not in _S5_OUTPUTS):
+                raise Problem("E230", f"{name} has no parameter {arg.name or '(unnamed)'}", arg.loc)
+            if key in _S5_OUTPUTS:
+                if value:
+                    raise Problem("E232", f"{name} with outputs is a statement", arg.loc)
+                outs.append((_S5_OUTPUTS[key], 2 if key == "Q" else 1, self._actual_place(arg)))
+                given[key] = ""
+                continue
+            given[key] = self._s5_input(key, arg, timer)
+        if number not in given:
+            raise Problem("E231", f"{name}: parameter {number} missing", target.loc)
+        args = [given[number], *(given.get(k, "0" if k in ("TV", "PV") else "False") for k in ins)]
+        if timer:
+            call = f"_s5_timer(ctx, {S5_TIMERS[name]!r}, {', '.join(args)})"
+        else:
+            call = f"_s5_counter(ctx, {', '.join(args)})"
+        rtype = ty.S5TIME if timer else ty.WORD
+        if value:
+            return X(rtype, f"{call}[0]")
+        r = b.temp("r")
+        b.emit(f"{r} = {call}")
+        for t, k, place in outs:
+            b.emit(place.store(self._take(X(t, f"{r}[{k}]"), place, target)))
+        if result is not None:
+            b.emit(result.store(self._take(X(rtype, f"{r}[0]"), result, target)))
+        return X(rtype, f"{r}[0]")
+
+    def _s5_input(self, key: str, arg: m.Arg, timer: bool) -> str:
+        x = self.b.exprs.expr(arg.value)
+        if key in ("T_NO", "C_NO"):
+            cell = ty.TIMER if timer else ty.COUNTER
+            if x.type.kind not in (cell.kind, "INT", "WORD", "ERROR"):
+                raise Problem("E220", f"{key} is a {cell.kind} or an INT, not {x.type}", arg.loc)
+            return x.src
+        if key == "TV" and x.type.kind == "WORD":
+            return f"_s5ms({x.src})"
+        want = {"TV": ty.S5TIME, "PV": ty.WORD}.get(key, ty.BOOL)
+        return self.b.exprs.convert(x, want, arg.loc, "pass")

@@ -19,6 +19,7 @@ from s7graph.engine.errors import AddressError, SourceLocation
 from s7graph.steps.scl import model as m
 from s7graph.steps.scl import types as ty
 from s7graph.steps.scl.builtins import BUILTINS
+from s7graph.steps.scl.calls import S5_COUNTERS, S5_TIMERS
 from s7graph.steps.scl.consts import Constant
 from s7graph.steps.scl.declare import BlockInfo
 from s7graph.steps.scl.diagnostics import Problem
@@ -383,9 +384,7 @@ class Places:
         )
 
 
-_S5_FUNCTIONS = frozenset(
-    {"S_PULSE", "S_PEXT", "S_ODT", "S_ODTS", "S_OFFDT", "S_CU", "S_CD", "S_CUD"}
-)
+_S5_FUNCTIONS = frozenset(S5_TIMERS) | frozenset(S5_COUNTERS)
 
 
 def _bits_of(t: ty.SclType) -> int:

@@ -24,8 +24,9 @@ from typing import Any
 from weakref import WeakKeyDictionary
 
 from s7graph.engine.address import Address, Area, Width
-from s7graph.engine.datatypes import DATE_EPOCH, REAL_MAX, check_value, decode, encode
+from s7graph.engine.datatypes import DATE_EPOCH, REAL_MAX, check_value, decode, encode, s5time_to_ms
 from s7graph.engine.errors import BlockError, ProgramError, ScanAborted, TypeMismatch
+from s7graph.engine.instructions import instruction
 from s7graph.engine.literals import format_literal
 from s7graph.steps.scl.types import SclType, clone, element_stride, size_of, struct_layout
 
@@ -458,6 +459,30 @@ def _start_info(ctx: Any, key: str, default: Any, type_name: str) -> Any:
         return check_value(type_name, value)
     except (TypeMismatch, ValueError):
         return default
+
+
+def _s5_timer(ctx: Any, fn: str, number: int, s: bool, tv: int, r: bool) -> tuple[int, int, bool]:
+    """S_PULSE … S_OFFDT: the operating system's S5 timer on T ``number`` (registered by
+    ``sfb``, ``engine.instructions``): remaining ms, remaining count, Q."""
+    box = instruction("S5_TIMER")
+    result: tuple[int, int, bool] = box(ctx.mem.timers, number, fn, s, tv, r, ctx.now_ns)
+    return result
+
+
+def _s5_counter(
+    ctx: Any, number: int, cu: bool, cd: bool, s: bool, pv: int, r: bool
+) -> tuple[int, int, bool]:
+    """S_CU, S_CD, S_CUD on C ``number``: the count BCD (the function value), binary, Q."""
+    q, cv, bcd = instruction("S5_COUNTER")(ctx.mem.counters, number, cu, cd, s, pv, r)
+    return int(bcd), int(cv), bool(q)
+
+
+def _s5ms(word: int) -> int:
+    """An S5TIME given as a WORD (BCD count and time base) in ms."""
+    try:
+        return s5time_to_ms(word)
+    except TypeMismatch as exc:
+        raise ProgramError(exc.message) from None
 
 
 class Meter:

@@ -21,10 +21,12 @@ from dataclasses import dataclass, field
 from s7graph.engine.errors import SourceLocation
 from s7graph.steps.scl import model as m
 from s7graph.steps.scl import types as ty
+from s7graph.steps.scl.calls import S5_COUNTERS, S5_TIMERS
 from s7graph.steps.scl.diagnostics import Problem
 from s7graph.steps.scl.exprs import checked
 from s7graph.steps.scl.gen import Block, Place, Target
 
+S5_FUNCTIONS = frozenset(S5_TIMERS) | frozenset(S5_COUNTERS)
 MAX_PYTHON_LOOPS = 18
 """Python allows 20 nested loops in a function; loops and dispatch loops stay below."""
 
@@ -241,7 +243,7 @@ class Stmts:
             b.ret_set = True
         if isinstance(s.value, m.Path):
             got = b.places.resolve(s.value)
-            if isinstance(got, Target) and got.kind == "fc":
+            if isinstance(got, Target) and (got.kind == "fc" or got.name in S5_FUNCTIONS):
                 b.calls.statement(got, result=place)
                 return
         x = b.exprs.expr(s.value)
