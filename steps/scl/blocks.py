@@ -102,13 +102,13 @@ def _build(source: m.Source, prog: Program, gen: Generated) -> tuple[SclProgram,
         except Problem as p:
             problems.append(error(p.code, p.message, p.loc, info.label))
             continue
+        if info.kind == "DB" and info.instance_of:
+            out.instance_values[info.number] = _instance_inits(prog, info)
         if blk is None:
             continue
         if isinstance(blk, FB | FC):
             built[blk.label] = blk
         out.blocks.append(blk)
-        if info.kind == "DB" and info.instance_of:
-            out.instance_values[info.number] = _instance_inits(prog, info)
     return out, problems
 
 

@@ -178,7 +178,15 @@ def same(a: SclType, b: SclType) -> bool:
 
 
 def common(a: SclType, b: SclType) -> SclType | None:
-    """The type both operands widen to, or None."""
+    """The type both operands widen to, or None (two strings: the longer one)."""
+    if (
+        a.kind in ("STRING", "CHAR")
+        and b.kind in ("STRING", "CHAR")
+        and "STRING" in (a.kind, b.kind)
+    ):
+        return string(
+            max(a.length if a.kind == "STRING" else 1, b.length if b.kind == "STRING" else 1)
+        )
     if widens(a, b):
         return b if b.kind not in ("ERROR", "ANY") else a
     if widens(b, a):
