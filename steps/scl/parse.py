@@ -98,26 +98,34 @@ def _place(file: str, text: str, pos: int) -> SourceLocation:
 
 
 def _too_deep(tree: Tree[Any], file: str) -> Diagnostic | None:
-    """E204 at the first node nested beyond a limit (an iterative walk)."""
-    todo: list[tuple[Tree[Any], int, int, int]] = [(tree, 0, 0, 0)]
+    """E204 at the first construct nested beyond a limit (an iterative walk): a statement
+    at its own place, an expression at the place where it starts."""
+    todo: list[tuple[Tree[Any], int, int, int, Tree[Any] | None]] = [(tree, 0, 0, 0, None)]
     while todo:
-        node, depth, stmts, exprs = todo.pop()
+        node, depth, stmts, exprs, outer = todo.pop()
         name = str(node.data)
         stmts += name in _STATEMENTS
-        exprs += name in _EXPRESSIONS
-        what = ""
+        if name in _EXPRESSIONS:
+            exprs += 1
+            outer = outer or node
+        elif name != "args":
+            outer = None if name not in ("positional_arg", "named_arg", "index") else outer
+        what, at = "", node
         if stmts > MAX_STATEMENT_NESTING:
             what = f"more than {MAX_STATEMENT_NESTING} control statements inside each other"
         elif exprs > MAX_EXPRESSION_NESTING:
             what = f"an expression nested more than {MAX_EXPRESSION_NESTING} levels deep"
+            at = outer or node
         elif depth > MAX_TREE_DEPTH:
             what = f"a source nested more than {MAX_TREE_DEPTH} levels deep"
         if what:
-            meta = node.meta
-            line = getattr(meta, "line", 1) if not meta.empty else 1
-            col = getattr(meta, "column", 1) if not meta.empty else 1
+            meta = at.meta
+            line = meta.line if not meta.empty else 1
+            col = meta.column if not meta.empty else 1
             return error("E204", what, SourceLocation(file, line, col))
-        todo.extend((c, depth + 1, stmts, exprs) for c in node.children if isinstance(c, Tree))
+        todo.extend(
+            (c, depth + 1, stmts, exprs, outer) for c in node.children if isinstance(c, Tree)
+        )
     return None
 
 
