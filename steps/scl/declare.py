@@ -14,7 +14,7 @@ import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 
-from s7graph.engine.blocks import FB, FC, BlockKind, Decl
+from s7graph.engine.blocks import FB, FC, Decl
 from s7graph.engine.errors import SourceLocation
 from s7graph.engine.symbols import SymbolTable
 from s7graph.steps.scl import model as m
@@ -383,6 +383,3 @@ def _named_type(prog: Program, spec: m.NamedType) -> ty.SclType:
     if blk is not None and blk.kind in ("FB", "SFB"):
         return ty.SclType("FB", name=blk.label)
     raise Problem("E212", f"unknown data type {spec.name!r}", spec.loc)
-
-
-BLOCK_KINDS = {k.value for k in BlockKind}

@@ -21,13 +21,11 @@ NOWHERE = SourceLocation()
 
 @dataclass(frozen=True, slots=True)
 class Lit:
-    """A literal as written (``text``); ``typed``: written with a type prefix (``INT#5``,
-    ``T#1S``), else its type follows from the value and the context."""
+    """A literal as written (``INT#5``, ``T#1S``, ``16#FF``; a ``-`` written right before a
+    number is folded into it); an untyped number's type follows from its context."""
 
     text: str
     loc: SourceLocation = NOWHERE
-    negative: bool = False
-    """A ``-`` written right before an untyped number, folded into it."""
 
 
 BaseKind = Literal["name", "address", "db_address", "block", "symbol", "cell"]

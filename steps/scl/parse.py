@@ -16,7 +16,7 @@ from functools import cache
 from pathlib import Path
 from typing import Any
 
-from lark import Lark, Token, Transformer, Tree
+from lark import Lark, Token, Transformer, Tree, v_args
 from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken, VisitError
 
 from s7graph.engine.errors import SourceLocation
@@ -389,8 +389,9 @@ class _Build(Transformer[Token, Any]):
     def stmts(self, c: list[Any]) -> _Stmts:
         return _Stmts(c)
 
-    def empty(self, c: list[Any]) -> m.Empty:
-        return m.Empty(SourceLocation(self.file))
+    @v_args(meta=True)
+    def empty(self, meta: Any, c: list[Any]) -> m.Empty:
+        return m.Empty(self._at(_Meta(meta)))
 
     def labeled(self, c: list[Any]) -> m.Labeled:
         return m.Labeled(str(c[0]), c[1], self._at(c[0]))
@@ -508,6 +509,13 @@ class _Build(Transformer[Token, Any]):
 
     def positional_arg(self, c: list[Any]) -> m.Arg:
         return m.Arg("", c[0], c[0].loc)
+
+
+class _Meta:
+    """A rule's place, for ``_loc`` (lark hands it to ``v_args(meta=True)`` methods)."""
+
+    def __init__(self, meta: Any) -> None:
+        self.meta = meta
 
 
 class _Stmts(tuple):  # type: ignore[type-arg]

@@ -27,7 +27,6 @@ from s7graph.engine.address import Address, Area, Width
 from s7graph.engine.datatypes import DATE_EPOCH, REAL_MAX, check_value, decode, encode, s5time_to_ms
 from s7graph.engine.errors import BlockError, ProgramError, ScanAborted, TypeMismatch
 from s7graph.engine.instructions import instruction
-from s7graph.engine.literals import format_literal
 from s7graph.steps.scl.types import SclType, clone, element_stride, size_of, struct_layout
 
 PASS_NS = 1_000
@@ -525,14 +524,6 @@ def _meter(ctx: Any) -> Meter:
         meter.cycle, meter.at = ctx.cycle, ctx.now_ns
         meter.left = 2 * _max_cycle_ns(cpu) // PASS_NS
     return meter
-
-
-def _repr_value(t: str, value: Any) -> str:
-    """A value as an S7 literal, for messages."""
-    try:
-        return format_literal(t, value)
-    except Exception:
-        return repr(value)
 
 
 RUNTIME: dict[str, Any] = {

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from datetime import date, datetime
 
 from s7graph.engine.datatypes import DATE_EPOCH, DT_MIN
 
@@ -270,17 +269,6 @@ def engine_type(t: SclType) -> str:
     if t.aggregate:
         return "OBJECT"
     return t.kind
-
-
-def value_type(value: object) -> str:
-    """A short name of a Python value's kind, for messages."""
-    if isinstance(value, bool):
-        return "BOOL"
-    if isinstance(value, datetime):
-        return "DATE_AND_TIME"
-    if isinstance(value, date):
-        return "DATE"
-    return type(value).__name__
 
 
 # ---------------------------------------------------------------- memory layout
