@@ -385,3 +385,58 @@ def test_the_message_generator_builds_motor_12_started_in_the_text_buffer() -> N
     text = db[4 : 4 + db[3]].decode("latin-1")
     assert text == "Motor12started"
     assert cpu.mem.get("M10.2") is True and cpu.mem.get("M10.1") is True
+
+
+SETPOINT = """
+ORGANIZATION_BLOCK OB100
+  mw0 := INT_TO_WORD(400);
+  mw2 := INT_TO_WORD(0);
+END_ORGANIZATION_BLOCK
+
+ORGANIZATION_BLOCK OB35
+VAR_TEMP
+  a, b : INT;
+END_VAR
+  a := WORD_TO_INT(mw0);
+  b := WORD_TO_INT(mw2) + 1;
+  CASE b OF
+    0..3600: a := a + 1;
+    3601..7200: a := a;
+    7201..9000: a := a - 2;
+  ELSE
+    stp();
+  END_CASE;
+  mw0 := INT_TO_WORD(a);
+  mw2 := INT_TO_WORD(b);
+END_ORGANIZATION_BLOCK
+
+ORGANIZATION_BLOCK OB1
+END_ORGANIZATION_BLOCK
+"""
+
+
+def test_the_setpoint_ramp_in_ob35_rises_holds_falls_and_stops_the_cpu() -> None:
+    """The guide's heat-treatment ramp, OB35 every second (its listing reads the elapsed
+    seconds from MW2 but never counts them: here ``b`` counts)."""
+
+    def every_second(cpu: object) -> None:
+        cpu.interrupts.configure(35, 1000)  # type: ignore[attr-defined]
+
+    cpu = run(SETPOINT, 0)
+    cpu.stop()
+    every_second(cpu)
+    cpu.start()
+    for _ in range(51):
+        cpu.scan()
+        cpu.clock.advance(100)  # type: ignore[attr-defined]
+    assert (cpu.mem.get("MW0"), cpu.mem.get("MW2")) == (405, 5)
+    cpu.mem.set("MW2", 7200)
+    for _ in range(10):
+        cpu.scan()
+        cpu.clock.advance(100)  # type: ignore[attr-defined]
+    assert cpu.mem.get("MW0") == 403
+    cpu.mem.set("MW2", 9000)
+    for _ in range(10):
+        cpu.scan()
+        cpu.clock.advance(100)  # type: ignore[attr-defined]
+    assert cpu.mode is CpuMode.STOP
