@@ -40,6 +40,8 @@ KIND_OF_UNIT = {"FUNCTION_BLOCK": "FB", "FUNCTION": "FC", "ORGANIZATION_BLOCK": 
 KIND_OF_UNIT |= {"DATA_BLOCK": "DB", "TYPE": "UDT"}
 _LABEL = re.compile(r"(SFB|SFC|FB|FC|OB|DB|UDT)(\d+)", re.IGNORECASE)
 MAX_DIMENSIONS = 6
+MAX_BYTES = 65536
+"""The largest DB of an S7-400 CPU, in bytes: no variable, structure or array is larger."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -357,8 +359,8 @@ def resolve_type(prog: Program, spec: m.TypeSpec, consts: Consts) -> ty.SclType:
         if element.kind in ("FB", "ARRAY", "TIMER", "COUNTER"):
             raise Problem("E212", f"an ARRAY of {element.kind} is not allowed", spec.loc)
         t = ty.SclType("ARRAY", dims=tuple(dims), element=element)
-        if t.count > 65536:
-            raise Problem("E217", f"an ARRAY of {t.count} elements is too large", spec.loc)
+        if t.count > MAX_BYTES or ty.size_of(t) > MAX_BYTES:
+            raise Problem("E217", f"{t} is larger than a DB can be (64 KB)", spec.loc)
         return t
     fields: list[tuple[str, ty.SclType]] = []
     seen: set[str] = set()
@@ -369,7 +371,10 @@ def resolve_type(prog: Program, spec: m.TypeSpec, consts: Consts) -> ty.SclType:
         for name, loc in decl.names:
             _fresh(seen, name, loc)
             fields.append((name, ft))
-    return ty.SclType("STRUCT", fields=tuple(fields))
+    t = ty.SclType("STRUCT", fields=tuple(fields))
+    if ty.size_of(t) > MAX_BYTES:
+        raise Problem("E217", "a STRUCT larger than a DB can be (64 KB)", spec.loc)
+    return t
 
 
 def _named_type(prog: Program, spec: m.NamedType) -> ty.SclType:

@@ -132,3 +132,19 @@ END_ORGANIZATION_BLOCK
     cpu = run(src)
     assert cpu.mode is CpuMode.STOP
     assert list(cpu.diagnostics)[-1].event_id == EventId.STACK_OVERFLOW
+
+
+@pytest.mark.parametrize(
+    "decl",
+    [
+        "a : ARRAY[1..65536] OF STRUCT b : ARRAY[1..65536] OF INT; END_STRUCT;",
+        "a : ARRAY[-32768..32767, -32768..32767] OF BOOL;",
+        "a : ARRAY[1..30000] OF DINT;",
+        "s : STRUCT "
+        + " ".join(f"f{k} : ARRAY[1..1000] OF REAL;" for k in range(20))
+        + " END_STRUCT;",
+    ],
+)
+def test_a_variable_larger_than_a_db_is_a_diagnostic(decl: str) -> None:
+    src = f"FUNCTION_BLOCK FB1\nVAR {decl} END_VAR\nEND_FUNCTION_BLOCK\n"
+    assert [c for c, _, _ in codes(src)] == ["E217"]
