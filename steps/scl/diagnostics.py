@@ -62,30 +62,31 @@ CODES: Final[dict[str, str]] = {
 
 @dataclass(frozen=True, slots=True)
 class Diagnostic:
-    """One problem of a source; ``block`` names the block it concerns (``FB17``) or ``""``."""
+    """One problem of a source; ``element`` names the block it concerns (``FB17``) or ``""``
+    (the shape of a chart's ``Diagnostic``)."""
 
     severity: Severity
     code: str
     message: str
     loc: SourceLocation
-    block: str = ""
+    element: str = ""
 
     @property
     def is_error(self) -> bool:
         return self.severity == "error"
 
 
-def error(code: str, message: str, loc: SourceLocation, block: str = "") -> Diagnostic:
-    return Diagnostic("error", code, message, loc, block)
+def error(code: str, message: str, loc: SourceLocation, element: str = "") -> Diagnostic:
+    return Diagnostic("error", code, message, loc, element)
 
 
-def warning(code: str, message: str, loc: SourceLocation, block: str = "") -> Diagnostic:
-    return Diagnostic("warning", code, message, loc, block)
+def warning(code: str, message: str, loc: SourceLocation, element: str = "") -> Diagnostic:
+    return Diagnostic("warning", code, message, loc, element)
 
 
 def format_diagnostic(d: Diagnostic) -> str:
     """``file:line:col: error[E220]: message (FB17)``."""
-    tail = f" ({d.block})" if d.block else ""
+    tail = f" ({d.element})" if d.element else ""
     return f"{d.loc}: {d.severity}[{d.code}]: {d.message}{tail}"
 
 

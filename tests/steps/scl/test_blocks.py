@@ -616,7 +616,7 @@ def test_declaration_and_call_diagnostics(src: str, code: str) -> None:
 def test_unknown_variable_is_located_at_its_name() -> None:
     src = "FUNCTION_BLOCK FB1\nVAR i : INT; END_VAR\n  i := i + speed;\nEND_FUNCTION_BLOCK\n"
     found = check_scl(src, "m.scl")
-    assert [(d.code, d.loc.line, d.loc.col, d.block) for d in found] == [("E211", 3, 12, "FB1")]
+    assert [(d.code, d.loc.line, d.loc.col, d.element) for d in found] == [("E211", 3, 12, "FB1")]
     assert "'speed'" in found[0].message
 
 
