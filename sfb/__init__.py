@@ -20,6 +20,7 @@ from s7graph.sfb import (
     iec_counters,
     iec_timers,
     pulsegen,
+    s5_counters,  # noqa: F401  (importing it registers the S5 counter instruction)
     s5_timers,  # noqa: F401  (importing it registers the S5 timer tick)
     sfc_clock,
     sfc_control,
@@ -105,6 +106,7 @@ def install(cpu: _Loader) -> None:
     """Load all system blocks into ``cpu`` (they belong to the OS: no download needed).
 
     The S5 timer update needs no install: importing ``sfb`` registers it as an OS scan hook
-    of every CPU (``s5_timers.scan_hook``), so GraphFB timers tick too.
+    of every CPU (``s5_timers.scan_hook``), so GraphFB timers tick too; the S5 timer and
+    counter boxes S7-SCL calls are registered the same way (``engine.instructions``).
     """
     cpu.load(*SYSTEM_BLOCKS)

@@ -16,6 +16,7 @@ from typing import NamedTuple
 
 from s7graph.engine.datatypes import bcd_to_int
 from s7graph.engine.errors import ProgramError, TypeMismatch
+from s7graph.engine.instructions import add_instruction
 from s7graph.engine.memory import S5Counter
 
 COUNT_MAX = 999
@@ -99,3 +100,14 @@ def s_cud(
     set_preset(cell, s, pv)
     reset(cell, r)
     return CounterBox(cell.q, cell.value, cell.bcd())
+
+
+def box(
+    counters: Sequence[S5Counter], number: int, cu: bool, cd: bool, s: bool, pv: int, r: bool
+) -> CounterBox:
+    """An S5 counter box called as a function (S_CU, S_CD, S_CUD of S7-SCL) on counter
+    ``number``: Q, CV binary and the function value BCD."""
+    return s_cud(cell_of(counters, number), cu=cu, cd=cd, s=s, pv=pv, r=r)
+
+
+add_instruction("S5_COUNTER", box)

@@ -30,6 +30,7 @@ from s7graph.engine.cpu import Cpu, add_os_scan_hook
 from s7graph.engine.datatypes import S5_BASES_MS as TIME_BASES_MS
 from s7graph.engine.datatypes import bcd_to_int, int_to_bcd, ms_to_s5time, s5time_to_ms
 from s7graph.engine.errors import ProgramError
+from s7graph.engine.instructions import add_instruction
 from s7graph.engine.memory import S5Timer
 
 NS_PER_MS = 1_000_000
@@ -190,3 +191,17 @@ def run(
     if r:
         reset(cell)
     return cell.q
+
+
+def box(
+    timers: Sequence[S5Timer], number: int, function: str, s: bool, tv_ms: int, r: bool, now_ns: int
+) -> tuple[int, int, bool]:
+    """An S5 timer box called as a function (S_PULSE … S_OFFDT of S7-SCL): timer ``number``
+    run with S, TV and R; returns the remaining time in ms (the function value, an S5TIME),
+    the remaining count binary (BI) and the status (Q)."""
+    cell = cell_of(timers, number)
+    q = run(cell, function, s, tv_ms, now_ns, r=r)
+    return cell.value_ms, cell.binary(), q
+
+
+add_instruction("S5_TIMER", box)

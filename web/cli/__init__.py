@@ -406,10 +406,15 @@ def run(
 
 @app.command()
 def check(
-    chart: Annotated[Path, typer.Argument(help="A chart in .s7g source.")],
+    chart: Annotated[Path, typer.Argument(help="A chart in .s7g source, or an .scl source.")],
     symbols: Annotated[Path | None, typer.Option(help="A symbol table file.")] = None,
 ) -> None:
-    """Print a chart's diagnostics; exit 0 clean, 1 warnings only, 2 errors."""
+    """Print a chart's (or an SCL source's) diagnostics; exit 0 clean, 1 warnings only, 2
+    errors."""
+    if chart.suffix.lower() == ".scl":
+        from s7graph.web.cli.scl import check_scl_command
+
+        raise typer.Exit(check_scl_command(chart, symbols=symbols))
     from s7graph.web.cli.check import check_command
 
     raise typer.Exit(check_command(chart, symbols=symbols))
@@ -417,7 +422,7 @@ def check(
 
 @app.command()
 def sim(
-    chart: Annotated[Path, typer.Argument(help="A chart in .s7g source.")],
+    chart: Annotated[Path, typer.Argument(help="A chart in .s7g source, or an .scl source.")],
     stimulus: Annotated[
         Path | None, typer.Option(help='JSONL stimulus: {"at_ms": 0, "set": {...}} a line.')
     ] = None,
@@ -434,7 +439,23 @@ def sim(
         Path | None, typer.Option(help="A simulated plant (.py) run each cycle.")
     ] = None,
 ) -> None:
-    """Run a chart on the virtual clock: stimulus in, one JSON line per cycle out."""
+    """Run a chart (or an .scl program) on the virtual clock: stimulus in, one JSON line
+    per cycle out."""
+    if chart.suffix.lower() == ".scl":
+        from s7graph.web.cli.scl import sim_scl_command
+
+        raise typer.Exit(
+            sim_scl_command(
+                chart,
+                stimulus=stimulus,
+                cycle_ms=cycle_ms,
+                cycles=cycles,
+                watch=watch,
+                trace=trace,
+                symbols=symbols,
+                plant=plant,
+            )
+        )
     from s7graph.web.cli.sim import sim_command
 
     raise typer.Exit(

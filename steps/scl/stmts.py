@@ -1,0 +1,386 @@
+"""Statements → Python source (docs/scl.md, "Statements"; the guide ch. 13, control
+statements).
+
+Loops become Python loops; each pass counts on the CPU's loop meter (``runtime.Meter``).
+``FOR v := a TO b BY s`` evaluates ``b`` and ``s`` once, tests before each pass (``v <= b``
+for a positive step, ``v >= b`` for a negative one) and adds ``s`` after it — in the
+variable's type, so ``FOR i := 0 TO 32767`` on an INT wraps and runs until the cycle
+monitoring ends it, as on the CPU. ``CASE`` values are integer literals and ranges.
+
+**GOTO.** A statement list holding labels runs as a dispatch loop: its statements are cut
+into segments at the labels, and a jump sets the segment to go on with and starts the
+loop again. A jump may leave loops and statement lists towards an enclosing one, never
+enter one (E219). EXIT and CONTINUE that must leave a dispatch loop first, and a GOTO that
+must leave loops, pass through a flag checked after each loop they cross.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from s7graph.engine.errors import SourceLocation
+from s7graph.steps.scl import model as m
+from s7graph.steps.scl import types as ty
+from s7graph.steps.scl.calls import S5_COUNTERS, S5_TIMERS
+from s7graph.steps.scl.diagnostics import Problem
+from s7graph.steps.scl.exprs import checked
+from s7graph.steps.scl.gen import Block, Place, Target
+
+S5_FUNCTIONS = frozenset(S5_TIMERS) | frozenset(S5_COUNTERS)
+MAX_PYTHON_LOOPS = 18
+"""Python allows 20 nested loops in a function; loops and dispatch loops stay below."""
+
+
+@dataclass
+class Frame:
+    """A Python loop being generated: an SCL loop or a dispatch loop of labels."""
+
+    kind: str
+    id: int
+    cont: list[str] = field(default_factory=list)
+    """An SCL loop's lines before ``continue`` (a FOR's step, a REPEAT's test)."""
+    pending: list[tuple[str, Frame]] = field(default_factory=list)
+    """Signals to pass on after this loop: (kind of jump, target frame)."""
+
+
+class Stmts:
+    """The statement translator of one block."""
+
+    def __init__(self, b: Block, declared: dict[str, SourceLocation], epilogue: list[str]) -> None:
+        self.b = b
+        self.frames: list[Frame] = []
+        self.labels: list[dict[str, tuple[Frame, int]]] = []
+        self.declared = declared
+        self.placed: dict[str, SourceLocation] = {}
+        self.jumped: set[str] = set()
+        self.flags: set[str] = set()
+        self.epilogue = epilogue
+        self._ids = 0
+
+    # ---- lists
+
+    def run(self, stmts: tuple[m.Stmt, ...]) -> None:
+        """The block's statements (labels collected first: a GOTO may jump forward)."""
+        self._collect(stmts)
+        self.body(stmts)
+
+    def _collect(self, stmts: tuple[m.Stmt, ...]) -> None:
+        todo = list(stmts)
+        while todo:
+            s = todo.pop()
+            if isinstance(s, m.Labeled):
+                key = s.label.upper()
+                if key in self.placed:
+                    self.b.report(Problem("E219", f"label {s.label} is placed twice", s.loc))
+                if key not in self.declared:
+                    self.b.report(
+                        Problem("E218", f"label {s.label} is not declared in LABEL", s.loc)
+                    )
+                self.placed[key] = s.loc
+                todo.append(s.stmt)
+            elif isinstance(s, m.If):
+                todo += [x for _, body in s.branches for x in body] + list(s.orelse or ())
+            elif isinstance(s, m.Case):
+                todo += [x for arm in s.arms for x in arm.body] + list(s.orelse or ())
+            elif isinstance(s, m.For | m.While | m.Repeat):
+                todo += list(s.body)
+
+    def body(self, stmts: tuple[m.Stmt, ...]) -> None:
+        """A statement list (``pass`` when empty; a dispatch loop when it holds labels)."""
+        if not stmts:
+            self.b.emit("pass")
+            return
+        if any(isinstance(s, m.Labeled) for s in stmts):
+            self._dispatch(stmts)
+            return
+        for s in stmts:
+            self.stmt(s)
+
+    def _dispatch(self, stmts: tuple[m.Stmt, ...]) -> None:
+        b = self.b
+        segments: list[list[m.Stmt]] = [[]]
+        names: dict[str, tuple[Frame, int]] = {}
+        frame = self._frame("dispatch")
+        for s in stmts:
+            if isinstance(s, m.Labeled):
+                if segments[-1]:
+                    segments.append([])
+                while isinstance(s, m.Labeled):
+                    names[s.label.upper()] = (frame, len(segments) - 1)
+                    s = s.stmt
+            segments[-1].append(s)
+        pc = f"_pc{frame.id}"
+        b.emit(f"{pc} = 0")
+        self._open(frame, "while True:")
+        self.labels.append(names)
+        for k, segment in enumerate(segments):
+            b.emit(f"if {pc} <= {k}:")
+            b.indent += 1
+            for s in segment:
+                self.stmt(s)
+            if not segment:
+                b.emit("pass")
+            b.indent -= 1
+        b.emit("break")
+        self.labels.pop()
+        self._close(frame)
+
+    # ---- loops and their frames
+
+    def _frame(self, kind: str) -> Frame:
+        self._ids += 1
+        return Frame(kind, self._ids)
+
+    def _open(self, frame: Frame, head: str) -> None:
+        b = self.b
+        if len(self.frames) >= MAX_PYTHON_LOOPS or b.indent > 60:
+            raise Problem("E204", "loops and labelled statement lists nested too deeply", b.loc)
+        b.emit(head)
+        b.indent += 1
+        self.frames.append(frame)
+        b.emit("_M.left -= 1")
+        b.emit(f"if _M.left < 0: _M.over(ctx, {b.label!r})")
+
+    def _close(self, frame: Frame) -> None:
+        """End ``frame``'s loop; pass on the jumps that crossed it."""
+        b = self.b
+        self.frames.pop()
+        b.indent -= 1
+        parent = self.frames[-1] if self.frames else None
+        done: set[tuple[str, int]] = set()
+        for kind, target in frame.pending:
+            if (kind, target.id) in done:
+                continue
+            done.add((kind, target.id))
+            flag, test = self._flag(kind, target)
+            if parent is not target:
+                b.emit(f"if {test}: break")
+                assert parent is not None
+                parent.pending.append((kind, target))
+            elif kind == "exit":
+                b.emit(f"if {test}: {flag} = 0; break")
+            elif kind == "goto":
+                b.emit(f"if {test}: {flag} = False; continue")
+            else:
+                b.emit(f"if {test}:")
+                b.emit(f"    {flag} = 0")
+                for line in target.cont:
+                    b.emit(f"    {line}")
+                b.emit("    continue")
+
+    def _flag(self, kind: str, target: Frame) -> tuple[str, str]:
+        if kind == "goto":
+            flag = f"_g{target.id}"
+            self.flags.add(flag)
+            return flag, flag
+        flag = f"_s{target.id}"
+        self.flags.add(flag)
+        return flag, f"{flag} == {1 if kind == 'exit' else 2}"
+
+    def _jump_out(self, kind: str, target: Frame) -> None:
+        """Leave the loops above ``target`` with a flag they pass on."""
+        b = self.b
+        crossed = self.frames[self.frames.index(target) + 1 :]
+        flag, _ = self._flag(kind, target)
+        if kind == "goto":
+            b.emit(f"{flag} = True")
+        else:
+            b.emit(f"{flag} = {1 if kind == 'exit' else 2}")
+        b.emit("break")
+        crossed[-1].pending.append((kind, target))
+
+    # ---- statements
+
+    def stmt(self, s: m.Stmt) -> None:
+        b = self.b
+        b.loc = s.loc
+        try:
+            self._stmt(s)
+        except Problem as p:
+            b.report(p)
+            b.emit("pass")
+
+    def _stmt(self, s: m.Stmt) -> None:
+        b = self.b
+        if isinstance(s, m.Assign):
+            self._assign(s)
+        elif isinstance(s, m.CallStmt):
+            got = b.places.resolve(s.call)
+            if not isinstance(got, Target):
+                raise Problem("E232", "a statement is an assignment or a call", s.loc)
+            b.calls.statement(got)
+        elif isinstance(s, m.If):
+            self._if(s)
+        elif isinstance(s, m.Case):
+            self._case(s)
+        elif isinstance(s, m.For):
+            self._for(s)
+        elif isinstance(s, m.While):
+            frame = self._frame("loop")
+            self._open(frame, f"while {b.exprs.cond(s.cond)}:")
+            self.body(s.body)
+            self._close(frame)
+        elif isinstance(s, m.Repeat):
+            frame = self._frame("loop")
+            self._open(frame, "while True:")
+            self.body(s.body)
+            b.loc = s.loc
+            test = f"if {b.exprs.cond(s.cond)}: break"
+            frame.cont = [test]
+            b.emit(test)
+            self._close(frame)
+        elif isinstance(s, m.Jump):
+            self._jump(s)
+        elif isinstance(s, m.Labeled):
+            raise Problem("E219", f"label {s.label} here is not in a statement list", s.loc)
+        else:
+            b.emit("pass")
+
+    def _assign(self, s: m.Assign) -> None:
+        b = self.b
+        place = b.places.place(s.target, writing=True)
+        if place.get == "_ret":
+            b.ret_set = True
+        if isinstance(s.value, m.Path):
+            got = b.places.resolve(s.value)
+            if isinstance(got, Target) and (got.kind == "fc" or got.name in S5_FUNCTIONS):
+                b.calls.statement(got, result=place)
+                return
+        x = b.exprs.expr(s.value)
+        b.emit(place.store(b.exprs.convert(x, place.type, s.loc, "assign")))
+
+    def _if(self, s: m.If) -> None:
+        b = self.b
+        for k, (cond, body) in enumerate(s.branches):
+            b.loc = cond.loc
+            b.emit(f"{'if' if k == 0 else 'elif'} {b.exprs.cond(cond)}:")
+            b.indent += 1
+            self.body(body)
+            b.indent -= 1
+        if s.orelse is not None:
+            b.emit("else:")
+            b.indent += 1
+            self.body(s.orelse)
+            b.indent -= 1
+
+    def _case(self, s: m.Case) -> None:
+        b = self.b
+        sel = b.exprs.expr(s.selector)
+        if not ty.is_int(sel.type):
+            raise Problem("E242", f"a CASE selector is an INT or DINT, not {sel.type}", s.loc)
+        var = b.temp("c")
+        b.emit(f"{var} = {sel.src}")
+        taken: list[tuple[int, int]] = []
+        for k, arm in enumerate(s.arms):
+            tests = []
+            for lo_lit, hi_lit in arm.values:
+                lo, hi = self._case_value(lo_lit, sel.type), self._case_value(hi_lit, sel.type)
+                if lo > hi or any(lo <= h and l <= hi for l, h in taken):  # noqa: E741
+                    raise Problem(
+                        "E242", f"CASE value {lo}..{hi} is empty or listed twice", lo_lit.loc
+                    )
+                taken.append((lo, hi))
+                tests.append(f"{var} == {lo}" if lo == hi else f"{lo} <= {var} <= {hi}")
+            b.emit(f"{'if' if k == 0 else 'elif'} {' or '.join(tests)}:")
+            b.indent += 1
+            self.body(arm.body)
+            b.indent -= 1
+        if s.orelse is not None:
+            b.emit("else:" if s.arms else "if True:")
+            b.indent += 1
+            self.body(s.orelse)
+            b.indent -= 1
+
+    def _case_value(self, lit: m.Lit, t: ty.SclType) -> int:
+        from s7graph.steps.scl.consts import literal
+
+        c = literal(lit)
+        if (
+            not isinstance(c.value, int)
+            or isinstance(c.value, bool)
+            or not ty.literal_fits(t, c.value)
+        ):
+            raise Problem("E242", f"CASE value {lit.text} is not an integer of {t}", lit.loc)
+        return c.value
+
+    def _for(self, s: m.For) -> None:
+        b = self.b
+        if s.var.selectors:
+            raise Problem("E241", "the FOR variable is a simple variable", s.var.loc)
+        var = b.places.place(s.var, writing=True)
+        if var.type.kind not in ty.INTS or not _simple(var):
+            raise Problem(
+                "E241", f"the FOR variable is an INT or DINT variable, not {var.what}", s.loc
+            )
+        t = var.type
+        start = b.exprs.convert(b.exprs.expr(s.start), t, s.start.loc, "start")
+        end = b.exprs.convert(b.exprs.expr(s.end), t, s.end.loc, "end")
+        step_x = b.exprs.expr(s.step) if s.step is not None else None
+        step = b.exprs.convert(step_x, t, s.step.loc, "step") if step_x and s.step else "1"
+        const_step = step_x.const.value if step_x is not None and step_x.const else 1
+        b.emit(var.store(start))
+        e = b.temp("e")
+        b.emit(f"{e} = {end}")
+        if isinstance(const_step, int):
+            if const_step == 0:
+                raise Problem("E241", "a FOR step of 0 never ends", s.loc)
+            test = f"{var.get} {'<=' if const_step > 0 else '>='} {e}"
+        else:
+            st = b.temp("s")
+            b.emit(f"{st} = {step}")
+            step = st
+            test = f"({var.get} <= {e} if {st} >= 0 else {var.get} >= {e})"
+        frame = self._frame("loop")
+        incr = var.store(checked(f"{var.get} + {step}", t.kind))
+        frame.cont = [incr]
+        self._open(frame, f"while {test}:")
+        self.body(s.body)
+        b.emit(incr)
+        self._close(frame)
+
+    def _jump(self, s: m.Jump) -> None:
+        b = self.b
+        if s.kind == "RETURN":
+            for line in self.epilogue:
+                b.emit(line)
+            return
+        if s.kind == "GOTO":
+            self._goto(s)
+            return
+        loops = [f for f in self.frames if f.kind == "loop"]
+        if not loops:
+            raise Problem("E240", f"{s.kind} outside a loop", s.loc)
+        target = loops[-1]
+        kind = "exit" if s.kind == "EXIT" else "cont"
+        if self.frames[-1] is not target:
+            self._jump_out(kind, target)
+        elif kind == "exit":
+            b.emit("break")
+        else:
+            for line in target.cont:
+                b.emit(line)
+            b.emit("continue")
+
+    def _goto(self, s: m.Jump) -> None:
+        b = self.b
+        key = s.label.upper()
+        self.jumped.add(key)
+        for names in reversed(self.labels):
+            if key in names:
+                frame, segment = names[key]
+                b.emit(f"_pc{frame.id} = {segment}")
+                if self.frames[-1] is frame:
+                    b.emit("continue")
+                else:
+                    self._jump_out("goto", frame)
+                return
+        if key not in self.declared:
+            raise Problem("E218", f"GOTO {s.label}: no such label is declared", s.loc)
+        if key not in self.placed:
+            raise Problem("E218", f"GOTO {s.label}: the label is never placed", s.loc)
+        raise Problem("E219", f"GOTO {s.label}: a jump may not enter a loop or a branch", s.loc)
+
+
+def _simple(place: Place) -> bool:
+    """A variable held by the block (not an operand in memory or an element)."""
+    return place.get.startswith(("t_", "V[", "P[", "P.get(")) and place.get.count("[") <= 1

@@ -1,0 +1,211 @@
+"""The S5 timer and counter functions of S7-SCL: S_PULSE, S_PEXT, S_ODT, S_ODTS,
+S_OFFDT, S_CU, S_CD, S_CUD, run by the operating system's S5 cells (docs/scl.md,
+"Functions"; STEP7 comprehensive guide vol. 2, ch. 13, timers and counters)."""
+
+from __future__ import annotations
+
+import pytest
+
+from s7graph.engine import parse_address
+from tests.steps.scl.helpers import errors, run
+
+TIMERS = """
+FUNCTION_BLOCK FB2
+VAR
+  CurrTime : S5TIME;
+  BiVal : WORD;
+  ActFlag : BOOL;
+END_VAR
+  CurrTime := S_ODT(T_NO := T10, S := I0.0, TV := T#1s, R := I0.1, BI := BiVal, Q := ActFlag);
+  Q0.0 := ActFlag;
+  MW2 := BiVal;
+  CurrTime := S_ODTS(T_NO := T11, S := I0.0, TV := T#1s, R := I0.1, Q := Q0.1);
+  CurrTime := S_OFFDT(T_NO := T12, S := I0.0, TV := T#1s, R := I0.1, Q := Q0.2);
+  CurrTime := S_PEXT(T_NO := T13, S := I0.0, TV := T#1s, R := I0.1, Q := Q0.3);
+  CurrTime := S_PULSE(T_NO := T14, S := I0.0, TV := T#1s, R := I0.1, Q := Q0.4);
+END_FUNCTION_BLOCK
+ORGANIZATION_BLOCK OB1
+  FB2.DB2();
+END_ORGANIZATION_BLOCK
+"""
+
+
+def q(cpu: object) -> list[bool]:
+    return [cpu.mem.get(f"Q0.{k}") for k in range(5)]  # type: ignore[attr-defined]
+
+
+def test_the_five_timers_from_scl() -> None:
+    cpu = run(TIMERS, 1, ms=100)
+    assert q(cpu) == [False, False, False, False, False]
+    cpu.mem.periph_in[0] = 1  # S rises
+    for _ in range(3):
+        cpu.scan()
+        cpu.clock.advance(100)  # type: ignore[attr-defined]
+    # 300 ms in: on-delays wait, off-delay holds, both pulses run
+    assert q(cpu) == [False, False, True, True, True]
+    assert 0 < cpu.mem.get("MW2") <= 100  # BI: the time left in 10 ms units
+    for _ in range(9):
+        cpu.scan()
+        cpu.clock.advance(100)  # type: ignore[attr-defined]
+    # 1.2 s in: the on-delays are on, the pulses are over
+    assert q(cpu) == [True, True, True, False, False]
+    cpu.mem.periph_in[0] = 0  # S falls
+    cpu.scan()
+    assert q(cpu) == [False, True, True, False, False]  # S_ODTS keeps Q until R
+    for _ in range(12):
+        cpu.clock.advance(100)  # type: ignore[attr-defined]
+        cpu.scan()
+    assert q(cpu) == [False, True, False, False, False]  # the off-delay ran out
+    cpu.mem.periph_in[0] = 2  # R
+    cpu.scan()
+    assert q(cpu) == [False, False, False, False, False]
+
+
+def test_the_function_value_is_the_time_left_as_s5time() -> None:
+    src = """
+ORGANIZATION_BLOCK OB1
+VAR_TEMP t : S5TIME; END_VAR
+  t := S_PEXT(T_NO := T3, S := TRUE, TV := T#25S);
+  DB1.S := t;
+END_ORGANIZATION_BLOCK
+DATA_BLOCK DB1 STRUCT S : S5TIME; END_STRUCT BEGIN END_DATA_BLOCK
+"""
+    cpu = run(src, 11, ms=100)
+    assert cpu.mem.read_as(parse_address("DB1.DBW0"), "S5TIME") == 24000
+
+
+def test_the_timer_resumes_with_the_time_left() -> None:
+    """The guide's example: a pulse timer that, cut short, goes on with the time it had
+    left when its switch closes again."""
+    src = """
+FUNCTION_BLOCK FB1
+VAR
+  currtime, t_remain : S5TIME;
+  aa, bival : WORD;
+END_VAR
+  IF i0.0 = false THEN
+    aa := bival;
+    t_remain := currtime;
+    IF bival <> 16#0 THEN
+      m0.0 := 1;
+    ELSE
+      m0.0 := false;
+    END_IF;
+  END_IF;
+  IF m0.0 = true THEN
+    CurrTime := S_PULSE(T_NO := T14, S := i0.0, TV := T_remain, R := i0.1, BI := biVal, Q := q0.0);
+  ELSE
+    CurrTime := S_PULSE(T_NO := T14, S := i0.0, TV := T#20s, R := i0.1, BI := biVal, Q := q0.0);
+  END_IF;
+END_FUNCTION_BLOCK
+ORGANIZATION_BLOCK OB1
+  FB1.DB1();
+END_ORGANIZATION_BLOCK
+"""
+    cpu = run(src, 1, ms=100)
+    pi = cpu.mem.periph_in
+
+    def seconds(n: float) -> None:
+        for _ in range(round(n * 10)):
+            cpu.scan()
+            cpu.clock.advance(100)  # type: ignore[attr-defined]
+
+    pi[0] = 1
+    seconds(8)  # 8 s of the 20 s pulse
+    assert cpu.mem.get("Q0.0") is True
+    pi[0] = 0  # cut short: 12 s left
+    seconds(5)
+    assert cpu.mem.get("Q0.0") is False and cpu.instance_db(1)["t_remain"] == 12000
+    pi[0] = 1
+    seconds(11.5)
+    assert cpu.mem.get("Q0.0") is True
+    seconds(0.8)
+    assert cpu.mem.get("Q0.0") is False  # the time left has run out
+
+
+def test_the_three_counters() -> None:
+    src = """
+FUNCTION_BLOCK FB1
+VAR
+  CurrVal, binVal : WORD;
+  actFlag : BOOL;
+END_VAR
+  CurrVal := S_CD(C_NO := C10, CD := M0.0, S := M0.1, PV := 16#100, R := FALSE,
+                  CV := binVal, Q := actFlag);
+  MW10 := binVal;
+  MW12 := CurrVal;
+  CurrVal := S_CU(C_NO := C11, CU := M0.0, S := M0.1, PV := 16#110, R := M0.2,
+                  CV := binVal, Q := Q0.7);
+  MW14 := binVal;
+  CurrVal := S_CUD(C_NO := C12, CD := I0.0, CU := I0.1, S := I0.2 & I0.3, PV := C#120,
+                   R := FALSE, CV := binVal);
+  MW16 := binVal;
+END_FUNCTION_BLOCK
+ORGANIZATION_BLOCK OB1
+  FB1.DB1();
+END_ORGANIZATION_BLOCK
+"""
+    cpu = run(src, 1)
+    mem = cpu.mem
+    mem.set("M0.1", True)  # set both counters
+    cpu.scan()
+    mem.set("M0.1", False)
+    for _ in range(3):  # three rising edges
+        mem.set("M0.0", True)
+        cpu.scan()
+        mem.set("M0.0", False)
+        cpu.scan()
+    assert (mem.get("MW10"), mem.get("MW12"), mem.get("MW14")) == (97, 0x97, 113)
+    assert mem.get("Q0.7") is True
+    cpu.mem.periph_in[0] = 0x0C  # S of S_CUD
+    cpu.scan()
+    cpu.mem.periph_in[0] = 0x02  # CU
+    cpu.scan()
+    assert mem.get("MW16") == 121
+
+
+def test_a_timer_number_from_a_variable_and_a_tv_word() -> None:
+    src = """
+FUNCTION_BLOCK FB3
+VAR_INPUT
+  MY_TIMER : ARRAY[1..4] OF STRUCT
+    T_NO : INT;
+    TV : WORD;
+  END_STRUCT;
+  mytime : TIMER;
+END_VAR
+VAR_TEMP I : INT; END_VAR
+  FOR I := 1 TO 4 DO
+    S_ODT(T_NO := MY_TIMER[I].T_NO, S := true, TV := MY_TIMER[I].TV);
+  END_FOR;
+  S_PEXT(T_NO := mytime, S := TRUE, TV := T#5S);
+END_FUNCTION_BLOCK
+ORGANIZATION_BLOCK OB1
+  FB3.DB3(mytime := T20);
+END_ORGANIZATION_BLOCK
+"""
+
+    def presets(cpu: object) -> None:
+        db = cpu.instance_db(3)  # type: ignore[attr-defined]
+        for k, row in enumerate(db["MY_TIMER"]):
+            row["T_NO"] = 30 + k
+            row["TV"] = 0x1000 | (k + 1) * 0x10  # 1 s, 2 s, 3 s, 4 s in 100 ms units
+
+    cpu = run(src, 1, before=presets, ms=100)
+    timers = cpu.mem.timers
+    assert [timers[30 + k].preset_ms for k in range(4)] == [1000, 2000, 3000, 4000]
+    assert timers[20].running
+
+
+@pytest.mark.parametrize(
+    ("call", "code"),
+    [
+        ("S_ODT(S := TRUE, TV := T#1S);", "E231"),
+        ("S_ODT(T_NO := T1, X := TRUE);", "E230"),
+        ("S_ODT(T_NO := 1.5, S := TRUE);", "E220"),
+        ("b := S_ODT(T_NO := T1, S := TRUE, Q := b) = S5T#0MS;", "E232"),
+    ],
+)
+def test_s5_function_diagnostics(call: str, code: str) -> None:
+    src = f"FUNCTION_BLOCK FB1\nVAR b : BOOL; END_VAR\n  {call}\nEND_FUNCTION_BLOCK\n"
+    assert errors(src) == [code]

@@ -1,0 +1,213 @@
+"""``s7graph check PROGRAM.scl`` and ``s7graph sim PROGRAM.scl``: an S7-SCL source checked,
+or run on the virtual clock (docs/cli.md, "s7graph sim"; docs/scl.md).
+
+``check`` prints the source's diagnostics one a line and a summary — exit 0 clean, 1
+warnings only, 2 errors — as for a chart. ``sim`` compiles the source with the system
+blocks, loads it into a CPU on the virtual clock, starts it (OB100) and runs ``cycles``
+scans ``cycle_ms`` apart, one JSON line a cycle in the chart's trace format: ``active`` and
+``events`` are empty lists (no GRAPH FB runs), ``mode`` is the CPU's mode, ``values`` the
+``--watch`` names — addresses, symbols and the variables of instance DBs (``DB10.CONTROL``).
+Stimuli set addresses and symbols (an input on the module side) and instance variables;
+a plant (``--plant``) runs with a chart only. A source that does not compile is its
+diagnostics on stderr, exit 2; a STOP ends the trace with that cycle, the reason on stderr,
+exit 1.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import sys
+from pathlib import Path
+from typing import Any, TextIO
+
+from s7graph import sfb
+from s7graph.engine.address import Address, Area, Width, parse_address
+from s7graph.engine.clock import VirtualClock
+from s7graph.engine.cpu import Cpu
+from s7graph.engine.errors import AddressError, S7Error
+from s7graph.engine.runner import stop_reason
+from s7graph.engine.symbols import SymbolTable, default_type
+from s7graph.engine.text import NotUtf8, decode_utf8
+from s7graph.steps.scl import SclError, SclProgram, check_scl, compile_scl, format_diagnostic
+from s7graph.web.cli.report import fail
+from s7graph.web.cli.sim import _read_stimulus
+
+_INSTANCE = re.compile(r"DB(\d+)\.(\w+)", re.IGNORECASE)
+
+
+def _text(path: Path) -> str:
+    try:
+        return decode_utf8(path.read_bytes(), str(path))
+    except OSError as exc:
+        raise S7Error(f"cannot read {path}: {exc.strerror or exc}") from None
+    except NotUtf8 as exc:
+        raise S7Error(str(exc)) from None
+
+
+def _symbols(path: Path | None) -> SymbolTable | None:
+    if path is None:
+        return None
+    try:
+        return SymbolTable.from_file(path)
+    except OSError as exc:
+        raise S7Error(f"cannot read symbols {path}: {exc.strerror or exc}") from None
+    except S7Error as exc:
+        raise S7Error(f"cannot read symbols {path}: {exc}") from None
+
+
+def check_scl_command(source: Path, symbols: Path | None = None) -> int:
+    """Print the diagnostics of an SCL source and a summary; return the exit status."""
+    try:
+        text, table = _text(source), _symbols(symbols)
+    except S7Error as exc:
+        return fail(exc)
+    found = check_scl(text, str(source), blocks=sfb.SYSTEM_BLOCKS, symbols=table)
+    for d in found:
+        print(format_diagnostic(d))
+    errors = sum(d.is_error for d in found)
+    warnings = len(found) - errors
+    print(f"{source}: {_plural(errors, 'error')}, {_plural(warnings, 'warning')}")
+    return 2 if errors else 1 if warnings else 0
+
+
+def _plural(n: int, word: str) -> str:
+    return f"{n} {word}" if n == 1 else f"{n} {word}s"
+
+
+class SclSession:
+    """One CPU on the virtual clock running a compiled SCL program."""
+
+    def __init__(self, program: SclProgram, symbols: SymbolTable | None) -> None:
+        self.clock = VirtualClock()
+        self.cpu = Cpu(self.clock)
+        self.cpu.mem.symbols = symbols
+        self.symbols = symbols
+        sfb.install(self.cpu)
+        program.load(self.cpu)
+
+    def _address(self, name: str) -> tuple[Address, str] | None:
+        sym = self.symbols.lookup(name) if self.symbols is not None else None
+        if sym is not None:
+            return sym.address, sym.type
+        try:
+            addr = parse_address(name)
+        except AddressError:
+            return None
+        return addr, default_type(addr)
+
+    def check_name(self, name: str) -> None:
+        if _INSTANCE.fullmatch(name) is None and self._address(name) is None:
+            raise S7Error(f"unknown name {name}: not an address, symbol or DBn.variable")
+
+    def get(self, name: str) -> Any:
+        if m := _INSTANCE.fullmatch(name):
+            return _json(self.cpu.instance_db(int(m[1]))[m[2]])
+        found = self._address(name)
+        if found is None:
+            raise S7Error(f"unknown name {name}")
+        addr, type_name = found
+        if addr.area in (Area.T, Area.C):
+            cells = self.cpu.mem.timers if addr.area is Area.T else self.cpu.mem.counters
+            return bool(cells[addr.byte].q)
+        return _json(self.cpu.mem.read_as(addr, type_name))
+
+    def set(self, name: str, value: Any) -> None:
+        if m := _INSTANCE.fullmatch(name):
+            self.cpu.instance_db(int(m[1]))[m[2]] = value
+            return
+        found = self._address(name)
+        if found is None:
+            raise S7Error(f"unknown name {name}")
+        addr, type_name = found
+        mem = self.cpu.mem
+        mem.write_as(addr, type_name, value)
+        if addr.area is Area.I:  # the module side, read into the PII at the next cycle
+            size = 1 if addr.width is Width.BIT else int(addr.width) // 8
+            mem.periph_in[addr.byte : addr.byte + size] = mem.inputs[addr.byte : addr.byte + size]
+
+
+def _json(v: Any) -> Any:
+    if isinstance(v, bool | int | float | str) or v is None:
+        return v
+    if isinstance(v, list | dict):
+        return json.loads(json.dumps(v, default=str))
+    return str(v)
+
+
+def sim_scl_command(
+    source: Path,
+    *,
+    stimulus: Path | None = None,
+    cycle_ms: float = 10.0,
+    cycles: int = 100,
+    watch: str = "",
+    trace: Path | None = None,
+    symbols: Path | None = None,
+    plant: Path | None = None,
+) -> int:
+    """Run the SCL program for ``cycles`` cycles; return the exit status."""
+    if plant is not None:
+        return fail(f"{source}: a plant runs with a chart only, not with an SCL program")
+    try:
+        text, table = _text(source), _symbols(symbols)
+        program = compile_scl(text, str(source), blocks=sfb.SYSTEM_BLOCKS, symbols=table)
+    except SclError as exc:
+        for d in exc.diagnostics:
+            print(format_diagnostic(d), file=sys.stderr)
+        return 2
+    except S7Error as exc:
+        return fail(exc)
+    try:
+        session = SclSession(program, table)
+        stim = _read_stimulus(stimulus)
+        names = [w.strip() for w in watch.split(",") if w.strip()]
+        for name in names + [n for _, values in stim for n in values]:
+            session.check_name(name)
+    except S7Error as exc:
+        return fail(exc)
+    out: TextIO = sys.stdout if trace is None else open(trace, "w", encoding="utf-8")  # noqa: SIM115
+    try:
+        return _run(session, stim, names, cycle_ms, cycles, out)
+    except S7Error as exc:
+        return fail(exc)
+    finally:
+        if out is not sys.stdout:
+            out.close()
+
+
+def _run(
+    session: SclSession,
+    stim: list[tuple[float, dict[str, Any]]],
+    names: list[str],
+    cycle_ms: float,
+    cycles: int,
+    out: TextIO,
+) -> int:
+    cpu = session.cpu
+    cpu.start("warm")
+    nxt = 0
+    for k in range(cycles):
+        t_ms = k * cycle_ms
+        while nxt < len(stim) and stim[nxt][0] <= t_ms + 1e-9:
+            for name, value in stim[nxt][1].items():
+                session.set(name, value)
+            nxt += 1
+        record = cpu.scan()
+        line: dict[str, Any] = {
+            "cycle": k,
+            "t_ms": int(t_ms) if float(t_ms).is_integer() else round(t_ms, 6),
+            "active": [],
+            "events": [],
+            "mode": record.mode.name,
+            "values": {name: session.get(name) for name in names},
+        }
+        out.write(json.dumps(line) + "\n")
+        if record.mode.name == "STOP":
+            print(
+                f"s7graph: error: cycle {k}: the CPU went to STOP: {stop_reason(cpu)}",
+                file=sys.stderr,
+            )
+            return 1
+        session.clock.advance(cycle_ms)
+    return 0
