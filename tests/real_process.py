@@ -4,6 +4,7 @@ SQLite state store from outside while it runs, imported as ``tests.real_process`
 
 from __future__ import annotations
 
+import signal
 import sqlite3
 import subprocess
 import sys
@@ -59,3 +60,40 @@ def wait_for(
         assert proc.poll() is None, proc.stderr.read() if proc.stderr else b""
         time.sleep(0.05)
     raise AssertionError(f"timed out; last state {read(path)}")
+
+
+def descendants(pid: int) -> list[int]:
+    """The processes below ``pid`` (``s7graph run``'s CPU, its view and compiler)."""
+    found: list[int] = []
+    for task in Path(f"/proc/{pid}/task").glob("*"):
+        try:
+            children = (task / "children").read_text().split()
+        except OSError:
+            continue
+        for child in map(int, children):
+            found += [child, *descendants(child)]
+    return found
+
+
+def wait_gone(pids: list[int], timeout: float = 30.0) -> None:
+    """Until none of ``pids`` runs any more (a zombie counts as gone)."""
+    deadline = time.monotonic() + timeout
+    for pid in pids:
+        while time.monotonic() < deadline:
+            try:
+                state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+            except (OSError, IndexError):
+                break
+            if state == "Z":
+                break
+            time.sleep(0.01)
+
+
+def kill_run(proc: subprocess.Popen[bytes], timeout: float = 30.0) -> None:
+    """SIGKILL ``s7graph run`` and wait until its CPU is gone too: the CPU dies with its
+    supervisor (parent-death signal) but may still be in its last commit's fsync when the
+    run is reaped — that commit is durable, and a reader must not miss it."""
+    below = descendants(proc.pid)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait(timeout)
+    wait_gone(below, timeout)

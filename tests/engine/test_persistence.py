@@ -18,7 +18,7 @@ import pytest
 
 from s7graph.engine import DB, CallContext, Cpu, InstanceDB, VirtualClock, fb, ob
 from s7graph.engine.persistence import StateStore, unpack_instance
-from tests.real_process import ROOT, query_store, run_command, wait_for
+from tests.real_process import ROOT, kill_run, query_store, run_command, wait_for
 
 
 @fb(2, STAT={"total": ("DINT", 0), "note": ("STRING[8]", "")})
@@ -280,8 +280,7 @@ def test_killed_cpu_process_comes_back_by_warm_restart(tmp_path: Path) -> None:
     try:
         wait_for(_read, state, lambda s: s["MW2"] >= 20, first)
     finally:
-        first.send_signal(signal.SIGKILL)
-        first.wait(10)
+        kill_run(first)
     killed = _read(state)
     assert killed is not None and killed["restarts"] == 1
 

@@ -5,7 +5,6 @@ and the CPU restarted hot (``--restart hot``) shows the effect."""
 
 from __future__ import annotations
 
-import signal
 import sqlite3
 import subprocess
 from collections.abc import Iterator
@@ -19,6 +18,7 @@ from s7graph.web.access.audit import read_audit
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import Command
 from tests.paths import ROOT
+from tests.real_process import kill_run
 from tests.web.helpers import cpu_process, wait_until
 
 pytestmark = pytest.mark.timeout(180)
@@ -49,9 +49,8 @@ def cpu(tmp_path: Path, state: Path) -> Iterator[tuple[subprocess.Popen[str], Bu
 
 def _send_and_kill(proc: subprocess.Popen[str], client: BusClient, command: Command) -> None:
     reply = client.send(command)
-    proc.send_signal(signal.SIGKILL)  # at once, on the reply
+    kill_run(proc)  # at once, on the reply
     assert reply.applied, reply.reason
-    proc.wait(30)
 
 
 def _disk(state: Path) -> tuple[str, list[tuple[str, str, str]]]:

@@ -11,7 +11,6 @@ restart would initialize it); ``undo_download`` likewise puts the old one back."
 from __future__ import annotations
 
 import shutil
-import signal
 import sqlite3
 import subprocess
 from collections.abc import Callable, Iterator
@@ -27,6 +26,7 @@ from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import Command, CommandReply, StepStateUpdate
 from s7graph.web.harness.session import load_chart
 from tests.paths import ROOT
+from tests.real_process import kill_run
 from tests.web.helpers import cpu_process, wait_until
 
 pytestmark = pytest.mark.timeout(600)
@@ -67,9 +67,8 @@ class Cpu:
     def kill_on(self, op: str, **args: object) -> CommandReply:
         """Send ``op`` and SIGKILL the CPU the moment its reply arrives."""
         reply = self.client.send(self.command(op, **args))
-        self.proc.send_signal(signal.SIGKILL)
+        kill_run(self.proc)
         assert reply.applied, (op, args, reply.reason)
-        self.proc.wait(30)
         return reply
 
     def state(self) -> StepStateUpdate:
@@ -172,8 +171,7 @@ def test_every_applied_command_survives_sigkill_and_a_hot_restart(drill: Path) -
         assert cpu.until(lambda s: s.latched == [2]).values["Cl_press_ok"] is True
         cpu.send("mode", mode="AUTO")
         cpu.send_until_applied("ack_step", step=2)  # released, S2 switches by T3
-        cpu.proc.send_signal(signal.SIGKILL)
-        cpu.proc.wait(30)
+        kill_run(cpu.proc)
     with run(drill) as cpu:
         assert (cpu.state().active, cpu.state().latched) == ([4], [])
         cpu.send("mode", mode="MAN")
@@ -183,8 +181,7 @@ def test_every_applied_command_survives_sigkill_and_a_hot_restart(drill: Path) -
         cpu.send("mode", mode="AUTO")
         before = _acknowledged(state, S2_SV)
         cpu.send_until_applied("ack")
-        cpu.proc.send_signal(signal.SIGKILL)
-        cpu.proc.wait(30)
+        kill_run(cpu.proc)
     assert _acknowledged(state, S2_SV) == before + 1  # ACK_EF acknowledged it, as tess
     with run(drill) as cpu:
         assert (cpu.state().active, cpu.state().latched) == ([4], [])
@@ -279,6 +276,5 @@ def test_a_download_the_disk_has_not_confirmed_is_answered_not_confirmed(drill: 
         assert reply.reason.startswith("not confirmed: version 2 runs (was 1)"), reply.reason
         assert reply.reason.endswith("but the state file has not committed it within 5 s")
         assert wait_until(lambda: ("download", "applied") in _audited(state), 20)
-        cpu.proc.send_signal(signal.SIGKILL)
-        cpu.proc.wait(30)
+        kill_run(cpu.proc)
     assert _row_fingerprint(state) == fingerprint(load_chart(path, drill / "symbols.txt")[0])

@@ -14,7 +14,7 @@ from typing import Any
 
 import pytest
 
-from tests.real_process import ROOT, query_store, run_command, wait_for
+from tests.real_process import ROOT, kill_run, query_store, run_command, wait_for
 
 PROGRAM = """
 from s7graph.engine import DB, ob
@@ -81,8 +81,7 @@ def test_killed_cpu_keeps_its_message_list_and_who_acknowledged_when(tmp_path: P
     try:
         killed = wait_for(_read, state, lambda s: _acked(s) and len(s["alarms"]) == 2, first)
     finally:
-        first.send_signal(signal.SIGKILL)
-        first.wait(10)
+        kill_run(first)
     (incoming, acked) = killed["alarms"]
     assert incoming[1:] == ("7", "incoming", "")
     assert acked[1:] == ("7", "acknowledged", "ann")

@@ -38,6 +38,7 @@ from s7graph.engine.diagnostics import EventId
 from s7graph.engine.persistence import unpack_instance
 from s7graph.sequencer.state import GraphState
 from tests.paths import ROOT
+from tests.real_process import kill_run
 
 DRILL = ROOT / "examples" / "drill"
 KILLS = 50
@@ -118,33 +119,6 @@ def _position(diagnostics: list[tuple[int, int, str]], after: int) -> tuple[str,
     return entries[-1], {int(n) for n, _ in found}, {int(n) for n, f in found if f}
 
 
-def _descendants(pid: int) -> list[int]:
-    """The processes below ``pid`` (``s7graph run``'s CPU, its view and compiler)."""
-    found: list[int] = []
-    for task in Path(f"/proc/{pid}/task").glob("*"):
-        try:
-            children = (task / "children").read_text().split()
-        except OSError:
-            continue
-        for child in map(int, children):
-            found += [child, *_descendants(child)]
-    return found
-
-
-def _wait_gone(pids: list[int], timeout: float = 30.0) -> None:
-    """Until none of ``pids`` runs any more (a zombie counts as gone)."""
-    deadline = time.monotonic() + timeout
-    for pid in pids:
-        while time.monotonic() < deadline:
-            try:
-                state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
-            except (OSError, IndexError):
-                break
-            if state == "Z":
-                break
-            time.sleep(0.01)
-
-
 def _kill_runs(
     tmp_path: Path, restart: str, *, idle: int, slow: int, seed: int, upto_s: float
 ) -> list[tuple[OnDisk, OnDisk]]:
@@ -191,10 +165,7 @@ def _kill_runs(
             assert proc.wait(30) == 0, proc.stderr.read()
         else:
             time.sleep(rng.uniform(0.0, upto_s))
-            cpus = _descendants(proc.pid)  # the supervised CPU
-            proc.kill()
-            proc.wait(30)
-            _wait_gone(cpus)  # killed with its supervisor: its last commit may still land
+            kill_run(proc)  # and its CPU: its last commit may still land after the run
         proc.stderr.close()
         seen.append(_read(state))
     return list(itertools.pairwise(seen))
