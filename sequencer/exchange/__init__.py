@@ -17,6 +17,7 @@ from pathlib import Path
 
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.checks.diagnostics import Diagnostic, sort_key
+from s7graph.sequencer.exchange.pending import PendingScl
 from s7graph.sequencer.exchange.problems import ImportFailed, Problems
 from s7graph.sequencer.text.model import Binary, Chart
 from s7graph.sequencer.text.walk import rewrite
@@ -26,6 +27,7 @@ __all__ = [
     "FORMATS",
     "ImportFailed",
     "Imported",
+    "PendingScl",
     "detect_format",
     "export_chart",
     "import_chart",
@@ -53,6 +55,7 @@ class Imported:
     chart: Chart
     format: str
     problems: list[Diagnostic] = field(default_factory=list)
+    pending: list[PendingScl] = field(default_factory=list)  # bodies kept for the SCL block
 
 
 def canonical_chains(chart: Chart) -> Chart:
@@ -178,8 +181,8 @@ def _import_chart(
         except ChartSyntaxError as exc:
             raise ImportFailed(exc.diagnostics) from None
         return Imported(chart, fmt, [])
-    chart = iec_to_chart(item, problems)
-    return Imported(chart, fmt, sorted(problems.items, key=sort_key))
+    chart, pending = iec_to_chart(item, problems)
+    return Imported(chart, fmt, sorted(problems.items, key=sort_key), pending)
 
 
 def import_file(

@@ -66,7 +66,7 @@ def read_iec_text(text: str, file: str, problems: Problems) -> list[IecChart]:
                 _loc(file, item.children[0]),
             )
             continue
-        chart = _pou(item, file)
+        chart = _pou(item, file, text)
         if chart.steps:
             charts.append(chart)
         else:
@@ -74,14 +74,15 @@ def read_iec_text(text: str, file: str, problems: Problems) -> list[IecChart]:
     return charts
 
 
-def _pou(tree: Tree[Any], file: str) -> IecChart:
+def _pou(tree: Tree[Any], file: str, text: str) -> IecChart:
     head = tree.children[0]
     kind_tok, name_tok = head.children[0], head.children[1]
     chart = IecChart(
         str(name_tok), _POU_KINDS[str(kind_tok).upper()], _loc(file, kind_tok), dialect="iec"
     )
     order = 0
-    for ch in tree.children[1:]:
+    spans: list[str] = []
+    for i, ch in enumerate(tree.children[1:], 1):
         if isinstance(ch, Tree):
             rule = ch.data
             if rule == "var_block":
@@ -92,11 +93,31 @@ def _pou(tree: Tree[Any], file: str) -> IecChart:
                 chart.transitions.append(_transition(ch, file, order))
                 order += 1
             elif rule == "action":
-                act = _action(ch, file)
+                act = _action(ch, file, text)
                 chart.actions[act.name.upper()] = act
         elif ch is not None and not isinstance(ch, Token):
             chart.prelude.append(ch)  # a statement of the POU body
+            nxt = next((c for c in tree.children[i + 1 :] if c is not None), None)
+            spans.append(text[_offset(text, ch) : _offset(text, nxt) if nxt else len(text)])
+    chart.prelude_text = "".join(spans)
     return chart
+
+
+def _offset(text: str, node: Any) -> int:
+    """Where ``node`` (a tree, a token or a statement) starts in ``text``."""
+    if isinstance(node, Token) and node.start_pos is not None:
+        return node.start_pos
+    if isinstance(node, Tree):
+        if not node.meta.empty:
+            return int(node.meta.start_pos)
+        return _offset(text, node.children[0]) if node.children else len(text)
+    line, col = getattr(node, "line", 0), getattr(node, "col", 0)
+    if not line:
+        return len(text)
+    start = 0
+    for _ in range(line - 1):
+        start = text.index("\n", start) + 1
+    return start + col - 1
 
 
 def _var_block(tree: Tree[Any], file: str) -> list[IecVar]:
@@ -188,7 +209,11 @@ def _transition(tree: Tree[Any], file: str, order: int) -> IecTransition:
     )
 
 
-def _action(tree: Tree[Any], file: str) -> IecAction:
-    kw, name = tree.children[0], tree.children[1]
+def _action(tree: Tree[Any], file: str, text: str) -> IecAction:
+    """``ACTION name: … END_ACTION``: its statements (placed in the file) and its text."""
+    kw, name, end = tree.children[0], tree.children[1], tree.children[-1]
     body: list[Any] = [s for s in tree.children[2:] if s is not None and not isinstance(s, Token)]
-    return IecAction(str(name), body, _loc(file, kw))
+    assert isinstance(name, Token) and name.end_pos is not None
+    start = text.index(":", name.end_pos) + 1
+    stop = end.start_pos if isinstance(end, Token) and end.start_pos is not None else start
+    return IecAction(str(name), body, _loc(file, kw), text=text[start:stop])

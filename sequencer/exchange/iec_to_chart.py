@@ -47,9 +47,11 @@ from s7graph.sequencer.exchange.iec_model import (
     IecChart,
     IecStep,
     IecTransition,
+    StatementBody,
     Unsupported,
 )
 from s7graph.sequencer.exchange.mapping import QUALIFIERS
+from s7graph.sequencer.exchange.pending import PendingScl, first_other, written_by
 from s7graph.sequencer.exchange.problems import Problems
 from s7graph.sequencer.exchange.st import (
     SAssign,
@@ -59,11 +61,14 @@ from s7graph.sequencer.exchange.st import (
     SName,
     SOther,
     SSetReset,
+    SStmt,
 )
+from s7graph.sequencer.exchange.stalls import report_stalls
 from s7graph.sequencer.text.model import (
     ActionRow,
     Assignment,
     Binary,
+    BlockCall,
     Chart,
     ChartOptions,
     Coil,
@@ -119,9 +124,13 @@ class _Convert(IecExpressions):
                     t.condition.loc,
                 )
                 continue
-            if t.condition is not None:
+            if isinstance(t.condition, StatementBody):
+                cond = self.statement_condition(t.condition)
+                if cond is None:
+                    continue
+            elif t.condition is not None:
                 try:
-                    cond = self.expr(t.condition, t.cond_origin)
+                    cond = self.condition(t.condition, t.cond_origin)
                 except _NoMap as exc:
                     self.p.error("I012", f"condition not imported: {exc.message}", exc.loc)
                     continue
@@ -137,6 +146,28 @@ class _Convert(IecExpressions):
             )
             out.append((t, tr))
         return out
+
+    def statement_condition(self, t: StatementBody) -> Expr | None:
+        """A transition body of statements: ``name := expr;`` alone is ``expr``; other
+        statements are kept for the SCL block, which computes the FB variable the
+        condition then reads (FALSE until it does)."""
+        only = t.body[0] if len(t.body) == 1 else None
+        if isinstance(only, SAssign) and only.target.text.upper() == t.name.upper():
+            try:
+                return self.condition(only.expr, t.origin)
+            except _NoMap as exc:
+                self.p.error("I012", f"condition not imported: {exc.message}", exc.loc)
+                return None
+        result = self.helper(t.name, "BOOL")
+        found = first_other(t.body)
+        why = found[0] if found else "statements"
+        first = self.loc(found[1], t.origin) if found else t.loc
+        writes = tuple(w for w in written_by(t.body) if w.upper() != t.name.upper())
+        item = PendingScl(
+            "transition", t.name, t.text, t.loc, "before", writes=writes, result=result, why=why
+        )
+        self.pending.keep(item, first)
+        return Operand(result, False, t.loc)
 
     def step_ref(self, name: str, loc: SourceLocation) -> int | None:
         n = self.step_numbers.get(name.upper())
@@ -201,6 +232,18 @@ class _Convert(IecExpressions):
                     "variable of the POU; not imported",
                     a.loc,
                 )
+                continue
+            if key in self.stored:
+                if a.qualifier.upper() == "S" and step.initial:
+                    self.permanent_action(action, key)
+                else:
+                    self.warn_once(
+                        (key, "stored"),
+                        "I031",
+                        f"{a.qualifier} {a.action} adds nothing: an initial step stores "
+                        f"{a.action} for good (it runs every call, in PERMANENT AFTER)",
+                        a.loc,
+                    )
                 continue
             if rule.body is None:
                 self.p.warn("I020", f"{a.qualifier} {a.action} not imported: {rule.why}", a.loc)
@@ -274,19 +317,35 @@ class _Convert(IecExpressions):
                 "I021", f"action {action.name} has an empty body (a comment at most); no rows", at
             )
             return []
+        found = first_other(action.body)
+        if found is not None:
+            item = PendingScl(
+                "action",
+                action.name,
+                action.text,
+                action.loc,
+                "step",
+                number,
+                event,
+                written_by(action.body),
+                why=found[0],
+            )
+            self.pending.keep(item, self.loc(found[1], action.origin))
+            return []
         rows: list[ActionRow] = []
         coils: list[PermanentInstruction] = []
         ev = event or None
         for st in action.body:
             loc = self.loc(st, action.origin)
             try:
-                if isinstance(st, SOther):
-                    raise _NoMap(
-                        f"{st.keyword} statement not imported (a GRAPH row is one instruction)", loc
-                    )
+                assert not isinstance(st, SOther)  # such bodies are pending (above)
                 if isinstance(st, SCallStmt):
                     call = self.fb_call(st, action.origin, action=True)
-                    rows.append(ActionRow("CALL", call, ev, False, None, loc))
+                    if isinstance(call, BlockCall):
+                        rows.append(ActionRow("CALL", call, ev, False, None, loc))
+                    else:
+                        gate = self.gate(gate_kind, step, number, loc)
+                        coils += [_gated(t, gate, v, loc) for t, v in call]
                     continue
                 target = self.operand(st.target, action.origin)
                 assert isinstance(target, Operand)
@@ -351,23 +410,98 @@ class _Convert(IecExpressions):
         )
 
     def prelude(self) -> None:
-        for st in self.src.prelude:
-            loc = self.loc(st, (1, 1))
+        found = first_other(self.src.prelude)
+        if found is not None:
+            writes = written_by(self.src.prelude)
+            loc = self.loc(self.src.prelude[0], (1, 1))
+            item = PendingScl(
+                "body",
+                self.src.name,
+                self.src.prelude_text,
+                loc,
+                "before",
+                writes=writes,
+                why=found[0],
+            )
+            self.pending.keep(item, self.loc(found[1], (1, 1)))
+            return
+        self.permanent(self.src.prelude, (1, 1), self.before, "")
+
+    def permanent(
+        self,
+        body: list[SStmt],
+        origin: tuple[int, int],
+        into: list[PermanentInstruction],
+        action: str,
+    ) -> None:
+        """Statements that run every call, as permanent instructions: the POU body beside
+        its SFC (PERMANENT BEFORE), an S action of an initial step that nothing resets
+        (PERMANENT AFTER, ``action`` its name)."""
+        for st in body:
+            loc = self.loc(st, origin)
             try:
                 if isinstance(st, SCallStmt):
-                    self.before.append(self.fb_call(st, (1, 1), action=False))
+                    call = self.fb_call(st, origin, action=False)
+                    if isinstance(call, BlockCall):
+                        into.append(call)
+                    else:
+                        into += [_permanent_assignment(t, v, loc) for t, v in call]
                     continue
-                if isinstance(st, SOther):
-                    raise _NoMap(f"{st.keyword} in the POU body not imported", loc)
-                target = self.operand(st.target, (1, 1))
+                assert not isinstance(st, SOther)  # such bodies are pending
+                target = self.operand(st.target, origin)
                 assert isinstance(target, Operand)
-                value = self.assigned(st.expr, self.type_of(target), (1, 1))
+                value = self.assigned(st.expr, self.type_of(target), origin)
                 if isinstance(st, SSetReset):
-                    self.before.append(Coil(st.kind, target, value, loc))  # type: ignore[arg-type]
+                    into.append(Coil(st.kind, target, value, loc))  # type: ignore[arg-type]
                 else:
-                    self.before.append(_permanent_assignment(target, value, loc))
+                    into.append(_permanent_assignment(target, value, loc))
             except _NoMap as exc:
-                self.p.warn("I022", exc.message, exc.loc)
+                if action:
+                    self.p.warn("I021", f"action {action}: {exc.message}", exc.loc)
+                else:
+                    self.p.warn("I022", exc.message, exc.loc)
+
+    def stored_for_good(self) -> set[str]:
+        """The actions an S association of an initial step stores and nothing resets (no R
+        association anywhere): active from the first call on, for good — which is what
+        PERMANENT AFTER does (Beremiz stores the blocks of a chart's network so, as the
+        action COMPUTE_FUNCTION_BLOCKS)."""
+        reset = {
+            a.action.upper()
+            for s in self.src.steps
+            for a in s.associations
+            if a.qualifier.upper() == "R" and not a.phase
+        }
+        return {
+            a.action.upper()
+            for s in self.src.steps
+            if s.initial
+            for a in s.associations
+            if a.qualifier.upper() == "S"
+            and not a.phase
+            and a.action.upper() not in reset
+            and (a.inline is not None or a.action.upper() in self.src.actions)
+        }
+
+    def permanent_action(self, action: IecAction, key: str) -> None:
+        """An action stored for good: its body in PERMANENT AFTER (once)."""
+        if key in self.made_permanent:
+            return
+        self.made_permanent.add(key)
+        if isinstance(action.body, Unsupported):
+            self.p.warn(
+                "I021", f"action {action.name}: {action.body.what} not imported", action.body.loc
+            )
+            return
+        found = first_other(action.body)
+        if found is not None:
+            writes = written_by(action.body)
+            item = PendingScl(
+                "action", action.name, action.text, action.loc, "after", writes=writes, why=found[0]
+            )
+            self.pending.keep(item, self.loc(found[1], action.origin))
+            return
+        self.permanent(action.body, action.origin, self.after, action.name)
 
     # ------------------------------------------------------------ the chart
 
@@ -375,6 +509,8 @@ class _Convert(IecExpressions):
         self.number_steps()
         self.scan_writes()
         self.variables()
+        self.stored = self.stored_for_good()
+        self.made_permanent: set[str] = set()
         pairs = self.transitions()
         steps: dict[int, tuple[IecStep, Step]] = {}
         for s in self.src.steps:
@@ -383,6 +519,9 @@ class _Convert(IecExpressions):
                 continue
             rows = self.step_actions(s, number)
             steps[number] = (s, _step(s, number, rows))
+        for number, texts in self.pending.step_comments.items():
+            s, st = steps[number]
+            steps[number] = (s, dataclasses.replace(st, comment="\n".join(texts)))
         for number, extra in self.rows.items():  # pulses of P gates go first
             s, st = steps[number]
             steps[number] = (s, dataclasses.replace(st, actions=(*extra, *st.actions)))
@@ -407,8 +546,30 @@ class _Convert(IecExpressions):
             after=tuple(self.after),
             file=self.file,
             loc=self.src.loc,
+            end_comment="\n".join(self.pending.end_comments),
         )
         return chart
+
+    def external(self) -> set[str]:
+        """The FB variables (upper case) others may write: the inputs, in-outs, externals
+        and globals of an IEC function block; every variable of a program (a configuration
+        reaches them by access paths, an HMI by name) — not the importer's own."""
+        kinds = ("input", "inout", "external", "global")
+        program = self.src.kind == "program"
+        names = [v.name.upper() for v in self.src.vars if program or v.kind in kinds]
+        return {self.vars[n].graph.upper() for n in names if n in self.vars}
+
+    def stall_reasons(self) -> dict[str, str]:
+        """Why nothing writes an FB variable (upper case), where the import knows it."""
+        out: dict[str, str] = {}
+        for head, (member, graph) in self.members_read.items():
+            if head not in self.instance_dbs and head not in self.called:
+                name, fb_type, _ = self.instances[head]
+                out[graph.upper()] = f"is {name}.{member}, and {name} : {fb_type} is never called"
+        for var, where in self.pending.writes().items():
+            graph = self.vars[var].graph if var in self.vars else var
+            out.setdefault(graph.upper(), f"is written only by {where}, kept for the SCL block")
+        return out
 
     def check_shared_variables(self) -> None:
         for name in sorted(self.bool_actions & set(self.body_writes)):
@@ -610,9 +771,12 @@ def _with(base: Chart, qi: int, field: str, i: int, item: Step | Transition) -> 
     return dataclasses.replace(base, sequences=tuple(seqs))
 
 
-def iec_to_chart(src: IecChart, problems: Problems) -> Chart:
-    """The GRAPH chart of ``src`` (raises ``ImportFailed`` with the located problems)."""
+def iec_to_chart(src: IecChart, problems: Problems) -> tuple[Chart, list[PendingScl]]:
+    """The GRAPH chart of ``src`` and the bodies it keeps for the SCL block (raises
+    ``ImportFailed`` with the located problems)."""
     conv = _Convert(src, problems)
     chart = conv.build()
     assert chart is not None
-    return accepted(chart, problems)
+    chart = accepted(chart, problems)
+    report_stalls(chart, problems, conv.external(), conv.stall_reasons())
+    return chart, conv.pending.items

@@ -22,6 +22,7 @@ from s7graph.sequencer.exchange.iec_model import (
     IecStep,
     IecTransition,
     IecVar,
+    StatementBody,
     Unsupported,
 )
 from s7graph.sequencer.exchange.networks import Network
@@ -29,7 +30,6 @@ from s7graph.sequencer.exchange.problems import Problems
 from s7graph.sequencer.exchange.st import (
     SExpr,
     SLiteral,
-    SStmt,
     StSyntaxError,
     parse_expression,
     parse_statements,
@@ -219,28 +219,27 @@ class _Reader:
                 return found
         return None
 
-    def statements(
-        self, name: str, holder: Node
-    ) -> tuple[list[SStmt] | Unsupported, tuple[int, int]]:
+    def statements(self, name: str, holder: Node, loc: SourceLocation) -> IecAction:
+        """Action ``name`` of the body ``holder`` (a ``body`` or an ``inline``)."""
         lang = self.body_of(holder)
         if lang is None:
-            return Unsupported("an empty or unknown action body", self.at(holder)), (1, 1)
+            return IecAction(name, Unsupported("an empty or unknown action body", loc), loc)
         if lang.tag == "ST":
             text, origin = self.st_text(lang)
             try:
-                return parse_statements(text, self.file, origin, f"action {name}"), origin
+                stmts = parse_statements(text, self.file, origin, f"action {name}")
+                return IecAction(name, stmts, loc, origin, text)
             except StSyntaxError as exc:
                 where = exc.where if isinstance(exc.where, SourceLocation) else self.at(lang)
-                return Unsupported(f"ST that does not parse ({exc.message})", where), origin
+                what = Unsupported(f"ST that does not parse ({exc.message})", where)
+                return IecAction(name, what, loc, origin, text)
         if lang.tag in ("LD", "FBD"):
             try:
-                return Network(lang, self.file).statements(), (1, 1)
+                return IecAction(name, Network(lang, self.file).statements(), loc)
             except ElementError as exc:
-                return Unsupported(f"a {lang.tag} network with {exc.message}", self.at(exc.node)), (
-                    1,
-                    1,
-                )
-        return Unsupported(f"an {lang.tag} body", self.at(lang)), (1, 1)
+                what = Unsupported(f"a {lang.tag} network with {exc.message}", self.at(exc.node))
+                return IecAction(name, what, loc)
+        return IecAction(name, Unsupported(f"an {lang.tag} body", self.at(lang)), loc)
 
     def actions(self, pou: Node) -> dict[str, IecAction]:
         out: dict[str, IecAction] = {}
@@ -250,14 +249,13 @@ class _Reader:
             name = a.get("name")
             if body is None:
                 continue
-            stmts, origin = self.statements(name, body)
-            out[name.upper()] = IecAction(name, stmts, self.at(a), origin)
+            out[name.upper()] = self.statements(name, body, self.at(a))
         return out
 
     def named_transitions(
         self, pou: Node
-    ) -> dict[str, tuple[SExpr | Unsupported, tuple[int, int]]]:
-        out: dict[str, tuple[SExpr | Unsupported, tuple[int, int]]] = {}
+    ) -> dict[str, tuple[SExpr | Unsupported | StatementBody, tuple[int, int]]]:
+        out: dict[str, tuple[SExpr | Unsupported | StatementBody, tuple[int, int]]] = {}
         holder = pou.child("transitions")
         for t in holder.all("transition") if holder is not None else []:
             name = t.get("name")
@@ -270,7 +268,7 @@ class _Reader:
                 )
             elif lang.tag == "ST":
                 text, origin = self.st_text(lang)
-                out[name.upper()] = (self.st_condition(text, origin, lang), origin)
+                out[name.upper()] = (self.st_condition(text, origin, lang, name), origin)
             elif lang.tag in ("LD", "FBD"):
                 try:
                     value = Network(lang, self.file).output_named(name)
@@ -298,8 +296,11 @@ class _Reader:
                 )
         return out
 
-    def st_condition(self, text: str, origin: tuple[int, int], node: Node) -> SExpr | Unsupported:
-        """A condition in ST; a named transition's body may read ``:= expr;``."""
+    def st_condition(
+        self, text: str, origin: tuple[int, int], node: Node, name: str = ""
+    ) -> SExpr | Unsupported | StatementBody:
+        """A condition in ST; a named transition's body may read ``:= expr;``, or be
+        statements that assign the transition's name (CODESYS, TwinCAT)."""
         body = text.strip()
         lead = len(text) - len(text.lstrip())
         if body.startswith(":="):
@@ -310,6 +311,12 @@ class _Reader:
         try:
             return parse_expression(pad + body, self.file, origin, "condition")
         except StSyntaxError as exc:
+            try:
+                stmts = parse_statements(text, self.file, origin, "transition")
+            except StSyntaxError:
+                stmts = []
+            if stmts and name:
+                return StatementBody(name, stmts, text, self.at(node), origin)
             where = exc.where if isinstance(exc.where, SourceLocation) else self.at(node)
             return Unsupported(f"a condition that does not parse ({exc.message})", where)
 
@@ -337,14 +344,6 @@ class _Reader:
                     f"macro step {el.get('name')} is not imported (GRAPH has no macro steps)",
                     self.at(el),
                 )
-            elif el.tag == "block" and el.get("instanceName"):
-                self.p.warn(
-                    "I022",
-                    f"block {el.get('instanceName')} : {el.get('typeName')} of "
-                    "the chart's network is not called (GRAPH calls blocks with an "
-                    "instance DB)",
-                    self.at(el),
-                )
         steps = {s.name.upper(): s for s in chart.steps}
         for el in sfc.children:
             if el.tag == "actionBlock":
@@ -353,7 +352,38 @@ class _Reader:
             t = self.transition(el, order, by_id, refs, named, net)
             if t is not None:
                 chart.transitions.append(t)
+        self.computed_blocks(chart, sfc, net)
         return chart
+
+    def computed_blocks(self, chart: IecChart, sfc: Node, net: Network) -> None:
+        """The function block instances of the chart's network that its conditions read
+        are called every call, as Beremiz calls them: the action ``COMPUTE_FUNCTION_BLOCKS``
+        stored (S) on the first initial step, in the order the conditions need them; an
+        instance no condition reads is not computed by Beremiz either (reported)."""
+        for el in sfc.children:
+            if (
+                el.tag == "block"
+                and el.get("instanceName")
+                and el.get("localId") not in net.computed
+            ):
+                self.p.warn(
+                    "I024",
+                    f"block {el.get('instanceName')} : {el.get('typeName')} of the chart's "
+                    "network feeds no transition; Beremiz does not call it either: not "
+                    "imported",
+                    self.at(el),
+                )
+        if not net.calls:
+            return
+        first = next((s for s in chart.steps if s.initial), None)
+        if first is None:
+            return  # no chart anyway: the import says so
+        name = "COMPUTE_FUNCTION_BLOCKS"
+        while name.upper() in chart.actions:
+            name += "_"
+        loc = SourceLocation(self.file, net.calls[0].line, net.calls[0].col)
+        chart.actions[name.upper()] = IecAction(name, list(net.calls), loc)
+        first.associations.append(IecAssociation(name, "S", loc))
 
     def step(self, el: Node) -> IecStep:
         step = IecStep(el.get("name"), el.get("initialStep") == "true", self.at(el))
@@ -395,9 +425,8 @@ class _Reader:
                 assoc.action = ref.get("name")
             elif inline is not None:
                 name = f"{step.name}_inline{i + 1}"
-                body, origin = self.statements(name, inline)
                 assoc.action = name
-                assoc.inline = IecAction(name, body, self.at(inline), origin)
+                assoc.inline = self.statements(name, inline, self.at(inline))
             else:
                 self.p.warn("I021", "an action without reference or body; not imported", self.at(a))
                 continue
@@ -440,7 +469,7 @@ class _Reader:
         order: int,
         by_id: dict[str, Node],
         refs: dict[str, list[Node]],
-        named: dict[str, tuple[SExpr | Unsupported, tuple[int, int]]],
+        named: dict[str, tuple[SExpr | Unsupported | StatementBody, tuple[int, int]]],
         net: Network,
     ) -> IecTransition | None:
         try:
@@ -479,8 +508,11 @@ class _Reader:
         )
 
     def condition(
-        self, el: Node, named: dict[str, tuple[SExpr | Unsupported, tuple[int, int]]], net: Network
-    ) -> tuple[SExpr | Unsupported, tuple[int, int]]:
+        self,
+        el: Node,
+        named: dict[str, tuple[SExpr | Unsupported | StatementBody, tuple[int, int]]],
+        net: Network,
+    ) -> tuple[SExpr | Unsupported | StatementBody, tuple[int, int]]:
         cond = el.child("condition")
         if cond is None:
             return Unsupported("a transition without a condition", self.at(el)), (1, 1)

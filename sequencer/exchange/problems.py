@@ -33,6 +33,7 @@ CODES: Final[dict[str, str]] = {
     "I022": "a network element or block without an exact GRAPH equivalent",
     "I023": "a variable, type or address without an exact GRAPH equivalent",
     "I024": "a part of the file the chart does not use (configuration, other POUs ...)",
+    "I025": "a step the chart can never leave: what its transitions wait for, nothing writes",
     # mapped, with a difference worth knowing
     "I030": "a name changed to be a valid GRAPH name",
     "I031": "an IEC and a GRAPH rule differ here; the GRAPH rule applies",
