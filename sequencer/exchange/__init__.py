@@ -157,15 +157,16 @@ def _import_chart(
         problems.error("I004", "no POU with an SFC body in the file", problems.at(1, 1))
         problems.fail_if_errors()
     if pou is not None:
-        picked = [c for c, n in zip(found, names, strict=True) if n.upper() == pou.upper()]
-        if not picked:
+        picked = _pick(pou, names)
+        if len(picked) != 1:
+            what = f"no chart {pou}" if not picked else f"{len(picked)} charts of {pou}"
             problems.error(
                 "I005",
-                f"no chart {pou} in the file; it holds {', '.join(names)}",
+                f"{what} in the file; it holds {', '.join(names)}",
                 problems.at(1, 1),
             )
             problems.fail_if_errors()
-        found = picked
+        found = [found[picked[0]]]
     elif len(found) > 1:
         problems.error(
             "I005",
@@ -183,6 +184,20 @@ def _import_chart(
         return Imported(chart, fmt, [])
     chart, pending = iec_to_chart(item, problems)
     return Imported(chart, fmt, sorted(problems.items, key=sort_key), pending)
+
+
+def _pick(pou: str, names: list[str]) -> list[int]:
+    """The charts ``--pou`` names: the one of that name; else those of the POU (``Crane``:
+    ``Crane.Auto`` …) or of that action (``Auto``: ``Crane.Auto``)."""
+    want = pou.upper()
+    exact = [i for i, n in enumerate(names) if n.upper() == want]
+    if exact:
+        return exact
+    return [
+        i
+        for i, n in enumerate(names)
+        if n.upper().startswith(want + ".") or n.upper().endswith("." + want)
+    ]
 
 
 def import_file(

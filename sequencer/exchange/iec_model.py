@@ -133,4 +133,5 @@ class IecChart:
     actions: dict[str, IecAction] = field(default_factory=dict)
     prelude: list[SStmt] = field(default_factory=list)
     prelude_text: str = ""  # the prelude as written
+    sfc_actions: set[str] = field(default_factory=set)  # actions that are charts (upper case)
     graph: dict[str, str] = field(default_factory=dict)

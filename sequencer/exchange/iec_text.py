@@ -11,6 +11,7 @@ divergence, ``FROM (a, b)`` a simultaneous join (IEC 61131-3 §6.7.3).
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 from lark import Token, Tree
@@ -49,15 +50,21 @@ def _loc(file: str, tok: Any) -> SourceLocation:
 
 
 def read_iec_text(text: str, file: str, problems: Problems) -> list[IecChart]:
-    """Every POU of ``text`` that holds SFC elements."""
+    """Every POU of ``text`` that holds SFC elements. When the text as a whole does not
+    parse, each POU is read on its own (``_pieces``): one this grammar cannot read (an IL
+    function, a TYPE block) is reported and left out, so that the charts beside it import;
+    a piece with SFC elements that does not parse is an error, as before."""
     try:
-        tree = build(parse_tree(text, "file", file, (1, 1), "the IEC text"))
+        trees = [build(parse_tree(text, "file", file, (1, 1), "the IEC text"))]
     except StSyntaxError as exc:
-        where = exc.where if isinstance(exc.where, SourceLocation) else problems.at(1, 1)
-        problems.error("I001", exc.message, where)
-        return []
+        pieces = _pieces(text)
+        if len(pieces) < 2:
+            where = exc.where if isinstance(exc.where, SourceLocation) else problems.at(1, 1)
+            problems.error("I001", exc.message, where)
+            return []
+        trees = [t for t in (_piece(text, a, b, file, problems) for a, b in pieces) if t]
     charts: list[IecChart] = []
-    for item in tree.children:
+    for item in (i for tree in trees for i in tree.children):
         if isinstance(item, Tree) and item.data == "configuration":
             problems.warn(
                 "I024",
@@ -72,6 +79,44 @@ def read_iec_text(text: str, file: str, problems: Problems) -> list[IecChart]:
         else:
             problems.warn("I024", f"{chart.name} has no SFC elements; not imported", chart.loc)
     return charts
+
+
+_PIECE = re.compile(
+    r"^[ \t]*(FUNCTION_BLOCK|PROGRAM|FUNCTION|CONFIGURATION|TYPE)(?![A-Za-z0-9_])",
+    re.IGNORECASE | re.MULTILINE,
+)
+_SFC = re.compile(r"(?<![A-Za-z0-9_])INITIAL_STEP(?![A-Za-z0-9_])", re.IGNORECASE)
+
+
+def _pieces(text: str) -> list[tuple[int, int]]:
+    """Where each POU, configuration or TYPE block of ``text`` starts and ends (from one
+    such keyword at the start of a line to the next)."""
+    starts = [m.start() for m in _PIECE.finditer(text)]
+    return list(zip(starts, [*starts[1:], len(text)], strict=True))
+
+
+def _piece(text: str, start: int, end: int, file: str, problems: Problems) -> Any:
+    """The parse tree of ``text[start:end]``, read in place (the rest blanked, so lines and
+    columns stay the file's); None, reported, when it does not parse."""
+    blank = re.sub(r"[^\n]", " ", text[:start])
+    piece = text[start:end]
+    try:
+        return build(parse_tree(blank + piece, "file", file, (1, 1), "the IEC text"))
+    except StSyntaxError as exc:
+        where = exc.where if isinstance(exc.where, SourceLocation) else problems.at(1, 1)
+        head = piece.split(None, 2)
+        name = " ".join(head[:2]) if head else "a block"
+        if _SFC.search(piece):
+            problems.error("I001", exc.message, where)
+        else:
+            line = text.count("\n", 0, start) + 1
+            problems.warn(
+                "I024",
+                f"{name} does not parse as ST or textual SFC at line {where.line} (IL, or a "
+                "construct the import does not read): not imported; the charts beside it are",
+                problems.at(line, 1),
+            )
+        return None
 
 
 def _pou(tree: Tree[Any], file: str, text: str) -> IecChart:
@@ -167,7 +212,13 @@ def _step(tree: Tree[Any], file: str) -> IecStep:
     return step
 
 
+_TIMED = frozenset({"L", "D", "SD", "DS", "SL"})
+
+
 def _association(tree: Tree[Any], file: str) -> IecAssociation:
+    """``name(qualifier[, action time][, indicator …])``: after a timed qualifier (L D SD
+    DS SL) comes the action time, a TIME literal or a variable (IEC 61131-3 §6.7.4.3);
+    the other names are indicator variables."""
     name = tree.children[0]
     args: list[Any] = [a for a in tree.children[1:] if a is not None]
     qualifier, duration, indicator = "N", "", ""
@@ -175,8 +226,10 @@ def _association(tree: Tree[Any], file: str) -> IecAssociation:
     if args and isinstance(args[0], SName) and len(args[0].parts) == 1:
         qualifier = args[0].parts[0].upper()
         rest = args[1:]
+    if qualifier in _TIMED and rest and isinstance(rest[0], SLiteral | SName):
+        duration, rest = rest[0].text, rest[1:]
     for a in rest:
-        if isinstance(a, SLiteral) and "#" in a.text:
+        if isinstance(a, SLiteral) and "#" in a.text and not duration:
             duration = a.text
         elif isinstance(a, SName):
             indicator = a.text

@@ -247,8 +247,8 @@ class _Reader:
         for a in holder.all("action") if holder is not None else []:
             body = a.child("body")
             name = a.get("name")
-            if body is None:
-                continue
+            if body is None or _sfc_of(a) is not None:
+                continue  # an action's chart is a chart of its own
             out[name.upper()] = self.statements(name, body, self.at(a))
         return out
 
@@ -322,12 +322,23 @@ class _Reader:
 
     # ------------------------------------------------------------ the chart
 
-    def chart(self, pou: Node, sfc: Node) -> IecChart:
+    def chart(self, pou: Node, sfc: Node, name: str = "") -> IecChart:
+        """The chart of the SFC body ``sfc`` of ``pou`` (or of one of its actions: ``name``
+        ``POU.action``), with the POU's variables, actions and transitions."""
         chart = IecChart(
-            pou.get("name"), pou.get("pouType", "program"), self.at(pou), dialect=self.dialect
+            name or pou.get("name"),
+            pou.get("pouType", "program"),
+            self.at(pou),
+            dialect=self.dialect,
         )
         chart.vars = self.interface(pou)
         chart.actions = self.actions(pou)
+        holder = pou.child("actions")
+        chart.sfc_actions = {
+            a.get("name").upper()
+            for a in (holder.all("action") if holder is not None else [])
+            if _sfc_of(a) is not None
+        }
         named = self.named_transitions(pou)
         net = Network(sfc, self.file)
         by_id = net.by_id
@@ -549,14 +560,27 @@ def _connections(el: Node) -> list[Node]:
     return [c for p in el.all("connectionPointIn") for c in p.all("connection")]
 
 
+def _sfc_of(holder: Node) -> Node | None:
+    """The SFC body of a POU or an action (``<body><SFC>``), or None."""
+    return next((b.child("SFC") for b in holder.all("body") if b.child("SFC") is not None), None)
+
+
 def read_plcopen(root: Node, problems: Problems) -> list[IecChart | tuple[str, int, int, str]]:
-    """Every POU with an SFC body: an ``IecChart``, or the `.s7g` source s7graph wrote
+    """Every SFC body: a POU's (a chart named after the POU), an action's (TwinCAT and
+    CODESYS draw charts in actions: one named ``POU.action``, with the POU's variables,
+    actions and transitions) — an ``IecChart`` each — or the `.s7g` source s7graph wrote
     (text, line, col, POU name)."""
     reader = _Reader(root, problems)
     out: list[IecChart | tuple[str, int, int, str]] = []
     for pou in root.iter("pou"):
-        sfc = next((b.child("SFC") for b in pou.all("body") if b.child("SFC") is not None), None)
-        if sfc is None:
+        sfc = _sfc_of(pou)
+        holder = pou.child("actions")
+        in_actions = [
+            (a, found)
+            for a in (holder.all("action") if holder is not None else [])
+            if (found := _sfc_of(a)) is not None
+        ]
+        if sfc is None and not in_actions:
             langs = {c.tag for b in pou.all("body") for c in b.children}
             problems.warn(
                 "I024",
@@ -569,7 +593,21 @@ def read_plcopen(root: Node, problems: Problems) -> list[IecChart | tuple[str, i
         if source is not None:
             out.append((*source, pou.get("name")))
             continue
-        out.append(reader.chart(pou, sfc))
+        if sfc is not None:
+            out.append(reader.chart(pou, sfc))
+        elif pou.all("body"):
+            langs = {c.tag for b in pou.all("body") for c in b.children}
+            charts = ", ".join(f"{pou.get('name')}.{a.get('name')}" for a, _ in in_actions)
+            problems.warn(
+                "I024",
+                f"the {'/'.join(sorted(langs))} body of POU {pou.get('name')} is not "
+                f"imported; the charts of its actions are, each on its own ({charts})",
+                reader.at(pou),
+            )
+        for action, body in in_actions:
+            chart = reader.chart(pou, body, f"{pou.get('name')}.{action.get('name')}")
+            chart.loc = reader.at(action)
+            out.append(chart)
     for conf in root.iter("configuration"):
         problems.warn(
             "I024",

@@ -28,6 +28,7 @@ from s7graph.engine.errors import LiteralError, S7Error, SourceLocation
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.exchange.export_simaticml import S7GRAPH_COMMENT
 from s7graph.sequencer.exchange.flgnet import read_network
+from s7graph.sequencer.exchange.iec_actions import permanent_assignment
 from s7graph.sequencer.exchange.iec_to_chart import accepted, const
 from s7graph.sequencer.exchange.problems import Problems
 from s7graph.sequencer.exchange.xmltree import ElementError, Node
@@ -468,9 +469,7 @@ class _Reader:
         value = cond if cond is not None else Const(True, "BOOL", "TRUE", self.at(coil))
         kind = {"SCoil": "S", "RCoil": "R"}.get(coil.get("Name"), "=")
         if kind == "=":
-            from s7graph.sequencer.exchange.iec_to_chart import _permanent_assignment
-
-            return _permanent_assignment(target, value, self.at(coil))
+            return permanent_assignment(target, value, self.at(coil))
         return Coil(kind, target, value, self.at(coil))  # type: ignore[arg-type]
 
     def step(self, s: Node) -> Step:
