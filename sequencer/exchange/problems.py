@@ -27,6 +27,7 @@ CODES: Final[dict[str, str]] = {
     "I011": "a transition without preceding or following step",
     "I012": "a condition or expression that does not parse",
     "I013": "a chart shape GRAPH cannot hold",
+    "I014": "an address the import must allocate does not fit the CPU's memory",
     # not imported (the chart is built without it)
     "I020": "an IEC action qualifier without an exact GRAPH equivalent",
     "I021": "an ST statement or action body without an exact GRAPH equivalent",
