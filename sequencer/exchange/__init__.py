@@ -3,10 +3,11 @@
 
 ``import_chart(data, file)`` detects the format (``detect_format``) and returns an
 ``Imported``: the chart and the problems worth knowing (each located in the file); when no
-chart can be built it raises ``ImportFailed`` with every problem found. ``export_chart``
-writes a chart in one of the XML formats. ``importable_files(directory)`` lists the files
-of a directory an import can read, with their format, for a file chooser (the browser
-editor's *Open*).
+chart can be built it raises ``ImportFailed`` with every problem found; the ST bodies it
+keeps for the SCL block are in ``Imported.pending``. ``export_chart`` writes a chart in one
+of the XML formats (``export_reported`` also says what the format's other readers do not
+see). ``importable_files(directory)`` lists the files of a directory an import can read,
+with their format, for a file chooser (the browser editor's *Open*).
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ __all__ = [
     "PendingScl",
     "detect_format",
     "export_chart",
+    "export_reported",
     "import_chart",
     "import_file",
     "importable_files",
@@ -234,6 +236,14 @@ def importable_files(directory: Path) -> list[tuple[Path, str]]:
 def export_chart(chart: Chart, to: str, symbols: SymbolTable | None = None) -> str:
     """``chart`` as a ``plcopen`` or ``simaticml`` document (``ValueError`` for a chart
     part the format cannot hold)."""
+    return export_reported(chart, to, symbols)[0]
+
+
+def export_reported(
+    chart: Chart, to: str, symbols: SymbolTable | None = None
+) -> tuple[str, list[Diagnostic]]:
+    """``export_chart``, and what of the chart the format's other readers do not see or run
+    otherwise, each located in the chart (``X01x`` warnings)."""
     if to == "plcopen":
         from s7graph.sequencer.exchange.export_plcopen import export_plcopen
 

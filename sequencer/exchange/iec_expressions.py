@@ -201,6 +201,7 @@ class IecExpressions:
         self.bool_actions: set[str] = set()
         self.body_writes: dict[str, SourceLocation] = {}
         self.pending = PendingBodies(problems)
+        self.helpers: set[str] = set()  # the FB variables the importer added
 
     def loc(self, node: object, origin: tuple[int, int]) -> SourceLocation:
         line, col = shift(getattr(node, "line", 0) or 1, getattr(node, "col", 0) or 1, origin)
@@ -235,6 +236,7 @@ class IecExpressions:
         self.taken.add(graph.upper())
         self.decls.append(VarDecl(graph, type_name))
         self.vars[key] = _Var(graph, type_name)
+        self.helpers.add(graph)
         return graph
 
     def variables(self) -> None:

@@ -200,14 +200,19 @@ class _Convert(IecActions):
         )
         return chart
 
-    def external(self) -> set[str]:
-        """The FB variables (upper case) others may write: the inputs, in-outs, externals
-        and globals of an IEC function block; every variable of a program (a configuration
-        reaches them by access paths, an HMI by name) — not the importer's own."""
-        kinds = ("input", "inout", "external", "global")
-        program = self.src.kind == "program"
-        names = [v.name.upper() for v in self.src.vars if program or v.kind in kinds]
-        return {self.vars[n].graph.upper() for n in names if n in self.vars}
+    def internal(self) -> set[str]:
+        """The FB variables (upper case) only the chart could write: the importer's own
+        (instance outputs and states, transition results), the constants, and the locals
+        and outputs of a function block that only a body kept for the SCL block writes
+        (the source writes them there); inputs, in-outs, externals, globals and the
+        variables of a program may be written from outside."""
+        graph = {n: v.graph.upper() for n, v in self.vars.items()}
+        inner = set() if self.src.kind == "program" else {"local", "output", "temp"}
+        declared = [v for v in self.src.vars if v.name.upper() in graph]
+        own = {graph[v.name.upper()] for v in declared if v.kind in inner}
+        constants = {graph[v.name.upper()] for v in declared if v.constant}
+        by_pending = {g for g in self.stall_reasons() if g in own}
+        return constants | {h.upper() for h in self.helpers} | by_pending
 
     def stall_reasons(self) -> dict[str, str]:
         """Why nothing writes an FB variable (upper case), where the import knows it."""
@@ -405,5 +410,5 @@ def iec_to_chart(src: IecChart, problems: Problems) -> tuple[Chart, list[Pending
     chart = conv.build()
     assert chart is not None
     chart = accepted(chart, problems)
-    report_stalls(chart, problems, conv.external(), conv.stall_reasons())
+    report_stalls(chart, problems, conv.internal(), conv.stall_reasons())
     return chart, conv.pending.items

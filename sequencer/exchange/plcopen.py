@@ -36,9 +36,10 @@ from s7graph.sequencer.exchange.st import (
 )
 from s7graph.sequencer.exchange.xmltree import ElementError, Node
 
-__all__ = ["S7GRAPH_DATA", "read_plcopen"]
+__all__ = ["S7GRAPH_DATA", "TRANSITION_IDS", "read_plcopen"]
 
 S7GRAPH_DATA = "urn:s7graph:chart"
+TRANSITION_IDS = 100_000  # s7graph's export: a transition's localId is this plus its number
 CODESYS_DATA = "http://www.3s-software.com/plcopenxml/sfc/element"
 _CODESYS_STEP_ACTIONS = {
     "a6b08bd8-b696-47e3-9cbf-7408b61c9ff8": "entry",
@@ -398,6 +399,9 @@ class _Reader:
 
     def step(self, el: Node) -> IecStep:
         step = IecStep(el.get("name"), el.get("initialStep") == "true", self.at(el))
+        if self.dialect == "s7graph" and el.get("localId").isdigit():
+            number = int(el.get("localId"))  # s7graph's export: a step's localId is its number
+            step.graph_number = number if 0 < number < TRANSITION_IDS else None
         for attr in el.iter("attribute"):
             phase = _CODESYS_STEP_ACTIONS.get(attr.get("guid").strip("{}"))
             name = attr.text.strip()
@@ -505,11 +509,13 @@ class _Reader:
         for attr in el.iter("attribute"):
             if attr.get("guid").strip("{}") == _CODESYS_PRIORITY and attr.text.strip().isdigit():
                 priority = priority or attr.text.strip()
+        number = int(el.get("localId")) - TRANSITION_IDS if el.get("localId").isdigit() else 0
         return IecTransition(
             sources,
             [n for n, _ in targets],
             cond,
             self.at(el),
+            graph_number=number if self.dialect == "s7graph" and 0 < number < 100_000 else None,
             name=el.get("name"),
             priority=int(priority) if priority and priority.lstrip("-").isdigit() else None,
             x=float(pos.get("x")) if pos is not None and pos.get("x") else None,

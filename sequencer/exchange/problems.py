@@ -1,9 +1,11 @@
-"""What an import reports: one table of codes, and the exception that carries the list.
+"""What an import or an export reports: one table of codes, and the exception that carries
+the list.
 
 An import yields a chart or, when no chart can be built, ``ImportFailed`` with every problem
 found, each located in the source file (``file:line:col``). Constructs that have no exact
 GRAPH equivalent are left out of the chart and reported as warnings (``I02x``): nothing is
-dropped without a line saying what and where.
+dropped without a line saying what and where. An export reports (``X01x``) what of the chart
+the format's other readers do not see, or run otherwise.
 """
 
 from __future__ import annotations
@@ -39,6 +41,10 @@ CODES: Final[dict[str, str]] = {
     "I030": "a name changed to be a valid GRAPH name",
     "I031": "an IEC and a GRAPH rule differ here; the GRAPH rule applies",
     "I032": "an address the export does not give; one was allocated",
+    # export: what the format's other readers do not see or run otherwise
+    "X010": "a chart part other tools do not see (kept in s7graph's own data only)",
+    "X011": "a chart part other tools run otherwise",
+    "X012": "a chart part written in s7graph's spelling, which other tools may not read",
 }
 
 

@@ -82,6 +82,7 @@ class _Reader(TiaOperands):
                 pieces.append(c.get("Text"))
             elif c.tag == "Access":
                 pieces.append(self.access_text(c))
+                self.action_tag(c)
         text = "".join(pieces).strip()
         qualifier = action.get("Qualifier")
         if not text and not qualifier:
@@ -274,13 +275,12 @@ class _Reader(TiaOperands):
         )
         chart = accepted(chart, self.p, self.known)
         constants = {v.upper() for v in self.constant_vars.values()}
-        statics = {v.upper() for v in self.vars} - constants
         why = {
             graph.upper(): f"is the constant {name}, whose value the export does not carry "
             "(it starts at 0)"
             for name, graph in self.constant_vars.items()
         }
-        report_stalls(chart, self.p, statics, why)
+        report_stalls(chart, self.p, constants, why)
         return chart
 
     def permanent(self, holder: Node | None) -> tuple[PermanentInstruction, ...]:

@@ -1,15 +1,16 @@
 """Steps an imported chart can never leave, found before anyone runs it.
 
 A transition can never switch when its condition is FALSE whatever happens outside the FB:
-every operand it reads is either a constant or an FB variable that nothing can change —
-not written by any row, permanent instruction or call output of the chart, and not one
-others may write (an IEC function block's ``VAR_INPUT``, ``VAR_IN_OUT``, ``VAR_EXTERNAL``,
-``VAR_GLOBAL``; any variable of an IEC program) — and so keeps its initial value. Step
-attributes, symbols and addresses may change; such a condition is not judged. A step whose
-every leaving transition can never switch is a stall: the import warns (I025) at the step,
-for each initial step so stuck and for any other step the chart can reach, saying which
-variables the conditions wait for and why nothing writes them (an instance never called, a
-body kept for the SCL block).
+every operand it reads is either a constant or an FB variable only the chart itself could
+write — one the importer made (the output of an FB instance, a transition body's result),
+one only a body kept for the SCL block writes, a constant without its value — that nothing
+in the chart writes (no row, permanent instruction or call output), so it keeps its initial
+value. The variables the source declared may be written from outside (an HMI, a caller),
+and step attributes, symbols and addresses may change: a condition reading them is not
+judged. A step whose every leaving transition can never switch is a stall: the import warns
+(I025) at the step, for each initial step so stuck and for any other step the chart can
+reach, saying which variables the conditions wait for and why nothing writes them (an
+instance never called, a body kept for the SCL block).
 """
 
 from __future__ import annotations
@@ -59,12 +60,12 @@ def _writes(op: object) -> list[str]:
 
 
 class _Judge:
-    def __init__(self, chart: Chart, external: set[str]) -> None:
+    def __init__(self, chart: Chart, internal: set[str]) -> None:
         written = _written(chart)
         self.fixed: dict[str, _Value] = {}
         for v in chart.vars:
             key = v.name.upper()
-            if key in written or key in external:
+            if key in written or key not in internal:
                 continue
             init = v.init.value if v.init is not None else None
             if v.type == "BOOL":
@@ -125,15 +126,12 @@ class _Judge:
 
 
 def report_stalls(
-    chart: Chart,
-    problems: Problems,
-    external: set[str],
-    why: dict[str, str],
+    chart: Chart, problems: Problems, internal: set[str], why: dict[str, str]
 ) -> None:
-    """Warn (I025) at each step the chart reaches and can never leave. ``external``: the FB
-    variables (upper case) the caller may write; ``why``: for a variable (upper case)
-    nothing writes, the reason to give (``an instance never called`` …)."""
-    judge = _Judge(chart, external)
+    """Warn (I025) at each step the chart reaches and can never leave. ``internal``: the FB
+    variables (upper case) only the chart could write; ``why``: for a variable (upper case)
+    the reason nothing writes it (``an instance never called`` …)."""
+    judge = _Judge(chart, internal)
     steps = {s.number: s for s in chart.all_steps()}
     leaving: dict[int, list[Transition]] = {}
     for t in chart.all_transitions():

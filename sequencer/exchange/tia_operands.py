@@ -210,6 +210,18 @@ class TiaOperands:
         width = _WIDTH[t]
         return f"{area}{n // 8}.{n % 8}" if width == "" else f"{area}{width}{n // 8}"
 
+    def action_tag(self, node: Node) -> None:
+        """A global tag an action row names by an ``Access``: declared at the I/Q/M
+        address the export gives it (the row's text types it later)."""
+        sym = node.child("Symbol")
+        addr = sym.child("Address") if sym is not None else None
+        if node.get("Scope") != "GlobalVariable" or sym is None or addr is None:
+            return
+        if addr.get("Area") in _AREAS:
+            name = ".".join(component(c) for c in sym.all("Component"))
+            t = TIA_TYPES.get(addr.get("Type").upper()) or None
+            self.symbol(name, t, node, "", self.absolute(addr, node))
+
     def access_text(self, node: Node) -> str:
         scope = node.get("Scope")
         sym = node.child("Symbol")
