@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from s7graph.sequencer.exchange import import_chart
-from s7graph.sequencer.exchange.mapping import QUALIFIERS, markdown_tables
+from s7graph.sequencer.exchange.mapping import CONSTRUCTS, QUALIFIERS, markdown_tables
 from s7graph.sequencer.text.format import format_chart, format_row
 from s7graph.sequencer.text.model import Chart
 from tests.paths import DOCS
@@ -230,3 +230,18 @@ def test_codesys_step_actions_and_evaluation_order() -> None:
 def test_the_import_export_doc_table_is_the_mapping_table() -> None:
     assert markdown_tables() in DOC.read_text(encoding="utf-8")
     assert set(QUALIFIERS) == {"N", "S", "R", "P", "P1", "P0", "D", "L", "SD", "DS", "SL"}
+
+
+def test_the_construct_table_covers_every_format_both_ways() -> None:
+    """One table in code says, for every format read and written, what each construct
+    becomes or why it is refused — each row a format, a construct and an outcome."""
+    formats = {row[0] for row in CONSTRUCTS}
+    assert formats == {
+        "IEC",
+        "PLCopen",
+        "IEC text",
+        "SimaticML",
+        "export → PLCopen",
+        "export → SimaticML",
+    }
+    assert all(fmt and construct and becomes for fmt, construct, becomes, _ in CONSTRUCTS)
