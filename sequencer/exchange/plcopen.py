@@ -272,7 +272,16 @@ class _Reader:
                 out[name.upper()] = (self.st_condition(text, origin, lang, name), origin)
             elif lang.tag in ("LD", "FBD"):
                 try:
-                    value = Network(lang, self.file).output_named(name)
+                    network = Network(lang, self.file)
+                    value = network.output_named(name)
+                    for call in network.calls:
+                        self.p.warn(
+                            "I022",
+                            f"transition {name}: its {lang.tag} body calls {call.name}, "
+                            "which is not imported (a condition calls no block); its "
+                            "outputs keep the values the chart's own calls give them",
+                            SourceLocation(self.file, call.line, call.col),
+                        )
                 except ElementError as exc:
                     value = None
                     out[name.upper()] = (

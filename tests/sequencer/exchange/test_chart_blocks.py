@@ -209,3 +209,30 @@ def test_rows_of_the_chart_blocks_file_read_back_the_same() -> None:
     """The MOTOR row of Run is the Boolean action N (no trace of the blocks in the rows)."""
     chart = import_file(synthetic("beremiz_chart_blocks.xml")).chart
     assert [format_row(r) for r in chart.all_steps()[1].actions] == ["N MOTOR;"]
+
+
+def test_a_block_called_in_a_transition_body_is_reported_not_dropped_silently() -> None:
+    """A named transition's FBD body calling an FB instance: a condition calls no block, so
+    the call is not imported — said where it is."""
+    xml = synthetic("beremiz_chart_blocks.xml").read_text()
+    body = (
+        '<transitions><transition name="Started"><body><FBD>'
+        '<inVariable localId="1"><expression>START_BUTTON</expression></inVariable>'
+        '<block localId="2" typeName="R_TRIG" instanceName="R_TRIG0"><inputVariables>'
+        '<variable formalParameter="CLK"><connectionPointIn><connection refLocalId="1"/>'
+        "</connectionPointIn></variable></inputVariables><inOutVariables/><outputVariables>"
+        '<variable formalParameter="Q"><connectionPointOut/></variable></outputVariables>'
+        '</block><outVariable localId="3"><connectionPointIn><connection refLocalId="2" '
+        'formalParameter="Q"/></connectionPointIn><expression>Started</expression>'
+        "</outVariable></FBD></body></transition></transitions>"
+    )
+    wired = (
+        '<connectionPointIn><connection refLocalId="10" formalParameter="Q"/></connectionPointIn>'
+    )
+    assert wired in xml
+    xml = xml.replace("</interface>", "</interface>" + body)
+    xml = xml.replace(wired, '<reference name="Started"/>')
+    result = import_chart(xml.encode(), "t.xml")
+    called = [d.message for d in result.problems if d.code == "I022"]
+    assert "transition Started: its FBD body calls R_TRIG0, which is not imported" in called[1]
+    assert "R_TRIG0 : R_TRIG is not called by the chart" in called[0]
