@@ -3,10 +3,11 @@
 
 ``import_chart(data, file)`` detects the format (``detect_format``) and returns an
 ``Imported``: the chart and the problems worth knowing (each located in the file); when no
-chart can be built it raises ``ImportFailed`` with every problem found. ``export_chart``
-writes a chart in one of the XML formats. ``importable_files(directory)`` lists the files
-of a directory an import can read, with their format, for a file chooser (the browser
-editor's *Open*).
+chart can be built it raises ``ImportFailed`` with every problem found; the ST bodies it
+keeps for the SCL block are in ``Imported.pending``. ``export_chart`` writes a chart in one
+of the XML formats (``export_reported`` also says what the format's other readers do not
+see). ``importable_files(directory)`` lists the files of a directory an import can read,
+with their format, for a file chooser (the browser editor's *Open*).
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from pathlib import Path
 
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.checks.diagnostics import Diagnostic, sort_key
+from s7graph.sequencer.exchange.pending import PendingScl
 from s7graph.sequencer.exchange.problems import ImportFailed, Problems
 from s7graph.sequencer.text.model import Binary, Chart
 from s7graph.sequencer.text.walk import rewrite
@@ -26,8 +28,10 @@ __all__ = [
     "FORMATS",
     "ImportFailed",
     "Imported",
+    "PendingScl",
     "detect_format",
     "export_chart",
+    "export_reported",
     "import_chart",
     "import_file",
     "importable_files",
@@ -53,6 +57,7 @@ class Imported:
     chart: Chart
     format: str
     problems: list[Diagnostic] = field(default_factory=list)
+    pending: list[PendingScl] = field(default_factory=list)  # bodies kept for the SCL block
 
 
 def canonical_chains(chart: Chart) -> Chart:
@@ -154,15 +159,16 @@ def _import_chart(
         problems.error("I004", "no POU with an SFC body in the file", problems.at(1, 1))
         problems.fail_if_errors()
     if pou is not None:
-        picked = [c for c, n in zip(found, names, strict=True) if n.upper() == pou.upper()]
-        if not picked:
+        picked = _pick(pou, names)
+        if len(picked) != 1:
+            what = f"no chart {pou}" if not picked else f"{len(picked)} charts of {pou}"
             problems.error(
                 "I005",
-                f"no chart {pou} in the file; it holds {', '.join(names)}",
+                f"{what} in the file; it holds {', '.join(names)}",
                 problems.at(1, 1),
             )
             problems.fail_if_errors()
-        found = picked
+        found = [found[picked[0]]]
     elif len(found) > 1:
         problems.error(
             "I005",
@@ -178,8 +184,22 @@ def _import_chart(
         except ChartSyntaxError as exc:
             raise ImportFailed(exc.diagnostics) from None
         return Imported(chart, fmt, [])
-    chart = iec_to_chart(item, problems)
-    return Imported(chart, fmt, sorted(problems.items, key=sort_key))
+    chart, pending = iec_to_chart(item, problems)
+    return Imported(chart, fmt, sorted(problems.items, key=sort_key), pending)
+
+
+def _pick(pou: str, names: list[str]) -> list[int]:
+    """The charts ``--pou`` names: the one of that name; else those of the POU (``Crane``:
+    ``Crane.Auto`` …) or of that action (``Auto``: ``Crane.Auto``)."""
+    want = pou.upper()
+    exact = [i for i, n in enumerate(names) if n.upper() == want]
+    if exact:
+        return exact
+    return [
+        i
+        for i, n in enumerate(names)
+        if n.upper().startswith(want + ".") or n.upper().endswith("." + want)
+    ]
 
 
 def import_file(
@@ -216,6 +236,14 @@ def importable_files(directory: Path) -> list[tuple[Path, str]]:
 def export_chart(chart: Chart, to: str, symbols: SymbolTable | None = None) -> str:
     """``chart`` as a ``plcopen`` or ``simaticml`` document (``ValueError`` for a chart
     part the format cannot hold)."""
+    return export_reported(chart, to, symbols)[0]
+
+
+def export_reported(
+    chart: Chart, to: str, symbols: SymbolTable | None = None
+) -> tuple[str, list[Diagnostic]]:
+    """``export_chart``, and what of the chart the format's other readers do not see or run
+    otherwise, each located in the chart (``X01x`` warnings)."""
     if to == "plcopen":
         from s7graph.sequencer.exchange.export_plcopen import export_plcopen
 

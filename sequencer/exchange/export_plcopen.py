@@ -22,29 +22,36 @@ from __future__ import annotations
 from xml.sax.saxutils import escape, quoteattr
 
 from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer.checks.diagnostics import Diagnostic
 from s7graph.sequencer.exchange.iec_to_chart import S7_PIN, SFB_OF
 from s7graph.sequencer.exchange.naming import s7_to_iec
-from s7graph.sequencer.exchange.plcopen import S7GRAPH_DATA
+from s7graph.sequencer.exchange.plcopen import S7GRAPH_DATA, TRANSITION_IDS
+from s7graph.sequencer.exchange.problems import Problems
 from s7graph.sequencer.exchange.shape import priority, shape_of
 from s7graph.sequencer.text.format import format_chart, format_expr, format_row
 from s7graph.sequencer.text.model import (
     ActionRow,
     Assignment,
+    Binary,
     BlockCall,
     Chart,
+    Coil,
     Const,
     Expr,
     Operand,
+    PermanentInstruction,
     Sequence,
     Step,
     StepAttr,
     TransAttr,
+    Unary,
 )
 from s7graph.sfb import catalogue
 
 __all__ = ["export_plcopen"]
 
 _NS = "http://www.plcopen.org/xml/tc6_0201"
+_OTHER_IDS = 200_000  # the other elements' localIds start here
 _TYPES = {"TIME_OF_DAY": "TOD", "DATE_AND_TIME": "DT"}
 _IEC_PIN = {s7: iec for iec, s7 in S7_PIN.items()}  # S7's LOAD → IEC's LD
 
@@ -58,14 +65,16 @@ class _Export:
     def __init__(self, chart: Chart, symbols: SymbolTable | None) -> None:
         self.chart = chart
         self.table = symbols
-        self.ids = 0
+        self.ids = _OTHER_IDS
         self.instances: dict[str, str] = {}  # IEC FB instances the calls name → their type
+        self.p = Problems(chart.file)
         names = [s.name for s in chart.all_steps()]
         self.step_name: dict[int, str] = {}
         for s in chart.all_steps():
             ident = _ident(s.name) if s.name else ""
             unique = ident and names.count(s.name) == 1 and ident.upper() != f"S{s.number}"
             self.step_name[s.number] = ident if unique else f"S{s.number}"
+        self.permanent_xml = self.permanent()
 
     def next_id(self) -> int:
         self.ids += 1
@@ -118,6 +127,12 @@ class _Export:
             call = self.fb_call(op)
             if call is not None:
                 return self.inline(qualifier or "N", call)
+        self.p.warn(
+            "X010",
+            f"row {format_row(r)!r} has no IEC form: an ST comment in the SFC other tools "
+            "read, kept in s7graph's data",
+            r.loc,
+        )
         return self.inline("N", f"(* s7graph: {format_row(r).replace('*)', '* )')} *)")
 
     def fb_call(self, c: BlockCall) -> str | None:
@@ -131,6 +146,81 @@ class _Export:
         params = [f"{_IEC_PIN.get(pin.upper(), pin)} := {self.st(e)}" for pin, e in c.inputs]
         params += [f"{pin} => {self.st(o)}" for pin, o in c.outputs]
         return f"{name}({', '.join(params)});"
+
+    def permanent(self) -> str:
+        """The permanent instructions as an IEC tool runs them: the body of an inline
+        action stored (S) on the chart's first initial step and never reset, which runs
+        every call for good (s7graph reads it back as PERMANENT AFTER). PERMANENT BEFORE
+        goes first in it; an IEC tool runs it after the transitions (reported)."""
+        items = [*self.chart.before, *self.chart.after]
+        if not items:
+            return ""
+        if self.chart.before:
+            self.p.warn(
+                "X011",
+                "PERMANENT BEFORE runs, in an IEC tool, in a stored action of the initial "
+                "step, after the transitions: what it writes reaches the conditions one call "
+                "later",
+                self.chart.before[0].loc,
+            )
+        if not any(s.initial for s in self.chart.all_steps()):
+            self.p.warn(
+                "X010",
+                "the permanent instructions have no IEC form without an initial step to "
+                "store them on: kept in s7graph's data only",
+                items[0].loc,
+            )
+            return ""
+        body = "\n".join(self.permanent_st(p) for p in items)
+        return self.inline("S", body)
+
+    def permanent_st(self, p: PermanentInstruction) -> str:
+        """One permanent instruction in ST (a set coil ``x := x OR c``, a reset coil ``x :=
+        x AND NOT c``, a call of an IEC timer or counter as its instance's call)."""
+        if isinstance(p, Coil):
+            value: Expr = p.condition
+            if p.kind == "S":
+                value = Binary("OR", p.target, p.condition, p.loc)
+            elif p.kind == "R":
+                c = p.condition
+                no = c.operand if isinstance(c, Unary) and c.op == "NOT" else Unary("NOT", c, p.loc)
+                value = Binary("AND", p.target, no, p.loc)
+            return f"{self.st(p.target)} := {self.st(value)};"
+        if isinstance(p, Assignment):
+            return f"{self.st(p.target)} := {self.st(p.expr)};"
+        call = self.fb_call(p)
+        if call is not None:
+            return call
+        text = _permanent_text(p)
+        self.p.warn(
+            "X010",
+            f"{text!r} has no IEC form (an IEC tool calls only the IEC timers and counters "
+            "here): an ST comment, kept in s7graph's data",
+            p.loc,
+        )
+        return f"(* s7graph: {text.replace('*)', '* )')} *)"
+
+    def left_out(self, q: Sequence) -> None:
+        """Report what of ``q`` an IEC tool does not see (kept in s7graph's data)."""
+        for st in q.steps:
+            for what, cond, loc in (
+                ("interlock", st.interlock, st.interlock_loc),
+                ("supervision", st.supervision, st.supervision_loc),
+            ):
+                if cond is not None:
+                    self.p.warn(
+                        "X010",
+                        f"S{st.number}'s {what} has no IEC form: kept in s7graph's data",
+                        loc or st.loc,
+                    )
+        for t in q.transitions:
+            if not t.targets:
+                self.p.warn(
+                    "X010",
+                    f"T{t.number} TO STOP (a branch stop) has no IEC form: the transition "
+                    "leads nowhere in the SFC other tools read",
+                    t.loc,
+                )
 
     def bool_action(self, qualifier: str, op: Operand, duration: str = "") -> str:
         dur = f" duration={quoteattr(duration)}" if duration else ""
@@ -150,8 +240,9 @@ class _Export:
     def sequence(self, q: Sequence, column: int, out: list[str]) -> None:
         order = {s.number: i for i, s in enumerate(q.steps)}
         x0 = 40 + column * 400
-        step_id: dict[int, int] = {s.number: self.next_id() for s in q.steps}
-        trans_id: dict[int, int] = {t.number: self.next_id() for t in q.transitions}
+        step_id: dict[int, int] = {s.number: s.number for s in q.steps}
+        trans_id: dict[int, int] = {t.number: TRANSITION_IDS + t.number for t in q.transitions}
+        self.left_out(q)
         drawn = shape_of(q)
         leaving, arriving, jumps = drawn.leaving, drawn.arriving, drawn.jumps
         # what a transition's input connects to: a step, or that step's divergence
@@ -225,12 +316,16 @@ class _Export:
             f'<position x="{x}" y="{y}"/>{cp}'
             "<connectionPointOut/><connectionPointOutAction/></step>"
         )
-        if s.actions:
+        extra = ""
+        if self.permanent_xml and s.initial:
+            extra, self.permanent_xml = self.permanent_xml, ""
+        if s.actions or extra:
             bid = self.next_id()
             xml += (
                 f'<actionBlock localId="{bid}" height="30" width="200">'
                 f'<position x="{x + 120}" y="{y}"/>{_cpin([sid])}'
                 + "".join(self.action(r) for r in s.actions)
+                + extra
                 + "</actionBlock>"
             )
         return xml
@@ -271,7 +366,28 @@ class _Export:
             seen.setdefault(sym.name, (sym.name, str(sym.address), sym.type))
         return list(seen.values())
 
+    def options(self) -> None:
+        o = self.chart.options
+        changed = [
+            name
+            for name, value, default in (
+                ("SKIP_STEPS", o.skip_steps, False),
+                ("ACK_REQUIRED", o.ack_required, True),
+                ("MESSAGES", o.messages, False),
+                ("ACK_FORCES_SWITCH", o.ack_forces_switch, False),
+                ("ORDER", o.order, "graph"),
+            )
+            if value != default
+        ]
+        if changed:
+            self.p.warn(
+                "X010",
+                f"the block options {', '.join(changed)} have no IEC form: kept in s7graph's data",
+                self.chart.loc,
+            )
+
     def document(self) -> str:
+        self.options()
         body: list[str] = []
         for i, q in enumerate(self.chart.sequences):
             self.sequence(q, i, body)
@@ -313,6 +429,17 @@ def _type(type_name: str) -> str:
     return f"<type><{t}/></type>"
 
 
-def export_plcopen(chart: Chart, symbols: SymbolTable | None = None) -> str:
-    """The PLCopen XML document of ``chart`` (``symbols``: the table its symbols are in)."""
-    return _Export(chart, symbols).document()
+def _permanent_text(p: PermanentInstruction) -> str:
+    text = format_chart(Chart("x", after=(p,)))
+    return text.split("PERMANENT AFTER\n", 1)[1].split("\nEND_PERMANENT", 1)[0].strip()
+
+
+def export_plcopen(
+    chart: Chart, symbols: SymbolTable | None = None
+) -> tuple[str, list[Diagnostic]]:
+    """The PLCopen XML document of ``chart`` (``symbols``: the table its symbols are in),
+    and what of the chart other IEC tools do not see or run otherwise (located warnings;
+    all of it is in s7graph's data)."""
+    export = _Export(chart, symbols)
+    text = export.document()
+    return text, export.p.items

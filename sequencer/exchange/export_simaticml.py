@@ -20,14 +20,17 @@ calls and non-bit assignments in the permanent instructions have no form here: a
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 from xml.sax.saxutils import escape, quoteattr
 
 from s7graph.engine.address import parse_address
 from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer.checks.diagnostics import Diagnostic
 from s7graph.sequencer.exchange.flgnet import write_network
+from s7graph.sequencer.exchange.problems import Problems
 from s7graph.sequencer.exchange.shape import shape_of
 from s7graph.sequencer.params import Direction, pins_for
-from s7graph.sequencer.text.format import format_row, row_body
+from s7graph.sequencer.text.format import format_expr, format_row, quote, row_body
 from s7graph.sequencer.text.model import (
     ActionRow,
     Assignment,
@@ -82,6 +85,8 @@ class _Export:
     def __init__(self, chart: Chart, symbols: SymbolTable | None) -> None:
         self.chart = chart
         self.table = symbols
+        self.p = Problems(chart.file)
+        self.warned_call = False
         self.step_names = {s.number: s.name or f"Step{s.number}" for s in chart.all_steps()}
         self.trans_names = {t.number: t.name or f"Trans{t.number}" for t in chart.all_transitions()}
 
@@ -160,16 +165,50 @@ class _Export:
             raise ValueError(f"{exc}: a SimaticML network cannot hold it") from None
 
     def action(self, r: ActionRow, step: int) -> str:
-        if isinstance(r.operand, BlockCall):
-            raise ValueError(
-                f"{r.loc}: S{step} row {format_row(r)!r}: CALL rows have no SimaticML form"
-                " here (the PLCopen export keeps them)"
-            )
+        """An ``Action``: the row's text as tokens, each symbol an ``Access`` element with
+        its address (informative, as in the networks) so that it reads back at it; a CALL
+        row in s7graph's spelling of the call (reported: TIA names blocks by symbol)."""
         attrs = f' Event="{r.event}"' if r.event else ""
         attrs += ' Interlock="true"' if r.interlocked else ""
         attrs += f' Qualifier="{r.qualifier}"'
-        text = row_body(r, self.spell)
-        return f'<Action{attrs}><Token Text={quoteattr(text)} /><Token Text="&#xA;" /></Action>'
+        accesses: list[str] = []
+
+        def spell(e: Expr) -> str | None:
+            if isinstance(e, Operand) and e.quoted:
+                accesses.append(self.access(e, str(21 + len(accesses))))
+                return f"\x00{len(accesses) - 1}\x00"
+            return self.spell(e)
+
+        if isinstance(r.operand, BlockCall):
+            text = self.call_text(r.operand, spell)
+            if not self.warned_call:
+                self.warned_call = True
+                self.p.warn(
+                    "X012",
+                    f"S{step} row {format_row(r)!r}: CALL rows are written in s7graph's "
+                    "spelling (block and instance DB by number); TIA calls blocks by their "
+                    "symbolic names: rename them there",
+                    r.loc,
+                )
+        else:
+            text = row_body(r, spell)
+        parts = []
+        for i, piece in enumerate(text.split("\x00")):
+            if i % 2:
+                parts.append(accesses[int(piece)])
+            elif piece:
+                parts.append(f"<Token Text={quoteattr(piece)} />")
+        return f'<Action{attrs}>{"".join(parts)}<Token Text="&#xA;" /></Action>'
+
+    def call_text(self, c: BlockCall, spell: Callable[[Expr], str | None]) -> str:
+        """A call as s7graph writes it, its operands spelled as TIA's tokens."""
+        block = f"{c.kind} {c.block}" if c.kind else quote(str(c.block))
+        if c.instance is not None:
+            inst = f"DB {c.instance}" if isinstance(c.instance, int) else quote(c.instance)
+            block += f", {inst}"
+        params = [f"{n} := {format_expr(v, spell)}" for n, v in c.inputs]
+        params += [f"{n} => {format_expr(o, spell)}" for n, o in c.outputs]
+        return f"{block} ({', '.join(params)})" if params else block
 
     def step(self, s: Step) -> str:
         rows = "".join(self.action(r, s.number) for r in s.actions)
@@ -381,6 +420,11 @@ def _address_type(address: str) -> str:
     return {1: "Bool", 8: "Byte", 16: "Word", 32: "DWord"}.get(int(a.width), "Word")
 
 
-def export_simaticml(chart: Chart, symbols: SymbolTable | None = None) -> str:
-    """The SimaticML document of ``chart`` (``ValueError`` for what it cannot hold)."""
-    return _Export(chart, symbols).document()
+def export_simaticml(
+    chart: Chart, symbols: SymbolTable | None = None
+) -> tuple[str, list[Diagnostic]]:
+    """The SimaticML document of ``chart`` and what TIA may read otherwise (located
+    warnings); ``ValueError`` for what it cannot hold."""
+    export = _Export(chart, symbols)
+    text = export.document()
+    return text, export.p.items

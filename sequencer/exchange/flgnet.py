@@ -6,7 +6,9 @@ pin or an operand) to its other ends; a value is followed back from the network'
 operation): the power rail is TRUE, a ``Contact`` ANDs its operand (``Negated`` on the
 ``operand`` pin: NOT) with its ``in``, ``O`` ORs its inputs, ``A``/``X`` (FBD) AND/XOR them,
 ``Not`` negates, a comparison box (``Eq Ne Gt Ge Lt Le``, ``SrcType`` its type) compares
-``in1`` with ``in2`` and ANDs ``pre`` (LAD). A coil fed by the rail alone carries no
+``in1`` with ``in2`` and ANDs ``pre`` (LAD); a comparison with a step's time (``T``,
+``U``) reads the other side as a TIME, as TIA compiles it (an untyped tag or a DInt, an
+integer as milliseconds). A coil fed by the rail alone carries no
 condition: an empty transition (holds), no interlock, no supervision.
 
 Writing (``network``): the inverse, in LAD — a sum of products as contacts in series
@@ -25,7 +27,7 @@ from dataclasses import dataclass, field
 
 from s7graph.engine.errors import SourceLocation
 from s7graph.sequencer.exchange.xmltree import ElementError, Node
-from s7graph.sequencer.text.model import Binary, Const, Expr, Unary
+from s7graph.sequencer.text.model import Binary, Const, Expr, StepAttr, Unary
 
 __all__ = ["COMPARE_PARTS", "read_network", "write_network"]
 
@@ -130,10 +132,20 @@ class _Net:
             left, right = self.pin(uid, "in1", src_type), self.pin(uid, "in2", src_type)
             if left is None or right is None:
                 raise ElementError("a comparison of the power rail", part)
+            # a step's time (T, U) is a TIME: the other side is read as one, as TIA does
+            if _is_time(left) and not _is_time(right):
+                right = self.pin(uid, "in2", "TIME")
+            elif _is_time(right) and not _is_time(left):
+                left = self.pin(uid, "in1", "TIME")
+            assert left is not None and right is not None
             cmp = Binary(COMPARE_PARTS[kind], left, right, loc)
             pre = self.pin(uid, "pre") if (uid, "pre") in self.sources else None
             return _and(pre, cmp, loc)
         raise ElementError(f"part {kind} has no GRAPH condition form", part)
+
+
+def _is_time(e: Expr | None) -> bool:
+    return isinstance(e, StepAttr) and e.attr in ("T", "U")
 
 
 def _cardinality(part: Node) -> int:

@@ -15,13 +15,14 @@ from functools import cache
 
 from s7graph.engine.errors import LiteralError, S7Error, SourceLocation
 from s7graph.engine.literals import format_literal, parse_literal
-from s7graph.sequencer.exchange.iec_model import (
-    IecChart,
-)
+from s7graph.sequencer.exchange.iec_blocks import EDGE_AND_LATCH, bistable_body
+from s7graph.sequencer.exchange.iec_model import IecChart
 from s7graph.sequencer.exchange.mapping import FUNCTIONS, TYPES
 from s7graph.sequencer.exchange.naming import iec_address, safe_name
+from s7graph.sequencer.exchange.pending import PendingBodies
 from s7graph.sequencer.exchange.problems import Problems
 from s7graph.sequencer.exchange.st import (
+    SBinary,
     SCall,
     SCallStmt,
     SDirect,
@@ -144,6 +145,25 @@ def _typed(text: str, type_name: str | None) -> str:
     return text
 
 
+def _bool_literals(e: SExpr) -> SExpr:
+    """``e`` (an expression a BOOL is expected of) with its 1 and 0 in BOOL positions as
+    TRUE and FALSE (IEC 61131-3 §6.3.3: 1 and 0 are BOOL literals too)."""
+    if isinstance(e, SLiteral) and e.text in ("0", "1"):
+        return SLiteral("TRUE" if e.text == "1" else "FALSE", e.line, e.col)
+    if isinstance(e, SUnary) and e.op == "NOT":
+        return SUnary("NOT", _bool_literals(e.operand), e.line, e.col)
+    if isinstance(e, SBinary) and e.op in ("AND", "OR", "XOR"):
+        return SBinary(e.op, _bool_literals(e.left), _bool_literals(e.right), e.line, e.col)
+    return e
+
+
+def _bool_literal(e: Expr) -> Expr:
+    """``e``, or the BOOL constant an IEC 0/1 stands for where a BOOL is expected."""
+    if isinstance(e, Const) and e.type in ("INT", "DINT") and e.value in (0, 1):
+        return Const(e.value == 1, "BOOL", "TRUE" if e.value == 1 else "FALSE", e.loc)
+    return e
+
+
 def _bool_compare(op: str, left: Expr, right: Expr, loc: SourceLocation) -> Expr:
     """``x = TRUE`` → ``x``; ``x = FALSE`` → ``NOT x``; ``a = b`` → ``NOT (a XOR b)``."""
     for const_side, other in ((right, left), (left, right)):
@@ -169,6 +189,7 @@ class IecExpressions:
         self.symbols: list[SymbolDecl] = []
         self.instances: dict[str, tuple[str, str, SourceLocation]] = {}
         self.instance_dbs: dict[str, int] = {}  # called instances: name → instance DB
+        self.called: set[str] = set()  # bistables and edge detectors computed (upper case)
         self.members_read: dict[str, tuple[str, str]] = {}  # instance → (member, variable)
         self.taken: set[str] = set()
         self.steps: dict[str, Step] = {}
@@ -179,6 +200,8 @@ class IecExpressions:
         self.warned: set[tuple[str, str]] = set()
         self.bool_actions: set[str] = set()
         self.body_writes: dict[str, SourceLocation] = {}
+        self.pending = PendingBodies(problems)
+        self.helpers: set[str] = set()  # the FB variables the importer added
 
     def loc(self, node: object, origin: tuple[int, int]) -> SourceLocation:
         line, col = shift(getattr(node, "line", 0) or 1, getattr(node, "col", 0) or 1, origin)
@@ -213,6 +236,7 @@ class IecExpressions:
         self.taken.add(graph.upper())
         self.decls.append(VarDecl(graph, type_name))
         self.vars[key] = _Var(graph, type_name)
+        self.helpers.add(graph)
         return graph
 
     def variables(self) -> None:
@@ -348,21 +372,26 @@ class IecExpressions:
         self.members_read.setdefault(head, (member, graph))
         return Operand(graph, False, loc)
 
-    def fb_call(self, st: SCallStmt, origin: tuple[int, int], *, action: bool) -> BlockCall:
+    def fb_call(
+        self, st: SCallStmt, origin: tuple[int, int], *, action: bool
+    ) -> BlockCall | list[tuple[Operand, Expr]]:
         """``TON1(IN := x, PT := T#2S)`` as ``CALL SFB 4, DB 100 (IN := x, PT := T#2S,
-        Q => TON1_Q, ET => TON1_ET)`` (``SFB_OF``); the call of any other block is not
-        mapped."""
+        Q => TON1_Q, ET => TON1_ET)`` (``SFB_OF``); a call of R_TRIG, F_TRIG, SR or RS as
+        the bit assignments of its body (``iec_blocks``), for the caller to place; the call
+        of any other block is not mapped."""
         loc = self.loc(st, origin)
         found = self.instances.get(st.name.upper())
         if found is None:
             raise _NoMap(f"call of {st.name} not imported: not an FB instance of the POU", loc)
         name, fb_type, decl_loc = found
+        if fb_type in EDGE_AND_LATCH:
+            return self.bistable_call(st, origin, found)
         number = SFB_OF.get(fb_type)
         if number is None:
-            known = ", ".join(SFB_OF)
+            known = ", ".join([*SFB_OF, *EDGE_AND_LATCH])
             raise _NoMap(
-                f"call of {name} : {fb_type} not imported: the CPU's system blocks are the "
-                f"IEC FBs {known}",
+                f"call of {name} : {fb_type} not imported: GRAPH calls the CPU's system "
+                f"blocks; the importer maps the IEC FBs {known}",
                 loc,
             )
         ins = [(S7_PIN.get(pin.upper(), pin.upper()), e) for pin, e in st.inputs]
@@ -397,6 +426,42 @@ class IecExpressions:
         )
         return BlockCall("SFB", number, db, inputs, tuple(outputs), loc)
 
+    def bistable_call(
+        self,
+        st: SCallStmt,
+        origin: tuple[int, int],
+        found: tuple[str, str, SourceLocation],
+    ) -> list[tuple[Operand, Expr]]:
+        """The assignments of a call of an R_TRIG, F_TRIG, SR or RS instance, its ``=>``
+        outputs copied after them."""
+        loc = self.loc(st, origin)
+        name, fb_type, decl_loc = found
+        pins, outs = EDGE_AND_LATCH[fb_type]
+        known = {p for spellings in pins for p in spellings}
+        given: dict[str, Expr] = {}
+        for pin, e in st.inputs:
+            if pin.upper() not in known:
+                raise _NoMap(f"call of {name} : {fb_type}: no input {pin or '(positional)'}", loc)
+            given[pin.upper()] = self.expr(e, origin)
+        body = bistable_body(fb_type, name, given, self.helper, loc)
+        for pin, target in st.outputs:
+            if pin.upper() not in outs:
+                raise _NoMap(f"call of {name} : {fb_type}: no output {pin}", loc)
+            op = self.operand(target, origin)
+            assert isinstance(op, Operand)
+            body.append((op, Operand(self.helper(f"{name}_{pin.upper()}", "BOOL"), False, loc)))
+        self.called.add(name.upper())
+        states = ", ".join(dict.fromkeys(t.name for t, _ in body if t.name.startswith(name)))
+        self.warn_once(
+            (name, "called"),
+            "I031",
+            f"{name} : {fb_type} is computed by bit assignments in the permanent "
+            f"instructions (IEC's body of {fb_type}); its state is in the FB variables "
+            f"{states}",
+            decl_loc,
+        )
+        return body
+
     def instance_db(self, name: str) -> int:
         """The instance DB of FB instance ``name``: the number its name ends in when it is
         ``…_DB<n>`` (s7graph's PLCopen export names them so) and free, else the next free
@@ -414,7 +479,7 @@ class IecExpressions:
     def uncalled_instances(self) -> None:
         """An instance whose outputs the chart reads but which it never calls: reported."""
         for head, (member, graph) in self.members_read.items():
-            if head in self.instance_dbs:
+            if head in self.instance_dbs or head in self.called:
                 continue
             name, fb_type, decl_loc = self.instances[head]
             self.p.warn(
@@ -440,6 +505,11 @@ class IecExpressions:
                 return "BOOL"
             return self.type_of(e.left) or self.type_of(e.right)
         return None
+
+    def condition(self, e: SExpr, origin: tuple[int, int]) -> Expr:
+        """A transition condition: IEC's literals 1 and 0 are TRUE and FALSE where a BOOL is
+        expected — the condition itself, and the operands of NOT, AND, OR, XOR in it."""
+        return self.expr(_bool_literals(e), origin)
 
     def expr(self, e: SExpr, origin: tuple[int, int]) -> Expr:
         loc = self.loc(e, origin)
@@ -470,8 +540,29 @@ class IecExpressions:
             return out
         if e.name == "NOT" and len(args) == 1:
             return Unary("NOT", args[0], loc)
+        if e.name == "SEL" and len(args) == 3:
+            return self.select(args, loc)
         if e.name in FUNCTIONS and len(args) == 1:
             from s7graph.sequencer.text.model import FuncCall
 
             return FuncCall(FUNCTIONS[e.name], (args[0],), loc)
         raise _NoMap(f"function {e.name} has no exact GRAPH equivalent", loc)
+
+    def select(self, args: list[Expr], loc: SourceLocation) -> Expr:
+        """``SEL(G, IN0, IN1)`` on BOOLs: ``NOT G AND IN0 OR G AND IN1`` (IEC 61131-3
+        §6.6.2.5.9); GRAPH has no selection of other values."""
+        g, in0, in1 = (_bool_literal(a) for a in args)
+        types = {self.type_of(g), self.type_of(in0), self.type_of(in1)}
+        if types != {"BOOL"}:
+            what = ", ".join(sorted(t or "?" for t in types - {"BOOL"}))
+            raise _NoMap(
+                f"SEL of {what} has no GRAPH form (GRAPH expressions select no values; "
+                "SEL on BOOLs is a condition)",
+                loc,
+            )
+        return Binary(
+            "OR",
+            Binary("AND", Unary("NOT", g, loc), in0, loc),
+            Binary("AND", g, in1, loc),
+            loc,
+        )

@@ -19,6 +19,7 @@ __all__ = [
     "IecStep",
     "IecTransition",
     "IecVar",
+    "StatementBody",
     "Unsupported",
 ]
 
@@ -48,6 +49,18 @@ class Unsupported:
 
 
 @dataclass
+class StatementBody:
+    """A transition body of ST statements rather than an expression (CODESYS, TwinCAT):
+    it assigns the transition's value to the transition's ``name``."""
+
+    name: str
+    body: list[SStmt]
+    text: str
+    loc: SourceLocation
+    origin: tuple[int, int] = (1, 1)
+
+
+@dataclass
 class IecAction:
     """A named action: its body is ST statements or an ``Unsupported`` one."""
 
@@ -55,6 +68,7 @@ class IecAction:
     body: list[SStmt] | Unsupported
     loc: SourceLocation
     origin: tuple[int, int] = (1, 1)  # where the body's text starts (ST places are relative)
+    text: str = ""  # an ST body as written (kept for the SCL block when rows cannot hold it)
 
 
 @dataclass
@@ -85,13 +99,14 @@ class IecStep:
 class IecTransition:
     """``TRANSITION [name] [(PRIORITY := n)] FROM … TO … := condition``; ``targets`` empty
     means the path ends (no IEC form; only s7graph's own export writes it). ``condition``
-    is an ST expression, or ``Unsupported`` (IL, a network the importer cannot read);
+    is an ST expression, ST statements (``StatementBody``) or ``Unsupported`` (IL, a
+    network the importer cannot read);
     ``order`` sorts the transitions leaving one step (priority, then left to right, then
     as written)."""
 
     sources: list[str]
     targets: list[str]
-    condition: SExpr | Unsupported | None
+    condition: SExpr | Unsupported | StatementBody | None
     loc: SourceLocation
     name: str = ""
     priority: int | None = None
@@ -117,4 +132,6 @@ class IecChart:
     transitions: list[IecTransition] = field(default_factory=list)
     actions: dict[str, IecAction] = field(default_factory=dict)
     prelude: list[SStmt] = field(default_factory=list)
+    prelude_text: str = ""  # the prelude as written
+    sfc_actions: set[str] = field(default_factory=set)  # actions that are charts (upper case)
     graph: dict[str, str] = field(default_factory=dict)

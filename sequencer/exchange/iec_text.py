@@ -11,6 +11,7 @@ divergence, ``FROM (a, b)`` a simultaneous join (IEC 61131-3 §6.7.3).
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 from lark import Token, Tree
@@ -49,15 +50,21 @@ def _loc(file: str, tok: Any) -> SourceLocation:
 
 
 def read_iec_text(text: str, file: str, problems: Problems) -> list[IecChart]:
-    """Every POU of ``text`` that holds SFC elements."""
+    """Every POU of ``text`` that holds SFC elements. When the text as a whole does not
+    parse, each POU is read on its own (``_pieces``): one this grammar cannot read (an IL
+    function, a TYPE block) is reported and left out, so that the charts beside it import;
+    a piece with SFC elements that does not parse is an error, as before."""
     try:
-        tree = build(parse_tree(text, "file", file, (1, 1), "the IEC text"))
+        trees = [build(parse_tree(text, "file", file, (1, 1), "the IEC text"))]
     except StSyntaxError as exc:
-        where = exc.where if isinstance(exc.where, SourceLocation) else problems.at(1, 1)
-        problems.error("I001", exc.message, where)
-        return []
+        pieces = _pieces(text)
+        if len(pieces) < 2:
+            where = exc.where if isinstance(exc.where, SourceLocation) else problems.at(1, 1)
+            problems.error("I001", exc.message, where)
+            return []
+        trees = [t for t in (_piece(text, a, b, file, problems) for a, b in pieces) if t]
     charts: list[IecChart] = []
-    for item in tree.children:
+    for item in (i for tree in trees for i in tree.children):
         if isinstance(item, Tree) and item.data == "configuration":
             problems.warn(
                 "I024",
@@ -66,7 +73,7 @@ def read_iec_text(text: str, file: str, problems: Problems) -> list[IecChart]:
                 _loc(file, item.children[0]),
             )
             continue
-        chart = _pou(item, file)
+        chart = _pou(item, file, text)
         if chart.steps:
             charts.append(chart)
         else:
@@ -74,14 +81,53 @@ def read_iec_text(text: str, file: str, problems: Problems) -> list[IecChart]:
     return charts
 
 
-def _pou(tree: Tree[Any], file: str) -> IecChart:
+_PIECE = re.compile(
+    r"^[ \t]*(FUNCTION_BLOCK|PROGRAM|FUNCTION|CONFIGURATION|TYPE)(?![A-Za-z0-9_])",
+    re.IGNORECASE | re.MULTILINE,
+)
+_SFC = re.compile(r"(?<![A-Za-z0-9_])INITIAL_STEP(?![A-Za-z0-9_])", re.IGNORECASE)
+
+
+def _pieces(text: str) -> list[tuple[int, int]]:
+    """Where each POU, configuration or TYPE block of ``text`` starts and ends (from one
+    such keyword at the start of a line to the next)."""
+    starts = [m.start() for m in _PIECE.finditer(text)]
+    return list(zip(starts, [*starts[1:], len(text)], strict=True))
+
+
+def _piece(text: str, start: int, end: int, file: str, problems: Problems) -> Any:
+    """The parse tree of ``text[start:end]``, read in place (the rest blanked, so lines and
+    columns stay the file's); None, reported, when it does not parse."""
+    blank = re.sub(r"[^\n]", " ", text[:start])
+    piece = text[start:end]
+    try:
+        return build(parse_tree(blank + piece, "file", file, (1, 1), "the IEC text"))
+    except StSyntaxError as exc:
+        where = exc.where if isinstance(exc.where, SourceLocation) else problems.at(1, 1)
+        head = piece.split(None, 2)
+        name = " ".join(head[:2]) if head else "a block"
+        if _SFC.search(piece):
+            problems.error("I001", exc.message, where)
+        else:
+            line = text.count("\n", 0, start) + 1
+            problems.warn(
+                "I024",
+                f"{name} does not parse as ST or textual SFC at line {where.line} (IL, or a "
+                "construct the import does not read): not imported; the charts beside it are",
+                problems.at(line, 1),
+            )
+        return None
+
+
+def _pou(tree: Tree[Any], file: str, text: str) -> IecChart:
     head = tree.children[0]
     kind_tok, name_tok = head.children[0], head.children[1]
     chart = IecChart(
         str(name_tok), _POU_KINDS[str(kind_tok).upper()], _loc(file, kind_tok), dialect="iec"
     )
     order = 0
-    for ch in tree.children[1:]:
+    spans: list[str] = []
+    for i, ch in enumerate(tree.children[1:], 1):
         if isinstance(ch, Tree):
             rule = ch.data
             if rule == "var_block":
@@ -92,11 +138,31 @@ def _pou(tree: Tree[Any], file: str) -> IecChart:
                 chart.transitions.append(_transition(ch, file, order))
                 order += 1
             elif rule == "action":
-                act = _action(ch, file)
+                act = _action(ch, file, text)
                 chart.actions[act.name.upper()] = act
         elif ch is not None and not isinstance(ch, Token):
             chart.prelude.append(ch)  # a statement of the POU body
+            nxt = next((c for c in tree.children[i + 1 :] if c is not None), None)
+            spans.append(text[_offset(text, ch) : _offset(text, nxt) if nxt else len(text)])
+    chart.prelude_text = "".join(spans)
     return chart
+
+
+def _offset(text: str, node: Any) -> int:
+    """Where ``node`` (a tree, a token or a statement) starts in ``text``."""
+    if isinstance(node, Token) and node.start_pos is not None:
+        return node.start_pos
+    if isinstance(node, Tree):
+        if not node.meta.empty:
+            return int(node.meta.start_pos)
+        return _offset(text, node.children[0]) if node.children else len(text)
+    line, col = getattr(node, "line", 0), getattr(node, "col", 0)
+    if not line:
+        return len(text)
+    start = 0
+    for _ in range(line - 1):
+        start = text.index("\n", start) + 1
+    return start + col - 1
 
 
 def _var_block(tree: Tree[Any], file: str) -> list[IecVar]:
@@ -146,7 +212,13 @@ def _step(tree: Tree[Any], file: str) -> IecStep:
     return step
 
 
+_TIMED = frozenset({"L", "D", "SD", "DS", "SL"})
+
+
 def _association(tree: Tree[Any], file: str) -> IecAssociation:
+    """``name(qualifier[, action time][, indicator …])``: after a timed qualifier (L D SD
+    DS SL) comes the action time, a TIME literal or a variable (IEC 61131-3 §6.7.4.3);
+    the other names are indicator variables."""
     name = tree.children[0]
     args: list[Any] = [a for a in tree.children[1:] if a is not None]
     qualifier, duration, indicator = "N", "", ""
@@ -154,8 +226,10 @@ def _association(tree: Tree[Any], file: str) -> IecAssociation:
     if args and isinstance(args[0], SName) and len(args[0].parts) == 1:
         qualifier = args[0].parts[0].upper()
         rest = args[1:]
+    if qualifier in _TIMED and rest and isinstance(rest[0], SLiteral | SName):
+        duration, rest = rest[0].text, rest[1:]
     for a in rest:
-        if isinstance(a, SLiteral) and "#" in a.text:
+        if isinstance(a, SLiteral) and "#" in a.text and not duration:
             duration = a.text
         elif isinstance(a, SName):
             indicator = a.text
@@ -188,7 +262,11 @@ def _transition(tree: Tree[Any], file: str, order: int) -> IecTransition:
     )
 
 
-def _action(tree: Tree[Any], file: str) -> IecAction:
-    kw, name = tree.children[0], tree.children[1]
+def _action(tree: Tree[Any], file: str, text: str) -> IecAction:
+    """``ACTION name: … END_ACTION``: its statements (placed in the file) and its text."""
+    kw, name, end = tree.children[0], tree.children[1], tree.children[-1]
     body: list[Any] = [s for s in tree.children[2:] if s is not None and not isinstance(s, Token)]
-    return IecAction(str(name), body, _loc(file, kw))
+    assert isinstance(name, Token) and name.end_pos is not None
+    start = text.index(":", name.end_pos) + 1
+    stop = end.start_pos if isinstance(end, Token) and end.start_pos is not None else start
+    return IecAction(str(name), body, _loc(file, kw), text=text[start:stop])

@@ -10,13 +10,18 @@
   would change what it does (an initial value on an I/Q location, an input the chart
   writes): then an FB variable, reported. A call of an instance of an IEC timer or counter
   (TON TOF TP CTU CTD CTUD) is ``CALL SFB n`` with an instance DB of its own (``SFB_OF``,
-  ``instance_db``), its outputs written to FB variables: ``INST.Q`` reads ``INST_Q``.
-  Other FB instances (R_TRIG, SR …) are not called, and a read of their outputs is
-  reported.
-* Action rows by qualifier and statement (``mapping``); a bit assigned from an expression
-  goes to PERMANENT AFTER, gated by the step (GRAPH writes bits from conditions only in
-  permanent instructions); statements of a textual POU body beside its SFC elements go
-  to PERMANENT BEFORE.
+  ``instance_db``), its outputs written to FB variables: ``INST.Q`` reads ``INST_Q``; one
+  of R_TRIG, F_TRIG, SR, RS the assignments of its body (``iec_blocks``). Other FB
+  instances are not called, and a read of their outputs is reported.
+* Action rows by qualifier and statement (``mapping``, ``iec_actions``); a bit assigned
+  from an expression goes to PERMANENT AFTER, gated by the step (GRAPH writes bits from
+  conditions only in permanent instructions); an S action of an initial step that nothing
+  resets, and statements of a textual POU body beside its SFC elements, run every call
+  (PERMANENT AFTER, BEFORE); a body with statements a row cannot hold is kept for the SCL
+  block (``pending``).
+* IEC's 1 and 0 are TRUE and FALSE where a condition expects a BOOL; a transition body
+  of statements is its condition when it assigns the transition's name.
+* Steps the chart can never leave are reported (``stalls``).
 
 Everything left out is reported with its place. The chart is then validated: an action
 row or instruction the validator refuses is left out and reported too, so the result is a
@@ -28,60 +33,38 @@ from __future__ import annotations
 import dataclasses
 from typing import Literal
 
-from s7graph.engine.errors import LiteralError, S7Error, SourceLocation
+from s7graph.engine.errors import SourceLocation
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.checks.diagnostics import Diagnostic
 from s7graph.sequencer.checks.validate import validate
-from s7graph.sequencer.exchange.iec_expressions import (
-    S7_PIN,
-    SFB_OF,
-    IecExpressions,
-    _NoMap,
-    _typed,
-    const,
-    iec_literal,
-)
+from s7graph.sequencer.exchange.iec_actions import IecActions
+from s7graph.sequencer.exchange.iec_expressions import S7_PIN, SFB_OF, _NoMap, const, iec_literal
 from s7graph.sequencer.exchange.iec_model import (
-    IecAction,
-    IecAssociation,
     IecChart,
     IecStep,
     IecTransition,
+    StatementBody,
     Unsupported,
 )
-from s7graph.sequencer.exchange.mapping import QUALIFIERS
+from s7graph.sequencer.exchange.pending import PendingScl, first_other, written_by
 from s7graph.sequencer.exchange.problems import Problems
-from s7graph.sequencer.exchange.st import (
-    SAssign,
-    SCallStmt,
-    SExpr,
-    SLiteral,
-    SName,
-    SOther,
-    SSetReset,
-)
+from s7graph.sequencer.exchange.st import SAssign
+from s7graph.sequencer.exchange.stalls import report_stalls
 from s7graph.sequencer.text.model import (
     ActionRow,
-    Assignment,
-    Binary,
     Chart,
     ChartOptions,
-    Coil,
-    Const,
     Expr,
     Operand,
-    PermanentInstruction,
     Sequence,
     Step,
-    StepAttr,
     Transition,
-    Unary,
 )
 
 __all__ = ["S7_PIN", "SFB_OF", "const", "iec_literal", "iec_to_chart"]
 
 
-class _Convert(IecExpressions):
+class _Convert(IecActions):
     """The chart of an IEC SFC: its structure, its actions, the chart itself."""
 
     # ------------------------------------------------------------ structure
@@ -119,9 +102,13 @@ class _Convert(IecExpressions):
                     t.condition.loc,
                 )
                 continue
-            if t.condition is not None:
+            if isinstance(t.condition, StatementBody):
+                cond = self.statement_condition(t.condition)
+                if cond is None:
+                    continue
+            elif t.condition is not None:
                 try:
-                    cond = self.expr(t.condition, t.cond_origin)
+                    cond = self.condition(t.condition, t.cond_origin)
                 except _NoMap as exc:
                     self.p.error("I012", f"condition not imported: {exc.message}", exc.loc)
                     continue
@@ -138,236 +125,33 @@ class _Convert(IecExpressions):
             out.append((t, tr))
         return out
 
+    def statement_condition(self, t: StatementBody) -> Expr | None:
+        """A transition body of statements: ``name := expr;`` alone is ``expr``; other
+        statements are kept for the SCL block, which computes the FB variable the
+        condition then reads (FALSE until it does)."""
+        only = t.body[0] if len(t.body) == 1 else None
+        if isinstance(only, SAssign) and only.target.text.upper() == t.name.upper():
+            try:
+                return self.condition(only.expr, t.origin)
+            except _NoMap as exc:
+                self.p.error("I012", f"condition not imported: {exc.message}", exc.loc)
+                return None
+        result = self.helper(t.name, "BOOL")
+        found = first_other(t.body)
+        why = found[0] if found else "statements"
+        first = self.loc(found[1], t.origin) if found else t.loc
+        writes = tuple(w for w in written_by(t.body) if w.upper() != t.name.upper())
+        item = PendingScl(
+            "transition", t.name, t.text, t.loc, "before", writes=writes, result=result, why=why
+        )
+        self.pending.keep(item, first)
+        return Operand(result, False, t.loc)
+
     def step_ref(self, name: str, loc: SourceLocation) -> int | None:
         n = self.step_numbers.get(name.upper())
         if n is None:
             self.p.error("I010", f"unknown step {name}", loc)
         return n
-
-    # ------------------------------------------------------------ actions
-
-    def scan_writes(self) -> None:
-        """What the chart writes (a located input written must stay an FB variable)."""
-        self.written: set[str] = set()
-        names = {v.name.upper() for v in self.src.vars}
-        for s in self.src.steps:
-            for a in s.associations:
-                if a.inline is None and a.action.upper() in names:
-                    self.written.add(a.action.upper())
-                    self.bool_actions.add(a.action.upper())
-        bodies = [a.body for a in self.src.actions.values()]
-        bodies += [a.inline.body for s in self.src.steps for a in s.associations if a.inline]
-        bodies.append(self.src.prelude)
-        for body in bodies:
-            if isinstance(body, Unsupported):
-                continue
-            for st in body:
-                if isinstance(st, SAssign | SSetReset) and isinstance(st.target, SName):
-                    self.written.add(st.target.parts[0].upper())
-                elif isinstance(st, SCallStmt):
-                    targets = [t for _, t in st.outputs if isinstance(t, SName)]
-                    self.written.update(t.parts[0].upper() for t in targets)
-
-    def step_actions(self, step: IecStep, number: int) -> list[ActionRow]:
-        rows: list[ActionRow] = []
-        for a in step.associations:
-            rule = QUALIFIERS.get(a.qualifier.upper()) if not a.phase else None
-            if a.phase:
-                rows += self.phase_action(a, step, number)
-                continue
-            if rule is None:
-                self.p.warn(
-                    "I020",
-                    f"qualifier {a.qualifier} is not an IEC action qualifier; "
-                    f"{a.action} not imported",
-                    a.loc,
-                )
-                continue
-            if a.indicator:
-                self.p.warn(
-                    "I020",
-                    f"indicator variable {a.indicator} not imported (GRAPH rows have no indicator)",
-                    a.loc,
-                )
-            key = a.action.upper()
-            action = a.inline or self.src.actions.get(key)
-            if action is None and key in self.vars and self.vars[key].type == "BOOL":
-                rows += self.variable_action(a, rule.iec, number)
-                continue
-            if action is None:
-                self.p.warn(
-                    "I021",
-                    f"action {a.action} is neither an action nor a Boolean "
-                    "variable of the POU; not imported",
-                    a.loc,
-                )
-                continue
-            if rule.body is None:
-                self.p.warn("I020", f"{a.qualifier} {a.action} not imported: {rule.why}", a.loc)
-                continue
-            rows += self.body(action, rule.body, rule.gate, step, number, a.loc)
-        return rows
-
-    def phase_action(self, a: IecAssociation, step: IecStep, number: int) -> list[ActionRow]:
-        """A CODESYS entry/active/exit step action: its body once on entry (S1), every
-        call (no event), once on exit (S0)."""
-        action = self.src.actions.get(a.action.upper())
-        if action is None:
-            self.p.warn("I021", f"step action {a.action} is not in the POU; not imported", a.loc)
-            return []
-        event, gate = {"entry": ("S1", "P"), "active": ("", "X"), "exit": ("S0", "")}[a.phase]
-        return self.body(action, event, gate, step, number, a.loc)
-
-    def variable_action(self, a: IecAssociation, qualifier: str, number: int) -> list[ActionRow]:
-        rule = QUALIFIERS[qualifier]
-        var = self.vars[a.action.upper()]
-        if rule.variable is None:
-            self.p.warn("I020", f"{qualifier} {a.action} not imported: {rule.why}", a.loc)
-            return []
-        op = Operand(var.graph, var.symbol, a.loc)
-        event, q = (None, rule.variable) if " " not in rule.variable else rule.variable.split()
-        value: Expr | None = None
-        if rule.timed:
-            value = self.duration(a)
-            if value is None:
-                return []
-        return [ActionRow(q, op, event, False, value, a.loc)]
-
-    def duration(self, a: IecAssociation) -> Const | None:
-        text = a.duration.strip()
-        if not text:
-            self.p.warn("I020", f"{a.qualifier} {a.action} has no time; not imported", a.loc)
-            return None
-        if "#" not in text:
-            self.p.warn("I031", f"duration {text!r} has no T#; read as T#{text}", a.loc)
-            text = "T#" + text
-        try:
-            c = const(text, a.loc)
-        except (LiteralError, S7Error):
-            c = None
-        if c is None or c.type != "TIME":
-            self.p.warn(
-                "I020",
-                f"duration {a.duration!r} is not a constant TIME; "
-                f"{a.qualifier} {a.action} not imported",
-                a.loc,
-            )
-            return None
-        return c
-
-    def body(
-        self,
-        action: IecAction,
-        event: str,
-        gate_kind: str,
-        step: IecStep,
-        number: int,
-        at: SourceLocation,
-    ) -> list[ActionRow]:
-        if isinstance(action.body, Unsupported):
-            self.p.warn(
-                "I021", f"action {action.name}: {action.body.what} not imported", action.body.loc
-            )
-            return []
-        if not action.body:
-            self.p.warn(
-                "I021", f"action {action.name} has an empty body (a comment at most); no rows", at
-            )
-            return []
-        rows: list[ActionRow] = []
-        coils: list[PermanentInstruction] = []
-        ev = event or None
-        for st in action.body:
-            loc = self.loc(st, action.origin)
-            try:
-                if isinstance(st, SOther):
-                    raise _NoMap(
-                        f"{st.keyword} statement not imported (a GRAPH row is one instruction)", loc
-                    )
-                if isinstance(st, SCallStmt):
-                    call = self.fb_call(st, action.origin, action=True)
-                    rows.append(ActionRow("CALL", call, ev, False, None, loc))
-                    continue
-                target = self.operand(st.target, action.origin)
-                assert isinstance(target, Operand)
-                ttype = self.type_of(target)
-                if isinstance(st, SSetReset):
-                    cond = self.expr(st.expr, action.origin)
-                    if isinstance(cond, Const) and cond.value is True:
-                        rows.append(ActionRow(st.kind, target, ev, False, None, loc))
-                    else:
-                        gate = self.gate(gate_kind, step, number, loc)
-                        coils.append(Coil(st.kind, target, Binary("AND", gate, cond, loc), loc))  # type: ignore[arg-type]
-                    continue
-                value = self.assigned(st.expr, ttype, action.origin)
-                if ttype == "BOOL" and isinstance(value, Const):
-                    q = "S" if value.value else "R"
-                    rows.append(ActionRow(q, target, ev, False, None, loc))
-                elif ttype == "BOOL":
-                    gate = self.gate(gate_kind, step, number, loc)
-                    coils.append(_gated(target, gate, value, loc))
-                else:
-                    rows.append(
-                        ActionRow("N", Assignment(target, value, loc), ev, False, None, loc)
-                    )
-            except _NoMap as exc:
-                self.p.warn("I021", f"action {action.name}: {exc.message}", exc.loc)
-        if rows and coils:
-            self.warn_once(
-                (action.name, "mixed"),
-                "I031",
-                f"action {action.name}: its bit "
-                "assignments from expressions run in PERMANENT AFTER, its other "
-                "statements as rows of the step, so their order is not the "
-                "body's",
-                at,
-            )
-        self.after += coils
-        for st in action.body:
-            if isinstance(st, SAssign | SSetReset) and isinstance(st.target, SName):
-                self.body_writes.setdefault(st.target.parts[0].upper(), self.loc(st, action.origin))
-        return rows
-
-    def assigned(self, e: SExpr, target_type: str | None, origin: tuple[int, int]) -> Expr:
-        """The value of an assignment; IEC's 0/1 for a BOOL and integers for a REAL are
-        the same constants in GRAPH."""
-        if isinstance(e, SLiteral):
-            e = SLiteral(_typed(e.text, target_type), e.line, e.col)
-        return self.expr(e, origin)
-
-    def gate(self, kind: str, step: IecStep, number: int, loc: SourceLocation) -> Expr:
-        if kind == "X":
-            return StepAttr(number, "X", loc)
-        if kind == "P":
-            name = self.helper(f"{step.name}_P1", "BOOL")
-            rows = self.rows.setdefault(number, [])
-            if not any(isinstance(r.operand, Operand) and r.operand.name == name for r in rows):
-                rows.append(ActionRow("N", Operand(name, False, loc), "S1", False, None, loc))
-            return Operand(name, False, loc)
-        raise _NoMap(
-            "a bit assigned from an expression on leaving the step has no exact "
-            "GRAPH form (an S0 row cannot pulse)",
-            loc,
-        )
-
-    def prelude(self) -> None:
-        for st in self.src.prelude:
-            loc = self.loc(st, (1, 1))
-            try:
-                if isinstance(st, SCallStmt):
-                    self.before.append(self.fb_call(st, (1, 1), action=False))
-                    continue
-                if isinstance(st, SOther):
-                    raise _NoMap(f"{st.keyword} in the POU body not imported", loc)
-                target = self.operand(st.target, (1, 1))
-                assert isinstance(target, Operand)
-                value = self.assigned(st.expr, self.type_of(target), (1, 1))
-                if isinstance(st, SSetReset):
-                    self.before.append(Coil(st.kind, target, value, loc))  # type: ignore[arg-type]
-                else:
-                    self.before.append(_permanent_assignment(target, value, loc))
-            except _NoMap as exc:
-                self.p.warn("I022", exc.message, exc.loc)
 
     # ------------------------------------------------------------ the chart
 
@@ -375,6 +159,8 @@ class _Convert(IecExpressions):
         self.number_steps()
         self.scan_writes()
         self.variables()
+        self.stored = self.stored_for_good()
+        self.made_permanent = set()
         pairs = self.transitions()
         steps: dict[int, tuple[IecStep, Step]] = {}
         for s in self.src.steps:
@@ -383,6 +169,9 @@ class _Convert(IecExpressions):
                 continue
             rows = self.step_actions(s, number)
             steps[number] = (s, _step(s, number, rows))
+        for number, texts in self.pending.step_comments.items():
+            s, st = steps[number]
+            steps[number] = (s, dataclasses.replace(st, comment="\n".join(texts)))
         for number, extra in self.rows.items():  # pulses of P gates go first
             s, st = steps[number]
             steps[number] = (s, dataclasses.replace(st, actions=(*extra, *st.actions)))
@@ -407,8 +196,35 @@ class _Convert(IecExpressions):
             after=tuple(self.after),
             file=self.file,
             loc=self.src.loc,
+            end_comment="\n".join(self.pending.end_comments),
         )
         return chart
+
+    def internal(self) -> set[str]:
+        """The FB variables (upper case) only the chart could write: the importer's own
+        (instance outputs and states, transition results), the constants, and the locals
+        and outputs of a function block that only a body kept for the SCL block writes
+        (the source writes them there); inputs, in-outs, externals, globals and the
+        variables of a program may be written from outside."""
+        graph = {n: v.graph.upper() for n, v in self.vars.items()}
+        inner = set() if self.src.kind == "program" else {"local", "output", "temp"}
+        declared = [v for v in self.src.vars if v.name.upper() in graph]
+        own = {graph[v.name.upper()] for v in declared if v.kind in inner}
+        constants = {graph[v.name.upper()] for v in declared if v.constant}
+        by_pending = {g for g in self.stall_reasons() if g in own}
+        return constants | {h.upper() for h in self.helpers} | by_pending
+
+    def stall_reasons(self) -> dict[str, str]:
+        """Why nothing writes an FB variable (upper case), where the import knows it."""
+        out: dict[str, str] = {}
+        for head, (member, graph) in self.members_read.items():
+            if head not in self.instance_dbs and head not in self.called:
+                name, fb_type, _ = self.instances[head]
+                out[graph.upper()] = f"is {name}.{member}, and {name} : {fb_type} is never called"
+        for var, where in self.pending.writes().items():
+            graph = self.vars[var].graph if var in self.vars else var
+            out.setdefault(graph.upper(), f"is written only by {where}, kept for the SCL block")
+        return out
 
     def check_shared_variables(self) -> None:
         for name in sorted(self.bool_actions & set(self.body_writes)):
@@ -420,29 +236,6 @@ class _Convert(IecExpressions):
                 "acts on it",
                 self.body_writes[name],
             )
-
-
-def _gated(target: Operand, gate: Expr, value: Expr, loc: SourceLocation) -> PermanentInstruction:
-    """``target := gate AND (value) OR NOT gate AND target``: the body's assignment in the
-    calls the gate holds, the old value otherwise."""
-    expr = Binary(
-        "OR",
-        Binary("AND", gate, value, loc),
-        Binary("AND", Unary("NOT", gate, loc), target, loc),
-        loc,
-    )
-    return _permanent_assignment(target, expr, loc)
-
-
-def _permanent_assignment(
-    target: Operand, value: Expr, loc: SourceLocation
-) -> PermanentInstruction:
-    """A coil on an absolute bit address, else an assignment (the parser's reading)."""
-    from s7graph.sequencer.text.build import _BIT_ADDRESS
-
-    if not target.quoted and _BIT_ADDRESS.fullmatch(target.name):
-        return Coil("=", target, value, loc)
-    return Assignment(target, value, loc)
 
 
 def _step(s: IecStep, number: int, rows: list[ActionRow]) -> Step:
@@ -610,9 +403,12 @@ def _with(base: Chart, qi: int, field: str, i: int, item: Step | Transition) -> 
     return dataclasses.replace(base, sequences=tuple(seqs))
 
 
-def iec_to_chart(src: IecChart, problems: Problems) -> Chart:
-    """The GRAPH chart of ``src`` (raises ``ImportFailed`` with the located problems)."""
+def iec_to_chart(src: IecChart, problems: Problems) -> tuple[Chart, list[PendingScl]]:
+    """The GRAPH chart of ``src`` and the bodies it keeps for the SCL block (raises
+    ``ImportFailed`` with the located problems)."""
     conv = _Convert(src, problems)
     chart = conv.build()
     assert chart is not None
-    return accepted(chart, problems)
+    chart = accepted(chart, problems)
+    report_stalls(chart, problems, conv.internal(), conv.stall_reasons())
+    return chart, conv.pending.items

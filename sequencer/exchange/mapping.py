@@ -1,5 +1,7 @@
-"""What an IEC 61131-3 SFC construct becomes in GRAPH: the tables the importer reads and
-docs/import-export.md shows (``markdown_tables``).
+"""What a construct of each format becomes in GRAPH, and what a chart becomes in each
+format: the tables the importer reads (qualifiers, types, functions) and the one table of
+every other construct, import and export, that docs/import-export.md shows
+(``markdown_tables``; a test checks the page against it).
 
 Sources: IEC 61131-3 ed.3 §6.7.4 (action qualifiers); matiec's runtime
 (``stage4/generate_c/generate_c_sfc.cc``: an action is active in the call its association says, its
@@ -162,75 +164,236 @@ FUNCTIONS: Final[dict[str, str]] = {
     "DINT_TO_REAL": "DINT_TO_REAL",
 }
 
-# Everything else, for docs/import-export.md: (IEC construct, GRAPH, note).
-CONSTRUCTS: Final[tuple[tuple[str, str, str], ...]] = (
+# Every other construct of every format, for docs/import-export.md: (format, construct, what it
+# becomes, note or why it is refused). "IEC" is PLCopen TC6 XML and textual SFC alike.
+IEC, PLCOPEN, TEXT, TIA = "IEC", "PLCopen", "IEC text", "SimaticML"
+TO_PLCOPEN, TO_TIA = "export → PLCopen", "export → SimaticML"
+CONSTRUCTS: Final[tuple[tuple[str, str, str, str], ...]] = (
     (
+        IEC,
         "step, initial step",
         "STEP / INITIAL_STEP, numbered in the order written",
         "the IEC name is the step's name; s7graph's own export keeps numbers",
     ),
     (
+        IEC,
         "transition with an ST condition",
         "TRANSITION … := condition",
-        "`x = TRUE` → `x`, `x = FALSE` → `NOT x`, `OR(a, b, c)` → `a OR b OR c`",
+        "`x = TRUE` → `x`, `x = FALSE` → `NOT x`, `OR(a, b, c)` → `a OR b OR c`; 1 and 0 "
+        "where a BOOL is expected are TRUE and FALSE (`:= 1` holds)",
     ),
-    ("condition wired from contacts, AND, OR, NOT (LD/FBD)", "the same condition", ""),
-    ("named transition (ST, LD, FBD body)", "its condition", ""),
+    (IEC, "`SEL(G, IN0, IN1)` on BOOLs", "`NOT G AND IN0 OR G AND IN1`", "on other types refused"),
     (
+        IEC,
+        "condition wired from contacts, AND, OR, NOT, SEL (LD/FBD)",
+        "the same condition",
+        "an edge contact is refused (no GRAPH condition form)",
+    ),
+    (IEC, "named transition (ST, LD, FBD body)", "its condition", ""),
+    (
+        PLCOPEN,
+        "transition body of ST statements (CODESYS, TwinCAT)",
+        "`name := expr;` alone: its condition; other statements: kept for the SCL block",
+        "the condition reads an FB variable the SCL block will compute (FALSE until then)",
+    ),
+    (
+        IEC,
         "several transitions from one step",
         "an alternative branch; priority: PRIORITY, then left to right (x), then as written",
         "IEC without priority may switch several paths; GRAPH switches exactly one",
     ),
-    ("`TO (a, b)`, `FROM (a, b)`", "simultaneous divergence, join", ""),
-    ("jump step", "a jump (TO the target step)", "into another chart of the POU too"),
-    ("several charts in one POU", "one SEQUENCE each", "in the order of their first step"),
+    (IEC, "`TO (a, b)`, `FROM (a, b)`", "simultaneous divergence, join", ""),
+    (IEC, "jump step", "a jump (TO the target step)", "into another chart of the POU too"),
+    (IEC, "several charts in one POU", "one SEQUENCE each", "in the order of their first step"),
     (
+        PLCOPEN,
+        "SFC body of an action (TwinCAT, CODESYS)",
+        "a chart of its own, `POU.action`, with the POU's variables",
+        "`--pou` names it in full, by the action or by the POU; GRAPH does not nest charts, "
+        "so a step associating it is reported",
+    ),
+    (
+        IEC,
         "variable (VAR, VAR_INPUT, VAR_OUTPUT, VAR_EXTERNAL)",
         "FB variable (VAR)",
         "a GRAPH FB has no further pins; an external takes its global's value",
     ),
     (
+        IEC,
         "located variable (`AT %IX0.1`)",
         'symbol `"name" : I0.1`',
         "unless it has an "
         "initial value or is an input the chart writes: then an FB variable (S7 re-reads "
         "inputs each cycle and starts outputs at 0)",
     ),
-    ("`x := TRUE` / `x := FALSE` in an action", "`S x` / `R x` (with the qualifier's event)", ""),
-    ("`n := expr` (not a bit) in an action", "`N n := expr`", ""),
+    (IEC, "`x := TRUE` / `x := FALSE` in an action", "`S x` / `R x` (the qualifier's event)", ""),
+    (IEC, "`n := expr` (not a bit) in an action", "`N n := expr`", ""),
     (
+        IEC,
         "`x := bit expression` in an action",
         "PERMANENT AFTER `x := gate AND (…) OR NOT gate AND x`",
         "gate: `Sn.X` (N), a one-call pulse of the step (P); GRAPH writes bits "
         "from conditions only in permanent instructions",
     ),
-    ("set / reset coil of an action network", "PERMANENT AFTER `S x := gate AND …`", ""),
+    (IEC, "set / reset coil of an action network", "PERMANENT AFTER `S x := gate AND …`", ""),
     (
-        "statements of a textual POU body beside its SFC",
-        "PERMANENT BEFORE",
-        "run every call, before the chart",
+        IEC,
+        "an action body with IF, CASE, FOR, WHILE, REPEAT, EXIT, RETURN",
+        "kept whole for the SCL block: `Imported.pending`, a `(* PENDING SCL` comment on the "
+        "step, a warning",
+        "GRAPH rows are single instructions; S7 runs such a body as an SCL FC called from "
+        "the step's row — none of it runs until the chart language has SCL blocks",
     ),
     (
-        "call of a TON, TOF, TP, CTU, CTD or CTUD instance (ST, and FBD action bodies)",
-        "`CALL SFB n, DB m (…)` (in the action's row, or PERMANENT BEFORE from the POU body)",
+        IEC,
+        "`END_IF` (END_CASE …) without `;` (CODESYS)",
+        "read as with it",
+        "",
+    ),
+    (
+        IEC,
+        "an S action on an initial step that nothing resets",
+        "PERMANENT AFTER",
+        "stored from the first call on, for good: it runs every call, after the rows",
+    ),
+    (
+        IEC,
+        "statements of a textual POU body beside its SFC",
+        "PERMANENT BEFORE",
+        "run every call, before the chart (kept for the SCL block when they hold an IF …)",
+    ),
+    (
+        IEC,
+        "call of a TON, TOF, TP, CTU, CTD or CTUD instance",
+        "`CALL SFB n, DB m (…)` (a row of the action's step; permanent from the POU body or "
+        "the chart's network)",
         "each instance an instance DB of its own: the `n` of a name `…_DB<n>` (as "
         "s7graph's PLCopen export writes them), else the next free from DB 100; IEC's `LD` "
         "is S7's `LOAD`; every output not given with `=>` written to an FB variable: "
         "`TON3.Q` reads `TON3_Q`",
     ),
     (
-        "other FB instances (R_TRIG, SR …), and calls in FBD networks of the POU body",
-        "not imported",
-        "the CPU's system blocks are the IEC timers and counters; a read of an output of an "
-        "instance never called is reported; an array element `A[1]` is the FB variable `A_1`",
+        IEC,
+        "call of an R_TRIG, F_TRIG, SR or RS instance",
+        "the bit assignments of its IEC body on FB variables (`E1_Q := E1_CLK AND NOT "
+        "E1_M` …), gated by the step in an action",
+        "the CPU has no system block for them; state starts FALSE as in matiec; CODESYS's "
+        "`SET1`/`RESET`, `SET`/`RESET1` read too",
     ),
-    ("IF, CASE, FOR, WHILE, REPEAT", "not imported", "GRAPH rows are single instructions"),
-    ("IL action bodies", "not imported", ""),
-    ("IL transition conditions, macro steps", "no chart (an error)", "a path needs them"),
     (
+        PLCOPEN,
+        "function blocks drawn in a chart's network (Beremiz)",
+        "called every call in PERMANENT AFTER, in the order the conditions need them",
+        "as Beremiz computes them (the S action `COMPUTE_FUNCTION_BLOCKS` of the first "
+        "initial step); a block no condition reads is reported, as Beremiz does not call it",
+    ),
+    (
+        IEC,
+        "other FB instances, arrays",
+        "not imported",
+        "GRAPH calls the CPU's system blocks; a read of an output of an instance never "
+        "called is reported; an array element `A[1]` is the FB variable `A_1`",
+    ),
+    (
+        IEC,
+        "`x(L, dt)`, `x(D, dt)` with a TIME variable",
+        "`L x, dt` / `D x, dt`",
+        "the name after a timed qualifier is the action time; further names are indicators "
+        "(reported: GRAPH rows have none)",
+    ),
+    (IEC, "IL action bodies", "not imported", ""),
+    (IEC, "IL transition conditions, macro steps", "no chart (an error)", "a path needs them"),
+    (
+        TEXT,
+        "a POU the grammar cannot read (IL, TYPE …) beside a chart",
+        "left out, reported",
+        "the file is read POU by POU when it does not parse as a whole",
+    ),
+    (
+        PLCOPEN,
         "CODESYS entry / active / exit step actions",
         "S1 rows / rows / S0 rows",
         "CODESYS files import with `ORDER := CODESYS` (actions before transitions)",
+    ),
+    (
+        IEC,
+        "a step the chart can never leave",
+        "a warning (I025) at the step",
+        "what its transitions wait for that only the chart could write (an instance never "
+        "called, a body kept for the SCL block), and why nothing writes it",
+    ),
+    (TIA, "steps, transitions, branches, jumps, branch stops", "the same, numbers kept", ""),
+    (TIA, "LAD/FBD conditions, interlocks, supervisions", "conditions", ""),
+    (
+        TIA,
+        "a step's `T`/`U` compared with an untyped tag, an integer or a DInt tag",
+        "a TIME comparison",
+        "TIA compiles them as milliseconds; a DInt tag is declared TIME (reported)",
+    ),
+    (
+        TIA,
+        '`Scope="LocalConstant"`',
+        "its value (the block's Constant section)",
+        "",
+    ),
+    (
+        TIA,
+        '`Scope="GlobalConstant"`',
+        "an FB variable of its name (reported)",
+        "its value lives in the PLC's constants table, which a block export does not carry",
+    ),
+    (
+        TIA,
+        "global tag without an address",
+        "a symbol at a marker address inside the CPU's M area (reported)",
+        "bits from M100.0, wider tags from MB150, then from MB16, never a used byte; M full: "
+        "no chart (I014)",
+    ),
+    (TIA, "action rows", "the same rows (an `Access` with an address keeps it)", ""),
+    (
+        TO_PLCOPEN,
+        "steps, transitions, branches, jumps",
+        "an SFC other IEC tools read",
+        "each step's localId is its number (a transition's 100000 + its number); a step only "
+        "an upward link reaches is drawn hanging on it",
+    ),
+    (
+        TO_PLCOPEN,
+        "permanent instructions",
+        "the body of an inline action stored (S) on the first initial step",
+        "other tools run it every call; BEFORE's results reach the conditions a call "
+        "later there (reported)",
+    ),
+    (
+        TO_PLCOPEN,
+        "interlocks, supervisions, rows without an IEC qualifier, TO STOP, block options",
+        "s7graph's data only (`addData`), each reported",
+        "IEC has no form for them",
+    ),
+    (
+        TO_PLCOPEN,
+        "`CALL SFB n, DB m` of an IEC timer or counter",
+        "the call of instance `TON_DBm`",
+        "",
+    ),
+    (TO_TIA, "the chart", "a GRAPH FB (`Graph/v5`)", "numbers, names, options kept"),
+    (
+        TO_TIA,
+        "action rows",
+        "`Action` tokens; a symbol an `Access` with its informative address",
+        "",
+    ),
+    (
+        TO_TIA,
+        "CALL rows",
+        '`Qualifier="CALL"`, the call in s7graph\'s spelling',
+        "reported: TIA names blocks and instance DBs by symbol",
+    ),
+    (
+        TO_TIA,
+        "permanent CALLs and arithmetic assignments",
+        "refused (an error naming the place)",
+        "a LAD call box is not written here",
     ),
 )
 
@@ -240,7 +403,8 @@ def _row(cells: tuple[str, ...]) -> str:
 
 
 def markdown_tables() -> str:
-    """The tables of docs/import-export.md: qualifiers, then the other constructs."""
+    """The tables of docs/import-export.md: qualifiers, then every other construct of every
+    format (import and export)."""
     lines = [
         "| IEC qualifier | meaning | Boolean action variable | action body |",
         "|---|---|---|---|",
@@ -255,6 +419,6 @@ def markdown_tables() -> str:
             body = "rows every call" if q.body == "" else f"`{q.body}` rows"
         note = f" ({q.why})" if q.why else ""
         lines.append(_row((f"`{q.iec}`", q.meaning, var, body + note)))
-    lines += ["", "| IEC construct | GRAPH | note |", "|---|---|---|"]
+    lines += ["", "| format | construct | becomes | note |", "|---|---|---|---|"]
     lines += [_row(c) for c in CONSTRUCTS]
     return "\n".join(lines)

@@ -8,7 +8,15 @@ NOT, GT GE EQ NE LE LT, ADD SUB MUL DIV MOD, MOVE) is the operator, an output of
 block instance (``TON3.Q``) is that instance's member, a continuation is its connector's
 input. A network's statements (``statements``) are its coils (set/reset coils as such),
 output variables and inout variables, in execution order, and its calls of function
-block instances (which the importer reports, as GRAPH does not call them).
+block instances with their wired inputs. ``SEL`` is the function call ``SEL(G, IN0, IN1)``
+(the importer maps it on BOOLs).
+
+The network of an SFC body: reading a condition wired from an output of a function block
+instance (``TON3.Q``) computes that instance — its inputs first, depth first — as Beremiz
+does (``PLCGenerator``: the blocks a condition needs become the action
+``COMPUTE_FUNCTION_BLOCKS``, stored on the first initial step); ``calls`` holds those calls
+in that order, each instance once, and an instance output read while the instance is being
+computed is its stored value, not a feedback loop.
 """
 
 from __future__ import annotations
@@ -18,6 +26,7 @@ from dataclasses import dataclass, field
 from s7graph.sequencer.exchange.st import (
     SAssign,
     SBinary,
+    SCall,
     SCallStmt,
     SExpr,
     SLiteral,
@@ -69,6 +78,8 @@ class Network:
     file: str
     by_id: dict[str, Node] = field(init=False)
     connectors: dict[str, Node] = field(init=False)
+    calls: list[SCallStmt] = field(init=False, default_factory=list)
+    computed: set[str] = field(init=False, default_factory=set)  # instance block localIds
 
     def __post_init__(self) -> None:
         self.by_id = {n.get("localId"): n for n in self.root.children if n.get("localId")}
@@ -99,6 +110,8 @@ class Network:
         node = self.by_id.get(ref)
         if node is None:
             raise ElementError(f"a connection to element {ref}, which does not exist", conn)
+        if node.tag == "block" and node.get("instanceName"):
+            return self.instance_output(node, conn.get("formalParameter"), seen)
         if ref in seen:
             raise ElementError("a feedback loop in the network", node)
         seen = seen | {ref}
@@ -145,27 +158,57 @@ class Network:
             raise ElementError(f"a {node.tag} without a variable", node)
         return self.expression(var, var.text.strip())
 
-    def inputs(self, block: Node, seen: frozenset[str]) -> list[tuple[str, SExpr]]:
+    def inputs(
+        self, block: Node, seen: frozenset[str], *, optional: bool = False
+    ) -> list[tuple[str, SExpr]]:
+        """The wired inputs of ``block`` (``optional``: an unconnected one is left out, as
+        an FB call leaves out a parameter; a function needs every input)."""
         out: list[tuple[str, SExpr]] = []
         holder = block.child("inputVariables")
         for v in holder.all("variable") if holder is not None else []:
-            value = self.value_of(v.child("connectionPointIn"), seen)
+            point = v.child("connectionPointIn")
+            if optional and (point is None or not point.all("connection")):
+                continue
+            value = self.value_of(point, seen)
             if v.get("negated") == "true":
                 value = _not(value, v)
             out.append((v.get("formalParameter"), value))
         return out
 
+    def instance_output(self, node: Node, output: str, seen: frozenset[str]) -> SExpr:
+        """An output of a function block instance: the instance is called first (once,
+        its inputs computed depth first), then its output is read."""
+        ref = node.get("localId")
+        if ref not in self.computed:
+            self.computed.add(ref)
+            self.calls.append(self.call_of(node, seen | {ref}))
+        return SName((node.get("instanceName"), output or "Q"), node.line, node.col)
+
+    def call_of(self, node: Node, seen: frozenset[str]) -> SCallStmt:
+        """The call of the instance block ``node`` with its wired inputs."""
+        holder = node.child("inputVariables")
+        for v in holder.all("variable") if holder is not None else []:
+            point = v.child("connectionPointIn")
+            if v.get("formalParameter").upper() == "EN" and point and point.all("connection"):
+                raise ElementError(
+                    f"block {node.get('instanceName')}: a wired EN input (a conditional call)", v
+                )
+        inputs = [
+            (pin, value)
+            for pin, value in self.inputs(node, seen, optional=True)
+            if pin.upper() != "EN"
+        ]
+        return SCallStmt(node.get("instanceName"), tuple(inputs), (), node.line, node.col)
+
     def block(self, node: Node, output: str, seen: frozenset[str]) -> SExpr:
         type_name = node.get("typeName").upper()
-        instance = node.get("instanceName")
-        if instance:
-            member = output or "Q"
-            return SName((instance, member), node.line, node.col)
         args = [v for _, v in self.inputs(node, seen)]
         if type_name == "NOT" and len(args) == 1:
             return _not(args[0], node)
         if type_name == "MOVE" and len(args) == 1:
             return args[0]
+        if type_name == "SEL" and len(args) == 3:
+            return SCall("SEL", tuple(("", a) for a in args), node.line, node.col)
         op = _OPERATORS.get(type_name)
         if op is None or len(args) < 2:
             raise ElementError(
@@ -177,15 +220,25 @@ class Network:
         return out
 
     def statements(self) -> list[SStmt]:
-        """What the network writes, in execution order (then as written)."""
-        items: list[tuple[int, int, SStmt]] = []
+        """What the network writes, in Beremiz's order: the elements with an execution order
+        first (by it), then the coils and output variables, then the function block
+        instances not called yet, each group top to bottom, then left to right; the calls
+        of the instances an element reads go just before it."""
+        ordered: list[tuple[tuple[int, int, int], Node]] = []
         for i, node in enumerate(self.root.children):
+            if node.tag not in ("coil", "outVariable", "inOutVariable", "block"):
+                continue
             order = int(node.get("executionOrderId", "0") or 0)
+            group = 0 if order > 0 else (2 if node.tag == "block" else 1)
+            ordered.append(((group, order or _top_left(node), i), node))
+        out: list[SStmt] = []
+        for _, node in sorted(ordered, key=lambda item: item[0]):
+            start = len(self.calls)
             stmt = self.statement(node)
+            out += self.calls[start:]
             if stmt is not None:
-                items.append((order, i, stmt))
-        items.sort(key=lambda t: (t[0], t[1]))
-        return [s for _, _, s in items]
+                out.append(stmt)
+        return out
 
     def statement(self, node: Node) -> SStmt | None:
         tag = node.tag
@@ -214,7 +267,10 @@ class Network:
                 value = _not(value, node)
             return SAssign(target, value, node.line, node.col)
         if tag == "block" and node.get("instanceName"):
-            return SCallStmt(node.get("instanceName"), (), (), node.line, node.col)
+            if node.get("localId") in self.computed:
+                return None
+            self.computed.add(node.get("localId"))
+            return self.call_of(node, frozenset({node.get("localId")}))
         return None
 
     def output_named(self, name: str) -> SExpr | None:
@@ -230,3 +286,15 @@ class Network:
                 if label.upper() == name.upper():
                     return self.value_of(node.child("connectionPointIn"))
         return None
+
+
+def _top_left(node: Node) -> int:
+    """A sort key: top to bottom, then left to right (Beremiz's order of unordered elements)."""
+    pos = node.child("position")
+    if pos is None:
+        return 0
+    x, y = pos.get("x", "0"), pos.get("y", "0")
+    try:
+        return int(float(y)) * 100_000 + int(float(x))
+    except ValueError:
+        return 0

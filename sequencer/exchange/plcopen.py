@@ -22,6 +22,7 @@ from s7graph.sequencer.exchange.iec_model import (
     IecStep,
     IecTransition,
     IecVar,
+    StatementBody,
     Unsupported,
 )
 from s7graph.sequencer.exchange.networks import Network
@@ -29,16 +30,16 @@ from s7graph.sequencer.exchange.problems import Problems
 from s7graph.sequencer.exchange.st import (
     SExpr,
     SLiteral,
-    SStmt,
     StSyntaxError,
     parse_expression,
     parse_statements,
 )
 from s7graph.sequencer.exchange.xmltree import ElementError, Node
 
-__all__ = ["S7GRAPH_DATA", "read_plcopen"]
+__all__ = ["S7GRAPH_DATA", "TRANSITION_IDS", "read_plcopen"]
 
 S7GRAPH_DATA = "urn:s7graph:chart"
+TRANSITION_IDS = 100_000  # s7graph's export: a transition's localId is this plus its number
 CODESYS_DATA = "http://www.3s-software.com/plcopenxml/sfc/element"
 _CODESYS_STEP_ACTIONS = {
     "a6b08bd8-b696-47e3-9cbf-7408b61c9ff8": "entry",
@@ -219,28 +220,27 @@ class _Reader:
                 return found
         return None
 
-    def statements(
-        self, name: str, holder: Node
-    ) -> tuple[list[SStmt] | Unsupported, tuple[int, int]]:
+    def statements(self, name: str, holder: Node, loc: SourceLocation) -> IecAction:
+        """Action ``name`` of the body ``holder`` (a ``body`` or an ``inline``)."""
         lang = self.body_of(holder)
         if lang is None:
-            return Unsupported("an empty or unknown action body", self.at(holder)), (1, 1)
+            return IecAction(name, Unsupported("an empty or unknown action body", loc), loc)
         if lang.tag == "ST":
             text, origin = self.st_text(lang)
             try:
-                return parse_statements(text, self.file, origin, f"action {name}"), origin
+                stmts = parse_statements(text, self.file, origin, f"action {name}")
+                return IecAction(name, stmts, loc, origin, text)
             except StSyntaxError as exc:
                 where = exc.where if isinstance(exc.where, SourceLocation) else self.at(lang)
-                return Unsupported(f"ST that does not parse ({exc.message})", where), origin
+                what = Unsupported(f"ST that does not parse ({exc.message})", where)
+                return IecAction(name, what, loc, origin, text)
         if lang.tag in ("LD", "FBD"):
             try:
-                return Network(lang, self.file).statements(), (1, 1)
+                return IecAction(name, Network(lang, self.file).statements(), loc)
             except ElementError as exc:
-                return Unsupported(f"a {lang.tag} network with {exc.message}", self.at(exc.node)), (
-                    1,
-                    1,
-                )
-        return Unsupported(f"an {lang.tag} body", self.at(lang)), (1, 1)
+                what = Unsupported(f"a {lang.tag} network with {exc.message}", self.at(exc.node))
+                return IecAction(name, what, loc)
+        return IecAction(name, Unsupported(f"an {lang.tag} body", self.at(lang)), loc)
 
     def actions(self, pou: Node) -> dict[str, IecAction]:
         out: dict[str, IecAction] = {}
@@ -248,16 +248,15 @@ class _Reader:
         for a in holder.all("action") if holder is not None else []:
             body = a.child("body")
             name = a.get("name")
-            if body is None:
-                continue
-            stmts, origin = self.statements(name, body)
-            out[name.upper()] = IecAction(name, stmts, self.at(a), origin)
+            if body is None or _sfc_of(a) is not None:
+                continue  # an action's chart is a chart of its own
+            out[name.upper()] = self.statements(name, body, self.at(a))
         return out
 
     def named_transitions(
         self, pou: Node
-    ) -> dict[str, tuple[SExpr | Unsupported, tuple[int, int]]]:
-        out: dict[str, tuple[SExpr | Unsupported, tuple[int, int]]] = {}
+    ) -> dict[str, tuple[SExpr | Unsupported | StatementBody, tuple[int, int]]]:
+        out: dict[str, tuple[SExpr | Unsupported | StatementBody, tuple[int, int]]] = {}
         holder = pou.child("transitions")
         for t in holder.all("transition") if holder is not None else []:
             name = t.get("name")
@@ -270,10 +269,19 @@ class _Reader:
                 )
             elif lang.tag == "ST":
                 text, origin = self.st_text(lang)
-                out[name.upper()] = (self.st_condition(text, origin, lang), origin)
+                out[name.upper()] = (self.st_condition(text, origin, lang, name), origin)
             elif lang.tag in ("LD", "FBD"):
                 try:
-                    value = Network(lang, self.file).output_named(name)
+                    network = Network(lang, self.file)
+                    value = network.output_named(name)
+                    for call in network.calls:
+                        self.p.warn(
+                            "I022",
+                            f"transition {name}: its {lang.tag} body calls {call.name}, "
+                            "which is not imported (a condition calls no block); its "
+                            "outputs keep the values the chart's own calls give them",
+                            SourceLocation(self.file, call.line, call.col),
+                        )
                 except ElementError as exc:
                     value = None
                     out[name.upper()] = (
@@ -298,8 +306,11 @@ class _Reader:
                 )
         return out
 
-    def st_condition(self, text: str, origin: tuple[int, int], node: Node) -> SExpr | Unsupported:
-        """A condition in ST; a named transition's body may read ``:= expr;``."""
+    def st_condition(
+        self, text: str, origin: tuple[int, int], node: Node, name: str = ""
+    ) -> SExpr | Unsupported | StatementBody:
+        """A condition in ST; a named transition's body may read ``:= expr;``, or be
+        statements that assign the transition's name (CODESYS, TwinCAT)."""
         body = text.strip()
         lead = len(text) - len(text.lstrip())
         if body.startswith(":="):
@@ -310,17 +321,34 @@ class _Reader:
         try:
             return parse_expression(pad + body, self.file, origin, "condition")
         except StSyntaxError as exc:
+            try:
+                stmts = parse_statements(text, self.file, origin, "transition")
+            except StSyntaxError:
+                stmts = []
+            if stmts and name:
+                return StatementBody(name, stmts, text, self.at(node), origin)
             where = exc.where if isinstance(exc.where, SourceLocation) else self.at(node)
             return Unsupported(f"a condition that does not parse ({exc.message})", where)
 
     # ------------------------------------------------------------ the chart
 
-    def chart(self, pou: Node, sfc: Node) -> IecChart:
+    def chart(self, pou: Node, sfc: Node, name: str = "") -> IecChart:
+        """The chart of the SFC body ``sfc`` of ``pou`` (or of one of its actions: ``name``
+        ``POU.action``), with the POU's variables, actions and transitions."""
         chart = IecChart(
-            pou.get("name"), pou.get("pouType", "program"), self.at(pou), dialect=self.dialect
+            name or pou.get("name"),
+            pou.get("pouType", "program"),
+            self.at(pou),
+            dialect=self.dialect,
         )
         chart.vars = self.interface(pou)
         chart.actions = self.actions(pou)
+        holder = pou.child("actions")
+        chart.sfc_actions = {
+            a.get("name").upper()
+            for a in (holder.all("action") if holder is not None else [])
+            if _sfc_of(a) is not None
+        }
         named = self.named_transitions(pou)
         net = Network(sfc, self.file)
         by_id = net.by_id
@@ -337,14 +365,6 @@ class _Reader:
                     f"macro step {el.get('name')} is not imported (GRAPH has no macro steps)",
                     self.at(el),
                 )
-            elif el.tag == "block" and el.get("instanceName"):
-                self.p.warn(
-                    "I022",
-                    f"block {el.get('instanceName')} : {el.get('typeName')} of "
-                    "the chart's network is not called (GRAPH calls blocks with an "
-                    "instance DB)",
-                    self.at(el),
-                )
         steps = {s.name.upper(): s for s in chart.steps}
         for el in sfc.children:
             if el.tag == "actionBlock":
@@ -353,10 +373,44 @@ class _Reader:
             t = self.transition(el, order, by_id, refs, named, net)
             if t is not None:
                 chart.transitions.append(t)
+        self.computed_blocks(chart, sfc, net)
         return chart
+
+    def computed_blocks(self, chart: IecChart, sfc: Node, net: Network) -> None:
+        """The function block instances of the chart's network that its conditions read
+        are called every call, as Beremiz calls them: the action ``COMPUTE_FUNCTION_BLOCKS``
+        stored (S) on the first initial step, in the order the conditions need them; an
+        instance no condition reads is not computed by Beremiz either (reported)."""
+        for el in sfc.children:
+            if (
+                el.tag == "block"
+                and el.get("instanceName")
+                and el.get("localId") not in net.computed
+            ):
+                self.p.warn(
+                    "I024",
+                    f"block {el.get('instanceName')} : {el.get('typeName')} of the chart's "
+                    "network feeds no transition; Beremiz does not call it either: not "
+                    "imported",
+                    self.at(el),
+                )
+        if not net.calls:
+            return
+        first = next((s for s in chart.steps if s.initial), None)
+        if first is None:
+            return  # no chart anyway: the import says so
+        name = "COMPUTE_FUNCTION_BLOCKS"
+        while name.upper() in chart.actions:
+            name += "_"
+        loc = SourceLocation(self.file, net.calls[0].line, net.calls[0].col)
+        chart.actions[name.upper()] = IecAction(name, list(net.calls), loc)
+        first.associations.append(IecAssociation(name, "S", loc))
 
     def step(self, el: Node) -> IecStep:
         step = IecStep(el.get("name"), el.get("initialStep") == "true", self.at(el))
+        if self.dialect == "s7graph" and el.get("localId").isdigit():
+            number = int(el.get("localId"))  # s7graph's export: a step's localId is its number
+            step.graph_number = number if 0 < number < TRANSITION_IDS else None
         for attr in el.iter("attribute"):
             phase = _CODESYS_STEP_ACTIONS.get(attr.get("guid").strip("{}"))
             name = attr.text.strip()
@@ -395,9 +449,8 @@ class _Reader:
                 assoc.action = ref.get("name")
             elif inline is not None:
                 name = f"{step.name}_inline{i + 1}"
-                body, origin = self.statements(name, inline)
                 assoc.action = name
-                assoc.inline = IecAction(name, body, self.at(inline), origin)
+                assoc.inline = self.statements(name, inline, self.at(inline))
             else:
                 self.p.warn("I021", "an action without reference or body; not imported", self.at(a))
                 continue
@@ -440,7 +493,7 @@ class _Reader:
         order: int,
         by_id: dict[str, Node],
         refs: dict[str, list[Node]],
-        named: dict[str, tuple[SExpr | Unsupported, tuple[int, int]]],
+        named: dict[str, tuple[SExpr | Unsupported | StatementBody, tuple[int, int]]],
         net: Network,
     ) -> IecTransition | None:
         try:
@@ -465,11 +518,13 @@ class _Reader:
         for attr in el.iter("attribute"):
             if attr.get("guid").strip("{}") == _CODESYS_PRIORITY and attr.text.strip().isdigit():
                 priority = priority or attr.text.strip()
+        number = int(el.get("localId")) - TRANSITION_IDS if el.get("localId").isdigit() else 0
         return IecTransition(
             sources,
             [n for n, _ in targets],
             cond,
             self.at(el),
+            graph_number=number if self.dialect == "s7graph" and 0 < number < 100_000 else None,
             name=el.get("name"),
             priority=int(priority) if priority and priority.lstrip("-").isdigit() else None,
             x=float(pos.get("x")) if pos is not None and pos.get("x") else None,
@@ -479,8 +534,11 @@ class _Reader:
         )
 
     def condition(
-        self, el: Node, named: dict[str, tuple[SExpr | Unsupported, tuple[int, int]]], net: Network
-    ) -> tuple[SExpr | Unsupported, tuple[int, int]]:
+        self,
+        el: Node,
+        named: dict[str, tuple[SExpr | Unsupported | StatementBody, tuple[int, int]]],
+        net: Network,
+    ) -> tuple[SExpr | Unsupported | StatementBody, tuple[int, int]]:
         cond = el.child("condition")
         if cond is None:
             return Unsupported("a transition without a condition", self.at(el)), (1, 1)
@@ -517,14 +575,27 @@ def _connections(el: Node) -> list[Node]:
     return [c for p in el.all("connectionPointIn") for c in p.all("connection")]
 
 
+def _sfc_of(holder: Node) -> Node | None:
+    """The SFC body of a POU or an action (``<body><SFC>``), or None."""
+    return next((b.child("SFC") for b in holder.all("body") if b.child("SFC") is not None), None)
+
+
 def read_plcopen(root: Node, problems: Problems) -> list[IecChart | tuple[str, int, int, str]]:
-    """Every POU with an SFC body: an ``IecChart``, or the `.s7g` source s7graph wrote
+    """Every SFC body: a POU's (a chart named after the POU), an action's (TwinCAT and
+    CODESYS draw charts in actions: one named ``POU.action``, with the POU's variables,
+    actions and transitions) — an ``IecChart`` each — or the `.s7g` source s7graph wrote
     (text, line, col, POU name)."""
     reader = _Reader(root, problems)
     out: list[IecChart | tuple[str, int, int, str]] = []
     for pou in root.iter("pou"):
-        sfc = next((b.child("SFC") for b in pou.all("body") if b.child("SFC") is not None), None)
-        if sfc is None:
+        sfc = _sfc_of(pou)
+        holder = pou.child("actions")
+        in_actions = [
+            (a, found)
+            for a in (holder.all("action") if holder is not None else [])
+            if (found := _sfc_of(a)) is not None
+        ]
+        if sfc is None and not in_actions:
             langs = {c.tag for b in pou.all("body") for c in b.children}
             problems.warn(
                 "I024",
@@ -537,7 +608,21 @@ def read_plcopen(root: Node, problems: Problems) -> list[IecChart | tuple[str, i
         if source is not None:
             out.append((*source, pou.get("name")))
             continue
-        out.append(reader.chart(pou, sfc))
+        if sfc is not None:
+            out.append(reader.chart(pou, sfc))
+        elif pou.all("body"):
+            langs = {c.tag for b in pou.all("body") for c in b.children}
+            charts = ", ".join(f"{pou.get('name')}.{a.get('name')}" for a, _ in in_actions)
+            problems.warn(
+                "I024",
+                f"the {'/'.join(sorted(langs))} body of POU {pou.get('name')} is not "
+                f"imported; the charts of its actions are, each on its own ({charts})",
+                reader.at(pou),
+            )
+        for action, body in in_actions:
+            chart = reader.chart(pou, body, f"{pou.get('name')}.{action.get('name')}")
+            chart.loc = reader.at(action)
+            out.append(chart)
     for conf in root.iter("configuration"):
         problems.warn(
             "I024",

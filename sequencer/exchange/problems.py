@@ -1,9 +1,11 @@
-"""What an import reports: one table of codes, and the exception that carries the list.
+"""What an import or an export reports: one table of codes, and the exception that carries
+the list.
 
 An import yields a chart or, when no chart can be built, ``ImportFailed`` with every problem
 found, each located in the source file (``file:line:col``). Constructs that have no exact
 GRAPH equivalent are left out of the chart and reported as warnings (``I02x``): nothing is
-dropped without a line saying what and where.
+dropped without a line saying what and where. An export reports (``X01x``) what of the chart
+the format's other readers do not see, or run otherwise.
 """
 
 from __future__ import annotations
@@ -27,16 +29,22 @@ CODES: Final[dict[str, str]] = {
     "I011": "a transition without preceding or following step",
     "I012": "a condition or expression that does not parse",
     "I013": "a chart shape GRAPH cannot hold",
+    "I014": "an address the import must allocate does not fit the CPU's memory",
     # not imported (the chart is built without it)
     "I020": "an IEC action qualifier without an exact GRAPH equivalent",
     "I021": "an ST statement or action body without an exact GRAPH equivalent",
     "I022": "a network element or block without an exact GRAPH equivalent",
     "I023": "a variable, type or address without an exact GRAPH equivalent",
     "I024": "a part of the file the chart does not use (configuration, other POUs ...)",
+    "I025": "a step the chart can never leave: what its transitions wait for, nothing writes",
     # mapped, with a difference worth knowing
     "I030": "a name changed to be a valid GRAPH name",
     "I031": "an IEC and a GRAPH rule differ here; the GRAPH rule applies",
     "I032": "an address the export does not give; one was allocated",
+    # export: what the format's other readers do not see or run otherwise
+    "X010": "a chart part other tools do not see (kept in s7graph's own data only)",
+    "X011": "a chart part other tools run otherwise",
+    "X012": "a chart part written in s7graph's spelling, which other tools may not read",
 }
 
 

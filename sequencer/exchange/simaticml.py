@@ -14,9 +14,10 @@ names, transitions their numbers, names and order.
 * The FB's attributes: ``SkipSteps``, ``AcknowledgeErrorsRequired``, ``WithAlarmHandling``
   (messages); its parameter set is the set whose pins the interface holds. Static members
   of elementary types are FB variables.
-* Global tags: a block export does not carry the tag table. Tags found in the symbol
-  table given keep their addresses there; the others are declared with an allocated
-  marker address (reported), which the user replaces with the tag table's.
+* Operands, global tags (a block export does not carry the tag table: tags found in the
+  symbol table given keep their addresses there, the others get marker addresses within
+  the CPU's M area, reported, which the user replaces with the tag table's) and named
+  constants: ``exchange.tia_operands``.
 """
 
 from __future__ import annotations
@@ -28,8 +29,12 @@ from s7graph.engine.errors import LiteralError, S7Error, SourceLocation
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.exchange.export_simaticml import S7GRAPH_COMMENT
 from s7graph.sequencer.exchange.flgnet import read_network
+from s7graph.sequencer.exchange.iec_actions import permanent_assignment
 from s7graph.sequencer.exchange.iec_to_chart import accepted, const
+from s7graph.sequencer.exchange.markers import used_bytes
 from s7graph.sequencer.exchange.problems import Problems
+from s7graph.sequencer.exchange.stalls import report_stalls
+from s7graph.sequencer.exchange.tia_operands import TIA_TYPES, TiaOperands
 from s7graph.sequencer.exchange.xmltree import ElementError, Node
 from s7graph.sequencer.params import PARAMETER_SETS, pins_for
 from s7graph.sequencer.text.model import (
@@ -44,158 +49,17 @@ from s7graph.sequencer.text.model import (
     PermanentInstruction,
     Sequence,
     Step,
-    StepAttr,
-    SymbolDecl,
-    TransAttr,
     Transition,
     VarDecl,
 )
 from s7graph.sequencer.text.parse import ChartSyntaxError, parse_chart
+from s7graph.sequencer.text.walk import nodes
 
 __all__ = ["TIA_TYPES", "read_simaticml"]
 
-# TIA data types → S7 types of the chart model.
-TIA_TYPES = {
-    "BOOL": "BOOL",
-    "BYTE": "BYTE",
-    "WORD": "WORD",
-    "DWORD": "DWORD",
-    "INT": "INT",
-    "DINT": "DINT",
-    "REAL": "REAL",
-    "TIME": "TIME",
-    "S5TIME": "S5TIME",
-    "DATE": "DATE",
-    "TIME_OF_DAY": "TIME_OF_DAY",
-    "TOD": "TIME_OF_DAY",
-    "CHAR": "CHAR",
-    "STRING": "STRING",
-    "DATE_AND_TIME": "DATE_AND_TIME",
-    "DTL": "",
-}
-_AREAS = {"Input": "I", "Output": "Q", "Memory": "M"}
-_WIDTH = {
-    "BOOL": "",
-    "BYTE": "B",
-    "CHAR": "B",
-    "WORD": "W",
-    "INT": "W",
-    "S5TIME": "W",
-    "DWORD": "D",
-    "DINT": "D",
-    "REAL": "D",
-    "TIME": "D",
-}
 
-
-class _Alloc:
-    """Marker addresses for tags the export names without an address: bits from M100.0,
-    bytes, words and double words from MB150."""
-
-    def __init__(self) -> None:
-        self.bit = 800
-        self.byte = 150
-
-    def take(self, type_name: str) -> str:
-        width = _WIDTH.get(type_name, "W")
-        if width == "":
-            n, self.bit = self.bit, self.bit + 1
-            return f"M{n // 8}.{n % 8}"
-        size = {"B": 1, "W": 2, "D": 4}[width]
-        if size > 1 and self.byte % 2:
-            self.byte += 1
-        n, self.byte = self.byte, self.byte + size
-        return f"M{width}{n}"
-
-
-class _Reader:
-    def __init__(self, fb: Node, problems: Problems, symbols: SymbolTable | None) -> None:
-        self.fb = fb
-        self.p = problems
-        self.file = problems.file
-        self.known = symbols
-        self.symbols: dict[str, SymbolDecl] = {}
-        self.types: dict[str, str] = {}  # symbol → type seen
-        self.alloc = _Alloc()
-        self.vars: dict[str, VarDecl] = {}
-        self.step_names: dict[str, int] = {}
-        self.trans_names: dict[str, int] = {}
-
-    def at(self, node: Node) -> SourceLocation:
-        return node.loc(self.file)
-
-    def attr(self, name: str) -> str:
-        node = self.fb.find("AttributeList", name)
-        return node.text.strip() if node is not None else ""
-
-    # ------------------------------------------------------------ operands
-
-    def symbol(
-        self, name: str, type_name: str | None, node: Node, informative: str = "", address: str = ""
-    ) -> Operand:
-        """A global tag: the symbol table's if it knows it, else declared in the chart (at
-        the export's informative address, or at an allocated one)."""
-        if self.known is not None and self.known.lookup(name) is not None:
-            return Operand(name, True, self.at(node))
-        if type_name:
-            self.types.setdefault(name, type_name)
-        old = self.symbols.get(name)
-        if old is None or (address and not old.address):
-            self.symbols[name] = SymbolDecl(
-                name, address, type_name or "", informative, self.at(node)
-            )
-        return Operand(name, True, self.at(node))
-
-    def access(self, node: Node, want: str | None) -> Expr:
-        scope = node.get("Scope")
-        loc = self.at(node)
-        if scope in ("LiteralConstant", "TypedConstant"):
-            value = node.find("Constant", "ConstantValue")
-            text = value.text.strip() if value is not None else ""
-            ctype = node.find("Constant", "ConstantType")
-            if ctype is not None and ctype.text.strip().upper() == "BOOL":
-                text = text.upper()
-            try:
-                return const(text, loc)
-            except (LiteralError, S7Error):
-                raise ElementError(f"constant {text!r} has no GRAPH form", node) from None
-        sym = node.child("Symbol")
-        if sym is None:
-            address = node.child("Address")
-            if address is not None and scope == "GlobalVariable":
-                return Operand(self.absolute(address, node), False, loc)
-            raise ElementError(f"an operand of scope {scope} the importer does not read", node)
-        parts = [_component(c) for c in sym.all("Component")]
-        addr = sym.child("Address")
-        t = addr.get("Type").upper() if addr is not None else None
-        if scope == "LocalVariable":
-            if len(parts) == 2 and parts[0] in self.step_names and parts[1] in ("X", "T", "U"):
-                return StepAttr(self.step_names[parts[0]], parts[1], loc)  # type: ignore[arg-type]
-            if len(parts) == 2 and parts[0] in self.trans_names and parts[1] == "TT":
-                return TransAttr(self.trans_names[parts[0]], "TT", loc)
-            if len(parts) == 1:
-                return Operand(parts[0], False, loc)
-            raise ElementError(
-                f"#{'.'.join(parts)} is not an FB variable, step or transition attribute", node
-            )
-        informative, where = "", ""
-        if addr is not None and addr.get("BlockNumber") and addr.get("BitOffset"):
-            informative = f"TIA: DB{addr.get('BlockNumber')} bit offset {addr.get('BitOffset')}"
-        elif addr is not None and addr.get("Area") in _AREAS:
-            where = self.absolute(addr, node)
-        return self.symbol(
-            ".".join(parts), TIA_TYPES.get(t or "") or want, node, informative, where
-        )
-
-    def absolute(self, address: Node, at: Node) -> str:
-        area = _AREAS.get(address.get("Area"))
-        offset = address.get("BitOffset")
-        t = TIA_TYPES.get(address.get("Type").upper(), "")
-        if area is None or not offset.isdigit() or t not in _WIDTH:
-            raise ElementError("an absolute address the importer does not read", at)
-        n = int(offset)
-        width = _WIDTH[t]
-        return f"{area}{n // 8}.{n % 8}" if width == "" else f"{area}{width}{n // 8}"
+class _Reader(TiaOperands):
+    """A GRAPH FB of a SimaticML document: its block, sequences and rows."""
 
     def network(self, holder: Node | None) -> list[tuple[Node, Expr | None]]:
         net = holder.child("FlgNet") if holder is not None else None
@@ -218,6 +82,7 @@ class _Reader:
                 pieces.append(c.get("Text"))
             elif c.tag == "Access":
                 pieces.append(self.access_text(c))
+                self.action_tag(c)
         text = "".join(pieces).strip()
         qualifier = action.get("Qualifier")
         if not text and not qualifier:
@@ -281,20 +146,10 @@ class _Reader:
                     return t
         return None
 
-    def access_text(self, node: Node) -> str:
-        scope = node.get("Scope")
-        sym = node.child("Symbol")
-        if sym is not None:
-            parts = [_component(c) for c in sym.all("Component")]
-            if scope == "LocalVariable":
-                return "#" + ".".join(parts)
-            return '"' + ".".join(parts) + '"'
-        value = node.find("Constant", "ConstantValue")
-        return value.text.strip() if value is not None else ""
-
     # ------------------------------------------------------------ the block
 
     def variables(self) -> None:
+        self.block_constants()
         for section in self.fb.iter("Section"):
             if section.get("Name") != "Static" or section.parent is None:
                 continue
@@ -394,7 +249,14 @@ class _Reader:
         sequences = tuple(self.sequence(q, i + 1) for i, q in enumerate(seq_nodes))
         after = self.permanent(graph.child("PostOperations"))
         self.p.fail_if_errors()
-        symbols = self.finish_symbols()
+        used = {
+            b
+            for n in nodes((before, sequences, after))
+            if isinstance(n, Operand) and not n.quoted
+            for b in used_bytes(n.name)
+        }
+        symbols = self.finish_symbols(used)
+        self.p.fail_if_errors()
         name = self.attr("Name") or "GRAPH"
         number = self.attr("Number")
         db = self.kept().get("DB")
@@ -411,29 +273,15 @@ class _Reader:
             file=self.file,
             loc=self.at(self.fb),
         )
-        return accepted(chart, self.p, self.known)
-
-    def finish_symbols(self) -> tuple[SymbolDecl, ...]:
-        out: list[SymbolDecl] = []
-        allocated = 0
-        for name, s in self.symbols.items():
-            t = s.type or self.types.get(name, "BOOL")
-            if s.address:
-                out.append(SymbolDecl(name, s.address, t, "", s.loc))
-                continue
-            address = self.alloc.take(t)
-            allocated += 1
-            comment = s.comment or "TIA tag"
-            out.append(SymbolDecl(name, address, t, f"{comment}; address allocated", s.loc))
-        if allocated:
-            self.p.warn(
-                "I032",
-                f"{allocated} global tag(s) have no address in a block export; "
-                "they are declared at allocated marker addresses (M100.0…, MW150…): "
-                "give the tag table with --symbols",
-                self.at(self.fb),
-            )
-        return tuple(out)
+        chart = accepted(chart, self.p, self.known)
+        constants = {v.upper() for v in self.constant_vars.values()}
+        why = {
+            graph.upper(): f"is the constant {name}, whose value the export does not carry "
+            "(it starts at 0)"
+            for name, graph in self.constant_vars.items()
+        }
+        report_stalls(chart, self.p, constants, why)
+        return chart
 
     def permanent(self, holder: Node | None) -> tuple[PermanentInstruction, ...]:
         out: list[PermanentInstruction] = []
@@ -468,9 +316,7 @@ class _Reader:
         value = cond if cond is not None else Const(True, "BOOL", "TRUE", self.at(coil))
         kind = {"SCoil": "S", "RCoil": "R"}.get(coil.get("Name"), "=")
         if kind == "=":
-            from s7graph.sequencer.exchange.iec_to_chart import _permanent_assignment
-
-            return _permanent_assignment(target, value, self.at(coil))
+            return permanent_assignment(target, value, self.at(coil))
         return Coil(kind, target, value, self.at(coil))  # type: ignore[arg-type]
 
     def step(self, s: Node) -> Step:
@@ -638,13 +484,6 @@ class _Links:
             for i, t in zip(idxs, ordered, strict=True):
                 out[i] = t
         return out
-
-
-def _component(c: Node) -> str:
-    """A tag path component; an array index (``AccessModifier="Array"``) as ``[i]``."""
-    index = [a.find("Constant", "ConstantValue") for a in c.all("Access")]
-    text = ",".join(i.text.strip() for i in index if i is not None)
-    return f"{c.get('Name')}[{text}]" if text else c.get("Name")
 
 
 def _operands(e: Expr) -> list[Operand]:

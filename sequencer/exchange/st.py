@@ -15,7 +15,7 @@ from functools import cache
 from pathlib import Path
 from typing import Any
 
-from lark import Lark, Token, Transformer, v_args
+from lark import Lark, Token, Transformer, Tree, v_args
 from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken, VisitError
 
 from s7graph.engine.errors import S7Error, SourceLocation
@@ -141,11 +141,16 @@ class SCallStmt:
 
 @dataclass(frozen=True, slots=True)
 class SOther:
-    """A statement the importer does not map (``IF``, ``CASE``, ``FOR`` ...)."""
+    """A statement a GRAPH row cannot hold (``IF``, ``CASE``, ``FOR`` ...); ``writes``: the
+    variables it assigns (the first name of each target, FB instances it calls included),
+    ``end_line``/``end_col`` where it ends."""
 
     keyword: str
     line: int = 0
     col: int = 0
+    writes: tuple[str, ...] = ()
+    end_line: int = 0
+    end_col: int = 0
 
 
 SStmt = SAssign | SSetReset | SCallStmt | SOther
@@ -264,13 +269,34 @@ class _Build(Transformer[Token, Any]):
         if tok is None and hasattr(first, "children"):
             tok = next((c for c in first.children if isinstance(c, Token)), None)
         word = str(tok).upper() if tok is not None else "statement"
-        return SOther(word, meta.line, meta.column)
+        writes = tuple(dict.fromkeys(_writes(ch)))
+        return SOther(word, meta.line, meta.column, writes, meta.end_line, meta.end_column)
 
     def empty_statement(self, meta: Any, ch: list[Any]) -> None:
         return None
 
     def statements(self, meta: Any, ch: list[Any]) -> list[SStmt]:
         return [c for c in ch if c is not None]
+
+
+def _writes(node: Any) -> list[str]:
+    """The variables the statements in ``node`` (a parse subtree, its statements already
+    built) assign, in order: targets, ``=>`` outputs, called instances, FOR counters."""
+    if isinstance(node, list | tuple):
+        return [w for n in node for w in _writes(n)]
+    if isinstance(node, SAssign | SSetReset):
+        return [node.target.parts[0] if isinstance(node.target, SName) else node.target.text]
+    if isinstance(node, SCallStmt):
+        outs = [t.parts[0] if isinstance(t, SName) else t.text for _, t in node.outputs]
+        return [node.name, *outs]
+    if isinstance(node, SOther):
+        return list(node.writes)
+    if isinstance(node, Tree):
+        out: list[str] = []
+        if node.data == "for_statement":
+            out += [str(c) for c in node.children if isinstance(c, Token) and c.type == "NAME"][:1]
+        return out + _writes(node.children)
+    return []
 
 
 def _fail(exc: UnexpectedInput, file: str, origin: tuple[int, int], what: str) -> StSyntaxError:

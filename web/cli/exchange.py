@@ -10,7 +10,9 @@ left out or changed is listed, and noted at the top of the chart), 2 no chart (t
 says why) — with ``--strict`` also when anything was left out.
 
 ``export CHART.s7g --to plcopen|simaticml -o FILE [--symbols FILE]`` writes the chart in
-that format; a chart that does not compile is its diagnostics and exit 2.
+that format and prints, one a line, what of it the format's other readers do not see or
+run otherwise (exit 1; 0 when nothing); a chart that does not compile, or a part the
+format cannot hold, is its diagnostics and exit 2.
 """
 
 from __future__ import annotations
@@ -22,7 +24,13 @@ from pathlib import Path
 from s7graph.engine.errors import S7Error
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.checks.diagnostics import format_diagnostic
-from s7graph.sequencer.exchange import FORMATS, Imported, ImportFailed, export_chart, import_file
+from s7graph.sequencer.exchange import (
+    FORMATS,
+    Imported,
+    ImportFailed,
+    export_reported,
+    import_file,
+)
 from s7graph.sequencer.text.format import format_chart, quote
 from s7graph.sequencer.text.model import Chart
 from s7graph.web.cli.report import fail
@@ -112,9 +120,13 @@ def export_command(chart: Path, *, to: str, output: Path, symbols: Path | None =
         from s7graph.sequencer.text.parse import parse_file
 
         model = parse_file(chart)
-        text = export_chart(model, to, table if symbols is not None else None)
+        text, problems = export_reported(model, to, table if symbols is not None else None)
         output.write_text(text, encoding="utf-8")
     except (S7Error, ValueError, OSError) as exc:
         return fail(exc)
-    print(f"{chart}: exported to {output} ({FORMATS[to]})", file=sys.stderr)
-    return 0
+    for d in problems:
+        print(format_diagnostic(d), file=sys.stderr)
+    n = len(problems)
+    more = f", {n} warning{'s' * (n != 1)}" if n else ""
+    print(f"{chart}: exported to {output} ({FORMATS[to]}){more}", file=sys.stderr)
+    return 1 if problems else 0

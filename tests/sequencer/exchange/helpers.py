@@ -1,6 +1,7 @@
 """Shared drivers of the import/export tests, imported as
 ``tests.sequencer.exchange.helpers``: the corpus (read in place from ``../shared/corpus``,
-skipped when absent), ``s7graph import`` and ``s7graph sim`` run through the command line."""
+skipped when absent), the synthetic files beside the tests (one per construct an import or
+export fix is about), ``s7graph import`` and ``s7graph sim`` run through the command line."""
 
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ from s7graph.web.cli import main
 from tests.paths import ROOT
 
 CORPUS = ROOT.parent / "shared" / "corpus"
+HERE = Path(__file__).resolve().parent
 
 
 def corpus(relative: str) -> Path:
@@ -27,6 +29,13 @@ def corpus(relative: str) -> Path:
 
 def imported(relative: str) -> Imported:
     return import_file(corpus(relative))
+
+
+def synthetic(name: str) -> Path:
+    """A synthetic file of the tests (``tests/sequencer/exchange/<name>``)."""
+    path = HERE / name
+    assert path.is_file(), path
+    return path
 
 
 def codes(problems: list[Diagnostic]) -> list[tuple[str, int]]:

@@ -139,7 +139,11 @@ def traffic_light(tmp_path: Path, stimulus: list[dict], cycles: int) -> tuple[li
 def test_traffic_light_cycles_through_its_d_timed_steps_until_stop(tmp_path: Path) -> None:
     """The file's task runs every 100 ms. With SWITCH_BUTTON on, each step's D action
     (2 s, 2 s, 10 s, 2 s, 20 s) becomes active after its time, and its transition switches
-    in the next call; STOP (SWITCH_BUTTON off) jumps back to Standstill from any step."""
+    in the next call; STOP (SWITCH_BUTTON off) jumps back to Standstill from any step, where
+    BLINK_ORANGE_LIGHT blinks: its LD body's TON1/TON2 (500 ms) and R_TRIG0/R_TRIG1 run,
+    600 ms a half period at 100 ms a call. Back after 50 s, TON2 (IN held TRUE since its
+    last call, at 0 ms) is due at once: the P action's ORANGE_LIGHT := 1 is reset in the
+    same call, as matiec's TON would reset it."""
     records, label = traffic_light(
         tmp_path,
         [
@@ -158,8 +162,30 @@ def test_traffic_light_cycles_through_its_d_timed_steps_until_stop(tmp_path: Pat
         (36500, ["ORANGE"], ["ORANGE_LIGHT", "PEDESTRIAN_RED_LIGHT"]),
         (38600, ["RED"], ["RED_LIGHT", "PEDESTRIAN_RED_LIGHT"]),
         (40700, ["PEDESTRIAN_GREEN"], ["RED_LIGHT", "PEDESTRIAN_GREEN_LIGHT"]),
-        (50000, ["Standstill"], ["ORANGE_LIGHT"]),
+        (50000, ["Standstill"], []),
+        (50600, ["Standstill"], ["ORANGE_LIGHT"]),
+        (51200, ["Standstill"], []),
+        (51800, ["Standstill"], ["ORANGE_LIGHT"]),
     ]
+
+
+def test_traffic_light_pedestrian_button_cuts_green_short_through_its_chart_blocks(
+    tmp_path: Path,
+) -> None:
+    """The blocks drawn in the chart (SR0 set by PEDESTRIAN_BUTTON, reset by TON3, which it
+    starts) run every call, as Beremiz's COMPUTE_FUNCTION_BLOCKS does: a press in GREEN
+    leads to ORANGE 2 s later (TON3.Q), not after WARN_CARS' 20 s."""
+    records, label = traffic_light(
+        tmp_path,
+        [
+            {"at_ms": 0, "set": {"SWITCH_BUTTON": True}},
+            {"at_ms": 20_000, "set": {"PEDESTRIAN_BUTTON": True}},
+            {"at_ms": 20_300, "set": {"PEDESTRIAN_BUTTON": False}},
+        ],
+        260,
+    )
+    seen = [(t, [label[s] for s in active]) for t, active, _ in changes(records)]
+    assert seen[4:6] == [(16400, ["GREEN"]), (22100, ["ORANGE"])]
 
 
 def test_traffic_light_alternative_without_priority_takes_the_left_path(tmp_path: Path) -> None:
@@ -264,3 +290,46 @@ def test_tia_v16_sequence_switches_on_its_lad_condition_and_stops(tmp_path: Path
     assert [r["values"][watch[0]] for r in records[:2]] == [1, 1]
     assert records[2]["events"] == [["S1", "S2"]] and records[2]["values"][watch[0]] == 2
     assert records[3]["events"] == [["S2", "STOP"]]
+
+
+# ---------------------------------------------------------------- no silent stalls
+
+# file → a stimulus (at 0 ms) under which every initial step with a way out takes it
+LEAVES: dict[str, dict[str, object]] = {
+    "plcopen/beremiz_first_steps.xml": {},
+    "plcopen/beremiz_test_svgui.xml": {"CNT2": True},
+    "plcopen/beremiz_traffic_light.xml": {"SWITCH_BUTTON": True},
+    "plcopen/iec_checker_example.xml": {"IN1": True, "IN2": True, "IN3": True},
+    "plcopen/matiec_SFC_TEST.xml": {},
+    "iec-text/ironplc_first_steps_counter_sfc.st": {},
+    "iec-text/matiec_annexF_gravel.txt": {"ON_PB": True, "FILL_PB": True},
+    "iec-text/matiec_sfc.txt": {},
+    "simaticml/GraphBranch2.xml": {},
+    "simaticml/GraphBranchAbortOption.xml": {},
+    "simaticml/GraphEnd.xml": {},
+    "simaticml/StepSequence.xml": {
+        "StepData.Values.CylcleState": 1,
+        "StepData.Values.StepMode": 0,
+        "StepData.Values.CurrentTime": 5,
+    },
+}
+
+
+@pytest.mark.parametrize("relative", sorted(LEAVES))
+def test_every_corpus_chart_leaves_its_initial_steps_or_the_import_says_why(
+    relative: str, tmp_path: Path
+) -> None:
+    """No corpus chart is stuck in an initial step without the import saying so (I025, with
+    the reason): none is stuck, and under a plain stimulus of its inputs each initial step
+    that has a way out takes it."""
+    source = corpus(relative)
+    result = import_file(source)
+    assert [d for d in result.problems if d.code == "I025"] == []
+    rc, chart = import_to(tmp_path, source)
+    assert rc in (0, 1)
+    stimulus = [{"at_ms": 0, "set": LEAVES[relative]}] if LEAVES[relative] else []
+    records = sim(tmp_path, chart, watch=[], cycles=40, stimulus=stimulus)
+    left = {e[0] for r in records for e in r["events"]}
+    leaving = {f"S{s}" for t in result.chart.all_transitions() for s in t.sources}
+    initial = {f"S{s.number}" for s in result.chart.all_steps() if s.initial} & leaving
+    assert initial <= left, (initial - left, records[-1]["active"])

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from s7graph.sequencer.exchange import import_chart
-from s7graph.sequencer.exchange.mapping import QUALIFIERS, markdown_tables
+from s7graph.sequencer.exchange.mapping import CONSTRUCTS, QUALIFIERS, markdown_tables
 from s7graph.sequencer.text.format import format_chart, format_row
 from s7graph.sequencer.text.model import Chart
 from tests.paths import DOCS
@@ -80,19 +80,14 @@ def test_a_pulse_body_assigning_a_bit_is_gated_by_a_one_call_pulse(tmp_path: Pat
     assert [r["values"]["y"] for r in records] == [False, True, True, True, True, True]
 
 
-def test_statements_beyond_assignments_are_reported_where_they_are() -> None:
-    body = (
-        "STEP B: ACT(N); END_STEP\nACTION ACT:\n IF x THEN y := TRUE; END_IF;\n"
-        " E1(CLK := x);\nEND_ACTION"
-    )
-    result = import_chart(program(body, "x : BOOL; y : BOOL; E1 : R_TRIG;"), "p.st")
-    assert rows_of(result.chart, "B") == []
+def test_a_call_of_a_block_the_import_does_not_map_is_reported_where_it_is() -> None:
+    body = "STEP B: ACT(N); END_STEP\nACTION ACT:\n y := x;\n E1(CLK := x);\nEND_ACTION"
+    result = import_chart(program(body, "x : BOOL; y : BOOL; E1 : LOGGER;"), "p.st")
     assert [(d.code, d.loc.line, d.loc.col) for d in result.problems] == [
-        ("I021", 7, 2),
+        ("I023", 2, 25),
         ("I021", 8, 2),
     ]
-    assert "IF statement" in result.problems[0].message
-    assert "call of E1 : R_TRIG not imported" in result.problems[1].message
+    assert "call of E1 : LOGGER not imported" in result.problems[1].message
 
 
 def test_an_iec_timer_called_in_an_action_is_a_call_of_its_system_block(tmp_path: Path) -> None:
@@ -235,3 +230,18 @@ def test_codesys_step_actions_and_evaluation_order() -> None:
 def test_the_import_export_doc_table_is_the_mapping_table() -> None:
     assert markdown_tables() in DOC.read_text(encoding="utf-8")
     assert set(QUALIFIERS) == {"N", "S", "R", "P", "P1", "P0", "D", "L", "SD", "DS", "SL"}
+
+
+def test_the_construct_table_covers_every_format_both_ways() -> None:
+    """One table in code says, for every format read and written, what each construct
+    becomes or why it is refused — each row a format, a construct and an outcome."""
+    formats = {row[0] for row in CONSTRUCTS}
+    assert formats == {
+        "IEC",
+        "PLCopen",
+        "IEC text",
+        "SimaticML",
+        "export → PLCopen",
+        "export → SimaticML",
+    }
+    assert all(fmt and construct and becomes for fmt, construct, becomes, _ in CONSTRUCTS)

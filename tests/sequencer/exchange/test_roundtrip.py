@@ -10,15 +10,18 @@ from pathlib import Path
 import pytest
 
 from s7graph.engine.symbols import SymbolTable
-from s7graph.sequencer.exchange import export_chart, import_chart
-from s7graph.sequencer.text.format import format_row
+from s7graph.sequencer.exchange import export_chart, export_reported, import_chart
+from s7graph.sequencer.exchange.shape import priority
+from s7graph.sequencer.text.format import format_chart, format_row
 from s7graph.sequencer.text.model import Chart
 from s7graph.sequencer.text.parse import parse_chart, parse_file
 from s7graph.sequencer.text.walk import uncommented, unlocated
 from s7graph.web.cli import main
 from tests.paths import ROOT
+from tests.sequencer.exchange.helpers import sim, synthetic
 
 EXAMPLES = sorted(ROOT.glob("examples/*/*.s7g"))
+SIX = synthetic("six_sequences.s7g")
 
 
 def example(path: Path) -> tuple[Chart, SymbolTable]:
@@ -36,12 +39,17 @@ def test_example_comes_back_the_same_through_the_format(path: Path, to: str) -> 
     assert uncommented(unlocated(back.chart)) == uncommented(unlocated(chart))  # XML: no comments
 
 
-@pytest.mark.parametrize("to", ["plcopen", "simaticml"])
-def test_export_then_import_on_the_command_line_round_trips(to: str, tmp_path: Path) -> None:
+@pytest.mark.parametrize(("to", "status"), [("plcopen", 1), ("simaticml", 0)])
+def test_export_then_import_on_the_command_line_round_trips(
+    to: str, status: int, tmp_path: Path
+) -> None:
+    """Mixing's interlocks and its V1/A1 rows are not in the SFC other IEC tools read: the
+    PLCopen export says so (exit 1); SimaticML holds all of it (exit 0)."""
     path = next(p for p in EXAMPLES if p.stem == "mixing")
     symbols = path.with_name("symbols.txt")
     xml, back = tmp_path / "mixing.xml", tmp_path / "back.s7g"
-    assert main(["export", str(path), "--to", to, "-o", str(xml), "--symbols", str(symbols)]) == 0
+    args = ["export", str(path), "--to", to, "-o", str(xml), "--symbols", str(symbols)]
+    assert main(args) == status
     assert main(["import", str(xml), "-o", str(back), "--symbols", str(symbols)]) == 0
     assert main(["check", str(back), "--symbols", str(symbols)]) == 0
     original = parse_file(path)
@@ -117,20 +125,22 @@ def test_an_iec_timer_call_goes_to_plcopen_as_an_fb_instance_and_comes_back() ->
     ]
 
 
-def test_a_row_simaticml_cannot_hold_is_one_clear_export_error(
+def test_a_part_simaticml_cannot_hold_is_one_clear_export_error(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """A CALL row has no SimaticML form here: one located line, exit 2; PLCopen takes it."""
+    """A CALL among the permanent instructions has no SimaticML form here (a LAD call box):
+    one located line, exit 2; PLCopen takes it (a stored action of the initial step)."""
     chart = tmp_path / "call.s7g"
     chart.write_text(
-        'FUNCTION_BLOCK "X"\nVAR a : BOOL; END_VAR\nSEQUENCE 1\n'
-        "INITIAL_STEP S1: END_STEP\nSTEP S2: CALL FC 9; END_STEP\n"
+        'FUNCTION_BLOCK "X"\nVAR a : BOOL; done : BOOL; END_VAR\nSEQUENCE 1\n'
+        "INITIAL_STEP S1: END_STEP\nSTEP S2: END_STEP\n"
         "TRANSITION T1 FROM S1 TO S2 := a;\nTRANSITION T2 FROM S2 TO S1 := NOT a;\n"
-        "END_SEQUENCE\nEND_FUNCTION_BLOCK\n"
+        "END_SEQUENCE\nPERMANENT AFTER\n  CALL SFB 4, DB 9 (IN := a, PT := T#1S, Q => done);\n"
+        "END_PERMANENT\nEND_FUNCTION_BLOCK\n"
     )
     assert main(["export", str(chart), "--to", "simaticml", "-o", str(tmp_path / "x.xml")]) == 2
     err = capsys.readouterr().err
-    assert "call.s7g:5:10: S2 row" in err and "CALL FC 9" in err, err
+    assert "call.s7g:10:3: a permanent instruction that is not a bit coil" in err, err
     assert main(["export", str(chart), "--to", "plcopen", "-o", str(tmp_path / "x.xml")]) == 0
 
 
@@ -178,8 +188,168 @@ END_FUNCTION_BLOCK
 """,
         "alt.s7g",
     )
-    back = import_chart(native_only(export_chart(chart, "plcopen")), "alt.xml").chart
+    xml = export_chart(chart, "plcopen")
+    drawn = re.findall(r'<transition localId="1000(\d\d)"[^>]*><position x="(\d+)"', xml)
+    assert [int(n) for n, _ in sorted(drawn, key=lambda d: int(d[1]))] == [5, 3, 9]
+    back = import_chart(native_only(xml), "alt.xml").chart
     names = {s.number: s.name for s in back.all_steps()}
     start = next(s.number for s in back.all_steps() if s.name == "Start")
-    out = [names[t.targets[0]] for t in back.all_transitions() if t.sources == (start,)]
-    assert out == ["Fill", "Drain", "Heat"]
+    leaving = {t.number: t for t in back.all_transitions() if t.sources == (start,)}
+    out = [names[leaving[n].targets[0]] for n in priority(list(leaving))]
+    assert out == ["Fill", "Drain", "Heat"]  # read back, the same path wins
+
+
+# ---------------------------------------------------------------- what other tools see
+
+PERMANENT = """FUNCTION_BLOCK "P"
+VAR
+  go : BOOL; pulse : BOOL; latch : BOOL; n : INT; done : BOOL; waited : TIME;
+END_VAR
+SEQUENCE 1
+  INITIAL_STEP S1 "Idle":
+  END_STEP
+  STEP S2 "Run":
+  END_STEP
+  TRANSITION T1 FROM S1 TO S2 := go;
+  TRANSITION T2 FROM S2 TO S1 := done;
+END_SEQUENCE
+PERMANENT AFTER
+  pulse := go AND NOT latch;
+  S latch := go;
+  R latch := NOT go;
+  n := n + 1;
+  CALL SFB 4, DB 10 (IN := S2.X, PT := T#50MS, Q => done, ET => waited);
+END_PERMANENT
+END_FUNCTION_BLOCK
+"""
+
+
+def test_plcopen_export_gives_other_tools_the_permanent_instructions(tmp_path: Path) -> None:
+    """PERMANENT AFTER goes to the SFC other IEC tools read as the body of an action stored
+    (S) on the initial step and never reset — which runs every call, after the transitions,
+    as PERMANENT AFTER does; a set coil is ``x := x OR c``, a reset coil ``x := x AND NOT c``,
+    a timer the call of its instance. Read back as IEC, the chart runs the same."""
+    chart = parse_chart(PERMANENT, "p.s7g")
+    xml, problems = export_reported(chart, "plcopen")
+    assert problems == []
+    assert '<action localId="0" qualifier="S"><inline><ST>' in xml
+    assert "latch := latch OR go;\nlatch := latch AND go;" in xml
+    assert "TON_DB10(IN := Run.X, PT := T#50MS, Q => done, ET => waited);" in xml
+    back = import_chart(native_only(xml), "p.xml")
+    assert [d.code for d in back.problems] == ["I031", "I024"]  # TON_DB10 is SFB 4; the task
+    assert format_chart(back.chart).split("PERMANENT AFTER")[1] == format_chart(chart).split(
+        "PERMANENT AFTER"
+    )[1].replace("S latch := go;", "latch := latch OR go;").replace(
+        "R latch := NOT go;", "latch := latch AND go;"
+    )
+    texts = {}
+    for name, c in (("original", chart), ("read back", back.chart)):
+        path = tmp_path / f"{name}.s7g"
+        path.write_text(format_chart(c))
+        texts[name] = [
+            (r["active"], r["values"])
+            for r in sim(
+                tmp_path,
+                path,
+                watch=["pulse", "latch", "n", "done"],
+                cycles=20,
+                stimulus=[
+                    {"at_ms": 30, "set": {"go": True}},
+                    {"at_ms": 120, "set": {"go": False}},
+                ],
+            )
+        ]
+    assert texts["read back"] == texts["original"]
+
+
+def test_plcopen_export_reports_what_other_tools_do_not_see(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Interlocks, supervisions, rows without an IEC qualifier, TO STOP, block options and
+    PERMANENT BEFORE's place: each a located warning (exit 1); all of it stays in s7graph's
+    data, so s7graph reads the file back exactly."""
+    text = (
+        'FUNCTION_BLOCK "W"\n  ORDER := CODESYS;\nVAR a : BOOL; b : BOOL; END_VAR\n'
+        "PERMANENT BEFORE\n  b := a;\nEND_PERMANENT\nSEQUENCE 1\n"
+        "  INITIAL_STEP S1:\n    INTERLOCK := a;\n    NC b;\n  END_STEP\n"
+        "  STEP S2:\n    SUPERVISION := S2.T > T#5S;\n  END_STEP\n"
+        "  TRANSITION T1 FROM S1 TO S2 := a;\n  TRANSITION T2 FROM S2 TO STOP := NOT a;\n"
+        "END_SEQUENCE\nEND_FUNCTION_BLOCK\n"
+    )
+    path = tmp_path / "w.s7g"
+    path.write_text(text)
+    _, problems = export_reported(parse_chart(text, str(path)), "plcopen")
+    assert [(d.code, d.loc.line) for d in problems] == [
+        ("X011", 5),
+        ("X010", 1),
+        ("X010", 9),
+        ("X010", 13),
+        ("X010", 16),
+        ("X010", 10),
+    ]
+    assert main(["export", str(path), "--to", "plcopen", "-o", str(tmp_path / "w.xml")]) == 1
+    err = capsys.readouterr().err
+    assert f"{path}:10:5: warning[X010]: row 'NC b;' has no IEC form" in err
+    assert err.splitlines()[-1].endswith("(PLCopen TC6 XML (SFC)), 6 warnings")
+    back = import_chart((tmp_path / "w.xml").read_bytes(), "w.xml").chart
+    assert uncommented(unlocated(back)) == uncommented(unlocated(parse_chart(text)))
+
+
+def test_a_six_sequence_chart_keeps_sequences_and_numbers_read_by_another_tool() -> None:
+    """Read as plain IEC, six sequences stay six, with the same step and transition
+    numbers: a step only an upward link reaches hangs in its sequence's drawing (else it
+    read as a chart of its own), and s7graph's export gives each step its number as its
+    localId (a transition 100000 plus its number), which s7graph reads back."""
+    chart = parse_file(SIX)
+    back = import_chart(native_only(export_chart(chart, "plcopen")), "cell.xml").chart
+    assert [[s.number for s in q.steps] for q in back.sequences] == [
+        [s.number for s in q.steps] for q in chart.sequences
+    ]
+    assert [(t.number, t.sources, t.targets) for t in back.all_transitions()] == [
+        (t.number, t.sources, t.targets) for t in chart.all_transitions()
+    ]
+    tia = import_chart(export_chart(chart, "simaticml").encode(), "cell.xml").chart
+    assert [(t.number, t.sources, t.targets) for t in tia.all_transitions()] == [
+        (t.number, t.sources, t.targets) for t in chart.all_transitions()
+    ]
+
+
+def test_simaticml_export_keeps_the_address_of_an_action_operand() -> None:
+    """``N "Ram"`` with Ram at Q0.0: the action names the tag by an Access element with its
+    address, as the networks do, so it reads back at Q0.0 (it came back as M100.0)."""
+    text = (
+        'FUNCTION_BLOCK "A"\nSYMBOLS\n  "Ram" : Q0.0 : BOOL;\n  "Go" : I0.0 : BOOL;\n'
+        '  "Count" : MW20 : INT;\nEND_SYMBOLS\nSEQUENCE 1\n  INITIAL_STEP S1:\n  END_STEP\n'
+        '  STEP S2:\n    N "Ram";\n    S1 N "Count" := "Count" + 1;\n  END_STEP\n'
+        '  TRANSITION T1 FROM S1 TO S2 := "Go";\n  TRANSITION T2 FROM S2 TO S1 := NOT "Go";\n'
+        "END_SEQUENCE\nEND_FUNCTION_BLOCK\n"
+    )
+    chart = parse_chart(text)
+    back = import_chart(export_chart(chart, "simaticml").encode(), "a.xml")
+    assert {s.name: s.address for s in back.chart.symbols} == {
+        "Ram": "Q0.0",
+        "Go": "I0.0",
+        "Count": "MW20",
+    }
+    assert back.problems == []
+
+
+def test_simaticml_export_writes_call_rows_and_reads_them_back() -> None:
+    """An IEC chart with a timer has CALL rows: SimaticML takes them (in s7graph's spelling
+    of the call, reported once: TIA names blocks by symbol) and reads them back."""
+    text = (
+        'FUNCTION_BLOCK "T"\nVAR done : BOOL; waited : TIME; END_VAR\nSYMBOLS\n'
+        '  "Go" : I0.0 : BOOL;\nEND_SYMBOLS\nSEQUENCE 1\n  INITIAL_STEP S1:\n  END_STEP\n'
+        '  STEP S2:\n    CALL SFB 4, DB 10 (IN := "Go", PT := T#2S, Q => done, ET => waited);\n'
+        '  END_STEP\n  TRANSITION T1 FROM S1 TO S2 := "Go";\n'
+        "  TRANSITION T2 FROM S2 TO S1 := done;\nEND_SEQUENCE\nEND_FUNCTION_BLOCK\n"
+    )
+    chart = parse_chart(text, "t.s7g")
+    xml, problems = export_reported(chart, "simaticml")
+    assert [(d.code, d.loc.line) for d in problems] == [("X012", 10)]
+    assert 'Qualifier="CALL"' in xml and "#done" in xml
+    back = import_chart(xml.encode(), "t.xml").chart
+    assert [format_row(r) for r in back.all_steps()[1].actions] == [
+        'CALL SFB 4, DB 10 (IN := "Go", PT := T#2S, Q => done, ET => waited);'
+    ]
+    assert {s.name: s.address for s in back.symbols} == {"Go": "I0.0"}
