@@ -8,6 +8,7 @@ the two blocks (docs/runtime.md, "Process control: CONT_C, CONT_S, PULSEGEN").""
 
 from __future__ import annotations
 
+import json
 import re
 import statistics
 from pathlib import Path
@@ -30,19 +31,22 @@ WATCH = ("Oven_temp", "Setpoint", "Heater", "Heater_pct", "ERR_FLT", "firings")
 
 
 def run_oven(cycles: int, plant: Path = EXAMPLE / "plant.py") -> list[dict[str, Any]]:
-    """The example on the virtual clock, as ``s7graph sim`` runs a chart: the operator
-    presses Start from 1 s to 2 s; each cycle a scan, then the plant. One record a cycle
-    in ``sim``'s trace form."""
+    """The example on the virtual clock, as ``s7graph sim`` runs a chart: the stimulus of
+    ``stimulus.jsonl`` (the operator presses Start from 1 s to 2 s) in the cycle of its
+    time; each cycle a scan, then the plant. One record a cycle in ``sim``'s trace form."""
     session = ChartSession.load(
         EXAMPLE / "oven.s7g", EXAMPLE / "symbols.txt", VirtualClock(), blocks=EXAMPLE / "oven.scl"
     )
+    lines = (EXAMPLE / "stimulus.jsonl").read_text(encoding="utf-8").splitlines()
+    stimulus = {line["at_ms"]: line["set"] for line in map(json.loads, lines)}
+    assert stimulus == {1000: {"Start": True}, 2000: {"Start": False}}
     oven = load_plant(plant)
     session.start()
     records = []
     for k in range(cycles):
         t_ms = k * CYCLE_MS
-        if t_ms in (1000, 2000):
-            session.set("Start", t_ms == 1000)
+        for name, value in stimulus.get(t_ms, {}).items():
+            session.set(name, value)
         record = session.scan()
         assert record.mode.name == "RUN"
         oven.cycle(session, t_ms, CYCLE_MS)
