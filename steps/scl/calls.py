@@ -147,7 +147,7 @@ class Calls:
         if en is not None:
             b.emit(f"if {en}:")
             b.indent += 1
-        b.emit(f"{r} = _invoke(ctx, _block(ctx, {info.label!r}), {a})")
+        b.emit(f"{r} = ctx._invoke(_block(ctx, {info.label!r}), {a})")
         b.emit(f"_eno[0] = {a}.pop('ENO', True) is not False")
         for param, place in outputs:
             value = self._take(X(param.type, f"{a}[{param.name!r}]"), place, target)
@@ -194,7 +194,10 @@ class Calls:
         b.emit(f"{v} = {i}.values")
         for line in lines:
             b.emit(line)
-        b.emit(f"_eno[0] = _eno_of(_invoke(ctx, {i}.fb, {i}))")
+        # the engine's own call path (``engine.context.CallContext._invoke``: nesting depth,
+        # scan marks, the innermost block named in an error); ENO is what an SCL FB returns,
+        # its OK flag, and TRUE for any other block
+        b.emit(f"_eno[0] = ctx._invoke({i}.fb, {i}) is not False")
         for line in backs:
             b.emit(line)
         if en is not None:

@@ -143,20 +143,27 @@ def _generate(b: Block) -> None:
     b.indent = 0
     b.emit(f"def _b_{info.label}{head}:")
     b.indent = 1
-    _prologue(b, sorted(stmts.flags))
+    _prologue(b, sorted(stmts.flags), _USED.findall("\n".join(body)))
     b.lines += body
     b.locs += body_locs
     _finish(b, stmts, labels)
 
 
-def _prologue(b: Block, flags: list[str]) -> None:
+_USED = re.compile(r"\b(V|_mem|_ok|_eno|_M)\b")
+"""The names of a block's prologue its body may use: only those used are bound (the loop
+meter's look-up, above all, costs a block without loops or jumps nothing)."""
+
+
+def _prologue(b: Block, flags: list[str], used: list[str]) -> None:
     info = b.info
-    if info.kind == "FB":
+    need = set(used) | ({"_ok"} if info.kind in ("FB", "FC") else set())  # the epilogue's ENO
+    if info.kind == "FB" and "V" in need:
         b.emit("V = db.values")
-    b.emit("_mem = ctx.mem")
-    b.emit("_ok = [True]")
-    b.emit("_eno = [True]")
-    b.emit("_M = _meter(ctx)")
+    for name, value in (("_mem", "ctx.mem"), ("_ok", "[True]"), ("_eno", "[True]")):
+        if name in need:
+            b.emit(f"{name} = {value}")
+    if "_M" in need:
+        b.emit("_M = _meter(ctx)")
     for flag in flags:
         b.emit(f"{flag} = {'False' if flag.startswith('_g') else '0'}")
     if info.kind == "FC":

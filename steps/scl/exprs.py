@@ -158,9 +158,15 @@ class Exprs:
             if op == "/":
                 return X(t, f"_rdiv(_ok, {x}, {y})")
             return X(t, f"_r32(_ok, {x} {op} {y})")
-        return X(t, self._integer(op, x, y, t.kind))
+        d = b.const.value if b.const is not None else None
+        return X(t, self._integer(op, x, y, t.kind, d if isinstance(d, int) else None))
 
-    def _integer(self, op: str, x: str, y: str, kind: str) -> str:
+    def _integer(self, op: str, x: str, y: str, kind: str, divisor: int | None = None) -> str:
+        if divisor is not None and divisor >= 2 and op in ("/", "DIV", "MOD"):
+            # by a constant of 2 or more: no division by zero, no overflow — inline, toward
+            # zero (the remainder with the dividend's sign)
+            how = "//" if op != "MOD" else "%"
+            return f"(_v {how} {divisor} if (_v := {x}) >= 0 else -(-_v {how} {divisor}))"
         if op in ("/", "DIV"):
             return f"_idiv(_ok, {x}, {y}, {_BITS[kind]})"
         if op == "MOD":

@@ -20,6 +20,7 @@ from __future__ import annotations
 import math
 import struct
 from datetime import date, datetime, timedelta
+from functools import lru_cache
 from typing import Any
 from weakref import WeakKeyDictionary
 
@@ -346,8 +347,10 @@ def _ix(i: int, lo: int, hi: int, where: str) -> int:
 _WIDTHS = {1: Width.BIT, 8: Width.BYTE, 16: Width.WORD, 32: Width.DWORD}
 
 
+@lru_cache(maxsize=4096)
 def _ad(area: str, bits: int, byte: int, bit: int = 0, db: int | None = None) -> Address:
-    """The address of an indexed operand (``MD[i]``, ``Q[i, 0]``, ``DB1.DW[i]``)."""
+    """The address of an indexed operand (``MD[i]``, ``Q[i, 0]``, ``DB1.DW[i]``), made once
+    for each place a program reaches (an Address is immutable)."""
     return Address(Area(area), _WIDTHS[bits], byte, bit, db)
 
 
@@ -430,23 +433,11 @@ def _idb(ctx: Any, number: int, fb: str) -> Any:
     return idb
 
 
-def _invoke(ctx: Any, blk: Any, arg: Any) -> Any:
-    """Run a block's body one nesting level deeper, as a CALL does — the engine's own call
-    path (``engine.context.CallContext``): nesting depth, scan marks, the innermost block
-    named in an error."""
-    return ctx._invoke(blk, arg)
-
-
 def _fcall(ctx: Any, eno: Ok, blk: Any, args: dict[str, Any]) -> Any:
     """An FC called inside an expression: its value; ENO from its OK flag."""
     result = ctx._invoke(blk, args)
     eno[0] = args.pop("ENO", True) is not False
     return result
-
-
-def _eno_of(result: Any) -> bool:
-    """An FB's ENO: what an SCL FB returns (its OK flag); TRUE for any other block."""
-    return result is not False
 
 
 def _start_info(ctx: Any, key: str, default: Any, type_name: str) -> Any:

@@ -16,6 +16,7 @@ must leave loops, pass through a flag checked after each loop they cross.
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 
 from s7graph.engine.errors import SourceLocation
@@ -24,9 +25,11 @@ from s7graph.steps.scl import types as ty
 from s7graph.steps.scl.calls import S5_COUNTERS, S5_TIMERS
 from s7graph.steps.scl.diagnostics import Problem
 from s7graph.steps.scl.exprs import checked
-from s7graph.steps.scl.gen import Block, Place, Target
+from s7graph.steps.scl.gen import HOLE, Block, Place, Target
 
 S5_FUNCTIONS = frozenset(S5_TIMERS) | frozenset(S5_COUNTERS)
+_CALLS = ("_invoke(", "_fcall(", "_s5_")
+"""What generated code calls other blocks (or the operating system's cells) with."""
 MAX_PYTHON_LOOPS = 18
 """Python allows 20 nested loops in a function; loops and dispatch loops stay below."""
 
@@ -314,7 +317,8 @@ class Stmts:
             )
         t = var.type
         start = b.exprs.convert(b.exprs.expr(s.start), t, s.start.loc, "start")
-        end = b.exprs.convert(b.exprs.expr(s.end), t, s.end.loc, "end")
+        end_x = b.exprs.expr(s.end)
+        end = b.exprs.convert(end_x, t, s.end.loc, "end")
         step_x = b.exprs.expr(s.step) if s.step is not None else None
         step = b.exprs.convert(step_x, t, s.step.loc, "step") if step_x and s.step else "1"
         const_step = step_x.const.value if step_x is not None and step_x.const else 1
@@ -333,10 +337,39 @@ class Stmts:
         frame = self._frame("loop")
         incr = var.store(checked(f"{var.get} + {step}", t.kind))
         frame.cont = [incr]
+        first = len(b.lines)
         self._open(frame, f"while {test}:")
         self.body(s.body)
         b.emit(incr)
         self._close(frame)
+        if isinstance(const_step, int) and end_x.const is not None:
+            last = end_x.const.value
+            if isinstance(last, int):
+                self._plain_step(var, t, last + const_step, step, incr, first)
+
+    def _plain_step(
+        self, var: Place, t: ty.SclType, last: int, step: str, incr: str, first: int
+    ) -> None:
+        """The FOR's step without the overflow test when it cannot overflow: the end and
+        the step are constants whose sum ``last`` is in the type's range, and nothing in
+        the loop (after line ``first``) stores into the variable — a VAR_TEMP or an FC's
+        parameter, or an FB's variable in a loop that calls no block (which could write
+        it through the instance DB)."""
+        b = self.b
+        if not ty.literal_fits(t, last):
+            return
+        assert var.put is not None
+        store = re.compile(r"(?<![\w'\]])" + re.escape(var.put.split(HOLE)[0]))
+        lines = b.lines[first:]
+        body = [line for line in lines if line.strip() != incr]
+        if any(store.search(line) for line in body):
+            return
+        if var.get.startswith("V[") and any(c in line for line in body for c in _CALLS):
+            return
+        plain = var.store(f"{var.get} + {step}")
+        b.lines[first:] = [
+            line.replace(incr, plain) if line.strip() == incr else line for line in lines
+        ]
 
     def _jump(self, s: m.Jump) -> None:
         b = self.b

@@ -4,11 +4,15 @@
 :class:`ChartSession` loads the compiled chart as a GraphFB called from OB1 of one CPU and
 reads and writes it by name — S7 addresses, symbols, FB pins of the chart's parameter set,
 FB variables and step/transition attributes (``Sn.X``, ``Sn.T``, ``Sn.U``, ``Tn.TT``).
+:func:`load_blocks` compiles an S7-SCL source with the chart's symbol table, and
+``ChartSession(…, blocks=program)`` loads it into the same CPU beside the chart
+(:func:`add_blocks`): the chart's FB calls its FBs and FCs, its OBs run as the CPU's.
 """
 
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import functools
 import re
 from collections.abc import Callable, Iterator, Sequence
@@ -17,10 +21,12 @@ from typing import Any
 
 from s7graph import sfb
 from s7graph.engine.address import Address, Area, Width, parse_address
+from s7graph.engine.blocks import OB
 from s7graph.engine.clock import Clock
 from s7graph.engine.cpu import Cpu
 from s7graph.engine.errors import AddressError, S7Error
 from s7graph.engine.symbols import SymbolTable, default_type
+from s7graph.engine.text import decode_utf8
 from s7graph.sequencer.calls import prepare_calls
 from s7graph.sequencer.checks.diagnostics import Diagnostic, format_diagnostic
 from s7graph.sequencer.compile import ChartError, compile_chart
@@ -29,8 +35,18 @@ from s7graph.sequencer.fb import GraphFB, install_all
 from s7graph.sequencer.params import Direction, check_pin, is_pin
 from s7graph.sequencer.text.model import Chart
 from s7graph.sequencer.text.parse import ChartSyntaxError, chart_text, parse_chart
+from s7graph.steps.scl import SclError, SclProgram, compile_scl
+from s7graph.steps.scl import format_diagnostic as scl_diagnostic
 
-__all__ = ["ChartLoadError", "ChartSession", "compile_model", "compile_text", "load_chart"]
+__all__ = [
+    "ChartLoadError",
+    "ChartSession",
+    "add_blocks",
+    "compile_model",
+    "compile_text",
+    "load_blocks",
+    "load_chart",
+]
 
 _STEP_ATTR = re.compile(r"S(\d+)\.([XTU])", re.I)
 _TRANS_ATTR = re.compile(r"T(\d+)\.TT", re.I)
@@ -93,6 +109,42 @@ def _as_load_error(file: str) -> Iterator[None]:
         raise ChartLoadError([f"{file}: the chart nests too deeply to compile"]) from None
 
 
+def load_blocks(path: Path, symbols: SymbolTable | None = None) -> SclProgram:
+    """Read and compile an S7-SCL source (docs/scl.md) with the system blocks and the
+    operand symbol table ``symbols`` (a chart's, its own ``SYMBOLS`` included), for
+    ``ChartSession(…, blocks=…)``; ``ChartLoadError`` with every diagnostic when it does
+    not compile. Warnings stay in the program's ``diagnostics``."""
+    try:
+        data = Path(path).read_bytes()
+    except OSError as exc:
+        raise ChartLoadError([f"s7graph: error: cannot read {path}: {exc.strerror}"]) from None
+    with _as_load_error(str(path)):
+        text = decode_utf8(data, str(path))
+        try:
+            return compile_scl(text, str(path), blocks=sfb.SYSTEM_BLOCKS, symbols=symbols)
+        except SclError as exc:
+            raise ChartLoadError([scl_diagnostic(d) for d in exc.diagnostics]) from None
+
+
+def add_blocks(cpu: Cpu, program: SclProgram) -> None:
+    """Load ``program`` into ``cpu`` beside what is loaded: its FBs, FCs and DBs, the
+    instance DBs it names, and its OBs — an OB the CPU already has (a chart's OB1, OB100,
+    OB102) runs first, then the program's, in one OB."""
+    blocks = [
+        _after(cpu.obs[b.number], b) if isinstance(b, OB) and b.number in cpu.obs else b
+        for b in program.blocks
+    ]
+    dataclasses.replace(program, blocks=blocks).load(cpu)
+
+
+def _after(first: OB, then: OB) -> OB:
+    def body(ctx: Any) -> None:
+        first.body(ctx)
+        then.body(ctx)
+
+    return OB(first.number, first.name, body)
+
+
 def _symbols(path: Path) -> SymbolTable:
     try:
         return SymbolTable.from_file(path)
@@ -107,7 +159,8 @@ def _fmt(d: Any) -> str:
 class ChartSession:
     """One CPU running one compiled chart as a GraphFB from OB1 (sim and run); ``beside``:
     more charts called after it from the same OB1 (the jitter benchmark's 200 sequencers),
-    their GraphFBs in ``others``."""
+    their GraphFBs in ``others``; ``blocks``: a compiled S7-SCL program loaded into the
+    same CPU before start (:func:`add_blocks`)."""
 
     def __init__(
         self,
@@ -116,6 +169,7 @@ class ChartSession:
         clock: Clock,
         *,
         beside: Sequence[CompiledChart] = (),
+        blocks: SclProgram | None = None,
     ) -> None:
         self.clock = clock
         self.cpu = Cpu(clock, keep_outputs_on_hot_restart=True)  # a hot restart resumes the
@@ -124,6 +178,8 @@ class ChartSession:
         self.others = [GraphFB(c) for c in beside]
         install_all(self.cpu, [self.graph, *self.others])
         sfb.install(self.cpu)  # the operating system's blocks, as on S7
+        if blocks is not None:
+            add_blocks(self.cpu, blocks)
         self.missing: list[str] = []
         """Calls of blocks this CPU does not have (``sequencer.calls``): they stop it when
         reached; ``sim`` and ``run`` print them as warnings."""
@@ -150,10 +206,14 @@ class ChartSession:
         self.cpu.mem.symbols = table
 
     @classmethod
-    def load(cls, path: Path, symbols: Path | None, clock: Clock) -> ChartSession:
-        """``load_chart`` (raises ``ChartLoadError``) and a session of it on ``clock``."""
+    def load(
+        cls, path: Path, symbols: Path | None, clock: Clock, *, blocks: Path | None = None
+    ) -> ChartSession:
+        """``load_chart`` and ``load_blocks`` of an S7-SCL source ``blocks`` (each raises
+        ``ChartLoadError``) and a session of them on ``clock``."""
         cc, table = load_chart(path, symbols)
-        return cls(cc, table, clock)
+        program = load_blocks(blocks, table) if blocks is not None else None
+        return cls(cc, table, clock, blocks=program)
 
     # ------------------------------------------------------------ names
 

@@ -52,6 +52,12 @@ def test_precedence_table(expr: str, rtype: str, expected: object) -> None:
         ("-7 / 2", "INT", -3, True),  # toward zero
         ("-7 MOD 2", "INT", -1, True),  # the dividend's sign
         ("7 MOD -2", "INT", 1, True),
+        ("b / 2", "INT", -16384, True),  # by a constant: inline, the same rules
+        ("(b + 1) DIV 10", "INT", -3276, True),
+        ("b MOD 10", "INT", -8, True),
+        ("a MOD 10 + a / 10", "INT", 3283, True),
+        ("d DIV 16", "DINT", 134217727, True),
+        ("-d MOD 16", "DINT", -15, True),
         ("d - d + a", "DINT", 32767, True),  # INT widened to DINT first
         ("a + INT_TO_DINT(1)", "DINT", 32768, True),
         ("a + d", "DINT", -(2**31) + 32766, False),

@@ -76,6 +76,23 @@ def test_for_that_never_starts_leaves_only_the_start_value() -> None:
     assert (got["s"], got["i"]) == (0, 5)
 
 
+def test_for_steps_to_the_end_of_the_range_without_overflow() -> None:
+    got = fb("FOR i := 32000 TO 32766 DO s := i; END_FOR; b := OK;")
+    assert (got["i"], got["s"], got["b"]) == (32767, 32766, True)
+
+
+def test_for_whose_body_sets_its_variable_wraps_at_the_end_of_the_range() -> None:
+    """The step after ``i := 32767`` leaves the INT: it wraps to -32768 with OK FALSE, and
+    the loop goes on from there up to its end (the step is checked whenever the loop
+    stores into its variable, constant end and step or not)."""
+    got = fb(
+        "b := TRUE; FOR i := 1 TO 10 DO c := c + 1; IF b THEN i := 32767; b := FALSE; "
+        "END_IF; END_FOR; okay := OK;",
+        "c : DINT; okay : BOOL;",
+    )
+    assert (got["c"], got["i"], got["okay"]) == (1 + 32779, 11, False)
+
+
 def test_while_and_repeat() -> None:
     got = fb("""
   i := 1;
