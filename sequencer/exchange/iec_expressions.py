@@ -200,7 +200,8 @@ class IecExpressions:
         self.warned: set[tuple[str, str]] = set()
         self.bool_actions: set[str] = set()
         self.body_writes: dict[str, SourceLocation] = {}
-        self.pending = PendingBodies(problems)
+        self.pending = PendingBodies(problems, self.vars)
+        self.result_calls: list[PermanentInstruction] = []  # FCs computing transitions
         self.helpers: set[str] = set()  # the FB variables the importer added
 
     def loc(self, node: object, origin: tuple[int, int]) -> SourceLocation:

@@ -1,16 +1,18 @@
-"""ST bodies that need the SCL block: kept, not dropped.
+"""ST bodies that need the SCL block: run as SCL FCs, or kept, never dropped.
 
 A GRAPH row is one instruction, so an action or transition body with statements (IF, CASE,
 FOR, WHILE, REPEAT, EXIT, RETURN) has no row form. S7 runs such a body as an SCL FC called
-from the step's row (``CALL FC n``); until the chart language has SCL blocks the import
-keeps each such body whole — none of its statements is imported on its own, since the FC
-will run them in their order — as a ``PendingScl`` record:
+from the step's row (``CALL FC n``), and so does the import: each such body is a
+``PendingScl`` record (none of its statements is imported on its own, since the FC runs them
+in their order), made an SCL FC (``body_fc``) numbered from FC 1, called where the record
+says and reported (I033); the chart's SCL source (``Imported.blocks_scl``) holds them all.
+A body the SCL compiler refuses stays pending:
 
-* in ``Imported.pending``, for the change that turns it into an SCL FC and its call;
+* in ``Imported.pending``;
 * in the chart, as a comment beginning ``(* PENDING SCL`` on the step that would call it
   (the chart's end comment for the POU body and for actions that run every call), so the
   `.s7g` file carries the body text;
-* in the import's problems, as a located warning (I021) saying it needs the SCL block.
+* in the import's problems, as a located warning (I021) naming the SCL diagnostic.
 
 Where the call goes: ``placement`` ``step`` (a row of step ``step`` with the event ``event``:
 "" every call while active, ``S1`` on activation, ``S0`` on deactivation), ``before``
@@ -21,13 +23,26 @@ initial step stores for good).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import PurePath
-from typing import Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 from s7graph.engine.errors import SourceLocation
 from s7graph.sequencer.exchange.problems import Problems
-from s7graph.sequencer.exchange.st import SAssign, SCallStmt, SName, SOther, SSetReset, SStmt
+from s7graph.sequencer.exchange.st import (
+    SAssign,
+    SCallStmt,
+    SName,
+    SOther,
+    SSetReset,
+    SStmt,
+    shift,
+)
+from s7graph.sequencer.text.model import BlockCall
+
+if TYPE_CHECKING:
+    from s7graph.sequencer.exchange.body_fc import BodyFc
 
 __all__ = ["MARK", "PendingBodies", "PendingScl", "comment", "first_other", "written_by"]
 
@@ -73,17 +88,49 @@ def _why(first: SOther) -> str:
 
 
 class PendingBodies:
-    """The bodies an import keeps for the SCL block, with the comments that carry them."""
+    """The bodies an import keeps for the SCL block: each one the SCL compiler accepts
+    becomes an FC the chart calls (``functions``); the others stay pending, with the
+    comments that carry them."""
 
-    def __init__(self, problems: Problems) -> None:
+    def __init__(self, problems: Problems, variables: Mapping[str, Any] | None = None) -> None:
         self.p = problems
+        self.variables: Mapping[str, Any] = variables if variables is not None else {}
         self.items: list[PendingScl] = []
+        self.functions: list[BodyFc] = []
+        self.by_body: dict[tuple[str, str, str], BodyFc] = {}
+        self.next_fc = 1
         self.step_comments: dict[int, list[str]] = {}
         self.end_comments: list[str] = []
 
-    def keep(self, item: PendingScl, first: SourceLocation) -> None:
-        """Record ``item``, its comment and its warning (located at ``first``, the first
-        statement a row cannot hold)."""
+    def keep(
+        self, item: PendingScl, first: SourceLocation, origin: tuple[int, int]
+    ) -> BlockCall | None:
+        """The call of ``item``'s FC (reported, located at ``first``, the first statement a
+        row cannot hold), or None: the SCL compiler refuses it, and it is recorded with its
+        comment and its warning, located at the SCL error (``origin``: where the body's
+        text starts in the file)."""
+        from s7graph.sequencer.exchange.body_fc import BodyFc, Refusal, make_fc
+
+        key = (item.kind, item.name.upper(), item.text)
+        made: BodyFc | Refusal | None = self.by_body.get(key)
+        if made is None:
+            made = make_fc(item, self.next_fc, self.variables)
+            if isinstance(made, BodyFc):
+                self.by_body[key] = made
+                self.functions.append(made)
+                self.next_fc += 1
+        if isinstance(made, BodyFc):
+            self.p.warn(
+                "I033",
+                f"{item.kind} {item.name}: {item.why}, which a GRAPH row cannot hold; the "
+                f"body is SCL FC {made.number} (the chart's SCL source), called from "
+                f"{_placement(item)}: load that source with the chart",
+                first,
+            )
+            return made.call
+        assert isinstance(made, Refusal)
+        if made.at is not None:
+            first = SourceLocation(first.file, *shift(*made.at, origin))
         self.items.append(item)
         text = comment(item)
         if item.placement == "step" and item.step is not None:
@@ -95,15 +142,15 @@ class PendingBodies:
             "before": "the chart's end comment",
             "after": "the chart's end comment",
         }[item.placement]
-        waits = f"; until then {item.result} stays FALSE" if item.result else ""
+        waits = f"; {item.result} stays FALSE" if item.result else ""
         self.p.warn(
             "I021",
-            f"{item.kind} {item.name}: {item.why}, which a GRAPH row cannot hold; the whole "
-            f"body is kept for the SCL block (an SCL FC called from "
-            f"{_placement(item)}), in {where} ({MARK}): none of it runs until "
-            f"then{waits}",
+            f"{item.kind} {item.name}: {item.why}, which a GRAPH row cannot hold, and the "
+            f"SCL compiler refuses it as an FC ({made}); the whole body is kept in {where} "
+            f"({MARK}), to be called from {_placement(item)}: none of it runs{waits}",
             first,
         )
+        return None
 
     def writes(self) -> dict[str, str]:
         """Variable (upper case) → the pending body that writes it."""
