@@ -9,22 +9,11 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from s7graph.engine import VirtualClock
-from s7graph.sequencer.exchange import Imported, import_chart, import_file
+from s7graph.sequencer.exchange import import_chart, import_file
 from s7graph.sequencer.text.format import format_chart, format_row
 from s7graph.sequencer.text.model import BlockCall
-from s7graph.steps.scl import compile_scl
-from s7graph.web.harness.session import ChartSession, compile_model
-from tests.sequencer.exchange.helpers import codes, import_to, synthetic
-
-
-def _session(result: Imported) -> ChartSession:
-    """The imported chart in a CPU with its SCL FCs loaded."""
-    cc, table = compile_model(result.chart)
-    session = ChartSession(cc, table, VirtualClock())
-    compile_scl(result.blocks_scl, "blocks.scl").load(session.cpu)
-    session.start()
-    return session
+from s7graph.web.harness.session import ChartSession
+from tests.sequencer.exchange.helpers import codes, import_to, scl_session, synthetic
 
 
 def _watch(session: ChartSession, names: list[str], cycles: int) -> list[tuple[Any, ...]]:
@@ -49,7 +38,7 @@ def test_an_action_body_with_if_else_and_a_for_loop_runs_as_an_scl_fc() -> None:
     [heat] = [f for f in result.functions if f.item.name == "Heat"]
     assert heat.number == 2 and "FOR i := 1 TO level DO" in heat.source
     assert "END_IF;\ntotal := 0;" in heat.source and "END_FOR;\nphase" in heat.source
-    s = _session(result)
+    s = scl_session(result)
     s.set("level", 5)
     s.set("start", True)
     seen = _watch(s, ["S2.X", "heater", "total", "i", "phase"], 3)
@@ -72,7 +61,7 @@ def test_a_transition_body_with_case_computes_its_result_and_switches_the_chart(
         result.chart
     )
     assert "TRANSITION T2 FROM S2 TO S1 := Ready;" in format_chart(result.chart)
-    s = _session(result)
+    s = scl_session(result)
     s.set("level", 5)
     s.set("start", True)
     s.scan()
