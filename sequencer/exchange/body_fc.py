@@ -22,13 +22,16 @@ import re
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import PurePath
-from typing import Protocol
+from typing import Any, Protocol
 
-from s7graph.sequencer.exchange.pending import PendingScl
+from s7graph.engine.errors import SourceLocation
+from s7graph.sequencer.exchange.pending import MARK, PendingScl, comment, placement
+from s7graph.sequencer.exchange.problems import Problems
+from s7graph.sequencer.exchange.st import shift
 from s7graph.sequencer.text.model import BlockCall, Expr, Operand
 from s7graph.steps.scl import check_scl
 
-__all__ = ["BodyFc", "Refusal", "blocks_source", "make_fc", "to_scl"]
+__all__ = ["BodyFc", "PendingBodies", "Refusal", "blocks_source", "make_fc", "to_scl"]
 
 _TOKEN = re.compile(
     r"\(\*[\s\S]*?\*\)|//[^\n]*|'(?:[^'$\n]|\$.)*'|\"[^\"\n]*\""
@@ -161,3 +164,76 @@ def blocks_source(functions: list[BodyFc], chart: str) -> str:
         return ""
     head = f"// The ST bodies of {chart} a GRAPH row cannot hold: SCL FCs the chart calls.\n"
     return head + "\n".join(f.source for f in functions)
+
+
+class PendingBodies:
+    """The bodies an import keeps for the SCL block: each one the SCL compiler accepts
+    becomes an FC the chart calls (``functions``); the others stay pending, with the
+    comments that carry them."""
+
+    def __init__(self, problems: Problems, variables: Mapping[str, Any] | None = None) -> None:
+        self.p = problems
+        self.variables: Mapping[str, Any] = variables if variables is not None else {}
+        self.items: list[PendingScl] = []
+        self.functions: list[BodyFc] = []
+        self.by_body: dict[tuple[str, str, str], BodyFc] = {}
+        self.next_fc = 1
+        self.step_comments: dict[int, list[str]] = {}
+        self.end_comments: list[str] = []
+
+    def keep(
+        self, item: PendingScl, first: SourceLocation, origin: tuple[int, int]
+    ) -> BlockCall | None:
+        """The call of ``item``'s FC (reported, located at ``first``, the first statement a
+        row cannot hold), or None: the SCL compiler refuses it, and it is recorded with its
+        comment and its warning, located at the SCL error (``origin``: where the body's
+        text starts in the file)."""
+        key = (item.kind, item.name.upper(), item.text)
+        made: BodyFc | Refusal | None = self.by_body.get(key)
+        if made is None:
+            made = make_fc(item, self.next_fc, self.variables)
+            if isinstance(made, BodyFc):
+                self.by_body[key] = made
+                self.functions.append(made)
+                self.next_fc += 1
+        if isinstance(made, BodyFc):
+            self.p.warn(
+                "I033",
+                f"{item.kind} {item.name}: {item.why}, which a GRAPH row cannot hold; the "
+                f"body is SCL FC {made.number} (the chart's SCL source), called from "
+                f"{placement(item)}: load that source with the chart",
+                first,
+            )
+            return made.call
+        assert isinstance(made, Refusal)
+        if made.at is not None:
+            first = SourceLocation(first.file, *shift(*made.at, origin))
+        self.items.append(item)
+        text = comment(item)
+        if item.placement == "step" and item.step is not None:
+            self.step_comments.setdefault(item.step, []).append(text)
+        else:
+            self.end_comments.append(text)
+        where = {
+            "step": f"step S{item.step}'s comment",
+            "before": "the chart's end comment",
+            "after": "the chart's end comment",
+        }[item.placement]
+        waits = f"; {item.result} stays FALSE" if item.result else ""
+        self.p.warn(
+            "I021",
+            f"{item.kind} {item.name}: {item.why}, which a GRAPH row cannot hold, and the "
+            f"SCL compiler refuses it as an FC ({made}); the whole body is kept in {where} "
+            f"({MARK}), to be called from {placement(item)}: none of it runs{waits}",
+            first,
+        )
+        return None
+
+    def writes(self) -> dict[str, str]:
+        """Variable (upper case) → the pending body that writes it."""
+        out: dict[str, str] = {}
+        for item in self.items:
+            for name in (*item.writes, item.result):
+                if name:
+                    out.setdefault(name.upper(), f"{item.kind} {item.name}")
+        return out

@@ -239,10 +239,10 @@ class IecActions(IecExpressions):
                 written_by(action.body),
                 why=found[0],
             )
-            call = self.pending.keep(item, self.loc(found[1], action.origin), action.origin)
-            if call is None:
+            fc = self.pending.keep(item, self.loc(found[1], action.origin), action.origin)
+            if fc is None:
                 return []
-            return [ActionRow("CALL", call, event or None, False, None, at)]
+            return [ActionRow("CALL", fc, event or None, False, None, at)]
         rows: list[ActionRow] = []
         coils: list[PermanentInstruction] = []
         ev = event or None

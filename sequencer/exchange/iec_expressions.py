@@ -15,11 +15,11 @@ from functools import cache
 
 from s7graph.engine.errors import LiteralError, S7Error, SourceLocation
 from s7graph.engine.literals import format_literal, parse_literal
+from s7graph.sequencer.exchange.body_fc import PendingBodies
 from s7graph.sequencer.exchange.iec_blocks import EDGE_AND_LATCH, bistable_body
 from s7graph.sequencer.exchange.iec_model import IecChart
 from s7graph.sequencer.exchange.mapping import FUNCTIONS, TYPES
 from s7graph.sequencer.exchange.naming import iec_address, safe_name
-from s7graph.sequencer.exchange.pending import PendingBodies
 from s7graph.sequencer.exchange.problems import Problems
 from s7graph.sequencer.exchange.st import (
     SBinary,

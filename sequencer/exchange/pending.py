@@ -4,8 +4,9 @@ A GRAPH row is one instruction, so an action or transition body with statements 
 FOR, WHILE, REPEAT, EXIT, RETURN) has no row form. S7 runs such a body as an SCL FC called
 from the step's row (``CALL FC n``), and so does the import: each such body is a
 ``PendingScl`` record (none of its statements is imported on its own, since the FC runs them
-in their order), made an SCL FC (``body_fc``) numbered from FC 1, called where the record
-says and reported (I033); the chart's SCL source (``Imported.blocks_scl``) holds them all.
+in their order), made an SCL FC numbered from FC 1 (``body_fc.PendingBodies``), called where
+the record says and reported (I033); the chart's SCL source (``Imported.blocks_scl``) holds
+them all.
 A body the SCL compiler refuses stays pending:
 
 * in ``Imported.pending``;
@@ -23,28 +24,14 @@ initial step stores for good).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import PurePath
-from typing import TYPE_CHECKING, Any, Literal
+from typing import Literal
 
 from s7graph.engine.errors import SourceLocation
-from s7graph.sequencer.exchange.problems import Problems
-from s7graph.sequencer.exchange.st import (
-    SAssign,
-    SCallStmt,
-    SName,
-    SOther,
-    SSetReset,
-    SStmt,
-    shift,
-)
-from s7graph.sequencer.text.model import BlockCall
+from s7graph.sequencer.exchange.st import SAssign, SCallStmt, SName, SOther, SSetReset, SStmt
 
-if TYPE_CHECKING:
-    from s7graph.sequencer.exchange.body_fc import BodyFc
-
-__all__ = ["MARK", "PendingBodies", "PendingScl", "comment", "first_other", "written_by"]
+__all__ = ["MARK", "PendingScl", "comment", "first_other", "placement", "written_by"]
 
 MARK = "PENDING SCL"
 
@@ -87,82 +74,8 @@ def _why(first: SOther) -> str:
     return f"{article} {first.keyword} statement"
 
 
-class PendingBodies:
-    """The bodies an import keeps for the SCL block: each one the SCL compiler accepts
-    becomes an FC the chart calls (``functions``); the others stay pending, with the
-    comments that carry them."""
-
-    def __init__(self, problems: Problems, variables: Mapping[str, Any] | None = None) -> None:
-        self.p = problems
-        self.variables: Mapping[str, Any] = variables if variables is not None else {}
-        self.items: list[PendingScl] = []
-        self.functions: list[BodyFc] = []
-        self.by_body: dict[tuple[str, str, str], BodyFc] = {}
-        self.next_fc = 1
-        self.step_comments: dict[int, list[str]] = {}
-        self.end_comments: list[str] = []
-
-    def keep(
-        self, item: PendingScl, first: SourceLocation, origin: tuple[int, int]
-    ) -> BlockCall | None:
-        """The call of ``item``'s FC (reported, located at ``first``, the first statement a
-        row cannot hold), or None: the SCL compiler refuses it, and it is recorded with its
-        comment and its warning, located at the SCL error (``origin``: where the body's
-        text starts in the file)."""
-        from s7graph.sequencer.exchange.body_fc import BodyFc, Refusal, make_fc
-
-        key = (item.kind, item.name.upper(), item.text)
-        made: BodyFc | Refusal | None = self.by_body.get(key)
-        if made is None:
-            made = make_fc(item, self.next_fc, self.variables)
-            if isinstance(made, BodyFc):
-                self.by_body[key] = made
-                self.functions.append(made)
-                self.next_fc += 1
-        if isinstance(made, BodyFc):
-            self.p.warn(
-                "I033",
-                f"{item.kind} {item.name}: {item.why}, which a GRAPH row cannot hold; the "
-                f"body is SCL FC {made.number} (the chart's SCL source), called from "
-                f"{_placement(item)}: load that source with the chart",
-                first,
-            )
-            return made.call
-        assert isinstance(made, Refusal)
-        if made.at is not None:
-            first = SourceLocation(first.file, *shift(*made.at, origin))
-        self.items.append(item)
-        text = comment(item)
-        if item.placement == "step" and item.step is not None:
-            self.step_comments.setdefault(item.step, []).append(text)
-        else:
-            self.end_comments.append(text)
-        where = {
-            "step": f"step S{item.step}'s comment",
-            "before": "the chart's end comment",
-            "after": "the chart's end comment",
-        }[item.placement]
-        waits = f"; {item.result} stays FALSE" if item.result else ""
-        self.p.warn(
-            "I021",
-            f"{item.kind} {item.name}: {item.why}, which a GRAPH row cannot hold, and the "
-            f"SCL compiler refuses it as an FC ({made}); the whole body is kept in {where} "
-            f"({MARK}), to be called from {_placement(item)}: none of it runs{waits}",
-            first,
-        )
-        return None
-
-    def writes(self) -> dict[str, str]:
-        """Variable (upper case) → the pending body that writes it."""
-        out: dict[str, str] = {}
-        for item in self.items:
-            for name in (*item.writes, item.result):
-                if name:
-                    out.setdefault(name.upper(), f"{item.kind} {item.name}")
-        return out
-
-
-def _placement(p: PendingScl) -> str:
+def placement(p: PendingScl) -> str:
+    """Where ``p``'s call goes, in words: ``S2 on S1``, ``PERMANENT BEFORE``."""
     if p.placement == "step":
         return f"S{p.step}" + (f" on {p.event}" if p.event else "")
     return "PERMANENT BEFORE" if p.placement == "before" else "PERMANENT AFTER"
