@@ -4,7 +4,8 @@
 ``import_chart(data, file)`` detects the format (``detect_format``) and returns an
 ``Imported``: the chart and the problems worth knowing (each located in the file); when no
 chart can be built it raises ``ImportFailed`` with every problem found; the ST bodies it
-keeps for the SCL block are in ``Imported.pending``. ``export_chart`` writes a chart in one
+runs as SCL FCs are in ``Imported.functions`` (their source ``Imported.blocks_scl``), those
+the SCL compiler refuses in ``Imported.pending``. ``export_chart`` writes a chart in one
 of the XML formats (``export_reported`` also says what the format's other readers do not
 see). ``importable_files(directory)`` lists the files of a directory an import can read,
 with their format, for a file chooser (the browser editor's *Open*).
@@ -18,6 +19,7 @@ from pathlib import Path
 
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.checks.diagnostics import Diagnostic, sort_key
+from s7graph.sequencer.exchange.body_fc import BodyFc, blocks_source
 from s7graph.sequencer.exchange.pending import PendingScl
 from s7graph.sequencer.exchange.problems import ImportFailed, Problems
 from s7graph.sequencer.text.model import Binary, Chart
@@ -26,6 +28,7 @@ from s7graph.steps.syntax import CHAIN_OPS, chain, chain_parts
 
 __all__ = [
     "FORMATS",
+    "BodyFc",
     "ImportFailed",
     "Imported",
     "PendingScl",
@@ -57,7 +60,14 @@ class Imported:
     chart: Chart
     format: str
     problems: list[Diagnostic] = field(default_factory=list)
-    pending: list[PendingScl] = field(default_factory=list)  # bodies kept for the SCL block
+    pending: list[PendingScl] = field(default_factory=list)  # bodies the SCL FCs cannot run
+    functions: list[BodyFc] = field(default_factory=list)  # bodies run as SCL FCs
+
+    @property
+    def blocks_scl(self) -> str:
+        """The SCL source of the FCs the chart calls for its ST bodies ("" for none): load
+        it with the chart (``s7graph import -o chart.s7g`` writes it to ``chart.scl``)."""
+        return blocks_source(self.functions, self.chart.name)
 
 
 def canonical_chains(chart: Chart) -> Chart:
@@ -184,8 +194,8 @@ def _import_chart(
         except ChartSyntaxError as exc:
             raise ImportFailed(exc.diagnostics) from None
         return Imported(chart, fmt, [])
-    chart, pending = iec_to_chart(item, problems)
-    return Imported(chart, fmt, sorted(problems.items, key=sort_key), pending)
+    chart, pending, functions = iec_to_chart(item, problems)
+    return Imported(chart, fmt, sorted(problems.items, key=sort_key), pending, functions)
 
 
 def _pick(pou: str, names: list[str]) -> list[int]:

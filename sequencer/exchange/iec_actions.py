@@ -239,8 +239,10 @@ class IecActions(IecExpressions):
                 written_by(action.body),
                 why=found[0],
             )
-            self.pending.keep(item, self.loc(found[1], action.origin))
-            return []
+            fc = self.pending.keep(item, self.loc(found[1], action.origin), action.origin)
+            if fc is None:
+                return []
+            return [ActionRow("CALL", fc, event or None, False, None, at)]
         rows: list[ActionRow] = []
         coils: list[PermanentInstruction] = []
         ev = event or None
@@ -332,7 +334,9 @@ class IecActions(IecExpressions):
                 writes=writes,
                 why=found[0],
             )
-            self.pending.keep(item, self.loc(found[1], (1, 1)))
+            call = self.pending.keep(item, self.loc(found[1], (1, 1)), (loc.line, loc.col))
+            if call is not None:
+                self.before.append(call)
             return
         self.permanent(self.src.prelude, (1, 1), self.before, "")
 
@@ -408,7 +412,9 @@ class IecActions(IecExpressions):
             item = PendingScl(
                 "action", action.name, action.text, action.loc, "after", writes=writes, why=found[0]
             )
-            self.pending.keep(item, self.loc(found[1], action.origin))
+            call = self.pending.keep(item, self.loc(found[1], action.origin), action.origin)
+            if call is not None:
+                self.after.append(call)
             return
         self.permanent(action.body, action.origin, self.after, action.name)
 

@@ -15,11 +15,11 @@ from functools import cache
 
 from s7graph.engine.errors import LiteralError, S7Error, SourceLocation
 from s7graph.engine.literals import format_literal, parse_literal
+from s7graph.sequencer.exchange.body_fc import PendingBodies
 from s7graph.sequencer.exchange.iec_blocks import EDGE_AND_LATCH, bistable_body
 from s7graph.sequencer.exchange.iec_model import IecChart
 from s7graph.sequencer.exchange.mapping import FUNCTIONS, TYPES
 from s7graph.sequencer.exchange.naming import iec_address, safe_name
-from s7graph.sequencer.exchange.pending import PendingBodies
 from s7graph.sequencer.exchange.problems import Problems
 from s7graph.sequencer.exchange.st import (
     SBinary,
@@ -200,7 +200,8 @@ class IecExpressions:
         self.warned: set[tuple[str, str]] = set()
         self.bool_actions: set[str] = set()
         self.body_writes: dict[str, SourceLocation] = {}
-        self.pending = PendingBodies(problems)
+        self.pending = PendingBodies(problems, self.vars)
+        self.result_calls: list[PermanentInstruction] = []  # FCs computing transitions
         self.helpers: set[str] = set()  # the FB variables the importer added
 
     def loc(self, node: object, origin: tuple[int, int]) -> SourceLocation:

@@ -37,6 +37,7 @@ from s7graph.engine.errors import SourceLocation
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.checks.diagnostics import Diagnostic
 from s7graph.sequencer.checks.validate import validate
+from s7graph.sequencer.exchange.body_fc import BodyFc
 from s7graph.sequencer.exchange.iec_actions import IecActions
 from s7graph.sequencer.exchange.iec_expressions import S7_PIN, SFB_OF, _NoMap, const, iec_literal
 from s7graph.sequencer.exchange.iec_model import (
@@ -144,7 +145,9 @@ class _Convert(IecActions):
         item = PendingScl(
             "transition", t.name, t.text, t.loc, "before", writes=writes, result=result, why=why
         )
-        self.pending.keep(item, first)
+        call = self.pending.keep(item, first, t.origin)
+        if call is not None:
+            self.result_calls.append(call)
         return Operand(result, False, t.loc)
 
     def step_ref(self, name: str, loc: SourceLocation) -> int | None:
@@ -191,7 +194,7 @@ class _Convert(IecActions):
             options=_options(self.src),
             vars=tuple(self.decls),
             symbols=tuple(self.symbols),
-            before=tuple(self.before),
+            before=(*self.before, *self.result_calls),
             sequences=sequences,
             after=tuple(self.after),
             file=self.file,
@@ -403,12 +406,12 @@ def _with(base: Chart, qi: int, field: str, i: int, item: Step | Transition) -> 
     return dataclasses.replace(base, sequences=tuple(seqs))
 
 
-def iec_to_chart(src: IecChart, problems: Problems) -> tuple[Chart, list[PendingScl]]:
-    """The GRAPH chart of ``src`` and the bodies it keeps for the SCL block (raises
-    ``ImportFailed`` with the located problems)."""
+def iec_to_chart(src: IecChart, problems: Problems) -> tuple[Chart, list[PendingScl], list[BodyFc]]:
+    """The GRAPH chart of ``src``, the bodies it keeps for the SCL block and the SCL FCs it
+    calls (raises ``ImportFailed`` with the located problems)."""
     conv = _Convert(src, problems)
     chart = conv.build()
     assert chart is not None
     chart = accepted(chart, problems)
     report_stalls(chart, problems, conv.internal(), conv.stall_reasons())
-    return chart, conv.pending.items
+    return chart, conv.pending.items, conv.pending.functions

@@ -193,8 +193,9 @@ CONSTRUCTS: Final[tuple[tuple[str, str, str, str], ...]] = (
     (
         PLCOPEN,
         "transition body of ST statements (CODESYS, TwinCAT)",
-        "`name := expr;` alone: its condition; other statements: kept for the SCL block",
-        "the condition reads an FB variable the SCL block will compute (FALSE until then)",
+        "`name := expr;` alone: its condition; other statements: an SCL FC called in "
+        "PERMANENT BEFORE (`Name => Name`)",
+        "the condition reads the FB variable the FC computes in the same call",
     ),
     (
         IEC,
@@ -239,10 +240,13 @@ CONSTRUCTS: Final[tuple[tuple[str, str, str, str], ...]] = (
     (
         IEC,
         "an action body with IF, CASE, FOR, WHILE, REPEAT, EXIT, RETURN",
-        "kept whole for the SCL block: `Imported.pending`, a `(* PENDING SCL` comment on the "
-        "step, a warning",
+        "an SCL FC of the chart's `.scl` source (`Imported.blocks_scl`), called from the "
+        "step's row: `CALL FC n (x := x, y_IN := y, y => y)`, a warning (I033)",
         "GRAPH rows are single instructions; S7 runs such a body as an SCL FC called from "
-        "the step's row — none of it runs until the chart language has SCL blocks",
+        "the step's row. Read variables are inputs; written ones outputs fed their value "
+        "(`y_IN`), as an IN_OUT would be. A body the SCL compiler refuses is kept whole: "
+        "`Imported.pending`, a `(* PENDING SCL` comment on the step, a warning (I021) at "
+        "the SCL error",
     ),
     (
         IEC,
@@ -260,7 +264,7 @@ CONSTRUCTS: Final[tuple[tuple[str, str, str, str], ...]] = (
         IEC,
         "statements of a textual POU body beside its SFC",
         "PERMANENT BEFORE",
-        "run every call, before the chart (kept for the SCL block when they hold an IF …)",
+        "run every call, before the chart (an SCL FC called there when they hold an IF …)",
     ),
     (
         IEC,
@@ -320,7 +324,7 @@ CONSTRUCTS: Final[tuple[tuple[str, str, str, str], ...]] = (
         "a step the chart can never leave",
         "a warning (I025) at the step",
         "what its transitions wait for that only the chart could write (an instance never "
-        "called, a body kept for the SCL block), and why nothing writes it",
+        "called, a body the SCL compiler refused), and why nothing writes it",
     ),
     (TIA, "steps, transitions, branches, jumps, branch stops", "the same, numbers kept", ""),
     (TIA, "LAD/FBD conditions, interlocks, supervisions", "conditions", ""),

@@ -1,16 +1,19 @@
-"""ST bodies that need the SCL block: kept, not dropped.
+"""ST bodies that need the SCL block: run as SCL FCs, or kept, never dropped.
 
 A GRAPH row is one instruction, so an action or transition body with statements (IF, CASE,
 FOR, WHILE, REPEAT, EXIT, RETURN) has no row form. S7 runs such a body as an SCL FC called
-from the step's row (``CALL FC n``); until the chart language has SCL blocks the import
-keeps each such body whole — none of its statements is imported on its own, since the FC
-will run them in their order — as a ``PendingScl`` record:
+from the step's row (``CALL FC n``), and so does the import: each such body is a
+``PendingScl`` record (none of its statements is imported on its own, since the FC runs them
+in their order), made an SCL FC numbered from FC 1 (``body_fc.PendingBodies``), called where
+the record says and reported (I033); the chart's SCL source (``Imported.blocks_scl``) holds
+them all.
+A body the SCL compiler refuses stays pending:
 
-* in ``Imported.pending``, for the change that turns it into an SCL FC and its call;
+* in ``Imported.pending``;
 * in the chart, as a comment beginning ``(* PENDING SCL`` on the step that would call it
   (the chart's end comment for the POU body and for actions that run every call), so the
   `.s7g` file carries the body text;
-* in the import's problems, as a located warning (I021) saying it needs the SCL block.
+* in the import's problems, as a located warning (I021) naming the SCL diagnostic.
 
 Where the call goes: ``placement`` ``step`` (a row of step ``step`` with the event ``event``:
 "" every call while active, ``S1`` on activation, ``S0`` on deactivation), ``before``
@@ -26,10 +29,9 @@ from pathlib import PurePath
 from typing import Literal
 
 from s7graph.engine.errors import SourceLocation
-from s7graph.sequencer.exchange.problems import Problems
 from s7graph.sequencer.exchange.st import SAssign, SCallStmt, SName, SOther, SSetReset, SStmt
 
-__all__ = ["MARK", "PendingBodies", "PendingScl", "comment", "first_other", "written_by"]
+__all__ = ["MARK", "PendingScl", "comment", "first_other", "placement", "written_by"]
 
 MARK = "PENDING SCL"
 
@@ -72,50 +74,8 @@ def _why(first: SOther) -> str:
     return f"{article} {first.keyword} statement"
 
 
-class PendingBodies:
-    """The bodies an import keeps for the SCL block, with the comments that carry them."""
-
-    def __init__(self, problems: Problems) -> None:
-        self.p = problems
-        self.items: list[PendingScl] = []
-        self.step_comments: dict[int, list[str]] = {}
-        self.end_comments: list[str] = []
-
-    def keep(self, item: PendingScl, first: SourceLocation) -> None:
-        """Record ``item``, its comment and its warning (located at ``first``, the first
-        statement a row cannot hold)."""
-        self.items.append(item)
-        text = comment(item)
-        if item.placement == "step" and item.step is not None:
-            self.step_comments.setdefault(item.step, []).append(text)
-        else:
-            self.end_comments.append(text)
-        where = {
-            "step": f"step S{item.step}'s comment",
-            "before": "the chart's end comment",
-            "after": "the chart's end comment",
-        }[item.placement]
-        waits = f"; until then {item.result} stays FALSE" if item.result else ""
-        self.p.warn(
-            "I021",
-            f"{item.kind} {item.name}: {item.why}, which a GRAPH row cannot hold; the whole "
-            f"body is kept for the SCL block (an SCL FC called from "
-            f"{_placement(item)}), in {where} ({MARK}): none of it runs until "
-            f"then{waits}",
-            first,
-        )
-
-    def writes(self) -> dict[str, str]:
-        """Variable (upper case) → the pending body that writes it."""
-        out: dict[str, str] = {}
-        for item in self.items:
-            for name in (*item.writes, item.result):
-                if name:
-                    out.setdefault(name.upper(), f"{item.kind} {item.name}")
-        return out
-
-
-def _placement(p: PendingScl) -> str:
+def placement(p: PendingScl) -> str:
+    """Where ``p``'s call goes, in words: ``S2 on S1``, ``PERMANENT BEFORE``."""
     if p.placement == "step":
         return f"S{p.step}" + (f" on {p.event}" if p.event else "")
     return "PERMANENT BEFORE" if p.placement == "before" else "PERMANENT AFTER"

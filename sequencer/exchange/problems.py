@@ -41,6 +41,7 @@ CODES: Final[dict[str, str]] = {
     "I030": "a name changed to be a valid GRAPH name",
     "I031": "an IEC and a GRAPH rule differ here; the GRAPH rule applies",
     "I032": "an address the export does not give; one was allocated",
+    "I033": "an ST body a GRAPH row cannot hold, run as an SCL FC the chart calls",
     # export: what the format's other readers do not see or run otherwise
     "X010": "a chart part other tools do not see (kept in s7graph's own data only)",
     "X011": "a chart part other tools run otherwise",

@@ -2,7 +2,8 @@
 PLCopen TC6 XML and IEC 61131-3 textual SFC.
 
 ``import FILE [-o OUT.s7g] [--symbols-out FILE] [--symbols FILE] [--pou NAME] [--strict]``
-detects the format, writes the chart (stdout without ``-o``) and prints every problem on
+detects the format, writes the chart (stdout without ``-o``) — and, with ``-o``, the SCL FCs
+it calls for ST bodies a row cannot hold to ``OUT.scl`` beside it — and prints every problem on
 stderr, one a line (``file:line:col: warning[I021]: …``). The chart keeps its symbols in a
 ``SYMBOLS`` section, or in a symbol file with ``--symbols-out`` (then ``s7graph check OUT
 --symbols FILE``). Exit status: 0 imported as it is, 1 imported with warnings (what was
@@ -101,6 +102,8 @@ def import_command(
             sys.stdout.write(text)
         else:
             output.write_text(text, encoding="utf-8")
+            if result.functions:
+                output.with_suffix(".scl").write_text(result.blocks_scl, encoding="utf-8")
     except OSError as exc:
         return fail(S7Error(f"cannot write: {exc}"))
     n = len(result.problems)
@@ -108,6 +111,9 @@ def import_command(
         f"{source}: imported ({FORMATS[result.format]}), {n} warning{'s' * (n != 1)}",
         file=sys.stderr,
     )
+    if result.functions:
+        where = output.with_suffix(".scl") if output is not None else "not written (no -o)"
+        print(f"{source}: the SCL FCs the chart calls: {where}", file=sys.stderr)
     return 1 if result.problems else 0
 
 

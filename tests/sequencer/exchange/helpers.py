@@ -10,9 +10,12 @@ from pathlib import Path
 
 import pytest
 
+from s7graph.engine import VirtualClock
 from s7graph.sequencer.checks.diagnostics import Diagnostic
 from s7graph.sequencer.exchange import Imported, import_file
+from s7graph.steps.scl import compile_scl
 from s7graph.web.cli import main
+from s7graph.web.harness.session import ChartSession, compile_model
 from tests.paths import ROOT
 
 CORPUS = ROOT.parent / "shared" / "corpus"
@@ -80,6 +83,16 @@ def sim(
     records = [json.loads(line) for line in trace.read_text().splitlines()]
     assert len(records) == cycles
     return records
+
+
+def scl_session(result: Imported) -> ChartSession:
+    """The imported chart in a CPU on the virtual clock with the SCL FCs of its ST bodies
+    loaded (``Imported.blocks_scl``), started."""
+    cc, table = compile_model(result.chart)
+    session = ChartSession(cc, table, VirtualClock())
+    compile_scl(result.blocks_scl, "blocks.scl").load(session.cpu)
+    session.start()
+    return session
 
 
 def changes(records: list[dict], *names: str) -> list[tuple[int, list[str], list[str]]]:
