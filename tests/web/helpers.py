@@ -72,6 +72,19 @@ def chromium_page(url: str) -> Iterator[Page]:
             browser.close()
 
 
+def page_point(client: object, x: float, y: float, *, left: float = 0.0) -> tuple[int, int]:
+    """Where the scene point ``(x, y)`` shows on ``client``'s page: its camera as the page
+    reports it (looking straight down, viser's vertical field of view), on its canvas
+    (``left``: pixels of the page left of the canvas, a panel docked there)."""
+    import math
+
+    cam = client.camera  # type: ignore[attr-defined]
+    cx, cy, z = (float(v) for v in cam.position)
+    half = z * math.tan(cam.fov / 2)
+    w, h = float(cam.image_width), float(cam.image_height)
+    return round(left + w / 2 + (x - cx) / half * h / 2), round(h / 2 - (y - cy) / half * h / 2)
+
+
 def field(page: Page, label: str) -> Locator:
     """The text input of a viser GUI field by its label (viser's label does not name it)."""
     row = "ancestor::div[contains(@class,'mantine-Flex-root')][1]"

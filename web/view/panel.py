@@ -7,7 +7,9 @@ disabled (and the CPU refuses commands without a valid token anyway); after logi
 buttons its role allows (``web.access.roles``) are enabled, and a page whose role may
 ``force`` gets a Force folder (address, value, Force / Unforce / Unforce all, the active
 jobs). The current mode is highlighted on its button. Command verdicts come back as
-notifications on this page only.
+notifications on this page only. The Alarms folder (``web.view.alarms``) filters the
+message list and acknowledges all of it; *Chart view* fits the chart to the page, and for
+a chart of several sequences shows one of them or all (an overview).
 """
 
 from __future__ import annotations
@@ -32,13 +34,11 @@ from s7graph.web.bus.protocol import (
 from s7graph.web.commands import (
     MODES,
     Ack,
-    AckMsg,
     AckStep,
     Force,
     ForceArgs,
     Halt,
     Init,
-    MessageArgs,
     Mode,
     ModeArgs,
     Off,
@@ -54,6 +54,7 @@ from s7graph.web.commands import (
     op_of,
 )
 from s7graph.web.view import texts
+from s7graph.web.view.alarms import AlarmView
 from s7graph.web.view.drawing import aim_camera
 from s7graph.web.view.editor import Editor
 from s7graph.web.view.engineering import Engineering, ViewHost
@@ -127,8 +128,8 @@ class ClientPanel:
         self.role = "viewer"
         self.verified = True
         self._lock = threading.Lock()
-        self._alarm_buttons: dict[int | str, viser.GuiButtonHandle] = {}
         self._shown: dict[str, str] = {}
+        self._focus: int | None = None  # the sequence Chart view shows (None: all)
         self._mode: str | None = None
         self._alarms: AlarmList | None = None
         self.force_folder: viser.GuiFolderHandle | None = None
@@ -177,8 +178,8 @@ class ClientPanel:
             for kind, _ in _STEP_BUTTONS:
                 make = functools.partial(self._step, kind)
                 self.step_buttons[op_of(kind)].on_click(self._on_click(make))
-        with gui.add_folder("Alarms") as self.alarm_folder:
-            self.alarm_html = gui.add_html(texts.alarms_html(None))
+        self.alarms = AlarmView(self, w.layout)
+        self.alarm_folder = self.alarms.folder
         with gui.add_folder("Alarm history", expand_by_default=False):
             self.history_html = gui.add_html(texts.history_html(None))
         with gui.add_folder("Audit", expand_by_default=False):
@@ -202,7 +203,9 @@ class ClientPanel:
             )
             self.detail_html = gui.add_html(texts.small("waiting for the CPU…"))
             self.detail_step.on_update(lambda _: self._clear_transition())
-        with gui.add_folder("Chart view", expand_by_default=False):
+        several = len(w.layout.sequences) > 1
+        with gui.add_folder("Chart view", expand_by_default=several) as self.view_folder:
+            self.sequence_buttons = self._sequence_buttons(w.layout)
             whole = gui.add_button("Whole chart", hint="zoom out to the whole chart")
             near = gui.add_button("Readable zoom", hint="back to the default zoom")
             whole.on_click(lambda _: self.aim(whole=True))
@@ -222,8 +225,7 @@ class ClientPanel:
             mode_button.disabled = not allowed(role, "mode")
         for op, button in {**self.buttons, **self.step_buttons}.items():
             button.disabled = not allowed(role, op)
-        for button in self._alarm_buttons.values():
-            button.disabled = not allowed(role, "ack_msg")
+        self.alarms.enable(allowed(role, "ack_msg"))
         self.login_button.disabled = bool(self.token)
         self.logout_button.disabled = not self.token
         self.user_field.disabled = bool(self.token)
@@ -291,19 +293,49 @@ class ClientPanel:
         self.detail_transition.value = 0  # type: ignore[misc]
 
     def aim(self, *, whole: bool) -> None:
-        """Aim this page's camera at the live chart: the whole of it, or readably."""
+        """Aim this page's camera at the live chart (the sequence chosen in *Chart view*,
+        else all of it): the whole of it, or readably."""
         host = self.wiring.host
         pic = getattr(host, "picture", None)
         if pic is None or (self.editor is not None and self.editor.editing):
             if self.editor is not None and self.editor.editing:
                 self.editor.aim(whole=whole)
             return
-        aim_camera(self.client, pic, whole=whole)
+        bounds = pic.sequence_bounds.get(self._focus) if self._focus is not None else None
+        aim_camera(self.client, pic, whole=whole, bounds=bounds)
+
+    def _sequence_buttons(self, layout: ChartLayout) -> viser.GuiButtonGroupHandle | None:
+        """A chart of several sequences: a button per sequence and one for the overview."""
+        if len(layout.sequences) < 2:
+            return None
+        options = _sequence_labels(layout)
+        group = self.client.gui.add_button_group(
+            "Sequence", options, hint="show one sequence at a readable zoom, or all of them"
+        )
+        numbers = {label: q.number for label, q in zip(options[1:], layout.sequences, strict=True)}
+
+        def chosen(event: Any) -> None:
+            self._focus = numbers.get(str(event.target.value))
+            self.aim(whole=self._focus is None)
+
+        group.on_click(chosen)
+        return group
 
     def chart_changed(self, layout: ChartLayout) -> None:
-        """The CPU runs another chart version (render thread)."""
+        """The CPU runs another chart version (render thread): the page is fitted to it."""
         if self.editor is not None:
             self.editor.running_changed(layout)
+        self.alarms.chart_changed(layout)
+        if self._focus not in {q.number for q in layout.sequences}:
+            self._focus = None
+        wanted = _sequence_labels(layout) if len(layout.sequences) > 1 else []
+        shown = self.sequence_buttons
+        if (list(shown.options) if shown is not None else []) != wanted:
+            if shown is not None:
+                shown.remove()
+            with self.view_folder:
+                self.sequence_buttons = self._sequence_buttons(layout)
+        self.aim(whole=False)
 
     # ------------------------------------------------------------ login
 
@@ -370,9 +402,6 @@ class ClientPanel:
         """Halt, or resume when halted (the button shows which)."""
         return Halt(fb=self.fb, args=OnArgs(on=not self._halted))
 
-    def _ack_msg(self, msg_id: int | str) -> AckMsg:
-        return AckMsg(fb=self.fb, args=MessageArgs(msg_id=msg_id))
-
     def _unforce_all(self) -> Force:
         return Force(fb=self.fb, args=ForceArgs(all=True))
 
@@ -382,6 +411,15 @@ class ClientPanel:
         verdict = "applied" if reply.applied else "refused"
         self._notify(f"{command.op} {verdict}", reply.reason or "OK", ok=reply.applied)
         return reply
+
+    def send_quiet(self, command: Command) -> CommandReply:
+        """Send ``command`` as this page's user without a notice (the caller says how it
+        went: *Acknowledge all* sums up its commands in one)."""
+        return self._send(command, self.wiring.send)
+
+    def notify(self, title: str, body: str, *, ok: bool) -> None:
+        """A notice on this page only."""
+        self._notify(title, body, ok=ok)
 
     def engineer_command(self, command: Command) -> CommandReply:
         """Send one engineering command (download, save …) as this page's user and wait
@@ -440,28 +478,12 @@ class ClientPanel:
                 self.buttons["halt"].label = "Resume (HALT off)" if halted else "Halt"
             if page.alarms is not self._alarms:
                 self._alarms = page.alarms
-                self._set(self.alarm_html, "alarms", page.alarms_html)
-                self._alarm_rows(page.alarms)
+                self.alarms.set_alarms(page.alarms)
 
-    def _alarm_rows(self, alarms: AlarmList | None) -> None:
-        """One Acknowledge button per unacknowledged message."""
-        pending = alarms.pending() if alarms is not None else []
-        wanted = {e.msg_id: e for e in pending}
-        for mid in [m for m in self._alarm_buttons if m not in wanted]:
-            self._alarm_buttons.pop(mid).remove()
-        role = self.role if self.token else "viewer"
-        with self.alarm_folder:
-            for mid, entry in wanted.items():
-                if mid not in self._alarm_buttons:
-                    button = self.client.gui.add_button(
-                        texts.ack_label(entry),
-                        color="red",
-                        hint=texts.clip(entry.text, 200),
-                        disabled=not allowed(role, "ack_msg"),
-                    )
-                    make = functools.partial(self._ack_msg, mid)
-                    button.on_click(self._on_click(make))
-                    self._alarm_buttons[mid] = button
+
+def _sequence_labels(layout: ChartLayout) -> list[str]:
+    """The buttons of *Chart view*'s Sequence: the overview, then each sequence."""
+    return ["Overview", *(texts.clip(f"{q.number} {q.name}".strip(), 24) for q in layout.sequences)]
 
 
 def _origin(client: viser.ClientHandle) -> str:
