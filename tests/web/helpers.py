@@ -72,17 +72,36 @@ def chromium_page(url: str) -> Iterator[Page]:
             browser.close()
 
 
-def page_point(client: object, x: float, y: float, *, left: float = 0.0) -> tuple[int, int]:
+def page_point(
+    client: object, x: float, y: float, *, left: float = 0.0, page: Page | None = None
+) -> tuple[int, int]:
     """Where the scene point ``(x, y)`` shows on ``client``'s page: its camera as the page
     reports it (looking straight down, viser's vertical field of view), on its canvas
-    (``left``: pixels of the page left of the canvas, a panel docked there)."""
+    (``left``: pixels of the page left of the canvas, a panel docked there). With ``page``
+    the canvas is measured on the page itself (the size the page last reported may be one
+    it had while its panel was still being docked)."""
     import math
 
     cam = client.camera  # type: ignore[attr-defined]
     cx, cy, z = (float(v) for v in cam.position)
     half = z * math.tan(cam.fov / 2)
     w, h = float(cam.image_width), float(cam.image_height)
+    if page is not None:
+        left, w, h = canvas_box(page)
     return round(left + w / 2 + (x - cx) / half * h / 2), round(h / 2 - (y - cy) / half * h / 2)
+
+
+def canvas_box(page: Page) -> tuple[float, float, float]:
+    """The left, width and height of the page's WebGL canvas, in page pixels."""
+    box = page.evaluate(
+        """() => {
+            const all = Array.from(document.querySelectorAll('canvas'));
+            const c = all.sort((a, b) => b.width * b.height - a.width * a.height)[0];
+            const r = c.getBoundingClientRect();
+            return [r.left, r.width, r.height];
+        }"""
+    )
+    return float(box[0]), float(box[1]), float(box[2])
 
 
 def field(page: Page, label: str) -> Locator:
@@ -166,11 +185,19 @@ class OnlineRig:
 
 @contextmanager
 def online_cpu(
-    tmp_path: Path, chart: str, *, serve: bool, users: dict[str, str], name: str = "chart.s7g"
+    tmp_path: Path,
+    chart: str,
+    *,
+    serve: bool,
+    users: dict[str, str],
+    name: str = "chart.s7g",
+    messages: bool = False,
 ) -> Iterator[OnlineRig]:
     """``chart`` written to ``tmp_path / name`` and run with a users file (name → role,
     password ``PASSWORD``), its bus on a unix socket, the view when ``serve``; the CPU
-    takes force jobs as ``s7graph run`` does."""
+    takes force jobs as ``s7graph run`` does, and with ``messages`` keeps its message list
+    on the bus (the page's Alarms)."""
+    from s7graph.sfb.alarms import message_list
     from s7graph.web.access.audit import AuditStore
     from s7graph.web.access.login import Authenticator
     from s7graph.web.access.users import UsersFile
@@ -190,7 +217,8 @@ def online_cpu(
     audit = AuditStore(state)
     cc, table = load_chart(path)
     session = ChartSession(cc, table, VirtualClock())
-    live = LiveGraph(session.graph, read=session.get)
+    kept = message_list(session.cpu) if messages else None
+    live = LiveGraph(session.graph, read=session.get, messages=kept)
     gate = Gate(Authenticator(users_file), audit)
     online = OnlineChange(session, live, gate, path=path)
     endpoint = f"unixsock-stream/{tmp_path}/bus.sock"

@@ -142,6 +142,12 @@ class AlarmView:
                 button.disabled = not may_ack
         self.refresh()
 
+    @property
+    def alarms(self) -> AlarmList | None:
+        """The CPU's message list as it came, unfiltered."""
+        with self._lock:
+            return self._alarms
+
     def shown(self) -> list[AlarmEntry]:
         """The messages listed now."""
         with self._lock:

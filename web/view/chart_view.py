@@ -262,7 +262,7 @@ class ChartView:
             return  # closed for its foreign Origin: no panel, nothing sent
         client.gui.add_html(PAGE_STYLE)
         panel = ClientPanel(client, self._wiring)
-        panel.aim(whole=False)  # fitted to this page's canvas
+        panel.opened_at(self.server.initial_camera.position)  # fitted once it says its canvas
         with self._lock:
             self.panels[client.client_id] = panel
         self._wake.set()

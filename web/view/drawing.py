@@ -413,7 +413,7 @@ class _Drawing:
         steps, transitions = self.step_xy.values(), self.transition_xy.values()
         xs = [v for x, _ in steps for v in (x - BOX_W / 2 - 0.9, x + BOX_W / 2 + 0.3)]
         xs += [x + BAR_W / 2 + 0.08 + self.text_w for x, _ in transitions]
-        xs += [t.x + t.width for t in self.text_items]
+        xs += [v for t in self.text_items for v in (t.x, t.x + t.width)]
         ys = [y for _, y in steps] + [y for _, y in transitions]
         ys += [t.y - t.height for t in self.text_items] + [1.0]
         return (
@@ -606,20 +606,27 @@ def aim_camera(
     whole: bool,
     offset: tuple[float, float] = (0, 0),
     bounds: Bounds | None = None,
-) -> None:
+) -> tuple[float, float, float] | None:
     """Aim ``client``'s camera at ``pic`` (``bounds``: a part of it): the whole of it, or
-    the default readable zoom, fitted to the page's canvas."""
+    the default readable zoom, fitted to the page's canvas; where the camera was put
+    (None: the page is gone)."""
     aspect, height = canvas_of(client)
     position, look = camera_for(
         pic, offset=offset, whole=whole, aspect=aspect, height_px=height, bounds=bounds
     )
     try:
         cam = client.camera
+        x, y, z = position
+        if all(abs(float(a) - b) < 1e-6 for a, b in zip(cam.position, position, strict=True)):
+            # viser sends nothing for a position equal to the one the page last reported,
+            # which may be older than one sent since (a report crossed it): move it first
+            cam.position = (x, y, z + 1e-3)
         cam.position = position
         cam.look_at = look
         cam.up_direction = (0.0, 1.0, 0.0)
     except Exception:  # the page has not told its camera yet, or is gone
-        return
+        return None
+    return position
 
 
 def scale_px(z: float, fov: float = 1.309, height_px: float = 800.0) -> float:

@@ -215,15 +215,17 @@ class Editor(CpuCommands, RowEditing):
             self._drawing, self._drawn = None, None
         self._clear_form()
         self.status.content = self._status_html()
+        self.panel.fit(lambda: None)
         pic = getattr(self.host, "picture", None)
         if pic is not None:
-            aim_camera(self.client, pic, whole=False)
+            self.panel.fit(lambda: aim_camera(self.client, pic, whole=False))
 
     def aim(self, *, whole: bool) -> None:
         """Aim the page at the chart edited (the docked panels narrow the canvas: the page
         says its size)."""
-        if self._picture is not None:
-            aim_camera(self.client, self._picture, whole=whole, offset=EDIT_OFFSET)
+        pic = self._picture
+        if pic is not None:
+            self.panel.fit(lambda: aim_camera(self.client, pic, whole=whole, offset=EDIT_OFFSET))
 
     def running_changed(self, layout: ChartLayout) -> None:
         """The CPU runs another chart version (a download, from here or elsewhere)."""

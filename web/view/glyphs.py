@@ -157,7 +157,7 @@ def _render(items: list[Text]) -> Tile:
     y1 = max(t.y for t in items) + 0.1
     y0 = min(t.y - t.height for t in items) - 0.1
     size = (max(round((x1 - x0) * TEXT_PX), 1), max(round((y1 - y0) * TEXT_PX), 1))
-    image = Image.new("RGBA", size, (255, 255, 255, 0))
+    image = Image.new("RGBA", size, (0, 0, 0, 0))  # black: filtering blends no white in
     draw = ImageDraw.Draw(image)
     for t in items:
         font = _font(round(t.size * TEXT_PX))

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import functools
 import threading
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Final
@@ -130,6 +131,9 @@ class ClientPanel:
         self._lock = threading.Lock()
         self._shown: dict[str, str] = {}
         self._focus: int | None = None  # the sequence Chart view shows (None: all)
+        self._fit: Callable[[], tuple[float, float, float] | None] = lambda: None
+        self._ours: deque[tuple[float, ...]] = deque(maxlen=8)  # where the view put the camera
+        self._canvas: tuple[int, int] = (0, 0)
         self._mode: str | None = None
         self._alarms: AlarmList | None = None
         self.force_folder: viser.GuiFolderHandle | None = None
@@ -215,6 +219,7 @@ class ClientPanel:
             self.event_log = gui.add_html(texts.log_html([]))
         self._halted = False
         self._enable()
+        self.client.camera.on_update(self._camera_moved)
 
     def _enable(self) -> None:
         """Enable exactly the buttons this page's role allows; an engineer gets the editor."""
@@ -301,8 +306,40 @@ class ClientPanel:
             if self.editor is not None and self.editor.editing:
                 self.editor.aim(whole=whole)
             return
+        self.fit(functools.partial(self._aim_live, whole=whole))
+
+    def _aim_live(self, *, whole: bool) -> tuple[float, float, float] | None:
+        pic = getattr(self.wiring.host, "picture", None)
+        if pic is None:
+            return None
         bounds = pic.sequence_bounds.get(self._focus) if self._focus is not None else None
-        aim_camera(self.client, pic, whole=whole, bounds=bounds)
+        return aim_camera(self.client, pic, whole=whole, bounds=bounds)
+
+    def fit(self, aim: Callable[[], tuple[float, float, float] | None]) -> None:
+        """Aim the page's camera with ``aim``, and again whenever the page's canvas changes
+        size (a panel docked or undocked, the window resized) while the camera is still
+        where ``aim`` put it: an aim made before the page had docked its panel fits it."""
+        self._fit = aim
+        aimed = aim()
+        if aimed is not None:
+            self._ours.append(aimed)
+
+    def opened_at(self, position: Any) -> None:
+        """The page opened with its camera at ``position`` (the view's initial camera,
+        aimed for the usual canvas): fitted again once the page says its canvas."""
+        self._ours.append(tuple(float(v) for v in position))
+        self._fit = functools.partial(self._aim_live, whole=False)
+
+    def _camera_moved(self, camera: Any) -> None:
+        """The page reported its camera: on a canvas of another size, fit again unless the
+        camera is somewhere the user moved it (not where the view put it)."""
+        canvas = (int(camera.image_width), int(camera.image_height))
+        if canvas == self._canvas:
+            return
+        self._canvas = canvas
+        at = tuple(float(v) for v in camera.position)
+        if any(all(abs(a - b) < 1e-2 for a, b in zip(at, p, strict=True)) for p in self._ours):
+            self.fit(self._fit)
 
     def _sequence_buttons(self, layout: ChartLayout) -> viser.GuiButtonGroupHandle | None:
         """A chart of several sequences: a button per sequence and one for the overview."""

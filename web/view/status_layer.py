@@ -24,6 +24,8 @@ from collections.abc import Callable, Hashable
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from s7graph.web.bus.protocol import StepStateUpdate
 from s7graph.web.view.criteria import CONTACT_FAILS, CONTACT_PASSES, contact_states
 from s7graph.web.view.glyphs import LINE, label_image, text_width
@@ -31,7 +33,7 @@ from s7graph.web.view.glyphs import LINE, label_image, text_width
 __all__ = ["TIMES_SIZE", "VALUE_FALSE", "VALUE_PLAIN", "VALUE_TRUE", "StatusLayer", "value_text"]
 
 Rgb = tuple[int, int, int]
-TIMES_SIZE = 0.13
+TIMES_SIZE = 0.15
 VALUE_SIZE = 0.14
 VALUE_TRUE: Rgb = CONTACT_PASSES
 VALUE_FALSE: Rgb = (215, 215, 215)
@@ -72,11 +74,34 @@ class _Chip:
     colour: Rgb
 
 
-class _Pool:
-    """Scene nodes of one kind, each showing one element (by key) or hidden, free."""
+def _label_content(spec: _Label) -> Hashable:
+    return spec.lines, spec.size, spec.background, spec.width
 
-    def __init__(self, make: Callable[[str], Any], show: Callable[[Any, Any, Any], None]):
-        self._make, self._show = make, show
+
+def _chip_content(spec: _Chip) -> Hashable:
+    return spec.w, spec.h, spec.colour
+
+
+def _solid(colour: Rgb) -> Any:
+    """A small image of one colour (stretched over a contact)."""
+    return np.full((2, 2, 3), colour, np.uint8)
+
+
+class _Pool:
+    """Scene nodes of one kind, each showing one element (by key) or hidden, free.
+
+    A node freed is hidden only if no element takes it over in the same update; a node
+    taken over is, by preference, the one that last showed the same element, else one that
+    showed the same content elsewhere (only moved), else one that showed the same kind of
+    element (``key[0]``)."""
+
+    def __init__(
+        self,
+        make: Callable[[str], Any],
+        show: Callable[[Any, Any, Any], None],
+        content: Callable[[Any], Hashable],
+    ) -> None:
+        self._make, self._show, self._content = make, show, content
         self._by_key: dict[Hashable, Any] = {}
         self._spec: dict[int, tuple[Hashable, Any]] = {}  # node id: the key, spec it shows
         self._free: list[Any] = []
@@ -85,28 +110,37 @@ class _Pool:
     def show(self, wanted: dict[Hashable, Any]) -> None:
         """Show exactly the elements ``wanted`` (key: spec); hide the rest."""
         for key in [k for k in self._by_key if k not in wanted]:
-            node = self._by_key.pop(key)
-            node.visible = False
-            self._free.append(node)
+            self._free.append(self._by_key.pop(key))
         for key, spec in wanted.items():
             node = self._by_key.get(key)
             if node is None:
-                node = self._take(key)
-                self._by_key[key] = node
+                node = self._by_key[key] = self._take(key, spec)
             shown = self._spec.get(id(node))
             if shown is None or shown[1] != spec:
                 self._show(node, spec, None if shown is None else shown[1])
                 self._spec[id(node)] = (key, spec)
             if not node.visible:
                 node.visible = True
+        for node in self._free:
+            if node.visible:
+                node.visible = False
 
-    def _take(self, key: Hashable) -> Any:
-        """A free node, the one that last showed ``key`` first; else a new one."""
-        for i, node in enumerate(self._free):
-            if self._spec.get(id(node), (None,))[0] == key:
-                return self._free.pop(i)
+    def _take(self, key: Hashable, spec: Any) -> Any:
+        """A free node, the most alike first; else a new one."""
+        content = self._content(spec)
+        kind = key[0] if isinstance(key, tuple) else key
+
+        def likeness(node: Any) -> int:
+            shown_key, shown = self._spec.get(id(node), (None, None))
+            if shown_key == key:
+                return 3
+            if shown is not None and self._content(shown) == content:
+                return 2
+            return int(isinstance(shown_key, tuple) and shown_key[0] == kind)
+
         if self._free:
-            return self._free.pop()
+            best = max(range(len(self._free)), key=lambda i: likeness(self._free[i]))
+            return self._free.pop(best)
         node = self._make(f"n{len(self.nodes)}")
         self.nodes.append(node)
         return node
@@ -128,8 +162,8 @@ class StatusLayer:
         offset: tuple[float, float] = (0.0, 0.0),
     ) -> None:
         self.scene, self.picture, self.root, self.offset = scene, pic, root, offset
-        self.labels = _Pool(self._new_label, self._show_label)
-        self.chips = _Pool(self._new_chip, self._show_chip)
+        self.labels = _Pool(self._new_label, self._show_label, _label_content)
+        self.chips = _Pool(self._new_chip, self._show_chip, _chip_content)
 
     # ------------------------------------------------------------ what to show
 
@@ -220,10 +254,13 @@ class StatusLayer:
             node.position = (spec.x + spec.width / 2 + ox, spec.y - height / 2 + oy, Z_LABEL)
 
     def _new_chip(self, name: str) -> Any:
-        return self.scene.add_box(
+        # an image, not a box: an image shows its colour as it is (a box's is tone-mapped)
+        return self.scene.add_image(
             f"{self.root}/contact/{name}",
-            color=CONTACT_PASSES,
-            dimensions=(0.1, 0.1, 0.005),
+            _solid(CONTACT_PASSES),
+            render_width=0.1,
+            render_height=0.1,
+            format="png",
             visible=False,
             cast_shadow=False,
             receive_shadow=False,
@@ -231,9 +268,9 @@ class StatusLayer:
 
     def _show_chip(self, node: Any, spec: _Chip, before: _Chip | None) -> None:
         if before is None or before.colour != spec.colour:
-            node.color = spec.colour
+            node.image = _solid(spec.colour)
         if before is None or (before.w, before.h) != (spec.w, spec.h):
-            node.dimensions = (spec.w, spec.h, 0.005)
+            node.render_width, node.render_height = spec.w, spec.h
         if before is None or (before.cx, before.cy) != (spec.cx, spec.cy):
             ox, oy = self.offset
             node.position = (spec.cx + ox, spec.cy + oy, Z_CHIP)
