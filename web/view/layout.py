@@ -423,15 +423,11 @@ class _SequencePlacer:
         for step, branch in sorted(sides, key=lambda sb: (row[sb[0]], sb[0][1])):
             x, top = self.lane[step], row[step] + 0.25
             bottom = row[branch] + 1.0
-            lane = x + 1
-            while taken.hit(lane, top, bottom) or any(
-                taken.hit(between, top, top + 0.5) for between in range(int(x) + 1, int(lane))
-            ):
+            lane = x + 1  # the step's divergence line runs across to it: shared, not taken
+            while taken.hit(lane, top, bottom):
                 lane += 1
             self.lane[branch] = lane
             taken.add(lane, top, bottom)
-            for between in range(int(x) + 1, int(lane)):
-                taken.add(between, top, top + 0.5)
 
     def _occupy_edge(self, taken: _Occupancy, a: Node, b: Node, row: dict[Node, int]) -> None:
         """Mark where the line from ``a`` down to ``b`` runs (as ``_lines`` draws it)."""

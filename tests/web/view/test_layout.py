@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from s7graph.sequencer.text.model import Chart, Sequence, Step, Transition
+from s7graph.sequencer.text.parse import ChartSyntaxError, parse_chart
 from s7graph.web.bus.protocol import ChartLayout
 from s7graph.web.view.layout import place
+from tests.paths import ROOT
 
 pytestmark = pytest.mark.timeout(30)
 
@@ -165,3 +169,21 @@ def test_imported_charts_stand_in_no_more_lanes_than_their_widest_branching(
         widest = max([*leaving.values(), *(len(t.targets) for t in q.transitions), 1])
         column = next(c for c in p.sequences if c.number == q.number)
         assert column.x1 - column.x0 + 1 <= widest + 1, (q.number, column)
+
+
+def _charts() -> list[Path]:
+    return sorted([*ROOT.glob("examples/*/*.s7g"), *ROOT.glob("tests/sequencer/*/*.s7g")])
+
+
+@pytest.mark.parametrize("path", _charts(), ids=lambda p: p.name)
+def test_every_chart_is_placed_with_no_two_elements_in_one_place(path: Path) -> None:
+    """Every chart the tests and examples hold (the broken ones too: a join of two
+    alternatives, a branch that jumps back beside a join) is placed, each step and each
+    transition in a place of its own."""
+    try:
+        c = parse_chart(path.read_text(encoding="utf-8"), str(path))
+    except ChartSyntaxError:
+        pytest.skip("does not parse")
+    p = place(c)
+    spots = [(s.x, s.y) for s in p.steps.values()] + [(t.x, t.y) for t in p.transitions.values()]
+    assert len(spots) == len(set(spots))
