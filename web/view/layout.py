@@ -67,6 +67,7 @@ class PlacedTransition:
     condition: str
     sequence: int
     contacts: tuple[tuple[int, int], ...] = ()  # where each contact stands in the condition
+    sources: tuple[int, ...] = ()  # the steps before it
 
 
 @dataclass(frozen=True, slots=True)
@@ -263,6 +264,7 @@ class _SequencePlacer:
                 condition=trans[n].condition,
                 sequence=seq.number,
                 contacts=tuple((a, b) for a, b in trans[n].contacts),
+                sources=tuple(trans[n].sources),
             )
             for n in seq.transitions
             if n in trans

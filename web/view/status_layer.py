@@ -74,6 +74,28 @@ class _Chip:
     colour: Rgb
 
 
+MAX_RESERVED = 32  # nodes of a kind made with the chart; more are made when needed
+
+
+def _needed(pic: Any) -> tuple[int, int]:
+    """How many labels and contact pieces one active step per sequence shows at most (the
+    step that shows most, in each sequence): the nodes to make with the chart."""
+    placement = pic.placement
+    pieces: dict[int, int] = {}
+    for t in placement.transitions.values():
+        count = sum(len(rects) for rects in pic.contacts.get(("T", t.number), ()))
+        for s in t.sources:
+            pieces[s] = pieces.get(s, 0) + count
+    labels: dict[int, int] = {}
+    chips: dict[int, int] = {}
+    for s in placement.steps.values():
+        own = sum(len(r) for k in ("C", "V") for r in pic.contacts.get((k, s.number), ()))
+        label = 1 + len(pic.cells.get(s.number, ()))
+        labels[s.sequence] = max(labels.get(s.sequence, 0), label)
+        chips[s.sequence] = max(chips.get(s.sequence, 0), pieces.get(s.number, 0) + own)
+    return min(sum(labels.values()), MAX_RESERVED), min(sum(chips.values()), MAX_RESERVED)
+
+
 def _label_content(spec: _Label) -> Hashable:
     return spec.lines, spec.size, spec.background, spec.width
 
@@ -145,6 +167,13 @@ class _Pool:
         self.nodes.append(node)
         return node
 
+    def reserve(self, count: int) -> None:
+        """Make ``count`` nodes now, hidden (drawn with the chart, not at its first update)."""
+        while len(self.nodes) < count:
+            node = self._make(f"n{len(self.nodes)}")
+            self.nodes.append(node)
+            self._free.append(node)
+
     def shown(self) -> dict[Hashable, Any]:
         """What each element shown shows (its spec), by key."""
         return {k: self._spec[id(n)][1] for k, n in self._by_key.items()}
@@ -164,6 +193,9 @@ class StatusLayer:
         self.scene, self.picture, self.root, self.offset = scene, pic, root, offset
         self.labels = _Pool(self._new_label, self._show_label, _label_content)
         self.chips = _Pool(self._new_chip, self._show_chip, _chip_content)
+        labels, chips = _needed(pic)
+        self.labels.reserve(labels)
+        self.chips.reserve(chips)
 
     # ------------------------------------------------------------ what to show
 

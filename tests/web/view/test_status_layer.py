@@ -1,7 +1,7 @@
-"""The status view's live layer (``web.view.status_layer``) without a browser: drawn once
-per chart, then per state update only shown, hidden, moved or recoloured — its nodes
-pooled, so a step change in a long chart creates no scene node once the pools hold as
-many as are shown at once — and its colours readable under black text."""
+"""The status view's live layer (``web.view.status_layer``) without a browser: its nodes
+made with the chart (as many as one active step per sequence shows), then per state update
+only shown, hidden, moved or recoloured — pooled, so a step change in a long chart creates
+no scene node — and its colours readable under black text."""
 
 from __future__ import annotations
 
@@ -103,6 +103,7 @@ def pic() -> Any:
 def test_a_step_change_moves_the_nodes_it_shows_and_creates_none(pic: Any) -> None:
     scene = Scene()
     layer = StatusLayer(scene, pic)
+    assert len(scene.made) == 4  # made with the chart, hidden: T/U, a value, two contacts
     layer.show(active(1), connected=True)
     assert layer.shown_text() == {
         ("times", 1): ("T 1.5 s", "U 1.5 s"),
@@ -113,7 +114,7 @@ def test_a_step_change_moves_the_nodes_it_shows_and_creates_none(pic: Any) -> No
         (("T", 1), 1, 0): CONTACT_PASSES,
     }
     made = len(scene.made)
-    assert made == 4  # T/U, a value, two contacts
+    assert made == 4  # none more
     for step in range(2, 31):
         scene.log.clear()
         layer.show(active(step), connected=True)
