@@ -153,7 +153,6 @@ class ChartView:
         self.status: StatusLayer | None = None
         self._next_layout: ChartLayout | None = None
         self._alarms: AlarmList | None = None
-        self._alarms_html = texts.alarms_html(None)
         self._history: AlarmHistory | None = None
         self._history_stale = history is not None
         self._audit: deque[AuditEntry] = deque(maxlen=AUDIT_ROWS)
@@ -294,9 +293,8 @@ class ChartView:
 
     def apply_alarms(self, alarms: AlarmList) -> None:
         """Show the CPU's message list (thread-safe; drawn by the render thread)."""
-        html = texts.alarms_html(alarms)
         with self._lock:
-            self._alarms, self._alarms_html = alarms, html
+            self._alarms = alarms
             self._history_stale = self._history_source is not None
         self._wake.set()
 
@@ -379,7 +377,6 @@ class ChartView:
                 else texts.small("no live state"),
                 mode=update.mode if update is not None and connected else None,
                 alarms=self._alarms,
-                alarms_html=self._alarms_html,
                 history=texts.history_html(self._history),
                 audit=texts.audit_html(list(self._audit)),
                 events=texts.log_html(self._event_lines()),

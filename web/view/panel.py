@@ -110,8 +110,7 @@ class PageState:
     banner: str
     status: str
     mode: str | None
-    alarms: AlarmList | None
-    alarms_html: str
+    alarms: AlarmList | None  # each page lists it through its own filter (web.view.alarms)
     history: str
     audit: str
     events: str
