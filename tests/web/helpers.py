@@ -74,6 +74,38 @@ def chromium_page(url: str) -> Iterator[Page]:
             browser.close()
 
 
+def page_point(
+    client: object, x: float, y: float, *, left: float = 0.0, page: Page | None = None
+) -> tuple[int, int]:
+    """Where the scene point ``(x, y)`` shows on ``client``'s page: its camera as the page
+    reports it (looking straight down, viser's vertical field of view), on its canvas
+    (``left``: pixels of the page left of the canvas, a panel docked there). With ``page``
+    the canvas is measured on the page itself (the size the page last reported may be one
+    it had while its panel was still being docked)."""
+    import math
+
+    cam = client.camera  # type: ignore[attr-defined]
+    cx, cy, z = (float(v) for v in cam.position)
+    half = z * math.tan(cam.fov / 2)
+    w, h = float(cam.image_width), float(cam.image_height)
+    if page is not None:
+        left, w, h = canvas_box(page)
+    return round(left + w / 2 + (x - cx) / half * h / 2), round(h / 2 - (y - cy) / half * h / 2)
+
+
+def canvas_box(page: Page) -> tuple[float, float, float]:
+    """The left, width and height of the page's WebGL canvas, in page pixels."""
+    box = page.evaluate(
+        """() => {
+            const all = Array.from(document.querySelectorAll('canvas'));
+            const c = all.sort((a, b) => b.width * b.height - a.width * a.height)[0];
+            const r = c.getBoundingClientRect();
+            return [r.left, r.width, r.height];
+        }"""
+    )
+    return float(box[0]), float(box[1]), float(box[2])
+
+
 def field(page: Page, label: str) -> Locator:
     """The text input of a viser GUI field by its label (viser's label does not name it)."""
     row = "ancestor::div[contains(@class,'mantine-Flex-root')][1]"
@@ -174,11 +206,14 @@ def online_cpu(
     users: dict[str, str],
     certs: BusCerts,
     name: str = "chart.s7g",
+    messages: bool = False,
 ) -> Iterator[OnlineRig]:
     """``chart`` written to ``tmp_path / name`` and run with a users file (name → role,
     password ``PASSWORD``), its bus on TLS on loopback with the certificates ``certs`` (as
     ``s7graph run`` insists with a users file: a client joins as ``client.olga``), the view
-    when ``serve``; the CPU takes force jobs as ``s7graph run`` does."""
+    when ``serve``; the CPU takes force jobs as ``s7graph run`` does, and with ``messages``
+    keeps its message list on the bus (the page's Alarms)."""
+    from s7graph.sfb.alarms import message_list
     from s7graph.web.access.audit import AuditStore
     from s7graph.web.access.login import Authenticator
     from s7graph.web.access.users import UsersFile
@@ -198,7 +233,8 @@ def online_cpu(
     audit = AuditStore(state)
     cc, table = load_chart(path)
     session = ChartSession(cc, table, VirtualClock())
-    live = LiveGraph(session.graph, read=session.get)
+    kept = message_list(session.cpu) if messages else None
+    live = LiveGraph(session.graph, read=session.get, messages=kept)
     gate = Gate(Authenticator(users_file), audit)
     online = OnlineChange(session, live, gate, path=path)
     endpoint = f"tls/localhost:{free_port()}"

@@ -352,6 +352,7 @@ def test_the_pages_buttons_send_the_vocabularys_ops() -> None:
     buttons = [kind for kind, *_ in (*_CONTROL_BUTTONS, *_STEP_BUTTONS)]
     sent = {op_of(kind) for kind in buttons}
     sent |= _structs_built(ROOT / "web/view/panel.py")
+    sent |= _structs_built(ROOT / "web/view/alarms.py")  # a message's button, Acknowledge all
     assert {"ack", "init", "off", "t_push", "halt", "step_on", "ack_step", "ack_msg"} <= sent
     assert sent <= set(OPS)
     assert _hint(buttons[0]) == "INIT_SQ: activate the initial steps"  # the pin, the row

@@ -120,6 +120,7 @@ LEVEL_PINS: dict[str, tuple[str, bool]] = {
     op_of(c): (c.pin, c.held) for c in COMMAND_TYPES if c.kind == "level"
 }
 MAX_WATCH = 64
+MAX_VALUES = 512  # outputs, watched operands and the active steps' action operands
 # Commands of one group queued at the same scan boundary would act as simultaneous edges
 # in one call (the FB resolves them by priority, not by order), so the second is refused.
 _GROUPS = {op_of(c): c.group for c in COMMAND_TYPES if c.group}
@@ -135,6 +136,8 @@ class LiveChart:
     tr_neg: tuple[tuple[bool, ...], ...]
     il_neg: tuple[tuple[bool, ...], ...]
     sv_neg: tuple[tuple[bool, ...], ...]
+    # per step index: the operands of its action rows, whose values go out while it is active
+    operands: tuple[tuple[str, ...], ...] = ()
 
     def step_details(self) -> StepDetails:
         """A fresh builder of this chart's step details."""
@@ -146,9 +149,11 @@ def prepare_chart(cc: CompiledChart, *, fb: str, version: int) -> LiveChart:
     negated); made off the scan thread before an online change (``web.bus.compiler``
     makes it in the compiler's process)."""
     chart = cc.chart
+    layout = ChartLayout.from_chart(chart, fb=fb, version=version)
+    rows = {s.number: s.actions for s in layout.steps}
     return LiveChart(
         cc=cc,
-        layout=ChartLayout.from_chart(chart, fb=fb, version=version),
+        layout=layout,
         tr_neg=tuple(
             _negations(t.condition, n)
             for t, n in zip(chart.all_transitions(), cc.crit_labels, strict=True)
@@ -160,6 +165,10 @@ def prepare_chart(cc: CompiledChart, *, fb: str, version: int) -> LiveChart:
         sv_neg=tuple(
             _negations(st.supervision, n)
             for st, n in zip(chart.all_steps(), cc.sv_labels, strict=True)
+        ),
+        operands=tuple(
+            tuple(dict.fromkeys(a.watch for a in rows.get(n, ()) if a.watch))
+            for n in cc.step_numbers
         ),
     )
 
@@ -229,6 +238,8 @@ class LiveGraph:
         self.step_details = chart.step_details()
         self._readers: tuple[tuple[str, ...], _Readers] | None = None
         """The watch list the readers were made for, and a reader per name."""
+        self._step_readers: dict[int, _Readers] = {}
+        """Per step index: a reader per operand of its action rows (made when first active)."""
 
     @property
     def cc(self) -> CompiledChart:
@@ -332,7 +343,8 @@ class LiveGraph:
         return AlarmList(cycle=max(self.cycle, 0), entries=out)
 
     def values(self) -> dict[str, bool | int | float | str | None]:
-        """The FB outputs, then the watched operands (an unreadable one is left out)."""
+        """The FB outputs, then the watched operands, then the operands of the active steps'
+        action rows (an unreadable one is left out)."""
         graph = self.graph
         pins = graph.out_pins
         if pins is not self._pins:  # a chart with another parameter set (online change)
@@ -346,20 +358,37 @@ class LiveGraph:
             out = {name: _scalar(v) for name, v in out.items()}
         made = self._readers
         if made is None or made[0] is not self.watch:
-            made = self._readers = (self.watch, self._resolve())
+            made = self._readers = (self.watch, self._resolve(self.watch))
         for name, read in made[1]:
             try:
                 out[name] = _scalar(read())
             except Exception:  # a watch must never stop the scan
                 continue
+        if self._chart.operands:
+            self._step_values(out)
         return out
 
-    def _resolve(self) -> _Readers:
+    def _step_values(self, out: dict[str, bool | int | float | str | None]) -> None:
+        """Add the values of the active steps' action operands to ``out``."""
+        operands, made = self._chart.operands, self._step_readers
+        for i in self.graph.state.active:
+            readers = made.get(i)
+            if readers is None:
+                readers = made[i] = self._resolve(operands[i]) if i < len(operands) else ()
+            for name, read in readers:
+                if len(out) >= MAX_VALUES:
+                    return
+                try:
+                    out[name] = _scalar(read())
+                except Exception:  # a watch must never stop the scan
+                    continue
+
+    def _resolve(self, names: tuple[str, ...]) -> _Readers:
         """A reader per watched name (once, not per scan: a symbol's lookup and an
         address's parse cost more than the read); a name ``reader`` cannot resolve is read
         through ``read``, which leaves it out while it stays unreadable."""
         out: list[tuple[str, Callable[[], object]]] = []
-        for name in self.watch:
+        for name in names:
             fn: Callable[[], object] | None = None
             if self._reader is not None:
                 try:

@@ -17,6 +17,7 @@ from msgspec import Meta, Struct
 from s7graph.sequencer.change.base import MAX_SOURCE
 from s7graph.sequencer.text.format import format_expr
 from s7graph.sequencer.text.model import Chart, Expr
+from s7graph.web.bus.chart_text import action_rows, contact_spans
 from s7graph.web.commands import (
     MODES,
     NAME_PATTERN,
@@ -42,6 +43,7 @@ __all__ = [
     "MODES",
     "OPS",
     "REMOVED_CHOICES",
+    "ActionInfo",
     "AlarmEntry",
     "AlarmEvent",
     "AlarmHistory",
@@ -109,8 +111,25 @@ class _Msg(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
 # ---------------------------------------------------------------- chart structure
 
 
+# Where each contact of a condition stands in its text (start, end), in CRIT bit order
+Spans = Annotated[list[tuple[Count, Count]], Meta(max_length=32)]
+
+
+class ActionInfo(_Msg, frozen=True, kw_only=True):
+    """One row of a step's action table as S7-GRAPH shows it: event, qualifier (``C``
+    appended when interlocked), operand and time or value; ``watch`` names the value the CPU
+    sends while the step is active (the operand's, an assignment's target's; "" none)."""
+
+    event: Annotated[str, Meta(max_length=8)] = ""
+    qualifier: Annotated[str, Meta(max_length=8)]
+    operand: Text
+    value: ShortText = ""
+    watch: Annotated[str, Meta(max_length=128)] = ""
+
+
 class StepInfo(_Msg, frozen=True, kw_only=True):
-    """One step box: number, name, and which frames the view draws around it."""
+    """One step box: number, name, which frames the view draws around it, its action table,
+    and its interlock and supervision conditions with where their contacts stand."""
 
     number: StepNo
     name: ShortText = ""
@@ -118,16 +137,23 @@ class StepInfo(_Msg, frozen=True, kw_only=True):
     interlock: bool = False
     supervision: bool = False
     message: Text = ""
+    actions: Annotated[list[ActionInfo], Meta(max_length=256)] = []
+    interlock_condition: Text = ""
+    interlock_contacts: Spans = []
+    supervision_condition: Text = ""
+    supervision_contacts: Spans = []
 
 
 class TransitionInfo(_Msg, frozen=True, kw_only=True):
-    """One transition bar; ``targets == []`` is a branch stop (``TO STOP``)."""
+    """One transition bar; ``targets == []`` is a branch stop (``TO STOP``); ``contacts``:
+    where each contact stands in ``condition``."""
 
     number: StepNo
     name: ShortText = ""
     sources: Steps
     targets: Steps
     condition: Text = ""
+    contacts: Spans = []
 
 
 class SequenceInfo(_Msg, frozen=True, kw_only=True):
@@ -152,27 +178,47 @@ class ChartLayout(_Msg, frozen=True, kw_only=True):
     @classmethod
     def from_chart(cls, chart: Chart, *, fb: str | None = None, version: int = 0) -> ChartLayout:
         """Describe ``chart`` for a view; ``fb`` defaults to the chart's name."""
-        steps = [
-            StepInfo(
-                number=s.number,
-                name=_clip(s.name, 256),
-                initial=s.initial,
-                interlock=s.interlock is not None,
-                supervision=s.supervision is not None,
-                message=_clip(s.message, 4096),
+        steps = []
+        for s in chart.all_steps():
+            interlock, il_spans = _condition(s.interlock)
+            supervision, sv_spans = _condition(s.supervision)
+            steps.append(
+                StepInfo(
+                    number=s.number,
+                    name=_clip(s.name, 256),
+                    initial=s.initial,
+                    interlock=s.interlock is not None,
+                    supervision=s.supervision is not None,
+                    message=_clip(s.message, 4096),
+                    actions=[
+                        ActionInfo(
+                            event=r.event,
+                            qualifier=r.qualifier,
+                            operand=_clip(r.operand, 4096),
+                            value=_clip(r.value, 256),
+                            watch=r.watch,
+                        )
+                        for r in action_rows(s.actions[:256])
+                    ],
+                    interlock_condition=interlock,
+                    interlock_contacts=il_spans,
+                    supervision_condition=supervision,
+                    supervision_contacts=sv_spans,
+                )
             )
-            for s in chart.all_steps()
-        ]
-        transitions = [
-            TransitionInfo(
-                number=t.number,
-                name=_clip(t.name, 256),
-                sources=list(t.sources),
-                targets=list(t.targets),
-                condition=_clip(condition_text(t.condition), 4096),
+        transitions = []
+        for t in chart.all_transitions():
+            condition, spans = _condition(t.condition)
+            transitions.append(
+                TransitionInfo(
+                    number=t.number,
+                    name=_clip(t.name, 256),
+                    sources=list(t.sources),
+                    targets=list(t.targets),
+                    condition=condition,
+                    contacts=spans,
+                )
             )
-            for t in chart.all_transitions()
-        ]
         sequences = [
             SequenceInfo(
                 number=q.number,
@@ -599,6 +645,16 @@ def _clip(text: str, limit: int) -> str:
 
 
 # ---------------------------------------------------------------- condition text
+
+
+def _condition(expr: Expr | None) -> tuple[str, list[tuple[int, int]]]:
+    """A condition's text as a view shows it and where its contacts stand (none when the
+    text had to be clipped before the end of a contact)."""
+    text = _clip(condition_text(expr), 4096)
+    written, spans = contact_spans(expr)
+    if written != text:  # clipped (or written otherwise): keep the contacts that are whole
+        spans = [(a, b) for a, b in spans if b < len(text) and text[:b] == written[:b]]
+    return text, spans
 
 
 def condition_text(expr: Expr | None) -> str:

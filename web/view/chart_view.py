@@ -1,9 +1,13 @@
 """The live browser view: a viser scene drawing the chart as S7-GRAPH does, and a panel per page.
 
 The scene shows steps as boxes (the initial step double-framed, ``C``/``V`` marks for an
-interlock/supervision), transitions as bars with their number, lines, jumps and stops;
-it is coloured live (active green, disturbed or latched red, inactive grey) and greyed out
-with a "disconnected" banner while the CPU is unreachable (its ``alive`` token gone).
+interlock/supervision) with their action tables and conditions, transitions as bars with
+their number, lines, jumps and stops; it is coloured live (active green, disturbed or
+latched red, inactive grey), with S7-GRAPH's status over it — the active steps' times and
+operand values, the contacts of the conditions evaluated (``web.view.status_layer``) — and
+greyed out with a "disconnected" banner while the CPU is unreachable (its ``alive`` token
+gone). The side panel is docked right of the chart (nothing is drawn under it) and viser's
+notice about software WebGL is not shown over the chart.
 The scene is shared by every page; each page has its own side panel
 (``web.view.panel.ClientPanel``: login, Control Sequencer, alarms, alarm history, audit,
 step details, events; an engineer's Force folder), built when the page connects — a page
@@ -44,6 +48,7 @@ from s7graph.web.view.drawing import (
     DISTURBED,
     FLAT_LIGHT,
     INACTIVE,
+    PANEL_W,
     Drawing,
     camera_for,
     picture,
@@ -52,12 +57,16 @@ from s7graph.web.view.engineering import Engineering
 from s7graph.web.view.guard import OriginGuard, guard_server
 from s7graph.web.view.layout import Placement, place
 from s7graph.web.view.panel import ClientPanel, PageState, Wiring
+from s7graph.web.view.status_layer import StatusLayer
 
 __all__ = ["ACTIVE", "DISCONNECTED", "DISTURBED", "INACTIVE", "ChartView", "make_server"]
 
 MAX_FPS = 20.0
 LOG_LINES = 40
 AUDIT_ROWS = 50
+# viser shows a notice (its DOM id below) when the browser draws WebGL in software; it
+# covered the chart's top-left corner and has no theme option, so a page's style hides it.
+PAGE_STYLE = "<style>#webgl-software-rendering{display:none !important}</style>"
 
 Sender = Callable[[Command], CommandReply]
 LoginCall = Callable[[str, str, str], LoginReply]
@@ -73,7 +82,9 @@ def make_server(
     """A viser server bound to ``host`` (loopback by default) that refuses foreign-Origin
     websockets and has no share tunnel; read ``get_port()`` after."""
     server = viser.ViserServer(host=host, port=port, label=label, verbose=False)
-    return server, guard_server(server, allowed_origins)
+    guard = guard_server(server, allowed_origins)
+    server.gui.configure_theme(show_share_button=False, show_logo=False)
+    return server, guard
 
 
 def _refuse_login(user: str, password: str, origin: str) -> LoginReply:
@@ -139,9 +150,9 @@ class ChartView:
         self._forces: ForceList | None = None
         self._force_count = 0  # force jobs active: the status line's FORCE mark
         self.drawing: Drawing | None = None
+        self.status: StatusLayer | None = None
         self._next_layout: ChartLayout | None = None
         self._alarms: AlarmList | None = None
-        self._alarms_html = texts.alarms_html(None)
         self._history: AlarmHistory | None = None
         self._history_stale = history is not None
         self._audit: deque[AuditEntry] = deque(maxlen=AUDIT_ROWS)
@@ -153,6 +164,8 @@ class ChartView:
         )
         self._set_scene()
         self._draw_chart()
+        server.gui.main_panel.dock_right()  # the canvas ends where the panel starts
+        server.gui.main_panel.set_width(PANEL_W)
         server.on_client_connect(self._connect)
         server.on_client_disconnect(self._disconnect)
         self._thread = threading.Thread(target=self._render_loop, name="s7graph-view", daemon=True)
@@ -178,10 +191,13 @@ class ChartView:
         pic = picture(self.placement)
         if self.drawing is not None:
             self.drawing.remove()
+        if self.status is not None:
+            self.status.remove()
         drawing = Drawing(
             sc, pic, on_step=self._clicked_step, on_transition=self._clicked_transition
         )
         self.picture, self.drawing = pic, drawing
+        self.status = StatusLayer(sc, pic)
         cam = self.server.initial_camera
         cam.position, cam.look_at = camera_for(pic)
         cam.up = (0.0, 1.0, 0.0)
@@ -231,7 +247,7 @@ class ChartView:
         with self._lock:
             panels = list(self.panels.values())
         for panel in panels:
-            panel.chart_changed(layout)
+            panel.chart_changed(layout)  # and fitted to the chart as it is now
 
     def latest(self) -> StepStateUpdate | None:
         """The newest state shown (for an editor: the active steps of the running chart)."""
@@ -243,7 +259,9 @@ class ChartView:
     def _connect(self, client: viser.ClientHandle) -> None:
         if self._guard is not None and self._guard.refused(client.client_id):
             return  # closed for its foreign Origin: no panel, nothing sent
+        client.gui.add_html(PAGE_STYLE)
         panel = ClientPanel(client, self._wiring)
+        panel.opened_at(self.server.initial_camera.position)  # fitted once it says its canvas
         with self._lock:
             self.panels[client.client_id] = panel
         self._wake.set()
@@ -275,9 +293,8 @@ class ChartView:
 
     def apply_alarms(self, alarms: AlarmList) -> None:
         """Show the CPU's message list (thread-safe; drawn by the render thread)."""
-        html = texts.alarms_html(alarms)
         with self._lock:
-            self._alarms, self._alarms_html = alarms, html
+            self._alarms = alarms
             self._history_stale = self._history_source is not None
         self._wake.set()
 
@@ -369,7 +386,6 @@ class ChartView:
                 else texts.small("no live state"),
                 mode=update.mode if update is not None and connected else None,
                 alarms=self._alarms,
-                alarms_html=self._alarms_html,
                 history=texts.history_html(self._history),
                 audit=texts.audit_html(list(self._audit)),
                 events=texts.log_html(self._event_lines()),
@@ -408,4 +424,5 @@ class ChartView:
             elif number in active:
                 colours[number] = ACTIVE
         with self.server.atomic():
-            self.drawing.paint(colours)
+            holds = self.status.show(update, connected) if self.status is not None else set()
+            self.drawing.paint(colours, dict.fromkeys(holds, ACTIVE))

@@ -7,7 +7,12 @@ number, name and whole condition wrapped beside them (a transition row grows whe
 needs more lines), lines, jumps, stops and the continuation arrows of wrapped sequences.
 Every text is fitted: a step's name wraps inside its box and its size shrinks until it fits,
 so it is never cut nor spills out; all texts are rendered into a few images (one per band of
-the chart: labels are slow under software WebGL, an image is not). :class:`Drawing` puts a
+the chart: labels are slow under software WebGL, an image is not; ``web.view.glyphs``).
+Beside each step its action table and under it its interlock and supervision conditions
+(``web.view.actions_table``); lanes are wide enough for them. The picture also says where
+the status view shows what changes (``web.view.status_layer``): each step's times, each
+action row's live value, each contact of a condition (``web.view.criteria``), and where each
+sequence lies (``Picture.sequence_bounds``). :class:`Drawing` puts a
 picture into one scene (the shared live scene, or one page's edit scene at an offset) with
 click handlers on steps and on transitions (an invisible target over bar and text), and
 recolours its steps and transitions. :func:`camera_for` aims a camera at a picture at a
@@ -19,30 +24,48 @@ from __future__ import annotations
 import functools
 import itertools
 import math
-from collections.abc import Callable, Iterable
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from PIL import Image, ImageDraw, ImageFont
 
 from s7graph.web.view import texts
+from s7graph.web.view.actions_table import Block, Cell, block_width, columns_of, step_block
+from s7graph.web.view.criteria import ConditionKey, Rect, span_rects
+from s7graph.web.view.glyphs import (
+    BAND_PX,
+    LINE,
+    TEXT_PX,
+    Text,
+    Tile,
+    fit_text,
+    line_starts,
+    text_width,
+    tiles,
+    wrap,
+)
 from s7graph.web.view.layout import Placement
 
 __all__ = [
     "ACTIVE",
+    "BAND_PX",
     "DISCONNECTED",
     "DISTURBED",
     "FLAT_LIGHT",
     "FLAWED",
     "INACTIVE",
     "INK",
+    "LINE",
+    "PANEL_W",
     "READABLE_PX",
     "SELECTED",
+    "TEXT_PX",
     "Drawing",
     "Picture",
     "aim_camera",
     "camera_for",
+    "canvas_of",
     "contrast",
     "fit_text",
     "picture",
@@ -64,7 +87,7 @@ lights a standard material's albedo by irradiance / π). A chart is flat: no def
 no shadows, no environment map — each is a pass software WebGL pays for in every frame
 (``bench/page.py``: frames 67 → 33 ms for 8 steps, 167 → 83 ms for 250)."""
 
-LANE = 3.6  # scene units per lane
+LANE = 3.6  # scene units per lane (more when steps have action tables)
 ROW = 0.8  # scene units per row (more under a transition whose text needs it)
 BOX_W, BOX_H = 1.9, 0.6
 BAR_W = 0.55
@@ -73,71 +96,13 @@ TRANSITION_SIZE = 0.18
 TEXT_W = LANE - BAR_W / 2 - 0.08 - BOX_W / 2 - 0.35  # beside a bar, short of the next lane
 TEXT_TOP = 0.32  # a transition's text starts this far above its bar
 TEXT_ROOM = 0.64  # and has this much height before its row grows
-LINE = 1.25  # line height / text height
-TEXT_PX = 90  # text image pixels per scene unit
-BAND_PX = 2048  # the widest text image (WebGL textures stay small)
+BLOCK_GAP = 0.34  # from a step box to its action table (room for the V mark)
+LEFT_ROOM = 1.4  # left of a box: an incoming jump, the C mark, the step's times
 MAX_TRANSITION_LINES = 24  # beyond: "…", the whole condition is in the details panel
 READABLE_PX = 55.0  # screen pixels per scene unit at the default zoom: text of 10-12 px
 
 
-@functools.cache
-def _font(px: int) -> ImageFont.FreeTypeFont | ImageFont.ImageFont:
-    return ImageFont.load_default(size=max(px, 6))
-
-
-def _width(text: str, size: float) -> float:
-    """The width of ``text`` in scene units at text height ``size``."""
-    return float(_font(round(size * TEXT_PX)).getlength(text)) / TEXT_PX
-
-
-def wrap(text: str, width: float, size: float) -> list[str]:
-    """``text`` in lines no wider than ``width`` at ``size``: broken at blanks, a word too
-    long for a line broken inside; every character kept (line breaks start new lines)."""
-    lines: list[str] = []
-    for para in text.split("\n"):
-        line = ""
-        for word in para.split(" "):
-            candidate = f"{line} {word}" if line else word
-            if _width(candidate, size) <= width:
-                line = candidate
-                continue
-            if line:
-                lines.append(line)
-            line = ""
-            while word and _width(word, size) > width:
-                cut = max(1, _fits(word, width, size))
-                lines.append(word[:cut])
-                word = word[cut:]
-            line = word
-        lines.append(line)
-    return lines
-
-
-def _fits(word: str, width: float, size: float) -> int:
-    """How many leading characters of ``word`` fit in ``width``."""
-    lo, hi = 0, len(word)
-    while lo < hi:
-        mid = (lo + hi + 1) // 2
-        if _width(word[:mid], size) <= width:
-            lo = mid
-        else:
-            hi = mid - 1
-    return lo
-
-
-def fit_text(
-    text: str, width: float, height: float, sizes: Iterable[float]
-) -> tuple[list[str], float]:
-    """The lines and the largest of ``sizes`` at which ``text`` fits in ``width`` ×
-    ``height``; the smallest size when none does (its lines then are all there)."""
-    best: tuple[list[str], float] | None = None
-    for size in sizes:
-        lines = wrap(text, width, size)
-        best = (lines, size)
-        if len(lines) * size * LINE <= height:
-            return best
-    assert best is not None
-    return best
+_width = text_width  # the name the tests know
 
 
 def contrast(a: Rgb, b: Rgb) -> float:
@@ -156,23 +121,6 @@ def contrast(a: Rgb, b: Rgb) -> float:
 
 
 @dataclass(frozen=True, slots=True)
-class Text:
-    lines: tuple[str, ...]
-    x: float  # left
-    y: float  # top
-    size: float
-
-
-@dataclass(frozen=True, slots=True)
-class Tile:
-    image: Any  # RGBA numpy array, rows bottom-up
-    width: float
-    height: float
-    cx: float
-    cy: float
-
-
-@dataclass(frozen=True, slots=True)
 class Picture:
     """The scene geometry of one placed chart (scene units, y up), computed once per chart."""
 
@@ -184,6 +132,11 @@ class Picture:
     double: Any
     tiles: tuple[Tile, ...]
     bounds: tuple[float, float, float, float]  # x0, x1, y0 (bottom), y1 (top)
+    lane: float = LANE
+    times: dict[int, tuple[float, float]] = field(default_factory=dict)  # step: T/U top-left
+    cells: dict[int, tuple[Cell, ...]] = field(default_factory=dict)  # step: live values
+    contacts: dict[ConditionKey, tuple[tuple[Rect, ...], ...]] = field(default_factory=dict)
+    sequence_bounds: dict[int, tuple[float, float, float, float]] = field(default_factory=dict)
 
 
 def _rect(cx: float, cy: float, w: float, h: float) -> list[list[list[float]]]:
@@ -225,10 +178,20 @@ class _Rows:
 def picture(placement: Placement) -> Picture:
     """The scene geometry and rendered texts of ``placement``."""
     p = placement
-    trans_text, rows = _transition_texts(p)
-    d = _Drawing(rows)
+    infos = [s.info for s in p.steps.values() if s.info is not None]
+    cols = columns_of(infos)
+    block_w = block_width(cols, infos)
+    lane = max(LANE, BOX_W + BLOCK_GAP + block_w + LEFT_ROOM) if block_w else LANE
+    blocks = {
+        s.number: step_block(s.info, cols, block_w, 0.0, 0.0)
+        for s in p.steps.values()
+        if s.info is not None and block_w
+    }
+    trans_text, rows = _transition_texts(p, lane - (LANE - TEXT_W), blocks)
+    d = _Drawing(rows, lane)
     d.links(p)
     d.steps(p)
+    d.blocks(p, {n: b for n, b in blocks.items() if b.height}, cols, block_w)
     d.transitions(p, trans_text)
     d.jumps(p)
     d.incoming_jumps(p)
@@ -238,6 +201,7 @@ def picture(placement: Placement) -> Picture:
         x, _ = d.xy(q.x0, 0)
         title = f"Sequence {q.number}  {q.name}".rstrip()
         d.text_at([title], x - BOX_W / 2, 0.75, "bottom-left", 0.22)
+    bounds = d.bounds()
     return Picture(
         placement=p,
         steps=d.step_xy,
@@ -245,45 +209,85 @@ def picture(placement: Placement) -> Picture:
         targets=d.targets,
         segments=np.array(d.segments, np.float32).reshape(-1, 2, 3),
         double=np.array(d.double, np.float32).reshape(-1, 2, 3),
-        tiles=tuple(_tiles(d.text_items)),
-        bounds=d.bounds(),
+        tiles=tuple(tiles(d.text_items)),
+        bounds=bounds,
+        lane=lane,
+        times=d.times,
+        cells=d.cells,
+        contacts=d.contacts,
+        sequence_bounds={
+            q.number: (
+                q.x0 * lane - BOX_W / 2 - LEFT_ROOM,
+                min(q.x1 * lane + lane - BOX_W / 2 - 0.2, bounds[1]),
+                bounds[2],
+                bounds[3],
+            )
+            for q in p.sequences
+        },
     )
 
 
-def _transition_texts(p: Placement) -> tuple[dict[int, tuple[list[str], float]], _Rows]:
-    """Each transition's wrapped title and condition with its text size, and the rows, each
-    as high as the longest transition text on it needs."""
-    trans_text: dict[int, tuple[list[str], float]] = {}
+@dataclass(frozen=True, slots=True)
+class _TransitionText:
+    """A transition's lines beside its bar: its title, then its condition from line
+    ``first`` (``condition``: those lines, ``starts``: where each begins in the text)."""
+
+    lines: list[str]
+    size: float
+    first: int
+    condition: list[str]
+    starts: list[int]
+
+
+def _transition_texts(
+    p: Placement, text_w: float, blocks: dict[int, Block]
+) -> tuple[dict[int, _TransitionText], _Rows]:
+    """Each transition's wrapped title and condition, and the rows, each as high as the
+    longest transition text on it needs, or a step's action table and conditions."""
+    trans_text: dict[int, _TransitionText] = {}
     extra: dict[int, float] = {}
     for t in p.transitions.values():
         title = texts.title("T", t.number, t.name, 10_000)
-        lines = wrap(title, TEXT_W, TRANSITION_SIZE)
-        if t.condition:
-            lines += wrap(t.condition, TEXT_W, TRANSITION_SIZE)
+        lines = wrap(title, text_w, TRANSITION_SIZE)
+        first = len(lines)
+        condition = wrap(t.condition, text_w, TRANSITION_SIZE) if t.condition else []
+        lines += condition
         if len(lines) > MAX_TRANSITION_LINES:
             lines = [*lines[: MAX_TRANSITION_LINES - 1], "… (whole condition: click)"]
-        trans_text[t.number] = (lines, TRANSITION_SIZE)
+            condition = condition[: max(MAX_TRANSITION_LINES - 1 - first, 0)]
+        starts = line_starts(t.condition, condition)
+        trans_text[t.number] = _TransitionText(lines, TRANSITION_SIZE, first, condition, starts)
         need = len(lines) * TRANSITION_SIZE * LINE - TEXT_ROOM
         if need > 0:
             row = int(t.y)
             extra[row] = max(extra.get(row, 0.0), need)
+    room = BOX_H / 2 + ROW / 2 - 0.08  # from a box's top to a line half a row under it
+    for number, block in blocks.items():
+        if block.height > room:
+            row = int(p.steps[number].y)
+            extra[row] = max(extra.get(row, 0.0), block.height - room)
     return trans_text, _Rows(extra)
 
 
 class _Drawing:
     """The line segments and texts of a picture as they are drawn, element kind by kind."""
 
-    def __init__(self, rows: _Rows) -> None:
+    def __init__(self, rows: _Rows, lane: float = LANE) -> None:
         self.rows = rows
+        self.lane = lane
+        self.text_w = lane - (LANE - TEXT_W)
         self.text_items: list[Text] = []
         self.segments: list[list[list[float]]] = []
         self.double: list[list[list[float]]] = []
         self.step_xy: dict[int, tuple[float, float]] = {}
         self.transition_xy: dict[int, tuple[float, float]] = {}
         self.targets: dict[int, tuple[float, float, float, float]] = {}
+        self.times: dict[int, tuple[float, float]] = {}
+        self.cells: dict[int, tuple[Cell, ...]] = {}
+        self.contacts: dict[ConditionKey, tuple[tuple[Rect, ...], ...]] = {}
 
     def xy(self, x: float, y: float, *, from_above: bool = False) -> tuple[float, float]:
-        return x * LANE, self.rows.at(y, from_above=from_above)
+        return x * self.lane, self.rows.at(y, from_above=from_above)
 
     def text_at(self, lines: list[str], x: float, y: float, anchor: str, size: float) -> None:
         w = max((_width(line, size) for line in lines), default=0.0)
@@ -313,6 +317,7 @@ class _Drawing:
             label = texts.title("S", s.number, s.name, 10_000)
             lines, size = fit_text(label, BOX_W - 0.12, BOX_H - 0.08, STEP_SIZES)
             self.text_at(lines, x, y, "center-center", size)
+            self.times[s.number] = (x - BOX_W / 2, y - BOX_H / 2 - 0.03)
             if s.interlock:
                 self.segments += _rect(x - BOX_W / 2 - 0.14, y, 0.22, 0.28)
                 self.text_at(["C"], x - BOX_W / 2 - 0.14, y, "center-center", 0.2)
@@ -320,15 +325,34 @@ class _Drawing:
                 self.segments += _rect(x + BOX_W / 2 + 0.14, y, 0.22, 0.28)
                 self.text_at(["V"], x + BOX_W / 2 + 0.14, y, "center-center", 0.2)
 
-    def transitions(self, p: Placement, trans_text: dict[int, tuple[list[str], float]]) -> None:
+    def blocks(self, p: Placement, blocks: dict[int, Block], cols: Any, width: float) -> None:
+        """Each step's action table and conditions right of its box, its top at the box's."""
+        for number in blocks:
+            s = p.steps[number]
+            assert s.info is not None
+            x, y = self.step_xy[number]
+            b = step_block(s.info, cols, width, x + BOX_W / 2 + BLOCK_GAP, y + BOX_H / 2)
+            self.text_items += b.texts
+            self.segments += b.segments
+            if b.cells:
+                self.cells[number] = tuple(b.cells)
+            self.contacts.update(b.contacts)
+
+    def transitions(self, p: Placement, trans_text: dict[int, _TransitionText]) -> None:
         for t in p.transitions.values():
             x, y = self.xy(t.x, t.y)
             self.transition_xy[t.number] = (x, y)
-            lines, size = trans_text[t.number]
+            tt = trans_text[t.number]
+            lines, size = tt.lines, tt.size
             left, top = x + BAR_W / 2 + 0.08, y + TEXT_TOP
             self.text_at(lines, left, top, "top-left", size)
+            if t.contacts:
+                cond_top = top - tt.first * size * LINE
+                spans = list(t.contacts)
+                rects = span_rects(tt.condition, tt.starts, spans, left, cond_top, size)
+                self.contacts[("T", t.number)] = rects
             h = max(size * LINE * len(lines), 0.3)
-            x0, x1 = x - BAR_W / 2 - 0.05, left + TEXT_W
+            x0, x1 = x - BAR_W / 2 - 0.05, left + self.text_w
             y0, y1 = min(top - h, y - 0.15), max(top, y + 0.15)
             self.targets[t.number] = ((x0 + x1) / 2, (y0 + y1) / 2, x1 - x0, y1 - y0)
 
@@ -388,49 +412,16 @@ class _Drawing:
     def bounds(self) -> tuple[float, float, float, float]:
         steps, transitions = self.step_xy.values(), self.transition_xy.values()
         xs = [v for x, _ in steps for v in (x - BOX_W / 2 - 0.9, x + BOX_W / 2 + 0.3)]
-        xs += [x + BAR_W / 2 + 0.08 + TEXT_W for x, _ in transitions]
+        xs += [x + BAR_W / 2 + 0.08 + self.text_w for x, _ in transitions]
+        xs += [v for t in self.text_items for v in (t.x, t.x + t.width)]
         ys = [y for _, y in steps] + [y for _, y in transitions]
-        ys += [t.y - t.size * LINE * len(t.lines) for t in self.text_items] + [1.0]
+        ys += [t.y - t.height for t in self.text_items] + [1.0]
         return (
             min(xs, default=0.0),
             max(xs, default=1.0),
             min(ys, default=0.0) - BOX_H,
             max(ys, default=0.0),
         )
-
-
-def _tiles(items: list[Text]) -> list[Tile]:
-    """The texts rendered onto transparent images, one per band of at most ``BAND_PX``
-    pixels of width (a text belongs to the band where it starts)."""
-    band_w = BAND_PX / TEXT_PX
-    if not items:
-        return []
-    x_min = min(t.x for t in items)
-    bands: dict[int, list[Text]] = {}
-    for t in items:
-        bands.setdefault(int((t.x - x_min) // band_w), []).append(t)
-    return [_render(group) for _, group in sorted(bands.items())]
-
-
-def _render(items: list[Text]) -> Tile:
-    def width(t: Text) -> float:
-        return max((_width(line, t.size) for line in t.lines), default=0.0)
-
-    x0 = min(t.x for t in items) - 0.1
-    x1 = max(t.x + width(t) for t in items) + 0.1
-    y1 = max(t.y for t in items) + 0.1
-    y0 = min(t.y - t.size * LINE * len(t.lines) for t in items) - 0.1
-    size = (max(round((x1 - x0) * TEXT_PX), 1), max(round((y1 - y0) * TEXT_PX), 1))
-    image = Image.new("RGBA", size, (255, 255, 255, 0))
-    draw = ImageDraw.Draw(image)
-    for t in items:
-        font = _font(round(t.size * TEXT_PX))
-        for i, line in enumerate(t.lines):
-            px = (t.x - x0) * TEXT_PX
-            py = (y1 - t.y + i * t.size * LINE) * TEXT_PX
-            draw.text((px, py), line, font=font, fill=(0, 0, 0, 255))
-    pixels = np.ascontiguousarray(np.asarray(image)[::-1])  # the plane shows rows bottom-up
-    return Tile(pixels, x1 - x0, y1 - y0, (x0 + x1) / 2, (y0 + y1) / 2)
 
 
 # ---------------------------------------------------------------- into a scene
@@ -558,21 +549,29 @@ def _relay(callback: Click, number: int, event: Any) -> None:
     callback(number, event)
 
 
+PAGE_W, PAGE_H = 1280, 800  # the page a camera is aimed for before it says its size
+PANEL_W = 380  # the side panel, docked right of the chart (the canvas ends where it starts)
+CANVAS_ASPECT = (PAGE_W - PANEL_W) / PAGE_H
+Bounds = tuple[float, float, float, float]
+
+
 def camera_for(
     pic: Picture,
     *,
     offset: tuple[float, float] = (0.0, 0.0),
     fov: float = 1.309,
-    aspect: float = 1.6,
-    right: float = 0.28,
-    height_px: float = 800.0,
+    aspect: float = CANVAS_ASPECT,
+    right: float = 0.0,
+    height_px: float = float(PAGE_H),
     whole: bool = False,
+    bounds: Bounds | None = None,
 ) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
-    """Camera position and look-at point showing ``pic`` (at ``offset``) left of the side
-    panel covering ``right`` of the canvas' width (``aspect``: width / height): the whole
-    chart if its text stays readable (``READABLE_PX`` screen pixels per scene unit on a
-    page ``height_px`` high) or ``whole`` is asked for, else its top-left part at that zoom."""
-    x0, x1, y0, y1 = pic.bounds
+    """Camera position and look-at point showing ``pic`` (at ``offset``; ``bounds``: only
+    that part of it, a sequence) on a canvas ``aspect`` wide per height, ``height_px``
+    high, of which a panel covers ``right`` (none: the side panel is docked beside the
+    canvas): the whole of it if its text stays readable (``READABLE_PX`` screen pixels per
+    scene unit) or ``whole`` is asked for, else its top-left part at that zoom."""
+    x0, x1, y0, y1 = bounds or pic.bounds
     x0, x1, y0, y1 = x0 - 0.2, x1 + 0.2, y0 - 0.2, y1 + 0.2
     tan = math.tan(fov / 2)
     usable = aspect * (1 - right)
@@ -580,11 +579,24 @@ def camera_for(
     readable = fit if whole else height_px / (READABLE_PX * 2 * tan)
     z = min(fit, readable)
     half_h, half_w = z * tan, z * tan * usable
-    cx = (x0 + x1) / 2 if fit <= readable else x0 + half_w
-    cy = (y0 + y1) / 2 if fit <= readable else y1 - half_h
-    cx += z * tan * aspect * right  # the side panel covers the right of the canvas
+    cx = (x0 + x1) / 2 if fit <= readable or x1 - x0 <= 2 * half_w else x0 + half_w
+    cy = (y0 + y1) / 2 if fit <= readable or y1 - y0 <= 2 * half_h else y1 - half_h
+    cx += z * tan * aspect * right  # a panel over the right of the canvas
     ox, oy = offset
     return (cx + ox, cy + oy, z), (cx + ox, cy + oy, 0.0)
+
+
+def canvas_of(client: Any) -> tuple[float, float]:
+    """The aspect and pixel height of ``client``'s canvas as its page last said (the side
+    panel docked beside it is not part of it); the default page's until it has."""
+    try:
+        cam = client.camera
+        height = float(cam.image_height)
+        if height > 0 and cam.image_width > 0:
+            return float(cam.image_width) / height, height
+    except Exception:  # the page has not told its camera yet, or is gone
+        pass
+    return CANVAS_ASPECT, float(PAGE_H)
 
 
 def aim_camera(
@@ -593,19 +605,28 @@ def aim_camera(
     *,
     whole: bool,
     offset: tuple[float, float] = (0, 0),
-    aspect: float = 1.6,
-    right: float = 0.28,
-) -> None:
-    """Aim ``client``'s camera at ``pic``: the whole chart, or the default readable zoom
-    (``aspect`` of the canvas, ``right``: the part of its width the side panel covers)."""
-    position, look = camera_for(pic, offset=offset, whole=whole, aspect=aspect, right=right)
+    bounds: Bounds | None = None,
+) -> tuple[float, float, float] | None:
+    """Aim ``client``'s camera at ``pic`` (``bounds``: a part of it): the whole of it, or
+    the default readable zoom, fitted to the page's canvas; where the camera was put
+    (None: the page is gone)."""
+    aspect, height = canvas_of(client)
+    position, look = camera_for(
+        pic, offset=offset, whole=whole, aspect=aspect, height_px=height, bounds=bounds
+    )
     try:
         cam = client.camera
+        x, y, z = position
+        if all(abs(float(a) - b) < 1e-6 for a, b in zip(cam.position, position, strict=True)):
+            # viser sends nothing for a position equal to the one the page last reported,
+            # which may be older than one sent since (a report crossed it): move it first
+            cam.position = (x, y, z + 1e-3)
         cam.position = position
         cam.look_at = look
         cam.up_direction = (0.0, 1.0, 0.0)
     except Exception:  # the page has not told its camera yet, or is gone
-        return
+        return None
+    return position
 
 
 def scale_px(z: float, fov: float = 1.309, height_px: float = 800.0) -> float:

@@ -53,7 +53,6 @@ __all__ = ["EDIT_OFFSET", "Editor"]
 
 EDIT_OFFSET: Final = (0.0, -2000.0)  # where a page draws the chart it edits (off the live one)
 EDITOR_WIDTH: Final = 400  # pixels of the editor's panel, docked left of the chart
-PAGE_WIDTH, PAGE_HEIGHT, PANEL_WIDTH = 1280, 800, 340  # the page the camera is aimed for
 DEBOUNCE_S: Final = 0.6  # typing pauses this long: the text is applied
 
 
@@ -216,21 +215,17 @@ class Editor(CpuCommands, RowEditing):
             self._drawing, self._drawn = None, None
         self._clear_form()
         self.status.content = self._status_html()
+        self.panel.fit(lambda: None)
         pic = getattr(self.host, "picture", None)
         if pic is not None:
-            aim_camera(self.client, pic, whole=False)
+            self.panel.fit(lambda: aim_camera(self.client, pic, whole=False))
 
     def aim(self, *, whole: bool) -> None:
-        if self._picture is not None:
-            canvas = PAGE_WIDTH - EDITOR_WIDTH  # the docked editor narrows the canvas
-            aim_camera(
-                self.client,
-                self._picture,
-                whole=whole,
-                offset=EDIT_OFFSET,
-                aspect=canvas / PAGE_HEIGHT,
-                right=PANEL_WIDTH / canvas,
-            )
+        """Aim the page at the chart edited (the docked panels narrow the canvas: the page
+        says its size)."""
+        pic = self._picture
+        if pic is not None:
+            self.panel.fit(lambda: aim_camera(self.client, pic, whole=whole, offset=EDIT_OFFSET))
 
     def running_changed(self, layout: ChartLayout) -> None:
         """The CPU runs another chart version (a download, from here or elsewhere)."""
@@ -305,7 +300,11 @@ class Editor(CpuCommands, RowEditing):
             self.status.content = self._status_html()
 
     def _draw(self, chart: Chart) -> None:
+        """Draw ``chart``; when the edit made it larger or smaller, fit the page to it."""
+        before = self._picture.bounds if self._picture is not None else None
         self._picture = picture(place(ChartLayout.from_chart(chart)))
+        if before is not None and before != self._picture.bounds:
+            self.aim(whole=False)
         if self._drawing is not None:
             self._drawing.remove()
         self._drawing = Drawing(

@@ -8,6 +8,10 @@ Rows are the longest path from the top, so a convergence or a join sits below ev
 that reaches it. An edge back to a step already on the path, or to another sequence, is a
 jump: an arrow under the transition with the target number. ``TO STOP`` is a branch stop.
 
+At an alternative divergence the branches that go on come first (left), those that only
+jump back or stop after them: a chart whose first branch at every step jumps back (as
+imported PLCopen charts often are) keeps its path in one lane.
+
 A long sequence wraps into several columns side by side (at most ``FOLD_ROWS`` rows each,
 a column always starting with a step row), so a 250-step chart stays readable: a line that
 would cross from one column into the next ends in a :class:`Continuation` arrow naming
@@ -22,7 +26,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 from s7graph.sequencer.text.model import Chart
-from s7graph.web.bus.protocol import ChartLayout, SequenceInfo, TransitionInfo
+from s7graph.web.bus.protocol import ChartLayout, SequenceInfo, StepInfo, TransitionInfo
 
 __all__ = [
     "FOLD_ROWS",
@@ -51,6 +55,7 @@ class PlacedStep:
     interlock: bool
     supervision: bool
     sequence: int
+    info: StepInfo | None = None  # its action table and conditions, as the CPU described them
 
 
 @dataclass(frozen=True, slots=True)
@@ -61,6 +66,8 @@ class PlacedTransition:
     y: float
     condition: str
     sequence: int
+    contacts: tuple[tuple[int, int], ...] = ()  # where each contact stands in the condition
+    sources: tuple[int, ...] = ()  # the steps before it
 
 
 @dataclass(frozen=True, slots=True)
@@ -232,7 +239,7 @@ class _SequencePlacer:
         seq, trans = self.seq, self.trans
         self._walk()
         row = self._rows()
-        self._lanes(x0)
+        self._lanes(x0, row)
         lane = self.lane
         placed_steps = [
             PlacedStep(
@@ -244,6 +251,7 @@ class _SequencePlacer:
                 interlock=self.step_info[n].interlock,
                 supervision=self.step_info[n].supervision,
                 sequence=seq.number,
+                info=self.step_info[n],
             )
             for n in self.own_steps
         ]
@@ -255,6 +263,8 @@ class _SequencePlacer:
                 y=float(row[("T", n)]),
                 condition=trans[n].condition,
                 sequence=seq.number,
+                contacts=tuple((a, b) for a, b in trans[n].contacts),
+                sources=tuple(trans[n].sources),
             )
             for n in seq.transitions
             if n in trans
@@ -336,15 +346,39 @@ class _SequencePlacer:
     def _is_divergence(self, node: Node) -> bool:
         return node[0] == "T" and len(self.trans[node[1]].targets) > 1
 
-    def _lanes(self, x0: float) -> None:
-        """Lanes: tree children side by side; jumps in a simultaneous divergence take a lane."""
+    def _only_jumps(self, node: Node) -> bool:
+        """Whether transition ``node`` leads nowhere on the page below it: every target a
+        jump (back, or to another sequence), or a branch stop (one target at most)."""
+        if node[0] != "T" or len(self.trans[node[1]].targets) > 1:
+            return False
+        return set(self._jump_targets(node)) == set(self.trans[node[1]].targets)
+
+    def _split(self, node: Node) -> tuple[list[Node], list[Node]]:
+        """The tree children of ``node`` that take lanes side by side, and at an alternative
+        divergence the branches that only jump back or stop: those are placed afterwards
+        in the first lane right of their step that is free at their rows
+        (:meth:`_side_branches`), so the path that goes on keeps its lane instead of
+        stepping one lane right at every step whose first branch jumps back."""
+        children = self.tree_children[node]
+        if node[0] != "S" or len(children) < 2:
+            return children, []
+        main = [c for c in children if not self._only_jumps(c)]
+        side = [c for c in children if self._only_jumps(c)]
+        if not main:
+            main.append(side.pop(0))
+        return main, side
+
+    def _lanes(self, x0: float, row: dict[Node, int]) -> None:
+        """Lanes: tree children side by side; jumps in a simultaneous divergence take a
+        lane; branches that only jump or stop go where their rows are free."""
         width: dict[Node, int] = {}
         for node in self.postorder:
-            own = sum(width[c] for c in self.tree_children[node])
+            own = sum(width[c] for c in self._split(node)[0])
             if self._is_divergence(node):
                 own += len(self._jump_targets(node))
             width[node] = max(1, own)
         lane = self.lane
+        sides: list[tuple[Node, Node]] = []
         next_lane = x0
         for root in self.roots:
             lane[root] = next_lane
@@ -352,10 +386,9 @@ class _SequencePlacer:
             while stack:
                 node = stack.pop()
                 x = lane[node]
-                children = self.tree_children[node]
                 if self._is_divergence(node):
                     # Keep written target order across real steps and jumps.
-                    tree = {c[1]: c for c in children}
+                    tree = {c[1]: c for c in self.tree_children[node]}
                     jumped = set(self._jump_targets(node))
                     for target in self.trans[node[1]].targets:
                         if target in tree:
@@ -365,12 +398,51 @@ class _SequencePlacer:
                         elif target in jumped:
                             self.jump_lane[(node[1], target)] = x
                             x += 1
-                else:
-                    for child in children:
-                        lane[child] = x
-                        stack.append(child)
-                        x += width[child]
+                    continue
+                main, side = self._split(node)
+                for child in main:
+                    lane[child] = x
+                    stack.append(child)
+                    x += width[child]
+                sides += [(node, child) for child in side]
             next_lane += width[root]
+        if sides:
+            self._side_branches(sides, row)
+
+    def _side_branches(self, sides: list[tuple[Node, Node]], row: dict[Node, int]) -> None:
+        """Place each branch that only jumps or stops in the first lane right of its step
+        where nothing is drawn from the line under the step down to its jump arrow."""
+        taken = _Occupancy()
+        for node, preds in self.dag_preds.items():
+            if node in self.lane:
+                for pred in preds:
+                    if pred in self.lane:
+                        self._occupy_edge(taken, pred, node, row)
+        for node in self.lane:
+            taken.add(self.lane[node], row[node] - 0.45, row[node] + 0.45)
+        for (t, _), x in self.jump_lane.items():
+            taken.add(x, row[("T", t)] + 0.5, row[("T", t)] + 1.0)
+        for step, branch in sorted(sides, key=lambda sb: (row[sb[0]], sb[0][1])):
+            x, top = self.lane[step], row[step] + 0.25
+            bottom = row[branch] + 1.0
+            lane = x + 1  # the step's divergence line runs across to it: shared, not taken
+            while taken.hit(lane, top, bottom):
+                lane += 1
+            self.lane[branch] = lane
+            taken.add(lane, top, bottom)
+
+    def _occupy_edge(self, taken: _Occupancy, a: Node, b: Node, row: dict[Node, int]) -> None:
+        """Mark where the line from ``a`` down to ``b`` runs (as ``_lines`` draws it)."""
+        xa, xb, ra, rb = self.lane[a], self.lane[b], float(row[a]), float(row[b])
+        if xa == xb:
+            taken.add(xa, ra, rb)
+            return
+        fans_out = (a[0] == "S" and len(self.out.get(a[1], [])) > 1) or self._is_divergence(a)
+        mid = ra + 0.5 if fans_out else rb - 0.5
+        taken.add(xa, ra, mid)
+        taken.add(xb, mid, rb)
+        for lane in range(int(min(xa, xb)), int(max(xa, xb)) + 1):
+            taken.add(lane, mid - 0.25, mid + 0.25)
 
     def _lines(
         self, placed_steps: list[PlacedStep], placed_trans: list[PlacedTransition]
@@ -420,6 +492,20 @@ class _SequencePlacer:
             else:
                 links.append(_elbow((sx, sy), (t.x, t.y), t.y - 0.5, False, t.number))
         return links
+
+
+class _Occupancy:
+    """Which rows of each lane something is drawn on (intervals of grid rows)."""
+
+    def __init__(self) -> None:
+        self._spans: dict[int, list[tuple[float, float]]] = {}
+
+    def add(self, lane: float, top: float, bottom: float) -> None:
+        lo, hi = min(top, bottom), max(top, bottom)
+        self._spans.setdefault(int(lane), []).append((lo, hi))
+
+    def hit(self, lane: float, top: float, bottom: float) -> bool:
+        return any(lo < bottom and top < hi for lo, hi in self._spans.get(int(lane), ()))
 
 
 def _elbow(a: Point, b: Point, y_mid: float, double: bool, transition: int) -> Link:

@@ -9,13 +9,17 @@ viewer: every command button is disabled (and the CPU refuses commands without a
 token anyway); after login the buttons its role allows (``web.access.roles``) are
 enabled, and a page whose role may ``force`` gets a Force folder (address, value, Force /
 Unforce / Unforce all, the active jobs). The current mode is highlighted on its button.
-Command verdicts come back as notifications on this page only.
+Command verdicts come back as notifications on this page only. The Alarms folder
+(``web.view.alarms``) filters the message list and acknowledges all of it; *Chart view*
+fits the chart to the page, and for a chart of several sequences shows one of them or all
+(an overview).
 """
 
 from __future__ import annotations
 
 import functools
 import threading
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Final
@@ -34,13 +38,11 @@ from s7graph.web.bus.protocol import (
 from s7graph.web.commands import (
     MODES,
     Ack,
-    AckMsg,
     AckStep,
     Force,
     ForceArgs,
     Halt,
     Init,
-    MessageArgs,
     Mode,
     ModeArgs,
     Off,
@@ -56,6 +58,7 @@ from s7graph.web.commands import (
     op_of,
 )
 from s7graph.web.view import texts
+from s7graph.web.view.alarms import AlarmView
 from s7graph.web.view.drawing import aim_camera
 from s7graph.web.view.editor import Editor
 from s7graph.web.view.engineering import Engineering, ViewHost
@@ -110,8 +113,7 @@ class PageState:
     banner: str
     status: str
     mode: str | None
-    alarms: AlarmList | None
-    alarms_html: str
+    alarms: AlarmList | None  # each page lists it through its own filter (web.view.alarms)
     history: str
     audit: str
     events: str
@@ -129,8 +131,11 @@ class ClientPanel:
         self.role = "viewer"
         self.verified = True
         self._lock = threading.Lock()
-        self._alarm_buttons: dict[int | str, viser.GuiButtonHandle] = {}
         self._shown: dict[str, str] = {}
+        self._focus: int | None = None  # the sequence Chart view shows (None: all)
+        self._fit: Callable[[], tuple[float, float, float] | None] = lambda: None
+        self._ours: deque[tuple[float, ...]] = deque(maxlen=8)  # where the view put the camera
+        self._canvas: tuple[int, int] = (0, 0)
         self._mode: str | None = None
         self._alarms: AlarmList | None = None
         self.force_folder: viser.GuiFolderHandle | None = None
@@ -179,8 +184,8 @@ class ClientPanel:
             for kind, _ in _STEP_BUTTONS:
                 make = functools.partial(self._step, kind)
                 self.step_buttons[op_of(kind)].on_click(self._on_click(make))
-        with gui.add_folder("Alarms") as self.alarm_folder:
-            self.alarm_html = gui.add_html(texts.alarms_html(None))
+        self.alarms = AlarmView(self, w.layout)
+        self.alarm_folder = self.alarms.folder
         with gui.add_folder("Alarm history", expand_by_default=False):
             self.history_html = gui.add_html(texts.history_html(None))
         with gui.add_folder("Audit", expand_by_default=False):
@@ -204,7 +209,9 @@ class ClientPanel:
             )
             self.detail_html = gui.add_html(texts.small("waiting for the CPU…"))
             self.detail_step.on_update(lambda _: self._clear_transition())
-        with gui.add_folder("Chart view", expand_by_default=False):
+        several = len(w.layout.sequences) > 1
+        with gui.add_folder("Chart view", expand_by_default=several) as self.view_folder:
+            self.sequence_buttons = self._sequence_buttons(w.layout)
             whole = gui.add_button("Whole chart", hint="zoom out to the whole chart")
             near = gui.add_button("Readable zoom", hint="back to the default zoom")
             whole.on_click(lambda _: self.aim(whole=True))
@@ -214,6 +221,7 @@ class ClientPanel:
             self.event_log = gui.add_html(texts.log_html([]))
         self._halted = False
         self._enable()
+        self.client.camera.on_update(self._camera_moved)
 
     def _enable(self) -> None:
         """Enable exactly the buttons this page's role allows; an engineer gets the editor."""
@@ -224,8 +232,7 @@ class ClientPanel:
             mode_button.disabled = not allowed(role, "mode")
         for op, button in {**self.buttons, **self.step_buttons}.items():
             button.disabled = not allowed(role, op)
-        for button in self._alarm_buttons.values():
-            button.disabled = not allowed(role, "ack_msg")
+        self.alarms.enable(allowed(role, "ack_msg"))
         self.login_button.disabled = bool(self.token)
         self.logout_button.disabled = not self.token
         self.user_field.disabled = bool(self.token)
@@ -293,19 +300,81 @@ class ClientPanel:
         self.detail_transition.value = 0  # type: ignore[misc]
 
     def aim(self, *, whole: bool) -> None:
-        """Aim this page's camera at the live chart: the whole of it, or readably."""
+        """Aim this page's camera at the live chart (the sequence chosen in *Chart view*,
+        else all of it): the whole of it, or readably."""
         host = self.wiring.host
         pic = getattr(host, "picture", None)
         if pic is None or (self.editor is not None and self.editor.editing):
             if self.editor is not None and self.editor.editing:
                 self.editor.aim(whole=whole)
             return
-        aim_camera(self.client, pic, whole=whole)
+        self.fit(functools.partial(self._aim_live, whole=whole))
+
+    def _aim_live(self, *, whole: bool) -> tuple[float, float, float] | None:
+        pic = getattr(self.wiring.host, "picture", None)
+        if pic is None:
+            return None
+        bounds = pic.sequence_bounds.get(self._focus) if self._focus is not None else None
+        return aim_camera(self.client, pic, whole=whole, bounds=bounds)
+
+    def fit(self, aim: Callable[[], tuple[float, float, float] | None]) -> None:
+        """Aim the page's camera with ``aim``, and again whenever the page's canvas changes
+        size (a panel docked or undocked, the window resized) while the camera is still
+        where ``aim`` put it: an aim made before the page had docked its panel fits it."""
+        self._fit = aim
+        aimed = aim()
+        if aimed is not None:
+            self._ours.append(aimed)
+
+    def opened_at(self, position: Any) -> None:
+        """The page opened with its camera at ``position`` (the view's initial camera,
+        aimed for the usual canvas): fitted again once the page says its canvas."""
+        self._ours.append(tuple(float(v) for v in position))
+        self._fit = functools.partial(self._aim_live, whole=False)
+
+    def _camera_moved(self, camera: Any) -> None:
+        """The page reported its camera: on a canvas of another size, fit again unless the
+        camera is somewhere the user moved it (not where the view put it)."""
+        canvas = (int(camera.image_width), int(camera.image_height))
+        if canvas == self._canvas:
+            return
+        self._canvas = canvas
+        at = tuple(float(v) for v in camera.position)
+        if any(all(abs(a - b) < 1e-2 for a, b in zip(at, p, strict=True)) for p in self._ours):
+            self.fit(self._fit)
+
+    def _sequence_buttons(self, layout: ChartLayout) -> viser.GuiButtonGroupHandle | None:
+        """A chart of several sequences: a button per sequence and one for the overview."""
+        if len(layout.sequences) < 2:
+            return None
+        options = _sequence_labels(layout)
+        group = self.client.gui.add_button_group(
+            "Sequence", options, hint="show one sequence at a readable zoom, or all of them"
+        )
+        numbers = {label: q.number for label, q in zip(options[1:], layout.sequences, strict=True)}
+
+        def chosen(event: Any) -> None:
+            self._focus = numbers.get(str(event.target.value))
+            self.aim(whole=self._focus is None)
+
+        group.on_click(chosen)
+        return group
 
     def chart_changed(self, layout: ChartLayout) -> None:
-        """The CPU runs another chart version (render thread)."""
+        """The CPU runs another chart version (render thread): the page is fitted to it."""
         if self.editor is not None:
             self.editor.running_changed(layout)
+        self.alarms.chart_changed(layout)
+        if self._focus not in {q.number for q in layout.sequences}:
+            self._focus = None
+        wanted = _sequence_labels(layout) if len(layout.sequences) > 1 else []
+        shown = self.sequence_buttons
+        if (list(shown.options) if shown is not None else []) != wanted:
+            if shown is not None:
+                shown.remove()
+            with self.view_folder:
+                self.sequence_buttons = self._sequence_buttons(layout)
+        self.aim(whole=False)
 
     # ------------------------------------------------------------ login
 
@@ -372,9 +441,6 @@ class ClientPanel:
         """Halt, or resume when halted (the button shows which)."""
         return Halt(fb=self.fb, args=OnArgs(on=not self._halted))
 
-    def _ack_msg(self, msg_id: int | str) -> AckMsg:
-        return AckMsg(fb=self.fb, args=MessageArgs(msg_id=msg_id))
-
     def _unforce_all(self) -> Force:
         return Force(fb=self.fb, args=ForceArgs(all=True))
 
@@ -384,6 +450,15 @@ class ClientPanel:
         verdict = "applied" if reply.applied else "refused"
         self._notify(f"{command.op} {verdict}", reply.reason or "OK", ok=reply.applied)
         return reply
+
+    def send_quiet(self, command: Command) -> CommandReply:
+        """Send ``command`` as this page's user without a notice (the caller says how it
+        went: *Acknowledge all* sums up its commands in one)."""
+        return self._send(command, self.wiring.send)
+
+    def notify(self, title: str, body: str, *, ok: bool) -> None:
+        """A notice on this page only."""
+        self._notify(title, body, ok=ok)
 
     def engineer_command(self, command: Command) -> CommandReply:
         """Send one engineering command (download, save …) as this page's user and wait
@@ -442,28 +517,12 @@ class ClientPanel:
                 self.buttons["halt"].label = "Resume (HALT off)" if halted else "Halt"
             if page.alarms is not self._alarms:
                 self._alarms = page.alarms
-                self._set(self.alarm_html, "alarms", page.alarms_html)
-                self._alarm_rows(page.alarms)
+                self.alarms.set_alarms(page.alarms)
 
-    def _alarm_rows(self, alarms: AlarmList | None) -> None:
-        """One Acknowledge button per unacknowledged message."""
-        pending = alarms.pending() if alarms is not None else []
-        wanted = {e.msg_id: e for e in pending}
-        for mid in [m for m in self._alarm_buttons if m not in wanted]:
-            self._alarm_buttons.pop(mid).remove()
-        role = self.role if self.token else "viewer"
-        with self.alarm_folder:
-            for mid, entry in wanted.items():
-                if mid not in self._alarm_buttons:
-                    button = self.client.gui.add_button(
-                        texts.ack_label(entry),
-                        color="red",
-                        hint=texts.clip(entry.text, 200),
-                        disabled=not allowed(role, "ack_msg"),
-                    )
-                    make = functools.partial(self._ack_msg, mid)
-                    button.on_click(self._on_click(make))
-                    self._alarm_buttons[mid] = button
+
+def _sequence_labels(layout: ChartLayout) -> list[str]:
+    """The buttons of *Chart view*'s Sequence: the overview, then each sequence."""
+    return ["Overview", *(texts.clip(f"{q.number} {q.name}".strip(), 24) for q in layout.sequences)]
 
 
 def _origin(client: viser.ClientHandle) -> str:

@@ -81,10 +81,10 @@ def ack_label(entry: AlarmEntry) -> str:
     return clip(f"Acknowledge message {entry.msg_id}", 64)
 
 
-def alarms_html(alarms: AlarmList | None) -> str:
+def alarms_html(alarms: AlarmList | None, *, empty: str = "no messages") -> str:
     """Every listed message: time, state, text, step, who acknowledged it and when."""
     if alarms is None or not alarms.entries:
-        return small('<span style="color:#777">no messages</span>')
+        return small(f'<span style="color:#777">{html.escape(empty)}</span>')
     rows = []
     for e in reversed(alarms.entries):  # newest first
         colour = "#c00" if e.state == "incoming" else "#a60"

@@ -116,7 +116,7 @@ def screenshot(page: Page, path: Path) -> None:
     """The page without its notifications, as a small palette PNG."""
     from PIL import Image
 
-    buttons = page.locator(".mantine-Notification-closeButton")
+    buttons = page.locator(".mantine-Notification-closeButton").locator("visible=true")
 
     def closed() -> bool:
         for button in buttons.all():

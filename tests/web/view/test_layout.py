@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from s7graph.sequencer.text.model import Chart, Sequence, Step, Transition
+from s7graph.sequencer.text.parse import ChartSyntaxError, parse_chart
 from s7graph.web.bus.protocol import ChartLayout
 from s7graph.web.view.layout import place
+from tests.paths import ROOT
 
 pytestmark = pytest.mark.timeout(30)
 
@@ -118,4 +122,68 @@ def test_no_two_steps_share_a_place() -> None:
     )
     p = place(c)
     spots = [(s.x, s.y) for s in p.steps.values()]
+    assert len(spots) == len(set(spots))
+
+
+def test_an_imported_beremiz_chart_lays_out_without_a_staircase() -> None:
+    """Beremiz's traffic light: every step's first (highest-priority) branch jumps back to
+    the start, the second goes on. The path that goes on keeps its lane; the jumps stand
+    in one lane beside it, free at their rows — two lanes, not one more per step."""
+    from tests.sequencer.exchange.helpers import imported
+
+    chart = imported("plcopen/beremiz_traffic_light.xml").chart
+    assert chart is not None
+    p = place(chart)
+    main = [1, 2, 3, 4, 5, 6]  # Standstill, ORANGE, RED, PEDESTRIAN_GREEN/RED, GREEN
+    assert {p.steps[n].x for n in main} == {0.0}
+    assert [p.steps[n].y for n in main] == sorted(p.steps[n].y for n in main)
+    jumps_back = [2, 4, 6, 8, 11]  # NOT SWITCH_BUTTON: back to S1
+    assert {p.transitions[n].x for n in jumps_back} == {1.0}
+    assert p.width <= 2.0
+
+
+@pytest.mark.parametrize(
+    "relative",
+    [
+        "plcopen/beremiz_traffic_light.xml",
+        "plcopen/beremiz_test_svgui.xml",
+        "plcopen/beremiz_first_steps.xml",
+        "iec-text/matiec_annexF_gravel.txt",
+    ],
+)
+def test_imported_charts_stand_in_no_more_lanes_than_their_widest_branching(
+    relative: str,
+) -> None:
+    """No sequence of an imported chart is wider than its widest divergence plus one lane
+    for its jumps back (a staircase would be as wide as the chart is long)."""
+    from tests.sequencer.exchange.helpers import imported
+
+    chart = imported(relative).chart
+    assert chart is not None
+    p = place(chart)
+    for q in chart.sequences:
+        leaving: dict[int, int] = {}
+        for t in q.transitions:
+            for s in t.sources:
+                leaving[s] = leaving.get(s, 0) + 1
+        widest = max([*leaving.values(), *(len(t.targets) for t in q.transitions), 1])
+        column = next(c for c in p.sequences if c.number == q.number)
+        assert column.x1 - column.x0 + 1 <= widest + 1, (q.number, column)
+
+
+def _charts() -> list[Path]:
+    return sorted([*ROOT.glob("examples/*/*.s7g"), *ROOT.glob("tests/sequencer/*/*.s7g")])
+
+
+@pytest.mark.parametrize("path", _charts(), ids=lambda p: p.name)
+def test_every_chart_is_placed_with_no_two_elements_in_one_place(path: Path) -> None:
+    """Every chart the tests and examples hold (the broken ones too: a join of two
+    alternatives, a branch that jumps back beside a join) is placed, each step and each
+    transition in a place of its own."""
+    try:
+        c = parse_chart(path.read_text(encoding="utf-8"), str(path))
+    except ChartSyntaxError:
+        pytest.skip("does not parse")
+    p = place(c)
+    spots = [(s.x, s.y) for s in p.steps.values()] + [(t.x, t.y) for t in p.transitions.values()]
     assert len(spots) == len(set(spots))

@@ -9,7 +9,6 @@ the tests run in order on them."""
 
 from __future__ import annotations
 
-import math
 import os
 import subprocess
 import sys
@@ -32,6 +31,7 @@ from tests.web.helpers import (
     log_in,
     needs_chromium,
     online_cpu,
+    page_point,
     wait_until,
 )
 from tests.web.view.test_edit_browser import click, condition, select, type_into
@@ -44,7 +44,6 @@ if TYPE_CHECKING:
 pytestmark = [pytest.mark.timeout(300), needs_chromium]
 pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
 
-WIDTH, HEIGHT = 1280, 800  # the page (helpers.chromium_page)
 INSET = 0.15  # scene units inside a box's top-left corner: its fill, not its frame or text
 CHAIN = "\n".join(
     [
@@ -162,33 +161,18 @@ def run_to(cpu: OnlineRig, gate: str, step: int) -> None:
 
 
 def live_point(view: ChartView, n: int) -> tuple[int, int]:
-    """Where the top-left inside corner of live step box ``n`` shows on the page (the
-    initial camera: looking straight down, viser's vertical field of view)."""
+    """Where the top-left inside corner of live step box ``n`` shows on the (one) page."""
     x, y = view.picture.steps[n]
-    x, y = x - BOX_W / 2 + INSET, y + BOX_H / 2 - INSET
-    cam = view.server.initial_camera
-    cx, cy, z = cam.position
-    half = z * math.tan(cam.fov / 2)
-    return (
-        round(WIDTH / 2 + (x - cx) / half * HEIGHT / 2),
-        round(HEIGHT / 2 - (y - cy) / half * HEIGHT / 2),
-    )
+    (panel,) = view.panels.values()
+    return page_point(panel.client, x - BOX_W / 2 + INSET, y + BOX_H / 2 - INSET)
 
 
 def edit_point(ed: Editor, drawing: Drawing, n: int) -> tuple[int, int]:
     """Where the top-left inside corner of step box ``n`` of the editor's drawing shows on
-    its page (its camera as the page reports it; the canvas starts right of the docked
-    editor)."""
+    its page (the canvas starts right of the docked editor)."""
     x, y = drawing.picture.steps[n]
     x, y = x + drawing.offset[0] - BOX_W / 2 + INSET, y + drawing.offset[1] + BOX_H / 2 - INSET
-    cam = ed.client.camera
-    cx, cy, z = (float(v) for v in cam.position)
-    half = z * math.tan(cam.fov / 2)
-    left = EDITOR_WIDTH + (WIDTH - EDITOR_WIDTH) / 2
-    return (
-        round(left + (x - cx) / half * HEIGHT / 2),
-        round(HEIGHT / 2 - (y - cy) / half * HEIGHT / 2),
-    )
+    return page_point(ed.client, x, y, left=EDITOR_WIDTH)
 
 
 def shows(

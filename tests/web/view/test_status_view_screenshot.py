@@ -1,13 +1,17 @@
-"""The README's screenshot of the status view, taken from the running product: the README's
-first command (the drill with its demo plant, ``s7graph run … --web``) as a real process on
-the system clock, its page in one headless Chromium, photographed once the demo's slow clamp
-has turned S2 red (a supervision fault waiting for acknowledgement, in the Alarms panel).
-The maximum cycle time is raised to 60 s: a loaded test machine (Chromium drawing in
-software beside it) must not stop the CPU by a slow cycle; timing is not what this checks.
+"""The pictures of the docs, taken from the running product: the README's first command
+(the drill with its demo plant, ``s7graph run … --web``) as a real process on the system
+clock, its page in one headless Chromium, photographed once the demo's slow clamp has
+turned S2 red (a supervision fault waiting for acknowledgement): the status view (the
+chart with its action tables, S2's times, the contacts of its transitions), the alarm list
+(its message with Acknowledge all), and the editor (a demo login is an engineer's) with S2
+selected. The maximum cycle time is raised to 60 s: a loaded test machine (Chromium
+drawing in software beside it) must not stop the CPU by a slow cycle; timing is not what
+this checks.
 
-``S7GRAPH_STATUS_SCREENSHOT=docs/status-view.png python -m pytest
-tests/web/view/test_status_view_screenshot.py`` writes ``docs/status-view.png``; without it the
-picture goes to a temporary folder and is only checked."""
+``S7GRAPH_SCREENSHOTS=docs python -m pytest tests/web/view/test_status_view_screenshot.py``
+writes ``docs/status-view.png``, ``docs/alarms.png`` and ``docs/editor.png``
+(``S7GRAPH_STATUS_SCREENSHOT=docs/status-view.png`` the first alone); without either the
+pictures go to a temporary folder and are only checked."""
 
 from __future__ import annotations
 
@@ -24,8 +28,8 @@ from pathlib import Path
 import pytest
 
 from tests.paths import ROOT
-from tests.web.helpers import chromium_page, needs_chromium, wait_until
-from tests.web.view.test_edit_browser import screenshot
+from tests.web.helpers import chromium_page, log_in, needs_chromium, wait_until
+from tests.web.view.test_edit_browser import choose, screenshot
 from tests.web.wiring.test_run_chart_web import _free_port
 
 DRILL = ROOT / "examples" / "drill"
@@ -43,6 +47,17 @@ def _red_pixels(png: bytes) -> int:
     rgb = np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(np.int16)
     r, g, b = rgb[..., 0], rgb[..., 1], rgb[..., 2]
     return int(np.count_nonzero((r > g + 50) & (r > b + 50)))
+
+
+def _pictures(tmp_path: Path) -> dict[str, Path]:
+    """Where each picture goes: the docs' folder named by ``S7GRAPH_SCREENSHOTS`` (or the
+    status view alone by ``S7GRAPH_STATUS_SCREENSHOT``), else ``tmp_path``."""
+    folder = Path(os.environ.get("S7GRAPH_SCREENSHOTS") or tmp_path)
+    shots = {name: folder / f"{name}.png" for name in ("status-view", "alarms", "editor")}
+    status = os.environ.get("S7GRAPH_STATUS_SCREENSHOT")
+    if status:
+        shots["status-view"] = Path(status)
+    return shots
 
 
 def test_the_status_view_of_the_readme_demo_shows_active_and_disturbed_steps(
@@ -76,9 +91,24 @@ def test_the_status_view_of_the_readme_demo_shows_active_and_disturbed_steps(
             page.get_by_text("S002 Work piece not clamped").first.wait_for(timeout=30_000)
             page.screenshot(path=str(tmp_path / "seen.png"))  # kept for a failed run
             assert wait_until(lambda: _red_pixels(page.screenshot()) > 200, 30)
-            shot = Path(os.environ.get("S7GRAPH_STATUS_SCREENSHOT") or tmp_path / "status.png")
-            screenshot(page, shot)
-        assert shot.stat().st_size > 10_000
+            # the status view: S2 red, its action table's values, its transitions' contacts
+            page.get_by_text("T2 Clamped, coolant").first.wait_for(timeout=30_000)
+            shots = _pictures(tmp_path)
+            screenshot(page, shots["status-view"])
+            # the alarm list: S2's message, its own button and Acknowledge all
+            choose(page, "Show", "unacknowledged")
+            page.get_by_role("button", name="Acknowledge all (1)").wait_for(timeout=30_000)
+            page.get_by_text("Alarm history", exact=True).first.scroll_into_view_if_needed()
+            screenshot(page, shots["alarms"])
+            # the editor (a demo login is an engineer's), S2 selected
+            page.get_by_text("Login", exact=True).first.scroll_into_view_if_needed()
+            log_in(page, "olga")
+            page.get_by_role("button", name="Edit mode", exact=True).click()
+            page.get_by_role("button", name="Leave edit mode").wait_for(timeout=30_000)
+            choose(page, "Element", "S2 Clamp")
+            page.get_by_text("step S2 Clamp", exact=True).first.wait_for(timeout=30_000)
+            screenshot(page, shots["editor"])
+        assert all(shot.stat().st_size > 10_000 for shot in shots.values())
     finally:
         if proc.poll() is None:
             proc.send_signal(signal.SIGINT)

@@ -13,10 +13,10 @@ import pytest
 
 from s7graph.sequencer.text.model import Chart, Operand, Sequence, Step, Transition
 from s7graph.web.bus.protocol import ChartLayout, Command, StepStateUpdate
-from s7graph.web.view.chart_view import ACTIVE, DISTURBED, INACTIVE
+from s7graph.web.view.chart_view import ACTIVE, DISTURBED, INACTIVE, ChartView
 from s7graph.web.view.drawing import BOX_H, BOX_W
 from s7graph.web.wiring.web_edge import WebEdge, serve_view
-from tests.web.helpers import chromium_page, log_in, needs_chromium, wait_until
+from tests.web.helpers import chromium_page, log_in, needs_chromium, page_point, wait_until
 from tests.web.toy_feed import ToySequencer
 
 if TYPE_CHECKING:
@@ -161,17 +161,10 @@ def test_demo_feed_applies_commands_between_scans() -> None:
         assert not refused.applied and "TAP and TOP" in refused.reason
 
 
-def screen_point(
-    view: object, x: float, y: float, width: int = 1280, height: int = 800
-) -> tuple[float, float]:
-    """Where the scene point ``(x, y)`` shows on the page, for the initial camera (a camera
-    looking straight down, viser's vertical field of view)."""
-    import math
-
-    cam = view.server.initial_camera  # type: ignore[attr-defined]
-    cx, cy, z = cam.position
-    half = z * math.tan(cam.fov / 2)
-    return width / 2 + (x - cx) / half * height / 2, height / 2 - (y - cy) / half * height / 2
+def screen_point(view: ChartView, x: float, y: float) -> tuple[int, int]:
+    """Where the scene point ``(x, y)`` shows on the (one) page."""
+    (panel,) = view.panels.values()
+    return page_point(panel.client, x, y)
 
 
 def test_a_click_on_a_transition_shows_its_whole_condition(page: Page, edge: WebEdge) -> None:
@@ -204,7 +197,7 @@ def test_every_step_shows_its_state_colour_itself_on_the_page(page: Page, edge: 
 
     view = edge.view
     assert wait_until(lambda: view.boxes[4].color == ACTIVE)
-    wanted = {4: ACTIVE, 3: DISTURBED, 5: INACTIVE}  # S1's corner is under a notice
+    wanted = {1: INACTIVE, 4: ACTIVE, 3: DISTURBED, 5: INACTIVE}
     corners = {}
     for n in wanted:
         x, y = view.picture.steps[n]

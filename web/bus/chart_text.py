@@ -1,0 +1,129 @@
+"""What a view draws of a chart beside its boxes and bars, as text: each step's action
+table as S7-GRAPH shows it, and where each contact of a condition stands in its text.
+
+:func:`action_rows` gives a step's rows — event, qualifier (``C`` appended when the row is
+interlocked), operand, time or value — each with the name of the operand whose value the
+CPU sends while the step is active (``web.bus.live``: the bit a row sets, the variable an
+assignment writes, a timer's or counter's Q, ``Sn.X`` of a step an ``ON``/``OFF`` row
+switches; none for a ``CALL``). :func:`contact_spans` writes a condition as
+``condition_text`` does and says where each contact stands in that text, in CRIT bit
+order (``steps.conditions.contacts``: bit ``k`` is the ``k``-th contact in source order), so
+a view colours the contacts of the condition it draws from the CRIT bits of the last
+evaluation. Plain tuples: ``web.bus.protocol`` makes its messages of them.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import NamedTuple
+
+from s7graph.sequencer.text.format import format_expr, row_body
+from s7graph.steps.conditions import MAX_CONTACTS
+from s7graph.steps.expressions import COMPARE
+from s7graph.steps.syntax import (
+    CHAIN_OPS,
+    ActionRow,
+    Assignment,
+    Binary,
+    Const,
+    Expr,
+    Operand,
+    StepTarget,
+    Unary,
+)
+
+__all__ = ["RowText", "action_rows", "contact_spans"]
+
+MAX_WATCH_NAME = 128  # the longest value name a state update carries
+
+
+class RowText(NamedTuple):
+    """One action row as the view draws it; ``watch``: the value to show beside it ("")."""
+
+    event: str
+    qualifier: str
+    operand: str
+    value: str
+    watch: str
+
+
+def action_rows(rows: tuple[ActionRow, ...]) -> list[RowText]:
+    """A step's action rows, in their order."""
+    return [
+        RowText(
+            event=r.event or "",
+            qualifier=r.qualifier + ("C" if r.interlocked else ""),
+            operand=row_body(dataclasses.replace(r, value=None)),
+            value=format_expr(r.value) if r.value is not None else "",
+            watch=_watched(r),
+        )
+        for r in rows
+    ]
+
+
+def _watched(r: ActionRow) -> str:
+    op = r.operand
+    if isinstance(op, Operand):
+        name = op.name
+    elif isinstance(op, Assignment):
+        name = op.target.name
+    elif isinstance(op, StepTarget) and op.step is not None:
+        name = f"S{op.step}.X"
+    else:  # a CALL, or OFF S_ALL
+        name = ""
+    return name if len(name) <= MAX_WATCH_NAME else ""
+
+
+# Binding strength as the chart writer prints (sequencer.text.format): the logic operators,
+# a comparison, NOT and a negative literal, a primary.
+_LOGIC = {"OR": 1, "XOR": 2, "AND": 3}
+_COMPARISON, _SHIFT, _UNARY, _PRIMARY = 4, 5, 8, 9
+
+
+def _level(e: Expr) -> int:
+    if isinstance(e, Binary):
+        op = e.op.upper()
+        return _LOGIC.get(op, _COMPARISON if e.op in COMPARE else _SHIFT)
+    if isinstance(e, Unary) or (isinstance(e, Const) and e.text.startswith("-")):
+        return _UNARY
+    return _PRIMARY
+
+
+def contact_spans(expr: Expr | None) -> tuple[str, list[tuple[int, int]]]:
+    """``expr`` as text (``web.bus.protocol.condition_text`` writes the same) and the span
+    ``(start, end)`` of each contact in it, in CRIT bit order (at most ``MAX_CONTACTS``)."""
+    if expr is None:
+        return "", []
+    parts: list[str] = []
+    spans: list[tuple[int, int]] = []
+    at = [0]
+
+    def put(text: str) -> None:
+        parts.append(text)
+        at[0] += len(text)
+
+    def wrap(e: Expr, at_least: int) -> None:
+        if _level(e) < at_least:
+            put("(")
+            walk(e)
+            put(")")
+        else:
+            walk(e)
+
+    def walk(e: Expr) -> None:
+        if isinstance(e, Unary) and e.op == "NOT":
+            put("NOT ")
+            wrap(e.operand, _UNARY)
+        elif isinstance(e, Binary) and e.op.upper() in _LOGIC:
+            level = _LOGIC[e.op.upper()]
+            chained = e.op in CHAIN_OPS and isinstance(e.right, Binary) and e.right.op == e.op
+            wrap(e.left, level)
+            put(f" {e.op} ")
+            wrap(e.right, level if chained else level + 1)
+        else:  # a contact: an operand, a step or transition attribute, a comparison
+            start = at[0]
+            put(format_expr(e, chains=True))
+            spans.append((start, at[0]))
+
+    walk(expr)
+    return "".join(parts), spans[:MAX_CONTACTS]
