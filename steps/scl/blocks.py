@@ -40,6 +40,12 @@ class SclProgram:
     diagnostics: list[Diagnostic] = field(default_factory=list)
     python: str = ""
     """The generated module's source (for reading, never run as text)."""
+    types: dict[str, ty.SclType] = field(default_factory=dict)
+    """The structure of each FB's instance (its IN, OUT, IN_OUT and VAR) and of each global
+    DB, by label: what a DB variable is read by name with (``steps.scl.access``)."""
+    places: dict[str, SourceLocation] = field(default_factory=dict)
+    """Where each block is written, by label (``FB17``, ``DB10``): the place a conflict
+    with another source names."""
 
     def block(self, label: str) -> OB | FB | FC | DB:
         for blk in self.blocks:
@@ -104,6 +110,13 @@ def _build(source: m.Source, prog: Program, gen: Generated) -> tuple[SclProgram,
             continue
         if info.kind == "DB" and info.instance_of:
             out.instance_values[info.number] = _instance_inits(prog, info)
+        if info.kind in ("FB", "FC", "OB", "DB"):
+            out.places[info.label] = unit.loc
+        if info.kind == "FB":
+            fields = tuple((p.name, p.type) for p in info.params.values())
+            out.types[info.label] = ty.SclType("STRUCT", fields=fields, name=info.label)
+        elif info.kind == "DB" and info.db_type is not None:
+            out.types[info.label] = info.db_type
         if blk is None:
             continue
         if isinstance(blk, FB | FC):

@@ -248,6 +248,15 @@ def _supervised() -> bool:
     return _ENTRY_ARGS is not None and hasattr(os, "memfd_create") and not child
 
 
+Blocks = Annotated[
+    list[Path] | None,
+    typer.Option(
+        "--blocks",
+        help="An S7-SCL source of the blocks the chart or program calls (several allowed, "
+        "compiled in order before it).",
+    ),
+]
+
 # The options of ``run`` (``s7graph run --help``).
 ProgramArg = Annotated[
     Path, typer.Argument(help="A Python program of blocks (.py) or a chart (.s7g).")
@@ -408,16 +417,17 @@ def run(
 def check(
     chart: Annotated[Path, typer.Argument(help="A chart in .s7g source, or an .scl source.")],
     symbols: Annotated[Path | None, typer.Option(help="A symbol table file.")] = None,
+    blocks: Blocks = None,
 ) -> None:
     """Print a chart's (or an SCL source's) diagnostics; exit 0 clean, 1 warnings only, 2
     errors."""
     if chart.suffix.lower() == ".scl":
         from s7graph.web.cli.scl import check_scl_command
 
-        raise typer.Exit(check_scl_command(chart, symbols=symbols))
+        raise typer.Exit(check_scl_command(chart, symbols=symbols, blocks=blocks or []))
     from s7graph.web.cli.check import check_command
 
-    raise typer.Exit(check_command(chart, symbols=symbols))
+    raise typer.Exit(check_command(chart, symbols=symbols, blocks=blocks or []))
 
 
 @app.command()
@@ -438,6 +448,7 @@ def sim(
     plant: Annotated[
         Path | None, typer.Option(help="A simulated plant (.py) run each cycle.")
     ] = None,
+    blocks: Blocks = None,
 ) -> None:
     """Run a chart (or an .scl program) on the virtual clock: stimulus in, one JSON line
     per cycle out."""
@@ -454,6 +465,7 @@ def sim(
                 trace=trace,
                 symbols=symbols,
                 plant=plant,
+                blocks=blocks or [],
             )
         )
     from s7graph.web.cli.sim import sim_command
@@ -468,6 +480,7 @@ def sim(
             trace=trace,
             symbols=symbols,
             plant=plant,
+            blocks=blocks or [],
         )
     )
 

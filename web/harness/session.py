@@ -3,7 +3,8 @@
 :func:`load_chart` parses, validates and compiles a chart file with its symbol table;
 :class:`ChartSession` loads the compiled chart as a GraphFB called from OB1 of one CPU and
 reads and writes it by name — S7 addresses, symbols, FB pins of the chart's parameter set,
-FB variables and step/transition attributes (``Sn.X``, ``Sn.T``, ``Sn.U``, ``Tn.TT``).
+FB variables, step/transition attributes (``Sn.X``, ``Sn.T``, ``Sn.U``, ``Tn.TT``) and DB
+variables (``DB10.n``, ``DB3.motor[2].on``: ``web.harness.dbvars``).
 """
 
 from __future__ import annotations
@@ -29,6 +30,8 @@ from s7graph.sequencer.fb import GraphFB, install_all
 from s7graph.sequencer.params import Direction, check_pin, is_pin
 from s7graph.sequencer.text.model import Chart
 from s7graph.sequencer.text.parse import ChartSyntaxError, chart_text, parse_chart
+from s7graph.web.harness.dbvars import DbVariables
+from s7graph.web.harness.scl import Loadable, compile_sources, load_beside
 
 __all__ = ["ChartLoadError", "ChartSession", "compile_model", "compile_text", "load_chart"]
 
@@ -44,14 +47,18 @@ class ChartLoadError(S7Error):
         super().__init__("\n".join(lines))
 
 
-def load_chart(path: Path, symbols: Path | None = None) -> tuple[CompiledChart, SymbolTable]:
-    """Parse, validate and compile a chart file (with an optional symbol table file)."""
+def load_chart(
+    path: Path, symbols: Path | None = None, *, table: SymbolTable | None = None
+) -> tuple[CompiledChart, SymbolTable]:
+    """Parse, validate and compile a chart file (with an optional symbol table file, or the
+    ``table`` read from it already)."""
     try:
         data = Path(path).read_bytes()
     except OSError as exc:
         raise ChartLoadError([f"s7graph: error: cannot read {path}: {exc.strerror}"]) from None
     with _as_load_error(str(path)):
-        table = _symbols(symbols) if symbols is not None else SymbolTable()
+        if table is None:
+            table = _symbols(symbols) if symbols is not None else SymbolTable()
         text = chart_text(data, str(path))
     return compile_text(text, str(path), table)
 
@@ -107,7 +114,9 @@ def _fmt(d: Any) -> str:
 class ChartSession:
     """One CPU running one compiled chart as a GraphFB from OB1 (sim and run); ``beside``:
     more charts called after it from the same OB1 (the jitter benchmark's 200 sequencers),
-    their GraphFBs in ``others``."""
+    their GraphFBs in ``others``; ``blocks``: the programs of blocks its calls reach
+    (``--blocks``: compiled S7-SCL sources, ``web.harness.scl``), loaded before its calls
+    are prepared — their OBs run too, OB1 after the chart's call."""
 
     def __init__(
         self,
@@ -116,6 +125,7 @@ class ChartSession:
         clock: Clock,
         *,
         beside: Sequence[CompiledChart] = (),
+        blocks: Sequence[Loadable] = (),
     ) -> None:
         self.clock = clock
         self.cpu = Cpu(clock, keep_outputs_on_hot_restart=True)  # a hot restart resumes the
@@ -124,6 +134,15 @@ class ChartSession:
         self.others = [GraphFB(c) for c in beside]
         install_all(self.cpu, [self.graph, *self.others])
         sfb.install(self.cpu)  # the operating system's blocks, as on S7
+        if blocks:
+            problems = load_beside(self.cpu, [self.graph, *self.others], blocks)
+            if problems:
+                raise ChartLoadError(problems)
+        types = {k: v for b in blocks for k, v in getattr(b, "types", {}).items()}
+        self.dbvars = DbVariables(self.cpu, types)
+        """The DB variables by name (``DB10.n``, ``"Seq".S_NO``)."""
+        self.warnings: list[str] = []
+        """The warnings of the ``blocks``' sources (``load``), for ``sim`` and ``run``."""
         self.missing: list[str] = []
         """Calls of blocks this CPU does not have (``sequencer.calls``): they stop it when
         reached; ``sim`` and ``run`` print them as warnings."""
@@ -150,10 +169,18 @@ class ChartSession:
         self.cpu.mem.symbols = table
 
     @classmethod
-    def load(cls, path: Path, symbols: Path | None, clock: Clock) -> ChartSession:
-        """``load_chart`` (raises ``ChartLoadError``) and a session of it on ``clock``."""
-        cc, table = load_chart(path, symbols)
-        return cls(cc, table, clock)
+    def load(
+        cls, path: Path, symbols: Path | None, clock: Clock, *, blocks: Sequence[Path] = ()
+    ) -> ChartSession:
+        """``load_chart`` (raises ``ChartLoadError``) and a session of it on ``clock``, with
+        the S7-SCL sources ``blocks`` its calls reach (``SclLoadError`` when they do not
+        compile; their warnings in ``warnings``)."""
+        table = _symbols(symbols) if symbols is not None else None
+        sources = compile_sources(blocks, table) if blocks else None
+        cc, table = load_chart(path, symbols, table=table)
+        session = cls(cc, table, clock, blocks=[sources] if sources is not None else [])
+        session.warnings = list(sources.warnings) if sources is not None else []
+        return session
 
     # ------------------------------------------------------------ names
 
@@ -179,6 +206,9 @@ class ChartSession:
             check_pin(name, self.cc.parameters, direction=Direction.IN if writing else None)
             return
         if self._address(name) is None:
+            if self.dbvars.is_db_name(name):
+                (self.dbvars.writer if writing else self.dbvars.reader)(name)
+                return
             raise S7Error(f"unknown name {name}: not an address, symbol, FB pin or variable")
 
     def get(self, name: str) -> Any:
@@ -222,6 +252,8 @@ class ChartSession:
         type (S7Error now for an unknown name or a type that does not fit the address)."""
         found = self._address(name)
         if found is None:
+            if self.dbvars.is_db_name(name):
+                return self.dbvars.reader(name)
             raise S7Error(f"unknown name {name}")
         addr, type_name = found
         mem = self.cpu.mem
@@ -248,6 +280,9 @@ class ChartSession:
             return
         found = self._address(name)
         if found is None:
+            if self.dbvars.is_db_name(name):
+                self.dbvars.writer(name)(value)
+                return
             raise S7Error(f"unknown name {name}")
         addr, type_name = found
         mem = self.cpu.mem
