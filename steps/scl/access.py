@@ -25,7 +25,7 @@ from s7graph.steps.scl.runtime import _decode, _encode
 
 __all__ = ["Member", "member", "parse_name", "plain", "read_bytes", "write_bytes"]
 
-_NAME = re.compile(r'\s*(?:DB\s*(\d+)|"([^"]{1,64})")\s*\.(.+)', re.IGNORECASE | re.DOTALL)
+_NAME = re.compile(r'\s*(?:DB\s*(\d+)|"([^"]{1,64})")\s*\.(.*)', re.IGNORECASE | re.DOTALL)
 _STEP = re.compile(r"\s*(?:\.\s*([A-Za-z_]\w{0,63})|\[\s*([-+\d\s,]{1,64})\])")
 _FIRST = re.compile(r"\s*([A-Za-z_]\w{0,63})")
 MAX_STEPS = 16
