@@ -28,6 +28,7 @@ from s7graph.steps.scl.consts import Consts, adapt
 from s7graph.steps.scl.declare import BlockInfo, Program, struct_initial
 from s7graph.steps.scl.diagnostics import Diagnostic, Problem, SclError, error, sort_key
 from s7graph.steps.scl.runtime import _encode
+from s7graph.steps.scl.state import SclState, type_text
 
 
 @dataclass
@@ -66,6 +67,7 @@ class SclProgram:
             else:
                 continue
             for name, value in self.instance_values.get(number, {}).items():
+                idb.presets[name] = _factory(value)  # a cold restart comes back to it
                 idb[name] = ty.clone(value)
 
 
@@ -138,7 +140,8 @@ def _engine_block(
         return OB(info.number, name, _located(fn, gen, info.label))
     interface = tuple(_var(prog, p, built, info) for p in info.params.values())
     if info.kind == "FB":
-        return FB(info.number, name, interface, _located(fn, gen, info.label))
+        fmt = _state_format(info, built)
+        return FB(info.number, name, interface, _located(fn, gen, info.label), state_format=fmt)
     ret = ty.engine_type(info.ret) if info.ret is not None else None
     return FC(info.number, name, interface, _located(fn, gen, info.label), ret_type=ret)
 
@@ -158,6 +161,16 @@ def _var(prog: Program, p: Any, built: dict[str, FB | FC], info: BlockInfo) -> V
         value = init if init is not None else ty.zero(t)
         return Var(p.name, "OBJECT", p.decl, _factory(value) if info.kind == "FB" else None)
     return Var(p.name, ty.engine_type(t), p.decl, init if info.kind == "FB" else None)
+
+
+def _state_format(info: BlockInfo, built: dict[str, FB | FC]) -> SclState:
+    """How the FB's instances are recognised in a state file (``steps.scl.state``)."""
+    prints: dict[str, str] = {}
+    for label, blk in built.items():
+        fmt = getattr(blk, "state_format", None)
+        if isinstance(blk, FB) and fmt is not None:
+            prints[label] = fmt.fingerprint
+    return SclState(tuple((p.name, type_text(p.type, prints)) for p in info.params.values()))
 
 
 def _factory(value: object) -> Callable[[], object]:

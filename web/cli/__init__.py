@@ -259,7 +259,10 @@ Blocks = Annotated[
 
 # The options of ``run`` (``s7graph run --help``).
 ProgramArg = Annotated[
-    Path, typer.Argument(help="A Python program of blocks (.py) or a chart (.s7g).")
+    Path,
+    typer.Argument(
+        help="A Python program of blocks (.py), an S7-SCL program (.scl) or a chart (.s7g)."
+    ),
 ]
 StateFile = Annotated[
     Path | None,
@@ -347,6 +350,7 @@ def run(
     rt_priority: RtPriority = None,
     comm_load: CommLoad = COMM_LOAD_PCT,
     core: Core = None,
+    blocks: Blocks = None,
 ) -> None:
     """Run a program or a chart on the system clock until Ctrl-C."""
     if _supervised():
@@ -354,6 +358,24 @@ def run(
 
         raise typer.Exit(supervise(_ENTRY_ARGS or []))
     priority = _scan_priority(rt_priority)
+    if program.suffix.lower() == ".scl":
+        _run_scl_program(
+            program,
+            blocks=blocks or [],
+            symbols=symbols,
+            state=state,
+            cycle_ms=cycle_ms,
+            duration_s=duration_s,
+            max_cycle_ms=max_cycle_ms,
+            restart=restart,
+            fresh=fresh,
+            rt_priority=priority,
+            core=core,
+            bus=bool(web or listen or connect),
+        )
+    if blocks and program.suffix.lower() != ".s7g":
+        print("s7graph: error: --blocks goes with a chart or an .scl program", file=sys.stderr)
+        raise typer.Exit(2)
     if program.suffix.lower() == ".s7g":
         from s7graph.web.cli.run_chart import run_chart
 
@@ -394,6 +416,7 @@ def run(
                 rt_priority=priority,
                 comm_load_pct=comm_load,
                 core=core if core is not None else "auto",
+                blocks=blocks or [],
             )
         )
     from s7graph.web.cli.run_program import run_program
@@ -411,6 +434,20 @@ def run(
             core=core,
         )
     )
+
+
+def _run_scl_program(program: Path, *, bus: bool, **options: Any) -> None:
+    """``run PROGRAM.scl``: on the system clock, without the bus (a chart's)."""
+    if bus:
+        print(
+            "s7graph: error: --web, --listen and --connect run a chart; a program of S7-SCL "
+            "blocks runs without the bus",
+            file=sys.stderr,
+        )
+        raise typer.Exit(2)
+    from s7graph.web.cli.run_scl import run_scl
+
+    raise typer.Exit(run_scl(program, **options))
 
 
 @app.command()
