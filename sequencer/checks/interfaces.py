@@ -1,6 +1,6 @@
 """The user blocks a chart's calls are checked against: the FBs' and FCs' interfaces and
 the DBs of the program that runs beside the chart (``s7graph check CHART.s7g --blocks
-BLOCKS.scl``; docs/chart-format.md, "Calls").
+BLOCKS.scl``; docs/cli.md, "s7graph check").
 
 ``program_blocks(blocks, instances)`` reads them from engine blocks — compiled S7-SCL or
 Python — so the chart's checks need neither the SCL compiler nor a CPU: a pin is its name,

@@ -1,5 +1,5 @@
 """A chart's calls of user FBs and FCs checked against the program's blocks (E047;
-docs/chart-format.md, "Calls"): ``s7graph check CHART.s7g --blocks BLOCKS.scl``.
+docs/cli.md, "s7graph check"): ``s7graph check CHART.s7g --blocks BLOCKS.scl``.
 
 Without the program's blocks a call of a user block is not checked (only the program that
 loads them knows them). With them, as a CALL in STEP 7 is checked against the called block

@@ -358,24 +358,11 @@ def run(
 
         raise typer.Exit(supervise(_ENTRY_ARGS or []))
     priority = _scan_priority(rt_priority)
-    if program.suffix.lower() == ".scl":
-        _run_scl_program(
-            program,
-            blocks=blocks or [],
-            symbols=symbols,
-            state=state,
-            cycle_ms=cycle_ms,
-            duration_s=duration_s,
-            max_cycle_ms=max_cycle_ms,
-            restart=restart,
-            fresh=fresh,
-            rt_priority=priority,
-            core=core,
-            bus=bool(web or listen or connect),
-        )
-    if blocks and program.suffix.lower() != ".s7g":
-        print("s7graph: error: --blocks goes with a chart or an .scl program", file=sys.stderr)
-        raise typer.Exit(2)
+    if program.suffix.lower() == ".scl" or (blocks and program.suffix.lower() != ".s7g"):
+        options = {"symbols": symbols, "state": state, "cycle_ms": cycle_ms, "core": core}
+        options |= {"duration_s": duration_s, "max_cycle_ms": max_cycle_ms, "fresh": fresh}
+        options |= {"restart": restart, "rt_priority": priority}
+        _run_scl_program(program, blocks or [], bool(web or listen or connect), **options)
     if program.suffix.lower() == ".s7g":
         from s7graph.web.cli.run_chart import run_chart
 
@@ -436,8 +423,12 @@ def run(
     )
 
 
-def _run_scl_program(program: Path, *, bus: bool, **options: Any) -> None:
-    """``run PROGRAM.scl``: on the system clock, without the bus (a chart's)."""
+def _run_scl_program(program: Path, blocks: list[Path], bus: bool, **options: Any) -> None:
+    """``run PROGRAM.scl``: on the system clock, without the bus (a chart's); ``--blocks``
+    beside a Python program is refused."""
+    if program.suffix.lower() != ".scl":
+        print("s7graph: error: --blocks goes with a chart or an .scl program", file=sys.stderr)
+        raise typer.Exit(2)
     if bus:
         print(
             "s7graph: error: --web, --listen and --connect run a chart; a program of S7-SCL "
@@ -447,7 +438,7 @@ def _run_scl_program(program: Path, *, bus: bool, **options: Any) -> None:
         raise typer.Exit(2)
     from s7graph.web.cli.run_scl import run_scl
 
-    raise typer.Exit(run_scl(program, **options))
+    raise typer.Exit(run_scl(program, blocks=blocks, **options))
 
 
 @app.command()
