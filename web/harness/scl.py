@@ -31,6 +31,7 @@ __all__ = [
     "Loadable",
     "SclLoadError",
     "SclSources",
+    "chain_obs",
     "compile_sources",
     "load_beside",
     "read_source",
@@ -166,14 +167,18 @@ def load_beside(cpu: Any, graphs: Sequence[GraphFB], programs: Sequence[Loadable
             program.load(cpu)
     except BlockError as exc:
         return [f"s7graph: error: the blocks cannot be loaded beside the chart: {exc}"]
+    chain_obs(cpu, graphs, blocks)
+    return []
+
+
+def chain_obs(cpu: Any, graphs: Sequence[GraphFB], blocks: Sequence[Any]) -> None:
+    """Load the charts' OB1, OB100 and OB102 calling ``graphs``, each followed by the OB of
+    the same number among ``blocks`` (the sources'), if any."""
     obs = {b.number: b for b in blocks if isinstance(b, OB)}
-    if not obs.keys() & {1, 100, 102}:
-        return []
     ob1 = obs.get(1)
     own1, own100 = startup_obs(*graphs, extra_ob1=ob1.body if ob1 is not None else None)
     own102 = cold_restart_ob(*graphs)
     cpu.load(own1, _then(own100, obs.get(100)), _then(own102, obs.get(102)))
-    return []
 
 
 def _then(own: OB, theirs: OB | None) -> OB:

@@ -31,7 +31,8 @@ from s7graph.sequencer.params import Direction, check_pin, is_pin
 from s7graph.sequencer.text.model import Chart
 from s7graph.sequencer.text.parse import ChartSyntaxError, chart_text, parse_chart
 from s7graph.web.harness.dbvars import DbVariables
-from s7graph.web.harness.scl import Loadable, compile_sources, load_beside
+from s7graph.web.harness.scl import Loadable, SclSources, compile_sources, load_beside
+from s7graph.web.harness.scl_reload import reload_sources
 
 __all__ = ["ChartLoadError", "ChartSession", "compile_model", "compile_text", "load_chart"]
 
@@ -138,6 +139,7 @@ class ChartSession:
             problems = load_beside(self.cpu, [self.graph, *self.others], blocks)
             if problems:
                 raise ChartLoadError(problems)
+        self.blocks = list(blocks)
         types = {k: v for b in blocks for k, v in getattr(b, "types", {}).items()}
         self.dbvars = DbVariables(self.cpu, types)
         """The DB variables by name (``DB10.n``, ``"Seq".S_NO``)."""
@@ -291,6 +293,15 @@ class ChartSession:
             n = addr.byte
             size = max(1, int(addr.width) // 8)
             mem.periph_in[n : n + size] = mem.inputs[n : n + size]
+
+    def reload_blocks(self, new: SclSources) -> list[str]:
+        """Download the changed S7-SCL sources ``new`` in place of the session's (between
+        two scans: ``web.harness.scl_reload``); the notes of what their DBs did not keep."""
+        old = next((b for b in self.blocks if isinstance(b, SclSources)), None)
+        notes = reload_sources(self.cpu, [self.graph, *self.others], old, new)
+        self.blocks = [new]
+        self.dbvars.types = dict(new.types)
+        return notes
 
     # ------------------------------------------------------------ running
 
