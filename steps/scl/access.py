@@ -9,8 +9,8 @@ its value is: the keys into an instance DB's values (a member name, the flat ind
 ARRAY element, as the instance holds them) and the byte and bit in a global DB's bytes (as
 S7 lays a DB out). ``read_bytes``/``write_bytes`` decode and encode a global DB's variable;
 ``plain(value)`` is a value as JSON holds it: INT and DINT signed, BYTE, WORD and DWORD
-unsigned, REAL a number, TIME and TIME_OF_DAY in ms, a DATE or DT as ISO text, an ARRAY a
-list, a STRUCT or an instance an object.
+unsigned, REAL a number, TIME and TIME_OF_DAY in ms, a DATE or DT as text (``1990-01-01``,
+``1990-01-01 00:00:00``), an ARRAY a list, a STRUCT or an instance an object.
 """
 
 from __future__ import annotations
@@ -141,7 +141,7 @@ def plain(value: Any) -> Any:
     if isinstance(value, bool | int | float | str) or value is None:
         return value
     if isinstance(value, datetime | date):
-        return value.isoformat()
+        return str(value)  # as a chart's FB variable reads: 1990-01-01 00:00:00
     if isinstance(value, list | tuple):
         return [plain(v) for v in value]
     if isinstance(value, dict):

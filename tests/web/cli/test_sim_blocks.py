@@ -219,3 +219,58 @@ def test_without_blocks_a_chart_calls_nothing_but_the_system_blocks_as_before(
     rc, _, err = _sim(capsys, f["seq_s7g"], "--cycles", "1")
     assert rc == 1  # the permanent instruction's FC5 stops the CPU in cycle 0
     assert "warning: CALL FC 5: FC5 is not in this CPU" in err
+
+
+TYPES = """
+FUNCTION_BLOCK FB1
+VAR i : INT := -5; d : DINT := -70000; b : BYTE := 16#FF; w : WORD := 16#FFFF;
+  dw : DWORD := 16#FFFFFFFF; r : REAL := 1.5; t : TIME := T#1S500MS;
+  tod : TIME_OF_DAY := TOD#01:00:00; da : DATE := D#2026-01-02;
+  dt : DATE_AND_TIME := DT#2026-01-02-03:04:05; c : CHAR := 'A'; s : STRING[8] := 'abc';
+  x : BOOL := TRUE;
+END_VAR
+END_FUNCTION_BLOCK
+DATA_BLOCK DB2
+STRUCT i : INT := -5; w : WORD := 16#FFFF; dw : DWORD := 16#FFFFFFFF; r : REAL := 1.5;
+  t : TIME := T#1S500MS; c : CHAR := 'A'; s : STRING[8] := 'abc'; END_STRUCT
+BEGIN
+END_DATA_BLOCK
+ORGANIZATION_BLOCK OB1
+  FB1.DB1();
+END_ORGANIZATION_BLOCK
+"""
+
+
+def test_trace_values_of_db_variables_keep_their_types(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    f = _write(tmp_path, types_scl=TYPES)
+    names = ["i", "d", "b", "w", "dw", "r", "t", "tod", "da", "dt", "c", "s", "x"]
+    watch = ",".join(
+        [f"DB1.{n}" for n in names] + [f"DB2.{n}" for n in ["i", "w", "dw", "r", "t", "c", "s"]]
+    )
+    rc, trace, err = _sim(capsys, f["types_scl"], "--cycles", "1", "--watch", watch)
+    assert rc == 0, err
+    values = trace[0]["values"]
+    assert values == {
+        "DB1.i": -5,
+        "DB1.d": -70000,
+        "DB1.b": 255,
+        "DB1.w": 65535,
+        "DB1.dw": 4294967295,
+        "DB1.r": 1.5,
+        "DB1.t": 1500,
+        "DB1.tod": 3600000,
+        "DB1.da": "2026-01-02",
+        "DB1.dt": "2026-01-02 03:04:05",
+        "DB1.c": "A",
+        "DB1.s": "abc",
+        "DB1.x": True,
+        "DB2.i": -5,
+        "DB2.w": 65535,
+        "DB2.dw": 4294967295,
+        "DB2.r": 1.5,
+        "DB2.t": 1500,
+        "DB2.c": "A",
+        "DB2.s": "abc",
+    }
