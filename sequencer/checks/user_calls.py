@@ -20,7 +20,7 @@ from s7graph.sequencer.checks.interfaces import Interface, UserPin
 from s7graph.sequencer.checks.types import _as_bit, _as_number, _show, _unify
 from s7graph.sequencer.text.model import BlockCall
 
-__all__ = ["check_instance", "check_user_call"]
+__all__ = ["check_instance", "check_own_blocks", "check_user_call"]
 
 Typed = Sequence[tuple[str, str | None, object]]
 """Each parameter given: its name, the type of its value or operand (None: unknown), the
@@ -137,3 +137,19 @@ def _check_type(
     if not fits:
         why = f"{block.label}: {pin.name} is {_show(want)}, {_show(t)} does not fit it"
         ctx.err("E047", why, loc, el)
+
+
+def check_own_blocks(ctx: _Ctx) -> None:
+    """E047 when the program's blocks write the chart's own FB or instance DB (the header's
+    ``FB n DB m``): loaded beside the chart, one would replace the other."""
+    program, chart = ctx.blocks, ctx.chart
+    if program is None:
+        return
+    fb = program.blocks.get(f"FB{chart.fb_number}") if chart.fb_number is not None else None
+    if fb is not None and fb.label == f"FB{chart.fb_number}":
+        why = f"FB{chart.fb_number}, the chart's FB, is a block of the program too"
+        ctx.err("E047", f"{why} ({program.sources})", chart.loc)
+    number = chart.db_number
+    if number is not None and (number in program.global_dbs or number in program.instances):
+        why = f"DB{number}, the chart's instance DB, is a DB of the program too"
+        ctx.err("E047", f"{why} ({program.sources})", chart.loc)

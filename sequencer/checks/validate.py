@@ -49,6 +49,7 @@ from s7graph.sequencer.checks.types import (
     rule_conditions,
     rule_empty_conditions,
 )
+from s7graph.sequencer.checks.user_calls import check_own_blocks
 from s7graph.sequencer.text.model import Chart
 
 __all__ = [
@@ -113,5 +114,6 @@ def validate(
         ctx.transitions.setdefault(t.number, t)
     for rule in RULES:
         rule(ctx)
+    check_own_blocks(ctx)
     unique = list(dict.fromkeys(ctx.diags))
     return sorted(unique, key=sort_key)

@@ -197,3 +197,24 @@ def test_an_scl_program_is_checked_with_the_blocks_of_an_earlier_source(
     assert main(["check", str(program), "--blocks", str(lib)]) == 0
     assert capsys.readouterr().out == f"{program}: 0 errors, 0 warnings\n"
     assert main(["check", str(program)]) == 2  # FB17 unknown without its source
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (
+            "FUNCTION_BLOCK FB1\nVAR x : INT; END_VAR\nEND_FUNCTION_BLOCK\n",
+            "FB1, the chart's FB, is a block of the program too",
+        ),
+        (
+            "DATA_BLOCK DB1\nSTRUCT x : INT; END_STRUCT\nBEGIN\nEND_DATA_BLOCK\n",
+            "DB1, the chart's instance DB, is a DB of the program too",
+        ),
+    ],
+)
+def test_blocks_that_write_the_charts_own_fb_or_db_are_an_e047_at_its_header(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], extra: str, message: str
+) -> None:
+    rc, lines = _check(tmp_path, capsys, blocks=BLOCKS + extra)
+    assert rc == 2
+    assert f"seq.s7g:1:1: error[E047]: {message} ({tmp_path}/blocks.scl)" in lines, lines
