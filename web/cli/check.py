@@ -1,8 +1,11 @@
-"""``s7graph check CHART.s7g [--symbols FILE]``: print a chart's diagnostics (docs/chart-format.md).
+"""``s7graph check CHART.s7g [--symbols FILE] [--blocks BLOCKS.scl …]``: print a chart's
+diagnostics (docs/chart-format.md).
 
 One diagnostic a line on stdout (``file:line:col: error[E010]: message (element)``), then a
 summary line. Exit status: 0 clean, 1 warnings only, 2 errors (syntax errors included). An
-unreadable chart or symbol file is one line on stderr and exit 2.
+unreadable chart or symbol file is one line on stderr and exit 2. ``--blocks``: the S7-SCL
+sources whose blocks the chart's calls are checked against (E047,
+``sequencer.checks.user_calls``); their own diagnostics come first and count.
 """
 
 from __future__ import annotations

@@ -1,16 +1,17 @@
 """``s7graph check PROGRAM.scl`` and ``s7graph sim PROGRAM.scl``: an S7-SCL source checked,
-or run on the virtual clock (docs/cli.md, "s7graph sim"; docs/scl.md).
+or run on the virtual clock (docs/cli.md, "s7graph sim"; docs/scl.md, "On the command line").
 
 ``check`` prints the source's diagnostics one a line and a summary — exit 0 clean, 1
 warnings only, 2 errors — as for a chart. ``sim`` compiles the source with the system
 blocks, loads it into a CPU on the virtual clock, starts it (OB100) and runs ``cycles``
 scans ``cycle_ms`` apart, one JSON line a cycle in the chart's trace format: ``active`` and
 ``events`` are empty lists (no GRAPH FB runs), ``mode`` is the CPU's mode, ``values`` the
-``--watch`` names — addresses, symbols and the variables of instance DBs (``DB10.CONTROL``).
-Stimuli set addresses and symbols (an input on the module side) and instance variables;
-a plant (``--plant``) runs with a chart only. A source that does not compile is its
-diagnostics on stderr, exit 2; a STOP ends the trace with that cycle, the reason on stderr,
-exit 1.
+``--watch`` names — addresses, symbols and DB variables by name (``DB10.CONTROL``,
+``DB20.motor[2].on``: ``web.harness.dbvars``), their types kept. Stimuli set addresses and
+symbols (an input on the module side) and elementary DB variables; a plant (``--plant``)
+runs with a chart only. ``--blocks`` sources are compiled first, in order, and the program
+calls their blocks (``web.harness.scl``). A source that does not compile is its diagnostics
+on stderr, exit 2; a STOP ends the trace with that cycle, the reason on stderr, exit 1.
 """
 
 from __future__ import annotations

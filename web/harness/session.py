@@ -177,11 +177,15 @@ class ChartSession:
         """``load_chart`` (raises ``ChartLoadError``) and a session of it on ``clock``, with
         the S7-SCL sources ``blocks`` its calls reach (``SclLoadError`` when they do not
         compile; their warnings in ``warnings``)."""
-        table = _symbols(symbols) if symbols is not None else None
-        sources = compile_sources(blocks, table) if blocks else None
-        cc, table = load_chart(path, symbols, table=table)
-        session = cls(cc, table, clock, blocks=[sources] if sources is not None else [])
-        session.warnings = list(sources.warnings) if sources is not None else []
+        if not blocks:
+            cc, table = load_chart(path, symbols)
+            return cls(cc, table, clock)
+        with _as_load_error(str(path)):  # as load_chart reports it
+            read = _symbols(symbols) if symbols is not None else None
+        sources = compile_sources(blocks, read)
+        cc, table = load_chart(path, symbols, table=read)
+        session = cls(cc, table, clock, blocks=[sources])
+        session.warnings = list(sources.warnings)
         return session
 
     # ------------------------------------------------------------ names
