@@ -17,6 +17,7 @@ from s7graph.engine.persistence import unpack_instance
 from s7graph.web.cli import main
 from tests.paths import ROOT
 from tests.real_process import query_store
+from tests.web.helpers import cpu_process, wait_until
 
 PROGRAM = """
 FUNCTION_BLOCK FB1
@@ -178,3 +179,24 @@ def test_blocks_beside_a_python_program_are_refused(
     path.write_text("", encoding="utf-8")
     assert main(["run", str(path), "--blocks", str(path), "--duration-s", "0.1"]) == 2
     assert "--blocks goes with a chart or an .scl program" in capsys.readouterr().err
+
+
+def test_a_chart_with_its_blocks_runs_on_the_bus(tmp_path: Path) -> None:
+    chart = tmp_path / "seq.s7g"
+    chart.write_text(CHART, encoding="utf-8")
+    blocks = tmp_path / "blocks.scl"
+    blocks.write_text(BLOCKS, encoding="utf-8")
+    state = tmp_path / "seq.state.sqlite"
+    args = [str(chart), "--blocks", str(blocks), "--state", str(state), "--duration-s", "60"]
+    with cpu_process(tmp_path, args, fb="Seq", terminate=True) as (proc, client, _):
+        update = client.state("Seq")
+        assert update is not None and update.active == [1]
+        assert wait_until(lambda: _counted(state) > 0, 30)
+    assert proc.wait(timeout=60) == 0
+
+
+def _counted(state: Path) -> int:
+    try:
+        return int(_instance(state, 10)["n"])
+    except (AssertionError, TypeError):
+        return 0
