@@ -329,26 +329,34 @@ def _decode(var: Var, current: object, data: object) -> object:
 class InstanceDB:
     """Data of one FB instance: IN, OUT, IN_OUT, STAT by name (attribute or item access)."""
 
-    __slots__ = ("fb", "name", "number", "values")
+    __slots__ = ("fb", "name", "number", "presets", "values")
 
     number: int
     fb: FB
     name: str
     values: dict[str, object]
+    presets: dict[str, Callable[[], object]]
+    """This instance's own initial values, where they differ from the FB's (an S7-SCL
+    ``DATA_BLOCK DB10 FB17 BEGIN x := 5;``): a function giving each, for ``reset``."""
 
     def __init__(self, number: int, fb: FB, *, name: str | None = None) -> None:
         object.__setattr__(self, "number", number)
         object.__setattr__(self, "fb", fb)
         object.__setattr__(self, "name", name if name is not None else f"DB{number}")
         object.__setattr__(self, "values", {})
+        object.__setattr__(self, "presets", {})
         self.reset()
 
     def reset(self) -> None:
-        """Every variable back to its initial value (cold restart)."""
+        """Every variable back to its initial value (cold restart): the instance's own
+        (``presets``), else its FB's."""
         self.values.clear()
         for var in self.fb.interface:
             if var.decl is not Decl.TEMP:
                 self.values[var.name] = _initial(var, self.number)
+        for name, initial in self.presets.items():
+            if name in self.values:
+                self.values[name] = initial()
 
     def __getattr__(self, name: str) -> object:
         try:

@@ -5,9 +5,10 @@ FBs, FCs, SFBs and SFCs alike (STEP7 comprehensive guide vol. 2, ch. 14). A syst
 the CPU's operating system, as on S7; the instance DB an SFB call names is created with the chart,
 as the SCL compiler creates the DB a call names when it does not exist (STEP7 comprehensive guide
 vol. 2, ch. 13). So ``prepare_calls(cpu, chart)`` runs before a chart is first called — at load, and
-at an online change before the swap: it creates each missing instance DB of an SFB call, and refuses
-(nothing created) when a named DB is already something else: a global DB, or the instance of another
-block. A call of a user block (``CALL FC 9``, ``CALL FB 5, DB 5``) that the CPU has not loaded is
+at an online change before the swap: it creates each missing instance DB of an SFB call, and of a
+call of a user FB the CPU has loaded (an S7-SCL FB of ``--blocks``), and refuses (nothing created)
+when a named DB is already something else: a global DB, or the instance of another block. A call
+of a user block (``CALL FC 9``, ``CALL FB 5, DB 5``) that the CPU has not loaded is
 reported in ``missing``: a chart run by itself has the system blocks only, and the call stops the
 CPU when it is reached (a programming error without OB121, as on S7). A download into the running
 CPU may not add such a call: ``swap`` refuses it.
@@ -87,7 +88,7 @@ def prepare_calls(cpu: Any, chart: Chart, *, allowed_missing: set[str] | None = 
                 why = f"{label} is not in this CPU; reached, the call stops it"
                 plan.missing.append(site.line("warning", why))
             continue
-        if getattr(block, "kind", None) != "SFB":  # an SFB by number or by name ("TON")
+        if getattr(block, "kind", None) not in ("SFB", "FB"):  # by number or name ("TON")
             continue
         if not isinstance(c.instance, int):
             plan.problems.append(site.line("error", "name the instance DB by its number"))

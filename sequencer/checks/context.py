@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 from s7graph.engine.errors import SourceLocation
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.checks.diagnostics import Diagnostic, error, warning
+from s7graph.sequencer.checks.interfaces import ProgramBlocks
 from s7graph.sequencer.text.model import Chart, Step, Transition
 
 
@@ -18,6 +19,10 @@ class _Ctx:
     steps: dict[int, Step] = field(default_factory=dict)
     transitions: dict[int, Transition] = field(default_factory=dict)
     diags: list[Diagnostic] = field(default_factory=list)
+    blocks: ProgramBlocks | None = None
+    """The program's FBs, FCs and DBs the chart's calls reach (``--blocks``), if given."""
+    instances: dict[int, str] = field(default_factory=dict)
+    """The instance DBs the chart's calls name so far: number → the FB or SFB's label."""
 
     def err(self, code: str, msg: str, loc: SourceLocation, element: str = "") -> None:
         self.diags.append(error(code, msg, loc, element))

@@ -56,6 +56,8 @@ CODES: Final[dict[str, str]] = {
     "E045": "write to a read-only operand (FB output, PI, step or transition attribute)",
     # calls
     "E046": "CALL of a system block s7graph lacks, or with a wrong instance or parameter",
+    "E047": "CALL of a user FB or FC that does not fit the program's blocks (--blocks): "
+    "unknown block or parameter, wrong direction, type or instance DB",
     # warnings
     "W101": "step without a way in",
     "W102": "step without a way out",

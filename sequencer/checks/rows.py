@@ -17,6 +17,7 @@ from s7graph.sequencer.checks.types import (
     _type,
     _unify,
 )
+from s7graph.sequencer.checks.user_calls import check_instance, check_user_call
 from s7graph.sequencer.text.model import (
     ActionRow,
     Assignment,
@@ -130,7 +131,7 @@ def _check_call(ctx: _Ctx, call: BlockCall, el: str) -> None:
     number) exactly when it is an SFB, and its parameters are pins of it, ``:=`` for
     inputs, ``=>`` for outputs, of the pin's type, all of them for an SFC (the catalogue,
     ``sfb.catalogue``). FB and FC calls name the user's blocks, which only the program
-    that loads them knows."""
+    that loads them knows: checked when it is given (``sequencer.checks.user_calls``)."""
     types = [(name, _type(ctx, e, el), e) for name, e in call.inputs]
     for name, o in call.outputs:
         res = _resolve(ctx, o, el)
@@ -146,10 +147,12 @@ def _check_call(ctx: _Ctx, call: BlockCall, el: str) -> None:
     if isinstance(call.instance, int) and not 1 <= call.instance <= 65535:
         ctx.err("E046", f"DB {call.instance}: a DB number is 1 to 65535", call.loc, el)
     if call.kind not in ("SFB", "SFC", ""):
+        check_user_call(ctx, call, el, types)
         return
     entry = catalogue.find(f"{call.kind}{call.block}")  # by number, or by name ("TON")
     if entry is None and call.kind == "":
-        return  # a user block's symbol
+        check_user_call(ctx, call, el, types)  # a user block's symbol
+        return
     if entry is None:
         known = " ".join(e.key for e in catalogue.CATALOGUE if e.kind == call.kind)
         ctx.err(
@@ -175,6 +178,8 @@ def _check_call(ctx: _Ctx, call: BlockCall, el: str) -> None:
             call.loc,
             el,
         )
+    if entry.needs_instance and ctx.blocks is not None:  # with the program's DBs
+        check_instance(ctx, call, el, entry.key)
     if entry.needs_instance and isinstance(call.instance, str):
         ctx.err(
             "E046",

@@ -18,6 +18,7 @@ from typing import Final
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.checks.context import _Ctx
 from s7graph.sequencer.checks.diagnostics import Diagnostic, sort_key
+from s7graph.sequencer.checks.interfaces import ProgramBlocks
 from s7graph.sequencer.checks.rows import (
     rule_action_rows,
     rule_c_without_interlock,
@@ -48,6 +49,7 @@ from s7graph.sequencer.checks.types import (
     rule_conditions,
     rule_empty_conditions,
 )
+from s7graph.sequencer.checks.user_calls import check_own_blocks
 from s7graph.sequencer.text.model import Chart
 
 __all__ = [
@@ -63,6 +65,7 @@ __all__ = [
     "MAX_STEPS",
     "MAX_TRANSITIONS",
     "RULES",
+    "ProgramBlocks",
     "rule_action_rows",
     "rule_c_without_interlock",
     "rule_conditions",
@@ -96,14 +99,21 @@ RULES: Final[tuple[Callable[[_Ctx], None], ...]] = (
 )
 
 
-def validate(chart: Chart, symbols: SymbolTable | None = None) -> list[Diagnostic]:
-    """Every diagnostic of ``chart`` (errors and warnings), sorted by place."""
-    ctx = _Ctx(chart, symbols)
+def validate(
+    chart: Chart, symbols: SymbolTable | None = None, *, blocks: ProgramBlocks | None = None
+) -> list[Diagnostic]:
+    """Every diagnostic of ``chart`` (errors and warnings), sorted by place. ``blocks``: the
+    program's FBs, FCs and DBs, when known, that the chart's calls are checked against
+    (E047, ``sequencer.checks.user_calls``)."""
+    ctx = _Ctx(chart, symbols, blocks=blocks)
+    if chart.db_number is not None and chart.fb_number is not None:
+        ctx.instances[chart.db_number] = f"FB{chart.fb_number} (this chart)"
     for s in chart.all_steps():
         ctx.steps.setdefault(s.number, s)
     for t in chart.all_transitions():
         ctx.transitions.setdefault(t.number, t)
     for rule in RULES:
         rule(ctx)
+    check_own_blocks(ctx)
     unique = list(dict.fromkeys(ctx.diags))
     return sorted(unique, key=sort_key)

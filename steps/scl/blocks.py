@@ -28,6 +28,7 @@ from s7graph.steps.scl.consts import Consts, adapt
 from s7graph.steps.scl.declare import BlockInfo, Program, struct_initial
 from s7graph.steps.scl.diagnostics import Diagnostic, Problem, SclError, error, sort_key
 from s7graph.steps.scl.runtime import _encode
+from s7graph.steps.scl.state import SclState, type_text
 
 
 @dataclass
@@ -40,6 +41,12 @@ class SclProgram:
     diagnostics: list[Diagnostic] = field(default_factory=list)
     python: str = ""
     """The generated module's source (for reading, never run as text)."""
+    types: dict[str, ty.SclType] = field(default_factory=dict)
+    """The structure of each FB's instance (its IN, OUT, IN_OUT and VAR) and of each global
+    DB, by label: what a DB variable is read by name with (``steps.scl.access``)."""
+    places: dict[str, SourceLocation] = field(default_factory=dict)
+    """Where each block is written, by label (``FB17``, ``DB10``): the place a conflict
+    with another source names."""
 
     def block(self, label: str) -> OB | FB | FC | DB:
         for blk in self.blocks:
@@ -60,6 +67,7 @@ class SclProgram:
             else:
                 continue
             for name, value in self.instance_values.get(number, {}).items():
+                idb.presets[name] = _factory(value)  # a cold restart comes back to it
                 idb[name] = ty.clone(value)
 
 
@@ -104,6 +112,13 @@ def _build(source: m.Source, prog: Program, gen: Generated) -> tuple[SclProgram,
             continue
         if info.kind == "DB" and info.instance_of:
             out.instance_values[info.number] = _instance_inits(prog, info)
+        if info.kind in ("FB", "FC", "OB", "DB"):
+            out.places[info.label] = unit.loc
+        if info.kind == "FB":
+            fields = tuple((p.name, p.type) for p in info.params.values())
+            out.types[info.label] = ty.SclType("STRUCT", fields=fields, name=info.label)
+        elif info.kind == "DB" and info.db_type is not None:
+            out.types[info.label] = info.db_type
         if blk is None:
             continue
         if isinstance(blk, FB | FC):
@@ -125,7 +140,8 @@ def _engine_block(
         return OB(info.number, name, _located(fn, gen, info.label))
     interface = tuple(_var(prog, p, built, info) for p in info.params.values())
     if info.kind == "FB":
-        return FB(info.number, name, interface, _located(fn, gen, info.label))
+        fmt = _state_format(info, built)
+        return FB(info.number, name, interface, _located(fn, gen, info.label), state_format=fmt)
     ret = ty.engine_type(info.ret) if info.ret is not None else None
     return FC(info.number, name, interface, _located(fn, gen, info.label), ret_type=ret)
 
@@ -145,6 +161,16 @@ def _var(prog: Program, p: Any, built: dict[str, FB | FC], info: BlockInfo) -> V
         value = init if init is not None else ty.zero(t)
         return Var(p.name, "OBJECT", p.decl, _factory(value) if info.kind == "FB" else None)
     return Var(p.name, ty.engine_type(t), p.decl, init if info.kind == "FB" else None)
+
+
+def _state_format(info: BlockInfo, built: dict[str, FB | FC]) -> SclState:
+    """How the FB's instances are recognised in a state file (``steps.scl.state``)."""
+    prints: dict[str, str] = {}
+    for label, blk in built.items():
+        fmt = getattr(blk, "state_format", None)
+        if isinstance(blk, FB) and fmt is not None:
+            prints[label] = fmt.fingerprint
+    return SclState(tuple((p.name, type_text(p.type, prints)) for p in info.params.values()))
 
 
 def _factory(value: object) -> Callable[[], object]:

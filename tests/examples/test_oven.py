@@ -35,7 +35,7 @@ def run_oven(cycles: int, plant: Path = EXAMPLE / "plant.py") -> list[dict[str, 
     ``stimulus.jsonl`` (the operator presses Start from 1 s to 2 s) in the cycle of its
     time; each cycle a scan, then the plant. One record a cycle in ``sim``'s trace form."""
     session = ChartSession.load(
-        EXAMPLE / "oven.s7g", EXAMPLE / "symbols.txt", VirtualClock(), blocks=EXAMPLE / "oven.scl"
+        EXAMPLE / "oven.s7g", EXAMPLE / "symbols.txt", VirtualClock(), blocks=[EXAMPLE / "oven.scl"]
     )
     lines = (EXAMPLE / "stimulus.jsonl").read_text(encoding="utf-8").splitlines()
     stimulus = {line["at_ms"]: line["set"] for line in map(json.loads, lines)}
@@ -167,3 +167,24 @@ def test_oven_readme_python_way_runs_one_firing(
     assert capsys.readouterr().out == printed
     steps = [line.split()[2] for line in printed.splitlines()]
     assert steps == ["S1"] + ["S2"] * 4 + ["S3"] * 5 + ["S4"] * 8 + ["S1"]
+
+
+def test_the_readmes_command_line_runs_the_same_oven_as_the_harness(tmp_path: Path) -> None:
+    """``s7graph sim … --blocks oven.scl`` (the README's command) and the Python session
+    trace the same cycles."""
+    from s7graph.web.cli import main
+
+    trace = tmp_path / "oven.jsonl"
+    args = ["sim", str(EXAMPLE / "oven.s7g"), "--blocks", str(EXAMPLE / "oven.scl")]
+    args += ["--symbols", str(EXAMPLE / "symbols.txt"), "--plant", str(EXAMPLE / "plant.py")]
+    args += ["--stimulus", str(EXAMPLE / "stimulus.jsonl"), "--cycle-ms", "100"]
+    args += ["--cycles", "3000", "--watch", ",".join(WATCH[:5]), "--trace", str(trace)]
+    assert main(args) == 0
+    cli = [json.loads(line) for line in trace.read_text(encoding="utf-8").splitlines()]
+    ours = run_oven(3000)
+    assert len(cli) == len(ours) == 3000
+    for k in (0, 999, 2999):
+        assert cli[k]["active"] == ours[k]["active"]
+        assert {n: cli[k]["values"][n] for n in WATCH[:5]} == {
+            n: ours[k]["values"][n] for n in WATCH[:5]
+        }

@@ -248,9 +248,21 @@ def _supervised() -> bool:
     return _ENTRY_ARGS is not None and hasattr(os, "memfd_create") and not child
 
 
+Blocks = Annotated[
+    list[Path] | None,
+    typer.Option(
+        "--blocks",
+        help="An S7-SCL source of the blocks the chart or program calls (several allowed, "
+        "compiled in order before it).",
+    ),
+]
+
 # The options of ``run`` (``s7graph run --help``).
 ProgramArg = Annotated[
-    Path, typer.Argument(help="A Python program of blocks (.py) or a chart (.s7g).")
+    Path,
+    typer.Argument(
+        help="A Python program of blocks (.py), an S7-SCL program (.scl) or a chart (.s7g)."
+    ),
 ]
 StateFile = Annotated[
     Path | None,
@@ -338,6 +350,7 @@ def run(
     rt_priority: RtPriority = None,
     comm_load: CommLoad = COMM_LOAD_PCT,
     core: Core = None,
+    blocks: Blocks = None,
 ) -> None:
     """Run a program or a chart on the system clock until Ctrl-C."""
     if _supervised():
@@ -345,6 +358,11 @@ def run(
 
         raise typer.Exit(supervise(_ENTRY_ARGS or []))
     priority = _scan_priority(rt_priority)
+    if program.suffix.lower() == ".scl" or (blocks and program.suffix.lower() != ".s7g"):
+        options = {"symbols": symbols, "state": state, "cycle_ms": cycle_ms, "core": core}
+        options |= {"duration_s": duration_s, "max_cycle_ms": max_cycle_ms, "fresh": fresh}
+        options |= {"restart": restart, "rt_priority": priority}
+        _run_scl_program(program, blocks or [], bool(web or listen or connect), **options)
     if program.suffix.lower() == ".s7g":
         from s7graph.web.cli.run_chart import run_chart
 
@@ -385,6 +403,7 @@ def run(
                 rt_priority=priority,
                 comm_load_pct=comm_load,
                 core=core if core is not None else "auto",
+                blocks=blocks or [],
             )
         )
     from s7graph.web.cli.run_program import run_program
@@ -404,20 +423,39 @@ def run(
     )
 
 
+def _run_scl_program(program: Path, blocks: list[Path], bus: bool, **options: Any) -> None:
+    """``run PROGRAM.scl``: on the system clock, without the bus (a chart's); ``--blocks``
+    beside a Python program is refused."""
+    if program.suffix.lower() != ".scl":
+        print("s7graph: error: --blocks goes with a chart or an .scl program", file=sys.stderr)
+        raise typer.Exit(2)
+    if bus:
+        print(
+            "s7graph: error: --web, --listen and --connect run a chart; a program of S7-SCL "
+            "blocks runs without the bus",
+            file=sys.stderr,
+        )
+        raise typer.Exit(2)
+    from s7graph.web.cli.run_scl import run_scl
+
+    raise typer.Exit(run_scl(program, blocks=blocks, **options))
+
+
 @app.command()
 def check(
     chart: Annotated[Path, typer.Argument(help="A chart in .s7g source, or an .scl source.")],
     symbols: Annotated[Path | None, typer.Option(help="A symbol table file.")] = None,
+    blocks: Blocks = None,
 ) -> None:
     """Print a chart's (or an SCL source's) diagnostics; exit 0 clean, 1 warnings only, 2
     errors."""
     if chart.suffix.lower() == ".scl":
         from s7graph.web.cli.scl import check_scl_command
 
-        raise typer.Exit(check_scl_command(chart, symbols=symbols))
+        raise typer.Exit(check_scl_command(chart, symbols=symbols, blocks=blocks or []))
     from s7graph.web.cli.check import check_command
 
-    raise typer.Exit(check_command(chart, symbols=symbols))
+    raise typer.Exit(check_command(chart, symbols=symbols, blocks=blocks or []))
 
 
 @app.command()
@@ -438,6 +476,7 @@ def sim(
     plant: Annotated[
         Path | None, typer.Option(help="A simulated plant (.py) run each cycle.")
     ] = None,
+    blocks: Blocks = None,
 ) -> None:
     """Run a chart (or an .scl program) on the virtual clock: stimulus in, one JSON line
     per cycle out."""
@@ -454,6 +493,7 @@ def sim(
                 trace=trace,
                 symbols=symbols,
                 plant=plant,
+                blocks=blocks or [],
             )
         )
     from s7graph.web.cli.sim import sim_command
@@ -468,6 +508,7 @@ def sim(
             trace=trace,
             symbols=symbols,
             plant=plant,
+            blocks=blocks or [],
         )
     )
 

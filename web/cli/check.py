@@ -1,26 +1,34 @@
-"""``s7graph check CHART.s7g [--symbols FILE]``: print a chart's diagnostics (docs/chart-format.md).
+"""``s7graph check CHART.s7g [--symbols FILE] [--blocks BLOCKS.scl …]``: print a chart's
+diagnostics (docs/chart-format.md).
 
 One diagnostic a line on stdout (``file:line:col: error[E010]: message (element)``), then a
 summary line. Exit status: 0 clean, 1 warnings only, 2 errors (syntax errors included). An
-unreadable chart or symbol file is one line on stderr and exit 2.
+unreadable chart or symbol file is one line on stderr and exit 2. ``--blocks``: the S7-SCL
+sources whose blocks the chart's calls are checked against (E047,
+``sequencer.checks.user_calls``); their own diagnostics come first and count.
 """
 
 from __future__ import annotations
 
 import sys
+from collections.abc import Sequence
 from pathlib import Path
 
 from s7graph.engine.errors import S7Error
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.checks.diagnostics import Diagnostic, format_diagnostic, warning
+from s7graph.sequencer.checks.interfaces import ProgramBlocks
 from s7graph.sequencer.checks.validate import validate
 from s7graph.sequencer.text.model import Chart
 from s7graph.sequencer.text.parse import ChartSyntaxError, chart_text, parse_chart
 from s7graph.web.bus.protocol import ChartLayout, layout_problem
+from s7graph.web.harness.scl import SclLoadError, compile_sources
 
 
-def check_command(chart: Path, symbols: Path | None = None) -> int:
-    """Parse and validate ``chart``; print diagnostics and a summary; return the exit code."""
+def check_command(chart: Path, symbols: Path | None = None, blocks: Sequence[Path] = ()) -> int:
+    """Parse and validate ``chart``; print diagnostics and a summary; return the exit code.
+    ``blocks``: S7-SCL sources whose FBs, FCs and DBs the chart's calls are checked against
+    (E047); their own diagnostics come first and count."""
     try:
         data = chart.read_bytes()
     except OSError as exc:
@@ -39,20 +47,45 @@ def check_command(chart: Path, symbols: Path | None = None) -> int:
         except S7Error as exc:
             print(f"s7graph: error: cannot read symbols {symbols}: {exc}", file=sys.stderr)
             return 2
+    program, lines = _program(blocks, table)
+    if program is None and lines is None:
+        return 2
     diags: list[Diagnostic]
     try:
         parsed = parse_chart(chart_text(data, str(chart)), str(chart))
-        diags = validate(parsed, table)
+        diags = validate(parsed, table, blocks=program)
         if not any(d.severity == "error" for d in diags):
             diags += view_diagnostics(parsed)
     except ChartSyntaxError as exc:
         diags = exc.diagnostics
+    scl_errors = 0
+    for line, is_error in lines or []:
+        print(line)
+        scl_errors += is_error
     for d in diags:
         print(format_diagnostic(d))
-    errors = sum(d.severity == "error" for d in diags)
-    warnings = len(diags) - errors
+    errors = sum(d.severity == "error" for d in diags) + scl_errors
+    warnings = len(diags) + len(lines or []) - errors
     print(f"{chart}: {_plural(errors, 'error')}, {_plural(warnings, 'warning')}")
     return 2 if errors else 1 if warnings else 0
+
+
+def _program(
+    blocks: Sequence[Path], table: SymbolTable | None
+) -> tuple[ProgramBlocks | None, list[tuple[str, bool]] | None]:
+    """The interfaces of the ``blocks`` sources (None without any) and their diagnostic
+    lines (is each an error); (None, None) after one line on stderr when a source cannot
+    be read."""
+    if not blocks:
+        return None, []
+    try:
+        sources = compile_sources(blocks, table)
+    except SclLoadError as exc:
+        return None, [(line, ": warning[" not in line) for line in exc.lines]
+    except S7Error as exc:
+        print(f"s7graph: error: {exc}", file=sys.stderr)
+        return None, None
+    return sources.interfaces(), [(line, False) for line in sources.warnings]
 
 
 def view_diagnostics(chart: Chart) -> list[Diagnostic]:

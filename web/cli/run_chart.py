@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import functools
 import sys
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -75,6 +76,7 @@ def run_chart(
     rt_priority: int | None = RT_PRIORITY,
     comm_load_pct: float = COMM_LOAD_PCT,
     core: str | int | None = "auto",
+    blocks: Sequence[Path] = (),
 ) -> int:
     """Run ``path`` until Ctrl-C/SIGTERM/``duration_s``; 0 clean, 1 plant error, STOP by
     error or state not written, 2 bad chart or a state file it cannot trust.
@@ -90,7 +92,8 @@ def run_chart(
     ``rt_priority``: the scan thread's real-time priority (None: normal scheduling).
     ``comm_load_pct``: the share of the cycle commands may take at a scan boundary.
     ``core``: the processor kept for the scan (``--core``: ``engine.cores``); the bus, the
-    view and the writer start off it."""
+    view and the writer start off it. ``blocks``: the S7-SCL sources the chart's calls reach
+    (``--blocks``), loaded beside it; their instance DBs are kept in the state file."""
     try:
         kept = core_for(core, rt_priority)
     except ValueError as exc:
@@ -117,6 +120,7 @@ def run_chart(
             rt_priority=rt_priority,
             comm_load_pct=comm_load_pct,
             core=kept,
+            blocks=blocks,
         )
 
 
@@ -140,8 +144,9 @@ def _run_chart(
     rt_priority: int | None,
     comm_load_pct: float,
     core: int | None,
+    blocks: Sequence[Path] = (),
 ) -> int:
-    made = _load(path, symbols, plant, session)
+    made = _load(path, symbols, plant, session, blocks)
     if isinstance(made, int):
         return made
     session, loaded = made
@@ -246,17 +251,22 @@ def _close(view: ViewProcess | None, live: LiveEdge | None) -> None:
 
 
 def _load(
-    path: Path, symbols: Path | None, plant: Path | None, session: ChartSession | None
+    path: Path,
+    symbols: Path | None,
+    plant: Path | None,
+    session: ChartSession | None,
+    blocks: Sequence[Path] = (),
 ) -> tuple[ChartSession, LoadedPlant | None] | int:
-    """The chart's session (on the system clock unless given) and its plant, the calls of
-    blocks the CPU lacks printed as warnings; an exit status when either cannot load."""
+    """The chart's session (on the system clock unless given) with the S7-SCL ``blocks``
+    and its plant, the sources' warnings and the calls of blocks the CPU lacks printed as
+    warnings; an exit status when either cannot load."""
     try:
         if session is None:
-            session = ChartSession.load(path, symbols, SystemClock())
+            session = ChartSession.load(path, symbols, SystemClock(), blocks=blocks)
         loaded = load_plant(plant) if plant is not None else None
-    except S7Error as exc:  # ChartLoadError included
+    except S7Error as exc:  # ChartLoadError and SclLoadError included
         return fail(exc)
-    for line in session.missing:
+    for line in session.warnings + session.missing:
         print(line, file=sys.stderr)
     return session, loaded
 

@@ -1,16 +1,17 @@
 """``s7graph check PROGRAM.scl`` and ``s7graph sim PROGRAM.scl``: an S7-SCL source checked,
-or run on the virtual clock (docs/cli.md, "s7graph sim"; docs/scl.md).
+or run on the virtual clock (docs/cli.md, "s7graph sim"; docs/scl.md, "On the command line").
 
 ``check`` prints the source's diagnostics one a line and a summary — exit 0 clean, 1
 warnings only, 2 errors — as for a chart. ``sim`` compiles the source with the system
 blocks, loads it into a CPU on the virtual clock, starts it (OB100) and runs ``cycles``
 scans ``cycle_ms`` apart, one JSON line a cycle in the chart's trace format: ``active`` and
 ``events`` are empty lists (no GRAPH FB runs), ``mode`` is the CPU's mode, ``values`` the
-``--watch`` names — addresses, symbols and the variables of instance DBs (``DB10.CONTROL``).
-Stimuli set addresses and symbols (an input on the module side) and instance variables;
-a plant (``--plant``) runs with a chart only. A source that does not compile is its
-diagnostics on stderr, exit 2; a STOP ends the trace with that cycle, the reason on stderr,
-exit 1.
+``--watch`` names — addresses, symbols and DB variables by name (``DB10.CONTROL``,
+``DB20.motor[2].on``: ``web.harness.dbvars``), their types kept. Stimuli set addresses and
+symbols (an input on the module side) and elementary DB variables; a plant (``--plant``)
+runs with a chart only. ``--blocks`` sources are compiled first, in order, and the program
+calls their blocks (``web.harness.scl``). A source that does not compile is its diagnostics
+on stderr, exit 2; a STOP ends the trace with that cycle, the reason on stderr, exit 1.
 """
 
 from __future__ import annotations
@@ -18,31 +19,31 @@ from __future__ import annotations
 import json
 import re
 import sys
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, TextIO
 
 from s7graph import sfb
 from s7graph.engine.address import Address, Area, Width, parse_address
+from s7graph.engine.blocks import FB, FC
 from s7graph.engine.clock import VirtualClock
 from s7graph.engine.cpu import Cpu
 from s7graph.engine.errors import AddressError, S7Error
 from s7graph.engine.runner import stop_reason
 from s7graph.engine.symbols import SymbolTable, default_type
-from s7graph.engine.text import NotUtf8, decode_utf8
-from s7graph.steps.scl import SclError, SclProgram, check_scl, compile_scl, format_diagnostic
+from s7graph.steps.scl import check_scl, format_diagnostic
 from s7graph.web.cli.report import fail
 from s7graph.web.cli.sim import _read_stimulus
+from s7graph.web.harness.dbvars import DbVariables
+from s7graph.web.harness.scl import (
+    Loadable,
+    SclLoadError,
+    SclSources,
+    compile_sources,
+    read_source,
+)
 
-_INSTANCE = re.compile(r"DB(\d+)\.(\w+)", re.IGNORECASE)
-
-
-def _text(path: Path) -> str:
-    try:
-        return decode_utf8(path.read_bytes(), str(path))
-    except OSError as exc:
-        raise S7Error(f"cannot read {path}: {exc.strerror or exc}") from None
-    except NotUtf8 as exc:
-        raise S7Error(str(exc)) from None
+_SEVERITY = re.compile(r": (error|warning)[\[:]")
 
 
 def _symbols(path: Path | None) -> SymbolTable | None:
@@ -56,19 +57,44 @@ def _symbols(path: Path | None) -> SymbolTable | None:
         raise S7Error(f"cannot read symbols {path}: {exc}") from None
 
 
-def check_scl_command(source: Path, symbols: Path | None = None) -> int:
-    """Print the diagnostics of an SCL source and a summary; return the exit status."""
+def check_scl_command(
+    source: Path, symbols: Path | None = None, blocks: Sequence[Path] = ()
+) -> int:
+    """Print the diagnostics of an SCL source and a summary; return the exit status.
+    ``blocks``: sources compiled before it whose FBs and FCs it may call (their errors are
+    printed and counted, the source itself not checked then)."""
     try:
-        text, table = _text(source), _symbols(symbols)
+        text, table = read_source(source), _symbols(symbols)
+        known = compile_sources(blocks, table)
+    except SclLoadError as exc:
+        return _summary(source, exc.lines)
     except S7Error as exc:
         return fail(exc)
-    found = check_scl(text, str(source), blocks=sfb.SYSTEM_BLOCKS, symbols=table)
-    for d in found:
-        print(format_diagnostic(d))
-    errors = sum(d.is_error for d in found)
-    warnings = len(found) - errors
+    found = check_scl(
+        text, str(source), blocks=[*sfb.SYSTEM_BLOCKS, *_callable(known)], symbols=table
+    )
+    lines = known.warnings + [format_diagnostic(d) for d in found]
+    return _summary(source, lines)
+
+
+def _callable(known: SclSources) -> list[FB | FC]:
+    return [b for b in known.blocks if isinstance(b, FB | FC)]
+
+
+def _summary(source: Path, lines: list[str]) -> int:
+    """Print diagnostic ``lines`` and the summary of ``source``; the exit status."""
+    for line in lines:
+        print(line)
+    errors = sum(_severity(line) == "error" for line in lines)
+    warnings = len(lines) - errors
     print(f"{source}: {_plural(errors, 'error')}, {_plural(warnings, 'warning')}")
     return 2 if errors else 1 if warnings else 0
+
+
+def _severity(line: str) -> str:
+    """``error`` or ``warning``: the first severity a diagnostic line names."""
+    found = _SEVERITY.search(line)
+    return found[1] if found is not None else "error"
 
 
 def _plural(n: int, word: str) -> str:
@@ -78,13 +104,14 @@ def _plural(n: int, word: str) -> str:
 class SclSession:
     """One CPU on the virtual clock running a compiled SCL program."""
 
-    def __init__(self, program: SclProgram, symbols: SymbolTable | None) -> None:
+    def __init__(self, program: Loadable, symbols: SymbolTable | None) -> None:
         self.clock = VirtualClock()
         self.cpu = Cpu(self.clock)
         self.cpu.mem.symbols = symbols
         self.symbols = symbols
         sfb.install(self.cpu)
         program.load(self.cpu)
+        self.dbvars = DbVariables(self.cpu, getattr(program, "types", {}))
 
     def _address(self, name: str) -> tuple[Address, str] | None:
         sym = self.symbols.lookup(name) if self.symbols is not None else None
@@ -96,16 +123,17 @@ class SclSession:
             return None
         return addr, default_type(addr)
 
-    def check_name(self, name: str) -> None:
-        if _INSTANCE.fullmatch(name) is None and self._address(name) is None:
+    def check_name(self, name: str, *, writing: bool = False) -> None:
+        if self._address(name) is not None:
+            return
+        if not self.dbvars.is_db_name(name):
             raise S7Error(f"unknown name {name}: not an address, symbol or DBn.variable")
+        (self.dbvars.writer if writing else self.dbvars.reader)(name)
 
     def get(self, name: str) -> Any:
-        if m := _INSTANCE.fullmatch(name):
-            return _json(self.cpu.instance_db(int(m[1]))[m[2]])
         found = self._address(name)
         if found is None:
-            raise S7Error(f"unknown name {name}")
+            return self.dbvars.reader(name)()
         addr, type_name = found
         if addr.area in (Area.T, Area.C):
             cells = self.cpu.mem.timers if addr.area is Area.T else self.cpu.mem.counters
@@ -113,12 +141,10 @@ class SclSession:
         return _json(self.cpu.mem.read_as(addr, type_name))
 
     def set(self, name: str, value: Any) -> None:
-        if m := _INSTANCE.fullmatch(name):
-            self.cpu.instance_db(int(m[1]))[m[2]] = value
-            return
         found = self._address(name)
         if found is None:
-            raise S7Error(f"unknown name {name}")
+            self.dbvars.writer(name)(value)
+            return
         addr, type_name = found
         mem = self.cpu.mem
         mem.write_as(addr, type_name, value)
@@ -145,25 +171,28 @@ def sim_scl_command(
     trace: Path | None = None,
     symbols: Path | None = None,
     plant: Path | None = None,
+    blocks: Sequence[Path] = (),
 ) -> int:
-    """Run the SCL program for ``cycles`` cycles; return the exit status."""
+    """Run the SCL program for ``cycles`` cycles; return the exit status. ``blocks``:
+    sources compiled before it, whose blocks it calls (``web.harness.scl``)."""
     if plant is not None:
         return fail(f"{source}: a plant runs with a chart only, not with an SCL program")
     try:
-        text, table = _text(source), _symbols(symbols)
-        program = compile_scl(text, str(source), blocks=sfb.SYSTEM_BLOCKS, symbols=table)
-    except SclError as exc:
-        for d in exc.diagnostics:
-            print(format_diagnostic(d), file=sys.stderr)
-        return 2
-    except S7Error as exc:
+        table = _symbols(symbols)
+        program = compile_sources([*blocks, source], table)
+    except S7Error as exc:  # SclLoadError included: its diagnostics
         return fail(exc)
+    for line in program.warnings:
+        print(line, file=sys.stderr)
     try:
         session = SclSession(program, table)
         stim = _read_stimulus(stimulus)
         names = [w.strip() for w in watch.split(",") if w.strip()]
-        for name in names + [n for _, values in stim for n in values]:
+        for name in names:
             session.check_name(name)
+        for _, values in stim:
+            for name in values:
+                session.check_name(name, writing=True)
     except S7Error as exc:
         return fail(exc)
     out: TextIO = sys.stdout if trace is None else open(trace, "w", encoding="utf-8")  # noqa: SIM115

@@ -20,8 +20,9 @@ set, FB variables, ``Sn.X``/``Sn.T``/``Sn.U``, ``Tn.TT``.
 Stimulus names: addresses, symbols, FB *input* pins of the parameter set, FB variables.
 An input address (I…) is written on the module side (PI), so the CPU reads it at the start
 of the cycle. A chart that does not compile, an unknown name or a pin outside the parameter
-set: diagnostics on stderr, exit status 2. A call of a block the CPU does not have (a
-user FB or FC: a chart is simulated with the system blocks only) is a warning on stderr.
+set: diagnostics on stderr, exit status 2. ``--blocks`` S7-SCL sources bring the user FBs
+and FCs the chart calls (and OBs that run beside it, ``web.harness.scl``); a call of a
+block the CPU does not have is a warning on stderr.
 When the CPU goes to STOP (a block error without OB121, as on S7), the trace ends with
 that cycle's line, the reason goes to stderr and the exit status is 1.
 """
@@ -30,6 +31,7 @@ from __future__ import annotations
 
 import json
 import sys
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, TextIO
 
@@ -88,10 +90,13 @@ def sim_command(
     trace: Path | None = None,
     symbols: Path | None = None,
     plant: Path | None = None,
+    blocks: Sequence[Path] = (),
 ) -> int:
-    """Run ``chart`` for ``cycles`` cycles; return the exit status (docs/cli.md, "s7graph sim")."""
+    """Run ``chart`` for ``cycles`` cycles; return the exit status (docs/cli.md, "s7graph sim").
+    ``blocks``: S7-SCL sources whose FBs and FCs the chart's calls reach, whose OBs run
+    beside it."""
     try:
-        session = ChartSession.load(chart, symbols, VirtualClock())
+        session = ChartSession.load(chart, symbols, VirtualClock(), blocks=blocks)
         stim = _read_stimulus(stimulus)
         names = [w.strip() for w in watch.split(",") if w.strip()]
         for name in names:
@@ -102,7 +107,7 @@ def sim_command(
         loaded: LoadedPlant | None = load_plant(plant) if plant is not None else None
     except S7Error as exc:  # ChartLoadError included
         return fail(exc)
-    for line in session.missing:
+    for line in session.warnings + session.missing:
         print(line, file=sys.stderr)
     out: TextIO = sys.stdout if trace is None else open(trace, "w", encoding="utf-8")  # noqa: SIM115
     try:

@@ -3,16 +3,13 @@
 :func:`load_chart` parses, validates and compiles a chart file with its symbol table;
 :class:`ChartSession` loads the compiled chart as a GraphFB called from OB1 of one CPU and
 reads and writes it by name — S7 addresses, symbols, FB pins of the chart's parameter set,
-FB variables and step/transition attributes (``Sn.X``, ``Sn.T``, ``Sn.U``, ``Tn.TT``).
-:func:`load_blocks` compiles an S7-SCL source with the chart's symbol table, and
-``ChartSession(…, blocks=program)`` loads it into the same CPU beside the chart
-(:func:`add_blocks`): the chart's FB calls its FBs and FCs, its OBs run as the CPU's.
+FB variables, step/transition attributes (``Sn.X``, ``Sn.T``, ``Sn.U``, ``Tn.TT``) and DB
+variables (``DB10.n``, ``DB3.motor[2].on``: ``web.harness.dbvars``).
 """
 
 from __future__ import annotations
 
 import contextlib
-import dataclasses
 import functools
 import re
 from collections.abc import Callable, Iterator, Sequence
@@ -21,12 +18,10 @@ from typing import Any
 
 from s7graph import sfb
 from s7graph.engine.address import Address, Area, Width, parse_address
-from s7graph.engine.blocks import OB
 from s7graph.engine.clock import Clock
 from s7graph.engine.cpu import Cpu
 from s7graph.engine.errors import AddressError, S7Error
 from s7graph.engine.symbols import SymbolTable, default_type
-from s7graph.engine.text import decode_utf8
 from s7graph.sequencer.calls import prepare_calls
 from s7graph.sequencer.checks.diagnostics import Diagnostic, format_diagnostic
 from s7graph.sequencer.compile import ChartError, compile_chart
@@ -35,16 +30,15 @@ from s7graph.sequencer.fb import GraphFB, install_all
 from s7graph.sequencer.params import Direction, check_pin, is_pin
 from s7graph.sequencer.text.model import Chart
 from s7graph.sequencer.text.parse import ChartSyntaxError, chart_text, parse_chart
-from s7graph.steps.scl import SclError, SclProgram, compile_scl
-from s7graph.steps.scl import format_diagnostic as scl_diagnostic
+from s7graph.web.harness.dbvars import DbVariables
+from s7graph.web.harness.scl import Loadable, SclSources, compile_sources, load_beside
+from s7graph.web.harness.scl_reload import reload_sources
 
 __all__ = [
     "ChartLoadError",
     "ChartSession",
-    "add_blocks",
     "compile_model",
     "compile_text",
-    "load_blocks",
     "load_chart",
 ]
 
@@ -60,14 +54,18 @@ class ChartLoadError(S7Error):
         super().__init__("\n".join(lines))
 
 
-def load_chart(path: Path, symbols: Path | None = None) -> tuple[CompiledChart, SymbolTable]:
-    """Parse, validate and compile a chart file (with an optional symbol table file)."""
+def load_chart(
+    path: Path, symbols: Path | None = None, *, table: SymbolTable | None = None
+) -> tuple[CompiledChart, SymbolTable]:
+    """Parse, validate and compile a chart file (with an optional symbol table file, or the
+    ``table`` read from it already)."""
     try:
         data = Path(path).read_bytes()
     except OSError as exc:
         raise ChartLoadError([f"s7graph: error: cannot read {path}: {exc.strerror}"]) from None
     with _as_load_error(str(path)):
-        table = _symbols(symbols) if symbols is not None else SymbolTable()
+        if table is None:
+            table = _symbols(symbols) if symbols is not None else SymbolTable()
         text = chart_text(data, str(path))
     return compile_text(text, str(path), table)
 
@@ -109,42 +107,6 @@ def _as_load_error(file: str) -> Iterator[None]:
         raise ChartLoadError([f"{file}: the chart nests too deeply to compile"]) from None
 
 
-def load_blocks(path: Path, symbols: SymbolTable | None = None) -> SclProgram:
-    """Read and compile an S7-SCL source (docs/scl.md) with the system blocks and the
-    operand symbol table ``symbols`` (a chart's, its own ``SYMBOLS`` included), for
-    ``ChartSession(…, blocks=…)``; ``ChartLoadError`` with every diagnostic when it does
-    not compile. Warnings stay in the program's ``diagnostics``."""
-    try:
-        data = Path(path).read_bytes()
-    except OSError as exc:
-        raise ChartLoadError([f"s7graph: error: cannot read {path}: {exc.strerror}"]) from None
-    with _as_load_error(str(path)):
-        text = decode_utf8(data, str(path))
-        try:
-            return compile_scl(text, str(path), blocks=sfb.SYSTEM_BLOCKS, symbols=symbols)
-        except SclError as exc:
-            raise ChartLoadError([scl_diagnostic(d) for d in exc.diagnostics]) from None
-
-
-def add_blocks(cpu: Cpu, program: SclProgram) -> None:
-    """Load ``program`` into ``cpu`` beside what is loaded: its FBs, FCs and DBs, the
-    instance DBs it names, and its OBs — an OB the CPU already has (a chart's OB1, OB100,
-    OB102) runs first, then the program's, in one OB."""
-    blocks = [
-        _after(cpu.obs[b.number], b) if isinstance(b, OB) and b.number in cpu.obs else b
-        for b in program.blocks
-    ]
-    dataclasses.replace(program, blocks=blocks).load(cpu)
-
-
-def _after(first: OB, then: OB) -> OB:
-    def body(ctx: Any) -> None:
-        first.body(ctx)
-        then.body(ctx)
-
-    return OB(first.number, first.name, body)
-
-
 def _symbols(path: Path) -> SymbolTable:
     try:
         return SymbolTable.from_file(path)
@@ -159,8 +121,9 @@ def _fmt(d: Any) -> str:
 class ChartSession:
     """One CPU running one compiled chart as a GraphFB from OB1 (sim and run); ``beside``:
     more charts called after it from the same OB1 (the jitter benchmark's 200 sequencers),
-    their GraphFBs in ``others``; ``blocks``: a compiled S7-SCL program loaded into the
-    same CPU before start (:func:`add_blocks`)."""
+    their GraphFBs in ``others``; ``blocks``: the programs of blocks its calls reach
+    (``--blocks``: compiled S7-SCL sources, ``web.harness.scl``), loaded before its calls
+    are prepared — their OBs run too, OB1 after the chart's call."""
 
     def __init__(
         self,
@@ -169,7 +132,7 @@ class ChartSession:
         clock: Clock,
         *,
         beside: Sequence[CompiledChart] = (),
-        blocks: SclProgram | None = None,
+        blocks: Sequence[Loadable] = (),
     ) -> None:
         self.clock = clock
         self.cpu = Cpu(clock, keep_outputs_on_hot_restart=True)  # a hot restart resumes the
@@ -178,8 +141,16 @@ class ChartSession:
         self.others = [GraphFB(c) for c in beside]
         install_all(self.cpu, [self.graph, *self.others])
         sfb.install(self.cpu)  # the operating system's blocks, as on S7
-        if blocks is not None:
-            add_blocks(self.cpu, blocks)
+        if blocks:
+            problems = load_beside(self.cpu, [self.graph, *self.others], blocks)
+            if problems:
+                raise ChartLoadError(problems)
+        self.blocks = list(blocks)
+        types = {k: v for b in blocks for k, v in getattr(b, "types", {}).items()}
+        self.dbvars = DbVariables(self.cpu, types)
+        """The DB variables by name (``DB10.n``, ``"Seq".S_NO``)."""
+        self.warnings: list[str] = []
+        """The warnings of the ``blocks``' sources (``load``), for ``sim`` and ``run``."""
         self.missing: list[str] = []
         """Calls of blocks this CPU does not have (``sequencer.calls``): they stop it when
         reached; ``sim`` and ``run`` print them as warnings."""
@@ -207,13 +178,19 @@ class ChartSession:
 
     @classmethod
     def load(
-        cls, path: Path, symbols: Path | None, clock: Clock, *, blocks: Path | None = None
+        cls, path: Path, symbols: Path | None, clock: Clock, *, blocks: Sequence[Path] = ()
     ) -> ChartSession:
-        """``load_chart`` and ``load_blocks`` of an S7-SCL source ``blocks`` (each raises
-        ``ChartLoadError``) and a session of them on ``clock``."""
-        cc, table = load_chart(path, symbols)
-        program = load_blocks(blocks, table) if blocks is not None else None
-        return cls(cc, table, clock, blocks=program)
+        """``load_chart`` (raises ``ChartLoadError``) and a session of it on ``clock``, with
+        the S7-SCL sources ``blocks`` its calls reach (``SclLoadError`` when they do not
+        compile; their warnings in ``warnings``)."""
+        if not blocks:
+            cc, table = load_chart(path, symbols)
+            return cls(cc, table, clock)
+        cc, table = load_chart(path, symbols)  # the sources see the chart's SYMBOLS too
+        sources = compile_sources(blocks, table)
+        session = cls(cc, table, clock, blocks=[sources])
+        session.warnings = list(sources.warnings)
+        return session
 
     # ------------------------------------------------------------ names
 
@@ -239,6 +216,9 @@ class ChartSession:
             check_pin(name, self.cc.parameters, direction=Direction.IN if writing else None)
             return
         if self._address(name) is None:
+            if self.dbvars.is_db_name(name):
+                (self.dbvars.writer if writing else self.dbvars.reader)(name)
+                return
             raise S7Error(f"unknown name {name}: not an address, symbol, FB pin or variable")
 
     def get(self, name: str) -> Any:
@@ -282,6 +262,8 @@ class ChartSession:
         type (S7Error now for an unknown name or a type that does not fit the address)."""
         found = self._address(name)
         if found is None:
+            if self.dbvars.is_db_name(name):
+                return self.dbvars.reader(name)
             raise S7Error(f"unknown name {name}")
         addr, type_name = found
         mem = self.cpu.mem
@@ -308,6 +290,9 @@ class ChartSession:
             return
         found = self._address(name)
         if found is None:
+            if self.dbvars.is_db_name(name):
+                self.dbvars.writer(name)(value)
+                return
             raise S7Error(f"unknown name {name}")
         addr, type_name = found
         mem = self.cpu.mem
@@ -316,6 +301,15 @@ class ChartSession:
             n = addr.byte
             size = max(1, int(addr.width) // 8)
             mem.periph_in[n : n + size] = mem.inputs[n : n + size]
+
+    def reload_blocks(self, new: SclSources) -> list[str]:
+        """Download the changed S7-SCL sources ``new`` in place of the session's (between
+        two scans: ``web.harness.scl_reload``); the notes of what their DBs did not keep."""
+        old = next((b for b in self.blocks if isinstance(b, SclSources)), None)
+        notes = reload_sources(self.cpu, [self.graph, *self.others], old, new)
+        self.blocks = [new]
+        self.dbvars.types = dict(new.types)
+        return notes
 
     # ------------------------------------------------------------ running
 

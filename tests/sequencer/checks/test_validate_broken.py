@@ -1,5 +1,7 @@
 """Each broken chart in ``broken/`` states its expected diagnostic in its first line
-(``// expect: CODE line:col``); the front end must report exactly that code there."""
+(``// expect: CODE line:col``); the front end must report exactly that code there. A chart
+with an S7-SCL source of the same name beside it is checked against that source's blocks
+(``s7graph check CHART.s7g --blocks CHART.scl``: E047)."""
 
 from __future__ import annotations
 
@@ -9,16 +11,24 @@ from pathlib import Path
 import pytest
 
 from s7graph.sequencer.checks.diagnostics import CODES, Diagnostic
+from s7graph.sequencer.checks.interfaces import program_blocks
 from s7graph.sequencer.checks.validate import validate
 from s7graph.sequencer.text.parse import ChartSyntaxError, parse_chart
+from s7graph.sfb import SYSTEM_BLOCKS
+from s7graph.steps.scl import compile_scl
 from tests.sequencer.helpers import BROKEN
 
 FILES = sorted(BROKEN.glob("*.s7g"))
 
 
 def diagnostics_of(path: Path) -> list[Diagnostic]:
+    scl = path.with_suffix(".scl")
+    blocks = None
+    if scl.exists():
+        program = compile_scl(scl.read_text(encoding="utf-8"), scl.name, blocks=SYSTEM_BLOCKS)
+        blocks = program_blocks(program.blocks, program.instances, sources=scl.name)
     try:
-        return validate(parse_chart(path.read_text(encoding="utf-8"), path.name))
+        return validate(parse_chart(path.read_text(encoding="utf-8"), path.name), blocks=blocks)
     except ChartSyntaxError as exc:
         return exc.diagnostics
 

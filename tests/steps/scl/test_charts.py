@@ -57,8 +57,8 @@ def test_a_chart_calls_an_scl_fb_and_fc() -> None:
     program.load(cpu)
     cc = compile_chart(parse_chart(CHART, "seq.s7g"))
     install_all(cpu, [GraphFB(cc)])
-    assert prepare_calls(cpu, cc.chart).missing == []
-    cpu.create_instance_db(10, cpu.block("FB17"))  # type: ignore[arg-type]
+    plan = prepare_calls(cpu, cc.chart)
+    assert plan.missing == [] and plan.created == [10]  # the FB's instance DB, as for an SFB
     cpu.start()
     cpu.mem.set("MW10", 21)
     cpu.scan()

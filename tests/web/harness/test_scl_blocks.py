@@ -1,5 +1,5 @@
 """An S7-SCL program beside a chart in one session (``web/harness/session.py``:
-``load_blocks``, ``ChartSession(…, blocks=…)``, ``add_blocks``): compiled with the chart's
+``ChartSession.load(…, blocks=…)``, ``web/harness/scl.py``): compiled with the chart's
 symbol table, loaded into the chart's CPU before start, so the chart calls its FBs and FCs
 and its OBs run as the CPU's — an OB1 or OB100 after the chart's own (docs/scl.md,
 "Loading and running"; docs/chart-format.md)."""
@@ -11,7 +11,9 @@ from pathlib import Path
 import pytest
 
 from s7graph.engine.clock import VirtualClock
-from s7graph.web.harness.session import ChartLoadError, ChartSession, load_blocks
+from s7graph.engine.errors import S7Error
+from s7graph.web.harness.scl import SclLoadError, compile_sources
+from s7graph.web.harness.session import ChartSession
 
 CHART = """FUNCTION_BLOCK "Seq" FB 1 DB 1
 SYMBOLS "Go" : I0.0 : BOOL; "Count" : MW20 : INT; END_SYMBOLS
@@ -62,7 +64,7 @@ def test_a_chart_calls_an_scl_fb_and_the_programs_obs_run_after_the_charts(
     tmp_path: Path,
 ) -> None:
     chart, blocks = files(tmp_path)
-    session = ChartSession.load(chart, None, VirtualClock(), blocks=blocks)
+    session = ChartSession.load(chart, None, VirtualClock(), blocks=[blocks])
     assert session.missing == []  # FB17 is in the CPU: no warning
     session.start()
     assert session.get("Count") == 70  # OB100: the chart's startup call, then the program's
@@ -83,15 +85,15 @@ def test_an_scl_source_that_does_not_compile_is_a_load_error_with_its_places(
     tmp_path: Path,
 ) -> None:
     chart, blocks = files(tmp_path, "ORGANIZATION_BLOCK OB35\n  x := 1;\nEND_ORGANIZATION_BLOCK\n")
-    with pytest.raises(ChartLoadError) as caught:
-        ChartSession.load(chart, None, VirtualClock(), blocks=blocks)
+    with pytest.raises(SclLoadError) as caught:
+        ChartSession.load(chart, None, VirtualClock(), blocks=[blocks])
     assert caught.value.lines[0].startswith(f"{blocks}:2:3: error[E211]")
 
 
 def test_an_scl_source_that_cannot_be_read_is_a_load_error(tmp_path: Path) -> None:
-    with pytest.raises(ChartLoadError, match="cannot read"):
-        load_blocks(tmp_path / "none.scl")
+    with pytest.raises(S7Error, match="cannot read"):
+        compile_sources([tmp_path / "none.scl"])
     bad = tmp_path / "latin1.scl"
     bad.write_bytes(b"// caf\xe9\n")
-    with pytest.raises(ChartLoadError, match="not UTF-8"):
-        load_blocks(bad)
+    with pytest.raises(S7Error, match="not UTF-8"):
+        compile_sources([bad])

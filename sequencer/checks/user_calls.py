@@ -1,0 +1,155 @@
+"""A chart's calls of user FBs and FCs checked against the program's blocks (E047;
+docs/cli.md, "s7graph check"): ``s7graph check CHART.s7g --blocks BLOCKS.scl``.
+
+Without the program's blocks a call of a user block is not checked (only the program that
+loads them knows them). With them, as a CALL in STEP 7 is checked against the called block
+(STEP7 comprehensive guide vol. 2, ch. 14): the block is there; an FB has an instance DB
+named by number, an FC none; that DB is no global DB and no instance of another FB, in the
+program or in the chart's other calls; ``:=`` names an input or in/out, ``=>`` an output or
+in/out, each once; an FC is given every parameter (its RET_VAL may be left out); a value
+fits its parameter's type; an ARRAY, STRUCT or multi-instance parameter cannot be passed.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from s7graph.engine.errors import SourceLocation
+from s7graph.sequencer.checks.context import _Ctx
+from s7graph.sequencer.checks.interfaces import Interface, UserPin
+from s7graph.sequencer.checks.types import _as_bit, _as_number, _show, _unify
+from s7graph.sequencer.text.model import BlockCall
+
+__all__ = ["check_instance", "check_own_blocks", "check_user_call"]
+
+Typed = Sequence[tuple[str, str | None, object]]
+"""Each parameter given: its name, the type of its value or operand (None: unknown), the
+expression or operand (for its place)."""
+
+
+def _where(call: BlockCall) -> str:
+    return f"{call.kind} {call.block}" if call.kind else f'"{call.block}"'
+
+
+def check_user_call(ctx: _Ctx, call: BlockCall, el: str, types: Typed) -> None:
+    """E047 for each way ``call`` (of an FB, an FC or a block symbol) does not fit the
+    program's blocks ``ctx.blocks``; nothing without them."""
+    program = ctx.blocks
+    if program is None:
+        return
+    block = program.find(call.kind, call.block)
+    if block is None:
+        kind = call.kind or "FB"
+        known = f"{kind}s: {program.known(kind)}" if call.kind else "no block of that name"
+        ctx.err(
+            "E047",
+            f"{_where(call)} is not in the program's blocks ({program.sources}; {known})",
+            call.loc,
+            el,
+        )
+        return
+    if block.kind == "FB":
+        _check_fb_instance(ctx, call, el, block)
+    elif call.instance is not None:
+        ctx.err("E047", f"{block.label} is an FC and takes no instance DB", call.loc, el)
+    _check_pins(ctx, call, el, block)
+    for name, t, e in types:
+        pin = block.pin(name)
+        if pin is not None and t is not None:
+            _check_type(ctx, block, pin, t, getattr(e, "loc", call.loc), el)
+
+
+def _check_fb_instance(ctx: _Ctx, call: BlockCall, el: str, block: Interface) -> None:
+    if call.instance is None:
+        why = f"{block.label} is an FB and needs an instance DB (CALL FB {block.number}, DB n)"
+        ctx.err("E047", why, call.loc, el)
+    elif not isinstance(call.instance, int):
+        why = f"{block.label}: name its instance DB by number (DB 10), not {call.instance!r}"
+        ctx.err("E047", why, call.loc, el)
+    else:
+        check_instance(ctx, call, el, block.label)
+
+
+def check_instance(ctx: _Ctx, call: BlockCall, el: str, label: str) -> None:
+    """The instance DB ``call`` names for ``label`` (an FB or SFB): no global DB and no
+    instance of another block, in the program (when given) or in the chart's other calls."""
+    number = call.instance
+    if not isinstance(number, int):
+        return
+    code = "E046" if label.startswith("SFB") else "E047"
+    program = ctx.blocks
+    if program is not None and number in program.global_dbs:
+        why = f"DB{number} is a global DB of the program, not an instance DB of {label}"
+        ctx.err(code, why, call.loc, el)
+        return
+    held = program.instances.get(number) if program is not None else None
+    if held is not None and held != label:
+        why = f"DB{number} is the instance DB of {held} in the program, not of {label}"
+        ctx.err(code, why, call.loc, el)
+        return
+    other = ctx.instances.setdefault(number, label)
+    if other != label:
+        ctx.err(code, f"DB{number} is the instance DB of {other} already", call.loc, el)
+
+
+def _check_pins(ctx: _Ctx, call: BlockCall, el: str, block: Interface) -> None:
+    seen: set[str] = set()
+    for names, given_as_input in (
+        ([n for n, _ in call.inputs], True),
+        ([n for n, _ in call.outputs], False),
+    ):
+        for name in names:
+            pin = block.pin(name)
+            if pin is None:
+                known = ", ".join(p.name for p in block.pins) or "none"
+                why = f"{block.label} has no parameter {name} (parameters: {known})"
+                ctx.err("E047", why, call.loc, el)
+                continue
+            if pin.name.upper() in seen:
+                ctx.err("E047", f"{block.label}: parameter {pin.name} given twice", call.loc, el)
+            seen.add(pin.name.upper())
+            if given_as_input and not pin.is_input:
+                why = f"{block.label}: {pin.name} is an output, use {pin.name} => ..."
+                ctx.err("E047", why, call.loc, el)
+            if not given_as_input and not pin.is_output:
+                why = f"{block.label}: {pin.name} is an input, use {pin.name} := ..."
+                ctx.err("E047", why, call.loc, el)
+    missing = [p.name for p in block.pins if p.name.upper() not in seen and p.name != "RET_VAL"]
+    if block.kind == "FC" and missing:
+        why = f"{block.label}: an FC takes every parameter; {', '.join(missing)} missing"
+        ctx.err("E047", why, call.loc, el)
+
+
+def _check_type(
+    ctx: _Ctx, block: Interface, pin: UserPin, t: str, loc: SourceLocation, el: str
+) -> None:
+    want = pin.type.upper()
+    if want == "OBJECT" or want.startswith(("ARRAY", "STRUCT")):
+        why = f"{block.label}: {pin.name} is an ARRAY or STRUCT; a chart passes elementary values"
+        ctx.err("E047", why, loc, el)
+        return
+    if want in ("TIMER", "COUNTER"):
+        fits = t == ("@T" if want == "TIMER" else "@C")
+    elif want == "ANY":
+        fits = True
+    else:
+        fits = _unify(want, _as_bit(t) if want == "BOOL" else _as_number(t)) is not None
+    if not fits:
+        why = f"{block.label}: {pin.name} is {_show(want)}, {_show(t)} does not fit it"
+        ctx.err("E047", why, loc, el)
+
+
+def check_own_blocks(ctx: _Ctx) -> None:
+    """E047 when the program's blocks write the chart's own FB or instance DB (the header's
+    ``FB n DB m``): loaded beside the chart, one would replace the other."""
+    program, chart = ctx.blocks, ctx.chart
+    if program is None:
+        return
+    fb = program.blocks.get(f"FB{chart.fb_number}") if chart.fb_number is not None else None
+    if fb is not None and fb.label == f"FB{chart.fb_number}":
+        why = f"FB{chart.fb_number}, the chart's FB, is a block of the program too"
+        ctx.err("E047", f"{why} ({program.sources})", chart.loc)
+    number = chart.db_number
+    if number is not None and (number in program.global_dbs or number in program.instances):
+        why = f"DB{number}, the chart's instance DB, is a DB of the program too"
+        ctx.err("E047", f"{why} ({program.sources})", chart.loc)

@@ -1,0 +1,152 @@
+"""DB variables by name for ``sim``'s ``--watch`` and stimuli and ``run``'s watch list:
+``DBn.var`` or ``"DBname".var``, nested with dots and indexed with ``[i]`` (``DB20.avg``,
+``DB3.motor[2].on``; docs/cli.md, "s7graph sim").
+
+An instance DB is read through its FB's structure when the FB is written in S7-SCL
+(``SclProgram.types``), else by the names of its FB's interface (an SFB's ``DB10.ET``, a
+Python FB's variables) one level deep; a global DB declared in an S7-SCL source through
+its STRUCT, as S7 lays it out. A DB by name is one whose name the CPU knows (a chart's
+instance DB by the chart's name, a DB an SCL source names). Values keep their type
+(``steps.scl.access.plain``). An address (``DB1.DBW2``) is not a DB variable: the callers
+try addresses first, so what an address trace gave stays as it was.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from typing import Any
+
+from s7graph.engine.blocks import Decl, InstanceDB
+from s7graph.engine.datatypes import check_value
+from s7graph.engine.errors import S7Error
+from s7graph.steps.scl import types as ty
+from s7graph.steps.scl.access import Member, member, parse_name, plain, read_bytes, write_bytes
+
+__all__ = ["DbVariables"]
+
+
+class DbVariables:
+    """The DB variables of ``cpu`` by name; ``types``: the structures of S7-SCL FBs and
+    global DBs by label (``FB17``, ``DB20``)."""
+
+    def __init__(self, cpu: Any, types: Mapping[str, ty.SclType] | None = None) -> None:
+        self.cpu = cpu
+        self.types = dict(types or {})
+
+    def is_db_name(self, name: str) -> bool:
+        """Whether ``name`` has a DB variable's form (it may still not resolve)."""
+        try:
+            return parse_name(name) is not None
+        except ValueError:
+            return True
+
+    def reader(self, name: str) -> Callable[[], Any]:
+        """A function giving the variable's value as JSON holds it; ``S7Error`` when the
+        name does not resolve."""
+        where, m, _ = self._find(name)
+        if isinstance(where, InstanceDB):
+            keys = m.keys
+            return lambda: plain(_walk(where, keys))
+        buf = where
+        return lambda: plain(read_bytes(buf, m))
+
+    def writer(self, name: str) -> Callable[[Any], None]:
+        """A function writing an elementary variable (its value checked against its type);
+        ``S7Error`` when the name does not resolve or names an ARRAY, STRUCT or instance."""
+        where, m, t = self._find(name)
+        if t.aggregate or t.kind == "FB":
+            raise S7Error(f"{name} is {t}: set its elements one by one")
+        engine_type = ty.engine_type(t)
+
+        def checked(value: Any) -> Any:
+            try:
+                return check_value(engine_type, value)
+            except S7Error as exc:
+                raise S7Error(f"{name}: {exc}") from None
+
+        if isinstance(where, InstanceDB):
+            *parents, last = m.keys
+            idb = where
+
+            def write(value: Any) -> None:
+                _container(idb, parents)[last] = checked(value)
+
+            return write
+        buf = where
+        return lambda value: write_bytes(buf, m, checked(value))
+
+    def _find(self, name: str) -> tuple[InstanceDB | bytearray, Member, ty.SclType]:
+        try:
+            parsed = parse_name(name)
+        except ValueError as exc:
+            raise S7Error(str(exc)) from None
+        if parsed is None:
+            raise S7Error(f"{name} is not a DB variable (DBn.name)")
+        db, path = parsed
+        number = db if isinstance(db, int) else self._by_name(db, name)
+        idb = self.cpu.instance_dbs.get(number)
+        if idb is not None:
+            structure = self.types.get(idb.fb.label) or _interface(idb)
+            found = _member(structure, path, self.types, name)
+            return idb, found, found.type
+        block = self.cpu.mem.dbs.get(number)
+        if block is None:
+            raise S7Error(f"{name}: DB{number} is not in this CPU")
+        declared = self.types.get(f"DB{number}")
+        if declared is None:
+            why = "its structure is not declared in an S7-SCL source"
+            raise S7Error(f"{name}: {why}; read DB{number} by address (DB{number}.DBW0)")
+        found = _member(declared, path, self.types, name)
+        return block.data, found, found.type
+
+    def _by_name(self, db: str, name: str) -> int:
+        key = db.upper()
+        for number, idb in self.cpu.instance_dbs.items():
+            if idb.name.upper() == key:
+                return int(number)
+        for number, block in self.cpu.mem.dbs.items():
+            if block.name.upper() == key:
+                return int(number)
+        raise S7Error(f'{name}: no DB is named "{db}"')
+
+
+def _member(structure: ty.SclType, path: Any, types: Mapping[str, ty.SclType], name: str) -> Member:
+    try:
+        return member(structure, path, dict(types), name)
+    except ValueError as exc:
+        raise S7Error(str(exc)) from None
+
+
+def _interface(idb: InstanceDB) -> ty.SclType:
+    """An instance of an FB not written in S7-SCL: its variables by their engine types
+    (an OBJECT as ANY: read whole, never walked into)."""
+    fields = []
+    for var in idb.fb.interface:
+        if var.decl is Decl.TEMP:
+            continue
+        t = ty.by_name(var.type.split("[")[0]) if isinstance(var.type, str) else None
+        if isinstance(var.type, str) and var.type.upper().startswith("STRING["):
+            t = ty.string(int(var.type[7:-1]))
+        fields.append((var.name, t or ty.ANY))
+    return ty.SclType("STRUCT", fields=tuple(fields), name=idb.fb.label)
+
+
+def _walk(idb: InstanceDB, keys: tuple[str | int, ...]) -> Any:
+    value: Any = idb.values
+    key: Any
+    for key in keys:
+        value = value[key]
+        if isinstance(value, InstanceDB):
+            value = value.values
+    return value
+
+
+def _container(idb: InstanceDB, keys: list[str | int]) -> Any:
+    value: Any = idb.values
+    key: Any
+
+    for key in keys:
+        value = value[key]
+        if isinstance(value, InstanceDB):
+            value = value.values
+    return value

@@ -1,0 +1,193 @@
+"""S7-SCL sources on the command line: a program of SCL blocks (``sim``/``run``
+``PROGRAM.scl``) or the blocks a chart calls (``--blocks BLOCKS.scl``), compiled in the
+order given and loaded into one CPU (docs/scl.md, "On the command line").
+
+Each source is compiled with the system blocks and the FBs and FCs of the sources before
+it, so a later source calls the blocks of an earlier one (``--blocks`` sources come before
+the program that calls them). A block, or a DB, written in two sources is refused, naming
+both places. A source with errors ends the compilation there: its diagnostics are the
+refusal (``SclLoadError``), the later sources not compiled — they would only report that
+the blocks it defines are missing. Warnings are kept (``warnings``) for the command to
+print.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Protocol
+
+from s7graph import sfb
+from s7graph.engine.blocks import DB, FB, FC, OB
+from s7graph.engine.errors import BlockError, S7Error
+from s7graph.engine.symbols import SymbolTable
+from s7graph.engine.text import NotUtf8, decode_utf8
+from s7graph.sequencer.checks.interfaces import ProgramBlocks, program_blocks
+from s7graph.sequencer.fb import GraphFB, cold_restart_ob, startup_obs
+from s7graph.steps.scl import SclError, SclProgram, compile_scl, format_diagnostic
+
+__all__ = [
+    "Loadable",
+    "SclLoadError",
+    "SclSources",
+    "chain_obs",
+    "compile_sources",
+    "load_beside",
+    "read_source",
+]
+
+
+class Loadable(Protocol):
+    """Blocks a chart's session downloads beside it: ``SclSources``, an ``SclProgram``."""
+
+    @property
+    def blocks(self) -> Sequence[Any]: ...
+
+    def load(self, cpu: Any) -> None: ...
+
+
+class SclLoadError(S7Error):
+    """Sources that do not compile; ``lines`` are their diagnostics, one a line."""
+
+    def __init__(self, lines: list[str]) -> None:
+        self.lines = lines
+        super().__init__("\n".join(lines))
+
+
+@dataclass
+class SclSources:
+    """The compiled sources, in the order given, with their warnings."""
+
+    programs: list[SclProgram] = field(default_factory=list)
+    files: list[str] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
+
+    def load(self, cpu: Any) -> None:
+        """Download every source's blocks into ``cpu`` (its system blocks installed)."""
+        for program in self.programs:
+            program.load(cpu)
+
+    @property
+    def blocks(self) -> list[Any]:
+        """Every engine block of the sources: OBs, FBs, FCs and global DBs."""
+        return [b for program in self.programs for b in program.blocks]
+
+    @property
+    def types(self) -> dict[str, Any]:
+        """The structures of the FBs' instances and the global DBs, by label."""
+        out: dict[str, Any] = {}
+        for program in self.programs:
+            out.update(program.types)
+        return out
+
+    @property
+    def instances(self) -> dict[int, str]:
+        """The instance DBs the sources name: number → FB label."""
+        out: dict[int, str] = {}
+        for program in self.programs:
+            out.update(program.instances)
+        return out
+
+    def interfaces(self) -> ProgramBlocks:
+        """The FBs' and FCs' interfaces and the DBs, for checking a chart's calls."""
+        return program_blocks(self.blocks, self.instances, sources=", ".join(self.files))
+
+
+def read_source(path: Path) -> str:
+    """The text of a source file; ``S7Error`` naming it when it cannot be read."""
+    try:
+        return decode_utf8(Path(path).read_bytes(), str(path))
+    except OSError as exc:
+        raise S7Error(f"cannot read {path}: {exc.strerror or exc}") from None
+    except NotUtf8 as exc:
+        raise S7Error(str(exc)) from None
+
+
+def compile_sources(paths: Sequence[Path], symbols: SymbolTable | None = None) -> SclSources:
+    """Compile ``paths`` in order (see the module docstring); ``SclLoadError`` with the
+    diagnostics of the first source that does not compile, ``S7Error`` for one that cannot
+    be read."""
+    out = SclSources()
+    known: list[FB | FC] = list(sfb.SYSTEM_BLOCKS)
+    places: dict[str, str] = {}
+    of: dict[int, str] = {}
+    for path in paths:
+        text = read_source(path)
+        try:
+            program = compile_scl(text, str(path), blocks=known, symbols=symbols)
+        except SclError as exc:
+            raise SclLoadError([format_diagnostic(d) for d in exc.diagnostics]) from None
+        except RecursionError:
+            raise SclLoadError([f"{path}: the source nests too deeply to compile"]) from None
+        _no_twice(program, str(path), places, of)
+        out.programs.append(program)
+        out.files.append(str(path))
+        out.warnings += [format_diagnostic(d) for d in program.diagnostics]
+        known += [b for b in program.blocks if isinstance(b, FB | FC)]
+    return out
+
+
+def _no_twice(program: SclProgram, file: str, places: dict[str, str], of: dict[int, str]) -> None:
+    """Refuse a block or DB another source wrote already, or a DB another source makes the
+    instance of another FB; note this source's."""
+    lines: list[str] = []
+    for label, loc in program.places.items():
+        before = places.get(label)
+        if before is not None:
+            lines.append(f"{loc}: error: {label} is written in {before} too")
+    for number, fb in sorted(program.instances.items()):
+        held, where = of.get(number), places.get(f"DB{number}")
+        if held is not None and held != fb:
+            why = f"DB{number} is the instance DB of {held} in another source"
+            lines.append(f"{file}: error: {why}")
+        elif held is None and where is not None:
+            why = f"DB{number}, the instance DB of {fb}, is a DB of {where}"
+            lines.append(f"{file}: error: {why}")
+    if lines:
+        raise SclLoadError(lines)
+    places.update((label, str(loc)) for label, loc in program.places.items())
+    of.update(program.instances)
+
+
+def load_beside(cpu: Any, graphs: Sequence[GraphFB], programs: Sequence[Loadable]) -> list[str]:
+    """Download ``programs`` into ``cpu`` beside the installed GRAPH FBs ``graphs``: their
+    OB1 runs after the charts' calls, their OB100 and OB102 after the charts' startup
+    calls, their other OBs as they are. Returns the problems that refuse them (nothing
+    loaded then): a block or DB of the charts' own written in a source too."""
+    blocks = [b for program in programs for b in program.blocks]
+    ours = {g.fb.label for g in graphs} | {f"DB{g.db_number}" for g in graphs}
+    theirs = {b.label for b in blocks if isinstance(b, FB | FC | DB)}
+    theirs |= {f"DB{n}" for p in programs for n in getattr(p, "instances", {})}
+    clash = sorted(ours & theirs)
+    if clash:
+        return [f"s7graph: error: {', '.join(clash)} of the chart is written in a source too"]
+    try:
+        for program in programs:
+            program.load(cpu)
+    except BlockError as exc:
+        return [f"s7graph: error: the blocks cannot be loaded beside the chart: {exc}"]
+    chain_obs(cpu, graphs, blocks)
+    return []
+
+
+def chain_obs(cpu: Any, graphs: Sequence[GraphFB], blocks: Sequence[Any]) -> None:
+    """Load the charts' OB1, OB100 and OB102 calling ``graphs``, each followed by the OB of
+    the same number among ``blocks`` (the sources'), if any."""
+    obs = {b.number: b for b in blocks if isinstance(b, OB)}
+    ob1 = obs.get(1)
+    own1, own100 = startup_obs(*graphs, extra_ob1=ob1.body if ob1 is not None else None)
+    own102 = cold_restart_ob(*graphs)
+    cpu.load(own1, _then(own100, obs.get(100)), _then(own102, obs.get(102)))
+
+
+def _then(own: OB, theirs: OB | None) -> OB:
+    """The charts' startup OB ``own``, then the program's of the same number."""
+    if theirs is None:
+        return own
+
+    def body(ctx: Any) -> None:
+        own.body(ctx)
+        theirs.body(ctx)
+
+    return OB(own.number, own.name, body)

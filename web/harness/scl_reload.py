@@ -1,0 +1,86 @@
+"""Changed S7-SCL sources downloaded into a running CPU at a scan boundary, their DBs' values
+kept by name (docs/scl.md, "On the command line"; docs/online-change.md).
+
+``reload_sources(cpu, graphs, old, new)`` is the blocks' part of an online change: the new
+sources' FBs, FCs and OBs replace those of the same label (blocks the new sources no longer
+write stay loaded, as a download leaves the blocks it does not bring); every instance DB of
+a changed FB is made again from the new FB with its values carried over by name where the
+type is the same (``steps.scl.state.SclState.adapt``), the others at their initial values;
+a global DB whose declared structure is the same keeps its bytes, one whose structure
+changed comes back with its new initial values; the charts' OB1, OB100 and OB102 are chained
+to the new sources' again. It returns one note per change of a DB, as a state file's
+carry-over does; ``BlockError`` (nothing changed then is not promised: call it between two
+scans, the CPU's program as the sources left it) when the new sources cannot be loaded.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+from s7graph.engine.blocks import FB, InstanceDB
+from s7graph.sequencer.fb import GraphFB
+from s7graph.web.harness.scl import SclSources, chain_obs
+
+__all__ = ["reload_sources"]
+
+
+def reload_sources(
+    cpu: Any, graphs: Sequence[GraphFB], old: SclSources | None, new: SclSources
+) -> list[str]:
+    """Download ``new`` in place of ``old`` into the running ``cpu`` (see the module
+    docstring); the notes of what the DBs did not keep."""
+    fbs = {b.label: b for b in new.blocks if isinstance(b, FB)}
+    saved = {
+        number: (idb.fb, idb.snapshot())
+        for number, idb in cpu.instance_dbs.items()
+        if idb.fb.label in fbs and idb.fb is not fbs[idb.fb.label]
+    }
+    kept_dbs = _same_global_dbs(cpu, old, new)
+    new.load(cpu)
+    for number in saved:
+        idb = cpu.instance_dbs[number]
+        if idb.fb is not fbs[idb.fb.label]:
+            cpu.replace_instance_db(number, fbs[idb.fb.label], name=idb.name)
+    notes: list[str] = []
+    for number, (before, data) in sorted(saved.items()):
+        notes += _carry(cpu.instance_dbs[number], before, data)
+    for number, data in kept_dbs.items():
+        cpu.mem.dbs[number].data[:] = data
+    before = _global_types(old)
+    for label, t in sorted(_global_types(new).items()):
+        if label in before and before[label] != t:
+            notes.append(f"{label}: its structure changed; at its new initial values")
+    if graphs:
+        chain_obs(cpu, graphs, new.blocks)
+    return notes
+
+
+def _global_types(sources: SclSources | None) -> dict[str, Any]:
+    if sources is None:
+        return {}
+    return {k: v for k, v in sources.types.items() if k.startswith("DB")}
+
+
+def _same_global_dbs(cpu: Any, old: SclSources | None, new: SclSources) -> dict[int, bytes]:
+    """The bytes of each global DB whose declared structure the new sources keep."""
+    out: dict[int, bytes] = {}
+    before = _global_types(old)
+    for label, t in _global_types(new).items():
+        number = int(label[2:])
+        if before.get(label) == t and number in cpu.mem.dbs:
+            out[number] = bytes(cpu.mem.dbs[number].data)
+    return out
+
+
+def _carry(idb: InstanceDB, before: FB, data: dict[str, object]) -> list[str]:
+    """``data`` (a snapshot under FB ``before``) into ``idb`` of the new FB: whole when the
+    FB's state format is the same, else by name and type; the notes."""
+    fb = idb.fb
+    old_fmt, fmt = before.state_format, fb.state_format
+    if fmt is None or old_fmt is None or old_fmt.fingerprint == fmt.fingerprint:
+        idb.restore(data)
+        return []
+    kept, notes = fmt.adapt(old_fmt.shape(), data)
+    idb.restore(kept)
+    return [f"DB{idb.number} {fb.label} {fb.name!r}: {note}" for note in notes]
