@@ -113,7 +113,7 @@ class Cpu(ProgramBlocks, Forcing, InterruptDispatch):
         self.name = name
         self.mode = CpuMode.STOP
         self.key = key
-        self.diagnostics = DiagnosticBuffer(diag_capacity)
+        self.diagnostics = DiagnosticBuffer(diag_capacity, wall=getattr(clock, "wall_ns", None))
         self.watchdog = Watchdog(max_cycle_ms, min_cycle_ms)
         self.stats = CycleStatistics()
         self.interrupts = CyclicScheduler()
@@ -204,20 +204,29 @@ class Cpu(ProgramBlocks, Forcing, InterruptDispatch):
             self.mode = CpuMode.RUN
             self.diagnostics.record(raw, EventId.HOLD_LEFT, "", "HOLD → RUN")
 
-    def memory_reset(self) -> None:
-        """MRES (STOP only): program and operand areas cleared; diagnostics and key kept
-        ."""
+    def memory_reset(self, *, keep_program: bool = False) -> None:
+        """MRES (STOP only): program and operand areas cleared; diagnostics and key kept.
+
+        ``keep_program``: as an S7-300 with its program on a memory card, the program is
+        copied back from load memory: the blocks stay loaded, every DB and instance DB goes
+        back to its initial values, DBs created at run time (SFC22) are deleted
+        (docs/runtime.md, "Memory reset (MRES)")."""
         if self.mode is not CpuMode.STOP:
             raise BlockError("memory reset is possible only in STOP")
-        self.blocks.clear()
-        self.obs.clear()
-        self.instance_dbs.clear()
-        self.mem.dbs.clear()
+        if keep_program:
+            for idb in self.instance_dbs.values():
+                idb.reset()
+        else:
+            self.blocks.clear()
+            self.obs.clear()
+            self.instance_dbs.clear()
+            self.mem.dbs.clear()
         self.mem.reset_to_initial()
         self.hot_blockers.add("memory reset")
         self.cycle = 0
         now = self.clock.now_ns()
-        self.diagnostics.record(now, EventId.MEMORY_RESET, "", "memory reset")
+        what = "memory reset, the program copied from load memory" if keep_program else ""
+        self.diagnostics.record(now, EventId.MEMORY_RESET, "", what or "memory reset")
         gone = self.forces.clear()
         if gone:
             self._force_notes.clear()
@@ -454,7 +463,8 @@ class Cpu(ProgramBlocks, Forcing, InterruptDispatch):
         # the runtime's own errors say what went wrong; a Python error of a block's body
         # keeps its class, which its author knows
         message = str(exc) if isinstance(exc, S7Error) else f"{type(exc).__name__}: {exc}"
-        self.diagnostics.record(self._raw, event, block, message, getattr(exc, "address", ""))
+        address = getattr(exc, "address", "")
+        self.diagnostics.record(self._raw, event, block, message, address, ob=ob)
         if isinstance(exc, NestingOverflow | RecursionError):
             self.hot_blockers.add("stack overflow")
             self._go_stop(EventId.STACK_OVERFLOW, block, "block stack overflow")

@@ -7,7 +7,7 @@ clear it; it survives restarts and memory reset (it belongs to the CPU, not to m
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from enum import IntEnum
 
 from s7graph.engine.record import DiagEntry
@@ -63,17 +63,21 @@ class EventId(IntEnum):
 
 
 class DiagnosticBuffer:
-    """A fixed-length ring of ``DiagEntry``: iteration oldest first, ``latest()`` newest first."""
+    """A fixed-length ring of ``DiagEntry``: iteration oldest first, ``latest()`` newest first.
 
-    __slots__ = ("_entries", "capacity", "total")
+    ``wall``: the wall-clock time of a clock time (``SystemClock.wall_ns``), stamped on each
+    entry ``record`` makes (None: a virtual clock, no wall time)."""
 
-    def __init__(self, capacity: int = 100) -> None:
+    __slots__ = ("_entries", "capacity", "total", "wall")
+
+    def __init__(self, capacity: int = 100, *, wall: Callable[[int], int] | None = None) -> None:
         if capacity < 1:
             raise ValueError("a diagnostic buffer holds at least one entry")
         self.capacity = capacity
         self._entries: deque[DiagEntry] = deque(maxlen=capacity)
         self.total = 0
         """Entries ever added (a sequence number: the last ``total - n`` are new)."""
+        self.wall = wall
 
     def add(self, entry: DiagEntry) -> DiagEntry:
         self._entries.append(entry)
@@ -81,10 +85,18 @@ class DiagnosticBuffer:
         return entry
 
     def record(
-        self, t_ns: int, event_id: int, block: str = "", message: str = "", address: str = ""
+        self,
+        t_ns: int,
+        event_id: int,
+        block: str = "",
+        message: str = "",
+        address: str = "",
+        *,
+        ob: int = 0,
     ) -> DiagEntry:
-        """Append an entry built from its fields and return it."""
-        return self.add(DiagEntry(t_ns, int(event_id), block, message, address))
+        """Append an entry built from its fields (and its wall-clock time) and return it."""
+        wall = self.wall(t_ns) if self.wall is not None else 0
+        return self.add(DiagEntry(t_ns, int(event_id), block, message, address, ob, wall))
 
     def since(self, total: int) -> tuple[DiagEntry, ...]:
         """Entries added after the buffer's ``total`` was ``total`` (at most ``capacity``)."""

@@ -104,7 +104,7 @@ CREATE TABLE IF NOT EXISTS instances (
     fingerprint TEXT NOT NULL, shape TEXT NOT NULL, data BLOB NOT NULL);
 CREATE TABLE IF NOT EXISTS diagnostics (
     seq INTEGER PRIMARY KEY, t_ns INTEGER, event_id INTEGER, block TEXT, message TEXT,
-    address TEXT);
+    address TEXT, ob INTEGER NOT NULL DEFAULT 0, wall_ns INTEGER NOT NULL DEFAULT 0);
 CREATE TABLE IF NOT EXISTS alarms (
     id INTEGER PRIMARY KEY AUTOINCREMENT, t_ns INTEGER, key TEXT, state TEXT, text TEXT,
     user TEXT NOT NULL DEFAULT '', cpu_ns INTEGER, reason TEXT NOT NULL DEFAULT '');
@@ -142,6 +142,13 @@ _ADDED_ALARM_COLUMNS = (
     ("cpu_ns", "INTEGER"),
     ("reason", "TEXT NOT NULL DEFAULT ''"),
 )
+_DIAG_COLUMNS = ("seq", "t_ns", "event_id", "block", "message", "address", "ob", "wall_ns")
+_ADDED_DIAG_COLUMNS = (
+    ("ob", "INTEGER NOT NULL DEFAULT 0"),
+    ("wall_ns", "INTEGER NOT NULL DEFAULT 0"),
+)
+DiagRow = tuple[int, int, int, str, str, str, int, int]
+"""A row of the diagnostics table, in ``_DIAG_COLUMNS`` order."""
 
 
 class StateFileError(S7Error):
@@ -202,7 +209,7 @@ class Batch:
     """DB number → (FB label, FB name, fingerprint, shape JSON, encoded snapshot): ``write``
     compresses it, in the writer's thread."""
     parts: dict[str, str] = field(default_factory=dict)
-    diagnostics: list[tuple[int, int, int, str, str, str]] = field(default_factory=list)
+    diagnostics: list[DiagRow] = field(default_factory=list)
     alarms: list[tuple[int, str, str, str, str, int | None, str]] = field(default_factory=list)
     audit: list[tuple[int, str, str, str]] = field(default_factory=list)
     appended: list[tuple[str, tuple[str, ...], tuple[Any, ...]]] = field(default_factory=list)
@@ -402,10 +409,14 @@ class StateStore:
         db.execute("PRAGMA journal_mode=WAL")
         db.execute(f"PRAGMA synchronous={self.synchronous}")  # FULL: fsync at every commit
         db.executescript(_SCHEMA)
-        columns = {row[1] for row in db.execute("PRAGMA table_info(alarms)")}
-        for column, decl in _ADDED_ALARM_COLUMNS:
-            if column not in columns:  # a state file from before the column existed
-                db.execute(f"ALTER TABLE alarms ADD COLUMN {column} {decl}")
+        for table, added in (
+            ("alarms", _ADDED_ALARM_COLUMNS),
+            ("diagnostics", _ADDED_DIAG_COLUMNS),
+        ):
+            columns = {row[1] for row in db.execute(f"PRAGMA table_info({table})")}
+            for column, decl in added:
+                if column not in columns:  # a state file from before the column existed
+                    db.execute(f"ALTER TABLE {table} ADD COLUMN {column} {decl}")
         db.execute("INSERT OR REPLACE INTO meta VALUES ('format', ?)", (FORMAT,))
 
     def _next_diag_seq(self) -> int:
@@ -489,10 +500,7 @@ class StateStore:
                 batch.parts[name] = _dumps(data)
                 self._part_seen[name] = data
         for e in cpu.diagnostics.since(self._diag_saved):
-            batch.diagnostics.append(
-                (self._diag_seq, e.t_ns, e.event_id, e.block, e.message, e.address)
-            )
-            self._diag_seq += 1
+            batch.diagnostics.append(self.diagnostic_row(e))
         self._diag_saved = cpu.diagnostics.total
         if not batch:
             return None
@@ -540,12 +548,13 @@ class StateStore:
             shape = self._shapes[number] = (fb, _dumps(fmt.shape() if fmt is not None else None))
         batch.instances[number] = (fb.label, fb.name, fingerprint_of(fb), shape[1], row)
 
-    def diagnostic_row(self, entry: DiagEntry) -> tuple[int, int, int, str, str, str]:
-        """A diagnostics row for an entry written outside ``stage`` (the runner's last word
-        when the scan hangs)."""
+    def diagnostic_row(self, entry: DiagEntry) -> DiagRow:
+        """The diagnostics row of ``entry``, numbered next (``stage``; the runner's last
+        word when the scan hangs, written outside it)."""
         seq = self._diag_seq
         self._diag_seq += 1
-        return (seq, entry.t_ns, entry.event_id, entry.block, entry.message, entry.address)
+        e = entry
+        return (seq, e.t_ns, e.event_id, e.block, e.message, e.address, e.ob, e.wall_ns)
 
     def maybe_save(self, cpu: Cpu) -> bool:
         """Stage and write at once if something changed (and the interval has passed)."""
@@ -594,7 +603,8 @@ class StateStore:
                 db.executemany("INSERT OR REPLACE INTO parts VALUES (?, ?)", batch.parts.items())
             if batch.diagnostics:
                 db.executemany(
-                    "INSERT OR REPLACE INTO diagnostics VALUES (?, ?, ?, ?, ?, ?)",
+                    f"INSERT OR REPLACE INTO diagnostics ({', '.join(_DIAG_COLUMNS)}) "
+                    "VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
                     batch.diagnostics,
                 )
             if batch.alarms:
@@ -671,7 +681,8 @@ class StateStore:
                 self.path, "force table", lambda: cpu.forces.restore(json.loads(forces), cpu.mem)
             )
         entries = self._db.execute(
-            "SELECT t_ns, event_id, block, message, address FROM diagnostics ORDER BY seq"
+            "SELECT t_ns, event_id, block, message, address, ob, wall_ns FROM diagnostics "
+            "ORDER BY seq"
         ).fetchall()
         saved = [_diag_entry(row) for row in entries[-cpu.diagnostics.capacity :]]
         for entry in saved:
@@ -933,9 +944,15 @@ def _checked(
 
 
 def _diag_entry(row: tuple[Any, ...]) -> DiagEntry:
-    t_ns, event_id, block, message, address = row
+    t_ns, event_id, block, message, address, ob, wall_ns = row
     return DiagEntry(
-        int(t_ns), int(event_id), str(block or ""), str(message or ""), str(address or "")
+        int(t_ns),
+        int(event_id),
+        str(block or ""),
+        str(message or ""),
+        str(address or ""),
+        int(ob or 0),
+        int(wall_ns or 0),
     )
 
 

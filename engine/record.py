@@ -14,13 +14,18 @@ from s7graph.engine.modes import CpuMode
 @dataclass(frozen=True, slots=True)
 class DiagEntry:
     """One diagnostic-buffer entry: time, event id 16#xxxx, block, message (Siemens' Program Design
-    for S7-300/400, ch. 10)."""
+    for S7-300/400, ch. 10); ``ob`` is the OB whose program the event occurred in where the
+    CPU knows it (a programming error: the OB that called the faulty block; else 0), and
+    ``wall_ns`` the wall-clock time of the event (ns since the epoch; 0 when not known: a
+    virtual clock, an entry of an older state file)."""
 
     t_ns: int
     event_id: int
     block: str = ""
     message: str = ""
     address: str = ""
+    ob: int = 0
+    wall_ns: int = 0
 
     def __str__(self) -> str:
         where = f" {self.block}" if self.block else ""
