@@ -1,7 +1,7 @@
 """The ``s7graph`` command line: ``run``, ``sim``, ``check``, ``import``, ``export``,
-``--version``; for the bus ``web``, ``router``, ``watch``, ``status`` and the shell's
-commands (``ack``, ``mode``, ..., ``force``, ``download``, ``stop``, ``start``); ``users``
-and ``audit``.
+``--version``; for the bus ``web``, ``router``, ``watch``, ``status``, ``diag`` and the
+shell's commands (``ack``, ``mode``, ..., ``force``, ``download``, ``stop``, ``start``,
+``mres``); ``users`` and ``audit``.
 
 The shell's command of an op is built from the op's struct (``shell`` in
 ``web.commands``): one loop makes ``ack``, ``mode``, ``init`` ... with the op's argument
@@ -163,9 +163,7 @@ def _supervised() -> bool:
 
 
 # The options of ``run`` (``s7graph run --help``).
-ProgramArg = Annotated[
-    Path, typer.Argument(help="A Python program of blocks (.py) or a chart (.s7g).")
-]
+ProgramArg = Annotated[Path, typer.Argument(help="A program of blocks (.py) or a chart (.s7g).")]
 StateFile = Annotated[
     Path | None,
     typer.Option(help="SQLite file for retentive data (default: beside the program)."),
@@ -210,7 +208,7 @@ CommLoad = Annotated[
     typer.Option(
         min=1,
         max=100,
-        help="Scan cycle load from communication, % (charts): the share of the cycle "
+        help="Scan cycle load from communication, %: the share of the cycle "
         "commands may take at each scan boundary; the rest wait for the next. S7's "
         "default: 20.",
     ),
@@ -235,7 +233,7 @@ def run(
     cycle_ms: Annotated[float, typer.Option(help="Minimum cycle time in ms.")] = 10.0,
     max_cycle_ms: MaxCycleMs = None,
     duration_s: Duration = None,
-    web: Annotated[bool, typer.Option(help="Serve the browser view (charts only).")] = False,
+    web: Annotated[bool, typer.Option(help="Serve the browser view.")] = False,
     port: Annotated[int, typer.Option(help="Port of the browser view.")] = 8080,
     record: Record = None,
     cpu: CpuName = "cpu1",
@@ -259,27 +257,26 @@ def run(
 
         raise typer.Exit(supervise(_ENTRY_ARGS or []))
     priority = _scan_priority(rt_priority)
+    net = _net(
+        cpu=cpu,
+        listen=listen,
+        connect=connect,
+        host=host,
+        users=users,
+        tls_ca=tls_ca,
+        tls_cert=tls_cert,
+        tls_key=tls_key,
+        origins=origin,
+    )
+    problem = net.problem(listening=web)
+    if problem:
+        print(f"s7graph: error: {problem}", file=sys.stderr)
+        raise typer.Exit(2)
+    if not 0 <= port <= 65535:
+        print(f"s7graph: error: --port {port} is out of range (0-65535)", file=sys.stderr)
+        raise typer.Exit(2)
     if program.suffix.lower() == ".s7g":
         from s7graph.web.cli.run_chart import run_chart
-
-        net = _net(
-            cpu=cpu,
-            listen=listen,
-            connect=connect,
-            host=host,
-            users=users,
-            tls_ca=tls_ca,
-            tls_cert=tls_cert,
-            tls_key=tls_key,
-            origins=origin,
-        )
-        problem = net.problem(listening=web)
-        if problem:
-            print(f"s7graph: error: {problem}", file=sys.stderr)
-            raise typer.Exit(2)
-        if not 0 <= port <= 65535:
-            print(f"s7graph: error: --port {port} is out of range (0-65535)", file=sys.stderr)
-            raise typer.Exit(2)
 
         raise typer.Exit(
             run_chart(
@@ -303,6 +300,10 @@ def run(
         )
     from s7graph.web.cli.run_program import run_program
 
+    for given, option in ((plant, "--plant"), (symbols, "--symbols"), (record, "--record")):
+        if given is not None:
+            print(f"s7graph: error: {option} is for a chart (.s7g), not a program", file=sys.stderr)
+            raise typer.Exit(2)
     raise typer.Exit(
         run_program(
             program,
@@ -314,6 +315,10 @@ def run(
             fresh=fresh,
             rt_priority=priority,
             core=core,
+            net=net,
+            web=web,
+            port=port,
+            comm_load_pct=comm_load,
         )
     )
 
@@ -474,11 +479,35 @@ def watch(
     fb: FbName = None,
     tls_ca: TlsCa = None,
     duration_s: Annotated[float | None, typer.Option(help="Stop after this many seconds.")] = None,
+    address: Annotated[
+        str | None,
+        typer.Option(
+            "--address",
+            help="Watch these operands instead of an FB's steps, comma-separated: addresses "
+            "(MW0, Q4.0, DB20.DBW2, T5), symbols, DB variables by name (DB20.avg, "
+            "DB10.ctu.CV, DB20.speeds[2]), each optionally :TYPE (MW0:INT).",
+        ),
+    ] = None,
+    interval_ms: Annotated[
+        float, typer.Option(help="With --address: how often to read them, in ms (20 or more).")
+    ] = 200.0,
 ) -> None:
-    """Print a CPU's step changes live (one line each)."""
+    """Print a CPU's step changes live (one line each), or with --address the values of
+    addresses and DB variables whenever one changes."""
+    net = _net(cpu=cpu, connect=connect, tls_ca=tls_ca)
+    if address is not None:
+        from s7graph.web.cli.watch_table import split_addresses, watch_addresses
+
+        if fb is not None:
+            raise typer.BadParameter("--address watches operands, --fb an FB's steps: not both")
+        try:
+            operands = split_addresses(address)
+        except ValueError as exc:
+            raise typer.BadParameter(str(exc)) from None
+        code = watch_addresses(net, operands, interval_ms=interval_ms, duration_s=duration_s)
+        raise typer.Exit(code)
     from s7graph.web.cli.remote import watch_command
 
-    net = _net(cpu=cpu, connect=connect, tls_ca=tls_ca)
     raise typer.Exit(watch_command(net, fb=fb, duration_s=duration_s))
 
 
@@ -488,6 +517,22 @@ def status(cpu: CpuName = "cpu1", connect: Connect = None, tls_ca: TlsCa = None)
     from s7graph.web.cli.remote import status_command
 
     raise typer.Exit(status_command(_net(cpu=cpu, connect=connect, tls_ca=tls_ca)))
+
+
+@app.command()
+def diag(
+    cpu: CpuName = "cpu1",
+    connect: Connect = None,
+    tls_ca: TlsCa = None,
+    n: Annotated[int, typer.Option("-n", help="How many entries, newest first (1-1000).")] = 100,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the entries as JSON.")] = False,
+) -> None:
+    """Print a CPU's diagnostic buffer, newest first: time, event ID, OB and priority
+    class, text."""
+    from s7graph.web.cli.diag import diag_command
+
+    net = _net(cpu=cpu, connect=connect, tls_ca=tls_ca)
+    raise typer.Exit(diag_command(net, n=n, as_json=as_json))
 
 
 def _remote(
