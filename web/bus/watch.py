@@ -110,7 +110,9 @@ def parse_item(text: str) -> WatchItem:
     target, type_name = spelled, None
     closing = spelled.rfind('"')
     head, colon, tail = spelled.rpartition(":")
-    if colon and head and closing < len(head):
+    if colon and not head.strip():
+        return WatchItem(text, error=f"{text}: no operand before ':'")
+    if colon and closing < len(head):
         target, type_name = head.strip(), tail.strip().upper()
         try:
             type_name = type_of(type_name).name
