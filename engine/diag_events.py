@@ -55,7 +55,7 @@ EVENT_TEXTS: dict[int, str] = {
     EventId.STOP_HUNG: "STOP: a scan did not return after a stop request",
     EventId.STOP_KILLED: "STOP: the supervisor ended the CPU process, its scan hung",
     EventId.COMMAND_FAILED: "A command failed at the scan boundary",
-    EventId.SEQUENCER_POSITION: "S7-GRAPH sequencer position at a restart",
+    EventId.SEQUENCER_POSITION: "S7-GRAPH sequencer position",
     EventId.STATE_CARRIED_OVER: "State carried over to a changed block",
     EventId.FORCE_STARTED: "Force job started",
     EventId.FORCE_ENDED: "Force jobs deleted",

@@ -75,6 +75,7 @@ class DiagFeed:
         buffer = cpu.diagnostics
         self._seen = buffer.total
         self._snapshot: tuple[DiagEntry, ...] = tuple(buffer)
+        self._encoded: tuple[tuple[int, int], bytes] = ((-1, 0), b"")
         self._pub = publisher.declare_publisher("diag/new")
         publisher.declare_queryable("diag", self._on_query)
 
@@ -93,6 +94,18 @@ class DiagFeed:
         events.reverse()  # newest first
         message = DiagBuffer(total=total, capacity=buffer.capacity, entries=events)
         self._publisher.post(self._pub, message)
+
+    def encoded(self, n: int = DEFAULT_ENTRIES) -> bytes:
+        """``current(n)`` as JSON, made once per state of the buffer and ``n`` (a view
+        that asks again and again costs the CPU's process one encoding)."""
+        with self._lock:
+            key = (self._seen, n)
+            if self._encoded[0] == key:
+                return self._encoded[1]
+        data = encode(self.current(n))
+        with self._lock:
+            self._encoded = (key, data)
+        return data
 
     def current(self, n: int = DEFAULT_ENTRIES) -> DiagBuffer:
         """The newest ``n`` entries, newest first (any thread)."""
@@ -130,7 +143,7 @@ class DiagFeed:
             if isinstance(n, str):
                 query.reply_err(n.encode())
                 return
-            data = encode(self.current(n))
+            data = self.encoded(n)
             key = self._publisher.key("diag")
             query.reply(key, data, encoding=zenoh.Encoding.APPLICATION_JSON)
         except Exception:

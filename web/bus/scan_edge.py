@@ -24,11 +24,13 @@ import time
 from typing import TYPE_CHECKING, Protocol
 
 from s7graph.engine.cpu import Cpu
+from s7graph.engine.diagnostics import EventId
 from s7graph.engine.modes import CpuMode
 from s7graph.engine.profile import CycleBreakdown
 from s7graph.engine.record import ScanRecord
 from s7graph.engine.runner import Runner, stop_reason
 from s7graph.engine.watchdog import CycleStatistics
+from s7graph.sequencer.fb import position
 from s7graph.web.bus.diagnostics import DiagFeed
 from s7graph.web.bus.live import LiveGraph
 from s7graph.web.bus.protocol import (
@@ -187,8 +189,8 @@ class CpuEdge:
                 publisher.publish_forces(forces)
         if self.diag is not None:
             self.diag.at_boundary()
-        if self.watching is not None:
-            self.watching.at_boundary(record.t_ns // 1_000_000)
+        if self.watching is not None:  # within what the commands left of the share
+            self.watching.at_boundary(record.t_ns // 1_000_000, until_ns)
 
     def apply(self, command: Command) -> tuple[bool, str, str]:
         """One command the gate let through, at the scan boundary: the switch's and MRES to
@@ -292,6 +294,22 @@ class ScanEdge(CpuEdge):
         if self.online is not None:
             self.online.at_boundary()
         return update
+
+    def _memory_reset(self, cpu: Cpu) -> tuple[bool, str, str]:
+        """The CPU's memory reset, the FB's position first written to the diagnostic
+        buffer: nothing is destroyed silently, as before a warm or cold restart."""
+        graph = self.live.graph
+        if cpu.mode is CpuMode.STOP and not self._starting and graph.idb is not None:
+            st = graph.state
+            if st.calls:
+                where = f"{graph.cc.name}/DB{graph.db_number}"
+                cpu.diagnostics.record(
+                    cpu.clock.now_ns(),
+                    EventId.SEQUENCER_POSITION,
+                    graph.fb.label,
+                    f"memory reset clears {where}, {position(graph.cc, st)}",
+                )
+        return super()._memory_reset(cpu)
 
     def apply(self, command: Command) -> tuple[bool, str, str]:
         """One command the gate let through, at the scan boundary: the CPU's to the CPU,

@@ -27,6 +27,7 @@ import dataclasses
 import math
 import queue
 import re
+import time
 from dataclasses import dataclass
 from datetime import date, datetime
 from typing import Any, Final, cast
@@ -412,12 +413,16 @@ class Watching:
         self._queue: queue.Queue[tuple[QueryReply, list[WatchItem]]] = queue.Queue(QUEUE)
         publisher.declare_queryable("watch", self._on_query)
 
-    def at_boundary(self, t_ms: int | None = None) -> int:
-        """Read and answer the requests waiting (at most ``PER_BOUNDARY``): the values of
-        the scan just ended; how many were answered."""
+    def at_boundary(self, t_ms: int | None = None, until_ns: int | None = None) -> int:
+        """Read and answer the requests waiting — the values of the scan just ended — at
+        most ``PER_BOUNDARY``, and once ``until_ns`` (``time.perf_counter_ns``: the end of
+        the boundary's share for communication) is past only the first; how many were
+        answered."""
         cpu = self.cpu
         done = 0
         while done < PER_BOUNDARY:
+            if done and until_ns is not None and time.perf_counter_ns() >= until_ns:
+                break
             try:
                 reply, items = self._queue.get_nowait()
             except queue.Empty:

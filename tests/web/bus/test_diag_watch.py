@@ -241,7 +241,7 @@ def test_a_watch_request_is_answered_at_the_next_scan_boundary(rig: Rig) -> None
     ("payload", "reason"),
     [
         (b"", "a watch request names the addresses to watch"),
-        (b"{\"addresses\": [", "malformed JSON"),
+        (b'{"addresses": [', "malformed JSON"),
         (b'{"addresses": []}', "Expected `array` of length >= 1"),
         (encode(WatchRequest(addresses=["MW0"] * 65)), "length <= 64"),
         (b'{"addresses": ["MW0"], "evil": 1}', "unknown field `evil`"),

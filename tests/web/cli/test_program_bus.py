@@ -235,3 +235,6 @@ def test_a_charts_cpu_answers_diag_and_mres_initializes_its_sequencer(tmp_path: 
         assert state is not None and state.mode == "AUTO"  # initial values: mode, steps
         lines = s7graph("diag", *_bus(tmp_path), "-n", "10").stdout
         assert "16#4307" in lines and "16#4304" in lines
+        cleared = next(line for line in lines.splitlines() if "16#5F01" in line)
+        assert "memory reset clears Seq_drill/DB1, in S1 'Ready'" in cleared  # written before
+        assert "S3 'Coolant'" in cleared and "(mode MAN)" in cleared
