@@ -28,6 +28,9 @@ __all__ = ["DiagSource", "DiagnosticsPanel", "diagnostics_html", "event_html", "
 SHOWN = 100
 """Entries the folder lists at most (the CPU's buffer holds 100 by default)."""
 MAX_FPS = 5.0
+LAST = 1e9
+"""The folder's place on a page: below the others, those built later too (a Force folder
+at login)."""
 
 
 def _small(body: str) -> str:
@@ -182,7 +185,8 @@ class DiagnosticsPanel:
     def _connect(self, page: viser.ClientHandle) -> None:
         if self._guard is not None and self._guard.refused(page.client_id):
             return
-        with page.gui.add_folder("Diagnostics", expand_by_default=self._expand):
+        folder = page.gui.add_folder("Diagnostics", order=LAST, expand_by_default=self._expand)
+        with folder:
             handle = page.gui.add_html(self.source.html())
         with self._lock:
             self._pages[page.client_id] = handle
