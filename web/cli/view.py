@@ -71,7 +71,8 @@ def web_command(
     if chosen is None:
         return _fail(f"no CPU {cpu!r} on the bus; found {', '.join(s.cpu for s in cpus)}")
     if fb is not None and fb not in chosen.fbs:
-        return _fail(f"CPU {chosen.cpu} runs no FB {fb!r}; it runs {', '.join(chosen.fbs)}")
+        runs = ", ".join(chosen.fbs) or "none (a program of blocks: leave --fb out)"
+        return _fail(f"CPU {chosen.cpu} runs no FB {fb!r}; it runs {runs}")
     if not is_loopback_host(net.host) and chosen.login != "users":
         return _fail(
             f"--host {net.host} is not loopback and CPU {chosen.cpu} has no users file: "

@@ -25,6 +25,8 @@ DRILL = ROOT / "examples" / "drill"
 PROGRAM = """
 from s7graph.engine import ob, fb
 
+CPU = {"max_cycle_ms": 5000}   # a busy test machine must not stop it by a time error
+
 @fb(10, "Count", IN={"step": "INT"}, STAT={"n": "INT", "last": "ARRAY[1..2] OF INT"})
 def count(ctx, db):
     db.n = min(int(db.n) + db.step, 32767)
