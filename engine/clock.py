@@ -40,6 +40,12 @@ class SystemClock:
 
     def __init__(self) -> None:
         self._origin = time.monotonic_ns()
+        self._wall_origin = time.time_ns() - (time.monotonic_ns() - self._origin)
 
     def now_ns(self) -> int:
         return time.monotonic_ns() - self._origin
+
+    def wall_ns(self, t_ns: int) -> int:
+        """The wall-clock time (ns since the epoch) of clock time ``t_ns``, as the wall clock
+        stood when this clock began: what the diagnostic buffer stamps its entries with."""
+        return self._wall_origin + t_ns

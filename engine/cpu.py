@@ -116,7 +116,7 @@ class Cpu(ProgramBlocks, Forcing, InterruptDispatch, SyncErrors):
         self.name = name
         self.mode = CpuMode.STOP
         self.key = key
-        self.diagnostics = DiagnosticBuffer(diag_capacity)
+        self.diagnostics = DiagnosticBuffer(diag_capacity, wall=getattr(clock, "wall_ns", None))
         self.watchdog = Watchdog(max_cycle_ms, min_cycle_ms)
         self.stats = CycleStatistics()
         self.interrupts = CyclicScheduler()
@@ -207,20 +207,29 @@ class Cpu(ProgramBlocks, Forcing, InterruptDispatch, SyncErrors):
             self.mode = CpuMode.RUN
             self.diagnostics.record(raw, EventId.HOLD_LEFT, "", "HOLD → RUN")
 
-    def memory_reset(self) -> None:
-        """MRES (STOP only): program and operand areas cleared; diagnostics and key kept
-        ."""
+    def memory_reset(self, *, keep_program: bool = False) -> None:
+        """MRES (STOP only): program and operand areas cleared; diagnostics and key kept.
+
+        ``keep_program``: as an S7-300 with its program on a memory card, the program is
+        copied back from load memory: the blocks stay loaded, every DB and instance DB goes
+        back to its initial values, DBs created at run time (SFC22) are deleted
+        (docs/runtime.md, "Memory reset (MRES)")."""
         if self.mode is not CpuMode.STOP:
             raise BlockError("memory reset is possible only in STOP")
-        self.blocks.clear()
-        self.obs.clear()
-        self.instance_dbs.clear()
-        self.mem.dbs.clear()
+        if keep_program:
+            for idb in self.instance_dbs.values():
+                idb.reset()
+        else:
+            self.blocks.clear()
+            self.obs.clear()
+            self.instance_dbs.clear()
+            self.mem.dbs.clear()
         self.mem.reset_to_initial()
         self.hot_blockers.add("memory reset")
         self.cycle = 0
         now = self.clock.now_ns()
-        self.diagnostics.record(now, EventId.MEMORY_RESET, "", "memory reset")
+        what = "memory reset, the program copied from load memory" if keep_program else ""
+        self.diagnostics.record(now, EventId.MEMORY_RESET, "", what or "memory reset")
         gone = self.forces.clear()
         if gone:
             self._force_notes.clear()

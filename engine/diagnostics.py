@@ -10,7 +10,7 @@ the CPU, not to memory).
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from enum import IntEnum
 
 from s7graph.engine.record import DiagEntry
@@ -74,11 +74,14 @@ class EventId(IntEnum):
 
 
 class DiagnosticBuffer:
-    """A fixed-length ring of ``DiagEntry``: iteration oldest first, ``latest()`` newest first."""
+    """A fixed-length ring of ``DiagEntry``: iteration oldest first, ``latest()`` newest first.
 
-    __slots__ = ("_entries", "capacity", "ob", "priority", "total")
+    ``wall``: the wall-clock time of a clock time (``SystemClock.wall_ns``), stamped on each
+    entry ``record`` makes (None: a virtual clock, no wall time)."""
 
-    def __init__(self, capacity: int = 100) -> None:
+    __slots__ = ("_entries", "capacity", "ob", "priority", "total", "wall")
+
+    def __init__(self, capacity: int = 100, *, wall: Callable[[int], int] | None = None) -> None:
         if capacity < 1:
             raise ValueError("a diagnostic buffer holds at least one entry")
         self.capacity = capacity
@@ -89,6 +92,7 @@ class DiagnosticBuffer:
         self.priority = 0
         """The OB running now and its priority class (the CPU sets both around every OB):
         ``record`` stamps them on the entry; 0 outside every OB."""
+        self.wall = wall
 
     def add(self, entry: DiagEntry) -> DiagEntry:
         self._entries.append(entry)
@@ -96,11 +100,21 @@ class DiagnosticBuffer:
         return entry
 
     def record(
-        self, t_ns: int, event_id: int, block: str = "", message: str = "", address: str = ""
+        self,
+        t_ns: int,
+        event_id: int,
+        block: str = "",
+        message: str = "",
+        address: str = "",
+        *,
+        ob: int = 0,
     ) -> DiagEntry:
-        """Append an entry built from its fields, stamped with the running OB and its priority
-        class, and return it."""
-        entry = DiagEntry(t_ns, int(event_id), block, message, address, self.ob, self.priority)
+        """Append an entry built from its fields, stamped with the OB (``ob``, else the
+        running one), its priority class and its wall-clock time, and return it."""
+        wall = self.wall(t_ns) if self.wall is not None else 0
+        entry = DiagEntry(
+            t_ns, int(event_id), block, message, address, ob or self.ob, self.priority, wall
+        )
         return self.add(entry)
 
     def since(self, total: int) -> tuple[DiagEntry, ...]:

@@ -107,7 +107,8 @@ CREATE TABLE IF NOT EXISTS instances (
     fingerprint TEXT NOT NULL, shape TEXT NOT NULL, data BLOB NOT NULL);
 CREATE TABLE IF NOT EXISTS diagnostics (
     seq INTEGER PRIMARY KEY, t_ns INTEGER, event_id INTEGER, block TEXT, message TEXT,
-    address TEXT, ob INTEGER NOT NULL DEFAULT 0, priority INTEGER NOT NULL DEFAULT 0);
+    address TEXT, ob INTEGER NOT NULL DEFAULT 0, priority INTEGER NOT NULL DEFAULT 0,
+    wall_ns INTEGER NOT NULL DEFAULT 0);
 CREATE TABLE IF NOT EXISTS alarms (
     id INTEGER PRIMARY KEY AUTOINCREMENT, t_ns INTEGER, key TEXT, state TEXT, text TEXT,
     user TEXT NOT NULL DEFAULT '', cpu_ns INTEGER, reason TEXT NOT NULL DEFAULT '');
@@ -147,12 +148,24 @@ _ADDED_ALARM_COLUMNS = (
     ("cpu_ns", "INTEGER"),
     ("reason", "TEXT NOT NULL DEFAULT ''"),
 )
+_DIAG_COLUMNS = (
+    "seq",
+    "t_ns",
+    "event_id",
+    "block",
+    "message",
+    "address",
+    "ob",
+    "priority",
+    "wall_ns",
+)
 _ADDED_DIAG_COLUMNS = (
     ("ob", "INTEGER NOT NULL DEFAULT 0"),
     ("priority", "INTEGER NOT NULL DEFAULT 0"),
+    ("wall_ns", "INTEGER NOT NULL DEFAULT 0"),
 )
-DiagRow = tuple[int, int, int, str, str, str, int, int]
-"""A diagnostics row: seq, t_ns, event_id, block, message, address, OB, priority class."""
+DiagRow = tuple[int, int, int, str, str, str, int, int, int]
+"""A row of the diagnostics table, in ``_DIAG_COLUMNS`` order."""
 
 
 class StateFileError(S7Error):
@@ -423,14 +436,14 @@ class StateStore:
         db.execute("PRAGMA journal_mode=WAL")
         db.execute(f"PRAGMA synchronous={self.synchronous}")  # FULL: fsync at every commit
         db.executescript(_SCHEMA)
-        columns = {row[1] for row in db.execute("PRAGMA table_info(alarms)")}
-        for column, decl in _ADDED_ALARM_COLUMNS:
-            if column not in columns:  # a state file from before the column existed
-                db.execute(f"ALTER TABLE alarms ADD COLUMN {column} {decl}")
-        columns = {row[1] for row in db.execute("PRAGMA table_info(diagnostics)")}
-        for column, decl in _ADDED_DIAG_COLUMNS:
-            if column not in columns:  # entries written before it: 0, the OS's
-                db.execute(f"ALTER TABLE diagnostics ADD COLUMN {column} {decl}")
+        for table, added in (
+            ("alarms", _ADDED_ALARM_COLUMNS),
+            ("diagnostics", _ADDED_DIAG_COLUMNS),
+        ):
+            columns = {row[1] for row in db.execute(f"PRAGMA table_info({table})")}
+            for column, decl in added:
+                if column not in columns:  # a state file from before the column existed
+                    db.execute(f"ALTER TABLE {table} ADD COLUMN {column} {decl}")
         db.execute("INSERT OR REPLACE INTO meta VALUES ('format', ?)", (FORMAT,))
 
     def _next_diag_seq(self) -> int:
@@ -514,19 +527,7 @@ class StateStore:
                 batch.parts[name] = _dumps(data)
                 self._part_seen[name] = data
         for e in cpu.diagnostics.since(self._diag_saved):
-            batch.diagnostics.append(
-                (
-                    self._diag_seq,
-                    e.t_ns,
-                    e.event_id,
-                    e.block,
-                    e.message,
-                    e.address,
-                    e.ob,
-                    e.priority,
-                )
-            )
-            self._diag_seq += 1
+            batch.diagnostics.append(self.diagnostic_row(e))
         self._diag_saved = cpu.diagnostics.total
         if not batch:
             return None
@@ -575,12 +576,12 @@ class StateStore:
         batch.instances[number] = (fb.label, fb.name, fingerprint_of(fb), shape[1], row)
 
     def diagnostic_row(self, entry: DiagEntry) -> DiagRow:
-        """A diagnostics row for an entry written outside ``stage`` (the runner's last word
-        when the scan hangs)."""
+        """The diagnostics row of ``entry``, numbered next (``stage``; the runner's last
+        word when the scan hangs, written outside it)."""
         seq = self._diag_seq
         self._diag_seq += 1
         e = entry
-        return (seq, e.t_ns, e.event_id, e.block, e.message, e.address, e.ob, e.priority)
+        return (seq, e.t_ns, e.event_id, e.block, e.message, e.address, e.ob, e.priority, e.wall_ns)
 
     def maybe_save(self, cpu: Cpu) -> bool:
         """Stage and write at once if something changed (and the interval has passed)."""
@@ -629,8 +630,8 @@ class StateStore:
                 db.executemany("INSERT OR REPLACE INTO parts VALUES (?, ?)", batch.parts.items())
             if batch.diagnostics:
                 db.executemany(
-                    "INSERT OR REPLACE INTO diagnostics (seq, t_ns, event_id, block, message, "
-                    "address, ob, priority) VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
+                    f"INSERT OR REPLACE INTO diagnostics ({', '.join(_DIAG_COLUMNS)}) "
+                    "VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)",
                     batch.diagnostics,
                 )
             if batch.alarms:
@@ -720,7 +721,8 @@ class StateStore:
                 self.path, "force table", lambda: cpu.forces.restore(json.loads(forces), cpu.mem)
             )
         entries = self._db.execute(
-            "SELECT t_ns, event_id, block, message, address, ob, priority FROM diagnostics "
+            "SELECT t_ns, event_id, block, message, address, ob, priority, wall_ns "
+            "FROM diagnostics "
             "ORDER BY seq"
         ).fetchall()
         saved = [_diag_entry(row) for row in entries[-cpu.diagnostics.capacity :]]
@@ -1006,7 +1008,7 @@ def _checked(
 
 
 def _diag_entry(row: tuple[Any, ...]) -> DiagEntry:
-    t_ns, event_id, block, message, address, ob, priority = row
+    t_ns, event_id, block, message, address, ob, priority, wall_ns = row
     return DiagEntry(
         int(t_ns),
         int(event_id),
@@ -1015,6 +1017,7 @@ def _diag_entry(row: tuple[Any, ...]) -> DiagEntry:
         str(address or ""),
         int(ob or 0),
         int(priority or 0),
+        int(wall_ns or 0),
     )
 
 

@@ -16,7 +16,8 @@ class DiagEntry:
     """One diagnostic-buffer entry: time, event id 16#xxxx, block, message (Siemens' Program Design
     for S7-300/400, ch. 10); ``ob`` and ``priority`` are the OB in which the event happened
     and its priority class (OB121/OB122: the faulting OB's class), 0 for an event of the
-    operating system outside every OB."""
+    operating system outside every OB; ``wall_ns`` the wall-clock time of the event (ns since
+    the epoch; 0 when not known: a virtual clock, an entry of an older state file)."""
 
     t_ns: int
     event_id: int
@@ -25,6 +26,7 @@ class DiagEntry:
     address: str = ""
     ob: int = 0
     priority: int = 0
+    wall_ns: int = 0
 
     def __str__(self) -> str:
         where = f" {self.block}" if self.block else ""

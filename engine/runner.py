@@ -68,6 +68,7 @@ from types import FrameType
 
 from s7graph.engine.cores import allowed_cpus, others, pin, scan_core
 from s7graph.engine.cpu import Cpu
+from s7graph.engine.diag_events import stop_cause
 from s7graph.engine.diagnostics import EventId
 from s7graph.engine.errors import ScanAborted
 from s7graph.engine.marks import ScanMarks
@@ -694,7 +695,9 @@ class Runner:
             f"the scan did not return{where} within {waited_s:.1f} s of the stop request: "
             "process ended; the state is the last finished scan's"
         )
-        entry = DiagEntry(self.cpu.clock.now_ns(), EventId.STOP_HUNG, "", message)
+        entry = DiagEntry(
+            self.cpu.clock.now_ns(), EventId.STOP_HUNG, "", message, wall_ns=time.time_ns()
+        )
         writer = self.writer
         if writer is not None and self.store is not None:
             batch = Batch(diagnostics=[self.store.diagnostic_row(entry)])
@@ -713,11 +716,7 @@ def stop_reason(cpu: Cpu) -> str:
     stop = cpu.stop_entry
     if stop is None:
         return "the CPU is in STOP"
-    entries = list(cpu.diagnostics)
-    cause: DiagEntry | None = None
-    for k, entry in enumerate(entries):
-        if entry is stop and k > 0 and entries[k - 1].event_id >> 12 in (0x2, 0x3):
-            cause = entries[k - 1]
+    cause = stop_cause(cpu.diagnostics, stop)
     if cause is None:
         return f"{_at(stop)}{stop.message}"
     return f"{_at(cause)}{cause.message} ({stop.message})"

@@ -237,11 +237,11 @@ class Command(
     as (shown in the role table), ``kind`` how (``edge``: a one-call edge of ``pin``;
     ``level``: ``pin`` held at ``held``; ``mode``: a mode selector; "" no pin), ``does``
     and ``example`` (its arguments) for the documentation; ``where`` it is carried out
-    (``fb``: the FB at the scan boundary, ``web.bus.live``; ``cpu``: the RUN/STOP switch;
-    ``force``: the force table; ``online``: the online change, ``web.bus.online``) and its
-    ``group``: two commands of one group at the same scan boundary would act as
-    simultaneous edges of one call, so the second is refused; ``shell`` how a shell gives
-    it (None: only by ``s7graph send``)."""
+    (``fb``: the FB at the scan boundary, ``web.bus.live``; ``cpu``: the RUN/STOP switch
+    and the memory reset; ``force``: the force table; ``online``: the online change,
+    ``web.bus.online``) and its ``group``: two commands of one group at the same scan
+    boundary would act as simultaneous edges of one call, so the second is refused;
+    ``shell`` how a shell gives it (None: only by ``s7graph send``)."""
 
     role: ClassVar[str] = ""
     where: ClassVar[Literal["fb", "cpu", "force", "online"]] = "fb"
@@ -440,6 +440,22 @@ class Start(Command, tag="start", frozen=True, kw_only=True):
     args: NoArgs = NoArgs()
 
 
+class Mres(Command, tag="mres", frozen=True, kw_only=True):
+    where = "cpu"
+    role = "engineer"
+    does = (
+        "memory reset (MRES), in STOP only: every memory area, DB and instance DB to its "
+        "initial values, force jobs deleted; the program and the diagnostic buffer are kept"
+    )
+    shell = Shell(
+        "mres",
+        "Reset the CPU's memory (MRES; engineer): in STOP only, every flag, timer, counter, DB "
+        "and instance DB to its initial values, force jobs deleted; the diagnostic buffer is "
+        "kept.",
+    )
+    args: NoArgs = NoArgs()
+
+
 # The union, in the order of the role table.
 AnyCommand = (
     Ack
@@ -461,6 +477,7 @@ AnyCommand = (
     | Open
     | Stop
     | Start
+    | Mres
 )
 COMMAND_TYPES: tuple[type[Command], ...] = get_args(AnyCommand)
 

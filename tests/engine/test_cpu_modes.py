@@ -6,13 +6,16 @@ from __future__ import annotations
 import pytest
 
 from s7graph.engine import (
+    DB,
     CallContext,
     Cpu,
     CpuMode,
     EventId,
+    InstanceDB,
     KeySwitch,
     ModeRequest,
     VirtualClock,
+    fb,
     ob,
 )
 from s7graph.engine.errors import BlockError
@@ -181,3 +184,50 @@ def test_emitted_events_land_in_the_scan_record(clock: VirtualClock) -> None:
     cpu.start()
     assert cpu.scan().events == (("S1", 1), ("S0", 1), ("V1", 1))
     assert cpu.scan().events == (("S1", 2), ("S0", 2), ("V1", 2))
+
+
+def test_memory_reset_keeping_the_program_puts_every_area_and_db_to_its_initial_values(
+    clock: VirtualClock,
+) -> None:
+    """MRES with the program kept (its load memory: an S7-300's memory card): the blocks
+    stay; retentive and other flags, timers, counters, DBs and instance DBs go back to
+    their initial values, a DB created at run time goes, force jobs are deleted; the
+    diagnostic buffer stays, the CPU stays in STOP and only a warm restart follows."""
+
+    @fb(5, "Count", STAT={"n": "INT"})
+    def count(ctx: CallContext, db: InstanceDB) -> None:
+        db.n = int(db.n) + 1  # type: ignore[call-overload]
+
+    @ob(1)
+    def main(ctx: CallContext) -> None:
+        ctx.call(count, 6)
+        ctx.mem.set("MW0", int(ctx.mem.get("MW0")) + 1)  # retentive
+
+    cpu = Cpu(clock)
+    cpu.load(main, count, DB(20, 4, init=b"\x00\x07"))
+    cpu.create_instance_db(6, count)
+    cpu.start()
+    for _ in range(3):
+        clock.advance(10)
+        cpu.scan()
+    cpu.mem.set("DB20.DBW0", 99)
+    cpu.mem.create_db(30, 2, created=True)
+    cpu.mem.counters[0].set_value(5)
+    cpu.force("I0.3", True)
+    cpu.stop("the switch")
+    before = len(cpu.diagnostics)
+    cpu.memory_reset(keep_program=True)
+    assert cpu.mode is CpuMode.STOP and set(cpu.blocks) >= {"OB1", "FB5", "DB20"}
+    assert cpu.mem.get("MW0") == 0 and cpu.instance_dbs[6].n == 0
+    assert cpu.mem.get("DB20.DBW0") == 7 and 30 not in cpu.mem.dbs
+    assert cpu.mem.counters[0].value == 0 and not cpu.forces and cpu.cycle == 0
+    assert [e.event_id for e in cpu.diagnostics.latest()[:2]] == [
+        EventId.FORCE_ENDED,
+        EventId.MEMORY_RESET,
+    ]
+    assert len(cpu.diagnostics) == before + 2 and "memory reset" in cpu.hot_blockers
+    cpu.start("hot")
+    assert cpu.last_restart == "warm" and cpu.mode is CpuMode.RUN
+    clock.advance(10)
+    cpu.scan()
+    assert cpu.mem.get("MW0") == 1 and cpu.instance_dbs[6].n == 1

@@ -75,6 +75,6 @@ def role_table_markdown() -> str:
         args = f"`{c.args}`" if c.args else ""
         pin = f"`{c.pin}`" if c.pin else ""
         rows.append(f"| `{c.op}` | {args} | {pin} | {c.does} | {marks} |")
-    reads = "chart, source, state, status, alarms, history, audit, project"
+    reads = "chart, source, state, status, alarms, history, audit, project, diag, watch"
     rows.append(f"| *read* ({reads}) | | | | ✓ | ✓ | ✓ |")
     return "\n".join(rows) + "\n"

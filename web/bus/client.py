@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import contextlib
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any, Literal
 
 import zenoh
@@ -26,12 +26,15 @@ from s7graph.web.bus.protocol import (
     Command,
     CommandReply,
     CpuStatus,
+    DiagBuffer,
     ForceList,
     LoginReply,
     LoginRequest,
     ProjectFiles,
     ProtocolError,
     StepStateUpdate,
+    WatchRequest,
+    WatchValues,
     decode,
     encode,
 )
@@ -154,6 +157,40 @@ class BusClient:
         """Call ``callback`` with the current force jobs, then with each newer list (by
         ``seq``; on a zenoh thread)."""
         self._follow_seq(self._keys.forces, ForceList, self.forces, callback)
+
+    def diag(self, n: int | None = None) -> DiagBuffer | None:
+        """The CPU's diagnostic buffer, newest first (its newest ``n`` entries; the CPU's
+        default 100), or None if no CPU answers."""
+        key = self._keys.diag if n is None else f"{self._keys.diag}?n={n}"
+        data = self._get_one(key)
+        return None if data is None else decode(data, DiagBuffer)
+
+    def on_diag(self, callback: Callable[[DiagBuffer], None]) -> None:
+        """Call ``callback`` with the entries the CPU writes from now on, newest first, as
+        it publishes them (``diag/new``, on a zenoh thread)."""
+
+        def on_sample(sample: zenoh.Sample) -> None:
+            with contextlib.suppress(ProtocolError):
+                callback(decode(sample.payload.to_bytes(), DiagBuffer))
+
+        key = self._keys.diag_new
+        self._subscribers.append(self._session.declare_subscriber(key, on_sample))
+
+    def watch(self, addresses: Sequence[str], *, timeout: float | None = None) -> WatchValues:
+        """The values of ``addresses`` at the CPU's next scan boundary; no answer, or a
+        request the CPU refuses, is a ``WatchValues`` with its ``error``."""
+        try:
+            request = encode(WatchRequest(addresses=list(addresses)))
+            data = self._get_one(self._keys.watch, request, timeout)
+        except zenoh.ZError as exc:
+            return WatchValues(error=f"bus error: {type(exc).__name__}")
+        if data is None:
+            wait = timeout or self._timeout
+            return WatchValues(error=f"no answer from CPU {self._keys.cpu!r} within {wait:g} s")
+        try:
+            return decode(data, WatchValues)
+        except ProtocolError as exc:
+            return WatchValues(error=f"unreadable answer: {exc}")
 
     def send(self, command: Command, *, timeout: float | None = None) -> CommandReply:
         """Send a command and wait for the CPU's answer; no answer is a refusal too. A

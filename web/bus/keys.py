@@ -31,13 +31,18 @@ Key space, all under ``s7graph/<cpu>/``:
 - ``login`` — queryable: a :class:`LoginRequest` in, a :class:`LoginReply` (a token) out;
 - ``audit`` — each :class:`AuditEntry` as it is written; ``audit/list`` — queryable: the
   last 50 (:class:`AuditList`);
+- ``diag`` — queryable: the CPU's diagnostic buffer, newest first (:class:`DiagBuffer`; the
+  newest 100, or ``?n=N``); ``diag/new`` — the entries written since the last publication,
+  published at the scan boundary after they were written;
+- ``watch`` — queryable: a :class:`WatchRequest` in, the :class:`WatchValues` read at the
+  next scan boundary out (only a query for its exact key);
 - ``alive`` — a liveliness token while the CPU's bus is up (a view greys its chart when it
   goes).
 
 A wildcard query (``s7graph/**``) gets the read-only answers, each under its own key;
-``cmd`` and ``login`` answer only a query for their exact key. Sessions talk only to the
-given endpoints (``web.bus.session``), and only the CPU's own identity may serve or publish
-its keys (``web.bus.acl``). docs/bus.md shows every message.
+``cmd``, ``login`` and ``watch`` answer only a query for their exact key. Sessions talk
+only to the given endpoints (``web.bus.session``), and only the CPU's own identity may
+serve or publish its keys (``web.bus.acl``). docs/bus.md shows every message.
 """
 
 from __future__ import annotations
@@ -96,6 +101,18 @@ class keys:
     @property
     def audit_list(self) -> str:
         return f"{ROOT}/{self.cpu}/audit/list"
+
+    @property
+    def diag(self) -> str:
+        return f"{ROOT}/{self.cpu}/diag"
+
+    @property
+    def diag_new(self) -> str:
+        return f"{ROOT}/{self.cpu}/diag/new"
+
+    @property
+    def watch(self) -> str:
+        return f"{ROOT}/{self.cpu}/watch"
 
     @property
     def alive(self) -> str:

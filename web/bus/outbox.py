@@ -12,14 +12,13 @@ from __future__ import annotations
 
 import queue
 import threading
-from typing import Any
+from typing import Any, Protocol
 
 import msgspec
-import zenoh
 
 from s7graph.web.bus.protocol import encode
 
-__all__ = ["OUTBOX_LIMIT", "Outbox"]
+__all__ = ["OUTBOX_LIMIT", "Outbox", "Sink"]
 
 OUTBOX_LIMIT = 20_000
 """Messages waiting at most (at 200 deltas a scan, 100 scans' worth)."""
@@ -27,12 +26,19 @@ OUTBOX_LIMIT = 20_000
 _STOP = None
 
 
+class Sink(Protocol):
+    """Where the outbox puts a message: a zenoh publisher, or a query answered later
+    (``web.bus.publisher.QueryReply``)."""
+
+    def put(self, payload: bytes) -> object: ...
+
+
 class Outbox:
-    """A queue of ``(publisher, message, seq)`` and the thread that sends it; :meth:`close`
+    """A queue of ``(sink, message, seq)`` and the thread that sends it; :meth:`close`
     sends what is queued, then stops the thread."""
 
     def __init__(self, *, limit: int = OUTBOX_LIMIT, name: str = "s7graph-bus-out") -> None:
-        self._queue: queue.SimpleQueue[tuple[zenoh.Publisher, msgspec.Struct, int | None] | None]
+        self._queue: queue.SimpleQueue[tuple[Sink, msgspec.Struct, int | None] | None]
         self._queue = queue.SimpleQueue()
         self._limit = limit
         self.sent = 0
@@ -41,7 +47,7 @@ class Outbox:
         self._thread = threading.Thread(target=self._run, name=name, daemon=True)
         self._thread.start()
 
-    def post(self, publisher: zenoh.Publisher, message: Any, seq: int | None = None) -> bool:
+    def post(self, publisher: Sink, message: Any, seq: int | None = None) -> bool:
         """Queue ``message`` (with ``seq`` replaced, if given) for ``publisher``; False if
         it was dropped because too many wait."""
         q = self._queue

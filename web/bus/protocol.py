@@ -55,9 +55,12 @@ __all__ = [
     "Command",
     "CommandReply",
     "Contact",
+    "CpuState",
     "CpuStatus",
     "CycleReport",
     "CycleStats",
+    "DiagBuffer",
+    "DiagEvent",
     "ForceEntry",
     "ForceList",
     "LoginReply",
@@ -71,6 +74,9 @@ __all__ = [
     "StepStateUpdate",
     "TransitionCriteria",
     "TransitionInfo",
+    "WatchRequest",
+    "WatchValue",
+    "WatchValues",
     "condition_text",
     "decode",
     "encode",
@@ -93,6 +99,7 @@ ValueName = Annotated[str, Meta(min_length=1, max_length=128)]
 Millis = Annotated[float, Meta(ge=0.0, le=1e12)]
 Label = Annotated[str, Meta(max_length=80)]
 LevelPin = Literal["HALT_SQ", "EN_IL", "EN_SV"]
+CpuState = Literal["RUN", "STOP", "STARTUP", "HOLD"]
 
 
 def valid_name(name: str) -> bool:
@@ -401,11 +408,51 @@ class CycleStats(_Msg, frozen=True, kw_only=True):
     comm_limited: Count = 0
 
 
+# ---------------------------------------------------------------- the diagnostic buffer
+
+EventIdNumber = Annotated[int, Meta(ge=0, le=0xFFFF)]
+ObNumber = Annotated[int, Meta(ge=0, le=255)]
+MAX_DIAG_ENTRIES = 1000
+
+
+class DiagEvent(_Msg, frozen=True, kw_only=True):
+    """One entry of the CPU's diagnostic buffer, as STEP 7's "Diagnostic Buffer" lists it:
+    ``number`` counts the entries the CPU process has held (the newest has the highest;
+    1 is the oldest it read back from the state file), ``event_id`` (``16#4302`` is
+    17154) with its ``text``, what the entry says (``info``) and the block and address it
+    names, the OB the event requests (``ob``, 0: none) and the priority class that OB runs
+    in, the time on the CPU's clock (``t_ms``) and on the wall clock (``wall_ms``, ms since
+    the epoch; 0: not known)."""
+
+    number: Count
+    event_id: EventIdNumber
+    text: Text = ""
+    info: Text = ""
+    block: ShortText = ""
+    address: ShortText = ""
+    ob: ObNumber = 0
+    priority: ObNumber = 0
+    t_ms: Count = 0
+    wall_ms: Count = 0
+
+
+class DiagBuffer(_Msg, frozen=True, kw_only=True):
+    """Entries of the diagnostic buffer, newest first: the ``diag`` queryable's answer (the
+    newest ``n``, 100 unless the query says ``?n=``) and ``diag/new``'s publication (the
+    entries written since the last one). ``total``: the ``number`` of the newest entry
+    (a subscriber that saw an older total than ``total - len(entries)`` missed some: get
+    ``diag`` again); ``capacity``: how many the CPU keeps."""
+
+    total: Count = 0
+    capacity: Count = 0
+    entries: Annotated[list[DiagEvent], Meta(max_length=MAX_DIAG_ENTRIES)] = []
+
+
 class CpuStatus(_Msg, frozen=True, kw_only=True):
     """``status``: the CPU's run state and its FBs; published on change and at 1 Hz."""
 
     cpu: Name
-    state: Literal["RUN", "STOP", "STARTUP", "HOLD"] = "RUN"
+    state: CpuState = "RUN"
     cycle: Count = 0
     t_ms: Count = 0
     fbs: Annotated[list[Name], Meta(max_length=256)] = []
@@ -413,6 +460,8 @@ class CpuStatus(_Msg, frozen=True, kw_only=True):
     login: Literal["users", "demo"] = "demo"  # demo: no users file, names are claimed
     forces: Count = 0  # force jobs active: the CPU's FRCE LED is on when > 0
     reason: Text = ""  # why the CPU is in STOP (its STOP entry and the error before it)
+    stop: DiagEvent | None = None  # in STOP: the diagnostic entry of the STOP
+    cause: DiagEvent | None = None  # the error entry that caused it (none: the STOP itself)
 
 
 class ForceEntry(_Msg, frozen=True, kw_only=True):
@@ -431,6 +480,45 @@ class ForceList(_Msg, frozen=True, kw_only=True):
 
     seq: Count = 0
     entries: Annotated[list[ForceEntry], Meta(max_length=256)] = []
+
+
+# ---------------------------------------------------------------- the watch table
+
+MAX_WATCH = 64
+WatchText = Annotated[str, Meta(min_length=1, max_length=128)]
+
+
+class WatchRequest(_Msg, frozen=True, kw_only=True):
+    """``watch`` queryable: the addresses to read at the next scan boundary (STEP 7's
+    "Monitor/Modify Variables", triggered once at the end of a cycle): an absolute address
+    (``MW0``, ``Q4.0``, ``DB20.DBW2``, ``T5``), a symbol, or a DB variable by name
+    (``DB20.avg``, ``DB10.ctu.cv``, ``DB20.speeds[2]``), each optionally with the type to
+    show it as (``MW0:INT``, ``MD4:REAL``)."""
+
+    addresses: Annotated[list[WatchText], Meta(min_length=1, max_length=MAX_WATCH)]
+
+
+class WatchValue(_Msg, frozen=True, kw_only=True):
+    """One watched address: its value (None when it cannot be read), the value as S7 shows
+    it (``TRUE``, ``W#16#00FF``, ``-5``, ``T#1S``), its type, or why it cannot be read."""
+
+    address: WatchText
+    value: Scalar = None
+    text: Text = ""
+    type: ShortText = ""
+    error: Text = ""
+
+
+class WatchValues(_Msg, frozen=True, kw_only=True):
+    """The answer of ``watch``: the values at the end of scan ``cycle`` (CPU clock
+    ``t_ms``), in the order asked, with the CPU's run state; ``error``: why the request was
+    refused as a whole (nothing read)."""
+
+    cycle: Count = 0
+    t_ms: Count = 0
+    state: CpuState = "RUN"
+    values: Annotated[list[WatchValue], Meta(max_length=MAX_WATCH)] = []
+    error: Text = ""
 
 
 # ---------------------------------------------------------------- messages (alarms)

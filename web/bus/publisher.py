@@ -31,7 +31,7 @@ import zenoh
 from s7graph.web.bus.gate import Apply, Gate, claimed_note
 from s7graph.web.bus.keys import ROOT, keys
 from s7graph.web.bus.origin import transport_origin
-from s7graph.web.bus.outbox import Outbox
+from s7graph.web.bus.outbox import Outbox, Sink
 from s7graph.web.bus.protocol import (
     AlarmList,
     AuditEntry,
@@ -40,6 +40,7 @@ from s7graph.web.bus.protocol import (
     CommandReply,
     CpuStatus,
     CycleStats,
+    DiagEvent,
     ForceList,
     LoginReply,
     LoginRequest,
@@ -49,7 +50,7 @@ from s7graph.web.bus.protocol import (
     encode,
 )
 
-__all__ = ["BusPublisher", "Durability", "PendingCommand"]
+__all__ = ["BusPublisher", "Durability", "PendingCommand", "QueryReply"]
 
 COMMAND_QUEUE_SIZE = 256
 COMMAND_MAX_AGE_S = 3.0
@@ -60,6 +61,25 @@ REPLY_WITHIN_S = 4.5
 not confirmed (before its sender's ``web.bus.client.CLIENT_TIMEOUT_S`` runs out)."""
 STATUS_PERIOD_S = 1.0
 STATUS_PERIOD_NS = int(STATUS_PERIOD_S * 1e9)
+_CPU_WIDE = ("cpu", "force")
+"""Where the ops are carried out that act on the CPU, not on the FB named (``web.commands``):
+a CPU without an FB (a program of blocks) takes them whatever ``fb`` says."""
+
+
+class QueryReply:
+    """A query answered from the outbox's thread (:meth:`BusPublisher.post`): ``put`` replies
+    under ``key`` and lets the query go."""
+
+    def __init__(self, query: zenoh.Query, key: str) -> None:
+        self.query, self.key = query, key
+
+    def put(self, payload: bytes) -> None:
+        try:
+            self.query.reply(self.key, payload, encoding=zenoh.Encoding.APPLICATION_JSON)
+        except zenoh.ZError:
+            pass  # the asker went away
+        finally:
+            self.query.drop()  # type: ignore[no-untyped-call]  # zenoh's stub
 
 
 @dataclass(eq=False)
@@ -288,12 +308,58 @@ class BusPublisher:
         self._publish_status()
         return forces
 
-    def set_cpu_state(self, state: str, reason: str = "") -> None:
+    def set_cpu_state(
+        self,
+        state: str,
+        reason: str = "",
+        *,
+        stop: DiagEvent | None = None,
+        cause: DiagEvent | None = None,
+    ) -> None:
         """Report a CPU run state change (RUN/STOP/STARTUP) on ``status`` at once, with
-        ``reason``: why it is in STOP."""
+        ``reason``: why it is in STOP, and its diagnostic entries: the STOP's and the error
+        that caused it."""
         with self._lock:
-            self._status = msgspec.structs.replace(self._status, state=state, reason=reason)
+            self._status = msgspec.structs.replace(
+                self._status, state=state, reason=reason, stop=stop, cause=cause
+            )
         self._publish_status()
+
+    def scanned(self, cycle: int, t_ms: int) -> None:
+        """A scan without an FB to publish (a program of blocks) ended: its cycle and time
+        go into ``status``, published at most once a second."""
+        with self._lock:
+            self._cycle = (cycle, t_ms)
+        if time.monotonic_ns() - self._status_sent_ns >= STATUS_PERIOD_NS:
+            self._publish_status()
+
+    # ------------------------------------------------------------ more keys
+
+    def key(self, leaf: str) -> str:
+        """The key ``s7graph/<cpu>/<leaf>``."""
+        return f"{ROOT}/{self._keys.cpu}/{leaf}"
+
+    def declare_publisher(self, leaf: str) -> zenoh.Publisher:
+        """A publisher on ``s7graph/<cpu>/<leaf>`` (JSON, blocking: nothing dropped on the
+        way), undeclared with the rest by :meth:`close`; put on it through :meth:`post`."""
+        pub = self._session.declare_publisher(
+            self.key(leaf),
+            encoding=zenoh.Encoding.APPLICATION_JSON,
+            congestion_control=zenoh.CongestionControl.BLOCK,
+        )
+        self._declared.append(pub)
+        return pub
+
+    def declare_queryable(self, leaf: str, handler: Callable[[zenoh.Query], None]) -> None:
+        """A queryable on ``s7graph/<cpu>/<leaf>`` whose ``handler`` sees each query (on a
+        zenoh thread: it must not block or raise), undeclared by :meth:`close`."""
+        self._declared.append(self._session.declare_queryable(self.key(leaf), handler))
+
+    def post(self, sink: Sink, message: msgspec.Struct) -> None:
+        """Queue ``message`` for the outbox's thread, which encodes it and puts it on
+        ``sink`` (a publisher, or a query's :class:`QueryReply`): the scan thread never
+        waits for the bus."""
+        self.outbox.post(sink, message)
 
     def set_cycle_stats(self, stats: CycleStats) -> None:
         """Carry ``stats`` in the next ``status`` (published at most once a second)."""
@@ -535,8 +601,9 @@ class BusPublisher:
             return
         note = claimed_note(command.origin)
         command = msgspec.structs.replace(command, origin=source)
-        if command.fb not in self._charts:
-            reason = f"unknown FB {command.fb!r}; this CPU runs {', '.join(self._charts)}"
+        if command.fb not in self._charts and type(command).where not in _CPU_WIDE:
+            runs = f"runs {', '.join(self._charts)}" if self._charts else "runs no GRAPH FB"
+            reason = f"unknown FB {command.fb!r}; this CPU {runs}"
             self._refuse(query, command, reason, source, note)
             return
         pending = PendingCommand(command, query, note=note)

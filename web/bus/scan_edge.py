@@ -1,14 +1,19 @@
-"""The CPU's side of the bus at the scan boundary, for one running GraphFB.
+"""The CPU's side of the bus at the scan boundary.
 
-:class:`ScanEdge` is called back after each scan, in the scan thread: it publishes the
-scan's :class:`StepStateUpdate` (of a :class:`~web.bus.live.LiveGraph`), the CPU state and
-cycle statistics, the CPU's message list when it changed (``alarms``), optionally records
-the update (a :class:`Recording`: ``web.recorder``'s rerun ``.rrd`` file), then applies the
-commands received since the last scan — the scan boundary: ``force`` to the CPU's force
-table (``web.bus.forcing``), ``stop`` and ``start`` to the CPU's RUN/STOP switch
-(``Runner.switch_stop``/``switch_start``), the others to the FB — and publishes the force
-jobs when they changed (``forces``). ``web.wiring.live_edge`` gives it its bus, its
-recording and, in one process, the view.
+:class:`CpuEdge` is what the scan thread does after each scan for the CPU itself — any CPU,
+a chart's or a program of blocks': it publishes the CPU's state (with the STOP's reason and
+diagnostic entries) and cycle statistics on ``status``, applies the commands received since
+the last scan — the scan boundary: ``stop``, ``start`` and ``mres`` to the CPU's switch
+(``Runner.switch_stop``/``switch_start``, ``Cpu.memory_reset``), ``force`` to the CPU's
+force table (``web.bus.forcing``) — publishes the force jobs when they changed
+(``forces``), the diagnostic buffer's new entries (``diag``, ``web.bus.diagnostics``) and
+answers the watch requests waiting (``watch``, ``web.bus.watch``).
+
+:class:`ScanEdge` adds one running GraphFB: the scan's :class:`StepStateUpdate` (of a
+:class:`~web.bus.live.LiveGraph`), the CPU's message list when it changed (``alarms``),
+optionally the recording (a :class:`Recording`: ``web.recorder``'s rerun ``.rrd`` file),
+and the FB's commands. ``web.wiring.live_edge`` gives it its bus, its recording and, in one
+process, the view; ``web.wiring.program_edge`` gives a program of blocks its bus.
 """
 
 from __future__ import annotations
@@ -18,11 +23,15 @@ import functools
 import time
 from typing import TYPE_CHECKING, Protocol
 
+from s7graph.engine.cpu import Cpu
+from s7graph.engine.diagnostics import EventId
 from s7graph.engine.modes import CpuMode
 from s7graph.engine.profile import CycleBreakdown
 from s7graph.engine.record import ScanRecord
 from s7graph.engine.runner import Runner, stop_reason
 from s7graph.engine.watchdog import CycleStatistics
+from s7graph.sequencer.fb import position
+from s7graph.web.bus.diagnostics import DiagFeed
 from s7graph.web.bus.live import LiveGraph
 from s7graph.web.bus.protocol import (
     ChartLayout,
@@ -32,12 +41,13 @@ from s7graph.web.bus.protocol import (
     StepStateUpdate,
 )
 from s7graph.web.bus.publisher import BusPublisher
+from s7graph.web.bus.watch import Watching
 
 if TYPE_CHECKING:
     from s7graph.web.bus.forcing import Forcing
     from s7graph.web.bus.online import OnlineChange
 
-__all__ = ["Recording", "ScanEdge", "cycle_report", "cycle_stats"]
+__all__ = ["CpuEdge", "Recording", "ScanEdge", "cycle_report", "cycle_stats"]
 
 _MS = 1e6
 
@@ -93,7 +103,151 @@ class Recording(Protocol):
     def close(self) -> object: ...
 
 
-class ScanEdge:
+class CpuEdge:
+    """What the scan thread does with the bus (``publisher``; None: no bus) after each scan
+    for the CPU ``cpu`` (default: the force table's); close it when done."""
+
+    def __init__(
+        self,
+        publisher: BusPublisher | None,
+        *,
+        forcing: Forcing | None = None,
+        cpu: Cpu | None = None,
+    ) -> None:
+        self.publisher = publisher
+        self.forcing = forcing
+        self.cpu = cpu if cpu is not None else forcing.cpu if forcing is not None else None
+        self.restart = "warm"
+        """The startup the switch's ``start`` does (``--restart``)."""
+        self._runner: Runner | None = None
+        self._cpu_state: str | None = None
+        self._starting = False  # a start applied at this boundary
+        self.diag: DiagFeed | None = None
+        self.watching: Watching | None = None
+        if publisher is not None and self.cpu is not None:
+            self.diag = DiagFeed(self.cpu, publisher)
+            self.watching = Watching(self.cpu, publisher)
+
+    def on_record(
+        self,
+        record: ScanRecord,
+        *,
+        stats: CycleStatistics | None = None,
+        runner: Runner | None = None,
+    ) -> StepStateUpdate | None:
+        """Publish the CPU's side of the scan ``record`` and apply the pending commands
+        (call in the scan thread); with ``runner``, within its share of the cycle for
+        communication."""
+        until_ns = self._begin(runner)
+        publisher = self.publisher
+        if publisher is None:
+            return None
+        self._publish_cpu(record, stats, runner, publisher)
+        publisher.scanned(record.cycle, record.t_ns // 1_000_000)
+        self._boundary(record, runner, until_ns, publisher)
+        return None
+
+    def _begin(self, runner: Runner | None) -> int | None:
+        """A scan boundary begins: the end of its share for communication, if limited."""
+        self._runner = runner
+        self._starting = False
+        return time.perf_counter_ns() + runner.comm_budget_ns if runner is not None else None
+
+    def _publish_cpu(
+        self,
+        record: ScanRecord,
+        stats: CycleStatistics | None,
+        runner: Runner | None,
+        publisher: BusPublisher,
+    ) -> None:
+        """The CPU's state on a change (in STOP with why: its entries), the statistics."""
+        state = str(record.mode)
+        if state != self._cpu_state:
+            self._cpu_state = state
+            cpu = runner.cpu if runner is not None else self.cpu
+            if record.mode is CpuMode.STOP and cpu is not None:
+                stop, cause = self.diag.stop_events() if self.diag is not None else (None, None)
+                publisher.set_cpu_state(state, stop_reason(cpu), stop=stop, cause=cause)
+            else:
+                publisher.set_cpu_state(state)
+        if stats is not None:
+            publisher.set_cycle_stats(cycle_stats(stats, runner, publisher.comm_limited))
+
+    def _boundary(
+        self,
+        record: ScanRecord,
+        runner: Runner | None,
+        until_ns: int | None,
+        publisher: BusPublisher,
+    ) -> None:
+        """The commands, then what they and the scan changed: force jobs, the diagnostic
+        buffer's new entries, the watch requests waiting."""
+        publisher.apply_commands(self.apply, cycle=record.cycle, durable=runner, until_ns=until_ns)
+        if self.forcing is not None:
+            forces = self.forcing.changed()
+            if forces is not None:
+                publisher.publish_forces(forces)
+        if self.diag is not None:
+            self.diag.at_boundary()
+        if self.watching is not None:  # within what the commands left of the share
+            self.watching.at_boundary(record.t_ns // 1_000_000, until_ns)
+
+    def apply(self, command: Command) -> tuple[bool, str, str]:
+        """One command the gate let through, at the scan boundary: the switch's and MRES to
+        the CPU, ``force`` to the force table."""
+        where = type(command).where  # web.commands: who carries the op out
+        if where == "cpu":
+            return self._switch(command)
+        if where != "force":
+            return False, f"this CPU runs no GRAPH FB: {command.op} needs one", ""
+        if self.forcing is None:
+            return False, "this CPU takes no force jobs", ""
+        return self.forcing.apply(command)
+
+    def _switch(self, command: Command) -> tuple[bool, str, str]:
+        """The CPU's RUN/STOP switch: ``stop`` now (outputs to 0), ``start`` from STOP by
+        the configured restart at the next scan boundary (as S7's mode switch); ``mres``
+        in STOP only (``Cpu.memory_reset``, the program kept)."""
+        runner = self._runner
+        if runner is None:
+            return False, "this CPU has no RUN/STOP switch", ""
+        mode = runner.cpu.mode
+        if command.op == "mres":
+            return self._memory_reset(runner.cpu)
+        if command.op == "stop":
+            if mode is CpuMode.STOP:
+                return False, "the CPU is in STOP already", ""
+            runner.switch_stop(f"STOP by the switch ({command.user or 'no user'})")
+            return True, "", f"{mode} → STOP"
+        if mode is not CpuMode.STOP:
+            return False, f"the CPU is in {mode}, not in STOP", ""
+        runner.switch_start(self.restart)
+        self._starting = True
+        return True, "", f"STOP → RUN ({self.restart} restart)"
+
+    def _memory_reset(self, cpu: Cpu) -> tuple[bool, str, str]:
+        """MRES (docs/runtime.md, "Memory reset (MRES)"): refused unless in STOP."""
+        if cpu.mode is not CpuMode.STOP:
+            why = f"the CPU is in {cpu.mode}: a memory reset needs STOP (stop it first)"
+            return False, why, ""
+        if self._starting:
+            return False, "a start came first at this scan boundary: the CPU is starting", ""
+        jobs = len(cpu.forces)
+        cpu.memory_reset(keep_program=True)
+        gone = f", {jobs} force job{'s' if jobs != 1 else ''} deleted" if jobs else ""
+        return True, "", f"memory reset in STOP: every area, DB and instance DB initial{gone}"
+
+    def close(self) -> None:
+        """Nothing to close here (the bus is the caller's)."""
+
+    def __enter__(self) -> CpuEdge:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+class ScanEdge(CpuEdge):
     """What the scan thread does with the bus (``publisher``; None: no bus) and the
     recording after each scan of one running GraphFB; close it when done."""
 
@@ -104,18 +258,14 @@ class ScanEdge:
         *,
         online: OnlineChange | None = None,
         forcing: Forcing | None = None,
+        cpu: Cpu | None = None,
     ) -> None:
+        super().__init__(publisher, forcing=forcing, cpu=cpu)
         self.live = live
         self.online = online
-        self.forcing = forcing
         self.recorder: Recording | None = None
-        self.publisher = publisher
         if online is not None and publisher is not None:
             online.attach(publisher)
-        self._cpu_state: str | None = None
-        self.restart = "warm"
-        """The startup the switch's ``start`` does (``--restart``)."""
-        self._runner: Runner | None = None
 
     def on_record(
         self,
@@ -126,8 +276,7 @@ class ScanEdge:
     ) -> StepStateUpdate:
         """Publish the scan ``record`` and apply the pending commands (call in the scan
         thread); with ``runner``, within its share of the cycle for communication."""
-        until_ns = time.perf_counter_ns() + runner.comm_budget_ns if runner is not None else None
-        self._runner = runner
+        until_ns = self._begin(runner)
         update = self.live.update(record)
         if self.recorder is not None and record.mode is CpuMode.RUN:
             if self.recorder.layout is not self.live.layout:  # an online change
@@ -136,55 +285,38 @@ class ScanEdge:
         publisher = self.publisher
         if publisher is None:
             return update
-        state = str(record.mode)
-        if state != self._cpu_state:
-            self._cpu_state = state
-            stopped = record.mode is CpuMode.STOP
-            reason = stop_reason(runner.cpu) if runner is not None and stopped else ""
-            publisher.set_cpu_state(state, reason)
-        if stats is not None:
-            publisher.set_cycle_stats(cycle_stats(stats, runner, publisher.comm_limited))
+        self._publish_cpu(record, stats, runner, publisher)
         publisher.publish(self.live.fb, update)
         alarms = self.live.alarms_changed()
         if alarms is not None:
             publisher.publish_alarms(alarms)
-        publisher.apply_commands(self.apply, cycle=record.cycle, durable=runner, until_ns=until_ns)
-        if self.forcing is not None:
-            forces = self.forcing.changed()
-            if forces is not None:
-                publisher.publish_forces(forces)
+        self._boundary(record, runner, until_ns, publisher)
         if self.online is not None:
             self.online.at_boundary()
         return update
 
-    def apply(self, command: Command) -> tuple[bool, str, str]:
-        """One command the gate let through, at the scan boundary: ``force`` to the CPU's
-        force table, the others to the FB."""
-        where = type(command).where  # web.commands: who carries the op out
-        if where == "cpu":
-            return self._switch(command)
-        if where != "force":
-            return self.live.apply(command)
-        if self.forcing is None:
-            return False, "this CPU takes no force jobs", ""
-        return self.forcing.apply(command)
+    def _memory_reset(self, cpu: Cpu) -> tuple[bool, str, str]:
+        """The CPU's memory reset, the FB's position first written to the diagnostic
+        buffer: nothing is destroyed silently, as before a warm or cold restart."""
+        graph = self.live.graph
+        if cpu.mode is CpuMode.STOP and not self._starting and graph.idb is not None:
+            st = graph.state
+            if st.calls:
+                where = f"{graph.cc.name}/DB{graph.db_number}"
+                cpu.diagnostics.record(
+                    cpu.clock.now_ns(),
+                    EventId.SEQUENCER_POSITION,
+                    graph.fb.label,
+                    f"memory reset clears {where}, {position(graph.cc, st)}",
+                )
+        return super()._memory_reset(cpu)
 
-    def _switch(self, command: Command) -> tuple[bool, str, str]:
-        """The CPU's RUN/STOP switch: ``stop`` now (outputs to 0), ``start`` from STOP by
-        the configured restart at the next scan boundary (as S7's mode switch)."""
-        runner = self._runner
-        if runner is None:
-            return False, "this CPU has no RUN/STOP switch", ""
-        mode = runner.cpu.mode
-        if command.op == "stop":
-            if mode is CpuMode.STOP:
-                return False, "the CPU is in STOP already", ""
-            runner.switch_stop(f"STOP by the switch ({command.user or 'no user'})")
-            return True, "", f"{mode} → STOP"
-        if mode is not CpuMode.STOP:
-            return False, f"the CPU is in {mode}, not in STOP", ""
-        runner.switch_start(self.restart)
-        return True, "", f"STOP → RUN ({self.restart} restart)"
+    def apply(self, command: Command) -> tuple[bool, str, str]:
+        """One command the gate let through, at the scan boundary: the CPU's to the CPU,
+        the others to the FB."""
+        if type(command).where in ("cpu", "force"):
+            return super().apply(command)
+        return self.live.apply(command)
 
     def close(self) -> None:
         """Close the online change and the recording."""
@@ -197,6 +329,3 @@ class ScanEdge:
 
     def __enter__(self) -> ScanEdge:
         return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()

@@ -1,7 +1,7 @@
 """The ``s7graph`` command line: ``run``, ``sim``, ``check``, ``import``, ``export``,
-``--version``; for the bus ``web``, ``router``, ``watch``, ``status`` and the shell's
-commands (``ack``, ``mode``, ..., ``force``, ``download``, ``stop``, ``start``); ``users``,
-``audit`` and ``certs``.
+``--version``; for the bus ``web``, ``router``, ``watch``, ``status``, ``diag`` and the
+shell's commands (``ack``, ``mode``, ..., ``force``, ``download``, ``stop``, ``start``,
+``mres``); ``users``, ``audit`` and ``certs``.
 
 The shell's command of an op is built from the op's struct (``shell`` in
 ``web.commands``): one loop makes ``ack``, ``mode``, ``init`` ... with the op's argument
@@ -308,7 +308,7 @@ CommLoad = Annotated[
     typer.Option(
         min=1,
         max=100,
-        help="Scan cycle load from communication, % (charts): the share of the cycle "
+        help="Scan cycle load from communication, %: the share of the cycle "
         "commands may take at each scan boundary; the rest wait for the next. S7's "
         "default: 20.",
     ),
@@ -333,7 +333,7 @@ def run(
     cycle_ms: Annotated[float, typer.Option(help="Minimum cycle time in ms.")] = 10.0,
     max_cycle_ms: MaxCycleMs = None,
     duration_s: Duration = None,
-    web: Annotated[bool, typer.Option(help="Serve the browser view (charts only).")] = False,
+    web: Annotated[bool, typer.Option(help="Serve the browser view.")] = False,
     port: Annotated[int, typer.Option(help="Port of the browser view.")] = 8080,
     record: Record = None,
     cpu: CpuName = "cpu1",
@@ -363,27 +363,21 @@ def run(
         options |= {"duration_s": duration_s, "max_cycle_ms": max_cycle_ms, "fresh": fresh}
         options |= {"restart": restart, "rt_priority": priority}
         _run_scl_program(program, blocks or [], bool(web or listen or connect), **options)
+    net = _cpu_net(
+        web,
+        port,
+        cpu=cpu,
+        listen=listen,
+        connect=connect,
+        host=host,
+        users=users,
+        tls_ca=tls_ca,
+        tls_cert=tls_cert,
+        tls_key=tls_key,
+        origins=origin,
+    )
     if program.suffix.lower() == ".s7g":
         from s7graph.web.cli.run_chart import run_chart
-
-        net = _net(
-            cpu=cpu,
-            listen=listen,
-            connect=connect,
-            host=host,
-            users=users,
-            tls_ca=tls_ca,
-            tls_cert=tls_cert,
-            tls_key=tls_key,
-            origins=origin,
-        )
-        problem = net.problem(listening=web, role="cpu")
-        if problem:
-            print(f"s7graph: error: {problem}", file=sys.stderr)
-            raise typer.Exit(2)
-        if not 0 <= port <= 65535:
-            print(f"s7graph: error: --port {port} is out of range (0-65535)", file=sys.stderr)
-            raise typer.Exit(2)
 
         raise typer.Exit(
             run_chart(
@@ -408,6 +402,10 @@ def run(
         )
     from s7graph.web.cli.run_program import run_program
 
+    for given, option in ((plant, "--plant"), (symbols, "--symbols"), (record, "--record")):
+        if given is not None:
+            print(f"s7graph: error: {option} is for a chart (.s7g), not a program", file=sys.stderr)
+            raise typer.Exit(2)
     raise typer.Exit(
         run_program(
             program,
@@ -419,8 +417,25 @@ def run(
             fresh=fresh,
             rt_priority=priority,
             core=core,
+            net=net,
+            web=web,
+            port=port,
+            comm_load_pct=comm_load,
         )
     )
+
+
+def _cpu_net(web: bool, port: int, **kw: Any) -> NetOptions:
+    """A CPU's network options (``run``), checked: what is refused is one line, exit 2."""
+    net = _net(**kw)
+    problem = net.problem(listening=web, role="cpu")
+    if problem:
+        print(f"s7graph: error: {problem}", file=sys.stderr)
+        raise typer.Exit(2)
+    if not 0 <= port <= 65535:
+        print(f"s7graph: error: --port {port} is out of range (0-65535)", file=sys.stderr)
+        raise typer.Exit(2)
+    return net
 
 
 def _run_scl_program(program: Path, blocks: list[Path], bus: bool, **options: Any) -> None:
@@ -629,11 +644,35 @@ def watch(
     fb: FbName = None,
     tls_ca: TlsCa = None,
     duration_s: Annotated[float | None, typer.Option(help="Stop after this many seconds.")] = None,
+    address: Annotated[
+        str | None,
+        typer.Option(
+            "--address",
+            help="Watch these operands instead of an FB's steps, comma-separated: addresses "
+            "(MW0, Q4.0, DB20.DBW2, T5), symbols, DB variables by name (DB20.avg, "
+            "DB10.ctu.CV, DB20.speeds[2]), each optionally :TYPE (MW0:INT).",
+        ),
+    ] = None,
+    interval_ms: Annotated[
+        float, typer.Option(help="With --address: how often to read them, in ms (20 or more).")
+    ] = 200.0,
 ) -> None:
-    """Print a CPU's step changes live (one line each)."""
+    """Print a CPU's step changes live (one line each), or with --address the values of
+    addresses and DB variables whenever one changes."""
+    net = _net(cpu=cpu, connect=connect, tls_ca=tls_ca)
+    if address is not None:
+        from s7graph.web.cli.watch_table import split_addresses, watch_addresses
+
+        if fb is not None:
+            raise typer.BadParameter("--address watches operands, --fb an FB's steps: not both")
+        try:
+            operands = split_addresses(address)
+        except ValueError as exc:
+            raise typer.BadParameter(str(exc)) from None
+        code = watch_addresses(net, operands, interval_ms=interval_ms, duration_s=duration_s)
+        raise typer.Exit(code)
     from s7graph.web.cli.remote import watch_command
 
-    net = _net(cpu=cpu, connect=connect, tls_ca=tls_ca)
     raise typer.Exit(watch_command(net, fb=fb, duration_s=duration_s))
 
 
@@ -643,6 +682,22 @@ def status(cpu: CpuName = "cpu1", connect: Connect = None, tls_ca: TlsCa = None)
     from s7graph.web.cli.remote import status_command
 
     raise typer.Exit(status_command(_net(cpu=cpu, connect=connect, tls_ca=tls_ca)))
+
+
+@app.command()
+def diag(
+    cpu: CpuName = "cpu1",
+    connect: Connect = None,
+    tls_ca: TlsCa = None,
+    n: Annotated[int, typer.Option("-n", help="How many entries, newest first (1-1000).")] = 100,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the entries as JSON.")] = False,
+) -> None:
+    """Print a CPU's diagnostic buffer, newest first: time, event ID, OB and priority
+    class, text."""
+    from s7graph.web.cli.diag import diag_command
+
+    net = _net(cpu=cpu, connect=connect, tls_ca=tls_ca)
+    raise typer.Exit(diag_command(net, n=n, as_json=as_json))
 
 
 def _remote(

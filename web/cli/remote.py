@@ -27,6 +27,7 @@ import zenoh
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import Command, CommandReply, CpuStatus, StepStateUpdate
 from s7graph.web.bus.session import open_session
+from s7graph.web.cli.diag_text import event_line, when
 from s7graph.web.cli.net import NetOptions
 from s7graph.web.cli.stopping import wait_until_stopped
 from s7graph.web.commands import Args, Download, DownloadArgs, checked, op_of
@@ -34,8 +35,10 @@ from s7graph.web.view.texts import cycle_lines
 
 __all__ = [
     "PASSWORD_ENV",
+    "ask",
     "download_command",
     "list_forces",
+    "on_bus",
     "send_command",
     "status_command",
     "status_lines",
@@ -70,7 +73,7 @@ def _join(net: NetOptions) -> zenoh.Session | str:
 
 
 @contextlib.contextmanager
-def _on_bus(net: NetOptions) -> Iterator[BusClient | str]:
+def on_bus(net: NetOptions) -> Iterator[BusClient | str]:
     """A client of ``net.cpu`` on the bus (its session closed after), or why there is none."""
     session = _join(net)
     if isinstance(session, str):
@@ -87,7 +90,7 @@ def _on_bus(net: NetOptions) -> Iterator[BusClient | str]:
 def _logged_in(net: NetOptions, *, fb: str | None, user: str) -> Iterator[_Shell | int]:
     """A shell logged in at ``net.cpu`` as ``user`` (logged out again after), or the exit
     status when that fails (the reason printed)."""
-    with _on_bus(net) as client:
+    with on_bus(net) as client:
         if isinstance(client, str):
             yield _fail(client)
             return
@@ -95,7 +98,8 @@ def _logged_in(net: NetOptions, *, fb: str | None, user: str) -> Iterator[_Shell
         if status is None:
             yield _fail(f"CPU {net.cpu!r} does not answer", 1)
             return
-        name = fb or (status.fbs[0] if status.fbs else "")
+        # a CPU without an FB (a program) takes its CPU's ops whatever FB they name
+        name = fb or (status.fbs[0] if status.fbs else net.cpu)
         password = os.environ.get(PASSWORD_ENV, "")
         if status.login == "users" and not password and sys.stdin.isatty():
             password = getpass.getpass(f"Password for {user}: ")
@@ -139,16 +143,17 @@ def send_command(
             return _fail(str(exc))
     if not reply.applied:
         return _refused(op, reply)
-    print(f"s7graph: {op} applied on {net.cpu}/{shell.fb} (cycle {reply.cycle})")
+    on = net.cpu if kind.where in ("cpu", "force") else f"{net.cpu}/{shell.fb}"
+    print(f"s7graph: {op} applied on {on} (cycle {reply.cycle})")
     if reply.reason:  # what an applied command will not do (a fault that stays latched)
         print(f"s7graph: {reply.reason}")
     return 0
 
 
-def _ask(net: NetOptions, query: Callable[[BusClient], T | None]) -> T | int:
+def ask(net: NetOptions, query: Callable[[BusClient], T | None]) -> T | int:
     """What ``query`` gets from ``net.cpu``, or the exit status (2, the reason printed)
     when there is no bus or the CPU does not answer."""
-    with _on_bus(net) as client:
+    with on_bus(net) as client:
         if isinstance(client, str):
             return _fail(client)
         answer = query(client)
@@ -160,7 +165,7 @@ def _ask(net: NetOptions, query: Callable[[BusClient], T | None]) -> T | int:
 def list_forces(net: NetOptions) -> int:
     """``s7graph force --list``: the CPU's force jobs, one line each; 0, or 2 when the CPU
     does not answer."""
-    forces = _ask(net, BusClient.forces)
+    forces = ask(net, BusClient.forces)
     if isinstance(forces, int):
         return forces
     if not forces.entries:
@@ -272,6 +277,9 @@ def status_lines(status: CpuStatus) -> list[str]:
     ]
     if status.reason:
         lines.append(f"STOP: {status.reason}")
+    for what, event in (("STOP entry", status.stop), ("caused by", status.cause)):
+        if event is not None:
+            lines.append(f"  {what}: {when(event)}  {event_line(event)}")
     stats = status.stats
     if stats is None:
         return [*lines, "cycle time: not measured yet"]
@@ -285,7 +293,7 @@ def status_lines(status: CpuStatus) -> list[str]:
 
 def status_command(net: NetOptions) -> int:
     """Print ``status_lines`` of ``net.cpu``; 0, or 2 when it does not answer."""
-    status = _ask(net, BusClient.status)
+    status = ask(net, BusClient.status)
     if isinstance(status, int):
         return status
     for line in status_lines(status):
@@ -296,7 +304,7 @@ def status_command(net: NetOptions) -> int:
 def watch_command(net: NetOptions, *, fb: str | None, duration_s: float | None = None) -> int:
     """Print step changes of ``net.cpu`` live; 0 at the end, 2 when nothing can be watched."""
     lock = threading.Lock()
-    with _on_bus(net) as client:
+    with on_bus(net) as client:
         if isinstance(client, str):
             return _fail(client)
         status = client.status()

@@ -1,39 +1,56 @@
-"""``s7graph run PROGRAM.py``: a Python program of blocks on the system clock.
+"""``s7graph run PROGRAM.py``: a program of blocks on the system clock.
 
 Program convention: a Python file whose module-level ``@ob``/``@fb``/``@fc`` blocks (and
 ``DB`` definitions) are loaded; an optional ``CPU = {...}`` dict passes keyword options to
 ``Cpu`` (``max_cycle_ms``, ``clock_memory``, ...; ``--max-cycle-ms`` overrides its
 ``max_cycle_ms``; its ``restart`` chooses the startup from a saved state); an optional
-``setup(cpu)`` creates instance DBs and configures interrupts. The state file restores
+``setup(cpu)`` creates instance DBs and configures interrupts. Other kinds of program
+plug in by their file's suffix (``PROGRAM_LOADERS``: a loader gives the CPU with its
+blocks, and the program's restart and core). The state file restores
 retentive data and the CPU's message list (who acknowledged what, when; every message event
 is also appended to its alarm log) and the CPU comes back by the chosen restart (warm by
 default); on Ctrl-C, SIGTERM or ``--duration-s`` the CPU goes to STOP (outputs 0) and the
 state is saved. A broken program or a state file it cannot trust is one line on stderr and
 exit 2; a STOP by error or a state file that cannot be written ends the run, one line,
 exit 1.
+
+With ``--listen``/``--connect`` (``web.cli.net``, checked as for a chart) the CPU is on the
+bus (``web.wiring.program_edge``): status, the diagnostic buffer, force jobs, the RUN/STOP
+switch, the memory reset and the watch of addresses and DB variables, logins and the audit
+in the state file; ``--web`` serves its page (status, diagnostics, watch table) from a
+process of its own and keeps the CPU in STOP after an error, for the engineer to read why.
 """
 
 from __future__ import annotations
 
+import functools
 import importlib.util
 import signal
 import sys
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from s7graph import sfb
 from s7graph.engine.blocks import DB, FB, FC, OB
-from s7graph.engine.clock import SystemClock
+from s7graph.engine.clock import Clock, SystemClock
+from s7graph.engine.cores import kept_free
 from s7graph.engine.cpu import Cpu
 from s7graph.engine.modes import CpuMode
 from s7graph.engine.persistence import StateFileError
 from s7graph.engine.record import ScanRecord
 from s7graph.engine.restart import parse_restart
-from s7graph.engine.runner import RT_PRIORITY, Runner, core_for, keep_small_pages
+from s7graph.engine.runner import COMM_LOAD_PCT, RT_PRIORITY, Runner, core_for, keep_small_pages
 from s7graph.web.cli.supervisor import child_marks, recovered_cause
 from s7graph.web.harness.persist import OpenedState, open_state, refusal
+
+if TYPE_CHECKING:
+    from s7graph.engine.persistence import StateStore
+    from s7graph.web.cli.net import NetOptions
+    from s7graph.web.cli.view_process import ViewProcess
+    from s7graph.web.wiring.program_edge import ProgramEdge
 
 
 class ProgramLoadError(Exception):
@@ -112,6 +129,38 @@ def program_core(module: ModuleType) -> Any:
     return _options(module).get("core")
 
 
+@dataclass(frozen=True, slots=True)
+class LoadedProgram:
+    """A program loaded into its CPU: the CPU, and the program's own restart and core
+    (None: it sets none)."""
+
+    cpu: Cpu
+    restart: str | None = None
+    core: Any = None
+
+
+def load_python(path: Path, clock: Clock, *, max_cycle_ms: float | None) -> LoadedProgram:
+    """A Python program of blocks (the convention above)."""
+    module = import_program(path)
+    cpu = build_cpu(module, clock, max_cycle_ms=max_cycle_ms)
+    return LoadedProgram(cpu, program_restart(module), program_core(module))
+
+
+ProgramLoader = Callable[..., LoadedProgram]
+"""``loader(path, clock, *, max_cycle_ms)``: the program in its CPU, or ProgramLoadError."""
+PROGRAM_LOADERS: dict[str, ProgramLoader] = {".py": load_python}
+"""The kinds of program ``s7graph run`` runs, by their file's suffix (lower case)."""
+
+
+def load_program(path: Path, clock: Clock, *, max_cycle_ms: float | None = None) -> LoadedProgram:
+    """The program at ``path`` by its suffix's loader (``PROGRAM_LOADERS``)."""
+    loader = PROGRAM_LOADERS.get(path.suffix.lower())
+    if loader is None:
+        kinds = ", ".join(sorted(PROGRAM_LOADERS))
+        raise ProgramLoadError(f"not a program s7graph runs ({kinds}, or a chart .s7g)")
+    return loader(path, clock, max_cycle_ms=max_cycle_ms)
+
+
 def _report(record: ScanRecord) -> None:
     for entry in record.diagnostics:
         if entry.event_id >> 8 in (0x25, 0x35):  # errors; a STOP is reported by the run
@@ -129,6 +178,10 @@ def run_program(
     fresh: bool = False,
     rt_priority: int | None = RT_PRIORITY,
     core: str | int | None = None,
+    net: NetOptions | None = None,
+    web: bool = False,
+    port: int = 8080,
+    comm_load_pct: float = COMM_LOAD_PCT,
 ) -> int:
     """Run a program until Ctrl-C/SIGTERM/duration; 0 on a clean end, 1 when the CPU went
     to STOP by an error or the state could not be written, 2 on a broken program or a
@@ -138,16 +191,16 @@ def run_program(
     ``restart`` (``--restart``): the startup from a saved state; None: the program's
     ``CPU["restart"]``, else warm. ``rt_priority``: the scan thread's real-time priority
     (None: normal scheduling). ``core`` (``--core``): the processor kept for the scan
-    (``engine.cores``); None: the program's ``CPU["core"]``, else auto."""
+    (``engine.cores``); None: the program's ``CPU["core"]``, else auto. ``net``: the bus
+    (with endpoints, or ``web``: the CPU is on it); ``web``: serve its page on ``port``;
+    ``comm_load_pct``: the share of the cycle commands may take at a scan boundary."""
     if rt_priority is not None:
         keep_small_pages()  # before the view starts: it inherits it
     try:
-        module = import_program(path)
-        cpu = build_cpu(module, SystemClock(), max_cycle_ms=max_cycle_ms)
-        restart = restart or program_restart(module) or "warm"
-        choice = core if core is not None else program_core(module)
+        loaded = load_program(path, SystemClock(), max_cycle_ms=max_cycle_ms)
     except ProgramLoadError as exc:
         return _fail(path, str(exc))
+    choice = core if core is not None else loaded.core
     try:
         kept = core_for(choice, rt_priority)
     except ValueError as exc:
@@ -155,13 +208,14 @@ def run_program(
             return _fail(path, f"CPU option core: {exc}")
         print(f"s7graph: error: --core: {exc}", file=sys.stderr)
         return 2
+    restart = restart or loaded.restart or "warm"
     recovered = recovered_cause()
     state_path = state if state is not None else path.with_suffix(".state.sqlite")
     try:
         fresh = fresh and recovered is None  # never anew after a hang: its last state
         opened = open_state(  # a recovered CPU stays in STOP until started
             state_path,
-            cpu,
+            loaded.cpu,
             fresh=fresh,
             hot=restart == "hot",
             restart=None if recovered else restart,
@@ -171,25 +225,103 @@ def run_program(
         return 2
     except OSError as exc:
         return _fail(state_path, f"cannot use the state file: {exc.strerror or exc}")
-    runner = Runner(
-        cpu,
-        cycle_ms=cycle_ms,
-        store=opened.store,
-        on_record=_report,
-        end_on_stop=True,
-        rt_priority=rt_priority,
-        core=kept,
-        marks=child_marks(),
+    with kept_free(kept):  # before the bus and the view start: they inherit it
+        on_bus = web or (net is not None and net.on_bus)
+        edges = _program_edges(loaded.cpu, opened.store, net, web, port) if on_bus else None
+        if isinstance(edges, int):
+            return edges
+        edge, view = edges if edges is not None else (None, None)
+        runner = _program_runner(
+            loaded.cpu,
+            opened.store,
+            edge,
+            cycle_ms=cycle_ms,
+            end_on_stop=not (web or bool(recovered and edge is not None)),
+            rt_priority=rt_priority,
+            comm_load_pct=comm_load_pct,
+            core=kept,
+        )
+        if edge is not None:
+            edge.restart = restart
+        if view is not None:
+            view.start()
+        return run_until_stopped(
+            runner,
+            opened,
+            what=path.name,
+            restart=restart,
+            duration_s=duration_s,
+            on_start=_report,
+            close=functools.partial(_close_edges, view, edge),
+            recovered=recovered,
+        )
+
+
+def _program_runner(
+    cpu: Cpu, store: StateStore, edge: ProgramEdge | None, **options: Any
+) -> Runner:
+    """The runner of a program's CPU: each record reported (its errors on stderr) and, on
+    the bus, handed to ``edge`` in the scan thread."""
+    runner: Runner
+
+    def on_record(record: ScanRecord) -> None:
+        _report(record)
+        if edge is not None:
+            edge.on_record(record, stats=cpu.stats, runner=runner)
+
+    runner = Runner(cpu, store=store, on_record=on_record, marks=child_marks(), **options)
+    return runner
+
+
+def _program_edges(
+    cpu: Cpu, store: StateStore, net: NetOptions | None, web: bool, port: int
+) -> tuple[ProgramEdge, ViewProcess | None] | int:
+    """The program's CPU on the bus (its logins and audit in the state file) and, with
+    ``web``, its page's process (not started yet); exit status 2 with one line when the
+    bus or the page cannot be served (the state file closed then)."""
+    from s7graph.web.bus.gate import cpu_gate  # zenoh and viser only when asked for
+    from s7graph.web.cli.net import NetOptions
+    from s7graph.web.cli.view_process import ViewProcess, view_endpoints
+    from s7graph.web.view.edge import check_port
+    from s7graph.web.wiring.program_edge import ProgramEdge
+
+    net = net or NetOptions()
+    try:
+        if web:
+            check_port(net.host, port)
+        gate = cpu_gate(net.users, store)
+        edge = ProgramEdge(cpu, name=net.cpu, ends=net.ends, gate=gate)
+    except Exception as exc:
+        print(f"s7graph: error: cannot put the CPU on the bus: {exc}", file=sys.stderr)
+        store.close()
+        return 2
+    if not web:
+        print(f"s7graph: CPU {net.cpu} on the bus {edge.endpoint}; Ctrl-C to stop", flush=True)
+        return edge, None
+    bus = edge.endpoint
+    view: ViewProcess | None = None
+
+    def served(url: str) -> None:
+        if view is not None and view.starts == 1:
+            print(f"s7graph: view {url} (bus {bus}); Ctrl-C to stop", flush=True)
+
+    view = ViewProcess(
+        connect=view_endpoints(net.listen, net.connect) or [bus],
+        cpu=net.cpu,
+        host=net.host,
+        port=port,
+        origins=net.origins,
+        tls_ca=net.tls_ca,
+        on_url=served,
     )
-    return run_until_stopped(
-        runner,
-        opened,
-        what=path.name,
-        restart=restart,
-        duration_s=duration_s,
-        on_start=_report,
-        recovered=recovered,
-    )
+    return edge, view
+
+
+def _close_edges(view: ViewProcess | None, edge: ProgramEdge | None) -> None:
+    if view is not None:
+        view.stop()
+    if edge is not None:
+        edge.close()
 
 
 def _recover(runner: Runner, opened: OpenedState, what: str, recovered: tuple[str, str]) -> None:

@@ -2,7 +2,8 @@
 its own, for any CPU on the bus.
 
 It lists the CPUs answering on the bus with their FBs, serves the view of ``--cpu`` (by
-default the first, by name) and ``--fb`` (by default its first FB) on ``--host:--port``,
+default the first, by name) and ``--fb`` (by default its first FB; a CPU without one, a
+program of blocks, gets its status, watch table and diagnostics) on ``--host:--port``,
 and knows the CPU only over the bus. ``s7graph run --web`` starts it so, as its child
 (``--child``: it ends when its stdin closes — the CPU's process went — and yields the
 processor to the CPU). The page may leave this machine (``--host``) only when the CPU
@@ -70,7 +71,8 @@ def web_command(
     if chosen is None:
         return _fail(f"no CPU {cpu!r} on the bus; found {', '.join(s.cpu for s in cpus)}")
     if fb is not None and fb not in chosen.fbs:
-        return _fail(f"CPU {chosen.cpu} runs no FB {fb!r}; it runs {', '.join(chosen.fbs)}")
+        runs = ", ".join(chosen.fbs) or "none (a program of blocks: leave --fb out)"
+        return _fail(f"CPU {chosen.cpu} runs no FB {fb!r}; it runs {runs}")
     if not is_loopback_host(net.host) and chosen.login != "users":
         return _fail(
             f"--host {net.host} is not loopback and CPU {chosen.cpu} has no users file: "
@@ -89,7 +91,8 @@ def web_command(
         return _fail(str(exc))
     except Exception as exc:
         return _fail(f"cannot serve the view: {type(exc).__name__}: {exc}")
-    print(f"s7graph: view {view.url} of {chosen.cpu}/{view.fb}; Ctrl-C to stop", flush=True)
+    of = f"{chosen.cpu}/{view.fb}" if view.fb else f"{chosen.cpu} (a program)"
+    print(f"s7graph: view {view.url} of {of}; Ctrl-C to stop", flush=True)
     try:
         wait_until_stopped(duration_s, stop)
     finally:

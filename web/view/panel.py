@@ -45,6 +45,7 @@ from s7graph.web.commands import (
     Init,
     Mode,
     ModeArgs,
+    Mres,
     Off,
     OnArgs,
     SetMode,
@@ -76,6 +77,7 @@ _CONTROL_BUTTONS: Final[tuple[tuple[type[Command], str, dict[str, Any]], ...]] =
     (Halt, "Halt", {}),
     (Stop, "CPU to STOP", {}),
     (Start, "CPU to RUN", {}),
+    (Mres, "Memory reset (MRES)", {"color": "red"}),
 )
 # The step buttons: the op's struct (its argument: the Step field), the label.
 _STEP_BUTTONS: Final[tuple[tuple[type[Command], str], ...]] = (

@@ -23,6 +23,7 @@ from s7graph.web.bus.session import BusEnds
 from s7graph.web.wiring.web_edge import WebEdge, serve_view
 
 if TYPE_CHECKING:
+    from s7graph.engine.cpu import Cpu
     from s7graph.web.bus.forcing import Forcing
     from s7graph.web.bus.online import OnlineChange
 
@@ -31,7 +32,8 @@ __all__ = ["LiveEdge"]
 
 class LiveEdge(ScanEdge):
     """The view and bus (``serve``), or the bus alone (``bus``), and the recording
-    (``record``) of one running GraphFB; close it when done."""
+    (``record``) of one running GraphFB; close it when done. ``cpu_of``: the CPU whose
+    diagnostic buffer and memory the bus serves (default: the force table's)."""
 
     def __init__(
         self,
@@ -49,6 +51,7 @@ class LiveEdge(ScanEdge):
         bus: bool = False,
         online: OnlineChange | None = None,
         forcing: Forcing | None = None,
+        cpu_of: Cpu | None = None,
     ) -> None:
         self.edge: WebEdge | None = None
         self.cpu_side: CpuSide | None = None
@@ -71,7 +74,7 @@ class LiveEdge(ScanEdge):
                 {live.fb: live.layout}, cpu=cpu, ends=ends or BusEnds(), gate=gate
             )
             publisher = self.cpu_side.publisher
-        super().__init__(live, publisher, online=online, forcing=forcing)
+        super().__init__(live, publisher, online=online, forcing=forcing, cpu=cpu_of)
         try:
             if record is not None:
                 from s7graph.web.recorder import Recorder  # rerun-sdk only when recording

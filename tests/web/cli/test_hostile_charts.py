@@ -195,7 +195,7 @@ def test_a_chart_the_view_cannot_show_is_reported_by_check(
     path.write_text(chart("Many", many, loop))
     rc, out, _ = _cli(capsys, "check", str(path))
     assert rc == 1
-    assert "warning[W110]: the browser view (--web) cannot show this chart: invalid " in out
+    assert "warning[W110]: the browser view (--web) cannot show this chart: " in out
     spaced = tmp_path / "spaced.s7g"
     spaced.write_text(two_steps("TRUE").replace('"Hostile"', '"Bohren und Fräsen"'))
     rc, out, _ = _cli(capsys, "check", str(spaced))

@@ -1,0 +1,110 @@
+"""The page's Diagnostics folder and a program's page in a real headless Chromium, over a
+real bus: a program of blocks (no chart) gets its state, a watch table typed on the page
+and its diagnostic buffer; an engineer stops it from the page and the page says why it is
+in STOP, resets its memory and starts it again; a chart's page has the Diagnostics folder
+too (docs/view.md, "Diagnostics", "A program's page")."""
+
+from __future__ import annotations
+
+import socket
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+from s7graph.engine.clock import SystemClock
+from s7graph.engine.persistence import StateStore
+from s7graph.engine.record import ScanRecord
+from s7graph.engine.runner import Runner
+from s7graph.web.access.audit import read_audit
+from s7graph.web.bus.gate import cpu_gate
+from s7graph.web.bus.session import BusEnds
+from s7graph.web.view.edge import ViewSide
+from s7graph.web.wiring.program_edge import ProgramEdge
+from tests.web.bus.test_bus_force import CHART
+from tests.web.bus.test_diag_watch import program_cpu
+from tests.web.helpers import chromium_page, field, log_in, needs_chromium, online_cpu, wait_until
+
+pytestmark = [pytest.mark.timeout(240), needs_chromium]
+pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
+
+
+_SWITCH = ("stop", "mres", "start")
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+@dataclass
+class Program:
+    runner: Runner
+    view: ViewSide
+    state: Path
+
+
+@pytest.fixture
+def program(tmp_path: Path) -> Iterator[Program]:
+    """The watch test's program scanned by a runner, on the bus, and its page."""
+    cpu = program_cpu(SystemClock())
+    store = StateStore(tmp_path / "state.sqlite")
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    edge = ProgramEdge(cpu, ends=BusEnds(listen=[endpoint]), gate=cpu_gate(None, store))
+    runner: Runner
+
+    def on_record(record: ScanRecord) -> None:
+        edge.on_record(record, stats=cpu.stats, runner=runner)
+
+    runner = Runner(cpu, store=store, on_record=on_record, rt_priority=None, idle_gc=False)
+    runner.startup()
+    runner.start_thread(duration_s=200)
+    view = None
+    try:
+        view = ViewSide(cpu="cpu1", fb=None, ends=BusEnds(connect=[endpoint]), port=0)
+        yield Program(runner, view, store.path)
+    finally:
+        if view is not None:
+            view.close()
+        runner.shutdown("test ended")
+        edge.close()
+        store.close()
+
+
+def test_a_programs_page_shows_its_state_a_watch_table_and_why_it_stopped(
+    program: Program,
+) -> None:
+    assert program.view.program is not None and program.view.fb == ""
+    with chromium_page(program.view.url) as page:
+        page.get_by_text("s7graph CPU cpu1 (a program)").first.wait_for(timeout=30_000)
+        page.get_by_text("Mode transition from STARTUP to RUN").first.wait_for(timeout=30_000)
+        box = field(page, "Operands")
+        box.fill("MW0:INT, DB11.n, DB20.speed, DB99.x")
+        box.press("Tab")
+        page.get_by_text("DB99 is not loaded").first.wait_for(timeout=30_000)
+        page.get_by_text("-5").first.wait_for(timeout=30_000)  # DB20.speed, by its name
+        stop = page.get_by_role("button", name="CPU to STOP", exact=True)
+        assert stop.is_disabled()  # a viewer's page
+        log_in(page, "eng")
+        stop.click()
+        page.get_by_text("STOP by the switch (eng (unverified))").first.wait_for(timeout=30_000)
+        page.get_by_text("STOP entry").first.wait_for(timeout=30_000)
+        page.get_by_role("button", name="Memory reset (MRES)", exact=True).click()
+        page.get_by_text("Memory reset started by a PG operation").first.wait_for(timeout=30_000)
+        page.get_by_role("button", name="CPU to RUN", exact=True).click()
+        assert wait_until(lambda: program.runner.cpu.mode.value == "RUN", 30)
+    switched = [(r.op, r.outcome) for r in read_audit(program.state) if r.op in _SWITCH]
+    assert switched == [("stop", "applied"), ("mres", "applied"), ("start", "applied")]
+
+
+def test_a_charts_page_has_the_diagnostics_folder(tmp_path: Path) -> None:
+    with (
+        online_cpu(tmp_path, CHART, serve=True, users={"eng": "engineer"}) as rig,
+        chromium_page(rig.edge.url) as page,
+    ):
+        page.get_by_text("Diagnostics", exact=True).first.click()  # open the folder
+        page.get_by_text("Mode transition from STOP to STARTUP").first.wait_for(timeout=30_000)
+        page.get_by_text("OB100 · priority class 27").first.wait_for(timeout=30_000)
+        page.get_by_role("button", name="Memory reset (MRES)", exact=True).wait_for()

@@ -1,0 +1,109 @@
+"""``s7graph watch --address MW0,Q4.0,DB20.avg``: a watch table of addresses, symbols and
+DB variables of a CPU on the bus, as STEP 7's "Monitor/Modify Variables" triggered at the
+end of a cycle (``web.bus.watch``).
+
+Every ``--interval-ms`` it asks the CPU for the values at its next scan boundary and prints
+one line whenever one changed — the cycle, the CPU's state and each operand as S7 writes
+it (``MW0:INT=12  Q4.0=TRUE  DB20.avg=1.5``) — until Ctrl-C or ``--duration-s``. An
+operand the CPU cannot read is said once on stderr (``DB20.avg: DB20 is not loaded``) and
+shown as ``?``; when none can be read, or the CPU refuses the request, the exit status is
+2. A CPU that stops answering is said once, and again when it is back. A read: no login.
+"""
+
+from __future__ import annotations
+
+import sys
+import threading
+
+from s7graph.web.bus.client import BusClient
+from s7graph.web.bus.protocol import MAX_WATCH, WatchValues
+from s7graph.web.bus.watch import split_operands
+from s7graph.web.cli.net import NetOptions
+from s7graph.web.cli.remote import on_bus
+from s7graph.web.cli.stopping import wait_until_stopped
+
+__all__ = ["MIN_INTERVAL_MS", "split_addresses", "watch_addresses"]
+
+MIN_INTERVAL_MS = 20
+
+
+def split_addresses(text: str) -> list[str]:
+    """The operands of ``--address`` (``MW0,Q4.0, DB20.avg``), commas inside ``[i, j]``
+    kept; ValueError with a one-line reason for none or too many."""
+    operands = split_operands(text)
+    if not operands:
+        raise ValueError("--address: give the operands to watch, e.g. MW0,Q4.0,DB20.avg")
+    if len(operands) > MAX_WATCH:
+        raise ValueError(f"--address: at most {MAX_WATCH} operands, not {len(operands)}")
+    return operands
+
+
+def _line(answer: WatchValues) -> str:
+    shown = "  ".join(f"{v.address}={v.text if not v.error else '?'}" for v in answer.values)
+    return f"cycle {answer.cycle} {answer.state}  {shown}"
+
+
+def watch_addresses(
+    net: NetOptions,
+    addresses: list[str],
+    *,
+    interval_ms: float = 200.0,
+    duration_s: float | None = None,
+) -> int:
+    """Print the watch table of ``net.cpu`` on every change until Ctrl-C, SIGTERM or
+    ``duration_s``; 0 at the end, 2 when nothing can be watched (no bus, no CPU, every
+    operand refused)."""
+    with on_bus(net) as client:
+        if isinstance(client, str):
+            print(f"s7graph: error: {client}", file=sys.stderr)
+            return 2
+        first = client.watch(addresses)
+        if first.error:
+            print(f"s7graph: error: {net.cpu}: {first.error}", file=sys.stderr)
+            return 2
+        for value in first.values:
+            if value.error:
+                print(f"s7graph: {value.address}: {value.error}", file=sys.stderr)
+        if first.values and all(v.error for v in first.values):
+            return 2
+        print(_line(first), flush=True)
+        stop = threading.Event()
+        poll = max(interval_ms, MIN_INTERVAL_MS) / 1000
+        args = (client, addresses, first, poll, stop, net.cpu)
+        follower = threading.Thread(target=_follow, args=args, name="s7graph-watch", daemon=True)
+        follower.start()
+        try:
+            wait_until_stopped(duration_s, stop)
+        finally:
+            stop.set()
+            follower.join(timeout=5.0)
+    return 0
+
+
+def _follow(
+    client: BusClient,
+    addresses: list[str],
+    first: WatchValues,
+    poll_s: float,
+    stop: threading.Event,
+    cpu: str,
+) -> None:
+    """Ask every ``poll_s`` until ``stop``; a line for each change."""
+    shown = [(v.text, v.error) for v in first.values]
+    answering = True
+    while not stop.wait(poll_s):
+        answer = client.watch(addresses, timeout=2.0)
+        if stop.is_set():
+            return
+        if answer.error:
+            if answering:
+                print(f"s7graph: {cpu}: {answer.error}", file=sys.stderr, flush=True)
+            answering = False
+            continue
+        if not answering:
+            print(f"s7graph: {cpu} answers again", file=sys.stderr, flush=True)
+            answering = True
+        now = [(v.text, v.error) for v in answer.values]
+        if now != shown:
+            shown = now
+            print(_line(answer), flush=True)

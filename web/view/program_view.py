@@ -1,0 +1,267 @@
+"""The page of a CPU without a chart (a program of blocks, docs/view.md, "A program's page"):
+its state and why it stopped, its RUN/STOP switch and memory reset, a watch table and its
+diagnostic buffer — no scene.
+
+Every page has its own login (as the chart's page: ``web.view.panel``), its own watch
+table — operands typed into ``Operands`` (``MW0:INT, Q4.0, DB20.avg``), read at the CPU's
+scan boundaries about twice a second while the page is open (``web.bus.watch``) — and the
+buttons its role allows (``stop``, ``start``, ``mres``: an engineer's). The Diagnostics
+folder is :class:`~web.view.diagnostics.DiagnosticsPanel`'s. Every text from the bus or a
+user is escaped.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import html
+import threading
+from typing import Any
+
+import viser
+
+from s7graph.web.access.roles import allowed
+from s7graph.web.bus.client import BusClient
+from s7graph.web.bus.protocol import MAX_WATCH, Command, CommandReply, CpuStatus, WatchValues
+from s7graph.web.bus.watch import split_operands
+from s7graph.web.commands import Mres, Start, Stop, checked, op_of
+from s7graph.web.view import texts
+from s7graph.web.view.diagnostics import state_html
+from s7graph.web.view.guard import OriginGuard
+from s7graph.web.view.panel import _origin
+
+__all__ = ["ProgramPage", "ProgramView", "watch_html"]
+
+POLL_S = 0.5
+_BUTTONS: tuple[tuple[type[Command], str, dict[str, Any]], ...] = (
+    (Stop, "CPU to STOP", {}),
+    (Start, "CPU to RUN", {}),
+    (Mres, "Memory reset (MRES)", {"color": "red"}),
+)
+
+
+def watch_html(answer: WatchValues | None) -> str:
+    """The watch table: each operand, its value as S7 writes it (or why not), its type."""
+    if answer is None:
+        return texts.small('<span style="color:#777">type operands above: MW0:INT, Q4.0</span>')
+    if answer.error:
+        return texts.small(f'<span style="color:#c00">{html.escape(answer.error)}</span>')
+    rows = []
+    for v in answer.values:
+        kind = f"<span style='color:#777'>{html.escape(v.type)}</span>"
+        shown = (
+            f'<span style="color:#c00">{html.escape(v.error)}</span>'
+            if v.error
+            else f"<b>{html.escape(v.text)}</b> {kind}"
+        )
+        rows.append(f"<tr><td><code>{html.escape(v.address)}</code></td><td>{shown}</td></tr>")
+    head = f"cycle {answer.cycle} · {html.escape(answer.state)}"
+    return texts.small(f"{head}<table>{''.join(rows)}</table>")
+
+
+class ProgramPage:
+    """One browser page of a program's CPU: login, switch, watch table."""
+
+    def __init__(self, page: viser.ClientHandle, view: ProgramView) -> None:
+        self.page, self.view = page, view
+        self.user = self.token = ""
+        self.role, self.verified = "viewer", True
+        self.origin = _origin(page)
+        self._lock = threading.Lock()
+        self._shown: dict[str, str] = {}
+        gui = page.gui
+        gui.set_panel_label(f"s7graph CPU {view.cpu} (a program)")
+        self.banner = gui.add_html("")
+        with gui.add_folder("Login"):
+            self.user_field = gui.add_text("User", "")
+            self.password = gui.add_text("Password", "", visible=not view.demo)
+            uid = self.password._impl.uuid
+            rule = f".mantine-Flex-root:has(label[for='{uid}']) input{{-webkit-text-security:disc}}"
+            gui.add_html(f"<style>{rule}</style>")
+            self.login_button = gui.add_button("Log in")
+            self.logout_button = gui.add_button("Log out", disabled=True)
+            self.who = gui.add_html(texts.login_html("", "", True, view.demo))
+        self.login_button.on_click(lambda _: self._log_in())
+        self.logout_button.on_click(lambda _: self._log_out())
+        with gui.add_folder("CPU"):
+            self.status = gui.add_html(state_html(None))
+            self.buttons = {
+                op_of(kind): gui.add_button(label, hint=kind.does.replace("`", ""), **style)
+                for kind, label, style in _BUTTONS
+            }
+        for kind, _, _ in _BUTTONS:
+            self.buttons[op_of(kind)].on_click(functools.partial(self._clicked, kind))
+        with gui.add_folder("Watch"):
+            self.operands = gui.add_text(
+                "Operands",
+                "",
+                hint="comma-separated: MW0:INT, Q4.0, T5, DB20.DBW2, a symbol, DB20.avg, "
+                "DB10.ctu.CV, DB20.speeds[2]",
+            )
+            self.watch = gui.add_html(watch_html(None))
+        self._enable()
+
+    def asked(self) -> list[str]:
+        """The operands this page watches (at most ``MAX_WATCH``)."""
+        return split_operands(str(self.operands.value))[:MAX_WATCH]
+
+    def show(self, key: str, handle: Any, content: str) -> None:
+        if self._shown.get(key) != content:
+            handle.content = content
+            self._shown[key] = content
+
+    def _enable(self) -> None:
+        role = self.role if self.token else "viewer"
+        for op, button in self.buttons.items():
+            button.disabled = not allowed(role, op)
+        self.login_button.disabled = bool(self.token)
+        self.logout_button.disabled = not self.token
+        self.user_field.disabled = bool(self.token)
+        self.who.content = texts.login_html(
+            self.user if self.token else "", self.role, self.verified, self.view.demo
+        )
+
+    def _log_in(self) -> None:
+        user, password = str(self.user_field.value).strip(), str(self.password.value)
+        self.password.value = ""  # type: ignore[misc]  # never left on the page
+        reply = self.view.client.login(user, password, origin=self.origin)
+        if not reply.ok:
+            self._notify("login refused", reply.reason, ok=False)
+            return
+        with self._lock:
+            self.user, self.token, self.role = reply.user, reply.token, reply.role
+            self.verified = reply.verified
+        self._enable()
+        self._notify("logged in", f"{reply.user} ({reply.role})", ok=True)
+
+    def _log_out(self) -> None:
+        with self._lock:
+            token, user, self.token, self.user, self.role = self.token, self.user, "", "", "viewer"
+        if token:
+            self.view.client.logout(token, user=user, origin=self.origin)
+        self._enable()
+
+    def forget(self) -> None:
+        """The page went away: revoke its token."""
+        with self._lock:
+            token, user, self.token = self.token, self.user, ""
+        if token:
+            self.view.client.logout(token, user=user, origin=self.origin)
+
+    def _clicked(self, kind: type[Command], _: object) -> None:
+        self.command(kind)
+
+    def command(self, kind: type[Command]) -> CommandReply:
+        """Send op ``kind`` as this page's user (viser's callback thread)."""
+        with self._lock:
+            user, token = self.user, self.token
+        made = kind(fb=self.view.cpu, user=user, token=token, origin=self.origin)
+        try:
+            reply = self.view.client.send(checked(made))
+        except (TypeError, ValueError) as exc:
+            reply = CommandReply(applied=False, reason=str(exc), op=made.op)
+        verdict = "applied" if reply.applied else "refused"
+        self._notify(f"{made.op} {verdict}", reply.reason or "OK", ok=reply.applied)
+        return reply
+
+    def _notify(self, title: str, body: str, *, ok: bool) -> None:
+        self.page.add_notification(
+            title, body, auto_close_seconds=4.0, color="green" if ok else "red"
+        )
+
+
+class ProgramView:
+    """The pages of ``server`` for CPU ``cpu`` (no chart), reached through ``client``;
+    :meth:`close` stops its thread."""
+
+    def __init__(
+        self,
+        server: viser.ViserServer,
+        client: BusClient,
+        *,
+        cpu: str,
+        demo: bool = True,
+        guard: OriginGuard | None = None,
+    ) -> None:
+        self.server, self.client, self.cpu, self.demo = server, client, cpu, demo
+        self._guard = guard
+        self._lock = threading.Lock()
+        self.pages: dict[int, ProgramPage] = {}
+        self.status: CpuStatus | None = None
+        self.connected = True
+        self._wake = threading.Event()
+        self._closed = False
+        client.on_status(self.apply_status)
+        client.on_alive(self.set_connected)
+        server.on_client_connect(self._connect)
+        server.on_client_disconnect(self._disconnect)
+        server.scene.world_axes.visible = False  # no chart: an empty scene
+        self._thread = threading.Thread(target=self._loop, name="s7graph-program", daemon=True)
+        self._thread.start()
+
+    def apply_status(self, status: CpuStatus) -> None:
+        with self._lock:
+            self.status = status
+        self._wake.set()
+
+    def set_connected(self, connected: bool) -> None:
+        with self._lock:
+            self.connected = connected
+        self._wake.set()
+
+    def _connect(self, page: viser.ClientHandle) -> None:
+        if self._guard is not None and self._guard.refused(page.client_id):
+            return
+        built = ProgramPage(page, self)
+        with self._lock:
+            self.pages[page.client_id] = built
+        self._wake.set()
+
+    def _disconnect(self, page: viser.ClientHandle) -> None:
+        with self._lock:
+            gone = self.pages.pop(page.client_id, None)
+        if gone is not None:
+            gone.forget()
+
+    def _loop(self) -> None:
+        while not self._closed:
+            self._wake.wait(timeout=POLL_S)
+            self._wake.clear()
+            if self._closed:
+                return
+            with contextlib.suppress(Exception):  # a page gone mid-update must not stop it
+                self._render()
+
+    def _render(self) -> None:
+        with self._lock:
+            status, connected, pages = self.status, self.connected, list(self.pages.values())
+        top = texts.banner_html(connected, self.cpu)
+        line = _status_html(status) if connected else texts.small("no live state")
+        answers: dict[tuple[str, ...], WatchValues] = {}
+        for page in pages:
+            page.show("banner", page.banner, top)
+            page.show("status", page.status, line)
+            asked = tuple(page.asked())
+            if not asked:
+                page.show("watch", page.watch, watch_html(None))
+                continue
+            if asked not in answers:
+                answers[asked] = self.client.watch(list(asked), timeout=2.0)
+            page.show("watch", page.watch, watch_html(answers[asked]))
+
+    def close(self) -> None:
+        self._closed = True
+        self._wake.set()
+        self._thread.join(timeout=3.0)
+
+
+def _status_html(status: CpuStatus | None) -> str:
+    """The state (and why it stopped), the cycle, the FORCE mark and the cycle time."""
+    if status is None:
+        return state_html(None)
+    parts = [f"cycle {status.cycle}"]
+    stats = status.stats
+    if stats is not None and stats.max_ms > 0:
+        parts.append(f"cycle time {stats.last_ms:.1f} ms (max {stats.max_ms:.1f})")
+    line = texts.small(texts.force_mark(status.forces) + " · ".join(parts))
+    return state_html(status) + line
