@@ -104,8 +104,9 @@ def _named_ob(block: str) -> int:
 
 def requested_ob(entry: DiagEntry) -> int:
     """The OB the event requests (STEP 7's "Requested OB"): OB121 for a programming error,
-    OB122 for an I/O access error, OB80 for a time error, OB8x for an asynchronous error, the startup OB of a STOP →
-    STARTUP transition, the error OB not loaded of a STOP; 0 for none."""
+    OB122 for an I/O access error, OB80 for a time error, OB8x for an asynchronous error,
+    the startup OB of a STOP → STARTUP transition, the error OB not loaded of a STOP; 0 for
+    none."""
     event = entry.event_id
     if event >> 8 == 0x25:
         return 121

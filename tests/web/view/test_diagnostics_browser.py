@@ -10,6 +10,7 @@ import socket
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 
@@ -28,6 +29,9 @@ from tests.web.helpers import chromium_page, field, log_in, needs_chromium, onli
 
 pytestmark = [pytest.mark.timeout(240), needs_chromium]
 pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
+
+if TYPE_CHECKING:
+    from tests.conftest import BusCerts
 
 
 _SWITCH = ("stop", "mres", "start")
@@ -99,9 +103,9 @@ def test_a_programs_page_shows_its_state_a_watch_table_and_why_it_stopped(
     assert switched == [("stop", "applied"), ("mres", "applied"), ("start", "applied")]
 
 
-def test_a_charts_page_has_the_diagnostics_folder(tmp_path: Path) -> None:
+def test_a_charts_page_has_the_diagnostics_folder(tmp_path: Path, bus_certs: BusCerts) -> None:
     with (
-        online_cpu(tmp_path, CHART, serve=True, users={"eng": "engineer"}) as rig,
+        online_cpu(tmp_path, CHART, serve=True, users={"eng": "engineer"}, certs=bus_certs) as rig,
         chromium_page(rig.edge.url) as page,
     ):
         page.get_by_text("Diagnostics", exact=True).first.click()  # open the folder
