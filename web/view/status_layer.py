@@ -175,8 +175,14 @@ class _Pool:
             self._free.append(node)
 
     def shown(self) -> dict[Hashable, Any]:
-        """What each element shown shows (its spec), by key."""
-        return {k: self._spec[id(n)][1] for k, n in self._by_key.items()}
+        """What each element shown shows (its spec), by key; safe to call from another
+        thread while :meth:`show` runs (an element half placed is left out)."""
+        out: dict[Hashable, Any] = {}
+        for key, node in list(self._by_key.items()):
+            spec = self._spec.get(id(node))
+            if spec is not None and spec[0] == key:
+                out[key] = spec[1]
+        return out
 
 
 class StatusLayer:

@@ -124,6 +124,16 @@ def back_to_idle(cpu: OnlineRig) -> None:
     cpu.session.set("Full", False)
 
 
+@pytest.fixture(autouse=True)
+def idle(cpu: OnlineRig) -> None:
+    """Each test starts with S2 idle and nothing live drawn under it, whatever the last
+    one left."""
+    back_to_idle(cpu)
+    layer = view_of(cpu).status
+    assert layer is not None
+    assert wait_until(lambda: ("times", 2) not in layer.shown_text())
+
+
 def to_fill(cpu: OnlineRig) -> None:
     cpu.session.set("Start", True)
     assert wait_until(lambda: 2 in active(cpu))
