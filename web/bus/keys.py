@@ -14,7 +14,12 @@ Key space, all under ``s7graph/<cpu>/``:
   ``seq`` counts these, so a late joiner does ``get(state)`` and applies newer deltas only,
   and a gap in ``seq`` means a missed delta. The scan thread only decides and queues; the
   publisher's :class:`~web.bus.outbox.Outbox` thread encodes and puts (deltas, status,
-  alarms), so a congested bus never holds up a scan;
+  alarms), so a congested bus never holds up a scan. Published while something subscribes
+  to it (a zenoh matching listener), besides ``deltas``;
+- ``deltas`` — one :class:`ScanDeltas` per scan in which an FB changed: every changed FB's
+  :class:`StepStateUpdate` (with the ``seq`` of ``fb/<name>/delta``), encoded in one go;
+  its own ``seq`` counts these messages, so a gap means one was lost (``BusClient.follow``
+  reads this key and gets ``state`` again);
 - ``alarms`` — the :class:`AlarmList` (the CPU's message list), published on change;
   ``alarms/list`` — queryable: the current one (``seq`` orders the two);
 - ``alarms/history`` — queryable: the last 200 message events (:class:`AlarmHistory`);
@@ -64,6 +69,10 @@ class keys:
     @property
     def status(self) -> str:
         return f"{ROOT}/{self.cpu}/status"
+
+    @property
+    def deltas(self) -> str:
+        return f"{ROOT}/{self.cpu}/deltas"
 
     @property
     def alarms(self) -> str:
