@@ -45,6 +45,15 @@ only for the steps whose state changed, ``web.bus.step_details``), and
 of a scan are grouped by instance DB once per scan record, for every LiveGraph of the CPU
 (``web.bus.scan_events``).
 
+:meth:`LiveGraph.changed` is the scan thread's cheap path: it builds the update only when
+the FB may have changed, judged from what the FB itself says — its step events in the
+scan record (every switch, disturbance and acknowledgement raises one), its mode and level
+pins, its output pins, the watched operands, its transitions' TT and CRIT words (and
+interlock and supervision words), and the clock time at which the first active step's T
+or U reaches its next whole second (:class:`Seen`) — instead of building the whole state
+and comparing it (``StepStateUpdate.changed_from``, which the bus publisher still does
+for what ``changed`` builds).
+
 Each op the FB carries out has one handler, found by the op's struct (:data:`HANDLERS`; a
 test checks that every such op of ``web.commands`` has one). Every command is refused
 while the CPU is not in RUN, and so is a second mode, step, or init/off command at the
@@ -135,6 +144,8 @@ class LiveChart:
     tr_neg: tuple[tuple[bool, ...], ...]
     il_neg: tuple[tuple[bool, ...], ...]
     sv_neg: tuple[tuple[bool, ...], ...]
+    checks: bool = True
+    """Whether a step has an interlock or a supervision (their words are watched)."""
 
     def step_details(self) -> StepDetails:
         """A fresh builder of this chart's step details."""
@@ -161,10 +172,15 @@ def prepare_chart(cc: CompiledChart, *, fb: str, version: int) -> LiveChart:
             _negations(st.supervision, n)
             for st, n in zip(chart.all_steps(), cc.sv_labels, strict=True)
         ),
+        checks=any(
+            st.interlock is not None or st.supervision is not None for st in chart.all_steps()
+        ),
     )
 
 
 _PLAIN = frozenset({bool, int, float, str, type(None)})
+SECOND_NS = 1_000_000_000  # step times change a delta once a second (``changed_from``)
+_PART = SECOND_NS.__rmod__  # the part of a second of a time in ns
 
 
 def _scalar(value: object) -> bool | int | float | str | None:
@@ -174,6 +190,83 @@ def _scalar(value: object) -> bool | int | float | str | None:
 
 
 _Readers = tuple[tuple[str, Callable[[], object]], ...]
+
+
+class Seen:
+    """What the last update built saw of the FB (:meth:`LiveGraph.changed` compares it
+    with the FB's state now): the state object, its clock time ``last_ns`` then, the
+    active steps' T and U then (from which ``due_ns``: the clock time at which one of them
+    may reach a new whole second, worked out at the first comparison), the mode and level
+    pins, the active steps, the transitions' TT and CRIT (interlock and supervision words
+    and flags when the chart has them), the output pins and the watched operands. Made at
+    every update: copies only, no bytecode per step."""
+
+    __slots__ = (
+        "active",
+        "checks",
+        "crit",
+        "due_ns",
+        "flags",
+        "last_ns",
+        "outs",
+        "st",
+        "times",
+        "tt",
+        "watched",
+    )
+
+    def __init__(
+        self, st: Any, checks: bool, outs: tuple[Any, ...], watched: tuple[Any, ...]
+    ) -> None:
+        self.st = st
+        self.last_ns: int = st.last_ns
+        self.due_ns: int | None = None
+        active = self.active = list(st.active)
+        self.times = [*map(st.t_ns.__getitem__, active), *map(st.u_ns.__getitem__, active)]
+        self.flags = _flags(st)
+        self.tt = list(st.tt)
+        self.crit = list(st.crit)
+        self.checks = _checks(st) if checks else None
+        self.outs = outs
+        self.watched = watched
+
+    def same(self, st: Any, checks: bool) -> bool:
+        """Whether nothing of ``st`` a view sees may differ (outputs and watches aside)."""
+        due = self.due_ns
+        if due is None:  # T and U grow at most as fast as the clock
+            most = max(map(_PART, self.times), default=0)
+            due = self.due_ns = self.last_ns + SECOND_NS - most
+        return (
+            st is self.st
+            and self.last_ns <= st.last_ns < due
+            and st.active == self.active
+            and st.crit == self.crit
+            and st.tt == self.tt
+            and _flags(st) == self.flags
+            and (not checks or _checks(st) == self.checks)
+        )
+
+
+def _flags(st: Any) -> tuple[Any, ...]:
+    levels = st.levels
+    return (
+        st.mode,
+        st.halted,
+        st.il_enabled,
+        st.sv_enabled,
+        st.ackreq_enabled,
+        tuple(levels.items()) if levels else (),
+    )
+
+
+def _checks(st: Any) -> tuple[list[Any], ...]:
+    return (
+        list(st.il_ok),
+        list(st.il_err),
+        list(st.sv_err),
+        list(st.crit_loc),
+        list(st.crit_sup),
+    )
 
 
 class LiveGraph:
@@ -216,6 +309,8 @@ class LiveGraph:
         self._alarm_entries: tuple[Message, ...] | None = None
         self._pins: tuple[str, ...] | None = None  # the output pins _pick reads
         self._pick: Callable[[Any], tuple[Any, ...]] | None = None
+        self.quiet = 0
+        """Scans :meth:`changed` found nothing in (no update built)."""
 
     # ------------------------------------------------------------ the chart
 
@@ -227,6 +322,7 @@ class LiveGraph:
         """Describe ``chart`` from now on (at the scan boundary of an online change)."""
         self._chart = chart
         self.step_details = chart.step_details()
+        self._seen: Seen | None = None  # what the last update saw (``changed``)
         self._readers: tuple[tuple[str, ...], _Readers] | None = None
         """The watch list the readers were made for, and a reader per name."""
 
@@ -247,20 +343,42 @@ class LiveGraph:
 
     # ------------------------------------------------------------ state out
 
-    def update(self, record: ScanRecord) -> StepStateUpdate:
-        """The FB's state after the scan ``record`` (call once per scan, in the scan thread)."""
+    def changed(self, record: ScanRecord) -> StepStateUpdate | None:
+        """:meth:`update` if the FB may have changed since the last update built, else None
+        (nothing a view sees differs: see the module docstring). Call once per scan, in the
+        scan thread, instead of :meth:`update`."""
+        seen = self._seen
+        if (
+            seen is None
+            or self.events.of(record, self.graph.db_number)
+            or self._chart.cc is not self.graph.cc
+            or not seen.same(self.graph.state, self._chart.checks)
+        ):
+            return self.update(record)
+        outs, watched = self._outs(), self._watched()
+        if outs != seen.outs or watched != seen.watched:
+            return self.update(record)
+        self._scan(record)
+        self.quiet += 1
+        return None
+
+    def _scan(self, record: ScanRecord) -> None:
         self.cpu_mode = record.mode
         self.cycle = record.cycle
         self._t_ns = record.t_ns
         self._pending_mode = None  # the commands queued before this scan have acted
         if self._pending:
             self._pending.clear()
+
+    def update(self, record: ScanRecord) -> StepStateUpdate:
+        """The FB's state after the scan ``record`` (call once per scan, in the scan thread)."""
+        self._scan(record)
         if self._chart.cc is not self.graph.cc:
             self._follow()
         st = self.graph.state
         numbers = self.graph.cc.step_numbers
         steps = st.active
-        active = sorted([numbers[i] for i in steps])
+        active = sorted(map(numbers.__getitem__, steps))
         il_err, sv_err = st.il_err, st.sv_err
         bad = [i for i in steps if il_err[i] or sv_err[i]]
         if bad:
@@ -269,6 +387,8 @@ class LiveGraph:
         else:
             disturbed, latched = [], []
         mode = st.mode
+        outs, watched = self._outs(), self._watched()
+        self._seen = Seen(st, self._chart.checks, outs, watched)
         return StepStateUpdate(
             cycle=record.cycle if record.cycle > 0 else 0,
             t_ms=max(record.t_ns // 1_000_000, 0),
@@ -277,7 +397,7 @@ class LiveGraph:
             disturbed=disturbed,
             latched=latched,
             events=self.events.of(record, self.graph.db_number),  # type: ignore[arg-type]
-            values=self.values(),
+            values=self._values(outs, watched),
             details=self.step_details.of(st),
             halted=bool(st.halted),
             il_enabled=bool(st.il_enabled),
@@ -333,25 +453,41 @@ class LiveGraph:
 
     def values(self) -> dict[str, bool | int | float | str | None]:
         """The FB outputs, then the watched operands (an unreadable one is left out)."""
+        return self._values(self._outs(), self._watched())
+
+    def _outs(self) -> tuple[Any, ...]:
+        """The FB's output pins' values, in ``out_pins`` order."""
         graph = self.graph
         pins = graph.out_pins
         if pins is not self._pins:  # a chart with another parameter set (online change)
             self._pins = pins
             self._pick = operator.itemgetter(*pins) if len(pins) > 1 else None
         if graph.idb is None or self._pick is None:
-            out = graph.outputs
-        else:
-            out = dict(zip(pins, self._pick(graph.idb.values), strict=True))
-        if not _PLAIN.issuperset(map(type, out.values())):
-            out = {name: _scalar(v) for name, v in out.items()}
+            return tuple(graph.outputs.values())
+        return self._pick(graph.idb.values)
+
+    def _watched(self) -> tuple[tuple[str, object], ...]:
+        """The watched operands that could be read, with their values."""
+        if not self.watch:
+            return ()
         made = self._readers
         if made is None or made[0] is not self.watch:
             made = self._readers = (self.watch, self._resolve())
+        out = []
         for name, read in made[1]:
             try:
-                out[name] = _scalar(read())
+                out.append((name, _scalar(read())))
             except Exception:  # a watch must never stop the scan
                 continue
+        return tuple(out)
+
+    def _values(
+        self, outs: tuple[Any, ...], watched: tuple[tuple[str, object], ...]
+    ) -> dict[str, bool | int | float | str | None]:
+        out = dict(zip(self.graph.out_pins, outs, strict=False))  # no instance DB: none
+        if not _PLAIN.issuperset(map(type, outs)):
+            out = {name: _scalar(v) for name, v in out.items()}
+        out.update(watched)
         return out
 
     def _resolve(self) -> _Readers:

@@ -1,7 +1,8 @@
 """The CPU's side of the bus at the scan boundary, for one running GraphFB.
 
 :class:`ScanEdge` is called back after each scan, in the scan thread: it publishes the
-scan's :class:`StepStateUpdate` (of a :class:`~web.bus.live.LiveGraph`), the CPU state and
+scan's :class:`StepStateUpdate` (of a :class:`~web.bus.live.LiveGraph`, built only when
+the FB may have changed: ``LiveGraph.changed``), the CPU state and
 cycle statistics, the CPU's message list when it changed (``alarms``), optionally records
 the update (a :class:`Recording`: ``web.recorder``'s rerun ``.rrd`` file), then applies the
 commands received since the last scan — the scan boundary: ``force`` to the CPU's force
@@ -123,13 +124,14 @@ class ScanEdge:
         *,
         stats: CycleStatistics | None = None,
         runner: Runner | None = None,
-    ) -> StepStateUpdate:
+    ) -> StepStateUpdate | None:
         """Publish the scan ``record`` and apply the pending commands (call in the scan
-        thread); with ``runner``, within its share of the cycle for communication."""
+        thread); with ``runner``, within its share of the cycle for communication. Returns
+        the FB's update, None if the scan changed nothing of it."""
         until_ns = time.perf_counter_ns() + runner.comm_budget_ns if runner is not None else None
         self._runner = runner
-        update = self.live.update(record)
-        if self.recorder is not None and record.mode is CpuMode.RUN:
+        update = self.live.changed(record)
+        if update is not None and self.recorder is not None and record.mode is CpuMode.RUN:
             if self.recorder.layout is not self.live.layout:  # an online change
                 self.recorder.chart_changed(self.live.layout)
             self.recorder.record(update)
@@ -144,7 +146,8 @@ class ScanEdge:
             publisher.set_cpu_state(state, reason)
         if stats is not None:
             publisher.set_cycle_stats(cycle_stats(stats, runner, publisher.comm_limited))
-        publisher.publish(self.live.fb, update)
+        changed = [(self.live.fb, update)] if update is not None else []
+        publisher.publish_scan(max(record.cycle, 0), max(record.t_ns // 1_000_000, 0), changed)
         alarms = self.live.alarms_changed()
         if alarms is not None:
             publisher.publish_alarms(alarms)
