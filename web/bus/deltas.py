@@ -16,6 +16,7 @@ there. When the outbox drops the job, the scan's ``seq`` stays used: a follower 
 from __future__ import annotations
 
 import contextlib
+import operator
 import threading
 from collections.abc import Callable, Iterable, Sequence
 from typing import Any
@@ -34,6 +35,7 @@ from s7graph.web.bus.protocol import (
 
 __all__ = ["DeltaOut", "ScanJob", "encode_parts"]
 
+_first = operator.itemgetter(0)
 Changed = list[tuple[str, StepStateUpdate, int]]
 """The deltas of one scan: (FB, its update, its ``seq``)."""
 
@@ -93,7 +95,7 @@ class DeltaOut:
         """Record one scan: each ``(fb, update)`` becomes the FB's state; those that changed
         go out together on ``deltas`` (cycle ``cycle``, time ``t_ms``). Returns the FBs that
         changed, in order. An unknown FB raises KeyError, nothing of the scan recorded."""
-        if not self._names.issuperset([fb for fb, _ in updates]):
+        if not self._names.issuperset(map(_first, updates)):
             unknown = sorted({fb for fb, _ in updates} - self._names)
             raise KeyError(f"unknown FB {unknown[0]!r}; known: {', '.join(self._seq)}")
         changed: Changed = []

@@ -91,6 +91,7 @@ from s7graph.web.bus.protocol import (
     StepStateUpdate,
 )
 from s7graph.web.bus.scan_events import ScanEvents
+from s7graph.web.bus.seen import Seen, due_ns, same, seen
 from s7graph.web.bus.step_details import StepDetails
 from s7graph.web.commands import (
     COMMAND_TYPES,
@@ -149,7 +150,7 @@ class LiveChart:
 
     def step_details(self) -> StepDetails:
         """A fresh builder of this chart's step details."""
-        return StepDetails(self.cc, self.tr_neg, self.il_neg, self.sv_neg)
+        return StepDetails(self.cc, self.tr_neg, self.il_neg, self.sv_neg, checks=self.checks)
 
 
 def prepare_chart(cc: CompiledChart, *, fb: str, version: int) -> LiveChart:
@@ -179,8 +180,6 @@ def prepare_chart(cc: CompiledChart, *, fb: str, version: int) -> LiveChart:
 
 
 _PLAIN = frozenset({bool, int, float, str, type(None)})
-SECOND_NS = 1_000_000_000  # step times change a delta once a second (``changed_from``)
-_PART = SECOND_NS.__rmod__  # the part of a second of a time in ns
 
 
 def _scalar(value: object) -> bool | int | float | str | None:
@@ -190,83 +189,6 @@ def _scalar(value: object) -> bool | int | float | str | None:
 
 
 _Readers = tuple[tuple[str, Callable[[], object]], ...]
-
-
-class Seen:
-    """What the last update built saw of the FB (:meth:`LiveGraph.changed` compares it
-    with the FB's state now): the state object, its clock time ``last_ns`` then, the
-    active steps' T and U then (from which ``due_ns``: the clock time at which one of them
-    may reach a new whole second, worked out at the first comparison), the mode and level
-    pins, the active steps, the transitions' TT and CRIT (interlock and supervision words
-    and flags when the chart has them), the output pins and the watched operands. Made at
-    every update: copies only, no bytecode per step."""
-
-    __slots__ = (
-        "active",
-        "checks",
-        "crit",
-        "due_ns",
-        "flags",
-        "last_ns",
-        "outs",
-        "st",
-        "times",
-        "tt",
-        "watched",
-    )
-
-    def __init__(
-        self, st: Any, checks: bool, outs: tuple[Any, ...], watched: tuple[Any, ...]
-    ) -> None:
-        self.st = st
-        self.last_ns: int = st.last_ns
-        self.due_ns: int | None = None
-        active = self.active = list(st.active)
-        self.times = [*map(st.t_ns.__getitem__, active), *map(st.u_ns.__getitem__, active)]
-        self.flags = _flags(st)
-        self.tt = list(st.tt)
-        self.crit = list(st.crit)
-        self.checks = _checks(st) if checks else None
-        self.outs = outs
-        self.watched = watched
-
-    def same(self, st: Any, checks: bool) -> bool:
-        """Whether nothing of ``st`` a view sees may differ (outputs and watches aside)."""
-        due = self.due_ns
-        if due is None:  # T and U grow at most as fast as the clock
-            most = max(map(_PART, self.times), default=0)
-            due = self.due_ns = self.last_ns + SECOND_NS - most
-        return (
-            st is self.st
-            and self.last_ns <= st.last_ns < due
-            and st.active == self.active
-            and st.crit == self.crit
-            and st.tt == self.tt
-            and _flags(st) == self.flags
-            and (not checks or _checks(st) == self.checks)
-        )
-
-
-def _flags(st: Any) -> tuple[Any, ...]:
-    levels = st.levels
-    return (
-        st.mode,
-        st.halted,
-        st.il_enabled,
-        st.sv_enabled,
-        st.ackreq_enabled,
-        tuple(levels.items()) if levels else (),
-    )
-
-
-def _checks(st: Any) -> tuple[list[Any], ...]:
-    return (
-        list(st.il_ok),
-        list(st.il_err),
-        list(st.sv_err),
-        list(st.crit_loc),
-        list(st.crit_sup),
-    )
 
 
 class LiveGraph:
@@ -309,6 +231,8 @@ class LiveGraph:
         self._alarm_entries: tuple[Message, ...] | None = None
         self._pins: tuple[str, ...] | None = None  # the output pins _pick reads
         self._pick: Callable[[Any], tuple[Any, ...]] | None = None
+        self._made: tuple[Any, Any, dict[str, Any]] | None = None  # outs, watched → values
+        self._busy = False  # the last scan had events of this FB
         self.quiet = 0
         """Scans :meth:`changed` found nothing in (no update built)."""
 
@@ -323,6 +247,7 @@ class LiveGraph:
         self._chart = chart
         self.step_details = chart.step_details()
         self._seen: Seen | None = None  # what the last update saw (``changed``)
+        self._due: int | None = None  # and when a step time may reach a new second
         self._readers: tuple[tuple[str, ...], _Readers] | None = None
         """The watch list the readers were made for, and a reader per name."""
 
@@ -344,20 +269,25 @@ class LiveGraph:
     # ------------------------------------------------------------ state out
 
     def changed(self, record: ScanRecord) -> StepStateUpdate | None:
-        """:meth:`update` if the FB may have changed since the last update built, else None
-        (nothing a view sees differs: see the module docstring). Call once per scan, in the
-        scan thread, instead of :meth:`update`."""
-        seen = self._seen
+        """:meth:`update` if the FB may have changed since the last update this built, else
+        None (nothing a view sees differs: ``web.bus.seen``). Call once per scan, in the
+        scan thread, instead of :meth:`update`. An FB with events in this scan and the last
+        keeps no copy (``Seen``): it changes every scan, and copying would only cost."""
+        graph = self.graph
+        events = self.events.of(record, graph.db_number)
+        busy, self._busy = self._busy, bool(events)
+        last = self._seen
+        if events or last is None or self._chart.cc is not graph.cc:
+            return self._update(record, events, see=not (events and busy))
+        due = self._due
+        if due is None:
+            due = self._due = due_ns(last)
         if (
-            seen is None
-            or self.events.of(record, self.graph.db_number)
-            or self._chart.cc is not self.graph.cc
-            or not seen.same(self.graph.state, self._chart.checks)
+            not same(last, graph.state, due)
+            or self._outs() != last.outs
+            or (self.watch and self._watched() != last.watched)
         ):
-            return self.update(record)
-        outs, watched = self._outs(), self._watched()
-        if outs != seen.outs or watched != seen.watched:
-            return self.update(record)
+            return self._update(record, events, see=True)
         self._scan(record)
         self.quiet += 1
         return None
@@ -372,6 +302,12 @@ class LiveGraph:
 
     def update(self, record: ScanRecord) -> StepStateUpdate:
         """The FB's state after the scan ``record`` (call once per scan, in the scan thread)."""
+        return self._update(record, self.events.of(record, self.graph.db_number), see=False)
+
+    def _update(
+        self, record: ScanRecord, events: list[tuple[str, int]], *, see: bool
+    ) -> StepStateUpdate:
+        """:meth:`update`; with ``see``, keep what it saw for :meth:`changed`."""
         self._scan(record)
         if self._chart.cc is not self.graph.cc:
             self._follow()
@@ -387,8 +323,11 @@ class LiveGraph:
         else:
             disturbed, latched = [], []
         mode = st.mode
-        outs, watched = self._outs(), self._watched()
-        self._seen = Seen(st, self._chart.checks, outs, watched)
+        outs = self._outs()
+        watched = self._watched() if self.watch else ()
+        values = self._values(outs, watched)
+        self._seen = seen(st, self._chart.checks, outs, watched) if see else None
+        self._due = None
         return StepStateUpdate(
             cycle=record.cycle if record.cycle > 0 else 0,
             t_ms=max(record.t_ns // 1_000_000, 0),
@@ -396,8 +335,8 @@ class LiveGraph:
             active=active,
             disturbed=disturbed,
             latched=latched,
-            events=self.events.of(record, self.graph.db_number),  # type: ignore[arg-type]
-            values=self._values(outs, watched),
+            events=events,  # type: ignore[arg-type]
+            values=values,
             details=self.step_details.of(st),
             halted=bool(st.halted),
             il_enabled=bool(st.il_enabled),
@@ -453,7 +392,7 @@ class LiveGraph:
 
     def values(self) -> dict[str, bool | int | float | str | None]:
         """The FB outputs, then the watched operands (an unreadable one is left out)."""
-        return self._values(self._outs(), self._watched())
+        return dict(self._values(self._outs(), self._watched()))
 
     def _outs(self) -> tuple[Any, ...]:
         """The FB's output pins' values, in ``out_pins`` order."""
@@ -484,10 +423,16 @@ class LiveGraph:
     def _values(
         self, outs: tuple[Any, ...], watched: tuple[tuple[str, object], ...]
     ) -> dict[str, bool | int | float | str | None]:
+        """The values of an update: the last update's own dict while they are the same
+        (messages are never changed, so two may share it)."""
+        made = self._made
+        if made is not None and made[0] == outs and made[1] == watched:
+            return made[2]
         out = dict(zip(self.graph.out_pins, outs, strict=False))  # no instance DB: none
         if not _PLAIN.issuperset(map(type, outs)):
             out = {name: _scalar(v) for name, v in out.items()}
         out.update(watched)
+        self._made = (outs, watched, out)
         return out
 
     def _resolve(self) -> _Readers:
