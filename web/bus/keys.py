@@ -10,12 +10,13 @@ Key space, all under ``s7graph/<cpu>/``:
   (also a queryable, for late joiners);
 - ``fb/<name>/chart`` — queryable: the :class:`ChartLayout`;
 - ``fb/<name>/state`` — queryable: the latest :class:`StepStateUpdate` with its ``seq``;
-- ``fb/<name>/delta`` — the :class:`StepStateUpdate` of every scan that changed something;
-  ``seq`` counts these, so a late joiner does ``get(state)`` and applies newer deltas only,
-  and a gap in ``seq`` means a missed delta. The scan thread only decides and queues; the
-  publisher's :class:`~web.bus.outbox.Outbox` thread encodes and puts (deltas, status,
-  alarms), so a congested bus never holds up a scan. Published while something subscribes
-  to it (a zenoh matching listener), besides ``deltas``;
+- ``fb/<name>/delta`` — the :class:`StepStateUpdate` of every scan that changed the FB,
+  put here besides ``deltas`` only while something subscribes to this key (a zenoh
+  matching listener says so); ``seq`` counts the FB's changes, so a late joiner does
+  ``get(state)`` and applies newer deltas only, and a gap in ``seq`` means a missed delta.
+  The scan thread only decides and queues; the publisher's
+  :class:`~web.bus.outbox.Outbox` thread encodes and puts (deltas, status, alarms), so a
+  congested bus never holds up a scan;
 - ``deltas`` — one :class:`ScanDeltas` per scan in which an FB changed: every changed FB's
   :class:`StepStateUpdate` (with the ``seq`` of ``fb/<name>/delta``), encoded in one go;
   its own ``seq`` counts these messages, so a gap means one was lost (``BusClient.follow``
