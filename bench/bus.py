@@ -5,26 +5,37 @@ delta callback in another process, and how many deltas a second it carries (run 
 The CPU side runs in this process: the 200 sequencers of ``bench/scan.py`` (``--layout``
 ``packed``: 25 FBs of 8, ``single``: 200 FBs of 1) on the system clock, paced by the
 engine's ``Runner``, each FB seen by a ``LiveGraph`` (one ``ScanEvents`` shared by all) and
-published by one ``BusPublisher`` after every scan, as ``s7graph run`` does. The other side
-is a second process (this file with ``--peer``) on its own zenoh session, connected over a
+published by one ``BusPublisher`` after every scan. ``--path batched`` (the default, as
+``s7graph run`` does): ``LiveGraph.changed`` (an update only for an FB that may have
+changed) and ``BusPublisher.publish_scan``, one message per scan on ``deltas``;
+``--path per-fb``: ``LiveGraph.update`` and ``BusPublisher.publish`` for every FB, one
+message per FB and scan (the way of the code before ``deltas``). The other side is a
+second process (this file with ``--peer``) on its own zenoh session, connected over a
 unix socket: it follows every FB with ``BusClient.follow`` (decode, ``seq`` order: the
-view's code) and subscribes to a raw key. Times are ``CLOCK_MONOTONIC``, which both
+view's code) and subscribes to a raw key; with ``--old-readers`` it also subscribes to
+every FB's own ``fb/<fb>/delta`` and decodes what comes there, as a reader of the old key
+would (the CPU then puts each delta there too). Times are ``CLOCK_MONOTONIC``, which both
 processes share. In each round, per layout:
 
-(a) **raw zenoh**: at every 10 ms tick, as many puts as the CPU published deltas in the
-    same tick of (b), each payload a real encoded delta, the sample's id in the
+(a) **raw zenoh**: at every 10 ms tick, the messages the CPU published in the same tick
+    of (b) — batched: one message carrying as many real encoded deltas as that scan's;
+    per-fb: as many puts as deltas, each a real encoded delta — the sample's id in the
     attachment; latency = put → subscriber callback;
 (b) **step change → delta callback**: the CPU at a 10 ms cycle; latency = end of the scan
     in which steps switched → the follower's callback with that FB's delta. The difference
     to (a) is what s7graph adds (LiveGraph, the publisher, its outbox thread, decoding);
 (c) **throughput**: the CPU scanning back to back for ``--seconds``; deltas/s = deltas the
-    other process received ÷ time until the last was sent. The scan thread's time in
-    ``Cpu.scan()`` and in the bus (every ``LiveGraph.update`` and ``BusPublisher.publish``),
-    and the process's CPU time beyond the scans (the bus all included: outbox thread,
-    zenoh's threads), per scan.
+    other process received ÷ time until the last was sent; beside it raw zenoh carrying
+    the messages of (a) back to back for as long (batched: each with as many deltas as a
+    typical scan of (b)). The scan thread's time in ``Cpu.scan()`` and in the bus (the
+    LiveGraph and ``BusPublisher``), and the process's CPU time beyond the scans (the bus
+    all included: outbox thread, zenoh's threads), per scan; the deltas received per CPU
+    second of this process and of the peer — what one core of each would carry, which the
+    machine's load changes less than the deltas per second.
 
 Targets: ≥ 20,000 deltas/s; the bus costing at most as much as the scan; added
-p99 ≤ 2 ms over raw zenoh. ``--repeat`` rounds; min/median/max over them.
+p99 ≤ 2 ms over raw zenoh. ``--repeat`` rounds; min/median/max over them; the load
+average at the start, after each round and at the end.
 """
 
 from __future__ import annotations
@@ -47,6 +58,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
+import msgspec  # noqa: E402
 import zenoh  # noqa: E402
 from figures import pct, spread  # noqa: E402
 
@@ -55,8 +67,9 @@ from s7graph.engine.record import ScanRecord  # noqa: E402
 from s7graph.engine.runner import Runner  # noqa: E402
 from s7graph.engine.watchdog import Watchdog  # noqa: E402
 from s7graph.web.bus.client import BusClient  # noqa: E402
+from s7graph.web.bus.keys import keys  # noqa: E402
 from s7graph.web.bus.live import LiveGraph  # noqa: E402
-from s7graph.web.bus.protocol import StepStateUpdate, encode  # noqa: E402
+from s7graph.web.bus.protocol import ScanDeltas, StepStateUpdate, decode, encode  # noqa: E402
 from s7graph.web.bus.publisher import BusPublisher  # noqa: E402
 from s7graph.web.bus.scan_events import ScanEvents  # noqa: E402
 from s7graph.web.bus.session import open_session  # noqa: E402
@@ -70,13 +83,20 @@ TARGET_ADDED_P99_MS = 2.0
 # ---------------------------------------------------------------------------- the peer
 
 
-def peer(endpoint: str, cpus: dict[str, list[str]]) -> int:
-    """The other process: follow every FB of ``cpus`` and the raw key; on ``dump`` print
-    what came since the last dump as one JSON line."""
+def peer(endpoint: str, cpus: dict[str, list[str]], old_readers: bool = False) -> int:
+    """The other process: follow every FB of ``cpus`` and the raw key (and, with
+    ``old_readers``, every FB's own key); on ``dump`` print what came since the last dump
+    as one JSON line."""
     lock = threading.Lock()
     raw: list[tuple[int, int]] = []
     deltas: dict[str, list[tuple[int, int]]] = {}
+    old: list[int] = [0]
+    subs = []
     with open_session(connect=[endpoint]) as session:
+
+        def on_old(sample: zenoh.Sample) -> None:
+            decode(sample.payload.to_bytes(), StepStateUpdate)
+            old[0] += 1
 
         def on_raw(sample: zenoh.Sample) -> None:
             t = time.monotonic_ns()
@@ -98,6 +118,8 @@ def peer(endpoint: str, cpus: dict[str, list[str]]) -> int:
                     got.append((u.seq, time.monotonic_ns()))
 
                 client.follow(fb, on_update)
+                if old_readers:
+                    subs.append(session.declare_subscriber(keys(cpu).fb(fb, "delta"), on_old))
         print("ready", flush=True)
         try:
             for line in sys.stdin:
@@ -105,6 +127,9 @@ def peer(endpoint: str, cpus: dict[str, list[str]]) -> int:
                     break
                 with lock:
                     out = {"raw": raw[:], "deltas": {k: v[:] for k, v in deltas.items()}}
+                    out["old"] = old[0]
+                    out["cpu_ns"] = time.process_time_ns()
+                    old[0] = 0
                     raw.clear()
                     for v in deltas.values():
                         v.clear()
@@ -112,16 +137,18 @@ def peer(endpoint: str, cpus: dict[str, list[str]]) -> int:
         finally:
             for client in clients:
                 client.close()
-            sub.undeclare()  # type: ignore[no-untyped-call]
+            for s in (sub, *subs):
+                s.undeclare()  # type: ignore[no-untyped-call]
     return 0
 
 
 class Peer:
     """The peer process, started and stopped by the CPU side."""
 
-    def __init__(self, endpoint: str, cpus: dict[str, list[str]]) -> None:
+    def __init__(self, endpoint: str, cpus: dict[str, list[str]], old_readers: bool) -> None:
+        extra = ["--old-readers"] if old_readers else []
         self.proc = subprocess.Popen(
-            [sys.executable, __file__, "--peer", endpoint, "--cpus", json.dumps(cpus)],
+            [sys.executable, __file__, "--peer", endpoint, "--cpus", json.dumps(cpus), *extra],
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
             text=True,
@@ -156,6 +183,7 @@ class Cpu:
 
     layout: str
     session: zenoh.Session
+    path: str = "batched"
     workload: Any = None
     lives: list[LiveGraph] = field(default_factory=list)
     publisher: BusPublisher | None = None
@@ -183,14 +211,39 @@ class Cpu:
         publisher = self.publisher
         assert publisher is not None
         seq = self.seq
+        last = self.last
         sent = []
+        if self.path == "batched":
+            changed = []
+            for live in self.lives:
+                update = live.changed(record)
+                if update is not None:
+                    changed.append((live.fb, update))
+                    last[live.fb] = update
+            t_ms = max(record.t_ns // 1_000_000, 0)
+            for fb in publisher.publish_scan(max(record.cycle, 0), t_ms, changed):
+                seq[fb] += 1
+                sent.append((fb, seq[fb], bool(last[fb].events)))
+            return sent
         for live in self.lives:
             update = live.update(record)
-            self.last[live.fb] = update
+            last[live.fb] = update
             if publisher.publish(live.fb, update):
                 seq[live.fb] += 1
                 sent.append((live.fb, seq[live.fb], bool(update.events)))
         return sent
+
+    def payloads(self, per_scan: list[int]) -> list[bytes]:
+        """Real encoded messages for (a) to replay: per-fb, a delta of each FB; batched, per
+        number of deltas a scan of (b) sent, a ``deltas`` message carrying as many."""
+        updates = [msgspec.structs.replace(self.last[fb], seq=1) for fb in self.fbs]
+        if self.path != "batched":
+            return [encode(u) for u in updates]
+        out = [b""]
+        for n in range(1, max(per_scan, default=0) + 1):
+            fbs = {fb: updates[k] for k, fb in enumerate(self.fbs[:n])}
+            out.append(encode(ScanDeltas(seq=1, cycle=1, t_ms=1, fbs=fbs)))
+        return out
 
     def drain(self, timeout: float = 30.0) -> None:
         assert self.publisher is not None
@@ -250,17 +303,19 @@ def latency_raw(cpu: Cpu, peer_: Peer, session: zenoh.Session, per_scan: list[in
         congestion_control=zenoh.CongestionControl.BLOCK,
     )
     assert cpu.publisher is not None
-    payloads = [encode(cpu.last[fb]) for fb in cpu.fbs]  # real deltas
+    payloads = cpu.payloads(per_scan)  # real deltas
+    batched = cpu.path == "batched"
     sent_at: dict[int, int] = {}
     n = 0
     try:
         peer_.dump()
         due = time.monotonic()
         for count in per_scan:
-            for k in range(count):
+            for k in range(min(count, 1) if batched else count):
                 n += 1
                 t0 = time.monotonic_ns()
-                pub.put(payloads[k % len(payloads)], attachment=n.to_bytes(8, "little"))
+                data = payloads[count] if batched else payloads[k % len(payloads)]
+                pub.put(data, attachment=n.to_bytes(8, "little"))
                 sent_at[n] = t0
             due += CYCLE_MS / 1000
             delay = due - time.monotonic()
@@ -282,6 +337,9 @@ class Throughput:
     bus_us: float  # CPU time per scan of the scan thread in LiveGraph.update + publish
     cpu_us: float  # per scan, the process's CPU time beyond Cpu.scan() (all threads)
     dropped: int
+    old: int  # deltas the peer's readers of the FBs' own keys received
+    per_cpu_s: float  # deltas received per CPU second of this process
+    peer_per_cpu_s: float  # and of the peer process
 
 
 def throughput(cpu: Cpu, peer_: Peer, seconds: float) -> Throughput:
@@ -292,7 +350,7 @@ def throughput(cpu: Cpu, peer_: Peer, seconds: float) -> Throughput:
     publish = cpu.publish
     clock = time.thread_time_ns
     dropped0 = cpu.publisher.outbox.dropped
-    peer_.dump()
+    peer0 = peer_.dump()["cpu_ns"]
     scans = sent = scan_ns = bus_ns = 0
     start = time.monotonic()
     deadline = start + seconds
@@ -309,9 +367,11 @@ def throughput(cpu: Cpu, peer_: Peer, seconds: float) -> Throughput:
     end = time.monotonic()
     cpu_ns = time.process_time_ns() - cpu0
     time.sleep(0.5)
-    got = peer_.dump()["deltas"]
+    dump = peer_.dump()
+    got = dump["deltas"]
     received = sum(len(v) for k, v in got.items() if k.startswith(cpu.layout + "/"))
     scans = max(scans, 1)
+    peer_ns = max(dump["cpu_ns"] - peer0, 1)
     return Throughput(
         rate=received / (end - start),
         sent=sent,
@@ -320,11 +380,51 @@ def throughput(cpu: Cpu, peer_: Peer, seconds: float) -> Throughput:
         bus_us=bus_ns / scans / 1e3,
         cpu_us=(cpu_ns - scan_ns) / scans / 1e3,
         dropped=cpu.publisher.outbox.dropped - dropped0,
+        old=dump["old"],
+        per_cpu_s=received / (cpu_ns / 1e9),
+        peer_per_cpu_s=received / (peer_ns / 1e9),
     )
 
 
+def throughput_raw(
+    cpu: Cpu, peer_: Peer, session: zenoh.Session, per_scan: list[int], seconds: float
+) -> float:
+    """(c) for raw zenoh: the messages of (b) — batched, one carrying as many deltas as a
+    typical scan of (b) sent; per-fb, one delta each — put back to back for ``seconds``;
+    deltas the peer's raw subscriber received ÷ time."""
+    pub = session.declare_publisher(
+        RAW_KEY,
+        encoding=zenoh.Encoding.APPLICATION_JSON,
+        congestion_control=zenoh.CongestionControl.BLOCK,
+    )
+    payloads = cpu.payloads(per_scan)
+    typical = max(round(statistics.median(per_scan or [1])), 1)
+    batched = cpu.path == "batched"
+    each = typical if batched else 1
+    data = payloads[typical] if batched else payloads[0]
+    n = 0
+    try:
+        peer_.dump()
+        start = time.monotonic()
+        deadline = start + seconds
+        while time.monotonic() < deadline:
+            n += 1
+            pub.put(data, attachment=n.to_bytes(8, "little"))
+        end = time.monotonic()
+        time.sleep(0.5)
+        got = len(peer_.dump()["raw"])
+    finally:
+        pub.undeclare()  # type: ignore[no-untyped-call]
+    return got * each / (end - start)
+
+
 def record(
-    res: dict[str, list[float]], a: list[float], b: list[float], per_scan: list[int], t: Throughput
+    res: dict[str, list[float]],
+    a: list[float],
+    b: list[float],
+    per_scan: list[int],
+    t: Throughput,
+    raw_rate: float,
 ) -> None:
     """Keep one round's figures of one layout."""
 
@@ -336,21 +436,27 @@ def record(
         add(f"cpu {name}", pct(b, q))
         add(f"added {name}", pct(b, q) - pct(a, q))
     add("samples", len(b))
+    add("raw rate", raw_rate)
+    add("rate/raw", t.rate / raw_rate if raw_rate else float("nan"))
     add("deltas/scan", statistics.fmean(per_scan))
-    for k in ("rate", "scan_us", "bus_us", "cpu_us"):
+    for k in ("rate", "scan_us", "bus_us", "cpu_us", "per_cpu_s", "peer_per_cpu_s"):
         add(k, getattr(t, k))
     add("bus/scan", t.bus_us / t.scan_us)
     add("cpu/scan", t.cpu_us / t.scan_us)
     add("lost", t.sent - t.received)
     add("dropped", t.dropped)
+    add("old", t.old / max(t.received, 1))
 
 
-def one_line(a: list[float], b: list[float], t: Throughput) -> str:
+def one_line(a: list[float], b: list[float], t: Throughput, raw_rate: float) -> str:
     return (
         f"raw p50/p99 {pct(a, 0.5):.3f}/{pct(a, 0.99):.3f} ms, CPU→callback "
-        f"{pct(b, 0.5):.3f}/{pct(b, 0.99):.3f} ms ({len(b)} deltas); {t.rate:,.0f} deltas/s, "
+        f"{pct(b, 0.5):.3f}/{pct(b, 0.99):.3f} ms ({len(b)} deltas); {t.rate:,.0f} deltas/s "
+        f"(raw zenoh {raw_rate:,.0f}; {t.per_cpu_s:,.0f} per CPU second, the peer "
+        f"{t.peer_per_cpu_s:,.0f}), "
         f"scan {t.scan_us:.0f} µs, bus {t.bus_us:.0f} µs in the scan thread, {t.cpu_us:.0f} µs "
         f"CPU beyond the scan; lost {t.sent - t.received}, dropped {t.dropped}"
+        + (f", old-key readers got {t.old}" if t.old else "")
     )
 
 
@@ -383,34 +489,50 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seconds", type=float, default=5.0, help="per phase and round (5)")
     ap.add_argument("--repeat", type=int, default=3, help="rounds (3)")
     ap.add_argument("--layout", choices=("packed", "single", "both"), default="both")
+    ap.add_argument(
+        "--path",
+        choices=("batched", "per-fb"),
+        default="batched",
+        help="batched: LiveGraph.changed + publish_scan, one message a scan (default); "
+        "per-fb: LiveGraph.update + publish for every FB, one message per FB and scan",
+    )
+    ap.add_argument(
+        "--old-readers",
+        action="store_true",
+        help="the peer also subscribes to every FB's own fb/<fb>/delta key",
+    )
     ap.add_argument("--peer", help=argparse.SUPPRESS)
     ap.add_argument("--cpus", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.peer:
-        return peer(args.peer, json.loads(args.cpus))
+        return peer(args.peer, json.loads(args.cpus), args.old_readers)
 
     layouts = ("packed", "single") if args.layout == "both" else (args.layout,)
     print(
         f"python {sys.version.split()[0]}, {os.cpu_count()} cores; {args.repeat} rounds, "
-        f"{args.seconds:g} s per phase; CPU and peer processes over a unix socket"
+        f"{args.seconds:g} s per phase; CPU and peer processes over a unix socket; path "
+        f"{args.path}" + (", old-key readers" if args.old_readers else "")
     )
+    print("load average at the start: " + load())
     res: dict[str, dict[str, list[float]]] = {lay: {} for lay in layouts}
 
     with tempfile.TemporaryDirectory(prefix="s7graph-busbench-") as tmp:
         endpoint = f"unixsock-stream/{tmp}/bus.sock"
         with open_session(listen=[endpoint]) as session:
-            cpus = {lay: Cpu(lay, session) for lay in layouts}
+            cpus = {lay: Cpu(lay, session, args.path) for lay in layouts}
             for cpu in cpus.values():
                 cpu.workload.cpu.start("warm")
-            peer_ = Peer(endpoint, {lay: cpu.fbs for lay, cpu in cpus.items()})
+            peer_ = Peer(endpoint, {lay: cpu.fbs for lay, cpu in cpus.items()}, args.old_readers)
             try:
                 for r in range(args.repeat):
                     for lay, cpu in cpus.items():
                         b, per_scan = latency_cpu(cpu, peer_, args.seconds)
                         a = latency_raw(cpu, peer_, session, per_scan)
                         t = throughput(cpu, peer_, args.seconds)
-                        record(res[lay], a, b, per_scan, t)
-                        print(f"round {r + 1} {lay}: " + one_line(a, b, t), flush=True)
+                        raw_rate = throughput_raw(cpu, peer_, session, per_scan, args.seconds)
+                        record(res[lay], a, b, per_scan, t, raw_rate)
+                        print(f"round {r + 1} {lay}: " + one_line(a, b, t, raw_rate), flush=True)
+                        print(f"  load average: {load()}", flush=True)
             finally:
                 peer_.close()
                 for cpu in cpus.values():
@@ -425,6 +547,10 @@ def main(argv: list[str] | None = None) -> int:
         ("added p50 ms", "added p50", "{:.3f}"),
         ("added p99 ms", "added p99", "{:.3f}"),
         ("deltas/s", "rate", "{:,.0f}"),
+        ("raw zenoh deltas/s", "raw rate", "{:,.0f}"),
+        ("deltas/s ÷ raw zenoh", "rate/raw", "{:.2f}"),
+        ("deltas per CPU s (CPU)", "per_cpu_s", "{:,.0f}"),
+        ("deltas per CPU s (peer)", "peer_per_cpu_s", "{:,.0f}"),
         ("deltas per scan", "deltas/scan", "{:.0f}"),
         ("scan µs", "scan_us", "{:.0f}"),
         ("bus µs (scan thread)", "bus_us", "{:.0f}"),
@@ -432,13 +558,22 @@ def main(argv: list[str] | None = None) -> int:
         ("CPU µs beyond the scan", "cpu_us", "{:.0f}"),
         ("that ÷ scan", "cpu/scan", "{:.2f}"),
         ("deltas lost", "lost", "{:.0f}"),
+        ("deltas dropped (outbox)", "dropped", "{:.0f}"),
     ]
+    if args.old_readers:
+        rows.append(("old-key deltas ÷ followed", "old", "{:.2f}"))
     for label, key, fmt in rows:
         print(f"{label:26}" + "".join(f"{spread(res[lay][key], fmt):>26}" for lay in layouts))
     print()
     for lay in layouts:
         print(f"targets, {lay}: " + verdict(res[lay]))
+    print("load average at the end: " + load())
     return 0
+
+
+def load() -> str:
+    """The 1, 5 and 15 minute load averages."""
+    return "/".join(f"{x:.2f}" for x in os.getloadavg())
 
 
 if __name__ == "__main__":

@@ -1,7 +1,13 @@
 """A view's (or a command line's, or a test's) side of the zenoh bus: :class:`BusClient`
 reads, follows and commands one CPU through its keys (:mod:`web.bus.keys`),
 :class:`StateFollower` keeps an FB's newest state from a snapshot and its deltas, and
-:func:`find_cpus` lists the CPUs on the bus."""
+:func:`find_cpus` lists the CPUs on the bus.
+
+A client follows FBs through one subscription to the CPU's ``deltas`` (one message per
+scan, every changed FB's delta): :class:`DeltaFeed` decodes each message's envelope once,
+then only the deltas of the FBs followed, and hands each to its followers; a gap in the
+messages' ``seq`` (one lost: a congested CPU dropped it) makes every follower get its FB's
+``state`` again, on a thread of the feed's own."""
 
 from __future__ import annotations
 
@@ -10,6 +16,7 @@ import threading
 from collections.abc import Callable, Sequence
 from typing import Any, Literal
 
+import msgspec
 import zenoh
 
 from s7graph.web.access.scram import Signer, log_in
@@ -39,7 +46,7 @@ from s7graph.web.bus.protocol import (
     encode,
 )
 
-__all__ = ["BusClient", "StateFollower", "find_cpus"]
+__all__ = ["BusClient", "DeltaFeed", "StateFollower", "find_cpus"]
 
 CLIENT_TIMEOUT_S = 5.0
 """How long a :class:`BusClient` waits for an answer."""
@@ -59,6 +66,7 @@ class BusClient:
         self._subscribers: list[zenoh.Subscriber[Any]] = []
         self._lock = threading.Lock()
         self._signers: dict[str, Signer] = {}  # token -> its session's key and seq
+        self._feed: DeltaFeed | None = None  # the followers of ``deltas`` (``follow``)
 
     def _get_one(
         self, key: str, payload: bytes | None = None, timeout: float | None = None
@@ -300,11 +308,18 @@ class BusClient:
 
     def follow(self, fb: str, on_update: Callable[[StepStateUpdate], None]) -> StateFollower:
         """Subscribe to deltas, then fetch the state: ``on_update`` sees each newer state once,
-        in ``seq`` order (it runs on a zenoh thread; keep it short)."""
+        in ``seq`` order (it runs on a zenoh thread; keep it short). The deltas come from
+        the CPU's ``deltas``, through one subscription for all the FBs this client follows
+        (:class:`DeltaFeed`)."""
         follower = StateFollower(on_update)
-        sub = self._session.declare_subscriber(self._keys.fb(fb, "delta"), follower.on_sample)
-        self._subscribers.append(sub)
         follower.resync = lambda: self.state(fb)  # type: ignore[method-assign]
+        with self._lock:
+            feed = self._feed
+            if feed is None:
+                feed = self._feed = DeltaFeed()
+                sub = self._session.declare_subscriber(self._keys.deltas, feed.on_sample)
+                self._subscribers.append(sub)
+            feed.add(fb, follower)
         follower.start()
         return follower
 
@@ -323,6 +338,8 @@ class BusClient:
             with contextlib.suppress(zenoh.ZError):
                 sub.undeclare()  # type: ignore[no-untyped-call]  # zenoh's stub: no annotations
         self._subscribers.clear()
+        with self._lock:
+            self._feed = None
 
     def __enter__(self) -> BusClient:
         return self
@@ -367,14 +384,29 @@ class StateFollower:
             self._offer(snapshot)
 
     def on_sample(self, sample: zenoh.Sample) -> None:
+        """A delta of the FB's own key (``fb/<fb>/delta``)."""
         try:
             update = decode(sample.payload.to_bytes(), StepStateUpdate)
         except ProtocolError:
             return
+        self.on_delta(update)
+
+    def on_delta(self, update: StepStateUpdate) -> None:
+        """A delta of the FB (a gap in ``seq`` is counted; the delta is whole)."""
         latest = self.latest
         if latest is not None and update.seq > latest.seq + 1:
             self.gaps += 1
         self._offer(update)
+
+    def refetch(self) -> None:
+        """Get the state again (a message of ``deltas`` was lost): it is taken if newer."""
+        snapshot = self.resync()
+        if snapshot is None:
+            return
+        latest = self.latest
+        if snapshot.seq > (latest.seq if latest is not None else 0):
+            self.gaps += 1  # a delta was missed
+        self._offer(snapshot)
 
     def _offer(self, update: StepStateUpdate) -> None:
         with self._lock:
@@ -384,3 +416,71 @@ class StateFollower:
             self.latest = update
             # Called under the lock so updates reach the view in order.
             self._on_update(update)
+
+
+class _Envelope(msgspec.Struct, frozen=True):
+    """A ``deltas`` message with each FB's delta left undecoded (``ScanDeltas``)."""
+
+    seq: int = 0
+    fbs: dict[str, msgspec.Raw] = {}
+
+
+class DeltaFeed:
+    """The followers of one CPU's ``deltas`` (``BusClient.follow``): ``on_sample`` decodes
+    a message's envelope, then each delta of an FB followed, and offers it to that FB's
+    followers; on a gap in the messages' ``seq`` every follower refetches its FB's state
+    (:meth:`StateFollower.refetch`) on a thread of the feed's own, never a zenoh thread.
+    ``lost`` counts the gaps."""
+
+    def __init__(self) -> None:
+        self._followers: dict[str, tuple[StateFollower, ...]] = {}
+        self._lock = threading.Lock()
+        self._last: int | None = None  # the seq of the last message
+        self._refetching = False
+        self._again = False
+        self.lost = 0
+
+    def add(self, fb: str, follower: StateFollower) -> None:
+        with self._lock:
+            self._followers[fb] = (*self._followers.get(fb, ()), follower)
+
+    def on_sample(self, sample: zenoh.Sample) -> None:
+        try:
+            envelope = decode(sample.payload.to_bytes(), _Envelope)
+        except ProtocolError:
+            return
+        followers = self._followers
+        for fb, raw in envelope.fbs.items():
+            wanted = followers.get(fb)
+            if wanted:
+                try:
+                    update = decode(raw, StepStateUpdate)
+                except ProtocolError:
+                    continue
+                for follower in wanted:
+                    follower.on_delta(update)
+        last, self._last = self._last, envelope.seq
+        if last is not None and not last <= envelope.seq <= last + 1:  # lost, or a new CPU
+            self.lost += 1
+            self._refetch()
+
+    def _refetch(self) -> None:
+        with self._lock:
+            if self._refetching:
+                self._again = True
+                return
+            self._refetching = True
+        threading.Thread(target=self._refetch_all, name="s7graph-refetch", daemon=True).start()
+
+    def _refetch_all(self) -> None:
+        while True:
+            with self._lock:
+                followers = [f for group in self._followers.values() for f in group]
+                self._again = False
+            for follower in followers:
+                with contextlib.suppress(ProtocolError, zenoh.ZError):
+                    follower.refetch()
+            with self._lock:
+                if not self._again:
+                    self._refetching = False
+                    return

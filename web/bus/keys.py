@@ -10,11 +10,17 @@ Key space, all under ``s7graph/<cpu>/``:
   (also a queryable, for late joiners);
 - ``fb/<name>/chart`` — queryable: the :class:`ChartLayout`;
 - ``fb/<name>/state`` — queryable: the latest :class:`StepStateUpdate` with its ``seq``;
-- ``fb/<name>/delta`` — the :class:`StepStateUpdate` of every scan that changed something;
-  ``seq`` counts these, so a late joiner does ``get(state)`` and applies newer deltas only,
-  and a gap in ``seq`` means a missed delta. The scan thread only decides and queues; the
-  publisher's :class:`~web.bus.outbox.Outbox` thread encodes and puts (deltas, status,
-  alarms), so a congested bus never holds up a scan;
+- ``fb/<name>/delta`` — the :class:`StepStateUpdate` of every scan that changed the FB,
+  put here besides ``deltas`` only while something subscribes to this key (a zenoh
+  matching listener says so); ``seq`` counts the FB's changes, so a late joiner does
+  ``get(state)`` and applies newer deltas only, and a gap in ``seq`` means a missed delta.
+  The scan thread only decides and queues; the publisher's
+  :class:`~web.bus.outbox.Outbox` thread encodes and puts (deltas, status, alarms), so a
+  congested bus never holds up a scan;
+- ``deltas`` — one :class:`ScanDeltas` per scan in which an FB changed: every changed FB's
+  :class:`StepStateUpdate` (with the ``seq`` of ``fb/<name>/delta``), encoded in one go;
+  its own ``seq`` counts these messages, so a gap means one was lost (``BusClient.follow``
+  reads this key and gets ``state`` again);
 - ``alarms`` — the :class:`AlarmList` (the CPU's message list), published on change;
   ``alarms/list`` — queryable: the current one (``seq`` orders the two);
 - ``alarms/history`` — queryable: the last 200 message events (:class:`AlarmHistory`);
@@ -69,6 +75,10 @@ class keys:
     @property
     def status(self) -> str:
         return f"{ROOT}/{self.cpu}/status"
+
+    @property
+    def deltas(self) -> str:
+        return f"{ROOT}/{self.cpu}/deltas"
 
     @property
     def alarms(self) -> str:

@@ -45,6 +45,15 @@ only for the steps whose state changed, ``web.bus.step_details``), and
 of a scan are grouped by instance DB once per scan record, for every LiveGraph of the CPU
 (``web.bus.scan_events``).
 
+:meth:`LiveGraph.changed` is the scan thread's cheap path: it builds the update only when
+the FB may have changed, judged from what the FB itself says — its step events in the
+scan record (every switch, disturbance and acknowledgement raises one), its mode and level
+pins, its output pins, the watched operands, its transitions' TT and CRIT words (and
+interlock and supervision words), and the clock time at which the first active step's T
+or U reaches its next whole second (:class:`Seen`) — instead of building the whole state
+and comparing it (``StepStateUpdate.changed_from``, which the bus publisher still does
+for what ``changed`` builds).
+
 Each op the FB carries out has one handler, found by the op's struct (:data:`HANDLERS`; a
 test checks that every such op of ``web.commands`` has one). Every command is refused
 while the CPU is not in RUN, and so is a second mode, step, or init/off command at the
@@ -82,6 +91,7 @@ from s7graph.web.bus.protocol import (
     StepStateUpdate,
 )
 from s7graph.web.bus.scan_events import ScanEvents
+from s7graph.web.bus.seen import Seen, due_ns, same, seen
 from s7graph.web.bus.step_details import StepDetails
 from s7graph.web.commands import (
     COMMAND_TYPES,
@@ -138,10 +148,12 @@ class LiveChart:
     sv_neg: tuple[tuple[bool, ...], ...]
     # per step index: the operands of its action rows, whose values go out while it is active
     operands: tuple[tuple[str, ...], ...] = ()
+    checks: bool = True
+    """Whether a step has an interlock or a supervision (their words are watched)."""
 
     def step_details(self) -> StepDetails:
         """A fresh builder of this chart's step details."""
-        return StepDetails(self.cc, self.tr_neg, self.il_neg, self.sv_neg)
+        return StepDetails(self.cc, self.tr_neg, self.il_neg, self.sv_neg, checks=self.checks)
 
 
 def prepare_chart(cc: CompiledChart, *, fb: str, version: int) -> LiveChart:
@@ -169,6 +181,9 @@ def prepare_chart(cc: CompiledChart, *, fb: str, version: int) -> LiveChart:
         operands=tuple(
             tuple(dict.fromkeys(a.watch for a in rows.get(n, ()) if a.watch))
             for n in cc.step_numbers
+        ),
+        checks=any(
+            st.interlock is not None or st.supervision is not None for st in chart.all_steps()
         ),
     )
 
@@ -225,6 +240,10 @@ class LiveGraph:
         self._alarm_entries: tuple[Message, ...] | None = None
         self._pins: tuple[str, ...] | None = None  # the output pins _pick reads
         self._pick: Callable[[Any], tuple[Any, ...]] | None = None
+        self._made: tuple[Any, Any, dict[str, Any]] | None = None  # outs, watched → values
+        self._busy = False  # the last scan had events of this FB
+        self.quiet = 0
+        """Scans :meth:`changed` found nothing in (no update built)."""
 
     # ------------------------------------------------------------ the chart
 
@@ -236,6 +255,8 @@ class LiveGraph:
         """Describe ``chart`` from now on (at the scan boundary of an online change)."""
         self._chart = chart
         self.step_details = chart.step_details()
+        self._seen: Seen | None = None  # what the last update saw (``changed``)
+        self._due: int | None = None  # and when a step time may reach a new second
         self._readers: tuple[tuple[str, ...], _Readers] | None = None
         """The watch list the readers were made for, and a reader per name."""
         self._step_readers: dict[int, _Readers] = {}
@@ -258,20 +279,53 @@ class LiveGraph:
 
     # ------------------------------------------------------------ state out
 
-    def update(self, record: ScanRecord) -> StepStateUpdate:
-        """The FB's state after the scan ``record`` (call once per scan, in the scan thread)."""
+    def changed(self, record: ScanRecord) -> StepStateUpdate | None:
+        """:meth:`update` if the FB may have changed since the last update this built, else
+        None (nothing a view sees differs: ``web.bus.seen``). Call once per scan, in the
+        scan thread, instead of :meth:`update`. An FB with events in this scan and the last
+        keeps no copy (``Seen``): it changes every scan, and copying would only cost."""
+        graph = self.graph
+        events = self.events.of(record, graph.db_number)
+        busy, self._busy = self._busy, bool(events)
+        last = self._seen
+        if events or last is None or self._chart.cc is not graph.cc:
+            return self._update(record, events, see=not (events and busy))
+        due = self._due
+        if due is None:
+            due = self._due = due_ns(last)
+        if (
+            not same(last, graph.state, due)
+            or self._outs() != last.outs
+            or ((self.watch or self._chart.operands) and self._watched() != last.watched)
+        ):
+            return self._update(record, events, see=True)
+        self._scan(record)
+        self.quiet += 1
+        return None
+
+    def _scan(self, record: ScanRecord) -> None:
         self.cpu_mode = record.mode
         self.cycle = record.cycle
         self._t_ns = record.t_ns
         self._pending_mode = None  # the commands queued before this scan have acted
         if self._pending:
             self._pending.clear()
+
+    def update(self, record: ScanRecord) -> StepStateUpdate:
+        """The FB's state after the scan ``record`` (call once per scan, in the scan thread)."""
+        return self._update(record, self.events.of(record, self.graph.db_number), see=False)
+
+    def _update(
+        self, record: ScanRecord, events: list[tuple[str, int]], *, see: bool
+    ) -> StepStateUpdate:
+        """:meth:`update`; with ``see``, keep what it saw for :meth:`changed`."""
+        self._scan(record)
         if self._chart.cc is not self.graph.cc:
             self._follow()
         st = self.graph.state
         numbers = self.graph.cc.step_numbers
         steps = st.active
-        active = sorted([numbers[i] for i in steps])
+        active = sorted(map(numbers.__getitem__, steps))
         il_err, sv_err = st.il_err, st.sv_err
         bad = [i for i in steps if il_err[i] or sv_err[i]]
         if bad:
@@ -280,6 +334,11 @@ class LiveGraph:
         else:
             disturbed, latched = [], []
         mode = st.mode
+        outs = self._outs()
+        watched = self._watched()
+        values = self._values(outs, watched)
+        self._seen = seen(st, self._chart.checks, outs, watched) if see else None
+        self._due = None
         return StepStateUpdate(
             cycle=record.cycle if record.cycle > 0 else 0,
             t_ms=max(record.t_ns // 1_000_000, 0),
@@ -287,8 +346,8 @@ class LiveGraph:
             active=active,
             disturbed=disturbed,
             latched=latched,
-            events=self.events.of(record, self.graph.db_number),  # type: ignore[arg-type]
-            values=self.values(),
+            events=events,  # type: ignore[arg-type]
+            values=values,
             details=self.step_details.of(st),
             halted=bool(st.halted),
             il_enabled=bool(st.il_enabled),
@@ -345,41 +404,64 @@ class LiveGraph:
     def values(self) -> dict[str, bool | int | float | str | None]:
         """The FB outputs, then the watched operands, then the operands of the active steps'
         action rows (an unreadable one is left out)."""
+        return dict(self._values(self._outs(), self._watched()))
+
+    def _outs(self) -> tuple[Any, ...]:
+        """The FB's output pins' values, in ``out_pins`` order."""
         graph = self.graph
         pins = graph.out_pins
         if pins is not self._pins:  # a chart with another parameter set (online change)
             self._pins = pins
             self._pick = operator.itemgetter(*pins) if len(pins) > 1 else None
         if graph.idb is None or self._pick is None:
-            out = graph.outputs
-        else:
-            out = dict(zip(pins, self._pick(graph.idb.values), strict=True))
-        if not _PLAIN.issuperset(map(type, out.values())):
-            out = {name: _scalar(v) for name, v in out.items()}
-        made = self._readers
-        if made is None or made[0] is not self.watch:
-            made = self._readers = (self.watch, self._resolve(self.watch))
-        for name, read in made[1]:
-            try:
-                out[name] = _scalar(read())
-            except Exception:  # a watch must never stop the scan
-                continue
+            return tuple(graph.outputs.values())
+        return self._pick(graph.idb.values)
+
+    def _watched(self) -> tuple[tuple[str, object], ...]:
+        """The watched operands, then the active steps' action operands, that could be
+        read, with their values."""
+        out: list[tuple[str, object]] = []
+        if self.watch:
+            made = self._readers
+            if made is None or made[0] is not self.watch:
+                made = self._readers = (self.watch, self._resolve(self.watch))
+            for name, read in made[1]:
+                try:
+                    out.append((name, _scalar(read())))
+                except Exception:  # a watch must never stop the scan
+                    continue
         if self._chart.operands:
             self._step_values(out)
+        return tuple(out)
+
+    def _values(
+        self, outs: tuple[Any, ...], watched: tuple[tuple[str, object], ...]
+    ) -> dict[str, bool | int | float | str | None]:
+        """The values of an update: the last update's own dict while they are the same
+        (messages are never changed, so two may share it)."""
+        made = self._made
+        if made is not None and made[0] == outs and made[1] == watched:
+            return made[2]
+        out = dict(zip(self.graph.out_pins, outs, strict=False))  # no instance DB: none
+        if not _PLAIN.issuperset(map(type, outs)):
+            out = {name: _scalar(v) for name, v in out.items()}
+        out.update(watched)
+        self._made = (outs, watched, out)
         return out
 
-    def _step_values(self, out: dict[str, bool | int | float | str | None]) -> None:
+    def _step_values(self, out: list[tuple[str, object]]) -> None:
         """Add the values of the active steps' action operands to ``out``."""
         operands, made = self._chart.operands, self._step_readers
+        room = MAX_VALUES - len(self.graph.out_pins)
         for i in self.graph.state.active:
             readers = made.get(i)
             if readers is None:
                 readers = made[i] = self._resolve(operands[i]) if i < len(operands) else ()
             for name, read in readers:
-                if len(out) >= MAX_VALUES:
+                if len(out) >= room:
                     return
                 try:
-                    out[name] = _scalar(read())
+                    out.append((name, _scalar(read())))
                 except Exception:  # a watch must never stop the scan
                     continue
 

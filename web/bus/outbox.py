@@ -5,25 +5,31 @@ nanoseconds); :class:`Outbox`'s thread encodes it (``seq`` set then, if given) a
 on its zenoh publisher, in the order queued. A put that blocks — a congested link, a slow
 subscriber under ``CongestionControl.BLOCK`` — holds up this thread, never a scan. While
 more than ``limit`` messages wait, new ones are dropped and counted (``dropped``): a view
-sees the gap in ``seq`` and goes on from the next state, which is whole.
+sees the gap in ``seq`` and goes on from the next state, which is whole. A job
+(:meth:`Outbox.run`: a scan's deltas, ``web.bus.deltas``) encodes and puts on this thread
+what it carries, in the same order; it counts as the deltas it carries, against the limit
+and, dropped, in ``dropped``.
 """
 
 from __future__ import annotations
 
 import queue
 import threading
+from collections.abc import Callable
 from typing import Any, Protocol
 
 import msgspec
 
 from s7graph.web.bus.protocol import encode
 
-__all__ = ["OUTBOX_LIMIT", "Outbox", "Sink"]
+__all__ = ["OUTBOX_LIMIT", "Job", "Outbox", "Sink"]
 
 OUTBOX_LIMIT = 20_000
 """Messages waiting at most (at 200 deltas a scan, 100 scans' worth)."""
 
 _STOP = None
+Job = Callable[[], int]
+"""Work for the outbox's thread: encodes and puts, returns how many messages it put."""
 
 
 class Sink(Protocol):
@@ -38,9 +44,13 @@ class Outbox:
     sends what is queued, then stops the thread."""
 
     def __init__(self, *, limit: int = OUTBOX_LIMIT, name: str = "s7graph-bus-out") -> None:
-        self._queue: queue.SimpleQueue[tuple[Sink, msgspec.Struct, int | None] | None]
+        self._queue: queue.SimpleQueue[tuple[Sink | None, Any, int] | None]
         self._queue = queue.SimpleQueue()
-        self._limit = limit
+        self.limit = limit
+        """Messages waiting at most; beyond, new ones are dropped and counted."""
+        self._lock = threading.Lock()
+        self._in = 0  # messages queued so far (a job: its weight), under the lock
+        self._out = 0  # and taken off the queue (the thread's alone)
         self.sent = 0
         self.dropped = 0
         self.failed = 0
@@ -50,16 +60,30 @@ class Outbox:
     def post(self, publisher: Sink, message: Any, seq: int | None = None) -> bool:
         """Queue ``message`` (with ``seq`` replaced, if given) for ``publisher``; False if
         it was dropped because too many wait."""
-        q = self._queue
-        if q.qsize() >= self._limit:
-            self.dropped += 1
+        if not self._admit(1):
             return False
-        q.put((publisher, message, seq))
+        self._queue.put((publisher, (message, seq), 1))
+        return True
+
+    def run(self, job: Job, weight: int = 1) -> bool:
+        """Queue ``job`` to run on the outbox's thread, counting as ``weight`` messages
+        (a scan's deltas: one each); False if it was dropped because too many wait."""
+        if not self._admit(weight):
+            return False
+        self._queue.put((None, job, weight))
+        return True
+
+    def _admit(self, weight: int) -> bool:
+        with self._lock:
+            if self._in - self._out >= self.limit:
+                self.dropped += weight
+                return False
+            self._in += weight
         return True
 
     def pending(self) -> int:
-        """Messages queued and not yet sent (about)."""
-        return self._queue.qsize()
+        """Messages queued and not yet sent (a job: its weight)."""
+        return self._in - self._out
 
     def close(self, timeout: float = 2.0) -> None:
         """Send what is queued (for at most ``timeout`` s), then end the thread."""
@@ -74,10 +98,15 @@ class Outbox:
             item = get()
             if item is None:
                 return
-            publisher, message, seq = item
+            publisher, what, weight = item
             try:
-                publisher.put(encode(message if seq is None else replace(message, seq=seq)))
+                if publisher is None:  # a job: it encodes and puts
+                    self.sent += what()
+                else:
+                    message, seq = what
+                    publisher.put(encode(message if seq is None else replace(message, seq=seq)))
+                    self.sent += 1
             except Exception:  # a closed session, an undeclared publisher: never raise here
                 self.failed += 1
-                continue
-            self.sent += 1
+            finally:
+                self._out += weight

@@ -68,6 +68,7 @@ __all__ = [
     "ProjectFile",
     "ProjectFiles",
     "ProtocolError",
+    "ScanDeltas",
     "SequenceInfo",
     "StepDetail",
     "StepInfo",
@@ -316,6 +317,22 @@ class StepStateUpdate(_Msg, frozen=True, kw_only=True):
             != (other.halted, other.il_enabled, other.sv_enabled, other.overrides)
             or not _same_coarse(self.details, other.details)
         )
+
+
+MAX_FBS = 256  # FBs of one CPU (``CpuStatus.fbs``)
+
+
+class ScanDeltas(_Msg, frozen=True, kw_only=True):
+    """``deltas``: one message per CPU scan in which an FB changed, holding the
+    :class:`StepStateUpdate` of every FB that changed (by FB name, each with its own
+    ``seq``). ``seq`` counts these messages: a gap means one was lost (get ``state`` of the
+    FBs followed). A scan whose deltas would not fit in one message goes out in several,
+    each with the scan's ``seq``."""
+
+    seq: Count = 0
+    cycle: Count
+    t_ms: Count
+    fbs: Annotated[dict[Name, StepStateUpdate], Meta(max_length=MAX_FBS)] = {}
 
 
 def _same_coarse(a: list[StepDetail], b: list[StepDetail]) -> bool:

@@ -9,7 +9,8 @@ are durable (``apply_commands(..., durable=runner)``: from the writer thread's c
 when the next scan's state is committed; never does the scan thread wait), or, if the
 state file has not confirmed it ``REPLY_WITHIN_S`` after the command came, as not
 confirmed. The scan thread only decides and queues; the publisher's
-:class:`~web.bus.outbox.Outbox` thread encodes and puts.
+:class:`~web.bus.outbox.Outbox` thread encodes and puts. The FBs' deltas go out one
+message per scan (``deltas``; :class:`~web.bus.deltas.DeltaOut`).
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ import functools
 import queue
 import threading
 import time
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any, Protocol
@@ -28,6 +29,7 @@ from typing import Any, Protocol
 import msgspec
 import zenoh
 
+from s7graph.web.bus.deltas import DeltaOut
 from s7graph.web.bus.gate import Apply, Gate, claimed_note
 from s7graph.web.bus.keys import ROOT, keys
 from s7graph.web.bus.origin import transport_origin
@@ -176,7 +178,8 @@ def _reply(query: zenoh.Query | None, reply: CommandReply | LoginReply) -> None:
 class BusPublisher:
     """The CPU's face on the bus: serves charts and state, publishes deltas, takes commands.
 
-    Call :meth:`publish` once per scan per FB, and :meth:`apply_commands` at the scan
+    Call :meth:`publish_scan` once per scan with the FBs that may have changed (or
+    :meth:`publish` once per scan per FB), and :meth:`apply_commands` at the scan
     boundary; :meth:`close` undeclares everything (the session stays the caller's).
     ``gate`` decides who may command (default: the demo, names claimed, no audit kept)."""
 
@@ -198,9 +201,9 @@ class BusPublisher:
         self._lock = threading.Lock()
         self._charts = dict(charts)
         self._chart_bytes = {name: encode(layout) for name, layout in self._charts.items()}
-        self._state: dict[str, StepStateUpdate] = {}  # the latest scan (its seq: _seq)
-        self._seq: dict[str, int] = dict.fromkeys(self._charts, 0)
         self.outbox = Outbox()
+        self.deltas: DeltaOut | None = None
+        """The FBs' deltas and states (``web.bus.deltas``)."""
         self._commands: queue.Queue[PendingCommand] = queue.Queue(maxsize=queue_size)
         self._max_age_ns = int(max_age_s * 1e9)
         self._within_ns = int(reply_within_s * 1e9)
@@ -215,25 +218,19 @@ class BusPublisher:
         self._alarms = AlarmList()
         self._forces = ForceList()
         self._declared: list[Any] = []
-        self._delta_pubs: dict[str, zenoh.Publisher] = {}
         self._chart_pubs: dict[str, zenoh.Publisher] = {}
         self._routes: dict[str, Callable[[PendingCommand], None]] = {}
         try:
             for name in self._charts:
                 for leaf, read in (("chart", self._chart_of), ("state", self._state_of)):
                     self._serve(self._keys.fb(name, leaf), functools.partial(read, name))
-                pub = session.declare_publisher(
-                    self._keys.fb(name, "delta"),
-                    encoding=zenoh.Encoding.APPLICATION_JSON,
-                    congestion_control=zenoh.CongestionControl.BLOCK,
-                )
-                self._delta_pubs[name] = pub
-                self._declared.append(pub)
                 chart_pub = session.declare_publisher(
                     self._keys.fb(name, "chart"), encoding=zenoh.Encoding.APPLICATION_JSON
                 )
                 self._chart_pubs[name] = chart_pub
                 self._declared.append(chart_pub)
+            self.deltas = DeltaOut(session, self._keys, self._charts, self.outbox)
+            self._declared.append(self.deltas)
             self._declared.append(session.declare_queryable(self._keys.cmd, self._on_cmd))
             self._declared.append(session.declare_queryable(self._keys.login, self._on_login))
             self._serve(self._keys.status, self._status_bytes)
@@ -273,16 +270,19 @@ class BusPublisher:
         """Record one scan of ``fb``; publish a delta if something changed. Returns whether
         a delta went out. ``update.seq`` is replaced by the bus's own change counter (the
         delta is encoded and put by the outbox's thread)."""
-        if fb not in self._charts:
-            raise KeyError(f"unknown FB {fb!r}; known: {', '.join(self._charts)}")
+        return bool(self.publish_scan(update.cycle, update.t_ms, [(fb, update)]))
+
+    def publish_scan(
+        self, cycle: int, t_ms: int, updates: Sequence[tuple[str, StepStateUpdate]]
+    ) -> list[str]:
+        """Record one scan (``cycle`` at CPU time ``t_ms``) of the FBs in ``updates``, each
+        ``(fb, update)`` — an FB left out has not changed (``LiveGraph.changed``); those
+        that did change go out in one message on ``deltas`` (``web.bus.deltas``). Returns
+        them, in order. ``update.seq`` is replaced by the bus's own change counter."""
+        assert self.deltas is not None
+        changed = self.deltas.publish(cycle, t_ms, updates)
         with self._lock:
-            changed = update.changed_from(self._state.get(fb))
-            if changed:
-                seq = self._seq[fb] = self._seq[fb] + 1
-            self._state[fb] = update
-            self._cycle = (update.cycle, update.t_ms)
-        if changed:
-            self.outbox.post(self._delta_pubs[fb], update, seq)
+            self._cycle = (cycle, t_ms)
         if time.monotonic_ns() - self._status_sent_ns >= STATUS_PERIOD_NS:
             self._publish_status()
         return changed
@@ -538,9 +538,8 @@ class BusPublisher:
         return self._chart_bytes.get(fb)
 
     def _state_of(self, fb: str) -> bytes | None:
-        with self._lock:
-            state, seq = self._state.get(fb), self._seq[fb]
-        return None if state is None else encode(msgspec.structs.replace(state, seq=seq))
+        state = self.deltas.state(fb) if self.deltas is not None else None
+        return None if state is None else encode(state)
 
     def _alarm_bytes(self) -> bytes:
         with self._lock:

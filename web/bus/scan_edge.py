@@ -10,10 +10,12 @@ force table (``web.bus.forcing``) — publishes the force jobs when they changed
 answers the watch requests waiting (``watch``, ``web.bus.watch``).
 
 :class:`ScanEdge` adds one running GraphFB: the scan's :class:`StepStateUpdate` (of a
-:class:`~web.bus.live.LiveGraph`), the CPU's message list when it changed (``alarms``),
-optionally the recording (a :class:`Recording`: ``web.recorder``'s rerun ``.rrd`` file),
-and the FB's commands. ``web.wiring.live_edge`` gives it its bus, its recording and, in one
-process, the view; ``web.wiring.program_edge`` gives a program of blocks its bus.
+:class:`~web.bus.live.LiveGraph`, built only when the FB may have changed:
+``LiveGraph.changed``; out in the scan's one message on ``deltas``), the CPU's message
+list when it changed (``alarms``), optionally the recording (a :class:`Recording`:
+``web.recorder``'s rerun ``.rrd`` file), and the FB's commands. ``web.wiring.live_edge``
+gives it its bus, its recording and, in one process, the view; ``web.wiring.program_edge``
+gives a program of blocks its bus.
 """
 
 from __future__ import annotations
@@ -273,12 +275,13 @@ class ScanEdge(CpuEdge):
         *,
         stats: CycleStatistics | None = None,
         runner: Runner | None = None,
-    ) -> StepStateUpdate:
+    ) -> StepStateUpdate | None:
         """Publish the scan ``record`` and apply the pending commands (call in the scan
-        thread); with ``runner``, within its share of the cycle for communication."""
+        thread); with ``runner``, within its share of the cycle for communication. Returns
+        the FB's update, None if the scan changed nothing of it."""
         until_ns = self._begin(runner)
-        update = self.live.update(record)
-        if self.recorder is not None and record.mode is CpuMode.RUN:
+        update = self.live.changed(record)
+        if update is not None and self.recorder is not None and record.mode is CpuMode.RUN:
             if self.recorder.layout is not self.live.layout:  # an online change
                 self.recorder.chart_changed(self.live.layout)
             self.recorder.record(update)
@@ -286,7 +289,8 @@ class ScanEdge(CpuEdge):
         if publisher is None:
             return update
         self._publish_cpu(record, stats, runner, publisher)
-        publisher.publish(self.live.fb, update)
+        changed = [(self.live.fb, update)] if update is not None else []
+        publisher.publish_scan(max(record.cycle, 0), max(record.t_ns // 1_000_000, 0), changed)
         alarms = self.live.alarms_changed()
         if alarms is not None:
             publisher.publish_alarms(alarms)

@@ -41,12 +41,21 @@ class StepDetails:
     """The details of chart ``cc``'s active steps, scan after scan (one per chart version).
 
     ``tr_neg``/``il_neg``/``sv_neg``: which contacts of each transition condition, interlock
-    and supervision are negated. ``built`` counts the details built so far."""
+    and supervision are negated; ``checks``: whether a step has an interlock or a
+    supervision (without, a step's key leaves out their bits and words, which never
+    change). ``built`` counts the details built so far."""
 
     def __init__(
-        self, cc: CompiledChart, tr_neg: Negations, il_neg: Negations, sv_neg: Negations
+        self,
+        cc: CompiledChart,
+        tr_neg: Negations,
+        il_neg: Negations,
+        sv_neg: Negations,
+        *,
+        checks: bool = True,
     ) -> None:
         self.cc = cc
+        self.checks = checks
         self._tr_neg, self._il_neg, self._sv_neg = tr_neg, il_neg, sv_neg
         self.built = 0
         self._seen: list[dict[tuple[Any, ...], StepDetail]] = [{} for _ in cc.step_numbers]
@@ -64,6 +73,8 @@ class StepDetails:
 
     def of(self, st: Any) -> list[StepDetail]:
         """A :class:`StepDetail` per active step of ``st`` (a ``GraphState``), by step index."""
+        if not self.checks:
+            return self._plain(st)
         tt, crit = st.tt, st.crit
         t_ns, u_ns, il_ok, il_err, sv_err = st.t_ns, st.u_ns, st.il_ok, st.il_err, st.sv_err
         crit_loc, crit_sup = st.crit_loc, st.crit_sup
@@ -93,6 +104,36 @@ class StepDetails:
                 if len(known) >= PER_STEP:
                     known.clear()
                 detail = known[key] = self._build(i, key, tt, crit)
+            out.append(detail)
+        return out
+
+    def _plain(self, st: Any) -> list[StepDetail]:
+        """:meth:`of` for a chart without interlocks and supervisions: the same details,
+        keyed by the times and the transitions alone."""
+        tt, crit, t_ns, u_ns = st.tt, st.crit, st.t_ns, st.u_ns
+        single, joins, seen = self._single, self._joins, self._seen
+        out = []
+        for i in sorted(st.active):
+            valid = self._valid(i, st.x) if joins[i] else single[i]
+            if len(valid) == 1:
+                j = valid[0]
+                key: tuple[Any, ...] = (
+                    t_ns[i] // TENTH_NS,
+                    u_ns[i] // TENTH_NS,
+                    valid,
+                    tt[j],
+                    crit[j],
+                )
+            else:
+                transitions = tuple([(tt[j], crit[j]) for j in valid])
+                key = (t_ns[i] // TENTH_NS, u_ns[i] // TENTH_NS, valid, transitions)
+            known = seen[i]
+            detail = known.get(key)
+            if detail is None:
+                if len(known) >= PER_STEP:
+                    known.clear()
+                full = (key[0], key[1], True, False, False, 0, 0, valid, None)
+                detail = known[key] = self._build(i, full, tt, crit)
             out.append(detail)
         return out
 

@@ -18,6 +18,7 @@ from s7graph.sequencer.text.parse import parse_chart
 from s7graph.web.bus.live import LiveGraph
 from s7graph.web.bus.protocol import EVENTS, StepStateUpdate
 from s7graph.web.bus.scan_events import ScanEvents
+from s7graph.web.bus.step_details import StepDetails
 from s7graph.web.harness.session import ChartSession
 from tests.web.helpers import chart_session
 
@@ -178,3 +179,41 @@ def test_the_events_of_a_scan_are_grouped_once_for_every_fb_of_the_cpu() -> None
             ]
             assert update.events == own
     assert any(u.events for u in updates)
+
+
+def test_a_chart_without_interlocks_keys_its_details_by_times_and_transitions_alone() -> None:
+    """A divergence and a join: the lean keys give the details the full keys give."""
+    text = """\
+FUNCTION_BLOCK "Join" FB 1 DB 1
+SEQUENCE 1 "A"
+  INITIAL_STEP S1 "a":
+  END_STEP
+  STEP S2 "b":
+  END_STEP
+  STEP S3 "c":
+  END_STEP
+  STEP S4 "d":
+  END_STEP
+  TRANSITION T1 FROM S1 TO (S2, S3) := S1.T >= T#30MS;
+  TRANSITION T2 FROM S2 TO S4 := S2.T >= T#50MS;
+  TRANSITION T3 FROM (S4, S3) TO S1 := S3.T >= T#150MS;
+  TRANSITION T4 FROM S3 TO S1 := S3.T >= T#1S AND S2.X;
+END_SEQUENCE
+END_FUNCTION_BLOCK
+"""
+    clock = VirtualClock()
+    cpu = Cpu(clock)
+    g = GraphFB(compile_chart(parse_chart(text, "<join>")))
+    install_all(cpu, [g])
+    cpu.start("warm")
+    live = LiveGraph(g)
+    lean = live.step_details
+    assert not lean.checks
+    full = LiveGraph(g).prepare(g.cc, version=1)
+    keyed = StepDetails(full.cc, full.tr_neg, full.il_neg, full.sv_neg, checks=True)
+    rng = random.Random(3)
+    for n in range(300):
+        clock.advance(rng.choice((1, 10, 40, 120)))
+        cpu.scan()
+        assert lean.of(g.state) == keyed.of(g.state), f"scan {n}"
+    assert lean.built < 300

@@ -99,3 +99,30 @@ def test_a_late_joiner_and_a_view_that_missed_deltas_end_at_the_cpus_state(
         finally:
             client.close()
             publisher.close()
+
+
+def test_a_job_runs_in_order_on_the_outbox_thread_and_counts_as_its_weight() -> None:
+    pub = Blocked()
+    box = Outbox(limit=9)
+    ran: list[str] = []
+
+    def job() -> int:
+        ran.append(threading.current_thread().name)
+        pub.put(b"job")
+        return 1
+
+    try:
+        assert box.post(pub, update(1), seq=1)  # type: ignore[arg-type]
+        assert box.run(job, weight=8)
+        assert box.pending() == 9
+        assert not box.run(job, weight=3)  # 9 wait: the limit, dropped as 3
+        assert not box.post(pub, update(2), seq=2)  # type: ignore[arg-type]
+        assert box.dropped == 4
+        pub.release.set()
+        assert wait_until(lambda: box.pending() == 0)
+        assert pub.sent[1] == b"job" and len(pub.sent) == 2
+        assert ran == ["s7graph-bus-out"] and box.sent == 2
+        assert box.post(pub, update(3), seq=3)  # type: ignore[arg-type]
+    finally:
+        pub.release.set()
+        box.close()
