@@ -153,11 +153,18 @@ class OnlineRig:
 
 @contextmanager
 def online_cpu(
-    tmp_path: Path, chart: str, *, serve: bool, users: dict[str, str], name: str = "chart.s7g"
+    tmp_path: Path,
+    chart: str,
+    *,
+    serve: bool,
+    users: dict[str, str],
+    name: str = "chart.s7g",
+    operands: bool = False,
 ) -> Iterator[OnlineRig]:
     """``chart`` written to ``tmp_path / name`` and run with a users file (name → role,
     password ``PASSWORD``), its bus on a unix socket, the view when ``serve``; the CPU
-    takes force jobs as ``s7graph run`` does."""
+    takes force jobs as ``s7graph run`` does, and publishes its operands when
+    ``operands`` (``web.bus.operands``)."""
     from s7graph.web.access.audit import AuditStore
     from s7graph.web.access.login import Authenticator
     from s7graph.web.access.users import UsersFile
@@ -165,6 +172,7 @@ def online_cpu(
     from s7graph.web.bus.gate import Gate
     from s7graph.web.bus.live import LiveGraph
     from s7graph.web.bus.online import OnlineChange
+    from s7graph.web.bus.operands import OperandFeed
     from s7graph.web.bus.session import BusEnds
     from s7graph.web.wiring.live_edge import LiveEdge
 
@@ -192,6 +200,7 @@ def online_cpu(
             online=online,
             ends=BusEnds(listen=[endpoint]),
             forcing=Forcing(session.cpu),
+            operands=OperandFeed(session, fb=live.fb) if operands else None,
         )
         with edge, scanning(session, edge, lambda record: scans.append(record.cycle)):
             yield OnlineRig(session, edge, online, path, state, endpoint, scans)

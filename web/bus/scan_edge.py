@@ -7,8 +7,8 @@ the update (a :class:`Recording`: ``web.recorder``'s rerun ``.rrd`` file), then 
 commands received since the last scan — the scan boundary: ``force`` to the CPU's force
 table (``web.bus.forcing``), ``stop`` and ``start`` to the CPU's RUN/STOP switch
 (``Runner.switch_stop``/``switch_start``), the others to the FB — and publishes the force
-jobs when they changed (``forces``). ``web.wiring.live_edge`` gives it its bus, its
-recording and, in one process, the view.
+jobs when they changed (``forces``) and the operands when due (``web.bus.operands``).
+``web.wiring.live_edge`` gives it its bus, its recording and, in one process, the view.
 """
 
 from __future__ import annotations
@@ -36,6 +36,7 @@ from s7graph.web.bus.publisher import BusPublisher
 if TYPE_CHECKING:
     from s7graph.web.bus.forcing import Forcing
     from s7graph.web.bus.online import OnlineChange
+    from s7graph.web.bus.operands import OperandFeed
 
 __all__ = ["Recording", "ScanEdge", "cycle_report", "cycle_stats"]
 
@@ -104,14 +105,18 @@ class ScanEdge:
         *,
         online: OnlineChange | None = None,
         forcing: Forcing | None = None,
+        operands: OperandFeed | None = None,
     ) -> None:
         self.live = live
         self.online = online
         self.forcing = forcing
+        self.operands = operands
         self.recorder: Recording | None = None
         self.publisher = publisher
         if online is not None and publisher is not None:
             online.attach(publisher)
+        if operands is not None and publisher is not None:
+            operands.attach(publisher)
         self._cpu_state: str | None = None
         self.restart = "warm"
         """The startup the switch's ``start`` does (``--restart``)."""
@@ -153,6 +158,8 @@ class ScanEdge:
             forces = self.forcing.changed()
             if forces is not None:
                 publisher.publish_forces(forces)
+        if self.operands is not None:
+            self.operands.at_boundary(record.cycle)
         if self.online is not None:
             self.online.at_boundary()
         return update

@@ -25,6 +25,7 @@ from s7graph.web.wiring.web_edge import WebEdge, serve_view
 if TYPE_CHECKING:
     from s7graph.web.bus.forcing import Forcing
     from s7graph.web.bus.online import OnlineChange
+    from s7graph.web.bus.operands import OperandFeed
 
 __all__ = ["LiveEdge"]
 
@@ -49,6 +50,7 @@ class LiveEdge(ScanEdge):
         bus: bool = False,
         online: OnlineChange | None = None,
         forcing: Forcing | None = None,
+        operands: OperandFeed | None = None,
     ) -> None:
         self.edge: WebEdge | None = None
         self.cpu_side: CpuSide | None = None
@@ -71,7 +73,7 @@ class LiveEdge(ScanEdge):
                 {live.fb: live.layout}, cpu=cpu, ends=ends or BusEnds(), gate=gate
             )
             publisher = self.cpu_side.publisher
-        super().__init__(live, publisher, online=online, forcing=forcing)
+        super().__init__(live, publisher, online=online, forcing=forcing, operands=operands)
         try:
             if record is not None:
                 from s7graph.web.recorder import Recorder  # rerun-sdk only when recording
