@@ -160,11 +160,13 @@ def online_cpu(
     users: dict[str, str],
     name: str = "chart.s7g",
     operands: bool = False,
+    messages: bool = False,
 ) -> Iterator[OnlineRig]:
     """``chart`` written to ``tmp_path / name`` and run with a users file (name → role,
     password ``PASSWORD``), its bus on a unix socket, the view when ``serve``; the CPU
     takes force jobs as ``s7graph run`` does, and publishes its operands when
-    ``operands`` (``web.bus.operands``)."""
+    ``operands`` (``web.bus.operands``) and its message list when ``messages``."""
+    from s7graph.sfb.alarms import message_list
     from s7graph.web.access.audit import AuditStore
     from s7graph.web.access.login import Authenticator
     from s7graph.web.access.users import UsersFile
@@ -185,7 +187,8 @@ def online_cpu(
     audit = AuditStore(state)
     cc, table = load_chart(path)
     session = ChartSession(cc, table, VirtualClock())
-    live = LiveGraph(session.graph, read=session.get)
+    listed = message_list(session.cpu) if messages else None
+    live = LiveGraph(session.graph, read=session.get, messages=listed)
     gate = Gate(Authenticator(users_file), audit)
     online = OnlineChange(session, live, gate, path=path)
     endpoint = f"unixsock-stream/{tmp_path}/bus.sock"

@@ -1,5 +1,5 @@
 """The ``s7graph`` command line: ``run``, ``sim``, ``check``, ``import``, ``export``,
-``--version``; for the bus ``web``, ``router``, ``watch``, ``status`` and the shell's
+``--version``; for the bus ``web``, ``opcua``, ``router``, ``watch``, ``status`` and the shell's
 commands (``ack``, ``mode``, ..., ``force``, ``download``, ``stop``, ``start``); ``users``
 and ``audit``.
 
@@ -26,6 +26,7 @@ import typer
 
 if TYPE_CHECKING:
     from s7graph.web.cli.net import NetOptions
+    from s7graph.web.cli.run_chart import OpcuaFace
 
 from s7graph import __version__
 from s7graph.engine.errors import S7Error
@@ -226,6 +227,22 @@ Core = Annotated[
 ]
 
 
+OpcuaUrl = Annotated[
+    str | None,
+    typer.Option(
+        "--opcua",
+        metavar="opc.tcp://HOST:PORT",
+        help="Serve OPC UA there from a process of its own (s7graph opcua as a child, "
+        "restarted when it ends; charts only).",
+    ),
+]
+OpcuaCert = Annotated[
+    Path | None,
+    typer.Option(help="The OPC UA server's certificate (PEM or DER; with --opcua-key)."),
+]
+OpcuaKey = Annotated[Path | None, typer.Option(help="The OPC UA server's private key.")]
+
+
 @app.command()
 def run(
     program: ProgramArg,
@@ -252,6 +269,9 @@ def run(
     rt_priority: RtPriority = None,
     comm_load: CommLoad = COMM_LOAD_PCT,
     core: Core = None,
+    opcua: OpcuaUrl = None,
+    opcua_cert: OpcuaCert = None,
+    opcua_key: OpcuaKey = None,
 ) -> None:
     """Run a program or a chart on the system clock until Ctrl-C."""
     if _supervised():
@@ -280,6 +300,7 @@ def run(
         if not 0 <= port <= 65535:
             print(f"s7graph: error: --port {port} is out of range (0-65535)", file=sys.stderr)
             raise typer.Exit(2)
+        face = _opcua_face(opcua, users, opcua_cert, opcua_key)
 
         raise typer.Exit(
             run_chart(
@@ -299,8 +320,12 @@ def run(
                 rt_priority=priority,
                 comm_load_pct=comm_load,
                 core=core if core is not None else "auto",
+                opcua=face,
             )
         )
+    if opcua is not None:
+        print("s7graph: error: --opcua serves a chart's CPU (.s7g)", file=sys.stderr)
+        raise typer.Exit(2)
     from s7graph.web.cli.run_program import run_program
 
     raise typer.Exit(
@@ -316,6 +341,25 @@ def run(
             core=core,
         )
     )
+
+
+def _opcua_face(
+    url: str | None, users: Path | None, cert: Path | None, key: Path | None
+) -> OpcuaFace | None:
+    """``run --opcua``'s child, checked before the CPU starts (exit 2 with one line)."""
+    if url is None:
+        if cert is not None or key is not None:
+            print("s7graph: error: --opcua-cert and --opcua-key go with --opcua", file=sys.stderr)
+            raise typer.Exit(2)
+        return None
+    from s7graph.web.cli.run_chart import OpcuaFace
+    from s7graph.web.opcua.server import listen_problem
+
+    problem = listen_problem(url, users=users is not None, cert=cert, key=key)
+    if problem:
+        print(f"s7graph: error: --opcua: {problem}", file=sys.stderr)
+        raise typer.Exit(2)
+    return OpcuaFace(url=url, cert=cert, key=key)
 
 
 @app.command()
@@ -440,6 +484,64 @@ def web(
     net = _net(connect=connect, host=host, tls_ca=tls_ca, origins=origin)
     raise typer.Exit(
         web_command(net, cpu=cpu, fb=fb, port=port, duration_s=duration_s, child=child)
+    )
+
+
+Anonymous = Annotated[
+    str | None,
+    typer.Option(
+        metavar="read|refuse",
+        help="Anonymous OPC UA sessions: read (browse, read, subscribe) or refused. "
+        "Default: read on loopback, refused beyond it.",
+    ),
+]
+
+
+@app.command()
+def opcua(
+    connect: Connect = None,
+    cpu: Annotated[str | None, typer.Option("--cpu", help="The CPU (default: the first).")] = None,
+    listen: Annotated[
+        str, typer.Option("--listen", metavar="opc.tcp://HOST:PORT", help="Where to serve OPC UA.")
+    ] = "opc.tcp://127.0.0.1:4840",
+    users: Annotated[
+        Path | None,
+        typer.Option(
+            help="The users file the CPU checks logins against (the CPU checks each "
+            "password; needed beyond loopback)."
+        ),
+    ] = None,
+    anonymous: Anonymous = None,
+    cert: Annotated[
+        Path | None, typer.Option(help="The server's certificate (PEM or DER), for SignAndEncrypt.")
+    ] = None,
+    key: Annotated[Path | None, typer.Option(help="The server's private key.")] = None,
+    trust: Annotated[
+        Path | None,
+        typer.Option(help="A folder of trusted client certificates (default: any may connect)."),
+    ] = None,
+    tls_ca: TlsCa = None,
+    duration_s: Annotated[float | None, typer.Option(help="Stop after this many seconds.")] = None,
+    child: Annotated[
+        bool, typer.Option("--child", hidden=True, help="The OPC UA server of a run --opcua.")
+    ] = False,
+) -> None:
+    """Serve a CPU on the bus over OPC UA, as a process of its own."""
+    from s7graph.web.cli.opcua import opcua_command
+
+    net = _net(connect=connect, users=users, tls_ca=tls_ca)
+    raise typer.Exit(
+        opcua_command(
+            net,
+            cpu=cpu,
+            listen=listen,
+            anonymous=anonymous,
+            cert=cert,
+            key=key,
+            trust=trust,
+            duration_s=duration_s,
+            child=child,
+        )
     )
 
 
