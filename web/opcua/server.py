@@ -100,6 +100,11 @@ class OpcuaOptions:
     limits: Limits = field(default_factory=Limits)
 
 
+def _format(data: bytes) -> str:
+    """``pem`` or ``der``, by the content (whatever the file's name)."""
+    return "pem" if b"-----BEGIN" in data else "der"
+
+
 def application_uri(cpu: str, cert: Path | None) -> str:
     """The server's application URI: the certificate's (its subjectAltName URI), or
     ``urn:s7graph:opcua:<cpu>``."""
@@ -220,8 +225,9 @@ class OpcuaServer:
         server.set_identity_tokens(tokens)
         policies = [ua.SecurityPolicyType.Basic256Sha256_SignAndEncrypt]
         if options.cert is not None and options.key is not None:
-            await server.load_certificate(str(options.cert))
-            await server.load_private_key(str(options.key))
+            cert, key = options.cert.read_bytes(), options.key.read_bytes()
+            await server.load_certificate(cert, _format(cert))
+            await server.load_private_key(key, None, _format(key))
         else:
             policies = []
         host = urlparse(options.url).hostname or ""

@@ -57,6 +57,7 @@ END_FUNCTION_BLOCK
 USERS = {"olga": "operator", "eng": "engineer", "vic": "viewer"}
 PASSWORD = "correct horse"
 NS_URI = "urn:s7graph:plc"
+CLIENT_URI = "urn:s7graph:test:client"
 
 
 def free_port() -> int:
@@ -87,6 +88,7 @@ def face_rig(
 ) -> Iterator[FaceRig]:
     """``chart`` running with ``USERS`` (password ``PASSWORD``) on a bus, its operands
     published, and the OPC UA face of it in this process on a free loopback port."""
+    tmp_path.mkdir(parents=True, exist_ok=True)
     with (
         online_cpu(
             tmp_path, chart, serve=False, users=USERS, name="mix.s7g", operands=True, messages=True
@@ -114,6 +116,7 @@ async def connected(
         client.set_user(user)
         client.set_password(password)
     if security:
+        client.application_uri = CLIENT_URI  # as its certificate says
         await client.set_security(**security)
     async with client:
         yield client
@@ -216,7 +219,7 @@ def make_certs(where: Path, *, server_uri: str = "urn:s7graph:opcua:cpu1") -> Ce
     def write(path: Path, cert: x509.Certificate, k: rsa.RSAPrivateKey | None = None) -> None:
         path.write_bytes(cert.public_bytes(serialization.Encoding.PEM))
         if k is not None:
-            path.with_suffix(".key").write_bytes(
+            path.with_name(path.stem + "-key.pem").write_bytes(
                 k.private_bytes(
                     serialization.Encoding.PEM,
                     serialization.PrivateFormat.PKCS8,
@@ -235,7 +238,7 @@ def make_certs(where: Path, *, server_uri: str = "urn:s7graph:opcua:cpu1") -> Ce
     return Certs(
         where / "ca.pem",
         where / "server.pem",
-        where / "server.key",
+        where / "server-key.pem",
         where / "client.pem",
-        where / "client.key",
+        where / "client-key.pem",
     )
