@@ -269,7 +269,7 @@ class Face:
         the CPU's answer)."""
         op = op_of(kind)
         if not isinstance(user, FaceUser):
-            _log.info("opcua: %s refused: an anonymous session sends no command", op)
+            _log.debug("opcua: %s refused: an anonymous session sends no command", op)
             return StatusCodes.BadUserAccessDenied, None
         if not fb:
             return StatusCodes.BadInvalidState, None

@@ -15,9 +15,11 @@ change the address space's structure.
 
 from __future__ import annotations
 
+import asyncio
 import contextvars
 import logging
 import math
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, Final
@@ -123,7 +125,13 @@ class FaceRules(PermissionRuleset):
 
 @dataclass(frozen=True, slots=True)
 class Limits:
-    """What one request and one session may ask for; past it, a bad status code."""
+    """What one request and one session may ask for; past it, a bad status code. And
+    how fast requests are served: ``pace`` units of work a second for one session (a
+    value read, browsed or written: 1; a monitored item made: 5; a method call or a
+    subscription made or deleted: 50), ``server_pace`` for all of them together, each with
+    a second's worth at once; a request asked faster waits before it is served, so no
+    client can take the face from the others or from the bus, and a flood of them leaves
+    the event loop time to carry the CPU's changes to the subscriptions."""
 
     operations: int = 1000  # nodes to read, browse, write, methods to call per request
     subscriptions: int = 20  # per session
@@ -132,6 +140,31 @@ class Limits:
     connections: int = 128  # TCP connections, activated or not
     min_publishing_ms: float = 10.0
     max_publishing_ms: float = 3_600_000.0
+    pace: float = 5000.0
+    server_pace: float = 20_000.0
+
+
+COST_CALL: Final = 50
+COST_ITEM: Final = 5
+COST_SUBSCRIPTION: Final = 50
+MAX_WAIT_S: Final = 1.0
+
+
+class Pace:
+    """A token bucket: ``rate`` units a second, at most ``burst`` saved up."""
+
+    def __init__(self, rate: float, burst: float) -> None:
+        self.rate = rate
+        self.burst = burst
+        self._tokens = burst
+        self._at = time.monotonic()
+
+    def wait(self, cost: float) -> float:
+        """Take ``cost`` units; the seconds to wait first (0: none)."""
+        now = time.monotonic()
+        self._tokens = min(self.burst, self._tokens + (now - self._at) * self.rate) - cost
+        self._at = now
+        return 0.0 if self._tokens >= 0 else min(-self._tokens / self.rate, MAX_WAIT_S)
 
 
 def _bounded(count: int, limit: int) -> None:
@@ -141,13 +174,31 @@ def _bounded(count: int, limit: int) -> None:
 
 
 class FaceSession(InternalSession):
-    """An OPC UA session of the face: bounded requests, the caller known to methods, the
-    bus token logged out when it closes."""
+    """An OPC UA session of the face: bounded and paced requests, the caller known to
+    methods, the bus token logged out when it closes."""
+
+    _pace: Pace | None = None
 
     @property
     def limits(self) -> Limits:
         server = self.iserver
         return server.limits if isinstance(server, FaceServer) else Limits()
+
+    async def _serve(self, count: int, cost: float) -> None:
+        """A request of ``count`` operations costing ``cost``: refused when it has too
+        many, served after a wait when this session asks faster than its pace."""
+        _bounded(count, self.limits.operations)
+        limits = self.limits
+        if self._pace is None:
+            self._pace = Pace(limits.pace, limits.pace)
+        delay = self._pace.wait(cost)
+        server = self.iserver
+        if isinstance(server, FaceServer):
+            if server.pace is None:
+                server.pace = Pace(limits.server_pace, limits.server_pace)
+            delay = max(delay, server.pace.wait(cost))
+        if delay:
+            await asyncio.sleep(delay)
 
     def activate_session(
         self, params: ua.ActivateSessionParameters, peer_certificate: bytes | None
@@ -175,32 +226,32 @@ class FaceSession(InternalSession):
             hook(user)
 
     async def read(self, params: ua.ReadParameters) -> list[ua.DataValue]:
-        _bounded(len(params.NodesToRead), self.limits.operations)
+        await self._serve(len(params.NodesToRead), len(params.NodesToRead))
         return await super().read(params)
 
     async def write(self, params: ua.WriteParameters) -> list[ua.StatusCode]:
-        _bounded(len(params.NodesToWrite), self.limits.operations)
+        await self._serve(len(params.NodesToWrite), len(params.NodesToWrite))
         return await super().write(params)
 
     async def browse(self, params: ua.BrowseParameters) -> list[ua.BrowseResult]:
-        _bounded(len(params.NodesToBrowse), self.limits.operations)
+        await self._serve(len(params.NodesToBrowse), len(params.NodesToBrowse))
         return await super().browse(params)
 
     async def translate_browsepaths_to_nodeids(
         self, params: list[ua.BrowsePath]
     ) -> list[ua.BrowsePathResult]:
-        _bounded(len(params), self.limits.operations)
+        await self._serve(len(params), len(params))
         return await super().translate_browsepaths_to_nodeids(params)
 
     async def register_nodes(self, nodes: list[ua.NodeId]) -> list[ua.NodeId]:
-        _bounded(len(nodes), self.limits.operations)
+        await self._serve(len(nodes), len(nodes))
         return await super().register_nodes(nodes)
 
     async def history_read(self, params: ua.HistoryReadParameters) -> list[ua.HistoryReadResult]:
         raise ServiceError(StatusCodes.BadHistoryOperationUnsupported)
 
     async def call(self, params: list[ua.CallMethodRequest]) -> list[ua.CallMethodResult]:
-        _bounded(len(params), self.limits.operations)
+        await self._serve(len(params), len(params) * COST_CALL)
         mark = CALLER.set(self.user)
         try:
             return await super().call(params)
@@ -217,6 +268,7 @@ class FaceSession(InternalSession):
         callback: Callable[..., Any],
         request_callback: Callable[..., Any] | None = None,
     ) -> ua.CreateSubscriptionResult:
+        await self._serve(1, COST_SUBSCRIPTION)
         if len(self._subscriptions()) >= self.limits.subscriptions:
             raise ServiceError(StatusCodes.BadTooManySubscriptions)
         interval = params.RequestedPublishingInterval
@@ -226,11 +278,15 @@ class FaceSession(InternalSession):
         params.RequestedPublishingInterval = float(min(max(interval, lo), hi))
         return await super().create_subscription(params, callback, request_callback)
 
+    async def delete_subscriptions(self, ids: list[int]) -> list[ua.StatusCode]:
+        await self._serve(len(ids), len(ids) * COST_SUBSCRIPTION)
+        return await super().delete_subscriptions(ids)
+
     async def create_monitored_items(
         self, params: ua.CreateMonitoredItemsParameters
     ) -> list[ua.MonitoredItemCreateResult]:
         asked = len(params.ItemsToCreate)
-        _bounded(asked, self.limits.operations)
+        await self._serve(asked, asked * COST_ITEM)
         held = sum(len(s.monitored_item_srv._monitored_items) for s in self._subscriptions())
         if held + asked > self.limits.monitored_items:
             refused = ua.MonitoredItemCreateResult()
@@ -245,6 +301,7 @@ class FaceServer(InternalServer):
 
     limits: Limits = Limits()
     on_close: Callable[[FaceUser], None] | None = None
+    pace: Pace | None = None  # all sessions' requests together
 
     def create_session(
         self,
