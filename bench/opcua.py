@@ -215,10 +215,17 @@ def flood(url: str, seconds: float, mode: str) -> int:
     ]
 
     async def hostile(kind: int) -> None:
+        deadline = time.monotonic() + seconds
+        while time.monotonic() < deadline:  # a client the face dropped comes again
+            try:
+                await one_hostile(kind, deadline)
+            except (ConnectionError, OSError, TimeoutError, UaStatusCodeError):
+                await asyncio.sleep(0.5)
+
+    async def one_hostile(kind: int, deadline: float) -> None:
         async with Client(url, timeout=10) as c:
             fb = c.get_node(ua.NodeId(f"cpu1/{FB}", 2))
             cycle = c.get_node(ua.NodeId("cpu1/Cycle", 2))
-            deadline = time.monotonic() + seconds
             while time.monotonic() < deadline:
                 try:
                     if kind == 0:

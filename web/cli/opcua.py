@@ -40,7 +40,7 @@ def _logging() -> None:
     """The face's lines (logins refused, commands and their outcome) on stderr."""
     handler = logging.StreamHandler(sys.stderr)
     handler.setFormatter(logging.Formatter("s7graph: %(message)s"))
-    log = logging.getLogger("s7graph.opcua")
+    log = logging.getLogger("s7graph.web.opcua")
     log.addHandler(handler)
     log.setLevel(logging.INFO)
     log.propagate = False
@@ -96,7 +96,9 @@ def opcua_command(
         if net.users is not None and chosen.login != "users":
             return _fail(f"--users given, but CPU {chosen.cpu} checks no logins (no users file)")
         reads = anonymous == "read" or (anonymous is None and loopback(listen))
-        options = OpcuaOptions(url=listen, anonymous=reads, cert=cert, key=key, trust=trust)
+        options = OpcuaOptions(
+            url=listen, anonymous=reads, cert=cert, key=key, trust=trust, own_process=True
+        )
         server = OpcuaServer(session, chosen, options)
         try:
             server.start()

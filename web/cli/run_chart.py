@@ -211,8 +211,7 @@ def _run_chart(
         if live is not None:
             live.on_record(record, stats=cpu.stats, runner=runner)
 
-    on_bus = bool(recovered and live is not None and live.endpoint)
-    stays = web or opcua is not None or on_bus
+    stays = web or opcua is not None or bool(recovered and live is not None and live.endpoint)
     runner = Runner(
         cpu,
         cycle_ms=cycle_ms,
@@ -224,9 +223,7 @@ def _run_chart(
         core=core,
         marks=child_marks(),
     )
-    _wire(live, runner, restart)
-    for child in children:
-        child.start()
+    _wire(live, runner, restart, children)
     status = run_until_stopped(
         runner,
         opened,
@@ -249,13 +246,16 @@ def _watch(cpu: Cpu, max_cycle_ms: float | None, *, inline: bool) -> None:
     cpu.watchdog = Watchdog(max_cycle_ms, cpu.watchdog.min_cycle_ns / 1e6)
 
 
-def _wire(live: LiveEdge | None, runner: Runner, restart: str) -> None:
+def _wire(live: LiveEdge | None, runner: Runner, restart: str, children: list[ViewProcess]) -> None:
     """The bus end learns what the RUN/STOP switch's start does, and that a download is
-    applied once its state is on disk (the runner's durability)."""
+    applied once its state is on disk (the runner's durability); the children (the
+    view's, the OPC UA server's process) start."""
     if live is not None:
         live.restart = restart
         if live.online is not None:
             live.online.durability = runner
+    for child in children:
+        child.start()
 
 
 def _close(children: list[ViewProcess], live: LiveEdge | None) -> None:

@@ -36,7 +36,7 @@ from s7graph.web.opcua.typed import ObjectIds, Server, StatusCodes, ua_id, ua_st
 
 __all__ = ["Alarms", "Send", "condition_name"]
 
-_log = logging.getLogger("s7graph.opcua")
+_log = logging.getLogger("s7graph.web.opcua")
 
 SEVERITY: Final = {"SV": 700, "IL": 500, "": 600}
 """An event's severity (1–1000): a supervision fault, an interlock error, any other

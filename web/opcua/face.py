@@ -72,7 +72,7 @@ from s7graph.web.opcua.typed import AttributeIds, ObjectIds, Server, StatusCodes
 
 __all__ = ["MAX_COMMANDS", "MAX_SESSION_COMMANDS", "Face", "FaceAttributes"]
 
-_log = logging.getLogger("s7graph.opcua")
+_log = logging.getLogger("s7graph.web.opcua")
 
 MAX_COMMANDS: Final = 16
 MAX_SESSION_COMMANDS: Final = 4
@@ -96,6 +96,8 @@ class Face:
         self.latest: dict[str, StepStateUpdate] = {}
         self.layouts: dict[str, ChartLayout] = {}
         self.applied = 0  # messages from the bus applied (the tests wait on it)
+        self.rebuilt: Callable[[], None] = lambda: None
+        """Called after the address space was rebuilt (``server.quiet_collector``)."""
         self._waiting: dict[int, int] = {}  # id of a session's user -> commands waiting
         self._inbox: Inbox | None = None
         self._task: asyncio.Task[None] | None = None
@@ -185,6 +187,7 @@ class Face:
             catalog = await self.link.ask(self.link.reader.operand_catalog)
             if catalog is not None:
                 await self.space.build_operands(catalog)
+                self.rebuilt()
         await self.space.apply_operands(values)
 
     async def _chart(self, fb: str, layout: ChartLayout) -> None:
@@ -194,6 +197,7 @@ class Face:
             self.space.fbs[fb].version = -1  # another chart, whatever its number
         self.layouts[fb] = layout
         await self.space.build_chart(fb, layout)
+        self.rebuilt()
         latest = self.latest.get(fb)
         if latest is not None:
             await self.space.apply_state(fb, latest)

@@ -44,7 +44,7 @@ __all__ = [
     "caller",
 ]
 
-_log = logging.getLogger("s7graph.opcua")
+_log = logging.getLogger("s7graph.web.opcua")
 
 
 @dataclass
