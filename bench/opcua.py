@@ -138,7 +138,16 @@ def cpu(with_page: bool) -> Iterator[tuple[page.Cpu, str]]:
         try:
             view = _serving(proc, with_page)
             time.sleep(2.0)  # let the start settle
-            yield page.Cpu(proc, view, path), url
+            machine = page.Cpu(proc, view, path)
+            asked = machine.changes
+            lock = threading.Lock()
+
+            def changes() -> list[tuple[float, list[int]]]:
+                with lock:  # the page's watch and the OPC UA one ask from two threads
+                    return asked()
+
+            machine.changes = changes  # type: ignore[method-assign]
+            yield machine, url
             assert proc.stdin is not None
             proc.stdin.write("end\n")
             proc.stdin.flush()
@@ -286,13 +295,32 @@ def loaded(url: str, seconds: float, mode: str) -> Iterator[None]:
 # ---------------------------------------------------------------------------- rounds
 
 
+def watching(url: str, machine: page.Cpu, changes: int) -> threading.Thread:
+    """:func:`watch` in a thread and an event loop of its own (Playwright's sync API
+    keeps one running in the main thread); its result in ``thread.result``."""
+
+    def run() -> None:
+        thread.result = asyncio.run(watch(url, machine, changes))  # type: ignore[attr-defined]
+
+    thread = threading.Thread(target=run, daemon=True)
+    thread.result = {"latency": [], "missed": []}  # type: ignore[attr-defined]
+    thread.start()
+    return thread
+
+
+def watched(url: str, machine: page.Cpu, changes: int) -> dict[str, list[float]]:
+    thread = watching(url, machine, changes)
+    thread.join(changes * 0.4 + 120)
+    return thread.result  # type: ignore[attr-defined,no-any-return]
+
+
 def one_round(changes: int, browser: Any | None) -> dict[str, dict[str, list[float]]]:
     result: dict[str, dict[str, list[float]]] = {}
     with cpu(with_page=False) as (machine, url):
-        result["idle"] = asyncio.run(watch(url, machine, changes))
+        result["idle"] = watched(url, machine, changes)
         for mode in ("clients", "flood"):
             with loaded(url, changes * 0.4 + 60, mode):
-                result[mode] = asyncio.run(watch(url, machine, changes))
+                result[mode] = watched(url, machine, changes)
     if browser is not None:
         result.update(page_round(browser, changes))
     return result
@@ -306,17 +334,13 @@ def page_round(browser: Any, changes: int) -> dict[str, dict[str, list[float]]]:
         tab.add_init_script(page.HOOK)
         try:
             page.first_paint(tab, machine.url, empty=False)
-            seen: list[dict[str, list[float]]] = []
-            thread = threading.Thread(
-                target=lambda: seen.append(asyncio.run(watch(url, machine, changes)))
-            )
-            thread.start()
+            thread = watching(url, machine, changes)
             colour = page.colour_latency(tab, machine, changes)
             thread.join(changes * 0.4 + 120)
         finally:
             context.close()
     return {
-        "page": seen[0] if seen else {"latency": [], "missed": []},
+        "page": thread.result,  # type: ignore[attr-defined]
         "page: colour": {"latency": colour["colour"], "missed": colour["missed"]},
     }
 

@@ -19,6 +19,7 @@ from asyncua.server.internal_session import InternalSession
 
 from s7graph.web.opcua.model import UaType, eu_information
 from s7graph.web.opcua.typed import (
+    AttributeIds,
     ObjectIds,
     Server,
     StatusCodes,
@@ -55,6 +56,7 @@ class Nodes:
         self.under: dict[ua.NodeId, list[ua.NodeId]] = {}
         """Per root of a subtree, the nodes added under it (itself first)."""
         self._written: dict[ua.NodeId, tuple[Any, int]] = {}
+        self._names: dict[tuple[ua.NodeId, AttributeIds], str] = {}
 
     # ------------------------------------------------------------ adding
 
@@ -262,12 +264,16 @@ class Nodes:
             await self.server.write_attribute_value(nid, ua.DataValue(StatusCode=initial))
 
     async def delete(self, root: ua.NodeId) -> None:
-        """Delete the subtree added under ``root``, ``root`` itself included."""
+        """Delete the subtree added under ``root``, ``root`` itself included (and every
+        subtree inside it)."""
         nids = self.under.pop(root, [])
-        for other in self.under.values():  # a subtree inside this one goes too
-            other[:] = [n for n in other if n not in set(nids)]
         if not nids:
             return
+        gone = set(nids)
+        for sub in [k for k in self.under if k in gone]:
+            del self.under[sub]
+        for other in self.under.values():  # a subtree this one was inside
+            other[:] = [nid for nid in other if nid not in gone]
         params = ua.DeleteNodesParameters()
         for nid in reversed(nids):
             item = ua.DeleteNodesItem()
@@ -275,6 +281,8 @@ class Nodes:
             item.DeleteTargetReferences = True
             params.NodesToDelete.append(item)
             self._written.pop(nid, None)
+        for key in [k for k in self._names if k[0] in gone]:
+            del self._names[key]
         await self._session.delete_nodes(params)
 
     # ------------------------------------------------------------ values
@@ -299,6 +307,19 @@ class Nodes:
         await self.server.write_attribute_value(nid, data)
         self._written[nid] = (shown, status)
         return True
+
+    async def rename(self, nid: ua.NodeId, shown: str, description: str = "") -> None:
+        """Give ``nid`` the display name ``shown`` (and ``description``, or ``shown``)
+        unless it has them already."""
+        for attr, text in (
+            (AttributeIds.DisplayName, shown),
+            (AttributeIds.Description, description or shown),
+        ):
+            if self._names.get((nid, attr)) == text:
+                continue
+            value = data_value(ua.Variant(ua.LocalizedText(text), ua.VariantType.LocalizedText))
+            await self.server.write_attribute_value(nid, value, attr)
+            self._names[(nid, attr)] = text
 
     def known(self, nid: ua.NodeId) -> bool:
         return nid in self._written

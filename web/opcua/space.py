@@ -111,6 +111,8 @@ class StepNodes:
     conditions: dict[str, ua.NodeId] = field(default_factory=dict)  # IL/SV -> node
     t_ms: int = 0
     u_ms: int = 0
+    sequence: int = 0  # the sequence it is in
+    shape: tuple[bool, bool] | None = None  # it has an interlock, a supervision
 
 
 @dataclass
@@ -229,52 +231,68 @@ class Space:
         await self.build_chart(fb, layout)
 
     async def build_chart(self, fb: str, layout: ChartLayout) -> None:
-        """The FB's sequences and steps for chart ``layout`` (again after a download:
-        the old ones go, the node ids stay those of the step numbers)."""
+        """The FB's sequences and steps for chart ``layout``; again after a download, as
+        a change: a step kept keeps its nodes (a client's monitored items with them),
+        one gone, moved to another sequence or given another interlock or supervision
+        loses them, a new one gets them; names are renamed in place."""
         fbn = self.fbs[fb]
         if layout.version == fbn.version:
             return
-        for seq in list(fbn.sequences.values()):
-            await self.nodes.delete(seq)
-        fbn.sequences.clear()
-        fbn.steps.clear()
-        fbn.touched = set()
         n = self.nodes
-        by_number = {s.number: s for s in layout.steps}
+        infos = {s.number: s for s in layout.steps}
+        sequence_of = {number: q.number for q in layout.sequences for number in q.steps}
+        for number, nodes in list(fbn.steps.items()):
+            info = infos.get(number)
+            shape = (info.interlock, info.supervision) if info is not None else None
+            if sequence_of.get(number) != nodes.sequence or shape != nodes.shape:
+                await n.delete(nodes.node)
+                del fbn.steps[number]
+        numbers = {q.number for q in layout.sequences}
+        for number, seq in list(fbn.sequences.items()):
+            if number not in numbers:
+                await n.delete(seq)
+                del fbn.sequences[number]
         for q in layout.sequences:
             nid = self.nid(fb, f"Sequence{q.number}")
             n.root(nid)
-            shown = f"Sequence {q.number}" + (f" {q.name}" if q.name else "")
-            n.obj(fbn.node, nid, f"Sequence{q.number}", display=shown)
-            n.var(nid, self.nid(fb, f"Sequence{q.number}", "Number"), "Number", UINT16)
-            n.var(nid, self.nid(fb, f"Sequence{q.number}", "Name"), "Name", TEXT)
+            if q.number not in fbn.sequences:
+                n.obj(fbn.node, nid, f"Sequence{q.number}")
+                n.var(nid, self.nid(fb, f"Sequence{q.number}", "Number"), "Number", UINT16)
+                n.var(nid, self.nid(fb, f"Sequence{q.number}", "Name"), "Name", TEXT)
+                fbn.sequences[q.number] = nid
             for number in q.steps:
-                step = by_number.get(number)
-                if step is not None:
-                    fbn.steps[number] = self._step(fb, nid, step.number, step.name, step)
+                if number not in fbn.steps and number in infos:
+                    fbn.steps[number] = self._step(fb, nid, infos[number], q.number)
             n.end_root()
-            fbn.sequences[q.number] = nid
         await n.flush()
         fbn.version = layout.version
         fbn.touched = set(fbn.steps)  # the next state sets every step
+        await self._names(fb, layout)
+
+    async def _names(self, fb: str, layout: ChartLayout) -> None:
+        """The sequences' and steps' names, numbers and display names of ``layout``."""
+        fbn, n = self.fbs[fb], self.nodes
         for q in layout.sequences:
+            nid = fbn.sequences[q.number]
+            await n.rename(nid, f"Sequence {q.number}" + (f" {q.name}" if q.name else ""))
             await n.set(self.nid(fb, f"Sequence{q.number}", "Number"), _v(q.number, UINT16))
             await n.set(self.nid(fb, f"Sequence{q.number}", "Name"), _v(q.name, TEXT))
         for s in layout.steps:
             nodes = fbn.steps.get(s.number)
             if nodes is not None:
+                await n.rename(nodes.node, f"S{s.number} {s.name}".strip(), s.message)
                 await n.set(nodes.vars["Number"], _v(s.number, UINT16))
                 await n.set(nodes.vars["Name"], _v(s.name, TEXT))
                 await n.set(nodes.vars["Initial"], _v(s.initial, BOOLEAN))
         await n.set(fbn.vars["ChartVersion"], _v(layout.version, UINT64))
 
-    def _step(self, fb: str, parent: ua.NodeId, number: int, name: str, step: Any) -> StepNodes:
+    def _step(self, fb: str, parent: ua.NodeId, step: Any, sequence: int) -> StepNodes:
         n = self.nodes
-        key = f"S{number}"
+        key = f"S{step.number}"
         nid = self.nid(fb, key)
-        shown = f"{key} {name}".strip()
-        n.obj(parent, nid, key, display=shown, description=step.message or shown)
-        nodes = StepNodes(nid, {})
+        n.root(nid)
+        n.obj(parent, nid, key)
+        nodes = StepNodes(nid, {}, sequence=sequence, shape=(step.interlock, step.supervision))
         for var, t, text in _STEP_VARS:
             nodes.vars[var] = n.var(nid, self.nid(fb, key, var), var, t, description=text)
         for kind, flag in (("IL", step.interlock), ("SV", step.supervision)):
@@ -289,6 +307,7 @@ class Space:
                 )
                 n.reference(nid, cond, ObjectIds.HasCondition)
                 nodes.conditions[kind] = cond
+        n.end_root()
         return nodes
 
     async def build_operands(self, catalog: OperandCatalog) -> None:
