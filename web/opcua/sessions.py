@@ -303,6 +303,14 @@ class FaceServer(InternalServer):
     on_close: Callable[[FaceUser], None] | None = None
     pace: Pace | None = None  # all sessions' requests together
 
+    def register_server(self, server: Any, conf: Any = None) -> None:
+        """No discovery server: a client registering one is refused (asyncua serves
+        RegisterServer before any session, so no permission rule can)."""
+        raise ServiceError(StatusCodes.BadServiceUnsupported)
+
+    def register_server2(self, params: ua.RegisterServer2Parameters) -> None:
+        raise ServiceError(StatusCodes.BadServiceUnsupported)
+
     def create_session(
         self,
         name: str,

@@ -41,6 +41,11 @@ async def _names(client: object, path: str) -> dict[str, str]:
     return out
 
 
+def _commands(face: FaceRig) -> list[AuditRecord]:
+    """The audit rows of commands (logins and logouts left out)."""
+    return [r for r in read_audit(face.rig.state) if r.op not in ("login", "logout")]
+
+
 def test_the_address_space_is_the_cpu_its_fbs_sequences_steps_and_symbols(face: FaceRig) -> None:
     async def check() -> None:
         async with connected(face.url) as c:
@@ -185,14 +190,9 @@ def test_a_viewer_is_refused_by_the_gate_and_audited(face: FaceRig) -> None:
             assert _code(refused.value) == ua.StatusCodes.BadUserAccessDenied
 
     run(check())
-    row = [r for r in read_audit(face.rig.state) if r.user == "vic"][-1]
+    row = [r for r in _commands(face) if r.user == "vic"][-1]
     assert (row.op, row.outcome, row.role) == ("init", "refused", "viewer")
     assert "may not init" in row.reason
-
-
-def _commands(face: FaceRig) -> list[AuditRecord]:
-    """The audit rows of commands (logins and logouts left out)."""
-    return [r for r in read_audit(face.rig.state) if r.op not in ("login", "logout")]
 
 
 def test_anonymous_reads_but_never_writes_nor_calls(face: FaceRig) -> None:

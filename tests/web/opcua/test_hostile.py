@@ -156,6 +156,21 @@ def test_wrong_arguments_are_refused_by_status_code(face: FaceRig) -> None:
     assert after == before  # no command went to the CPU
 
 
+def test_no_client_registers_a_server_with_the_face(face: FaceRig) -> None:
+    async def check() -> None:
+        async with connected(face.url) as c:
+            server = ua.RegisteredServer()
+            server.ServerUri = "urn:someone:else"
+            server.ServerNames = [ua.LocalizedText("someone")]
+            server.IsOnline = True
+            with pytest.raises(UaStatusCodeError) as refused:
+                await c.uaclient.register_server(server)
+            assert _code(refused.value) == ua.StatusCodes.BadServiceUnsupported
+            assert [s.ApplicationUri for s in await c.find_servers()] == ["urn:s7graph:opcua:cpu1"]
+
+    run(check())
+
+
 def test_garbage_on_the_socket_costs_that_connection_only(face: FaceRig) -> None:
     where = urlparse(face.url)
     for garbage in (b"\x00" * 64, b"HEL" + b"\xff" * 5000, b"MSGF" + b"\x10\x00\x00\x00" * 64):
