@@ -8,9 +8,10 @@ hash; each OPC UA session keeps the bus token of its own login in its
 :class:`FaceUser`, logged out when the session closes. An anonymous session is a viewer
 (read, browse, subscribe) or refused. :class:`FaceSession` bounds what one request and
 one session may ask for (:class:`Limits`) — more operations, subscriptions or monitored
-items than that are answered with a bad status code, never served — and
-:class:`FaceServer` makes every session one of them. :class:`FaceRules` lets no client
-change the address space's structure.
+items than that are answered with a bad status code, never served — and paces them
+(:class:`Pace`: a request asked faster than its session's or the server's share waits
+before it is served); :class:`FaceServer` makes every session one of them and serves no
+RegisterServer. :class:`FaceRules` lets no client change the address space's structure.
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ __all__ = [
     "FaceSession",
     "FaceUser",
     "Limits",
+    "Pace",
     "caller",
 ]
 
