@@ -3,8 +3,8 @@ the core is pure.
 
 - Layers, bottom to top: ``engine`` → ``sfb`` and ``steps`` (siblings, neither imports the
   other) → ``sequencer`` → ``web``; inside ``web`` the roles stack ``harness`` → ``access``
-  → ``bus`` → ``recorder`` → ``view`` → ``wiring`` → ``cli``. A module imports only from its
-  own layer or below.
+  → ``bus`` → ``recorder`` → ``view`` → ``opcua`` → ``wiring`` → ``cli``. A module imports
+  only from its own layer or below.
 - No import cycle between modules, whether the import runs at import time, inside a
   function or only for the type checker (``TYPE_CHECKING``): every import is an edge.
 - Inside ``sequencer`` the jobs keep their order: the chart's text (``text``) and its
@@ -62,6 +62,7 @@ RANKS: dict[str, float] = {
     "s7graph.web.bus": 4.2,
     "s7graph.web.recorder": 4.3,
     "s7graph.web.view": 4.4,
+    "s7graph.web.opcua": 4.42,  # the OPC UA face: beside the view, a client of the bus
     "s7graph.web.wiring": 4.45,
     "s7graph.web.cli": 4.5,
     "s7graph.__main__": 5,

@@ -206,13 +206,15 @@ def online_cpu(
     users: dict[str, str],
     certs: BusCerts,
     name: str = "chart.s7g",
+    operands: bool = False,
     messages: bool = False,
 ) -> Iterator[OnlineRig]:
     """``chart`` written to ``tmp_path / name`` and run with a users file (name → role,
     password ``PASSWORD``), its bus on TLS on loopback with the certificates ``certs`` (as
     ``s7graph run`` insists with a users file: a client joins as ``client.olga``), the view
-    when ``serve``; the CPU takes force jobs as ``s7graph run`` does, and with ``messages``
-    keeps its message list on the bus (the page's Alarms)."""
+    when ``serve``; the CPU takes force jobs as ``s7graph run`` does, and publishes its
+    operands when ``operands`` (``web.bus.operands``) and keeps its message list on the bus
+    when ``messages`` (the page's Alarms)."""
     from s7graph.sfb.alarms import message_list
     from s7graph.web.access.audit import AuditStore
     from s7graph.web.access.login import Authenticator
@@ -221,6 +223,7 @@ def online_cpu(
     from s7graph.web.bus.gate import Gate
     from s7graph.web.bus.live import LiveGraph
     from s7graph.web.bus.online import OnlineChange
+    from s7graph.web.bus.operands import OperandFeed
     from s7graph.web.bus.session import BusEnds
     from s7graph.web.wiring.live_edge import LiveEdge
 
@@ -250,6 +253,7 @@ def online_cpu(
             online=online,
             ends=BusEnds(listen=[endpoint], tls=certs.tls("cpu.cpu1")),
             forcing=Forcing(session.cpu),
+            operands=OperandFeed(session, fb=live.fb) if operands else None,
         )
         with edge, scanning(session, edge, lambda record: scans.append(record.cycle)):
             client = certs.tls("client.olga")

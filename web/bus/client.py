@@ -37,6 +37,8 @@ from s7graph.web.bus.protocol import (
     ForceList,
     LoginReply,
     LoginRequest,
+    OperandCatalog,
+    OperandValues,
     ProjectFiles,
     ProtocolError,
     StepStateUpdate,
@@ -199,6 +201,21 @@ class BusClient:
             return decode(data, WatchValues)
         except ProtocolError as exc:
             return WatchValues(error=f"unreadable answer: {exc}")
+
+    def operands(self) -> OperandValues | None:
+        """The CPU's latest operand values, or None if no CPU answers (or it has none)."""
+        data = self._get_one(self._keys.operands)
+        return None if data is None else decode(data, OperandValues)
+
+    def operand_catalog(self) -> OperandCatalog | None:
+        """What the CPU's operand values carry (names, types, addresses), or None."""
+        data = self._get_one(self._keys.operand_list)
+        return None if data is None else decode(data, OperandCatalog)
+
+    def on_operands(self, callback: Callable[[OperandValues], None]) -> None:
+        """Call ``callback`` with the current operand values, then with each newer one (by
+        ``seq``; on a zenoh thread)."""
+        self._follow_seq(self._keys.operands, OperandValues, self.operands, callback)
 
     def send(self, command: Command, *, timeout: float | None = None) -> CommandReply:
         """Send a command and wait for the CPU's answer; no answer is a refusal too. A

@@ -26,6 +26,10 @@ Key space, all under ``s7graph/<cpu>/``:
 - ``alarms/history`` — queryable: the last 200 message events (:class:`AlarmHistory`);
 - ``forces`` — the :class:`ForceList` (the CPU's force jobs), published on change and a
   queryable; ``status`` counts them (the FRCE LED);
+- ``operands`` — :class:`OperandValues`: the symbol table's operands and each FB's
+  variables and pins, read at a scan boundary, published on change at most 10 times a
+  second (``web.bus.operands``; also a queryable); ``operands/list`` — queryable: their
+  :class:`OperandCatalog` (names, types, addresses);
 - ``cmd`` — queryable: a :class:`Command` in, one :class:`CommandReply` out. Valid commands
   go on a thread-safe queue; the scan loop drains it at a scan boundary, where the
   :class:`~web.bus.gate.Gate` checks who sent each and whether their role allows it,
@@ -95,6 +99,14 @@ class keys:
     @property
     def forces(self) -> str:
         return f"{ROOT}/{self.cpu}/forces"
+
+    @property
+    def operands(self) -> str:
+        return f"{ROOT}/{self.cpu}/operands"
+
+    @property
+    def operand_list(self) -> str:
+        return f"{ROOT}/{self.cpu}/operands/list"
 
     @property
     def cmd(self) -> str:

@@ -61,10 +61,14 @@ __all__ = [
     "CycleStats",
     "DiagBuffer",
     "DiagEvent",
+    "FbOperands",
     "ForceEntry",
     "ForceList",
     "LoginReply",
     "LoginRequest",
+    "OperandCatalog",
+    "OperandInfo",
+    "OperandValues",
     "ProjectFile",
     "ProjectFiles",
     "ProtocolError",
@@ -536,6 +540,58 @@ class WatchValues(_Msg, frozen=True, kw_only=True):
     state: CpuState = "RUN"
     values: Annotated[list[WatchValue], Meta(max_length=MAX_WATCH)] = []
     error: Text = ""
+
+
+# ---------------------------------------------------------------- operands
+
+
+class OperandInfo(_Msg, frozen=True, kw_only=True):
+    """One operand a CPU publishes on ``operands``: its name, S7 type (``BOOL``, ``INT``,
+    ``TIME``, ``STRING[20]``), address (a symbol's; "" for an FB's variable or pin), the
+    comment, and a pin's direction (``IN``/``OUT``; "" for the others)."""
+
+    name: ValueName
+    type: ShortText
+    address: Annotated[str, Meta(max_length=64)] = ""
+    comment: Text = ""
+    direction: Literal["IN", "OUT", ""] = ""
+
+
+Infos = Annotated[list[OperandInfo], Meta(max_length=4096)]
+
+
+class FbOperands(_Msg, frozen=True, kw_only=True):
+    """One FB's operands: the variables of its chart (``VAR``) and the pins of its
+    parameter set, each list in the chart's and the pin table's order."""
+
+    variables: Infos = []
+    pins: Infos = []
+
+
+class OperandCatalog(_Msg, frozen=True, kw_only=True):
+    """``operands/list`` (a queryable): what :class:`OperandValues` carries, and their
+    types; ``version`` changes when an online change changes an FB's variables or pins."""
+
+    version: Count = 0
+    symbols: Infos = []
+    fbs: Annotated[dict[Name, FbOperands], Meta(max_length=256)] = {}
+
+
+Values = Annotated[dict[ValueName, Scalar], Meta(max_length=4096)]
+
+
+class OperandValues(_Msg, frozen=True, kw_only=True):
+    """``operands``: the values of the symbol table's operands and of each FB's variables
+    and pins (``fbs``: FB → name → value), published on change at most
+    ``web.bus.operands.PERIOD_MS`` apart, read at a scan boundary (also a queryable);
+    ``seq`` counts the changes, ``catalog`` is the :class:`OperandCatalog`'s version. An
+    operand that cannot be read is left out."""
+
+    seq: Count = 0
+    cycle: Count = 0
+    catalog: Count = 0
+    symbols: Values = {}
+    fbs: Annotated[dict[Name, Values], Meta(max_length=256)] = {}
 
 
 # ---------------------------------------------------------------- messages (alarms)

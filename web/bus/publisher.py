@@ -391,6 +391,28 @@ class BusPublisher:
         key = self._keys.fb(fb, leaf) if fb is not None else f"{ROOT}/{self._keys.cpu}/{leaf}"
         self._serve(key, read)
 
+    def feed(self, leaf: str) -> Callable[[msgspec.Struct], None]:
+        """One more published key, ``s7graph/<cpu>/<leaf>``, also a queryable answering the
+        latest message; the function returned publishes a message there (from the scan
+        thread: the outbox's thread encodes and puts it). A feed of values whose newest
+        is whole (``web.bus.operands``): a put the bus cannot take is dropped."""
+        key = f"{ROOT}/{self._keys.cpu}/{leaf}"
+        pub = self._session.declare_publisher(key, encoding=zenoh.Encoding.APPLICATION_JSON)
+        self._declared.append(pub)
+        latest: list[msgspec.Struct | None] = [None]
+
+        def read() -> bytes | None:
+            message = latest[0]
+            return None if message is None else encode(message)
+
+        self._serve(key, read)
+
+        def post(message: msgspec.Struct) -> None:
+            latest[0] = message
+            self.outbox.post(pub, message)
+
+        return post
+
     @property
     def queued(self) -> int:
         """Commands received and not yet taken at a scan boundary."""

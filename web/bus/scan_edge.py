@@ -13,9 +13,10 @@ answers the watch requests waiting (``watch``, ``web.bus.watch``).
 :class:`~web.bus.live.LiveGraph`, built only when the FB may have changed:
 ``LiveGraph.changed``; out in the scan's one message on ``deltas``), the CPU's message
 list when it changed (``alarms``), optionally the recording (a :class:`Recording`:
-``web.recorder``'s rerun ``.rrd`` file), and the FB's commands. ``web.wiring.live_edge``
-gives it its bus, its recording and, in one process, the view; ``web.wiring.program_edge``
-gives a program of blocks its bus.
+``web.recorder``'s rerun ``.rrd`` file), the FB's commands, and the operands when due
+(``operands``, ``web.bus.operands``). ``web.wiring.live_edge`` gives it its bus, its
+recording and, in one process, the view; ``web.wiring.program_edge`` gives a program of
+blocks its bus.
 """
 
 from __future__ import annotations
@@ -48,6 +49,7 @@ from s7graph.web.bus.watch import Watching
 if TYPE_CHECKING:
     from s7graph.web.bus.forcing import Forcing
     from s7graph.web.bus.online import OnlineChange
+    from s7graph.web.bus.operands import OperandFeed
 
 __all__ = ["CpuEdge", "Recording", "ScanEdge", "cycle_report", "cycle_stats"]
 
@@ -261,13 +263,17 @@ class ScanEdge(CpuEdge):
         online: OnlineChange | None = None,
         forcing: Forcing | None = None,
         cpu: Cpu | None = None,
+        operands: OperandFeed | None = None,
     ) -> None:
         super().__init__(publisher, forcing=forcing, cpu=cpu)
         self.live = live
         self.online = online
+        self.operands = operands
         self.recorder: Recording | None = None
         if online is not None and publisher is not None:
             online.attach(publisher)
+        if operands is not None and publisher is not None:
+            operands.attach(publisher)
 
     def on_record(
         self,
@@ -295,6 +301,8 @@ class ScanEdge(CpuEdge):
         if alarms is not None:
             publisher.publish_alarms(alarms)
         self._boundary(record, runner, until_ns, publisher)
+        if self.operands is not None:
+            self.operands.at_boundary(record.cycle)
         if self.online is not None:
             self.online.at_boundary()
         return update

@@ -1,7 +1,7 @@
 """The ``s7graph`` command line: ``run``, ``sim``, ``check``, ``import``, ``export``,
-``--version``; for the bus ``web``, ``router``, ``watch``, ``status``, ``diag`` and the
-shell's commands (``ack``, ``mode``, ..., ``force``, ``download``, ``stop``, ``start``,
-``mres``); ``users``, ``audit`` and ``certs``.
+``--version``; for the bus ``web``, ``opcua``, ``router``, ``watch``, ``status``, ``diag``
+and the shell's commands (``ack``, ``mode``, ..., ``force``, ``download``, ``stop``,
+``start``, ``mres``); ``users``, ``audit`` and ``certs``.
 
 The shell's command of an op is built from the op's struct (``shell`` in
 ``web.commands``): one loop makes ``ack``, ``mode``, ``init`` ... with the op's argument
@@ -29,6 +29,7 @@ import typer
 
 if TYPE_CHECKING:
     from s7graph.web.cli.net import NetOptions
+    from s7graph.web.cli.run_chart import OpcuaFace
 
 from s7graph import __version__
 from s7graph.engine.errors import S7Error
@@ -164,7 +165,8 @@ def _with_credentials(fn: Callable[..., Any]) -> Callable[..., Any]:
     every command on the bus proves who it is the same way, the shell's included."""
     signature = inspect.signature(fn, eval_str=True)
     have = signature.parameters
-    wanted = dict(_CREDENTIAL_OPTIONS, **(_LISTENER_OPTIONS if "listen" in have else {}))
+    listens = "listen" in have and have["listen"].annotation == Listen  # the bus's, not OPC UA's
+    wanted = dict(_CREDENTIAL_OPTIONS, **(_LISTENER_OPTIONS if listens else {}))
     extra = {name: kind for name, kind in wanted.items() if name not in have}
     if "connect" not in have or not extra:
         return fn
@@ -324,6 +326,22 @@ Core = Annotated[
 ]
 
 
+OpcuaUrl = Annotated[
+    str | None,
+    typer.Option(
+        "--opcua",
+        metavar="opc.tcp://HOST:PORT",
+        help="Serve OPC UA there from a process of its own (s7graph opcua as a child, "
+        "restarted when it ends; charts only).",
+    ),
+]
+OpcuaCert = Annotated[
+    Path | None,
+    typer.Option(help="The OPC UA server's certificate (PEM or DER; with --opcua-key)."),
+]
+OpcuaKey = Annotated[Path | None, typer.Option(help="The OPC UA server's private key.")]
+
+
 @app.command()
 def run(
     program: ProgramArg,
@@ -351,6 +369,9 @@ def run(
     comm_load: CommLoad = COMM_LOAD_PCT,
     core: Core = None,
     blocks: Blocks = None,
+    opcua: OpcuaUrl = None,
+    opcua_cert: OpcuaCert = None,
+    opcua_key: OpcuaKey = None,
 ) -> None:
     """Run a program or a chart on the system clock until Ctrl-C."""
     if _supervised():
@@ -358,6 +379,7 @@ def run(
 
         raise typer.Exit(supervise(_ENTRY_ARGS or []))
     priority = _scan_priority(rt_priority)
+    face = _opcua_face(program, opcua, users, opcua_cert, opcua_key)
     if program.suffix.lower() == ".scl" or (blocks and program.suffix.lower() != ".s7g"):
         options = {"symbols": symbols, "state": state, "cycle_ms": cycle_ms, "core": core}
         options |= {"duration_s": duration_s, "max_cycle_ms": max_cycle_ms, "fresh": fresh}
@@ -398,14 +420,12 @@ def run(
                 comm_load_pct=comm_load,
                 core=core if core is not None else "auto",
                 blocks=blocks or [],
+                opcua=face,
             )
         )
     from s7graph.web.cli.run_program import run_program
 
-    for given, option in ((plant, "--plant"), (symbols, "--symbols"), (record, "--record")):
-        if given is not None:
-            print(f"s7graph: error: {option} is for a chart (.s7g), not a program", file=sys.stderr)
-            raise typer.Exit(2)
+    _chart_only(plant=plant, symbols=symbols, record=record)
     raise typer.Exit(
         run_program(
             program,
@@ -454,6 +474,36 @@ def _run_scl_program(program: Path, blocks: list[Path], bus: bool, **options: An
     from s7graph.web.cli.run_scl import run_scl
 
     raise typer.Exit(run_scl(program, blocks=blocks, **options))
+
+
+def _chart_only(**given: Path | None) -> None:
+    """``run PROGRAM.py``: the options of a chart's run are refused (exit 2, one line)."""
+    for name, value in given.items():
+        if value is not None:
+            print(f"s7graph: error: --{name} is for a chart (.s7g), not a program", file=sys.stderr)
+            raise typer.Exit(2)
+
+
+def _opcua_face(
+    program: Path, url: str | None, users: Path | None, cert: Path | None, key: Path | None
+) -> OpcuaFace | None:
+    """``run --opcua``'s child, checked before the CPU starts (exit 2 with one line)."""
+    if url is not None and program.suffix.lower() != ".s7g":
+        print("s7graph: error: --opcua serves a chart's CPU (.s7g)", file=sys.stderr)
+        raise typer.Exit(2)
+    if url is None:
+        if cert is not None or key is not None:
+            print("s7graph: error: --opcua-cert and --opcua-key go with --opcua", file=sys.stderr)
+            raise typer.Exit(2)
+        return None
+    from s7graph.web.cli.run_chart import OpcuaFace
+    from s7graph.web.opcua.server import listen_problem
+
+    problem = listen_problem(url, users=users is not None, cert=cert, key=key)
+    if problem:
+        print(f"s7graph: error: --opcua: {problem}", file=sys.stderr)
+        raise typer.Exit(2)
+    return OpcuaFace(url=url, cert=cert, key=key)
 
 
 @app.command()
@@ -603,6 +653,64 @@ def web(
     net = _net(connect=connect, host=host, tls_ca=tls_ca, origins=origin)
     raise typer.Exit(
         web_command(net, cpu=cpu, fb=fb, port=port, duration_s=duration_s, child=child)
+    )
+
+
+Anonymous = Annotated[
+    str | None,
+    typer.Option(
+        metavar="read|refuse",
+        help="Anonymous OPC UA sessions: read (browse, read, subscribe) or refused. "
+        "Default: read on loopback, refused beyond it.",
+    ),
+]
+
+
+@app.command()
+def opcua(
+    connect: Connect = None,
+    cpu: Annotated[str | None, typer.Option("--cpu", help="The CPU (default: the first).")] = None,
+    listen: Annotated[
+        str, typer.Option("--listen", metavar="opc.tcp://HOST:PORT", help="Where to serve OPC UA.")
+    ] = "opc.tcp://127.0.0.1:4840",
+    users: Annotated[
+        Path | None,
+        typer.Option(
+            help="The users file the CPU checks logins against (the CPU checks each "
+            "password; needed beyond loopback)."
+        ),
+    ] = None,
+    anonymous: Anonymous = None,
+    cert: Annotated[
+        Path | None, typer.Option(help="The server's certificate (PEM or DER), for SignAndEncrypt.")
+    ] = None,
+    key: Annotated[Path | None, typer.Option(help="The server's private key.")] = None,
+    trust: Annotated[
+        Path | None,
+        typer.Option(help="A folder of trusted client certificates (default: any may connect)."),
+    ] = None,
+    tls_ca: TlsCa = None,
+    duration_s: Annotated[float | None, typer.Option(help="Stop after this many seconds.")] = None,
+    child: Annotated[
+        bool, typer.Option("--child", hidden=True, help="The OPC UA server of a run --opcua.")
+    ] = False,
+) -> None:
+    """Serve a CPU on the bus over OPC UA, as a process of its own."""
+    from s7graph.web.cli.opcua import opcua_command
+
+    net = _net(connect=connect, users=users, tls_ca=tls_ca)
+    raise typer.Exit(
+        opcua_command(
+            net,
+            cpu=cpu,
+            listen=listen,
+            anonymous=anonymous,
+            cert=cert,
+            key=key,
+            trust=trust,
+            duration_s=duration_s,
+            child=child,
+        )
     )
 
 

@@ -16,7 +16,10 @@ engineer's force jobs too, ``web/bus/forcing.py``, and downloads, ``web/bus/onli
 each audited in the state file) and serves its live browser view on ``--host:--port`` from
 a process of its own (``web/cli/view_process.py``: ``s7graph web`` as a child, restarted
 when it ends), so a page load never shares the scan's process. ``--record FILE.rrd``
-records the same updates as a rerun timeline (extra ``[trace]``). The maximum cycle time is
+records the same updates as a rerun timeline (extra ``[trace]``). ``--opcua URL`` serves
+the CPU over OPC UA from a process of its own too (``web/cli/opcua.py``: ``s7graph opcua``
+as a child, restarted when it ends; ``web.opcua``), so an OPC UA client never shares the
+scan's process either. The maximum cycle time is
 ``--max-cycle-ms``, by default S7's 150 ms; ``view_in_process`` (for the jitter benchmark's
 comparison) serves the view in the CPU's process as before, with 1 s.
 """
@@ -26,6 +29,7 @@ from __future__ import annotations
 import functools
 import sys
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -52,6 +56,17 @@ if TYPE_CHECKING:
     from s7graph.web.wiring.live_edge import LiveEdge
 
 DEFAULT_MAX_CYCLE_MS = 150.0  # S7's default maximum cycle time
+
+
+@dataclass(frozen=True)
+class OpcuaFace:
+    """``--opcua``: where the OPC UA child serves, with its certificate and key."""
+
+    url: str
+    cert: Path | None = None
+    key: Path | None = None
+
+
 IN_PROCESS_VIEW_MAX_CYCLE_MS = 1000.0
 """With ``view_in_process``: sending the scene to a new page holds the scan's process."""
 
@@ -77,6 +92,7 @@ def run_chart(
     comm_load_pct: float = COMM_LOAD_PCT,
     core: str | int | None = "auto",
     blocks: Sequence[Path] = (),
+    opcua: OpcuaFace | None = None,
 ) -> int:
     """Run ``path`` until Ctrl-C/SIGTERM/``duration_s``; 0 clean, 1 plant error, STOP by
     error or state not written, 2 bad chart or a state file it cannot trust.
@@ -93,7 +109,8 @@ def run_chart(
     ``comm_load_pct``: the share of the cycle commands may take at a scan boundary.
     ``core``: the processor kept for the scan (``--core``: ``engine.cores``); the bus, the
     view and the writer start off it. ``blocks``: the S7-SCL sources the chart's calls reach
-    (``--blocks``), loaded beside it; their instance DBs are kept in the state file."""
+    (``--blocks``), loaded beside it; their instance DBs are kept in the state file.
+    ``opcua``: the OPC UA server's child (``--opcua``)."""
     try:
         kept = core_for(core, rt_priority)
     except ValueError as exc:
@@ -121,6 +138,7 @@ def run_chart(
             comm_load_pct=comm_load_pct,
             core=kept,
             blocks=blocks,
+            opcua=opcua,
         )
 
 
@@ -145,6 +163,7 @@ def _run_chart(
     comm_load_pct: float,
     core: int | None,
     blocks: Sequence[Path] = (),
+    opcua: OpcuaFace | None,
 ) -> int:
     made = _load(path, symbols, plant, session, blocks)
     if isinstance(made, int):
@@ -161,8 +180,8 @@ def _run_chart(
         return opened
     store = opened.store
     live: LiveEdge | None = None
-    view: ViewProcess | None = None
-    if web or record is not None or (net is not None and net.on_bus):
+    children: list[ViewProcess] = []
+    if web or opcua or record is not None or (net is not None and net.on_bus):
         edges = _edges(
             session,
             store,
@@ -173,10 +192,11 @@ def _run_chart(
             path=path,
             symbols=symbols,
             in_process=view_in_process,
+            opcua=opcua,
         )
         if isinstance(edges, int):
             return edges
-        live, view = edges
+        live, children = edges
     failure: list[str] = []
     last = [clock.now_ns()]
     runner: Runner
@@ -197,7 +217,7 @@ def _run_chart(
         if live is not None:
             live.on_record(record, stats=cpu.stats, runner=runner)
 
-    stays = web or bool(recovered and live is not None and live.endpoint)  # on the bus
+    stays = web or opcua is not None or bool(recovered and live is not None and live.endpoint)
     runner = Runner(
         cpu,
         cycle_ms=cycle_ms,
@@ -209,16 +229,14 @@ def _run_chart(
         core=core,
         marks=child_marks(),
     )
-    _wire(live, runner, restart)
-    if view is not None:
-        view.start()
+    _wire(live, runner, restart, children)
     status = run_until_stopped(
         runner,
         opened,
         what=f"{path.name} ({session.cc.name})",
         restart=restart,
         duration_s=duration_s,
-        close=functools.partial(_close, view, live),
+        close=functools.partial(_close, children, live),
         recovered=recovered,
     )
     if failure:
@@ -234,18 +252,21 @@ def _watch(cpu: Cpu, max_cycle_ms: float | None, *, inline: bool) -> None:
     cpu.watchdog = Watchdog(max_cycle_ms, cpu.watchdog.min_cycle_ns / 1e6)
 
 
-def _wire(live: LiveEdge | None, runner: Runner, restart: str) -> None:
+def _wire(live: LiveEdge | None, runner: Runner, restart: str, children: list[ViewProcess]) -> None:
     """The bus end learns what the RUN/STOP switch's start does, and that a download is
-    applied once its state is on disk (the runner's durability)."""
+    applied once its state is on disk (the runner's durability); the children (the
+    view's, the OPC UA server's process) start."""
     if live is not None:
         live.restart = restart
         if live.online is not None:
             live.online.durability = runner
+    for child in children:
+        child.start()
 
 
-def _close(view: ViewProcess | None, live: LiveEdge | None) -> None:
-    if view is not None:
-        view.stop()
+def _close(children: list[ViewProcess], live: LiveEdge | None) -> None:
+    for child in children:
+        child.stop()
     if live is not None:
         live.close()
 
@@ -273,7 +294,7 @@ def _load(
 
 def _edges(
     session: ChartSession, store: StateStore, **options: Any
-) -> tuple[LiveEdge | None, ViewProcess | None] | int:
+) -> tuple[LiveEdge | None, list[ViewProcess]] | int:
     """``_serve``, or exit status 2 with one line when the view cannot be served (a port in
     use, no rerun-sdk …); the state file is closed then."""
     try:
@@ -320,7 +341,8 @@ def _serve(
     path: Path | None = None,
     symbols: Path | None = None,
     in_process: bool = False,
-) -> tuple[LiveEdge, ViewProcess | None]:
+    opcua: OpcuaFace | None = None,
+) -> tuple[LiveEdge, list[ViewProcess]]:
     """The CPU on the bus (and the recording) of the session's GraphFB, its online change
     (``path``: the chart file a download rewrites), and the view's process (not started
     yet) when ``web``; prints where to look."""
@@ -328,6 +350,7 @@ def _serve(
     from s7graph.web.bus.gate import cpu_gate  # zenoh and viser only when asked for
     from s7graph.web.bus.live import LiveGraph, watch_names
     from s7graph.web.bus.online import OnlineChange
+    from s7graph.web.bus.operands import OperandFeed
     from s7graph.web.cli.net import NetOptions
     from s7graph.web.cli.view_process import ViewProcess, view_endpoints
     from s7graph.web.view.edge import check_port
@@ -352,7 +375,7 @@ def _serve(
         port=port,
         record=record,
         serve=inline,
-        bus=web or net.on_bus,
+        bus=web or net.on_bus or opcua is not None,
         cpu=net.cpu,
         host=net.host,
         ends=net.ends,
@@ -360,6 +383,7 @@ def _serve(
         allowed_origins=tuple(net.origins),
         online=online,
         forcing=Forcing(session.cpu),
+        operands=OperandFeed(session, fb=live.fb),
     )
     view = None
     if inline:
@@ -384,4 +408,32 @@ def _serve(
         print(f"s7graph: CPU {net.cpu} on the bus {edge.endpoint}; Ctrl-C to stop", flush=True)
     if record is not None:
         print(f"s7graph: recording to {record}", flush=True)
-    return edge, view
+    children = [view] if view is not None else []
+    if opcua is not None:
+        children.append(_opcua_child(opcua, net, edge.endpoint))
+    return edge, children
+
+
+def _opcua_child(face: OpcuaFace, net: NetOptions, bus: str) -> ViewProcess:
+    """The OPC UA server's process (``s7graph opcua`` as a child); prints where it serves
+    the first time it does."""
+    from s7graph.web.cli.opcua import OpcuaProcess
+    from s7graph.web.cli.view_process import view_endpoints
+
+    child = OpcuaProcess(
+        connect=view_endpoints(net.listen, net.connect) or [bus],
+        cpu=net.cpu,
+        url=face.url,
+        users=net.users,
+        cert=face.cert,
+        key=face.key,
+        tls_ca=net.tls_ca,
+        bus_args=net.credential_args(),
+    )
+
+    def served(url: str) -> None:
+        if child.starts == 1:
+            print(f"s7graph: opcua {url} (bus {bus}); Ctrl-C to stop", flush=True)
+
+    child.on_url = served
+    return child

@@ -64,7 +64,12 @@ class ViewProcess:
     in only nodes with credentials lets its view in.
 
     ``on_url(url)`` is called (in the supervising thread) each time a view serves its page;
-    ``port`` 0 picks a free port the first time and keeps it for the restarts."""
+    ``port`` 0 picks a free port the first time and keeps it for the restarts. A subclass
+    runs another face so (``web.cli.opcua.OpcuaProcess``): ``what`` it is, the line it
+    prints when ready (``ready``, its first group the URL) and its :meth:`command`."""
+
+    what = "view"
+    ready: re.Pattern[str] = _URL
 
     def __init__(
         self,
@@ -94,7 +99,8 @@ class ViewProcess:
         self._stop = threading.Event()
         self._lock = threading.Lock()
         self._proc: subprocess.Popen[str] | None = None
-        self._thread = threading.Thread(target=self._supervise, name="s7graph-view", daemon=True)
+        name = f"s7graph-{self.what.replace(' ', '-')}"
+        self._thread = threading.Thread(target=self._supervise, name=name, daemon=True)
 
     def command(self) -> list[str]:
         """The child's command line."""
@@ -149,7 +155,8 @@ class ViewProcess:
             if time.monotonic() - started >= STABLE_S:
                 backoff = self.first_backoff_s
             print(
-                f"s7graph: the view process ended ({_ended(code)}); restarting it in {backoff:g} s",
+                f"s7graph: the {self.what} process ended ({_ended(code)}); "
+                f"restarting it in {backoff:g} s",
                 file=sys.stderr,
                 flush=True,
             )
@@ -171,14 +178,14 @@ class ViewProcess:
                     start_new_session=True,
                 )
             except OSError as exc:
-                print(f"s7graph: error: cannot start the view: {exc}", file=sys.stderr)
+                print(f"s7graph: error: cannot start the {self.what}: {exc}", file=sys.stderr)
                 return None
             self._proc = proc
             self.pid = proc.pid
             self.starts += 1
         assert proc.stdout is not None
         for line in proc.stdout:  # until the view ends (its stdout closes)
-            found = _URL.match(line)
+            found = self.ready.match(line)
             if found:
                 self._served(found[1])
         proc.stdout.close()

@@ -26,6 +26,7 @@ if TYPE_CHECKING:
     from s7graph.engine.cpu import Cpu
     from s7graph.web.bus.forcing import Forcing
     from s7graph.web.bus.online import OnlineChange
+    from s7graph.web.bus.operands import OperandFeed
 
 __all__ = ["LiveEdge"]
 
@@ -52,6 +53,7 @@ class LiveEdge(ScanEdge):
         online: OnlineChange | None = None,
         forcing: Forcing | None = None,
         cpu_of: Cpu | None = None,
+        operands: OperandFeed | None = None,
     ) -> None:
         self.edge: WebEdge | None = None
         self.cpu_side: CpuSide | None = None
@@ -74,7 +76,9 @@ class LiveEdge(ScanEdge):
                 {live.fb: live.layout}, cpu=cpu, ends=ends or BusEnds(), gate=gate
             )
             publisher = self.cpu_side.publisher
-        super().__init__(live, publisher, online=online, forcing=forcing, cpu=cpu_of)
+        super().__init__(
+            live, publisher, online=online, forcing=forcing, cpu=cpu_of, operands=operands
+        )
         try:
             if record is not None:
                 from s7graph.web.recorder import Recorder  # rerun-sdk only when recording

@@ -1,0 +1,190 @@
+"""Malformed and hostile OPC UA requests get a bad status code, never a crash of the face
+and never a command to the CPU: requests with too many operations, a request larger than
+the server takes, floods of subscriptions and monitored items, a publishing interval of
+nothing, wrong argument types and counts, garbage on the socket (docs/opcua.md,
+"Limits")."""
+
+from __future__ import annotations
+
+import asyncio
+import socket
+from collections.abc import Iterator
+from urllib.parse import urlparse
+
+import pytest
+from asyncua import ua
+from asyncua.ua.uaerrors import UaStatusCodeError
+
+from s7graph.web.access.audit import read_audit
+from s7graph.web.opcua.sessions import Limits
+from tests.web.opcua.helpers import FaceRig, connected, face_rig, node, run
+
+pytestmark = pytest.mark.timeout(180)
+
+LIMITS = Limits()
+STEP_ON = ua.NodeId("cpu1/Seq_mix/StepOn", 2)
+SET_MODE = ua.NodeId("cpu1/Seq_mix/SetMode", 2)
+
+
+@pytest.fixture(scope="module")
+def face(tmp_path_factory: pytest.TempPathFactory) -> Iterator[FaceRig]:
+    with face_rig(tmp_path_factory.mktemp("hostile")) as rig:
+        yield rig
+
+
+def _code(exc: BaseException) -> int:
+    assert isinstance(exc, UaStatusCodeError), repr(exc)
+    return int(exc.code)
+
+
+def test_a_request_of_too_many_operations_is_refused(face: FaceRig) -> None:
+    async def check() -> None:
+        async with connected(face.url) as c:
+            many = LIMITS.operations + 1
+            browse = ua.BrowseParameters()
+            browse.NodesToBrowse = [
+                ua.BrowseDescription(NodeId=ua.NodeId("cpu1", 2), ResultMask=63)
+                for _ in range(many)
+            ]
+            with pytest.raises(UaStatusCodeError) as refused:
+                await c.uaclient.browse(browse)
+            assert _code(refused.value) == ua.StatusCodes.BadTooManyOperations
+            read = ua.ReadParameters()
+            read.NodesToRead = [
+                ua.ReadValueId(NodeId=ua.NodeId("cpu1/State", 2), AttributeId=13)
+                for _ in range(many)
+            ]
+            with pytest.raises(UaStatusCodeError) as refused:
+                await c.uaclient.read(read)
+            assert _code(refused.value) == ua.StatusCodes.BadTooManyOperations
+            # at the limit it is served
+            browse.NodesToBrowse = browse.NodesToBrowse[: LIMITS.operations]
+            assert len(await c.uaclient.browse(browse)) == LIMITS.operations
+
+    run(check())
+
+
+def test_a_request_larger_than_the_server_takes_closes_only_that_connection(
+    face: FaceRig,
+) -> None:
+    async def check() -> None:
+        with pytest.raises((UaStatusCodeError, ConnectionError, asyncio.TimeoutError)):
+            async with connected(face.url, "olga") as c:
+                huge = "x" * (9 << 20)  # over the 8 MiB a request may be
+                await node(c, "cpu1/Seq_mix/Mode").write_value(ua.Variant(huge))
+        async with connected(face.url) as c:  # the face goes on serving
+            assert await node(c, "cpu1/State").read_value() == "RUN"
+
+    run(check())
+
+
+def test_floods_of_subscriptions_and_monitored_items_are_refused(face: FaceRig) -> None:
+    async def check() -> None:
+        async with connected(face.url) as c:
+            subs = []
+            for _ in range(LIMITS.subscriptions):
+                subs.append(await c.create_subscription(100, None))
+            with pytest.raises(UaStatusCodeError) as refused:
+                await c.create_subscription(100, None)
+            assert _code(refused.value) == ua.StatusCodes.BadTooManySubscriptions
+            for sub in subs[1:]:
+                await sub.delete()
+            sub = subs[0]
+            state = node(c, "cpu1/State")
+            with pytest.raises(UaStatusCodeError) as refused:  # one call of too many
+                await sub.subscribe_data_change([state] * (LIMITS.operations + 1))
+            assert _code(refused.value) == ua.StatusCodes.BadTooManyOperations
+            for _ in range(LIMITS.monitored_items // LIMITS.operations):
+                await sub.subscribe_data_change([state] * LIMITS.operations)
+            results = await sub.subscribe_data_change([state, state])
+            assert all(isinstance(r, ua.StatusCode) for r in results), results
+            assert {r.value for r in results} == {ua.StatusCodes.BadTooManyMonitoredItems}
+            await sub.delete()
+
+    run(check())
+
+
+def test_a_publishing_interval_of_nothing_is_revised_to_the_minimum(face: FaceRig) -> None:
+    async def check() -> None:
+        async with connected(face.url) as c:
+            params = ua.CreateSubscriptionParameters()
+            params.RequestedPublishingInterval = 0.0
+            params.RequestedLifetimeCount = 100
+            params.RequestedMaxKeepAliveCount = 10
+            params.PublishingEnabled = True
+            result = await c.uaclient.create_subscription(params, lambda *_: None)
+            assert result.RevisedPublishingInterval == LIMITS.min_publishing_ms
+            await c.uaclient.delete_subscriptions([result.SubscriptionId])
+
+    run(check())
+
+
+def test_wrong_arguments_are_refused_by_status_code(face: FaceRig) -> None:
+    before = [r for r in read_audit(face.rig.state) if r.op not in ("login", "logout")]
+
+    async def call(c: object, method: ua.NodeId, *args: object) -> ua.CallMethodResult:
+        request = ua.CallMethodRequest()
+        request.ObjectId = ua.NodeId("cpu1/Seq_mix", 2)
+        request.MethodId = method
+        request.InputArguments = list(args)
+        (result,) = await c.uaclient.call([request])  # type: ignore[attr-defined]
+        return result
+
+    async def check() -> None:
+        async with connected(face.url, "olga") as c:
+            bad = await call(c, STEP_ON, ua.Variant("three"))
+            assert bad.StatusCode.value == ua.StatusCodes.BadInvalidArgument
+            assert [r.value for r in bad.InputArgumentResults] == [ua.StatusCodes.BadTypeMismatch]
+            bad = await call(c, STEP_ON, ua.Variant(0, ua.VariantType.UInt16))  # steps from 1
+            assert bad.StatusCode.value == ua.StatusCodes.BadInvalidArgument
+            bad = await call(c, STEP_ON, ua.Variant([1, 2], ua.VariantType.UInt16))
+            assert bad.StatusCode.value == ua.StatusCodes.BadInvalidArgument
+            bad = await call(c, SET_MODE)
+            assert bad.StatusCode.value == ua.StatusCodes.BadArgumentsMissing
+            bad = await call(c, SET_MODE, ua.Variant("MAN"), ua.Variant("AUTO"))
+            assert bad.StatusCode.value == ua.StatusCodes.BadTooManyArguments
+            bad = await call(c, SET_MODE, ua.Variant("FAST"))
+            assert bad.StatusCode.value == ua.StatusCodes.BadInvalidArgument
+            bad = await call(c, ua.NodeId("cpu1/Seq_mix/NoSuchOp", 2))
+            assert bad.StatusCode.value == ua.StatusCodes.BadNodeIdInvalid
+            with pytest.raises(UaStatusCodeError) as refused:
+                await node(c, "cpu1/NoSuchNode").read_value()
+            assert _code(refused.value) == ua.StatusCodes.BadNodeIdUnknown
+
+    run(check())
+    after = [r for r in read_audit(face.rig.state) if r.op not in ("login", "logout")]
+    assert after == before  # no command went to the CPU
+
+
+def test_no_client_registers_a_server_with_the_face(face: FaceRig) -> None:
+    async def check() -> None:
+        async with connected(face.url) as c:
+            server = ua.RegisteredServer()
+            server.ServerUri = "urn:someone:else"
+            server.ServerNames = [ua.LocalizedText("someone")]
+            server.IsOnline = True
+            with pytest.raises(UaStatusCodeError) as refused:
+                await c.uaclient.register_server(server)
+            assert _code(refused.value) == ua.StatusCodes.BadServiceUnsupported
+            assert [s.ApplicationUri for s in await c.find_servers()] == ["urn:s7graph:opcua:cpu1"]
+
+    run(check())
+
+
+def test_garbage_on_the_socket_costs_that_connection_only(face: FaceRig) -> None:
+    where = urlparse(face.url)
+    for garbage in (b"\x00" * 64, b"HEL" + b"\xff" * 5000, b"MSGF" + b"\x10\x00\x00\x00" * 64):
+        with socket.create_connection((where.hostname, where.port), timeout=5) as s:
+            s.sendall(garbage)
+            s.settimeout(5)
+            try:
+                while s.recv(65536):
+                    pass
+            except OSError:
+                pass
+
+    async def check() -> None:
+        async with connected(face.url) as c:
+            assert await node(c, "cpu1/State").read_value() == "RUN"
+
+    run(check())

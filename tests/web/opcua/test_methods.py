@@ -1,0 +1,117 @@
+"""The ops of the command union as OPC UA methods (``web.opcua.methods``): one per op,
+named as its struct, one typed argument per field of its argument struct; input variants
+become the op's checked arguments or a status code; the CPU's refusals become status
+codes an OPC UA client can act on."""
+
+from __future__ import annotations
+
+import msgspec
+import pytest
+from asyncua import ua
+
+from s7graph.web.bus.protocol import CommandReply
+from s7graph.web.commands import COMMAND_TYPES, ForceArgs, ModeArgs, StepArgs
+from s7graph.web.opcua.methods import (
+    CallError,
+    arguments_of,
+    method_specs,
+    output_arguments,
+    outputs,
+    refusal_status,
+)
+
+SPECS = {s.name: s for s in method_specs()}
+
+
+def test_every_op_of_the_union_is_one_method_with_its_structs_fields() -> None:
+    assert [s.kind for s in method_specs()] == list(COMMAND_TYPES)
+    for spec in method_specs():
+        args = next(f.type for f in msgspec.structs.fields(spec.kind) if f.name == "args")
+        assert [a.name for a in spec.args] == list(args.__struct_fields__), spec.name
+        assert spec.where == ("cpu" if spec.kind.where in ("cpu", "force") else "fb")
+        assert spec.kind.role in spec.description
+    types = {a.name: a.data_type for s in method_specs() for a in s.args}
+    assert types["step"] == ua.NodeId(ua.ObjectIds.UInt16)
+    assert types["on"] == ua.NodeId(ua.ObjectIds.Boolean)
+    assert types["mode"] == ua.NodeId(ua.ObjectIds.String)
+    assert types["msg_id"] == ua.NodeId(ua.ObjectIds.BaseDataType)  # a number or a text
+    assert types["base"] == ua.NodeId(ua.ObjectIds.UInt64)
+
+
+def test_input_variants_become_the_checked_arguments() -> None:
+    assert arguments_of(SPECS["AckStep"], [ua.Variant(3, ua.VariantType.UInt16)]) == StepArgs(
+        step=3
+    )
+    assert arguments_of(SPECS["AckStep"], [ua.Variant(3)]) == StepArgs(step=3)  # any integer
+    assert arguments_of(SPECS["SetMode"], [ua.Variant("TAP")]) == ModeArgs(mode="TAP")
+    force = SPECS["Force"]
+    assert arguments_of(force, [ua.Variant("I0.3"), ua.Variant(True)]) == ForceArgs(
+        address="I0.3", value=True
+    )
+    assert arguments_of(force, [ua.Variant("I0.3"), ua.Variant(None)]) == ForceArgs(
+        address="I0.3",
+        value=None,  # Null for a value that takes null: unforce
+    )
+    everything = [ua.Variant(None), ua.Variant(None), ua.Variant(True)]
+    assert arguments_of(force, everything) == ForceArgs(all=True)  # Null left out
+
+
+@pytest.mark.parametrize(
+    ("name", "inputs", "status", "per_argument"),
+    [
+        ("AckStep", [ua.Variant("3")], "BadInvalidArgument", ["BadTypeMismatch"]),
+        ("AckStep", [ua.Variant(0)], "BadInvalidArgument", []),
+        ("AckStep", [ua.Variant(70000)], "BadInvalidArgument", []),
+        ("AckStep", [], "BadArgumentsMissing", []),
+        ("AckStep", [ua.Variant(1), ua.Variant(2)], "BadTooManyArguments", []),
+        ("AckStep", [ua.Variant([1, 2])], "BadInvalidArgument", ["BadTypeMismatch"]),
+        ("AckStep", ["not a variant"], "BadInvalidArgument", ["BadTypeMismatch"]),
+        ("SetMode", [ua.Variant("FAST")], "BadInvalidArgument", []),
+        ("Halt", [ua.Variant(1)], "BadInvalidArgument", ["BadTypeMismatch"]),
+        ("Save", [ua.Variant("../x.s7g"), ua.Variant("x" * 2_000_000)], "BadInvalidArgument", []),
+        (
+            "Force",
+            [ua.Variant("I0.3"), ua.Variant(True), ua.Variant(True)],
+            "BadInvalidArgument",
+            [],
+        ),
+    ],
+)
+def test_wrong_inputs_are_a_status_code(
+    name: str, inputs: list[object], status: str, per_argument: list[str]
+) -> None:
+    with pytest.raises(CallError) as refused:
+        arguments_of(SPECS[name], inputs)
+    assert refused.value.status == getattr(ua.StatusCodes, status)
+    shown = [ua.StatusCode(c).name for c in refused.value.arguments if c != ua.StatusCodes.Good]
+    assert shown == per_argument
+
+
+@pytest.mark.parametrize(
+    ("reason", "status"),
+    [
+        ("role viewer may not init (needs operator)", "BadUserAccessDenied"),
+        ("token expired: log in again", "BadUserAccessDenied"),
+        ("no answer from CPU 'cpu1' within 5 s", "BadCommunicationError"),
+        ("step_on needs mode MAN (S7-GRAPH Control Sequencer)", "BadInvalidState"),
+        ("the CPU is in STOP, not RUN", "BadInvalidState"),
+        ("no step S9 in Seq_mix", "BadNotFound"),
+        ("message 'x' is already acknowledged by olga", "BadConditionBranchAlreadyAcked"),
+        ("mode conflicts with mode MAN, queued for the same scan; retry", "BadResourceUnavailable"),
+        ("not confirmed: applied in cycle 7, but the state file failed", "BadTimeout"),
+        ("something nobody foresaw", "BadRequestNotAllowed"),
+    ],
+)
+def test_a_refusal_is_a_status_code(reason: str, status: str) -> None:
+    assert refusal_status(reason) == getattr(ua.StatusCodes, status)
+
+
+def test_an_applied_commands_outputs() -> None:
+    reply = CommandReply(applied=True, reason="S3 stays latched", cycle=42)
+    assert [v.Value for v in outputs(SPECS["Ack"], reply)] == ["S3 stays latched", 42]
+    download = SPECS["Download"]
+    names = [a.Name for a in output_arguments(download)]
+    assert names == ["Reason", "Cycle", "Lines", "Version", "Removed", "Text"]
+    reply = CommandReply(applied=True, cycle=5, lines=["T2: condition"], version=2, removed=[3])
+    values = [v.Value for v in outputs(download, reply)]
+    assert values == ["", 5, ["T2: condition"], 2, [3], ""]

@@ -1,0 +1,108 @@
+"""The OPC UA face's security (docs/opcua.md, "Security"): ``Basic256Sha256``
+``SignAndEncrypt`` with certificates of a CA (made here with ``cryptography``), the
+``None`` policy only on loopback and no other endpoint; anonymous sessions refused when
+configured; client certificates checked against a trust folder when one is given; and
+the listen address's rules, as the command line checks them."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from asyncua import ua
+from asyncua.crypto.security_policies import SecurityPolicyBasic256Sha256
+from asyncua.ua.uaerrors import UaStatusCodeError
+
+from s7graph.web.opcua.server import application_uri, listen_problem, loopback
+from tests.web.opcua.helpers import Certs, connected, face_rig, make_certs, node, run
+
+pytestmark = pytest.mark.timeout(180)
+
+B256 = "http://opcfoundation.org/UA/SecurityPolicy#Basic256Sha256"
+NONE = "http://opcfoundation.org/UA/SecurityPolicy#None"
+
+
+def _secure(
+    certs: Certs, *, cert: Path | None = None, key: Path | None = None
+) -> dict[str, object]:
+    return {
+        "policy": SecurityPolicyBasic256Sha256,
+        "certificate": str(cert or certs.client_cert),
+        "private_key": str(key or certs.client_key),
+        "server_certificate": str(certs.server_cert),
+        "mode": ua.MessageSecurityMode.SignAndEncrypt,
+    }
+
+
+def test_sign_and_encrypt_with_the_cas_certificates(tmp_path: Path) -> None:
+    certs = make_certs(tmp_path / "pki")
+    trusted = tmp_path / "trusted"  # the CA alone: what it signed is trusted
+    trusted.mkdir()
+    (trusted / "ca.pem").write_bytes(certs.ca.read_bytes())
+    options = {"cert": certs.server_cert, "key": certs.server_key, "trust": trusted}
+    stranger = make_certs(tmp_path / "stranger")  # another CA's client
+
+    async def check(url: str) -> None:
+        async with connected(url) as c:
+            endpoints = await c.get_endpoints()
+            shown = {(e.SecurityPolicyUri, e.SecurityMode) for e in endpoints}
+            assert shown == {
+                (NONE, ua.MessageSecurityMode.None_),
+                (B256, ua.MessageSecurityMode.SignAndEncrypt),
+            }
+            server_uri = endpoints[0].Server.ApplicationUri
+            assert server_uri == "urn:s7graph:opcua:cpu1"
+        async with connected(url, "olga", **_secure(certs)) as c:
+            assert await node(c, "cpu1/State").read_value() == "RUN"
+            fb = node(c, "cpu1/Seq_mix")
+            await fb.call_method(ua.NodeId("cpu1/Seq_mix/SetMode", 2), "MAN")
+            await fb.call_method(ua.NodeId("cpu1/Seq_mix/SetMode", 2), "AUTO")
+        with pytest.raises(ua.uaerrors.BadCertificateUntrusted):  # not of the trusted CA
+            async with connected(
+                url, "olga", **_secure(certs, cert=stranger.client_cert, key=stranger.client_key)
+            ):
+                pass
+
+    with face_rig(tmp_path / "cpu", options=options) as face:
+        run(check(face.url))
+
+
+def test_anonymous_sessions_may_be_refused(tmp_path: Path) -> None:
+    async def check(url: str) -> None:
+        with pytest.raises(UaStatusCodeError) as refused:
+            async with connected(url):
+                pass
+        assert refused.value.code in (
+            ua.StatusCodes.BadIdentityTokenRejected,
+            ua.StatusCodes.BadIdentityTokenInvalid,
+            ua.StatusCodes.BadUserAccessDenied,
+        )
+        async with connected(url, "vic") as c:  # a viewer reads
+            assert await node(c, "cpu1/State").read_value() == "RUN"
+            tokens = {t.TokenType for e in await c.get_endpoints() for t in e.UserIdentityTokens}
+            assert tokens == {ua.UserTokenType.UserName}
+
+    with face_rig(tmp_path, options={"anonymous": False}) as face:
+        run(check(face.url))
+
+
+def test_the_listen_address_rules() -> None:
+    assert listen_problem("opc.tcp://127.0.0.1:4840", users=False, cert=None, key=None) is None
+    assert listen_problem("opc.tcp://[::1]:4840", users=False, cert=None, key=None) is None
+    for url in ("tcp://127.0.0.1:4840", "opc.tcp://127.0.0.1", "127.0.0.1:4840", "opc.tcp://:1"):
+        problem = listen_problem(url, users=False, cert=None, key=None)
+        assert problem is not None and "opc.tcp://HOST:PORT" in problem, url
+    beyond = "opc.tcp://0.0.0.0:4840"
+    problem = listen_problem(beyond, users=False, cert=None, key=None)
+    assert problem is not None and "--users" in problem
+    problem = listen_problem(beyond, users=True, cert=None, key=None)
+    assert problem is not None and "--cert and --key" in problem
+    problem = listen_problem(beyond, users=True, cert=Path("/nonexistent.pem"), key=None)
+    assert problem is not None and "together" in problem
+    assert loopback("opc.tcp://localhost:4840") and not loopback("opc.tcp://10.0.0.1:4840")
+
+
+def test_the_application_uri_is_the_certificates(tmp_path: Path) -> None:
+    certs = make_certs(tmp_path, server_uri="urn:plant:line1:opcua")
+    assert application_uri("cpu1", certs.server_cert) == "urn:plant:line1:opcua"
+    assert application_uri("cpu1", None) == "urn:s7graph:opcua:cpu1"

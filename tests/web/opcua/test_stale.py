@@ -1,0 +1,45 @@
+"""A CPU gone from the bus: its values keep their last value with ``BadNoCommunication``,
+``Online`` turns false and the server's ``ServiceLevel`` drops to 0 — what an OPC UA
+client takes for a stale source (docs/opcua.md, "Values and their status")."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from asyncua import ua
+
+from tests.web.opcua.helpers import connected, eventually, face_rig, node, run
+
+pytestmark = pytest.mark.timeout(120)
+
+
+def test_the_values_of_a_cpu_gone_are_kept_with_a_bad_status(tmp_path: Path) -> None:
+    with face_rig(tmp_path) as face:
+
+        async def check() -> None:
+            async with connected(face.url) as c:
+                state = node(c, "cpu1/State")
+
+                async def running() -> bool:
+                    value = await state.read_data_value()
+                    return bool(value.StatusCode.is_good() and value.Value.Value == "RUN")
+
+                assert await eventually(running)
+                level = await c.nodes.server.get_child("0:ServiceLevel")
+                assert await level.read_value() == 255
+                face.rig.edge.close()  # the CPU's bus goes (its liveliness token with it)
+
+                async def stale() -> bool:
+                    value = await state.read_data_value(raise_on_bad_status=False)
+                    return value.StatusCode.value == ua.StatusCodes.BadNoCommunication
+
+                assert await eventually(stale, 20)
+                value = await node(c, "cpu1/Seq_mix/S1/Active").read_data_value(
+                    raise_on_bad_status=False
+                )
+                assert value.StatusCode.value == ua.StatusCodes.BadNoCommunication
+                assert await node(c, "cpu1/Online").read_value() is False
+                assert await level.read_value() == 0
+
+        run(check())

@@ -1,0 +1,166 @@
+"""``s7graph opcua --connect EP --cpu NAME [--listen opc.tcp://127.0.0.1:4840]``: the
+OPC UA server of a CPU on the bus, as a process of its own (``web.opcua``; docs/opcua.md).
+
+It finds the CPU on the bus (waiting up to ``wait_s`` for it), serves its address space
+on ``--listen`` and knows the CPU only over the bus, like the view. ``s7graph run …
+--opcua URL`` starts it so, as its child (``--child``: it ends when its stdin closes — the
+CPU's process went — and yields the processor to the CPU; :class:`OpcuaProcess`
+restarts it when it ends). Beyond loopback it serves only with ``--users`` (the CPU must
+check logins: its status says ``users``) and a certificate (``--cert``/``--key``:
+``SignAndEncrypt`` only). Stopped, it says so in one line on stderr.
+"""
+
+from __future__ import annotations
+
+import logging
+import re
+import sys
+import threading
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
+from s7graph.web.cli.net import NetOptions
+from s7graph.web.cli.stopping import wait_until_stopped
+from s7graph.web.cli.view import _as_child
+from s7graph.web.cli.view_process import ViewProcess
+
+__all__ = ["ANONYMOUS", "OpcuaProcess", "opcua_command"]
+
+ANONYMOUS = ("read", "refuse")
+"""What an anonymous OPC UA session may do: read (browse, subscribe), or nothing."""
+
+
+def _fail(message: str) -> int:
+    print(f"s7graph: error: {message}", file=sys.stderr)
+    return 2
+
+
+def _logging() -> None:
+    """The face's lines (logins refused, commands and their outcome) on stderr."""
+    handler = logging.StreamHandler(sys.stderr)
+    handler.setFormatter(logging.Formatter("s7graph: %(message)s"))
+    log = logging.getLogger("s7graph.web.opcua")
+    log.addHandler(handler)
+    log.setLevel(logging.INFO)
+    log.propagate = False
+
+
+def opcua_command(
+    net: NetOptions,
+    *,
+    cpu: str | None,
+    listen: str,
+    anonymous: str | None = None,
+    cert: Path | None = None,
+    key: Path | None = None,
+    trust: Path | None = None,
+    duration_s: float | None = None,
+    wait_s: float = 10.0,
+    child: bool = False,
+) -> int:
+    """Serve OPC UA for ``cpu`` (None: the first on the bus) at ``listen``; 0 when
+    stopped, 2 when it cannot serve (one line on stderr)."""
+    stop = threading.Event()
+    if child:
+        _as_child(stop)  # lower its priority before the imports: they take a while
+    from s7graph.web.bus.client import find_cpus
+    from s7graph.web.bus.session import open_session
+    from s7graph.web.opcua.server import OpcuaOptions, OpcuaServer, listen_problem, loopback
+
+    problem = NetOptions(**{**net.__dict__, "host": "127.0.0.1"}).problem()
+    if problem is None and not net.connect:
+        problem = "give the bus to join with --connect ENDPOINT"
+    if anonymous is not None and anonymous not in ANONYMOUS:
+        problem = "--anonymous must be read or refuse"
+    if problem is None and net.users is not None and not net.users.is_file():
+        problem = f"{net.users}: no such users file"
+    problem = problem or listen_problem(listen, users=net.users is not None, cert=cert, key=key)
+    if problem is None and trust is not None and not trust.is_dir():
+        problem = f"--trust {trust}: no such folder"
+    if problem:
+        return _fail(problem)
+    _logging()
+    session = None
+    try:
+        session = open_session(connect=net.connect, tls=net.tls)
+        deadline = time.monotonic() + wait_s
+        cpus = find_cpus(session)
+        while not any(cpu in (None, s.cpu) for s in cpus) and time.monotonic() < deadline:
+            time.sleep(0.2)
+            cpus = find_cpus(session)
+        chosen = next((s for s in cpus if cpu in (None, s.cpu)), None)
+        if chosen is None:
+            found = ", ".join(s.cpu for s in cpus) or "none"
+            return _fail(f"no CPU {cpu or ''} answers on {', '.join(net.connect)} (found: {found})")
+        if net.users is not None and chosen.login != "users":
+            return _fail(f"--users given, but CPU {chosen.cpu} checks no logins (no users file)")
+        reads = anonymous == "read" or (anonymous is None and loopback(listen))
+        options = OpcuaOptions(
+            url=listen, anonymous=reads, cert=cert, key=key, trust=trust, own_process=True
+        )
+        server = OpcuaServer(session, chosen, options)
+        try:
+            server.start()
+        except Exception as exc:
+            return _fail(f"cannot serve OPC UA at {listen}: {type(exc).__name__}: {exc}")
+        print(f"s7graph: opcua {listen} of {chosen.cpu}; Ctrl-C to stop", flush=True)
+        try:
+            wait_until_stopped(duration_s, stop)
+        finally:
+            server.stop()
+    except Exception as exc:
+        return _fail(f"cannot join the bus: {type(exc).__name__}: {exc}")
+    finally:
+        if session is not None:
+            session.close()  # type: ignore[no-untyped-call]  # zenoh's stub
+    print("s7graph: opcua stopped", file=sys.stderr, flush=True)
+    return 0
+
+
+class OpcuaProcess(ViewProcess):
+    """``s7graph opcua`` for CPU ``cpu`` at ``connect``, serving ``url``, kept running
+    until :meth:`stop` (restarted after a back-off when it ends, as the view is)."""
+
+    what = "OPC UA server"
+    ready = re.compile(r"^s7graph: opcua (\S+) of ")
+
+    def __init__(
+        self,
+        *,
+        connect: Sequence[str],
+        cpu: str,
+        url: str,
+        users: Path | None = None,
+        cert: Path | None = None,
+        key: Path | None = None,
+        tls_ca: Path | None = None,
+        bus_args: Sequence[str] = (),
+        first_backoff_s: float = 1.0,
+    ) -> None:
+        super().__init__(
+            connect=connect,
+            cpu=cpu,
+            tls_ca=tls_ca,
+            bus_args=bus_args,
+            first_backoff_s=first_backoff_s,
+        )
+        self.opcua_url = url
+        self.users = users
+        self.cert = cert
+        self.key = key
+
+    def command(self) -> list[str]:
+        cmd = [sys.executable, "-m", "s7graph", "opcua", "--cpu", self.cpu]
+        cmd += ["--listen", self.opcua_url, "--child"]
+        for endpoint in self.connect:
+            cmd += ["--connect", endpoint]
+        for option, path in (
+            ("--users", self.users),
+            ("--cert", self.cert),
+            ("--key", self.key),
+            ("--tls-ca", None if "--tls-ca" in self.bus_args else self.tls_ca),
+        ):
+            if path is not None:
+                cmd += [option, str(path)]
+        return cmd + self.bus_args

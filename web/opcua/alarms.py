@@ -1,0 +1,225 @@
+"""The CPU's message list as OPC UA Alarms & Conditions (docs/opcua.md, "Alarms and
+conditions").
+
+Each message of the list (``alarms`` on the bus) is an ``AlarmConditionType`` condition:
+a step's interlock or supervision message the condition node under that step
+(``cpu1/Seq_drill/S2/Supervision``), any other message one under the CPU's ``Messages``
+folder, made when it first comes. Whenever a message's state changes — it comes, goes,
+is acknowledged — its condition's event goes out from the ``Server`` object, with
+``ActiveState``, ``AckedState`` and ``Retain`` (active, or waiting for its
+acknowledgement); a message that has left the list sends its last event with ``Retain``
+false. ``ConditionRefresh`` replays the retained ones (asyncua's subscription service).
+
+``Acknowledge`` on a condition sends ``ack_msg`` for its message under the OPC UA
+session's own login — the gate checks the role and audits it under that user, and a
+supervision message acknowledged so releases its step, as from any other face. The
+EventId must be one the condition sent; the comment is not kept.
+"""
+
+from __future__ import annotations
+
+import collections
+import logging
+import uuid
+from collections.abc import Awaitable, Callable
+from dataclasses import dataclass, field
+from datetime import UTC, datetime
+from typing import Any, Final
+
+from asyncua import ua
+from asyncua.common.event_objects import AlarmCondition
+
+from s7graph.web.bus.protocol import AlarmEntry, AlarmList, CommandReply
+from s7graph.web.commands import AckMsg, Args, Command, MessageArgs
+from s7graph.web.opcua.sessions import caller
+from s7graph.web.opcua.typed import ObjectIds, Server, StatusCodes, ua_id, ua_status
+
+__all__ = ["Alarms", "Send", "condition_name"]
+
+_log = logging.getLogger("s7graph.web.opcua")
+
+SEVERITY: Final = {"SV": 700, "IL": 500, "": 600}
+"""An event's severity (1–1000): a supervision fault, an interlock error, any other
+message of the list."""
+_NAMES: Final = {"SV": "Supervision", "IL": "Interlock"}
+_TIME_FIELDS: Final = (
+    "ActiveState/TransitionTime",
+    "AckedState/TransitionTime",
+    "EnabledState/TransitionTime",
+)
+_KEPT_EVENT_IDS: Final = 32
+
+Send = Callable[[Any, type[Command], str, Args], Awaitable[tuple[int, CommandReply | None]]]
+"""``send(user, kind, fb, args)``: a command under the user's login; (status, reply)."""
+
+
+def condition_name(kind: str) -> str:
+    """The condition node's browse name under a step for a message kind (``SV``, ``IL``)."""
+    return _NAMES[kind]
+
+
+def _ms(ms: int | None) -> datetime | None:
+    return None if ms is None else datetime.fromtimestamp(ms / 1000, UTC)
+
+
+@dataclass
+class _Condition:
+    """One condition: its node, the node and name of its source, the FB its ``ack_msg``
+    goes to, its event, and the message it shows now."""
+
+    nid: ua.NodeId
+    source: ua.NodeId
+    source_name: str
+    name: str
+    fb: str
+    event: Any
+    msg_id: int | str | None = None
+    shown: tuple[object, ...] | None = None
+    event_ids: collections.deque[bytes] = field(
+        default_factory=lambda: collections.deque(maxlen=_KEPT_EVENT_IDS)
+    )
+
+
+def _event(cond_nid: ua.NodeId, source: ua.NodeId, source_name: str, name: str) -> Any:
+    made: Callable[..., Any] = AlarmCondition  # asyncua's event classes are untyped
+    event = made(sourcenode=source)
+    event.add_property("NodeId", cond_nid, ua.VariantType.NodeId)  # the ConditionId
+    for name_ in _TIME_FIELDS:
+        event.data_types[name_] = ua.VariantType.DateTime
+    event.SourceName = source_name
+    event.ConditionName = name
+    event.ConditionClassId = ua_id(ObjectIds.ProcessConditionClassType)
+    event.ConditionClassName = ua.LocalizedText("Process")
+    event.BranchId = ua.NodeId()
+    event.EnabledState = ua.LocalizedText("Enabled")
+    setattr(event, "EnabledState/Id", True)
+    event.Quality = ua_status(StatusCodes.Good)
+    event.SuppressedOrShelved = False
+    event.emitting_node = ua_id(ObjectIds.Server)
+    return event
+
+
+class Alarms:
+    """The conditions of one CPU's message list in ``server``; ``locate(entry)`` says
+    where a message's condition is (its node, source node, source name, name, FB), or
+    None for one under ``messages`` (made here); ``send`` sends an ``ack_msg``."""
+
+    def __init__(
+        self,
+        server: Server,
+        *,
+        messages: Callable[[AlarmEntry], Awaitable[tuple[ua.NodeId, ua.NodeId, str, str, str]]],
+        locate: Callable[[AlarmEntry], tuple[ua.NodeId, ua.NodeId, str, str, str] | None],
+        send: Send,
+    ) -> None:
+        self.server = server
+        self._messages = messages
+        self._locate = locate
+        self._send = send
+        self._by_node: dict[ua.NodeId, _Condition] = {}
+        self._live: dict[str, _Condition] = {}  # message key -> its condition
+        self.triggered = 0
+
+    async def apply(self, alarms: AlarmList) -> None:
+        """Send an event for each message whose state changed, and a last one for each
+        message that left the list."""
+        seen: set[str] = set()
+        for entry in alarms.entries:
+            key = str(entry.msg_id)
+            seen.add(key)
+            cond = self._live.get(key) or await self._condition(entry)
+            self._live[key] = cond
+            await self._show(cond, entry)
+        for key in [k for k in self._live if k not in seen]:
+            cond = self._live.pop(key)
+            await self._gone(cond)
+
+    async def _condition(self, entry: AlarmEntry) -> _Condition:
+        where = self._locate(entry) or await self._messages(entry)
+        nid, source, source_name, name, fb = where
+        cond = self._by_node.get(nid)
+        if cond is None:
+            event = _event(nid, source, source_name, name)
+            cond = _Condition(nid, source, source_name, name, fb, event)
+            self._by_node[nid] = cond
+        return cond
+
+    async def _show(self, cond: _Condition, e: AlarmEntry) -> None:
+        shown = (e.msg_id, e.event_id, e.state, e.acked, e.ack_required, e.text, e.ack_user)
+        if cond.shown == shown:
+            return
+        cond.shown, cond.msg_id = shown, e.msg_id
+        active = e.state == "incoming"
+        acked = e.acked or not e.ack_required
+        ev = cond.event
+        ev.Message = ua.LocalizedText(e.text or cond.name)
+        ev.Severity = SEVERITY.get(e.kind, SEVERITY[""])
+        ev.LastSeverity = ev.Severity
+        ev.Retain = active or not acked
+        ev.ActiveState = ua.LocalizedText("Active" if active else "Inactive")
+        setattr(ev, "ActiveState/Id", active)
+        ev.AckedState = ua.LocalizedText("Acknowledged" if acked else "Unacknowledged")
+        setattr(ev, "AckedState/Id", acked)
+        ev.ClientUserId = e.ack_user or None
+        came, went, ack = _ms(e.came_ms), _ms(e.went_ms), _ms(e.ack_ms)
+        setattr(ev, "ActiveState/TransitionTime", went if not active and went else came)
+        if ack is not None:
+            setattr(ev, "AckedState/TransitionTime", ack)
+        latest = max((t for t in (came, went, ack) if t is not None), default=None)
+        await self._trigger(cond, latest)
+
+    async def _gone(self, cond: _Condition) -> None:
+        """The message left the list (gone and acknowledged): the last event."""
+        ev = cond.event
+        ev.Retain = False
+        ev.ActiveState = ua.LocalizedText("Inactive")
+        setattr(ev, "ActiveState/Id", False)
+        ev.AckedState = ua.LocalizedText("Acknowledged")
+        setattr(ev, "AckedState/Id", True)
+        cond.shown, cond.msg_id = None, None
+        await self._trigger(cond, None)
+
+    async def _trigger(self, cond: _Condition, when: datetime | None) -> None:
+        ev = cond.event
+        event_id = uuid.uuid4().bytes
+        cond.event_ids.append(event_id)
+        now = datetime.now(UTC)
+        ev.EventId = event_id
+        ev.Time = when or now
+        ev.ReceiveTime = now
+        try:
+            await self.server.iserver.subscription_service.trigger_event(ev)
+        except Exception as exc:  # one client's broken filter must not stop the others
+            _log.warning("opcua: an alarm event failed: %s", type(exc).__name__)
+        self.triggered += 1
+
+    # ------------------------------------------------------------ Acknowledge
+
+    async def acknowledge(self, parent: ua.NodeId, *inputs: Any) -> ua.CallMethodResult:
+        """``Acknowledge(EventId, Comment)`` on condition ``parent``: ``ack_msg`` of its
+        message under the caller's login."""
+        result = ua.CallMethodResult()
+        cond = self._by_node.get(parent)
+        status = self._ack_problem(cond, inputs)
+        if status is None and cond is not None and cond.msg_id is not None:
+            args = MessageArgs(msg_id=cond.msg_id)
+            status, _ = await self._send(caller(), AckMsg, cond.fb, args)
+        result.StatusCode = ua_status(status if status is not None else StatusCodes.Good)
+        result.InputArgumentResults = [ua.StatusCode() for _ in inputs]
+        return result
+
+    def _ack_problem(self, cond: _Condition | None, inputs: tuple[Any, ...]) -> int | None:
+        if cond is None:
+            return StatusCodes.BadNodeIdUnknown
+        if len(inputs) < 2:
+            return StatusCodes.BadArgumentsMissing
+        if len(inputs) > 2:
+            return StatusCodes.BadTooManyArguments
+        event_id = inputs[0]
+        if not isinstance(event_id, ua.Variant) or not isinstance(event_id.Value, bytes):
+            return StatusCodes.BadTypeMismatch
+        if event_id.Value not in cond.event_ids:
+            return StatusCodes.BadEventIdUnknown
+        if cond.msg_id is None or cond.event.AckedState.Text == "Acknowledged":
+            return StatusCodes.BadConditionBranchAlreadyAcked
+        return None

@@ -1,0 +1,324 @@
+"""Who an OPC UA client is, and what one session may ask of the face (docs/opcua.md,
+"Security").
+
+:class:`BusUsers` is the server's user manager: a user name and password are checked by
+logging that user in at the CPU over the bus (``BusClient.login``: the CPU checks the
+password against its users file and audits the login), so the face never reads a password
+hash; each OPC UA session keeps the bus token of its own login in its
+:class:`FaceUser`, logged out when the session closes. An anonymous session is a viewer
+(read, browse, subscribe) or refused. :class:`FaceSession` bounds what one request and
+one session may ask for (:class:`Limits`) — more operations, subscriptions or monitored
+items than that are answered with a bad status code, never served — and paces them
+(:class:`Pace`: a request asked faster than its session's or the server's share waits
+before it is served); :class:`FaceServer` makes every session one of them and serves no
+RegisterServer. :class:`FaceRules` lets no client change the address space's structure.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextvars
+import logging
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, Final
+
+from asyncua import ua
+from asyncua.common.utils import ServiceError
+from asyncua.crypto.permission_rules import USER_TYPES, PermissionRuleset, User, UserRole
+from asyncua.server.internal_server import InternalServer
+from asyncua.server.internal_session import InternalSession
+from asyncua.server.user_managers import UserManager
+
+from s7graph.web.opcua.typed import StatusCodes, ua_id, ua_status
+
+__all__ = [
+    "CALLER",
+    "BusUsers",
+    "FaceRules",
+    "FaceServer",
+    "FaceSession",
+    "FaceUser",
+    "Limits",
+    "Pace",
+    "caller",
+]
+
+_log = logging.getLogger("s7graph.web.opcua")
+
+
+@dataclass
+class FaceUser(User):
+    """A session's user logged in at the CPU: the role the CPU gave, the token its
+    commands carry, whether the name was verified (a users file), the bus client of this
+    session's own login, and where the session came from (for the audit)."""
+
+    role: UserRole = UserRole.User
+    bus_role: str = ""
+    token: str = field(default="", repr=False)
+    verified: bool = True
+    client: Any = field(default=None, repr=False)
+    origin: str = ""
+
+
+CALLER: Final[contextvars.ContextVar[User | None]] = contextvars.ContextVar(
+    "s7graph_opcua_caller", default=None
+)
+"""The user of the session whose call is being served (set around a Call request)."""
+_ACTIVATING: Final[contextvars.ContextVar[str]] = contextvars.ContextVar(
+    "s7graph_opcua_peer", default=""
+)
+
+
+def caller() -> User:
+    """The user of the call being served (anonymous when none)."""
+    return CALLER.get() or User(role=UserRole.Anonymous)
+
+
+Login = Callable[[str, str, str], "FaceUser | str"]
+"""``login(user, password, origin)``: the user logged in at the CPU, or why not."""
+
+
+class BusUsers(UserManager):
+    """User name and password checked by the CPU (``login``); anonymous sessions allowed
+    read-only (``anonymous``) or refused."""
+
+    def __init__(self, login: Login, *, anonymous: bool) -> None:
+        self._login = login
+        self.anonymous = anonymous
+
+    def get_user(
+        self,
+        iserver: InternalServer,
+        username: str | None = None,
+        password: str | None = None,
+        certificate: Any = None,
+    ) -> User | None:
+        peer = _ACTIVATING.get()
+        if username is None:
+            if self.anonymous:
+                return User(role=UserRole.Anonymous)
+            _log.info("opcua: anonymous session from %s refused", peer or "?")
+            return None
+        origin = f"opcua {peer}".strip()[:160]
+        try:
+            result = self._login(username, password or "", origin)
+        except Exception as exc:  # the bus went away: refused, never a crash
+            result = f"login failed: {type(exc).__name__}"
+        if isinstance(result, str):
+            _log.info("opcua: login of %r from %s refused: %s", username[:32], peer, result)
+            return None
+        return result
+
+
+class FaceRules(PermissionRuleset):
+    """Every user may use the session services (read, browse, subscribe, write, call —
+    what a write or a call may do is the CPU's gate's to decide); nobody may add or
+    delete nodes or references, or register servers."""
+
+    def __init__(self) -> None:
+        self._allowed = frozenset(ua_id(t) for t in USER_TYPES)
+
+    def check_validity(self, user: Any, action_type_id: Any, body: Any) -> bool:
+        return action_type_id in self._allowed
+
+
+@dataclass(frozen=True, slots=True)
+class Limits:
+    """What one request and one session may ask for; past it, a bad status code. And
+    how fast requests are served: ``pace`` units of work a second for one session (a
+    value read, browsed or written: 1; a monitored item made: 5; a method call or a
+    subscription made or deleted: 50), ``server_pace`` for all of them together, each with
+    a second's worth at once; a request asked faster waits before it is served, so no
+    client can take the face from the others or from the bus, and a flood of them leaves
+    the event loop time to carry the CPU's changes to the subscriptions."""
+
+    operations: int = 1000  # nodes to read, browse, write, methods to call per request
+    subscriptions: int = 20  # per session
+    monitored_items: int = 5000  # per session
+    sessions: int = 64  # activated sessions of the server
+    connections: int = 128  # TCP connections, activated or not
+    min_publishing_ms: float = 10.0
+    max_publishing_ms: float = 3_600_000.0
+    pace: float = 5000.0
+    server_pace: float = 20_000.0
+
+
+COST_CALL: Final = 50
+COST_ITEM: Final = 5
+COST_SUBSCRIPTION: Final = 50
+MAX_WAIT_S: Final = 1.0
+
+
+class Pace:
+    """A token bucket: ``rate`` units a second, at most ``burst`` saved up."""
+
+    def __init__(self, rate: float, burst: float) -> None:
+        self.rate = rate
+        self.burst = burst
+        self._tokens = burst
+        self._at = time.monotonic()
+
+    def wait(self, cost: float) -> float:
+        """Take ``cost`` units; the seconds to wait first (0: none)."""
+        now = time.monotonic()
+        self._tokens = min(self.burst, self._tokens + (now - self._at) * self.rate) - cost
+        self._at = now
+        return 0.0 if self._tokens >= 0 else min(-self._tokens / self.rate, MAX_WAIT_S)
+
+
+def _bounded(count: int, limit: int) -> None:
+    """``BadTooManyOperations`` for a request of more than ``limit`` operations."""
+    if count > limit:
+        raise ServiceError(StatusCodes.BadTooManyOperations)
+
+
+class FaceSession(InternalSession):
+    """An OPC UA session of the face: bounded and paced requests, the caller known to
+    methods, the bus token logged out when it closes."""
+
+    _pace: Pace | None = None
+
+    @property
+    def limits(self) -> Limits:
+        server = self.iserver
+        return server.limits if isinstance(server, FaceServer) else Limits()
+
+    async def _serve(self, count: int, cost: float) -> None:
+        """A request of ``count`` operations costing ``cost``: refused when it has too
+        many, served after a wait when this session asks faster than its pace."""
+        _bounded(count, self.limits.operations)
+        limits = self.limits
+        if self._pace is None:
+            self._pace = Pace(limits.pace, limits.pace)
+        delay = self._pace.wait(cost)
+        server = self.iserver
+        if isinstance(server, FaceServer):
+            if server.pace is None:
+                server.pace = Pace(limits.server_pace, limits.server_pace)
+            delay = max(delay, server.pace.wait(cost))
+        if delay:
+            await asyncio.sleep(delay)
+
+    def activate_session(
+        self, params: ua.ActivateSessionParameters, peer_certificate: bytes | None
+    ) -> ua.ActivateSessionResult:
+        before = self.user
+        peer = self.name
+        shown = f"{peer[0]}:{peer[1]}" if isinstance(peer, tuple) and len(peer) >= 2 else ""
+        mark = _ACTIVATING.set(shown)
+        try:
+            result = super().activate_session(params, peer_certificate)
+        finally:
+            _ACTIVATING.reset(mark)
+        if before is not self.user and isinstance(before, FaceUser):
+            self._closed(before)  # the session changed its user: the old login ends
+        return result
+
+    async def close_session(self, delete_subs: bool = True) -> None:
+        await super().close_session(delete_subs)
+        self._closed(self.user)
+
+    def _closed(self, user: User) -> None:
+        server = self.iserver
+        hook = server.on_close if isinstance(server, FaceServer) else None
+        if hook is not None and isinstance(user, FaceUser):
+            hook(user)
+
+    async def read(self, params: ua.ReadParameters) -> list[ua.DataValue]:
+        await self._serve(len(params.NodesToRead), len(params.NodesToRead))
+        return await super().read(params)
+
+    async def write(self, params: ua.WriteParameters) -> list[ua.StatusCode]:
+        await self._serve(len(params.NodesToWrite), len(params.NodesToWrite))
+        return await super().write(params)
+
+    async def browse(self, params: ua.BrowseParameters) -> list[ua.BrowseResult]:
+        await self._serve(len(params.NodesToBrowse), len(params.NodesToBrowse))
+        return await super().browse(params)
+
+    async def translate_browsepaths_to_nodeids(
+        self, params: list[ua.BrowsePath]
+    ) -> list[ua.BrowsePathResult]:
+        await self._serve(len(params), len(params))
+        return await super().translate_browsepaths_to_nodeids(params)
+
+    async def register_nodes(self, nodes: list[ua.NodeId]) -> list[ua.NodeId]:
+        await self._serve(len(nodes), len(nodes))
+        return await super().register_nodes(nodes)
+
+    async def history_read(self, params: ua.HistoryReadParameters) -> list[ua.HistoryReadResult]:
+        raise ServiceError(StatusCodes.BadHistoryOperationUnsupported)
+
+    async def call(self, params: list[ua.CallMethodRequest]) -> list[ua.CallMethodResult]:
+        await self._serve(len(params), len(params) * COST_CALL)
+        mark = CALLER.set(self.user)
+        try:
+            return await super().call(params)
+        finally:
+            CALLER.reset(mark)
+
+    def _subscriptions(self) -> list[Any]:
+        subs = self.subscription_service.subscriptions.values()
+        return [s for s in subs if s.session_id == self.session_id]
+
+    async def create_subscription(
+        self,
+        params: ua.CreateSubscriptionParameters,
+        callback: Callable[..., Any],
+        request_callback: Callable[..., Any] | None = None,
+    ) -> ua.CreateSubscriptionResult:
+        await self._serve(1, COST_SUBSCRIPTION)
+        if len(self._subscriptions()) >= self.limits.subscriptions:
+            raise ServiceError(StatusCodes.BadTooManySubscriptions)
+        interval = params.RequestedPublishingInterval
+        lo, hi = self.limits.min_publishing_ms, self.limits.max_publishing_ms
+        if not isinstance(interval, float | int) or not math.isfinite(interval):
+            interval = lo
+        params.RequestedPublishingInterval = float(min(max(interval, lo), hi))
+        return await super().create_subscription(params, callback, request_callback)
+
+    async def delete_subscriptions(self, ids: list[int]) -> list[ua.StatusCode]:
+        await self._serve(len(ids), len(ids) * COST_SUBSCRIPTION)
+        return await super().delete_subscriptions(ids)
+
+    async def create_monitored_items(
+        self, params: ua.CreateMonitoredItemsParameters
+    ) -> list[ua.MonitoredItemCreateResult]:
+        asked = len(params.ItemsToCreate)
+        await self._serve(asked, asked * COST_ITEM)
+        held = sum(len(s.monitored_item_srv._monitored_items) for s in self._subscriptions())
+        if held + asked > self.limits.monitored_items:
+            refused = ua.MonitoredItemCreateResult()
+            refused.StatusCode = ua_status(StatusCodes.BadTooManyMonitoredItems)
+            return [refused for _ in range(asked)]
+        return await super().create_monitored_items(params)
+
+
+class FaceServer(InternalServer):
+    """The internal server whose sessions are :class:`FaceSession` s, with their
+    ``limits`` and what happens when one closes (``on_close``: its login ends)."""
+
+    limits: Limits = Limits()
+    on_close: Callable[[FaceUser], None] | None = None
+    pace: Pace | None = None  # all sessions' requests together
+
+    def register_server(self, server: Any, conf: Any = None) -> None:
+        """No discovery server: a client registering one is refused (asyncua serves
+        RegisterServer before any session, so no permission rule can)."""
+        raise ServiceError(StatusCodes.BadServiceUnsupported)
+
+    def register_server2(self, params: ua.RegisterServer2Parameters) -> None:
+        raise ServiceError(StatusCodes.BadServiceUnsupported)
+
+    def create_session(
+        self,
+        name: str,
+        user: User = User(role=UserRole.Anonymous),  # noqa: B008  (asyncua's own default)
+        external: bool = False,
+    ) -> InternalSession:
+        return FaceSession(
+            self, self.aspace, self.subscription_service, name, user=user, external=external
+        )
