@@ -42,7 +42,16 @@ from s7graph.sequencer.text.model import Chart
 from s7graph.sequencer.text.parse import ChartSyntaxError, parse_chart
 from s7graph.web.bus.protocol import ChartLayout, ChartSource
 from s7graph.web.view import texts
-from s7graph.web.view.drawing import FLAWED, SELECTED, Drawing, Picture, aim_camera, picture
+from s7graph.web.view.drawing import (
+    BAR_W,
+    BOX_W,
+    FLAWED,
+    SELECTED,
+    Drawing,
+    Picture,
+    aim_camera,
+    picture,
+)
 from s7graph.web.view.edit_forms import DEBOUNCE_S, Field, Form, element_choices, form_for
 from s7graph.web.view.editor_cpu import MAX_DIAGNOSTIC_BUTTONS, CpuCommands, Located, refused
 from s7graph.web.view.editor_place import InPlace, delete_of
@@ -197,7 +206,7 @@ class Editor(CpuCommands, RowEditing, InPlace):
         self.toggle.label = "Leave edit mode"
         self.tools.visible = True
         self.side.visible = True
-        self.place.visible = True
+        self._place_aside()
         self._keys_on()
         self._refresh_files()
         self.note = f"editing version {source.version} as the CPU runs it"
@@ -321,13 +330,25 @@ class Editor(CpuCommands, RowEditing, InPlace):
         )
         self._drawn = chart
 
-    def _clicked_step(self, number: int, event: Any) -> None:
-        self._guarded(functools.partial(self._place_at, event))
+    def _clicked_step(self, number: int, _: Any) -> None:
+        self._guarded(functools.partial(self._place_at, StepRef(number)))
         self._guarded(functools.partial(self.select, StepRef(number)))
 
-    def _clicked_transition(self, number: int, event: Any) -> None:
-        self._guarded(functools.partial(self._place_at, event))
+    def _clicked_transition(self, number: int, _: Any) -> None:
+        self._guarded(functools.partial(self._place_at, TransitionRef(number)))
         self._guarded(functools.partial(self.select, TransitionRef(number)))
+
+    def _place_at(self, ref: Ref | None) -> None:
+        """Float the element's form beside where ``ref`` is drawn (unfolded)."""
+        pic, (ox, oy) = self._picture, EDIT_OFFSET
+        if isinstance(ref, StepRef) and pic is not None and ref.number in pic.steps:
+            x, y = pic.steps[ref.number]
+            self._place_beside(x + ox + BOX_W / 2, y + oy)
+        elif isinstance(ref, TransitionRef) and pic is not None and ref.number in pic.transitions:
+            x, y = pic.transitions[ref.number]
+            self._place_beside(x + ox + BAR_W / 2, y + oy)
+        else:
+            self.place.expand()
 
     def _colour(self) -> None:
         if self._drawing is None or self.session is None:
@@ -362,6 +383,7 @@ class Editor(CpuCommands, RowEditing, InPlace):
         if getattr(event, "client", None) is None:
             return  # set from here
         ref = self._choices.get(str(self.element.value))
+        self._guarded(lambda: self._place_at(ref))
         self._guarded(lambda: self.select(ref))
 
     def _diagnostics(self, s: Session) -> None:

@@ -17,13 +17,15 @@ import viser
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.change.edit import BY_NAME, Operation, Session
 from s7graph.sequencer.text.elements import Ref, RowRef, SequenceRef, StepRef, TransitionRef
+from s7graph.web.view.drawing import BOX_W, scale_px
 from s7graph.web.view.edit_forms import EXPRESSIONS, Field, Form, completed, completions, names_for
 
 __all__ = ["PICK", "PLACE_WIDTH", "InPlace", "delete_of"]
 
 PLACE_WIDTH: Final = 340  # pixels of the floating form
+MIN_WIDTH: Final = 240  # narrower than this it covers the element rather
 PLACE_HEIGHT: Final = 560  # its height at most (it scrolls)
-GAP: Final = 70  # pixels between the click and the form
+GAP: Final = 12  # pixels between the element and the form
 PICK: Final = "(pick a name)"
 HINT_COMPLETE: Final = (
     "Names of symbols, variables, steps and transitions that match the word you are"
@@ -85,7 +87,6 @@ class InPlace:
             self.form_folder = gui.add_folder("Properties")
             self.insert_folder = gui.add_folder("Insert or delete here")
         self.place.set_width(PLACE_WIDTH)
-        self.place.float(x=16, y=16)
         self.undo_button.on_click(lambda _: self._guarded(self.undo))
         self.redo_button.on_click(lambda _: self._guarded(self.redo))
         self.delete_button.on_click(lambda _: self._guarded(self.delete_selected))
@@ -128,19 +129,41 @@ class InPlace:
 
     # ------------------------------------------------------------ placing
 
-    def _place_at(self, event: Any) -> None:
-        """Float the form beside where ``event`` (a click on the chart) happened, on the
-        side with room for it."""
-        pos = getattr(event, "screen_pos", None)
+    def _place_aside(self) -> None:
+        """Show the form folded in the lower right corner, off the chart, until an element
+        is clicked (its header unfolds it)."""
+        self.place.visible = True
+        self.place.float(x=-16, y=-16)
+        self.place.minimize()
+
+    def _place_beside(self, right: float, y: float) -> None:
+        """Float the form beside a drawn element whose right edge is at scene ``right``
+        (its middle at scene ``y``), on the side with room for it (on a narrow canvas
+        narrower, on the roomier side); where the page's camera looks now."""
         cam = self.client.camera
-        w, h = float(cam.image_width), float(cam.image_height)
-        if pos is None or w <= 0 or h <= 0:
+        try:
+            cx, cy, z = (float(v) for v in cam.position)
+            w, h = float(cam.image_width), float(cam.image_height)
+            scale = scale_px(z, float(cam.fov), h)
+        except Exception:  # the page has not told its camera yet
             return
-        x, y = float(pos[0]) * w, float(pos[1]) * h
-        left = x + GAP if x + GAP + PLACE_WIDTH <= w else max(0.0, x - GAP - PLACE_WIDTH)
+        if w <= 0 or h <= 0 or z <= 0:
+            return
+        x_right = w / 2 + (right - cx) * scale
+        py = h / 2 - (y - cy) * scale
+        x_left = x_right - BOX_W * scale  # an element's width at most: look past it
+        right_room, left_room = w - x_right - GAP, x_left - GAP
+        width = float(PLACE_WIDTH)
+        if right_room < width and left_room < width:  # a narrow canvas: the roomier side
+            width = max(float(MIN_WIDTH), min(width, max(right_room, left_room)))
+        if right_room >= width or right_room >= left_room:
+            left = min(x_right + GAP, w - width)
+        else:
+            left = max(0.0, x_left - GAP - width)
         height = min(PLACE_HEIGHT, max(200.0, h - 16))
-        top = min(max(8.0, y - 60), max(8.0, h - height - 8))
-        self.place.float(x=round(left), y=round(top), height=round(height))
+        top = min(max(8.0, py - 60), max(8.0, h - height - 8))
+        self.place.float(x=round(left), y=round(top), width=round(width), height=round(height))
+        self.place.expand()
 
     # ------------------------------------------------------------ completing names
 

@@ -346,8 +346,11 @@ def transition_html(layout: ChartLayout, update: StepStateUpdate | None, number:
     return small("<br>".join(rows))
 
 
-def login_html(user: str, role: str, verified: bool, demo: bool) -> str:
-    """Who this page is logged in as, or how to log in."""
+def login_html(user: str, role: str, verified: bool, demo: bool, refused: str = "") -> str:
+    """Who this page is logged in as, or how to log in; ``refused``: why the last login
+    was refused (a wrong password, a lockout), shown until the next one."""
+    if not user and refused:
+        return small(f'<span style="color:#c92a2a">login refused: {html.escape(refused)}</span>')
     if not user:
         how = (
             "type your name and <i>Log in</i> (no users file: names are recorded unverified)"
