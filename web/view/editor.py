@@ -114,7 +114,9 @@ class Editor(CpuCommands, RowEditing, InPlace):
                 )
                 self.file = gui.add_text("File", "", hint="the .s7g file Save writes")
                 self.save_button = gui.add_button("Save", hint="write the chart as the File")
-                self.open_choice = gui.add_dropdown("Open file", ["(none)"])
+                self.open_choice = gui.add_dropdown(
+                    "Open file", ["(none)"], hint="A chart or importable file of the CPU's project."
+                )
                 self.open_button = gui.add_button("Open", hint="open the chosen file")
                 self.new_button = gui.add_button("New", hint="a new chart: S1 and T1")
         # The element's form floats beside it on the chart; the problems and the source
@@ -129,7 +131,12 @@ class Editor(CpuCommands, RowEditing, InPlace):
             with self.diag_folder:
                 self.diag_html = gui.add_html("")
         with self.side.add_tab("Source (.s7g)"):
-            self.source = gui.add_text("Source", "", multiline=True)
+            self.source = gui.add_text(
+                "Source",
+                "",
+                multiline=True,
+                hint="The chart as .s7g text; what you type becomes the chart when typing pauses.",
+            )
             uid = self.source._impl.uuid
             rule = (
                 f".mantine-Flex-root:has(label[for='{uid}']) textarea{{"
