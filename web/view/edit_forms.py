@@ -12,23 +12,28 @@ everything else comes from ``OPERATIONS``.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import re
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, replace
 from typing import Final
 
 from s7graph.sequencer.change.edit import OPERATIONS, Argument, Operation
 from s7graph.sequencer.change.typed import RowFields
 from s7graph.sequencer.text.elements import Ref, RowRef, SequenceRef, StepRef, TransitionRef, find
-from s7graph.sequencer.text.format import format_expr, row_body
+from s7graph.sequencer.text.format import format_expr, quote, row_body
 from s7graph.sequencer.text.model import ActionRow, Chart, Expr, Sequence, Step, Transition
 
 __all__ = [
     "CURRENT",
+    "DEBOUNCE_S",
     "Field",
     "Form",
+    "completed",
+    "completions",
     "element_choices",
     "form_for",
     "kind_of",
+    "names_for",
     "row_fields",
 ]
 
@@ -44,6 +49,8 @@ def _step(f: Callable[[Step], object]) -> Callable[[object], object]:
 def _transition(f: Callable[[Transition], object]) -> Callable[[object], object]:
     return lambda x: f(x) if isinstance(x, Transition) else None
 
+
+DEBOUNCE_S: Final = 0.6  # typing pauses this long: the text is applied
 
 # How the current value of a property operation's one argument is read from its element.
 CURRENT: Final[dict[str, Callable[[object], object]]] = {
@@ -177,3 +184,41 @@ def element_choices(chart: Chart) -> list[tuple[str, Ref | None]]:
         out += [(f"S{s.number} {s.name}".rstrip(), StepRef(s.number)) for s in q.steps]
         out += [(f"T{t.number} {t.name}".rstrip(), TransitionRef(t.number)) for t in q.transitions]
     return out
+
+
+# ---------------------------------------------------------------- completing names
+
+MAX_COMPLETIONS: Final = 40  # names a completion list offers at once
+EXPRESSIONS: Final = frozenset({"set_condition", "set_interlock", "set_supervision"})
+_PLAIN: Final = re.compile(r"[A-Za-z_][A-Za-z0-9_]*(\.[A-Za-z_][A-Za-z0-9_]*)?")
+_WORD: Final = re.compile(r'("[^"]*|[A-Za-z0-9_.#]*)$')
+
+
+def names_for(chart: Chart, symbols: Iterable[str] = ()) -> list[str]:
+    """The names a condition may read, as it writes them: the symbols (of the symbol
+    table and of the chart), the chart's variables, and each step's and transition's
+    flags (``S2.X``, ``S2.T``, ``T1.TT``); a name that is not a plain word is quoted."""
+    out: list[str] = []
+    for name in [*symbols, *(d.name for d in chart.symbols), *(v.name for v in chart.vars)]:
+        out.append(name if _PLAIN.fullmatch(name) else quote(name))
+    for q in chart.sequences:
+        for s in q.steps:
+            out += [f"S{s.number}.X", f"S{s.number}.T"]
+        out += [f"T{t.number}.TT" for t in q.transitions]
+    return list(dict.fromkeys(out))
+
+
+def completions(names: Iterable[str], text: str) -> list[str]:
+    """The names completing the word ``text`` ends with: those starting with it first,
+    then those containing it, case-insensitive, at most ``MAX_COMPLETIONS``."""
+    word = _WORD.search(text)
+    stem = (word.group(1) if word else "").lstrip('"').lower()
+    starts = [n for n in names if n.lstrip('"').lower().startswith(stem)]
+    inside = [n for n in names if stem and stem in n.lower() and n not in starts]
+    return (starts + inside)[:MAX_COMPLETIONS]
+
+
+def completed(text: str, name: str) -> str:
+    """``text`` with the word it ends with replaced by ``name``."""
+    word = _WORD.search(text)
+    return text[: word.start(1) if word else len(text)] + name

@@ -42,9 +42,19 @@ from s7graph.sequencer.text.model import Chart
 from s7graph.sequencer.text.parse import ChartSyntaxError, parse_chart
 from s7graph.web.bus.protocol import ChartLayout, ChartSource
 from s7graph.web.view import texts
-from s7graph.web.view.drawing import FLAWED, SELECTED, Drawing, Picture, aim_camera, picture
-from s7graph.web.view.edit_forms import Field, Form, element_choices, form_for
+from s7graph.web.view.drawing import (
+    BAR_W,
+    BOX_W,
+    FLAWED,
+    SELECTED,
+    Drawing,
+    Picture,
+    aim_camera,
+    picture,
+)
+from s7graph.web.view.edit_forms import DEBOUNCE_S, Field, Form, element_choices, form_for
 from s7graph.web.view.editor_cpu import MAX_DIAGNOSTIC_BUTTONS, CpuCommands, Located, refused
+from s7graph.web.view.editor_place import InPlace, delete_of
 from s7graph.web.view.editor_rows import RowEditing
 from s7graph.web.view.engineering import EditorPage
 from s7graph.web.view.layout import place
@@ -53,10 +63,9 @@ __all__ = ["EDIT_OFFSET", "Editor"]
 
 EDIT_OFFSET: Final = (0.0, -2000.0)  # where a page draws the chart it edits (off the live one)
 EDITOR_WIDTH: Final = 400  # pixels of the editor's panel, docked left of the chart
-DEBOUNCE_S: Final = 0.6  # typing pauses this long: the text is applied
 
 
-class Editor(CpuCommands, RowEditing):
+class Editor(CpuCommands, RowEditing, InPlace):
     """The edit mode of ``panel``'s page (built only for a role that may download)."""
 
     def __init__(self, panel: EditorPage) -> None:
@@ -97,8 +106,6 @@ class Editor(CpuCommands, RowEditing):
             self.toggle = gui.add_button("Edit mode", hint="edit this chart and download it")
             self.status = gui.add_html(self._status_html())
             with gui.add_folder("Chart", visible=False) as self.tools:
-                self.undo_button = gui.add_button("Undo", disabled=True)
-                self.redo_button = gui.add_button("Redo", disabled=True)
                 self.download_button = gui.add_button(
                     "Download", color="orange", hint="compile and download into the CPU"
                 )
@@ -107,22 +114,29 @@ class Editor(CpuCommands, RowEditing):
                 )
                 self.file = gui.add_text("File", "", hint="the .s7g file Save writes")
                 self.save_button = gui.add_button("Save", hint="write the chart as the File")
-                self.open_choice = gui.add_dropdown("Open file", ["(none)"])
+                self.open_choice = gui.add_dropdown(
+                    "Open file", ["(none)"], hint="A chart or importable file of the CPU's project."
+                )
                 self.open_button = gui.add_button("Open", hint="open the chosen file")
                 self.new_button = gui.add_button("New", hint="a new chart: S1 and T1")
-        # The element's form, the problems and the source: a panel of their own, docked
-        # left of the chart while editing.
+        # The element's form floats beside it on the chart; the problems and the source
+        # are a panel of their own, docked left of the chart while editing.
+        self._place_build()
         self.side = gui.add_panel(visible=False)
         with self.side.add_tab("Element"):
-            self.element = gui.add_dropdown("Element", ["Chart"])
-            self.form_folder = gui.add_folder("Selection")
-            with self.form_folder:
-                self.form_html = gui.add_html("")
+            self.element = gui.add_dropdown(
+                "Element", ["Chart"], hint="Choose what to edit, or click it on the chart."
+            )
             self.diag_folder = gui.add_folder("Diagnostics")
             with self.diag_folder:
                 self.diag_html = gui.add_html("")
         with self.side.add_tab("Source (.s7g)"):
-            self.source = gui.add_text("Source", "", multiline=True)
+            self.source = gui.add_text(
+                "Source",
+                "",
+                multiline=True,
+                hint="The chart as .s7g text; what you type becomes the chart when typing pauses.",
+            )
             uid = self.source._impl.uuid
             rule = (
                 f".mantine-Flex-root:has(label[for='{uid}']) textarea{{"
@@ -137,8 +151,6 @@ class Editor(CpuCommands, RowEditing):
         self.save_button.on_click(lambda _: self._guarded(self.save))
         self.open_button.on_click(lambda _: self._guarded(self.open))
         self.new_button.on_click(lambda _: self._guarded(self.new))
-        self.undo_button.on_click(lambda _: self._guarded(lambda: self.change(lambda s: s.undo())))
-        self.redo_button.on_click(lambda _: self._guarded(lambda: self.change(lambda s: s.redo())))
         self.download_button.on_click(lambda _: self._guarded(self.download))
         self.undo_download_button.on_click(lambda _: self._guarded(self.undo_download))
         self.element.on_update(self._element_chosen)
@@ -157,6 +169,8 @@ class Editor(CpuCommands, RowEditing):
                 self.leave()
             with contextlib.suppress(Exception):
                 self.folder.remove()
+            with contextlib.suppress(Exception):
+                self.place.remove()
             with contextlib.suppress(Exception):
                 self.side.remove()
 
@@ -199,6 +213,8 @@ class Editor(CpuCommands, RowEditing):
         self.toggle.label = "Leave edit mode"
         self.tools.visible = True
         self.side.visible = True
+        self._place_aside()
+        self._keys_on()
         self._refresh_files()
         self.note = f"editing version {source.version} as the CPU runs it"
         self._show(source_changed=True)
@@ -210,6 +226,8 @@ class Editor(CpuCommands, RowEditing):
         self.toggle.label = "Edit mode"
         self.tools.visible = False
         self.side.visible = False
+        self.place.visible = False
+        self._keys_off()
         if self._drawing is not None:
             self._drawing.remove()
             self._drawing, self._drawn = None, None
@@ -297,6 +315,8 @@ class Editor(CpuCommands, RowEditing):
                 self.source.value = self._source_text  # type: ignore[misc]
             self.undo_button.disabled = s.undo_label is None
             self.redo_button.disabled = s.redo_label is None
+            shown = self._form.ref if self._form is not None else None
+            self.delete_button.disabled = delete_of(shown) is None
             self.status.content = self._status_html()
 
     def _draw(self, chart: Chart) -> None:
@@ -318,10 +338,24 @@ class Editor(CpuCommands, RowEditing):
         self._drawn = chart
 
     def _clicked_step(self, number: int, _: Any) -> None:
+        self._guarded(functools.partial(self._place_at, StepRef(number)))
         self._guarded(functools.partial(self.select, StepRef(number)))
 
     def _clicked_transition(self, number: int, _: Any) -> None:
+        self._guarded(functools.partial(self._place_at, TransitionRef(number)))
         self._guarded(functools.partial(self.select, TransitionRef(number)))
+
+    def _place_at(self, ref: Ref | None) -> None:
+        """Float the element's form beside where ``ref`` is drawn (unfolded)."""
+        pic, (ox, oy) = self._picture, EDIT_OFFSET
+        if isinstance(ref, StepRef) and pic is not None and ref.number in pic.steps:
+            x, y = pic.steps[ref.number]
+            self._place_beside(x + ox + BOX_W / 2, y + oy)
+        elif isinstance(ref, TransitionRef) and pic is not None and ref.number in pic.transitions:
+            x, y = pic.transitions[ref.number]
+            self._place_beside(x + ox + BAR_W / 2, y + oy)
+        else:
+            self.place.expand()
 
     def _colour(self) -> None:
         if self._drawing is None or self.session is None:
@@ -356,6 +390,7 @@ class Editor(CpuCommands, RowEditing):
         if getattr(event, "client", None) is None:
             return  # set from here
         ref = self._choices.get(str(self.element.value))
+        self._guarded(lambda: self._place_at(ref))
         self._guarded(lambda: self.select(ref))
 
     def _diagnostics(self, s: Session) -> None:
@@ -397,9 +432,13 @@ class Editor(CpuCommands, RowEditing):
             with contextlib.suppress(Exception):
                 handle.remove()
         self._form_handles, self._inputs, self._form = [], {}, None
+        self._completers = {}
 
     def _form_of(self, chart: Chart, selection: Ref | None) -> None:
         form = form_for(chart, selection)
+        title = texts.small(f"<b>{html.escape(_title(chart, form.ref))}</b>")
+        if self.form_html.content != title:
+            self.form_html.content = title
         if self._form is not None and self._form.key == form.key:
             for f in form.properties:  # the same fields: only their values
                 handle = self._inputs.get(f.op.name)
@@ -412,16 +451,19 @@ class Editor(CpuCommands, RowEditing):
         self._clear_form()
         self._form = form
         gui = self.client.gui
-        what = form.ref
-        self.form_html.content = texts.small(f"<b>{html.escape(_title(chart, what))}</b>")
         with self.form_folder:
             for f in form.properties:
                 handle = self._input(f)
                 self._inputs[f.op.name] = handle
                 handle.on_update(self._property_handler(f))
+                self._complete_for(f, handle, form.ref)
             if form.rows:
                 self._rows_form(chart, form.ref)
+        quick = delete_of(form.ref)  # the Delete button's
+        with self.insert_folder:
             for op, fields in form.actions:
+                if quick is not None and op.name == quick.name:
+                    continue
                 handles = [self._input(f) for f in fields]
                 button = gui.add_button(op.title, hint=op.hint)
                 self._form_handles.append(button)

@@ -1,12 +1,16 @@
-"""The action rows of the selected step in the editor's form: the fields of one row and
-the buttons that add, change, remove or move it. ``RowEditing`` is a part of
-``web.view.editor.Editor``, which owns the attributes it declares.
+"""The action rows of the selected step as an editable table in the step's form: one
+line of inputs per row (event, qualifier, C, operand, time or value) applied as they
+change, each with buttons to move it up or down or remove it, and a new row's inputs with
+*Add action row* below. ``RowEditing`` is a part of ``web.view.editor.Editor``, which owns
+the attributes it declares.
 """
 
 from __future__ import annotations
 
+import contextlib
 import functools
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Final
 
 import viser
@@ -14,17 +18,60 @@ import viser
 from s7graph.sequencer.change.base import Edit, EditRefused
 from s7graph.sequencer.change.edit import Session, make_edit
 from s7graph.sequencer.change.typed import RowFields
-from s7graph.sequencer.text.elements import Ref, RowRef, StepRef, find
-from s7graph.sequencer.text.format import format_row
-from s7graph.sequencer.text.model import Chart, Step
+from s7graph.sequencer.text.elements import Ref, StepRef, find
+from s7graph.sequencer.text.model import ActionRow, Chart, Step
 from s7graph.steps.qualifiers import EVENTS, QUALIFIERS
 from s7graph.web.view import texts
-from s7graph.web.view.edit_forms import Form, row_fields
+from s7graph.web.view.edit_forms import DEBOUNCE_S, Form, row_fields
 from s7graph.web.view.editor_cpu import refused
 
-__all__ = ["NO_EVENT", "RowEditing"]
+__all__ = ["MAX_TABLE_ROWS", "NO_EVENT", "RowEditing"]
 
 NO_EVENT: Final = "(none)"
+MAX_TABLE_ROWS: Final = 16  # rows the table shows; the source view has them all
+MOVES: Final = ("Up", "Down", "Remove")
+HINT_EVENT: Final = "When the row runs: (none) every scan the step is active, or at an event."
+HINT_QUALIFIER: Final = "What the row does: N sets while active, S/R set and reset, D/L delay"
+HINT_C: Final = "Tick it to run the row only while the step's interlock holds."
+HINT_OPERAND: Final = 'What the row acts on: Q0.0, "Motor_on", S4 or n := n + 1.'
+HINT_VALUE: Final = "A time for D and L (T#2S), a count for CS (C#10); else empty."
+
+
+@dataclass(slots=True)
+class _Line:
+    """The inputs of one row of the table (``inputs`` in RowFields order)."""
+
+    folder: Any
+    event: Any
+    qualifier: Any
+    c: Any
+    operand: Any
+    value: Any
+    moves: Any
+
+    def fields(self) -> RowFields:
+        event = str(self.event.value)
+        return RowFields(
+            qualifier=str(self.qualifier.value),
+            operand=str(self.operand.value),
+            event="" if event == NO_EVENT else event,
+            interlocked=bool(self.c.value),
+            value=str(self.value.value),
+        )
+
+    def show(self, f: RowFields) -> None:
+        """Show ``f`` (only what differs is sent)."""
+        want: list[tuple[Any, object]] = [
+            (self.event, f.event or NO_EVENT),
+            (self.c, f.interlocked),
+            (self.operand, f.operand),
+            (self.value, f.value),
+        ]
+        if f.qualifier in QUALIFIERS:
+            want.append((self.qualifier, f.qualifier))
+        for handle, value in want:
+            if handle.value != value:
+                handle.value = value
 
 
 class RowEditing:
@@ -43,82 +90,98 @@ class RowEditing:
 
         def _guarded(self, action: Callable[[], object]) -> None: ...
 
+        def _later(self, key: str, delay: float, action: Callable[[], None]) -> None: ...
+
         def apply(self, edit: Edit) -> None: ...
 
     def _rows_form(self, chart: Chart, ref: Ref | None) -> None:
         gui = self.client.gui
-        self.rows_html = gui.add_html("")
-        self.row_number = gui.add_number(
-            "Row", 1, min=1, max=256, step=1, hint="the action row the fields below show"
-        )
-        self.row_event = gui.add_dropdown("Event", [NO_EVENT, *EVENTS])
-        self.row_qualifier = gui.add_dropdown("Qualifier", list(QUALIFIERS))
-        self.row_c = gui.add_checkbox("C (interlocked)", False)
-        self.row_operand = gui.add_text("Operand", "", hint='Q0.0, "Motor_on", S4, n := n + 1')
-        self.row_value = gui.add_text("Time / value", "", hint="T#2S for D and L, C#10 for CS")
-        buttons = {
-            "add": gui.add_button("Add action row", hint="the fields above as a new last row"),
-            "change": gui.add_button("Change action row", hint="row Row becomes the fields"),
-            "remove": gui.add_button("Remove action row", hint="remove row Row"),
-            "up": gui.add_button("Move action row up"),
-            "down": gui.add_button("Move action row down"),
-        }
-        self._form_handles += [
-            self.rows_html,
-            self.row_number,
-            self.row_event,
-            self.row_qualifier,
-            self.row_c,
-            self.row_operand,
-            self.row_value,
-            *buttons.values(),
-        ]
-        for what, button in buttons.items():
-            button.on_click(self._click(functools.partial(self._row_action, what)))
-        self.row_number.on_update(self._row_chosen)
-        self._rows_show(chart, ref, fill=True)
+        self.rows_folder = gui.add_folder("Action rows")
+        self._form_handles.append(self.rows_folder)
+        self._lines: list[_Line] = []
+        step = self._step_of(chart, ref)
+        with self.rows_folder:
+            self.rows_html = gui.add_html("", order=0)
+            self.rows_table = gui.add_folder("Rows", order=1, visible=False)
+            empty = not (step.actions if step is not None else ())
+            with gui.add_folder("New action row", order=2, expand_by_default=empty):
+                self.row_event = gui.add_dropdown("Event", [NO_EVENT, *EVENTS], hint=HINT_EVENT)
+                self.row_qualifier = gui.add_dropdown(
+                    "Qualifier", list(QUALIFIERS), hint=HINT_QUALIFIER
+                )
+                self.row_c = gui.add_checkbox("C (interlocked)", False, hint=HINT_C)
+                self.row_operand = gui.add_text("Operand", "", hint=HINT_OPERAND)
+                self.row_value = gui.add_text("Time / value", "", hint=HINT_VALUE)
+                add = gui.add_button("Add action row", hint="Add the fields above as a last row.")
+        add.on_click(self._click(self._row_add))
+        self._rows_show(chart, ref)
 
     def _step_of(self, chart: Chart, ref: Ref | None) -> Step | None:
         number = ref.number if isinstance(ref, StepRef) else None
         found = find(chart, StepRef(number)) if number is not None else None
         return found if isinstance(found, Step) else None
 
-    def _rows_show(self, chart: Chart, ref: Ref | None, *, fill: bool = False) -> None:
+    def _rows_show(self, chart: Chart, ref: Ref | None) -> None:
+        """Bring the table up to the step's rows: values in place while the number of rows
+        stays, else the table anew."""
         step = self._step_of(chart, ref)
-        rows = step.actions if step is not None else ()
-        self.rows_html.content = texts.rows_html([format_row(r) for r in rows])
-        sel = self.session.selection if self.session is not None else None
-        if isinstance(sel, RowRef):
-            fill = True
-            if int(self.row_number.value) != sel.index + 1:
-                self.row_number.value = sel.index + 1  # type: ignore[misc]
-        if fill:
-            self._row_fill(rows)
+        rows = step.actions[:MAX_TABLE_ROWS] if step is not None else ()
+        more = len(step.actions) - len(rows) if step is not None else 0
+        self.rows_html.content = texts.rows_note(len(rows), more)
+        if len(rows) != len(self._lines):
+            self._rows_table(rows)
+        for line, row in zip(self._lines, rows, strict=True):
+            line.show(row_fields(row))
+            label = f"Row {self._lines.index(line) + 1}"
+            if line.folder.label != label:
+                line.folder.label = label
+        self.rows_table.visible = bool(rows)
 
-    def _row_fill(self, rows: tuple[Any, ...]) -> None:
-        i = int(self.row_number.value) - 1
-        if not 0 <= i < len(rows):
-            return
-        f = row_fields(rows[i])
-        self.row_event.value = f.event or NO_EVENT  # type: ignore[misc]
-        if f.qualifier in QUALIFIERS:
-            self.row_qualifier.value = f.qualifier  # type: ignore[misc]
-        self.row_c.value = f.interlocked  # type: ignore[misc]
-        self.row_operand.value = f.operand  # type: ignore[misc]
-        self.row_value.value = f.value  # type: ignore[misc]
+    def _rows_table(self, rows: tuple[ActionRow, ...]) -> None:
+        for line in self._lines:
+            with contextlib.suppress(Exception):
+                line.folder.remove()
+        self._lines = []
+        gui = self.client.gui
+        with self.rows_table:
+            for i, row in enumerate(rows, 1):
+                with gui.add_folder(f"Row {i}") as folder:
+                    line = _Line(
+                        folder,
+                        gui.add_dropdown(f"Event {i}", [NO_EVENT, *EVENTS], hint=HINT_EVENT),
+                        gui.add_dropdown(f"Qualifier {i}", list(QUALIFIERS), hint=HINT_QUALIFIER),
+                        gui.add_checkbox(f"C {i}", False, hint=HINT_C),
+                        gui.add_text(f"Operand {i}", "", hint=HINT_OPERAND),
+                        gui.add_text(f"Time / value {i}", "", hint=HINT_VALUE),
+                        gui.add_button_group(
+                            f"Row {i}:", MOVES, hint="Move this row up or down, or remove it."
+                        ),
+                    )
+                line.show(row_fields(row))
+                self._lines.append(line)
+                for handle, delay in (
+                    (line.event, 0.0),
+                    (line.qualifier, 0.0),
+                    (line.c, 0.0),
+                    (line.operand, DEBOUNCE_S),
+                    (line.value, DEBOUNCE_S),
+                ):
+                    handle.on_update(functools.partial(self._row_typed, i - 1, delay))
+                line.moves.on_click(functools.partial(self._row_moved, i - 1))
 
-    def _row_chosen(self, event: Any) -> None:
-        if getattr(event, "client", None) is None or self.session is None:
-            return
-        step = self._step_of(self.session.chart, self._form.ref if self._form else None)
-        if step is not None:
-            self._guarded(lambda: self._row_fill(step.actions))
+    def _row_typed(self, index: int, delay: float, event: Any) -> None:
+        if getattr(event, "client", None) is None or index >= len(self._lines):
+            return  # set from here
+        line = self._lines[index]
+        self._later(f"row {index}", delay, lambda: self._row_edit("change_row", index, line))
 
-    def _row_action(self, what: str) -> None:
-        if self.session is None or self._form is None or not isinstance(self._form.ref, StepRef):
-            return
-        n = self._form.ref.number
-        index = int(self.row_number.value) - 1
+    def _row_moved(self, index: int, event: Any) -> None:
+        what = str(event.target.value)
+        op = "remove_row" if what == "Remove" else "move_row"
+        to = index - 1 if what == "Up" else index + 1
+        self._guarded(lambda: self._row_edit(op, index, None, to))
+
+    def _row_add(self) -> None:
         event = str(self.row_event.value)
         fields = RowFields(
             qualifier=str(self.row_qualifier.value),
@@ -127,22 +190,25 @@ class RowEditing:
             interlocked=bool(self.row_c.value),
             value=str(self.row_value.value),
         )
-        args: dict[str, dict[str, object]] = {
-            "add": {"op": "add_row", "step": n, "row": fields},
-            "change": {"op": "change_row", "step": n, "index": index, "row": fields},
-            "remove": {"op": "remove_row", "step": n, "index": index},
-            "up": {"op": "move_row", "step": n, "index": index, "to": index - 1},
-            "down": {"op": "move_row", "step": n, "index": index, "to": index + 1},
-        }
-        chosen = dict(args[what])
-        name = str(chosen.pop("op"))
+        self._row_edit("add_row", -1, fields)
+
+    def _row_edit(self, name: str, index: int, line: _Line | RowFields | None, to: int = 0) -> None:
+        """Apply the row operation ``name`` to row ``index`` of the form's step."""
+        if self.session is None or self._form is None or not isinstance(self._form.ref, StepRef):
+            return
+        args: dict[str, object] = {"step": self._form.ref.number}
+        if name != "add_row":
+            args["index"] = index
+        if isinstance(line, _Line):
+            args["row"] = line.fields()
+        elif isinstance(line, RowFields):
+            args["row"] = line
+        if name == "move_row":
+            args["to"] = to
         try:
-            edit = make_edit(name, chosen)
+            edit = make_edit(name, args)
         except EditRefused as exc:
             self.session = refused(self.session, exc)
             self._show(source_changed=False)
             return
         self.apply(edit)
-        sel = self.session.selection
-        if isinstance(sel, RowRef):  # the row just made, moved or changed
-            self.row_number.value = sel.index + 1  # type: ignore[misc]

@@ -387,6 +387,7 @@ class ClientPanel:
         reply = self.wiring.login(user, password, self.origin)
         if not reply.ok:
             self._notify("login refused", reply.reason, ok=False)
+            self.who.content = texts.login_html("", "", True, self.wiring.demo, reply.reason)
             return
         with self._lock:
             self.user, self.token, self.role = reply.user, reply.token, reply.role

@@ -127,6 +127,7 @@ class ProgramPage:
         reply = self.view.client.login(user, password, origin=self.origin)
         if not reply.ok:
             self._notify("login refused", reply.reason, ok=False)
+            self.who.content = texts.login_html("", "", True, self.view.demo, reply.reason)
             return
         with self._lock:
             self.user, self.token, self.role = reply.user, reply.token, reply.role

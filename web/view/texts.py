@@ -46,7 +46,7 @@ __all__ = [
     "lines_html",
     "log_html",
     "login_html",
-    "rows_html",
+    "rows_note",
     "small",
     "status_html",
     "step_rows",
@@ -346,8 +346,11 @@ def transition_html(layout: ChartLayout, update: StepStateUpdate | None, number:
     return small("<br>".join(rows))
 
 
-def login_html(user: str, role: str, verified: bool, demo: bool) -> str:
-    """Who this page is logged in as, or how to log in."""
+def login_html(user: str, role: str, verified: bool, demo: bool, refused: str = "") -> str:
+    """Who this page is logged in as, or how to log in; ``refused``: why the last login
+    was refused (a wrong password, a lockout), shown until the next one."""
+    if not user and refused:
+        return small(f'<span style="color:#c92a2a">login refused: {html.escape(refused)}</span>')
     if not user:
         how = (
             "type your name and <i>Log in</i> (no users file: names are recorded unverified)"
@@ -427,12 +430,12 @@ def editor_status_html(
     return small("<br>".join(rows))
 
 
-def rows_html(lines: list[str]) -> str:
-    """A step's action rows, numbered as ``check`` numbers them."""
-    if not lines:
-        return small('<span style="color:#777">no action rows</span>')
-    body = "<br>".join(f"{i}: {html.escape(line)}" for i, line in enumerate(lines, 1))
-    return small(f'<span style="font-family:monospace">{body}</span>')
+def rows_note(shown: int, more: int) -> str:
+    """The line above a step's table of action rows."""
+    if not shown:
+        return small('<span style="color:#777">no action rows: add one below</span>')
+    tail = f"; {more} more in the source view" if more else ""
+    return small(f"{shown} action row{'s' if shown != 1 else ''}, run top to bottom{tail}")
 
 
 def lines_html(lines: Iterable[str], *, heading: str = "") -> str:
