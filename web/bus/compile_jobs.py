@@ -163,4 +163,9 @@ def _open(path: Path, symbols: str) -> dict[str, Any]:
     except (OSError, S7Error) as exc:
         raise _Refused(f"cannot open {name}: {exc}") from None
     text = format_chart(imported.chart)
-    return {"text": text, "lines": [format_diagnostic(d) for d in imported.problems]}
+    return {
+        "text": text,
+        "lines": [format_diagnostic(d) for d in imported.problems],
+        "scl": imported.blocks_scl,
+        "functions": [(f.number, f.source) for f in imported.functions],
+    }
