@@ -125,22 +125,40 @@ def test_an_iec_timer_call_goes_to_plcopen_as_an_fb_instance_and_comes_back() ->
     ]
 
 
-def test_a_part_simaticml_cannot_hold_is_one_clear_export_error(
+def test_permanent_calls_and_moves_travel_through_simaticml_as_lad_boxes() -> None:
+    """A permanent CALL is a LAD call box fed by the power rail (block and instance DB by
+    number, reported once as for CALL rows), an assignment of an operand or a constant a
+    MOVE box: both read back as the same instructions."""
+    chart = parse_chart(synthetic("permanent_boxes.s7g").read_text(encoding="utf-8"), "p.s7g")
+    xml, problems = export_reported(chart, "simaticml")
+    assert [(d.code, d.loc.line) for d in problems] == [("X012", 19)]
+    assert '<CallInfo Name="SFB4" BlockType="SFB">' in xml and '<Part Name="Move"' in xml
+    back = import_chart(xml.encode(), "p.xml")
+    assert back.problems == []
+    assert uncommented(unlocated(back.chart)) == uncommented(unlocated(chart))
+    added = import_chart(xml.replace('Name="Move"', 'Name="Add"', 1).encode(), "p.xml")
+    assert [(d.code, d.message) for d in added.problems] == [
+        ("I022", "permanent operation not imported: part Add has no GRAPH permanent form")
+    ]
+    assert len(added.chart.before) == len(chart.before) - 1
+
+
+def test_a_permanent_arithmetic_expression_is_one_clear_simaticml_export_error(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """A CALL among the permanent instructions has no SimaticML form here (a LAD call box):
+    """``n := n + 1`` among the permanent instructions has no LAD form this export writes:
     one located line, exit 2; PLCopen takes it (a stored action of the initial step)."""
-    chart = tmp_path / "call.s7g"
+    chart = tmp_path / "sum.s7g"
     chart.write_text(
-        'FUNCTION_BLOCK "X"\nVAR a : BOOL; done : BOOL; END_VAR\nSEQUENCE 1\n'
+        'FUNCTION_BLOCK "X"\nVAR a : BOOL; n : INT; END_VAR\nSEQUENCE 1\n'
         "INITIAL_STEP S1: END_STEP\nSTEP S2: END_STEP\n"
         "TRANSITION T1 FROM S1 TO S2 := a;\nTRANSITION T2 FROM S2 TO S1 := NOT a;\n"
-        "END_SEQUENCE\nPERMANENT AFTER\n  CALL SFB 4, DB 9 (IN := a, PT := T#1S, Q => done);\n"
+        "END_SEQUENCE\nPERMANENT AFTER\n  n := n + 1;\n"
         "END_PERMANENT\nEND_FUNCTION_BLOCK\n"
     )
     assert main(["export", str(chart), "--to", "simaticml", "-o", str(tmp_path / "x.xml")]) == 2
     err = capsys.readouterr().err
-    assert "call.s7g:10:3: a permanent instruction that is not a bit coil" in err, err
+    assert "sum.s7g:10:3: permanent instruction n := n + 1: an arithmetic expression" in err, err
     assert main(["export", str(chart), "--to", "plcopen", "-o", str(tmp_path / "x.xml")]) == 0
 
 
