@@ -265,10 +265,13 @@ class Compiler:
         _size_limit(text, "the chart")
         self._call({"op": "check", "text": text, "file": file}, "save")
 
-    def open(self, path: Path, *, symbols: str) -> Opened:
+    def open(self, path: Path, *, symbols: str, pou: str | None = None) -> Opened:
         """The chart of file ``path`` (any format ``sequencer.exchange`` imports) as
-        ``.s7g`` text, the import's notes and the SCL FCs the chart calls for its ST bodies."""
-        reply, _ = self._call({"op": "open", "path": str(path), "symbols": symbols}, "open")
+        ``.s7g`` text, the import's notes and the SCL FCs the chart calls for its ST bodies;
+        ``pou`` picks one chart of a file that holds several (refused without: its lines
+        name each chart, ``CHART_CHOICE``)."""
+        request = {"op": "open", "path": str(path), "symbols": symbols, "pou": pou}
+        reply, _ = self._call(request, "open")
         functions = tuple((int(n), str(src)) for n, src in reply.get("functions", ()))
         return Opened(
             str(reply["text"]), list(reply["lines"]), str(reply.get("scl", "")), functions

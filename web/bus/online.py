@@ -57,6 +57,7 @@ from s7graph.web.commands import COMMAND_TYPES, op_of
 from s7graph.web.harness.project import (
     MAX_READ,
     ProjectError,
+    chart_file,
     project_file,
     project_files,
     restore_backup,
@@ -281,7 +282,8 @@ class OnlineChange:
     def _run(self, command: Command) -> tuple[CommandReply, str]:
         op = command.op
         if op == "open":
-            return self._open(str(command.args["file"])), ""
+            pou = command.args.get("pou")
+            return self._open(str(command.args["file"]), pou if isinstance(pou, str) else None), ""
         if op == "save":
             return self._save(str(command.args["file"]), str(command.args["source"]))
         preview = command.args.get("preview") is True
@@ -448,7 +450,7 @@ class OnlineChange:
         except ProjectError as exc:
             raise _Refused(str(exc)) from None
 
-    def _open(self, name: str) -> CommandReply:
+    def _open(self, name: str, pou: str | None = None) -> CommandReply:
         path = self._file(name)
         try:
             if not path.is_file():
@@ -459,16 +461,17 @@ class OnlineChange:
                 )
         except OSError as exc:
             raise _Refused(f"cannot open {name}: {exc}") from None
-        opened = self.compiler.open(path, symbols=self.symbols_text)
+        opened = self.compiler.open(path, symbols=self.symbols_text, pou=pou)
         lines = opened.lines
         if opened.functions:
-            lines = [*self._functions_beside(path, opened), *lines]
+            lines = [*self._functions_beside(path, pou, opened), *lines]
         return CommandReply(applied=True, text=opened.text, lines=lines[:MAX_LINES])
 
-    def _functions_beside(self, path: Path, opened: Opened) -> list[str]:
+    def _functions_beside(self, path: Path, pou: str | None, opened: Opened) -> list[str]:
         """The SCL FCs an imported chart calls for its ST bodies, written beside the file
-        as ``<stem>.scl`` (as ``s7graph import -o <stem>.s7g`` writes them; the file it
-        replaces kept as a backup); the notes saying so and which of them this CPU lacks.
+        as ``<stem>.scl`` (``chart_file``: as ``s7graph import -o <stem>.s7g`` writes them,
+        beside the ``.s7g`` the editor proposes; the file it replaces kept as a backup); the
+        notes saying so and which of them this CPU lacks.
         Refused when this CPU has an FC of such a number that is another block: the chart
         would call that one."""
         cpu = self.session.cpu
@@ -491,7 +494,7 @@ class OnlineChange:
                 "would call it; import the file with s7graph import and renumber the FCs, "
                 "or run the CPU without them"
             )
-        scl = path.with_name(f"{path.stem}.scl")
+        scl = path.with_name(chart_file(path.name, pou, ".scl"))
         numbers = ", ".join(f"FC {n}" for n, _ in opened.functions)
         note = f"{scl.name}: the SCL FCs the chart calls for its ST bodies ({numbers})"
         try:

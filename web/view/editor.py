@@ -108,6 +108,7 @@ class Editor(CpuCommands, RowEditing):
                 self.file = gui.add_text("File", "", hint="the .s7g file Save writes")
                 self.save_button = gui.add_button("Save", hint="write the chart as the File")
                 self.open_choice = gui.add_dropdown("Open file", ["(none)"])
+                self.chart_choices: dict[str, tuple[str, str]] = {}
                 self.open_button = gui.add_button("Open", hint="open the chosen file")
                 self.new_button = gui.add_button("New", hint="a new chart: S1 and T1")
         # The element's form, the problems and the source: a panel of their own, docked

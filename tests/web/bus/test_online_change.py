@@ -303,6 +303,22 @@ def test_open_is_refused_when_the_cpu_has_another_fc_of_an_imported_body_s_numbe
     assert not any("does not have" in line for line in opened.lines)
 
 
+def test_open_of_a_file_with_several_charts_names_them_and_opens_the_one_chosen(
+    cpu: Cpu,
+) -> None:
+    """Without a chart the open is refused, each chart a line (``two.st » Blink``); with
+    ``pou`` that chart opens."""
+    shutil.copy(synthetic("il_beside_chart.st"), cpu.path.parent / "two.st")
+    refused = cpu.send("open", file="two.st")
+    assert not refused.applied
+    assert refused.reason == "two.st holds 2 charts (Blink, Count): choose one"
+    assert refused.lines == ["two.st » Blink", "two.st » Count"]
+    opened = cpu.send("open", file="two.st", pou="Count")
+    assert opened.applied, opened.reason
+    assert 'FUNCTION_BLOCK "Count"' in opened.text
+    assert not cpu.send("open", file="two.st", pou="Nosuch").applied
+
+
 def _shell(bus: list[str], *args: str) -> subprocess.CompletedProcess[str]:
     env = {**os.environ, "S7GRAPH_PASSWORD": PASSWORD}
     return subprocess.run(
