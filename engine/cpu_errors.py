@@ -25,6 +25,7 @@ from s7graph.engine.blocks import OB
 from s7graph.engine.context import CallContext, NestingOverflow
 from s7graph.engine.diagnostics import DiagnosticBuffer, EventId
 from s7graph.engine.errors import AddressError, BlockError, S7Error, TypeMismatch
+from s7graph.engine.interrupts import class_at_start
 from s7graph.engine.memory import AreaLengthError, AreaWriteError, IOAccessError
 from s7graph.engine.modes import CpuMode
 
@@ -52,17 +53,14 @@ class SyncErrors:
         def _go_stop(self, event: int, block: str, message: str) -> None: ...
 
     def priority_class(self, ob: int) -> int:
-        """The class OB ``ob`` runs in when it starts now: OB121/OB122 that of the running
-        (faulting) OB, OB80–OB87 28 during startup, else ``priority_of`` (0 for an OB
-        without a class)."""
-        if ob in (121, 122):
-            return self.diagnostics.priority
-        if 80 <= ob <= 87 and self.mode is CpuMode.STARTUP:
-            return 28
-        try:
-            return self.priority_of(ob)
-        except ValueError:
-            return 0
+        """The class OB ``ob`` runs in when it starts now (``interrupts.class_at_start``):
+        the running OB's is the faulting one's."""
+        return class_at_start(
+            ob,
+            faulting=self.diagnostics.priority,
+            startup=self.mode is CpuMode.STARTUP,
+            priority_of=self.priority_of,
+        )
 
     def _program_error(self, ob: int, block: str, exc: BaseException) -> None:
         event = classify(exc)

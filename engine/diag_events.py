@@ -16,7 +16,7 @@ from collections.abc import Callable, Iterable
 
 from s7graph.engine.cpu_interrupts import MISSING_STOP
 from s7graph.engine.diagnostics import EventId
-from s7graph.engine.interrupts import priority
+from s7graph.engine.interrupts import class_at_start, priority
 from s7graph.engine.record import DiagEntry
 
 __all__ = ["EVENT_TEXTS", "event_text", "hex_id", "priority_class", "requested_ob", "stop_cause"]
@@ -77,6 +77,7 @@ _CLASS_TEXTS: dict[int, str] = {
     0x5F: "s7graph event",
 }
 _OB = re.compile(r"OB(\d{1,3})$")
+STARTUP_OBS = frozenset({100, 101, 102})  # an event in one of them happened in startup
 _MISSING: dict[int, int] = {int(event): ob for ob, event in MISSING_STOP.items()}
 _MISSING[EventId.STOP_OB121_MISSING] = 121
 _MISSING[EventId.STOP_OB122_MISSING] = 122
@@ -124,18 +125,19 @@ def requested_ob(entry: DiagEntry) -> int:
 
 
 def priority_class(entry: DiagEntry, priority_of: Callable[[int], int] = priority) -> int:
-    """The priority class the requested OB runs in (0: no OB); OB121 runs in the class of
-    the OB whose program faulted (``entry.ob``; OB1's when not known). ``priority_of``: the
-    CPU's (``Cpu.priority_of``, its parametrised classes)."""
+    """The priority class the requested OB runs in (0: no OB), by the CPU's own rule
+    (``interrupts.class_at_start``): OB121/OB122 in the class of the OB whose program
+    faulted — the class the entry records (``entry.priority``; that of ``entry.ob``, or of
+    OB1, for an entry without one) —, OB80–OB87 in 28 for an event of a startup OB.
+    ``priority_of``: the CPU's (``Cpu.priority_of``, its parametrised classes)."""
     ob = requested_ob(entry)
     if ob == 0:
         return 0
-    if ob in (121, 122):
-        ob = entry.ob or 1
-    try:
-        return priority_of(ob)
-    except ValueError:
-        return 0
+    faulting = entry.priority or class_at_start(
+        entry.ob or 1, faulting=0, startup=False, priority_of=priority_of
+    )
+    startup = entry.ob in STARTUP_OBS
+    return class_at_start(ob, faulting=faulting, startup=startup, priority_of=priority_of)
 
 
 def stop_cause(entries: Iterable[DiagEntry], stop: DiagEntry) -> DiagEntry | None:

@@ -9,7 +9,7 @@ and are reported as lost.
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 
 CYCLIC_DEFAULT_MS: dict[int, int] = {
@@ -29,7 +29,8 @@ _MS = 1_000_000
 
 
 def priority(ob: int) -> int:
-    """Default priority class of an OB; OB121/122 take the faulting OB's class."""
+    """Default priority class of an OB; OB121/122 take the faulting OB's class
+    (``class_at_start``)."""
     if ob == 1:
         return 1
     if 10 <= ob <= 17:
@@ -47,6 +48,28 @@ def priority(ob: int) -> int:
     if ob == 90:
         return 29
     raise ValueError(f"OB{ob} has no fixed priority")
+
+
+STARTUP_ERROR_CLASS = 28
+"""The class OB80–OB87 run in during startup (26 in RUN)."""
+
+
+def class_at_start(
+    ob: int, *, faulting: int, startup: bool, priority_of: Callable[[int], int] = priority
+) -> int:
+    """The one rule for the priority class OB ``ob`` runs in when it starts: OB121/OB122 the
+    class of the OB that caused them (``faulting``), OB80–OB87 28 during ``startup``, every
+    other OB its own (``priority_of``: the CPU's parametrised classes, else ``priority``),
+    0 for an OB without a class. The CPU stamps its diagnostic entries with it, and a
+    diagnostic entry's requested OB is shown in it (``engine.diag_events``)."""
+    if ob in (121, 122):
+        return faulting
+    if 80 <= ob <= 87 and startup:
+        return STARTUP_ERROR_CLASS
+    try:
+        return priority_of(ob)
+    except ValueError:
+        return 0
 
 
 @dataclass(slots=True)

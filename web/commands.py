@@ -184,6 +184,7 @@ class SaveArgs(Args, frozen=True, kw_only=True):
 
 class OpenArgs(Args, frozen=True, kw_only=True):
     file: FileName
+    pou: FileName | UnsetType = UNSET  # the chart of a file that holds several (--pou)
 
 
 # ---------------------------------------------------------------- commands

@@ -185,7 +185,7 @@ def _import_chart(
             f"the file holds {len(found)} charts ({', '.join(names)}); choose one with --pou",
             problems.at(1, 1),
         )
-        problems.fail_if_errors()
+        raise ImportFailed(problems.items, tuple(names))
     item = found[0]
     if isinstance(item, tuple):  # s7graph's own export: its source, kept in the file
         text, line, _, _ = item

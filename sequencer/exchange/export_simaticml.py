@@ -12,9 +12,10 @@ as alarm text) and bit coils of the permanent instructions are LAD networks
 (``"Tag"``, ``#variable``, ``%Q0.3``). Symbols are global tags with their address as
 informative data. What a GRAPH block has no field for — the instance DB number,
 ``ORDER``, ``ACK_FORCES_SWITCH`` — is kept in the block comment (``s7graph: …``), which
-the importer reads. ``XOR`` in a condition is drawn as (a AND NOT b) OR (NOT a AND b). Block
-calls and non-bit assignments in the permanent instructions have no form here: a
-``ValueError`` naming their place.
+the importer reads. ``XOR`` in a condition is drawn as (a AND NOT b) OR (NOT a AND b). A
+permanent CALL is a LAD ``Call`` box, a permanent assignment of an operand or constant to a
+non-bit a ``Move`` box; one of an arithmetic expression has no form here: a ``ValueError``
+naming its place.
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ from xml.sax.saxutils import escape, quoteattr
 from s7graph.engine.address import parse_address
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.checks.diagnostics import Diagnostic
-from s7graph.sequencer.exchange.flgnet import write_network
+from s7graph.sequencer.exchange.flgnet import write_call, write_move, write_network
 from s7graph.sequencer.exchange.problems import Problems
 from s7graph.sequencer.exchange.shape import shape_of
 from s7graph.sequencer.params import Direction, pins_for
@@ -308,6 +309,9 @@ class _Export:
         )
 
     def permanent(self, items: tuple[PermanentInstruction, ...]) -> str:
+        """Each permanent instruction a LAD network: a bit's coil, a ``Move`` box of an
+        operand or constant, a ``Call`` box; an arithmetic expression is refused (an error
+        naming its place: the boxes TIA would draw it with are not written here)."""
         out: list[str] = []
         for p in items:
             if isinstance(p, Coil):
@@ -315,13 +319,69 @@ class _Export:
                 net = self.network(p.condition, coil, p.target)
             elif isinstance(p, Assignment) and self.is_bit(p.target):
                 net = self.network(p.expr, "Coil", p.target)
+            elif isinstance(p, Assignment) and isinstance(p.expr, Operand | Const):
+                net = write_move(p.expr, p.target, self.access)
+            elif isinstance(p, BlockCall):
+                net = self.call_network(p)
             else:
                 raise ValueError(
-                    f"{p.loc}: a permanent instruction that is not a bit coil (an "
-                    "arithmetic assignment or a CALL) has no SimaticML LAD form here"
+                    f"{p.loc}: permanent instruction {format_expr(p.target)} := "
+                    f"{format_expr(p.expr)}: an arithmetic expression has no LAD form in "
+                    "this export (TIA draws it with ADD/SUB/MUL/DIV or CALCULATE boxes); "
+                    "compute it in an FC the permanent instructions call"
                 )
             out.append(f'<PermanentOperation ProgrammingLanguage="LAD">{net}</PermanentOperation>')
         return "".join(out)
+
+    def call_network(self, c: BlockCall) -> str:
+        """A permanent CALL as a LAD ``Call`` box fed by the power rail, the block and its
+        instance DB named by number (``FC2``, ``DB10``: reported once, as for CALL rows)."""
+        name = f"{c.kind}{c.block}" if c.kind else str(c.block)
+        kind = c.kind or ("FB" if c.instance is not None else "FC")
+        params = "".join(
+            f'<Parameter Name={quoteattr(n)} Section="{section}"{self.type_attr(e)} />'
+            for section, pins in (("Input", c.inputs), ("Output", c.outputs))
+            for n, e in pins
+        )
+
+        def info(uid: str) -> str:
+            inst = ""
+            if c.instance is not None:
+                db = f"DB{c.instance}" if isinstance(c.instance, int) else c.instance
+                inst = (
+                    f'<Instance Scope="GlobalVariable" UId="{uid}"><Component '
+                    f"Name={quoteattr(db)} /></Instance>"
+                )
+            head = f"<CallInfo Name={quoteattr(name)} BlockType={quoteattr(kind)}>"
+            return f"{head}{inst}{params}</CallInfo>"
+
+        if not self.warned_call:
+            self.warned_call = True
+            self.p.warn(
+                "X012",
+                f"CALL {name}: calls are written with blocks and instance DBs by number; "
+                "TIA calls blocks by their symbolic names: rename them there",
+                c.loc,
+            )
+        try:
+            return write_call(info, c.inputs, c.outputs, self.access)
+        except ValueError as exc:
+            raise ValueError(
+                f"{c.loc}: CALL {name}: {exc}: a LAD call box cannot hold it"
+            ) from None
+
+    def type_attr(self, e: Expr) -> str:
+        """`` Type="Int"`` of an operand or constant whose type is known, else ""."""
+        t: str | None = None
+        if isinstance(e, Const):
+            t = e.type
+        elif isinstance(e, Operand) and e.quoted:
+            found = self.address_of(e.name)
+            t = found[1] if found is not None else None
+        elif isinstance(e, Operand):
+            var = next((v for v in self.chart.vars if v.name.upper() == e.name.upper()), None)
+            t = var.type if var is not None else None
+        return f' Type="{_tia_type(t)}"' if t else ""
 
     def is_bit(self, op: Operand) -> bool:
         if op.quoted:

@@ -29,11 +29,12 @@ from s7graph.engine.errors import SourceLocation
 from s7graph.sequencer.exchange.xmltree import ElementError, Node
 from s7graph.sequencer.text.model import Binary, Const, Expr, StepAttr, Unary
 
-__all__ = ["COMPARE_PARTS", "read_network", "write_network"]
+__all__ = ["COMPARE_PARTS", "Box", "read_boxes", "read_network", "write_call", "write_move"]
 
 COMPARE_PARTS = {"Eq": "=", "Ne": "<>", "Gt": ">", "Ge": ">=", "Lt": "<", "Le": "<="}
 _PART_OF = {v: k for k, v in COMPARE_PARTS.items()}
 COILS = {"TrCoil", "IlCoil", "SvCoil", "Coil", "SCoil", "RCoil"}
+_READ_PARTS = COILS | set(COMPARE_PARTS) | {"Contact", "O", "A", "X", "Not", "Move"}
 
 
 Operand = Callable[[Node, str | None], Expr]  # an Access element (and the type it needs)
@@ -166,6 +167,57 @@ def read_network(net: Node, operand: Operand, file: str) -> list[tuple[Node, Exp
     for uid, part in n.parts.items():
         if part.tag == "Part" and part.get("Name") in COILS:
             out.append((part, n.pin(uid, "in")))
+    return out
+
+
+@dataclass(frozen=True)
+class Box:
+    """A ``Call`` (``CallInfo`` ``Name``, ``BlockType``, the instance's name) or ``Move``
+    box fed by the power rail: what flows into its inputs, the operands its outputs feed."""
+
+    node: Node
+    name: str  # the block's name; "Move" for a move
+    block_type: str
+    instance: str | None
+    inputs: tuple[tuple[str, Expr], ...]
+    outputs: tuple[tuple[str, Expr], ...]
+
+
+def read_boxes(net: Node, operand: Operand, file: str) -> list[Box]:
+    """Every call and move box of ``net``; ``ElementError`` for one whose ``en`` is not the
+    power rail alone (a conditional call has no GRAPH permanent form) and for a part no
+    condition, coil or box here reads (an ADD box …)."""
+    n = _Net(net, operand, file)
+    out: list[Box] = []
+    for uid, part in n.parts.items():
+        info = part.child("CallInfo") if part.tag == "Call" else None
+        kind = part.get("Name")
+        if part.tag == "Part" and kind not in _READ_PARTS:
+            raise ElementError(f"part {kind} has no GRAPH permanent form", part)
+        if info is None and not (part.tag == "Part" and kind == "Move"):
+            continue
+        if n.sources.get((uid, "en"), [("rail", "")]) != [("rail", "")]:
+            raise ElementError("a box whose EN is not the power rail alone", part)
+        ins: list[tuple[str, Expr]] = []
+        for (sink, pin), srcs in n.sources.items():
+            if sink == uid and pin != "en":
+                value = n.value(srcs[0], None)
+                if value is None:
+                    raise ElementError(f"input {pin} on the power rail", part)
+                ins.append((pin, value))
+        outs = [
+            (pin, n.operand(n.parts[sink], None))
+            for (sink, _), srcs in n.sources.items()
+            for src, pin in srcs
+            if src == uid and n.parts.get(sink) is not None and n.parts[sink].tag == "Access"
+        ]
+        if info is None:
+            out.append(Box(part, "Move", "", None, tuple(ins), tuple(outs)))
+            continue
+        inst = info.find("Instance", "Component")
+        instance = inst.get("Name") if inst is not None else None
+        name, kind = info.get("Name"), info.get("BlockType")
+        out.append(Box(part, name, kind, instance, tuple(ins), tuple(outs)))
     return out
 
 
@@ -308,4 +360,38 @@ def write_network(
         w.flow(cond, into)
     if target:
         w.wire(f'<IdentCon UId="{target}" />', f'<NameCon UId="{box}" Name="operand" />')
+    return f"<FlgNet><Parts>{''.join(w.parts)}</Parts><Wires>{w.wires_xml()}</Wires></FlgNet>"
+
+
+def write_call(
+    info: Callable[[str], str],
+    inputs: tuple[tuple[str, Expr], ...],
+    outputs: tuple[tuple[str, Expr], ...],
+    access: Callable[[Expr, str], str],
+) -> str:
+    """A ``FlgNet`` of one ``Call`` box fed by the power rail, ``inputs`` wired from their
+    operands, ``outputs`` to theirs; ``info(uid)`` writes its ``CallInfo`` (an instance's
+    ``Access``-like element takes UId ``uid``)."""
+    w = _Writer(access)
+    box, inst = w.next(), w.next()
+    w.parts.append(f'<Call UId="{box}">{info(inst)}</Call>')
+    w.wire(_RAIL, f'<NameCon UId="{box}" Name="en" />')
+    for pin, e in inputs:
+        w.wire(f'<IdentCon UId="{w.operand(e)}" />', f'<NameCon UId="{box}" Name="{pin}" />')
+    for pin, e in outputs:
+        w.wire(f'<NameCon UId="{box}" Name="{pin}" />', f'<IdentCon UId="{w.operand(e)}" />')
+    return f"<FlgNet><Parts>{''.join(w.parts)}</Parts><Wires>{w.wires_xml()}</Wires></FlgNet>"
+
+
+def write_move(source: Expr, target: Expr, access: Callable[[Expr, str], str]) -> str:
+    """A ``FlgNet`` of one ``Move`` box fed by the power rail: ``source`` to ``target``."""
+    w = _Writer(access)
+    box = w.next()
+    w.parts.append(
+        f'<Part Name="Move" UId="{box}"><TemplateValue Name="Card" '
+        'Type="Cardinality">1</TemplateValue></Part>'
+    )
+    w.wire(_RAIL, f'<NameCon UId="{box}" Name="en" />')
+    w.wire(f'<IdentCon UId="{w.operand(source)}" />', f'<NameCon UId="{box}" Name="in" />')
+    w.wire(f'<NameCon UId="{box}" Name="out1" />', f'<IdentCon UId="{w.operand(target)}" />')
     return f"<FlgNet><Parts>{''.join(w.parts)}</Parts><Wires>{w.wires_xml()}</Wires></FlgNet>"

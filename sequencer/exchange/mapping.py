@@ -355,6 +355,12 @@ CONSTRUCTS: Final[tuple[tuple[str, str, str, str], ...]] = (
     ),
     (TIA, "action rows", "the same rows (an `Access` with an address keeps it)", ""),
     (
+        TIA,
+        "permanent operations: coils, `Move` and `Call` boxes fed by the power rail",
+        "bit instructions, assignments, CALLs (`FC2` → `FC 2`, `DB10` → `DB 10`)",
+        "another box, or a box whose EN is a condition, is left out and reported (I022)",
+    ),
+    (
         TO_PLCOPEN,
         "steps, transitions, branches, jumps",
         "an SFC other IEC tools read",
@@ -395,9 +401,22 @@ CONSTRUCTS: Final[tuple[tuple[str, str, str, str], ...]] = (
     ),
     (
         TO_TIA,
-        "permanent CALLs and arithmetic assignments",
+        "permanent CALLs",
+        "a LAD `Call` box fed by the power rail (`CallInfo` `FC2`, instance `DB10`)",
+        "reported as for CALL rows; read back as the same CALL",
+    ),
+    (
+        TO_TIA,
+        "permanent assignment of an operand or a constant to a non-bit",
+        "a LAD `Move` box",
+        "read back as the same assignment",
+    ),
+    (
+        TO_TIA,
+        "permanent assignment of an arithmetic expression",
         "refused (an error naming the place)",
-        "a LAD call box is not written here",
+        "TIA draws it with ADD/SUB/MUL/DIV or CALCULATE boxes, not written here: "
+        "compute it in an FC the permanent instructions call",
     ),
 )
 

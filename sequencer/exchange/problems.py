@@ -81,10 +81,12 @@ class Problems:
 
 
 class ImportFailed(S7Error):
-    """No chart could be built; ``diagnostics`` lists every problem, located."""
+    """No chart could be built; ``diagnostics`` lists every problem, located; ``charts``
+    the charts of a file that holds several when none was chosen (a ``pou`` for each)."""
 
-    def __init__(self, diagnostics: list[Diagnostic]) -> None:
+    def __init__(self, diagnostics: list[Diagnostic], charts: tuple[str, ...] = ()) -> None:
         self.diagnostics = diagnostics
+        self.charts = charts
         first = next((d for d in diagnostics if d.is_error), diagnostics[0])
         more = f" (and {len(diagnostics) - 1} more)" if len(diagnostics) > 1 else ""
         super().__init__(f"{format_diagnostic(first)}{more}")

@@ -28,7 +28,7 @@ from dataclasses import replace
 from s7graph.engine.errors import LiteralError, S7Error, SourceLocation
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.exchange.export_simaticml import S7GRAPH_COMMENT
-from s7graph.sequencer.exchange.flgnet import read_network
+from s7graph.sequencer.exchange.flgnet import Box, read_boxes, read_network
 from s7graph.sequencer.exchange.iec_actions import permanent_assignment
 from s7graph.sequencer.exchange.iec_to_chart import accepted, const
 from s7graph.sequencer.exchange.markers import used_bytes
@@ -40,6 +40,7 @@ from s7graph.sequencer.params import PARAMETER_SETS, pins_for
 from s7graph.sequencer.text.model import (
     ActionRow,
     Assignment,
+    BlockCall,
     Chart,
     ChartOptions,
     Coil,
@@ -289,11 +290,34 @@ class _Reader(TiaOperands):
             try:
                 for coil, cond in self.network(op):
                     out.append(self.coil(coil, cond, op))
+                net = op.child("FlgNet")
+                for box in read_boxes(net, self.access, self.file) if net is not None else []:
+                    out.append(self.box(box))
             except ElementError as exc:
                 self.p.warn(
                     "I022", f"permanent operation not imported: {exc.message}", self.at(exc.node)
                 )
         return tuple(out)
+
+    def box(self, box: Box) -> PermanentInstruction:
+        """A ``Move`` box: an assignment; a ``Call`` box: a CALL of the block by its number
+        (``FC2``, an instance ``DB10``) or by its name."""
+        loc = self.at(box.node)
+        outs: list[tuple[str, Operand]] = []
+        for pin, e in box.outputs:
+            if not isinstance(e, Operand):
+                raise ElementError(f"output {pin} feeds no variable", box.node)
+            outs.append((pin, e))
+        if box.name == "Move":
+            if len(box.inputs) != 1 or len(outs) != 1:
+                raise ElementError("a MOVE box needs one input and one output", box.node)
+            return permanent_assignment(outs[0][1], box.inputs[0][1], loc)
+        m = _BLOCK.fullmatch(box.name.replace(" ", ""))
+        kind, block = (m[1].upper(), int(m[2])) if m else ("", box.name)
+        instance: int | str | None = box.instance
+        if box.instance is not None and (d := _DB.fullmatch(box.instance.replace(" ", ""))):
+            instance = int(d[1])
+        return BlockCall(kind, block, instance, box.inputs, tuple(outs), loc)
 
     def coil(self, coil: Node, cond: Expr | None, op: Node) -> PermanentInstruction:
         net = op.child("FlgNet")
@@ -508,6 +532,8 @@ def _node(el: Node, port: str) -> tuple[str, int, int]:
     return (kind, int(el.get("Number", "0") or 0), int(el.get(port, "0") or 0))
 
 
+_BLOCK = re.compile(r"(FB|FC|SFB|SFC)(\d+)", re.IGNORECASE)
+_DB = re.compile(r"DB(\d+)", re.IGNORECASE)
 _GLOBAL = re.compile(r'"((?:[^"]|"")*)"((?:\.[A-Za-z_][A-Za-z0-9_]*|\[[^\]]*\])*)')
 _LOCAL = re.compile(r"#([A-Za-z_][A-Za-z0-9_]*)")
 _ABSOLUTE = re.compile(r"%([IQM][XBWD]?\d+(?:\.\d+)?)", re.IGNORECASE)

@@ -183,3 +183,52 @@ def test_a_state_file_written_before_the_wall_time_column_gets_it(tmp_path: Path
     rows = con.execute("SELECT event_id, wall_ns FROM diagnostics ORDER BY seq").fetchall()
     con.close()
     assert rows == [(0x4304, 0), (0x4301, 99)]
+
+
+def test_an_entry_shows_its_requested_ob_in_the_class_the_cpu_runs_that_ob_in(
+    clock: VirtualClock,
+) -> None:
+    """One rule (``interrupts.class_at_start``) for the class an OB starts in and the class
+    an entry shows for the OB it requests: OB121 after an error of OB35 parametrised to
+    class 15 runs in 15 and the error entry says 15; OB80 requested by an event of a
+    startup OB runs in 28, not its RUN class 26."""
+    from s7graph.engine import fc
+    from s7graph.sfb import install
+
+    seen: dict[int, int] = {}
+
+    @fc(60, IN={"EVENTN": "WORD"})
+    def note(ctx: CallContext, p: dict[str, object]) -> None:
+        ctx.call("WR_USMSG", SEND=False, EVENTN=p["EVENTN"], INFO1="", INFO2="")
+
+    @ob(100)
+    def startup(ctx: CallContext) -> None:
+        seen[80] = cpu.priority_class(80)
+
+    @ob(35)
+    def cyclic(ctx: CallContext) -> None:
+        raise ValueError("in OB35")
+
+    @ob(121)
+    def prog_error(ctx: CallContext) -> None:
+        ctx.call(note, EVENTN=0xA121)
+
+    @ob(1)
+    def main(ctx: CallContext) -> None:
+        pass
+
+    cpu = Cpu(clock)
+    install(cpu)
+    cpu.load(note, startup, cyclic, prog_error, main)
+    cpu.ob_priority[35] = 15
+    cpu.interrupts.configure(35, 100)
+    cpu.start()
+    clock.advance(100)
+    cpu.scan()
+    error = next(e for e in cpu.diagnostics if e.event_id == EventId.PYTHON_EXCEPTION)
+    in_ob121 = next(e for e in cpu.diagnostics if e.event_id == 0xA121)
+    assert (error.ob, in_ob121.priority, priority_class(error, cpu.priority_of)) == (35, 15, 15)
+    late = DiagEntry(0, EventId.CYCLE_TIME_EXCEEDED, "OB100", "", ob=100, priority=27)
+    assert seen[80] == priority_class(late, cpu.priority_of) == 28
+    in_run = DiagEntry(0, EventId.CYCLE_TIME_EXCEEDED, "OB1", "", ob=1, priority=1)
+    assert priority_class(in_run, cpu.priority_of) == 26

@@ -27,11 +27,13 @@ from s7graph.sequencer.text.model import Chart
 from s7graph.sequencer.text.parse import parse_chart
 from s7graph.web.bus.live import prepare_chart
 from s7graph.web.bus.pieces import dumps_in_pieces
+from s7graph.web.harness.project import CHART_CHOICE
 from s7graph.web.harness.session import ChartLoadError, compile_model
 
 __all__ = ["MAX_SUMMARY_LINES", "answer"]
 
 MAX_SUMMARY_LINES: Final = 1000  # lines of a change summary sent back
+
 
 SOURCE_PIECE: Final = 1 << 18
 _KEPT: Final = 4  # running charts kept parsed (by the hash of their text)
@@ -57,7 +59,10 @@ def answer(request: dict[str, Any]) -> tuple[dict[str, Any], list[bytes]]:
             _parse(str(request["text"]), str(request["file"]), "not saved")
             return {}, []
         if op == "open":
-            return _open(Path(str(request["path"])), str(request.get("symbols", ""))), []
+            pou = request.get("pou")
+            path = Path(str(request["path"]))
+            symbols = str(request.get("symbols", ""))
+            return _open(path, symbols, pou if isinstance(pou, str) else None), []
         return {"refused": f"the compiler has no request {op!r}"}, []
     except _Refused as exc:
         return {"refused": exc.reason, "lines": exc.lines[:MAX_SUMMARY_LINES]}, []
@@ -150,12 +155,18 @@ def _summary(request: dict[str, Any]) -> dict[str, Any]:
     }
 
 
-def _open(path: Path, symbols: str) -> dict[str, Any]:
+def _open(path: Path, symbols: str, pou: str | None) -> dict[str, Any]:
     name = path.name
     try:
         table = SymbolTable.from_text(symbols) if symbols else None
-        imported = import_file(path, symbols=table)
+        imported = import_file(path, symbols=table, pou=pou)
     except ImportFailed as exc:
+        if exc.charts:
+            shown = ", ".join(exc.charts)
+            raise _Refused(
+                f"{name} holds {len(exc.charts)} charts ({shown}): choose one",
+                [CHART_CHOICE.format(file=name, chart=c) for c in exc.charts],
+            ) from None
         lines = [format_diagnostic(d) for d in exc.diagnostics]
         raise _Refused(
             f"{name} does not import: {lines[0] if lines else 'no chart'}", lines
@@ -163,4 +174,9 @@ def _open(path: Path, symbols: str) -> dict[str, Any]:
     except (OSError, S7Error) as exc:
         raise _Refused(f"cannot open {name}: {exc}") from None
     text = format_chart(imported.chart)
-    return {"text": text, "lines": [format_diagnostic(d) for d in imported.problems]}
+    return {
+        "text": text,
+        "lines": [format_diagnostic(d) for d in imported.problems],
+        "scl": imported.blocks_scl,
+        "functions": [(f.number, f.source) for f in imported.functions],
+    }

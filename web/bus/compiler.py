@@ -59,6 +59,7 @@ __all__ = [
     "CompileRefused",
     "Compiled",
     "Compiler",
+    "Opened",
     "Summary",
 ]
 
@@ -108,6 +109,18 @@ class Compiled:
     table: SymbolTable
     live: LiveChart
     summary: Summary
+
+
+@dataclass(frozen=True, slots=True)
+class Opened:
+    """A file imported for the editor's *Open*: the chart's ``.s7g`` text, the import's
+    notes, the SCL source of the FCs it calls for its ST bodies (``Imported.blocks_scl``,
+    "" for none) and those FCs as (number, source)."""
+
+    text: str
+    lines: list[str]
+    scl: str = ""
+    functions: tuple[tuple[int, str], ...] = ()
 
 
 class Compiler:
@@ -252,11 +265,17 @@ class Compiler:
         _size_limit(text, "the chart")
         self._call({"op": "check", "text": text, "file": file}, "save")
 
-    def open(self, path: Path, *, symbols: str) -> tuple[str, list[str]]:
+    def open(self, path: Path, *, symbols: str, pou: str | None = None) -> Opened:
         """The chart of file ``path`` (any format ``sequencer.exchange`` imports) as
-        ``.s7g`` text, and the import's notes."""
-        reply, _ = self._call({"op": "open", "path": str(path), "symbols": symbols}, "open")
-        return str(reply["text"]), list(reply["lines"])
+        ``.s7g`` text, the import's notes and the SCL FCs the chart calls for its ST bodies;
+        ``pou`` picks one chart of a file that holds several (refused without: its lines
+        name each chart, ``CHART_CHOICE``)."""
+        request = {"op": "open", "path": str(path), "symbols": symbols, "pou": pou}
+        reply, _ = self._call(request, "open")
+        functions = tuple((int(n), str(src)) for n, src in reply.get("functions", ()))
+        return Opened(
+            str(reply["text"]), list(reply["lines"]), str(reply.get("scl", "")), functions
+        )
 
 
 def _size_limit(text: str, what: str) -> None:

@@ -31,16 +31,17 @@ import threading
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Final, Protocol
+from typing import Any, Final, Protocol
 
 import msgspec
 
+from s7graph.engine.errors import BlockError
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.change.online import SwapRefused, SwapReport, swap
 from s7graph.sequencer.compiled import CompiledChart
 from s7graph.sequencer.text.format import format_chart
 from s7graph.web.access.audit import Facts
-from s7graph.web.bus.compiler import Compiled, Compiler, CompileRefused, Summary
+from s7graph.web.bus.compiler import Compiled, Compiler, CompileRefused, Opened, Summary
 from s7graph.web.bus.gate import Gate, with_note
 from s7graph.web.bus.live import LiveChart, LiveGraph
 from s7graph.web.bus.protocol import (
@@ -56,6 +57,7 @@ from s7graph.web.commands import COMMAND_TYPES, op_of
 from s7graph.web.harness.project import (
     MAX_READ,
     ProjectError,
+    chart_file,
     project_file,
     project_files,
     restore_backup,
@@ -280,7 +282,8 @@ class OnlineChange:
     def _run(self, command: Command) -> tuple[CommandReply, str]:
         op = command.op
         if op == "open":
-            return self._open(str(command.args["file"])), ""
+            pou = command.args.get("pou")
+            return self._open(str(command.args["file"]), pou if isinstance(pou, str) else None), ""
         if op == "save":
             return self._save(str(command.args["file"]), str(command.args["source"]))
         preview = command.args.get("preview") is True
@@ -447,7 +450,7 @@ class OnlineChange:
         except ProjectError as exc:
             raise _Refused(str(exc)) from None
 
-    def _open(self, name: str) -> CommandReply:
+    def _open(self, name: str, pou: str | None = None) -> CommandReply:
         path = self._file(name)
         try:
             if not path.is_file():
@@ -458,8 +461,58 @@ class OnlineChange:
                 )
         except OSError as exc:
             raise _Refused(f"cannot open {name}: {exc}") from None
-        text, lines = self.compiler.open(path, symbols=self.symbols_text)
-        return CommandReply(applied=True, text=text, lines=lines[:MAX_LINES])
+        opened = self.compiler.open(path, symbols=self.symbols_text, pou=pou)
+        lines = opened.lines
+        if opened.functions:
+            lines = [*self._functions_beside(path, pou, opened), *lines]
+        return CommandReply(applied=True, text=opened.text, lines=lines[:MAX_LINES])
+
+    def _functions_beside(self, path: Path, pou: str | None, opened: Opened) -> list[str]:
+        """The SCL FCs an imported chart calls for its ST bodies, written beside the file
+        as ``<stem>.scl`` (``chart_file``: as ``s7graph import -o <stem>.s7g`` writes them,
+        beside the ``.s7g`` the editor proposes; the file it replaces kept as a backup); the
+        notes saying so and which of them this CPU lacks.
+        Refused when this CPU has an FC of such a number that is another block: the chart
+        would call that one."""
+        cpu = self.session.cpu
+        loaded = _loaded_sources(self.session.blocks)
+        lacking: list[int] = []
+        other: list[int] = []
+        for number, source in opened.functions:
+            try:
+                cpu.block(f"FC{number}")
+            except BlockError:
+                lacking.append(number)
+                continue
+            if _squeezed(source) not in loaded:
+                other.append(number)
+        if other:
+            shown = ", ".join(f"FC {n}" for n in other)
+            raise _Refused(
+                f"{path.name}: its chart calls {shown} for ST bodies (SCL FCs the import "
+                f"makes), and this CPU's {shown} comes from another source: a download "
+                "would call it; import the file with s7graph import and renumber the FCs, "
+                "or run the CPU without them"
+            )
+        scl = path.with_name(chart_file(path.name, pou, ".scl"))
+        numbers = ", ".join(f"FC {n}" for n, _ in opened.functions)
+        note = f"{scl.name}: the SCL FCs the chart calls for its ST bodies ({numbers})"
+        try:
+            same = scl.is_file() and scl.read_text(encoding="utf-8") == opened.scl
+            backup = None if same else write_chart(scl, opened.scl)
+        except (OSError, UnicodeDecodeError, ProjectError) as exc:
+            raise _Refused(
+                f"{path.name}: cannot write {scl.name}, the SCL FCs its chart calls: {exc}"
+            ) from None
+        kept = f", the old file kept as {backup.name}" if backup is not None else ""
+        lines = [f"{note}, {'unchanged' if same else 'written'}{kept}"]
+        if lacking:
+            shown = ", ".join(f"FC {n}" for n in lacking)
+            lines.append(
+                f"this CPU does not have {shown}: a download of the chart is refused until "
+                f"the CPU runs with --blocks {scl.name}"
+            )
+        return lines
 
     def _save(self, name: str, text: str) -> tuple[CommandReply, str]:
         if not name.endswith(".s7g"):
@@ -473,6 +526,20 @@ class OnlineChange:
         kept = f" (the old file kept as {backup.name})" if backup is not None else ""
         line = f"{name} written{kept}"
         return CommandReply(applied=True, lines=[line]), line
+
+
+def _loaded_sources(blocks: list[Any]) -> str:
+    """The text of the S7-SCL sources the CPU loaded (``--blocks``), whitespace squeezed."""
+    texts: list[str] = []
+    for b in blocks:
+        for name in getattr(b, "files", ()):
+            with contextlib.suppress(OSError, UnicodeDecodeError):
+                texts.append(Path(name).read_text(encoding="utf-8"))
+    return _squeezed("\n".join(texts))
+
+
+def _squeezed(text: str) -> str:
+    return " ".join(text.split())
 
 
 def _unconfirmed(reply: CommandReply, timeout_s: float) -> CommandReply:

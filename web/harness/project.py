@@ -23,8 +23,10 @@ from s7graph.engine.errors import S7Error
 from s7graph.sequencer.exchange import importable_files
 
 __all__ = [
+    "CHART_CHOICE",
     "ProjectError",
     "backup_name",
+    "chart_file",
     "project_file",
     "project_files",
     "restore_backup",
@@ -32,6 +34,9 @@ __all__ = [
 ]
 
 _NAME = re.compile(r"^[^/\\\x00-\x1f\x7f.][^/\\\x00-\x1f\x7f]{0,127}$")
+CHART_CHOICE = "{file} » {chart}"
+"""A line of an open refused because the file holds several charts: one chart to choose
+(the editor offers each in its *Open file* list)."""
 MAX_READ = 10_000_000  # bytes of a file Open reads (the import refuses beyond its limits)
 
 
@@ -50,6 +55,16 @@ def project_file(directory: Path, name: str) -> Path:
     if path.resolve().parent != Path(directory).resolve():
         raise ProjectError(f"{name!r} leads out of the project directory")
     return path
+
+
+def chart_file(file: str, pou: str | None, suffix: str) -> str:
+    """The name of what an opened ``file`` becomes beside it (``suffix``: ``.s7g`` as the
+    editor saves it, ``.scl`` for its SCL FCs): ``line1.s7g``, or ``line1_Crane.Hoist.s7g``
+    for the chart ``pou`` of a file that holds several (its odd characters ``_``)."""
+    stem = file.rsplit(".", 1)[0] if "." in file[1:] else file
+    if pou:
+        stem += "_" + re.sub(r"[^A-Za-z0-9_.-]", "_", pou)
+    return f"{stem}{suffix}"
 
 
 def project_files(directory: Path) -> list[tuple[str, str]]:

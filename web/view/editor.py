@@ -117,6 +117,7 @@ class Editor(CpuCommands, RowEditing, InPlace):
                 self.open_choice = gui.add_dropdown(
                     "Open file", ["(none)"], hint="A chart or importable file of the CPU's project."
                 )
+                self.chart_choices: dict[str, tuple[str, str]] = {}
                 self.open_button = gui.add_button("Open", hint="open the chosen file")
                 self.new_button = gui.add_button("New", hint="a new chart: S1 and T1")
         # The element's form floats beside it on the chart; the problems and the source

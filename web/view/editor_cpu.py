@@ -36,6 +36,7 @@ from s7graph.web.commands import (
     UndoArgs,
     UndoDownload,
 )
+from s7graph.web.harness.project import CHART_CHOICE, chart_file
 from s7graph.web.view import texts
 from s7graph.web.view.engineering import EditorPage
 
@@ -67,6 +68,7 @@ class CpuCommands:
     note: str
     file: viser.GuiTextHandle
     open_choice: viser.GuiDropdownHandle[Any]
+    chart_choices: dict[str, tuple[str, str]]  # an Open file choice → (file, chart)
     _modal: Any
 
     if TYPE_CHECKING:
@@ -78,7 +80,24 @@ class CpuCommands:
     def _refresh_files(self) -> None:
         listed = self.eng.project()
         names = [f.name for f in listed.files] if listed is not None else []
+        self.chart_choices = {}
         self.open_choice.options = names or ["(none)"]
+
+    def _offer_charts(self, file: str, reply: CommandReply) -> bool:
+        """A file that holds several charts: each chart (``file » chart``, the CPU's
+        refusal lists them) becomes a choice of *Open file*, right after the file, the
+        first one chosen; False when the refusal is another one."""
+        head = CHART_CHOICE.format(file=file, chart="")
+        offered = {line: (file, line[len(head) :]) for line in reply.lines if line.startswith(head)}
+        if not offered:
+            return False
+        self.chart_choices = {**self.chart_choices, **offered}
+        options = [o for o in self.open_choice.options if o not in offered]
+        at = options.index(file) + 1 if file in options else len(options)
+        self.open_choice.options = [*options[:at], *offered, *options[at:]]
+        self.open_choice.value = next(iter(offered))  # type: ignore[misc]
+        self._notify(f"{file}: choose a chart", f"{reply.reason} in Open file", ok=True)
+        return True
 
     def save(self) -> None:
         if self.session is None:
@@ -95,9 +114,12 @@ class CpuCommands:
         if name == "(none)":
             self._refresh_files()
             return
-        reply = self._command(Open(fb=self.panel.fb, args=OpenArgs(file=name)))
+        file, pou = self.chart_choices.get(name, (name, None))
+        args = OpenArgs(file=file) if pou is None else OpenArgs(file=file, pou=pou)
+        reply = self._command(Open(fb=self.panel.fb, args=args))
         if not reply.applied:
-            self._report("open", reply)
+            if not self._offer_charts(file, reply):
+                self._report("open", reply)
             return
         try:
             chart = parse_source(reply.text, name if name.endswith(".s7g") else f"{name}.s7g")
@@ -106,8 +128,7 @@ class CpuCommands:
             self._notify("open refused", exc.reason, ok=False)
             return
         self.session = session
-        stem = name.rsplit(".", 1)[0]
-        self.file.value = f"{stem}.s7g"  # type: ignore[misc]
+        self.file.value = chart_file(file, pou, ".s7g")  # type: ignore[misc]
         self.note = "opened " + name + ("".join(f"; {x}" for x in reply.lines[:3]))
         self._show(source_changed=True)
 

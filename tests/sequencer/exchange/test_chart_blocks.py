@@ -96,8 +96,7 @@ def iec_reference(steps: list[dict[str, bool]]) -> list[dict[str, bool]]:
 def test_r_trig_f_trig_sr_and_rs_compute_their_iec_bodies(tmp_path: Path) -> None:
     """Called in the POU body (PERMANENT BEFORE), the four blocks give matiec's outputs call
     by call — OB100's first call included, in which F_TRIG sees CLK FALSE and pulses."""
-    body = "E1(CLK := x);\nE2(CLK := x);\nL1(S1 := a, R := b);\nL2(S := a, R1 := b);"
-    result = import_chart(edge_program(body), "p.st")
+    result = import_file(synthetic("edge_latch_blocks.st"))
     chart = tmp_path / "p.s7g"
     chart.write_text(format_chart(result.chart))
     pattern = [(1, 0, 0), (1, 1, 0), (0, 1, 1), (0, 0, 1), (1, 0, 0), (0, 0, 0), (0, 1, 0)]
@@ -140,14 +139,7 @@ def test_an_edge_detector_called_in_an_action_runs_while_its_step_is_active() ->
 def test_sel_on_bools_is_a_condition_and_on_numbers_is_reported() -> None:
     """``SEL(G, IN0, IN1)`` on BOOLs is ``NOT G AND IN0 OR G AND IN1`` (IEC's 0 and 1 read
     as BOOLs there); a SEL of numbers has no GRAPH form: the row is left out, reported."""
-    text = (
-        b"FUNCTION_BLOCK P\nVAR_INPUT g : BOOL; a : BOOL; m : INT; END_VAR\nVAR n : INT; END_VAR\n"
-        b"INITIAL_STEP A: END_STEP\nSTEP B: PICK(N); END_STEP\n"
-        b"ACTION PICK:\n n := SEL(g, m, 5);\nEND_ACTION\n"
-        b"TRANSITION FROM A TO B := SEL(g, a, 1); END_TRANSITION\n"
-        b"TRANSITION FROM B TO A := NOT g; END_TRANSITION\nEND_FUNCTION_BLOCK\n"
-    )
-    result = import_chart(text, "p.st")
+    result = import_file(synthetic("sel_condition.st"))
     t1 = result.chart.all_transitions()[0]
     assert "NOT g AND a OR g AND TRUE" in format_chart(result.chart)
     assert t1.condition is not None

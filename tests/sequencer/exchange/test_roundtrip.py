@@ -103,14 +103,7 @@ def test_an_iec_timer_call_goes_to_plcopen_as_an_fb_instance_and_comes_back() ->
     """``CALL SFB 4, DB 10 (…)`` is the call of the POU's instance ``TON_DB10`` in the SFC
     other IEC tools read (``Q => done`` included), and reads back as the same row; a call
     with no IEC form stays a comment."""
-    text = (
-        'FUNCTION_BLOCK "T"\nVAR done : BOOL; waited : TIME; END_VAR\nSEQUENCE 1\n'
-        "INITIAL_STEP S1:\n  CALL SFB 4, DB 10 (IN := I0.0, PT := T#2S, Q => done, ET => waited);"
-        "\n  CALL SFB 1, DB 11 (CD := I0.1, LOAD := I0.2, PV := 3);"
-        "\n  CALL SFC 46;\nEND_STEP\nSTEP S2: END_STEP\n"
-        "TRANSITION T1 FROM S1 TO S2 := done;\nTRANSITION T2 FROM S2 TO S1 := NOT I0.0;\n"
-        "END_SEQUENCE\nEND_FUNCTION_BLOCK\n"
-    )
+    text = synthetic("plcopen_export_timers.s7g").read_text(encoding="utf-8")
     chart = parse_chart(text, "t.s7g")
     xml = export_chart(chart, "plcopen")
     assert '<variable name="TON_DB10"><type><derived name="TON"/></type></variable>' in xml
@@ -125,22 +118,40 @@ def test_an_iec_timer_call_goes_to_plcopen_as_an_fb_instance_and_comes_back() ->
     ]
 
 
-def test_a_part_simaticml_cannot_hold_is_one_clear_export_error(
+def test_permanent_calls_and_moves_travel_through_simaticml_as_lad_boxes() -> None:
+    """A permanent CALL is a LAD call box fed by the power rail (block and instance DB by
+    number, reported once as for CALL rows), an assignment of an operand or a constant a
+    MOVE box: both read back as the same instructions."""
+    chart = parse_chart(synthetic("permanent_boxes.s7g").read_text(encoding="utf-8"), "p.s7g")
+    xml, problems = export_reported(chart, "simaticml")
+    assert [(d.code, d.loc.line) for d in problems] == [("X012", 19)]
+    assert '<CallInfo Name="SFB4" BlockType="SFB">' in xml and '<Part Name="Move"' in xml
+    back = import_chart(xml.encode(), "p.xml")
+    assert back.problems == []
+    assert uncommented(unlocated(back.chart)) == uncommented(unlocated(chart))
+    added = import_chart(xml.replace('Name="Move"', 'Name="Add"', 1).encode(), "p.xml")
+    assert [(d.code, d.message) for d in added.problems] == [
+        ("I022", "permanent operation not imported: part Add has no GRAPH permanent form")
+    ]
+    assert len(added.chart.before) == len(chart.before) - 1
+
+
+def test_a_permanent_arithmetic_expression_is_one_clear_simaticml_export_error(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """A CALL among the permanent instructions has no SimaticML form here (a LAD call box):
+    """``n := n + 1`` among the permanent instructions has no LAD form this export writes:
     one located line, exit 2; PLCopen takes it (a stored action of the initial step)."""
-    chart = tmp_path / "call.s7g"
+    chart = tmp_path / "sum.s7g"
     chart.write_text(
-        'FUNCTION_BLOCK "X"\nVAR a : BOOL; done : BOOL; END_VAR\nSEQUENCE 1\n'
+        'FUNCTION_BLOCK "X"\nVAR a : BOOL; n : INT; END_VAR\nSEQUENCE 1\n'
         "INITIAL_STEP S1: END_STEP\nSTEP S2: END_STEP\n"
         "TRANSITION T1 FROM S1 TO S2 := a;\nTRANSITION T2 FROM S2 TO S1 := NOT a;\n"
-        "END_SEQUENCE\nPERMANENT AFTER\n  CALL SFB 4, DB 9 (IN := a, PT := T#1S, Q => done);\n"
+        "END_SEQUENCE\nPERMANENT AFTER\n  n := n + 1;\n"
         "END_PERMANENT\nEND_FUNCTION_BLOCK\n"
     )
     assert main(["export", str(chart), "--to", "simaticml", "-o", str(tmp_path / "x.xml")]) == 2
     err = capsys.readouterr().err
-    assert "call.s7g:10:3: a permanent instruction that is not a bit coil" in err, err
+    assert "sum.s7g:10:3: permanent instruction n := n + 1: an arithmetic expression" in err, err
     assert main(["export", str(chart), "--to", "plcopen", "-o", str(tmp_path / "x.xml")]) == 0
 
 
@@ -201,27 +212,7 @@ END_FUNCTION_BLOCK
 
 # ---------------------------------------------------------------- what other tools see
 
-PERMANENT = """FUNCTION_BLOCK "P"
-VAR
-  go : BOOL; pulse : BOOL; latch : BOOL; n : INT; done : BOOL; waited : TIME;
-END_VAR
-SEQUENCE 1
-  INITIAL_STEP S1 "Idle":
-  END_STEP
-  STEP S2 "Run":
-  END_STEP
-  TRANSITION T1 FROM S1 TO S2 := go;
-  TRANSITION T2 FROM S2 TO S1 := done;
-END_SEQUENCE
-PERMANENT AFTER
-  pulse := go AND NOT latch;
-  S latch := go;
-  R latch := NOT go;
-  n := n + 1;
-  CALL SFB 4, DB 10 (IN := S2.X, PT := T#50MS, Q => done, ET => waited);
-END_PERMANENT
-END_FUNCTION_BLOCK
-"""
+PERMANENT = synthetic("plcopen_export_permanent.s7g").read_text(encoding="utf-8")
 
 
 def test_plcopen_export_gives_other_tools_the_permanent_instructions(tmp_path: Path) -> None:
@@ -317,13 +308,7 @@ def test_a_six_sequence_chart_keeps_sequences_and_numbers_read_by_another_tool()
 def test_simaticml_export_keeps_the_address_of_an_action_operand() -> None:
     """``N "Ram"`` with Ram at Q0.0: the action names the tag by an Access element with its
     address, as the networks do, so it reads back at Q0.0 (it came back as M100.0)."""
-    text = (
-        'FUNCTION_BLOCK "A"\nSYMBOLS\n  "Ram" : Q0.0 : BOOL;\n  "Go" : I0.0 : BOOL;\n'
-        '  "Count" : MW20 : INT;\nEND_SYMBOLS\nSEQUENCE 1\n  INITIAL_STEP S1:\n  END_STEP\n'
-        '  STEP S2:\n    N "Ram";\n    S1 N "Count" := "Count" + 1;\n  END_STEP\n'
-        '  TRANSITION T1 FROM S1 TO S2 := "Go";\n  TRANSITION T2 FROM S2 TO S1 := NOT "Go";\n'
-        "END_SEQUENCE\nEND_FUNCTION_BLOCK\n"
-    )
+    text = synthetic("tia_export_addresses.s7g").read_text(encoding="utf-8")
     chart = parse_chart(text)
     back = import_chart(export_chart(chart, "simaticml").encode(), "a.xml")
     assert {s.name: s.address for s in back.chart.symbols} == {
@@ -337,13 +322,7 @@ def test_simaticml_export_keeps_the_address_of_an_action_operand() -> None:
 def test_simaticml_export_writes_call_rows_and_reads_them_back() -> None:
     """An IEC chart with a timer has CALL rows: SimaticML takes them (in s7graph's spelling
     of the call, reported once: TIA names blocks by symbol) and reads them back."""
-    text = (
-        'FUNCTION_BLOCK "T"\nVAR done : BOOL; waited : TIME; END_VAR\nSYMBOLS\n'
-        '  "Go" : I0.0 : BOOL;\nEND_SYMBOLS\nSEQUENCE 1\n  INITIAL_STEP S1:\n  END_STEP\n'
-        '  STEP S2:\n    CALL SFB 4, DB 10 (IN := "Go", PT := T#2S, Q => done, ET => waited);\n'
-        '  END_STEP\n  TRANSITION T1 FROM S1 TO S2 := "Go";\n'
-        "  TRANSITION T2 FROM S2 TO S1 := done;\nEND_SEQUENCE\nEND_FUNCTION_BLOCK\n"
-    )
+    text = synthetic("tia_export_call_rows.s7g").read_text(encoding="utf-8")
     chart = parse_chart(text, "t.s7g")
     xml, problems = export_reported(chart, "simaticml")
     assert [(d.code, d.loc.line) for d in problems] == [("X012", 10)]

@@ -7,6 +7,7 @@ audited — and undone the same way. Refusals leave the CPU running the old char
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
 import sys
 from collections.abc import Iterator
@@ -19,6 +20,7 @@ import pytest
 from s7graph.engine.clock import VirtualClock
 from s7graph.engine.persistence import StateStore
 from s7graph.sequencer.change.online import swap
+from s7graph.sequencer.exchange import import_file
 from s7graph.sequencer.fb import GraphFB
 from s7graph.web.access.audit import read_audit
 from s7graph.web.bus.client import BusClient
@@ -26,7 +28,9 @@ from s7graph.web.bus.online import OnlineChange
 from s7graph.web.bus.protocol import Command, CommandReply
 from s7graph.web.bus.session import open_session
 from s7graph.web.harness.persist import open_state
+from s7graph.web.harness.scl import compile_sources
 from s7graph.web.harness.session import ChartSession, compile_text, load_chart
+from tests.sequencer.exchange.helpers import synthetic
 from tests.web.helpers import PASSWORD, online_cpu, wait_until
 
 if TYPE_CHECKING:
@@ -245,6 +249,74 @@ def test_save_and_open_use_the_project_directory_with_backups(cpu: Cpu) -> None:
     for bad in ("../escape.s7g", ".hidden.s7g", "sub/x.s7g"):
         assert not cpu.send("save", file=bad, source=CHART).applied, bad
     assert not cpu.send("open", file="missing.s7g").applied
+
+
+def test_open_of_an_import_with_st_bodies_writes_their_scl_fcs_beside_it(cpu: Cpu) -> None:
+    """The FCs an imported chart calls for its ST bodies are kept: written as <stem>.scl
+    beside the file (as ``import -o`` writes them), a note that this CPU lacks them."""
+    source = synthetic("codesys_scl_bodies.xml")
+    shutil.copy(source, cpu.path.parent / "bodies.xml")
+    opened = cpu.send("open", file="bodies.xml")
+    assert opened.applied, opened.reason
+    scl = cpu.path.parent / "bodies.scl"
+    made = import_file(cpu.path.parent / "bodies.xml")
+    assert made.functions and scl.read_text(encoding="utf-8") == made.blocks_scl
+    assert "CALL FC 1 (" in opened.text and "CALL FC 2 (" in opened.text
+    assert opened.lines[0] == (
+        "bodies.scl: the SCL FCs the chart calls for its ST bodies (FC 1, FC 2), written"
+    )
+    assert opened.lines[1] == (
+        "this CPU does not have FC 1, FC 2: a download of the chart is refused until the "
+        "CPU runs with --blocks bodies.scl"
+    )
+    assert any("I033" in line for line in opened.lines[2:])
+    again = cpu.send("open", file="bodies.xml")
+    assert again.applied and again.lines[0].endswith("(FC 1, FC 2), unchanged")
+
+
+def test_open_is_refused_when_the_cpu_has_another_fc_of_an_imported_body_s_number(
+    cpu: Cpu,
+) -> None:
+    """An FC of the CPU by the number the import gives a body, from another source, would be
+    what the chart calls: refused; the FCs of the written source itself are no conflict."""
+    shutil.copy(synthetic("codesys_scl_bodies.xml"), cpu.path.parent / "bodies.xml")
+    other = cpu.path.parent / "mine.scl"
+    other.write_text(
+        "FUNCTION FC1 : VOID\nVAR_INPUT\n  x : INT;\nEND_VAR\nBEGIN\nEND_FUNCTION\n",
+        encoding="utf-8",
+    )
+    cpu.session.blocks = [compile_sources([other])]
+    cpu.session.blocks[0].load(cpu.session.cpu)
+    refused = cpu.send("open", file="bodies.xml")
+    assert not refused.applied
+    assert "calls FC 1 for ST bodies" in refused.reason
+    assert "comes from another source" in refused.reason
+    assert not (cpu.path.parent / "bodies.scl").exists()
+    # the CPU runs with the import's own source: nothing lacks, nothing conflicts
+    scl = cpu.path.parent / "bodies.scl"
+    scl.write_text(import_file(cpu.path.parent / "bodies.xml").blocks_scl, encoding="utf-8")
+    cpu.session.blocks = [compile_sources([scl])]
+    cpu.session.blocks[0].load(cpu.session.cpu)
+    opened = cpu.send("open", file="bodies.xml")
+    assert opened.applied, opened.reason
+    assert opened.lines[0].endswith("(FC 1, FC 2), unchanged")
+    assert not any("does not have" in line for line in opened.lines)
+
+
+def test_open_of_a_file_with_several_charts_names_them_and_opens_the_one_chosen(
+    cpu: Cpu,
+) -> None:
+    """Without a chart the open is refused, each chart a line (``two.st » Blink``); with
+    ``pou`` that chart opens."""
+    shutil.copy(synthetic("il_beside_chart.st"), cpu.path.parent / "two.st")
+    refused = cpu.send("open", file="two.st")
+    assert not refused.applied
+    assert refused.reason == "two.st holds 2 charts (Blink, Count): choose one"
+    assert refused.lines == ["two.st » Blink", "two.st » Count"]
+    opened = cpu.send("open", file="two.st", pou="Count")
+    assert opened.applied, opened.reason
+    assert 'FUNCTION_BLOCK "Count"' in opened.text
+    assert not cpu.send("open", file="two.st", pou="Nosuch").applied
 
 
 def _shell(bus: list[str], *args: str) -> subprocess.CompletedProcess[str]:

@@ -10,6 +10,7 @@ the tests run in order on them."""
 from __future__ import annotations
 
 import os
+import shutil
 import subprocess
 import sys
 import threading
@@ -24,6 +25,7 @@ from s7graph.web.access.audit import read_audit
 from s7graph.web.view.chart_view import ChartView
 from s7graph.web.view.drawing import ACTIVE, BOX_H, BOX_W, INACTIVE, SELECTED, Drawing
 from s7graph.web.view.editor import EDITOR_WIDTH, Editor
+from tests.sequencer.exchange.helpers import synthetic
 from tests.web.helpers import (
     PASSWORD,
     OnlineRig,
@@ -34,7 +36,7 @@ from tests.web.helpers import (
     page_point,
     wait_until,
 )
-from tests.web.view.test_edit_browser import click, condition, select, type_into
+from tests.web.view.test_edit_browser import choose, click, condition, select, type_into
 
 if TYPE_CHECKING:
     from playwright.sync_api import Page
@@ -287,3 +289,27 @@ def test_after_undo_download_the_page_draws_the_chart_being_edited(
     assert wait_until(lambda: ed.session is not None and ed.session.selection == StepRef(6))
     page.get_by_text("step S6 Step 6", exact=True).first.wait_for(timeout=30_000)
     assert wait_until(lambda: shows(page, corner, {6: SELECTED}, 35), 30, poll=0.5)
+
+
+def test_open_offers_each_chart_of_a_file_that_holds_several(page: Page, cpu: OnlineRig) -> None:
+    """A file with two charts cannot open as one: the CPU's refusal names them and *Open
+    file* offers each (``two.st » Blink``); opening one proposes ``two_Blink.s7g``."""
+    shutil.copy(synthetic("il_beside_chart.st"), cpu.path.parent / "two.st")
+    leave = page.get_by_role("button", name="Leave edit mode")
+    if leave.is_visible():
+        leave.click()
+    click(page, "Edit mode")  # the Open file list is read on entering
+    leave.wait_for(timeout=30_000)
+    ed = editor(cpu)
+    assert wait_until(lambda: "two.st" in ed.open_choice.options)
+    choose(page, "Open file", "two.st")
+    assert wait_until(lambda: ed.open_choice.value == "two.st")
+    click(page, "Open")
+    assert wait_until(lambda: ed.open_choice.value == "two.st » Blink")
+    assert {"two.st » Blink", "two.st » Count"} <= set(ed.open_choice.options)
+    page.get_by_text("two.st: choose a chart").first.wait_for(timeout=30_000)
+    choose(page, "Open file", "two.st » Count")
+    assert wait_until(lambda: ed.open_choice.value == "two.st » Count")
+    click(page, "Open")
+    assert wait_until(lambda: ed.session is not None and ed.session.chart.name == "Count")
+    assert ed.file.value == "two_Count.s7g"
