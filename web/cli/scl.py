@@ -24,17 +24,18 @@ from pathlib import Path
 from typing import Any
 
 from s7graph import sfb
-from s7graph.engine.address import Address, Area, Width, parse_address
+from s7graph.engine.address import Address, Area
 from s7graph.engine.blocks import FB, FC
 from s7graph.engine.clock import VirtualClock
 from s7graph.engine.cpu import Cpu
-from s7graph.engine.errors import AddressError, S7Error
+from s7graph.engine.errors import S7Error
 from s7graph.engine.record import ScanRecord
-from s7graph.engine.symbols import SymbolTable, default_type
+from s7graph.engine.symbols import SymbolTable
 from s7graph.steps.scl import check_scl, format_diagnostic
 from s7graph.web.cli.report import fail
 from s7graph.web.cli.trace import checked_inputs, run_trace, trace_out
 from s7graph.web.harness.dbvars import DbVariables
+from s7graph.web.harness.operands import address_of, write_operand
 from s7graph.web.harness.scl import (
     Loadable,
     SclLoadError,
@@ -114,14 +115,7 @@ class SclSession:
         self.dbvars = DbVariables(self.cpu, getattr(program, "types", {}))
 
     def _address(self, name: str) -> tuple[Address, str] | None:
-        sym = self.symbols.lookup(name) if self.symbols is not None else None
-        if sym is not None:
-            return sym.address, sym.type
-        try:
-            addr = parse_address(name)
-        except AddressError:
-            return None
-        return addr, default_type(addr)
+        return address_of(self.symbols, name)
 
     def check_name(self, name: str, *, writing: bool = False) -> None:
         if self._address(name) is not None:
@@ -145,12 +139,7 @@ class SclSession:
         if found is None:
             self.dbvars.writer(name)(value)
             return
-        addr, type_name = found
-        mem = self.cpu.mem
-        mem.write_as(addr, type_name, value)
-        if addr.area is Area.I:  # the module side, read into the PII at the next cycle
-            size = 1 if addr.width is Width.BIT else int(addr.width) // 8
-            mem.periph_in[addr.byte : addr.byte + size] = mem.inputs[addr.byte : addr.byte + size]
+        write_operand(self.cpu.mem, *found, value)
 
 
 def _json(v: Any) -> Any:
