@@ -41,7 +41,7 @@ from typing import Any
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "bench"))
 
-from figures import spread  # noqa: E402 (bench/ on the path first)
+from figures import opcodes, spread  # noqa: E402 (bench/ on the path first)
 
 from s7graph import sfb  # noqa: E402
 from s7graph.engine import CallContext, Cpu, InstanceDB, VirtualClock, fb, fc, ob  # noqa: E402
@@ -422,20 +422,9 @@ def count_opcodes(
     opcode events, 20 scans after 50 unmeasured ones): deterministic, unlike the times."""
     measure(cpu, clock, between, 50)
     ops = calls = 0
-
-    def trace(frame: Any, event: str, arg: Any) -> Any:
-        nonlocal ops, calls
-        if event == "call":
-            frame.f_trace_opcodes = True
-            calls += 1
-        elif event == "opcode":
-            ops += 1
-        return trace
-
     for _ in range(20):
-        sys.settrace(trace)
-        cpu.scan()
-        sys.settrace(None)
+        o, c = opcodes(cpu.scan)
+        ops, calls = ops + o, calls + c
         clock.advance(10)
         if between is not None:
             between(cpu)
