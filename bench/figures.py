@@ -1,13 +1,17 @@
-"""What the benchmarks share: min/median/max of repeated runs, a percentile, and the two
-helpers of the benchmarks that start a CPU with its view (a free port, is it serving)."""
+"""What the benchmarks share: min/median/max of repeated runs, a percentile, the opcodes
+of a call, and the two helpers of the benchmarks that start a CPU with its view (a free
+port, is it serving)."""
 
 from __future__ import annotations
 
 import socket
 import statistics
+import sys
 import urllib.request
+from collections.abc import Callable
+from typing import Any
 
-__all__ = ["free_port", "pct", "serves", "spread"]
+__all__ = ["free_port", "opcodes", "pct", "serves", "spread"]
 
 
 def spread(values: list[float], fmt: str = "{:.2f}") -> str:
@@ -41,3 +45,25 @@ def serves(url: str) -> bool:
             return bool(page.status == 200)
     except OSError:
         return False
+
+
+def opcodes(run: Callable[[], object]) -> tuple[int, int]:
+    """The Python opcodes and Python-level calls of one ``run()`` (``sys.settrace`` with
+    opcode events): deterministic, unlike its time."""
+    ops = calls = 0
+
+    def trace(frame: Any, event: str, arg: Any) -> Any:
+        nonlocal ops, calls
+        if event == "call":
+            frame.f_trace_opcodes = True
+            calls += 1
+        elif event == "opcode":
+            ops += 1
+        return trace
+
+    sys.settrace(trace)
+    try:
+        run()
+    finally:
+        sys.settrace(None)
+    return ops, calls

@@ -33,7 +33,6 @@ from __future__ import annotations
 
 import argparse
 import asyncio
-import json
 import os
 import re
 import subprocess
@@ -68,42 +67,13 @@ PAGE_RECORDED = "145/147/243 ms (loop8, bench/README.md, bench/page.py --repeat 
 
 
 def worker(path: Path, endpoint: str, url: str, state: Path, port: int) -> int:
-    """Run ``path`` as ``s7graph run --opcua URL`` (and ``--web`` when ``port``) does,
-    stamping every change of the active steps; ``dump`` on stdin prints them as one line,
-    ``end`` stops the run."""
-    from s7graph.engine.runner import RT_PRIORITY, Runner
-    from s7graph.web.bus.live import LiveGraph
+    """Run ``path`` as ``s7graph run --opcua URL`` (and ``--web`` when ``port``) does, its
+    changes stamped (``page.stamp_changes``: ``dump`` on stdin prints them, ``end`` stops)."""
+    from s7graph.engine.runner import RT_PRIORITY
     from s7graph.web.cli.net import NetOptions
     from s7graph.web.cli.run_chart import OpcuaFace, run_chart
 
-    changes: list[tuple[float, list[int]]] = []
-    runners: list[Runner] = []
-    update, run = LiveGraph.update, Runner.run
-    last: list[list[int]] = [[]]
-
-    def stamped_update(self: LiveGraph, record: Any) -> Any:
-        t = time.time()  # the end of the scan, before it is published
-        result = update(self, record)
-        if result.active != last[0]:
-            last[0] = list(result.active)
-            changes.append((t, last[0]))
-        return result
-
-    def kept_run(self: Runner, **kw: Any) -> None:
-        runners.append(self)
-        run(self, **kw)
-
-    LiveGraph.update = stamped_update  # type: ignore[method-assign]
-    Runner.run = kept_run  # type: ignore[method-assign]
-
-    def control() -> None:
-        for line in sys.stdin:
-            if line.strip() == "dump":
-                print(page.RESULT + json.dumps(changes[:]), flush=True)
-            elif line.strip() == "end" and runners:
-                runners[0].request_stop()
-
-    threading.Thread(target=control, daemon=True).start()
+    page.stamp_changes()
     return int(
         run_chart(
             path,

@@ -180,14 +180,12 @@ def loop_source(steps: int) -> str:
 # ---------------------------------------------------------------------------- the CPU process
 
 
-def worker(chart: str, path: Path, endpoint: str, port: int, state: Path) -> int:
-    """Run ``chart`` as ``s7graph run --web`` does, stamping every change of the active
-    steps; a ``dump`` line on stdin prints the changes so far as one ``PAGE {json}`` line,
-    ``end`` stops the run."""
-    from s7graph.engine.runner import RT_PRIORITY, Runner
+def stamp_changes() -> None:
+    """Stamp every change of the active steps of the chart this process runs next (at the
+    end of its scan, before it is published); a ``dump`` line on stdin prints the changes so
+    far as one ``PAGE {json}`` line, ``end`` stops the run."""
+    from s7graph.engine.runner import Runner
     from s7graph.web.bus.live import LiveGraph
-    from s7graph.web.cli.net import NetOptions
-    from s7graph.web.cli.run_chart import run_chart
 
     changes: list[tuple[float, list[int]]] = []
     runners: list[Runner] = []
@@ -219,6 +217,15 @@ def worker(chart: str, path: Path, endpoint: str, port: int, state: Path) -> int
                 runners[0].request_stop()
 
     threading.Thread(target=control, daemon=True).start()
+
+
+def worker(chart: str, path: Path, endpoint: str, port: int, state: Path) -> int:
+    """Run ``chart`` as ``s7graph run --web`` does, its changes stamped (``stamp_changes``)."""
+    from s7graph.engine.runner import RT_PRIORITY
+    from s7graph.web.cli.net import NetOptions
+    from s7graph.web.cli.run_chart import run_chart
+
+    stamp_changes()
     common: dict[str, Any] = {
         "state": state,
         "cycle_ms": CYCLE_MS,

@@ -44,7 +44,7 @@ from typing import Any
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from figures import spread
+from figures import opcodes, spread
 
 from s7graph.engine.clock import Clock, VirtualClock
 from s7graph.engine.cpu import Cpu
@@ -432,21 +432,10 @@ def count_opcodes(layout: str, scans: int = 12) -> tuple[float, float]:
     for _ in range(100):
         e.scan()
     ops = calls = 0
-
-    def trace(frame: Any, event: str, arg: Any) -> Any:
-        nonlocal ops, calls
-        if event == "call":
-            frame.f_trace_opcodes = True
-            calls += 1
-        elif event == "opcode":
-            ops += 1
-        return trace
-
     for _ in range(scans):
         e.clock.advance(CYCLE_MS)
-        sys.settrace(trace)
-        e.cpu.scan()
-        sys.settrace(None)
+        o, c = opcodes(e.cpu.scan)
+        ops, calls = ops + o, calls + c
     return ops / scans, calls / scans
 
 

@@ -8,18 +8,19 @@ builds lark's parser) apart; min/median/max over ``--repeat`` rounds.
 
 **Scan.** The example algorithms of the S7-SCL chapter of the STEP7 comprehensive guide
 (vol. 2, ch. 13 — average of N REALs, bit counting, sorting with GOTO, the trapezoidal
-integrator over TIME_TCK, the message generator with CONCAT/RIGHT/I_STRNG; the sources of
-``tests/steps/scl/test_examples.py``, their OB1 calling the block in every scan), each
-against the same logic hand-written as Python blocks with the engine's ``@fb``/``@fc``/
-``@ob`` decorators and ``ctx.mem``'s typed access, as docs/runtime.md, "Programs of blocks
-in Python", writes them. Each runs in its own ``Cpu`` on a ``VirtualClock`` (10 ms a
-scan), beside a third with an empty OB1 (the CPU's own cost of a scan); the CPU time of
-``Cpu.scan()`` alone is measured, in chunks of 50 scans, the three in turn, so load from
-other processes hits them alike, and a round of ``--scans`` scans keeps each one's
-quickest chunk. Reported: µs per scan of each, and the SCL ÷ Python ratio of the scan and
-of the block (the empty scan taken off), min/median/max over the rounds, with the load
-average. The run ends by checking that both left the same result in memory (exit status 1
-otherwise). ``--count``: Python opcodes and calls per scan instead, deterministic.
+integrator over TIME_TCK, the message generator with CONCAT/RIGHT/I_STRNG; the listings of
+``examples/scl_guide/`` that ``tests/steps/scl/test_examples.py`` runs, their OB1 calling
+the block in every scan), each against the same logic hand-written as Python blocks with the
+engine's ``@fb``/``@fc``/``@ob`` decorators and ``ctx.mem``'s typed access, as
+docs/runtime.md, "Programs of blocks in Python", writes them. Each runs in its own ``Cpu``
+on a ``VirtualClock`` (10 ms a scan), beside a third with an empty OB1 (the CPU's own cost
+of a scan); the CPU time of ``Cpu.scan()`` alone is measured, in chunks of 50 scans, the
+three in turn, so load from other processes hits them alike, and a round of ``--scans``
+scans keeps each one's quickest chunk. Reported: µs per scan of each, and the SCL ÷ Python
+ratio of the scan and of the block (the empty scan taken off), min/median/max over the
+rounds, with the load average. The run ends by checking that both left the same result in
+memory (exit status 1 otherwise). ``--count``: Python opcodes and calls per scan instead,
+deterministic.
 Target: SCL within 1.5× of the hand-written Python.
 """
 
@@ -40,7 +41,7 @@ from typing import Any
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "bench"))
 
-from figures import spread  # noqa: E402 (bench/ on the path first)
+from figures import opcodes, spread  # noqa: E402 (bench/ on the path first)
 
 from s7graph import sfb  # noqa: E402
 from s7graph.engine import CallContext, Cpu, InstanceDB, VirtualClock, fb, fc, ob  # noqa: E402
@@ -51,206 +52,26 @@ from s7graph.steps.scl.parse import parse_source  # noqa: E402
 
 # ---------------------------------------------------------------- the algorithms in SCL
 
-AVERAGE = """
-FUNCTION FC1 : VOID
-VAR_TEMP
-  k, i : INT;
-  sum, avg : REAL;
-END_VAR
-VAR_INPUT
-  n : INT;
-END_VAR
-BEGIN
-  sum := 0;
-  k := 4 * (n - 1);
-  FOR i := 0 TO k BY 4 DO
-    sum := sum + DWORD_TO_REAL(MD[i]);
-  END_FOR;
-  avg := sum / n;
-  MD100 := REAL_TO_DWORD(avg);
-END_FUNCTION
+GUIDE = ROOT / "examples" / "scl_guide"  # the guide's listings, as the tests run them
 
+
+def listing(name: str) -> str:
+    return (GUIDE / f"{name}.scl").read_text(encoding="utf-8")
+
+
+AVERAGE, BIT_COUNT, SORT = listing("average"), listing("bit_count"), listing("sort")
+INTEGRATOR = listing("integrator")
+# the generator's blocks, called in every scan (the listing's OB1 calls it on an edge)
+MESSAGES = (
+    listing("messages").split("Organization_block OB1")[0]
+    + """
 ORGANIZATION_BLOCK OB1
-  FC1(n := 10);
+  M10.2 := Textgenerator(unit := WORD_TO_INT(MW0), no := WORD_TO_INT(IW2),
+                         status := WORD_TO_INT(MW2), value := WORD_TO_INT(MW4));
 END_ORGANIZATION_BLOCK
 """
-
-BIT_COUNT = """
-ORGANIZATION_BLOCK OB1
-VAR_TEMP
-  a, b, c, s, i : INT;
-END_VAR
-  a := WORD_TO_INT(IW0);
-  s := 0;
-  FOR i := 1 TO 16 DO
-    b := a / 2;
-    c := a - b * 2;
-    s := s + c;
-    a := b;
-  END_FOR;
-  MW0 := INT_TO_WORD(s);
-END_ORGANIZATION_BLOCK
-"""
-
-SORT = """
-FUNCTION FC1 : VOID
-VAR_TEMP
-  temp1, i, low, swap : INT;
-END_VAR
-VAR_INPUT
-  n : INT;
-END_VAR
-LABEL
-  a001, a002;
-END_LABEL
-a002: swap := 0;
-  i := 2 * n - 2;
-  low := 2;
-a001: ;
-  IF WORD_TO_INT(db1.dbw[i - 2]) > WORD_TO_INT(db1.dbw[i]) THEN
-    temp1 := WORD_TO_INT(db1.dbw[i - 2]);
-    db1.dbw[i - 2] := db1.dbw[i];
-    db1.dbw[i] := INT_TO_WORD(temp1);
-    swap := 1;
-  END_IF;
-  i := i - 2;
-  IF i >= low THEN
-    GOTO a001;
-  END_IF;
-  mw0 := INT_TO_WORD(i);
-  IF swap <> 0 THEN
-    GOTO a002;
-  END_IF;
-END_FUNCTION
-
-DATA_BLOCK DB1
-STRUCT
-  v : ARRAY[0..9] OF INT;
-END_STRUCT
-BEGIN
-END_DATA_BLOCK
-
-ORGANIZATION_BLOCK OB1
-  fc1(n := 10);
-END_ORGANIZATION_BLOCK
-"""
-
-INTEGRATOR = """
-FUNCTION_BLOCK FB1 // Integral calculation
-VAR_INPUT
-  IN : REAL;
-  RESET : BOOL;
-  ENABLE : BOOL;
-END_VAR
-VAR_OUTPUT
-  OUT : REAL;
-  RESET_ACTIV : BOOL;
-END_VAR
-VAR
-  OUT_LOW : REAL;
-  LAST_IN : REAL;
-  LAST_OUT : REAL;
-  LAST_TIME : REAL;
-  ACTUAL_TIME : REAL;
-  X : REAL;
-  n : INT;
-END_VAR
-  RESET_ACTIV := RESET;
-  IF RESET = TRUE THEN
-    OUT := 0.0;
-    OUT_LOW := 0.0;
-    LAST_OUT := 0.0;
-    LAST_TIME := ACTUAL_TIME;
-    ACTUAL_TIME := TIME_TO_DINT(TIME_TCK()) / 1000.0;
-    X := 0.0;
-    n := 0;
-  ELSIF ENABLE = FALSE THEN
-    n := 0;
-  ELSE
-    IF n = 0 THEN
-      ACTUAL_TIME := TIME_TO_DINT(TIME_TCK()) / 1000.0;
-      LAST_TIME := ACTUAL_TIME;
-      LAST_IN := IN;
-      n := 1;
-    ELSE
-      ACTUAL_TIME := TIME_TO_DINT(TIME_TCK()) / 1000.0;
-      IF ACTUAL_TIME < LAST_TIME THEN
-        X := (ACTUAL_TIME - LAST_TIME + 2147483.647) * (IN + LAST_IN) / 2;
-      ELSE
-        X := (ACTUAL_TIME - LAST_TIME) * (IN + LAST_IN) / 2;
-      END_IF;
-      LAST_TIME := ACTUAL_TIME;
-      LAST_IN := IN;
-      LAST_OUT := OUT;
-      OUT := LAST_OUT + X;
-      OUT_LOW := (OUT - LAST_OUT) - X + OUT_LOW;
-      IF OUT_LOW <> 0 THEN
-        IF ABS(OUT / OUT_LOW) < 10000000 THEN
-          LAST_OUT := OUT;
-          OUT := OUT - OUT_LOW;
-          OUT_LOW := (OUT - LAST_OUT) + OUT_LOW;
-        END_IF;
-      END_IF;
-    END_IF;
-  END_IF;
-END_FUNCTION_BLOCK
-
-ORGANIZATION_BLOCK OB1
-  FB1.DB1(IN := INT_TO_REAL(WORD_TO_INT(MW10)) * 0.5, RESET := M0.1, ENABLE := M0.0);
-END_ORGANIZATION_BLOCK
-"""
-
-MESSAGES = """
-DATA_BLOCK DB10
-STRUCT
-  Index : INT;
-  textbuffer : ARRAY[0..19] OF STRING[34];
-  HW : ARRAY[1..5] OF STRING[16];
-  statuses : ARRAY[1..5] OF STRING[12];
-END_STRUCT
-BEGIN
-  Index := 0;
-  HW[1] := 'Motor'; HW[2] := 'Valve'; HW[3] := 'Press'; HW[4] := 'Weldingstation';
-  HW[5] := 'Burner';
-  statuses[1] := 'problem'; statuses[2] := 'started'; statuses[3] := 'temperature';
-  statuses[4] := 'repaired'; statuses[5] := 'maintained';
-END_DATA_BLOCK
-
-FUNCTION FC10 : BOOL
-VAR_INPUT
-  unit : INT;
-  no : INT;
-  status : INT;
-  value : INT;
-END_VAR
-VAR_TEMP
-  text : STRING[34];
-  i : INT;
-END_VAR
-  text := '';
-  FC10 := TRUE;
-  CASE unit OF
-    1..5 : CASE status OF
-             1..5 : text := CONCAT(IN1 := DB10.HW[unit],
-                                   IN2 := RIGHT(L := 2, IN := I_STRNG(no)));
-                    text := CONCAT(IN1 := text, IN2 := DB10.statuses[status]);
-                    IF value <> 0 THEN
-                      text := CONCAT(IN1 := text, IN2 := I_STRNG(value));
-                    END_IF;
-           ELSE FC10 := FALSE;
-           END_CASE;
-  ELSE FC10 := FALSE;
-  END_CASE;
-  i := DB10.Index;
-  DB10.textbuffer[i] := text;
-  DB10.Index := (i + 1) MOD 20;
-END_FUNCTION
-
-ORGANIZATION_BLOCK OB1
-  M10.2 := FC10(unit := WORD_TO_INT(MW0), no := WORD_TO_INT(IW2),
-                status := WORD_TO_INT(MW2), value := WORD_TO_INT(MW4));
-END_ORGANIZATION_BLOCK
-"""
+)
+MESSAGE_NAMES = {"Messagetexts": "DB10", "Textgenerator": "FC10"}
 
 EMPTY = """
 ORGANIZATION_BLOCK OB1
@@ -497,6 +318,7 @@ WORKLOADS = (
         _message,
         result=_db_bytes(10, 722),
         db_of_scl=(10,),
+        names=MESSAGE_NAMES,
     ),
 )
 
@@ -506,7 +328,7 @@ def build(w: Workload, language: str) -> tuple[Cpu, VirtualClock]:
     clock = VirtualClock()
     cpu = Cpu(clock)
     sfb.install(cpu)
-    program = compile_scl(w.scl, f"{w.name}.scl", blocks=sfb.SYSTEM_BLOCKS)
+    program = compile_scl(w.scl, f"{w.name}.scl", blocks=sfb.SYSTEM_BLOCKS, names=w.names)
     if language == "scl":
         program.load(cpu)
     elif language == "python":
@@ -600,20 +422,9 @@ def count_opcodes(
     opcode events, 20 scans after 50 unmeasured ones): deterministic, unlike the times."""
     measure(cpu, clock, between, 50)
     ops = calls = 0
-
-    def trace(frame: Any, event: str, arg: Any) -> Any:
-        nonlocal ops, calls
-        if event == "call":
-            frame.f_trace_opcodes = True
-            calls += 1
-        elif event == "opcode":
-            ops += 1
-        return trace
-
     for _ in range(20):
-        sys.settrace(trace)
-        cpu.scan()
-        sys.settrace(None)
+        o, c = opcodes(cpu.scan)
+        ops, calls = ops + o, calls + c
         clock.advance(10)
         if between is not None:
             between(cpu)

@@ -19,11 +19,11 @@ Design for S7-300/400, ch. 3-4 and 10).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-from s7graph.engine.blocks import OB
 from s7graph.engine.context import CallContext, NestingOverflow
-from s7graph.engine.diagnostics import DiagnosticBuffer, EventId
+from s7graph.engine.cpu_part import CpuPart
+from s7graph.engine.diagnostics import EventId
 from s7graph.engine.errors import AddressError, BlockError, S7Error, TypeMismatch
 from s7graph.engine.interrupts import class_at_start
 from s7graph.engine.memory import AreaLengthError, AreaWriteError, IOAccessError
@@ -32,25 +32,11 @@ from s7graph.engine.modes import CpuMode
 __all__ = ["SyncErrors", "classify"]
 
 
-class SyncErrors:
+class SyncErrors(CpuPart):
     """OB121, OB122 and the priority class of a running OB."""
 
-    mode: CpuMode
-    obs: dict[int, OB]
-    diagnostics: DiagnosticBuffer
     hot_blockers: set[str]
     _ctx: CallContext
-    _raw: int
-
-    if TYPE_CHECKING:
-
-        def priority_of(self, ob: int) -> int: ...
-
-        def _run_ob(
-            self, number: int, start_info: dict[str, Any], *, nested: bool = False
-        ) -> None: ...
-
-        def _go_stop(self, event: int, block: str, message: str) -> None: ...
 
     def priority_class(self, ob: int) -> int:
         """The class OB ``ob`` runs in when it starts now (``interrupts.class_at_start``):

@@ -9,10 +9,10 @@ attributes and the OB runner it declares.
 from __future__ import annotations
 
 from datetime import datetime, timedelta
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-from s7graph.engine.blocks import OB
-from s7graph.engine.diagnostics import DiagnosticBuffer, EventId
+from s7graph.engine.cpu_part import CpuPart
+from s7graph.engine.diagnostics import EventId
 from s7graph.engine.interrupts import CyclicScheduler
 from s7graph.engine.modes import CpuMode
 from s7graph.engine.rtc import RealTimeClock
@@ -35,28 +35,14 @@ Due = tuple[int, int, int, dict[str, Any], int]
 """(OB, start event ns, error OB when missing, start info, 0)."""
 
 
-class InterruptDispatch:
+class InterruptDispatch(CpuPart):
     """The interrupt part of the scan: collect the due start events, run their OBs."""
 
-    mode: CpuMode
-    obs: dict[int, OB]
-    diagnostics: DiagnosticBuffer
     interrupts: CyclicScheduler
     delays: DelayInterrupts
     tod: TodInterrupts
     rtc: RealTimeClock
-    _raw: int
     _tod_seen: tuple[int, object] | None
-
-    if TYPE_CHECKING:
-
-        def priority_of(self, ob: int) -> int: ...
-
-        def _run_ob(
-            self, number: int, start_info: dict[str, Any], *, nested: bool = False
-        ) -> None: ...
-
-        def _go_stop(self, event: int, block: str, message: str) -> None: ...
 
     def _interrupts(self, now: int) -> None:
         """Run due interrupt OBs: priority first, then the order of their start events."""

@@ -6,17 +6,17 @@ Every diagnostic carries ``file:line:col`` and the step / transition / row it co
     drill.s7g:14:5: error[E020]: S0 NC: the interlock mark C is allowed only ... (step S2 row 3)
 
 Codes: ``E0xx`` errors (the chart does not compile), ``W1xx`` warnings. The list of codes
-lives in ``CODES`` so tests and ``s7graph check`` can name them.
+lives in ``CODES`` so tests and ``s7graph check`` can name them; ``Diagnostic`` is shared
+with S7-SCL (``steps/diagnostics.py``).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Final, Literal
+from typing import Final
 
-from s7graph.engine.errors import SourceLocation
+from s7graph.steps.diagnostics import Diagnostic, error, format_diagnostic, sort_key, warning
 
-Severity = Literal["error", "warning"]
+__all__ = ["CODES", "Diagnostic", "error", "format_diagnostic", "sort_key", "warning"]
 
 CODES: Final[dict[str, str]] = {
     # parser (sequencer/text/parse.py)
@@ -67,37 +67,3 @@ CODES: Final[dict[str, str]] = {
     "W122": "rows marked C on a step without an interlock",
     "W130": "simultaneous branch that can never join",
 }
-
-
-@dataclass(frozen=True, slots=True)
-class Diagnostic:
-    """One problem of a chart. ``element`` names what it concerns: ``step S3``,
-    ``transition T2``, ``step S2 row 3``, ``sequence 1``, ``permanent before`` or ``""``."""
-
-    severity: Severity
-    code: str
-    message: str
-    loc: SourceLocation
-    element: str = ""
-
-    @property
-    def is_error(self) -> bool:
-        return self.severity == "error"
-
-
-def error(code: str, message: str, loc: SourceLocation, element: str = "") -> Diagnostic:
-    return Diagnostic("error", code, message, loc, element)
-
-
-def warning(code: str, message: str, loc: SourceLocation, element: str = "") -> Diagnostic:
-    return Diagnostic("warning", code, message, loc, element)
-
-
-def format_diagnostic(d: Diagnostic) -> str:
-    """``file:line:col: error[E012]: message (step S3)``."""
-    tail = f" ({d.element})" if d.element else ""
-    return f"{d.loc}: {d.severity}[{d.code}]: {d.message}{tail}"
-
-
-def sort_key(d: Diagnostic) -> tuple[str, int, int, str]:
-    return (d.loc.file, d.loc.line, d.loc.col, d.code)

@@ -213,19 +213,9 @@ def _finish(b: Block, stmts: Stmts, labels: dict[str, SourceLocation]) -> None:
 def _instances(source: m.Source, prog: Program) -> None:
     """``FBn.DBm(…)`` anywhere in the source makes DBm an instance of FBn (for reads of
     ``DBm.x`` in blocks that come before the call)."""
-    todo: list[m.Stmt] = [s for unit in source.units for s in unit.body]
-    while todo:
-        s = todo.pop()
+    for s in m.every_stmt(s for unit in source.units for s in unit.body):
         if isinstance(s, m.CallStmt):
             _instance_of(s.call, prog)
-        elif isinstance(s, m.Labeled):
-            todo.append(s.stmt)
-        elif isinstance(s, m.If):
-            todo += [x for _, body in s.branches for x in body] + list(s.orelse or ())
-        elif isinstance(s, m.Case):
-            todo += [x for arm in s.arms for x in arm.body] + list(s.orelse or ())
-        elif isinstance(s, m.For | m.While | m.Repeat):
-            todo += list(s.body)
 
 
 def _instance_of(path: m.Path, prog: Program) -> None:

@@ -6,18 +6,28 @@ way compilers do::
     mix.scl:14:5: error[E220]: cannot assign a REAL to the INT variable 'n'
 
 Codes: ``E2xx`` errors (the source does not compile), ``W3xx`` warnings. They are listed in
-``CODES`` so that tests and ``s7graph check`` can name them. The shape is that of the
-chart's diagnostics (``sequencer/checks/diagnostics.py``).
+``CODES`` so that tests and ``s7graph check`` can name them. ``Diagnostic`` itself is the
+chart's too (``steps/diagnostics.py``); here errors sort before warnings.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Final, Literal
+from typing import Final
 
 from s7graph.engine.errors import S7Error, SourceLocation
+from s7graph.steps.diagnostics import Diagnostic, error, format_diagnostic, warning
+from s7graph.steps.diagnostics import errors_first as sort_key
 
-Severity = Literal["error", "warning"]
+__all__ = [
+    "CODES",
+    "Diagnostic",
+    "Problem",
+    "SclError",
+    "error",
+    "format_diagnostic",
+    "sort_key",
+    "warning",
+]
 
 CODES: Final[dict[str, str]] = {
     # the text (steps/scl/parse.py)
@@ -58,41 +68,6 @@ CODES: Final[dict[str, str]] = {
     # warnings
     "W301": "declared label never placed or never jumped to",
 }
-
-
-@dataclass(frozen=True, slots=True)
-class Diagnostic:
-    """One problem of a source; ``element`` names the block it concerns (``FB17``) or ``""``
-    (the shape of a chart's ``Diagnostic``)."""
-
-    severity: Severity
-    code: str
-    message: str
-    loc: SourceLocation
-    element: str = ""
-
-    @property
-    def is_error(self) -> bool:
-        return self.severity == "error"
-
-
-def error(code: str, message: str, loc: SourceLocation, element: str = "") -> Diagnostic:
-    return Diagnostic("error", code, message, loc, element)
-
-
-def warning(code: str, message: str, loc: SourceLocation, element: str = "") -> Diagnostic:
-    return Diagnostic("warning", code, message, loc, element)
-
-
-def format_diagnostic(d: Diagnostic) -> str:
-    """``file:line:col: error[E220]: message (FB17)``."""
-    tail = f" ({d.element})" if d.element else ""
-    return f"{d.loc}: {d.severity}[{d.code}]: {d.message}{tail}"
-
-
-def sort_key(d: Diagnostic) -> tuple[bool, str, int, int, str]:
-    """Errors before warnings, each in source order."""
-    return (not d.is_error, d.loc.file, d.loc.line, d.loc.col, d.code)
 
 
 class SclError(S7Error):

@@ -9,6 +9,7 @@ quoted symbol) followed by selectors — ``.member``, ``[index, …]`` and a cal
 
 from __future__ import annotations
 
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from typing import Literal
 
@@ -214,6 +215,24 @@ class Labeled:
 
 
 Stmt = Assign | CallStmt | If | Case | For | While | Repeat | Jump | Empty | Labeled
+
+
+def every_stmt(stmts: Iterable[Stmt]) -> Iterator[Stmt]:
+    """Each statement of ``stmts`` and each one nested in them (a labelled statement, the
+    branches of IF and CASE, the bodies of loops), depth first from the last."""
+    todo = list(stmts)
+    while todo:
+        s = todo.pop()
+        yield s
+        if isinstance(s, Labeled):
+            todo.append(s.stmt)
+        elif isinstance(s, If):
+            todo += [x for _, body in s.branches for x in body] + list(s.orelse or ())
+        elif isinstance(s, Case):
+            todo += [x for arm in s.arms for x in arm.body] + list(s.orelse or ())
+        elif isinstance(s, For | While | Repeat):
+            todo += list(s.body)
+
 
 # ---------------------------------------------------------------- declarations
 

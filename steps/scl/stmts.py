@@ -68,9 +68,7 @@ class Stmts:
         self.body(stmts)
 
     def _collect(self, stmts: tuple[m.Stmt, ...]) -> None:
-        todo = list(stmts)
-        while todo:
-            s = todo.pop()
+        for s in m.every_stmt(stmts):
             if isinstance(s, m.Labeled):
                 key = s.label.upper()
                 if key in self.placed:
@@ -80,13 +78,6 @@ class Stmts:
                         Problem("E218", f"label {s.label} is not declared in LABEL", s.loc)
                     )
                 self.placed[key] = s.loc
-                todo.append(s.stmt)
-            elif isinstance(s, m.If):
-                todo += [x for _, body in s.branches for x in body] + list(s.orelse or ())
-            elif isinstance(s, m.Case):
-                todo += [x for arm in s.arms for x in arm.body] + list(s.orelse or ())
-            elif isinstance(s, m.For | m.While | m.Repeat):
-                todo += list(s.body)
 
     def body(self, stmts: tuple[m.Stmt, ...]) -> None:
         """A statement list (``pass`` when empty; a dispatch loop when it holds labels)."""

@@ -5,6 +5,8 @@ the virtual clock."""
 from __future__ import annotations
 
 import os
+import queue
+import re
 import subprocess
 import sys
 import threading
@@ -308,3 +310,21 @@ def cpu_process(
         if proc.poll() is None:
             proc.terminate() if terminate else proc.kill()
         proc.wait(30)
+
+
+def view_line(proc: subprocess.Popen[str], stderr: Path, timeout: float = 30) -> re.Match[str]:
+    """The ``view URL (bus ENDPOINT)`` line ``s7graph run --web`` prints; its stdout is
+    read by a thread from here on. Fails with its ``stderr`` file if it ends first."""
+    lines: queue.Queue[str] = queue.Queue()
+    assert proc.stdout is not None
+    out = proc.stdout
+    threading.Thread(target=lambda: [lines.put(line) for line in out], daemon=True).start()
+    found = None
+    deadline = time.monotonic() + timeout
+    while found is None and time.monotonic() < deadline:
+        try:
+            found = re.search(r"view (\S+) \(bus (\S+)\)", lines.get(timeout=1))
+        except queue.Empty:
+            assert proc.poll() is None, stderr.read_text()
+    assert found is not None, "no view URL printed"
+    return found

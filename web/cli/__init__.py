@@ -546,25 +546,12 @@ def sim(
     """Run a chart (or an .scl program) on the virtual clock: stimulus in, one JSON line
     per cycle out."""
     if chart.suffix.lower() == ".scl":
-        from s7graph.web.cli.scl import sim_scl_command
-
-        raise typer.Exit(
-            sim_scl_command(
-                chart,
-                stimulus=stimulus,
-                cycle_ms=cycle_ms,
-                cycles=cycles,
-                watch=watch,
-                trace=trace,
-                symbols=symbols,
-                plant=plant,
-                blocks=blocks or [],
-            )
-        )
-    from s7graph.web.cli.sim import sim_command
+        from s7graph.web.cli.scl import sim_scl_command as command
+    else:
+        from s7graph.web.cli.sim import sim_command as command
 
     raise typer.Exit(
-        sim_command(
+        command(
             chart,
             stimulus=stimulus,
             cycle_ms=cycle_ms,

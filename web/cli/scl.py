@@ -21,20 +21,21 @@ import re
 import sys
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any, TextIO
+from typing import Any
 
 from s7graph import sfb
-from s7graph.engine.address import Address, Area, Width, parse_address
+from s7graph.engine.address import Address, Area
 from s7graph.engine.blocks import FB, FC
 from s7graph.engine.clock import VirtualClock
 from s7graph.engine.cpu import Cpu
-from s7graph.engine.errors import AddressError, S7Error
-from s7graph.engine.runner import stop_reason
-from s7graph.engine.symbols import SymbolTable, default_type
+from s7graph.engine.errors import S7Error
+from s7graph.engine.record import ScanRecord
+from s7graph.engine.symbols import SymbolTable
 from s7graph.steps.scl import check_scl, format_diagnostic
 from s7graph.web.cli.report import fail
-from s7graph.web.cli.sim import _read_stimulus
+from s7graph.web.cli.trace import checked_inputs, run_trace, trace_out
 from s7graph.web.harness.dbvars import DbVariables
+from s7graph.web.harness.operands import address_of, write_operand
 from s7graph.web.harness.scl import (
     Loadable,
     SclLoadError,
@@ -114,14 +115,7 @@ class SclSession:
         self.dbvars = DbVariables(self.cpu, getattr(program, "types", {}))
 
     def _address(self, name: str) -> tuple[Address, str] | None:
-        sym = self.symbols.lookup(name) if self.symbols is not None else None
-        if sym is not None:
-            return sym.address, sym.type
-        try:
-            addr = parse_address(name)
-        except AddressError:
-            return None
-        return addr, default_type(addr)
+        return address_of(self.symbols, name)
 
     def check_name(self, name: str, *, writing: bool = False) -> None:
         if self._address(name) is not None:
@@ -145,12 +139,7 @@ class SclSession:
         if found is None:
             self.dbvars.writer(name)(value)
             return
-        addr, type_name = found
-        mem = self.cpu.mem
-        mem.write_as(addr, type_name, value)
-        if addr.area is Area.I:  # the module side, read into the PII at the next cycle
-            size = 1 if addr.width is Width.BIT else int(addr.width) // 8
-            mem.periph_in[addr.byte : addr.byte + size] = mem.inputs[addr.byte : addr.byte + size]
+        write_operand(self.cpu.mem, *found, value)
 
 
 def _json(v: Any) -> Any:
@@ -163,6 +152,7 @@ def _json(v: Any) -> Any:
 
 def sim_scl_command(
     source: Path,
+    /,
     *,
     stimulus: Path | None = None,
     cycle_ms: float = 10.0,
@@ -186,57 +176,17 @@ def sim_scl_command(
         print(line, file=sys.stderr)
     try:
         session = SclSession(program, table)
-        stim = _read_stimulus(stimulus)
-        names = [w.strip() for w in watch.split(",") if w.strip()]
-        for name in names:
-            session.check_name(name)
-        for _, values in stim:
-            for name in values:
-                session.check_name(name, writing=True)
+        stim, names = checked_inputs(session, stimulus, watch)
     except S7Error as exc:
         return fail(exc)
-    out: TextIO = sys.stdout if trace is None else open(trace, "w", encoding="utf-8")  # noqa: SIM115
+
+    def cycle(k: int, t_ms: float) -> tuple[ScanRecord, dict[str, Any]]:
+        record = session.cpu.scan()
+        return record, {"active": [], "events": [], "mode": record.mode.name}
+
     try:
-        return _run(session, stim, names, cycle_ms, cycles, out)
+        with trace_out(trace) as out:
+            session.cpu.start("warm")
+            return run_trace(session, session.clock, cycle, stim, names, cycle_ms, cycles, out)
     except S7Error as exc:
         return fail(exc)
-    finally:
-        if out is not sys.stdout:
-            out.close()
-
-
-def _run(
-    session: SclSession,
-    stim: list[tuple[float, dict[str, Any]]],
-    names: list[str],
-    cycle_ms: float,
-    cycles: int,
-    out: TextIO,
-) -> int:
-    cpu = session.cpu
-    cpu.start("warm")
-    nxt = 0
-    for k in range(cycles):
-        t_ms = k * cycle_ms
-        while nxt < len(stim) and stim[nxt][0] <= t_ms + 1e-9:
-            for name, value in stim[nxt][1].items():
-                session.set(name, value)
-            nxt += 1
-        record = cpu.scan()
-        line: dict[str, Any] = {
-            "cycle": k,
-            "t_ms": int(t_ms) if float(t_ms).is_integer() else round(t_ms, 6),
-            "active": [],
-            "events": [],
-            "mode": record.mode.name,
-            "values": {name: session.get(name) for name in names},
-        }
-        out.write(json.dumps(line) + "\n")
-        if record.mode.name == "STOP":
-            print(
-                f"s7graph: error: cycle {k}: the CPU went to STOP: {stop_reason(cpu)}",
-                file=sys.stderr,
-            )
-            return 1
-        session.clock.advance(cycle_ms)
-    return 0

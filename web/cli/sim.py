@@ -29,7 +29,6 @@ that cycle's line, the reason goes to stderr and the exit status is 1.
 
 from __future__ import annotations
 
-import json
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -37,31 +36,12 @@ from typing import Any, TextIO
 
 from s7graph.engine.clock import VirtualClock
 from s7graph.engine.errors import S7Error
-from s7graph.engine.runner import stop_reason
+from s7graph.engine.record import ScanRecord
 from s7graph.sequencer.compiled import CompiledChart
 from s7graph.web.cli.report import fail
+from s7graph.web.cli.trace import Stimulus, checked_inputs, ms, run_trace, trace_out
 from s7graph.web.harness.plant import LoadedPlant, PlantError, load_plant
 from s7graph.web.harness.session import ChartSession
-
-
-def _read_stimulus(path: Path | None) -> list[tuple[float, dict[str, Any]]]:
-    if path is None:
-        return []
-    out: list[tuple[float, dict[str, Any]]] = []
-    for n, line in enumerate(Path(path).read_text(encoding="utf-8").splitlines(), 1):
-        if not line.strip():
-            continue
-        try:
-            obj = json.loads(line)
-            at = float(obj.get("at_ms", 0))
-            values = obj["set"]
-            if not isinstance(values, dict):
-                raise ValueError("'set' must be an object")
-        except (ValueError, KeyError, TypeError, AttributeError) as exc:
-            raise S7Error(f"{path}:{n}: bad stimulus line: {exc}") from None
-        out.append((at, values))
-    out.sort(key=lambda item: item[0])
-    return out
 
 
 def _events(cc: CompiledChart, fired: list[int]) -> list[list[str]]:
@@ -76,12 +56,9 @@ def _events(cc: CompiledChart, fired: list[int]) -> list[list[str]]:
     return pairs
 
 
-def _ms(v: float) -> int | float:
-    return int(v) if float(v).is_integer() else round(v, 6)
-
-
 def sim_command(
     chart: Path,
+    /,
     *,
     stimulus: Path | None = None,
     cycle_ms: float = 10.0,
@@ -97,33 +74,24 @@ def sim_command(
     beside it."""
     try:
         session = ChartSession.load(chart, symbols, VirtualClock(), blocks=blocks)
-        stim = _read_stimulus(stimulus)
-        names = [w.strip() for w in watch.split(",") if w.strip()]
-        for name in names:
-            session.check_name(name, writing=False)
-        for _, values in stim:
-            for name in values:
-                session.check_name(name, writing=True)
+        stim, names = checked_inputs(session, stimulus, watch)
         loaded: LoadedPlant | None = load_plant(plant) if plant is not None else None
     except S7Error as exc:  # ChartLoadError included
         return fail(exc)
     for line in session.warnings + session.missing:
         print(line, file=sys.stderr)
-    out: TextIO = sys.stdout if trace is None else open(trace, "w", encoding="utf-8")  # noqa: SIM115
     try:
-        return _run(session, stim, names, loaded, cycle_ms, cycles, out)
+        with trace_out(trace) as out:
+            return _run(session, stim, names, loaded, cycle_ms, cycles, out)
     except PlantError as exc:
         return fail(exc, 1)
     except S7Error as exc:
         return fail(exc)
-    finally:
-        if out is not sys.stdout:
-            out.close()
 
 
 def _run(
     session: ChartSession,
-    stim: list[tuple[float, dict[str, Any]]],
+    stim: Stimulus,
     names: list[str],
     plant: LoadedPlant | None,
     cycle_ms: float,
@@ -135,31 +103,18 @@ def _run(
     assert isinstance(clock, VirtualClock)
     session.start()
     startup = list(session.graph.state.fired)  # the startup call's switches: in line 0
-    nxt = 0
-    for k in range(cycles):
-        t_ms = k * cycle_ms
-        while nxt < len(stim) and stim[nxt][0] <= t_ms + 1e-9:
-            for name, value in stim[nxt][1].items():
-                session.set(name, value)
-            nxt += 1
+
+    def cycle(k: int, t_ms: float) -> tuple[ScanRecord, dict[str, Any]]:
         record = session.scan()
         st = session.graph.state
         if plant is not None:
-            plant.cycle(session, _ms(t_ms), _ms(cycle_ms))
-        line = {
-            "cycle": k,
-            "t_ms": _ms(t_ms),
+            plant.cycle(session, ms(t_ms), ms(cycle_ms))
+        return record, {
             "active": [
                 cc.step_label(i) for i in sorted(st.active, key=cc.step_numbers.__getitem__)
             ],
             "events": _events(cc, startup + st.fired if k == 0 else st.fired),
             "mode": st.mode,
-            "values": {name: session.get(name) for name in names},
         }
-        out.write(json.dumps(line) + "\n")
-        if record.mode.name == "STOP":
-            why = stop_reason(session.cpu)
-            print(f"s7graph: error: cycle {k}: the CPU went to STOP: {why}", file=sys.stderr)
-            return 1
-        clock.advance(cycle_ms)
-    return 0
+
+    return run_trace(session, clock, cycle, stim, names, cycle_ms, cycles, out)

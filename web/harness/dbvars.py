@@ -13,7 +13,7 @@ try addresses first, so what an address trace gave stays as it was.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 from s7graph.engine.blocks import Decl, InstanceDB
@@ -69,7 +69,7 @@ class DbVariables:
             idb = where
 
             def write(value: Any) -> None:
-                _container(idb, parents)[last] = checked(value)
+                _walk(idb, parents)[last] = checked(value)
 
             return write
         buf = where
@@ -131,20 +131,10 @@ def _interface(idb: InstanceDB) -> ty.SclType:
     return ty.SclType("STRUCT", fields=tuple(fields), name=idb.fb.label)
 
 
-def _walk(idb: InstanceDB, keys: tuple[str | int, ...]) -> Any:
+def _walk(idb: InstanceDB, keys: Sequence[str | int]) -> Any:
+    """The value at ``keys`` inside an instance DB (a multi-instance: its own values)."""
     value: Any = idb.values
     key: Any
-    for key in keys:
-        value = value[key]
-        if isinstance(value, InstanceDB):
-            value = value.values
-    return value
-
-
-def _container(idb: InstanceDB, keys: list[str | int]) -> Any:
-    value: Any = idb.values
-    key: Any
-
     for key in keys:
         value = value[key]
         if isinstance(value, InstanceDB):

@@ -17,11 +17,11 @@ from pathlib import Path
 from typing import Any
 
 from s7graph import sfb
-from s7graph.engine.address import Address, Area, Width, parse_address
+from s7graph.engine.address import Address, Area, Width
 from s7graph.engine.clock import Clock
 from s7graph.engine.cpu import Cpu
-from s7graph.engine.errors import AddressError, S7Error
-from s7graph.engine.symbols import SymbolTable, default_type
+from s7graph.engine.errors import S7Error
+from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.calls import prepare_calls
 from s7graph.sequencer.checks.diagnostics import Diagnostic, format_diagnostic
 from s7graph.sequencer.compile import ChartError, compile_chart
@@ -31,6 +31,7 @@ from s7graph.sequencer.params import Direction, check_pin, is_pin
 from s7graph.sequencer.text.model import Chart
 from s7graph.sequencer.text.parse import ChartSyntaxError, chart_text, parse_chart
 from s7graph.web.harness.dbvars import DbVariables
+from s7graph.web.harness.operands import address_of, write_operand
 from s7graph.web.harness.scl import Loadable, SclSources, compile_sources, load_beside
 from s7graph.web.harness.scl_reload import reload_sources
 
@@ -195,14 +196,7 @@ class ChartSession:
     # ------------------------------------------------------------ names
 
     def _address(self, name: str) -> tuple[Address, str] | None:
-        sym = self.symbols.lookup(name)
-        if sym is not None:
-            return sym.address, sym.type
-        try:
-            addr = parse_address(name)
-        except AddressError:
-            return None
-        return addr, default_type(addr)
+        return address_of(self.symbols, name)
 
     def check_name(self, name: str, *, writing: bool) -> None:
         """Raise S7Error if ``name`` cannot be set (``writing``) or watched."""
@@ -294,13 +288,7 @@ class ChartSession:
                 self.dbvars.writer(name)(value)
                 return
             raise S7Error(f"unknown name {name}")
-        addr, type_name = found
-        mem = self.cpu.mem
-        mem.write_as(addr, type_name, value)
-        if addr.area is Area.I:  # the module side, read into the PII at the next cycle
-            n = addr.byte
-            size = max(1, int(addr.width) // 8)
-            mem.periph_in[n : n + size] = mem.inputs[n : n + size]
+        write_operand(self.cpu.mem, *found, value)
 
     def reload_blocks(self, new: SclSources) -> list[str]:
         """Download the changed S7-SCL sources ``new`` in place of the session's (between

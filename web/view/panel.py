@@ -18,7 +18,6 @@ fits the chart to the page, and for a chart of several sequences shows one of th
 from __future__ import annotations
 
 import functools
-import threading
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -63,6 +62,7 @@ from s7graph.web.view.alarms import AlarmView
 from s7graph.web.view.drawing import aim_camera
 from s7graph.web.view.editor import Editor
 from s7graph.web.view.engineering import Engineering, ViewHost
+from s7graph.web.view.page_login import PageLogin
 
 __all__ = ["ClientPanel", "PageState", "Wiring"]
 
@@ -122,18 +122,13 @@ class PageState:
     forces: str = ""
 
 
-class ClientPanel:
+class ClientPanel(PageLogin):
     """The side panel of one browser page (``client``)."""
 
     def __init__(self, client: viser.ClientHandle, wiring: Wiring) -> None:
         self.client = client
         self.wiring = wiring
-        self.user = ""
-        self.token = ""
-        self.role = "viewer"
-        self.verified = True
-        self._lock = threading.Lock()
-        self._shown: dict[str, str] = {}
+        self._init_login(client, wiring.demo)
         self._focus: int | None = None  # the sequence Chart view shows (None: all)
         self._fit: Callable[[], tuple[float, float, float] | None] = lambda: None
         self._ours: deque[tuple[float, ...]] = deque(maxlen=8)  # where the view put the camera
@@ -141,7 +136,6 @@ class ClientPanel:
         self._mode: str | None = None
         self._alarms: AlarmList | None = None
         self.force_folder: viser.GuiFolderHandle | None = None
-        self.origin = _origin(client)
         self._build()
 
     # ------------------------------------------------------------ building
@@ -151,19 +145,7 @@ class ClientPanel:
         w = self.wiring
         gui.set_panel_label(f"S7-GRAPH {w.layout.fb} on {w.cpu}")
         self.banner = gui.add_html("")
-        with gui.add_folder("Login"):
-            self.user_field = gui.add_text("User", "")
-            self.password = gui.add_text("Password", "", visible=not w.demo)
-            # viser has no password input: mask the one whose label points at this field
-            # (Chromium, Safari, Firefox >= 127 honour -webkit-text-security)
-            uid = self.password._impl.uuid
-            rule = f".mantine-Flex-root:has(label[for='{uid}']) input{{-webkit-text-security:disc}}"
-            gui.add_html(f"<style>{rule}</style>")
-            self.login_button = gui.add_button("Log in")
-            self.logout_button = gui.add_button("Log out", disabled=True)
-            self.who = gui.add_html(texts.login_html("", "", True, w.demo))
-        self.login_button.on_click(lambda _: self._log_in())
-        self.logout_button.on_click(lambda _: self._log_out())
+        self._build_login()
         with gui.add_folder("Control Sequencer") as self.control_folder:
             self.status = gui.add_html(texts.status_html(None, 0, "RUN", None))
             self.mode_buttons = {m: gui.add_button(m, hint=f"SW_{m}") for m in MODES}
@@ -235,12 +217,7 @@ class ClientPanel:
         for op, button in {**self.buttons, **self.step_buttons}.items():
             button.disabled = not allowed(role, op)
         self.alarms.enable(allowed(role, "ack_msg"))
-        self.login_button.disabled = bool(self.token)
-        self.logout_button.disabled = not self.token
-        self.user_field.disabled = bool(self.token)
-        self.who.content = texts.login_html(
-            self.user if self.token else "", self.role, self.verified, self.wiring.demo
-        )
+        self._show_login()
 
     def _editor_for(self, role: str) -> None:
         """Build the editor for a page whose role may download; drop it for any other."""
@@ -380,39 +357,18 @@ class ClientPanel:
 
     # ------------------------------------------------------------ login
 
-    def _log_in(self) -> None:
-        user = str(self.user_field.value)  # as typed: "olga " is refused, not trimmed
-        password = str(self.password.value)
-        self.password.value = ""  # type: ignore[misc]  # never left on the page
-        reply = self.wiring.login(user, password, self.origin)
-        if not reply.ok:
-            self._notify("login refused", reply.reason, ok=False)
-            self.who.content = texts.login_html("", "", True, self.wiring.demo, reply.reason)
-            return
-        with self._lock:
-            self.user, self.token, self.role = reply.user, reply.token, reply.role
-            self.verified = reply.verified
-        self._enable()
-        self._notify("logged in", f"{reply.user} ({reply.role})", ok=True)
+    def _login(self, user: str, password: str) -> LoginReply:
+        return self.wiring.login(user, password, self.origin)  # as typed: "olga " is refused
 
-    def _log_out(self) -> None:
-        with self._lock:
-            token, user = self.token, self.user
-            self.token, self.user, self.role = "", "", "viewer"
-        if token:
-            self.wiring.logout(token, user, self.origin)
-        self._enable()
+    def _logout(self, token: str, user: str) -> None:
+        self.wiring.logout(token, user, self.origin)
 
     def forget(self) -> None:
         """The page went away: revoke its token (its GUI is gone, nothing to update)."""
         editor, self.editor = self.editor, None
         if editor is not None:
             editor.close(page_gone=True)
-        with self._lock:
-            token, user = self.token, self.user
-            self.token = ""
-        if token:
-            self.wiring.logout(token, user, self.origin)
+        self._revoke()
 
     # ------------------------------------------------------------ commands
 
@@ -486,31 +442,21 @@ class ClientPanel:
         w.on_reply(reply)
         return reply
 
-    def _notify(self, title: str, body: str, *, ok: bool) -> None:
-        self.client.add_notification(
-            title, body, auto_close_seconds=4.0, color="green" if ok else "red"
-        )
-
     # ------------------------------------------------------------ showing
-
-    def _set(self, handle: Any, key: str, content: str) -> None:
-        if self._shown.get(key) != content:
-            handle.content = content
-            self._shown[key] = content
 
     def show(self, page: PageState, detail: Callable[[tuple[str, int]], str], halted: bool) -> None:
         """Bring this page up to date (render thread; only what changed is sent)."""
         with self.client.atomic():
-            self._set(self.banner, "banner", page.banner)
-            self._set(self.status, "status", page.status)
-            self._set(self.event_log, "events", page.events)
-            self._set(self.history_html, "history", page.history)
-            self._set(self.audit_html, "audit", page.audit)
+            self.update_html(self.banner, "banner", page.banner)
+            self.update_html(self.status, "status", page.status)
+            self.update_html(self.event_log, "events", page.events)
+            self.update_html(self.history_html, "history", page.history)
+            self.update_html(self.audit_html, "audit", page.audit)
             if self.force_folder is not None:
-                self._set(self.force_html, "forces", page.forces)
+                self.update_html(self.force_html, "forces", page.forces)
             shown = int(self.detail_transition.value)
             key = ("T", shown) if shown > 0 else ("S", int(self.detail_step.value))
-            self._set(self.detail_html, "detail", detail(key))
+            self.update_html(self.detail_html, "detail", detail(key))
             if page.mode != self._mode:
                 self._mode = page.mode
                 for mode, button in self.mode_buttons.items():
@@ -526,17 +472,3 @@ class ClientPanel:
 def _sequence_labels(layout: ChartLayout) -> list[str]:
     """The buttons of *Chart view*'s Sequence: the overview, then each sequence."""
     return ["Overview", *(texts.clip(f"{q.number} {q.name}".strip(), 24) for q in layout.sequences)]
-
-
-def _origin(client: viser.ClientHandle) -> str:
-    """``page <id> (<address>)`` for the audit: which browser page gave a command."""
-    address = ""
-    try:
-        ws: Any = client._viser_server._websock_server  # viser 1.1.1 (pinned)
-        conn = ws._live_connections.get(client.client_id)
-        if conn is not None and conn.remote_address:
-            address = str(conn.remote_address[0])
-    except Exception:
-        address = ""
-    where = f" ({address})" if address else ""
-    return f"page {client.client_id}{where}"[:160]

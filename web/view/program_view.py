@@ -2,7 +2,7 @@
 its state and why it stopped, its RUN/STOP switch and memory reset, a watch table and its
 diagnostic buffer — no scene.
 
-Every page has its own login (as the chart's page: ``web.view.panel``), its own watch
+Every page has its own login (as the chart's page: ``web.view.page_login``), its own watch
 table — operands typed into ``Operands`` (``MW0:INT, Q4.0, DB20.avg``), read at the CPU's
 scan boundaries about twice a second while the page is open (``web.bus.watch``) — and the
 buttons its role allows (``stop``, ``start``, ``mres``: an engineer's). The Diagnostics
@@ -22,13 +22,20 @@ import viser
 
 from s7graph.web.access.roles import allowed
 from s7graph.web.bus.client import BusClient
-from s7graph.web.bus.protocol import MAX_WATCH, Command, CommandReply, CpuStatus, WatchValues
+from s7graph.web.bus.protocol import (
+    MAX_WATCH,
+    Command,
+    CommandReply,
+    CpuStatus,
+    LoginReply,
+    WatchValues,
+)
 from s7graph.web.bus.watch import split_operands
 from s7graph.web.commands import Mres, Start, Stop, checked, op_of
 from s7graph.web.view import texts
 from s7graph.web.view.diagnostics import state_html
 from s7graph.web.view.guard import OriginGuard
-from s7graph.web.view.panel import _origin
+from s7graph.web.view.page_login import PageLogin
 
 __all__ = ["ProgramPage", "ProgramView", "watch_html"]
 
@@ -59,30 +66,16 @@ def watch_html(answer: WatchValues | None) -> str:
     return texts.small(f"{head}<table>{''.join(rows)}</table>")
 
 
-class ProgramPage:
+class ProgramPage(PageLogin):
     """One browser page of a program's CPU: login, switch, watch table."""
 
     def __init__(self, page: viser.ClientHandle, view: ProgramView) -> None:
         self.page, self.view = page, view
-        self.user = self.token = ""
-        self.role, self.verified = "viewer", True
-        self.origin = _origin(page)
-        self._lock = threading.Lock()
-        self._shown: dict[str, str] = {}
+        self._init_login(page, view.demo)
         gui = page.gui
         gui.set_panel_label(f"s7graph CPU {view.cpu} (a program)")
         self.banner = gui.add_html("")
-        with gui.add_folder("Login"):
-            self.user_field = gui.add_text("User", "")
-            self.password = gui.add_text("Password", "", visible=not view.demo)
-            uid = self.password._impl.uuid
-            rule = f".mantine-Flex-root:has(label[for='{uid}']) input{{-webkit-text-security:disc}}"
-            gui.add_html(f"<style>{rule}</style>")
-            self.login_button = gui.add_button("Log in")
-            self.logout_button = gui.add_button("Log out", disabled=True)
-            self.who = gui.add_html(texts.login_html("", "", True, view.demo))
-        self.login_button.on_click(lambda _: self._log_in())
-        self.logout_button.on_click(lambda _: self._log_out())
+        self._build_login()
         with gui.add_folder("CPU"):
             self.status = gui.add_html(state_html(None))
             self.buttons = {
@@ -105,49 +98,21 @@ class ProgramPage:
         """The operands this page watches (at most ``MAX_WATCH``)."""
         return split_operands(str(self.operands.value))[:MAX_WATCH]
 
-    def show(self, key: str, handle: Any, content: str) -> None:
-        if self._shown.get(key) != content:
-            handle.content = content
-            self._shown[key] = content
-
     def _enable(self) -> None:
         role = self.role if self.token else "viewer"
         for op, button in self.buttons.items():
             button.disabled = not allowed(role, op)
-        self.login_button.disabled = bool(self.token)
-        self.logout_button.disabled = not self.token
-        self.user_field.disabled = bool(self.token)
-        self.who.content = texts.login_html(
-            self.user if self.token else "", self.role, self.verified, self.view.demo
-        )
+        self._show_login()
 
-    def _log_in(self) -> None:
-        user, password = str(self.user_field.value).strip(), str(self.password.value)
-        self.password.value = ""  # type: ignore[misc]  # never left on the page
-        reply = self.view.client.login(user, password, origin=self.origin)
-        if not reply.ok:
-            self._notify("login refused", reply.reason, ok=False)
-            self.who.content = texts.login_html("", "", True, self.view.demo, reply.reason)
-            return
-        with self._lock:
-            self.user, self.token, self.role = reply.user, reply.token, reply.role
-            self.verified = reply.verified
-        self._enable()
-        self._notify("logged in", f"{reply.user} ({reply.role})", ok=True)
+    def _login(self, user: str, password: str) -> LoginReply:
+        return self.view.client.login(user, password, origin=self.origin)
 
-    def _log_out(self) -> None:
-        with self._lock:
-            token, user, self.token, self.user, self.role = self.token, self.user, "", "", "viewer"
-        if token:
-            self.view.client.logout(token, user=user, origin=self.origin)
-        self._enable()
+    def _logout(self, token: str, user: str) -> None:
+        self.view.client.logout(token, user=user, origin=self.origin)
 
     def forget(self) -> None:
         """The page went away: revoke its token."""
-        with self._lock:
-            token, user, self.token = self.token, self.user, ""
-        if token:
-            self.view.client.logout(token, user=user, origin=self.origin)
+        self._revoke()
 
     def _clicked(self, kind: type[Command], _: object) -> None:
         self.command(kind)
@@ -164,11 +129,6 @@ class ProgramPage:
         verdict = "applied" if reply.applied else "refused"
         self._notify(f"{made.op} {verdict}", reply.reason or "OK", ok=reply.applied)
         return reply
-
-    def _notify(self, title: str, body: str, *, ok: bool) -> None:
-        self.page.add_notification(
-            title, body, auto_close_seconds=4.0, color="green" if ok else "red"
-        )
 
 
 class ProgramView:
@@ -240,15 +200,15 @@ class ProgramView:
         line = _status_html(status) if connected else texts.small("no live state")
         answers: dict[tuple[str, ...], WatchValues] = {}
         for page in pages:
-            page.show("banner", page.banner, top)
-            page.show("status", page.status, line)
+            page.update_html(page.banner, "banner", top)
+            page.update_html(page.status, "status", line)
             asked = tuple(page.asked())
             if not asked:
-                page.show("watch", page.watch, watch_html(None))
+                page.update_html(page.watch, "watch", watch_html(None))
                 continue
             if asked not in answers:
                 answers[asked] = self.client.watch(list(asked), timeout=2.0)
-            page.show("watch", page.watch, watch_html(answers[asked]))
+            page.update_html(page.watch, "watch", watch_html(answers[asked]))
 
     def close(self) -> None:
         self._closed = True

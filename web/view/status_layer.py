@@ -256,10 +256,11 @@ class StatusLayer:
 
     # ------------------------------------------------------------ nodes
 
-    def _new_label(self, name: str) -> Any:
+    def _hidden_image(self, name: str, image: Any) -> Any:
+        """A scene image, hidden until it is shown and sized (``_show_…``)."""
         return self.scene.add_image(
-            f"{self.root}/label/{name}",
-            label_image([""], VALUE_SIZE, 0.1, VALUE_PLAIN),
+            f"{self.root}/{name}",
+            image,
             render_width=0.1,
             render_height=0.1,
             format="png",
@@ -267,6 +268,9 @@ class StatusLayer:
             cast_shadow=False,
             receive_shadow=False,
         )
+
+    def _new_label(self, name: str) -> Any:
+        return self._hidden_image(f"label/{name}", label_image([""], VALUE_SIZE, 0.1, VALUE_PLAIN))
 
     def _show_label(self, node: Any, spec: _Label, before: _Label | None) -> None:
         if before is None or (before.lines, before.background, before.width) != (
@@ -293,16 +297,7 @@ class StatusLayer:
 
     def _new_chip(self, name: str) -> Any:
         # an image, not a box: an image shows its colour as it is (a box's is tone-mapped)
-        return self.scene.add_image(
-            f"{self.root}/contact/{name}",
-            _solid(CONTACT_PASSES),
-            render_width=0.1,
-            render_height=0.1,
-            format="png",
-            visible=False,
-            cast_shadow=False,
-            receive_shadow=False,
-        )
+        return self._hidden_image(f"contact/{name}", _solid(CONTACT_PASSES))
 
     def _show_chip(self, node: Any, spec: _Chip, before: _Chip | None) -> None:
         if before is None or before.colour != spec.colour:

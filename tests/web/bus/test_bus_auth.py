@@ -4,7 +4,6 @@ loopback): the CPU side checks every command at the scan boundary and audits it.
 from __future__ import annotations
 
 import re
-import socket
 import threading
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -23,7 +22,7 @@ from s7graph.web.bus.gate import Gate
 from s7graph.web.bus.protocol import ChartLayout, Command, CommandReply, StepStateUpdate
 from s7graph.web.bus.publisher import BusPublisher
 from s7graph.web.bus.session import open_session
-from tests.web.helpers import wait_until
+from tests.web.helpers import free_port, wait_until
 
 if TYPE_CHECKING:
     from tests.conftest import BusCerts
@@ -182,16 +181,10 @@ def test_wildcard_queries_are_answered_or_ignored_cleanly(rig: Rig) -> None:
 # ---------------------------------------------------------------- TLS on loopback
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
 def test_tls_on_loopback_carries_login_and_commands_and_refuses_a_stranger(
     tmp_path: Path, bus_certs: BusCerts
 ) -> None:
-    endpoint = f"tls/localhost:{_free_port()}"
+    endpoint = f"tls/localhost:{free_port()}"
     users = UsersFile(tmp_path / "users.json")
     users.add("olga", "operator", PASSWORD)
     gate = Gate(Authenticator(users))

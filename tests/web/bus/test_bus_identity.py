@@ -6,7 +6,6 @@ and publications, and the audit's origin taken from the transport (``web.bus.ori
 from __future__ import annotations
 
 import re
-import socket
 import threading
 import time
 from collections.abc import Iterator
@@ -28,7 +27,7 @@ from s7graph.web.bus.cpu_side import CpuSide
 from s7graph.web.bus.gate import Gate
 from s7graph.web.bus.protocol import ChartLayout, Command, CommandReply, StepStateUpdate
 from s7graph.web.bus.session import BusEnds, BusLogin, TlsFiles, open_session
-from tests.web.helpers import wait_until
+from tests.web.helpers import free_port, wait_until
 
 if TYPE_CHECKING:
     from tests.conftest import BusCerts
@@ -42,12 +41,6 @@ def _layout() -> ChartLayout:
     steps = (Step(1, "Idle", initial=True), Step(2, "Run"))
     transitions = (Transition(1, "", (1,), (2,)), Transition(2, "", (2,), (1,)))
     return ChartLayout.from_chart(Chart("FILL", sequences=(Sequence(1, "M", steps, transitions),)))
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 @dataclass
@@ -106,7 +99,7 @@ def _log_in_and_command(client: BusClient) -> CommandReply:
 def test_a_rogue_with_a_valid_certificate_never_sees_a_login_nor_answers_a_command(
     tmp_path: Path, bus_certs: BusCerts
 ) -> None:
-    endpoint = f"tls/localhost:{_free_port()}"
+    endpoint = f"tls/localhost:{free_port()}"
     ends = BusEnds(listen=[endpoint], tls=bus_certs.tls("cpu.cpu1"))
     heard: list[str] = []
 
@@ -143,7 +136,7 @@ def test_without_the_access_control_the_rogue_would_hear_the_password(
     bus_certs: BusCerts,
 ) -> None:
     """The control of the test above: the same sessions, no ``guard`` on the listener."""
-    endpoint = f"tls/localhost:{_free_port()}"
+    endpoint = f"tls/localhost:{free_port()}"
     heard: list[bytes] = []
 
     def rogue_answer(query: zenoh.Query) -> None:
@@ -163,7 +156,7 @@ def test_without_the_access_control_the_rogue_would_hear_the_password(
 def test_a_peer_without_a_certificate_cannot_join_a_cpu_with_one(
     tmp_path: Path, bus_certs: BusCerts
 ) -> None:
-    endpoint = f"tls/localhost:{_free_port()}"
+    endpoint = f"tls/localhost:{free_port()}"
     with running_cpu(tmp_path, BusEnds(listen=[endpoint], tls=bus_certs.tls("cpu.cpu1"))):
         with pytest.raises(zenoh.ZError):
             open_session(connect=[endpoint], tls=bus_certs.tls()).close()
@@ -180,7 +173,7 @@ def test_a_peer_without_a_certificate_cannot_join_a_cpu_with_one(
 def test_the_audit_origin_is_the_certificates_name_and_the_transport_locator(
     tmp_path: Path, bus_certs: BusCerts
 ) -> None:
-    endpoint = f"tls/localhost:{_free_port()}"
+    endpoint = f"tls/localhost:{free_port()}"
     with (
         running_cpu(tmp_path, BusEnds(listen=[endpoint], tls=bus_certs.tls("cpu.cpu1"))) as cpu,
         open_session(connect=[endpoint], tls=bus_certs.tls("client.olga")) as olga,
@@ -204,7 +197,7 @@ def test_usrpwd_a_wrong_password_cannot_join_and_the_right_one_is_audited_by_its
     dictionary = tmp_path / "bus-users.txt"
     dictionary.write_text("cpu.cpu1:cpu secret\nolga:olga secret\n", encoding="utf-8")
     dictionary.chmod(0o600)
-    endpoint = f"tcp/127.0.0.1:{_free_port()}"
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
     login = BusLogin("cpu.cpu1", "cpu secret", str(dictionary))
     with running_cpu(tmp_path, BusEnds(listen=[endpoint], login=login)) as cpu:
         for who in (None, BusLogin("olga", "not it"), BusLogin("mallory", "olga secret")):
@@ -225,7 +218,7 @@ def test_usrpwd_a_wrong_password_cannot_join_and_the_right_one_is_audited_by_its
 def test_through_a_router_each_cpu_serves_only_its_own_keys(
     tmp_path: Path, bus_certs: BusCerts
 ) -> None:
-    endpoint = f"tls/localhost:{_free_port()}"
+    endpoint = f"tls/localhost:{free_port()}"
     heard: list[str] = []
     with open_session(
         [endpoint], mode="router", tls=bus_certs.tls("router.hub"), guard=("line1", "line2")

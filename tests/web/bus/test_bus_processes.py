@@ -24,6 +24,7 @@ import pytest
 
 from s7graph.web.access.users import UsersFile
 from tests.paths import ROOT
+from tests.web.helpers import free_port
 
 if TYPE_CHECKING:
     from tests.conftest import BusCerts
@@ -31,12 +32,6 @@ if TYPE_CHECKING:
 pytestmark = pytest.mark.timeout(240)
 DRILL = ROOT / "examples" / "drill"
 PASSWORD = "correct horse"
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 class Proc:

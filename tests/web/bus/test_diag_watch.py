@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import base64
 import json
-import socket
 import sqlite3
 import threading
 from collections.abc import Iterator
@@ -40,15 +39,9 @@ from s7graph.web.bus.protocol import (
 from s7graph.web.bus.session import BusEnds, open_session
 from s7graph.web.bus.watch import parse_item, split_operands
 from s7graph.web.wiring.program_edge import ProgramEdge
-from tests.web.helpers import wait_until
+from tests.web.helpers import free_port, wait_until
 
 pytestmark = pytest.mark.timeout(120)
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 @fb(10, "Average", IN={"x": "REAL"}, STAT={"avg": "REAL", "n": "INT", "last": "ARRAY[1..3] OF INT"})

@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import resource
 import signal
-import socket
 import sqlite3
 import subprocess
 import sys
@@ -19,6 +18,7 @@ import pytest
 
 from s7graph.web.cli import main
 from tests.paths import ROOT
+from tests.web.helpers import free_port
 
 DRILL = ROOT / "examples" / "drill"
 CHART = ["run", str(DRILL / "drill.s7g"), "--symbols", str(DRILL / "symbols.txt")]
@@ -121,12 +121,6 @@ def _no_room(limit: int) -> None:
     resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
 @pytest.mark.timeout(120)
 @pytest.mark.parametrize("web", [False, True], ids=["alone", "with the view"])
 def test_a_state_file_that_cannot_grow_stops_the_run_with_one_line(
@@ -149,7 +143,7 @@ def test_a_state_file_that_cannot_grow_stops_the_run_with_one_line(
         "5000",
     ]
     if web:
-        cmd += ["--web", "--port", str(_free_port())]
+        cmd += ["--web", "--port", str(free_port())]
     # room for the start (with the view, the audit store's tables share the file and its
     # write-ahead log), none for an hour of running
     room = 80_000 if web else 40_000

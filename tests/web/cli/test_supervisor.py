@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import os
 import signal
-import socket
 import sqlite3
 import subprocess
 import sys
@@ -23,6 +22,7 @@ from s7graph.engine.diagnostics import EventId
 from s7graph.engine.runner import EXIT_HUNG, GRACE_S
 from s7graph.web.cli.supervisor import KILL_AFTER_S, STOP_EXTRA_S
 from tests.paths import ROOT
+from tests.web.helpers import free_port
 
 if TYPE_CHECKING:
     from tests.conftest import BusCerts
@@ -104,12 +104,6 @@ def test_a_block_hanging_in_c_code_is_killed_and_the_run_ends_in_stop_naming_it(
     assert "past twice the maximum cycle time (200 ms)" in message and "in STOP" in message
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
 def _users(tmp_path: Path) -> Path:
     users = tmp_path / "users.json"
     for name, role in (("olga", "operator"), ("eng", "engineer")):
@@ -154,7 +148,7 @@ def test_a_plant_hanging_in_c_code_comes_back_in_stop_on_the_bus_and_an_engineer
     plant = tmp_path / "hangplant.py"
     plant.write_text(textwrap.dedent(HANGING_PLANT))
     state = tmp_path / "drill.sqlite"
-    endpoint = f"tls/localhost:{_free_port()}"  # a users file: every node has a certificate
+    endpoint = f"tls/localhost:{free_port()}"  # a users file: every node has a certificate
     bus = ["--connect", endpoint, *bus_certs.args("client.olga")]
     users = _users(tmp_path)
     proc = _s7graph(
@@ -300,7 +294,7 @@ def test_sigterm_while_the_hung_cpu_is_restarted_ends_the_run_with_the_cause_on_
     plant = tmp_path / "hangplant.py"
     plant.write_text(textwrap.dedent(HANGING_PLANT))
     state = tmp_path / "drill.sqlite"
-    endpoint = f"tcp/127.0.0.1:{_free_port()}"
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
     proc = _s7graph(
         "run",
         str(DRILL / "drill.s7g"),

@@ -10,7 +10,6 @@ import os
 import queue
 import re
 import signal
-import socket
 import subprocess
 import sys
 import threading
@@ -27,17 +26,11 @@ from s7graph.web.bus.protocol import CpuStatus
 from s7graph.web.bus.session import open_session
 from s7graph.web.cli.view_process import view_endpoints
 from tests.paths import ROOT
-from tests.web.helpers import wait_until
+from tests.web.helpers import free_port, wait_until
 
 pytestmark = pytest.mark.timeout(180)
 DRILL = ROOT / "examples" / "drill"
 CYCLE_MS = 10  # s7graph run's default cycle
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def _as_from_a_shell() -> None:
@@ -66,7 +59,7 @@ class Run:
     signal to its process group is what a Ctrl-C at its terminal sends)."""
 
     def __init__(self, tmp_path: Path, *extra: str) -> None:
-        self.port = _free_port()
+        self.port = free_port()
         self.proc = subprocess.Popen(
             [
                 sys.executable,

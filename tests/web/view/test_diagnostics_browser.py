@@ -6,7 +6,6 @@ too (docs/view.md, "Diagnostics", "A program's page")."""
 
 from __future__ import annotations
 
-import socket
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,7 +24,15 @@ from s7graph.web.view.edge import ViewSide
 from s7graph.web.wiring.program_edge import ProgramEdge
 from tests.web.bus.test_bus_force import CHART
 from tests.web.bus.test_diag_watch import program_cpu
-from tests.web.helpers import chromium_page, field, log_in, needs_chromium, online_cpu, wait_until
+from tests.web.helpers import (
+    chromium_page,
+    field,
+    free_port,
+    log_in,
+    needs_chromium,
+    online_cpu,
+    wait_until,
+)
 
 pytestmark = [pytest.mark.timeout(240), needs_chromium]
 pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
@@ -35,12 +42,6 @@ if TYPE_CHECKING:
 
 
 _SWITCH = ("stop", "mres", "start")
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 @dataclass

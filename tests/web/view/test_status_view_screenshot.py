@@ -16,21 +16,23 @@ pictures go to a temporary folder and are only checked."""
 from __future__ import annotations
 
 import os
-import queue
-import re
 import signal
 import subprocess
 import sys
-import threading
-import time
 from pathlib import Path
 
 import pytest
 
 from tests.paths import ROOT
-from tests.web.helpers import chromium_page, log_in, needs_chromium, wait_until
+from tests.web.helpers import (
+    chromium_page,
+    free_port,
+    log_in,
+    needs_chromium,
+    view_line,
+    wait_until,
+)
 from tests.web.view.test_edit_browser import choose, screenshot
-from tests.web.wiring.test_run_chart_web import _free_port
 
 DRILL = ROOT / "examples" / "drill"
 
@@ -66,24 +68,13 @@ def test_the_status_view_of_the_readme_demo_shows_active_and_disturbed_steps(
     pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
     command = [sys.executable, "-m", "s7graph", "run", str(DRILL / "drill.s7g")]
     command += ["--plant", str(DRILL / "demo_plant.py"), "--symbols", str(DRILL / "symbols.txt")]
-    command += ["--web", "--port", str(_free_port()), "--duration-s", "200"]
+    command += ["--web", "--port", str(free_port()), "--duration-s", "200"]
     command += ["--max-cycle-ms", "60000"]  # a loaded test machine: no STOP by a slow cycle
     command += ["--state", str(tmp_path / "drill.sqlite")]
     stderr = (tmp_path / "stderr.txt").open("w")
     proc = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE, stderr=stderr, text=True)
-    lines: queue.Queue[str] = queue.Queue()
-    assert proc.stdout is not None
-    out = proc.stdout
-    threading.Thread(target=lambda: [lines.put(line) for line in out], daemon=True).start()
     try:
-        found = None
-        deadline = time.monotonic() + 30
-        while found is None and time.monotonic() < deadline:
-            try:
-                found = re.search(r"view (\S+) \(bus (\S+)\)", lines.get(timeout=1))
-            except queue.Empty:
-                assert proc.poll() is None, (tmp_path / "stderr.txt").read_text()
-        assert found is not None, "no view URL printed"
+        found = view_line(proc, tmp_path / "stderr.txt")
         with chromium_page(found[1]) as page:
             page.get_by_role("button", name="Acknowledge", exact=True).wait_for(timeout=30_000)
             # every third piece the clamp is slow: S2's supervision trips and waits

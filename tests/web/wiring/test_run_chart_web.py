@@ -8,15 +8,11 @@ its page in one headless Chromium, a supervision fault acknowledged by a click.
 from __future__ import annotations
 
 import io
-import queue
 import re
 import signal
-import socket
 import sqlite3
 import subprocess
 import sys
-import threading
-import time
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -30,7 +26,15 @@ from s7graph.web.bus.session import open_session
 from s7graph.web.harness.session import ChartSession, load_chart
 from s7graph.web.wiring.live_edge import LiveEdge
 from tests.paths import ROOT
-from tests.web.helpers import chromium_page, log_in, needs_chromium, scanning, wait_until
+from tests.web.helpers import (
+    chromium_page,
+    free_port,
+    log_in,
+    needs_chromium,
+    scanning,
+    view_line,
+    wait_until,
+)
 
 DRILL = ROOT / "examples" / "drill"
 FB = "Seq_drill"
@@ -100,12 +104,6 @@ def send(client: BusClient, command: Command) -> CommandReply:
     return reply
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
 def _green_pixels(png: bytes) -> int:
     """Pixels of the ACTIVE step colour family (green clearly above red and blue)."""
     import numpy as np
@@ -126,7 +124,7 @@ def test_run_drill_web_serves_the_live_sequence_and_takes_an_acknowledge_click(
     stderr = (tmp_path / "stderr.txt").open("w")
     command = [sys.executable, "-m", "s7graph", "run", str(DRILL / "drill.s7g")]
     command += ["--plant", str(DRILL / "plant.py"), "--symbols", str(DRILL / "symbols.txt")]
-    command += ["--web", "--port", str(_free_port()), "--duration-s", "200", "--state", str(state)]
+    command += ["--web", "--port", str(free_port()), "--duration-s", "200", "--state", str(state)]
     proc = subprocess.Popen(
         command,
         cwd=ROOT,
@@ -134,25 +132,9 @@ def test_run_drill_web_serves_the_live_sequence_and_takes_an_acknowledge_click(
         stderr=stderr,
         text=True,
     )
-    lines: queue.Queue[str] = queue.Queue()
-    assert proc.stdout is not None
-    out = proc.stdout
-
-    def read_lines() -> None:
-        for line in out:
-            lines.put(line)
-
-    threading.Thread(target=read_lines, daemon=True).start()
     session = None
     try:
-        found = None
-        deadline = time.monotonic() + 30
-        while found is None and time.monotonic() < deadline:
-            try:
-                found = re.search(r"view (\S+) \(bus (\S+)\)", lines.get(timeout=1))
-            except queue.Empty:
-                assert proc.poll() is None, (tmp_path / "stderr.txt").read_text()
-        assert found is not None, "no view URL printed"
+        found = view_line(proc, tmp_path / "stderr.txt")
         url, endpoint = found[1], found[2]
         assert url.startswith("http://127.0.0.1:")
 

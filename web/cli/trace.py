@@ -1,0 +1,125 @@
+"""The trace of ``s7graph sim``, for a chart and for an S7-SCL program alike (docs/cli.md,
+"s7graph sim").
+
+Each cycle ``k`` (at ``t_ms = k * cycle_ms``): set the stimuli with ``at_ms <= t_ms``
+(values stay until set again), run the cycle, write one JSON line — ``cycle``, ``t_ms``,
+what the program reports (``active``, ``events``, ``mode``) and the ``--watch`` values —
+then advance the virtual clock by ``cycle_ms``. A scan that ends in STOP ends the trace
+with its line, the reason on stderr and exit status 1.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any, Protocol, TextIO
+
+from s7graph.engine.clock import VirtualClock
+from s7graph.engine.cpu import Cpu
+from s7graph.engine.errors import S7Error
+from s7graph.engine.record import ScanRecord
+from s7graph.engine.runner import stop_reason
+
+Stimulus = list[tuple[float, dict[str, Any]]]
+Cycle = Callable[[int, float], tuple[ScanRecord, dict[str, Any]]]
+"""One cycle ``(k, t_ms)``: scan, and the fields the line reports of it besides the values."""
+
+
+class Traced(Protocol):
+    """A session a trace drives: names checked, set by stimuli and read for ``--watch``."""
+
+    cpu: Cpu
+
+    def check_name(self, name: str, *, writing: bool) -> None: ...
+
+    def set(self, name: str, value: Any) -> None: ...
+
+    def get(self, name: str) -> Any: ...
+
+
+def read_stimulus(path: Path | None) -> Stimulus:
+    """The JSONL stimulus ``{"at_ms": 0, "set": {...}}`` a line, in time order."""
+    if path is None:
+        return []
+    out: Stimulus = []
+    for n, line in enumerate(Path(path).read_text(encoding="utf-8").splitlines(), 1):
+        if not line.strip():
+            continue
+        try:
+            obj = json.loads(line)
+            at = float(obj.get("at_ms", 0))
+            values = obj["set"]
+            if not isinstance(values, dict):
+                raise ValueError("'set' must be an object")
+        except (ValueError, KeyError, TypeError, AttributeError) as exc:
+            raise S7Error(f"{path}:{n}: bad stimulus line: {exc}") from None
+        out.append((at, values))
+    out.sort(key=lambda item: item[0])
+    return out
+
+
+def checked_inputs(
+    session: Traced, stimulus: Path | None, watch: str
+) -> tuple[Stimulus, list[str]]:
+    """The stimulus and the watched names, every name checked against ``session``: a name
+    it cannot read, or a stimulus name it cannot write, raises S7Error."""
+    stim = read_stimulus(stimulus)
+    names = [w.strip() for w in watch.split(",") if w.strip()]
+    for name in names:
+        session.check_name(name, writing=False)
+    for _, values in stim:
+        for name in values:
+            session.check_name(name, writing=True)
+    return stim, names
+
+
+@contextmanager
+def trace_out(trace: Path | None) -> Iterator[TextIO]:
+    """The trace's file, or stdout without ``--trace``."""
+    if trace is None:
+        yield sys.stdout
+        return
+    with open(trace, "w", encoding="utf-8") as out:
+        yield out
+
+
+def ms(v: float) -> int | float:
+    """A time in ms as the trace writes it: whole numbers as integers."""
+    return int(v) if float(v).is_integer() else round(v, 6)
+
+
+def run_trace(
+    session: Traced,
+    clock: VirtualClock,
+    cycle: Cycle,
+    stim: Stimulus,
+    names: list[str],
+    cycle_ms: float,
+    cycles: int,
+    out: TextIO,
+) -> int:
+    """Run ``cycles`` cycles writing one line each; the exit status (0, or 1 on STOP)."""
+    nxt = 0
+    for k in range(cycles):
+        t_ms = k * cycle_ms
+        while nxt < len(stim) and stim[nxt][0] <= t_ms + 1e-9:
+            for name, value in stim[nxt][1].items():
+                session.set(name, value)
+            nxt += 1
+        record, fields = cycle(k, t_ms)
+        line = {
+            "cycle": k,
+            "t_ms": ms(t_ms),
+            **fields,
+            "values": {name: session.get(name) for name in names},
+        }
+        out.write(json.dumps(line) + "\n")
+        if record.mode.name == "STOP":
+            why = stop_reason(session.cpu)
+            print(f"s7graph: error: cycle {k}: the CPU went to STOP: {why}", file=sys.stderr)
+            return 1
+        clock.advance(cycle_ms)
+    return 0
