@@ -128,8 +128,11 @@ def face_rig(
 async def connected(
     url: str, user: str | None = None, password: str = PASSWORD, **security: Any
 ) -> AsyncIterator[Client]:
-    """An asyncua client of ``url``, logged in as ``user`` (None: anonymous)."""
-    client = Client(url, timeout=10)
+    """An asyncua client of ``url``, logged in as ``user`` (None: anonymous). Its health
+    probe (a read of the server's state every ``watchdog_intervall`` s, given as long to
+    answer) waits 5 s: the face may hold a paced request up to 1 s, and a loaded machine
+    adds to it — asyncua's 1 s would take that for a lost connection."""
+    client = Client(url, timeout=10, watchdog_intervall=5.0)
     if user is not None:
         client.set_user(user)
         client.set_password(password)
