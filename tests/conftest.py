@@ -28,6 +28,7 @@ BUS_NODES = (
     ("cpu", "line2"),
     ("router", "hub"),
     ("view", "desk"),
+    ("opcua", "scada"),
     ("client", "olga"),
     ("client", "rogue"),
 )

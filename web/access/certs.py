@@ -1,10 +1,11 @@
 """A plant's certificates for the bus: one CA, and a certificate per node (``s7graph certs``).
 
 The rule of names: a node's certificate says what it is and which one in its common name,
-``<kind>.<name>`` — ``cpu.line1``, ``router.hub``, ``view.desk``, ``client.olga`` — with the
-kinds of :data:`KINDS` and a name as a CPU's (letters, digits, ``_ . -``, up to 64, not
-starting with a digit). The bus's access control (``web.bus.acl``) grants a CPU's keys to
-the common name ``cpu.<its --cpu>`` and nothing to the others, so the name is the identity.
+``<kind>.<name>`` — ``cpu.line1``, ``router.hub``, ``view.desk``, ``opcua.scada``,
+``client.olga`` — with the kinds of :data:`KINDS` and a name as a CPU's (letters, digits,
+``_ . -``, up to 64, not starting with a digit). The bus's access control (``web.bus.acl``)
+grants a CPU's keys to the common name ``cpu.<its --cpu>`` and nothing to the others, so
+the name is the identity.
 
 Files, all in one folder: ``ca.pem`` (the CA's certificate, copied to every node) and
 ``ca.key`` (its key: keep it on the machine that issues, never copy it to a node), and for
@@ -45,8 +46,9 @@ __all__ = [
     "read_common_name",
 ]
 
-KINDS: Final = ("cpu", "router", "view", "client")
-"""What a node is: a CPU, a router, a browser view, or a client (a shell, watch, a tool)."""
+KINDS: Final = ("cpu", "router", "view", "opcua", "client")
+"""What a node is: a CPU, a router, a browser view, an OPC UA server (``s7graph opcua``),
+or a client (a shell, watch, a tool)."""
 CA_CERT: Final = "ca.pem"
 CA_KEY: Final = "ca.key"
 CA_DAYS: Final = 3650

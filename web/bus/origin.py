@@ -28,10 +28,11 @@ import zenoh
 __all__ = ["RELAYS", "UNKNOWN", "lockout_source", "stamp", "transport_origin"]
 
 UNKNOWN = "unknown transport"
-RELAYS = ("cpu.", "view.")
-"""Identities that relay many people over one link (a view serves many pages; ``run
---web`` gives its view the CPU's certificate, or meets it on a unix socket in a folder
-only its own user may open): the page such a link names is believed."""
+RELAYS = ("cpu.", "view.", "opcua.")
+"""Identities that relay many people over one link (a view serves many pages, an OPC UA
+face many clients; ``run --web`` and ``run --opcua`` give theirs the CPU's certificate,
+or meet it on a unix socket in a folder only its own user may open): the page or client
+such a link names is believed."""
 _SN = itertools.count(1)
 
 
@@ -73,9 +74,10 @@ def transport_origin(session: zenoh.Session, source_info: zenoh.SourceInfo | Non
 def lockout_source(transport: str, claimed: str) -> str:
     """Where failed logins are counted from: the transport's identity and host, without
     the port (a client that connects again is the same source); for a link of a
-    :data:`RELAYS` identity, a unix socket, or this process, also the page it names, so one bad page
-    locks out itself and not every page of that view. Any other claim is ignored: a client
-    could change it at every try to dodge the lockout."""
+    :data:`RELAYS` identity, a unix socket, or this process, also the page it names, so one
+    bad page locks out itself and not every page of that view — an OPC UA face's client
+    (``opcua HOST:PORT``) by its host, as a direct client. Any other claim is ignored: a
+    client could change it at every try to dodge the lockout."""
     who, at, where = transport.partition("@")
     if not at:
         who, where = "", transport
@@ -89,5 +91,7 @@ def lockout_source(transport: str, claimed: str) -> str:
     key += " (relayed)" if relayed else ""
     local = transport == "this process" or host == "unixsock-stream"
     if claimed and (local or who.startswith(RELAYS)):
+        if claimed.startswith("opcua ") and ":" in claimed:  # its port changes per session
+            claimed = claimed.rsplit(":", 1)[0]
         return f"{key} / {claimed}"
     return key

@@ -1028,7 +1028,7 @@ def certs_init(directory: CertsDir, force: Overwrite = False) -> None:
 def certs_issue(
     directory: CertsDir,
     name: Annotated[str, typer.Argument(help="The node's name: a CPU's is its --cpu.")],
-    kind: Annotated[str, typer.Option(help="cpu, router, view or client.")],
+    kind: Annotated[str, typer.Option(help="cpu, router, view, opcua or client.")],
     host: Annotated[
         list[str] | None,
         typer.Option("--host", help="An address or DNS name the node is reached at (several)."),

@@ -83,7 +83,7 @@ def opcua_command(
     _logging()
     session = None
     try:
-        session = open_session(connect=net.connect, tls=net.tls)
+        session = open_session(connect=net.connect, tls=net.tls, login=net.login)
         deadline = time.monotonic() + wait_s
         cpus = find_cpus(session)
         while not any(cpu in (None, s.cpu) for s in cpus) and time.monotonic() < deadline:

@@ -37,6 +37,7 @@ from s7graph.web.bus.protocol import (
     ChartLayout,
     CommandReply,
     CpuStatus,
+    DiagBuffer,
     OperandValues,
     StepStateUpdate,
 )
@@ -56,6 +57,7 @@ from s7graph.web.commands import (
     op_of,
 )
 from s7graph.web.opcua.alarms import Alarms, condition_name
+from s7graph.web.opcua.diag import DIAG_ENTRIES, DiagNodes
 from s7graph.web.opcua.link import BusLink, Inbox
 from s7graph.web.opcua.methods import (
     CallError,
@@ -91,6 +93,7 @@ class Face:
         self.alarms = Alarms(
             server, messages=self._message_where, locate=self._locate, send=self.send
         )
+        self.diag = DiagNodes(space.nodes, space.nid, space.root)
         self.first_fb = ""
         self.status: CpuStatus | None = None
         self.latest: dict[str, StepStateUpdate] = {}
@@ -114,6 +117,8 @@ class Face:
         space, link = self.space, self.link
         space.online = True
         await space.build_cpu(status, [(s, self._method(s, "")) for s in specs if s.where == "cpu"])
+        self.diag.build()
+        await space.nodes.flush()
         for fb in fbs:
             layout = await link.ask(link.reader.chart, fb)
             if layout is None:
@@ -130,6 +135,7 @@ class Face:
         inbox = self._inbox = Inbox(asyncio.get_running_loop())
         link.watch_alive(inbox)
         await link.ask(link.follow, inbox, list(space.fbs))
+        await self._diag_anew()  # after following: an entry between the two is not lost
         self._task = asyncio.create_task(self._pump(inbox), name="s7graph-opcua-face")
 
     async def stop(self) -> None:
@@ -176,8 +182,23 @@ class Face:
             await self._operands(message)
         elif kind == "chart":
             await self._chart(key, message)
+        elif kind == "diag":
+            await self._diag(message)
         elif kind == "alive":
             await self._alive(bool(message))
+
+    async def _diag(self, new: DiagBuffer) -> None:
+        if self.diag.shown.merge(new):
+            await self.diag.write()
+        else:  # an entry missed, or the CPU counts anew
+            await self._diag_anew()
+
+    async def _diag_anew(self) -> None:
+        """The diagnostic buffer as the CPU's ``diag`` answers now."""
+        buffer = await self.link.ask(self.link.reader.diag, DIAG_ENTRIES)
+        if buffer is not None:
+            self.diag.shown.replace(buffer)
+            await self.diag.write()
 
     async def _alarms(self, alarms: AlarmList) -> None:
         await self.alarms.apply(alarms)
@@ -220,6 +241,7 @@ class Face:
                 await self._chart(fb, layout)
         self.latest.clear()
         await link.ask(link.follow, self._inbox, list(self.space.fbs))
+        await self._diag_anew()
         status = await link.ask(link.reader.status)
         if status is not None:
             await self.space.apply_status(status)

@@ -4,11 +4,11 @@ UA server's event loop.
 :class:`BusLink` holds the face's zenoh session and a :class:`BusClient` for its queries;
 :meth:`BusLink.follow` subscribes (with a client of its own, made again when the CPU
 comes back: its change counters start anew) to each FB's state deltas and chart, the
-status, the message list and the operands, and hands every message to an :class:`Inbox`;
-blocking calls — a query, a command waiting for its durable answer — run on a small pool
-of threads, never in the event loop. A login (:meth:`BusLink.login`) makes the session's
-own :class:`BusClient` (``web.bus.client``: its public ``login`` and ``send``), whose
-commands carry that login's token.
+status, the message list, the operands and the diagnostic buffer's new entries, and hands
+every message to an :class:`Inbox`; blocking calls — a query, a command waiting for its
+durable answer — run on a small pool of threads, never in the event loop. A login
+(:meth:`BusLink.login`) makes the session's own :class:`BusClient` (``web.bus.client``:
+its public ``login`` and ``send``), whose commands carry that login's token.
 """
 
 from __future__ import annotations
@@ -106,6 +106,7 @@ class BusLink:
         client.on_status(lambda s: inbox.put("status", "", s))
         client.on_alarms(lambda a: inbox.put("alarms", "", a))
         client.on_operands(lambda v: inbox.put("operands", "", v))
+        client.on_diag(lambda d: inbox.put("diag", "", d))
         for fb in fbs:
             client.on_chart(fb, functools.partial(inbox.put, "chart", fb))
             client.follow(fb, functools.partial(inbox.put, "state", fb))

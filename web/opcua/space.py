@@ -23,6 +23,7 @@ from asyncua import ua
 from s7graph.web.bus.protocol import (
     ChartLayout,
     CpuStatus,
+    DiagEvent,
     FbOperands,
     OperandCatalog,
     OperandInfo,
@@ -30,6 +31,7 @@ from s7graph.web.bus.protocol import (
     StepStateUpdate,
 )
 from s7graph.web.opcua.alarms import condition_name
+from s7graph.web.opcua.diag import event_id_text
 from s7graph.web.opcua.methods import MethodSpec, output_arguments
 from s7graph.web.opcua.model import (
     BOOLEAN,
@@ -55,10 +57,28 @@ FORCEABLE: Final = ("I", "Q", "M")
 """The areas a force job takes: a symbol there is writable (an engineer's force)."""
 STALE: Final = StatusCodes.BadNoCommunication
 UNREADABLE: Final = StatusCodes.BadConfigurationError
+
+
+def _event_id(event: DiagEvent | None) -> str:
+    return event_id_text(event.event_id) if event is not None else ""
+
+
 # The CPU's status: its variables, their types, and how a status gives their value.
 _CPU_VARS: Final[tuple[tuple[str, UaType, str, Callable[[CpuStatus], object]], ...]] = (
     ("State", TEXT, "the CPU's operating mode: RUN, STOP, STARTUP or HOLD", lambda s: s.state),
     ("StopReason", TEXT, "why the CPU is in STOP ('' in RUN)", lambda s: s.reason),
+    (
+        "StopEventId",
+        TEXT,
+        "in STOP: the event ID of the STOP's diagnostic entry, 16#4562 ('' in RUN)",
+        lambda s: _event_id(s.stop if s.state == "STOP" else None),
+    ),
+    (
+        "StopCauseEventId",
+        TEXT,
+        "in STOP: the event ID of the error entry that caused it ('': none, or in RUN)",
+        lambda s: _event_id(s.cause if s.state == "STOP" else None),
+    ),
     ("Cycle", UINT64, "scans since the CPU started", lambda s: s.cycle),
     ("Logins", TEXT, "users: logins checked; demo: names claimed", lambda s: s.login),
     ("ForceJobs", UINT32, "force jobs active (the FRCE LED is on when > 0)", lambda s: s.forces),

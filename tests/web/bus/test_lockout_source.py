@@ -1,6 +1,6 @@
 """Failed logins are counted per source (web/bus/origin.py ``lockout_source``): the
-transport's identity and host, never its port, and a page's name only where one link
-relays many pages."""
+transport's identity and host, never its port, and a page's name (an OPC UA client's
+host) only where one link relays many pages (clients)."""
 
 from __future__ import annotations
 
@@ -26,6 +26,13 @@ from s7graph.web.bus.origin import lockout_source
         ("cpu.line1@tls/[::1]:6000", "page 4 (::1)", "cpu.line1@tls/[::1] / page 4 (::1)"),
         ("unixsock-stream/6c1f", "page 2 (127.0.0.1)", "unixsock-stream / page 2 (127.0.0.1)"),
         ("this process", "page 1", "this process / page 1"),
+        # an OPC UA face relays many clients: the client's host counts, not its port
+        (
+            "opcua.scada@tls/10.0.0.5:40112",
+            "opcua 10.0.0.7:51422",
+            "opcua.scada@tls/10.0.0.5 / opcua 10.0.0.7",
+        ),
+        ("cpu.cpu1@tls/127.0.0.1:6000", "opcua ::1:5000", "cpu.cpu1@tls/127.0.0.1 / opcua ::1"),
         # behind a router every client is the router's link
         ("router.hub@tls/10.0.0.1:7447 (relayed)", "shell", "router.hub@tls/10.0.0.1 (relayed)"),
         ("tcp/127.0.0.1:4545", "shell", "tcp/127.0.0.1"),

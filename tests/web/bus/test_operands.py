@@ -9,6 +9,7 @@ import time
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 
@@ -17,6 +18,9 @@ from s7graph.web.bus.operands import PERIOD_MS
 from s7graph.web.bus.protocol import Command, OperandValues
 from s7graph.web.bus.session import open_session
 from tests.web.helpers import PASSWORD, OnlineRig, online_cpu, wait_until
+
+if TYPE_CHECKING:
+    from tests.conftest import BusCerts
 
 pytestmark = pytest.mark.timeout(90)
 
@@ -55,17 +59,18 @@ class Bus:
 
 
 @pytest.fixture
-def bus(tmp_path: Path) -> Iterator[Bus]:
+def bus(tmp_path: Path, bus_certs: BusCerts) -> Iterator[Bus]:
     with (
         online_cpu(
             tmp_path,
             CHART,
             serve=False,
             users={"eng": "engineer"},
+            certs=bus_certs,
             name="lamp.s7g",
             operands=True,
         ) as rig,
-        open_session(connect=[rig.endpoint]) as session,
+        open_session(connect=[rig.endpoint], tls=rig.tls) as session,
         BusClient(session, "cpu1") as client,
     ):
         seen: list[OperandValues] = []

@@ -1,6 +1,7 @@
-"""What the OPC UA tests share: a CPU on the virtual clock on a real zenoh bus with its
-OPC UA face in this process (``face_rig``), an asyncua client logged in or not, the
-certificates of a test CA made with ``cryptography``, and a free port."""
+"""What the OPC UA tests share: a CPU on the virtual clock on a real zenoh bus (mutual TLS,
+as a CPU with a users file insists) with its OPC UA face in this process joining it as
+``opcua.scada`` (``face_rig``), an asyncua client logged in or not, the certificates of a
+test CA made with ``cryptography`` for OPC UA, and a free port."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ from collections.abc import AsyncIterator, Awaitable, Callable, Iterator
 from contextlib import asynccontextmanager, contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from asyncua import Client, ua
 
@@ -19,6 +20,9 @@ from s7graph.web.bus.client import find_cpus
 from s7graph.web.bus.session import open_session
 from s7graph.web.opcua.server import OpcuaOptions, OpcuaServer
 from tests.web.helpers import OnlineRig, online_cpu, wait_until
+
+if TYPE_CHECKING:
+    from tests.conftest import BusCerts
 
 T = TypeVar("T")
 
@@ -58,6 +62,8 @@ USERS = {"olga": "operator", "eng": "engineer", "vic": "viewer"}
 PASSWORD = "correct horse"
 NS_URI = "urn:s7graph:plc"
 CLIENT_URI = "urn:s7graph:test:client"
+FACE_CN = "opcua.scada"
+"""The common name of the face's bus certificate (``s7graph certs issue … --kind opcua``)."""
 
 
 def free_port() -> int:
@@ -84,16 +90,28 @@ class FaceRig:
 
 @contextmanager
 def face_rig(
-    tmp_path: Path, *, chart: str = CHART, options: dict[str, Any] | None = None
+    tmp_path: Path,
+    certs: BusCerts,
+    *,
+    chart: str = CHART,
+    options: dict[str, Any] | None = None,
 ) -> Iterator[FaceRig]:
-    """``chart`` running with ``USERS`` (password ``PASSWORD``) on a bus, its operands
-    published, and the OPC UA face of it in this process on a free loopback port."""
+    """``chart`` running with ``USERS`` (password ``PASSWORD``) on a TLS bus with the
+    certificates ``certs``, its operands published, and the OPC UA face of it in this
+    process (joining as ``FACE_CN``) on a free loopback port."""
     tmp_path.mkdir(parents=True, exist_ok=True)
     with (
         online_cpu(
-            tmp_path, chart, serve=False, users=USERS, name="mix.s7g", operands=True, messages=True
+            tmp_path,
+            chart,
+            serve=False,
+            users=USERS,
+            certs=certs,
+            name="mix.s7g",
+            operands=True,
+            messages=True,
         ) as rig,
-        open_session(connect=[rig.endpoint]) as session,
+        open_session(connect=[rig.endpoint], tls=certs.tls(FACE_CN)) as session,
     ):
         assert wait_until(lambda: bool(find_cpus(session, timeout=1.0)), 20)
         status = find_cpus(session)[0]
@@ -110,8 +128,11 @@ def face_rig(
 async def connected(
     url: str, user: str | None = None, password: str = PASSWORD, **security: Any
 ) -> AsyncIterator[Client]:
-    """An asyncua client of ``url``, logged in as ``user`` (None: anonymous)."""
-    client = Client(url, timeout=10)
+    """An asyncua client of ``url``, logged in as ``user`` (None: anonymous). Its health
+    probe (a read of the server's state every ``watchdog_intervall`` s, given as long to
+    answer) waits 5 s: the face may hold a paced request up to 1 s, and a loaded machine
+    adds to it — asyncua's 1 s would take that for a lost connection."""
+    client = Client(url, timeout=10, watchdog_intervall=5.0)
     if user is not None:
         client.set_user(user)
         client.set_password(password)

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import asyncio
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import pytest
 from asyncua import ua
@@ -17,7 +17,10 @@ from asyncua.ua.uaerrors import UaStatusCodeError
 
 from s7graph.web.access.audit import read_audit
 from tests.web.helpers import wait_until
-from tests.web.opcua.helpers import FaceRig, connected, eventually, face_rig, node, run
+from tests.web.opcua.helpers import FACE_CN, FaceRig, connected, eventually, face_rig, node, run
+
+if TYPE_CHECKING:
+    from tests.conftest import BusCerts
 
 pytestmark = pytest.mark.timeout(120)
 
@@ -41,12 +44,15 @@ def _value(event: dict[str, Any], name: str) -> Any:
     return None if field is None else field.Value
 
 
-def test_messages_are_conditions_and_an_opcua_acknowledge_releases_the_step(tmp_path: Path) -> None:
-    with face_rig(tmp_path) as face:
+def test_messages_are_conditions_and_an_opcua_acknowledge_releases_the_step(
+    tmp_path: Path, bus_certs: BusCerts
+) -> None:
+    with face_rig(tmp_path, bus_certs) as face:
         run(_alarms(face))
     rows = [r for r in read_audit(face.rig.state) if r.op == "ack_msg"]
     assert [(r.user, r.outcome, r.role) for r in rows] == [("olga", "applied", "operator")]
-    assert rows[0].origin.startswith("opcua 127.0.0.1:")
+    assert rows[0].origin.startswith(f"{FACE_CN}@tls/127.0.0.1:")  # the face's link
+    assert "claimed origin: opcua 127.0.0.1:" in rows[0].detail  # the OPC UA client's
     assert "Seq_mix/DB1/S2/SV" in rows[0].args
 
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import asyncio
 from collections.abc import Iterator
+from typing import TYPE_CHECKING
 
 import pytest
 from asyncua import ua
@@ -16,14 +17,17 @@ from asyncua.ua.uaerrors import UaStatusCodeError
 from s7graph.web.access.audit import AuditRecord, read_audit
 from s7graph.web.commands import COMMAND_TYPES
 from tests.web.helpers import wait_until
-from tests.web.opcua.helpers import FaceRig, connected, eventually, face_rig, node, run
+from tests.web.opcua.helpers import FACE_CN, FaceRig, connected, eventually, face_rig, node, run
+
+if TYPE_CHECKING:
+    from tests.conftest import BusCerts
 
 pytestmark = pytest.mark.timeout(120)
 
 
 @pytest.fixture(scope="module")
-def face(tmp_path_factory: pytest.TempPathFactory) -> Iterator[FaceRig]:
-    with face_rig(tmp_path_factory.mktemp("face")) as rig:
+def face(tmp_path_factory: pytest.TempPathFactory, bus_certs: BusCerts) -> Iterator[FaceRig]:
+    with face_rig(tmp_path_factory.mktemp("face"), bus_certs) as rig:
         rig.set("Guard", True)
         yield rig
 
@@ -178,7 +182,9 @@ def test_an_operator_commands_through_the_gate_and_is_audited(face: FaceRig) -> 
     rows = [r for r in _commands(face) if r.user == "olga"]
     ops = [(r.op, r.outcome) for r in rows]
     assert ops[:3] == [("mode", "applied"), ("step_on", "applied"), ("step_on", "refused")]
-    assert all(r.origin.startswith("opcua 127.0.0.1:") and r.role == "operator" for r in rows)
+    assert all(r.origin.startswith(f"{FACE_CN}@tls/127.0.0.1:") for r in rows)  # its link
+    assert all("claimed origin: opcua 127.0.0.1:" in r.detail for r in rows)  # the client's
+    assert all(r.role == "operator" for r in rows)
     assert wait_until(lambda: face.active() == [1])
 
 

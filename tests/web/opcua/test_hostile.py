@@ -9,6 +9,7 @@ from __future__ import annotations
 import asyncio
 import socket
 from collections.abc import Iterator
+from typing import TYPE_CHECKING
 from urllib.parse import urlparse
 
 import pytest
@@ -19,6 +20,9 @@ from s7graph.web.access.audit import read_audit
 from s7graph.web.opcua.sessions import Limits
 from tests.web.opcua.helpers import FaceRig, connected, face_rig, node, run
 
+if TYPE_CHECKING:
+    from tests.conftest import BusCerts
+
 pytestmark = pytest.mark.timeout(180)
 
 LIMITS = Limits()
@@ -27,8 +31,8 @@ SET_MODE = ua.NodeId("cpu1/Seq_mix/SetMode", 2)
 
 
 @pytest.fixture(scope="module")
-def face(tmp_path_factory: pytest.TempPathFactory) -> Iterator[FaceRig]:
-    with face_rig(tmp_path_factory.mktemp("hostile")) as rig:
+def face(tmp_path_factory: pytest.TempPathFactory, bus_certs: BusCerts) -> Iterator[FaceRig]:
+    with face_rig(tmp_path_factory.mktemp("hostile"), bus_certs) as rig:
         yield rig
 
 

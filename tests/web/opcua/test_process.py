@@ -1,8 +1,11 @@
 """The OPC UA server as a process of its own, beside a real ``s7graph run`` CPU process:
-``run --opcua`` starts it as a child and starts it again when it dies; ``s7graph opcua``
-refuses bad options in one line; and a flood of OPC UA requests costs the face's
-process, never the CPU's — its processor time and its scans go on as without the flood
-(docs/opcua.md, "Running it")."""
+``run --opcua`` starts it as a child and starts it again when it dies; with a users file
+on a TLS bus the child joins with the CPU's certificate and ``s7graph opcua`` with its
+own, OPC UA users log in (the CPU checks the password over the bus) and their signed
+commands stop and start the CPU, whose STOP's reason and entry the face shows;
+``s7graph opcua`` refuses bad options in one line; and a flood of OPC UA requests costs
+the face's process, never the CPU's — its processor time and its scans go on as without
+the flood (docs/opcua.md, "Running it")."""
 
 from __future__ import annotations
 
@@ -16,16 +19,30 @@ import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 from asyncua import ua
 from asyncua.ua.uaerrors import UaStatusCodeError
 
+from s7graph.web.access.audit import read_audit
+from s7graph.web.access.users import UsersFile
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.session import open_session
 from tests.paths import ROOT
 from tests.web.helpers import wait_until
-from tests.web.opcua.helpers import connected, eventually, free_port, node, run
+from tests.web.opcua.helpers import (
+    FACE_CN,
+    PASSWORD,
+    connected,
+    eventually,
+    free_port,
+    node,
+    run,
+)
+
+if TYPE_CHECKING:
+    from tests.conftest import BusCerts
 
 pytestmark = pytest.mark.timeout(240)
 
@@ -151,6 +168,66 @@ def test_run_opcua_serves_from_a_child_started_again_when_it_dies(tmp_path: Path
         proc.send_signal(signal.SIGINT)
         _, err = proc.communicate(timeout=60)
     assert "the OPC UA server process ended (killed by SIGKILL); restarting it in 1 s" in err
+
+
+def test_on_a_tls_bus_the_faces_log_users_in_and_their_commands_stop_and_start_the_cpu(
+    tmp_path: Path, bus_certs: BusCerts
+) -> None:
+    users = UsersFile(tmp_path / "users.json")
+    users.add("eng", "engineer", PASSWORD)
+    endpoint = f"tls/localhost:{free_port()}"
+    child_url, own_url = (f"opc.tcp://127.0.0.1:{free_port()}" for _ in range(2))
+    cpu_args = ["--users", str(users.path), "--listen", endpoint, *bus_certs.args("cpu.cpu1")]
+    with _run(tmp_path, *cpu_args, "--opcua", child_url) as cpu:
+        assert child_url in _line(cpu, r"^s7graph: opcua ")  # joined with the CPU's
+        face_args = ["--listen", own_url, "--users", str(users.path), *bus_certs.args(FACE_CN)]
+        face = subprocess.Popen(
+            [*S7GRAPH, "opcua", "--connect", endpoint, *face_args],
+            cwd=ROOT,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        try:
+            _line(face, r"^s7graph: opcua ")
+            run(_stop_and_start(child_url, own_url))
+        finally:
+            face.send_signal(signal.SIGINT)
+            face.wait(30)
+    rows = [r for r in read_audit(tmp_path / "state.sqlite") if r.op in ("stop", "start")]
+    assert [(r.user, r.op, r.outcome) for r in rows] == [
+        ("eng", "stop", "applied"),
+        ("eng", "stop", "refused"),
+        ("eng", "start", "applied"),
+    ]
+    assert rows[0].origin.startswith("cpu.cpu1@tls/127.0.0.1:")  # the child's link
+    assert rows[2].origin.startswith(f"{FACE_CN}@tls/127.0.0.1:")  # the face's own
+
+
+async def _stop_and_start(child_url: str, own_url: str) -> None:
+    """STOP through the child's face, its reason and entry on both faces; RUN again
+    through the other."""
+
+    async def reads(c: object, path: str, value: object, index: int | None = None) -> bool:
+        got = await node(c, path).read_value()
+        return bool(got) and got[index] == value if index is not None else bool(got == value)
+
+    async with connected(child_url, "eng") as child, connected(own_url, "eng") as own:
+        assert await eventually(lambda: reads(own, "cpu1/State", "RUN"), 30)
+        await node(child, "cpu1").call_method(ua.NodeId("cpu1/Stop", 2))
+        for c in (child, own):
+            assert await eventually(lambda c=c: reads(c, "cpu1/State", "STOP"), 30)
+            assert await eventually(lambda c=c: reads(c, "cpu1/StopEventId", "16#4304"), 30)
+            assert "STOP by the switch (eng)" in await node(c, "cpu1/StopReason").read_value()
+            newest = "cpu1/DiagnosticBuffer/EventId"
+            assert await eventually(lambda c=c, at=newest: reads(c, at, "16#4304", 0), 30)
+        with pytest.raises(UaStatusCodeError):  # in STOP already: the CPU refuses it
+            await node(own, "cpu1").call_method(ua.NodeId("cpu1/Stop", 2))
+        await node(own, "cpu1").call_method(ua.NodeId("cpu1/Start", 2))
+        for c in (child, own):
+            assert await eventually(lambda c=c: reads(c, "cpu1/State", "RUN"), 30)
+            assert await eventually(lambda c=c: reads(c, "cpu1/StopEventId", ""), 30)
+            assert await node(c, "cpu1/StopReason").read_value() == ""
 
 
 @pytest.mark.parametrize(

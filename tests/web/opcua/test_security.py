@@ -7,6 +7,7 @@ the listen address's rules, as the command line checks them."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 from asyncua import ua
@@ -15,6 +16,9 @@ from asyncua.ua.uaerrors import UaStatusCodeError
 
 from s7graph.web.opcua.server import application_uri, listen_problem, loopback
 from tests.web.opcua.helpers import Certs, connected, face_rig, make_certs, node, run
+
+if TYPE_CHECKING:
+    from tests.conftest import BusCerts
 
 pytestmark = pytest.mark.timeout(180)
 
@@ -34,7 +38,7 @@ def _secure(
     }
 
 
-def test_sign_and_encrypt_with_the_cas_certificates(tmp_path: Path) -> None:
+def test_sign_and_encrypt_with_the_cas_certificates(tmp_path: Path, bus_certs: BusCerts) -> None:
     certs = make_certs(tmp_path / "pki")
     trusted = tmp_path / "trusted"  # the CA alone: what it signed is trusted
     trusted.mkdir()
@@ -63,11 +67,11 @@ def test_sign_and_encrypt_with_the_cas_certificates(tmp_path: Path) -> None:
             ):
                 pass
 
-    with face_rig(tmp_path / "cpu", options=options) as face:
+    with face_rig(tmp_path / "cpu", bus_certs, options=options) as face:
         run(check(face.url))
 
 
-def test_anonymous_sessions_may_be_refused(tmp_path: Path) -> None:
+def test_anonymous_sessions_may_be_refused(tmp_path: Path, bus_certs: BusCerts) -> None:
     async def check(url: str) -> None:
         with pytest.raises(UaStatusCodeError) as refused:
             async with connected(url):
@@ -82,7 +86,7 @@ def test_anonymous_sessions_may_be_refused(tmp_path: Path) -> None:
             tokens = {t.TokenType for e in await c.get_endpoints() for t in e.UserIdentityTokens}
             assert tokens == {ua.UserTokenType.UserName}
 
-    with face_rig(tmp_path, options={"anonymous": False}) as face:
+    with face_rig(tmp_path, bus_certs, options={"anonymous": False}) as face:
         run(check(face.url))
 
 

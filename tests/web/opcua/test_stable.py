@@ -6,7 +6,7 @@ space")."""
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import pytest
 from asyncua import ua
@@ -17,6 +17,7 @@ from s7graph.web.bus.session import open_session
 from s7graph.web.opcua.server import OpcuaOptions, OpcuaServer
 from tests.web.opcua.helpers import (
     CHART,
+    FACE_CN,
     PASSWORD,
     connected,
     eventually,
@@ -25,6 +26,9 @@ from tests.web.opcua.helpers import (
     node,
     run,
 )
+
+if TYPE_CHECKING:
+    from tests.conftest import BusCerts
 
 pytestmark = pytest.mark.timeout(180)
 
@@ -42,12 +46,14 @@ async def _tree(client: Any, path: str = "cpu1") -> dict[str, str]:
     return out
 
 
-def test_node_ids_stay_across_a_restart_and_an_online_change(tmp_path: Path) -> None:
-    with face_rig(tmp_path) as face:
+def test_node_ids_stay_across_a_restart_and_an_online_change(
+    tmp_path: Path, bus_certs: BusCerts
+) -> None:
+    with face_rig(tmp_path, bus_certs) as face:
         first = run(_tree_of(face.url))
         assert "cpu1/Seq_mix/S2/Active" in first and "cpu1/Symbols/Level/Address" in first
         assert "cpu1/Seq_mix/AckStep/InputArguments" in first
-        with open_session(connect=[face.rig.endpoint]) as session:
+        with open_session(connect=[face.rig.endpoint], tls=bus_certs.tls(FACE_CN)) as session:
             status = find_cpus(session)[0]
             url = f"opc.tcp://127.0.0.1:{free_port()}"
             again = OpcuaServer(session, status, OpcuaOptions(url=url))

@@ -5,17 +5,23 @@ client takes for a stale source (docs/opcua.md, "Values and their status")."""
 from __future__ import annotations
 
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 from asyncua import ua
 
 from tests.web.opcua.helpers import connected, eventually, face_rig, node, run
 
+if TYPE_CHECKING:
+    from tests.conftest import BusCerts
+
 pytestmark = pytest.mark.timeout(120)
 
 
-def test_the_values_of_a_cpu_gone_are_kept_with_a_bad_status(tmp_path: Path) -> None:
-    with face_rig(tmp_path) as face:
+def test_the_values_of_a_cpu_gone_are_kept_with_a_bad_status(
+    tmp_path: Path, bus_certs: BusCerts
+) -> None:
+    with face_rig(tmp_path, bus_certs) as face:
 
         async def check() -> None:
             async with connected(face.url) as c:
