@@ -149,16 +149,15 @@ def test_a_chart_run_with_its_blocks_keeps_their_instance_db_across_a_restart(
     assert _instance(state, 10)["n"] > n1 >= 1
 
 
-@pytest.mark.parametrize("option", ["--web", "--listen=tcp/127.0.0.1:0"])
-def test_a_program_of_scl_blocks_on_the_bus_is_refused_in_one_line(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str], option: str
+def test_a_plant_or_a_recording_beside_an_scl_program_is_refused_in_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     path = tmp_path / "prog.scl"
     path.write_text(PROGRAM, encoding="utf-8")
-    assert main(["run", str(path), option, "--duration-s", "0.1"]) == 2
+    assert main(["run", str(path), "--plant", str(path), "--duration-s", "0.1"]) == 2
     err = capsys.readouterr().err
-    assert err.startswith("s7graph: error: --web, --listen and --connect run a chart")
-    assert err.count("\n") == 1 and not (tmp_path / "prog.state.sqlite").exists()
+    assert err == "s7graph: error: --plant is for a chart (.s7g), not a program\n"
+    assert not (tmp_path / "prog.state.sqlite").exists()
 
 
 def test_a_program_that_does_not_compile_is_its_diagnostics_and_exit_2(
