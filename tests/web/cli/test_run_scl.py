@@ -180,7 +180,7 @@ def test_blocks_beside_a_python_program_are_refused(
     assert "--blocks goes with a chart or an .scl program" in capsys.readouterr().err
 
 
-def test_a_chart_with_its_blocks_runs_on_the_bus(tmp_path: Path) -> None:
+def test_a_chart_with_its_blocks_runs_on_the_bus_and_serves_their_source(tmp_path: Path) -> None:
     chart = tmp_path / "seq.s7g"
     chart.write_text(CHART, encoding="utf-8")
     blocks = tmp_path / "blocks.scl"
@@ -190,6 +190,9 @@ def test_a_chart_with_its_blocks_runs_on_the_bus(tmp_path: Path) -> None:
     with cpu_process(tmp_path, args, fb="Seq", terminate=True) as (proc, client, _):
         update = client.state("Seq")
         assert update is not None and update.active == [1]
+        served = client.blocks()  # the sources of --blocks, for the page's CALL links
+        assert served is not None and [b.label for b in served.blocks] == ["FB17"]
+        assert served.blocks[0].file == "blocks.scl" and "n := n + 1" in served.blocks[0].text
         assert wait_until(lambda: _counted(state) > 0, 30)
     assert proc.wait(timeout=60) == 0
 
