@@ -156,7 +156,7 @@ def test_max_cycle_time_reaches_the_cpu_of_a_chart_run(
     import s7graph.web.cli.run_chart
     from s7graph.web.cli import main
 
-    monkeypatch.setattr(s7graph.web.cli.run_chart, "_serve", lambda *args, **kwargs: (None, None))
+    monkeypatch.setattr(s7graph.web.cli.run_chart, "_serve", lambda *args, **kwargs: (None, []))
     drill = ROOT / "examples/drill"
     rc = main(
         [
