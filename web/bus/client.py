@@ -28,6 +28,7 @@ from s7graph.web.bus.protocol import (
     AlarmList,
     AuditEntry,
     AuditList,
+    BlockSources,
     ChartLayout,
     ChartSource,
     Command,
@@ -201,6 +202,11 @@ class BusClient:
             return decode(data, WatchValues)
         except ProtocolError as exc:
             return WatchValues(error=f"unreadable answer: {exc}")
+
+    def blocks(self) -> BlockSources | None:
+        """The S7-SCL blocks the CPU runs, as source, or None if no CPU answers."""
+        data = self._get_one(self._keys.blocks)
+        return None if data is None else decode(data, BlockSources)
 
     def operands(self) -> OperandValues | None:
         """The CPU's latest operand values, or None if no CPU answers (or it has none)."""

@@ -46,6 +46,8 @@ Key space, all under ``s7graph/<cpu>/``:
   published at the scan boundary after they were written;
 - ``watch`` — queryable: a :class:`WatchRequest` in, the :class:`WatchValues` read at the
   next scan boundary out (only a query for its exact key);
+- ``blocks`` — queryable: the S7-SCL blocks the CPU runs, as source
+  (:class:`BlockSources`, ``web.bus.block_sources``);
 - ``alive`` — a liveliness token while the CPU's bus is up (a view greys its chart when it
   goes).
 
@@ -135,6 +137,10 @@ class keys:
     @property
     def watch(self) -> str:
         return f"{ROOT}/{self.cpu}/watch"
+
+    @property
+    def blocks(self) -> str:
+        return f"{ROOT}/{self.cpu}/blocks"
 
     @property
     def alive(self) -> str:

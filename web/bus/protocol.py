@@ -50,6 +50,8 @@ __all__ = [
     "AlarmList",
     "AuditEntry",
     "AuditList",
+    "BlockSource",
+    "BlockSources",
     "ChartLayout",
     "ChartSource",
     "Command",
@@ -263,6 +265,25 @@ class ChartSource(_Msg, frozen=True, kw_only=True):
     file: ShortText = ""
     text: Annotated[str, Meta(max_length=MAX_SOURCE)]
     symbols: Annotated[str, Meta(max_length=MAX_SOURCE)] = ""
+
+
+class BlockSource(_Msg, frozen=True, kw_only=True):
+    """One S7-SCL block the CPU runs, as written: its label (``FB17``), its name, the file
+    it came from (a name, no directory), the line it starts on and its text."""
+
+    label: Label
+    name: ShortText = ""
+    file: ShortText = ""
+    line: Count = 0
+    text: Annotated[str, Meta(max_length=MAX_SOURCE)] = ""
+
+
+class BlockSources(_Msg, frozen=True, kw_only=True):
+    """The S7-SCL blocks the CPU was loaded with, as source (``blocks``), in source order;
+    ``left_out``: the labels of those that did not fit in one message."""
+
+    blocks: Annotated[list[BlockSource], Meta(max_length=4096)] = []
+    left_out: Annotated[list[Label], Meta(max_length=4096)] = []
 
 
 class ProjectFile(_Msg, frozen=True, kw_only=True):

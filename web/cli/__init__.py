@@ -380,11 +380,6 @@ def run(
         raise typer.Exit(supervise(_ENTRY_ARGS or []))
     priority = _scan_priority(rt_priority)
     face = _opcua_face(program, opcua, users, opcua_cert, opcua_key)
-    if program.suffix.lower() == ".scl" or (blocks and program.suffix.lower() != ".s7g"):
-        options = {"symbols": symbols, "state": state, "cycle_ms": cycle_ms, "core": core}
-        options |= {"duration_s": duration_s, "max_cycle_ms": max_cycle_ms, "fresh": fresh}
-        options |= {"restart": restart, "rt_priority": priority}
-        _run_scl_program(program, blocks or [], bool(web or listen or connect), **options)
     net = _cpu_net(
         web,
         port,
@@ -398,6 +393,11 @@ def run(
         tls_key=tls_key,
         origins=origin,
     )
+    if program.suffix.lower() == ".scl" or (blocks and program.suffix.lower() != ".s7g"):
+        scl: dict[str, Any] = {"symbols": symbols, "state": state, "cycle_ms": cycle_ms}
+        scl |= {"duration_s": duration_s, "max_cycle_ms": max_cycle_ms, "fresh": fresh, "web": web}
+        scl |= {"restart": restart, "rt_priority": priority, "net": net, "port": port, "core": core}
+        _run_scl_program(program, blocks or [], plant, record, comm_load_pct=comm_load, **scl)
     if program.suffix.lower() == ".s7g":
         from s7graph.web.cli.run_chart import run_chart
 
@@ -458,19 +458,16 @@ def _cpu_net(web: bool, port: int, **kw: Any) -> NetOptions:
     return net
 
 
-def _run_scl_program(program: Path, blocks: list[Path], bus: bool, **options: Any) -> None:
-    """``run PROGRAM.scl``: on the system clock, without the bus (a chart's); ``--blocks``
-    beside a Python program is refused."""
+def _run_scl_program(
+    program: Path, blocks: list[Path], plant: Path | None, record: Path | None, **options: Any
+) -> None:
+    """``run PROGRAM.scl``: on the system clock, on the bus with ``--listen``/``--connect``
+    or ``--web`` as a Python program (``web.cli.run_scl``); ``--blocks`` beside a Python
+    program, a plant or a recording are refused."""
     if program.suffix.lower() != ".scl":
         print("s7graph: error: --blocks goes with a chart or an .scl program", file=sys.stderr)
         raise typer.Exit(2)
-    if bus:
-        print(
-            "s7graph: error: --web, --listen and --connect run a chart; a program of S7-SCL "
-            "blocks runs without the bus",
-            file=sys.stderr,
-        )
-        raise typer.Exit(2)
+    _chart_only(plant=plant, record=record)
     from s7graph.web.cli.run_scl import run_scl
 
     raise typer.Exit(run_scl(program, blocks=blocks, **options))

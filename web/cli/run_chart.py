@@ -346,6 +346,7 @@ def _serve(
     """The CPU on the bus (and the recording) of the session's GraphFB, its online change
     (``path``: the chart file a download rewrites), and the view's process (not started
     yet) when ``web``; prints where to look."""
+    from s7graph.web.bus.block_sources import serve_blocks
     from s7graph.web.bus.forcing import Forcing
     from s7graph.web.bus.gate import cpu_gate  # zenoh and viser only when asked for
     from s7graph.web.bus.live import LiveGraph, watch_names
@@ -353,6 +354,7 @@ def _serve(
     from s7graph.web.bus.operands import OperandFeed
     from s7graph.web.cli.net import NetOptions
     from s7graph.web.cli.view_process import ViewProcess, view_endpoints
+    from s7graph.web.harness.scl import scl_of
     from s7graph.web.view.edge import check_port
     from s7graph.web.wiring.live_edge import LiveEdge
 
@@ -385,6 +387,8 @@ def _serve(
         forcing=Forcing(session.cpu),
         operands=OperandFeed(session, fb=live.fb),
     )
+    if edge.publisher is not None:  # the blocks of --blocks, as the CPU runs them now
+        serve_blocks(edge.publisher, lambda: scl_of(session.blocks))
     view = None
     if inline:
         print(f"s7graph: view {edge.url} (bus {edge.endpoint}); Ctrl-C to stop", flush=True)

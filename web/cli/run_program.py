@@ -38,11 +38,13 @@ from s7graph.engine.blocks import DB, FB, FC, OB
 from s7graph.engine.clock import Clock, SystemClock
 from s7graph.engine.cores import kept_free
 from s7graph.engine.cpu import Cpu
+from s7graph.engine.errors import S7Error
 from s7graph.engine.modes import CpuMode
 from s7graph.engine.persistence import StateFileError
 from s7graph.engine.record import ScanRecord
 from s7graph.engine.restart import parse_restart
 from s7graph.engine.runner import COMM_LOAD_PCT, RT_PRIORITY, Runner, core_for, keep_small_pages
+from s7graph.web.cli.report import fail
 from s7graph.web.cli.supervisor import child_marks, recovered_cause
 from s7graph.web.harness.persist import OpenedState, open_state, refusal
 
@@ -50,6 +52,7 @@ if TYPE_CHECKING:
     from s7graph.engine.persistence import StateStore
     from s7graph.web.cli.net import NetOptions
     from s7graph.web.cli.view_process import ViewProcess
+    from s7graph.web.harness.scl import SclSources
     from s7graph.web.wiring.program_edge import ProgramEdge
 
 
@@ -132,11 +135,13 @@ def program_core(module: ModuleType) -> Any:
 @dataclass(frozen=True, slots=True)
 class LoadedProgram:
     """A program loaded into its CPU: the CPU, and the program's own restart and core
-    (None: it sets none)."""
+    (None: it sets none), and its S7-SCL sources."""
 
     cpu: Cpu
     restart: str | None = None
     core: Any = None
+    sources: SclSources | None = None
+    """The S7-SCL sources of its blocks (served on the bus as ``blocks``), if any."""
 
 
 def load_python(path: Path, clock: Clock, *, max_cycle_ms: float | None) -> LoadedProgram:
@@ -182,6 +187,7 @@ def run_program(
     web: bool = False,
     port: int = 8080,
     comm_load_pct: float = COMM_LOAD_PCT,
+    load: Callable[[Clock], LoadedProgram] | None = None,
 ) -> int:
     """Run a program until Ctrl-C/SIGTERM/duration; 0 on a clean end, 1 when the CPU went
     to STOP by an error or the state could not be written, 2 on a broken program or a
@@ -193,13 +199,20 @@ def run_program(
     (None: normal scheduling). ``core`` (``--core``): the processor kept for the scan
     (``engine.cores``); None: the program's ``CPU["core"]``, else auto. ``net``: the bus
     (with endpoints, or ``web``: the CPU is on it); ``web``: serve its page on ``port``;
-    ``comm_load_pct``: the share of the cycle commands may take at a scan boundary."""
+    ``comm_load_pct``: the share of the cycle commands may take at a scan boundary.
+    ``load``: the program in its CPU on the clock given (an S7-SCL program's,
+    ``web.cli.run_scl``; ``S7Error`` is its diagnostics); None: by ``path``'s suffix."""
     if rt_priority is not None:
         keep_small_pages()  # before the view starts: it inherits it
     try:
-        loaded = load_program(path, SystemClock(), max_cycle_ms=max_cycle_ms)
+        if load is not None:
+            loaded = load(SystemClock())
+        else:
+            loaded = load_program(path, SystemClock(), max_cycle_ms=max_cycle_ms)
     except ProgramLoadError as exc:
         return _fail(path, str(exc))
+    except S7Error as exc:  # an S7-SCL program's diagnostics
+        return fail(exc)
     choice = core if core is not None else loaded.core
     try:
         kept = core_for(choice, rt_priority)
@@ -227,7 +240,7 @@ def run_program(
         return _fail(state_path, f"cannot use the state file: {exc.strerror or exc}")
     with kept_free(kept):  # before the bus and the view start: they inherit it
         on_bus = web or (net is not None and net.on_bus)
-        edges = _program_edges(loaded.cpu, opened.store, net, web, port) if on_bus else None
+        edges = _program_edges(loaded, opened.store, net, web, port) if on_bus else None
         if isinstance(edges, int):
             return edges
         edge, view = edges if edges is not None else (None, None)
@@ -274,11 +287,13 @@ def _program_runner(
 
 
 def _program_edges(
-    cpu: Cpu, store: StateStore, net: NetOptions | None, web: bool, port: int
+    loaded: LoadedProgram, store: StateStore, net: NetOptions | None, web: bool, port: int
 ) -> tuple[ProgramEdge, ViewProcess | None] | int:
-    """The program's CPU on the bus (its logins and audit in the state file) and, with
-    ``web``, its page's process (not started yet); exit status 2 with one line when the
-    bus or the page cannot be served (the state file closed then)."""
+    """The program's CPU on the bus (its logins and audit in the state file, its S7-SCL
+    sources on ``blocks``) and, with ``web``, its page's process (not started yet); exit
+    status 2 with one line when the bus or the page cannot be served (the state file
+    closed then)."""
+    from s7graph.web.bus.block_sources import serve_blocks
     from s7graph.web.bus.gate import cpu_gate  # zenoh and viser only when asked for
     from s7graph.web.cli.net import NetOptions
     from s7graph.web.cli.view_process import ViewProcess, view_endpoints
@@ -290,7 +305,10 @@ def _program_edges(
         if web:
             check_port(net.host, port)
         gate = cpu_gate(net.users, store)
-        edge = ProgramEdge(cpu, name=net.cpu, ends=net.ends, gate=gate)
+        edge = ProgramEdge(loaded.cpu, name=net.cpu, ends=net.ends, gate=gate)
+        if edge.publisher is not None:
+            sources = loaded.sources
+            serve_blocks(edge.publisher, lambda: sources)
     except Exception as exc:
         print(f"s7graph: error: cannot put the CPU on the bus: {exc}", file=sys.stderr)
         store.close()

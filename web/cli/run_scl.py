@@ -3,49 +3,56 @@ system clock (docs/cli.md, "s7graph run"; docs/scl.md, "On the command line").
 
 The sources are compiled in order (``--blocks`` first, ``web.harness.scl``) with the system
 blocks, loaded into one CPU (maximum cycle time ``--max-cycle-ms``, else S7's 150 ms) and
-run as a Python program is (``web.cli.run_program``): the state file restores the retentive
-data, the global DBs and every instance DB by number — an FB whose interface changed keeps
-its variables by name — and the CPU starts by ``--restart`` (warm by default; cold: every
-DB at its initial values). A source that does not compile is its diagnostics on stderr,
-exit 2; a STOP by error ends the run, exit 1.
+run as a Python program is (``web.cli.run_program``, whose run this is): the state file
+restores the retentive data, the global DBs and every instance DB by number — an FB whose
+interface changed keeps its variables by name — and the CPU starts by ``--restart`` (warm
+by default; cold: every DB at its initial values). A source that does not compile is its
+diagnostics on stderr, exit 2; a STOP by error ends the run, exit 1. With
+``--listen``/``--connect`` the CPU is on the bus as a Python program's is (status, diag,
+force, stop/start/mres, watch) and serves its sources on ``blocks``; ``--web`` serves its
+page.
 """
 
 from __future__ import annotations
 
+import functools
 import sys
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from s7graph import sfb
-from s7graph.engine.clock import SystemClock
+from s7graph.engine.clock import Clock
 from s7graph.engine.cpu import Cpu
 from s7graph.engine.errors import S7Error
-from s7graph.engine.persistence import StateFileError
-from s7graph.engine.runner import RT_PRIORITY, Runner, core_for, keep_small_pages
+from s7graph.engine.runner import COMM_LOAD_PCT, RT_PRIORITY
 from s7graph.engine.symbols import SymbolTable
-from s7graph.web.cli.report import fail
-from s7graph.web.cli.run_program import _report, run_until_stopped
-from s7graph.web.cli.supervisor import child_marks, recovered_cause
-from s7graph.web.harness.persist import open_state, refusal
+from s7graph.web.cli.run_program import LoadedProgram, run_program
 from s7graph.web.harness.scl import compile_sources
+
+if TYPE_CHECKING:
+    from s7graph.web.cli.net import NetOptions
 
 DEFAULT_MAX_CYCLE_MS = 150.0  # S7's default maximum cycle time
 
 
-def build_scl_cpu(
-    paths: Sequence[Path], symbols: Path | None, clock: object, max_cycle_ms: float | None
-) -> Cpu:
-    """A CPU with the system blocks and the compiled sources ``paths`` loaded; ``S7Error``
-    (``SclLoadError``: the diagnostics) when they do not compile or cannot be read."""
-    table = SymbolTable.from_file(symbols) if symbols is not None else None
+def load_scl(
+    paths: Sequence[Path], symbols: Path | None, clock: Clock, *, max_cycle_ms: float | None
+) -> LoadedProgram:
+    """The sources ``paths`` in their CPU, for ``run_program``: ``S7Error`` when they do
+    not compile (their diagnostics) or the symbols cannot be read."""
+    try:
+        table = SymbolTable.from_file(symbols) if symbols is not None else None
+    except OSError as exc:
+        raise S7Error(f"cannot read symbols {symbols}: {exc.strerror or exc}") from None
     sources = compile_sources(paths, table)
     for line in sources.warnings:
         print(line, file=sys.stderr)
-    cpu = Cpu(clock, max_cycle_ms=max_cycle_ms or DEFAULT_MAX_CYCLE_MS)  # type: ignore[arg-type]
+    cpu = Cpu(clock, max_cycle_ms=max_cycle_ms or DEFAULT_MAX_CYCLE_MS)
     cpu.mem.symbols = table
     sfb.install(cpu)
     sources.load(cpu)
-    return cpu
+    return LoadedProgram(cpu, sources=sources)
 
 
 def run_scl(
@@ -61,52 +68,26 @@ def run_scl(
     fresh: bool = False,
     rt_priority: int | None = RT_PRIORITY,
     core: str | int | None = None,
+    net: NetOptions | None = None,
+    web: bool = False,
+    port: int = 8080,
+    comm_load_pct: float = COMM_LOAD_PCT,
 ) -> int:
-    """Run the SCL program ``path`` until Ctrl-C/SIGTERM/``duration_s``; the exit status as
-    ``run_program``'s."""
-    if rt_priority is not None:
-        keep_small_pages()
-    try:
-        cpu = build_scl_cpu([*blocks, path], symbols, SystemClock(), max_cycle_ms)
-        kept = core_for(core if core is not None else "auto", rt_priority)
-    except ValueError as exc:
-        return fail(f"--core: {exc}")
-    except S7Error as exc:  # SclLoadError included: its diagnostics
-        return fail(exc)
-    except OSError as exc:
-        return fail(f"cannot read symbols {symbols}: {exc.strerror or exc}")
-    restart = restart or "warm"
-    recovered = recovered_cause()
-    state_path = state if state is not None else path.with_suffix(".state.sqlite")
-    try:
-        opened = open_state(
-            state_path,
-            cpu,
-            fresh=fresh and recovered is None,
-            hot=restart == "hot",
-            restart=None if recovered else restart,
-        )
-    except StateFileError as exc:
-        print(refusal(exc), file=sys.stderr)
-        return 2
-    except OSError as exc:
-        return fail(f"{state_path}: cannot use the state file: {exc.strerror or exc}")
-    runner = Runner(
-        cpu,
+    """Run the SCL program ``path`` until Ctrl-C/SIGTERM/``duration_s`` as ``run_program``
+    runs a program (on the bus with ``net``, its page with ``web``); its exit status."""
+    return run_program(
+        path,
+        state=state,
         cycle_ms=cycle_ms,
-        store=opened.store,
-        on_record=_report,
-        end_on_stop=True,
-        rt_priority=rt_priority,
-        core=kept,
-        marks=child_marks(),
-    )
-    return run_until_stopped(
-        runner,
-        opened,
-        what=path.name,
-        restart=restart,
         duration_s=duration_s,
-        on_start=_report,
-        recovered=recovered,
+        max_cycle_ms=max_cycle_ms,
+        restart=restart,
+        fresh=fresh,
+        rt_priority=rt_priority,
+        core=core,
+        net=net,
+        web=web,
+        port=port,
+        comm_load_pct=comm_load_pct,
+        load=functools.partial(load_scl, [*blocks, path], symbols, max_cycle_ms=max_cycle_ms),
     )

@@ -13,10 +13,11 @@ print.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Any, NamedTuple, Protocol
 
 from s7graph import sfb
 from s7graph.engine.blocks import DB, FB, FC, OB
@@ -28,13 +29,16 @@ from s7graph.sequencer.fb import GraphFB, cold_restart_ob, startup_obs
 from s7graph.steps.scl import SclError, SclProgram, compile_scl, format_diagnostic
 
 __all__ = [
+    "BlockText",
     "Loadable",
     "SclLoadError",
     "SclSources",
+    "block_texts",
     "chain_obs",
     "compile_sources",
     "load_beside",
     "read_source",
+    "scl_of",
 ]
 
 
@@ -62,6 +66,8 @@ class SclSources:
     programs: list[SclProgram] = field(default_factory=list)
     files: list[str] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
+    texts: list[str] = field(default_factory=list)
+    """Each source's text, as ``files`` (what ``block_texts`` cuts the blocks out of)."""
 
     def load(self, cpu: Any) -> None:
         """Download every source's blocks into ``cpu`` (its system blocks installed)."""
@@ -94,6 +100,44 @@ class SclSources:
         return program_blocks(self.blocks, self.instances, sources=", ".join(self.files))
 
 
+class BlockText(NamedTuple):
+    """One block of a source as written: its label (``FB17``), its name, the file and the
+    line it starts on, its text from its first line to its ``END_`` line."""
+
+    label: str
+    name: str
+    file: str
+    line: int
+    text: str
+
+
+_END = {"FB": "END_FUNCTION_BLOCK", "FC": "END_FUNCTION", "OB": "END_ORGANIZATION_BLOCK"}
+_END["DB"] = "END_DATA_BLOCK"
+
+
+def block_texts(sources: SclSources) -> list[BlockText]:
+    """Every OB, FB, FC and DB of ``sources`` as written, in source order: the lines from
+    where the block starts to its ``END_FUNCTION_BLOCK`` (…) line — to the next block's
+    start, or the end of the file, if it has none."""
+    out: list[BlockText] = []
+    for program, file, text in zip(sources.programs, sources.files, sources.texts, strict=False):
+        lines = text.splitlines()
+        names = {b.label: str(getattr(b, "name", "") or "") for b in program.blocks}
+        starts = sorted((loc.line, label) for label, loc in program.places.items())
+        for k, (line, label) in enumerate(starts):
+            stop = starts[k + 1][0] - 1 if k + 1 < len(starts) else len(lines)
+            end = re.compile(rf"^\s*{_END.get(label[:2], 'END_')}\b", re.IGNORECASE)
+            last = next((n for n in range(line - 1, stop) if end.match(lines[n])), stop - 1)
+            body = "\n".join(lines[max(line - 1, 0) : last + 1])
+            out.append(BlockText(label, names.get(label, ""), file, line, body))
+    return out
+
+
+def scl_of(blocks: Sequence[object]) -> SclSources | None:
+    """The compiled S7-SCL sources among a session's ``blocks``, None if none."""
+    return next((b for b in blocks if isinstance(b, SclSources)), None)
+
+
 def read_source(path: Path) -> str:
     """The text of a source file; ``S7Error`` naming it when it cannot be read."""
     try:
@@ -123,6 +167,7 @@ def compile_sources(paths: Sequence[Path], symbols: SymbolTable | None = None) -
         _no_twice(program, str(path), places, of)
         out.programs.append(program)
         out.files.append(str(path))
+        out.texts.append(text)
         out.warnings += [format_diagnostic(d) for d in program.diagnostics]
         known += [b for b in program.blocks if isinstance(b, FB | FC)]
     return out

@@ -32,6 +32,7 @@ from s7graph.web.bus.protocol import (
     AlarmHistory,
     AlarmList,
     AuditEntry,
+    BlockSources,
     ChartLayout,
     Command,
     CommandReply,
@@ -116,7 +117,8 @@ class ChartView:
     ``send`` carries a page's commands to the CPU (``BusClient.send``), ``login`` /
     ``logout`` its logins (``BusClient.login``/``logout`` as ``(user, secret, origin)``);
     ``demo``: the CPU has no users file (names are claimed). ``history`` fetches the
-    alarm history (called from the render thread when the alarm list changed)."""
+    alarm history (called from the render thread when the alarm list changed); ``blocks``
+    reads the CPU's S7-SCL sources (``BusClient.blocks``) for *Details*' links."""
 
     def __init__(
         self,
@@ -131,6 +133,7 @@ class ChartView:
         guard: OriginGuard | None = None,
         history: Callable[[], AlarmHistory | None] | None = None,
         engineering: Engineering | None = None,
+        blocks: Callable[[], BlockSources | None] | None = None,
     ) -> None:
         self.server = server
         self.layout = layout
@@ -160,7 +163,7 @@ class ChartView:
         self.replies: list[CommandReply] = []  # every answer the CPU gave this view
         self.panels: dict[int, ClientPanel] = {}
         self._wiring = Wiring(
-            layout, cpu, send, login, logout, demo, self.replies.append, engineering, self
+            layout, cpu, send, login, logout, demo, self.replies.append, engineering, self, blocks
         )
         self._set_scene()
         self._draw_chart()
@@ -390,6 +393,7 @@ class ChartView:
                 audit=texts.audit_html(list(self._audit)),
                 events=texts.log_html(self._event_lines()),
                 forces=texts.forces_html(self._forces),
+                step=texts.followed_step(update) if connected else 0,
             )
             panels = list(self.panels.values())
         self._switch_chart()

@@ -126,6 +126,7 @@ class ViewSide:
             demo=status is None or status.login == "demo",
             history=client.history,
             engineering=engineering,
+            blocks=client.blocks,
         )
         self._closers.append(self.view.close)
         client.on_chart(self.fb, self.view.apply_chart)

@@ -12,7 +12,8 @@ Unforce / Unforce all, the active jobs). The current mode is highlighted on its 
 Command verdicts come back as notifications on this page only. The Alarms folder
 (``web.view.alarms``) filters the message list and acknowledges all of it; *Chart view*
 fits the chart to the page, and for a chart of several sequences shows one of them or all
-(an overview).
+(an overview). *Details* links a step's ``CALL`` rows to the S7-SCL source of the blocks
+they call (``web.view.block_links``).
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ import viser
 from s7graph.web.access.roles import allowed
 from s7graph.web.bus.protocol import (
     AlarmList,
+    BlockSources,
     ChartLayout,
     Command,
     CommandReply,
@@ -59,6 +61,7 @@ from s7graph.web.commands import (
 )
 from s7graph.web.view import texts
 from s7graph.web.view.alarms import AlarmView
+from s7graph.web.view.block_links import BlockLinks
 from s7graph.web.view.drawing import aim_camera
 from s7graph.web.view.editor import Editor
 from s7graph.web.view.engineering import Engineering, ViewHost
@@ -106,6 +109,7 @@ class Wiring:
     on_reply: Callable[[CommandReply], None]
     engineering: Engineering | None = None  # None: this view cannot edit (no bus for it)
     host: ViewHost | None = None
+    blocks: Callable[[], BlockSources | None] | None = None  # the CPU's S7-SCL sources
 
 
 @dataclass(frozen=True, slots=True)
@@ -120,6 +124,7 @@ class PageState:
     audit: str
     events: str
     forces: str = ""
+    step: int = 0  # the step Details follows when none is chosen (0: none active)
 
 
 class ClientPanel(PageLogin):
@@ -174,7 +179,7 @@ class ClientPanel(PageLogin):
             self.history_html = gui.add_html(texts.history_html(None))
         with gui.add_folder("Audit", expand_by_default=False):
             self.audit_html = gui.add_html(texts.audit_html([]))
-        with gui.add_folder("Details"):
+        with gui.add_folder("Details") as details:
             self.detail_step = gui.add_number(
                 "Show step",
                 0,
@@ -193,6 +198,9 @@ class ClientPanel(PageLogin):
             )
             self.detail_html = gui.add_html(texts.small("waiting for the CPU…"))
             self.detail_step.on_update(lambda _: self._clear_transition())
+        self.block_links = BlockLinks(
+            self.client, details, w.layout, w.blocks, lambda t, b: self._notify(t, b, ok=False)
+        )
         several = len(w.layout.sequences) > 1
         with gui.add_folder("Chart view", expand_by_default=several) as self.view_folder:
             self.sequence_buttons = self._sequence_buttons(w.layout)
@@ -344,6 +352,7 @@ class ClientPanel(PageLogin):
         if self.editor is not None:
             self.editor.running_changed(layout)
         self.alarms.chart_changed(layout)
+        self.block_links.layout = layout
         if self._focus not in {q.number for q in layout.sequences}:
             self._focus = None
         wanted = _sequence_labels(layout) if len(layout.sequences) > 1 else []
@@ -457,6 +466,7 @@ class ClientPanel(PageLogin):
             shown = int(self.detail_transition.value)
             key = ("T", shown) if shown > 0 else ("S", int(self.detail_step.value))
             self.update_html(self.detail_html, "detail", detail(key))
+            self.block_links.show(0 if shown > 0 else key[1] or page.step)
             if page.mode != self._mode:
                 self._mode = page.mode
                 for mode, button in self.mode_buttons.items():

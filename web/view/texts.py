@@ -294,13 +294,21 @@ def history_html(history: AlarmHistory | None) -> str:
     return small(f'<div style="{style}">' + "<br>".join(rows) + "</div>")
 
 
+def followed_step(update: StepStateUpdate | None) -> int:
+    """The step *Details* shows when none is chosen: the first disturbed, else the first
+    active step (0: none active)."""
+    if update is None or not update.active:
+        return 0
+    return (sorted(set(update.disturbed) & set(update.active)) or update.active)[0]
+
+
 def detail_html(layout: ChartLayout, update: StepStateUpdate | None, number: int) -> str:
     """The "Step details" of step ``number`` (0: the first disturbed, else the first
     active step): why it does (not) switch."""
     if number == 0:
-        if update is None or not update.active:
+        number = followed_step(update)
+        if number == 0:
             return small("no active step (choose one with <i>Show step</i>)")
-        number = (sorted(set(update.disturbed) & set(update.active)) or update.active)[0]
     info = layout.step(number)
     if info is None:
         return small(f"no step S{number} in {html.escape(layout.fb)}")

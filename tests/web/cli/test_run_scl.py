@@ -149,16 +149,15 @@ def test_a_chart_run_with_its_blocks_keeps_their_instance_db_across_a_restart(
     assert _instance(state, 10)["n"] > n1 >= 1
 
 
-@pytest.mark.parametrize("option", ["--web", "--listen=tcp/127.0.0.1:0"])
-def test_a_program_of_scl_blocks_on_the_bus_is_refused_in_one_line(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str], option: str
+def test_a_plant_or_a_recording_beside_an_scl_program_is_refused_in_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     path = tmp_path / "prog.scl"
     path.write_text(PROGRAM, encoding="utf-8")
-    assert main(["run", str(path), option, "--duration-s", "0.1"]) == 2
+    assert main(["run", str(path), "--plant", str(path), "--duration-s", "0.1"]) == 2
     err = capsys.readouterr().err
-    assert err.startswith("s7graph: error: --web, --listen and --connect run a chart")
-    assert err.count("\n") == 1 and not (tmp_path / "prog.state.sqlite").exists()
+    assert err == "s7graph: error: --plant is for a chart (.s7g), not a program\n"
+    assert not (tmp_path / "prog.state.sqlite").exists()
 
 
 def test_a_program_that_does_not_compile_is_its_diagnostics_and_exit_2(
@@ -181,7 +180,7 @@ def test_blocks_beside_a_python_program_are_refused(
     assert "--blocks goes with a chart or an .scl program" in capsys.readouterr().err
 
 
-def test_a_chart_with_its_blocks_runs_on_the_bus(tmp_path: Path) -> None:
+def test_a_chart_with_its_blocks_runs_on_the_bus_and_serves_their_source(tmp_path: Path) -> None:
     chart = tmp_path / "seq.s7g"
     chart.write_text(CHART, encoding="utf-8")
     blocks = tmp_path / "blocks.scl"
@@ -191,6 +190,9 @@ def test_a_chart_with_its_blocks_runs_on_the_bus(tmp_path: Path) -> None:
     with cpu_process(tmp_path, args, fb="Seq", terminate=True) as (proc, client, _):
         update = client.state("Seq")
         assert update is not None and update.active == [1]
+        served = client.blocks()  # the sources of --blocks, for the page's CALL links
+        assert served is not None and [b.label for b in served.blocks] == ["FB17"]
+        assert served.blocks[0].file == "blocks.scl" and "n := n + 1" in served.blocks[0].text
         assert wait_until(lambda: _counted(state) > 0, 30)
     assert proc.wait(timeout=60) == 0
 

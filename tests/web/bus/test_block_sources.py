@@ -1,0 +1,61 @@
+"""``s7graph/<cpu>/blocks`` on a real bus: the S7-SCL blocks the CPU runs, read when asked
+(after a reload, the new ones); file names without their folder; one message stays under
+the bus's limit, the blocks that do not fit only named (docs/bus.md, "Keys")."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from s7graph.web.bus.block_sources import MAX_TEXT_BYTES, block_sources, serve_blocks
+from s7graph.web.bus.client import BusClient
+from s7graph.web.bus.cpu_side import CpuSide
+from s7graph.web.bus.protocol import MAX_MESSAGE_BYTES, BlockSources, decode, encode
+from s7graph.web.bus.session import open_session
+from s7graph.web.harness.scl import SclSources, compile_sources
+
+SOURCE = """FUNCTION FC{n} : INT
+VAR_INPUT a : INT; END_VAR
+  FC{n} := a + {n};{pad}
+END_FUNCTION
+"""
+
+
+def _compiled(tmp_path: Path, name: str, *numbers: int, pad: int = 0) -> SclSources:
+    path = tmp_path / "src" / name
+    path.parent.mkdir(exist_ok=True)
+    text = "".join(SOURCE.format(n=n, pad=" // " + "x" * pad if pad else "") for n in numbers)
+    path.write_text(text, encoding="utf-8")
+    return compile_sources([path])
+
+
+def test_a_client_reads_the_blocks_the_cpu_runs_now(tmp_path: Path) -> None:
+    running: list[SclSources | None] = [None]
+    side = CpuSide({}, cpu="cpu1")
+    try:
+        serve_blocks(side.publisher, lambda: running[0])
+        with open_session(connect=[side.endpoint]) as session:
+            client = BusClient(session, "cpu1")
+            assert client.blocks() == BlockSources()  # no S7-SCL blocks: an empty list
+            running[0] = _compiled(tmp_path, "a.scl", 1, 2)
+            first = client.blocks()
+            assert first is not None
+            assert [(b.label, b.file, b.line) for b in first.blocks] == [
+                ("FC1", "a.scl", 1),
+                ("FC2", "a.scl", 5),
+            ]
+            assert first.blocks[1].text.splitlines()[2] == "  FC2 := a + 2;"
+            running[0] = _compiled(tmp_path, "b.scl", 7)  # an online change brought others
+            again = client.blocks()
+            assert again is not None and [b.label for b in again.blocks] == ["FC7"]
+            client.close()
+    finally:
+        side.close()
+
+
+def test_blocks_past_the_message_limit_are_only_named(tmp_path: Path) -> None:
+    pad = MAX_TEXT_BYTES // 3
+    message = block_sources(_compiled(tmp_path, "big.scl", 1, 2, 3, 4, pad=pad))
+    assert [b.label for b in message.blocks] == ["FC1", "FC2"]
+    assert message.left_out == ["FC3", "FC4"]
+    data = encode(message)
+    assert len(data) < MAX_MESSAGE_BYTES and decode(data, BlockSources) == message

@@ -1,0 +1,63 @@
+"""The S7-SCL blocks a CPU runs, as source, on the bus (``s7graph/<cpu>/blocks``).
+
+A chart run with ``--blocks`` and a program of S7-SCL blocks serve the text of every block
+of their sources (:class:`BlockSources`), so a view shows the FB or FC a step's ``CALL``
+row calls as it was written: read-only, as the engineering station opens a block of the
+CPU ("Opening a block online", in the STEP 7 programming manual). Each block is its own
+lines (``web.harness.scl.block_texts``), in source order; file names go without their
+directory. One message stays under the bus's limit: the blocks after the first that
+would not fit are only named (``left_out``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import PurePath
+
+from s7graph.web.bus.protocol import MAX_MESSAGE_BYTES, BlockSource, BlockSources, encode
+from s7graph.web.bus.publisher import BusPublisher
+from s7graph.web.harness.scl import SclSources, block_texts
+
+__all__ = ["MAX_TEXT_BYTES", "block_sources", "serve_blocks"]
+
+MAX_TEXT_BYTES = MAX_MESSAGE_BYTES * 3 // 4
+"""The texts one message carries at most (UTF-8; JSON escapes take some of the rest)."""
+
+
+def block_sources(sources: SclSources | None) -> BlockSources:
+    """The message of ``sources`` (None: no S7-SCL blocks, an empty list)."""
+    if sources is None:
+        return BlockSources()
+    blocks: list[BlockSource] = []
+    left_out: list[str] = []
+    room = MAX_TEXT_BYTES
+    for b in block_texts(sources):
+        size = len(b.text.encode()) + 2 * b.text.count("\n") + 200
+        if left_out or size > room:
+            left_out.append(b.label)
+            continue
+        room -= size
+        blocks.append(
+            BlockSource(
+                label=b.label,
+                name=b.name[:256],
+                file=PurePath(b.file).name[:256],
+                line=b.line,
+                text=b.text,
+            )
+        )
+    return BlockSources(blocks=blocks, left_out=left_out)
+
+
+def serve_blocks(publisher: BusPublisher, read: Callable[[], SclSources | None]) -> None:
+    """Serve ``blocks`` on ``publisher``'s bus: the message of the sources ``read()`` gives
+    at the query (those the CPU runs now), encoded once per sources."""
+    made: list[tuple[object, bytes]] = []
+
+    def answer() -> bytes:
+        sources = read()
+        if not made or made[0][0] is not sources:
+            made[:] = [(sources, encode(block_sources(sources)))]
+        return made[0][1]
+
+    publisher.serve("blocks", answer)
