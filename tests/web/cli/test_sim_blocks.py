@@ -142,7 +142,7 @@ END_DATA_BLOCK
 @pytest.mark.parametrize(
     ("name", "why"),
     [
-        ("DB10.speed", "DB10.speed: FB17 has no member speed"),
+        ("DB10.speed", "DB10.speed: FB17 has no member speed; it has FINALVAL, CONTROL, n, hist"),
         ("DB10.hist[4]", "DB10.hist[4]: index 4 outside 1..3"),
         ("DB10.n[1]", "DB10.n[1]: INT is not an ARRAY"),
         ("DB99.x", "DB99.x: DB99 is not in this CPU"),
