@@ -45,10 +45,14 @@ def _place(name: str, t: ty.SclType, byte: int, bit: int, out: dict[str, Slot]) 
             out[name] = Slot(byte, 0, str(t), ty.size_of(t))
             return
         out[name] = Slot(byte, 0, "ARRAY", ty.size_of(t))
+        one: dict[str, Slot] = {}  # an element laid out once, copied to each place
+        _place("", t.element, 0, 0, one)
         stride = ty.element_stride(t)
         ranges = [range(lo, hi + 1) for lo, hi in t.dims]
         for k, index in enumerate(itertools.product(*ranges)):
-            _place(f"{name}[{','.join(map(str, index))}]", t.element, byte + k * stride, 0, out)
+            at, spelled = byte + k * stride, f"{name}[{','.join(map(str, index))}]"
+            for sub, slot in one.items():
+                out[spelled + sub] = Slot(slot.byte + at, slot.bit, slot.type, slot.size)
         return
     if t.kind == "BOOL":
         out[name] = Slot(byte, bit, "BOOL", 0)
