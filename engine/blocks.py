@@ -22,7 +22,7 @@ from datetime import date, datetime
 from enum import StrEnum
 from typing import Any, Protocol, runtime_checkable
 
-from s7graph.engine.datatypes import DT_MIN, check_value, decode, type_of
+from s7graph.engine.datatypes import DT_MIN, Layout, check_value, decode, type_of
 from s7graph.engine.errors import BlockError, TypeMismatch
 
 OBJECT = "OBJECT"
@@ -229,13 +229,16 @@ class OB:
 
 @dataclass(frozen=True, slots=True)
 class DB:
-    """A global data block as downloaded: size and initial bytes (its load-memory image)."""
+    """A global data block as downloaded: size and initial bytes (its load-memory image),
+    and ``layout``, its variables by name when its structure was declared (an S7-SCL
+    ``DATA_BLOCK``), so a watch can read ``DB20.avg``."""
 
     number: int
     size: int
     init: bytes | None = None
     retain: bool = True
     name: str = ""
+    layout: Layout | None = field(default=None, hash=False)
 
     @property
     def label(self) -> str:

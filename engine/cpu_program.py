@@ -45,7 +45,12 @@ class ProgramBlocks:
                 raise BlockError(f"DB{block.number} is already an instance DB")
             self.mem.dbs.pop(block.number, None)
             self.mem.create_db(
-                block.number, block.size, init=block.init, retain=block.retain, name=block.name
+                block.number,
+                block.size,
+                init=block.init,
+                retain=block.retain,
+                name=block.name,
+                layout=block.layout,
             )
 
     def block(self, ref: str | int) -> OB | FB | FC | DB:

@@ -100,7 +100,8 @@ def _field(
 ) -> tuple[ty.SclType, int, int]:
     found = t.field_type(name) if t.kind == "STRUCT" else None
     if found is None:
-        raise ValueError(f"{what}: {t} has no member {name}")
+        has = ", ".join(f for f, _ in t.fields[:24]) if t.kind == "STRUCT" else ""
+        raise ValueError(f"{what}: {t} has no member {name}" + (f"; it has {has}" if has else ""))
     spelled, ft = found
     keys.append(spelled)
     offset = ty.struct_layout(t)[0][spelled]

@@ -27,6 +27,7 @@ from s7graph.steps.scl.compile import Generated, translate
 from s7graph.steps.scl.consts import Consts, adapt
 from s7graph.steps.scl.declare import BlockInfo, Program, struct_initial
 from s7graph.steps.scl.diagnostics import Diagnostic, Problem, SclError, error, sort_key
+from s7graph.steps.scl.layout import db_layout
 from s7graph.steps.scl.runtime import _encode
 from s7graph.steps.scl.state import SclState, type_text
 
@@ -234,7 +235,7 @@ def _data_block(prog: Program, info: BlockInfo) -> DB:
     size = ty.size_of(t)
     image = bytearray(size)
     _encode(image, 0, 0, t, value)
-    return DB(info.number, size, bytes(image), name=info.name)
+    return DB(info.number, size, bytes(image), name=info.name, layout=db_layout(t))
 
 
 def _db_assign(consts: Consts, t: ty.SclType, value: dict[str, object], a: m.Assign) -> None:

@@ -287,3 +287,19 @@ def test_a_timer_parameter_refuses_an_operand_that_is_not_a_timer(clock: Virtual
     cpu.start()
     cpu.scan()
     assert len(errors) == 3 and all("takes a timer like T12" in e for e in errors), errors
+
+
+def test_a_db_is_loaded_with_its_layout_and_keeps_it_through_a_cold_restart(
+    clock: VirtualClock,
+) -> None:
+    """A downloaded DB's layout (its variables by name) is the CPU's DB's layout."""
+    from s7graph.engine import DB, parse_address
+    from s7graph.engine.datatypes import layout
+
+    recipe = layout([("warm", "BOOL"), ("avg", "REAL")])
+    cpu = Cpu(clock)
+    cpu.load(DB(20, recipe.size, layout=recipe), DB(21, 4))
+    assert cpu.mem.dbs[20].layout == recipe and cpu.mem.dbs[21].layout is None
+    assert cpu.mem.dbs[20].field_address("avg") == parse_address("DB20.DBD2")
+    cpu.start("cold")
+    assert cpu.mem.dbs[20].layout == recipe

@@ -12,8 +12,9 @@ hands the answer to the publisher's outbox, which encodes and sends it. An opera
 - a symbol of the CPU's table (``"Start_button"``, quotes optional), in its declared type;
 - a DB variable by name: ``DBn.var``, nested with dots and indexed with ``[i]`` — in an
   instance DB (``DB10.count``, ``DB10.ctu.CV``, a multi-instance's variables, an ARRAY by
-  its declared bounds) or in a global DB that has a layout (``DB20.avg``,
-  ``DB20.recipe.speed``, ``DB20.speeds[2]``);
+  its declared bounds) or in a global DB that has a layout — one declared in S7-SCL
+  (``DB20.avg``, ``DB20.recipe.speed``, ``DB20.speeds[2]``, ``DB20.motor[2].on``); the DB
+  also by its name, ``"Data".temps[2]``;
 
 each optionally followed by the type to show it as (``MW0:INT``, ``MD4:REAL``,
 ``DB20.DBW0:S5TIME``). A value is shown as S7 writes it (``TRUE``, ``B#16#07``,
@@ -64,6 +65,9 @@ _DB_VAR = re.compile(
     r"DB(\d{1,5})\.([^\W\d]\w*(?:\.[^\W\d]\w*|\[\s*-?\d+(?:\s*,\s*-?\d+)*\s*\])*)$",
     re.IGNORECASE,
 )
+_NAMED_DB_VAR = re.compile(
+    r'"([^"]+)"\.([^\W\d]\w*(?:\.[^\W\d]\w*|\[\s*-?\d+(?:\s*,\s*-?\d+)*\s*\])*)$'
+)
 _SEGMENT = re.compile(r"\.?([^\W\d]\w*)|\[([^\]]*)\]")
 _ARRAY = re.compile(r"ARRAY\s*\[(.+?)\]\s*OF\s+(.+)", re.IGNORECASE | re.DOTALL)
 _BOUND = re.compile(r"\s*(-?\d+)\s*\.\.\s*(-?\d+)\s*")
@@ -80,7 +84,7 @@ class WatchError(S7Error):
 class WatchItem:
     """One operand as asked (``text``): its target without the type, the type to show it
     as (None: its own), its path when it is a DB variable by name, or why it is no
-    operand (``error``)."""
+    operand (``error``); a DB named by its name (``"Data".x``) has ``db_name``."""
 
     text: str
     target: str = ""
@@ -88,6 +92,7 @@ class WatchItem:
     db: int | None = None
     path: tuple[Segment, ...] = ()
     error: str = ""
+    db_name: str = ""
 
 
 def split_operands(text: str) -> list[str]:
@@ -124,6 +129,9 @@ def parse_item(text: str) -> WatchItem:
     m = _DB_VAR.match(target)
     if m is not None and not _absolute(target):
         return WatchItem(text, target, type_name, int(m[1]), _segments(m[2]))
+    named = _NAMED_DB_VAR.match(target)
+    if named is not None:
+        return WatchItem(text, target, type_name, path=_segments(named[2]), db_name=named[1])
     return WatchItem(text, target, type_name)
 
 
@@ -165,7 +173,7 @@ def watch_value(cpu: Cpu, item: WatchItem) -> WatchValue:
 
 def _read(cpu: Cpu, item: WatchItem) -> tuple[object, str]:
     mem = cpu.mem
-    if item.db is not None:
+    if item.db is not None or item.db_name:
         return _db_variable(cpu, item)
     symbol = mem.symbols.lookup(item.target) if mem.symbols is not None else None
     if symbol is not None:
@@ -191,7 +199,8 @@ def _natural(address: Address) -> str:
 
 def _db_variable(cpu: Cpu, item: WatchItem) -> tuple[object, str]:
     number, path = item.db, item.path
-    assert number is not None
+    if number is None:
+        number = _db_by_name(cpu, item.db_name)
     idb = cpu.instance_dbs.get(number)
     if idb is not None:
         value, type_name = _walk_instance(idb, path, f"DB{number}")
@@ -200,6 +209,18 @@ def _db_variable(cpu: Cpu, item: WatchItem) -> tuple[object, str]:
     if db is None:
         raise WatchError(f"DB{number} is not loaded")
     return _layout_variable(cpu, db, path, item.type)
+
+
+def _db_by_name(cpu: Cpu, name: str) -> int:
+    """The number of the DB named ``name`` (an instance DB's or a global DB's name)."""
+    key = name.casefold()
+    for number, idb in cpu.instance_dbs.items():
+        if idb.name.casefold() == key:
+            return int(number)
+    for number, db in cpu.mem.dbs.items():
+        if db.name.casefold() == key:
+            return int(number)
+    raise WatchError(f'"{name}": no DB has this name')
 
 
 def _walk_instance(idb: InstanceDB, path: tuple[Segment, ...], where: str) -> tuple[object, str]:
@@ -315,15 +336,15 @@ def _layout_variable(
         raise WatchError(
             f"{where} has no variables by name (no layout): watch its bytes, e.g. {where}.DBW0"
         )
-    name = ".".join(s for s in path if isinstance(s, str))
-    indices = [s for s in path if not isinstance(s, str)]
-    if len(indices) > 1 or (indices and isinstance(path[-1], str)):
-        raise WatchError(f"{where}.{name}: an index goes at the end of the name")
-    index = indices[0] if indices else None
     slots = db.layout.slots
-    key = next((k for k in slots if k.casefold() == name.casefold()), None)
+    name, index = _spelled(path), None
+    key = _slot_key(slots, name)
+    if key is None and not isinstance(path[-1], str):
+        name, index = _spelled(path[:-1]), path[-1]
+        key = _slot_key(slots, name)
     if key is None:
-        raise WatchError(f"{where} has no variable {name!r}; it has {', '.join(list(slots)[:24])}")
+        top = [k for k in slots if "." not in k and "[" not in k]
+        raise WatchError(f"{where} has no variable {name!r}; it has {', '.join(top[:24])}")
     slot = slots[key]
     byte, bit, type_name = slot.byte, slot.bit, slot.type
     if index is not None:
@@ -337,6 +358,23 @@ def _layout_variable(
     address = Address(Area.DB, width, byte, bit, db.number)
     shown_as = wanted or type_name
     return cpu.mem.read_as(address, shown_as), shown_as
+
+
+def _spelled(path: tuple[Segment, ...]) -> str:
+    """A path as a layout names it: ``motor[2].on``, ``grid[1,2]``."""
+    out = ""
+    for step in path:
+        if isinstance(step, str):
+            out += f".{step}" if out else step
+        else:
+            out += f"[{','.join(map(str, step))}]"
+    return out
+
+
+def _slot_key(slots: dict[str, Any], name: str) -> str | None:
+    if name in slots:
+        return name
+    return next((k for k in slots if k.casefold() == name.casefold()), None)
 
 
 def _array_element(

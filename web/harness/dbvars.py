@@ -14,6 +14,7 @@ try addresses first, so what an address trace gave stays as it was.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import replace
 from typing import Any
 
 from s7graph.engine.blocks import Decl, InstanceDB
@@ -96,7 +97,7 @@ class DbVariables:
         if declared is None:
             why = "its structure is not declared in an S7-SCL source"
             raise S7Error(f"{name}: {why}; read DB{number} by address (DB{number}.DBW0)")
-        found = _member(declared, path, self.types, name)
+        found = _member(replace(declared, name=f"DB{number}"), path, self.types, name)
         return block.data, found, found.type
 
     def _by_name(self, db: str, name: str) -> int:

@@ -1,7 +1,8 @@
 """``s7graph run PROGRAM.scl`` on the bus (real processes): as a Python program of blocks,
-on a TLS bus with a users file it answers ``s7graph status``, ``watch --address``,
-``stop`` and ``start`` from a shell and serves its sources on ``blocks``; with ``--web``
-its page shows the CPU in RUN (docs/scl.md, "On the bus"; docs/cli.md, "s7graph run")."""
+on a TLS bus with a users file it answers ``s7graph status``, ``watch --address`` (a
+global DB by name, kept by the warm restart), ``stop`` and ``start`` from a shell and
+serves its sources on ``blocks``; with ``--web`` its page shows the CPU in RUN
+(docs/scl.md, "On the bus"; docs/cli.md, "s7graph run")"""
 
 from __future__ import annotations
 
@@ -122,8 +123,10 @@ def test_an_scl_program_on_a_tls_bus_answers_the_shell_and_serves_its_sources(
         assert f"s7graph: CPU cpu1 on the bus {endpoint}" in _first_line(proc)
         status = _status(bus)  # a loaded machine may refuse the first TLS handshake
         assert status.startswith("CPU cpu1: RUN") and "FBs none" in status, status
-        watched = _shell(bus, "watch", "--address", "DB10.n,MW0:INT", "--duration-s", "1")
-        found = re.search(r"DB10\.n=L#(\d+)\s+MW0:INT=0$", watched.stdout.splitlines()[0])
+        asked = "DB10.n,MW0:INT,DB20.warm"  # DB20 by name: its layout came with the block
+        watched = _shell(bus, "watch", "--address", asked, "--duration-s", "1")
+        line = watched.stdout.splitlines()[0]
+        found = re.search(r"DB10\.n=L#(\d+)\s+MW0:INT=0\s+DB20\.warm=1$", line)
         assert found is not None and int(found[1]) > 0, watched.stdout  # FB17 counts
         assert _shell(bus, "stop", "--user", "olga").returncode == 1  # an operator's? no
         stopped = _shell(bus, "stop", "--user", "eng")
@@ -132,6 +135,8 @@ def test_an_scl_program_on_a_tls_bus_answers_the_shell_and_serves_its_sources(
         started = _shell(bus, "start", "--user", "eng")
         assert started.returncode == 0, started.stderr
         assert wait_until(lambda: _status(bus).startswith("CPU cpu1: RUN"), 60)
+        again = _shell(bus, "watch", "--address", "DB20.warm", "--duration-s", "1")
+        assert again.stdout.splitlines()[0].endswith(" DB20.warm=2"), again  # kept, OB100
         sources = _blocks(endpoint, bus_certs)
         assert [(b.label, b.file, b.line) for b in sources.blocks] == [
             ("FB17", "blocks.scl", 2),

@@ -142,7 +142,7 @@ END_DATA_BLOCK
 @pytest.mark.parametrize(
     ("name", "why"),
     [
-        ("DB10.speed", "DB10.speed: FB17 has no member speed"),
+        ("DB10.speed", "DB10.speed: FB17 has no member speed; it has FINALVAL, CONTROL, n, hist"),
         ("DB10.hist[4]", "DB10.hist[4]: index 4 outside 1..3"),
         ("DB10.n[1]", "DB10.n[1]: INT is not an ARRAY"),
         ("DB99.x", "DB99.x: DB99 is not in this CPU"),
@@ -274,3 +274,43 @@ def test_trace_values_of_db_variables_keep_their_types(
         "DB2.c": "A",
         "DB2.s": "abc",
     }
+
+
+def test_an_scl_programs_global_dbs_are_watched_and_set_by_name_in_their_types(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    program = """
+DATA_BLOCK DB20
+STRUCT warm : BOOL; count : INT; mask : WORD; wait : TIME;
+  motor : ARRAY[1..2] OF STRUCT on : BOOL; END_STRUCT;
+END_STRUCT
+BEGIN count := -3; mask := 16#8001; wait := T#2S;
+END_DATA_BLOCK
+DATA_BLOCK DB21
+STRUCT temps : ARRAY[1..3] OF REAL; END_STRUCT
+BEGIN temps[2] := 1.5;
+END_DATA_BLOCK
+ORGANIZATION_BLOCK OB1
+VAR_TEMP info : ARRAY[0..19] OF BYTE; END_VAR
+BEGIN
+  DB20.count := DB20.count + 1;
+  DB20.motor[2].on := DB20.warm;
+END_ORGANIZATION_BLOCK
+"""
+    stim = '{"at_ms": 10, "set": {"DB20.warm": true, "\\"DB21\\".temps[3]": -2.25}}\n'
+    f = _write(tmp_path, prog_scl=program, stim_jsonl=stim)
+    watch = 'DB20.warm,DB20.count,DB20.mask,DB20.wait,"DB21".temps[3],DB20.motor[2].on'
+    args = [f["prog_scl"], "--stimulus", f["stim_jsonl"], "--cycles", "3", "--watch", watch]
+    rc, trace, err = _sim(capsys, *args)
+    assert rc == 0, err
+    assert trace[0]["values"] == {
+        "DB20.warm": False,
+        "DB20.count": -2,
+        "DB20.mask": 0x8001,
+        "DB20.wait": 2000,
+        '"DB21".temps[3]': 0.0,
+        "DB20.motor[2].on": False,
+    }
+    assert trace[2]["values"]["DB20.count"] == 0
+    assert trace[2]["values"]['"DB21".temps[3]'] == -2.25
+    assert trace[2]["values"]["DB20.motor[2].on"] is True

@@ -1,0 +1,124 @@
+"""A global DB written in S7-SCL watched by name over a real zenoh bus (TCP on 127.0.0.1)
+against a program of SCL blocks in this process (``web.wiring.program_edge``): its layout
+came with the compiled DB, so ``DB20.warm``, ``DB20.motor[2].speed`` and ``"Data".temps[2]``
+read in their types, and a name the DB lacks says what it has."""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+import pytest
+
+from s7graph import sfb
+from s7graph.engine import Cpu, VirtualClock
+from s7graph.steps.scl import compile_scl
+from s7graph.web.bus.client import BusClient
+from s7graph.web.bus.protocol import WatchValues
+from s7graph.web.bus.session import BusEnds, open_session
+from s7graph.web.wiring.program_edge import ProgramEdge
+from tests.web.helpers import free_port, wait_until
+
+pytestmark = pytest.mark.timeout(120)
+
+SOURCE = """
+DATA_BLOCK DB20
+STRUCT
+  warm : BOOL; count : INT; mask : WORD; avg : REAL; wait : TIME;
+  grid : ARRAY[1..2, 1..3] OF INT;
+  motor : ARRAY[1..3] OF STRUCT run : BOOL; speed : INT; END_STRUCT;
+END_STRUCT
+BEGIN count := -7; mask := 16#F00F; avg := 2.5; wait := T#1S500MS; motor[2].speed := 9;
+  grid[2, 3] := -4;
+END_DATA_BLOCK
+DATA_BLOCK "Data"
+STRUCT temps : ARRAY[1..4] OF REAL; END_STRUCT
+BEGIN temps[2] := 21.5;
+END_DATA_BLOCK
+ORGANIZATION_BLOCK OB1
+VAR_TEMP info : ARRAY[0..19] OF BYTE; END_VAR
+BEGIN
+  DB20.warm := TRUE;
+END_ORGANIZATION_BLOCK
+"""
+
+
+@dataclass
+class Rig:
+    cpu: Cpu
+    edge: ProgramEdge
+    client: BusClient
+    clock: VirtualClock
+
+    def scan(self) -> None:
+        self.clock.advance(10)
+        self.edge.on_record(self.cpu.scan(), stats=self.cpu.stats)
+
+    def watch(self, operands: list[str]) -> WatchValues:
+        """Ask ``watch`` from another thread and scan until it is answered."""
+        answers: list[WatchValues] = []
+        asking = threading.Thread(target=lambda: answers.append(self.client.watch(operands)))
+        asking.start()
+        while asking.is_alive():
+            self.scan()
+            asking.join(0.01)
+        return answers[0]
+
+
+@pytest.fixture
+def rig() -> Iterator[Rig]:
+    program = compile_scl(SOURCE, "db.scl", blocks=sfb.SYSTEM_BLOCKS, names={"Data": "DB21"})
+    clock = VirtualClock()
+    cpu = Cpu(clock, max_cycle_ms=5000)
+    sfb.install(cpu)
+    program.load(cpu)
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    with (
+        ProgramEdge(cpu, ends=BusEnds(listen=[endpoint])) as edge,
+        open_session(connect=[endpoint]) as session,
+        BusClient(session, "cpu1") as client,
+    ):
+        cpu.start()
+        rig = Rig(cpu, edge, client, clock)
+        rig.scan()
+        assert wait_until(lambda: client.status() is not None)
+        yield rig
+
+
+def test_an_scl_global_db_is_watched_by_name_in_its_types(rig: Rig) -> None:
+    asked = [
+        "DB20.warm",
+        "DB20.count",
+        "DB20.mask",
+        "DB20.avg",
+        "DB20.wait",
+        "DB20.grid[2, 3]",
+        "DB20.motor[2].speed",
+        "db20.MOTOR[3].run",
+        '"Data".temps[2]',
+        "DB21.temps[1]",
+    ]
+    got = {v.address: (v.value, v.type, v.error) for v in rig.watch(asked).values}
+    assert got["DB20.warm"] == (True, "BOOL", "")
+    assert got["DB20.count"] == (-7, "INT", "")
+    assert got["DB20.mask"] == (0xF00F, "WORD", "")
+    assert got["DB20.avg"] == (2.5, "REAL", "")
+    assert got["DB20.wait"] == (1500, "TIME", "")
+    assert got["DB20.grid[2, 3]"] == (-4, "INT", "")
+    assert got["DB20.motor[2].speed"] == (9, "INT", "")
+    assert got["db20.MOTOR[3].run"] == (False, "BOOL", "")
+    assert got['"Data".temps[2]'] == (21.5, "REAL", "")
+    assert got["DB21.temps[1]"] == (0.0, "REAL", "")
+
+
+def test_a_name_an_scl_db_lacks_says_what_the_db_has(rig: Rig) -> None:
+    asked = ["DB20.wram", "DB20.motor[4].run", "DB20.motor[2]", '"Nope".x', "DB20.count[1]"]
+    got = {v.address: v.error for v in rig.watch(asked).values}
+    assert got["DB20.wram"] == (
+        "DB20 has no variable 'wram'; it has warm, count, mask, avg, wait, grid, motor"
+    )
+    assert got["DB20.motor[4].run"].startswith("DB20 has no variable 'motor[4].run'")
+    assert got["DB20.motor[2]"] == "DB20.motor[2] is a STRUCT: watch one of its elements"
+    assert got['"Nope".x'] == '"Nope": no DB has this name'
+    assert got["DB20.count[1]"] == "DB20.count is no ARRAY: it takes no index"

@@ -1,0 +1,86 @@
+"""DB variables by name for ``sim`` and ``run`` (``web/harness/dbvars.py``) in global DBs
+written in S7-SCL: read in their types, written through their types, by number or by the
+DB's name, and a name the DB lacks says what it has."""
+
+from __future__ import annotations
+
+import pytest
+
+from s7graph import sfb
+from s7graph.engine import Cpu, VirtualClock
+from s7graph.engine.errors import S7Error
+from s7graph.steps.scl import compile_scl
+from s7graph.web.harness.dbvars import DbVariables
+
+SOURCE = """
+TYPE "Pump"
+STRUCT on : BOOL; rpm : INT; END_STRUCT
+END_TYPE
+DATA_BLOCK DB20
+STRUCT
+  warm : BOOL; count : INT; mask : WORD; avg : REAL; wait : TIME;
+  motor : ARRAY[1..3] OF STRUCT run : BOOL; speed : INT; END_STRUCT;
+END_STRUCT
+BEGIN count := -7; mask := 16#F00F; avg := 2.5; wait := T#1S500MS;
+END_DATA_BLOCK
+DATA_BLOCK "Data"
+STRUCT temps : ARRAY[1..4] OF REAL; END_STRUCT
+BEGIN temps[2] := 21.5;
+END_DATA_BLOCK
+DATA_BLOCK DB5 "Pump"
+BEGIN rpm := 1450;
+END_DATA_BLOCK
+ORGANIZATION_BLOCK OB1
+VAR_TEMP info : ARRAY[0..19] OF BYTE; END_VAR
+BEGIN
+  DB20.warm := DB5.on;
+  DB20.motor[2].speed := DB20.count * 2;
+END_ORGANIZATION_BLOCK
+"""
+
+
+@pytest.fixture
+def dbvars() -> DbVariables:
+    program = compile_scl(SOURCE, "db.scl", blocks=sfb.SYSTEM_BLOCKS, names={"Data": "DB21"})
+    cpu = Cpu(VirtualClock())
+    sfb.install(cpu)
+    program.load(cpu)
+    cpu.start()
+    return DbVariables(cpu, program.types)
+
+
+def test_global_db_variables_read_in_their_types(dbvars: DbVariables) -> None:
+    def read(name: str) -> object:
+        return dbvars.reader(name)()
+
+    assert read("DB20.warm") is False
+    assert read("DB20.count") == -7 and read("DB20.mask") == 0xF00F
+    assert read("DB20.avg") == 2.5 and read("DB20.wait") == 1500
+    assert read('"Data".temps[2]') == 21.5 and read("DB21.temps[1]") == 0.0
+    assert read("DB5.rpm") == 1450  # a DB of a UDT
+
+
+def test_a_stimulus_writes_a_global_db_variable_the_program_reads(
+    dbvars: DbVariables,
+) -> None:
+    dbvars.writer("DB5.on")(True)
+    dbvars.writer("DB20.count")(-300)
+    dbvars.writer('"Data".temps[4]')(-1.25)
+    dbvars.cpu.scan()
+    assert dbvars.reader("DB20.warm")() is True
+    assert dbvars.reader("DB20.motor[2].speed")() == -600
+    assert dbvars.reader("DB21.temps[4]")() == -1.25
+    with pytest.raises(S7Error, match=r"DB20.count: .*32768"):
+        dbvars.writer("DB20.count")(32768)
+
+
+def test_a_name_a_global_db_lacks_names_the_db_and_what_it_has(dbvars: DbVariables) -> None:
+    with pytest.raises(S7Error) as caught:
+        dbvars.reader("DB20.wram")
+    assert str(caught.value) == (
+        "DB20.wram: DB20 has no member wram; it has warm, count, mask, avg, wait, motor"
+    )
+    with pytest.raises(S7Error, match=r'"Oven".x: no DB is named "Oven"'):
+        dbvars.reader('"Oven".x')
+    with pytest.raises(S7Error, match=r"DB20.motor\[4\].run: index 4 outside 1..3"):
+        dbvars.reader("DB20.motor[4].run")
