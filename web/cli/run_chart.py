@@ -193,6 +193,7 @@ def _run_chart(
             symbols=symbols,
             in_process=view_in_process,
             opcua=opcua,
+            blocks=blocks,
         )
         if isinstance(edges, int):
             return edges
@@ -342,9 +343,11 @@ def _serve(
     symbols: Path | None = None,
     in_process: bool = False,
     opcua: OpcuaFace | None = None,
+    blocks: Sequence[Path] = (),
 ) -> tuple[LiveEdge, list[ViewProcess]]:
     """The CPU on the bus (and the recording) of the session's GraphFB, its online change
-    (``path``: the chart file a download rewrites), and the view's process (not started
+    (``path``: the chart file a download rewrites, ``blocks`` the S7-SCL sources it may
+    bring changed), and the view's process (not started
     yet) when ``web``; prints where to look."""
     from s7graph.web.bus.forcing import Forcing
     from s7graph.web.bus.gate import cpu_gate  # zenoh and viser only when asked for
@@ -368,7 +371,7 @@ def _serve(
     )
     gate = cpu_gate(net.users, store, cpu=session.cpu)
     table = symbols.read_text(encoding="utf-8-sig") if symbols is not None else ""
-    online = OnlineChange(session, live, gate, path=path, symbols=table)
+    online = OnlineChange(session, live, gate, path=path, symbols=table, blocks=blocks)
     inline = web and in_process
     edge = LiveEdge(
         live,
