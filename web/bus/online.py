@@ -305,6 +305,7 @@ class OnlineChange:
                 "look at the change again"
             )
         target: Version | None
+        scl_texts: Mapping[str, str]
         if op == "undo_download":
             if not self.history:
                 raise _Refused("no download to undo (the charts of the last 20 downloads are kept)")
@@ -323,14 +324,16 @@ class OnlineChange:
                 target=self._source_of(back),
                 active=self._active(),
             )
+            scl_changed = back.scl is not self.current.scl
+            scl_texts = back.scl_texts
         else:
             sent = self._sent_blocks(command)
             target, summary = self._compile(str(command.args["source"]), preview, sent)
-        scl_changed = target is not None and target.scl is not self.current.scl
-        lines = list(summary.lines()) or ["no change: the CPU runs this chart"]
+            scl_changed, scl_texts = bool(sent), {**self.current.scl_texts, **sent}
+        same = "the chart does not change" if scl_changed else "no change: the CPU runs this chart"
+        lines = list(summary.lines()) or [same]
         if scl_changed:
-            assert target is not None
-            lines.append(_blocks_line(target, self.current))
+            lines.append(_blocks_line(scl_texts, self.current))
         if preview:
             reply = CommandReply(
                 applied=True,
@@ -442,7 +445,7 @@ class OnlineChange:
             self.publisher.set_chart(self.live.fb, live.layout)
         lines = [*pending.report.lines(), *summary.lines()]
         if blocks is not None:
-            lines += [_blocks_line(target, old), *pending.notes]
+            lines += [_blocks_line(target.scl_texts, old), *pending.notes]
         where = f"; {self.path.name} written" if self.path is not None else ""
         kept = f", the old file kept as {backup.name}" if backup is not None else ""
         head = f"version {target.number} runs (was {old.number}){where}{kept}"
@@ -570,8 +573,8 @@ def _sized(text: str) -> str:
     return f"{len(text):,} characters, sha256 {digest}"
 
 
-def _blocks_line(target: Version, old: Version) -> str:
-    """Which S7-SCL sources a change brings."""
+def _blocks_line(texts: Mapping[str, str], old: Version) -> str:
+    """Which S7-SCL sources a change to ``texts`` brings."""
     was = old.scl_texts
-    changed = [n for n, t in target.scl_texts.items() if was.get(n) != t]
-    return f"S7-SCL blocks changed: {', '.join(changed) or 'as before ' + str(old.number)}"
+    changed = [n for n, t in texts.items() if was.get(n) != t]
+    return f"S7-SCL blocks changed: {', '.join(changed) or 'the same sources, compiled again'}"
