@@ -121,7 +121,7 @@ def changes(draw: st.DrawFn) -> tuple[list[Var], list[Var]]:
     return old, draw(st.permutations(new))
 
 
-@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=100, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(changes(), st.integers(1, 6), st.integers(1, 4))
 def test_a_changed_running_fb_ends_as_a_fresh_one_with_the_kept_values_or_is_refused(
     change: tuple[list[Var], list[Var]], before: int, after: int
