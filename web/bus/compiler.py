@@ -234,7 +234,7 @@ class Compiler:
         in this process of the child's bytes: ``web.harness.scl.load_texts``)."""
         _size_limit(text, "the chart")
         if blocks is not None:
-            _size_limit("".join(t for _, t in blocks), "the S7-SCL blocks together")
+            _size_limit("".join(t for _, t in blocks), "the S7-SCL sources (together)")
         request = {
             "op": "preview" if preview else "compile",
             "text": text,

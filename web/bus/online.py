@@ -19,6 +19,10 @@ summary. The chart before each download is kept: ``undo_download`` swaps it back
 way. The CPU keeps running the old chart through any refusal; nothing a sender writes
 reaches the scan but a compiled chart.
 
+A download may bring changed S7-SCL sources of the blocks the chart calls (``blocks``):
+compiled with the chart in the compiler's process, written beside it, swapped in with it at
+the same boundary (``web.bus.online_blocks``), kept with its version for ``undo_download``.
+
 Reads (``fb/<fb>/source``: :class:`ChartSource`; ``project``: :class:`ProjectFiles`) are
 queryables like the chart and the state.
 """

@@ -22,6 +22,7 @@ from s7graph.web.access.audit import read_audit
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import Command, CommandReply
 from s7graph.web.bus.session import open_session
+from s7graph.web.commands import Download, DownloadArgs, checked, make_command
 from s7graph.web.harness.session import ChartSession
 from tests.paths import ROOT
 from tests.web.helpers import PASSWORD, cpu_process, online_cpu, wait_until
@@ -156,9 +157,15 @@ def test_refusals_give_a_reason_and_the_old_blocks_run_on(cpu: Cpu) -> None:
     assert not reply.applied and "runs no S7-SCL source other.scl" in reply.reason
     reply = cpu.send("download", source=CHART, blocks={"fb17.scl": BLOCKS})
     assert not reply.applied and "nothing changes" in reply.reason
+    # the blocks swap, then the chart's is refused at the same boundary: both go back
+    s3 = CHART.replace("INITIAL_STEP S1", "INITIAL_STEP S3").replace("FROM S1", "FROM S3")
+    reply = cpu.send("download", source=s3, blocks={"fb17.scl": CHANGED})
+    assert not reply.applied and "active steps S1 are not in the new chart" in reply.reason
+    assert cpu.session.cpu.block("FB17").interface[1].type == "INT"  # the old FB17
     assert cpu.grows_by(1)  # the old FB runs on
     assert (cpu.path.parent / "fb17.scl").read_text(encoding="utf-8") == BLOCKS
     assert not (cpu.path.parent / "fb17.scl.~1~").exists()
+    assert cpu.path.read_text(encoding="utf-8") == CHART
 
 
 def test_a_download_without_blocks_leaves_them_as_they_are(cpu: Cpu) -> None:
@@ -216,3 +223,13 @@ def test_s7graph_download_blocks_into_s7graph_run_and_the_change_survives_a_rest
         assert first > 3000 and first % 1000 == carried  # carried, then kept on disk
         assert wait_until(lambda: _value(client, "DB10.n") >= first + 3000)  # the new code
         assert _value(client, "DB10.fresh") > 5
+
+
+def test_the_command_carries_at_most_8_sources_and_old_senders_need_none() -> None:
+    many = {f"s{i}.scl": "" for i in range(9)}
+    with pytest.raises(ValueError, match="blocks"):
+        checked(Download(fb="Seq", args=DownloadArgs(source=CHART, blocks=many)))
+    eight = dict(list(many.items())[:8])
+    assert checked(Download(fb="Seq", args=DownloadArgs(source=CHART, blocks=eight)))
+    old = make_command(op="download", fb="Seq", args={"source": CHART})
+    assert isinstance(old, Download) and "blocks" not in old.args
