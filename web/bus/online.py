@@ -68,6 +68,7 @@ from s7graph.web.harness.project import (
     write_chart,
 )
 from s7graph.web.harness.scl import SclSources
+from s7graph.web.harness.scl_reload import refusals
 from s7graph.web.harness.session import ChartSession
 
 __all__ = ["ENGINEERING_OPS", "MAX_WAITING", "Durability", "OnlineChange", "Version"]
@@ -407,6 +408,11 @@ class OnlineChange:
         backup = None
         written = False
         blocks = target.scl if target.scl is not self.current.scl else None
+        if blocks is not None:
+            with contextlib.suppress(RuntimeError):  # the boundary checks again, for sure
+                if refused := refusals(self.session.cpu, blocks):
+                    why = "; ".join(refused)
+                    raise _Refused(f"{command.op} refused: {why}; the CPU keeps the old blocks")
         files = self._write_blocks(command, target) if blocks is not None else []
         if self.path is not None:
             try:
