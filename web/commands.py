@@ -161,14 +161,21 @@ class ForceArgs(Args, frozen=True, kw_only=True):
             )
 
 
+MAX_BLOCK_FILES = 8  # S7-SCL sources one download brings
+BlockSources = Annotated[dict[FileName, Source], Meta(max_length=MAX_BLOCK_FILES)]
+
+
 class DownloadArgs(Args, frozen=True, kw_only=True):
     """The chart text; the chart version the sender saw, what to do with active steps the
-    change removes, and whether only to preview the change."""
+    change removes, and whether only to preview the change; ``blocks``: changed S7-SCL
+    sources the chart's calls reach, by the file name of the CPU's ``--blocks`` source
+    each replaces (swapped in with the chart)."""
 
     source: Source
     base: Version | UnsetType = UNSET
     removed: Removed | UnsetType = UNSET
     preview: bool | UnsetType = UNSET
+    blocks: BlockSources | UnsetType = UNSET
 
 
 class UndoArgs(Args, frozen=True, kw_only=True):
@@ -619,6 +626,9 @@ def _type_text(t: mi.Type) -> str:
         if t.max_length is None:
             return "text"
         return f"text ({t.min_length or 0}..{t.max_length:,} chars)"
+    if isinstance(t, mi.DictType):
+        most = f"at most {t.max_length} " if t.max_length is not None else ""
+        return f"{most}file name → {_type_text(t.value_type)}"
     names = {mi.BoolType: "bool", mi.FloatType: "number", mi.NoneType: "null"}
     return names.get(type(t), type(t).__name__)
 

@@ -90,6 +90,14 @@ def compile_scl(
     )
     if generated is None:
         raise SclError(diags)
+    return build_program(source, prog, generated, diags)
+
+
+def build_program(
+    source: m.Source, prog: Program, generated: Generated, diags: list[Diagnostic]
+) -> SclProgram:
+    """The engine blocks of a translated source (``compile.translate``): what
+    :func:`compile_scl` returns (:class:`SclError` when a block cannot be built)."""
     out, problems = _build(source, prog, generated)
     if problems:
         raise SclError(sorted(problems + diags, key=sort_key))

@@ -14,11 +14,14 @@ from __future__ import annotations
 
 import hashlib
 import json
-from dataclasses import dataclass
+import re
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
 
 from s7graph.steps.scl import types as ty
 
-__all__ = ["SclState", "type_text"]
+__all__ = ["CarryPlan", "SclState", "carried", "type_text"]
 
 
 def type_text(t: ty.SclType, fingerprints: dict[str, str]) -> str:
@@ -79,3 +82,81 @@ def _same(before: dict[str, object] | None, name: str, now: str, value: object) 
     if before is not None:
         return before.get(name) == now
     return not isinstance(value, list | dict) and not now.startswith(("ARRAY", "STRUCT", "FB"))
+
+
+# ---------------------------------------------------------------- an online change's carry
+
+_WIDER: dict[tuple[str, str], Callable[[Any], object]] = {
+    ("BOOL", "BYTE"): int,
+    ("BOOL", "WORD"): int,
+    ("BOOL", "DWORD"): int,
+    ("BYTE", "WORD"): int,
+    ("BYTE", "DWORD"): int,
+    ("WORD", "DWORD"): int,
+    ("INT", "DINT"): int,
+    ("INT", "REAL"): float,  # every INT is exact in a REAL's 24 bits
+    ("CHAR", "STRING"): str,
+}
+"""Type changes every value of the old type survives unchanged (S7-SCL's implicit class A
+conversions that lose nothing): the value is carried, converted."""
+_STRING = re.compile(r"STRING\[(\d+)\]")
+
+
+def carried(old: str, new: str) -> Callable[[object], object] | None:
+    """How a value of type ``old`` (a ``type_text``) becomes one of ``new`` without loss:
+    None when it cannot (another structure, a narrower type)."""
+    if old == new:
+        return _same_value
+    o, n = _STRING.fullmatch(old), _STRING.fullmatch(new)
+    if o is not None and n is not None:
+        return str if int(o[1]) <= int(n[1]) else None
+    if old == "CHAR" and n is not None:
+        return str
+    return _WIDER.get((old, new))
+
+
+def _same_value(value: object) -> object:
+    return value
+
+
+@dataclass
+class CarryPlan:
+    """What an online change does with an instance's variables: ``kept`` by name (with the
+    conversion of each), ``dropped`` (no longer declared), ``new`` (at their initial
+    values) and ``refused`` (another type that does not carry the value: ``name: OLD →
+    NEW``)."""
+
+    kept: dict[str, Callable[[object], object]] = field(default_factory=dict)
+    dropped: list[str] = field(default_factory=list)
+    new: list[str] = field(default_factory=list)
+    refused: list[str] = field(default_factory=list)
+
+    @staticmethod
+    def between(old: SclState, new: SclState) -> CarryPlan:
+        """The plan from an instance of ``old``'s FB to one of ``new``'s."""
+        plan = CarryPlan()
+        before, now = dict(old.types), dict(new.types)
+        for name, t in before.items():
+            if name not in now:
+                plan.dropped.append(name)
+                continue
+            how = carried(t, now[name])
+            if how is None:
+                plan.refused.append(f"{name}: {t} → {now[name]}")
+            else:
+                plan.kept[name] = how
+        plan.new = [name for name in now if name not in before]
+        return plan
+
+    def apply(self, data: dict[str, object]) -> dict[str, object]:
+        """The values of ``data`` (an instance's snapshot) the plan keeps, converted."""
+        return {n: how(data[n]) for n, how in self.kept.items() if n in data}
+
+    def notes(self) -> list[str]:
+        """What the plan drops and starts afresh (nothing: the values all stay)."""
+        out = []
+        if self.dropped:
+            out.append(f"dropped (no longer declared): {', '.join(self.dropped)}")
+        if self.new:
+            out.append(f"new, at their initial values: {', '.join(self.new)}")
+        return out

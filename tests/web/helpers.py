@@ -210,13 +210,15 @@ def online_cpu(
     name: str = "chart.s7g",
     operands: bool = False,
     messages: bool = False,
+    blocks: dict[str, str] | None = None,
 ) -> Iterator[OnlineRig]:
     """``chart`` written to ``tmp_path / name`` and run with a users file (name → role,
     password ``PASSWORD``), its bus on TLS on loopback with the certificates ``certs`` (as
     ``s7graph run`` insists with a users file: a client joins as ``client.olga``), the view
     when ``serve``; the CPU takes force jobs as ``s7graph run`` does, and publishes its
     operands when ``operands`` (``web.bus.operands``) and keeps its message list on the bus
-    when ``messages`` (the page's Alarms)."""
+    when ``messages`` (the page's Alarms); ``blocks``: S7-SCL sources (file name → text)
+    written beside the chart and run with it, as ``--blocks`` does."""
     from s7graph.sfb.alarms import message_list
     from s7graph.web.access.audit import AuditStore
     from s7graph.web.access.login import Authenticator
@@ -236,12 +238,15 @@ def online_cpu(
         users_file.add(user, role, PASSWORD)
     state = tmp_path / "state.sqlite"
     audit = AuditStore(state)
-    cc, table = load_chart(path)
-    session = ChartSession(cc, table, VirtualClock())
+    sources = []
+    for file, text in (blocks or {}).items():
+        sources.append(tmp_path / file)
+        sources[-1].write_text(text, encoding="utf-8")
+    session = ChartSession.load(path, None, VirtualClock(), blocks=sources)
     kept = message_list(session.cpu) if messages else None
     live = LiveGraph(session.graph, read=session.get, messages=kept)
     gate = Gate(Authenticator(users_file), audit)
-    online = OnlineChange(session, live, gate, path=path)
+    online = OnlineChange(session, live, gate, path=path, blocks=sources)
     endpoint = f"tls/localhost:{free_port()}"
     bus = ["--connect", endpoint, *certs.args("client.olga")]
     scans: list[int] = []

@@ -1,7 +1,8 @@
 """What the compiler process (``web.bus.compiler``) does with one request.
 
 ``answer(request)`` parses, validates and compiles a chart (``compile``; ``preview``: the
-same, only the change summary goes back), compares two charts (``summary``: an undo),
+same, only the change summary goes back) — with ``blocks``, the S7-SCL sources its calls
+reach too, the calls checked against their interfaces — compares two charts (``summary``: an undo),
 checks that a text parses (``check``: a save), or imports a file (``open``). Every
 refusal is ``{"refused": reason, "lines": diagnostics}`` with one line naming the place;
 nothing a request holds makes it raise.
@@ -21,6 +22,7 @@ from s7graph.sequencer.change.carry import fingerprint
 from s7graph.sequencer.change.diff import summarize
 from s7graph.sequencer.change.typed import parse_source
 from s7graph.sequencer.checks.diagnostics import format_diagnostic
+from s7graph.sequencer.checks.validate import validate
 from s7graph.sequencer.exchange import ImportFailed, import_file
 from s7graph.sequencer.text.format import format_chart
 from s7graph.sequencer.text.model import Chart
@@ -28,6 +30,7 @@ from s7graph.sequencer.text.parse import parse_chart
 from s7graph.web.bus.live import prepare_chart
 from s7graph.web.bus.pieces import dumps_in_pieces
 from s7graph.web.harness.project import CHART_CHOICE
+from s7graph.web.harness.scl import SclLoadError, compile_texts
 from s7graph.web.harness.session import ChartLoadError, compile_model
 
 __all__ = ["MAX_SUMMARY_LINES", "answer"]
@@ -125,6 +128,10 @@ def _compile(request: dict[str, Any], *, preview: bool) -> tuple[dict[str, Any],
     out: dict[str, Any] = {
         "summary": (lines[:MAX_SUMMARY_LINES], summary.removed_active, len(summary.changes))
     }
+    blocks = request.get("blocks")
+    portable: list[tuple[bytes, bytes]] = []
+    if blocks is not None:
+        out["blocks"] = _blocks(chart, table, list(blocks), portable)
     if preview:
         return out, []
     fingerprint(cc)  # kept with the chart: the scan boundary does not compute it
@@ -137,7 +144,27 @@ def _compile(request: dict[str, Any], *, preview: bool) -> tuple[dict[str, Any],
     out["parts"] = (len(pieces), len(code))
     step = SOURCE_PIECE
     text = [source[k : k + step].encode() for k in range(0, len(source), step)]
-    return out, [*pieces, *code, *text]
+    return out, [*pieces, *code, *text, *(blob for pair in portable for blob in pair)]
+
+
+def _blocks(
+    chart: Chart, table: SymbolTable, named: list[tuple[str, str]], portable: list[Any]
+) -> tuple[list[str], list[str], int]:
+    """The S7-SCL sources ``named`` compiled in order with the chart's symbol table (their
+    programs' bytes appended to ``portable``: ``steps.scl.portable``) and the chart's calls
+    checked against their interfaces; (files, warnings, programs)."""
+    try:
+        sources = compile_texts(named, table, portable=portable)
+    except SclLoadError as exc:
+        errors = [line for line in exc.lines if ": warning[" not in line] or exc.lines
+        raise _Refused(
+            f"the S7-SCL blocks do not compile: {len(errors)} error(s); {errors[0]}", exc.lines
+        ) from None
+    calls = [d for d in validate(chart, table, blocks=sources.interfaces()) if d.is_error]
+    if calls:
+        lines = [format_diagnostic(d) for d in calls]
+        raise _Refused(f"the chart's calls do not fit the new blocks: {lines[0]}", lines)
+    return list(sources.files), list(sources.warnings), len(sources.programs)
 
 
 def _summary(request: dict[str, Any]) -> dict[str, Any]:

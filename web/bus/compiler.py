@@ -19,6 +19,9 @@ lock. The rules:
   compiles source; it unpickles with the cyclic collector paused and, when the runner
   collects in the scan's idle time (automatic collections off), freezes each piece as it
   comes (``gc.freeze``) so that the scan's idle collections do not walk the new chart;
+- S7-SCL sources sent with a download (``blocks``) are compiled there too, after the
+  chart, and come back as bytes (``steps.scl.portable``): the CPU's process runs each
+  source's generated module once to make its blocks, and parses or compiles nothing;
 - a preview, a save and an open bring back text only (the change summary, the chart).
 
 Used by ``web.bus.online.OnlineChange`` from its one worker thread.
@@ -27,6 +30,7 @@ Used by ``web.bus.online.OnlineChange`` from its one worker thread.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import gc
 import marshal
 import os
@@ -51,6 +55,7 @@ from s7graph.sequencer.compiled import CompiledChart
 from s7graph.web.bus import compile_jobs
 from s7graph.web.bus.live import LiveChart
 from s7graph.web.bus.pieces import loads_in_pieces
+from s7graph.web.harness.scl import SclSources, load_texts
 
 __all__ = [
     "MAX_SOURCE",
@@ -109,6 +114,7 @@ class Compiled:
     table: SymbolTable
     live: LiveChart
     summary: Summary
+    blocks: SclSources | None = None  # the S7-SCL sources compiled with it, if sent
 
 
 @dataclass(frozen=True, slots=True)
@@ -232,11 +238,16 @@ class Compiler:
         fb: str,
         version: int,
         preview: bool = False,
+        blocks: list[tuple[str, str]] | None = None,
     ) -> Compiled | Summary:
         """``text`` compiled as version ``version`` of FB ``fb`` with the symbol table text
         ``symbols``, its change summary against the ``running`` chart's text with the
-        ``active`` steps; a ``preview`` brings back the summary only."""
+        ``active`` steps; a ``preview`` brings back the summary only. ``blocks``: the S7-SCL
+        sources (file, text) the chart's calls reach, compiled with it in that order (made
+        in this process of the child's bytes: ``web.harness.scl.load_texts``)."""
         _size_limit(text, "the chart")
+        if blocks is not None:
+            _size_limit("".join(t for _, t in blocks), "the S7-SCL sources (together)")
         request = {
             "op": "preview" if preview else "compile",
             "text": text,
@@ -246,12 +257,21 @@ class Compiler:
             "active": active,
             "fb": fb,
             "version": version,
+            "blocks": blocks,
         }
         reply, blobs = self._call(request, "download")
         summary = Summary(*reply["summary"])
         if preview:
             return summary
-        return _loaded(blobs, reply["parts"], summary)
+        if blocks is None:
+            return _loaded(blobs, reply["parts"], summary)
+        files, warnings, n = reply["blocks"]
+        cut = len(blobs) - 2 * n
+        pairs = [(blobs[k], blobs[k + 1]) for k in range(cut, len(blobs), 2)]
+        done = _loaded(blobs[:cut], reply["parts"], summary)
+        with collector_paused():
+            sources = load_texts(files, pairs, warnings, [t for _, t in blocks])
+        return dataclasses.replace(done, blocks=sources)
 
     def summarize(self, *, running: str, target: str, active: tuple[int, ...]) -> Summary:
         """The change summary from the ``running`` chart's text to ``target``'s, with the

@@ -19,6 +19,10 @@ summary. The chart before each download is kept: ``undo_download`` swaps it back
 way. The CPU keeps running the old chart through any refusal; nothing a sender writes
 reaches the scan but a compiled chart.
 
+A download may bring changed S7-SCL sources of the blocks the chart calls (``blocks``):
+compiled with the chart in the compiler's process, written beside it, swapped in with it at
+the same boundary (``web.bus.online_blocks``), kept with its version for ``undo_download``.
+
 Reads (``fb/<fb>/source``: :class:`ChartSource`; ``project``: :class:`ProjectFiles`) are
 queryables like the chart and the state.
 """
@@ -28,6 +32,7 @@ from __future__ import annotations
 import contextlib
 import hashlib
 import threading
+from collections.abc import Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -44,6 +49,7 @@ from s7graph.web.access.audit import Facts
 from s7graph.web.bus.compiler import Compiled, Compiler, CompileRefused, Opened, Summary
 from s7graph.web.bus.gate import Gate, with_note
 from s7graph.web.bus.live import LiveChart, LiveGraph
+from s7graph.web.bus.online_blocks import BlockFiles, BlocksRefused, swap_blocks
 from s7graph.web.bus.protocol import (
     ChartSource,
     Command,
@@ -63,6 +69,8 @@ from s7graph.web.harness.project import (
     restore_backup,
     write_chart,
 )
+from s7graph.web.harness.scl import SclSources
+from s7graph.web.harness.scl_reload import refusals
 from s7graph.web.harness.session import ChartSession
 
 __all__ = ["ENGINEERING_OPS", "MAX_WAITING", "Durability", "OnlineChange", "Version"]
@@ -85,6 +93,8 @@ class Version:
     table: SymbolTable
     text: str
     live: LiveChart | None = None  # the view's description, when the compiler made it
+    scl: SclSources | None = None  # the S7-SCL blocks beside it (None: none)
+    scl_texts: Mapping[str, str] = field(default_factory=dict)  # their sources by file name
 
 
 @dataclass(eq=False)
@@ -95,8 +105,10 @@ class _Swap:
     live: LiveChart
     removed: str | None
     user: str
+    blocks: SclSources | None = None  # S7-SCL blocks swapped in with the chart
     done: threading.Event = field(default_factory=threading.Event)
     report: SwapReport | None = None
+    notes: list[str] = field(default_factory=list)  # what the blocks' DBs did not keep
     refusal: str = ""
     cancelled: bool = False
     mark: int | None = None  # the scan whose commit makes the swap durable
@@ -122,8 +134,10 @@ class OnlineChange:
     checked and audited by ``gate``; ``path`` is the chart file (None: no file: a download
     writes nothing, there is no project directory), ``symbols`` the text of the symbol
     table file the chart was compiled with; ``compiler``: the process that compiles (by
-    default one of its own, started by :meth:`attach`). :meth:`attach` puts it on a bus
-    publisher; call :meth:`at_boundary` between two scans (the scan thread)."""
+    default one of its own, started by :meth:`attach`); ``blocks``: the S7-SCL source
+    files the chart's calls reach (``--blocks``), which a download may bring changed
+    (``web.bus.online_blocks``). :meth:`attach` puts it on a bus publisher; call
+    :meth:`at_boundary` between two scans (the scan thread)."""
 
     def __init__(
         self,
@@ -135,6 +149,7 @@ class OnlineChange:
         symbols: str = "",
         boundary_timeout_s: float = BOUNDARY_TIMEOUT_S,
         compiler: Compiler | None = None,
+        blocks: Sequence[Path] = (),
     ) -> None:
         self.session = session
         self.live = live
@@ -147,7 +162,10 @@ class OnlineChange:
         if self.path is not None:
             with contextlib.suppress(OSError, UnicodeDecodeError):
                 text = self.path.read_text(encoding="utf-8")
-        self.current = Version(1, session.cc, session.symbols, text)
+        self.block_files = BlockFiles(blocks)
+        scl = next((b for b in session.blocks if isinstance(b, SclSources)), None)
+        texts = dict(self.block_files.texts)
+        self.current = Version(1, session.cc, session.symbols, text, None, scl, texts)
         self.history: list[Version] = []  # the charts before each download, oldest first
         self.publisher: BusPublisher | None = None
         self.durability: Durability | None = None  # the runner: when a scan is on disk
@@ -295,19 +313,35 @@ class OnlineChange:
                 "look at the change again"
             )
         target: Version | None
+        scl_texts: Mapping[str, str]
         if op == "undo_download":
             if not self.history:
                 raise _Refused("no download to undo (the charts of the last 20 downloads are kept)")
             back = self.history[-1]
-            target = Version(self.current.number + 1, back.cc, back.table, back.text)
+            target = Version(
+                self.current.number + 1,
+                back.cc,
+                back.table,
+                back.text,
+                None,
+                back.scl,
+                back.scl_texts,
+            )
             summary = self.compiler.summarize(
                 running=self._source_of(self.current),
                 target=self._source_of(back),
                 active=self._active(),
             )
+            scl_changed = back.scl is not self.current.scl
+            scl_texts = back.scl_texts
         else:
-            target, summary = self._compile(str(command.args["source"]), preview=preview)
-        lines = list(summary.lines()) or ["no change: the CPU runs this chart"]
+            sent = self._sent_blocks(command)
+            target, summary = self._compile(str(command.args["source"]), preview, sent)
+            scl_changed, scl_texts = bool(sent), {**self.current.scl_texts, **sent}
+        same = "the chart does not change" if scl_changed else "no change: the CPU runs this chart"
+        lines = list(summary.lines()) or [same]
+        if scl_changed:
+            lines.append(_blocks_line(scl_texts, self.current))
         if preview:
             reply = CommandReply(
                 applied=True,
@@ -316,7 +350,7 @@ class OnlineChange:
                 removed=list(summary.removed_active),
             )
             return reply, f"preview of version {self.current.number + 1}: {summary.count} changes"
-        if op == "download" and summary.unchanged:
+        if op == "download" and summary.unchanged and not scl_changed:
             raise _Refused(
                 f"nothing changes: the CPU runs this chart (version {self.current.number})"
             )
@@ -327,10 +361,23 @@ class OnlineChange:
         cc, st = self.current.cc, self.session.graph.state
         return tuple(n for n, x in zip(cc.step_numbers, list(st.x), strict=False) if x)
 
-    def _compile(self, text: str, *, preview: bool) -> tuple[Version | None, Summary]:
-        """``text`` compiled with the CPU's symbol table in the compiler's process, and its
-        change summary (a preview: the summary only)."""
+    def _sent_blocks(self, command: Command) -> dict[str, str]:
+        """The S7-SCL sources a download brings that differ from the CPU's."""
+        sent = command.args.get("blocks") or {}
+        try:
+            self.block_files.merged(sent)
+        except BlocksRefused as exc:
+            raise _Refused(f"{command.op} refused: {exc}") from None
+        return self.block_files.changes(sent)
+
+    def _compile(
+        self, text: str, preview: bool, sent: dict[str, str]
+    ) -> tuple[Version | None, Summary]:
+        """``text`` compiled with the CPU's symbol table in the compiler's process, with the
+        changed S7-SCL sources ``sent`` (and the CPU's others), and its change summary (a
+        preview: the summary only)."""
         v = self.current
+        blocks = self.block_files.merged(sent) if sent else None
         file = self.path.name if self.path is not None else f"{v.cc.name}.s7g"
         done = self.compiler.compile(
             text,
@@ -341,10 +388,12 @@ class OnlineChange:
             fb=self.live.fb,
             version=v.number + 1,
             preview=preview,
+            blocks=blocks,
         )
         if not isinstance(done, Compiled):
             return None, done
-        return Version(v.number + 1, done.cc, done.table, text, done.live), done.summary
+        scl, texts = (done.blocks, {**v.scl_texts, **sent}) if sent else (v.scl, v.scl_texts)
+        return Version(v.number + 1, done.cc, done.table, text, done.live, scl, texts), done.summary
 
     def _source_of(self, v: Version) -> str:
         """Chart version ``v`` as ``.s7g`` text (the first, when imported from another
@@ -361,16 +410,24 @@ class OnlineChange:
         """Write the file, swap at the boundary, keep the old version; undo when refused."""
         backup = None
         written = False
+        blocks = target.scl if target.scl is not self.current.scl else None
+        if blocks is not None:
+            with contextlib.suppress(RuntimeError):  # the boundary checks again, for sure
+                if refused := refusals(self.session.cpu, blocks):
+                    why = "; ".join(refused)
+                    raise _Refused(f"{command.op} refused: {why}; the CPU keeps the old blocks")
+        files = self._write_blocks(command, target) if blocks is not None else []
         if self.path is not None:
             try:
                 backup = write_chart(self.path, target.text)
                 written = True
             except ProjectError as exc:
+                self.block_files.restore(files)
                 raise _Refused(
                     f"{command.op} refused: {exc}; the CPU keeps the old chart"
                 ) from None
         live = target.live or self.live.prepare(target.cc, version=target.number)
-        pending = _Swap(target, live, removed, command.user)
+        pending = _Swap(target, live, removed, command.user, blocks)
         with self._lock:
             self._swap = pending
         pending.done.wait(self._timeout)
@@ -387,6 +444,8 @@ class OnlineChange:
                     restore_backup(self.path, backup)  # type: ignore[arg-type]
                 except ProjectError as exc:
                     reason += f"; and {exc}"
+            if problem := self.block_files.restore(files):
+                reason += f"; and {problem}"
             raise _Refused(f"{command.op} refused: {reason}; the CPU keeps the old chart")
         old = self.current
         if command.op == "undo_download":
@@ -394,9 +453,12 @@ class OnlineChange:
         else:
             self.history = [*self.history, old][-MAX_HISTORY:]
         self.current = target
+        self.block_files.adopt(target.scl_texts)
         if self.publisher is not None:
             self.publisher.set_chart(self.live.fb, live.layout)
         lines = [*pending.report.lines(), *summary.lines()]
+        if blocks is not None:
+            lines += [_blocks_line(target.scl_texts, old), *pending.notes]
         where = f"; {self.path.name} written" if self.path is not None else ""
         kept = f", the old file kept as {backup.name}" if backup is not None else ""
         head = f"version {target.number} runs (was {old.number}){where}{kept}"
@@ -422,25 +484,45 @@ class OnlineChange:
                 return
             try:
                 session = self.session
-                report = swap(
-                    session.graph,
-                    pending.target.cc,
-                    session.cpu,
-                    removed=pending.removed,
-                    user=pending.user,
-                )
+                back = None
+                if pending.blocks is not None:
+                    pending.notes, back = swap_blocks(session, pending.blocks)
+                try:
+                    report = swap(
+                        session.graph,
+                        pending.target.cc,
+                        session.cpu,
+                        removed=pending.removed,
+                        user=pending.user,
+                    )
+                except Exception:
+                    if back is not None:
+                        back()  # the old blocks with the old chart
+                    raise
                 session.symbols = pending.target.table
                 self.live.switch(pending.live)
                 pending.report = report
                 if self.durability is not None:
                     pending.mark = self.durability.durable_mark()
-            except SwapRefused as exc:
+            except (SwapRefused, BlocksRefused) as exc:
                 pending.refusal = str(exc)
             except Exception as exc:  # the old chart keeps running
                 pending.refusal = f"{type(exc).__name__}: {exc}"
             pending.done.set()
 
     # ------------------------------------------------------------ files
+
+    def _write_blocks(self, command: Command, target: Version) -> list[tuple[Path, Path | None]]:
+        """Write the S7-SCL sources ``target`` changes into the CPU's files (none without
+        a chart file: a CPU that writes nothing)."""
+        if self.path is None:
+            return []
+        was = self.current.scl_texts
+        changed = {n: t for n, t in target.scl_texts.items() if was.get(n) != t}
+        try:
+            return self.block_files.write(changed)
+        except BlocksRefused as exc:
+            raise _Refused(f"{command.op} refused: {exc}") from None
 
     def _file(self, name: str) -> Path:
         if self.directory is None:
@@ -551,10 +633,25 @@ def _unconfirmed(reply: CommandReply, timeout_s: float) -> CommandReply:
 
 
 def _audited_args(command: Command) -> dict[str, object]:
-    """A command's arguments for the audit: a chart's text by its size and hash."""
+    """A command's arguments for the audit: a chart's and each S7-SCL source's text by its
+    size and hash."""
     args: dict[str, object] = dict(command.args)
     source = args.get("source")
     if isinstance(source, str):
-        digest = hashlib.sha256(source.encode()).hexdigest()[:12]
-        args["source"] = f"{len(source):,} characters, sha256 {digest}"
+        args["source"] = _sized(source)
+    blocks = args.get("blocks")
+    if isinstance(blocks, dict):
+        args["blocks"] = {name: _sized(str(text)) for name, text in blocks.items()}
     return args
+
+
+def _sized(text: str) -> str:
+    digest = hashlib.sha256(text.encode()).hexdigest()[:12]
+    return f"{len(text):,} characters, sha256 {digest}"
+
+
+def _blocks_line(texts: Mapping[str, str], old: Version) -> str:
+    """Which S7-SCL sources a change to ``texts`` brings."""
+    was = old.scl_texts
+    changed = [n for n, t in texts.items() if was.get(n) != t]
+    return f"S7-SCL blocks changed: {', '.join(changed) or 'the same sources, compiled again'}"

@@ -992,6 +992,14 @@ def download(
         ),
     ] = None,
     yes: Annotated[bool, typer.Option("--yes", help="Download without asking.")] = False,
+    blocks: Annotated[
+        list[Path] | None,
+        typer.Option(
+            "--blocks",
+            help="A changed S7-SCL source the CPU runs with the chart (several allowed): "
+            "swapped in with it, instance values kept by name.",
+        ),
+    ] = None,
 ) -> None:
     """Download a changed chart into the running FB (online change): the change summary,
     then the swap at a scan boundary with the state carried over by step number."""
@@ -1000,7 +1008,10 @@ def download(
     if removed is not None and removed not in ("keep", "init"):
         raise typer.BadParameter("--removed must be keep or init")
     net = _net(cpu=cpu, connect=connect, tls_ca=tls_ca)
-    raise typer.Exit(download_command(net, chart, fb=fb, user=user, removed=removed, yes=yes))
+    code = download_command(
+        net, chart, fb=fb, user=user, removed=removed, yes=yes, blocks=blocks or []
+    )
+    raise typer.Exit(code)
 
 
 # ---------------------------------------------------------------- certificates

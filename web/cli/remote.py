@@ -17,7 +17,7 @@ import os
 import socket
 import sys
 import threading
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import TypeVar
 
@@ -188,19 +188,28 @@ def download_command(
     removed: str | None = None,
     yes: bool = False,
     timeout: float = 30.0,
+    blocks: Sequence[Path] = (),
 ) -> int:
-    """``s7graph download CHART.s7g``: the change summary, a confirmation (``yes`` skips
-    it), then the download into the running FB; 0 downloaded, 1 refused or not confirmed,
-    2 a usage or bus error."""
+    """``s7graph download CHART.s7g [--blocks B.scl …]``: the change summary, a
+    confirmation (``yes`` skips it), then the download into the running FB (with the
+    changed S7-SCL sources ``blocks``, by file name); 0 downloaded, 1 refused or not
+    confirmed, 2 a usage or bus error."""
+    sources: dict[str, str] = {}
     try:
         source = chart.read_text(encoding="utf-8")
+        for path in blocks:
+            if path.name in sources:
+                return _fail(f"--blocks {path}: a source named {path.name} is given twice")
+            sources[path.name] = path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:
-        return _fail(f"cannot read {chart}: {getattr(exc, 'strerror', None) or exc}")
+        where = getattr(exc, "filename", None) or chart
+        return _fail(f"cannot read {where}: {getattr(exc, 'strerror', None) or exc}")
+    sent: dict[str, str] | msgspec.UnsetType = sources or msgspec.UNSET
     with _logged_in(net, fb=fb, user=user) as shell:
         if isinstance(shell, int):
             return shell
         try:
-            asked = DownloadArgs(source=source, preview=True)
+            asked = DownloadArgs(source=source, preview=True, blocks=sent)
             preview = shell.send(Download, asked, timeout=timeout)
         except (TypeError, ValueError) as exc:
             return _fail(str(exc))
@@ -223,7 +232,7 @@ def download_command(
                 file=sys.stderr,
             )
             return 1
-        args = DownloadArgs(source=source)
+        args = DownloadArgs(source=source, blocks=sent)
         if preview.version is not None:
             args = msgspec.structs.replace(args, base=preview.version)
         if removed is not None:

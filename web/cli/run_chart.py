@@ -47,6 +47,7 @@ from s7graph.web.cli.run_program import run_until_stopped
 from s7graph.web.cli.supervisor import child_marks, recovered_cause
 from s7graph.web.harness.persist import OpenedState, open_state, refusal
 from s7graph.web.harness.plant import LoadedPlant, PlantError, load_plant
+from s7graph.web.harness.scl import SclSources
 from s7graph.web.harness.session import ChartSession
 
 if TYPE_CHECKING:
@@ -344,7 +345,8 @@ def _serve(
     opcua: OpcuaFace | None = None,
 ) -> tuple[LiveEdge, list[ViewProcess]]:
     """The CPU on the bus (and the recording) of the session's GraphFB, its online change
-    (``path``: the chart file a download rewrites), and the view's process (not started
+    (``path``: the chart file a download rewrites, with the session's S7-SCL source files
+    it may bring changed), and the view's process (not started
     yet) when ``web``; prints where to look."""
     from s7graph.web.bus.block_sources import serve_blocks
     from s7graph.web.bus.forcing import Forcing
@@ -370,7 +372,8 @@ def _serve(
     )
     gate = cpu_gate(net.users, store, cpu=session.cpu)
     table = symbols.read_text(encoding="utf-8-sig") if symbols is not None else ""
-    online = OnlineChange(session, live, gate, path=path, symbols=table)
+    blocks = [Path(f) for b in session.blocks if isinstance(b, SclSources) for f in b.files]
+    online = OnlineChange(session, live, gate, path=path, symbols=table, blocks=blocks)
     inline = web and in_process
     edge = LiveEdge(
         live,

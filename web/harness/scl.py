@@ -27,6 +27,7 @@ from s7graph.engine.text import NotUtf8, decode_utf8
 from s7graph.sequencer.checks.interfaces import ProgramBlocks, program_blocks
 from s7graph.sequencer.fb import GraphFB, cold_restart_ob, startup_obs
 from s7graph.steps.scl import SclError, SclProgram, compile_scl, format_diagnostic
+from s7graph.steps.scl.portable import compile_portable, load_portable
 
 __all__ = [
     "BlockText",
@@ -36,7 +37,9 @@ __all__ = [
     "block_texts",
     "chain_obs",
     "compile_sources",
+    "compile_texts",
     "load_beside",
+    "load_texts",
     "read_source",
     "scl_of",
 ]
@@ -152,23 +155,56 @@ def compile_sources(paths: Sequence[Path], symbols: SymbolTable | None = None) -
     """Compile ``paths`` in order (see the module docstring); ``SclLoadError`` with the
     diagnostics of the first source that does not compile, ``S7Error`` for one that cannot
     be read."""
+    return compile_texts([(str(path), read_source(path)) for path in paths], symbols)
+
+
+def compile_texts(
+    named: Sequence[tuple[str, str]],
+    symbols: SymbolTable | None = None,
+    *,
+    portable: list[tuple[bytes, bytes]] | None = None,
+) -> SclSources:
+    """Compile the sources ``named`` (file, text) in order as :func:`compile_sources` does;
+    with ``portable`` (a list), each program's bytes are appended to it for
+    :func:`load_texts` in another process (``steps.scl.portable``)."""
     out = SclSources()
     known: list[FB | FC] = list(sfb.SYSTEM_BLOCKS)
     places: dict[str, str] = {}
     of: dict[int, str] = {}
-    for path in paths:
-        text = read_source(path)
+    for file, text in named:
         try:
-            program = compile_scl(text, str(path), blocks=known, symbols=symbols)
+            if portable is None:
+                program = compile_scl(text, file, blocks=known, symbols=symbols)
+            else:
+                program, data = compile_portable(text, file, blocks=known, symbols=symbols)
+                portable.append(data)
         except SclError as exc:
             raise SclLoadError([format_diagnostic(d) for d in exc.diagnostics]) from None
         except RecursionError:
-            raise SclLoadError([f"{path}: the source nests too deeply to compile"]) from None
-        _no_twice(program, str(path), places, of)
+            raise SclLoadError([f"{file}: the source nests too deeply to compile"]) from None
+        _no_twice(program, file, places, of)
         out.programs.append(program)
-        out.files.append(str(path))
+        out.files.append(file)
         out.texts.append(text)
         out.warnings += [format_diagnostic(d) for d in program.diagnostics]
+        known += [b for b in program.blocks if isinstance(b, FB | FC)]
+    return out
+
+
+def load_texts(
+    files: Sequence[str],
+    portable: Sequence[tuple[bytes, bytes]],
+    warnings: Sequence[str] = (),
+    texts: Sequence[str] = (),
+) -> SclSources:
+    """The sources :func:`compile_texts` compiled (``portable``: their bytes, in order) made
+    in this process without compiling anything (``steps.scl.portable``); ``texts``: their
+    texts, as ``files`` (the blocks' sources the CPU serves)."""
+    out = SclSources(files=list(files), warnings=list(warnings), texts=list(texts))
+    known: list[FB | FC] = list(sfb.SYSTEM_BLOCKS)
+    for data in portable:
+        program = load_portable(data, known)
+        out.programs.append(program)
         known += [b for b in program.blocks if isinstance(b, FB | FC)]
     return out
 

@@ -11,6 +11,13 @@ changed comes back with its new initial values; the charts' OB1, OB100 and OB102
 to the new sources' again. It returns one note per change of a DB, as a state file's
 carry-over does; ``BlockError`` (nothing changed then is not promised: call it between two
 scans, the CPU's program as the sources left it) when the new sources cannot be loaded.
+
+``refusals(cpu, new)`` says what an online change of the bus refuses before it reloads
+(docs/online-change.md, "S7-SCL blocks"): an instance DB of a changed FB where a variable
+changes type in a way its value does not survive (``steps.scl.state.carried``), or one the
+new sources make the instance of another FB. Where nothing is refused, a changed FB's
+instances keep every variable by name, converted where the type widens losslessly
+(``CarryPlan``); the notes say which variables went and which came new.
 """
 
 from __future__ import annotations
@@ -20,9 +27,10 @@ from typing import Any
 
 from s7graph.engine.blocks import FB, InstanceDB
 from s7graph.sequencer.fb import GraphFB
+from s7graph.steps.scl.state import CarryPlan, SclState
 from s7graph.web.harness.scl import SclSources, chain_obs
 
-__all__ = ["reload_sources"]
+__all__ = ["refusals", "reload_sources"]
 
 
 def reload_sources(
@@ -56,6 +64,33 @@ def reload_sources(
     return notes
 
 
+def refusals(cpu: Any, new: SclSources) -> list[str]:
+    """Why ``new`` cannot replace the running sources of ``cpu`` with every instance's
+    values carried: one line per instance DB (nothing: it can)."""
+    fbs = {b.label: b for b in new.blocks if isinstance(b, FB)}
+    out: list[str] = []
+    for number, label in sorted(new.instances.items()):
+        have = cpu.instance_dbs.get(number)
+        if have is not None and have.fb.label != label:
+            out.append(
+                f"DB{number} is the instance DB of {have.fb.label} in the CPU; the new "
+                f"sources make it one of {label}"
+            )
+    for number, idb in sorted(cpu.instance_dbs.items()):
+        fb = fbs.get(idb.fb.label)
+        if fb is None or fb is idb.fb:
+            continue
+        old_fmt, fmt = idb.fb.state_format, fb.state_format
+        if isinstance(old_fmt, SclState) and isinstance(fmt, SclState):
+            refused = CarryPlan.between(old_fmt, fmt).refused
+            if refused:
+                out.append(
+                    f"DB{number} ({fb.label}): {'; '.join(refused)}: the value cannot be "
+                    "carried over (rename the variable to start it afresh)"
+                )
+    return out
+
+
 def _global_types(sources: SclSources | None) -> dict[str, Any]:
     if sources is None:
         return {}
@@ -81,6 +116,15 @@ def _carry(idb: InstanceDB, before: FB, data: dict[str, object]) -> list[str]:
     if fmt is None or old_fmt is None or old_fmt.fingerprint == fmt.fingerprint:
         idb.restore(data)
         return []
-    kept, notes = fmt.adapt(old_fmt.shape(), data)
+    plan = (
+        CarryPlan.between(old_fmt, fmt)
+        if isinstance(old_fmt, SclState) and isinstance(fmt, SclState)
+        else None
+    )
+    if plan is not None and not plan.refused:
+        kept = plan.apply(data)
+        notes = [f"interface changed; variables kept by name ({len(kept)})", *plan.notes()]
+    else:
+        kept, notes = fmt.adapt(old_fmt.shape(), data)
     idb.restore(kept)
     return [f"DB{idb.number} {fb.label} {fb.name!r}: {note}" for note in notes]

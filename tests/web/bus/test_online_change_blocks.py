@@ -1,0 +1,235 @@
+"""A download that brings changed S7-SCL blocks, over a real zenoh bus (docs/online-change.md,
+"S7-SCL blocks"): compiled in the CPU's compiler process, the chart's calls checked against
+the new interfaces, swapped in with the chart at one scan boundary, the instance DB keeping
+its values by name; refusals give a reason and leave the old blocks running; the block file
+is rewritten with a numbered backup; an undo puts the old blocks back. Then through
+``s7graph run --blocks`` and ``s7graph download --blocks`` as real processes, the change
+surviving a restart."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import pytest
+
+from s7graph.web.access.audit import read_audit
+from s7graph.web.bus.client import BusClient
+from s7graph.web.bus.protocol import Command, CommandReply
+from s7graph.web.bus.session import open_session
+from s7graph.web.commands import Download, DownloadArgs, checked, make_command
+from s7graph.web.harness.session import ChartSession
+from tests.paths import ROOT
+from tests.web.helpers import PASSWORD, cpu_process, online_cpu, wait_until
+
+if TYPE_CHECKING:
+    from tests.conftest import BusCerts
+
+pytestmark = pytest.mark.timeout(120)
+
+CHART = """FUNCTION_BLOCK "Seq" FB 1 DB 1
+SEQUENCE 1 "S"
+  INITIAL_STEP S1 "count":
+    CALL FB 17, DB 10 (go := TRUE);
+  END_STEP
+  STEP S2 "never": END_STEP
+  TRANSITION T1 FROM S1 TO S2 := FALSE;
+END_SEQUENCE
+END_FUNCTION_BLOCK
+"""
+BLOCKS = """FUNCTION_BLOCK FB17
+VAR_INPUT go : BOOL; END_VAR
+VAR n : INT; old : INT; END_VAR
+  IF go THEN n := n + 1; END_IF;
+END_FUNCTION_BLOCK
+"""
+# n by 1000 now, ``old`` dropped, ``fresh`` new (from 5), ``n`` an INT → DINT carried
+CHANGED = """FUNCTION_BLOCK FB17
+VAR_INPUT go : BOOL; END_VAR
+VAR n : DINT; fresh : INT := 5; END_VAR
+  IF go THEN n := n + 1000; fresh := fresh + 1; END_IF;
+END_FUNCTION_BLOCK
+"""
+
+
+@dataclass
+class Cpu:
+    session: ChartSession
+    client: BusClient
+    path: Path
+    state: Path
+    token: str
+
+    def send(self, op: str, **args: object) -> CommandReply:
+        command = Command(op=op, fb="Seq", user="eng", token=self.token, args=args)  # type: ignore[arg-type]
+        return self.client.send(command, timeout=30)
+
+    def n(self) -> int:
+        return int(self.session.get("DB10.n"))
+
+    def grows_by(self, step: int) -> bool:
+        """``n`` goes on growing by ``step`` a scan."""
+        first = self.n()
+        return wait_until(lambda: self.n() >= first + 3 * step and (self.n() - first) % step == 0)
+
+
+@pytest.fixture
+def cpu(tmp_path: Path, bus_certs: BusCerts) -> Iterator[Cpu]:
+    with (
+        online_cpu(
+            tmp_path,
+            CHART,
+            serve=False,
+            users={"eng": "engineer"},
+            certs=bus_certs,
+            name="seq.s7g",
+            blocks={"fb17.scl": BLOCKS},
+        ) as rig,
+        open_session(connect=[rig.endpoint], tls=rig.tls) as view,
+        BusClient(view, "cpu1") as client,
+    ):
+        assert wait_until(lambda: client.status() is not None)
+        login = client.login("eng", PASSWORD)
+        assert login.ok, login.reason
+        yield Cpu(rig.session, client, rig.path, rig.state, login.token)
+
+
+def test_a_download_swaps_changed_blocks_in_keeping_the_instance_values_by_name(
+    cpu: Cpu,
+) -> None:
+    assert wait_until(lambda: cpu.n() > 5)
+    preview = cpu.send("download", source=CHART, blocks={"fb17.scl": CHANGED}, preview=True)
+    assert preview.applied, preview.reason
+    assert "S7-SCL blocks changed: fb17.scl" in preview.lines
+    reply = cpu.send("download", source=CHART, blocks={"fb17.scl": CHANGED})
+    assert reply.applied, reply.reason
+    assert reply.version == 2
+    notes = "\n".join(reply.lines)
+    assert "DB10 FB17 'FB17': dropped (no longer declared): old" in notes
+    assert "DB10 FB17 'FB17': new, at their initial values: fresh" in notes
+    assert cpu.grows_by(1000)  # the new code, on the value n had: carried as a DINT
+    assert cpu.n() % 1000 != 0 and int(cpu.session.get("DB10.fresh")) > 5
+    block_file = cpu.path.parent / "fb17.scl"
+    assert block_file.read_text(encoding="utf-8") == CHANGED
+    assert (cpu.path.parent / "fb17.scl.~1~").read_text(encoding="utf-8") == BLOCKS
+    rows = [r for r in read_audit(cpu.state) if r.op == "download" and r.outcome == "applied"]
+    assert rows and "fb17.scl" in rows[-1].args and "sha256" in rows[-1].args
+
+    back = cpu.send("undo_download")  # n would narrow from DINT to INT: refused
+    assert not back.applied and "DB10 (FB17): n: DINT → INT" in back.reason, back.reason
+    assert cpu.grows_by(1000) and block_file.read_text(encoding="utf-8") == CHANGED
+
+    by_7 = CHANGED.replace("n + 1000", "n + 7")
+    assert cpu.send("download", source=CHART, blocks={"fb17.scl": by_7}).applied
+    assert cpu.grows_by(7)
+    back = cpu.send("undo_download")  # the blocks before, the values carried back
+    assert back.applied, back.reason
+    assert "S7-SCL blocks changed: fb17.scl" in back.lines
+    assert cpu.grows_by(1000) and block_file.read_text(encoding="utf-8") == CHANGED
+
+
+def test_refusals_give_a_reason_and_the_old_blocks_run_on(cpu: Cpu) -> None:
+    assert wait_until(lambda: cpu.n() > 2)
+    cases = {
+        "n : BOOL; old : INT; END_VAR\n  IF go THEN n := NOT n;": (
+            "DB10 (FB17): n: INT → BOOL: the value cannot be carried over"
+        ),
+        "n : INT; old : INT; END_VAR\n  IF go THEN n := n + TRUE;": (
+            "the S7-SCL blocks do not compile"
+        ),
+    }
+    for change, reason in cases.items():
+        text = BLOCKS.replace("n : INT; old : INT; END_VAR\n  IF go THEN n := n + 1;", change)
+        assert text != BLOCKS
+        reply = cpu.send("download", source=CHART, blocks={"fb17.scl": text})
+        assert not reply.applied and reason in reply.reason, reply.reason
+        assert "keeps the old" in reply.reason or "do not compile" in reply.reason
+    no_input = BLOCKS.replace("VAR_INPUT go : BOOL; END_VAR\n", "").replace("IF go", "IF TRUE")
+    reply = cpu.send("download", source=CHART, blocks={"fb17.scl": no_input})
+    assert not reply.applied and "the chart's calls do not fit the new blocks" in reply.reason
+    assert any("E047" in line for line in reply.lines), reply.lines
+    reply = cpu.send("download", source=CHART, blocks={"other.scl": BLOCKS})
+    assert not reply.applied and "runs no S7-SCL source other.scl" in reply.reason
+    reply = cpu.send("download", source=CHART, blocks={"fb17.scl": BLOCKS})
+    assert not reply.applied and "nothing changes" in reply.reason
+    # the blocks swap, then the chart's is refused at the same boundary: both go back
+    s3 = CHART.replace("INITIAL_STEP S1", "INITIAL_STEP S3").replace("FROM S1", "FROM S3")
+    reply = cpu.send("download", source=s3, blocks={"fb17.scl": CHANGED})
+    assert not reply.applied and "active steps S1 are not in the new chart" in reply.reason
+    assert cpu.session.cpu.block("FB17").interface[1].type == "INT"  # the old FB17
+    assert cpu.grows_by(1)  # the old FB runs on
+    assert (cpu.path.parent / "fb17.scl").read_text(encoding="utf-8") == BLOCKS
+    assert not (cpu.path.parent / "fb17.scl.~1~").exists()
+    assert cpu.path.read_text(encoding="utf-8") == CHART
+
+
+def test_a_download_without_blocks_leaves_them_as_they_are(cpu: Cpu) -> None:
+    edited = CHART.replace('"never"', '"never ever"')
+    reply = cpu.send("download", source=edited)
+    assert reply.applied, reply.reason
+    assert not any("S7-SCL" in line for line in reply.lines)
+    assert cpu.grows_by(1)
+
+
+def _cli(tmp_path: Path, *args: str) -> subprocess.CompletedProcess[str]:
+    env = {**os.environ, "S7GRAPH_PASSWORD": "unused"}
+    endpoint = f"unixsock-stream/{tmp_path}/bus.sock"
+    return subprocess.run(
+        [sys.executable, "-m", "s7graph", *args, "--connect", endpoint, "--user", "eng"],
+        cwd=ROOT,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+
+
+def _value(client: BusClient, name: str) -> int:
+    got = client.watch([name], timeout=10)
+    assert not got.error, got.error
+    return int(got.values[0].value)  # type: ignore[arg-type]
+
+
+def test_s7graph_download_blocks_into_s7graph_run_and_the_change_survives_a_restart(
+    tmp_path: Path,
+) -> None:
+    chart, blocks, state = tmp_path / "seq.s7g", tmp_path / "fb17.scl", tmp_path / "s.sqlite"
+    chart.write_text(CHART, encoding="utf-8")
+    blocks.write_text(BLOCKS, encoding="utf-8")
+    changed = tmp_path / "edit" / "fb17.scl"
+    changed.parent.mkdir()
+    changed.write_text(CHANGED, encoding="utf-8")
+    args = [str(chart), "--blocks", str(blocks), "--state", str(state), "--duration-s", "100"]
+    with cpu_process(tmp_path, args, fb="Seq", terminate=True) as (_, client, _):
+        assert wait_until(lambda: _value(client, "DB10.n") > 3)
+        done = _cli(tmp_path, "download", str(chart), "--blocks", str(changed), "--yes")
+        assert done.returncode == 0, done.stdout + done.stderr
+        assert "S7-SCL blocks changed: fb17.scl" in done.stdout
+        assert "new, at their initial values: fresh" in done.stdout
+        assert "download applied" in done.stdout
+        assert wait_until(lambda: _value(client, "DB10.n") > 3000)
+        carried = _value(client, "DB10.n") % 1000  # n when downloaded: below 1000
+        assert carried != 0
+        missing = _cli(tmp_path, "download", str(chart), "--blocks", str(tmp_path / "x.scl"))
+        assert missing.returncode == 2 and "cannot read" in missing.stderr
+    assert blocks.read_text(encoding="utf-8") == CHANGED
+    with cpu_process(tmp_path, args, fb="Seq", terminate=True) as (_, client, _):
+        first = _value(client, "DB10.n")
+        assert first > 3000 and first % 1000 == carried  # carried, then kept on disk
+        assert wait_until(lambda: _value(client, "DB10.n") >= first + 3000)  # the new code
+        assert _value(client, "DB10.fresh") > 5
+
+
+def test_the_command_carries_at_most_8_sources_and_old_senders_need_none() -> None:
+    many = {f"s{i}.scl": "" for i in range(9)}
+    with pytest.raises(ValueError, match="blocks"):
+        checked(Download(fb="Seq", args=DownloadArgs(source=CHART, blocks=many)))
+    eight = dict(list(many.items())[:8])
+    assert checked(Download(fb="Seq", args=DownloadArgs(source=CHART, blocks=eight)))
+    old = make_command(op="download", fb="Seq", args={"source": CHART})
+    assert isinstance(old, Download) and "blocks" not in old.args
