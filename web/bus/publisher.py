@@ -556,6 +556,11 @@ class BusPublisher:
 
         self._declared.append(self._session.declare_queryable(key, on_query))
 
+    def _cpu_wide(self, command: Command) -> bool:
+        """Whether ``command`` acts on the CPU whatever FB it names: the switch's ops and
+        forcing, and on a CPU without an FB ``ack_msg`` (the message list is the CPU's)."""
+        return type(command).where in _CPU_WIDE or (not self._charts and command.op == "ack_msg")
+
     def _chart_of(self, fb: str) -> bytes | None:
         return self._chart_bytes.get(fb)
 
@@ -622,7 +627,7 @@ class BusPublisher:
             return
         note = claimed_note(command.origin)
         command = msgspec.structs.replace(command, origin=source)
-        if command.fb not in self._charts and type(command).where not in _CPU_WIDE:
+        if command.fb not in self._charts and not self._cpu_wide(command):
             runs = f"runs {', '.join(self._charts)}" if self._charts else "runs no GRAPH FB"
             reason = f"unknown FB {command.fb!r}; this CPU {runs}"
             self._refuse(query, command, reason, source, note)
