@@ -438,8 +438,8 @@ MAX_DIAG_ENTRIES = 1000
 
 class DiagEvent(_Msg, frozen=True, kw_only=True):
     """One entry of the CPU's diagnostic buffer, as STEP 7's "Diagnostic Buffer" lists it:
-    ``number`` counts the entries the CPU process has held (the newest has the highest;
-    1 is the oldest it read back from the state file), ``event_id`` (``16#4302`` is
+    ``number`` is its place among the entries the CPU wrote to its state file (kept across
+    restarts; the newest has the highest), ``event_id`` (``16#4302`` is
     17154) with its ``text``, what the entry says (``info``) and the block and address it
     names, the OB the event requests (``ob``, 0: none) and the priority class that OB runs
     in, the time on the CPU's clock (``t_ms``) and on the wall clock (``wall_ms``, ms since

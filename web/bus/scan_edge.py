@@ -215,7 +215,7 @@ class CpuEdge:
             if forces is not None:
                 publisher.publish_forces(forces)
         if self.diag is not None:
-            self.diag.at_boundary()
+            self.diag.at_boundary(runner)
         if self.watching is not None:  # within what the commands left of the share
             self.watching.at_boundary(record.t_ns // 1_000_000, until_ns)
 
