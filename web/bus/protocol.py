@@ -1,9 +1,18 @@
 """Wire messages between a CPU and its views: frozen msgspec structs, JSON on the bus.
 
-Every struct forbids unknown fields and bounds its numbers, strings and lists, so a hostile
-message is refused with a :class:`ProtocolError` naming the bad field (``$.args.step``),
-never an exception that escapes. Schema evolution follows msgspec's rules: a new field gets
-a default, a field never changes type.
+Every struct bounds its numbers, strings and lists, so a hostile message is refused with a
+:class:`ProtocolError` naming the bad field (``$.args.step``), never an exception that
+escapes.
+
+How messages evolve (docs/bus.md, "How messages evolve"): what the CPU takes — a command
+and its arguments (``web.commands``), a :class:`LoginRequest`, a :class:`WatchRequest` —
+is strict: an unknown field is refused. What the CPU says (status, deltas, alarms, the
+diagnostic buffer, charts, replies …) is read leniently: a reader ignores a field it does
+not know, so a newer CPU may add fields (each with a default) and older readers go on
+reading. A field never changes type or meaning and is never removed; a change that would
+need that raises :data:`PROTOCOL`, which :class:`CpuStatus` carries as ``v``.
+:class:`CpuStatus` leaves out fields at their default, so readers from before this rule
+(strict everywhere) read every status but one naming a STOP's entries.
 """
 
 from __future__ import annotations
@@ -42,6 +51,7 @@ __all__ = [
     "MAX_MESSAGE_BYTES",
     "MODES",
     "OPS",
+    "PROTOCOL",
     "REMOVED_CHOICES",
     "ActionInfo",
     "AlarmEntry",
@@ -89,6 +99,9 @@ __all__ = [
 ]
 
 SCHEMA = 1
+PROTOCOL = 1
+"""The bus protocol's version: raised only by a change an older reader cannot ignore (a
+field removed, or one that changes type or meaning); a new field with a default is not."""
 MAX_MESSAGE_BYTES = 1 << 20  # refuse anything larger before decoding it
 
 Event = Literal["S1", "S0", "V1", "V0", "L1", "L0", "A1", "R1"]
@@ -116,8 +129,12 @@ class ProtocolError(ValueError):
     """A message that does not decode to the expected struct; the text says where and why."""
 
 
-class _Msg(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
-    pass
+class _Msg(Struct, frozen=True, kw_only=True):
+    """What the CPU says: a reader ignores the fields it does not know."""
+
+
+class _Request(_Msg, frozen=True, forbid_unknown_fields=True, kw_only=True):
+    """What the CPU takes: strict, an unknown field is refused."""
 
 
 # ---------------------------------------------------------------- chart structure
@@ -469,8 +486,10 @@ class DiagBuffer(_Msg, frozen=True, kw_only=True):
     entries: Annotated[list[DiagEvent], Meta(max_length=MAX_DIAG_ENTRIES)] = []
 
 
-class CpuStatus(_Msg, frozen=True, kw_only=True):
-    """``status``: the CPU's run state and its FBs; published on change and at 1 Hz."""
+class CpuStatus(_Msg, frozen=True, kw_only=True, omit_defaults=True):
+    """``status``: the CPU's run state and its FBs; published on change and at 1 Hz. A
+    field at its default is left out of the JSON; ``v`` is the :data:`PROTOCOL` the CPU
+    speaks (left out: 1)."""
 
     cpu: Name
     state: CpuState = "RUN"
@@ -483,6 +502,7 @@ class CpuStatus(_Msg, frozen=True, kw_only=True):
     reason: Text = ""  # why the CPU is in STOP (its STOP entry and the error before it)
     stop: DiagEvent | None = None  # in STOP: the diagnostic entry of the STOP
     cause: DiagEvent | None = None  # the error entry that caused it (none: the STOP itself)
+    v: Annotated[int, Meta(ge=1, le=65535)] = PROTOCOL
 
 
 class ForceEntry(_Msg, frozen=True, kw_only=True):
@@ -509,7 +529,7 @@ MAX_WATCH = 64
 WatchText = Annotated[str, Meta(min_length=1, max_length=128)]
 
 
-class WatchRequest(_Msg, frozen=True, kw_only=True):
+class WatchRequest(_Request, frozen=True, kw_only=True):
     """``watch`` queryable: the addresses to read at the next scan boundary (STEP 7's
     "Monitor/Modify Variables", triggered once at the end of a cycle): an absolute address
     (``MW0``, ``Q4.0``, ``DB20.DBW2``, ``T5``), a symbol, or a DB variable by name
@@ -665,7 +685,7 @@ ScramMessage = Annotated[str, Meta(pattern=r"^[!-~]{0,512}\Z")]
 LoginId = Annotated[str, Meta(pattern=r"^[A-Za-z0-9_-]{0,32}\Z")]
 
 
-class LoginRequest(_Msg, frozen=True, kw_only=True):
+class LoginRequest(_Request, frozen=True, kw_only=True):
     """``login`` queryable, a SCRAM-SHA-256 exchange (no password on the wire): ``login``
     with the user and the client-first message in ``scram`` (nothing more without a users
     file), then ``proof`` with the ``login_id`` answered and the client-final message; or
