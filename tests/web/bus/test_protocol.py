@@ -353,6 +353,7 @@ REQUIRED = {
     "AlarmEvent": ("id", "t_ms", "msg_id", "state"),
     "AuditEntry": ("id", "t_ms", "user", "op", "outcome"),
     "ChartLayout": ("fb", "steps", "transitions", "sequences"),
+    "ChartPart": ("fb",),
     "ChartSource": ("fb", "text"),
     "CommandReply": ("applied",),
     "Contact": ("text", "ok"),
