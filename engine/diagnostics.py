@@ -4,7 +4,9 @@ Every entry carries the OB in which its event happened and that OB's priority cl
 (OB121/OB122 the class of the OB that caused them; 0 for the operating system's own
 events outside every OB). A ring of fixed length: the newest entry overwrites the oldest.
 The user program cannot clear it; it survives restarts and memory reset (it belongs to
-the CPU, not to memory).
+the CPU, not to memory). Entries are numbered 1, 2, … in the order written, and keep their
+number across restarts: a CPU that reads its buffer back from its state file numbers on
+from the last entry written there.
 """
 
 from __future__ import annotations
@@ -87,12 +89,19 @@ class DiagnosticBuffer:
         self.capacity = capacity
         self._entries: deque[DiagEntry] = deque(maxlen=capacity)
         self.total = 0
-        """Entries ever added (a sequence number: the last ``total - n`` are new)."""
+        """Entries ever added — to this CPU's state file, across restarts, once it was read
+        back (``continue_from``): entry number ``total`` is the newest; the last
+        ``total - n`` are new."""
         self.ob = 0
         self.priority = 0
         """The OB running now and its priority class (the CPU sets both around every OB):
         ``record`` stamps them on the entry; 0 outside every OB."""
         self.wall = wall
+
+    def continue_from(self, total: int) -> None:
+        """The entries held are the newest of ``total`` ever written (read back from the
+        state file): number on from there, so an entry keeps its number across restarts."""
+        self.total = max(self.total, total)
 
     def add(self, entry: DiagEntry) -> DiagEntry:
         self._entries.append(entry)

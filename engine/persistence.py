@@ -526,7 +526,11 @@ class StateStore:
             if full or (data is not seen and data != seen):
                 batch.parts[name] = _dumps(data)
                 self._part_seen[name] = data
-        for e in cpu.diagnostics.since(self._diag_saved):
+        new = cpu.diagnostics.since(self._diag_saved)
+        # the row of entry number N is N - 1; entries that left the ring before they were
+        # staged leave their numbers unused
+        self._diag_seq = max(self._diag_seq, cpu.diagnostics.total - len(new))
+        for e in new:
             batch.diagnostics.append(self.diagnostic_row(e))
         self._diag_saved = cpu.diagnostics.total
         if not batch:
@@ -728,6 +732,7 @@ class StateStore:
         saved = [_diag_entry(row) for row in entries[-cpu.diagnostics.capacity :]]
         for entry in saved:
             cpu.diagnostics.add(entry)
+        cpu.diagnostics.continue_from(self._diag_seq)  # numbered on from the last run's
         stopped = stop_blocker(saved)
         if stopped is not None:
             cpu.hot_blockers.add(stopped)

@@ -64,6 +64,53 @@ def test_state_round_trips_and_restarts_warm(clock: VirtualClock, tmp_path: Path
     assert [e.message for e in again.diagnostics][:2] == ["warm restart", "STARTUP → RUN (warm)"]
 
 
+def _rows(path: Path) -> list[tuple[int, str]]:
+    with sqlite3.connect(path) as con:
+        rows = [(int(r[0]), str(r[1])) for r in con.execute("SELECT seq, message FROM diagnostics")]
+    con.close()
+    return rows
+
+
+def test_diagnostic_entries_keep_their_numbers_across_restarts(
+    clock: VirtualClock, tmp_path: Path
+) -> None:
+    """Entry N is row N - 1 of the state file; a CPU that reads the buffer back numbers on
+    from the last entry written there, even when it holds fewer than were written."""
+    path = tmp_path / "s.sqlite"
+    store = StateStore(path)
+    cpu = Cpu(clock, diag_capacity=4)
+    cpu.load(main, acc, DB(1, 4))
+    cpu.create_instance_db(2, acc)
+    for k in range(6):
+        cpu.diagnostics.record(clock.now_ns(), 0x5FFF, message=f"first run {k}")
+    store.save(cpu)
+    store.close()
+    assert cpu.diagnostics.total == 6
+
+    again = Cpu(VirtualClock(), diag_capacity=4)
+    again.load(main, acc, DB(1, 4))
+    again.create_instance_db(2, acc)
+    store = StateStore(path)
+    assert store.load(again)
+    assert again.diagnostics.total == 6 and len(again.diagnostics) == 4
+    again.diagnostics.record(0, 0x5FFF, message="second run")
+    assert again.diagnostics.total == 7
+    for k in range(5):  # more than the ring holds between two saves: 7 and 8 are lost
+        again.diagnostics.record(0, 0x5FFF, message=f"burst {k}")
+    store.save(again)
+    store.close()
+    rows = _rows(path)
+    assert rows[:4] == [(k, f"first run {k}") for k in range(2, 6)]  # 0 and 1 were lost
+    assert rows[4:] == [(8, "burst 1"), (9, "burst 2"), (10, "burst 3"), (11, "burst 4")]
+    third = Cpu(VirtualClock(), diag_capacity=4)
+    third.load(main, acc, DB(1, 4))
+    third.create_instance_db(2, acc)
+    store = StateStore(path)
+    assert store.load(third)
+    store.close()
+    assert third.diagnostics.total == 12
+
+
 @fb(3, STAT={"r": ("REAL", 0.0), "inf": ("REAL", 0.0), "big": ("OBJECT", None)})
 def holder(ctx: CallContext, db: InstanceDB) -> None:
     pass

@@ -30,6 +30,7 @@ from s7graph.web.bus.protocol import (
     AuditList,
     BlockSources,
     ChartLayout,
+    ChartPart,
     ChartSource,
     Command,
     CommandReply,
@@ -47,6 +48,7 @@ from s7graph.web.bus.protocol import (
     WatchValues,
     decode,
     encode,
+    join_layout,
 )
 
 __all__ = ["BusClient", "DeltaFeed", "StateFollower", "find_cpus"]
@@ -86,9 +88,32 @@ class BusClient:
         return None
 
     def chart(self, fb: str) -> ChartLayout | None:
-        """The FB's chart structure, or None if no CPU answers."""
+        """The FB's chart structure, whole (a large one fetched in parts), or None if no
+        CPU answers."""
         data = self._get_one(self._keys.fb(fb, "chart"))
-        return None if data is None else decode(data, ChartLayout)
+        return None if data is None else self._whole(decode(data, ChartLayout))
+
+    def _whole(self, head: ChartLayout, tries: int = 3) -> ChartLayout | None:
+        """``head`` with its parts (``fb/<fb>/chart/part?k=K``); fetched again from the
+        head when the CPU ran another chart version meanwhile; None if a part does not
+        come. Not on a zenoh thread."""
+        for _ in range(tries):
+            if not head.parts:
+                return head
+            key = self._keys.fb(head.fb, "chart/part")
+            parts = []
+            for k in range(head.parts):
+                data = self._get_one(f"{key}?k={k}")
+                if data is None:
+                    return None
+                parts.append(decode(data, ChartPart))
+            if all(p.version == head.version for p in parts):
+                return join_layout(head, parts)
+            data = self._get_one(self._keys.fb(head.fb, "chart"))
+            if data is None:
+                return None
+            head = decode(data, ChartLayout)
+        raise ProtocolError(f"chart of {head.fb}: its version changed while it was read")
 
     def source(self, fb: str) -> ChartSource | None:
         """The ``.s7g`` source of the chart the FB runs, or None if no CPU answers."""
@@ -102,11 +127,28 @@ class BusClient:
         return None if data is None else decode(data, ProjectFiles)
 
     def on_chart(self, fb: str, callback: Callable[[ChartLayout], None]) -> None:
-        """Call ``callback`` with the FB's chart each time the CPU runs another version."""
+        """Call ``callback`` with the FB's chart (whole) each time the CPU runs another
+        version."""
+
+        newest = [0]  # the version last given to ``callback``
+        lock = threading.Lock()
+
+        def deliver(head: ChartLayout) -> None:
+            with contextlib.suppress(ProtocolError):
+                layout = self._whole(head)
+                with lock:
+                    if layout is None or layout.version < newest[0]:
+                        return
+                    newest[0] = layout.version
+                callback(layout)
 
         def on_sample(sample: zenoh.Sample) -> None:
             with contextlib.suppress(ProtocolError):
-                callback(decode(sample.payload.to_bytes(), ChartLayout))
+                head = decode(sample.payload.to_bytes(), ChartLayout)
+                if not head.parts:
+                    deliver(head)
+                    return  # the parts are fetched off the zenoh thread
+                threading.Thread(target=deliver, args=(head,), daemon=True).start()
 
         key = self._keys.fb(fb, "chart")
         self._subscribers.append(self._session.declare_subscriber(key, on_sample))

@@ -1,17 +1,21 @@
 """The CPU's diagnostic buffer on the bus (docs/bus.md, "The diagnostic buffer: diag").
 
 :class:`DiagFeed` serves the ``diag`` queryable — the newest entries first, 100 unless the
-query asks ``?n=N`` (1..1000) — and publishes on ``diag/new`` the entries written since
-the last publication. The scan thread only looks, at each scan boundary, whether the
-buffer's count moved (:meth:`DiagFeed.at_boundary`); when it did it keeps a copy of the
-buffer for the queryable and queues the new entries for the publisher's outbox, so a
+query asks ``?n=N`` (1..1000) — and publishes on ``diag/new`` the entries written since the
+last publication. An entry's ``number`` is its place among all the entries the CPU has
+written to its state file, so it stays across restarts (``DiagnosticBuffer.continue_from``);
+with a state file an entry is served and published only once it is on disk, so a crash never
+gives its number to another entry. The scan thread only looks, at each scan boundary,
+whether the buffer's count moved (:meth:`DiagFeed.at_boundary`); when it did it keeps a copy
+of the buffer for the queryable and queues the new entries for the publisher's outbox, so a
 query never reads the CPU's buffer while a scan writes it. Each entry goes out as STEP 7
-lists it (``engine.diag_events``): event ID, text, requested OB and priority class, the
-time on the CPU clock and on the wall clock.
+lists it (``engine.diag_events``): event ID, text, requested OB and priority class, the time
+on the CPU clock and on the wall clock.
 """
 
 from __future__ import annotations
 
+import functools
 import threading
 from collections.abc import Callable, Sequence
 
@@ -22,7 +26,7 @@ from s7graph.engine.diag_events import event_text, priority_class, requested_ob,
 from s7graph.engine.interrupts import priority
 from s7graph.engine.record import DiagEntry
 from s7graph.web.bus.protocol import MAX_DIAG_ENTRIES, DiagBuffer, DiagEvent, encode
-from s7graph.web.bus.publisher import BusPublisher
+from s7graph.web.bus.publisher import BusPublisher, Durability
 
 __all__ = ["DEFAULT_ENTRIES", "DiagFeed", "diag_event", "entries_asked"]
 
@@ -73,26 +77,43 @@ class DiagFeed:
         self._publisher = publisher
         self._lock = threading.Lock()
         buffer = cpu.diagnostics
-        self._seen = buffer.total
+        self._seen = buffer.total  # the newest entry served and published
+        self._staged = buffer.total  # the newest entry handed on at a scan boundary
         self._snapshot: tuple[DiagEntry, ...] = tuple(buffer)
         self._encoded: tuple[tuple[int, int], bytes] = ((-1, 0), b"")
         self._pub = publisher.declare_publisher("diag/new")
         publisher.declare_queryable("diag", self._on_query)
 
-    def at_boundary(self) -> None:
-        """Publish the entries written since the last call (scan thread)."""
+    def at_boundary(self, durable: Durability | None = None) -> None:
+        """Publish the entries written since the last call (scan thread); with ``durable``
+        (the runner of a CPU with a state file) once they are on disk, so that a number
+        read on the bus is never given to another entry after a crash."""
         buffer = self.cpu.diagnostics
         total = buffer.total
-        if total == self._seen:
+        if total == self._staged:
             return
-        new = buffer.since(self._seen)
+        new = buffer.since(self._staged)
+        self._staged = total
         snapshot = tuple(buffer)
-        with self._lock:
-            self._seen, self._snapshot = total, snapshot
         first = total - len(new) + 1
         events = [diag_event(e, first + k, self.cpu.priority_of) for k, e in enumerate(new)]
         events.reverse()  # newest first
         message = DiagBuffer(total=total, capacity=buffer.capacity, entries=events)
+        show = functools.partial(self._show, total, snapshot, message)
+        if durable is None:
+            show(None)
+        else:
+            durable.when_durable(durable.durable_mark(), show)
+
+    def _show(
+        self, total: int, snapshot: tuple[DiagEntry, ...], message: DiagBuffer, _: str | None
+    ) -> None:
+        """The entries up to number ``total`` are on disk (or never will be: shown all the
+        same): serve and publish them (the scan or the writer thread)."""
+        with self._lock:
+            if total <= self._seen:
+                return
+            self._seen, self._snapshot = total, snapshot
         self._publisher.post(self._pub, message)
 
     def encoded(self, n: int = DEFAULT_ENTRIES) -> bytes:

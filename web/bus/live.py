@@ -77,13 +77,13 @@ from s7graph.engine.modes import CpuMode
 from s7graph.engine.record import ScanRecord
 from s7graph.sequencer.compiled import CompiledChart
 from s7graph.sequencer.fb import GraphFB
-from s7graph.sequencer.messages import PROGRAM_USER, parse_message_id
+from s7graph.sequencer.messages import parse_message_id
 from s7graph.sequencer.modes import SELECTORS
-from s7graph.sfb.alarms import Message, MessageList
+from s7graph.sfb.alarms import MessageList
 from s7graph.steps.conditions import contact_negations
+from s7graph.web.bus.alarm_feed import AlarmFeed
 from s7graph.web.bus.protocol import (
     MODES,
-    AlarmEntry,
     AlarmList,
     ChartLayout,
     Command,
@@ -231,13 +231,12 @@ class LiveGraph:
         self._reader = reader
         self.switch(self.prepare(graph.cc, version=1))
         self.watch = tuple(dict.fromkeys(watch))[:MAX_WATCH]
-        self._wall_ns = wall_ns
+        self._alarms = AlarmFeed(messages, wall_ns=wall_ns) if messages is not None else None
         self.cpu_mode = CpuMode.STOP
         self.cycle = 0
         self._pending_mode: str | None = None  # a mode change queued for the next call
         self._pending: dict[str, str] = {}  # conflict group -> op queued for the next call
         self._t_ns = 0  # CPU time of the last scan
-        self._alarm_entries: tuple[Message, ...] | None = None
         self._pins: tuple[str, ...] | None = None  # the output pins _pick reads
         self._pick: Callable[[Any], tuple[Any, ...]] | None = None
         self._made: tuple[Any, Any, dict[str, Any]] | None = None  # outs, watched → values
@@ -364,42 +363,10 @@ class LiveGraph:
 
     def alarms_changed(self) -> AlarmList | None:
         """The message list if it changed since the last call (first call: always), else
-        None. Times become wall-clock ms (``wall_ns`` minus the age on the CPU clock)."""
-        if self.messages is None:
+        None (``web.bus.alarm_feed``)."""
+        if self._alarms is None:
             return None
-        entries = self.messages.entries()
-        if entries == self._alarm_entries:
-            return None
-        self._alarm_entries = entries
-        offset = self._wall_ns() - self._t_ns
-
-        def wall(t_ns: int | None) -> int | None:
-            return None if t_ns is None else max((t_ns + offset) // 1_000_000, 0)
-
-        out = []
-        for m in entries:
-            where = parse_message_id(m.msg_id)
-            fb, db, step, kind = where if where is not None else ("", None, None, "")
-            out.append(
-                AlarmEntry(
-                    msg_id=m.msg_id,
-                    event_id=m.event_id,
-                    state=m.state.value,
-                    text=m.text[:4096],
-                    source=m.source[:256],
-                    came_ms=wall(m.came_ns) or 0,
-                    went_ms=wall(m.went_ns),
-                    ack_required=m.ack_required,
-                    acked=m.acked,
-                    ack_user=m.ack_user[:64],
-                    ack_ms=wall(m.ack_ns),
-                    fb=fb,
-                    db=db,
-                    step=step,
-                    kind=kind,  # type: ignore[arg-type]
-                )
-            )
-        return AlarmList(cycle=max(self.cycle, 0), entries=out)
+        return self._alarms.changed(self._t_ns, self.cycle)
 
     def values(self) -> dict[str, bool | int | float | str | None]:
         """The FB outputs, then the watched operands, then the operands of the active steps'
@@ -600,18 +567,12 @@ class LiveGraph:
         return not (mode == "AUTO" and any(st.tt[j] for j in cc.leaving[i]))
 
     def _ack_msg(self, command: AckMsg, mode: str) -> Result:
-        mid, user = command.msg_id, command.user or "?"
-        if self.messages is None:
+        mid = command.msg_id
+        if self._alarms is None:
             return False, "this view has no message list", ""
-        if user == PROGRAM_USER:
-            return False, f"the user name {PROGRAM_USER!r} is reserved for ACK_EF", ""
-        msg = self.messages.get(mid) if mid is not None else None
+        msg, why = self._alarms.acknowledge(mid, command.user or "?", self._t_ns)
         if msg is None:
-            return False, f"no message {mid!r} in the message list", ""
-        if msg.acked:
-            how = f" by {msg.ack_user}" if msg.ack_user else ""
-            return False, f"message {mid!r} is already acknowledged{how}", ""
-        self.messages.acknowledge(msg.msg_id, user, self._t_ns)
+            return False, why, ""
         where = parse_message_id(msg.msg_id)
         ours = where is not None and where[:2] == (self.cc.name, self.graph.db_number)
         step = where[2] if where is not None and ours and where[3] == "SV" else None

@@ -1,9 +1,18 @@
 """Wire messages between a CPU and its views: frozen msgspec structs, JSON on the bus.
 
-Every struct forbids unknown fields and bounds its numbers, strings and lists, so a hostile
-message is refused with a :class:`ProtocolError` naming the bad field (``$.args.step``),
-never an exception that escapes. Schema evolution follows msgspec's rules: a new field gets
-a default, a field never changes type.
+Every struct bounds its numbers, strings and lists, so a hostile message is refused with a
+:class:`ProtocolError` naming the bad field (``$.args.step``), never an exception that
+escapes.
+
+How messages evolve (docs/bus.md, "How messages evolve"): what the CPU takes — a command
+and its arguments (``web.commands``), a :class:`LoginRequest`, a :class:`WatchRequest` —
+is strict: an unknown field is refused. What the CPU says (status, deltas, alarms, the
+diagnostic buffer, charts, replies …) is read leniently: a reader ignores a field it does
+not know, so a newer CPU may add fields (each with a default) and older readers go on
+reading. A field never changes type or meaning and is never removed; a change that would
+need that raises :data:`PROTOCOL`, which :class:`CpuStatus` carries as ``v``.
+:class:`CpuStatus` leaves out fields at their default, so readers from before this rule
+(strict everywhere) read every status but one naming a STOP's entries.
 """
 
 from __future__ import annotations
@@ -40,8 +49,11 @@ from s7graph.web.commands import (
 __all__ = [
     "EVENTS",
     "MAX_MESSAGE_BYTES",
+    "MAX_PARTS",
     "MODES",
     "OPS",
+    "PART_BYTES",
+    "PROTOCOL",
     "REMOVED_CHOICES",
     "ActionInfo",
     "AlarmEntry",
@@ -53,6 +65,7 @@ __all__ = [
     "BlockSource",
     "BlockSources",
     "ChartLayout",
+    "ChartPart",
     "ChartSource",
     "Command",
     "CommandReply",
@@ -87,11 +100,19 @@ __all__ = [
     "condition_text",
     "decode",
     "encode",
+    "join_layout",
+    "split_layout",
     "valid_name",
 ]
 
 SCHEMA = 1
+PROTOCOL = 1
+"""The bus protocol's version: raised only by a change an older reader cannot ignore (a
+field removed, or one that changes type or meaning); a new field with a default is not."""
 MAX_MESSAGE_BYTES = 1 << 20  # refuse anything larger before decoding it
+PART_BYTES = 1 << 19
+"""A chart layout larger than this goes in parts of at most this size (:func:`split_layout`)."""
+MAX_PARTS = 1024
 
 Event = Literal["S1", "S0", "V1", "V0", "L1", "L0", "A1", "R1"]
 EVENTS: tuple[str, ...] = ("S1", "S0", "V1", "V0", "L1", "L0", "A1", "R1")
@@ -118,8 +139,12 @@ class ProtocolError(ValueError):
     """A message that does not decode to the expected struct; the text says where and why."""
 
 
-class _Msg(Struct, frozen=True, forbid_unknown_fields=True, kw_only=True):
-    pass
+class _Msg(Struct, frozen=True, kw_only=True):
+    """What the CPU says: a reader ignores the fields it does not know."""
+
+
+class _Request(_Msg, frozen=True, forbid_unknown_fields=True, kw_only=True):
+    """What the CPU takes: strict, an unknown field is refused."""
 
 
 # ---------------------------------------------------------------- chart structure
@@ -188,6 +213,11 @@ class ChartLayout(_Msg, frozen=True, kw_only=True):
     sequences: Annotated[list[SequenceInfo], Meta(max_length=256)]
     schema: int = SCHEMA
     version: Count = 0  # the chart version the CPU runs (1 at start, +1 per download)
+    parts: Annotated[int, Meta(ge=0, le=MAX_PARTS)] = 0
+    """How many :class:`ChartPart` s complete this layout (0: it is whole): a layout too
+    large for one message comes without its steps' action tables — or, larger still,
+    without its steps and transitions — and those come in parts (``fb/<name>/chart/part``,
+    :func:`split_layout`, :func:`join_layout`)."""
 
     @classmethod
     def from_chart(cls, chart: Chart, *, fb: str | None = None, version: int = 0) -> ChartLayout:
@@ -253,6 +283,20 @@ class ChartLayout(_Msg, frozen=True, kw_only=True):
     def step(self, number: int) -> StepInfo | None:
         """The step with this number, or None."""
         return next((s for s in self.steps if s.number == number), None)
+
+
+class ChartPart(_Msg, frozen=True, kw_only=True):
+    """Part ``k`` of a layout served in parts (``fb/<name>/chart/part?k=K``): whole steps
+    from index ``first_step`` of the layout's steps on, whole transitions from
+    ``first_transition`` on, for chart ``version``."""
+
+    fb: Name
+    version: Count = 0
+    k: Annotated[int, Meta(ge=0, lt=MAX_PARTS)] = 0
+    first_step: Annotated[int, Meta(ge=0, le=4096)] = 0
+    steps: Annotated[list[StepInfo], Meta(max_length=4096)] = []
+    first_transition: Annotated[int, Meta(ge=0, le=4096)] = 0
+    transitions: Annotated[list[TransitionInfo], Meta(max_length=4096)] = []
 
 
 class ChartSource(_Msg, frozen=True, kw_only=True):
@@ -459,8 +503,8 @@ MAX_DIAG_ENTRIES = 1000
 
 class DiagEvent(_Msg, frozen=True, kw_only=True):
     """One entry of the CPU's diagnostic buffer, as STEP 7's "Diagnostic Buffer" lists it:
-    ``number`` counts the entries the CPU process has held (the newest has the highest;
-    1 is the oldest it read back from the state file), ``event_id`` (``16#4302`` is
+    ``number`` is its place among the entries the CPU wrote to its state file (kept across
+    restarts; the newest has the highest), ``event_id`` (``16#4302`` is
     17154) with its ``text``, what the entry says (``info``) and the block and address it
     names, the OB the event requests (``ob``, 0: none) and the priority class that OB runs
     in, the time on the CPU's clock (``t_ms``) and on the wall clock (``wall_ms``, ms since
@@ -490,8 +534,10 @@ class DiagBuffer(_Msg, frozen=True, kw_only=True):
     entries: Annotated[list[DiagEvent], Meta(max_length=MAX_DIAG_ENTRIES)] = []
 
 
-class CpuStatus(_Msg, frozen=True, kw_only=True):
-    """``status``: the CPU's run state and its FBs; published on change and at 1 Hz."""
+class CpuStatus(_Msg, frozen=True, kw_only=True, omit_defaults=True):
+    """``status``: the CPU's run state and its FBs; published on change and at 1 Hz. A
+    field at its default is left out of the JSON; ``v`` is the :data:`PROTOCOL` the CPU
+    speaks (left out: 1)."""
 
     cpu: Name
     state: CpuState = "RUN"
@@ -504,6 +550,7 @@ class CpuStatus(_Msg, frozen=True, kw_only=True):
     reason: Text = ""  # why the CPU is in STOP (its STOP entry and the error before it)
     stop: DiagEvent | None = None  # in STOP: the diagnostic entry of the STOP
     cause: DiagEvent | None = None  # the error entry that caused it (none: the STOP itself)
+    v: Annotated[int, Meta(ge=1, le=65535)] = PROTOCOL
 
 
 class ForceEntry(_Msg, frozen=True, kw_only=True):
@@ -530,7 +577,7 @@ MAX_WATCH = 64
 WatchText = Annotated[str, Meta(min_length=1, max_length=128)]
 
 
-class WatchRequest(_Msg, frozen=True, kw_only=True):
+class WatchRequest(_Request, frozen=True, kw_only=True):
     """``watch`` queryable: the addresses to read at the next scan boundary (STEP 7's
     "Monitor/Modify Variables", triggered once at the end of a cycle): an absolute address
     (``MW0``, ``Q4.0``, ``DB20.DBW2``, ``T5``), a symbol, or a DB variable by name
@@ -686,7 +733,7 @@ ScramMessage = Annotated[str, Meta(pattern=r"^[!-~]{0,512}\Z")]
 LoginId = Annotated[str, Meta(pattern=r"^[A-Za-z0-9_-]{0,32}\Z")]
 
 
-class LoginRequest(_Msg, frozen=True, kw_only=True):
+class LoginRequest(_Request, frozen=True, kw_only=True):
     """``login`` queryable, a SCRAM-SHA-256 exchange (no password on the wire): ``login``
     with the user and the client-first message in ``scram`` (nothing more without a users
     file), then ``proof`` with the ``login_id`` answered and the client-final message; or
@@ -814,12 +861,95 @@ def _op_of(data: bytes | bytearray | memoryview | str) -> object:
 
 def layout_problem(layout: ChartLayout) -> str | None:
     """Why a view would refuse ``layout`` as it comes over the bus (a limit of this
-    protocol: steps, numbers, names, size), or None when it decodes."""
+    protocol: steps, numbers, names, a step too large for one message), or None when it
+    decodes — whole or in parts (:func:`split_layout`)."""
     try:
-        decode(encode(layout), ChartLayout)
-    except ProtocolError as exc:
+        head, parts = split_layout(layout)
+        decode(encode(head), ChartLayout)
+        for part in parts:
+            decode(encode(part), ChartPart)
+    except (ProtocolError, msgspec.ValidationError) as exc:
         return str(exc)
     return None
+
+
+def split_layout(
+    layout: ChartLayout, limit: int = PART_BYTES
+) -> tuple[ChartLayout, list[ChartPart]]:
+    """``layout`` as it goes over the bus: whole if its JSON fits in ``limit`` bytes, else a
+    head (its ``parts`` says how many follow) without the steps' action tables, and parts of
+    at most ``limit`` bytes carrying the whole steps; if the head is still too large, it
+    leaves out steps and transitions and the parts carry both. A single step or transition
+    larger than ``limit`` gets a part of its own."""
+    if len(encode(layout)) <= limit:
+        return msgspec.structs.replace(layout, parts=0), []
+    head = msgspec.structs.replace(
+        layout, steps=[msgspec.structs.replace(s, actions=[]) for s in layout.steps], parts=0
+    )
+    chunks: list[tuple[str, int, list[Any]]] = [
+        ("steps", k, c) for k, c in _chunks(layout.steps, limit)
+    ]
+    if len(encode(head)) > limit:
+        head = msgspec.structs.replace(head, steps=[], transitions=[])
+        chunks += [("transitions", k, c) for k, c in _chunks(layout.transitions, limit)]
+    parts = []
+    for k, (what, first, items) in enumerate(chunks):
+        if what == "steps":
+            part = ChartPart(
+                fb=layout.fb, version=layout.version, k=k, first_step=first, steps=items
+            )
+        else:
+            part = ChartPart(
+                fb=layout.fb, version=layout.version, k=k, first_transition=first, transitions=items
+            )
+        parts.append(part)
+    if len(parts) > MAX_PARTS:
+        raise ProtocolError(f"chart layout too large: {len(parts)} parts (limit {MAX_PARTS})")
+    return msgspec.structs.replace(head, parts=len(parts)), parts
+
+
+def _chunks(items: list[Any], limit: int) -> list[tuple[int, list[Any]]]:
+    """``items`` cut into runs whose JSON stays within ``limit`` bytes: (first index, run)."""
+    out: list[tuple[int, list[Any]]] = []
+    run: list[Any] = []
+    size = first = 0
+    for i, item in enumerate(items):
+        n = len(encode(item)) + 1
+        if run and size + n > limit - 256:  # room for the part's own fields
+            out.append((first, run))
+            run, size, first = [], 0, i
+        run.append(item)
+        size += n
+    if run:
+        out.append((first, run))
+    return out
+
+
+def join_layout(head: ChartLayout, parts: list[ChartPart]) -> ChartLayout:
+    """The whole layout from its ``head`` and its parts (in any order); ``ProtocolError``
+    when one is missing, of another chart version, or does not fit the head."""
+    if len(parts) != head.parts or sorted(p.k for p in parts) != list(range(head.parts)):
+        raise ProtocolError(f"chart layout: {len(parts)} of {head.parts} parts")
+    steps, transitions = list(head.steps), list(head.transitions)
+    for part in sorted(parts, key=lambda p: p.k):
+        if part.fb != head.fb or part.version != head.version:
+            raise ProtocolError(
+                f"chart layout part {part.k} is of {part.fb} version {part.version}, "
+                f"not {head.fb} version {head.version}"
+            )
+        _place(steps, part.first_step, part.steps, "steps")
+        _place(transitions, part.first_transition, part.transitions, "transitions")
+    return msgspec.structs.replace(head, steps=steps, transitions=transitions, parts=0)
+
+
+def _place(into: list[Any], first: int, items: list[Any], what: str) -> None:
+    """Put ``items`` at ``first`` of ``into``: over the head's (stripped) entries there, or
+    after the last when the head left them out."""
+    if not items:
+        return
+    if first > len(into):
+        raise ProtocolError(f"chart layout: {what} from {first} follow only {len(into)}")
+    into[first : first + len(items)] = items
 
 
 def _clip(text: str, limit: int) -> str:

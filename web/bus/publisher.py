@@ -50,6 +50,7 @@ from s7graph.web.bus.protocol import (
     StepStateUpdate,
     decode,
     encode,
+    split_layout,
 )
 
 __all__ = ["BusPublisher", "Durability", "PendingCommand", "QueryReply"]
@@ -200,7 +201,10 @@ class BusPublisher:
         self._session = session
         self._lock = threading.Lock()
         self._charts = dict(charts)
-        self._chart_bytes = {name: encode(layout) for name, layout in self._charts.items()}
+        self._chart_bytes: dict[str, bytes] = {}
+        self._chart_parts: dict[str, list[bytes]] = {}
+        for name, layout in self._charts.items():
+            self._chart_bytes[name], self._chart_parts[name] = _served(layout)
         self.outbox = Outbox()
         self.deltas: DeltaOut | None = None
         """The FBs' deltas and states (``web.bus.deltas``)."""
@@ -224,6 +228,11 @@ class BusPublisher:
             for name in self._charts:
                 for leaf, read in (("chart", self._chart_of), ("state", self._state_of)):
                     self._serve(self._keys.fb(name, leaf), functools.partial(read, name))
+                self._declared.append(
+                    session.declare_queryable(
+                        self._keys.fb(name, "chart/part"), functools.partial(self._on_part, name)
+                    )
+                )
                 chart_pub = session.declare_publisher(
                     self._keys.fb(name, "chart"), encoding=zenoh.Encoding.APPLICATION_JSON
                 )
@@ -368,13 +377,14 @@ class BusPublisher:
 
     def set_chart(self, fb: str, layout: ChartLayout) -> None:
         """The FB runs another chart (an online change): serve ``layout`` on
-        ``fb/<fb>/chart`` and publish it there, so views redraw."""
+        ``fb/<fb>/chart`` (a large one with its parts on ``fb/<fb>/chart/part``) and publish
+        it there, so views redraw."""
         if fb not in self._charts:
             raise KeyError(f"unknown FB {fb!r}; known: {', '.join(self._charts)}")
-        data = encode(layout)
+        data, parts = _served(layout)
         with self._lock:
             self._charts[fb] = layout
-            self._chart_bytes[fb] = data
+            self._chart_bytes[fb], self._chart_parts[fb] = data, parts
         with contextlib.suppress(zenoh.ZError):
             self._chart_pubs[fb].put(data)
 
@@ -559,6 +569,12 @@ class BusPublisher:
     def _chart_of(self, fb: str) -> bytes | None:
         return self._chart_bytes.get(fb)
 
+    def _on_part(self, fb: str, query: zenoh.Query) -> None:
+        """``fb/<fb>/chart/part?k=K`` (a zenoh thread)."""
+        with self._lock:
+            parts = self._chart_parts.get(fb, [])
+        _answer_part(query, self._keys.fb(fb, "chart/part"), parts)
+
     def _state_of(self, fb: str) -> bytes | None:
         state = self.deltas.state(fb) if self.deltas is not None else None
         return None if state is None else encode(state)
@@ -622,7 +638,7 @@ class BusPublisher:
             return
         note = claimed_note(command.origin)
         command = msgspec.structs.replace(command, origin=source)
-        if command.fb not in self._charts and type(command).where not in _CPU_WIDE:
+        if command.fb not in self._charts and not _cpu_wide(command, self._charts):
             runs = f"runs {', '.join(self._charts)}" if self._charts else "runs no GRAPH FB"
             reason = f"unknown FB {command.fb!r}; this CPU {runs}"
             self._refuse(query, command, reason, source, note)
@@ -654,3 +670,31 @@ class BusPublisher:
         _answer(query, CommandReply(applied=False, reason=reason, op=op, fb=fb))
         with contextlib.suppress(Exception):  # the audit must not raise on a zenoh thread
             self.gate.refuse(command, reason, origin=source, note=note)
+
+
+def _served(layout: ChartLayout) -> tuple[bytes, list[bytes]]:
+    """``layout`` as served: its JSON (a head, if too large for one message) and its parts'
+    (``protocol.split_layout``)."""
+    head, parts = split_layout(layout)
+    return encode(head), [encode(p) for p in parts]
+
+
+def _answer_part(query: zenoh.Query, key: str, parts: list[bytes]) -> None:
+    """Answer ``?k=K`` with part K of ``parts`` under ``key``; a bad or missing ``k`` with an
+    error reply. Never raises (a zenoh thread)."""
+    try:
+        given = zenoh.Parameters(str(query.parameters)).get("k")
+        if given is None or not given.isdigit() or int(given) >= len(parts):
+            why = f"?k={str(given)[:16]!r}: give a part, 0 to {len(parts) - 1}"
+            query.reply_err(why.encode())
+            return
+        query.reply(key, parts[int(given)], encoding=zenoh.Encoding.APPLICATION_JSON)
+    except Exception:
+        return
+
+
+def _cpu_wide(command: Command, charts: Mapping[str, object]) -> bool:
+    """Whether ``command`` acts on the CPU whatever FB it names: the switch's ops and
+    forcing, and on a CPU without an FB (no ``charts``) ``ack_msg`` (the message list is
+    the CPU's)."""
+    return type(command).where in _CPU_WIDE or (not charts and command.op == "ack_msg")

@@ -3,9 +3,10 @@
 :class:`CpuEdge` is what the scan thread does after each scan for the CPU itself — any CPU,
 a chart's or a program of blocks': it publishes the CPU's state (with the STOP's reason and
 diagnostic entries) and cycle statistics on ``status``, applies the commands received since
-the last scan — the scan boundary: ``stop``, ``start`` and ``mres`` to the CPU's switch
-(``Runner.switch_stop``/``switch_start``, ``Cpu.memory_reset``), ``force`` to the CPU's
-force table (``web.bus.forcing``) — publishes the force jobs when they changed
+the last scan — the scan boundary: ``ack_msg`` to the CPU's message list (published on
+``alarms`` when it changed, ``web.bus.alarm_feed``), ``stop``, ``start`` and ``mres`` to the
+CPU's switch (``Runner.switch_stop``/``switch_start``, ``Cpu.memory_reset``), ``force`` to
+the CPU's force table (``web.bus.forcing``) — publishes the force jobs when they changed
 (``forces``), the diagnostic buffer's new entries (``diag``, ``web.bus.diagnostics``) and
 answers the watch requests waiting (``watch``, ``web.bus.watch``).
 
@@ -34,9 +35,12 @@ from s7graph.engine.record import ScanRecord
 from s7graph.engine.runner import Runner, stop_reason
 from s7graph.engine.watchdog import CycleStatistics
 from s7graph.sequencer.fb import position
+from s7graph.sfb.alarms import MessageList
+from s7graph.web.bus.alarm_feed import AlarmFeed
 from s7graph.web.bus.diagnostics import DiagFeed
 from s7graph.web.bus.live import LiveGraph
 from s7graph.web.bus.protocol import (
+    AlarmList,
     ChartLayout,
     Command,
     CycleReport,
@@ -45,6 +49,7 @@ from s7graph.web.bus.protocol import (
 )
 from s7graph.web.bus.publisher import BusPublisher
 from s7graph.web.bus.watch import Watching
+from s7graph.web.commands import AckMsg
 
 if TYPE_CHECKING:
     from s7graph.web.bus.forcing import Forcing
@@ -117,6 +122,7 @@ class CpuEdge:
         *,
         forcing: Forcing | None = None,
         cpu: Cpu | None = None,
+        messages: MessageList | None = None,
     ) -> None:
         self.publisher = publisher
         self.forcing = forcing
@@ -128,6 +134,11 @@ class CpuEdge:
         self._starting = False  # a start applied at this boundary
         self.diag: DiagFeed | None = None
         self.watching: Watching | None = None
+        self.alarms: AlarmFeed | None = None
+        """The CPU's message list (``alarms``, ``ack_msg``), if it keeps one."""
+        self._t_ns = 0  # CPU time of the last scan
+        if publisher is not None and messages is not None:
+            self.alarms = AlarmFeed(messages)
         if publisher is not None and self.cpu is not None:
             self.diag = DiagFeed(self.cpu, publisher)
             self.watching = Watching(self.cpu, publisher)
@@ -146,10 +157,22 @@ class CpuEdge:
         publisher = self.publisher
         if publisher is None:
             return None
+        self._t_ns = record.t_ns
         self._publish_cpu(record, stats, runner, publisher)
         publisher.scanned(record.cycle, record.t_ns // 1_000_000)
+        self._publish_alarms(record, publisher)
         self._boundary(record, runner, until_ns, publisher)
         return None
+
+    def _alarms_changed(self, record: ScanRecord) -> AlarmList | None:
+        """The CPU's message list if it changed (None: it did not, or there is none)."""
+        return self.alarms.changed(record.t_ns, record.cycle) if self.alarms is not None else None
+
+    def _publish_alarms(self, record: ScanRecord, publisher: BusPublisher) -> None:
+        """The message list on ``alarms`` when it changed."""
+        alarms = self._alarms_changed(record)
+        if alarms is not None:
+            publisher.publish_alarms(alarms)
 
     def _begin(self, runner: Runner | None) -> int | None:
         """A scan boundary begins: the end of its share for communication, if limited."""
@@ -192,7 +215,7 @@ class CpuEdge:
             if forces is not None:
                 publisher.publish_forces(forces)
         if self.diag is not None:
-            self.diag.at_boundary()
+            self.diag.at_boundary(runner)
         if self.watching is not None:  # within what the commands left of the share
             self.watching.at_boundary(record.t_ns // 1_000_000, until_ns)
 
@@ -202,11 +225,21 @@ class CpuEdge:
         where = type(command).where  # web.commands: who carries the op out
         if where == "cpu":
             return self._switch(command)
+        if isinstance(command, AckMsg) and self.alarms is not None:
+            return self._ack_msg(command)
         if where != "force":
             return False, f"this CPU runs no GRAPH FB: {command.op} needs one", ""
         if self.forcing is None:
             return False, "this CPU takes no force jobs", ""
         return self.forcing.apply(command)
+
+    def _ack_msg(self, command: AckMsg) -> tuple[bool, str, str]:
+        """``ack_msg``: one message of the CPU's message list, as the command's user."""
+        assert self.alarms is not None
+        msg, why = self.alarms.acknowledge(command.msg_id, command.user or "?", self._t_ns)
+        if msg is None:
+            return False, why, ""
+        return True, "", f"message {command.msg_id}: {msg.text}"
 
     def _switch(self, command: Command) -> tuple[bool, str, str]:
         """The CPU's RUN/STOP switch: ``stop`` now (outputs to 0), ``start`` from STOP by
@@ -297,15 +330,17 @@ class ScanEdge(CpuEdge):
         self._publish_cpu(record, stats, runner, publisher)
         changed = [(self.live.fb, update)] if update is not None else []
         publisher.publish_scan(max(record.cycle, 0), max(record.t_ns // 1_000_000, 0), changed)
-        alarms = self.live.alarms_changed()
-        if alarms is not None:
-            publisher.publish_alarms(alarms)
+        self._publish_alarms(record, publisher)
         self._boundary(record, runner, until_ns, publisher)
         if self.operands is not None:
             self.operands.at_boundary(record.cycle)
         if self.online is not None:
             self.online.at_boundary()
         return update
+
+    def _alarms_changed(self, record: ScanRecord) -> AlarmList | None:
+        """The message list as the FB's view gives it (``LiveGraph.alarms_changed``)."""
+        return self.live.alarms_changed()
 
     def _memory_reset(self, cpu: Cpu) -> tuple[bool, str, str]:
         """The CPU's memory reset, the FB's position first written to the diagnostic

@@ -1,6 +1,7 @@
 """``s7graph diag --connect EP --cpu NAME``: the CPU's diagnostic buffer, as STEP 7's
 "Module Information → Diagnostic Buffer" lists it — newest first, one line each: its
-number (1: the newest), the time (the wall clock's, local; the CPU clock's when the entry
+place (1: the newest), its own number (``#N``: the N-th entry the CPU wrote, kept across
+restarts), the time (the wall clock's, local; the CPU clock's when the entry
 has none), the event ID as ``16#xxxx``, the OB it requests with its priority class, the
 event's text and what the entry says (block, address, message). ``--json`` prints the
 :class:`~web.bus.protocol.DiagBuffer` as the bus carries it; ``-n`` how many entries.
@@ -38,5 +39,5 @@ def diag_command(net: NetOptions, *, n: int = 100, as_json: bool = False) -> int
     held = f"{len(buffer.entries)} of {min(buffer.total, buffer.capacity)}"
     print(f"Diagnostic buffer of {net.cpu} ({held} entries, newest first)")
     for no, event in enumerate(buffer.entries, 1):
-        print(f"{no:>3}  {when(event):<23}  {event_line(event)}")
+        print(f"{no:>3}  {'#' + str(event.number):<7}  {when(event):<23}  {event_line(event)}")
     return 0

@@ -1,6 +1,7 @@
 """The page of a CPU without a chart (a program of blocks, docs/view.md, "A program's page"):
-its state and why it stopped, its RUN/STOP switch and memory reset, a watch table and its
-diagnostic buffer — no scene.
+its state and why it stopped, its RUN/STOP switch and memory reset, the messages of its
+ALARM_S / ALARM_SQ calls with *Acknowledge* (``web.view.alarms``: an operator's
+``ack_msg``), a watch table and its diagnostic buffer — no scene.
 
 Every page has its own login (as the chart's page: ``web.view.page_login``), its own watch
 table — operands typed into ``Operands`` (``MW0:INT, Q4.0, DB20.avg``), read at the CPU's
@@ -18,12 +19,15 @@ import html
 import threading
 from typing import Any
 
+import msgspec
 import viser
 
 from s7graph.web.access.roles import allowed
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import (
     MAX_WATCH,
+    AlarmList,
+    ChartLayout,
     Command,
     CommandReply,
     CpuStatus,
@@ -31,8 +35,9 @@ from s7graph.web.bus.protocol import (
     WatchValues,
 )
 from s7graph.web.bus.watch import split_operands
-from s7graph.web.commands import Mres, Start, Stop, checked, op_of
+from s7graph.web.commands import AckMsg, Mres, Start, Stop, checked, op_of
 from s7graph.web.view import texts
+from s7graph.web.view.alarms import AlarmView
 from s7graph.web.view.diagnostics import state_html
 from s7graph.web.view.guard import OriginGuard
 from s7graph.web.view.page_login import PageLogin
@@ -67,10 +72,11 @@ def watch_html(answer: WatchValues | None) -> str:
 
 
 class ProgramPage(PageLogin):
-    """One browser page of a program's CPU: login, switch, watch table."""
+    """One browser page of a program's CPU: login, switch, alarms, watch table."""
 
     def __init__(self, page: viser.ClientHandle, view: ProgramView) -> None:
         self.page, self.view = page, view
+        self.client = page  # the AlarmView's page
         self._init_login(page, view.demo)
         gui = page.gui
         gui.set_panel_label(f"s7graph CPU {view.cpu} (a program)")
@@ -84,6 +90,10 @@ class ProgramPage(PageLogin):
             }
         for kind, _, _ in _BUTTONS:
             self.buttons[op_of(kind)].on_click(functools.partial(self._clicked, kind))
+        self.alarms = AlarmView(
+            self, ChartLayout(fb=view.cpu, steps=[], transitions=[], sequences=[])
+        )
+        self.alarms_shown: AlarmList | None = None
         with gui.add_folder("Watch"):
             self.operands = gui.add_text(
                 "Operands",
@@ -102,6 +112,7 @@ class ProgramPage(PageLogin):
         role = self.role if self.token else "viewer"
         for op, button in self.buttons.items():
             button.disabled = not allowed(role, op)
+        self.alarms.enable(allowed(role, op_of(AckMsg)))
         self._show_login()
 
     def _login(self, user: str, password: str) -> LoginReply:
@@ -114,21 +125,37 @@ class ProgramPage(PageLogin):
         """The page went away: revoke its token."""
         self._revoke()
 
+    @property
+    def fb(self) -> str:
+        """What this page's commands name: the CPU (it runs no FB)."""
+        return self.view.cpu
+
     def _clicked(self, kind: type[Command], _: object) -> None:
         self.command(kind)
 
-    def command(self, kind: type[Command]) -> CommandReply:
-        """Send op ``kind`` as this page's user (viser's callback thread)."""
+    def command(self, command: Command | type[Command]) -> CommandReply:
+        """Send ``command`` (or op ``kind`` without arguments) as this page's user (viser's
+        callback thread), with a notice of how it went."""
+        reply = self.send_quiet(command)
+        verdict = "applied" if reply.applied else "refused"
+        self._notify(f"{reply.op} {verdict}", reply.reason or "OK", ok=reply.applied)
+        return reply
+
+    def send_quiet(self, command: Command | type[Command]) -> CommandReply:
+        """Send ``command`` as this page's user without a notice."""
         with self._lock:
             user, token = self.user, self.token
-        made = kind(fb=self.view.cpu, user=user, token=token, origin=self.origin)
+        if isinstance(command, type):
+            command = command(fb=self.view.cpu)
+        made = msgspec.structs.replace(command, user=user, token=token, origin=self.origin)
         try:
-            reply = self.view.client.send(checked(made))
+            return self.view.client.send(checked(made))
         except (TypeError, ValueError) as exc:
-            reply = CommandReply(applied=False, reason=str(exc), op=made.op)
-        verdict = "applied" if reply.applied else "refused"
-        self._notify(f"{made.op} {verdict}", reply.reason or "OK", ok=reply.applied)
-        return reply
+            return CommandReply(applied=False, reason=str(exc), op=made.op)
+
+    def notify(self, title: str, body: str, *, ok: bool) -> None:
+        """A notice on this page only."""
+        self._notify(title, body, ok=ok)
 
 
 class ProgramView:
@@ -152,7 +179,9 @@ class ProgramView:
         self.connected = True
         self._wake = threading.Event()
         self._closed = False
+        self.alarms: AlarmList | None = None
         client.on_status(self.apply_status)
+        client.on_alarms(self.apply_alarms)
         client.on_alive(self.set_connected)
         server.on_client_connect(self._connect)
         server.on_client_disconnect(self._disconnect)
@@ -163,6 +192,11 @@ class ProgramView:
     def apply_status(self, status: CpuStatus) -> None:
         with self._lock:
             self.status = status
+        self._wake.set()
+
+    def apply_alarms(self, alarms: AlarmList) -> None:
+        with self._lock:
+            self.alarms = alarms
         self._wake.set()
 
     def set_connected(self, connected: bool) -> None:
@@ -196,12 +230,16 @@ class ProgramView:
     def _render(self) -> None:
         with self._lock:
             status, connected, pages = self.status, self.connected, list(self.pages.values())
+            alarms = self.alarms
         top = texts.banner_html(connected, self.cpu)
         line = _status_html(status) if connected else texts.small("no live state")
         answers: dict[tuple[str, ...], WatchValues] = {}
         for page in pages:
             page.update_html(page.banner, "banner", top)
             page.update_html(page.status, "status", line)
+            if page.alarms_shown is not alarms:
+                page.alarms_shown = alarms
+                page.alarms.set_alarms(alarms)
             asked = tuple(page.asked())
             if not asked:
                 page.update_html(page.watch, "watch", watch_html(None))

@@ -1,17 +1,19 @@
 """``s7graph run PROGRAM --listen/--connect``: a program of blocks on the bus.
 
-:class:`ProgramEdge` is the :class:`~web.bus.scan_edge.CpuEdge` of a CPU without a GRAPH
-FB, with its own end of the bus (a :class:`CpuSide` serving no chart): ``status`` with the
-STOP's reason, the diagnostic buffer (``diag``), the force table (``force``, ``forces``),
-the RUN/STOP switch and the memory reset (``stop``, ``start``, ``mres``), the watch of
-addresses and DB variables (``watch``), logins and the audit — everything a chart's CPU
-serves but its FB. The runner calls :meth:`~web.bus.scan_edge.CpuEdge.on_record` after
-each scan, in the scan thread.
+:class:`ProgramEdge` is the :class:`~web.bus.scan_edge.CpuEdge` of a CPU without a GRAPH FB,
+with its own end of the bus (a :class:`CpuSide` serving no chart): ``status`` with the
+STOP's reason, the diagnostic buffer (``diag``), the message list of its ALARM_S and
+ALARM_SQ calls (``alarms``, ``alarms/list``, acknowledged by ``ack_msg``), the force table
+(``force``, ``forces``), the RUN/STOP switch and the memory reset (``stop``, ``start``,
+``mres``), the watch of addresses and DB variables (``watch``), logins and the audit —
+everything a chart's CPU serves but its FB. The runner calls
+:meth:`~web.bus.scan_edge.CpuEdge.on_record` after each scan, in the scan thread.
 """
 
 from __future__ import annotations
 
 from s7graph.engine.cpu import Cpu
+from s7graph.sfb.alarms import message_list
 from s7graph.web.bus.cpu_side import CpuSide
 from s7graph.web.bus.forcing import Forcing
 from s7graph.web.bus.gate import Gate
@@ -35,7 +37,9 @@ class ProgramEdge(CpuEdge):
     ) -> None:
         self.cpu_side: CpuSide | None = CpuSide({}, cpu=name, ends=ends or BusEnds(), gate=gate)
         try:
-            super().__init__(self.cpu_side.publisher, forcing=Forcing(cpu), cpu=cpu)
+            super().__init__(
+                self.cpu_side.publisher, forcing=Forcing(cpu), cpu=cpu, messages=message_list(cpu)
+            )
         except BaseException:
             self.cpu_side.close()
             raise

@@ -150,6 +150,53 @@ def test_each_entry_written_goes_out_on_diag_new_at_the_next_scan_boundary(rig: 
     assert got[0].total == before + 2 and [e.info for e in got[0].entries] == ["two", "one"]
 
 
+def test_entries_read_back_from_the_state_file_keep_their_numbers_on_the_bus(
+    tmp_path: Path,
+) -> None:
+    first = program_cpu(VirtualClock())
+    store = StateStore(tmp_path / "state.sqlite")
+    for i in range(150):  # more than the buffer holds: the state file has them all
+        first.diagnostics.record(0, 0x5F03, "", f"entry {i + 1}")
+    store.save(first)
+    store.close()
+    clock = VirtualClock()
+    cpu = program_cpu(clock)
+    store = StateStore(tmp_path / "state.sqlite")
+    assert store.load(cpu)
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    with (
+        ProgramEdge(cpu, ends=BusEnds(listen=[endpoint])) as edge,
+        open_session(connect=[endpoint]) as session,
+        BusClient(session, "cpu1") as client,
+    ):
+        rig = Rig(cpu, edge, client, session, clock)
+        cpu.start("warm")
+        rig.scan()
+        assert wait_until(lambda: (b := client.diag(1)) is not None and b.total == 152)
+        buffer = client.diag(5)
+        assert buffer is not None
+        assert [(e.number, e.info) for e in buffer.entries[2:]] == [
+            (150, "entry 150"),
+            (149, "entry 149"),
+            (148, "entry 148"),
+        ]
+        assert [e.number for e in buffer.entries[:2]] == [152, 151]  # the warm restart's
+        got: list[DiagBuffer] = []
+        client.on_diag(got.append)
+        written = [0]
+
+        def published() -> bool:  # one entry a scan until the subscription sees one
+            written[0] += 1
+            cpu.diagnostics.record(clock.now_ns(), 0x5F04, "", f"new {written[0]}")
+            rig.scan()
+            return any(e.number > 152 for b in got for e in b.entries)
+
+        assert wait_until(published)
+        new = [e for b in got for e in b.entries if e.number > 152]  # a late 151, 152 aside
+        assert new and all(e.info == f"new {e.number - 152}" for e in new)
+    store.close()
+
+
 def test_status_names_the_stop_entry_and_the_programming_error_that_caused_it(
     rig: Rig,
 ) -> None:

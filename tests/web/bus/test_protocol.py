@@ -3,6 +3,7 @@ with a message that says where and why, never with an exception other than Proto
 
 from __future__ import annotations
 
+import msgspec
 import pytest
 
 from s7graph.sequencer.text.format import format_expr
@@ -17,8 +18,10 @@ from s7graph.sequencer.text.model import (
     Transition,
     Unary,
 )
+from s7graph.web.bus import protocol
 from s7graph.web.bus.protocol import (
     MAX_MESSAGE_BYTES,
+    PROTOCOL,
     AlarmEntry,
     AlarmList,
     ChartLayout,
@@ -26,6 +29,9 @@ from s7graph.web.bus.protocol import (
     CommandReply,
     Contact,
     CpuStatus,
+    CycleStats,
+    DiagEvent,
+    LoginRequest,
     ProtocolError,
     StepDetail,
     StepStateUpdate,
@@ -34,6 +40,7 @@ from s7graph.web.bus.protocol import (
     decode,
     encode,
 )
+from s7graph.web.commands import COMMAND_TYPES, Args
 
 pytestmark = pytest.mark.timeout(30)
 
@@ -205,7 +212,6 @@ def test_hostile_command_is_refused_with_a_clear_reason(payload: bytes, reason: 
 @pytest.mark.parametrize(
     "payload",
     [
-        b'{"cycle":1,"t_ms":0,"mode":"AUTO","active":[1],"extra":1}',
         b'{"cycle":-1,"t_ms":0,"mode":"AUTO","active":[1]}',
         b'{"cycle":1,"t_ms":0,"mode":"FAST","active":[1]}',
         b'{"cycle":1,"t_ms":0,"mode":"AUTO","active":[70000]}',
@@ -253,3 +259,126 @@ def test_pending_alarms_are_those_waiting_for_an_acknowledgement() -> None:
     assert [e.msg_id for e in AlarmList(entries=entries).pending()] == [1]
     with pytest.raises(ProtocolError, match="state"):
         decode(b'{"entries":[{"msg_id":1,"event_id":1,"state":"gone","came_ms":0}]}', AlarmList)
+
+
+# ---------------------------------------------------------------- how messages evolve
+
+
+class PreviousCpuStatus(msgspec.Struct, frozen=True, kw_only=True):
+    """``status`` as a reader built before ``stop``, ``cause`` and ``v`` knew it."""
+
+    cpu: str
+    state: str = "RUN"
+    cycle: int = 0
+    t_ms: int = 0
+    fbs: list[str] = []
+    stats: CycleStats | None = None
+    login: str = "demo"
+    forces: int = 0
+    reason: str = ""
+
+
+class StrictPreviousCpuStatus(PreviousCpuStatus, frozen=True, forbid_unknown_fields=True):
+    """The same reader from before readers ignored unknown fields."""
+
+
+def _stopped() -> CpuStatus:
+    stop = DiagEvent(number=7, event_id=0x4562, text="STOP caused by a programming error")
+    cause = DiagEvent(number=6, event_id=0x25FF, info="OB1: ZeroDivisionError")
+    return CpuStatus(
+        cpu="cpu1",
+        state="STOP",
+        cycle=9,
+        reason="OB1: ZeroDivisionError",
+        stop=stop,
+        cause=cause,
+        stats=CycleStats(last_ms=1.5),
+    )
+
+
+def test_a_reader_of_the_previous_status_reads_a_new_one_with_stop_and_cause() -> None:
+    new = _stopped()
+    data = encode(msgspec.structs.replace(new, v=PROTOCOL))
+    old = decode(data, PreviousCpuStatus)
+    assert (old.cpu, old.state, old.cycle, old.reason) == ("cpu1", "STOP", 9, new.reason)
+    assert old.stats == new.stats
+    # and a field a later CPU adds is ignored the same way
+    later = data[:-1] + b',"lamp":"red","leds":{"SF":true}}'
+    assert decode(later, CpuStatus) == new
+    assert decode(later, PreviousCpuStatus) == old
+
+
+def test_a_status_leaves_out_its_defaults_so_strict_old_readers_read_it_while_it_runs() -> None:
+    running = CpuStatus(cpu="cpu1", cycle=5, fbs=["FILL"], stats=CycleStats(last_ms=1.0))
+    data = encode(running)
+    assert b'"stop"' not in data and b'"v"' not in data and b'"state"' not in data
+    assert decode(data, StrictPreviousCpuStatus).fbs == ["FILL"]
+    assert decode(data, CpuStatus) == running and decode(data, CpuStatus).v == PROTOCOL
+    with pytest.raises(ProtocolError, match="unknown field `stop`"):
+        decode(encode(_stopped()), StrictPreviousCpuStatus)  # the one it cannot read
+
+
+def _messages() -> dict[str, type[msgspec.Struct]]:
+    return {
+        name: kind
+        for name, kind in vars(protocol).items()
+        if isinstance(kind, type)
+        and issubclass(kind, msgspec.Struct)
+        and kind.__module__ == protocol.__name__
+        and not name.startswith("_")
+    }
+
+
+TAKEN_BY_THE_CPU = {"LoginRequest", "WatchRequest"}
+
+
+def test_what_the_cpu_takes_is_strict_and_what_it_says_ignores_unknown_fields() -> None:
+    for name, kind in _messages().items():
+        strict = kind.__struct_config__.forbid_unknown_fields
+        assert strict == (name in TAKEN_BY_THE_CPU), name
+    args: list[type[msgspec.Struct]] = [Args]
+    for kind in args:  # every argument struct, however deep
+        args.extend(kind.__subclasses__())
+    for kind in (*COMMAND_TYPES, *args):
+        assert kind.__struct_config__.forbid_unknown_fields, kind
+    with pytest.raises(ProtocolError, match="unknown field `evil`"):
+        decode(b'{"op":"login","evil":1}', LoginRequest)
+
+
+# The required fields of each message the CPU says: a field added later has a default, so
+# a reader never needs what an older CPU does not send; this list only ever shrinks.
+REQUIRED = {
+    "ActionInfo": ("qualifier", "operand"),
+    "AlarmEntry": ("msg_id", "event_id", "state", "came_ms"),
+    "AlarmEvent": ("id", "t_ms", "msg_id", "state"),
+    "AuditEntry": ("id", "t_ms", "user", "op", "outcome"),
+    "BlockSource": ("label",),
+    "ChartLayout": ("fb", "steps", "transitions", "sequences"),
+    "ChartPart": ("fb",),
+    "ChartSource": ("fb", "text"),
+    "CommandReply": ("applied",),
+    "Contact": ("text", "ok"),
+    "CpuStatus": ("cpu",),
+    "DiagEvent": ("number", "event_id"),
+    "ForceEntry": ("address", "value"),
+    "LoginReply": ("ok",),
+    "OperandInfo": ("name", "type"),
+    "ProjectFile": ("name", "format"),
+    "ScanDeltas": ("cycle", "t_ms"),
+    "SequenceInfo": ("number", "steps", "transitions"),
+    "StepDetail": ("number",),
+    "StepInfo": ("number",),
+    "StepStateUpdate": ("cycle", "t_ms", "mode", "active"),
+    "TransitionCriteria": ("number", "holds"),
+    "TransitionInfo": ("number", "sources", "targets"),
+    "WatchValue": ("address",),
+}
+
+
+def test_no_message_the_cpu_says_gains_a_required_field() -> None:
+    for name, kind in _messages().items():
+        if name in TAKEN_BY_THE_CPU:
+            continue
+        fields = msgspec.inspect.type_info(kind).fields  # type: ignore[attr-defined]
+        required = tuple(f.name for f in fields if f.required)
+        assert set(required) <= set(REQUIRED.get(name, ())), (name, required)

@@ -7,6 +7,7 @@ reset (MRES)")."""
 
 from __future__ import annotations
 
+import re
 import signal
 import subprocess
 import sys
@@ -104,7 +105,7 @@ def test_a_program_on_the_bus_answers_the_shell_status_diag_watch_stop_mres_star
         diag = s7graph("diag", *bus, "-n", "3").stdout.splitlines()
         assert diag[0] == "Diagnostic buffer of cpu1 (3 of 4 entries, newest first)"
         assert "16#4307" in diag[1] and "Memory reset started by a PG operation" in diag[1]
-        assert diag[1].startswith("  1  20") and "16#4304" in diag[2]
+        assert re.match(r"  1  #\d+ +20", diag[1]) and "16#4304" in diag[2]
         zero = s7graph("watch", *bus, "--address", "MW10:INT,DB11.n", "--duration-s", "0.2")
         assert zero.stdout.splitlines()[0].endswith("STOP  MW10:INT=0  DB11.n=0")
         assert s7graph("start", *bus, "--user", "eng").returncode == 0
@@ -128,8 +129,10 @@ def test_an_applied_mres_survives_sigkill_and_only_a_warm_restart_follows(
         from s7graph.web.bus.protocol import Command
 
         reply = client.send(Command(op="mres", fb="cpu1", user="eng", token=token))
-        proc.send_signal(signal.SIGKILL)
         assert reply.applied, reply.reason
+        assert wait_until(lambda: _numbered(client.diag(100)).get(0x4307) is not None, 30)
+        before = client.diag(100)
+        proc.send_signal(signal.SIGKILL)
         proc.wait(30)
     hot = subprocess.run(
         [sys.executable, "-m", "s7graph", "run", *args, "--restart", "hot"],
@@ -148,6 +151,17 @@ def test_an_applied_mres_survives_sigkill_and_only_a_warm_restart_follows(
         assert buffer is not None
         reset = next(e for e in buffer.entries if e.event_id == 0x4307)
         assert reset.wall_ms > 1_600_000_000_000  # read back with its time from the last run
+        # every entry read before the SIGKILL is read back under its number, the new ones
+        # numbered on from there
+        assert before is not None
+        assert wait_until(lambda: (b := client.diag(100)) is not None and b.total > before.total)
+        again = {e.number: e for e in (client.diag(100) or DiagBuffer()).entries}
+        for e in before.entries:
+            assert again[e.number] == e
+        numbers = sorted(again)
+        assert numbers == list(range(numbers[0], numbers[-1] + 1))
+        assert before.total == before.entries[0].number
+        assert {again[n].event_id for n in numbers if n > before.total} >= {0x4301, 0x4302}
 
 
 def test_a_stop_by_an_error_is_in_the_next_runs_diagnostic_buffer_with_its_cause(
@@ -171,8 +185,18 @@ def test_a_stop_by_an_error_is_in_the_next_runs_diagnostic_buffer_with_its_cause
     assert (
         "16#25FF  OB121 PK1" in cause and "OB1: ZeroDivisionError: the fault of cycle 30" in cause
     )
-    assert cause.split()[1].startswith("20")  # its date: read back from the state file
+    assert cause.split()[1].startswith("#") and cause.split()[2].startswith(
+        "20"
+    )  # its date: read back from the state file
     assert any("16#4302" in line for line in lines[:stop])  # this run's start is newer
+
+
+def _numbered(buffer: DiagBuffer | None) -> dict[int, int]:
+    """Each event ID of ``buffer`` with the number of its newest entry."""
+    out: dict[int, int] = {}
+    for e in reversed(buffer.entries if buffer is not None else []):
+        out[e.event_id] = e.number
+    return out
 
 
 def test_a_program_on_the_bus_is_refused_a_listen_a_chart_would_be_refused(
