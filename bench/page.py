@@ -189,13 +189,13 @@ def stamp_changes() -> None:
 
     changes: list[tuple[float, list[int]]] = []
     runners: list[Runner] = []
-    update = LiveGraph.update
+    update = LiveGraph._update  # behind update() and changed(): every state built
     run = Runner.run
     last: list[list[int]] = [[]]
 
-    def stamped_update(self: LiveGraph, record: Any) -> Any:
+    def stamped_update(self: LiveGraph, record: Any, *args: Any, **kw: Any) -> Any:
         t = time.time()  # the end of the scan, before it is published
-        result = update(self, record)
+        result = update(self, record, *args, **kw)
         if result.active != last[0]:
             last[0] = list(result.active)
             changes.append((t, last[0]))
@@ -205,7 +205,7 @@ def stamp_changes() -> None:
         runners.append(self)
         run(self, **kw)
 
-    LiveGraph.update = stamped_update  # type: ignore[method-assign]
+    LiveGraph._update = stamped_update  # type: ignore[method-assign]
     Runner.run = kept_run  # type: ignore[method-assign]
 
     def control() -> None:
