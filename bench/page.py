@@ -4,12 +4,13 @@ bench/README.md). A benchmark, not a test: it prints figures and the targets, me
 
 Each chart runs in a CPU process of its own — the real ``run_chart`` of ``s7graph run CHART
 --web`` (state file, bus on a unix socket, the view in its own process) at a 10 ms cycle on
-the system clock — whose ``LiveGraph.update`` (called at the end of every scan, before the
-scan is published) is wrapped to stamp ``time.time()`` whenever the active steps change.
-Headless Chromium (Playwright driving /usr/bin/chromium, software WebGL) opens the page
-with an init script that hooks viser's websocket worker: the worker's ``WebSocket`` notes
-the wall-clock arrival of every frame (``performance.timeOrigin + performance.now()``, the
-machine clock the CPU stamps with), the page notes when each decoded batch reaches the main
+the system clock — whose ``LiveGraph._update`` (behind ``update`` and ``changed``, called
+at the end of a scan, before it is published) is wrapped to stamp ``time.time()`` whenever
+the active steps change. Headless Chromium (Playwright driving /usr/bin/chromium, software
+WebGL) opens the page with an init script that hooks viser's websocket worker: the
+worker's ``WebSocket`` notes the wall-clock arrival of every frame
+(``performance.timeOrigin + performance.now()``, the machine clock the CPU stamps with), the
+page notes when each decoded batch reaches the main
 thread and the second ``requestAnimationFrame`` after it ("painted": the frame that drew
 the batch has been presented — or, as viser applies a node's props through React, the one
 drawing it has begun: up to a frame short; see bench/README.md).
