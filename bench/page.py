@@ -4,12 +4,13 @@ bench/README.md). A benchmark, not a test: it prints figures and the targets, me
 
 Each chart runs in a CPU process of its own — the real ``run_chart`` of ``s7graph run CHART
 --web`` (state file, bus on a unix socket, the view in its own process) at a 10 ms cycle on
-the system clock — whose ``LiveGraph.update`` (called at the end of every scan, before the
-scan is published) is wrapped to stamp ``time.time()`` whenever the active steps change.
-Headless Chromium (Playwright driving /usr/bin/chromium, software WebGL) opens the page
-with an init script that hooks viser's websocket worker: the worker's ``WebSocket`` notes
-the wall-clock arrival of every frame (``performance.timeOrigin + performance.now()``, the
-machine clock the CPU stamps with), the page notes when each decoded batch reaches the main
+the system clock — whose ``LiveGraph._update`` (behind ``update`` and ``changed``, called
+at the end of a scan, before it is published) is wrapped to stamp ``time.time()`` whenever
+the active steps change. Headless Chromium (Playwright driving /usr/bin/chromium, software
+WebGL) opens the page with an init script that hooks viser's websocket worker: the
+worker's ``WebSocket`` notes the wall-clock arrival of every frame
+(``performance.timeOrigin + performance.now()``, the machine clock the CPU stamps with), the
+page notes when each decoded batch reaches the main
 thread and the second ``requestAnimationFrame`` after it ("painted": the frame that drew
 the batch has been presented — or, as viser applies a node's props through React, the one
 drawing it has begun: up to a frame short; see bench/README.md).
@@ -189,13 +190,13 @@ def stamp_changes() -> None:
 
     changes: list[tuple[float, list[int]]] = []
     runners: list[Runner] = []
-    update = LiveGraph.update
+    update = LiveGraph._update  # behind update() and changed(): every state built
     run = Runner.run
     last: list[list[int]] = [[]]
 
-    def stamped_update(self: LiveGraph, record: Any) -> Any:
+    def stamped_update(self: LiveGraph, record: Any, *args: Any, **kw: Any) -> Any:
         t = time.time()  # the end of the scan, before it is published
-        result = update(self, record)
+        result = update(self, record, *args, **kw)
         if result.active != last[0]:
             last[0] = list(result.active)
             changes.append((t, last[0]))
@@ -205,7 +206,7 @@ def stamp_changes() -> None:
         runners.append(self)
         run(self, **kw)
 
-    LiveGraph.update = stamped_update  # type: ignore[method-assign]
+    LiveGraph._update = stamped_update  # type: ignore[method-assign]
     Runner.run = kept_run  # type: ignore[method-assign]
 
     def control() -> None:

@@ -278,7 +278,8 @@ class ChartView:
     # ------------------------------------------------------------ live state
 
     def apply(self, update: StepStateUpdate) -> None:
-        """Show ``update`` (thread-safe; the newest one wins, drawn at most ``MAX_FPS``/s)."""
+        """Show ``update`` (thread-safe; the newest one wins: its step colours at once, the
+        rest at most ``MAX_FPS`` times a second)."""
         with self._lock:
             self._latest = update
             layout = self._next_layout or self.layout  # the newest chart known
@@ -357,14 +358,28 @@ class ChartView:
         self._thread.join(timeout=2.0)
 
     def _render_loop(self) -> None:
+        """Each wake-up paints the step boxes at once (``_paint_steps``: a change of the
+        active steps is in the pages one websocket frame later); the rest — the live layer,
+        the bars, every page's panel — at most ``MAX_FPS`` times a second, counted from the
+        start of the last full render, and once a second without a wake-up."""
+        due = 0.0  # the earliest start of the next full render
+        pending = False
         while not self._closed:
-            self._wake.wait(timeout=1.0)
-            self._wake.clear()
+            wait = max(0.0, due - time.monotonic()) if pending else 1.0
+            woke = self._wake.wait(timeout=wait)
             if self._closed:
                 return
+            if woke:
+                self._wake.clear()
+                pending = True
+                with contextlib.suppress(Exception):  # a page gone mid-update
+                    self._paint_steps()
+            if pending and time.monotonic() < due:
+                continue
+            pending = False
+            due = time.monotonic() + 1.0 / MAX_FPS
             with contextlib.suppress(Exception):  # a page gone mid-update must not stop it
                 self._render()
-            time.sleep(1.0 / MAX_FPS)
 
     def _render(self) -> None:
         if self._history_stale and self._history_source is not None:
@@ -411,22 +426,37 @@ class ChartView:
         for panel in panels:
             try:
                 panel.show(page, detail, halted)
+                panel.client.flush()  # its panel now, not at the end of viser's window
             except Exception:
                 continue
+
+    def _colours(self, update: StepStateUpdate | None, connected: bool) -> dict[int, Any]:
+        """Each step box's colour but inactive grey (every box's when disconnected)."""
+        assert self.drawing is not None
+        if not connected:
+            return dict.fromkeys(self.drawing.boxes, DISCONNECTED)
+        if update is None:
+            return {}
+        bad = set(update.disturbed) | set(update.latched)
+        colours = {n: ACTIVE for n in update.active if n in self.drawing.boxes}
+        colours.update({n: DISTURBED for n in bad if n in self.drawing.boxes})
+        return colours
+
+    def _paint_steps(self) -> None:
+        """Send the step boxes' colours now, if they changed (a few bytes: the boxes that
+        changed), and have viser send them without its 1/60 s window."""
+        with self._lock:
+            update, connected = self._latest, self.connected
+        if (update is None and connected) or self.drawing is None:
+            return
+        if self.drawing.paint_steps(self._colours(update, connected)):
+            self.server.flush()
 
     def _paint(self, update: StepStateUpdate | None, connected: bool) -> None:
         if (update is None and connected) or self.drawing is None:
             return
-        active = set(update.active) if update is not None else set()
-        bad = set(update.disturbed) | set(update.latched) if update is not None else set()
-        colours = {}
-        for number in self.drawing.boxes:
-            if not connected:
-                colours[number] = DISCONNECTED
-            elif number in bad:
-                colours[number] = DISTURBED
-            elif number in active:
-                colours[number] = ACTIVE
+        colours = self._colours(update, connected)
         with self.server.atomic():
             holds = self.status.show(update, connected) if self.status is not None else set()
             self.drawing.paint(colours, dict.fromkeys(holds, ACTIVE))
+        self.server.flush()

@@ -520,15 +520,24 @@ class Drawing:
     def paint(self, steps: dict[int, Rgb], transitions: dict[int, Rgb] | None = None) -> None:
         """Colour each step box (missing: inactive grey) and transition bar (missing:
         ink); only what changed is sent."""
-        for n, box in self.boxes.items():
-            self._set(("S", n), box, steps.get(n, INACTIVE))
+        self.paint_steps(steps)
         for n, bar in self.bars.items():
             self._set(("T", n), bar, (transitions or {}).get(n, INK))
 
-    def _set(self, key: tuple[str, int], handle: Any, colour: Rgb) -> None:
-        if self._colour.get(key) != colour:
-            handle.color = colour
-            self._colour[key] = colour
+    def paint_steps(self, steps: dict[int, Rgb]) -> bool:
+        """Colour each step box (missing: inactive grey), the bars as they are; only what
+        changed is sent. True if something was."""
+        sent = False
+        for n, box in self.boxes.items():
+            sent = self._set(("S", n), box, steps.get(n, INACTIVE)) or sent
+        return sent
+
+    def _set(self, key: tuple[str, int], handle: Any, colour: Rgb) -> bool:
+        if self._colour.get(key) == colour:
+            return False
+        handle.color = colour
+        self._colour[key] = colour
+        return True
 
     def forget_colours(self) -> None:
         """Send every colour again at the next paint."""

@@ -7,7 +7,8 @@ from __future__ import annotations
 import pytest
 
 from s7graph.sequencer.text.model import Chart, Operand, Sequence, Step, Transition
-from s7graph.web.bus.protocol import ChartLayout, StepStateUpdate
+from s7graph.web.bus.protocol import ChartLayout, StepDetail, StepStateUpdate
+from s7graph.web.view import chart_view
 from s7graph.web.view.chart_view import ChartView, make_server
 from s7graph.web.view.drawing import (
     ACTIVE,
@@ -108,6 +109,35 @@ def test_the_layout_is_computed_once_per_chart_version() -> None:
         view.apply_chart(changed)
         assert wait_until(lambda: view.picture is not first)
         assert len(view.boxes) == 13 and view.layout.version == 2
+    finally:
+        view.close()
+        server.stop()
+
+
+def test_a_step_change_is_coloured_at_once_while_the_rest_keeps_its_rate(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    monkeypatch.setattr(chart_view, "MAX_FPS", 0.05)  # a full render every 20 s at most
+    layout = ChartLayout.from_chart(long_chart(8, "S{i}"), version=1)
+    server, _ = make_server(port=0)
+    view = ChartView(server, layout, lambda c: None)  # type: ignore[arg-type, return-value]
+    status = view.status
+    assert status is not None
+
+    def at(cycle: int, step: int) -> StepStateUpdate:
+        detail = StepDetail(number=step, t_ms=0, u_ms=0)
+        return StepStateUpdate(
+            cycle=cycle, t_ms=cycle, mode="AUTO", active=[step], details=[detail]
+        )
+
+    try:
+        view.apply(at(1, 1))  # the first full render
+        assert wait_until(lambda: ("times", 1) in status.shown_text())
+        view.apply(at(2, 2))
+        assert wait_until(lambda: view.boxes[2].color == ACTIVE, timeout=5.0)
+        assert view.boxes[1].color == INACTIVE
+        assert ("times", 1) in status.shown_text()  # the live layer waits its turn
+        assert view.drawing is not None and not view.drawing.paint_steps({2: ACTIVE})
     finally:
         view.close()
         server.stop()
