@@ -39,8 +39,8 @@ HINT_VALUE: Final = "A time for D and L (T#2S), a count for CS (C#10); else empt
 
 def pages_of(count: int) -> list[str]:
     """The choices of *Rows shown* for a step of ``count`` rows: ``1–16``, ``17–32`` …"""
-    firsts = range(0, max(count, 1), MAX_TABLE_ROWS)
-    return [f"{a + 1}–{min(a + MAX_TABLE_ROWS, max(count, 1))}" for a in firsts]
+    firsts = range(0, count, MAX_TABLE_ROWS)
+    return [f"{a + 1}–{min(a + MAX_TABLE_ROWS, count)}" for a in firsts] or ["1–16"]
 
 
 @dataclass(slots=True)

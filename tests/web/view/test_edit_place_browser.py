@@ -3,8 +3,10 @@ virtual clock with a users file and a real zenoh bus (docs/online-change.md, "Ed
 browser"): a wrong password says so on the page; a click on a step or transition in edit mode
 floats its form beside it with its values; renaming there and completing a condition change the
 chart and the source view; the step's action rows are a table; an insert at the clicked transition
-lands after it; Undo and Redo of the form and the keys Ctrl+Z, Ctrl+Y and Delete work. One browser,
-one page for the module (CI has 2 cores); the tests run in order on it."""
+lands after it; Undo and Redo of the form and the keys Ctrl+Z, Ctrl+Y and Delete work; a click on
+an empty place offers the inserts there; the window follows its step when the chart is
+zoomed; a step of 21 rows pages its table. One browser, one page for the module (CI has 2 cores);
+the tests run in order on it."""
 
 from __future__ import annotations
 
