@@ -43,8 +43,6 @@ from s7graph.sequencer.text.parse import ChartSyntaxError, parse_chart
 from s7graph.web.bus.protocol import ChartLayout, ChartSource
 from s7graph.web.view import texts
 from s7graph.web.view.drawing import (
-    BAR_W,
-    BOX_W,
     FLAWED,
     SELECTED,
     Drawing,
@@ -54,14 +52,13 @@ from s7graph.web.view.drawing import (
 )
 from s7graph.web.view.edit_forms import DEBOUNCE_S, Field, Form, element_choices, form_for
 from s7graph.web.view.editor_cpu import MAX_DIAGNOSTIC_BUTTONS, CpuCommands, Located, refused
-from s7graph.web.view.editor_place import InPlace, delete_of
+from s7graph.web.view.editor_place import EDIT_OFFSET, FOLLOW_S, InPlace, delete_of
 from s7graph.web.view.editor_rows import RowEditing
 from s7graph.web.view.engineering import EditorPage
 from s7graph.web.view.layout import place
 
 __all__ = ["EDIT_OFFSET", "Editor"]
 
-EDIT_OFFSET: Final = (0.0, -2000.0)  # where a page draws the chart it edits (off the live one)
 EDITOR_WIDTH: Final = 400  # pixels of the editor's panel, docked left of the chart
 
 
@@ -337,6 +334,8 @@ class Editor(CpuCommands, RowEditing, InPlace):
             on_transition=self._clicked_transition,
         )
         self._drawn = chart
+        if self._anchor is not None:  # its element may be drawn elsewhere now
+            self._later("follow", FOLLOW_S, self._follow)
 
     def _clicked_step(self, number: int, _: Any) -> None:
         self._guarded(functools.partial(self._place_at, StepRef(number)))
@@ -345,18 +344,6 @@ class Editor(CpuCommands, RowEditing, InPlace):
     def _clicked_transition(self, number: int, _: Any) -> None:
         self._guarded(functools.partial(self._place_at, TransitionRef(number)))
         self._guarded(functools.partial(self.select, TransitionRef(number)))
-
-    def _place_at(self, ref: Ref | None) -> None:
-        """Float the element's form beside where ``ref`` is drawn (unfolded)."""
-        pic, (ox, oy) = self._picture, EDIT_OFFSET
-        if isinstance(ref, StepRef) and pic is not None and ref.number in pic.steps:
-            x, y = pic.steps[ref.number]
-            self._place_beside(x + ox + BOX_W / 2, y + oy)
-        elif isinstance(ref, TransitionRef) and pic is not None and ref.number in pic.transitions:
-            x, y = pic.transitions[ref.number]
-            self._place_beside(x + ox + BAR_W / 2, y + oy)
-        else:
-            self.place.expand()
 
     def _colour(self) -> None:
         if self._drawing is None or self.session is None:

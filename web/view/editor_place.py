@@ -3,12 +3,15 @@ transition clicked on the chart, holding its fields (name, number, condition …
 action rows as a table, what can be inserted or deleted at that place, and Undo, Redo and
 Delete. A condition field offers the names that complete the word being typed. The keys
 Delete, Ctrl+Z and Ctrl+Y (Ctrl+Shift+Z) do the same as the buttons while the focus is
-not in a text field (the browser's own undo works there). ``InPlace`` is a part of
+not in a text field (the browser's own undo works there). A click on an empty place of
+the chart offers the inserts there, and the window follows the chart when the camera
+moves. ``InPlace`` is a part of
 ``web.view.editor.Editor``, which owns the attributes it declares.
 """
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, Final
 
@@ -17,10 +20,13 @@ import viser
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.change.edit import BY_NAME, Operation, Session
 from s7graph.sequencer.text.elements import Ref, RowRef, SequenceRef, StepRef, TransitionRef
-from s7graph.web.view.drawing import BOX_W, scale_px
+from s7graph.web.view.drawing import BAR_W, BOX_H, BOX_W, Picture, scale_px
 from s7graph.web.view.edit_forms import EXPRESSIONS, Field, Form, completed, completions, names_for
 
-__all__ = ["PICK", "PLACE_WIDTH", "InPlace", "delete_of"]
+__all__ = ["EDIT_OFFSET", "PICK", "PLACE_WIDTH", "InPlace", "column_transition", "delete_of"]
+
+EDIT_OFFSET: Final = (0.0, -2000.0)  # where a page draws the chart it edits (off the live one)
+FOLLOW_S: Final = 0.25  # the window follows the camera once it rests this long
 
 PLACE_WIDTH: Final = 340  # pixels of the floating form
 MIN_WIDTH: Final = 240  # narrower than this it covers the element rather
@@ -45,10 +51,31 @@ def delete_of(ref: Ref | None) -> Operation | None:
     return None
 
 
+def _hit(pic: Picture, x: float, y: float) -> bool:
+    """Whether the picture point ``(x, y)`` is on a step box or a transition's click target
+    (their own clicks handle it)."""
+    for sx, sy in pic.steps.values():
+        if abs(x - sx) <= BOX_W / 2 and abs(y - sy) <= BOX_H / 2:
+            return True
+    return any(
+        abs(x - cx) <= w / 2 and abs(y - cy) <= h / 2 for cx, cy, w, h in pic.targets.values()
+    )
+
+
+def column_transition(pic: Picture, x: float, y: float) -> int | None:
+    """The transition an empty place ``(x, y)`` of the picture inserts after: the nearest one
+    above it in its column (a step box wide); None off every column (a new sequencer)."""
+    above = [(ty, n) for n, (tx, ty) in pic.transitions.items() if abs(x - tx) <= BOX_W / 2]
+    above = [(ty, n) for ty, n in above if ty > y]
+    return min(above)[1] if above else None
+
+
 class InPlace:
     """The floating form, its placing, name completion and the edit keys."""
 
     client: viser.ClientHandle
+    editing: bool
+    _picture: Picture | None
     session: Session | None
     symbols: SymbolTable | None
     _form: Form | None
@@ -60,6 +87,8 @@ class InPlace:
         def _guarded(self, action: Callable[[], object]) -> None: ...
 
         def _later(self, key: str, delay: float, action: Callable[[], None]) -> None: ...
+
+        def select(self, ref: Ref | None) -> None: ...
 
         def _apply_op(self, op: Operation, ref: Ref | None, values: dict[str, object]) -> None: ...
 
@@ -92,6 +121,9 @@ class InPlace:
         self.delete_button.on_click(lambda _: self._guarded(self.delete_selected))
         self._keys: list[Any] = []
         self._completers = {}
+        self._anchor: Ref | tuple[float, float] | None = None
+        self._placed: tuple[int, int, int, int] | None = None
+        self.client.camera.on_update(self._camera_moved)
 
     # ------------------------------------------------------------ undo, redo, delete
 
@@ -121,22 +153,73 @@ class InPlace:
             command = gui.add_command(label, hotkey=key, modifier=modifier)
             command.on_trigger(lambda _, a=action: self._guarded(a))  # type: ignore[misc]
             self._keys.append(command)
+        self.client.scene.on_click()(self._clicked_empty)
 
     def _keys_off(self) -> None:
         for command in self._keys:
             command.remove()
         self._keys = []
+        self._anchor = None
+        with contextlib.suppress(Exception):  # the page is gone
+            self.client.scene.remove_click_callback(self._clicked_empty)
+
+    def _clicked_empty(self, event: Any) -> None:
+        """A click on the chart where nothing is drawn: the inserts of that place — after the
+        transition above it in its column (*Step + Transition* …), off every column the
+        chart's (*Sequencer*) — in the window beside it."""
+        pic, (ox, oy) = self._picture, EDIT_OFFSET
+        (x0, y0, z0), (dx, dy, dz) = event.ray_origin, event.ray_direction
+        if not self.editing or pic is None or dz == 0 or -z0 / dz <= 0:
+            return
+        x, y = x0 - z0 / dz * dx - ox, y0 - z0 / dz * dy - oy
+        if _hit(pic, x, y):
+            return
+        n = column_transition(pic, x, y)
+        ref = TransitionRef(n) if n is not None else None
+        self._guarded(lambda: self._place_at((x + ox, y + oy)))
+        self._guarded(lambda: self.select(ref))
 
     # ------------------------------------------------------------ placing
 
     def _place_aside(self) -> None:
         """Show the form folded in the lower right corner, off the chart, until an element
         is clicked (its header unfolds it)."""
+        self._anchor, self._placed = None, None
         self.place.visible = True
         self.place.float(x=-16, y=-16)
         self.place.minimize()
 
-    def _place_beside(self, right: float, y: float) -> None:
+    def _place_at(self, at: Ref | tuple[float, float] | None, *, unfold: bool = True) -> None:
+        """Float the form beside where ``at`` is drawn (a step, a transition, or a scene
+        point clicked) and remember it, so the form follows when the chart moves."""
+        pic, (ox, oy) = self._picture, EDIT_OFFSET
+        if isinstance(at, tuple):
+            self._anchor = at
+            self._place_beside(*at, unfold=unfold)
+        elif isinstance(at, StepRef) and pic is not None and at.number in pic.steps:
+            self._anchor = at
+            x, y = pic.steps[at.number]
+            self._place_beside(x + ox + BOX_W / 2, y + oy, unfold=unfold)
+        elif isinstance(at, TransitionRef) and pic is not None and at.number in pic.transitions:
+            self._anchor = at
+            x, y = pic.transitions[at.number]
+            self._place_beside(x + ox + BAR_W / 2, y + oy, unfold=unfold)
+        elif unfold:
+            self.place.expand()
+
+    def _camera_moved(self, _: Any) -> None:
+        """The page's camera moved (zoomed, panned, or aimed after an edit changed the
+        chart's size): the form follows its element once the camera rests."""
+        if self.editing and self._anchor is not None:
+            self._later("follow", FOLLOW_S, self._follow)
+
+    def _follow(self) -> None:
+        """Float the form beside its element again, where it is drawn now (folded or not as
+        the user left it)."""
+        if self.editing and self._anchor is not None:
+            self._place_at(self._anchor, unfold=False)
+
+    def _place_beside(self, right: float, y: float, *, unfold: bool = True) -> None:
         """Float the form beside a drawn element whose right edge is at scene ``right``
         (its middle at scene ``y``), on the side with room for it (on a narrow canvas
         narrower, on the roomier side); where the page's camera looks now."""
@@ -162,8 +245,12 @@ class InPlace:
             left = max(0.0, x_left - GAP - width)
         height = min(PLACE_HEIGHT, max(200.0, h - 16))
         top = min(max(8.0, py - 60), max(8.0, h - height - 8))
-        self.place.float(x=round(left), y=round(top), width=round(width), height=round(height))
-        self.place.expand()
+        placed = (round(left), round(top), round(width), round(height))
+        if placed != self._placed:
+            self.place.float(x=placed[0], y=placed[1], width=placed[2], height=placed[3])
+            self._placed = placed
+        if unfold:
+            self.place.expand()
 
     # ------------------------------------------------------------ completing names
 

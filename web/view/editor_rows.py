@@ -25,16 +25,22 @@ from s7graph.web.view import texts
 from s7graph.web.view.edit_forms import DEBOUNCE_S, Form, row_fields
 from s7graph.web.view.editor_cpu import refused
 
-__all__ = ["MAX_TABLE_ROWS", "NO_EVENT", "RowEditing"]
+__all__ = ["MAX_TABLE_ROWS", "NO_EVENT", "RowEditing", "pages_of"]
 
 NO_EVENT: Final = "(none)"
-MAX_TABLE_ROWS: Final = 16  # rows the table shows; the source view has them all
+MAX_TABLE_ROWS: Final = 16  # rows the table shows at once; *Rows shown* pages through more
 MOVES: Final = ("Up", "Down", "Remove")
 HINT_EVENT: Final = "When the row runs: (none) every scan the step is active, or at an event."
 HINT_QUALIFIER: Final = "What the row does: N sets while active, S/R set and reset, D/L delay"
 HINT_C: Final = "Tick it to run the row only while the step's interlock holds."
 HINT_OPERAND: Final = 'What the row acts on: Q0.0, "Motor_on", S4 or n := n + 1.'
 HINT_VALUE: Final = "A time for D and L (T#2S), a count for CS (C#10); else empty."
+
+
+def pages_of(count: int) -> list[str]:
+    """The choices of *Rows shown* for a step of ``count`` rows: ``1–16``, ``17–32`` …"""
+    firsts = range(0, count, MAX_TABLE_ROWS)
+    return [f"{a + 1}–{min(a + MAX_TABLE_ROWS, count)}" for a in firsts] or ["1–16"]
 
 
 @dataclass(slots=True)
@@ -102,6 +108,15 @@ class RowEditing:
         step = self._step_of(chart, ref)
         with self.rows_folder:
             self.rows_html = gui.add_html("", order=0)
+            self._row_start, self._table_start = 0, 0
+            self.rows_page = gui.add_dropdown(
+                "Rows shown",
+                ["1–16"],
+                order=0.5,
+                visible=False,
+                hint="A step with more than 16 action rows: which 16 the table shows.",
+            )
+            self.rows_page.on_update(self._rows_paged)
             self.rows_table = gui.add_folder("Rows", order=1, visible=False)
             empty = not (step.actions if step is not None else ())
             with gui.add_folder("New action row", order=2, expand_by_default=empty):
@@ -125,26 +140,48 @@ class RowEditing:
         """Bring the table up to the step's rows: values in place while the number of rows
         stays, else the table anew."""
         step = self._step_of(chart, ref)
-        rows = step.actions[:MAX_TABLE_ROWS] if step is not None else ()
-        more = len(step.actions) - len(rows) if step is not None else 0
-        self.rows_html.content = texts.rows_note(len(rows), more)
-        if len(rows) != len(self._lines):
-            self._rows_table(rows)
+        every = step.actions if step is not None else ()
+        pages = pages_of(len(every))
+        self._row_start = min(self._row_start, (len(pages) - 1) * MAX_TABLE_ROWS)
+        start = self._row_start
+        rows = every[start : start + MAX_TABLE_ROWS]
+        self.rows_html.content = texts.rows_note(len(rows), len(every), start)
+        if list(self.rows_page.options) != pages:
+            self.rows_page.options = pages
+        shown = pages[start // MAX_TABLE_ROWS]
+        if self.rows_page.value != shown:
+            self.rows_page.value = shown  # type: ignore[misc]
+        self.rows_page.visible = len(pages) > 1
+        if len(rows) != len(self._lines) or start != self._table_start:
+            self._rows_table(rows, start)
         for line, row in zip(self._lines, rows, strict=True):
             line.show(row_fields(row))
-            label = f"Row {self._lines.index(line) + 1}"
-            if line.folder.label != label:
-                line.folder.label = label
         self.rows_table.visible = bool(rows)
 
-    def _rows_table(self, rows: tuple[ActionRow, ...]) -> None:
+    def _rows_paged(self, event: Any) -> None:
+        """Another 16 rows chosen in *Rows shown*."""
+        if getattr(event, "client", None) is None or self.session is None or self._form is None:
+            return  # set from here
+        options = list(self.rows_page.options)
+        value = str(self.rows_page.value)
+        start = options.index(value) * MAX_TABLE_ROWS if value in options else 0
+
+        def page() -> None:
+            if self.session is not None and start != self._row_start:
+                self._row_start = start
+                self._rows_show(self.session.chart, self._form.ref if self._form else None)
+
+        self._guarded(page)
+
+    def _rows_table(self, rows: tuple[ActionRow, ...], start: int) -> None:
+        """The table's lines for ``rows``, the first of them the step's row ``start`` (0-based)."""
         for line in self._lines:
             with contextlib.suppress(Exception):
                 line.folder.remove()
-        self._lines = []
+        self._lines, self._table_start = [], start
         gui = self.client.gui
         with self.rows_table:
-            for i, row in enumerate(rows, 1):
+            for i, row in enumerate(rows, start + 1):
                 with gui.add_folder(f"Row {i}") as folder:
                     line = _Line(
                         folder,
@@ -170,9 +207,10 @@ class RowEditing:
                 line.moves.on_click(functools.partial(self._row_moved, i - 1))
 
     def _row_typed(self, index: int, delay: float, event: Any) -> None:
-        if getattr(event, "client", None) is None or index >= len(self._lines):
-            return  # set from here
-        line = self._lines[index]
+        at = index - self._table_start
+        if getattr(event, "client", None) is None or not 0 <= at < len(self._lines):
+            return  # set from here, or a line of another page
+        line = self._lines[at]
         self._later(f"row {index}", delay, lambda: self._row_edit("change_row", index, line))
 
     def _row_moved(self, index: int, event: Any) -> None:

@@ -438,12 +438,15 @@ def editor_status_html(
     return small("<br>".join(rows))
 
 
-def rows_note(shown: int, more: int) -> str:
-    """The line above a step's table of action rows."""
+def rows_note(shown: int, total: int = -1, start: int = 0) -> str:
+    """The line above a step's table of action rows (``shown`` of ``total`` from row
+    ``start``, 0-based)."""
+    total = shown if total < 0 else total
     if not shown:
         return small('<span style="color:#777">no action rows: add one below</span>')
-    tail = f"; {more} more in the source view" if more else ""
-    return small(f"{shown} action row{'s' if shown != 1 else ''}, run top to bottom{tail}")
+    if shown == total:
+        return small(f"{shown} action row{'s' if shown != 1 else ''}, run top to bottom")
+    return small(f"rows {start + 1}–{start + shown} of {total}, run top to bottom")
 
 
 def lines_html(lines: Iterable[str], *, heading: str = "") -> str:

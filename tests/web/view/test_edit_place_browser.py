@@ -3,8 +3,10 @@ virtual clock with a users file and a real zenoh bus (docs/online-change.md, "Ed
 browser"): a wrong password says so on the page; a click on a step or transition in edit mode
 floats its form beside it with its values; renaming there and completing a condition change the
 chart and the source view; the step's action rows are a table; an insert at the clicked transition
-lands after it; Undo and Redo of the form and the keys Ctrl+Z, Ctrl+Y and Delete work. One browser,
-one page for the module (CI has 2 cores); the tests run in order on it."""
+lands after it; Undo and Redo of the form and the keys Ctrl+Z, Ctrl+Y and Delete work; a click on
+an empty place offers the inserts there; the window follows its step when the chart is
+zoomed; a step of 21 rows pages its table. One browser, one page for the module (CI has 2 cores);
+the tests run in order on it."""
 
 from __future__ import annotations
 
@@ -14,8 +16,10 @@ from typing import TYPE_CHECKING
 
 import pytest
 
+from s7graph.sequencer.change.edit import make_edit
 from s7graph.sequencer.text.elements import StepRef, TransitionRef, find
 from s7graph.sequencer.text.model import Step, Transition
+from s7graph.web.view.drawing import BOX_H, BOX_W
 from s7graph.web.view.editor import EDIT_OFFSET, Editor
 from tests.web.bus.test_online_change import CHART
 from tests.web.helpers import (
@@ -30,7 +34,14 @@ from tests.web.helpers import (
     page_point,
     wait_until,
 )
-from tests.web.view.test_edit_browser import choose, click, condition, editor, type_into
+from tests.web.view.test_edit_browser import (
+    choose,
+    click,
+    condition,
+    editor,
+    select,
+    type_into,
+)
 
 if TYPE_CHECKING:
     from playwright.sync_api import Page
@@ -69,6 +80,8 @@ def click_on_chart(page: Page, ed: Editor, kind: str, n: int) -> tuple[int, int]
     ox, oy = drawing.offset
     assert wait_until(lambda: settled(ed), timeout=30)
     px, py = page_point(ed.client, x + ox, y + oy, page=page)
+    on = f"() => document.elementFromPoint({px}, {py}).tagName"
+    assert wait_until(lambda: page.evaluate(on) == "CANVAS", 10), f"{kind} {n} is covered"
     page.mouse.click(px, py)
     return px, py
 
@@ -96,9 +109,24 @@ def targets(ed: Editor, n: int) -> tuple[int, ...]:
 
 
 def blank(page: Page) -> None:
-    """Click the canvas where nothing is drawn (the focus leaves the form's fields)."""
-    left, _, height = canvas_box(page)
-    page.mouse.click(left + 20, height - 20)
+    """Take the focus out of the form's fields (a click on an empty place would insert)."""
+    page.evaluate("() => document.activeElement && document.activeElement.blur()")
+
+
+def click_at(page: Page, ed: Editor, x: float, y: float) -> None:
+    """Click the picture point ``(x, y)`` of the chart edited, which must be on the canvas."""
+    assert wait_until(lambda: settled(ed), timeout=30)
+    ox, oy = EDIT_OFFSET
+    px, py = page_point(ed.client, x + ox, y + oy, page=page)
+    left, width, height = canvas_box(page)
+    assert left < px < left + width and 0 < py < height, (px, py, left, width, height)
+    page.mouse.click(px, py)
+
+
+def tab_box(page: Page) -> tuple[float, float]:
+    box = page.get_by_role("tab", name="Edit here").bounding_box()
+    assert box is not None
+    return box["x"], box["y"]
 
 
 def test_a_wrong_password_says_so_on_the_page(page: Page, cpu: OnlineRig) -> None:
@@ -121,7 +149,9 @@ def test_a_click_on_a_step_opens_its_form_beside_it_and_a_rename_there_changes_t
     ed = editor(cpu)
     assert wait_until(lambda: ed._drawing is not None, timeout=30)
     px, py = click_on_chart(page, ed, "step", 2)
-    assert wait_until(lambda: ed.session is not None and ed.session.selection == StepRef(2), 30)
+    assert wait_until(lambda: ed.session is not None and ed.session.selection == StepRef(2), 30), (
+        ed.session and ed.session.selection
+    )
     page.get_by_text("step S2 Fill", exact=True).first.wait_for(timeout=30_000)
     assert field(page, "Name").input_value() == "Fill"
     assert field(page, "Number").input_value() == "2"
@@ -180,3 +210,72 @@ def test_an_insert_lands_at_the_clicked_transition_and_undo_redo_and_keys_work(
     page.keyboard.press("Delete")  # S4 and T4 go; T1 leads to S2 again
     assert wait_until(lambda: targets(ed, 1) == (2,), 30)
     assert ed.session is not None and len(ed.session.chart.sequences[0].steps) == 3
+
+
+def test_a_click_on_an_empty_place_offers_the_inserts_there(page: Page, cpu: OnlineRig) -> None:
+    ed = editor(cpu)
+    assert ed._drawing is not None
+    pic = ed._drawing.picture
+    x1, y1 = pic.steps[1]
+    x3, y3 = pic.transitions[3]  # the column's last transition (the jump back to S1)
+    click_at(page, ed, x3, y3 - 0.5)  # below it, in its column: the inserts after it
+    assert wait_until(lambda: ed.session is not None and ed.session.selection == TransitionRef(3))
+    page.get_by_text("transition T3 Empty", exact=True).first.wait_for(timeout=30_000)
+    click(page, "Step + Transition")
+    assert wait_until(lambda: targets(ed, 3) == (4,), 30)
+    assert targets(ed, 4) == (1,)  # appended: the new transition jumps back as T3 did
+    click(page, "Undo")
+    assert wait_until(lambda: targets(ed, 3) == (1,), 30)
+    click_at(page, ed, x1, y1 + 1.5 * BOX_H)  # above the column: the chart's inserts
+    assert wait_until(lambda: ed._form is not None and ed._form.ref is None, 30)
+    click(page, "Sequencer")
+    assert wait_until(lambda: ed.session is not None and len(ed.session.chart.sequences) == 2)
+    click(page, "Undo")
+    assert wait_until(lambda: ed.session is not None and len(ed.session.chart.sequences) == 1)
+
+
+def test_the_window_follows_the_chart_when_it_is_zoomed(page: Page, cpu: OnlineRig) -> None:
+    ed = editor(cpu)
+    select(page, ed, "S2 Filling", StepRef(2))  # the window beside it (over the chart: narrow)
+    assert wait_until(lambda: ed._placed is not None, 30)
+    before, placed = tab_box(page), ed._placed
+    left, width, height = canvas_box(page)
+    page.mouse.move(left + width / 4, height / 4)
+    page.mouse.wheel(0, 800)  # zoom out
+    assert wait_until(lambda: settled_anywhere(ed), timeout=30)
+    assert wait_until(lambda: ed._placed != placed, 30), placed
+    assert ed._placed is not None
+    moved = left + ed._placed[0]
+    assert wait_until(lambda: abs(tab_box(page)[0] - moved) <= 2, 30), (before, moved)
+    drawing = ed._drawing
+    assert drawing is not None
+    x, y = drawing.picture.steps[2]
+    px, py = page_point(ed.client, x + EDIT_OFFSET[0] + BOX_W / 2, y + EDIT_OFFSET[1], page=page)
+    tx, ty = tab_box(page)
+    assert px <= tx < px + 60 and ty < py, (px, py, tx, ty)  # beside the step where it is now
+
+
+def settled_anywhere(ed: Editor) -> bool:
+    before = tuple(float(v) for v in ed.client.camera.position)
+    time.sleep(0.6)
+    return before == tuple(float(v) for v in ed.client.camera.position)
+
+
+def test_a_step_with_more_rows_than_the_table_shows_pages_through_them(
+    page: Page, cpu: OnlineRig
+) -> None:
+    ed = editor(cpu)
+    more = "".join(f"    N Q{i // 8}.{i % 8};\n" for i in range(1, 21))  # S3: 21 rows
+    text = str(ed.source.value).replace("    N Q0.1;\n", "    N Q0.1;\n" + more)
+    ed._guarded(lambda: ed.apply(make_edit("set_source", {"text": text})))
+    assert wait_until(lambda: len(step(ed, 3).actions) == 21, 30)
+    select(page, ed, "S3 Drain", StepRef(3))
+    page.get_by_text("rows 1–16 of 21, run top to bottom").first.wait_for(timeout=30_000)
+    assert field(page, "Operand 16").input_value() == "Q1.7"
+    choose(page, "Rows shown", "17–21")
+    page.get_by_text("rows 17–21 of 21, run top to bottom").first.wait_for(timeout=30_000)
+    assert wait_until(lambda: field(page, "Operand 17").input_value() == "Q2.0", 30)
+    assert field(page, "Operand 21").input_value() == "Q2.4"
+    type_into(page, "Operand 18", "Q7.7")
+    assert wait_until(lambda: "Q7.7" in str(step(ed, 3).actions[17]), 30)
+    assert page.get_by_text("rows 17–21 of 21, run top to bottom").count() > 0  # stays
