@@ -75,24 +75,40 @@ def descendants(pid: int) -> list[int]:
     return found
 
 
+def _running(pid: int) -> bool:
+    """Whether any thread of process ``pid`` still runs. A zombie thread-group leader is not
+    enough: when a process is SIGKILLed its main thread may be a zombie while another thread
+    (the CPU's state writer, preempted inside its ``write`` under load) has yet to finish the
+    system call it was in — and that write may complete a commit."""
+    try:
+        tasks = list(Path(f"/proc/{pid}/task").iterdir())
+    except OSError:
+        return False
+    for task in tasks:
+        try:
+            state = (task / "stat").read_text().rsplit(")", 1)[1].split()[0]
+        except (OSError, IndexError):
+            continue
+        if state != "Z":
+            return True
+    return False
+
+
 def wait_gone(pids: list[int], timeout: float = 30.0) -> None:
-    """Until none of ``pids`` runs any more (a zombie counts as gone)."""
+    """Until none of ``pids`` runs any more: every thread of each ended (a zombie counts as
+    gone, once all its threads are)."""
     deadline = time.monotonic() + timeout
     for pid in pids:
-        while time.monotonic() < deadline:
-            try:
-                state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
-            except (OSError, IndexError):
-                break
-            if state == "Z":
-                break
+        while _running(pid):
+            assert time.monotonic() < deadline, f"process {pid} still runs {timeout:g} s on"
             time.sleep(0.01)
 
 
 def kill_run(proc: subprocess.Popen[bytes], timeout: float = 30.0) -> None:
-    """SIGKILL ``s7graph run`` and wait until its CPU is gone too: the CPU dies with its
-    supervisor (parent-death signal) but may still be in its last commit's fsync when the
-    run is reaped — that commit is durable, and a reader must not miss it."""
+    """SIGKILL ``s7graph run`` and wait until its CPU is gone too, every thread of it: the
+    CPU dies with its supervisor (parent-death signal) but its writer thread may still be in
+    its last commit's write or fsync when the run is reaped — that commit is durable, and a
+    reader must not miss it."""
     below = descendants(proc.pid)
     proc.send_signal(signal.SIGKILL)
     proc.wait(timeout)

@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import functools
 import mmap
 import os
 import signal
@@ -77,8 +78,13 @@ def _prctl(option: int, value: int) -> bool:
         return False
 
 
-def _die_with_parent() -> None:  # in the child, between fork and exec
+def die_with_parent(parent: int) -> None:  # in the child, between fork and exec
+    """Be SIGKILLed when ``parent`` ends — at once if it ended before the signal was set
+    (between the fork and here): else the CPU would run on, orphaned, writing the state file
+    a restarted run reads (prctl(2), PR_SET_PDEATHSIG)."""
     _prctl(_PR_SET_PDEATHSIG, signal.SIGKILL)
+    if os.getppid() != parent:
+        os.kill(os.getpid(), signal.SIGKILL)
 
 
 def child_marks() -> ScanMarks | None:
@@ -168,7 +174,7 @@ class Supervisor:
             [sys.executable, "-m", "s7graph", *self.args],
             env=env,
             pass_fds=(self._fd,),
-            preexec_fn=_die_with_parent,
+            preexec_fn=functools.partial(die_with_parent, os.getpid()),
         )
         return self._proc
 

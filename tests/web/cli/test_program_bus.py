@@ -109,7 +109,7 @@ def test_a_program_on_the_bus_answers_the_shell_status_diag_watch_stop_mres_star
         zero = s7graph("watch", *bus, "--address", "MW10:INT,DB11.n", "--duration-s", "0.2")
         assert zero.stdout.splitlines()[0].endswith("STOP  MW10:INT=0  DB11.n=0")
         assert s7graph("start", *bus, "--user", "eng").returncode == 0
-        assert wait_until(lambda: (s := client.status()) is not None and s.state == "RUN")
+        assert wait_until(lambda: (s := client.status()) is not None and s.state == "RUN", 30)
         as_json = s7graph("diag", *bus, "--json", "-n", "2").stdout
         buffer = decode(as_json, DiagBuffer)
         assert [e.event_id for e in buffer.entries] == [0x4302, 0x4301]
@@ -239,6 +239,8 @@ def test_a_charts_cpu_answers_diag_and_mres_initializes_its_sequencer(tmp_path: 
         str(tmp_path / "drill.sqlite"),
         "--duration-s",
         "120",
+        "--max-cycle-ms",  # the bus is tested, not the watchdog: a loaded CI's slow scan
+        "5000",
     ]
     fb = "Seq_drill"
     with cpu_process(tmp_path, args, fb=fb, user="eng") as (_, client, token):
@@ -251,12 +253,12 @@ def test_a_charts_cpu_answers_diag_and_mres_initializes_its_sequencer(tmp_path: 
 
         send("mode", mode="MAN")
         send("step_on", step=3)
-        assert wait_until(lambda: (s := client.state(fb)) is not None and 3 in s.active)
+        assert wait_until(lambda: (s := client.state(fb)) is not None and 3 in s.active, 30)
         send("stop")
         send("mres")
         assert s7graph("watch", *_bus(tmp_path), "--address", "DB1.S_NO", "--duration-s", "0.1")
         send("start")
-        assert wait_until(lambda: (s := client.state(fb)) is not None and s.active == [1])
+        assert wait_until(lambda: (s := client.state(fb)) is not None and s.active == [1], 30)
         state = client.state(fb)
         assert state is not None and state.mode == "AUTO"  # initial values: mode, steps
         lines = s7graph("diag", *_bus(tmp_path), "-n", "10").stdout

@@ -21,10 +21,12 @@ from tests.paths import ROOT
 DRILL = ROOT / "examples" / "drill"
 
 SWALLOWER = """
+from pathlib import Path
 from s7graph.engine import ob
 
 CPU = {"max_cycle_ms": 50}
 calls = [0]
+SWALLOWED = Path(__file__).with_suffix(".swallowed")
 
 @ob(1)
 def main(ctx):
@@ -36,7 +38,11 @@ def main(ctx):
             while True:
                 pass
         except BaseException:
-            pass
+            try:             # (an abort while it is said is swallowed too)
+                if not SWALLOWED.exists():
+                    SWALLOWED.write_text("an abort")
+            except BaseException:
+                pass
 """
 
 
@@ -59,8 +65,14 @@ def test_a_scan_swallowing_every_abort_cannot_hold_the_process_against_sigterm(
     proc = _start(str(program), "--state", str(state), "--cycle-ms", "5")
     assert proc.stderr is not None
     assert "in RUN" in proc.stderr.readline()
-    time.sleep(0.5)  # scan 20 starts hanging, aborts are raised and swallowed
-    assert proc.poll() is None
+    # scan 20 hangs, aborts are raised and swallowed: SIGTERM then, at once — its supervisor
+    # kills a scan hung 1 s past the first abort (a later SIGTERM, on a loaded machine, would
+    # find a CPU started again in STOP)
+    swallowed = program.with_suffix(".swallowed")
+    deadline = time.monotonic() + 30
+    while not swallowed.exists():
+        assert proc.poll() is None and time.monotonic() < deadline, proc.stderr.read()
+        time.sleep(0.01)
     sent = time.monotonic()
     proc.send_signal(signal.SIGTERM)
     code = proc.wait(GRACE_S + 20)

@@ -6,6 +6,7 @@ its last durable state, with the cause in the diagnostic buffer, on stderr and i
 
 from __future__ import annotations
 
+import functools
 import os
 import signal
 import sqlite3
@@ -20,7 +21,7 @@ import pytest
 
 from s7graph.engine.diagnostics import EventId
 from s7graph.engine.runner import EXIT_HUNG, GRACE_S
-from s7graph.web.cli.supervisor import KILL_AFTER_S, STOP_EXTRA_S
+from s7graph.web.cli.supervisor import KILL_AFTER_S, STOP_EXTRA_S, die_with_parent
 from tests.paths import ROOT
 from tests.web.helpers import free_port
 
@@ -317,3 +318,18 @@ def test_sigterm_while_the_hung_cpu_is_restarted_ends_the_run_with_the_cause_on_
         clean = con.execute("SELECT value FROM meta WHERE key='clean'").fetchone()
     con.close()
     assert clean == ("1",)  # the new CPU ended as by Ctrl-C: its state saved
+
+
+def test_a_cpu_spawned_as_its_supervisor_dies_ends_instead_of_running_on_orphaned() -> None:
+    # the parent-death signal is set after the fork: a supervisor SIGKILLed in between would
+    # leave the CPU running, writing the state file the next run reads
+    sleeper = [sys.executable, "-c", "import time; time.sleep(60)"]
+    mine = os.getpid()
+    kept = subprocess.Popen(sleeper, preexec_fn=functools.partial(die_with_parent, mine))
+    orphan = subprocess.Popen(sleeper, preexec_fn=functools.partial(die_with_parent, mine + 1))
+    try:
+        assert orphan.wait(30) == -signal.SIGKILL  # its parent was not the one it was given
+        assert kept.poll() is None
+    finally:
+        kept.kill()
+        kept.wait()

@@ -19,7 +19,7 @@ import pytest
 from s7graph.sequencer.change.edit import make_edit
 from s7graph.sequencer.text.elements import StepRef, TransitionRef, find
 from s7graph.sequencer.text.model import Step, Transition
-from s7graph.web.view.drawing import BOX_H, BOX_W
+from s7graph.web.view.drawing import BOX_H, BOX_W, INACTIVE
 from s7graph.web.view.editor import EDIT_OFFSET, Editor
 from tests.web.bus.test_online_change import CHART
 from tests.web.helpers import (
@@ -42,6 +42,7 @@ from tests.web.view.test_edit_browser import (
     select,
     type_into,
 )
+from tests.web.view.test_online_change_browser import edit_point, shows
 
 if TYPE_CHECKING:
     from playwright.sync_api import Page
@@ -68,7 +69,10 @@ def page(cpu: OnlineRig) -> Iterator[Page]:
 
 
 def click_on_chart(page: Page, ed: Editor, kind: str, n: int) -> tuple[int, int]:
-    """Click step or transition ``n`` where the editor draws it; the page point clicked."""
+    """Click step or transition ``n`` where the editor draws it; the page point clicked.
+    Only once the page shows the drawing where the test reckons it (a step box's colour
+    inside its corner: the scene has reached the browser and the camera it reports is the
+    one it draws with) — a click before that hits nothing."""
     drawn = ed.session.chart if ed.session is not None else None
     assert wait_until(lambda: ed._drawing is not None and ed._drawn is drawn, timeout=30)
     drawing = ed._drawing
@@ -79,6 +83,13 @@ def click_on_chart(page: Page, ed: Editor, kind: str, n: int) -> tuple[int, int]
         x, y = drawing.picture.transitions[n]  # its bar
     ox, oy = drawing.offset
     assert wait_until(lambda: settled(ed), timeout=30)
+    seen = n if kind == "step" else min(drawing.picture.steps)
+    colour = drawing._colour.get(("S", seen), INACTIVE)
+
+    def corner() -> dict[int, tuple[int, int]]:
+        return {seen: edit_point(page, ed, drawing, seen)}
+
+    assert wait_until(lambda: shows(page, corner, {seen: colour}, 35), 30, poll=0.5)
     px, py = page_point(ed.client, x + ox, y + oy, page=page)
     on = f"() => document.elementFromPoint({px}, {py}).tagName"
     assert wait_until(lambda: page.evaluate(on) == "CANVAS", 10), f"{kind} {n} is covered"

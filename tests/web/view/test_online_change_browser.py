@@ -14,7 +14,7 @@ import shutil
 import subprocess
 import sys
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from io import BytesIO
 from typing import TYPE_CHECKING
 
@@ -24,7 +24,7 @@ from s7graph.sequencer.text.elements import StepRef, TransitionRef, find
 from s7graph.web.access.audit import read_audit
 from s7graph.web.view.chart_view import ChartView
 from s7graph.web.view.drawing import ACTIVE, BOX_H, BOX_W, INACTIVE, SELECTED, Drawing
-from s7graph.web.view.editor import EDITOR_WIDTH, Editor
+from s7graph.web.view.editor import Editor
 from tests.sequencer.exchange.helpers import synthetic
 from tests.web.helpers import (
     PASSWORD,
@@ -162,32 +162,40 @@ def run_to(cpu: OnlineRig, gate: str, step: int) -> None:
     cpu.session.set(gate, False)
 
 
-def live_point(view: ChartView, n: int) -> tuple[int, int]:
-    """Where the top-left inside corner of live step box ``n`` shows on the (one) page."""
+def live_point(page: Page, view: ChartView, n: int) -> tuple[int, int]:
+    """Where the top-left inside corner of live step box ``n`` shows on the (one) page, as
+    its camera is now."""
     x, y = view.picture.steps[n]
     (panel,) = view.panels.values()
-    return page_point(panel.client, x - BOX_W / 2 + INSET, y + BOX_H / 2 - INSET)
+    return page_point(panel.client, x - BOX_W / 2 + INSET, y + BOX_H / 2 - INSET, page=page)
 
 
-def edit_point(ed: Editor, drawing: Drawing, n: int) -> tuple[int, int]:
+def edit_point(page: Page, ed: Editor, drawing: Drawing, n: int) -> tuple[int, int]:
     """Where the top-left inside corner of step box ``n`` of the editor's drawing shows on
-    its page (the canvas starts right of the docked editor)."""
+    its page (its canvas measured on the page: right of the docked editor), as its camera
+    is now."""
     x, y = drawing.picture.steps[n]
     x, y = x + drawing.offset[0] - BOX_W / 2 + INSET, y + drawing.offset[1] + BOX_H / 2 - INSET
-    return page_point(ed.client, x, y, left=EDITOR_WIDTH)
+    return page_point(ed.client, x, y, page=page)
 
 
 def shows(
-    page: Page, where: dict[int, tuple[int, int]], colours: dict[int, object], within: int = 20
+    page: Page,
+    where: Callable[[], dict[int, tuple[int, int]]],
+    colours: dict[int, object],
+    within: int = 20,
 ) -> bool:
-    """Whether each point shows its colour on the page (each channel ``within``)."""
+    """Whether each point shows its colour on the page (each channel ``within``). The points
+    are taken anew at each look: the camera the page reports may still be moving (an aim
+    after an edit, back to the live chart) when the look is first asked for."""
     from PIL import Image
 
+    points = where()
     shot = Image.open(BytesIO(page.screenshot())).convert("RGB")
-    if not all(0 <= x < shot.width and 0 <= y < shot.height for x, y in where.values()):
+    if not all(0 <= x < shot.width and 0 <= y < shot.height for x, y in points.values()):
         return False  # the camera looks elsewhere
     return all(
-        all(abs(a - b) <= within for a, b in zip(shot.getpixel(where[n]), rgb, strict=True))  # type: ignore[arg-type]
+        all(abs(a - b) <= within for a, b in zip(shot.getpixel(points[n]), rgb, strict=True))  # type: ignore[arg-type]
         for n, rgb in colours.items()
     )
 
@@ -224,7 +232,10 @@ def test_an_inserted_step_is_named_by_events_watch_the_page_and_the_audit(
     assert wait_until(lambda: watch.saw("active S8", "S0:S6", "S1:S8")), watch.lines
     page.get_by_text("S1 S8 Eight").first.wait_for(timeout=30_000)  # the page's event list
     page.get_by_text("S0 S6 Step 6").first.wait_for(timeout=30_000)
-    corners = {n: live_point(view, n) for n in (6, 7, 8)}
+
+    def corners() -> dict[int, tuple[int, int]]:
+        return {n: live_point(page, view, n) for n in (6, 7, 8)}
+
     colours = {8: ACTIVE, 6: INACTIVE, 7: INACTIVE}
     assert wait_until(lambda: shows(page, corners, colours), 30, poll=0.5)
     run_to(cpu, "g8", 7)  # S8 -> S7
@@ -237,7 +248,7 @@ def test_an_inserted_step_is_named_by_events_watch_the_page_and_the_audit(
 
     click(page, "MAN")  # a click on S8 of the live chart names S8 in a command
     assert wait_until(lambda: cpu.session.graph.state.mode == "MAN")
-    page.mouse.click(*corners[8])
+    page.mouse.click(*corners()[8])  # where the page showed it active
     panel = next(p for p in view.panels.values() if p.editor is not None)
     assert wait_until(lambda: int(panel.step_number.value) == 8)
     click(page, "Activate")
@@ -280,12 +291,15 @@ def test_after_undo_download_the_page_draws_the_chart_being_edited(
     assert wait_until(lambda: ed._drawing is not None and 8 in ed._drawing.boxes)
     drawing = ed._drawing
     assert drawing is not None  # (the selection's blue shows a little paler: within 35)
-    corner = {n: edit_point(ed, drawing, n) for n in (6, 8)}
+
+    def corner() -> dict[int, tuple[int, int]]:
+        return {n: edit_point(page, ed, drawing, n) for n in (6, 8)}
+
     assert wait_until(lambda: shows(page, corner, {8: SELECTED}, 35), 30, poll=0.5)
     select(page, ed, "T8 Trans8", TransitionRef(8))
     type_into(page, "Condition", "g8 AND nosuch")  # its diagnostic on the page
     page.get_by_text("error[E042] unknown name 'nosuch'").first.wait_for(timeout=30_000)
-    page.mouse.click(*corner[6])  # a click on a step of the drawing selects it
+    page.mouse.click(*corner()[6])  # a click on a step of the drawing selects it
     assert wait_until(lambda: ed.session is not None and ed.session.selection == StepRef(6))
     page.get_by_text("step S6 Step 6", exact=True).first.wait_for(timeout=30_000)
     assert wait_until(lambda: shows(page, corner, {6: SELECTED}, 35), 30, poll=0.5)

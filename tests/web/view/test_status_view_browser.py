@@ -213,7 +213,8 @@ def test_t_and_u_are_shown_under_an_active_step_and_advance(cpu: OnlineRig, page
     aim_at_chart(cpu)
     client = client_of(cpu)
     x, y = view.picture.times[2]
-    assert dark_pixels(page, client, x, y, 0.8, 0.33) == 0  # S2 idle: nothing under it
+    # S2 idle: nothing under it (once the page has drawn what the server shows, at the aim)
+    assert wait_until(lambda: dark_pixels(page, client, x, y, 0.8, 0.33) == 0, 30, 0.5)
     to_fill(cpu)
     assert wait_until(lambda: ("times", 2) in layer.shown_text())
     t0 = _seconds(layer.shown_text()[("times", 2)][0])
@@ -277,9 +278,11 @@ def test_a_chart_of_two_sequences_offers_each_and_the_overview(cpu: OnlineRig, p
 
     assert wait_until(grey, 30, 0.5), seen
     page.get_by_role("button", name="Overview", exact=True).click()
-    time.sleep(0.5)
-    _, width, height = canvas_box(page)
-    for n in (1, 12):  # the whole chart: both sequences on the canvas
-        x, y = view.picture.steps[n]
-        px, py = page_point(panel.client, x, y, page=page)
-        assert 0 <= px < width and 0 <= py < height, (n, px, py)
+    where: list[tuple[int, int]] = []
+
+    def whole() -> bool:  # the whole chart: both sequences on the canvas, once it moved there
+        _, width, height = canvas_box(page)
+        where[:] = [page_point(panel.client, *view.picture.steps[n], page=page) for n in (1, 12)]
+        return all(0 <= px < width and 0 <= py < height for px, py in where)
+
+    assert wait_until(whole, 30, 0.5), where
