@@ -4,7 +4,7 @@ bench/README.md). A benchmark, not a test: it prints figures and the targets, me
 
 Each chart runs in a CPU process of its own — the real ``run_chart`` of ``s7graph run CHART
 --web`` (state file, bus on a unix socket, the view in its own process) at a 10 ms cycle on
-the system clock — whose ``LiveGraph.update`` (called at the end of every scan, before the
+the system clock — whose ``LiveGraph.changed`` (called at the end of every scan, before the
 scan is published) is wrapped to stamp ``time.time()`` whenever the active steps change.
 Headless Chromium (Playwright driving /usr/bin/chromium, software WebGL) opens the page
 with an init script that hooks viser's websocket worker: the worker's ``WebSocket`` notes
@@ -189,23 +189,29 @@ def stamp_changes() -> None:
 
     changes: list[tuple[float, list[int]]] = []
     runners: list[Runner] = []
-    update = LiveGraph.update
+    update, changed = LiveGraph.update, LiveGraph.changed
     run = Runner.run
     last: list[list[int]] = [[]]
 
-    def stamped_update(self: LiveGraph, record: Any) -> Any:
-        t = time.time()  # the end of the scan, before it is published
-        result = update(self, record)
-        if result.active != last[0]:
+    def stamp(t: float, result: Any) -> Any:
+        if result is not None and result.active != last[0]:
             last[0] = list(result.active)
             changes.append((t, last[0]))
         return result
+
+    def stamped_update(self: LiveGraph, record: Any) -> Any:
+        return stamp(time.time(), update(self, record))  # the end of the scan, not yet sent
+
+    def stamped_changed(self: LiveGraph, record: Any) -> Any:
+        """``s7graph run`` asks ``changed`` each scan (an update only when one may be due)."""
+        return stamp(time.time(), changed(self, record))
 
     def kept_run(self: Runner, **kw: Any) -> None:
         runners.append(self)
         run(self, **kw)
 
     LiveGraph.update = stamped_update  # type: ignore[method-assign]
+    LiveGraph.changed = stamped_changed  # type: ignore[method-assign]
     Runner.run = kept_run  # type: ignore[method-assign]
 
     def control() -> None:
