@@ -5,7 +5,9 @@ Accepted text forms, one per file (detected from the content): ``"Name" ; I0.7 ;
 lines; ``,``-separated CSV with a header row (columns named symbol/name, address, type, comment);
 ``"Name" : I0.7 : BOOL;`` entries as in the ``.s7g`` SYMBOLS section (docs/chart-format.md). ``//``
 and ``#`` start comment lines. Names are unique regardless of case (as in the STEP 7 symbol editor
-``[K]``).
+``[K]``). A row whose address is a block (``"Data" ; DB 20 ; DB 20``, ``"Motor" : FB17 : FB;``)
+names that block, as the STEP 7 symbol table does: ``db_number`` finds a DB by it
+(``"Data".temps[2]``); such rows are kept apart from the operand symbols.
 """
 
 from __future__ import annotations
@@ -22,7 +24,7 @@ from s7graph.engine.datatypes import type_of
 from s7graph.engine.errors import AddressError, SourceLocation, SymbolError, TypeMismatch
 from s7graph.engine.text import read_utf8
 
-__all__ = ["Symbol", "SymbolTable", "default_type"]
+__all__ = ["BlockSymbol", "Symbol", "SymbolTable", "default_type"]
 
 _WIDTH_TYPES: dict[Width, str] = {
     Width.BIT: "BOOL",
@@ -51,6 +53,19 @@ class Symbol:
     comment: str = ""
 
 
+@dataclass(frozen=True, slots=True)
+class BlockSymbol:
+    """A symbol table row naming a block (``"Data"`` for DB 20): kind ``DB``, ``FB``, …"""
+
+    name: str
+    kind: str
+    number: int
+    comment: str = ""
+
+
+_BLOCK = re.compile(r"\s*(DB|FB|FC|SFB|SFC|UDT|OB|VAT)\s*(\d{1,5})\s*", re.IGNORECASE)
+
+
 def _fits(address: Address, type_name: str) -> bool:
     """A type fits an address when its size equals the width (T/C: TIMER/COUNTER only)."""
     if address.area in (Area.T, Area.C):
@@ -74,6 +89,7 @@ class SymbolTable:
     def __init__(self) -> None:
         self._by_key: dict[str, Symbol] = {}
         self._where: dict[str, SourceLocation | None] = {}
+        self._blocks: dict[str, BlockSymbol] = {}
 
     def __len__(self) -> int:
         return len(self._by_key)
@@ -92,17 +108,21 @@ class SymbolTable:
         comment: str = "",
         *,
         where: SourceLocation | None = None,
-    ) -> Symbol:
-        """Add a symbol; a duplicate name, a bad address or an unknown/unfitting type raises
-        SymbolError naming ``where`` (and the first definition for duplicates)."""
+    ) -> Symbol | BlockSymbol:
+        """Add a symbol (a block's when ``address`` is one, ``DB 20``); a duplicate name, a
+        bad address or an unknown/unfitting type raises SymbolError naming ``where`` (and the
+        first definition for duplicates)."""
         bare = _unquote(name)
         if not bare:
             raise SymbolError("empty symbol name", where)
         key = bare.casefold()
-        if key in self._by_key:
+        if key in self._by_key or key in self._blocks:
             first = self._where.get(key)
             also = f" (first defined at {first})" if first is not None else ""
             raise SymbolError(f'duplicate symbol "{bare}"{also}', where)
+        block = _BLOCK.fullmatch(address) if isinstance(address, str) else None
+        if block is not None:
+            return self._add_block(bare, block, comment, where)
         try:
             addr = parse_address(address, where) if isinstance(address, str) else address
         except AddressError as exc:
@@ -118,6 +138,38 @@ class SymbolTable:
         self._by_key[key] = sym
         self._where[key] = where
         return sym
+
+    def _add_block(
+        self, bare: str, block: re.Match[str], comment: str, where: SourceLocation | None
+    ) -> BlockSymbol:
+        number = int(block[2])
+        if not 0 <= number <= 65535:
+            raise SymbolError(f'symbol "{bare}": block number {number} is not 0…65535', where)
+        sym = BlockSymbol(bare, block[1].upper(), number, comment.strip())
+        self._blocks[bare.casefold()] = sym
+        self._where[bare.casefold()] = where
+        return sym
+
+    def block(self, name: str) -> BlockSymbol | None:
+        """The block symbol called ``name`` (quotes optional, case-insensitive), else None."""
+        return self._blocks.get(_unquote(name).casefold())
+
+    def block_names(self) -> dict[str, str]:
+        """The block symbols as names → labels (``{"Data": "DB20"}``), for a compiler."""
+        return {b.name: f"{b.kind}{b.number}" for b in self._blocks.values()}
+
+    def db_number(self, name: str) -> int | None:
+        """The number of the DB the symbol ``name`` names; None when the table does not
+        have ``name``; SymbolError when ``name`` names another block or an operand."""
+        block = self.block(name)
+        if block is not None:
+            if block.kind != "DB":
+                raise SymbolError(f'"{block.name}" is {block.kind} {block.number}, not a DB')
+            return block.number
+        operand = self.lookup(name)
+        if operand is not None:
+            raise SymbolError(f'"{operand.name}" is the operand {operand.address}, not a DB')
+        return None
 
     def lookup(self, name: str) -> Symbol | None:
         """The symbol called ``name`` (quotes optional, case-insensitive), else None."""

@@ -3,9 +3,10 @@ interfaces, UDTs and DB structures, and the blocks it may call outside it (docs/
 "Blocks and declarations").
 
 A block is named by number (``FB17``), or by a name mapped to one in ``names``
-(``{"ACQUIRE": "FB10"}``) — a block symbol, as the STEP 7 symbol table gives S7-SCL V5;
-a name without a number is E214. Blocks known outside the source (system blocks, blocks
-already loaded) are given as engine blocks and found by label or name.
+(``{"ACQUIRE": "FB10"}``) — a block symbol, as the STEP 7 symbol table gives S7-SCL V5
+(the symbol table's block rows, ``"Data" ; DB 20``, are such names too); a name without a
+number is E214. Blocks known outside the source (system blocks, blocks already loaded) are
+given as engine blocks and found by label or name.
 """
 
 from __future__ import annotations
@@ -164,7 +165,9 @@ def declare(
 ) -> Program:
     """Number every block, resolve UDTs and interfaces; problems go to ``diags``."""
     prog = Program(source.file, symbols=symbols)
-    prog.names = {k.upper(): "".join(v.split()).upper() for k, v in (names or {}).items()}
+    table = symbols.block_names() if symbols is not None else {}  # "Data" ; DB 20
+    given = {**table, **(names or {})}
+    prog.names = {k.upper(): "".join(v.split()).upper() for k, v in given.items()}
     for info in external(blocks):
         prog.blocks.setdefault(info.label, info)
         prog.blocks.setdefault(info.name.upper(), info)

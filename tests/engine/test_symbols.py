@@ -83,3 +83,29 @@ def test_memory_get_and_set_read_symbols_as_their_declared_type() -> None:
     mem.set('"Temp"', -250)
     assert mem.get("Temp") == -250
     assert mem.get("MW20") == 0xFF06
+
+
+def test_a_block_row_names_a_block_apart_from_the_operand_symbols() -> None:
+    table = SymbolTable.from_text(
+        '"Data" ; DB 20 ; DB 20 ; recipe\n"Motor" ; fb17 ; FB 17\n"Start" ; I0.0 ; BOOL\n'
+    )
+    data = table.block('"data"')
+    assert data is not None and (data.kind, data.number, data.comment) == ("DB", 20, "recipe")
+    assert [s.name for s in table] == ["Start"] and table.lookup("Data") is None
+    assert table.block_names() == {"Data": "DB20", "Motor": "FB17"}
+    assert table.db_number("Data") == 20 and table.db_number("Nothing") is None
+    with pytest.raises(SymbolError, match='"Motor" is FB 17, not a DB'):
+        table.db_number("Motor")
+    with pytest.raises(SymbolError, match=r'"Start" is the operand I0\.0, not a DB'):
+        table.db_number('"Start"')
+
+
+def test_a_block_entry_in_the_colon_form_and_its_errors() -> None:
+    table = SymbolTable.from_text('"Data" : DB20 : DB;\n"Recipe" : UDT 5 : UDT 5;\n')
+    assert table.db_number("Data") == 20 and table.block_names()["Recipe"] == "UDT5"
+    with pytest.raises(
+        SymbolError, match=r"sym:2:1: duplicate symbol \"data\" \(first defined at sym:1:1\)"
+    ):
+        SymbolTable.from_text('"Data" ; DB 20\n"data" ; M0.0 ; BOOL\n', file="sym")
+    with pytest.raises(SymbolError, match="block number 70000 is not 0…65535"):
+        SymbolTable.from_text('"Big" ; DB 70000 ; DB\n')

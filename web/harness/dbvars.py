@@ -5,10 +5,11 @@
 An instance DB is read through its FB's structure when the FB is written in S7-SCL
 (``SclProgram.types``), else by the names of its FB's interface (an SFB's ``DB10.ET``, a
 Python FB's variables) one level deep; a global DB declared in an S7-SCL source through
-its STRUCT, as S7 lays it out. A DB by name is one whose name the CPU knows (a chart's
-instance DB by the chart's name, a DB an SCL source names). Values keep their type
-(``steps.scl.access.plain``). An address (``DB1.DBW2``) is not a DB variable: the callers
-try addresses first, so what an address trace gave stays as it was.
+its STRUCT, as S7 lays it out. A DB by name is one the CPU's symbol table names
+(``"Data" ; DB 20``) or whose name the CPU knows (a chart's instance DB by the chart's name,
+a DB an SCL source names). Values keep their type (``steps.scl.access.plain``). An address
+(``DB1.DBW2``) is not a DB variable: the callers try addresses first, so what an address
+trace gave stays as it was.
 """
 
 from __future__ import annotations
@@ -101,6 +102,11 @@ class DbVariables:
         return block.data, found, found.type
 
     def _by_name(self, db: str, name: str) -> int:
+        """A DB symbol of the CPU's symbol table first, then a loaded DB's own name."""
+        symbols = self.cpu.mem.symbols
+        block = symbols.block(db) if symbols is not None else None
+        if block is not None and block.kind == "DB":
+            return int(block.number)
         key = db.upper()
         for number, idb in self.cpu.instance_dbs.items():
             if idb.name.upper() == key:
@@ -108,7 +114,12 @@ class DbVariables:
         for number, block in self.cpu.mem.dbs.items():
             if block.name.upper() == key:
                 return int(number)
-        raise S7Error(f'{name}: no DB is named "{db}"')
+        if symbols is not None:
+            try:
+                symbols.db_number(db)
+            except S7Error as exc:
+                raise S7Error(f"{name}: {exc.message}") from None
+        raise S7Error(f'{name}: no DB is named "{db}" (name it in the symbol table: "{db}" ; DB n)')
 
 
 def _member(structure: ty.SclType, path: Any, types: Mapping[str, ty.SclType], name: str) -> Member:

@@ -1,7 +1,9 @@
 """A global DB written in S7-SCL watched by name over a real zenoh bus (TCP on 127.0.0.1)
 against a program of SCL blocks in this process (``web.wiring.program_edge``): its layout
 came with the compiled DB, so ``DB20.warm``, ``DB20.motor[2].speed`` and ``"Data".temps[2]``
-read in their types, and a name the DB lacks says what it has."""
+read in their types, and a name the DB lacks says what it has. The CPU's symbol table names
+the DBs (``"Data" ; DB 21``): the source's ``DATA_BLOCK "Data"`` gets its number from it, and
+``"Plant".warm`` reads DB20 by its symbol."""
 
 from __future__ import annotations
 
@@ -13,6 +15,7 @@ import pytest
 
 from s7graph import sfb
 from s7graph.engine import Cpu, VirtualClock
+from s7graph.engine.symbols import SymbolTable
 from s7graph.steps.scl import compile_scl
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import WatchValues
@@ -43,6 +46,14 @@ BEGIN
 END_ORGANIZATION_BLOCK
 """
 
+SYMBOLS = """\
+"Data" ; DB 21 ; DB 21 ; recipe temperatures
+"Plant" ; DB20 ; DB20
+"Motor" ; FB 17 ; FB 17
+"Start" ; I0.0 ; BOOL
+"Gone" ; DB 99 ; DB 99
+"""
+
 
 @dataclass
 class Rig:
@@ -68,9 +79,11 @@ class Rig:
 
 @pytest.fixture
 def rig() -> Iterator[Rig]:
-    program = compile_scl(SOURCE, "db.scl", blocks=sfb.SYSTEM_BLOCKS, names={"Data": "DB21"})
+    table = SymbolTable.from_text(SYMBOLS)
+    program = compile_scl(SOURCE, "db.scl", blocks=sfb.SYSTEM_BLOCKS, symbols=table)
     clock = VirtualClock()
     cpu = Cpu(clock, max_cycle_ms=5000)
+    cpu.mem.symbols = table
     sfb.install(cpu)
     program.load(cpu)
     endpoint = f"tcp/127.0.0.1:{free_port()}"
@@ -122,3 +135,13 @@ def test_a_name_an_scl_db_lacks_says_what_the_db_has(rig: Rig) -> None:
     assert got["DB20.motor[2]"] == "DB20.motor[2] is a STRUCT: watch one of its elements"
     assert got['"Nope".x'] == '"Nope": no DB has this name'
     assert got["DB20.count[1]"] == "DB20.count is no ARRAY: it takes no index"
+
+
+def test_a_db_symbol_of_the_symbol_table_names_the_db_over_the_bus(rig: Rig) -> None:
+    asked = ['"Plant".warm', "Plant.motor[2].speed", '"Motor".x', '"Start".x', '"Gone".x']
+    got = {v.address: (v.value, v.error) for v in rig.watch(asked).values}
+    assert got['"Plant".warm'] == (True, "")
+    assert got["Plant.motor[2].speed"][1] != ""  # a DB symbol is quoted, as in S7-SCL
+    assert got['"Motor".x'][1] == '"Motor" is FB 17, not a DB'
+    assert got['"Start".x'][1] == '"Start" is the operand I0.0, not a DB'
+    assert got['"Gone".x'][1] == "DB99 is not loaded"

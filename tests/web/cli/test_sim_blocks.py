@@ -146,7 +146,10 @@ END_DATA_BLOCK
         ("DB10.hist[4]", "DB10.hist[4]: index 4 outside 1..3"),
         ("DB10.n[1]", "DB10.n[1]: INT is not an ARRAY"),
         ("DB99.x", "DB99.x: DB99 is not in this CPU"),
-        ('"Oven".x', '"Oven".x: no DB is named "Oven"'),
+        (
+            '"Oven".x',
+            '"Oven".x: no DB is named "Oven" (name it in the symbol table: "Oven" ; DB n)',
+        ),
         ("DB10.hist[x]", "DB10.hist[x]: cannot read '[x]'"),
     ],
 )
@@ -314,3 +317,63 @@ END_ORGANIZATION_BLOCK
     assert trace[2]["values"]["DB20.count"] == 0
     assert trace[2]["values"]['"DB21".temps[3]'] == -2.25
     assert trace[2]["values"]["DB20.motor[2].on"] is True
+
+
+SYMBOLS = """\
+"Data" ; DB 21 ; DB 21 ; recipe temperatures
+"Plant" ; DB 20 ; DB 20
+"Counter" ; FB 17 ; FB 17
+"Start" ; I0.0 ; BOOL
+"Gone" ; DB 99 ; DB 99
+"""
+
+NAMED_DBS = """
+DATA_BLOCK DB20
+STRUCT warm : BOOL; END_STRUCT
+END_DATA_BLOCK
+DATA_BLOCK "Data"
+STRUCT temps : ARRAY[1..3] OF REAL; END_STRUCT
+BEGIN temps[2] := 1.5;
+END_DATA_BLOCK
+"""
+
+
+def test_the_symbol_tables_db_rows_name_dbs_for_watch_and_stimulus(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    stim = '{"at_ms": 10, "set": {"\\"Plant\\".warm": true, "\\"Data\\".temps[3]": -2.5}}\n'
+    f = _write(
+        tmp_path, seq_s7g=CHART, blocks_scl=BLOCKS + NAMED_DBS, sym_txt=SYMBOLS, stim_jsonl=stim
+    )
+    watch = '"Plant".warm,"Data".temps[2],"Data".temps[3],DB21.temps[3]'
+    args = ["--blocks", f["blocks_scl"], "--symbols", f["sym_txt"], "--watch", watch]
+    rc, trace, err = _sim(
+        capsys, f["seq_s7g"], *args, "--stimulus", f["stim_jsonl"], "--cycles", "3"
+    )
+    assert rc == 0, err
+    assert trace[0]["values"] == {
+        '"Plant".warm': False,
+        '"Data".temps[2]': 1.5,
+        '"Data".temps[3]': 0.0,
+        "DB21.temps[3]": 0.0,
+    }
+    assert trace[2]["values"]['"Plant".warm'] is True
+    assert trace[2]["values"]["DB21.temps[3]"] == -2.5
+
+
+@pytest.mark.parametrize(
+    ("name", "why"),
+    [
+        ('"Counter".n', '"Counter".n: "Counter" is FB 17, not a DB'),
+        ('"Start".x', '"Start".x: "Start" is the operand I0.0, not a DB'),
+        ('"Gone".x', '"Gone".x: DB99 is not in this CPU'),
+    ],
+)
+def test_a_symbol_that_names_no_loaded_db_is_one_line_and_exit_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], name: str, why: str
+) -> None:
+    f = _write(tmp_path, seq_s7g=CHART, blocks_scl=BLOCKS + NAMED_DBS, sym_txt=SYMBOLS)
+    args = ["--blocks", f["blocks_scl"], "--symbols", f["sym_txt"], "--watch", name]
+    rc, trace, err = _sim(capsys, f["seq_s7g"], *args)
+    assert rc == 2 and trace == []
+    assert err.splitlines() == [f"s7graph: error: {why}"]

@@ -9,6 +9,7 @@ import pytest
 from s7graph import sfb
 from s7graph.engine import Cpu, VirtualClock
 from s7graph.engine.errors import S7Error
+from s7graph.engine.symbols import SymbolTable
 from s7graph.steps.scl import compile_scl
 from s7graph.web.harness.dbvars import DbVariables
 
@@ -84,3 +85,14 @@ def test_a_name_a_global_db_lacks_names_the_db_and_what_it_has(dbvars: DbVariabl
         dbvars.reader('"Oven".x')
     with pytest.raises(S7Error, match=r"DB20.motor\[4\].run: index 4 outside 1..3"):
         dbvars.reader("DB20.motor[4].run")
+
+
+def test_a_db_symbol_of_the_cpus_symbol_table_names_a_db(dbvars: DbVariables) -> None:
+    table = SymbolTable.from_text('"Plant" ; DB 20 ; DB 20\n"Pumps" ; FB 3 ; FB 3\n')
+    dbvars.cpu.mem.symbols = table
+    assert dbvars.reader('"Plant".count')() == -7
+    assert dbvars.reader('"Data".temps[2]')() == 21.5  # the DB's own name still holds
+    dbvars.writer('"plant".motor[1].speed')(12)
+    assert dbvars.reader("DB20.motor[1].speed")() == 12
+    with pytest.raises(S7Error, match=r'^"Pumps".on: "Pumps" is FB 3, not a DB$'):
+        dbvars.reader('"Pumps".on')
