@@ -21,6 +21,7 @@ from asyncua import ua
 
 from s7graph.web.bus.protocol import CommandReply
 from s7graph.web.commands import COMMAND_TYPES, Args, Command, args_of, op_of
+from s7graph.web.opcua.model import FLOAT_VARIANTS, INT_VARIANTS
 from s7graph.web.opcua.typed import ObjectIds, StatusCodes, ua_id
 
 __all__ = [
@@ -34,19 +35,6 @@ __all__ = [
     "refusal_status",
 ]
 
-_INTS: Final = frozenset(
-    {
-        ua.VariantType.SByte,
-        ua.VariantType.Byte,
-        ua.VariantType.Int16,
-        ua.VariantType.UInt16,
-        ua.VariantType.Int32,
-        ua.VariantType.UInt32,
-        ua.VariantType.Int64,
-        ua.VariantType.UInt64,
-    }
-)
-_FLOATS: Final = frozenset({ua.VariantType.Float, ua.VariantType.Double})
 _BASE_DATA_TYPE: Final = ua_id(ObjectIds.BaseDataType)
 
 
@@ -173,9 +161,9 @@ def _convert(variant: ua.Variant, spec: ArgSpec) -> object:
     for t in spec.types:
         if isinstance(t, mi.BoolType) and vt is ua.VariantType.Boolean:
             return bool(value)
-        if isinstance(t, mi.IntType) and vt in _INTS and isinstance(value, int):
+        if isinstance(t, mi.IntType) and vt in INT_VARIANTS and isinstance(value, int):
             return int(value)
-        if isinstance(t, mi.FloatType) and vt in _FLOATS and isinstance(value, float):
+        if isinstance(t, mi.FloatType) and vt in FLOAT_VARIANTS and isinstance(value, float):
             return float(value)
         string = vt is ua.VariantType.String and isinstance(value, str)
         if isinstance(t, mi.StrType | mi.LiteralType) and string:

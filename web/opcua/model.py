@@ -20,6 +20,8 @@ from asyncua import ua
 from s7graph.web.opcua.typed import ua_id
 
 __all__ = [
+    "FLOAT_VARIANTS",
+    "INT_VARIANTS",
     "MS",
     "NAMESPACE_URI",
     "PERCENT",
@@ -110,7 +112,7 @@ _TYPES: Final[dict[str, UaType]] = {
     "DATE_AND_TIME": UaType(ua.VariantType.DateTime, "time"),
     "DT": UaType(ua.VariantType.DateTime, "time"),
 }
-_INT_VARIANTS: Final = frozenset(
+INT_VARIANTS: Final = frozenset(  # the integer variants a value may arrive in
     {
         ua.VariantType.SByte,
         ua.VariantType.Byte,
@@ -122,7 +124,7 @@ _INT_VARIANTS: Final = frozenset(
         ua.VariantType.UInt64,
     }
 )
-_FLOAT_VARIANTS: Final = frozenset({ua.VariantType.Float, ua.VariantType.Double})
+FLOAT_VARIANTS: Final = frozenset({ua.VariantType.Float, ua.VariantType.Double})
 
 
 def ua_type(s7_type: str) -> UaType:
@@ -163,11 +165,11 @@ def from_variant(variant: ua.Variant, t: UaType) -> bool | int | float | str:
     value, vt, kind = variant.Value, variant.VariantType, t.kind
     if kind == "bool" and vt is ua.VariantType.Boolean and isinstance(value, bool):
         return value
-    if kind == "int" and vt in _INT_VARIANTS and isinstance(value, int):
+    if kind == "int" and vt in INT_VARIANTS and isinstance(value, int):
         if not t.lo <= value <= t.hi:
             raise ValueError(f"{value} is out of range {t.lo}..{t.hi}")
         return value
-    if kind == "float" and vt in _FLOAT_VARIANTS and isinstance(value, float):
+    if kind == "float" and vt in FLOAT_VARIANTS and isinstance(value, float):
         if not math.isfinite(value):
             raise ValueError("not a finite number")
         return value
