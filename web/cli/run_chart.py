@@ -355,7 +355,7 @@ def _serve(
     from s7graph.web.bus.online import OnlineChange
     from s7graph.web.bus.operands import OperandFeed
     from s7graph.web.cli.net import NetOptions
-    from s7graph.web.cli.view_process import ViewProcess, view_endpoints
+    from s7graph.web.cli.view_process import run_view
     from s7graph.web.harness.scl import scl_of
     from s7graph.web.view.edge import check_port
     from s7graph.web.wiring.live_edge import LiveEdge
@@ -396,21 +396,7 @@ def _serve(
     if inline:
         print(f"s7graph: view {edge.url} (bus {edge.endpoint}); Ctrl-C to stop", flush=True)
     elif web:
-        bus = edge.endpoint
-
-        def served(url: str) -> None:
-            if view is not None and view.starts == 1:
-                print(f"s7graph: view {url} (bus {bus}); Ctrl-C to stop", flush=True)
-
-        view = ViewProcess(
-            connect=view_endpoints(net.listen, net.connect) or [bus],
-            cpu=net.cpu,
-            host=net.host,
-            port=port,
-            origins=net.origins,
-            bus_args=net.credential_args(),
-            on_url=served,
-        )
+        view = run_view(net, port, edge.endpoint)
     elif edge.endpoint:
         print(f"s7graph: CPU {net.cpu} on the bus {edge.endpoint}; Ctrl-C to stop", flush=True)
     if record is not None:

@@ -296,7 +296,7 @@ def _program_edges(
     from s7graph.web.bus.block_sources import serve_blocks
     from s7graph.web.bus.gate import cpu_gate  # zenoh and viser only when asked for
     from s7graph.web.cli.net import NetOptions
-    from s7graph.web.cli.view_process import ViewProcess, view_endpoints
+    from s7graph.web.cli.view_process import run_view
     from s7graph.web.view.edge import check_port
     from s7graph.web.wiring.program_edge import ProgramEdge
 
@@ -316,22 +316,7 @@ def _program_edges(
     if not web:
         print(f"s7graph: CPU {net.cpu} on the bus {edge.endpoint}; Ctrl-C to stop", flush=True)
         return edge, None
-    bus = edge.endpoint
-    view: ViewProcess | None = None
-
-    def served(url: str) -> None:
-        if view is not None and view.starts == 1:
-            print(f"s7graph: view {url} (bus {bus}); Ctrl-C to stop", flush=True)
-
-    view = ViewProcess(
-        connect=view_endpoints(net.listen, net.connect) or [bus],
-        cpu=net.cpu,
-        host=net.host,
-        port=port,
-        origins=net.origins,
-        tls_ca=net.tls_ca,
-        on_url=served,
-    )
+    view = run_view(net, port, edge.endpoint)
     return edge, view
 
 

@@ -24,8 +24,12 @@ import threading
 import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-__all__ = ["MAX_BACKOFF_S", "STABLE_S", "ViewProcess", "view_endpoints"]
+if TYPE_CHECKING:
+    from s7graph.web.cli.net import NetOptions
+
+__all__ = ["MAX_BACKOFF_S", "STABLE_S", "ViewProcess", "run_view", "view_endpoints"]
 
 FIRST_BACKOFF_S = 1.0
 MAX_BACKOFF_S = 30.0
@@ -203,3 +207,25 @@ class ViewProcess:
                 self.port = int(port)
         if self.on_url is not None:
             self.on_url(url)
+
+
+def run_view(net: NetOptions, port: int, bus: str) -> ViewProcess:
+    """The page of ``run --web`` as a child process (not started yet): on the CPU's bus
+    (``bus``, its endpoint, when it neither listens nor connects elsewhere) with the run's
+    own credentials, printing where it serves the first time it does."""
+    view: ViewProcess | None = None
+
+    def served(url: str) -> None:
+        if view is not None and view.starts == 1:
+            print(f"s7graph: view {url} (bus {bus}); Ctrl-C to stop", flush=True)
+
+    view = ViewProcess(
+        connect=view_endpoints(net.listen, net.connect) or [bus],
+        cpu=net.cpu,
+        host=net.host,
+        port=port,
+        origins=net.origins,
+        bus_args=net.credential_args(),
+        on_url=served,
+    )
+    return view
