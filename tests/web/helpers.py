@@ -28,10 +28,13 @@ from tests.paths import ROOT
 if TYPE_CHECKING:
     from playwright.sync_api import Locator, Page
 
+    from s7graph.engine.cpu import Cpu
     from s7graph.engine.record import ScanRecord
+    from s7graph.engine.runner import Runner
     from s7graph.web.bus.client import BusClient
     from s7graph.web.bus.online import OnlineChange
     from s7graph.web.bus.session import TlsFiles
+    from s7graph.web.view.edge import ViewSide
     from s7graph.web.wiring.live_edge import LiveEdge
     from tests.conftest import BusCerts
 
@@ -333,3 +336,46 @@ def view_line(proc: subprocess.Popen[str], stderr: Path, timeout: float = 30) ->
             assert proc.poll() is None, stderr.read_text()
     assert found is not None, "no view URL printed"
     return found
+
+
+@dataclass
+class ProgramPage:
+    """A program's CPU scanned by its runner, on a bus, and the view serving its page;
+    ``state``: its state file (logins, the audit)."""
+
+    runner: Runner
+    view: ViewSide
+    state: Path
+
+
+@contextmanager
+def program_page(cpu: Cpu, tmp_path: Path) -> Iterator[ProgramPage]:
+    """``cpu`` run on the system clock by a runner whose scans go to a ``ProgramEdge`` on
+    TCP on loopback (no users file), with a ``ViewSide`` serving its page on a free port."""
+    from s7graph.engine.runner import Runner
+    from s7graph.web.bus.gate import cpu_gate
+    from s7graph.web.bus.session import BusEnds
+    from s7graph.web.view.edge import ViewSide
+    from s7graph.web.wiring.program_edge import ProgramEdge
+
+    store = StateStore(tmp_path / "state.sqlite")
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    edge = ProgramEdge(cpu, ends=BusEnds(listen=[endpoint]), gate=cpu_gate(None, store))
+    runner: Runner
+
+    def on_record(record: ScanRecord) -> None:
+        edge.on_record(record, stats=cpu.stats, runner=runner)
+
+    runner = Runner(cpu, store=store, on_record=on_record, rt_priority=None, idle_gc=False)
+    runner.startup()
+    runner.start_thread(duration_s=200)
+    view = None
+    try:
+        view = ViewSide(cpu="cpu1", fb=None, ends=BusEnds(connect=[endpoint]), port=0)
+        yield ProgramPage(runner, view, store.path)
+    finally:
+        if view is not None:
+            view.close()
+        runner.shutdown("test ended")
+        edge.close()
+        store.close()

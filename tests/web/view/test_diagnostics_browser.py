@@ -7,30 +7,23 @@ too (docs/view.md, "Diagnostics", "A program's page")."""
 from __future__ import annotations
 
 from collections.abc import Iterator
-from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import pytest
 
 from s7graph.engine.clock import SystemClock
-from s7graph.engine.persistence import StateStore
-from s7graph.engine.record import ScanRecord
-from s7graph.engine.runner import Runner
 from s7graph.web.access.audit import read_audit
-from s7graph.web.bus.gate import cpu_gate
-from s7graph.web.bus.session import BusEnds
-from s7graph.web.view.edge import ViewSide
-from s7graph.web.wiring.program_edge import ProgramEdge
 from tests.web.bus.test_bus_force import CHART
 from tests.web.bus.test_diag_watch import program_cpu
 from tests.web.helpers import (
+    ProgramPage,
     chromium_page,
     field,
-    free_port,
     log_in,
     needs_chromium,
     online_cpu,
+    program_page,
     wait_until,
 )
 
@@ -44,42 +37,16 @@ if TYPE_CHECKING:
 _SWITCH = ("stop", "mres", "start")
 
 
-@dataclass
-class Program:
-    runner: Runner
-    view: ViewSide
-    state: Path
-
-
 @pytest.fixture
-def program(tmp_path: Path) -> Iterator[Program]:
+def program(tmp_path: Path) -> Iterator[ProgramPage]:
     """The watch test's program scanned by a runner, on the bus, and its page."""
     cpu = program_cpu(SystemClock())
-    store = StateStore(tmp_path / "state.sqlite")
-    endpoint = f"tcp/127.0.0.1:{free_port()}"
-    edge = ProgramEdge(cpu, ends=BusEnds(listen=[endpoint]), gate=cpu_gate(None, store))
-    runner: Runner
-
-    def on_record(record: ScanRecord) -> None:
-        edge.on_record(record, stats=cpu.stats, runner=runner)
-
-    runner = Runner(cpu, store=store, on_record=on_record, rt_priority=None, idle_gc=False)
-    runner.startup()
-    runner.start_thread(duration_s=200)
-    view = None
-    try:
-        view = ViewSide(cpu="cpu1", fb=None, ends=BusEnds(connect=[endpoint]), port=0)
-        yield Program(runner, view, store.path)
-    finally:
-        if view is not None:
-            view.close()
-        runner.shutdown("test ended")
-        edge.close()
-        store.close()
+    with program_page(cpu, tmp_path) as running:
+        yield running
 
 
 def test_a_programs_page_shows_its_state_a_watch_table_and_why_it_stopped(
-    program: Program,
+    program: ProgramPage,
 ) -> None:
     assert program.view.program is not None and program.view.fb == ""
     with chromium_page(program.view.url) as page:
