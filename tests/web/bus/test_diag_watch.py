@@ -12,6 +12,7 @@ import json
 import sqlite3
 import threading
 from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -98,10 +99,10 @@ class Rig:
         return answers[0]
 
 
-@pytest.fixture
-def rig() -> Iterator[Rig]:
-    clock = VirtualClock()
-    cpu = program_cpu(clock)
+@contextmanager
+def program_rig(cpu: Cpu, clock: VirtualClock) -> Iterator[Rig]:
+    """``cpu`` (on ``clock``) started behind a ``ProgramEdge`` on TCP on loopback, a
+    client's session on it, one scan made and the status seen."""
     endpoint = f"tcp/127.0.0.1:{free_port()}"
     with (
         ProgramEdge(cpu, ends=BusEnds(listen=[endpoint])) as edge,
@@ -113,6 +114,13 @@ def rig() -> Iterator[Rig]:
         rig.scan()
         assert wait_until(lambda: client.status() is not None)
         yield rig
+
+
+@pytest.fixture
+def rig() -> Iterator[Rig]:
+    clock = VirtualClock()
+    with program_rig(program_cpu(clock), clock) as made:
+        yield made
 
 
 def test_diag_answers_the_newest_entries_first_and_n_bounds_them(rig: Rig) -> None:

@@ -7,9 +7,7 @@ the DBs (``"Data" ; DB 21``): the source's ``DATA_BLOCK "Data"`` gets its number
 
 from __future__ import annotations
 
-import threading
 from collections.abc import Iterator
-from dataclasses import dataclass
 
 import pytest
 
@@ -17,11 +15,7 @@ from s7graph import sfb
 from s7graph.engine import Cpu, VirtualClock
 from s7graph.engine.symbols import SymbolTable
 from s7graph.steps.scl import compile_scl
-from s7graph.web.bus.client import BusClient
-from s7graph.web.bus.protocol import WatchValues
-from s7graph.web.bus.session import BusEnds, open_session
-from s7graph.web.wiring.program_edge import ProgramEdge
-from tests.web.helpers import free_port, wait_until
+from tests.web.bus.test_diag_watch import Rig, program_rig
 
 pytestmark = pytest.mark.timeout(120)
 
@@ -55,28 +49,6 @@ SYMBOLS = """\
 """
 
 
-@dataclass
-class Rig:
-    cpu: Cpu
-    edge: ProgramEdge
-    client: BusClient
-    clock: VirtualClock
-
-    def scan(self) -> None:
-        self.clock.advance(10)
-        self.edge.on_record(self.cpu.scan(), stats=self.cpu.stats)
-
-    def watch(self, operands: list[str]) -> WatchValues:
-        """Ask ``watch`` from another thread and scan until it is answered."""
-        answers: list[WatchValues] = []
-        asking = threading.Thread(target=lambda: answers.append(self.client.watch(operands)))
-        asking.start()
-        while asking.is_alive():
-            self.scan()
-            asking.join(0.01)
-        return answers[0]
-
-
 @pytest.fixture
 def rig() -> Iterator[Rig]:
     table = SymbolTable.from_text(SYMBOLS)
@@ -86,17 +58,8 @@ def rig() -> Iterator[Rig]:
     cpu.mem.symbols = table
     sfb.install(cpu)
     program.load(cpu)
-    endpoint = f"tcp/127.0.0.1:{free_port()}"
-    with (
-        ProgramEdge(cpu, ends=BusEnds(listen=[endpoint])) as edge,
-        open_session(connect=[endpoint]) as session,
-        BusClient(session, "cpu1") as client,
-    ):
-        cpu.start()
-        rig = Rig(cpu, edge, client, clock)
-        rig.scan()
-        assert wait_until(lambda: client.status() is not None)
-        yield rig
+    with program_rig(cpu, clock) as made:
+        yield made
 
 
 def test_an_scl_global_db_is_watched_by_name_in_its_types(rig: Rig) -> None:
