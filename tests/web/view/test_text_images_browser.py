@@ -46,8 +46,10 @@ def test_a_page_that_connects_after_the_chart_was_drawn_shows_its_texts() -> Non
             (client,) = server.get_clients().values()
             aimed = np.array(cam.position)
             assert wait_until(
-                lambda: client.camera.image_height > 0
-                and np.allclose(client.camera.position, aimed, atol=1e-3),
+                lambda: (
+                    client.camera.image_height > 0
+                    and np.allclose(client.camera.position, aimed, atol=1e-3)
+                ),
                 30,
             ), (client.camera.position, aimed)
             inside = []  # the middle of each step box: its name, and no frame line
