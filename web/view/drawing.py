@@ -6,8 +6,9 @@ boxes (the initial step double-framed, ``C``/``V`` marks), transitions as bars w
 number, name and whole condition wrapped beside them (a transition row grows when its text
 needs more lines), lines, jumps, stops and the continuation arrows of wrapped sequences.
 Every text is fitted: a step's name wraps inside its box and its size shrinks until it fits,
-so it is never cut nor spills out; all texts are rendered into a few images (one per band of
-the chart: labels are slow under software WebGL, an image is not; ``web.view.glyphs``).
+so it is never cut nor spills out; all texts are rendered into images (one per part of the
+chart that has text, each at most 2048 pixels square: labels are slow under software WebGL,
+an image is not; ``web.view.glyphs``).
 Beside each step its action table and under it its interlock and supervision conditions
 (``web.view.actions_table``); lanes are wide enough for them. The picture also says where
 the status view shows what changes (``web.view.status_layer``): each step's times, each
