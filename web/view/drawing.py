@@ -6,8 +6,9 @@ boxes (the initial step double-framed, ``C``/``V`` marks), transitions as bars w
 number, name and whole condition wrapped beside them (a transition row grows when its text
 needs more lines), lines, jumps, stops and the continuation arrows of wrapped sequences.
 Every text is fitted: a step's name wraps inside its box and its size shrinks until it fits,
-so it is never cut nor spills out; all texts are rendered into a few images (one per band of
-the chart: labels are slow under software WebGL, an image is not; ``web.view.glyphs``).
+so it is never cut nor spills out; all texts are rendered into images (one per part of the
+chart that has text, each at most 2048 pixels square: labels are slow under software WebGL,
+an image is not; ``web.view.glyphs``).
 Beside each step its action table and under it its interlock and supervision conditions
 (``web.view.actions_table``); lanes are wide enough for them. The picture also says where
 the status view shows what changes (``web.view.status_layer``): each step's times, each
@@ -34,9 +35,9 @@ from s7graph.web.view import texts
 from s7graph.web.view.actions_table import Block, Cell, block_width, columns_of, step_block
 from s7graph.web.view.criteria import ConditionKey, Rect, span_rects
 from s7graph.web.view.glyphs import (
-    BAND_PX,
     LINE,
     TEXT_PX,
+    TILE_PX,
     Text,
     Tile,
     fit_text,
@@ -49,7 +50,6 @@ from s7graph.web.view.layout import Placement
 
 __all__ = [
     "ACTIVE",
-    "BAND_PX",
     "DISCONNECTED",
     "DISTURBED",
     "FLAT_LIGHT",
@@ -61,6 +61,7 @@ __all__ = [
     "READABLE_PX",
     "SELECTED",
     "TEXT_PX",
+    "TILE_PX",
     "Drawing",
     "Picture",
     "aim_camera",
@@ -504,18 +505,18 @@ class Drawing:
                     )
                 )
         for i, tile in enumerate(pic.tiles):
-            self._nodes.append(
-                scene.add_image(
-                    f"{root}/text{i}",
-                    tile.image,
-                    render_width=tile.width,
-                    render_height=tile.height,
-                    format="png",
-                    position=(tile.cx + ox, tile.cy + oy, 0.05),
-                    cast_shadow=False,
-                    receive_shadow=False,
-                )
+            image = scene.add_image(
+                f"{root}/text{i}",
+                tile.image,  # rendered now, and kept only as the PNG viser sends
+                render_width=tile.width,
+                render_height=tile.height,
+                format="png",
+                position=(tile.cx + ox, tile.cy + oy, 0.05),
+                cast_shadow=False,
+                receive_shadow=False,
             )
+            _drop_pixels(image)
+            self._nodes.append(image)
 
     def paint(self, steps: dict[int, Rgb], transitions: dict[int, Rgb] | None = None) -> None:
         """Colour each step box (missing: inactive grey) and transition bar (missing:
@@ -552,6 +553,15 @@ class Drawing:
         self._nodes.clear()
         self.boxes.clear()
         self.bars.clear()
+
+
+def _drop_pixels(handle: Any) -> None:
+    """Let go of the pixels viser 1.1.1 keeps on an image's handle (``SceneApi.add_image``
+    sets ``handle._image``; only the handle's ``image`` and ``format`` read them): the
+    node's PNG stays in its message, which viser's persistent buffer replays to every page
+    that connects later, so a drawn text image costs its PNG, not its RGBA pixels."""
+    if getattr(handle, "_image", None) is not None:
+        handle._image = None
 
 
 def _relay(callback: Click, number: int, event: Any) -> None:

@@ -1,15 +1,17 @@
 """Text on the chart, as images: how wide a text is, how it wraps, and the images it is
-rendered into (``web.view.drawing``'s bands of static text, ``web.view.status_layer``'s
+rendered into (``web.view.drawing``'s tiles of static text, ``web.view.status_layer``'s
 live values).
 
 Texts are rendered with Pillow into images, not drawn as viser labels: a label costs software
-WebGL far more per frame than a textured plane. A scene unit is ``TEXT_PX`` image pixels;
-a line is ``LINE`` times its text height.
+WebGL far more per frame than a textured plane. A scene unit is ``TEXT_PX`` image pixels
+(fewer for a chart whose texts would exceed ``BUDGET_PX``); a line is ``LINE`` times its
+text height.
 """
 
 from __future__ import annotations
 
 import functools
+import math
 from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Any
@@ -18,9 +20,10 @@ import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
 __all__ = [
-    "BAND_PX",
+    "BUDGET_PX",
     "LINE",
     "TEXT_PX",
+    "TILE_PX",
     "Text",
     "Tile",
     "fit_text",
@@ -34,17 +37,16 @@ __all__ = [
 Rgb = tuple[int, int, int]
 LINE = 1.25  # line height / text height
 TEXT_PX = 90  # text image pixels per scene unit
-BAND_PX = 2048  # the widest text image (WebGL textures stay small)
 
 
 @functools.cache
 def _font(px: int) -> ImageFont.FreeTypeFont | ImageFont.ImageFont:
-    return ImageFont.load_default(size=max(px, 6))
+    return ImageFont.load_default(size=max(px, 1))
 
 
 def text_width(text: str, size: float) -> float:
     """The width of ``text`` in scene units at text height ``size``."""
-    return float(_font(round(size * TEXT_PX)).getlength(text)) / TEXT_PX
+    return float(_font(max(round(size * TEXT_PX), 6)).getlength(text)) / TEXT_PX
 
 
 def wrap(text: str, width: float, size: float) -> list[str]:
@@ -129,44 +131,174 @@ class Text:
 
 @dataclass(frozen=True, slots=True)
 class Tile:
-    """An image of texts: RGBA pixels (rows bottom-up), its size and centre in scene units."""
+    """Texts on one transparent image: its size and centre in scene units, ``scale`` image
+    pixels per scene unit. The pixels are rendered when ``image`` is read (RGBA, rows
+    bottom-up), every time: a picture keeps its texts, not their pixels."""
 
-    image: Any
+    texts: tuple[Text, ...]
     width: float
     height: float
     cx: float
     cy: float
+    scale: float
+    origin: tuple[float, float]  # scene x, y of the chart's text grid (top-left)
+    offset: tuple[int, int]  # this image's top-left pixel on that grid
+
+    @property
+    def px(self) -> tuple[int, int]:
+        """The image's width and height in pixels."""
+        return max(round(self.width * self.scale), 1), max(round(self.height * self.scale), 1)
+
+    @property
+    def image(self) -> Any:
+        return _render(self)
+
+
+TILE_PX = 2048
+"""The widest and highest text image: the least ``MAX_TEXTURE_SIZE`` that OpenGL ES 3.0,
+and so WebGL 2, guarantees (larger textures fail on small implementations and cost
+software WebGL memory and frame time)."""
+CELL_PX = 1536
+"""A text belongs to the square cell of this many pixels where it starts; its image is
+cropped to the cell's texts, which may reach ``TILE_PX - CELL_PX`` beyond it (a longer
+reach is cut into more images)."""
+BUDGET_PX = 48_000_000
+"""The most pixels a chart's text images may have in all; a chart whose texts need more is
+rendered at fewer pixels per scene unit (``Tile.scale``), its scene size the same. 48 Mpx
+is 192 MB of RGBA textures in the page, whatever the chart. It keeps charts of a few
+hundred steps at ``TEXT_PX`` (a 250-step loop needs 15 Mpx, the drill 1.5) and a loop of
+1,000 steps with an action each (99 Mpx) at 59 pixels per unit — still more than the
+default zoom shows (``READABLE_PX``, 55); 1,000 steps of 31 action rows each (627 Mpx at
+``TEXT_PX``: 2.5 GB) get 24, sharp only when zoomed out."""
+
+_Box = tuple[float, float, float, float]  # x0, x1 (left, right), y0, y1 (bottom, top)
 
 
 def tiles(items: list[Text]) -> list[Tile]:
-    """The texts rendered onto transparent images, one per band of at most ``BAND_PX``
-    pixels of width (a text belongs to the band where it starts)."""
-    band_w = BAND_PX / TEXT_PX
+    """``items`` rendered onto transparent images of at most ``TILE_PX`` square, one per
+    cell of the chart that has texts (a text belongs to the cell where it starts), each
+    cropped to its texts; at ``TEXT_PX`` pixels per scene unit, or fewer when more than
+    ``BUDGET_PX`` pixels would be needed in all."""
     if not items:
         return []
-    x_min = min(t.x for t in items)
-    bands: dict[int, list[Text]] = {}
-    for t in items:
-        bands.setdefault(int((t.x - x_min) // band_w), []).append(t)
-    return [_render(group) for _, group in sorted(bands.items())]
+    boxes = [_box(t) for t in items]
+    origin = (min(b[0] for b in boxes), max(b[3] for b in boxes))
+    scale = float(TEXT_PX)
+    while True:
+        out = _layout(items, boxes, origin, scale)
+        total = sum(w * h for w, h in (t.px for t in out))
+        if total <= BUDGET_PX:
+            return out
+        scale *= min(0.95, (BUDGET_PX / total) ** 0.5)
 
 
-def _render(items: list[Text]) -> Tile:
-    x0 = min(t.x for t in items) - 0.1
-    x1 = max(t.x + t.width for t in items) + 0.1
-    y1 = max(t.y for t in items) + 0.1
-    y0 = min(t.y - t.height for t in items) - 0.1
-    size = (max(round((x1 - x0) * TEXT_PX), 1), max(round((y1 - y0) * TEXT_PX), 1))
-    image = Image.new("RGBA", size, (0, 0, 0, 0))  # black: filtering blends no white in
+def _box(t: Text) -> _Box:
+    """Where ``t``'s image must reach: its lines and 0.1 around."""
+    return t.x - 0.1, t.x + t.width + 0.1, t.y - t.height - 0.1, t.y + 0.1
+
+
+def _layout(
+    items: list[Text], boxes: list[_Box], origin: tuple[float, float], scale: float
+) -> list[Tile]:
+    ox, oy = origin
+    cell = CELL_PX / scale
+    cells: dict[tuple[int, int], list[int]] = {}
+    for i, t in enumerate(items):
+        cells.setdefault((int((t.x - ox) // cell), int((oy - t.y) // cell)), []).append(i)
+    out: list[Tile] = []
+    for _, members in sorted(cells.items()):
+        out += _cut(items, boxes, members, origin, scale)
+    return out
+
+
+def _cut(
+    items: list[Text],
+    boxes: list[_Box],
+    members: list[int],
+    origin: tuple[float, float],
+    scale: float,
+) -> list[Tile]:
+    """The image of one cell's texts (``members``), cut into pieces when it is larger than
+    ``TILE_PX``, each piece cropped to the texts that reach into it."""
+    tile = _tile(items, boxes, members, origin, scale)
+    w, h = tile.px
+    if w <= TILE_PX and h <= TILE_PX:
+        return [tile]
+    ox, oy = origin
+    kx, ky = tile.offset
+    nx, ny = -(-w // TILE_PX), -(-h // TILE_PX)
+    out: list[Tile] = []
+    for j in range(ny):
+        for i in range(nx):
+            x0, x1 = kx + w * i // nx, kx + w * (i + 1) // nx  # pixels on the grid
+            y0, y1 = ky + h * j // ny, ky + h * (j + 1) // ny
+            inside = [
+                m
+                for m in members
+                if (boxes[m][0] - ox) * scale < x1
+                and (boxes[m][1] - ox) * scale > x0
+                and (oy - boxes[m][3]) * scale < y1
+                and (oy - boxes[m][2]) * scale > y0
+            ]
+            if inside:
+                out.append(_piece(items, boxes, inside, origin, scale, (x0, x1, y0, y1)))
+    return out
+
+
+def _tile(
+    items: list[Text],
+    boxes: list[_Box],
+    members: list[int],
+    origin: tuple[float, float],
+    scale: float,
+) -> Tile:
+    """The texts ``members`` on one image cropped to them, its top-left on the pixel grid."""
+    ox, oy = origin
+    kx = math.floor((min(boxes[m][0] for m in members) - ox) * scale)
+    ky = math.floor((oy - max(boxes[m][3] for m in members)) * scale)
+    left, top = ox + kx / scale, oy - ky / scale
+    width = max(boxes[m][1] for m in members) - left
+    height = top - min(boxes[m][2] for m in members)
+    texts = tuple(items[m] for m in members)
+    return Tile(texts, width, height, left + width / 2, top - height / 2, scale, origin, (kx, ky))
+
+
+def _piece(
+    items: list[Text],
+    boxes: list[_Box],
+    members: list[int],
+    origin: tuple[float, float],
+    scale: float,
+    pixels: tuple[int, int, int, int],
+) -> Tile:
+    """The part ``pixels`` (x0, x1, y0, y1 on the grid) of the image of ``members``,
+    cropped to where they reach."""
+    ox, oy = origin
+    x0, x1, y0, y1 = pixels
+    x0 = max(x0, math.floor((min(boxes[m][0] for m in members) - ox) * scale))
+    y0 = max(y0, math.floor((oy - max(boxes[m][3] for m in members)) * scale))
+    x1 = min(x1, math.ceil((max(boxes[m][1] for m in members) - ox) * scale))
+    y1 = min(y1, math.ceil((oy - min(boxes[m][2] for m in members)) * scale))
+    left, top = ox + x0 / scale, oy - y0 / scale
+    width, height = (x1 - x0) / scale, (y1 - y0) / scale
+    texts = tuple(items[m] for m in members)
+    return Tile(texts, width, height, left + width / 2, top - height / 2, scale, origin, (x0, y0))
+
+
+def _render(tile: Tile) -> Any:
+    """``tile``'s texts in black on transparent black (filtering blends no white in); each
+    text drawn where it stands on the chart's pixel grid, so that texts cut across images
+    join."""
+    image = Image.new("RGBA", tile.px, (0, 0, 0, 0))
     draw = ImageDraw.Draw(image)
-    for t in items:
-        font = _font(round(t.size * TEXT_PX))
+    (ox, oy), (kx, ky), s = tile.origin, tile.offset, tile.scale
+    for t in tile.texts:
+        font = _font(round(t.size * s))  # below 6 px too: a text keeps its place and width
         for i, line in enumerate(t.lines):
-            px = (t.x - x0) * TEXT_PX
-            py = (y1 - t.y + i * t.size * LINE) * TEXT_PX
+            px = (t.x - ox) * s - kx
+            py = (oy - t.y + i * t.size * LINE) * s - ky
             draw.text((px, py), line, font=font, fill=(0, 0, 0, 255))
-    pixels = np.ascontiguousarray(np.asarray(image)[::-1])  # the plane shows rows bottom-up
-    return Tile(pixels, x1 - x0, y1 - y0, (x0 + x1) / 2, (y0 + y1) / 2)
+    return np.ascontiguousarray(np.asarray(image)[::-1])  # the plane shows rows bottom-up
 
 
 def label_image(lines: list[str], size: float, width: float, background: Rgb) -> Any:

@@ -22,6 +22,7 @@ from s7graph.web.view.drawing import (
     SELECTED,
     STEP_SIZES,
     TEXT_W,
+    TILE_PX,
     TRANSITION_SIZE,
     _width,
     camera_for,
@@ -84,7 +85,7 @@ def test_a_250_step_chart_wraps_into_columns_readable_at_the_default_zoom() -> N
     assert scale_px(z) >= 55.0  # text of 10-12 screen pixels at the default zoom
     (_, _, whole), _ = camera_for(pic, whole=True)
     assert whole > z  # "Whole chart" zooms out to all of it
-    assert all(t.image.shape[1] <= 4096 for t in pic.tiles)  # WebGL-sized text images
+    assert all(max(t.px) <= TILE_PX for t in pic.tiles)  # WebGL-sized text images
 
 
 def test_a_small_chart_is_shown_whole() -> None:

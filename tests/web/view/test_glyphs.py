@@ -1,0 +1,146 @@
+"""The chart's texts as images (``web.view.glyphs.tiles``): every image at most 2048 pixels
+square and made only where there is text; all of a chart's images within a pixel budget,
+at fewer pixels per scene unit when its texts need more, in the same place and size in the
+scene; a small chart's texts pixel for pixel as one image of the whole chart shows them."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+from PIL import Image, ImageDraw, ImageFont
+
+from bench.big_charts import huge_chart
+from s7graph.sequencer.text.parse import parse_chart
+from s7graph.web.bus.protocol import ChartLayout
+from s7graph.web.view import glyphs
+from s7graph.web.view.drawing import Picture, picture
+from s7graph.web.view.glyphs import BUDGET_PX, LINE, TEXT_PX, TILE_PX, Text, Tile, tiles
+from s7graph.web.view.layout import place
+from tests.paths import EXAMPLES
+
+pytestmark = pytest.mark.timeout(240)
+
+CHARTS = sorted(EXAMPLES.glob("*/*.s7g"))
+
+
+def chart_picture(source: str, name: str = "chart.s7g") -> Picture:
+    return picture(place(ChartLayout.from_chart(parse_chart(source, name), version=1)))
+
+
+def texts_of(tiles_: Sequence[Tile]) -> list[Text]:
+    """Every text once, in the order drawn."""
+    seen: dict[int, Text] = {}
+    for tile in tiles_:
+        for t in tile.texts:
+            seen.setdefault(id(t), t)
+    return list(seen.values())
+
+
+def one_image(texts: list[Text], scale: float) -> tuple[Any, float, float]:
+    """All ``texts`` on one image of the whole chart (as the view drew them before its
+    images were bounded), top row first, and the scene x, y of its top-left corner."""
+    x0 = min(t.x for t in texts) - 0.1
+    x1 = max(t.x + t.width for t in texts) + 0.1
+    y1 = max(t.y for t in texts) + 0.1
+    y0 = min(t.y - t.height for t in texts) - 0.1
+    image = Image.new("RGBA", (round((x1 - x0) * scale) + 2, round((y1 - y0) * scale) + 2))
+    draw = ImageDraw.Draw(image)
+    for t in texts:
+        font = ImageFont.load_default(size=max(round(t.size * scale), 1))
+        for i, line in enumerate(t.lines):
+            at = ((t.x - x0) * scale, (y1 - t.y + i * t.size * LINE) * scale)
+            draw.text(at, line, font=font, fill=(0, 0, 0, 255))
+    return np.asarray(image), x0, y1
+
+
+def pasted(tiles_: Sequence[Tile], shape: tuple[int, ...], x0: float, y1: float) -> Any:
+    """The opacity of ``tiles_`` laid over each other where the scene shows them, on an
+    image of ``shape`` whose top-left is the scene point ``(x0, y1)``."""
+    alpha = np.zeros(shape[:2], np.float64)
+    for tile in tiles_:
+        scale = tile.scale
+        image = tile.image[::-1]  # top row first
+        h, w = image.shape[:2]
+        assert (w, h) == (round(tile.width * scale), round(tile.height * scale))
+        left = (tile.cx - tile.width / 2 - x0) * scale
+        top = (y1 - tile.cy - tile.height / 2) * scale
+        assert abs(left - round(left)) < 1e-6 and abs(top - round(top)) < 1e-6  # on the grid
+        kx, ky = round(left), round(top)
+        region = alpha[ky : ky + h, kx : kx + w]
+        a = image[: region.shape[0], : region.shape[1], 3] / 255
+        region[...] = a + region * (1 - a)  # one over the other
+    return np.round(alpha * 255).astype(np.uint8)
+
+
+@pytest.mark.parametrize("path", CHARTS, ids=[p.stem for p in CHARTS])
+def test_a_small_charts_texts_are_drawn_as_before_pixel_for_pixel(path: Path) -> None:
+    pic = chart_picture(path.read_text(), path.name)
+    assert pic.tiles and all(t.scale == TEXT_PX for t in pic.tiles)  # the size it had
+    assert all(w <= TILE_PX and h <= TILE_PX for w, h in (t.px for t in pic.tiles))
+    texts = texts_of(pic.tiles)
+    whole, x0, y1 = one_image(texts, TEXT_PX)
+    assert np.array_equal(pasted(pic.tiles, whole.shape, x0, y1), whole[..., 3])
+
+
+def test_the_drill_is_one_image_of_its_texts() -> None:
+    pic = chart_picture((EXAMPLES / "drill" / "drill.s7g").read_text(), "drill.s7g")
+    (tile,) = pic.tiles
+    assert tile.image.shape == (1181, 1248, 4)  # as before the images were bounded
+
+
+def test_a_text_wider_and_higher_than_an_image_is_cut_and_its_parts_join() -> None:
+    long = Text(("W" * 300,) * 3, 0.0, 0.0, 0.3)  # about 5,000 pixels wide
+    tall = Text(tuple(f"line {i}" for i in range(90)), 0.0, -2.0, 0.25)  # 2,500 high
+    out = tiles([long, tall, Text(("far away",), 400.0, -300.0, 0.2)])
+    sizes = [t.px for t in out]
+    assert len(out) > 4 and all(w <= TILE_PX and h <= TILE_PX for w, h in sizes)
+    assert sum(w * h for w, h in sizes) < 0.5 * 400 * 300 * TEXT_PX**2  # empty area: nothing
+    near = [t for t in out if t.cx < 100]
+    whole, x0, y1 = one_image([long, tall], TEXT_PX)
+    assert np.array_equal(pasted(near, whole.shape, x0, y1), whole[..., 3])
+
+
+def test_texts_over_the_budget_are_drawn_smaller_in_the_same_place(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    pic = chart_picture((EXAMPLES / "drill" / "drill.s7g").read_text(), "drill.s7g")
+    texts = texts_of(pic.tiles)
+    monkeypatch.setattr(glyphs, "BUDGET_PX", 400_000)  # the drill needs 1.5 Mpx
+    out = tiles(texts)
+    scale = out[0].scale
+    assert scale < TEXT_PX * 0.6 and all(t.scale == scale for t in out)
+    assert sum(w * h for w, h in (t.px for t in out)) <= 400_000
+    (tile,) = out  # the scene size stays: the image covers what it covered
+    assert tile.width == pytest.approx(pic.tiles[0].width, abs=1 / scale)
+    assert tile.height == pytest.approx(pic.tiles[0].height, abs=1 / scale)
+    assert (tile.cx, tile.cy) == pytest.approx((pic.tiles[0].cx, pic.tiles[0].cy), abs=1 / scale)
+    whole, x0, y1 = one_image(texts, scale)
+    assert np.array_equal(pasted(out, whole.shape, x0, y1), whole[..., 3])
+
+
+def test_the_huge_charts_texts_stay_within_the_budget_in_images_of_2048_square() -> None:
+    pic = chart_picture(huge_chart())
+    sizes = [t.px for t in pic.tiles]
+    total = sum(w * h for w, h in sizes)
+    assert total <= BUDGET_PX and all(w <= TILE_PX and h <= TILE_PX for w, h in sizes)
+    scale = pic.tiles[0].scale
+    assert scale < TEXT_PX / 2 and all(t.scale == scale for t in pic.tiles)
+    for tile in pic.tiles[:: max(len(pic.tiles) // 5, 1)]:  # a few: rendering takes time
+        w, h = tile.px
+        image = tile.image
+        assert image.shape == (h, w, 4) and np.count_nonzero(image[..., 3]) > 0.01 * w * h
+    texts = texts_of(pic.tiles)
+    placed = {  # each text on an image that covers where it starts, in scene units
+        id(t)
+        for tile in pic.tiles
+        for t in tile.texts
+        if abs(t.x - tile.cx) <= tile.width / 2 and abs(t.y - tile.cy) <= tile.height / 2
+    }
+    assert placed == {id(t) for t in texts}
+    assert len(texts) > 60_000
+    right = max(t.cx + t.width / 2 for t in pic.tiles)
+    assert right == pytest.approx(max(t.x + t.width for t in texts) + 0.1, abs=1 / scale)
