@@ -457,6 +457,10 @@ class ChartView:
             return
         colours = self._colours(update, connected)
         with self.server.atomic():
-            holds = self.status.show(update, connected) if self.status is not None else set()
+            holds = (
+                self.status.show(update, connected, time.monotonic())
+                if self.status is not None
+                else set()
+            )
             self.drawing.paint(colours, dict.fromkeys(holds, ACTIVE))
         self.server.flush()

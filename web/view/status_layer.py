@@ -11,11 +11,15 @@ shows of the active steps beside the colours of the boxes.
 - which transitions hold (their bars green).
 
 The geometry comes with the picture (once per chart); a state update only shows, hides,
-moves or recolours nodes. Nodes are pooled: one shown for an element that went is hidden
-and kept, and the next element of its kind takes it over (moved, its text replaced) — so a
-step change sends a few property updates, not new scene nodes, once the pools are as
-large as the most elements shown at once; an element shown again on the node it had keeps
-its text and place and is only made visible.
+moves or recolours nodes. A browser drawing WebGL in software pays dearly for every new
+image (decoded, uploaded, its mipmaps made) and little for a node shown or hidden, so a
+contact's two colours are two images made once, one of them shown, and the times (the one
+text that changes while nothing else does) are redrawn at most every ``TIMES_PERIOD``
+seconds. Nodes are pooled: one shown for an element that went is hidden and kept, and the
+next element of its kind takes it over (moved, its text replaced) — so a step change sends
+a few property updates, not new scene nodes, once the pools are as large as the most
+elements shown at once; an element shown again on the node it had keeps its text and
+place and is only made visible.
 """
 
 from __future__ import annotations
@@ -30,7 +34,15 @@ from s7graph.web.bus.protocol import StepStateUpdate
 from s7graph.web.view.criteria import CONTACT_FAILS, CONTACT_PASSES, contact_states
 from s7graph.web.view.glyphs import LINE, label_image, text_width
 
-__all__ = ["TIMES_SIZE", "VALUE_FALSE", "VALUE_PLAIN", "VALUE_TRUE", "StatusLayer", "value_text"]
+__all__ = [
+    "TIMES_PERIOD",
+    "TIMES_SIZE",
+    "VALUE_FALSE",
+    "VALUE_PLAIN",
+    "VALUE_TRUE",
+    "StatusLayer",
+    "value_text",
+]
 
 Rgb = tuple[int, int, int]
 TIMES_SIZE = 0.15
@@ -40,6 +52,8 @@ VALUE_FALSE: Rgb = (215, 215, 215)
 VALUE_PLAIN: Rgb = (255, 255, 255)
 TIMES_BACK: Rgb = (255, 255, 255)
 Z_CHIP, Z_LABEL = 0.03, 0.07  # behind the chart's text (0.05), over it
+TIMES_PERIOD = 0.5  # s: an active step's T and U are redrawn at most this often
+CHIP_COLOURS: tuple[Rgb, ...] = (CONTACT_PASSES, CONTACT_FAILS)
 
 
 def value_text(value: object) -> tuple[str, Rgb]:
@@ -107,6 +121,53 @@ def _chip_content(spec: _Chip) -> Hashable:
 def _solid(colour: Rgb) -> Any:
     """A small image of one colour (stretched over a contact)."""
     return np.full((2, 2, 3), colour, np.uint8)
+
+
+class _ChipNodes:
+    """The node of a contact piece: one image per colour of ``CHIP_COLOURS``, made once;
+    the one of its colour shown while it is visible. Only that one is moved and sized; the
+    other takes the place when it is shown."""
+
+    def __init__(self, images: dict[Rgb, Any]) -> None:
+        self._images = images
+        self._colour = CHIP_COLOURS[0]
+        self._visible = False
+        self._place: dict[str, Any] = {}  # where the piece is: the props of its image
+        self._placed: dict[Rgb, dict[str, Any]] = {c: {} for c in images}
+
+    @property
+    def visible(self) -> bool:
+        return self._visible
+
+    @visible.setter
+    def visible(self, on: bool) -> None:
+        if on != self._visible:
+            self._visible = on
+            self._images[self._colour].visible = on
+
+    def recolour(self, colour: Rgb) -> None:
+        if colour == self._colour:
+            return
+        was, self._colour = self._colour, colour
+        self._sync(colour)
+        if self._visible:
+            self._images[was].visible = False
+            self._images[colour].visible = True
+
+    def place(self, **props: Any) -> None:
+        self._place.update(props)
+        self._sync(self._colour)
+
+    def _sync(self, colour: Rgb) -> None:
+        placed, image = self._placed[colour], self._images[colour]
+        for key, value in self._place.items():
+            if placed.get(key) != value:
+                setattr(image, key, value)
+                placed[key] = value
+
+    def remove(self) -> None:
+        for image in self._images.values():
+            image.remove()
 
 
 class _Pool:
@@ -202,17 +263,21 @@ class StatusLayer:
         labels, chips = _needed(pic)
         self.labels.reserve(labels)
         self.chips.reserve(chips)
+        self._times_due: dict[int, float] = {}  # step: when its times may be redrawn
 
     # ------------------------------------------------------------ what to show
 
-    def show(self, update: StepStateUpdate | None, connected: bool) -> set[int]:
+    def show(
+        self, update: StepStateUpdate | None, connected: bool, now: float | None = None
+    ) -> set[int]:
         """Show ``update``'s live state (nothing while disconnected); the transitions that
-        hold (their bars go green)."""
+        hold (their bars go green). ``now`` (s, monotonic): a step's times already shown
+        are redrawn only ``TIMES_PERIOD`` after they were last (None: always)."""
         if update is None or not connected:
             self.labels.show({})
             self.chips.show({})
             return set()
-        self.labels.show(self._labels(update))
+        self.labels.show(self._labels(update, now))
         chips: dict[Hashable, _Chip] = {}
         contacts = self.picture.contacts
         for key, oks in contact_states(update).items():
@@ -224,16 +289,25 @@ class StatusLayer:
         self.chips.show(chips)
         return {t.number for d in update.details for t in d.transitions if t.holds}
 
-    def _labels(self, update: StepStateUpdate) -> dict[Hashable, _Label]:
+    def _labels(self, update: StepStateUpdate, now: float | None) -> dict[Hashable, _Label]:
         pic = self.picture
         out: dict[Hashable, _Label] = {}
+        shown = self.labels.shown()
+        due = self._times_due
         for d in update.details:
             at = pic.times.get(d.number)
-            if at is not None:
-                lines = (f"T {d.t_ms / 1000:.1f} s", f"U {d.u_ms / 1000:.1f} s")
-                width = max(text_width(line, TIMES_SIZE) for line in lines) + 0.1
-                x, y = at
-                out[("times", d.number)] = _Label(lines, TIMES_SIZE, TIMES_BACK, x, y, width)
+            if at is None:
+                continue
+            key = ("times", d.number)
+            if now is not None and key in shown and now < due.get(d.number, 0.0):
+                out[key] = shown[key]  # redrawn at its time
+                continue
+            lines = (f"T {d.t_ms / 1000:.1f} s", f"U {d.u_ms / 1000:.1f} s")
+            width = max(text_width(line, TIMES_SIZE) for line in lines) + 0.1
+            x, y = at
+            out[key] = _Label(lines, TIMES_SIZE, TIMES_BACK, x, y, width)
+            if now is not None and (key not in shown or shown[key] != out[key]):
+                due[d.number] = now + TIMES_PERIOD
         values = update.values
         for number in update.active:
             for cell in pic.cells.get(number, ()):
@@ -295,18 +369,24 @@ class StatusLayer:
             ox, oy = self.offset
             node.position = (spec.x + spec.width / 2 + ox, spec.y - height / 2 + oy, Z_LABEL)
 
-    def _new_chip(self, name: str) -> Any:
-        # an image, not a box: an image shows its colour as it is (a box's is tone-mapped)
-        return self._hidden_image(f"contact/{name}", _solid(CONTACT_PASSES))
+    def _new_chip(self, name: str) -> _ChipNodes:
+        # images, not boxes: an image shows its colour as it is (a box's is tone-mapped)
+        return _ChipNodes(
+            {
+                colour: self._hidden_image(
+                    f"contact/{name}/{'ok' if i == 0 else 'no'}", _solid(colour)
+                )
+                for i, colour in enumerate(CHIP_COLOURS)
+            }
+        )
 
-    def _show_chip(self, node: Any, spec: _Chip, before: _Chip | None) -> None:
-        if before is None or before.colour != spec.colour:
-            node.image = _solid(spec.colour)
+    def _show_chip(self, node: _ChipNodes, spec: _Chip, before: _Chip | None) -> None:
+        node.recolour(spec.colour)
         if before is None or (before.w, before.h) != (spec.w, spec.h):
-            node.render_width, node.render_height = spec.w, spec.h
+            node.place(render_width=spec.w, render_height=spec.h)
         if before is None or (before.cx, before.cy) != (spec.cx, spec.cy):
             ox, oy = self.offset
-            node.position = (spec.cx + ox, spec.cy + oy, Z_CHIP)
+            node.place(position=(spec.cx + ox, spec.cy + oy, Z_CHIP))
 
     def remove(self) -> None:
         """Remove every node of the layer (the chart is drawn anew)."""

@@ -21,6 +21,7 @@ from s7graph.web.view.criteria import CONTACT_FAILS, CONTACT_PASSES
 from s7graph.web.view.drawing import INK, contrast, picture
 from s7graph.web.view.layout import place
 from s7graph.web.view.status_layer import (
+    TIMES_PERIOD,
     VALUE_FALSE,
     VALUE_PLAIN,
     VALUE_TRUE,
@@ -74,10 +75,10 @@ def loop(n: int) -> str:
     )
 
 
-def active(step: int, t_ms: int = 1500) -> StepStateUpdate:
+def active(step: int, t_ms: int = 1500, first_ok: bool = False) -> StepStateUpdate:
     """Step ``step`` active for ``t_ms``: its action's operand on, its transition blocked by
-    its first contact."""
-    contacts = [Contact(text=f'"In{step}"', ok=False), Contact(text='NOT "Stop"', ok=True)]
+    its first contact (unless ``first_ok``)."""
+    contacts = [Contact(text=f'"In{step}"', ok=first_ok), Contact(text='NOT "Stop"', ok=True)]
     return StepStateUpdate(
         cycle=t_ms // 10,
         t_ms=t_ms,
@@ -103,7 +104,8 @@ def pic() -> Any:
 def test_a_step_change_moves_the_nodes_it_shows_and_creates_none(pic: Any) -> None:
     scene = Scene()
     layer = StatusLayer(scene, pic)
-    assert len(scene.made) == 4  # made with the chart, hidden: T/U, a value, two contacts
+    # made with the chart, hidden: T/U, a value, two contacts of two colours each
+    assert len(scene.made) == 6
     layer.show(active(1), connected=True)
     assert layer.shown_text() == {
         ("times", 1): ("T 1.5 s", "U 1.5 s"),
@@ -114,7 +116,7 @@ def test_a_step_change_moves_the_nodes_it_shows_and_creates_none(pic: Any) -> No
         (("T", 1), 1, 0): CONTACT_PASSES,
     }
     made = len(scene.made)
-    assert made == 4  # none more
+    assert made == 6  # none more
     for step in range(2, 31):
         scene.log.clear()
         layer.show(active(step), connected=True)
@@ -129,6 +131,41 @@ def test_a_step_change_moves_the_nodes_it_shows_and_creates_none(pic: Any) -> No
     assert scene.log == []
     layer.show(active(30, t_ms=2500), connected=True)  # T and U: that image alone
     assert {name for name, _ in scene.log} == {"/chart/live/label/n0"}
+
+
+def test_a_contact_changing_colour_is_shown_by_its_other_image_none_sent(pic: Any) -> None:
+    scene = Scene()
+    layer = StatusLayer(scene, pic)
+    layer.show(active(2), connected=True)
+    scene.log.clear()
+    layer.show(active(2, first_ok=True), connected=True)
+    assert layer.shown_contacts()[(("T", 2), 0, 0)] == CONTACT_PASSES
+    # no image sent: one hidden, the other placed and shown
+    assert {prop for _, prop in scene.log} <= {
+        "visible",
+        "position",
+        "render_width",
+        "render_height",
+    }
+    assert [prop for _, prop in scene.log].count("visible") == 2
+    scene.log.clear()
+    layer.show(active(2), connected=True)  # and back: both placed already
+    assert {prop for _, prop in scene.log} == {"visible"} and len(scene.log) == 2
+
+
+def test_an_active_steps_times_are_redrawn_at_most_every_times_period(pic: Any) -> None:
+    scene = Scene()
+    layer = StatusLayer(scene, pic)
+    layer.show(active(5, t_ms=1000), connected=True, now=10.0)
+    assert layer.shown_text()[("times", 5)] == ("T 1.0 s", "U 1.0 s")
+    scene.log.clear()
+    layer.show(active(5, t_ms=1200), connected=True, now=10.0 + TIMES_PERIOD - 0.01)
+    assert layer.shown_text()[("times", 5)] == ("T 1.0 s", "U 1.0 s")  # not yet
+    assert scene.log == []
+    layer.show(active(5, t_ms=1500), connected=True, now=10.0 + TIMES_PERIOD)
+    assert layer.shown_text()[("times", 5)] == ("T 1.5 s", "U 1.5 s")
+    layer.show(active(6, t_ms=0), connected=True, now=10.0 + TIMES_PERIOD + 0.01)
+    assert layer.shown_text()[("times", 6)] == ("T 0.0 s", "U 0.0 s")  # a new step: at once
 
 
 def test_a_node_shown_again_for_its_element_is_only_made_visible(pic: Any) -> None:
