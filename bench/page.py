@@ -125,8 +125,8 @@ HOOK = r"""
         }
       } else if (name.startsWith('/chart/') && !/^(Set|Remove)/.test(m.type)) {
         nodes += 1;
-      } else if (m.type === 'GuiUpdateMessage' && m.updates) {
-        const found = /active: ((?:S\d+(?:, )?)+|none)/.exec(JSON.stringify(m.updates));
+      } else if ((m.type === 'GuiUpdateMessage' && m.updates) || m.type === 'GuiHtmlMessage') {
+        const found = /active: ((?:S\d+(?:, )?)+|none)/.exec(JSON.stringify(m.updates || m.props));
         if (found) recs.push({kind: 'status', key: found[1], raw, arr, paint: 0});
       }
     }

@@ -263,7 +263,9 @@ class ChartView:
         if self._guard is not None and self._guard.refused(client.client_id):
             return  # closed for its foreign Origin: no panel, nothing sent
         client.gui.add_html(PAGE_STYLE)
-        panel = ClientPanel(client, self._wiring)
+        with self._lock:
+            status = self._status_line()
+        panel = ClientPanel(client, self._wiring, status)
         panel.opened_at(self.server.initial_camera.position)  # fitted once it says its canvas
         with self._lock:
             self.panels[client.client_id] = panel
@@ -392,16 +394,7 @@ class ChartView:
             update, connected = self._latest, self.connected
             page = PageState(
                 banner=texts.banner_html(connected, self.cpu),
-                status=texts.status_html(
-                    update,
-                    self._cpu_cycle,
-                    self._cpu_state,
-                    self._cpu_stats,
-                    self._force_count,
-                    self._cpu_reason,
-                )
-                if connected
-                else texts.small("no live state"),
+                status=self._status_line(),
                 mode=update.mode if update is not None and connected else None,
                 alarms=self._alarms,
                 history=texts.history_html(self._history),
@@ -429,6 +422,19 @@ class ChartView:
                 panel.client.flush()  # its panel now, not at the end of viser's window
             except Exception:
                 continue
+
+    def _status_line(self) -> str:
+        """The status line as the pages show it now (call with the lock held)."""
+        if not self.connected:
+            return texts.small("no live state")
+        return texts.status_html(
+            self._latest,
+            self._cpu_cycle,
+            self._cpu_state,
+            self._cpu_stats,
+            self._force_count,
+            self._cpu_reason,
+        )
 
     def _colours(self, update: StepStateUpdate | None, connected: bool) -> dict[int, Any]:
         """Each step box's colour but inactive grey (every box's when disconnected)."""

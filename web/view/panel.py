@@ -130,7 +130,9 @@ class PageState:
 class ClientPanel(PageLogin):
     """The side panel of one browser page (``client``)."""
 
-    def __init__(self, client: viser.ClientHandle, wiring: Wiring) -> None:
+    def __init__(self, client: viser.ClientHandle, wiring: Wiring, status: str = "") -> None:
+        """``status``: the status line as the view shows it now (empty: waiting for the
+        CPU)."""
         self.client = client
         self.wiring = wiring
         self._init_login(client, wiring.demo)
@@ -141,18 +143,21 @@ class ClientPanel(PageLogin):
         self._mode: str | None = None
         self._alarms: AlarmList | None = None
         self.force_folder: viser.GuiFolderHandle | None = None
-        self._build()
+        self._build(status or texts.status_html(None, 0, "RUN", None))
 
     # ------------------------------------------------------------ building
 
-    def _build(self) -> None:
+    def _build(self, status: str) -> None:
+        """The panel, its status line and controls sent first (a page mounts and paints
+        them before the folders below, which take the page longer to mount)."""
         gui = self.client.gui
         w = self.wiring
         gui.set_panel_label(f"S7-GRAPH {w.layout.fb} on {w.cpu}")
         self.banner = gui.add_html("")
         self._build_login()
         with gui.add_folder("Control Sequencer") as self.control_folder:
-            self.status = gui.add_html(texts.status_html(None, 0, "RUN", None))
+            self.status = gui.add_html(status)
+            self._shown["status"] = status
             self.mode_buttons = {m: gui.add_button(m, hint=f"SW_{m}") for m in MODES}
             for mode, button in self.mode_buttons.items():
                 button.on_click(self._on_click(functools.partial(self._switch_mode, mode)))
@@ -173,6 +178,8 @@ class ClientPanel(PageLogin):
             for kind, _ in _STEP_BUTTONS:
                 make = functools.partial(self._step, kind)
                 self.step_buttons[op_of(kind)].on_click(self._on_click(make))
+        self._enable_controls()
+        self.client.flush()
         self.alarms = AlarmView(self, w.layout)
         self.alarm_folder = self.alarms.folder
         with gui.add_folder("Alarm history", expand_by_default=False):
@@ -220,11 +227,16 @@ class ClientPanel(PageLogin):
         role = self.role if self.token else "viewer"
         self._editor_for(role)
         self._force_for(role)
+        self._enable_controls()
+        self.alarms.enable(allowed(role, "ack_msg"))
+
+    def _enable_controls(self) -> None:
+        """The login and *Control Sequencer*'s buttons as this page's role allows."""
+        role = self.role if self.token else "viewer"
         for mode_button in self.mode_buttons.values():
             mode_button.disabled = not allowed(role, "mode")
         for op, button in {**self.buttons, **self.step_buttons}.items():
             button.disabled = not allowed(role, op)
-        self.alarms.enable(allowed(role, "ack_msg"))
         self._show_login()
 
     def _editor_for(self, role: str) -> None:
