@@ -276,7 +276,7 @@ class ProgramView:
         answers: dict[tuple[str, ...], WatchValues] = {}
         now = time.monotonic()
         due = [p for p in pages if p.blocks_due is not None and p.blocks_due <= now]
-        sources = self.read_blocks() if due else None
+        sources = self.read_blocks() if due and connected else None  # no bus: no wait
         for page in due:
             page.list_blocks(sources, now)
         for page in pages:
