@@ -26,9 +26,13 @@ ends) when the system allows it — root, ``CAP_SYS_NICE`` or an rtprio limit �
 normal priority otherwise (``realtime`` says which). The process's other threads (the
 bus, the writer) run real-time too, ``HELPERS_BELOW`` lower: each takes the interpreter's
 lock at times, and one that holds it must not wait for the processor while the scan waits
-for the lock. Processes they start (the view) are reset to the normal policy; the loop
-ends with every thread back at the normal policy. The process and the view it starts keep
-small pages (:func:`keep_small_pages`): the kernel merging huge pages held scans up.
+for the lock. They run ``SCHED_RR``, taking turns with every thread of their priority:
+the helpers of all the CPUs on a machine share the processors the scans leave, and under
+``SCHED_FIFO`` one of them busy for seconds (any CPU's) kept the others — a writer
+confirming a download — from running at all. Processes they start (the view) are reset to
+the normal policy; the loop ends with every thread back at the normal policy. The process
+and the view it starts keep small pages (:func:`keep_small_pages`): the kernel merging huge
+pages held scans up.
 With ``core`` (``engine/cores.py``) the scan thread runs on that processor and the
 process's other threads on the rest while the loop runs — but the writer's encoder, which
 works only while the scan thread sleeps (``engine/writer.py``) and runs below it; all of
@@ -113,15 +117,17 @@ HELPERS_BELOW = 10
 """How far below the scan thread the process's other threads run real-time."""
 
 
-def set_realtime(priority: int | None, tid: int = 0) -> bool:
+def set_realtime(priority: int | None, tid: int = 0, *, turns: bool = False) -> bool:
     """Schedule thread ``tid`` (a native id; 0: the calling thread) ``SCHED_FIFO`` at
     ``priority`` (reset in processes it forks), or back to the normal policy with None;
-    False when the system refuses (or the thread is gone)."""
+    False when the system refuses (or the thread is gone). ``turns``: ``SCHED_RR``
+    instead — threads of the same priority take turns, a time slice each, where under
+    ``SCHED_FIFO`` one that does not block keeps the processor from the others."""
     try:
         if priority is None:
             os.sched_setscheduler(tid, os.SCHED_OTHER, os.sched_param(0))
         else:
-            policy = os.SCHED_FIFO | os.SCHED_RESET_ON_FORK
+            policy = (os.SCHED_RR if turns else os.SCHED_FIFO) | os.SCHED_RESET_ON_FORK
             os.sched_setscheduler(tid, policy, os.sched_param(priority))
     except (OSError, AttributeError):  # no permission, gone, or not Linux
         return False
@@ -411,7 +417,7 @@ class Runner:
         if self.realtime and self.rt_priority is not None:
             helpers = max(1, self.rt_priority - HELPERS_BELOW)
             for tid in _other_threads():
-                set_realtime(helpers, tid)
+                set_realtime(helpers, tid, turns=True)
         everywhere = allowed_cpus() | ({self.core} if self.core is not None else set())
         if self.core is not None:  # (the calling thread may have kept off it already)
             self.pinned = self._keep_core(self.core, everywhere)

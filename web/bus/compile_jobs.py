@@ -1,11 +1,11 @@
 """What the compiler process (``web.bus.compiler``) does with one request.
 
 ``answer(request)`` parses, validates and compiles a chart (``compile``; ``preview``: the
-same, only the change summary goes back) — with ``blocks``, the S7-SCL sources its calls
-reach too, the calls checked against their interfaces — compares two charts (``summary``: an undo),
-checks that a text parses (``check``: a save), or imports a file (``open``). Every
-refusal is ``{"refused": reason, "lines": diagnostics}`` with one line naming the place;
-nothing a request holds makes it raise.
+same, only the change summary and the S7-SCL programs go back) — with ``blocks``, the S7-SCL
+sources its calls reach too, the calls checked against their interfaces — compares two
+charts (``summary``: an undo), checks that a text parses (``check``: a save), or imports a
+file (``open``). Every refusal is ``{"refused": reason, "lines": diagnostics}`` with one
+line naming the place; nothing a request holds makes it raise.
 """
 
 from __future__ import annotations
@@ -132,8 +132,8 @@ def _compile(request: dict[str, Any], *, preview: bool) -> tuple[dict[str, Any],
     portable: list[tuple[bytes, bytes]] = []
     if blocks is not None:
         out["blocks"] = _blocks(chart, table, list(blocks), portable)
-    if preview:
-        return out, []
+    if preview:  # the S7-SCL programs only: the CPU says what they carry over
+        return out, [blob for pair in portable for blob in pair]
     fingerprint(cc)  # kept with the chart: the scan boundary does not compute it
     code = [marshal.dumps(piece) for piece in cc.code]
     source = cc.source

@@ -22,7 +22,9 @@ lock. The rules:
 - S7-SCL sources sent with a download (``blocks``) are compiled there too, after the
   chart, and come back as bytes (``steps.scl.portable``): the CPU's process runs each
   source's generated module once to make its blocks, and parses or compiles nothing;
-- a preview, a save and an open bring back text only (the change summary, the chart).
+- a preview, a save and an open bring back text only (the change summary, the chart) —
+  but a preview's S7-SCL sources, which come back as a download's do: the CPU's process
+  says from them what the download would carry over (``web.harness.scl_reload``).
 
 Used by ``web.bus.online.OnlineChange`` from its one worker thread.
 """
@@ -96,6 +98,7 @@ class Summary:
     text: tuple[str, ...]
     removed_active: tuple[int, ...]
     count: int
+    blocks: SclSources | None = None  # a preview's S7-SCL sources, compiled (if sent)
 
     @property
     def unchanged(self) -> bool:
@@ -242,9 +245,10 @@ class Compiler:
     ) -> Compiled | Summary:
         """``text`` compiled as version ``version`` of FB ``fb`` with the symbol table text
         ``symbols``, its change summary against the ``running`` chart's text with the
-        ``active`` steps; a ``preview`` brings back the summary only. ``blocks``: the S7-SCL
-        sources (file, text) the chart's calls reach, compiled with it in that order (made
-        in this process of the child's bytes: ``web.harness.scl.load_texts``)."""
+        ``active`` steps; a ``preview`` brings back the summary only (with the compiled
+        ``blocks``, if sent). ``blocks``: the S7-SCL sources (file, text) the chart's calls
+        reach, compiled with it in that order (made in this process of the child's bytes:
+        ``web.harness.scl.load_texts``)."""
         _size_limit(text, "the chart")
         if blocks is not None:
             _size_limit("".join(t for _, t in blocks), "the S7-SCL sources (together)")
@@ -261,16 +265,16 @@ class Compiler:
         }
         reply, blobs = self._call(request, "download")
         summary = Summary(*reply["summary"])
-        if preview:
-            return summary
         if blocks is None:
-            return _loaded(blobs, reply["parts"], summary)
+            return summary if preview else _loaded(blobs, reply["parts"], summary)
         files, warnings, n = reply["blocks"]
         cut = len(blobs) - 2 * n
         pairs = [(blobs[k], blobs[k + 1]) for k in range(cut, len(blobs), 2)]
-        done = _loaded(blobs[:cut], reply["parts"], summary)
+        done = None if preview else _loaded(blobs[:cut], reply["parts"], summary)
         with collector_paused():
             sources = load_texts(files, pairs, warnings, [t for _, t in blocks])
+        if done is None:
+            return dataclasses.replace(summary, blocks=sources)
         return dataclasses.replace(done, blocks=sources)
 
     def summarize(self, *, running: str, target: str, active: tuple[int, ...]) -> Summary:

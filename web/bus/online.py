@@ -22,6 +22,9 @@ reaches the scan but a compiled chart.
 A download may bring changed S7-SCL sources of the blocks the chart calls (``blocks``):
 compiled with the chart in the compiler's process, written beside it, swapped in with it at
 the same boundary (``web.bus.online_blocks``), kept with its version for ``undo_download``.
+Its preview (and an undo's) says what the instance DBs would keep, drop and start afresh
+— the notes the download's reply gives, made by the same function
+(``web.harness.scl_reload.carry_notes``) — or the reason it would be refused.
 
 Reads (``fb/<fb>/source``: :class:`ChartSource`; ``project``: :class:`ProjectFiles`) are
 queryables like the chart and the state.
@@ -70,7 +73,7 @@ from s7graph.web.harness.project import (
     write_chart,
 )
 from s7graph.web.harness.scl import SclSources
-from s7graph.web.harness.scl_reload import refusals
+from s7graph.web.harness.scl_reload import carry_notes, refusals
 from s7graph.web.harness.session import ChartSession
 
 __all__ = ["ENGINEERING_OPS", "MAX_WAITING", "Durability", "OnlineChange", "Version"]
@@ -333,15 +336,18 @@ class OnlineChange:
                 active=self._active(),
             )
             scl_changed = back.scl is not self.current.scl
-            scl_texts = back.scl_texts
+            scl_texts, new_scl = back.scl_texts, back.scl
         else:
             sent = self._sent_blocks(command)
             target, summary = self._compile(str(command.args["source"]), preview, sent)
             scl_changed, scl_texts = bool(sent), {**self.current.scl_texts, **sent}
+            new_scl = summary.blocks if target is None else target.scl
         same = "the chart does not change" if scl_changed else "no change: the CPU runs this chart"
         lines = list(summary.lines()) or [same]
         if scl_changed:
             lines.append(_blocks_line(scl_texts, self.current))
+        if preview and scl_changed and new_scl is not None:
+            lines += self._carried(op, new_scl)  # the notes the download's reply gives
         if preview:
             reply = CommandReply(
                 applied=True,
@@ -356,6 +362,20 @@ class OnlineChange:
             )
         assert target is not None  # compiled: not a preview
         return self._download(command, target, summary, str(removed) if removed else None)
+
+    def _carried(self, op: str, new: SclSources) -> list[str]:
+        """What a download of ``new`` carries over, read off the running CPU from this
+        thread (the scan boundary checks again): the notes its reply gives
+        (``carry_notes``); ``_Refused`` with its reason when an instance DB cannot carry
+        its values."""
+        cpu = self.session.cpu
+        try:
+            refused, notes = refusals(cpu, new), carry_notes(cpu, self.current.scl, new)
+        except RuntimeError:  # the CPU's DBs changed while read: the boundary checks again
+            return []
+        if refused:
+            raise _Refused(f"{op} refused: {'; '.join(refused)}; the CPU keeps the old blocks")
+        return notes
 
     def _active(self) -> tuple[int, ...]:
         cc, st = self.current.cc, self.session.graph.state
@@ -412,10 +432,7 @@ class OnlineChange:
         written = False
         blocks = target.scl if target.scl is not self.current.scl else None
         if blocks is not None:
-            with contextlib.suppress(RuntimeError):  # the boundary checks again, for sure
-                if refused := refusals(self.session.cpu, blocks):
-                    why = "; ".join(refused)
-                    raise _Refused(f"{command.op} refused: {why}; the CPU keeps the old blocks")
+            self._carried(command.op, blocks)
         files = self._write_blocks(command, target) if blocks is not None else []
         if self.path is not None:
             try:

@@ -1,4 +1,5 @@
-"""The Details folder's links from a step's ``CALL`` rows to the blocks they call.
+"""Buttons that open a block's S7-SCL source read-only: the Details folder's links from a
+step's ``CALL`` rows to the blocks they call, and a program's page's list of its blocks.
 
 When the step shown in *Details* has action rows that call an FB or an FC (``CALL FB 17,
 DB 10 (…)``, ``CALL FC 3 (…)``, ``CALL "Counter", "Inst"``), the folder gets a button per
@@ -6,25 +7,35 @@ block called — *FB 17 source* — that opens the block's S7-SCL source as the 
 (``s7graph/<cpu>/blocks``, ``web.bus.block_sources``) in a read-only window of this page,
 as the engineering station opens a block online. A block the CPU has no source of (a
 system block, a block of a Python program) says so in a notice. The source is read when
-the button is pressed: after an online change it is the one running then. Every text is
-escaped.
+the button is pressed: after an online change it is the one running then. A program's
+page (``web.view.program_view``) lists every OB, FB, FC and DB the CPU has a source of the
+same way (:func:`listed_blocks`, :class:`BlockButtons`). Every text is escaped.
 """
 
 from __future__ import annotations
 
 import html
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import viser
 
 from s7graph.web.bus.protocol import BlockSource, BlockSources, ChartLayout
 
-__all__ = ["BlockLinks", "called_blocks", "find_block", "source_html"]
+__all__ = [
+    "BlockButtons",
+    "BlockLinks",
+    "called_blocks",
+    "find_block",
+    "listed_blocks",
+    "source_html",
+]
 
 _CALLED = re.compile(r'\s*(?:(FB|FC)\s*(\d{1,5})\b|"([^"]{1,128})")', re.IGNORECASE)
+_LABEL = re.compile(r"([A-Z]+)(\d+)$", re.IGNORECASE)
 MAX_LINKS = 16  # buttons of one step at most
+MAX_BLOCKS = 256  # buttons of a program's list at most
 
 
 def called_blocks(layout: ChartLayout, step: int) -> list[tuple[str, str]]:
@@ -65,41 +76,53 @@ def source_html(block: BlockSource) -> str:
     )
 
 
-class BlockLinks:
-    """The buttons of one page's Details folder (``folder``) for the shown step's calls;
-    ``read`` gives the CPU's sources (None: no answer), ``notify(title, body)`` a notice."""
+def listed_blocks(sources: BlockSources) -> list[tuple[str, str]]:
+    """Every block of ``sources``, those left out too, in source order: ``(key, label)`` as
+    :func:`find_block` takes the key (``FB17``) and the label as STEP 7 writes it (``FB 17``,
+    ``FB 10 "Counter"`` for a named one)."""
+    out: list[tuple[str, str]] = []
+    for label, name in [(b.label, b.name) for b in sources.blocks] + [
+        (left, "") for left in sources.left_out
+    ]:
+        split = _LABEL.match(label)
+        shown = f"{split[1]} {split[2]}" if split is not None else label
+        if name and name.casefold() != label.casefold():
+            shown += f' "{name}"'
+        out.append((label.upper(), shown))
+    return out[:MAX_BLOCKS]
+
+
+class BlockButtons:
+    """Buttons in ``folder`` of one page, one per block, each opening the block's source
+    read-only; ``read`` gives the CPU's sources (None: no answer), ``notify(title, body)``
+    a notice."""
 
     def __init__(
         self,
         client: viser.ClientHandle,
         folder: viser.GuiFolderHandle,
-        layout: ChartLayout,
         read: Callable[[], BlockSources | None] | None,
         notify: Callable[[str, str], None],
     ) -> None:
         self.client = client
         self.folder = folder
-        self.layout = layout
         self._read = read
         self._notify = notify
-        self._shown: tuple[int, int, tuple[tuple[str, str], ...]] | None = None
+        self._placed: tuple[tuple[str, str], ...] | None = None
         self.buttons: list[viser.GuiButtonHandle] = []
         self._modal: Any = None  # the window open, if any
 
-    def show(self, step: int) -> None:
-        """Buttons for the blocks step ``step`` calls (0: none); unchanged ones stay."""
-        calls = tuple(called_blocks(self.layout, step)) if step > 0 else ()
-        if self._read is None:
-            calls = ()
-        shown = (step, self.layout.version, calls)
-        if shown == self._shown:
+    def place(self, blocks: Sequence[tuple[str, str]]) -> None:
+        """A button per ``(key, label)`` of ``blocks``, in order; unchanged ones stay."""
+        wanted = tuple(blocks) if self._read is not None else ()
+        if wanted == self._placed:
             return
-        self._shown = shown
+        self._placed = wanted
         for button in self.buttons:
             button.remove()
         self.buttons = []
         with self.folder:
-            for key, label in calls:
+            for key, label in wanted:
                 button = self.client.gui.add_button(
                     f"{label} source", hint=f"the S7-SCL source of {label}, read-only"
                 )
@@ -135,3 +158,23 @@ class BlockLinks:
             self._modal = modal
             gui.add_html(source_html(block))
             gui.add_button("Close").on_click(lambda _: modal.close())
+
+
+class BlockLinks(BlockButtons):
+    """The buttons of one page's Details folder (``folder``) for the shown step's calls in
+    ``layout``; the rest as :class:`BlockButtons`."""
+
+    def __init__(
+        self,
+        client: viser.ClientHandle,
+        folder: viser.GuiFolderHandle,
+        layout: ChartLayout,
+        read: Callable[[], BlockSources | None] | None,
+        notify: Callable[[str, str], None],
+    ) -> None:
+        super().__init__(client, folder, read, notify)
+        self.layout = layout
+
+    def show(self, step: int) -> None:
+        """Buttons for the blocks step ``step`` calls (0: none); unchanged ones stay."""
+        self.place(called_blocks(self.layout, step) if step > 0 else [])

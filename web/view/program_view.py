@@ -1,12 +1,16 @@
 """The page of a CPU without a chart (a program of blocks, docs/view.md, "A program's page"):
 its state and why it stopped, its RUN/STOP switch and memory reset, the messages of its
 ALARM_S / ALARM_SQ calls with *Acknowledge* (``web.view.alarms``: an operator's
-``ack_msg``), a watch table and its diagnostic buffer — no scene.
+``ack_msg``), a watch table, its blocks' S7-SCL sources and its diagnostic buffer — no
+scene.
 
 Every page has its own login (as the chart's page: ``web.view.page_login``), its own watch
 table — operands typed into ``Operands`` (``MW0:INT, Q4.0, DB20.avg``), read at the CPU's
 scan boundaries about twice a second while the page is open (``web.bus.watch``) — and the
-buttons its role allows (``stop``, ``start``, ``mres``: an engineer's). The Diagnostics
+buttons its role allows (``stop``, ``start``, ``mres``: an engineer's). The Blocks folder
+lists the blocks the CPU has a source of (``s7graph/<cpu>/blocks``, read once when the page
+opens, again every ``BLOCKS_RETRY_S`` while the CPU does not answer); each button opens the
+block's text read-only, read when pressed (``web.view.block_links``). The Diagnostics
 folder is :class:`~web.view.diagnostics.DiagnosticsPanel`'s. Every text from the bus or a
 user is escaped.
 """
@@ -17,6 +21,7 @@ import contextlib
 import functools
 import html
 import threading
+import time
 from typing import Any
 
 import msgspec
@@ -27,6 +32,7 @@ from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import (
     MAX_WATCH,
     AlarmList,
+    BlockSources,
     ChartLayout,
     Command,
     CommandReply,
@@ -38,13 +44,15 @@ from s7graph.web.bus.watch import split_operands
 from s7graph.web.commands import AckMsg, Mres, Start, Stop, checked, op_of
 from s7graph.web.view import texts
 from s7graph.web.view.alarms import AlarmView
+from s7graph.web.view.block_links import BlockButtons, listed_blocks
 from s7graph.web.view.diagnostics import state_html
 from s7graph.web.view.guard import OriginGuard
 from s7graph.web.view.page_login import PageLogin
 
-__all__ = ["ProgramPage", "ProgramView", "watch_html"]
+__all__ = ["ProgramPage", "ProgramView", "blocks_html", "watch_html"]
 
 POLL_S = 0.5
+BLOCKS_RETRY_S = 5.0  # the block list asked again while the CPU does not answer
 _BUTTONS: tuple[tuple[type[Command], str, dict[str, Any]], ...] = (
     (Stop, "CPU to STOP", {}),
     (Start, "CPU to RUN", {}),
@@ -69,6 +77,16 @@ def watch_html(answer: WatchValues | None) -> str:
         rows.append(f"<tr><td><code>{html.escape(v.address)}</code></td><td>{shown}</td></tr>")
     head = f"cycle {answer.cycle} · {html.escape(answer.state)}"
     return texts.small(f"{head}<table>{''.join(rows)}</table>")
+
+
+def blocks_html(sources: BlockSources | None) -> str:
+    """The line above the Blocks folder's buttons: how many, or why there are none."""
+    if sources is None:
+        return texts.small('<span style="color:#c00">the CPU does not answer</span>')
+    count = len(sources.blocks) + len(sources.left_out)
+    if count == 0:
+        return texts.small('<span style="color:#777">no S7-SCL blocks (a Python program)</span>')
+    return texts.small(f"{count} block{'s' if count != 1 else ''} · the sources, read-only")
 
 
 class ProgramPage(PageLogin):
@@ -102,7 +120,22 @@ class ProgramPage(PageLogin):
                 "DB10.ctu.CV, DB20.speeds[2]",
             )
             self.watch = gui.add_html(watch_html(None))
+        with gui.add_folder("Blocks") as folder:
+            self.blocks_line = gui.add_html(texts.small("reading the CPU's blocks…"))
+        self.blocks = BlockButtons(
+            page, folder, view.read_blocks, lambda t, b: self._notify(t, b, ok=False)
+        )
+        self.blocks_due: float | None = 0.0  # when to ask for the list (None: listed)
         self._enable()
+
+    def list_blocks(self, sources: BlockSources | None, now: float) -> None:
+        """A button per block of ``sources`` (render thread); None: asked again later."""
+        self.update_html(self.blocks_line, "blocks", blocks_html(sources))
+        if sources is None:
+            self.blocks_due = now + BLOCKS_RETRY_S
+            return
+        self.blocks_due = None
+        self.blocks.place(listed_blocks(sources))
 
     def asked(self) -> list[str]:
         """The operands this page watches (at most ``MAX_WATCH``)."""
@@ -204,6 +237,13 @@ class ProgramView:
             self.connected = connected
         self._wake.set()
 
+    def read_blocks(self) -> BlockSources | None:
+        """The CPU's S7-SCL sources, or None if it does not answer (or answers garbage)."""
+        try:
+            return self.client.blocks()
+        except Exception:  # an unreadable answer: as no answer, the page says so
+            return None
+
     def _connect(self, page: viser.ClientHandle) -> None:
         if self._guard is not None and self._guard.refused(page.client_id):
             return
@@ -234,6 +274,11 @@ class ProgramView:
         top = texts.banner_html(connected, self.cpu)
         line = _status_html(status) if connected else texts.small("no live state")
         answers: dict[tuple[str, ...], WatchValues] = {}
+        now = time.monotonic()
+        due = [p for p in pages if p.blocks_due is not None and p.blocks_due <= now]
+        sources = self.read_blocks() if due and connected else None  # no bus: no wait
+        for page in due:
+            page.list_blocks(sources, now)
         for page in pages:
             page.update_html(page.banner, "banner", top)
             page.update_html(page.status, "status", line)

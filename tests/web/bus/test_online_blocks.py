@@ -1,8 +1,9 @@
 """The S7-SCL blocks of an online change at the scan boundary (``web/bus/online_blocks.py``):
 random changes of a running SCL FB — variables added, removed, retyped, its code changed —
 end as a fresh CPU loaded from the new source with the kept variables set would be, or are
-refused with a reason and leave the old program running; the source files a download may
-bring are those the CPU runs."""
+refused with a reason and leave the old program running; what a preview says they carry
+over is what the download's notes say; the source files a download may bring are those the
+CPU runs."""
 
 from __future__ import annotations
 
@@ -15,7 +16,8 @@ from hypothesis import strategies as st
 
 from s7graph.engine.clock import VirtualClock
 from s7graph.web.bus.online_blocks import BlockFiles, BlocksRefused, swap_blocks
-from s7graph.web.harness.scl import compile_texts
+from s7graph.web.harness.scl import compile_texts, scl_of
+from s7graph.web.harness.scl_reload import carry_notes
 from s7graph.web.harness.session import ChartSession, compile_text
 
 CHART = """FUNCTION_BLOCK "Seq" FB 1 DB 1
@@ -149,7 +151,10 @@ def test_a_changed_running_fb_ends_as_a_fresh_one_with_the_kept_values_or_is_ref
         scans(running, after)
         assert values(running) == values(twin)  # the old FB runs on
         return
+    said = carry_notes(running.cpu, scl_of(running.blocks), new_sources)  # the preview's
+    assert running.cpu.blocks == program and values(running) == was  # it changes nothing
     notes, _ = swap_blocks(running, new_sources)
+    assert notes == said  # the download's reply says what its preview said
     fresh = session_of(new)  # set as loaded, the kept variables as they were
     kept = values(session_of(new, start=False))
     kept["go"] = was["go"]  # the input, kept as every variable of the same type
@@ -209,6 +214,31 @@ def test_the_way_back_puts_the_old_program_and_values_back() -> None:
     assert running.cpu.blocks == program and values(running) == was
     scans(running, 1)
     assert running.get("DB10.n") == was["n"] + 2  # type: ignore[operator]
+
+
+def test_a_preview_notes_the_variables_kept_dropped_and_new_and_a_restructured_db() -> None:
+    db = "DATA_BLOCK DB20\nSTRUCT {} END_STRUCT\nBEGIN\nEND_DATA_BLOCK\n"
+    old = source([Var("n", "INT", 2, False), Var("gone", "INT", 1, False)])
+    cc, table = compile_text(CHART, "seq.s7g")
+    was = compile_texts([("b.scl", old + db.format("w : INT;"))], table)
+    running = ChartSession(cc, table, VirtualClock(), blocks=[was])
+    running.start()
+    scans(running, 2)
+    before = values(running)
+    new = source([Var("n", "DINT", 2, False), Var("fresh", "INT", 1, True)])
+    changed = compile_texts([("b.scl", new + db.format("w : INT; v : INT;"))], table)
+    said = carry_notes(running.cpu, was, changed)
+    assert said == [
+        "DB10 FB17 'FB17': interface changed; variables kept by name (2)",
+        "DB10 FB17 'FB17': dropped (no longer declared): gone",
+        "DB10 FB17 'FB17': new, at their initial values: fresh",
+        "DB20: its structure changed; at its new initial values",
+    ]
+    assert values(running) == before and running.cpu.block("FB17").interface[1].type == "INT"
+    same = compile_texts([("b.scl", old.replace("+ 2", "+ 3") + db.format("w : INT;"))], table)
+    assert carry_notes(running.cpu, was, same) == []  # the code only: every value stays
+    notes, _ = swap_blocks(running, changed)
+    assert notes == said
 
 
 def test_a_download_brings_only_the_sources_the_cpu_runs(tmp_path: Path) -> None:

@@ -1,8 +1,9 @@
 """A download that brings changed S7-SCL blocks, over a real zenoh bus (docs/online-change.md,
 "S7-SCL blocks"): compiled in the CPU's compiler process, the chart's calls checked against
 the new interfaces, swapped in with the chart at one scan boundary, the instance DB keeping
-its values by name; refusals give a reason and leave the old blocks running; the block file
-is rewritten with a numbered backup; an undo puts the old blocks back. Then through
+its values by name — which its preview says first; refusals give a reason (a preview's
+too) and leave the old blocks running; the block file is rewritten with a numbered backup;
+an undo puts the old blocks back. Then through
 ``s7graph run --blocks`` and ``s7graph download --blocks`` as real processes, the change
 surviving a restart."""
 
@@ -106,12 +107,14 @@ def test_a_download_swaps_changed_blocks_in_keeping_the_instance_values_by_name(
     preview = cpu.send("download", source=CHART, blocks={"fb17.scl": CHANGED}, preview=True)
     assert preview.applied, preview.reason
     assert "S7-SCL blocks changed: fb17.scl" in preview.lines
+    said = [line for line in preview.lines if line.startswith("DB10 ")]
+    assert "DB10 FB17 'FB17': dropped (no longer declared): old" in said
+    assert "DB10 FB17 'FB17': new, at their initial values: fresh" in said
+    assert cpu.session.cpu.block("FB17").interface[1].type == "INT"  # a preview: no change
     reply = cpu.send("download", source=CHART, blocks={"fb17.scl": CHANGED})
     assert reply.applied, reply.reason
     assert reply.version == 2
-    notes = "\n".join(reply.lines)
-    assert "DB10 FB17 'FB17': dropped (no longer declared): old" in notes
-    assert "DB10 FB17 'FB17': new, at their initial values: fresh" in notes
+    assert [line for line in reply.lines if line.startswith("DB10 ")] == said
     assert cpu.grows_by(1000)  # the new code, on the value n had: carried as a DINT
     assert cpu.n() % 1000 != 0 and int(cpu.session.get("DB10.fresh")) > 5
     block_file = cpu.path.parent / "fb17.scl"
@@ -120,16 +123,21 @@ def test_a_download_swaps_changed_blocks_in_keeping_the_instance_values_by_name(
     rows = [r for r in read_audit(cpu.state) if r.op == "download" and r.outcome == "applied"]
     assert rows and "fb17.scl" in rows[-1].args and "sha256" in rows[-1].args
 
+    asked = cpu.send("undo_download", preview=True)  # n would narrow: its preview says so
+    assert not asked.applied and "DB10 (FB17): n: DINT → INT" in asked.reason, asked.reason
     back = cpu.send("undo_download")  # n would narrow from DINT to INT: refused
-    assert not back.applied and "DB10 (FB17): n: DINT → INT" in back.reason, back.reason
+    assert not back.applied and back.reason == asked.reason, back.reason
     assert cpu.grows_by(1000) and block_file.read_text(encoding="utf-8") == CHANGED
 
     by_7 = CHANGED.replace("n + 1000", "n + 7")
     assert cpu.send("download", source=CHART, blocks={"fb17.scl": by_7}).applied
     assert cpu.grows_by(7)
+    asked = cpu.send("undo_download", preview=True)
+    assert asked.applied and "S7-SCL blocks changed: fb17.scl" in asked.lines, asked.reason
     back = cpu.send("undo_download")  # the blocks before, the values carried back
     assert back.applied, back.reason
     assert "S7-SCL blocks changed: fb17.scl" in back.lines
+    assert not any(line.startswith("DB10 ") for line in asked.lines)  # the code only
     assert cpu.grows_by(1000) and block_file.read_text(encoding="utf-8") == CHANGED
 
 
@@ -146,6 +154,8 @@ def test_refusals_give_a_reason_and_the_old_blocks_run_on(cpu: Cpu) -> None:
     for change, reason in cases.items():
         text = BLOCKS.replace("n : INT; old : INT; END_VAR\n  IF go THEN n := n + 1;", change)
         assert text != BLOCKS
+        asked = cpu.send("download", source=CHART, blocks={"fb17.scl": text}, preview=True)
+        assert not asked.applied and reason in asked.reason, asked.reason  # said before
         reply = cpu.send("download", source=CHART, blocks={"fb17.scl": text})
         assert not reply.applied and reason in reply.reason, reply.reason
         assert "keeps the old" in reply.reason or "do not compile" in reply.reason
@@ -210,7 +220,9 @@ def test_s7graph_download_blocks_into_s7graph_run_and_the_change_survives_a_rest
         done = _cli(tmp_path, "download", str(chart), "--blocks", str(changed), "--yes")
         assert done.returncode == 0, done.stdout + done.stderr
         assert "S7-SCL blocks changed: fb17.scl" in done.stdout
-        assert "new, at their initial values: fresh" in done.stdout
+        fresh = "DB10 FB17 'FB17': new, at their initial values: fresh"
+        assert f"\n  {fresh}\n" in done.stdout  # the preview's line, before the question
+        assert f"\ns7graph: {fresh}\n" in done.stdout  # the download's
         assert "download applied" in done.stdout
         assert wait_until(lambda: _value(client, "DB10.n") > 3000)
         carried = _value(client, "DB10.n") % 1000  # n when downloaded: below 1000

@@ -1,10 +1,12 @@
-"""Which blocks a step's ``CALL`` rows call, and finding and showing their source
-(``web.view.block_links``; the page's buttons: test_block_links_browser.py)."""
+"""Which blocks a step's ``CALL`` rows call, a program's list of its blocks, and finding
+and showing their source (``web.view.block_links``; the pages' buttons:
+test_block_links_browser.py, test_program_blocks_browser.py)."""
 
 from __future__ import annotations
 
 from s7graph.web.bus.protocol import ActionInfo, BlockSource, BlockSources, ChartLayout, StepInfo
-from s7graph.web.view.block_links import called_blocks, find_block, source_html
+from s7graph.web.view.block_links import called_blocks, find_block, listed_blocks, source_html
+from s7graph.web.view.program_view import blocks_html
 
 
 def _layout(*operands: tuple[str, str]) -> ChartLayout:
@@ -38,3 +40,23 @@ def test_a_block_is_found_by_its_label_or_its_name_and_shown_escaped() -> None:
     assert find_block(sources, "FB6") is None and find_block(sources, '"Other"') is None
     shown = source_html(fb)
     assert "x := a &lt; b;" in shown and "FB5 Counter" in shown and "b.scl, line 3" in shown
+
+
+def test_a_programs_list_names_every_block_in_source_order_the_left_out_last() -> None:
+    sources = BlockSources(
+        blocks=[
+            BlockSource(label="FB10", name="Counter"),
+            BlockSource(label="DB20", name="DB20"),
+            BlockSource(label="OB1"),
+        ],
+        left_out=["FC300"],
+    )
+    assert listed_blocks(sources) == [
+        ("FB10", 'FB 10 "Counter"'),
+        ("DB20", "DB 20"),
+        ("OB1", "OB 1"),
+        ("FC300", "FC 300"),
+    ]
+    assert "4 blocks" in blocks_html(sources)
+    assert "no S7-SCL blocks" in blocks_html(BlockSources())  # a Python program
+    assert "does not answer" in blocks_html(None)
