@@ -25,8 +25,15 @@ render loop); ``drill``, the README's demo (``drill.s7g`` with ``demo_plant.py``
   to the websocket frame's arrival in viser's worker (*ws*) and to the decoded batch in the
   page's main thread (*main*), the length of the frame that drew it (first to second
   animation frame after the batch), and the status line's "active: S<n>" painted
-  (*status*). A change the page never shows is counted as missed. Target: colour p99
-  ≤ 100 ms.
+  (*status*). A change the page never shows is counted as missed. Targets (at load
+  average ≤ 2): colour p99 ≤ 100 ms for ``loop8``, ≤ 150 ms for ``loop250``.
+- *bareN*, the peer of each loop chart, measured right after it in the same browser: a
+  bare viser page (nothing of s7graph, ``Boxes``) of N boxes and a status line showing
+  the same step changes at the same times — the least any viser page costs to show them
+  on this machine at this load; printed beside the chart, with the ratio of the two.
+- *frames*: while each page runs, its animation frames a second and the CPU time the
+  browser spent per frame (all its processes, from ``/proc``) — what a frame costs
+  software WebGL, which the load changes less than how long a frame takes.
 - *first paint*: from ``page.goto`` (a fresh browser context: no cache) to the painted
   frame after the batch that created the chart's last scene node (no new one for 2 s
   after; *chart*), and to the later of that and the painted frame after the panel's first
@@ -521,11 +528,57 @@ def colour_latency(page: Any, machine: Cpu | Boxes, changes: int) -> dict[str, l
     return out
 
 
+# ---------------------------------------------------------------------------- frame cost
+
+FRAME_S = 5.0  # seconds of frames counted per page
+COUNT_FRAMES = """(ms) => new Promise((done) => { let n = 0; const t0 = performance.now();
+  const tick = () => { n++; if (performance.now() - t0 < ms) requestAnimationFrame(tick);
+  else done(n); }; requestAnimationFrame(tick); })"""
+
+
+def _browser_cpu_ms() -> float:
+    """CPU time (ms) so far of every Chromium process this benchmark started (the
+    descendants of this process whose command line names chromium)."""
+    children: dict[int, list[int]] = {}
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                with open(f"/proc/{entry}/stat") as f:
+                    parent = int(f.read().rsplit(")", 1)[1].split()[1])
+            except (OSError, IndexError, ValueError):
+                continue
+            children.setdefault(parent, []).append(int(entry))
+    total, todo = 0, list(children.get(os.getpid(), []))
+    while todo:
+        pid = todo.pop()
+        todo += children.get(pid, [])
+        try:
+            with open(f"/proc/{pid}/cmdline", "rb") as f:
+                if b"chrom" not in f.read():
+                    continue
+            with open(f"/proc/{pid}/stat") as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+            total += int(fields[11]) + int(fields[12])  # utime + stime, in ticks
+        except (OSError, IndexError, ValueError):
+            continue
+    return total * 1000 / os.sysconf("SC_CLK_TCK")
+
+
+def frame_cost(page: Any) -> tuple[float, float]:
+    """While the page runs for ``FRAME_S``: its animation frames a second and the CPU time
+    (ms) the browser spent per frame — what one frame costs software WebGL, which the
+    machine's load changes less than the frame's length."""
+    before, t0 = _browser_cpu_ms(), time.monotonic()
+    frames = int(page.evaluate(COUNT_FRAMES, FRAME_S * 1000))
+    spent, took = _browser_cpu_ms() - before, time.monotonic() - t0
+    return frames / took, spent / max(frames, 1)
+
+
 # ---------------------------------------------------------------------------- figures
 
 
 def one_round(browser: Any, charts: list[str], changes: int) -> dict[str, Any]:
-    result: dict[str, Any] = {"paint": {}, "colour": {}}
+    result: dict[str, Any] = {"paint": {}, "colour": {}, "frame": {}}
 
     def page_of() -> Any:
         context = browser.new_context(viewport={"width": 1280, "height": 800})
@@ -548,6 +601,7 @@ def one_round(browser: Any, charts: list[str], changes: int) -> dict[str, Any]:
                     print(f"  {chart}: the websocket hook failed: {error}")
                 if chart in COLOUR_CHARTS:
                     result["colour"][chart] = colour_latency(page, machine, changes)
+                    result["frame"][chart] = frame_cost(page)
             finally:
                 context.close()
         if chart in COLOUR_CHARTS:  # its peer, right after it
@@ -557,6 +611,7 @@ def one_round(browser: Any, charts: list[str], changes: int) -> dict[str, Any]:
                     page.goto(boxes.url, timeout=120_000)
                     time.sleep(QUIET_S)
                     result["colour"][peer_of(chart)] = colour_latency(page, boxes, changes)
+                    result["frame"][peer_of(chart)] = frame_cost(page)
                 finally:
                     context.close()
     return result
@@ -589,6 +644,15 @@ def colour_table(rounds: list[dict[str, Any]], charts: list[str]) -> None:
             seen = f"{statistics.median(n):.0f}" + (f"-{max(missed)}" if max(missed) else "")
             p50s, p99s = spread(p50, "{:.0f}"), spread(p99, "{:.0f}")
             print(f"{chart:8} {what:34} {seen:>9} {p50s:>17} {p99s:>17}  {target}")
+    print("\nframes while it runs: per second, and the browser's CPU time per frame (ms)")
+    for chart in [name for c in charts for name in (c, peer_of(c))]:
+        got = [r["frame"][chart] for r in rounds if chart in r.get("frame", {})]
+        if got:
+            rate, cost = (
+                spread([g[0] for g in got], "{:.1f}"),
+                spread([g[1] for g in got], "{:.0f}"),
+            )
+            print(f"{chart:8} {rate:>17}/s {cost:>17} ms")
     for chart in charts:
         pairs = [
             (r["colour"][chart]["colour"], r["colour"][peer_of(chart)]["colour"])
