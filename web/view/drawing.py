@@ -208,8 +208,8 @@ def picture(placement: Placement) -> Picture:
         steps=d.step_xy,
         transitions=d.transition_xy,
         targets=d.targets,
-        segments=np.array(d.segments, np.float32).reshape(-1, 2, 3),
-        double=np.array(d.double, np.float32).reshape(-1, 2, 3),
+        segments=joined(np.array(d.segments, np.float32).reshape(-1, 2, 3)),
+        double=joined(np.array(d.double, np.float32).reshape(-1, 2, 3)),
         tiles=tuple(tiles(d.text_items)),
         bounds=bounds,
         lane=lane,
@@ -226,6 +226,38 @@ def picture(placement: Placement) -> Picture:
             for q in p.sequences
         },
     )
+
+
+_TOUCH = 1e-4  # scene units: segment ends this close touch
+
+
+def joined(segments: Any) -> Any:
+    """The same lines in fewer segments: vertical and horizontal segments on one line that
+    touch or overlap are one segment (a sequence's line from step to transition to step is
+    drawn as one run); the others as they are. Software WebGL pays per segment drawn."""
+    runs: dict[tuple[int, float, float], list[tuple[float, float]]] = {}
+    rest: list[Any] = []
+    for a, b in segments.tolist():
+        for axis in (0, 1):  # 0: vertical (x the same), 1: horizontal (y the same)
+            if abs(a[axis] - b[axis]) < _TOUCH and a[2] == b[2]:
+                key = (axis, round(a[axis] / _TOUCH) * _TOUCH, a[2])
+                lo, hi = sorted((a[1 - axis], b[1 - axis]))
+                runs.setdefault(key, []).append((lo, hi))
+                break
+        else:
+            rest.append([a, b])
+    out = rest
+    for (axis, at, z), spans in runs.items():
+        spans.sort()
+        lo, hi = spans[0]
+        for nlo, nhi in [*spans[1:], (math.inf, math.inf)]:
+            if nlo <= hi + _TOUCH:
+                hi = max(hi, nhi)
+                continue
+            ends = [[at, lo, z], [at, hi, z]] if axis == 0 else [[lo, at, z], [hi, at, z]]
+            out.append(ends)
+            lo, hi = nlo, nhi
+    return np.array(out, np.float32).reshape(-1, 2, 3)
 
 
 @dataclass(frozen=True, slots=True)

@@ -4,7 +4,10 @@ columns and shown at a readable default zoom; the layout computed once per chart
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from s7graph.sequencer.text.model import Chart, Operand, Sequence, Step, Transition
 from s7graph.web.bus.protocol import ChartLayout, StepDetail, StepStateUpdate
@@ -28,6 +31,7 @@ from s7graph.web.view.drawing import (
     camera_for,
     contrast,
     fit_text,
+    joined,
     picture,
     scale_px,
     wrap,
@@ -142,3 +146,58 @@ def test_a_step_change_is_coloured_at_once_while_the_rest_keeps_its_rate(
     finally:
         view.close()
         server.stop()
+
+
+def test_lines_on_one_line_that_touch_are_drawn_as_one_segment() -> None:
+    segments = np.array(
+        [
+            [[0, 0, 0], [0, -1, 0]],
+            [[0, -1, 0], [0, -2, 0]],  # touches the first: one run 0..-2
+            [[0, -3, 0], [0, -4, 0]],  # a gap: a run of its own
+            [[1, 0, 0], [2, 0, 0]],
+            [[2.5, 0, 0], [1.5, 0, 0]],  # overlaps, drawn backwards: one run 1..2.5
+            [[0, 0, 0], [1, 1, 0]],  # a slant: as it is
+        ],
+        np.float32,
+    )
+    out = {tuple(map(tuple, s.round(3).tolist())) for s in joined(segments)}
+    assert out == {
+        ((0, -2, 0), (0, 0, 0)),
+        ((0, -4, 0), (0, -3, 0)),
+        ((1, 0, 0), (2.5, 0, 0)),
+        ((0, 0, 0), (1, 1, 0)),
+    }
+
+
+def _on(point: tuple[float, float], seg: list[list[float]]) -> bool:
+    (ax, ay, _), (bx, by, _) = seg
+    px, py = point
+    cross = (bx - ax) * (py - ay) - (by - ay) * (px - ax)
+    inside = min(ax, bx) - 1e-3 <= px <= max(ax, bx) + 1e-3
+    return abs(cross) < 1e-3 and inside and min(ay, by) - 1e-3 <= py <= max(ay, by) + 1e-3
+
+
+@given(
+    st.lists(
+        st.tuples(st.integers(0, 3), st.integers(0, 6), st.integers(0, 6), st.booleans()),
+        max_size=12,
+    )
+)
+def test_joined_segments_cover_exactly_the_points_of_the_lines(
+    spans: list[tuple[int, int, int, bool]],
+) -> None:
+    """Vertical (``True``) or horizontal segments on a grid of lines: every point of the
+    lines is on a joined segment and every joined segment's points are on the lines."""
+    raw = [
+        [[at, a / 2, 0.0], [at, b / 2, 0.0]] if vertical else [[a / 2, at, 0.0], [b / 2, at, 0.0]]
+        for at, a, b, vertical in spans
+        if a != b
+    ]
+    out = joined(np.array(raw, np.float32).reshape(-1, 2, 3)).tolist()
+    assert len(out) <= len(raw)
+    for src, dst in ((raw, out), (out, raw)):
+        for seg in src:
+            (ax, ay, _), (bx, by, _) = seg
+            for k in range(11):
+                point = (ax + (bx - ax) * k / 10, ay + (by - ay) * k / 10)
+                assert any(_on(point, other) for other in dst), (point, seg)
