@@ -21,6 +21,7 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedTok
 
 from s7graph.engine.errors import SourceLocation
 from s7graph.steps.scl import model as m
+from s7graph.steps.scl.comments import blank_comments
 from s7graph.steps.scl.diagnostics import Diagnostic, Problem, SclError, error
 
 GRAMMAR = Path(__file__).with_name("grammar.lark")
@@ -48,6 +49,9 @@ def _parser() -> Lark:
 
 def parse_source(text: str, file: str = "<input>") -> m.Source:
     """Parse an SCL source; raise :class:`SclError` with a located diagnostic (E201–E205)."""
+    text, unclosed = blank_comments(text, file)
+    if unclosed is not None:
+        raise SclError([unclosed])
     if long := _long_numbers(text, file):
         raise SclError(long)
     try:
@@ -69,9 +73,7 @@ def parse_source(text: str, file: str = "<input>") -> m.Source:
 
 # ---------------------------------------------------------------- hostile text
 
-_CODE_OR_NUMBER = re.compile(
-    r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"\n]|\"\")*\"|\(\*.*?\*\)|//[^\n]*|([0-9A-Fa-f_]{40,})", re.S
-)
+_CODE_OR_NUMBER = re.compile(r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"\n]|\"\")*\"|([0-9A-Fa-f_]{40,})")
 
 
 def _long_numbers(text: str, file: str) -> list[Diagnostic]:
