@@ -425,11 +425,25 @@ class _Build(Transformer[Token, Any]):
         orelse = tuple(c[-1]) if isinstance(c[-1], _Stmts) else None
         return m.Case(c[0], arms, orelse, c[0].loc)
 
+    def case_head(self, c: list[Any]) -> m.CaseHead:
+        first = m.Path(self._base("name", c[0]), (), self._at(c[0]))
+        more: list[Any] = list(c[1])
+        values: list[tuple[m.CaseValue, m.CaseValue]] = [(first, first)]
+        if more and not isinstance(more[0], tuple):
+            values = [(first, more.pop(0))]
+        return m.CaseHead((*values, *more), c[2], self._at(c[0]))
+
+    def case_tail(self, c: list[Any]) -> list[Any]:
+        return c
+
+    def case_name(self, c: list[Token]) -> m.Path:
+        return m.Path(self._base("name", c[0]), (), self._at(c[0]))
+
     def case_arm(self, c: list[Any]) -> m.CaseArm:
         values = tuple(x for x in c[:-1])
         return m.CaseArm(values, tuple(c[-1]), values[0][0].loc)
 
-    def case_value(self, c: list[Any]) -> tuple[m.Lit, m.Lit]:
+    def case_value(self, c: list[Any]) -> tuple[m.CaseValue, m.CaseValue]:
         return (c[0], c[1] if c[1] is not None else c[0])
 
     def case_int(self, c: list[Any]) -> m.Lit:
