@@ -5,8 +5,9 @@ the model (which recurses), an iterative walk refuses sources nested deeper than
 ``MAX_STATEMENT_NESTING`` control statements, ``MAX_EXPRESSION_NESTING`` operators or
 calls, or ``MAX_TREE_DEPTH`` grammar levels in all (E204), so that no source can exhaust
 the interpreter's stack. A number of 40 or more digits is refused before anything reads
-it (E203). A syntax error is reported once, at the token where it was found, with what
-was expected there; a block left open names its opening keyword's line.
+it (E203). Each syntax error, up to ``recover.MAX_SYNTAX_ERRORS``, is reported at the
+token where it was found, with what was expected there; a block left open names its
+opening keyword's line.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from s7graph.engine.errors import SourceLocation
 from s7graph.steps.scl import model as m
 from s7graph.steps.scl.comments import blank_comments
 from s7graph.steps.scl.diagnostics import Diagnostic, Problem, SclError, error
+from s7graph.steps.scl.recover import parse_all
 
 GRAMMAR = Path(__file__).with_name("grammar.lark")
 MAX_STATEMENT_NESTING = 16
@@ -54,10 +56,9 @@ def parse_source(text: str, file: str = "<input>") -> m.Source:
         raise SclError([unclosed])
     if long := _long_numbers(text, file):
         raise SclError(long)
-    try:
-        tree = _parser().parse(text)
-    except UnexpectedInput as exc:
-        raise SclError([_syntax(exc, file, text)]) from None
+    tree, syntax = parse_all(_parser(), text, lambda exc: _syntax(exc, file, text))
+    if syntax:
+        raise SclError(syntax)
     if deep := _too_deep(tree, file):
         raise SclError([deep])
     try:
@@ -229,8 +230,7 @@ def _end_of(file: str, text: str) -> SourceLocation:
 def _open_construct(exc: UnexpectedToken) -> tuple[str, int, str] | None:
     """The keyword, line and closing keyword of the innermost construct the parser holds
     open (its opening token is still on the parser's stack)."""
-    parser = getattr(exc, "interactive_parser", None)
-    stack = getattr(getattr(parser, "parser_state", None), "value_stack", None) or []
+    stack = getattr(exc.state, "value_stack", None) or []
     for value in reversed(stack):
         if isinstance(value, Token) and value.type in _CLOSERS:
             return str(value).upper(), value.line or 0, _CLOSERS[value.type]
