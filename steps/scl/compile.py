@@ -24,6 +24,7 @@ from s7graph.engine.symbols import SymbolTable
 from s7graph.steps.scl import model as m
 from s7graph.steps.scl import types as ty
 from s7graph.steps.scl.calls import Calls
+from s7graph.steps.scl.cases import split_arms
 from s7graph.steps.scl.declare import BlockInfo, Program, declare
 from s7graph.steps.scl.diagnostics import Diagnostic, Problem, SclError, error, sort_key, warning
 from s7graph.steps.scl.exprs import Exprs
@@ -133,7 +134,7 @@ def _generate(b: Block) -> None:
     b.loc = unit.loc
     body_start = len(b.lines)
     stmts = Stmts(b, labels, epilogue)
-    stmts.run(unit.body)
+    stmts.run(split_arms(unit.body, labels, b.report))
     b.loc = unit.end
     for line in epilogue:
         b.emit(line)

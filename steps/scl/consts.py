@@ -2,7 +2,8 @@
 initial values are evaluated once, by the compiler (docs/scl.md, "Literals and constants").
 
 A literal is read by ``engine.literals.parse_literal`` (typed forms ``INT#5``, ``T#1S``,
-``W#16#FF``, ``DT#…`` and the rest). A number written without a type prefix is *untyped*:
+``W#16#FF``, ``DT#…`` and the rest); ``BYTE#'a'`` and ``B#'a'`` are the character's code
+as a BYTE. A number written without a type prefix is *untyped*:
 it becomes whatever type it is assigned or passed to when its value fits there
 (``types.literal_fits``).
 """
@@ -10,6 +11,7 @@ it becomes whatever type it is assigned or passed to when its value fits there
 from __future__ import annotations
 
 import operator
+import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -20,6 +22,8 @@ from s7graph.steps.scl import types as ty
 from s7graph.steps.scl.diagnostics import Problem
 
 _LITERAL_TYPE = {"TIME_OF_DAY": ty.TOD, "DATE_AND_TIME": ty.DT}
+_BYTE_CHAR = re.compile(r"(?:BYTE|B)#('.*')", re.I | re.S)
+"""``BYTE#'a'``: a character's code as a BYTE (S7-SCL V5.3, "Notation for Constants")."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -34,10 +38,20 @@ class Constant:
 def literal(lit: m.Lit) -> Constant:
     """The type and value of a literal (E203 when it does not parse or fit)."""
     text = lit.text
+    byte_char = _BYTE_CHAR.fullmatch(text)
     try:
-        tname, value = parse_literal(text)
+        tname, value = parse_literal(f"CHAR#{byte_char[1]}" if byte_char else text)
     except LiteralError as exc:
-        raise Problem("E203", exc.message, lit.loc) from None
+        message = exc.message
+        if byte_char:
+            message = message.replace(f"CHAR#{byte_char[1]}", text)
+            message = message.replace("a CHAR is one character", "it holds one character")
+        raise Problem("E203", message, lit.loc) from None
+    if byte_char:
+        assert isinstance(value, str)
+        if ord(value) > 0xFF:
+            raise Problem("E203", f"{text}: a BYTE holds a character of code 0..255", lit.loc)
+        return Constant(ty.BYTE, ord(value))
     body = text.lstrip("+-")
     untyped = body[:1].isdigit()
     if tname == "STRING":

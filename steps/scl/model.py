@@ -110,6 +110,8 @@ class Binary:
 
 
 Expr = Lit | Path | Unary | Binary
+CaseValue = Lit | Path
+"""A CASE value: an integer literal or a constant's name."""
 
 # ---------------------------------------------------------------- statements
 
@@ -142,9 +144,10 @@ class If:
 
 @dataclass(frozen=True, slots=True)
 class CaseArm:
-    """``3, 5..9: …``: values as ``(low, high)`` literal pairs (a single value twice)."""
+    """``3, 5..9: …``: values as ``(low, high)`` pairs (a single value twice), each an
+    integer literal or the name of a constant (a ``Path`` of one name)."""
 
-    values: tuple[tuple[Lit, Lit], ...]
+    values: tuple[tuple[CaseValue, CaseValue], ...]
     body: tuple[Stmt, ...]
     loc: SourceLocation = NOWHERE
 
@@ -214,7 +217,17 @@ class Labeled:
     loc: SourceLocation = NOWHERE
 
 
-Stmt = Assign | CallStmt | If | Case | For | While | Repeat | Jump | Empty | Labeled
+@dataclass(frozen=True, slots=True)
+class CaseHead:
+    """``Fill, 3..Drain: statement`` read inside a statement list: the values that start a
+    further arm of the CASE around it (``steps/scl/cases.py`` makes it one)."""
+
+    values: tuple[tuple[CaseValue, CaseValue], ...]
+    stmt: Stmt
+    loc: SourceLocation = NOWHERE
+
+
+Stmt = Assign | CallStmt | If | Case | For | While | Repeat | Jump | Empty | Labeled | CaseHead
 
 
 def every_stmt(stmts: Iterable[Stmt]) -> Iterator[Stmt]:
@@ -224,7 +237,7 @@ def every_stmt(stmts: Iterable[Stmt]) -> Iterator[Stmt]:
     while todo:
         s = todo.pop()
         yield s
-        if isinstance(s, Labeled):
+        if isinstance(s, Labeled | CaseHead):
             todo.append(s.stmt)
         elif isinstance(s, If):
             todo += [x for _, body in s.branches for x in body] + list(s.orelse or ())

@@ -5,8 +5,9 @@ the model (which recurses), an iterative walk refuses sources nested deeper than
 ``MAX_STATEMENT_NESTING`` control statements, ``MAX_EXPRESSION_NESTING`` operators or
 calls, or ``MAX_TREE_DEPTH`` grammar levels in all (E204), so that no source can exhaust
 the interpreter's stack. A number of 40 or more digits is refused before anything reads
-it (E203). A syntax error is reported once, at the token where it was found, with what
-was expected there; a block left open names its opening keyword's line.
+it (E203). Each syntax error, up to ``recover.MAX_SYNTAX_ERRORS``, is reported at the
+token where it was found, with what was expected there; a block left open names its
+opening keyword's line.
 """
 
 from __future__ import annotations
@@ -21,7 +22,9 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedTok
 
 from s7graph.engine.errors import SourceLocation
 from s7graph.steps.scl import model as m
+from s7graph.steps.scl.comments import blank_comments
 from s7graph.steps.scl.diagnostics import Diagnostic, Problem, SclError, error
+from s7graph.steps.scl.recover import parse_all
 
 GRAMMAR = Path(__file__).with_name("grammar.lark")
 MAX_STATEMENT_NESTING = 16
@@ -48,12 +51,14 @@ def _parser() -> Lark:
 
 def parse_source(text: str, file: str = "<input>") -> m.Source:
     """Parse an SCL source; raise :class:`SclError` with a located diagnostic (E201–E205)."""
+    text, unclosed = blank_comments(text, file)
+    if unclosed is not None:
+        raise SclError([unclosed])
     if long := _long_numbers(text, file):
         raise SclError(long)
-    try:
-        tree = _parser().parse(text)
-    except UnexpectedInput as exc:
-        raise SclError([_syntax(exc, file, text)]) from None
+    tree, syntax = parse_all(_parser(), text, lambda exc: _syntax(exc, file, text))
+    if syntax:
+        raise SclError(syntax)
     if deep := _too_deep(tree, file):
         raise SclError([deep])
     try:
@@ -69,9 +74,7 @@ def parse_source(text: str, file: str = "<input>") -> m.Source:
 
 # ---------------------------------------------------------------- hostile text
 
-_CODE_OR_NUMBER = re.compile(
-    r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"\n]|\"\")*\"|\(\*.*?\*\)|//[^\n]*|([0-9A-Fa-f_]{40,})", re.S
-)
+_CODE_OR_NUMBER = re.compile(r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"\n]|\"\")*\"|([0-9A-Fa-f_]{40,})")
 
 
 def _long_numbers(text: str, file: str) -> list[Diagnostic]:
@@ -227,8 +230,7 @@ def _end_of(file: str, text: str) -> SourceLocation:
 def _open_construct(exc: UnexpectedToken) -> tuple[str, int, str] | None:
     """The keyword, line and closing keyword of the innermost construct the parser holds
     open (its opening token is still on the parser's stack)."""
-    parser = getattr(exc, "interactive_parser", None)
-    stack = getattr(getattr(parser, "parser_state", None), "value_stack", None) or []
+    stack = getattr(exc.state, "value_stack", None) or []
     for value in reversed(stack):
         if isinstance(value, Token) and value.type in _CLOSERS:
             return str(value).upper(), value.line or 0, _CLOSERS[value.type]
@@ -423,11 +425,25 @@ class _Build(Transformer[Token, Any]):
         orelse = tuple(c[-1]) if isinstance(c[-1], _Stmts) else None
         return m.Case(c[0], arms, orelse, c[0].loc)
 
+    def case_head(self, c: list[Any]) -> m.CaseHead:
+        first = m.Path(self._base("name", c[0]), (), self._at(c[0]))
+        more: list[Any] = list(c[1])
+        values: list[tuple[m.CaseValue, m.CaseValue]] = [(first, first)]
+        if more and not isinstance(more[0], tuple):
+            values = [(first, more.pop(0))]
+        return m.CaseHead((*values, *more), c[2], self._at(c[0]))
+
+    def case_tail(self, c: list[Any]) -> list[Any]:
+        return c
+
+    def case_name(self, c: list[Token]) -> m.Path:
+        return m.Path(self._base("name", c[0]), (), self._at(c[0]))
+
     def case_arm(self, c: list[Any]) -> m.CaseArm:
         values = tuple(x for x in c[:-1])
         return m.CaseArm(values, tuple(c[-1]), values[0][0].loc)
 
-    def case_value(self, c: list[Any]) -> tuple[m.Lit, m.Lit]:
+    def case_value(self, c: list[Any]) -> tuple[m.CaseValue, m.CaseValue]:
         return (c[0], c[1] if c[1] is not None else c[0])
 
     def case_int(self, c: list[Any]) -> m.Lit:

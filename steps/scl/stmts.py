@@ -5,7 +5,8 @@ Loops become Python loops; each pass counts on the CPU's loop meter (``runtime.M
 ``FOR v := a TO b BY s`` evaluates ``b`` and ``s`` once, tests before each pass (``v <= b``
 for a positive step, ``v >= b`` for a negative one) and adds ``s`` after it — in the
 variable's type, so ``FOR i := 0 TO 32767`` on an INT wraps and runs until the cycle
-monitoring ends it, as on the CPU. ``CASE`` values are integer literals and ranges.
+monitoring ends it, as on the CPU. ``CASE`` values are integer literals, the names of
+integer constants of the block and ranges of these (``steps/scl/cases.py``).
 
 **GOTO.** A statement list holding labels runs as a dispatch loop: its statements are cut
 into segments at the labels, and a jump sets the segment to go on with and starts the
@@ -270,9 +271,8 @@ class Stmts:
             for lo_lit, hi_lit in arm.values:
                 lo, hi = self._case_value(lo_lit, sel.type), self._case_value(hi_lit, sel.type)
                 if lo > hi or any(lo <= h and l <= hi for l, h in taken):  # noqa: E741
-                    raise Problem(
-                        "E242", f"CASE value {lo}..{hi} is empty or listed twice", lo_lit.loc
-                    )
+                    said = _said(lo_lit, lo) if lo_lit is hi_lit else f"{lo}..{hi}"
+                    raise Problem("E242", f"CASE value {said} is empty or listed twice", lo_lit.loc)
                 taken.append((lo, hi))
                 tests.append(f"{var} == {lo}" if lo == hi else f"{lo} <= {var} <= {hi}")
             b.emit(f"{'if' if k == 0 else 'elif'} {' or '.join(tests)}:")
@@ -285,17 +285,27 @@ class Stmts:
             self.body(s.orelse)
             b.indent -= 1
 
-    def _case_value(self, lit: m.Lit, t: ty.SclType) -> int:
+    def _case_value(self, value: m.CaseValue, t: ty.SclType) -> int:
+        """An integer literal, or the name of an integer constant of the block."""
         from s7graph.steps.scl.consts import literal
 
-        c = literal(lit)
-        if (
-            not isinstance(c.value, int)
-            or isinstance(c.value, bool)
-            or not ty.literal_fits(t, c.value)
-        ):
-            raise Problem("E242", f"CASE value {lit.text} is not an integer of {t}", lit.loc)
-        return c.value
+        if isinstance(value, m.Path):
+            name = value.base.text
+            found = self.b.info.consts.get(name.upper())
+            if found is None:
+                raise Problem(
+                    "E242",
+                    f"CASE value {name} is not a constant declared in this block",
+                    value.loc,
+                )
+            ctype, v = found
+            what = f"CASE value {name} (the {ctype} constant {v!r})"
+        else:
+            v = literal(value).value
+            what = f"CASE value {value.text}"
+        if not isinstance(v, int) or isinstance(v, bool) or not ty.literal_fits(t, v):
+            raise Problem("E242", f"{what} is not an integer of {t}", value.loc)
+        return v
 
     def _for(self, s: m.For) -> None:
         b = self.b
@@ -408,3 +418,8 @@ class Stmts:
 def _simple(place: Place) -> bool:
     """A variable held by the block (not an operand in memory or an element)."""
     return place.get.startswith(("t_", "V[", "P[", "P.get(")) and place.get.count("[") <= 1
+
+
+def _said(value: m.CaseValue, v: int) -> str:
+    """A CASE value as written, with its number when it is a constant's name."""
+    return f"{value.base.text} (= {v})" if isinstance(value, m.Path) else str(v)

@@ -95,3 +95,18 @@ def test_sim_of_a_broken_source_prints_its_diagnostics_and_exits_2(
     assert capsys.readouterr().err.splitlines() == [
         f"{scl}:3:19: error[E202]: missing END_IF for the IF at line 2"
     ]
+
+
+def test_check_prints_every_syntax_error_of_a_source(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    source = "FUNCTION_BLOCK FB1\nVAR n : INT; END_VAR\n  n := 1 +;\n  n := (2;\n  n := 3 4;\n"
+    scl, _ = _files(tmp_path, source + "END_FUNCTION_BLOCK\n")
+    assert main(["check", str(scl)]) == 2
+    out = capsys.readouterr().out.splitlines()
+    assert [line.split(": error")[0] for line in out[:-1]] == [
+        f"{scl}:3:11",
+        f"{scl}:4:10",
+        f"{scl}:5:10",
+    ]
+    assert out[-1] == f"{scl}: 3 errors, 0 warnings"

@@ -1,0 +1,67 @@
+"""After a syntax error the parser reads on from the next ';' or keyword that closes or
+goes on with a statement, and reports up to ten syntax errors, each with its place and
+what was expected there (docs/scl.md, "Diagnostics")."""
+
+from __future__ import annotations
+
+import pytest
+
+from s7graph.steps.scl import SclError, check_scl, format_diagnostic
+from s7graph.steps.scl.recover import MAX_SYNTAX_ERRORS
+from tests.steps.scl.helpers import build
+
+
+def fb(body: str, decls: str = "n : INT; b : BOOL;") -> str:
+    return f"FUNCTION_BLOCK FB1\nVAR {decls} END_VAR\n{body}\nEND_FUNCTION_BLOCK\n"
+
+
+def found(src: str) -> list[str]:
+    return [format_diagnostic(d) for d in check_scl(src, "t.scl")]
+
+
+def test_each_broken_statement_is_one_error_with_what_was_expected() -> None:
+    body = "n := 1 +;\nIF n > 1 b THEN\n  n := 2 3;\n  b := ;\nEND_IF;\nn := 4;"
+    assert found(fb(body)) == [
+        "t.scl:3:9: error[E201]: unexpected ';'; expected '(', '+', '-', a block like FB17 or"
+        " DB10, a constant, a name or …",
+        "t.scl:4:10: error[E201]: unexpected 'b'; expected '&', ')', '*', '**', '+', ',' or …",
+        "t.scl:5:10: error[E201]: unexpected '3'; expected '&', ')', '*', '**', '+', ',' or …",
+        "t.scl:6:8: error[E201]: unexpected ';'; expected '(', '+', '-', a block like FB17 or"
+        " DB10, a constant, a name or …",
+    ]
+
+
+def test_errors_in_declarations_case_arms_and_later_blocks_are_all_reported() -> None:
+    src = fb("CASE n OF 1: n := ; 2..: ; END_CASE;", "n : INT := ; b : BOOL;")
+    src += "FUNCTION FC1 : INT\nFC1 := 1 1;\nEND_FUNCTION\n"
+    assert [(c, line, col) for c, line, col in _places(src)] == [
+        ("E201", 2, 16),
+        ("E201", 3, 19),
+        ("E201", 3, 24),
+        ("E201", 6, 10),
+    ]
+
+
+def test_a_stray_character_is_one_error_and_reading_goes_on() -> None:
+    assert _places(fb("n := @@@ 1;\nn := 2;\nb := ;")) == [("E201", 3, 6), ("E201", 5, 6)]
+
+
+def test_a_missing_end_after_an_error_still_names_the_open_block() -> None:
+    src = "FUNCTION_BLOCK FB1\nVAR n : INT; END_VAR\nn := 1 1;\nIF TRUE THEN\n"
+    messages = found(src)
+    assert len(messages) == 2
+    assert messages[1].startswith("t.scl:4:13: error[E202]: missing END_IF for the IF at line 4")
+
+
+def test_at_most_ten_syntax_errors_are_reported() -> None:
+    body = "\n".join(f"n := {k} {k};" for k in range(25))
+    with pytest.raises(SclError) as caught:
+        build(fb(body))
+    diags = caught.value.diagnostics
+    assert len(diags) == MAX_SYNTAX_ERRORS == 10
+    assert [d.loc.line for d in diags] == list(range(3, 13))
+    assert str(caught.value).endswith("(and 9 more)")
+
+
+def _places(src: str) -> list[tuple[str, int, int]]:
+    return [(d.code, d.loc.line, d.loc.col) for d in check_scl(src, "t.scl")]
