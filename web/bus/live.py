@@ -189,6 +189,9 @@ def prepare_chart(cc: CompiledChart, *, fb: str, version: int) -> LiveChart:
 
 
 _PLAIN = frozenset({bool, int, float, str, type(None)})
+# Shared by every update that has none (messages are never changed, so they may share)
+_NONE: list[int] = []
+_NO_LEVELS: dict[str, bool] = {}
 
 
 def _scalar(value: object) -> bool | int | float | str | None:
@@ -292,12 +295,13 @@ class LiveGraph:
         due = self._due
         if due is None:
             due = self._due = due_ns(last)
-        if (
-            not same(last, graph.state, due)
-            or self._outs() != last.outs
-            or ((self.watch or self._chart.operands) and self._watched() != last.watched)
-        ):
-            return self._update(record, events, see=True)
+        outs = self._outs()
+        if not same(last, graph.state, due) or outs != last.outs:
+            return self._update(record, events, see=True, outs=outs)
+        if self.watch or self._chart.operands:
+            watched = self._watched()
+            if watched != last.watched:
+                return self._update(record, events, see=True, outs=outs, watched=watched)
         self._scan(record)
         self.quiet += 1
         return None
@@ -315,9 +319,16 @@ class LiveGraph:
         return self._update(record, self.events.of(record, self.graph.db_number), see=False)
 
     def _update(
-        self, record: ScanRecord, events: list[tuple[str, int]], *, see: bool
+        self,
+        record: ScanRecord,
+        events: list[tuple[str, int]],
+        *,
+        see: bool,
+        outs: tuple[Any, ...] | None = None,
+        watched: tuple[tuple[str, object], ...] | None = None,
     ) -> StepStateUpdate:
-        """:meth:`update`; with ``see``, keep what it saw for :meth:`changed`."""
+        """:meth:`update`; with ``see``, keep what it saw for :meth:`changed`; ``outs`` and
+        ``watched``: the values :meth:`changed` read already in this scan."""
         self._scan(record)
         if self._chart.cc is not self.graph.cc:
             self._follow()
@@ -331,10 +342,12 @@ class LiveGraph:
             disturbed = sorted([numbers[i] for i in bad])
             latched = sorted([numbers[i] for i in bad if sv_err[i]]) if st.ackreq_enabled else []
         else:
-            disturbed, latched = [], []
+            disturbed = latched = _NONE
         mode = st.mode
-        outs = self._outs()
-        watched = self._watched()
+        if outs is None:
+            outs = self._outs()
+        if watched is None:
+            watched = self._watched()
         values = self._values(outs, watched)
         self._seen = seen(st, self._chart.checks, outs, watched) if see else None
         self._due = None
@@ -351,7 +364,7 @@ class LiveGraph:
             halted=bool(st.halted),
             il_enabled=bool(st.il_enabled),
             sv_enabled=bool(st.sv_enabled),
-            overrides=dict(st.levels),  # type: ignore[arg-type]
+            overrides=dict(st.levels) if st.levels else _NO_LEVELS,  # type: ignore[arg-type]
         )
 
     def details(self) -> list[StepDetail]:
