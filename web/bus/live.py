@@ -437,13 +437,28 @@ class LiveGraph:
             readers = made.get(i)
             if readers is None:
                 readers = made[i] = self._resolve(operands[i]) if i < len(operands) else ()
-            for name, read in readers:
+            if len(out) + len(readers) > room:
+                self._read_into(out, readers, room)
                 if len(out) >= room:
                     return
+                continue
+            for name, read in readers:
                 try:
-                    out.append((name, _scalar(read())))
+                    value = read()
                 except Exception:  # a watch must never stop the scan
                     continue
+                out.append((name, value if type(value) in _PLAIN else _scalar(value)))
+
+    @staticmethod
+    def _read_into(out: list[tuple[str, object]], readers: _Readers, room: int) -> None:
+        """Add the values of ``readers`` to ``out`` until it holds ``room``."""
+        for name, read in readers:
+            if len(out) >= room:
+                return
+            try:
+                out.append((name, _scalar(read())))
+            except Exception:  # a watch must never stop the scan
+                continue
 
     def _resolve(self, names: tuple[str, ...]) -> _Readers:
         """A reader per watched name (once, not per scan: a symbol's lookup and an
