@@ -263,6 +263,11 @@ class LiveGraph:
         """The watch list the readers were made for, and a reader per name."""
         self._step_readers: dict[int, _Readers] = {}
         """Per step index: a reader per operand of its action rows (made when first active)."""
+        self._operands = bool(chart.operands) and (
+            self._reader is not None or self._read is not None
+        )
+        """Whether the active steps' action operands are read (they have some, and there
+        is a way to read them)."""
 
     @property
     def cc(self) -> CompiledChart:
@@ -298,7 +303,7 @@ class LiveGraph:
         outs = self._outs()
         if not same(last, graph.state, due) or outs != last.outs:
             return self._update(record, events, see=True, outs=outs)
-        if self.watch or self._chart.operands:
+        if self.watch or self._operands:
             watched = self._watched()
             if watched != last.watched:
                 return self._update(record, events, see=True, outs=outs, watched=watched)
@@ -410,7 +415,7 @@ class LiveGraph:
                     out.append((name, _scalar(read())))
                 except Exception:  # a watch must never stop the scan
                     continue
-        if self._chart.operands:
+        if self._operands:
             self._step_values(out)
         return tuple(out)
 
