@@ -130,6 +130,8 @@ LEVEL_PINS: dict[str, tuple[str, bool]] = {
     op_of(c): (c.pin, c.held) for c in COMMAND_TYPES if c.kind == "level"
 }
 MAX_WATCH = 64
+WASTED = 4  # copies in a row that found the FB changed, after which none is kept ...
+PROBE = 8  # ... but every PROBE-th scan's (``LiveGraph.changed``)
 MAX_VALUES = 512  # outputs, watched operands and the active steps' action operands
 # Commands of one group queued at the same scan boundary would act as simultaneous edges
 # in one call (the FB resolves them by priority, not by order), so the second is refused.
@@ -244,6 +246,10 @@ class LiveGraph:
         self._pick: Callable[[Any], tuple[Any, ...]] | None = None
         self._made: tuple[Any, Any, dict[str, Any]] | None = None  # outs, watched → values
         self._busy = False  # the last scan had events of this FB
+        self._wasted = 0  # copies in a row that found the FB changed (``changed``)
+        self._skipped = 0  # copies not kept since the last one (``changed``)
+        self.copies = 0
+        """Copies of what an update saw kept for :meth:`changed` (``Seen``)."""
         self.quiet = 0
         """Scans :meth:`changed` found nothing in (no update built)."""
 
@@ -289,27 +295,46 @@ class LiveGraph:
     def changed(self, record: ScanRecord) -> StepStateUpdate | None:
         """:meth:`update` if the FB may have changed since the last update this built, else
         None (nothing a view sees differs: ``web.bus.seen``). Call once per scan, in the
-        scan thread, instead of :meth:`update`. An FB with events in this scan and the last
-        keeps no copy (``Seen``): it changes every scan, and copying would only cost."""
+        scan thread, instead of :meth:`update`. A copy (``Seen``) is kept only while it pays:
+        not for an FB with events in this scan and the last, nor — but every
+        ``PROBE``-th scan — for one whose last ``WASTED`` copies all found it changed."""
         graph = self.graph
         events = self.events.of(record, graph.db_number)
         busy, self._busy = self._busy, bool(events)
         last = self._seen
         if events or last is None or self._chart.cc is not graph.cc:
-            return self._update(record, events, see=not (events and busy))
+            if last is not None:
+                self._wasted += 1
+            return self._update(record, events, see=self._see(bool(events and busy)))
         due = self._due
         if due is None:
             due = self._due = due_ns(last)
         outs = self._outs()
         if not same(last, graph.state, due) or outs != last.outs:
-            return self._update(record, events, see=True, outs=outs)
+            self._wasted += 1
+            return self._update(record, events, see=self._see(False), outs=outs)
         if self.watch or self._operands:
             watched = self._watched()
             if watched != last.watched:
-                return self._update(record, events, see=True, outs=outs, watched=watched)
+                self._wasted += 1
+                see = self._see(False)
+                return self._update(record, events, see=see, outs=outs, watched=watched)
         self._scan(record)
+        self._wasted = 0
         self.quiet += 1
         return None
+
+    def _see(self, busy: bool) -> bool:
+        """Whether the update :meth:`changed` builds keeps its copy (see there)."""
+        if busy:
+            return False
+        if self._wasted < WASTED:
+            return True
+        self._skipped += 1
+        if self._skipped < PROBE:
+            return False
+        self._skipped = 0
+        return True
 
     def _scan(self, record: ScanRecord) -> None:
         self.cpu_mode = record.mode
@@ -354,7 +379,11 @@ class LiveGraph:
         if watched is None:
             watched = self._watched()
         values = self._values(outs, watched)
-        self._seen = seen(st, self._chart.checks, outs, watched) if see else None
+        if see:
+            self._seen = seen(st, self._chart.checks, outs, watched)
+            self.copies += 1
+        else:
+            self._seen = None
         self._due = None
         return StepStateUpdate(
             cycle=record.cycle if record.cycle > 0 else 0,
