@@ -9,7 +9,9 @@ published by one ``BusPublisher`` after every scan. ``--path batched`` (the defa
 ``s7graph run`` does): ``LiveGraph.changed`` (an update only for an FB that may have
 changed) and ``BusPublisher.publish_scan``, one message per scan on ``deltas``;
 ``--path per-fb``: ``LiveGraph.update`` and ``BusPublisher.publish`` for every FB, one
-message per FB and scan (the way of the code before ``deltas``). The other side is a
+message per FB and scan (the way of the code before ``deltas``); ``--part N`` (batched):
+a message leaves every N changed FBs while the scan thread builds the rest, and (a)
+replays messages of that size. The other side is a
 second process (this file with ``--peer``) on its own zenoh session, connected over a
 unix socket: it follows every FB with ``BusClient.follow`` (decode, ``seq`` order: the
 view's code) and subscribes to a raw key; with ``--old-readers`` it also subscribes to
