@@ -9,7 +9,9 @@ published by one ``BusPublisher`` after every scan. ``--path batched`` (the defa
 ``s7graph run`` does): ``LiveGraph.changed`` (an update only for an FB that may have
 changed) and ``BusPublisher.publish_scan``, one message per scan on ``deltas``;
 ``--path per-fb``: ``LiveGraph.update`` and ``BusPublisher.publish`` for every FB, one
-message per FB and scan (the way of the code before ``deltas``). The other side is a
+message per FB and scan (the way of the code before ``deltas``); ``--part N`` (batched):
+a message leaves every N changed FBs while the scan thread builds the rest, and (a)
+replays messages of that size. The other side is a
 second process (this file with ``--peer``) on its own zenoh session, connected over a
 unix socket: it follows every FB with ``BusClient.follow`` (decode, ``seq`` order: the
 view's code) and subscribes to a raw key; with ``--old-readers`` it also subscribes to
@@ -184,6 +186,7 @@ class Cpu:
     layout: str
     session: zenoh.Session
     path: str = "batched"
+    part: int = 0  # batched: at most this many deltas a message (0: a scan's all)
     workload: Any = None
     lives: list[LiveGraph] = field(default_factory=list)
     publisher: BusPublisher | None = None
@@ -215,15 +218,18 @@ class Cpu:
         sent = []
         if self.path == "batched":
             changed = []
+            cycle, t_ms = max(record.cycle, 0), max(record.t_ns // 1_000_000, 0)
+            part = self.part
             for live in self.lives:
                 update = live.changed(record)
                 if update is not None:
                     changed.append((live.fb, update))
                     last[live.fb] = update
-            t_ms = max(record.t_ns // 1_000_000, 0)
-            for fb in publisher.publish_scan(max(record.cycle, 0), t_ms, changed):
-                seq[fb] += 1
-                sent.append((fb, seq[fb], bool(last[fb].events)))
+                    if len(changed) == part:  # a part of the scan's deltas leaves now
+                        self._sent(publisher.publish_scan(cycle, t_ms, changed), sent)
+                        changed = []
+            if changed or not sent:
+                self._sent(publisher.publish_scan(cycle, t_ms, changed), sent)
             return sent
         for live in self.lives:
             update = live.update(record)
@@ -232,6 +238,19 @@ class Cpu:
                 seq[live.fb] += 1
                 sent.append((live.fb, seq[live.fb], bool(update.events)))
         return sent
+
+    def parts(self, count: int) -> list[int]:
+        """The sizes of the messages that carry a scan's ``count`` deltas (batched)."""
+        if not self.part or count <= self.part:
+            return [count] if count else []
+        whole, rest = divmod(count, self.part)
+        return [self.part] * whole + ([rest] if rest else [])
+
+    def _sent(self, fbs: list[str], sent: list[tuple[str, int, bool]]) -> None:
+        seq, last = self.seq, self.last
+        for fb in fbs:
+            seq[fb] += 1
+            sent.append((fb, seq[fb], bool(last[fb].events)))
 
     def payloads(self, per_scan: list[int]) -> list[bytes]:
         """Real encoded messages for (a) to replay: per-fb, a delta of each FB; batched, per
@@ -311,10 +330,11 @@ def latency_raw(cpu: Cpu, peer_: Peer, session: zenoh.Session, per_scan: list[in
         peer_.dump()
         due = time.monotonic()
         for count in per_scan:
-            for k in range(min(count, 1) if batched else count):
+            sizes = cpu.parts(count) if batched else [1] * count
+            for k, size in enumerate(sizes):
                 n += 1
                 t0 = time.monotonic_ns()
-                data = payloads[count] if batched else payloads[k % len(payloads)]
+                data = payloads[size] if batched else payloads[k % len(payloads)]
                 pub.put(data, attachment=n.to_bytes(8, "little"))
                 sent_at[n] = t0
             due += CYCLE_MS / 1000
@@ -399,6 +419,7 @@ def throughput_raw(
     )
     payloads = cpu.payloads(per_scan)
     typical = max(round(statistics.median(per_scan or [1])), 1)
+    typical = min(typical, cpu.part or typical)
     batched = cpu.path == "batched"
     each = typical if batched else 1
     data = payloads[typical] if batched else payloads[0]
@@ -497,6 +518,13 @@ def main(argv: list[str] | None = None) -> int:
         "per-fb: LiveGraph.update + publish for every FB, one message per FB and scan",
     )
     ap.add_argument(
+        "--part",
+        type=int,
+        default=0,
+        help="batched: a message leaves every PART changed FBs, while the scan's others "
+        "are still being built (0: one message a scan, the default)",
+    )
+    ap.add_argument(
         "--old-readers",
         action="store_true",
         help="the peer also subscribes to every FB's own fb/<fb>/delta key",
@@ -519,7 +547,7 @@ def main(argv: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory(prefix="s7graph-busbench-") as tmp:
         endpoint = f"unixsock-stream/{tmp}/bus.sock"
         with open_session(listen=[endpoint]) as session:
-            cpus = {lay: Cpu(lay, session, args.path) for lay in layouts}
+            cpus = {lay: Cpu(lay, session, args.path, args.part) for lay in layouts}
             for cpu in cpus.values():
                 cpu.workload.cpu.start("warm")
             peer_ = Peer(endpoint, {lay: cpu.fbs for lay, cpu in cpus.items()}, args.old_readers)

@@ -130,6 +130,8 @@ LEVEL_PINS: dict[str, tuple[str, bool]] = {
     op_of(c): (c.pin, c.held) for c in COMMAND_TYPES if c.kind == "level"
 }
 MAX_WATCH = 64
+WASTED = 4  # copies in a row that found the FB changed, after which none is kept ...
+PROBE = 8  # ... but every PROBE-th scan's (``LiveGraph.changed``)
 MAX_VALUES = 512  # outputs, watched operands and the active steps' action operands
 # Commands of one group queued at the same scan boundary would act as simultaneous edges
 # in one call (the FB resolves them by priority, not by order), so the second is refused.
@@ -189,6 +191,9 @@ def prepare_chart(cc: CompiledChart, *, fb: str, version: int) -> LiveChart:
 
 
 _PLAIN = frozenset({bool, int, float, str, type(None)})
+# Shared by every update that has none (messages are never changed, so they may share)
+_NONE: list[int] = []
+_NO_LEVELS: dict[str, bool] = {}
 
 
 def _scalar(value: object) -> bool | int | float | str | None:
@@ -241,6 +246,10 @@ class LiveGraph:
         self._pick: Callable[[Any], tuple[Any, ...]] | None = None
         self._made: tuple[Any, Any, dict[str, Any]] | None = None  # outs, watched → values
         self._busy = False  # the last scan had events of this FB
+        self._wasted = 0  # copies in a row that found the FB changed (``changed``)
+        self._skipped = 0  # copies not kept since the last one (``changed``)
+        self.copies = 0
+        """Copies of what an update saw kept for :meth:`changed` (``Seen``)."""
         self.quiet = 0
         """Scans :meth:`changed` found nothing in (no update built)."""
 
@@ -260,6 +269,11 @@ class LiveGraph:
         """The watch list the readers were made for, and a reader per name."""
         self._step_readers: dict[int, _Readers] = {}
         """Per step index: a reader per operand of its action rows (made when first active)."""
+        self._operands = bool(chart.operands) and (
+            self._reader is not None or self._read is not None
+        )
+        """Whether the active steps' action operands are read (they have some, and there
+        is a way to read them)."""
 
     @property
     def cc(self) -> CompiledChart:
@@ -281,26 +295,46 @@ class LiveGraph:
     def changed(self, record: ScanRecord) -> StepStateUpdate | None:
         """:meth:`update` if the FB may have changed since the last update this built, else
         None (nothing a view sees differs: ``web.bus.seen``). Call once per scan, in the
-        scan thread, instead of :meth:`update`. An FB with events in this scan and the last
-        keeps no copy (``Seen``): it changes every scan, and copying would only cost."""
+        scan thread, instead of :meth:`update`. A copy (``Seen``) is kept only while it pays:
+        not for an FB with events in this scan and the last, nor — but every
+        ``PROBE``-th scan — for one whose last ``WASTED`` copies all found it changed."""
         graph = self.graph
         events = self.events.of(record, graph.db_number)
         busy, self._busy = self._busy, bool(events)
         last = self._seen
         if events or last is None or self._chart.cc is not graph.cc:
-            return self._update(record, events, see=not (events and busy))
+            if last is not None:
+                self._wasted += 1
+            return self._update(record, events, see=self._see(bool(events and busy)))
         due = self._due
         if due is None:
             due = self._due = due_ns(last)
-        if (
-            not same(last, graph.state, due)
-            or self._outs() != last.outs
-            or ((self.watch or self._chart.operands) and self._watched() != last.watched)
-        ):
-            return self._update(record, events, see=True)
+        outs = self._outs()
+        if not same(last, graph.state, due) or outs != last.outs:
+            self._wasted += 1
+            return self._update(record, events, see=self._see(False), outs=outs)
+        if self.watch or self._operands:
+            watched = self._watched()
+            if watched != last.watched:
+                self._wasted += 1
+                see = self._see(False)
+                return self._update(record, events, see=see, outs=outs, watched=watched)
         self._scan(record)
+        self._wasted = 0
         self.quiet += 1
         return None
+
+    def _see(self, busy: bool) -> bool:
+        """Whether the update :meth:`changed` builds keeps its copy (see there)."""
+        if busy:
+            return False
+        if self._wasted < WASTED:
+            return True
+        self._skipped += 1
+        if self._skipped < PROBE:
+            return False
+        self._skipped = 0
+        return True
 
     def _scan(self, record: ScanRecord) -> None:
         self.cpu_mode = record.mode
@@ -315,9 +349,16 @@ class LiveGraph:
         return self._update(record, self.events.of(record, self.graph.db_number), see=False)
 
     def _update(
-        self, record: ScanRecord, events: list[tuple[str, int]], *, see: bool
+        self,
+        record: ScanRecord,
+        events: list[tuple[str, int]],
+        *,
+        see: bool,
+        outs: tuple[Any, ...] | None = None,
+        watched: tuple[tuple[str, object], ...] | None = None,
     ) -> StepStateUpdate:
-        """:meth:`update`; with ``see``, keep what it saw for :meth:`changed`."""
+        """:meth:`update`; with ``see``, keep what it saw for :meth:`changed`; ``outs`` and
+        ``watched``: the values :meth:`changed` read already in this scan."""
         self._scan(record)
         if self._chart.cc is not self.graph.cc:
             self._follow()
@@ -331,12 +372,18 @@ class LiveGraph:
             disturbed = sorted([numbers[i] for i in bad])
             latched = sorted([numbers[i] for i in bad if sv_err[i]]) if st.ackreq_enabled else []
         else:
-            disturbed, latched = [], []
+            disturbed = latched = _NONE
         mode = st.mode
-        outs = self._outs()
-        watched = self._watched()
+        if outs is None:
+            outs = self._outs()
+        if watched is None:
+            watched = self._watched()
         values = self._values(outs, watched)
-        self._seen = seen(st, self._chart.checks, outs, watched) if see else None
+        if see:
+            self._seen = seen(st, self._chart.checks, outs, watched)
+            self.copies += 1
+        else:
+            self._seen = None
         self._due = None
         return StepStateUpdate(
             cycle=record.cycle if record.cycle > 0 else 0,
@@ -351,7 +398,7 @@ class LiveGraph:
             halted=bool(st.halted),
             il_enabled=bool(st.il_enabled),
             sv_enabled=bool(st.sv_enabled),
-            overrides=dict(st.levels),  # type: ignore[arg-type]
+            overrides=dict(st.levels) if st.levels else _NO_LEVELS,  # type: ignore[arg-type]
         )
 
     def details(self) -> list[StepDetail]:
@@ -397,7 +444,7 @@ class LiveGraph:
                     out.append((name, _scalar(read())))
                 except Exception:  # a watch must never stop the scan
                     continue
-        if self._chart.operands:
+        if self._operands:
             self._step_values(out)
         return tuple(out)
 
@@ -424,13 +471,28 @@ class LiveGraph:
             readers = made.get(i)
             if readers is None:
                 readers = made[i] = self._resolve(operands[i]) if i < len(operands) else ()
-            for name, read in readers:
+            if len(out) + len(readers) > room:
+                self._read_into(out, readers, room)
                 if len(out) >= room:
                     return
+                continue
+            for name, read in readers:
                 try:
-                    out.append((name, _scalar(read())))
+                    value = read()
                 except Exception:  # a watch must never stop the scan
                     continue
+                out.append((name, value if type(value) in _PLAIN else _scalar(value)))
+
+    @staticmethod
+    def _read_into(out: list[tuple[str, object]], readers: _Readers, room: int) -> None:
+        """Add the values of ``readers`` to ``out`` until it holds ``room``."""
+        for name, read in readers:
+            if len(out) >= room:
+                return
+            try:
+                out.append((name, _scalar(read())))
+            except Exception:  # a watch must never stop the scan
+                continue
 
     def _resolve(self, names: tuple[str, ...]) -> _Readers:
         """A reader per watched name (once, not per scan: a symbol's lookup and an

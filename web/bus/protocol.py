@@ -143,6 +143,12 @@ class _Msg(Struct, frozen=True, kw_only=True):
     """What the CPU says: a reader ignores the fields it does not know."""
 
 
+class _Scan(_Msg, frozen=True, kw_only=True, omit_defaults=True, gc=False):
+    """What the CPU says every scan (a delta and its parts): fields at their default are
+    left out (a reader applies the defaults), and the garbage collector does not track
+    them (they hold no cycles), so a scan's many updates cost it nothing."""
+
+
 class _Request(_Msg, frozen=True, forbid_unknown_fields=True, kw_only=True):
     """What the CPU takes: strict, an unknown field is refused."""
 
@@ -348,7 +354,7 @@ class ProjectFiles(_Msg, frozen=True, kw_only=True):
 # ---------------------------------------------------------------- per-scan state
 
 
-class StepStateUpdate(_Msg, frozen=True, kw_only=True):
+class StepStateUpdate(_Scan, frozen=True, kw_only=True):
     """The FB's state after one scan (``fb/<name>/state``; ``fb/<name>/delta`` on change).
 
     ``seq`` counts changes (the bus publisher numbers them); ``disturbed`` are steps with an
@@ -391,7 +397,7 @@ class StepStateUpdate(_Msg, frozen=True, kw_only=True):
 MAX_FBS = 256  # FBs of one CPU (``CpuStatus.fbs``)
 
 
-class ScanDeltas(_Msg, frozen=True, kw_only=True):
+class ScanDeltas(_Scan, frozen=True, kw_only=True):
     """``deltas``: one message per CPU scan in which an FB changed, holding the
     :class:`StepStateUpdate` of every FB that changed (by FB name, each with its own
     ``seq``). ``seq`` counts these messages: a gap means one was lost (get ``state`` of the
@@ -420,7 +426,7 @@ def _same_coarse(a: list[StepDetail], b: list[StepDetail]) -> bool:
     return True
 
 
-class Contact(_Msg, frozen=True, kw_only=True):
+class Contact(_Scan, frozen=True, kw_only=True):
     """One contact of a condition in its last evaluation (a CRIT bit): ``ok`` when it lets
     the condition through (a ``NOT x`` contact when ``x`` is false)."""
 
@@ -431,7 +437,7 @@ class Contact(_Msg, frozen=True, kw_only=True):
 Contacts = Annotated[list[Contact], Meta(max_length=32)]
 
 
-class TransitionCriteria(_Msg, frozen=True, kw_only=True):
+class TransitionCriteria(_Scan, frozen=True, kw_only=True):
     """A valid transition leaving an active step: whether its condition held (``Tn.TT``)
     at its last evaluation, and each contact."""
 
@@ -441,7 +447,7 @@ class TransitionCriteria(_Msg, frozen=True, kw_only=True):
     contacts: Contacts = []
 
 
-class StepDetail(_Msg, frozen=True, kw_only=True):
+class StepDetail(_Scan, frozen=True, kw_only=True):
     """Why an active step does (not) switch: its times (to 0.1 s; a change of times alone is
     a change once a second), interlock and supervision state with their contacts, and its
     valid outgoing transitions."""

@@ -15,6 +15,7 @@ from s7graph.web.bus.protocol import EVENTS
 __all__ = ["ScanEvents"]
 
 _EVENTS = frozenset(EVENTS)
+_NONE: list[tuple[str, int]] = []  # shared: an update's lists are never changed
 
 
 class ScanEvents:
@@ -32,7 +33,7 @@ class ScanEvents:
     def of(self, record: ScanRecord, db: int) -> list[tuple[str, int]]:
         if record is not self._record:
             self._group(record)
-        return self._by_db.get(db) or []
+        return self._by_db.get(db) or _NONE
 
     def _group(self, record: ScanRecord) -> None:
         by_db: dict[int, list[tuple[str, int]]] = {}

@@ -70,6 +70,11 @@ class StepDetails:
             tuple(j for j in leaving if cc.tr_src[j] and cc.tr_src[j] != (i,))
             for i, leaving in enumerate(cc.leaving)
         )
+        # per step: its one leaving transition, if it has one and no other (-1: none or more)
+        self._one = tuple(
+            one[0] if len(one) == 1 and not joins else -1
+            for one, joins in zip(self._single, self._joins, strict=True)
+        )
 
     def of(self, st: Any) -> list[StepDetail]:
         """A :class:`StepDetail` per active step of ``st`` (a ``GraphState``), by step index."""
@@ -109,33 +114,35 @@ class StepDetails:
 
     def _plain(self, st: Any) -> list[StepDetail]:
         """:meth:`of` for a chart without interlocks and supervisions: the same details,
-        keyed by the times and the transitions alone."""
+        keyed by the times and the transitions alone (a step with one leaving transition:
+        its TT and CRIT)."""
         tt, crit, t_ns, u_ns = st.tt, st.crit, st.t_ns, st.u_ns
-        single, joins, seen = self._single, self._joins, self._seen
+        one, seen, tenth = self._one, self._seen, TENTH_NS
         out = []
         for i in sorted(st.active):
-            valid = self._valid(i, st.x) if joins[i] else single[i]
-            if len(valid) == 1:
-                j = valid[0]
-                key: tuple[Any, ...] = (
-                    t_ns[i] // TENTH_NS,
-                    u_ns[i] // TENTH_NS,
-                    valid,
-                    tt[j],
-                    crit[j],
-                )
+            j = one[i]
+            if j >= 0:
+                key: tuple[Any, ...] = (t_ns[i] // tenth, u_ns[i] // tenth, tt[j], crit[j])
             else:
-                transitions = tuple([(tt[j], crit[j]) for j in valid])
-                key = (t_ns[i] // TENTH_NS, u_ns[i] // TENTH_NS, valid, transitions)
-            known = seen[i]
-            detail = known.get(key)
+                valid = self._valid(i, st.x) if self._joins[i] else self._single[i]
+                transitions = tuple([(tt[k], crit[k]) for k in valid])
+                key = (t_ns[i] // tenth, u_ns[i] // tenth, valid, transitions)
+            detail = seen[i].get(key)
             if detail is None:
-                if len(known) >= PER_STEP:
-                    known.clear()
-                full = (key[0], key[1], True, False, False, 0, 0, valid, None)
-                detail = known[key] = self._build(i, full, tt, crit)
+                detail = self._plain_new(i, key, st)
             out.append(detail)
         return out
+
+    def _plain_new(self, i: int, key: tuple[Any, ...], st: Any) -> StepDetail:
+        """The detail of active step ``i`` for a key of :meth:`_plain`, kept."""
+        known = self._seen[i]
+        if len(known) >= PER_STEP:
+            known.clear()
+        j = self._one[i]
+        valid = (j,) if j >= 0 else key[2]
+        full = (key[0], key[1], True, False, False, 0, 0, valid, None)
+        detail = known[key] = self._build(i, full, st.tt, st.crit)
+        return detail
 
     def _valid(self, i: int, x: list[bool]) -> tuple[int, ...]:
         """The valid leaving transitions of active step ``i``, in priority order."""

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from s7graph.web.bus.live import LiveGraph, watch_names
+from s7graph.web.bus.live import PROBE, WASTED, LiveGraph, watch_names
 from s7graph.web.bus.protocol import Command, StepStateUpdate
 from tests.web.helpers import chart_session
 
@@ -159,3 +159,30 @@ def test_an_online_change_or_a_new_state_builds_the_update_again(side: Side) -> 
     live.switch(live.prepare(live.cc, version=2))  # a new chart version described
     assert live.changed(side.session.scan()) is not None
     assert live.changed(side.session.scan()) is None
+
+
+def test_an_fb_that_changes_every_scan_stops_keeping_copies_until_it_is_quiet(
+    tmp_path: Path,
+) -> None:
+    """ "Full" toggled every scan changes T1's CRIT every scan: after ``WASTED`` copies that
+    each found a change, only every ``PROBE``-th scan keeps one; once the FB is quiet
+    again, the next probe's copy makes its scans build nothing. The deltas are those of
+    the whole-state compare throughout."""
+    full, cheap = Side(tmp_path / "full", cheap=False), Side(tmp_path / "cheap", cheap=True)
+    try:
+        for s in (full, cheap):
+            s.scan()
+        copies = cheap.live.copies
+        for n in range(6 * PROBE):  # S1's T stays under a second (100 scans)
+            for s in (full, cheap):
+                s.session.set("Full", n % 2 == 0)
+            assert full.scan() == cheap.scan() is not None, f"scan {n}"
+        assert cheap.live.copies - copies <= WASTED + 6
+        quiet = cheap.live.quiet
+        for n in range(2 * PROBE):
+            assert full.scan() == cheap.scan() is None, f"quiet scan {n}"
+        assert cheap.live.quiet - quiet >= PROBE - 1
+        assert full.deltas == cheap.deltas
+    finally:
+        full.store.close()
+        cheap.store.close()
