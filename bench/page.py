@@ -25,7 +25,9 @@ render loop); ``drill``, the README's demo (``drill.s7g`` with ``demo_plant.py``
   to the websocket frame's arrival in viser's worker (*ws*) and to the decoded batch in the
   page's main thread (*main*), the length of the frame that drew it (first to second
   animation frame after the batch), and the status line's "active: S<n>" painted
-  (*status*). A change the page never shows is counted as missed. Targets (at load
+  (*status*). A change the page never shows is counted as missed. The changes are
+  watched once the page has settled (``settle``: viser's adaptive resolution steps down
+  in the first seconds of a slow page, each step a stall). Targets (at load
   average ≤ 2): colour p99 ≤ 100 ms for ``loop8``, ≤ 150 ms for ``loop250``.
 - *bareN*, the peer of each loop chart, measured right after it in the same browser: a
   bare viser page (nothing of s7graph, ``Boxes``) of N boxes and a status line showing
@@ -481,8 +483,32 @@ def _watch(machine: Cpu | Boxes, changes: int, start: float) -> list[tuple[float
     return got[:changes]
 
 
+CANVAS_SIZES = """Array.from(document.querySelectorAll('canvas'))
+  .map((c) => c.width + 'x' + c.height).join(' ')"""
+SETTLED_S = 4.0  # the canvas unchanged this long: the page has chosen its resolution
+SETTLE_MAX_S = 30.0
+
+
+def settle(page: Any) -> float:
+    """Wait until the page's canvas kept its size for ``SETTLED_S`` (at most
+    ``SETTLE_MAX_S``); the seconds waited. viser lowers the canvas's resolution in steps
+    while frames are slow (its adaptive DPR): each step reallocates the drawing buffer and
+    holds the page up for about 0.1 s in software WebGL, a few times in the first seconds
+    of a page; the figures are of the page as it then stays."""
+    t0 = time.monotonic()
+    last, since = page.evaluate(CANVAS_SIZES), t0
+    while time.monotonic() - since < SETTLED_S and time.monotonic() - t0 < SETTLE_MAX_S:
+        time.sleep(0.1)
+        now = page.evaluate(CANVAS_SIZES)
+        if now != last:
+            last, since = now, time.monotonic()
+    return time.monotonic() - t0
+
+
 def colour_latency(page: Any, machine: Cpu | Boxes, changes: int) -> dict[str, list[float]]:
-    """Watch ``changes`` step changes; per change the ms from the CPU's scan to the page."""
+    """Watch ``changes`` step changes, the page settled first (``settle``); per change the
+    ms from the CPU's scan to the page."""
+    settled = settle(page)
     page.evaluate("window.__bench.recs = []")
     start = time.time()
     got = _watch(machine, changes, start)
@@ -503,6 +529,7 @@ def colour_latency(page: Any, machine: Cpu | Boxes, changes: int) -> dict[str, l
         "frame": [],
         "status": [],
         "missed": [],
+        "settled": [settled],
     }
     prev: set[int] = set()
     before = [c for c in machine.changes() if c[0] <= start + 0.5]
@@ -644,6 +671,11 @@ def colour_table(rounds: list[dict[str, Any]], charts: list[str]) -> None:
             seen = f"{statistics.median(n):.0f}" + (f"-{max(missed)}" if max(missed) else "")
             p50s, p99s = spread(p50, "{:.0f}"), spread(p99, "{:.0f}")
             print(f"{chart:8} {what:34} {seen:>9} {p50s:>17} {p99s:>17}  {target}")
+    print("\nthe page settled (its canvas's size unchanged for 4 s) after … s")
+    for chart in [name for c in charts for name in (c, peer_of(c))]:
+        waited = [r["colour"][chart]["settled"][0] for r in rounds if chart in r["colour"]]
+        if waited:
+            print(f"{chart:8} {spread(waited, '{:.1f}'):>17}")
     print("\nframes while it runs: per second, and the browser's CPU time per frame (ms)")
     for chart in [name for c in charts for name in (c, peer_of(c))]:
         got = [r["frame"][chart] for r in rounds if chart in r.get("frame", {})]

@@ -15,7 +15,7 @@ import time
 import pytest
 
 from s7graph.engine import CallContext, Cpu, SystemClock, ob
-from s7graph.engine.runner import HELPERS_BELOW, Runner, set_realtime
+from s7graph.engine.runner import HELPERS_BELOW, SWITCH_S, Runner, set_realtime
 from tests.engine.bystander import bystander
 
 
@@ -131,3 +131,20 @@ def test_without_a_priority_the_scan_keeps_the_normal_policy() -> None:
 def test_a_priority_out_of_range_is_refused() -> None:
     with pytest.raises(ValueError, match=r"1\.\.98"):
         Runner(Cpu(SystemClock()), rt_priority=99)
+
+
+@pytest.mark.timeout(30)
+def test_while_the_loop_runs_other_threads_get_the_interpreter_within_switch_s() -> None:
+    cpu = Cpu(SystemClock())
+    cpu.load(idle)
+    seen: list[float] = []
+    runner = Runner(
+        cpu, cycle_ms=5, rt_priority=None, on_record=lambda _: seen.append(sys.getswitchinterval())
+    )
+    before = sys.getswitchinterval()
+    runner.startup()
+    runner.run(duration_s=0.1)
+    runner.shutdown()
+    loop = sorted(seen)[: len(seen) - 2]  # the start-up's and the last scan's aside
+    assert len(loop) > 5 and max(loop) <= SWITCH_S < before
+    assert sys.getswitchinterval() == before  # given back when the loop ends
