@@ -66,7 +66,8 @@ from figures import pct, spread  # noqa: E402
 
 from s7graph.engine.clock import SystemClock  # noqa: E402
 from s7graph.engine.record import ScanRecord  # noqa: E402
-from s7graph.engine.runner import SWITCH_S, Runner  # noqa: E402
+from s7graph.engine.runner import Runner  # noqa: E402
+from s7graph.engine.switching import switching  # noqa: E402
 from s7graph.engine.watchdog import Watchdog  # noqa: E402
 from s7graph.web.bus.client import BusClient  # noqa: E402
 from s7graph.web.bus.keys import keys  # noqa: E402
@@ -364,7 +365,7 @@ class Throughput:
 
 def throughput(cpu: Cpu, peer_: Peer, seconds: float) -> Throughput:
     """(c): back-to-back scans for ``seconds``, every FB published after each, as the
-    runner's loop does (with its switch interval, ``SWITCH_S``); CPU times of this thread
+    runner's loop does (with its switch interval, ``engine.switching``); CPU times of this thread
     (robust to other processes' load)."""
     assert cpu.publisher is not None
     scan = cpu.workload.cpu.scan
@@ -376,9 +377,7 @@ def throughput(cpu: Cpu, peer_: Peer, seconds: float) -> Throughput:
     start = time.monotonic()
     deadline = start + seconds
     cpu0 = time.process_time_ns()
-    switch = sys.getswitchinterval()
-    sys.setswitchinterval(min(switch, SWITCH_S))
-    try:
+    with switching():
         while time.monotonic() < deadline:
             t0 = clock()
             record = scan()
@@ -387,8 +386,6 @@ def throughput(cpu: Cpu, peer_: Peer, seconds: float) -> Throughput:
             bus_ns += clock() - t1
             scan_ns += t1 - t0
             scans += 1
-    finally:
-        sys.setswitchinterval(switch)
     cpu.drain()
     end = time.monotonic()
     cpu_ns = time.process_time_ns() - cpu0

@@ -34,11 +34,11 @@ the normal policy; the loop ends with every thread back at the normal policy. Th
 and the view it starts keep small pages (:func:`keep_small_pages`): the kernel merging huge
 pages held scans up.
 While the loop runs the interpreter hands its lock to a thread that asks for it after
-``SWITCH_S`` (0.5 ms) instead of its usual 5 ms: a CPU that scans back to back (OB1
-free-cycling, as an S7 CPU does without a minimum cycle time) still leaves its bus thread
-and its writer their share — S7's "cycle load from communication" — where the outbox put
-one message per 5 ms and dropped the rest; and a scan waking while a helper holds the lock
-waits for it at most that long.
+0.5 ms (``engine.switching``) instead of its usual 5 ms: a CPU that scans back to back
+(OB1 free-cycling, as an S7 CPU does without a minimum cycle time) still leaves its bus
+thread and its writer their share — S7's "cycle load from communication" — where the
+outbox put one message per 5 ms and dropped the rest; and a scan waking while a helper
+holds the lock waits for it at most that long.
 With ``core`` (``engine/cores.py``) the scan thread runs on that processor and the
 process's other threads on the rest while the loop runs — but the writer's encoder, which
 works only while the scan thread sleeps (``engine/writer.py``) and runs below it; all of
@@ -87,6 +87,7 @@ from s7graph.engine.persistence import Batch, StateStore, StateWriteError
 from s7graph.engine.profile import CycleProfile, OpenCycle
 from s7graph.engine.record import DiagEntry, ScanRecord
 from s7graph.engine.restart import RestartType
+from s7graph.engine.switching import switching
 from s7graph.engine.watchdog import CycleStatistics
 from s7graph.engine.writer import DurableCallback, StoreWriter
 
@@ -121,8 +122,6 @@ default). Commands beyond it wait for the next boundary."""
 
 HELPERS_BELOW = 10
 """How far below the scan thread the process's other threads run real-time."""
-SWITCH_S = 0.0005
-"""The interpreter's switch interval while the loop runs (its default is 5 ms)."""
 
 
 def set_realtime(priority: int | None, tid: int = 0, *, turns: bool = False) -> bool:
@@ -434,12 +433,10 @@ class Runner:
                 pin({self.core}, encoder)  # it works while the scan thread sleeps
         if self.gc is not None:
             self.gc.start()
-        switch = sys.getswitchinterval()
-        sys.setswitchinterval(min(switch, SWITCH_S))
         try:
-            self._loop(duration_s)
+            with switching():
+                self._loop(duration_s)
         finally:
-            sys.setswitchinterval(switch)
             self._finish_staging(carry=False)  # nothing half-staged after the loop
             if self.gc is not None:
                 self.gc.stop()

@@ -15,7 +15,8 @@ import time
 import pytest
 
 from s7graph.engine import CallContext, Cpu, SystemClock, ob
-from s7graph.engine.runner import HELPERS_BELOW, SWITCH_S, Runner, set_realtime
+from s7graph.engine.runner import HELPERS_BELOW, Runner, set_realtime
+from s7graph.engine.switching import SWITCH_S
 from tests.engine.bystander import bystander
 
 

@@ -44,12 +44,12 @@ import subprocess
 import sys
 import threading
 import time
-from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any, Final
 
 from s7graph.engine.cores import allowed_cpus
+from s7graph.engine.switching import SWITCH_S, switching
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.change.base import MAX_SOURCE
 from s7graph.sequencer.collector import collector_paused
@@ -321,7 +321,7 @@ def _loaded(blobs: list[bytes], parts: tuple[int, int], summary: Summary) -> Com
     chart loaded so far (13 ms seen for a 1,000-step chart)."""
     n_chart, n_code = parts
     settle = gc.freeze if not gc.isenabled() else None
-    with collector_paused(), _switching(SWITCH_S):
+    with collector_paused(), switching(SWITCH_S):
         cc, table, live = loads_in_pieces(blobs[:n_chart], settle)
         code = []
         for piece in blobs[n_chart : n_chart + n_code]:
@@ -334,20 +334,6 @@ def _loaded(blobs: list[bytes], parts: tuple[int, int], summary: Summary) -> Com
     if settle is not None:
         settle()
     return Compiled(cc, table, live, summary)
-
-
-SWITCH_S: Final = 0.0005
-
-
-@contextlib.contextmanager
-def _switching(interval_s: float) -> Iterator[None]:
-    """The interpreter's switch interval at most ``interval_s`` for the ``with`` block."""
-    before = sys.getswitchinterval()
-    sys.setswitchinterval(min(before, interval_s))
-    try:
-        yield
-    finally:
-        sys.setswitchinterval(before)
 
 
 def _child_env() -> dict[str, str]:
