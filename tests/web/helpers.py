@@ -173,6 +173,19 @@ def chart_session(
     return session, table, clock, store
 
 
+CALLS_FB17 = """FUNCTION_BLOCK "Seq" FB 1 DB 1
+SEQUENCE 1 "S"
+  INITIAL_STEP S1 "count":
+    CALL FB 17, DB 10 (go := TRUE);
+  END_STEP
+  STEP S2 "never": END_STEP
+  TRANSITION T1 FROM S1 TO S2 := FALSE;
+END_SEQUENCE
+END_FUNCTION_BLOCK
+"""
+"""A chart whose initial step calls FB 17 with DB 10 (``go := TRUE``) and never leaves:
+the S7-SCL blocks' tests give FB 17 in their own source."""
+
 PASSWORD = "correct horse"
 
 

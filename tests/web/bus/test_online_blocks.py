@@ -19,17 +19,9 @@ from s7graph.web.bus.online_blocks import BlockFiles, BlocksRefused, swap_blocks
 from s7graph.web.harness.scl import compile_texts, scl_of
 from s7graph.web.harness.scl_reload import carry_notes
 from s7graph.web.harness.session import ChartSession, compile_text
+from tests.web.helpers import CALLS_FB17
 
-CHART = """FUNCTION_BLOCK "Seq" FB 1 DB 1
-SEQUENCE 1 "S"
-  INITIAL_STEP S1 "run":
-    CALL FB 17, DB 10 (go := TRUE);
-  END_STEP
-  STEP S2 "never": END_STEP
-  TRANSITION T1 FROM S1 TO S2 := FALSE;
-END_SEQUENCE
-END_FUNCTION_BLOCK
-"""
+CHART = CALLS_FB17
 
 TYPES = ("INT", "DINT", "REAL", "BOOL", "BYTE", "WORD", "ARRAY[1..3] OF INT", "ARRAY[1..4] OF INT")
 INITIAL = {"INT": "7", "DINT": "70000", "REAL": "1.5", "BOOL": "TRUE", "BYTE": "16#0F"}

@@ -26,23 +26,14 @@ from s7graph.web.bus.session import open_session
 from s7graph.web.commands import Download, DownloadArgs, checked, make_command
 from s7graph.web.harness.session import ChartSession
 from tests.paths import ROOT
-from tests.web.helpers import PASSWORD, cpu_process, online_cpu, wait_until
+from tests.web.helpers import CALLS_FB17, PASSWORD, cpu_process, online_cpu, wait_until
 
 if TYPE_CHECKING:
     from tests.conftest import BusCerts
 
 pytestmark = pytest.mark.timeout(120)
 
-CHART = """FUNCTION_BLOCK "Seq" FB 1 DB 1
-SEQUENCE 1 "S"
-  INITIAL_STEP S1 "count":
-    CALL FB 17, DB 10 (go := TRUE);
-  END_STEP
-  STEP S2 "never": END_STEP
-  TRANSITION T1 FROM S1 TO S2 := FALSE;
-END_SEQUENCE
-END_FUNCTION_BLOCK
-"""
+CHART = CALLS_FB17
 BLOCKS = """FUNCTION_BLOCK FB17
 VAR_INPUT go : BOOL; END_VAR
 VAR n : INT; old : INT; END_VAR

@@ -17,7 +17,7 @@ from s7graph.engine.persistence import unpack_instance
 from s7graph.web.cli import main
 from tests.paths import ROOT
 from tests.real_process import query_store
-from tests.web.helpers import cpu_process, wait_until
+from tests.web.helpers import CALLS_FB17, cpu_process, wait_until
 
 PROGRAM = """
 FUNCTION_BLOCK FB1
@@ -121,16 +121,7 @@ VAR n : DINT; END_VAR
   IF go THEN n := n + 1; END_IF;
 END_FUNCTION_BLOCK
 """
-CHART = """FUNCTION_BLOCK "Seq" FB 1 DB 1
-SEQUENCE 1 "S"
-  INITIAL_STEP S1 "count":
-    CALL FB 17, DB 10 (go := TRUE);
-  END_STEP
-  STEP S2 "never": END_STEP
-  TRANSITION T1 FROM S1 TO S2 := FALSE;
-END_SEQUENCE
-END_FUNCTION_BLOCK
-"""
+CHART = CALLS_FB17
 
 
 def test_a_chart_run_with_its_blocks_keeps_their_instance_db_across_a_restart(

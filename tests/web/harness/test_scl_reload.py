@@ -10,6 +10,7 @@ from pathlib import Path
 from s7graph.engine.clock import VirtualClock
 from s7graph.web.harness.scl import SclSources, compile_sources
 from s7graph.web.harness.session import ChartSession, compile_text
+from tests.web.helpers import CALLS_FB17
 
 BLOCKS = """
 FUNCTION_BLOCK FB17
@@ -30,16 +31,7 @@ ORGANIZATION_BLOCK OB1
   DB21.x := DB21.x + 1;
 END_ORGANIZATION_BLOCK
 """
-CHART = """FUNCTION_BLOCK "Seq" FB 1 DB 1
-SEQUENCE 1 "S"
-  INITIAL_STEP S1 "count":
-    CALL FB 17, DB 10 (go := TRUE);
-  END_STEP
-  STEP S2 "never": END_STEP
-  TRANSITION T1 FROM S1 TO S2 := FALSE;
-END_SEQUENCE
-END_FUNCTION_BLOCK
-"""
+CHART = CALLS_FB17
 
 
 def _sources(tmp_path: Path, text: str, name: str) -> SclSources:
