@@ -79,6 +79,12 @@ def chromium_page(url: str) -> Iterator[Page]:
             browser.close()
 
 
+def block_source(page: Page) -> str:
+    """The S7-SCL source a page's read-only window shows now ("" when none is open)."""
+    shown = page.locator("pre.s7-block-source")
+    return str(shown.inner_text()) if shown.count() else ""
+
+
 def page_point(
     client: object, x: float, y: float, *, left: float = 0.0, page: Page | None = None
 ) -> tuple[int, int]:

@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from tests.paths import ROOT
-from tests.web.helpers import chromium_page, field, free_port, wait_until
+from tests.web.helpers import block_source, chromium_page, field, free_port, wait_until
 
 pytestmark = pytest.mark.timeout(240)
 
@@ -74,7 +74,7 @@ def test_a_steps_call_rows_open_the_scl_source_of_the_blocks_they_call(tmp_path:
             page.get_by_role("button", name="Close", exact=True).click()
             assert wait_until(lambda: shown.count() == 0, 30)
             page.get_by_role("button", name="FC 3 source", exact=True).click()
-            assert wait_until(lambda: "FC3 := a * 2;" in _source(page), 30)
+            assert wait_until(lambda: "FC3 := a * 2;" in block_source(page), 30)
             page.get_by_role("button", name="Close", exact=True).click()
             field(page, "Show step").fill("2")
             field(page, "Show step").press("Enter")
@@ -83,8 +83,3 @@ def test_a_steps_call_rows_open_the_scl_source_of_the_blocks_they_call(tmp_path:
         proc.send_signal(signal.SIGTERM)
         _, err = proc.communicate(timeout=60)
     assert proc.returncode == 0, err
-
-
-def _source(page: object) -> str:
-    shown = page.locator("pre.s7-block-source")  # type: ignore[attr-defined]
-    return str(shown.inner_text()) if shown.count() else ""

@@ -14,7 +14,7 @@ import pytest
 
 from tests.paths import ROOT
 from tests.web.cli.test_scl_bus import BLOCKS, PROGRAM
-from tests.web.helpers import chromium_page, free_port, needs_chromium, wait_until
+from tests.web.helpers import block_source, chromium_page, free_port, needs_chromium, wait_until
 
 pytestmark = [pytest.mark.timeout(240), needs_chromium]
 pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
@@ -51,13 +51,8 @@ def test_a_programs_page_lists_its_blocks_and_opens_each_ones_source(tmp_path: P
             page.get_by_role("button", name="Close", exact=True).click()
             assert wait_until(lambda: shown.count() == 0, 30)
             page.get_by_role("button", name="FB 17 source", exact=True).click()
-            assert wait_until(lambda: "n := n + 1" in _source(page), 30)
+            assert wait_until(lambda: "n := n + 1" in block_source(page), 30)
     finally:
         proc.send_signal(signal.SIGTERM)
         _, err = proc.communicate(timeout=60)
     assert proc.returncode == 0, err
-
-
-def _source(page: object) -> str:
-    shown = page.locator("pre.s7-block-source")  # type: ignore[attr-defined]
-    return str(shown.inner_text()) if shown.count() else ""
