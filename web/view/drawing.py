@@ -15,13 +15,15 @@ the status view shows what changes (``web.view.status_layer``): each step's time
 action row's live value, each contact of a condition (``web.view.criteria``), and where each
 sequence lies (``Picture.sequence_bounds``). :class:`Drawing` puts a
 picture into one scene (the shared live scene, or one page's edit scene at an offset) with
-click handlers on steps and on transitions (an invisible target over bar and text), and
-recolours its steps and transitions. :func:`camera_for` aims a camera at a picture at a
+click handlers on steps and on transitions (the bar a node's click; the text beside it
+found from where a scene click meets the chart: no invisible target costs a frame its
+pixels), and recolours its steps and transitions. :func:`camera_for` aims a camera at a picture at a
 zoom where its text is readable: the whole chart when it fits, else its top-left part.
 """
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import itertools
 import math
@@ -92,6 +94,7 @@ LANE = 3.6  # scene units per lane (more when steps have action tables)
 ROW = 0.8  # scene units per row (more under a transition whose text needs it)
 BOX_W, BOX_H = 1.9, 0.6
 BAR_W = 0.55
+BAR_H = 0.07
 STEP_SIZES = (0.22, 0.19, 0.16, 0.13, 0.11, 0.09, 0.075)  # text heights tried in a box
 TRANSITION_SIZE = 0.18
 TEXT_W = LANE - BAR_W / 2 - 0.08 - BOX_W / 2 - 0.35  # beside a bar, short of the next lane
@@ -503,7 +506,7 @@ class Drawing:
             bar = scene.add_box(
                 f"{root}/trans/T{n}",
                 color=INK,
-                dimensions=(BAR_W, 0.07, 0.04),
+                dimensions=(BAR_W, BAR_H, 0.04),
                 position=(x + ox, y + oy, 0.0),
                 cast_shadow=False,
                 receive_shadow=False,
@@ -511,19 +514,10 @@ class Drawing:
             self.bars[n] = bar
             self._nodes.append(bar)
             if on_transition is not None:
-                cx, cy, w, h = pic.targets[n]
-                hit = scene.add_box(
-                    f"{root}/hit/T{n}",
-                    color=(255, 255, 255),
-                    opacity=0.0,
-                    dimensions=(w, h, 0.01),
-                    position=(cx + ox, cy + oy, -0.02),
-                    cast_shadow=False,
-                    receive_shadow=False,
-                )
-                hit.on_click(functools.partial(_relay, on_transition, n))
                 bar.on_click(functools.partial(_relay, on_transition, n))
-                self._nodes.append(hit)
+        self._on_transition = on_transition
+        if on_transition is not None:  # a transition's text: where a click on the chart is
+            scene.on_click()(self._clicked)
         shifted = np.array([ox, oy, 0.0], np.float32)
         for name, lines, width in (("lines", pic.segments, 2.0), ("double", pic.double, 1.5)):
             if len(lines):
@@ -576,7 +570,22 @@ class Drawing:
         """Send every colour again at the next paint."""
         self._colour.clear()
 
+    def _clicked(self, event: Any) -> None:
+        """A click anywhere in the scene: on a transition's text (beside its bar), that
+        transition (its bar and the step boxes have clicks of their own)."""
+        (x0, y0, z0), (dx, dy, dz) = event.ray_origin, event.ray_direction
+        if self._on_transition is None or dz == 0 or -z0 / dz <= 0:
+            return
+        ox, oy = self.offset
+        n = transition_text_at(self.picture, x0 - z0 / dz * dx - ox, y0 - z0 / dz * dy - oy)
+        if n is not None:
+            self._on_transition(n, event)
+
     def remove(self) -> None:
+        if self._on_transition is not None:
+            with contextlib.suppress(Exception):  # a page gone meanwhile
+                self.scene.remove_click_callback(self._clicked)
+            self._on_transition = None
         for node in self._nodes:
             try:
                 node.remove()
@@ -585,6 +594,20 @@ class Drawing:
         self._nodes.clear()
         self.boxes.clear()
         self.bars.clear()
+
+
+def transition_text_at(pic: Picture, x: float, y: float) -> int | None:
+    """The transition whose click target (bar and text) holds the picture point ``(x,
+    y)``, unless the point is on its bar or on a step box (they are clicked as nodes)."""
+    for sx, sy in pic.steps.values():
+        if abs(x - sx) <= BOX_W / 2 and abs(y - sy) <= BOX_H / 2:
+            return None
+    for n, (cx, cy, w, h) in pic.targets.items():
+        if abs(x - cx) <= w / 2 and abs(y - cy) <= h / 2:
+            tx, ty = pic.transitions[n]
+            on_bar = abs(x - tx) <= BAR_W / 2 and abs(y - ty) <= BAR_H / 2
+            return None if on_bar else n
+    return None
 
 
 def _drop_pixels(handle: Any) -> None:

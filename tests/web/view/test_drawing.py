@@ -15,6 +15,8 @@ from s7graph.web.view import chart_view
 from s7graph.web.view.chart_view import ChartView, make_server
 from s7graph.web.view.drawing import (
     ACTIVE,
+    BAR_H,
+    BAR_W,
     BOX_H,
     BOX_W,
     DISCONNECTED,
@@ -34,6 +36,7 @@ from s7graph.web.view.drawing import (
     joined,
     picture,
     scale_px,
+    transition_text_at,
     wrap,
 )
 from s7graph.web.view.layout import FOLD_ROWS, place
@@ -95,6 +98,41 @@ def test_a_250_step_chart_wraps_into_columns_readable_at_the_default_zoom() -> N
 def test_a_small_chart_is_shown_whole() -> None:
     pic = picture(place(long_chart(5)))
     assert camera_for(pic) == camera_for(pic, whole=True)
+
+
+def test_a_click_on_a_transitions_text_finds_that_transition_and_nothing_else() -> None:
+    """A transition's text is clicked through the scene's click at that point (no invisible
+    box over it, which would cost every frame its pixels); its bar and the step boxes are
+    clicked as nodes of their own, so a point on them finds no transition."""
+    pic = picture(place(long_chart(8, "S{i}")))
+    for n, (tx, ty) in pic.transitions.items():
+        cx, cy, w, h = pic.targets[n]
+        assert transition_text_at(pic, tx + BAR_W / 2 + 0.2, ty) == n  # its text, beside
+        assert transition_text_at(pic, cx + w / 2 - 0.01, cy + h / 2 - 0.01) == n
+        assert transition_text_at(pic, tx, ty) is None  # the bar: its own click
+        assert transition_text_at(pic, tx + BAR_W / 2 - 0.01, ty + BAR_H / 2 - 0.01) is None
+        assert transition_text_at(pic, cx + w / 2 + 0.01, cy) != n
+    for sx, sy in pic.steps.values():
+        assert transition_text_at(pic, sx + BOX_W / 2 - 0.01, sy) is None
+    _, x1, _, y1 = pic.bounds
+    assert transition_text_at(pic, x1 + 5, y1 + 5) is None
+
+
+def test_the_drawing_adds_no_invisible_node() -> None:
+    """Every node a live chart's drawing adds is seen: a transparent click target would
+    cost software WebGL its pixels in every frame."""
+    layout = ChartLayout.from_chart(long_chart(8, "S{i}"), version=1)
+    server, _ = make_server(port=0)
+    view = ChartView(server, layout, lambda c: None)  # type: ignore[arg-type, return-value]
+    try:
+        drawing = view.drawing
+        assert drawing is not None
+        nodes = drawing._nodes
+        assert nodes and all(getattr(node, "opacity", None) != 0.0 for node in nodes)
+        assert all(node.visible for node in nodes)
+    finally:
+        view.close()
+        server.stop()
 
 
 def test_the_layout_is_computed_once_per_chart_version() -> None:
