@@ -8,7 +8,8 @@ needs more lines), lines, jumps, stops and the continuation arrows of wrapped se
 Every text is fitted: a step's name wraps inside its box and its size shrinks until it fits,
 so it is never cut nor spills out; all texts are rendered into images (one per part of the
 chart that has text, each at most 2048 pixels square: labels are slow under software WebGL,
-an image is not; ``web.view.glyphs``).
+an image is not; ``web.view.glyphs``), each drawn as a mesh over its inked blocks only
+(``web.view.text_mesh``).
 Beside each step its action table and under it its interlock and supervision conditions
 (``web.view.actions_table``); lanes are wide enough for them. The picture also says where
 the status view shows what changes (``web.view.status_layer``): each step's times, each
@@ -49,6 +50,7 @@ from s7graph.web.view.glyphs import (
     wrap,
 )
 from s7graph.web.view.layout import Placement
+from s7graph.web.view.text_mesh import tile_glb
 
 __all__ = [
     "ACTIVE",
@@ -531,18 +533,18 @@ class Drawing:
                     )
                 )
         for i, tile in enumerate(pic.tiles):
-            image = scene.add_image(
-                f"{root}/text{i}",
-                tile.image,  # rendered now, and kept only as the PNG viser sends
-                render_width=tile.width,
-                render_height=tile.height,
-                format="png",
-                position=(tile.cx + ox, tile.cy + oy, 0.05),
-                cast_shadow=False,
-                receive_shadow=False,
+            glb = tile_glb(tile)  # rendered now, and kept only as the GLB viser sends
+            if glb is None:
+                continue
+            self._nodes.append(
+                scene.add_glb(
+                    f"{root}/text{i}",
+                    glb,
+                    position=(tile.cx + ox, tile.cy + oy, 0.05),
+                    cast_shadow=False,
+                    receive_shadow=False,
+                )
             )
-            _drop_pixels(image)
-            self._nodes.append(image)
 
     def paint(self, steps: dict[int, Rgb], transitions: dict[int, Rgb] | None = None) -> None:
         """Colour each step box (missing: inactive grey) and transition bar (missing:
@@ -608,15 +610,6 @@ def transition_text_at(pic: Picture, x: float, y: float) -> int | None:
             on_bar = abs(x - tx) <= BAR_W / 2 and abs(y - ty) <= BAR_H / 2
             return None if on_bar else n
     return None
-
-
-def _drop_pixels(handle: Any) -> None:
-    """Let go of the pixels viser 1.1.1 keeps on an image's handle (``SceneApi.add_image``
-    sets ``handle._image``; only the handle's ``image`` and ``format`` read them): the
-    node's PNG stays in its message, which viser's persistent buffer replays to every page
-    that connects later, so a drawn text image costs its PNG, not its RGBA pixels."""
-    if getattr(handle, "_image", None) is not None:
-        handle._image = None
 
 
 def _relay(callback: Click, number: int, event: Any) -> None:

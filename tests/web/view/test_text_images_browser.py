@@ -1,6 +1,6 @@
 """The chart's text images reach a page that connects after they were drawn: the view keeps
-no pixels of them (``web.view.drawing`` lets go of viser's copy once sent), and viser
-replays their PNGs to the new page from its own message buffer. A real viser server and a
+no pixels of them (each is sent as a GLB, ``web.view.text_mesh``, its PNG inside), and
+viser replays them to the new page from its own message buffer. A real viser server and a
 real headless Chromium on loopback."""
 
 from __future__ import annotations
@@ -35,9 +35,9 @@ def test_a_page_that_connects_after_the_chart_was_drawn_shows_its_texts() -> Non
     try:
         server.scene.set_up_direction("+y")  # as the view's scene
         drawing = Drawing(server.scene, pic)
-        images: list[Any] = [n for n in drawing._nodes if type(n).__name__ == "ImageHandle"]
-        assert len(images) == len(pic.tiles)
-        assert all(getattr(n, "_image", None) is None for n in images)  # no pixels kept
+        meshes: list[Any] = [n for n in drawing._nodes if type(n).__name__ == "GlbHandle"]
+        assert len(meshes) == len(pic.tiles)  # each text image a mesh over its ink
+        assert not any(type(n).__name__ == "ImageHandle" for n in drawing._nodes)
         cam = server.initial_camera
         cam.position, cam.look_at = camera_for(pic)
         cam.up = (0.0, 1.0, 0.0)

@@ -1,0 +1,159 @@
+"""A text image drawn as a mesh over its ink only: the chart's text tiles as glTF (GLB).
+
+A tile (``web.view.glyphs.Tile``) is mostly transparent: the space between a step's name,
+its action table and the next transition's condition. Drawn as one textured plane, every
+one of its pixels is shaded and blended in every frame, which is what a page costs under
+software WebGL (``bench/page.py``). :func:`tile_glb` instead cuts the tile's image into
+``BLOCK`` × ``BLOCK`` pixel blocks and draws a quad only over the blocks that hold ink
+(runs of them along a row merged), textured from the same image: what shows is the same,
+pixel for pixel, but the empty blocks cost nothing.
+
+The GLB holds one mesh whose material is unlit (``KHR_materials_unlit``, so no light
+changes the black of the text), blended (``alphaMode: BLEND``) and two-sided; its image
+is the tile's PNG; the sampler is linear with mipmaps, as a textured plane's. Positions are
+in scene units about the tile's centre, the chart's plane at z = 0 (glTF 2.0
+specification, Khronos Group, sections 3.6 "Geometry", 3.8 "Texture Data" and 3.9
+"Materials"; the extension's own page for ``KHR_materials_unlit``).
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import struct
+from typing import Any
+
+import numpy as np
+from PIL import Image
+
+from s7graph.web.view.glyphs import Tile
+
+__all__ = ["BLOCK", "inked_runs", "tile_glb"]
+
+BLOCK = 32
+"""The side of a block, in image pixels: a quad covers whole blocks that hold ink."""
+
+_FLOAT, _UINT32 = 5126, 5125  # glTF component types
+_ARRAY, _ELEMENTS = 34962, 34963  # buffer view targets
+_LINEAR, _LINEAR_MIPMAP_LINEAR, _CLAMP = 9729, 9987, 33071
+Run = tuple[int, int, int, int]  # x0, y0, x1, y1: image pixels, rows from the top
+
+
+def inked_runs(alpha: Any, block: int = BLOCK) -> list[Run]:
+    """The pixel rectangles that cover every non-zero pixel of ``alpha`` (rows from the
+    top): its ``block``-square blocks that hold ink, consecutive ones of a row of blocks
+    joined into one rectangle, each clipped to the image."""
+    h, w = alpha.shape
+    rows, cols = -(-h // block), -(-w // block)
+    padded = np.zeros((rows * block, cols * block), bool)
+    padded[:h, :w] = alpha > 0
+    inked: Any = padded.reshape(rows, block, cols, block).any(axis=(1, 3))
+    runs: list[Run] = []
+    for r in range(rows):
+        row = inked[r]
+        # where runs of inked blocks start and end: the edges of a 0/1 sequence
+        edges = np.flatnonzero(np.diff(np.concatenate(([0], row.astype(np.int8), [0]))))
+        for start, end in zip(edges[::2], edges[1::2], strict=True):
+            x0, x1 = int(start) * block, min(int(end) * block, w)
+            y0, y1 = r * block, min((r + 1) * block, h)
+            runs.append((x0, y0, x1, y1))
+    return runs
+
+
+def tile_glb(tile: Tile, block: int = BLOCK) -> bytes | None:
+    """``tile`` as a GLB whose mesh covers the inked blocks of its image, centred on the
+    tile's centre (place the node at ``(tile.cx, tile.cy, z)``); None if it has no ink."""
+    image = np.ascontiguousarray(tile.image[::-1])  # rows from the top, as glTF reads them
+    h, w = image.shape[:2]
+    runs = inked_runs(image[..., 3], block)
+    if not runs:
+        return None
+    sx, sy = tile.width / w, tile.height / h  # scene units per pixel
+    left, top = -tile.width / 2, tile.height / 2
+    corners = np.array(
+        [(x, y) for x0, y0, x1, y1 in runs for x, y in ((x0, y0), (x1, y0), (x1, y1), (x0, y1))],
+        np.float64,
+    )
+    positions = np.zeros((len(corners), 3), np.float32)
+    positions[:, 0] = left + corners[:, 0] * sx
+    positions[:, 1] = top - corners[:, 1] * sy
+    uvs = (corners / (w, h)).astype(np.float32)
+    quad = np.array([0, 3, 2, 0, 2, 1], np.uint32)  # counter-clockwise seen from +z
+    indices = (np.arange(len(runs), dtype=np.uint32)[:, None] * 4 + quad).ravel()
+    png = io.BytesIO()
+    Image.fromarray(image, "RGBA").save(png, format="PNG", compress_level=1)
+    return _glb(positions, uvs, indices, png.getvalue())
+
+
+def _glb(positions: Any, uvs: Any, indices: Any, png: bytes) -> bytes:
+    """One mesh of ``positions`` (float32 n × 3), ``uvs`` (float32 n × 2) and triangle
+    ``indices`` (uint32), textured by ``png``: the GLB container (header, JSON, binary)."""
+    parts = [positions.tobytes(), uvs.tobytes(), indices.tobytes(), png]
+    views, offset = [], 0
+    for data in parts:
+        views.append({"buffer": 0, "byteOffset": offset, "byteLength": len(data)})
+        offset += len(data) + (-len(data)) % 4
+    views[0]["target"], views[1]["target"], views[2]["target"] = _ARRAY, _ARRAY, _ELEMENTS
+    doc = {
+        "asset": {"version": "2.0", "generator": "s7graph"},
+        "extensionsUsed": ["KHR_materials_unlit"],
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [
+            {
+                "primitives": [
+                    {"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2, "material": 0}
+                ]
+            }
+        ],
+        "materials": [
+            {
+                "pbrMetallicRoughness": {
+                    "baseColorTexture": {"index": 0},
+                    "metallicFactor": 0.0,
+                    "roughnessFactor": 1.0,
+                },
+                "alphaMode": "BLEND",
+                "doubleSided": True,
+                "extensions": {"KHR_materials_unlit": {}},
+            }
+        ],
+        "textures": [{"sampler": 0, "source": 0}],
+        "samplers": [
+            {
+                "magFilter": _LINEAR,
+                "minFilter": _LINEAR_MIPMAP_LINEAR,
+                "wrapS": _CLAMP,
+                "wrapT": _CLAMP,
+            }
+        ],
+        "images": [{"bufferView": 3, "mimeType": "image/png"}],
+        "accessors": [
+            {
+                "bufferView": 0,
+                "componentType": _FLOAT,
+                "count": len(positions),
+                "type": "VEC3",
+                "min": positions.min(axis=0).tolist(),
+                "max": positions.max(axis=0).tolist(),
+            },
+            {"bufferView": 1, "componentType": _FLOAT, "count": len(uvs), "type": "VEC2"},
+            {"bufferView": 2, "componentType": _UINT32, "count": len(indices), "type": "SCALAR"},
+        ],
+        "bufferViews": views,
+        "buffers": [{"byteLength": offset}],
+    }
+    binary = b"".join(data + b"\0" * ((-len(data)) % 4) for data in parts)
+    text = json.dumps(doc, separators=(",", ":")).encode()
+    text += b" " * ((-len(text)) % 4)
+    total = 12 + 8 + len(text) + 8 + len(binary)
+    return b"".join(
+        (
+            struct.pack("<4sII", b"glTF", 2, total),
+            struct.pack("<I4s", len(text), b"JSON"),
+            text,
+            struct.pack("<I4s", len(binary), b"BIN\0"),
+            binary,
+        )
+    )
