@@ -50,7 +50,7 @@ from s7graph.web.view.glyphs import (
     wrap,
 )
 from s7graph.web.view.layout import Placement
-from s7graph.web.view.text_mesh import tile_glb
+from s7graph.web.view.text_mesh import lines_glb, tile_glb
 
 __all__ = [
     "ACTIVE",
@@ -106,6 +106,10 @@ BLOCK_GAP = 0.34  # from a step box to its action table (room for the V mark)
 LEFT_ROOM = 1.4  # left of a box: an incoming jump, the C mark, the step's times
 MAX_TRANSITION_LINES = 24  # beyond: "…", the whole condition is in the details panel
 READABLE_PX = 55.0  # screen pixels per scene unit at the default zoom: text of 10-12 px
+FRAME_W = 2.0 / READABLE_PX
+"""The width of a step box's and an action table's lines, in scene units: 2 pixels at the
+default zoom, growing and shrinking with the chart like its text (one mesh of quads: under
+software WebGL each segment of a line object costs a frame as much as a small mesh)."""
 
 
 _width = text_width  # the name the tests know
@@ -134,8 +138,9 @@ class Picture:
     steps: dict[int, tuple[float, float]]
     transitions: dict[int, tuple[float, float]]
     targets: dict[int, tuple[float, float, float, float]]  # transition: cx, cy, w, h
-    segments: Any  # float32 (n, 2, 3)
+    segments: Any  # float32 (n, 2, 3): links, jumps, stops
     double: Any
+    frames: Any  # float32 (n, 2, 3): the frames of step boxes and action tables
     tiles: tuple[Tile, ...]
     bounds: tuple[float, float, float, float]  # x0, x1, y0 (bottom), y1 (top)
     lane: float = LANE
@@ -215,6 +220,7 @@ def picture(placement: Placement) -> Picture:
         targets=d.targets,
         segments=joined(np.array(d.segments, np.float32).reshape(-1, 2, 3)),
         double=joined(np.array(d.double, np.float32).reshape(-1, 2, 3)),
+        frames=joined(np.array(d.frames, np.float32).reshape(-1, 2, 3)),
         tiles=tuple(tiles(d.text_items)),
         bounds=bounds,
         lane=lane,
@@ -317,6 +323,7 @@ class _Drawing:
         self.text_items: list[Text] = []
         self.segments: list[list[list[float]]] = []
         self.double: list[list[list[float]]] = []
+        self.frames: list[list[list[float]]] = []  # step boxes, marks, action tables
         self.step_xy: dict[int, tuple[float, float]] = {}
         self.transition_xy: dict[int, tuple[float, float]] = {}
         self.targets: dict[int, tuple[float, float, float, float]] = {}
@@ -349,18 +356,18 @@ class _Drawing:
         for s in p.steps.values():
             x, y = self.xy(s.x, s.y)
             self.step_xy[s.number] = (x, y)
-            self.segments += _rect(x, y, BOX_W, BOX_H)
+            self.frames += _rect(x, y, BOX_W, BOX_H)
             if s.initial:  # S7-GRAPH draws the initial step with a double frame
-                self.segments += _rect(x, y, BOX_W + 0.12, BOX_H + 0.12)
+                self.frames += _rect(x, y, BOX_W + 0.12, BOX_H + 0.12)
             label = texts.title("S", s.number, s.name, 10_000)
             lines, size = fit_text(label, BOX_W - 0.12, BOX_H - 0.08, STEP_SIZES)
             self.text_at(lines, x, y, "center-center", size)
             self.times[s.number] = (x - BOX_W / 2, y - BOX_H / 2 - 0.03)
             if s.interlock:
-                self.segments += _rect(x - BOX_W / 2 - 0.14, y, 0.22, 0.28)
+                self.frames += _rect(x - BOX_W / 2 - 0.14, y, 0.22, 0.28)
                 self.text_at(["C"], x - BOX_W / 2 - 0.14, y, "center-center", 0.2)
             if s.supervision:
-                self.segments += _rect(x + BOX_W / 2 + 0.14, y, 0.22, 0.28)
+                self.frames += _rect(x + BOX_W / 2 + 0.14, y, 0.22, 0.28)
                 self.text_at(["V"], x + BOX_W / 2 + 0.14, y, "center-center", 0.2)
 
     def blocks(self, p: Placement, blocks: dict[int, Block], cols: Any, width: float) -> None:
@@ -371,7 +378,7 @@ class _Drawing:
             x, y = self.step_xy[number]
             b = step_block(s.info, cols, width, x + BOX_W / 2 + BLOCK_GAP, y + BOX_H / 2)
             self.text_items += b.texts
-            self.segments += b.segments
+            self.frames += b.segments
             if b.cells:
                 self.cells[number] = tuple(b.cells)
             self.contacts.update(b.contacts)
@@ -532,6 +539,11 @@ class Drawing:
                         thickness_units="screen",
                     )
                 )
+        frames = lines_glb(pic.frames + shifted, FRAME_W, INK)
+        if frames is not None:
+            self._nodes.append(
+                scene.add_glb(f"{root}/frames", frames, cast_shadow=False, receive_shadow=False)
+            )
         for i, tile in enumerate(pic.tiles):
             glb = tile_glb(tile)  # rendered now, and kept only as the GLB viser sends
             if glb is None:

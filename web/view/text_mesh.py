@@ -28,7 +28,7 @@ from PIL import Image
 
 from s7graph.web.view.glyphs import Tile
 
-__all__ = ["BLOCK", "inked_runs", "tile_glb"]
+__all__ = ["BLOCK", "inked_runs", "lines_glb", "tile_glb"]
 
 BLOCK = 32
 """The side of a block, in image pixels: a quad covers whole blocks that hold ink."""
@@ -85,62 +85,110 @@ def tile_glb(tile: Tile, block: int = BLOCK) -> bytes | None:
     return _glb(positions, uvs, indices, png.getvalue())
 
 
-def _glb(positions: Any, uvs: Any, indices: Any, png: bytes) -> bytes:
-    """One mesh of ``positions`` (float32 n × 3), ``uvs`` (float32 n × 2) and triangle
-    ``indices`` (uint32), textured by ``png``: the GLB container (header, JSON, binary)."""
-    parts = [positions.tobytes(), uvs.tobytes(), indices.tobytes(), png]
+def lines_glb(segments: Any, width: float, colour: tuple[int, int, int]) -> bytes | None:
+    """``segments`` (n × 2 points, x and y used, z the first point's) as one opaque mesh of
+    quads ``width`` scene units wide in ``colour`` (sRGB), each reaching ``width / 2`` past
+    its ends so that corners close; None if there are none."""
+    seg = np.asarray(segments, np.float64).reshape(-1, 2, 3)
+    d = seg[:, 1, :2] - seg[:, 0, :2]
+    length = np.hypot(d[:, 0], d[:, 1])
+    seg, d, length = seg[length > 0], d[length > 0], length[length > 0]
+    if not len(seg):
+        return None
+    along = d / length[:, None] * (width / 2)
+    across = np.stack([-along[:, 1], along[:, 0]], axis=1)
+    a, b = seg[:, 0, :2] - along, seg[:, 1, :2] + along
+    corners = np.stack([a - across, b - across, b + across, a + across], axis=1)
+    positions = np.zeros((len(seg) * 4, 3), np.float32)
+    positions[:, :2] = corners.reshape(-1, 2)
+    positions[:, 2] = np.repeat(seg[:, 0, 2], 4)
+    quad = np.array([0, 1, 2, 0, 2, 3], np.uint32)
+    indices = (np.arange(len(seg), dtype=np.uint32)[:, None] * 4 + quad).ravel()
+    return _glb(positions, None, indices, None, colour)
+
+
+def _linear(channel: int) -> float:
+    """An sRGB channel (0–255) as the linear value glTF's colour factors hold."""
+    c = channel / 255
+    return c / 12.92 if c <= 0.04045 else float(((c + 0.055) / 1.055) ** 2.4)
+
+
+def _glb(
+    positions: Any,
+    uvs: Any,
+    indices: Any,
+    png: bytes | None,
+    colour: tuple[int, int, int] | None = None,
+) -> bytes:
+    """One mesh of ``positions`` (float32 n × 3) and triangle ``indices`` (uint32): textured
+    by ``png`` at ``uvs`` (float32 n × 2) and blended, or else opaque in ``colour``; the GLB
+    container (header, JSON chunk, binary chunk)."""
+    parts = [positions.tobytes(), indices.tobytes()]
+    if png is not None:
+        parts += [uvs.tobytes(), png]
     views, offset = [], 0
     for data in parts:
         views.append({"buffer": 0, "byteOffset": offset, "byteLength": len(data)})
         offset += len(data) + (-len(data)) % 4
-    views[0]["target"], views[1]["target"], views[2]["target"] = _ARRAY, _ARRAY, _ELEMENTS
+    views[0]["target"], views[1]["target"] = _ARRAY, _ELEMENTS
+    accessors: list[dict[str, Any]] = [
+        {
+            "bufferView": 0,
+            "componentType": _FLOAT,
+            "count": len(positions),
+            "type": "VEC3",
+            "min": positions.min(axis=0).tolist(),
+            "max": positions.max(axis=0).tolist(),
+        },
+        {"bufferView": 1, "componentType": _UINT32, "count": len(indices), "type": "SCALAR"},
+    ]
+    attributes = {"POSITION": 0}
+    material: dict[str, Any] = {
+        "doubleSided": True,
+        "extensions": {"KHR_materials_unlit": {}},
+    }
+    textured: dict[str, Any] = {}
+    if png is not None:
+        views[2]["target"] = _ARRAY
+        accessors.append(
+            {"bufferView": 2, "componentType": _FLOAT, "count": len(uvs), "type": "VEC2"}
+        )
+        attributes["TEXCOORD_0"] = 2
+        material["pbrMetallicRoughness"] = {
+            "baseColorTexture": {"index": 0},
+            "metallicFactor": 0.0,
+            "roughnessFactor": 1.0,
+        }
+        material["alphaMode"] = "BLEND"
+        textured = {
+            "textures": [{"sampler": 0, "source": 0}],
+            "samplers": [
+                {
+                    "magFilter": _LINEAR,
+                    "minFilter": _LINEAR_MIPMAP_LINEAR,
+                    "wrapS": _CLAMP,
+                    "wrapT": _CLAMP,
+                }
+            ],
+            "images": [{"bufferView": 3, "mimeType": "image/png"}],
+        }
+    else:
+        rgb = colour if colour is not None else (0, 0, 0)
+        material["pbrMetallicRoughness"] = {
+            "baseColorFactor": [*(_linear(c) for c in rgb), 1.0],
+            "metallicFactor": 0.0,
+            "roughnessFactor": 1.0,
+        }
     doc = {
         "asset": {"version": "2.0", "generator": "s7graph"},
         "extensionsUsed": ["KHR_materials_unlit"],
         "scene": 0,
         "scenes": [{"nodes": [0]}],
         "nodes": [{"mesh": 0}],
-        "meshes": [
-            {
-                "primitives": [
-                    {"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2, "material": 0}
-                ]
-            }
-        ],
-        "materials": [
-            {
-                "pbrMetallicRoughness": {
-                    "baseColorTexture": {"index": 0},
-                    "metallicFactor": 0.0,
-                    "roughnessFactor": 1.0,
-                },
-                "alphaMode": "BLEND",
-                "doubleSided": True,
-                "extensions": {"KHR_materials_unlit": {}},
-            }
-        ],
-        "textures": [{"sampler": 0, "source": 0}],
-        "samplers": [
-            {
-                "magFilter": _LINEAR,
-                "minFilter": _LINEAR_MIPMAP_LINEAR,
-                "wrapS": _CLAMP,
-                "wrapT": _CLAMP,
-            }
-        ],
-        "images": [{"bufferView": 3, "mimeType": "image/png"}],
-        "accessors": [
-            {
-                "bufferView": 0,
-                "componentType": _FLOAT,
-                "count": len(positions),
-                "type": "VEC3",
-                "min": positions.min(axis=0).tolist(),
-                "max": positions.max(axis=0).tolist(),
-            },
-            {"bufferView": 1, "componentType": _FLOAT, "count": len(uvs), "type": "VEC2"},
-            {"bufferView": 2, "componentType": _UINT32, "count": len(indices), "type": "SCALAR"},
-        ],
+        "meshes": [{"primitives": [{"attributes": attributes, "indices": 1, "material": 0}]}],
+        "materials": [material],
+        **textured,
+        "accessors": accessors,
         "bufferViews": views,
         "buffers": [{"byteLength": offset}],
     }

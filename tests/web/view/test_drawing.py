@@ -118,9 +118,10 @@ def test_a_click_on_a_transitions_text_finds_that_transition_and_nothing_else() 
     assert transition_text_at(pic, x1 + 5, y1 + 5) is None
 
 
-def test_the_drawing_adds_no_invisible_node() -> None:
+def test_the_drawing_adds_no_invisible_node_and_frames_its_boxes_in_one_mesh() -> None:
     """Every node a live chart's drawing adds is seen: a transparent click target would
-    cost software WebGL its pixels in every frame."""
+    cost software WebGL its pixels in every frame; and the step boxes' frames are one mesh
+    (each segment of a line object costs a frame as a small mesh would)."""
     layout = ChartLayout.from_chart(long_chart(8, "S{i}"), version=1)
     server, _ = make_server(port=0)
     view = ChartView(server, layout, lambda c: None)  # type: ignore[arg-type, return-value]
@@ -130,6 +131,11 @@ def test_the_drawing_adds_no_invisible_node() -> None:
         nodes = drawing._nodes
         assert nodes and all(getattr(node, "opacity", None) != 0.0 for node in nodes)
         assert all(node.visible for node in nodes)
+        # the boxes' frames are one mesh of quads, not hundreds of line segments
+        frames = [n for n in nodes if n.name.endswith("/frames")]
+        assert len(frames) == 1 and type(frames[0]).__name__ == "GlbHandle"
+        pic = view.picture
+        assert len(pic.frames) >= 4 * len(pic.steps) > len(pic.segments)
     finally:
         view.close()
         server.stop()

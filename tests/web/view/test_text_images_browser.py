@@ -35,8 +35,9 @@ def test_a_page_that_connects_after_the_chart_was_drawn_shows_its_texts() -> Non
     try:
         server.scene.set_up_direction("+y")  # as the view's scene
         drawing = Drawing(server.scene, pic)
-        meshes: list[Any] = [n for n in drawing._nodes if type(n).__name__ == "GlbHandle"]
+        meshes: list[Any] = [n for n in drawing._nodes if "/text" in n.name]
         assert len(meshes) == len(pic.tiles)  # each text image a mesh over its ink
+        assert all(type(n).__name__ == "GlbHandle" for n in meshes)
         assert not any(type(n).__name__ == "ImageHandle" for n in drawing._nodes)
         cam = server.initial_camera
         cam.position, cam.look_at = camera_for(pic)

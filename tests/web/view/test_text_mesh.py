@@ -1,6 +1,7 @@
 """A text image as a mesh over its ink (``web.view.text_mesh``): the quads cover every
 inked pixel and no block without ink; the GLB is what glTF 2.0 says (a header, a JSON and a
-binary chunk) and maps each quad onto its own pixels of the image."""
+binary chunk) and maps each quad onto its own pixels of the image. Lines as one opaque
+mesh of quads."""
 
 from __future__ import annotations
 
@@ -10,12 +11,13 @@ import struct
 from typing import Any
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from PIL import Image
 
 from s7graph.web.view.glyphs import TEXT_PX, Text, tiles
-from s7graph.web.view.text_mesh import BLOCK, inked_runs, tile_glb
+from s7graph.web.view.text_mesh import BLOCK, inked_runs, lines_glb, tile_glb
 from tests.paths import EXAMPLES
 from tests.web.view.test_glyphs import chart_picture
 
@@ -82,11 +84,11 @@ def test_the_drills_texts_are_meshes_that_show_their_own_pixels() -> None:
         doc, binary = read_glb(data)
         (material,) = doc["materials"]
         assert material["alphaMode"] == "BLEND" and "KHR_materials_unlit" in material["extensions"]
-        pos = np.frombuffer(view(doc, binary, 0, np.float32, 3).tobytes(), np.float32).reshape(
-            -1, 3
-        )
-        uv = np.frombuffer(view(doc, binary, 1, np.float32, 2).tobytes(), np.float32).reshape(-1, 2)
-        idx = np.frombuffer(view(doc, binary, 2, np.uint32, 1), np.uint32)
+        (primitive,) = doc["meshes"][0]["primitives"]
+        attributes = primitive["attributes"]
+        pos = view(doc, binary, attributes["POSITION"], np.float32, 3)
+        uv = view(doc, binary, attributes["TEXCOORD_0"], np.float32, 2)
+        idx = np.frombuffer(view(doc, binary, primitive["indices"], np.uint32, 1), np.uint32)
         image_bv = doc["bufferViews"][doc["images"][0]["bufferView"]]
         png = binary[image_bv["byteOffset"] : image_bv["byteOffset"] + image_bv["byteLength"]]
         image = np.asarray(Image.open(io.BytesIO(png)))
@@ -107,3 +109,31 @@ def test_the_drills_texts_are_meshes_that_show_their_own_pixels() -> None:
         assert np.all(mask[image[..., 3] > 0] == 1)  # every inked pixel on a quad, once
         assert mask.sum() < 0.6 * w * h  # and much of the empty space left out
         assert len(runs) <= -(-h // BLOCK) * -(-w // BLOCK)
+
+
+def test_lines_are_one_opaque_mesh_of_quads_that_close_at_the_corners() -> None:
+    """A step box's four lines: four quads of the given width, each reaching half of it
+    past its ends (the corners are closed), opaque in the ink's colour."""
+    box = [
+        [[0.0, 0.0, 0.03], [2.0, 0.0, 0.03]],
+        [[2.0, 0.0, 0.03], [2.0, 1.0, 0.03]],
+        [[2.0, 1.0, 0.03], [0.0, 1.0, 0.03]],
+        [[0.0, 1.0, 0.03], [0.0, 0.0, 0.03]],
+        [[5.0, 5.0, 0.03], [5.0, 5.0, 0.03]],  # no length: nothing drawn
+    ]
+    data = lines_glb(np.array(box, np.float32), 0.1, (30, 30, 30))
+    assert data is not None
+    doc, binary = read_glb(data)
+    (material,) = doc["materials"]
+    assert material.get("alphaMode", "OPAQUE") == "OPAQUE" and "images" not in doc
+    r, g, b, a = material["pbrMetallicRoughness"]["baseColorFactor"]
+    assert r == g == b == pytest.approx(0.0130, abs=1e-3) and a == 1.0  # sRGB 30, linear
+    (primitive,) = doc["meshes"][0]["primitives"]
+    pos = view(doc, binary, primitive["attributes"]["POSITION"], np.float32, 3)
+    assert len(pos) == 16 and np.allclose(pos[:, 2], 0.03)
+    xs, ys = pos[:, 0], pos[:, 1]
+    assert xs.min() == pytest.approx(-0.05) and xs.max() == pytest.approx(2.05)
+    assert ys.min() == pytest.approx(-0.05) and ys.max() == pytest.approx(1.05)
+    first = pos[:4, :2]  # the bottom line: 2.1 long, 0.1 wide
+    assert np.ptp(first[:, 0]) == pytest.approx(2.1) and np.ptp(first[:, 1]) == pytest.approx(0.1)
+    assert lines_glb(np.zeros((0, 2, 3), np.float32), 0.1, (0, 0, 0)) is None
