@@ -136,6 +136,10 @@ def test_the_drawing_adds_no_invisible_node_and_frames_its_boxes_in_one_mesh() -
         assert len(frames) == 1 and type(frames[0]).__name__ == "GlbHandle"
         pic = view.picture
         assert len(pic.frames) >= 4 * len(pic.steps) > len(pic.segments)
+        # its scene click goes with it: a redrawn chart leaves no stale one behind
+        clicks = len(server.scene._scene_pointer_cb)
+        drawing.remove()
+        assert len(server.scene._scene_pointer_cb) == clicks - 1
     finally:
         view.close()
         server.stop()
