@@ -5,12 +5,13 @@ its action table and the next transition's condition. Drawn as one textured plan
 one of its pixels is shaded and blended in every frame, which is what a page costs under
 software WebGL (``bench/page.py``). :func:`tile_glb` instead cuts the tile's image into
 ``BLOCK`` × ``BLOCK`` pixel blocks and draws a quad only over the blocks that hold ink
-(runs of them along a row merged), textured from the same image: what shows is the same,
-pixel for pixel, but the empty blocks cost nothing.
+(runs of them along a row merged), textured with those runs' pixels packed into a smaller
+image (shelves of runs, transparent gutters between them): what shows is the same, pixel
+for pixel, but the empty blocks cost nothing, neither per frame nor as texture memory.
 
 The GLB holds one mesh whose material is unlit (``KHR_materials_unlit``, so no light
 changes the black of the text), blended (``alphaMode: BLEND``) and two-sided; its image
-is the tile's PNG; the sampler is linear with mipmaps, as a textured plane's. Positions are
+is the packed PNG; the sampler is linear with mipmaps, as a textured plane's. Positions are
 in scene units about the tile's centre, the chart's plane at z = 0 (glTF 2.0
 specification, Khronos Group, sections 3.6 "Geometry", 3.8 "Texture Data" and 3.9
 "Materials"; the extension's own page for ``KHR_materials_unlit``).
@@ -32,6 +33,8 @@ __all__ = ["BLOCK", "inked_runs", "lines_glb", "tile_glb"]
 
 BLOCK = 32
 """The side of a block, in image pixels: a quad covers whole blocks that hold ink."""
+GUTTER = 4
+"""Transparent pixels between the packed runs of a tile's texture."""
 
 _FLOAT, _UINT32 = 5126, 5125  # glTF component types
 _ARRAY, _ELEMENTS = 34962, 34963  # buffer view targets
@@ -77,12 +80,50 @@ def tile_glb(tile: Tile, block: int = BLOCK) -> bytes | None:
     positions = np.zeros((len(corners), 3), np.float32)
     positions[:, 0] = left + corners[:, 0] * sx
     positions[:, 1] = top - corners[:, 1] * sy
-    uvs = (corners / (w, h)).astype(np.float32)
+    sheet, places = _packed(image, runs, block)
+    ah, aw = sheet.shape[:2]
+    uv = np.array(
+        [
+            (u, v)
+            for (ax, ay), (x0, y0, x1, y1) in zip(places, runs, strict=True)
+            for u, v in (
+                (ax, ay),
+                (ax + x1 - x0, ay),
+                (ax + x1 - x0, ay + y1 - y0),
+                (ax, ay + y1 - y0),
+            )
+        ],
+        np.float64,
+    )
+    uvs = (uv / (aw, ah)).astype(np.float32)
     quad = np.array([0, 3, 2, 0, 2, 1], np.uint32)  # counter-clockwise seen from +z
     indices = (np.arange(len(runs), dtype=np.uint32)[:, None] * 4 + quad).ravel()
     png = io.BytesIO()
-    Image.fromarray(image, "RGBA").save(png, format="PNG", compress_level=1)
+    Image.fromarray(sheet, "RGBA").save(png, format="PNG", compress_level=1)
     return _glb(positions, uvs, indices, png.getvalue())
+
+
+def _packed(image: Any, runs: list[Run], block: int) -> tuple[Any, list[tuple[int, int]]]:
+    """The pixels of ``runs`` (each at most ``block`` high) packed into shelves, left to
+    right, ``GUTTER`` transparent pixels between runs and between shelves (what a mipmap
+    blends in at a run's edge is then what the tile had there), no wider than ``image``;
+    the packed image and each run's top-left in it. If that is no lower than ``image``,
+    the image itself and the runs where they are."""
+    h, w = image.shape[:2]
+    places: list[tuple[int, int]] = []
+    x = y = 0
+    for x0, _, x1, _ in runs:
+        if x and x + (x1 - x0) > w:
+            x, y = 0, y + block + GUTTER
+        places.append((x, y))
+        x += x1 - x0 + GUTTER
+    height = y + block
+    if height >= h:
+        return image, [(x0, y0) for x0, y0, _, _ in runs]
+    sheet = np.zeros((height, w, 4), np.uint8)
+    for (ax, ay), (x0, y0, x1, y1) in zip(places, runs, strict=True):
+        sheet[ay : ay + y1 - y0, ax : ax + x1 - x0] = image[y0:y1, x0:x1]
+    return sheet, places
 
 
 def lines_glb(segments: Any, width: float, colour: tuple[int, int, int]) -> bytes | None:

@@ -91,24 +91,45 @@ def test_the_drills_texts_are_meshes_that_show_their_own_pixels() -> None:
         idx = np.frombuffer(view(doc, binary, primitive["indices"], np.uint32, 1), np.uint32)
         image_bv = doc["bufferViews"][doc["images"][0]["bufferView"]]
         png = binary[image_bv["byteOffset"] : image_bv["byteOffset"] + image_bv["byteLength"]]
-        image = np.asarray(Image.open(io.BytesIO(png)))
-        assert np.array_equal(image, tile.image[::-1])  # the tile's own pixels, top row first
+        sheet = np.asarray(Image.open(io.BytesIO(png)))
+        image = tile.image[::-1]  # the tile's pixels, top row first
         h, w = image.shape[:2]
+        sh, sw = sheet.shape[:2]
+        assert sh < h and sw <= w  # the texture holds the inked runs only, packed
         assert len(idx) % 6 == 0 and idx.max() < len(pos) and np.all(pos[:, 2] == 0)
-        # each corner's texture pixel is where the corner lies on the tile, at TEXT_PX
-        px = uv * (w, h)
-        x = -tile.width / 2 + px[:, 0] * tile.width / w
-        y = tile.height / 2 - px[:, 1] * tile.height / h
-        assert np.allclose(pos[:, 0], x, atol=1e-4) and np.allclose(pos[:, 1], y, atol=1e-4)
         assert tile.scale == TEXT_PX
-        runs = [
-            (round(a[0]), round(a[1]), round(c[0]), round(c[1]))
-            for a, c in zip(px[0::4], px[2::4], strict=True)
-        ]
+        # each quad: where it lies on the tile (pixels), and its texture's pixels
+        at = np.stack(
+            [
+                (pos[:, 0] + tile.width / 2) * w / tile.width,
+                (tile.height / 2 - pos[:, 1]) * h / tile.height,
+            ],
+            axis=1,
+        )
+        tex = uv * (sw, sh)
+        runs = []
+        for q in range(len(pos) // 4):
+            (x0, y0), (x1, y1) = np.round(at[4 * q]), np.round(at[4 * q + 2])
+            (u0, v0), (u1, v1) = np.round(tex[4 * q]), np.round(tex[4 * q + 2])
+            assert np.allclose(at[4 * q : 4 * q + 4], np.round(at[4 * q : 4 * q + 4]), atol=1e-3)
+            x0, y0, x1, y1, u0, v0, u1, v1 = (int(v) for v in (x0, y0, x1, y1, u0, v0, u1, v1))
+            assert np.array_equal(sheet[v0:v1, u0:u1], image[y0:y1, x0:x1])  # its own pixels
+            runs.append((x0, y0, x1, y1))
         mask = covered(runs, (h, w))
         assert np.all(mask[image[..., 3] > 0] == 1)  # every inked pixel on a quad, once
         assert mask.sum() < 0.6 * w * h  # and much of the empty space left out
         assert len(runs) <= -(-h // BLOCK) * -(-w // BLOCK)
+        # between packed runs only transparent pixels: a mipmap blends in no other run
+        owned = covered(
+            [
+                (int(u0), int(v0), int(u1), int(v1))
+                for u0, v0, u1, v1 in (
+                    np.round(np.r_[tex[4 * q], tex[4 * q + 2]]) for q in range(len(runs))
+                )
+            ],
+            (sh, sw),
+        )
+        assert owned.max() == 1 and not sheet[owned == 0, 3].any()
 
 
 def test_lines_are_one_opaque_mesh_of_quads_that_close_at_the_corners() -> None:
