@@ -105,8 +105,8 @@ def tile_glb(tile: Tile, block: int = BLOCK) -> bytes | None:
 
 def _packed(image: Any, runs: list[Run], block: int) -> tuple[Any, list[tuple[int, int]]]:
     """The pixels of ``runs`` (each at most ``block`` high) packed into shelves, left to
-    right, ``GUTTER`` transparent pixels between runs and between shelves (what a mipmap
-    blends in at a run's edge is then what the tile had there), no wider than ``image``;
+    right, ``GUTTER`` transparent pixels between runs and between shelves (a mipmap blends
+    transparency into a run's edge, never another run's ink), no wider than ``image``;
     the packed image and each run's top-left in it. If that is no lower than ``image``,
     the image itself and the runs where they are."""
     h, w = image.shape[:2]
