@@ -587,12 +587,9 @@ class Drawing:
     def _clicked(self, event: Any) -> None:
         """A click anywhere in the scene: on a transition's text (beside its bar), that
         transition (its bar and the step boxes have clicks of their own)."""
-        (x0, y0, z0), (dx, dy, dz) = event.ray_origin, event.ray_direction
-        if self._on_transition is None or dz == 0 or -z0 / dz <= 0:
-            return
-        ox, oy = self.offset
-        n = transition_text_at(self.picture, x0 - z0 / dz * dx - ox, y0 - z0 / dz * dy - oy)
-        if n is not None:
+        at = chart_point(event, self.offset)
+        n = transition_text_at(self.picture, *at) if at is not None else None
+        if n is not None and self._on_transition is not None:
             self._on_transition(n, event)
 
     def remove(self) -> None:
@@ -610,18 +607,41 @@ class Drawing:
         self.bars.clear()
 
 
+def chart_point(event: Any, offset: tuple[float, float]) -> tuple[float, float] | None:
+    """Where a scene click's ray (``ray_origin``, ``ray_direction``) meets the chart's plane
+    z = 0, as a point of a picture drawn at ``offset``; None if it never does."""
+    (x0, y0, z0), (dx, dy, dz) = event.ray_origin, event.ray_direction
+    if dz == 0 or -z0 / dz <= 0:
+        return None
+    ox, oy = offset
+    return x0 - z0 / dz * dx - ox, y0 - z0 / dz * dy - oy
+
+
+def on_step_box(pic: Picture, x: float, y: float) -> bool:
+    """Whether the picture point ``(x, y)`` is on a step box."""
+    return any(
+        abs(x - sx) <= BOX_W / 2 and abs(y - sy) <= BOX_H / 2 for sx, sy in pic.steps.values()
+    )
+
+
+def target_at(pic: Picture, x: float, y: float) -> int | None:
+    """The transition whose click target (bar and text) holds the picture point ``(x, y)``."""
+    for n, (cx, cy, w, h) in pic.targets.items():
+        if abs(x - cx) <= w / 2 and abs(y - cy) <= h / 2:
+            return n
+    return None
+
+
 def transition_text_at(pic: Picture, x: float, y: float) -> int | None:
     """The transition whose click target (bar and text) holds the picture point ``(x,
     y)``, unless the point is on its bar or on a step box (they are clicked as nodes)."""
-    for sx, sy in pic.steps.values():
-        if abs(x - sx) <= BOX_W / 2 and abs(y - sy) <= BOX_H / 2:
-            return None
-    for n, (cx, cy, w, h) in pic.targets.items():
-        if abs(x - cx) <= w / 2 and abs(y - cy) <= h / 2:
-            tx, ty = pic.transitions[n]
-            on_bar = abs(x - tx) <= BAR_W / 2 and abs(y - ty) <= BAR_H / 2
-            return None if on_bar else n
-    return None
+    if on_step_box(pic, x, y):
+        return None
+    n = target_at(pic, x, y)
+    if n is None:
+        return None
+    tx, ty = pic.transitions[n]
+    return None if abs(x - tx) <= BAR_W / 2 and abs(y - ty) <= BAR_H / 2 else n
 
 
 def _relay(callback: Click, number: int, event: Any) -> None:

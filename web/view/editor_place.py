@@ -20,7 +20,15 @@ import viser
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.change.edit import BY_NAME, Operation, Session
 from s7graph.sequencer.text.elements import Ref, RowRef, SequenceRef, StepRef, TransitionRef
-from s7graph.web.view.drawing import BAR_W, BOX_H, BOX_W, Picture, scale_px
+from s7graph.web.view.drawing import (
+    BAR_W,
+    BOX_W,
+    Picture,
+    chart_point,
+    on_step_box,
+    scale_px,
+    target_at,
+)
 from s7graph.web.view.edit_forms import EXPRESSIONS, Field, Form, completed, completions, names_for
 
 __all__ = ["EDIT_OFFSET", "PICK", "PLACE_WIDTH", "InPlace", "column_transition", "delete_of"]
@@ -54,12 +62,7 @@ def delete_of(ref: Ref | None) -> Operation | None:
 def _hit(pic: Picture, x: float, y: float) -> bool:
     """Whether the picture point ``(x, y)`` is on a step box or a transition's click target
     (their own clicks handle it)."""
-    for sx, sy in pic.steps.values():
-        if abs(x - sx) <= BOX_W / 2 and abs(y - sy) <= BOX_H / 2:
-            return True
-    return any(
-        abs(x - cx) <= w / 2 and abs(y - cy) <= h / 2 for cx, cy, w, h in pic.targets.values()
-    )
+    return on_step_box(pic, x, y) or target_at(pic, x, y) is not None
 
 
 def column_transition(pic: Picture, x: float, y: float) -> int | None:
@@ -168,10 +171,10 @@ class InPlace:
         transition above it in its column (*Step + Transition* …), off every column the
         chart's (*Sequencer*) — in the window beside it."""
         pic, (ox, oy) = self._picture, EDIT_OFFSET
-        (x0, y0, z0), (dx, dy, dz) = event.ray_origin, event.ray_direction
-        if not self.editing or pic is None or dz == 0 or -z0 / dz <= 0:
+        at = chart_point(event, EDIT_OFFSET)
+        if not self.editing or pic is None or at is None:
             return
-        x, y = x0 - z0 / dz * dx - ox, y0 - z0 / dz * dy - oy
+        x, y = at
         if _hit(pic, x, y):
             return
         n = column_transition(pic, x, y)
