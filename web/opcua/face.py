@@ -100,7 +100,7 @@ class Face:
         self.layouts: dict[str, ChartLayout] = {}
         self.applied = 0  # messages from the bus applied (the tests wait on it)
         self.rebuilt: Callable[[], None] = lambda: None
-        """Called after the address space was rebuilt (``server.quiet_collector``)."""
+        """Called after the address space was rebuilt (``web.collector.quiet_collector``)."""
         self._waiting: dict[int, int] = {}  # id of a session's user -> commands waiting
         self._inbox: Inbox | None = None
         self._task: asyncio.Task[None] | None = None

@@ -24,7 +24,6 @@ its text is readable: the whole chart when it fits, else its top-left part.
 
 from __future__ import annotations
 
-import contextlib
 import functools
 import itertools
 import math
@@ -524,9 +523,7 @@ class Drawing:
             self._nodes.append(bar)
             if on_transition is not None:
                 bar.on_click(functools.partial(_relay, on_transition, n))
-        self._on_transition = on_transition
-        if on_transition is not None:  # a transition's text: where a click on the chart is
-            scene.on_click()(self._clicked)
+        self._on_step, self._on_transition = on_step, on_transition
         shifted = np.array([ox, oy, 0.0], np.float32)
         for name, lines, width in (("lines", pic.segments, 2.0), ("double", pic.double, 1.5)):
             if len(lines):
@@ -548,15 +545,16 @@ class Drawing:
             glb = tile_glb(tile)  # rendered now, and kept only as the GLB viser sends
             if glb is None:
                 continue
-            self._nodes.append(
-                scene.add_glb(
-                    f"{root}/text{i}",
-                    glb,
-                    position=(tile.cx + ox, tile.cy + oy, 0.05),
-                    cast_shadow=False,
-                    receive_shadow=False,
-                )
+            text = scene.add_glb(
+                f"{root}/text{i}",
+                glb,
+                position=(tile.cx + ox, tile.cy + oy, 0.05),
+                cast_shadow=False,
+                receive_shadow=False,
             )
+            if on_step is not None or on_transition is not None:
+                text.on_click(self._clicked)  # its mesh covers only the ink
+            self._nodes.append(text)
 
     def paint(self, steps: dict[int, Rgb], transitions: dict[int, Rgb] | None = None) -> None:
         """Colour each step box (missing: inactive grey) and transition bar (missing:
@@ -585,18 +583,23 @@ class Drawing:
         self._colour.clear()
 
     def _clicked(self, event: Any) -> None:
-        """A click anywhere in the scene: on a transition's text (beside its bar), that
-        transition (its bar and the step boxes have clicks of their own)."""
+        """A click on a text: the text lies over what it names, so a point on a step box
+        is that step, beside a transition's bar that transition (the bars and boxes have
+        clicks of their own; a text over a box hides the box from the click)."""
         at = chart_point(event, self.offset)
-        n = transition_text_at(self.picture, *at) if at is not None else None
+        if at is None:
+            return
+        n = step_box_at(self.picture, *at)
+        if n is not None:
+            if self._on_step is not None:
+                self._on_step(n, event)
+            return
+        n = transition_text_at(self.picture, *at)
         if n is not None and self._on_transition is not None:
             self._on_transition(n, event)
 
     def remove(self) -> None:
-        if self._on_transition is not None:
-            with contextlib.suppress(Exception):  # a page gone meanwhile
-                self.scene.remove_click_callback(self._clicked)
-            self._on_transition = None
+        self._on_step = self._on_transition = None
         for node in self._nodes:
             try:
                 node.remove()
@@ -617,11 +620,17 @@ def chart_point(event: Any, offset: tuple[float, float]) -> tuple[float, float] 
     return x0 - z0 / dz * dx - ox, y0 - z0 / dz * dy - oy
 
 
+def step_box_at(pic: Picture, x: float, y: float) -> int | None:
+    """The step whose box holds the picture point ``(x, y)``."""
+    for n, (sx, sy) in pic.steps.items():
+        if abs(x - sx) <= BOX_W / 2 and abs(y - sy) <= BOX_H / 2:
+            return n
+    return None
+
+
 def on_step_box(pic: Picture, x: float, y: float) -> bool:
     """Whether the picture point ``(x, y)`` is on a step box."""
-    return any(
-        abs(x - sx) <= BOX_W / 2 and abs(y - sy) <= BOX_H / 2 for sx, sy in pic.steps.values()
-    )
+    return step_box_at(pic, x, y) is not None
 
 
 def target_at(pic: Picture, x: float, y: float) -> int | None:

@@ -14,7 +14,7 @@ import pytest
 from s7graph.sequencer.text.model import Chart, Operand, Sequence, Step, Transition
 from s7graph.web.bus.protocol import ChartLayout, Command, StepStateUpdate
 from s7graph.web.view.chart_view import ACTIVE, DISTURBED, INACTIVE, ChartView
-from s7graph.web.view.drawing import BOX_H, BOX_W
+from s7graph.web.view.drawing import BAR_W, BOX_H, BOX_W, TEXT_TOP
 from s7graph.web.wiring.web_edge import WebEdge, serve_view
 from tests.web.helpers import chromium_page, log_in, needs_chromium, page_point, wait_until
 from tests.web.toy_feed import ToySequencer
@@ -167,11 +167,29 @@ def screen_point(view: ChartView, x: float, y: float) -> tuple[int, int]:
     return page_point(panel.client, x, y)
 
 
+def cursor(page: Page) -> str:
+    """The cursor viser shows over its scene's canvas (the page's largest)."""
+    return str(
+        page.evaluate(
+            """() => Array.from(document.querySelectorAll('canvas'))
+                .sort((a, b) => b.width * b.height - a.width * a.height)[0].style.cursor"""
+        )
+    )
+
+
 def test_a_click_on_a_transition_shows_its_whole_condition(page: Page, edge: WebEdge) -> None:
-    """Transitions are clickable like steps: the details show name and whole condition."""
+    """Transitions are clickable like steps, on their bar or their text: the details show
+    name and whole condition. The pointer cursor shows over what a click finds, not over
+    the empty canvas."""
     view = edge.view
-    cx, cy, _, _ = view.picture.targets[2]
-    px, py = screen_point(view, cx, cy)
+    tx, ty = view.picture.transitions[2]
+    x1 = view.picture.bounds[1]
+    page.mouse.move(*screen_point(view, x1 + 0.5, ty))  # right of the chart: nothing there
+    page.mouse.move(*screen_point(view, x1 + 0.6, ty))
+    assert wait_until(lambda: cursor(page) in ("", "auto")), cursor(page)
+    px, py = screen_point(view, tx + BAR_W / 2 + 0.25, ty + TEXT_TOP - 0.1)  # its first line
+    page.mouse.move(px, py)
+    assert wait_until(lambda: cursor(page) == "pointer"), cursor(page)
     page.mouse.click(px, py)
     assert wait_until(
         lambda: any(int(p.detail_transition.value) == 2 for p in view.panels.values())
