@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 from PIL import Image
 
 from s7graph.web.view.glyphs import TEXT_PX, Text, tiles
-from s7graph.web.view.text_mesh import BLOCK, inked_runs, lines_glb, tile_glb
+from s7graph.web.view.text_mesh import BLOCK, _packed, inked_runs, lines_glb, tile_glb
 from tests.paths import EXAMPLES
 from tests.web.view.test_glyphs import chart_picture
 
@@ -50,6 +50,43 @@ def test_the_quads_cover_every_inked_pixel_once_and_only_inked_blocks(
         assert 0 <= x0 < x1 <= w and 0 <= y0 < y1 <= h
         for bx in range(x0, x1, block):
             assert alpha[y0:y1, bx : bx + block].any()
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    h=st.integers(1, 80),
+    w=st.integers(1, 80),
+    block=st.sampled_from([4, 8, 32]),
+    dots=st.lists(st.tuples(st.integers(0, 79), st.integers(0, 79)), max_size=60),
+)
+def test_the_packed_texture_holds_each_run_whole_and_is_never_taller_than_the_image(
+    h: int, w: int, block: int, dots: list[tuple[int, int]]
+) -> None:
+    """Each run's pixels are found at its place in the packed texture; nothing else there
+    is ink; the texture is lower than the image, or else it is the image itself with the
+    runs where they are."""
+    image = np.zeros((h, w, 4), np.uint8)
+    for y, x in dots:
+        image[y % h, x % w] = (0, 0, 0, 128 + (x * 7 + y) % 128)
+    runs = inked_runs(image[..., 3], block)
+    sheet, places = _packed(image, runs, block)
+    assert sheet.shape[1] == w and sheet.shape[0] <= h
+    if sheet.shape[0] == h:  # packing would not have saved a row: the image itself
+        assert sheet is image and places == [(x0, y0) for x0, y0, _, _ in runs]
+    inked = np.zeros(sheet.shape[:2], bool)
+    for (ax, ay), (x0, y0, x1, y1) in zip(places, runs, strict=True):
+        assert np.array_equal(sheet[ay : ay + y1 - y0, ax : ax + x1 - x0], image[y0:y1, x0:x1])
+        inked[ay : ay + y1 - y0, ax : ax + x1 - x0] = True
+    assert not sheet[..., 3][~inked].any()
+
+
+def test_an_image_inked_all_over_keeps_its_own_pixels() -> None:
+    """Two full rows of blocks would pack into a taller texture (a gutter between the
+    shelves): the image is used as it is."""
+    image = np.full((2 * BLOCK, 2 * BLOCK, 4), 255, np.uint8)
+    runs = inked_runs(image[..., 3])
+    sheet, places = _packed(image, runs, BLOCK)
+    assert sheet is image and places == [(0, 0), (0, BLOCK)]
 
 
 def test_an_image_without_ink_has_no_mesh() -> None:
