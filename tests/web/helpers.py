@@ -193,6 +193,10 @@ END_FUNCTION_BLOCK
 the S7-SCL blocks' tests give FB 17 in their own source."""
 
 PASSWORD = "correct horse"
+PREVIEW_MS = 90_000
+"""How long a page may wait for a download's preview ("What changes"): it is compiled in a
+process of its own, which a loaded machine (a CI run beside other test processes) may keep
+waiting for a processor for tens of seconds."""
 
 
 @dataclass

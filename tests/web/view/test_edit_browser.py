@@ -23,6 +23,7 @@ from s7graph.web.view.editor import Editor
 from tests.web.bus.test_online_change import CHART
 from tests.web.helpers import (
     PASSWORD,
+    PREVIEW_MS,
     OnlineRig,
     chromium_page,
     field,
@@ -183,7 +184,7 @@ def test_an_engineer_changes_a_condition_downloads_and_the_sequence_follows(
     assert wait_until(lambda: condition(ed, 3) == "empty OR go")  # the text is the chart
     page.get_by_role("tab", name="Element").click()
     click(page, "Download")
-    page.get_by_text("What changes").first.wait_for(timeout=30_000)
+    page.get_by_text("What changes").first.wait_for(timeout=PREVIEW_MS)
     assert page.get_by_text("T1").count() >= 1
     click(page, "Download to the CPU")
     page.get_by_text("download applied").first.wait_for(timeout=30_000)
@@ -223,7 +224,7 @@ def test_a_chart_built_from_scratch_downloads_and_runs(page: Page, cpu: OnlineRi
         assert wait_until(lambda n=n, a=address: condition(ed, n) == a)  # type: ignore[misc]
     assert ed.session is not None and not ed.session.has_errors
     click(page, "Download")
-    page.get_by_text("What changes").first.wait_for(timeout=30_000)
+    page.get_by_text("What changes").first.wait_for(timeout=PREVIEW_MS)
     click(page, "Download to the CPU")
     page.get_by_text("download applied").first.wait_for(timeout=30_000)
     cc = cpu.session.graph.cc

@@ -28,6 +28,7 @@ from s7graph.web.view.editor import Editor
 from tests.sequencer.exchange.helpers import synthetic
 from tests.web.helpers import (
     PASSWORD,
+    PREVIEW_MS,
     OnlineRig,
     chromium_page,
     log_in,
@@ -219,7 +220,7 @@ def test_an_inserted_step_is_named_by_events_watch_the_page_and_the_audit(
     type_into(page, "Condition", "g8")
     assert wait_until(lambda: condition(ed, 8) == "g8")
     click(page, "Download")
-    page.get_by_text("What changes").first.wait_for(timeout=30_000)
+    page.get_by_text("What changes").first.wait_for(timeout=PREVIEW_MS)
     click(page, "Download to the CPU")
     page.get_by_text("download applied").first.wait_for(timeout=30_000)
     assert cpu.session.graph.cc.step_numbers == (1, 2, 3, 4, 5, 6, 8, 7)
@@ -275,7 +276,7 @@ def test_after_undo_download_the_page_draws_the_chart_being_edited(
     page.get_by_role("button", name="Leave edit mode").wait_for(timeout=30_000)
     ed = editor(cpu)
     click(page, "Undo download")
-    page.get_by_text("What changes").first.wait_for(timeout=30_000)
+    page.get_by_text("What changes").first.wait_for(timeout=PREVIEW_MS)
     click(page, "Undo the download")
     page.get_by_text("undo download applied").first.wait_for(timeout=30_000)
     assert cpu.session.graph.cc.step_numbers == tuple(range(1, 8))
