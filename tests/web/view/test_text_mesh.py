@@ -29,19 +29,24 @@ def covered(runs: list[tuple[int, int, int, int]], shape: tuple[int, int]) -> An
     return mask
 
 
-@settings(max_examples=60, deadline=None)
-@given(
-    h=st.integers(1, 100),
-    w=st.integers(1, 100),
-    block=st.sampled_from([4, 8, 32]),
-    dots=st.lists(st.tuples(st.integers(0, 99), st.integers(0, 99)), max_size=40),
-)
-def test_the_quads_cover_every_inked_pixel_once_and_only_inked_blocks(
-    h: int, w: int, block: int, dots: list[tuple[int, int]]
-) -> None:
+@st.composite
+def sparse_ink(draw: st.DrawFn) -> tuple[Any, int]:
+    """An alpha image of up to 100 × 100 pixels with up to 60 inked dots, and a block size."""
+    h, w = draw(st.integers(1, 100)), draw(st.integers(1, 100))
+    dots = draw(st.lists(st.tuples(st.integers(0, 99), st.integers(0, 99)), max_size=60))
     alpha = np.zeros((h, w), np.uint8)
     for y, x in dots:
-        alpha[y % h, x % w] = 255
+        alpha[y % h, x % w] = 128 + (x * 7 + y) % 128
+    return alpha, draw(st.sampled_from([4, 8, 32]))
+
+
+@settings(max_examples=60, deadline=None)
+@given(sparse_ink())
+def test_the_quads_cover_every_inked_pixel_once_and_only_inked_blocks(
+    sample: tuple[Any, int],
+) -> None:
+    alpha, block = sample
+    h, w = alpha.shape
     runs = inked_runs(alpha, block)
     mask = covered(runs, (h, w))
     assert mask.max(initial=0) <= 1  # no pixel drawn twice
@@ -53,21 +58,17 @@ def test_the_quads_cover_every_inked_pixel_once_and_only_inked_blocks(
 
 
 @settings(max_examples=60, deadline=None)
-@given(
-    h=st.integers(1, 80),
-    w=st.integers(1, 80),
-    block=st.sampled_from([4, 8, 32]),
-    dots=st.lists(st.tuples(st.integers(0, 79), st.integers(0, 79)), max_size=60),
-)
+@given(sparse_ink())
 def test_the_packed_texture_holds_each_run_whole_and_is_never_taller_than_the_image(
-    h: int, w: int, block: int, dots: list[tuple[int, int]]
+    sample: tuple[Any, int],
 ) -> None:
     """Each run's pixels are found at its place in the packed texture; nothing else there
     is ink; the texture is lower than the image, or else it is the image itself with the
     runs where they are."""
+    alpha, block = sample
+    h, w = alpha.shape
     image = np.zeros((h, w, 4), np.uint8)
-    for y, x in dots:
-        image[y % h, x % w] = (0, 0, 0, 128 + (x * 7 + y) % 128)
+    image[..., 3] = alpha
     runs = inked_runs(image[..., 3], block)
     sheet, places = _packed(image, runs, block)
     assert sheet.shape[1] == w and sheet.shape[0] <= h
