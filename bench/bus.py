@@ -14,11 +14,11 @@ a message leaves every N changed FBs while the scan thread builds the rest, and 
 replays messages of that size. The other side is a
 second process (this file with ``--peer``) on its own zenoh session, connected over a
 unix socket: it follows every FB with ``BusClient.follow`` (decode, ``seq`` order: the
-view's code), its garbage collector tuned as the view's process tunes its own
-(``web.collector``), and subscribes to a raw key; with ``--old-readers`` it also subscribes to
-every FB's own ``fb/<fb>/delta`` and decodes what comes there, as a reader of the old key
-would (the CPU then puts each delta there too). Times are ``CLOCK_MONOTONIC``, which both
-processes share. In each round, per layout:
+view's code), what it built to start frozen as the view's process freezes its own
+(``web.collector.freeze_start``), and subscribes to a raw key; with ``--old-readers`` it
+also subscribes to every FB's own ``fb/<fb>/delta`` and decodes what comes there, as a
+reader of the old key would (the CPU then puts each delta there too). Times are
+``CLOCK_MONOTONIC``, which both processes share. In each round, per layout:
 
 (a) **raw zenoh**: at every 10 ms tick, the messages the CPU published in the same tick
     of (b) — batched: one message carrying as many real encoded deltas as that scan's;
@@ -77,7 +77,7 @@ from s7graph.web.bus.protocol import ScanDeltas, StepStateUpdate, decode, encode
 from s7graph.web.bus.publisher import BusPublisher  # noqa: E402
 from s7graph.web.bus.scan_events import ScanEvents  # noqa: E402
 from s7graph.web.bus.session import open_session  # noqa: E402
-from s7graph.web.collector import quiet_collector  # noqa: E402
+from s7graph.web.collector import freeze_start  # noqa: E402
 
 RAW_KEY = "s7graph-bench/raw"
 CYCLE_MS = 10.0
@@ -125,7 +125,7 @@ def peer(endpoint: str, cpus: dict[str, list[str]], old_readers: bool = False) -
                 client.follow(fb, on_update)
                 if old_readers:
                     subs.append(session.declare_subscriber(keys(cpu).fb(fb, "delta"), on_old))
-        quiet_collector()  # as the view's process does (``s7graph web``)
+        freeze_start()  # as the view's process does (``s7graph web``)
         print("ready", flush=True)
         try:
             for line in sys.stdin:

@@ -7,9 +7,9 @@ program of blocks, gets its status, watch table and diagnostics) on ``--host:--p
 and knows the CPU only over the bus. ``s7graph run --web`` starts it so, as its child
 (``--child``: it ends when its stdin closes — the CPU's process went — and yields the
 processor to the CPU). The page may leave this machine (``--host``) only when the CPU
-checks logins (a users file). Once it serves, what it built to start is frozen and its
-young objects are collected less often (``web.collector``): no full collection holds a
-step change up on its way to the page. Stopped, it says so in one line on stderr.
+checks logins (a users file). Once it serves, what it built to start is frozen
+(``web.collector.freeze_start``): a full collection walks only what came later and holds a
+step change up on its way to the page for less. Stopped, it says so in one line on stderr.
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ from s7graph.web.bus.client import find_cpus
 from s7graph.web.bus.session import open_session
 from s7graph.web.cli.net import NetOptions, is_loopback_host
 from s7graph.web.cli.stopping import wait_until_stopped
-from s7graph.web.collector import quiet_collector
+from s7graph.web.collector import freeze_start
 from s7graph.web.view.edge import PortError, ViewSide
 
 __all__ = ["web_command"]
@@ -94,7 +94,7 @@ def web_command(
         return _fail(str(exc))
     except Exception as exc:
         return _fail(f"cannot serve the view: {type(exc).__name__}: {exc}")
-    quiet_collector()  # the process is the view's alone; a step change waits for no full GC
+    freeze_start()  # the process is the view's alone: a full collection skips what it built
     of = f"{chosen.cpu}/{view.fb}" if view.fb else f"{chosen.cpu} (a program)"
     print(f"s7graph: view {view.url} of {of}; Ctrl-C to stop", flush=True)
     try:
