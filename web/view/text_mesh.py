@@ -82,22 +82,13 @@ def tile_glb(tile: Tile, block: int = BLOCK) -> bytes | None:
     positions[:, 1] = top - corners[:, 1] * sy
     sheet, places = _packed(image, runs, block)
     ah, aw = sheet.shape[:2]
-    uv = np.array(
-        [
-            (u, v)
-            for (ax, ay), (x0, y0, x1, y1) in zip(places, runs, strict=True)
-            for u, v in (
-                (ax, ay),
-                (ax + x1 - x0, ay),
-                (ax + x1 - x0, ay + y1 - y0),
-                (ax, ay + y1 - y0),
-            )
-        ],
+    # each run's corners, moved to where the packing put the run
+    moved = np.array(
+        [(ax - x0, ay - y0) for (ax, ay), (x0, y0, _, _) in zip(places, runs, strict=True)],
         np.float64,
     )
-    uvs = (uv / (aw, ah)).astype(np.float32)
-    quad = np.array([0, 3, 2, 0, 2, 1], np.uint32)  # counter-clockwise seen from +z
-    indices = (np.arange(len(runs), dtype=np.uint32)[:, None] * 4 + quad).ravel()
+    uvs = ((corners + np.repeat(moved, 4, axis=0)) / (aw, ah)).astype(np.float32)
+    indices = _quads(len(runs), (0, 3, 2, 0, 2, 1))  # counter-clockwise seen from +z
     png = io.BytesIO()
     Image.fromarray(sheet, "RGBA").save(png, format="PNG", compress_level=1)
     return _glb(positions, uvs, indices, png.getvalue())
@@ -143,9 +134,14 @@ def lines_glb(segments: Any, width: float, colour: tuple[int, int, int]) -> byte
     positions = np.zeros((len(seg) * 4, 3), np.float32)
     positions[:, :2] = corners.reshape(-1, 2)
     positions[:, 2] = np.repeat(seg[:, 0, 2], 4)
-    quad = np.array([0, 1, 2, 0, 2, 3], np.uint32)
-    indices = (np.arange(len(seg), dtype=np.uint32)[:, None] * 4 + quad).ravel()
-    return _glb(positions, None, indices, None, colour)
+    return _glb(positions, None, _quads(len(seg), (0, 1, 2, 0, 2, 3)), None, colour)
+
+
+def _quads(count: int, order: tuple[int, ...]) -> Any:
+    """The triangle indices (uint32) of ``count`` quads of 4 vertices each, every quad's
+    two triangles taking its corners in ``order``."""
+    quad = np.array(order, np.uint32)
+    return (np.arange(count, dtype=np.uint32)[:, None] * 4 + quad).ravel()
 
 
 def _linear(channel: int) -> float:
