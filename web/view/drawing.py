@@ -334,13 +334,22 @@ class _Drawing:
     def xy(self, x: float, y: float, *, from_above: bool = False) -> tuple[float, float]:
         return x * self.lane, self.rows.at(y, from_above=from_above)
 
-    def text_at(self, lines: list[str], x: float, y: float, anchor: str, size: float) -> None:
+    def text_at(
+        self,
+        lines: list[str],
+        x: float,
+        y: float,
+        anchor: str,
+        size: float,
+        *,
+        click: bool = False,
+    ) -> None:
         w = max((_width(line, size) for line in lines), default=0.0)
         h = size * LINE * len(lines)
         vertical, _, horizontal = anchor.partition("-")
         left = x - {"left": 0.0, "center": w / 2, "right": w}[horizontal]
         top = y + {"top": 0.0, "center": h / 2, "bottom": h}[vertical]
-        self.text_items.append(Text(tuple(lines), left, top, size))
+        self.text_items.append(Text(tuple(lines), left, top, size, click))
 
     def links(self, p: Placement) -> None:
         for link in p.links:
@@ -390,7 +399,7 @@ class _Drawing:
             tt = trans_text[t.number]
             lines, size = tt.lines, tt.size
             left, top = x + BAR_W / 2 + 0.08, y + TEXT_TOP
-            self.text_at(lines, left, top, "top-left", size)
+            self.text_at(lines, left, top, "top-left", size, click=True)
             if t.contacts:
                 cond_top = top - tt.first * size * LINE
                 spans = list(t.contacts)
@@ -553,7 +562,7 @@ class Drawing:
                 cast_shadow=False,
                 receive_shadow=False,
             )
-            if on_step is not None or on_transition is not None:
+            if tile.click and (on_step is not None or on_transition is not None):
                 text.on_click(self._clicked)  # its mesh covers only the ink
             self._nodes.append(text)
 
@@ -584,9 +593,9 @@ class Drawing:
         self._colour.clear()
 
     def _clicked(self, event: Any) -> None:
-        """A click on a text: the text lies over what it names, so a point on a step box
-        is that step, beside a transition's bar that transition (the bars and boxes have
-        clicks of their own; a text over a box hides the box from the click)."""
+        """A click on a transition's text (the only texts that take clicks: a step's name
+        lets the click through to its box): that transition; a point of it that lies on a
+        step box, that step (the bars and boxes have clicks of their own)."""
         at = chart_point(event, self.offset)
         if at is None:
             return

@@ -113,12 +113,16 @@ def fit_text(
 
 @dataclass(frozen=True, slots=True)
 class Text:
-    """Lines of text at a place of the chart: ``x`` its left, ``y`` its top."""
+    """Lines of text at a place of the chart: ``x`` its left, ``y`` its top. ``click``: a
+    click on it means something of its own (a transition's name and condition); its image
+    then takes clicks and holds no other text, while the rest let a click through to what
+    lies under them (a step's name to its box)."""
 
     lines: tuple[str, ...]
     x: float
     y: float
     size: float
+    click: bool = False
 
     @property
     def width(self) -> float:
@@ -132,8 +136,8 @@ class Text:
 @dataclass(frozen=True, slots=True)
 class Tile:
     """Texts on one transparent image: its size and centre in scene units, ``scale`` image
-    pixels per scene unit. The pixels are rendered when ``image`` is read (RGBA, rows
-    bottom-up), every time: a picture keeps its texts, not their pixels."""
+    pixels per scene unit. The pixels are rendered when ``alpha`` or ``image`` is read,
+    every time: a picture keeps its texts, not their pixels."""
 
     texts: tuple[Text, ...]
     width: float
@@ -145,12 +149,28 @@ class Tile:
     offset: tuple[int, int]  # this image's top-left pixel on that grid
 
     @property
+    def click(self) -> bool:
+        """Whether the image takes clicks (its texts are the clickable ones, ``Text.click``)."""
+        return any(t.click for t in self.texts)
+
+    @property
     def px(self) -> tuple[int, int]:
         """The image's width and height in pixels."""
         return max(round(self.width * self.scale), 1), max(round(self.height * self.scale), 1)
 
     @property
     def image(self) -> Any:
+        """The pixels: RGBA, black where the texts are, rows bottom-up (as a plane shows
+        them)."""
+        alpha = self.alpha[::-1]
+        image = np.zeros((*alpha.shape, 4), np.uint8)
+        image[..., 3] = alpha
+        return image
+
+    @property
+    def alpha(self) -> Any:
+        """The texts' opacity (their colour is black): rows from the top, as glTF reads a
+        texture; a quarter of the bytes of the RGBA image, read-only."""
         return _render(self)
 
 
@@ -176,15 +196,16 @@ _Box = tuple[float, float, float, float]  # x0, x1 (left, right), y0, y1 (bottom
 
 def tiles(items: list[Text]) -> list[Tile]:
     """``items`` rendered onto transparent images of at most ``TILE_PX`` square, one per
-    cell of the chart that has texts (a text belongs to the cell where it starts), each
-    cropped to its texts; at ``TEXT_PX`` pixels per scene unit, or fewer when more than
-    ``BUDGET_PX`` pixels would be needed in all."""
+    cell of the chart that has texts (a text belongs to the cell where it starts) and per
+    kind of text (clickable or not, ``Text.click``), each cropped to its texts; at
+    ``TEXT_PX`` pixels per scene unit, or fewer when more than ``BUDGET_PX`` pixels would be
+    needed in all."""
     if not items:
         return []
-    boxes = [_box(t) for t in items]
-    origin = (min(b[0] for b in boxes), max(b[3] for b in boxes))
+    origin = (min(t.x for t in items) - 0.1, max(t.y for t in items) + 0.1)  # as _box's
     scale = float(TEXT_PX)
     while True:
+        boxes = [_box(t, scale) for t in items]
         out = _layout(items, boxes, origin, scale)
         total = sum(w * h for w, h in (t.px for t in out))
         if total <= BUDGET_PX:
@@ -192,9 +213,15 @@ def tiles(items: list[Text]) -> list[Tile]:
         scale *= min(0.95, (BUDGET_PX / total) ** 0.5)
 
 
-def _box(t: Text) -> _Box:
-    """Where ``t``'s image must reach: its lines and 0.1 around."""
-    return t.x - 0.1, t.x + t.width + 0.1, t.y - t.height - 0.1, t.y + 0.1
+def _box(t: Text, scale: float) -> _Box:
+    """Where ``t``'s image must reach at ``scale`` pixels per unit: its lines and 0.1
+    around. Below ``TEXT_PX`` a line may be wider than ``t.width``: its font's pixel size
+    is rounded (``_render``), and so its width grows by up to half a pixel per pixel."""
+    width = t.width
+    if scale != TEXT_PX:
+        font = _font(round(t.size * scale))
+        width = max(width, max((float(font.getlength(x)) for x in t.lines), default=0.0) / scale)
+    return t.x - 0.1, t.x + width + 0.1, t.y - t.height - 0.1, t.y + 0.1
 
 
 def _layout(
@@ -202,9 +229,10 @@ def _layout(
 ) -> list[Tile]:
     ox, oy = origin
     cell = CELL_PX / scale
-    cells: dict[tuple[int, int], list[int]] = {}
+    cells: dict[tuple[int, int, bool], list[int]] = {}
     for i, t in enumerate(items):
-        cells.setdefault((int((t.x - ox) // cell), int((oy - t.y) // cell)), []).append(i)
+        key = (int((t.x - ox) // cell), int((oy - t.y) // cell), t.click)
+        cells.setdefault(key, []).append(i)
     out: list[Tile] = []
     for _, members in sorted(cells.items()):
         out += _cut(items, boxes, members, origin, scale)
@@ -286,10 +314,9 @@ def _piece(
 
 
 def _render(tile: Tile) -> Any:
-    """``tile``'s texts in black on transparent black (filtering blends no white in); each
-    text drawn where it stands on the chart's pixel grid, so that texts cut across images
-    join."""
-    image = Image.new("RGBA", tile.px, (0, 0, 0, 0))
+    """The opacity of ``tile``'s texts (``Tile.alpha``), rows from the top; each text drawn
+    where it stands on the chart's pixel grid, so that texts cut across images join."""
+    image = Image.new("L", tile.px, 0)
     draw = ImageDraw.Draw(image)
     (ox, oy), (kx, ky), s = tile.origin, tile.offset, tile.scale
     for t in tile.texts:
@@ -297,8 +324,8 @@ def _render(tile: Tile) -> Any:
         for i, line in enumerate(t.lines):
             px = (t.x - ox) * s - kx
             py = (oy - t.y + i * t.size * LINE) * s - ky
-            draw.text((px, py), line, font=font, fill=(0, 0, 0, 255))
-    return np.ascontiguousarray(np.asarray(image)[::-1])  # the plane shows rows bottom-up
+            draw.text((px, py), line, font=font, fill=255)
+    return np.asarray(image)
 
 
 def label_image(lines: list[str], size: float, width: float, background: Rgb) -> Any:

@@ -47,12 +47,11 @@ def inked_runs(alpha: Any, block: int = BLOCK) -> list[Run]:
     top): its ``block``-square blocks that hold ink, consecutive ones of a row of blocks
     joined into one rectangle, each clipped to the image."""
     h, w = alpha.shape
-    rows, cols = -(-h // block), -(-w // block)
-    padded = np.zeros((rows * block, cols * block), bool)
-    padded[:h, :w] = alpha > 0
-    inked: Any = padded.reshape(rows, block, cols, block).any(axis=(1, 3))
+    # each block's most opaque pixel (one pass over the image, the last blocks cut short)
+    most = np.maximum.reduceat(alpha, np.arange(0, h, block), axis=0)
+    inked: Any = np.maximum.reduceat(most, np.arange(0, w, block), axis=1) > 0
     runs: list[Run] = []
-    for r in range(rows):
+    for r in range(len(inked)):
         row = inked[r]
         # where runs of inked blocks start and end: the edges of a 0/1 sequence
         edges = np.flatnonzero(np.diff(np.concatenate(([0], row.astype(np.int8), [0]))))
@@ -66,9 +65,9 @@ def inked_runs(alpha: Any, block: int = BLOCK) -> list[Run]:
 def tile_glb(tile: Tile, block: int = BLOCK) -> bytes | None:
     """``tile`` as a GLB whose mesh covers the inked blocks of its image, centred on the
     tile's centre (place the node at ``(tile.cx, tile.cy, z)``); None if it has no ink."""
-    image = np.ascontiguousarray(tile.image[::-1])  # rows from the top, as glTF reads them
-    h, w = image.shape[:2]
-    runs = inked_runs(image[..., 3], block)
+    alpha = tile.alpha  # rows from the top, as glTF reads them
+    h, w = alpha.shape
+    runs = inked_runs(alpha, block)
     if not runs:
         return None
     sx, sy = tile.width / w, tile.height / h  # scene units per pixel
@@ -80,8 +79,10 @@ def tile_glb(tile: Tile, block: int = BLOCK) -> bytes | None:
     positions = np.zeros((len(corners), 3), np.float32)
     positions[:, 0] = left + corners[:, 0] * sx
     positions[:, 1] = top - corners[:, 1] * sy
-    sheet, places = _packed(image, runs, block)
-    ah, aw = sheet.shape[:2]
+    packed, places = _packed(alpha, runs, block)
+    ah, aw = packed.shape
+    sheet = np.zeros((ah, aw, 4), np.uint8)  # black, as opaque as the texts
+    sheet[..., 3] = packed
     # each run's corners, moved to where the packing put the run
     moved = np.array(
         [(ax - x0, ay - y0) for (ax, ay), (x0, y0, _, _) in zip(places, runs, strict=True)],
@@ -111,7 +112,7 @@ def _packed(image: Any, runs: list[Run], block: int) -> tuple[Any, list[tuple[in
     height = y + block
     if height >= h:
         return image, [(x0, y0) for x0, y0, _, _ in runs]
-    sheet = np.zeros((height, w, 4), np.uint8)
+    sheet = np.zeros((height, *image.shape[1:]), image.dtype)
     for (ax, ay), (x0, y0, x1, y1) in zip(places, runs, strict=True):
         sheet[ay : ay + y1 - y0, ax : ax + x1 - x0] = image[y0:y1, x0:x1]
     return sheet, places

@@ -122,8 +122,8 @@ def test_a_click_on_a_transitions_text_finds_that_transition_and_nothing_else() 
 
 
 def test_a_click_on_a_text_selects_the_step_under_it_or_the_transition_beside_it() -> None:
-    """A text lies over what it names and hides it from the click: a point of a step box is
-    that step, a transition's text that transition, a text that is neither nothing."""
+    """A clickable text hides what lies under it from the click: a point of a step box is
+    that step, a transition's text that transition, a point that is neither nothing."""
     pic = picture(place(long_chart(4, "S{i}")))
     clicked: list[tuple[str, int]] = []
     server, _ = make_server(port=0)
@@ -175,10 +175,14 @@ def test_the_drawing_adds_no_invisible_node_and_frames_its_boxes_in_one_mesh() -
         assert len(frames) == 1 and type(frames[0]).__name__ == "GlbHandle"
         pic = view.picture
         assert len(pic.frames) >= 4 * len(pic.steps) > len(pic.segments)
-        # the texts are clicked as nodes of their own, not through a click on the whole
-        # scene (which makes viser show the pointer cursor all over the canvas)
-        texts = [n for n in nodes if "/text" in n.name]
-        assert texts and all(n._impl.click_cb for n in texts)
+        # the transitions' texts are clicked as nodes of their own, not through a click on
+        # the whole scene (which makes viser show the pointer cursor all over the canvas);
+        # the other texts take none: a click (and the hover outline) on a step's name
+        # reaches its box
+        texts = {n.name.rsplit("/", 1)[1]: n for n in nodes if "/text" in n.name}
+        clicks = {f"text{i}": t.click for i, t in enumerate(pic.tiles)}
+        assert True in clicks.values() and False in clicks.values()
+        assert {name: bool(n._impl.click_cb) for name, n in texts.items()} == clicks
         assert not server.scene._scene_pointer_cb
     finally:
         view.close()

@@ -40,13 +40,17 @@ def texts_of(tiles_: Sequence[Tile]) -> list[Text]:
     return list(seen.values())
 
 
-def one_image(texts: list[Text], scale: float) -> tuple[Any, float, float]:
+def one_image(
+    texts: list[Text], scale: float, frame: list[Text] | None = None
+) -> tuple[Any, float, float]:
     """All ``texts`` on one image of the whole chart (as the view drew them before its
-    images were bounded), top row first, and the scene x, y of its top-left corner."""
-    x0 = min(t.x for t in texts) - 0.1
-    x1 = max(t.x + t.width for t in texts) + 0.1
-    y1 = max(t.y for t in texts) + 0.1
-    y0 = min(t.y - t.height for t in texts) - 0.1
+    images were bounded; as large as the texts ``frame``, default ``texts``), top row first,
+    and the scene x, y of its top-left corner."""
+    frame = texts if frame is None else frame
+    x0 = min(t.x for t in frame) - 0.1
+    x1 = max(t.x + t.width for t in frame) + 0.1
+    y1 = max(t.y for t in frame) + 0.1
+    y0 = min(t.y - t.height for t in frame) - 0.1
     image = Image.new("RGBA", (round((x1 - x0) * scale) + 2, round((y1 - y0) * scale) + 2))
     draw = ImageDraw.Draw(image)
     for t in texts:
@@ -86,10 +90,15 @@ def test_a_small_charts_texts_are_drawn_as_before_pixel_for_pixel(path: Path) ->
     assert np.array_equal(pasted(pic.tiles, whole.shape, x0, y1), whole[..., 3])
 
 
-def test_the_drill_is_one_image_of_its_texts() -> None:
+def test_the_drill_is_one_image_of_its_transitions_texts_and_one_of_the_rest() -> None:
+    """The texts a click means something on (``Text.click``: the transitions') never share
+    an image with the others, which let a click through to what lies under them."""
     pic = chart_picture((EXAMPLES / "drill" / "drill.s7g").read_text(), "drill.s7g")
-    (tile,) = pic.tiles
-    assert tile.image.shape == (1181, 1248, 4)  # as before the images were bounded
+    rest, transitions = pic.tiles
+    assert not rest.click and all(not t.click for t in rest.texts)
+    assert transitions.click and all(t.click for t in transitions.texts)
+    assert {t.lines[0].split()[0] for t in transitions.texts} == {f"T{n}" for n in range(1, 9)}
+    assert any(t.lines[0].startswith("S1 ") for t in rest.texts)  # a step's name
 
 
 def test_a_text_wider_and_higher_than_an_image_is_cut_and_its_parts_join() -> None:
@@ -114,12 +123,19 @@ def test_texts_over_the_budget_are_drawn_smaller_in_the_same_place(
     scale = out[0].scale
     assert scale < TEXT_PX * 0.6 and all(t.scale == scale for t in out)
     assert sum(w * h for w, h in (t.px for t in out)) <= 400_000
-    (tile,) = out  # the scene size stays: the image covers what it covered
-    assert tile.width == pytest.approx(pic.tiles[0].width, abs=1 / scale)
-    assert tile.height == pytest.approx(pic.tiles[0].height, abs=1 / scale)
-    assert (tile.cx, tile.cy) == pytest.approx((pic.tiles[0].cx, pic.tiles[0].cy), abs=1 / scale)
-    whole, x0, y1 = one_image(texts, scale)
-    assert np.array_equal(pasted(out, whole.shape, x0, y1), whole[..., 3])
+    assert len(out) == len(pic.tiles)  # the same place: each covers what it covered, its
+    for tile, before in zip(out, pic.tiles, strict=True):  # top-left where it was, and
+        # reaches as far as the rounded font sizes' lines do (a little wider than before)
+        left, top = tile.cx - tile.width / 2, tile.cy + tile.height / 2
+        assert (left, top) == pytest.approx(
+            (before.cx - before.width / 2, before.cy + before.height / 2), abs=1 / scale
+        )
+        assert tile.height == pytest.approx(before.height, abs=1 / scale)
+        assert before.width - 1 / scale <= tile.width <= before.width * 1.1
+    for click in (False, True):  # each kind's images hold its texts as one image would
+        whole, x0, y1 = one_image([t for t in texts if t.click is click], scale, texts)
+        kind = [t for t in out if t.click is click]
+        assert np.array_equal(pasted(kind, whole.shape, x0, y1), whole[..., 3])
 
 
 def test_the_huge_charts_texts_stay_within_the_budget_in_images_of_2048_square() -> None:
@@ -142,5 +158,6 @@ def test_the_huge_charts_texts_stay_within_the_budget_in_images_of_2048_square()
     }
     assert placed == {id(t) for t in texts}
     assert len(texts) > 60_000
-    right = max(t.cx + t.width / 2 for t in pic.tiles)
-    assert right == pytest.approx(max(t.x + t.width for t in texts) + 0.1, abs=1 / scale)
+    right = max(t.cx + t.width / 2 for t in pic.tiles)  # the widest line as rendered, + 0.1
+    assert right == pytest.approx(max(glyphs._box(t, scale)[1] for t in texts), abs=1 / scale)
+    assert right >= max(t.x + t.width for t in texts) + 0.1 - 1 / scale

@@ -204,6 +204,40 @@ def test_a_click_on_a_transition_shows_its_whole_condition(page: Page, edge: Web
     assert wait_until(lambda: all(int(p.detail_transition.value) == 0 for p in panels))
 
 
+def test_the_pointer_on_a_steps_name_outlines_its_box(page: Page, edge: WebEdge) -> None:
+    """A step's name lets the pointer through to its box: the box shows viser's hover
+    outline (yellow) around it, as over the rest of the box, and the pointer cursor."""
+    from io import BytesIO
+
+    from PIL import Image
+
+    view = edge.view
+    sx, sy = view.picture.steps[5]
+
+    def outlined() -> int:
+        """On how many of the box's four sides the outline shows: a yellow pixel within 12
+        pixels outside its frame, off the link (the camera read each time: the page may
+        still be aiming it)."""
+        shot = Image.open(BytesIO(page.screenshot())).convert("RGB")
+        sides = 0
+        for dx, dy in ((-1, 0), (1, 0), (-0.5, -1), (0.5, 1)):
+            x, y = screen_point(view, sx + dx * BOX_W / 2, sy + dy * BOX_H / 2)
+            step = (0, -dy) if dy else (dx, 0)  # outwards on the page (its y grows down)
+            pixels = [shot.getpixel((x + k * step[0], y + k * step[1])) for k in range(2, 13)]
+            sides += any(min(r, g) > 150 and b < r - 40 for r, g, b in pixels)  # yellow
+        return sides
+
+    def pointing(x: float, y: float, outlines: int) -> bool:
+        page.mouse.move(*screen_point(view, x, y))
+        return outlined() == outlines
+
+    x1 = view.picture.bounds[1]
+    assert wait_until(lambda: pointing(x1 + 0.5, sy, 0), 30, poll=0.5)  # nothing there
+    assert wait_until(lambda: pointing(sx, sy, 4), 30, poll=0.5)  # its name: "S5  Drain"
+    assert cursor(page) == "pointer"
+    assert wait_until(lambda: pointing(x1 + 0.5, sy, 0), 30, poll=0.5)
+
+
 def test_every_step_shows_its_state_colour_itself_on_the_page(page: Page, edge: WebEdge) -> None:
     """The chart is lit flat (``FLAT_LIGHT``: one ambient light, no shadows, no environment
     map), so a box's pixels are its state's RGB — active, disturbed, inactive — not a shaded
