@@ -572,7 +572,7 @@ def main(argv: list[str] | None = None) -> int:
                 for cpu in cpus.values():
                     cpu.close()
     print()
-    print(f"{'min/median/max':26}" + "".join(f"{lay:>26}" for lay in layouts))
+    print(f"{'min/median/max':26}" + "".join(f"{lay:>32}" for lay in layouts))
     rows = [
         ("raw zenoh p50 ms", "raw p50", "{:.3f}"),
         ("raw zenoh p99 ms", "raw p99", "{:.3f}"),
@@ -597,7 +597,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.old_readers:
         rows.append(("old-key deltas ÷ followed", "old", "{:.2f}"))
     for label, key, fmt in rows:
-        print(f"{label:26}" + "".join(f"{spread(res[lay][key], fmt):>26}" for lay in layouts))
+        cells = (spread(res[lay][key], fmt) for lay in layouts)
+        print(f"{label:26}" + "".join(f" {cell:>31}" for cell in cells))  # one blank at least
     print()
     for lay in layouts:
         print(f"targets, {lay}: " + verdict(res[lay]))

@@ -16,11 +16,13 @@ the status view shows what changes (``web.view.status_layer``): each step's time
 action row's live value, each contact of a condition (``web.view.criteria``), and where each
 sequence lies (``Picture.sequence_bounds``). :class:`Drawing` puts a picture into one
 scene (the shared live scene, or one page's edit scene at an offset) with click handlers
-on steps and on transitions (a box's and a bar's click their own; a text mesh, which covers
-only its ink, takes the clicks on it and finds the step under it or the transition beside
-it from where the click meets the chart: no invisible target costs a frame its pixels),
-and recolours its steps and transitions. :func:`camera_for` aims a camera at a picture at
-a zoom where its text is readable: the whole chart when it fits, else its top-left part.
+on steps and on transitions (a box's and a bar's click their own; the transitions' texts
+are text meshes of their own, covering only their ink, that take the clicks on them and
+find the transition from where the click meets the chart — no invisible target costs a
+frame its pixels; the other texts take none, so a step's name passes a click and the
+hover on to its box), and recolours its steps and transitions. :func:`camera_for` aims a
+camera at a picture at a zoom where its text is readable: the whole chart when it fits,
+else its top-left part.
 """
 
 from __future__ import annotations
