@@ -44,9 +44,16 @@ def _font(px: int) -> ImageFont.FreeTypeFont | ImageFont.ImageFont:
     return ImageFont.load_default(size=max(px, 1))
 
 
+@functools.lru_cache(maxsize=1 << 16)
+def _length(px: int, line: str) -> float:
+    """The width in pixels of ``line`` at ``px`` pixels high (a chart repeats its names: of
+    the 66,000 lines of a 1,000-step chart, 4,000 differ)."""
+    return float(_font(px).getlength(line))
+
+
 def text_width(text: str, size: float) -> float:
     """The width of ``text`` in scene units at text height ``size``."""
-    return float(_font(max(round(size * TEXT_PX), 6)).getlength(text)) / TEXT_PX
+    return _length(max(round(size * TEXT_PX), 6), text) / TEXT_PX
 
 
 def wrap(text: str, width: float, size: float) -> list[str]:
@@ -183,9 +190,11 @@ CELL_PX = 1536
 cropped to the cell's texts, which may reach ``TILE_PX - CELL_PX`` beyond it (a longer
 reach is cut into more images)."""
 BUDGET_PX = 48_000_000
-"""The most pixels a chart's text images may have in all; a chart whose texts need more is
-rendered at fewer pixels per scene unit (``Tile.scale``), its scene size the same. 48 Mpx
-is 192 MB of RGBA textures in the page, whatever the chart. It keeps charts of a few
+"""The most pixels a chart's text images may have in all, counted as one image per cell
+(the images of the two kinds of text overlap there, and only their inked blocks reach the
+page); a chart whose texts need more is rendered at fewer pixels per scene unit
+(``Tile.scale``), its scene size the same. 48 Mpx would be 192 MB of RGBA textures in the
+page if every pixel held ink, whatever the chart. It keeps charts of a few
 hundred steps at ``TEXT_PX`` (a 250-step loop needs 15 Mpx, the drill 1.5) and a loop of
 1,000 steps with an action each (99 Mpx) at 59 pixels per unit — still more than the
 default zoom shows (``READABLE_PX``, 55); 1,000 steps of 31 action rows each (627 Mpx at
@@ -198,40 +207,49 @@ def tiles(items: list[Text]) -> list[Tile]:
     """``items`` rendered onto transparent images of at most ``TILE_PX`` square, one per
     cell of the chart that has texts (a text belongs to the cell where it starts) and per
     kind of text (clickable or not, ``Text.click``), each cropped to its texts; at
-    ``TEXT_PX`` pixels per scene unit, or fewer when more than ``BUDGET_PX`` pixels would be
-    needed in all."""
+    ``TEXT_PX`` pixels per scene unit, or fewer when one image per cell would need more
+    than ``BUDGET_PX`` pixels in all (the kinds' images overlap, but only their inked
+    blocks reach the page: ``web.view.text_mesh``)."""
     if not items:
         return []
-    origin = (min(t.x for t in items) - 0.1, max(t.y for t in items) + 0.1)  # as _box's
+    boxes = [_box(t) for t in items]
+    origin = (min(b[0] for b in boxes), max(b[3] for b in boxes))
     scale = float(TEXT_PX)
     while True:
-        boxes = [_box(t, scale) for t in items]
-        out = _layout(items, boxes, origin, scale)
-        total = sum(w * h for w, h in (t.px for t in out))
+        total = sum(w * h for w, h in (t.px for t in _layout(items, boxes, origin, scale)))
         if total <= BUDGET_PX:
-            return out
+            break
         scale *= min(0.95, (BUDGET_PX / total) ** 0.5)
+    if scale != TEXT_PX:
+        boxes = [_box(t, scale) for t in items]
+    return _layout(items, boxes, origin, scale, kinds=True)
 
 
-def _box(t: Text, scale: float) -> _Box:
+def _box(t: Text, scale: float = TEXT_PX) -> _Box:
     """Where ``t``'s image must reach at ``scale`` pixels per unit: its lines and 0.1
     around. Below ``TEXT_PX`` a line may be wider than ``t.width``: its font's pixel size
-    is rounded (``_render``), and so its width grows by up to half a pixel per pixel."""
+    is rounded (``_render``), and so its glyphs' widths."""
     width = t.width
     if scale != TEXT_PX:
-        font = _font(round(t.size * scale))
-        width = max(width, max((float(font.getlength(x)) for x in t.lines), default=0.0) / scale)
+        px = round(t.size * scale)
+        width = max(width, max((_length(px, line) for line in t.lines), default=0.0) / scale)
     return t.x - 0.1, t.x + width + 0.1, t.y - t.height - 0.1, t.y + 0.1
 
 
 def _layout(
-    items: list[Text], boxes: list[_Box], origin: tuple[float, float], scale: float
+    items: list[Text],
+    boxes: list[_Box],
+    origin: tuple[float, float],
+    scale: float,
+    *,
+    kinds: bool = False,
 ) -> list[Tile]:
+    """The images of ``items`` at ``scale``: one per cell (``kinds``: per cell and kind)."""
     ox, oy = origin
     cell = CELL_PX / scale
     cells: dict[tuple[int, int, bool], list[int]] = {}
     for i, t in enumerate(items):
-        key = (int((t.x - ox) // cell), int((oy - t.y) // cell), t.click)
+        key = (int((t.x - ox) // cell), int((oy - t.y) // cell), kinds and t.click)
         cells.setdefault(key, []).append(i)
     out: list[Tile] = []
     for _, members in sorted(cells.items()):

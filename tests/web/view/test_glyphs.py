@@ -5,6 +5,7 @@ scene; a small chart's texts pixel for pixel as one image of the whole chart sho
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -113,6 +114,15 @@ def test_a_text_wider_and_higher_than_an_image_is_cut_and_its_parts_join() -> No
     assert np.array_equal(pasted(near, whole.shape, x0, y1), whole[..., 3])
 
 
+def one_per_cell(texts: list[Text], scale: float) -> int:
+    """The pixels of ``texts``' images with one image per cell (no kinds apart), which the
+    budget bounds, at ``scale`` (the images of both kinds overlap; only their ink reaches
+    the page)."""
+    union = tiles([dataclasses.replace(t, click=False) for t in texts])
+    assert all(t.scale == pytest.approx(scale) for t in union)
+    return sum(w * h for w, h in (t.px for t in union))
+
+
 def test_texts_over_the_budget_are_drawn_smaller_in_the_same_place(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
@@ -122,7 +132,7 @@ def test_texts_over_the_budget_are_drawn_smaller_in_the_same_place(
     out = tiles(texts)
     scale = out[0].scale
     assert scale < TEXT_PX * 0.6 and all(t.scale == scale for t in out)
-    assert sum(w * h for w, h in (t.px for t in out)) <= 400_000
+    assert one_per_cell(texts, scale) <= 400_000
     assert len(out) == len(pic.tiles)  # the same place: each covers what it covered, its
     for tile, before in zip(out, pic.tiles, strict=True):  # top-left where it was, and
         # reaches as far as the rounded font sizes' lines do (a little wider than before)
@@ -141,10 +151,10 @@ def test_texts_over_the_budget_are_drawn_smaller_in_the_same_place(
 def test_the_huge_charts_texts_stay_within_the_budget_in_images_of_2048_square() -> None:
     pic = chart_picture(huge_chart())
     sizes = [t.px for t in pic.tiles]
-    total = sum(w * h for w, h in sizes)
-    assert total <= BUDGET_PX and all(w <= TILE_PX and h <= TILE_PX for w, h in sizes)
+    assert all(w <= TILE_PX and h <= TILE_PX for w, h in sizes)
     scale = pic.tiles[0].scale
     assert scale < TEXT_PX / 2 and all(t.scale == scale for t in pic.tiles)
+    assert one_per_cell(texts_of(pic.tiles), scale) <= BUDGET_PX
     for tile in pic.tiles[:: max(len(pic.tiles) // 5, 1)]:  # a few: rendering takes time
         w, h = tile.px
         image = tile.image
