@@ -212,17 +212,14 @@ def tiles(items: list[Text]) -> list[Tile]:
     blocks reach the page: ``web.view.text_mesh``)."""
     if not items:
         return []
-    boxes = [_box(t) for t in items]
-    origin = (min(b[0] for b in boxes), max(b[3] for b in boxes))
+    origin = (min(t.x for t in items) - 0.1, max(t.y for t in items) + 0.1)  # as _box's
     scale = float(TEXT_PX)
     while True:
+        boxes = [_box(t, scale) for t in items]
         total = sum(w * h for w, h in (t.px for t in _layout(items, boxes, origin, scale)))
         if total <= BUDGET_PX:
-            break
+            return _layout(items, boxes, origin, scale, kinds=True)
         scale *= min(0.95, (BUDGET_PX / total) ** 0.5)
-    if scale != TEXT_PX:
-        boxes = [_box(t, scale) for t in items]
-    return _layout(items, boxes, origin, scale, kinds=True)
 
 
 def _box(t: Text, scale: float = TEXT_PX) -> _Box:
