@@ -46,7 +46,7 @@ from s7graph.sequencer.text.model import (
 )
 from s7graph.steps.syntax import CHAIN_OPS
 
-__all__ = ["format_chart", "format_expr", "format_row", "quote", "row_body"]
+__all__ = ["format_chart", "format_expr", "format_permanent", "format_row", "quote", "row_body"]
 
 T = TypeVar("T")
 
@@ -168,7 +168,8 @@ def row_body(r: ActionRow, operand: Callable[[Expr], str | None] | None = None) 
     return body
 
 
-def _permanent(p: PermanentInstruction) -> str:
+def format_permanent(p: PermanentInstruction) -> str:
+    """A permanent instruction as the chart file writes it (``S "Lamp" := "Fault";``)."""
     if isinstance(p, Coil):
         kind = "" if p.kind == "=" else f"{p.kind} "
         return f"{kind}{format_expr(p.target)} := {format_expr(p.condition)};"
@@ -276,11 +277,19 @@ def format_chart(chart: Chart, header: str = "") -> str:
         out += ["SYMBOLS", *(_symbol(s) for s in chart.symbols), "END_SYMBOLS"]
     for place, items in (("BEFORE", chart.before), ("AFTER", chart.after)):
         if items and place == "BEFORE":
-            out += ["PERMANENT BEFORE", *(f"  {_permanent(p)}" for p in items), "END_PERMANENT"]
+            out += [
+                "PERMANENT BEFORE",
+                *(f"  {format_permanent(p)}" for p in items),
+                "END_PERMANENT",
+            ]
     for q in chart.sequences:
         out += _sequence(q)
     if chart.after:
-        out += ["PERMANENT AFTER", *(f"  {_permanent(p)}" for p in chart.after), "END_PERMANENT"]
+        out += [
+            "PERMANENT AFTER",
+            *(f"  {format_permanent(p)}" for p in chart.after),
+            "END_PERMANENT",
+        ]
     out.append("END_FUNCTION_BLOCK")
     out += _above(chart.end_comment, "")
     return "\n".join(out) + "\n"

@@ -5,7 +5,8 @@ table as S7-GRAPH shows it, and where each contact of a condition stands in its 
 interlocked), operand, time or value — each with the name of the operand whose value the
 CPU sends while the step is active (``web.bus.live``: the bit a row sets, the variable an
 assignment writes, a timer's or counter's Q, ``Sn.X`` of a step an ``ON``/``OFF`` row
-switches; none for a ``CALL``). :func:`contact_spans` writes a condition as
+switches; none for a ``CALL``); :func:`permanent_rows` the chart's permanent instructions,
+each with the operand it writes (none for a ``CALL``). :func:`contact_spans` writes a condition as
 ``condition_text`` does and says where each contact stands in that text, in CRIT bit
 order (``steps.conditions.contacts``: bit ``k`` is the ``k``-th contact in source order), so
 a view colours the contacts of the condition it draws from the CRIT bits of the last
@@ -15,9 +16,10 @@ evaluation. Plain tuples: ``web.bus.protocol`` makes its messages of them.
 from __future__ import annotations
 
 import dataclasses
-from typing import NamedTuple
+from typing import Literal, NamedTuple
 
-from s7graph.sequencer.text.format import format_expr, row_body
+from s7graph.sequencer.text.format import format_expr, format_permanent, row_body
+from s7graph.sequencer.text.model import Chart
 from s7graph.steps.conditions import MAX_CONTACTS
 from s7graph.steps.expressions import COMPARE
 from s7graph.steps.syntax import (
@@ -25,14 +27,16 @@ from s7graph.steps.syntax import (
     ActionRow,
     Assignment,
     Binary,
+    BlockCall,
     Const,
     Expr,
     Operand,
+    PermanentInstruction,
     StepTarget,
     Unary,
 )
 
-__all__ = ["RowText", "action_rows", "contact_spans"]
+__all__ = ["PermanentText", "RowText", "action_rows", "contact_spans", "permanent_rows"]
 
 MAX_WATCH_NAME = 128  # the longest value name a state update carries
 
@@ -59,6 +63,27 @@ def action_rows(rows: tuple[ActionRow, ...]) -> list[RowText]:
         )
         for r in rows
     ]
+
+
+class PermanentText(NamedTuple):
+    """One permanent instruction as the view lists it: ``place`` ``before`` or ``after`` the
+    sequences, its text as the chart file writes it, and the operand it writes (""), whose
+    value the CPU sends every scan."""
+
+    place: Literal["before", "after"]
+    text: str
+    watch: str
+
+
+def permanent_rows(chart: Chart) -> list[PermanentText]:
+    """The chart's permanent instructions before the sequences, then those after, in order."""
+    before = [_permanent("before", p) for p in chart.before]
+    return before + [_permanent("after", p) for p in chart.after]
+
+
+def _permanent(place: Literal["before", "after"], p: PermanentInstruction) -> PermanentText:
+    watch = "" if isinstance(p, BlockCall) else p.target.name
+    return PermanentText(place, format_permanent(p), watch if len(watch) <= MAX_WATCH_NAME else "")
 
 
 def _watched(r: ActionRow) -> str:

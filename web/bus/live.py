@@ -2,8 +2,9 @@
 
 :class:`LiveGraph` reads a ``GraphFB``'s ``GraphState`` after each scan (active steps,
 disturbed = interlock error or supervision fault, latched = supervision fault waiting for
-its acknowledgement, this scan's step events, the mode, the FB outputs and a few watched
-operands) and turns operator :class:`Command` s into one-call edges of the FB.
+its acknowledgement, this scan's step events, the mode, the FB outputs, a few watched
+operands and those the permanent instructions write) and turns operator :class:`Command` s
+into one-call edges of the FB.
 
 Commands act like the "Control Sequencer" dialog of S7-GRAPH (the TIA "MOP" command
 bits): they come from the operator's debugger, not from the FB's pins, so they act
@@ -150,6 +151,8 @@ class LiveChart:
     sv_neg: tuple[tuple[bool, ...], ...]
     # per step index: the operands of its action rows, whose values go out while it is active
     operands: tuple[tuple[str, ...], ...] = ()
+    # the operands the permanent instructions write, whose values go out every scan
+    permanent: tuple[str, ...] = ()
     checks: bool = True
     """Whether a step has an interlock or a supervision (their words are watched)."""
 
@@ -184,6 +187,7 @@ def prepare_chart(cc: CompiledChart, *, fb: str, version: int) -> LiveChart:
             tuple(dict.fromkeys(a.watch for a in rows.get(n, ()) if a.watch))
             for n in cc.step_numbers
         ),
+        permanent=tuple(dict.fromkeys(p.watch for p in layout.permanent if p.watch)),
         checks=any(
             st.interlock is not None or st.supervision is not None for st in chart.all_steps()
         ),
@@ -269,11 +273,13 @@ class LiveGraph:
         """The watch list the readers were made for, and a reader per name."""
         self._step_readers: dict[int, _Readers] = {}
         """Per step index: a reader per operand of its action rows (made when first active)."""
-        self._operands = bool(chart.operands) and (
-            self._reader is not None or self._read is not None
-        )
+        readable = self._reader is not None or self._read is not None
+        self._operands = bool(chart.operands) and readable
         """Whether the active steps' action operands are read (they have some, and there
         is a way to read them)."""
+        self._permanent: _Readers | None = None if chart.permanent and readable else ()
+        """A reader per operand the permanent instructions write (made at the first read;
+        empty: none, or no way to read them)."""
 
     @property
     def cc(self) -> CompiledChart:
@@ -313,7 +319,7 @@ class LiveGraph:
         if not same(last, graph.state, due) or outs != last.outs:
             self._wasted += 1
             return self._update(record, events, see=self._see(False), outs=outs)
-        if self.watch or self._operands:
+        if self.watch or self._operands or self._permanent != ():
             watched = self._watched()
             if watched != last.watched:
                 self._wasted += 1
@@ -416,8 +422,9 @@ class LiveGraph:
         return self._alarms.changed(self._t_ns, self.cycle)
 
     def values(self) -> dict[str, bool | int | float | str | None]:
-        """The FB outputs, then the watched operands, then the operands of the active steps'
-        action rows (an unreadable one is left out)."""
+        """The FB outputs, then the watched operands, the operands the permanent
+        instructions write, then those of the active steps' action rows (an unreadable one
+        is left out)."""
         return dict(self._values(self._outs(), self._watched()))
 
     def _outs(self) -> tuple[Any, ...]:
@@ -432,8 +439,8 @@ class LiveGraph:
         return self._pick(graph.idb.values)
 
     def _watched(self) -> tuple[tuple[str, object], ...]:
-        """The watched operands, then the active steps' action operands, that could be
-        read, with their values."""
+        """The watched operands, the operands the permanent instructions write, then the
+        active steps' action operands, that could be read, with their values."""
         out: list[tuple[str, object]] = []
         if self.watch:
             made = self._readers
@@ -444,6 +451,11 @@ class LiveGraph:
                     out.append((name, _scalar(read())))
                 except Exception:  # a watch must never stop the scan
                     continue
+        if self._permanent != ():
+            readers = self._permanent
+            if readers is None:
+                readers = self._permanent = self._resolve(self._chart.permanent)
+            self._read_into(out, readers, MAX_VALUES - len(self.graph.out_pins))
         if self._operands:
             self._step_values(out)
         return tuple(out)

@@ -26,7 +26,7 @@ from msgspec import Meta, Struct
 from s7graph.sequencer.change.base import MAX_SOURCE
 from s7graph.sequencer.text.format import format_expr
 from s7graph.sequencer.text.model import Chart, Expr
-from s7graph.web.bus.chart_text import action_rows, contact_spans
+from s7graph.web.bus.chart_text import action_rows, contact_spans, permanent_rows
 from s7graph.web.commands import (
     MODES,
     NAME_PATTERN,
@@ -50,6 +50,7 @@ __all__ = [
     "EVENTS",
     "MAX_MESSAGE_BYTES",
     "MAX_PARTS",
+    "MAX_PERMANENT",
     "MODES",
     "OPS",
     "PART_BYTES",
@@ -84,6 +85,7 @@ __all__ = [
     "OperandCatalog",
     "OperandInfo",
     "OperandValues",
+    "PermanentInfo",
     "ProjectFile",
     "ProjectFiles",
     "ProtocolError",
@@ -172,6 +174,20 @@ class ActionInfo(_Msg, frozen=True, kw_only=True):
     watch: Annotated[str, Meta(max_length=128)] = ""
 
 
+MAX_PERMANENT = 256  # permanent instructions a layout lists at most
+
+
+class PermanentInfo(_Msg, frozen=True, kw_only=True):
+    """One permanent instruction of the FB (S7-GRAPH's permanent pre- and post-instructions):
+    ``place`` ``before`` or ``after`` the sequences, its text as the chart file writes it,
+    and ``watch``, the operand it writes, whose value the CPU sends every scan ("": none,
+    a block call)."""
+
+    place: Literal["before", "after"] = "before"
+    text: Text = ""
+    watch: Annotated[str, Meta(max_length=128)] = ""
+
+
 class StepInfo(_Msg, frozen=True, kw_only=True):
     """One step box: number, name, which frames the view draws around it, its action table,
     and its interlock and supervision conditions with where their contacts stand."""
@@ -219,6 +235,9 @@ class ChartLayout(_Msg, frozen=True, kw_only=True):
     sequences: Annotated[list[SequenceInfo], Meta(max_length=256)]
     schema: int = SCHEMA
     version: Count = 0  # the chart version the CPU runs (1 at start, +1 per download)
+    permanent: Annotated[list[PermanentInfo], Meta(max_length=MAX_PERMANENT)] = []
+    """The permanent instructions, those before the sequences first (each at most 1,024
+    characters shown; a reader of the time before this field has none)."""
     parts: Annotated[int, Meta(ge=0, le=MAX_PARTS)] = 0
     """How many :class:`ChartPart` s complete this layout (0: it is whole): a layout too
     large for one message comes without its steps' action tables — or, larger still,
@@ -278,12 +297,17 @@ class ChartLayout(_Msg, frozen=True, kw_only=True):
             )
             for q in chart.sequences
         ]
+        permanent = [
+            PermanentInfo(place=p.place, text=_clip(p.text, 1024), watch=p.watch)
+            for p in permanent_rows(chart)[:MAX_PERMANENT]
+        ]
         return cls(
             fb=fb or chart.name,
             steps=steps,
             transitions=transitions,
             sequences=sequences,
             version=version,
+            permanent=permanent,
         )
 
     def step(self, number: int) -> StepInfo | None:

@@ -402,6 +402,7 @@ class ChartView:
                 events=texts.log_html(self._event_lines()),
                 forces=texts.forces_html(self._forces),
                 step=texts.followed_step(update) if connected else 0,
+                permanent=texts.permanent_html(self.layout, update if connected else None),
             )
             panels = list(self.panels.values())
         self._switch_chart()

@@ -125,6 +125,7 @@ class PageState:
     events: str
     forces: str = ""
     step: int = 0  # the step Details follows when none is chosen (0: none active)
+    permanent: str = ""  # the permanent instructions with their values ("": none)
 
 
 class ClientPanel(PageLogin):
@@ -143,6 +144,7 @@ class ClientPanel(PageLogin):
         self._mode: str | None = None
         self._alarms: AlarmList | None = None
         self.force_folder: viser.GuiFolderHandle | None = None
+        self.permanent_folder: viser.GuiFolderHandle | None = None
         self._build(status or texts.status_html(None, 0, "RUN", None))
 
     # ------------------------------------------------------------ building
@@ -208,6 +210,7 @@ class ClientPanel(PageLogin):
         self.block_links = BlockLinks(
             self.client, details, w.layout, w.blocks, lambda t, b: self._notify(t, b, ok=False)
         )
+        self._permanent(texts.permanent_html(w.layout, None))
         several = len(w.layout.sequences) > 1
         with gui.add_folder("Chart view", expand_by_default=several) as self.view_folder:
             self.sequence_buttons = self._sequence_buttons(w.layout)
@@ -272,6 +275,20 @@ class ClientPanel(PageLogin):
         elif not wanted and self.force_folder is not None:
             folder, self.force_folder = self.force_folder, None
             folder.remove()
+
+    def _permanent(self, content: str) -> None:
+        """The *Permanent instructions* folder while the chart has some (``content``), with
+        their values; gone while it has none."""
+        if content and self.permanent_folder is None:
+            gui = self.client.gui
+            with gui.add_folder("Permanent instructions") as self.permanent_folder:
+                self.permanent_html = gui.add_html(content)
+            self._shown["permanent"] = content
+        elif not content and self.permanent_folder is not None:
+            folder, self.permanent_folder = self.permanent_folder, None
+            folder.remove()
+        elif content:
+            self.update_html(self.permanent_html, "permanent", content)
 
     def _force(self, on: bool) -> None:
         address = str(self.force_address.value).strip()
@@ -475,6 +492,7 @@ class ClientPanel(PageLogin):
             self.update_html(self.audit_html, "audit", page.audit)
             if self.force_folder is not None:
                 self.update_html(self.force_html, "forces", page.forces)
+            self._permanent(page.permanent)
             shown = int(self.detail_transition.value)
             key = ("T", shown) if shown > 0 else ("S", int(self.detail_step.value))
             self.update_html(self.detail_html, "detail", detail(key))

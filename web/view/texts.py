@@ -26,6 +26,7 @@ from s7graph.web.bus.protocol import (
     StepDetail,
     StepStateUpdate,
 )
+from s7graph.web.view.status_layer import value_text
 
 __all__ = [
     "ack_label",
@@ -46,6 +47,7 @@ __all__ = [
     "lines_html",
     "log_html",
     "login_html",
+    "permanent_html",
     "rows_note",
     "small",
     "status_html",
@@ -351,6 +353,32 @@ def transition_html(layout: ChartLayout, update: StepStateUpdate | None, number:
         rows += [f"now: {holds}", *map(mark, live.contacts)]
     elif update is not None:
         rows.append("<i>evaluated while the steps before it are active</i>")
+    return small("<br>".join(rows))
+
+
+PERMANENT_PLACES = {"before": "Before the sequences", "after": "After the sequences"}
+"""The headings of S7-GRAPH's permanent pre- and post-instructions in the panel."""
+
+
+def permanent_html(layout: ChartLayout, update: StepStateUpdate | None) -> str:
+    """The FB's permanent instructions (run in every call, before or after its sequences),
+    each with the value the operand it writes had after the last scan ("" when the chart
+    has none)."""
+    if not layout.permanent:
+        return ""
+    values = update.values if update is not None else {}
+    rows: list[str] = []
+    for place, heading in PERMANENT_PLACES.items():
+        items = [p for p in layout.permanent if p.place == place]
+        if items:
+            rows.append(f"<b>{heading}</b>")
+        for p in items:
+            code = f'<span style="font-family:monospace">{html.escape(p.text)}</span>'
+            if p.watch and p.watch in values:
+                text, (r, g, b) = value_text(values[p.watch])
+                chip = f"background:#{r:02x}{g:02x}{b:02x};padding:0 0.3em"
+                code += f' <span style="{chip}">{html.escape(text)}</span>'
+            rows.append(code)
     return small("<br>".join(rows))
 
 

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import pytest
 
+from s7graph.sequencer.compile import compile_chart
 from s7graph.sequencer.text.parse import parse_chart
 from s7graph.web.bus.chart_text import contact_spans
 from s7graph.web.bus.live import prepare_chart
@@ -96,3 +97,52 @@ END_FUNCTION_BLOCK
         ("S1", "ON", "S2", "", "S2.X"),
         ("S1", "OFF", "S_ALL", "", ""),
     ]
+
+
+PERMANENT = """\
+FUNCTION_BLOCK "Perm" FB 1 DB 1
+  PARAMETERS := STANDARD;
+SYMBOLS
+  "Start" : I0.0 : BOOL;
+  "Trip" : I0.1 : BOOL;
+  "Lamp" : Q0.0 : BOOL;
+  "Motor" : Q0.1 : BOOL;
+  "Ready" : M0.0 : BOOL;
+END_SYMBOLS
+VAR
+  runs : INT := 0;
+END_VAR
+PERMANENT BEFORE
+  "Ready" := "Start" AND NOT "Trip";
+END_PERMANENT
+PERMANENT AFTER
+  S "Lamp" := "Trip";  R "Motor" := "Trip";
+  runs := runs + 1;
+  CALL FC 3;
+END_PERMANENT
+SEQUENCE 1 "Main"
+  INITIAL_STEP S1 "Idle":
+    N "Motor";
+  END_STEP
+  STEP S2 "Run":
+  END_STEP
+  TRANSITION T1 FROM S1 TO S2 := "Ready";
+  TRANSITION T2 FROM S2 TO S1 := NOT "Start";
+END_SEQUENCE
+END_FUNCTION_BLOCK
+"""
+
+
+def test_the_permanent_instructions_come_with_the_operands_they_write() -> None:
+    """S7-GRAPH's permanent pre- and post-instructions, as the chart file writes them, those
+    before the sequences first; each names the operand it writes (a block call none)."""
+    layout = ChartLayout.from_chart(parse_chart(PERMANENT, "perm.s7g"))
+    assert [(p.place, p.text, p.watch) for p in layout.permanent] == [
+        ("before", '"Ready" := "Start" AND NOT "Trip";', "Ready"),
+        ("after", 'S "Lamp" := "Trip";', "Lamp"),
+        ("after", 'R "Motor" := "Trip";', "Motor"),
+        ("after", "runs := runs + 1;", "runs"),
+        ("after", "CALL FC 3;", ""),
+    ]
+    live = prepare_chart(compile_chart(parse_chart(PERMANENT, "perm.s7g")), fb="Perm", version=1)
+    assert live.permanent == ("Ready", "Lamp", "Motor", "runs")

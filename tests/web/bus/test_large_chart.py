@@ -19,9 +19,11 @@ from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.cpu_side import CpuSide
 from s7graph.web.bus.protocol import (
     MAX_MESSAGE_BYTES,
+    MAX_PERMANENT,
     PART_BYTES,
     ChartLayout,
     ChartPart,
+    PermanentInfo,
     ProtocolError,
     encode,
     join_layout,
@@ -66,6 +68,20 @@ def test_a_layout_over_the_message_limit_is_cut_into_parts_and_joined_whole(
         join_layout(head, [older, *parts[1:]])
     whole, none = split_layout(ChartLayout(fb="S", steps=[], transitions=[], sequences=[]))
     assert none == [] and whole.parts == 0
+
+
+def test_the_permanent_instructions_travel_in_the_head_of_a_layout_in_parts(
+    big: ChartLayout,
+) -> None:
+    permanent = [
+        PermanentInfo(place="after", text=f"M{i}.0 := I{i}.0 AND NOT I{i}.1;", watch=f"M{i}.0")
+        for i in range(MAX_PERMANENT)
+    ]
+    layout = msgspec.structs.replace(big, permanent=permanent)
+    for limit in (PART_BYTES, 50_000):  # the head with its steps, and without them
+        head, parts = split_layout(layout, limit=limit)
+        assert head.permanent == permanent and parts
+        assert join_layout(head, parts) == layout
 
 
 @dataclass

@@ -344,3 +344,38 @@ def test_a_chart_swapped_under_the_live_view_is_followed_with_its_own_steps(rig:
     assert events(seen)[:4] == [("S0", 2), ("S1", 8), ("S0", 8), ("S1", 3)]
     assert rig.live.cc is cc and rig.live.layout.version == version + 1
     assert [s.number for s in rig.live.layout.steps] == [1, 2, 8, 3]
+
+
+def test_the_operands_the_permanent_instructions_write_go_out_every_scan(
+    tmp_path: Path,
+) -> None:
+    """What the permanent pre- and post-instructions write is among an update's values in
+    every scan, whatever step is active; a change of one alone is a change of the FB."""
+    from tests.web.bus.test_chart_text import PERMANENT
+
+    chart = PERMANENT.replace("  CALL FC 3;\n", "")  # no FC 3 in this CPU
+    session, _, clock, store = chart_session(tmp_path, "perm.s7g", chart)
+    try:
+        live = LiveGraph(session.graph, read=session.get, reader=session.reader)
+        session.start()
+
+        def scan() -> StepStateUpdate | None:
+            clock.advance(10)
+            return live.changed(session.scan())
+
+        first = scan()
+        assert first is not None and first.active == [1]
+        assert {k: first.values[k] for k in ("Ready", "Lamp", "Motor")} == {
+            "Ready": False,
+            "Lamp": False,
+            "Motor": True,  # S1's N row, after which R "Motor" := "Trip" resets nothing
+        }
+        runs = first.values["runs"]
+        later = scan()  # runs := runs + 1 in every call: a change every scan
+        assert later is not None and later.values["runs"] == runs + 1
+        session.set("Trip", True)
+        faulted = scan()
+        assert faulted is not None and faulted.active == [1]  # no step switched
+        assert (faulted.values["Lamp"], faulted.values["Motor"]) == (True, False)
+    finally:
+        store.close()

@@ -2,7 +2,8 @@
 sequences on the virtual clock, on a real bus, its inputs driven from the test as a plant
 would. Beside the active step its action table shows each operand's live value, T and U
 advance under its box, the contacts of the transition leaving it change colour with its
-inputs, and each sequence can be shown on its own. One browser for the module."""
+inputs, each sequence can be shown on its own, and the permanent instructions are listed
+with the values they write. One browser for the module."""
 
 from __future__ import annotations
 
@@ -41,6 +42,7 @@ FUNCTION_BLOCK "Plant" FB 1 DB 1
   PARAMETERS := STANDARD;
 VAR
   count : INT := 0;
+  busy : BOOL := FALSE;
 END_VAR
 SYMBOLS
   "Start" : I0.0 : BOOL;
@@ -50,6 +52,9 @@ SYMBOLS
   "Pump" : Q0.0 : BOOL;
   "Valve" : Q0.1 : BOOL;
 END_SYMBOLS
+PERMANENT AFTER
+  busy := "Start" AND "Door";
+END_PERMANENT
 SEQUENCE 1 "Fill"
   INITIAL_STEP S1 "Idle":
   END_STEP
@@ -286,3 +291,26 @@ def test_a_chart_of_two_sequences_offers_each_and_the_overview(cpu: OnlineRig, p
         return all(0 <= px < width and 0 <= py < height for px, py in where)
 
     assert wait_until(whole, 30, 0.5), where
+
+
+def test_the_permanent_instructions_are_listed_with_the_values_they_write(
+    cpu: OnlineRig, page: Page
+) -> None:
+    """As S7-GRAPH's permanent post-instructions in TIA Portal's status view: the panel's
+    *Permanent instructions* lists each under its heading, and the value it writes follows
+    the plant's inputs."""
+    folder = page.get_by_text("Permanent instructions", exact=True)
+    folder.wait_for(timeout=30_000)
+    page.get_by_text("After the sequences", exact=True).wait_for(timeout=30_000)
+    line = page.get_by_text('busy := "Start" AND "Door";')
+    line.first.wait_for(timeout=30_000)
+    row = page.locator("div", has=line.first).last  # the panel's HTML holding the list
+
+    def says(value: str) -> bool:
+        return value in row.inner_text()
+
+    assert wait_until(lambda: says("FALSE")), row.inner_text()
+    to_fill(cpu)  # Start and Door: busy
+    assert wait_until(lambda: says("TRUE")), row.inner_text()
+    back_to_idle(cpu)
+    assert wait_until(lambda: says("FALSE")), row.inner_text()
