@@ -601,14 +601,14 @@ class Drawing:
         at = chart_point(event, self.offset)
         if at is None:
             return
-        n = step_box_at(self.picture, *at)
+        n = transition_text_at(self.picture, *at)  # None on a step box: it looks first
         if n is not None:
-            if self._on_step is not None:
-                self._on_step(n, event)
+            if self._on_transition is not None:
+                self._on_transition(n, event)
             return
-        n = transition_text_at(self.picture, *at)
-        if n is not None and self._on_transition is not None:
-            self._on_transition(n, event)
+        n = step_box_at(self.picture, *at)
+        if n is not None and self._on_step is not None:
+            self._on_step(n, event)
 
     def remove(self) -> None:
         self._on_step = self._on_transition = None

@@ -143,8 +143,8 @@ class Text:
 @dataclass(frozen=True, slots=True)
 class Tile:
     """Texts on one transparent image: its size and centre in scene units, ``scale`` image
-    pixels per scene unit. The pixels are rendered when ``alpha`` or ``image`` is read,
-    every time: a picture keeps its texts, not their pixels."""
+    pixels per scene unit. The pixels are rendered when ``alpha`` is read, every time: a
+    picture keeps its texts, not their pixels."""
 
     texts: tuple[Text, ...]
     width: float
@@ -166,18 +166,9 @@ class Tile:
         return max(round(self.width * self.scale), 1), max(round(self.height * self.scale), 1)
 
     @property
-    def image(self) -> Any:
-        """The pixels: RGBA, black where the texts are, rows bottom-up (as a plane shows
-        them)."""
-        alpha = self.alpha[::-1]
-        image = np.zeros((*alpha.shape, 4), np.uint8)
-        image[..., 3] = alpha
-        return image
-
-    @property
     def alpha(self) -> Any:
         """The texts' opacity (their colour is black): rows from the top, as glTF reads a
-        texture; a quarter of the bytes of the RGBA image, read-only."""
+        texture; read-only."""
         return _render(self)
 
 

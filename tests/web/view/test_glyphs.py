@@ -68,15 +68,15 @@ def pasted(tiles_: Sequence[Tile], shape: tuple[int, ...], x0: float, y1: float)
     alpha = np.zeros(shape[:2], np.float64)
     for tile in tiles_:
         scale = tile.scale
-        image = tile.image[::-1]  # top row first
-        h, w = image.shape[:2]
+        image = tile.alpha  # top row first
+        h, w = image.shape
         assert (w, h) == (round(tile.width * scale), round(tile.height * scale))
         left = (tile.cx - tile.width / 2 - x0) * scale
         top = (y1 - tile.cy - tile.height / 2) * scale
         assert abs(left - round(left)) < 1e-6 and abs(top - round(top)) < 1e-6  # on the grid
         kx, ky = round(left), round(top)
         region = alpha[ky : ky + h, kx : kx + w]
-        a = image[: region.shape[0], : region.shape[1], 3] / 255
+        a = image[: region.shape[0], : region.shape[1]] / 255
         region[...] = a + region * (1 - a)  # one over the other
     return np.round(alpha * 255).astype(np.uint8)
 
@@ -157,8 +157,8 @@ def test_the_huge_charts_texts_stay_within_the_budget_in_images_of_2048_square()
     assert one_per_cell(texts_of(pic.tiles), scale) <= BUDGET_PX
     for tile in pic.tiles[:: max(len(pic.tiles) // 5, 1)]:  # a few: rendering takes time
         w, h = tile.px
-        image = tile.image
-        assert image.shape == (h, w, 4) and np.count_nonzero(image[..., 3]) > 0.01 * w * h
+        alpha = tile.alpha
+        assert alpha.shape == (h, w) and np.count_nonzero(alpha) > 0.01 * w * h
     texts = texts_of(pic.tiles)
     placed = {  # each text on an image that covers where it starts, in scene units
         id(t)

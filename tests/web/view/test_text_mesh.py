@@ -130,8 +130,9 @@ def test_the_drills_texts_are_meshes_that_show_their_own_pixels() -> None:
         image_bv = doc["bufferViews"][doc["images"][0]["bufferView"]]
         png = binary[image_bv["byteOffset"] : image_bv["byteOffset"] + image_bv["byteLength"]]
         sheet = np.asarray(Image.open(io.BytesIO(png)))
-        image = tile.image[::-1]  # the tile's pixels, top row first
-        h, w = image.shape[:2]
+        h, w = tile.alpha.shape  # the tile's pixels, top row first: black, its opacity
+        image = np.zeros((h, w, 4), np.uint8)
+        image[..., 3] = tile.alpha
         sh, sw = sheet.shape[:2]
         assert sh < h and sw <= w  # the texture holds the inked runs only, packed
         assert len(idx) % 6 == 0 and idx.max() < len(pos) and np.all(pos[:, 2] == 0)
