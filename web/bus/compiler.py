@@ -10,6 +10,9 @@ lock. The rules:
   parses it (and before it is sent to the child);
 - the time limit: a request the child has not answered within ``time_limit_s`` is refused
   and the child killed and replaced (a fresh one starts at once, warm for the next);
+- a child found ended before it had the whole request (gone while idle, its pipe closed) is
+  replaced and the request sent once more; one that ends with the request is replaced and
+  the request refused;
 - the child runs on the processors of the thread that made the :class:`Compiler` (the chart
   runner makes it off the processor it keeps for the scan: ``engine.cores.kept_free``), at
   the normal scheduling policy even when started from a real-time thread;
@@ -196,19 +199,56 @@ class Compiler:
 
     def _call(self, request: dict[str, Any], what: str) -> tuple[dict[str, Any], list[bytes]]:
         """Send ``request``, wait for the answer (a small header, then as many raw pieces
-        as it says) within the time limit."""
+        as it says) within the time limit. A child found ended before it had the whole
+        request (gone while idle, its pipe closed) is replaced and the request sent once
+        more to the fresh one: every request is a pure function of its text, so sending it
+        again changes nothing but who answers."""
+        data = pickle.dumps(request, protocol=pickle.HIGHEST_PROTOCOL)
+        for again in (True, False):
+            proc = self._started(what)
+            try:
+                self._send(proc, data, what)
+                break
+            except (OSError, EOFError, ValueError) as exc:
+                self._replace()
+                if not again:
+                    reason = f"{what} refused: the compiler process ended ({exc})"
+                    raise CompileRefused(reason) from None
+        return self._answer(proc, what)
+
+    def _started(self, what: str) -> subprocess.Popen[bytes]:
+        """The child, started if none runs."""
         self.start()
         proc = self._proc
         if proc is None or proc.stdin is None or proc.stdout is None:
             raise CompileRefused(f"{what} refused: the CPU's compiler is closed")
+        return proc
+
+    def _send(self, proc: subprocess.Popen[bytes], data: bytes, what: str) -> None:
+        """``data`` to the child, once it said it is ready (refused when it does not
+        within ``start_limit_s``)."""
+        assert proc.stdin is not None and proc.stdout is not None
+        if not self._ready:
+            try:
+                ready = _read(proc.stdout, self.start_limit_s)
+            except TimeoutError:
+                self._replace()
+                raise CompileRefused(
+                    f"{what} refused: the compiler process did not start within "
+                    f"{self.start_limit_s:g} s"
+                ) from None
+            if ready != _READY:
+                raise EOFError("it did not start")
+            self._ready = True
+        proc.stdin.write(_HEADER.pack(len(data)) + data)
+        proc.stdin.flush()
+
+    def _answer(
+        self, proc: subprocess.Popen[bytes], what: str
+    ) -> tuple[dict[str, Any], list[bytes]]:
+        """The child's answer to the request just sent, within the time limit."""
+        assert proc.stdout is not None
         try:
-            if not self._ready:
-                if _read(proc.stdout, self.start_limit_s) != _READY:
-                    raise EOFError("it did not start")
-                self._ready = True
-            data = pickle.dumps(request, protocol=pickle.HIGHEST_PROTOCOL)
-            proc.stdin.write(_HEADER.pack(len(data)) + data)
-            proc.stdin.flush()
             deadline = time.monotonic() + self.time_limit_s
             reply: dict[str, Any] = pickle.loads(_read(proc.stdout, self.time_limit_s))
             blobs = [

@@ -9,8 +9,10 @@ from __future__ import annotations
 
 import os
 import shutil
+import signal
 import subprocess
 import sys
+import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -123,6 +125,59 @@ def test_the_time_limit_kills_a_runaway_compile_and_a_fresh_compiler_takes_the_n
         )
         assert isinstance(done, Compiled) and done.cc.step_names[0] == "Ready to drill"
         assert done.live.layout.version == 2 and done.summary.count == 1
+    finally:
+        compiler.close()
+
+
+def test_a_compiler_found_gone_before_a_request_is_replaced_and_the_request_answered() -> None:
+    compiler = Compiler()
+    running = (DRILL / "drill.s7g").read_text(encoding="utf-8")
+    symbols = (DRILL / "symbols.txt").read_text(encoding="utf-8")
+    edited = running.replace('"Ready"', '"Ready to drill"')
+    try:
+        compiler.check(running, "drill.s7g")
+        proc = compiler._proc
+        assert proc is not None and proc.stdin is not None
+        proc.stdin.close()  # the pipe closed under the idle child ("write to closed file")
+        done = compiler.compile(
+            edited, "drill.s7g", symbols=symbols, running=running, active=(1,), fb=FB, version=2
+        )
+        assert isinstance(done, Compiled) and done.cc.step_names[0] == "Ready to drill"
+        assert compiler.started == 2 and not _alive(proc.pid)
+        proc = compiler._proc
+        assert proc is not None
+        proc.kill()  # gone while idle
+        proc.wait()
+        compiler.check(edited, "drill.s7g")
+        assert compiler.started == 3
+    finally:
+        compiler.close()
+
+
+def test_a_compiler_ending_during_a_request_refuses_it_and_does_not_send_it_again() -> None:
+    compiler = Compiler(time_limit_s=600)
+    result: list[BaseException] = []
+
+    def compile_huge() -> None:
+        try:
+            compiler.compile(
+                huge_chart(), "d.s7g", symbols="", running="", active=(), fb=FB, version=2
+            )
+        except CompileRefused as exc:
+            result.append(exc)
+
+    try:
+        compiler.start()
+        pid = compiler.pid
+        assert pid is not None
+        worker = threading.Thread(target=compile_huge)
+        worker.start()
+        assert wait_until(lambda: _busy(pid), 90)  # it has the request: compiling
+        os.kill(pid, signal.SIGKILL)
+        worker.join(60)
+        assert len(result) == 1 and isinstance(result[0], CompileRefused)
+        assert "the compiler process ended" in result[0].reason
+        assert compiler.started == 2  # replaced, warm for the next; the request not resent
     finally:
         compiler.close()
 
