@@ -108,6 +108,7 @@ GRACE_S = 3.0
 EXIT_HUNG = 3
 """Exit status of a process ended because its scan did not return after a stop request."""
 _ABORT_SIGNAL = signal.SIGUSR2
+_CYCLE_STOPS = frozenset({EventId.STOP_OB80_MISSING, EventId.STOP_CYCLE_TIME})
 RT_PRIORITY = 40
 """The scan thread's ``SCHED_FIFO`` priority (1-98) when the system allows real-time."""
 ENCODE_MARGIN_S = 0.0005
@@ -401,6 +402,19 @@ class Runner:
             self.store.save(cpu, clean=False)
             self.writer = StoreWriter(self.store)
 
+    def _why_stopped(self) -> str:
+        """:func:`stop_reason`; for a STOP by the cycle time, with where the cycle that ran
+        over spent its time (its :class:`~s7graph.engine.profile.CycleBreakdown`: the phase
+        that took it, and whether the scan thread ran, waited for a processor or was
+        blocked) — the cycle monitor says only that it was long."""
+        reason = stop_reason(self.cpu)
+        stop = self.cpu.stop_entry
+        recent = self.profile.recent
+        last = recent[-1] if recent and recent[-1].scan == self.scans - 1 else None
+        if stop is not None and stop.event_id in _CYCLE_STOPS and last is not None:
+            reason += f"; where the cycle's time went: {last.describe()}"
+        return reason
+
     def _stopped_by_itself(self, was_running: bool) -> bool:
         switched, self._switched = self._switched, False
         stopped = was_running and self.cpu.mode is CpuMode.STOP
@@ -510,7 +524,7 @@ class Runner:
                 if self.write_error is not None:
                     break
                 if self._stopped_by_itself(was_running):
-                    self.stopped = stop_reason(cpu)
+                    self.stopped = self._why_stopped()
                     if self.on_stop is not None:
                         self.on_stop(self.stopped)
                     if self.end_on_stop:

@@ -11,9 +11,11 @@ from collections.abc import Callable
 import pytest
 
 from s7graph.engine import CallContext, Cpu, SystemClock, ob
+from s7graph.engine.modes import CpuMode
 from s7graph.engine.profile import PHASE_NAMES, CycleProfile, OpenCycle, describe
 from s7graph.engine.record import ScanRecord
 from s7graph.engine.runner import Runner
+from s7graph.engine.watchdog import Watchdog
 
 _MS = 1_000_000
 
@@ -121,3 +123,24 @@ def test_a_cycle_that_waits_on_a_lock_is_put_down_as_blocked() -> None:
     if long.blocked_ns is not None:
         assert long.blocked_ns >= 12 * _MS
         assert long.cpu_ns < 5 * _MS
+
+
+@pytest.mark.timeout(30)
+def test_a_stop_by_the_cycle_time_says_where_that_cycles_time_went() -> None:
+    runner = runner_with({5: lambda: spin(0.080)})
+    runner.cpu.watchdog = Watchdog(max_cycle_ms=50)  # no OB80: STOP at once
+    runner.run(duration_s=1.0)
+    assert runner.cpu.mode is CpuMode.STOP
+    reason, went = runner.stopped.split("; where the cycle's time went: ")
+    assert "cycle time" in reason and "exceeds 50 ms" in reason
+    (long,) = [c for c in runner.profile.recent if c.scan == 5]
+    assert went == long.describe() and long.phase("edge") >= 80 * _MS
+    assert f"edge {long.phase('edge') / _MS:.1f}" in went  # the phase that took it, in ms
+
+
+@pytest.mark.timeout(30)
+def test_a_stop_of_another_cause_has_no_cycle_breakdown() -> None:
+    runner = runner_with({5: lambda: runner.cpu.stop("STP")})
+    runner.run(duration_s=0.5)
+    assert runner.cpu.mode is CpuMode.STOP
+    assert runner.stopped and "where the cycle" not in runner.stopped
