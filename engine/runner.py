@@ -388,19 +388,25 @@ class Runner:
         self.cpu.submit(ModeRequest(CpuMode.RUN, restart=str(restart)))
         self.stopped = ""
 
-    def recover(self, block: str, message: str) -> None:
+    def recover(self, block: str, message: str) -> ScanRecord:
         """Instead of ``startup``: the CPU stays in STOP as restored from the state file,
         with an entry ``EventId.STOP_KILLED`` naming ``block`` (the supervisor ended the
-        process before, its scan hung); the state is written at once, the writer starts."""
+        process before, its scan hung); the state is written at once, the writer starts.
+        The recovery's record (the CPU in STOP, that entry) goes to ``on_record`` at once,
+        as a scan's would: the bus says STOP from then on, not only from the loop's first
+        scan."""
         self._watch()
         cpu = self.cpu
-        cpu.stop_entry = cpu.diagnostics.record(
-            cpu.clock.now_ns(), EventId.STOP_KILLED, block, message
-        )
+        now = cpu.clock.now_ns()
+        cpu.stop_entry = entry = cpu.diagnostics.record(now, EventId.STOP_KILLED, block, message)
         self.stopped = stop_reason(cpu)
         if self.store is not None:
             self.store.save(cpu, clean=False)
             self.writer = StoreWriter(self.store)
+        record = ScanRecord(max(cpu.cycle, 0), now, 0, cpu.mode, diagnostics=(entry,))
+        if self.on_record is not None:
+            self.on_record(record)
+        return record
 
     def _why_stopped(self) -> str:
         """:func:`stop_reason`; for a STOP by the cycle time, with where the cycle that ran

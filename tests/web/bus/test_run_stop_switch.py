@@ -12,6 +12,7 @@ import pytest
 from s7graph.engine.diagnostics import EventId
 from s7graph.engine.marks import MARKS_SIZE, MarkReader, ScanMarks
 from s7graph.engine.modes import CpuMode
+from s7graph.engine.record import ScanRecord
 from s7graph.web.bus.protocol import CpuStatus, StepStateUpdate
 from s7graph.web.cli.remote import status_lines
 from s7graph.web.view.texts import status_html
@@ -50,8 +51,13 @@ def test_a_recovered_cpu_stays_in_stop_with_the_cause_until_started() -> None:
     runner.cpu.stop("before the kill")
     page = mmap.mmap(-1, MARKS_SIZE)
     runner.marks = ScanMarks(memoryview(page))
-    runner.recover("plant p.py", "no scan ended for 1.3 s: hung in plant p.py")
+    handed: list[ScanRecord] = []
+    runner.on_record = handed.append
+    record = runner.recover("plant p.py", "no scan ended for 1.3 s: hung in plant p.py")
     assert runner.cpu.mode is CpuMode.STOP
+    assert handed == [record] and runner.scans == 0  # the bus says STOP before any scan
+    assert record.mode is CpuMode.STOP
+    assert [e.event_id for e in record.diagnostics] == [EventId.STOP_KILLED]
     assert runner.stopped == "plant p.py: no scan ended for 1.3 s: hung in plant p.py"
     runner.on_record = lambda record: runner.switch_start("warm") if runner.scans == 5 else None
     runner.run(duration_s=0.2)
