@@ -1,7 +1,9 @@
-"""Force jobs of the CPU (``force``/``unforce``) and the texts of their diagnostic entries.
+"""Force jobs of the CPU (``force``/``unforce``) and the texts of their diagnostic entries;
+a modify (``modify``: a value written once).
 
 ``Forcing`` is a part of ``engine.cpu.Cpu``, which owns the attributes it declares; the
-table itself and how a job is applied live in ``engine/force.py``.
+table itself and how a job is applied live in ``engine/force.py``, a modify in
+``engine/modify.py``.
 """
 
 from __future__ import annotations
@@ -10,6 +12,7 @@ from s7graph.engine.address import Address
 from s7graph.engine.diagnostics import EventId
 from s7graph.engine.force import Force, ForceTable, force_target, make_force
 from s7graph.engine.memory import Memory
+from s7graph.engine.modify import Modify, make_modify, write_modify
 
 __all__ = ["Forcing", "jobs_text", "listed"]
 
@@ -32,6 +35,15 @@ class Forcing:
         text = f"force {force}{was}{by}; {jobs_text(len(self.forces))} active"
         self._force_notes.append((EventId.FORCE_STARTED, str(force.address), text))
         return force
+
+    def modify(self, target: str | Address, value: object) -> Modify:
+        """Write ``value`` once into ``target`` — an I, Q, M or DB address or a symbol —
+        where ``engine.modify.MODIFY_POINTS`` says; call at a scan boundary. Not held: the
+        program and the modules may write it again. ``ModifyError`` names what is wrong (a
+        forced operand included); nothing is written then."""
+        modify = make_modify(self.mem, target, value)
+        write_modify(self.mem, self.forces, modify)
+        return modify
 
     def unforce(self, target: str | Address | None = None, *, user: str = "") -> list[Force]:
         """Delete the force job of ``target`` (an address or symbol; None: every job) from

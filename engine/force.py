@@ -48,8 +48,11 @@ __all__ = [
     "ForcePoint",
     "ForceTable",
     "apply_plan",
+    "bit_masks",
+    "encode_value",
     "force_target",
     "make_force",
+    "resolve_operand",
 ]
 
 MAX_FORCES: Final = 256
@@ -109,11 +112,7 @@ class Force:
 
     def masks(self) -> dict[int, tuple[int, int]]:
         """Byte → (mask of the forced bits, the forced bits) of this job."""
-        a = self.address
-        if a.width is Width.BIT:
-            return {a.byte: (1 << a.bit, (self.value & 1) << a.bit)}
-        data = self.value.to_bytes(a.size, "big")
-        return {a.byte + k: (0xFF, b) for k, b in enumerate(data)}
+        return bit_masks(self.address, self.value)
 
     def to_json(self) -> dict[str, Any]:
         return {
@@ -143,6 +142,15 @@ class Force:
         return cls(address, value, *texts)
 
 
+def bit_masks(address: Address, value: int) -> dict[int, tuple[int, int]]:
+    """Byte → (mask of the bits ``address`` covers, those bits as ``value`` sets them;
+    ``value`` the raw bits of ``address``)."""
+    if address.width is Width.BIT:
+        return {address.byte: (1 << address.bit, (value & 1) << address.bit)}
+    data = value.to_bytes(address.size, "big")
+    return {address.byte + k: (0xFF, b) for k, b in enumerate(data)}
+
+
 def make_force(mem: Memory, target: str | Address, value: object, *, user: str = "") -> Force:
     """The force job of ``target`` (an address or a symbol of ``mem.symbols``) at
     ``value``: a bool for a bit; an int (unsigned, or negative as INT/DINT), a float (REAL,
@@ -150,14 +158,14 @@ def make_force(mem: Memory, target: str | Address, value: object, *, user: str =
     symbol's value in its declared type. ForceError names what is wrong."""
     address, type_name, symbol = force_target(mem, target)
     name = f'"{symbol}" ({address})' if symbol else str(address)
-    raw, shown = _encode(address, type_name, name, value)
+    raw, shown = encode_value(address, type_name, name, value)
     return Force(address, raw, shown, symbol, user)
 
 
 def force_target(mem: Memory, target: str | Address) -> tuple[Address, str, str]:
     """(address, type, symbol name or "") of a force target: an address or a symbol of
     ``mem.symbols`` in an area that can be forced, inside it; ForceError otherwise."""
-    address, type_name, symbol = _target(mem, target)
+    address, type_name, symbol = resolve_operand(mem, target)
     if address.area not in FORCE_POINTS:
         areas = ", ".join(str(a) for a in FORCE_POINTS)
         raise ForceError(f"{address} cannot be forced: only {areas} can (inputs, outputs, flags)")
@@ -167,12 +175,16 @@ def force_target(mem: Memory, target: str | Address) -> tuple[Address, str, str]
     return address, type_name, symbol
 
 
-def _target(mem: Memory, target: str | Address) -> tuple[Address, str, str]:
+def resolve_operand(
+    mem: Memory, target: str | Address, error: type[S7Error] = ForceError
+) -> tuple[Address, str, str]:
+    """(address, type, symbol name or "") of an address or a symbol of ``mem.symbols``;
+    ``error`` (ForceError) names what is not one."""
     if isinstance(target, Address):
         return target, default_type(target), ""
     text = target.strip()
     if not text or len(text) > 64:
-        raise ForceError(f"not an address or symbol: {text[:64]!r}")
+        raise error(f"not an address or symbol: {text[:64]!r}")
     table = mem.symbols
     sym = table.lookup(text) if table is not None else None
     if sym is not None:
@@ -182,58 +194,73 @@ def _target(mem: Memory, target: str | Address) -> tuple[Address, str, str]:
             raise SymbolError(f"unknown symbol {text}")
         address = parse_address(text)
     except S7Error as exc:
-        raise ForceError(f"{exc.message}: not an S7 address or a symbol") from None
+        raise error(f"{exc.message}: not an S7 address or a symbol") from None
     return address, default_type(address), ""
 
 
-def _encode(address: Address, type_name: str, name: str, value: object) -> tuple[int, str]:
-    """(raw bits, the value as shown) of ``value`` at ``address`` of type ``type_name``."""
+def encode_value(
+    address: Address,
+    type_name: str,
+    name: str,
+    value: object,
+    verb: str = "force",
+    error: type[S7Error] = ForceError,
+) -> tuple[int, str]:
+    """(raw bits, the value as shown) of ``value`` at ``address`` of type ``type_name``;
+    ``error`` (ForceError) names what does not fit, for ``verb`` ("force", "modify")."""
     width = address.width
     what = f"the {_WIDTH_NAME[width] if type_name in _UNSIGNED else type_name} {name}"
     if value is None:
-        raise ForceError(f"no value to force {name} to")
+        raise error(f"no value to {verb} {name} to")
     if isinstance(value, str):
         try:
             literal_type, value = parse_literal(value)
         except LiteralError as exc:
-            raise ForceError(f"{exc.message} (to force {what})") from None
+            raise error(f"{exc.message} (to {verb} {what})") from None
         if literal_type not in _PLAIN:  # a typed literal: B#16#.., W#16#.., T#.., S5T#..
             bits = type_of(literal_type).size_bits
             fits = bits == width if type_name in _UNSIGNED else literal_type == type_name
             if not fits:
-                raise ForceError(
+                raise error(
                     f"{format_literal(literal_type, value)} is a {literal_type} "
                     f"({bits} bits), not a value for {what}"
                 )
-            return _typed(address, literal_type, value, what)
+            return _typed(address, literal_type, value, what, verb, error)
     if width is Width.BIT:
         if isinstance(value, bool) or (isinstance(value, int) and value in (0, 1)):
             return int(value), "TRUE" if value else "FALSE"
-        raise ForceError(f"{value!r} does not fit {what}: force TRUE or FALSE")
+        raise error(f"{value!r} does not fit {what}: {verb} TRUE or FALSE")
     if isinstance(value, bool):
-        raise ForceError(f"{what} takes a number, not {'TRUE' if value else 'FALSE'}")
+        raise error(f"{what} takes a number, not {'TRUE' if value else 'FALSE'}")
     if type_name not in _UNSIGNED:
-        return _typed(address, type_name, value, what)
+        return _typed(address, type_name, value, what, verb, error)
     if isinstance(value, float):
         if width is not Width.DWORD:
-            raise ForceError(f"{value!r} is a REAL (32 bits), not a value for {what}")
-        return _typed(address, "REAL", value, what)
+            raise error(f"{value!r} is a REAL (32 bits), not a value for {what}")
+        return _typed(address, "REAL", value, what, verb, error)
     if not isinstance(value, int):
-        raise ForceError(f"{value!r} is no value for {what}")
+        raise error(f"{value!r} is no value for {what}")
     lo, hi = -(1 << (width - 1)), (1 << width) - 1
     if not lo <= value <= hi:
-        raise ForceError(f"{value} does not fit {what} (0..{hi}, or {lo}..{-lo - 1})")
+        raise error(f"{value} does not fit {what} (0..{hi}, or {lo}..{-lo - 1})")
     return value & hi, str(value)
 
 
-def _typed(address: Address, type_name: str, value: object, what: str) -> tuple[int, str]:
+def _typed(
+    address: Address,
+    type_name: str,
+    value: object,
+    what: str,
+    verb: str,
+    error: type[S7Error],
+) -> tuple[int, str]:
     try:
         data = encode(type_name, value)
         shown = format_literal(type_name, value)
     except TypeMismatch as exc:
-        raise ForceError(f"{exc.message} (to force {what})") from None
+        raise error(f"{exc.message} (to {verb} {what})") from None
     if len(data) != address.size:
-        raise ForceError(f"a {type_name} is no value for {what}")
+        raise error(f"a {type_name} is no value for {what}")
     return int.from_bytes(data, "big"), shown
 
 
@@ -282,18 +309,27 @@ class ForceTable:
         if old is None:
             if len(self._forces) >= MAX_FORCES:
                 raise ForceError(f"the force table is full ({MAX_FORCES} jobs): unforce one first")
-            mine = force.masks()
-            for other in self._forces.values():
-                if other.address.area is address.area and any(
-                    byte in mine and mine[byte][0] & mask
-                    for byte, (mask, _) in other.masks().items()
-                ):
-                    raise ForceError(
-                        f"{address} overlaps the force job {other}: unforce {other.address} first"
-                    )
+            other = self.holding(address)
+            if other is not None:
+                raise ForceError(
+                    f"{address} overlaps the force job {other}: unforce {other.address} first"
+                )
         self._forces[address] = force
         self._changed(address.area)
         return old
+
+    def holding(self, address: Address) -> Force | None:
+        """The job that holds a bit of ``address``, if any (an address of an area that
+        cannot be forced: None)."""
+        if address.area not in FORCE_POINTS:
+            return None
+        mine = bit_masks(address, 0)
+        for other in self._forces.values():
+            if other.address.area is address.area and any(
+                byte in mine and mine[byte][0] & mask for byte, (mask, _) in other.masks().items()
+            ):
+                return other
+        return None
 
     def remove(self, address: Address) -> Force:
         """Delete the job of ``address``; ForceError when there is none."""

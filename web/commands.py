@@ -161,6 +161,13 @@ class ForceArgs(Args, frozen=True, kw_only=True):
             )
 
 
+class ModifyArgs(Args, frozen=True, kw_only=True):
+    """``{"address": "M10.0", "value": true}``: the operand and the value written once."""
+
+    address: ForceText
+    value: bool | int | float | ForceText
+
+
 MAX_BLOCK_FILES = 8  # S7-SCL sources one download brings
 BlockSources = Annotated[dict[FileName, Source], Meta(max_length=MAX_BLOCK_FILES)]
 
@@ -246,7 +253,8 @@ class Command(
     ``level``: ``pin`` held at ``held``; ``mode``: a mode selector; "" no pin), ``does``
     and ``example`` (its arguments) for the documentation; ``where`` it is carried out
     (``fb``: the FB at the scan boundary, ``web.bus.live``; ``cpu``: the RUN/STOP switch
-    and the memory reset; ``force``: the force table; ``online``: the online change,
+    and the memory reset; ``force``: the force table, and ``modify``'s write into the CPU's
+    memory; ``online``: the online change,
     ``web.bus.online``) and its ``group``: two commands of one group at the same scan
     boundary would act as simultaneous edges of one call, so the second is refused;
     ``shell`` how a shell gives it (None: only by ``s7graph send``)."""
@@ -394,6 +402,18 @@ class Force(Command, tag="force", frozen=True, kw_only=True):
     args: ForceArgs
 
 
+class Modify(Command, tag="modify", frozen=True, kw_only=True):
+    where = "force"
+    role = "engineer"
+    does = (
+        "write an input, output, flag or data block value once at the scan boundary, not held"
+        " (STEP 7's Modify): the program and the modules may write it again"
+    )
+    example = '{"address": "M10.0", "value": true}'
+    shell = Shell("modify", metavar="ADDRESS VALUE", by_hand=True)
+    args: ModifyArgs
+
+
 class Download(Command, tag="download", frozen=True, kw_only=True):
     where = "online"
     role = "engineer"
@@ -479,6 +499,7 @@ AnyCommand = (
     | EnIl
     | EnSv
     | Force
+    | Modify
     | Download
     | UndoDownload
     | Save

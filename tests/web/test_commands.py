@@ -364,7 +364,7 @@ def test_who_carries_each_op_out_and_which_conflict() -> None:
 
     assert ENGINEERING_OPS == ("download", "undo_download", "save", "open")
     assert {op_of(c) for c in COMMAND_TYPES if c.where == "cpu"} == {"stop", "start", "mres"}
-    assert {op_of(c) for c in COMMAND_TYPES if c.where == "force"} == {"force"}
+    assert {op_of(c) for c in COMMAND_TYPES if c.where == "force"} == {"force", "modify"}
     assert set(live.HANDLERS) == {c for c in COMMAND_TYPES if c.where == "fb"}
     assert live._GROUPS == {
         "mode": "mode",

@@ -9,14 +9,17 @@ number or an S7 literal text: ``-5``, ``16#00FF``, ``T#5S``; a symbol's value in
 ``"value": null`` unforces that address, ``{"all": true}`` every job. Forcing does not wait
 for RUN: a force job set in STOP acts from the first cycle in RUN, as on S7.
 :meth:`Forcing.changed` gives the list whenever the table changed (the bus publishes it on
-``forces`` and counts the jobs in ``status``). It never raises: a hostile command is
-refused with the reason.
+``forces`` and counts the jobs in ``status``). ``modify`` (``{"address": "M10.0",
+"value": true}``, engineers too) writes a value once through ``Cpu.modify``
+(``engine/modify.py``): not held, no diagnostic entry, the audit row says what. It never
+raises: a hostile command is refused with the reason.
 """
 
 from __future__ import annotations
 
 from s7graph.engine.cpu import Cpu
 from s7graph.engine.force import Force, ForceError
+from s7graph.engine.modify import ModifyError
 from s7graph.web.bus.protocol import Command, ForceEntry, ForceList
 
 __all__ = ["Forcing", "force_entry"]
@@ -40,15 +43,18 @@ class Forcing:
         self._seen = -1  # the table version last listed
 
     def apply(self, command: Command) -> tuple[bool, str, str]:
-        """Apply a ``force`` command as ``command.user``: (applied, reason, detail)."""
+        """Apply a ``force`` or ``modify`` command as ``command.user``: (applied, reason,
+        detail)."""
         try:
             return self._apply(command)
         except ForceError as exc:
             return False, exc.message[:4096], ""
         except Exception as exc:  # a bad command must not stop the scan loop
-            return False, f"force refused: {type(exc).__name__}: {exc}"[:4096], ""
+            return False, f"{command.op} refused: {type(exc).__name__}: {exc}"[:4096], ""
 
     def _apply(self, command: Command) -> tuple[bool, str, str]:
+        if command.op == "modify":
+            return self._modify(command)
         if command.op != "force":
             return False, f"not a force command: {command.op!r}", ""
         args, user, cpu = command.args, command.user or "?", self.cpu
@@ -64,6 +70,20 @@ class Forcing:
             return True, "", f"unforce {force}"
         force = cpu.force(address, value, user=user)
         return True, "", f"force {force}; {len(cpu.forces)} active"
+
+    def _modify(self, command: Command) -> tuple[bool, str, str]:
+        """``modify``: the value written once (``Cpu.modify``); the detail says what."""
+        address, value = (
+            getattr(command.args, "address", None),
+            getattr(command.args, "value", None),
+        )
+        if not isinstance(address, str) or value is None:
+            return False, "modify needs an address and a value", ""
+        try:
+            done = self.cpu.modify(address, value)
+        except ModifyError as exc:
+            return False, exc.message[:4096], ""
+        return True, "", f"modify {done}"
 
     def listing(self) -> ForceList:
         """The force jobs now."""

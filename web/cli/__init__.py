@@ -1,11 +1,12 @@
 """The ``s7graph`` command line: ``run``, ``sim``, ``check``, ``import``, ``export``,
 ``--version``; for the bus ``web``, ``opcua``, ``router``, ``watch``, ``status``, ``diag``
-and the shell's commands (``ack``, ``mode``, ..., ``force``, ``download``, ``stop``,
-``start``, ``mres``); ``users``, ``audit`` and ``certs``.
+and the shell's commands (``ack``, ``mode``, ..., ``force``, ``modify``, ``download``,
+``stop``, ``start``, ``mres``); ``users``, ``audit`` and ``certs``.
 
 The shell's command of an op is built from the op's struct (``shell`` in
 ``web.commands``): one loop makes ``ack``, ``mode``, ``init`` ... with the op's argument
-as the positional; ``send`` gives any op; ``force`` and ``download`` are written here.
+as the positional; ``send`` gives any op; ``force``, ``modify`` and ``download`` are
+written here.
 
 Each command lives in its own module (``web/cli/*.py``) and is imported only when used, so
 ``s7graph check`` never pays for zenoh or viser. Errors are one line on stderr and a
@@ -41,6 +42,8 @@ from s7graph.web.commands import (
     Command,
     Force,
     ForceArgs,
+    Modify,
+    ModifyArgs,
     Shell,
     args_of,
     argument_field,
@@ -894,7 +897,8 @@ def _op_command(kind: type[Command], options: tuple[type[Command], ...]) -> None
 
 def _op_commands() -> None:
     """A command for each op whose ``shell`` (web.commands) asks for one, in the union's
-    order; ``force`` and ``download`` are written below (they do more than send the op)."""
+    order; ``force``, ``modify`` and ``download`` are written below (they take two words or
+    do more than send the op)."""
     for kind in COMMAND_TYPES:
         shell = kind.shell
         if shell is None or shell.by_hand or shell.option:
@@ -974,6 +978,38 @@ def force(
     address, value = words
     args = ForceArgs(address=address, value=None if value.lower() == "off" else value)
     send_force(args)
+
+
+@app.command(context_settings={"ignore_unknown_options": True})  # MW10 -5: a value
+def modify(
+    job: Annotated[
+        list[str],
+        typer.Argument(
+            metavar="ADDRESS VALUE",
+            help="An I, Q, M or DB address or a symbol, and TRUE/FALSE, a number or an S7 "
+            "literal (16#00FF, T#5S).",
+        ),
+    ],
+    user: UserName,
+    cpu: CpuName = "cpu1",
+    connect: Connect = None,
+    fb: FbName = None,
+    tls_ca: TlsCa = None,
+) -> None:
+    """Write a value once at the next scan boundary, not held (engineers; STEP 7's Modify):
+    the program and the modules may write it again."""
+    if len(job) != 2:
+        raise typer.BadParameter("give ADDRESS VALUE, e.g. modify M10.0 TRUE")
+    address, value = job
+    _remote(
+        Modify,
+        ModifyArgs(address=address, value=value),
+        cpu=cpu,
+        connect=connect,
+        fb=fb,
+        user=user,
+        tls_ca=tls_ca,
+    )
 
 
 @app.command()

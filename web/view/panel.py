@@ -8,12 +8,12 @@ logs in at the CPU by SCRAM-SHA-256 and signs the page's commands with the sessi
 viewer: every command button is disabled (and the CPU refuses commands without a valid
 token anyway); after login the buttons its role allows (``web.access.roles``) are
 enabled, and a page whose role may ``force`` gets a Force folder (address, value, Force /
-Unforce / Unforce all, the active jobs). The current mode is highlighted on its button.
-Command verdicts come back as notifications on this page only. The Alarms folder
-(``web.view.alarms``) filters the message list and acknowledges all of it; *Chart view*
-fits the chart to the page, and for a chart of several sequences shows one of them or all
-(an overview). *Details* links a step's ``CALL`` rows to the S7-SCL source of the blocks
-they call (``web.view.block_links``).
+Modify (once, not held) / Unforce / Unforce all, the active jobs). The current mode is
+highlighted on its button. Command verdicts come back as notifications on this page only.
+The Alarms folder (``web.view.alarms``) filters the message list and acknowledges all of
+it; *Chart view* fits the chart to the page, and for a chart of several sequences shows one
+of them or all (an overview). *Details* links a step's ``CALL`` rows to the S7-SCL source
+of the blocks they call (``web.view.block_links``).
 """
 
 from __future__ import annotations
@@ -46,6 +46,8 @@ from s7graph.web.commands import (
     Init,
     Mode,
     ModeArgs,
+    Modify,
+    ModifyArgs,
     Mres,
     Off,
     OnArgs,
@@ -265,11 +267,15 @@ class ClientPanel(PageLogin):
                     "Value", "", hint="TRUE/FALSE, a number or an S7 literal (16#00FF, T#5S)"
                 )
                 force = gui.add_button("Force", color="yellow", hint="hold it at the value")
+                modify = gui.add_button(
+                    "Modify", hint="write the value once; the program may write it again"
+                )
                 unforce = gui.add_button("Unforce", hint="give it back to the program")
                 unforce_all = gui.add_button("Unforce all", hint="delete every force job")
                 self.force_html = gui.add_html(texts.forces_html(None))
             self._shown.pop("forces", None)
             force.on_click(lambda _: self._force(True))
+            modify.on_click(lambda _: self._modify())
             unforce.on_click(lambda _: self._force(False))
             unforce_all.on_click(self._on_click(self._unforce_all))
         elif not wanted and self.force_folder is not None:
@@ -294,6 +300,11 @@ class ClientPanel(PageLogin):
         address = str(self.force_address.value).strip()
         value = str(self.force_value.value).strip() if on else None
         self.command(Force(fb=self.fb, args=ForceArgs(address=address, value=value)))
+
+    def _modify(self) -> None:
+        address = str(self.force_address.value).strip()
+        value = str(self.force_value.value).strip()
+        self.command(Modify(fb=self.fb, args=ModifyArgs(address=address, value=value)))
 
     # ------------------------------------------------------------ the chart
 

@@ -232,7 +232,9 @@ def test_a_wrong_password_is_refused_when_the_session_activates(face: FaceRig) -
     assert (row.user, row.outcome) == ("olga", "refused")
 
 
-def test_a_write_is_a_command_and_forcing_is_an_engineers(face: FaceRig) -> None:
+def test_a_write_is_a_command_and_forcing_and_modifying_are_an_engineers(
+    face: FaceRig,
+) -> None:
     async def check() -> None:
         level = ua.Variant(42, ua.VariantType.Int16)
         async with connected(face.url, "olga") as c:
@@ -265,11 +267,17 @@ def test_a_write_is_a_command_and_forcing_is_an_engineers(face: FaceRig) -> None
             force = ua.NodeId("cpu1/Force", 2)
             await node(c, "cpu1").call_method(force, "Level", ua.Variant(None))  # unforce
             assert await eventually(lambda: _reads(c, "cpu1/ForceJobs", 0))
+            modify = ua.NodeId("cpu1/Modify", 2)  # once, not held: no force job
+            await node(c, "cpu1").call_method(modify, "Level", ua.Variant(7, ua.VariantType.Int16))
+            assert await eventually(lambda: _reads(c, "cpu1/Symbols/Level", 7))
+            assert await _reads(c, "cpu1/ForceJobs", 0)
 
     run(check())
-    rows = [(r.user, r.op, r.outcome) for r in read_audit(face.rig.state) if r.op == "force"]
+    audit = read_audit(face.rig.state)
+    rows = [(r.user, r.op, r.outcome) for r in audit if r.op in ("force", "modify")]
     assert rows == [
         ("olga", "force", "refused"),
         ("eng", "force", "applied"),
         ("eng", "force", "applied"),
+        ("eng", "modify", "applied"),
     ]

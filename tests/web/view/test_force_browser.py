@@ -1,7 +1,7 @@
 """The page's Force folder in a real headless Chromium, against a chart on the virtual clock
 on a real bus: an engineer forces an input from the page, every page shows the yellow FORCE
-mark and the engineer's the active job, Unforce gives it back; an operator's page has no
-Force folder."""
+mark and the engineer's the active job, Unforce gives it back; Modify writes a value once
+without a force job; an operator's page has no Force folder."""
 
 from __future__ import annotations
 
@@ -53,14 +53,19 @@ def _active(cpu: OnlineRig) -> list[int]:
     return [n for n, x in zip(g.cc.step_numbers, g.state.x, strict=True) if x]
 
 
+def _engineers_force_folder(page: Page, address: str, value: str) -> None:
+    """Log in as the engineer, open the Force folder, fill in ``address`` and ``value``."""
+    log_in(page, "eng", PASSWORD)
+    page.get_by_text("Force", exact=True).first.click()  # open the folder
+    for label, text in (("Address", address), ("Value", value)):
+        box = field(page, label)
+        box.fill(text)
+        box.press("Tab")
+
+
 def test_an_engineer_forces_from_the_page_and_every_page_shows_force(cpu: OnlineRig) -> None:
     with _open(cpu.edge.url) as page:
-        log_in(page, "eng", PASSWORD)
-        page.get_by_text("Force", exact=True).first.click()  # open the folder
-        for label, text in (("Address", "Start"), ("Value", "TRUE")):
-            box = field(page, label)
-            box.fill(text)
-            box.press("Tab")
+        _engineers_force_folder(page, "Start", "TRUE")
         page.get_by_role("button", name="Force", exact=True).click()
         page.get_by_text("force applied").first.wait_for(timeout=30_000)
         assert wait_until(lambda: _active(cpu) == [2], 20)  # OB1 read the forced input
@@ -80,6 +85,19 @@ def test_an_engineer_forces_from_the_page_and_every_page_shows_force(cpu: Online
         field(page, "Value").press("Tab")
         page.get_by_role("button", name="Force", exact=True).click()
         page.get_by_text("DB1.DBX0.0 cannot be forced").first.wait_for(timeout=30_000)
+
+
+def test_an_engineer_modifies_from_the_page_once_without_a_force_job(cpu: OnlineRig) -> None:
+    with _open(cpu.edge.url) as page:
+        _engineers_force_folder(page, "Start", "TRUE")
+        page.get_by_role("button", name="Modify", exact=True).click()
+        page.get_by_text("modify applied").first.wait_for(timeout=30_000)
+        assert wait_until(lambda: _active(cpu) == [2], 20)  # OB1 read the modified input
+        assert len(cpu.session.cpu.forces) == 0
+        page.get_by_text("no force job active").first.wait_for(timeout=30_000)
+        assert page.get_by_text("FORCE", exact=True).count() == 0  # no FRCE LED
+        rows = [(r.user, r.outcome) for r in read_audit(cpu.state) if r.op == "modify"]
+        assert rows == [("eng", "applied")]
 
 
 def test_an_operators_page_has_no_force_folder(cpu: OnlineRig) -> None:

@@ -1,0 +1,108 @@
+"""Modifying: a value written once, as STEP 7's "Modify Variables" writes it and TIA Portal's
+*Modify to 1*, *Modify to 0* and *Modify value* do from a watch table or a block's status
+view (docs/runtime.md, "Modify").
+
+Unlike a force job (``engine/force.py``) a modify is not held: it is written once, at a
+scan boundary, and the program and the modules may write the operand again at once, as on
+S7. ``MODIFY_POINTS`` is the one table of the areas that can be modified and where the
+value goes:
+
+- **I**: into the inputs as the modules deliver them (the peripheral inputs): the next
+  scan reads them into the process-image input table, so the program sees the value in
+  that scan — until the modules (the plant) deliver another one;
+- **Q**: into the process-image output table: the modules get it at the end of the next
+  scan unless the program writes it first;
+- **M**: into the flags;
+- **DB**: into the data block (``DB20.DBX0.1``, ``DB20.DBW2``; the DB must exist).
+
+A bit, byte, word or double word, by address or by a symbol (in its declared type), with
+the values a force takes (``TRUE``, ``-5``, ``16#00FF``, ``T#5S``, ``1.5``). An operand a
+force job holds is refused: the force value would be written over it at its next point
+(unforce it first). Pure data and a write into ``Memory``: no clock, no threads.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Final
+
+from s7graph.engine.address import Address, Area
+from s7graph.engine.errors import S7Error
+from s7graph.engine.force import ForceTable, bit_masks, encode_value, resolve_operand
+
+if TYPE_CHECKING:
+    from s7graph.engine.memory import Memory
+
+__all__ = ["MODIFY_POINTS", "Modify", "ModifyError", "make_modify", "write_modify"]
+
+MODIFY_POINTS: Final[dict[Area, str]] = {
+    Area.I: "the peripheral inputs: the next scan reads them into the process image",
+    Area.Q: "the process-image output table: the modules get it at the end of the next scan",
+    Area.M: "the flags",
+    Area.DB: "the data block",
+}
+"""The areas that can be modified, and where the value is written."""
+
+
+class ModifyError(S7Error):
+    """A modify refused: unknown operand, an area that cannot be modified, a value that does
+    not fit, an operand outside its area or a forced one; the message names the problem."""
+
+
+@dataclass(frozen=True, slots=True)
+class Modify:
+    """One modify: ``address`` written with ``value`` (its raw bits, unsigned; a bit 0/1),
+    ``shown`` as the engineer reads it, ``symbol`` the name it was given by ("" for an
+    absolute address)."""
+
+    address: Address
+    value: int
+    shown: str
+    symbol: str = ""
+
+    def __str__(self) -> str:
+        name = f'"{self.symbol}" ({self.address})' if self.symbol else str(self.address)
+        return f"{name} = {self.shown}"
+
+
+def make_modify(mem: Memory, target: str | Address, value: object) -> Modify:
+    """The modify of ``target`` (an address or a symbol of ``mem.symbols``) with ``value``;
+    ModifyError names what is wrong."""
+    address, type_name, symbol = resolve_operand(mem, target, ModifyError)
+    if address.area not in MODIFY_POINTS:
+        areas = ", ".join(str(a) for a in MODIFY_POINTS)
+        raise ModifyError(
+            f"{address} cannot be modified: only {areas} can (inputs, outputs, flags, data)"
+        )
+    size = len(_buffer(mem, address))
+    if address.byte + address.size > size:
+        where = f"DB{address.db}" if address.area is Area.DB else f"the {address.area} area"
+        raise ModifyError(f"{address} is outside {where} ({size} bytes)")
+    name = f'"{symbol}" ({address})' if symbol else str(address)
+    raw, shown = encode_value(address, type_name, name, value, "modify", ModifyError)
+    return Modify(address, raw, shown, symbol)
+
+
+def write_modify(mem: Memory, forces: ForceTable, modify: Modify) -> None:
+    """Write ``modify`` where :data:`MODIFY_POINTS` says (call at a scan boundary);
+    ModifyError when a force job holds a bit of it."""
+    held = forces.holding(modify.address)
+    if held is not None:
+        raise ModifyError(
+            f"{modify.address} is forced ({held}): the force value would be written over "
+            f"it; unforce {held.address} first"
+        )
+    buf = _buffer(mem, modify.address)
+    for byte, (mask, bits) in bit_masks(modify.address, modify.value).items():
+        buf[byte] = buf[byte] & ~mask & 0xFF | bits
+
+
+def _buffer(mem: Memory, address: Address) -> bytearray | memoryview:
+    """The bytes a modify of ``address`` is written into (the I area: as many peripheral
+    inputs as the process image has)."""
+    if address.area is Area.I:
+        return memoryview(mem.periph_in)[: len(mem.inputs)]
+    try:
+        return mem.area_bytes(address.area, address.db)
+    except S7Error:
+        raise ModifyError(f"{address}: DB{address.db} does not exist") from None
