@@ -64,6 +64,7 @@ from s7graph.web.commands import (
 from s7graph.web.view import texts
 from s7graph.web.view.alarms import AlarmView
 from s7graph.web.view.block_links import BlockLinks
+from s7graph.web.view.contact_modify import ContactModify
 from s7graph.web.view.drawing import aim_camera
 from s7graph.web.view.editor import Editor
 from s7graph.web.view.engineering import Engineering, ViewHost
@@ -146,6 +147,7 @@ class ClientPanel(PageLogin):
         self._mode: str | None = None
         self._alarms: AlarmList | None = None
         self.force_folder: viser.GuiFolderHandle | None = None
+        self.contact_modify: ContactModify | None = None  # an engineer's, in Details
         self.permanent_folder: viser.GuiFolderHandle | None = None
         self._build(status or texts.status_html(None, 0, "RUN", None))
 
@@ -190,7 +192,7 @@ class ClientPanel(PageLogin):
             self.history_html = gui.add_html(texts.history_html(None))
         with gui.add_folder("Audit", expand_by_default=False):
             self.audit_html = gui.add_html(texts.audit_html([]))
-        with gui.add_folder("Details") as details:
+        with gui.add_folder("Details") as self.details_folder:
             self.detail_step = gui.add_number(
                 "Show step",
                 0,
@@ -210,7 +212,11 @@ class ClientPanel(PageLogin):
             self.detail_html = gui.add_html(texts.small("waiting for the CPU…"))
             self.detail_step.on_update(lambda _: self._clear_transition())
         self.block_links = BlockLinks(
-            self.client, details, w.layout, w.blocks, lambda t, b: self._notify(t, b, ok=False)
+            self.client,
+            self.details_folder,
+            w.layout,
+            w.blocks,
+            lambda t, b: self._notify(t, b, ok=False),
         )
         self._permanent(texts.permanent_html(w.layout, None))
         several = len(w.layout.sequences) > 1
@@ -232,6 +238,7 @@ class ClientPanel(PageLogin):
         role = self.role if self.token else "viewer"
         self._editor_for(role)
         self._force_for(role)
+        self._contact_modify_for(role)
         self._enable_controls()
         self.alarms.enable(allowed(role, "ack_msg"))
 
@@ -281,6 +288,18 @@ class ClientPanel(PageLogin):
         elif not wanted and self.force_folder is not None:
             folder, self.force_folder = self.force_folder, None
             folder.remove()
+
+    def _contact_modify_for(self, role: str) -> None:
+        """*Modify to 1/0* of a contact in *Details* for a page whose role may modify."""
+        wanted = allowed(role, "modify")
+        if wanted and self.contact_modify is None:
+            layout = self.block_links.layout
+            self.contact_modify = ContactModify(
+                self.client, self.details_folder, layout, self.command
+            )
+        elif not wanted and self.contact_modify is not None:
+            shown, self.contact_modify = self.contact_modify, None
+            shown.remove()
 
     def _permanent(self, content: str) -> None:
         """The *Permanent instructions* folder while the chart has some (``content``), with
@@ -393,6 +412,8 @@ class ClientPanel(PageLogin):
             self.editor.running_changed(layout)
         self.alarms.chart_changed(layout)
         self.block_links.layout = layout
+        if self.contact_modify is not None:
+            self.contact_modify.layout = layout
         if self._focus not in {q.number for q in layout.sequences}:
             self._focus = None
         wanted = _sequence_labels(layout) if len(layout.sequences) > 1 else []
@@ -508,6 +529,9 @@ class ClientPanel(PageLogin):
             key = ("T", shown) if shown > 0 else ("S", int(self.detail_step.value))
             self.update_html(self.detail_html, "detail", detail(key))
             self.block_links.show(0 if shown > 0 else key[1] or page.step)
+            contacts = self.contact_modify
+            if contacts is not None:
+                contacts.show(key if key[1] > 0 else ("S", page.step))
             if page.mode != self._mode:
                 self._mode = page.mode
                 for mode, button in self.mode_buttons.items():

@@ -1,7 +1,8 @@
 """The page's Force folder in a real headless Chromium, against a chart on the virtual clock
 on a real bus: an engineer forces an input from the page, every page shows the yellow FORCE
 mark and the engineer's the active job, Unforce gives it back; Modify writes a value once
-without a force job; an operator's page has no Force folder."""
+without a force job, and *Details* offers *Modify to 1/0* on the contact that blocks; an
+operator's page has neither."""
 
 from __future__ import annotations
 
@@ -100,6 +101,23 @@ def test_an_engineer_modifies_from_the_page_once_without_a_force_job(cpu: Online
         assert rows == [("eng", "applied")]
 
 
+def test_an_engineer_modifies_the_contact_that_blocks_from_details(cpu: OnlineRig) -> None:
+    with _open(cpu.edge.url) as page:
+        log_in(page, "eng", PASSWORD)
+        to_1 = page.get_by_role("button", name="Modify to 1", exact=True)
+        to_1.wait_for(timeout=30_000)
+        assert wait_until(lambda: to_1.is_enabled(), 30)  # S1 shown: T1 := "Start"
+        to_1.click()
+        page.get_by_text("modify applied").first.wait_for(timeout=30_000)
+        assert wait_until(lambda: _active(cpu) == [2], 20)  # the modified input switched T1
+        to_0 = page.get_by_role("button", name="Modify to 0", exact=True)
+        to_0.click()  # S2 shown now: T2 := NOT "Start"
+        assert wait_until(lambda: _active(cpu) == [1], 20)
+        assert len(cpu.session.cpu.forces) == 0
+        rows = [(r.user, r.outcome) for r in read_audit(cpu.state) if r.op == "modify"]
+        assert rows == [("eng", "applied")] * 2
+
+
 def test_an_operators_page_has_no_force_folder(cpu: OnlineRig) -> None:
     with _open(cpu.edge.url) as page:
         log_in(page, "olga", PASSWORD)
@@ -109,3 +127,5 @@ def test_an_operators_page_has_no_force_folder(cpu: OnlineRig) -> None:
         assert view is not None
         assert wait_until(lambda: all(p.role == "operator" for p in view.panels.values()))
         assert all(p.force_folder is None for p in view.panels.values())
+        assert all(p.contact_modify is None for p in view.panels.values())
+        assert page.get_by_role("button", name="Modify to 1", exact=True).count() == 0
