@@ -59,6 +59,8 @@ from s7graph.web.view.guard import OriginGuard, guard_server
 from s7graph.web.view.layout import Placement, place
 from s7graph.web.view.panel import ClientPanel, PageState, Wiring
 from s7graph.web.view.status_layer import StatusLayer
+from s7graph.web.view.watch_table import POLL_S as WATCH_POLL_S
+from s7graph.web.view.watch_table import Watch, refresh
 
 __all__ = ["ACTIVE", "DISCONNECTED", "DISTURBED", "INACTIVE", "ChartView", "make_server"]
 
@@ -118,7 +120,8 @@ class ChartView:
     ``logout`` its logins (``BusClient.login``/``logout`` as ``(user, secret, origin)``);
     ``demo``: the CPU has no users file (names are claimed). ``history`` fetches the
     alarm history (called from the render thread when the alarm list changed); ``blocks``
-    reads the CPU's S7-SCL sources (``BusClient.blocks``) for *Details*' links."""
+    reads the CPU's S7-SCL sources (``BusClient.blocks``) for *Details*' links; ``watch``
+    reads operands (``BusClient.watch``) for each page's watch table."""
 
     def __init__(
         self,
@@ -134,6 +137,7 @@ class ChartView:
         history: Callable[[], AlarmHistory | None] | None = None,
         engineering: Engineering | None = None,
         blocks: Callable[[], BlockSources | None] | None = None,
+        watch: Watch | None = None,
     ) -> None:
         self.server = server
         self.layout = layout
@@ -163,7 +167,17 @@ class ChartView:
         self.replies: list[CommandReply] = []  # every answer the CPU gave this view
         self.panels: dict[int, ClientPanel] = {}
         self._wiring = Wiring(
-            layout, cpu, send, login, logout, demo, self.replies.append, engineering, self, blocks
+            layout,
+            cpu,
+            send,
+            login,
+            logout,
+            demo,
+            self.replies.append,
+            engineering,
+            self,
+            blocks,
+            watch,
         )
         self._set_scene()
         self._draw_chart()
@@ -173,6 +187,10 @@ class ChartView:
         server.on_client_disconnect(self._disconnect)
         self._thread = threading.Thread(target=self._render_loop, name="s7graph-view", daemon=True)
         self._thread.start()
+        self._watch = watch
+        if watch is not None:  # the watch tables wait for the CPU: never the render thread
+            name = "s7graph-view-watch"
+            threading.Thread(target=self._watch_loop, name=name, daemon=True).start()
 
     # ------------------------------------------------------------ scene
 
@@ -382,6 +400,17 @@ class ChartView:
             due = time.monotonic() + 1.0 / MAX_FPS
             with contextlib.suppress(Exception):  # a page gone mid-update must not stop it
                 self._render()
+
+    def _watch_loop(self) -> None:
+        """Every ``POLL_S`` the pages' watch tables read (``web.view.watch_table``)."""
+        watch = self._watch
+        assert watch is not None
+        while not self._closed:
+            with self._lock:
+                tables = [p.watch_table for p in self.panels.values() if p.watch_table]
+            with contextlib.suppress(Exception):  # a page gone mid-update must not stop it
+                refresh(tables, watch)
+            time.sleep(WATCH_POLL_S)
 
     def _render(self) -> None:
         if self._history_stale and self._history_source is not None:

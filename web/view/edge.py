@@ -16,6 +16,7 @@ from collections.abc import Callable, Iterable
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import ChartLayout, CpuStatus
 from s7graph.web.bus.session import BusEnds, open_session
+from s7graph.web.view import watch_table
 from s7graph.web.view.chart_view import ChartView, make_server
 from s7graph.web.view.diagnostics import DiagnosticsPanel
 from s7graph.web.view.engineering import Engineering
@@ -127,6 +128,7 @@ class ViewSide:
             history=client.history,
             engineering=engineering,
             blocks=client.blocks,
+            watch=lambda operands: client.watch(operands, timeout=watch_table.TIMEOUT_S),
         )
         self._closers.append(self.view.close)
         client.on_chart(self.fb, self.view.apply_chart)

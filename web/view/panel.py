@@ -11,9 +11,11 @@ enabled, and a page whose role may ``force`` gets a Force folder (address, value
 Modify (once, not held) / Unforce / Unforce all, the active jobs). The current mode is
 highlighted on its button. Command verdicts come back as notifications on this page only.
 The Alarms folder (``web.view.alarms``) filters the message list and acknowledges all of
-it; *Chart view* fits the chart to the page, and for a chart of several sequences shows one
-of them or all (an overview). *Details* links a step's ``CALL`` rows to the S7-SCL source
-of the blocks they call (``web.view.block_links``).
+it; *Watch* is the watch table (``web.view.watch_table``); *Chart view* fits the chart to
+the page, and for a chart of several sequences shows one of them or all (an overview).
+*Details* links a step's ``CALL`` rows to the S7-SCL source of the blocks they call
+(``web.view.block_links``) and offers an engineer *Modify to 1/0* on the contacts it shows
+(``web.view.contact_modify``).
 """
 
 from __future__ import annotations
@@ -69,6 +71,7 @@ from s7graph.web.view.drawing import aim_camera
 from s7graph.web.view.editor import Editor
 from s7graph.web.view.engineering import Engineering, ViewHost
 from s7graph.web.view.page_login import PageLogin
+from s7graph.web.view.watch_table import Watch, WatchTable
 
 __all__ = ["ClientPanel", "PageState", "Wiring"]
 
@@ -113,6 +116,7 @@ class Wiring:
     engineering: Engineering | None = None  # None: this view cannot edit (no bus for it)
     host: ViewHost | None = None
     blocks: Callable[[], BlockSources | None] | None = None  # the CPU's S7-SCL sources
+    watch: Watch | None = None  # the CPU's watch (BusClient.watch): the watch table
 
 
 @dataclass(frozen=True, slots=True)
@@ -219,6 +223,7 @@ class ClientPanel(PageLogin):
             lambda t, b: self._notify(t, b, ok=False),
         )
         self._permanent(texts.permanent_html(w.layout, None))
+        self.watch_table = WatchTable(gui, expand=False) if w.watch is not None else None
         several = len(w.layout.sequences) > 1
         with gui.add_folder("Chart view", expand_by_default=several) as self.view_folder:
             self.sequence_buttons = self._sequence_buttons(w.layout)

@@ -19,9 +19,9 @@ from __future__ import annotations
 
 import contextlib
 import functools
-import html
 import threading
 import time
+from collections.abc import Sequence
 from typing import Any
 
 import msgspec
@@ -30,7 +30,6 @@ import viser
 from s7graph.web.access.roles import allowed
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import (
-    MAX_WATCH,
     AlarmList,
     BlockSources,
     ChartLayout,
@@ -40,7 +39,6 @@ from s7graph.web.bus.protocol import (
     LoginReply,
     WatchValues,
 )
-from s7graph.web.bus.watch import split_operands
 from s7graph.web.commands import AckMsg, Mres, Start, Stop, checked, op_of
 from s7graph.web.view import texts
 from s7graph.web.view.alarms import AlarmView
@@ -48,6 +46,7 @@ from s7graph.web.view.block_links import BlockButtons, listed_blocks
 from s7graph.web.view.diagnostics import state_html
 from s7graph.web.view.guard import OriginGuard
 from s7graph.web.view.page_login import PageLogin
+from s7graph.web.view.watch_table import TIMEOUT_S, WatchTable, refresh, watch_html
 
 __all__ = ["ProgramPage", "ProgramView", "blocks_html", "watch_html"]
 
@@ -58,25 +57,6 @@ _BUTTONS: tuple[tuple[type[Command], str, dict[str, Any]], ...] = (
     (Start, "CPU to RUN", {}),
     (Mres, "Memory reset (MRES)", {"color": "red"}),
 )
-
-
-def watch_html(answer: WatchValues | None) -> str:
-    """The watch table: each operand, its value as S7 writes it (or why not), its type."""
-    if answer is None:
-        return texts.small('<span style="color:#777">type operands above: MW0:INT, Q4.0</span>')
-    if answer.error:
-        return texts.small(f'<span style="color:#c00">{html.escape(answer.error)}</span>')
-    rows = []
-    for v in answer.values:
-        kind = f"<span style='color:#777'>{html.escape(v.type)}</span>"
-        shown = (
-            f'<span style="color:#c00">{html.escape(v.error)}</span>'
-            if v.error
-            else f"<b>{html.escape(v.text)}</b> {kind}"
-        )
-        rows.append(f"<tr><td><code>{html.escape(v.address)}</code></td><td>{shown}</td></tr>")
-    head = f"cycle {answer.cycle} · {html.escape(answer.state)}"
-    return texts.small(f"{head}<table>{''.join(rows)}</table>")
 
 
 def blocks_html(sources: BlockSources | None) -> str:
@@ -112,14 +92,7 @@ class ProgramPage(PageLogin):
             self, ChartLayout(fb=view.cpu, steps=[], transitions=[], sequences=[])
         )
         self.alarms_shown: AlarmList | None = None
-        with gui.add_folder("Watch"):
-            self.operands = gui.add_text(
-                "Operands",
-                "",
-                hint="comma-separated: MW0:INT, Q4.0, T5, DB20.DBW2, a symbol, DB20.avg, "
-                "DB10.ctu.CV, DB20.speeds[2]",
-            )
-            self.watch = gui.add_html(watch_html(None))
+        self.watch_table = WatchTable(gui)
         with gui.add_folder("Blocks") as folder:
             self.blocks_line = gui.add_html(texts.small("reading the CPU's blocks…"))
         self.blocks = BlockButtons(
@@ -136,10 +109,6 @@ class ProgramPage(PageLogin):
             return
         self.blocks_due = None
         self.blocks.place(listed_blocks(sources))
-
-    def asked(self) -> list[str]:
-        """The operands this page watches (at most ``MAX_WATCH``)."""
-        return split_operands(str(self.operands.value))[:MAX_WATCH]
 
     def _enable(self) -> None:
         role = self.role if self.token else "viewer"
@@ -273,7 +242,6 @@ class ProgramView:
             alarms = self.alarms
         top = texts.banner_html(connected, self.cpu)
         line = _status_html(status) if connected else texts.small("no live state")
-        answers: dict[tuple[str, ...], WatchValues] = {}
         now = time.monotonic()
         due = [p for p in pages if p.blocks_due is not None and p.blocks_due <= now]
         sources = self.read_blocks() if due and connected else None  # no bus: no wait
@@ -285,13 +253,10 @@ class ProgramView:
             if page.alarms_shown is not alarms:
                 page.alarms_shown = alarms
                 page.alarms.set_alarms(alarms)
-            asked = tuple(page.asked())
-            if not asked:
-                page.update_html(page.watch, "watch", watch_html(None))
-                continue
-            if asked not in answers:
-                answers[asked] = self.client.watch(list(asked), timeout=2.0)
-            page.update_html(page.watch, "watch", watch_html(answers[asked]))
+        refresh((page.watch_table for page in pages), self._watch)
+
+    def _watch(self, operands: Sequence[str]) -> WatchValues:
+        return self.client.watch(operands, timeout=TIMEOUT_S)
 
     def close(self) -> None:
         self._closed = True

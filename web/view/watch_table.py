@@ -1,0 +1,106 @@
+"""The pages' watch table: STEP 7's *Monitor/Modify Variables*, TIA Portal's watch table
+(docs/view.md, "The watch table"), on a chart's page and a program's page alike.
+
+A *Watch* folder: the operands typed into *Operands*, comma-separated — an address
+(``MW0:INT``, ``Q4.0``, ``DB20.DBW2``, ``T5``), a symbol (``"Start"``) or a DB variable by
+name (``DB20.avg``, ``DB10.ctu.CV``, ``DB20.speeds[2]``), each optionally with the type to
+show it as — as ``s7graph watch --address`` takes them (``web.bus.split_operands``), at
+most ``MAX_WATCH``. While a page has operands, the CPU reads them all at one of its scan
+boundaries every ``POLL_S`` (the bus's ``watch``: the values of one scan, never torn) and
+the table shows each value as S7 writes it (``TRUE``, ``W#16#00FF``, ``-5``,
+``S5T#1S200MS``) with its type, or why it cannot be read. Reading is a viewer's right:
+every page watches; writing is the *Force* folder's (*Force*, *Modify*: an engineer's).
+
+:func:`refresh` asks once per distinct list of operands for all the pages given; it waits
+for the CPU's answer, so the views call it from a thread of its own, never from the
+thread that paints the chart.
+"""
+
+from __future__ import annotations
+
+import html
+from collections.abc import Callable, Iterable, Sequence
+from typing import Final, Protocol
+
+import viser
+
+from s7graph.web.bus.protocol import MAX_WATCH, WatchValues
+from s7graph.web.bus.watch import split_operands
+from s7graph.web.view import texts
+
+__all__ = ["POLL_S", "TIMEOUT_S", "Watch", "WatchTable", "Watched", "refresh", "watch_html"]
+
+POLL_S: Final = 0.5
+"""How often the values of a page's operands are read."""
+TIMEOUT_S: Final = 2.0
+"""How long one request waits for the CPU's next scan boundary (then the table says so)."""
+
+Watch = Callable[[Sequence[str]], WatchValues]
+"""Reads operands at the CPU's next scan boundary (``BusClient.watch``)."""
+
+
+def watch_html(answer: WatchValues | None) -> str:
+    """The watch table: each operand, its value as S7 writes it (or why not), its type."""
+    if answer is None:
+        return texts.small('<span style="color:#777">type operands above: MW0:INT, Q4.0</span>')
+    if answer.error:
+        return texts.small(f'<span style="color:#c00">{html.escape(answer.error)}</span>')
+    rows = []
+    for v in answer.values:
+        kind = f"<span style='color:#777'>{html.escape(v.type)}</span>"
+        shown = (
+            f'<span style="color:#c00">{html.escape(v.error)}</span>'
+            if v.error
+            else f"<b>{html.escape(v.text)}</b> {kind}"
+        )
+        rows.append(f"<tr><td><code>{html.escape(v.address)}</code></td><td>{shown}</td></tr>")
+    head = f"cycle {answer.cycle} · {html.escape(answer.state)}"
+    return texts.small(f"{head}<table>{''.join(rows)}</table>")
+
+
+class WatchTable:
+    """The *Watch* folder of one page (``gui``: the page's)."""
+
+    def __init__(self, gui: viser.GuiApi, *, expand: bool = True) -> None:
+        with gui.add_folder("Watch", expand_by_default=expand) as self.folder:
+            self.operands = gui.add_text(
+                "Operands",
+                "",
+                hint="comma-separated: MW0:INT, Q4.0, T5, DB20.DBW2, a symbol, DB20.avg, "
+                "DB10.ctu.CV, DB20.speeds[2]",
+            )
+            self.html = gui.add_html(watch_html(None))
+        self._shown = watch_html(None)
+
+    def asked(self) -> tuple[str, ...]:
+        """The operands this page watches (at most ``MAX_WATCH``)."""
+        return tuple(split_operands(str(self.operands.value))[:MAX_WATCH])
+
+    def show(self, answer: WatchValues | None) -> None:
+        """Show ``answer`` (None: nothing asked); sent only when it changed."""
+        shown = watch_html(answer)
+        if shown != self._shown:
+            self._shown = shown
+            self.html.content = shown
+
+
+class Watched(Protocol):
+    """What :func:`refresh` needs of a table: what it asks, where the answer goes."""
+
+    def asked(self) -> tuple[str, ...]: ...
+
+    def show(self, answer: WatchValues | None) -> None: ...
+
+
+def refresh(tables: Iterable[Watched], watch: Watch) -> None:
+    """Read the operands of ``tables`` (one request per distinct list) and show them; a
+    table without operands shows how to type them."""
+    answers: dict[tuple[str, ...], WatchValues] = {}
+    for table in tables:
+        asked = table.asked()
+        if not asked:
+            table.show(None)
+            continue
+        if asked not in answers:
+            answers[asked] = watch(list(asked))
+        table.show(answers[asked])
