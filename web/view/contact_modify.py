@@ -23,6 +23,7 @@ import viser
 
 from s7graph.web.bus.protocol import ChartLayout
 from s7graph.web.commands import Command, Modify, ModifyArgs
+from s7graph.web.view.watch_table import set_choices
 
 __all__ = ["NONE", "ContactModify", "contact_operands"]
 
@@ -105,9 +106,7 @@ class ContactModify:
         if options == self._options:
             return
         self._options = options
-        if str(self.choice.value) not in options:
-            self.choice.value = options[0]  # type: ignore[misc]
-        self.choice.options = options
+        set_choices(self.choice, options)
         self.on.disabled = self.off.disabled = not operands
 
     def _modify(self, value: bool) -> None:

@@ -244,6 +244,9 @@ class ClientPanel(PageLogin):
         self._editor_for(role)
         self._force_for(role)
         self._contact_modify_for(role)
+        if self.watch_table is not None:
+            may = allowed(role, "modify")
+            self.watch_table.enable_modify(self._modify_operand if may else None)
         self._enable_controls()
         self.alarms.enable(allowed(role, "ack_msg"))
 
@@ -326,9 +329,11 @@ class ClientPanel(PageLogin):
         self.command(Force(fb=self.fb, args=ForceArgs(address=address, value=value)))
 
     def _modify(self) -> None:
-        address = str(self.force_address.value).strip()
-        value = str(self.force_value.value).strip()
-        self.command(Modify(fb=self.fb, args=ModifyArgs(address=address, value=value)))
+        self._modify_operand(str(self.force_address.value), str(self.force_value.value))
+
+    def _modify_operand(self, operand: str, value: str) -> None:
+        args = ModifyArgs(address=operand.strip(), value=value.strip())
+        self.command(Modify(fb=self.fb, args=args))
 
     # ------------------------------------------------------------ the chart
 

@@ -39,7 +39,16 @@ from s7graph.web.bus.protocol import (
     LoginReply,
     WatchValues,
 )
-from s7graph.web.commands import AckMsg, Mres, Start, Stop, checked, op_of
+from s7graph.web.commands import (
+    AckMsg,
+    Modify,
+    ModifyArgs,
+    Mres,
+    Start,
+    Stop,
+    checked,
+    op_of,
+)
 from s7graph.web.view import texts
 from s7graph.web.view.alarms import AlarmView
 from s7graph.web.view.block_links import BlockButtons, listed_blocks
@@ -115,7 +124,12 @@ class ProgramPage(PageLogin):
         for op, button in self.buttons.items():
             button.disabled = not allowed(role, op)
         self.alarms.enable(allowed(role, op_of(AckMsg)))
+        may = allowed(role, op_of(Modify))
+        self.watch_table.enable_modify(self._modify if may else None)
         self._show_login()
+
+    def _modify(self, operand: str, value: str) -> None:
+        self.command(Modify(fb=self.view.cpu, args=ModifyArgs(address=operand, value=value)))
 
     def _login(self, user: str, password: str) -> LoginReply:
         return self.view.client.login(user, password, origin=self.origin)

@@ -67,8 +67,19 @@ def test_a_programs_page_shows_its_state_a_watch_table_and_why_it_stopped(
         page.get_by_text("Memory reset started by a PG operation").first.wait_for(timeout=30_000)
         page.get_by_role("button", name="CPU to RUN", exact=True).click()
         assert wait_until(lambda: program.runner.cpu.mode.value == "RUN", 30)
-    switched = [(r.op, r.outcome) for r in read_audit(program.state) if r.op in _SWITCH]
+        field(page, "Modify value").fill("16#7FFF")  # MW0: the only operand it may modify
+        field(page, "Modify value").press("Tab")
+        page.get_by_role("button", name="Modify now", exact=True).click()
+        page.get_by_text("modify applied").first.wait_for(timeout=30_000)
+    audit = read_audit(program.state)
+    switched = [(r.op, r.outcome) for r in audit if r.op in _SWITCH]
     assert switched == [("stop", "applied"), ("mres", "applied"), ("start", "applied")]
+    modified = [(r.outcome, r.detail) for r in audit if r.op == "modify"]
+    assert (
+        len(modified) == 1
+        and modified[0][0] == "applied"
+        and "modify MW0 = W#16#7FFF" in modified[0][1]
+    )
 
 
 def test_a_charts_page_has_the_diagnostics_folder(tmp_path: Path, bus_certs: BusCerts) -> None:

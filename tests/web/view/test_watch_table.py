@@ -8,7 +8,7 @@ from collections.abc import Sequence
 
 from s7graph.web.bus.protocol import MAX_WATCH, WatchValue, WatchValues
 from s7graph.web.bus.watch import split_operands
-from s7graph.web.view.watch_table import refresh, watch_html
+from s7graph.web.view.watch_table import refresh, watch_html, watch_target
 
 
 class Table:
@@ -58,3 +58,9 @@ def test_the_table_shows_each_value_or_why_not_escaped() -> None:
     refused = watch_html(WatchValues(error="no answer from CPU 'cpu1' within 2 s"))
     assert "no answer from CPU &#x27;cpu1&#x27; within 2 s" in refused
     assert "type operands above" in watch_html(None)
+
+
+def test_modify_offers_the_watched_addresses_and_symbols_without_their_display_type() -> None:
+    shown = [watch_target(t) for t in ("MW0:INT", '"Start"', "DB20.DBW2", "DB10.count")]
+    assert shown == ["MW0", '"Start"', "DB20.DBW2", ""]  # a DB variable by name: not offered
+    assert watch_target('"Data".x') == "" and watch_target(":INT") == ""

@@ -1,7 +1,8 @@
 """The chart page's watch table in a real headless Chromium, against a chart on the virtual
 clock on a real bus: a page not logged in (reading is a viewer's) types operands into
 *Watch*; the values follow the CPU and an operand that cannot be read says why — the same
-table a program's page has (tests/web/view/test_diagnostics_browser.py)."""
+table a program's page has (tests/web/view/test_diagnostics_browser.py); an engineer's
+page modifies a watched operand with *Modify now*."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from tests.web.helpers import OnlineRig, field, needs_chromium, wait_until
+from tests.web.helpers import PASSWORD, OnlineRig, field, log_in, needs_chromium, wait_until
 from tests.web.view.test_force_browser import _open, cpu  # noqa: F401  (the fixture)
 
 if TYPE_CHECKING:
@@ -37,3 +38,22 @@ def test_a_viewers_chart_page_watches_operands_as_the_cpu_reads_them(cpu: Online
         box.fill("")
         box.press("Tab")
         page.get_by_text("type operands above").first.wait_for(timeout=30_000)
+
+
+def test_an_engineer_modifies_a_watched_operand_now(cpu: OnlineRig) -> None:  # noqa: F811
+    with _open(cpu.edge.url) as page:
+        page.get_by_text("Watch", exact=True).first.click()  # open the folder
+        assert page.get_by_role("button", name="Modify now", exact=True).count() == 0
+        log_in(page, "eng", PASSWORD)
+        now = page.get_by_role("button", name="Modify now", exact=True)
+        now.wait_for(timeout=30_000)
+        box = field(page, "Operands")
+        box.fill("MW20:INT, DB1.count")  # a DB variable by name: watched, not modified
+        box.press("Tab")
+        field(page, "Modify value").fill("-7")
+        field(page, "Modify value").press("Tab")
+        assert wait_until(lambda: now.is_enabled(), 30)
+        now.click()
+        page.get_by_text("modify applied").first.wait_for(timeout=30_000)
+        assert wait_until(lambda: "-7" in _table(page), 20)
+        assert cpu.session.cpu.mem.get("MW20") == 0xFFF9 and len(cpu.session.cpu.forces) == 0
