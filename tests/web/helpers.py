@@ -124,14 +124,26 @@ def field(page: Page, label: str) -> Locator:
     return page.locator(f"xpath={xpath}").first
 
 
+GUI_SETTLE_MS = 250
+"""viser's page sends one GUI update per 50 ms and keeps only the newest of those that
+wait (viser 1.1.1, ``makeThrottledMessageSender``): a field filled, then another field or
+a button within that window, and the first never reaches the view. A test lets this much
+pass between two inputs (more than 50 ms: the page's timer runs late on a loaded machine)."""
+
+
+def fill(page: Page, label: str, text: str) -> None:
+    """Type ``text`` into the viser field ``label`` and let it reach the view."""
+    box = field(page, label)
+    box.fill(text)
+    box.press("Tab")
+    page.wait_for_timeout(GUI_SETTLE_MS)
+
+
 def log_in(page: Page, user: str, password: str = "") -> None:
     """Log the page in through its Login panel and wait until it says so."""
-    field(page, "User").fill(user)
+    fill(page, "User", user)
     if password:
-        field(page, "Password").fill(password)
-        field(page, "Password").press("Tab")
-    else:
-        field(page, "User").press("Tab")
+        fill(page, "Password", password)
     page.get_by_role("button", name="Log in", exact=True).click()
     page.get_by_text(f"logged in as {user}").first.wait_for(timeout=30_000)
 

@@ -20,6 +20,7 @@ from tests.web.helpers import (
     ProgramPage,
     chromium_page,
     field,
+    fill,
     log_in,
     needs_chromium,
     online_cpu,
@@ -67,8 +68,7 @@ def test_a_programs_page_shows_its_state_a_watch_table_and_why_it_stopped(
         page.get_by_text("Memory reset started by a PG operation").first.wait_for(timeout=30_000)
         page.get_by_role("button", name="CPU to RUN", exact=True).click()
         assert wait_until(lambda: program.runner.cpu.mode.value == "RUN", 30)
-        field(page, "Modify value").fill("16#7FFF")  # MW0: the only operand it may modify
-        field(page, "Modify value").press("Tab")
+        fill(page, "Modify value", "16#7FFF")  # MW0: the only operand it may modify
         page.get_by_role("button", name="Modify now", exact=True).click()
         page.get_by_text("modify applied").first.wait_for(timeout=30_000)
     audit = read_audit(program.state)

@@ -19,6 +19,7 @@ from tests.web.helpers import (
     OnlineRig,
     chromium_page,
     field,
+    fill,
     log_in,
     needs_chromium,
     online_cpu,
@@ -58,10 +59,8 @@ def _engineers_force_folder(page: Page, address: str, value: str) -> None:
     """Log in as the engineer, open the Force folder, fill in ``address`` and ``value``."""
     log_in(page, "eng", PASSWORD)
     page.get_by_text("Force", exact=True).first.click()  # open the folder
-    for label, text in (("Address", address), ("Value", value)):
-        box = field(page, label)
-        box.fill(text)
-        box.press("Tab")
+    fill(page, "Address", address)
+    fill(page, "Value", value)
 
 
 def test_an_engineer_forces_from_the_page_and_every_page_shows_force(cpu: OnlineRig) -> None:

@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 
 import pytest
 
-from tests.web.helpers import PASSWORD, OnlineRig, field, log_in, needs_chromium, wait_until
+from tests.web.helpers import PASSWORD, OnlineRig, fill, log_in, needs_chromium, wait_until
 from tests.web.view.test_force_browser import _open, cpu  # noqa: F401  (the fixture)
 
 if TYPE_CHECKING:
@@ -27,16 +27,13 @@ def _table(page: Page) -> str:
 def test_a_viewers_chart_page_watches_operands_as_the_cpu_reads_them(cpu: OnlineRig) -> None:  # noqa: F811
     with _open(cpu.edge.url) as page:
         page.get_by_text("Watch", exact=True).first.click()  # open the folder
-        box = field(page, "Operands")
-        box.fill('"Start", MW20:INT, MW99999')
-        box.press("Tab")
+        fill(page, "Operands", '"Start", MW20:INT, MW99999')
         assert wait_until(lambda: "FALSE" in _table(page), 30)
         assert "outside" in _table(page).split("MW99999", 1)[1]  # why it cannot be read
         cpu.session.cpu.mem.set("MW20", -5)
         cpu.session.cpu.mem.periph_in[0] |= 1  # "Start" on the module
         assert wait_until(lambda: "TRUE" in _table(page) and "-5" in _table(page), 20)
-        box.fill("")
-        box.press("Tab")
+        fill(page, "Operands", "")
         page.get_by_text("type operands above").first.wait_for(timeout=30_000)
 
 
@@ -47,11 +44,8 @@ def test_an_engineer_modifies_a_watched_operand_now(cpu: OnlineRig) -> None:  # 
         log_in(page, "eng", PASSWORD)
         now = page.get_by_role("button", name="Modify now", exact=True)
         now.wait_for(timeout=30_000)
-        box = field(page, "Operands")
-        box.fill("MW20:INT, DB1.count")  # a DB variable by name: watched, not modified
-        box.press("Tab")
-        field(page, "Modify value").fill("-7")
-        field(page, "Modify value").press("Tab")
+        fill(page, "Modify value", "-7")
+        fill(page, "Operands", "MW20:INT, DB1.count")  # DB1.count: watched, not modified
         assert wait_until(lambda: now.is_enabled(), 30)
         now.click()
         page.get_by_text("modify applied").first.wait_for(timeout=30_000)
