@@ -22,7 +22,6 @@ from typing import Final
 import viser
 
 from s7graph.web.bus.protocol import ChartLayout
-from s7graph.web.commands import Command, Modify, ModifyArgs
 from s7graph.web.view.watch_table import set_choices
 
 __all__ = ["NONE", "ContactModify", "contact_operands"]
@@ -61,17 +60,18 @@ def contact_operands(layout: ChartLayout, key: tuple[str, int]) -> list[str]:
 class ContactModify:
     """The list of contacts and *Modify to 1* / *Modify to 0* in a page's *Details* folder
     (render thread) for the chart ``layout`` (set it again after an online change);
-    ``send`` sends a command as the page's user."""
+    ``modify(operand, value)`` sends one ``modify`` as the page's user (the watch table's
+    *Modify now* sends through the same)."""
 
     def __init__(
         self,
         client: viser.ClientHandle,
         folder: viser.GuiFolderHandle,
         layout: ChartLayout,
-        send: Callable[[Command], object],
+        modify: Callable[[str, str], object],
     ) -> None:
         self.layout = layout
-        self._send = send
+        self._send = modify
         self._shown: tuple[ChartLayout, tuple[str, int]] | None = None
         self._options: tuple[str, ...] = (NONE,)
         gui = client.gui
@@ -92,8 +92,8 @@ class ContactModify:
                 disabled=True,
                 hint="write FALSE once (STEP 7's Modify); the program may write it again",
             )
-        self.on.on_click(lambda _: self._modify(True))
-        self.off.on_click(lambda _: self._modify(False))
+        self.on.on_click(lambda _: self._modify("TRUE"))
+        self.off.on_click(lambda _: self._modify("FALSE"))
 
     def show(self, key: tuple[str, int]) -> None:
         """Offer the contacts of what *Details* shows (``contact_operands``; none: the
@@ -109,11 +109,10 @@ class ContactModify:
         set_choices(self.choice, options)
         self.on.disabled = self.off.disabled = not operands
 
-    def _modify(self, value: bool) -> None:
+    def _modify(self, value: str) -> None:
         operand = str(self.choice.value)
         if operand in self._options and operand != NONE:
-            args = ModifyArgs(address=operand, value=value)
-            self._send(Modify(fb=self.layout.fb, args=args))
+            self._send(operand, value)
 
     def remove(self) -> None:
         """Take the list and the buttons off the page."""

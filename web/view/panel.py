@@ -303,7 +303,7 @@ class ClientPanel(PageLogin):
         if wanted and self.contact_modify is None:
             layout = self.block_links.layout
             self.contact_modify = ContactModify(
-                self.client, self.details_folder, layout, self.command
+                self.client, self.details_folder, layout, self._modify_operand
             )
         elif not wanted and self.contact_modify is not None:
             shown, self.contact_modify = self.contact_modify, None
