@@ -253,6 +253,14 @@ def _supervised() -> bool:
     return _ENTRY_ARGS is not None and hasattr(os, "memfd_create") and not child
 
 
+def _supervise_if_asked() -> None:
+    """Become the supervisor (``_supervised``): exit with what it returns; else go on."""
+    if _supervised():
+        from s7graph.web.cli.supervisor import supervise
+
+        raise typer.Exit(supervise(_ENTRY_ARGS or []))
+
+
 Blocks = Annotated[
     list[Path] | None,
     typer.Option(
@@ -343,6 +351,14 @@ OpcuaCert = Annotated[
     typer.Option(help="The OPC UA server's certificate (PEM or DER; with --opcua-key)."),
 ]
 OpcuaKey = Annotated[Path | None, typer.Option(help="The OPC UA server's private key.")]
+_WRITES_HELP = (
+    "What an OPC UA client's write of a symbol sends: force (a force job on an input, "
+    "output or flag, held until unforced; the default) or modify (written once, as an "
+    "S7-1500 writes a PLC tag; inputs, outputs, flags and data blocks)."
+)
+OpcuaWrites = Annotated[
+    str | None, typer.Option("--opcua-writes", metavar="force|modify", help=_WRITES_HELP)
+]
 
 
 @app.command()
@@ -375,14 +391,12 @@ def run(
     opcua: OpcuaUrl = None,
     opcua_cert: OpcuaCert = None,
     opcua_key: OpcuaKey = None,
+    opcua_writes: OpcuaWrites = None,
 ) -> None:
     """Run a program or a chart on the system clock until Ctrl-C."""
-    if _supervised():
-        from s7graph.web.cli.supervisor import supervise
-
-        raise typer.Exit(supervise(_ENTRY_ARGS or []))
+    _supervise_if_asked()
     priority = _scan_priority(rt_priority)
-    face = _opcua_face(program, opcua, users, opcua_cert, opcua_key)
+    face = _opcua_face(program, opcua, users, opcua_cert, opcua_key, opcua_writes)
     net = _cpu_net(
         web,
         port,
@@ -485,25 +499,35 @@ def _chart_only(**given: Path | None) -> None:
 
 
 def _opcua_face(
-    program: Path, url: str | None, users: Path | None, cert: Path | None, key: Path | None
+    program: Path,
+    url: str | None,
+    users: Path | None,
+    cert: Path | None,
+    key: Path | None,
+    writes: str | None = None,
 ) -> OpcuaFace | None:
     """``run --opcua``'s child, checked before the CPU starts (exit 2 with one line)."""
     if url is not None and program.suffix.lower() != ".s7g":
         print("s7graph: error: --opcua serves a chart's CPU (.s7g)", file=sys.stderr)
         raise typer.Exit(2)
     if url is None:
-        if cert is not None or key is not None:
-            print("s7graph: error: --opcua-cert and --opcua-key go with --opcua", file=sys.stderr)
+        if cert is not None or key is not None or writes is not None:
+            print(
+                "s7graph: error: --opcua-cert, --opcua-key and --opcua-writes go with --opcua",
+                file=sys.stderr,
+            )
             raise typer.Exit(2)
         return None
+    from s7graph.web.cli.opcua import writes_problem
     from s7graph.web.cli.run_chart import OpcuaFace
     from s7graph.web.opcua.server import listen_problem
 
     problem = listen_problem(url, users=users is not None, cert=cert, key=key)
+    problem = problem or writes_problem(writes, "--opcua-writes")
     if problem:
         print(f"s7graph: error: --opcua: {problem}", file=sys.stderr)
         raise typer.Exit(2)
-    return OpcuaFace(url=url, cert=cert, key=key)
+    return OpcuaFace(url=url, cert=cert, key=key, writes=writes or "force")
 
 
 @app.command()
@@ -668,6 +692,9 @@ def opcua(
         ),
     ] = None,
     anonymous: Anonymous = None,
+    writes: Annotated[
+        str | None, typer.Option("--writes", metavar="force|modify", help=_WRITES_HELP)
+    ] = None,
     cert: Annotated[
         Path | None, typer.Option(help="The server's certificate (PEM or DER), for SignAndEncrypt.")
     ] = None,
@@ -692,6 +719,7 @@ def opcua(
             cpu=cpu,
             listen=listen,
             anonymous=anonymous,
+            writes=writes,
             cert=cert,
             key=key,
             trust=trust,

@@ -25,7 +25,7 @@ from s7graph.web.cli.stopping import wait_until_stopped
 from s7graph.web.cli.view import _as_child
 from s7graph.web.cli.view_process import ViewProcess
 
-__all__ = ["ANONYMOUS", "OpcuaProcess", "opcua_command"]
+__all__ = ["ANONYMOUS", "OpcuaProcess", "opcua_command", "writes_problem"]
 
 ANONYMOUS = ("read", "refuse")
 """What an anonymous OPC UA session may do: read (browse, subscribe), or nothing."""
@@ -46,12 +46,24 @@ def _logging() -> None:
     log.propagate = False
 
 
+def writes_problem(writes: str | None, option: str) -> str | None:
+    """Why ``writes`` is not an op a symbol's write may send, else None."""
+    if writes is None:
+        return None
+    from s7graph.web.opcua.space import SYMBOL_WRITES
+
+    if writes not in SYMBOL_WRITES:
+        return f"{option} must be {' or '.join(SYMBOL_WRITES)}, not {writes!r}"
+    return None
+
+
 def opcua_command(
     net: NetOptions,
     *,
     cpu: str | None,
     listen: str,
     anonymous: str | None = None,
+    writes: str | None = None,
     cert: Path | None = None,
     key: Path | None = None,
     trust: Path | None = None,
@@ -73,6 +85,7 @@ def opcua_command(
         problem = "give the bus to join with --connect ENDPOINT"
     if anonymous is not None and anonymous not in ANONYMOUS:
         problem = "--anonymous must be read or refuse"
+    problem = problem or writes_problem(writes, "--writes")
     if problem is None and net.users is not None and not net.users.is_file():
         problem = f"{net.users}: no such users file"
     problem = problem or listen_problem(listen, users=net.users is not None, cert=cert, key=key)
@@ -97,7 +110,13 @@ def opcua_command(
             return _fail(f"--users given, but CPU {chosen.cpu} checks no logins (no users file)")
         reads = anonymous == "read" or (anonymous is None and loopback(listen))
         options = OpcuaOptions(
-            url=listen, anonymous=reads, cert=cert, key=key, trust=trust, own_process=True
+            url=listen,
+            anonymous=reads,
+            cert=cert,
+            key=key,
+            trust=trust,
+            own_process=True,
+            writes=writes or "force",
         )
         server = OpcuaServer(session, chosen, options)
         try:
@@ -137,6 +156,7 @@ class OpcuaProcess(ViewProcess):
         tls_ca: Path | None = None,
         bus_args: Sequence[str] = (),
         first_backoff_s: float = 1.0,
+        writes: str = "force",
     ) -> None:
         super().__init__(
             connect=connect,
@@ -149,10 +169,11 @@ class OpcuaProcess(ViewProcess):
         self.users = users
         self.cert = cert
         self.key = key
+        self.writes = writes
 
     def command(self) -> list[str]:
         cmd = [sys.executable, "-m", "s7graph", "opcua", "--cpu", self.cpu]
-        cmd += ["--listen", self.opcua_url, "--child"]
+        cmd += ["--listen", self.opcua_url, "--writes", self.writes, "--child"]
         for endpoint in self.connect:
             cmd += ["--connect", endpoint]
         for option, path in (

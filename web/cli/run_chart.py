@@ -61,11 +61,13 @@ DEFAULT_MAX_CYCLE_MS = 150.0  # S7's default maximum cycle time
 
 @dataclass(frozen=True)
 class OpcuaFace:
-    """``--opcua``: where the OPC UA child serves, with its certificate and key."""
+    """``--opcua``: where the OPC UA child serves, with its certificate and key, and what
+    a client's write of a symbol sends (``--opcua-writes``)."""
 
     url: str
     cert: Path | None = None
     key: Path | None = None
+    writes: str = "force"
 
 
 IN_PROCESS_VIEW_MAX_CYCLE_MS = 1000.0
@@ -422,6 +424,7 @@ def _opcua_child(face: OpcuaFace, net: NetOptions, bus: str) -> ViewProcess:
         key=face.key,
         tls_ca=net.tls_ca,
         bus_args=net.credential_args(),
+        writes=face.writes,
     )
 
     def served(url: str) -> None:

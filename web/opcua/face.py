@@ -14,8 +14,9 @@ that, ``BadTooManyOperations``.
 
 A write is a command too: an FB's ``Mode`` sends ``mode``, ``Halted`` ``halt``,
 ``InterlocksEnabled``/``SupervisionsEnabled`` ``en_il``/``en_sv``, a symbol on an input,
-output or flag a ``force`` job (an engineer's). The variable shows the CPU's value once
-the CPU publishes it, never the value written.
+output or flag a ``force`` job, or with ``writes="modify"`` a symbol on an input, output,
+flag or data block a ``modify`` (both an engineer's; ``web.opcua.space.SYMBOL_WRITES``).
+The variable shows the CPU's value once the CPU publishes it, never the value written.
 """
 
 from __future__ import annotations
@@ -51,6 +52,8 @@ from s7graph.web.commands import (
     ForceArgs,
     Halt,
     ModeArgs,
+    Modify,
+    ModifyArgs,
     OnArgs,
     SetMode,
     make_command,
@@ -79,6 +82,11 @@ _log = logging.getLogger("s7graph.web.opcua")
 MAX_COMMANDS: Final = 16
 MAX_SESSION_COMMANDS: Final = 4
 _LEVELS: Final[dict[str, type[Command]]] = {"halt": Halt, "en_il": EnIl, "en_sv": EnSv}
+_SYMBOL_OPS: Final[dict[str, tuple[type[Command], type[ForceArgs] | type[ModifyArgs]]]] = {
+    "force": (Force, ForceArgs),
+    "modify": (Modify, ModifyArgs),
+}
+"""A symbol's write as each op of ``SYMBOL_WRITES`` sends it: the command and its args."""
 _COLLAPSED: Final = frozenset({"status", "alarms", "operands", "chart"})
 """Kinds of which only the newest of a batch counts (a state delta: each, in order)."""
 
@@ -357,10 +365,11 @@ class Face:
         self, nid: ua.NodeId, target: tuple[str, str], variant: ua.Variant
     ) -> tuple[type[Command], str, Args]:
         fb, op = target
-        if op == "force":
+        if op in _SYMBOL_OPS:
             info = self.space.symbol_info[nid]
             value = from_variant(variant, ua_type(info.type))
-            return Force, self.first_fb, ForceArgs(address=info.address, value=value)
+            kind, make = _SYMBOL_OPS[op]
+            return kind, self.first_fb, make(address=info.address, value=value)
         if op == "mode":
             if variant.VariantType is not ua.VariantType.String:
                 raise TypeError("mode is text")

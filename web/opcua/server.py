@@ -100,7 +100,8 @@ class OpcuaOptions:
     or refused; the server's certificate and key (PEM or DER); a folder of trusted client
     certificates (None: any client certificate opens a secure channel; the user token
     still decides); the limits; ``own_process``: the process is the face's alone, so its
-    garbage collector may be tuned (:func:`quiet_collector`)."""
+    garbage collector may be tuned (:func:`quiet_collector`); ``writes``: what a client's
+    write of a symbol sends, ``force`` or ``modify`` (``web.opcua.space.SYMBOL_WRITES``)."""
 
     url: str = DEFAULT_URL
     anonymous: bool = True
@@ -109,6 +110,7 @@ class OpcuaOptions:
     trust: Path | None = None
     limits: Limits = field(default_factory=Limits)
     own_process: bool = False
+    writes: str = "force"
 
 
 def _format(data: bytes) -> str:
@@ -188,7 +190,8 @@ class OpcuaServer:
         try:
             server = await self._server(link)
             self.server = server
-            space = Space(server, await server.register_namespace(NAMESPACE_URI), self.status.cpu)
+            ns = await server.register_namespace(NAMESPACE_URI)
+            space = Space(server, ns, self.status.cpu, writes=self.options.writes)
             face = self.face = Face(server, link, space)
             server.iserver.attribute_service = FaceAttributes(server.iserver.aspace, face)
             await face.start(self.status)

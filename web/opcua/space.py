@@ -20,6 +20,7 @@ from typing import Any, Final
 
 from asyncua import ua
 
+from s7graph.engine.modify import MODIFY_POINTS
 from s7graph.web.bus.protocol import (
     ChartLayout,
     CpuStatus,
@@ -46,7 +47,7 @@ from s7graph.web.opcua.model import (
 from s7graph.web.opcua.nodes import GOOD, Nodes
 from s7graph.web.opcua.typed import ObjectIds, Server, StatusCodes, ua_id
 
-__all__ = ["FORCEABLE", "Space", "StepNodes"]
+__all__ = ["FORCEABLE", "SYMBOL_WRITES", "Space", "StepNodes", "symbol_writable"]
 
 UINT16: Final = UaType(ua.VariantType.UInt16, "int", 0, 0xFFFF)
 UINT32: Final = UaType(ua.VariantType.UInt32, "int", 0, 0xFFFF_FFFF)
@@ -55,8 +56,22 @@ DURATION: Final = UaType(ua.VariantType.Double, "float", unit=MS)
 SHARE: Final = UaType(ua.VariantType.Double, "float", unit=PERCENT)
 FORCEABLE: Final = ("I", "Q", "M")
 """The areas a force job takes: a symbol there is writable (an engineer's force)."""
+SYMBOL_WRITES: Final[dict[str, tuple[str, ...]]] = {
+    "force": FORCEABLE,
+    "modify": tuple(str(area) for area in MODIFY_POINTS),
+}
+"""What a client's write of a symbol sends (``s7graph opcua --writes``), and the areas
+whose symbols it makes writable: a ``force`` job, held until unforced (I, Q, M), or a
+``modify``, written once at the scan boundary as an S7-1500's OPC UA server writes a PLC
+tag (I, Q, M, DB)."""
 STALE: Final = StatusCodes.BadNoCommunication
 UNREADABLE: Final = StatusCodes.BadConfigurationError
+
+
+def symbol_writable(address: str, op: str) -> bool:
+    """Whether a client may write the symbol at ``address`` when a write sends ``op``."""
+    area = "DB" if address.startswith("DB") else address[:1]
+    return area in SYMBOL_WRITES.get(op, ())
 
 
 def _event_id(event: DiagEvent | None) -> str:
@@ -156,8 +171,10 @@ def _v(value: object, t: UaType) -> ua.Variant:
 class Space:
     """The CPU ``cpu`` as nodes of namespace ``ns`` of ``server``."""
 
-    def __init__(self, server: Server, ns: int, cpu: str) -> None:
+    def __init__(self, server: Server, ns: int, cpu: str, *, writes: str = "force") -> None:
         self.server = server
+        self.symbol_op = writes
+        """The op a write of a symbol sends: ``force`` or ``modify`` (:data:`SYMBOL_WRITES`)."""
         self.ns = ns
         self.cpu = cpu
         self.nodes = Nodes(server, ns)
@@ -166,7 +183,7 @@ class Space:
         self.symbols: dict[str, tuple[ua.NodeId, UaType]] = {}
         self.symbol_info: dict[ua.NodeId, OperandInfo] = {}
         self.writes: dict[ua.NodeId, tuple[str, str]] = {}
-        """A writable variable's FB and the op a write sends (``force``: a symbol's)."""
+        """A writable variable's FB and the op a write sends (a symbol's: ``symbol_op``)."""
         self.catalog_version = -1
         self._cpu_vars: dict[str, ua.NodeId] = {}
         self.online = False
@@ -348,17 +365,16 @@ class Space:
             nid = self.nid("Symbols", info.name)
             n.root(nid)
             text = f"{info.address} {info.type}" + (f": {info.comment}" if info.comment else "")
-            n.var(
-                folder, nid, info.name, t, description=text, writable=info.address[:1] in FORCEABLE
-            )
+            writable = symbol_writable(info.address, self.symbol_op)
+            n.var(folder, nid, info.name, t, description=text, writable=writable)
             n.prop(
                 nid, "Address", ua.Variant(info.address, ua.VariantType.String), ObjectIds.String
             )
             n.end_root()
             self.symbols[info.name] = (nid, t)
             self.symbol_info[nid] = info
-            if info.address[:1] in FORCEABLE:
-                self.writes[nid] = ("", "force")
+            if writable:
+                self.writes[nid] = ("", self.symbol_op)
         for fbn in self.fbs.values():
             for nid, _ in list(fbn.operands.values()):
                 await n.delete(nid)

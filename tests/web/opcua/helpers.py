@@ -95,10 +95,12 @@ def face_rig(
     *,
     chart: str = CHART,
     options: dict[str, Any] | None = None,
+    blocks: dict[str, str] | None = None,
 ) -> Iterator[FaceRig]:
     """``chart`` running with ``USERS`` (password ``PASSWORD``) on a TLS bus with the
     certificates ``certs``, its operands published, and the OPC UA face of it in this
-    process (joining as ``FACE_CN``) on a free loopback port."""
+    process (joining as ``FACE_CN``) on a free loopback port; ``blocks``: S7-SCL sources
+    run beside the chart (``--blocks``)."""
     tmp_path.mkdir(parents=True, exist_ok=True)
     with (
         online_cpu(
@@ -110,6 +112,7 @@ def face_rig(
             name="mix.s7g",
             operands=True,
             messages=True,
+            blocks=blocks,
         ) as rig,
         open_session(connect=[rig.endpoint], tls=certs.tls(FACE_CN)) as session,
     ):

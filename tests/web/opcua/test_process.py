@@ -245,6 +245,12 @@ async def _stop_and_start(child_url: str, own_url: str) -> None:
         (["opcua", "--listen", "opc.tcp://127.0.0.1:4840"], "--connect"),
         (["run", "x.s7g", "--opcua", "opc.tcp://10.1.2.3:4840"], "--users"),
         (["run", "x.s7g", "--opcua-cert", "c.pem"], "go with --opcua"),
+        (["opcua", "--connect", "tcp/127.0.0.1:1", "--writes", "hold"], "force or modify"),
+        (["run", "x.s7g", "--opcua-writes", "modify"], "go with --opcua"),
+        (
+            ["run", "x.s7g", "--opcua", "opc.tcp://127.0.0.1:4840", "--opcua-writes", "hold"],
+            "--opcua-writes must be force or modify",
+        ),
         (["run", "x.py", "--opcua", "opc.tcp://127.0.0.1:4840"], "chart"),
     ],
 )
