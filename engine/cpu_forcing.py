@@ -36,12 +36,20 @@ class Forcing:
         self._force_notes.append((EventId.FORCE_STARTED, str(force.address), text))
         return force
 
-    def modify(self, target: str | Address, value: object) -> Modify:
+    def modify(
+        self,
+        target: str | Address,
+        value: object,
+        *,
+        type_name: str | None = None,
+        variable: str = "",
+    ) -> Modify:
         """Write ``value`` once into ``target`` — an I, Q, M or DB address or a symbol —
         where ``engine.modify.MODIFY_POINTS`` says; call at a scan boundary. Not held: the
-        program and the modules may write it again. ``ModifyError`` names what is wrong (a
+        program and the modules may write it again. An address may come with its type and
+        the DB variable it is (``make_modify``). ``ModifyError`` names what is wrong (a
         forced operand included); nothing is written then."""
-        modify = make_modify(self.mem, target, value)
+        modify = make_modify(self.mem, target, value, type_name=type_name, variable=variable)
         write_modify(self.mem, self.forces, modify)
         return modify
 

@@ -26,14 +26,15 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Final
 
-from s7graph.engine.address import Address, Area
+from s7graph.engine.address import Address, Area, Width
+from s7graph.engine.datatypes import decode, type_of
 from s7graph.engine.errors import S7Error
 from s7graph.engine.force import ForceTable, bit_masks, encode_value, resolve_operand
 
 if TYPE_CHECKING:
     from s7graph.engine.memory import Memory
 
-__all__ = ["MODIFY_POINTS", "Modify", "ModifyError", "make_modify", "write_modify"]
+__all__ = ["MODIFY_POINTS", "Modify", "ModifyError", "make_modify", "typed_value", "write_modify"]
 
 MODIFY_POINTS: Final[dict[Area, str]] = {
     Area.I: "the peripheral inputs: the next scan reads them into the process image",
@@ -42,6 +43,9 @@ MODIFY_POINTS: Final[dict[Area, str]] = {
     Area.DB: "the data block",
 }
 """The areas that can be modified, and where the value is written."""
+
+
+_WIDTHS: Final = {1: Width.BIT, 8: Width.BYTE, 16: Width.WORD, 32: Width.DWORD}
 
 
 class ModifyError(S7Error):
@@ -59,16 +63,32 @@ class Modify:
     value: int
     shown: str
     symbol: str = ""
+    variable: str = ""
+    """A DB variable's name when it was given by one (``DB20.avg``)."""
 
     def __str__(self) -> str:
-        name = f'"{self.symbol}" ({self.address})' if self.symbol else str(self.address)
+        if self.symbol:
+            name = f'"{self.symbol}" ({self.address})'
+        elif self.variable:
+            name = f"{self.variable} ({self.address})"
+        else:
+            name = str(self.address)
         return f"{name} = {self.shown}"
 
 
-def make_modify(mem: Memory, target: str | Address, value: object) -> Modify:
+def make_modify(
+    mem: Memory,
+    target: str | Address,
+    value: object,
+    *,
+    type_name: str | None = None,
+    variable: str = "",
+) -> Modify:
     """The modify of ``target`` (an address or a symbol of ``mem.symbols``) with ``value``;
-    ModifyError names what is wrong."""
-    address, type_name, symbol = resolve_operand(mem, target, ModifyError)
+    an address may come with its type (``type_name``) and the DB variable it is
+    (``variable``). ModifyError names what is wrong."""
+    address, declared, symbol = resolve_operand(mem, target, ModifyError)
+    type_name = type_name or declared
     if address.area not in MODIFY_POINTS:
         areas = ", ".join(str(a) for a in MODIFY_POINTS)
         raise ModifyError(
@@ -78,9 +98,31 @@ def make_modify(mem: Memory, target: str | Address, value: object) -> Modify:
     if address.byte + address.size > size:
         where = f"DB{address.db}" if address.area is Area.DB else f"the {address.area} area"
         raise ModifyError(f"{address} is outside {where} ({size} bytes)")
-    name = f'"{symbol}" ({address})' if symbol else str(address)
+    name = f'"{symbol}" ({address})' if symbol else variable or str(address)
     raw, shown = encode_value(address, type_name, name, value, "modify", ModifyError)
-    return Modify(address, raw, shown, symbol)
+    return Modify(address, raw, shown, symbol, variable)
+
+
+def typed_value(type_name: str, name: str, value: object) -> tuple[object, str]:
+    """The value of S7 type ``type_name`` that ``value`` stands for (``TRUE``, ``-5``,
+    ``T#5S``, ``1.5``, JSON's true, 5, 1.5) and how S7 writes it, by the rules a modify of
+    an address of that type follows: for a variable that lives as a value, not in bytes
+    (an instance DB's). ModifyError names ``name`` and what does not fit; a type wider
+    than a double word or a STRING cannot be modified."""
+    try:
+        size = type_of(type_name).size_bits
+    except S7Error:
+        size = 0
+    width = _WIDTHS.get(1 if type_name == "BOOL" else size)
+    if width is None:
+        raise ModifyError(
+            f"{name} is a {type_name}: a modify writes a bit, a byte, a word or a double word"
+        )
+    shape = Address(Area.M, width, 0, 0)
+    raw, shown = encode_value(shape, type_name, name, value, "modify", ModifyError)
+    if width is Width.BIT:
+        return bool(raw), shown
+    return decode(type_name, raw.to_bytes(shape.size, "big")), shown
 
 
 def write_modify(mem: Memory, forces: ForceTable, modify: Modify) -> None:

@@ -111,6 +111,17 @@ class LoadedChart:
         self.flat = False
 
 
+def chart_variables(idb: InstanceDB) -> tuple[dict[str, Any], dict[str, str]] | None:
+    """The chart's own variables (its ``VAR``) in a GraphFB's instance DB — their values,
+    kept in the ``GraphState``, and their declared types — as S7-GRAPH keeps an FB's static
+    variables in its instance DB; None for an instance DB of another FB."""
+    fmt = idb.fb.state_format
+    state = idb.values.get(fmt.state_var) if isinstance(fmt, ChartFormat) else None
+    if not isinstance(fmt, ChartFormat) or not isinstance(state, GraphState):
+        return None
+    return state.vars, fmt.cc.var_types
+
+
 class GraphFB:
     """A ``CompiledChart`` bound to an engine FB number and an instance DB number; what it
     derives from the chart is one :class:`LoadedChart` (``loaded``)."""

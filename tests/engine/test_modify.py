@@ -5,6 +5,7 @@ as the same values written into a second CPU's memory through ``Memory.set``."""
 
 from __future__ import annotations
 
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -181,3 +182,36 @@ def test_random_modifies_of_a_running_program_equal_the_same_writes_into_a_fresh
     for area in ("inputs", "outputs", "markers", "periph_in", "periph_out"):
         assert getattr(cpu.mem, area) == getattr(fresh.mem, area), area
     assert cpu.mem.dbs[20].data == fresh.mem.dbs[20].data
+
+
+def test_an_address_given_with_its_type_and_variable_is_modified_as_that_type() -> None:
+    from s7graph.engine.address import parse_address
+
+    clock = VirtualClock()
+    cpu, _ = running(clock)
+    done = cpu.modify(parse_address("DB20.DBW2"), "-5", type_name="INT", variable="DB20.count")
+    assert str(done) == "DB20.count (DB20.DBW2) = -5"
+    assert cpu.mem.get("DB20.DBW2") == 0xFFFB
+    with pytest.raises(ModifyError, match=r"DB20\.count"):
+        cpu.modify(parse_address("DB20.DBW2"), "T#5S", type_name="INT", variable="DB20.count")
+    assert cpu.mem.get("DB20.DBW2") == 0xFFFB
+
+
+def test_a_value_for_a_variable_follows_the_rules_of_a_modify_of_its_type() -> None:
+    from s7graph.engine.modify import typed_value
+
+    assert typed_value("INT", "v", "-5") == (-5, "-5")
+    assert typed_value("TIME", "v", "T#5S") == (5000, "T#5S")
+    assert typed_value("REAL", "v", 2) == (2.0, "2.0")
+    assert typed_value("BOOL", "v", 1) == (True, "TRUE")
+    assert typed_value("WORD", "v", "16#00FF") == (255, "W#16#00FF")
+    for type_name, value, says in (
+        ("INT", True, "takes a number"),
+        ("INT", 70000, "out of range"),
+        ("BOOL", 2, "TRUE or FALSE"),
+        ("STRING[8]", "'x'", "a bit, a byte, a word or a double word"),
+        ("LREAL", 1.5, "a bit, a byte, a word or a double word"),
+    ):
+        with pytest.raises(ModifyError) as refused:
+            typed_value(type_name, "DB10.v", value)
+        assert says in refused.value.message and "DB10.v" in refused.value.message

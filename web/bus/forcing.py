@@ -11,8 +11,9 @@ for RUN: a force job set in STOP acts from the first cycle in RUN, as on S7.
 :meth:`Forcing.changed` gives the list whenever the table changed (the bus publishes it on
 ``forces`` and counts the jobs in ``status``). ``modify`` (``{"address": "M10.0",
 "value": true}``, engineers too) writes a value once through ``Cpu.modify``
-(``engine/modify.py``): not held, no diagnostic entry, the audit row says what. It never
-raises: a hostile command is refused with the reason.
+(``engine/modify.py``) — a DB variable by name (``DB20.avg``, ``"Data".temps[2]``)
+through ``web.bus.modify_vars`` —: not held, no diagnostic entry, the audit row says what.
+It never raises: a hostile command is refused with the reason.
 """
 
 from __future__ import annotations
@@ -20,7 +21,9 @@ from __future__ import annotations
 from s7graph.engine.cpu import Cpu
 from s7graph.engine.force import Force, ForceError
 from s7graph.engine.modify import ModifyError
+from s7graph.web.bus.modify_vars import modify_variable
 from s7graph.web.bus.protocol import Command, ForceEntry, ForceList
+from s7graph.web.bus.watch import WatchError
 
 __all__ = ["Forcing", "force_entry"]
 
@@ -80,8 +83,10 @@ class Forcing:
         if not isinstance(address, str) or value is None:
             return False, "modify needs an address and a value", ""
         try:
-            done = self.cpu.modify(address, value)
-        except ModifyError as exc:
+            done = modify_variable(self.cpu, address, value)
+            if done is None:
+                done = str(self.cpu.modify(address, value))
+        except (ModifyError, WatchError) as exc:
             return False, exc.message[:4096], ""
         return True, "", f"modify {done}"
 

@@ -12,7 +12,8 @@ hands the answer to the publisher's outbox, which encodes and sends it. An opera
 - a symbol of the CPU's table (``"Start_button"``, quotes optional), in its declared type;
 - a DB variable by name: ``DBn.var``, nested with dots and indexed with ``[i]`` — in an
   instance DB (``DB10.count``, ``DB10.ctu.CV``, a multi-instance's variables, an ARRAY by
-  its declared bounds) or in a global DB that has a layout — one declared in S7-SCL
+  its declared bounds, a chart's own variables in its GraphFB's: ``"Seq_mix".count``) or
+  in a global DB that has a layout — one declared in S7-SCL
   (``DB20.avg``, ``DB20.recipe.speed``, ``DB20.speeds[2]``, ``DB20.motor[2].on``); the DB
   also by its name, ``"Data".temps[2]``;
 
@@ -43,6 +44,7 @@ from s7graph.engine.errors import S7Error
 from s7graph.engine.literals import format_literal
 from s7graph.engine.memory import DataBlock
 from s7graph.engine.symbols import default_type
+from s7graph.sequencer.fb import chart_variables
 from s7graph.web.bus.protocol import (
     CpuState,
     ProtocolError,
@@ -54,7 +56,20 @@ from s7graph.web.bus.protocol import (
 )
 from s7graph.web.bus.publisher import BusPublisher, QueryReply
 
-__all__ = ["WatchItem", "Watching", "parse_item", "split_operands", "watch_value"]
+__all__ = [
+    "Segment",
+    "WatchError",
+    "WatchItem",
+    "Watching",
+    "array_bounds",
+    "db_by_name",
+    "element_type",
+    "instance_slot",
+    "layout_address",
+    "parse_item",
+    "split_operands",
+    "watch_value",
+]
 
 QUEUE: Final = 64
 """Watch requests waiting at most; beyond, a request is refused at once as busy."""
@@ -200,7 +215,7 @@ def _natural(address: Address) -> str:
 def _db_variable(cpu: Cpu, item: WatchItem) -> tuple[object, str]:
     number, path = item.db, item.path
     if number is None:
-        number = _db_by_name(cpu, item.db_name)
+        number = db_by_name(cpu, item.db_name)
     idb = cpu.instance_dbs.get(number)
     if idb is not None:
         value, type_name = _walk_instance(idb, path, f"DB{number}")
@@ -211,7 +226,7 @@ def _db_variable(cpu: Cpu, item: WatchItem) -> tuple[object, str]:
     return _layout_variable(cpu, db, path, item.type)
 
 
-def _db_by_name(cpu: Cpu, name: str) -> int:
+def db_by_name(cpu: Cpu, name: str) -> int:
     """The number of the DB named ``name``: a DB symbol of the CPU's symbol table, else an
     instance DB's or a global DB's own name."""
     symbols = cpu.mem.symbols
@@ -243,10 +258,10 @@ def _walk_instance(idb: InstanceDB, path: tuple[Segment, ...], where: str) -> tu
         if isinstance(value, InstanceDB):
             if not isinstance(step, str):
                 raise WatchError(f"{where} is an instance DB: it takes no index")
-            var = _variable(value, step, where)
-            value, type_name = value.values[var], value.fb.var(var).type
+            values, var, type_name = instance_slot(value, step, where)
+            value = values[var]
             where = f"{where}.{var}"
-            bounds = _bounds(type_name)
+            bounds = array_bounds(type_name)
         elif isinstance(step, str):
             value, where, type_name, bounds = (
                 _field(value, step, where),
@@ -257,20 +272,30 @@ def _walk_instance(idb: InstanceDB, path: tuple[Segment, ...], where: str) -> tu
         else:
             value = _element(value, step, bounds, where)
             where = f"{where}[{','.join(map(str, step))}]"
-            type_name, bounds = _element_type(type_name), None
+            type_name, bounds = element_type(type_name), None
     if isinstance(value, InstanceDB):
         raise WatchError(f"{where} is a multi-instance: watch one of its variables")
     return value, type_name if _elementary(type_name) else ""
 
 
-def _variable(idb: InstanceDB, name: str, where: str) -> str:
+def instance_slot(idb: InstanceDB, name: str, where: str) -> tuple[dict[str, Any], str, str]:
+    """(the dict holding the variable ``name`` of ``idb``, its key there, its declared
+    type): a variable of the FB's interface, or a chart's own variable in its GraphFB's
+    instance DB (``sequencer.fb.chart_variables``), the name in any case."""
     names = [v.name for v in idb.fb.interface if v.decl is not Decl.TEMP]
     found = next((n for n in names if n.casefold() == name.casefold()), None)
-    if found is None:
-        raise WatchError(
-            f"{where} ({idb.fb.label}) has no variable {name!r}; it has {', '.join(names[:24])}"
-        )
-    return found
+    if found is not None:
+        return idb.values, found, idb.fb.var(found).type
+    chart = chart_variables(idb)
+    if chart is not None:
+        values, types = chart
+        key = next((n for n in types if n.casefold() == name.casefold()), None)
+        if key is not None and key in values:
+            return values, key, types[key]
+        names = [*types, *names]
+    raise WatchError(
+        f"{where} ({idb.fb.label}) has no variable {name!r}; it has {', '.join(names[:24])}"
+    )
 
 
 def _field(value: object, name: str, where: str) -> object:
@@ -310,7 +335,7 @@ def _element(
     return current
 
 
-def _bounds(type_name: str) -> list[tuple[int, int]] | None:
+def array_bounds(type_name: str) -> list[tuple[int, int]] | None:
     m = _ARRAY.fullmatch(type_name.strip())
     if m is None:
         return None
@@ -323,7 +348,7 @@ def _bounds(type_name: str) -> list[tuple[int, int]] | None:
     return out
 
 
-def _element_type(type_name: str) -> str:
+def element_type(type_name: str) -> str:
     m = _ARRAY.fullmatch(type_name.strip())
     return m[2].strip().upper() if m else ""
 
@@ -341,10 +366,20 @@ def _layout_variable(
     cpu: Cpu, db: DataBlock, path: tuple[Segment, ...], wanted: str | None
 ) -> tuple[object, str]:
     """A variable of a global DB by its layout (``engine.datatypes.layout``)."""
+    address, type_name = layout_address(db, path)
+    shown_as = wanted or type_name
+    return cpu.mem.read_as(address, shown_as), shown_as
+
+
+def layout_address(
+    db: DataBlock, path: tuple[Segment, ...], verb: str = "watch"
+) -> tuple[Address, str]:
+    """The address and declared type of the variable ``path`` of global DB ``db``, by its
+    layout (``engine.datatypes.layout``); WatchError says why not, for ``verb``."""
     where = f"DB{db.number}"
     if db.layout is None:
         raise WatchError(
-            f"{where} has no variables by name (no layout): watch its bytes, e.g. {where}.DBW0"
+            f"{where} has no variables by name (no layout): {verb} its bytes, e.g. {where}.DBW0"
         )
     slots = db.layout.slots
     name, index = _spelled(path), None
@@ -360,14 +395,13 @@ def _layout_variable(
     if index is not None:
         byte, bit, type_name = _array_element(slot.byte, slot.type, index, f"{where}.{key}")
     if type_name == "STRUCT" or type_name.upper().startswith("ARRAY"):
-        raise WatchError(f"{where}.{key} is a {type_name.split('[')[0]}: watch one of its elements")
+        what = "an ARRAY" if type_name.upper().startswith("ARRAY") else "a STRUCT"
+        raise WatchError(f"{where}.{key} is {what}: {verb} one of its elements")
     size = type_of(type_name).size
     width = {0: Width.BIT, 1: Width.BYTE, 2: Width.WORD, 4: Width.DWORD}.get(size, Width.BYTE)
     if type_name == "BOOL":
         width = Width.BIT
-    address = Address(Area.DB, width, byte, bit, db.number)
-    shown_as = wanted or type_name
-    return cpu.mem.read_as(address, shown_as), shown_as
+    return Address(Area.DB, width, byte, bit, db.number), type_name
 
 
 def _spelled(path: tuple[Segment, ...]) -> str:
@@ -391,7 +425,7 @@ def _array_element(
     start: int, array: str, index: tuple[int, ...], where: str
 ) -> tuple[int, int, str]:
     """(byte, bit, element type) of ``array[index]`` laid out from byte ``start``."""
-    bounds, elem = _bounds(array), _element_type(array)
+    bounds, elem = array_bounds(array), element_type(array)
     if bounds is None or not elem:
         raise WatchError(f"{where} is no ARRAY: it takes no index")
     if len(index) != len(bounds):

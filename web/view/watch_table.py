@@ -29,6 +29,7 @@ import viser
 
 from s7graph.web.bus.protocol import MAX_WATCH, WatchValues
 from s7graph.web.bus.watch import parse_item, split_operands
+from s7graph.web.commands import MAX_FORCE_TEXT
 from s7graph.web.view import texts
 
 __all__ = [
@@ -147,7 +148,8 @@ class Modifying:
         self.button.on_click(lambda _: self._clicked())
 
     def offer(self, asked: tuple[str, ...]) -> None:
-        """The operands to choose from: those watched that name an address or a symbol."""
+        """The operands to choose from: those watched (an address, a symbol, a DB
+        variable by name)."""
         options = tuple(a for a in (watch_target(a) for a in asked) if a) or (NO_OPERAND,)
         if options == self._options:
             return
@@ -174,9 +176,10 @@ def set_choices(choice: viser.GuiDropdownHandle[str], options: tuple[str, ...]) 
 
 def watch_target(text: str) -> str:
     """The operand a watched ``text`` names without the type to show it as (``MW0:INT`` →
-    ``MW0``); "" for a DB variable by name or a spelling that is no operand."""
+    ``MW0``; a DB variable by name as it is, ``"Data".temps[2]``); "" for a spelling that
+    is no operand or one too long for a command."""
     item = parse_item(text)
-    if item.error or item.path or item.db_name:
+    if item.error or len(item.target) > MAX_FORCE_TEXT:
         return ""
     return item.target
 

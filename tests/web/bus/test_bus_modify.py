@@ -125,3 +125,21 @@ def test_the_modify_command_writes_once_from_a_shell(bus: Bus) -> None:  # noqa:
     assert wait_until(lambda: rig.session.cpu.mem.get("Speed") == -7)
     usage = _shell(rig, "M0.0", "--user", "eng")
     assert usage.returncode == 2 and "give ADDRESS VALUE" in usage.stderr
+
+
+def test_an_instance_db_pin_is_modified_by_name_through_the_gate(bus: Bus) -> None:  # noqa: F811
+    reply = bus.send("olga", "modify", address='"Seq_lamp".SW_MAN', value=True)
+    assert not reply.applied and "needs engineer" in reply.reason
+    reply = bus.send("eng", "modify", address='"Seq_lamp".SW_MAN', value="TRUE")
+    assert reply.applied, reply.reason
+    graph = bus.rig.session.graph
+    assert wait_until(lambda: graph.state.mode == "MAN")  # the FB read its input
+    assert bus.send("eng", "modify", address="DB1.SW_AUTO", value=True).applied
+    assert wait_until(lambda: graph.state.mode == "AUTO")
+    reply = bus.send("eng", "modify", address="DB1.SW_MAN", value=2)
+    assert not reply.applied and "TRUE or FALSE" in reply.reason
+    details = [d for u, o, _, d in _rows(bus.rig) if (u, o) == ("eng", "applied")]
+    assert [d.split(": ", 1)[1].split(";")[0] for d in details] == [
+        'modify "Seq_lamp".SW_MAN = TRUE',
+        "modify DB1.SW_AUTO = TRUE",
+    ]

@@ -60,7 +60,8 @@ def test_the_table_shows_each_value_or_why_not_escaped() -> None:
     assert "type operands above" in watch_html(None)
 
 
-def test_modify_offers_the_watched_addresses_and_symbols_without_their_display_type() -> None:
+def test_modify_offers_the_watched_operands_without_their_display_type() -> None:
     shown = [watch_target(t) for t in ("MW0:INT", '"Start"', "DB20.DBW2", "DB10.count")]
-    assert shown == ["MW0", '"Start"', "DB20.DBW2", ""]  # a DB variable by name: not offered
-    assert watch_target('"Data".x') == "" and watch_target(":INT") == ""
+    assert shown == ["MW0", '"Start"', "DB20.DBW2", "DB10.count"]
+    assert watch_target('"Data".temps[2]') == '"Data".temps[2]'
+    assert watch_target(":INT") == "" and watch_target("DB1." + "x" * 64) == ""
