@@ -354,7 +354,7 @@ OpcuaKey = Annotated[Path | None, typer.Option(help="The OPC UA server's private
 _WRITES_HELP = (
     "What an OPC UA client's write of a symbol sends: force (a force job on an input, "
     "output or flag, held until unforced; the default) or modify (written once, as an "
-    "S7-1500 writes a PLC tag; inputs, outputs, flags and data blocks)."
+    "S7-1500 writes a PLC tag; inputs, outputs, flags, data blocks and a chart's variables)."
 )
 OpcuaWrites = Annotated[
     str | None, typer.Option("--opcua-writes", metavar="force|modify", help=_WRITES_HELP)

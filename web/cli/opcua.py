@@ -50,10 +50,10 @@ def writes_problem(writes: str | None, option: str) -> str | None:
     """Why ``writes`` is not an op a symbol's write may send, else None."""
     if writes is None:
         return None
-    from s7graph.web.opcua.space import SYMBOL_WRITES
+    from s7graph.web.opcua.space import WRITES
 
-    if writes not in SYMBOL_WRITES:
-        return f"{option} must be {' or '.join(SYMBOL_WRITES)}, not {writes!r}"
+    if writes not in WRITES:
+        return f"{option} must be {' or '.join(WRITES)}, not {writes!r}"
     return None
 
 

@@ -15,7 +15,8 @@ that, ``BadTooManyOperations``.
 A write is a command too: an FB's ``Mode`` sends ``mode``, ``Halted`` ``halt``,
 ``InterlocksEnabled``/``SupervisionsEnabled`` ``en_il``/``en_sv``, a symbol on an input,
 output or flag a ``force`` job, or with ``writes="modify"`` a symbol on an input, output,
-flag or data block a ``modify`` (both an engineer's; ``web.opcua.space.SYMBOL_WRITES``).
+flag or data block and a chart's own variable a ``modify`` (both an engineer's;
+``web.opcua.space.WRITES``).
 The variable shows the CPU's value once the CPU publishes it, never the value written.
 """
 
@@ -86,7 +87,8 @@ _SYMBOL_OPS: Final[dict[str, tuple[type[Command], type[ForceArgs] | type[ModifyA
     "force": (Force, ForceArgs),
     "modify": (Modify, ModifyArgs),
 }
-"""A symbol's write as each op of ``SYMBOL_WRITES`` sends it: the command and its args."""
+"""A symbol's or a chart variable's write as each op of ``WRITES`` sends it: the command
+and its args."""
 _COLLAPSED: Final = frozenset({"status", "alarms", "operands", "chart"})
 """Kinds of which only the newest of a batch counts (a state delta: each, in order)."""
 
@@ -366,10 +368,10 @@ class Face:
     ) -> tuple[type[Command], str, Args]:
         fb, op = target
         if op in _SYMBOL_OPS:
-            info = self.space.symbol_info[nid]
+            info = self.space.targets[nid]
             value = from_variant(variant, ua_type(info.type))
             kind, make = _SYMBOL_OPS[op]
-            return kind, self.first_fb, make(address=info.address, value=value)
+            return kind, fb or self.first_fb, make(address=info.address, value=value)
         if op == "mode":
             if variant.VariantType is not ua.VariantType.String:
                 raise TypeError("mode is text")

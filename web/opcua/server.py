@@ -101,7 +101,7 @@ class OpcuaOptions:
     certificates (None: any client certificate opens a secure channel; the user token
     still decides); the limits; ``own_process``: the process is the face's alone, so its
     garbage collector may be tuned (:func:`quiet_collector`); ``writes``: what a client's
-    write of a symbol sends, ``force`` or ``modify`` (``web.opcua.space.SYMBOL_WRITES``)."""
+    write of a symbol sends, ``force`` or ``modify`` (``web.opcua.space.WRITES``)."""
 
     url: str = DEFAULT_URL
     anonymous: bool = True

@@ -16,8 +16,9 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
-from typing import Any, Final
+from typing import Any, Final, NamedTuple
 
+import msgspec
 from asyncua import ua
 
 from s7graph.engine.modify import MODIFY_POINTS
@@ -47,7 +48,7 @@ from s7graph.web.opcua.model import (
 from s7graph.web.opcua.nodes import GOOD, Nodes
 from s7graph.web.opcua.typed import ObjectIds, Server, StatusCodes, ua_id
 
-__all__ = ["FORCEABLE", "SYMBOL_WRITES", "Space", "StepNodes", "symbol_writable"]
+__all__ = ["FORCEABLE", "WRITES", "Space", "StepNodes", "Writes", "symbol_writable"]
 
 UINT16: Final = UaType(ua.VariantType.UInt16, "int", 0, 0xFFFF)
 UINT32: Final = UaType(ua.VariantType.UInt32, "int", 0, 0xFFFF_FFFF)
@@ -56,14 +57,25 @@ DURATION: Final = UaType(ua.VariantType.Double, "float", unit=MS)
 SHARE: Final = UaType(ua.VariantType.Double, "float", unit=PERCENT)
 FORCEABLE: Final = ("I", "Q", "M")
 """The areas a force job takes: a symbol there is writable (an engineer's force)."""
-SYMBOL_WRITES: Final[dict[str, tuple[str, ...]]] = {
-    "force": FORCEABLE,
-    "modify": tuple(str(area) for area in MODIFY_POINTS),
+
+
+class Writes(NamedTuple):
+    """What a client's writes may reach under one ``--writes``: the areas whose symbols
+    are writable, and whether a chart's own variables (an FB's ``Variables``) are."""
+
+    areas: tuple[str, ...]
+    variables: bool
+
+
+WRITES: Final[dict[str, Writes]] = {
+    "force": Writes(FORCEABLE, variables=False),
+    "modify": Writes(tuple(str(area) for area in MODIFY_POINTS), variables=True),
 }
-"""What a client's write of a symbol sends (``s7graph opcua --writes``), and the areas
-whose symbols it makes writable: a ``force`` job, held until unforced (I, Q, M), or a
-``modify``, written once at the scan boundary as an S7-1500's OPC UA server writes a PLC
-tag (I, Q, M, DB)."""
+"""The op a client's write of a symbol or a chart's variable sends (``s7graph opcua
+--writes``), and what it makes writable: a ``force`` job, held until unforced (symbols on
+I, Q, M), or a ``modify``, written once at the scan boundary as an S7-1500's OPC UA server
+writes a PLC tag (symbols on I, Q, M, DB, and a chart's own variables by its instance DB's
+name, ``"Seq_mix".count``)."""
 STALE: Final = StatusCodes.BadNoCommunication
 UNREADABLE: Final = StatusCodes.BadConfigurationError
 
@@ -71,7 +83,8 @@ UNREADABLE: Final = StatusCodes.BadConfigurationError
 def symbol_writable(address: str, op: str) -> bool:
     """Whether a client may write the symbol at ``address`` when a write sends ``op``."""
     area = "DB" if address.startswith("DB") else address[:1]
-    return area in SYMBOL_WRITES.get(op, ())
+    writes = WRITES.get(op)
+    return writes is not None and area in writes.areas
 
 
 def _event_id(event: DiagEvent | None) -> str:
@@ -174,7 +187,8 @@ class Space:
     def __init__(self, server: Server, ns: int, cpu: str, *, writes: str = "force") -> None:
         self.server = server
         self.symbol_op = writes
-        """The op a write of a symbol sends: ``force`` or ``modify`` (:data:`SYMBOL_WRITES`)."""
+        """The op a write of a symbol or a chart's variable sends: ``force`` or ``modify``
+        (:data:`WRITES`)."""
         self.ns = ns
         self.cpu = cpu
         self.nodes = Nodes(server, ns)
@@ -182,6 +196,9 @@ class Space:
         self.fbs: dict[str, FbNodes] = {}
         self.symbols: dict[str, tuple[ua.NodeId, UaType]] = {}
         self.symbol_info: dict[ua.NodeId, OperandInfo] = {}
+        self.targets: dict[ua.NodeId, OperandInfo] = {}
+        """A writable symbol's or chart variable's operand: its type, and the address or
+        name a write sends (``"Seq_mix".count`` for a chart's variable)."""
         self.writes: dict[ua.NodeId, tuple[str, str]] = {}
         """A writable variable's FB and the op a write sends (a symbol's: ``symbol_op``)."""
         self.catalog_version = -1
@@ -355,8 +372,9 @@ class Space:
         n = self.nodes
         for root in [self.nid("Symbols", s) for s in self.symbols]:
             await n.delete(root)
-        for nid in list(self.symbol_info):
+        for nid in list(self.targets):
             self.writes.pop(nid, None)
+        self.targets.clear()
         self.symbols.clear()
         self.symbol_info.clear()
         folder = self.nid("Symbols")
@@ -375,6 +393,7 @@ class Space:
             self.symbol_info[nid] = info
             if writable:
                 self.writes[nid] = ("", self.symbol_op)
+                self.targets[nid] = info
         for fbn in self.fbs.values():
             for nid, _ in list(fbn.operands.values()):
                 await n.delete(nid)
@@ -387,7 +406,9 @@ class Space:
 
     def _fb_operands(self, fb: str, operands: FbOperands) -> None:
         fbn, n = self.fbs[fb], self.nodes
+        writes = WRITES.get(self.symbol_op)
         for folder, infos in (("Pins", operands.pins), ("Variables", operands.variables)):
+            writable = folder == "Variables" and writes is not None and writes.variables
             for info in infos:
                 t = ua_type(info.type)
                 nid = self.nid(fb, folder, info.name)
@@ -395,9 +416,12 @@ class Space:
                 text = f"{info.direction} {info.type}".strip() + (
                     f": {info.comment}" if info.comment else ""
                 )
-                n.var(self.nid(fb, folder), nid, info.name, t, description=text)
+                n.var(self.nid(fb, folder), nid, info.name, t, description=text, writable=writable)
                 n.end_root()
                 fbn.operands[info.name] = (nid, t)
+                if writable:
+                    self.writes[nid] = (fb, self.symbol_op)
+                    self.targets[nid] = msgspec.structs.replace(info, address=f'"{fb}".{info.name}')
 
     # ------------------------------------------------------------ values
 

@@ -260,6 +260,11 @@ def test_a_write_is_a_command_and_forcing_and_modifying_are_an_engineers(
                     "BadNotWritable",
                 ),
                 ("cpu1/Symbols/Total", ua.Variant(1, ua.VariantType.Int16), "BadNotWritable"),
+                (
+                    "cpu1/Seq_mix/Variables/count",  # with --writes modify only
+                    ua.Variant(1, ua.VariantType.Int16),
+                    "BadNotWritable",
+                ),
             ):
                 with pytest.raises(UaStatusCodeError) as refused:
                     await node(c, path).write_value(value)

@@ -17,7 +17,7 @@ from asyncua.ua.uaerrors import UaStatusCodeError
 
 from s7graph.web.access.audit import read_audit
 from s7graph.web.cli.opcua import OpcuaProcess
-from s7graph.web.opcua.space import SYMBOL_WRITES, symbol_writable
+from s7graph.web.opcua.space import WRITES, symbol_writable
 from tests.web.opcua.helpers import (
     CHART,
     FaceRig,
@@ -71,17 +71,20 @@ def test_the_areas_a_write_takes_are_forces_or_modifys() -> None:
         False,
     ]
     assert all(symbol_writable(a, "modify") for a in ("I0.0", "QB1", "MW20", "DB1.DBW30"))
-    assert not any(symbol_writable(a, op) for a in ("T1", "C2", "PIW256") for op in SYMBOL_WRITES)
+    assert not any(symbol_writable(a, op) for a in ("T1", "C2", "PIW256") for op in WRITES)
 
 
 def test_the_docs_table_of_writes_is_the_faces() -> None:
     text = (Path(__file__).resolve().parents[3] / "docs" / "opcua.md").read_text()
-    rows = [line.split("|")[1:4] for line in text.splitlines() if line.startswith("| `")]
+    rows = [line.split("|")[1:5] for line in text.splitlines() if line.startswith("| `")]
     found = {
-        op.split("`")[1]: areas.strip().removeprefix("on ") for op, _, areas in rows if "`" in op
+        op.split("`")[1]: (areas.strip().removeprefix("on "), variables.strip())
+        for op, _, areas, variables in rows
+        if "`" in op
     }
-    assert {op: found.get(op) for op in SYMBOL_WRITES} == {
-        op: ", ".join(areas) for op, areas in SYMBOL_WRITES.items()
+    assert {op: found.get(op) for op in WRITES} == {
+        op: (", ".join(w.areas), "writable" if w.variables else "read only")
+        for op, w in WRITES.items()
     }
 
 
@@ -113,6 +116,10 @@ def test_a_written_symbol_is_modified_once_and_not_held(face: FaceRig) -> None:
             await node(c, "cpu1/Symbols/Total").write_value(total)
             assert await eventually(lambda: _reads(c, "cpu1/Symbols/Total", 9))
             assert await _reads(c, "cpu1/ForceJobs", 0)
+            count = "cpu1/Seq_mix/Variables/count"  # a chart's own variable, by name
+            await node(c, count).write_value(ua.Variant(41, ua.VariantType.Int16))
+            assert await eventually(lambda: _reads(c, count, 41))
+            assert face.rig.session.graph.state.vars["count"] == 41
             with pytest.raises(UaStatusCodeError) as refused:
                 await node(c, "cpu1/Symbols/Total").write_value(ua.Variant(1.5))
             assert int(refused.value.code) == ua.StatusCodes.BadTypeMismatch
@@ -120,5 +127,7 @@ def test_a_written_symbol_is_modified_once_and_not_held(face: FaceRig) -> None:
     run(check())
     assert len(cpu.forces) == 0
     rows = [(r.user, r.outcome) for r in read_audit(face.rig.state) if r.op == "modify"]
-    assert rows == [("olga", "refused")] + [("eng", "applied")] * 3
+    assert rows == [("olga", "refused")] + [("eng", "applied")] * 4
+    details = [r.detail for r in read_audit(face.rig.state) if r.op == "modify"]
+    assert 'modify "Seq_mix".count = 41' in details[-1]
     assert not [r for r in read_audit(face.rig.state) if r.op == "force"]
