@@ -1,4 +1,4 @@
-"""The ``s7graph`` command line: ``run``, ``sim``, ``check``, ``import``, ``export``,
+"""The ``s7graph`` command line: ``run``, ``sim``, ``check``, ``xref``, ``import``, ``export``,
 ``--version``; for the bus ``web``, ``opcua``, ``router``, ``watch``, ``status``, ``diag``
 and the shell's commands (``ack``, ``mode``, ..., ``force``, ``modify``, ``download``,
 ``stop``, ``start``, ``mres``); ``users``, ``audit`` and ``certs``.
@@ -545,6 +545,22 @@ def check(
     from s7graph.web.cli.check import check_command
 
     raise typer.Exit(check_command(chart, symbols=symbols, blocks=blocks or []))
+
+
+@app.command()
+def xref(
+    chart: Annotated[Path, typer.Argument(help="A chart in .s7g source.")],
+    symbols: Annotated[Path | None, typer.Option(help="A symbol table file.")] = None,
+    operand: Annotated[
+        str | None,
+        typer.Option(help="Only this operand's uses: a symbol, an address or a variable."),
+    ] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="One JSON object.")] = False,
+) -> None:
+    """Print a chart's cross-references: where each operand is used, and how."""
+    from s7graph.web.cli.xref import xref_command
+
+    raise typer.Exit(xref_command(chart, symbols=symbols, operand=operand, as_json=as_json))
 
 
 @app.command()

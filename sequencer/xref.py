@@ -1,0 +1,234 @@
+"""Cross-references of a chart: where each operand is used and how, as TIA Portal's
+cross-reference list (Tools > Cross-references) shows a tag's uses (docs/cli.md,
+"s7graph xref").
+
+Every contact and operand of a transition's condition, a step's interlock and supervision,
+its action rows and the permanent instructions is one :class:`Use`: the operand as written
+(a symbol, an address, an FB variable, ``S3.X``, ``T2.TT``, a block, a step an ON/OFF row
+acts on), the element it stands in (``T1 "Start"``, ``S2 "Clamp" interlock``, ``S2 "Clamp"
+row 3``, ``permanent before 1``), its access (:data:`ACCESS` by qualifier; contacts and the
+operands of an expression are read), and its place in the source. A symbol and its address
+are one operand (``"Start_button" (I0.7)``), with the chart's own ``SYMBOLS`` and a symbol
+table; the symbols the chart declares and never uses are listed as TIA lists unused tags.
+Pure: the parsed chart in, data out.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from dataclasses import dataclass
+from typing import Final
+
+from s7graph.engine.errors import SourceLocation
+from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer.text.model import (
+    ActionRow,
+    Assignment,
+    BlockCall,
+    Chart,
+    Coil,
+    Expr,
+    Operand,
+    PermanentInstruction,
+    Step,
+    StepAttr,
+    StepTarget,
+    TransAttr,
+)
+from s7graph.sequencer.text.walk import nodes
+
+__all__ = ["ACCESS", "CrossReferences", "Use", "cross_references"]
+
+ACCESS: Final[dict[str, str]] = {
+    "N": "write",
+    "D": "write",
+    "L": "write",
+    "S": "set",
+    "R": "reset",
+    "CALL": "call",
+    "ON": "activate",
+    "OFF": "deactivate",
+    "CS": "counter",
+    "CU": "counter",
+    "CD": "counter",
+    "CR": "counter",
+    "TL": "timer",
+    "TD": "timer",
+    "TF": "timer",
+    "TR": "timer",
+}
+"""How an action row uses its operand, by qualifier (an assignment's target is written, a
+block call's instance DB is its instance); every contact and expression operand is read."""
+_COIL: Final = {"=": "write", "S": "set", "R": "reset"}
+
+
+@dataclass(frozen=True, slots=True)
+class Use:
+    """One use of ``operand`` (as shown: ``"Start" (I0.0)``, ``count``, ``S3.X``): in
+    ``element``, with ``access``, written at ``loc``."""
+
+    operand: str
+    element: str
+    access: str
+    loc: SourceLocation
+
+    @property
+    def place(self) -> str:
+        """``file:line:col``."""
+        return str(self.loc)
+
+
+@dataclass(frozen=True, slots=True)
+class CrossReferences:
+    """The uses of a chart's operands, each operand's in the order written, operands
+    sorted by name; ``unused``: the symbols the chart declares and never uses."""
+
+    uses: tuple[Use, ...]
+    unused: tuple[str, ...]
+
+    def operands(self) -> dict[str, list[Use]]:
+        """The uses by operand, sorted by the operand as shown (case-insensitive)."""
+        out: dict[str, list[Use]] = {}
+        for use in self.uses:
+            out.setdefault(use.operand, []).append(use)
+        return dict(sorted(out.items(), key=lambda kv: kv[0].casefold()))
+
+    def of(self, name: str) -> list[Use]:
+        """The uses of the operand written ``name`` (a symbol with or without quotes, an
+        address, a variable; any case)."""
+        key = name.strip().strip('"').casefold()
+        return [
+            u
+            for u in self.uses
+            if key in {p.strip().strip('"()').casefold() for p in u.operand.split(" (")}
+        ]
+
+
+def cross_references(chart: Chart, symbols: SymbolTable | None = None) -> CrossReferences:
+    """Every use of an operand in ``chart``; ``symbols`` (optional) a symbol table beside
+    the chart's own ``SYMBOLS``, which come first."""
+    names = _Names(chart, symbols)
+    uses = [
+        Use(names.shown(text), element, access, loc) for element, text, access, loc in _walk(chart)
+    ]
+    used = {u.operand for u in uses}
+    unused = tuple(s.name for s in chart.symbols if names.shown(f'"{s.name}"') not in used)
+    return CrossReferences(tuple(uses), unused)
+
+
+class _Names:
+    """How an operand is shown: a symbol with its address, an address with its symbol
+    (the chart's own first), anything else as written."""
+
+    def __init__(self, chart: Chart, table: SymbolTable | None) -> None:
+        self.by_name: dict[str, tuple[str, str]] = {}
+        for source in (
+            [(s.name, s.address) for s in chart.symbols],
+            [(s.name, str(s.address)) for s in table or ()],
+        ):
+            for name, address in source:
+                self.by_name.setdefault(name.casefold(), (name, address))
+        self.by_address = {
+            address.replace(" ", "").upper(): name for name, address in self.by_name.values()
+        }
+        self.variables = {v.name.casefold(): v.name for v in chart.vars}
+
+    def shown(self, text: str) -> str:
+        name = text.strip('"')
+        found = self.by_name.get(name.casefold())
+        if found is not None and (text.startswith('"') or name.casefold() not in self.variables):
+            return f'"{found[0]}" ({found[1]})'
+        if text.startswith('"'):
+            return text
+        symbol = self.by_address.get(text.replace(" ", "").upper())
+        if symbol is not None:
+            return f'"{symbol}" ({self.by_name[symbol.casefold()][1]})'
+        return self.variables.get(text.casefold(), text)
+
+
+_Found = tuple[str, str, str, SourceLocation]  # element, operand as written, access, place
+
+
+def _walk(chart: Chart) -> Iterator[_Found]:
+    for label, instructions in (("before", chart.before), ("after", chart.after)):
+        for k, instruction in enumerate(instructions, 1):
+            yield from _permanent(f"permanent {label} {k}", instruction)
+    for sequence in chart.sequences:
+        for step in sequence.steps:
+            yield from _step(step)
+        for t in sequence.transitions:
+            yield from _read(f"T{t.number} {_quoted(t.name)}".strip(), t.condition)
+
+
+def _step(step: Step) -> Iterator[_Found]:
+    element = f"S{step.number} {_quoted(step.name)}".strip()
+    yield from _read(f"{element} interlock", step.interlock)
+    yield from _read(f"{element} supervision", step.supervision)
+    for k, row in enumerate(step.actions, 1):
+        yield from _row(f"{element} row {k} ({_row_head(row)})", row)
+
+
+def _row(element: str, row: ActionRow) -> Iterator[_Found]:
+    operand = row.operand
+    if isinstance(operand, Assignment):
+        yield element, _text(operand.target), "write", operand.target.loc
+        yield from _read(element, operand.expr)
+    elif isinstance(operand, BlockCall):
+        yield from _call(element, operand)
+    elif isinstance(operand, StepTarget):
+        target = "S_ALL" if operand.step is None else f"S{operand.step}"
+        yield element, target, ACCESS.get(row.qualifier, row.qualifier.lower()), operand.loc
+    else:
+        yield element, _text(operand), ACCESS.get(row.qualifier, "write"), operand.loc
+    yield from _read(element, row.value)
+
+
+def _permanent(element: str, instruction: PermanentInstruction) -> Iterator[_Found]:
+    if isinstance(instruction, Coil):
+        yield element, _text(instruction.target), _COIL[instruction.kind], instruction.target.loc
+        yield from _read(element, instruction.condition)
+    elif isinstance(instruction, Assignment):
+        yield element, _text(instruction.target), "write", instruction.target.loc
+        yield from _read(element, instruction.expr)
+    else:
+        yield from _call(element, instruction)
+
+
+def _call(element: str, call: BlockCall) -> Iterator[_Found]:
+    yield element, _block(call.kind, call.block), "call", call.loc
+    if call.instance is not None:
+        yield element, _block("DB", call.instance), "instance", call.loc
+    for _, expr in call.inputs:
+        yield from _read(element, expr)
+    for _, out in call.outputs:
+        yield element, _text(out), "write", out.loc
+
+
+def _read(element: str, expr: Expr | None) -> Iterator[_Found]:
+    """Every operand of ``expr``, read, in the order written."""
+    if expr is None:
+        return
+    for node in nodes(expr):
+        if isinstance(node, Operand):
+            yield element, _text(node), "read", node.loc
+        elif isinstance(node, StepAttr):
+            yield element, f"S{node.step}.{node.attr}", "read", node.loc
+        elif isinstance(node, TransAttr):
+            yield element, f"T{node.transition}.{node.attr}", "read", node.loc
+
+
+def _text(operand: Operand) -> str:
+    return f'"{operand.name}"' if operand.quoted else operand.name
+
+
+def _block(kind: str, block: int | str) -> str:
+    return f"{kind} {block}" if isinstance(block, int) else f'"{block}"'
+
+
+def _quoted(name: str) -> str:
+    return f'"{name}"' if name else ""
+
+
+def _row_head(row: ActionRow) -> str:
+    head = f"{row.event} " if row.event else ""
+    return head + row.qualifier + ("C" if row.interlocked else "")

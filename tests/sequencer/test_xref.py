@@ -1,0 +1,111 @@
+"""Cross-references of a chart (``sequencer/xref.py``): every operand of the conditions,
+interlocks, supervisions, action rows and permanent instructions with the element it stands
+in, its access and its place; a symbol and its address are one operand, whether written by
+the symbol or the address; an FB variable is not a symbol of the same name; the chart's
+unused symbols are listed; one table of accesses by qualifier."""
+
+from __future__ import annotations
+
+from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer.text.parse import parse_chart
+from s7graph.sequencer.xref import ACCESS, cross_references
+from s7graph.steps.qualifiers import QUALIFIERS
+from tests.paths import ROOT
+
+CHART = """FUNCTION_BLOCK "Seq_x" FB 1 DB 1
+VAR count : INT := 0; Lamp : BOOL; END_VAR
+SYMBOLS
+  "Start" : I0.0 : BOOL;
+  "Lamp" : Q1.0 : BOOL;
+  "Spare" : M9.0 : BOOL;
+END_SYMBOLS
+PERMANENT BEFORE
+  M0.1 := "Start" AND NOT I0.1;
+  S M0.2 := S2.X;
+END_PERMANENT
+SEQUENCE 1 "Main"
+  INITIAL_STEP S1 "Idle":
+    S0 R M0.2;
+  END_STEP
+  STEP S2 "Run":
+    INTERLOCK := I0.1;
+    SUPERVISION := S2.U > T#5S;
+    N "Lamp";
+    S1 N count := count + Lamp;
+    D Q1.1, T#2S;
+    CALL "TON", DB 10 (IN := M0.1, PT := T#1S, Q => M0.3);
+    S1 ON S3;
+    S1 CU C 4;
+  END_STEP
+  STEP S3 "End":
+  END_STEP
+  TRANSITION T1 "Go" FROM S1 TO S2 := I0.0 AND T2.TT;
+  TRANSITION T2 FROM S2 TO S3 := count > 2;
+  TRANSITION T3 FROM S3 TO S1 := TRUE;
+END_SEQUENCE
+END_FUNCTION_BLOCK
+"""
+
+
+def _uses(table: SymbolTable | None = None) -> dict[str, list[tuple[str, str, int]]]:
+    refs = cross_references(parse_chart(CHART, "x.s7g"), table)
+    return {
+        operand: [(u.element, u.access, u.loc.line) for u in uses]
+        for operand, uses in refs.operands().items()
+    }
+
+
+def test_every_use_names_its_element_access_and_line() -> None:
+    uses = _uses()
+    assert uses['"Start" (I0.0)'] == [
+        ("permanent before 1", "read", 9),
+        ('T1 "Go"', "read", 28),  # written as I0.0: the same operand
+    ]
+    assert uses["M0.2"] == [
+        ("permanent before 2", "set", 10),
+        ('S1 "Idle" row 1 (S0 R)', "reset", 14),
+    ]
+    assert uses["I0.1"] == [("permanent before 1", "read", 9), ('S2 "Run" interlock', "read", 17)]
+    assert uses["S2.U"] == [('S2 "Run" supervision', "read", 18)]
+    assert uses["S2.X"] == [("permanent before 2", "read", 10)]
+    assert uses["T2.TT"] == [('T1 "Go"', "read", 28)]
+    assert uses['"Lamp" (Q1.0)'] == [('S2 "Run" row 1 (N)', "write", 19)]
+    assert uses["count"] == [
+        ('S2 "Run" row 2 (S1 N)', "write", 20),
+        ('S2 "Run" row 2 (S1 N)', "read", 20),
+        ("T2", "read", 29),
+    ]
+    assert uses["Lamp"] == [('S2 "Run" row 2 (S1 N)', "read", 20)]  # the variable, unquoted
+    assert uses["Q1.1"] == [('S2 "Run" row 3 (D)', "write", 21)]
+    row = 'S2 "Run" row 4 (CALL)'
+    assert uses['"TON"'] == [(row, "call", 22)]
+    assert uses["DB 10"] == [(row, "instance", 22)]
+    assert (row, "read", 22) in uses["M0.1"] and uses["M0.3"] == [(row, "write", 22)]
+    assert uses["S3"] == [('S2 "Run" row 5 (S1 ON)', "activate", 23)]
+    assert uses["C4"] == [('S2 "Run" row 6 (S1 CU)', "counter", 24)]
+
+
+def test_a_symbol_tables_symbol_and_its_address_are_one_operand() -> None:
+    table = SymbolTable.from_text('"Guard" ; I0.1 ; BOOL\n')
+    uses = _uses(table)
+    assert "I0.1" not in uses
+    assert [e for e, _, _ in uses['"Guard" (I0.1)']] == ["permanent before 1", 'S2 "Run" interlock']
+
+
+def test_the_unused_symbols_of_the_chart_are_listed_and_an_operand_found_by_any_name() -> None:
+    refs = cross_references(parse_chart(CHART, "x.s7g"))
+    assert refs.unused == ("Spare",)
+    assert [u.element for u in refs.of("start")] == ["permanent before 1", 'T1 "Go"']
+    assert refs.of("I0.0") == refs.of('"Start"') and refs.of("nothing") == []
+
+
+def test_each_qualifier_has_one_access_and_the_docs_table_is_the_codes() -> None:
+    assert set(ACCESS) == set(QUALIFIERS)
+    text = (ROOT / "docs" / "cli.md").read_text(encoding="utf-8")
+    table = text.split("| access | qualifiers |", 1)[1].split("\n\n", 1)[0]
+    documented = {
+        q.strip(" `"): row.split("|")[1].strip()
+        for row in table.splitlines()[2:]
+        for q in row.split("|")[2].split(",")
+    }
+    assert documented == ACCESS
