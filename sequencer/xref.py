@@ -21,6 +21,7 @@ from typing import Final
 
 from s7graph.engine.errors import SourceLocation
 from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer.text.elements import DeclRef, Ref, RowRef, StepRef, TransitionRef
 from s7graph.sequencer.text.model import (
     ActionRow,
     Assignment,
@@ -65,12 +66,13 @@ _COIL: Final = {"=": "write", "S": "set", "R": "reset"}
 @dataclass(frozen=True, slots=True)
 class Use:
     """One use of ``operand`` (as shown: ``"Start" (I0.0)``, ``count``, ``S3.X``): in
-    ``element``, with ``access``, written at ``loc``."""
+    ``element`` (``ref`` the editor selects it by), with ``access``, written at ``loc``."""
 
     operand: str
     element: str
     access: str
     loc: SourceLocation
+    ref: Ref | None = None
 
     @property
     def place(self) -> str:
@@ -109,7 +111,8 @@ def cross_references(chart: Chart, symbols: SymbolTable | None = None) -> CrossR
     the chart's own ``SYMBOLS``, which come first."""
     names = _Names(chart, symbols)
     uses = [
-        Use(names.shown(text), element, access, loc) for element, text, access, loc in _walk(chart)
+        Use(names.shown(text), element, access, loc, ref)
+        for (element, ref), text, access, loc in _walk(chart)
     ]
     used = {u.operand for u in uses}
     unused = tuple(s.name for s in chart.symbols if names.shown(f'"{s.name}"') not in used)
@@ -146,29 +149,32 @@ class _Names:
         return self.variables.get(text.casefold(), text)
 
 
-_Found = tuple[str, str, str, SourceLocation]  # element, operand as written, access, place
+_Element = tuple[str, Ref | None]  # the element as shown, and as the editor selects it
+_Found = tuple[_Element, str, str, SourceLocation]  # element, operand as written, access, place
 
 
 def _walk(chart: Chart) -> Iterator[_Found]:
     for label, instructions in (("before", chart.before), ("after", chart.after)):
+        ref = DeclRef("permanent", label)
         for k, instruction in enumerate(instructions, 1):
-            yield from _permanent(f"permanent {label} {k}", instruction)
+            yield from _permanent((f"permanent {label} {k}", ref), instruction)
     for sequence in chart.sequences:
         for step in sequence.steps:
             yield from _step(step)
         for t in sequence.transitions:
-            yield from _read(f"T{t.number} {_quoted(t.name)}".strip(), t.condition)
+            element = (f"T{t.number} {_quoted(t.name)}".strip(), TransitionRef(t.number))
+            yield from _read(element, t.condition)
 
 
 def _step(step: Step) -> Iterator[_Found]:
-    element = f"S{step.number} {_quoted(step.name)}".strip()
-    yield from _read(f"{element} interlock", step.interlock)
-    yield from _read(f"{element} supervision", step.supervision)
+    name, n = f"S{step.number} {_quoted(step.name)}".strip(), step.number
+    yield from _read((f"{name} interlock", StepRef(n, "interlock")), step.interlock)
+    yield from _read((f"{name} supervision", StepRef(n, "supervision")), step.supervision)
     for k, row in enumerate(step.actions, 1):
-        yield from _row(f"{element} row {k} ({_row_head(row)})", row)
+        yield from _row((f"{name} row {k} ({_row_head(row)})", RowRef(n, k - 1)), row)
 
 
-def _row(element: str, row: ActionRow) -> Iterator[_Found]:
+def _row(element: _Element, row: ActionRow) -> Iterator[_Found]:
     operand = row.operand
     if isinstance(operand, Assignment):
         yield element, _text(operand.target), "write", operand.target.loc
@@ -183,7 +189,7 @@ def _row(element: str, row: ActionRow) -> Iterator[_Found]:
     yield from _read(element, row.value)
 
 
-def _permanent(element: str, instruction: PermanentInstruction) -> Iterator[_Found]:
+def _permanent(element: _Element, instruction: PermanentInstruction) -> Iterator[_Found]:
     if isinstance(instruction, Coil):
         yield element, _text(instruction.target), _COIL[instruction.kind], instruction.target.loc
         yield from _read(element, instruction.condition)
@@ -194,7 +200,7 @@ def _permanent(element: str, instruction: PermanentInstruction) -> Iterator[_Fou
         yield from _call(element, instruction)
 
 
-def _call(element: str, call: BlockCall) -> Iterator[_Found]:
+def _call(element: _Element, call: BlockCall) -> Iterator[_Found]:
     yield element, _block(call.kind, call.block), "call", call.loc
     if call.instance is not None:
         yield element, _block("DB", call.instance), "instance", call.loc
@@ -204,7 +210,7 @@ def _call(element: str, call: BlockCall) -> Iterator[_Found]:
         yield element, _text(out), "write", out.loc
 
 
-def _read(element: str, expr: Expr | None) -> Iterator[_Found]:
+def _read(element: _Element, expr: Expr | None) -> Iterator[_Found]:
     """Every operand of ``expr``, read, in the order written."""
     if expr is None:
         return

@@ -7,6 +7,7 @@ unused symbols are listed; one table of accesses by qualifier."""
 from __future__ import annotations
 
 from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer.text.elements import DeclRef, RowRef, StepRef, TransitionRef
 from s7graph.sequencer.text.parse import parse_chart
 from s7graph.sequencer.xref import ACCESS, cross_references
 from s7graph.steps.qualifiers import QUALIFIERS
@@ -83,6 +84,17 @@ def test_every_use_names_its_element_access_and_line() -> None:
     assert (row, "read", 22) in uses["M0.1"] and uses["M0.3"] == [(row, "write", 22)]
     assert uses["S3"] == [('S2 "Run" row 5 (S1 ON)', "activate", 23)]
     assert uses["C4"] == [('S2 "Run" row 6 (S1 CU)', "counter", 24)]
+
+
+def test_each_use_names_the_element_the_editor_selects() -> None:
+    refs = cross_references(parse_chart(CHART, "x.s7g"))
+    assert {u.element: u.ref for u in refs.of("I0.1")} == {
+        "permanent before 1": DeclRef("permanent", "before"),
+        'S2 "Run" interlock': StepRef(2, "interlock"),
+    }
+    assert [u.ref for u in refs.of("S2.U")] == [StepRef(2, "supervision")]
+    assert [u.ref for u in refs.of("Q1.1")] == [RowRef(2, 2)]
+    assert [u.ref for u in refs.of("T2.TT")] == [TransitionRef(1)]
 
 
 def test_a_symbol_tables_symbol_and_its_address_are_one_operand() -> None:

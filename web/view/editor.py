@@ -54,6 +54,7 @@ from s7graph.web.view.edit_forms import DEBOUNCE_S, Field, Form, element_choices
 from s7graph.web.view.editor_cpu import MAX_DIAGNOSTIC_BUTTONS, CpuCommands, Located, refused
 from s7graph.web.view.editor_place import EDIT_OFFSET, FOLLOW_S, InPlace, delete_of
 from s7graph.web.view.editor_rows import RowEditing
+from s7graph.web.view.editor_xref import CrossReferencing, key_ref
 from s7graph.web.view.engineering import EditorPage
 from s7graph.web.view.layout import place
 
@@ -62,7 +63,7 @@ __all__ = ["EDIT_OFFSET", "Editor"]
 EDITOR_WIDTH: Final = 400  # pixels of the editor's panel, docked left of the chart
 
 
-class Editor(CpuCommands, RowEditing, InPlace):
+class Editor(CpuCommands, RowEditing, InPlace, CrossReferencing):
     """The edit mode of ``panel``'s page (built only for a role that may download)."""
 
     def __init__(self, panel: EditorPage) -> None:
@@ -143,6 +144,7 @@ class Editor(CpuCommands, RowEditing, InPlace):
                 "overflow:auto !important}"
             )
             gui.add_html(f"<style>{rule}</style>")
+        self._xref_build(self.side)
         self.side.dock_left()
         self.side.set_width(EDITOR_WIDTH)
         self.toggle.on_click(lambda _: self._toggle())
@@ -303,6 +305,7 @@ class Editor(CpuCommands, RowEditing, InPlace):
         if chart is not self._drawn:
             self.located = _located(chart, self.symbols)
             self._draw(chart)
+            self._xref_show(chart)
         self._colour()
         with self.client.atomic():
             self._form_of(chart, s.selection)
@@ -369,7 +372,7 @@ class Editor(CpuCommands, RowEditing, InPlace):
         labels = [label for label, _ in choices]
         if list(self.element.options) != labels:
             self.element.options = labels
-        want = _key_ref(selection)
+        want = key_ref(selection)
         shown = next((label for label, ref in choices if ref == want), labels[0])
         if self.element.value != shown:
             self.element.value = shown  # type: ignore[misc]
@@ -408,7 +411,7 @@ class Editor(CpuCommands, RowEditing, InPlace):
         ref = element_of(d, self.located.chart)
         if ref is None and self.session is not None:
             ref = element_of(d, self.session.chart)
-        self.select(_key_ref(ref) if ref is not None else None)
+        self.select(key_ref(ref) if ref is not None else None)
 
     # ------------------------------------------------------------ the form
 
@@ -554,15 +557,6 @@ def _located(chart: Chart, symbols: SymbolTable | None) -> Located:
         return Located(tuple(validate(read, symbols)), read)
     except RecursionError:  # pragma: no cover - the session bounds the nesting
         return Located((), read)
-
-
-def _key_ref(ref: Ref | None) -> Ref | None:
-    """The element the selection dropdown lists for ``ref`` (a row: its step)."""
-    if isinstance(ref, RowRef):
-        return StepRef(ref.step)
-    if isinstance(ref, StepRef) and ref.part:
-        return StepRef(ref.number)
-    return ref
 
 
 def _title(chart: Chart, ref: Ref | None) -> str:

@@ -20,6 +20,7 @@ from s7graph.sequencer.text.elements import StepRef, TransitionRef, find
 from s7graph.sequencer.text.format import format_expr
 from s7graph.sequencer.text.model import Transition
 from s7graph.web.view.editor import Editor
+from s7graph.web.view.editor_xref import use_label
 from tests.web.bus.test_online_change import CHART
 from tests.web.helpers import (
     PASSWORD,
@@ -166,6 +167,26 @@ def test_an_invalid_edit_shows_its_diagnostic_with_line_and_column_and_the_cpu_k
     assert cpu.session.graph.cc is running  # the CPU keeps its chart
     click(page, "Undo")
     assert wait_until(lambda: condition(ed, 2) == "full")
+
+
+def test_cross_references_list_an_operands_uses_and_a_click_selects_its_element(
+    page: Page, cpu: OnlineRig
+) -> None:
+    ed = editor(cpu)
+    select(page, ed, "T1 Go", TransitionRef(1))
+    page.get_by_role("tab", name="Cross-references").click()
+    choose(page, "Uses of", "pieces")
+    page.get_by_text("pieces: 2 uses").first.wait_for(timeout=30_000)  # written and read
+    assert ed._xref is not None
+    uses = [u for u in ed._xref.uses if u.operand == "pieces"]
+    assert [(u.element, u.access) for u in uses] == [
+        ('S2 "Fill" row 1 (S1 N)', "write"),
+        ('S2 "Fill" row 1 (S1 N)', "read"),
+    ]
+    page.get_by_role("button", name=use_label(uses[0]), exact=True).click()
+    assert wait_until(lambda: ed.session is not None and ed.session.selection == StepRef(2))
+    page.get_by_text("step S2 Fill", exact=True).first.wait_for(timeout=30_000)
+    page.get_by_role("tab", name="Element").click()
 
 
 def test_an_engineer_changes_a_condition_downloads_and_the_sequence_follows(
