@@ -94,7 +94,8 @@ def _element(
 ) -> tuple[list[Any], int]:
     """(the list holding ``value[index]``, its position there), by the declared bounds."""
     if not isinstance(value, list) or bounds is None or len(index) != len(bounds):
-        raise ModifyError(f"{where} is no ARRAY of {len(index)} dimensions: it takes no {index}")
+        spelled = ",".join(map(str, index))
+        raise ModifyError(f"{where} is no ARRAY of that shape: it takes no index [{spelled}]")
     current: Any = value
     for k, (i, (lo, hi)) in enumerate(zip(index, bounds, strict=True)):
         if not lo <= i <= hi or not isinstance(current, list) or i - lo >= len(current):

@@ -70,6 +70,8 @@ def test_an_instance_db_variable_is_modified_by_name_the_fb_reads_it(cpu: Cpu) -
         ("DB11.n", True, "takes a number"),
         ("DB11.last", 1, "ARRAY"),
         ("DB11.last[4]", 1, "index 4 outside 1..3"),
+        ("DB11.last[1, 2]", 1, "DB11.last is no ARRAY of that shape: it takes no index [1,2]"),
+        ("DB11.n[1]", 1, "DB11.n is no ARRAY of that shape"),
         ("DB11.nope", 1, "has no variable 'nope'"),
         ("DB20.speed", "T#5S", "a TIME"),
         ("DB20.temps", 1.0, "is an ARRAY: modify one of its elements"),
