@@ -1,8 +1,9 @@
 """*Cross-references* in edit mode: the chart's operands, and for the one chosen every use
 — the element, the access, the line of the source view — a click on one selecting its
 element on the chart, as TIA Portal's cross-reference list jumps to a use
-(``sequencer.xref``; docs/view.md, "Cross-references"). ``CrossReferencing`` is a part of
-``web.view.editor.Editor``, which owns the attributes it declares.
+(``sequencer.xref``; docs/online-change.md, "Editing in the browser and downloading").
+``CrossReferencing`` is a part of ``web.view.editor.Editor``, which owns the attributes it
+declares.
 """
 
 from __future__ import annotations

@@ -170,6 +170,7 @@ def test_a_reader_of_an_fbs_own_key_still_gets_its_deltas(bus: Bus) -> None:
 def test_a_late_joiner_gets_the_state_then_newer_deltas_only(bus: Bus) -> None:
     bus.scan("A")
     bus.scan("A")
+    bus.sent()  # both put before the follower subscribes (the outbox sends on its thread)
     seen: list[StepStateUpdate] = []
     follower = bus.client.follow("A", seen.append)
     assert [(u.seq, u.cycle) for u in seen] == [(2, 2)]  # the snapshot

@@ -27,7 +27,7 @@ from tests.web.helpers import (
     PREVIEW_MS,
     OnlineRig,
     chromium_page,
-    field,
+    fill,
     log_in,
     needs_chromium,
     online_cpu,
@@ -81,17 +81,21 @@ def choose(page: Page, label: str, option: str) -> None:
 
 
 def select(page: Page, ed: Editor, option: str, ref: object) -> None:
-    """Select an element in the Element dropdown and wait for its form on the page."""
-    choose(page, "Element", option)
-    assert wait_until(lambda: ed.session is not None and ed.session.selection == ref)
+    """Select an element in the Element dropdown and wait for its form on the page. The
+    choice is made again when it did not reach the view: the dropdown's options are
+    re-sent after every edit, and a popup open while they arrive may lose the click."""
+    for _ in range(3):
+        choose(page, "Element", option)
+        if wait_until(lambda: ed.session is not None and ed.session.selection == ref, 5):
+            break
+        page.keyboard.press("Escape")
+    assert ed.session is not None and ed.session.selection == ref
     kind = "step" if option.startswith("S") else "transition"
     page.get_by_text(f"{kind} {option}", exact=True).first.wait_for(timeout=30_000)
 
 
 def type_into(page: Page, label: str, text: str) -> None:
-    box = field(page, label)
-    box.fill(text)
-    box.press("Tab")
+    fill(page, label, text)  # it reaches the view before the next input (GUI_SETTLE_MS)
 
 
 def condition(ed: Editor, n: int) -> str:
