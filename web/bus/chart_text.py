@@ -28,15 +28,26 @@ from s7graph.steps.syntax import (
     Assignment,
     Binary,
     BlockCall,
+    Coil,
     Const,
     Expr,
     Operand,
     PermanentInstruction,
+    StepAttr,
     StepTarget,
+    TransAttr,
     Unary,
 )
 
-__all__ = ["PermanentText", "RowText", "action_rows", "contact_spans", "permanent_rows"]
+__all__ = [
+    "ContactText",
+    "PermanentText",
+    "RowText",
+    "action_rows",
+    "coil_contacts",
+    "contact_spans",
+    "permanent_rows",
+]
 
 MAX_WATCH_NAME = 128  # the longest value name a state update carries
 
@@ -65,14 +76,26 @@ def action_rows(rows: tuple[ActionRow, ...]) -> list[RowText]:
     ]
 
 
+class ContactText(NamedTuple):
+    """One contact of a permanent instruction's condition: as written (``NOT "Stop"``), the
+    bit it reads (``Stop``, ``S2.X``, ``T1.TT``; "" for a comparison, whose truth the view
+    cannot tell from one value), and whether a NOT inverts it (a normally closed contact)."""
+
+    text: str
+    watch: str
+    negated: bool
+
+
 class PermanentText(NamedTuple):
     """One permanent instruction as the view lists it: ``place`` ``before`` or ``after`` the
-    sequences, its text as the chart file writes it, and the operand it writes (""), whose
-    value the CPU sends every scan."""
+    sequences, its text as the chart file writes it, the operand it writes (""), whose
+    value the CPU sends every scan, and the contacts of a coil (or of an assignment of a
+    logic operation), whose bits it sends too."""
 
     place: Literal["before", "after"]
     text: str
     watch: str
+    contacts: tuple[ContactText, ...] = ()
 
 
 def permanent_rows(chart: Chart) -> list[PermanentText]:
@@ -83,7 +106,51 @@ def permanent_rows(chart: Chart) -> list[PermanentText]:
 
 def _permanent(place: Literal["before", "after"], p: PermanentInstruction) -> PermanentText:
     watch = "" if isinstance(p, BlockCall) else p.target.name
-    return PermanentText(place, format_permanent(p), watch if len(watch) <= MAX_WATCH_NAME else "")
+    contacts: tuple[ContactText, ...] = ()
+    if isinstance(p, Coil):
+        contacts = coil_contacts(p.condition)
+    elif isinstance(p, Assignment) and _logic(p.expr):  # "x := a AND NOT b": a coil too
+        contacts = coil_contacts(p.expr)
+    watch = watch if len(watch) <= MAX_WATCH_NAME else ""
+    return PermanentText(place, format_permanent(p), watch, contacts)
+
+
+def coil_contacts(condition: Expr) -> tuple[ContactText, ...]:
+    """The contacts of a coil's condition in order (at most ``MAX_CONTACTS``), each with the
+    bit it reads and whether it is negated, as the criteria of a transition are counted."""
+    out: list[ContactText] = []
+    todo: list[tuple[Expr, bool]] = [(condition, False)]
+    while todo and len(out) < MAX_CONTACTS:
+        e, negated = todo.pop()
+        if isinstance(e, Unary) and e.op == "NOT":
+            todo.append((e.operand, not negated))
+        elif isinstance(e, Binary) and e.op.upper() in _LOGIC:
+            todo += [(e.right, negated), (e.left, negated)]
+        else:
+            text = format_expr(e)
+            bit = _bit(e)
+            out.append(ContactText(f"NOT {text}" if negated else text, bit, negated))
+    return tuple(out)
+
+
+def _logic(e: Expr) -> bool:
+    """Whether ``e`` is a logic operation (its root AND, OR, XOR or NOT)."""
+    if isinstance(e, Unary):
+        return e.op == "NOT"
+    return isinstance(e, Binary) and e.op.upper() in _LOGIC
+
+
+def _bit(e: Expr) -> str:
+    """The name of the bit contact ``e`` reads ("" for any other contact)."""
+    if isinstance(e, Operand):
+        name = e.name
+    elif isinstance(e, StepAttr) and e.attr == "X":
+        name = f"S{e.step}.X"
+    elif isinstance(e, TransAttr):
+        name = f"T{e.transition}.TT"
+    else:
+        return ""
+    return name if len(name) <= MAX_WATCH_NAME else ""
 
 
 def _watched(r: ActionRow) -> str:

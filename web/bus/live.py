@@ -151,7 +151,8 @@ class LiveChart:
     sv_neg: tuple[tuple[bool, ...], ...]
     # per step index: the operands of its action rows, whose values go out while it is active
     operands: tuple[tuple[str, ...], ...] = ()
-    # the operands the permanent instructions write, whose values go out every scan
+    # the operands the permanent instructions write and their coils' contacts read, whose
+    # values go out every scan
     permanent: tuple[str, ...] = ()
     checks: bool = True
     """Whether a step has an interlock or a supervision (their words are watched)."""
@@ -187,7 +188,12 @@ def prepare_chart(cc: CompiledChart, *, fb: str, version: int) -> LiveChart:
             tuple(dict.fromkeys(a.watch for a in rows.get(n, ()) if a.watch))
             for n in cc.step_numbers
         ),
-        permanent=tuple(dict.fromkeys(p.watch for p in layout.permanent if p.watch)),
+        permanent=tuple(
+            dict.fromkeys(
+                [p.watch for p in layout.permanent if p.watch]
+                + [c.watch for p in layout.permanent for c in p.contacts if c.watch]
+            )
+        ),
         checks=any(
             st.interlock is not None or st.supervision is not None for st in chart.all_steps()
         ),

@@ -26,6 +26,7 @@ from msgspec import Meta, Struct
 from s7graph.sequencer.change.base import MAX_SOURCE
 from s7graph.sequencer.text.format import format_expr
 from s7graph.sequencer.text.model import Chart, Expr
+from s7graph.steps.conditions import MAX_CONTACTS
 from s7graph.web.bus.chart_text import action_rows, contact_spans, permanent_rows
 from s7graph.web.commands import (
     MODES,
@@ -85,6 +86,7 @@ __all__ = [
     "OperandCatalog",
     "OperandInfo",
     "OperandValues",
+    "PermanentContact",
     "PermanentInfo",
     "ProjectFile",
     "ProjectFiles",
@@ -177,6 +179,16 @@ class ActionInfo(_Msg, frozen=True, kw_only=True):
 MAX_PERMANENT = 256  # permanent instructions a layout lists at most
 
 
+class PermanentContact(_Msg, frozen=True, kw_only=True):
+    """One contact of a permanent coil's condition: ``text`` as written (``NOT "Stop"``),
+    ``watch`` the bit it reads, whose value the CPU sends every scan ("": a comparison),
+    ``negated`` whether a NOT inverts it."""
+
+    text: ShortText = ""
+    watch: Annotated[str, Meta(max_length=128)] = ""
+    negated: bool = False
+
+
 class PermanentInfo(_Msg, frozen=True, kw_only=True):
     """One permanent instruction of the FB (S7-GRAPH's permanent pre- and post-instructions):
     ``place`` ``before`` or ``after`` the sequences, its text as the chart file writes it,
@@ -186,6 +198,8 @@ class PermanentInfo(_Msg, frozen=True, kw_only=True):
     place: Literal["before", "after"] = "before"
     text: Text = ""
     watch: Annotated[str, Meta(max_length=128)] = ""
+    contacts: Annotated[list[PermanentContact], Meta(max_length=MAX_CONTACTS)] = []
+    """A coil's contacts, each with the bit it reads (none for an assignment or a call)."""
 
 
 class StepInfo(_Msg, frozen=True, kw_only=True):
@@ -298,7 +312,15 @@ class ChartLayout(_Msg, frozen=True, kw_only=True):
             for q in chart.sequences
         ]
         permanent = [
-            PermanentInfo(place=p.place, text=_clip(p.text, 1024), watch=p.watch)
+            PermanentInfo(
+                place=p.place,
+                text=_clip(p.text, 1024),
+                watch=p.watch,
+                contacts=[
+                    PermanentContact(text=_clip(c.text, 256), watch=c.watch, negated=c.negated)
+                    for c in p.contacts
+                ],
+            )
             for p in permanent_rows(chart)[:MAX_PERMANENT]
         ]
         return cls(

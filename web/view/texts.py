@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import html
 import time
-from collections.abc import Iterable
+from collections.abc import Iterable, Mapping
 
 from s7graph.engine.profile import describe as describe_cycle
 from s7graph.sequencer.checks.diagnostics import Diagnostic
@@ -23,6 +23,7 @@ from s7graph.web.bus.protocol import (
     CycleReport,
     CycleStats,
     ForceList,
+    PermanentContact,
     StepDetail,
     StepStateUpdate,
 )
@@ -362,8 +363,10 @@ PERMANENT_PLACES = {"before": "Before the sequences", "after": "After the sequen
 
 def permanent_html(layout: ChartLayout, update: StepStateUpdate | None) -> str:
     """The FB's permanent instructions (run in every call, before or after its sequences),
-    each with the value the operand it writes had after the last scan ("" when the chart
-    has none)."""
+    each with the value the operand it writes had after the last scan and a coil's
+    contacts marked as the criteria are — fulfilled or not, by the bit each reads and its
+    NOT — as S7-GRAPH's status shows the permanent instructions' contacts ("" when the
+    chart has none)."""
     if not layout.permanent:
         return ""
     values = update.values if update is not None else {}
@@ -379,7 +382,17 @@ def permanent_html(layout: ChartLayout, update: StepStateUpdate | None) -> str:
                 chip = f"background:#{r:02x}{g:02x}{b:02x};padding:0 0.3em"
                 code += f' <span style="{chip}">{html.escape(text)}</span>'
             rows.append(code)
+            rows += [_permanent_contact(c, values) for c in p.contacts]
     return small("<br>".join(rows))
+
+
+def _permanent_contact(c: PermanentContact, values: Mapping[str, object]) -> str:
+    """A coil's contact: ✓ or ✗ from the bit it read (inverted by its NOT), or nothing
+    (a comparison, or no value yet)."""
+    value = values.get(c.watch) if c.watch else None
+    if not isinstance(value, bool | int):
+        return f"&nbsp;&nbsp;· {html.escape(c.text)}"
+    return mark(Contact(text=c.text, ok=bool(value) != c.negated))
 
 
 def login_html(user: str, role: str, verified: bool, demo: bool, refused: str = "") -> str:

@@ -13,8 +13,9 @@ from s7graph.sequencer.compile import compile_chart
 from s7graph.sequencer.text.parse import parse_chart
 from s7graph.web.bus.chart_text import contact_spans
 from s7graph.web.bus.live import prepare_chart
-from s7graph.web.bus.protocol import ChartLayout, condition_text
+from s7graph.web.bus.protocol import ChartLayout, StepStateUpdate, condition_text
 from s7graph.web.harness.session import ChartLoadError, load_chart
+from s7graph.web.view.texts import permanent_html
 from tests.paths import ROOT
 
 pytestmark = pytest.mark.timeout(60)
@@ -145,4 +146,27 @@ def test_the_permanent_instructions_come_with_the_operands_they_write() -> None:
         ("after", "CALL FC 3;", ""),
     ]
     live = prepare_chart(compile_chart(parse_chart(PERMANENT, "perm.s7g")), fb="Perm", version=1)
-    assert live.permanent == ("Ready", "Lamp", "Motor", "runs")
+    assert live.permanent == ("Ready", "Lamp", "Motor", "runs", "Start", "Trip")
+
+
+def state_with(values: dict[str, bool | int]) -> StepStateUpdate:
+    return StepStateUpdate(cycle=1, t_ms=0, mode="AUTO", active=[1], values=values)
+
+
+def test_a_permanent_coils_contacts_come_with_the_bits_they_read_and_their_nots() -> None:
+    """As TIA Portal's status shows the contacts of the permanent instructions: each coil's
+    contacts in order, the bit each reads (the CPU sends its value) and whether a NOT
+    inverts it; an assignment and a call have none, a comparison reads no single bit."""
+    text = PERMANENT.replace('S "Lamp" := "Trip";', 'S "Lamp" := "Trip" OR runs > 3 OR S2.X;')
+    layout = ChartLayout.from_chart(parse_chart(text, "perm.s7g"))
+    contacts = [[(c.text, c.watch, c.negated) for c in p.contacts] for p in layout.permanent]
+    assert contacts == [
+        [('"Start"', "Start", False), ('NOT "Trip"', "Trip", True)],
+        [('"Trip"', "Trip", False), ("runs > 3", "", False), ("S2.X", "S2.X", False)],
+        [('"Trip"', "Trip", False)],
+        [],
+        [],
+    ]
+    shown = permanent_html(layout, state_with({"Start": True, "Trip": True, "S2.X": False}))
+    assert "✓</span> &quot;Start&quot;" in shown and "✗</span> NOT &quot;Trip&quot;" in shown
+    assert "· runs &gt; 3" in shown and "✗</span> S2.X" in shown

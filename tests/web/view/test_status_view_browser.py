@@ -297,8 +297,8 @@ def test_the_permanent_instructions_are_listed_with_the_values_they_write(
     cpu: OnlineRig, page: Page
 ) -> None:
     """As S7-GRAPH's permanent post-instructions in TIA Portal's status view: the panel's
-    *Permanent instructions* lists each under its heading, and the value it writes follows
-    the plant's inputs."""
+    *Permanent instructions* lists each under its heading, and the value it writes and its
+    contacts (✓ fulfilled, ✗ not) follow the plant's inputs."""
     folder = page.get_by_text("Permanent instructions", exact=True)
     folder.wait_for(timeout=30_000)
     page.get_by_text("After the sequences", exact=True).wait_for(timeout=30_000)
@@ -310,7 +310,7 @@ def test_the_permanent_instructions_are_listed_with_the_values_they_write(
         return value in row.inner_text()
 
     assert wait_until(lambda: says("FALSE")), row.inner_text()
-    to_fill(cpu)  # Start and Door: busy
-    assert wait_until(lambda: says("TRUE")), row.inner_text()
+    to_fill(cpu)  # Start and Door: busy, both contacts fulfilled
+    assert wait_until(lambda: says("TRUE") and says('✓ "Start"') and says('✓ "Door"'))
     back_to_idle(cpu)
-    assert wait_until(lambda: says("FALSE")), row.inner_text()
+    assert wait_until(lambda: says("FALSE") and says('✗ "Start"')), row.inner_text()
