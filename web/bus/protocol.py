@@ -199,7 +199,8 @@ class PermanentInfo(_Msg, frozen=True, kw_only=True):
     text: Text = ""
     watch: Annotated[str, Meta(max_length=128)] = ""
     contacts: Annotated[list[PermanentContact], Meta(max_length=MAX_CONTACTS)] = []
-    """A coil's contacts, each with the bit it reads (none for an assignment or a call)."""
+    """A coil's contacts (or an assignment's of a logic operation), each with the bit it
+    reads; none for another assignment or a call."""
 
 
 class StepInfo(_Msg, frozen=True, kw_only=True):

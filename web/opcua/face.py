@@ -16,8 +16,8 @@ A write is a command too: an FB's ``Mode`` sends ``mode``, ``Halted`` ``halt``,
 ``InterlocksEnabled``/``SupervisionsEnabled`` ``en_il``/``en_sv``, a symbol on an input,
 output or flag a ``force`` job, or with ``writes="modify"`` a symbol on an input, output,
 flag or data block and a chart's own variable a ``modify`` (both an engineer's;
-``web.opcua.space.WRITES``).
-The variable shows the CPU's value once the CPU publishes it, never the value written.
+``web.opcua.space.WRITES``). The variable shows the CPU's value once the CPU publishes
+it, never the value written.
 """
 
 from __future__ import annotations

@@ -195,7 +195,6 @@ class Space:
         self.root = node_id(ns, cpu)
         self.fbs: dict[str, FbNodes] = {}
         self.symbols: dict[str, tuple[ua.NodeId, UaType]] = {}
-        self.symbol_info: dict[ua.NodeId, OperandInfo] = {}
         self.targets: dict[ua.NodeId, OperandInfo] = {}
         """A writable symbol's or chart variable's operand: its type, and the address or
         name a write sends (``"Seq_mix".count`` for a chart's variable)."""
@@ -376,7 +375,6 @@ class Space:
             self.writes.pop(nid, None)
         self.targets.clear()
         self.symbols.clear()
-        self.symbol_info.clear()
         folder = self.nid("Symbols")
         for info in catalog.symbols:
             t = ua_type(info.type)
@@ -390,7 +388,6 @@ class Space:
             )
             n.end_root()
             self.symbols[info.name] = (nid, t)
-            self.symbol_info[nid] = info
             if writable:
                 self.writes[nid] = ("", self.symbol_op)
                 self.targets[nid] = info
