@@ -41,23 +41,27 @@ def contacts(e: Expr | None, resolve: Resolve) -> list[Expr]:
     return out
 
 
+def contact_leaves(e: Expr | None) -> list[tuple[Expr, bool]]:
+    """The contacts of a condition in source order, each with whether an odd number of NOTs
+    inverts it (a normally closed contact). Walks every AND/OR/XOR below a BOOL root, which
+    are BOOL, without recursion (a chain may be thousands long)."""
+    out: list[tuple[Expr, bool]] = []
+    todo: list[tuple[Expr, bool]] = [(e, False)] if e is not None else []
+    while todo:
+        n, negated = todo.pop()
+        if isinstance(n, Unary) and n.op == "NOT":
+            todo.append((n.operand, not negated))
+        elif isinstance(n, Binary) and n.op.upper() in ("AND", "OR", "XOR"):
+            todo += [(n.right, negated), (n.left, negated)]
+        else:
+            out.append((n, negated))
+    return out
+
+
 def contact_negations(e: Expr | None) -> list[bool]:
     """Per contact of ``contacts`` (same order): whether an odd number of NOTs inverts it
-    (a normally closed contact). Walks every AND/OR/XOR below a BOOL root, which are BOOL."""
-    out: list[bool] = []
-
-    def walk(n: Expr, negated: bool) -> None:
-        if isinstance(n, Unary) and n.op == "NOT":
-            walk(n.operand, not negated)
-        elif isinstance(n, Binary) and n.op.upper() in ("AND", "OR", "XOR"):
-            walk(n.left, negated)
-            walk(n.right, negated)
-        else:
-            out.append(negated)
-
-    if e is not None:
-        walk(e, False)
-    return out
+    (a normally closed contact); ``contact_leaves``' second half."""
+    return [negated for _, negated in contact_leaves(e)]
 
 
 def contact_text(e: Expr) -> str:

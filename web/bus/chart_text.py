@@ -20,7 +20,7 @@ from typing import Literal, NamedTuple
 
 from s7graph.sequencer.text.format import format_expr, format_permanent, row_body
 from s7graph.sequencer.text.model import Chart
-from s7graph.steps.conditions import MAX_CONTACTS
+from s7graph.steps.conditions import MAX_CONTACTS, contact_leaves
 from s7graph.steps.expressions import COMPARE
 from s7graph.steps.syntax import (
     CHAIN_OPS,
@@ -117,20 +117,12 @@ def _permanent(place: Literal["before", "after"], p: PermanentInstruction) -> Pe
 
 def coil_contacts(condition: Expr) -> tuple[ContactText, ...]:
     """The contacts of a coil's condition in order (at most ``MAX_CONTACTS``), each with the
-    bit it reads and whether it is negated, as the criteria of a transition are counted."""
-    out: list[ContactText] = []
-    todo: list[tuple[Expr, bool]] = [(condition, False)]
-    while todo and len(out) < MAX_CONTACTS:
-        e, negated = todo.pop()
-        if isinstance(e, Unary) and e.op == "NOT":
-            todo.append((e.operand, not negated))
-        elif isinstance(e, Binary) and e.op.upper() in _LOGIC:
-            todo += [(e.right, negated), (e.left, negated)]
-        else:
-            text = format_expr(e)
-            bit = _bit(e)
-            out.append(ContactText(f"NOT {text}" if negated else text, bit, negated))
-    return tuple(out)
+    bit it reads and whether it is negated, as the criteria of a transition are counted
+    (``steps.conditions.contact_leaves``)."""
+    return tuple(
+        ContactText(f"NOT {format_expr(e)}" if negated else format_expr(e), _bit(e), negated)
+        for e, negated in contact_leaves(condition)[:MAX_CONTACTS]
+    )
 
 
 def _logic(e: Expr) -> bool:
