@@ -15,8 +15,8 @@ Pure: the parsed chart in, data out.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-from dataclasses import dataclass
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
 from typing import Final
 
 from s7graph.engine.errors import SourceLocation
@@ -87,6 +87,8 @@ class CrossReferences:
 
     uses: tuple[Use, ...]
     unused: tuple[str, ...]
+    shown: Callable[[str], str] = field(default=str, repr=False, compare=False)
+    """How an operand written so is shown (the chart's names: ``_Names.shown``)."""
 
     def operands(self) -> dict[str, list[Use]]:
         """The uses by operand, sorted by the operand as shown (case-insensitive)."""
@@ -98,12 +100,9 @@ class CrossReferences:
     def of(self, name: str) -> list[Use]:
         """The uses of the operand written ``name`` (a symbol with or without quotes, an
         address, a variable; any case)."""
-        key = name.strip().strip('"').casefold()
-        return [
-            u
-            for u in self.uses
-            if key in {p.strip().strip('"()').casefold() for p in u.operand.split(" (")}
-        ]
+        bare = name.strip().strip('"')
+        keys = {self.shown(bare).casefold(), self.shown(f'"{bare}"').casefold()}
+        return [u for u in self.uses if u.operand.casefold() in keys]
 
 
 def cross_references(chart: Chart, symbols: SymbolTable | None = None) -> CrossReferences:
@@ -116,7 +115,7 @@ def cross_references(chart: Chart, symbols: SymbolTable | None = None) -> CrossR
     ]
     used = {u.operand for u in uses}
     unused = tuple(s.name for s in chart.symbols if names.shown(f'"{s.name}"') not in used)
-    return CrossReferences(tuple(uses), unused)
+    return CrossReferences(tuple(uses), unused, names.shown)
 
 
 class _Names:
