@@ -26,6 +26,7 @@ from s7graph.web.bus.watch import (
     Segment,
     array_bounds,
     db_by_name,
+    element_slot,
     element_type,
     instance_slot,
     layout_address,
@@ -92,15 +93,12 @@ def _instance_slot(idb: InstanceDB, path: tuple[Segment, ...], where: str) -> tu
 def _element(
     value: object, index: tuple[int, ...], bounds: list[tuple[int, int]] | None, where: str
 ) -> tuple[list[Any], int]:
-    """(the list holding ``value[index]``, its position there), by the declared bounds."""
+    """(the list holding ``value[index]``, its position there), by the declared bounds,
+    every dimension indexed (``web.bus.watch.element_slot``)."""
     if not isinstance(value, list) or bounds is None or len(index) != len(bounds):
         spelled = ",".join(map(str, index))
         raise ModifyError(f"{where} is no ARRAY of that shape: it takes no index [{spelled}]")
-    current: Any = value
-    for k, (i, (lo, hi)) in enumerate(zip(index, bounds, strict=True)):
-        if not lo <= i <= hi or not isinstance(current, list) or i - lo >= len(current):
-            raise ModifyError(f"{where}: index {i} outside {lo}..{hi}")
-        if k == len(index) - 1:
-            return current, i - lo
-        current = current[i - lo]
-    raise ModifyError(f"{where} takes an index")
+    holder, position = element_slot(value, index, bounds, where)
+    if not isinstance(holder, list):
+        raise ModifyError(f"{where} cannot be written element by element")
+    return holder, position

@@ -63,6 +63,7 @@ __all__ = [
     "Watching",
     "array_bounds",
     "db_by_name",
+    "element_slot",
     "element_type",
     "instance_slot",
     "layout_address",
@@ -324,15 +325,27 @@ def _public_names(value: object) -> list[str]:
 def _element(
     value: object, index: tuple[int, ...], bounds: list[tuple[int, int]] | None, where: str
 ) -> object:
+    holder, position = element_slot(value, index, bounds, where)
+    return holder[position]
+
+
+def element_slot(
+    value: object, index: tuple[int, ...], bounds: list[tuple[int, int]] | None, where: str
+) -> tuple[Any, int]:
+    """(the list holding ``value[index]``, its position there): each index within its
+    declared bounds (a dimension without: from 0); WatchError names the one outside."""
     if not isinstance(value, list | tuple):
         raise WatchError(f"{where} is no ARRAY: it takes no index")
     current: Any = value
+    holder: Any = value
+    position = 0
     for k, i in enumerate(index):
         lo, hi = bounds[k] if bounds is not None and k < len(bounds) else (0, len(current) - 1)
         if not lo <= i <= hi or not isinstance(current, list | tuple) or i - lo >= len(current):
             raise WatchError(f"{where}: index {i} outside {lo}..{hi}")
-        current = current[i - lo]
-    return current
+        holder, position = current, i - lo
+        current = current[position]
+    return holder, position
 
 
 def array_bounds(type_name: str) -> list[tuple[int, int]] | None:
