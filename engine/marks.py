@@ -11,12 +11,19 @@ say where it hangs and since when.
 
 Names (blocks, sections) go once into a table of fixed slots after the header; a name that
 finds no free slot is marked by its number alone. :class:`MarkReader` reads the same
-buffer from the other side.
+buffer from the other side. ``GRACE_S`` and ``EXIT_HUNG`` are the rest of what the two
+sides agree on: how long a stop request waits for a hanging scan, and the exit status of a
+process that ended so.
 """
 
 from __future__ import annotations
 
-__all__ = ["MARKS_SIZE", "MarkReader", "ScanMarks"]
+__all__ = ["EXIT_HUNG", "GRACE_S", "MARKS_SIZE", "MarkReader", "ScanMarks"]
+
+GRACE_S = 3.0
+"""How long a stop request waits for a hanging scan before the process ends anyway."""
+EXIT_HUNG = 3
+"""Exit status of a process ended because its scan did not return after a stop request."""
 
 MARKS_SIZE = 4096
 _HEADER = 64

@@ -81,7 +81,7 @@ from s7graph.engine.cpu import Cpu
 from s7graph.engine.diag_events import stop_cause
 from s7graph.engine.diagnostics import EventId
 from s7graph.engine.errors import ScanAborted
-from s7graph.engine.marks import ScanMarks
+from s7graph.engine.marks import EXIT_HUNG, GRACE_S, ScanMarks
 from s7graph.engine.modes import CpuMode, ModeRequest
 from s7graph.engine.persistence import Batch, StateStore, StateWriteError
 from s7graph.engine.profile import CycleProfile, OpenCycle
@@ -93,8 +93,6 @@ from s7graph.engine.writer import DurableCallback, StoreWriter
 
 __all__ = [
     "COMM_LOAD_PCT",
-    "EXIT_HUNG",
-    "GRACE_S",
     "RT_PRIORITY",
     "IdleGc",
     "Runner",
@@ -103,10 +101,6 @@ __all__ = [
     "stop_reason",
 ]
 
-GRACE_S = 3.0
-"""How long a stop request waits for a hanging scan before the process ends anyway."""
-EXIT_HUNG = 3
-"""Exit status of a process ended because its scan did not return after a stop request."""
 _ABORT_SIGNAL = signal.SIGUSR2
 _CYCLE_STOPS = frozenset({EventId.STOP_OB80_MISSING, EventId.STOP_CYCLE_TIME})
 RT_PRIORITY = 40

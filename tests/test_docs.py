@@ -153,7 +153,7 @@ def resolves(dotted: str) -> bool:
     if parts[0].startswith("__"):
         return True
     if parts[0] not in PACKAGES:
-        return parts[0] in ("__main__", "__version__", "cli")
+        return parts[0] in ("__main__", "__version__", "cli", "lazy")
     here = ROOT / parts[0]
     for part in parts[1:]:
         if (here / part).is_dir():

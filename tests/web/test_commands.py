@@ -219,7 +219,7 @@ def _shell_commands() -> dict[str, Any]:
     """The click commands of ``s7graph``, by name."""
     from typer.main import get_command
 
-    from s7graph.web.cli import app
+    from s7graph.web.cli.root import app
 
     group: Any = get_command(app)  # typer's group (its own click)
     return dict(group.commands)
@@ -286,7 +286,7 @@ def test_a_shell_command_sends_its_ops_struct(
 ) -> None:
     import typer
 
-    from s7graph.web import cli
+    from s7graph.web.cli import root as cli
 
     seen: list[Command] = []
 

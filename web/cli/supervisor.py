@@ -44,8 +44,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from types import FrameType
 
-from s7graph.engine.marks import MARKS_SIZE, MarkReader, ScanMarks
-from s7graph.engine.runner import EXIT_HUNG, GRACE_S
+from s7graph.engine.marks import EXIT_HUNG, GRACE_S, MARKS_SIZE, MarkReader, ScanMarks
 
 __all__ = [
     "KILL_AFTER_S",
@@ -55,6 +54,7 @@ __all__ = [
     "child_marks",
     "recovered_cause",
     "supervise",
+    "supervises",
 ]
 
 MARKS_ENV = "S7GRAPH_SCAN_MARKS"
@@ -306,6 +306,12 @@ def _children_of(parent: int) -> list[int]:
         if len(fields) > 1 and fields[1] == str(parent):
             found.append(int(entry.name))
     return found
+
+
+def supervises(*, as_program: bool) -> bool:
+    """Whether a ``run`` becomes the supervisor of a CPU process of its own: started as the
+    program (not called from Python), on Linux, not yet the supervised CPU itself."""
+    return as_program and hasattr(os, "memfd_create") and MARKS_ENV not in os.environ
 
 
 def supervise(args: Sequence[str]) -> int:

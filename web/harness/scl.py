@@ -17,7 +17,7 @@ import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, NamedTuple, Protocol
+from typing import TYPE_CHECKING, Any, NamedTuple, Protocol
 
 from s7graph import sfb
 from s7graph.engine.blocks import DB, FB, FC, OB
@@ -26,8 +26,9 @@ from s7graph.engine.symbols import SymbolTable
 from s7graph.engine.text import NotUtf8, decode_utf8
 from s7graph.sequencer.checks.interfaces import ProgramBlocks, program_blocks
 from s7graph.sequencer.fb import GraphFB, cold_restart_ob, startup_obs
-from s7graph.steps.scl import SclError, SclProgram, compile_scl, format_diagnostic
-from s7graph.steps.scl.portable import compile_portable, load_portable
+
+if TYPE_CHECKING:  # the S7-SCL compiler is imported by the functions that compile or load
+    from s7graph.steps.scl import SclProgram
 
 __all__ = [
     "BlockText",
@@ -167,6 +168,9 @@ def compile_texts(
     """Compile the sources ``named`` (file, text) in order as :func:`compile_sources` does;
     with ``portable`` (a list), each program's bytes are appended to it for
     :func:`load_texts` in another process (``steps.scl.portable``)."""
+    from s7graph.steps.scl import SclError, compile_scl, format_diagnostic
+    from s7graph.steps.scl.portable import compile_portable
+
     out = SclSources()
     known: list[FB | FC] = list(sfb.SYSTEM_BLOCKS)
     places: dict[str, str] = {}
@@ -200,6 +204,8 @@ def load_texts(
     """The sources :func:`compile_texts` compiled (``portable``: their bytes, in order) made
     in this process without compiling anything (``steps.scl.portable``); ``texts``: their
     texts, as ``files`` (the blocks' sources the CPU serves)."""
+    from s7graph.steps.scl.portable import load_portable
+
     out = SclSources(files=list(files), warnings=list(warnings), texts=list(texts))
     known: list[FB | FC] = list(sfb.SYSTEM_BLOCKS)
     for data in portable:

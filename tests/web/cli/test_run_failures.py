@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 from s7graph.engine.diagnostics import EventId
-from s7graph.engine.runner import EXIT_HUNG, GRACE_S
+from s7graph.engine.marks import EXIT_HUNG, GRACE_S
 from tests.paths import ROOT
 
 DRILL = ROOT / "examples" / "drill"

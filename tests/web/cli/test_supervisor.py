@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING
 import pytest
 
 from s7graph.engine.diagnostics import EventId
-from s7graph.engine.runner import EXIT_HUNG, GRACE_S
+from s7graph.engine.marks import EXIT_HUNG, GRACE_S
 from s7graph.web.cli.supervisor import KILL_AFTER_S, STOP_EXTRA_S, die_with_parent
 from tests.paths import ROOT
 from tests.web.helpers import free_port
