@@ -10,15 +10,19 @@ row 3``, ``permanent before 1``), its access (:data:`ACCESS` by qualifier; conta
 operands of an expression are read), and its place in the source. A symbol and its address
 are one operand (``"Start_button" (I0.7)``), with the chart's own ``SYMBOLS`` and a symbol
 table; the symbols the chart declares and never uses are listed as TIA lists unused tags.
-Pure: the parsed chart in, data out.
+With the S7-SCL sources of the blocks beside the chart, their uses are listed too
+(``steps.scl.xref``: the element is the block, ``OB 35``), as TIA's list spans every block
+of a program. Pure: the parsed chart and sources in, data out.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Final
 
+from s7graph import sfb
+from s7graph.engine.blocks import Decl
 from s7graph.engine.errors import SourceLocation
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.text.elements import DeclRef, Ref, RowRef, StepRef, TransitionRef
@@ -37,6 +41,8 @@ from s7graph.sequencer.text.model import (
     TransAttr,
 )
 from s7graph.sequencer.text.walk import nodes
+from s7graph.steps.scl import model as scl
+from s7graph.steps.scl.xref import interfaces, scl_uses
 
 __all__ = ["ACCESS", "CrossReferences", "Use", "cross_references"]
 
@@ -105,17 +111,40 @@ class CrossReferences:
         return [u for u in self.uses if u.operand.casefold() in keys]
 
 
-def cross_references(chart: Chart, symbols: SymbolTable | None = None) -> CrossReferences:
-    """Every use of an operand in ``chart``; ``symbols`` (optional) a symbol table beside
-    the chart's own ``SYMBOLS``, which come first."""
+def cross_references(
+    chart: Chart, symbols: SymbolTable | None = None, blocks: Sequence[scl.Source] = ()
+) -> CrossReferences:
+    """Every use of an operand in ``chart``, then in the S7-SCL sources ``blocks`` in their
+    order; ``symbols`` (optional) a symbol table beside the chart's own ``SYMBOLS``, which
+    come first."""
     names = _Names(chart, symbols)
     uses = [
         Use(names.shown(text), element, access, loc, ref)
         for (element, ref), text, access, loc in _walk(chart)
     ]
+    params = _system_params()
+    for source in blocks:
+        params.update(interfaces(source))
+    for source in blocks:
+        uses += [
+            Use(names.shown(u.operand), u.block, u.access, u.loc) for u in scl_uses(source, params)
+        ]
     used = {u.operand for u in uses}
     unused = tuple(s.name for s in chart.symbols if names.shown(f'"{s.name}"') not in used)
     return CrossReferences(tuple(uses), unused, names.shown)
+
+
+_SECTIONS: Final = {Decl.IN: "VAR_INPUT", Decl.OUT: "VAR_OUTPUT", Decl.IN_OUT: "VAR_IN_OUT"}
+
+
+def _system_params() -> dict[str, dict[str, str]]:
+    """The parameters of the system blocks an S7-SCL source may call, by name and number
+    (``CONT_C``, ``SFB41``)."""
+    out: dict[str, dict[str, str]] = {}
+    for block in sfb.SYSTEM_BLOCKS:
+        params = {v.name.upper(): _SECTIONS[v.decl] for v in block.interface if v.decl in _SECTIONS}
+        out[block.name.upper()] = out[block.label.upper()] = params
+    return out
 
 
 class _Names:

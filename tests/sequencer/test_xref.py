@@ -2,7 +2,8 @@
 interlocks, supervisions, action rows and permanent instructions with the element it stands
 in, its access and its place; a symbol and its address are one operand, whether written by
 the symbol or the address; an FB variable is not a symbol of the same name; the chart's
-unused symbols are listed; one table of accesses by qualifier."""
+unused symbols are listed (a use in an S7-SCL block beside the chart counts); one table of
+accesses by qualifier."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ from s7graph.sequencer.text.elements import DeclRef, RowRef, StepRef, Transition
 from s7graph.sequencer.text.parse import parse_chart
 from s7graph.sequencer.xref import ACCESS, cross_references
 from s7graph.steps.qualifiers import QUALIFIERS
+from s7graph.steps.scl.parse import parse_source
 from tests.paths import ROOT
 
 CHART = """FUNCTION_BLOCK "Seq_x" FB 1 DB 1
@@ -121,3 +123,16 @@ def test_each_qualifier_has_one_access_and_the_docs_table_is_the_codes() -> None
         for q in row.split("|")[2].split(",")
     }
     assert documented == ACCESS
+
+
+def test_a_symbol_used_only_in_a_block_beside_the_chart_is_not_unused() -> None:
+    block = parse_source(
+        'FUNCTION FC 3 : VOID\nBEGIN\n  "Spare" := %M9.1 OR I0.0;\nEND_FUNCTION\n', "b.scl"
+    )
+    refs = cross_references(parse_chart(CHART, "x.s7g"), blocks=[block])
+    assert refs.unused == ()
+    assert [(u.element, u.access, u.place) for u in refs.of("M9.0")] == [
+        ("FC 3", "write", "b.scl:3:3")
+    ]
+    assert [u.element for u in refs.of('"Start"')][-1] == "FC 3"  # its address written
+    assert [u.ref for u in refs.of("M9.1")] == [None]  # nothing the chart's editor selects

@@ -548,11 +548,19 @@ def xref(
         typer.Option(help="Only this operand's uses: a symbol, an address or a variable."),
     ] = None,
     as_json: Annotated[bool, typer.Option("--json", help="One JSON object.")] = False,
+    blocks: Annotated[
+        list[Path] | None,
+        typer.Option(
+            "--blocks", help="An S7-SCL source whose blocks' uses are listed too (several allowed)."
+        ),
+    ] = None,
 ) -> None:
     """Print a chart's cross-references: where each operand is used, and how."""
     from s7graph.web.cli.xref import xref_command
 
-    raise typer.Exit(xref_command(chart, symbols=symbols, operand=operand, as_json=as_json))
+    raise typer.Exit(
+        xref_command(chart, symbols=symbols, operand=operand, as_json=as_json, blocks=blocks or [])
+    )
 
 
 @app.command()

@@ -1,19 +1,21 @@
-"""``s7graph xref CHART [--symbols FILE] [--operand NAME] [--json]``: the cross-reference
-list of a chart — where each operand is used and how — as TIA Portal's cross-references
-show a tag's uses (``sequencer.xref``; docs/cli.md, "s7graph xref").
+"""``s7graph xref CHART [--symbols FILE] [--operand NAME] [--json] [--blocks SCL …]``: the
+cross-reference list of a chart and the S7-SCL blocks beside it — where each operand is
+used and how — as TIA Portal's cross-references show a tag's uses (``sequencer.xref``;
+docs/cli.md, "s7graph xref").
 
 Text: each operand on a line of its own, then one line per use (the element, the access,
 ``file:line:col``), then the symbols the chart declares and never uses. ``--operand``:
 that operand's uses only (a symbol with or without quotes, an address, a variable); exit
 1 when it has none. ``--json``: one object, ``{"operands": {operand: [{"element",
-"access", "at"}]}, "unused": [...]}``. A chart that does not parse, or an unreadable chart
-or symbol table, is its diagnostics on stderr and exit 2.
+"access", "at"}]}, "unused": [...]}``. A chart or an S7-SCL source that does not parse,
+or an unreadable chart, source or symbol table, is its diagnostics on stderr and exit 2.
 """
 
 from __future__ import annotations
 
 import json
 import sys
+from collections.abc import Sequence
 from pathlib import Path
 
 from s7graph.engine.errors import S7Error
@@ -21,19 +23,31 @@ from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.checks.diagnostics import format_diagnostic
 from s7graph.sequencer.text.parse import ChartSyntaxError, chart_text, parse_chart
 from s7graph.sequencer.xref import CrossReferences, Use, cross_references
+from s7graph.steps.scl import SclError
+from s7graph.steps.scl import format_diagnostic as scl_diagnostic
+from s7graph.steps.scl.parse import parse_source
+from s7graph.web.harness.scl import read_source
 
 __all__ = ["xref_command"]
 
 
 def xref_command(
-    chart: Path, *, symbols: Path | None = None, operand: str | None = None, as_json: bool = False
+    chart: Path,
+    *,
+    symbols: Path | None = None,
+    operand: str | None = None,
+    as_json: bool = False,
+    blocks: Sequence[Path] = (),
 ) -> int:
-    """Print the cross-references of ``chart``; the exit code (0, 1: ``operand`` unused,
-    2: a chart or symbol table that cannot be read)."""
+    """Print the cross-references of ``chart`` and the S7-SCL sources ``blocks``; the exit
+    code (0, 1: ``operand`` unused, 2: a chart, source or symbol table that cannot be
+    read)."""
     try:
         text = chart_text(chart.read_bytes(), str(chart))
         table = SymbolTable.from_file(symbols) if symbols is not None else None
-        refs = cross_references(parse_chart(text, str(chart)), table)
+        parsed = parse_chart(text, str(chart))
+        sources = [parse_source(read_source(path), str(path)) for path in blocks]
+        refs = cross_references(parsed, table, sources)
     except OSError as exc:
         name = exc.filename or chart
         print(f"s7graph: error: cannot read {name}: {exc.strerror or exc}", file=sys.stderr)
@@ -41,6 +55,10 @@ def xref_command(
     except ChartSyntaxError as exc:
         for d in exc.diagnostics:
             print(format_diagnostic(d), file=sys.stderr)
+        return 2
+    except SclError as exc:
+        for e in exc.diagnostics:
+            print(scl_diagnostic(e), file=sys.stderr)
         return 2
     except S7Error as exc:
         print(f"s7graph: error: {exc}", file=sys.stderr)

@@ -1,7 +1,8 @@
 """``s7graph xref`` (``web/cli/xref.py``; docs/cli.md, "s7graph xref"): the drill's
 cross-references as text and JSON, one operand's uses by symbol or address, exit 1 for an
 operand the chart never uses, exit 2 with the diagnostics for a chart that does not parse
-and one line for a file that cannot be read; and through the real command line."""
+and one line for a file that cannot be read; with the S7-SCL blocks beside a chart
+(``--blocks``) their uses too; and through the real command line."""
 
 from __future__ import annotations
 
@@ -18,6 +19,7 @@ from tests.sequencer.helpers import BROKEN
 
 DRILL = ROOT / "examples" / "drill" / "drill.s7g"
 SYMBOLS = ROOT / "examples" / "drill" / "symbols.txt"
+OVEN = ROOT / "examples" / "oven"
 
 
 def test_one_operand_by_its_symbol_or_address(capsys: pytest.CaptureFixture[str]) -> None:
@@ -83,3 +85,37 @@ END_FUNCTION_BLOCK
         f"  T2  read  {chart}:7:38",
         'unused symbols: "Spare"',
     ]
+
+
+def test_the_blocks_beside_a_chart_list_their_uses_after_the_charts(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    chart, scl, symbols = OVEN / "oven.s7g", OVEN / "oven.scl", OVEN / "symbols.txt"
+    assert xref_command(chart, symbols=symbols, operand="Oven_temp", blocks=[scl]) == 0
+    assert capsys.readouterr().out.splitlines() == [
+        '"Oven_temp" (MD14)',
+        f'  T2 "Temperature reached"  read   {chart}:42:56',
+        f'  T4 "Cooled"               read   {chart}:44:43',
+        f"  OB 35                     write  {scl}:32:3",
+    ]
+    assert xref_command(chart, symbols=symbols, as_json=True) == 0
+    assert '"Heater" (Q12.0)' not in json.loads(capsys.readouterr().out)["operands"]
+    assert xref_command(chart, symbols=symbols, as_json=True, blocks=[scl]) == 0
+    both = json.loads(capsys.readouterr().out)
+    assert both["operands"]['"Heater" (Q12.0)'][0]["access"] == "write"
+    assert {"element": "OB 35", "access": "read", "at": f"{scl}:34:43"} in both["operands"][
+        '"Setpoint" (MD10)'
+    ]  # an input of CONT_C (SFB41): its interface says so
+    assert [u["access"] for u in both["operands"]["DB 41"]] == ["instance", "instance"]
+
+
+def test_a_block_source_that_does_not_parse_is_its_diagnostic_and_exit_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    bad = tmp_path / "bad.scl"
+    bad.write_text("FUNCTION FC1 : VOID\nBEGIN\n  M0.0 := ;\nEND_FUNCTION\n", encoding="utf-8")
+    assert xref_command(DRILL, blocks=[bad]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"{bad}:3:") and "Traceback" not in err
+    assert xref_command(DRILL, blocks=[tmp_path / "none.scl"]) == 2
+    assert capsys.readouterr().err.startswith("s7graph: error: cannot read")

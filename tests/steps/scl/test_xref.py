@@ -1,0 +1,81 @@
+"""The uses of outside operands in an S7-SCL source (``steps/scl/xref.py``): what is listed
+and what is a block's own, how each operand is spelt, and its access by where it stands —
+an actual parameter by the called block's interface."""
+
+from __future__ import annotations
+
+from s7graph.steps.scl.parse import parse_source
+from s7graph.steps.scl.xref import ARG_ACCESS, interfaces, scl_uses
+
+SOURCE = """\
+FUNCTION "Scale" : REAL
+VAR_INPUT raw : INT; END_VAR
+VAR_OUTPUT clipped : BOOL; END_VAR
+VAR_IN_OUT count : INT; END_VAR
+CONST K := 10; END_CONST
+BEGIN
+  clipped := raw > K;
+  count := count + 1;
+  "Scale" := INT_TO_REAL(raw) / 10.0;
+END_FUNCTION
+
+ORGANIZATION_BLOCK OB1
+VAR_TEMP i : INT; x : REAL; END_VAR
+BEGIN
+  x := "Scale"(raw := %IW64, clipped := M0.1, count := "Counts");
+  x := "Scale"(raw := IW66, clipped := M0.2, count := "Counts");
+  FOR i := 1 TO "Data".n DO
+    "Data".temps[i] := x;
+  END_FOR;
+  IF %I0.0 AND NOT T5 THEN
+    FB17.DB10(IN := DB20.DBW4, OUT := MW8);
+  END_IF;
+  Motor_on := TRUE;
+END_ORGANIZATION_BLOCK
+"""
+
+
+def _uses() -> list[tuple[str, str, str, int]]:
+    source = parse_source(SOURCE, "test.scl")
+    return [(u.operand, u.block, u.access, u.loc.line) for u in scl_uses(source)]
+
+
+def test_only_outside_operands_are_listed_with_the_block_and_line_they_stand_in() -> None:
+    uses = _uses()
+    operands = {op for op, _, _, _ in uses}
+    for own in ("raw", "clipped", "count", "K", "i", "x", "INT_TO_REAL"):
+        assert not [u for u in operands if u.lstrip('"').startswith(own)], own
+    assert ('"Scale"', 'FC "Scale"', "write", 9) in uses  # a function's return value
+    assert ("MOTOR_ON", "OB 1", "write", 23) not in uses
+    assert ("Motor_on", "OB 1", "write", 23) in uses  # an unquoted symbol, as written
+    assert [u[3] for u in uses] == sorted(u[3] for u in uses)  # in the order written
+
+
+def test_addresses_blocks_and_db_variables_are_spelt_one_way() -> None:
+    uses = _uses()
+    assert ("IW64", "OB 1", "argument", 15) not in uses  # the interface is known
+    assert ("IW64", "OB 1", "read", 15) in uses and ("IW66", "OB 1", "read", 16) in uses
+    assert ("I0.0", "OB 1", "read", 20) in uses and ("T5", "OB 1", "read", 20) in uses
+    assert ('"Data".n', "OB 1", "read", 17) in uses
+    assert ('"Data".temps', "OB 1", "write", 18) in uses  # members up to the first index
+    assert ("FB 17", "OB 1", "call", 21) in uses and ("DB 10", "OB 1", "instance", 21) in uses
+
+
+def test_an_actual_parameter_is_used_as_the_called_blocks_interface_declares_it() -> None:
+    uses = _uses()
+    assert ("M0.1", "OB 1", "write", 15) in uses and ("M0.2", "OB 1", "write", 16) in uses
+    assert ('"Counts"', "OB 1", "read/write", 15) in uses
+    assert ('"Scale"', "OB 1", "call", 15) in uses
+    # FB17's interface is not in the source: its parameters' operands are arguments
+    assert ("DB20.DBW4", "OB 1", "argument", 21) in uses
+    assert ("MW8", "OB 1", "argument", 21) in uses
+    source = parse_source(SOURCE, "test.scl")
+    assert interfaces(source)["SCALE"] == {
+        "RAW": "VAR_INPUT",
+        "CLIPPED": "VAR_OUTPUT",
+        "COUNT": "VAR_IN_OUT",
+    }
+    fb17 = {"FB17": {"IN": "VAR_INPUT", "OUT": "VAR_OUTPUT"}}
+    given = [(u.operand, u.access) for u in scl_uses(source, fb17) if u.loc.line == 21]
+    assert ("DB20.DBW4", "read") in given and ("MW8", "write") in given
+    assert set(ARG_ACCESS) == {"VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT"}
