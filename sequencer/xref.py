@@ -44,7 +44,7 @@ from s7graph.sequencer.text.walk import nodes
 from s7graph.steps.scl import model as scl
 from s7graph.steps.scl.xref import interfaces, scl_uses
 
-__all__ = ["ACCESS", "CrossReferences", "Use", "cross_references"]
+__all__ = ["ACCESS", "CrossReferences", "Use", "block_references", "cross_references"]
 
 ACCESS: Final[dict[str, str]] = {
     "N": "write",
@@ -122,16 +122,30 @@ def cross_references(
         Use(names.shown(text), element, access, loc, ref)
         for (element, ref), text, access, loc in _walk(chart)
     ]
-    params = _system_params()
-    for source in blocks:
-        params.update(interfaces(source))
-    for source in blocks:
-        uses += [
-            Use(names.shown(u.operand), u.block, u.access, u.loc) for u in scl_uses(source, params)
-        ]
+    uses += _block_uses(names, blocks)
     used = {u.operand for u in uses}
     unused = tuple(s.name for s in chart.symbols if names.shown(f'"{s.name}"') not in used)
     return CrossReferences(tuple(uses), unused, names.shown)
+
+
+def block_references(
+    blocks: Sequence[scl.Source], symbols: SymbolTable | None = None
+) -> CrossReferences:
+    """Every use of an operand from outside the blocks of the S7-SCL sources ``blocks`` (a
+    program without a chart), a symbol shown with its address from ``symbols``."""
+    names = _Names(None, symbols)
+    return CrossReferences(tuple(_block_uses(names, blocks)), (), names.shown)
+
+
+def _block_uses(names: _Names, blocks: Sequence[scl.Source]) -> list[Use]:
+    params = _system_params()
+    for source in blocks:
+        params.update(interfaces(source))
+    return [
+        Use(names.shown(u.operand), u.block, u.access, u.loc)
+        for source in blocks
+        for u in scl_uses(source, params)
+    ]
 
 
 _SECTIONS: Final = {Decl.IN: "VAR_INPUT", Decl.OUT: "VAR_OUTPUT", Decl.IN_OUT: "VAR_IN_OUT"}
@@ -151,10 +165,10 @@ class _Names:
     """How an operand is shown: a symbol with its address, an address with its symbol
     (the chart's own first), anything else as written."""
 
-    def __init__(self, chart: Chart, table: SymbolTable | None) -> None:
+    def __init__(self, chart: Chart | None, table: SymbolTable | None) -> None:
         self.by_name: dict[str, tuple[str, str]] = {}
         for source in (
-            [(s.name, s.address) for s in chart.symbols],
+            [(s.name, s.address) for s in chart.symbols] if chart is not None else [],
             [(s.name, str(s.address)) for s in table or ()],
         ):
             for name, address in source:
@@ -162,7 +176,7 @@ class _Names:
         self.by_address = {
             address.replace(" ", "").upper(): name for name, address in self.by_name.values()
         }
-        self.variables = {v.name.casefold(): v.name for v in chart.vars}
+        self.variables = {v.name.casefold(): v.name for v in chart.vars} if chart else {}
 
     def shown(self, text: str) -> str:
         name = text.strip('"')

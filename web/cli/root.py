@@ -541,7 +541,9 @@ def check(
 
 @app.command()
 def xref(
-    chart: Annotated[Path, typer.Argument(help="A chart in .s7g source.")],
+    chart: Annotated[
+        Path, typer.Argument(help="A chart in .s7g source, or an S7-SCL program (.scl).")
+    ],
     symbols: Annotated[Path | None, typer.Option(help="A symbol table file.")] = None,
     operand: Annotated[
         str | None,

@@ -1,7 +1,8 @@
 """``s7graph xref CHART [--symbols FILE] [--operand NAME] [--json] [--blocks SCL …]``: the
 cross-reference list of a chart and the S7-SCL blocks beside it — where each operand is
 used and how — as TIA Portal's cross-references show a tag's uses (``sequencer.xref``;
-docs/cli.md, "s7graph xref").
+docs/cli.md, "s7graph xref"). ``CHART`` may be an S7-SCL program (``.scl``): the uses in
+its blocks and those of ``--blocks``.
 
 Text: each operand on a line of its own, then one line per use (the element, the access,
 ``file:line:col``), then the symbols the chart declares and never uses. ``--operand``:
@@ -22,7 +23,7 @@ from s7graph.engine.errors import S7Error
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.checks.diagnostics import format_diagnostic
 from s7graph.sequencer.text.parse import ChartSyntaxError, chart_text, parse_chart
-from s7graph.sequencer.xref import CrossReferences, Use, cross_references
+from s7graph.sequencer.xref import CrossReferences, Use, block_references, cross_references
 from s7graph.steps.scl import SclError
 from s7graph.steps.scl import format_diagnostic as scl_diagnostic
 from s7graph.steps.scl.parse import parse_source
@@ -43,11 +44,14 @@ def xref_command(
     code (0, 1: ``operand`` unused, 2: a chart, source or symbol table that cannot be
     read)."""
     try:
-        text = chart_text(chart.read_bytes(), str(chart))
         table = SymbolTable.from_file(symbols) if symbols is not None else None
-        parsed = parse_chart(text, str(chart))
-        sources = [parse_source(read_source(path), str(path)) for path in blocks]
-        refs = cross_references(parsed, table, sources)
+        if chart.suffix.lower() == ".scl":  # a program: its source and the blocks beside it
+            sources = [parse_source(read_source(p), str(p)) for p in (chart, *blocks)]
+            refs = block_references(sources, table)
+        else:
+            parsed = parse_chart(chart_text(chart.read_bytes(), str(chart)), str(chart))
+            sources = [parse_source(read_source(path), str(path)) for path in blocks]
+            refs = cross_references(parsed, table, sources)
     except OSError as exc:
         name = exc.filename or chart
         print(f"s7graph: error: cannot read {name}: {exc.strerror or exc}", file=sys.stderr)

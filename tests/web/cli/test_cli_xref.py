@@ -119,3 +119,18 @@ def test_a_block_source_that_does_not_parse_is_its_diagnostic_and_exit_2(
     assert err.startswith(f"{bad}:3:") and "Traceback" not in err
     assert xref_command(DRILL, blocks=[tmp_path / "none.scl"]) == 2
     assert capsys.readouterr().err.startswith("s7graph: error: cannot read")
+
+
+def test_an_scl_program_alone_lists_the_uses_in_its_blocks(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    program = ROOT / "examples" / "scl_guide" / "setpoint.scl"
+    assert xref_command(program, operand="MW0") == 0
+    assert capsys.readouterr().out.splitlines() == [
+        "MW0",
+        f"  OB 100  write  {program}:5:3",
+        f"  OB 35   read   {program}:13:20",
+        f"  OB 35   write  {program}:22:3",
+    ]
+    assert xref_command(OVEN / "oven.scl", symbols=OVEN / "symbols.txt", operand='"Heater"') == 0
+    assert capsys.readouterr().out.splitlines()[0] == '"Heater" (Q12.0)'
