@@ -217,6 +217,8 @@ def encode_value(
             literal_type, value = parse_literal(value)
         except LiteralError as exc:
             raise error(f"{exc.message} (to {verb} {what})") from None
+        if literal_type == "STRING" and type_name == "CHAR" and len(str(value)) == 1:
+            literal_type = "CHAR"  # 'a': one character in quotes is a CHAR literal in S7
         if literal_type not in _PLAIN:  # a typed literal: B#16#.., W#16#.., T#.., S5T#..
             bits = type_of(literal_type).size_bits
             fits = bits == width if type_name in _UNSIGNED else literal_type == type_name

@@ -205,11 +205,13 @@ def test_a_value_for_a_variable_follows_the_rules_of_a_modify_of_its_type() -> N
     assert typed_value("REAL", "v", 2) == (2.0, "2.0")
     assert typed_value("BOOL", "v", 1) == (True, "TRUE")
     assert typed_value("WORD", "v", "16#00FF") == (255, "W#16#00FF")
+    assert typed_value("CHAR", "v", "'a'") == ("a", "CHAR#97")  # one character: a CHAR
     for type_name, value, says in (
         ("INT", True, "takes a number"),
         ("INT", 70000, "out of range"),
         ("BOOL", 2, "TRUE or FALSE"),
         ("STRING[8]", "'x'", "a bit, a byte, a word or a double word"),
+        ("CHAR", "'ab'", "is a STRING"),
         ("LREAL", 1.5, "a bit, a byte, a word or a double word"),
     ):
         with pytest.raises(ModifyError) as refused:
