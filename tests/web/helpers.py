@@ -256,7 +256,7 @@ def online_cpu(
     when ``serve``; the CPU takes force jobs as ``s7graph run`` does, and publishes its
     operands when ``operands`` (``web.bus.operands``) and keeps its message list on the bus
     when ``messages`` (the page's Alarms); ``blocks``: S7-SCL sources (file name → text)
-    written beside the chart and run with it, as ``--blocks`` does."""
+    written beside the chart and run with it, and served on the bus, as ``--blocks`` does."""
     from s7graph.sfb.alarms import message_list
     from s7graph.web.access.audit import AuditStore
     from s7graph.web.access.login import Authenticator
@@ -300,6 +300,11 @@ def online_cpu(
             forcing=Forcing(session.cpu),
             operands=OperandFeed(session, fb=live.fb) if operands else None,
         )
+        if sources and edge.publisher is not None:  # as s7graph run serves --blocks
+            from s7graph.web.bus.block_sources import serve_blocks
+            from s7graph.web.harness.scl import scl_of
+
+            serve_blocks(edge.publisher, lambda: scl_of(session.blocks))
         with edge, scanning(session, edge, lambda record: scans.append(record.cycle)):
             client = certs.tls("client.olga")
             yield OnlineRig(session, edge, online, path, state, endpoint, scans, client, bus)

@@ -135,6 +135,13 @@ class BlockButtons:
 
         return click
 
+    def read(self) -> BlockSources | None:
+        """The CPU's sources now (None: no reader, no answer or a bus error)."""
+        try:
+            return self._read() if self._read is not None else None
+        except Exception:  # a bus error: the caller goes on without them
+            return None
+
     def open(self, key: str, label: str) -> None:
         """Read the CPU's sources and open ``key``'s in a window, or say why not."""
         try:

@@ -208,6 +208,7 @@ class Editor(CpuCommands, RowEditing, InPlace, CrossReferencing):
             self._notify("edit mode", f"cannot edit the running chart: {reason}", ok=False)
             return
         self.base, self.symbols, self.session = source, symbols, session
+        self._xref_blocks = None  # the CPU's S7-SCL blocks read again for this session
         self.file.value = source.file or f"{chart.name}.s7g"  # type: ignore[misc]
         self.editing = True
         self.toggle.label = "Leave edit mode"

@@ -42,12 +42,21 @@ if TYPE_CHECKING:
 pytestmark = [pytest.mark.timeout(240), needs_chromium]
 pytest.importorskip("playwright.sync_api", reason="playwright is not installed")
 USERS = {"eng": "engineer", "olga": "operator", "vic": "viewer"}
+BLOCKS = """// beside the chart: reads what step S2 writes
+FUNCTION FC 5 : VOID
+BEGIN
+  M1.0 := Q0.0;
+END_FUNCTION
+"""
 
 
 @pytest.fixture(scope="module")
 def cpu(tmp_path_factory: pytest.TempPathFactory, bus_certs: BusCerts) -> Iterator[OnlineRig]:
     tmp = tmp_path_factory.mktemp("edit")
-    with online_cpu(tmp, CHART, serve=True, users=USERS, certs=bus_certs, name="fill.s7g") as rig:
+    blocks = {"fill_blocks.scl": BLOCKS}
+    with online_cpu(
+        tmp, CHART, serve=True, users=USERS, certs=bus_certs, name="fill.s7g", blocks=blocks
+    ) as rig:
         yield rig
 
 
@@ -190,6 +199,13 @@ def test_cross_references_list_an_operands_uses_and_a_click_selects_its_element(
     page.get_by_role("button", name=use_label(uses[0]), exact=True).click()
     assert wait_until(lambda: ed.session is not None and ed.session.selection == StepRef(2))
     page.get_by_text("step S2 Fill", exact=True).first.wait_for(timeout=30_000)
+    choose(page, "Uses of", "Q0.0")  # written by S2, read by FC 5 beside the chart
+    page.get_by_text("Q0.0: 2 uses").first.wait_for(timeout=30_000)
+    in_block = [u for u in ed._xref.uses if u.operand == "Q0.0"][-1]
+    assert (in_block.element, in_block.access, in_block.loc.line) == ("FC 5", "read", 4)
+    page.get_by_role("button", name=use_label(in_block), exact=True).click()
+    page.get_by_text("M1.0 := Q0.0;").first.wait_for(timeout=30_000)  # FC 5's source
+    page.get_by_role("button", name="Close", exact=True).click()
     page.get_by_role("tab", name="Element").click()
 
 
