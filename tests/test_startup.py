@@ -1,6 +1,7 @@
 """What a process imports to start: the supervisor of ``s7graph run`` neither typer nor the
-CPU, a chart's CPU not the S7-SCL compiler; the packages that load their names when first
-used (``s7graph.lazy``) name each where it is defined."""
+CPU, a chart's CPU not the S7-SCL compiler, a CPU on the bus not the view (viser); the
+packages that load their names when first used (``s7graph.lazy``) name each where it is
+defined."""
 
 from __future__ import annotations
 
@@ -39,6 +40,14 @@ def test_a_charts_cpu_process_loads_no_scl_compiler_until_it_has_blocks() -> Non
     assert not loaded["s7graph.steps.scl.compile"] and not loaded["s7graph.steps.scl.parse"]
     code += "\nfrom s7graph.web.harness.scl import compile_texts\ncompile_texts([])"
     assert _loaded_after(code, compiler)["s7graph.steps.scl.compile"]
+
+
+def test_a_cpu_on_the_bus_loads_no_view_its_view_runs_in_a_process_of_its_own() -> None:
+    code = "import s7graph.web.cli.run_chart, s7graph.web.wiring.live_edge, s7graph.web.view.port"
+    assert _loaded_after(code, ["viser", "s7graph.web.view.edge"]) == {
+        "viser": False,
+        "s7graph.web.view.edge": False,
+    }
 
 
 def _type_checking_names(init: Path) -> dict[str, str]:

@@ -359,7 +359,7 @@ def _serve(
     from s7graph.web.cli.net import NetOptions
     from s7graph.web.cli.view_process import run_view
     from s7graph.web.harness.scl import scl_of
-    from s7graph.web.view.edge import check_port
+    from s7graph.web.view.port import check_port
     from s7graph.web.wiring.live_edge import LiveEdge
 
     net = net or NetOptions()

@@ -297,7 +297,7 @@ def _program_edges(
     from s7graph.web.bus.gate import cpu_gate  # zenoh and viser only when asked for
     from s7graph.web.cli.net import NetOptions
     from s7graph.web.cli.view_process import run_view
-    from s7graph.web.view.edge import check_port
+    from s7graph.web.view.port import check_port
     from s7graph.web.wiring.program_edge import ProgramEdge
 
     net = net or NetOptions()

@@ -25,7 +25,8 @@ from s7graph.web.bus.session import open_session
 from s7graph.web.cli.net import NetOptions, is_loopback_host
 from s7graph.web.cli.stopping import wait_until_stopped
 from s7graph.web.collector import freeze_start
-from s7graph.web.view.edge import PortError, ViewSide
+from s7graph.web.view.edge import ViewSide
+from s7graph.web.view.port import PortError
 
 __all__ = ["web_command"]
 

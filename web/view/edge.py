@@ -2,14 +2,13 @@
 to the bus, a :class:`BusClient`, a viser server and the :class:`ChartView` (a program's
 :class:`ProgramView`), with a Diagnostics folder on every page — all it knows
 of the CPU comes over the bus, so it runs as well in another process (``s7graph web``, the
-view of ``s7graph run --web``) as beside the CPU (``web.wiring``). :func:`check_port` says
-whether the page's port is free.
+view of ``s7graph run --web``) as beside the CPU (``web.wiring``). Whether the page's
+port is free: ``web.view.port``.
 """
 
 from __future__ import annotations
 
 import contextlib
-import socket
 import time
 from collections.abc import Callable, Iterable
 
@@ -21,33 +20,13 @@ from s7graph.web.view.chart_view import ChartView, make_server
 from s7graph.web.view.diagnostics import DiagnosticsPanel
 from s7graph.web.view.engineering import Engineering
 from s7graph.web.view.guard import OriginGuard
+from s7graph.web.view.port import PortError, check_port
 from s7graph.web.view.program_view import ProgramView
 
-__all__ = ["PortError", "ViewSide", "check_port"]
+__all__ = ["ViewSide"]
 
 
 ENGINEERING_TIMEOUT_S = 30.0  # a download compiles, writes the file and waits for a scan
-
-
-class PortError(ValueError):
-    """A page port out of range or taken."""
-
-
-def check_port(host: str, port: int) -> None:
-    """:class:`PortError` if ``port`` is out of range or taken on ``host`` (0: any free one)."""
-    if not 0 <= port <= 65535:
-        raise PortError(f"--port {port} is out of range (0-65535; 0 picks a free one)")
-    if port == 0:
-        return
-    family = socket.AF_INET6 if ":" in host else socket.AF_INET
-    with socket.socket(family, socket.SOCK_STREAM) as s:
-        # as the page's server binds: connections of a view that just ended (TIME_WAIT)
-        # do not make the port busy, a listening server does
-        s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-        try:
-            s.bind((host, port))
-        except OSError as exc:
-            raise PortError(f"port {port} on {host} is in use ({exc.strerror})") from None
 
 
 class ViewSide:

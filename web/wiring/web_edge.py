@@ -10,13 +10,16 @@ from __future__ import annotations
 import threading
 import time
 from collections.abc import Iterable
+from typing import TYPE_CHECKING
 
 from s7graph.sequencer.text.model import Chart
 from s7graph.web.bus.cpu_side import CpuSide
 from s7graph.web.bus.gate import Apply, Gate
 from s7graph.web.bus.protocol import ChartLayout, Command, StepStateUpdate
 from s7graph.web.bus.session import BusEnds
-from s7graph.web.view.edge import ViewSide
+
+if TYPE_CHECKING:
+    from s7graph.web.view.edge import ViewSide
 
 __all__ = ["WebEdge", "serve_view"]
 
@@ -48,8 +51,10 @@ class WebEdge:
         self.endpoint = self.cpu_side.endpoint
         self.publisher = self.cpu_side.publisher
         try:
+            from s7graph.web.view.edge import ViewSide  # viser: only in a process that serves
+
             connect = list(ends.connect) or [self.endpoint]
-            self.view_side = ViewSide(
+            self.view_side: ViewSide = ViewSide(
                 cpu=cpu,
                 fb=self.fb,
                 ends=ends.joining(connect),
