@@ -99,7 +99,6 @@ class CrossReferencing:
     client: viser.ClientHandle
     located: Located
     symbols: SymbolTable | None
-
     panel: EditorPage
 
     if TYPE_CHECKING:
@@ -124,7 +123,9 @@ class CrossReferencing:
         self._xref_blocks: list[scl.Source] | None = None  # read at the first listing
         with side.add_tab("Cross-references"):
             self.xref_choice = gui.add_dropdown(
-                "Uses of", (NO_OPERAND,), hint="An operand of the chart: where is it used?"
+                "Uses of",
+                (NO_OPERAND,),
+                hint="An operand of the chart or of its S7-SCL blocks: where is it used?",
             )
             self.xref_html = gui.add_html(texts.small("Choose an operand to list its uses."))
             self.xref_folder = gui.add_folder("Uses")
@@ -170,9 +171,9 @@ class CrossReferencing:
         self.xref_html.content = texts.small(f"<b>{html.escape(chosen)}</b>: {said}")
         with self.xref_folder:
             for use in uses[:MAX_USES]:
-                button = self.client.gui.add_button(
-                    use_label(use), hint=f"select it: line {use.loc.line}, column {use.loc.col}"
-                )
+                place = f"line {use.loc.line}, column {use.loc.col}"
+                hint = f"select it: {place}" if use.ref else f"open the block's source: {place}"
+                button = self.client.gui.add_button(use_label(use), hint=hint)
                 button.on_click(self._click(functools.partial(self._xref_go, use)))
                 self._xref_buttons.append(button)
 
