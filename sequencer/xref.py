@@ -138,14 +138,26 @@ def block_references(
 
 
 def _block_uses(names: _Names, blocks: Sequence[scl.Source]) -> list[Use]:
+    """The uses in ``blocks``; a system block called by its name in another case is shown
+    by its own (``stp()`` calls ``"STP"``), unless a source defines a block so named."""
     params = _system_params()
+    system = {b.name.upper(): f'"{b.name}"' for b in sfb.SYSTEM_BLOCKS}
     for source in blocks:
-        params.update(interfaces(source))
+        own = interfaces(source)
+        params.update(own)
+        for name in own:
+            system.pop(name, None)
     return [
-        Use(names.shown(u.operand), u.block, u.access, u.loc)
+        Use(_system_name(names.shown(u.operand), u.access, system), u.block, u.access, u.loc)
         for source in blocks
         for u in scl_uses(source, params)
     ]
+
+
+def _system_name(operand: str, access: str, system: dict[str, str]) -> str:
+    if access != "call" or not operand.startswith('"'):
+        return operand
+    return system.get(operand.strip('"').upper(), operand)
 
 
 _SECTIONS: Final = {Decl.IN: "VAR_INPUT", Decl.OUT: "VAR_OUTPUT", Decl.IN_OUT: "VAR_IN_OUT"}

@@ -132,5 +132,7 @@ def test_an_scl_program_alone_lists_the_uses_in_its_blocks(
         f"  OB 35   read   {program}:13:20",
         f"  OB 35   write  {program}:22:3",
     ]
+    assert xref_command(program, operand="STP") == 0  # stp(): the system's SFC46 by its name
+    assert capsys.readouterr().out.splitlines() == ['"STP"', f"  OB 35  call  {program}:20:5"]
     assert xref_command(OVEN / "oven.scl", symbols=OVEN / "symbols.txt", operand='"Heater"') == 0
     assert capsys.readouterr().out.splitlines()[0] == '"Heater" (Q12.0)'
