@@ -10,7 +10,8 @@ scan boundaries about twice a second while the page is open (``web.bus.watch``) 
 buttons its role allows (``stop``, ``start``, ``mres``: an engineer's). The Blocks folder
 lists the blocks the CPU has a source of (``s7graph/<cpu>/blocks``, read once when the page
 opens, again every ``BLOCKS_RETRY_S`` while the CPU does not answer); each button opens the
-block's text read-only, read when pressed (``web.view.block_links``). The Diagnostics
+block's text read-only, read when pressed (``web.view.block_links``); *Cross-references*
+lists where each operand of those blocks is used (``web.view.uses_list``). The Diagnostics
 folder is :class:`~web.view.diagnostics.DiagnosticsPanel`'s. Every text from the bus or a
 user is escaped.
 """
@@ -21,12 +22,13 @@ import contextlib
 import functools
 import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import msgspec
 import viser
 
+from s7graph.sequencer.xref import Use, block_references
 from s7graph.web.access.roles import allowed
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import (
@@ -55,6 +57,7 @@ from s7graph.web.view.block_links import BlockButtons, listed_blocks
 from s7graph.web.view.diagnostics import state_html
 from s7graph.web.view.guard import OriginGuard
 from s7graph.web.view.page_login import PageLogin
+from s7graph.web.view.uses_list import UsesList, block_key, parsed_blocks
 from s7graph.web.view.watch_table import TIMEOUT_S, WatchTable, refresh, watch_html
 
 __all__ = ["ProgramPage", "ProgramView", "blocks_html", "watch_html"]
@@ -107,6 +110,13 @@ class ProgramPage(PageLogin):
         self.blocks = BlockButtons(
             page, folder, view.read_blocks, lambda t, b: self._notify(t, b, ok=False)
         )
+        with gui.add_folder("Cross-references", expand_by_default=False):
+            self.uses = UsesList(
+                page,
+                hint="An operand of the program's blocks: where is it used?",
+                go=self._open_use,
+                guard=self._guarded,
+            )
         self.blocks_due: float | None = 0.0  # when to ask for the list (None: listed)
         self._enable()
 
@@ -118,6 +128,20 @@ class ProgramPage(PageLogin):
             return
         self.blocks_due = None
         self.blocks.place(listed_blocks(sources))
+        self.uses.show(block_references(parsed_blocks(sources)))
+
+    def _open_use(self, use: Use) -> None:
+        """Open the source of the block a use of the cross-references stands in."""
+        key = block_key(use.element)
+        if key is not None:
+            self.blocks.open(key, use.element)
+
+    def _guarded(self, action: Callable[[], object]) -> None:
+        """Run a click's action; an unexpected error is a notice, never a dead callback."""
+        try:
+            action()
+        except Exception as exc:
+            self._notify("cross-references", f"{type(exc).__name__}: {exc}", ok=False)
 
     def _enable(self) -> None:
         role = self.role if self.token else "viewer"

@@ -20,7 +20,7 @@ from s7graph.sequencer.text.elements import StepRef, TransitionRef, find
 from s7graph.sequencer.text.format import format_expr
 from s7graph.sequencer.text.model import Transition
 from s7graph.web.view.editor import Editor
-from s7graph.web.view.editor_xref import use_label
+from s7graph.web.view.uses_list import use_label
 from tests.web.bus.test_online_change import CHART
 from tests.web.helpers import (
     PASSWORD,

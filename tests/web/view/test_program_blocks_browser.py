@@ -1,7 +1,8 @@
 """A program's page lists the S7-SCL blocks its CPU runs and opens each one's text
 read-only, in real Chromium against ``s7graph run PROGRAM.scl --blocks BLOCKS.scl --web``
-(a real process): a button per OB, FB, FC and DB in source order, the library's first
-(docs/view.md, "A program's page"; docs/scl.md, "On the bus")."""
+(a real process): a button per OB, FB, FC and DB in source order, the library's first,
+and the blocks' cross-references, a use opening its block's source (docs/view.md, "A
+program's page"; docs/scl.md, "On the bus")."""
 
 from __future__ import annotations
 
@@ -52,6 +53,14 @@ def test_a_programs_page_lists_its_blocks_and_opens_each_ones_source(tmp_path: P
             assert wait_until(lambda: shown.count() == 0, 30)
             page.get_by_role("button", name="FB 17 source", exact=True).click()
             assert wait_until(lambda: "n := n + 1" in block_source(page), 30)
+            page.get_by_role("button", name="Close", exact=True).click()
+            page.get_by_text("Cross-references", exact=True).first.click()  # open the folder
+            row = "ancestor::div[contains(@class,'mantine-Flex-root')][1]"
+            page.locator(f"xpath=//label[text()='Uses of']/{row}//input").first.click()
+            page.get_by_role("option", name="DB20.warm", exact=True).click()
+            page.get_by_text("DB20.warm: 2 uses").first.wait_for(timeout=30_000)
+            page.get_by_role("button", name="OB 100 · write · prog.scl:8", exact=True).click()
+            assert wait_until(lambda: "DB20.warm := DB20.warm + 1;" in block_source(page), 30)
     finally:
         proc.send_signal(signal.SIGTERM)
         _, err = proc.communicate(timeout=60)

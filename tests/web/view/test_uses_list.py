@@ -1,4 +1,4 @@
-"""The editor's cross-references and the CPU's S7-SCL blocks (``web/view/editor_xref.py``):
+"""A page's cross-reference list and the CPU's S7-SCL blocks (``web/view/uses_list.py``):
 each block parsed where it stands in its file, a block that does not parse left out, a
 use in a block labelled by its file and line and found again by its block's key."""
 
@@ -7,7 +7,7 @@ from __future__ import annotations
 from s7graph.engine.errors import SourceLocation
 from s7graph.sequencer.xref import Use
 from s7graph.web.bus.protocol import BlockSource, BlockSources
-from s7graph.web.view.editor_xref import block_key, parsed_blocks, use_label
+from s7graph.web.view.uses_list import block_key, parsed_blocks, use_label
 
 SOURCES = BlockSources(
     blocks=[
