@@ -240,19 +240,6 @@ def _restart_type(value: str | None) -> str | None:
     return value.lower() if value is not None else None
 
 
-_ENTRY_ARGS: list[str] | None = None
-"""The command line of ``main()`` run as the program (not called with ``argv``)."""
-
-
-def _supervise_if_asked() -> None:
-    """Become the supervisor (``supervisor.supervises``): exit with what it returns; else
-    go on. (``main`` in ``web/cli/__init__.py`` does so before importing the commands.)"""
-    from s7graph.web.cli.supervisor import supervise, supervises
-
-    if supervises(as_program=_ENTRY_ARGS is not None):
-        raise typer.Exit(supervise(_ENTRY_ARGS or []))
-
-
 Blocks = Annotated[
     list[Path] | None,
     typer.Option(
@@ -386,7 +373,8 @@ def run(
     opcua_writes: OpcuaWrites = None,
 ) -> None:
     """Run a program or a chart on the system clock until Ctrl-C."""
-    _supervise_if_asked()
+    # As the program, this runs in the CPU's process its supervisor started (``main`` in
+    # web/cli/__init__.py decides, before the commands are imported).
     priority = _scan_priority(rt_priority)
     face = _opcua_face(program, opcua, users, opcua_cert, opcua_key, opcua_writes)
     net = _cpu_net(
@@ -1199,12 +1187,9 @@ def audit(
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the console script; turns every known error into one stderr line.
-
-    Run as the program (``argv`` None), ``s7graph run`` supervises its CPU as a process of
-    its own (``web.cli.supervisor``); called with ``argv`` it runs in this process."""
-    global _ENTRY_ARGS
-    _ENTRY_ARGS = sys.argv[1:] if argv is None else None
+    """The commands' entry point (``main`` in ``web/cli/__init__.py`` calls it, once the
+    supervisor of a ``run`` is not wanted); turns every known error into one stderr line.
+    ``argv`` None: the program's command line."""
     _credentials_everywhere()
     try:
         rc = app(args=argv, standalone_mode=False)
