@@ -17,6 +17,7 @@ of a program. Pure: the parsed chart and sources in, data out.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Final
@@ -140,7 +141,9 @@ def block_references(
 def _block_uses(names: _Names, blocks: Sequence[scl.Source]) -> list[Use]:
     """The uses in ``blocks``; a system block called by its name in another case is shown
     by its own (``stp()`` calls ``"STP"``), unless a source defines a block so named."""
-    params = _system_params()
+    if not blocks:  # the editor asks at every edit of a chart: no system tables for none
+        return []
+    params = dict(_system_params())
     system = {b.name.upper(): f'"{b.name}"' for b in sfb.SYSTEM_BLOCKS}
     for source in blocks:
         own = interfaces(source)
@@ -163,9 +166,10 @@ def _system_name(operand: str, access: str, system: dict[str, str]) -> str:
 _SECTIONS: Final = {Decl.IN: "VAR_INPUT", Decl.OUT: "VAR_OUTPUT", Decl.IN_OUT: "VAR_IN_OUT"}
 
 
+@functools.cache
 def _system_params() -> dict[str, dict[str, str]]:
     """The parameters of the system blocks an S7-SCL source may call, by name and number
-    (``CONT_C``, ``SFB41``)."""
+    (``CONT_C``, ``SFB41``): made once, copied by the caller before it adds to it."""
     out: dict[str, dict[str, str]] = {}
     for block in sfb.SYSTEM_BLOCKS:
         params = {v.name.upper(): _SECTIONS[v.decl] for v in block.interface if v.decl in _SECTIONS}
