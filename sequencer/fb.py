@@ -39,6 +39,7 @@ from s7graph.sequencer.params import (
     pins_for,
 )
 from s7graph.sequencer.state import GraphState
+from s7graph.sequencer.sync import SyncStep, synchronization
 from s7graph.sfb import s5_counters, s5_timers
 from s7graph.sfb.alarms import message_list
 from s7graph.steps.qualifiers import EVENT_NAMES
@@ -257,6 +258,15 @@ class GraphFB:
     def levels(self) -> dict[str, bool]:
         """The level overrides in force (kept in the instance DB's ``GraphState``)."""
         return dict(self.state.levels) if self.idb is not None else {}
+
+    def synchronization(self) -> tuple[SyncStep, ...]:
+        """Every step judged against the current process values (``sequencer.sync``); call
+        between scans. A BlockError until the FB has been called once (its conditions are
+        bound to the CPU's memory at the first call)."""
+        prog = self.loaded.prog
+        if prog is None or self.idb is None:
+            raise BlockError(f"{self.cc.name}: not called yet, nothing to judge")
+        return synchronization(self.cc, prog, self.state)
 
     def replace_chart(self, cc: CompiledChart, state: GraphState, cpu: Any) -> None:
         """Online change: run ``cc`` from the next call on, with ``state`` (the running state

@@ -14,7 +14,7 @@ from __future__ import annotations
 import contextlib
 import threading
 from collections.abc import Callable, Sequence
-from typing import Any, Literal
+from typing import Any, Literal, TypeVar
 
 import msgspec
 import zenoh
@@ -44,6 +44,7 @@ from s7graph.web.bus.protocol import (
     ProjectFiles,
     ProtocolError,
     StepStateUpdate,
+    SyncReport,
     WatchRequest,
     WatchValues,
     decode,
@@ -52,6 +53,8 @@ from s7graph.web.bus.protocol import (
 )
 
 __all__ = ["BusClient", "DeltaFeed", "StateFollower", "find_cpus"]
+
+_Answer = TypeVar("_Answer", WatchValues, SyncReport)
 
 CLIENT_TIMEOUT_S = 5.0
 """How long a :class:`BusClient` waits for an answer."""
@@ -232,18 +235,31 @@ class BusClient:
     def watch(self, addresses: Sequence[str], *, timeout: float | None = None) -> WatchValues:
         """The values of ``addresses`` at the CPU's next scan boundary; no answer, or a
         request the CPU refuses, is a ``WatchValues`` with its ``error``."""
+        request = encode(WatchRequest(addresses=list(addresses)))
+        return self._answer(self._keys.watch, request, WatchValues, timeout)
+
+    def synchronization(self, fb: str, *, timeout: float | None = None) -> SyncReport:
+        """Every step of ``fb`` judged against the process values at the CPU's next scan
+        boundary (``fb/<fb>/sync``); no answer, or a refusal, is a report with its
+        ``error``."""
+        return self._answer(self._keys.fb(fb, "sync"), None, SyncReport, timeout)
+
+    def _answer(
+        self, key: str, payload: bytes | None, kind: type[_Answer], timeout: float | None
+    ) -> _Answer:
+        """The CPU's answer to a query of ``key`` as ``kind``; a ``kind`` with its
+        ``error`` when the bus fails, no CPU answers in time or the answer is unreadable."""
         try:
-            request = encode(WatchRequest(addresses=list(addresses)))
-            data = self._get_one(self._keys.watch, request, timeout)
+            data = self._get_one(key, payload, timeout)
         except zenoh.ZError as exc:
-            return WatchValues(error=f"bus error: {type(exc).__name__}")
+            return kind(error=f"bus error: {type(exc).__name__}")
         if data is None:
             wait = timeout or self._timeout
-            return WatchValues(error=f"no answer from CPU {self._keys.cpu!r} within {wait:g} s")
+            return kind(error=f"no answer from CPU {self._keys.cpu!r} within {wait:g} s")
         try:
-            return decode(data, WatchValues)
+            return decode(data, kind)
         except ProtocolError as exc:
-            return WatchValues(error=f"unreadable answer: {exc}")
+            return kind(error=f"unreadable answer: {exc}")
 
     def blocks(self) -> BlockSources | None:
         """The S7-SCL blocks the CPU runs, as source, or None if no CPU answers."""

@@ -96,6 +96,8 @@ __all__ = [
     "StepDetail",
     "StepInfo",
     "StepStateUpdate",
+    "SyncReport",
+    "SyncStepInfo",
     "TransitionCriteria",
     "TransitionInfo",
     "WatchRequest",
@@ -661,6 +663,53 @@ class WatchValues(_Msg, frozen=True, kw_only=True):
     state: CpuState = "RUN"
     values: Annotated[list[WatchValue], Meta(max_length=MAX_WATCH)] = []
     error: Text = ""
+
+
+# ---------------------------------------------------------------- synchronization
+
+
+class SyncStepInfo(_Msg, frozen=True, kw_only=True):
+    """One step judged against the process values (``fb/<fb>/sync``): whether it is active,
+    its interlock holds, a transition into it holds (``entered``), which leaving
+    transitions hold (``done``); it ``fits`` (interlock held, none done) and is ``likely``
+    (fits and entered)."""
+
+    number: StepNo
+    name: Label = ""
+    sequence: Annotated[int, Meta(ge=0, le=255)] = 0
+    active: bool = False
+    interlock: bool = True
+    entered: bool = False
+    done: Annotated[list[StepNo], Meta(max_length=256)] = []
+    fits: bool = False
+    likely: bool = False
+
+    @property
+    def verdict(self) -> str:
+        """In words: ``likely``, ``fits``, ``interlock not held`` or ``done (T1 holds)``."""
+        if self.likely or self.fits:
+            return "likely" if self.likely else "fits"
+        if not self.interlock:
+            return "interlock not held"
+        return f"done ({', '.join(f'T{n}' for n in self.done)} holds)"
+
+
+class SyncReport(_Msg, frozen=True, kw_only=True):
+    """The answer of ``fb/<fb>/sync``: every step of the FB judged on the values at the end
+    of scan ``cycle`` (CPU clock ``t_ms``), in chart order, with the CPU's run state and the
+    sequencer's mode; ``error``: why nothing was judged."""
+
+    fb: Annotated[str, Meta(max_length=128)] = ""
+    cycle: Count = 0
+    t_ms: Count = 0
+    state: CpuState = "RUN"
+    mode: Mode = "AUTO"
+    steps: Annotated[list[SyncStepInfo], Meta(max_length=4096)] = []
+    error: Text = ""
+
+    def ordered(self) -> list[SyncStepInfo]:
+        """The likely steps, the other fitting ones, then the rest, each in chart order."""
+        return sorted(self.steps, key=lambda s: (not s.likely, not s.fits))
 
 
 # ---------------------------------------------------------------- operands

@@ -48,6 +48,7 @@ from s7graph.web.bus.protocol import (
     StepStateUpdate,
 )
 from s7graph.web.bus.publisher import BusPublisher
+from s7graph.web.bus.sync import Synchronizing
 from s7graph.web.bus.watch import Watching
 from s7graph.web.commands import AckMsg
 
@@ -303,6 +304,9 @@ class ScanEdge(CpuEdge):
         self.online = online
         self.operands = operands
         self.recorder: Recording | None = None
+        self.sync: Synchronizing | None = None
+        if publisher is not None and self.cpu is not None:
+            self.sync = Synchronizing(live.graph, live.fb, self.cpu, publisher)
         if online is not None and publisher is not None:
             online.attach(publisher)
         if operands is not None and publisher is not None:
@@ -332,6 +336,8 @@ class ScanEdge(CpuEdge):
         publisher.publish_scan(max(record.cycle, 0), max(record.t_ns // 1_000_000, 0), changed)
         self._publish_alarms(record, publisher)
         self._boundary(record, runner, until_ns, publisher)
+        if self.sync is not None:  # one judgement for all the queries, at most every 0.2 s
+            self.sync.at_boundary()
         if self.operands is not None:
             self.operands.at_boundary(record.cycle)
         if self.online is not None:

@@ -829,6 +829,22 @@ def diag(
     raise typer.Exit(diag_command(net, n=n, as_json=as_json))
 
 
+@app.command()
+def sync(
+    cpu: CpuName = "cpu1",
+    connect: Connect = None,
+    fb: FbName = None,
+    tls_ca: TlsCa = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the report as JSON.")] = False,
+) -> None:
+    """Print where the process stands in an FB's chart (S7-GRAPH's synchronization): the
+    steps whose interlock holds and whose next transition does not, the likely first."""
+    from s7graph.web.cli.sync import sync_command
+
+    net = _net(cpu=cpu, connect=connect, tls_ca=tls_ca)
+    raise typer.Exit(sync_command(net, fb=fb, as_json=as_json))
+
+
 def _remote(
     kind: type[Command],
     args: Args,

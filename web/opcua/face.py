@@ -10,7 +10,8 @@ the face answers the client then — ``Good`` with the method's outputs, or the 
 a status code (``web.opcua.methods.refusal_status``), the reason in the face's log. An
 anonymous session sends nothing: ``BadUserAccessDenied``. At most ``MAX_COMMANDS``
 commands wait for their answers at once, ``MAX_SESSION_COMMANDS`` of one session; past
-that, ``BadTooManyOperations``.
+that, ``BadTooManyOperations``. ``Synchronize`` on each FB's object is a read
+(``web.opcua.sync``): any session may call it.
 
 A write is a command too: an FB's ``Mode`` sends ``mode``, ``Halted`` ``halt``,
 ``InterlocksEnabled``/``SupervisionsEnabled`` ``en_il``/``en_sv``, a symbol on an input,
@@ -24,6 +25,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import functools
 import json
 import logging
 from collections.abc import Callable, Coroutine
@@ -60,6 +62,7 @@ from s7graph.web.commands import (
     make_command,
     op_of,
 )
+from s7graph.web.opcua import sync
 from s7graph.web.opcua.alarms import Alarms, condition_name
 from s7graph.web.opcua.diag import DIAG_ENTRIES, DiagNodes
 from s7graph.web.opcua.link import BusLink, Inbox
@@ -136,7 +139,7 @@ class Face:
                 continue
             self.layouts[fb] = layout
             methods = [(s, self._method(s, fb)) for s in specs if s.where == "fb"]
-            await space.build_fb(fb, layout, methods)
+            await space.build_fb(fb, layout, methods, self._synchronize(fb))
         catalog = await link.ask(link.reader.operand_catalog)
         if catalog is not None:
             await space.build_operands(catalog)
@@ -294,6 +297,23 @@ class Face:
             result.InputArgumentResults = [ua.StatusCode() for _ in inputs]
             if status == StatusCodes.Good and reply is not None:
                 result.OutputArguments = outputs(spec, reply)
+            return result
+
+        return call
+
+    def _synchronize(self, fb: str) -> Callable[..., Coroutine[Any, Any, ua.CallMethodResult]]:
+        """The callback of FB ``fb``'s ``Synchronize``: the CPU's judgement, for any
+        session (a read)."""
+
+        async def call(parent: ua.NodeId, *inputs: Any) -> ua.CallMethodResult:
+            result = ua.CallMethodResult()
+            if inputs:
+                result.StatusCode = ua_status(StatusCodes.BadTooManyArguments)
+                return result
+            ask = functools.partial(self.link.reader.synchronization, fb, timeout=sync.TIMEOUT_S)
+            status, out = sync.sync_result(await self.link.ask(ask))
+            result.StatusCode = ua_status(status)
+            result.OutputArguments = out
             return result
 
         return call

@@ -289,6 +289,7 @@ _REFUSALS: Final[tuple[tuple[tuple[str, ...], int], ...]] = (
             "no supervision fault",
             "persists",
             "not in stop",
+            "not called yet",
         ),
         StatusCodes.BadInvalidState,
     ),

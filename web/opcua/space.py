@@ -32,6 +32,7 @@ from s7graph.web.bus.protocol import (
     OperandValues,
     StepStateUpdate,
 )
+from s7graph.web.opcua import sync
 from s7graph.web.opcua.alarms import condition_name
 from s7graph.web.opcua.diag import event_id_text
 from s7graph.web.opcua.methods import MethodSpec, output_arguments
@@ -263,8 +264,10 @@ class Space:
         fb: str,
         layout: ChartLayout,
         methods: Iterable[tuple[MethodSpec, Callable[..., Any]]],
+        synchronize: Callable[..., Any] | None = None,
     ) -> None:
-        """An FB's object under the CPU's: its variables, sequences and steps, methods."""
+        """An FB's object under the CPU's: its variables, sequences and steps, methods (and
+        ``Synchronize`` with the callback ``synchronize``)."""
         n = self.nodes
         node = n.obj(self.root, self.nid(fb), fb, description=f"the GRAPH FB {fb}")
         nodes = FbNodes(node, {})
@@ -279,6 +282,16 @@ class Space:
         n.folder(node, self.nid(fb, "Variables"), "Variables", "the chart's variables (VAR)")
         for spec, callback in methods:
             self._method(node, (fb,), spec, callback)
+        if synchronize is not None:
+            n.method(
+                node,
+                self.nid(fb, sync.NAME),
+                sync.NAME,
+                synchronize,
+                description=sync.DESCRIPTION,
+                inputs=[],
+                outputs=sync.sync_output_arguments(),
+            )
         self.fbs[fb] = nodes
         await n.flush()
         await self.build_chart(fb, layout)

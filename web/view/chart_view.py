@@ -59,6 +59,7 @@ from s7graph.web.view.guard import OriginGuard, guard_server
 from s7graph.web.view.layout import Placement, place
 from s7graph.web.view.panel import ClientPanel, PageState, Wiring
 from s7graph.web.view.status_layer import StatusLayer
+from s7graph.web.view.sync_view import Sync
 from s7graph.web.view.watch_table import POLL_S as WATCH_POLL_S
 from s7graph.web.view.watch_table import Watch, refresh
 
@@ -121,7 +122,8 @@ class ChartView:
     ``demo``: the CPU has no users file (names are claimed). ``history`` fetches the
     alarm history (called from the render thread when the alarm list changed); ``blocks``
     reads the CPU's S7-SCL sources (``BusClient.blocks``) for *Details*' links; ``watch``
-    reads operands (``BusClient.watch``) for each page's watch table."""
+    reads operands (``BusClient.watch``) for each page's watch table; ``sync`` judges the
+    FB's steps (``BusClient.synchronization``) for each page's *Synchronization*."""
 
     def __init__(
         self,
@@ -138,6 +140,7 @@ class ChartView:
         engineering: Engineering | None = None,
         blocks: Callable[[], BlockSources | None] | None = None,
         watch: Watch | None = None,
+        sync: Sync | None = None,
     ) -> None:
         self.server = server
         self.layout = layout
@@ -178,6 +181,7 @@ class ChartView:
             self,
             blocks,
             watch,
+            sync,
         )
         self._set_scene()
         self._draw_chart()

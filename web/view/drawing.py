@@ -56,6 +56,8 @@ from s7graph.web.view.text_mesh import lines_glb, tile_glb
 
 __all__ = [
     "ACTIVE",
+    "BOX_H",
+    "BOX_W",
     "DISCONNECTED",
     "DISTURBED",
     "FLAT_LIGHT",

@@ -15,7 +15,7 @@ from collections.abc import Callable, Iterable
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import ChartLayout, CpuStatus
 from s7graph.web.bus.session import BusEnds, open_session
-from s7graph.web.view import watch_table
+from s7graph.web.view import sync_view, watch_table
 from s7graph.web.view.chart_view import ChartView, make_server
 from s7graph.web.view.diagnostics import DiagnosticsPanel
 from s7graph.web.view.engineering import Engineering
@@ -108,6 +108,7 @@ class ViewSide:
             engineering=engineering,
             blocks=client.blocks,
             watch=lambda operands: client.watch(operands, timeout=watch_table.TIMEOUT_S),
+            sync=lambda: client.synchronization(name, timeout=sync_view.TIMEOUT_S),
         )
         self._closers.append(self.view.close)
         client.on_chart(self.fb, self.view.apply_chart)

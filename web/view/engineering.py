@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 import viser
 
@@ -21,6 +21,9 @@ from s7graph.web.bus.protocol import (
     StepStateUpdate,
 )
 
+if TYPE_CHECKING:
+    from s7graph.web.view.drawing import Picture
+
 __all__ = ["EditorPage", "Engineering", "ViewHost"]
 
 
@@ -32,9 +35,11 @@ class Engineering:
 
 
 class ViewHost(Protocol):
-    """The view an editor page belongs to: the chart the CPU runs and its newest state."""
+    """The view a page belongs to: the chart the CPU runs, where it is drawn, and its
+    newest state."""
 
     layout: ChartLayout
+    picture: Picture
 
     def latest(self) -> StepStateUpdate | None: ...
 

@@ -11,7 +11,8 @@ enabled, and a page whose role may ``force`` gets a Force folder (address, value
 Modify (once, not held) / Unforce / Unforce all, the active jobs). The current mode is
 highlighted on its button. Command verdicts come back as notifications on this page only.
 The Alarms folder (``web.view.alarms``) filters the message list and acknowledges all of
-it; *Watch* is the watch table (``web.view.watch_table``); *Chart view* fits the chart to
+it; *Watch* is the watch table (``web.view.watch_table``); *Synchronization* finds where the
+process stands in the chart (``web.view.sync_view``); *Chart view* fits the chart to
 the page, and for a chart of several sequences shows one of them or all (an overview).
 *Details* links a step's ``CALL`` rows to the S7-SCL source of the blocks they call
 (``web.view.block_links``) and offers an engineer *Modify to 1/0* on the contacts it shows
@@ -71,6 +72,7 @@ from s7graph.web.view.drawing import aim_camera
 from s7graph.web.view.editor import Editor
 from s7graph.web.view.engineering import Engineering, ViewHost
 from s7graph.web.view.page_login import PageLogin
+from s7graph.web.view.sync_view import Sync, SyncView
 from s7graph.web.view.watch_table import Watch, WatchTable
 
 __all__ = ["ClientPanel", "PageState", "Wiring"]
@@ -117,6 +119,7 @@ class Wiring:
     host: ViewHost | None = None
     blocks: Callable[[], BlockSources | None] | None = None  # the CPU's S7-SCL sources
     watch: Watch | None = None  # the CPU's watch (BusClient.watch): the watch table
+    sync: Sync | None = None  # the FB's synchronization (BusClient.synchronization)
 
 
 @dataclass(frozen=True, slots=True)
@@ -224,6 +227,11 @@ class ClientPanel(PageLogin):
         )
         self._permanent(texts.permanent_html(w.layout, None))
         self.watch_table = WatchTable(gui, expand=False) if w.watch is not None else None
+        self.sync_view = (
+            SyncView(gui, w.sync, scene=self.client.scene, places=self._step_places)
+            if w.sync is not None
+            else None
+        )
         several = len(w.layout.sequences) > 1
         with gui.add_folder("Chart view", expand_by_default=several) as self.view_folder:
             self.sequence_buttons = self._sequence_buttons(w.layout)
@@ -247,6 +255,9 @@ class ClientPanel(PageLogin):
         if self.watch_table is not None:
             may = allowed(role, "modify")
             self.watch_table.enable_modify(self._modify_operand if may else None)
+        if self.sync_view is not None:
+            may = allowed(role, "step_on")
+            self.sync_view.enable_activate(self._activate_step if may else None)
         self._enable_controls()
         self.alarms.enable(allowed(role, "ack_msg"))
 
@@ -472,6 +483,15 @@ class ClientPanel(PageLogin):
     def _step(self, kind: type[Command]) -> Command:
         """A step button's command: the step of the Step field."""
         return kind(fb=self.fb, args=StepArgs(step=int(self.step_number.value)))
+
+    def _step_places(self) -> dict[int, tuple[float, float]]:
+        """Where the chart the page shows draws each step (its box's centre)."""
+        host = self.wiring.host
+        return dict(host.picture.steps) if host is not None else {}
+
+    def _activate_step(self, step: int) -> CommandReply:
+        """*Synchronization*'s *Activate in MAN*: S_ON on ``step``."""
+        return self.command(StepOn(fb=self.fb, args=StepArgs(step=step)))
 
     def _switch_mode(self, mode: Mode) -> SetMode:
         return SetMode(fb=self.fb, args=ModeArgs(mode=mode))

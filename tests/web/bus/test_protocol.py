@@ -369,6 +369,7 @@ REQUIRED = {
     "StepDetail": ("number",),
     "StepInfo": ("number",),
     "StepStateUpdate": ("cycle", "t_ms", "mode", "active"),
+    "SyncStepInfo": ("number",),
     "TransitionCriteria": ("number", "holds"),
     "TransitionInfo": ("number", "sources", "targets"),
     "WatchValue": ("address",),

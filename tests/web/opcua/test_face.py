@@ -161,6 +161,25 @@ def test_the_ops_are_methods_with_the_structs_arguments(face: FaceRig) -> None:
     run(check())
 
 
+def test_synchronize_answers_where_the_process_stands_to_any_session(face: FaceRig) -> None:
+    face.set("Start", False)  # T3 into S1 holds, T1 out of it not; S2's interlock holds
+
+    async def check() -> None:
+        async with connected(face.url) as c:  # anonymous: a read
+            args = await node(c, "cpu1/Seq_mix/Synchronize/OutputArguments").read_value()
+            assert [a.Name for a in args] == ["Likely", "Fits", "Cycle"]
+            fb = node(c, "cpu1/Seq_mix")
+            likely, fits, cycle = await fb.call_method(ua.NodeId("cpu1/Seq_mix/Synchronize", 2))
+            assert (likely, fits) == ([1], [1, 2]) and cycle > 0
+            with pytest.raises(UaStatusCodeError) as refused:
+                await fb.call_method(ua.NodeId("cpu1/Seq_mix/Synchronize", 2), 1)
+            assert _code(refused.value) == ua.StatusCodes.BadTooManyArguments
+
+    before = len(_commands(face))
+    run(check())
+    assert len(_commands(face)) == before  # a read: no command, no audit row
+
+
 def test_an_operator_commands_through_the_gate_and_is_audited(face: FaceRig) -> None:
     async def check() -> None:
         async with connected(face.url, "olga") as c:
