@@ -1,13 +1,20 @@
 """Synchronization (docs/semantics.md, "Synchronization"): a step fits the process when its
 interlock holds and none of its leaving transitions does; it is likely when a transition
 into it holds too. Judged on the current values whatever the steps' activity, without
-writing anything."""
+writing anything: a CPU judged between random scans scans as one never judged."""
 
 from __future__ import annotations
 
 import copy
+from pathlib import Path
 
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from s7graph.engine.clock import VirtualClock
 from s7graph.sequencer.sync import SyncStep, synchronization
+from s7graph.web.harness.session import ChartSession, compile_model
+from tests.sequencer.change.test_online_change_properties import DRILL, STARTS, _scan, _start
 from tests.sequencer.helpers import Run, chart, seq
 
 LINE = seq("""
@@ -106,3 +113,38 @@ def test_judging_writes_nothing() -> None:
     _judge(run)
     assert run.st == before
     assert (bytes(run.mem.outputs), bytes(run.mem.markers)) == image
+
+
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    start=st.sampled_from(STARTS),
+    inputs=st.lists(st.binary(min_size=2, max_size=2), min_size=1, max_size=10),
+    judged=st.sets(st.integers(0, 9)),
+    ms=st.sampled_from([10, 250, 1200]),
+)
+def test_judging_between_scans_leaves_the_plant_scanning_as_one_never_judged(
+    start: Path, inputs: list[bytes], judged: set[int], ms: int
+) -> None:
+    """Two CPUs run the same chart on the same inputs; one is judged between some scans:
+    both scan alike, judging twice gives the same, and every verdict follows its rule."""
+    symbols = DRILL / "symbols.txt" if start.parent == DRILL else None
+    chart, table = _start(start, symbols)
+    cc, table = compile_model(chart, table)
+    plants = [ChartSession(cc, table, VirtualClock()) for _ in range(2)]
+    for plant in plants:
+        plant.start()
+    judged_one, fresh = plants
+    for k, data in enumerate(inputs):
+        for plant in plants:
+            plant.cpu.mem.periph_in[:2] = data
+            plant.clock.advance(ms)  # type: ignore[attr-defined]
+        if k in judged:
+            graph, mem = judged_one.graph, judged_one.cpu.mem
+            before = graph.state.to_state(), bytes(mem.inputs), bytes(mem.markers)
+            steps = graph.synchronization()
+            assert (graph.state.to_state(), bytes(mem.inputs), bytes(mem.markers)) == before
+            assert graph.synchronization() == steps
+            for s in steps:
+                assert s.fits == (s.interlock and not s.done)
+                assert s.likely == (s.fits and s.entered)
+        assert _scan(judged_one) == _scan(fresh)

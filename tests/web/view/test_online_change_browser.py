@@ -327,4 +327,4 @@ def test_open_offers_each_chart_of_a_file_that_holds_several(page: Page, cpu: On
     assert wait_until(lambda: ed.open_choice.value == "two.st » Count")
     click(page, "Open")
     assert wait_until(lambda: ed.session is not None and ed.session.chart.name == "Count")
-    assert ed.file.value == "two_Count.s7g"
+    assert wait_until(lambda: ed.file.value == "two_Count.s7g")  # set just after the session
