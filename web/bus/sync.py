@@ -35,7 +35,8 @@ that a flood of queries costs the scan thread at most that every 0.2 s."""
 
 def sync_report(graph: GraphFB, fb: str, cpu: Cpu) -> SyncReport:
     """The FB's steps judged on the values the scan just ended left, as a message; a
-    report with its ``error`` when the FB cannot be judged yet."""
+    report with its ``error`` when the FB cannot be judged (never an exception: this runs
+    in the scan thread)."""
     state = cast(CpuState, str(cpu.mode))
     cycle, t_ms = max(cpu.cycle, 0), max(cpu.clock.now_ns() // 1_000_000, 0)
     try:
@@ -43,6 +44,9 @@ def sync_report(graph: GraphFB, fb: str, cpu: Cpu) -> SyncReport:
         mode = graph.state.mode
     except S7Error as exc:
         return SyncReport(fb=fb, cycle=cycle, t_ms=t_ms, state=state, error=str(exc)[:4096])
+    except Exception as exc:  # the scan thread's edge: never raise
+        why = f"{fb}: cannot judge, a condition failed: {type(exc).__name__}: {exc}"
+        return SyncReport(fb=fb, cycle=cycle, t_ms=t_ms, state=state, error=why[:4096])
     return SyncReport(
         fb=fb,
         cycle=cycle,

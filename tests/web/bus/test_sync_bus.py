@@ -1,8 +1,8 @@
 """Synchronization over the bus (docs/bus.md, "Synchronization: sync"): ``fb/<fb>/sync``
 judges every step of a real ``s7graph run`` process's FB at its next scan boundary; an
-unknown FB gets no answer; an FB not yet called says why; ``s7graph sync`` prints it from a
-shell (docs/cli.md, "s7graph sync"); a flood of queries is answered by one judgement at
-most every 0.2 s."""
+unknown FB gets no answer; an FB not yet called, or whose judgement fails, says why;
+``s7graph sync`` prints it from a shell (docs/cli.md, "s7graph sync"); a flood of queries
+is answered by one judgement at most every 0.2 s."""
 
 from __future__ import annotations
 
@@ -16,6 +16,7 @@ import pytest
 from s7graph.engine.clock import VirtualClock
 from s7graph.engine.cpu import Cpu
 from s7graph.sequencer.fb import GraphFB, install_all
+from s7graph.sequencer.sync import SyncStep
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.live import LiveGraph
 from s7graph.web.bus.protocol import SyncReport
@@ -81,6 +82,24 @@ def _sync(*args: str) -> subprocess.CompletedProcess[str]:
     """``s7graph sync ARGS`` as a shell runs it."""
     command = [sys.executable, "-m", "s7graph", "sync", *args]
     return subprocess.run(command, capture_output=True, text=True, timeout=60)
+
+
+class _Failing(GraphFB):
+    """An FB whose judgement fails inside (what no condition of today's language does)."""
+
+    def synchronization(self) -> tuple[SyncStep, ...]:
+        raise RuntimeError("a condition broke")
+
+
+def test_a_judgement_that_fails_inside_is_a_report_with_why_never_an_exception() -> None:
+    cc, _ = compile_text(CHART, "sync.s7g")
+    cpu = Cpu(VirtualClock())
+    graph = _Failing(cc)
+    install_all(cpu, [graph])
+    report = sync_report(graph, "Seq_sync", cpu)
+    assert report.error == (
+        "Seq_sync: cannot judge, a condition failed: RuntimeError: a condition broke"
+    )
 
 
 def test_an_fb_not_called_yet_is_not_judged_and_says_why() -> None:
