@@ -685,6 +685,11 @@ class SyncStepInfo(_Msg, frozen=True, kw_only=True):
     likely: bool = False
 
     @property
+    def label(self) -> str:
+        """``S2 Clamp`` (``S2`` for a step without a name)."""
+        return f"S{self.number} {self.name}".strip()
+
+    @property
     def verdict(self) -> str:
         """In words: ``likely``, ``fits``, ``interlock not held`` or ``done (T1 holds)``."""
         if self.likely or self.fits:

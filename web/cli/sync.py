@@ -31,12 +31,11 @@ def sync_lines(report: SyncReport, cpu: str) -> list[str]:
         f"{report.fb} on {cpu} · cycle {report.cycle} · {report.state} · {report.mode} · "
         f"{fits} of {len(report.steps)} steps fit"
     )
-    labels = [f"S{s.number} {s.name}".strip() for s in ordered]
-    width = max((len(label) for label in labels), default=0)
+    width = max((len(s.label) for s in ordered), default=0)
     lines = [head]
-    for step, label in zip(ordered, labels, strict=True):
+    for step in ordered:
         active = "  active" if step.active else ""
-        lines.append(f"{label:<{width}}  seq {step.sequence}  {step.verdict}{active}".rstrip())
+        lines.append(f"{step.label:<{width}}  seq {step.sequence}  {step.verdict}{active}")
     return lines
 
 

@@ -49,9 +49,8 @@ def sync_result(report: SyncReport) -> tuple[int, list[ua.Variant]]:
     not called yet: ``BadInvalidState``)."""
     if report.error:
         return refusal_status(report.error), []
-    numbers = [min(s.number, 0xFFFF) for s in report.steps]
-    likely = [n for n, s in zip(numbers, report.steps, strict=True) if s.likely]
-    fits = [n for n, s in zip(numbers, report.steps, strict=True) if s.fits]
+    likely = [s.number for s in report.steps if s.likely]  # StepNo: a UInt16 already
+    fits = [s.number for s in report.steps if s.fits]
     return StatusCodes.Good, [
         ua.Variant(likely, ua.VariantType.UInt16),
         ua.Variant(fits, ua.VariantType.UInt16),

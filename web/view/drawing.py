@@ -78,6 +78,7 @@ __all__ = [
     "contrast",
     "fit_text",
     "picture",
+    "rect_segments",
     "wrap",
 ]
 
@@ -154,10 +155,14 @@ class Picture:
     sequence_bounds: dict[int, tuple[float, float, float, float]] = field(default_factory=dict)
 
 
-def _rect(cx: float, cy: float, w: float, h: float) -> list[list[list[float]]]:
+def rect_segments(
+    cx: float, cy: float, w: float, h: float, z: float = 0.03
+) -> list[list[list[float]]]:
+    """The four sides of the ``w`` × ``h`` rectangle centred on ``(cx, cy)`` at height ``z``,
+    as line segments."""
     x0, x1, y0, y1 = cx - w / 2, cx + w / 2, cy - h / 2, cy + h / 2
     corners = [(x0, y0), (x1, y0), (x1, y1), (x0, y1), (x0, y0)]
-    return [[[a[0], a[1], 0.03], [b[0], b[1], 0.03]] for a, b in itertools.pairwise(corners)]
+    return [[[a[0], a[1], z], [b[0], b[1], z]] for a, b in itertools.pairwise(corners)]
 
 
 class _Rows:
@@ -369,18 +374,18 @@ class _Drawing:
         for s in p.steps.values():
             x, y = self.xy(s.x, s.y)
             self.step_xy[s.number] = (x, y)
-            self.frames += _rect(x, y, BOX_W, BOX_H)
+            self.frames += rect_segments(x, y, BOX_W, BOX_H)
             if s.initial:  # S7-GRAPH draws the initial step with a double frame
-                self.frames += _rect(x, y, BOX_W + 0.12, BOX_H + 0.12)
+                self.frames += rect_segments(x, y, BOX_W + 0.12, BOX_H + 0.12)
             label = texts.title("S", s.number, s.name, 10_000)
             lines, size = fit_text(label, BOX_W - 0.12, BOX_H - 0.08, STEP_SIZES)
             self.text_at(lines, x, y, "center-center", size)
             self.times[s.number] = (x - BOX_W / 2, y - BOX_H / 2 - 0.03)
             if s.interlock:
-                self.frames += _rect(x - BOX_W / 2 - 0.14, y, 0.22, 0.28)
+                self.frames += rect_segments(x - BOX_W / 2 - 0.14, y, 0.22, 0.28)
                 self.text_at(["C"], x - BOX_W / 2 - 0.14, y, "center-center", 0.2)
             if s.supervision:
-                self.frames += _rect(x + BOX_W / 2 + 0.14, y, 0.22, 0.28)
+                self.frames += rect_segments(x + BOX_W / 2 + 0.14, y, 0.22, 0.28)
                 self.text_at(["V"], x + BOX_W / 2 + 0.14, y, "center-center", 0.2)
 
     def blocks(self, p: Placement, blocks: dict[int, Block], cols: Any, width: float) -> None:

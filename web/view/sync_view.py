@@ -14,7 +14,6 @@ the steps that do not belong (*Deactivate*) and switches back to AUTO.
 from __future__ import annotations
 
 import html
-import itertools
 import threading
 from collections.abc import Callable, Iterable, Mapping
 from typing import Any, Final
@@ -24,7 +23,7 @@ import viser
 
 from s7graph.web.bus.protocol import SyncReport, SyncStepInfo
 from s7graph.web.view import texts
-from s7graph.web.view.drawing import BOX_H, BOX_W
+from s7graph.web.view.drawing import BOX_H, BOX_W, rect_segments
 from s7graph.web.view.watch_table import set_choices
 
 __all__ = ["MARK", "TIMEOUT_S", "Sync", "SyncView", "found", "mark_segments", "sync_html"]
@@ -64,7 +63,7 @@ def sync_html(report: SyncReport | None) -> str:
     ordered = report.ordered()
     rows = []
     for step in ordered:
-        name = html.escape(f"S{step.number} {step.name}".strip())
+        name = html.escape(step.label)
         active = " · <b>active</b>" if step.active else ""
         rows.append(
             f"<tr><td>{name}</td><td>seq {step.sequence}</td><td>{_verdict(step)}{active}</td></tr>"
@@ -79,14 +78,11 @@ def sync_html(report: SyncReport | None) -> str:
 def mark_segments(places: Mapping[int, tuple[float, float]], steps: Iterable[int]) -> Any:
     """Line segments (float32, ``(n, 2, 3)``) of a frame around each of ``steps`` that has
     a place (its box's centre in the scene), just outside the box."""
-    w, h = BOX_W / 2 + MARGIN, BOX_H / 2 + MARGIN
+    w, h = BOX_W + 2 * MARGIN, BOX_H + 2 * MARGIN
     out = []
     for n in steps:
-        if n not in places:
-            continue
-        x, y = places[n]
-        corners = [(x - w, y - h), (x + w, y - h), (x + w, y + h), (x - w, y + h), (x - w, y - h)]
-        out += [[[a, b, 0.05], [c, d, 0.05]] for (a, b), (c, d) in itertools.pairwise(corners)]
+        if n in places:
+            out += rect_segments(*places[n], w, h, z=0.05)
     return np.array(out, np.float32).reshape(-1, 2, 3)
 
 
@@ -103,14 +99,12 @@ class SyncView:
         scene: viser.SceneApi | None = None,
         places: Callable[[], Mapping[int, tuple[float, float]]] = dict,
     ) -> None:
-        self._gui = gui
         self._sync = sync
         self._scene, self._places = scene, places
         self._marks: list[Any] = []
         self._lock = threading.Lock()
         self._activate: Callable[[int], object] | None = None
-        self._options: tuple[str, ...] = (NOTHING,)
-        self._steps: dict[str, int] = {}
+        self._steps: dict[str, int] = {}  # a label in *Resume at* -> its step
         with gui.add_folder("Synchronization", expand_by_default=False) as self.folder:
             self.find = gui.add_button(
                 "Find steps",
@@ -124,7 +118,7 @@ class SyncView:
             )
             self.html = gui.add_html(sync_html(None))
             self.choice = gui.add_dropdown(
-                "Resume at", self._options, hint="one of the steps found", visible=False
+                "Resume at", (NOTHING,), hint="one of the steps found", visible=False
             )
             self.button = gui.add_button(
                 "Activate in MAN",
@@ -139,14 +133,14 @@ class SyncView:
     def search(self) -> None:
         """Ask the CPU (waits for its answer: viser's callback thread) and show it."""
         report = self._sync()
-        steps = {f"S{s.number} {s.name}".strip(): s.number for s in found(report)}
+        fitting = found(report)
+        steps = {s.label: s.number for s in fitting}
         with self._lock:
             self._steps = steps
-            self._options = tuple(steps) or (NOTHING,)
-            set_choices(self.choice, self._options)
+            set_choices(self.choice, tuple(steps) or (NOTHING,))
             self.button.disabled = self._activate is None or not steps
         self.html.content = sync_html(report)
-        self._mark(found(report))
+        self._mark(fitting)
 
     @property
     def framed(self) -> tuple[str, ...]:

@@ -91,11 +91,17 @@ class _Failing(GraphFB):
         raise RuntimeError("a condition broke")
 
 
-def test_a_judgement_that_fails_inside_is_a_report_with_why_never_an_exception() -> None:
+def _installed(kind: type[GraphFB]) -> tuple[GraphFB, Cpu]:
+    """An FB of ``kind`` running ``CHART``, installed in a CPU not started."""
     cc, _ = compile_text(CHART, "sync.s7g")
     cpu = Cpu(VirtualClock())
-    graph = _Failing(cc)
+    graph = kind(cc)
     install_all(cpu, [graph])
+    return graph, cpu
+
+
+def test_a_judgement_that_fails_inside_is_a_report_with_why_never_an_exception() -> None:
+    graph, cpu = _installed(_Failing)
     report = sync_report(graph, "Seq_sync", cpu)
     assert report.error == (
         "Seq_sync: cannot judge, a condition failed: RuntimeError: a condition broke"
@@ -103,10 +109,7 @@ def test_a_judgement_that_fails_inside_is_a_report_with_why_never_an_exception()
 
 
 def test_an_fb_not_called_yet_is_not_judged_and_says_why() -> None:
-    cc, _ = compile_text(CHART, "sync.s7g")
-    cpu = Cpu(VirtualClock())
-    graph = GraphFB(cc)
-    install_all(cpu, [graph])
+    graph, cpu = _installed(GraphFB)
     report = sync_report(graph, "Seq_sync", cpu)
     assert report.steps == [] and "not called yet" in report.error
     assert isinstance(report, SyncReport)
