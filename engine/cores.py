@@ -10,10 +10,11 @@ one kept for it.
 
 ``--core`` (``CPU = {"core": ...}`` in a program) says which:
 
-- ``auto`` (the default): the last processor this process may use, when the scan runs
-  real-time and the process may use two or more; otherwise none (a scan at the normal
-  priority is better off free to move to whichever processor is idle);
-- a processor number: that one (real-time or not);
+- ``auto`` (the default): the last processor this process may use that no other CPU on the
+  machine keeps (never the first), when the scan runs real-time and the process may use
+  two or more; otherwise none (a scan at the normal priority is better off free to move to
+  whichever processor is idle);
+- a processor number: that one (real-time or not), even if another CPU keeps it;
 - ``off``: none; every thread may run anywhere.
 
 :func:`kept_free` (the chart runner, before the bus and the view start: threads and
@@ -22,15 +23,37 @@ scan thread on it and the process's other threads on the rest while its loop run
 (``engine/runner.py``), and gives every thread the whole set back when it ends. Processes
 other than s7graph's may still run there: a machine that must keep the core for the scan
 alone says so to the kernel (``isolcpus=``).
+
+Two CPUs on one machine never keep the same processor by ``auto`` (:class:`CoreClaims`): a
+CPU claims the processor it keeps with a lock on a file per processor, which the kernel
+lets go of when the process ends however it ends (SIGKILL included). Both scan threads
+real-time at one priority on one processor, the one whose scan hung in C code would keep
+it from the other until its supervisor killed it, and every long scan of one would delay
+the other's — as an S7-1500 software controller gives each CPU instance cores of its own.
 """
 
 from __future__ import annotations
 
 import os
+import tempfile
 from collections.abc import Iterator
 from contextlib import contextmanager
+from pathlib import Path
 
-__all__ = ["allowed_cpus", "kept_free", "others", "pin", "scan_core"]
+try:
+    import fcntl
+except ImportError:  # not POSIX: nothing to claim with
+    fcntl = None  # type: ignore[assignment]
+
+__all__ = [
+    "CoreClaims",
+    "allowed_cpus",
+    "kept_free",
+    "machine_claims",
+    "others",
+    "pin",
+    "scan_core",
+]
 
 
 def allowed_cpus() -> set[int]:
@@ -41,16 +64,95 @@ def allowed_cpus() -> set[int]:
         return set(range(os.cpu_count() or 1))
 
 
+class CoreClaims:
+    """The processors the CPUs on this machine keep: one lock file per processor in
+    ``folder``, locked (``flock``) by the process that keeps it for as long as it lives or
+    until :meth:`release`. Where the folder cannot be used or the system has no such
+    locks, every claim is granted (there is nothing to agree with)."""
+
+    def __init__(self, folder: Path) -> None:
+        self.folder = folder
+        self._held: dict[int, int] = {}  # processor -> the locked file's descriptor
+
+    def take(self, core: int) -> bool:
+        """Claim ``core`` for this process: True if it holds it now (or did already), False
+        if another process holds it."""
+        if core in self._held or fcntl is None:
+            return True
+        try:
+            fd = os.open(self._file(core), os.O_RDWR | os.O_CREAT, 0o666)
+        except OSError:
+            return True
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            os.close(fd)
+            return False
+        os.ftruncate(fd, 0)
+        os.write(fd, f"{os.getpid()}\n".encode())
+        self._held[core] = fd
+        return True
+
+    def _file(self, core: int) -> Path:
+        """The lock file of ``core``, its folder made open to every user of the machine
+        (sticky, as ``/tmp``: the CPUs of several users agree on the processors too)."""
+        if not self.folder.is_dir():
+            self.folder.mkdir(parents=True, exist_ok=True)
+            self.folder.chmod(0o1777)
+        path = self.folder / f"core-{core}.lock"
+        if not path.exists():
+            path.touch()
+            path.chmod(0o666)
+        return path
+
+    def held(self) -> frozenset[int]:
+        """The processors this process holds."""
+        return frozenset(self._held)
+
+    def holder(self, core: int) -> int | None:
+        """The process that last claimed ``core`` (its pid as it wrote it), or None."""
+        try:
+            text = (self.folder / f"core-{core}.lock").read_text()
+        except OSError:
+            return None
+        return int(text) if text.strip().isdigit() else None
+
+    def release(self, core: int | None) -> None:
+        """Let ``core`` go, if this process holds it (the lock goes with its file)."""
+        fd = self._held.pop(core, None) if core is not None else None
+        if fd is not None:
+            os.close(fd)
+
+
+_MACHINE: list[CoreClaims] = []
+
+
+def machine_claims() -> CoreClaims:
+    """The claims of every s7graph CPU of this machine (in the system's temporary folder)."""
+    if not _MACHINE:
+        _MACHINE.append(CoreClaims(Path(tempfile.gettempdir()) / "s7graph-cores"))
+    return _MACHINE[0]
+
+
 def scan_core(
-    choice: str | int | None, *, realtime: bool, allowed: set[int] | None = None
+    choice: str | int | None,
+    *,
+    realtime: bool,
+    allowed: set[int] | None = None,
+    claims: CoreClaims | None = None,
 ) -> int | None:
     """The processor kept for the scan for ``choice`` (``auto``/None, ``off``, or a number as
     an int or a string), the scan running ``realtime`` or not, among ``allowed`` (default:
-    this thread's); None: no processor kept. ValueError naming the choice and the
-    processors there are for one that cannot be."""
+    this thread's); None: no processor kept. With ``claims``, ``auto`` takes the last one
+    it can claim but the first (none if it claims none), and a number is claimed if it can
+    be. ValueError naming the choice and the processors there are for one that cannot be."""
     pool = sorted(allowed_cpus() if allowed is None else allowed)
     if choice is None or choice == "auto":
-        return pool[-1] if realtime and len(pool) >= 2 else None
+        if not realtime or len(pool) < 2:
+            return None
+        if claims is None:
+            return pool[-1]
+        return next((core for core in reversed(pool[1:]) if claims.take(core)), None)
     if choice == "off":
         return None
     if isinstance(choice, bool) or not (
@@ -61,6 +163,8 @@ def scan_core(
     if core not in pool:
         there = ", ".join(map(str, pool))
         raise ValueError(f"core {core} is not a processor this process may use ({there})")
+    if claims is not None:
+        claims.take(core)  # so that a CPU started with auto leaves it
     return core
 
 
@@ -83,7 +187,8 @@ def pin(cpus: set[int], tid: int = 0) -> bool:
 @contextmanager
 def kept_free(core: int | None) -> Iterator[None]:
     """The calling thread, and so the threads and processes it starts meanwhile, off
-    ``core`` (nothing for None); its processors back at the end."""
+    ``core`` (nothing for None); its processors back at the end, and this process's claim on
+    ``core`` (``machine_claims``) let go."""
     if core is None:
         yield
         return
@@ -94,3 +199,4 @@ def kept_free(core: int | None) -> Iterator[None]:
     finally:
         if moved:
             pin(before)
+        machine_claims().release(core)

@@ -76,7 +76,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from types import FrameType
 
-from s7graph.engine.cores import allowed_cpus, others, pin, scan_core
+from s7graph.engine.cores import allowed_cpus, machine_claims, others, pin, scan_core
 from s7graph.engine.cpu import Cpu
 from s7graph.engine.diag_events import stop_cause
 from s7graph.engine.diagnostics import EventId
@@ -149,11 +149,12 @@ def realtime_allowed(priority: int) -> bool:
 def core_for(choice: str | int | None, rt_priority: int | None) -> int | None:
     """The processor to keep for a scan at ``rt_priority`` (None: normal scheduling) for the
     ``--core`` ``choice`` (``engine.cores.scan_core``; ``auto`` keeps one only where the
-    system grants the priority); ValueError for a choice that cannot be."""
+    system grants the priority, and one no other CPU of the machine keeps), claimed for this
+    process (``engine.cores.machine_claims``); ValueError for a choice that cannot be."""
     realtime = rt_priority is not None and (
         choice not in (None, "auto") or realtime_allowed(rt_priority)
     )
-    return scan_core(choice, realtime=realtime)
+    return scan_core(choice, realtime=realtime, claims=machine_claims())
 
 
 PR_SET_THP_DISABLE = 41

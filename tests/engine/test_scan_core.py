@@ -6,6 +6,9 @@ thread given all of them back when the loop ends."""
 from __future__ import annotations
 
 import os
+import signal
+import subprocess
+import sys
 import threading
 from collections.abc import Callable
 from pathlib import Path
@@ -13,7 +16,7 @@ from pathlib import Path
 import pytest
 
 from s7graph.engine import CallContext, Cpu, SystemClock, ob
-from s7graph.engine.cores import kept_free, others, scan_core
+from s7graph.engine.cores import CoreClaims, kept_free, machine_claims, others, scan_core
 from s7graph.engine.persistence import StateStore
 from s7graph.engine.runner import Runner, core_for
 from tests.engine.bystander import bystander
@@ -56,6 +59,79 @@ def test_a_core_that_cannot_be_is_refused_naming_it(choice: object, says: str) -
     with pytest.raises(ValueError) as info:
         scan_core(choice, realtime=True, allowed=TWO)  # type: ignore[arg-type]
     assert str(info.value) == says
+
+
+HOLDER = """
+import sys
+from pathlib import Path
+from s7graph.engine.cores import CoreClaims
+claims = CoreClaims(Path(sys.argv[1]))
+assert all(claims.take(int(c)) for c in sys.argv[2:])
+print("held", flush=True)
+sys.stdin.read()
+"""
+
+
+def _holder(folder: Path, *cores: int) -> subprocess.Popen[str]:
+    """Another process (another CPU) that claims ``cores`` in ``folder`` and keeps them."""
+    proc = subprocess.Popen(
+        [sys.executable, "-c", HOLDER, str(folder), *map(str, cores)],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    assert proc.stdout is not None and proc.stdout.readline() == "held\n"
+    return proc
+
+
+def test_auto_leaves_the_processor_another_cpu_keeps_until_that_process_is_killed(
+    tmp_path: Path,
+) -> None:
+    other = _holder(tmp_path, 3)
+    try:
+        claims = CoreClaims(tmp_path)
+        assert scan_core("auto", realtime=True, allowed={0, 1, 2, 3}, claims=claims) == 2
+        assert claims.holder(3) == other.pid and claims.holder(2) == os.getpid()
+        assert scan_core("auto", realtime=True, allowed={0, 1, 2, 3}, claims=claims) == 2
+    finally:
+        other.send_signal(signal.SIGKILL)
+        other.wait()
+    later = CoreClaims(tmp_path)  # a CPU started after the other one was killed
+    assert scan_core("auto", realtime=True, allowed={0, 1, 2, 3}, claims=later) == 3
+
+
+def test_auto_keeps_none_when_other_cpus_keep_every_processor_but_the_first(
+    tmp_path: Path,
+) -> None:
+    other = _holder(tmp_path, 1)
+    try:
+        assert scan_core("auto", realtime=True, allowed=TWO, claims=CoreClaims(tmp_path)) is None
+        mine = CoreClaims(tmp_path)
+        assert scan_core(1, realtime=True, allowed=TWO, claims=mine) == 1  # asked for: taken
+        mine.release(1)
+    finally:
+        other.communicate("")
+    assert other.returncode == 0
+
+
+def test_a_claim_let_go_is_free_for_the_next_cpu(tmp_path: Path) -> None:
+    first, second = CoreClaims(tmp_path), CoreClaims(tmp_path)
+    assert first.take(1) and first.take(1)  # held already: still granted
+    other = subprocess.run([sys.executable, "-c", HOLDER, str(tmp_path), "1"], input="")
+    assert other.returncode == 1  # another process: refused
+    first.release(1)
+    assert second.take(1)
+    second.release(1)
+
+
+def test_a_run_lets_go_of_the_processor_it_claimed() -> None:
+    core = max(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 0
+    claims = machine_claims()
+    if not claims.take(core):
+        pytest.skip(f"another CPU on this machine keeps processor {core}")
+    with kept_free(core):
+        pass
+    assert core not in claims.held()
 
 
 def test_the_others_are_the_rest_or_the_only_one_there_is() -> None:
