@@ -20,7 +20,8 @@ from pathlib import Path
 
 import pytest
 
-from s7graph.engine.runner import PR_SET_THP_DISABLE
+from s7graph.engine.cores import machine_claims
+from s7graph.engine.runner import PR_SET_THP_DISABLE, RT_PRIORITY, realtime_allowed
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import CpuStatus
 from s7graph.web.bus.session import open_session
@@ -253,6 +254,35 @@ def test_the_scan_keeps_its_processor_and_the_bus_and_the_view_run_on_the_others
         for pid in run.children() if run.proc.poll() is None else []:
             os.kill(pid, signal.SIGKILL)
         run.stop()
+
+
+@pytest.mark.skipif(len(os.sched_getaffinity(0)) < 2, reason="one processor: none to keep")
+def test_two_cpus_on_one_machine_never_keep_the_same_processor(tmp_path: Path) -> None:
+    """``--core auto`` (engine/cores.py): a second CPU leaves the processor the first
+    keeps — both scan threads real-time at one priority on one processor, a scan of one
+    hanging in C code would keep the other's from running at all."""
+    if not realtime_allowed(RT_PRIORITY):
+        pytest.skip("the scan cannot run real-time here: auto keeps no processor")
+    for name in ("a", "b"):
+        (tmp_path / name).mkdir()
+    first = Run(tmp_path / "a")
+    second: Run | None = None
+    try:
+        first.view_line()
+        assert wait_until(lambda: len(_cpus(first.cpu)) == 1, 30), first.err
+        (kept,) = _cpus(first.cpu)
+        second = Run(tmp_path / "b")
+        found = second.view_line()
+        with open_session(connect=[found[2]]) as session:
+            client = BusClient(session, "cpu1")
+            assert wait_until(lambda: (s := client.status()) is not None and s.cycle > 5, 30)
+        assert _cpus(first.cpu) == {kept}
+        assert kept not in _cpus(second.cpu) or len(_cpus(second.cpu)) > 1
+        assert machine_claims().holder(kept) == first.cpu
+    finally:
+        for run in (first, second):
+            if run is not None:
+                run.stop()
 
 
 def test_a_processor_that_is_not_there_is_refused_naming_the_option(tmp_path: Path) -> None:
