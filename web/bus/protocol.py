@@ -534,7 +534,9 @@ class CycleStats(_Msg, frozen=True, kw_only=True):
     max), mean scan execution time, how many cycles overran the set cycle time, how many
     ran long (over ``long_over_ms``), and the breakdowns of the longest and the last long
     cycle; the share of the cycle commands may take at a scan boundary (``comm_load``, per
-    cent; 0: not limited) and at how many boundaries it ran out with commands waiting."""
+    cent; 0: not limited) and at how many boundaries it ran out with commands waiting; the
+    scan thread's real-time priority (``priority``, 0: normal scheduling) and the processor
+    it keeps (``core``, -1: none)."""
 
     last_ms: Millis = 0.0
     min_ms: Millis = 0.0
@@ -547,6 +549,8 @@ class CycleStats(_Msg, frozen=True, kw_only=True):
     last_long: CycleReport | None = None
     comm_load: Annotated[float, Meta(ge=0, le=100)] = 0.0
     comm_limited: Count = 0
+    priority: Annotated[int, Meta(ge=0, le=99)] = 0
+    core: Annotated[int, Meta(ge=-1, le=4095)] = -1
 
 
 # ---------------------------------------------------------------- the diagnostic buffer

@@ -67,7 +67,8 @@ def cycle_stats(
 ) -> CycleStats:
     """The published statistics: the CPU's cycle time, the runner's execution time, its
     overruns and long cycles with the breakdowns of the longest and the last long one, its
-    share for communication and how often that ran out (``comm_limited``)."""
+    share for communication and how often that ran out (``comm_limited``), and where the
+    scan thread runs (its real-time priority, the processor it keeps)."""
     if runner is None:
         return CycleStats(
             last_ms=cpu.last_ns / _MS, min_ms=cpu.min_ns / _MS, max_ms=cpu.max_ns / _MS
@@ -86,6 +87,8 @@ def cycle_stats(
         last_long=cycle_report(recent[-1]) if recent else None,
         comm_load=runner.comm_load_pct,
         comm_limited=comm_limited,
+        priority=(runner.rt_priority or 0) if runner.realtime else 0,
+        core=runner.core if runner.pinned and runner.core is not None else -1,
     )
 
 

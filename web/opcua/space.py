@@ -54,6 +54,7 @@ __all__ = ["FORCEABLE", "WRITES", "Space", "StepNodes", "Writes", "symbol_writab
 UINT16: Final = UaType(ua.VariantType.UInt16, "int", 0, 0xFFFF)
 UINT32: Final = UaType(ua.VariantType.UInt32, "int", 0, 0xFFFF_FFFF)
 UINT64: Final = UaType(ua.VariantType.UInt64, "int", 0, 2**64 - 1)
+INT16: Final = UaType(ua.VariantType.Int16, "int", -(2**15), 2**15 - 1)
 DURATION: Final = UaType(ua.VariantType.Double, "float", unit=MS)
 SHARE: Final = UaType(ua.VariantType.Double, "float", unit=PERCENT)
 FORCEABLE: Final = ("I", "Q", "M")
@@ -127,6 +128,13 @@ _CYCLE_VARS: Final[tuple[tuple[str, UaType, str, str], ...]] = (
         "scan boundaries whose share ran out with commands waiting",
         "comm_limited",
     ),
+    (
+        "ScanPriority",
+        UINT16,
+        "the scan thread's real-time priority (SCHED_FIFO; 0: normal scheduling)",
+        "priority",
+    ),
+    ("ScanCore", INT16, "the processor kept for the scan thread (-1: none)", "core"),
 )
 # An FB's own variables: name, type, description, writable (the op a write sends).
 _FB_VARS: Final[tuple[tuple[str, UaType, str, str], ...]] = (

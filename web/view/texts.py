@@ -50,6 +50,7 @@ __all__ = [
     "login_html",
     "permanent_html",
     "rows_note",
+    "scan_thread_line",
     "small",
     "status_html",
     "step_rows",
@@ -206,7 +207,15 @@ def cycle_lines(stats: CycleStats) -> list[str]:
         )
     if stats.comm_load:
         lines.append(comm_line(stats))
+        lines.append(scan_thread_line(stats))
     return lines
+
+
+def scan_thread_line(stats: CycleStats) -> str:
+    """Where the scan thread runs: its real-time priority, the processor it keeps."""
+    how = f"real-time (SCHED_FIFO {stats.priority})" if stats.priority else "normal priority"
+    where = f"on processor {stats.core}, kept for it" if stats.core >= 0 else "on any processor"
+    return f"scan thread: {how}, {where}"
 
 
 def comm_line(stats: CycleStats) -> str:

@@ -189,9 +189,10 @@ def test_router_two_cpus_one_web_view_and_shell_commands_as_processes(
             r"(encode [\d.]+, )?scan ",
             longest,
         ), longest
-        assert status.stdout.splitlines()[-1].startswith(
+        assert status.stdout.splitlines()[-2].startswith(
             "communication: up to 25 % of the cycle at each scan boundary; "
         )
+        assert status.stdout.splitlines()[-1].startswith("scan thread: ")
         absent = run("status", "--cpu", "line9", *olga)
         assert absent.returncode == 2 and "CPU 'line9' does not answer" in absent.stderr
     finally:

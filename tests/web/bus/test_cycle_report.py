@@ -40,6 +40,7 @@ def test_the_status_carries_the_longest_and_the_last_long_cycle_with_their_phase
             assert f"{name} {longest.parts[name]:.1f}" in lines[2], lines[2]
     assert lines[3].startswith(f"last over 12.0 ms ({stats.long} so far): cycle ")
     assert lines[4] == "communication: up to 20 % of the cycle at each scan boundary; never ran out"
+    assert lines[5] == "scan thread: normal priority, on any processor"  # rt_priority None
 
 
 def test_the_status_says_how_often_the_share_for_communication_ran_out() -> None:
@@ -47,9 +48,22 @@ def test_the_status_says_how_often_the_share_for_communication_ran_out() -> None
     runner.run(duration_s=0.05)
     stats = decode(encode(cycle_stats(runner.cpu.stats, runner, comm_limited=3)), CycleStats)
     assert stats.comm_load == 20 and stats.comm_limited == 3
-    assert status_lines(CpuStatus(cpu="cpu1", stats=stats))[-1] == (
+    assert status_lines(CpuStatus(cpu="cpu1", stats=stats))[-2] == (
         "communication: up to 20 % of the cycle at each scan boundary; ran out at 3 scan "
         "boundaries (the commands left waited for the next)"
+    )
+
+
+def test_the_status_says_where_the_scan_thread_runs() -> None:
+    stats = CycleStats(comm_load=20, priority=40, core=1)
+    assert decode(encode(stats), CycleStats) == stats
+    assert status_lines(CpuStatus(cpu="cpu1", stats=stats))[-1] == (
+        "scan thread: real-time (SCHED_FIFO 40), on processor 1, kept for it"
+    )
+    plain = decode(encode(CycleStats(comm_load=20)), CycleStats)  # defaults left out
+    assert (plain.priority, plain.core) == (0, -1)
+    assert status_lines(CpuStatus(cpu="cpu1", stats=plain))[-1] == (
+        "scan thread: normal priority, on any processor"
     )
 
 

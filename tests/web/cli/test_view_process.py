@@ -276,6 +276,8 @@ def test_two_cpus_on_one_machine_never_keep_the_same_processor(tmp_path: Path) -
         with open_session(connect=[found[2]]) as session:
             client = BusClient(session, "cpu1")
             assert wait_until(lambda: (s := client.status()) is not None and s.cycle > 5, 30)
+            stats = client.status().stats  # type: ignore[union-attr]
+            assert stats is not None and stats.priority == RT_PRIORITY and stats.core != kept
         assert _cpus(first.cpu) == {kept}
         assert kept not in _cpus(second.cpu) or len(_cpus(second.cpu)) > 1
         assert machine_claims().holder(kept) == first.cpu

@@ -91,6 +91,8 @@ def test_values_are_typed_with_their_units(face: FaceRig) -> None:
                 "cpu1/Seq_mix/Pins/S_NO": ua.VariantType.Int16,
                 "cpu1/Seq_mix/S2/T": ua.VariantType.Double,
                 "cpu1/Cycle": ua.VariantType.UInt64,
+                "cpu1/CycleTime/ScanPriority": ua.VariantType.UInt16,
+                "cpu1/CycleTime/ScanCore": ua.VariantType.Int16,
             }
             for path, vt in types.items():
                 value = await node(c, path).read_data_value()
