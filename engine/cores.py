@@ -85,9 +85,9 @@ class CoreClaims:
             return True
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
+        except OSError as exc:  # held elsewhere; or a file system without locks: granted
             os.close(fd)
-            return False
+            return not isinstance(exc, BlockingIOError)
         os.ftruncate(fd, 0)
         os.write(fd, f"{os.getpid()}\n".encode())
         self._held[core] = fd

@@ -311,8 +311,8 @@ Core = Annotated[
         help="The processor kept for the scan thread, as an S7-1500 software controller "
         "keeps cores: auto (the last one no other CPU of the machine keeps, when the scan "
         "runs real-time on a machine of two or more; the default), off, or a processor "
-        "number. The bus, the view and "
-        "the writer run on the others. For a program, its CPU dict's core, else auto.",
+        "number. The bus, the view and the writer run on the others. For a program, its "
+        "CPU dict's core, else auto.",
     ),
 ]
 

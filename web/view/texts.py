@@ -196,7 +196,8 @@ def status_html(
 
 def cycle_lines(stats: CycleStats) -> list[str]:
     """Where the longest and the last long cycle went (``engine.profile``), one line each,
-    none before the runner has measured a cycle; then the share for communication."""
+    none before the runner has measured a cycle; then the share for communication and where
+    the scan thread runs (both from a runner's statistics only)."""
     lines = []
     if stats.longest is not None:
         lines.append(f"longest: {_cycle_line(stats.longest)}")
