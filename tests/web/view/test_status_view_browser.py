@@ -188,6 +188,7 @@ def test_the_action_table_of_the_active_step_shows_its_rows_and_live_operand_val
     to_fill(cpu)
     assert wait_until(lambda: layer.shown_text().get(("value", 2, 0)) == ("TRUE",))
     assert wait_until(lambda: layer.shown_text().get(("value", 2, 1)) == ("TRUE",))
+    assert wait_until(lambda: ("value", 2, 2) in layer.shown_text())  # each cell in its turn
     first = int(layer.shown_text()[("value", 2, 2)][0])
     assert wait_until(lambda: int(layer.shown_text()[("value", 2, 2)][0]) > first + 5)
     aim_at_chart(cpu)
