@@ -34,16 +34,14 @@ the other's — as an S7-1500 software controller gives each CPU instance cores 
 
 from __future__ import annotations
 
+import functools
 import os
 import tempfile
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
-try:
-    import fcntl
-except ImportError:  # not POSIX: nothing to claim with
-    fcntl = None  # type: ignore[assignment]
+from s7graph.engine.file_lock import try_lock
 
 __all__ = [
     "CoreClaims",
@@ -67,8 +65,8 @@ def allowed_cpus() -> set[int]:
 class CoreClaims:
     """The processors the CPUs on this machine keep: one lock file per processor in
     ``folder``, locked (``flock``) by the process that keeps it for as long as it lives or
-    until :meth:`release`. Where the folder cannot be used or the system has no such
-    locks, every claim is granted (there is nothing to agree with)."""
+    until :meth:`release` (``engine.file_lock``). Where the folder cannot be used or the
+    file system has no such locks, every claim is granted (there is nothing to agree with)."""
 
     def __init__(self, folder: Path) -> None:
         self.folder = folder
@@ -77,17 +75,16 @@ class CoreClaims:
     def take(self, core: int) -> bool:
         """Claim ``core`` for this process: True if it holds it now (or did already), False
         if another process holds it."""
-        if core in self._held or fcntl is None:
+        if core in self._held:
             return True
         try:
             fd = os.open(self._file(core), os.O_RDWR | os.O_CREAT, 0o666)
         except OSError:
             return True
-        try:
-            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError as exc:  # held elsewhere; or a file system without locks: granted
+        locked = try_lock(fd)
+        if locked is not True:  # held elsewhere; or a file system without locks: granted
             os.close(fd)
-            return not isinstance(exc, BlockingIOError)
+            return locked is None
         os.ftruncate(fd, 0)
         os.write(fd, f"{os.getpid()}\n".encode())
         self._held[core] = fd
@@ -124,14 +121,10 @@ class CoreClaims:
             os.close(fd)
 
 
-_MACHINE: list[CoreClaims] = []
-
-
+@functools.cache
 def machine_claims() -> CoreClaims:
     """The claims of every s7graph CPU of this machine (in the system's temporary folder)."""
-    if not _MACHINE:
-        _MACHINE.append(CoreClaims(Path(tempfile.gettempdir()) / "s7graph-cores"))
-    return _MACHINE[0]
+    return CoreClaims(Path(tempfile.gettempdir()) / "s7graph-cores")
 
 
 def scan_core(

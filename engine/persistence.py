@@ -55,7 +55,6 @@ FB: by step number, ``sequencer/change/carry.py``) and reports what it could not
 from __future__ import annotations
 
 import contextlib
-import fcntl
 import functools
 import hashlib
 import json
@@ -72,6 +71,7 @@ import msgspec
 from s7graph.engine.blocks import FB, BlockKind, Decl, InstanceDB
 from s7graph.engine.cpu import Cpu
 from s7graph.engine.errors import S7Error
+from s7graph.engine.file_lock import try_lock
 from s7graph.engine.record import DiagEntry
 from s7graph.engine.restart import stop_blocker
 from s7graph.engine.rollup import ALARM_ROWS, ALARM_SUMMARY, Job, low_water, roll_alarms
@@ -1050,15 +1050,13 @@ def _hold(path: Path) -> tuple[int, int] | None:
         held[1] += 1
         return key
     fd = os.open(path, os.O_RDONLY | os.O_CLOEXEC)
-    try:
-        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except BlockingIOError:
+    locked = try_lock(fd)
+    if locked is not True:
         os.close(fd)  # before this store's connection has locked anything
-        raise StateFileError(
-            path, "in use by another process (another run holds it)", way_out=_IN_USE_WAY_OUT
-        ) from None
-    except OSError:
-        os.close(fd)
+        if locked is False:
+            raise StateFileError(
+                path, "in use by another process (another run holds it)", way_out=_IN_USE_WAY_OUT
+            )
         return None
     _HELD[key] = [fd, 1]
     return key
