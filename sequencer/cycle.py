@@ -4,7 +4,8 @@
 1. latch the FB inputs, detect rising edges, advance step times (T; U unless disturbed;
    both frozen by HALT_TM);
 2. apply OFF_SQ, INIT_SQ (and the very first call, which initializes like INIT_SQ), mode
-   changes, MAN requests S_ON/S_OFF, acknowledgement (ACK_EF, ACK_S) and registration;
+   changes, MAN requests S_ON/S_OFF and placements (``sequencer.placing``), acknowledgement
+   (ACK_EF, ACK_S) and registration;
 3. permanent *before* instructions;
 4. per sequencer, in definition order: a) evaluate the transitions leaving active steps
    (criteria bits), b) decide which switch (mode rule, HALT_SQ, supervision faults, at an
@@ -38,6 +39,7 @@ from s7graph.sequencer.fastpath import FastPath
 from s7graph.sequencer.latch import advance, latch
 from s7graph.sequencer.modes import MODE_RULES, select_mode
 from s7graph.sequencer.params import input_defaults, inputs_for, output_defaults
+from s7graph.sequencer.placing import place
 from s7graph.sequencer.state import EDGE_INPUTS, GraphState
 from s7graph.sequencer.switching import switch
 from s7graph.steps.qualifiers import EV_A1, EV_L0, EV_L1, EV_R1, EV_S0, EV_S1, EV_V0, EV_V1
@@ -89,6 +91,7 @@ class GraphRuntime:
         self._remote: list[int] = []  # acknowledgements queued for the next call
         self._commands: list[tuple[str, int | None]] = []  # operator commands, next call
         self._target: int | None = None  # step of this call's S_ON/S_OFF/ACK_S command
+        self.placing: tuple[int, ...] = ()  # steps to place in the next call (MAN)
         self.levels = self.st.levels  # overrides of HALT_SQ / EN_IL / EN_SV (kept in the state)
         self._final: list[int] = []  # steps left, awaiting their final scan
         self._getter: Callable[[Any], Any] = operator.itemgetter(*self.input_names)
@@ -128,6 +131,7 @@ class GraphRuntime:
         fp.last_in = None
         self._remote.clear()
         self._commands.clear()
+        self.placing = ()
         self._late.clear()
         self._carry.clear()
         self._done = 0
@@ -307,6 +311,9 @@ class GraphRuntime:
             self._acked.clear()
         if rose:
             self._requests(rose)
+        if self.placing:
+            place(self, self.placing)
+            self.placing = ()
         if self._remote:
             self._release([i for i in self._remote if st.x[i] and st.sv_err[i]])
             self._remote.clear()

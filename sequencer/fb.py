@@ -144,6 +144,7 @@ class GraphFB:
         self._commands: list[tuple[str, int | None]] = []
         self._levels: dict[str, bool | None] = {}  # level overrides for the next call
         self._acting: tuple[str, int | None] | None = None  # who commanded (user, ACK_S step)
+        self._placing: tuple[int, ...] = ()  # step numbers to place in the next call
         self._restart = ""  # the reason a startup OB's call gives its messages
 
     @property
@@ -248,6 +249,12 @@ class GraphFB:
             self._acting = (user, step if pin == "ACK_S" else None)
         self.loaded.flat = False
 
+    def place(self, steps: Iterable[int]) -> None:
+        """Place the sequence at step numbers ``steps`` in the next call, in MAN: in each
+        sequence holding one of them exactly those active (``sequencer.placing``)."""
+        self._placing = tuple(steps)
+        self.loaded.flat = False
+
     def set_level(self, pin: str, value: bool | None) -> None:
         """Override HALT_SQ, EN_IL or EN_SV from the next call on (None: the pin decides
         again), whatever the parameter set (``GraphRuntime.set_level``)."""
@@ -307,6 +314,11 @@ class GraphFB:
             for pin, step in self._commands:
                 rt.command(pin, step)
             self._commands.clear()
+        if self._placing:
+            index = self.cc.step_index
+            rt.placing = tuple(index[n] for n in self._placing if n in index)
+            rt.fastpath.armed = False
+            self._placing = ()
         acting, self._acting = self._acting, None
         st = rt.execute(values, ctx.now_ns)
         self._copy_outputs(values, st, rt.outs_written)

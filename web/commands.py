@@ -130,6 +130,13 @@ class StepArgs(Args, frozen=True, kw_only=True):
     step: StepNumber
 
 
+MAX_SET_STEPS = 64  # steps one set_steps names
+
+
+class StepsArgs(Args, frozen=True, kw_only=True):
+    steps: Annotated[list[StepNumber], Meta(min_length=1, max_length=MAX_SET_STEPS)]
+
+
 class ModeArgs(Args, frozen=True, kw_only=True):
     mode: Mode
 
@@ -378,6 +385,24 @@ class StepOff(Command, tag="step_off", frozen=True, kw_only=True):
     args: StepArgs
 
 
+class SetSteps(Command, tag="set_steps", frozen=True, kw_only=True):
+    group = "step"
+    role = "operator"
+    does = (
+        "make the steps named the active ones of their sequences in one call (MAN): the "
+        "others of those sequences leave with their final scan"
+    )
+    example = '{"steps": [n, ...]}'
+    shell = Shell(
+        "set-steps",
+        "Make these steps the active ones of their sequences in one call (MAN): the steps "
+        "active in those sequences now leave, other sequences keep theirs.",
+        "The step numbers.",
+        metavar="STEP",
+    )
+    args: StepsArgs
+
+
 class EnIl(Command, tag="en_il", frozen=True, kw_only=True):
     role, pin, kind, held = "engineer", "EN_IL", "level", False
     does, example = "enable / disable interlocks", '{"on": false}'
@@ -496,6 +521,7 @@ AnyCommand = (
     | TPush
     | StepOn
     | StepOff
+    | SetSteps
     | EnIl
     | EnSv
     | Force
@@ -650,6 +676,8 @@ def _type_text(t: mi.Type) -> str:
     if isinstance(t, mi.DictType):
         most = f"at most {t.max_length} " if t.max_length is not None else ""
         return f"{most}file name → {_type_text(t.value_type)}"
+    if isinstance(t, mi.ListType):
+        return f"list ({t.min_length or 0}..{t.max_length}) of {_type_text(t.item_type)}"
     names = {mi.BoolType: "bool", mi.FloatType: "number", mi.NoneType: "null"}
     return names.get(type(t), type(t).__name__)
 
@@ -676,6 +704,8 @@ def shell_usage(kind: type[Command]) -> str:
         return " ".join(["s7graph send", op_of(kind), *words])
     field = argument_field(kind)
     placeholder = shell.metavar or (field.name.upper() if field is not None else "")
+    if field is not None and isinstance(field.type, mi.ListType):
+        placeholder += "..."  # one word per item
     return " ".join(w for w in ("s7graph", shell.name, shell.option, placeholder) if w)
 
 

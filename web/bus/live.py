@@ -80,6 +80,7 @@ from s7graph.sequencer.compiled import CompiledChart
 from s7graph.sequencer.fb import GraphFB
 from s7graph.sequencer.messages import parse_message_id
 from s7graph.sequencer.modes import SELECTORS
+from s7graph.sequencer.placing import moves
 from s7graph.sfb.alarms import MessageList
 from s7graph.steps.conditions import contact_negations
 from s7graph.web.bus.alarm_feed import AlarmFeed
@@ -105,6 +106,7 @@ from s7graph.web.commands import (
     Init,
     Off,
     SetMode,
+    SetSteps,
     StepOff,
     StepOn,
     TPush,
@@ -664,6 +666,25 @@ class LiveGraph:
         return True, note, f"message {mid}: {msg.text}"
 
 
+def _set_steps(live: LiveGraph, command: SetSteps, mode: str) -> Result:
+    """The steps named the active ones of their sequences in one call, in MAN
+    (``sequencer.placing``); refused when nothing would change."""
+    if mode != "MAN":
+        return False, f"set_steps needs mode MAN ({CONTROL_SEQUENCER})", ""
+    cc, numbers = live.cc, command.args.steps
+    unknown = [n for n in numbers if n not in cc.step_index]
+    if unknown:
+        return False, f"no step {', '.join(f'S{n}' for n in unknown)} in {live.fb}", ""
+    steps = list(dict.fromkeys(cc.step_index[n] for n in numbers))
+    leave, enter = moves(cc.step_seq, live.graph.state.active, steps)
+    if not leave and not enter:
+        why = "already active, no other step active in their sequences"
+        return False, f"nothing to change: {_steps(cc, steps)} {why}", ""
+    live.graph.place(numbers)
+    off, on = _steps(cc, leave) or "none", _steps(cc, enter) or "none"
+    return True, "", f"{_steps(cc, steps)} (off: {off}; on: {on})"
+
+
 # The FB's handler of each op the FB carries out (``where == "fb"``), by the op's struct:
 # an op of the union without one is refused as unknown (a test checks that none is).
 HANDLERS: Final[dict[type[Command], Callable[[LiveGraph, Any, str], Result]]] = {
@@ -677,6 +698,7 @@ HANDLERS: Final[dict[type[Command], Callable[[LiveGraph, Any, str], Result]]] = 
     TPush: LiveGraph._t_push,
     StepOn: LiveGraph._step,
     StepOff: LiveGraph._step,
+    SetSteps: _set_steps,
     EnIl: LiveGraph._level,
     EnSv: LiveGraph._level,
 }

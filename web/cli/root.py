@@ -909,9 +909,9 @@ def _parameter(kind: type[Command], field: mi.Field) -> Parameter:
     values = [str(v) for v in getattr(field.type, "values", ())]  # a choice's: AUTO, MAN ...
     choices = f"{', '.join(values[:-1])} or {values[-1]}." if values else ""
     argument = typer.Argument(metavar=shell.metavar or None, help=shell.argument or choices)
-    return Parameter(
-        field.name, Parameter.KEYWORD_ONLY, annotation=hint[int if number else str, argument]
-    )
+    many = isinstance(field.type, mi.ListType)  # set-steps 3 12: one word per item
+    typed = list[int] if many else int if number else str
+    return Parameter(field.name, Parameter.KEYWORD_ONLY, annotation=hint[typed, argument])
 
 
 def _op_command(kind: type[Command], options: tuple[type[Command], ...]) -> None:

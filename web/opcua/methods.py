@@ -64,12 +64,17 @@ class ArgSpec:
         """Whether the field takes null as a value (a force job's value: unforce)."""
         return any(isinstance(t, mi.NoneType) for t in self.types)
 
+    @property
+    def array(self) -> bool:
+        """Whether the field is a list (``set_steps``' steps): a one-dimensional array."""
+        return any(isinstance(t, mi.ListType) for t in self.types)
+
     def argument(self) -> ua.Argument:
         text = self.description + ("" if self.required else " (may be Null: left out)")
         return ua.Argument(
             Name=self.name,
             DataType=self.data_type,
-            ValueRank=ua.ValueRank.Scalar,
+            ValueRank=ua.ValueRank.OneDimension if self.array else ua.ValueRank.Scalar,
             Description=ua.LocalizedText(text),
         )
 
@@ -103,6 +108,8 @@ def _data_type(types: tuple[mi.Type, ...]) -> ua.NodeId:
     if len(real) != 1:
         return _BASE_DATA_TYPE
     t = real[0]
+    if isinstance(t, mi.ListType):  # an array of its items' type
+        return _data_type((t.item_type,))
     if isinstance(t, mi.BoolType):
         return ua_id(ObjectIds.Boolean)
     if isinstance(t, mi.FloatType):
@@ -125,6 +132,8 @@ def _shown(t: mi.Type) -> str:
     if isinstance(t, mi.IntType):
         bounds = f" {t.ge}..{t.le}" if t.ge is not None and t.le is not None else ""
         return "integer" + bounds
+    if isinstance(t, mi.ListType):
+        return f"array of {t.min_length or 0}..{t.max_length}, each {_shown(t.item_type)}"
     names = {mi.BoolType: "Boolean", mi.FloatType: "number", mi.StrType: "text"}
     return names.get(type(t), "Null")
 
@@ -158,6 +167,14 @@ def _convert(variant: ua.Variant, spec: ArgSpec) -> object:
     """The value of ``variant`` for argument ``spec``; ``TypeError`` when no type of the
     field takes it (ranges and choices are the struct's to check)."""
     value, vt = variant.Value, variant.VariantType
+    if variant.is_array or isinstance(value, list):
+        item = next((t.item_type for t in spec.types if isinstance(t, mi.ListType)), None)
+        if item is None or not isinstance(value, list):
+            raise TypeError(vt.name)
+        return [
+            _convert(ua.Variant(v, vt), ArgSpec(spec.name, spec.data_type, (item,), True, ""))
+            for v in value
+        ]
     for t in spec.types:
         if isinstance(t, mi.BoolType) and vt is ua.VariantType.Boolean:
             return bool(value)
@@ -189,9 +206,6 @@ def arguments_of(spec: MethodSpec, inputs: Sequence[Any]) -> Args:
         if variant.VariantType is ua.VariantType.Null or variant.Value is None:
             if arg.nullable:
                 nulls.append(arg.name)
-            continue
-        if variant.is_array:
-            codes[i] = StatusCodes.BadTypeMismatch
             continue
         try:
             given[arg.name] = _convert(variant, arg)

@@ -55,10 +55,12 @@ from s7graph.web.commands import (
     Off,
     OnArgs,
     SetMode,
+    SetSteps,
     Start,
     StepArgs,
     StepOff,
     StepOn,
+    StepsArgs,
     Stop,
     TPush,
     checked,
@@ -256,7 +258,7 @@ class ClientPanel(PageLogin):
             may = allowed(role, "modify")
             self.watch_table.enable_modify(self._modify_operand if may else None)
         if self.sync_view is not None:
-            may = allowed(role, "step_on")
+            may = allowed(role, "set_steps")
             self.sync_view.enable_activate(self._activate_step if may else None)
         self._enable_controls()
         self.alarms.enable(allowed(role, "ack_msg"))
@@ -490,8 +492,8 @@ class ClientPanel(PageLogin):
         return dict(host.picture.steps) if host is not None else {}
 
     def _activate_step(self, step: int) -> CommandReply:
-        """*Synchronization*'s *Activate in MAN*: S_ON on ``step``."""
-        return self.command(StepOn(fb=self.fb, args=StepArgs(step=step)))
+        """*Synchronization*'s *Set in MAN*: ``step`` the active step of its sequence."""
+        return self.command(SetSteps(fb=self.fb, args=StepsArgs(steps=[step])))
 
     def _switch_mode(self, mode: Mode) -> SetMode:
         return SetMode(fb=self.fb, args=ModeArgs(mode=mode))

@@ -5,10 +5,11 @@ the sequence there (docs/view.md, "Synchronization"; ``sequencer.sync``).
 scan boundary (the bus's ``fb/<fb>/sync``) and lists the steps where the sequence could go
 on — the interlock holds and no leaving transition does — the likeliest first (a
 transition into them holds too), each with its sequence, with the active steps marked.
-Asking is a viewer's right. A page whose role may ``step_on`` also gets *Resume at* (the
-steps found) and *Activate in MAN*: one ``step_on`` command, which the CPU carries out in
-MAN only, as S7-GRAPH's Control Sequencer activates a step; the operator then deactivates
-the steps that do not belong (*Deactivate*) and switches back to AUTO.
+Asking is a viewer's right. A page whose role may ``set_steps`` also gets *Resume at* (the
+steps found) and *Set in MAN*: one ``set_steps`` command, which the CPU carries out in MAN
+only — the chosen step becomes the active step of its sequence in one call, the steps
+active there leave with their final scan, other sequences keep theirs
+(``sequencer.placing``); the operator then switches back to AUTO.
 """
 
 from __future__ import annotations
@@ -89,7 +90,7 @@ def mark_segments(places: Mapping[int, tuple[float, float]], steps: Iterable[int
 class SyncView:
     """The *Synchronization* folder of one page (``gui``: the page's), the steps found
     framed on the chart in ``scene`` (the page's own) at the places ``places`` gives; with
-    :meth:`enable_activate`, *Resume at* and *Activate in MAN*."""
+    :meth:`enable_activate`, *Resume at* and *Set in MAN*."""
 
     def __init__(
         self,
@@ -121,10 +122,11 @@ class SyncView:
                 "Resume at", (NOTHING,), hint="one of the steps found", visible=False
             )
             self.button = gui.add_button(
-                "Activate in MAN",
+                "Set in MAN",
                 disabled=True,
                 visible=False,
-                hint="S_ON on the chosen step; the CPU carries it out in MAN only",
+                hint="the chosen step becomes the active step of its sequence in one call, "
+                "the steps active there leave; in MAN only",
             )
         self.find.on_click(lambda _: self.search())
         self.clear.on_click(lambda _: self._mark([]))
@@ -177,7 +179,7 @@ class SyncView:
                 )
 
     def enable_activate(self, activate: Callable[[int], object] | None) -> None:
-        """*Resume at* and *Activate in MAN* for a page whose role may ``step_on``
+        """*Resume at* and *Set in MAN* for a page whose role may ``set_steps``
         (``activate(step)`` sends it); ``None`` hides them."""
         with self._lock:
             self._activate = activate

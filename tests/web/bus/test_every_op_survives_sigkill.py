@@ -175,8 +175,9 @@ def test_every_applied_command_survives_sigkill_and_a_hot_restart(drill: Path) -
     with run(drill) as cpu:
         assert (cpu.state().active, cpu.state().latched) == ([4], [])
         cpu.send("mode", mode="MAN")
-        cpu.send("step_off", step=4)
-        cpu.send("step_on", step=2)
+        cpu.kill_on("set_steps", steps=[2])  # S4 leaves, S2 enters: one call
+    with run(drill) as cpu:
+        assert (cpu.state().active, cpu.state().mode) == ([2], "MAN")
         cpu.until(lambda s: s.latched == [2])
         cpu.send("mode", mode="AUTO")
         before = _acknowledged(state, S2_SV)
@@ -214,6 +215,7 @@ def test_every_applied_command_survives_sigkill_and_a_hot_restart(drill: Path) -
         "mode",
         "step_on",
         "step_off",
+        "set_steps",
         "ack_msg",
         "force",
         "ack_step",

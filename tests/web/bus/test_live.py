@@ -140,6 +140,25 @@ def test_step_on_and_off_need_man_mode_and_a_known_step(rig: Rig) -> None:
     assert rig.cmd("step_off", step=1) == (False, "S1 is not active")
 
 
+def test_set_steps_moves_the_sequence_in_one_call_in_man(rig: Rig) -> None:
+    applied, reason = rig.cmd("set_steps", steps=[3])
+    assert (applied, reason) == (False, "set_steps needs mode MAN (S7-GRAPH Control Sequencer)")
+    assert rig.cmd("mode", mode="MAN") == (True, "")
+    rig.scan()
+    assert rig.cmd("set_steps", steps=[3, 9]) == (False, "no step S9 in Live")
+    assert rig.cmd("set_steps", steps=[1]) == (
+        False,
+        "nothing to change: S1 already active, no other step active in their sequences",
+    )
+    applied, reason, detail = rig.live.apply(
+        Command(op="set_steps", fb="Live", user="alice", args={"steps": [3, 3]})  # type: ignore[arg-type]
+    )
+    assert (applied, detail) == (True, "FB Live: S3 (off: S1; on: S3)")  # the audit's words
+    assert not rig.cmd("step_on", step=2)[0]  # one step command a boundary
+    update = rig.scan()
+    assert update.active == [3] and {("S0", 1), ("S1", 3)} <= set(update.events)
+
+
 def test_mode_then_step_on_at_one_boundary_act_in_order(rig: Rig) -> None:
     assert rig.cmd("mode", mode="MAN") == (True, "")
     assert rig.cmd("step_on", step=2) == (True, "")

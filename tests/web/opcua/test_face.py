@@ -196,6 +196,10 @@ def test_an_operator_commands_through_the_gate_and_is_audited(face: FaceRig) -> 
                 await fb.call_method(ua.NodeId("cpu1/Seq_mix/StepOn", 2), step)
             assert _code(refused.value) == ua.StatusCodes.BadInvalidState
             await fb.call_method(ua.NodeId("cpu1/Seq_mix/StepOff", 2), step)
+            steps = ua.Variant([2], ua.VariantType.UInt16)  # S1 leaves, S2 enters: one call
+            await fb.call_method(ua.NodeId("cpu1/Seq_mix/SetSteps", 2), steps)
+            assert await eventually(lambda: _reads(c, "cpu1/Seq_mix/S2/Active", True))
+            assert await _reads(c, "cpu1/Seq_mix/S1/Active", False)
             await fb.call_method(ua.NodeId("cpu1/Seq_mix/Init", 2))
             await fb.call_method(ua.NodeId("cpu1/Seq_mix/SetMode", 2), "AUTO")
 
@@ -203,6 +207,7 @@ def test_an_operator_commands_through_the_gate_and_is_audited(face: FaceRig) -> 
     rows = [r for r in _commands(face) if r.user == "olga"]
     ops = [(r.op, r.outcome) for r in rows]
     assert ops[:3] == [("mode", "applied"), ("step_on", "applied"), ("step_on", "refused")]
+    assert ("set_steps", "applied") in ops
     assert all(r.origin.startswith(f"{FACE_CN}@tls/127.0.0.1:") for r in rows)  # its link
     assert all("claimed origin: opcua 127.0.0.1:" in r.detail for r in rows)  # the client's
     assert all(r.role == "operator" for r in rows)

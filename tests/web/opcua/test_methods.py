@@ -10,7 +10,7 @@ import pytest
 from asyncua import ua
 
 from s7graph.web.bus.protocol import CommandReply
-from s7graph.web.commands import COMMAND_TYPES, ForceArgs, ModeArgs, StepArgs
+from s7graph.web.commands import COMMAND_TYPES, ForceArgs, ModeArgs, StepArgs, StepsArgs
 from s7graph.web.opcua.methods import (
     CallError,
     arguments_of,
@@ -36,6 +36,9 @@ def test_every_op_of_the_union_is_one_method_with_its_structs_fields() -> None:
     assert types["mode"] == ua.NodeId(ua.ObjectIds.String)
     assert types["msg_id"] == ua.NodeId(ua.ObjectIds.BaseDataType)  # a number or a text
     assert types["base"] == ua.NodeId(ua.ObjectIds.UInt64)
+    steps = SPECS["SetSteps"].args[0].argument()  # an array of step numbers
+    assert (steps.DataType, steps.ValueRank) == (ua.NodeId(ua.ObjectIds.UInt16), 1)
+    assert SPECS["AckStep"].args[0].argument().ValueRank == ua.ValueRank.Scalar
 
 
 def test_input_variants_become_the_checked_arguments() -> None:
@@ -52,6 +55,8 @@ def test_input_variants_become_the_checked_arguments() -> None:
         address="I0.3",
         value=None,  # Null for a value that takes null: unforce
     )
+    steps = ua.Variant([3, 12], ua.VariantType.UInt16)
+    assert arguments_of(SPECS["SetSteps"], [steps]) == StepsArgs(steps=[3, 12])
     everything = [ua.Variant(None), ua.Variant(None), ua.Variant(True)]
     assert arguments_of(force, everything) == ForceArgs(all=True)  # Null left out
 
@@ -67,6 +72,11 @@ def test_input_variants_become_the_checked_arguments() -> None:
         ("AckStep", [ua.Variant([1, 2])], "BadInvalidArgument", ["BadTypeMismatch"]),
         ("AckStep", ["not a variant"], "BadInvalidArgument", ["BadTypeMismatch"]),
         ("SetMode", [ua.Variant("FAST")], "BadInvalidArgument", []),
+        ("SetSteps", [ua.Variant(3)], "BadInvalidArgument", ["BadTypeMismatch"]),
+        ("SetSteps", [ua.Variant(["3"])], "BadInvalidArgument", ["BadTypeMismatch"]),
+        ("SetSteps", [ua.Variant([], ua.VariantType.UInt16)], "BadInvalidArgument", []),
+        ("SetSteps", [ua.Variant([0], ua.VariantType.UInt16)], "BadInvalidArgument", []),
+        ("SetSteps", [ua.Variant(list(range(1, 66)))], "BadInvalidArgument", []),
         ("Halt", [ua.Variant(1)], "BadInvalidArgument", ["BadTypeMismatch"]),
         ("Save", [ua.Variant("../x.s7g"), ua.Variant("x" * 2_000_000)], "BadInvalidArgument", []),
         (
@@ -96,6 +106,7 @@ def test_wrong_inputs_are_a_status_code(
         ("step_on needs mode MAN (S7-GRAPH Control Sequencer)", "BadInvalidState"),
         ("the CPU is in STOP, not RUN", "BadInvalidState"),
         ("no step S9 in Seq_mix", "BadNotFound"),
+        ("nothing to change: S1 already active, no other step active in", "BadInvalidState"),
         ("message 'x' is already acknowledged by olga", "BadConditionBranchAlreadyAcked"),
         ("mode conflicts with mode MAN, queued for the same scan; retry", "BadResourceUnavailable"),
         ("not confirmed: applied in cycle 7, but the state file failed", "BadTimeout"),

@@ -1,8 +1,8 @@
 """The page's *Synchronization* in a real headless Chromium, against a chart on the virtual
 clock on a real bus: a viewer's page finds where the process stands (the steps whose
 interlock holds and whose next transition does not, the likely one first, framed on its
-chart until cleared) and cannot activate; an operator's page switches to MAN and
-activates the step found."""
+chart until cleared) and cannot set it; an operator's page switches to MAN and sets the
+step found in one call — the step active there leaves."""
 
 from __future__ import annotations
 
@@ -40,7 +40,7 @@ def test_a_page_finds_where_the_process_stands_and_an_operator_resumes_there(
         page.get_by_role("button", name="Clear marks", exact=True).click()
         assert wait_until(lambda: _framed(cpu) == [], 10)
         assert "1 of 2 steps fit" in page.locator("div", has_text="steps fit").last.inner_text()
-        activate = page.get_by_role("button", name="Activate in MAN", exact=True)
+        activate = page.get_by_role("button", name="Set in MAN", exact=True)
         assert activate.count() == 0 or not activate.is_visible()  # a viewer's page
         log_in(page, "olga", PASSWORD)
         page.get_by_role("button", name="MAN", exact=True).click()
@@ -50,8 +50,9 @@ def test_a_page_finds_where_the_process_stands_and_an_operator_resumes_there(
         activate.wait_for(timeout=30_000)
         assert wait_until(activate.is_enabled, 30)
         activate.click()
-        page.get_by_text("step_on applied").first.wait_for(timeout=30_000)
-        assert wait_until(lambda: cpu.session.graph.state.x[1], 30)
+        page.get_by_text("set_steps applied").first.wait_for(timeout=30_000)
+        state = cpu.session.graph.state
+        assert wait_until(lambda: state.x[1] and not state.x[0], 30)  # S2 in, S1 out
 
 
 def _refound(page: Page) -> str:
