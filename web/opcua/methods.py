@@ -168,13 +168,13 @@ def _convert(variant: ua.Variant, spec: ArgSpec) -> object:
     field takes it (ranges and choices are the struct's to check)."""
     value, vt = variant.Value, variant.VariantType
     if variant.is_array or isinstance(value, list):
-        item = next((t.item_type for t in spec.types if isinstance(t, mi.ListType)), None)
-        if item is None or not isinstance(value, list):
+        kind = next((t for t in spec.types if isinstance(t, mi.ListType)), None)
+        if kind is None or not isinstance(value, list):
             raise TypeError(vt.name)
-        return [
-            _convert(ua.Variant(v, vt), ArgSpec(spec.name, spec.data_type, (item,), True, ""))
-            for v in value
-        ]
+        item = ArgSpec(spec.name, spec.data_type, (kind.item_type,), True, "")
+        most = kind.max_length if kind.max_length is not None else len(value)
+        # one item past the most is enough for the struct to refuse the length
+        return [_convert(ua.Variant(v, vt), item) for v in value[: most + 1]]
     for t in spec.types:
         if isinstance(t, mi.BoolType) and vt is ua.VariantType.Boolean:
             return bool(value)

@@ -96,6 +96,7 @@ _CONTROL_BUTTONS: Final[tuple[tuple[type[Command], str, dict[str, Any]], ...]] =
 _STEP_BUTTONS: Final[tuple[tuple[type[Command], str], ...]] = (
     (StepOn, "Activate"),
     (StepOff, "Deactivate"),
+    (SetSteps, "Only this step"),
     (AckStep, "Acknowledge step"),
 )
 
@@ -483,8 +484,12 @@ class ClientPanel(PageLogin):
         return kind(fb=self.fb)
 
     def _step(self, kind: type[Command]) -> Command:
-        """A step button's command: the step of the Step field."""
-        return kind(fb=self.fb, args=StepArgs(step=int(self.step_number.value)))
+        """A step button's command: the step of the Step field (*Only this step*: that
+        step alone active in its sequence)."""
+        step = int(self.step_number.value)
+        if kind is SetSteps:
+            return SetSteps(fb=self.fb, args=StepsArgs(steps=[step]))
+        return kind(fb=self.fb, args=StepArgs(step=step))
 
     def _step_places(self) -> dict[int, tuple[float, float]]:
         """Where the chart the page shows draws each step (its box's centre)."""

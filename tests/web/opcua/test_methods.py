@@ -77,6 +77,7 @@ def test_input_variants_become_the_checked_arguments() -> None:
         ("SetSteps", [ua.Variant([], ua.VariantType.UInt16)], "BadInvalidArgument", []),
         ("SetSteps", [ua.Variant([0], ua.VariantType.UInt16)], "BadInvalidArgument", []),
         ("SetSteps", [ua.Variant(list(range(1, 66)))], "BadInvalidArgument", []),
+        ("SetSteps", [ua.Variant([1] * 1_000_000)], "BadInvalidArgument", []),
         ("Halt", [ua.Variant(1)], "BadInvalidArgument", ["BadTypeMismatch"]),
         ("Save", [ua.Variant("../x.s7g"), ua.Variant("x" * 2_000_000)], "BadInvalidArgument", []),
         (

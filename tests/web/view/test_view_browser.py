@@ -7,7 +7,7 @@ import os
 import shutil
 from collections.abc import Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import pytest
 
@@ -16,7 +16,14 @@ from s7graph.web.bus.protocol import ChartLayout, Command, StepStateUpdate
 from s7graph.web.view.chart_view import ACTIVE, DISTURBED, INACTIVE, ChartView
 from s7graph.web.view.drawing import BAR_W, BOX_H, BOX_W, TEXT_TOP
 from s7graph.web.wiring.web_edge import WebEdge, serve_view
-from tests.web.helpers import chromium_page, log_in, needs_chromium, page_point, wait_until
+from tests.web.helpers import (
+    chromium_page,
+    fill,
+    log_in,
+    needs_chromium,
+    page_point,
+    wait_until,
+)
 from tests.web.toy_feed import ToySequencer
 
 if TYPE_CHECKING:
@@ -97,6 +104,7 @@ def test_control_sequencer_panel_offers_every_command(page: Page) -> None:
         "T_PUSH (Continue)",
         "Activate",
         "Deactivate",
+        "Only this step",
     ):
         assert page.get_by_role("button", name=name, exact=True).count() == 1, name
     assert page.get_by_text("Control Sequencer").count() >= 1
@@ -142,6 +150,22 @@ def test_acknowledge_click_reaches_the_cpu_queue_and_is_answered(
     keep = os.environ.get("S7GRAPH_SCREENSHOT")
     if keep:  # for a human to look at the chart
         shutil.copy(shot, keep)
+
+
+def test_only_this_step_sends_set_steps_with_the_step_field(page: Page, edge: WebEdge) -> None:
+    if not page.get_by_text("logged in as olga").count():  # one page for the module
+        log_in(page, "olga")
+    only = page.get_by_role("button", name="Only this step", exact=True)
+    assert wait_until(only.is_enabled)
+    fill(page, "Step", "2")
+    (panel,) = edge.view.panels.values()
+    assert wait_until(lambda: panel.step_number.value == 2)
+    only.click()
+    received: list[Any] = []
+    assert wait_until(lambda: received.extend(edge.publisher.drain_commands()) or received)
+    (pending,) = received
+    assert (pending.command.op, pending.command.args.steps) == ("set_steps", [2])
+    pending.resolve(True, cycle=4)
 
 
 def test_demo_feed_applies_commands_between_scans() -> None:
