@@ -30,6 +30,9 @@ lets go of when the process ends however it ends (SIGKILL included). Both scan t
 real-time at one priority on one processor, the one whose scan hung in C code would keep
 it from the other until its supervisor killed it, and every long scan of one would delay
 the other's — as an S7-1500 software controller gives each CPU instance cores of its own.
+For the same reason a CPU's other threads stay off the processors other CPUs keep
+(:meth:`CoreClaims.kept_elsewhere`, :func:`others`), beside its own scan when no other
+processor is left.
 """
 
 from __future__ import annotations
@@ -37,7 +40,7 @@ from __future__ import annotations
 import functools
 import os
 import tempfile
-from collections.abc import Iterator
+from collections.abc import Iterator, Set
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -114,6 +117,34 @@ class CoreClaims:
             return None
         return int(text) if text.strip().isdigit() else None
 
+    def kept_elsewhere(self, cores: set[int]) -> frozenset[int]:
+        """The processors of ``cores`` another process keeps now: their lock files locked
+        by another pid in the kernel's list of locks (``/proc/locks``; read, not probed by
+        locking, so a CPU starting meanwhile is never refused). Empty where there is no
+        such list."""
+        try:
+            locks = Path("/proc/locks").read_text()
+        except OSError:
+            return frozenset()
+        mine = str(os.getpid())
+        locked = set()
+        for line in locks.splitlines():  # "1: FLOCK  ADVISORY  WRITE 1234 fe:00:5678 0 EOF"
+            words = line.split()
+            if len(words) >= 6 and words[1] == "FLOCK" and words[4] != mine:
+                device, _, inode = words[5].rpartition(":")
+                if inode.isdigit():
+                    locked.add((device, int(inode)))
+        kept = set()
+        for core in cores:
+            try:
+                st = (self.folder / f"core-{core}.lock").stat()
+            except OSError:
+                continue
+            device = f"{os.major(st.st_dev):02x}:{os.minor(st.st_dev):02x}"
+            if (device, st.st_ino) in locked:
+                kept.add(core)
+        return frozenset(kept)
+
     def release(self, core: int | None) -> None:
         """Let ``core`` go, if this process holds it (the lock goes with its file)."""
         fd = self._held.pop(core, None) if core is not None else None
@@ -161,10 +192,14 @@ def scan_core(
     return core
 
 
-def others(core: int, allowed: set[int] | None = None) -> set[int]:
-    """The processors but ``core`` (all of ``allowed`` when it is the only one)."""
+def others(core: int, allowed: set[int] | None = None, kept: Set[int] = frozenset()) -> set[int]:
+    """The processors for a CPU's threads but its scan: those of ``allowed`` but ``core``
+    and the ``kept`` ones other CPUs keep; when that leaves none, ``core`` itself (a
+    processor another CPU keeps is free only while that CPU's scan sleeps, never while it
+    hangs in C code; this CPU's own scan leaves ``core`` between scans); all of ``allowed``
+    when ``core`` is the only one."""
     pool = allowed_cpus() if allowed is None else allowed
-    return pool - {core} or set(pool)
+    return pool - {core} - set(kept) or pool & {core} or set(pool)
 
 
 def pin(cpus: set[int], tid: int = 0) -> bool:
@@ -186,7 +221,8 @@ def kept_free(core: int | None) -> Iterator[None]:
         yield
         return
     before = allowed_cpus()
-    moved = pin(others(core, before | {core}))
+    everywhere = before | {core}
+    moved = pin(others(core, everywhere, machine_claims().kept_elsewhere(everywhere)))
     try:
         yield
     finally:

@@ -470,7 +470,7 @@ class Runner:
     @staticmethod
     def _keep_core(core: int, everywhere: set[int]) -> bool:
         """The calling (scan) thread on ``core``, the process's other threads off it."""
-        rest = others(core, everywhere)
+        rest = others(core, everywhere, machine_claims().kept_elsewhere(everywhere))
         for tid in _other_threads():
             pin(rest, tid)
         return pin({core})

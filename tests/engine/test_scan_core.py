@@ -140,6 +140,29 @@ def test_the_others_are_the_rest_or_the_only_one_there_is() -> None:
     assert others(0, {0}) == {0}
 
 
+def test_the_others_leave_out_what_other_cpus_keep_or_else_share_the_own_core() -> None:
+    assert others(2, {0, 1, 2}, kept={1}) == {0}
+    assert others(0, {0, 1}, kept={1}) == {0}  # beside its own scan, not another CPU's
+    assert others(0, {0, 1, 2}, kept={1, 2}) == {0}
+
+
+def test_the_processors_other_cpus_keep_are_read_from_the_kernels_locks(tmp_path: Path) -> None:
+    other = _holder(tmp_path, 1, 3)
+    mine = CoreClaims(tmp_path)
+    try:
+        assert mine.take(2)
+        if not Path("/proc/locks").exists():
+            pytest.skip("no /proc/locks here")
+        assert mine.kept_elsewhere({0, 1, 2, 3}) == {1, 3}  # not its own, not a free one
+    finally:
+        other.send_signal(signal.SIGKILL)
+        other.wait()
+    assert mine.kept_elsewhere({0, 1, 2, 3}) == set()  # the kernel let go with the process
+    assert mine.take(1)  # and so may this CPU
+    mine.release(1)
+    mine.release(2)
+
+
 def test_without_a_real_time_priority_auto_keeps_nothing() -> None:
     assert core_for("auto", None) is None
     assert core_for("off", 40) is None

@@ -16,6 +16,7 @@ import threading
 import time
 import urllib.request
 from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
@@ -256,22 +257,35 @@ def test_the_scan_keeps_its_processor_and_the_bus_and_the_view_run_on_the_others
         run.stop()
 
 
-@pytest.mark.skipif(len(os.sched_getaffinity(0)) < 2, reason="one processor: none to keep")
-def test_two_cpus_on_one_machine_never_keep_the_same_processor(tmp_path: Path) -> None:
-    """``--core auto`` (engine/cores.py): a second CPU leaves the processor the first
-    keeps — both scan threads real-time at one priority on one processor, a scan of one
-    hanging in C code would keep the other's from running at all."""
+@contextmanager
+def _beside_a_real_time_cpu(tmp_path: Path) -> Iterator[tuple[Run, int, list[Run]]]:
+    """A first CPU (``--core auto``) on the processor it keeps (yielded), and a list for the
+    CPUs a test starts beside it (``tmp_path / "b"`` is there for one); all stopped at the
+    end. Skipped where the scan cannot run real-time: ``auto`` keeps nothing there."""
     if not realtime_allowed(RT_PRIORITY):
         pytest.skip("the scan cannot run real-time here: auto keeps no processor")
     for name in ("a", "b"):
         (tmp_path / name).mkdir()
     first = Run(tmp_path / "a")
-    second: Run | None = None
+    more: list[Run] = []
     try:
         first.view_line()
         assert wait_until(lambda: len(_cpus(first.cpu)) == 1, 30), first.err
         (kept,) = _cpus(first.cpu)
+        yield first, kept, more
+    finally:
+        for run in (first, *more):
+            run.stop()
+
+
+@pytest.mark.skipif(len(os.sched_getaffinity(0)) < 2, reason="one processor: none to keep")
+def test_two_cpus_on_one_machine_never_keep_the_same_processor(tmp_path: Path) -> None:
+    """``--core auto`` (engine/cores.py): a second CPU leaves the processor the first
+    keeps — both scan threads real-time at one priority on one processor, a scan of one
+    hanging in C code would keep the other's from running at all."""
+    with _beside_a_real_time_cpu(tmp_path) as (first, kept, more):
         second = Run(tmp_path / "b")
+        more.append(second)
         found = second.view_line()
         with open_session(connect=[found[2]]) as session:
             client = BusClient(session, "cpu1")
@@ -281,10 +295,29 @@ def test_two_cpus_on_one_machine_never_keep_the_same_processor(tmp_path: Path) -
         assert _cpus(first.cpu) == {kept}
         assert kept not in _cpus(second.cpu) or len(_cpus(second.cpu)) > 1
         assert machine_claims().holder(kept) == first.cpu
-    finally:
-        for run in (first, second):
-            if run is not None:
-                run.stop()
+
+
+@pytest.mark.skipif(len(os.sched_getaffinity(0)) < 2, reason="one processor: none to keep")
+def test_a_cpu_given_a_processor_keeps_its_threads_off_the_one_another_cpu_keeps(
+    tmp_path: Path,
+) -> None:
+    """``--core N`` beside a CPU that keeps another processor (engine/cores.py): the bus,
+    the view and the writer stay off that one — a scan of the other CPU hanging in C code
+    would keep them from running — and share the scan's own when no other is left."""
+    with _beside_a_real_time_cpu(tmp_path) as (_, kept, more):
+        mine = min(_cpus(0) - {kept})
+        second = Run(tmp_path / "b", "--core", str(mine))
+        more.append(second)
+        second.view_line()
+        (view,) = second.children()
+        pid = second.cpu
+
+        def off_the_other() -> bool:
+            threads = [int(t) for t in os.listdir(f"/proc/{pid}/task")]
+            return _cpus(pid) == {mine} and all(kept not in _cpus(t) for t in threads)
+
+        assert wait_until(off_the_other, 30), second.err
+        assert kept not in _cpus(view)
 
 
 def test_a_processor_that_is_not_there_is_refused_naming_the_option(tmp_path: Path) -> None:
