@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import contextlib
 import threading
+import time
 from collections.abc import Callable, Sequence
 from typing import Any, Literal, TypeVar
 
@@ -52,7 +53,7 @@ from s7graph.web.bus.protocol import (
     join_layout,
 )
 
-__all__ = ["BusClient", "DeltaFeed", "StateFollower", "find_cpus"]
+__all__ = ["BusClient", "DeltaFeed", "StateFollower", "find_cpus", "no_answer"]
 
 _Answer = TypeVar("_Answer", WatchValues, SyncReport)
 
@@ -60,6 +61,18 @@ CLIENT_TIMEOUT_S = 5.0
 """How long a :class:`BusClient` waits for an answer."""
 MAX_SESSIONS = 4096
 """Logins one client keeps the session keys of (a view: one per page logged in)."""
+
+
+def no_answer(cpu: str, wait: float, waited: float) -> str:
+    """Why a request of CPU ``cpu`` got no answer: the ``wait`` ran out, or the bus ended it
+    sooner — after ``waited`` s, with no CPU of that name reachable to answer (none on the
+    bus, the CPU gone, its link lost). Both begin ``no answer from CPU``."""
+    if waited < wait - min(0.5, wait / 2):  # ended well before the wait was up
+        return (
+            f"no answer from CPU {cpu!r}: the bus ended the request after {waited:.1f} s "
+            "(no such CPU reachable: not running, or its link lost)"
+        )
+    return f"no answer from CPU {cpu!r} within {wait:g} s"
 
 
 class BusClient:
@@ -249,13 +262,13 @@ class BusClient:
     ) -> _Answer:
         """The CPU's answer to a query of ``key`` as ``kind``; a ``kind`` with its
         ``error`` when the bus fails, no CPU answers in time or the answer is unreadable."""
+        wait, asked = timeout or self._timeout, time.monotonic()
         try:
-            data = self._get_one(key, payload, timeout)
+            data = self._get_one(key, payload, wait)
         except zenoh.ZError as exc:
             return kind(error=f"bus error: {type(exc).__name__}")
         if data is None:
-            wait = timeout or self._timeout
-            return kind(error=f"no answer from CPU {self._keys.cpu!r} within {wait:g} s")
+            return kind(error=no_answer(self._keys.cpu, wait, time.monotonic() - asked))
         try:
             return decode(data, kind)
         except ProtocolError as exc:
@@ -289,12 +302,13 @@ class BusClient:
         signer = self._signer(command.token)
         if signer is not None and not command.mac:
             command = signer.sign(command)
+        asked = time.monotonic()
         try:
             data = self._get_one(self._keys.cmd, encode(command), wait)
         except zenoh.ZError as exc:
             return CommandReply(applied=False, reason=f"bus error: {type(exc).__name__}")
         if data is None:
-            reason = f"no answer from CPU {self._keys.cpu!r} within {wait:g} s"
+            reason = no_answer(self._keys.cpu, wait, time.monotonic() - asked)
             return CommandReply(applied=False, reason=reason, op=command.op, fb=command.fb)
         try:
             return decode(data, CommandReply)

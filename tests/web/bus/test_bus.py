@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import threading
+import time
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -146,7 +147,24 @@ def test_a_command_nobody_drains_ends_in_a_refusal_not_a_hang(
 ) -> None:
     _, client = bus
     reply = client.send(cmd(client, "init"), timeout=0.3)
-    assert not reply.applied and "no answer" in reply.reason
+    assert not reply.applied and reply.reason == "no answer from CPU 'cpu1' within 0.3 s"
+
+
+def test_no_answer_from_no_cpu_at_all_says_so_at_once(tmp_path: Path) -> None:
+    """Nothing on the bus serves the CPU's keys: the request ends before its wait, and
+    the reason says the CPU is not reachable rather than that it kept silent 30 s."""
+    with open_session(listen=[f"unixsock-stream/{tmp_path}/bus.sock"]) as alone:
+        nobody = BusClient(alone, "cpu9")
+        try:
+            asked = time.monotonic()
+            reply = nobody.send(Command(op="init", fb="FILL", user="bob"), timeout=30)
+            assert time.monotonic() - asked < 10  # not the 30 s asked for
+            assert not reply.applied
+            assert reply.reason.startswith("no answer from CPU 'cpu9': the bus ended the request")
+            watched = nobody.watch(["M0.0"], timeout=30)
+            assert watched.error.startswith("no answer from CPU 'cpu9': the bus ended")
+        finally:
+            nobody.close()
 
 
 def test_an_exception_while_applying_refuses_that_command_only(
