@@ -5,8 +5,9 @@ process values at the next scan boundary (docs/bus.md, "Synchronization: sync";
 The zenoh thread only checks the key and queues the query; the scan thread judges at the
 next boundary — the values of one scan, never torn by the next — once for every query
 waiting and at most once every ``EVERY_NS``, and hands the :class:`SyncReport` to the
-publisher's outbox. Reading it changes nothing, so any user may ask; activating the steps
-it finds is the ``step_on`` command in MAN, with its role and audit.
+publisher's outbox. Reading it changes nothing, so any user may ask; resuming at the steps
+it finds is the ``set_steps`` command in MAN (or ``step_on`` one at a time), with its role
+and audit.
 """
 
 from __future__ import annotations

@@ -1,5 +1,6 @@
 """``s7graph watch`` and the shell's commands: ``ack``, ``mode``, ``init``, ``off``,
-``step-on``, ``step-off``, ``t-push``, ``force`` and ``download`` for one CPU on the bus.
+``step-on``, ``step-off``, ``set-steps``, ``t-push``, ``force`` and ``download`` for one CPU
+on the bus.
 
 A command logs in as ``--user`` (the password from ``S7GRAPH_PASSWORD``, else a prompt
 when the CPU checks passwords), sends the command with the token, logs out, and exits 0

@@ -4,7 +4,7 @@ every step on the values of its next scan boundary, and the shell prints the ste
 fit — interlock held, no leaving transition held — the likely ones first (a transition
 into them holds too), then the others with why not, a line each, the active steps marked.
 ``--json`` prints the :class:`~web.bus.protocol.SyncReport` as the bus carries it. A
-read: no login; activating a step found is ``s7graph step-on N`` in MAN.
+read: no login; resuming at the steps found is ``s7graph set-steps N...`` in MAN.
 """
 
 from __future__ import annotations

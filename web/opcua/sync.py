@@ -2,7 +2,7 @@
 each FB's object asks the CPU where the process stands in the chart (the bus's
 ``fb/<fb>/sync``; docs/semantics.md, "Synchronization") and answers the steps found — a
 read, which any session may call, so that an HMI offers the operator the steps to resume at
-before it sends ``StepOn`` in MAN.
+before it sends ``SetSteps`` in MAN.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ NAME: Final = "Synchronize"
 DESCRIPTION: Final = (
     "where the process stands in the chart (S7-GRAPH's synchronization): the steps whose "
     "interlock holds and whose next transition does not (Fits), those of them a transition "
-    "into which holds too (Likely); a read, any session; activate one with StepOn in MAN"
+    "into which holds too (Likely); a read, any session; resume at them with SetSteps in MAN"
 )
 TIMEOUT_S: Final = 5.0
 """How long a call waits for the CPU's next scan boundary."""
