@@ -31,7 +31,7 @@ real-time at one priority on one processor, the one whose scan hung in C code wo
 it from the other until its supervisor killed it, and every long scan of one would delay
 the other's — as an S7-1500 software controller gives each CPU instance cores of its own.
 For the same reason a CPU's other threads stay off the processors other CPUs keep
-(:meth:`CoreClaims.kept_elsewhere`, :func:`others`), beside its own scan when no other
+(:meth:`CoreClaims.kept_elsewhere`, :func:`rest_of`), beside its own scan when no other
 processor is left.
 """
 
@@ -53,6 +53,7 @@ __all__ = [
     "machine_claims",
     "others",
     "pin",
+    "rest_of",
     "scan_core",
 ]
 
@@ -202,6 +203,13 @@ def others(core: int, allowed: set[int] | None = None, kept: Set[int] = frozense
     return pool - {core} - set(kept) or pool & {core} or set(pool)
 
 
+def rest_of(core: int, everywhere: set[int]) -> set[int]:
+    """Where a CPU that keeps ``core`` runs its other threads and processes: :func:`others`
+    of ``everywhere``, the processors the other CPUs of this machine keep now left out
+    (``machine_claims``)."""
+    return others(core, everywhere, machine_claims().kept_elsewhere(everywhere))
+
+
 def pin(cpus: set[int], tid: int = 0) -> bool:
     """Let thread ``tid`` (a native id; 0: the calling thread) run on ``cpus`` only; False
     when the system refuses (or the thread is gone)."""
@@ -222,7 +230,7 @@ def kept_free(core: int | None) -> Iterator[None]:
         return
     before = allowed_cpus()
     everywhere = before | {core}
-    moved = pin(others(core, everywhere, machine_claims().kept_elsewhere(everywhere)))
+    moved = pin(rest_of(core, everywhere))
     try:
         yield
     finally:

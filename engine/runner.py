@@ -76,7 +76,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from types import FrameType
 
-from s7graph.engine.cores import allowed_cpus, machine_claims, others, pin, scan_core
+from s7graph.engine.cores import allowed_cpus, machine_claims, pin, rest_of, scan_core
 from s7graph.engine.cpu import Cpu
 from s7graph.engine.diag_events import stop_cause
 from s7graph.engine.diagnostics import EventId
@@ -470,7 +470,7 @@ class Runner:
     @staticmethod
     def _keep_core(core: int, everywhere: set[int]) -> bool:
         """The calling (scan) thread on ``core``, the process's other threads off it."""
-        rest = others(core, everywhere, machine_claims().kept_elsewhere(everywhere))
+        rest = rest_of(core, everywhere)
         for tid in _other_threads():
             pin(rest, tid)
         return pin({core})
