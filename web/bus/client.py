@@ -53,14 +53,32 @@ from s7graph.web.bus.protocol import (
     join_layout,
 )
 
-__all__ = ["BusClient", "DeltaFeed", "StateFollower", "find_cpus", "no_answer"]
+__all__ = ["BusClient", "DeltaFeed", "ErrorReply", "StateFollower", "find_cpus", "no_answer"]
 
 _Answer = TypeVar("_Answer", WatchValues, SyncReport)
+_Read = TypeVar("_Read")
 
 CLIENT_TIMEOUT_S = 5.0
 """How long a :class:`BusClient` waits for an answer."""
 MAX_SESSIONS = 4096
 """Logins one client keeps the session keys of (a view: one per page logged in)."""
+ZENOH_TIMEOUT = b"Timeout"
+"""The error reply zenoh itself gives a query whose wait ran out (from either end, with or
+without a replier id: zenoh 1.x), which is no answer, not the CPU's."""
+REASON_CHARS = 200
+"""Of an error reply's reason, at most this much is shown (a peer may send anything)."""
+
+
+class ErrorReply(ProtocolError):
+    """A query answered with an error (zenoh's ``reply_err``), not the message asked for:
+    the text names the key and gives the answerer's reason, on one line."""
+
+
+def one_line(reason: bytes) -> str:
+    """An error reply's reason as one printable line of at most ``REASON_CHARS``."""
+    text = "".join(c if c.isprintable() else " " for c in reason.decode("utf-8", "replace"))
+    text = " ".join(text.split())
+    return text if len(text) <= REASON_CHARS else text[: REASON_CHARS - 1] + "…"
 
 
 def no_answer(cpu: str, wait: float, waited: float) -> str:
@@ -98,16 +116,41 @@ class BusClient:
             timeout=timeout or self._timeout,
             source_info=stamp(self._session),  # the CPU audits the link it came over
         )
+        refused = None
         for reply in replies:
             if reply.ok is not None:
                 return reply.ok.payload.to_bytes()
+            if refused is None and reply.err is not None:
+                said = reply.err.payload.to_bytes()
+                refused = None if said == ZENOH_TIMEOUT else said  # the wait ran out
+        if refused is not None:
+            where = key.partition("?")[0]
+            raise ErrorReply(f"{where}: the CPU answered with an error: {one_line(refused)}")
         return None
+
+    def _read(
+        self,
+        key: str,
+        kind: type[_Read],
+        payload: bytes | None = None,
+        timeout: float | None = None,
+    ) -> _Read | None:
+        """The answer to a query of ``key`` as ``kind``, or None if nobody answers; an
+        error reply, or an answer that does not decode, raises :class:`ProtocolError`
+        naming the key."""
+        data = self._get_one(key, payload, timeout)
+        if data is None:
+            return None
+        try:
+            return decode(data, kind)
+        except ProtocolError as exc:
+            raise ProtocolError(f"{key.partition('?')[0]}: unreadable answer: {exc}") from None
 
     def chart(self, fb: str) -> ChartLayout | None:
         """The FB's chart structure, whole (a large one fetched in parts), or None if no
         CPU answers."""
-        data = self._get_one(self._keys.fb(fb, "chart"))
-        return None if data is None else self._whole(decode(data, ChartLayout))
+        head = self._read(self._keys.fb(fb, "chart"), ChartLayout)
+        return None if head is None else self._whole(head)
 
     def _whole(self, head: ChartLayout, tries: int = 3) -> ChartLayout | None:
         """``head`` with its parts (``fb/<fb>/chart/part?k=K``); fetched again from the
@@ -118,29 +161,30 @@ class BusClient:
                 return head
             key = self._keys.fb(head.fb, "chart/part")
             parts = []
-            for k in range(head.parts):
-                data = self._get_one(f"{key}?k={k}")
-                if data is None:
-                    return None
-                parts.append(decode(data, ChartPart))
-            if all(p.version == head.version for p in parts):
+            try:
+                for k in range(head.parts):
+                    data = self._get_one(f"{key}?k={k}")
+                    if data is None:
+                        return None
+                    parts.append(decode(data, ChartPart))
+            except ErrorReply:  # no such part now: the CPU runs a version in fewer parts
+                parts.clear()
+            if parts and all(p.version == head.version for p in parts):
                 return join_layout(head, parts)
-            data = self._get_one(self._keys.fb(head.fb, "chart"))
-            if data is None:
+            again = self._read(self._keys.fb(head.fb, "chart"), ChartLayout)
+            if again is None:
                 return None
-            head = decode(data, ChartLayout)
+            head = again
         raise ProtocolError(f"chart of {head.fb}: its version changed while it was read")
 
     def source(self, fb: str) -> ChartSource | None:
         """The ``.s7g`` source of the chart the FB runs, or None if no CPU answers."""
-        data = self._get_one(self._keys.fb(fb, "source"))
-        return None if data is None else decode(data, ChartSource)
+        return self._read(self._keys.fb(fb, "source"), ChartSource)
 
     def project(self) -> ProjectFiles | None:
         """The charts and importable files of the CPU's project directory (None: no CPU
         answers, or it has none)."""
-        data = self._get_one(f"{ROOT}/{self._keys.cpu}/project")
-        return None if data is None else decode(data, ProjectFiles)
+        return self._read(f"{ROOT}/{self._keys.cpu}/project", ProjectFiles)
 
     def on_chart(self, fb: str, callback: Callable[[ChartLayout], None]) -> None:
         """Call ``callback`` with the FB's chart (whole) each time the CPU runs another
@@ -171,17 +215,14 @@ class BusClient:
 
     def state(self, fb: str) -> StepStateUpdate | None:
         """The FB's latest state, or None if no CPU answers or no scan ran yet."""
-        data = self._get_one(self._keys.fb(fb, "state"))
-        return None if data is None else decode(data, StepStateUpdate)
+        return self._read(self._keys.fb(fb, "state"), StepStateUpdate)
 
     def status(self) -> CpuStatus | None:
-        data = self._get_one(self._keys.status)
-        return None if data is None else decode(data, CpuStatus)
+        return self._read(self._keys.status, CpuStatus)
 
     def alarms(self) -> AlarmList | None:
         """The CPU's current message list, or None if no CPU answers."""
-        data = self._get_one(self._keys.alarm_list)
-        return None if data is None else decode(data, AlarmList)
+        return self._read(self._keys.alarm_list, AlarmList)
 
     def on_alarms(self, callback: Callable[[AlarmList], None]) -> None:
         """Call ``callback`` with the current message list, then with each newer one (by
@@ -219,8 +260,7 @@ class BusClient:
 
     def forces(self) -> ForceList | None:
         """The CPU's force jobs, or None if no CPU answers."""
-        data = self._get_one(self._keys.forces)
-        return None if data is None else decode(data, ForceList)
+        return self._read(self._keys.forces, ForceList)
 
     def on_forces(self, callback: Callable[[ForceList], None]) -> None:
         """Call ``callback`` with the current force jobs, then with each newer list (by
@@ -231,8 +271,7 @@ class BusClient:
         """The CPU's diagnostic buffer, newest first (its newest ``n`` entries; the CPU's
         default 100), or None if no CPU answers."""
         key = self._keys.diag if n is None else f"{self._keys.diag}?n={n}"
-        data = self._get_one(key)
-        return None if data is None else decode(data, DiagBuffer)
+        return self._read(key, DiagBuffer)
 
     def on_diag(self, callback: Callable[[DiagBuffer], None]) -> None:
         """Call ``callback`` with the entries the CPU writes from now on, newest first, as
@@ -267,6 +306,8 @@ class BusClient:
             data = self._get_one(key, payload, wait)
         except zenoh.ZError as exc:
             return kind(error=f"bus error: {type(exc).__name__}")
+        except ErrorReply as exc:
+            return kind(error=str(exc))
         if data is None:
             return kind(error=no_answer(self._keys.cpu, wait, time.monotonic() - asked))
         try:
@@ -276,18 +317,15 @@ class BusClient:
 
     def blocks(self) -> BlockSources | None:
         """The S7-SCL blocks the CPU runs, as source, or None if no CPU answers."""
-        data = self._get_one(self._keys.blocks)
-        return None if data is None else decode(data, BlockSources)
+        return self._read(self._keys.blocks, BlockSources)
 
     def operands(self) -> OperandValues | None:
         """The CPU's latest operand values, or None if no CPU answers (or it has none)."""
-        data = self._get_one(self._keys.operands)
-        return None if data is None else decode(data, OperandValues)
+        return self._read(self._keys.operands, OperandValues)
 
     def operand_catalog(self) -> OperandCatalog | None:
         """What the CPU's operand values carry (names, types, addresses), or None."""
-        data = self._get_one(self._keys.operand_list)
-        return None if data is None else decode(data, OperandCatalog)
+        return self._read(self._keys.operand_list, OperandCatalog)
 
     def on_operands(self, callback: Callable[[OperandValues], None]) -> None:
         """Call ``callback`` with the current operand values, then with each newer one (by
@@ -307,6 +345,8 @@ class BusClient:
             data = self._get_one(self._keys.cmd, encode(command), wait)
         except zenoh.ZError as exc:
             return CommandReply(applied=False, reason=f"bus error: {type(exc).__name__}")
+        except ErrorReply as exc:
+            return CommandReply(applied=False, reason=str(exc), op=command.op, fb=command.fb)
         if data is None:
             reason = no_answer(self._keys.cpu, wait, time.monotonic() - asked)
             return CommandReply(applied=False, reason=reason, op=command.op, fb=command.fb)
@@ -356,8 +396,10 @@ class BusClient:
     def _ask_login(self, request: LoginRequest) -> LoginReply:
         try:
             data = self._get_one(self._keys.login, encode(request))
-        except (ProtocolError, zenoh.ZError) as exc:
+        except zenoh.ZError as exc:
             return LoginReply(ok=False, reason=f"bus error: {type(exc).__name__}")
+        except ErrorReply as exc:
+            return LoginReply(ok=False, reason=str(exc))
         if data is None:
             return LoginReply(ok=False, reason=f"no answer from CPU {self._keys.cpu!r}")
         try:
@@ -367,13 +409,11 @@ class BusClient:
 
     def audit(self) -> AuditList | None:
         """The CPU's last 50 audit rows, or None if no CPU answers."""
-        data = self._get_one(self._keys.audit_list)
-        return None if data is None else decode(data, AuditList)
+        return self._read(self._keys.audit_list, AuditList)
 
     def history(self) -> AlarmHistory | None:
         """The CPU's last 200 message events, or None if no CPU answers."""
-        data = self._get_one(self._keys.alarm_history)
-        return None if data is None else decode(data, AlarmHistory)
+        return self._read(self._keys.alarm_history, AlarmHistory)
 
     def on_audit(self, callback: Callable[[AuditEntry], None]) -> None:
         """Call ``callback`` with each audit row as the CPU writes it (on a zenoh thread)."""
@@ -398,8 +438,7 @@ class BusClient:
 
     def send_raw(self, payload: bytes, *, timeout: float | None = None) -> CommandReply | None:
         """Send raw bytes to ``cmd`` (for tests of hostile input); None if nobody answered."""
-        data = self._get_one(self._keys.cmd, payload, timeout)
-        return None if data is None else decode(data, CommandReply)
+        return self._read(self._keys.cmd, CommandReply, payload, timeout)
 
     def follow(self, fb: str, on_update: Callable[[StepStateUpdate], None]) -> StateFollower:
         """Subscribe to deltas, then fetch the state: ``on_update`` sees each newer state once,

@@ -27,12 +27,12 @@ from typing import TYPE_CHECKING, Annotated, Any
 
 import msgspec.inspect as mi
 import typer
+from typer.main import get_command
 
 if TYPE_CHECKING:
     from s7graph.web.cli.net import NetOptions
     from s7graph.web.cli.run_chart import OpcuaFace
 
-from s7graph import __version__
 from s7graph.engine.errors import S7Error
 from s7graph.engine.runner import COMM_LOAD_PCT
 from s7graph.web.commands import (
@@ -61,6 +61,8 @@ app = typer.Typer(
 
 def _show_version(value: bool) -> None:
     if value:
+        from s7graph import __version__
+
         typer.echo(f"s7graph {__version__}")
         raise typer.Exit(0)
 
@@ -1203,13 +1205,21 @@ def audit(
     raise typer.Exit(audit_command(state, since, summary=summary))
 
 
+@functools.cache
+def _command() -> Any:
+    """``app`` as the click command typer makes of it, the credential options given to
+    every command on the bus: built once per process, not per call (typer reads every
+    command's signature for it, some 40 ms)."""
+    _credentials_everywhere()
+    return get_command(app)
+
+
 def main(argv: list[str] | None = None) -> int:
     """The commands' entry point (``main`` in ``web/cli/__init__.py`` calls it, once the
     supervisor of a ``run`` is not wanted); turns every known error into one stderr line.
     ``argv`` None: the program's command line."""
-    _credentials_everywhere()
     try:
-        rc = app(args=argv, standalone_mode=False)
+        rc = _command()(args=argv, standalone_mode=False)
     except S7Error as exc:
         print(f"s7graph: error: {exc}", file=sys.stderr)
         return 2
@@ -1225,6 +1235,11 @@ def main(argv: list[str] | None = None) -> int:
             return code if isinstance(code, int) else 2
         if type(exc).__name__ == "Abort":  # Ctrl-C at a prompt
             return 130
+        from s7graph.web.bus.protocol import ProtocolError
+
+        if isinstance(exc, ProtocolError):  # a peer's answer s7graph cannot take
+            print(f"s7graph: error: {exc}", file=sys.stderr)
+            return 2
         print(f"s7graph: internal error: {type(exc).__name__}: {exc}", file=sys.stderr)
         return 2
     return rc if isinstance(rc, int) else 0

@@ -13,7 +13,7 @@ import time
 from collections.abc import Callable, Iterable
 
 from s7graph.web.bus.client import BusClient
-from s7graph.web.bus.protocol import ChartLayout, CpuStatus
+from s7graph.web.bus.protocol import ChartLayout, CpuStatus, ProtocolError
 from s7graph.web.bus.session import BusEnds, open_session
 from s7graph.web.view import sync_view, watch_table
 from s7graph.web.view.chart_view import ChartView, make_server
@@ -129,17 +129,23 @@ class ViewSide:
         """The CPU's status and the chart of ``fb`` (default: its first FB's); no chart for
         a CPU that answers without an FB (a program of blocks) when ``fb`` is not asked."""
         deadline = time.monotonic() + timeout
+        problem = ""  # the last answer that could not be read, said when the time is up
         while True:
-            status = self.client.status()
-            if fb is None and status is not None and not status.fbs:
-                return status, None
-            name = fb or (status.fbs[0] if status is not None and status.fbs else None)
-            layout = self.client.chart(name) if name else None
+            status: CpuStatus | None = None
+            layout: ChartLayout | None = None
+            try:
+                status = self.client.status()
+                if fb is None and status is not None and not status.fbs:
+                    return status, None
+                name = fb or (status.fbs[0] if status is not None and status.fbs else None)
+                layout = self.client.chart(name) if name else None
+            except ProtocolError as exc:
+                problem = f" (last answer: {exc})"
             if layout is not None:
                 return status, layout
             if time.monotonic() > deadline:
                 what = f"FB {fb!r}" if fb else "a CPU with an FB"
-                raise TimeoutError(f"no chart for {what} on the bus within {timeout:g} s")
+                raise TimeoutError(f"no chart for {what} on the bus within {timeout:g} s{problem}")
             time.sleep(0.05)
 
     def close(self) -> None:
