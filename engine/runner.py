@@ -88,7 +88,7 @@ from s7graph.engine.profile import CycleProfile, OpenCycle
 from s7graph.engine.record import DiagEntry, ScanRecord
 from s7graph.engine.restart import RestartType
 from s7graph.engine.switching import switching
-from s7graph.engine.watchdog import CycleStatistics
+from s7graph.engine.watchdog import COMM_LOAD_PCT, CycleStatistics
 from s7graph.engine.writer import DurableCallback, StoreWriter
 
 __all__ = [
@@ -109,10 +109,6 @@ ENCODE_MARGIN_S = 0.0005
 """How long before the next scan falls due the writer stops encoding the instance DBs of the
 last staging (``engine/writer.py``; it also keeps twice its longest recent encoding clear):
 what is left then is carried over to the next staging, or encoded by the scan thread."""
-COMM_LOAD_PCT = 20
-"""The share of the cycle time the edge may spend on commands at each scan boundary, in
-per cent: S7's "scan cycle load from communication" (HW Config, Cycle/Clock Memory; 20 by
-default). Commands beyond it wait for the next boundary."""
 
 
 HELPERS_BELOW = 10

@@ -14,6 +14,11 @@ from enum import StrEnum
 
 _MS = 1_000_000
 
+COMM_LOAD_PCT = 20
+"""The share of the cycle time the edge may spend on commands at each scan boundary, in
+per cent: S7's "scan cycle load from communication" (HW Config, Cycle/Clock Memory; 20 by
+default). Commands beyond it wait for the next boundary (``engine.runner``)."""
+
 
 @dataclass(slots=True)
 class CycleStatistics:

@@ -72,3 +72,11 @@ def test_a_lazy_packages_names_are_its_all_its_typed_imports_and_the_real_object
     for name, home in table.items():
         assert getattr(module, name) is getattr(importlib.import_module(f"{package}.{home}"), name)
     assert not hasattr(module, "nothing_here")
+
+
+def test_the_shells_commands_load_neither_the_pages_drawing_nor_the_scan_runner() -> None:
+    """``s7graph status`` and the shell's ops ask a CPU and print lines: the page's drawing
+    (numpy, pillow), viser and the real-time runner stay unloaded."""
+    heavy = ["numpy", "PIL", "viser", "s7graph.engine.runner"]
+    code = "import s7graph.web.cli.root, s7graph.web.cli.remote, s7graph.web.cli.diag"
+    assert _loaded_after(code, heavy) == dict.fromkeys(heavy, False)

@@ -459,7 +459,7 @@ class BusPublisher:
         many were handled.
 
         ``until_ns`` (``time.perf_counter_ns``): the end of this boundary's share of the
-        cycle for communication (``engine.runner.COMM_LOAD_PCT``). Once it is past, the
+        cycle for communication (``engine.watchdog.COMM_LOAD_PCT``). Once it is past, the
         commands still waiting stay queued for the next boundary, in order, and
         ``comm_limited`` counts the boundary; one command is always handled, so a flood
         slows the answers, never the scan, and never stops them.

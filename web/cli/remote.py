@@ -26,13 +26,13 @@ import msgspec
 import zenoh
 
 from s7graph.web.bus.client import BusClient
+from s7graph.web.bus.cycle_text import cycle_lines
 from s7graph.web.bus.protocol import Command, CommandReply, CpuStatus, StepStateUpdate
 from s7graph.web.bus.session import open_session
 from s7graph.web.cli.diag_text import event_line, when
 from s7graph.web.cli.net import NetOptions
 from s7graph.web.cli.stopping import wait_until_stopped
 from s7graph.web.commands import Args, Download, DownloadArgs, checked, op_of
-from s7graph.web.view.texts import cycle_lines
 
 __all__ = [
     "PASSWORD_ENV",

@@ -34,7 +34,7 @@ if TYPE_CHECKING:
     from s7graph.web.cli.run_chart import OpcuaFace
 
 from s7graph.engine.errors import S7Error
-from s7graph.engine.runner import COMM_LOAD_PCT
+from s7graph.engine.watchdog import COMM_LOAD_PCT
 from s7graph.web.commands import (
     COMMAND_TYPES,
     OPS,

@@ -11,8 +11,8 @@ import html
 import time
 from collections.abc import Iterable, Mapping
 
-from s7graph.engine.profile import describe as describe_cycle
 from s7graph.sequencer.checks.diagnostics import Diagnostic
+from s7graph.web.bus.cycle_text import cycle_lines
 from s7graph.web.bus.protocol import (
     AlarmEntry,
     AlarmHistory,
@@ -20,7 +20,6 @@ from s7graph.web.bus.protocol import (
     AuditEntry,
     ChartLayout,
     Contact,
-    CycleReport,
     CycleStats,
     ForceList,
     PermanentContact,
@@ -35,7 +34,6 @@ __all__ = [
     "audit_html",
     "banner_html",
     "clip",
-    "cycle_lines",
     "describe",
     "detail_html",
     "diagnostic_button",
@@ -50,7 +48,6 @@ __all__ = [
     "login_html",
     "permanent_html",
     "rows_note",
-    "scan_thread_line",
     "small",
     "status_html",
     "step_rows",
@@ -192,50 +189,6 @@ def status_html(
         parts.insert(0, f'<b style="color:#c00">{html.escape(cpu_state)}</b>')
     why = f'<div style="color:#c00">{html.escape(reason)}</div>' if reason else ""
     return f'<div style="font-size:0.85em">{mark}{" · ".join(parts)}{why}</div>'
-
-
-def cycle_lines(stats: CycleStats) -> list[str]:
-    """Where the longest and the last long cycle went (``engine.profile``), one line each,
-    none before the runner has measured a cycle; then the share for communication and where
-    the scan thread runs (both from a runner's statistics only)."""
-    lines = []
-    if stats.longest is not None:
-        lines.append(f"longest: {_cycle_line(stats.longest)}")
-    if stats.last_long is not None:
-        lines.append(
-            f"last over {stats.long_over_ms:.1f} ms ({stats.long} so far): "
-            f"{_cycle_line(stats.last_long)}"
-        )
-    if stats.comm_load:
-        lines.append(comm_line(stats))
-        lines.append(scan_thread_line(stats))
-    return lines
-
-
-def scan_thread_line(stats: CycleStats) -> str:
-    """Where the scan thread runs: its real-time priority, the processor it keeps."""
-    how = f"real-time (SCHED_FIFO {stats.priority})" if stats.priority else "normal priority"
-    where = f"on processor {stats.core}, kept for it" if stats.core >= 0 else "on any processor"
-    return f"scan thread: {how}, {where}"
-
-
-def comm_line(stats: CycleStats) -> str:
-    """The share of the cycle commands may take, and how often it ran out."""
-    n = stats.comm_limited
-    ran_out = (
-        f"ran out at {n} scan boundar{'ies' if n != 1 else 'y'} "
-        "(the commands left waited for the next)"
-        if n
-        else "never ran out"
-    )
-    share = f"up to {stats.comm_load:g} % of the cycle at each scan boundary"
-    return f"communication: {share}; {ran_out}"
-
-
-def _cycle_line(report: CycleReport) -> str:
-    over = ", overran" if report.overrun else ""
-    parts = describe_cycle(report.cycle_ms, report.parts)
-    return f"cycle {report.scan} at {clock(report.at_ms)}{over}, {parts}"
 
 
 def force_mark(forces: int) -> str:
