@@ -77,6 +77,7 @@ def opcua_command(
     if child:
         _as_child(stop)  # lower its priority before the imports: they take a while
     from s7graph.web.bus.client import find_cpus
+    from s7graph.web.bus.protocol import ProtocolError
     from s7graph.web.bus.session import open_session
     from s7graph.web.opcua.server import OpcuaOptions, OpcuaServer, listen_problem, loopback
 
@@ -121,6 +122,8 @@ def opcua_command(
         server = OpcuaServer(session, chosen, options)
         try:
             server.start()
+        except ProtocolError as exc:  # what the CPU answered while the nodes were built
+            return _fail(f"cannot serve OPC UA of CPU {chosen.cpu}: {exc}")
         except Exception as exc:
             return _fail(f"cannot serve OPC UA at {listen}: {type(exc).__name__}: {exc}")
         print(f"s7graph: opcua {listen} of {chosen.cpu}; Ctrl-C to stop", flush=True)

@@ -3,8 +3,9 @@
 ``odd`` with zenoh's error reply, or with bytes that are no message. The client says so,
 naming the key and — for an error reply — the answerer's reason on one printable line;
 the shell prints that as one error line (never "internal error" and an exception's class),
-a command or a login is refused with it, and a chart whose parts change under the reader
-is read again from its head."""
+a command or a login is refused with it, a view or an OPC UA face that cannot get its
+chart says why, and a chart whose parts change under the reader is read again from its
+head."""
 
 from __future__ import annotations
 
@@ -19,6 +20,7 @@ from s7graph.web.bus.protocol import (
     ActionInfo,
     ChartLayout,
     Command,
+    CpuStatus,
     ProtocolError,
     StepInfo,
     encode,
@@ -164,3 +166,25 @@ def test_a_peer_that_keeps_silent_is_no_answer_not_an_error_reply(
         assert c.status() is None and held
         reply = c.send(Command(op="init", fb="F", user="u", token="t"))
         assert reply.reason == "no answer from CPU 'odd' within 0.3 s"
+
+
+def _a_cpu_whose_chart_is_refused(q: zenoh.Query) -> None:
+    if str(q.key_expr).endswith("/status"):
+        q.reply(q.key_expr, encode(CpuStatus(cpu="odd", fbs=["F"])))
+    else:
+        q.reply_err(b"not now")
+
+
+def test_a_view_and_an_opcua_face_of_a_cpu_whose_chart_is_refused_say_why(
+    odd: tuple[str, list[Answer]], capsys: pytest.CaptureFixture[str]
+) -> None:
+    pytest.importorskip("asyncua")
+    odd[1][0] = _a_cpu_whose_chart_is_refused
+    why = "s7graph/odd/fb/F/chart: the CPU answered with an error: not now"
+    face = ["opcua", "--listen", f"opc.tcp://127.0.0.1:{free_port()}", "--duration-s", "1"]
+    assert main([*face, "--connect", odd[0], "--cpu", "odd"]) == 2
+    assert capsys.readouterr().err == f"s7graph: error: cannot serve OPC UA of CPU odd: {why}\n"
+    view = ["web", "--port", "0", "--duration-s", "1", "--connect", odd[0], "--cpu", "odd"]
+    assert main(view) == 2
+    err = capsys.readouterr().err
+    assert err.endswith(f"within 5 s (last answer: {why})\n") and "internal error" not in err
