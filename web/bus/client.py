@@ -313,7 +313,7 @@ class BusClient:
         try:
             return decode(data, kind)
         except ProtocolError as exc:
-            return kind(error=f"unreadable answer: {exc}")
+            return kind(error=f"{key.partition('?')[0]}: unreadable answer: {exc}")
 
     def blocks(self) -> BlockSources | None:
         """The S7-SCL blocks the CPU runs, as source, or None if no CPU answers."""
@@ -353,7 +353,8 @@ class BusClient:
         try:
             return decode(data, CommandReply)
         except ProtocolError as exc:
-            return CommandReply(applied=False, reason=f"unreadable answer: {exc}")
+            reason = f"{self._keys.cmd}: unreadable answer: {exc}"
+            return CommandReply(applied=False, reason=reason, op=command.op, fb=command.fb)
 
     def login(self, user: str, password: str = "", *, origin: str = "") -> LoginReply:
         """Log in at the CPU (no password needed without a users file) by SCRAM-SHA-256:
@@ -405,7 +406,7 @@ class BusClient:
         try:
             return decode(data, LoginReply)
         except ProtocolError as exc:
-            return LoginReply(ok=False, reason=f"unreadable answer: {exc}")
+            return LoginReply(ok=False, reason=f"{self._keys.login}: unreadable answer: {exc}")
 
     def audit(self) -> AuditList | None:
         """The CPU's last 50 audit rows, or None if no CPU answers."""

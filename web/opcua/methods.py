@@ -270,6 +270,8 @@ def outputs(spec: MethodSpec, reply: CommandReply) -> list[ua.Variant]:
 
 # The CPU's refusals in the words of OPC UA: the first pattern found in the reason wins.
 _REFUSALS: Final[tuple[tuple[tuple[str, ...], int], ...]] = (
+    # first: the rest of such a reason is whatever the peer that answered wrote
+    (("answered with an error",), StatusCodes.BadCommunicationError),
     (
         (
             "may not",

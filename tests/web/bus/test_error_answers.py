@@ -83,6 +83,12 @@ def test_an_answer_that_is_no_message_names_the_key(
         client.status()
     with pytest.raises(ProtocolError, match=r"^s7graph/odd/fb/F/state: unreadable answer"):
         client.state("F")
+    reply = client.send(Command(op="init", fb="F", user="u", token="t"))
+    assert not reply.applied and reply.op == "init"
+    assert reply.reason.startswith("s7graph/odd/cmd: unreadable answer: malformed JSON")
+    login = client.login("olga", "secret")
+    assert login.reason.startswith("s7graph/odd/login: unreadable answer: malformed JSON")
+    assert client.watch(["M0.0"]).error.startswith("s7graph/odd/watch: unreadable answer")
 
 
 def test_a_command_a_login_a_watch_refused_by_an_error_reply_carry_its_reason(

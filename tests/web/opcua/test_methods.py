@@ -105,6 +105,8 @@ def test_wrong_inputs_are_a_status_code(
         ("token expired: log in again", "BadUserAccessDenied"),
         ("no answer from CPU 'cpu1' within 5 s", "BadCommunicationError"),
         ("no answer from CPU 'cpu1': the bus ended the request after", "BadCommunicationError"),
+        ("s7graph/cpu1/cmd: the CPU answered with an error: you may not", "BadCommunicationError"),
+        ("s7graph/cpu1/cmd: unreadable answer: malformed JSON", "BadCommunicationError"),
         ("step_on needs mode MAN (S7-GRAPH Control Sequencer)", "BadInvalidState"),
         ("the CPU is in STOP, not RUN", "BadInvalidState"),
         ("no step S9 in Seq_mix", "BadNotFound"),
