@@ -53,7 +53,15 @@ from s7graph.web.bus.protocol import (
     join_layout,
 )
 
-__all__ = ["BusClient", "DeltaFeed", "ErrorReply", "StateFollower", "find_cpus", "no_answer"]
+__all__ = [
+    "BusClient",
+    "DeltaFeed",
+    "ErrorReply",
+    "StateFollower",
+    "find_cpus",
+    "no_answer",
+    "unread_note",
+]
 
 _Answer = TypeVar("_Answer", WatchValues, SyncReport)
 _Read = TypeVar("_Read")
@@ -483,8 +491,11 @@ class BusClient:
         self.close()
 
 
-def find_cpus(session: zenoh.Session, *, timeout: float = 2.0) -> list[CpuStatus]:
-    """The status of every CPU answering on the bus (a wildcard query), sorted by name."""
+def find_cpus(
+    session: zenoh.Session, *, timeout: float = 2.0, unreadable: list[str] | None = None
+) -> list[CpuStatus]:
+    """The status of every CPU answering on the bus (a wildcard query), sorted by name; an
+    answer that is no status is left out, and said in ``unreadable`` (key and why)."""
     found: dict[str, CpuStatus] = {}
     replies = session.get(
         f"{ROOT}/*/status",
@@ -494,11 +505,27 @@ def find_cpus(session: zenoh.Session, *, timeout: float = 2.0) -> list[CpuStatus
     )
     for reply in replies:
         if reply.ok is None:
+            said = reply.err.payload.to_bytes() if reply.err is not None else ZENOH_TIMEOUT
+            if unreadable is not None and said != ZENOH_TIMEOUT:
+                unreadable.append(f"an error reply: {one_line(said)}")
             continue
-        with contextlib.suppress(ProtocolError):
+        try:
             status = decode(reply.ok.payload.to_bytes(), CpuStatus)
-            found[status.cpu] = status
+        except ProtocolError as exc:
+            if unreadable is not None:
+                unreadable.append(f"{reply.ok.key_expr}: unreadable answer: {exc}")
+            continue
+        found[status.cpu] = status
     return [found[name] for name in sorted(found)]
+
+
+def unread_note(unreadable: Sequence[str]) -> str:
+    """What :func:`find_cpus` could not read, as the end of a "no CPU answers" line ("":
+    nothing)."""
+    if not unreadable:
+        return ""
+    more = f" (and {len(unreadable) - 1} more)" if len(unreadable) > 1 else ""
+    return f"; an answer could not be read: {unreadable[0]}{more}"
 
 
 class StateFollower:

@@ -76,7 +76,7 @@ def opcua_command(
     stop = threading.Event()
     if child:
         _as_child(stop)  # lower its priority before the imports: they take a while
-    from s7graph.web.bus.client import find_cpus
+    from s7graph.web.bus.client import find_cpus, unread_note
     from s7graph.web.bus.protocol import ProtocolError
     from s7graph.web.bus.session import open_session
     from s7graph.web.opcua.server import OpcuaOptions, OpcuaServer, listen_problem, loopback
@@ -99,14 +99,19 @@ def opcua_command(
     try:
         session = open_session(connect=net.connect, tls=net.tls, login=net.login)
         deadline = time.monotonic() + wait_s
-        cpus = find_cpus(session)
+        unreadable: list[str] = []
+        cpus = find_cpus(session, unreadable=unreadable)
         while not any(cpu in (None, s.cpu) for s in cpus) and time.monotonic() < deadline:
             time.sleep(0.2)
-            cpus = find_cpus(session)
+            unreadable.clear()
+            cpus = find_cpus(session, unreadable=unreadable)
         chosen = next((s for s in cpus if cpu in (None, s.cpu)), None)
         if chosen is None:
             found = ", ".join(s.cpu for s in cpus) or "none"
-            return _fail(f"no CPU {cpu or ''} answers on {', '.join(net.connect)} (found: {found})")
+            where = ", ".join(net.connect)
+            return _fail(
+                f"no CPU {cpu or ''} answers on {where} (found: {found}){unread_note(unreadable)}"
+            )
         if net.users is not None and chosen.login != "users":
             return _fail(f"--users given, but CPU {chosen.cpu} checks no logins (no users file)")
         reads = anonymous == "read" or (anonymous is None and loopback(listen))

@@ -20,7 +20,7 @@ import sys
 import threading
 import time
 
-from s7graph.web.bus.client import find_cpus
+from s7graph.web.bus.client import find_cpus, unread_note
 from s7graph.web.bus.session import open_session
 from s7graph.web.cli.net import NetOptions, is_loopback_host
 from s7graph.web.cli.stopping import wait_until_stopped
@@ -57,14 +57,16 @@ def web_command(
     try:
         with open_session(connect=net.connect, tls=net.tls, login=net.login) as probe:
             deadline = time.monotonic() + wait_s
-            cpus = find_cpus(probe)
+            unreadable: list[str] = []
+            cpus = find_cpus(probe, unreadable=unreadable)
             while not cpus and time.monotonic() < deadline:
                 time.sleep(0.2)
-                cpus = find_cpus(probe)
+                unreadable.clear()
+                cpus = find_cpus(probe, unreadable=unreadable)
     except Exception as exc:
         return _fail(f"cannot join the bus: {type(exc).__name__}: {exc}{net.join_hint()}")
     if not cpus:
-        return _fail(f"no CPU answers on {', '.join(net.connect)}")
+        return _fail(f"no CPU answers on {', '.join(net.connect)}{unread_note(unreadable)}")
     for status in cpus:
         print(
             f"s7graph: CPU {status.cpu} ({status.state}, logins: {status.login}): "

@@ -15,7 +15,7 @@ from collections.abc import Callable, Iterator
 import pytest
 import zenoh
 
-from s7graph.web.bus.client import REASON_CHARS, BusClient, ErrorReply
+from s7graph.web.bus.client import REASON_CHARS, BusClient, ErrorReply, find_cpus, unread_note
 from s7graph.web.bus.protocol import (
     ActionInfo,
     ChartLayout,
@@ -194,3 +194,24 @@ def test_a_view_and_an_opcua_face_of_a_cpu_whose_chart_is_refused_say_why(
     assert main(view) == 2
     err = capsys.readouterr().err
     assert err.endswith(f"within 5 s (last answer: {why})\n") and "internal error" not in err
+
+
+def test_looking_for_cpus_says_which_answers_it_could_not_read(
+    odd: tuple[str, list[Answer]],
+) -> None:
+    """``s7graph web`` and ``s7graph opcua`` end their "no CPU answers" with it."""
+    with open_session(connect=[odd[0]]) as session:
+        for answer, said in (
+            (lambda q: q.reply("s7graph/odd/status", b"{"), "s7graph/odd/status: unreadable"),
+            (_refuse(b"no\\tstatus"), "an error reply: no\\tstatus"),
+        ):
+            odd[1][0] = answer
+            unreadable: list[str] = []
+            assert find_cpus(session, timeout=1, unreadable=unreadable) == []
+            assert len(unreadable) == 1 and unreadable[0].startswith(said), unreadable
+            assert unread_note(unreadable) == f"; an answer could not be read: {unreadable[0]}"
+        odd[1][0] = lambda q: q.reply("s7graph/odd/status", encode(CpuStatus(cpu="odd")))
+        unreadable = []
+        assert [s.cpu for s in find_cpus(session, unreadable=unreadable)] == ["odd"]
+        assert unreadable == [] and unread_note(unreadable) == ""
+    assert unread_note(["a", "b", "c"]) == "; an answer could not be read: a (and 2 more)"
