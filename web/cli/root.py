@@ -848,6 +848,32 @@ def sync(
     raise typer.Exit(sync_command(net, fb=fb, as_json=as_json))
 
 
+@app.command()
+def upload(
+    cpu: CpuName = "cpu1",
+    connect: Connect = None,
+    fb: FbName = None,
+    tls_ca: TlsCa = None,
+    to: Annotated[
+        Path | None,
+        typer.Option(
+            "--to",
+            help="Write the chart and its symbol table into this folder (default: the "
+            "chart's text to stdout).",
+        ),
+    ] = None,
+    force: Annotated[
+        bool, typer.Option("--force", help="Write over files that exist in --to.")
+    ] = False,
+) -> None:
+    """Upload the chart an FB runs from the CPU (STEP 7's "Upload from device"): the .s7g
+    text it compiled and the symbol table it was compiled with."""
+    from s7graph.web.cli.upload import upload_command
+
+    net = _net(cpu=cpu, connect=connect, tls_ca=tls_ca)
+    raise typer.Exit(upload_command(net, fb=fb, to=to, force=force))
+
+
 def _remote(
     kind: type[Command],
     args: Args,

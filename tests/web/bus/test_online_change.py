@@ -27,6 +27,7 @@ from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.online import OnlineChange
 from s7graph.web.bus.protocol import Command, CommandReply
 from s7graph.web.bus.session import open_session
+from s7graph.web.cli import main
 from s7graph.web.harness.persist import open_state
 from s7graph.web.harness.scl import compile_sources
 from s7graph.web.harness.session import ChartSession, compile_text, load_chart
@@ -396,3 +397,30 @@ def test_the_preview_reports_operands_left_set_by_s_rows_of_removed_steps(cpu: C
     preview = cpu.send("download", source=gone, preview=True)
     assert preview.applied
     assert any("Q0.2" in line and "S2" in line and "stay set" in line for line in preview.lines)
+
+
+def test_s7graph_upload_brings_back_the_chart_the_cpu_runs_after_a_download(
+    cpu: Cpu, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """STEP 7's "Upload from device": the ``.s7g`` text the CPU compiled — after a download,
+    the downloaded one — to stdout, or into a folder under the chart's file name, never over
+    a file there without ``--force``."""
+    bus = ["--cpu", "cpu1", *cpu.bus]
+    assert main(["upload", *bus]) == 0
+    assert capsys.readouterr().out == CHART
+    edited = CHART.replace(":= full;", ":= full OR empty;")
+    assert cpu.send("download", source=edited, base=1).applied
+    folder = tmp_path / "uploaded"
+    assert main(["upload", *bus, "--fb", "Seq_fill", "--to", str(folder)]) == 0
+    said = capsys.readouterr().out
+    assert said == f"s7graph: Seq_fill version 2 of cpu1 → {folder / 'fill.s7g'} (22 lines)\n"
+    assert [p.name for p in folder.iterdir()] == ["fill.s7g"]  # no symbol table: none given
+    assert (folder / "fill.s7g").read_text(encoding="utf-8") == edited
+    (folder / "fill.s7g").write_text("mine", encoding="utf-8")
+    assert main(["upload", *bus, "--to", str(folder)]) == 2
+    assert "fill.s7g exists (--force writes over it)" in capsys.readouterr().err
+    assert (folder / "fill.s7g").read_text(encoding="utf-8") == "mine"
+    assert main(["upload", *bus, "--to", str(folder), "--force"]) == 0
+    assert (folder / "fill.s7g").read_text(encoding="utf-8") == edited
+    assert main(["upload", *bus, "--fb", "Nope"]) == 2
+    assert capsys.readouterr().err.endswith("runs no FB 'Nope'; it runs Seq_fill\n")
