@@ -112,6 +112,10 @@ class Editor(CpuCommands, RowEditing, InPlace, CrossReferencing):
                 )
                 self.file = gui.add_text("File", "", hint="the .s7g file Save writes")
                 self.save_button = gui.add_button("Save", hint="write the chart as the File")
+                self.save_here_button = gui.add_button(
+                    "Save to this computer",
+                    hint="the chart being edited, as a .s7g file your browser downloads",
+                )
                 self.open_choice = gui.add_dropdown(
                     "Open file", ["(none)"], hint="A chart or importable file of the CPU's project."
                 )
@@ -149,6 +153,7 @@ class Editor(CpuCommands, RowEditing, InPlace, CrossReferencing):
         self.side.set_width(EDITOR_WIDTH)
         self.toggle.on_click(lambda _: self._toggle())
         self.save_button.on_click(lambda _: self._guarded(self.save))
+        self.save_here_button.on_click(lambda _: self._guarded(self.save_here))
         self.open_button.on_click(lambda _: self._guarded(self.open))
         self.new_button.on_click(lambda _: self._guarded(self.new))
         self.download_button.on_click(lambda _: self._guarded(self.download))

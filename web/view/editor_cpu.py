@@ -1,4 +1,5 @@
-"""The editor's commands to the CPU: Save, Open, New, Download and Undo download.
+"""The editor's commands to the CPU: Save, Open, New, Download and Undo download; and
+Save to this computer (the chart being edited, downloaded by the browser).
 
 Each is the engineer's command on the bus (checked and audited in the CPU); a download and
 its undo ask the CPU for the change summary first and confirm it in a modal. ``CpuCommands``
@@ -11,6 +12,7 @@ import contextlib
 import functools
 from collections.abc import Callable
 from dataclasses import dataclass, replace
+from pathlib import PurePath
 from typing import TYPE_CHECKING, Any, Final
 
 import msgspec
@@ -108,6 +110,16 @@ class CpuCommands:
         self._report("save", reply)
         if reply.applied:
             self._refresh_files()
+
+    def save_here(self) -> None:
+        """The chart being edited, as a file the browser saves (named as *File*, or
+        ``<FB>.s7g``): the page's "Upload from device", with the edits so far."""
+        if self.session is None:
+            return
+        stem = PurePath(str(self.file.value).strip().replace("\\", "/")).stem
+        name = f"{stem or self.panel.fb}.s7g"
+        text = format_chart(self.session.chart).encode()
+        self.client.send_file_download(name, text, save_immediately=True)
 
     def open(self) -> None:
         name = str(self.open_choice.value)

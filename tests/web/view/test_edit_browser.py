@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 import pytest
 
 from s7graph.sequencer.text.elements import StepRef, TransitionRef, find
-from s7graph.sequencer.text.format import format_expr
+from s7graph.sequencer.text.format import format_chart, format_expr
 from s7graph.sequencer.text.model import Transition
 from s7graph.web.view.editor import Editor
 from s7graph.web.view.uses_list import use_label
@@ -238,6 +238,25 @@ def test_an_engineer_changes_a_condition_downloads_and_the_sequence_follows(
     cpu.session.set("empty", True)
     assert wait_until(lambda: active(cpu) == [1])
     cpu.session.set("empty", False)
+
+
+def test_save_to_this_computer_gives_the_browser_the_chart_being_edited(
+    page: Page, cpu: OnlineRig
+) -> None:
+    ed = editor(cpu)
+    select(page, ed, "T2 Full", TransitionRef(2))
+    type_into(page, "Condition", "full AND NOT go")  # an edit not downloaded
+    assert wait_until(lambda: condition(ed, 2) == "full AND NOT go")
+    with page.expect_download(timeout=30_000) as started:
+        click(page, "Save to this computer")
+    got = started.value
+    assert got.suggested_filename == "fill.s7g"
+    text = Path(got.path()).read_text(encoding="utf-8")
+    assert ed.session is not None and text == format_chart(ed.session.chart)
+    assert "FROM S2 TO S3 := full AND NOT go;" in text
+    assert "FROM S2 TO S3 := full AND NOT go;" not in cpu.path.read_text(encoding="utf-8")
+    click(page, "Undo")
+    assert wait_until(lambda: condition(ed, 2) == "full")
 
 
 def test_a_chart_built_from_scratch_downloads_and_runs(page: Page, cpu: OnlineRig) -> None:
