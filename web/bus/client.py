@@ -61,6 +61,7 @@ __all__ = [
     "find_cpus",
     "no_answer",
     "unread_note",
+    "wait_for_cpus",
 ]
 
 _Answer = TypeVar("_Answer", WatchValues, SyncReport)
@@ -80,6 +81,15 @@ REASON_CHARS = 200
 class ErrorReply(ProtocolError):
     """A query answered with an error (zenoh's ``reply_err``), not the message asked for:
     the text names the key and gives the answerer's reason, on one line."""
+
+
+def refusal(reply: zenoh.Reply) -> bytes | None:
+    """The reason of an error reply; None for an answer, or for zenoh's own ``Timeout``
+    (no answer)."""
+    if reply.err is None:
+        return None
+    said = reply.err.payload.to_bytes()
+    return None if said == ZENOH_TIMEOUT else said
 
 
 def one_line(reason: bytes) -> str:
@@ -128,9 +138,8 @@ class BusClient:
         for reply in replies:
             if reply.ok is not None:
                 return reply.ok.payload.to_bytes()
-            if refused is None and reply.err is not None:
-                said = reply.err.payload.to_bytes()
-                refused = None if said == ZENOH_TIMEOUT else said  # the wait ran out
+            if refused is None:
+                refused = refusal(reply)
         if refused is not None:
             where = key.partition("?")[0]
             raise ErrorReply(f"{where}: the CPU answered with an error: {one_line(refused)}")
@@ -153,6 +162,19 @@ class BusClient:
             return decode(data, kind)
         except ProtocolError as exc:
             raise ProtocolError(f"{key.partition('?')[0]}: unreadable answer: {exc}") from None
+
+    def _ask(
+        self, key: str, kind: type[_Read], payload: bytes | None, wait: float | None
+    ) -> _Read | str | None:
+        """:meth:`_read` for a request that must come back as a reply: the answer, None
+        when nobody answered, or why it is none — the bus failed, an error reply, an
+        answer that does not decode (naming the key)."""
+        try:
+            return self._read(key, kind, payload, wait)
+        except zenoh.ZError as exc:
+            return f"bus error: {type(exc).__name__}"
+        except ProtocolError as exc:  # an error reply (ErrorReply) or no message
+            return str(exc)
 
     def chart(self, fb: str) -> ChartLayout | None:
         """The FB's chart structure, whole (a large one fetched in parts), or None if no
@@ -310,18 +332,10 @@ class BusClient:
         """The CPU's answer to a query of ``key`` as ``kind``; a ``kind`` with its
         ``error`` when the bus fails, no CPU answers in time or the answer is unreadable."""
         wait, asked = timeout or self._timeout, time.monotonic()
-        try:
-            data = self._get_one(key, payload, wait)
-        except zenoh.ZError as exc:
-            return kind(error=f"bus error: {type(exc).__name__}")
-        except ErrorReply as exc:
-            return kind(error=str(exc))
-        if data is None:
-            return kind(error=no_answer(self._keys.cpu, wait, time.monotonic() - asked))
-        try:
-            return decode(data, kind)
-        except ProtocolError as exc:
-            return kind(error=f"{key.partition('?')[0]}: unreadable answer: {exc}")
+        got = self._ask(key, kind, payload, wait)
+        if got is None:
+            got = no_answer(self._keys.cpu, wait, time.monotonic() - asked)
+        return kind(error=got) if isinstance(got, str) else got
 
     def blocks(self) -> BlockSources | None:
         """The S7-SCL blocks the CPU runs, as source, or None if no CPU answers."""
@@ -349,20 +363,12 @@ class BusClient:
         if signer is not None and not command.mac:
             command = signer.sign(command)
         asked = time.monotonic()
-        try:
-            data = self._get_one(self._keys.cmd, encode(command), wait)
-        except zenoh.ZError as exc:
-            return CommandReply(applied=False, reason=f"bus error: {type(exc).__name__}")
-        except ErrorReply as exc:
-            return CommandReply(applied=False, reason=str(exc), op=command.op, fb=command.fb)
-        if data is None:
-            reason = no_answer(self._keys.cpu, wait, time.monotonic() - asked)
-            return CommandReply(applied=False, reason=reason, op=command.op, fb=command.fb)
-        try:
-            return decode(data, CommandReply)
-        except ProtocolError as exc:
-            reason = f"{self._keys.cmd}: unreadable answer: {exc}"
-            return CommandReply(applied=False, reason=reason, op=command.op, fb=command.fb)
+        got = self._ask(self._keys.cmd, CommandReply, encode(command), wait)
+        if got is None:
+            got = no_answer(self._keys.cpu, wait, time.monotonic() - asked)
+        if isinstance(got, str):
+            return CommandReply(applied=False, reason=got, op=command.op, fb=command.fb)
+        return got
 
     def login(self, user: str, password: str = "", *, origin: str = "") -> LoginReply:
         """Log in at the CPU (no password needed without a users file) by SCRAM-SHA-256:
@@ -403,18 +409,10 @@ class BusClient:
             return self._signers.get(token) if token else None
 
     def _ask_login(self, request: LoginRequest) -> LoginReply:
-        try:
-            data = self._get_one(self._keys.login, encode(request))
-        except zenoh.ZError as exc:
-            return LoginReply(ok=False, reason=f"bus error: {type(exc).__name__}")
-        except ErrorReply as exc:
-            return LoginReply(ok=False, reason=str(exc))
-        if data is None:
-            return LoginReply(ok=False, reason=f"no answer from CPU {self._keys.cpu!r}")
-        try:
-            return decode(data, LoginReply)
-        except ProtocolError as exc:
-            return LoginReply(ok=False, reason=f"{self._keys.login}: unreadable answer: {exc}")
+        got = self._ask(self._keys.login, LoginReply, encode(request), None)
+        if got is None:
+            got = f"no answer from CPU {self._keys.cpu!r}"
+        return LoginReply(ok=False, reason=got) if isinstance(got, str) else got
 
     def audit(self) -> AuditList | None:
         """The CPU's last 50 audit rows, or None if no CPU answers."""
@@ -505,8 +503,8 @@ def find_cpus(
     )
     for reply in replies:
         if reply.ok is None:
-            said = reply.err.payload.to_bytes() if reply.err is not None else ZENOH_TIMEOUT
-            if unreadable is not None and said != ZENOH_TIMEOUT:
+            said = refusal(reply)
+            if unreadable is not None and said is not None:
                 unreadable.append(f"an error reply: {one_line(said)}")
             continue
         try:
@@ -517,6 +515,20 @@ def find_cpus(
             continue
         found[status.cpu] = status
     return [found[name] for name in sorted(found)]
+
+
+def wait_for_cpus(
+    session: zenoh.Session, wait_s: float, enough: Callable[[list[CpuStatus]], bool] = bool
+) -> tuple[list[CpuStatus], list[str]]:
+    """:func:`find_cpus` again every 0.2 s until what it finds is ``enough`` (default: any
+    CPU) or ``wait_s`` have passed: the CPUs of the last look, and what it could not read."""
+    deadline = time.monotonic() + wait_s
+    while True:
+        unreadable: list[str] = []
+        cpus = find_cpus(session, unreadable=unreadable)
+        if enough(cpus) or time.monotonic() >= deadline:
+            return cpus, unreadable
+        time.sleep(0.2)
 
 
 def unread_note(unreadable: Sequence[str]) -> str:

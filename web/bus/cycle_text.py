@@ -12,7 +12,7 @@ import time
 from s7graph.engine.profile import describe as describe_cycle
 from s7graph.web.bus.protocol import CycleReport, CycleStats
 
-__all__ = ["comm_line", "cycle_lines", "scan_thread_line"]
+__all__ = ["clock", "comm_line", "cycle_lines", "scan_thread_line"]
 
 
 def cycle_lines(stats: CycleStats) -> list[str]:
@@ -56,8 +56,9 @@ def comm_line(stats: CycleStats) -> str:
 def _cycle_line(report: CycleReport) -> str:
     over = ", overran" if report.overrun else ""
     parts = describe_cycle(report.cycle_ms, report.parts)
-    return f"cycle {report.scan} at {_clock(report.at_ms)}{over}, {parts}"
+    return f"cycle {report.scan} at {clock(report.at_ms)}{over}, {parts}"
 
 
-def _clock(ms: int) -> str:
-    return time.strftime("%H:%M:%S", time.localtime(ms / 1000))
+def clock(ms: int | None) -> str:
+    """A CPU time in ms as the local wall clock's ``HH:MM:SS`` ("" for none)."""
+    return "" if ms is None else time.strftime("%H:%M:%S", time.localtime(ms / 1000))

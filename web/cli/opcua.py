@@ -16,7 +16,6 @@ import logging
 import re
 import sys
 import threading
-import time
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -76,7 +75,7 @@ def opcua_command(
     stop = threading.Event()
     if child:
         _as_child(stop)  # lower its priority before the imports: they take a while
-    from s7graph.web.bus.client import find_cpus, unread_note
+    from s7graph.web.bus.client import unread_note, wait_for_cpus
     from s7graph.web.bus.protocol import ProtocolError
     from s7graph.web.bus.session import open_session
     from s7graph.web.opcua.server import OpcuaOptions, OpcuaServer, listen_problem, loopback
@@ -98,13 +97,9 @@ def opcua_command(
     session = None
     try:
         session = open_session(connect=net.connect, tls=net.tls, login=net.login)
-        deadline = time.monotonic() + wait_s
-        unreadable: list[str] = []
-        cpus = find_cpus(session, unreadable=unreadable)
-        while not any(cpu in (None, s.cpu) for s in cpus) and time.monotonic() < deadline:
-            time.sleep(0.2)
-            unreadable.clear()
-            cpus = find_cpus(session, unreadable=unreadable)
+        cpus, unreadable = wait_for_cpus(
+            session, wait_s, lambda found: any(cpu in (None, s.cpu) for s in found)
+        )
         chosen = next((s for s in cpus if cpu in (None, s.cpu)), None)
         if chosen is None:
             found = ", ".join(s.cpu for s in cpus) or "none"

@@ -38,6 +38,7 @@ __all__ = [
     "PASSWORD_ENV",
     "ask",
     "download_command",
+    "fb_to_read",
     "list_forces",
     "on_bus",
     "send_command",
@@ -149,6 +150,17 @@ def send_command(
     if reply.reason:  # what an applied command will not do (a fault that stays latched)
         print(f"s7graph: {reply.reason}")
     return 0
+
+
+def fb_to_read(status: CpuStatus, fb: str | None, *, without: str) -> tuple[str, str]:
+    """The FB a read of the CPU of ``status`` names — ``fb``, or the CPU's first — and "";
+    or "" and why there is none: ``without`` when the CPU runs no GRAPH FB, or ``fb`` is
+    none it runs."""
+    if not status.fbs:
+        return "", without
+    if fb is not None and fb not in status.fbs:
+        return "", f"this CPU runs no FB {fb!r}; it runs {', '.join(status.fbs)}"
+    return fb or status.fbs[0], ""
 
 
 def ask(net: NetOptions, query: Callable[[BusClient], T | None]) -> T | int:

@@ -14,7 +14,7 @@ import sys
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import SyncReport, encode
 from s7graph.web.cli.net import NetOptions
-from s7graph.web.cli.remote import ask
+from s7graph.web.cli.remote import ask, fb_to_read
 
 __all__ = ["TIMEOUT_S", "sync_command", "sync_lines"]
 
@@ -45,11 +45,10 @@ def _report(client: BusClient, fb: str | None) -> SyncReport | None:
     status = client.status()
     if status is None:
         return None
-    if not status.fbs:
-        return SyncReport(error="this CPU runs no GRAPH FB: nothing to synchronize")
-    if fb is not None and fb not in status.fbs:
-        return SyncReport(error=f"this CPU runs no FB {fb!r}; it runs {', '.join(status.fbs)}")
-    return client.synchronization(fb or status.fbs[0], timeout=TIMEOUT_S)
+    name, why = fb_to_read(status, fb, without="this CPU runs no GRAPH FB: nothing to synchronize")
+    if why:
+        return SyncReport(error=why)
+    return client.synchronization(name, timeout=TIMEOUT_S)
 
 
 def sync_command(net: NetOptions, *, fb: str | None, as_json: bool = False) -> int:

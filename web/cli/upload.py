@@ -18,7 +18,7 @@ from pathlib import Path, PurePath
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import ChartSource
 from s7graph.web.cli.net import NetOptions
-from s7graph.web.cli.remote import ask
+from s7graph.web.cli.remote import ask, fb_to_read
 
 __all__ = ["SYMBOLS_FILE", "files_of", "upload_command"]
 
@@ -53,11 +53,10 @@ def _source(client: BusClient, fb: str | None) -> ChartSource | _Refused | None:
     status = client.status()
     if status is None:
         return None
-    if not status.fbs:
-        return _Refused("this CPU runs no GRAPH FB (a program of blocks): no chart to upload")
-    if fb is not None and fb not in status.fbs:
-        return _Refused(f"this CPU runs no FB {fb!r}; it runs {', '.join(status.fbs)}")
-    name = fb or status.fbs[0]
+    without = "this CPU runs no GRAPH FB (a program of blocks): no chart to upload"
+    name, why = fb_to_read(status, fb, without=without)
+    if why:
+        return _Refused(why)
     source = client.source(name)
     if source is None:
         return _Refused(f"FB {name} gave no source (the CPU did not answer in time)")

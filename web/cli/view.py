@@ -18,9 +18,8 @@ import contextlib
 import os
 import sys
 import threading
-import time
 
-from s7graph.web.bus.client import find_cpus, unread_note
+from s7graph.web.bus.client import unread_note, wait_for_cpus
 from s7graph.web.bus.session import open_session
 from s7graph.web.cli.net import NetOptions, is_loopback_host
 from s7graph.web.cli.stopping import wait_until_stopped
@@ -56,13 +55,7 @@ def web_command(
         return _fail(problem)
     try:
         with open_session(connect=net.connect, tls=net.tls, login=net.login) as probe:
-            deadline = time.monotonic() + wait_s
-            unreadable: list[str] = []
-            cpus = find_cpus(probe, unreadable=unreadable)
-            while not cpus and time.monotonic() < deadline:
-                time.sleep(0.2)
-                unreadable.clear()
-                cpus = find_cpus(probe, unreadable=unreadable)
+            cpus, unreadable = wait_for_cpus(probe, wait_s)
     except Exception as exc:
         return _fail(f"cannot join the bus: {type(exc).__name__}: {exc}{net.join_hint()}")
     if not cpus:

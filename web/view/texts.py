@@ -8,11 +8,10 @@ goes through ``html.escape`` here; nothing else builds HTML for the page.
 from __future__ import annotations
 
 import html
-import time
 from collections.abc import Iterable, Mapping
 
 from s7graph.sequencer.checks.diagnostics import Diagnostic
-from s7graph.web.bus.cycle_text import cycle_lines
+from s7graph.web.bus.cycle_text import clock, cycle_lines
 from s7graph.web.bus.protocol import (
     AlarmEntry,
     AlarmHistory,
@@ -69,10 +68,6 @@ def title(prefix: str, number: int, name: str, width: int) -> str:
 
 def small(body: str) -> str:
     return f'<div style="font-size:0.8em;line-height:1.5">{body}</div>'
-
-
-def clock(ms: int | None) -> str:
-    return "" if ms is None else time.strftime("%H:%M:%S", time.localtime(ms / 1000))
 
 
 def ack_label(entry: AlarmEntry) -> str:
