@@ -7,6 +7,9 @@ CPU ("Opening a block online", in the STEP 7 programming manual). Each block is 
 lines (``web.harness.scl.block_texts``), in source order; file names go without their
 directory. One message stays under the bus's limit: the blocks after the first that
 would not fit are only named (``left_out``).
+
+The chart's source (``fb/<fb>/source``) carries the same sources whole, file by file
+(:func:`source_files`), for ``s7graph upload``: what a download's ``blocks`` replace.
 """
 
 from __future__ import annotations
@@ -18,7 +21,7 @@ from s7graph.web.bus.protocol import MAX_MESSAGE_BYTES, BlockSource, BlockSource
 from s7graph.web.bus.publisher import BusPublisher
 from s7graph.web.harness.scl import SclSources, block_texts
 
-__all__ = ["MAX_TEXT_BYTES", "block_sources", "serve_blocks"]
+__all__ = ["MAX_TEXT_BYTES", "block_sources", "serve_blocks", "source_files"]
 
 MAX_TEXT_BYTES = MAX_MESSAGE_BYTES * 3 // 4
 """The texts one message carries at most (UTF-8; JSON escapes take some of the rest)."""
@@ -47,6 +50,32 @@ def block_sources(sources: SclSources | None) -> BlockSources:
             )
         )
     return BlockSources(blocks=blocks, left_out=left_out)
+
+
+def _size(text: str) -> int:
+    """About what ``text`` takes in a JSON message (escaped line breaks, its name)."""
+    return len(text.encode()) + 2 * text.count("\n") + 300
+
+
+def source_files(
+    sources: SclSources | None, *, beside: str = ""
+) -> tuple[dict[str, str], list[str]]:
+    """The S7-SCL sources of ``sources`` whole, by file name (no directory), in order, for
+    a message that carries ``beside`` too; and the names of those that would not fit under
+    :data:`MAX_TEXT_BYTES` (the first that does not and all after it)."""
+    files: dict[str, str] = {}
+    left_out: list[str] = []
+    if sources is None:
+        return files, left_out
+    room = MAX_TEXT_BYTES - _size(beside)
+    for file, text in zip(sources.files, sources.texts, strict=False):
+        name = PurePath(file).name[:256]
+        if left_out or _size(text) > room or name in files:
+            left_out.append(name)
+            continue
+        room -= _size(text)
+        files[name] = text
+    return files, left_out
 
 
 def serve_blocks(publisher: BusPublisher, read: Callable[[], SclSources | None]) -> None:

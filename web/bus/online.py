@@ -49,6 +49,7 @@ from s7graph.sequencer.change.online import SwapRefused, SwapReport, swap
 from s7graph.sequencer.compiled import CompiledChart
 from s7graph.sequencer.text.format import format_chart
 from s7graph.web.access.audit import Facts
+from s7graph.web.bus.block_sources import source_files
 from s7graph.web.bus.compiler import Compiled, Compiler, CompileRefused, Opened, Summary
 from s7graph.web.bus.gate import Gate, with_note
 from s7graph.web.bus.live import LiveChart, LiveGraph
@@ -195,6 +196,7 @@ class OnlineChange:
     def _source_bytes(self) -> bytes:
         v = self.current
         name = self.path.name if self.path is not None else f"{v.cc.name}.s7g"
+        blocks, left_out = source_files(v.scl, beside=v.text + self.symbols_text)
         return encode(
             ChartSource(
                 fb=self.live.fb,
@@ -202,6 +204,8 @@ class OnlineChange:
                 file=name[:256],
                 text=v.text,
                 symbols=self.symbols_text,
+                blocks=blocks,
+                left_out=left_out,
             )
         )
 

@@ -357,13 +357,18 @@ class ChartPart(_Msg, frozen=True, kw_only=True):
 class ChartSource(_Msg, frozen=True, kw_only=True):
     """The running chart as ``.s7g`` text, for an editor (``fb/<name>/source``): its
     ``version`` (as in :class:`ChartLayout`), the file it came from (a name, no directory),
-    and the text of the symbol table it was compiled with."""
+    the text of the symbol table it was compiled with, and ``blocks``: the S7-SCL sources
+    the CPU runs beside it, whole, by file name (no directory) in the CPU's order — those a
+    download's ``blocks`` replace; ``left_out``: the names of those that did not fit in
+    one message."""
 
     fb: Name
     version: Count = 0
     file: ShortText = ""
     text: Annotated[str, Meta(max_length=MAX_SOURCE)]
     symbols: Annotated[str, Meta(max_length=MAX_SOURCE)] = ""
+    blocks: Annotated[dict[ShortText, str], Meta(max_length=4096)] = {}
+    left_out: Annotated[list[ShortText], Meta(max_length=4096)] = []
 
 
 class BlockSource(_Msg, frozen=True, kw_only=True):

@@ -858,8 +858,8 @@ def upload(
         Path | None,
         typer.Option(
             "--to",
-            help="Write the chart and its symbol table into this folder (default: the "
-            "chart's text to stdout).",
+            help="Write the chart, its symbol table and the S7-SCL sources the CPU runs "
+            "beside it into this folder (default: the chart's text to stdout).",
         ),
     ] = None,
     force: Annotated[
@@ -867,7 +867,7 @@ def upload(
     ] = False,
 ) -> None:
     """Upload the chart an FB runs from the CPU (STEP 7's "Upload from device"): the .s7g
-    text it compiled and the symbol table it was compiled with."""
+    text it compiled, the symbol table it was compiled with, its S7-SCL sources."""
     from s7graph.web.cli.upload import upload_command
 
     net = _net(cpu=cpu, connect=connect, tls_ca=tls_ca)

@@ -1,11 +1,11 @@
 """``s7graph upload --connect EP --cpu NAME [--fb FB] [--to DIR]``: the chart an FB runs,
 back from the CPU — STEP 7's "Upload from device": the ``.s7g`` text the CPU compiled (a
-download from the page included) and the symbol table it was compiled with
-(``fb/<fb>/source``). Without ``--to`` the chart's text goes to stdout; with it, the chart
-is written to ``DIR/<its file name>`` (``<FB>.s7g`` when the CPU knows none) and the symbol
-table to ``DIR/symbols.txt``, neither over an existing file unless ``--force``. A read: no
-login. The CPU's S7-SCL blocks are not uploaded: it keeps each block's own lines, not the
-source files they came from (their types, the text between blocks); the page shows them.
+download from the page included), the symbol table it was compiled with and the S7-SCL
+sources it runs beside the chart (``fb/<fb>/source``). Without ``--to`` the chart's text
+goes to stdout; with it, the chart is written to ``DIR/<its file name>`` (``<FB>.s7g``
+when the CPU knows none), the symbol table to ``DIR/symbols.txt`` and each S7-SCL source
+under its own file name — what ``s7graph download DIR/<chart> --blocks DIR/<source>``
+takes back — none over an existing file unless ``--force``. A read: no login.
 """
 
 from __future__ import annotations
@@ -14,13 +14,14 @@ import functools
 import sys
 from dataclasses import dataclass
 from pathlib import Path, PurePath
+from typing import NamedTuple
 
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import ChartSource
 from s7graph.web.cli.net import NetOptions
 from s7graph.web.cli.remote import ask, fb_to_read
 
-__all__ = ["SYMBOLS_FILE", "files_of", "upload_command"]
+__all__ = ["SYMBOLS_FILE", "Upload", "files_of", "upload_command"]
 
 SYMBOLS_FILE = "symbols.txt"
 """The name the symbol table is written under (the examples' own)."""
@@ -33,18 +34,41 @@ class _Refused:
     reason: str
 
 
-def files_of(source: ChartSource) -> list[tuple[str, str]]:
-    """The files an upload of ``source`` writes, as (name, text): the chart under the stem
-    of the file name the CPU gives and ``.s7g`` — only the name's last part, so a name from
-    the bus never leaves the folder — or ``<FB>.s7g``; then the symbol table, if the chart
-    has one."""
-    stem = PurePath(source.file.replace("\\", "/")).stem
-    usable = stem not in ("", ".", "..") and stem.isprintable()
-    name = f"{stem if usable else source.fb}.s7g"
-    files = [(name, source.text)]
+class Upload(NamedTuple):
+    """What an upload writes — (name, text, what it is), the chart first — and, a line
+    each, what it does not."""
+
+    files: list[tuple[str, str, str]]
+    skipped: list[str]
+
+
+def _file_name(name: str) -> str:
+    """The last part of a file name from the bus ("" when none is usable): a name from the
+    bus never leaves the folder."""
+    last = PurePath(name.replace("\\", "/")).name
+    return last if last not in ("", ".", "..") and last.isprintable() else ""
+
+
+def files_of(source: ChartSource) -> Upload:
+    """The files an upload of ``source`` writes: the chart under the stem of the file name
+    the CPU gives and ``.s7g``, or ``<FB>.s7g``; the symbol table, if the chart has one;
+    each S7-SCL source under its own name — skipped, with a line saying why, when that
+    name is no file name or taken, or when the CPU left the source out of its message."""
+    usable = _file_name(source.file)
+    files = [(f"{PurePath(usable).stem if usable else source.fb}.s7g", source.text, "chart")]
     if source.symbols.strip():
-        files.append((SYMBOLS_FILE, source.symbols))
-    return files
+        files.append((SYMBOLS_FILE, source.symbols, "its symbol table"))
+    skipped: list[str] = []
+    for name, text in source.blocks.items():
+        usable = _file_name(name)
+        if usable and usable not in [f[0] for f in files]:
+            files.append((usable, text, "an S7-SCL source it runs"))
+        else:
+            why = "the name of a file written before it" if usable else "no file name here"
+            skipped.append(f"S7-SCL source {name!r} not written: {why}")
+    for name in source.left_out:
+        skipped.append(f"S7-SCL source {name!r} not uploaded: too large for one bus message")
+    return Upload(files, skipped)
 
 
 def _source(client: BusClient, fb: str | None) -> ChartSource | _Refused | None:
@@ -75,19 +99,29 @@ def upload_command(
     if isinstance(source, _Refused):
         print(f"s7graph: error: {net.cpu}: {source.reason}", file=sys.stderr)
         return 2
+    upload = files_of(source)
     if to is None:
         sys.stdout.write(source.text if source.text.endswith("\n") else source.text + "\n")
+        if source.blocks or source.left_out:
+            names = ", ".join([*source.blocks, *source.left_out])
+            print(
+                f"s7graph: the CPU runs S7-SCL sources beside it ({names}): --to DIR writes them",
+                file=sys.stderr,
+            )
         return 0
-    files = [(to / name, text) for name, text in files_of(source)]
+    files = [(to / name, text) for name, text, _ in upload.files]
     problem = _write(files, force=force)
     if problem:
         print(f"s7graph: error: {problem}", file=sys.stderr)
         return 2
-    lines = len(source.text.splitlines())
-    wrote = f"{source.fb} version {source.version} of {net.cpu}"
-    print(f"s7graph: {wrote} → {files[0][0]} ({lines} lines)")
-    if len(files) > 1:
-        print(f"s7graph: its symbol table → {files[1][0]}")
+    for (path, text), (_, _, what) in zip(files, upload.files, strict=True):
+        lines = f"({len(text.splitlines())} lines)"
+        if what == "chart":
+            print(f"s7graph: {source.fb} version {source.version} of {net.cpu} → {path} {lines}")
+        else:
+            print(f"s7graph: {what} → {path} {lines}")
+    for line in upload.skipped:
+        print(f"s7graph: warning: {line}", file=sys.stderr)
     return 0
 
 

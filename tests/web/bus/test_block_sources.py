@@ -1,17 +1,29 @@
 """``s7graph/<cpu>/blocks`` on a real bus: the S7-SCL blocks the CPU runs, read when asked
 (after a reload, the new ones); file names without their folder; one message stays under
-the bus's limit, the blocks that do not fit only named (docs/bus.md, "Keys")."""
+the bus's limit, the blocks that do not fit only named (docs/bus.md, "Keys"). The same
+sources whole, file by file, for the chart's ``source`` key (``source_files``)."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from s7graph.web.bus.block_sources import MAX_TEXT_BYTES, block_sources, serve_blocks
+from s7graph.web.bus.block_sources import (
+    MAX_TEXT_BYTES,
+    block_sources,
+    serve_blocks,
+    source_files,
+)
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.cpu_side import CpuSide
-from s7graph.web.bus.protocol import MAX_MESSAGE_BYTES, BlockSources, decode, encode
+from s7graph.web.bus.protocol import (
+    MAX_MESSAGE_BYTES,
+    BlockSources,
+    ChartSource,
+    decode,
+    encode,
+)
 from s7graph.web.bus.session import open_session
-from s7graph.web.harness.scl import SclSources, compile_sources
+from s7graph.web.harness.scl import SclSources, compile_sources, compile_texts
 
 SOURCE = """FUNCTION FC{n} : INT
 VAR_INPUT a : INT; END_VAR
@@ -59,3 +71,22 @@ def test_blocks_past_the_message_limit_are_only_named(tmp_path: Path) -> None:
     assert message.left_out == ["FC3", "FC4"]
     data = encode(message)
     assert len(data) < MAX_MESSAGE_BYTES and decode(data, BlockSources) == message
+
+
+def test_whole_sources_for_the_chart_go_by_file_name_and_past_the_limit_only_named(
+    tmp_path: Path,
+) -> None:
+    """Each source whole under its file's name (no folder), in order; from the first that
+    would not fit beside the chart's own text, only named — the message stays readable."""
+    assert source_files(None) == ({}, [])
+    small, other = SOURCE.format(n=1, pad=""), SOURCE.format(n=3, pad="")
+    big = SOURCE.format(n=2, pad=" // " + "x" * (MAX_TEXT_BYTES // 2))
+    texts = [("/plant/a.scl", small), ("/plant/b.scl", big), ("/plant/c.scl", other)]
+    sources = compile_texts(texts)
+    assert source_files(sources) == ({"a.scl": small, "b.scl": big, "c.scl": other}, [])
+    chart = "x" * (MAX_TEXT_BYTES // 2)
+    files, left_out = source_files(sources, beside=chart)
+    assert (files, left_out) == ({"a.scl": small}, ["b.scl", "c.scl"])
+    message = ChartSource(fb="F", text=chart, blocks=files, left_out=left_out)
+    data = encode(message)
+    assert len(data) < MAX_MESSAGE_BYTES and decode(data, ChartSource) == message

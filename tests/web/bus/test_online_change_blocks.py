@@ -23,6 +23,7 @@ from s7graph.web.access.audit import read_audit
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import Command, CommandReply
 from s7graph.web.bus.session import open_session
+from s7graph.web.cli import main
 from s7graph.web.commands import Download, DownloadArgs, checked, make_command
 from s7graph.web.harness.session import ChartSession
 from tests.paths import ROOT
@@ -56,6 +57,7 @@ class Cpu:
     path: Path
     state: Path
     token: str
+    bus: list[str]
 
     def send(self, op: str, **args: object) -> CommandReply:
         command = Command(op=op, fb="Seq", user="eng", token=self.token, args=args)  # type: ignore[arg-type]
@@ -88,7 +90,7 @@ def cpu(tmp_path: Path, bus_certs: BusCerts) -> Iterator[Cpu]:
         assert wait_until(lambda: client.status() is not None)
         login = client.login("eng", PASSWORD)
         assert login.ok, login.reason
-        yield Cpu(rig.session, client, rig.path, rig.state, login.token)
+        yield Cpu(rig.session, client, rig.path, rig.state, login.token, rig.bus)
 
 
 def test_a_download_swaps_changed_blocks_in_keeping_the_instance_values_by_name(
@@ -130,6 +132,30 @@ def test_a_download_swaps_changed_blocks_in_keeping_the_instance_values_by_name(
     assert "S7-SCL blocks changed: fb17.scl" in back.lines
     assert not any(line.startswith("DB10 ") for line in asked.lines)  # the code only
     assert cpu.grows_by(1000) and block_file.read_text(encoding="utf-8") == CHANGED
+
+
+def test_upload_brings_back_the_chart_with_the_scl_sources_the_cpu_runs(
+    cpu: Cpu, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """STEP 7's "Upload from device" with blocks: the chart and each S7-SCL source the CPU
+    runs — after a download, those it brought — under its file name in the folder; without
+    ``--to``, stderr names the sources."""
+    bus = ["--cpu", "cpu1", *cpu.bus]
+    folder = tmp_path / "uploaded"
+    assert main(["upload", *bus, "--to", str(folder)]) == 0
+    assert (folder / "fb17.scl").read_text(encoding="utf-8") == BLOCKS
+    said = capsys.readouterr().out.splitlines()
+    assert said[1] == f"s7graph: an S7-SCL source it runs → {folder / 'fb17.scl'} (5 lines)"
+    assert cpu.send("download", source=CHART, blocks={"fb17.scl": CHANGED}).applied
+    assert main(["upload", *bus, "--to", str(folder), "--force"]) == 0
+    assert (folder / "seq.s7g").read_text(encoding="utf-8") == CHART
+    assert (folder / "fb17.scl").read_text(encoding="utf-8") == CHANGED
+    assert main(["upload", *bus]) == 0
+    out = capsys.readouterr()
+    assert out.out.endswith(CHART)
+    assert out.err == (
+        "s7graph: the CPU runs S7-SCL sources beside it (fb17.scl): --to DIR writes them\n"
+    )
 
 
 def test_refusals_give_a_reason_and_the_old_blocks_run_on(cpu: Cpu) -> None:
