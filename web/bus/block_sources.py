@@ -8,8 +8,9 @@ lines (``web.harness.scl.block_texts``), in source order; file names go without 
 directory. One message stays under the bus's limit: the blocks after the first that
 would not fit are only named (``left_out``).
 
-The chart's source (``fb/<fb>/source``) carries the same sources whole, file by file
-(:func:`source_files`), for ``s7graph upload``: what a download's ``blocks`` replace.
+The same message, and the chart's source (``fb/<fb>/source``), carry the sources whole,
+file by file (:func:`source_files`), for ``s7graph upload``: what a download's ``blocks``
+replace, or a program of blocks as it was loaded.
 """
 
 from __future__ import annotations
@@ -27,19 +28,24 @@ MAX_TEXT_BYTES = MAX_MESSAGE_BYTES * 3 // 4
 """The texts one message carries at most (UTF-8; JSON escapes take some of the rest)."""
 
 
+def _size(text: str) -> int:
+    """About what ``text`` takes in a JSON message (escaped line breaks, its name)."""
+    return len(text.encode()) + 2 * text.count("\n") + 300
+
+
 def block_sources(sources: SclSources | None) -> BlockSources:
-    """The message of ``sources`` (None: no S7-SCL blocks, an empty list)."""
+    """The message of ``sources`` (None: no S7-SCL blocks, an empty list): each block's
+    text, then — in the room the blocks leave — each source whole (:func:`source_files`)."""
     if sources is None:
         return BlockSources()
     blocks: list[BlockSource] = []
     left_out: list[str] = []
     room = MAX_TEXT_BYTES
     for b in block_texts(sources):
-        size = len(b.text.encode()) + 2 * b.text.count("\n") + 200
-        if left_out or size > room:
+        if left_out or _size(b.text) > room:
             left_out.append(b.label)
             continue
-        room -= size
+        room -= _size(b.text)
         blocks.append(
             BlockSource(
                 label=b.label,
@@ -49,25 +55,22 @@ def block_sources(sources: SclSources | None) -> BlockSources:
                 text=b.text,
             )
         )
-    return BlockSources(blocks=blocks, left_out=left_out)
-
-
-def _size(text: str) -> int:
-    """About what ``text`` takes in a JSON message (escaped line breaks, its name)."""
-    return len(text.encode()) + 2 * text.count("\n") + 300
+    files, files_left_out = source_files(sources, room=room)
+    return BlockSources(
+        blocks=blocks, left_out=left_out, files=files, files_left_out=files_left_out
+    )
 
 
 def source_files(
-    sources: SclSources | None, *, beside: str = ""
+    sources: SclSources | None, *, room: int = MAX_TEXT_BYTES
 ) -> tuple[dict[str, str], list[str]]:
-    """The S7-SCL sources of ``sources`` whole, by file name (no directory), in order, for
-    a message that carries ``beside`` too; and the names of those that would not fit under
-    :data:`MAX_TEXT_BYTES` (the first that does not and all after it)."""
+    """The S7-SCL sources of ``sources`` whole, by file name (no directory), in order, as
+    far as they fit in ``room`` bytes of a message; and the names of the others (the first
+    that does not fit, all after it, and a second source of a name already taken)."""
     files: dict[str, str] = {}
     left_out: list[str] = []
     if sources is None:
         return files, left_out
-    room = MAX_TEXT_BYTES - _size(beside)
     for file, text in zip(sources.files, sources.texts, strict=False):
         name = PurePath(file).name[:256]
         if left_out or _size(text) > room or name in files:

@@ -49,7 +49,7 @@ from s7graph.sequencer.change.online import SwapRefused, SwapReport, swap
 from s7graph.sequencer.compiled import CompiledChart
 from s7graph.sequencer.text.format import format_chart
 from s7graph.web.access.audit import Facts
-from s7graph.web.bus.block_sources import source_files
+from s7graph.web.bus.block_sources import MAX_TEXT_BYTES, source_files
 from s7graph.web.bus.compiler import Compiled, Compiler, CompileRefused, Opened, Summary
 from s7graph.web.bus.gate import Gate, with_note
 from s7graph.web.bus.live import LiveChart, LiveGraph
@@ -196,7 +196,8 @@ class OnlineChange:
     def _source_bytes(self) -> bytes:
         v = self.current
         name = self.path.name if self.path is not None else f"{v.cc.name}.s7g"
-        blocks, left_out = source_files(v.scl, beside=v.text + self.symbols_text)
+        room = MAX_TEXT_BYTES - len(v.text.encode()) - len(self.symbols_text.encode())
+        blocks, left_out = source_files(v.scl, room=room)
         return encode(
             ChartSource(
                 fb=self.live.fb,

@@ -384,10 +384,14 @@ class BlockSource(_Msg, frozen=True, kw_only=True):
 
 class BlockSources(_Msg, frozen=True, kw_only=True):
     """The S7-SCL blocks the CPU was loaded with, as source (``blocks``), in source order;
-    ``left_out``: the labels of those that did not fit in one message."""
+    ``left_out``: the labels of those that did not fit in one message; ``files``: the
+    sources whole, by file name (no directory), in the room the blocks leave;
+    ``files_left_out``: the names of those that did not fit."""
 
     blocks: Annotated[list[BlockSource], Meta(max_length=4096)] = []
     left_out: Annotated[list[Label], Meta(max_length=4096)] = []
+    files: Annotated[dict[ShortText, str], Meta(max_length=4096)] = {}
+    files_left_out: Annotated[list[ShortText], Meta(max_length=4096)] = []
 
 
 class ProjectFile(_Msg, frozen=True, kw_only=True):

@@ -1,27 +1,30 @@
-"""``s7graph upload --connect EP --cpu NAME [--fb FB] [--to DIR]``: the chart an FB runs,
-back from the CPU — STEP 7's "Upload from device": the ``.s7g`` text the CPU compiled (a
-download from the page included), the symbol table it was compiled with and the S7-SCL
-sources it runs beside the chart (``fb/<fb>/source``). Without ``--to`` the chart's text
-goes to stdout; with it, the chart is written to ``DIR/<its file name>`` (``<FB>.s7g``
-when the CPU knows none), the symbol table to ``DIR/symbols.txt`` and each S7-SCL source
-under its own file name — what ``s7graph download DIR/<chart> --blocks DIR/<source>``
-takes back — none over an existing file unless ``--force``. A read: no login.
+"""``s7graph upload --connect EP --cpu NAME [--fb FB] [--to DIR]``: the program back from
+the CPU — STEP 7's "Upload from device". For a chart (``fb/<fb>/source``): the ``.s7g``
+text the CPU compiled (a download from the page included), the symbol table it was
+compiled with and the S7-SCL sources it runs beside the chart. Without ``--to`` the chart's
+text goes to stdout; with it, the chart is written to ``DIR/<its file name>``
+(``<FB>.s7g`` when the CPU knows none), the symbol table to ``DIR/symbols.txt`` and each
+S7-SCL source under its own file name — what ``s7graph download DIR/<chart> --blocks
+DIR/<source>`` takes back. A CPU that runs a program of S7-SCL blocks without a chart gives
+its sources (``blocks``): one to stdout, or each into ``DIR``. No file is written over
+without ``--force``. A read: no login.
 """
 
 from __future__ import annotations
 
 import functools
 import sys
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path, PurePath
 from typing import NamedTuple
 
 from s7graph.web.bus.client import BusClient
-from s7graph.web.bus.protocol import ChartSource
+from s7graph.web.bus.protocol import BlockSources, ChartSource
 from s7graph.web.cli.net import NetOptions
 from s7graph.web.cli.remote import ask, fb_to_read
 
-__all__ = ["SYMBOLS_FILE", "Upload", "files_of", "upload_command"]
+__all__ = ["SYMBOLS_FILE", "Upload", "files_of", "program_files", "upload_command"]
 
 SYMBOLS_FILE = "symbols.txt"
 """The name the symbol table is written under (the examples' own)."""
@@ -35,11 +38,11 @@ class _Refused:
 
 
 class Upload(NamedTuple):
-    """What an upload writes — (name, text, what it is), the chart first — and, a line
-    each, what it does not."""
+    """What an upload writes — (name, text, what it is), the chart first — and what it
+    does not: (the name the CPU gives, why)."""
 
     files: list[tuple[str, str, str]]
-    skipped: list[str]
+    skipped: list[tuple[str, str]]
 
 
 def _file_name(name: str) -> str:
@@ -47,6 +50,25 @@ def _file_name(name: str) -> str:
     bus never leaves the folder."""
     last = PurePath(name.replace("\\", "/")).name
     return last if last not in ("", ".", "..") and last.isprintable() else ""
+
+
+def _add_sources(
+    files: list[tuple[str, str, str]],
+    skipped: list[tuple[str, str]],
+    sources: Mapping[str, str],
+    left_out: Sequence[str],
+    what: str,
+) -> None:
+    """Add each of ``sources`` to ``files`` under its own name, or a line to ``skipped``:
+    its name is no file name here or one written before it, or the CPU left it out."""
+    for name, text in sources.items():
+        usable = _file_name(name)
+        if usable and usable not in [f[0] for f in files]:
+            files.append((usable, text, what))
+        else:
+            why = "the name of a file written before it" if usable else "no file name here"
+            skipped.append((name, f"not written: {why}"))
+    skipped += [(name, "not uploaded: too large for one bus message") for name in left_out]
 
 
 def files_of(source: ChartSource) -> Upload:
@@ -58,27 +80,34 @@ def files_of(source: ChartSource) -> Upload:
     files = [(f"{PurePath(usable).stem if usable else source.fb}.s7g", source.text, "chart")]
     if source.symbols.strip():
         files.append((SYMBOLS_FILE, source.symbols, "its symbol table"))
-    skipped: list[str] = []
-    for name, text in source.blocks.items():
-        usable = _file_name(name)
-        if usable and usable not in [f[0] for f in files]:
-            files.append((usable, text, "an S7-SCL source it runs"))
-        else:
-            why = "the name of a file written before it" if usable else "no file name here"
-            skipped.append(f"S7-SCL source {name!r} not written: {why}")
-    for name in source.left_out:
-        skipped.append(f"S7-SCL source {name!r} not uploaded: too large for one bus message")
+    skipped: list[tuple[str, str]] = []
+    _add_sources(files, skipped, source.blocks, source.left_out, "an S7-SCL source it runs")
     return Upload(files, skipped)
 
 
-def _source(client: BusClient, fb: str | None) -> ChartSource | _Refused | None:
-    """The source of ``fb`` (default: the CPU's first FB); None when the CPU does not
-    answer."""
+def program_files(blocks: BlockSources) -> Upload:
+    """The files an upload of a program of S7-SCL blocks writes: each source under its own
+    name, skipped as :func:`files_of` skips them."""
+    files: list[tuple[str, str, str]] = []
+    skipped: list[tuple[str, str]] = []
+    _add_sources(files, skipped, blocks.files, blocks.files_left_out, "an S7-SCL source")
+    return Upload(files, skipped)
+
+
+def _source(client: BusClient, fb: str | None) -> ChartSource | BlockSources | _Refused | None:
+    """The source of ``fb`` (default: the CPU's first FB), or of the CPU's program of
+    S7-SCL blocks when it runs no GRAPH FB; None when the CPU does not answer."""
     status = client.status()
     if status is None:
         return None
-    without = "this CPU runs no GRAPH FB (a program of blocks): no chart to upload"
-    name, why = fb_to_read(status, fb, without=without)
+    if not status.fbs and fb is None:
+        blocks = client.blocks()
+        if blocks is None:
+            return None
+        if not blocks.files and not blocks.files_left_out:
+            return _Refused("this CPU runs no GRAPH FB and no S7-SCL source: nothing to upload")
+        return blocks
+    name, why = fb_to_read(status, fb, without="this CPU runs no GRAPH FB: no chart to upload")
     if why:
         return _Refused(why)
     source = client.source(name)
@@ -90,38 +119,58 @@ def _source(client: BusClient, fb: str | None) -> ChartSource | _Refused | None:
 def upload_command(
     net: NetOptions, *, fb: str | None = None, to: Path | None = None, force: bool = False
 ) -> int:
-    """Upload the chart ``fb`` (default: the CPU's first FB) runs: to stdout, or into the
-    folder ``to``; 0, or 2 when the CPU does not answer, runs no such FB, or a file
-    exists (without ``force``) or cannot be written."""
-    source: ChartSource | _Refused | int = ask(net, functools.partial(_source, fb=fb))
+    """Upload the chart ``fb`` (default: the CPU's first FB) runs, or the CPU's program of
+    S7-SCL blocks: to stdout, or into the folder ``to``; 0, or 2 when the CPU does not
+    answer, runs no such FB, a file exists (without ``force``) or cannot be written, or
+    a program of several sources is asked for without ``to``."""
+    source: ChartSource | BlockSources | _Refused | int = ask(
+        net, functools.partial(_source, fb=fb)
+    )
     if isinstance(source, int):
         return source
     if isinstance(source, _Refused):
         print(f"s7graph: error: {net.cpu}: {source.reason}", file=sys.stderr)
         return 2
-    upload = files_of(source)
+    upload = files_of(source) if isinstance(source, ChartSource) else program_files(source)
     if to is None:
-        sys.stdout.write(source.text if source.text.endswith("\n") else source.text + "\n")
-        if source.blocks or source.left_out:
-            names = ", ".join([*source.blocks, *source.left_out])
-            print(
-                f"s7graph: the CPU runs S7-SCL sources beside it ({names}): --to DIR writes them",
-                file=sys.stderr,
-            )
-        return 0
+        return _to_stdout(net, upload)
     files = [(to / name, text) for name, text, _ in upload.files]
     problem = _write(files, force=force)
     if problem:
         print(f"s7graph: error: {problem}", file=sys.stderr)
         return 2
+    if isinstance(source, BlockSources):
+        print(f"s7graph: the program of {net.cpu} (no GRAPH FB):")
     for (path, text), (_, _, what) in zip(files, upload.files, strict=True):
         lines = f"({len(text.splitlines())} lines)"
-        if what == "chart":
+        if what == "chart" and isinstance(source, ChartSource):
             print(f"s7graph: {source.fb} version {source.version} of {net.cpu} → {path} {lines}")
         else:
             print(f"s7graph: {what} → {path} {lines}")
-    for line in upload.skipped:
-        print(f"s7graph: warning: {line}", file=sys.stderr)
+    for name, why in upload.skipped:
+        print(f"s7graph: warning: S7-SCL source {name!r} {why}", file=sys.stderr)
+    return 0
+
+
+def _to_stdout(net: NetOptions, upload: Upload) -> int:
+    """The chart's text, or a program's only source, to stdout, and a line on stderr
+    naming the S7-SCL sources beside a chart; 2 for a program of several sources (or of
+    none that came)."""
+    sources = [name for name, _, what in upload.files if what.startswith("an S7-SCL")]
+    sources += [name for name, _ in upload.skipped]
+    chart = bool(upload.files) and upload.files[0][2] == "chart"
+    if not upload.files or (not chart and len(sources) != 1):
+        why = f"its program has S7-SCL sources {', '.join(sources)}: --to DIR writes them"
+        print(f"s7graph: error: {net.cpu}: {why}", file=sys.stderr)
+        return 2
+    text = upload.files[0][1]
+    sys.stdout.write(text if text.endswith("\n") else text + "\n")
+    if chart and sources:
+        names = ", ".join(sources)
+        print(
+            f"s7graph: the CPU runs S7-SCL sources beside it ({names}): --to DIR writes them",
+            file=sys.stderr,
+        )
     return 0
 
 

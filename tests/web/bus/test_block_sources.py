@@ -1,7 +1,8 @@
 """``s7graph/<cpu>/blocks`` on a real bus: the S7-SCL blocks the CPU runs, read when asked
 (after a reload, the new ones); file names without their folder; one message stays under
 the bus's limit, the blocks that do not fit only named (docs/bus.md, "Keys"). The same
-sources whole, file by file, for the chart's ``source`` key (``source_files``)."""
+sources whole, file by file, in the room the blocks leave and on the chart's ``source`` key
+(``source_files``)."""
 
 from __future__ import annotations
 
@@ -56,6 +57,8 @@ def test_a_client_reads_the_blocks_the_cpu_runs_now(tmp_path: Path) -> None:
                 ("FC2", "a.scl", 5),
             ]
             assert first.blocks[1].text.splitlines()[2] == "  FC2 := a + 2;"
+            whole = (tmp_path / "src" / "a.scl").read_text(encoding="utf-8")
+            assert first.files == {"a.scl": whole} and first.files_left_out == []
             running[0] = _compiled(tmp_path, "b.scl", 7)  # an online change brought others
             again = client.blocks()
             assert again is not None and [b.label for b in again.blocks] == ["FC7"]
@@ -69,6 +72,7 @@ def test_blocks_past_the_message_limit_are_only_named(tmp_path: Path) -> None:
     message = block_sources(_compiled(tmp_path, "big.scl", 1, 2, 3, 4, pad=pad))
     assert [b.label for b in message.blocks] == ["FC1", "FC2"]
     assert message.left_out == ["FC3", "FC4"]
+    assert message.files == {} and message.files_left_out == ["big.scl"]  # no room left
     data = encode(message)
     assert len(data) < MAX_MESSAGE_BYTES and decode(data, BlockSources) == message
 
@@ -85,7 +89,7 @@ def test_whole_sources_for_the_chart_go_by_file_name_and_past_the_limit_only_nam
     sources = compile_texts(texts)
     assert source_files(sources) == ({"a.scl": small, "b.scl": big, "c.scl": other}, [])
     chart = "x" * (MAX_TEXT_BYTES // 2)
-    files, left_out = source_files(sources, beside=chart)
+    files, left_out = source_files(sources, room=MAX_TEXT_BYTES - len(chart))
     assert (files, left_out) == ({"a.scl": small}, ["b.scl", "c.scl"])
     message = ChartSource(fb="F", text=chart, blocks=files, left_out=left_out)
     data = encode(message)

@@ -1,9 +1,9 @@
 """A program of blocks on the bus (real processes): ``s7graph run PROGRAM.py --listen`` is
 checked as a chart run is, answers ``s7graph status``, ``diag``, ``watch --address``,
-``stop``, ``start`` and ``mres`` from a shell, and an ``mres`` answered *applied*
-survives a SIGKILL; a STOP by an error is in the next run's diagnostic buffer with its
-time, OB and priority class (docs/cli.md, "s7graph diag"; docs/runtime.md, "Memory
-reset (MRES)")."""
+``upload`` (nothing: a Python program), ``stop``, ``start`` and ``mres`` from a shell,
+and an ``mres`` answered *applied* survives a SIGKILL; a STOP by an error is in the next
+run's diagnostic buffer with its time, OB and priority class (docs/cli.md, "s7graph
+diag"; docs/runtime.md, "Memory reset (MRES)")."""
 
 from __future__ import annotations
 
@@ -85,6 +85,10 @@ def test_a_program_on_the_bus_answers_the_shell_status_diag_watch_stop_mres_star
         assert wait_until(lambda: (s := client.status()) is not None and s.cycle > 40, 30)
         status = s7graph("status", *bus).stdout
         assert status.startswith("CPU cpu1: RUN, cycle ") and "FBs none" in status
+        assert s7graph("upload", *bus, check=2).stderr == (
+            "s7graph: error: cpu1: this CPU runs no GRAPH FB and no S7-SCL source: nothing "
+            "to upload\n"
+        )
         operands = "MW10:INT,DB11.n,DB11.last[2],DB9.x"
         watched = s7graph("watch", *bus, "--address", operands, "--duration-s", "1")
         lines = watched.stdout.splitlines()

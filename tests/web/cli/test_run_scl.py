@@ -193,3 +193,31 @@ def _counted(state: Path) -> int:
         return int(_instance(state, 10)["n"])
     except (AssertionError, TypeError):
         return 0
+
+
+def test_upload_of_an_scl_program_gives_its_sources_back(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A CPU that runs a program of S7-SCL blocks and no chart: ``s7graph upload`` prints
+    its one source, or writes it into ``--to``; ``--fb`` names no chart there."""
+    path = tmp_path / "prog.scl"
+    path.write_text(PROGRAM, encoding="utf-8")
+    args = [str(path), "--state", str(tmp_path / "prog.sqlite"), "--duration-s", "60"]
+    with cpu_process(tmp_path, args, terminate=True) as (proc, _, _):
+        bus = ["--cpu", "cpu1", "--connect", f"unixsock-stream/{tmp_path}/bus.sock"]
+        assert main(["upload", *bus]) == 0
+        assert capsys.readouterr().out == PROGRAM
+        folder = tmp_path / "back"
+        assert main(["upload", *bus, "--to", str(folder)]) == 0
+        assert (folder / "prog.scl").read_text(encoding="utf-8") == PROGRAM
+        said = capsys.readouterr().out.splitlines()
+        lines = len(PROGRAM.splitlines())
+        assert said == [
+            "s7graph: the program of cpu1 (no GRAPH FB):",
+            f"s7graph: an S7-SCL source → {folder / 'prog.scl'} ({lines} lines)",
+        ]
+        assert main(["upload", *bus, "--fb", "Seq"]) == 2
+        assert capsys.readouterr().err == (
+            "s7graph: error: cpu1: this CPU runs no GRAPH FB: no chart to upload\n"
+        )
+    assert proc.wait(timeout=60) == 0

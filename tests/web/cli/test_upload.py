@@ -7,8 +7,8 @@ from __future__ import annotations
 
 import pytest
 
-from s7graph.web.bus.protocol import ChartSource
-from s7graph.web.cli.upload import SYMBOLS_FILE, files_of
+from s7graph.web.bus.protocol import BlockSources, ChartSource
+from s7graph.web.cli.upload import SYMBOLS_FILE, files_of, program_files
 
 
 def _written(source: ChartSource) -> list[tuple[str, str]]:
@@ -59,8 +59,16 @@ def test_each_scl_source_is_written_under_its_own_name_and_the_rest_named_as_ski
         ("c.scl", "C"),
     ]
     assert upload.skipped == [
-        "S7-SCL source '..' not written: no file name here",
-        "S7-SCL source 'f.s7g' not written: the name of a file written before it",
-        "S7-SCL source 'symbols.txt' not written: the name of a file written before it",
-        "S7-SCL source 'big.scl' not uploaded: too large for one bus message",
+        ("..", "not written: no file name here"),
+        ("f.s7g", "not written: the name of a file written before it"),
+        ("symbols.txt", "not written: the name of a file written before it"),
+        ("big.scl", "not uploaded: too large for one bus message"),
     ]
+
+
+def test_a_program_of_blocks_uploads_its_sources_by_name() -> None:
+    """A CPU without a chart: its S7-SCL sources, as a chart's are, skipped alike."""
+    blocks = BlockSources(files={"main.scl": "M", "lib/x.scl": "X"}, files_left_out=["y.scl"])
+    upload = program_files(blocks)
+    assert [(n, t) for n, t, _ in upload.files] == [("main.scl", "M"), ("x.scl", "X")]
+    assert upload.skipped == [("y.scl", "not uploaded: too large for one bus message")]
