@@ -28,6 +28,7 @@ msgspec and the layers below ``web``.
 from __future__ import annotations
 
 import json
+import math
 import re
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
@@ -166,6 +167,7 @@ class ForceArgs(Args, frozen=True, kw_only=True):
                 'force takes {"address": "I0.3", "value": true} (value null: unforce) or '
                 '{"all": true}'
             )
+        _finite(self.value)
 
 
 class ModifyArgs(Args, frozen=True, kw_only=True):
@@ -173,6 +175,16 @@ class ModifyArgs(Args, frozen=True, kw_only=True):
 
     address: ForceText
     value: bool | int | float | ForceText
+
+    def __post_init__(self) -> None:
+        _finite(self.value)
+
+
+def _finite(value: object) -> None:
+    """A value a command carries is a finite number: JSON has no infinity or NaN, and
+    would carry one as null — for ``force``, *unforce*."""
+    if isinstance(value, float) and not math.isfinite(value):
+        raise ValueError(f"value {value}: the bus carries finite numbers only (no inf or NaN)")
 
 
 MAX_BLOCK_FILES = 8  # S7-SCL sources one download brings
@@ -580,6 +592,10 @@ def make_command(**fields: Any) -> Command:
         if not reason.isprintable():  # what it quotes of the fields: one line
             reason = "".join(c if c.isprintable() else repr(c)[1:-1] for c in reason)
         raise ValueError(reason) from None
+    try:
+        msgspec.json.encode(made)
+    except UnicodeEncodeError:  # a lone surrogate: what Python makes of bytes not UTF-8
+        raise ValueError(f"op {op!r}: a text of it is not valid Unicode") from None
     return made
 
 
@@ -653,7 +669,7 @@ def command_args(op: str, words: Iterable[str]) -> dict[str, Any]:
             raise ValueError(f"give each argument as NAME=VALUE, not {word!r}")
         try:
             args[name] = json.loads(value)
-        except ValueError:
+        except (ValueError, RecursionError):  # not JSON, or nested past Python's stack
             args[name] = value
     args_of(kind, args)  # refused here, not by the CPU
     return args

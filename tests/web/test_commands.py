@@ -45,6 +45,7 @@ from s7graph.web.commands import (
     checked,
     command_args,
     command_type,
+    make_command,
     op_of,
     shell_markdown,
 )
@@ -344,6 +345,8 @@ def test_the_shells_send_reads_any_ops_arguments_before_sending() -> None:
         ("halt", ["on=yes"], "$.args.on"),
         ("mode", ["mode=FAST"], "mode must be one of"),
         ("init", ["step=1"], "takes no argument 'step'"),
+        ("ack_msg", ["msg_id=" + "[" * 5000 + "]" * 5000], "length <= 128"),  # read as text
+        ("force", ["address=MD10", "value=Infinity"], "finite numbers only"),
     ]:
         with pytest.raises(ValueError) as err:
             command_args(op, words)
@@ -439,3 +442,24 @@ def test_a_struct_built_in_python_is_checked_before_it_is_sent() -> None:
         checked(StepOn(fb="FILL", args=StepArgs(step=0)))
     with pytest.raises(ValueError, match=r"\$\.fb"):
         checked(Ack(fb="bad name"))
+
+
+@pytest.mark.parametrize(
+    "args",
+    [
+        ForceArgs(address="MD10", value=1.0),
+        {"address": "MD10", "value": float("inf")},
+        {"address": "MD10", "value": float("nan")},
+        {"address": "M\udcff", "value": True},
+    ],
+)
+def test_a_value_or_text_json_cannot_carry_is_refused_not_changed(args: object) -> None:
+    """JSON carries infinity and NaN as null — for ``force``, *unforce* — and cannot carry
+    a lone surrogate (what Python makes of bytes that are not UTF-8): refused before the
+    bus, for ``force`` and ``modify`` alike."""
+    for op in ("force", "modify"):
+        if isinstance(args, ForceArgs):
+            assert make_command(op=op, fb="F", args=msgspec.to_builtins(args)).args.value == 1.0
+            continue
+        with pytest.raises(ValueError, match=r"finite numbers only|not valid Unicode"):
+            make_command(op=op, fb="F", args=args)

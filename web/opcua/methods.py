@@ -306,6 +306,7 @@ _REFUSALS: Final[tuple[tuple[tuple[str, ...], int], ...]] = (
             "persists",
             "not in stop",
             "not called yet",
+            "needs stop",
         ),
         StatusCodes.BadInvalidState,
     ),

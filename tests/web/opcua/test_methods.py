@@ -86,6 +86,11 @@ def test_input_variants_become_the_checked_arguments() -> None:
             "BadInvalidArgument",
             [],
         ),
+        # JSON has no inf or NaN: carried as null, a force of inf would be an unforce
+        ("Force", [ua.Variant("MD10"), ua.Variant(float("inf"))], "BadInvalidArgument", []),
+        ("Force", [ua.Variant("MD10"), ua.Variant(float("nan"))], "BadInvalidArgument", []),
+        ("Modify", [ua.Variant("MD10"), ua.Variant(float("-inf"))], "BadInvalidArgument", []),
+        ("Modify", [ua.Variant("M\udcff"), ua.Variant(1)], "BadInvalidArgument", []),
     ],
 )
 def test_wrong_inputs_are_a_status_code(
@@ -109,6 +114,7 @@ def test_wrong_inputs_are_a_status_code(
         ("s7graph/cpu1/cmd: unreadable answer: malformed JSON", "BadCommunicationError"),
         ("step_on needs mode MAN (S7-GRAPH Control Sequencer)", "BadInvalidState"),
         ("the CPU is in STOP, not RUN", "BadInvalidState"),
+        ("the CPU is in RUN: a memory reset needs STOP (stop it first)", "BadInvalidState"),
         ("no step S9 in Seq_mix", "BadNotFound"),
         ("nothing to change: S1 already active, no other step active in", "BadInvalidState"),
         ("message 'x' is already acknowledged by olga", "BadConditionBranchAlreadyAcked"),
