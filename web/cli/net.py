@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import ipaddress
 import os
+import re
 import stat
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -39,6 +40,18 @@ _LOCAL_NAMES = {"localhost", "localhost.localdomain", "ip6-localhost"}
 PASSWORD_ENV = "S7GRAPH_BUS_PASSWORD"
 """Where ``--bus-user``'s password comes from without ``--bus-password-file``."""
 CERTS_HINT = "make certificates: s7graph certs init DIR; s7graph certs issue DIR NAME --kind KIND"
+_ZENOH_PLACE = re.compile(r"\s+at \S+\.rs:\d+\.?\s*$")  # " at /…/orchestrator.rs:447."
+_UNREACHED = re.compile(r"^Unable to connect to any of \[(.*)\]!?$")
+
+
+def _utf8(text: str) -> bool:
+    """Whether ``text`` is valid Unicode (no lone surrogate: bytes of the command line that
+    were not UTF-8)."""
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError:
+        return False
+    return True
 
 
 def is_loopback_host(host: str) -> bool:
@@ -124,7 +137,7 @@ class NetOptions:
             if not valid_name(name):
                 return f"--cpu {name!r}: use letters, digits, _ . - (up to 64)"
         for ep in (*self.listen, *self.connect):
-            if "/" not in ep:
+            if "/" not in ep or not ep.isprintable() or not _utf8(ep):
                 return f"endpoint {ep!r}: write it as PROTOCOL/ADDRESS, e.g. tcp/127.0.0.1:7447"
         return None
 
@@ -298,6 +311,23 @@ class NetOptions:
             " (a bus that lets in only nodes with credentials wants --tls-cert/--tls-key "
             "or --bus-user)"
         )
+
+    def join_error(self, exc: BaseException) -> str:
+        """Why this node could not join the bus, in one line: zenoh's own words without
+        the place in its source they come from, and what to check."""
+        words = _ZENOH_PLACE.sub("", str(exc)).strip() or type(exc).__name__
+        unreached = _UNREACHED.match(words)
+        if unreached:
+            ends = ", ".join(self.connect) or unreached.group(1)
+            why = (
+                "it refused this node's credentials"
+                if self.has_credentials
+                else "it lets in only nodes with credentials (--tls-cert/--tls-key or --bus-user)"
+            )
+            return (
+                f"cannot join the bus: nothing answers at {ends}: nothing listens there, or {why}"
+            )
+        return f"cannot join the bus: {words[:300]}{self.join_hint()}"
 
     def credential_args(self) -> list[str]:
         """The options that give a child process (the CPU's view) this node's credentials

@@ -132,7 +132,7 @@ def opcua_command(
         finally:
             server.stop()
     except Exception as exc:
-        return _fail(f"cannot join the bus: {type(exc).__name__}: {exc}")
+        return _fail(net.join_error(exc))
     finally:
         if session is not None:
             session.close()  # type: ignore[no-untyped-call]  # zenoh's stub

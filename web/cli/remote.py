@@ -71,7 +71,7 @@ def _join(net: NetOptions) -> zenoh.Session | str:
     try:
         return open_session(connect=net.connect, tls=net.tls, login=net.login)
     except Exception as exc:
-        return f"cannot join the bus: {type(exc).__name__}: {exc}{net.join_hint()}"
+        return net.join_error(exc)
 
 
 @contextlib.contextmanager
@@ -324,7 +324,8 @@ def status_command(net: NetOptions) -> int:
 
 
 def watch_command(net: NetOptions, *, fb: str | None, duration_s: float | None = None) -> int:
-    """Print step changes of ``net.cpu`` live; 0 at the end, 2 when nothing can be watched."""
+    """Print step changes of ``net.cpu`` live (of ``fb``, or of every FB); 0 at the end, 2
+    when nothing can be watched: no CPU answers, it runs no such FB, or none."""
     lock = threading.Lock()
     with on_bus(net) as client:
         if isinstance(client, str):
@@ -332,7 +333,11 @@ def watch_command(net: NetOptions, *, fb: str | None, duration_s: float | None =
         status = client.status()
         if status is None:
             return _fail(f"CPU {net.cpu!r} does not answer")
-        names = [fb] if fb else list(status.fbs)
+        without = "this CPU runs no GRAPH FB: no steps to watch (--address watches operands)"
+        name, why = fb_to_read(status, fb, without=without)
+        if why:
+            return _fail(f"{net.cpu}: {why}")
+        names = [name] if fb else list(status.fbs)
         last: dict[str, tuple[object, ...]] = {}
 
         def show(name: str, update: StepStateUpdate) -> None:

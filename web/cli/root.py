@@ -212,6 +212,15 @@ def _positive_ms(value: float | None) -> float | None:
     return value
 
 
+MAX_DURATION_S = 1e9  # about 31 years: longer is "until stopped"
+
+
+def _duration(value: float | None) -> float | None:
+    if value is not None and not 0 <= value <= MAX_DURATION_S:
+        raise typer.BadParameter(f"from 0 to {MAX_DURATION_S:,.0f} s, not {value:g}")
+    return value
+
+
 def _rt_priority(value: int | None) -> int | None:
     if value is not None and not 0 <= value <= 98:
         raise typer.BadParameter("--rt-priority must be 0 (normal scheduling) to 98")
@@ -272,7 +281,11 @@ MaxCycleMs = Annotated[
     ),
 ]
 Duration = Annotated[
-    float | None, typer.Option(help="Stop after this many seconds (default: until Ctrl-C).")
+    float | None,
+    typer.Option(callback=_duration, help="Stop after this many seconds (default: until Ctrl-C)."),
+]
+StopAfter = Annotated[
+    float | None, typer.Option(callback=_duration, help="Stop after this many seconds.")
 ]
 Record = Annotated[Path | None, typer.Option(help="Record the chart's run to a rerun .rrd file.")]
 Restart = Annotated[
@@ -662,7 +675,7 @@ def web(
     port: Annotated[int, typer.Option(help="Port of the browser view (0: a free one).")] = 8080,
     tls_ca: TlsCa = None,
     origin: Origin = None,
-    duration_s: Annotated[float | None, typer.Option(help="Stop after this many seconds.")] = None,
+    duration_s: StopAfter = None,
     child: Annotated[
         bool, typer.Option("--child", hidden=True, help="The view of a run --web.")
     ] = False,
@@ -713,7 +726,7 @@ def opcua(
         typer.Option(help="A folder of trusted client certificates (default: any may connect)."),
     ] = None,
     tls_ca: TlsCa = None,
-    duration_s: Annotated[float | None, typer.Option(help="Stop after this many seconds.")] = None,
+    duration_s: StopAfter = None,
     child: Annotated[
         bool, typer.Option("--child", hidden=True, help="The OPC UA server of a run --opcua.")
     ] = False,
@@ -746,7 +759,7 @@ def router(
     tls_ca: TlsCa = None,
     tls_cert: TlsCert = None,
     tls_key: TlsKey = None,
-    duration_s: Annotated[float | None, typer.Option(help="Stop after this many seconds.")] = None,
+    duration_s: StopAfter = None,
     cpu: Annotated[
         list[str] | None,
         typer.Option(
@@ -775,7 +788,7 @@ def watch(
     connect: Connect = None,
     fb: FbName = None,
     tls_ca: TlsCa = None,
-    duration_s: Annotated[float | None, typer.Option(help="Stop after this many seconds.")] = None,
+    duration_s: StopAfter = None,
     address: Annotated[
         str | None,
         typer.Option(
@@ -786,19 +799,21 @@ def watch(
         ),
     ] = None,
     interval_ms: Annotated[
-        float, typer.Option(help="With --address: how often to read them, in ms (20 or more).")
+        float,
+        typer.Option(help="With --address: how often to read them, in ms (20 to 3,600,000)."),
     ] = 200.0,
 ) -> None:
     """Print a CPU's step changes live (one line each), or with --address the values of
     addresses and DB variables whenever one changes."""
     net = _net(cpu=cpu, connect=connect, tls_ca=tls_ca)
     if address is not None:
-        from s7graph.web.cli.watch_table import split_addresses, watch_addresses
+        from s7graph.web.cli.watch_table import check_interval, split_addresses, watch_addresses
 
         if fb is not None:
             raise typer.BadParameter("--address watches operands, --fb an FB's steps: not both")
         try:
             operands = split_addresses(address)
+            check_interval(interval_ms)
         except ValueError as exc:
             raise typer.BadParameter(str(exc)) from None
         code = watch_addresses(net, operands, interval_ms=interval_ms, duration_s=duration_s)

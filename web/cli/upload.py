@@ -134,6 +134,9 @@ def upload_command(
     upload = files_of(source) if isinstance(source, ChartSource) else program_files(source)
     if to is None:
         return _to_stdout(net, upload)
+    if to.exists() and not to.is_dir():
+        print(f"s7graph: error: --to {to}: not a folder", file=sys.stderr)
+        return 2
     files = [(to / name, text) for name, text, _ in upload.files]
     problem = _write(files, force=force)
     if problem:

@@ -57,7 +57,7 @@ def web_command(
         with open_session(connect=net.connect, tls=net.tls, login=net.login) as probe:
             cpus, unreadable = wait_for_cpus(probe, wait_s)
     except Exception as exc:
-        return _fail(f"cannot join the bus: {type(exc).__name__}: {exc}{net.join_hint()}")
+        return _fail(net.join_error(exc))
     if not cpus:
         return _fail(f"no CPU answers on {', '.join(net.connect)}{unread_note(unreadable)}")
     for status in cpus:

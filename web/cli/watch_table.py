@@ -22,20 +22,41 @@ from s7graph.web.cli.net import NetOptions
 from s7graph.web.cli.remote import on_bus
 from s7graph.web.cli.stopping import wait_until_stopped
 
-__all__ = ["MIN_INTERVAL_MS", "split_addresses", "watch_addresses"]
+__all__ = [
+    "MAX_INTERVAL_MS",
+    "MIN_INTERVAL_MS",
+    "check_interval",
+    "split_addresses",
+    "watch_addresses",
+]
 
 MIN_INTERVAL_MS = 20
+MAX_INTERVAL_MS = 3_600_000  # an hour
 
 
 def split_addresses(text: str) -> list[str]:
     """The operands of ``--address`` (``MW0,Q4.0, DB20.avg``), commas inside ``[i, j]``
     kept; ValueError with a one-line reason for none or too many."""
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError:  # bytes of the command line that are not UTF-8
+        raise ValueError("--address: not valid UTF-8 text") from None
     operands = split_operands(text)
     if not operands:
         raise ValueError("--address: give the operands to watch, e.g. MW0,Q4.0,DB20.avg")
     if len(operands) > MAX_WATCH:
         raise ValueError(f"--address: at most {MAX_WATCH} operands, not {len(operands)}")
     return operands
+
+
+def check_interval(ms: float) -> float:
+    """``--interval-ms`` when it is from :data:`MIN_INTERVAL_MS` to :data:`MAX_INTERVAL_MS`;
+    ValueError with a one-line reason otherwise (NaN included)."""
+    if not MIN_INTERVAL_MS <= ms <= MAX_INTERVAL_MS:
+        raise ValueError(
+            f"--interval-ms: from {MIN_INTERVAL_MS} to {MAX_INTERVAL_MS:,} ms, not {ms:g}"
+        )
+    return ms
 
 
 def _line(answer: WatchValues) -> str:

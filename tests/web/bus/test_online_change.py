@@ -424,3 +424,5 @@ def test_s7graph_upload_brings_back_the_chart_the_cpu_runs_after_a_download(
     assert (folder / "fill.s7g").read_text(encoding="utf-8") == edited
     assert main(["upload", *bus, "--fb", "Nope"]) == 2
     assert capsys.readouterr().err.endswith("runs no FB 'Nope'; it runs Seq_fill\n")
+    assert main(["upload", *bus, "--to", str(folder / "fill.s7g")]) == 2
+    assert capsys.readouterr().err == f"s7graph: error: --to {folder / 'fill.s7g'}: not a folder\n"

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import pytest
+import zenoh
 
 from s7graph.sequencer.text.model import Chart, Sequence, Step, Transition
 from s7graph.web.access.certs import read_common_name
@@ -20,6 +21,7 @@ from s7graph.web.bus.cpu_side import CpuSide
 from s7graph.web.bus.protocol import ChartLayout
 from s7graph.web.bus.session import BusEnds, TlsFiles, open_session
 from s7graph.web.cli import main
+from s7graph.web.cli.net import NetOptions
 from tests.web.helpers import wait_until
 
 if TYPE_CHECKING:
@@ -218,8 +220,43 @@ def test_a_shell_without_a_certificate_is_told_why_it_cannot_join(
     side = _cpu(endpoint, bus_certs.tls("cpu.cpu1"))
     try:
         line = _refused(capsys, "status", "--connect", endpoint, "--tls-ca", str(bus_certs.ca))
-        assert "cannot join the bus" in line and "wants --tls-cert/--tls-key" in line
+        assert line.endswith(
+            f"cannot join the bus: nothing answers at {endpoint}: nothing listens there, or "
+            "it lets in only nodes with credentials (--tls-cert/--tls-key or --bus-user)"
+        )
         assert main(["status", "--connect", endpoint, *bus_certs.args("client.olga")]) == 0
         assert capsys.readouterr().out.startswith("CPU cpu1: ")
     finally:
         side.close()
+
+
+@pytest.mark.parametrize(
+    ("credentials", "error", "said"),
+    [
+        (
+            False,
+            "Unable to connect to any of [Single(tcp/127.0.0.1:1)]!  at /root/.cargo/git/"
+            "checkouts/zenoh-9c599d5ef3e0480e/cc83980/zenoh/src/net/runtime/orchestrator.rs:447.",
+            "cannot join the bus: nothing answers at tcp/127.0.0.1:1: nothing listens there, "
+            "or it lets in only nodes with credentials (--tls-cert/--tls-key or --bus-user)",
+        ),
+        (
+            True,
+            "Unable to connect to any of [Single(tcp/127.0.0.1:1)]! at /x/orchestrator.rs:447.",
+            "cannot join the bus: nothing answers at tcp/127.0.0.1:1: nothing listens there, "
+            "or it refused this node's credentials",
+        ),
+        (
+            True,
+            "Invalid TLS configuration at /x/zenoh-link-tls/src/utils.rs:91.",
+            "cannot join the bus: Invalid TLS configuration",
+        ),
+    ],
+)
+def test_why_a_node_cannot_join_is_said_without_zenohs_source_places(
+    credentials: bool, error: str, said: str
+) -> None:
+    """zenoh ends its errors with the Rust file and line they come from: left out; a bus
+    nobody answers at says what to check, as this node showed credentials or not."""
+    net = NetOptions(connect=["tcp/127.0.0.1:1"], bus_user="olga" if credentials else None)
+    assert net.join_error(zenoh.ZError(error)) == said

@@ -17,6 +17,7 @@ from pathlib import Path
 import pytest
 
 from s7graph.web.bus.protocol import DiagBuffer, decode
+from s7graph.web.cli import main
 from tests.paths import ROOT
 from tests.web.helpers import cpu_process, wait_until
 
@@ -85,6 +86,10 @@ def test_a_program_on_the_bus_answers_the_shell_status_diag_watch_stop_mres_star
         assert wait_until(lambda: (s := client.status()) is not None and s.cycle > 40, 30)
         status = s7graph("status", *bus).stdout
         assert status.startswith("CPU cpu1: RUN, cycle ") and "FBs none" in status
+        assert s7graph("watch", *bus, "--duration-s", "5", check=2).stderr == (
+            "s7graph: error: cpu1: this CPU runs no GRAPH FB: no steps to watch (--address "
+            "watches operands)\n"
+        )
         assert s7graph("upload", *bus, check=2).stderr == (
             "s7graph: error: cpu1: this CPU runs no GRAPH FB and no S7-SCL source: nothing "
             "to upload\n"
@@ -234,6 +239,30 @@ def test_the_shell_says_in_one_line_what_is_wrong_with_diag_and_watch() -> None:
     assert "--address watches operands, --fb an FB's steps: not both" in both
 
 
+@pytest.mark.parametrize(
+    ("words", "reason"),
+    [
+        (["watch", "--address", "MW0", "--interval-ms", "nan"], "from 20 to 3,600,000 ms, not nan"),
+        (["watch", "--address", "MW0", "--interval-ms", "5"], "from 20 to 3,600,000 ms, not 5"),
+        (["watch", "--address", "M\udcff"], "--address: not valid UTF-8 text"),
+        (["watch", "--duration-s", "1e300"], "from 0 to 1,000,000,000 s, not 1e+300"),
+        (["watch", "--duration-s", "-1"], "from 0 to 1,000,000,000 s, not -1"),
+        (["web", "--duration-s", "inf"], "from 0 to 1,000,000,000 s, not inf"),
+        (["opcua", "--duration-s", "nan"], "from 0 to 1,000,000,000 s, not nan"),
+        (["router", "--duration-s", "-5"], "from 0 to 1,000,000,000 s, not -5"),
+        (["run", "x.s7g", "--duration-s", "inf"], "from 0 to 1,000,000,000 s, not inf"),
+    ],
+)
+def test_a_time_or_text_out_of_range_is_a_usage_error_before_the_bus(
+    words: list[str], reason: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A duration or interval that no timer can wait (NaN, infinity, 1e300: Python's own
+    ``OverflowError``) or text that is not UTF-8: one line, exit 2, nothing joined."""
+    assert main([*words, "--connect", "tcp/127.0.0.1:9"]) == 2
+    err = capsys.readouterr().err
+    assert reason in err and err.count("\n") == 1 and "Traceback" not in err
+
+
 def test_a_charts_cpu_answers_diag_and_mres_initializes_its_sequencer(tmp_path: Path) -> None:
     args = [
         str(DRILL / "drill.s7g"),
@@ -261,6 +290,10 @@ def test_a_charts_cpu_answers_diag_and_mres_initializes_its_sequencer(tmp_path: 
         send("stop")
         send("mres")
         assert s7graph("watch", *_bus(tmp_path), "--address", "DB1.S_NO", "--duration-s", "0.1")
+        nope = s7graph("watch", *_bus(tmp_path), "--fb", "../x", "--duration-s", "5", check=2)
+        assert (
+            nope.stderr == "s7graph: error: cpu1: this CPU runs no FB '../x'; it runs Seq_drill\n"
+        )
         send("start")
         assert wait_until(lambda: (s := client.state(fb)) is not None and s.active == [1], 30)
         state = client.state(fb)
