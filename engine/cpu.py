@@ -113,6 +113,7 @@ class Cpu(ProgramBlocks, Forcing, InterruptDispatch, SyncErrors):
         self.clock = clock
         self.mem = memory if memory is not None else Memory()
         self.mem.io_error = self._io_access_error  # OB122 (engine/cpu_errors.py)
+        self.mem.no_db = self.no_db_bytes  # an instance DB by name only (cpu_program.py)
         self.name = name
         self.mode = CpuMode.STOP
         self.key = key

@@ -89,6 +89,19 @@ class ProgramBlocks:
         self.instance_dbs[number] = idb
         return idb
 
+    def no_db_bytes(self, number: int) -> str:
+        """Why DB ``number`` has no byte addresses: an FB's instance DB is kept by variable
+        name here (``DB1.S_NO``, not ``DB1.DBW0``); "" for a DB that does not exist."""
+        idb = self.instance_dbs.get(number)
+        if idb is None:
+            return ""
+        names = [v.name for v in idb.fb.interface[:3]]
+        example = f" (DB{number}.{names[0]})" if names else ""
+        return (
+            f"DB{number} is the instance DB of {idb.fb.label} {idb.fb.name!r}: it has no byte "
+            f"addresses here; read and write its variables by name{example}"
+        )
+
     def instance_db(self, number: int) -> InstanceDB:
         try:
             return self.instance_dbs[number]

@@ -229,6 +229,9 @@ class Memory:
         self.pi_locked = False
         """True while the program runs (the CPU sets it around every OB): a write to PI is
         then an ``AreaWriteError``. The modules' side — a plant, a stimulus — writes PI."""
+        self.no_db: Callable[[int], str] | None = None
+        """Why a DB has no bytes (the CPU says: an FB's instance DB, by name only); None:
+        ``DB<n> does not exist``."""
         self._areas: dict[str, bytearray] = {
             Area.I: self.inputs,
             Area.Q: self.outputs,
@@ -247,7 +250,8 @@ class Memory:
             return buf
         if area == Area.DB:
             if db is None or db not in self.dbs:
-                raise AddressError(f"DB{db} does not exist")
+                why = self.no_db(db) if self.no_db is not None and db is not None else ""
+                raise AddressError(why or f"DB{db} does not exist")
             return self.dbs[db].data
         raise AddressError(f"area {area} has no byte image")
 
@@ -276,8 +280,8 @@ class Memory:
     def _span(self, addr: Address, size: int, write: bool) -> bytearray:
         try:
             buf = self.area_bytes(addr.area, addr.db)
-        except AddressError:
-            raise AddressError(f"{addr}: DB{addr.db} does not exist") from None
+        except AddressError as exc:
+            raise AddressError(f"{addr}: {exc.message}") from None
         if write and self.pi_locked and addr.area is Area.PI:
             raise AreaWriteError(f"{addr}: the peripheral inputs are read-only to the program")
         if addr.byte + size > len(buf):

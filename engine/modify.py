@@ -115,8 +115,10 @@ def typed_value(type_name: str, name: str, value: object) -> tuple[object, str]:
         size = 0
     width = _WIDTHS.get(1 if type_name == "BOOL" else size)
     if width is None:
+        article = "an" if type_name[:1] in ("A", "E", "I", "O") else "a"
         raise ModifyError(
-            f"{name} is a {type_name}: a modify writes a bit, a byte, a word or a double word"
+            f"{name} is {article} {type_name}: a modify writes a bit, a byte, a word or a "
+            "double word"
         )
     shape = Address(Area.M, width, 0, 0)
     raw, shown = encode_value(shape, type_name, name, value, "modify", ModifyError)
@@ -146,5 +148,5 @@ def _buffer(mem: Memory, address: Address) -> bytearray | memoryview:
         return memoryview(mem.periph_in)[: len(mem.inputs)]
     try:
         return mem.area_bytes(address.area, address.db)
-    except S7Error:
-        raise ModifyError(f"{address}: DB{address.db} does not exist") from None
+    except S7Error as exc:
+        raise ModifyError(f"{address}: {exc.message}") from None

@@ -681,9 +681,15 @@ def _served(layout: ChartLayout) -> tuple[bytes, list[bytes]]:
 
 def _answer_part(query: zenoh.Query, key: str, parts: list[bytes]) -> None:
     """Answer ``?k=K`` with part K of ``parts`` under ``key``; a bad or missing ``k`` with an
-    error reply. Never raises (a zenoh thread)."""
+    error reply; a wildcard query not at all (a part is asked for by its exact key). Never
+    raises (a zenoh thread)."""
     try:
+        if str(query.key_expr) != key:
+            return
         given = zenoh.Parameters(str(query.parameters)).get("k")
+        if not parts:
+            query.reply_err(b"the chart is whole, in one message: read chart, it has no parts")
+            return
         if given is None or not given.isdigit() or int(given) >= len(parts):
             why = f"?k={str(given)[:16]!r}: give a part, 0 to {len(parts) - 1}"
             query.reply_err(why.encode())

@@ -180,11 +180,18 @@ def watch_value(cpu: Cpu, item: WatchItem) -> WatchValue:
         value, type_name = _read(cpu, item)
         value, shown = _shown(value, type_name, item.target)
     except S7Error as exc:
-        return WatchValue(address=item.text[:128], error=exc.message[:4096])
+        return WatchValue(address=item.text[:128], error=_unprefixed(exc.message, item)[:4096])
     except Exception as exc:  # a block's object that does not read: say so, go on
         error = f"{item.target}: {type(exc).__name__}: {exc}"
         return WatchValue(address=item.text[:128], error=error[:4096])
     return WatchValue(address=item.text[:128], value=value, text=shown[:4096], type=type_name)
+
+
+def _unprefixed(message: str, item: WatchItem) -> str:
+    """``message`` without the operand it starts with: a reader shows the error beside the
+    operand already (``DB1.DBW0: DB1 does not exist``, not the address twice)."""
+    head = f"{item.target}: "
+    return message[len(head) :] if message[: len(head)].casefold() == head.casefold() else message
 
 
 def _read(cpu: Cpu, item: WatchItem) -> tuple[object, str]:

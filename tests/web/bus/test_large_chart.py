@@ -130,6 +130,22 @@ def test_the_client_and_a_subscriber_get_a_large_chart_whole(big: ChartLayout, b
     part = next(iter(bus.session.get(key + "?k=0", timeout=5))).ok
     assert part is not None and len(part.payload.to_bytes()) <= PART_BYTES
     assert msgspec.json.decode(part.payload.to_bytes(), type=ChartPart).k == 0
+    # a wildcard gets every read-only key's message, none of them an error (docs/bus.md)
+    every = list(bus.session.get("s7graph/**", target=zenoh.QueryTarget.ALL, timeout=5))
+    assert every and all(r.ok is not None for r in every)
+    assert not any(str(r.ok.key_expr).endswith("/part") for r in every if r.ok is not None)
+
+
+def test_a_chart_in_one_message_says_it_has_no_parts(bus: Bus) -> None:
+    """A chart small enough for one message has no parts: asking for one says so."""
+    small = ChartLayout(fb=FB, version=2, steps=[], transitions=[], sequences=[])
+    bus.side.publisher.set_chart(FB, small)
+    assert wait_until(lambda: bus.client.chart(FB) == small, 30)
+    (reply,) = list(bus.session.get(f"s7graph/cpu1/fb/{FB}/chart/part?k=0", timeout=5))
+    assert reply.ok is None
+    assert reply.err.payload.to_string() == (
+        "the chart is whole, in one message: read chart, it has no parts"
+    )
 
 
 def test_the_browser_view_opens_a_1000_step_chart_whole(big: ChartLayout, bus: Bus) -> None:

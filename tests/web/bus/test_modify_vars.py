@@ -110,3 +110,16 @@ def test_a_charts_own_variable_is_watched_and_modified_by_its_instance_dbs_name(
     assert not applied and "DB1.count" in reason
     applied, reason, _ = _modify(cpu, "DB1.counts", 1)
     assert not applied and "it has count, dwell, OFF_SQ" in reason
+
+
+def test_an_instance_dbs_bytes_are_refused_naming_its_fb_and_a_variable(cpu: Cpu) -> None:
+    """An FB's instance DB is kept by variable name here, not as bytes: ``DB11.DBW0`` says
+    so — whose instance DB it is, and a variable to use — where a DB that is not there
+    says it does not exist; a watch says it without the operand twice."""
+    reason = (
+        "DB11 is the instance DB of FB10 'Average': it has no byte addresses here; read and "
+        "write its variables by name (DB11.x)"
+    )
+    assert _modify(cpu, "DB11.DBW0", 5) == (False, f"DB11.DBW0: {reason}", "")
+    assert watch_value(cpu, parse_item("DB11.DBX0.1")).error == reason
+    assert watch_value(cpu, parse_item("DB77.DBW0")).error == "DB77 does not exist"
