@@ -90,8 +90,11 @@ _SFC = re.compile(r"(?<![A-Za-z0-9_])INITIAL_STEP(?![A-Za-z0-9_])", re.IGNORECAS
 
 def _pieces(text: str) -> list[tuple[int, int]]:
     """Where each POU, configuration or TYPE block of ``text`` starts and ends (from one
-    such keyword at the start of a line to the next)."""
+    such keyword at the start of a line to the next); none when no line starts with one
+    (``INITIAL_STEP`` without a ``PROGRAM`` header: the parser's error stands)."""
     starts = [m.start() for m in _PIECE.finditer(text)]
+    if not starts:
+        return []
     return list(zip(starts, [*starts[1:], len(text)], strict=True))
 
 

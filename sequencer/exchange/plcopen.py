@@ -519,6 +519,18 @@ class _Reader:
             if attr.get("guid").strip("{}") == _CODESYS_PRIORITY and attr.text.strip().isdigit():
                 priority = priority or attr.text.strip()
         number = int(el.get("localId")) - TRANSITION_IDS if el.get("localId").isdigit() else 0
+        x: float | None = None
+        if pos is not None and pos.get("x"):
+            try:
+                x = float(pos.get("x"))
+            except ValueError:  # it orders an alternative's paths: no guess
+                self.p.error(
+                    "I013",
+                    f'a transition\'s position x="{pos.get("x")}" is not a number (it orders '
+                    "the paths of an alternative branch, leftmost first)",
+                    self.at(pos),
+                )
+                return None
         return IecTransition(
             sources,
             [n for n, _ in targets],
@@ -527,7 +539,7 @@ class _Reader:
             graph_number=number if self.dialect == "s7graph" and 0 < number < 100_000 else None,
             name=el.get("name"),
             priority=int(priority) if priority and priority.lstrip("-").isdigit() else None,
-            x=float(pos.get("x")) if pos is not None and pos.get("x") else None,
+            x=x,
             order=order,
             cond_origin=origin,
             jumps={n for n, j in targets if j},

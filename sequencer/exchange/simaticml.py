@@ -32,7 +32,7 @@ from s7graph.sequencer.exchange.flgnet import Box, read_boxes, read_network
 from s7graph.sequencer.exchange.iec_actions import permanent_assignment
 from s7graph.sequencer.exchange.iec_to_chart import accepted, const
 from s7graph.sequencer.exchange.markers import used_bytes
-from s7graph.sequencer.exchange.problems import Problems
+from s7graph.sequencer.exchange.problems import ImportFailed, Problems
 from s7graph.sequencer.exchange.stalls import report_stalls
 from s7graph.sequencer.exchange.tia_operands import TIA_TYPES, TiaOperands
 from s7graph.sequencer.exchange.xmltree import ElementError, Node
@@ -83,7 +83,15 @@ class _Reader(TiaOperands):
                 pieces.append(c.get("Text"))
             elif c.tag == "Access":
                 pieces.append(self.access_text(c))
-                self.action_tag(c)
+                try:
+                    self.action_tag(c)
+                except ElementError as exc:
+                    self.p.warn(
+                        "I023",
+                        f"step {step}: action row with {pieces[-1]} not imported: {exc.message}",
+                        self.at(exc.node),
+                    )
+                    return None
         text = "".join(pieces).strip()
         qualifier = action.get("Qualifier")
         if not text and not qualifier:
@@ -241,11 +249,7 @@ class _Reader(TiaOperands):
         self.variables()
         opts = self.options()
         seq_nodes = graph.all("Sequence")
-        for q in seq_nodes:
-            for s in q.iter("Step"):
-                self.step_names[s.get("Name")] = int(s.get("Number"))
-            for t in q.iter("Transition"):
-                self.trans_names[t.get("Name")] = int(t.get("Number"))
+        self.numbers(seq_nodes)
         before = self.permanent(graph.child("PreOperations"))
         sequences = tuple(self.sequence(q, i + 1) for i, q in enumerate(seq_nodes))
         after = self.permanent(graph.child("PostOperations"))
@@ -283,6 +287,24 @@ class _Reader(TiaOperands):
         }
         report_stalls(chart, self.p, constants, why)
         return chart
+
+    def numbers(self, seq_nodes: list[Node]) -> None:
+        """Every step's and transition's number by its name; a ``Number`` that is not an
+        integer is an error (I013) naming the step or transition, and no chart."""
+        for q in seq_nodes:
+            for what, el in [("step", s) for s in q.iter("Step")] + [
+                ("transition", t) for t in q.iter("Transition")
+            ]:
+                names = self.step_names if what == "step" else self.trans_names
+                try:
+                    names[el.get("Name")] = _number(el, "Number")
+                except ElementError as exc:
+                    self.p.error(
+                        "I013",
+                        f'{what} "{el.get("Name")}": {exc.message} (GRAPH numbers {what}s 1, 2, …)',
+                        self.at(el),
+                    )
+        self.p.fail_if_errors()
 
     def permanent(self, holder: Node | None) -> tuple[PermanentInstruction, ...]:
         out: list[PermanentInstruction] = []
@@ -333,7 +355,12 @@ class _Reader(TiaOperands):
                     e.get("UId") == coil.get("UId") and e.get("Name") == "operand" for e in ends[1:]
                 )
             ):
-                acc = next(p for p in net.iter("Access") if p.get("UId") == ends[0].get("UId"))
+                uid = ends[0].get("UId")
+                acc = next((p for p in net.iter("Access") if p.get("UId") == uid), None)
+                if acc is None:
+                    raise ElementError(
+                        f'the coil\'s operand is UId "{uid}", which no Access has', w
+                    )
                 target = self.access(acc, "BOOL")
         if not isinstance(target, Operand):
             raise ElementError("a coil without an operand", coil)
@@ -344,7 +371,7 @@ class _Reader(TiaOperands):
         return Coil(kind, target, value, self.at(coil))  # type: ignore[arg-type]
 
     def step(self, s: Node) -> Step:
-        number = int(s.get("Number"))
+        number = _number(s, "Number")  # checked by numbers()
         rows = []
         actions = s.child("Actions")
         for a in actions.all("Action") if actions is not None else []:
@@ -389,8 +416,10 @@ class _Reader(TiaOperands):
         steps = [self.step(s) for s in q.iter("Step")]
         title = q.find("Title", "MultiLanguageText")
         name = title.text.strip() if title is not None else ""
-        trans = {int(t.get("Number")): t for t in q.iter("Transition")}
+        trans = {_number(t, "Number"): t for t in q.iter("Transition")}  # checked by numbers()
         links = _Links(q, self)
+        if links.broken:
+            self.p.fail_if_errors()
         out: list[Transition] = []
         for n, t in trans.items():
             try:
@@ -428,13 +457,28 @@ class _Links:
         self.out: dict[tuple[str, int, int], list[tuple[str, int, int]]] = {}
         self.into: dict[tuple[str, int, int], list[tuple[str, int, int]]] = {}
         self.types: dict[int, str] = {}
-        for b in q.iter("Branch"):
-            self.types[int(b.get("Number"))] = b.get("Type")
+        self.broken = False  # a branch or connection whose numbers are no numbers (I010)
+        try:
+            for b in q.iter("Branch"):
+                self.types[_number(b, "Number")] = b.get("Type")
+        except ElementError as exc:
+            self.broken = True
+            reader.p.error("I010", f"a branch's {exc.message}", reader.at(exc.node))
         for c in q.iter("Connection"):
             src, dst = c.child("NodeFrom"), c.child("NodeTo")
             if src is None or dst is None or not src.children or not dst.children:
                 continue
-            head, tail = _node(src.children[0], "Out"), _node(dst.children[0], "In")
+            try:
+                head, tail = _node(src.children[0], "Out"), _node(dst.children[0], "In")
+            except ElementError as exc:
+                self.broken = True
+                reader.p.error(
+                    "I010",
+                    f"a connection's {exc.node.tag} {exc.message} (a connection names "
+                    "its ends by number)",
+                    reader.at(exc.node),
+                )
+                continue
             self.out.setdefault(head, []).append(tail)
             self.into.setdefault(tail, []).append(head)
 
@@ -526,10 +570,24 @@ def _operands(e: Expr) -> list[Operand]:
 
 
 def _node(el: Node, port: str) -> tuple[str, int, int]:
+    """A connection's end: (S|T|B|E|?, number, port); ``ElementError`` for a number that
+    is not one (``<StepRef Number="Symbol"/>``)."""
     if el.tag == "EndConnection":
         return ("E", 0, 0)
     kind = {"StepRef": "S", "TransitionRef": "T", "BranchRef": "B"}.get(el.tag, "?")
-    return (kind, int(el.get("Number", "0") or 0), int(el.get(port, "0") or 0))
+    return (kind, _number(el, "Number", 0), _number(el, port, 0))
+
+
+def _number(el: Node, attr: str, missing: int | None = None) -> int:
+    """The integer attribute ``attr`` of ``el`` (``missing`` when it is absent or empty, if
+    given); ``ElementError`` naming the element, the attribute and its value otherwise."""
+    text = el.get(attr).strip()
+    if not text and missing is not None:
+        return missing
+    if not re.fullmatch(r"[+-]?\d+", text):
+        what = f'{attr}="{el.get(attr)}" is not a number' if text else f"has no {attr}"
+        raise ElementError(what, el)
+    return int(text)
 
 
 _BLOCK = re.compile(r"(FB|FC|SFB|SFC)(\d+)", re.IGNORECASE)
@@ -585,4 +643,8 @@ def read_simaticml(root: Node, problems: Problems, symbols: SymbolTable | None =
         problems.fail_if_errors()
     assert graph is not None
     reader = _Reader(fb, problems, symbols)
-    return reader.chart(graph)
+    try:
+        return reader.chart(graph)
+    except ElementError as exc:  # one no part of the reader placed: located all the same
+        problems.error("I001", f"<{exc.node.tag}>: {exc.message}", exc.node.loc(problems.file))
+        raise ImportFailed(problems.items) from None

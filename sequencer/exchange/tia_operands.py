@@ -205,7 +205,8 @@ class TiaOperands:
         offset = address.get("BitOffset")
         t = TIA_TYPES.get(address.get("Type").upper(), "")
         if area is None or not offset.isdigit() or t not in _WIDTH:
-            raise ElementError("an absolute address the importer does not read", at)
+            given = " ".join(f'{k}="{address.get(k)}"' for k in ("Area", "Type", "BitOffset"))
+            raise ElementError(f"an absolute address the importer does not read ({given})", at)
         n = int(offset)
         width = _WIDTH[t]
         return f"{area}{n // 8}.{n % 8}" if width == "" else f"{area}{width}{n // 8}"

@@ -86,6 +86,27 @@ class _Refused(Exception):
     pass
 
 
+_ENCODING = re.compile(rb"""^(?:\xef\xbb\xbf)?\s*<\?xml\b[^>]*?\bencoding\s*=\s*["']([^"']*)""")
+
+
+def _bad_encoding(data: bytes, problems: Problems) -> None:
+    """Report the encoding of the XML declaration that expat cannot decode (an unknown
+    name, or a multi-byte encoding other than UTF-8/UTF-16) as I001 at its name."""
+    m = _ENCODING.match(data)
+    if m is None:
+        problems.error("I001", "the file's encoding cannot be decoded", problems.at(1, 1))
+        return
+    line = data.count(b"\n", 0, m.start(1)) + 1
+    col = m.start(1) - (data.rfind(b"\n", 0, m.start(1)) + 1) + 1
+    name = m.group(1).decode("latin-1")
+    problems.error(
+        "I001",
+        f"the XML declaration names the encoding {name!r}, which this import cannot decode: "
+        "save the file as UTF-8",
+        problems.at(line, col),
+    )
+
+
 def parse_xml(data: bytes, file: str) -> Node:
     """The root element of ``data``; raises ``ImportFailed`` with one located diagnostic
     for conflict markers, a DTD or entity declaration, or malformed XML."""
@@ -161,6 +182,8 @@ def parse_xml(data: bytes, file: str) -> Node:
         problems.error(
             "I001", f"not well-formed XML: {message}", problems.at(exc.lineno, exc.offset + 1)
         )
+    except (LookupError, ValueError):  # an encoding Python does not know, or a multi-byte one
+        _bad_encoding(data, problems)
     problems.fail_if_errors()
     if not root:
         problems.error("I001", "no XML element in the file", problems.at(1, 1))

@@ -29,6 +29,7 @@ from s7graph.sequencer.exchange import (
     FORMATS,
     Imported,
     ImportFailed,
+    detect_format,
     export_reported,
     import_file,
 )
@@ -61,6 +62,57 @@ def _header(source: Path, result: Imported) -> str:
     return "\n".join(lines)
 
 
+def _os_error(doing: str, path: Path | str | None, exc: OSError) -> S7Error:
+    """A file the command cannot read or write as one line naming it (``cannot write
+    out.s7g: is a folder, not a file``), never Python's ``[Errno 21] …`` spelling."""
+    where = path if path is not None else exc.filename or "a file"
+    if isinstance(exc, IsADirectoryError) or Path(where).is_dir():
+        reason = "is a folder, not a file"
+    else:
+        reason = exc.strerror or str(exc)
+    return S7Error(f"cannot {doing} {where}: {reason}")
+
+
+def _format_of(source: Path) -> str:
+    """The name of the format ``source`` looks like, for a message ("a chart file" when it
+    cannot be told)."""
+    try:
+        with source.open("rb") as f:
+            fmt = detect_format(f.read(200_000))
+    except OSError:
+        fmt = None
+    return FORMATS[fmt] if fmt is not None else "a chart file"
+
+
+def _read(source: Path, symbols: Path | None, pou: str | None) -> Imported | int:
+    """The import of ``source`` or, when there is none, the exit status after saying why:
+    its located problems (``ImportFailed``), or one ``s7graph: error:`` line — a symbol
+    file that cannot be read, or anything else the importer did not expect, said as a file
+    that could not be read as its format (never a Python exception's name); exit 2."""
+    table: SymbolTable | None = None
+    if symbols is not None:
+        try:
+            table = SymbolTable.from_file(symbols)
+        except OSError as exc:
+            return fail(_os_error("read symbols", symbols, exc))
+        except S7Error as exc:
+            return fail(exc)
+    try:
+        return import_file(source, pou=pou, symbols=table)
+    except ImportFailed as exc:
+        for d in exc.diagnostics:
+            print(format_diagnostic(d), file=sys.stderr)
+        print(f"{source}: not imported", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        return fail(_os_error("read", exc.filename or source, exc))
+    except S7Error as exc:  # placed in the file when it names no place of its own
+        return fail(exc if exc.where is not None else S7Error(exc.message, str(source)))
+    except Exception:  # the last resort: a file that says so, not a traceback
+        what = _format_of(source)
+        return fail(S7Error(f"{source}: not imported: it cannot be read as {what}"))
+
+
 def import_command(
     source: Path,
     *,
@@ -70,19 +122,11 @@ def import_command(
     pou: str | None = None,
     strict: bool = False,
 ) -> int:
-    """Import ``source``; return the exit status (see the module docstring)."""
-    table: SymbolTable | None = None
-    try:
-        if symbols is not None:
-            table = SymbolTable.from_file(symbols)
-        result = import_file(source, pou=pou, symbols=table)
-    except ImportFailed as exc:
-        for d in exc.diagnostics:
-            print(format_diagnostic(d), file=sys.stderr)
-        print(f"{source}: not imported", file=sys.stderr)
-        return 2
-    except (OSError, S7Error) as exc:
-        return fail(exc)
+    """Import ``source``; return the exit status (see the module docstring). A file the
+    command cannot read or write is one ``s7graph: error:`` line naming it, exit 2."""
+    result = _read(source, symbols, pou)
+    if isinstance(result, int):
+        return result
     for d in result.problems:
         print(format_diagnostic(d), file=sys.stderr)
     left_out = [d for d in result.problems if d.code in _LEFT_OUT]
@@ -105,7 +149,7 @@ def import_command(
             if result.functions:
                 output.with_suffix(".scl").write_text(result.blocks_scl, encoding="utf-8")
     except OSError as exc:
-        return fail(S7Error(f"cannot write: {exc}"))
+        return fail(_os_error("write", None, exc))
     n = len(result.problems)
     print(
         f"{source}: imported ({FORMATS[result.format]}), {n} warning{'s' * (n != 1)}",
@@ -127,9 +171,12 @@ def export_command(chart: Path, *, to: str, output: Path, symbols: Path | None =
 
         model = parse_file(chart)
         text, problems = export_reported(model, to, table if symbols is not None else None)
-        output.write_text(text, encoding="utf-8")
     except (S7Error, ValueError, OSError) as exc:
         return fail(exc)
+    try:
+        output.write_text(text, encoding="utf-8")
+    except OSError as exc:
+        return fail(_os_error("write", output, exc))
     for d in problems:
         print(format_diagnostic(d), file=sys.stderr)
     n = len(problems)

@@ -1,0 +1,228 @@
+"""A broken file is one clear line naming the place — the file and the line, element or
+attribute — with the importer's diagnostic code and the documented exit status; never a
+Python exception's name nor a traceback (docs/import-export.md)."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+
+from s7graph.web.cli import main
+from tests.sequencer.exchange.helpers import corpus
+
+_CLASS_NAME = re.compile(r"\b[A-Z]\w*(?:Error|Exception|Iteration)\b|Traceback|internal error")
+
+_TRUE = (
+    '<FlgNet><Parts><Part Name="TrCoil" UId="21"/></Parts><Wires><Wire UId="22"><Powerrail/>'
+    '<NameCon UId="21" Name="in"/></Wire></Wires></FlgNet>'
+)
+_COIL = (
+    '<PermanentOperation><FlgNet><Parts><Access Scope="GlobalVariable" UId="{uid}"><Symbol>'
+    '<Component Name="Lamp"/></Symbol></Access><Part Name="Coil" UId="22"/></Parts><Wires>'
+    '<Wire UId="23"><Powerrail/><NameCon UId="22" Name="in"/></Wire>'
+    '<Wire UId="24"><IdentCon UId="21"/><NameCon UId="22" Name="operand"/></Wire>'
+    "</Wires></FlgNet></PermanentOperation>"
+)
+_ACTION = (
+    '<Action Qualifier="N"><Access Scope="GlobalVariable" UId="21"><Symbol>'
+    '<Component Name="Pump"/><Address Area="Output" Type="{type}" BitOffset="0" '
+    'Informative="true"/></Symbol></Access></Action>'
+)
+
+
+def _link(a: str, b: str, kind: str = "Direct") -> str:
+    return (
+        f"<Connection><NodeFrom>{a}</NodeFrom><NodeTo>{b}</NodeTo>"
+        f"<LinkType>{kind}</LinkType></Connection>"
+    )
+
+
+def simaticml(
+    *,
+    number: str = "1",
+    ref: str = "1",
+    action: str = "",
+    post: str = "",
+    encoding: str = "utf-8",
+) -> str:
+    """A GRAPH FB of two steps and two transitions as TIA exports it (line 8: step 1,
+    line 14: the connection from step 1, line 19: the permanent operations)."""
+    return f"""<?xml version="1.0" encoding="{encoding}"?>
+<Document><SW.Blocks.FB ID="0"><AttributeList><Name>Seq</Name><Number>1</Number>
+<ProgrammingLanguage>GRAPH</ProgrammingLanguage></AttributeList><ObjectList>
+<SW.Blocks.CompileUnit ID="1"><AttributeList><NetworkSource>
+<Graph xmlns="http://www.siemens.com/automation/Openness/SW/NetworkSource/Graph/v5">
+<PreOperations/>
+<Sequence><Steps>
+<Step Number="{number}" Init="true" Name="Idle"><Actions>{action}</Actions></Step>
+<Step Number="2" Init="false" Name="Run"/>
+</Steps><Transitions>
+<Transition Name="Go" Number="1">{_TRUE}</Transition>
+<Transition Name="Back" Number="2">{_TRUE}</Transition>
+</Transitions><Branches/><Connections>
+{_link(f'<StepRef Number="{ref}"/>', '<TransitionRef Number="1"/>')}
+{_link('<TransitionRef Number="1"/>', '<StepRef Number="2"/>')}
+{_link('<StepRef Number="2"/>', '<TransitionRef Number="2"/>')}
+{_link('<TransitionRef Number="2"/>', '<StepRef Number="1"/>', "Jump")}
+</Connections></Sequence>
+<PostOperations>{post}</PostOperations>
+</Graph></NetworkSource></AttributeList></SW.Blocks.CompileUnit></ObjectList></SW.Blocks.FB>
+</Document>
+"""
+
+
+def run(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], name: str, text: str, *extra: str
+) -> tuple[int, list[str]]:
+    """``s7graph import`` of ``text`` written to ``name``: (exit status, stderr lines); no
+    Python exception's name in what it prints."""
+    source = tmp_path / name
+    source.write_text(text, encoding="utf-8")
+    rc = main(["import", str(source), "-o", str(tmp_path / "out.s7g"), *extra])
+    out, err = capsys.readouterr()
+    assert not _CLASS_NAME.search(out + err), err
+    return rc, err.splitlines()
+
+
+def test_the_minimal_simaticml_of_these_tests_imports(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    rc, err = run(tmp_path, capsys, "ok.xml", simaticml(post=_COIL.format(uid=21)))
+    assert rc == 1 and [line.split(": ")[1] for line in err[:-1]] == ["warning[I032]"]
+    assert '"Lamp" := TRUE;' in (tmp_path / "out.s7g").read_text()
+
+
+def test_an_initial_step_without_a_pou_header_is_a_located_parse_error(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    rc, err = run(tmp_path, capsys, "a.st", "INITIAL_STEP A: END_STEP\nEND_PROGRAM\n")
+    assert rc == 2
+    assert err[0].startswith(f"{tmp_path / 'a.st'}:1:1: error[I001]: the IEC text does not parse")
+    assert err[1] == f"{tmp_path / 'a.st'}: not imported"
+
+
+def test_an_encoding_the_xml_reader_cannot_decode_is_named_where_it_is_declared(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    for encoding in ("utf-88", "shift_jis", "rot13"):
+        rc, err = run(tmp_path, capsys, "enc.xml", simaticml(encoding=encoding))
+        assert rc == 2
+        assert err[0] == (
+            f"{tmp_path / 'enc.xml'}:1:31: error[I001]: the XML declaration names the "
+            f"encoding '{encoding}', which this import cannot decode: save the file as UTF-8"
+        )
+
+
+def test_a_step_number_that_is_not_a_number_names_the_step(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    rc, err = run(tmp_path, capsys, "num.xml", simaticml(number="1$"))
+    assert rc == 2
+    assert err == [
+        f'{tmp_path / "num.xml"}:8:1: error[I013]: step "Idle": Number="1$" is not a number '
+        "(GRAPH numbers steps 1, 2, …)",
+        f"{tmp_path / 'num.xml'}: not imported",
+    ]
+
+
+def test_a_connection_naming_a_step_by_a_symbol_names_the_reference(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    rc, err = run(tmp_path, capsys, "ref.xml", simaticml(ref="Symbol"))
+    assert rc == 2
+    assert err[0] == (
+        f'{tmp_path / "ref.xml"}:14:23: error[I010]: a connection\'s StepRef Number="Symbol" '
+        "is not a number (a connection names its ends by number)"
+    )
+    assert len(err) == 2  # that line and "not imported": no consequential errors
+
+
+def test_a_permanent_coil_wired_to_no_access_is_left_out_at_its_wire(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    rc, err = run(tmp_path, capsys, "coil.xml", simaticml(post=_COIL.format(uid=99)))
+    assert rc == 1
+    assert err[0].startswith(f"{tmp_path / 'coil.xml'}:19:")
+    assert err[0].endswith(
+        'warning[I022]: permanent operation not imported: the coil\'s operand is UId "21", '
+        "which no Access has"
+    )
+    assert "PERMANENT" not in (tmp_path / "out.s7g").read_text().split("*)", 1)[1]
+
+
+def test_an_address_type_the_import_does_not_read_leaves_the_row_out_at_its_access(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    rc, err = run(tmp_path, capsys, "addr.xml", simaticml(action=_ACTION.format(type="Bool#")))
+    assert rc == 1
+    assert err[0] == (
+        f'{tmp_path / "addr.xml"}:8:73: warning[I023]: step 1: action row with "Pump" not '
+        "imported: an absolute address the importer does not read "
+        '(Area="Output" Type="Bool#" BitOffset="0")'
+    )
+    rc, _ = run(
+        tmp_path, capsys, "addr.xml", simaticml(action=_ACTION.format(type="Bool#")), "--strict"
+    )
+    assert rc == 2
+    rc, _ = run(tmp_path, capsys, "addr.xml", simaticml(action=_ACTION.format(type="Bool")))
+    assert rc == 0
+
+
+def test_a_plcopen_transition_position_that_is_not_a_number_names_the_position(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    text = corpus("plcopen/beremiz_first_steps.xml").read_text(encoding="utf-8")
+    m = re.search(r'<transition localId="\d+"[^>]*>\s*<position x="(\d+)"', text)
+    assert m is not None
+    broken = text[: m.start(1)] + "X$" + text[m.end(1) :]
+    rc, err = run(tmp_path, capsys, "pos.xml", broken)
+    assert rc == 2
+    line = text.count("\n", 0, m.start(1)) + 1
+    [error] = [e for e in err if "error[" in e]
+    assert error.startswith(f"{tmp_path / 'pos.xml'}:{line}:")
+    assert error.endswith(
+        'error[I013]: a transition\'s position x="X$" is not a number (it orders the paths '
+        "of an alternative branch, leftmost first)"
+    )
+
+
+def test_a_folder_given_as_a_file_says_so(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    folder = tmp_path / "dir.s7g"
+    folder.mkdir()
+    source = tmp_path / "ok.xml"
+    source.write_text(simaticml(), encoding="utf-8")
+    for args, doing in (
+        (["import", "--symbols", str(folder), str(source)], "read symbols"),
+        (["import", str(source), "-o", str(folder)], "write"),
+        (
+            ["import", str(source), "-o", str(tmp_path / "c.s7g"), "--symbols-out", str(folder)],
+            "write",
+        ),
+        (["export", str(tmp_path / "c.s7g"), "--to", "plcopen", "-o", str(folder)], "write"),
+    ):
+        if args[0] == "export":
+            assert main(["import", str(source), "-o", str(tmp_path / "c.s7g")]) == 0
+            capsys.readouterr()
+        assert main(args) == 2
+        err = capsys.readouterr().err
+        assert err == f"s7graph: error: cannot {doing} {folder}: is a folder, not a file\n"
+
+
+def test_an_unexpected_failure_of_an_importer_is_one_line_naming_the_file_and_format(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    def broken(*_: object, **__: object) -> None:
+        raise ValueError("zip() argument 2 is longer than argument 1")
+
+    monkeypatch.setattr("s7graph.web.cli.exchange.import_file", broken)
+    rc, err = run(tmp_path, capsys, "any.xml", simaticml())
+    assert rc == 2
+    assert err == [
+        f"s7graph: error: {tmp_path / 'any.xml'}: not imported: it cannot be read as "
+        "TIA Portal SimaticML (S7-GRAPH)"
+    ]
+    assert not (tmp_path / "out.s7g").exists()
