@@ -221,6 +221,30 @@ def _duration(value: float | None) -> float | None:
     return value
 
 
+MAX_CYCLE_MS = 3_600_000.0  # an hour: a cycle time beyond is no cycle
+
+
+def _cycle_ms(value: float) -> float:
+    if not 0 < value <= MAX_CYCLE_MS:
+        raise typer.BadParameter(f"from more than 0 to {MAX_CYCLE_MS:,.0f} ms, not {value:g}")
+    return value
+
+
+def _virtual_cycle_ms(value: float) -> float:
+    if not 0 <= value <= MAX_CYCLE_MS:  # 0: the virtual clock stands still
+        raise typer.BadParameter(f"from 0 to {MAX_CYCLE_MS:,.0f} ms, not {value:g}")
+    return value
+
+
+def _cycles(value: int) -> int:
+    if not 0 <= value <= MAX_CYCLES:
+        raise typer.BadParameter(f"from 0 to {MAX_CYCLES:,}, not {value}")
+    return value
+
+
+MAX_CYCLES = 100_000_000
+
+
 def _rt_priority(value: int | None) -> int | None:
     if value is not None and not 0 <= value <= 98:
         raise typer.BadParameter("--rt-priority must be 0 (normal scheduling) to 98")
@@ -287,6 +311,7 @@ Duration = Annotated[
 StopAfter = Annotated[
     float | None, typer.Option(callback=_duration, help="Stop after this many seconds.")
 ]
+CycleMs = Annotated[float, typer.Option(callback=_cycle_ms, help="Minimum cycle time in ms.")]
 Record = Annotated[Path | None, typer.Option(help="Record the chart's run to a rerun .rrd file.")]
 Restart = Annotated[
     str | None,
@@ -362,7 +387,7 @@ def run(
     plant: Annotated[Path | None, typer.Option(help="A simulated plant (.py) for a chart.")] = None,
     symbols: Annotated[Path | None, typer.Option(help="A symbol table file for a chart.")] = None,
     state: StateFile = None,
-    cycle_ms: Annotated[float, typer.Option(help="Minimum cycle time in ms.")] = 10.0,
+    cycle_ms: CycleMs = 10.0,
     max_cycle_ms: MaxCycleMs = None,
     duration_s: Duration = None,
     web: Annotated[bool, typer.Option(help="Serve the browser view.")] = False,
@@ -575,8 +600,10 @@ def sim(
     stimulus: Annotated[
         Path | None, typer.Option(help='JSONL stimulus: {"at_ms": 0, "set": {...}} a line.')
     ] = None,
-    cycle_ms: Annotated[float, typer.Option(help="Virtual cycle time in ms.")] = 10.0,
-    cycles: Annotated[int, typer.Option(help="Number of cycles to run.")] = 100,
+    cycle_ms: Annotated[
+        float, typer.Option(callback=_virtual_cycle_ms, help="Virtual cycle time in ms.")
+    ] = 10.0,
+    cycles: Annotated[int, typer.Option(callback=_cycles, help="Number of cycles to run.")] = 100,
     watch: Annotated[
         str, typer.Option(help="Comma-separated addresses, symbols or FB pins to report.")
     ] = "",

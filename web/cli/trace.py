@@ -11,6 +11,7 @@ with its line, the reason on stderr and exit status 1.
 from __future__ import annotations
 
 import json
+import math
 import sys
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -22,8 +23,10 @@ from s7graph.engine.cpu import Cpu
 from s7graph.engine.errors import S7Error
 from s7graph.engine.record import ScanRecord
 from s7graph.engine.runner import stop_reason
+from s7graph.web.harness.scl import read_source
 
-Stimulus = list[tuple[float, dict[str, Any]]]
+Stimulus = list[tuple[float, dict[str, Any], str]]
+"""The stimulus lines in time order: (at_ms, what they set, ``FILE:LINE``)."""
 Cycle = Callable[[int, float], tuple[ScanRecord, dict[str, Any]]]
 """One cycle ``(k, t_ms)``: scan, and the fields the line reports of it besides the values."""
 
@@ -41,11 +44,12 @@ class Traced(Protocol):
 
 
 def read_stimulus(path: Path | None) -> Stimulus:
-    """The JSONL stimulus ``{"at_ms": 0, "set": {...}}`` a line, in time order."""
+    """The JSONL stimulus ``{"at_ms": 0, "set": {...}}`` a line, in time order, each with
+    its place (``FILE:LINE``); S7Error naming the file (and line) that cannot be read."""
     if path is None:
         return []
     out: Stimulus = []
-    for n, line in enumerate(Path(path).read_text(encoding="utf-8").splitlines(), 1):
+    for n, line in enumerate(read_source(Path(path)).splitlines(), 1):
         if not line.strip():
             continue
         try:
@@ -54,9 +58,13 @@ def read_stimulus(path: Path | None) -> Stimulus:
             values = obj["set"]
             if not isinstance(values, dict):
                 raise ValueError("'set' must be an object")
+            if not 0 <= at < math.inf:
+                raise ValueError(f"at_ms must be a time from 0 on, not {at}")
+        except RecursionError:
+            raise S7Error(f"{path}:{n}: bad stimulus line: nested too deep") from None
         except (ValueError, KeyError, TypeError, AttributeError) as exc:
             raise S7Error(f"{path}:{n}: bad stimulus line: {exc}") from None
-        out.append((at, values))
+        out.append((at, values, f"{path}:{n}"))
     out.sort(key=lambda item: item[0])
     return out
 
@@ -70,9 +78,12 @@ def checked_inputs(
     names = [w.strip() for w in watch.split(",") if w.strip()]
     for name in names:
         session.check_name(name, writing=False)
-    for _, values in stim:
+    for _, values, where in stim:
         for name in values:
-            session.check_name(name, writing=True)
+            try:
+                session.check_name(name, writing=True)
+            except S7Error as exc:
+                raise S7Error(f"{where}: {exc.message}") from None
     return stim, names
 
 
@@ -82,7 +93,11 @@ def trace_out(trace: Path | None) -> Iterator[TextIO]:
     if trace is None:
         yield sys.stdout
         return
-    with open(trace, "w", encoding="utf-8") as out:
+    try:
+        out = open(trace, "w", encoding="utf-8")  # noqa: SIM115  (closed below)
+    except OSError as exc:
+        raise S7Error(f"cannot write the trace {trace}: {exc.strerror or exc}") from None
+    with out:
         yield out
 
 
@@ -106,8 +121,14 @@ def run_trace(
     for k in range(cycles):
         t_ms = k * cycle_ms
         while nxt < len(stim) and stim[nxt][0] <= t_ms + 1e-9:
-            for name, value in stim[nxt][1].items():
-                session.set(name, value)
+            _, values, where = stim[nxt]
+            for name, value in values.items():
+                try:
+                    session.set(name, value)
+                except S7Error as exc:
+                    said = exc.message
+                    named = said if said.startswith(f"{name}: ") else f"{name}: {said}"
+                    raise S7Error(f"{where}: {named}") from None
             nxt += 1
         record, fields = cycle(k, t_ms)
         line = {

@@ -20,7 +20,9 @@ from s7graph import sfb
 from s7graph.engine.address import Address, Area, Width
 from s7graph.engine.clock import Clock
 from s7graph.engine.cpu import Cpu
+from s7graph.engine.datatypes import type_of
 from s7graph.engine.errors import S7Error
+from s7graph.engine.modify import ModifyError, typed_value
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.calls import prepare_calls
 from s7graph.sequencer.checks.diagnostics import Diagnostic, format_diagnostic
@@ -273,14 +275,16 @@ class ChartSession:
         return lambda: _json(read_as(addr, type_name))
 
     def set(self, name: str, value: Any) -> None:
-        """Write an input: module-side inputs, memory, an FB input pin or an FB variable."""
+        """Write an input: module-side inputs, memory, an FB input pin or an FB variable —
+        a pin or variable in its declared type (S7Error naming it when the value does not
+        fit: the chart never sees text where it counts an INT)."""
         if name in self.cc.var_types:
-            self.graph.state.vars[name] = value
+            self.graph.state.vars[name] = _typed(self.cc.var_types[name], name, value)
             return
         if is_pin(name):
             pin = check_pin(name, self.cc.parameters, direction=Direction.IN)
             assert self.graph.idb is not None
-            self.graph.idb.values[pin.name] = value
+            self.graph.idb.values[pin.name] = _typed(pin.type, pin.name, value)
             return
         found = self._address(name)
         if found is None:
@@ -312,3 +316,21 @@ def _json(v: Any) -> Any:
     if isinstance(v, (bool, int, float, str)) or v is None:
         return v
     return str(v)
+
+
+def _typed(type_name: str, name: str, value: Any) -> Any:
+    """``value`` as the ``type_name`` of FB pin or variable ``name`` (``engine.modify``'s
+    rules; a whole-numbered float is an integer's value); a type a modify cannot write
+    (STRING, a structure, wider than a double word) is taken as given."""
+    try:
+        size = 1 if type_name == "BOOL" else type_of(type_name).size_bits
+    except S7Error:
+        return value
+    if size not in (1, 8, 16, 32):
+        return value
+    if isinstance(value, float) and value.is_integer() and type_name not in ("REAL", "LREAL"):
+        value = int(value)
+    try:
+        return typed_value(type_name, name, value)[0]
+    except ModifyError as exc:
+        raise S7Error(exc.message.replace(" (to modify the", " (to set the")) from None

@@ -100,3 +100,50 @@ def test_a_switch_in_the_startup_call_is_in_the_first_lines_events(tmp_path: Pat
     assert lines[0]["events"] == [["S1", "S2"], ["S1", "S3"]] and lines[1]["events"] == []
     assert lines[0]["active"] == ["S2", "S3"]
     assert graph[0]["events"] == lines[0]["events"]  # GRAPH switches in cycle 0's own call
+
+
+VARS = CHART.replace(
+    "  PARAMETERS := STANDARD;\n", "  PARAMETERS := STANDARD;\nVAR n : INT; END_VAR\n"
+)
+
+
+def test_a_stimulus_value_that_does_not_fit_names_its_line_and_exits_2(
+    tmp_path: Path, capsys
+) -> None:
+    """A value set on a variable, pin or address that its type cannot hold is the
+    stimulus's fault, not the chart's: ``FILE:LINE: name: why``, exit 2 — never a STOP of
+    the CPU blaming the FB, never a value wrapped or kept as text."""
+    for values, why in [
+        ({"n": "abc"}, "n: bad literal 'abc': not a literal (to set the INT n)"),
+        ({"n": 40000}, "n: 40000 is out of range for INT (to set the INT n)"),
+        ({"S_SEL": "x"}, "S_SEL: bad literal 'x'"),
+        ({"S_SEL": None}, "S_SEL: "),
+        ({"Start": "yes"}, "Start: 'yes' is out of range for BOOL"),
+    ]:
+        rc, _ = run(
+            tmp_path, [{"at_ms": 0, "set": {"S_SEL": 1}}, {"at_ms": 10, "set": values}], chart=VARS
+        )
+        err = capsys.readouterr().err
+        assert rc == 2 and err.startswith(f"s7graph: error: {tmp_path / 's.jsonl'}:2: {why}"), err
+    rc, lines = run(
+        tmp_path, [{"at_ms": 0, "set": {"n": 7.0, "S_SEL": 2}}], chart=VARS, watch="n,S_SEL"
+    )
+    assert rc == 0 and lines[0]["values"] == {"n": 7, "S_SEL": 2}  # 7.0: a whole number
+
+
+def test_a_stimulus_file_that_cannot_be_read_is_one_line_naming_it(tmp_path: Path, capsys) -> None:
+    c, s, out = write_sim_inputs(tmp_path, CHART, [])
+    for content, why in [
+        (b"\xff\n", "1:1: not UTF-8"),
+        (b"[" * 100_000 + b"\n", "1: bad stimulus line: nested too deep"),
+        (b'{"at_ms": -5, "set": {}}\n', "1: bad stimulus line: at_ms must be a time from 0 on"),
+    ]:
+        s.write_bytes(content)
+        assert sim_command(c, stimulus=s, cycles=1, trace=out) == 2
+        assert capsys.readouterr().err.startswith(f"s7graph: error: {s}:{why}")
+    assert sim_command(c, stimulus=tmp_path, cycles=1, trace=out) == 2
+    assert capsys.readouterr().err == f"s7graph: error: cannot read {tmp_path}: Is a directory\n"
+    assert sim_command(c, cycles=1, trace=tmp_path) == 2
+    assert capsys.readouterr().err == (
+        f"s7graph: error: cannot write the trace {tmp_path}: Is a directory\n"
+    )
