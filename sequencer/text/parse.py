@@ -30,7 +30,7 @@ from contextvars import ContextVar
 from copy import copy
 from functools import cache
 from pathlib import Path
-from typing import Any
+from typing import Any, Final
 
 from lark import Lark, Token, Tree
 from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
@@ -375,8 +375,18 @@ def _parse_chart(text: str, file: str) -> Chart:
     return chart  # type: ignore[no-any-return]
 
 
+MAX_CHART_BYTES: Final = 10_000_000
+"""A chart file is at most this large (ten times the largest chart the editor sends; a
+1,000-step chart with 30,000 action rows is under 1 MB): parsing more would hold a shell
+for minutes."""
+
+
 def chart_text(data: bytes, file: str) -> str:
-    """A chart file's bytes as text; ChartSyntaxError (E001 at the byte) if not UTF-8."""
+    """A chart file's bytes as text; ChartSyntaxError (E001) if larger than
+    :data:`MAX_CHART_BYTES`, or not UTF-8 (at the byte)."""
+    if len(data) > MAX_CHART_BYTES:
+        why = f"the file has {len(data):,} bytes: a chart file has at most {MAX_CHART_BYTES:,}"
+        raise ChartSyntaxError([error("E001", why, SourceLocation(file, 1, 1))])
     try:
         return decode_utf8(data, file)
     except NotUtf8 as exc:

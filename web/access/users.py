@@ -153,15 +153,20 @@ class UsersFile:
             )
         try:
             data = json.loads(self.path.read_text(encoding="utf-8"))
-            raw = data["users"]
-            if data.get("version") not in _READS or not isinstance(raw, dict):
-                raise ValueError("unknown version")
-            users = {name: _entry(name, entry) for name, entry in raw.items()}
-        except UsersError:
-            raise
-        except (OSError, ValueError, KeyError, TypeError) as exc:
+        except OSError as exc:
+            raise UsersError(f"{self.path}: cannot read it: {exc.strerror or exc}") from None
+        except RecursionError:
+            raise UsersError(f"{self.path}: not a users file (nested too deep)") from None
+        except ValueError as exc:  # not UTF-8, not JSON
             raise UsersError(f"{self.path}: not a users file ({exc})") from None
-        return users
+        raw = data.get("users") if isinstance(data, dict) else None
+        if not isinstance(raw, dict) or data.get("version") not in _READS:
+            why = "no table of users" if not isinstance(raw, dict) else "unknown version"
+            raise UsersError(f"{self.path}: not a users file ({why})")
+        try:
+            return {name: _entry(name, entry) for name, entry in raw.items()}
+        except (ValueError, KeyError, TypeError) as exc:
+            raise UsersError(f"{self.path}: not a users file ({exc})") from None
 
     def mtime_ns(self) -> int | None:
         """When the file last changed (None: no file): a reader reloads on a change."""

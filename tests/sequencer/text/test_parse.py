@@ -19,7 +19,7 @@ from s7graph.sequencer.text.model import (
     StepTarget,
     TransAttr,
 )
-from s7graph.sequencer.text.parse import ChartSyntaxError, parse_chart
+from s7graph.sequencer.text.parse import MAX_CHART_BYTES, ChartSyntaxError, chart_text, parse_chart
 from s7graph.sequencer.text.walk import unlocated
 from s7graph.steps.syntax import chain
 from tests.sequencer.helpers import CHARTS
@@ -231,3 +231,14 @@ def test_a_written_chain_parses_to_the_shape_steps_syntax_chain_builds(n: int) -
     condition = parse_chart(text, "t.s7g").all_transitions()[0].condition
     expected = chain("AND", [Operand(c) for c in contacts])
     assert unlocated(condition) == unlocated(expected)
+
+
+def test_a_chart_file_over_the_size_limit_is_refused_before_it_is_parsed() -> None:
+    """Parsing tens of megabytes holds a shell for minutes: a file over the limit is one
+    located E001 saying both sizes, and one at the limit is read."""
+    assert chart_text(b" " * MAX_CHART_BYTES, "big.s7g") == " " * MAX_CHART_BYTES
+    with pytest.raises(ChartSyntaxError) as refused:
+        chart_text(b" " * (MAX_CHART_BYTES + 1), "big.s7g")
+    (d,) = refused.value.diagnostics
+    assert (d.code, d.loc.file, d.loc.line) == ("E001", "big.s7g", 1)
+    assert d.message == "the file has 10,000,001 bytes: a chart file has at most 10,000,000"
