@@ -32,6 +32,7 @@ from s7graph.sequencer.fb import GraphFB, install_all
 from s7graph.sequencer.params import Direction, check_pin, is_pin
 from s7graph.sequencer.text.model import Chart
 from s7graph.sequencer.text.parse import ChartSyntaxError, chart_text, parse_chart
+from s7graph.steps.scl.access import parse_name
 from s7graph.web.harness.dbvars import DbVariables
 from s7graph.web.harness.operands import address_of, write_operand
 from s7graph.web.harness.scl import Loadable, SclSources, compile_sources, load_beside
@@ -197,11 +198,32 @@ class ChartSession:
 
     # ------------------------------------------------------------ names
 
+    def _own(self, name: str) -> str:
+        """``DB1.count`` or ``"Seq_mix".count`` — a variable of the chart in its own
+        instance DB, where S7-GRAPH keeps an FB's static variables — as the variable's own
+        name (``count``); any other name as it is."""
+        idb = self.graph.idb
+        if idb is None or name[:1] not in ('"', "D", "d"):
+            return name
+        try:
+            parsed = parse_name(name)
+        except ValueError:
+            return name
+        if parsed is None or len(parsed[1]) != 1 or not isinstance(parsed[1][0], str):
+            return name
+        db, (var,) = parsed
+        block = self.symbols.block(db) if isinstance(db, str) else None
+        number = block.number if block is not None and block.kind == "DB" else db
+        ours = number == idb.number or str(number).casefold() == idb.name.casefold()
+        key = next((v for v in self.cc.var_types if v.casefold() == var.casefold()), None)
+        return key if ours and key is not None else name
+
     def _address(self, name: str) -> tuple[Address, str] | None:
         return address_of(self.symbols, name)
 
     def check_name(self, name: str, *, writing: bool) -> None:
         """Raise S7Error if ``name`` cannot be set (``writing``) or watched."""
+        name = self._own(name)
         if _STEP_ATTR.fullmatch(name) or _TRANS_ATTR.fullmatch(name):
             if writing:
                 raise S7Error(f"{name} cannot be set")
@@ -219,6 +241,7 @@ class ChartSession:
 
     def get(self, name: str) -> Any:
         """The current value of an address, symbol, FB pin, variable or step attribute."""
+        name = self._own(name)
         st = self.graph.state
         if m := _STEP_ATTR.fullmatch(name):
             i = self.cc.step_index.get(int(m[1]))
@@ -244,6 +267,7 @@ class ChartSession:
         to its address and type, once instead of at every read (the view's watch list, read
         every scan); anything else through ``get``. S7Error for an unknown name. Resolve
         again once the symbol table changes."""
+        name = self._own(name)
         if (
             _STEP_ATTR.fullmatch(name)
             or _TRANS_ATTR.fullmatch(name)
@@ -278,6 +302,7 @@ class ChartSession:
         """Write an input: module-side inputs, memory, an FB input pin or an FB variable —
         a pin or variable in its declared type (S7Error naming it when the value does not
         fit: the chart never sees text where it counts an INT)."""
+        name = self._own(name)
         if name in self.cc.var_types:
             self.graph.state.vars[name] = _typed(self.cc.var_types[name], name, value)
             return

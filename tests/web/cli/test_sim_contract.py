@@ -147,3 +147,22 @@ def test_a_stimulus_file_that_cannot_be_read_is_one_line_naming_it(tmp_path: Pat
     assert capsys.readouterr().err == (
         f"s7graph: error: cannot write the trace {tmp_path}: Is a directory\n"
     )
+
+
+def test_a_charts_variable_is_watched_and_set_through_its_instance_db_too(
+    tmp_path: Path,
+) -> None:
+    """S7-GRAPH keeps an FB's static variables in its instance DB: ``DB1.n`` and
+    ``"Drill".n`` are the chart's ``n``, read and set as ``n`` is."""
+    rc, lines = run(
+        tmp_path,
+        [{"at_ms": 0, "set": {"DB1.n": 7}}, {"at_ms": 10, "set": {'"Drill".n': 9}}],
+        chart=VARS,
+        watch='n,DB1.n,"Drill".n',
+        cycles=2,
+    )
+    assert rc == 0
+    assert [line["values"] for line in lines] == [
+        {"n": 7, "DB1.n": 7, '"Drill".n': 7},
+        {"n": 9, "DB1.n": 9, '"Drill".n': 9},
+    ]
