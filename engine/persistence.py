@@ -47,8 +47,9 @@ label, name and fingerprint of its FB (``FB.state_format``, else its interface).
 refuses — :class:`StateFileError` naming the problem — an empty, truncated, garbled or
 foreign file, one without a table (copied without its write-ahead log), one locked by
 another process, a dropped instances table, an instance of another FB, a DB the program no
-longer has, a malformed row or memory image (``engine/state_checks.py``); a changed
-fingerprint lets the FB's ``state_format.adapt`` carry the data over (a GRAPH
+longer has, a malformed row (a diagnostics row too) or memory image
+(``engine/state_checks.py``), text that is not UTF-8 (a ``meta`` value by its key); a
+changed fingerprint lets the FB's ``state_format.adapt`` carry the data over (a GRAPH
 FB: by step number, ``sequencer/change/carry.py``) and reports what it could not keep.
 """
 
@@ -75,7 +76,7 @@ from s7graph.engine.file_lock import try_lock
 from s7graph.engine.record import DiagEntry
 from s7graph.engine.restart import stop_blocker
 from s7graph.engine.rollup import ALARM_ROWS, ALARM_SUMMARY, Job, low_water, roll_alarms
-from s7graph.engine.state_checks import check_hot_image, check_memory_image
+from s7graph.engine.state_checks import check_hot_image, check_memory_image, diag_entry
 
 __all__ = [
     "FORMAT",
@@ -428,9 +429,9 @@ class StateStore:
                 if "state" in columns:
                     raise StateFileError(self.path, "written by an older s7graph (no fingerprints)")
             if "meta" in tables:
-                row = db.execute("SELECT value FROM meta WHERE key='format'").fetchone()
-                if row is not None and row[0] not in READABLE:
-                    raise StateFileError(self.path, f"unknown format {row[0]!r}")
+                mark = _meta(db, self.path, "format")
+                if mark is not None and mark not in READABLE:
+                    raise StateFileError(self.path, f"unknown format {mark!r}")
         if not existed:
             db.execute("PRAGMA page_size=1024")  # a short row change writes one short page
         db.execute("PRAGMA journal_mode=WAL")
@@ -677,15 +678,22 @@ class StateStore:
         return rows
 
     def meta(self, key: str) -> str | None:
-        row = self._db.execute("SELECT value FROM meta WHERE key=?", (key,)).fetchone()
-        return None if row is None else str(row[0])
+        """The ``meta`` value of ``key`` (None: none); StateFileError if not UTF-8 text."""
+        return _meta(self._db, self.path, key)
 
     # ---- loading ---------------------------------------------------------------------------
 
     def load(self, cpu: Cpu) -> LoadReport | None:
         """Restore memory, instance DBs, diagnostics and the registered parts into a
         STOPped CPU; None when the file holds no state yet. ``StateFileError`` when it
-        holds a state this CPU cannot trust (see the module docstring)."""
+        holds a state this CPU cannot trust (see the module docstring), SQLite's own
+        errors reading it included."""
+        try:
+            return self._load(cpu)
+        except sqlite3.DatabaseError as exc:
+            raise _unreadable(self.path, exc) from None
+
+    def _load(self, cpu: Cpu) -> LoadReport | None:
         memory = self.meta("memory")
         instances = self._db.execute(
             "SELECT number, fb, name, fingerprint, shape, data FROM instances ORDER BY number"
@@ -724,12 +732,7 @@ class StateStore:
             _restore_part(
                 self.path, "force table", lambda: cpu.forces.restore(json.loads(forces), cpu.mem)
             )
-        entries = self._db.execute(
-            "SELECT t_ns, event_id, block, message, address, ob, priority, wall_ns "
-            "FROM diagnostics "
-            "ORDER BY seq"
-        ).fetchall()
-        saved = [_diag_entry(row) for row in entries[-cpu.diagnostics.capacity :]]
+        saved = _saved_diagnostics(self._db, self.path, cpu.diagnostics.capacity)
         for entry in saved:
             cpu.diagnostics.add(entry)
         cpu.diagnostics.continue_from(self._diag_seq)  # numbered on from the last run's
@@ -1012,18 +1015,34 @@ def _checked(
     return data
 
 
-def _diag_entry(row: tuple[Any, ...]) -> DiagEntry:
-    t_ns, event_id, block, message, address, ob, priority, wall_ns = row
-    return DiagEntry(
-        int(t_ns),
-        int(event_id),
-        str(block or ""),
-        str(message or ""),
-        str(address or ""),
-        int(ob or 0),
-        int(priority or 0),
-        int(wall_ns or 0),
-    )
+def _saved_diagnostics(db: sqlite3.Connection, path: Path, capacity: int) -> list[DiagEntry]:
+    """The last ``capacity`` diagnostics rows as entries, oldest first; ``StateFileError``
+    naming a row that is malformed (``engine/state_checks.py``)."""
+    rows = db.execute(
+        f"SELECT seq, {', '.join(_DIAG_COLUMNS[1:])} FROM diagnostics ORDER BY seq DESC LIMIT ?",
+        (capacity,),
+    ).fetchall()
+    entries = []
+    for row in reversed(rows):
+        try:
+            entries.append(diag_entry(tuple(row[1:])))
+        except ValueError as exc:
+            raise StateFileError(path, f"malformed diagnostics row {row[0]}: {exc}") from None
+    return entries
+
+
+def _meta(db: sqlite3.Connection, path: Path, key: str) -> str | None:
+    """The ``meta`` value of ``key``, read as bytes so that one not UTF-8 is refused by its
+    key (SQLite's own error names only the column)."""
+    row = db.execute("SELECT CAST(value AS BLOB) FROM meta WHERE key=?", (key,)).fetchone()
+    if row is None:
+        return None
+    try:
+        return bytes(row[0] or b"").decode()
+    except UnicodeDecodeError:
+        raise StateFileError(
+            path, f"not a readable state file (meta {key!r} is not UTF-8 text)"
+        ) from None
 
 
 def _unsaved(cpu: Cpu, saved: set[int], report: LoadReport) -> list[int]:
@@ -1079,7 +1098,17 @@ def _unreadable(path: Path, exc: sqlite3.DatabaseError) -> StateFileError:
         return StateFileError(
             path, f"in use by another process ({exc}): it was not read", way_out=_IN_USE_WAY_OUT
         )
-    return StateFileError(path, f"not a readable state file ({exc})")
+    return StateFileError(path, f"not a readable state file ({_sqlite_why(exc)})")
+
+
+def _sqlite_why(exc: sqlite3.Error) -> str:
+    """SQLite's error in words, without the text it could not decode (it may be long and is
+    not text)."""
+    text = str(exc)
+    if text.startswith("Could not decode to UTF-8 column "):
+        column = text.removeprefix("Could not decode to UTF-8 column ").split(" with text ")[0]
+        return f"column {column} holds text that is not UTF-8"
+    return text
 
 
 def _holds_state(db: sqlite3.Connection, tables: set[str]) -> bool:
@@ -1090,5 +1119,15 @@ def _holds_state(db: sqlite3.Connection, tables: set[str]) -> bool:
 
 
 def _why(exc: BaseException) -> str:
-    text = str(exc) or type(exc).__name__
-    return f"{type(exc).__name__}: {text}"[:300]
+    """What went wrong, in words: the message without the exception's class, what kind of
+    data it was not said where the message alone does not say it."""
+    text = str(exc)
+    if isinstance(exc, json.JSONDecodeError):
+        text = f"not valid JSON ({exc})"
+    elif isinstance(exc, msgspec.DecodeError):
+        text = f"not valid MessagePack ({exc})"
+    elif isinstance(exc, zlib.error):
+        text = f"not compressed data ({exc})"
+    elif isinstance(exc, KeyError) and exc.args:
+        text = f"no {exc.args[0]!r}"
+    return (text or "cannot be read")[:300]

@@ -1,12 +1,14 @@
-"""Checks of a state file's memory images before any of it is restored (``engine/
-persistence.py``): ValueError naming what is malformed, so a file is refused rather than
-half taken.
+"""Checks of a state file's memory images and diagnostics rows before any of it is
+restored (``engine/persistence.py``): ValueError naming what is malformed, so a file is
+refused rather than half taken.
 
 The retentive image (``Memory.snapshot``) and the hot-restart image
 (``Memory.hot_snapshot``) are JSON objects of base64 byte areas and S5 timer and counter
 cells. Taken unchecked, a garbled image is read as something else: invalid base64 decodes
 to fewer bytes, a marker span beyond the CPU's marker area grows it, a cell number the CPU
-does not have is skipped, a cell field of the wrong type is set as it is.
+does not have is skipped, a cell field of the wrong type is set as it is. A diagnostics row
+is typed only by SQLite's affinity: a NULL or a text where a number belongs is refused, not
+read as 0 or as a crash.
 """
 
 from __future__ import annotations
@@ -17,12 +19,16 @@ from dataclasses import fields
 from typing import Any
 
 from s7graph.engine.memory import Memory, S5Counter, S5Timer
+from s7graph.engine.record import DiagEntry
 
-__all__ = ["check_hot_image", "check_memory_image"]
+__all__ = ["check_hot_image", "check_memory_image", "diag_entry"]
 
 _IMAGE_KEYS = frozenset({"markers", "timers", "counters", "dbs"})
 _HOT_KEYS = frozenset({"markers", "outputs", "timers", "counters"})
 _DB_KEYS = frozenset({"data", "initial", "created"})
+_DIAG_FIELDS = ("t_ns", "event_id", "block", "message", "address", "ob", "priority", "wall_ns")
+_DIAG_NUMBERS = ("t_ns", "event_id", "ob", "priority", "wall_ns")
+_DIAG_TEXTS = ("block", "message", "address")
 
 
 def check_memory_image(data: object, mem: Memory) -> None:
@@ -67,6 +73,31 @@ def check_hot_image(data: object, mem: Memory) -> None:
             raise ValueError(f"{key!r} holds {len(raw)} bytes, the CPU {len(area)}")
     _cells(image.get("timers", {}), S5Timer, len(mem.timers), "timers")
     _cells(image.get("counters", {}), S5Counter, len(mem.counters), "counters")
+
+
+def diag_entry(row: tuple[object, ...]) -> DiagEntry:
+    """The entry of a diagnostics row (``t_ns, event_id, block, message, address, ob,
+    priority, wall_ns``): each number an integer (the event id a WORD), each text a text or
+    NULL (empty); ValueError naming the column that is not."""
+    field = dict(zip(_DIAG_FIELDS, row, strict=True))
+    t_ns, event_id, ob, priority, wall_ns = (_integer(field[n], n) for n in _DIAG_NUMBERS)
+    if not 0 <= event_id <= 0xFFFF:
+        raise ValueError(f"event_id is {event_id}, not an event id (a WORD)")
+    block, message, address = (_text(field[n], n) for n in _DIAG_TEXTS)
+    return DiagEntry(t_ns, event_id, block, message, address, ob, priority, wall_ns)
+
+
+def _integer(value: object, name: str) -> int:
+    if type(value) is not int:
+        shown = "NULL" if value is None else repr(value)
+        raise ValueError(f"{name} is {shown}, not an integer")
+    return value
+
+
+def _text(value: object, name: str) -> str:
+    if value is not None and not isinstance(value, str):
+        raise ValueError(f"{name} is {value!r}, not text")
+    return value or ""
 
 
 def _object(value: object, what: str) -> dict[str, Any]:

@@ -332,7 +332,8 @@ def test_a_malformed_retentive_memory_image_is_refused_not_taken(
     change(image)
     _edit(path, ("UPDATE meta SET value=? WHERE key='memory'", (json.dumps(image),)))
     problem = _refused(path)
-    assert problem.startswith("malformed memory image: ValueError: ") and fragment in problem
+    assert problem.startswith("malformed memory image: ") and fragment in problem
+    assert "ValueError" not in problem
 
 
 def test_a_hot_restart_image_of_another_size_is_refused(tmp_path: Path) -> None:

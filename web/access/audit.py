@@ -37,10 +37,10 @@ import json
 import operator
 import sqlite3
 import threading
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Final
+from typing import TYPE_CHECKING, Final, TypeVar
 
 from s7graph.engine.rollup import Job, day_of, low_water, roll
 
@@ -56,6 +56,7 @@ __all__ = [
     "AuditStore",
     "Facts",
     "SummaryRecord",
+    "UnreadableAudit",
     "read_audit",
     "read_summary",
     "write_count",
@@ -106,9 +107,13 @@ _AUDIT_COLUMNS: Final = (
 )
 _DEFAULTS: Final = {"outcome": "'applied'", "count": "1"}
 """What a column missing from an older file reads as (others: '')."""
+_ALWAYS: Final = ("id", "t_ns", "user", "action", "detail")
+"""The audit table's columns since the first state file: a table without one is not ours."""
 _TEXT: Final = ("user", "role", "origin", "action", "fb", "args", "reason", "detail")
 _SIZE: Final = "64 + " + " + ".join(f"length(ifnull({c}, ''))" for c in _TEXT)
 """SQL of ``row_size``."""
+_SUMMARY_NUMBERS: Final = ("count", "first_ns", "last_ns")
+_T = TypeVar("_T")
 _SUMMARY_KEYS: Final = {
     "day": day_of("t_ns"),
     "user": f"CASE WHEN outcome = 'refused' AND role = '' THEN '{UNAUTHENTICATED}' "
@@ -217,22 +222,44 @@ def _last_id(db: sqlite3.Connection) -> int:
     return max(last, int(seq[0] or 0) if seq is not None else 0)
 
 
+class UnreadableAudit(Exception):
+    """A state file whose audit cannot be read (``read_audit``, ``read_summary``): ``path``
+    and ``problem``, in words."""
+
+    def __init__(self, path: Path, problem: str) -> None:
+        self.path = path
+        self.problem = problem
+        super().__init__(f"{path}: not a state file s7graph can read the audit of ({problem})")
+
+
 def _audit_rows(
     db: sqlite3.Connection, where: str, params: tuple[object, ...]
 ) -> list[AuditRecord]:
+    """The audit rows ``where`` selects; ValueError when the table is not the one s7graph
+    writes (a column it always had missing, a row that is not typed as written)."""
     have = {row[1] for row in db.execute("PRAGMA table_info(audit)")}
+    lacking = [c for c in _ALWAYS if c not in have]
+    if lacking:
+        raise ValueError(f"its audit table has no column {', '.join(lacking)}")
     cols = ", ".join(c if c in have else _DEFAULTS.get(c, "''") for c in _AUDIT_COLUMNS)
     rows = db.execute(f"SELECT {cols} FROM audit {where}", params).fetchall()
     return [_record(r) for r in rows]
 
 
 def _record(r: tuple[object, ...]) -> AuditRecord:
-    """An ``AuditRecord`` of a row of ``_AUDIT_COLUMNS`` (an older file's NULLs as '')."""
+    """An ``AuditRecord`` of a row of ``_AUDIT_COLUMNS`` (an older file's NULLs as '');
+    ValueError naming the row and column when a number is not an integer or a text is a
+    blob."""
+    row_id = _integer(r[0], "audit row", "id")
+    where = f"audit row {row_id}"
+    for name, v in zip(_AUDIT_COLUMNS[2:-1], r[2:-1], strict=True):
+        if isinstance(v, bytes):
+            raise ValueError(f"{where}: {name} is a blob, not text")
     text = [str(v or "") for v in r[2:-1]]
     user, role, origin, op, fb, args, outcome, reason, detail = text
     return AuditRecord(
-        int(str(r[0])),
-        int(str(r[1] or 0)),
+        row_id,
+        _integer(r[1] if r[1] is not None else 0, where, "t_ns"),
         user,
         role,
         origin,
@@ -242,8 +269,16 @@ def _record(r: tuple[object, ...]) -> AuditRecord:
         outcome,
         reason,
         detail,
-        int(str(r[-1] or 1)),
+        _integer(r[-1] if r[-1] is not None else 1, where, "count"),
     )
+
+
+def _integer(value: object, where: str, name: str) -> int:
+    """``value`` if an integer; ValueError naming ``where`` and ``name`` if not."""
+    if type(value) is not int:
+        shown = "NULL" if value is None else repr(value)
+        raise ValueError(f"{where}: {name} is {shown}, not an integer")
+    return value
 
 
 def _summary_rows(db: sqlite3.Connection) -> list[SummaryRecord]:
@@ -254,10 +289,12 @@ def _summary_rows(db: sqlite3.Connection) -> list[SummaryRecord]:
         "SELECT day, user, op, outcome, count, first_ns, last_ns FROM audit_summary "
         "ORDER BY day, first_ns, user, op, outcome"
     ).fetchall()
-    return [
-        SummaryRecord(str(r[0]), str(r[1]), str(r[2]), str(r[3]), int(r[4]), int(r[5]), int(r[6]))
-        for r in rows
-    ]
+    out = []
+    for r in rows:
+        where = f"audit_summary row of {r[0]!r}"
+        numbers = [_integer(v, where, n) for v, n in zip(r[4:], _SUMMARY_NUMBERS, strict=True)]
+        out.append(SummaryRecord(str(r[0]), str(r[1]), str(r[2]), str(r[3]), *numbers))
+    return out
 
 
 def write_count(db: sqlite3.Connection, r: AuditRecord) -> None:
@@ -420,33 +457,70 @@ class AuditStore:
         ]
 
 
-def _read(path: Path | str) -> sqlite3.Connection:
-    uri = f"file:{Path(path)}?mode=ro"
-    return sqlite3.connect(uri, uri=True, timeout=5.0)
+_SQLITE_WORDS: Final = {
+    11: "it is damaged: SQLite finds its pages malformed (truncated or overwritten?)",
+    26: "it is not an SQLite database",
+}
+"""SQLite's primary error codes (``sqlite_errorcode & 0xFF``) a reader meets, in words."""
+
+
+def _in_words(exc: sqlite3.Error) -> str:
+    """What SQLite could not read, in words (never the bytes it could not decode)."""
+    text = str(exc)
+    words = _SQLITE_WORDS.get(int(getattr(exc, "sqlite_errorcode", 0) or 0) & 0xFF)
+    if words is not None:
+        return words
+    if text.startswith("Could not decode to UTF-8 column "):
+        column = text.removeprefix("Could not decode to UTF-8 column ").split(" with text ")[0]
+        return f"column {column} holds text that is not UTF-8"
+    if text.startswith(("no such column", "no such table")):
+        return f"its tables are not those s7graph writes ({text})"
+    return text
+
+
+def _reading(path: Path | str, read: Callable[[sqlite3.Connection], _T]) -> _T:
+    """``read(connection)`` on the file opened read-only, so nothing in it changes; a file
+    without a write-ahead log beside it (no run has it open) as immutable too, so none is
+    left beside it either (a read-only connection to a WAL file makes an empty ``-wal`` and
+    a ``-shm``, and cannot remove them). ``UnreadableAudit`` naming the file and, in words,
+    what could not be read."""
+    quiet = "" if Path(f"{path}-wal").exists() else "&immutable=1"
+    try:
+        uri = f"{Path(path).absolute().as_uri()}?mode=ro{quiet}"  # a '?' or '#' in it quoted
+        db = sqlite3.connect(uri, uri=True, timeout=5.0)
+    except sqlite3.Error as exc:
+        raise UnreadableAudit(Path(path), _in_words(exc)) from None
+    try:
+        return read(db)
+    except sqlite3.Error as exc:
+        raise UnreadableAudit(Path(path), _in_words(exc)) from None
+    except UnicodeDecodeError:
+        raise UnreadableAudit(Path(path), "it holds text that is not UTF-8") from None
+    except ValueError as exc:
+        raise UnreadableAudit(Path(path), str(exc)) from None
+    finally:
+        db.close()
 
 
 def read_audit(path: Path | str, *, since_ns: int | None = None) -> list[AuditRecord]:
-    """The audit rows of a state file (read-only; a file from before reads too)."""
-    db = _read(path)
-    try:
+    """The audit rows of a state file (read-only; a file from before reads too);
+    ``UnreadableAudit`` when it is not a state file whose audit can be read."""
+
+    def read(db: sqlite3.Connection) -> list[AuditRecord]:
         tables = {r[0] for r in db.execute("SELECT name FROM sqlite_master WHERE type='table'")}
         if "audit" not in tables:
             return []
         if since_ns is None:
             return _audit_rows(db, "ORDER BY id", ())
         return _audit_rows(db, "WHERE t_ns >= ? ORDER BY id", (since_ns,))
-    finally:
-        db.close()
+
+    return _reading(path, read)
 
 
 def read_summary(path: Path | str) -> list[SummaryRecord]:
     """The audit rows a state file rolled into its summary (read-only; none in a file from
-    before)."""
-    db = _read(path)
-    try:
-        return _summary_rows(db)
-    finally:
-        db.close()
+    before); ``UnreadableAudit`` when it is not a state file whose audit can be read."""
+    return _reading(path, _summary_rows)
 
 
 def lines(records: Iterable[AuditRecord]) -> list[str]:

@@ -10,12 +10,17 @@ from __future__ import annotations
 
 import datetime as dt
 import re
-import sqlite3
 import sys
 import time
 from pathlib import Path
 
-from s7graph.web.access.audit import lines, read_audit, read_summary, summary_lines
+from s7graph.web.access.audit import (
+    UnreadableAudit,
+    lines,
+    read_audit,
+    read_summary,
+    summary_lines,
+)
 
 __all__ = ["audit_command", "parse_since"]
 
@@ -44,7 +49,8 @@ def parse_since(text: str, now: float | None = None) -> int:
 
 def audit_command(state: Path, since: str | None, *, summary: bool = False) -> int:
     """Print the audit rows (oldest first), or with ``summary`` the summary's; exit 2 for a
-    missing file or a bad --since."""
+    missing file, a bad --since, or a file whose audit cannot be read (one line naming it
+    and what was wrong)."""
     if not state.is_file():
         print(f"s7graph: error: {state}: no such state file", file=sys.stderr)
         return 2
@@ -56,7 +62,7 @@ def audit_command(state: Path, since: str | None, *, summary: bool = False) -> i
         else:
             since_ns = parse_since(since) if since else None
             text = lines(read_audit(state, since_ns=since_ns))
-    except (ValueError, sqlite3.Error) as exc:
+    except (UnreadableAudit, ValueError) as exc:
         print(f"s7graph: error: {exc}", file=sys.stderr)
         return 2
     for line in text:

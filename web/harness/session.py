@@ -209,9 +209,11 @@ class ChartSession:
             parsed = parse_name(name)
         except ValueError:
             return name
-        if parsed is None or len(parsed[1]) != 1 or not isinstance(parsed[1][0], str):
+        if parsed is None or len(parsed[1]) != 1:
             return name
         db, (var,) = parsed
+        if not isinstance(var, str):
+            return name
         block = self.symbols.block(db) if isinstance(db, str) else None
         number = block.number if block is not None and block.kind == "DB" else db
         ours = number == idb.number or str(number).casefold() == idb.name.casefold()

@@ -1,0 +1,138 @@
+"""``s7graph audit --state FILE`` on a file whose audit it cannot read: one line naming the
+file, that it is not a state file s7graph can read the audit of, and what was wrong in
+words — never SQLite's or Python's bare message — exit 2; the file read without a change
+(web/access/audit.py opens it read-only)."""
+
+from __future__ import annotations
+
+import sqlite3
+from pathlib import Path
+
+import pytest
+
+from s7graph.engine.persistence import StateStore
+from s7graph.web.cli.audit import audit_command
+
+T0 = 1_700_000_000 * 10**9
+
+
+def _state(path: Path, rows: int = 3) -> Path:
+    """A state file with ``rows`` audit rows (closed: no -wal, no -shm)."""
+    store = StateStore(path)
+    for n in range(rows):
+        store.log_audit(T0 + n, "ann", "ack", "x" * 900)
+    store.close()
+    return path
+
+
+def _edit(path: Path, *statements: tuple[str, tuple[object, ...]]) -> None:
+    with sqlite3.connect(path) as con:
+        for sql, args in statements:
+            con.execute(sql, args)
+    con.close()
+
+
+def _files(path: Path) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in sorted(path.parent.iterdir())}
+
+
+def _refused(path: Path, capsys: pytest.CaptureFixture[str], *, summary: bool = False) -> str:
+    """The one line ``s7graph audit`` prints for ``path`` (exit 2, the file unchanged)."""
+    before = _files(path)
+    capsys.readouterr()
+    assert audit_command(path, None, summary=summary) == 2
+    out, err = capsys.readouterr()
+    assert out == ""
+    assert _files(path) == before  # nothing written, no -wal or -shm left
+    (line,) = err.splitlines()
+    prefix = f"s7graph: error: {path}: not a state file s7graph can read the audit of ("
+    assert line.startswith(prefix) and line.endswith(")")
+    return line.removeprefix(prefix)[:-1]
+
+
+@pytest.mark.parametrize("summary", [False, True], ids=["rows", "summary"])
+def test_a_garbled_file_is_refused_naming_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], summary: bool
+) -> None:
+    """Before: ``s7graph: error: file is not a database`` — no file named."""
+    path = tmp_path / "s.sqlite"
+    path.write_bytes(b"garbage, not SQLite " * 400)
+    assert _refused(path, capsys, summary=summary) == "it is not an SQLite database"
+
+
+def test_a_truncated_state_file_is_refused_as_damaged(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Before: ``s7graph: error: database disk image is malformed``."""
+    path = _state(tmp_path / "s.sqlite", rows=50)
+    data = path.read_bytes()
+    path.write_bytes(data[: len(data) // 2])
+    assert _refused(path, capsys).startswith("it is damaged")
+
+
+def test_an_audit_row_with_a_text_time_is_refused_naming_the_row(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Before: ``s7graph: error: invalid literal for int() with base 10: 'x'``."""
+    path = _state(tmp_path / "s.sqlite")
+    _edit(path, ("UPDATE audit SET t_ns='x' WHERE id=2", ()))
+    assert _refused(path, capsys) == "audit row 2: t_ns is 'x', not an integer"
+
+
+def test_a_schema_that_is_not_utf8_is_refused_in_words(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Before: ``Could not decode to UTF-8 column 'name' with text '…'``, the bytes with it."""
+    path = _state(tmp_path / "s.sqlite")
+    name = b"ju\xffk"
+    _edit(
+        path,
+        ("CREATE TABLE junk (x)", ()),
+        ("PRAGMA writable_schema=ON", ()),
+        (
+            "UPDATE sqlite_master SET name=CAST(? AS TEXT), tbl_name=CAST(? AS TEXT), "
+            "sql=CAST(? AS TEXT) WHERE name='junk'",
+            (name, name, b'CREATE TABLE "' + name + b'" (x)'),
+        ),
+    )
+    assert _refused(path, capsys) == "column 'name' holds text that is not UTF-8"
+
+
+def test_an_audit_table_of_another_shape_is_refused_naming_what_it_lacks(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Before: ``s7graph: error: no such column: id``."""
+    path = tmp_path / "s.sqlite"
+    _edit(path, ("CREATE TABLE audit (x)", ()))
+    assert _refused(path, capsys) == "its audit table has no column id, t_ns, user, action, detail"
+
+
+def test_a_summary_row_with_a_text_count_is_refused_naming_the_row(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = _state(tmp_path / "s.sqlite")
+    _edit(
+        path,
+        (
+            "CREATE TABLE audit_summary (day TEXT, user TEXT, op TEXT, outcome TEXT, "
+            "count INTEGER, first_ns INTEGER, last_ns INTEGER)",
+            (),
+        ),
+        (
+            "INSERT INTO audit_summary "
+            "VALUES ('2026-11-18', 'ann', 'ack', 'applied', 'many', 1, 2)",
+            (),
+        ),
+    )
+    problem = "audit_summary row of '2026-11-18': count is 'many', not an integer"
+    assert _refused(path, capsys, summary=True) == problem
+
+
+def test_a_state_file_that_reads_is_listed_and_left_as_it_was(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = _state(tmp_path / "s.sqlite")
+    before = _files(path)
+    assert audit_command(path, None) == 0
+    assert len(capsys.readouterr().out.splitlines()) == 3
+    assert _files(path) == before
