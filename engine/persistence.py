@@ -89,6 +89,7 @@ __all__ = [
     "StateStore",
     "StateWriteError",
     "fingerprint_of",
+    "sqlite_words",
     "unpack_instance",
 ]
 
@@ -1098,12 +1099,12 @@ def _unreadable(path: Path, exc: sqlite3.DatabaseError) -> StateFileError:
         return StateFileError(
             path, f"in use by another process ({exc}): it was not read", way_out=_IN_USE_WAY_OUT
         )
-    return StateFileError(path, f"not a readable state file ({_sqlite_why(exc)})")
+    return StateFileError(path, f"not a readable state file ({sqlite_words(exc)})")
 
 
-def _sqlite_why(exc: sqlite3.Error) -> str:
+def sqlite_words(exc: sqlite3.Error) -> str:
     """SQLite's error in words, without the text it could not decode (it may be long and is
-    not text)."""
+    not text): for every reader of a state file."""
     text = str(exc)
     if text.startswith("Could not decode to UTF-8 column "):
         column = text.removeprefix("Could not decode to UTF-8 column ").split(" with text ")[0]

@@ -42,6 +42,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Final, TypeVar
 
+from s7graph.engine.persistence import sqlite_words
 from s7graph.engine.rollup import Job, day_of, low_water, roll
 
 if TYPE_CHECKING:
@@ -466,13 +467,10 @@ _SQLITE_WORDS: Final = {
 
 def _in_words(exc: sqlite3.Error) -> str:
     """What SQLite could not read, in words (never the bytes it could not decode)."""
-    text = str(exc)
+    text = sqlite_words(exc)
     words = _SQLITE_WORDS.get(int(getattr(exc, "sqlite_errorcode", 0) or 0) & 0xFF)
     if words is not None:
         return words
-    if text.startswith("Could not decode to UTF-8 column "):
-        column = text.removeprefix("Could not decode to UTF-8 column ").split(" with text ")[0]
-        return f"column {column} holds text that is not UTF-8"
     if text.startswith(("no such column", "no such table")):
         return f"its tables are not those s7graph writes ({text})"
     return text
