@@ -44,6 +44,15 @@ _ZENOH_PLACE = re.compile(r"\s+at \S+\.rs:\d+\.?\s*$")  # " at /…/orchestrator
 _UNREACHED = re.compile(r"^Unable to connect to any of \[(.*)\]!?$")
 
 
+def error_words(exc: BaseException) -> str:
+    """What went wrong, in words: an OS error's own (``Address already in use``), zenoh's
+    without the place in its Rust source, else the message — never a class name unless
+    there is no message at all."""
+    if isinstance(exc, OSError) and exc.strerror:
+        return f"{exc.strerror}{f': {exc.filename}' if exc.filename else ''}"
+    return _ZENOH_PLACE.sub("", str(exc)).strip() or type(exc).__name__
+
+
 def _utf8(text: str) -> bool:
     """Whether ``text`` is valid Unicode (no lone surrogate: bytes of the command line that
     were not UTF-8)."""
@@ -315,7 +324,7 @@ class NetOptions:
     def join_error(self, exc: BaseException) -> str:
         """Why this node could not join the bus, in one line: zenoh's own words without
         the place in its source they come from, and what to check."""
-        words = _ZENOH_PLACE.sub("", str(exc)).strip() or type(exc).__name__
+        words = error_words(exc)
         unreached = _UNREACHED.match(words)
         if unreached:
             ends = ", ".join(self.connect) or unreached.group(1)

@@ -19,7 +19,7 @@ import threading
 from collections.abc import Sequence
 from pathlib import Path
 
-from s7graph.web.cli.net import NetOptions
+from s7graph.web.cli.net import NetOptions, error_words
 from s7graph.web.cli.stopping import wait_until_stopped
 from s7graph.web.cli.view import _as_child
 from s7graph.web.cli.view_process import ViewProcess
@@ -78,7 +78,13 @@ def opcua_command(
     from s7graph.web.bus.client import unread_note, wait_for_cpus
     from s7graph.web.bus.protocol import ProtocolError
     from s7graph.web.bus.session import open_session
-    from s7graph.web.opcua.server import OpcuaOptions, OpcuaServer, listen_problem, loopback
+    from s7graph.web.opcua.server import (
+        OpcuaOptions,
+        OpcuaServer,
+        listen_problem,
+        loopback,
+        trust_problem,
+    )
 
     problem = NetOptions(**{**net.__dict__, "host": "127.0.0.1"}).problem()
     if problem is None and not net.connect:
@@ -89,8 +95,8 @@ def opcua_command(
     if problem is None and net.users is not None and not net.users.is_file():
         problem = f"{net.users}: no such users file"
     problem = problem or listen_problem(listen, users=net.users is not None, cert=cert, key=key)
-    if problem is None and trust is not None and not trust.is_dir():
-        problem = f"--trust {trust}: no such folder"
+    if problem is None and trust is not None:
+        problem = trust_problem(trust) if trust.is_dir() else f"--trust {trust}: no such folder"
     if problem:
         return _fail(problem)
     _logging()
@@ -125,7 +131,7 @@ def opcua_command(
         except ProtocolError as exc:  # what the CPU answered while the nodes were built
             return _fail(f"cannot serve OPC UA of CPU {chosen.cpu}: {exc}")
         except Exception as exc:
-            return _fail(f"cannot serve OPC UA at {listen}: {type(exc).__name__}: {exc}")
+            return _fail(f"cannot serve OPC UA at {listen}: {error_words(exc)}")
         print(f"s7graph: opcua {listen} of {chosen.cpu}; Ctrl-C to stop", flush=True)
         try:
             wait_until_stopped(duration_s, stop)

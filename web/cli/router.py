@@ -12,7 +12,7 @@ from __future__ import annotations
 import sys
 
 from s7graph.web.bus.session import open_session
-from s7graph.web.cli.net import NetOptions
+from s7graph.web.cli.net import NetOptions, error_words
 from s7graph.web.cli.stopping import wait_until_stopped
 
 __all__ = ["router_command"]
@@ -31,9 +31,7 @@ def router_command(net: NetOptions, duration_s: float | None = None) -> int:
             net.listen, net.connect, mode="router", tls=net.tls, login=net.login, guard=guard
         )
     except Exception as exc:
-        print(
-            f"s7graph: error: cannot open the router: {type(exc).__name__}: {exc}", file=sys.stderr
-        )
+        print(f"s7graph: error: cannot open the router: {error_words(exc)}", file=sys.stderr)
         return 2
     serves = f"; CPUs {', '.join(guard)}" if guard else ""
     print(f"s7graph: router on {', '.join(net.listen)}{serves}; Ctrl-C to stop", flush=True)

@@ -21,7 +21,7 @@ import threading
 
 from s7graph.web.bus.client import unread_note, wait_for_cpus
 from s7graph.web.bus.session import open_session
-from s7graph.web.cli.net import NetOptions, is_loopback_host
+from s7graph.web.cli.net import NetOptions, error_words, is_loopback_host
 from s7graph.web.cli.stopping import wait_until_stopped
 from s7graph.web.collector import freeze_start
 from s7graph.web.view.edge import ViewSide
@@ -89,7 +89,7 @@ def web_command(
     except (PortError, TimeoutError) as exc:
         return _fail(str(exc))
     except Exception as exc:
-        return _fail(f"cannot serve the view: {type(exc).__name__}: {exc}")
+        return _fail(f"cannot serve the view: {error_words(exc)}")
     freeze_start()  # the process is the view's alone: a full collection skips what it built
     of = f"{chosen.cpu}/{view.fb}" if view.fb else f"{chosen.cpu} (a program)"
     print(f"s7graph: view {view.url} of {of}; Ctrl-C to stop", flush=True)

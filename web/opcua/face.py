@@ -387,6 +387,8 @@ class Face:
         self, nid: ua.NodeId, target: tuple[str, str], variant: ua.Variant
     ) -> tuple[type[Command], str, Args]:
         fb, op = target
+        if variant.is_array or isinstance(variant.Value, list | tuple):
+            raise TypeError("an array written to a scalar")  # bool([False]) would be True
         if op in _SYMBOL_OPS:
             info = self.space.targets[nid]
             value = from_variant(variant, ua_type(info.type))

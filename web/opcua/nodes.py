@@ -228,7 +228,7 @@ class Nodes:
             if args:
                 value = ua.Variant(list(args), ua.VariantType.ExtensionObject)
                 self.prop(nid, label, value, ObjectIds.Argument, array=True)
-        self._methods.append((nid, callback))
+        self._methods.append((nid, _owned(parent, callback)))
         return nid
 
     def reference(self, source: ua.NodeId, target: ua.NodeId, ref: int) -> None:
@@ -327,3 +327,17 @@ class Nodes:
     def written(self) -> list[ua.NodeId]:
         """The variables written so far (to mark them stale)."""
         return list(self._written)
+
+
+def _owned(owner: ua.NodeId, callback: Callable[..., Any]) -> Callable[..., Any]:
+    """``callback`` for calls on the object that has the method only: a call naming
+    another object (``Halt`` of one FB through the CPU's ``Symbols`` folder) is
+    ``BadMethodInvalid``, as OPC UA's Call service says (Part 4, 5.11.2), never carried
+    out."""
+
+    async def call(parent: ua.NodeId, *inputs: Any) -> Any:
+        if parent != owner:
+            return ua.CallMethodResult(StatusCode=ua_status(StatusCodes.BadMethodInvalid))
+        return await callback(parent, *inputs)
+
+    return call

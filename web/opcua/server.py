@@ -29,6 +29,8 @@ from asyncua.crypto.truststore import TrustStore
 from asyncua.crypto.validator import CertificateValidator, CertificateValidatorOptions
 from asyncua.server.internal_session import InternalSession
 from cryptography import x509
+from cryptography.hazmat.primitives import serialization
+from cryptography.hazmat.primitives.asymmetric import rsa
 
 from s7graph.web.bus.protocol import CpuStatus
 from s7graph.web.collector import quiet_collector
@@ -83,6 +85,10 @@ def listen_problem(url: str, *, users: bool, cert: Path | None, key: Path | None
     for path in (cert, key):
         if path is not None and not path.is_file():
             return f"{path}: no such file"
+    if cert is not None and key is not None:
+        problem = _certificate_problem(cert) or _key_problem(key)
+        if problem:
+            return problem
     if not loopback(parsed.hostname):
         if not users:
             return (
@@ -91,6 +97,57 @@ def listen_problem(url: str, *, users: bool, cert: Path | None, key: Path | None
             )
         if cert is None:
             return f"--listen {url} is not loopback: it needs --cert and --key (SignAndEncrypt)"
+    return None
+
+
+def _load_certificate(path: Path) -> x509.Certificate:
+    """The certificate in ``path`` (PEM or DER); ValueError when it holds none."""
+    data = path.read_bytes()
+    made = (
+        x509.load_pem_x509_certificate if b"-----BEGIN" in data else x509.load_der_x509_certificate
+    )
+    return made(data)
+
+
+def _certificate_problem(cert: Path) -> str | None:
+    """Why ``cert`` cannot be the server's certificate: not a certificate, or a key other
+    than RSA (``Basic256Sha256`` signs and encrypts with RSA only)."""
+    try:
+        public = _load_certificate(cert).public_key()
+    except (OSError, ValueError):
+        return f"{cert}: not a certificate (PEM or DER)"
+    if not isinstance(public, rsa.RSAPublicKey):
+        kind = type(public).__name__.removesuffix("PublicKey").removeprefix("_")
+        return (
+            f"{cert}: a certificate with an {kind or 'other'} key: Basic256Sha256 needs an RSA "
+            "key (s7graph certs makes EC keys, for the bus)"
+        )
+    return None
+
+
+def _key_problem(key: Path) -> str | None:
+    """Why ``key`` cannot be the server's private key (PEM or DER, unencrypted)."""
+    try:
+        data = key.read_bytes()
+        load = (
+            serialization.load_pem_private_key
+            if b"-----BEGIN" in data
+            else serialization.load_der_private_key
+        )
+        load(data, None)
+    except (OSError, ValueError, TypeError):
+        return f"{key}: not a private key (PEM or DER, without a password)"
+    return None
+
+
+def trust_problem(folder: Path) -> str | None:
+    """Why the ``--trust`` folder cannot be read: a file in it that is no certificate."""
+    for path in sorted(folder.iterdir()):
+        if path.is_file():
+            try:
+                _load_certificate(path)
+            except (OSError, ValueError):
+                return f"--trust {folder}: {path.name} is not a certificate (PEM or DER)"
     return None
 
 

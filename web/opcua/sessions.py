@@ -32,6 +32,7 @@ from asyncua.server.internal_server import InternalServer
 from asyncua.server.internal_session import InternalSession
 from asyncua.server.user_managers import UserManager
 
+from s7graph.web.access.lockout import Lockout
 from s7graph.web.opcua.typed import StatusCodes, ua_id, ua_status
 
 __all__ = [
@@ -81,13 +82,28 @@ Login = Callable[[str, str, str], "FaceUser | str"]
 """``login(user, password, origin)``: the user logged in at the CPU, or why not."""
 
 
+HOST_FAILURES: Final = 10
+"""Wrong logins from one host before the face refuses its next ones unchecked for a while
+(:data:`HOST_LOCKOUT_S`, doubling up to :data:`HOST_LONGEST_S`)."""
+HOST_LOCKOUT_S: Final = 10.0
+HOST_LONGEST_S: Final = 300.0
+
+
 class BusUsers(UserManager):
     """User name and password checked by the CPU (``login``); anonymous sessions allowed
-    read-only (``anonymous``) or refused."""
+    read-only (``anonymous``) or refused.
+
+    asyncua activates a session without yielding, and a login with a password the face
+    has not seen costs its SCRAM key derivation (tens of ms): a host that sends
+    :data:`HOST_FAILURES` wrong logins is refused unchecked for a while, whatever user it
+    names, so that nobody holds up the face's other clients by guessing passwords."""
 
     def __init__(self, login: Login, *, anonymous: bool) -> None:
         self._login = login
         self.anonymous = anonymous
+        self.hosts = Lockout(
+            max_failures=HOST_FAILURES, lockout_s=HOST_LOCKOUT_S, longest_s=HOST_LONGEST_S
+        )
 
     def get_user(
         self,
@@ -103,13 +119,21 @@ class BusUsers(UserManager):
             _log.info("opcua: anonymous session from %s refused", peer or "?")
             return None
         origin = f"opcua {peer}".strip()[:160]
+        host = peer.rsplit(":", 1)[0] if peer else "?"
+        wait = self.hosts.locked_for("", host)
+        if wait:
+            why = f"{HOST_FAILURES} wrong logins from this host: try again in {math.ceil(wait)} s"
+            _log.info("opcua: login of %r from %s refused: %s", username[:32], peer, why)
+            return None
         try:
             result = self._login(username, password or "", origin)
-        except Exception as exc:  # the bus went away: refused, never a crash
-            result = f"login failed: {type(exc).__name__}"
+        except Exception:  # the bus went away: refused, never a crash
+            result = "login failed: no answer from the CPU"
         if isinstance(result, str):
+            self.hosts.failed("", host)
             _log.info("opcua: login of %r from %s refused: %s", username[:32], peer, result)
             return None
+        self.hosts.succeeded("", host)
         return result
 
 

@@ -312,3 +312,34 @@ def test_a_write_is_a_command_and_forcing_and_modifying_are_an_engineers(
         ("eng", "force", "applied"),
         ("eng", "modify", "applied"),
     ]
+
+
+def test_an_array_on_a_scalar_or_a_method_on_another_object_is_refused_and_not_sent(
+    face: FaceRig,
+) -> None:
+    """``[False]`` written to the Boolean ``Halted`` is a type mismatch (Python would read
+    the list as true: a halt), and a method called through an object that does not have
+    it is ``BadMethodInvalid`` (OPC UA Part 4, Call): neither reaches the CPU."""
+
+    async def check() -> None:
+        async with connected(face.url, "eng") as c:
+            for path, value in (
+                ("cpu1/Seq_mix/Halted", ua.Variant([False], ua.VariantType.Boolean)),
+                ("cpu1/Seq_mix/Mode", ua.Variant(["MAN"], ua.VariantType.String)),
+                ("cpu1/Symbols/Level", ua.Variant([42], ua.VariantType.Int16)),
+            ):
+                with pytest.raises(UaStatusCodeError) as refused:
+                    await node(c, path).write_value(value)
+                assert _code(refused.value) == ua.StatusCodes.BadTypeMismatch, path
+            for owner, method in (
+                ("cpu1/Symbols", "cpu1/Seq_mix/Init"),
+                ("cpu1", "cpu1/Seq_mix/Halt"),
+            ):
+                with pytest.raises(UaStatusCodeError) as refused:
+                    await node(c, owner).call_method(ua.NodeId(method, 2), False)
+                assert _code(refused.value) == ua.StatusCodes.BadMethodInvalid, method
+
+    before = len(read_audit(face.rig.state))
+    run(check())
+    rows = read_audit(face.rig.state)[before:]
+    assert not [r for r in rows if r.op in ("halt", "init", "mode", "force")], rows

@@ -14,8 +14,8 @@ from asyncua import ua
 from asyncua.crypto.security_policies import SecurityPolicyBasic256Sha256
 from asyncua.ua.uaerrors import UaStatusCodeError
 
-from s7graph.web.opcua.server import application_uri, listen_problem, loopback
-from tests.web.opcua.helpers import Certs, connected, face_rig, make_certs, node, run
+from s7graph.web.opcua.server import application_uri, listen_problem, loopback, trust_problem
+from tests.web.opcua.helpers import FACE_CN, Certs, connected, face_rig, make_certs, node, run
 
 if TYPE_CHECKING:
     from tests.conftest import BusCerts
@@ -110,3 +110,36 @@ def test_the_application_uri_is_the_certificates(tmp_path: Path) -> None:
     certs = make_certs(tmp_path, server_uri="urn:plant:line1:opcua")
     assert application_uri("cpu1", certs.server_cert) == "urn:plant:line1:opcua"
     assert application_uri("cpu1", None) == "urn:s7graph:opcua:cpu1"
+
+
+def test_a_server_certificate_basic256sha256_cannot_use_is_refused_before_serving(
+    tmp_path: Path, bus_certs: BusCerts
+) -> None:
+    """An EC certificate (what ``s7graph certs`` makes, for the bus) opened the face, whose
+    every user login then failed: refused at the start, as a file that is no certificate,
+    a key that is none, and a ``--trust`` folder with a file that is no certificate."""
+    url = "opc.tcp://127.0.0.1:4840"
+    rsa = make_certs(tmp_path / "rsa")
+    ec_cert, ec_key = bus_certs.cert(FACE_CN)
+    problem = listen_problem(url, users=True, cert=ec_cert, key=ec_key)
+    assert problem == (
+        f"{ec_cert}: a certificate with an EC key: Basic256Sha256 needs an RSA key "
+        "(s7graph certs makes EC keys, for the bus)"
+    )
+    junk = tmp_path / "junk.pem"
+    junk.write_text("-----BEGIN CERTIFICATE-----\nnot base64\n", encoding="utf-8")
+    assert listen_problem(url, users=True, cert=junk, key=rsa.server_key) == (
+        f"{junk}: not a certificate (PEM or DER)"
+    )
+    assert listen_problem(url, users=True, cert=rsa.server_cert, key=junk) == (
+        f"{junk}: not a private key (PEM or DER, without a password)"
+    )
+    assert listen_problem(url, users=True, cert=rsa.server_cert, key=rsa.server_key) is None
+    trusted = tmp_path / "trusted"
+    trusted.mkdir()
+    (trusted / "client.der").write_bytes(rsa.client_cert.read_bytes())
+    assert trust_problem(trusted) is None
+    (trusted / "notes.txt").write_text("who is who", encoding="utf-8")
+    assert (
+        trust_problem(trusted) == f"--trust {trusted}: notes.txt is not a certificate (PEM or DER)"
+    )
