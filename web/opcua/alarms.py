@@ -28,6 +28,7 @@ from typing import Any, Final
 
 from asyncua import ua
 from asyncua.common.event_objects import AlarmCondition
+from asyncua.crypto.permission_rules import UserRole
 
 from s7graph.web.bus.protocol import AlarmEntry, AlarmList, CommandReply
 from s7graph.web.commands import AckMsg, Args, Command, MessageArgs
@@ -200,7 +201,7 @@ class Alarms:
         message under the caller's login."""
         result = ua.CallMethodResult()
         cond = self._by_node.get(parent)
-        status = self._ack_problem(cond, inputs)
+        status = self._ack_problem(parent, cond, inputs)
         if status is None and cond is not None and cond.msg_id is not None:
             args = MessageArgs(msg_id=cond.msg_id)
             status, _ = await self._send(caller(), AckMsg, cond.fb, args)
@@ -208,16 +209,29 @@ class Alarms:
         result.InputArgumentResults = [ua.StatusCode() for _ in inputs]
         return result
 
-    def _ack_problem(self, cond: _Condition | None, inputs: tuple[Any, ...]) -> int | None:
-        if cond is None:
-            return StatusCodes.BadNodeIdUnknown
+    def _ack_problem(
+        self, parent: ua.NodeId, cond: _Condition | None, inputs: tuple[Any, ...]
+    ) -> int | None:
+        """Why ``Acknowledge`` is refused before the CPU is asked, in this order: who may
+        (an anonymous session never), how many arguments, their types (an EventId's
+        ByteString, a Comment's LocalizedText or nothing), then which event: a condition
+        of no message yet knows no event (``BadEventIdUnknown``)."""
+        if caller().role is UserRole.Anonymous:
+            return StatusCodes.BadUserAccessDenied
         if len(inputs) < 2:
             return StatusCodes.BadArgumentsMissing
         if len(inputs) > 2:
             return StatusCodes.BadTooManyArguments
-        event_id = inputs[0]
+        event_id, comment = inputs
         if not isinstance(event_id, ua.Variant) or not isinstance(event_id.Value, bytes):
             return StatusCodes.BadTypeMismatch
+        if not isinstance(comment, ua.Variant) or not (
+            comment.Value is None or isinstance(comment.Value, ua.LocalizedText)
+        ):
+            return StatusCodes.BadTypeMismatch
+        if cond is None:
+            known = self.server.iserver.aspace.get(parent) is not None
+            return StatusCodes.BadEventIdUnknown if known else StatusCodes.BadNodeIdUnknown
         if event_id.Value not in cond.event_ids:
             return StatusCodes.BadEventIdUnknown
         if cond.msg_id is None or cond.event.AckedState.Text == "Acknowledged":

@@ -63,6 +63,9 @@ async def _alarms(face: FaceRig) -> None:
         events = Events()
         sub = await c.create_subscription(20, events)
         await sub.subscribe_alarms_and_conditions(c.nodes.server, ua.ObjectIds.AlarmConditionType)
+        with pytest.raises(UaStatusCodeError) as refused:  # there, with no event yet
+            await node(c, interlock).call_method(ACK, b"none yet", ua.LocalizedText("x"))
+        assert refused.value.code == ua.StatusCodes.BadEventIdUnknown
         face.set("Guard", False)  # the interlock does not hold: S2 is disturbed, U stands
         face.set("Start", True)
         assert wait_until(lambda: face.active() == [2])
@@ -100,12 +103,17 @@ async def _alarms(face: FaceRig) -> None:
 
         event_id = _value(events.of(supervision)[-1], "EventId")
         condition = node(anonymous, supervision)
-        with pytest.raises(UaStatusCodeError) as refused:
-            await condition.call_method(ACK, event_id, ua.LocalizedText("anon"))
-        assert refused.value.code == ua.StatusCodes.BadUserAccessDenied
-        with pytest.raises(UaStatusCodeError) as refused:
-            await node(c, supervision).call_method(ACK, b"not one of ours", ua.LocalizedText("x"))
-        assert refused.value.code == ua.StatusCodes.BadEventIdUnknown
+        for asked in (event_id, b"not one of ours"):  # refused first: nothing to learn
+            with pytest.raises(UaStatusCodeError) as refused:
+                await condition.call_method(ACK, asked, ua.LocalizedText("anon"))
+            assert refused.value.code == ua.StatusCodes.BadUserAccessDenied
+        for where, asked, comment, code in (
+            (supervision, b"not one of ours", ua.LocalizedText("x"), "BadEventIdUnknown"),
+            (supervision, event_id, "a String, not a LocalizedText", "BadTypeMismatch"),
+        ):
+            with pytest.raises(UaStatusCodeError) as refused:
+                await node(c, where).call_method(ACK, asked, comment)
+            assert refused.value.code == getattr(ua.StatusCodes, code), (where, comment)
 
         await node(c, supervision).call_method(ACK, event_id, ua.LocalizedText("seen it"))
         assert wait_until(lambda: face.active() == [3])  # released: T2 switched
