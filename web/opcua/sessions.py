@@ -33,7 +33,7 @@ from asyncua.server.internal_session import InternalSession
 from asyncua.server.user_managers import UserManager
 
 from s7graph.web.access.lockout import Lockout
-from s7graph.web.opcua.typed import StatusCodes, ua_id, ua_status
+from s7graph.web.opcua.typed import AttributeIds, StatusCodes, ua_id, ua_status
 
 __all__ = [
     "CALLER",
@@ -318,7 +318,26 @@ class FaceSession(InternalSession):
             refused = ua.MonitoredItemCreateResult()
             refused.StatusCode = ua_status(StatusCodes.BadTooManyMonitoredItems)
             return [refused for _ in range(asked)]
-        return await super().create_monitored_items(params)
+        wrong = [not _filter_fits(item) for item in params.ItemsToCreate]
+        if not any(wrong):
+            return await super().create_monitored_items(params)
+        params.ItemsToCreate = [
+            i for i, w in zip(params.ItemsToCreate, wrong, strict=True) if not w
+        ]
+        made = iter(await super().create_monitored_items(params) if params.ItemsToCreate else [])
+        refused = ua.MonitoredItemCreateResult()
+        refused.StatusCode = ua_status(StatusCodes.BadFilterNotAllowed)
+        return [refused if w else next(made) for w in wrong]
+
+
+def _filter_fits(item: ua.MonitoredItemCreateRequest) -> bool:
+    """Whether an item's filter goes with its attribute (Part 4, 7.22): no EventFilter or
+    AggregateFilter on a value, no DataChangeFilter or AggregateFilter on an event
+    notifier — asyncua answered those with a BadInternalError for the whole request."""
+    given = item.RequestedParameters.Filter
+    if item.ItemToMonitor.AttributeId == AttributeIds.EventNotifier:
+        return not isinstance(given, ua.DataChangeFilter | ua.AggregateFilter)
+    return not isinstance(given, ua.EventFilter | ua.AggregateFilter)
 
 
 class FaceServer(InternalServer):

@@ -108,6 +108,55 @@ def test_floods_of_subscriptions_and_monitored_items_are_refused(face: FaceRig) 
     run(check())
 
 
+def test_a_filter_that_does_not_go_with_its_attribute_is_refused_per_item(
+    face: FaceRig,
+) -> None:
+    """An EventFilter on a value (or a DataChangeFilter on events) is that item's
+    ``BadFilterNotAllowed``; the other items of the request are made (asyncua alone
+    answered the whole request with ``BadInternalError``)."""
+
+    async def check() -> None:
+        async with connected(face.url) as c:
+            result = await c.uaclient.create_subscription(
+                ua.CreateSubscriptionParameters(
+                    RequestedPublishingInterval=100,
+                    RequestedLifetimeCount=100,
+                    RequestedMaxKeepAliveCount=10,
+                    PublishingEnabled=True,
+                ),
+                lambda *_: None,
+            )
+
+            def item(attribute: int, filter_: object, handle: int) -> ua.MonitoredItemCreateRequest:
+                made = ua.MonitoredItemCreateRequest()
+                made.ItemToMonitor = ua.ReadValueId(
+                    NodeId=ua.NodeId("cpu1/State", 2), AttributeId=attribute
+                )
+                made.MonitoringMode = ua.MonitoringMode.Reporting
+                made.RequestedParameters = ua.MonitoringParameters(
+                    ClientHandle=handle, SamplingInterval=100, QueueSize=1, Filter=filter_
+                )
+                return made
+
+            value = ua.AttributeIds.Value
+            params = ua.CreateMonitoredItemsParameters(
+                SubscriptionId=result.SubscriptionId,
+                TimestampsToReturn=ua.TimestampsToReturn.Both,
+                ItemsToCreate=[
+                    item(value, ua.EventFilter(), 1),
+                    item(value, None, 2),
+                    item(value, ua.AggregateFilter(), 3),
+                    item(value, ua.DataChangeFilter(), 4),
+                ],
+            )
+            made = await c.uaclient.create_monitored_items(params)
+            codes = [r.StatusCode.name for r in made]
+            assert codes == ["BadFilterNotAllowed", "Good", "BadFilterNotAllowed", "Good"]
+            await c.uaclient.delete_subscriptions([result.SubscriptionId])
+
+    run(check())
+
+
 def test_a_publishing_interval_of_nothing_is_revised_to_the_minimum(face: FaceRig) -> None:
     async def check() -> None:
         async with connected(face.url) as c:
