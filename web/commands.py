@@ -620,6 +620,19 @@ _MISSING = re.compile(r"^Object missing required field `(\w+)` - at `\$\.args`$"
 _UNKNOWN = re.compile(r"^Object contains unknown field `(.+)` - at `\$\.args`$")
 _ENUM = re.compile(r"^Invalid enum value .* - at `\$\.args\.(\w+)`$")
 _USER = re.compile(r"^Expected `str` matching regex .* - at `\$\.user`$", re.S)
+_BOUND = re.compile(
+    r"^Expected `(str|int|array|object)`(?: of length)? ([<>]=) (\d+) - at `\$\.args\.(\w+)`$"
+)
+_BOUND_WORDS = {
+    ("str", "<="): "{name} takes at most {n:,} characters",
+    ("str", ">="): "{name} takes at least {n:,} characters",
+    ("int", "<="): "{name} is at most {n:,}",
+    ("int", ">="): "{name} is at least {n:,}",
+    ("array", "<="): "{name} takes at most {n:,} items",
+    ("array", ">="): "{name} takes at least {n:,} item(s)",
+    ("object", "<="): "{name} takes at most {n:,} entries",
+}
+"""msgspec's words for a bound an argument passes, in the vocabulary's."""
 
 
 def explain(op: object, message: str) -> str:
@@ -651,6 +664,9 @@ def explain(op: object, message: str) -> str:
         choices = {"mode": MODES, "removed": REMOVED_CHOICES}.get(m[1])
         if choices:
             return f"{m[1]} must be one of {', '.join(choices)} - at `$.args.{m[1]}`"
+    if (m := _BOUND.match(message)) and (words := _BOUND_WORDS.get((m[1], m[2]))):
+        said = f"{m[4]} is empty" if (m[1], m[2], m[3]) == ("str", ">=", "1") else words
+        return f"{said.format(name=m[4], n=int(m[3]))} - at `$.args.{m[4]}`"
     return message
 
 

@@ -345,7 +345,7 @@ def test_the_shells_send_reads_any_ops_arguments_before_sending() -> None:
         ("halt", ["on=yes"], "$.args.on"),
         ("mode", ["mode=FAST"], "mode must be one of"),
         ("init", ["step=1"], "takes no argument 'step'"),
-        ("ack_msg", ["msg_id=" + "[" * 5000 + "]" * 5000], "length <= 128"),  # read as text
+        ("ack_msg", ["msg_id=" + "[" * 5000 + "]" * 5000], "msg_id takes at most 128"),
         ("force", ["address=MD10", "value=Infinity"], "finite numbers only"),
     ]:
         with pytest.raises(ValueError) as err:

@@ -75,7 +75,7 @@ def name_problem(name: object) -> str:
     """Why ``name`` may not be a user's name ("": it may), in one line."""
     if not isinstance(name, str):
         return "invalid user name: not text"
-    shown = ascii(name)[:40]
+    shown = repr(name[:32]) + ("…" if len(name) > 32 else "")  # control characters escaped
     if any(not c.isprintable() for c in name):
         return f"invalid user name {shown}: it holds a control character; {NAME_RULE}"
     if name != name.strip():

@@ -472,9 +472,9 @@ class Editor(CpuCommands, RowEditing, InPlace, CrossReferencing):
         handle: Any
         if f.arg.type == "bool":
             handle = gui.add_checkbox(f.label, bool(value), hint=f.hint)
-        elif f.arg.type.startswith("int"):
-            low = 0 if f.arg.type == "int | None" else 1
-            handle = gui.add_number(f.label, int(value), min=low, max=32767, step=1, hint=f.hint)  # type: ignore[call-overload]
+        elif f.arg.type.startswith("int"):  # no min or max: the browser would clamp a
+            # number typed out of range silently; the edit refuses it, saying the range
+            handle = gui.add_number(f.label, int(value), step=1, hint=f.hint)  # type: ignore[call-overload]
         else:
             handle = gui.add_text(f.label, str(value), hint=f.hint)
         self._form_handles.append(handle)

@@ -186,7 +186,9 @@ class ClientPanel(PageLogin):
                 make = self._halt if kind is Halt else functools.partial(self._plain, kind)
                 self.buttons[op_of(kind)].on_click(self._on_click(make))
             first = w.layout.steps[0].number if w.layout.steps else 1
-            self.step_number = gui.add_number("Step", first, min=1, max=65535, step=1)
+            # no min or max: the browser would clamp a number typed out of range silently;
+            # the command is refused instead, saying the range
+            self.step_number = gui.add_number("Step", first, step=1)
             self.step_buttons = {
                 op_of(kind): gui.add_button(label, hint=_hint(kind))
                 for kind, label in _STEP_BUTTONS

@@ -31,7 +31,7 @@ from s7graph.web.access.scram import (
     Verifier,
     command_bytes,
 )
-from s7graph.web.access.users import UsersError, UsersFile
+from s7graph.web.access.users import UsersError, UsersFile, name_problem
 from s7graph.web.bus.gate import Gate
 from s7graph.web.commands import Command
 
@@ -342,3 +342,11 @@ def test_users_cli_refuses_hostile_names_and_shows_old_entries(tmp_path: Path) -
     assert run("list").stdout == "olga\toperator\tcannot log in: s7graph users passwd olga\n"
     assert run("passwd", "olga", "--password-stdin", stdin=PASSWORD + "\n").returncode == 0
     assert run("list").stdout == "olga\toperator\n"
+
+
+def test_a_refused_name_is_shown_as_written_its_control_characters_escaped() -> None:
+    """The page shows why a name is refused: ``ölga`` as ``ölga`` (not ``\\xf6lga``), a
+    long one cut whole characters short, a control or direction character escaped."""
+    assert name_problem("ölga").startswith("invalid user name 'ölga': ")
+    assert name_problem("😀" * 50).startswith(f"invalid user name '{'😀' * 32}'…: ")
+    assert name_problem("a\u202eb").startswith("invalid user name 'a\\u202eb': it holds a control")
