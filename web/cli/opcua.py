@@ -132,7 +132,7 @@ def opcua_command(
             return _fail(f"cannot serve OPC UA of CPU {chosen.cpu}: {exc}")
         except Exception as exc:
             return _fail(f"cannot serve OPC UA at {listen}: {error_words(exc)}")
-        print(f"s7graph: opcua {listen} of {chosen.cpu}; Ctrl-C to stop", flush=True)
+        print(f"s7graph: opcua {server.url} of {chosen.cpu}; Ctrl-C to stop", flush=True)
         try:
             wait_until_stopped(duration_s, stop)
         finally:

@@ -211,7 +211,13 @@ class OpcuaServer:
 
     @property
     def url(self) -> str:
-        return self.options.url
+        """The address served: the one asked for, with the port bound for port 0."""
+        bound = self.server.bserver if self.server is not None else None
+        parsed = urlparse(self.options.url)
+        if bound is None or parsed.port != 0 or not bound.port:
+            return self.options.url
+        host = f"[{parsed.hostname}]" if ":" in (parsed.hostname or "") else parsed.hostname
+        return f"opc.tcp://{host}:{bound.port}"
 
     def start(self, timeout: float = START_TIMEOUT_S) -> None:
         """Serve; raise what kept the server from starting (``RuntimeError`` when it did

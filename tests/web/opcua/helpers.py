@@ -99,8 +99,8 @@ def face_rig(
 ) -> Iterator[FaceRig]:
     """``chart`` running with ``USERS`` (password ``PASSWORD``) on a TLS bus with the
     certificates ``certs``, its operands published, and the OPC UA face of it in this
-    process (joining as ``FACE_CN``) on a free loopback port; ``blocks``: S7-SCL sources
-    run beside the chart (``--blocks``)."""
+    process (joining as ``FACE_CN``) on a free loopback port (``options["url"]``: that
+    address); ``blocks``: S7-SCL sources run beside the chart (``--blocks``)."""
     tmp_path.mkdir(parents=True, exist_ok=True)
     with (
         online_cpu(
@@ -118,11 +118,12 @@ def face_rig(
     ):
         assert wait_until(lambda: bool(find_cpus(session, timeout=1.0)), 20)
         status = find_cpus(session)[0]
-        url = f"opc.tcp://127.0.0.1:{free_port()}"
-        server = OpcuaServer(session, status, OpcuaOptions(url=url, **(options or {})))
+        given = dict(options or {})
+        url = str(given.pop("url", f"opc.tcp://127.0.0.1:{free_port()}"))
+        server = OpcuaServer(session, status, OpcuaOptions(url=url, **given))
         server.start()
         try:
-            yield FaceRig(rig, server, url)
+            yield FaceRig(rig, server, server.url)
         finally:
             server.stop()
 

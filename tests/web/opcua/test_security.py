@@ -143,3 +143,16 @@ def test_a_server_certificate_basic256sha256_cannot_use_is_refused_before_servin
     assert (
         trust_problem(trusted) == f"--trust {trusted}: notes.txt is not a certificate (PEM or DER)"
     )
+
+
+def test_port_0_serves_on_a_free_port_and_says_which(tmp_path: Path, bus_certs: BusCerts) -> None:
+    """``--listen opc.tcp://127.0.0.1:0``: the system picks the port, and the face's
+    address (what ``s7graph opcua`` prints) is the one it bound."""
+    with face_rig(tmp_path, bus_certs, options={"url": "opc.tcp://127.0.0.1:0"}) as face:
+        assert face.url.startswith("opc.tcp://127.0.0.1:") and not face.url.endswith(":0")
+
+        async def check() -> None:
+            async with connected(face.url) as c:
+                assert await node(c, "cpu1/State").read_value() == "RUN"
+
+        run(check())
