@@ -632,7 +632,7 @@ _BOUND_WORDS = {
     ("array", ">="): "{name} takes at least {n:,} item(s)",
     ("object", "<="): "{name} takes at most {n:,} entries",
 }
-"""msgspec's words for a bound an argument passes, in the vocabulary's."""
+"""msgspec's words for a bound an argument goes past, in the vocabulary's."""
 
 
 def explain(op: object, message: str) -> str:
