@@ -87,6 +87,8 @@ HOST_FAILURES: Final = 10
 (:data:`HOST_LOCKOUT_S`, doubling up to :data:`HOST_LONGEST_S`)."""
 HOST_LOCKOUT_S: Final = 10.0
 HOST_LONGEST_S: Final = 300.0
+_NOT_A_GUESS: Final = ("no answer", "bus error", "answered with an error", "unreadable answer")
+"""Words of a login refused by the bus, not by the CPU: not counted against the host."""
 
 
 class BusUsers(UserManager):
@@ -127,10 +129,12 @@ class BusUsers(UserManager):
             return None
         try:
             result = self._login(username, password or "", origin)
-        except Exception:  # the bus went away: refused, never a crash
-            result = "login failed: no answer from the CPU"
+        except Exception:  # the bus went away: refused, never a crash, and not a guess
+            _log.info("opcua: login of %r from %s refused: no answer", username[:32], peer)
+            return None
         if isinstance(result, str):
-            self.hosts.failed("", host)
+            if not any(w in result for w in _NOT_A_GUESS):  # the CPU's "no", not the bus's
+                self.hosts.failed("", host)
             _log.info("opcua: login of %r from %s refused: %s", username[:32], peer, result)
             return None
         self.hosts.succeeded("", host)

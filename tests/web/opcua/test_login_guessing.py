@@ -2,7 +2,8 @@
 "Security"): asyncua activates a session without yielding, and a wrong password costs the
 face its SCRAM key derivation, so a host that sent ten wrong logins is refused unchecked —
 whatever user it names, from whatever port — for 10 s, then twice as long after the next
-wrong one; another host logs in meanwhile, and a right login forgets the count."""
+wrong one; another host logs in meanwhile, and a right login forgets the count. A login
+the bus could not carry to the CPU counts for nothing."""
 
 from __future__ import annotations
 
@@ -25,6 +26,8 @@ def _users() -> tuple[BusUsers, list[str], _Clock]:
 
     def login(user: str, password: str, origin: str) -> User | str:
         asked.append(f"{user} {origin}")
+        if password == "down":
+            return "no answer from CPU 'cpu1' within 5 s"
         return User() if password == "right" else "wrong password"
 
     clock = _Clock()
@@ -43,6 +46,10 @@ def _try(users: BusUsers, peer: str, user: str, password: str) -> User | None:
 
 def test_a_host_guessing_passwords_is_refused_unchecked_and_others_are_not() -> None:
     users, asked, clock = _users()
+    for k in range(2 * HOST_FAILURES):  # the CPU not answering is no guess
+        assert _try(users, f"10.0.0.7:{3000 + k}", "olga", "down") is None
+    assert users.hosts.locked_for("", "10.0.0.7") == 0
+    asked.clear()
     for k in range(HOST_FAILURES):
         assert _try(users, f"10.0.0.7:{4000 + k}", f"user{k}", "guess") is None
     assert len(asked) == HOST_FAILURES
