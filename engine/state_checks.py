@@ -21,7 +21,7 @@ from typing import Any
 from s7graph.engine.memory import Memory, S5Counter, S5Timer
 from s7graph.engine.record import DiagEntry
 
-__all__ = ["check_hot_image", "check_memory_image", "diag_entry"]
+__all__ = ["check_hot_image", "check_memory_image", "diag_entry", "stored_integer"]
 
 _IMAGE_KEYS = frozenset({"markers", "timers", "counters", "dbs"})
 _HOT_KEYS = frozenset({"markers", "outputs", "timers", "counters"})
@@ -80,17 +80,19 @@ def diag_entry(row: tuple[object, ...]) -> DiagEntry:
     priority, wall_ns``): each number an integer (the event id a WORD), each text a text or
     NULL (empty); ValueError naming the column that is not."""
     field = dict(zip(_DIAG_FIELDS, row, strict=True))
-    t_ns, event_id, ob, priority, wall_ns = (_integer(field[n], n) for n in _DIAG_NUMBERS)
+    t_ns, event_id, ob, priority, wall_ns = (stored_integer(field[n], n) for n in _DIAG_NUMBERS)
     if not 0 <= event_id <= 0xFFFF:
         raise ValueError(f"event_id is {event_id}, not an event id (a WORD)")
     block, message, address = (_text(field[n], n) for n in _DIAG_TEXTS)
     return DiagEntry(t_ns, event_id, block, message, address, ob, priority, wall_ns)
 
 
-def _integer(value: object, name: str) -> int:
+def stored_integer(value: object, name: str, where: str = "") -> int:
+    """A column's ``value`` as SQLite gave it, if an integer (not a bool, a text, a blob or
+    NULL); ValueError naming ``where`` (a row) and column ``name`` if not."""
     if type(value) is not int:
         shown = "NULL" if value is None else repr(value)
-        raise ValueError(f"{name} is {shown}, not an integer")
+        raise ValueError(f"{f'{where}: ' if where else ''}{name} is {shown}, not an integer")
     return value
 
 

@@ -10,7 +10,7 @@ from pathlib import Path
 
 from s7graph.engine.errors import S7Error, SourceLocation
 
-__all__ = ["NotUtf8", "decode_utf8", "read_utf8"]
+__all__ = ["NotUtf8", "decode_utf8", "is_unicode", "read_utf8"]
 
 
 class NotUtf8(S7Error):
@@ -34,3 +34,13 @@ def decode_utf8(data: bytes, file: str = "<input>", *, bom: bool = True) -> str:
 def read_utf8(path: str | Path) -> str:
     """The text of the file at ``path`` (OSError if it cannot be read, ``NotUtf8``)."""
     return decode_utf8(Path(path).read_bytes(), str(path))
+
+
+def is_unicode(text: str) -> bool:
+    """Whether ``text`` can be written as UTF-8: no lone surrogate, which is what Python
+    makes of command-line bytes that were not UTF-8."""
+    try:
+        text.encode("utf-8")
+    except UnicodeEncodeError:
+        return False
+    return True

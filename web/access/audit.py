@@ -44,6 +44,7 @@ from typing import TYPE_CHECKING, Final, TypeVar
 
 from s7graph.engine.persistence import sqlite_words
 from s7graph.engine.rollup import Job, day_of, low_water, roll
+from s7graph.engine.state_checks import stored_integer
 
 if TYPE_CHECKING:
     from s7graph.engine.persistence import StateStore
@@ -251,7 +252,7 @@ def _record(r: tuple[object, ...]) -> AuditRecord:
     """An ``AuditRecord`` of a row of ``_AUDIT_COLUMNS`` (an older file's NULLs as '');
     ValueError naming the row and column when a number is not an integer or a text is a
     blob."""
-    row_id = _integer(r[0], "audit row", "id")
+    row_id = stored_integer(r[0], "id", "audit row")
     where = f"audit row {row_id}"
     for name, v in zip(_AUDIT_COLUMNS[2:-1], r[2:-1], strict=True):
         if isinstance(v, bytes):
@@ -260,7 +261,7 @@ def _record(r: tuple[object, ...]) -> AuditRecord:
     user, role, origin, op, fb, args, outcome, reason, detail = text
     return AuditRecord(
         row_id,
-        _integer(r[1] if r[1] is not None else 0, where, "t_ns"),
+        stored_integer(r[1] if r[1] is not None else 0, "t_ns", where),
         user,
         role,
         origin,
@@ -270,16 +271,8 @@ def _record(r: tuple[object, ...]) -> AuditRecord:
         outcome,
         reason,
         detail,
-        _integer(r[-1] if r[-1] is not None else 1, where, "count"),
+        stored_integer(r[-1] if r[-1] is not None else 1, "count", where),
     )
-
-
-def _integer(value: object, where: str, name: str) -> int:
-    """``value`` if an integer; ValueError naming ``where`` and ``name`` if not."""
-    if type(value) is not int:
-        shown = "NULL" if value is None else repr(value)
-        raise ValueError(f"{where}: {name} is {shown}, not an integer")
-    return value
 
 
 def _summary_rows(db: sqlite3.Connection) -> list[SummaryRecord]:
@@ -293,7 +286,9 @@ def _summary_rows(db: sqlite3.Connection) -> list[SummaryRecord]:
     out = []
     for r in rows:
         where = f"audit_summary row of {r[0]!r}"
-        numbers = [_integer(v, where, n) for v, n in zip(r[4:], _SUMMARY_NUMBERS, strict=True)]
+        numbers = [
+            stored_integer(v, n, where) for v, n in zip(r[4:], _SUMMARY_NUMBERS, strict=True)
+        ]
         out.append(SummaryRecord(str(r[0]), str(r[1]), str(r[2]), str(r[3]), *numbers))
     return out
 

@@ -31,6 +31,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from s7graph.engine.text import is_unicode
 from s7graph.web.bus.protocol import valid_name
 from s7graph.web.bus.session import BusEnds, BusLogin, TlsFiles
 
@@ -51,16 +52,6 @@ def error_words(exc: BaseException) -> str:
     if isinstance(exc, OSError) and exc.strerror:
         return f"{exc.strerror}{f': {exc.filename}' if exc.filename else ''}"
     return _ZENOH_PLACE.sub("", str(exc)).strip() or type(exc).__name__
-
-
-def _utf8(text: str) -> bool:
-    """Whether ``text`` is valid Unicode (no lone surrogate: bytes of the command line that
-    were not UTF-8)."""
-    try:
-        text.encode("utf-8")
-    except UnicodeEncodeError:
-        return False
-    return True
 
 
 def is_loopback_host(host: str) -> bool:
@@ -146,7 +137,7 @@ class NetOptions:
             if not valid_name(name):
                 return f"--cpu {name!r}: use letters, digits, _ . - (up to 64)"
         for ep in (*self.listen, *self.connect):
-            if "/" not in ep or not ep.isprintable() or not _utf8(ep):
+            if "/" not in ep or not ep.isprintable() or not is_unicode(ep):
                 return f"endpoint {ep!r}: write it as PROTOCOL/ADDRESS, e.g. tcp/127.0.0.1:7447"
         return None
 

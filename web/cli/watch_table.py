@@ -15,6 +15,7 @@ from __future__ import annotations
 import sys
 import threading
 
+from s7graph.engine.text import is_unicode
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import MAX_WATCH, WatchValues
 from s7graph.web.bus.watch import split_operands
@@ -37,10 +38,8 @@ MAX_INTERVAL_MS = 3_600_000  # an hour
 def split_addresses(text: str) -> list[str]:
     """The operands of ``--address`` (``MW0,Q4.0, DB20.avg``), commas inside ``[i, j]``
     kept; ValueError with a one-line reason for none or too many."""
-    try:
-        text.encode("utf-8")
-    except UnicodeEncodeError:  # bytes of the command line that are not UTF-8
-        raise ValueError("--address: not valid UTF-8 text") from None
+    if not is_unicode(text):  # bytes of the command line that are not UTF-8
+        raise ValueError("--address: not valid UTF-8 text")
     operands = split_operands(text)
     if not operands:
         raise ValueError("--address: give the operands to watch, e.g. MW0,Q4.0,DB20.avg")

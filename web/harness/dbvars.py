@@ -85,7 +85,7 @@ class DbVariables:
         if parsed is None:
             raise S7Error(f"{name} is not a DB variable (DBn.name)")
         db, path = parsed
-        number = db if isinstance(db, int) else self._by_name(db, name)
+        number = db if isinstance(db, int) else self.number_of(db, name)
         idb = self.cpu.instance_dbs.get(number)
         if idb is not None:
             structure = self.types.get(idb.fb.label) or _interface(idb)
@@ -101,8 +101,9 @@ class DbVariables:
         found = _member(replace(declared, name=f"DB{number}"), path, self.types, name)
         return block.data, found, found.type
 
-    def _by_name(self, db: str, name: str) -> int:
-        """A DB symbol of the CPU's symbol table first, then a loaded DB's own name."""
+    def number_of(self, db: str, name: str) -> int:
+        """The number of the DB named ``db`` (in ``name``, for the message): a DB symbol of
+        the CPU's symbol table first, then a loaded DB's own name; S7Error if none."""
         symbols = self.cpu.mem.symbols
         block = symbols.block(db) if symbols is not None else None
         if block is not None and block.kind == "DB":

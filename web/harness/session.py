@@ -214,11 +214,12 @@ class ChartSession:
         db, (var,) = parsed
         if not isinstance(var, str):
             return name
-        block = self.symbols.block(db) if isinstance(db, str) else None
-        number = block.number if block is not None and block.kind == "DB" else db
-        ours = number == idb.number or str(number).casefold() == idb.name.casefold()
+        try:
+            number = db if isinstance(db, int) else self.dbvars.number_of(db, name)
+        except S7Error:
+            return name
         key = next((v for v in self.cc.var_types if v.casefold() == var.casefold()), None)
-        return key if ours and key is not None else name
+        return key if number == idb.number and key is not None else name
 
     def _address(self, name: str) -> tuple[Address, str] | None:
         return address_of(self.symbols, name)

@@ -103,10 +103,9 @@ def listen_problem(url: str, *, users: bool, cert: Path | None, key: Path | None
 def _load_certificate(path: Path) -> x509.Certificate:
     """The certificate in ``path`` (PEM or DER); ValueError when it holds none."""
     data = path.read_bytes()
-    made = (
-        x509.load_pem_x509_certificate if b"-----BEGIN" in data else x509.load_der_x509_certificate
-    )
-    return made(data)
+    if _format(data) == "pem":
+        return x509.load_pem_x509_certificate(data)
+    return x509.load_der_x509_certificate(data)
 
 
 def _certificate_problem(cert: Path) -> str | None:
@@ -129,12 +128,10 @@ def _key_problem(key: Path) -> str | None:
     """Why ``key`` cannot be the server's private key (PEM or DER, unencrypted)."""
     try:
         data = key.read_bytes()
-        load = (
-            serialization.load_pem_private_key
-            if b"-----BEGIN" in data
-            else serialization.load_der_private_key
-        )
-        load(data, None)
+        if _format(data) == "pem":
+            serialization.load_pem_private_key(data, None)
+        else:
+            serialization.load_der_private_key(data, None)
     except (OSError, ValueError, TypeError):
         return f"{key}: not a private key (PEM or DER, without a password)"
     return None
@@ -180,13 +177,8 @@ def application_uri(cpu: str, cert: Path | None) -> str:
     ``urn:s7graph:opcua:<cpu>``."""
     if cert is not None:
         with contextlib.suppress(Exception):
-            data = cert.read_bytes()
-            made = (
-                x509.load_pem_x509_certificate
-                if b"-----BEGIN" in data
-                else x509.load_der_x509_certificate
-            )
-            names = made(data).extensions.get_extension_for_class(x509.SubjectAlternativeName)
+            found = _load_certificate(cert)
+            names = found.extensions.get_extension_for_class(x509.SubjectAlternativeName)
             uris = names.value.get_values_for_type(x509.UniformResourceIdentifier)
             if uris:
                 return str(uris[0])
