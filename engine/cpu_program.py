@@ -107,3 +107,22 @@ class ProgramBlocks:
             return self.instance_dbs[number]
         except KeyError:
             raise BlockError(f"instance DB{number} is not loaded") from None
+
+    def db_named(self, name: str) -> int | None:
+        """The number of the DB named ``name`` (quotes optional, case-insensitive): a DB
+        symbol of the symbol table first, then an instance DB's or a global DB's own name;
+        None when nothing has the name; SymbolError when the symbol names another block or
+        an operand."""
+        symbols = self.mem.symbols
+        if symbols is not None:
+            block = symbols.block(name)
+            if block is not None and block.kind == "DB":
+                return block.number
+        key = name.strip('"').casefold()
+        for number, idb in self.instance_dbs.items():
+            if idb.name.casefold() == key:
+                return int(number)
+        for number, db in self.mem.dbs.items():
+            if db.name.casefold() == key:
+                return int(number)
+        return symbols.db_number(name) if symbols is not None else None

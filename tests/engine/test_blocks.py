@@ -303,3 +303,25 @@ def test_a_db_is_loaded_with_its_layout_and_keeps_it_through_a_cold_restart(
     assert cpu.mem.dbs[20].field_address("avg") == parse_address("DB20.DBD2")
     cpu.start("cold")
     assert cpu.mem.dbs[20].layout == recipe
+
+
+def test_a_db_is_found_by_its_symbol_first_then_by_its_own_name_in_any_case(
+    clock: VirtualClock,
+) -> None:
+    """``Cpu.db_named``: a DB symbol wins; then an instance DB's or a global DB's own name,
+    case-insensitive; nothing → None; a symbol of another block or an operand → the reason."""
+    from s7graph.engine import DB
+    from s7graph.engine.errors import S7Error
+    from s7graph.engine.symbols import SymbolTable
+
+    cpu = Cpu(clock)
+    cpu.load(ob(1)(lambda ctx: None), motor, DB(20, 4, name="Recipe"), DB(21, 4, name="Motor_1"))
+    cpu.create_instance_db(1, motor, name="Motor_1")
+    cpu.mem.symbols = SymbolTable.from_text('"Oven"; DB21\n"Start"; I0.0; BOOL\n"Drive"; FB1\n')
+    assert cpu.db_named('"Oven"') == 21
+    assert cpu.db_named("recipe") == 20
+    assert cpu.db_named("MOTOR_1") == 1  # an instance DB's name before a global DB's
+    assert cpu.db_named("Nope") is None
+    for name, reason in (("Start", "is the operand I0.0"), ("Drive", "is FB 1")):
+        with pytest.raises(S7Error, match=reason):
+            cpu.db_named(name)

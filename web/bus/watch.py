@@ -235,25 +235,14 @@ def _db_variable(cpu: Cpu, item: WatchItem) -> tuple[object, str]:
 
 
 def db_by_name(cpu: Cpu, name: str) -> int:
-    """The number of the DB named ``name``: a DB symbol of the CPU's symbol table, else an
-    instance DB's or a global DB's own name."""
-    symbols = cpu.mem.symbols
-    block = symbols.block(name) if symbols is not None else None
-    if block is not None and block.kind == "DB":
-        return block.number
-    key = name.casefold()
-    for number, idb in cpu.instance_dbs.items():
-        if idb.name.casefold() == key:
-            return int(number)
-    for number, db in cpu.mem.dbs.items():
-        if db.name.casefold() == key:
-            return int(number)
-    if symbols is not None:
-        try:
-            symbols.db_number(name)
-        except S7Error as exc:
-            raise WatchError(exc.message) from None
-    raise WatchError(f'"{name}": no DB has this name')
+    """The number of the DB named ``name`` (``Cpu.db_named``); WatchError if none."""
+    try:
+        number = cpu.db_named(name)
+    except S7Error as exc:
+        raise WatchError(exc.message) from None
+    if number is None:
+        raise WatchError(f'"{name}": no DB has this name')
+    return number
 
 
 def _walk_instance(idb: InstanceDB, path: tuple[Segment, ...], where: str) -> tuple[object, str]:

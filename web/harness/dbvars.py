@@ -102,25 +102,17 @@ class DbVariables:
         return block.data, found, found.type
 
     def number_of(self, db: str, name: str) -> int:
-        """The number of the DB named ``db`` (in ``name``, for the message): a DB symbol of
-        the CPU's symbol table first, then a loaded DB's own name; S7Error if none."""
-        symbols = self.cpu.mem.symbols
-        block = symbols.block(db) if symbols is not None else None
-        if block is not None and block.kind == "DB":
-            return int(block.number)
-        key = db.upper()
-        for number, idb in self.cpu.instance_dbs.items():
-            if idb.name.upper() == key:
-                return int(number)
-        for number, block in self.cpu.mem.dbs.items():
-            if block.name.upper() == key:
-                return int(number)
-        if symbols is not None:
-            try:
-                symbols.db_number(db)
-            except S7Error as exc:
-                raise S7Error(f"{name}: {exc.message}") from None
-        raise S7Error(f'{name}: no DB is named "{db}" (name it in the symbol table: "{db}" ; DB n)')
+        """The number of the DB named ``db`` (``Cpu.db_named``; ``name`` for the message);
+        S7Error if none."""
+        try:
+            number = self.cpu.db_named(db)
+        except S7Error as exc:
+            raise S7Error(f"{name}: {exc.message}") from None
+        if number is None:
+            raise S7Error(
+                f'{name}: no DB is named "{db}" (name it in the symbol table: "{db}" ; DB n)'
+            )
+        return int(number)
 
 
 def _member(structure: ty.SclType, path: Any, types: Mapping[str, ty.SclType], name: str) -> Member:
