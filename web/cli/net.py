@@ -124,6 +124,7 @@ class NetOptions:
         module's rules)."""
         return (
             self._form_problem()
+            or self._users_problem()
             or self._network_problem(listening=listening, role=role)
             or self._tls_problem()
             or self._login_problem()
@@ -139,6 +140,13 @@ class NetOptions:
         for ep in (*self.listen, *self.connect):
             if "/" not in ep or not ep.isprintable() or not is_unicode(ep):
                 return f"endpoint {ep!r}: write it as PROTOCOL/ADDRESS, e.g. tcp/127.0.0.1:7447"
+        return None
+
+    def _users_problem(self) -> str | None:
+        """A users file named is there, even where nothing reads it yet (a CPU without a
+        bus or page): a mistyped path is said at start, not at the first login."""
+        if self.users is not None and not self.users.is_file():
+            return f"{self.users}: no such users file (s7graph users add ...)"
         return None
 
     def _network_problem(self, *, listening: bool, role: str) -> str | None:

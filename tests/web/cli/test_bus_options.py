@@ -69,6 +69,15 @@ def test_a_demo_cpu_connecting_to_another_machine_is_refused_like_listening(
     assert "--listen tcp/0.0.0.0:7447 is not loopback" in line
 
 
+def test_a_users_file_that_is_not_there_is_said_at_start_with_or_without_a_bus(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    missing = str(tmp_path / "nosuch" / "users.json")
+    for extra in ((), ("--listen", "tcp/127.0.0.1:7447")):
+        line = _refused(capsys, "run", CHART, "--users", missing, *extra)
+        assert line == f"s7graph: error: {missing}: no such users file (s7graph users add ...)"
+
+
 def test_a_cpu_with_users_and_a_bus_without_credentials_is_refused(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], bus_certs: BusCerts
 ) -> None:
