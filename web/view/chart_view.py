@@ -55,7 +55,7 @@ from s7graph.web.view.drawing import (
     picture,
 )
 from s7graph.web.view.engineering import Engineering
-from s7graph.web.view.guard import OriginGuard, guard_server
+from s7graph.web.view.guard import OriginGuard, guard_server, page_open
 from s7graph.web.view.layout import Placement, place
 from s7graph.web.view.panel import ClientPanel, PageState, Wiring
 from s7graph.web.view.status_layer import StatusLayer
@@ -290,7 +290,11 @@ class ChartView:
         panel = ClientPanel(client, self._wiring, status)
         panel.opened_at(self.server.initial_camera.position)  # fitted once it says its canvas
         with self._lock:
-            self.panels[client.client_id] = panel
+            gone = not page_open(client)
+            if not gone:
+                self.panels[client.client_id] = panel
+        if gone:  # closed while its panel was built: never kept
+            panel.forget()
         self._wake.set()
 
     def _disconnect(self, client: viser.ClientHandle) -> None:

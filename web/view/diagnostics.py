@@ -21,7 +21,7 @@ import viser
 
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import CpuStatus, DiagBuffer, DiagEvent
-from s7graph.web.view.guard import OriginGuard
+from s7graph.web.view.guard import OriginGuard, page_open
 
 __all__ = ["DiagSource", "DiagnosticsPanel", "diagnostics_html", "event_html", "state_html"]
 
@@ -189,7 +189,8 @@ class DiagnosticsPanel:
         with folder:
             handle = page.gui.add_html(self.source.html())
         with self._lock:
-            self._pages[page.client_id] = handle
+            if page_open(page):  # not one closed while its folder was built
+                self._pages[page.client_id] = handle
 
     def _disconnect(self, page: viser.ClientHandle) -> None:
         with self._lock:

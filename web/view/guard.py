@@ -5,7 +5,8 @@ session) by opening a websocket to it: the browser sends that site's ``Origin`` 
 handshake. :func:`guard_server` closes every websocket whose ``Origin`` is not the page's
 own (the ``Host`` it asked for, over http or https) or one of ``allowed_origins`` (the
 public URL behind an HTTPS reverse proxy), before viser sends it anything; and turns off
-viser's share-URL tunnel (it would publish the page through a third-party server).
+viser's share-URL tunnel (it would publish the page through a third-party server). What
+a websocket it lets in sends is screened before viser reads it (``web.view.inbound``).
 
 viser 1.1.1 has no hook for the handshake, so the check is the first of its connect
 callbacks (``_websock_server._client_connect_cb``), which run before any message is sent;
@@ -21,7 +22,9 @@ from urllib.parse import urlsplit
 
 import viser
 
-__all__ = ["OriginGuard", "guard_server", "same_origin"]
+from s7graph.web.view.inbound import screen_connection
+
+__all__ = ["OriginGuard", "guard_server", "page_open", "same_origin"]
 
 POLICY_VIOLATION = 1008
 
@@ -78,6 +81,8 @@ def guard_server(server: viser.ViserServer, allowed_origins: Iterable[str] = ())
         if not same_origin(headers.get("Origin"), headers.get("Host"), guard.allowed):
             guard._refuse(connection.client_id)
             await live.close(POLICY_VIOLATION, "foreign Origin")
+            return
+        screen_connection(server, connection.client_id, live)
 
     ws._client_connect_cb.insert(0, check)
 
@@ -87,3 +92,13 @@ def guard_server(server: viser.ViserServer, allowed_origins: Iterable[str] = ())
     server.request_share_url = no_share  # type: ignore[method-assign]  # the client's "share" asks this
     server.gui.configure_theme(show_share_button=False)
     return guard
+
+
+def page_open(page: viser.ClientHandle) -> bool:
+    """Whether ``page`` is still connected. A page's connect callback builds its panel
+    while the page may already have gone (a peer that connects and closes at once): viser
+    runs the disconnect callbacks as the connection ends, so a panel registered after
+    them would be kept, and painted, for ever. Check this under the lock that registers
+    the panel: viser drops the page from its clients before its disconnect callbacks."""
+    server: Any = page._viser_server  # viser 1.1.1 internals (pinned)
+    return page.client_id in server._connected_clients

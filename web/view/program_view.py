@@ -55,7 +55,7 @@ from s7graph.web.view import texts
 from s7graph.web.view.alarms import AlarmView
 from s7graph.web.view.block_links import BlockButtons, listed_blocks
 from s7graph.web.view.diagnostics import state_html
-from s7graph.web.view.guard import OriginGuard
+from s7graph.web.view.guard import OriginGuard, page_open
 from s7graph.web.view.page_login import PageLogin
 from s7graph.web.view.uses_list import UsesList, block_key, parsed_blocks
 from s7graph.web.view.watch_table import TIMEOUT_S, WatchTable, refresh, watch_html
@@ -256,7 +256,11 @@ class ProgramView:
             return
         built = ProgramPage(page, self)
         with self._lock:
-            self.pages[page.client_id] = built
+            gone = not page_open(page)
+            if not gone:
+                self.pages[page.client_id] = built
+        if gone:  # closed while its page was built: never kept
+            built.forget()
         self._wake.set()
 
     def _disconnect(self, page: viser.ClientHandle) -> None:
