@@ -17,6 +17,7 @@ from typing import Any
 
 from s7graph.engine.address import Area, Width
 from s7graph.engine.errors import S7Error, SourceLocation
+from s7graph.sequencer.checks.validate import validate
 from s7graph.sequencer.collector import collector_paused
 from s7graph.sequencer.compiled import CompiledChart
 from s7graph.sequencer.params import pin as pin_info
@@ -31,6 +32,7 @@ from s7graph.steps.conditions import (
     gen_condition,
     with_locals,
 )
+from s7graph.steps.diagnostics import Diagnostic, format_diagnostic
 from s7graph.steps.expressions import gen_assigned, gen_value
 from s7graph.steps.operands import WIDTH_TYPE, CodeGen, Ref
 
@@ -56,16 +58,11 @@ class _Problem:
         return f"{self.where}: {self.severity}: {self.message}"
 
 
-def _validate(chart: Chart, symbols: Any) -> tuple[list[Any], list[Any]]:
-    """Run ``sequencer.validate`` when present; return (errors, warnings)."""
-    try:
-        from s7graph.sequencer.checks.validate import validate  # written by H4
-    except ImportError:
-        return [], []
+def _validate(chart: Chart, symbols: Any) -> tuple[list[Diagnostic], list[Diagnostic]]:
+    """``sequencer.checks.validate``'s diagnostics: (errors, warnings)."""
     diags = list(validate(chart, symbols))
-    errors = [d for d in diags if str(getattr(d, "severity", "error")).lower().endswith("error")]
-    warnings = [d for d in diags if d not in errors]
-    return errors, warnings
+    errors = [d for d in diags if d.severity == "error"]
+    return errors, [d for d in diags if d.severity != "error"]
 
 
 class _Resolver:
@@ -218,7 +215,7 @@ def _compile_chart(chart: Chart, symbols: Any) -> CompiledChart:
         consts=dict(g.consts),
         step_index=step_index,
         transition_index=tr_index,
-        warnings=tuple(str(w) for w in warnings),
+        warnings=tuple(format_diagnostic(w) for w in warnings),
         aliases=tuple(aliases.values()),
     )
 
@@ -259,6 +256,8 @@ def _step_functions(
             f_src = f"def _f{i}(st, R, ev):\n    pass\n"
             own = None
         parts += [*_split(a_src), *_split(f_src)]
+        if own is not None and own.p_src is not None:
+            parts.append(own.p_src)
         # a step whose rows had to be split (100,000 rows) runs without the fused functions
         small = own is not None and len(own.rows) + len(own.reset) + len(own.s0) <= _SPLIT_LINES
         rows.append(own if small else None)
@@ -289,13 +288,16 @@ def _gen_step(
 ) -> str:
     """``def _s<i>(st, R, ev, c_ok, zero, _i, _j0, …) -> int`` (``Program.step``): step
     ``i``'s leaving transitions in priority order, each as ``tcond`` then ``crit_old``/
-    ``crit``/``tt`` as the cycle writes them; the first that holds is returned, else the
+    ``crit``/``tt`` as the cycle writes them — every one of them, as step 4.1 evaluates every
+    valid transition (``switching.switch``); the first that holds is returned, else the
     step's action rows run and -1 is returned. The indices are defaults, so the code of
     like steps is shared (``_share``)."""
     defaults = "".join(f", _j{k}={j}" for k, j in enumerate(leaving))
     lines = [f"def _s{i}(st, R, ev, c_ok, zero, _i={i}{defaults}):"]
     if leaving:
         lines += ["    _cr = st.crit", "    _tt = st.tt", "    _co = st.crit_old"]
+    if len(leaving) > 1:
+        lines.append("    _r = -1")
     for k, j in enumerate(leaving):
         body, value, crit = conds[j]
         lines += body
@@ -304,9 +306,13 @@ def _gen_step(
             f"    _co[_j{k}] = _cr[_j{k}]",
             f"    _cr[_j{k}] = {crit}",
             f"    _tt[_j{k}] = _v",
-            "    if _v:",
-            f"        return _j{k}",
         ]
+        if len(leaving) == 1:
+            lines += ["    if _v:", f"        return _j{k}"]
+        else:  # the first that holds wins; the others are evaluated all the same
+            lines += ["    if _v and _r < 0:", f"        _r = _j{k}"]
+    if len(leaving) > 1:
+        lines += ["    if _r >= 0:", "        return _r"]
     lines += a_body
     lines.append("    return -1")
     return with_locals(lines)

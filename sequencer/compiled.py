@@ -34,7 +34,9 @@ class Program:
     rows; ``enter[j](st, R, ev, ev_d, zero)`` (None unless ``j`` leaves a step that has
     ``step[i]`` for one target ``d`` of the same sequencer without interlock or
     supervision): the final scan of the source step (``fin``, events ``ev``) and then the
-    rows of ``d`` (``act[d]``, events ``ev_d``, interlock held)."""
+    rows of ``d`` (``act[d]``, events ``ev_d``, interlock held); ``pulse[i](st)`` (None
+    unless step ``i`` has ``S0 N`` rows): their operands back to 0, in the call after the
+    one that left the step (the end of their one-call pulse)."""
 
     tcond: tuple[Any, ...]
     ilc: tuple[Any, ...]
@@ -45,6 +47,7 @@ class Program:
     after: Any
     step: tuple[Any, ...] = ()
     enter: tuple[Any, ...] = ()
+    pulse: tuple[Any, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -122,6 +125,7 @@ class CompiledChart:
             after=ns["_after"],
             step=tuple(ns.get(f"_s{i}") for i in range(n)),
             enter=tuple(ns.get(f"_w{j}") for j in range(m)),
+            pulse=tuple(ns.get(f"_p{i}") for i in range(n)),
         )
 
     def step_label(self, i: int) -> str:

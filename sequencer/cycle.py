@@ -35,7 +35,7 @@ from typing import Any
 
 from s7graph.sequencer import display
 from s7graph.sequencer.compiled import CompiledChart, Program
-from s7graph.sequencer.fastpath import FastPath
+from s7graph.sequencer.fastpath import FastPath, run_rows
 from s7graph.sequencer.latch import advance, latch
 from s7graph.sequencer.modes import MODE_RULES, select_mode
 from s7graph.sequencer.params import input_defaults, inputs_for, output_defaults
@@ -361,7 +361,10 @@ class GraphRuntime:
         return st
 
     def _new_call(self, st: GraphState) -> None:
-        """Clear the per-call lists (events, log, fired, entered, left, late steps) and OV."""
+        """Clear the per-call lists (events, log, fired, entered, left, late steps) and OV; end
+        the one-call pulse of the ``S0 N`` rows of the steps left in the last call (their
+        operands back to 0 before anything of this call runs, docs/semantics.md, "Decisions":
+        an event N row is a one-call pulse)."""
         self._done = 0
         if self._late:
             self._late.clear()
@@ -377,6 +380,11 @@ class GraphRuntime:
         if st.entered:
             st.entered.clear()
         if st.left:
+            pulse = self.prog.pulse
+            if pulse:  # the S0 N rows of the steps left in the last call: their pulse ends
+                for i in st.left:
+                    if pulse[i] is not None:
+                        pulse[i](st)
             st.left.clear()
         st.ov = False
 
@@ -511,14 +519,7 @@ class GraphRuntime:
                 else:
                     fin[i](st, self, ev[i] | EV_S0)
             final[:] = keep
-        act = prog.act
-        zero = st.zeroed
-        il_ok = st.il_ok
-        n = 0
-        while n < len(steps):  # ON Sx in a row may append a step to this sequencer
-            i = steps[n]
-            n += 1
-            act[i](st, self, ev[i], il_ok[i], zero)
+        run_rows(self, steps, None)
 
     def _outputs(self) -> None:
         """Group flags and the FB outputs of docs/semantics.md, "One FB call", step 6 (display pins:

@@ -71,6 +71,34 @@ class Runtime(Protocol):
     def _late_steps(self) -> None: ...
 
 
+def run_rows(rt: Runtime, steps: list[int], ran: int | None) -> None:
+    """The action rows of every step of ``steps`` (one sequencer's active steps, in
+    activation order) but ``ran``, whose rows already ran in this call (docs/semantics.md,
+    "One FB call", step 4.5: the rows of *every* active step run). A row may change
+    ``steps`` while they run: an ``OFF Sx`` takes a step out — its rows do not run, it had
+    its final scan, and the steps after it in the list still run theirs — and an
+    ``ON Sx`` of a step of this sequencer adds it at the end, where its rows (with its
+    S1) run in turn."""
+    st = rt.st
+    act = rt.prog.act
+    ev, il_ok, x, zero = st.ev, st.il_ok, st.x, st.zeroed
+    order = [i for i in steps if i != ran] if ran is not None else steps[:]
+    entered = st.entered
+    seen = len(entered)
+    n = 0
+    while n < len(order):
+        i = order[n]
+        n += 1
+        if not x[i]:  # switched off by a row of a step before it
+            continue
+        act[i](st, rt, ev[i], il_ok[i], zero)
+        if len(entered) != seen:  # an ON Sx row: a step of this sequencer joins the end
+            for d in entered[seen:]:
+                if x[d] and d != ran and d in steps and d not in order:
+                    order.append(d)
+            seen = len(entered)
+
+
 class FastPath:
     """The quiet call and step 4 in AUTO of one ``GraphRuntime`` (``rt``)."""
 
@@ -259,12 +287,14 @@ class FastPath:
         st = self.st
         ev = st.ev
         zero = st.zeroed
+        ran = i  # the step whose rows ran: i, or after a plain switch its target d
         if j >= 0:
             plan = self._enter[j]
             if plan is None:
                 self._switch(rt, kk, steps, i, j, self.multi)
                 return
             d, rows = plan
+            ran = d
             # c) _deactivate(i), _activate(d), inline
             x = st.x
             st.fired.append(j)
@@ -294,12 +324,7 @@ class FastPath:
             # e) the final scan of i, then the rows of d
             rows(st, rt, ev[i], e, zero)
         if len(steps) > 1:  # steps an ON Sx row appended: their rows, in order
-            act, il_ok = self.prog.act, st.il_ok
-            n = 1
-            while n < len(steps):
-                i = steps[n]
-                n += 1
-                act[i](st, rt, ev[i], il_ok[i], zero)
+            run_rows(rt, steps, ran)
 
     def _switch(self, rt: Runtime, kk: int, steps: list[int], i: int, j: int, multi: bool) -> None:
         """The fast path's switch of sequencer ``kk`` (-1: the only one) whose only active
@@ -313,8 +338,6 @@ class FastPath:
         ev = st.ev
         il_ok = st.il_ok
         sv_err = st.sv_err
-        zero = st.zeroed
-        act = prog.act
         x = st.x
         il_err = st.il_err
         log = st.log
@@ -369,8 +392,4 @@ class FastPath:
             else:
                 fin[f](st, rt, ev[f] | EV_S0)
         final[:] = keep
-        n = 0
-        while n < len(steps):  # ON Sx in a row may append a step to this sequencer
-            i = steps[n]
-            n += 1
-            act[i](st, rt, ev[i], il_ok[i], zero)
+        run_rows(rt, steps, None)  # an OFF Sx or ON Sx row may change ``steps`` meanwhile

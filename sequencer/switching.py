@@ -40,7 +40,15 @@ def switch(
     """Steps a–c: evaluate, decide, switch (docs/semantics.md, "One FB call", steps 4.1–4.3) for one
     sequencer's active ``steps``. ``sw`` = (mode rule, None in AUTO; T_PUSH edge; switching blocked
     by HALT_SQ/OFF_SQ; steps whose acknowledgement forces their transition; steps ``held`` for this
-    call because step 2 activated them)."""
+    call because step 2 activated them).
+
+    a) *every* transition whose preceding steps are all active is evaluated (``Tn.TT``, CRIT), on
+    the state at the start of this step — the ones of lower priority than a switching one too;
+    b) at an alternative divergence the first switchable transition in priority order wins
+    (``CompiledChart.leaving``: the first written, then the lowest number). A simultaneous join
+    switches only if none of its preceding steps has a switchable transition of higher priority:
+    the divergence at each of its steps decides as at any other, whatever the order in which
+    the steps became active."""
     st = rt.st
     cc = rt.cc
     x = st.x
@@ -50,45 +58,47 @@ def switch(
     tt, crit, crit_old = st.tt, st.crit, st.crit_old
     mode_rule, push, blocked, forced, held = sw
     sv_err = st.sv_err
-    # a+b: on the state at the start of this step
-    fire: list[int] = []
-    taken: set[int] | None = None
-    joins: set[int] | None = None
+    # a: evaluate on the state at the start of this step; ``ok``: may switch (b, before the
+    # divergences are resolved)
+    ok: dict[int, bool] = {}
     for i in steps:
         for j in leaving[i]:
             srcs = tr_src[j]
             single = len(srcs) == 1
-            if not single:  # simultaneous join: all preceding steps active, once
-                if not all(x[s] for s in srcs):
-                    continue
-                if joins is None:
-                    joins = set()
-                elif j in joins:
-                    continue
-                joins.add(j)
+            # a simultaneous join: all preceding steps active, evaluated once
+            if not single and (j in ok or not all(x[s] for s in srcs)):
+                continue
             v, c = tcond[j](st)
             crit_old[j] = crit[j]
             crit[j] = c
             tt[j] = v
             if blocked or (held and not held.isdisjoint(srcs)):
+                ok[j] = False
                 continue
             if forced and i in forced:
                 v = True
             if mode_rule is not None:
                 v = mode_rule(v, push)
-            if not v:
+            if v:
+                v = not sv_err[i] if single else not any(sv_err[s] for s in srcs)
+            ok[j] = v
+    if not any(ok.values()):
+        return
+    # b: at most one path per divergence, in priority order
+    fire: list[int] = []
+    taken: set[int] = set()
+    for i in steps:
+        if i in taken:
+            continue
+        for j in leaving[i]:
+            if not ok.get(j):
                 continue
-            if single:
-                if sv_err[i]:
-                    continue
-            elif any(sv_err[s] for s in srcs):
+            srcs = tr_src[j]
+            if len(srcs) > 1 and (
+                any(s in taken for s in srcs) or _outranked(j, srcs, i, leaving, tr_src, ok, taken)
+            ):
                 continue
-            if taken is None:
-                taken = set(srcs)
-            else:
-                if (i in taken) if single else any(s in taken for s in srcs):
-                    continue
-                taken.update(srcs)
+            taken.update(srcs)
             fire.append(j)
             break  # alternative divergence: the first switchable path in priority order wins
     # c: switch
@@ -105,6 +115,29 @@ def switch(
                 rt._activate(d)
     if st.sskip_enabled:
         skip(rt, rule, held)
+
+
+def _outranked(
+    j: int,
+    srcs: tuple[int, ...],
+    i: int,
+    leaving: tuple[tuple[int, ...], ...],
+    tr_src: tuple[tuple[int, ...], ...],
+    ok: dict[int, bool],
+    taken: set[int],
+) -> bool:
+    """Whether the join ``j`` (reached from its preceding step ``i``) must give way: another of
+    its preceding steps ``s`` has a switchable transition of higher priority than ``j`` whose
+    own preceding steps are all still free — that path of ``s``'s divergence wins."""
+    for s in srcs:
+        if s == i:
+            continue
+        for k in leaving[s]:
+            if k == j:
+                break
+            if ok.get(k) and not any(t in taken for t in tr_src[k]):
+                return True
+    return False
 
 
 def skip(rt: _Runtime, rule: Callable[[bool, bool], bool], held: frozenset[int]) -> None:

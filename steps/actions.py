@@ -58,6 +58,10 @@ class ActionParts(NamedTuple):
     rows: list[str]
     reset: list[str]
     s0: list[str]
+    p_src: str | None = None
+    """``def _p<i>(st)``: the end of the one-call pulses of the step's ``S0 N`` rows (their
+    operands back to 0), for the call after the one that left the step; None without such
+    rows."""
 
 
 def step_action_parts(
@@ -73,6 +77,7 @@ def step_action_parts(
     body: list[str] = []
     final_reset: list[str] = []
     s0_rows: list[str] = []
+    pulse_end: list[str] = []
 
     def val(e: Expr) -> str:
         return gen_value(e, g, resolve, sidx, tidx)
@@ -85,6 +90,8 @@ def step_action_parts(
             final_reset.append(g.set_bit(resolve(bit), False))
         if row.event == "S0":
             s0_rows.extend(code)
+            if q == "N" and isinstance(row.operand, Operand):  # a one-call pulse, as any
+                pulse_end.append(g.write(resolve(row.operand), "False"))  # event N row
             continue
         if row.event is not None:
             cond = f"ev & {EVENT_BITS[row.event]}"
@@ -108,12 +115,14 @@ def step_action_parts(
     f_body = f_body or ["    pass"]
     a_src = [f"def _a{i}(st, R, ev, c_ok, zero{_own(i, a_body)}):", *a_body]
     f_src = [f"def _f{i}(st, R, ev{_own(i, f_body)}):", *f_body]
+    p_src = with_locals([f"def _p{i}(st):", *_indent(pulse_end)]) if pulse_end else None
     return ActionParts(
         with_locals(a_src),
         with_locals(f_src),
         _indent(body),
         _indent(final_reset),
         _indent(s0_rows),
+        p_src,
     )
 
 

@@ -6,7 +6,8 @@ Operators ``+ - * /`` on INT DINT REAL (TIME counts as DINT ms), ``MOD`` (DINT),
 ``AND OR XOR`` on WORD/DWORD, ``SHL SHR SSR ROL ROR``; the functions of ``FUNCTIONS``.
 INT/DINT results that leave their range, and divisions by zero, do not raise: they set the
 overflow status (``st.ov``, ``st.ov_count``, one line in ``st.diag``) and the result wraps
-as on the CPU (``/`` by zero gives 0).
+as on the CPU (``/`` by zero gives 0); ``ROUND``/``TRUNC`` of a REAL without a whole
+value in DINT (NaN, infinite, too large) give 0 and set it too.
 """
 
 from __future__ import annotations
@@ -35,6 +36,9 @@ StepIndex = Callable[[int, Any], int]
 INTS = frozenset({"INT", "DINT", "TIME", "S5TIME", "TIME_OF_DAY", "TOD"})
 BITS = frozenset({"BYTE", "WORD", "DWORD", "CHAR"})
 NUMERIC = INTS | BITS | {"REAL"}
+_COMPLEMENT = frozenset({"INT", "DINT"})
+"""The number types whose NOT is their one's complement, as the type check has it
+(``sequencer.checks.types``: NOT of INT is INT, of DINT is DINT)."""
 RANGE = {"INT": (-32768, 32767), "DINT": (-(2**31), 2**31 - 1), "TIME": (-(2**31), 2**31 - 1)}
 MASK = {"BYTE": 0xFF, "CHAR": 0xFF, "WORD": 0xFFFF, "DWORD": 0xFFFFFFFF}
 LOGIC = frozenset({"AND", "OR", "XOR"})
@@ -81,7 +85,10 @@ def expr_type(e: Expr, resolve: Resolve, number: bool = False) -> str:
     if isinstance(e, TransAttr):
         return "BOOL"
     if isinstance(e, Unary):
-        return "BOOL" if e.op == "NOT" else expr_type(e.operand, resolve, True)
+        if e.op == "NOT":  # of an INT or DINT: its one's complement (INVI, INVD), else BOOL
+            t = expr_type(e.operand, resolve)  # a timer or counter: its status bit
+            return t if t in _COMPLEMENT else "BOOL"
+        return expr_type(e.operand, resolve, True)
     if isinstance(e, FuncCall):
         res, _ = FUNCTIONS.get(e.name.upper(), (None, ""))
         return res or (expr_type(e.args[0], resolve, True) if e.args else "DINT")
@@ -134,8 +141,10 @@ def gen_value(
     if isinstance(e, Unary):
         if e.op == "NOT":
             inner = gen_value(e.operand, g, resolve, sidx, tidx)
-            t = expr_type(e.operand, resolve)
-            return f"_not(st, {inner}, {t!r})" if t in BITS else f"(not {inner})"
+            t = expr_type(e.operand, resolve)  # a timer or counter: its status bit
+            if t in BITS or t in _COMPLEMENT:
+                return f"_not(st, {inner}, {t!r})"
+            return f"(not {inner})"
         inner = gen_value(e.operand, g, resolve, sidx, tidx, True)
         t = expr_type(e.operand, resolve, True)
         return _checked(f"-({inner})", t) if t in RANGE else f"(-({inner}))"
@@ -300,13 +309,25 @@ def _num_to_bcd(st: Any, v: int, t: str) -> int:
     return r
 
 
+def _whole(st: Any, v: float, n: int | None) -> int:
+    """A REAL made a DINT (``n``: its whole value; None: NaN or infinite): out of range
+    or not a number sets the overflow status and gives 0, as S7 leaves no valid result."""
+    if n is None or not RANGE["DINT"][0] <= n <= RANGE["DINT"][1]:
+        _overflow(st, f"DINT overflow: {v}")
+        return 0
+    return n
+
+
 def _round(st: Any, v: float, t: str) -> int:
-    r = math.floor(v + 0.5) if v >= 0 else -math.floor(-v + 0.5)
-    return int(_ck(st, int(r), "DINT"))
+    """ROUND (STL ``RND``): to the nearest whole number, a half to the even one."""
+    v = float(v)
+    return _whole(st, v, round(v) if math.isfinite(v) else None)
 
 
 def _trunc(st: Any, v: float, t: str) -> int:
-    return int(_ck(st, int(v), "DINT"))
+    """TRUNC: the whole part, towards zero."""
+    v = float(v)
+    return _whole(st, v, math.trunc(v) if math.isfinite(v) else None)
 
 
 def _negr(st: Any, v: float, t: str) -> float:

@@ -79,6 +79,8 @@ def rule_declarations(ctx: _Ctx) -> None:
     for v in ctx.chart.vars:
         if v.init is not None:
             t = _type(ctx, v.init, f"variable {v.name}")
+            if t == "STRING" and v.type.upper() == "CHAR" and _one_char(v.init.text):
+                t = "CHAR"  # 'A' is a CHAR constant (Program Design, appendix C)
             if t is not None and _unify(v.type.upper(), t) is None:
                 ctx.err(
                     "E031",
@@ -93,6 +95,16 @@ def rule_declarations(ctx: _Ctx) -> None:
                     v.init.loc,
                     f"variable {v.name}",
                 )
+
+
+def _one_char(literal: str) -> bool:
+    """Whether the literal ``literal`` is a string of one character: in S7, ``'A'`` also
+    stands for the CHAR constant, so it initializes a CHAR variable."""
+    try:
+        _, value = parse_literal(literal)
+    except LiteralError:
+        return False
+    return isinstance(value, str) and len(value) == 1
 
 
 def _too_long(declared: str, literal: str) -> bool:

@@ -117,6 +117,24 @@ def test_int_overflow_sets_the_overflow_status_instead_of_crashing() -> None:
     assert -32768 <= st.vars["x"] <= 32767
 
 
+def test_round_takes_a_half_to_the_even_number_and_a_real_without_a_whole_value_gives_zero() -> (
+    None
+):
+    """ROUND is STL's RND (a half to the even number); NaN, infinity or a value beyond
+    DINT from ROUND or TRUNC set the overflow status and give 0, never stop the CPU."""
+    c = two(
+        "N a := ROUND(r); N b := ROUND(-r); N e := ROUND(3.5); N f := TRUNC(-2.7); "
+        "N g := ROUND(SQRT(m)); N h := TRUNC(r / 0.0); N k := ROUND(3.0E10);",
+        header="VAR r : REAL := 2.5; m : REAL := -1.0; "
+        + " ".join(f"{n} : DINT := L#7;" for n in "abefghk")
+        + " END_VAR",
+    )
+    enter(c)
+    v, st = c.rt.st.vars, c.rt.st
+    assert (v["a"], v["b"], v["e"], v["f"]) == (2, -2, 4, -2)
+    assert (v["g"], v["h"], v["k"]) == (0, 0, 0) and st.ov and st.ov_count >= 3
+
+
 def test_division_by_zero_sets_overflow_and_gives_zero() -> None:
     c = two("N x := 7 / y;", header="VAR x : INT := 1; y : INT := 0; END_VAR")
     enter(c)
@@ -130,4 +148,4 @@ def test_word_arithmetic_and_functions() -> None:
     )
     enter(c)
     v = c.rt.st.vars
-    assert v["w"] == 0xF00F and v["r"] == 4.0 and v["d"] == 3
+    assert v["w"] == 0xF00F and v["r"] == 4.0 and v["d"] == 2  # RND: a half to the even
