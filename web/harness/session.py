@@ -153,8 +153,9 @@ class ChartSession:
         types = {k: v for b in blocks for k, v in getattr(b, "types", {}).items()}
         self.dbvars = DbVariables(self.cpu, types)
         """The DB variables by name (``DB10.n``, ``"Seq".S_NO``)."""
-        self.warnings: list[str] = []
-        """The warnings of the ``blocks``' sources (``load``), for ``sim`` and ``run``."""
+        self.warnings: list[str] = [w for c in (cc, *beside) for w in c.warnings]
+        """The warnings of the charts and of the ``blocks``' sources (``load``), for ``sim``
+        and ``run`` to print (as ``check`` does)."""
         self.missing: list[str] = []
         """Calls of blocks this CPU does not have (``sequencer.calls``): they stop it when
         reached; ``sim`` and ``run`` print them as warnings."""
@@ -193,7 +194,7 @@ class ChartSession:
         cc, table = load_chart(path, symbols)  # the sources see the chart's SYMBOLS too
         sources = compile_sources(blocks, table)
         session = cls(cc, table, clock, blocks=[sources])
-        session.warnings = list(sources.warnings)
+        session.warnings += sources.warnings
         return session
 
     # ------------------------------------------------------------ names

@@ -72,6 +72,15 @@ def test_sim_exits_2_with_diagnostics_for_a_chart_that_does_not_compile(
     assert rc == 2 and "c.s7g:" in err and "Nope" in err
 
 
+def test_sim_says_the_charts_warnings_on_stderr_and_runs_it(tmp_path: Path, capsys) -> None:
+    """A chart with warnings runs (exit 0), its warnings on stderr as ``check`` says them:
+    an empty transition condition holds (W120)."""
+    rc, trace = run(tmp_path, [], chart=CHART.replace(":= I0.1;", ":= ;"))
+    err = capsys.readouterr().err.splitlines()
+    assert rc == 0 and len(err) == 1 and "c.s7g:9:3: warning[W120]: transition T2" in err[0]
+    assert trace[0]["active"] == ["S1"]  # T1 waits for Start; T2 would switch at once
+
+
 @settings(max_examples=25, deadline=None)
 @given(
     hs.lists(
