@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 
@@ -65,3 +66,17 @@ class ScanAborted(BaseException):
 
     block: str = ""
     """The innermost block (or ``plant``) the abort escaped from; empty until tagged."""
+
+
+GENERATED_PLACES: dict[str, Callable[[int], str | None]] = {}
+"""Code generated from another language: its code objects' file name → a function giving
+the source place (``file:line:col``) of a generated line, or None. Filled by the compilers
+above the engine (S7-SCL, ``steps/scl``), read where the engine names where a scan was
+(``engine.runner``), so that a user sees the place in their source, never generated code."""
+
+
+def generated_place(filename: str, line: int) -> str | None:
+    """The source place of ``line`` of the generated code ``filename``; None when it is not
+    generated code, or the line is not known."""
+    found = GENERATED_PLACES.get(filename)
+    return found(line) if found is not None else None

@@ -80,7 +80,7 @@ from s7graph.engine.cores import allowed_cpus, machine_claims, pin, rest_of, sca
 from s7graph.engine.cpu import Cpu
 from s7graph.engine.diag_events import stop_cause
 from s7graph.engine.diagnostics import EventId
-from s7graph.engine.errors import ScanAborted
+from s7graph.engine.errors import ScanAborted, generated_place
 from s7graph.engine.marks import EXIT_HUNG, GRACE_S, ScanMarks
 from s7graph.engine.modes import CpuMode, ModeRequest
 from s7graph.engine.persistence import Batch, StateStore, StateWriteError
@@ -781,8 +781,16 @@ def _set_async_exc(tid: int, exc: type[BaseException] | None) -> None:
 
 
 def _innermost(tid: int) -> str:
-    """`` (file.py:12 in f)``: where thread ``tid`` is running now, for the diagnostics."""
+    """`` (file.py:12 in f)``: where thread ``tid`` is running now, for the diagnostics; in
+    code generated from a source (S7-SCL), the innermost place of that source
+    (`` (mix.scl:7:3)``), never the generated code's."""
     frame = sys._current_frames().get(tid)
     if frame is None:
         return ""
+    outer: FrameType | None = frame
+    while outer is not None:
+        place = generated_place(outer.f_code.co_filename, outer.f_lineno)
+        if place is not None:
+            return f" ({place})"
+        outer = outer.f_back
     return f" ({Path(frame.f_code.co_filename).name}:{frame.f_lineno} in {frame.f_code.co_name})"

@@ -19,7 +19,7 @@ from types import CodeType
 from typing import Any
 
 from s7graph.engine.blocks import FB, FC, Decl
-from s7graph.engine.errors import SourceLocation
+from s7graph.engine.errors import GENERATED_PLACES, SourceLocation
 from s7graph.engine.symbols import SymbolTable
 from s7graph.steps.scl import model as m
 from s7graph.steps.scl import types as ty
@@ -52,8 +52,13 @@ class Generated:
     lines: tuple[SourceLocation, ...]
     consts: dict[str, Any]
 
+    def place(self, line: int) -> str | None:
+        """The source place of ``line`` of the module."""
+        return str(self.lines[line - 1]) if 1 <= line <= len(self.lines) else None
+
     def namespace(self) -> dict[str, Any]:
         """The module executed: its names, the functions among them."""
+        GENERATED_PLACES[self.filename] = self.place
         ns: dict[str, Any] = {"__builtins__": SAFE_BUILTINS}
         ns.update(RUNTIME)
         ns.update(self.consts)
@@ -90,7 +95,14 @@ def translate(
     diags.sort(key=sort_key)
     if any(d.is_error for d in diags):
         return source, prog, None, diags
-    return source, prog, _assemble(file, parts, module), diags
+    try:
+        generated = _assemble(file, parts, module)
+    except (RecursionError, MemoryError) as exc:  # CPython's own limits: never a crash
+        where = source.units[0].loc if source.units else SourceLocation(file, 1, 1)
+        why = "nests too deeply" if isinstance(exc, RecursionError) else "is too large"
+        diags.append(error("E204", f"the generated code {why} for Python to compile", where))
+        return source, prog, None, diags
+    return source, prog, generated, diags
 
 
 def _assemble(
@@ -227,5 +239,8 @@ def _instance_of(path: m.Path, prog: Program) -> None:
     if not isinstance(first, m.Member):
         return
     number = prog.db_number(first.name)
+    declared = prog.block(first.name)
+    if declared is not None and declared.unit is not None and not declared.instance_of:
+        return  # a global DB of the source: the call is E233
     if number is not None:
         prog.instances.setdefault(number, fb.label)

@@ -40,6 +40,9 @@ no static data, an OB only temporary data)."""
 KIND_OF_UNIT = {"FUNCTION_BLOCK": "FB", "FUNCTION": "FC", "ORGANIZATION_BLOCK": "OB"}
 KIND_OF_UNIT |= {"DATA_BLOCK": "DB", "TYPE": "UDT"}
 _LABEL = re.compile(r"(SFB|SFC|FB|FC|OB|DB|UDT)(\d+)", re.IGNORECASE)
+NUMBERS = {"FB": (0, 65535), "FC": (0, 65535), "DB": (1, 65535), "UDT": (0, 65535)}
+NUMBERS |= {"OB": (1, 32767)}
+"""The numbers a block of each kind may have (an S7-400's; OBs up to S7-1500's 32767)."""
 MAX_DIMENSIONS = 6
 MAX_BYTES = 65536
 """The largest DB of an S7-400 CPU, in bytes: no variable, structure or array is larger."""
@@ -212,6 +215,11 @@ def _number(prog: Program, unit: m.Unit) -> BlockInfo | None:
         return None
     if label[0] != kind:
         prog.diags.append(error("E213", f"{unit.kind} {unit.name} is not a {kind}", loc))
+        return None
+    low, high = NUMBERS[kind]
+    if not low <= label[1] <= high:
+        shown = f"{label[1]}" if len(str(label[1])) < 12 else f"{str(label[1])[:8]}…"
+        prog.diags.append(error("E214", f"{kind} number {shown} is outside {low}..{high}", loc))
         return None
     info = BlockInfo(kind, label[1], unit.name, unit)
     if info.label in prog.blocks and prog.blocks[info.label].unit is not None:

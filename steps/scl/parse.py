@@ -49,8 +49,19 @@ def _parser() -> Lark:
     )
 
 
+MAX_SOURCE = 1_000_000
+"""The longest source compiled, in characters — as much as a download carries per source
+(a 50 MB file would hold the parser for many minutes)."""
+
+
 def parse_source(text: str, file: str = "<input>") -> m.Source:
-    """Parse an SCL source; raise :class:`SclError` with a located diagnostic (E201–E205)."""
+    """Parse an SCL source; raise :class:`SclError` with a located diagnostic (E201–E205).
+    A source over ``MAX_SOURCE`` characters is E204 before anything reads it."""
+    if len(text) > MAX_SOURCE:
+        said = f"the source has {len(text):,} characters; at most {MAX_SOURCE:,} are compiled"
+        raise SclError(
+            [error("E204", f"{said} (split it into several sources)", SourceLocation(file, 1, 1))]
+        )
     text, unclosed = blank_comments(text, file)
     if unclosed is not None:
         raise SclError([unclosed])

@@ -341,7 +341,7 @@ def _ix(i: int, lo: int, hi: int, where: str) -> int:
     """``i - lo`` for an index within ``lo..hi``; outside it is a block error."""
     if lo <= i <= hi:
         return i - lo
-    raise ProgramError(f"{where}: array index {i} outside {lo}..{hi}")
+    raise ProgramError(f"array index {i} outside {lo}..{hi}", where)
 
 
 _WIDTHS = {1: Width.BIT, 8: Width.BYTE, 16: Width.WORD, 32: Width.DWORD}
@@ -485,13 +485,13 @@ class Meter:
         self.at = -1
         self.left = 0
 
-    def over(self, ctx: Any, block: str) -> None:
-        """The passes are used up: abort the scan (a time error, then STOP)."""
+    def over(self, ctx: Any, block: str, where: str = "") -> None:
+        """The passes are used up: abort the scan (a time error naming the loop's place, then
+        STOP)."""
         cpu = ctx.cpu
         limit = 2 * _max_cycle_ns(cpu) // 1_000_000
-        cpu.abort_reason = (
-            f"{block}: a loop still running at twice the maximum cycle time ({limit} ms)"
-        )
+        at = f", the loop at {where}" if where else ""
+        cpu.abort_reason = f"a loop still running at twice the maximum cycle time ({limit} ms){at}"
         abort = ScanAborted()
         abort.block = block
         raise abort

@@ -17,8 +17,11 @@ must leave loops, pass through a flag checked after each loop they cross.
 
 from __future__ import annotations
 
+import bisect
 import re
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from functools import partial
 
 from s7graph.engine.errors import SourceLocation
 from s7graph.steps.scl import model as m
@@ -31,6 +34,9 @@ from s7graph.steps.scl.gen import HOLE, Block, Place, Target
 S5_FUNCTIONS = frozenset(S5_TIMERS) | frozenset(S5_COUNTERS)
 _CALLS = ("_invoke(", "_fcall(", "_s5_")
 """What generated code calls other blocks (or the operating system's cells) with."""
+CHAIN = 100
+"""Arms of IF or CASE in one Python ``if``/``elif`` chain: CPython's compiler nests each
+``elif`` a level deeper and fails past about 2,900 (RecursionError, then MemoryError)."""
 MAX_PYTHON_LOOPS = 18
 """Python allows 20 nested loops in a function; loops and dispatch loops stay below."""
 
@@ -106,7 +112,8 @@ class Stmts:
             segments[-1].append(s)
         pc = f"_pc{frame.id}"
         b.emit(f"{pc} = 0")
-        self._open(frame, "while True:")
+        first = next(s for s in stmts if isinstance(s, m.Labeled))
+        self._open(frame, "while True:", first.loc)
         self.labels.append(names)
         for k, segment in enumerate(segments):
             b.emit(f"if {pc} <= {k}:")
@@ -126,7 +133,9 @@ class Stmts:
         self._ids += 1
         return Frame(kind, self._ids)
 
-    def _open(self, frame: Frame, head: str) -> None:
+    def _open(self, frame: Frame, head: str, where: SourceLocation) -> None:
+        """Open ``frame``'s Python loop; each pass counts on the loop meter, which names
+        ``where`` (the SCL loop, or the first label of a list) when it aborts the scan."""
         b = self.b
         if len(self.frames) >= MAX_PYTHON_LOOPS or b.indent > 60:
             raise Problem("E204", "loops and labelled statement lists nested too deeply", b.loc)
@@ -134,7 +143,7 @@ class Stmts:
         b.indent += 1
         self.frames.append(frame)
         b.emit("_M.left -= 1")
-        b.emit(f"if _M.left < 0: _M.over(ctx, {b.label!r})")
+        b.emit(f"if _M.left < 0: _M.over(ctx, {b.label!r}, {b.where(where)})")
 
     def _close(self, frame: Frame) -> None:
         """End ``frame``'s loop; pass on the jumps that crossed it."""
@@ -212,12 +221,12 @@ class Stmts:
             self._for(s)
         elif isinstance(s, m.While):
             frame = self._frame("loop")
-            self._open(frame, f"while {b.exprs.cond(s.cond)}:")
+            self._open(frame, f"while {b.exprs.cond(s.cond)}:", s.loc)
             self.body(s.body)
             self._close(frame)
         elif isinstance(s, m.Repeat):
             frame = self._frame("loop")
-            self._open(frame, "while True:")
+            self._open(frame, "while True:", s.loc)
             self.body(s.body)
             b.loc = s.loc
             test = f"if {b.exprs.cond(s.cond)}: break"
@@ -246,17 +255,8 @@ class Stmts:
 
     def _if(self, s: m.If) -> None:
         b = self.b
-        for k, (cond, body) in enumerate(s.branches):
-            b.loc = cond.loc
-            b.emit(f"{'if' if k == 0 else 'elif'} {b.exprs.cond(cond)}:")
-            b.indent += 1
-            self.body(body)
-            b.indent -= 1
-        if s.orelse is not None:
-            b.emit("else:")
-            b.indent += 1
-            self.body(s.orelse)
-            b.indent -= 1
+        arms = [(cond.loc, partial(b.exprs.cond, cond), body) for cond, body in s.branches]
+        self._chain(arms, s.orelse)
 
     def _case(self, s: m.Case) -> None:
         b = self.b
@@ -265,24 +265,66 @@ class Stmts:
             raise Problem("E242", f"a CASE selector is an INT or DINT, not {sel.type}", s.loc)
         var = b.temp("c")
         b.emit(f"{var} = {sel.src}")
-        taken: list[tuple[int, int]] = []
-        for k, arm in enumerate(s.arms):
+        taken: list[tuple[int, int]] = []  # sorted, disjoint: a look-up per value
+        arms: list[tuple[SourceLocation, Callable[[], str], tuple[m.Stmt, ...]]] = []
+        for arm in s.arms:
             tests = []
             for lo_lit, hi_lit in arm.values:
                 lo, hi = self._case_value(lo_lit, sel.type), self._case_value(hi_lit, sel.type)
-                if lo > hi or any(lo <= h and l <= hi for l, h in taken):  # noqa: E741
+                at = bisect.bisect_left(taken, (lo, hi))
+                before, after = taken[at - 1 : at], taken[at : at + 1]
+                if lo > hi or any(h >= lo for _, h in before) or any(l <= hi for l, _ in after):  # noqa: E741
                     said = _said(lo_lit, lo) if lo_lit is hi_lit else f"{lo}..{hi}"
                     raise Problem("E242", f"CASE value {said} is empty or listed twice", lo_lit.loc)
-                taken.append((lo, hi))
+                taken.insert(at, (lo, hi))
                 tests.append(f"{var} == {lo}" if lo == hi else f"{lo} <= {var} <= {hi}")
-            b.emit(f"{'if' if k == 0 else 'elif'} {' or '.join(tests)}:")
+            where = arm.values[0][0].loc if arm.values else s.loc
+            arms.append((where, _given(" or ".join(tests)), arm.body))
+        if not s.arms and s.orelse is not None:
+            arms.append((s.loc, _given("True"), s.orelse))
+        self._chain(arms, s.orelse if s.arms else None)
+
+    def _chain(
+        self,
+        arms: Sequence[tuple[SourceLocation, Callable[[], str], tuple[m.Stmt, ...]]],
+        orelse: tuple[m.Stmt, ...] | None,
+    ) -> None:
+        """``if``/``elif``/``else`` of IF's and CASE's arms, at most ``CHAIN`` to one Python
+        chain: the next ones run behind a flag set when none of a chain's tests held."""
+        b = self.b
+        groups = [arms[k : k + CHAIN] for k in range(0, len(arms), CHAIN)]
+        base = b.indent
+        flag = b.temp("e") if len(groups) > 1 else ""
+        if flag:
+            b.emit(f"{flag} = False")
+        try:
+            for g, group in enumerate(groups):
+                if g:
+                    b.emit(f"if {flag}:")
+                    b.indent = base + 1
+                    b.emit(f"{flag} = False")
+                self._arms(group)
+                if g < len(groups) - 1:
+                    b.emit("else:")
+                    b.emit(f"    {flag} = True")
+                elif orelse is not None:
+                    b.emit("else:")
+                    b.indent += 1
+                    self.body(orelse)
+                b.indent = base
+        finally:
+            b.indent = base
+
+    def _arms(
+        self, group: Sequence[tuple[SourceLocation, Callable[[], str], tuple[m.Stmt, ...]]]
+    ) -> None:
+        """One Python ``if``/``elif`` chain of ``group``'s tests and bodies."""
+        b = self.b
+        for k, (loc, test, body) in enumerate(group):
+            b.loc = loc
+            b.emit(f"{'if' if k == 0 else 'elif'} {test()}:")
             b.indent += 1
-            self.body(arm.body)
-            b.indent -= 1
-        if s.orelse is not None:
-            b.emit("else:" if s.arms else "if True:")
-            b.indent += 1
-            self.body(s.orelse)
+            self.body(body)
             b.indent -= 1
 
     def _case_value(self, value: m.CaseValue, t: ty.SclType) -> int:
@@ -339,7 +381,7 @@ class Stmts:
         incr = var.store(checked(f"{var.get} + {step}", t.kind))
         frame.cont = [incr]
         first = len(b.lines)
-        self._open(frame, f"while {test}:")
+        self._open(frame, f"while {test}:", s.loc)
         self.body(s.body)
         b.emit(incr)
         self._close(frame)
@@ -418,6 +460,11 @@ class Stmts:
 def _simple(place: Place) -> bool:
     """A variable held by the block (not an operand in memory or an element)."""
     return place.get.startswith(("t_", "V[", "P[", "P.get(")) and place.get.count("[") <= 1
+
+
+def _given(test: str) -> Callable[[], str]:
+    """A test already made, as ``Stmts._chain`` takes it."""
+    return lambda: test
 
 
 def _said(value: m.CaseValue, v: int) -> str:

@@ -25,6 +25,7 @@ from typing import TypeVar
 import msgspec
 import zenoh
 
+from s7graph.sequencer.change.base import MAX_SOURCE
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.cycle_text import cycle_lines
 from s7graph.web.bus.protocol import Command, CommandReply, CpuStatus, StepStateUpdate
@@ -217,6 +218,12 @@ def download_command(
     except (OSError, UnicodeDecodeError) as exc:
         where = getattr(exc, "filename", None) or chart
         return _fail(f"cannot read {where}: {getattr(exc, 'strerror', None) or exc}")
+    for path, text in [(chart, source), *((p, sources[p.name]) for p in blocks)]:
+        if len(text) > MAX_SOURCE:
+            return _fail(
+                f"{path}: {len(text):,} characters; a download carries at most {MAX_SOURCE:,} "
+                "a file (split a source of blocks into several)"
+            )
     sent: dict[str, str] | msgspec.UnsetType = sources or msgspec.UNSET
     with _logged_in(net, fb=fb, user=user) as shell:
         if isinstance(shell, int):
@@ -266,7 +273,10 @@ def _refused(op: str, reply: CommandReply) -> int:
     """A reply not *applied*: refused, or applied but not confirmed durable (its reason
     starts so)."""
     how = "" if reply.reason.startswith("not confirmed: ") else "refused: "
-    print(f"s7graph: {op} {how}{reply.reason}", file=sys.stderr)
+    said = f"{op} {how}{reply.reason}"
+    if reply.reason.startswith(f"{op} refused: "):  # the CPU said it already
+        said = reply.reason
+    print(f"s7graph: {said}", file=sys.stderr)
     for line in reply.lines:
         print(f"  {line}", file=sys.stderr)
     return 1

@@ -41,6 +41,7 @@ from s7graph.web.harness.scl import (
     SclLoadError,
     SclSources,
     compile_sources,
+    compile_texts,
     read_source,
 )
 
@@ -63,7 +64,8 @@ def check_scl_command(
 ) -> int:
     """Print the diagnostics of an SCL source and a summary; return the exit status.
     ``blocks``: sources compiled before it whose FBs and FCs it may call (their errors are
-    printed and counted, the source itself not checked then)."""
+    printed and counted, the source itself not checked then); a clean source is also refused
+    as ``run`` refuses it beside them (a DB of theirs made an instance, a block twice)."""
     try:
         text, table = read_source(source), _symbols(symbols)
         known = compile_sources(blocks, table)
@@ -75,6 +77,12 @@ def check_scl_command(
         text, str(source), blocks=[*sfb.SYSTEM_BLOCKS, *_callable(known)], symbols=table
     )
     lines = known.warnings + [format_diagnostic(d) for d in found]
+    if blocks and not any(d.is_error for d in found):
+        named = [*zip(known.files, known.texts, strict=True), (str(source), text)]
+        try:  # what ``run`` refuses beside the sources: a DB written twice, a DB made an instance
+            compile_texts(named, table)
+        except SclLoadError as exc:
+            lines += [line for line in exc.lines if ": warning" not in line]
     return _summary(source, lines)
 
 

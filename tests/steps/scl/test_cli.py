@@ -84,7 +84,7 @@ def test_sim_of_a_program_that_hangs_ends_with_the_stop(
     assert main([*args, "--cycles", "5"]) == 1
     captured = capsys.readouterr()
     assert len(captured.out.splitlines()) == 2
-    assert "cycle 1: the CPU went to STOP: OB1: aborted: OB1: a loop still running" in captured.err
+    assert "cycle 1: the CPU went to STOP: OB1: aborted: a loop still running" in captured.err
 
 
 def test_sim_of_a_broken_source_prints_its_diagnostics_and_exits_2(
@@ -110,3 +110,23 @@ def test_check_prints_every_syntax_error_of_a_source(
         f"{scl}:5:10",
     ]
     assert out[-1] == f"{scl}: 3 errors, 0 warnings"
+
+
+def test_check_with_blocks_refuses_what_run_refuses_beside_them(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """An FB called with a DB another source declares is refused by ``check`` as by ``run``
+    (docs/scl.md, "On the command line")."""
+    lib, prog = tmp_path / "lib.scl", tmp_path / "prog.scl"
+    lib.write_text("DATA_BLOCK DB20 STRUCT x : INT; END_STRUCT BEGIN END_DATA_BLOCK\n")
+    prog.write_text(
+        "FUNCTION_BLOCK FB17\nVAR n : INT; END_VAR\n  n := n + 1;\nEND_FUNCTION_BLOCK\n"
+        "ORGANIZATION_BLOCK OB1\n  FB17.DB20();\nEND_ORGANIZATION_BLOCK\n"
+    )
+    assert main(["check", str(prog)]) == 0
+    capsys.readouterr()
+    assert main(["check", str(prog), "--blocks", str(lib)]) == 2
+    assert capsys.readouterr().out.splitlines() == [
+        f"{prog}: error: DB20, the instance DB of FB17, is a DB of {lib}:1:12",
+        f"{prog}: 1 error, 0 warnings",
+    ]

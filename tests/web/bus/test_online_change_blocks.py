@@ -262,3 +262,35 @@ def test_the_command_carries_at_most_8_sources_and_old_senders_need_none() -> No
     assert checked(Download(fb="Seq", args=DownloadArgs(source=CHART, blocks=eight)))
     old = make_command(op="download", fb="Seq", args={"source": CHART})
     assert isinstance(old, Download) and "blocks" not in old.args
+
+
+def test_a_source_over_the_limit_is_refused_before_the_bus_in_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A download carries at most 1,000,000 characters a file: ``s7graph download`` says so,
+    naming the file, before it joins the bus."""
+    monkeypatch.setenv("S7GRAPH_PASSWORD", "unused")
+    chart, big = tmp_path / "seq.s7g", tmp_path / "fb17.scl"
+    chart.write_text(CHART, encoding="utf-8")
+    big.write_text(BLOCKS + "// " + "x" * 1_000_000 + "\n", encoding="utf-8")
+    endpoint = f"unixsock-stream/{tmp_path}/none.sock"
+    args = ["download", str(chart), "--blocks", str(big), "--connect", endpoint, "--user", "eng"]
+    assert main(args) == 2
+    assert capsys.readouterr().err == (
+        f"s7graph: error: {big}: 1,000,137 characters; a download carries at most 1,000,000 a "
+        "file (split a source of blocks into several)\n"
+    )
+
+
+def test_a_refusal_the_cpu_words_itself_is_printed_once(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """The compiler's time limit says ``download refused: …`` itself: printed as it is, not
+    as ``download refused: download refused: …``."""
+    from s7graph.web.cli.remote import _refused
+
+    why = "download refused: not compiled within 20 s (the time limit)"
+    assert _refused("download", CommandReply(applied=False, reason=why)) == 1
+    assert capsys.readouterr().err == f"s7graph: {why}\n"
+    assert _refused("download", CommandReply(applied=False, reason="no chart")) == 1
+    assert capsys.readouterr().err == "s7graph: download refused: no chart\n"
