@@ -65,6 +65,7 @@ EVENT_TEXTS: dict[int, str] = {
     EventId.IO_ACCESS_WRITE: "I/O access error when writing",
     EventId.USERS_FILE_EXPOSED: "The users file is readable by others: logins refused",
     EventId.USERS_FILE_PROTECTED: "The users file is private again: logins taken",
+    EventId.STATE_RENEWED: "State file written anew: it was deleted or damaged",
 }
 """The text of each event ID the runtime writes."""
 

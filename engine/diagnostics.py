@@ -73,6 +73,9 @@ class EventId(IntEnum):
     """Ours: the users file became readable by others; logins are refused until it is not."""
     USERS_FILE_PROTECTED = 0x5F06
     """Ours: the users file is no longer readable by others; logins are taken again."""
+    STATE_RENEWED = 0x5F07
+    """Ours: the state file was deleted, replaced or damaged while the CPU ran; it was
+    written anew from the running CPU (``engine/renew.py``)."""
 
 
 class DiagnosticBuffer:

@@ -50,7 +50,14 @@ another process, a dropped instances table, an instance of another FB, a DB the 
 longer has, a malformed row (a diagnostics row too) or memory image
 (``engine/state_checks.py``), text that is not UTF-8 (a ``meta`` value by its key); a
 changed fingerprint lets the FB's ``state_format.adapt`` carry the data over (a GRAPH
-FB: by step number, ``sequencer/change/carry.py``) and reports what it could not keep.
+FB: by step number, ``sequencer/change/carry.py``) and reports what it could not keep. A
+file missing beside its ``-wal`` (or its ``.renew``) is refused, never started fresh; a
+full disk or a read-only folder is the disk's problem, not the file's: refused without
+``--fresh`` as the way out.
+
+**Rebuilt when lost.** A file deleted, replaced or damaged under the running CPU (or its
+``-wal`` deleted) is noticed at the next ``write`` (``StateWriteError.renew``) and built anew
+from a whole staging (``renew``, ``engine/renew.py``) — the CPU is not taken down.
 """
 
 from __future__ import annotations
@@ -71,9 +78,11 @@ import msgspec
 
 from s7graph.engine.blocks import FB, BlockKind, Decl, InstanceDB
 from s7graph.engine.cpu import Cpu
+from s7graph.engine.diagnostics import EventId
 from s7graph.engine.errors import S7Error
 from s7graph.engine.file_lock import try_lock
 from s7graph.engine.record import DiagEntry
+from s7graph.engine.renew import gone, ident, rebuild
 from s7graph.engine.restart import stop_blocker
 from s7graph.engine.rollup import ALARM_ROWS, ALARM_SUMMARY, Job, low_water, roll_alarms
 from s7graph.engine.state_checks import check_hot_image, check_memory_image, diag_entry
@@ -85,6 +94,7 @@ __all__ = [
     "AlarmEvent",
     "Batch",
     "LoadReport",
+    "RenewHooks",
     "StateFileError",
     "StateStore",
     "StateWriteError",
@@ -129,6 +139,21 @@ TIME_MARK_MS = 500.0
 _NOT_KEPT = {"program download", "no hot restart image saved"}
 """Hot-restart blockers that belong to one run, not to the state on disk."""
 _BUSY = (5, 6)  # SQLITE_BUSY, SQLITE_LOCKED: another connection holds the lock
+_DAMAGED = (11, 26)  # SQLITE_CORRUPT, SQLITE_NOTADB: the file was overwritten or cut
+_DISK = {
+    3: "no permission to open it or its write-ahead log",
+    8: "its disk or folder is read-only, or the file is",
+    10: "the disk failed to read or write it",
+    13: "the disk is full",
+    14: "it or its write-ahead log cannot be opened (a read-only folder?)",
+}
+"""SQLite's primary error codes that are the disk's or the folder's, not the file's: the file
+is not read, and the way out is never ``--fresh``."""
+_DISK_WAY_OUT = "{0}, then run again (the file itself was not found wrong)"
+_DISK_FIX = {
+    10: "free space on its disk or check the disk (the kernel's log: dmesg)",
+    13: "free space on its disk",
+}
 _OURS = {"meta", "instances", "diagnostics", "alarms", "parts", "audit"}
 _APPENDABLE = {"alarms", "audit"}
 _APPENDED: set[tuple[str, tuple[str, ...]]] = set()
@@ -183,13 +208,38 @@ class StateFileError(S7Error):
 
 class StateWriteError(S7Error):
     """Writing the state file failed (disk full, I/O error, locked): the first error;
-    ``busy`` when another connection holds the lock (worth a retry)."""
+    ``busy`` when another connection holds the lock (worth a retry); ``renew`` when the file
+    was deleted, replaced or damaged under the CPU (``StateStore.renew`` builds it anew)."""
 
-    def __init__(self, path: Path, problem: str, *, busy: bool = False) -> None:
+    def __init__(
+        self,
+        path: Path,
+        problem: str,
+        *,
+        busy: bool = False,
+        renew: bool = False,
+        committed: bool = False,
+    ) -> None:
         self.path = path
         self.problem = problem
         self.busy = busy
+        self.renew = renew
+        self.committed = committed
+        """The batch was committed to the file that is gone (the open connection still reads
+        it: a renewal copies its rows)."""
         super().__init__(f"{path}: cannot write the state: {problem}")
+
+
+@dataclass(frozen=True, slots=True)
+class RenewHooks:
+    """What another user of the file does when the store builds it anew
+    (``StateStore.renew``): ``schema(db)`` adds its tables and columns to the new file,
+    ``release()`` closes its own connections to the old one (before it goes aside),
+    ``reopen()`` opens them on the new one."""
+
+    schema: Callable[[sqlite3.Connection], None]
+    release: Callable[[], None]
+    reopen: Callable[[], None]
 
 
 @runtime_checkable
@@ -245,6 +295,8 @@ class Batch:
     written for their ``VOLATILE`` keys alone)."""
     staged_ns: int = 0
     """The CPU's clock when the batch was staged."""
+    full: bool = False
+    """It holds a whole staging (``stage(full=True)``): enough to build the file anew."""
 
     def __bool__(self) -> bool:
         return bool(
@@ -267,6 +319,7 @@ class Batch:
             raise ValueError("a batch with instance DBs still to encode cannot take another")
         self.unencoded = later.unencoded
         self.time_mark, self.staged_ns = later.time_mark, later.staged_ns
+        self.full = self.full or later.full
         self.upto = max(self.upto, later.upto)
         self.meta.update(later.meta)
         self.instances.update(later.instances)
@@ -365,17 +418,17 @@ class StateStore:
         written when it changes, which a warm restart would clear anyway."""
         self.interval_ns = None if interval_ms is None else int(interval_ms * 1_000_000)
         existed = self.path.exists()
-        if existed and self.path.is_file() and self.path.stat().st_size == 0:
-            raise StateFileError(self.path, "empty file (0 bytes), not a state file")
+        _check_path(self.path, existed)
         try:
-            self._db = sqlite3.connect(
-                self.path, check_same_thread=False, isolation_level=None, timeout=5.0
-            )
+            self._db = _connect(self.path)
         except sqlite3.Error as exc:
-            raise StateFileError(self.path, f"cannot open: {exc}") from None
+            raise _unreadable(self.path, exc) from None
+        self.renew_hooks: list[RenewHooks] = []
+        """Other users of the file, told when it is built anew (``renew``)."""
         try:
             self._held = _hold(self.path)
-            self._open(existed)
+            _open_file(self._db, self.path, existed, self.synchronous)
+            self._idents()
         except sqlite3.DatabaseError as exc:
             self._db.close()
             _let_go(self._held)
@@ -407,46 +460,6 @@ class StateStore:
         """Set by a writer: ``log_*`` rows wait for the next ``stage`` instead of being
         written at once, so they commit with the scan's state (and off the scan thread)."""
         self.saves = 0
-
-    def _open(self, existed: bool) -> None:
-        db = self._db
-        tables = {r[0] for r in db.execute("SELECT name FROM sqlite_master WHERE type='table'")}
-        if existed:
-            check = db.execute("PRAGMA quick_check").fetchone()
-            if check is None or check[0] != "ok":
-                raise StateFileError(self.path, f"damaged file ({check[0] if check else '?'})")
-            if not tables:
-                raise StateFileError(self.path, _NO_TABLES, way_out=_WAL_WAY_OUT.format(self.path))
-            if not tables & _OURS:
-                raise StateFileError(self.path, "an SQLite file, but not an s7graph state file")
-            if "instances" not in tables and _holds_state(db, tables):
-                raise StateFileError(
-                    self.path,
-                    "the instances table is gone (the instance DBs, a sequencer's "
-                    "position among them): an incomplete state",
-                )
-            if "instances" in tables:
-                columns = {r[1] for r in db.execute("PRAGMA table_info(instances)")}
-                if "state" in columns:
-                    raise StateFileError(self.path, "written by an older s7graph (no fingerprints)")
-            if "meta" in tables:
-                mark = _meta(db, self.path, "format")
-                if mark is not None and mark not in READABLE:
-                    raise StateFileError(self.path, f"unknown format {mark!r}")
-        if not existed:
-            db.execute("PRAGMA page_size=1024")  # a short row change writes one short page
-        db.execute("PRAGMA journal_mode=WAL")
-        db.execute(f"PRAGMA synchronous={self.synchronous}")  # FULL: fsync at every commit
-        db.executescript(_SCHEMA)
-        for table, added in (
-            ("alarms", _ADDED_ALARM_COLUMNS),
-            ("diagnostics", _ADDED_DIAG_COLUMNS),
-        ):
-            columns = {row[1] for row in db.execute(f"PRAGMA table_info({table})")}
-            for column, decl in added:
-                if column not in columns:  # a state file from before the column existed
-                    db.execute(f"ALTER TABLE {table} ADD COLUMN {column} {decl}")
-        db.execute("INSERT OR REPLACE INTO meta VALUES ('format', ?)", (FORMAT,))
 
     def _next_diag_seq(self) -> int:
         row = self._db.execute("SELECT MAX(seq) FROM diagnostics").fetchone()
@@ -539,6 +552,7 @@ class StateStore:
             return None
         if full:
             batch.meta["cycle"] = str(cpu.cycle)
+            batch.full = True
         return batch
 
     def encode_next(self, batch: Batch) -> bool:
@@ -605,24 +619,45 @@ class StateStore:
         self._last_ns = now
         return True
 
-    def save(self, cpu: Cpu, *, clean: bool | None = None) -> None:
+    def save(self, cpu: Cpu, *, clean: bool | None = None, before: Batch | None = None) -> None:
         """Write everything now (at startup and on stop); ``clean`` marks whether the run
         ended cleanly (True at a shutdown, False while running). A clean end writes the
         hot-restart image too: S7-400 may restart hot after a STOP by hand."""
         batch = self.stage(cpu, full=True) or Batch()
+        if before is not None:  # rows a writer could not write (``StoreWriter.left``)
+            before.merge(batch)
+            batch = before
         if clean is not None:
             batch.meta["clean"] = "1" if clean else "0"
         if clean and not self.hot:  # a clean STOP allows a manual hot restart (as on S7-400)
             batch.meta["hot_memory"] = _dumps(cpu.mem.hot_snapshot())
-        self.write(batch)
+        batch.full = True
+        try:
+            self.write(batch)
+        except StateWriteError as exc:
+            if not exc.renew:
+                raise
+            note = self.renew(batch, exc.problem)
+            cpu.diagnostics.record(cpu.clock.now_ns(), EventId.STATE_RENEWED, "", note)
 
     # ---- writing ---------------------------------------------------------------------------
 
     def write(self, batch: Batch) -> None:
-        """Commit ``batch`` as one transaction; ``StateWriteError`` names the first error."""
+        """Commit ``batch`` as one transaction; ``StateWriteError`` names the first error
+        (``renew`` set when the file was deleted, replaced or damaged: ``renew``)."""
         if not batch:
             return
-        db = self._db
+        lost = gone(self.path, self._ident, self._wal_ident)
+        if lost is not None:
+            raise StateWriteError(self.path, lost[0], renew=lost[1])
+        self._alarm_rows = self._commit(self._db, batch)
+        self.saves += 1
+        lost = gone(self.path, self._ident, self._wal_ident)  # gone while it was committed
+        if lost is not None:
+            raise StateWriteError(self.path, lost[0], renew=lost[1], committed=True)
+
+    def _commit(self, db: sqlite3.Connection, batch: Batch) -> int:
+        """``batch`` as one transaction on ``db``; the rows the alarm log holds then."""
         try:
             db.execute("BEGIN IMMEDIATE")
             if batch.meta:
@@ -656,7 +691,7 @@ class StateStore:
                 db.executemany(f"INSERT INTO {table} ({', '.join(columns)}) VALUES ({marks})", rows)
             for job in batch.jobs:
                 _run_job(db, job)
-            alarms = self._bound_alarms(batch)
+            alarms = self._bound_alarms(db, batch)
             db.execute("COMMIT")
         except sqlite3.Error as exc:
             if db.in_transaction:
@@ -665,17 +700,31 @@ class StateStore:
             code = int(getattr(exc, "sqlite_errorcode", 0) or 0) & 0xFF
             name = getattr(exc, "sqlite_errorname", "")
             problem = f"{exc} ({name})" if name else str(exc)
-            raise StateWriteError(self.path, problem, busy=code in _BUSY) from None
-        self._alarm_rows = alarms
-        self.saves += 1
+            if code in _DAMAGED:
+                problem = f"the file was damaged while the CPU ran: {problem}"
+            raise StateWriteError(
+                self.path, problem, busy=code in _BUSY, renew=code in _DAMAGED
+            ) from None
+        return alarms
 
-    def _bound_alarms(self, batch: Batch) -> int:
+    def renew(self, batch: Batch, why: str) -> str:
+        """Build the file anew after ``why`` (``engine/renew.py``) with ``batch``, which must
+        hold a whole staging (``stage(full=True)``) and every row still waiting; what
+        happened, in words. ``StateWriteError`` when it cannot be built."""
+        return _renewed(self, batch, why)
+
+    def _idents(self) -> None:
+        """Remember which files the connection writes (``engine/renew.py``, ``gone``)."""
+        self._ident = ident(self.path)
+        self._wal_ident = ident(Path(f"{self.path}-wal"))
+
+    def _bound_alarms(self, db: sqlite3.Connection, batch: Batch) -> int:
         """Roll the oldest message events into ``alarm_summary`` if ``batch`` takes the log
         over ``alarm_limit`` (in its transaction); the rows the log holds then."""
         added = len(batch.alarms) + sum(1 for row in batch.appended if row[0] == "alarms")
         rows = self._alarm_rows + added
         if added and rows > self.alarm_limit:
-            rows -= roll_alarms(self._db, low_water(self.alarm_limit))
+            rows -= roll_alarms(db, low_water(self.alarm_limit))
         return rows
 
     def meta(self, key: str) -> str | None:
@@ -834,6 +883,139 @@ class StateStore:
         tests and tools reading the file."""
         row = self._db.execute("SELECT data FROM instances WHERE number=?", (number,)).fetchone()
         return None if row is None else unpack_instance(row[0])
+
+
+def _open_file(db: sqlite3.Connection, path: Path, existed: bool, synchronous: str) -> None:
+    """Check an existing file (``StateFileError``), then set it up: WAL, ``synchronous``,
+    the schema."""
+    if existed:
+        _check_existing(db, path)
+    else:
+        db.execute("PRAGMA page_size=1024")  # a short row change writes one short page
+    db.execute("PRAGMA journal_mode=WAL")
+    db.execute(f"PRAGMA synchronous={synchronous}")  # FULL: fsync at every commit
+    _schema(db)
+
+
+def _schema(db: sqlite3.Connection) -> None:
+    """The tables and columns this code writes (those missing added) and the format mark."""
+    db.executescript(_SCHEMA)
+    for table, added in (
+        ("alarms", _ADDED_ALARM_COLUMNS),
+        ("diagnostics", _ADDED_DIAG_COLUMNS),
+    ):
+        columns = {row[1] for row in db.execute(f"PRAGMA table_info({table})")}
+        for column, decl in added:
+            if column not in columns:  # a state file from before the column existed
+                db.execute(f"ALTER TABLE {table} ADD COLUMN {column} {decl}")
+    db.execute("INSERT OR REPLACE INTO meta VALUES ('format', ?)", (FORMAT,))
+
+
+def _check_existing(db: sqlite3.Connection, path: Path) -> None:
+    """``StateFileError`` for an existing file that is not a state file this code trusts."""
+    tables = {r[0] for r in db.execute("SELECT name FROM sqlite_master WHERE type='table'")}
+    check = db.execute("PRAGMA quick_check").fetchone()
+    if check is None or check[0] != "ok":
+        raise StateFileError(path, f"damaged file ({check[0] if check else '?'})")
+    if not tables:
+        raise StateFileError(path, _NO_TABLES, way_out=_WAL_WAY_OUT.format(path))
+    if not tables & _OURS:
+        raise StateFileError(path, "an SQLite file, but not an s7graph state file")
+    if "instances" not in tables and _holds_state(db, tables):
+        raise StateFileError(
+            path,
+            "the instances table is gone (the instance DBs, a sequencer's "
+            "position among them): an incomplete state",
+        )
+    if "instances" in tables:
+        columns = {r[1] for r in db.execute("PRAGMA table_info(instances)")}
+        if "state" in columns:
+            raise StateFileError(path, "written by an older s7graph (no fingerprints)")
+    if "meta" in tables:
+        mark = _meta(db, path, "format")
+        if mark is not None and mark not in READABLE:
+            raise StateFileError(path, f"unknown format {mark!r}")
+
+
+def _renewed(store: StateStore, batch: Batch, why: str) -> str:
+    """``StateStore.renew``: the file rebuilt, the store's connection and lock moved to it,
+    the other users told (``RenewHooks``)."""
+
+    def release() -> None:
+        for hooks in store.renew_hooks:
+            hooks.release()
+        store._db.close()
+        _let_go(store._held)
+        store._held = None
+
+    def schema(db: sqlite3.Connection) -> None:
+        _schema(db)
+        for hooks in store.renew_hooks:
+            hooks.schema(db)
+
+    try:
+        aside, lost = rebuild(
+            store._db,
+            store.path,
+            schema=schema,
+            fill=lambda db: store._commit(db, batch),
+            release=release,
+        )
+        store._db = _connect(store.path)
+        store._db.execute("PRAGMA journal_mode=WAL")
+        store._db.execute(f"PRAGMA synchronous={store.synchronous}")
+        store._held = _hold(store.path)
+        store._idents()
+        store._alarm_rows = int(store._db.execute("SELECT COUNT(*) FROM alarms").fetchone()[0])
+    except (OSError, sqlite3.Error, StateFileError, StateWriteError) as exc:
+        words = exc.problem if isinstance(exc, StateFileError | StateWriteError) else exc
+        if isinstance(exc, OSError) and exc.strerror:
+            words = exc.strerror
+        raise StateWriteError(
+            store.path, f"{why}, and a new state file could not be built: {words}"
+        ) from None
+    for hooks in store.renew_hooks:
+        hooks.reopen()
+    store.saves += 1
+    kept = f"; what was at its path is kept as {', '.join(aside)}" if aside else ""
+    unread = f"; not copied (unreadable): {', '.join(lost)}" if lost else ""
+    return f"{why}: the state file was written anew from the running CPU{kept}{unread}"
+
+
+def _connect(path: Path) -> sqlite3.Connection:
+    return sqlite3.connect(path, check_same_thread=False, isolation_level=None, timeout=5.0)
+
+
+def _check_path(path: Path, existed: bool) -> None:
+    """``StateFileError`` for what is at ``path`` before SQLite opens it: an empty file, a
+    folder, or a write-ahead log without its file (deleted while a run wrote it: SQLite
+    would start a new file beside it and the state in the log would be lost)."""
+    if existed and path.is_dir():
+        raise StateFileError(
+            path,
+            "a directory, not a state file",
+            way_out="give --state the path of a file (or move the directory away)",
+        )
+    if existed and path.is_file() and path.stat().st_size == 0:
+        raise StateFileError(path, "empty file (0 bytes), not a state file")
+    renewed = Path(f"{path}.renew")
+    if not existed and renewed.is_file():
+        raise StateFileError(
+            path,
+            f"missing, but {renewed.name} is there: the run that wrote it ended while it "
+            "built the state file anew (engine/renew.py)",
+            way_out=f"rename {renewed} to {path.name} (the state it was built with), or start "
+            f"anew with --fresh",
+        )
+    wal = Path(f"{path}-wal")
+    if not existed and wal.is_file() and wal.stat().st_size > 0:
+        raise StateFileError(
+            path,
+            f"missing, but its write-ahead log {wal.name} is there: the state file was "
+            "deleted (or moved) while a run wrote it, and the log alone cannot be read",
+            way_out=f"put the file back beside {wal.name}, or start anew with --fresh "
+            f"(keeps {wal.name} as {path}.old-N-wal)",
+        )
 
 
 class _NoLock:
@@ -1092,12 +1274,26 @@ def _let_go(key: tuple[int, int] | None) -> None:
             os.close(held[0])
 
 
-def _unreadable(path: Path, exc: sqlite3.DatabaseError) -> StateFileError:
+def _unreadable(path: Path, exc: sqlite3.Error) -> StateFileError:
     """The refusal of a file SQLite could not open: in use by another process (locked), or
     not readable."""
-    if int(getattr(exc, "sqlite_errorcode", 0) or 0) & 0xFF in _BUSY:
+    code = int(getattr(exc, "sqlite_errorcode", 0) or 0) & 0xFF
+    if code in _BUSY:
         return StateFileError(
             path, f"in use by another process ({exc}): it was not read", way_out=_IN_USE_WAY_OUT
+        )
+    if code in _DISK or (code == 0 and "unable to open" in str(exc)):
+        if not path.parent.is_dir():
+            return StateFileError(
+                path,
+                f"its folder {path.parent} does not exist",
+                way_out="create the folder, or give --state a path in one that exists",
+            )
+        problem = _DISK.get(code, _DISK[14])
+        return StateFileError(
+            path,
+            f"{problem} ({exc}): it was not read",
+            way_out=_DISK_WAY_OUT.format(_DISK_FIX.get(code, "make it and its folder writable")),
         )
     return StateFileError(path, f"not a readable state file ({sqlite_words(exc)})")
 

@@ -295,6 +295,9 @@ class Runner:
         self.end_on_stop = end_on_stop
         self.on_stop = on_stop
         """Called with the reason (one line) when the CPU goes to STOP by itself."""
+        self.on_note: Callable[[str], object] | None = None
+        """Called (in the scan thread) with what the user should know that is not a STOP:
+        the state file was written anew (``engine/renew.py``)."""
         self.grace_s = grace_s
         self.exec_stats = CycleStatistics()
         """Wall time spent inside ``scan()`` (ns)."""
@@ -552,8 +555,13 @@ class Runner:
         writer = self.writer
         if self.store is None or writer is None:
             return
-        batch = self.store.stage(self.cpu, upto=self.scans, defer=True)
+        full = writer.wants_full  # the file is built anew: with the whole state
+        batch = self.store.stage(self.cpu, upto=self.scans, full=full, defer=not full)
         writer.submit(batch, self.scans, until=until)
+        for note in writer.take_renewals():
+            self.cpu.diagnostics.record(self.cpu.clock.now_ns(), EventId.STATE_RENEWED, "", note)
+            if self.on_note is not None:
+                self.on_note(note)
         if writer.error is not None and self.write_error is None:
             self.write_error = writer.error
             self.cpu.stop_by_error(
@@ -609,6 +617,13 @@ class Runner:
             return
         self.writer.when_durable(mark, fn)
 
+    def write_problem(self) -> str | None:
+        """Why nothing more reaches the state file (a write error), in words; None: no such
+        error (a commit may still be late)."""
+        writer = self.writer
+        error = self.write_error or (writer.error if writer is not None else None)
+        return str(error) if error is not None else None
+
     def wait_durable(self, mark: int, timeout: float | None = None) -> bool:
         """Block (never in the scan thread) until scan ``mark`` is on disk."""
         return self.writer is None or self.writer.wait(mark, timeout)
@@ -639,13 +654,15 @@ class Runner:
         if self.on_record is not None:
             self.on_record(record)
         writer, self.writer = self.writer, None
+        left = None
         if writer is not None:
             writer.close()  # commits what is pending
-            if writer.error is not None and self.write_error is None:
+            left = writer.left  # the file to be built anew: the last save does it
+            if writer.error is not None and self.write_error is None and left is None:
                 self.write_error = writer.error
         if self.store is not None and self.write_error is None:
             try:
-                self.store.save(self.cpu, clean=True)
+                self.store.save(self.cpu, clean=True, before=left)
             except StateWriteError as exc:
                 self.write_error = exc
         self._done.set()

@@ -94,6 +94,15 @@ class StoreWriter:
         """Mark of the last scan whose state is on disk."""
         self.error: StateWriteError | None = None
         """The first write error; once set, nothing more is written."""
+        self._renewing: str | None = None
+        """Why the file must be built anew (deleted, replaced, damaged: ``engine/renew.py``);
+        the rows wait for a whole staging (``wants_full``) to build it with."""
+        self.wants_full = False
+        """The next staging must be whole (``stage(full=True)``): the file is built anew."""
+        self._renewals: list[str] = []
+        self.left: Batch | None = None
+        """The rows it could not write when it closed while the file was to be built anew:
+        the store's last ``save`` builds it with them (``Runner.shutdown``)."""
         self.commits = 0
         self.rows = 0
         self.busy_retries = 0
@@ -117,6 +126,14 @@ class StoreWriter:
         the disk. A batch with instance DBs still to encode (``stage(defer=True)``) is
         encoded by the encoder thread up to ``until`` (``time.monotonic``; None: not
         there), the rest by ``finish()``, which must come before the next ``submit``."""
+        if batch is not None and batch.full:
+            with self._cond:
+                carried, self._carried = self._carried, None
+                if carried is not None:  # its rows, under the whole staging
+                    carried.unencoded = []
+                    carried.merge(batch)
+                    batch = carried
+                self.wants_full = False
         if batch is not None and batch.unencoded:
             with self._cond:
                 if self._staging is not None:
@@ -285,19 +302,33 @@ class StoreWriter:
         """Closed, with nothing left to encode (``_cond`` held)."""
         return self._closed and (self._staging is None or self.error is not None)
 
+    def _writable(self) -> bool:
+        """A batch waiting that can be written now (``_cond`` held): while the file is to be
+        built anew, only one holding a whole staging."""
+        return self._pending is not None and (self._renewing is None or self._pending.full)
+
+    def take_renewals(self) -> list[str]:
+        """What happened each time the file was built anew since the last call, in words."""
+        with self._cond:
+            taken, self._renewals = self._renewals, []
+        return taken
+
     def _loop(self) -> None:
         while True:
             with self._cond:
-                while self._pending is None and not self._ending() and not self._due():
+                while not self._writable() and not self._ending() and not self._due():
                     self._cond.wait()
                 if self.error is not None:
                     batch = None
                     self._pending = None
-                else:
+                elif self._writable() or self._ending():
                     batch, self._pending = self._pending, None
+                else:
+                    batch = None
                 self._writing = batch is not None
                 closing = self._closed
-            error = self._commit(batch) if batch is not None else None
+                renewing = self._renewing
+            error = self._write(batch, renewing) if batch is not None else None
             with self._cond:
                 self._writing = False
                 if error is not None and error.busy and batch is not None and not closing:
@@ -305,9 +336,21 @@ class StoreWriter:
                         batch.merge(self._pending)
                     self._pending = batch  # a foreign lock: keep the rows, try again
                     self.busy_retries += 1
+                elif error is not None and error.renew and batch is not None and not closing:
+                    if error.committed:  # its rows are in the old file: copied from there
+                        batch = Batch(upto=batch.upto)
+                    if self._pending is not None:
+                        batch.merge(self._pending)
+                    self._pending = batch  # kept for the new file, with a whole staging
+                    self._renewing = error.problem
+                    self.wants_full = True
                 elif error is not None:
+                    if error.renew and batch is not None:  # for the store's last save
+                        self.left = Batch(upto=batch.upto) if error.committed else batch
                     self.error = self.error or error
                 elif batch is not None:
+                    if renewing is not None and batch.full:
+                        self._renewing = None
                     later = self._in_flight()
                     self.committed = max(self.committed, batch.upto if later else self._latest)
                 elif self._idle():
@@ -321,6 +364,23 @@ class StoreWriter:
                 return
             if busy:
                 time.sleep(_BUSY_RETRY_S)
+
+    def _write(self, batch: Batch, renewing: str | None) -> StateWriteError | None:
+        """Commit ``batch``; or, while the file is to be built anew and ``batch`` holds a
+        whole staging, build it (``StateStore.renew``)."""
+        if renewing is None:
+            return self._commit(batch)
+        if not batch.full:  # closing before a whole staging came: it is the store's now
+            return StateWriteError(self.store.path, renewing, renew=True)
+        try:
+            note = self.store.renew(batch, renewing)
+        except StateWriteError as exc:
+            return exc
+        except Exception as exc:  # anything else from the disk is still a write failure
+            return StateWriteError(self.store.path, f"{renewing}: {exc}")
+        with self._cond:
+            self._renewals.append(note)
+        return None
 
     def _commit(self, batch: Batch) -> StateWriteError | None:
         started = time.perf_counter_ns()

@@ -421,3 +421,53 @@ def test_two_stores_of_one_process_may_share_a_file(tmp_path: Path) -> None:
     assert first.has_state() and second.has_state()
     first.close()
     second.close()
+
+
+def test_a_write_ahead_log_without_its_file_is_refused_not_started_fresh(tmp_path: Path) -> None:
+    """The file deleted while a run wrote it leaves its ``-wal``: SQLite would start a new,
+    empty file beside it and the state would be gone without a word."""
+    path = _written(tmp_path / "s.sqlite")
+    wal = Path(f"{path}-wal")
+    wal.write_bytes(os.urandom(4096))
+    path.unlink()
+    with pytest.raises(StateFileError) as info:
+        StateStore(path)
+    assert info.value.problem.startswith("missing, but its write-ahead log s.sqlite-wal is there")
+    assert "--fresh" in info.value.way_out and "put the file back" in info.value.way_out
+    assert not path.exists() and wal.stat().st_size == 4096
+
+
+def test_a_directory_or_a_missing_folder_is_refused_without_pointing_to_fresh(
+    tmp_path: Path,
+) -> None:
+    for path, problem in (
+        (tmp_path, "a directory, not a state file"),
+        (tmp_path / "nothere" / "s.sqlite", f"its folder {tmp_path / 'nothere'} does not exist"),
+    ):
+        with pytest.raises(StateFileError) as info:
+            StateStore(path)
+        assert info.value.problem == problem
+        assert info.value.way_out and "--fresh" not in info.value.way_out
+
+
+def test_a_state_file_being_built_anew_when_its_run_ended_is_refused_not_started_fresh(
+    tmp_path: Path,
+) -> None:
+    """Killed between setting the old file aside and renaming the new one in
+    (``engine/renew.py``): the new one waits as ``FILE.renew``."""
+    built = _written(tmp_path / "s.sqlite.renew")
+    path = tmp_path / "s.sqlite"
+    with pytest.raises(StateFileError) as info:
+        StateStore(path)
+    assert info.value.problem.startswith("missing, but s.sqlite.renew is there")
+    assert info.value.way_out.startswith(f"rename {built} to s.sqlite")
+    os.rename(built, path)
+    assert _loads(path)
+
+
+def _loads(path: Path) -> bool:
+    store = StateStore(path)
+    try:
+        return store.load(_cpu()) is not None
+    finally:
+        store.close()

@@ -37,12 +37,13 @@ import json
 import operator
 import sqlite3
 import threading
+import urllib.parse
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Final, TypeVar
 
-from s7graph.engine.persistence import sqlite_words
+from s7graph.engine.persistence import RenewHooks, sqlite_words
 from s7graph.engine.rollup import Job, day_of, low_water, roll
 from s7graph.engine.state_checks import stored_integer
 
@@ -216,6 +217,16 @@ def _migrate(db: sqlite3.Connection) -> None:
             db.execute(f"ALTER TABLE audit ADD COLUMN {column} {decl}")
 
 
+def _connect(target: Path | str, *, uri: bool = False) -> sqlite3.Connection:
+    """A connection of the store (WAL, synced as the state store's: durable commits)."""
+    db = sqlite3.connect(
+        target, check_same_thread=False, isolation_level=None, timeout=5.0, uri=uri
+    )
+    db.execute("PRAGMA journal_mode=WAL")
+    db.execute("PRAGMA synchronous=FULL")
+    return db
+
+
 def _last_id(db: sqlite3.Connection) -> int:
     """The highest audit row id ever given (AUTOINCREMENT never reuses one)."""
     row = db.execute("SELECT MAX(id) FROM audit").fetchone()
@@ -327,12 +338,15 @@ class AuditStore:
         self.max_bytes = max_bytes
         self.lock = threading.RLock()
         """Guards the store; ``web/access/tally.py`` counts under it too (one lock: no
-        order to get wrong between the two)."""
-        self._db = sqlite3.connect(
-            self.path, check_same_thread=False, isolation_level=None, timeout=5.0
-        )
-        self._db.execute("PRAGMA journal_mode=WAL")
-        self._db.execute("PRAGMA synchronous=FULL")  # as the state store: durable commits
+        order to get wrong between the two). Never held while the file is read: the scan
+        thread takes it for each command's row (``record``), and a read waiting for a slow
+        disk would hold the scan up."""
+        self._conn_lock = threading.Lock()
+        """Guards the connection (taken after ``lock`` when both are)."""
+        self._db = _connect(self.path)
+        self._released = False
+        if state is not None:  # the run's store may build the file anew: follow it
+            state.renew_hooks.append(RenewHooks(_migrate, self._release, self._reopen))
         self._kept: set[int] = set()  # rows not to roll up (refusal windows still counting)
         self._rolling = False  # a roll-up is queued
         self.rolled = 0
@@ -344,8 +358,28 @@ class AuditStore:
             self._rows, self._bytes = int(rows or 0), int(size or 0)
 
     def close(self) -> None:
-        with self.lock:
+        with self.lock, self._conn_lock:
             self._db.close()
+
+    def _release(self) -> None:
+        """The state file is built anew: let the old one go (closed last, a connection would
+        delete the new file's ``-wal`` by name)."""
+        with self._conn_lock:
+            self._db.close()
+            self._released = True
+
+    def _reopen(self) -> None:
+        with self._conn_lock:
+            self._reader()
+
+    def _reader(self) -> sqlite3.Connection:
+        """The connection (``_conn_lock`` held): on the new state file if a renewal let the
+        old one go (never creating a file where there is none)."""
+        if self._released:
+            where = urllib.parse.quote(str(self.path.resolve()))
+            self._db = _connect(f"file:{where}?mode=rw", uri=True)
+            self._released = False
+        return self._db
 
     @property
     def deferred(self) -> bool:
@@ -361,9 +395,10 @@ class AuditStore:
             values = _ROW(rec)
             if self.state is None or not self.state.append("audit", _AUDIT_COLUMNS, values):
                 marks = ", ".join("?" * len(values))
-                self._db.execute(
-                    f"INSERT INTO audit ({', '.join(_AUDIT_COLUMNS)}) VALUES ({marks})", values
-                )
+                with self._conn_lock:
+                    self._reader().execute(
+                        f"INSERT INTO audit ({', '.join(_AUDIT_COLUMNS)}) VALUES ({marks})", values
+                    )
             self._rows += 1
             self._bytes += row_size(rec)
             if not self._rolling and (self._rows > self.max_rows or self._bytes > self.max_bytes):
@@ -377,13 +412,15 @@ class AuditStore:
         with self.lock:
             if self.state is not None and self.state.queue(job):
                 return
-            self._db.execute("BEGIN IMMEDIATE")
-            try:
-                job(self._db)
-            except BaseException:
-                self._db.execute("ROLLBACK")
-                raise
-            self._db.execute("COMMIT")
+            with self._conn_lock:
+                db = self._reader()
+                db.execute("BEGIN IMMEDIATE")
+                try:
+                    job(db)
+                except BaseException:
+                    db.execute("ROLLBACK")
+                    raise
+                db.execute("COMMIT")
 
     def resized(self, delta: int) -> None:
         """A row's text changed by ``delta`` characters (an aggregated row's ``*``)."""
@@ -429,22 +466,26 @@ class AuditStore:
 
     def last(self, n: int = 50) -> list[AuditRecord]:
         """The last ``n`` audit rows, oldest first."""
-        with self.lock:
-            rows = _audit_rows(self._db, "ORDER BY id DESC LIMIT ?", (max(n, 0),))
+        with self._conn_lock:
+            rows = _audit_rows(self._reader(), "ORDER BY id DESC LIMIT ?", (max(n, 0),))
         return rows[::-1]
 
     def summary(self) -> list[SummaryRecord]:
         """The rows rolled into the summary, oldest day first."""
-        with self.lock:
-            return _summary_rows(self._db)
+        with self._conn_lock:
+            return _summary_rows(self._reader())
 
     def alarm_history(self, n: int = 200) -> list[AlarmRecord]:
         """The last ``n`` message events (came, went, acknowledged), oldest first."""
-        with self.lock:
-            rows = self._db.execute(
-                "SELECT id, t_ns, key, state, text, user FROM alarms ORDER BY id DESC LIMIT ?",
-                (max(n, 0),),
-            ).fetchall()
+        with self._conn_lock:
+            rows = (
+                self._reader()
+                .execute(
+                    "SELECT id, t_ns, key, state, text, user FROM alarms ORDER BY id DESC LIMIT ?",
+                    (max(n, 0),),
+                )
+                .fetchall()
+            )
         return [
             AlarmRecord(
                 int(r[0]), int(r[1] or 0), str(r[2]), str(r[3]), str(r[4] or ""), str(r[5] or "")

@@ -125,6 +125,8 @@ class Durability(Protocol):
 
     def wait_durable(self, mark: int, timeout: float | None = None) -> bool: ...
 
+    def write_problem(self) -> str | None: ...
+
 
 class _Refused(Exception):
     def __init__(self, reason: str, lines: list[str] | tuple[str, ...] = ()) -> None:
@@ -302,7 +304,7 @@ class OnlineChange:
             and durability is not None
             and not durability.wait_durable(durability.durable_mark(), self._timeout)
         ):
-            reply = _unconfirmed(reply, self._timeout)
+            reply = _unconfirmed(reply, self._timeout, durability.write_problem())
         pending.answer(reply)
 
     def _run(self, command: Command) -> tuple[CommandReply, str]:
@@ -646,12 +648,17 @@ def _squeezed(text: str) -> str:
     return " ".join(text.split())
 
 
-def _unconfirmed(reply: CommandReply, timeout_s: float) -> CommandReply:
+def _unconfirmed(reply: CommandReply, timeout_s: float, problem: str | None) -> CommandReply:
     """``reply`` of a command that acts, but whose commit the state file has not confirmed
-    in time: not *applied* (a restart might not see it), as the bus answers the others."""
+    in time, or could not write (``problem``: a full disk): not *applied* (a restart might
+    not see it), as the bus answers the others."""
     head = reply.lines[0] if reply.lines else "applied"
-    reason = f"not confirmed: {head}, but the state file has not committed it within "
-    return msgspec.structs.replace(reply, applied=False, reason=f"{reason}{timeout_s:g} s")
+    if problem is not None:
+        reason = f"not confirmed: {head}, but {problem}"
+    else:
+        reason = f"not confirmed: {head}, but the state file has not committed it within "
+        reason += f"{timeout_s:g} s"
+    return msgspec.structs.replace(reply, applied=False, reason=reason)
 
 
 def _audited_args(command: Command) -> dict[str, object]:

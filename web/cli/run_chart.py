@@ -27,6 +27,7 @@ comparison) serves the view in the CPU's process as before, with 1 s.
 from __future__ import annotations
 
 import functools
+import sqlite3
 import sys
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -299,9 +300,18 @@ def _edges(
     session: ChartSession, store: StateStore, **options: Any
 ) -> tuple[LiveEdge | None, list[ViewProcess]] | int:
     """``_serve``, or exit status 2 with one line when the view cannot be served (a port in
-    use, no rerun-sdk …); the state file is closed then."""
+    use, no rerun-sdk …) or the audit's tables cannot be set up in the state file (a full
+    disk); the state file is closed then."""
     try:
         return _serve(session, store, **options)
+    except sqlite3.Error as exc:  # the audit's tables in the state file: its disk, not the view
+        print(
+            f"s7graph: error: {store.path}: cannot set up the audit ({exc}); free space on "
+            "its disk (or make it writable), then run again",
+            file=sys.stderr,
+        )
+        store.close()
+        return 2
     except Exception as exc:
         print(f"s7graph: error: cannot serve the view: {exc}", file=sys.stderr)
         store.close()

@@ -366,6 +366,7 @@ def run_until_stopped(
     runner.on_stop = lambda reason: print(
         f"s7graph: error: {what}: the CPU went to STOP: {reason}", file=sys.stderr, flush=True
     )
+    runner.on_note = lambda note: print(f"s7graph: warning: {note}", file=sys.stderr, flush=True)
     stop = runner.on_stop_signal
     previous = {sig: signal.signal(sig, stop) for sig in (signal.SIGTERM, signal.SIGINT)}
     try:

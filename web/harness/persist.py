@@ -16,6 +16,7 @@ from typing import Any
 from s7graph.engine.cpu import Cpu
 from s7graph.engine.diagnostics import EventId
 from s7graph.engine.persistence import LoadReport, StateFileError, StateStore
+from s7graph.engine.renew import set_aside
 from s7graph.sfb.alarms import message_list
 
 __all__ = [
@@ -92,20 +93,12 @@ class OpenedState:
 
 
 def keep_aside(path: Path) -> Path | None:
-    """Rename ``path`` (and its ``-wal``/``-shm`` companions) to ``path.old-N``, the first
-    free N; None when there is no file."""
-    if not path.exists():
+    """Rename ``path`` (and its ``-wal``/``-shm`` companions: also a ``-wal`` whose file is
+    gone) to ``path.old-N``, the first free N; the first file so kept (``path.old-N``, or
+    ``path.old-N-wal`` when only a write-ahead log was there), None when there is none."""
+    if not path.exists() and not Path(f"{path}-wal").exists():
         return None
-    n = 1
-    while Path(f"{path}.old-{n}").exists():
-        n += 1
-    target = Path(f"{path}.old-{n}")
-    path.rename(target)
-    for suffix in ("-wal", "-shm"):
-        companion = Path(f"{path}{suffix}")
-        if companion.exists():
-            companion.rename(Path(f"{target}{suffix}"))
-    return target
+    return set_aside(path, "old")[0]
 
 
 def open_state(

@@ -10,6 +10,7 @@ restart would initialize it); ``undo_download`` likewise puts the old one back."
 
 from __future__ import annotations
 
+import resource
 import shutil
 import sqlite3
 import subprocess
@@ -26,7 +27,7 @@ from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import Command, CommandReply, StepStateUpdate
 from s7graph.web.harness.session import load_chart
 from tests.paths import ROOT
-from tests.real_process import kill_run
+from tests.real_process import descendants, kill_run
 from tests.web.helpers import cpu_process, wait_until
 
 pytestmark = pytest.mark.timeout(600)
@@ -280,3 +281,22 @@ def test_a_download_the_disk_has_not_confirmed_is_answered_not_confirmed(drill: 
         assert wait_until(lambda: ("download", "applied") in _audited(state), 20)
         kill_run(cpu.proc)
     assert _row_fingerprint(state) == fingerprint(load_chart(path, drill / "symbols.txt")[0])
+
+
+def test_a_download_the_disk_cannot_take_is_answered_not_confirmed_saying_why(
+    drill: Path,
+) -> None:
+    """The disk full once the chart file is written (here: the CPU's files may not grow):
+    the reply says so at once, not that the commit is late."""
+    state, path = drill / "drill.sqlite", drill / "drill.s7g"
+    new = path.read_text(encoding="utf-8").replace("T#2S;", "T#3S;")
+    with run(drill) as cpu:
+        room = Path(f"{state}-wal").stat().st_size + 4096
+        for pid in descendants(cpu.proc.pid):
+            resource.prlimit(pid, resource.RLIMIT_FSIZE, (room, room))
+        reply = cpu.client.send(cpu.command("download", source=new, base=1), timeout=20)
+        assert not reply.applied
+        assert reply.reason.startswith("not confirmed: version 2 runs (was 1)"), reply.reason
+        assert f"{state}: cannot write the state: " in reply.reason
+        assert "within 5 s" not in reply.reason
+        kill_run(cpu.proc)

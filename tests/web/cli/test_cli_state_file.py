@@ -162,6 +162,44 @@ def test_a_state_file_that_cannot_grow_stops_the_run_with_one_line(
     assert line.endswith("; the CPU went to STOP") and "Traceback" not in proc.stderr
 
 
+def test_fresh_sets_a_write_ahead_log_without_its_file_aside(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A ``-wal`` whose file was deleted is refused (not read as a fresh start); ``--fresh``
+    keeps it as ``FILE.old-N-wal``, so no new file picks it up."""
+    state = tmp_path / "drill.sqlite"
+    Path(f"{state}-wal").write_bytes(b"x" * 4096)
+    assert main([*CHART, "--state", str(state), "--duration-s", "0.1"]) == 2
+    (line,) = _errors(capsys.readouterr().err)
+    assert "missing, but its write-ahead log drill.sqlite-wal is there" in line
+    assert main([*CHART, "--state", str(state), "--duration-s", "0.1", "--fresh"]) == 0
+    assert Path(f"{state}.old-1-wal").read_bytes() == b"x" * 4096 and state.is_file()
+    assert f"the old file is kept as {state}.old-1-wal" in capsys.readouterr().err
+
+
+def test_a_state_file_on_a_full_disk_is_not_read_and_not_called_unreadable(
+    tmp_path: Path,
+) -> None:
+    """Opening a state file writes to it: on a full disk (here: files may not grow) the run
+    is refused saying so, and the way out is to free space, never ``--fresh`` (which would
+    set the good file aside and start anew)."""
+    state = tmp_path / "drill.sqlite"
+    assert main([*CHART, "--state", str(state), "--duration-s", "0.2"]) == 0
+    proc = subprocess.run(
+        [sys.executable, "-m", "s7graph", *CHART, "--state", str(state), "--duration-s", "5"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        preexec_fn=lambda: _no_room(state.stat().st_size),
+    )
+    assert proc.returncode == 2, proc.stderr
+    (line,) = _errors(proc.stderr)
+    assert line.startswith(f"s7graph: error: {state}: the disk ")
+    assert "it was not read; free space on its disk" in line and "--fresh" not in line
+    assert "Traceback" not in proc.stderr and not Path(f"{state}.old-1").exists()
+
+
 def test_restart_hot_that_cannot_be_honoured_is_one_line_exit_2_and_never_a_warm_start(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
