@@ -436,7 +436,7 @@ class GraphRuntime:
             self._done = max(k, 0) + 1  # a step its transitions activate acts in the next call
             switch(self, steps, sw, rule)
         else:
-            switch(self, steps, sw, rule)
+            switch(self, steps, _held_now(self.st, steps, sw), rule)
             self._conditions_and_actions(k, steps)
 
     def _late_steps(self) -> None:
@@ -555,3 +555,17 @@ def new_state(cc: CompiledChart) -> GraphState:
     st.ackreq_enabled = cc.options.ack_required
     st.sskip_enabled = cc.options.skip_steps
     return st
+
+
+def _held_now(st: GraphState, steps: list[int], sw: tuple[Any, ...]) -> tuple[Any, ...]:
+    """``sw`` holding also the steps of ``steps`` an earlier sequencer activated in this call
+    (a jump or ``ON Sx`` into this one): like a step INIT_SQ activated, such a step is
+    active for this whole call — its transitions are evaluated, they switch in the next
+    call — so it runs its S1 rows and is never left unseen (docs/semantics.md,
+    "Decisions")."""
+    ev = st.ev
+    new = [i for i in steps if ev[i] & EV_S1]
+    held: frozenset[int] = sw[4]
+    if not new or held.issuperset(new):
+        return sw
+    return (*sw[:4], held.union(new))

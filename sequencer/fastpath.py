@@ -262,7 +262,8 @@ class FastPath:
         multi = self.multi
         for k, steps in enumerate(self.seqs):
             rt._done = k
-            if len(steps) == 1 and plain[i := steps[0]] and not final:
+            # a step an earlier sequencer activated in this call is held: ``_sequencer``
+            if len(steps) == 1 and plain[i := steps[0]] and not final and not ev[i] & EV_S1:
                 j = fused[i](st, rt, ev[i], True, zero)
                 if j >= 0 or len(steps) > 1:
                     self._fused_done(rt, k if multi else -1, steps, i, j)
