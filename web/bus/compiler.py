@@ -24,7 +24,10 @@ lock. The rules:
   comes (``gc.freeze``) so that the scan's idle collections do not walk the new chart;
 - S7-SCL sources sent with a download (``blocks``) are compiled there too, after the
   chart, and come back as bytes (``steps.scl.portable``): the CPU's process runs each
-  source's generated module once to make its blocks, and parses or compiles nothing;
+  source's generated module once to make its blocks, and parses or compiles nothing; it
+  loads them as a chart, the collector paused, and freezes them after. One source is one
+  pickle, loaded in one piece: the end of a very large one still holds the interpreter
+  for a moment (about 50 ms for a 740 kB source of 12,000 IF statements: docs/scl.md);
 - a preview, a save and an open bring back text only (the change summary, the chart) —
   but a preview's S7-SCL sources, which come back as a download's do: the CPU's process
   says from them what the download would carry over (``web.harness.scl_reload``).
@@ -311,8 +314,11 @@ class Compiler:
         cut = len(blobs) - 2 * n
         pairs = [(blobs[k], blobs[k + 1]) for k in range(cut, len(blobs), 2)]
         done = None if preview else _loaded(blobs[:cut], reply["parts"], summary)
-        with collector_paused():
+        settle = gc.freeze if not gc.isenabled() else None  # as ``_loaded`` does a chart
+        with collector_paused(), switching(SWITCH_S):
             sources = load_texts(files, pairs, warnings, [t for _, t in blocks])
+        if settle is not None:  # the scan's idle collections never walk the new blocks
+            settle()
         if done is None:
             return dataclasses.replace(summary, blocks=sources)
         return dataclasses.replace(done, blocks=sources)
