@@ -234,6 +234,16 @@ def chart(sequences: str, *, header: str = "", params: str = "MAXIMUM") -> Run:
     return Run(source(sequences, header=header, params=params), file="spec.s7g")
 
 
+def chart_on_path(sequences: str, fast: bool) -> Run:
+    """:func:`chart` whose cycle takes the fast path (``fast``) where it may, or always the
+    general one: a rule pinned on both."""
+    run = chart(sequences)
+    run.rt = GraphRuntime(
+        run.cc, run.cc.bind(run.mem), counter=run._counter, timer=run._timer, fast=fast
+    )
+    return run
+
+
 def two_steps(rows: str, *, header: str = "", interlock: str = "", params: str = "MAXIMUM") -> Run:
     """S1 (initial) -T1 I0.0-> S2 (``rows``) -T2 I0.1-> S3 -T3 I0.2-> S1."""
     il = f"INTERLOCK := {interlock};" if interlock else ""

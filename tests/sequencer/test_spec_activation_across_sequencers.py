@@ -12,8 +12,7 @@ from __future__ import annotations
 
 import pytest
 
-from s7graph.sequencer.cycle import GraphRuntime
-from tests.sequencer.helpers import Run, chart, seq
+from tests.sequencer.helpers import Run, chart_on_path, seq
 
 _FIRST = """
   INITIAL_STEP S1 "a": END_STEP
@@ -34,11 +33,7 @@ _SECOND = """
 
 
 def _run(fast: bool) -> Run:
-    run = chart(seq(_FIRST) + seq(_SECOND, 2))
-    run.rt = GraphRuntime(
-        run.cc, run.cc.bind(run.mem), counter=run._counter, timer=run._timer, fast=fast
-    )
-    return run
+    return chart_on_path(seq(_FIRST) + seq(_SECOND, 2), fast)
 
 
 @pytest.mark.parametrize("fast", [True, False])

@@ -12,16 +12,11 @@ from __future__ import annotations
 
 import pytest
 
-from s7graph.sequencer.cycle import GraphRuntime
-from tests.sequencer.helpers import Run, chart, seq
+from tests.sequencer.helpers import Run, chart_on_path, seq
 
 
 def _run(sequences: str, fast: bool) -> Run:
-    run = chart(sequences)
-    run.rt = GraphRuntime(
-        run.cc, run.cc.bind(run.mem), counter=run._counter, timer=run._timer, fast=fast
-    )
-    return run
+    return chart_on_path(sequences, fast)
 
 
 def _tt(run: Run, number: int) -> bool:
