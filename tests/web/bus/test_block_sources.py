@@ -34,11 +34,17 @@ END_FUNCTION
 
 
 def _compiled(tmp_path: Path, name: str, *numbers: int, pad: int = 0) -> SclSources:
+    return compile_sources([_source(tmp_path, name, numbers, pad)])
+
+
+def _source(tmp_path: Path, name: str, numbers: tuple[int, ...], pad: int = 0) -> Path:
+    """``src/<name>`` holding an FC of ``SOURCE`` for each of ``numbers`` (each ``pad``
+    characters of comment longer)."""
     path = tmp_path / "src" / name
     path.parent.mkdir(exist_ok=True)
     text = "".join(SOURCE.format(n=n, pad=" // " + "x" * pad if pad else "") for n in numbers)
     path.write_text(text, encoding="utf-8")
-    return compile_sources([path])
+    return path
 
 
 def test_a_client_reads_the_blocks_the_cpu_runs_now(tmp_path: Path) -> None:
@@ -68,11 +74,12 @@ def test_a_client_reads_the_blocks_the_cpu_runs_now(tmp_path: Path) -> None:
 
 
 def test_blocks_past_the_message_limit_are_only_named(tmp_path: Path) -> None:
-    pad = MAX_TEXT_BYTES // 3
-    message = block_sources(_compiled(tmp_path, "big.scl", 1, 2, 3, 4, pad=pad))
+    pad = MAX_TEXT_BYTES // 3  # two sources: one may hold at most 1,000,000 characters
+    paths = [_source(tmp_path, f"big{k}.scl", (2 * k - 1, 2 * k), pad) for k in (1, 2)]
+    message = block_sources(compile_sources(paths))
     assert [b.label for b in message.blocks] == ["FC1", "FC2"]
     assert message.left_out == ["FC3", "FC4"]
-    assert message.files == {} and message.files_left_out == ["big.scl"]  # no room left
+    assert message.files == {} and message.files_left_out == ["big1.scl", "big2.scl"]
     data = encode(message)
     assert len(data) < MAX_MESSAGE_BYTES and decode(data, BlockSources) == message
 
