@@ -130,11 +130,16 @@ def _snap(current: int, members: list[int]) -> int:
 
 
 def _step(current: int, members: list[int], delta: int) -> int:
+    """The member ``delta`` (+1 next, -1 previous) from ``current``, by number, wrapping; from
+    a number outside ``members`` (a step S_SEL chose) the nearest member above it (next) or
+    below it (previous)."""
     if not members:
         return 0
-    if current not in members:
-        return _snap(current, members)
-    return members[(members.index(current) + delta) % len(members)]
+    if current in members:
+        return members[(members.index(current) + delta) % len(members)]
+    if delta > 0:
+        return next((n for n in members if n > current), members[0])
+    return next((n for n in reversed(members) if n < current), members[-1])
 
 
 def _shown_step(chart: CompiledChart, state: GraphState, members: Callable[[], list[int]]) -> int:

@@ -46,6 +46,12 @@ MAX_EXPR_DEPTH = 32
 """Operators nested in one expression (an AND/OR/XOR chain counts about log2 of its
 length): what the generated code and the validator handle without deep recursion."""
 _BLANKS = re.compile(r"\s+")
+_BARE_DECIMAL = re.compile(r"\d(?:_?\d)*")
+
+
+def _bare_decimal(text: str) -> bool:
+    """Whether ``text`` is an integer literal without prefix (``32768``, not ``L#32768``)."""
+    return _BARE_DECIMAL.fullmatch(text) is not None
 
 
 def _int(tok: Token | str) -> int:
@@ -166,6 +172,8 @@ class _Build:
             type_name = inner.type
             if type_name == "INT" and value < -32768:
                 type_name = "DINT"
+            elif type_name == "DINT" and value == -32768 and _bare_decimal(inner.text):
+                type_name = "INT"  # -32768 is the least INT (its 32768 alone is a DINT)
             return Const(value, type_name, "-" + inner.text, loc)
         return self._nested(Unary("-", inner, loc), inner)
 
