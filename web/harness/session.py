@@ -153,6 +153,7 @@ class ChartSession:
         types = {k: v for b in blocks for k, v in getattr(b, "types", {}).items()}
         self.dbvars = DbVariables(self.cpu, types)
         """The DB variables by name (``DB10.n``, ``"Seq".S_NO``)."""
+        self._var_keys: tuple[CompiledChart | None, dict[str, str]] = (None, {})
         self.warnings: list[str] = [w for c in (cc, *beside) for w in c.warnings]
         """The warnings of the charts and of the ``blocks``' sources (``load``), for ``sim``
         and ``run`` to print (as ``check`` does)."""
@@ -203,6 +204,10 @@ class ChartSession:
         """``DB1.count`` or ``"Seq_mix".count`` — a variable of the chart in its own
         instance DB, where S7-GRAPH keeps an FB's static variables — as the variable's own
         name (``count``); any other name as it is."""
+        if name not in self.cc.var_types and name[:1] != '"':
+            key = self._var_named(name)  # S7 names are not case-sensitive
+            if key is not None:
+                return key
         idb = self.graph.idb
         if idb is None or name[:1] not in ('"', "D", "d"):
             return name
@@ -219,8 +224,16 @@ class ChartSession:
             number = db if isinstance(db, int) else self.dbvars.number_of(db, name)
         except S7Error:
             return name
-        key = next((v for v in self.cc.var_types if v.casefold() == var.casefold()), None)
+        key = self._var_named(var)
         return key if number == idb.number and key is not None else name
+
+    def _var_named(self, name: str) -> str | None:
+        """The chart's variable ``name`` as declared, in any case (None: no such variable);
+        the names by their folded case kept per compiled chart (a download brings another)."""
+        cc = self.cc
+        if self._var_keys[0] is not cc:
+            self._var_keys = (cc, {v.casefold(): v for v in cc.var_types})
+        return self._var_keys[1].get(name.casefold())
 
     def _address(self, name: str) -> tuple[Address, str] | None:
         return address_of(self.symbols, name)

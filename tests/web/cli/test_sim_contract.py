@@ -175,3 +175,20 @@ def test_a_charts_variable_is_watched_and_set_through_its_instance_db_too(
         {"n": 7, "DB1.n": 7, '"Drill".n': 7},
         {"n": 9, "DB1.n": 9, '"Drill".n': 9},
     ]
+
+
+def test_a_charts_variable_is_named_in_any_case_as_s7_names_are(tmp_path: Path) -> None:
+    """S7 names are not case-sensitive: ``N``, ``db1.N`` set and watch the chart's ``n``;
+    the trace keeps each name as the watch list wrote it."""
+    rc, lines = run(
+        tmp_path,
+        [{"at_ms": 0, "set": {"N": 7}}, {"at_ms": 10, "set": {"db1.N": 9}}],
+        chart=VARS,
+        watch="N,n,DB1.N",
+        cycles=2,
+    )
+    assert rc == 0
+    assert [line["values"] for line in lines] == [
+        {"N": 7, "n": 7, "DB1.N": 7},
+        {"N": 9, "n": 9, "DB1.N": 9},
+    ]
