@@ -303,10 +303,10 @@ class GraphRuntime:
             self.display.page(st, ins, rose)
 
         # 2. OFF_SQ, INIT_SQ, modes, MAN requests, acknowledgement, registration
+        if st.off and st.active:  # OFF_SQ, then INIT_SQ (docs/semantics.md, "One FB call", 2)
+            self._all_off()
         if st.calls == 0 or "INIT_SQ" in rose:
             self.initialize()
-        if st.off and st.active:
-            self._all_off()
         if self._acked:
             self._acked.clear()
         if rose:

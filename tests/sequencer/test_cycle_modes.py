@@ -211,6 +211,22 @@ def test_off_sq_deactivates_all_steps_and_init_sq_edge_restores_the_initial_ones
     assert c.active == ["S1"]
 
 
+def test_off_sq_is_applied_before_init_sq_so_both_in_one_call_initialize() -> None:
+    """Step 2 applies OFF_SQ, then INIT_SQ: an INIT_SQ edge while OFF_SQ holds brings the
+    initial steps for that call (no switching: OFF_SQ blocks it); the held OFF_SQ switches
+    them off again in the next call."""
+    c = Chart(MODES)
+    c.set(I0_0=True)
+    c.call(2)
+    assert c.active == ["S2"]
+    c.set(OFF_SQ=True, INIT_SQ=True)
+    c.call()
+    assert c.active == ["S1"]
+    c.set(INIT_SQ=False)
+    c.call()
+    assert c.active == []
+
+
 def test_halt_sq_stops_switching_and_halt_tm_freezes_times() -> None:
     c = Chart(MODES)
     c.set(HALT_SQ=True, HALT_TM=True, I0_0=True)
