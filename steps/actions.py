@@ -199,8 +199,9 @@ def _row(
     q = row.qualifier.upper()
     op = row.operand
     gate = " and c_ok" if row.interlocked else ""
-    if isinstance(op, Assignment):
-        return [gen_assigned(op.expr, resolve(op.target), g, resolve, sidx, tidx)]
+    if isinstance(op, Assignment):  # an N action: ZERO_OP holds it back as it does a CALL
+        code = gen_assigned(op.expr, resolve(op.target), g, resolve, sidx, tidx)
+        return ["if not zero:", *(f"    {line}" for line in code.splitlines())]
     if q == "N":
         ref = _bit(row, resolve)
         return [g.write(ref, f"not zero{gate}")]

@@ -326,6 +326,22 @@ def test_zero_op_skips_calls() -> None:
         run.set(ZERO_OP=False).call()
 
 
+def test_zero_op_holds_back_assignments_as_it_skips_calls() -> None:
+    """An assignment is an N action: under ZERO_OP it does not run (its variable keeps its
+    value, as an N bit goes to 0 and a CALL is skipped); released, it runs again."""
+    run = Run(
+        'FUNCTION_BLOCK "Z" PARAMETERS := MAXIMUM; VAR n : INT := 0; END_VAR\n'
+        'SEQUENCE 1 "s"\nINITIAL_STEP S1 "a": N n := n + 1; END_STEP\n'
+        "TRANSITION T1 FROM S1 TO STOP := FALSE;\nEND_SEQUENCE\nEND_FUNCTION_BLOCK\n"
+    )
+    run.call(2)
+    assert run.st.vars["n"] == 2
+    run.set(ZERO_OP=True).call(3)
+    assert run.st.vars["n"] == 2 and run.out("OP_ZEROED")
+    run.set(ZERO_OP=False).call()
+    assert run.st.vars["n"] == 3
+
+
 def test_s_prev_s_next_only_page_the_display() -> None:
     run = guarded()
     shown = []
