@@ -248,7 +248,12 @@ class ChartSession:
         if name in self.cc.var_types:
             return
         if is_pin(name):
-            check_pin(name, self.cc.parameters, direction=Direction.IN if writing else None)
+            try:
+                check_pin(name, self.cc.parameters, direction=Direction.IN if writing else None)
+            except S7Error as exc:
+                if self.symbols.lookup(name) is None:
+                    raise
+                raise S7Error(f'{exc}; the symbol "{name}" is written with its quotes') from None
             return
         if self._address(name) is None:
             if self.dbvars.is_db_name(name):

@@ -192,3 +192,20 @@ def test_a_charts_variable_is_named_in_any_case_as_s7_names_are(tmp_path: Path) 
         {"N": 7, "n": 7, "DB1.N": 7},
         {"N": 9, "n": 9, "DB1.N": 9},
     ]
+
+
+def test_a_symbol_named_like_a_pin_outside_the_set_is_pointed_to_its_quotes(
+    tmp_path: Path, capsys
+) -> None:
+    """``HALT_SQ`` unquoted is the pin, which STANDARD lacks; the refusal says that the chart's
+    symbol of that name takes its quotes, and with them it is set and watched."""
+    chart = CHART.replace(
+        '"Motor" : Q0.0 : BOOL;', '"Motor" : Q0.0 : BOOL; "HALT_SQ" : I0.3 : BOOL;'
+    )
+    rc, _ = run(tmp_path, [{"at_ms": 0, "set": {"HALT_SQ": True}}], chart=chart)
+    err = capsys.readouterr().err
+    assert rc == 2 and err.endswith('; the symbol "HALT_SQ" is written with its quotes\n'), err
+    rc, lines = run(
+        tmp_path, [{"at_ms": 0, "set": {'"HALT_SQ"': True}}], chart=chart, watch='"HALT_SQ"'
+    )
+    assert rc == 0 and lines[0]["values"] == {'"HALT_SQ"': True}
