@@ -19,6 +19,7 @@ import collections
 import contextlib
 import functools
 import queue
+import sqlite3
 import threading
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
@@ -29,6 +30,7 @@ from typing import Any, Protocol
 import msgspec
 import zenoh
 
+from s7graph.engine.persistence import sqlite_words
 from s7graph.web.bus.deltas import DeltaOut
 from s7graph.web.bus.gate import Apply, Gate, claimed_note
 from s7graph.web.bus.keys import ROOT, keys
@@ -559,10 +561,14 @@ class BusPublisher:
         def on_query(query: zenoh.Query) -> None:
             try:
                 data = read()
+            except Exception as exc:  # the asker hears why (an error reply), never a silence
+                why = sqlite_words(exc) if isinstance(exc, sqlite3.Error) else str(exc)
+                with contextlib.suppress(Exception):  # never raise on a zenoh thread
+                    query.reply_err(f"cannot read {key}: {' '.join(why.split())[:160]}".encode())
+                return
+            with contextlib.suppress(Exception):
                 if data is not None:
                     query.reply(key, data, encoding=zenoh.Encoding.APPLICATION_JSON)
-            except Exception:  # never raise on a zenoh thread
-                return
 
         self._declared.append(self._session.declare_queryable(key, on_query))
 

@@ -215,3 +215,26 @@ def test_looking_for_cpus_says_which_answers_it_could_not_read(
         assert [s.cpu for s in find_cpus(session, unreadable=unreadable)] == ["odd"]
         assert unreadable == [] and unread_note(unreadable) == ""
     assert unread_note(["a", "b", "c"]) == "; an answer could not be read: a (and 2 more)"
+
+
+def test_a_read_the_cpu_cannot_answer_is_an_error_reply_with_the_reason(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A CPU whose audit cannot be read (its disk fails) answers ``audit/list`` with an error
+    reply naming the key and SQLite's words — the asker hears why, not a silence."""
+    import sqlite3
+
+    from s7graph.web.bus.cpu_side import CpuSide
+
+    side = CpuSide({}, cpu="cpu1")
+    try:
+
+        def broken() -> object:
+            raise sqlite3.OperationalError("disk I/O error")
+
+        monkeypatch.setattr(side.publisher.gate, "audit_list", broken)
+        with open_session(connect=[side.endpoint]) as session, pytest.raises(ErrorReply) as got:
+            BusClient(session, "cpu1").audit()
+        assert "cannot read s7graph/cpu1/audit/list: disk I/O error" in str(got.value)
+    finally:
+        side.close()
