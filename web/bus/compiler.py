@@ -50,6 +50,7 @@ import subprocess
 import sys
 import threading
 import time
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any, Final
@@ -314,11 +315,8 @@ class Compiler:
         cut = len(blobs) - 2 * n
         pairs = [(blobs[k], blobs[k + 1]) for k in range(cut, len(blobs), 2)]
         done = None if preview else _loaded(blobs[:cut], reply["parts"], summary)
-        settle = gc.freeze if not gc.isenabled() else None  # as ``_loaded`` does a chart
-        with collector_paused(), switching(SWITCH_S):
+        with _loading():  # as ``_loaded`` loads a chart
             sources = load_texts(files, pairs, warnings, [t for _, t in blocks])
-        if settle is not None:  # the scan's idle collections never walk the new blocks
-            settle()
         if done is None:
             return dataclasses.replace(summary, blocks=sources)
         return dataclasses.replace(done, blocks=sources)
@@ -366,8 +364,7 @@ def _loaded(blobs: list[bytes], parts: tuple[int, int], summary: Summary) -> Com
     idle-time collection of the scan thread between two pieces would otherwise walk the
     chart loaded so far (13 ms seen for a 1,000-step chart)."""
     n_chart, n_code = parts
-    settle = gc.freeze if not gc.isenabled() else None
-    with collector_paused(), switching(SWITCH_S):
+    with _loading() as settle:
         cc, table, live = loads_in_pieces(blobs[:n_chart], settle)
         code = []
         for piece in blobs[n_chart : n_chart + n_code]:
@@ -377,9 +374,20 @@ def _loaded(blobs: list[bytes], parts: tuple[int, int], summary: Summary) -> Com
             source.append(piece.decode())
         object.__setattr__(cc, "code", tuple(code))
         object.__setattr__(cc, "source", "".join(source))
+    return Compiled(cc, table, live, summary)
+
+
+@contextlib.contextmanager
+def _loading() -> Iterator[Callable[[], None] | None]:
+    """Loading what the child compiled, beside the scan: the collector paused, the switch
+    interval short (``SWITCH_S``); where the runner keeps automatic collections off and
+    collects in the scan's idle time, ``gc.freeze`` is given (to freeze pieces as they
+    come) and called at the end, so that those collections never walk what was loaded."""
+    settle = gc.freeze if not gc.isenabled() else None
+    with collector_paused(), switching(SWITCH_S):
+        yield settle
     if settle is not None:
         settle()
-    return Compiled(cc, table, live, summary)
 
 
 def _child_env() -> dict[str, str]:
