@@ -308,7 +308,10 @@ class StoreWriter:
         return self._pending is not None and (self._renewing is None or self._pending.full)
 
     def take_renewals(self) -> list[str]:
-        """What happened each time the file was built anew since the last call, in words."""
+        """What happened each time the file was built anew since the last call, in words
+        (called every scan: nothing to take is seen without the lock)."""
+        if not self._renewals:
+            return []
         with self._cond:
             taken, self._renewals = self._renewals, []
         return taken
