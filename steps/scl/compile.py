@@ -239,8 +239,7 @@ def _instance_of(path: m.Path, prog: Program) -> None:
     if not isinstance(first, m.Member):
         return
     number = prog.db_number(first.name)
-    declared = prog.block(first.name)
-    if declared is not None and declared.unit is not None and not declared.instance_of:
-        return  # a global DB of the source: the call is E233
+    if prog.global_db(first.name) is not None:
+        return  # the call is E233 (``places``)
     if number is not None:
         prog.instances.setdefault(number, fb.label)

@@ -108,6 +108,14 @@ class Program:
             found = self.blocks.get(self.names[key])
         return found
 
+    def global_db(self, name: str) -> BlockInfo | None:
+        """The DB ``name`` if this source declares it as a global DB (its own
+        ``DATA_BLOCK``, not an FB's instance): no FB call may use it as an instance."""
+        found = self.block(name)
+        if found is None or found.kind != "DB" or found.unit is None or found.instance_of:
+            return None
+        return found
+
     def db_number(self, name: str) -> int | None:
         """The number of a DB named by label (``DB10``), by a block symbol or declared."""
         found = self.block(name)

@@ -169,8 +169,8 @@ class Places:
             number = self.b.prog.db_number(inst)
             if number is None:
                 raise Problem("E233", f"{inst} is not a DB for an instance of {blk.label}", loc)
-            declared = self.b.prog.block(inst)
-            if declared is not None and declared.unit is not None and not declared.instance_of:
+            declared = self.b.prog.global_db(inst)
+            if declared is not None and declared.unit is not None:
                 raise Problem(
                     "E233",
                     f"DB{number} is a global DB ({declared.unit.loc}), not an instance of "
