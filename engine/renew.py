@@ -25,7 +25,7 @@ import stat
 from collections.abc import Callable
 from pathlib import Path
 
-__all__ = ["Ident", "gone", "ident", "rebuild", "set_aside"]
+__all__ = ["Ident", "gone", "ident", "rebuild", "set_aside", "sync"]
 
 Ident = tuple[int, int]
 """A file's device and inode."""
@@ -96,7 +96,9 @@ def _copy(db: sqlite3.Connection, table: str) -> None:
         )
 
 
-def _sync(path: Path, *, folder: bool = False) -> None:
+def sync(path: Path, *, folder: bool = False) -> None:
+    """``fsync`` the file (or, ``folder``, the folder: its entries) at ``path``; OSError
+    when it cannot be done."""
     fd = os.open(path, (os.O_RDONLY | os.O_DIRECTORY) if folder else os.O_RDONLY)
     try:
         os.fsync(fd)
@@ -160,12 +162,12 @@ def rebuild(
             new.execute("PRAGMA journal_mode=WAL")
         finally:
             new.close()
-        _sync(tmp)
+        sync(tmp)
     except BaseException:
         _remove(tmp)
         raise
     release()
     aside = [p.name for p in set_aside(path, "damaged")]
     os.replace(tmp, path)
-    _sync(path.parent, folder=True)
+    sync(path.parent, folder=True)
     return aside, lost

@@ -20,6 +20,7 @@ import tempfile
 from pathlib import Path
 
 from s7graph.engine.errors import S7Error
+from s7graph.engine.renew import sync
 from s7graph.sequencer.exchange import importable_files
 
 __all__ = [
@@ -93,11 +94,7 @@ def glob_escape(name: str) -> str:
 
 def _fsync_dir(directory: Path) -> None:
     with contextlib.suppress(OSError):  # not every file system lets a folder be opened
-        fd = os.open(directory, os.O_RDONLY)
-        try:
-            os.fsync(fd)
-        finally:
-            os.close(fd)
+        sync(directory, folder=True)
 
 
 def write_chart(path: Path, text: str) -> Path | None:
