@@ -64,7 +64,10 @@ def running(
     the process wrote to stderr into ``stderr`` once it ended."""
     path = tmp_path / "chart.s7g"
     path.write_text(text, encoding="utf-8")
+    # downloads are tested here, not a loaded machine's cycle time (a compile never holds
+    # a scan up: test_compile_process.py): a generous maximum cycle time
     args = [str(path), "--state", str(tmp_path / "s.sqlite"), "--duration-s", "110"]
+    args += ["--max-cycle-ms", "1000"]
     with cpu_process(tmp_path, args, terminate=True) as (proc, client, _):
         yield proc, client
     if proc.stderr is not None:
