@@ -48,7 +48,9 @@ def switch(
     (``CompiledChart.leaving``: the first written, then the lowest number). A simultaneous join
     switches only if none of its preceding steps has a switchable transition of higher priority:
     the divergence at each of its steps decides as at any other, whatever the order in which
-    the steps became active."""
+    the steps became active;
+    c) the preceding steps of every switching transition leave (S0) before the following
+    steps enter (S1): a step one of them leaves and another enters stays active."""
     st = rt.st
     cc = rt.cc
     x = st.x
@@ -104,12 +106,16 @@ def switch(
     # c: switch
     if not fire:
         return
+    # every preceding step leaves before any following step enters: a step one switching
+    # transition leaves and another enters is active afterwards (left and entered again),
+    # whatever the order of the transitions
     tr_dst = cc.tr_dst
     for j in fire:
         st.fired.append(j)
         for s in tr_src[j]:
             if x[s]:
                 rt._deactivate(s)
+    for j in fire:
         for d in tr_dst[j]:
             if not x[d]:
                 rt._activate(d)
