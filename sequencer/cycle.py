@@ -34,6 +34,7 @@ from collections.abc import Callable, Iterable
 from typing import Any
 
 from s7graph.sequencer import display
+from s7graph.sequencer.checking import check
 from s7graph.sequencer.compiled import CompiledChart, Program
 from s7graph.sequencer.fastpath import FastPath, run_rows
 from s7graph.sequencer.latch import advance, latch
@@ -42,7 +43,7 @@ from s7graph.sequencer.params import input_defaults, inputs_for, output_defaults
 from s7graph.sequencer.placing import place
 from s7graph.sequencer.state import EDGE_INPUTS, GraphState
 from s7graph.sequencer.switching import switch
-from s7graph.steps.qualifiers import EV_A1, EV_L0, EV_L1, EV_R1, EV_S0, EV_S1, EV_V0, EV_V1
+from s7graph.steps.qualifiers import EV_A1, EV_R1, EV_S0, EV_S1, EV_V0
 
 BlockCaller = Callable[[str, Any, Any, dict[str, Any]], dict[str, Any]]
 CellOp = Callable[[str, int, Any], None]
@@ -108,6 +109,10 @@ class GraphRuntime:
         self._late: list[int] = []
         self._carry: list[int] = []
         self._forcing = cc.options.ack_forces_switch
+        # per step: it has an interlock or a supervision (checked by step 4.4)
+        self._checked = tuple(
+            a or b for a, b in zip(cc.has_interlock, cc.has_supervision, strict=True)
+        )
         self._lean = fast and not self.codesys  # a call may be quiet (FastPath.quiet)
         self._live_pins = bool(self.display.plan.live_pins)
         # the pins of st.outputs the last call wrote (GraphFB copies them)
@@ -143,9 +148,13 @@ class GraphRuntime:
         return self._call(kind, block, instance, params)
 
     def on(self, i: int) -> None:
-        """ON Sx: activate step ``i`` now (event S1); its rows run in this call."""
+        """ON Sx: activate step ``i`` now (event S1); its rows run in this call. A step of the
+        sequencer whose rows run (its step 4.4 done) has its interlock and supervision
+        checked at once, before its rows (L1/V1 at activation, rows marked C held back)."""
         if not self.st.x[i]:
             self._activate(i)
+            if self.cc.step_seq[i] == self._done and self._checked[i]:
+                check(self, (i,))
 
     def off(self, i: int) -> None:
         """OFF Sx: deactivate step ``i`` now (event S0) and run its final scan."""
@@ -294,6 +303,7 @@ class GraphRuntime:
         if self._commands:
             self._apply_commands()
         self._new_call(st)
+        self._done = -1  # step 2: no sequencer runs its rows (``on`` leaves the checks to 4.4)
         if self._carry:
             for i in self._carry:
                 if st.x[i]:
@@ -320,6 +330,7 @@ class GraphRuntime:
         st.calls += 1
 
         # 3. permanent before
+        self._done = 0
         if self._permanent:
             prog.before(st, self)
         # 4. the sequencers
@@ -467,47 +478,10 @@ class GraphRuntime:
         FB call", steps 4.4–4.5) of sequencer ``k`` (-1: the only one) whose active steps are
         ``steps``."""
         st = self.st
-        cc = self.cc
         prog = self.prog
-        step_seq = cc.step_seq
-        ilc, svc = prog.ilc, prog.svc
-        il_on = st.il_enabled
-        sv_on = st.sv_enabled
-        ack = st.ackreq_enabled
+        step_seq = self.cc.step_seq
         ev = st.ev
-        # d: interlock and supervision of the active steps
-        for i in steps:
-            f = ilc[i]
-            if f is not None:
-                if il_on:
-                    ok, c = f(st)
-                else:
-                    ok, c = True, 0
-                st.crit_loc[i] = c
-                was = st.il_ok[i] and not (ev[i] & EV_S1)
-                if not ok and (was or ev[i] & EV_S1):
-                    self._raise(i, EV_L1)
-                    st.crit_loc_err[i] = c
-                elif ok and not st.il_ok[i] and not (ev[i] & EV_S1):
-                    self._raise(i, EV_L0)
-                st.il_ok[i] = ok
-                st.il_err[i] = not ok
-            f = svc[i]
-            if f is not None:
-                if sv_on:
-                    bad, c = f(st)
-                else:
-                    bad, c = False, 0
-                st.crit_sup[i] = c
-                st.sv_cond[i] = bad
-                if bad and not st.sv_err[i]:
-                    st.sv_err[i] = True
-                    self._raise(i, EV_V1)
-                    for j in cc.leaving[i]:
-                        st.crit_flt[j] = st.crit[j]
-                elif st.sv_err[i] and not bad and (not ack or not sv_on):
-                    st.sv_err[i] = False
-                    self._raise(i, EV_V0)
+        check(self, steps)  # d: interlock and supervision of the active steps
         # e: final scans, then the action rows of active steps, in activation order
         fin = prog.fin
         final = self._final
