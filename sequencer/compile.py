@@ -327,7 +327,7 @@ def _gen_enter(j: int, d: int, left: ActionParts, entered: ActionParts) -> str:
     its own index."""
     lines = [f"def _w{j}(st, R, ev, ev_d, zero, _i={d}):", *left.reset]
     if left.s0:
-        lines += ["    c_ok = True", "    _z = zero", "    zero = False", *left.s0, "    zero = _z"]
+        lines += ["    c_ok = True", *left.s0]
     lines += ["    ev = ev_d", "    c_ok = True", *entered.rows]
     return with_locals(lines)
 

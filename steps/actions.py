@@ -13,7 +13,8 @@
   ON/OFF Sx, OFF S_ALL, counters CS CU CD CR, timers TL TD TF TR: event rows only
 ``ev`` is the step's event bits of this call, ``c_ok`` whether its interlock holds.
 ``def _f<i>(st, R, ev)`` is the final scan of a step deactivated in this call: N, D and L
-operands are reset, then the S0 rows run.
+operands are reset, then the S0 rows run (ZERO_OP holds back their N pulses, assignments and
+CALLs as it does those of the active steps).
 """
 
 from __future__ import annotations
@@ -111,7 +112,7 @@ def step_action_parts(
     a_body = _indent(body) or ["    pass"]
     f_body = _indent(final_reset)
     if s0_rows:
-        f_body += ["    c_ok = True", "    zero = False", *_indent(s0_rows)]
+        f_body += ["    c_ok = True", "    zero = st.zeroed", *_indent(s0_rows)]
     f_body = f_body or ["    pass"]
     a_src = [f"def _a{i}(st, R, ev, c_ok, zero{_own(i, a_body)}):", *a_body]
     f_src = [f"def _f{i}(st, R, ev{_own(i, f_body)}):", *f_body]
