@@ -14,6 +14,7 @@ import resource
 import shutil
 import sqlite3
 import subprocess
+import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -283,15 +284,57 @@ def test_a_download_the_disk_has_not_confirmed_is_answered_not_confirmed(drill: 
     assert _row_fingerprint(state) == fingerprint(load_chart(path, drill / "symbols.txt")[0])
 
 
+def _still(state: Path, quiet_s: float = 1.5) -> Callable[[], bool]:
+    """A poll: whether the state file's write-ahead log has not grown for ``quiet_s``
+    (three of the running chart's 500 ms time marks): nothing is being committed."""
+    seen: list[tuple[float, bytes]] = []
+
+    def still() -> bool:
+        now, head = time.monotonic(), Path(f"{state}-shm").read_bytes()[:48]
+        if not seen or seen[-1][1] != head:
+            seen.append((now, head))
+        return now - seen[-1][0] >= quiet_s
+
+    return still
+
+
+# A chart this short fits below the limit the test sets, so its file is written and the
+# download reaches the commit; no frame of the state file's log does (see the test).
+SHORT = """FUNCTION_BLOCK "Seq_drill" FB 1 DB 1
+SEQUENCE 1
+  INITIAL_STEP S1: END_STEP
+  STEP S2: END_STEP
+  TRANSITION T1 FROM S1 TO S2 := "Start_button";
+  TRANSITION T2 FROM S2 TO S1 := S2.T >= T#2S;
+END_SEQUENCE
+END_FUNCTION_BLOCK
+"""
+
+
 def test_a_download_the_disk_cannot_take_is_answered_not_confirmed_saying_why(
     drill: Path,
 ) -> None:
-    """The disk full once the chart file is written (here: the CPU's files may not grow):
-    the reply says so at once, not that the commit is late."""
+    """The disk full once the chart file is written (here: the CPU's files may not grow
+    past one page of the state file): the reply says so at once, not that the commit is
+    late.
+
+    RLIMIT_FSIZE refuses a write at or past the limit, wherever the file ends. A frame of
+    SQLite's write-ahead log (a 24-byte head and a page) starts after the log's 32-byte
+    head, so even the first frame of a log started over from its head ends past one page:
+    with the limit at one page, no commit can be written, wherever the log is; the short
+    chart (old and new) is written below it. The CPU is in STOP first, so that no commit
+    but the download's comes after the limit: a running chart commits its step times
+    every 500 ms, and a commit that fails before the download ends the run."""
     state, path = drill / "drill.sqlite", drill / "drill.s7g"
-    new = path.read_text(encoding="utf-8").replace("T#2S;", "T#3S;")
+    path.write_text(SHORT, encoding="utf-8")
+    new = SHORT.replace("T#2S;", "T#3S;")
     with run(drill) as cpu:
-        room = Path(f"{state}-wal").stat().st_size + 4096
+        cpu.send("stop")
+        assert wait_until(_still(state), 20)
+        with sqlite3.connect(f"file:{state}?mode=ro", uri=True) as con:
+            (room,) = con.execute("PRAGMA page_size").fetchone()
+        con.close()
+        assert len(new.encode()) < room and len(SHORT.encode()) < room
         for pid in descendants(cpu.proc.pid):
             resource.prlimit(pid, resource.RLIMIT_FSIZE, (room, room))
         reply = cpu.client.send(cpu.command("download", source=new, base=1), timeout=20)
