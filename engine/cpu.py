@@ -34,7 +34,7 @@ from s7graph.engine.cpu_forcing import Forcing, jobs_text, listed
 from s7graph.engine.cpu_interrupts import MISSING_STOP, InterruptDispatch
 from s7graph.engine.cpu_program import ProgramBlocks
 from s7graph.engine.diagnostics import DiagnosticBuffer, EventId
-from s7graph.engine.errors import BlockError, ScanAborted
+from s7graph.engine.errors import BlockError, S7Error, ScanAborted, internal_error
 from s7graph.engine.force import ForceTable, apply_plan
 from s7graph.engine.interrupts import CYCLIC_DEFAULT_MS, CyclicScheduler, priority
 from s7graph.engine.marks import ScanMarks
@@ -498,7 +498,11 @@ class Cpu(ProgramBlocks, Forcing, InterruptDispatch, SyncErrors):
                 else:
                     raise BlockError(f"unknown command {command!r}")
             except Exception as exc:
-                pending.error = f"{type(exc).__name__}: {exc}"
+                pending.error = (
+                    str(exc)
+                    if isinstance(exc, S7Error)
+                    else internal_error("in the CPU while applying a command", exc)
+                )
                 self.diagnostics.record(self._raw, EventId.COMMAND_FAILED, "", pending.error)
             pending.done = True
         if requests:

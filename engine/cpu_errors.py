@@ -50,9 +50,7 @@ class SyncErrors(CpuPart):
 
     def _program_error(self, ob: int, block: str, exc: BaseException) -> None:
         event = classify(exc)
-        # the runtime's own errors say what went wrong; a Python error of a block's body
-        # keeps its class, which its author knows
-        message = str(exc) if isinstance(exc, S7Error) else f"{type(exc).__name__}: {exc}"
+        message = _program_words(exc)
         self.diagnostics.record(self._raw, event, block, message, getattr(exc, "address", ""))
         if isinstance(exc, NestingOverflow | RecursionError):
             self.hot_blockers.add("stack overflow")
@@ -116,3 +114,16 @@ def classify(exc: BaseException) -> int:
                 return event
         return EventId.PYTHON_EXCEPTION
     return EventId.PYTHON_EXCEPTION
+
+
+def _program_words(exc: BaseException) -> str:
+    """What a scan's error says: the runtime's own errors what went wrong; Python's own
+    limits in words (nesting, memory); any other Python error of a block's body keeps its
+    class, which its author knows (``ZeroDivisionError: division by zero``)."""
+    if isinstance(exc, S7Error):
+        return str(exc)
+    if isinstance(exc, RecursionError):
+        return f"calls nested too deeply ({exc})"
+    if isinstance(exc, MemoryError):
+        return "the blocks need more memory than there is"
+    return f"{type(exc).__name__}: {exc}"

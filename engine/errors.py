@@ -80,3 +80,21 @@ def generated_place(filename: str, line: int) -> str | None:
     generated code, or the line is not known."""
     found = GENERATED_PLACES.get(filename)
     return found(line) if found is not None else None
+
+
+def internal_error(where: str, exc: BaseException | None = None) -> str:
+    """One line for a defect of ours that a last-resort guard caught: that it is an internal
+    error, ``where`` it happened ("in the CPU while applying ack to Seq_drill": which
+    command, op or block) and, with ``exc``, what it said — never the exception's class
+    name (docs/security.md, "Refusals in words"). ``exc`` None: the message stays in the
+    log (an answer to a peer not yet logged in)."""
+    said = ""
+    if exc is not None:
+        try:
+            said = " ".join(str(exc).split())[:1024]
+        except Exception:  # an exception that cannot even say what it is
+            said = ""
+        if not said:
+            said = "out of memory" if isinstance(exc, MemoryError) else "it gave no message"
+        said = f": {said}"
+    return f"an internal error {where}{said} (please report it)"

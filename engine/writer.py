@@ -40,6 +40,7 @@ import threading
 import time
 from collections.abc import Callable
 
+from s7graph.engine.errors import internal_error
 from s7graph.engine.persistence import Batch, StateStore, StateWriteError
 
 __all__ = ["DurableCallback", "StoreWriter"]
@@ -238,7 +239,7 @@ class StoreWriter:
             return self.store.encode_next(staging)
         except Exception as exc:
             staging.unencoded.clear()
-            problem = f"cannot encode the state: {type(exc).__name__}: {exc}"
+            problem = f"cannot encode the state: {internal_error('while encoding it', exc)}"
             with self._cond:
                 self.error = self.error or StateWriteError(self.store.path, problem)
             return False
@@ -392,7 +393,7 @@ class StoreWriter:
         except StateWriteError as exc:
             return exc
         except Exception as exc:  # anything else from the disk is still a write failure
-            return StateWriteError(self.store.path, f"{type(exc).__name__}: {exc}")
+            return StateWriteError(self.store.path, _disk_words(exc))
         self.max_commit_ns = max(self.max_commit_ns, time.perf_counter_ns() - started)
         self.commits += 1
         self.rows += batch.rows
@@ -436,3 +437,11 @@ class StoreWriter:
             left, self._waiters = self._waiters, []
         self._call([(fn, "the state file was closed first") for _, fn in left])
         self.store.deferred = False
+
+
+def _disk_words(exc: Exception) -> str:
+    """A write failure the store did not name, in words: an OS error's own (``File too
+    large``), else an internal error of the writer with its message."""
+    if isinstance(exc, OSError) and exc.strerror:
+        return f"{exc.strerror}{f': {exc.filename}' if exc.filename else ''}"
+    return internal_error("while writing it", exc)

@@ -346,7 +346,10 @@ def test_an_instance_db_that_cannot_be_encoded_is_a_write_error_not_an_exception
         assert writer.finish(carry=False) == 3  # no exception in the scan thread
         writer.when_durable(1, heard.append)
     assert writer.error is not None
-    assert "cannot encode the state: RuntimeError: a value that cannot be read" in str(writer.error)
+    assert (
+        "cannot encode the state: an internal error while encoding it: a value that cannot "
+        "be read (please report it)"
+    ) in str(writer.error)
     assert heard and heard[0] is not None and "cannot encode" in heard[0]
 
 

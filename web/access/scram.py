@@ -191,7 +191,7 @@ def _attributes(message: str) -> dict[str, str]:
 
 
 def _plain(exc: ScramException) -> str:
-    return str(exc.args[0]) if exc.args else type(exc).__name__
+    return str(exc.args[0]) if exc.args else "the SCRAM exchange failed"
 
 
 class Signer:

@@ -172,7 +172,8 @@ class BusClient:
         try:
             return self._read(key, kind, payload, wait)
         except zenoh.ZError as exc:
-            return f"bus error: {type(exc).__name__}"
+            said = " ".join(str(exc).split()) or "it gave no reason"
+            return f"{key.partition('?')[0]}: bus error: {said[:256]}"
         except ProtocolError as exc:  # an error reply (ErrorReply) or no message
             return str(exc)
 

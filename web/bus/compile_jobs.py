@@ -15,7 +15,7 @@ import marshal
 from pathlib import Path
 from typing import Any, Final
 
-from s7graph.engine.errors import S7Error
+from s7graph.engine.errors import S7Error, internal_error
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.change.base import EditRefused
 from s7graph.sequencer.change.carry import fingerprint
@@ -74,7 +74,8 @@ def answer(request: dict[str, Any]) -> tuple[dict[str, Any], list[bytes]]:
     except MemoryError:
         return {"refused": f"{op} refused: the chart needs more memory than there is"}, []
     except Exception as exc:  # a bad request is refused, the process goes on
-        return {"refused": f"{op} refused: {type(exc).__name__}: {exc}"[:4096]}, []
+        why = internal_error(f"in the compiler while answering {op}", exc)
+        return {"refused": f"{op} refused: {why}"[:4096]}, []
 
 
 def _parse(text: str, file: str, refused: str) -> Chart:

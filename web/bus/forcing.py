@@ -19,6 +19,7 @@ It never raises: a hostile command is refused with the reason.
 from __future__ import annotations
 
 from s7graph.engine.cpu import Cpu
+from s7graph.engine.errors import internal_error
 from s7graph.engine.force import Force, ForceError
 from s7graph.engine.modify import ModifyError
 from s7graph.web.bus.modify_vars import modify_variable
@@ -53,7 +54,8 @@ class Forcing:
         except ForceError as exc:
             return False, exc.message[:4096], ""
         except Exception as exc:  # a bad command must not stop the scan loop
-            return False, f"{command.op} refused: {type(exc).__name__}: {exc}"[:4096], ""
+            why = internal_error(f"in the CPU while applying {command.op}", exc)
+            return False, f"{command.op} refused: {why}"[:4096], ""
 
     def _apply(self, command: Command) -> tuple[bool, str, str]:
         if command.op == "modify":

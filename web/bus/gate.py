@@ -32,6 +32,7 @@ from typing import TYPE_CHECKING, TypeAlias
 import msgspec
 from msgspec import UNSET
 
+from s7graph.engine.errors import internal_error
 from s7graph.web.access.audit import AuditRecord, AuditStore, Facts
 from s7graph.web.access.login import NOT_SIGNED, Authenticator, Identity
 from s7graph.web.access.roles import NOT_AVAILABLE, allowed, lowest_role
@@ -229,7 +230,8 @@ class Gate:
             applied, reason = result[0], result[1]
             detail = result[2] if len(result) > 2 else ""
         except Exception as exc:  # a bad command must not stop the scan loop
-            applied, reason, detail = False, f"{type(exc).__name__}: {exc}", ""
+            where = f"in the CPU while applying {command.op} to {command.fb}"
+            applied, reason, detail = False, f"command refused: {internal_error(where, exc)}", ""
         if cycle is not None and applied:
             detail = f"cycle {cycle}" + (f": {detail}" if detail else "")
         self.record(_facts(command, who.label, who.role, applied, reason, with_note(detail, note)))

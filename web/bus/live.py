@@ -74,6 +74,7 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Any, Final
 
+from s7graph.engine.errors import internal_error
 from s7graph.engine.modes import CpuMode
 from s7graph.engine.record import ScanRecord
 from s7graph.sequencer.compiled import CompiledChart
@@ -544,7 +545,10 @@ class LiveGraph:
             what = f"FB {self.fb}" + (f": {detail}" if detail else "")
             return applied, reason, what if applied else ""
         except Exception as exc:
-            return False, f"command refused: {type(exc).__name__}: {exc}"[:4096], ""
+            op = getattr(command, "op", None)
+            doing = f"applying {op}" if isinstance(op, str) else "applying a command"
+            where = f"in the CPU while {doing} to {self.fb}"
+            return False, f"command refused: {internal_error(where, exc)}"[:4096], ""
 
     def _check(self, command: Command) -> Result:
         op = getattr(command, "op", None)

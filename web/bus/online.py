@@ -43,7 +43,7 @@ from typing import Any, Final, Protocol
 
 import msgspec
 
-from s7graph.engine.errors import BlockError
+from s7graph.engine.errors import BlockError, internal_error
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.change.online import SwapRefused, SwapReport, swap
 from s7graph.sequencer.compiled import CompiledChart
@@ -266,7 +266,9 @@ class OnlineChange:
                 lines = exc.lines[:MAX_LINES]
                 reply, detail = CommandReply(applied=False, reason=exc.reason, lines=lines), ""
             except Exception as exc:  # a bad command must never stop the worker
-                reason = f"{command.op} refused: {type(exc).__name__}: {exc}"[:4096]
+                where = f"in the CPU while applying {command.op} to {command.fb}"
+                why = internal_error(where, exc)
+                reason = f"{command.op} refused: {why}"[:4096]
                 reply, detail = CommandReply(applied=False, reason=reason), ""
             self._finish(pending, who, detail, reply)
         finally:
@@ -531,7 +533,8 @@ class OnlineChange:
             except (SwapRefused, BlocksRefused) as exc:
                 pending.refusal = str(exc)
             except Exception as exc:  # the old chart keeps running
-                pending.refusal = f"{type(exc).__name__}: {exc}"
+                where = f"in the CPU while switching {self.live.fb} to the new chart"
+                pending.refusal = internal_error(where, exc)
             pending.done.set()
 
     # ------------------------------------------------------------ files

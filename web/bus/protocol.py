@@ -942,7 +942,10 @@ def encode(message: Struct) -> bytes:
 
 def decode(data: bytes | bytearray | memoryview | str, kind: type[T]) -> T:
     """Decode JSON ``data`` as ``kind``; raise :class:`ProtocolError` with a clear reason."""
-    size = len(data.encode() if isinstance(data, str) else data)
+    try:
+        size = len(data.encode() if isinstance(data, str) else data)
+    except UnicodeEncodeError:
+        raise ProtocolError(f"invalid {kind.__name__}: text that is not valid UTF-8") from None
     if size > MAX_MESSAGE_BYTES:
         raise ProtocolError(f"message too large: {size} bytes (limit {MAX_MESSAGE_BYTES})")
     decoder = _DECODERS.get(kind)
@@ -956,8 +959,18 @@ def decode(data: bytes | bytearray | memoryview | str, kind: type[T]) -> T:
         raise ProtocolError(f"invalid {kind.__name__}: {_one_line(reason)}") from None
     except msgspec.DecodeError as exc:
         raise ProtocolError(f"malformed JSON: {exc}") from None
-    except (RecursionError, UnicodeDecodeError, ValueError, TypeError) as exc:
-        raise ProtocolError(f"invalid {kind.__name__}: {type(exc).__name__}") from None
+    except (RecursionError, UnicodeError, ValueError, TypeError) as exc:
+        raise ProtocolError(f"invalid {kind.__name__}: {_unreadable(exc)}") from None
+
+
+def _unreadable(exc: Exception) -> str:
+    """Why a message does not decode, in words (never the exception's class name)."""
+    if isinstance(exc, RecursionError):
+        return "nested too deeply (arrays or objects inside each other)"
+    if isinstance(exc, UnicodeError):
+        return "text that is not valid UTF-8"
+    said = _one_line(" ".join(str(exc).split()))[:256]
+    return f"a value that cannot be read: {said}" if said else "a value that cannot be read"
 
 
 def _one_line(text: str) -> str:

@@ -30,6 +30,7 @@ from typing import Any, Protocol
 import msgspec
 import zenoh
 
+from s7graph.engine.errors import internal_error
 from s7graph.engine.persistence import sqlite_words
 from s7graph.web.bus.deltas import DeltaOut
 from s7graph.web.bus.gate import Apply, Gate, claimed_note
@@ -128,6 +129,19 @@ class Durability(Protocol):
     def durable_mark(self) -> int: ...
 
     def when_durable(self, mark: int, fn: Callable[[str | None], None]) -> None: ...
+
+
+def _unreadable(exc: Exception) -> str:
+    """Why a command's message was not taken: the protocol's reason, or an internal error."""
+    if isinstance(exc, ProtocolError):
+        return str(exc)
+    return internal_error("in the CPU while reading a command", exc)
+
+
+def _route_broke(command: Command, exc: Exception) -> str:
+    """The refusal of a command whose route (a worker's queue) raised: a defect of ours."""
+    where = f"in the CPU while taking {command.op} for {command.fb}"
+    return f"command refused: {internal_error(where, exc)}"
 
 
 class _Awaiting:
@@ -622,8 +636,9 @@ class BusPublisher:
         transport (``web.bus.origin``)."""
         try:
             reply = self.gate.login(request, source=source)
-        except Exception as exc:
-            reply = LoginReply(ok=False, reason=f"login failed: {type(exc).__name__}")
+        except Exception:  # its message stays here: the asker is not logged in yet
+            why = internal_error(f"in the CPU while answering a {request.op} request")
+            reply = LoginReply(ok=False, reason=f"login failed: {why}")
         _reply(query, reply)
 
     def _on_cmd(self, query: zenoh.Query) -> None:
@@ -639,8 +654,7 @@ class BusPublisher:
                 raise ProtocolError("empty command")
             command = decode(payload.to_bytes(), Command)
         except Exception as exc:
-            reason = str(exc) if isinstance(exc, ProtocolError) else f"bad command: {exc}"
-            self._refuse(query, None, reason[:4096], source)
+            self._refuse(query, None, _unreadable(exc)[:4096], source)
             return
         note = claimed_note(command.origin)
         command = msgspec.structs.replace(command, origin=source)
@@ -655,8 +669,7 @@ class BusPublisher:
             try:
                 routed(pending)
             except Exception as exc:  # never raise on a zenoh thread
-                reason = f"command refused: {type(exc).__name__}: {exc}"
-                self._refuse(query, command, reason, source, note)
+                self._refuse(query, command, _route_broke(command, exc), source, note)
             return
         try:
             self._commands.put_nowait(pending)

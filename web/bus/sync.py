@@ -20,7 +20,7 @@ from typing import Final, cast
 import zenoh
 
 from s7graph.engine.cpu import Cpu
-from s7graph.engine.errors import S7Error
+from s7graph.engine.errors import S7Error, internal_error
 from s7graph.sequencer.fb import GraphFB
 from s7graph.web.bus.protocol import MODES, CpuState, SyncReport, SyncStepInfo, encode
 from s7graph.web.bus.publisher import BusPublisher, QueryReply
@@ -46,7 +46,7 @@ def sync_report(graph: GraphFB, fb: str, cpu: Cpu) -> SyncReport:
     except S7Error as exc:
         return SyncReport(fb=fb, cycle=cycle, t_ms=t_ms, state=state, error=str(exc)[:4096])
     except Exception as exc:  # the scan thread's edge: never raise
-        why = f"{fb}: cannot judge, a condition failed: {type(exc).__name__}: {exc}"
+        why = f"{fb}: cannot judge the steps: {internal_error('in the CPU', exc)}"
         return SyncReport(fb=fb, cycle=cycle, t_ms=t_ms, state=state, error=why[:4096])
     return SyncReport(
         fb=fb,

@@ -40,7 +40,7 @@ from s7graph.engine.address import Address, Area, Width, parse_address
 from s7graph.engine.blocks import Decl, InstanceDB
 from s7graph.engine.cpu import Cpu
 from s7graph.engine.datatypes import type_of
-from s7graph.engine.errors import S7Error
+from s7graph.engine.errors import S7Error, internal_error
 from s7graph.engine.literals import format_literal
 from s7graph.engine.memory import DataBlock
 from s7graph.engine.symbols import default_type
@@ -545,7 +545,8 @@ class Watching:
         except queue.Full:
             _refuse(reply, f"busy: {QUEUE} watch requests are waiting; ask again")
         except Exception as exc:
-            _refuse(reply, f"watch refused: {type(exc).__name__}")
+            where = "in the CPU while reading a watch request"
+            _refuse(reply, f"watch refused: {internal_error(where, exc)}")
 
 
 def _refuse(reply: QueryReply, reason: str) -> None:

@@ -47,11 +47,10 @@ _UNREACHED = re.compile(r"^Unable to connect to any of \[(.*)\]!?$")
 
 def error_words(exc: BaseException) -> str:
     """What went wrong, in words: an OS error's own (``Address already in use``), zenoh's
-    without the place in its Rust source, else the message — never a class name unless
-    there is no message at all."""
+    without the place in its Rust source, else the message — never a class name."""
     if isinstance(exc, OSError) and exc.strerror:
         return f"{exc.strerror}{f': {exc.filename}' if exc.filename else ''}"
-    return _ZENOH_PLACE.sub("", str(exc)).strip() or type(exc).__name__
+    return _ZENOH_PLACE.sub("", str(exc)).strip() or "it gave no reason"
 
 
 def is_loopback_host(host: str) -> bool:

@@ -33,7 +33,7 @@ if TYPE_CHECKING:
     from s7graph.web.cli.net import NetOptions
     from s7graph.web.cli.run_chart import OpcuaFace
 
-from s7graph.engine.errors import S7Error
+from s7graph.engine.errors import S7Error, internal_error
 from s7graph.engine.watchdog import COMM_LOAD_PCT
 from s7graph.web.commands import (
     COMMAND_TYPES,
@@ -1282,6 +1282,13 @@ def _command() -> Any:
     return get_command(app)
 
 
+def _doing(argv: list[str] | None) -> str:
+    """Where an internal error happened, in words: ``while running s7graph watch``."""
+    words = sys.argv[1:] if argv is None else argv
+    name = next((w for w in words if not w.startswith("-")), "")
+    return f"while running s7graph {name}"[:120].rstrip() if name.isprintable() else ""
+
+
 def main(argv: list[str] | None = None) -> int:
     """The commands' entry point (``main`` in ``web/cli/__init__.py`` calls it, once the
     supervisor of a ``run`` is not wanted); turns every known error into one stderr line.
@@ -1308,7 +1315,7 @@ def main(argv: list[str] | None = None) -> int:
         if isinstance(exc, ProtocolError):  # a peer's answer s7graph cannot take
             print(f"s7graph: error: {exc}", file=sys.stderr)
             return 2
-        print(f"s7graph: internal error: {type(exc).__name__}: {exc}", file=sys.stderr)
+        print(f"s7graph: {internal_error(_doing(argv), exc)}", file=sys.stderr)
         return 2
     return rc if isinstance(rc, int) else 0
 

@@ -30,6 +30,7 @@ from asyncua import ua
 from asyncua.common.event_objects import AlarmCondition
 from asyncua.crypto.permission_rules import UserRole
 
+from s7graph.engine.errors import internal_error
 from s7graph.web.bus.protocol import AlarmEntry, AlarmList, CommandReply
 from s7graph.web.commands import AckMsg, Args, Command, MessageArgs
 from s7graph.web.opcua.sessions import caller
@@ -191,7 +192,8 @@ class Alarms:
         try:
             await self.server.iserver.subscription_service.trigger_event(ev)
         except Exception as exc:  # one client's broken filter must not stop the others
-            _log.warning("opcua: an alarm event failed: %s", type(exc).__name__)
+            why = internal_error("while sending an alarm event", exc)
+            _log.warning("opcua: an alarm event was not sent: %s", why)
         self.triggered += 1
 
     # ------------------------------------------------------------ Acknowledge

@@ -35,6 +35,7 @@ from asyncua import ua
 from asyncua.crypto.permission_rules import User, UserRole
 from asyncua.server.address_space import AddressSpace, AttributeService
 
+from s7graph.engine.errors import internal_error
 from s7graph.web.bus.protocol import (
     AlarmEntry,
     AlarmList,
@@ -172,13 +173,8 @@ class Face:
                 except asyncio.CancelledError:
                     raise
                 except Exception as exc:  # one bad message must not stop the face
-                    _log.warning(
-                        "opcua: %s of %s not applied: %s: %s",
-                        kind,
-                        key or "the CPU",
-                        type(exc).__name__,
-                        exc,
-                    )
+                    where = f"while applying {kind} of {key or 'the CPU'}"
+                    _log.warning("opcua: not applied: %s", internal_error(where, exc))
                 self.applied += 1
 
     async def _apply(self, kind: str, key: str, message: Any) -> None:
@@ -425,7 +421,8 @@ class FaceAttributes(AttributeService):
             try:
                 status = await self._face.write(user, value)
             except Exception as exc:  # a hostile write is refused, never a crash
-                _log.warning("opcua: a write failed: %s", type(exc).__name__)
+                why = internal_error(f"while writing {value.NodeId}", exc)
+                _log.warning("opcua: a write was refused: %s", why)
                 status = StatusCodes.BadInternalError
             results.append(ua_status(status))
         return results

@@ -29,6 +29,7 @@ import threading
 from collections.abc import Callable
 from typing import Any, Final
 
+from s7graph.engine.errors import internal_error
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.change.base import Edit, EditRefused
 from s7graph.sequencer.change.content import SetSource
@@ -191,7 +192,7 @@ class Editor(CpuCommands, RowEditing, InPlace, CrossReferencing):
                 if not self._closed:
                     action()
         except Exception as exc:
-            self._notify("editor", f"{type(exc).__name__}: {exc}", ok=False)
+            self._notify("editor", internal_error("in the editor", exc), ok=False)
 
     # ------------------------------------------------------------ edit mode
 

@@ -28,6 +28,7 @@ from typing import Any
 import msgspec
 import viser
 
+from s7graph.engine.errors import internal_error
 from s7graph.sequencer.xref import Use, block_references
 from s7graph.web.access.roles import allowed
 from s7graph.web.bus.client import BusClient
@@ -141,7 +142,8 @@ class ProgramPage(PageLogin):
         try:
             action()
         except Exception as exc:
-            self._notify("cross-references", f"{type(exc).__name__}: {exc}", ok=False)
+            why = internal_error("in the cross-references", exc)
+            self._notify("cross-references", why, ok=False)
 
     def _enable(self) -> None:
         role = self.role if self.token else "viewer"

@@ -314,3 +314,25 @@ def test_a_flood_over_the_bus_is_a_row_per_kind_and_the_audit_topic_is_not_flood
     assert 2 <= len(audit) <= 4  # two kinds, in one minute or across two
     assert sum(r.count for r in audit) == 400
     assert len(published) < 40  # was 400: a message a refusal
+
+
+def test_a_command_that_breaks_in_the_cpu_is_refused_and_audited_in_words(
+    tmp_path: Path, users: UsersFile
+) -> None:
+    """A defect of ours behind the gate's last guard: the reply and the audit row say it
+    is an internal error, which op on which FB, and what it said — no class name."""
+    gate = Gate(Authenticator(users), AuditStore(tmp_path / "s.sqlite"), flush_s=None)
+    olga = gate_login(gate, "olga", PASSWORD)[1]
+    assert olga is not None
+    command = olga.sign(Command(op="init", fb="FILL", user="olga", token=olga.token))
+
+    def broken(command: Command) -> tuple[bool, str]:
+        raise KeyError("x")
+
+    why = (
+        "command refused: an internal error in the CPU while applying init to FILL: 'x' "
+        "(please report it)"
+    )
+    assert gate.apply(command, broken) == (False, why)
+    gate.flush()
+    assert [r.reason for r in rows(tmp_path / "s.sqlite", "init")] == [why]

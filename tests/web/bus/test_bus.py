@@ -129,6 +129,55 @@ def test_command_refused_by_the_cpu_carries_its_reason(
     assert replies[0].applied is False and replies[0].reason == "no error to acknowledge"
 
 
+def test_deeply_nested_json_is_refused_in_words(bus: tuple[BusPublisher, BusClient]) -> None:
+    """Any peer may send it: the refusal says what is wrong, never Python's
+    ``RecursionError``."""
+    _, client = bus
+    nested = b'{"op": ' + b"[" * 5000 + b"]" * 5000 + b', "fb": "FILL"}'
+    reply = client.send_raw(nested)
+    assert reply is not None and not reply.applied
+    assert reply.reason == (
+        "invalid Command: nested too deeply (arrays or objects inside each other)"
+    )
+
+
+def test_a_command_that_breaks_its_route_is_refused_in_words(
+    bus: tuple[BusPublisher, BusClient],
+) -> None:
+    """A defect of ours behind the last-resort guard of a routed command: an internal
+    error, which command and FB, and what it said, in one line."""
+    publisher, client = bus
+
+    def broken(pending: object) -> None:
+        raise KeyError("x")
+
+    publisher.route(["ack"], broken)
+    reply = client.send(cmd(client, "ack"))
+    assert not reply.applied
+    assert reply.reason == (
+        "command refused: an internal error in the CPU while taking ack for FILL: 'x' "
+        "(please report it)"
+    )
+
+
+def test_a_login_that_breaks_in_the_cpu_is_refused_in_words(
+    bus: tuple[BusPublisher, BusClient], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The asker is not logged in: it hears that the CPU failed, not how."""
+    publisher, client = bus
+
+    def broken(*args: object, **kwargs: object) -> None:
+        raise KeyError("x")
+
+    monkeypatch.setattr(publisher.gate, "login", broken)
+    reply = client.login("bob")
+    assert not reply.ok
+    assert reply.reason == (
+        "login failed: an internal error in the CPU while answering a login request "
+        "(please report it)"
+    )
+
+
 def test_hostile_or_misdirected_command_is_refused_at_once(
     bus: tuple[BusPublisher, BusClient],
 ) -> None:
@@ -180,7 +229,10 @@ def test_an_exception_while_applying_refuses_that_command_only(
 
     assert wait_until(lambda: publisher.apply_commands(apply) > 0)
     sender.join(5)
-    assert not replies[0].applied and "RuntimeError: boom" in replies[0].reason
+    assert not replies[0].applied and replies[0].reason == (
+        "command refused: an internal error in the CPU while applying off to FILL: boom "
+        "(please report it)"
+    )
 
 
 def test_status_reports_the_cpu_and_its_fbs(bus: tuple[BusPublisher, BusClient]) -> None:

@@ -303,3 +303,21 @@ def _alive(pid: int) -> bool:
         return False
     with open(f"/proc/{pid}/stat", encoding="ascii") as f:  # a zombie is gone too
         return f.read().rsplit(")", 1)[1].split()[0] != "Z"
+
+
+def test_a_request_that_breaks_the_compiler_is_refused_in_words(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A defect of ours in the compiler process: an internal error, which request, what it
+    said."""
+    from s7graph.web.bus import compile_jobs
+
+    def broken(*args: object, **kwargs: object) -> None:
+        raise KeyError("x")
+
+    monkeypatch.setattr(compile_jobs, "_summary", broken)
+    answer, _ = compile_jobs.answer({"op": "summary"})
+    assert answer == {
+        "refused": "summary refused: an internal error in the compiler while answering "
+        "summary: 'x' (please report it)"
+    }

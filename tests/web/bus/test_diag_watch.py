@@ -428,3 +428,22 @@ def test_mres_is_refused_in_run_and_resets_the_memory_in_stop_on_disk_before_the
     assert _send(running.client, "start")[0]
     assert wait_until(lambda: cpu.mode.value == "RUN" and cpu.mem.get("MW0") > 0)
     assert cpu.last_restart == "warm"
+
+
+def test_a_watch_request_that_breaks_the_cpu_is_refused_in_words(
+    rig: Rig, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A defect of ours reached by the watch's last-resort guard: an internal error,
+    where, and what it said — never an exception's class name."""
+
+    def broken(text: str) -> object:
+        raise KeyError("x")
+
+    monkeypatch.setattr("s7graph.web.bus.watch.parse_item", broken)
+    payload = encode(WatchRequest(addresses=["MW0"]))
+    replies = list(rig.session.get("s7graph/cpu1/watch", payload=payload, timeout=5))
+    answer = decode(replies[0].ok.payload.to_bytes(), WatchValues)
+    assert answer.error == (
+        "watch refused: an internal error in the CPU while reading a watch request: "
+        "'x' (please report it)"
+    )

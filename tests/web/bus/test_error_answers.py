@@ -238,3 +238,14 @@ def test_a_read_the_cpu_cannot_answer_is_an_error_reply_with_the_reason(
         assert "cannot read s7graph/cpu1/audit/list: disk I/O error" in str(got.value)
     finally:
         side.close()
+
+
+def test_a_bus_that_fails_under_a_question_is_said_in_words() -> None:
+    """zenoh's own error (here: the session closed under the client) names the key asked
+    and what the bus said, never the exception's class name."""
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    with open_session(listen=[endpoint]) as session:
+        client = BusClient(session, "cpu1")
+        session.close()
+        answer = client.watch(["MW0"], timeout=1)
+    assert answer.error == "s7graph/cpu1/watch: bus error: session closed"

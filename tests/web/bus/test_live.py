@@ -284,7 +284,11 @@ def test_a_failing_fb_hook_refuses_the_command_instead_of_raising(
         raise RuntimeError("hook broke")
 
     monkeypatch.setattr(rig.session.graph, "command", boom)
-    assert rig.cmd("init") == (False, "command refused: RuntimeError: hook broke")
+    assert rig.cmd("init") == (
+        False,
+        "command refused: an internal error in the CPU while applying init to "
+        f"{rig.live.fb}: hook broke (please report it)",
+    )
     assert rig.scan().active == [1]
 
 

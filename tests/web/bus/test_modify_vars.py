@@ -123,3 +123,21 @@ def test_an_instance_dbs_bytes_are_refused_naming_its_fb_and_a_variable(cpu: Cpu
     assert _modify(cpu, "DB11.DBW0", 5) == (False, f"DB11.DBW0: {reason}", "")
     assert watch_value(cpu, parse_item("DB11.DBX0.1")).error == reason
     assert watch_value(cpu, parse_item("DB77.DBW0")).error == "DB77 does not exist"
+
+
+def test_a_force_or_modify_that_breaks_in_the_cpu_is_refused_in_words(
+    cpu: Cpu, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A defect of ours behind the force table's last guard: an internal error, which op,
+    what it said — never the exception's class name."""
+
+    def broken(self: Forcing, command: object) -> None:
+        raise KeyError("x")
+
+    monkeypatch.setattr(Forcing, "_apply", broken)
+    assert _modify(cpu, "MW0", 1) == (
+        False,
+        "modify refused: an internal error in the CPU while applying modify: 'x' "
+        "(please report it)",
+        "",
+    )

@@ -383,3 +383,19 @@ def test_no_message_the_cpu_says_gains_a_required_field() -> None:
         fields = msgspec.inspect.type_info(kind).fields  # type: ignore[attr-defined]
         required = tuple(f.name for f in fields if f.required)
         assert set(required) <= set(REQUIRED.get(name, ())), (name, required)
+
+
+@pytest.mark.parametrize(
+    ("data", "reason"),
+    [
+        (b'{"op": ' + b"[" * 5000 + b"]" * 5000 + b"}", "nested too deeply"),
+        ('{"op": "ack", "fb": "\ud800"}', "text that is not valid UTF-8"),
+    ],
+)
+def test_a_message_python_cannot_read_is_refused_in_words(data: bytes | str, reason: str) -> None:
+    """Deep nesting and text that is no UTF-8: what is wrong, in words — never Python's
+    ``RecursionError`` or ``UnicodeEncodeError``."""
+    with pytest.raises(ProtocolError) as refused:
+        decode(data, Command)
+    said = str(refused.value)
+    assert said.startswith("invalid Command: ") and reason in said and "Error" not in said

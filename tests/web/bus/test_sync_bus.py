@@ -104,7 +104,8 @@ def test_a_judgement_that_fails_inside_is_a_report_with_why_never_an_exception()
     graph, cpu = _installed(_Failing)
     report = sync_report(graph, "Seq_sync", cpu)
     assert report.error == (
-        "Seq_sync: cannot judge, a condition failed: RuntimeError: a condition broke"
+        "Seq_sync: cannot judge the steps: an internal error in the CPU: a condition broke "
+        "(please report it)"
     )
 
 

@@ -45,3 +45,21 @@ def test_check_loads_no_viser_zenoh_or_numpy() -> None:
     )
     out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True)
     assert out.stdout.splitlines()[-1] == "0"
+
+
+def test_an_internal_error_of_a_command_is_one_line_in_words(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A defect of ours that reaches the command line's last guard: which command, what
+    it said, a request to report it — never the exception's class name nor a traceback."""
+    from s7graph.web.cli import root
+
+    def broken(**kwargs: object) -> int:
+        raise KeyError("x")
+
+    monkeypatch.setattr(root, "_command", lambda: broken)
+    assert main(["check", "--quiet", "drill.s7g"]) == 2
+    err = capsys.readouterr().err
+    assert err == (
+        "s7graph: an internal error while running s7graph check: 'x' (please report it)\n"
+    )
