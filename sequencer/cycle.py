@@ -109,10 +109,6 @@ class GraphRuntime:
         self._late: list[int] = []
         self._carry: list[int] = []
         self._forcing = cc.options.ack_forces_switch
-        # per step: it has an interlock or a supervision (checked by step 4.4)
-        self._checked = tuple(
-            a or b for a, b in zip(cc.has_interlock, cc.has_supervision, strict=True)
-        )
         self._lean = fast and not self.codesys  # a call may be quiet (FastPath.quiet)
         self._live_pins = bool(self.display.plan.live_pins)
         # the pins of st.outputs the last call wrote (GraphFB copies them)
@@ -153,7 +149,7 @@ class GraphRuntime:
         checked at once, before its rows (L1/V1 at activation, rows marked C held back)."""
         if not self.st.x[i]:
             self._activate(i)
-            if self.cc.step_seq[i] == self._done and self._checked[i]:
+            if self.cc.step_seq[i] == self._done:
                 check(self, (i,))
 
     def off(self, i: int) -> None:
