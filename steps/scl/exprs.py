@@ -15,7 +15,7 @@ from __future__ import annotations
 from s7graph.engine.errors import SourceLocation
 from s7graph.steps.scl import model as m
 from s7graph.steps.scl import types as ty
-from s7graph.steps.scl.consts import adapt, literal
+from s7graph.steps.scl.consts import Constant, adapt, literal
 from s7graph.steps.scl.diagnostics import Problem
 from s7graph.steps.scl.gen import Block, Place, Target, X
 
@@ -112,11 +112,29 @@ class Exprs:
         left, right = self.expr(e.left), self.expr(e.right)
         if left.type.kind == "ERROR" or right.type.kind == "ERROR":
             return ERROR
+        left, right = self._in_context(e.op, left, right), self._in_context(e.op, right, left)
         if e.op in _LOGIC:
             return self._logic(e, left, right)
         if e.op in COMPARE:
             return self._compare(e, left, right)
         return self._arith(e, left, right)
+
+    def _in_context(self, op: str, x: X, other: X) -> X:
+        """An untyped number beside a typed operand takes that operand's type where its value
+        fits: an INT or DINT (a DINT when an INT is too small) in arithmetic and comparisons
+        (``i + 16#1``, ``i = 2#101``), a BYTE, WORD or DWORD in logic (``w AND 5``) — S7-SCL
+        takes a constant's type from its context. A bit string compared with a decimal number
+        stays E221 (the guide's ``MW0 = 23``)."""
+        c = x.const
+        if c is None or not c.untyped or (other.const is not None and other.const.untyped):
+            return x
+        t = other.type
+        if op not in _LOGIC and ty.is_int(t) and not ty.literal_fits(t, c.value):
+            t = ty.DINT  # 16#FFFF beside an INT: a DINT, as 65535 would be
+        wanted = t.kind in ty.MASK if op in _LOGIC else ty.is_int(t)
+        if not wanted or t == x.type or not ty.literal_fits(t, c.value):
+            return x
+        return X(t, self.b.literal_src(c.value), Constant(t, c.value))
 
     def _logic(self, e: m.Binary, a: X, b: X) -> X:
         if not (ty.is_bits(a.type) and ty.is_bits(b.type)):

@@ -205,6 +205,10 @@ def test_a_long_string_is_cut_to_its_variable_and_ok_is_cleared() -> None:
         ("100", "WORD", 100),
         ("16#FFFF", "DWORD", 0xFFFF),
         ("'A'", "CHAR", "A"),
+        ("INT#5 * 2#11", "INT", 15),  # beside an INT, a number with a radix is an INT
+        ("INT#5 = 8#5", "BOOL", True),
+        ("INT#5 + 16#FFFF", "DINT", 65540),  # too big for an INT: a DINT
+        ("WORD#16#F0 OR 15", "WORD", 0xFF),  # beside a WORD, a decimal number is a WORD
         ("CHAR#49", "CHAR", "1"),
         ("TOD#23:59:59.999", "TIME_OF_DAY", 86399999),
         ("TOD#23:00:00 + T#2H", "TOD", 3600000),
@@ -215,6 +219,17 @@ def test_a_long_string_is_cut_to_its_variable_and_ok_is_cleared() -> None:
 )
 def test_typed_literals_and_contextual_numbers(expr: str, rtype: str, expected: object) -> None:
     assert value(expr, rtype) == (expected, True)
+
+
+def test_a_number_with_a_radix_counts_with_an_int_variable() -> None:
+    src = """FUNCTION_BLOCK FB1
+VAR i : INT; w : WORD; b : BOOL; END_VAR
+  i := i + 16#1;
+  b := i = 2#101;
+  w := w AND 5;
+END_FUNCTION_BLOCK
+"""
+    assert errors(src) == []
 
 
 def test_date_and_time_arithmetic() -> None:
