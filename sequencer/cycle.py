@@ -368,8 +368,9 @@ class GraphRuntime:
         return st
 
     def _new_call(self, st: GraphState) -> None:
-        """Clear the per-call lists (events, log, fired, entered, left, late steps) and OV; end
-        the one-call pulse of the ``S0 N`` rows of the steps left in the last call (their
+        """Clear the per-call lists (events, log, fired, entered, left, late steps) and OV and
+        the ``Tn.TT`` of the transitions leaving the steps left in the last call; end the
+        one-call pulse of the ``S0 N`` rows of the steps left in the last call (their
         operands back to 0 before anything of this call runs, docs/semantics.md, "Decisions":
         an event N row is a one-call pulse)."""
         self._done = 0
@@ -392,6 +393,12 @@ class GraphRuntime:
                 for i in st.left:
                     if pulse[i] is not None:
                         pulse[i](st)
+            # a transition no longer valid is not satisfied: Tn.TT of the transitions leaving
+            # the steps left back to 0 (step 4.1 evaluates those valid again)
+            tt, leaving = st.tt, self.cc.leaving
+            for i in st.left:
+                for j in leaving[i]:
+                    tt[j] = False
             st.left.clear()
         st.ov = False
 
