@@ -83,6 +83,7 @@ def step_action_parts(
     def val(e: Expr) -> str:
         return gen_value(e, g, resolve, sidx, tidx)
 
+    off_self = False  # a row above may switch the step itself off (``OFF Sn`` of its own)
     for row in rows:
         code = _row(i, row, g, resolve, val, sidx, tidx)
         q = row.qualifier.upper()
@@ -94,21 +95,13 @@ def step_action_parts(
             if q == "N" and isinstance(row.operand, Operand):  # a one-call pulse, as any
                 pulse_end.append(g.write(resolve(row.operand), "False"))  # event N row
             continue
-        if row.event is not None:
-            cond = f"ev & {EVENT_BITS[row.event]}"
-            if row.interlocked:
-                cond += " and c_ok"
-            if q == "N" and isinstance(row.operand, Operand):
-                # the one-call pulse: written every call while active
-                body.extend(_n_event(row, g, resolve, cond))
-                continue
-            body.append(f"if {cond}:")
-            body.extend(_indent(code))
-        elif row.interlocked and bit is None:
-            body.append("if c_ok:")
-            body.extend(_indent(code))
+        lines = _guarded(row, q, bit, code, g, resolve)
+        if off_self:  # the step is left once that row ran: the rows below it do not run
+            body.append("if X[_i]:")
+            body.extend(_indent(lines))
         else:
-            body.extend(code)
+            body.extend(lines)
+        off_self = off_self or _switches_itself_off(i, row, code)
     a_body = _indent(body) or ["    pass"]
     f_body = _indent(final_reset)
     if s0_rows:
@@ -125,6 +118,37 @@ def step_action_parts(
         _indent(s0_rows),
         p_src,
     )
+
+
+def _guarded(
+    row: ActionRow,
+    q: str,
+    bit: Operand | None,
+    code: list[str],
+    g: CodeGen,
+    resolve: Resolve,
+) -> list[str]:
+    """The statements of a row of an active step (not an S0 row) with its guard: its event
+    (and interlock) for an event row — an event N row is its one-call pulse, written every
+    call — the interlock for a row marked C but N, D, L (which gate their bit themselves)."""
+    if row.event is not None:
+        cond = f"ev & {EVENT_BITS[row.event]}"
+        if row.interlocked:
+            cond += " and c_ok"
+        if q == "N" and isinstance(row.operand, Operand):
+            return _n_event(row, g, resolve, cond)
+        return [f"if {cond}:", *_indent(code)]
+    if row.interlocked and bit is None:
+        return ["if c_ok:", *_indent(code)]
+    return code
+
+
+def _switches_itself_off(i: int, row: ActionRow, code: list[str]) -> bool:
+    """Whether ``row`` of step ``i`` (its statements ``code``) is ``OFF Sn`` of step ``i``
+    itself: once it ran, the step is left (its final scan done) and the rows below it do
+    not run — an N, D or L operand stays 0, as after any leaving (docs/semantics.md,
+    "Decisions")."""
+    return row.qualifier.upper() == "OFF" and code == [f"R.off({i})"]
 
 
 def _nld_bit(row: ActionRow) -> Operand | None:
