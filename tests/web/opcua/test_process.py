@@ -124,6 +124,17 @@ def _run(tmp_path: Path, *extra: str) -> Iterator[subprocess.Popen[str]]:
                 proc.wait(30)
 
 
+def _interrupt(proc: subprocess.Popen[str]) -> None:
+    """Ctrl-C to ``proc``; it must end within 30 s (else it is killed, and that fails)."""
+    proc.send_signal(signal.SIGINT)
+    try:
+        proc.wait(30)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait(30)
+        raise AssertionError(f"{proc.args} did not end within 30 s of Ctrl-C") from None
+
+
 def _line(proc: subprocess.Popen[str], pattern: str, timeout: float = 90.0) -> str:
     """The first line of ``proc``'s stdout matching ``pattern``."""
     assert proc.stdout is not None
@@ -192,8 +203,7 @@ def test_on_a_tls_bus_the_faces_log_users_in_and_their_commands_stop_and_start_t
             _line(face, r"^s7graph: opcua ")
             run(_stop_and_start(child_url, own_url))
         finally:
-            face.send_signal(signal.SIGINT)
-            face.wait(30)
+            _interrupt(face)
     rows = [r for r in read_audit(tmp_path / "state.sqlite") if r.op in ("stop", "start")]
     assert [(r.user, r.op, r.outcome) for r in rows] == [
         ("eng", "stop", "applied"),
@@ -279,8 +289,7 @@ def test_a_flood_of_opcua_requests_is_not_felt_by_the_cpu(tmp_path: Path) -> Non
             _line(face, r"^s7graph: opcua ")
             run(_flood(url, cpu.pid, face.pid, endpoint))
         finally:
-            face.send_signal(signal.SIGINT)
-            face.wait(30)
+            _interrupt(face)
 
 
 async def _flood(url: str, cpu_pid: int, face_pid: int, endpoint: str) -> None:
