@@ -19,6 +19,7 @@ from lark import Lark, Token, Transformer, Tree, v_args
 from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken, VisitError
 
 from s7graph.engine.errors import S7Error, SourceLocation
+from s7graph.engine.grammars import lark_parser
 
 __all__ = [
     "SAssign",
@@ -186,8 +187,8 @@ def absolute(node: Any, origin: tuple[int, int]) -> Any:
 
 @cache
 def _parser(start: str) -> Lark:
-    return Lark(
-        GRAMMAR.read_text(encoding="utf-8"),
+    return lark_parser(
+        GRAMMAR,
         parser="lalr",
         lexer="contextual",
         start=start,

@@ -42,12 +42,28 @@ class _Tables:
             (len(r.expansion), str(r.origin.name), _is_pass_through(r)) for r in self.rules
         ]
         # per state: (compiled union of the terminals, ignored, may hold newlines, callbacks)
-        self.lexers: dict[int, tuple[Any, frozenset[str], frozenset[str], dict[str, Any]]] = {}
-        for state, lexer in lark.parser.lexer.lexers.items():
-            mres = lexer.scanner._mres
-            if len(mres) != 1:  # lark split the union; not the case for this grammar
-                raise RuntimeError("fast parser: one scanner regex per state expected")
-            self.lexers[state] = (mres[0], lexer.ignore_types, lexer.newline_types, lexer.callback)
+        self.lexers = _Lexers(lark.parser.lexer.lexers)
+
+
+_Lexer = tuple[Any, frozenset[str], frozenset[str], dict[str, Any]]
+
+
+class _Lexers(dict[int, _Lexer]):
+    """Per parser state: (compiled union of its terminals, ignored, may hold newlines,
+    callbacks) — made when the state is first reached: compiling the unions of all states
+    took longer than parsing most charts, and a chart reaches a part of them."""
+
+    def __init__(self, lark_lexers: dict[int, Any]) -> None:
+        super().__init__()
+        self._lark = lark_lexers
+
+    def __missing__(self, state: int) -> _Lexer:
+        lexer = self._lark[state]
+        mres = lexer.scanner._mres
+        if len(mres) != 1:  # lark split the union; not the case for this grammar
+            raise RuntimeError("fast parser: one scanner regex per state expected")
+        made = self[state] = (mres[0], lexer.ignore_types, lexer.newline_types, lexer.callback)
+        return made
 
 
 def _is_pass_through(rule: Any) -> bool:

@@ -39,6 +39,7 @@ from lark.parse_tree_builder import ParseTreeBuilder
 from lark.parsers.lalr_parser import _Parser
 
 from s7graph.engine.errors import S7Error, SourceLocation
+from s7graph.engine.grammars import lark_parser
 from s7graph.engine.text import NotUtf8, decode_utf8
 from s7graph.sequencer.checks.diagnostics import Diagnostic, error, format_diagnostic
 from s7graph.sequencer.collector import collector_paused
@@ -63,8 +64,8 @@ class ChartSyntaxError(S7Error):
 
 @cache
 def _parser() -> Lark:
-    return Lark(
-        GRAMMAR.read_text(encoding="utf-8"),
+    return lark_parser(
+        GRAMMAR,
         parser="lalr",
         lexer="contextual",
         maybe_placeholders=True,

@@ -21,6 +21,7 @@ from lark import Lark, Token, Transformer, Tree, v_args
 from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken, VisitError
 
 from s7graph.engine.errors import SourceLocation
+from s7graph.engine.grammars import lark_parser
 from s7graph.steps.scl import model as m
 from s7graph.steps.scl.comments import blank_comments
 from s7graph.steps.scl.diagnostics import Diagnostic, Problem, SclError, error
@@ -40,8 +41,8 @@ _EXPRESSIONS = frozenset({"binary", "unary", "operand"})
 
 @cache
 def _parser() -> Lark:
-    return Lark(
-        GRAMMAR.read_text(encoding="utf-8"),
+    return lark_parser(
+        GRAMMAR,
         parser="lalr",
         lexer="contextual",
         propagate_positions=True,
