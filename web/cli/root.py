@@ -1274,12 +1274,36 @@ def audit(
 
 
 @functools.cache
-def _command() -> Any:
+def _command(name: str = "") -> Any:
     """``app`` as the click command typer makes of it, the credential options given to
-    every command on the bus: built once per process, not per call (typer reads every
-    command's signature for it, some 40 ms)."""
+    every command on the bus: built once per process, not per call. With ``name`` one of
+    its commands, the group holds that command alone: typer reads each command's signature
+    and builds its options (some 80 ms for all of them), and a process runs one."""
+    _credentials_added()
+    chosen = [info for info in app.registered_commands if _name_of(info) == name]
+    if not chosen:  # --help, --version, a misspelled command: the whole group
+        return get_command(app)
+    one = typer.Typer(add_completion=False, help=app.info.help, pretty_exceptions_enable=False)
+    one.registered_callback = app.registered_callback
+    one.registered_commands = chosen
+    return get_command(one)
+
+
+@functools.cache
+def _credentials_added() -> None:
     _credentials_everywhere()
-    return get_command(app)
+
+
+def _name_of(info: Any) -> str:
+    """The command's name on the command line (typer's rule: the function's, ``_`` → ``-``)."""
+    callback = info.callback
+    return str(info.name or (callback.__name__.lower().replace("_", "-") if callback else ""))
+
+
+def _command_word(argv: list[str] | None) -> str:
+    """The first word of the command line that is not an option: the command's name."""
+    words = sys.argv[1:] if argv is None else argv
+    return next((w for w in words if not w.startswith("-")), "")
 
 
 def _doing(argv: list[str] | None) -> str:
@@ -1294,7 +1318,7 @@ def main(argv: list[str] | None = None) -> int:
     supervisor of a ``run`` is not wanted); turns every known error into one stderr line.
     ``argv`` None: the program's command line."""
     try:
-        rc = _command()(args=argv, standalone_mode=False)
+        rc = _command(_command_word(argv))(args=argv, standalone_mode=False)
     except S7Error as exc:
         print(f"s7graph: error: {exc}", file=sys.stderr)
         return 2

@@ -32,6 +32,23 @@ def test_version_prints_the_distribution_version(capsys: pytest.CaptureFixture[s
     assert capsys.readouterr().out.startswith("s7graph ")
 
 
+def test_a_command_is_built_alone_and_the_help_lists_them_all(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """The command line builds the command it runs, not the others (typer reads each
+    command's signature); ``--help`` and a misspelled name get the whole group."""
+    from s7graph.web.cli import root
+
+    assert list(root._command("check").commands) == ["check"]
+    assert {"check", "run", "sim", "ack", "mode", "opcua"} <= set(root._command("").commands)
+    assert main(["mode", "--help"]) == 0
+    assert " mode [OPTIONS]" in capsys.readouterr().out
+    assert main(["--help"]) == 0
+    assert "download" in capsys.readouterr().out
+    assert main(["chek"]) == 2
+    assert "No such command 'chek'" in capsys.readouterr().err
+
+
 def test_check_loads_no_viser_zenoh_or_numpy() -> None:
     """``s7graph check`` starts fast: it imports only what checking a chart needs (the
     view's and the bus's libraries are imported by ``run`` alone)."""
@@ -57,7 +74,7 @@ def test_an_internal_error_of_a_command_is_one_line_in_words(
     def broken(**kwargs: object) -> int:
         raise KeyError("x")
 
-    monkeypatch.setattr(root, "_command", lambda: broken)
+    monkeypatch.setattr(root, "_command", lambda name="": broken)
     assert main(["check", "--quiet", "drill.s7g"]) == 2
     err = capsys.readouterr().err
     assert err == (
