@@ -1308,8 +1308,7 @@ def _command_word(argv: list[str] | None) -> str:
 
 def _doing(argv: list[str] | None) -> str:
     """Where an internal error happened, in words: ``while running s7graph watch``."""
-    words = sys.argv[1:] if argv is None else argv
-    name = next((w for w in words if not w.startswith("-")), "")
+    name = _command_word(argv)
     return f"while running s7graph {name}"[:120].rstrip() if name.isprintable() else ""
 
 
