@@ -101,7 +101,7 @@ def step_action_parts(
             body.extend(_indent(lines))
         else:
             body.extend(lines)
-        off_self = off_self or _switches_itself_off(i, row, code)
+        off_self = off_self or _switches_itself_off(i, row, sidx)
     a_body = _indent(body) or ["    pass"]
     f_body = _indent(final_reset)
     if s0_rows:
@@ -143,12 +143,17 @@ def _guarded(
     return code
 
 
-def _switches_itself_off(i: int, row: ActionRow, code: list[str]) -> bool:
-    """Whether ``row`` of step ``i`` (its statements ``code``) is ``OFF Sn`` of step ``i``
-    itself: once it ran, the step is left (its final scan done) and the rows below it do
-    not run — an N, D or L operand stays 0, as after any leaving (docs/semantics.md,
-    "Decisions")."""
-    return row.qualifier.upper() == "OFF" and code == [f"R.off({i})"]
+def _switches_itself_off(i: int, row: ActionRow, sidx: StepIndex) -> bool:
+    """Whether ``row`` of step ``i`` is ``OFF Sn`` of step ``i`` itself: once it ran, the
+    step is left (its final scan done) and the rows below it do not run — an N, D or L
+    operand stays 0, as after any leaving (docs/semantics.md, "Decisions")."""
+    op = row.operand
+    return (
+        row.qualifier.upper() == "OFF"
+        and isinstance(op, StepTarget)
+        and op.step is not None
+        and sidx(op.step, op.loc) == i
+    )
 
 
 def _nld_bit(row: ActionRow) -> Operand | None:
