@@ -144,10 +144,17 @@ def _panels(plant: Plant) -> dict[int, Any]:
     return plant.edge.edge.view.panels  # type: ignore[no-any-return]
 
 
-def _panel(plant: Plant) -> Any:
-    """The panel of the page opened last."""
-    panels = _panels(plant)
-    return panels[max(panels)]
+def _panel(plant: Plant, peer: Peer) -> Any:
+    """The panel of ``peer``'s page, known by the uuid of its "Show step" field (a page is
+    sent its fields while its panel is built, so the panel is kept a moment later)."""
+    uuid = peer.uuids["Show step"]
+
+    def found() -> Any:
+        mine = [p for p in list(_panels(plant).values()) if p.detail_step._impl.uuid == uuid]
+        return mine[0] if mine else None
+
+    assert wait_until(lambda: found() is not None, 20), "the page's panel was never kept"
+    return found()
 
 
 def test_bad_value_says_what_each_field_takes() -> None:
@@ -221,7 +228,7 @@ def test_a_malformed_frame_or_an_upload_closes_only_its_websocket_with_a_reason(
 def test_a_gui_update_of_the_wrong_type_is_ignored_with_a_notice_naming_the_field(
     plant: Plant, peer: Peer, capfd: pytest.CaptureFixture[str]
 ) -> None:
-    panel = _panel(plant)
+    panel = _panel(plant, peer)
     step = panel.step_number.value
     for value, why in [
         ("abc", "Step: a finite number is expected, not text"),
