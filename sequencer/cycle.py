@@ -29,6 +29,7 @@ visited.
 
 from __future__ import annotations
 
+import itertools
 import operator
 from collections.abc import Callable, Iterable
 from typing import Any
@@ -383,8 +384,6 @@ class GraphRuntime:
             st.ev_steps.clear()
         if st.log:
             st.log.clear()
-        if st.fired:
-            st.fired.clear()
         if st.entered:
             st.entered.clear()
         if st.left:
@@ -393,14 +392,21 @@ class GraphRuntime:
                 for i in st.left:
                     if pulse[i] is not None:
                         pulse[i](st)
-            # a transition no longer valid is not satisfied: Tn.TT of the transitions leaving
-            # the steps left back to 0 (step 4.1 evaluates those valid again)
-            tt, leaving = st.tt, self.cc.leaving
-            for i in st.left:
-                for j in leaving[i]:
-                    tt[j] = False
+            self._invalid(itertools.chain.from_iterable(self.cc.leaving[i] for i in st.left))
             st.left.clear()
+        if st.fired:
+            self._invalid(st.fired)  # also those out of a step skip steps passed through
+            st.fired.clear()
         st.ov = False
+
+    def _invalid(self, transitions: Iterable[int]) -> None:
+        """A transition no longer valid is not satisfied: ``Tn.TT`` of ``transitions`` whose
+        preceding steps are not all active back to 0 (step 4.1 evaluates those valid again)."""
+        st, tr_src = self.st, self.cc.tr_src
+        x, tt = st.x, st.tt
+        for j in transitions:
+            if tt[j] and not all(x[s] for s in tr_src[j]):
+                tt[j] = False
 
     def _requests(self, rose: set[str]) -> None:
         st = self.st

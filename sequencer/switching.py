@@ -115,12 +115,19 @@ def switch(
         for s in tr_src[j]:
             if x[s]:
                 rt._deactivate(s)
+    if st.sskip_enabled:
+        first = len(st.entered)
+        times = _Times(st)
+        for j in fire:
+            for d in tr_dst[j]:
+                if not x[d]:
+                    times.enter(rt, d)
+        skip(rt, rule, held, first, times)
+        return
     for j in fire:
         for d in tr_dst[j]:
             if not x[d]:
                 rt._activate(d)
-    if st.sskip_enabled:
-        skip(rt, rule, held)
 
 
 def _outranked(
@@ -146,15 +153,44 @@ def _outranked(
     return False
 
 
-def skip(rt: _Runtime, rule: Callable[[bool, bool], bool], held: frozenset[int]) -> None:
-    """Skip steps: a step entered in this call whose leaving transition already holds is
-    passed through without being active (no S1, no actions; docs/semantics.md, "Decisions"). A
-    step ``held`` (activated by INIT_SQ, the first call or S_ON) is never passed through."""
+class _Times:
+    """The step times of the steps a switch activates, as they were before (a step passed
+    through keeps the time of its last activation: it never becomes active)."""
+
+    def __init__(self, st: GraphState) -> None:
+        self.st = st
+        self.before: dict[int, tuple[int, int, int]] = {}
+
+    def enter(self, rt: _Runtime, i: int) -> None:
+        """Activate step ``i``, its times kept aside."""
+        st = self.st
+        self.before.setdefault(i, (st.t_ns[i], st.u_ns[i], st.act_ns[i]))
+        rt._activate(i)
+
+    def restore(self, i: int) -> None:
+        """Give step ``i`` back the times it had before this call activated it."""
+        st = self.st
+        st.t_ns[i], st.u_ns[i], st.act_ns[i] = self.before[i]
+
+
+def skip(
+    rt: _Runtime,
+    rule: Callable[[bool, bool], bool],
+    held: frozenset[int],
+    first: int,
+    times: _Times,
+) -> None:
+    """Skip steps: a step this switch entered (``st.entered[first:]``) whose leaving
+    transition already holds is passed through without being active (no S1, no actions;
+    its ``Sn.T`` and ``Sn.U`` those of its last activation; docs/semantics.md,
+    "Decisions"). A step ``held`` (activated by INIT_SQ, the first call or S_ON) or entered
+    earlier in the call (by another sequencer, whose rows already ran) is never passed
+    through."""
     st = rt.st
     cc = rt.cc
     for _ in range(st.n_steps):
         moved = False
-        for i in list(st.entered):
+        for i in st.entered[first:]:
             if not st.x[i] or i in held:
                 continue
             for j in cc.leaving[i]:
@@ -166,21 +202,28 @@ def skip(rt: _Runtime, rule: Callable[[bool, bool], bool], held: frozenset[int])
                 if not rule(v, False):
                     continue
                 for s in srcs:
-                    if s in st.entered:  # passed through: never active
-                        st.x[s] = False
-                        st.active.remove(s)
-                        if rt.multi:
-                            rt._by_seq[cc.step_seq[s]].remove(s)
-                        st.entered.remove(s)
-                        st.ev[s] &= ~EV_S1
-                        st.log = [e for e in st.log if e != (s, EV_S1)]
+                    if s in times.before and s in st.entered[first:]:  # never active
+                        _pass_through(rt, s, first)
+                        times.restore(s)
                     elif st.x[s]:
                         rt._deactivate(s)
                 st.fired.append(j)
                 for d in cc.tr_dst[j]:
                     if not st.x[d]:
-                        rt._activate(d)
+                        times.enter(rt, d)
                 moved = True
                 break
         if not moved:
             return
+
+
+def _pass_through(rt: _Runtime, s: int, first: int) -> None:
+    """Take step ``s``, entered by this switch, back out as if it had never been active."""
+    st = rt.st
+    st.x[s] = False
+    st.active.remove(s)
+    if rt.multi:
+        rt._by_seq[rt.cc.step_seq[s]].remove(s)
+    del st.entered[first + st.entered[first:].index(s)]
+    st.ev[s] &= ~EV_S1
+    st.log = [e for e in st.log if e != (s, EV_S1)]
