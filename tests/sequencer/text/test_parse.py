@@ -72,6 +72,16 @@ def test_interlock_mark_joined_or_apart_means_the_same() -> None:
     ]
 
 
+def test_a_variable_named_c_is_assigned_not_taken_for_the_interlock_mark() -> None:
+    """``N C := …`` assigns the variable C; ``N C x := …`` is the mark, then an assignment."""
+    rows = chart_with_rows(
+        "    S0 N C := MW0 AND W#16#FFF0; N c := 1; N C E := C;",
+        header="VAR C : WORD; E : WORD; END_VAR",
+    )
+    assert [(r.qualifier, r.interlocked) for r in rows] == [("N", False)] * 2 + [("N", True)]
+    assert [r.operand.target.name for r in rows] == ["C", "c", "E"]  # type: ignore[union-attr]
+
+
 def test_counter_qualifiers_are_not_s_or_r_with_the_mark() -> None:
     rows = chart_with_rows("    S1 CS C 5, C#5; S1 CU C 5; S1 CU C C 6; S1 CR C2; S1 CD C3;")
     assert [(r.qualifier, r.interlocked) for r in rows] == [
