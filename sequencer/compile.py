@@ -126,7 +126,17 @@ def _addr_ref(addr: Any, type_name: str | None, name: str) -> Ref:
     t = type_name or WIDTH_TYPE[int(addr.width)]
     if addr.width is Width.BIT:
         t = "BOOL"
-    return Ref("mem", t, name=name, area=str(addr.area), db=addr.db, byte=addr.byte, bit=addr.bit)
+    flex = type_name is None and addr.width is not Width.BIT
+    return Ref(
+        "mem",
+        t,
+        name=name,
+        area=str(addr.area),
+        db=addr.db,
+        byte=addr.byte,
+        bit=addr.bit,
+        flex=flex,
+    )
 
 
 def compile_chart(chart: Chart, symbols: Any = None) -> CompiledChart:

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from dataclasses import replace
 from typing import Any
 
 from s7graph.engine.datatypes import string_chars
@@ -42,6 +43,7 @@ _COMPLEMENT = frozenset({"INT", "DINT"})
 RANGE = {"INT": (-32768, 32767), "DINT": (-(2**31), 2**31 - 1), "TIME": (-(2**31), 2**31 - 1)}
 MASK = {"BYTE": 0xFF, "CHAR": 0xFF, "WORD": 0xFFFF, "DWORD": 0xFFFFFFFF}
 LOGIC = frozenset({"AND", "OR", "XOR"})
+_SHIFTS = frozenset({"SHL", "SHR", "SSR", "ROL", "ROR"})
 COMPARE = {"=": "==", "<>": "!=", "<": "<", ">": ">", "<=": "<=", ">=": ">="}
 
 # name -> (result type or None = same as argument, Python helper name)
@@ -72,6 +74,66 @@ FUNCTIONS: dict[str, tuple[str | None, str]] = {
 }
 
 
+# The argument types each function takes, and what it gives for each (the type check reads
+# it, ``sequencer.checks.types``; an untyped address argument is read as the first of them
+# its width allows): STEP7 comprehensive guide vol. 2, ch. 14.
+ARGUMENTS: dict[str, dict[str, str]] = {
+    "BCD_TO_NUM": {"WORD": "INT", "DWORD": "DINT"},
+    "NUM_TO_BCD": {"INT": "WORD", "DINT": "DWORD"},
+    "INT_TO_DINT": {"INT": "DINT"},
+    "DINT_TO_REAL": {"DINT": "REAL"},
+    "ROUND": {"REAL": "DINT"},
+    "TRUNC": {"REAL": "DINT"},
+    "NEG": {"INT": "INT", "DINT": "DINT", "REAL": "REAL"},
+    "NOT": {"INT": "INT", "DINT": "DINT", "WORD": "WORD", "DWORD": "DWORD"},
+    "SWAP": {"WORD": "WORD", "DWORD": "DWORD"},
+    "RLDA": {"DWORD": "DWORD"},
+    "RRDA": {"DWORD": "DWORD"},
+    **{
+        f: {"REAL": "REAL"}
+        for f in (
+            "NEGR",
+            "ABS",
+            "SQR",
+            "SQRT",
+            "LN",
+            "EXP",
+            "SIN",
+            "ASIN",
+            "COS",
+            "ACOS",
+            "TAN",
+            "ATAN",
+        )
+    },
+}
+_DOUBLE = ("DINT", "REAL", "TIME", "DWORD")
+"""What an untyped double-word address may stand for, in the order the type check tries."""
+
+
+def settled(ref: Ref, context: str) -> Ref:
+    """``ref`` read or written beside a value of type ``context``: an untyped double word
+    (``MD20``, ``ref.flex``) beside a REAL holds a REAL's bits (``MD20 > 1.5`` compares as
+    ``L MD20`` / ``>R`` does), else ``ref`` as it is."""
+    if ref.flex and context == "REAL" and ref.type == "DINT":
+        return replace(ref, type="REAL")
+    return ref
+
+
+def _operand_beside(
+    e: Expr, context: str, g: CodeGen, resolve: Resolve, number: bool = True
+) -> str | None:
+    """The read of operand ``e`` settled by ``context`` (``settled``), or None when ``e``
+    is not an operand so settled."""
+    if not isinstance(e, Operand):
+        return None
+    ref = resolve(e)
+    new = settled(ref, context)
+    if new is ref:
+        return None
+    return g.read_number(new) if number else g.read(new)
+
+
 def expr_type(e: Expr, resolve: Resolve, number: bool = False) -> str:
     """The S7 type of an expression (for code selection and the same-type check);
     ``number``: where a number is expected (a timer or counter cell is its INT value)."""
@@ -97,7 +159,7 @@ def expr_type(e: Expr, resolve: Resolve, number: bool = False) -> str:
             return "BOOL"
         arith = e.op.upper() not in LOGIC
         lt, rt = expr_type(e.left, resolve, arith), expr_type(e.right, resolve, arith)
-        if e.op in ("SHL", "SHR", "SSR", "ROL", "ROR"):
+        if e.op in _SHIFTS:
             return lt
         if lt == "BOOL" and rt == "BOOL":
             return "BOOL"
@@ -149,46 +211,65 @@ def gen_value(
         t = expr_type(e.operand, resolve, True)
         return _checked(f"-({inner})", t) if t in RANGE else f"(-({inner}))"
     if isinstance(e, FuncCall):
-        name = e.name.upper()
-        if name not in FUNCTIONS:
-            raise TypeMismatch(f"unknown function {e.name}", e.loc)
-        args = [gen_value(a, g, resolve, sidx, tidx, True) for a in e.args]
-        t = expr_type(e.args[0], resolve, True) if e.args else "DINT"
-        _, helper = FUNCTIONS[name]
-        if helper in ("int", "float"):
-            return f"{helper}({args[0]})"
-        return f"{helper}(st, {', '.join(args)}, {t!r})"
+        return _gen_call(e, g, resolve, sidx, tidx)
     if isinstance(e, Binary):
-        op = e.op.upper()
-        arith = op not in LOGIC
-        left = gen_value(e.left, g, resolve, sidx, tidx, arith)
-        right = gen_value(e.right, g, resolve, sidx, tidx, arith)
-        if op in COMPARE:
-            return f"({left} {COMPARE[op]} {right})"
-        t = expr_type(e, resolve)
-        if op in LOGIC:
-            py = {"AND": "and", "OR": "or", "XOR": "!="}[op]
-            if t == "BOOL":
-                if op == "XOR":
-                    return f"(bool({left}) != bool({right}))"
-                return f"(bool({left}) {py} bool({right}))"
-            py = {"AND": "&", "OR": "|", "XOR": "^"}[op]
-            return f"(({left}) {py} ({right}))"
-        if op in ("SHL", "SHR", "SSR", "ROL", "ROR"):
-            return f"_shift(st, {op!r}, {left}, {right}, {t!r})"
-        if op in ("+", "-", "*"):
-            src = f"(({left}) {op} ({right}))"
-            if t in RANGE:
-                return _checked(src, t)
-            if t in MASK:
-                return f"({src} & {MASK[t]})"
-            return src
-        if op == "/":
-            return f"_div(st, {left}, {right}, {t!r})"
-        if op == "MOD":
-            return f"_mod(st, {left}, {right}, {t!r})"
-        raise TypeMismatch(f"unknown operator {e.op}", e.loc)
+        return _gen_binary(e, g, resolve, sidx, tidx)
     raise TypeMismatch(f"not an expression: {e!r}")
+
+
+def _gen_call(e: FuncCall, g: CodeGen, resolve: Resolve, sidx: StepIndex, tidx: StepIndex) -> str:
+    """A call of one of ``FUNCTIONS`` (an untyped double word given to a REAL function is
+    read as a REAL)."""
+    name = e.name.upper()
+    if name not in FUNCTIONS:
+        raise TypeMismatch(f"unknown function {e.name}", e.loc)
+    args = [gen_value(a, g, resolve, sidx, tidx, True) for a in e.args]
+    t = expr_type(e.args[0], resolve, True) if e.args else "DINT"
+    takes = next((a for a in ARGUMENTS.get(name, {}) if a in _DOUBLE), "")
+    if e.args and (real := _operand_beside(e.args[0], takes, g, resolve)) is not None:
+        args[0], t = real, "REAL"
+    _, helper = FUNCTIONS[name]
+    if helper in ("int", "float"):
+        return f"{helper}({args[0]})"
+    return f"{helper}(st, {', '.join(args)}, {t!r})"
+
+
+def _gen_binary(e: Binary, g: CodeGen, resolve: Resolve, sidx: StepIndex, tidx: StepIndex) -> str:
+    """A comparison, logic, a shift or arithmetic (an untyped double word beside a REAL is
+    read as a REAL)."""
+    op = e.op.upper()
+    arith = op not in LOGIC
+    left = gen_value(e.left, g, resolve, sidx, tidx, arith)
+    right = gen_value(e.right, g, resolve, sidx, tidx, arith)
+    if arith and op not in _SHIFTS:  # an untyped double word beside a REAL is one
+        lt, rt = expr_type(e.left, resolve, True), expr_type(e.right, resolve, True)
+        left = _operand_beside(e.left, rt, g, resolve) or left
+        right = _operand_beside(e.right, lt, g, resolve) or right
+    if op in COMPARE:
+        return f"({left} {COMPARE[op]} {right})"
+    t = expr_type(e, resolve)
+    if op in LOGIC:
+        py = {"AND": "and", "OR": "or", "XOR": "!="}[op]
+        if t == "BOOL":
+            if op == "XOR":
+                return f"(bool({left}) != bool({right}))"
+            return f"(bool({left}) {py} bool({right}))"
+        py = {"AND": "&", "OR": "|", "XOR": "^"}[op]
+        return f"(({left}) {py} ({right}))"
+    if op in _SHIFTS:
+        return f"_shift(st, {op!r}, {left}, {right}, {t!r})"
+    if op in ("+", "-", "*"):
+        src = f"(({left}) {op} ({right}))"
+        if t in RANGE:
+            return _checked(src, t)
+        if t in MASK:
+            return f"({src} & {MASK[t]})"
+        return src
+    if op == "/":
+        return f"_div(st, {left}, {right}, {t!r})"
+    if op == "MOD":
+        return f"_mod(st, {left}, {right}, {t!r})"
+    raise TypeMismatch(f"unknown operator {e.op}", e.loc)
 
 
 def gen_assigned(
@@ -198,6 +279,8 @@ def gen_assigned(
     ``e`` as values, a BOOL target as status bits (``gen_value``'s ``number``). A
     ``STRING[n]`` target keeps the value's first ``n`` characters, as S7 does."""
     value = gen_value(e, g, resolve, sidx, tidx, target.type != "BOOL")
+    value = _operand_beside(e, target.type, g, resolve) or value
+    target = settled(target, expr_type(e, resolve, True))
     if (n := string_chars(target.type)) is not None:
         value = f"({value})[:{n}]"
     return g.write(target, value)

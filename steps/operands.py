@@ -63,6 +63,9 @@ class Ref:
     index: int = 0
     attr: str = ""
     number: int = 0
+    flex: bool = False
+    """An absolute address without a declared type (``MD20``): its width gives ``type``,
+    and a value beside it may settle another of that width (``expressions.settled``)."""
 
 
 @dataclass

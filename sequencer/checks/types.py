@@ -33,6 +33,7 @@ from s7graph.sequencer.text.model import (
     Unary,
 )
 from s7graph.sequencer.text.names import Resolved, resolve_operand
+from s7graph.steps.expressions import ARGUMENTS
 
 COMPARABLE: Final = frozenset({"INT", "DINT", "REAL", "TIME"})
 COMPARISONS: Final = frozenset({"=", "<>", "<", ">", "<=", ">="})
@@ -56,38 +57,8 @@ _FLEX_DEFAULT: Final = {
 }
 _CELL_FLEX: Final = {"TIMER": "@T", "COUNTER": "@C"}
 _ADDRESS_FLEX: Final = {"BYTE": "@8", "WORD": "@16", "DWORD": "@32"}
-# Built-in functions of STEP7 comprehensive guide vol. 2, ch. 14: name → {argument type: result
-# type}.
-FUNCTIONS: Final[dict[str, dict[str, str]]] = {
-    "BCD_TO_NUM": {"WORD": "INT", "DWORD": "DINT"},
-    "NUM_TO_BCD": {"INT": "WORD", "DINT": "DWORD"},
-    "INT_TO_DINT": {"INT": "DINT"},
-    "DINT_TO_REAL": {"DINT": "REAL"},
-    "ROUND": {"REAL": "DINT"},
-    "TRUNC": {"REAL": "DINT"},
-    "NEG": {"INT": "INT", "DINT": "DINT", "REAL": "REAL"},
-    "NOT": {"INT": "INT", "DINT": "DINT", "WORD": "WORD", "DWORD": "DWORD"},
-    "SWAP": {"WORD": "WORD", "DWORD": "DWORD"},
-    "RLDA": {"DWORD": "DWORD"},
-    "RRDA": {"DWORD": "DWORD"},
-    **{
-        f: {"REAL": "REAL"}
-        for f in (
-            "NEGR",
-            "ABS",
-            "SQR",
-            "SQRT",
-            "LN",
-            "EXP",
-            "SIN",
-            "ASIN",
-            "COS",
-            "ACOS",
-            "TAN",
-            "ATAN",
-        )
-    },
-}
+# Built-in functions: name → {argument type: result type} (``steps.expressions.ARGUMENTS``).
+FUNCTIONS: Final = ARGUMENTS
 _SHIFT_LEFT: Final = {
     "SHL": ("WORD", "DWORD"),
     "SHR": ("WORD", "DWORD"),
