@@ -28,6 +28,7 @@ import re
 from collections.abc import Callable
 from contextvars import ContextVar
 from copy import copy
+from dataclasses import replace
 from functools import cache
 from pathlib import Path
 from typing import Any, Final
@@ -45,6 +46,7 @@ from s7graph.sequencer.checks.diagnostics import Diagnostic, error, format_diagn
 from s7graph.sequencer.collector import collector_paused
 from s7graph.sequencer.text.build import _NEEDS_FIRST, _NEEDS_LAST, _Build
 from s7graph.sequencer.text.comments import attach_comments
+from s7graph.sequencer.text.enclosing import enclosing_element
 from s7graph.sequencer.text.lalr import _fast_parse, _GiveUp, _Tables
 from s7graph.sequencer.text.model import Chart
 
@@ -171,7 +173,20 @@ def _end_of(text: str) -> tuple[int, int]:
 
 
 def _syntax_diagnostic(e: UnexpectedInput, file: str, text: str) -> Diagnostic:
-    """Phrase a lark error for a PLC programmer: what was found, what was expected."""
+    """Phrase a lark error for a PLC programmer: what was found, what was expected, and
+    the step or transition it lies in."""
+    return _placed([_phrased(e, file, text)], text)[0]
+
+
+def _placed(diags: list[Diagnostic], text: str) -> list[Diagnostic]:
+    """``diags``, each naming the step or transition of ``text`` it lies in."""
+    return [
+        d if d.element else replace(d, element=enclosing_element(text, d.loc.line, d.loc.col))
+        for d in diags
+    ]
+
+
+def _phrased(e: UnexpectedInput, file: str, text: str) -> Diagnostic:
     loc = SourceLocation(file, e.line if e.line and e.line > 0 else 1, max(e.column or 1, 1))
     if isinstance(e, UnexpectedToken):
         tok = e.token
@@ -313,7 +328,7 @@ def parse_chart(text: str, file: str = "<input>") -> Chart:
     syntax diagnostics (file:line:col, what was found and what was expected). The garbage collector
     is paused meanwhile (``sequencer.collector``)."""
     if long := _long_numbers(text, file):
-        raise ChartSyntaxError(long)
+        raise ChartSyntaxError(_placed(long, text))
     with collector_paused():
         return attach_comments(_parse_chart(text, file), text)
 
@@ -348,7 +363,7 @@ def _parse_chart(text: str, file: str) -> Chart:
         pass  # the fast path is only a shortcut; lark's own parser below is the reference
     else:
         if builder.diags:
-            raise ChartSyntaxError(builder.diags)
+            raise ChartSyntaxError(_placed(builder.diags, text))
         return chart  # type: ignore[no-any-return]
     finally:
         _COMMENTS.reset(token)
@@ -372,7 +387,7 @@ def _parse_chart(text: str, file: str) -> Chart:
     if diags:
         raise ChartSyntaxError(diags)
     if builder.diags:
-        raise ChartSyntaxError(builder.diags)
+        raise ChartSyntaxError(_placed(builder.diags, text))
     return chart  # type: ignore[no-any-return]
 
 

@@ -1,5 +1,6 @@
 """Each broken chart in ``broken/`` states its expected diagnostic in its first line
-(``// expect: CODE line:col``); the front end must report exactly that code there. A chart
+(``// expect: CODE line:col``, and ``(step S2)`` when it names the element it concerns); the
+front end must report exactly that code there. A chart
 with an S7-SCL source of the same name beside it is checked against that source's blocks
 (``s7graph check CHART.s7g --blocks CHART.scl``: E047)."""
 
@@ -34,9 +35,22 @@ def diagnostics_of(path: Path) -> list[Diagnostic]:
 
 
 def expectation(path: Path) -> tuple[str, int, int]:
-    m = re.match(r"// expect: (\w+) (\d+):(\d+)", path.read_text(encoding="utf-8"))
+    m = _EXPECT.match(path.read_text(encoding="utf-8"))
     assert m, f"{path.name} lacks its '// expect: CODE line:col' header"
     return m.group(1), int(m.group(2)), int(m.group(3))
+
+
+_EXPECT = re.compile(r"// expect: (\w+) (\d+):(\d+)(?: \((.+)\))?")
+NAMED = [p for p in FILES if (m := _EXPECT.match(p.read_text(encoding="utf-8"))) and m.group(4)]
+
+
+@pytest.mark.parametrize("path", NAMED, ids=[p.stem for p in NAMED])
+def test_a_syntax_error_names_the_step_or_transition_it_lies_in(path: Path) -> None:
+    m = _EXPECT.match(path.read_text(encoding="utf-8"))
+    assert m is not None
+    code, line, col = expectation(path)
+    found = {(d.code, d.loc.line, d.loc.col): d.element for d in diagnostics_of(path)}
+    assert found[code, line, col] == m.group(4)
 
 
 @pytest.mark.parametrize("path", FILES, ids=[p.stem for p in FILES])

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import pytest
 
+from s7graph.sequencer.text.enclosing import enclosing_element
 from s7graph.sequencer.text.model import (
     ActionRow,
     Assignment,
@@ -252,3 +253,17 @@ def test_a_chart_file_over_the_size_limit_is_refused_before_it_is_parsed() -> No
     (d,) = refused.value.diagnostics
     assert (d.code, d.loc.file, d.loc.line) == ("E001", "big.s7g", 1)
     assert d.message == "the file has 10,000,001 bytes: a chart file has at most 10,000,000"
+
+
+def test_the_element_of_a_place_is_read_past_comments_and_quoted_texts() -> None:
+    text = (
+        'SEQUENCE 1\n  STEP S2 "a;b": (* END_STEP *) N Q0.0;\n'
+        "  // TRANSITION T9\n  END_STEP\n  TRANSITION T1 FROM S1 TO S2 := I0.0;\n"
+        "PERMANENT BEFORE\n  M0.0 := I0.0;\nEND_PERMANENT\n"
+    )
+    assert enclosing_element(text, 2, 40) == "step S2"
+    assert enclosing_element(text, 3, 10) == "step S2"
+    assert enclosing_element(text, 5, 30) == "transition T1"
+    assert enclosing_element(text, 5, 40) == ""
+    assert enclosing_element(text, 7, 5) == "permanent before"
+    assert enclosing_element(text, 8, 14) == ""

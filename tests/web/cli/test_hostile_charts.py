@@ -114,7 +114,10 @@ def test_a_number_beyond_its_type_is_a_located_error(
         rc, out, err = _cli(capsys, command[0], str(path), *command[1:])
         (line,) = [x for x in (out + err).splitlines() if "error[" in x]
         assert rc == 2
-        assert line == f"{path}:6:38: error[E003]: a number of 4301 digits is beyond every type"
+        assert line == (
+            f"{path}:6:38: error[E003]: a number of 4301 digits is beyond every type"
+            " (transition T1)"
+        )
 
 
 def test_bytes_that_are_not_utf8_are_a_located_error_in_sim_as_in_check(
