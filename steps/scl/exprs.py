@@ -77,8 +77,8 @@ class Exprs:
         src, k = x.src, x.type.kind
         if t.kind == "STRING" and (k == "CHAR" or x.type.length > t.length):
             return f"_fit(_ok, {src}, {t.length})" if k != "CHAR" else src
-        if t.aggregate:
-            return f"_clone({src})"
+        if t.aggregate:  # member names may differ: then they are the target's
+            return f"_clone({src})" if x.type == t else f"_recast({src}, {self.b.const(t)})"
         if k == "BOOL" and t.kind != "BOOL":
             return f"int({src})"
         if t.kind == "REAL" and k == "INT":

@@ -25,10 +25,27 @@ from typing import Any
 from weakref import WeakKeyDictionary
 
 from s7graph.engine.address import Address, Area, Width
-from s7graph.engine.datatypes import DATE_EPOCH, REAL_MAX, check_value, decode, encode, s5time_to_ms
+from s7graph.engine.datatypes import (
+    DATE_EPOCH,
+    DATE_MAX,
+    DT_MAX,
+    DT_MIN,
+    REAL_MAX,
+    check_value,
+    decode,
+    encode,
+    s5time_to_ms,
+)
 from s7graph.engine.errors import BlockError, ProgramError, ScanAborted, TypeMismatch
 from s7graph.engine.instructions import instruction
-from s7graph.steps.scl.types import SclType, clone, element_stride, size_of, struct_layout
+from s7graph.steps.scl.types import (
+    SclType,
+    clone,
+    element_stride,
+    recast,
+    size_of,
+    struct_layout,
+)
 
 PASS_NS = 1_000
 """CPU time one pass of a loop (or one jump) counts for: 1 µs."""
@@ -206,11 +223,15 @@ def _date_to_dint(v: date) -> int:
 
 
 def _dint_to_date(ok: Ok, v: int) -> date:
-    try:
-        return DATE_EPOCH + timedelta(days=v)
-    except OverflowError:
+    """Days since 1990-01-01 as a DATE; beyond D#1990-01-01..D#2168-12-31 the nearest limit
+    and OK false."""
+    if v < 0:
         ok[0] = False
         return DATE_EPOCH
+    if v > (DATE_MAX - DATE_EPOCH).days:
+        ok[0] = False
+        return DATE_MAX
+    return DATE_EPOCH + timedelta(days=v)
 
 
 def _tod(v: int) -> int:
@@ -219,11 +240,16 @@ def _tod(v: int) -> int:
 
 
 def _dt_add(ok: Ok, dt: datetime, ms: int) -> datetime:
+    """DT + TIME; beyond DT#1990-01-01-0:0:0..DT#2089-12-31-23:59:59.999 the nearest limit
+    and OK false, as AD_DT_TM limits its result and clears BR."""
     try:
-        return dt + timedelta(milliseconds=ms)
+        out = dt + timedelta(milliseconds=ms)
     except OverflowError:
-        ok[0] = False
-        return dt
+        out = DT_MAX if ms > 0 else DT_MIN
+    if DT_MIN <= out <= DT_MAX:
+        return out
+    ok[0] = False
+    return DT_MAX if out > DT_MAX else DT_MIN
 
 
 def _dt_diff(ok: Ok, a: Any, b: Any) -> int:
@@ -253,7 +279,7 @@ def _right(ok: Ok, s: str, n: int) -> str:
     if n < 0:
         ok[0] = False
         return ""
-    return s[len(s) - n :] if n else ""
+    return s[max(len(s) - n, 0) :] if n else ""  # all of it when L is longer
 
 
 def _mid(ok: Ok, s: str, n: int, p: int) -> str:
@@ -523,6 +549,7 @@ RUNTIME: dict[str, Any] = {
     if name.startswith("_") and not name.startswith("__") and callable(obj)
 }
 RUNTIME["_clone"] = clone
+RUNTIME["_recast"] = recast
 RUNTIME["_date"] = date
 RUNTIME["_datetime"] = datetime
 """The names generated code finds in its module (each begins with ``_``)."""

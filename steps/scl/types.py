@@ -261,6 +261,21 @@ def clone(value: object) -> object:
     return value
 
 
+def recast(value: object, t: SclType) -> object:
+    """A copy of ``value`` as a value of ``t``, a type structurally the same as its own
+    (``same``): a STRUCT's members take ``t``'s names, in order — an assignment copies by
+    position, as S7-SCL does for STRUCTs whose members differ only in their names."""
+    if t.kind == "STRUCT" and isinstance(value, dict):
+        return {
+            name: recast(v, member)
+            for (name, member), v in zip(t.fields, value.values(), strict=True)
+        }
+    if t.kind == "ARRAY" and isinstance(value, list):
+        assert t.element is not None
+        return [recast(v, t if isinstance(v, list) else t.element) for v in value]
+    return clone(value)
+
+
 def engine_type(t: SclType) -> str:
     """The type name of a block interface (``engine.blocks.Var``): elementary names,
     ``STRING[n]``, and ``OBJECT`` for an aggregate (a list or dict value)."""

@@ -167,6 +167,9 @@ def test_numeric_functions() -> None:
         ("I_STRNG(-7)", "-7", True),
         ("R_STRNG(123.4567)", "+1.2345670E+02", True),
         ("LEFT(IN := 'abc', L := -1)", "", False),
+        ("LEFT(IN := 'abc', L := 5)", "abc", True),  # L beyond the string: all of it
+        ("RIGHT(IN := 'abc', L := 5)", "abc", True),
+        ("RIGHT(IN := 'abcdef', L := 4)", "cdef", True),
         ("'$41$4E'", "AN", True),
     ],
 )
@@ -237,6 +240,21 @@ def test_date_and_time_arithmetic() -> None:
     assert ok and (got.hour, got.minute) == (13, 0)
     assert value("D#1990-01-02 - D#1990-01-01", "TIME") == (86_400_000, True)
     assert value("DT#1995-01-01-12:00:01 - DT#1995-01-01-12:00:00", "TIME") == (1000, True)
+
+
+def test_a_date_beyond_the_s7_range_is_its_limit_with_ok_false() -> None:
+    """DT runs from 1990-01-01 to 2089-12-31-23:59:59.999, DATE to 2168-12-31: a result
+    beyond is the nearest limit and clears OK (AD_DT_TM limits its result and clears BR),
+    never a stop of the CPU."""
+    last = "t : DT := DT#2089-12-31-23:59:59;"
+    got, ok = value("t + T#1S", "DT", last)
+    assert not ok and (got.year, got.second, got.microsecond) == (2089, 59, 999000)
+    got, ok = value("t - T#1S", "DT", last.replace("2089-12-31-23:59:59", "1990-01-01-0:0:0"))
+    assert not ok and (got.year, got.month, got.day, got.hour) == (1990, 1, 1, 0)
+    got, ok = value("DINT_TO_DATE(70000)", "DATE")
+    assert not ok and (got.year, got.month, got.day) == (2168, 12, 31)
+    got, ok = value("DINT_TO_DATE(-1)", "DATE")
+    assert not ok and got.year == 1990
 
 
 @pytest.mark.parametrize(

@@ -107,6 +107,40 @@ END_ORGANIZATION_BLOCK
     assert db["AUXVAR"] == 1.5
 
 
+def test_a_structure_is_assigned_and_passed_by_position_whatever_its_member_names() -> None:
+    """Only the members' types and their order must match (Program Design for S7-300/400,
+    the rule for whole STRUCT assignments): the target keeps its own member names."""
+    src = """
+TYPE UDT1 STRUCT a : INT; b : REAL; END_STRUCT END_TYPE
+DATA_BLOCK DB20
+STRUCT
+  s1 : STRUCT x : INT; y : REAL; END_STRUCT;
+  s2 : UDT1;
+  rows : ARRAY[1..2] OF STRUCT p : INT; q : REAL; END_STRUCT;
+  r : INT;
+END_STRUCT
+BEGIN
+  s1.x := 4; s1.y := 2.5;
+END_DATA_BLOCK
+FUNCTION FC1 : INT
+VAR_INPUT p : UDT1; END_VAR
+  FC1 := p.a;
+END_FUNCTION
+ORGANIZATION_BLOCK OB1
+VAR_TEMP t : STRUCT p : INT; q : REAL; END_STRUCT; END_VAR
+  t := DB20.s1;
+  DB20.s2 := t;
+  DB20.rows[2] := DB20.s1;
+  DB20.r := FC1(p := DB20.s1);
+END_ORGANIZATION_BLOCK
+"""
+    mem = run(src).mem  # s1 at 0, s2 at 6, rows at 12 (6 bytes each), r at 24
+    real = bytes.fromhex("40200000")  # 2.5
+    assert mem.get("DB20.DBW6") == 4 and mem.dbs[20].data[8:12] == real
+    assert mem.get("DB20.DBW18") == 4 and mem.dbs[20].data[20:24] == real
+    assert mem.get("DB20.DBW24") == 4
+
+
 def test_strings_chars_and_dates_in_an_fc_and_an_fb() -> None:
     src = """
 FUNCTION FC4 : STRING[20]
