@@ -319,12 +319,24 @@ def _variables(
         if decl is Decl.TEMP or info.kind == "FC" or t.kind in ("FB", "TIMER", "COUNTER"):
             raise Problem("E216", "no initial value is allowed here", var.loc)
         init = initial(consts, t, var.init, var.loc)
-    elif t.kind == "STRUCT" and decl is not Decl.TEMP and info.kind == "FB":
-        init = struct_initial(prog, var.type, consts)
+    elif t.kind in ("STRUCT", "ARRAY") and decl is not Decl.TEMP and info.kind == "FB":
+        init = aggregate_initial(prog, var.type, consts)
     for name, loc in var.names:
         _fresh(seen, name, loc)
         param = Param(name, decl, t, init, loc)
         (info.temps if decl is Decl.TEMP else info.params)[name.upper()] = param
+
+
+def aggregate_initial(prog: Program, spec: m.TypeSpec, consts: Consts) -> object | None:
+    """The initial value of a STRUCT, or of an ARRAY of STRUCTs (each element the STRUCT's),
+    from the members' ``:= …`` (a UDT's included); None when no member has one."""
+    if isinstance(spec, m.ArrayType):
+        inner = aggregate_initial(prog, spec.element, consts)
+        if inner is None:
+            return None
+        count = resolve_type(prog, spec, consts).count
+        return [ty.clone(inner) for _ in range(count)]
+    return struct_initial(prog, spec, consts)
 
 
 def struct_initial(prog: Program, spec: m.TypeSpec, consts: Consts) -> dict[str, object] | None:
@@ -342,7 +354,7 @@ def struct_initial(prog: Program, spec: m.TypeSpec, consts: Consts) -> dict[str,
         v: object
         if decl.init is not None:
             v, given = initial(consts, t, decl.init, decl.loc), True
-        elif t.kind == "STRUCT" and (sub := struct_initial(prog, decl.type, consts)) is not None:
+        elif t.aggregate and (sub := aggregate_initial(prog, decl.type, consts)) is not None:
             v, given = sub, True
         else:
             v = ty.zero(t)

@@ -484,6 +484,34 @@ END_ORGANIZATION_BLOCK
     assert cpu.mem.get("DB11.DBW6") == 0x1919
 
 
+def test_every_element_of_an_array_of_structures_takes_their_initial_values() -> None:
+    """Wherever a UDT or a STRUCT is used — alone, as the element of an ARRAY, in an FB's
+    instance DB or a global DB — its members start at their ``:= …``."""
+    src = """
+TYPE UDT5 STRUCT on : BOOL := TRUE; sp : INT := 7; END_STRUCT END_TYPE
+DATA_BLOCK DB20
+STRUCT
+  one : UDT5;
+  arr : ARRAY[1..2] OF UDT5;
+  st : ARRAY[1..2] OF STRUCT a : INT := 5; END_STRUCT;
+END_STRUCT
+BEGIN
+END_DATA_BLOCK
+FUNCTION_BLOCK FB1
+VAR au : ARRAY[1..2] OF UDT5; END_VAR
+  ;
+END_FUNCTION_BLOCK
+ORGANIZATION_BLOCK OB1
+  FB1.DB1();
+END_ORGANIZATION_BLOCK
+"""
+    cpu = run(src)
+    assert cpu.instance_db(1)["au"] == [{"on": True, "sp": 7}] * 2
+    # one at 0 (BOOL, INT: 4 bytes), arr at 4 (4 bytes each), st at 12 (2 bytes each)
+    assert [cpu.mem.get(f"DB20.DBX{n}.0") for n in (0, 4, 8)] == [True] * 3
+    assert [cpu.mem.get(f"DB20.DBW{n}") for n in (2, 6, 10, 12, 14)] == [7, 7, 7, 5, 5]
+
+
 def test_an_index_out_of_bounds_is_a_located_block_error_ob121_else_stop() -> None:
     src = """
 FUNCTION_BLOCK FB1
