@@ -321,7 +321,8 @@ def element_stride(t: SclType) -> int:
 
 def struct_layout(t: SclType) -> tuple[dict[str, tuple[int, int]], int]:
     """Offsets ``(byte, bit)`` of a STRUCT's members and its size: consecutive BOOLs share
-    a byte, BYTE and CHAR take the next byte, everything else starts on an even byte."""
+    a byte, BYTE and CHAR take the next byte, everything else starts on an even byte, and
+    the member after a STRING, an ARRAY or a STRUCT too."""
     offsets: dict[str, tuple[int, int]] = {}
     byte, bit = 0, 0
     for name, ft in t.fields:
@@ -338,6 +339,8 @@ def struct_layout(t: SclType) -> tuple[dict[str, tuple[int, int]], int]:
             byte += byte & 1
         offsets[name] = (byte, 0)
         byte += size
+        if ft.kind == "STRING":  # what follows a STRING starts on an even byte, as after
+            byte += byte & 1  # an ARRAY or a STRUCT (whose sizes are even)
     if bit:
         byte += 1
     return offsets, byte + (byte & 1)

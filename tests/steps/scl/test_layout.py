@@ -46,6 +46,19 @@ def test_a_global_db_carries_every_variable_where_s7_lays_it_out() -> None:
     assert slots["pump.rpm"].type == "INT"
 
 
+def test_the_member_after_a_string_starts_on_an_even_byte() -> None:
+    """A STRING[3] takes 5 bytes; the BYTE after it starts at 6, as after an ARRAY or a
+    STRUCT (Program Design for S7-300/400, appendix C)."""
+    block = build(
+        "DATA_BLOCK DB20 STRUCT s : STRING[3]; b : BYTE; w : INT; END_STRUCT\n"
+        "BEGIN s := 'xyz'; b := 16#22; END_DATA_BLOCK\n"
+    ).block("DB20")
+    assert block.layout is not None
+    slots = block.layout.slots
+    assert (slots["s"].byte, slots["b"].byte, slots["w"].byte, block.size) == (0, 6, 8, 10)
+    assert block.init is not None and block.init[6] == 0x22
+
+
 def test_the_layout_places_each_variable_where_the_compiler_reads_it() -> None:
     program = build(DB)
     t = program.types["DB20"]
