@@ -198,6 +198,32 @@ def _signed(v: int, bits: int) -> int:
     return v - (1 << bits) if v >> (bits - 1) & 1 else v
 
 
+def _from_bcd(ok: Ok, v: int, bits: int) -> int:
+    """A BCD word (3 digits, the sign in bits 12-15) or double word (7 digits, bits 28-31)
+    as a number (WORD_BCD_TO_INT, DWORD_BCD_TO_DINT); a digit A-F: OK := FALSE and 0."""
+    digits = bits // 4 - 1
+    n = 0
+    for k in range(digits - 1, -1, -1):
+        d = v >> (4 * k) & 15
+        if d > 9:
+            ok[0] = False
+            return 0
+        n = n * 10 + d
+    return -n if v >> (bits - 1) & 1 else n
+
+
+def _to_bcd(ok: Ok, v: int, bits: int) -> int:
+    """A number as BCD (INT_TO_BCD_WORD: -999..999, DINT_TO_BCD_DWORD: ±9,999,999), the
+    sign nibble all ones when negative; beyond the digits: OK := FALSE and 0."""
+    digits = bits // 4 - 1
+    a = abs(v)
+    if a >= 10**digits:
+        ok[0] = False
+        return 0
+    r = int(str(a), 16)  # each decimal digit one nibble
+    return r | (15 << (bits - 4)) if v < 0 else r
+
+
 def _dword_to_real(v: int) -> float:
     """The 32 bits of a DWORD taken as a REAL (the bit pattern, not the number)."""
     return float(_F32.unpack(_U32.pack(v & 0xFFFF_FFFF))[0])

@@ -242,6 +242,27 @@ def test_date_and_time_arithmetic() -> None:
     assert value("DT#1995-01-01-12:00:01 - DT#1995-01-01-12:00:00", "TIME") == (1000, True)
 
 
+@pytest.mark.parametrize(
+    ("expr", "rtype", "expected"),
+    [
+        ("WORD_BCD_TO_INT(16#0123)", "INT", (123, True)),
+        ("BCD_TO_INT(16#F123)", "INT", (-123, True)),  # the sign in bits 12-15
+        ("WORD_BCD_TO_INT(16#012A)", "INT", (0, False)),  # A is no digit
+        ("INT_TO_BCD_WORD(-123)", "WORD", (0xF123, True)),
+        ("INT_TO_BCD(1000)", "WORD", (0, False)),  # three digits only
+        ("DWORD_BCD_TO_DINT(16#F1234567)", "DINT", (-1234567, True)),
+        ("DINT_TO_BCD_DWORD(1234567)", "DWORD", (0x01234567, True)),
+        ("DINT_TO_BCD(10000000)", "DWORD", (0, False)),
+    ],
+)
+def test_bcd_conversions_take_three_or_seven_digits_and_a_sign(
+    expr: str, rtype: str, expected: tuple[int, bool]
+) -> None:
+    """S7-SCL's BCD conversions (the manual's CASE example reads a thumbwheel with
+    ``WORD_BCD_TO_INT``): a digit A-F or a number beyond the digits clears OK."""
+    assert value(expr, rtype) == expected
+
+
 def test_a_date_beyond_the_s7_range_is_its_limit_with_ok_false() -> None:
     """DT runs from 1990-01-01 to 2089-12-31-23:59:59.999, DATE to 2168-12-31: a result
     beyond is the nearest limit and clears OK (AD_DT_TM limits its result and clears BR),
