@@ -16,10 +16,11 @@ import re
 from typing import Any
 
 from s7graph.engine.address import Area, Width
+from s7graph.engine.datatypes import DATE_EPOCH, DT_MIN
 from s7graph.engine.errors import S7Error, SourceLocation
 from s7graph.sequencer.checks.validate import validate
 from s7graph.sequencer.collector import collector_paused
-from s7graph.sequencer.compiled import CompiledChart
+from s7graph.sequencer.compiled import CompiledChart, Reach
 from s7graph.sequencer.params import pin as pin_info
 from s7graph.sequencer.text.model import BlockCall, Chart, Coil, Operand, Step
 from s7graph.sequencer.text.names import resolve_operand
@@ -34,7 +35,7 @@ from s7graph.steps.conditions import (
 )
 from s7graph.steps.diagnostics import Diagnostic, format_diagnostic
 from s7graph.steps.expressions import gen_assigned, gen_value
-from s7graph.steps.operands import WIDTH_TYPE, CodeGen, Ref
+from s7graph.steps.operands import TYPE_BYTES, WIDTH_TYPE, CodeGen, Ref
 
 
 class ChartError(S7Error):
@@ -76,6 +77,24 @@ class _Resolver:
         self.vars = {v.name.upper(): v for v in chart.vars}
         self.problems: list[_Problem] = []
         self.cache: dict[tuple[str, bool], Ref] = {}
+        self.reach: dict[tuple[str, int | None], tuple[int, str]] = {}
+        """Per area (and DB): the end of the furthest byte an operand uses, and its name."""
+
+    def reaches(self) -> tuple[Reach, ...]:
+        """What the chart's operands reach: ``(area, db, end byte, operand)`` — for a timer
+        or counter cell the area ``T``/``C`` and the cell's number + 1 (``CompiledChart.bind``
+        checks each against the memory it is bound to)."""
+        return tuple((area, db, end, name) for (area, db), (end, name) in self.reach.items())
+
+    def _note(self, ref: Ref) -> None:
+        if ref.kind == "mem":
+            key, end = (ref.area, ref.db), ref.byte + max(TYPE_BYTES.get(ref.type, 1), 1)
+        elif ref.kind in ("timer", "counter"):
+            key, end = ("T" if ref.kind == "timer" else "C", None), ref.number + 1
+        else:
+            return
+        if end > self.reach.get(key, (0, ""))[0]:
+            self.reach[key] = (end, ref.name)
 
     def __call__(self, op: Operand) -> Ref:
         key = (op.name, op.quoted)
@@ -86,6 +105,7 @@ class _Resolver:
             except S7Error as exc:
                 self.problems.append(_Problem(op.loc, exc.message))
                 ref = Ref("var", "BOOL", name=f"?{op.name}")
+            self._note(ref)
             self.cache[key] = ref
         return ref
 
@@ -222,6 +242,7 @@ def _compile_chart(chart: Chart, symbols: Any) -> CompiledChart:
         source=source,
         code=code,
         buffers=tuple(g.buffers),
+        reach=res.reaches(),
         consts=dict(g.consts),
         step_index=step_index,
         transition_index=tr_index,
@@ -457,6 +478,8 @@ def _alias_source(src: str, aliases: dict[str, Alias]) -> str:
 
 
 def _zero(type_name: str) -> Any:
+    """A variable's value without an initial one: FALSE, 0, 0.0, '', and for a date the
+    first the CPU knows (D#1990-01-01, DT#1990-01-01-0:0:0), as S7 starts them."""
     t = type_name.upper()
     if t == "BOOL":
         return False
@@ -464,6 +487,10 @@ def _zero(type_name: str) -> Any:
         return 0.0
     if t.startswith("STRING"):
         return ""
+    if t in ("DATE_AND_TIME", "DT"):
+        return DT_MIN
+    if t == "DATE":
+        return DATE_EPOCH
     return 0
 
 

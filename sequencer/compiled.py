@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from types import CodeType, FunctionType
 from typing import Any
 
+from s7graph.engine.errors import AddressError
 from s7graph.sequencer.text.model import Chart, ChartOptions
 from s7graph.steps.expressions import RUNTIME as EXPR_RUNTIME
 from s7graph.steps.operands import RUNTIME as OPERAND_RUNTIME
@@ -50,6 +51,26 @@ class Program:
     pulse: tuple[Any, ...] = ()
 
 
+Reach = tuple[str, int | None, int, str]
+"""``(area, db, end, operand)``: an operand of the chart uses ``area`` (of DB ``db``) up to
+byte ``end`` (for ``T``/``C``: cells up to number ``end`` - 1)."""
+
+
+def _check_reach(reach: tuple[Reach, ...], mem: Any) -> None:
+    """Refuse memory an operand reaches beyond, naming the operand (S7: an area length
+    error), before the chart runs — a generated access would fail, or grow the area."""
+    for area, db, end, name in reach:
+        if area in ("T", "C"):
+            cells = getattr(mem, "timers" if area == "T" else "counters", None)
+            if cells is not None and end > len(cells):
+                raise AddressError(f"{name}: only {len(cells)} {area} cells exist")
+            continue
+        size = len(area_buffer(mem, area, db))
+        if end > size:
+            where = f"DB{db}" if db is not None else f"the {area} area"
+            raise AddressError(f"{name} is outside {where} ({size} bytes)")
+
+
 @dataclass(frozen=True)
 class CompiledChart:
     chart: Chart
@@ -79,6 +100,9 @@ class CompiledChart:
     code: tuple[CodeType, ...]  # the module, compiled in pieces (compile._batches)
     buffers: tuple[tuple[str, int | None], ...]
     consts: dict[str, Any]
+    reach: tuple[Reach, ...] = ()
+    """What the operands reach (``compile._Resolver.reaches``): ``bind`` refuses memory too
+    small for them."""
     step_index: dict[int, int] = field(default_factory=dict)
     transition_index: dict[int, int] = field(default_factory=dict)
     warnings: tuple[str, ...] = ()
@@ -107,6 +131,7 @@ class CompiledChart:
         ns.update(self.consts)
         for k, (area, db) in enumerate(self.buffers):
             ns[f"_m{k}"] = area_buffer(mem, area, db)
+        _check_reach(self.reach, mem)
         for piece in self.code:
             exec(piece, ns)
         for name, first, defaults in self.aliases:

@@ -32,6 +32,7 @@ from __future__ import annotations
 import itertools
 import operator
 from collections.abc import Callable, Iterable
+from datetime import date, datetime
 from typing import Any
 
 from s7graph.sequencer import display
@@ -80,7 +81,7 @@ class GraphRuntime:
         # False forces the general path on every call (the differential test compares both)
         self.fast = fast
         self.prog = prog
-        self.st = state if state is not None else new_state(cc)
+        self.st = dated(cc, state) if state is not None else new_state(cc)
         self._call = call
         self.counter = counter
         self.timer = timer
@@ -121,7 +122,7 @@ class GraphRuntime:
 
     def rebind(self, state: GraphState) -> None:
         """Run on another instance-DB content (restored snapshot, new instance)."""
-        self.st = state
+        self.st = state = dated(self.cc, state)
         fp = self.fastpath
         fp.st = state
         fp.armed = False
@@ -552,3 +553,15 @@ def _held_now(st: GraphState, steps: list[int], sw: tuple[Any, ...]) -> tuple[An
     if not new or held.issuperset(new):
         return sw
     return (*sw[:4], held.union(new))
+
+
+def dated(cc: CompiledChart, state: GraphState) -> GraphState:
+    """``state`` with its DATE and DATE_AND_TIME variables as dates again (a snapshot keeps
+    them as ISO text, ``engine.blocks``)."""
+    for name, t in cc.var_types.items():
+        v = state.vars.get(name)
+        if isinstance(v, str) and t == "DATE":
+            state.vars[name] = date.fromisoformat(v)
+        elif isinstance(v, str) and t in ("DATE_AND_TIME", "DT"):
+            state.vars[name] = datetime.fromisoformat(v)
+    return state

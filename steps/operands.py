@@ -13,6 +13,7 @@ WORD/DWORD unsigned int, REAL float, TIME ms.
 
 from __future__ import annotations
 
+import math
 import struct
 from dataclasses import dataclass, field
 from types import FunctionType
@@ -182,7 +183,12 @@ def _unpack_f(buf: bytearray, n: int) -> tuple[float]:
 
 
 def _pack_f(buf: bytearray, n: int, v: float) -> None:
-    _F.pack_into(buf, n, float(v))
+    """Write REAL ``v``; beyond the REAL range it is stored as an infinity of its sign, as
+    the CPU's floating-point overflow gives."""
+    try:
+        _F.pack_into(buf, n, float(v))
+    except OverflowError:
+        _F.pack_into(buf, n, math.copysign(math.inf, v))
 
 
 def _pin(st: Any, name: str) -> Any:
