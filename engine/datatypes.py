@@ -133,7 +133,29 @@ def string_chars(name: str) -> int | None:
 
 
 def _bad(spec: TypeSpec, value: object, why: str = "out of range") -> TypeMismatch:
-    return TypeMismatch(f"{value!r} is {why} for {spec.name}")
+    return TypeMismatch(f"{shown(value)} is {why} for {spec.name}")
+
+
+def shown(value: object) -> str:
+    """``value`` as a PLC programmer writes it: ``D#2169-06-06``, ``DT#…``, ``'text'``,
+    ``TRUE``; a list or an object by what it is, never a Python repr."""
+    if isinstance(value, bool):
+        return "TRUE" if value else "FALSE"
+    if isinstance(value, datetime):
+        return "DT#" + value.strftime("%Y-%m-%d-%H:%M:%S")
+    if isinstance(value, date):
+        return "D#" + value.isoformat()
+    if isinstance(value, str):
+        return f"'{value}'" if len(value) <= 40 else f"'{value[:37]}...'"
+    if value is None:
+        return "nothing"
+    if isinstance(value, list | tuple):
+        return "a list"
+    if isinstance(value, dict):
+        return "a structure"
+    if isinstance(value, int | float):
+        return repr(value)
+    return f"a {type(value).__name__} value"
 
 
 def check_value(type_name: str, value: object) -> object:
@@ -169,19 +191,19 @@ def check_value(type_name: str, value: object) -> object:
         raise _bad(spec, value, "not a single latin-1 character")
     if name == "DATE":
         if isinstance(value, datetime) or not isinstance(value, date):
-            raise _bad(spec, value, "not a datetime.date")
+            raise _bad(spec, value, "not a date")
         if not DATE_EPOCH <= value <= DATE_MAX:
             raise _bad(spec, value)
         return value
     if name == "DATE_AND_TIME":
         if not isinstance(value, datetime):
-            raise _bad(spec, value, "not a datetime.datetime")
+            raise _bad(spec, value, "not a date and time")
         if not DT_MIN <= value.replace(tzinfo=None) <= DT_MAX:
             raise _bad(spec, value)
         return value
     # STRING[n]
     if not isinstance(value, str):
-        raise _bad(spec, value, "not a str")
+        raise _bad(spec, value, "not text")
     if len(value) > spec.size - 2:
         raise _bad(spec, value, "too long")
     try:

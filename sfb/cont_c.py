@@ -39,6 +39,7 @@ keep the S7 instance DB's names; the sums run in double precision, and ``sRestIn
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -104,6 +105,8 @@ class ContCOut(NamedTuple):
 
 def lmn_per(lmn: float) -> int:
     """LMN as the I/O WORD: ``LMN * 27648 / 100`` rounded, within -32512..32511."""
+    if math.isnan(lmn):  # no number: no output (the REAL itself shows it in LMN)
+        return 0
     raw = min(max(lmn * PER_FULL / 100.0, PER_MIN), PER_MAX)
     return as_word(round(raw))
 

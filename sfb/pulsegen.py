@@ -65,8 +65,12 @@ class PulseGenOut(NamedTuple):
 
 
 def _calls(ms: float, cycle: int) -> int:
-    """A duration in whole calls, rounded to the nearest (halves up)."""
-    return math.floor(ms / cycle + 0.5)
+    """A duration in whole calls, rounded to the nearest (halves up); a duration that is
+    not a number (a NaN INV) none, an infinite one the longest a DINT counts."""
+    calls = ms / cycle + 0.5
+    if not math.isfinite(calls):
+        return 2**31 - 1 if calls > 0 else 0
+    return math.floor(calls)
 
 
 def durations(p: PulseGenIn) -> tuple[float, float]:

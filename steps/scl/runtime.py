@@ -351,7 +351,11 @@ def _i_strng(v: int) -> str:
 
 
 def _r_strng(v: float) -> str:
-    """R_STRNG: ``±v.vvvvvvvE±xx``."""
+    """R_STRNG: ``±v.vvvvvvvE±xx``; an infinity ``+INF`` / ``-INF``, not a number ``NaN``."""
+    if math.isinf(v):
+        return "+INF" if v > 0 else "-INF"
+    if math.isnan(v):
+        return "NaN"
     text = f"{v:+.7E}"
     mant, _, exp = text.partition("E")
     return f"{mant}E{int(exp):+03d}"

@@ -264,3 +264,17 @@ def test_layout_rejects_duplicate_fields_and_bad_bounds() -> None:
         layout([("a", "INT"), ("a", "INT")])
     with pytest.raises(TypeMismatch):
         layout([("a", "ARRAY[3..1] OF INT")])
+
+
+def test_a_value_that_does_not_fit_is_named_as_a_plc_programmer_writes_it() -> None:
+    """No Python repr in a refusal: dates as D#/DT#, BOOLs as TRUE/FALSE, aggregates by kind."""
+    for value, type_name, says in [
+        (date(2169, 6, 6), "DATE", "D#2169-06-06 is out of range for DATE"),
+        (datetime(2090, 1, 1), "DATE_AND_TIME", "DT#2090-01-01-00:00:00 is out of range"),
+        ("2000-01-01", "DATE", "'2000-01-01' is not a date for DATE"),
+        ({"a": 1}, "STRING[4]", "a structure is not text for STRING[4]"),
+        (None, "STRING[4]", "nothing is not text for STRING[4]"),
+    ]:
+        with pytest.raises(TypeMismatch) as caught:
+            check_value(type_name, value)
+        assert caught.value.message.startswith(says), caught.value.message

@@ -7,6 +7,7 @@ ER = 5 and, with GAIN = 2, ErKp = GAIN * ER = 10."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 import pytest
@@ -191,3 +192,10 @@ def test_the_state_round_trips() -> None:
     block = ContC()
     run(replace(AUTO, TI=10_000, D_SEL=True), 3, block)
     assert ContC.from_state(block.to_state()) == block
+
+
+def test_a_manual_value_that_is_no_number_leaves_the_io_word_at_0_and_the_block_running() -> None:
+    """MAN := NaN (a division 0.0 / 0.0 upstream): LMN shows it, LMN_PER is 0 — never a
+    Python error stopping the CPU."""
+    out = run(replace(AUTO, MAN_ON=True, MAN=float("nan")), 2)[-1]
+    assert math.isnan(out.LMN) and out.LMN_PER == 0

@@ -118,3 +118,9 @@ def test_com_rst_clears_the_outputs_and_starts_a_new_period() -> None:
     trains(replace(THREE, INV=30.0), 4, block)
     assert block(replace(THREE, COM_RST=True, INV=30.0)) == PulseGenOut()
     assert trains(replace(THREE, INV=30.0), 4, block)[0] == "1110"
+
+
+def test_an_input_that_is_no_number_pulses_neither_output() -> None:
+    """INV := NaN (0.0 / 0.0 upstream) gives no pulse — never a Python error stopping the
+    CPU."""
+    assert trains(replace(THREE, INV=float("nan")), 20) == ("0" * 20, "0" * 20)

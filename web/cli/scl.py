@@ -126,7 +126,12 @@ class SclSession:
         return address_of(self.symbols, name)
 
     def check_name(self, name: str, *, writing: bool = False) -> None:
-        if self._address(name) is not None:
+        found = self._address(name)
+        if found is not None:
+            addr = found[0]
+            cells = {Area.T: self.cpu.mem.timers, Area.C: self.cpu.mem.counters}.get(addr.area)
+            if cells is not None and addr.byte >= len(cells):
+                raise S7Error(f"{name}: only {len(cells)} {addr.area} cells exist")
             return
         if not self.dbvars.is_db_name(name):
             raise S7Error(f"unknown name {name}: not an address, symbol or DBn.variable")

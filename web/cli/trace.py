@@ -53,20 +53,32 @@ def read_stimulus(path: Path | None) -> Stimulus:
         if not line.strip():
             continue
         try:
-            obj = json.loads(line)
-            at = float(obj.get("at_ms", 0))
-            values = obj["set"]
-            if not isinstance(values, dict):
-                raise ValueError("'set' must be an object")
-            if not 0 <= at < math.inf:
-                raise ValueError(f"at_ms must be a time from 0 on, not {at}")
+            at, values = _stimulus_line(line)
         except RecursionError:
             raise S7Error(f"{path}:{n}: bad stimulus line: nested too deep") from None
-        except (ValueError, KeyError, TypeError, AttributeError) as exc:
+        except ValueError as exc:
             raise S7Error(f"{path}:{n}: bad stimulus line: {exc}") from None
         out.append((at, values, f"{path}:{n}"))
     out.sort(key=lambda item: item[0])
     return out
+
+
+def _stimulus_line(line: str) -> tuple[float, dict[str, Any]]:
+    """``(at_ms, set)`` of one stimulus line; ValueError saying what is wrong, in words."""
+    try:
+        obj = json.loads(line)
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"not JSON ({exc.msg}, column {exc.colno})") from None
+    except ValueError:  # a number of more digits than Python converts
+        raise ValueError("a number too long to read") from None
+    if not isinstance(obj, dict):
+        raise ValueError('a line is an object {"at_ms": 0, "set": {...}}')
+    if not isinstance(obj.get("set"), dict):
+        raise ValueError('"set" must be an object of names and values')
+    at = obj.get("at_ms", 0)
+    if isinstance(at, bool) or not isinstance(at, int | float) or not 0 <= at < math.inf:
+        raise ValueError("at_ms must be a time in ms from 0 on")
+    return float(at), obj["set"]
 
 
 def checked_inputs(

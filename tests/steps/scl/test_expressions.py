@@ -177,6 +177,12 @@ def test_string_functions(expr: str, expected: str, ok: bool) -> None:
     assert value(expr, "STRING[40]") == (expected, ok)
 
 
+def test_r_strng_of_an_infinity_or_nan_is_words_not_a_stop() -> None:
+    assert value("R_STRNG(1.0 / z)", "STRING[20]", "z : REAL;")[0] == "+INF"
+    assert value("R_STRNG(-1.0 / z)", "STRING[20]", "z : REAL;")[0] == "-INF"
+    assert value("R_STRNG(z / z)", "STRING[20]", "z : REAL;")[0] == "NaN"
+
+
 def test_string_functions_with_integer_results() -> None:
     assert value("LEN('Motor')", "INT") == (5, True)
     assert value("FIND(IN1 := 'ABCDEF', IN2 := 'CD')", "INT") == (3, True)

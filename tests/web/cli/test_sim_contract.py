@@ -145,7 +145,13 @@ def test_a_stimulus_file_that_cannot_be_read_is_one_line_naming_it(tmp_path: Pat
     for content, why in [
         (b"\xff\n", "1:1: not UTF-8"),
         (b"[" * 100_000 + b"\n", "1: bad stimulus line: nested too deep"),
-        (b'{"at_ms": -5, "set": {}}\n', "1: bad stimulus line: at_ms must be a time from 0 on"),
+        (b'{"at_ms": -5, "set": {}}\n', "1: bad stimulus line: at_ms must be a time in ms from 0"),
+        (b'{"at_ms": {"a": 1}, "set": {}}\n', "1: bad stimulus line: at_ms must be a time in ms"),
+        (b"[1, 2]\n", '1: bad stimulus line: a line is an object {"at_ms": 0, "set": {...}}'),
+        (b"null\n", "1: bad stimulus line: a line is an object"),
+        (b'{"at_ms": 0}\n', '1: bad stimulus line: "set" must be an object of names and values'),
+        (b'{"at_ms": 1' + b"0" * 5000 + b', "set": {}}\n', "1: bad stimulus line: a number too"),
+        (b'{"at_ms": 0, "set": \n', "1: bad stimulus line: not JSON"),
     ]:
         s.write_bytes(content)
         assert sim_command(c, stimulus=s, cycles=1, trace=out) == 2
@@ -209,3 +215,12 @@ def test_a_symbol_named_like_a_pin_outside_the_set_is_pointed_to_its_quotes(
         tmp_path, [{"at_ms": 0, "set": {'"HALT_SQ"': True}}], chart=chart, watch='"HALT_SQ"'
     )
     assert rc == 0 and lines[0]["values"] == {'"HALT_SQ"': True}
+
+
+def test_a_watched_cell_beyond_the_cpus_cells_is_refused_by_name(tmp_path: Path, capsys) -> None:
+    for name in ("T256", "C300"):
+        rc, _ = run(tmp_path, [], watch=name)
+        assert rc == 2
+        assert capsys.readouterr().err.endswith(
+            f"s7graph: error: {name}: only 256 {name[0]} cells exist\n"
+        )
