@@ -134,8 +134,17 @@ class Calls:
         return self.b.places.place(arg.value, writing=True)
 
     def _in_out_type(self, param: Param, place: Place, arg: m.Arg) -> None:
+        """An in/out parameter takes a variable of its very type — a STRUCT's member names
+        too, as the block reads and writes them by name (S7 passes the variable itself)."""
         if not (ty.widens(place.type, param.type) and ty.widens(param.type, place.type)):
             raise Problem("E220", f"{param.name} is {param.type}; {place.type} is passed", arg.loc)
+        if param.type.aggregate and place.type != param.type:
+            raise Problem(
+                "E220",
+                f"{param.name} is {_described(param.type)}; {_described(place.type)} is passed "
+                "(an in/out STRUCT takes one with the same member names)",
+                arg.loc,
+            )
 
     def _fc(self, info: BlockInfo, target: Target, result: Place | None) -> None:
         b = self.b
@@ -258,3 +267,10 @@ class Calls:
             return f"_s5ms({x.src})"
         want = {"TV": ty.S5TIME, "PV": ty.WORD}.get(key, ty.BOOL)
         return self.b.exprs.convert(x, want, arg.loc, "pass")
+
+
+def _described(t: ty.SclType) -> str:
+    """A STRUCT with its member names (``STRUCT a, b``), else the type's name."""
+    if t.kind == "STRUCT":
+        return f"{t.name or 'STRUCT'} ({', '.join(name for name, _ in t.fields)})"
+    return str(t)

@@ -8,7 +8,7 @@ import time
 from datetime import datetime
 
 from s7graph.engine import CpuMode
-from tests.steps.scl.helpers import build, run
+from tests.steps.scl.helpers import build, codes, run
 
 
 def test_attributes_comments_program_and_an_empty_begin() -> None:
@@ -139,6 +139,25 @@ END_ORGANIZATION_BLOCK
     assert mem.get("DB20.DBW6") == 4 and mem.dbs[20].data[8:12] == real
     assert mem.get("DB20.DBW18") == 4 and mem.dbs[20].data[20:24] == real
     assert mem.get("DB20.DBW24") == 4
+
+
+def test_an_in_out_structure_must_have_the_parameters_member_names() -> None:
+    """An in/out parameter is the variable itself, read and written by member name: a
+    STRUCT of the same member types under other names is E220 at the call, not a stop."""
+    src = """
+TYPE UDT1 STRUCT a : INT; b : BOOL; END_STRUCT END_TYPE
+TYPE UDT2 STRUCT x : INT; y : BOOL; END_STRUCT END_TYPE
+FUNCTION FC13 : VOID
+VAR_IN_OUT io : UDT1; END_VAR
+  io.a := 2;
+END_FUNCTION
+FUNCTION_BLOCK FB1
+VAR x : UDT2; ok : UDT1; END_VAR
+  FC13(io := ok);
+  FC13(io := x);
+END_FUNCTION_BLOCK
+"""
+    assert codes(src) == [("E220", 11, 8)]  # FC13(io := x)
 
 
 def test_strings_chars_and_dates_in_an_fc_and_an_fb() -> None:
