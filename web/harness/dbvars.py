@@ -19,10 +19,10 @@ from dataclasses import replace
 from typing import Any
 
 from s7graph.engine.blocks import Decl, InstanceDB
-from s7graph.engine.datatypes import check_value
 from s7graph.engine.errors import S7Error
 from s7graph.steps.scl import types as ty
 from s7graph.steps.scl.access import Member, member, parse_name, plain, read_bytes, write_bytes
+from s7graph.web.harness.operands import stimulus_value
 
 __all__ = ["DbVariables"]
 
@@ -61,10 +61,7 @@ class DbVariables:
         engine_type = ty.engine_type(t)
 
         def checked(value: Any) -> Any:
-            try:
-                return check_value(engine_type, value)
-            except S7Error as exc:
-                raise S7Error(f"{name}: {exc}") from None
+            return stimulus_value(engine_type, name, value)
 
         if isinstance(where, InstanceDB):
             *parents, last = m.keys

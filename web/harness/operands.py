@@ -4,11 +4,15 @@ symbol, and how a stimulus writes one."""
 
 from __future__ import annotations
 
+from datetime import date, datetime
 from typing import Any
 
 from s7graph.engine.address import Address, Area, parse_address
-from s7graph.engine.errors import AddressError
+from s7graph.engine.datatypes import check_value, type_of
+from s7graph.engine.errors import AddressError, S7Error
+from s7graph.engine.literals import parse_literal
 from s7graph.engine.memory import Memory
+from s7graph.engine.modify import ModifyError, typed_value
 from s7graph.engine.symbols import SymbolTable, default_type
 
 
@@ -50,3 +54,44 @@ def written_as(addr: Address, type_name: str, value: Any) -> str:
     if isinstance(value, int) and not isinstance(value, bool) and value < 0:
         return _SIGNED[type_name]
     return type_name
+
+
+def stimulus_value(type_name: str, name: str, value: Any) -> Any:
+    """``value`` of a stimulus or a ``set`` as the ``type_name`` of variable or pin ``name``:
+    a bit, a number or a time by the rules a modify follows (``engine.modify``: ``5``,
+    ``"5"``, ``"T#5S"``, ``"TRUE"``; a whole-numbered float is an integer's value); a
+    STRING as text that fits; a DATE or DATE_AND_TIME as ``D#…``/``DT#…`` or ISO text;
+    S7Error naming ``name`` otherwise."""
+    upper = type_name.upper()
+    try:
+        if upper.startswith("STRING") or upper == "CHAR":
+            return check_value(type_name, value)
+        if upper in ("DATE", "DATE_AND_TIME", "DT"):
+            return check_value(type_name, _date_of(upper, value))
+        size = 1 if upper == "BOOL" else type_of(type_name).size_bits
+    except S7Error as exc:
+        raise S7Error(f"{name}: {exc.message} (to set the {type_name} {name})") from None
+    if size not in (1, 8, 16, 32):
+        return check_value(type_name, value)
+    if isinstance(value, float) and value.is_integer() and upper not in ("REAL", "LREAL"):
+        value = int(value)
+    try:
+        return typed_value(type_name, name, value)[0]
+    except ModifyError as exc:
+        said = exc.message.replace(" (to modify the", " (to set the")
+        raise S7Error(said if said.startswith(f"{name}: ") else f"{name}: {said}") from None
+
+
+def _date_of(type_name: str, value: Any) -> Any:
+    """A DATE or DATE_AND_TIME from its S7 literal or ISO text (anything else as given)."""
+    if not isinstance(value, str):
+        return value
+    text = value.strip()
+    try:
+        if "#" in text:
+            return parse_literal(text)[1]
+        if type_name == "DATE":
+            return date.fromisoformat(text)
+        return datetime.fromisoformat(text)
+    except (S7Error, ValueError):
+        raise S7Error(f"'{value}' is not a {type_name.lower().replace('_', ' ')}") from None

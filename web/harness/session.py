@@ -20,9 +20,7 @@ from s7graph import sfb
 from s7graph.engine.address import Address, Area, Width
 from s7graph.engine.clock import Clock
 from s7graph.engine.cpu import Cpu
-from s7graph.engine.datatypes import type_of
 from s7graph.engine.errors import S7Error
-from s7graph.engine.modify import ModifyError, typed_value
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.calls import prepare_calls
 from s7graph.sequencer.checks.diagnostics import Diagnostic, format_diagnostic
@@ -34,7 +32,7 @@ from s7graph.sequencer.text.model import Chart
 from s7graph.sequencer.text.parse import ChartSyntaxError, chart_text, parse_chart
 from s7graph.steps.scl.access import parse_name
 from s7graph.web.harness.dbvars import DbVariables
-from s7graph.web.harness.operands import address_of, write_operand
+from s7graph.web.harness.operands import address_of, stimulus_value, write_operand
 from s7graph.web.harness.scl import Loadable, SclSources, compile_sources, load_beside
 from s7graph.web.harness.scl_reload import reload_sources
 
@@ -328,12 +326,12 @@ class ChartSession:
         fit: the chart never sees text where it counts an INT)."""
         name = self._own(name)
         if name in self.cc.var_types:
-            self.graph.state.vars[name] = _typed(self.cc.var_types[name], name, value)
+            self.graph.state.vars[name] = stimulus_value(self.cc.var_types[name], name, value)
             return
         if is_pin(name):
             pin = check_pin(name, self.cc.parameters, direction=Direction.IN)
             assert self.graph.idb is not None
-            self.graph.idb.values[pin.name] = _typed(pin.type, pin.name, value)
+            self.graph.idb.values[pin.name] = stimulus_value(pin.type, pin.name, value)
             return
         found = self._address(name)
         if found is None:
@@ -365,21 +363,3 @@ def _json(v: Any) -> Any:
     if isinstance(v, (bool, int, float, str)) or v is None:
         return v
     return str(v)
-
-
-def _typed(type_name: str, name: str, value: Any) -> Any:
-    """``value`` as the ``type_name`` of FB pin or variable ``name`` (``engine.modify``'s
-    rules; a whole-numbered float is an integer's value); a type a modify cannot write
-    (STRING, a structure, wider than a double word) is taken as given."""
-    try:
-        size = 1 if type_name == "BOOL" else type_of(type_name).size_bits
-    except S7Error:
-        return value
-    if size not in (1, 8, 16, 32):
-        return value
-    if isinstance(value, float) and value.is_integer() and type_name not in ("REAL", "LREAL"):
-        value = int(value)
-    try:
-        return typed_value(type_name, name, value)[0]
-    except ModifyError as exc:
-        raise S7Error(exc.message.replace(" (to modify the", " (to set the")) from None

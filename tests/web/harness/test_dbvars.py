@@ -75,6 +75,23 @@ def test_a_stimulus_writes_a_global_db_variable_the_program_reads(
         dbvars.writer("DB20.count")(32768)
 
 
+def test_a_stimulus_value_is_read_as_a_modify_reads_it(dbvars: DbVariables) -> None:
+    """The text forms the command line promises for pins and variables hold for a DB's
+    too (``"TRUE"``, ``"5"``, ``"T#5S"``, ``"16#FF"``); a value that does not fit is refused
+    in words, naming the variable."""
+    for name, given, read in [
+        ("DB5.on", "TRUE", True),
+        ("DB20.count", "5", 5),
+        ("DB20.wait", "T#5S", 5000),
+        ("DB20.mask", "16#FF", 0xFF),
+    ]:
+        dbvars.writer(name)(given)
+        assert dbvars.reader(name)() == read, name
+    with pytest.raises(S7Error) as caught:
+        dbvars.writer("DB20.count")({"a": 1})
+    assert caught.value.message.startswith("DB20.count: ") and "{" not in caught.value.message
+
+
 def test_a_name_a_global_db_lacks_names_the_db_and_what_it_has(dbvars: DbVariables) -> None:
     with pytest.raises(S7Error) as caught:
         dbvars.reader("DB20.wram")
