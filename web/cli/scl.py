@@ -128,10 +128,11 @@ class SclSession:
     def check_name(self, name: str, *, writing: bool = False) -> None:
         found = self._address(name)
         if found is not None:
-            addr = found[0]
-            cells = {Area.T: self.cpu.mem.timers, Area.C: self.cpu.mem.counters}.get(addr.area)
-            if cells is not None and addr.byte >= len(cells):
-                raise S7Error(f"{name}: only {len(cells)} {addr.area} cells exist")
+            addr, mem = found[0], self.cpu.mem
+            if addr.area in (Area.T, Area.C):
+                count = len(mem.timers) if addr.area is Area.T else len(mem.counters)
+                if addr.byte >= count:
+                    raise S7Error(f"{name}: only {count} {addr.area} cells exist")
             return
         if not self.dbvars.is_db_name(name):
             raise S7Error(f"unknown name {name}: not an address, symbol or DBn.variable")
