@@ -18,7 +18,7 @@ from typing import Any, Protocol
 from s7graph.engine.address import Address, Area, parse_address
 from s7graph.engine.blocks import DB, FB, FC, OB, Decl, InstanceDB, is_stringy
 from s7graph.engine.clock import Clock
-from s7graph.engine.datatypes import check_value
+from s7graph.engine.datatypes import check_value, shown
 from s7graph.engine.diagnostics import DiagnosticBuffer
 from s7graph.engine.errors import BlockError, ScanAborted
 from s7graph.engine.interrupts import CyclicScheduler
@@ -298,7 +298,9 @@ class CallContext:
                 if decl is not Decl.IN:
                     refs.append((name, actual, type_name))
             elif decl is not Decl.IN:
-                raise BlockError(f"{blk.label}.{name}: {decl} needs an operand, not {actual!r}")
+                raise BlockError(
+                    f"{blk.label}.{name}: {decl} needs an operand, not {shown(actual)}"
+                )
             else:
                 args[name] = check_value(type_name, actual)
         ret = self._invoke(blk, args)

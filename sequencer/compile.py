@@ -515,7 +515,7 @@ def _gen_permanent(name: str, instrs: tuple[Any, ...], g: CodeGen, res: _Resolve
             lines.append("    " + call_code(ins, val, res))
             for pname, target in ins.outputs:
                 lines.append(f"    if {pname!r} in _o:")
-                lines.append("        " + g.write(res(target), f"_o[{pname!r}]"))
+                lines.append("        " + g.write_returned(res(target), f"_o[{pname!r}]"))
         else:  # Assignment
             ref = res(ins.target)
             lines.append("    " + gen_assigned(ins.expr, ref, g, res, res.step, res.transition))

@@ -26,7 +26,7 @@ from typing import NamedTuple
 from s7graph.engine.errors import S7Error
 from s7graph.steps.conditions import with_locals
 from s7graph.steps.expressions import Resolve, StepIndex, gen_assigned, gen_value
-from s7graph.steps.operands import CELLS, CodeGen, Ref
+from s7graph.steps.operands import CELLS, CodeGen, Ref, address_text
 from s7graph.steps.qualifiers import EVENT_BITS
 from s7graph.steps.syntax import (
     ActionRow,
@@ -208,11 +208,15 @@ def call_code(call: BlockCall, val: Callable[[Expr], str], resolve: Resolve) -> 
 
 
 def _actual(e: Expr, val: Callable[[Expr], str], resolve: Resolve) -> str:
-    """The code of one CALL input: ``val(e)``, or a timer or counter cell's operand text."""
+    """The code of one CALL input: a timer or counter cell's or a memory operand's address
+    text (``'T12'``, ``'MW0'``: the block reads it in its parameter's type, and an in/out
+    parameter is written back to it, as S7 passes the operand itself), else ``val(e)``."""
     if isinstance(e, Operand):
         ref = resolve(e)
         if ref.kind in CELLS:
             return repr(f"{'T' if ref.kind == 'timer' else 'C'}{ref.number}")
+        if ref.kind == "mem" and (text := address_text(ref)) is not None:
+            return repr(text)
     return val(e)
 
 
@@ -250,7 +254,7 @@ def _row(
         lines = ["if not zero:", f"    {lines[0]}"]
         for name, target in op.outputs:
             lines.append(f"    if {name!r} in _o:")
-            lines.append(f"        {g.write(resolve(target), f'_o[{name!r}]')}")
+            lines.append(f"        {g.write_returned(resolve(target), f'_o[{name!r}]')}")
         return lines
     if q in ("ON", "OFF"):
         if not isinstance(op, StepTarget):

@@ -69,6 +69,25 @@ class Ref:
     and a value beside it may settle another of that width (``expressions.settled``)."""
 
 
+_WIDTH_LETTER = {1: "B", 2: "W", 4: "D"}
+
+
+def address_text(ref: Ref) -> str | None:
+    """The S7 address of a memory operand, as ``engine.address`` reads it: ``M0.1``,
+    ``MW10``, ``PID4``, ``DB2.DBX0.0``, ``DB2.DBW4`` (its width from its type); None for
+    a type no bit, byte, word or double word holds."""
+    size = TYPE_BYTES.get(ref.type, 0)
+    if ref.type != "BOOL" and size not in _WIDTH_LETTER:
+        return None
+    if ref.db is not None:
+        if ref.type == "BOOL":
+            return f"DB{ref.db}.DBX{ref.byte}.{ref.bit}"
+        return f"DB{ref.db}.DB{_WIDTH_LETTER[size]}{ref.byte}"
+    if ref.type == "BOOL":
+        return f"{ref.area}{ref.byte}.{ref.bit}"
+    return f"{ref.area}{_WIDTH_LETTER[size]}{ref.byte}"
+
+
 @dataclass
 class CodeGen:
     """Collects the memory buffers a generated module needs and renders operand code."""
@@ -158,6 +177,13 @@ class CodeGen:
             return f"_pack_f({b}, {n}, {value_src})"
         raise SymbolError(f"cannot write an operand of type {t}")
 
+    def write_returned(self, ref: Ref, value_src: str) -> str:
+        """``write`` of a value a called block returns: an untyped double word
+        (``ref.flex``) holds a REAL's bits when the block gives a REAL, else the number."""
+        if ref.kind == "mem" and ref.flex and ref.type == "DINT":
+            return f"_put_double({self.buf(ref.area, ref.db)}, {ref.byte}, {value_src})"
+        return self.write(ref, value_src)
+
     def set_bit(self, ref: Ref, on: bool) -> str:
         """A statement setting (``on``) or resetting a BOOL operand."""
         if ref.kind == "mem" and ref.type == "BOOL":
@@ -189,6 +215,14 @@ def _pack_f(buf: bytearray, n: int, v: float) -> None:
         _F.pack_into(buf, n, float(v))
     except OverflowError:
         _F.pack_into(buf, n, math.copysign(math.inf, v))
+
+
+def _put_double(buf: bytearray, n: int, v: Any) -> None:
+    """A double word from a block's output: a REAL's bits for a REAL, else the number."""
+    if isinstance(v, float):
+        _pack_f(buf, n, v)
+    else:
+        buf[n : n + 4] = (int(v) & 0xFFFFFFFF).to_bytes(4, "big")
 
 
 def _pin(st: Any, name: str) -> Any:
@@ -232,6 +266,7 @@ RUNTIME: dict[str, Any] = {
     "_signed_word": _signed_word,
     "_unpack_f": _unpack_f,
     "_pack_f": _pack_f,
+    "_put_double": _put_double,
     "_pin": _pin,
     "_cell_q": _cell_q,
     "_cell_v": _cell_v,

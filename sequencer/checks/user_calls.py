@@ -17,8 +17,8 @@ from collections.abc import Sequence
 from s7graph.engine.errors import SourceLocation
 from s7graph.sequencer.checks.context import _Ctx
 from s7graph.sequencer.checks.interfaces import Interface, UserPin
-from s7graph.sequencer.checks.types import _as_bit, _as_number, _show, _unify
-from s7graph.sequencer.text.model import BlockCall
+from s7graph.sequencer.checks.types import _CELL_FLEX, _as_bit, _as_number, _resolve, _show, _unify
+from s7graph.sequencer.text.model import BlockCall, Operand
 
 __all__ = ["check_instance", "check_own_blocks", "check_user_call"]
 
@@ -57,6 +57,21 @@ def check_user_call(ctx: _Ctx, call: BlockCall, el: str, types: Typed) -> None:
         pin = block.pin(name)
         if pin is not None and t is not None:
             _check_type(ctx, block, pin, t, getattr(e, "loc", call.loc), el)
+        if pin is not None and pin.direction == "IN_OUT" and not _in_memory(ctx, e, el):
+            why = (
+                f"{block.label}: {pin.name} is an in/out parameter: it takes an operand in "
+                "memory (an address or its symbol), which the block writes back"
+            )
+            ctx.err("E047", why, getattr(e, "loc", call.loc), el)
+
+
+def _in_memory(ctx: _Ctx, e: object, el: str) -> bool:
+    """Whether ``e`` is an operand in the CPU's memory (an address or a symbol of one, not
+    a timer or counter cell): what a call writes an in/out parameter back to."""
+    if not isinstance(e, Operand):
+        return False
+    res = _resolve(ctx, e, el)
+    return res is None or (res.kind in ("address", "symbol") and res.type not in _CELL_FLEX)
 
 
 def _check_fb_instance(ctx: _Ctx, call: BlockCall, el: str, block: Interface) -> None:

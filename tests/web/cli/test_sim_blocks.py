@@ -377,3 +377,49 @@ def test_a_symbol_that_names_no_loaded_db_is_one_line_and_exit_2(
     rc, trace, err = _sim(capsys, f["seq_s7g"], *args)
     assert rc == 2 and trace == []
     assert err.splitlines() == [f"s7graph: error: {why}"]
+
+
+INOUT = """
+FUNCTION FC6 : VOID
+VAR_IN_OUT io : INT; END_VAR
+  io := io + 1;
+END_FUNCTION
+FUNCTION_BLOCK FB6
+VAR_IN_OUT io : INT; END_VAR
+  io := io + 10;
+END_FUNCTION_BLOCK
+FUNCTION FC7 : VOID
+VAR_INPUT r : REAL; END_VAR
+VAR_OUTPUT twice : REAL; END_VAR
+  twice := 2.0 * r;
+END_FUNCTION
+"""
+
+
+def test_a_charts_call_passes_its_operand_so_an_in_out_is_written_back(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """S7 hands a block the operand itself: an in/out parameter given ``MW0`` is written
+    back there (FC and FB alike), and a REAL parameter given ``MD4`` reads its bits as a
+    REAL; a constant or a chart variable for an in/out parameter is E047 at the call."""
+    chart = CHART.replace(
+        "CALL FB 17, DB 10 (FINALVAL := 3, CONTROL => done);",
+        "CALL FC 6 (io := MW0); CALL FB 6, DB 6 (io := MW2); CALL FC 7 (r := MD4, twice => MD8);",
+    ).replace("CALL FC 5 (x := MW10, twice => MW12);", "")
+    f = _write(
+        tmp_path,
+        seq_s7g=chart,
+        blocks_scl=INOUT,
+        stim_jsonl='{"at_ms": 0, "set": {"I0.0": true, "MD4": 1.5}}\n',
+    )
+    args = [f["seq_s7g"], "--blocks", f["blocks_scl"], "--stimulus", f["stim_jsonl"]]
+    rc, trace, err = _sim(capsys, *args, "--cycles", "4", "--watch", "MW0,MW2,MD8")
+    assert rc == 0, err
+    assert [line["values"]["MW0"] for line in trace] == [1, 2, 3, 4]  # S2 from cycle 0
+    assert [line["values"]["MW2"] for line in trace] == [10, 20, 30, 40]
+    assert trace[-1]["values"]["MD8"] == 0x40400000  # 3.0
+    bad = chart.replace("(io := MW0)", "(io := 5)")
+    f = _write(tmp_path, bad_s7g=bad)
+    rc = main(["check", str(f["bad_s7g"]), "--blocks", str(tmp_path / "blocks.scl")])
+    out, err = capsys.readouterr()
+    assert rc == 2 and "error[E047]: FC6: io is an in/out parameter" in out + err
