@@ -29,7 +29,6 @@ visited.
 
 from __future__ import annotations
 
-import itertools
 import operator
 from collections.abc import Callable, Iterable
 from datetime import date, datetime
@@ -110,6 +109,8 @@ class GraphRuntime:
         self._done = 0
         self._late: list[int] = []
         self._carry: list[int] = []
+        self.passed: list[int] = []
+        """The steps skip steps passed through in the last call (``switching.skip``)."""
         self._forcing = cc.options.ack_forces_switch
         self._lean = fast and not self.codesys  # a call may be quiet (FastPath.quiet)
         self._live_pins = bool(self.display.plan.live_pins)
@@ -393,21 +394,24 @@ class GraphRuntime:
                 for i in st.left:
                     if pulse[i] is not None:
                         pulse[i](st)
-            self._invalid(itertools.chain.from_iterable(self.cc.leaving[i] for i in st.left))
+            # a transition no longer valid is not satisfied: Tn.TT of the transitions leaving
+            # the steps left back to 0 (step 4.1 evaluates those valid again); a step left and
+            # entered again keeps its transitions valid (a join's other step, if left, is here)
+            tt, leaving, x = st.tt, self.cc.leaving, st.x
+            for i in st.left:
+                if not x[i]:
+                    for j in leaving[i]:
+                        tt[j] = False
             st.left.clear()
+        if self.passed:  # and those out of a step skip steps passed through
+            tt, leaving = st.tt, self.cc.leaving
+            for i in self.passed:
+                for j in leaving[i]:
+                    tt[j] = False
+            self.passed.clear()
         if st.fired:
-            self._invalid(st.fired)  # also those out of a step skip steps passed through
             st.fired.clear()
         st.ov = False
-
-    def _invalid(self, transitions: Iterable[int]) -> None:
-        """A transition no longer valid is not satisfied: ``Tn.TT`` of ``transitions`` whose
-        preceding steps are not all active back to 0 (step 4.1 evaluates those valid again)."""
-        st, tr_src = self.st, self.cc.tr_src
-        x, tt = st.x, st.tt
-        for j in transitions:
-            if tt[j] and not all(x[s] for s in tr_src[j]):
-                tt[j] = False
 
     def _requests(self, rose: set[str]) -> None:
         st = self.st

@@ -28,6 +28,7 @@ class _Runtime(Protocol):
     st: GraphState
     multi: bool
     _by_seq: list[list[int]]
+    passed: list[int]
 
     def _activate(self, i: int) -> None: ...
 
@@ -227,3 +228,4 @@ def _pass_through(rt: _Runtime, s: int, first: int) -> None:
     del st.entered[first + st.entered[first:].index(s)]
     st.ev[s] &= ~EV_S1
     st.log = [e for e in st.log if e != (s, EV_S1)]
+    rt.passed.append(s)  # the next call clears the satisfied bits of its transitions
