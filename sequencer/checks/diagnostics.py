@@ -31,6 +31,7 @@ CODES: Final[dict[str, str]] = {
     "E011": "duplicate step number",
     "E012": "duplicate transition number",
     "E013": "duplicate declaration (FB variable or symbol)",
+    "E014": "FB variable of a type a chart cannot hold",
     # action rows
     "E020": "event / qualifier / C combination that S7-GRAPH does not allow",
     "E021": "missing value (D L CS TL TD TF need one)",

@@ -77,6 +77,9 @@ def rule_declarations(ctx: _Ctx) -> None:
         except AddressError as exc:
             ctx.err("E041", exc.message, s.loc, f'symbol "{s.name}"')
     for v in ctx.chart.vars:
+        if (why := _bad_type(v.type)) is not None:
+            ctx.err("E014", f"{v.name} : {v.type}: {why}", v.loc, f"variable {v.name}")
+            continue
         if v.init is not None:
             t = _type(ctx, v.init, f"variable {v.name}")
             if t == "STRING" and v.type.upper() == "CHAR" and _one_char(v.init.text):
@@ -95,6 +98,38 @@ def rule_declarations(ctx: _Ctx) -> None:
                     v.init.loc,
                     f"variable {v.name}",
                 )
+
+
+VAR_TYPES: Final = (
+    "BOOL",
+    "BYTE",
+    "WORD",
+    "DWORD",
+    "CHAR",
+    "INT",
+    "DINT",
+    "REAL",
+    "TIME",
+    "S5TIME",
+    "DATE",
+    "TIME_OF_DAY",
+    "TOD",
+    "DATE_AND_TIME",
+)
+"""The types an FB variable of a chart may have, beside STRING and STRING[n] (n ≤ 254)."""
+
+
+def _bad_type(type_name: str) -> str | None:
+    """Why a chart's FB variable cannot have type ``type_name`` (None: it can)."""
+    t = type_name.upper()
+    if t in VAR_TYPES or t == "STRING":
+        return None
+    n = string_chars(t)
+    if n is not None:
+        return None if 1 <= n <= 254 else "a STRING holds 1 to 254 characters"
+    if t == "DT":
+        return "write DATE_AND_TIME"
+    return f"a variable of a chart is one of {' '.join(VAR_TYPES)} or STRING[n]"
 
 
 def _one_char(literal: str) -> bool:
