@@ -59,7 +59,8 @@ class SyncErrors(CpuPart):
             why = "in OB122" if ob == 122 else "OB122 not loaded"
             self._go_stop(EventId.STOP_OB122_MISSING, block, f"I/O access error, {why}")
         elif ob == 121 or 121 not in self.obs:
-            self._go_stop(EventId.STOP_OB121_MISSING, block, "programming error, OB121 not loaded")
+            why = "in OB121" if ob == 121 else "OB121 not loaded"
+            self._go_stop(EventId.STOP_OB121_MISSING, block, f"programming error, {why}")
         else:
             info = {"SW_FLT": event & 0xFF, "BLOCK": block, "MESSAGE": message, "FAULT_OB": ob}
             info["EXCEPTION"] = exc

@@ -33,7 +33,8 @@ class CounterBox(NamedTuple):
 def cell_of(counters: Sequence[S5Counter], number: int) -> S5Counter:
     """Counter ``C number``; a number beyond the area is a programming error (8x27)."""
     if not 0 <= number < len(counters):
-        raise ProgramError(f"C{number}: counter number too high (the CPU has {len(counters)})")
+        why = "too high" if number >= 0 else "negative"
+        raise ProgramError(f"C{number}: counter number {why} (the CPU has {len(counters)})")
     return counters[number]
 
 

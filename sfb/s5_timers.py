@@ -127,7 +127,8 @@ def shift(timers: Sequence[S5Timer], delta_ns: int) -> None:
 def cell_of(timers: Sequence[S5Timer], number: int) -> S5Timer:
     """Timer ``T number``; a number beyond the area is a programming error (8x26)."""
     if not 0 <= number < len(timers):
-        raise ProgramError(f"T{number}: timer number too high (the CPU has {len(timers)})")
+        why = "too high" if number >= 0 else "negative"
+        raise ProgramError(f"T{number}: timer number {why} (the CPU has {len(timers)})")
     return timers[number]
 
 

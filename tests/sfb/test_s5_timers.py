@@ -245,3 +245,11 @@ def test_a_running_timer_restored_on_another_clock_keeps_its_time_left() -> None
     assert new.timers[3].value_ms == 7000 and new.timers[3].running
     s5.tick(new.timers[3], 7005 * MS)
     assert new.timers[3].value_ms == 0 and not new.timers[3].running
+
+
+def test_a_timer_number_outside_the_cells_is_a_programming_error_saying_which_way() -> None:
+    timers = [S5Timer() for _ in range(4)]
+    with pytest.raises(ProgramError, match=r"T4: timer number too high \(the CPU has 4\)"):
+        s5.cell_of(timers, 4)
+    with pytest.raises(ProgramError, match=r"T-1: timer number negative"):
+        s5.cell_of(timers, -1)

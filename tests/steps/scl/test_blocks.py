@@ -530,6 +530,10 @@ END_ORGANIZATION_BLOCK
     with_121 = src + "\nORGANIZATION_BLOCK OB121\n  M0.0 := TRUE;\nEND_ORGANIZATION_BLOCK\n"
     cpu = run(with_121)
     assert cpu.mode is CpuMode.RUN and cpu.mem.get("M0.0") is True
+    faulting = with_121.replace("M0.0 := TRUE;", "MW0 := DB7.DBW2;")  # OB121 faults too
+    cpu = run(faulting)
+    assert cpu.mode is CpuMode.STOP
+    assert any(e.message.endswith("programming error, in OB121") for e in cpu.diagnostics)
 
 
 def test_a_missing_db_is_a_located_block_error() -> None:
