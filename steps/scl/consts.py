@@ -56,12 +56,19 @@ def literal(lit: m.Lit) -> Constant:
     untyped = body[:1].isdigit()
     if tname == "STRING":
         assert isinstance(value, str)
+        if bad := [c for c in value if ord(c) > 0xFF]:
+            why = f"{bad[0]!s} is not a character of S7's code page (latin-1); write it as $hh"
+            raise Problem("E203", f"{_clip(text)}: {why}", lit.loc)
         return Constant(ty.string(max(len(value), 1)), value, untyped=len(value) == 1)
     if tname == "REAL":
         assert isinstance(value, float)
         value = _round32(value)
     t = _LITERAL_TYPE.get(tname) or ty.by_name(tname) or ty.ERROR
     return Constant(t, value, untyped)
+
+
+def _clip(text: str) -> str:
+    return text if len(text) <= 40 else text[:37] + "..."
 
 
 def _round32(v: float) -> float:

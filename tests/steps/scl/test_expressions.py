@@ -8,7 +8,7 @@ import math
 
 import pytest
 
-from tests.steps.scl.helpers import errors, value
+from tests.steps.scl.helpers import codes, errors, value
 
 
 @pytest.mark.parametrize(
@@ -313,3 +313,16 @@ VAR i : INT; d : DINT; r : REAL; w : WORD; b : BOOL; END_VAR
 END_FUNCTION_BLOCK
 """
     assert errors(src) == [code]
+
+
+def test_a_text_beyond_latin_1_is_refused_at_its_literal() -> None:
+    """S7 strings hold one byte a character (latin-1): '€' is E203 where it is written,
+    not a stop of the CPU when it is stored; '$80' writes the byte."""
+    src = """FUNCTION_BLOCK FB1
+VAR s : STRING[10] := 'uro'; c : CHAR; END_VAR
+  s := 'é€';
+  c := '$80';
+END_FUNCTION_BLOCK
+"""
+    assert codes(src) == [("E203", 3, 8)]
+    assert codes(src.replace(":= 'uro'", ":= '€uro'"))[0] == ("E203", 2, 23)
