@@ -5,7 +5,8 @@ looks at the path again. A state file deleted (or its ``-wal``) while the CPU ru
 taking commits that no restart will find, and the restart after a kill started fresh or
 came back from the last checkpoint, the acknowledged commands gone. So before each commit
 ``gone`` compares the path and its ``-wal`` with the files the store opened (device and
-inode), and a commit SQLite finds damaged (SQLITE_CORRUPT, SQLITE_NOTADB) counts the same.
+inode) and reads the file's first bytes (written over in place, it keeps its inode), and a
+commit SQLite finds damaged (SQLITE_CORRUPT, SQLITE_NOTADB) counts the same.
 
 The CPU holds its whole state in memory, so the file is not lost with it: ``rebuild`` builds
 a new file beside it — every table the open connection can still read copied (the alarm and
@@ -64,7 +65,24 @@ def gone(path: Path, main: Ident | None, wal: Ident | None) -> tuple[str, bool] 
             return f"{what} was replaced by {_kind(st.st_mode)} while the CPU ran", True
         if (st.st_dev, st.st_ino) != known:
             return f"{what} was replaced by another file while the CPU ran", True
+    if main is not None and not _looks_like_sqlite(path):
+        return "the state file was overwritten while the CPU ran", True
     return None
+
+
+_MAGIC = b"SQLite format 3\x00"
+
+
+def _looks_like_sqlite(path: Path) -> bool:
+    """Whether the file at ``path`` still starts as an SQLite database does (or is too short
+    to say: a new file in WAL mode may have no page yet) — written over in place, keeping its
+    inode, it is noticed here, before SQLite, which may not read it for a long time."""
+    try:
+        with open(path, "rb") as f:
+            head = f.read(len(_MAGIC))
+    except OSError:
+        return True  # ``gone`` has said what it can of the path
+    return len(head) < len(_MAGIC) or head == _MAGIC
 
 
 def _remove(path: Path) -> None:

@@ -129,15 +129,34 @@ def test_a_state_file_overwritten_under_a_running_cpu_is_kept_aside_and_written_
     path = tmp_path / "s.sqlite"
 
     def garble() -> None:
-        store._db.execute("PRAGMA cache_size=1")  # read its pages again: they are garbage now
-        with open(path, "r+b") as f:
+        with open(path, "r+b") as f:  # in place: the same inode, SQLite may not read it soon
             f.write(os.urandom(path.stat().st_size))
 
     with _running(clock, path) as (cpu, store, writer):
         early, notes = _lose_and_renew(clock, cpu, store, writer, garble)
     assert early == []
-    assert notes[0].startswith("the file was damaged while the CPU ran: ")
+    assert "the state file was overwritten while the CPU ran" in notes[0]
     assert (tmp_path / "s.sqlite.damaged-1").stat().st_size > 0  # kept as it was found
+    _holds(path, cpu)
+
+
+def test_a_page_sqlite_finds_damaged_under_a_running_cpu_is_kept_aside_and_written_anew(
+    clock: VirtualClock, tmp_path: Path
+) -> None:
+    """Damage past the file's header is what SQLite finds when it reads the page."""
+    path = tmp_path / "s.sqlite"
+
+    def garble() -> None:
+        store._db.execute("PRAGMA cache_size=1")  # read its pages again: they are garbage now
+        with open(path, "r+b") as f:
+            f.seek(100)  # the header and its magic stay
+            f.write(os.urandom(path.stat().st_size - 100))
+
+    with _running(clock, path) as (cpu, store, writer):
+        early, notes = _lose_and_renew(clock, cpu, store, writer, garble)
+    assert early == []
+    assert notes[0].startswith("the file was damaged while the CPU ran: ")
+    assert (tmp_path / "s.sqlite.damaged-1").stat().st_size > 0
     _holds(path, cpu)
 
 
