@@ -120,18 +120,29 @@ def settled(ref: Ref, context: str) -> Ref:
     return ref
 
 
-def _operand_beside(
-    e: Expr, context: str, g: CodeGen, resolve: Resolve, number: bool = True
-) -> str | None:
-    """The read of operand ``e`` settled by ``context`` (``settled``), or None when ``e``
-    is not an operand so settled."""
+def _beside(e: Expr, context: str, resolve: Resolve) -> Ref | None:
+    """The operand ``e`` is, settled by ``context`` (``settled``); None when ``e`` is no
+    operand that a value of ``context`` settles."""
     if not isinstance(e, Operand):
         return None
     ref = resolve(e)
     new = settled(ref, context)
-    if new is ref:
-        return None
-    return g.read_number(new) if number else g.read(new)
+    return None if new is ref else new
+
+
+def _value_beside(
+    e: Expr,
+    context: str,
+    g: CodeGen,
+    resolve: Resolve,
+    sidx: StepIndex,
+    tidx: StepIndex,
+    number: bool,
+) -> str:
+    """``gen_value`` of ``e`` standing beside a value of type ``context``: an untyped double
+    word beside a REAL read as one."""
+    new = _beside(e, context, resolve)
+    return g.read_number(new) if new is not None else gen_value(e, g, resolve, sidx, tidx, number)
 
 
 def expr_type(e: Expr, resolve: Resolve, number: bool = False) -> str:
@@ -223,11 +234,11 @@ def _gen_call(e: FuncCall, g: CodeGen, resolve: Resolve, sidx: StepIndex, tidx: 
     name = e.name.upper()
     if name not in FUNCTIONS:
         raise TypeMismatch(f"unknown function {e.name}", e.loc)
-    args = [gen_value(a, g, resolve, sidx, tidx, True) for a in e.args]
-    t = expr_type(e.args[0], resolve, True) if e.args else "DINT"
     takes = next((a for a in ARGUMENTS.get(name, {}) if a in _DOUBLE), "")
-    if e.args and (real := _operand_beside(e.args[0], takes, g, resolve)) is not None:
-        args[0], t = real, "REAL"
+    args = [_value_beside(a, takes, g, resolve, sidx, tidx, True) for a in e.args]
+    t = expr_type(e.args[0], resolve, True) if e.args else "DINT"
+    if e.args and _beside(e.args[0], takes, resolve) is not None:
+        t = "REAL"
     _, helper = FUNCTIONS[name]
     if helper in ("int", "float"):
         return f"{helper}({args[0]})"
@@ -239,12 +250,11 @@ def _gen_binary(e: Binary, g: CodeGen, resolve: Resolve, sidx: StepIndex, tidx: 
     read as a REAL)."""
     op = e.op.upper()
     arith = op not in LOGIC
-    left = gen_value(e.left, g, resolve, sidx, tidx, arith)
-    right = gen_value(e.right, g, resolve, sidx, tidx, arith)
-    if arith and op not in _SHIFTS:  # an untyped double word beside a REAL is one
+    lt = rt = ""  # an untyped double word beside a REAL is one (not in logic or shifts)
+    if arith and op not in _SHIFTS:
         lt, rt = expr_type(e.left, resolve, True), expr_type(e.right, resolve, True)
-        left = _operand_beside(e.left, rt, g, resolve) or left
-        right = _operand_beside(e.right, lt, g, resolve) or right
+    left = _value_beside(e.left, rt, g, resolve, sidx, tidx, arith)
+    right = _value_beside(e.right, lt, g, resolve, sidx, tidx, arith)
     if op in COMPARE:
         return f"({left} {COMPARE[op]} {right})"
     t = expr_type(e, resolve)
@@ -278,8 +288,7 @@ def gen_assigned(
     """The statement ``target := e``: a number target reads timer and counter cells of
     ``e`` as values, a BOOL target as status bits (``gen_value``'s ``number``). A
     ``STRING[n]`` target keeps the value's first ``n`` characters, as S7 does."""
-    value = gen_value(e, g, resolve, sidx, tidx, target.type != "BOOL")
-    value = _operand_beside(e, target.type, g, resolve) or value
+    value = _value_beside(e, target.type, g, resolve, sidx, tidx, target.type != "BOOL")
     target = settled(target, expr_type(e, resolve, True))
     if (n := string_chars(target.type)) is not None:
         value = f"({value})[:{n}]"
