@@ -321,7 +321,13 @@ def _decode(var: Var, current: object, data: object) -> object:
             return data
         restored = from_state(data)
         return current if restored is None else restored
-    upper = var.type.upper()
+    return from_stored(var.type, data)
+
+
+def from_stored(type_name: str, data: object) -> object:
+    """A value as a snapshot keeps it, in its type again: a DATE or DATE_AND_TIME kept as
+    ISO text is a date (ValueError when the text is none); anything else as it is."""
+    upper = type_name.upper()
     if isinstance(data, str) and upper == "DATE":
         return date.fromisoformat(data)
     if isinstance(data, str) and upper in ("DATE_AND_TIME", "DT"):

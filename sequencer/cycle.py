@@ -31,9 +31,9 @@ from __future__ import annotations
 
 import operator
 from collections.abc import Callable, Iterable
-from datetime import date, datetime
 from typing import Any
 
+from s7graph.engine.blocks import from_stored
 from s7graph.sequencer import display
 from s7graph.sequencer.checking import check
 from s7graph.sequencer.compiled import CompiledChart, Program
@@ -562,10 +562,8 @@ def _held_now(st: GraphState, steps: list[int], sw: tuple[Any, ...]) -> tuple[An
 def dated(cc: CompiledChart, state: GraphState) -> GraphState:
     """``state`` with its DATE and DATE_AND_TIME variables as dates again (a snapshot keeps
     them as ISO text, ``engine.blocks``)."""
+    vars_ = state.vars
     for name, t in cc.var_types.items():
-        v = state.vars.get(name)
-        if isinstance(v, str) and t == "DATE":
-            state.vars[name] = date.fromisoformat(v)
-        elif isinstance(v, str) and t in ("DATE_AND_TIME", "DT"):
-            state.vars[name] = datetime.fromisoformat(v)
+        if name in vars_:
+            vars_[name] = from_stored(t, vars_[name])
     return state

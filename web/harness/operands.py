@@ -4,10 +4,10 @@ symbol, and how a stimulus writes one."""
 
 from __future__ import annotations
 
-from datetime import date, datetime
 from typing import Any
 
 from s7graph.engine.address import Address, Area, parse_address
+from s7graph.engine.blocks import from_stored
 from s7graph.engine.datatypes import check_value, type_of
 from s7graph.engine.errors import AddressError, S7Error
 from s7graph.engine.literals import parse_literal
@@ -88,10 +88,6 @@ def _date_of(type_name: str, value: Any) -> Any:
         return value
     text = value.strip()
     try:
-        if "#" in text:
-            return parse_literal(text)[1]
-        if type_name == "DATE":
-            return date.fromisoformat(text)
-        return datetime.fromisoformat(text)
+        return parse_literal(text)[1] if "#" in text else from_stored(type_name, text)
     except (S7Error, ValueError):
         raise S7Error(f"'{value}' is not a {type_name.lower().replace('_', ' ')}") from None
