@@ -128,11 +128,8 @@ class SclSession:
     def check_name(self, name: str, *, writing: bool = False) -> None:
         found = self._address(name)
         if found is not None:
-            addr, mem = found[0], self.cpu.mem
-            if addr.area in (Area.T, Area.C):
-                count = len(mem.timers) if addr.area is Area.T else len(mem.counters)
-                if addr.byte >= count:
-                    raise S7Error(f"{name}: only {count} {addr.area} cells exist")
+            if found[0].area in (Area.T, Area.C):
+                self.cpu.mem.read_as(found[0], "BOOL")  # a cell beyond the CPU's: S7Error
             return
         if not self.dbvars.is_db_name(name):
             raise S7Error(f"unknown name {name}: not an address, symbol or DBn.variable")
@@ -144,8 +141,7 @@ class SclSession:
             return self.dbvars.reader(name)()
         addr, type_name = found
         if addr.area in (Area.T, Area.C):
-            cells = self.cpu.mem.timers if addr.area is Area.T else self.cpu.mem.counters
-            return bool(cells[addr.byte].q)
+            return bool(self.cpu.mem.read_as(addr, "BOOL"))
         return _json(self.cpu.mem.read_as(addr, type_name))
 
     def set(self, name: str, value: Any) -> None:

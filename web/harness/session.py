@@ -308,9 +308,8 @@ class ChartSession:
         addr, type_name = found
         mem = self.cpu.mem
         if addr.area in (Area.T, Area.C):
+            mem.read_as(addr, "BOOL")  # a cell beyond the CPU's: S7Error now
             cells = mem.timers if addr.area is Area.T else mem.counters
-            if addr.byte >= len(cells):
-                raise S7Error(f"{name}: only {len(cells)} {addr.area} cells exist")
             n = addr.byte
             return lambda: bool(cells[n].q)
         read_as = mem.read_as
