@@ -13,6 +13,7 @@ from s7graph.engine.literals import parse_literal
 from s7graph.sequencer.checks.context import _Ctx, _step_el
 from s7graph.sequencer.checks.types import LOGIC, _conditions, _show, _type, _unify
 from s7graph.sequencer.text.model import Binary, Expr, Step, StepTarget, Transition, Unary
+from s7graph.steps.operands import TYPE_BYTES
 
 # Limits that warn (docs/semantics.md, "Structure").
 MAX_STEPS: Final = 250
@@ -100,23 +101,10 @@ def rule_declarations(ctx: _Ctx) -> None:
                 )
 
 
-VAR_TYPES: Final = (
-    "BOOL",
-    "BYTE",
-    "WORD",
-    "DWORD",
-    "CHAR",
-    "INT",
-    "DINT",
-    "REAL",
-    "TIME",
-    "S5TIME",
-    "DATE",
-    "TIME_OF_DAY",
-    "TOD",
-    "DATE_AND_TIME",
-)
-"""The types an FB variable of a chart may have, beside STRING and STRING[n] (n ≤ 254)."""
+VAR_TYPES: Final = (*TYPE_BYTES, "DATE_AND_TIME")
+"""The types an FB variable of a chart may have, beside STRING and STRING[n] (n ≤ 254): the
+value types the chart's code reads and writes (``steps.operands.TYPE_BYTES``) and dates
+and times."""
 
 
 def _bad_type(type_name: str) -> str | None:
