@@ -36,6 +36,8 @@ __all__ = [
     "int_to_bcd",
     "layout",
     "ms_to_s5time",
+    "real32",
+    "real_shown",
     "s5time_to_ms",
     "string_chars",
     "type_of",
@@ -158,6 +160,32 @@ def shown(value: object) -> str:
     return f"a {type(value).__name__} value"
 
 
+_REAL = struct.Struct(">f")
+
+
+def real32(value: float) -> float:
+    """``value`` as a REAL holds it: rounded to IEEE 754 single precision (24 bits of
+    mantissa), as the CPU's floating-point unit gives every REAL result; beyond the REAL
+    range an infinity of its sign."""
+    try:
+        return float(_REAL.unpack(_REAL.pack(float(value)))[0])
+    except OverflowError:
+        return math.copysign(math.inf, value)
+
+
+def real_shown(value: float) -> float:
+    """A REAL's value as the CPU's watch table shows it: the shortest decimal that reads
+    back as the same REAL (``0.1``, not ``0.10000000149011612``); a value no REAL holds
+    exactly, as it is."""
+    if not math.isfinite(value) or real32(value) != value:
+        return value
+    for digits in range(1, 10):
+        near = float(f"{value:.{digits}g}")
+        if real32(near) == value:
+            return near
+    return value
+
+
 def check_value(type_name: str, value: object) -> object:
     """Check ``value`` fits ``type_name`` and return it (CHAR codes become 1-char str).
 
@@ -182,7 +210,7 @@ def check_value(type_name: str, value: object) -> object:
             raise _bad(spec, value, "not a number")
         if math.isfinite(value) and abs(value) > REAL_MAX:
             raise _bad(spec, value)
-        return float(value)
+        return real32(value)
     if name == "CHAR":
         if isinstance(value, int) and not isinstance(value, bool) and 0 <= value <= 0xFF:
             return chr(value)

@@ -22,6 +22,7 @@ from s7graph.engine.datatypes import (
     S5TIME_MAX_MS,
     TYPES,
     check_value,
+    real_shown,
     type_of,
 )
 from s7graph.engine.errors import LiteralError, SourceLocation, TypeMismatch
@@ -319,7 +320,7 @@ def format_literal(type_name: str, value: object) -> str:
         return "TRUE" if v else "FALSE"
     if name == "REAL":
         assert isinstance(v, float)
-        return _fmt_real(v)
+        return _fmt_real(real_shown(v))
     if name == "CHAR":
         assert isinstance(v, str)
         return f"CHAR#{ord(v)}"

@@ -16,7 +16,7 @@ import re
 from typing import Any
 
 from s7graph.engine.address import Area, Width
-from s7graph.engine.datatypes import DATE_EPOCH, DT_MIN
+from s7graph.engine.datatypes import DATE_EPOCH, DT_MIN, real32
 from s7graph.engine.errors import S7Error, SourceLocation
 from s7graph.sequencer.checks.validate import validate
 from s7graph.sequencer.collector import collector_paused
@@ -209,7 +209,8 @@ def _compile_chart(chart: Chart, symbols: Any) -> CompiledChart:
     code = tuple(compile(src, f"<chart {chart.name}>", "exec") for src in _batches(distinct))
     source = "\n".join(_alias_source(src, aliases) for src in parts)
     var_inits = {
-        v.name: (v.init.value if v.init is not None else _zero(v.type)) for v in chart.vars
+        v.name: (_initial(v.type, v.init.value) if v.init is not None else _zero(v.type))
+        for v in chart.vars
     }
 
     def labels(e: Any) -> tuple[str, ...]:
@@ -475,6 +476,11 @@ def _alias_source(src: str, aliases: dict[str, Alias]) -> str:
     if a[2] is None:
         return f"{a[0]} = {a[1]}\n"
     return f"{a[0]} = _with_defaults({a[1]}, {a[2]!r})\n"
+
+
+def _initial(type_name: str, value: Any) -> Any:
+    """A variable's initial value as its type holds it (a REAL's 32 bits)."""
+    return real32(value) if type_name.upper() == "REAL" and isinstance(value, float) else value
 
 
 def _zero(type_name: str) -> Any:

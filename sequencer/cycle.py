@@ -273,10 +273,13 @@ class GraphRuntime:
             return quiet
         self.fastpath.armed = False  # until this call is done
         try:
-            return self._general(inputs, now_ns)
+            st = self._general(inputs, now_ns)
         except BaseException:  # a call cut short: the next one writes every output pin
             self.display.cut_short()
             raise
+        if st.repin:  # the rows wrote input pins: into the instance DB, for the next call
+            self.fastpath.repinned(inputs)
+        return st
 
     def _general(self, inputs: dict[str, Any], now_ns: int) -> GraphState:
         """``execute`` when the call is not quiet: steps 1-6 of docs/semantics.md, "One FB call", in
@@ -416,7 +419,7 @@ class GraphRuntime:
     def _requests(self, rose: set[str]) -> None:
         st = self.st
         st.mode = select_mode(st.mode, rose)
-        if st.mode == "MAN" and ("S_ON" in rose or "S_OFF" in rose):
+        if st.mode == "MAN" and not st.off and ("S_ON" in rose or "S_OFF" in rose):
             i = self.cc.step_index.get(st.s_no if self._target is None else self._target)
             if i is not None:
                 if "S_ON" in rose and not st.x[i]:

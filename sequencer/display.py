@@ -17,7 +17,11 @@ Decisions (where S7-GRAPH's documentation is silent, pinned by tests/sequencer/t
   edge; default SACT (TIA start value of MOP.SACT_DISP).
 * S_SEL applies when its value changes to an existing step number (or again on an S_SELOK
   edge); the chosen step stays shown (pinned) even outside the display set, until S_PREV or
-  S_NEXT pages. S_SEL 0 or an unknown number leaves S_NO unchanged.
+  S_NEXT pages. S_SEL 0 leaves S_NO unchanged; a number the chart lacks is NO_SNO ("selected
+  step does not exist", manual 15-18): S_NO shows 0, so S_ON, S_OFF and ACK_S act on no step,
+  until S_SEL names a step or S_PREV/S_NEXT pages.
+* In MAN, S_PREV/S_NEXT page through every step by number (the next lower or higher), so
+  the operator can show an inactive step and activate it with S_ON; the step stays shown.
 * Otherwise S_NO follows the display set: if the shown step leaves the set, S_NO moves to
   the first step of the set with a number ≥ the old one (else the first); 0 if the set is
   empty. Paging wraps around. T_NO does the same through the *valid* transitions (all
@@ -143,6 +147,8 @@ def _step(current: int, members: list[int], delta: int) -> int:
 
 
 def _shown_step(chart: CompiledChart, state: GraphState, members: Callable[[], list[int]]) -> int:
+    if state.display.get("no_sno"):  # S_SEL chose a step the chart lacks: none shown
+        return 0
     if state.display.get("pinned") and state.s_no in chart.step_index:
         return state.s_no
     return _snap(state.s_no, members())
@@ -184,16 +190,25 @@ def page(
     state.s_no = shown_step(chart, state, active)
 
     sel = int(inputs.get("S_SEL", 0) or 0)
-    if (sel != disp.get("s_sel", 0) or "S_SELOK" in rose) and sel in chart.step_index:
-        state.s_no = sel
-        disp["pinned"] = True
+    if sel != disp.get("s_sel", 0) or "S_SELOK" in rose:
+        if sel in chart.step_index:
+            state.s_no = sel
+            disp["pinned"] = True
+            disp.pop("no_sno", None)
+        elif sel:  # NO_SNO: S_ON, S_OFF and ACK_S then act on no step
+            state.s_no = 0
+            disp["no_sno"] = True
     disp["s_sel"] = sel
 
     delta = ("S_NEXT" in rose) - ("S_PREV" in rose)
     if delta:
-        members = shown_steps(chart, state, active)
-        state.s_no = _step(state.s_no, members, delta)
-        disp["pinned"] = False
+        disp.pop("no_sno", None)
+        if state.mode == "MAN":  # every step, by number: the one S_ON activates
+            state.s_no = _step(state.s_no, sorted(chart.step_numbers), delta)
+            disp["pinned"] = True
+        else:
+            state.s_no = _step(state.s_no, shown_steps(chart, state, active), delta)
+            disp["pinned"] = False
 
     state.t_no = shown_transition(chart, state, active)
     t_delta = ("T_NEXT" in rose) - ("T_PREV" in rose)
@@ -319,7 +334,9 @@ def _outputs(
     when the set has transition pins, else ``state.t_no``). Only what they need is computed."""
     steps = shown_steps(chart, state, active)
     s_no = state.s_no
-    if not (state.display.get("pinned") and s_no in chart.step_index):  # _shown_step
+    if state.display.get("no_sno"):  # _shown_step
+        s_no = 0
+    elif not (state.display.get("pinned") and s_no in chart.step_index):
         s_no = _snap(s_no, steps)
     if plan.step:
         i = chart.step_index.get(s_no)
@@ -429,7 +446,7 @@ class Display:
         active steps instead of sorting them — then S_MORE, S_ACTIVE, the shown step's
         pins and those group pins are written. False, and nothing done, when it does not
         apply."""
-        if not self._by_switch:
+        if not self._by_switch or state.display.get("no_sno"):
             return False
         index = self.chart.step_index
         x = state.x

@@ -245,7 +245,18 @@ class FastPath:
             self.armed = False
             self.display.cut_short()
             raise
+        if st.repin:
+            self.repinned(inputs)
         return st
+
+    def repinned(self, inputs: Any) -> None:
+        """The input pins the chart's rows wrote in this call (``GraphState.repin``) into
+        the instance DB's ``inputs``, as S7 keeps them there; the next call latches them."""
+        st = self.st
+        for name in st.repin:
+            inputs[name] = st.inputs[name]
+        st.repin.clear()
+        self.last_in = None
 
     def sequencers(self, st: GraphState, rt: Runtime) -> None:
         """Step 4 in the common case (AUTO, no HALT_SQ/OFF_SQ, no forced acknowledgement,

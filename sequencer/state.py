@@ -159,6 +159,8 @@ class GraphState:
                           (-1 before the first)
       ``s_no`` ``t_no``   step / transition shown (owned by ``display.py``)
       ``display``         free scratch of ``display.py`` (persisted, JSON-able)
+      ``repin``           the input pins the chart's own rows wrote in this call (not
+                          saved: the call ends by writing them into the instance DB)
       ``levels``          level overrides in force (``LEVEL_PINS`` → value): HALT_SQ, EN_IL or
                           EN_SV held by a command whatever the pin; part of the instance DB, so
                           a warm or hot restart keeps them and a cold restart clears them
@@ -183,6 +185,7 @@ class GraphState:
         "diag",
         "display",
         "levels",
+        "repin",
     )
 
     VOLATILE: Final = ("calls", "last_ns")
@@ -239,6 +242,7 @@ class GraphState:
         self.t_no = 0
         self.display: dict[str, Any] = {}
         self.levels: dict[str, bool] = {}
+        self.repin: list[str] = []  # input pins the chart's rows wrote in this call
 
     # ------------------------------------------------------------ reading times (S7 TIME, ms)
 

@@ -17,6 +17,7 @@ from collections.abc import Callable
 from dataclasses import replace
 from typing import Any
 
+from s7graph.engine.datatypes import real32 as _single
 from s7graph.engine.datatypes import string_chars
 from s7graph.engine.errors import TypeMismatch
 from s7graph.steps.operands import CELL_VALUE_TYPE, CELLS, CodeGen, Ref
@@ -198,6 +199,8 @@ def gen_value(
     status bit (``operands.CELLS``)."""
     if isinstance(e, Const):
         v = e.value
+        if e.type == "REAL" and isinstance(v, float):
+            return repr(_single(v))  # a REAL constant holds 32 bits, as the CPU loads it
         if isinstance(v, (bool, int, float)):
             return repr(v)
         return g.const(v)
@@ -240,8 +243,10 @@ def _gen_call(e: FuncCall, g: CodeGen, resolve: Resolve, sidx: StepIndex, tidx: 
     if e.args and _beside(e.args[0], takes, resolve) is not None:
         t = "REAL"
     _, helper = FUNCTIONS[name]
-    if helper in ("int", "float"):
-        return f"{helper}({args[0]})"
+    if helper == "float":  # DINT_TO_REAL: 24 bits of mantissa
+        return f"_single({args[0]})"
+    if helper == "int":
+        return f"int({args[0]})"
     return f"{helper}(st, {', '.join(args)}, {t!r})"
 
 
@@ -274,7 +279,7 @@ def _gen_binary(e: Binary, g: CodeGen, resolve: Resolve, sidx: StepIndex, tidx: 
             return _checked(src, t)
         if t in MASK:
             return f"({src} & {MASK[t]})"
-        return src
+        return f"_single{src}" if t == "REAL" else src
     if op == "/":
         return f"_div(st, {left}, {right}, {t!r})"
     if op == "MOD":
@@ -327,8 +332,10 @@ def _div(st: Any, a: Any, b: Any, t: str) -> Any:
     if t == "REAL":
         if b == 0:
             _overflow(st, "REAL division by zero")
-            return math.inf if a >= 0 else -math.inf
-        return a / b
+            if a == 0 or a != a:
+                return math.nan
+            return math.copysign(math.inf, a) * math.copysign(1.0, b)
+        return _single(a / b)
     if b == 0:
         _overflow(st, f"{t} division by zero")
         return 0
@@ -431,16 +438,19 @@ def _abs(st: Any, v: float, t: str) -> float:
 
 
 def _sqr(st: Any, v: float, t: str) -> float:
-    return float(v) * float(v)
+    return _single(float(v) * float(v))
 
 
 def _real(fn: Callable[[float], float], name: str) -> Callable[[Any, float, str], float]:
     def apply(st: Any, v: float, t: str) -> float:
         try:
-            return fn(float(v))
-        except (ValueError, OverflowError):
+            return _single(fn(float(v)))
+        except OverflowError:  # EXP of a large value: beyond the REAL range
+            _overflow(st, f"{name}({v}) is out of the REAL range")
+            return math.inf
+        except ValueError:  # LN(0.0): minus infinity; SQRT(-1.0), LN(-1.0): NaN
             _overflow(st, f"{name}({v}) is not a number")
-            return math.nan
+            return -math.inf if name == "LN" and v == 0 else math.nan
 
     return apply
 

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 from types import FunctionType
 from typing import Any
 
+from s7graph.engine.datatypes import real32
 from s7graph.engine.errors import SourceLocation, SymbolError
 
 # S5 timer and counter cells (``T n``, ``C n``): a contact reads the status bit, a number
@@ -156,9 +157,13 @@ class CodeGen:
         """One Python statement writing ``value_src`` to ``ref``."""
         k = ref.kind
         if k == "var":
+            if ref.type == "REAL":  # a REAL variable holds 32 bits, as in the instance DB
+                value_src = f"_single({value_src})"
             return f"V[{ref.name!r}] = {value_src}"
-        if k == "pin":
-            return f"st.outputs[{ref.name!r}] = {value_src}"
+        if k == "pin":  # an input pin (an output pin is read-only, E045)
+            if ref.type == "BOOL":
+                value_src = f"bool({value_src})"
+            return f"_put_pin(st, {ref.name!r}, {value_src})"
         if k != "mem":
             raise SymbolError(f"{ref.name or k} cannot be written")
         b = self.buf(ref.area, ref.db)
@@ -225,6 +230,14 @@ def _put_double(buf: bytearray, n: int, v: Any) -> None:
         buf[n : n + 4] = (int(v) & 0xFFFFFFFF).to_bytes(4, "big")
 
 
+def _put_pin(st: Any, name: str, v: Any) -> None:
+    """An input pin the chart writes: the instance DB's value of it, as on S7, which the
+    next call latches (its edge counts: ``S1 S SW_MAN`` selects MAN) unless the caller
+    passes the pin, whose value then wins."""
+    st.inputs[name] = v
+    st.repin.append(name)
+
+
 def _pin(st: Any, name: str) -> Any:
     """An FB pin: the latched input, else the output of the previous call, else 0."""
     v = st.inputs.get(name)
@@ -266,8 +279,10 @@ RUNTIME: dict[str, Any] = {
     "_signed_word": _signed_word,
     "_unpack_f": _unpack_f,
     "_pack_f": _pack_f,
+    "_single": real32,
     "_put_double": _put_double,
     "_pin": _pin,
+    "_put_pin": _put_pin,
     "_cell_q": _cell_q,
     "_cell_v": _cell_v,
 }

@@ -32,6 +32,7 @@ CODES: Final[dict[str, str]] = {
     "E012": "duplicate transition number",
     "E013": "duplicate declaration (FB variable or symbol)",
     "E014": "FB variable of a type a chart cannot hold",
+    "E015": "simultaneous branch or join across sequences (only a jump reaches another)",
     # action rows
     "E020": "event / qualifier / C combination that S7-GRAPH does not allow",
     "E021": "missing value (D L CS TL TD TF need one)",

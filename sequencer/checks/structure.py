@@ -155,6 +155,28 @@ def rule_unknown_steps_in_from_to(ctx: _Ctx) -> None:
                     ctx.err("E010", f"unknown step S{n} in {part}", loc, f"transition T{t.number}")
 
 
+def rule_branches_in_one_sequence(ctx: _Ctx) -> None:
+    """A simultaneous branch or join stays in one sequence (E015): a sequencer's steps are
+    joined and forked only among themselves; only a jump (one step to one step) reaches
+    another sequencer (S7-GRAPH manual 6-4)."""
+    home = {s.number: q.number for q in ctx.chart.sequences for s in q.steps}
+    for t in ctx.chart.all_transitions():
+        if len(t.sources) < 2 and len(t.targets) < 2:
+            continue
+        seqs = {home[n] for n in (*t.sources, *t.targets) if n in home}
+        if len(seqs) > 1:
+            steps = ", ".join(
+                f"S{n} in sequence {home[n]}" for n in (*t.sources, *t.targets) if n in home
+            )
+            ctx.err(
+                "E015",
+                f"a simultaneous branch joins or forks steps of different sequences ({steps}); "
+                "only a jump to one step reaches another sequence",
+                t.loc,
+                f"transition T{t.number}",
+            )
+
+
 def rule_initial_steps(ctx: _Ctx) -> None:
     """Each sequencer has at least one initial step, else it never starts (W103)."""
     for seq in ctx.chart.sequences:

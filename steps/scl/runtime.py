@@ -34,6 +34,7 @@ from s7graph.engine.datatypes import (
     check_value,
     decode,
     encode,
+    real32,
     s5time_to_ms,
 )
 from s7graph.engine.errors import BlockError, ProgramError, ScanAborted, TypeMismatch
@@ -93,14 +94,6 @@ def _r32(ok: Ok, v: float) -> float:
         return float(_F32.unpack(_F32.pack(v))[0])
     except OverflowError:
         ok[0] = False
-        return math.copysign(math.inf, v)
-
-
-def _f32(v: float) -> float:
-    """A value converted to REAL (DINT → REAL rounds to 24 bits of mantissa)."""
-    try:
-        return float(_F32.unpack(_F32.pack(float(v)))[0])
-    except OverflowError:
         return math.copysign(math.inf, v)
 
 
@@ -578,6 +571,7 @@ RUNTIME: dict[str, Any] = {
     for name, obj in dict(globals()).items()
     if name.startswith("_") and not name.startswith("__") and callable(obj)
 }
+RUNTIME["_f32"] = real32
 RUNTIME["_clone"] = clone
 RUNTIME["_recast"] = recast
 RUNTIME["_date"] = date

@@ -134,11 +134,15 @@ def test_s_sel_shows_any_step_until_paging_resumes_the_display_set() -> None:
     assert press(ch, st, "S_SELOK", S_SEL=4)["S_NO"] == 4  # S_SELOK applies it again
 
 
-def test_s_sel_of_an_unknown_step_leaves_s_no_unchanged() -> None:
+def test_s_sel_of_an_unknown_step_shows_no_step_until_one_is_chosen() -> None:
     ch = chart()
     st = state_with(ch, 3)
-    assert press(ch, st, S_SEL=99)["S_NO"] == 3
-    assert shown_step(ch, st) == 3
+    assert press(ch, st, S_SEL=99)["S_NO"] == 0  # NO_SNO: the selected step does not exist
+    assert shown_step(ch, st) == 0
+    assert press(ch, st, S_SEL=0)["S_NO"] == 0  # S_SEL 0 chooses nothing
+    assert press(ch, st, S_SEL=2)["S_NO"] == 2
+    press(ch, st, S_SEL=99)
+    assert press(ch, st, "S_NEXT", S_SEL=99)["S_NO"] == 3  # paging shows the set again
 
 
 def test_shown_step_outputs_time_criteria_and_state_word() -> None:

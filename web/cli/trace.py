@@ -20,6 +20,7 @@ from typing import Any, Protocol, TextIO
 
 from s7graph.engine.clock import VirtualClock
 from s7graph.engine.cpu import Cpu
+from s7graph.engine.datatypes import real_shown
 from s7graph.engine.errors import S7Error
 from s7graph.engine.record import ScanRecord
 from s7graph.engine.runner import stop_reason
@@ -118,6 +119,18 @@ def ms(v: float) -> int | float:
     return int(v) if float(v).is_integer() else round(v, 6)
 
 
+def traced(value: Any) -> Any:
+    """A value as the trace writes it: a REAL (in an ARRAY or STRUCT too) as the CPU shows
+    it (``engine.datatypes.real_shown``)."""
+    if isinstance(value, float):
+        return real_shown(value)
+    if isinstance(value, list):
+        return [traced(v) for v in value]
+    if isinstance(value, dict):
+        return {k: traced(v) for k, v in value.items()}
+    return value
+
+
 def run_trace(
     session: Traced,
     clock: VirtualClock,
@@ -147,7 +160,7 @@ def run_trace(
             "cycle": k,
             "t_ms": ms(t_ms),
             **fields,
-            "values": {name: session.get(name) for name in names},
+            "values": {name: traced(session.get(name)) for name in names},
         }
         out.write(json.dumps(line) + "\n")
         if record.mode.name == "STOP":
