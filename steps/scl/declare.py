@@ -40,6 +40,14 @@ no static data, an OB only temporary data)."""
 KIND_OF_UNIT = {"FUNCTION_BLOCK": "FB", "FUNCTION": "FC", "ORGANIZATION_BLOCK": "OB"}
 KIND_OF_UNIT |= {"DATA_BLOCK": "DB", "TYPE": "UDT"}
 _LABEL = re.compile(r"(SFB|SFC|FB|FC|OB|DB|UDT)(\d+)", re.IGNORECASE)
+# Names S7-SCL reads as something else (an absolute address, a timer or counter, a block;
+# in a DB, a data word: ``DB20.DW1``), what each is.
+_NOT_NAMES: tuple[tuple[re.Pattern[str], str, bool], ...] = (
+    (re.compile(r"(?:PI|PQ|I|Q|M)[BWD]\d+", re.I), "the absolute address {}", False),
+    (re.compile(r"[TC]\d+", re.I), "the timer or counter {}", False),
+    (re.compile(r"(?:SFB|SFC|FB|FC|OB|DB|UDT)\d+", re.I), "the block {}", False),
+    (re.compile(r"(?:DB[XBWD]|D[XBWD])\d+", re.I), "a DB's absolute address (DB20.{})", True),
+)
 NUMBERS = {"FB": (0, 65535), "FC": (0, 65535), "DB": (1, 65535), "UDT": (0, 65535)}
 NUMBERS |= {"OB": (1, 32767)}
 """The numbers a block of each kind may have (an S7-400's; OBs up to S7-1500's 32767)."""
@@ -258,6 +266,10 @@ def _data_block(prog: Program, info: BlockInfo, unit: m.Unit, consts: Consts) ->
     t = resolve_type(prog, spec, consts)
     if t.kind != "STRUCT":
         raise Problem("E212", f"DATA_BLOCK {unit.name} needs a STRUCT, a UDT or an FB", spec.loc)
+    if isinstance(spec, m.StructType):
+        for member in spec.members:
+            for name, loc in member.names:
+                _a_name(name, loc, in_db=True)
     info.db_type = t
 
 
@@ -268,6 +280,7 @@ def _interface(prog: Program, info: BlockInfo, unit: m.Unit, consts: Consts) -> 
         if isinstance(section, m.ConstSection):
             for name, expr, loc in section.items:
                 _fresh(seen, name, loc)
+                _a_name(name, loc, in_db=False)
                 try:
                     consts.define(name, expr, loc)
                 except Problem as p:
@@ -294,6 +307,20 @@ def _interface(prog: Program, info: BlockInfo, unit: m.Unit, consts: Consts) -> 
             info.ret = resolve_type(prog, unit.ret, consts)
         except Problem as p:
             prog.problem(p, info.label)
+
+
+def _a_name(name: str, loc: SourceLocation, *, in_db: bool) -> None:
+    """``name`` reads as a name where it is used, not as an address, a timer or counter or
+    a block (``MW2``, ``T1``, ``FB3``; and, for what a DB holds at its top, ``DW1``):
+    E201, as S7-SCL's own lexer takes those for what they are."""
+    for pattern, what, db_only in _NOT_NAMES:
+        if (in_db or not db_only) and pattern.fullmatch(name):
+            raise Problem(
+                "E201",
+                f"{name} is {what.format(name.upper())} in S7-SCL, not a name: "
+                "give the variable another name",
+                loc,
+            )
 
 
 def _fresh(seen: set[str], name: str, loc: SourceLocation) -> None:
@@ -323,6 +350,7 @@ def _variables(
         init = aggregate_initial(prog, var.type, consts)
     for name, loc in var.names:
         _fresh(seen, name, loc)
+        _a_name(name, loc, in_db=info.kind == "FB" and decl is not Decl.TEMP)
         param = Param(name, decl, t, init, loc)
         (info.temps if decl is Decl.TEMP else info.params)[name.upper()] = param
 

@@ -73,7 +73,8 @@ class Exprs:
                     raise Problem("E220", f"'{value}' is longer than {t}", loc)
                 return self.b.literal_src(value)
         if not ty.widens(x.type, t):
-            raise Problem("E220", f"cannot {what} a {x.type} to {t}", loc)
+            a = "an" if str(x.type)[:1] in "AEIOU" else "a"
+            raise Problem("E220", f"cannot {what} {a} {x.type} to {t}", loc)
         src, k = x.src, x.type.kind
         if t.kind == "STRING" and (k == "CHAR" or x.type.length > t.length):
             return f"_fit(_ok, {src}, {t.length})" if k != "CHAR" else src

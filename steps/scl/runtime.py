@@ -107,9 +107,10 @@ def _rdiv(ok: Ok, a: float, b: float) -> float:
 def _pow(ok: Ok, a: float, b: float) -> float:
     try:
         result = float(a) ** float(b)
-    except (OverflowError, ZeroDivisionError):
+    except (OverflowError, ZeroDivisionError):  # beyond the range, or 0.0 ** a negative
         ok[0] = False
-        return math.inf
+        odd = float(b).is_integer() and int(b) % 2 == 1
+        return -math.inf if a < 0 and odd else math.inf
     if isinstance(result, complex):
         ok[0] = False
         return math.nan
@@ -117,12 +118,16 @@ def _pow(ok: Ok, a: float, b: float) -> float:
 
 
 def _real_fn(ok: Ok, name: str, v: float) -> float:
-    """ABS … ATAN of a REAL (``SQRT(-1)``: OK := FALSE, NaN)."""
+    """ABS … ATAN of a REAL (``SQRT(-1)``: OK := FALSE, NaN; ``EXP(1000.0)``: +infinity,
+    ``LN(0.0)``: -infinity, each with OK := FALSE, as the floating-point unit gives them)."""
     try:
         result = _REAL_FUNCTIONS[name](float(v))
-    except (ValueError, OverflowError):
+    except OverflowError:  # EXP, EXPD of a large value: beyond the range, as the FPU gives
         ok[0] = False
-        return math.nan
+        return math.inf
+    except ValueError:  # LN, LOG of 0: minus infinity; of a negative, SQRT(-1): NaN
+        ok[0] = False
+        return -math.inf if v == 0 and name in ("LN", "LOG") else math.nan
     return _r32(ok, result)
 
 

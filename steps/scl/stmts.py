@@ -364,7 +364,9 @@ class Stmts:
         end = b.exprs.convert(end_x, t, s.end.loc, "end")
         step_x = b.exprs.expr(s.step) if s.step is not None else None
         step = b.exprs.convert(step_x, t, s.step.loc, "step") if step_x and s.step else "1"
-        const_step = step_x.const.value if step_x is not None and step_x.const else 1
+        const_step: object = 1  # no BY: 1; a constant BY: its value; else read once below
+        if step_x is not None:
+            const_step = step_x.const.value if step_x.const else None
         b.emit(var.store(start))
         e = b.temp("e")
         b.emit(f"{e} = {end}")

@@ -147,7 +147,7 @@ def widens(src: SclType, dst: SclType) -> bool:
             return True
         if src.kind == "ARRAY":
             assert src.element is not None and dst.element is not None
-            return src.count == dst.count and same(src.element, dst.element)
+            return same(src, dst)  # the same bounds and element type (a whole ARRAY)
         if src.kind == "STRUCT":
             return same(src, dst)
         if src.kind == "FB":

@@ -86,6 +86,23 @@ def test_real_is_rounded_to_32_bits_and_overflows_to_infinity() -> None:
 
 
 @pytest.mark.parametrize(
+    ("expr", "expected"),
+    [
+        ("EXP(1000.0)", math.inf),
+        ("EXPD(400.0)", math.inf),
+        ("LN(0.0)", -math.inf),
+        ("LOG(0.0)", -math.inf),
+        ("(-10.0) ** 1001.0", -math.inf),
+        ("10.0 ** 1001.0", math.inf),
+    ],
+)
+def test_a_real_function_beyond_the_range_gives_the_infinity_the_fpu_gives(
+    expr: str, expected: float
+) -> None:
+    assert value(expr, "REAL") == (expected, False)
+
+
+@pytest.mark.parametrize(
     ("expr", "rtype", "expected"),
     [
         ("WORD_TO_INT(W#16#FFFF)", "INT", -1),
@@ -313,6 +330,20 @@ VAR i : INT; d : DINT; r : REAL; w : WORD; b : BOOL; END_VAR
 END_FUNCTION_BLOCK
 """
     assert errors(src) == [code]
+
+
+@pytest.mark.parametrize("body", ["a := m;", "a := c;", "m := n;", "a := r;"])
+def test_a_whole_array_is_assigned_only_to_one_of_the_same_bounds(body: str) -> None:
+    """S7-SCL assigns a whole ARRAY when the element types and the bounds are the same —
+    not merely the number of elements."""
+    src = f"""FUNCTION_BLOCK FB1
+VAR a : ARRAY[1..6] OF INT; c : ARRAY[0..5] OF INT; m : ARRAY[1..2, 1..3] OF INT;
+  n : ARRAY[1..3, 1..2] OF INT; r : ARRAY[1..6] OF DINT; a2 : ARRAY[1..6] OF INT; END_VAR
+  {body}
+  a := a2;
+END_FUNCTION_BLOCK
+"""
+    assert errors(src) == ["E220"]
 
 
 def test_a_text_beyond_latin_1_is_refused_at_its_literal() -> None:

@@ -71,6 +71,13 @@ def test_for_evaluates_its_end_and_step_once() -> None:
     assert got["s"] == 3
 
 
+def test_for_with_a_step_in_a_variable_counts_down_when_it_is_negative() -> None:
+    got = fb("n := -2; s := 0; FOR i := 10 TO 1 BY n DO s := s + 1; n := 5; END_FOR;")
+    assert (got["s"], got["i"]) == (5, 0)  # the step read once: 10 8 6 4 2
+    got = fb("n := 2; s := 0; FOR i := 10 TO 1 BY -n DO s := s + 1; END_FOR;")
+    assert (got["s"], got["i"]) == (5, 0)
+
+
 def test_for_that_never_starts_leaves_only_the_start_value() -> None:
     got = fb("s := 0; FOR i := 5 TO 1 DO s := s + 1; END_FOR;")
     assert (got["s"], got["i"]) == (0, 5)
