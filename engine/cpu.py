@@ -341,7 +341,8 @@ class Cpu(ProgramBlocks, Forcing, InterruptDispatch, SyncErrors):
             self._ctx.now_ns = self.process_ns()
             self._run_ob(ob, dict(info or {}))
         elif ob != 81:
-            self._go_stop(MISSING_STOP.get(ob, EventId.STOP_OB85_MISSING), f"OB{ob}", "not loaded")
+            stop = MISSING_STOP.get(ob, EventId.STOP_OB85_MISSING)
+            self._go_stop(stop, f"OB{ob}", f"OB{ob} is not loaded")
 
     # ---- the scan --------------------------------------------------------------------------
 
@@ -408,7 +409,8 @@ class Cpu(ProgramBlocks, Forcing, InterruptDispatch, SyncErrors):
                     if 80 in self.obs:
                         self._go_stop(EventId.STOP_CYCLE_TIME, "OB80", "twice the maximum")
                     else:
-                        self._go_stop(EventId.STOP_OB80_MISSING, "OB80", "not loaded")
+                        why = "no OB80 is loaded for a time error"
+                        self._go_stop(EventId.STOP_OB80_MISSING, "OB80", why)
                     return cycle_ns
                 self._run_ob(80, {"FLT_ID": 0x01, "CYCLE_MS": cycle_ns // 1_000_000})
                 if self.mode is not CpuMode.RUN:

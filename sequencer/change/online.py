@@ -28,6 +28,7 @@ from s7graph.sequencer.change.carry import CarryReport, ChartShape, carry_over
 from s7graph.sequencer.change.diff import ChangeSummary, active_steps, summarize
 from s7graph.sequencer.compiled import CompiledChart
 from s7graph.sequencer.fb import GraphFB
+from s7graph.steps.qualifiers import EV_S0
 
 __all__ = ["REMOVED", "Removed", "SwapRefused", "SwapReport", "preview", "swap"]
 
@@ -63,6 +64,22 @@ def preview(graph: GraphFB, new: CompiledChart) -> ChangeSummary:
     return summarize(running.chart, new.chart, active_steps(running, graph.state))
 
 
+def _final_scans(graph: GraphFB, steps: list[int]) -> None:
+    """The final scan of each active step the new chart lacks, as if it were left: its
+    N, D and L operands back to 0 and its S0 rows run — a step that is gone leaves no
+    output on (docs/online-change.md). A row that fails there (a block it calls is gone)
+    leaves the rest of that step's scan undone, not the download."""
+    rt = graph.loaded.runtime
+    if rt is None:
+        return
+    st, fin = rt.st, rt.prog.fin
+    for i in steps:
+        try:
+            fin[i](st, rt, st.ev[i] | EV_S0)
+        except Exception:  # the swap must not fail half done
+            continue
+
+
 def swap(
     graph: GraphFB,
     new: CompiledChart,
@@ -74,7 +91,8 @@ def swap(
     """Run ``new`` in ``graph`` from its next call, its state carried over by step number
     (call at a scan boundary). Active steps ``new`` does not have: refused unless
     ``removed`` is ``keep`` (the other steps go on) or ``init`` (INIT_SQ in the next call,
-    as ``user``)."""
+    as ``user``); either way each of those steps gets its final scan first (its N
+    operands back to 0)."""
     if removed is not None and removed not in REMOVED:
         raise SwapRefused(f"removed must be keep or init, not {removed!r}")
     old = graph.cc
@@ -90,6 +108,8 @@ def swap(
     plan = prepare_calls(cpu, new.chart, allowed_missing=missing_blocks(cpu, old.chart))
     if plan.problems:
         raise SwapRefused("; ".join(plan.problems))
+    if gone:
+        _final_scans(graph, [old.step_index[n] for n in gone])
     carried, report = carry_over(ChartShape.of(old), state, new)
     graph.replace_chart(new, carried, cpu)
     initialize = removed == "init" and bool(gone)

@@ -47,6 +47,8 @@ class _Net:
     file: str
     parts: dict[str, Node] = field(default_factory=dict)
     sources: dict[tuple[str, str], list[tuple[str, str]]] = field(default_factory=dict)
+    done: dict[tuple[tuple[str, str], str | None], Expr | None] = field(default_factory=dict)
+    busy: set[tuple[tuple[str, str], str | None]] = field(default_factory=set)
 
     def __post_init__(self) -> None:
         holder = self.root.child("Parts")
@@ -74,23 +76,73 @@ class _Net:
         srcs = self.sources.get((uid, name), [])
         if not srcs:
             raise ElementError(f"pin {name} of {part.get('Name')} is not connected", part)
-        values = [self.value(s, want) for s in srcs]
-        negated = any(n.get("Name") == name for n in part.all("Negated"))
-        out: Expr | None
-        if any(v is None for v in values):  # the rail: no condition, or TRUE in parallel
-            out = None if len(values) == 1 else Const(True, "BOOL", "TRUE", self.loc(part))
-        else:
-            out = values[0]
-            for v in values[1:]:
-                assert out is not None and v is not None
-                out = Binary("OR", out, v, self.loc(part))
-        if negated:
+        out = self.parallel(srcs, want, self.loc(part))
+        if any(n.get("Name") == name for n in part.all("Negated")):
             if out is None:
                 raise ElementError(f"a negated {name} on the power rail", part)
             out = Unary("NOT", out, self.loc(part))
         return out
 
+    def parallel(
+        self, srcs: list[tuple[str, str]], want: str | None, loc: SourceLocation
+    ) -> Expr | None:
+        """The OR of what flows from ``srcs``, a LAD parallel branch read as it is drawn:
+        branches of contacts in series that open at one place give ``before AND (b1 OR
+        b2 …)`` — what flows to that place read once, not once per branch (a network of
+        nested branches stays as long as its drawing, never doubles per level)."""
+        walks = [self.series(src) for src in srcs]
+        if len({base for base, _ in walks}) > 1:  # branches from several places
+            values = [self.value(src, want) for src in srcs]
+            if any(v is None for v in values):  # the rail: TRUE in parallel
+                return None if len(values) == 1 else Const(True, "BOOL", "TRUE", loc)
+            return _joined("OR", values, loc)  # type: ignore[arg-type]
+        base = walks[0][0]
+        head = self.value(base, want) if base is not None else None
+        if any(not ops for _, ops in walks):  # a branch of no contact: the flow itself
+            if head is None and len(walks) > 1:
+                return Const(True, "BOOL", "TRUE", loc)
+            return head
+        alt = _joined("OR", [_joined("AND", ops, loc) for _, ops in walks], loc)
+        return _and(head, alt, loc)
+
+    def series(self, src: tuple[str, str]) -> tuple[tuple[str, str] | None, list[Expr]]:
+        """Walk back from ``src`` through contacts in series (each fed by one wire): where
+        the chain starts (None: the power rail) and the contacts' operands in drawing
+        order; a loop of wires is an ElementError."""
+        ops: list[Expr] = []
+        for _ in range(len(self.parts) + 1):
+            uid, pin = src
+            if uid == "rail":
+                return None, ops[::-1]
+            part = self.parts.get(uid)
+            if part is None or pin == "@" or part.tag == "Access":
+                return src, ops[::-1]
+            ins = self.sources.get((uid, "in"), [])
+            negated = any(n.get("Name") == "in" for n in part.all("Negated"))
+            if part.get("Name") != "Contact" or len(ins) != 1 or negated:
+                return src, ops[::-1]
+            op = self.pin(uid, "operand", "BOOL")
+            assert op is not None
+            ops.append(op)
+            src = ins[0]
+        raise ElementError("a loop of wires: a contact feeds itself", self.parts[src[0]])
+
     def value(self, src: tuple[str, str], want: str | None) -> Expr | None:
+        """What flows out of ``src`` (read once: the same value for every wire from it);
+        a part whose value needs its own is a loop of wires, an ElementError."""
+        key = (src, want)
+        if key in self.done:
+            return self.done[key]
+        if key in self.busy:
+            part = self.parts.get(src[0])
+            raise ElementError("a loop of wires: an element feeds itself", part or self.root)
+        self.busy.add(key)
+        out = self._value(src, want)
+        self.busy.discard(key)
+        self.done[key] = out
+        return out
+
+    def _value(self, src: tuple[str, str], want: str | None) -> Expr | None:
         uid, pin = src
         if uid == "rail":
             return None
@@ -102,20 +154,21 @@ class _Net:
         kind = part.get("Name")
         loc = self.loc(part)
         if kind == "Contact":
-            op = self.pin(uid, "operand", "BOOL")
-            assert op is not None
-            return _and(self.pin(uid, "in"), op, loc)
+            base, ops = self.series(src)
+            head = self.value(base, want) if base is not None else None
+            return _and(head, _joined("AND", ops, loc), loc)
         if kind in ("O", "A", "X"):
             n = _cardinality(part)
-            ins = [self.pin(uid, f"in{i}") for i in range(1, n + 1)]
             logic = {"O": "OR", "A": "AND", "X": "XOR"}[kind]
+            feeds = [self.sources.get((uid, f"in{i}"), []) for i in range(1, n + 1)]
+            plain = not any(n.get("Name", "").startswith("in") for n in part.all("Negated"))
+            if logic == "OR" and plain and all(len(f) == 1 for f in feeds):
+                return self.parallel([f[0] for f in feeds], None, loc)
+            ins = [self.pin(uid, f"in{i}") for i in range(1, n + 1)]
             if logic == "OR" and any(v is None for v in ins):
                 return None
             vals = [v if v is not None else Const(True, "BOOL", "TRUE", loc) for v in ins]
-            out = vals[0]
-            for v in vals[1:]:
-                out = Binary(logic, out, v, loc)
-            return out
+            return _joined(logic, vals, loc)
         if kind == "Not":
             inner = self.pin(uid, "in")
             if inner is None:
@@ -158,6 +211,14 @@ def _cardinality(part: Node) -> int:
 
 def _and(a: Expr | None, b: Expr, loc: SourceLocation) -> Expr:
     return b if a is None else Binary("AND", a, b, loc)
+
+
+def _joined(op: str, values: list[Expr], loc: SourceLocation) -> Expr:
+    """``values`` joined by ``op``, left to right (one value: itself)."""
+    out = values[0]
+    for v in values[1:]:
+        out = Binary(op, out, v, loc)
+    return out
 
 
 def read_network(net: Node, operand: Operand, file: str) -> list[tuple[Node, Expr | None]]:

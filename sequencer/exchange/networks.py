@@ -60,6 +60,34 @@ _OPERATORS = {
 }
 
 
+MAX_ELEMENTS = 20_000
+"""The longest expression a network is read into, in elements written out."""
+
+
+def _size(e: SExpr, read: dict[tuple[str, str], tuple[SExpr, int]]) -> int:
+    """How many elements ``e`` is written out; a part already read counts its known size
+    (found by identity, so a shared part costs one look-up, not its whole length)."""
+    known = {id(v): n for v, n in read.values()}
+    total = 0
+    stack = [e]
+    while stack:
+        x = stack.pop()
+        n = known.get(id(x))
+        if n is not None:
+            total += n
+            continue
+        total += 1
+        if isinstance(x, SBinary):
+            stack += (x.left, x.right)
+        elif isinstance(x, SUnary):
+            stack.append(x.operand)
+        elif isinstance(x, SCall):
+            stack += [v for _, v in x.params]
+        if total > MAX_ELEMENTS:
+            return total
+    return total
+
+
 def _not(e: SExpr, node: Node) -> SExpr:
     return SUnary("NOT", e, node.line, node.col)
 
@@ -80,6 +108,9 @@ class Network:
     connectors: dict[str, Node] = field(init=False)
     calls: list[SCallStmt] = field(init=False, default_factory=list)
     computed: set[str] = field(init=False, default_factory=set)  # instance block localIds
+    read: dict[tuple[str, str], tuple[SExpr, int]] = field(init=False, default_factory=dict)
+    """What flows out of an element's output, and how many elements it is written out —
+    read once, whatever number of wires leave it (``source``)."""
 
     def __post_init__(self) -> None:
         self.by_id = {n.get("localId"): n for n in self.root.children if n.get("localId")}
@@ -106,6 +137,25 @@ class Network:
         return out
 
     def source(self, conn: Node, seen: frozenset[str]) -> SExpr:
+        """What flows out of the element ``conn`` names, read once per output; an
+        expression that would be over ``MAX_ELEMENTS`` long written out (an output fanned
+        out to several inputs at each of many levels) is an ElementError, not an import
+        that never ends."""
+        key = (conn.get("refLocalId"), conn.get("formalParameter"))
+        if key in self.read:
+            return self.read[key][0]
+        out = self._source(conn, seen)
+        size = _size(out, self.read)
+        if size > MAX_ELEMENTS:
+            raise ElementError(
+                f"an expression over {MAX_ELEMENTS:,} elements long written out "
+                "(outputs that feed several inputs, level after level)",
+                self.by_id.get(key[0], conn),
+            )
+        self.read[key] = (out, size)
+        return out
+
+    def _source(self, conn: Node, seen: frozenset[str]) -> SExpr:
         ref = conn.get("refLocalId")
         node = self.by_id.get(ref)
         if node is None:

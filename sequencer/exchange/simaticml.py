@@ -291,17 +291,25 @@ class _Reader(TiaOperands):
     def numbers(self, seq_nodes: list[Node]) -> None:
         """Every step's and transition's number by its name; a ``Number`` that is not an
         integer is an error (I013) naming the step or transition, and no chart."""
+        holders: dict[tuple[str, int], str] = {}
         for q in seq_nodes:
             for what, el in [("step", s) for s in q.iter("Step")] + [
                 ("transition", t) for t in q.iter("Transition")
             ]:
                 names = self.step_names if what == "step" else self.trans_names
+                name = el.get("Name")
                 try:
-                    names[el.get("Name")] = _number(el, "Number")
+                    number = _number(el, "Number")
+                    if not 1 <= number <= MAX_NUMBER:
+                        raise ElementError(f"Number {number} is outside 1..{MAX_NUMBER}", el)
+                    first = holders.setdefault((what, number), name)
+                    if first != name:
+                        raise ElementError(f'Number {number} is {what} "{first}"\'s too', el)
+                    names[name] = number
                 except ElementError as exc:
                     self.p.error(
                         "I013",
-                        f'{what} "{el.get("Name")}": {exc.message} (GRAPH numbers {what}s 1, 2, …)',
+                        f'{what} "{name}": {exc.message} (GRAPH numbers {what}s 1, 2, …)',
                         self.at(el),
                     )
         self.p.fail_if_errors()
@@ -482,34 +490,40 @@ class _Links:
             self.out.setdefault(head, []).append(tail)
             self.into.setdefault(tail, []).append(head)
 
-    def upstream(self, node: tuple[str, int, int]) -> list[int]:
+    def upstream(self, node: tuple[str, int, int], seen: frozenset[int] = frozenset()) -> list[int]:
+        """The steps a connection comes from, through branches (a branch that leads back
+        into itself gives none)."""
         kind, n, _ = node
         if kind == "S":
             return [n]
-        if kind == "B":
+        if kind == "B" and n not in seen:
             found: list[int] = []
             for (k, m, _), srcs in self.into.items():
                 if k == "B" and m == n:
                     for s in srcs:
-                        found += self.upstream(s)
+                        found += self.upstream(s, seen | {n})
             return found
         return []
 
-    def downstream(self, node: tuple[str, int, int]) -> list[int] | None:
+    def downstream(
+        self, node: tuple[str, int, int], seen: frozenset[int] = frozenset()
+    ) -> list[int] | None:
+        """The steps a connection leads to, through branches (a branch that leads back
+        into itself gives none)."""
         kind, n, _ = node
         if kind == "S":
             return [n]
         if kind == "E":
             return []
-        if kind == "B":
+        if kind == "B" and n not in seen:
             found: list[int] = []
             for key in sorted(k for k in self.out if k[0] == "B" and k[1] == n):
                 for d in self.out[key]:
-                    got = self.downstream(d)
+                    got = self.downstream(d, seen | {n})
                     if got:
                         found += got
             return found
-        return None
+        return None if kind != "B" else []
 
     def sources(self, t: int) -> list[int]:
         found: list[int] = []
@@ -576,6 +590,10 @@ def _node(el: Node, port: str) -> tuple[str, int, int]:
         return ("E", 0, 0)
     kind = {"StepRef": "S", "TransitionRef": "T", "BranchRef": "B"}.get(el.tag, "?")
     return (kind, _number(el, "Number", 0), _number(el, port, 0))
+
+
+MAX_NUMBER = 32767
+"""The highest step or transition number (S_NO and T_NO are INTs)."""
 
 
 def _number(el: Node, attr: str, missing: int | None = None) -> int:

@@ -321,8 +321,8 @@ class OnlineChange:
         removed = command.args.get("removed")
         if isinstance(base, int) and base != self.current.number:
             raise _Refused(
-                f"the CPU runs chart version {self.current.number} now, not {base}: "
-                "look at the change again"
+                f"the CPU runs chart version {self.current.number} now, not {base}: someone "
+                "downloaded meanwhile — look at the CPU's chart again and redo the change"
             )
         target: Version | None
         scl_texts: Mapping[str, str]

@@ -108,6 +108,13 @@ def _read(source: Path, symbols: Path | None, pou: str | None) -> Imported | int
         return fail(_os_error("read", exc.filename or source, exc))
     except S7Error as exc:  # placed in the file when it names no place of its own
         return fail(exc if exc.where is not None else S7Error(exc.message, str(source)))
+    except RecursionError:  # elements nested (or wired) deeper than a chart can hold
+        return fail(
+            S7Error(
+                f"{source}: not imported: its elements nest too deeply (a condition of "
+                "hundreds of levels, or elements deeper than a chart holds)"
+            )
+        )
     except Exception:  # the last resort: a file that says so, not a traceback
         what = _format_of(source)
         return fail(S7Error(f"{source}: not imported: it cannot be read as {what}"))

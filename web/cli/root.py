@@ -300,7 +300,7 @@ MaxCycleMs = Annotated[
     typer.Option(
         callback=_positive_ms,
         help="Maximum cycle time in ms; a longer scan is a time error (OB80, else STOP). "
-        "Default: 150 (S7's), 1000 with --web (the view shares the process); "
+        "Default: 150 (S7's), with --web too (the view runs in a process of its own); "
         "for a program, its CPU dict's max_cycle_ms, else 150.",
     ),
 ]

@@ -171,7 +171,12 @@ class CpuCommands:
             return
         text = format_chart(s.chart)
         fb = self.panel.fb
-        reply = self._command(Download(fb=fb, args=DownloadArgs(source=text, preview=True)))
+        # the version this edit was made from: a CPU that runs another one (someone else
+        # downloaded meanwhile) refuses, rather than the edit silently undoing theirs
+        args = DownloadArgs(source=text, preview=True)
+        if self.base is not None:
+            args = msgspec.structs.replace(args, base=self.base.version)
+        reply = self._command(Download(fb=fb, args=args))
         if not reply.applied:
             self._report("download", reply)
             return

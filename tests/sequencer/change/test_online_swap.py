@@ -122,3 +122,24 @@ def test_a_twenty_step_chain_of_true_transitions_downloaded_into_the_drill_keeps
     events = _steps_of(cpu, clock, 40)
     entered = [int(e.split()[0][1:]) for e in events if e.endswith("S1")]
     assert entered[:20] == [*range(2, 21), 1]  # every step in turn, one a call
+
+
+def test_an_active_step_a_download_removes_leaves_no_n_output_on() -> None:
+    """docs/online-change.md: a removed active step gets its final scan at the swap, as if
+    it were left: its N operand goes back to 0 (kept or initialized alike)."""
+    for removed in ("keep", "init"):
+        cpu, clock, g = _running(CHAIN)
+        cpu.mem.periph_in[0] = 1
+        assert _steps_of(cpu, clock, 1) == ["S1 S0", "S6 S1"]
+        cpu.mem.periph_in[0] = 0
+        _steps_of(cpu, clock, 1)
+        assert cpu.mem.periph_out[0] == 0x40  # Q0.6 of the active S6
+        without = (
+            CHAIN.replace('  STEP S6 "Six":\n    N Q0.6;\n  END_STEP\n', "")
+            .replace("FROM S1 TO S6", "FROM S1 TO S7")
+            .replace("  TRANSITION T2 FROM S6 TO S7 := I0.0;\n", "")
+        )
+        swap(g, _cc(without), cpu, removed=removed)
+        clock.advance(10)
+        cpu.scan()
+        assert cpu.mem.periph_out[0] & 0x40 == 0, removed

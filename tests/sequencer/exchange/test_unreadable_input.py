@@ -127,6 +127,33 @@ def test_a_step_number_that_is_not_a_number_names_the_step(
     ]
 
 
+@pytest.mark.parametrize(
+    ("number", "said"),
+    [
+        ("-5", "Number -5 is outside 1..32767"),
+        ("99999999999", "Number 99999999999 is outside 1..32767"),
+        ("2", 'Number 2 is step "Idle"\'s too'),
+    ],
+)
+def test_a_step_number_out_of_range_or_taken_twice_names_the_step(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], number: str, said: str
+) -> None:
+    text = simaticml(number=number, ref=number)
+    rc, err = run(tmp_path, capsys, "num.xml", text)
+    assert rc == 2
+    step = "Run" if number == "2" else "Idle"
+    assert f'error[I013]: step "{step}": {said} (GRAPH numbers steps 1, 2, …)' in err[0]
+
+
+def test_a_transition_number_taken_twice_is_refused_not_dropped(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    text = simaticml().replace('Name="Back" Number="2"', 'Name="Back" Number="1"')
+    rc, err = run(tmp_path, capsys, "dup.xml", text)
+    assert rc == 2
+    assert 'error[I013]: transition "Back": Number 1 is transition "Go"\'s too' in err[0]
+
+
 def test_a_connection_naming_a_step_by_a_symbol_names_the_reference(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -22,6 +22,9 @@ import pytest
 
 from s7graph.sequencer.text.elements import StepRef, TransitionRef, find
 from s7graph.web.access.audit import read_audit
+from s7graph.web.bus.client import BusClient
+from s7graph.web.bus.protocol import Command
+from s7graph.web.bus.session import open_session
 from s7graph.web.view.chart_view import ChartView
 from s7graph.web.view.drawing import ACTIVE, BOX_H, BOX_W, INACTIVE, SELECTED, Drawing
 from s7graph.web.view.editor import Editor
@@ -328,3 +331,38 @@ def test_open_offers_each_chart_of_a_file_that_holds_several(page: Page, cpu: On
     click(page, "Open")
     assert wait_until(lambda: ed.session is not None and ed.session.chart.name == "Count")
     assert wait_until(lambda: ed.file.value == "two_Count.s7g")  # set just after the session
+
+
+def test_a_page_download_of_an_edit_made_before_another_download_is_refused(
+    page: Page, cpu: OnlineRig
+) -> None:
+    """The page's download names the version its edit was made from: after someone else's
+    download, the CPU refuses it with the reason, instead of the edit silently undoing the
+    other one (docs/online-change.md)."""
+    leave = page.get_by_role("button", name="Leave edit mode")
+    if leave.is_visible():
+        leave.click()
+    click(page, "Edit mode")
+    leave.wait_for(timeout=30_000)
+    ed = editor(cpu)
+    assert wait_until(lambda: ed.session is not None and ed.session.chart.name == "Seq_chain")
+    assert wait_until(lambda: ed.base is not None)
+    other = cpu.path.read_text(encoding="utf-8").replace('S3 "Step 3"', 'S3 "Heating"')
+    with (
+        open_session(connect=[cpu.endpoint], tls=cpu.tls) as bus,
+        BusClient(bus, "cpu1") as client,
+    ):
+        login = client.login("eng", PASSWORD)
+        assert login.ok, login.reason
+        sent = Command(
+            op="download", fb="Seq_chain", user="eng", token=login.token, args={"source": other}
+        )
+        done = client.send(sent, timeout=60)
+        assert done.applied, done.reason
+    select(page, ed, "S2 Step 2", StepRef(2))
+    type_into(page, "Name", "Two")
+    assert wait_until(lambda: ed.session is not None and "Two" in str(ed.source.value))
+    click(page, "Download")
+    page.get_by_text("someone downloaded meanwhile", exact=False).first.wait_for(timeout=60_000)
+    names = {s.number: s.name for s in cpu.session.graph.cc.chart.sequences[0].steps}
+    assert names[3] == "Heating" and names[2] == "Step 2"  # theirs kept, nothing of ours
