@@ -154,7 +154,11 @@ def _radix(base: str, digits: str) -> int:
     clean = digits.replace("_", "")
     if not clean:
         raise _Bad("no digits")
-    return int(clean, int(base))
+    try:
+        return int(clean, int(base))
+    except ValueError:
+        wrong = next(c for c in clean if not c.isdigit() or int(c, 36) >= int(base))
+        raise _Bad(f"{wrong!r} is not a digit of base {base}") from None
 
 
 def _integer(body: str) -> int:
@@ -234,7 +238,13 @@ def _date(body: str) -> date:
     m = _DATE.fullmatch(body)
     if m is None:
         raise _Bad("a date is YYYY-MM-DD")
-    value = date(int(m[1]), int(m[2]), int(m[3]))
+    year, month, day = int(m[1]), int(m[2]), int(m[3])
+    if not 1 <= month <= 12:
+        raise _Bad(f"there is no month {month}")
+    try:
+        value = date(year, month, day)
+    except ValueError:
+        raise _Bad(f"{year}-{month:02d} has no day {day}") from None
     if not DATE_EPOCH <= value <= DATE_MAX:
         raise _Bad("outside D#1990-01-01..D#2168-12-31")
     return value

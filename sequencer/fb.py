@@ -29,7 +29,7 @@ from s7graph.engine.restart import RestartType
 from s7graph.sequencer.change.carry import ChartFormat
 from s7graph.sequencer.compiled import CompiledChart, Program
 from s7graph.sequencer.cycle import GraphRuntime, new_state
-from s7graph.sequencer.messages import PROGRAM_USER, sync_messages
+from s7graph.sequencer.messages import PROGRAM_USER, forget_removed, sync_messages
 from s7graph.sequencer.params import (
     Direction,
     check_pin,
@@ -146,6 +146,7 @@ class GraphFB:
         self._acting: tuple[str, int | None] | None = None  # who commanded (user, ACK_S step)
         self._placing: tuple[int, ...] = ()  # step numbers to place in the next call
         self._restart = ""  # the reason a startup OB's call gives its messages
+        self._swapped = False  # a download swapped the chart: gone steps' messages go
 
     @property
     def cc(self) -> CompiledChart:
@@ -295,6 +296,7 @@ class GraphFB:
         self.loaded = loaded
         self.idb = idb
         self._levels = levels
+        self._swapped = True
 
     # ------------------------------------------------------------ the FB body
 
@@ -379,6 +381,9 @@ class GraphFB:
         )
         if acks:
             rt.acknowledge(acks)
+        if self._swapped:
+            self._swapped = False
+            forget_removed(st, messages, self.cc.name, idb.number, ctx.now_ns)
         alarm = getattr(ctx, "alarm", None)
         if alarm is not None:
             for event in messages.pop_events():

@@ -185,6 +185,23 @@ def sync_messages(
     return acks
 
 
+def forget_removed(
+    state: GraphState,
+    message_list: MessageList,
+    fb_name: str,
+    db_number: int,
+    now_ns: int,
+    reason: str = "a download removed its step",
+) -> None:
+    """After an online change: a message of this FB still incoming for a step the chart no
+    longer has goes outgoing, ``reason`` saying why (it stays listed until acknowledged, as
+    after a restart); a step that is gone has no fault left to raise or clear it."""
+    raised = state.display.get(_MEMORY_KEY, {})
+    _forgotten(
+        message_list, fb_name, db_number, raised if isinstance(raised, dict) else {}, now_ns, reason
+    )
+
+
 def _forgotten(
     message_list: MessageList,
     fb_name: str,

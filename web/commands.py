@@ -620,6 +620,15 @@ _MISSING = re.compile(r"^Object missing required field `(\w+)` - at `\$\.args`$"
 _UNKNOWN = re.compile(r"^Object contains unknown field `(.+)` - at `\$\.args`$")
 _ENUM = re.compile(r"^Invalid enum value .* - at `\$\.args\.(\w+)`$")
 _USER = re.compile(r"^Expected `str` matching regex .* - at `\$\.user`$", re.S)
+_TYPE = re.compile(r"^Expected `(\w+)(?: \| null)?`, got `(\w+)` - at `\$\.args\.(\w+)`$")
+_TYPE_WORDS = {
+    "bool": "true or false",
+    "int": "a whole number",
+    "float": "a number",
+    "str": "a text",
+    "array": "a list",
+    "object": "an object",
+}
 _BOUND = re.compile(
     r"^Expected `(str|int|array|object)`(?: of length)? ([<>]=) (\d+) - at `\$\.args\.(\w+)`$"
 )
@@ -664,6 +673,9 @@ def explain(op: object, message: str) -> str:
         choices = {"mode": MODES, "removed": REMOVED_CHOICES}.get(m[1])
         if choices:
             return f"{m[1]} must be one of {', '.join(choices)} - at `$.args.{m[1]}`"
+    if m := _TYPE.match(message):
+        want, got = (_TYPE_WORDS.get(t, t) for t in (m[1], m[2]))
+        return f"{m[3]} is {want}, not {got} - at `$.args.{m[3]}`"
     if (m := _BOUND.match(message)) and (words := _BOUND_WORDS.get((m[1], m[2]))):
         said = f"{m[4]} is empty" if (m[1], m[2], m[3]) == ("str", ">=", "1") else words
         return f"{said.format(name=m[4], n=int(m[3]))} - at `$.args.{m[4]}`"

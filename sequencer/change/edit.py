@@ -313,12 +313,31 @@ def describe(edit: Edit) -> str:
     op = _BY_CLASS.get(type(edit))
     if op is None:
         return type(edit).__name__
-    shown = []
-    for f in fields(edit):  # type: ignore[arg-type]
-        v = getattr(edit, f.name)
-        text = v.text() if isinstance(v, RowFields) else repr(v)
-        shown.append(f"{f.name}={text if len(text) <= 40 else text[:37] + '...'}")
-    return f"{op.title} ({', '.join(shown)})"
+    shown = [_shown_field(f.name, getattr(edit, f.name)) for f in fields(edit)]  # type: ignore[arg-type]
+    words = ", ".join(w for w in shown if w)
+    return f"{op.title}: {words}" if words else op.title
+
+
+_ELEMENT_FIELDS: Final = {"step": "S{}", "transition": "T{}", "sequence": "sequence {}"}
+
+
+def _shown_field(name: str, value: object) -> str:
+    """One field of an edit as the undo menu says it: ``S3``, ``T2``, ``name Clamp``, a
+    row as the chart writes it; a source text as "the text" (never a Python repr)."""
+    if value is None:
+        return ""
+    if name in _ELEMENT_FIELDS and isinstance(value, int):
+        return _ELEMENT_FIELDS[name].format(value)
+    if isinstance(value, RowFields):
+        text = value.text()
+    elif name == "text":
+        return "the chart's text"
+    elif isinstance(value, bool):
+        text = "yes" if value else "no"
+    else:
+        text = str(value)
+    text = text if len(text) <= 40 else text[:37] + "..."
+    return f"{name} {text}" if name not in ("row",) else text
 
 
 # ---------------------------------------------------------------- applying an edit

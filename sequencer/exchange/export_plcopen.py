@@ -19,6 +19,7 @@ STOP`` live in the `.s7g` source only.
 
 from __future__ import annotations
 
+import re
 from xml.sax.saxutils import escape, quoteattr
 
 from s7graph.engine.symbols import SymbolTable
@@ -87,8 +88,12 @@ class _Export:
         return format_expr(e, self.iec)
 
     def iec(self, e: Expr) -> str | None:
-        if isinstance(e, Const) and e.type in ("WORD", "DWORD", "BYTE") and "#16#" in e.text:
-            return f"{e.type}#16#{e.text.rsplit('#', 1)[1]}"
+        if isinstance(e, Const) and e.type in ("WORD", "DWORD", "BYTE"):
+            m = re.fullmatch(r"\w+#(16|8|2)#(.+)", e.text)
+            if m:  # W#16#FF, DW#2#1010: the IEC type's own prefix
+                return f"{e.type}#{m[1]}#{m[2]}"
+        if isinstance(e, Const) and e.text.upper().startswith("L#"):  # L#70000: a DINT
+            return f"DINT#{e.text[2:]}"
         if isinstance(e, Operand) and e.quoted:
             return _ident(e.name)
         if isinstance(e, Operand):

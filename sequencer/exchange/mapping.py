@@ -386,6 +386,12 @@ CONSTRUCTS: Final[tuple[tuple[str, str, str, str], ...]] = (
         "the call of instance `TON_DBm`",
         "",
     ),
+    (
+        TO_PLCOPEN,
+        "S7 literals in ST (`L#70000`, `W#16#0F0F`, `DW#2#1010`)",
+        "the IEC forms `DINT#70000`, `WORD#16#0F0F`, `DWORD#2#1010`",
+        "other tools know no `L#`; read back, a DINT literal is a plain number",
+    ),
     (TO_TIA, "the chart", "a GRAPH FB (`Graph/v5`)", "numbers, names, options kept"),
     (
         TO_TIA,

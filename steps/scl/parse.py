@@ -118,6 +118,7 @@ def _too_deep(tree: Tree[Any], file: str) -> Diagnostic | None:
     todo: list[tuple[Tree[Any], int, int, int, Tree[Any] | None]] = [(tree, 0, 0, 0, None)]
     while todo:
         node, depth, stmts, exprs, outer = todo.pop()
+        inside = outer  # the expression this node is part of, if any
         name = str(node.data)
         stmts += name in _STATEMENTS
         if name in _EXPRESSIONS:
@@ -133,15 +134,30 @@ def _too_deep(tree: Tree[Any], file: str) -> Diagnostic | None:
             at = outer or node
         elif depth > MAX_TREE_DEPTH:
             what = f"a source nested more than {MAX_TREE_DEPTH} levels deep"
+            if inside is not None:  # a long chain of operators: where its expression starts
+                what = f"an expression deeper than {MAX_TREE_DEPTH} levels (split the chain)"
+                at = inside
         if what:
             meta = at.meta
             line = meta.line if not meta.empty else 1
             col = meta.column if not meta.empty else 1
             return error("E204", what, SourceLocation(file, line, col))
         todo.extend(
-            (c, depth + 1, stmts, exprs, outer) for c in node.children if isinstance(c, Tree)
+            (c, depth + 1, stmts, exprs - _chained(node, c), outer)
+            for c in node.children
+            if isinstance(c, Tree)
         )
     return None
+
+
+def _chained(node: Tree[Any], child: Tree[Any]) -> int:
+    """1 when ``child`` is the left operand of ``node`` and the same operator (``a AND b AND
+    c`` is a chain of one level, not nested: 40 contacts ANDed are no deeper than 2), else 0."""
+    kids = node.children
+    if node.data != "binary" or child.data != "binary" or not kids or kids[0] is not child:
+        return 0
+    op, inner = kids[1], child.children[1] if len(child.children) > 1 else None
+    return int(isinstance(op, Token) and isinstance(inner, Token) and op.upper() == inner.upper())
 
 
 # ---------------------------------------------------------------- syntax errors

@@ -113,6 +113,21 @@ def test_malformed_literals_raise_literal_error(text: str) -> None:
         parse_literal(text)
 
 
+@pytest.mark.parametrize(
+    ("text", "said"),
+    [
+        ("2#102", "'2' is not a digit of base 2"),
+        ("8#9", "'9' is not a digit of base 8"),
+        ("D#2026-02-30", "2026-02 has no day 30"),
+        ("DT#2000-13-01-00:00:00", "there is no month 13"),
+    ],
+)
+def test_a_malformed_literal_is_said_in_s7_terms_not_pythons(text: str, said: str) -> None:
+    with pytest.raises(LiteralError) as info:
+        parse_literal(text)
+    assert str(info.value).endswith(said) and "int()" not in str(info.value)
+
+
 def test_literal_error_names_the_source_location() -> None:
     with pytest.raises(LiteralError, match=r"^chart\.s7g:3:9: .*'B#16#100'"):
         parse_literal("B#16#100", SourceLocation("chart.s7g", 3, 9))

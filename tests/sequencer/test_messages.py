@@ -188,3 +188,28 @@ def test_graph_fb_ack_ef_acknowledges_its_message_as_program() -> None:
     assert messages.entries() == () and not g.outputs["ERR_FLT"]
     assert messages.log()[-1].kind == "acknowledged"
     assert (messages.log()[-1].user, messages.log()[-1].t_ns) == (PROGRAM_USER, clock.now_ns())
+
+
+def test_a_message_of_a_step_a_download_removes_goes_outgoing_saying_why() -> None:
+    """A step that is gone raises and clears nothing: its incoming message goes outgoing at
+    the first call after the download, the download as its reason, and stays listed until
+    acknowledged (as after a restart)."""
+    from s7graph.sequencer.change.online import swap
+
+    cpu, clock, g = cpu_plant()
+    messages = message_list(cpu)
+    cpu.mem.set("M3.1", True)
+    scan(cpu, clock)
+    assert messages.get(SV1).state is MessageState.INCOMING  # type: ignore[union-attr]
+    source, text = chart_text("messages")
+    renumbered = (
+        source.replace("INITIAL_STEP S1", "INITIAL_STEP S9")
+        .replace("FROM S1 ", "FROM S9 ")
+        .replace("TO S1 :=", "TO S9 :=")
+    )
+    swap(g, compile_chart(parse_chart(renumbered, text)), cpu, removed="keep")
+    rec = scan(cpu, clock)
+    msg = messages.get(SV1)
+    assert msg is not None and msg.state is MessageState.OUTGOING
+    gone = [e for e in rec.alarms if e.msg_id == SV1]
+    assert [(e.kind, e.reason) for e in gone] == [("outgoing", "a download removed its step")]

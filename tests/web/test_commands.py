@@ -276,8 +276,11 @@ def test_the_shells_op_commands_are_the_structs() -> None:
         (["off"], Off(fb="_")),
         (["t-push"], TPush(fb="_")),
         (["step-on", "3"], StepOn(fb="_", args=StepArgs(step=3))),
+        (["step-on", "S3"], StepOn(fb="_", args=StepArgs(step=3))),  # as S7-GRAPH names it
+        (["ack", "--step", "S2"], AckStep(fb="_", args=StepArgs(step=2))),
         (["step-off", "4"], StepOff(fb="_", args=StepArgs(step=4))),
         (["set-steps", "3", "12"], SetSteps(fb="_", args=StepsArgs(steps=[3, 12]))),
+        (["set-steps", "S3", "s12"], SetSteps(fb="_", args=StepsArgs(steps=[3, 12]))),
         (["stop"], Stop(fb="_")),
         (["start"], Start(fb="_")),
         (["send", "halt", "on=true"], Halt(fb="_", args=OnArgs(on=True))),
@@ -309,6 +312,8 @@ def test_a_shell_command_sends_its_ops_struct(
     [
         (["mode", "fast"], "mode must be one of AUTO, MAN, TAP, TOP"),
         (["step-on", "0"], "$.args.step"),
+        (["step-on", "three"], "step is a whole number, not a text - at `$.args.step`"),
+        (["send", "halt", "on=yes"], "on is true or false, not a text - at `$.args.on`"),
         (["set-steps", "3", "0"], "$.args.steps[1]"),
         (["ack", "--message", "0"], "$.args.msg_id"),
     ],

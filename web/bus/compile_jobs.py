@@ -83,7 +83,8 @@ def _parse(text: str, file: str, refused: str) -> Chart:
         return parse_source(text, file)
     except EditRefused as exc:
         lines = [format_diagnostic(d) for d in exc.diagnostics]
-        raise _Refused(f"{refused}: {exc.reason}", lines) from None
+        reason = exc.reason.removeprefix("the source does not parse: ")
+        raise _Refused(f"{refused}: {reason}", lines) from None
 
 
 def _running_chart(text: str) -> Chart:

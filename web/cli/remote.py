@@ -25,7 +25,9 @@ from typing import TypeVar
 import msgspec
 import zenoh
 
-from s7graph.sequencer.change.base import MAX_SOURCE
+from s7graph.sequencer.change.base import MAX_SOURCE, EditRefused
+from s7graph.sequencer.change.typed import parse_source
+from s7graph.sequencer.checks.diagnostics import format_diagnostic
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.cycle_text import cycle_lines
 from s7graph.web.bus.protocol import Command, CommandReply, CpuStatus, StepStateUpdate
@@ -224,6 +226,12 @@ def download_command(
                 f"{path}: {len(text):,} characters; a download carries at most {MAX_SOURCE:,} "
                 "a file (split a source of blocks into several)"
             )
+    try:  # a syntax error is said in this file's own name, before anything is sent
+        parse_source(source, str(chart))
+    except EditRefused as exc:
+        for d in exc.diagnostics:
+            print(format_diagnostic(d), file=sys.stderr)
+        return _fail(f"{chart}: not downloaded: {exc.reason}")
     sent: dict[str, str] | msgspec.UnsetType = sources or msgspec.UNSET
     with _logged_in(net, fb=fb, user=user) as shell:
         if isinstance(shell, int):

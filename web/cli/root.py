@@ -19,6 +19,7 @@ from __future__ import annotations
 import contextvars
 import functools
 import inspect
+import re
 import sys
 from collections.abc import Callable
 from inspect import Parameter, Signature
@@ -944,9 +945,22 @@ _BUS_PARAMETERS = (
 )
 
 
+_STEP_FIELDS = ("step", "steps")
+
+
+def _step_word(word: str) -> object:
+    """``S3`` or ``3`` as the step number 3; anything else as it is (the bus refuses it)."""
+    m = re.fullmatch(r"[Ss]?(\d{1,9})", word.strip())
+    return int(m[1]) if m else word
+
+
 def _word(field: mi.Field, value: object) -> object:
     """A shell word as the type of the argument ``field``: a choice whatever its case
     (``mode man``), digits as a number where a number may go (``--message 17``)."""
+    if field.name in _STEP_FIELDS:  # a step as S7-GRAPH names it: S3, or 3
+        if isinstance(value, list):
+            return [_step_word(v) for v in value]
+        return _step_word(value) if isinstance(value, str) else value
     if not isinstance(value, str):
         return value
     t = field.type
@@ -969,7 +983,7 @@ def _parameter(kind: type[Command], field: mi.Field) -> Parameter:
     shell = kind.shell
     assert shell is not None
     hint: Any = Annotated  # the argument's type is known at run time only
-    number = isinstance(field.type, mi.IntType)
+    number = isinstance(field.type, mi.IntType) and field.name not in _STEP_FIELDS
     if shell.option:
         option = typer.Option(shell.option, help=shell.help)
         typed = hint[int | None if number else str | None, option]
@@ -980,7 +994,7 @@ def _parameter(kind: type[Command], field: mi.Field) -> Parameter:
     choices = f"{', '.join(values[:-1])} or {values[-1]}." if values else ""
     argument = typer.Argument(metavar=shell.metavar or None, help=shell.argument or choices)
     many = isinstance(field.type, mi.ListType)  # set-steps 3 12: one word per item
-    typed = list[int] if many else int if number else str
+    typed = list[str] if many else int if number else str  # a step: S3 or 3 (_word)
     return Parameter(field.name, Parameter.KEYWORD_ONLY, annotation=hint[typed, argument])
 
 

@@ -13,7 +13,7 @@ from s7graph.sequencer.change import base as edit_base
 from s7graph.sequencer.change import content as edit_content
 from s7graph.sequencer.change import structure as edit_structure
 from s7graph.sequencer.change.base import MAX_UNDO, Edit, EditRefused
-from s7graph.sequencer.change.content import AddRow, RenameStep, SetCondition
+from s7graph.sequencer.change.content import AddRow, RenameStep, SetCondition, SetSource
 from s7graph.sequencer.change.edit import (
     BY_NAME,
     OPERATIONS,
@@ -124,11 +124,11 @@ def test_an_edit_from_data_may_leave_optional_arguments_out() -> None:
 
 
 def test_an_edit_is_described_for_the_undo_menu() -> None:
-    assert describe(RenameStep(3, "Clamp")) == "Name (step=3, name='Clamp')"
-    assert describe(AddRow(2, RowFields("S", "Q0.0", "S1"))) == (
-        "Add action row (step=2, row=S1 S Q0.0, at=None)"
-    )
-    assert describe(SetCondition(1, "I0.0 AND " * 20)).endswith("I0.0 AND ...)")
+    """In the words of the chart, never a Python repr: ``S3``, ``T1``, a row as written."""
+    assert describe(RenameStep(3, "Clamp")) == "Name: S3, name Clamp"
+    assert describe(AddRow(2, RowFields("S", "Q0.0", "S1"))) == "Add action row: S2, S1 S Q0.0"
+    assert describe(SetCondition(1, "I0.0 AND " * 20)).endswith("I0.0 AND I...")
+    assert describe(SetSource("FUNCTION_BLOCK 'x'")) == "Source: the chart's text"
 
 
 # ---------------------------------------------------------------- a new chart
@@ -162,8 +162,8 @@ def test_undo_gives_back_the_very_chart_and_redo_the_edited_one() -> None:
     start = Session.open(linear())
     one = start.apply(InsertStep(1))
     two = one.apply(RenameStep(4, "Wait"))
-    assert two.undo_label == "Name (step=4, name='Wait')"
-    assert two.undo().undo_label == "Step + Transition (transition=1)"
+    assert two.undo_label == "Name: S4, name Wait"
+    assert two.undo().undo_label == "Step + Transition: T1"
     back = two.undo().undo()
     assert back.chart is start.chart and back.diagnostics == start.diagnostics
     again = back.redo().redo()

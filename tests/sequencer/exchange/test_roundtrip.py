@@ -12,7 +12,7 @@ import pytest
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.exchange import export_chart, export_reported, import_chart
 from s7graph.sequencer.exchange.shape import priority
-from s7graph.sequencer.text.format import format_chart, format_row
+from s7graph.sequencer.text.format import format_chart, format_expr, format_row
 from s7graph.sequencer.text.model import Chart
 from s7graph.sequencer.text.parse import parse_chart, parse_file
 from s7graph.sequencer.text.walk import uncommented, unlocated
@@ -332,3 +332,29 @@ def test_simaticml_export_writes_call_rows_and_reads_them_back() -> None:
         'CALL SFB 4, DB 10 (IN := "Go", PT := T#2S, Q => done, ET => waited);'
     ]
     assert {s.name: s.address for s in back.symbols} == {"Go": "I0.0"}
+
+
+def test_plcopen_export_writes_s7_literals_in_iec_form_and_reads_them_back() -> None:
+    """``L#70000`` is ``DINT#70000`` and ``W#16#0F0F`` ``WORD#16#0F0F`` in the ST other tools
+    read (they know no ``L#``); read back as plain IEC, the rows are the chart's."""
+    text = """FUNCTION_BLOCK "T"
+VAR big : DINT; w : WORD; END_VAR
+SEQUENCE 1
+INITIAL_STEP S1:
+  N big := L#70000;
+  N w := W#16#0F0F;
+END_STEP
+STEP S2: END_STEP
+TRANSITION T1 FROM S1 TO S2 := big > L#5;
+TRANSITION T2 FROM S2 TO S1 := TRUE;
+END_SEQUENCE
+END_FUNCTION_BLOCK
+"""
+    xml = export_chart(parse_chart(text, "t.s7g"), "plcopen")
+    plain = native_only(xml).decode()
+    assert "L#" not in plain and "DINT#70000" in plain and "WORD#16#0F0F" in plain
+    back = import_chart(plain.encode(), "t.xml").chart
+    rows = [format_row(r) for r in back.all_steps()[0].actions]
+    assert rows == ["N big := 70000;", "N w := W#16#0F0F;"]
+    t1 = back.all_transitions()[0].condition
+    assert t1 is not None and format_expr(t1) in ("big > 5", "big > L#5")

@@ -36,6 +36,14 @@ def test_nesting_ten_thousand_deep_is_a_located_diagnostic(body: str) -> None:
         assert found[0][1:] == (3, 6)  # where the expression starts
 
 
+def test_a_flat_chain_of_a_hundred_contacts_is_not_nesting() -> None:
+    """``a AND b AND c …`` is one level of operators, however long (an interlock of 100
+    contacts compiles); only a chain beyond the tree's depth limit is E204."""
+    bools = fb("b := " + " AND ".join(["b"] * 100) + ";").replace("INT;", "INT; b : BOOL;")
+    assert codes(bools) == []
+    assert codes(fb("i := " + " + ".join(["i"] * 100) + ";")) == []
+
+
 def test_nested_structures_ten_thousand_deep_are_a_diagnostic() -> None:
     decl = "s : " + "STRUCT a : " * N + "INT;" + " END_STRUCT;" * N
     src = f"FUNCTION_BLOCK FB1\nVAR {decl} END_VAR\nEND_FUNCTION_BLOCK\n"

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -80,3 +81,19 @@ def test_an_internal_error_of_a_command_is_one_line_in_words(
     assert err == (
         "s7graph: an internal error while running s7graph check: 'x' (please report it)\n"
     )
+
+
+def test_download_says_a_syntax_error_in_its_own_files_name_before_the_bus(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    chart = tmp_path / "mine.s7g"
+    chart.write_text(
+        'FUNCTION_BLOCK "X" FB 1 DB 1\nSEQUENCE 1 "s"\n  INITIAL_STEP S1: END_STEP\n'
+        "  TRANSITION T1 FROM S1 TO S1 := I0.0 AND (;\nEND_SEQUENCE\nEND_FUNCTION_BLOCK\n",
+        encoding="utf-8",
+    )
+    assert main(["download", str(chart), "--user", "u", "--connect", "tcp/127.0.0.1:1"]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert err[0].startswith(f"{chart}:4:44: error[E001]: unexpected ';'")
+    assert err[-1].startswith(f"s7graph: error: {chart}: not downloaded: ")
+    assert not any("join the bus" in line for line in err)
