@@ -22,6 +22,7 @@ from s7graph.engine.datatypes import (
     S5TIME_MAX_MS,
     TYPES,
     check_value,
+    real32,
     real_shown,
     type_of,
 )
@@ -175,7 +176,7 @@ def _real(body: str) -> float:
     value = float(body.replace("_", ""))
     if not math.isfinite(value) or abs(value) > REAL_MAX:
         raise _Bad("outside the REAL range ±3.402823e+38")
-    return value
+    return real32(value)  # a REAL literal holds 32 bits, as the CPU loads it
 
 
 def _byte_list(body: str) -> tuple[str, object]:

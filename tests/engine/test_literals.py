@@ -25,7 +25,7 @@ from s7graph.engine.literals import format_literal, parse_literal
         ("INT#16#3F_FF", ("INT", 0x3FFF)),
         ("1.5", ("REAL", 1.5)),
         ("1.0e3", ("REAL", 1000.0)),
-        ("1.234567e+13", ("REAL", 1.234567e13)),
+        ("1.234567e+13", ("REAL", 12345669582848.0)),  # a REAL holds 32 bits
         ("REAL#2", ("REAL", 2.0)),
         ("16#FF", ("WORD", 255)),
         ("16#1_0000", ("DWORD", 0x10000)),
