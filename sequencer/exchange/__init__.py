@@ -193,9 +193,20 @@ def _import_chart(
             chart = parse_chart("\n" * (line - 1) + text, file)
         except ChartSyntaxError as exc:
             raise ImportFailed(exc.diagnostics) from None
-        return Imported(chart, fmt, [])
+        return Imported(_beside(chart, symbols), fmt, [])
     chart, pending, functions = iec_to_chart(item, problems)
     return Imported(chart, fmt, sorted(problems.items, key=sort_key), pending, functions)
+
+
+def _beside(chart: Chart, symbols: SymbolTable | None) -> Chart:
+    """The chart s7graph kept in its export, but for the symbols it carries that the
+    symbol table given to the import holds already (the same name at the same address):
+    they stay in the table, as for a chart exported and imported with one."""
+    if symbols is None or not chart.symbols:
+        return chart
+    given = {s.name: str(s.address) for s in symbols}
+    kept = tuple(s for s in chart.symbols if given.get(s.name) != s.address)
+    return replace(chart, symbols=kept)
 
 
 def _pick(pou: str, names: list[str]) -> list[int]:

@@ -20,6 +20,7 @@ STOP`` live in the `.s7g` source only.
 from __future__ import annotations
 
 import re
+from dataclasses import replace
 from xml.sax.saxutils import escape, quoteattr
 
 from s7graph.engine.symbols import SymbolTable
@@ -44,6 +45,7 @@ from s7graph.sequencer.text.model import (
     Sequence,
     Step,
     StepAttr,
+    SymbolDecl,
     TransAttr,
     Unary,
 )
@@ -397,7 +399,15 @@ class _Export:
         for i, q in enumerate(self.chart.sequences):
             self.sequence(q, i, body)
         iface, globals_ = self.interface()
-        source = format_chart(self.chart).replace("]]>", "]]]]><![CDATA[>")
+        # the chart kept with the symbols it was exported with (from --symbols too): read
+        # back, it passes check without the symbol file
+        kept = replace(
+            self.chart,
+            symbols=tuple(SymbolDecl(n, a, t) for n, a, t in self.symbols())
+            if self.table
+            else self.chart.symbols,
+        )
+        source = format_chart(kept).replace("]]>", "]]]]><![CDATA[>")
         name = quoteattr(self.chart.name)
         return (
             '<?xml version="1.0" encoding="utf-8"?>\n'

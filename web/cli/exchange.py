@@ -43,11 +43,14 @@ __all__ = ["export_command", "import_command"]
 _LEFT_OUT = ("I020", "I021", "I022", "I023", "I024")
 
 
-def _symbol_file(chart: Chart) -> str:
-    lines = [
-        f"{quote(s.name)} ; {s.address} ; {s.type} ; {s.comment}".rstrip(" ;")
-        for s in chart.symbols
-    ]
+def _symbol_file(chart: Chart, given: SymbolTable | None = None) -> str:
+    """The symbol file ``--symbols-out`` writes: the tags of the table the import was
+    given (``--symbols``) that the chart does not declare itself, then the chart's — all a
+    ``check`` of the chart needs, in one file."""
+    own = {s.name for s in chart.symbols}
+    rows = [(s.name, str(s.address), s.type, s.comment) for s in given or () if s.name not in own]
+    rows += [(s.name, s.address, s.type, s.comment) for s in chart.symbols]
+    lines = [f"{quote(n)} ; {a} ; {t} ; {c}".rstrip(" ;") for n, a, t, c in rows]
     return "\n".join(lines) + "\n"
 
 
@@ -146,7 +149,8 @@ def import_command(
     chart = result.chart
     try:
         if symbols_out is not None:
-            symbols_out.write_text(_symbol_file(chart), encoding="utf-8")
+            given = SymbolTable.from_file(symbols) if symbols is not None else None
+            symbols_out.write_text(_symbol_file(chart, given), encoding="utf-8")
             chart = dataclasses.replace(chart, symbols=())
         text = format_chart(chart, _header(source, result))
         if output is None:

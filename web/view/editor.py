@@ -197,7 +197,7 @@ class Editor(CpuCommands, RowEditing, InPlace, CrossReferencing):
     # ------------------------------------------------------------ edit mode
 
     def _toggle(self) -> None:
-        self._guarded(self.leave if self.editing else self.enter)
+        self._guarded(self.leave_asked if self.editing else self.enter)
 
     def enter(self) -> None:
         """Start editing the chart the CPU runs."""

@@ -79,6 +79,48 @@ class CpuCommands:
 
         def _click(self, action: Callable[[], object]) -> Callable[[Any], None]: ...
 
+        def leave(self) -> None: ...
+
+    def leave_asked(self) -> None:
+        """Leave edit mode — after a yes when the chart edited is not the one the CPU runs
+        (what was not downloaded would be dropped without a word)."""
+        if not self._unsent():
+            self.leave()
+            return
+        gui = self.client.gui
+        if self._modal is not None:
+            with contextlib.suppress(Exception):
+                self._modal.close()
+        with gui.add_modal("Leave edit mode") as modal:
+            self._modal = modal
+            gui.add_markdown(
+                "The chart edited is not the one the CPU runs: leaving drops the edits "
+                "not downloaded (*Save to this computer* keeps them in a file)."
+            )
+            drop = gui.add_button("Leave and drop the edits", color="red")
+            stay = gui.add_button("Stay in edit mode")
+
+        def dropped() -> None:
+            modal.close()
+            self.leave()
+
+        drop.on_click(self._click(dropped))
+        stay.on_click(lambda _: modal.close())
+
+    def _unsent(self) -> bool:
+        """Whether the chart edited differs from the one the CPU runs (by their text as the
+        editor writes charts)."""
+        s = self.session
+        if s is None or s.undo_label is None:
+            return False
+        if self.base is None:
+            return True
+        try:
+            running = parse_source(self.base.text, self.base.file or "chart.s7g")
+        except EditRefused:
+            return True
+        return format_chart(s.chart) != format_chart(running)
+
     def _refresh_files(self) -> None:
         listed = self.eng.project()
         names = [f.name for f in listed.files] if listed is not None else []

@@ -69,6 +69,7 @@ from s7graph.web.commands import (
 from s7graph.web.view import texts
 from s7graph.web.view.alarms import AlarmView
 from s7graph.web.view.block_links import BlockLinks
+from s7graph.web.view.confirm import ask
 from s7graph.web.view.contact_modify import ContactModify
 from s7graph.web.view.drawing import aim_camera
 from s7graph.web.view.editor import Editor
@@ -184,7 +185,7 @@ class ClientPanel(PageLogin):
             }
             for kind, _, _ in _CONTROL_BUTTONS:
                 make = self._halt if kind is Halt else functools.partial(self._plain, kind)
-                self.buttons[op_of(kind)].on_click(self._on_click(make))
+                self.buttons[op_of(kind)].on_click(self._on_click(make, kind))
             first = w.layout.steps[0].number if w.layout.steps else 1
             # no min or max: the browser would clamp a number typed out of range silently;
             # the command is refused instead, saying the range
@@ -473,11 +474,17 @@ class ClientPanel(PageLogin):
         """The FB this page commands."""
         return self.wiring.layout.fb
 
-    def _on_click(self, make: Callable[[], Command]) -> Callable[[Any], None]:
-        """A button's handler: send the command ``make`` builds at the click."""
+    def _on_click(
+        self, make: Callable[[], Command], kind: type[Command] | None = None
+    ) -> Callable[[Any], None]:
+        """A button's handler: send the command ``make`` builds at the click — after a yes
+        to the question of ``kind`` when it has one (CPU to STOP, MRES: ``confirm``)."""
 
         def click(_: Any) -> None:
-            self.command(make())
+            if kind is None:
+                self.command(make())
+            else:
+                ask(self.client.gui, kind, lambda: self.command(make()))
 
         return click
 

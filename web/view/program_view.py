@@ -55,6 +55,7 @@ from s7graph.web.commands import (
 from s7graph.web.view import texts
 from s7graph.web.view.alarms import AlarmView
 from s7graph.web.view.block_links import BlockButtons, listed_blocks
+from s7graph.web.view.confirm import ask
 from s7graph.web.view.diagnostics import state_html
 from s7graph.web.view.guard import OriginGuard, page_open
 from s7graph.web.view.page_login import PageLogin
@@ -173,7 +174,7 @@ class ProgramPage(PageLogin):
         return self.view.cpu
 
     def _clicked(self, kind: type[Command], _: object) -> None:
-        self.command(kind)
+        ask(self.page.gui, kind, lambda: self.command(kind))  # STOP, MRES: after a yes
 
     def command(self, command: Command | type[Command]) -> CommandReply:
         """Send ``command`` (or op ``kind`` without arguments) as this page's user (viser's

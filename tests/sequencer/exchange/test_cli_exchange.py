@@ -45,6 +45,26 @@ def test_symbols_out_moves_the_symbols_to_a_table_check_reads(tmp_path: Path) ->
     assert main(["check", str(out), "--symbols", str(table)]) == 0
 
 
+def test_symbols_out_holds_the_tags_symbols_gave_too(tmp_path: Path) -> None:
+    """A SimaticML block names tags of the PLC's tag table (``--symbols``): the table
+    ``--symbols-out`` writes holds them beside the chart's own, so ``check`` needs only it."""
+    given = tmp_path / "tags.txt"
+    given.write_text(
+        '"StepData.Values.CycleAbort" ; M5.0 ; BOOL ; x\n'
+        '"StepData.Values.CurrentStep" ; MW100 ; INT ; y\n',
+        encoding="utf-8",
+    )
+    table = tmp_path / "symbols.txt"
+    source = corpus("simaticml/StepSequence.xml")
+    rc, out = import_to(tmp_path, source, "--symbols", str(given), "--symbols-out", str(table))
+    assert rc in (0, 1)
+    assert table.read_text().splitlines()[:2] == [
+        '"StepData.Values.CycleAbort" ; M5.0 ; BOOL ; x',
+        '"StepData.Values.CurrentStep" ; MW100 ; INT ; y',
+    ]
+    assert main(["check", str(out), "--symbols", str(table)]) == 0
+
+
 def test_strict_refuses_a_chart_with_constructs_left_out(tmp_path: Path) -> None:
     rc, out = import_to(tmp_path, corpus("iec-text/matiec_annexF_gravel.txt"), "--strict")
     assert rc == 2 and not out.exists()

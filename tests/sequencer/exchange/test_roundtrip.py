@@ -358,3 +358,15 @@ END_FUNCTION_BLOCK
     assert rows == ["N big := 70000;", "N w := W#16#0F0F;"]
     t1 = back.all_transitions()[0].condition
     assert t1 is not None and format_expr(t1) in ("big > 5", "big > L#5")
+
+
+def test_a_plcopen_export_with_a_symbol_table_reads_back_with_its_symbols() -> None:
+    """The chart s7graph keeps in its own data carries the symbols it was exported with:
+    read back, the drill passes ``check`` without the symbol file."""
+    from s7graph.sequencer.checks.validate import validate
+
+    path = next(p for p in EXAMPLES if p.stem == "drill")
+    chart, table = example(path)
+    back = import_chart(export_chart(chart, "plcopen", table).encode(), "drill.xml").chart
+    assert [d for d in validate(back) if d.is_error] == []
+    assert {s.name: s.address for s in back.symbols} == {s.name: str(s.address) for s in table}

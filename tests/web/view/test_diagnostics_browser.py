@@ -61,10 +61,16 @@ def test_a_programs_page_shows_its_state_a_watch_table_and_why_it_stopped(
         stop = page.get_by_role("button", name="CPU to STOP", exact=True)
         assert stop.is_disabled()  # a viewer's page
         log_in(page, "eng")
+        stop.click()  # as TIA Portal, the page asks first; Cancel sends nothing
+        page.get_by_text("every output goes to 0").first.wait_for(timeout=30_000)
+        page.get_by_role("button", name="Cancel", exact=True).click()
+        assert program.runner.cpu.mode.value == "RUN"
         stop.click()
+        page.get_by_role("button", name="Stop the CPU", exact=True).click()
         page.get_by_text("STOP by the switch (eng (unverified))").first.wait_for(timeout=30_000)
         page.get_by_text("STOP entry").first.wait_for(timeout=30_000)
         page.get_by_role("button", name="Memory reset (MRES)", exact=True).click()
+        page.get_by_role("button", name="Reset the memory", exact=True).click()
         page.get_by_text("Memory reset started by a PG operation").first.wait_for(timeout=30_000)
         page.get_by_role("button", name="CPU to RUN", exact=True).click()
         assert wait_until(lambda: program.runner.cpu.mode.value == "RUN", 30)
