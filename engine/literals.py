@@ -202,7 +202,12 @@ def _string(body: str) -> str:
             i += 1
             continue
         nxt = inner[i + 1 : i + 2].upper()
-        if nxt in _ESCAPES:
+        if nxt == ">":  # a string break: what lies up to $< is layout, not text
+            end = inner.find("$<", i + 2)
+            if end < 0 or inner[i + 2 : end].strip():
+                raise _Bad("a string break $> ends at $< with only spaces and lines between")
+            i = end + 2
+        elif nxt in _ESCAPES:
             out.append(_ESCAPES[nxt])
             i += 2
         elif re.fullmatch(r"[0-9A-Fa-f]{2}", inner[i + 1 : i + 3]):

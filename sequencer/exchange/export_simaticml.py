@@ -46,6 +46,7 @@ from s7graph.sequencer.text.model import (
     Step,
     StepAttr,
     TransAttr,
+    Transition,
 )
 
 __all__ = ["S7GRAPH_COMMENT", "export_simaticml"]
@@ -88,8 +89,34 @@ class _Export:
         self.table = symbols
         self.p = Problems(chart.file)
         self.warned_call = False
-        self.step_names = {s.number: s.name or f"Step{s.number}" for s in chart.all_steps()}
-        self.trans_names = {t.number: t.name or f"Trans{t.number}" for t in chart.all_transitions()}
+        self.step_names: dict[int, str] = {}
+        self.trans_names: dict[int, str] = {}
+        self._unique_names()
+
+    def _unique_names(self) -> None:
+        """A name per step and transition, unique in the block as TIA requires (they are
+        members of its interface): a name taken before gets ``_2``, ``_3`` … (X013)."""
+        taken: set[str] = set()
+        elements: list[tuple[Step | Transition, str, dict[int, str]]] = [
+            (s, "Step", self.step_names) for s in self.chart.all_steps()
+        ]
+        elements += [(t, "Trans", self.trans_names) for t in self.chart.all_transitions()]
+        for e, prefix, names in elements:
+            name = e.name or f"{prefix}{e.number}"
+            unique, k = name, 1
+            while unique.casefold() in taken:
+                k += 1
+                unique = f"{name}_{k}"
+            if unique != name:
+                what = "step S" if prefix == "Step" else "transition T"
+                self.p.warn(
+                    "X013",
+                    f"{what}{e.number} {name!r} is named {unique!r}: TIA takes a name once "
+                    "per block (steps and transitions alike)",
+                    e.loc,
+                )
+            taken.add(unique.casefold())
+            names[e.number] = unique
 
     # ------------------------------------------------------------ operands
 

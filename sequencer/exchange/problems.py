@@ -46,6 +46,7 @@ CODES: Final[dict[str, str]] = {
     "X010": "a chart part other tools do not see (kept in s7graph's own data only)",
     "X011": "a chart part other tools run otherwise",
     "X012": "a chart part written in s7graph's spelling, which other tools may not read",
+    "X013": "a name changed so that the other tool takes it (TIA: unique element names)",
 }
 
 

@@ -169,6 +169,8 @@ class _Reader(TiaOperands):
                 if t.startswith("G7_"):
                     continue
                 graph_type = TIA_TYPES.get(t.split("[")[0], "")
+                if graph_type == "STRING" and (n := re.fullmatch(r"STRING\s*\[\s*(\d+)\s*\]", t)):
+                    graph_type = f"STRING[{n[1]}]"  # its length, as TIA declared it
                 if not graph_type:
                     self.p.warn(
                         "I023",
@@ -612,7 +614,10 @@ _BLOCK = re.compile(r"(FB|FC|SFB|SFC)(\d+)", re.IGNORECASE)
 _DB = re.compile(r"DB(\d+)", re.IGNORECASE)
 _GLOBAL = re.compile(r'"((?:[^"]|"")*)"((?:\.[A-Za-z_][A-Za-z0-9_]*|\[[^\]]*\])*)')
 _LOCAL = re.compile(r"#([A-Za-z_][A-Za-z0-9_]*)")
-_ABSOLUTE = re.compile(r"%([IQM][XBWD]?\d+(?:\.\d+)?)", re.IGNORECASE)
+_ABSOLUTE = re.compile(
+    r"%((?:P?[IQ]|M)[XBWD]?\d+(?:\.\d+)?|[TC]\d+|DB\d+\.DB[XBWD]\d+(?:\.\d+)?)(?![\w.])",
+    re.IGNORECASE,
+)
 
 
 def _graph_text(text: str) -> str:

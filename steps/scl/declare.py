@@ -266,11 +266,14 @@ def _data_block(prog: Program, info: BlockInfo, unit: m.Unit, consts: Consts) ->
     t = resolve_type(prog, spec, consts)
     if t.kind != "STRUCT":
         raise Problem("E212", f"DATA_BLOCK {unit.name} needs a STRUCT, a UDT or an FB", spec.loc)
-    if isinstance(spec, m.StructType):
+    info.db_type = t
+    if isinstance(spec, m.StructType):  # read as DB20.name: only DB20.DW1 is an address
         for member in spec.members:
             for name, loc in member.names:
-                _a_name(name, loc, in_db=True)
-    info.db_type = t
+                try:
+                    _a_name(name, loc, in_db=True, plain=False)
+                except Problem as p:
+                    prog.problem(p, info.label)
 
 
 def _interface(prog: Program, info: BlockInfo, unit: m.Unit, consts: Consts) -> None:
@@ -280,7 +283,7 @@ def _interface(prog: Program, info: BlockInfo, unit: m.Unit, consts: Consts) -> 
         if isinstance(section, m.ConstSection):
             for name, expr, loc in section.items:
                 _fresh(seen, name, loc)
-                _a_name(name, loc, in_db=False)
+                _a_name(name, loc, in_db=False, plain=True)
                 try:
                     consts.define(name, expr, loc)
                 except Problem as p:
@@ -309,12 +312,13 @@ def _interface(prog: Program, info: BlockInfo, unit: m.Unit, consts: Consts) -> 
             prog.problem(p, info.label)
 
 
-def _a_name(name: str, loc: SourceLocation, *, in_db: bool) -> None:
+def _a_name(name: str, loc: SourceLocation, *, in_db: bool, plain: bool) -> None:
     """``name`` reads as a name where it is used, not as an address, a timer or counter or
-    a block (``MW2``, ``T1``, ``FB3``; and, for what a DB holds at its top, ``DW1``):
-    E201, as S7-SCL's own lexer takes those for what they are."""
+    a block: written alone (``plain``) not ``MW2``, ``T1``, ``FB3``; at the top of a DB
+    (``in_db``: read as ``DB20.name``) not ``DW1``. E201, as S7-SCL's own lexer takes
+    those for what they are."""
     for pattern, what, db_only in _NOT_NAMES:
-        if (in_db or not db_only) and pattern.fullmatch(name):
+        if (in_db if db_only else plain) and pattern.fullmatch(name):
             raise Problem(
                 "E201",
                 f"{name} is {what.format(name.upper())} in S7-SCL, not a name: "
@@ -350,7 +354,7 @@ def _variables(
         init = aggregate_initial(prog, var.type, consts)
     for name, loc in var.names:
         _fresh(seen, name, loc)
-        _a_name(name, loc, in_db=info.kind == "FB" and decl is not Decl.TEMP)
+        _a_name(name, loc, in_db=info.kind == "FB" and decl is not Decl.TEMP, plain=True)
         param = Param(name, decl, t, init, loc)
         (info.temps if decl is Decl.TEMP else info.params)[name.upper()] = param
 

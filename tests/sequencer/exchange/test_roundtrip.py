@@ -370,3 +370,44 @@ def test_a_plcopen_export_with_a_symbol_table_reads_back_with_its_symbols() -> N
     back = import_chart(export_chart(chart, "plcopen", table).encode(), "drill.xml").chart
     assert [d for d in validate(back) if d.is_error] == []
     assert {s.name: s.address for s in back.symbols} == {s.name: str(s.address) for s in table}
+
+
+def test_simaticml_counter_and_timer_rows_read_back() -> None:
+    """TIA writes an S5 counter or timer as ``%C3`` / ``%T4`` in an action's text: the rows
+    s7graph exports that way come back, not left out."""
+    text = """FUNCTION_BLOCK "T"
+SEQUENCE 1
+INITIAL_STEP S1:
+  S1 CS C3, C#5;
+  S1 CU C3;
+  S1 TL T4, S5T#2S;
+END_STEP
+STEP S2: END_STEP
+TRANSITION T1 FROM S1 TO S2 := I0.0;
+TRANSITION T2 FROM S2 TO S1 := I0.1;
+END_SEQUENCE
+END_FUNCTION_BLOCK
+"""
+    chart = parse_chart(text, "t.s7g")
+    back = import_chart(export_chart(chart, "simaticml").encode(), "t.xml")
+    assert [d.code for d in back.problems] == []
+    rows = [format_row(r) for r in back.chart.all_steps()[0].actions]
+    assert rows == [format_row(r) for r in chart.all_steps()[0].actions]
+
+
+def test_simaticml_export_names_each_step_and_transition_once() -> None:
+    """TIA takes a name once per block: two steps and a transition named ``Fill`` go out as
+    ``Fill``, ``Fill_2`` and ``Fill_3``, each renamed one reported at its element."""
+    text = """FUNCTION_BLOCK "T"
+SEQUENCE 1
+INITIAL_STEP S1 "Fill": END_STEP
+STEP S2 "fill": END_STEP
+TRANSITION T1 "Fill" FROM S1 TO S2 := I0.0;
+TRANSITION T2 FROM S2 TO S1 := I0.1;
+END_SEQUENCE
+END_FUNCTION_BLOCK
+"""
+    xml, problems = export_reported(parse_chart(text, "t.s7g"), "simaticml")
+    names = re.findall(r'<(?:Step|Transition) [^>]*?Name="([^"]+)"', xml)
+    assert sorted(names, key=str.casefold) == ["Fill", "fill_2", "Fill_3", "Trans2"]
+    assert [(d.code, d.loc.line) for d in problems] == [("X013", 4), ("X013", 5)]

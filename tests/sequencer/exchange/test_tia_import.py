@@ -114,3 +114,18 @@ def test_the_allocator_skips_bytes_in_use_and_aligns_words() -> None:
     assert alloc.take("W") == "MW16"
     assert alloc.take("") == "M100.0"
     assert [alloc.take("") for _ in range(8)][-1] == "M101.0"
+
+
+def test_a_static_string_keeps_the_length_tia_declared() -> None:
+    """``String[8]`` is a ``STRING[8]`` variable, not one of 254 characters."""
+    xml = (
+        synthetic("tia_global_constant.xml")
+        .read_text()
+        .replace(
+            '<Member Name="strokes" Datatype="Int">',
+            '<Member Name="label" Datatype="String[8]"><StartValue>\'Drill\'</StartValue></Member>'
+            '<Member Name="strokes" Datatype="Int">',
+        )
+    )
+    text = format_chart(import_chart(xml.encode(), "t.xml").chart)
+    assert "  label : STRING[8] := 'Drill';" in text

@@ -357,3 +357,22 @@ END_FUNCTION_BLOCK
 """
     assert codes(src) == [("E203", 3, 8)]
     assert codes(src.replace(":= 'uro'", ":= '€uro'"))[0] == ("E203", 2, 23)
+
+
+def test_a_string_break_leaves_out_the_layout_between_its_marks() -> None:
+    """S7-SCL's string break: ``'ab$>`` and ``$<cd'`` on the next line are ``'abcd'``."""
+    assert value("'ab$>\n     $<cd'", "STRING[10]") == ("abcd", True)
+    assert value("'ab$>  $<cd'", "STRING[10]") == ("abcd", True)
+    assert errors(
+        "FUNCTION_BLOCK FB1\nVAR s : STRING[9]; END_VAR\n  s := 'ab$>x$<cd';\nEND_FUNCTION_BLOCK\n"
+    ) == ["E203"]
+
+
+def test_a_db_member_named_like_a_counter_is_a_member_a_variable_is_not() -> None:
+    """``DB20.c1`` reads as the member c1 (only ``DB20.DW1`` is an address); a variable
+    written alone as ``c1`` would be the counter C1 (E201)."""
+    db = "DATA_BLOCK DB20\nSTRUCT c1 : INT; END_STRUCT\nBEGIN\nEND_DATA_BLOCK\n"
+    assert errors(db + "ORGANIZATION_BLOCK OB1\n  DB20.c1 := 3;\nEND_ORGANIZATION_BLOCK\n") == []
+    assert errors("FUNCTION FC1 : VOID\nVAR_TEMP c1 : INT; END_VAR\n  c1 := 1;\nEND_FUNCTION\n")[
+        :1
+    ] == ["E201"]
