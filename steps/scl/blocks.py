@@ -280,19 +280,24 @@ def _db_assign(consts: Consts, t: ty.SclType, value: dict[str, object], a: m.Ass
 
 
 def _instance_inits(prog: Program, info: BlockInfo) -> dict[str, object]:
-    """``DATA_BLOCK DB10 FB17 BEGIN x := 5; END_DATA_BLOCK``: the values set."""
+    """``DATA_BLOCK DB10 FB17 BEGIN x := 5; s.p := 7; a[2] := 9; END_DATA_BLOCK``: the
+    values set, each variable whole (a STRUCT's or an ARRAY's other parts at their initial
+    values); a name the FB lacks is E224 at the assignment."""
     unit = info.unit
     fb = prog.block(info.instance_of)
     assert unit is not None and fb is not None
-    out: dict[str, object] = {}
+    params = [p for p in fb.params.values() if p.type.kind != "FB"]  # not multi-instances
+    t = ty.SclType("STRUCT", fields=tuple((p.name, p.type) for p in params))
+    value: dict[str, object] = {
+        p.name: ty.clone(p.init) if p.init is not None else ty.zero(p.type) for p in params
+    }
     consts = Consts()
+    set_: list[str] = []
     for a in unit.body:
-        param = fb.params.get(a.target.base.text.upper()) if isinstance(a, m.Assign) else None
-        if param is None or not isinstance(a, m.Assign) or a.target.selectors:
+        if not isinstance(a, m.Assign):
             raise SclError([error("E224", "an instance's variable is set by name", unit.loc)])
-        c = consts.evaluate(a.value)
-        v = adapt(c, param.type)
-        if v is None:
-            raise SclError([error("E216", f"{c.type} does not fit {param.type}", a.value.loc)])
-        out[param.name] = v
-    return out
+        _db_assign(consts, t, value, a)
+        found = t.field_type(a.target.base.text)
+        if found is not None and found[0] not in set_:
+            set_.append(found[0])
+    return {name: value[name] for name in set_}

@@ -158,6 +158,8 @@ class Consts:
             elif expr.op in ("/", "DIV", "MOD") and y != 0:
                 q = abs(x) // abs(y) * (1 if (x >= 0) == (y >= 0) else -1)
                 n = q if expr.op != "MOD" else x - q * y
+            elif expr.op in ("/", "DIV", "MOD"):
+                raise Problem("E217", f"{expr.op} by zero in a constant expression", expr.loc)
             else:
                 raise Problem("E217", f"{expr.op} in a constant expression", expr.loc)
             if not -(2**31) <= n < 2**31:
@@ -170,6 +172,8 @@ class Consts:
             ops = {"+": operator.add, "-": operator.sub, "*": operator.mul}
             r = ops[expr.op](x, y) if expr.op != "/" else x / y
             return Constant(ty.REAL, _round32(float(r)), untyped)
+        if expr.op == "/" and y == 0:
+            raise Problem("E217", "/ by zero in a constant expression", expr.loc)
         raise Problem("E217", f"{expr.op} in a constant expression", expr.loc)
 
 

@@ -190,6 +190,14 @@ class Places:
             if blk.db_type is not None and member and blk.db_type.field_type(member.name):
                 start = MemRef("DB", blk.number, "0", "0", blk.db_type, blk.name)
                 return self._mem_select(start, sels, path)
+            indexed = len(sels) > 1 and isinstance(sels[1], m.Index)  # DB20.DW[i]
+            if blk.db_type is not None and member and not indexed:
+                has = ", ".join(n for n, _ in blk.db_type.fields[:8]) or "no members"
+                raise Problem(
+                    "E224",
+                    f"DB{blk.number} has no member {member.name}; it has {has}",
+                    member.loc if hasattr(member, "loc") else path.loc,
+                )
             return self._db_absolute(blk.number, sels, path)
         raise Problem("E213", f"{blk.label} cannot be used here", loc)
 

@@ -1,6 +1,6 @@
 """A question before an operation that stops the plant or wipes its memory — CPU to STOP,
 memory reset (MRES) — as TIA Portal asks before either: one table of the questions, one
-modal that asks (docs/view.md, "For the operator")."""
+modal that asks (docs/view.md, "Diagnostics")."""
 
 from __future__ import annotations
 

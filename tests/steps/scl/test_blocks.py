@@ -665,3 +665,31 @@ END_ORGANIZATION_BLOCK
     cpu = run(src)
     assert cpu.mode is CpuMode.RUN
     assert cpu.mem.get("MB10") == EventId.AREA_ERROR & 0xFF
+
+
+INSTANCE = """FUNCTION_BLOCK FB3
+VAR acc : INT := 1000; s : STRUCT p : INT; q : INT := 4; END_STRUCT; a : ARRAY[1..3] OF INT;
+END_VAR
+  acc := acc + 1;
+END_FUNCTION_BLOCK
+
+DATA_BLOCK DB10 FB3
+BEGIN
+  {body}
+END_DATA_BLOCK
+
+ORGANIZATION_BLOCK OB1
+  FB3.DB10();
+END_ORGANIZATION_BLOCK
+"""
+
+
+def test_an_instance_dbs_begin_sets_members_and_elements_too() -> None:
+    """``s.p := 7;`` and ``a[2] := 9;`` in an instance DB's BEGIN, as in a global DB's:
+    the rest of the STRUCT and the ARRAY keep their initial values."""
+    values = run(INSTANCE.format(body="acc := 5; s.p := 7; a[2] := 9;")).instance_db(10).values
+    assert values["acc"] == 6 and values["s"] == {"p": 7, "q": 4} and values["a"] == [0, 9, 0]
+
+
+def test_a_name_the_fb_lacks_in_an_instance_dbs_begin_is_an_error_where_it_is_written() -> None:
+    assert codes(INSTANCE.format(body="acc := 5;\n  s.x := 7;")) == [("E224", 10, 5)]

@@ -8,6 +8,8 @@ import math
 
 import pytest
 
+from s7graph import sfb
+from s7graph.steps.scl import check_scl
 from tests.steps.scl.helpers import codes, errors, value
 
 
@@ -376,3 +378,13 @@ def test_a_db_member_named_like_a_counter_is_a_member_a_variable_is_not() -> Non
     assert errors("FUNCTION FC1 : VOID\nVAR_TEMP c1 : INT; END_VAR\n  c1 := 1;\nEND_FUNCTION\n")[
         :1
     ] == ["E201"]
+
+
+def test_a_db_member_the_db_lacks_and_a_constant_division_by_zero_say_so() -> None:
+    db = "DATA_BLOCK DB20\nSTRUCT a : INT; END_STRUCT\nBEGIN\nEND_DATA_BLOCK\n"
+    src = db + "ORGANIZATION_BLOCK OB1\n  DB20.b := 1;\nEND_ORGANIZATION_BLOCK\n"
+    found = check_scl(src, "t.scl", blocks=sfb.SYSTEM_BLOCKS)
+    assert [(d.code, d.message) for d in found] == [("E224", "DB20 has no member b; it has a")]
+    src = "FUNCTION FC1 : VOID\nCONST N := 10 / 0; END_CONST\nEND_FUNCTION\n"
+    found = check_scl(src, "t.scl", blocks=sfb.SYSTEM_BLOCKS)
+    assert [(d.code, d.message) for d in found] == [("E217", "/ by zero in a constant expression")]
