@@ -60,8 +60,12 @@ _IEC_PIN = {s7: iec for iec, s7 in S7_PIN.items()}  # S7's LOAD → IEC's LD
 
 
 def _ident(name: str) -> str:
-    out = "".join(c if c.isalnum() or c == "_" else "_" for c in name)
-    return out if out and not out[0].isdigit() else "_" + out
+    """``name`` as an IEC 61131-3 identifier: ASCII letters, digits and single
+    underscores, none at the end, not starting with a digit (``Start ä x`` →
+    ``Start_x``)."""
+    out = "".join(c if (c.isascii() and c.isalnum()) or c == "_" else "_" for c in name)
+    out = re.sub(r"_{2,}", "_", out).rstrip("_")
+    return out if out and not out[0].isdigit() else "_" + out if out else "_x"
 
 
 class _Export:
@@ -409,6 +413,7 @@ class _Export:
         )
         source = format_chart(kept).replace("]]>", "]]]]><![CDATA[>")
         name = quoteattr(self.chart.name)
+        pou = quoteattr(_ident(self.chart.name))  # an IEC identifier (the chart keeps its own)
         return (
             '<?xml version="1.0" encoding="utf-8"?>\n'
             f'<project xmlns="{_NS}" xmlns:xhtml="http://www.w3.org/1999/xhtml">\n'
@@ -417,7 +422,7 @@ class _Export:
             f'<contentHeader name={name}><coordinateInfo><fbd><scaling x="1" y="1"/></fbd>'
             '<ld><scaling x="1" y="1"/></ld><sfc><scaling x="1" y="1"/></sfc>'
             "</coordinateInfo></contentHeader>\n"
-            f'<types><dataTypes/><pous><pou name={name} pouType="functionBlock">\n'
+            f'<types><dataTypes/><pous><pou name={pou} pouType="functionBlock">\n'
             f"<interface>{iface}</interface>\n"
             "<body><SFC>\n" + "\n".join(body) + "\n</SFC></body>\n"
             f'<addData><data name="{S7GRAPH_DATA}" handleUnknown="discard">'
@@ -425,7 +430,7 @@ class _Export:
             "</pou></pous></types>\n"
             '<instances><configurations><configuration name="s7graph">'
             f'<resource name="cpu"><task name="OB1" priority="1" interval="T#10ms">'
-            f'<pouInstance name="{escape(_ident(self.chart.name))}_DB" typeName={name}/></task>'
+            f'<pouInstance name="{escape(_ident(self.chart.name))}_DB" typeName={pou}/></task>'
             f"</resource><globalVars>{globals_}</globalVars></configuration></configurations>"
             "</instances>\n</project>\n"
         )

@@ -388,6 +388,13 @@ CONSTRUCTS: Final[tuple[tuple[str, str, str, str], ...]] = (
     ),
     (
         TO_PLCOPEN,
+        "names of the POU, steps and variables",
+        "IEC identifiers: ASCII letters, digits and single underscores, none at the end "
+        "(`Lamp (x)` → `Lamp_x`)",
+        "the chart kept in s7graph's data keeps its own names",
+    ),
+    (
+        TO_PLCOPEN,
         "S7 literals in ST (`L#70000`, `W#16#0F0F`, `DW#2#1010`)",
         "the IEC forms `DINT#70000`, `WORD#16#0F0F`, `DWORD#2#1010`",
         "other tools know no `L#`; read back, a DINT literal is a plain number",

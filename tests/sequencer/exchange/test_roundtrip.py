@@ -411,3 +411,24 @@ END_FUNCTION_BLOCK
     names = re.findall(r'<(?:Step|Transition) [^>]*?Name="([^"]+)"', xml)
     assert sorted(names, key=str.casefold) == ["Fill", "fill_2", "Fill_3", "Trans2"]
     assert [(d.code, d.loc.line) for d in problems] == [("X013", 4), ("X013", 5)]
+
+
+def test_plcopen_export_names_are_iec_identifiers() -> None:
+    """IEC 61131-3 identifiers are ASCII letters, digits and single underscores, none at
+    the end: ``Lamp (x)`` and ``Füll ä`` go out as ``Lamp_x`` and ``F_ll``."""
+    text = """FUNCTION_BLOCK "Hard_Ünïcode"
+SYMBOLS
+  "Lamp (x)" : Q0.0 : BOOL;
+END_SYMBOLS
+SEQUENCE 1
+INITIAL_STEP S1 "Füll ä": N "Lamp (x)"; END_STEP
+STEP S2: END_STEP
+TRANSITION T1 FROM S1 TO S2 := I0.0;
+TRANSITION T2 FROM S2 TO S1 := I0.1;
+END_SEQUENCE
+END_FUNCTION_BLOCK
+"""
+    plain = native_only(export_chart(parse_chart(text, "t.s7g"), "plcopen")).decode()
+    names = re.findall(r'<(?:variable|step|pou) [^>]*?name="([^"]*)"', plain)
+    assert names and all(re.fullmatch(r"[A-Za-z_](?:_?[A-Za-z0-9])*", n) for n in names), names
+    assert "Lamp_x" in names and "F_ll" in names
