@@ -236,13 +236,13 @@ class _Export:
     def bool_action(self, qualifier: str, op: Operand, duration: str = "") -> str:
         dur = f" duration={quoteattr(duration)}" if duration else ""
         return (
-            f'<action localId="0" qualifier="{qualifier}"{dur}>'
+            f'<action localId="0" qualifier="{qualifier}"{dur}><relPosition x="0" y="0"/>'
             f"<reference name={quoteattr(self.st(op))}/></action>"
         )
 
     def inline(self, qualifier: str, body: str) -> str:
         return (
-            f'<action localId="0" qualifier="{qualifier}"><inline><ST>'
+            f'<action localId="0" qualifier="{qualifier}"><relPosition x="0" y="0"/><inline><ST>'
             f"<xhtml:p><![CDATA[{body}]]></xhtml:p></ST></inline></action>"
         )
 
@@ -262,15 +262,17 @@ class _Export:
             if s not in step_id:
                 continue
             if len(trs) > 1:
-                out_of[s] = self.branch("selectionDivergence", [step_id[s]], len(trs), out)
+                at = (x0, 60 + order.get(s, 0) * 120 + 40)
+                out_of[s] = self.branch("selectionDivergence", [step_id[s]], len(trs), out, at)
             else:
                 out_of[s] = step_id[s]
         after: dict[int, int] = {}  # transition → the element after it (simultaneous div.)
         for t in q.transitions:
             targets = [d for d in t.targets if (t.number, d) not in jumps]
             if len(t.targets) > 1:
+                at = (x0, 60 + order.get(t.sources[0], 0) * 120 + 100)
                 div = self.branch(
-                    "simultaneousDivergence", [trans_id[t.number]], len(t.targets), out
+                    "simultaneousDivergence", [trans_id[t.number]], len(t.targets), out, at
                 )
                 after[t.number] = div
             else:
@@ -278,43 +280,50 @@ class _Export:
             for d in t.targets:
                 if (t.number, d) in jumps or (len(t.targets) > 1 and d not in targets):
                     jid = self.next_id()
+                    y = 60 + order.get(t.sources[0], 0) * 120 + 110
                     out.append(
                         f'<jumpStep localId="{jid}" height="13" width="12" '
                         f"targetName={quoteattr(self.step_name[d])}>"
-                        f"{_cpin([after[t.number]])}</jumpStep>"
+                        f'<position x="{x0}" y="{y}"/>{_cpin([after[t.number]])}</jumpStep>'
                     )
         for st in q.steps:
             ins = [after[t] for t in arriving.get(st.number, [])]
             y = 60 + order[st.number] * 120
             if len(ins) > 1:
-                ins = [self.branch("selectionConvergence", ins, 1, out)]
+                ins = [self.branch("selectionConvergence", ins, 1, out, (x0, y - 20))]
             out.append(self.step(st, step_id[st.number], ins, x0, y))
         for t in q.transitions:
             srcs = [out_of.get(s, step_id.get(s, 0)) for s in t.sources]
             if len(srcs) > 1:
-                srcs = [self.branch("simultaneousConvergence", srcs, 1, out)]
+                at = (x0, 60 + order.get(t.sources[0], 0) * 120 + 60)
+                srcs = [self.branch("simultaneousConvergence", srcs, 1, out, at)]
             first = t.sources[0]
             rank = priority(leaving.get(first, [t.number])).index(t.number)
             x = x0 + rank * 160
             y = 60 + order.get(first, 0) * 120 + 80
             cond = self.st(t.condition) if t.condition is not None else "TRUE"
-            name = f" name={quoteattr(t.name)}" if t.name else ""
-            out.append(
-                f'<transition localId="{trans_id[t.number]}" height="2" width="20"{name}>'
+            out.append(  # TC6 names no transition: the name stays in s7graph's data
+                f'<transition localId="{trans_id[t.number]}" height="2" width="20">'
                 f'<position x="{x}" y="{y}"/>{_cpin(srcs)}<connectionPointOut/>'
                 f'<condition><inline name=""><ST><xhtml:p><![CDATA[{cond}]]></xhtml:p>'
                 "</ST></inline></condition></transition>"
             )
 
-    def branch(self, tag: str, ins: list[int], outs: int, out: list[str]) -> int:
-        """A divergence (one input, ``outs`` outputs) or a convergence (one input point per
-        element in ``ins``, one output); returns its localId."""
+    def branch(
+        self, tag: str, ins: list[int], outs: int, out: list[str], at: tuple[int, int] = (0, 0)
+    ) -> int:
+        """A divergence (one input, ``outs`` outputs, each named as TC6 requires) or a
+        convergence (one input point per element in ``ins``, one output) drawn at ``at``;
+        returns its localId."""
         bid = self.next_id()
-        points = _cpin(ins) if tag.endswith("Divergence") else "".join(_cpin([i]) for i in ins)
+        divergence = tag.endswith("Divergence")
+        points = _cpin(ins) if divergence else "".join(_cpin([i]) for i in ins)
+        point_out = (
+            '<connectionPointOut formalParameter=""/>' if divergence else ("<connectionPointOut/>")
+        )
         out.append(
-            f'<{tag} localId="{bid}" height="2" width="200">{points}'
-            + "<connectionPointOut/>" * outs
-            + f"</{tag}>"
+            f'<{tag} localId="{bid}" height="2" width="200">'
+            f'<position x="{at[0]}" y="{at[1]}"/>{points}' + point_out * outs + f"</{tag}>"
         )
         return bid
 
@@ -325,7 +334,8 @@ class _Export:
             f'<step localId="{sid}" height="30" width="80" '
             f'name={quoteattr(self.step_name[s.number])} initialStep="{init}">'
             f'<position x="{x}" y="{y}"/>{cp}'
-            "<connectionPointOut/><connectionPointOutAction/></step>"
+            '<connectionPointOut formalParameter=""/>'
+            '<connectionPointOutAction formalParameter=""/></step>'
         )
         extra = ""
         if self.permanent_xml and s.initial:

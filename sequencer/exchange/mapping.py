@@ -388,6 +388,13 @@ CONSTRUCTS: Final[tuple[tuple[str, str, str, str], ...]] = (
     ),
     (
         TO_PLCOPEN,
+        "transition names; the places of branches, jumps and actions",
+        "names in s7graph's data only; each branch, jump and action placed (`position`, "
+        "`relPosition`), each output named (`formalParameter`)",
+        "as the TC6 v2.01 schema asks, which other tools check a file against",
+    ),
+    (
+        TO_PLCOPEN,
         "names of the POU, steps and variables",
         "IEC identifiers: ASCII letters, digits and single underscores, none at the end "
         "(`Lamp (x)` → `Lamp_x`)",

@@ -77,8 +77,8 @@ def test_plcopen_export_is_an_iec_sfc_with_the_same_steps_conditions_and_rows() 
                 (s.number, s.name, s.initial, [format_row(r) for r in s.actions])
                 for s in c.all_steps()
             ],
-            [
-                (t.number, t.name, t.sources, t.targets, unlocated(t.condition))
+            [  # TC6 names no transition: the names are in s7graph's data only
+                (t.number, t.sources, t.targets, unlocated(t.condition))
                 for t in c.all_transitions()
             ],
         ]
@@ -223,7 +223,7 @@ def test_plcopen_export_gives_other_tools_the_permanent_instructions(tmp_path: P
     chart = parse_chart(PERMANENT, "p.s7g")
     xml, problems = export_reported(chart, "plcopen")
     assert problems == []
-    assert '<action localId="0" qualifier="S"><inline><ST>' in xml
+    assert '<action localId="0" qualifier="S"><relPosition x="0" y="0"/><inline><ST>' in xml
     assert "latch := latch OR go;\nlatch := latch AND go;" in xml
     assert "TON_DB10(IN := Run.X, PT := T#50MS, Q => done, ET => waited);" in xml
     back = import_chart(native_only(xml), "p.xml")
@@ -432,3 +432,32 @@ END_FUNCTION_BLOCK
     names = re.findall(r'<(?:variable|step|pou) [^>]*?name="([^"]*)"', plain)
     assert names and all(re.fullmatch(r"[A-Za-z_](?:_?[A-Za-z0-9])*", n) for n in names), names
     assert "Lamp_x" in names and "F_ll" in names
+
+
+@pytest.mark.parametrize("path", [*EXAMPLES, SIX], ids=lambda p: p.stem)
+def test_plcopen_export_has_what_the_tc6_schema_requires(path: Path) -> None:
+    """The TC6 v2.01 schema's rules other tools check a file against: a divergence,
+    convergence and jump is placed (``position`` first), an action block's action too
+    (``relPosition`` first), a step's and a divergence's outputs are named
+    (``formalParameter``), and an SFC transition has no ``name``."""
+    import xml.etree.ElementTree as ET
+
+    table = path.with_name("symbols.txt")
+    symbols = SymbolTable.from_file(table) if table.is_file() else None
+    root = ET.fromstring(export_chart(parse_file(path), "plcopen", symbols))
+    ns = "{http://www.plcopen.org/xml/tc6_0201}"
+    sfc = root.find(f".//{ns}SFC")
+    assert sfc is not None
+    placed = ("selectionDivergence", "selectionConvergence", "simultaneousDivergence")
+    placed += ("simultaneousConvergence", "jumpStep")
+    for el in sfc:
+        tag = el.tag.removeprefix(ns)
+        if tag in placed:
+            assert el[0].tag == f"{ns}position", tag
+        if tag in ("step", "selectionDivergence", "simultaneousDivergence"):
+            for point in el.iter(f"{ns}connectionPointOut"):
+                assert point.get("formalParameter") is not None, tag
+        if tag == "transition":
+            assert el.get("name") is None
+    for action in sfc.iter(f"{ns}action"):
+        assert action[0].tag == f"{ns}relPosition"
