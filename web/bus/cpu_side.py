@@ -13,6 +13,7 @@ import contextlib
 import shutil
 import tempfile
 
+from s7graph.web.bus import local
 from s7graph.web.bus.gate import Gate
 from s7graph.web.bus.protocol import ChartLayout
 from s7graph.web.bus.publisher import BusPublisher
@@ -33,6 +34,7 @@ class CpuSide:
         gate: Gate | None = None,
     ) -> None:
         self._tmp = None
+        self._cpu = cpu
         listen = list(ends.listen)
         if not listen and not ends.connect:
             self._tmp = tempfile.mkdtemp(prefix="s7graph-bus-")
@@ -46,6 +48,8 @@ class CpuSide:
         except BaseException:
             self.close()
             raise
+        if self._tmp:  # a shell of this machine finds it without --connect (web.bus.local)
+            local.publish(cpu, self.endpoint)
 
     def close(self) -> None:
         with contextlib.suppress(Exception):
@@ -54,5 +58,6 @@ class CpuSide:
         with contextlib.suppress(Exception):
             self.session.close()  # type: ignore[no-untyped-call]  # zenoh's stub
         if self._tmp:
+            local.withdraw(self._cpu, self.endpoint)
             shutil.rmtree(self._tmp, ignore_errors=True)
             self._tmp = None

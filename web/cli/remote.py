@@ -28,6 +28,7 @@ import zenoh
 from s7graph.sequencer.change.base import MAX_SOURCE, EditRefused
 from s7graph.sequencer.change.typed import parse_source
 from s7graph.sequencer.checks.diagnostics import format_diagnostic
+from s7graph.web.bus import local
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.cycle_text import cycle_lines
 from s7graph.web.bus.protocol import Command, CommandReply, CpuStatus, StepStateUpdate
@@ -67,12 +68,20 @@ def _origin() -> str:
 def _join(net: NetOptions) -> zenoh.Session | str:
     """A session on the bus of ``net`` (connecting only), or why there is none."""
     problem = net.problem(listening=False)
-    if problem is None and not net.connect:
-        problem = "give the bus with --connect ENDPOINT"
+    connect = list(net.connect)
+    if problem is None and not connect:
+        here = local.find(net.cpu)  # a CPU of this machine (web.bus.local)
+        if here is None:
+            problem = (
+                f"give the bus with --connect ENDPOINT (no CPU {net.cpu} runs on this "
+                "machine for this user)"
+            )
+        else:
+            connect = [here]
     if problem:
         return problem
     try:
-        return open_session(connect=net.connect, tls=net.tls, login=net.login)
+        return open_session(connect=connect, tls=net.tls, login=net.login)
     except Exception as exc:
         return net.join_error(exc)
 

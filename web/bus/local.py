@@ -1,0 +1,87 @@
+"""Where the CPUs of this machine listen, for a shell on it (docs/cli.md, "The bus from a
+shell").
+
+``s7graph run`` given no ``--listen`` or ``--connect`` listens on a unix socket in a
+private temporary folder, and writes that endpoint to ``<cpu>.endpoint`` in a folder of
+this user's (``$XDG_RUNTIME_DIR/s7graph``, else ``/tmp/s7graph-<uid>``, mode 0700); a
+command given no ``--connect`` (``status``, ``watch``, ``ack`` …) reads it there for its
+``--cpu`` — as TIA Portal lists the accessible devices. Only a folder this user owns and
+nobody else may enter is read or written; a CPU that ended takes its file away (one
+killed leaves it, and the command then says nothing answers there)."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import tempfile
+from pathlib import Path
+
+__all__ = ["find", "local_dir", "publish", "withdraw"]
+
+_SUFFIX = ".endpoint"
+
+
+def local_dir(*, create: bool = False) -> Path | None:
+    """This user's folder of endpoints (made with ``create``), or None when there is none
+    that only this user may enter."""
+    uid = getattr(os, "getuid", lambda: -1)()
+    runtime = os.environ.get("XDG_RUNTIME_DIR", "")
+    if runtime and Path(runtime).is_dir():
+        root = Path(runtime) / "s7graph"
+    else:
+        root = Path(tempfile.gettempdir()) / f"s7graph-{uid}"
+    if create:
+        with contextlib.suppress(OSError):
+            root.mkdir(mode=0o700, exist_ok=True)
+    try:
+        st = root.lstat()
+    except OSError:
+        return None
+    if not root.is_dir() or root.is_symlink() or st.st_uid != uid or st.st_mode & 0o077:
+        return None  # not ours, or others may enter it: never trusted
+    return root
+
+
+def publish(cpu: str, endpoint: str) -> Path | None:
+    """Write ``endpoint`` as where CPU ``cpu`` listens; its file, or None when there is no
+    private folder for it (the CPU runs all the same)."""
+    root = local_dir(create=True)
+    if root is None:
+        return None
+    path = root / f"{cpu}{_SUFFIX}"
+    try:
+        fd, tmp = tempfile.mkstemp(dir=root, prefix=".ep-")
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            f.write(endpoint + "\n")
+        os.replace(tmp, path)
+    except OSError:
+        return None
+    return path
+
+
+def withdraw(cpu: str, endpoint: str) -> None:
+    """Take CPU ``cpu``'s file away if it still names ``endpoint`` (another run of that
+    CPU may have written its own since)."""
+    if find(cpu, check=False) == endpoint:
+        root = local_dir()
+        if root is not None:
+            with contextlib.suppress(OSError):
+                (root / f"{cpu}{_SUFFIX}").unlink()
+
+
+def find(cpu: str, *, check: bool = True) -> str | None:
+    """Where CPU ``cpu`` of this machine listens, or None; with ``check``, a unix socket
+    that is gone is no answer."""
+    root = local_dir()
+    if root is None:
+        return None
+    try:
+        endpoint = (root / f"{cpu}{_SUFFIX}").read_text(encoding="utf-8").strip()
+    except (OSError, UnicodeDecodeError):
+        return None
+    if not endpoint.isprintable() or "/" not in endpoint:
+        return None
+    socket = endpoint.removeprefix("unixsock-stream/")
+    if check and socket != endpoint and not Path(socket).exists():
+        return None
+    return endpoint
