@@ -421,13 +421,16 @@ class ClientPanel(PageLogin):
         if len(layout.sequences) < 2:
             return None
         options = _sequence_labels(layout)
-        group = self.client.gui.add_button_group(
-            "Sequence", options, hint="show one sequence at a readable zoom, or all of them"
-        )
         numbers = {label: q.number for label, q in zip(options[1:], layout.sequences, strict=True)}
+        shown = next((k for k, n in numbers.items() if n == self._focus), options[0])
+        group = self.client.gui.add_button_group(
+            f"Sequence: {shown}", options, hint="show one sequence at a readable zoom, or all"
+        )
 
         def chosen(event: Any) -> None:
-            self._focus = numbers.get(str(event.target.value))
+            value = str(event.target.value)
+            self._focus = numbers.get(value)
+            group.label = f"Sequence: {value}"  # which one the page shows
             self.aim(whole=self._focus is None)
 
         group.on_click(chosen)

@@ -271,7 +271,9 @@ def test_a_chart_of_two_sequences_offers_each_and_the_overview(cpu: OnlineRig, p
     for name in ("Overview", "1 Fill", "2 Mix"):
         assert page.get_by_role("button", name=name, exact=True).count() == 1, name
     x0, x1, _, _ = view.picture.sequence_bounds[2]
+    page.get_by_text("Sequence: Overview", exact=True).wait_for(timeout=30_000)
     page.get_by_role("button", name="2 Mix", exact=True).click()
+    page.get_by_text("Sequence: 2 Mix", exact=True).wait_for(timeout=30_000)  # the one shown
     assert wait_until(lambda: x0 <= float(panel.client.camera.position[0]) <= x1)
     time.sleep(0.5)
     sx, sy = view.picture.steps[12]
