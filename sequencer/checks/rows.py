@@ -178,7 +178,7 @@ def _check_call(ctx: _Ctx, call: BlockCall, el: str) -> None:
             call.loc,
             el,
         )
-    if entry.needs_instance and ctx.blocks is not None:  # with the program's DBs
+    if entry.needs_instance:  # one block per instance DB (and the program's, when given)
         check_instance(ctx, call, el, entry.key)
     if entry.needs_instance and isinstance(call.instance, str):
         ctx.err(

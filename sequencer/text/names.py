@@ -27,7 +27,7 @@ from typing import Final, Literal
 from s7graph.engine.address import Address, Area, parse_address
 from s7graph.engine.errors import SymbolError
 from s7graph.engine.symbols import SymbolTable, default_type
-from s7graph.sequencer.params import Direction, pin
+from s7graph.sequencer.params import Direction, check_pin, pin
 from s7graph.sequencer.text.model import Chart, Operand, SymbolDecl, VarDecl
 
 Kind = Literal["address", "symbol", "var", "pin"]
@@ -100,7 +100,8 @@ def resolve_operand(op: Operand, chart: Chart, symbols: SymbolTable | None = Non
     if v is not None:
         return Resolved("var", None, v.type.upper())
     p = pin(op.name)
-    if p is not None:
+    if p is not None:  # only a pin of the chart's parameter set exists in its FB
+        p = check_pin(op.name, chart.options.parameters, op.loc)
         return Resolved("pin", None, p.type, writable=p.direction is Direction.IN)
     if looks_like_address(op.name):
         addr = parse_address(op.name, op.loc)

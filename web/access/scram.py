@@ -228,11 +228,18 @@ class Signer:
 # ---------------------------------------------------------------- the two ends
 
 
+MAX_PASSWORD: Final = 1024
+"""The longest password (a users file's rule too): a longer one is refused before its key
+derivation, whose time grows with its length."""
+
+
 class ClientLogin:
     """The client's end of one SCRAM exchange: :meth:`first`, :meth:`final` with the
     CPU's challenge, :meth:`verify` with its answer (the session key)."""
 
     def __init__(self, user: str, password: str) -> None:
+        if len(password) > MAX_PASSWORD:  # refused before any work: no client holds a face up
+            raise LoginError(f"a password has at most {MAX_PASSWORD:,} characters")
         try:
             self._client: Any = ScramClient([MECHANISM], user, password)
         except ScramException as exc:

@@ -31,6 +31,7 @@ from typing import Final
 from s7graph.web.access.roles import ROLES
 from s7graph.web.access.scram import (
     DEFAULT_ITERATIONS,
+    MAX_PASSWORD,
     LoginError,
     Verifier,
     make_verifier,
@@ -57,7 +58,6 @@ NAME_RULE: Final = "use 1-32 of A-Z a-z 0-9 . _ -"
 RESERVED_NAMES: Final = frozenset({"program"})
 LEGACY_PREFIX: Final = "scrypt$"
 MIN_PASSWORD: Final = 8
-MAX_PASSWORD: Final = 1024
 VERSION: Final = 2
 _READS: Final = (1, 2)
 

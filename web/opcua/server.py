@@ -86,7 +86,7 @@ def listen_problem(url: str, *, users: bool, cert: Path | None, key: Path | None
         if path is not None and not path.is_file():
             return f"{path}: no such file"
     if cert is not None and key is not None:
-        problem = _certificate_problem(cert) or _key_problem(key)
+        problem = _certificate_problem(cert) or _key_problem(key) or _pair_problem(cert, key)
         if problem:
             return problem
     if not loopback(parsed.hostname):
@@ -134,6 +134,23 @@ def _key_problem(key: Path) -> str | None:
             serialization.load_der_private_key(data, None)
     except (OSError, ValueError, TypeError):
         return f"{key}: not a private key (PEM or DER, without a password)"
+    return None
+
+
+def _pair_problem(cert: Path, key: Path) -> str | None:
+    """Why ``key`` is not the private key of ``cert`` (a server with a key of another
+    certificate starts, then fails every secure channel without a word)."""
+    data = key.read_bytes()
+    private = (
+        serialization.load_pem_private_key(data, None)
+        if _format(data) == "pem"
+        else serialization.load_der_private_key(data, None)
+    )
+    fmt = serialization.PublicFormat.SubjectPublicKeyInfo
+    mine = private.public_key().public_bytes(serialization.Encoding.DER, fmt)
+    theirs = _load_certificate(cert).public_key().public_bytes(serialization.Encoding.DER, fmt)
+    if mine != theirs:
+        return f"{key}: not the private key of the certificate {cert}"
     return None
 
 

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import asyncio
 import contextvars
+import copy
 import logging
 import math
 import time
@@ -325,10 +326,13 @@ class FaceSession(InternalSession):
         wrong = [not _filter_fits(item) for item in params.ItemsToCreate]
         if not any(wrong):
             return await super().create_monitored_items(params)
-        params.ItemsToCreate = [
+        # the items that fit, in a request of their own: the caller (asyncua's processor)
+        # goes on reading the request it passed, every item of it
+        fitting = copy.copy(params)
+        fitting.ItemsToCreate = [
             i for i, w in zip(params.ItemsToCreate, wrong, strict=True) if not w
         ]
-        made = iter(await super().create_monitored_items(params) if params.ItemsToCreate else [])
+        made = iter(await super().create_monitored_items(fitting) if fitting.ItemsToCreate else [])
         refused = ua.MonitoredItemCreateResult()
         refused.StatusCode = ua_status(StatusCodes.BadFilterNotAllowed)
         return [refused if w else next(made) for w in wrong]
@@ -338,10 +342,11 @@ def _filter_fits(item: ua.MonitoredItemCreateRequest) -> bool:
     """Whether an item's filter goes with its attribute (Part 4, 7.22): no EventFilter or
     AggregateFilter on a value, no DataChangeFilter or AggregateFilter on an event
     notifier — asyncua answered those with a BadInternalError for the whole request."""
-    given = item.RequestedParameters.Filter
+    given = type(item.RequestedParameters.Filter).__name__  # asyncua decodes a filter
+    # into a class of the same name, not always the one ``ua`` exports
     if item.ItemToMonitor.AttributeId == AttributeIds.EventNotifier:
-        return not isinstance(given, ua.DataChangeFilter | ua.AggregateFilter)
-    return not isinstance(given, ua.EventFilter | ua.AggregateFilter)
+        return given not in ("DataChangeFilter", "AggregateFilter")
+    return given not in ("EventFilter", "AggregateFilter")
 
 
 class FaceServer(InternalServer):

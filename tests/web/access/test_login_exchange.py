@@ -350,3 +350,21 @@ def test_a_refused_name_is_shown_as_written_its_control_characters_escaped() -> 
     assert name_problem("ölga").startswith("invalid user name 'ölga': ")
     assert name_problem("😀" * 50).startswith(f"invalid user name '{'😀' * 32}'…: ")
     assert name_problem("a\u202eb").startswith("invalid user name 'a\\u202eb': it holds a control")
+
+
+def test_a_password_longer_than_a_users_file_holds_is_refused_before_any_work(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A login with a megabyte of password held an OPC UA face's loop for seconds (its
+    key derivation grows with the length): it is refused before the SCRAM client is even
+    made, and the same length is a users file's limit."""
+    import s7graph.web.access.scram as scram
+
+    def never(*_: object) -> None:
+        raise AssertionError("the SCRAM client was made")
+
+    monkeypatch.setattr(scram, "ScramClient", never)
+    with pytest.raises(LoginError, match="a password has at most 1,024 characters"):
+        ClientLogin("olga", "x" * 1_000_000)
+    said, signer = scram.log_in("olga", "x" * 1025, lambda *_: pytest.fail("sent"))
+    assert said == "a password has at most 1,024 characters" and signer is None

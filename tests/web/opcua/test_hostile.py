@@ -127,10 +127,12 @@ def test_a_filter_that_does_not_go_with_its_attribute_is_refused_per_item(
                 lambda *_: None,
             )
 
-            def item(attribute: int, filter_: object, handle: int) -> ua.MonitoredItemCreateRequest:
+            def item(
+                attribute: int, filter_: object, handle: int, node: object = None
+            ) -> ua.MonitoredItemCreateRequest:
                 made = ua.MonitoredItemCreateRequest()
                 made.ItemToMonitor = ua.ReadValueId(
-                    NodeId=ua.NodeId("cpu1/State", 2), AttributeId=attribute
+                    NodeId=node or ua.NodeId("cpu1/State", 2), AttributeId=attribute
                 )
                 made.MonitoringMode = ua.MonitoringMode.Reporting
                 made.RequestedParameters = ua.MonitoringParameters(
@@ -138,7 +140,8 @@ def test_a_filter_that_does_not_go_with_its_attribute_is_refused_per_item(
                 )
                 return made
 
-            value = ua.AttributeIds.Value
+            value, events = ua.AttributeIds.Value, ua.AttributeIds.EventNotifier
+            server = ua.NodeId(ua.ObjectIds.Server)
             params = ua.CreateMonitoredItemsParameters(
                 SubscriptionId=result.SubscriptionId,
                 TimestampsToReturn=ua.TimestampsToReturn.Both,
@@ -147,11 +150,13 @@ def test_a_filter_that_does_not_go_with_its_attribute_is_refused_per_item(
                     item(value, None, 2),
                     item(value, ua.AggregateFilter(), 3),
                     item(value, ua.DataChangeFilter(), 4),
+                    item(events, ua.DataChangeFilter(), 5, server),  # events, not values
                 ],
             )
             made = await c.uaclient.create_monitored_items(params)
             codes = [r.StatusCode.name for r in made]
-            assert codes == ["BadFilterNotAllowed", "Good", "BadFilterNotAllowed", "Good"]
+            refused = "BadFilterNotAllowed"
+            assert codes == [refused, "Good", refused, "Good", refused]
             await c.uaclient.delete_subscriptions([result.SubscriptionId])
 
     run(check())

@@ -135,6 +135,10 @@ def test_a_server_certificate_basic256sha256_cannot_use_is_refused_before_servin
         f"{junk}: not a private key (PEM or DER, without a password)"
     )
     assert listen_problem(url, users=True, cert=rsa.server_cert, key=rsa.server_key) is None
+    other = make_certs(tmp_path / "other")  # a key of another certificate: said at once
+    assert listen_problem(url, users=True, cert=rsa.server_cert, key=other.server_key) == (
+        f"{other.server_key}: not the private key of the certificate {rsa.server_cert}"
+    )
     trusted = tmp_path / "trusted"
     trusted.mkdir()
     (trusted / "client.der").write_bytes(rsa.client_cert.read_bytes())
