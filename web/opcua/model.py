@@ -70,17 +70,19 @@ Kind = str
 @dataclass(frozen=True, slots=True)
 class UaType:
     """An S7 type as OPC UA sees it: the variant, its data type node, how a bus value
-    converts (``kind``), the range of an integer, the unit (None: none)."""
+    converts (``kind``), the range of an integer, the unit (None: none); ``node``: a data
+    type more precise than the variant's (Duration, a Double of ms), 0: the variant's."""
 
     variant: ua.VariantType
     kind: Kind
     lo: int = 0
     hi: int = 0
     unit: tuple[str, str, str] | None = None
+    node: int = 0
 
     @property
     def data_type(self) -> ua.NodeId:
-        return ua_id(self.variant.value)
+        return ua_id(self.node or self.variant.value)
 
 
 def _int(

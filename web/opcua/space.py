@@ -6,7 +6,8 @@ space").
 layout, the operand catalog (``web.bus.operands``) — and writes what it publishes into
 them: the status (1 Hz and on change), each scan's state delta, the operand values. It
 rebuilds an FB's sequences and steps when an online change brings another chart version,
-and marks every value ``BadNoCommunication`` (keeping it) while the CPU is gone from the
+and marks every value ``UncertainNoCommunicationLastUsableValue`` (keeping it: a Bad status
+would empty it: OPC UA Part 4, "DataValue") while the CPU is gone from the
 bus. Writable variables and methods are the face's (``web.opcua.face``) to serve:
 :class:`Space` only says where they are.
 """
@@ -55,7 +56,7 @@ UINT16: Final = UaType(ua.VariantType.UInt16, "int", 0, 0xFFFF)
 UINT32: Final = UaType(ua.VariantType.UInt32, "int", 0, 0xFFFF_FFFF)
 UINT64: Final = UaType(ua.VariantType.UInt64, "int", 0, 2**64 - 1)
 INT16: Final = UaType(ua.VariantType.Int16, "int", -(2**15), 2**15 - 1)
-DURATION: Final = UaType(ua.VariantType.Double, "float", unit=MS)
+DURATION: Final = UaType(ua.VariantType.Double, "float", unit=MS, node=ObjectIds.Duration)
 SHARE: Final = UaType(ua.VariantType.Double, "float", unit=PERCENT)
 FORCEABLE: Final = ("I", "Q", "M")
 """The areas a force job takes: a symbol there is writable (an engineer's force)."""
@@ -78,7 +79,7 @@ WRITES: Final[dict[str, Writes]] = {
 I, Q, M), or a ``modify``, written once at the scan boundary as an S7-1500's OPC UA server
 writes a PLC tag (symbols on I, Q, M, DB, and a chart's own variables by its instance DB's
 name, ``"Seq_mix".count``)."""
-STALE: Final = StatusCodes.BadNoCommunication
+STALE: Final = StatusCodes.UncertainNoCommunicationLastUsableValue
 UNREADABLE: Final = StatusCodes.BadConfigurationError
 
 
@@ -533,7 +534,7 @@ class Space:
 
     async def set_online(self, online: bool) -> None:
         """The CPU came (its values follow from the bus) or went: every value written so
-        far keeps its last value with ``BadNoCommunication``."""
+        far keeps its last value with ``UncertainNoCommunicationLastUsableValue``."""
         self.online = online
         await self.nodes.set(self._cpu_vars["Online"], _v(online, BOOLEAN))
         if online:
