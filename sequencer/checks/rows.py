@@ -6,6 +6,7 @@ The event × qualifier table is read from ``steps.qualifiers`` (never re-encoded
 
 from __future__ import annotations
 
+from s7graph.engine.errors import S7Error
 from s7graph.sequencer.checks.context import _Ctx, _row_el
 from s7graph.sequencer.checks.types import (
     _as_bit,
@@ -27,7 +28,8 @@ from s7graph.sequencer.text.model import (
     Step,
     StepTarget,
 )
-from s7graph.sequencer.text.names import Resolved
+from s7graph.sequencer.text.names import Resolved, resolve_operand
+from s7graph.sequencer.text.walk import nodes
 from s7graph.sfb import catalogue
 from s7graph.steps.qualifiers import (
     COUNTER_QUALIFIERS,
@@ -265,3 +267,29 @@ def rule_permanent_instructions(ctx: _Ctx) -> None:
                 _check_assignment(ctx, it, el, in_action=False)
             elif isinstance(it, BlockCall):
                 _check_call(ctx, it, el)
+
+
+def rule_instance_db_addresses(ctx: _Ctx) -> None:
+    """An absolute address into an instance DB the chart knows (its own, or one of its
+    calls': ``DB10.DBX6.0`` of ``CALL "TON", DB 10``) has no bytes to reach — such a DB
+    holds its FB's variables by name — and stopped the CPU at its first call (E041): a
+    call's output is read through its ``=>`` parameter instead. Run after the rows, whose
+    calls name the instance DBs."""
+    seen: set[tuple[str, bool]] = set()
+    for op in nodes(ctx.chart):
+        if not isinstance(op, Operand) or (op.name, op.quoted) in seen:
+            continue
+        seen.add((op.name, op.quoted))
+        try:
+            res = resolve_operand(op, ctx.chart, ctx.symbols)
+        except S7Error:
+            continue  # said where the operand is checked
+        db = res.address.db if res.address is not None else None
+        owner = ctx.instances.get(db) if db is not None else None
+        if owner is not None:
+            ctx.err(
+                "E041",
+                f"{op.name}: DB{db} is the instance DB of {owner}; it holds its variables by "
+                "name, not at byte addresses: take an output out with the call's => (Q => x)",
+                op.loc,
+            )

@@ -22,6 +22,7 @@ from s7graph.sequencer.checks.interfaces import ProgramBlocks
 from s7graph.sequencer.checks.rows import (
     rule_action_rows,
     rule_c_without_interlock,
+    rule_instance_db_addresses,
     rule_permanent_instructions,
 )
 from s7graph.sequencer.checks.structure import (
@@ -76,6 +77,7 @@ __all__ = [
     "rule_duplicate_numbers",
     "rule_empty_conditions",
     "rule_initial_steps",
+    "rule_instance_db_addresses",
     "rule_joins",
     "rule_limits",
     "rule_permanent_instructions",
@@ -99,6 +101,7 @@ RULES: Final[tuple[Callable[[_Ctx], None], ...]] = (
     rule_permanent_instructions,
     rule_conditions,
     rule_joins,
+    rule_instance_db_addresses,
 )
 
 
