@@ -258,7 +258,11 @@ class FaceSession(InternalSession):
 
     async def read(self, params: ua.ReadParameters) -> list[ua.DataValue]:
         await self._serve(len(params.NodesToRead), len(params.NodesToRead))
-        return await super().read(params)
+        values = await super().read(params)
+        if not isinstance(self.user, FaceUser):  # anonymous: nothing to write or call
+            for asked, value in zip(params.NodesToRead, values, strict=False):
+                _read_only(asked.AttributeId, value)
+        return values
 
     async def write(self, params: ua.WriteParameters) -> list[ua.StatusCode]:
         await self._serve(len(params.NodesToWrite), len(params.NodesToWrite))
@@ -336,6 +340,21 @@ class FaceSession(InternalSession):
         refused = ua.MonitoredItemCreateResult()
         refused.StatusCode = ua_status(StatusCodes.BadFilterNotAllowed)
         return [refused if w else next(made) for w in wrong]
+
+
+_CURRENT_WRITE: Final = 0x02  # AccessLevel's CurrentWrite bit
+
+
+def _read_only(attribute: int, value: ua.DataValue) -> None:
+    """``value`` of ``attribute`` as an anonymous session's: a variable's
+    ``UserAccessLevel`` without CurrentWrite, a method's ``UserExecutable`` false — what a
+    client greys out, as the face refuses those writes and calls (OPC UA Part 3, "User
+    access level")."""
+    held = value.Value.Value if value.Value is not None else None
+    if attribute == AttributeIds.UserAccessLevel and isinstance(held, int):
+        value.Value = ua.Variant(held & ~_CURRENT_WRITE, ua.VariantType.Byte)
+    elif attribute == AttributeIds.UserExecutable and isinstance(held, bool):
+        value.Value = ua.Variant(False, ua.VariantType.Boolean)
 
 
 def _filter_fits(item: ua.MonitoredItemCreateRequest) -> bool:

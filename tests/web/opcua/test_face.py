@@ -235,6 +235,13 @@ def test_anonymous_reads_but_never_writes_nor_calls(face: FaceRig) -> None:
     async def check() -> None:
         async with connected(face.url) as c:
             assert await node(c, "cpu1/Seq_mix/Mode").read_value() == "AUTO"
+            # what a client greys out: the session may not write or call (Part 3)
+            mode, init = node(c, "cpu1/Seq_mix/Mode"), node(c, "cpu1/Seq_mix/Init")
+            user = ua.AttributeIds.UserAccessLevel
+            assert (await mode.read_attribute(user)).Value.Value & 0x02 == 0
+            assert (await mode.read_attribute(ua.AttributeIds.AccessLevel)).Value.Value & 0x02
+            execute = ua.AttributeIds.UserExecutable
+            assert (await init.read_attribute(execute)).Value.Value is False
             with pytest.raises(UaStatusCodeError) as refused:
                 await node(c, "cpu1/Seq_mix/Mode").write_value(
                     ua.Variant("MAN", ua.VariantType.String)
