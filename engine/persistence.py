@@ -99,6 +99,7 @@ __all__ = [
     "StateStore",
     "StateWriteError",
     "fingerprint_of",
+    "not_in_use",
     "sqlite_words",
     "unpack_instance",
 ]
@@ -1262,6 +1263,26 @@ def _hold(path: Path) -> tuple[int, int] | None:
         return None
     _HELD[key] = [fd, 1]
     return key
+
+
+def not_in_use(path: Path) -> None:
+    """StateFileError when another process holds ``path``'s lock (a run on it): before
+    ``--fresh`` moves the file aside, which would hand a running CPU's retentive memory to
+    a second one. Nothing held after; no file, or no locks on the file system: fine."""
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_CLOEXEC)
+    except OSError:
+        return
+    try:
+        st = os.fstat(fd)
+        if (st.st_dev, st.st_ino) in _HELD:
+            return  # this process's own store
+        if try_lock(fd) is False:
+            raise StateFileError(
+                path, "in use by another process (another run holds it)", way_out=_IN_USE_WAY_OUT
+            )
+    finally:
+        os.close(fd)  # the lock, if taken, goes with it
 
 
 def _let_go(key: tuple[int, int] | None) -> None:

@@ -35,7 +35,7 @@ from s7graph.web.bus.protocol import Command, CommandReply, CpuStatus, StepState
 from s7graph.web.bus.session import open_session
 from s7graph.web.cli.diag_text import event_line, when
 from s7graph.web.cli.net import NetOptions
-from s7graph.web.cli.stopping import wait_until_stopped
+from s7graph.web.cli.stopping import say, wait_until_stopped
 from s7graph.web.commands import Args, Download, DownloadArgs, checked, op_of
 
 __all__ = [
@@ -278,6 +278,14 @@ def download_command(
             reply = shell.send(Download, args, timeout=timeout)
         except (TypeError, ValueError) as exc:
             return _fail(str(exc))
+    if not reply.applied and reply.reason.startswith("no answer from CPU"):
+        # sent, no answer: the CPU may have swapped the chart before it went
+        print(
+            f"s7graph: download not confirmed: {reply.reason}; it may or may not have taken "
+            "effect: `s7graph upload` shows the chart the CPU runs once it answers",
+            file=sys.stderr,
+        )
+        return 1
     if not reply.applied:
         return _refused("download", reply)
     for line in reply.lines:
@@ -366,6 +374,7 @@ def watch_command(net: NetOptions, *, fb: str | None, duration_s: float | None =
             return _fail(f"{net.cpu}: {why}")
         names = [name] if fb else list(status.fbs)
         last: dict[str, tuple[object, ...]] = {}
+        stop = threading.Event()  # set by the end, or by a reader gone (| head -1)
 
         def show(name: str, update: StepStateUpdate) -> None:
             key = (update.mode, update.active, update.disturbed, update.latched)
@@ -373,14 +382,14 @@ def watch_command(net: NetOptions, *, fb: str | None, duration_s: float | None =
                 return
             last[name] = key
             with lock:
-                print(_line(name, update), flush=True)
+                say(_line(name, update), stop)
 
         def alive(up: bool) -> None:
             with lock:
-                print(f"CPU {net.cpu} {'reachable' if up else 'disconnected'}", flush=True)
+                say(f"CPU {net.cpu} {'reachable' if up else 'disconnected'}", stop)
 
         client.on_alive(alive)
         for name in names:
             client.follow(name, lambda u, n=name: show(n, u))  # type: ignore[misc]
-        wait_until_stopped(duration_s)
+        wait_until_stopped(duration_s, stop)
     return 0

@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import contextlib
+import os
 import signal
+import sys
 import threading
 
-__all__ = ["wait_until_stopped"]
+__all__ = ["say", "wait_until_stopped"]
 
 
 def wait_until_stopped(
@@ -20,3 +22,15 @@ def wait_until_stopped(
             stop.wait(duration_s)
     finally:
         signal.signal(signal.SIGTERM, previous)
+
+
+def say(line: str, stop: threading.Event) -> None:
+    """Print ``line`` for a reader that may have gone (``watch … | head -1``): then the
+    command ends quietly (``stop`` set; stdout on /dev/null, so nothing more fails at
+    exit), never with a traceback of a broken pipe."""
+    try:
+        print(line, flush=True)
+    except (BrokenPipeError, ValueError):  # the pipe went, or stdout is closed already
+        with contextlib.suppress(OSError):
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        stop.set()

@@ -21,7 +21,7 @@ from s7graph.web.bus.protocol import MAX_WATCH, WatchValues
 from s7graph.web.bus.watch import split_operands
 from s7graph.web.cli.net import NetOptions
 from s7graph.web.cli.remote import on_bus
-from s7graph.web.cli.stopping import wait_until_stopped
+from s7graph.web.cli.stopping import say, wait_until_stopped
 
 __all__ = [
     "MAX_INTERVAL_MS",
@@ -86,8 +86,8 @@ def watch_addresses(
                 print(f"s7graph: {value.address}: {value.error}", file=sys.stderr)
         if first.values and all(v.error for v in first.values):
             return 2
-        print(_line(first), flush=True)
         stop = threading.Event()
+        say(_line(first), stop)
         poll = max(interval_ms, MIN_INTERVAL_MS) / 1000
         args = (client, addresses, first, poll, stop, net.cpu)
         follower = threading.Thread(target=_follow, args=args, name="s7graph-watch", daemon=True)
@@ -126,4 +126,4 @@ def _follow(
         now = [(v.text, v.error) for v in answer.values]
         if now != shown:
             shown = now
-            print(_line(answer), flush=True)
+            say(_line(answer), stop)

@@ -15,7 +15,7 @@ from typing import Any
 
 from s7graph.engine.cpu import Cpu
 from s7graph.engine.diagnostics import EventId
-from s7graph.engine.persistence import LoadReport, StateFileError, StateStore
+from s7graph.engine.persistence import LoadReport, StateFileError, StateStore, not_in_use
 from s7graph.engine.renew import set_aside
 from s7graph.sfb.alarms import message_list
 
@@ -110,6 +110,8 @@ def open_state(
     ``hot`` when hot); a saved state that allows no hot restart is refused
     (``HotRestartRefused``). ``StateFileError`` when the file cannot be trusted (the store is
     closed again)."""
+    if fresh:
+        not_in_use(path)  # a running CPU's file is never moved aside under it
     kept = keep_aside(path) if fresh else None
     store = StateStore(path, hot=hot or restart == "hot")
     try:

@@ -97,3 +97,55 @@ def test_download_says_a_syntax_error_in_its_own_files_name_before_the_bus(
     assert err[0].startswith(f"{chart}:4:44: error[E001]: unexpected ';'")
     assert err[-1].startswith(f"s7graph: error: {chart}: not downloaded: ")
     assert not any("join the bus" in line for line in err)
+
+
+def test_a_watcher_whose_reader_went_ends_quietly(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``s7graph watch … | head -1``: the next line meets a closed pipe — the watch ends
+    (its stop set), no traceback of a broken pipe."""
+    import os
+    import threading
+
+    from s7graph.web.cli.stopping import say
+
+    read, write = os.pipe()
+    os.close(read)
+    out = os.fdopen(write, "w")
+    monkeypatch.setattr(sys, "stdout", out)
+    stop = threading.Event()
+    say("cycle 1 RUN  MW0=W#16#0000", stop)
+    assert stop.is_set()
+    say("cycle 2 RUN  MW0=W#16#0001", stop)  # stdout is /dev/null now: nothing raised
+    out.close()
+
+
+def test_a_download_sent_without_an_answer_says_it_may_have_taken_effect(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The CPU may swap the chart, then go before it answers: no answer is not a refusal
+    (docs/durability.md) — the download is *not confirmed*, and says where to look."""
+    import contextlib
+
+    from s7graph.web.bus.protocol import CommandReply
+    from s7graph.web.cli import remote
+    from s7graph.web.cli.net import NetOptions
+
+    class Shell:
+        fb = "Seq"
+
+        def send(self, kind: object, args: object, timeout: float) -> CommandReply:
+            if getattr(args, "preview", False):
+                return CommandReply(applied=True, version=3, lines=["S2: renamed"])
+            return CommandReply(applied=False, reason="no answer from CPU 'cpu1' within 30 s")
+
+    @contextlib.contextmanager
+    def logged_in(*_: object, **__: object):  # type: ignore[no-untyped-def]
+        yield Shell()
+
+    monkeypatch.setattr(remote, "_logged_in", logged_in)
+    chart = tmp_path / "c.s7g"
+    chart.write_text((EXAMPLES / "drill" / "drill.s7g").read_text(encoding="utf-8"))
+    rc = remote.download_command(NetOptions(), chart, fb=None, user="eng", yes=True)
+    assert rc == 1
+    err = capsys.readouterr().err
+    assert err.startswith("s7graph: download not confirmed: no answer from CPU 'cpu1'")
+    assert "may or may not have taken effect" in err and "refused" not in err

@@ -276,11 +276,15 @@ def test_a_second_run_on_a_state_file_another_run_writes_is_refused_as_in_use(
     try:
         assert first.stderr is not None and " in RUN (" in first.stderr.readline()
         assert main([*CHART, "--state", str(state), "--duration-s", "0.1"]) == 2
+        # nor with --fresh, which would move the running CPU's file aside under it
+        assert main([*CHART, "--state", str(state), "--duration-s", "0.1", "--fresh"]) == 2
+        assert not list(tmp_path.glob("drill.sqlite.old-*"))
     finally:
         first.send_signal(signal.SIGTERM)
         assert first.wait(30) == 0
-    assert capsys.readouterr().err.splitlines() == [
+    in_use = (
         f"s7graph: error: {state}: in use by another process (another run holds it); stop the "
         "process that holds it (or wait until it ends), then run again"
-    ]
+    )
+    assert capsys.readouterr().err.splitlines() == [in_use, in_use]
     assert main([*CHART, "--state", str(state), "--duration-s", "0.1"]) == 0  # its turn now
