@@ -261,7 +261,8 @@ class Cpu(ProgramBlocks, Forcing, InterruptDispatch, SyncErrors):
 
     def stop_by_error(self, event: int, block: str, message: str) -> None:
         """Go to STOP because of an error outside the program (the state file could not be
-        written): an entry with ``event`` naming it; outputs go to 0."""
+        written): an entry with ``event``; outputs go to 0; then only a warm restart (S7)."""
+        self.hot_blockers.add(f"STOP by an error ({message})")
         if self.mode is not CpuMode.STOP:
             self._go_stop(event, block, message)
         else:

@@ -100,10 +100,17 @@ HOT_AFTER_STOP: frozenset[int] = frozenset(
 Operating Modes: the mode selector, a programmed STOP, an OB not loaded, a programming
 device's or a communication function's STOP)."""
 NO_HOT_AFTER_STOP: frozenset[int] = frozenset(
-    {EventId.STOP_CYCLE_TIME, EventId.STACK_OVERFLOW, EventId.STOP_STATE_WRITE, EventId.STOP_HUNG}
+    {
+        EventId.STOP_CYCLE_TIME,
+        EventId.STACK_OVERFLOW,
+        EventId.STOP_STATE_WRITE,
+        EventId.STOP_HUNG,
+        EventId.STOP_KILLED,
+    }
 )
 """STOPs by an error after which only a warm restart is possible: a block aborted by cycle
-monitoring, a stack overflow, a state file not written, a scan that did not return."""
+monitoring, a stack overflow, a state file not written, a scan that did not return (also
+when the supervisor ended the process for it)."""
 
 
 def stop_blocker(entries: Iterable[DiagEntry]) -> str | None:

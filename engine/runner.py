@@ -393,6 +393,7 @@ class Runner:
         cpu = self.cpu
         now = cpu.clock.now_ns()
         cpu.stop_entry = entry = cpu.diagnostics.record(now, EventId.STOP_KILLED, block, message)
+        cpu.hot_blockers.add(f"STOP by an error ({message})")  # a warm restart only
         self.stopped = stop_reason(cpu)
         if self.store is not None:
             self.store.save(cpu, clean=False)

@@ -111,6 +111,20 @@ def test_hot_restart_is_refused_after_memory_reset(clock: VirtualClock) -> None:
     assert cpu.last_restart is RestartType.WARM
 
 
+def test_hot_restart_is_refused_after_a_stop_by_an_error(clock: VirtualClock) -> None:
+    """A STOP by an error outside the program (the state file not written, a scan the
+    supervisor ended) allows only a warm restart, as on S7 — also when read back from a
+    saved diagnostic buffer."""
+    from s7graph.engine.restart import stop_blocker
+
+    cpu = _cpu(clock)
+    cpu.stop_by_error(EventId.STOP_STATE_WRITE, "", "state file not written: disk full")
+    cpu.start("hot")
+    assert cpu.last_restart is RestartType.WARM
+    killed = cpu.diagnostics.record(clock.now_ns(), EventId.STOP_KILLED, "plant p.py", "hung")
+    assert stop_blocker([killed]) == "STOP by an error (hung)"
+
+
 def test_the_first_start_after_loading_is_never_hot(clock: VirtualClock) -> None:
     """A freshly downloaded program starts warm even if hot is asked for."""
     cpu = Cpu(clock)
