@@ -82,7 +82,7 @@ from s7graph.engine.diagnostics import EventId
 from s7graph.engine.errors import S7Error
 from s7graph.engine.file_lock import try_lock
 from s7graph.engine.record import DiagEntry
-from s7graph.engine.renew import gone, ident, rebuild
+from s7graph.engine.renew import gone, known, rebuild
 from s7graph.engine.restart import stop_blocker
 from s7graph.engine.rollup import ALARM_ROWS, ALARM_SUMMARY, Job, low_water, roll_alarms
 from s7graph.engine.state_checks import check_hot_image, check_memory_image, diag_entry
@@ -648,12 +648,12 @@ class StateStore:
         (``renew`` set when the file was deleted, replaced or damaged: ``renew``)."""
         if not batch:
             return
-        lost = gone(self.path, self._ident, self._wal_ident)
+        lost = gone(self.path, self._files)
         if lost is not None:
             raise StateWriteError(self.path, lost[0], renew=lost[1])
         self._alarm_rows = self._commit(self._db, batch)
         self.saves += 1
-        lost = gone(self.path, self._ident, self._wal_ident)  # gone while it was committed
+        lost = gone(self.path, self._files)  # gone while it was committed
         if lost is not None:
             raise StateWriteError(self.path, lost[0], renew=lost[1], committed=True)
 
@@ -716,8 +716,7 @@ class StateStore:
 
     def _idents(self) -> None:
         """Remember which files the connection writes (``engine/renew.py``, ``gone``)."""
-        self._ident = ident(self.path)
-        self._wal_ident = ident(Path(f"{self.path}-wal"))
+        self._files = known(self.path)
 
     def _bound_alarms(self, db: sqlite3.Connection, batch: Batch) -> int:
         """Roll the oldest message events into ``alarm_summary`` if ``batch`` takes the log

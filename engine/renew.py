@@ -24,6 +24,7 @@ import os
 import sqlite3
 import stat
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 __all__ = ["Ident", "gone", "ident", "rebuild", "set_aside", "sync"]
@@ -45,10 +46,29 @@ def _kind(mode: int) -> str:
     return "a directory" if stat.S_ISDIR(mode) else "something that is not a file"
 
 
-def gone(path: Path, main: Ident | None, wal: Ident | None) -> tuple[str, bool] | None:
+@dataclass
+class Known:
+    """The files a store writes — the state file's and its ``-wal``'s device and inode —
+    and whether the state file has been seen starting as an SQLite database (``headed``:
+    from then on a file too short to say is one cut short, not one not written yet)."""
+
+    main: Ident | None
+    wal: Ident | None
+    headed: bool = False
+
+
+def known(path: Path) -> Known:
+    """What the store at ``path`` writes now (``gone`` checks against it)."""
+    found = Known(ident(path), ident(Path(f"{path}-wal")))
+    found.headed = _head(path) == _MAGIC
+    return found
+
+
+def gone(path: Path, files: Known) -> tuple[str, bool] | None:
     """Why ``path`` or its ``-wal`` no longer names the file the store writes (None: both
     still do), and whether a new file can be built there (not when the path cannot even be
     looked at; what is there, a directory too, is moved aside, never deleted)."""
+    main, wal = files.main, files.wal
     for file, known, what in (
         (path, main, "the state file"),
         (Path(f"{path}-wal"), wal, f"its write-ahead log {path.name}-wal"),
@@ -65,24 +85,28 @@ def gone(path: Path, main: Ident | None, wal: Ident | None) -> tuple[str, bool] 
             return f"{what} was replaced by {_kind(st.st_mode)} while the CPU ran", True
         if (st.st_dev, st.st_ino) != known:
             return f"{what} was replaced by another file while the CPU ran", True
-    if main is not None and not _looks_like_sqlite(path):
-        return "the state file was overwritten while the CPU ran", True
+    if main is not None:  # written over or cut short in place, keeping its inode: noticed
+        head = _head(path)  # here, before SQLite, which may not read it for a long time
+        if head == _MAGIC:
+            files.headed = True
+        elif len(head) >= len(_MAGIC):
+            return "the state file was overwritten while the CPU ran", True
+        elif files.headed and head is not None:  # (a new file in WAL mode has no page yet)
+            return "the state file was cut short while the CPU ran", True
     return None
 
 
 _MAGIC = b"SQLite format 3\x00"
 
 
-def _looks_like_sqlite(path: Path) -> bool:
-    """Whether the file at ``path`` still starts as an SQLite database does (or is too short
-    to say: a new file in WAL mode may have no page yet) — written over in place, keeping its
-    inode, it is noticed here, before SQLite, which may not read it for a long time."""
+def _head(path: Path) -> bytes | None:
+    """The first bytes of the file at ``path`` (None: it cannot be read; ``gone`` has said
+    what it can of the path)."""
     try:
         with open(path, "rb") as f:
-            head = f.read(len(_MAGIC))
+            return f.read(len(_MAGIC))
     except OSError:
-        return True  # ``gone`` has said what it can of the path
-    return len(head) < len(_MAGIC) or head == _MAGIC
+        return None
 
 
 def _remove(path: Path) -> None:

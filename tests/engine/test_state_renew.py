@@ -140,6 +140,24 @@ def test_a_state_file_overwritten_under_a_running_cpu_is_kept_aside_and_written_
     _holds(path, cpu)
 
 
+def test_a_state_file_cut_short_under_a_running_cpu_is_kept_aside_and_written_anew(
+    clock: VirtualClock, tmp_path: Path
+) -> None:
+    """``truncate -s 0`` keeps the inode and leaves nothing to read: a file seen whole before
+    is one cut short (a new one in WAL mode may have no page yet), noticed before the next
+    commit, not after the next restart."""
+    path = tmp_path / "s.sqlite"
+
+    def cut() -> None:
+        os.truncate(path, 0)
+
+    with _running(clock, path) as (cpu, store, writer):
+        early, notes = _lose_and_renew(clock, cpu, store, writer, cut)
+    assert early == []
+    assert "the state file was cut short while the CPU ran" in notes[0]
+    _holds(path, cpu)
+
+
 def test_a_page_sqlite_finds_damaged_under_a_running_cpu_is_kept_aside_and_written_anew(
     clock: VirtualClock, tmp_path: Path
 ) -> None:
