@@ -89,9 +89,9 @@ def gone(path: Path, files: Known) -> tuple[str, bool] | None:
         head = _head(path)  # here, before SQLite, which may not read it for a long time
         if head == _MAGIC:
             files.headed = True
-        elif len(head) >= len(_MAGIC):
+        elif head is not None and len(head) >= len(_MAGIC):
             return "the state file was overwritten while the CPU ran", True
-        elif files.headed and head is not None:  # (a new file in WAL mode has no page yet)
+        elif head is not None and files.headed:  # (a new file in WAL mode has no page yet)
             return "the state file was cut short while the CPU ran", True
     return None
 
