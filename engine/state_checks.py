@@ -134,3 +134,5 @@ def _cells(value: object, kind: type[S5Timer | S5Counter], count: int, what: str
         for name, item in state.items():
             if type(item) is not types[name]:
                 raise ValueError(f"{what} {key}: {name!r} is {item!r}")
+        if kind is S5Counter and not 0 <= int(state.get("value", 0)) <= 999:
+            raise ValueError(f"{what} {key}: the count {state['value']!r} is not in 0..999")

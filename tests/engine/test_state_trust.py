@@ -313,6 +313,8 @@ def _image(path: Path, key: str) -> dict[str, Any]:
         (lambda m: m.update(markers={"start": -4, "data": "AAAA"}), "'markers' starts at -4"),
         (lambda m: m.update(counters={"9999": {"value": 3}}), "the CPU has 256 cells"),
         (lambda m: m.update(counters={"0": {"value": "many"}}), "'value' is 'many'"),
+        (lambda m: m.update(counters={"0": {"value": 5000}}), "the count 5000 is not in 0..999"),
+        (lambda m: m.update(counters={"10": {"value": -7}}), "the count -7 is not in 0..999"),
         (lambda m: m.update(counters={"0": {"ghost": 1}}), "unknown key(s) 'ghost'"),
         (lambda m: m.update(spare=1), "unknown key(s) 'spare'"),
         (
