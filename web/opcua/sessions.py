@@ -330,8 +330,7 @@ class FaceSession(InternalSession):
         wrong = [not _filter_fits(item) for item in params.ItemsToCreate]
         if not any(wrong):
             return await super().create_monitored_items(params)
-        # the items that fit, in a request of their own: the caller (asyncua's processor)
-        # goes on reading the request it passed, every item of it
+        # the items that fit, in a request of their own (the one given stays as sent)
         fitting = copy.copy(params)
         fitting.ItemsToCreate = [
             i for i, w in zip(params.ItemsToCreate, wrong, strict=True) if not w
