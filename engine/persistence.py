@@ -72,7 +72,7 @@ import zlib
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Protocol, runtime_checkable
+from typing import Any, Final, Protocol, runtime_checkable
 
 import msgspec
 
@@ -81,6 +81,7 @@ from s7graph.engine.cpu import Cpu
 from s7graph.engine.diagnostics import EventId
 from s7graph.engine.errors import S7Error
 from s7graph.engine.file_lock import try_lock
+from s7graph.engine.modes import CpuMode
 from s7graph.engine.record import DiagEntry
 from s7graph.engine.renew import gone, known, rebuild
 from s7graph.engine.restart import stop_blocker
@@ -356,6 +357,21 @@ class LoadReport:
     changed: list[int] = field(default_factory=list)
     """Instance DBs whose FB changed since the file was written (carried over)."""
     notes: list[str] = field(default_factory=list)
+
+
+_MODES: Final = frozenset(str(m) for m in CpuMode)
+
+
+def _saved_report(store: StateStore) -> LoadReport:
+    """What the file says of the last run — its mode, whether it ended cleanly, its last
+    restart — each a value this code writes; StateFileError naming the key otherwise (a
+    file someone edited is not trusted for what it says)."""
+    mode, clean = store.meta("mode") or "", store.meta("clean")
+    if mode and mode not in _MODES:
+        raise StateFileError(store.path, f"malformed meta 'mode': {mode[:40]!r}")
+    if clean not in (None, "0", "1"):
+        raise StateFileError(store.path, f"malformed meta 'clean': {clean[:40]!r}")
+    return LoadReport(mode=mode, clean=clean == "1", last_restart=store.meta("last_restart") or "")
 
 
 def _volatile(value: object) -> tuple[str, ...]:
@@ -750,11 +766,7 @@ class StateStore:
         ).fetchall()
         if memory is None and not instances:
             return None
-        report = LoadReport(
-            mode=self.meta("mode") or "",
-            clean=self.meta("clean") == "1",
-            last_restart=self.meta("last_restart") or "",
-        )
+        report = _saved_report(self)
         if memory is None:
             raise StateFileError(self.path, "no memory image (an incomplete state)")
         hot = self.meta("hot_memory")

@@ -473,3 +473,14 @@ def _loads(path: Path) -> bool:
         return store.load(_cpu()) is not None
     finally:
         store.close()
+
+
+@pytest.mark.parametrize(("key", "value"), [("mode", "BANANA"), ("clean", "maybe")])
+def test_a_meta_value_this_code_never_writes_is_refused(
+    tmp_path: Path, key: str, value: str
+) -> None:
+    """A mode or a clean mark someone edited is not trusted for what it says (``clean``
+    decides whether the last run ended cleanly)."""
+    path = _written(tmp_path / "s.sqlite")
+    _edit(path, ("INSERT OR REPLACE INTO meta VALUES (?, ?)", (key, value)))
+    assert _refused(path) == f"malformed meta {key!r}: {value!r}"
