@@ -17,7 +17,7 @@ from s7graph.engine.modes import CpuMode
 from s7graph.sequencer.change.online import SwapRefused, swap
 from s7graph.web.cli import main
 from s7graph.web.harness.persist import open_state
-from s7graph.web.harness.session import ChartSession, compile_text
+from s7graph.web.harness.session import ChartLoadError, ChartSession, compile_text
 
 CHART = """FUNCTION_BLOCK "Timed" FB 3 DB 3
 VAR done : BOOL; waited : TIME; END_VAR
@@ -82,8 +82,8 @@ def test_an_instance_db_that_is_something_else_refuses_the_chart(
     path = chart(tmp_path, TON.replace("DB 10", "DB 3"))
     rc, trace, err = sim(path, capsys, "--cycles", "2")
     assert rc == 2 and trace == []
-    assert err == (
-        f"{path}:5:5: error: CALL SFB 4, DB 3: DB3 is the instance DB of FB3 'Timed' "
+    assert err == (  # said by the chart's check, before any CPU is made
+        f"{path}:5:5: error[E046]: DB3 is the instance DB of FB3 (this chart) already "
         "(step S1 row 1)\n"
     )
 
@@ -102,9 +102,9 @@ def test_an_online_change_that_adds_a_timer_creates_its_instance_db(tmp_path: Pa
         session.scan()
     assert session.cpu.mode is CpuMode.RUN
     assert session.get("S2.X") is True
-    clash, _ = compile_text(CHART.format(call=TON.replace("DB 10", "DB 3")), "timed.s7g")
-    with pytest.raises(SwapRefused, match="DB3 is the instance DB of FB3"):
-        swap(session.graph, clash, session.cpu)
+    with pytest.raises(ChartLoadError, match="DB3 is the instance DB of FB3"):  # at compile
+        compile_text(CHART.format(call=TON.replace("DB 10", "DB 3")), "timed.s7g")
+    assert session.cpu.mode is CpuMode.RUN
 
 
 def test_the_timer_instance_is_kept_with_the_state_and_outlives_its_call(tmp_path: Path) -> None:

@@ -22,7 +22,7 @@ SEQUENCE 1 "Fill"
   INITIAL_STEP S1 "Idle":
   END_STEP
   STEP S2 "Fill":
-    INTERLOCK := "Door" AND DB1.DBX0.1;
+    INTERLOCK := "Door" AND DB20.DBX0.1;
     SUPERVISION := S2.T > T#10S OR M10.1;
   END_STEP
   STEP S3 "Drain":
@@ -47,7 +47,7 @@ def test_a_steps_contacts_are_its_transitions_then_its_interlock_and_supervision
         '"Start"',
         "Q4.0",
         '"Door"',
-        "DB1.DBX0.1",
+        "DB20.DBX0.1",
         "M10.1",
     ]
     assert contact_operands(layout, ("S", 1)) == ['"Start"']
