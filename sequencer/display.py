@@ -333,11 +333,7 @@ def _outputs(
     """Write the pins of ``plan`` into ``out``; return the S_NO and T_NO shown (T_NO only
     when the set has transition pins, else ``state.t_no``). Only what they need is computed."""
     steps = shown_steps(chart, state, active)
-    s_no = state.s_no
-    if state.display.get("no_sno"):  # _shown_step
-        s_no = 0
-    elif not (state.display.get("pinned") and s_no in chart.step_index):
-        s_no = _snap(s_no, steps)
+    s_no = _shown_step(chart, state, lambda: steps)
     if plan.step:
         i = chart.step_index.get(s_no)
         out["S_NO"] = s_no

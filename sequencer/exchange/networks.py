@@ -64,10 +64,10 @@ MAX_ELEMENTS = 20_000
 """The longest expression a network is read into, in elements written out."""
 
 
-def _size(e: SExpr, read: dict[tuple[str, str], tuple[SExpr, int]]) -> int:
+def _size(e: SExpr, known: dict[int, int]) -> int:
     """How many elements ``e`` is written out; a part already read counts its known size
-    (found by identity, so a shared part costs one look-up, not its whole length)."""
-    known = {id(v): n for v, n in read.values()}
+    (``known``, by the part's identity: a shared part costs one look-up, not its whole
+    length)."""
     total = 0
     stack = [e]
     while stack:
@@ -108,9 +108,11 @@ class Network:
     connectors: dict[str, Node] = field(init=False)
     calls: list[SCallStmt] = field(init=False, default_factory=list)
     computed: set[str] = field(init=False, default_factory=set)  # instance block localIds
-    read: dict[tuple[str, str], tuple[SExpr, int]] = field(init=False, default_factory=dict)
-    """What flows out of an element's output, and how many elements it is written out —
-    read once, whatever number of wires leave it (``source``)."""
+    read: dict[tuple[str, str], SExpr] = field(init=False, default_factory=dict)
+    """What flows out of an element's output — read once, whatever number of wires leave
+    it (``source``)."""
+    sizes: dict[int, int] = field(init=False, default_factory=dict)
+    """How many elements each expression of ``read`` is written out, by its identity."""
 
     def __post_init__(self) -> None:
         self.by_id = {n.get("localId"): n for n in self.root.children if n.get("localId")}
@@ -143,16 +145,17 @@ class Network:
         that never ends."""
         key = (conn.get("refLocalId"), conn.get("formalParameter"))
         if key in self.read:
-            return self.read[key][0]
+            return self.read[key]
         out = self._source(conn, seen)
-        size = _size(out, self.read)
+        size = _size(out, self.sizes)
         if size > MAX_ELEMENTS:
             raise ElementError(
                 f"an expression over {MAX_ELEMENTS:,} elements long written out "
                 "(outputs that feed several inputs, level after level)",
                 self.by_id.get(key[0], conn),
             )
-        self.read[key] = (out, size)
+        self.read[key] = out
+        self.sizes[id(out)] = size  # ``out`` lives on in ``read``: its id stays its own
         return out
 
     def _source(self, conn: Node, seen: frozenset[str]) -> SExpr:

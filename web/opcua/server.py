@@ -31,6 +31,7 @@ from asyncua.server.internal_session import InternalSession
 from cryptography import x509
 from cryptography.hazmat.primitives import serialization
 from cryptography.hazmat.primitives.asymmetric import rsa
+from cryptography.hazmat.primitives.asymmetric.types import PrivateKeyTypes
 
 from s7graph.web.bus.protocol import CpuStatus
 from s7graph.web.collector import quiet_collector
@@ -124,14 +125,19 @@ def _certificate_problem(cert: Path) -> str | None:
     return None
 
 
+def _load_key(key: Path) -> PrivateKeyTypes:
+    """The private key in ``key`` (PEM or DER, unencrypted); OSError, ValueError or
+    TypeError when it holds none."""
+    data = key.read_bytes()
+    if _format(data) == "pem":
+        return serialization.load_pem_private_key(data, None)
+    return serialization.load_der_private_key(data, None)
+
+
 def _key_problem(key: Path) -> str | None:
     """Why ``key`` cannot be the server's private key (PEM or DER, unencrypted)."""
     try:
-        data = key.read_bytes()
-        if _format(data) == "pem":
-            serialization.load_pem_private_key(data, None)
-        else:
-            serialization.load_der_private_key(data, None)
+        _load_key(key)
     except (OSError, ValueError, TypeError):
         return f"{key}: not a private key (PEM or DER, without a password)"
     return None
@@ -140,14 +146,8 @@ def _key_problem(key: Path) -> str | None:
 def _pair_problem(cert: Path, key: Path) -> str | None:
     """Why ``key`` is not the private key of ``cert`` (a server with a key of another
     certificate starts, then fails every secure channel without a word)."""
-    data = key.read_bytes()
-    private = (
-        serialization.load_pem_private_key(data, None)
-        if _format(data) == "pem"
-        else serialization.load_der_private_key(data, None)
-    )
     fmt = serialization.PublicFormat.SubjectPublicKeyInfo
-    mine = private.public_key().public_bytes(serialization.Encoding.DER, fmt)
+    mine = _load_key(key).public_key().public_bytes(serialization.Encoding.DER, fmt)
     theirs = _load_certificate(cert).public_key().public_bytes(serialization.Encoding.DER, fmt)
     if mine != theirs:
         return f"{key}: not the private key of the certificate {cert}"

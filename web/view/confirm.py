@@ -9,7 +9,7 @@ from typing import Any, Final
 
 from s7graph.web.commands import Command, Mres, Stop
 
-__all__ = ["QUESTIONS", "ask"]
+__all__ = ["QUESTIONS", "ask", "question"]
 
 QUESTIONS: Final[dict[type[Command], tuple[str, str, str]]] = {
     Stop: (
@@ -31,19 +31,27 @@ QUESTIONS: Final[dict[type[Command], tuple[str, str, str]]] = {
 def ask(gui: Any, kind: type[Command], go: Callable[[], object]) -> None:
     """``go`` at once for an op without a question; else the question of ``kind`` in a
     modal of ``gui`` (a viser page's), ``go`` on its yes, nothing on Cancel."""
-    question = QUESTIONS.get(kind)
-    if question is None:
+    found = QUESTIONS.get(kind)
+    if found is None:
         go()
         return
-    title, what, label = question
+    title, what, label = found
+    question(gui, title, what, label, go)
+
+
+def question(
+    gui: Any, title: str, what: str, yes: str, go: Callable[[], object], *, no: str = "Cancel"
+) -> None:
+    """A modal of ``gui`` saying ``what``: its button ``yes`` closes it and does ``go``,
+    ``no`` only closes it."""
     with gui.add_modal(title) as modal:
         gui.add_markdown(what)
-        yes = gui.add_button(label, color="red")
-        no = gui.add_button("Cancel")
+        agreed = gui.add_button(yes, color="red")
+        refused = gui.add_button(no)
 
     def answer(_: object) -> None:
         modal.close()
         go()
 
-    yes.on_click(answer)
-    no.on_click(lambda _: modal.close())
+    agreed.on_click(answer)
+    refused.on_click(lambda _: modal.close())

@@ -40,6 +40,7 @@ from s7graph.web.commands import (
 )
 from s7graph.web.harness.project import CHART_CHOICE, chart_file
 from s7graph.web.view import texts
+from s7graph.web.view.confirm import question
 from s7graph.web.view.engineering import EditorPage
 
 __all__ = ["MAX_DIAGNOSTIC_BUTTONS", "CpuCommands", "Located", "refused"]
@@ -87,25 +88,19 @@ class CpuCommands:
         if not self._unsent():
             self.leave()
             return
-        gui = self.client.gui
         if self._modal is not None:
             with contextlib.suppress(Exception):
                 self._modal.close()
-        with gui.add_modal("Leave edit mode") as modal:
-            self._modal = modal
-            gui.add_markdown(
-                "The chart edited is not the one the CPU runs: leaving drops the edits "
-                "not downloaded (*Save to this computer* keeps them in a file)."
-            )
-            drop = gui.add_button("Leave and drop the edits", color="red")
-            stay = gui.add_button("Stay in edit mode")
-
-        def dropped() -> None:
-            modal.close()
-            self.leave()
-
-        drop.on_click(self._click(dropped))
-        stay.on_click(lambda _: modal.close())
+            self._modal = None
+        question(
+            self.client.gui,
+            "Leave edit mode",
+            "The chart edited is not the one the CPU runs: leaving drops the edits not "
+            "downloaded (*Save to this computer* keeps them in a file).",
+            "Leave and drop the edits",
+            functools.partial(self._click(self.leave), None),
+            no="Stay in edit mode",
+        )
 
     def _unsent(self) -> bool:
         """Whether the chart edited differs from the one the CPU runs (by their text as the
