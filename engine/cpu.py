@@ -41,7 +41,7 @@ from s7graph.engine.marks import ScanMarks
 from s7graph.engine.memory import Memory
 from s7graph.engine.modes import CpuMode, KeySwitch, ModeRequest, SetKeySwitch, resolve_requests
 from s7graph.engine.record import DiagEntry, ScanRecord
-from s7graph.engine.restart import RESTART, RestartType, parse_restart
+from s7graph.engine.restart import RESTART, RestartType, error_blocker, parse_restart
 from s7graph.engine.rtc import RealTimeClock
 from s7graph.engine.rtm import RuntimeMeters
 from s7graph.engine.timed import DelayInterrupts, TodInterrupts
@@ -262,7 +262,7 @@ class Cpu(ProgramBlocks, Forcing, InterruptDispatch, SyncErrors):
     def stop_by_error(self, event: int, block: str, message: str) -> None:
         """Go to STOP because of an error outside the program (the state file could not be
         written): an entry with ``event``; outputs go to 0; then only a warm restart (S7)."""
-        self.hot_blockers.add(f"STOP by an error ({message})")
+        self.hot_blockers.add(error_blocker(message))
         if self.mode is not CpuMode.STOP:
             self._go_stop(event, block, message)
         else:

@@ -120,8 +120,14 @@ def stop_blocker(entries: Iterable[DiagEntry]) -> str | None:
         if entry.event_id == EventId.STARTUP_TO_RUN or entry.event_id in HOT_AFTER_STOP:
             return None
         if entry.event_id in NO_HOT_AFTER_STOP:
-            return f"STOP by an error ({entry.message})"
+            return error_blocker(entry.message)
     return None
+
+
+def error_blocker(message: str) -> str:
+    """The hot restart blocker a STOP by an error (``NO_HOT_AFTER_STOP``) leaves, saying
+    ``message``: the same words whether the CPU holds it or a state file gives it back."""
+    return f"STOP by an error ({message})"
 
 
 def parse_restart(text: str | RestartType) -> RestartType:

@@ -86,7 +86,7 @@ from s7graph.engine.modes import CpuMode, ModeRequest
 from s7graph.engine.persistence import Batch, StateStore, StateWriteError
 from s7graph.engine.profile import CycleProfile, OpenCycle
 from s7graph.engine.record import DiagEntry, ScanRecord
-from s7graph.engine.restart import RestartType
+from s7graph.engine.restart import RestartType, error_blocker
 from s7graph.engine.switching import switching
 from s7graph.engine.watchdog import COMM_LOAD_PCT, CycleStatistics
 from s7graph.engine.writer import DurableCallback, StoreWriter
@@ -393,7 +393,7 @@ class Runner:
         cpu = self.cpu
         now = cpu.clock.now_ns()
         cpu.stop_entry = entry = cpu.diagnostics.record(now, EventId.STOP_KILLED, block, message)
-        cpu.hot_blockers.add(f"STOP by an error ({message})")  # a warm restart only
+        cpu.hot_blockers.add(error_blocker(message))  # a warm restart only
         self.stopped = stop_reason(cpu)
         if self.store is not None:
             self.store.save(cpu, clean=False)
