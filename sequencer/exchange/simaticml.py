@@ -27,6 +27,7 @@ from dataclasses import replace
 
 from s7graph.engine.errors import LiteralError, S7Error, SourceLocation
 from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer.change.base import MAX_NUMBER
 from s7graph.sequencer.exchange.export_simaticml import S7GRAPH_COMMENT
 from s7graph.sequencer.exchange.flgnet import Box, read_boxes, read_network
 from s7graph.sequencer.exchange.iec_actions import permanent_assignment
@@ -592,10 +593,6 @@ def _node(el: Node, port: str) -> tuple[str, int, int]:
         return ("E", 0, 0)
     kind = {"StepRef": "S", "TransitionRef": "T", "BranchRef": "B"}.get(el.tag, "?")
     return (kind, _number(el, "Number", 0), _number(el, port, 0))
-
-
-MAX_NUMBER = 32767
-"""The highest step or transition number (S_NO and T_NO are INTs)."""
 
 
 def _number(el: Node, attr: str, missing: int | None = None) -> int:
