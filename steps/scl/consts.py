@@ -10,11 +10,13 @@ it becomes whatever type it is assigned or passed to when its value fits there
 
 from __future__ import annotations
 
+import math
 import operator
 import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+from s7graph.engine.datatypes import real32
 from s7graph.engine.errors import LiteralError, SourceLocation
 from s7graph.engine.literals import parse_literal
 from s7graph.steps.scl import model as m
@@ -62,19 +64,13 @@ def literal(lit: m.Lit) -> Constant:
         return Constant(ty.string(max(len(value), 1)), value, untyped=len(value) == 1)
     if tname == "REAL":
         assert isinstance(value, float)
-        value = _round32(value)
+        value = real32(value)
     t = _LITERAL_TYPE.get(tname) or ty.by_name(tname) or ty.ERROR
     return Constant(t, value, untyped)
 
 
 def _clip(text: str) -> str:
     return text if len(text) <= 40 else text[:37] + "..."
-
-
-def _round32(v: float) -> float:
-    import struct
-
-    return float(struct.unpack(">f", struct.pack(">f", v))[0])
 
 
 def adapt(c: Constant, t: ty.SclType) -> object | None:
@@ -86,13 +82,13 @@ def adapt(c: Constant, t: ty.SclType) -> object | None:
     if c.untyped and ty.literal_fits(t, c.value):
         if t.kind == "BOOL":
             return bool(c.value)
-        return _round32(float(c.value)) if t.kind == "REAL" else c.value  # type: ignore[arg-type]
+        return real32(float(c.value)) if t.kind == "REAL" else c.value  # type: ignore[arg-type]
     if c.type.kind == "TIME" and t.kind == "S5TIME" and isinstance(c.value, int):
         return c.value if 0 <= c.value <= 9_990_000 else None
     if ty.widens(c.type, t) and not t.aggregate and t.kind != "ANY":
         v = c.value
         if t.kind == "REAL" and isinstance(v, int):
-            return _round32(float(v))
+            return real32(float(v))
         if t.kind in ty.MASK and isinstance(v, bool):
             return int(v)
         return v
@@ -170,8 +166,10 @@ class Consts:
             return Constant(t, n, untyped)
         if expr.op in ("+", "-", "*", "/") and not (expr.op == "/" and y == 0):
             ops = {"+": operator.add, "-": operator.sub, "*": operator.mul}
-            r = ops[expr.op](x, y) if expr.op != "/" else x / y
-            return Constant(ty.REAL, _round32(float(r)), untyped)
+            r = float(ops[expr.op](x, y) if expr.op != "/" else x / y)
+            if math.isinf(v := real32(r)):  # as a DINT constant beyond DINT, above
+                raise Problem("E217", f"constant {r:g} is outside REAL (±3.402823e+38)", expr.loc)
+            return Constant(ty.REAL, v, untyped)
         if expr.op == "/" and y == 0:
             raise Problem("E217", "/ by zero in a constant expression", expr.loc)
         raise Problem("E217", f"{expr.op} in a constant expression", expr.loc)

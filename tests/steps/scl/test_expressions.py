@@ -388,3 +388,15 @@ def test_a_db_member_the_db_lacks_and_a_constant_division_by_zero_say_so() -> No
     src = "FUNCTION FC1 : VOID\nCONST N := 10 / 0; END_CONST\nEND_FUNCTION\n"
     found = check_scl(src, "t.scl", blocks=sfb.SYSTEM_BLOCKS)
     assert [(d.code, d.message) for d in found] == [("E217", "/ by zero in a constant expression")]
+
+
+def test_a_real_constant_expression_beyond_the_real_range_is_E217() -> None:
+    """``3.0E38 * 10.0`` in a CONST section is outside REAL, as a DINT constant beyond
+    DINT is: a diagnostic at the expression, not an internal error."""
+    src = "FUNCTION FC1 : VOID\nCONST BIG := 3.0E38 * 10.0; END_CONST\nEND_FUNCTION\n"
+    found = check_scl(src, "t.scl", blocks=sfb.SYSTEM_BLOCKS)
+    assert [(d.code, d.message, d.loc.line) for d in found] == [
+        ("E217", "constant 3e+39 is outside REAL (±3.402823e+38)", 2)
+    ]
+    src = "FUNCTION FC1 : VOID\nCONST HALF := 1.0 / 3.0; END_CONST\nEND_FUNCTION\n"
+    assert check_scl(src, "t.scl", blocks=sfb.SYSTEM_BLOCKS) == []
