@@ -33,6 +33,7 @@ from s7graph.engine.cpu_errors import SyncErrors
 from s7graph.engine.cpu_forcing import Forcing, jobs_text, listed
 from s7graph.engine.cpu_interrupts import MISSING_STOP, InterruptDispatch
 from s7graph.engine.cpu_program import ProgramBlocks
+from s7graph.engine.cpu_stops import ErrorStops
 from s7graph.engine.diagnostics import DiagnosticBuffer, EventId
 from s7graph.engine.errors import BlockError, S7Error, ScanAborted, internal_error
 from s7graph.engine.force import ForceTable, apply_plan
@@ -41,7 +42,13 @@ from s7graph.engine.marks import ScanMarks
 from s7graph.engine.memory import Memory
 from s7graph.engine.modes import CpuMode, KeySwitch, ModeRequest, SetKeySwitch, resolve_requests
 from s7graph.engine.record import DiagEntry, ScanRecord
-from s7graph.engine.restart import RESTART, RestartType, error_blocker, parse_restart
+from s7graph.engine.restart import (
+    NO_HOT_AFTER_STOP,
+    RESTART,
+    RestartType,
+    error_blocker,
+    parse_restart,
+)
 from s7graph.engine.rtc import RealTimeClock
 from s7graph.engine.rtm import RuntimeMeters
 from s7graph.engine.timed import DelayInterrupts, TodInterrupts
@@ -92,7 +99,7 @@ class Pending:
     error: str = ""
 
 
-class Cpu(ProgramBlocks, Forcing, InterruptDispatch, SyncErrors):
+class Cpu(ProgramBlocks, Forcing, InterruptDispatch, SyncErrors, ErrorStops):
     """One soft CPU (docs/architecture.md, "Seams"). Power-on leaves it in STOP."""
 
     def __init__(
@@ -258,26 +265,6 @@ class Cpu(ProgramBlocks, Forcing, InterruptDispatch, SyncErrors):
     def mark_blocks(self, marks: ScanMarks | None) -> None:
         """Mark each OB, FB and FC as it runs in ``marks`` (``engine.marks``; None: stop)."""
         self._ctx.marks = marks
-
-    def stop_by_error(self, event: int, block: str, message: str) -> None:
-        """Go to STOP because of an error outside the program (the state file could not be
-        written): an entry with ``event``; outputs go to 0; then only a warm restart (S7)."""
-        self.hot_blockers.add(error_blocker(message))
-        if self.mode is not CpuMode.STOP:
-            self._go_stop(event, block, message)
-        else:
-            self.diagnostics.record(self.clock.now_ns(), event, block, message)
-
-    def abort(self, block: str) -> None:
-        """The runner aborted ``block`` (a block, the plant, the CPU itself) still running at
-        twice the maximum cycle time: a time error entry naming it, then STOP."""
-        limit = 2 * self.watchdog.max_cycle_ns // 1_000_000
-        why = self.abort_reason or f"still running at twice the maximum cycle time ({limit} ms)"
-        raw = self.clock.now_ns()
-        self.diagnostics.record(raw, EventId.CYCLE_TIME_EXCEEDED, block, f"aborted: {why}")
-        if self.mode is not CpuMode.STOP:
-            self._go_stop(EventId.STOP_CYCLE_TIME, block, "block aborted by cycle monitoring")
-        self.abort_reason = ""
 
     def _run_hooks(self, now: int) -> None:
         for hook in OS_SCAN_HOOKS:
@@ -475,6 +462,10 @@ class Cpu(ProgramBlocks, Forcing, InterruptDispatch, SyncErrors):
                 marks.leave(before)
 
     def _go_stop(self, event: int, block: str, message: str) -> None:
+        """STOP with an entry ``event``; after a STOP by an error (``NO_HOT_AFTER_STOP``)
+        only a warm restart, in this process as after the state file is read back."""
+        if event in NO_HOT_AFTER_STOP:
+            self.hot_blockers.add(error_blocker(message))
         self.mode = CpuMode.STOP
         self._hold_since = None
         self.meters.stop_cpu(self.clock.now_ns())

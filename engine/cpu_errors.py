@@ -35,7 +35,6 @@ __all__ = ["SyncErrors", "classify"]
 class SyncErrors(CpuPart):
     """OB121, OB122 and the priority class of a running OB."""
 
-    hot_blockers: set[str]
     _ctx: CallContext
 
     def priority_class(self, ob: int) -> int:
@@ -53,7 +52,6 @@ class SyncErrors(CpuPart):
         message = _program_words(exc)
         self.diagnostics.record(self._raw, event, block, message, getattr(exc, "address", ""))
         if isinstance(exc, NestingOverflow | RecursionError):
-            self.hot_blockers.add("stack overflow")
             self._go_stop(EventId.STACK_OVERFLOW, block, "block stack overflow")
         elif isinstance(exc, IOAccessError):  # OB122 would have run: missing, or this is it
             why = "in OB122" if ob == 122 else "OB122 not loaded"

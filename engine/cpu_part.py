@@ -1,6 +1,6 @@
-"""What a part of the CPU (``cpu_errors``, ``cpu_interrupts``) reads and calls of the
-``Cpu`` it is mixed into: its mode, OBs and diagnostic buffer, the time of the scan, and
-how it runs an OB or goes to STOP."""
+"""What a part of the CPU (``cpu_errors``, ``cpu_interrupts``, ``cpu_stops``) reads and
+calls of the ``Cpu`` it is mixed into: its mode, OBs and diagnostic buffer, the time of the
+scan, and how it runs an OB or goes to STOP."""
 
 from __future__ import annotations
 

@@ -125,6 +125,21 @@ def test_hot_restart_is_refused_after_a_stop_by_an_error(clock: VirtualClock) ->
     assert stop_blocker([killed]) == "STOP by an error (hung)"
 
 
+def test_hot_restart_is_refused_after_a_block_aborted_by_cycle_monitoring(
+    clock: VirtualClock,
+) -> None:
+    """A STOP by cycle monitoring (a block still running at twice the maximum cycle time)
+    allows only a warm restart in the running process too, not only once the state file
+    is read back."""
+    cpu = _cpu(clock)
+    cpu.start()
+    cpu.scan()
+    cpu.abort("OB1")
+    assert cpu.hot_blockers >= {"STOP by an error (block aborted by cycle monitoring)"}
+    cpu.start("hot")
+    assert cpu.last_restart is RestartType.WARM
+
+
 def test_the_first_start_after_loading_is_never_hot(clock: VirtualClock) -> None:
     """A freshly downloaded program starts warm even if hot is asked for."""
     cpu = Cpu(clock)

@@ -268,7 +268,7 @@ def test_nesting_overflow_stops_and_allows_only_warm_restart(clock: VirtualClock
     record = cpu.scan()
     assert record.mode is CpuMode.STOP
     assert record.diagnostics[-1].event_id == EventId.STACK_OVERFLOW
-    assert "stack overflow" in cpu.hot_blockers
+    assert "STOP by an error (block stack overflow)" in cpu.hot_blockers
     cpu.start("hot")
     assert cpu.last_restart == "warm"
 
