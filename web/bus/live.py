@@ -49,8 +49,9 @@ of a scan are grouped by instance DB once per scan record, for every LiveGraph o
 :meth:`LiveGraph.changed` is the scan thread's cheap path: it builds the update only when
 the FB may have changed, judged from what the FB itself says — its step events in the
 scan record (every switch, disturbance and acknowledgement raises one), its mode and level
-pins, its output pins, the watched operands, its transitions' TT and CRIT words (and
-interlock and supervision words), and the clock time at which the first active step's T
+pins, its output pins, the watched operands, its transitions' CRIT words, the TT bits of
+the transitions leaving its active steps (and interlock and supervision words), and the
+clock time at which the first active step's T
 or U reaches its next whole second (:class:`Seen`) — instead of building the whole state
 and comparing it (``StepStateUpdate.changed_from``, which the bus publisher still does
 for what ``changed`` builds).
@@ -94,7 +95,7 @@ from s7graph.web.bus.protocol import (
     StepStateUpdate,
 )
 from s7graph.web.bus.scan_events import ScanEvents
-from s7graph.web.bus.seen import Seen, due_ns, same, seen
+from s7graph.web.bus.seen import Leaving, Seen, due_ns, same, seen
 from s7graph.web.bus.step_details import StepDetails
 from s7graph.web.commands import (
     COMMAND_TYPES,
@@ -277,6 +278,7 @@ class LiveGraph:
         self._chart = chart
         self.step_details = chart.step_details()
         self._seen: Seen | None = None  # what the last update saw (``changed``)
+        self._leaving = Leaving(chart.cc.leaving)
         self._due: int | None = None  # and when a step time may reach a new second
         self._readers: tuple[tuple[str, ...], _Readers] | None = None
         """The watch list the readers were made for, and a reader per name."""
@@ -395,7 +397,7 @@ class LiveGraph:
             watched = self._watched()
         values = self._values(outs, watched)
         if see:
-            self._seen = seen(st, self._chart.checks, outs, watched)
+            self._seen = seen(st, self._chart.checks, outs, watched, self._leaving)
             self.copies += 1
         else:
             self._seen = None

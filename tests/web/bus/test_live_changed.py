@@ -115,6 +115,22 @@ def test_what_changes_without_a_step_event_still_makes_a_delta(side: Side) -> No
     assert update is not None and update.mode == "MAN"
 
 
+def test_the_scan_after_a_switch_builds_nothing_when_only_the_fired_tt_clears(
+    side: Side,
+) -> None:
+    """The transition that fired clears its TT in the next scan; no view shows the TT of a
+    transition whose step is no longer active, so that scan builds no update."""
+    side.scan()
+    side.session.set("Door", True)
+    side.session.set("Start", True)
+    update = side.scan()
+    assert update is not None and update.active == [2] and update.events
+    quiet = side.live.quiet
+    for _ in range(5):
+        assert side.scan() is None
+    assert side.live.quiet == quiet + 5
+
+
 def test_the_cheap_path_sends_exactly_the_deltas_of_the_whole_state_compare(
     tmp_path: Path,
 ) -> None:
