@@ -5,13 +5,13 @@ delta callback in another process, and how many deltas a second it carries (run 
 The CPU side runs in this process: the 200 sequencers of ``bench/scan.py`` (``--layout``
 ``packed``: 25 FBs of 8, ``single``: 200 FBs of 1) on the system clock, paced by the
 engine's ``Runner``, each FB seen by a ``LiveGraph`` (one ``ScanEvents`` shared by all) and
-published by one ``BusPublisher`` after every scan. ``--path batched`` (the default, as
-``s7graph run`` does): ``LiveGraph.changed`` (an update only for an FB that may have
-changed) and ``BusPublisher.publish_scan``, one message per scan on ``deltas``;
+published by one ``BusPublisher`` after every scan. ``--path batched`` (the default):
+``web.bus.fb_deltas.publish_fbs`` — ``LiveGraph.changed`` (an update only for an FB that
+may have changed), the FBs whose steps switched first, a message on ``deltas`` every
+``--part`` changed FBs (default ``web.bus.deltas.PART``; 0: one message per scan) while
+the scan thread builds the rest, and (a) replays messages of those sizes;
 ``--path per-fb``: ``LiveGraph.update`` and ``BusPublisher.publish`` for every FB, one
-message per FB and scan (the way of the code before ``deltas``); ``--part N`` (batched):
-a message leaves every N changed FBs while the scan thread builds the rest, and (a)
-replays messages of that size. The other side is a
+message per FB and scan (the way of the code before ``deltas``). The other side is a
 second process (this file with ``--peer``) on its own zenoh session, connected over a
 unix socket: it follows every FB with ``BusClient.follow`` (decode, ``seq`` order: the
 view's code), what it built to start frozen as the view's process freezes its own
@@ -71,6 +71,8 @@ from s7graph.engine.runner import Runner  # noqa: E402
 from s7graph.engine.switching import switching  # noqa: E402
 from s7graph.engine.watchdog import Watchdog  # noqa: E402
 from s7graph.web.bus.client import BusClient  # noqa: E402
+from s7graph.web.bus.deltas import PART  # noqa: E402
+from s7graph.web.bus.fb_deltas import publish_fbs  # noqa: E402
 from s7graph.web.bus.keys import keys  # noqa: E402
 from s7graph.web.bus.live import LiveGraph  # noqa: E402
 from s7graph.web.bus.protocol import ScanDeltas, StepStateUpdate, decode, encode  # noqa: E402
@@ -190,7 +192,7 @@ class Cpu:
     layout: str
     session: zenoh.Session
     path: str = "batched"
-    part: int = 0  # batched: at most this many deltas a message (0: a scan's all)
+    part: int = PART  # batched: at most this many deltas a message (0: a scan's all)
     workload: Any = None
     lives: list[LiveGraph] = field(default_factory=list)
     publisher: BusPublisher | None = None
@@ -221,19 +223,10 @@ class Cpu:
         last = self.last
         sent = []
         if self.path == "batched":
-            changed = []
-            cycle, t_ms = max(record.cycle, 0), max(record.t_ns // 1_000_000, 0)
-            part = self.part
-            for live in self.lives:
-                update = live.changed(record)
-                if update is not None:
-                    changed.append((live.fb, update))
-                    last[live.fb] = update
-                    if len(changed) == part:  # a part of the scan's deltas leaves now
-                        self._sent(publisher.publish_scan(cycle, t_ms, changed), sent)
-                        changed = []
-            if changed or not sent:
-                self._sent(publisher.publish_scan(cycle, t_ms, changed), sent)
+            for fb, update in publish_fbs(publisher, self.lives, record, part=self.part):
+                seq[fb] += 1
+                last[fb] = update
+                sent.append((fb, seq[fb], bool(update.events)))
             return sent
         for live in self.lives:
             update = live.update(record)
@@ -249,12 +242,6 @@ class Cpu:
             return [count] if count else []
         whole, rest = divmod(count, self.part)
         return [self.part] * whole + ([rest] if rest else [])
-
-    def _sent(self, fbs: list[str], sent: list[tuple[str, int, bool]]) -> None:
-        seq, last = self.seq, self.last
-        for fb in fbs:
-            seq[fb] += 1
-            sent.append((fb, seq[fb], bool(last[fb].events)))
 
     def payloads(self, per_scan: list[int]) -> list[bytes]:
         """Real encoded messages for (a) to replay: per-fb, a delta of each FB; batched, per
@@ -520,15 +507,15 @@ def main(argv: list[str] | None = None) -> int:
         "--path",
         choices=("batched", "per-fb"),
         default="batched",
-        help="batched: LiveGraph.changed + publish_scan, one message a scan (default); "
+        help="batched: publish_fbs, switched FBs first, a message every --part (default); "
         "per-fb: LiveGraph.update + publish for every FB, one message per FB and scan",
     )
     ap.add_argument(
         "--part",
         type=int,
-        default=0,
+        default=PART,
         help="batched: a message leaves every PART changed FBs, while the scan's others "
-        "are still being built (0: one message a scan, the default)",
+        f"are still being built (0: one message a scan; default {PART}, as web.bus.deltas)",
     )
     ap.add_argument(
         "--old-readers",

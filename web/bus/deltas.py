@@ -6,7 +6,10 @@ something subscribes there; per FB the latest state for ``fb/<fb>/state``.
 In the scan thread it only compares (``StepStateUpdate.changed_from``, for the updates an
 FB gives it: ``LiveGraph.changed`` gives none for a scan that changed nothing), numbers —
 ``seq`` per FB, counting its changes, and ``seq`` per message on ``deltas`` — and queues
-one job on the publisher's :class:`~web.bus.outbox.Outbox`. The outbox's thread sets each
+one job on the publisher's :class:`~web.bus.outbox.Outbox` — or, for a scan whose deltas
+come one by one (:meth:`DeltaOut.begin`, a :class:`ScanOut`), one job every ``part``
+deltas, so that the first of a large scan leave while the scan thread still builds the
+others: each such message carries the scan's ``seq``. The outbox's thread sets each
 delta's ``seq``, encodes the scan's message in one go and puts it; then, for each FB whose
 own key has a subscriber (a zenoh matching listener tells), encodes and puts its delta
 there. When the outbox drops the job, the scan's ``seq`` stays used: a follower of
@@ -33,7 +36,12 @@ from s7graph.web.bus.protocol import (
     encode,
 )
 
-__all__ = ["DeltaOut", "ScanJob", "encode_parts"]
+__all__ = ["PART", "DeltaOut", "ScanJob", "ScanOut", "encode_parts"]
+
+PART = 32
+"""Deltas a :class:`ScanOut` gathers before they leave in one message (the scan's others
+are still being built): small enough that the first leave soon, large enough that a
+message carries more than its envelope (``bench/bus.py --part``)."""
 
 _first = operator.itemgetter(0)
 Changed = list[tuple[str, StepStateUpdate, int]]
@@ -98,20 +106,35 @@ class DeltaOut:
         if not self._names.issuperset(map(_first, updates)):
             unknown = sorted({fb for fb, _ in updates} - self._names)
             raise KeyError(f"unknown FB {unknown[0]!r}; known: {', '.join(self._seq)}")
-        changed: Changed = []
+        out = self.begin(cycle, t_ms, part=0)
+        for fb, update in updates:
+            out.add(fb, update)
+        return [fb for fb, _ in out.end()]
+
+    def begin(self, cycle: int, t_ms: int, *, part: int = PART) -> ScanOut:
+        """A scan (cycle ``cycle`` at time ``t_ms``) whose updates come one at a time
+        (:meth:`ScanOut.add`); every ``part`` changed ones leave together (0: all at
+        :meth:`ScanOut.end`)."""
+        return ScanOut(self, cycle, t_ms, part)
+
+    def _record(self, fb: str, update: StepStateUpdate) -> int:
+        """``update`` becomes the FB's state; its new ``seq`` if it changed, else 0."""
         with self._lock:
             state, seqs = self._state, self._seq
-            for fb, update in updates:
-                if update.changed_from(state.get(fb)):
-                    seq = seqs[fb] = seqs[fb] + 1
-                    changed.append((fb, update, seq))
-                state[fb] = update
-            if not changed:
-                return []
+            if fb not in seqs:
+                raise KeyError(f"unknown FB {fb!r}; known: {', '.join(seqs)}")
+            before = state.get(fb)
+            state[fb] = update
+            if not update.changed_from(before):
+                return 0
+            seq = seqs[fb] = seqs[fb] + 1
+            return seq
+
+    def _scan_seq(self) -> int:
+        """The ``seq`` of a new message on ``deltas``."""
+        with self._lock:
             self.scans += 1
-            scan = self.scans
-        self.outbox.run(ScanJob(self, scan, cycle, t_ms, changed), len(changed))
-        return [fb for fb, _, _ in changed]
+            return self.scans
 
     def own_key_read(self, fb: str) -> bool:
         """Whether something subscribes to ``fb/<fb>/delta`` (its deltas are put there)."""
@@ -134,6 +157,47 @@ class DeltaOut:
             with contextlib.suppress(zenoh.ZError):
                 d.undeclare()
         self._declared.clear()
+
+
+class ScanOut:
+    """One scan's updates as the scan thread builds them (:meth:`DeltaOut.begin`): each
+    :meth:`add` compares and numbers; every ``part`` changed deltas leave in one message
+    with the scan's ``seq``, the rest at :meth:`end`."""
+
+    __slots__ = ("_pending", "changed", "cycle", "out", "part", "scan", "t_ms")
+
+    def __init__(self, out: DeltaOut, cycle: int, t_ms: int, part: int) -> None:
+        self.out, self.cycle, self.t_ms, self.part = out, cycle, t_ms, part
+        self.scan = 0  # the scan's seq on ``deltas`` (0: none yet, nothing changed)
+        self.changed: list[tuple[str, StepStateUpdate]] = []
+        """The FBs that changed so far, with their updates, in order."""
+        self._pending: Changed = []
+
+    def add(self, fb: str, update: StepStateUpdate) -> bool:
+        """Record ``update`` as FB ``fb``'s state; whether it changed (its delta goes out).
+        An unknown FB raises KeyError."""
+        seq = self.out._record(fb, update)
+        if not seq:
+            return False
+        self.changed.append((fb, update))
+        pending = self._pending
+        pending.append((fb, update, seq))
+        if len(pending) == self.part:
+            self._send()
+        return True
+
+    def end(self) -> list[tuple[str, StepStateUpdate]]:
+        """Send what is left; the FBs that changed, with their updates, in order."""
+        if self._pending:
+            self._send()
+        return self.changed
+
+    def _send(self) -> None:
+        out, pending = self.out, self._pending
+        if not self.scan:
+            self.scan = out._scan_seq()
+        self._pending = []
+        out.outbox.run(ScanJob(out, self.scan, self.cycle, self.t_ms, pending), len(pending))
 
 
 class ScanJob:

@@ -32,7 +32,7 @@ import zenoh
 
 from s7graph.engine.errors import internal_error
 from s7graph.engine.persistence import sqlite_words
-from s7graph.web.bus.deltas import DeltaOut
+from s7graph.web.bus.deltas import PART, DeltaOut, ScanOut
 from s7graph.web.bus.gate import Apply, Gate, claimed_note
 from s7graph.web.bus.keys import ROOT, keys
 from s7graph.web.bus.origin import transport_origin
@@ -306,11 +306,14 @@ class BusPublisher:
         them, in order. ``update.seq`` is replaced by the bus's own change counter."""
         assert self.deltas is not None
         changed = self.deltas.publish(cycle, t_ms, updates)
-        with self._lock:
-            self._cycle = (cycle, t_ms)
-        if time.monotonic_ns() - self._status_sent_ns >= STATUS_PERIOD_NS:
-            self._publish_status()
+        self.scanned(cycle, t_ms)
         return changed
+
+    def begin_scan(self, cycle: int, t_ms: int, *, part: int = PART) -> ScanOut:
+        """:meth:`publish_scan` with the updates given one by one (``ScanOut``; a message
+        every ``part`` changed FBs, 0: one at its ``end``); :meth:`scanned` after that."""
+        assert self.deltas is not None
+        return self.deltas.begin(cycle, t_ms, part=part)
 
     def publish_alarms(self, alarms: AlarmList) -> AlarmList:
         """Publish a changed message list on ``alarms`` (``seq`` is the bus's own counter)
@@ -351,8 +354,8 @@ class BusPublisher:
         self._publish_status()
 
     def scanned(self, cycle: int, t_ms: int) -> None:
-        """A scan without an FB to publish (a program of blocks) ended: its cycle and time
-        go into ``status``, published at most once a second."""
+        """A scan ended, without deltas (a program of blocks) or given by :meth:`begin_scan`:
+        its cycle and time go into ``status``, published at most once a second."""
         with self._lock:
             self._cycle = (cycle, t_ms)
         if time.monotonic_ns() - self._status_sent_ns >= STATUS_PERIOD_NS:

@@ -193,3 +193,38 @@ def test_deltas_too_large_for_one_message_go_out_in_several_with_the_scans_seq()
     assert len(parts) > 2 and {p.seq for p in parts} == {4}
     assert [fb for p in parts for fb in p.fbs] == list(fbs)
     assert all(len(msgspec.json.encode(p)) <= one // 3 for p in parts)
+
+
+def test_a_scan_given_fb_by_fb_sends_a_message_every_part_with_the_scans_seq(
+    bus: Bus,
+) -> None:
+    """``begin_scan``: the deltas leave in messages of ``part`` while the scan's others are
+    still being given, each message with the scan's ``seq``; an unchanged FB sends nothing
+    and the next scan's messages carry the next ``seq``; followers see every delta."""
+    got: list[ScanDeltas] = []
+    seen: dict[str, list[StepStateUpdate]] = {fb: [] for fb in FBS}
+    for fb in FBS:
+        bus.client.follow(fb, seen[fb].append)
+
+    def on_sample(sample: zenoh.Sample) -> None:
+        got.append(decode(sample.payload.to_bytes(), ScanDeltas))
+
+    sub = bus.view.declare_subscriber("s7graph/cpu1/deltas", on_sample)
+    try:
+        deltas = bus.publisher.deltas
+        assert deltas is not None and wait_until(deltas.read)
+        out = bus.publisher.begin_scan(1, 10, part=2)
+        assert out.add("A", state(1, 2)) and out.add("B", state(1, 2))
+        assert bus.sent() == 1  # the first part left before the scan ended
+        assert out.add("C", state(1, 2))
+        quiet = msgspec.structs.replace(state(1, 2), events=[])
+        assert not out.add("A", quiet)  # the same state without an event: no delta
+        assert [fb for fb, _ in out.end()] == ["A", "B", "C"]
+        assert bus.scan("A") == ["A"]
+        assert wait_until(lambda: len(got) == 3)
+        assert [(m.seq, list(m.fbs)) for m in got] == [(1, ["A", "B"]), (1, ["C"]), (2, ["A"])]
+        assert wait_until(lambda: len(seen["A"]) == 2 and len(seen["C"]) == 1)
+        with pytest.raises(KeyError, match="unknown FB 'Z'"):
+            bus.publisher.begin_scan(2, 20).add("Z", state(2, 1))
+    finally:
+        sub.undeclare()  # type: ignore[no-untyped-call]
