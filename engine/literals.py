@@ -76,6 +76,12 @@ def parse_literal(text: str, where: SourceLocation | None = None) -> tuple[str, 
         raise LiteralError(f"bad literal {clip(text)}: {exc}", where) from None
 
 
+def shorten(text: str, limit: int = 40) -> str:
+    """``text`` as it is, or cut to ``limit`` characters ending in "..." (for messages that
+    quote what was written)."""
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
 def clip(text: str, limit: int = 40) -> str:
     """``repr(text)``, shortened to about ``limit`` characters with "…" (for messages)."""
     if len(text) <= limit:

@@ -16,6 +16,7 @@ from collections.abc import Mapping
 from dataclasses import MISSING, dataclass, fields, replace
 from typing import Any, Final, Literal
 
+from s7graph.engine.literals import shorten
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.change.base import (
     MAX_NAME,
@@ -336,7 +337,7 @@ def _shown_field(name: str, value: object) -> str:
         text = "yes" if value else "no"
     else:
         text = str(value)
-    text = text if len(text) <= 40 else text[:37] + "..."
+    text = shorten(text)
     return f"{name} {text}" if name not in ("row",) else text
 
 

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 
 from s7graph.engine.datatypes import real32
 from s7graph.engine.errors import LiteralError, SourceLocation
-from s7graph.engine.literals import parse_literal
+from s7graph.engine.literals import parse_literal, shorten
 from s7graph.steps.scl import model as m
 from s7graph.steps.scl import types as ty
 from s7graph.steps.scl.diagnostics import Problem
@@ -60,17 +60,13 @@ def literal(lit: m.Lit) -> Constant:
         assert isinstance(value, str)
         if bad := [c for c in value if ord(c) > 0xFF]:
             why = f"{bad[0]!s} is not a character of S7's code page (latin-1); write it as $hh"
-            raise Problem("E203", f"{_clip(text)}: {why}", lit.loc)
+            raise Problem("E203", f"{shorten(text)}: {why}", lit.loc)
         return Constant(ty.string(max(len(value), 1)), value, untyped=len(value) == 1)
     if tname == "REAL":
         assert isinstance(value, float)
         value = real32(value)
     t = _LITERAL_TYPE.get(tname) or ty.by_name(tname) or ty.ERROR
     return Constant(t, value, untyped)
-
-
-def _clip(text: str) -> str:
-    return text if len(text) <= 40 else text[:37] + "..."
 
 
 def adapt(c: Constant, t: ty.SclType) -> object | None:

@@ -22,6 +22,7 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedTok
 
 from s7graph.engine.errors import SourceLocation
 from s7graph.engine.grammars import lark_parser
+from s7graph.engine.literals import shorten
 from s7graph.steps.scl import model as m
 from s7graph.steps.scl.comments import blank_comments
 from s7graph.steps.scl.diagnostics import Diagnostic, Problem, SclError, error
@@ -236,18 +237,13 @@ def _syntax(exc: UnexpectedInput, file: str, text: str) -> Diagnostic:
         return error("E202", f"the source ends too early; expected {_expected(expected)}", loc)
     if "SEMICOLON" in expected and prev is not None and tok.line != prev.end_line:
         return _missing_semicolon(file, prev, loc)
-    return error("E201", f"unexpected '{_short(tok)}'; expected {_expected(expected)}", loc)
+    return error("E201", f"unexpected '{shorten(str(tok))}'; expected {_expected(expected)}", loc)
 
 
 def _missing_semicolon(file: str, prev: Token, loc: SourceLocation) -> Diagnostic:
     if prev.end_line is not None and prev.end_column is not None:
         loc = SourceLocation(file, prev.end_line, prev.end_column)
-    return error("E201", f"missing ';' after '{_short(prev)}'", loc)
-
-
-def _short(tok: Token) -> str:
-    text = str(tok)
-    return text if len(text) < 40 else text[:37] + "..."
+    return error("E201", f"missing ';' after '{shorten(str(prev))}'", loc)
 
 
 def _end_of(file: str, text: str) -> SourceLocation:

@@ -30,7 +30,6 @@ from s7graph.engine.datatypes import (
     DATE_MAX,
     DT_MAX,
     DT_MIN,
-    REAL_MAX,
     check_value,
     decode,
     encode,
@@ -86,15 +85,12 @@ def _imod(ok: Ok, a: int, b: int) -> int:
 
 
 def _r32(ok: Ok, v: float) -> float:
-    """A REAL result rounded to 32 bits; beyond ±3.402823e+38 (or NaN): OK := FALSE."""
-    if v != v or abs(v) > REAL_MAX:
+    """A REAL result rounded to 32 bits (``real32``); beyond ±3.402823e+38 once rounded, an
+    infinity, or NaN: OK := FALSE."""
+    r = real32(v)
+    if not math.isfinite(r):
         ok[0] = False
-        return v if v != v else math.copysign(math.inf, v)
-    try:
-        return float(_F32.unpack(_F32.pack(v))[0])
-    except OverflowError:
-        ok[0] = False
-        return math.copysign(math.inf, v)
+    return r
 
 
 def _rdiv(ok: Ok, a: float, b: float) -> float:

@@ -80,6 +80,9 @@ def test_real_is_rounded_to_32_bits_and_overflows_to_infinity() -> None:
     got, ok = value("0.1 + 0.2", "REAL")
     assert ok and got == pytest.approx(0.3, abs=1e-7) and got != 0.1 + 0.2
     assert value("1.0E38 * 10.0", "REAL") == (math.inf, False)
+    # over the largest REAL by less than half its last step: rounded back to it, no overflow
+    assert value("3.4028234E38 + 1.0E31", "REAL") == (3.4028234663852886e38, True)
+    assert value("3.4028234E38 + 2.0E31", "REAL") == (math.inf, False)
     assert value("1.0 / 0.0", "REAL") == (math.inf, False)
     got, ok = value("SQRT(-1.0)", "REAL")
     assert math.isnan(got) and not ok
