@@ -6,15 +6,15 @@ switch, disturbance and acknowledgement raises an event into the scan record, wh
 LiveGraph asks first), its mode and level pins, its output pins and watched operands, and
 per active step the details — T and U to the whole second (``StepStateUpdate.changed_from``
 compares them so), the TT and CRIT of its valid transitions, its interlock and supervision
-words. :class:`Seen` keeps copies of those (the CRIT list whole, the interlock and
-supervision lists only for a chart that has them, the TT bits of the transitions leaving
-the active steps — a transition that fired clears its TT in the next scan, which no view
-sees — picked by one getter per set of active steps, :class:`Leaving`) made with no
-bytecode per step, and the
-T and U of the active steps, from which :func:`due_ns` gives the clock time at which the
-first of them may reach a new whole second: T and U grow at most as fast as the FB's clock
-(``GraphState.last_ns``). :func:`same` says whether the state still matches; if not, the
-LiveGraph builds the update, and the bus publisher's whole-state compare decides.
+words. :class:`Seen` keeps copies of those made with no bytecode per step (the CRIT list
+whole, the interlock and supervision lists only for a chart that has them, the TT bits of
+the transitions leaving the active steps — a transition that fired clears its TT in the
+next scan, which no view sees — picked by one getter per set of active steps, made once,
+:class:`Leaving`), and the T and U of the active steps, from which :func:`due_ns` gives the
+clock time at which the first of them may reach a new whole second: T and U grow at most as
+fast as the FB's clock (``GraphState.last_ns``). :func:`same` says whether the state still
+matches; if not, the LiveGraph builds the update, and the bus publisher's whole-state
+compare decides.
 """
 
 from __future__ import annotations
