@@ -125,12 +125,15 @@ class _Session:
         if seq < 1:
             return False
         if seq > self.top:
-            shift = seq - self.top
-            self.seen = ((self.seen << shift) | 1) & ((1 << REPLAY_WINDOW) - 1)
+            shift = seq - self.top  # a jump past the window forgets it (never a huge shift)
+            kept = self.seen << shift if shift < REPLAY_WINDOW else 0
+            self.seen = (kept | 1) & ((1 << REPLAY_WINDOW) - 1)
             self.top = seq
             return True
+        if self.top - seq >= REPLAY_WINDOW:  # below the window (never a huge shift)
+            return False
         bit = 1 << (self.top - seq)
-        if self.top - seq >= REPLAY_WINDOW or self.seen & bit:
+        if self.seen & bit:
             return False
         self.seen |= bit
         return True

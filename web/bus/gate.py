@@ -219,7 +219,10 @@ class Gate:
         """Check, apply (as the established user, without the token) and audit ``command``;
         (applied, reason). ``apply`` raising refuses the command. ``note`` goes to the
         row's detail (the origin the sender claimed)."""
-        who, refusal = self.check(command)
+        try:
+            who, refusal = self.check(command)
+        except Exception as exc:  # a hostile command must not stop the scan loop either
+            who, refusal = None, f"command refused: {internal_error('checking it', exc)}"
         if who is None or refusal:
             name, role = (who.label, who.role) if who is not None else (command.user or "?", "")
             self.record(_facts(command, name, role, False, refusal, note), anonymous=who is None)

@@ -12,6 +12,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import msgspec
 import pytest
 
 from s7graph.web.access.lockout import Lockout
@@ -30,6 +31,7 @@ from s7graph.web.access.scram import (
     Signer,
     Verifier,
     command_bytes,
+    sign,
 )
 from s7graph.web.access.users import UsersError, UsersFile, name_problem
 from s7graph.web.bus.gate import Gate
@@ -201,6 +203,45 @@ def test_commands_of_one_session_may_arrive_out_of_order_within_64_never_twice(
     assert _verify(auth, sent[6]) == ""  # seq 7: 63 below 70, still in the window
     assert _verify(auth, sent[5]) == "replayed or out of order: seq 6"  # 64 below: out
     assert _verify(auth, sent[1]) == "replayed or out of order: seq 2"
+
+
+def test_a_seq_far_ahead_only_moves_the_window_and_the_gate_audits_it(
+    users: UsersFile,
+) -> None:
+    """A signed command numbered 2**62 (a logged-in viewer's reach) moved the window by a
+    shift of 2**62 bits: the CPU ran out of memory, the scan stalled. The window now starts
+    again at that number; the command is checked, applied and audited as any other."""
+    auth = Authenticator(users)
+    signer, command = _signed(auth)
+    first = signer.sign(command)
+    key = signer._key
+    far = msgspec.structs.replace(first, seq=2**62)
+    far = msgspec.structs.replace(far, mac=sign(key, command_bytes(far)))
+    assert _verify(auth, first) == ""
+    assert _verify(auth, far) == ""
+    assert _verify(auth, far) == f"replayed or out of order: seq {2**62}"
+    top = msgspec.structs.replace(far, seq=2**63 - 1)
+    top = msgspec.structs.replace(top, mac=sign(key, command_bytes(top)))
+    assert _verify(auth, top) == ""
+    assert _verify(auth, first) == "replayed or out of order: seq 1"
+
+
+def test_a_check_that_fails_inside_refuses_the_command_with_an_audit_row(
+    users: UsersFile,
+) -> None:
+    auth = Authenticator(users)
+    gate = Gate(auth)
+    signer, command = _signed(auth)
+
+    def broken(*args: object, **kwargs: object) -> str:
+        raise MemoryError
+
+    auth.verify = broken  # type: ignore[method-assign]
+    applied, reason = gate.apply(signer.sign(command), lambda c: (True, ""))
+    assert not applied and reason.startswith("command refused: an internal error")
+    rows = gate.audit_list().entries
+    assert rows and (rows[-1].reason, rows[-1].outcome) == (reason, "refused")
+    gate.close()
 
 
 def test_the_sequence_lives_with_the_session_for_its_8_hours(users: UsersFile) -> None:
