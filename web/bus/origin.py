@@ -11,6 +11,12 @@ locator alone when the link proved nobody. The rule (:func:`transport_origin`):
    it is a router's (the sender is behind it);
 3. else ``unknown transport``.
 
+A query that names this session's own id is "this process" only when it also carries this
+process's own ``source_sn`` (:func:`stamp`: a random number drawn at start): every reply
+shows a CPU's id, so a peer could copy it to pass for the CPU itself — its failed logins
+counted per page it claims, its audit rows "this process". Such a copy counts as a query
+that names no one (rules 2 and 3).
+
 The limits: the id is the sender's claim, so a peer with valid credentials connected to the
 same CPU could name another connected peer's id and be described as that peer's link;
 through a router the CPU sees the router's link, not the sender's. The origin the sender
@@ -20,7 +26,7 @@ as a note (``web.bus.gate.claimed_note``), never as its origin.
 
 from __future__ import annotations
 
-import itertools
+import secrets
 from typing import Any
 
 import zenoh
@@ -33,12 +39,14 @@ RELAYS = ("cpu.", "view.", "opcua.")
 face many clients; ``run --web`` and ``run --opcua`` give theirs the CPU's certificate,
 or meet it on a unix socket in a folder only its own user may open): the page or client
 such a link names is believed."""
-_SN = itertools.count(1)
+_OWN_SN = secrets.randbits(32)
+"""The ``source_sn`` of this process's stamps (a query from its own session is believed to
+be by it only with this number, which no peer sees: only a CPU may serve its keys)."""
 
 
 def stamp(session: zenoh.Session) -> zenoh.SourceInfo:
     """The ``source_info`` a client sends with a login or a command: its session's id."""
-    return zenoh.SourceInfo(session.id, next(_SN) & 0xFFFFFFFF)
+    return zenoh.SourceInfo(session.id, _OWN_SN)
 
 
 def _describe(link: Any, relayed: bool = False) -> str:
@@ -53,7 +61,9 @@ def transport_origin(session: zenoh.Session, source_info: zenoh.SourceInfo | Non
     try:
         claimed = str(source_info.source_id.zid) if source_info is not None else ""
         if claimed and claimed == str(session.zid()):
-            return "this process"
+            if source_info is not None and source_info.source_sn == _OWN_SN:
+                return "this process"
+            claimed = ""  # the CPU's id copied by a peer: a query that names no one
         links = list(session.info.links())
         for link in links:
             if claimed and str(link.zid) == claimed:

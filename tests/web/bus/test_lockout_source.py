@@ -4,9 +4,13 @@ host) only where one link relays many pages (clients)."""
 
 from __future__ import annotations
 
-import pytest
+from pathlib import Path
 
-from s7graph.web.bus.origin import lockout_source
+import pytest
+import zenoh
+
+from s7graph.web.bus.origin import UNKNOWN, lockout_source, stamp, transport_origin
+from s7graph.web.bus.session import open_session
 
 
 @pytest.mark.parametrize(
@@ -43,3 +47,13 @@ def test_failed_logins_count_against_the_transport_and_a_relayed_page(
     transport: str, claimed: str, source: str
 ) -> None:
     assert lockout_source(transport, claimed) == source
+
+
+def test_a_peer_that_copies_the_cpus_id_is_not_this_process(tmp_path: Path) -> None:
+    """Every reply shows the CPU's zenoh id; a query naming it is "this process" (whose
+    failed logins count per page it claims) only with this process's own stamp."""
+    with open_session(listen=[f"unixsock-stream/{tmp_path}/bus.sock"]) as session:
+        assert transport_origin(session, stamp(session)) == "this process"
+        copied = zenoh.SourceInfo(session.id, stamp(session).source_sn ^ 1)
+        assert transport_origin(session, copied) == UNKNOWN
+        assert lockout_source(UNKNOWN, "page 1") == UNKNOWN  # the claimed page not believed
