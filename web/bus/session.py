@@ -8,6 +8,12 @@ plant's CA; with a :class:`BusLogin` it proves a **user name and password** (zen
 ``usrpwd``) on every link, and checks those of its callers against ``dictionary`` when it
 listens. A node that guards CPUs (``guard``: the CPU itself, or ``s7graph router``) runs
 zenoh's access control from ``web.bus.acl``: only each CPU's identity may serve its keys.
+
+That guards the CPU's side. A node that joins a CPU — a shell, a view, an OPC UA face —
+checks the other side with :func:`peer_problem`: whoever it reached directly over TLS must
+be that CPU (``cpu.<name>``) or a router; any other certificate of the plant (a
+``client.`` one) listening where the CPU should be would otherwise be believed, its
+status and step states shown, until a login found it out.
 """
 
 from __future__ import annotations
@@ -20,7 +26,7 @@ import zenoh
 
 from s7graph.web.bus.acl import acl_config
 
-__all__ = ["BusEnds", "BusLogin", "TlsFiles", "loopback_config", "open_session"]
+__all__ = ["BusEnds", "BusLogin", "TlsFiles", "loopback_config", "open_session", "peer_problem"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -107,6 +113,21 @@ def open_session(
     """Open a session on the given endpoints; the caller closes it (``with open_session(...)``)."""
     config = loopback_config(listen, connect, mode=mode, tls=tls, login=login, guard=guard)
     return zenoh.open(config)
+
+
+def peer_problem(session: zenoh.Session, cpu: str) -> str | None:
+    """Why a node ``session`` reached directly cannot be CPU ``cpu``'s way in (None: none
+    can be faulted): it proved over TLS an identity (its certificate's common name) that is
+    neither ``cpu.<cpu>`` nor a router's. Links that proved no one (a unix socket, TCP, a
+    bus login) are not judged."""
+    for link in session.info.links():
+        who = link.auth_identifier or ""
+        if who and who != f"cpu.{cpu}" and not who.startswith("router."):
+            return (
+                f"the node at {link.dst} is {who}, not cpu.{cpu} or a router: it is not "
+                f"CPU {cpu} (connect to the CPU's own endpoint, or to a router)"
+            )
+    return None
 
 
 @dataclass(frozen=True, slots=True)

@@ -77,7 +77,7 @@ def opcua_command(
         _as_child(stop)  # lower its priority before the imports: they take a while
     from s7graph.web.bus.client import unread_note, wait_for_cpus
     from s7graph.web.bus.protocol import ProtocolError
-    from s7graph.web.bus.session import open_session
+    from s7graph.web.bus.session import open_session, peer_problem
     from s7graph.web.opcua.server import (
         OpcuaOptions,
         OpcuaServer,
@@ -113,6 +113,9 @@ def opcua_command(
             return _fail(
                 f"no CPU {cpu or ''} answers on {where} (found: {found}){unread_note(unreadable)}"
             )
+        wrong = peer_problem(session, chosen.cpu)
+        if wrong is not None:
+            return _fail(wrong)
         if net.users is not None and chosen.login != "users":
             return _fail(f"--users given, but CPU {chosen.cpu} checks no logins (no users file)")
         reads = anonymous == "read" or (anonymous is None and loopback(listen))

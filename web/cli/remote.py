@@ -32,7 +32,7 @@ from s7graph.web.bus import local
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.cycle_text import cycle_lines
 from s7graph.web.bus.protocol import Command, CommandReply, CpuStatus, StepStateUpdate
-from s7graph.web.bus.session import open_session
+from s7graph.web.bus.session import open_session, peer_problem
 from s7graph.web.cli.diag_text import event_line, when
 from s7graph.web.cli.net import NetOptions
 from s7graph.web.cli.stopping import say, wait_until_stopped
@@ -81,9 +81,14 @@ def _join(net: NetOptions) -> zenoh.Session | str:
     if problem:
         return problem
     try:
-        return open_session(connect=connect, tls=net.tls, login=net.login)
+        session = open_session(connect=connect, tls=net.tls, login=net.login)
     except Exception as exc:
         return net.join_error(exc)
+    wrong = peer_problem(session, net.cpu)
+    if wrong is not None:
+        session.close()  # type: ignore[no-untyped-call]  # zenoh's stub
+        return wrong
+    return session
 
 
 @contextlib.contextmanager

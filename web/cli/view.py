@@ -20,7 +20,7 @@ import sys
 import threading
 
 from s7graph.web.bus.client import unread_note, wait_for_cpus
-from s7graph.web.bus.session import open_session
+from s7graph.web.bus.session import open_session, peer_problem
 from s7graph.web.cli.net import NetOptions, error_words, is_loopback_host
 from s7graph.web.cli.stopping import wait_until_stopped
 from s7graph.web.collector import freeze_start
@@ -56,17 +56,20 @@ def web_command(
     try:
         with open_session(connect=net.connect, tls=net.tls, login=net.login) as probe:
             cpus, unreadable = wait_for_cpus(probe, wait_s)
+            wrong = {s.cpu: peer_problem(probe, s.cpu) for s in cpus}
     except Exception as exc:
         return _fail(net.join_error(exc))
     if not cpus:
         return _fail(f"no CPU answers on {', '.join(net.connect)}{unread_note(unreadable)}")
+    chosen = next((s for s in cpus if s.cpu == cpu), None) if cpu else cpus[0]
+    if chosen is not None and wrong[chosen.cpu] is not None:
+        return _fail(str(wrong[chosen.cpu]))  # before a word of what it said is shown
     for status in cpus:
         print(
             f"s7graph: CPU {status.cpu} ({status.state}, logins: {status.login}): "
             f"{', '.join(status.fbs) or 'no FB'}",
             flush=True,
         )
-    chosen = next((s for s in cpus if s.cpu == cpu), None) if cpu else cpus[0]
     if chosen is None:
         return _fail(f"no CPU {cpu!r} on the bus; found {', '.join(s.cpu for s in cpus)}")
     if fb is not None and fb not in chosen.fbs:
