@@ -32,6 +32,7 @@ on, and ``on_users_file`` is called once when it happens and once when it is fix
 
 from __future__ import annotations
 
+import collections
 import dataclasses
 import hashlib
 import hmac
@@ -69,6 +70,9 @@ TOKEN_TTL_S: Final = 8 * 3600.0
 MAX_TOKEN: Final = 64
 LOGIN_WINDOW_S: Final = 10.0
 MAX_PENDING: Final = 256
+PENDING_PER_SOURCE: Final = 8
+"""Unfinished logins one source may hold: a flood of first steps from one place fills its
+own eight, never the table every other place's logins wait in."""
 REPLAY_WINDOW: Final = 64
 _MAX_SESSIONS: Final = 4096
 _WRONG: Final = "wrong user name or password"
@@ -186,6 +190,7 @@ class Authenticator:
         self._secret = secrets.token_bytes(32)  # the unknown names' fake salts
         self._sessions: dict[str, _Session] = {}
         self._pending: dict[str, _Pending] = {}
+        self._pending_from: collections.Counter[str] = collections.Counter()  # per source
         self._users: dict[str, User] = {}
         self._mtime: int | None = -1
         if users is not None:
@@ -266,7 +271,14 @@ class Authenticator:
         now = self._clock()
         with self._lock:
             self._forget_pending(now)
+            if self._pending_from[source] >= PENDING_PER_SOURCE:
+                return LoginResult(
+                    False,
+                    f"{PENDING_PER_SOURCE} logins from here are unfinished: finish one, or "
+                    f"log in again after {LOGIN_WINDOW_S:.0f} s",
+                )
             self._pending[login_id] = _Pending(user, source, exchange, now)
+            self._pending_from[source] += 1
         return LoginResult(False, login_id=login_id, scram=server_first)
 
     def prove(self, login_id: str, user: str, scram: str, *, source: str = "") -> LoginResult:
@@ -276,6 +288,8 @@ class Authenticator:
         with self._lock:
             self._forget_pending(self._clock())
             pending = self._pending.pop(login_id, None)
+            if pending is not None:
+                self._done_pending(pending.source)
         if pending is None or (pending.user, pending.source) != (user, source):
             return LoginResult(False, "no such login (unfinished after 10 s?): log in again")
         refused = self._refused(user, source)
@@ -323,7 +337,15 @@ class Authenticator:
             oldest = next(iter(pending))
             if pending[oldest].started > now - LOGIN_WINDOW_S and len(pending) < MAX_PENDING:
                 break
-            del pending[oldest]
+            self._done_pending(pending.pop(oldest).source)
+
+    def _done_pending(self, source: str) -> None:
+        """One unfinished login of ``source`` less (under the lock)."""
+        left = self._pending_from[source] - 1
+        if left > 0:
+            self._pending_from[source] = left
+        else:
+            del self._pending_from[source]
 
     def logout(self, token: str) -> bool:
         """Revoke ``token``; whether it was a live one."""

@@ -20,6 +20,7 @@ from s7graph.web.access.login import (
     LOGIN_WINDOW_S,
     MAX_PENDING,
     NOT_SIGNED,
+    PENDING_PER_SOURCE,
     Authenticator,
     LoginResult,
     password_login,
@@ -149,9 +150,33 @@ def test_unfinished_logins_expire_after_10_s_and_are_bounded(users: UsersFile) -
     clock.t += LOGIN_WINDOW_S + 0.1
     late = auth.prove(challenge.login_id, "olga", client.final(challenge.scram))
     assert not late.ok and "no such login" in late.reason
-    for _ in range(MAX_PENDING + 50):
-        auth.login("eng", ClientLogin("eng", PASSWORD).first())
+    for n in range(MAX_PENDING + 50):
+        auth.login("eng", ClientLogin("eng", PASSWORD).first(), source=f"pc{n}")
     assert len(auth._pending) == MAX_PENDING
+
+
+def test_a_flood_of_first_steps_from_one_source_fills_only_its_own_eight(
+    users: UsersFile,
+) -> None:
+    """Unfinished logins evict the oldest beyond 256: one source sending only first steps
+    made every other login fail ("no such login"). It holds 8 at most; the ninth is refused
+    with the reason, and another source's login goes through meanwhile."""
+    clock = Clock()
+    auth = Authenticator(users, clock=clock)
+    honest = ClientLogin("olga", PASSWORD)
+    challenge = auth.login("olga", honest.first(), source="client.olga@tls/10.0.0.7")
+    flood = [auth.login("eng", ClientLogin("eng", "x").first(), source="rogue") for _ in range(300)]
+    assert all(r.challenge for r in flood[:PENDING_PER_SOURCE])
+    refused = flood[PENDING_PER_SOURCE:]
+    assert {r.reason for r in refused} == {
+        "8 logins from here are unfinished: finish one, or log in again after 10 s"
+    }
+    done = auth.prove(
+        challenge.login_id, "olga", honest.final(challenge.scram), source="client.olga@tls/10.0.0.7"
+    )
+    assert done.ok, done.reason
+    clock.t += LOGIN_WINDOW_S + 0.1  # the rogue's eight expire: it may start again
+    assert auth.login("eng", ClientLogin("eng", "x").first(), source="rogue").challenge
 
 
 # ---------------------------------------------------------------- session binding, replay
