@@ -445,6 +445,8 @@ class StateStore:
         try:
             self._held = _hold(self.path)
             _open_file(self._db, self.path, existed, self.synchronous)
+            self.made_private = _make_private(self.path) and existed
+            """Others could read the file as it was found: it was made its owner's alone."""
             self._idents()
         except sqlite3.DatabaseError as exc:
             self._db.close()
@@ -975,6 +977,7 @@ def _renewed(store: StateStore, batch: Batch, why: str) -> str:
         )
         store._db = _connect(store.path)
         store._db.execute("PRAGMA journal_mode=WAL")
+        _make_private(store.path)
         store._db.execute(f"PRAGMA synchronous={store.synchronous}")
         store._held = _hold(store.path)
         store._idents()
@@ -996,6 +999,30 @@ def _renewed(store: StateStore, batch: Batch, why: str) -> str:
 
 def _connect(path: Path) -> sqlite3.Connection:
     return sqlite3.connect(path, check_same_thread=False, isolation_level=None, timeout=5.0)
+
+
+def _make_private(path: Path) -> bool:
+    """Keep the state file and its ``-wal`` and ``-shm`` to their owner (it holds the audit:
+    who did what, from where): each that others may read is made mode 0600. Whether one
+    was; ``StateFileError`` when one cannot be (another user's file)."""
+    made = False
+    for part in (path, Path(f"{path}-wal"), Path(f"{path}-shm")):
+        try:
+            mode = part.stat().st_mode
+        except FileNotFoundError:
+            continue
+        if mode & 0o077:
+            try:
+                os.chmod(part, mode & 0o700)
+            except OSError as exc:
+                raise StateFileError(
+                    path,
+                    f"others may read {part.name}, and it cannot be made private: "
+                    f"{exc.strerror or exc}",
+                    way_out=f"run as its owner, or chmod 600 {part} as its owner",
+                ) from None
+            made = True
+    return made
 
 
 def _check_path(path: Path, existed: bool) -> None:

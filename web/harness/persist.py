@@ -85,11 +85,16 @@ class OpenedState:
 
     def describe(self, restart: str) -> str:
         """How the run starts, for its first line on stderr."""
+        private = (
+            "; others could read it: made its owner's alone (mode 600)"
+            if self.store.made_private
+            else ""
+        )
         if self.report is None:
             aside = f"; the old file is kept as {self.kept}" if self.kept else ""
-            return f"fresh start, state in {self.store.path}{aside}"
+            return f"fresh start, state in {self.store.path}{aside}{private}"
         how = "" if self.report.clean else " after an unclean stop"
-        return f"{restart} restart from {self.store.path}{how}"
+        return f"{restart} restart from {self.store.path}{how}{private}"
 
 
 def keep_aside(path: Path) -> Path | None:

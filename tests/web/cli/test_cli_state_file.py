@@ -84,6 +84,24 @@ def test_fresh_keeps_the_old_file_aside_and_starts_anew(
     assert f"fresh start, state in {state}; the old file is kept as {state}.old-2" in err
 
 
+def test_the_state_file_is_its_owners_alone_and_one_others_could_read_is_made_so(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """It holds the audit (who did what, from where): made mode 600 with its -wal and -shm
+    whatever the umask; one found readable by others is made so, and the run says it."""
+    state = tmp_path / "drill.sqlite"
+    assert main([*CHART, "--state", str(state), "--duration-s", "0.1"]) == 0
+    made = [p for p in tmp_path.iterdir() if p.name.startswith("drill.sqlite")]
+    assert made and {oct(p.stat().st_mode & 0o777) for p in made} == {"0o600"}
+    assert "made its owner's alone" not in capsys.readouterr().err
+    for p in made:
+        p.chmod(0o644)
+    assert main([*CHART, "--state", str(state), "--duration-s", "0.1"]) == 0
+    err = capsys.readouterr().err
+    assert f"warm restart from {state}; others could read it: made its owner's alone" in err
+    assert {oct(p.stat().st_mode & 0o777) for p in made if p.exists()} == {"0o600"}
+
+
 def test_restart_must_be_warm_hot_or_cold(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
