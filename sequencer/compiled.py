@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from types import CodeType, FunctionType
 from typing import Any
 
-from s7graph.engine.errors import AddressError
+from s7graph.engine.errors import AddressError, SymbolError
 from s7graph.sequencer.text.model import Chart, ChartOptions
 from s7graph.steps.expressions import RUNTIME as EXPR_RUNTIME
 from s7graph.steps.operands import RUNTIME as OPERAND_RUNTIME
@@ -122,6 +122,18 @@ class CompiledChart:
     @property
     def n_transitions(self) -> int:
         return len(self.transition_numbers)
+
+    def reach_problem(self, mem: Any) -> str | None:
+        """Why :meth:`bind` would refuse ``mem`` (a DB the chart uses that does not exist, an
+        operand beyond its area), or None: at an online change, said before the swap instead
+        of stopping the CPU at the chart's first call."""
+        try:
+            for area, db in self.buffers:
+                area_buffer(mem, area, db)
+            _check_reach(self.reach, mem)
+        except (AddressError, SymbolError) as exc:
+            return str(exc)
+        return None
 
     def bind(self, mem: Any) -> Program:
         """Execute the generated module against ``mem`` (once per FB instance)."""

@@ -104,7 +104,11 @@ def swap(
             f"active steps {shown} are not in the new chart: choose keep (the other steps "
             "go on) or init (initialize the sequencer)"
         )
+    # nothing the new chart reaches beyond the CPU's memory (bound, it would stop the CPU);
     # the instance DBs of its new SFB calls; no new call of a block the CPU lacks
+    beyond = new.reach_problem(cpu.mem)
+    if beyond is not None:
+        raise SwapRefused(f"{beyond}: reached, the new chart would stop the CPU")
     plan = prepare_calls(cpu, new.chart, allowed_missing=missing_blocks(cpu, old.chart))
     if plan.problems:
         raise SwapRefused("; ".join(plan.problems))

@@ -5,11 +5,13 @@ those of the new chart, whatever it adds, removes or renumbers (``sequencer.fb.L
 
 from __future__ import annotations
 
+import pytest
+
 from s7graph.engine.clock import VirtualClock
 from s7graph.engine.cpu import Cpu
 from s7graph.engine.modes import CpuMode
 from s7graph.engine.symbols import SymbolTable
-from s7graph.sequencer.change.online import swap
+from s7graph.sequencer.change.online import SwapRefused, swap
 from s7graph.sequencer.compile import compile_chart
 from s7graph.sequencer.compiled import CompiledChart
 from s7graph.sequencer.fb import GraphFB, install_all
@@ -143,3 +145,21 @@ def test_an_active_step_a_download_removes_leaves_no_n_output_on() -> None:
         clock.advance(10)
         cpu.scan()
         assert cpu.mem.periph_out[0] & 0x40 == 0, removed
+
+
+def test_a_download_reaching_beyond_the_cpus_memory_is_refused_and_the_cpu_runs_on() -> None:
+    """A chart with ``N Q9999.7`` (or a DB the CPU lacks) passes ``check``, which knows no
+    CPU; downloaded, it would stop the CPU when the FB first runs it. The swap refuses it
+    naming the operand, and the old chart goes on."""
+    for operand, why in (
+        ("Q9999.7", "Q9999.7 is outside the Q area (128 bytes)"),
+        ("DB99.DBX0.0", "DB99 does not exist"),
+    ):
+        cpu, clock, g = _running(CHAIN)
+        old = g.cc
+        with pytest.raises(SwapRefused) as refused:
+            swap(g, _cc(CHAIN.replace("N Q0.7;", f"N {operand};")), cpu)
+        assert str(refused.value) == f"{why}: reached, the new chart would stop the CPU"
+        assert g.cc is old
+        cpu.mem.periph_in[0] = 1
+        assert _steps_of(cpu, clock, 3) == ["S1 S0", "S6 S1", "S6 S0", "S7 S1", "S7 S0", "S1 S1"]
