@@ -381,7 +381,11 @@ def apply_edit(
         if not isinstance(edit, Edit):
             raise EditRefused(f"not an edit operation: {type(edit).__name__}")
         edited, selection = edit.apply(chart)
-        return Outcome(edited, _checked(edited, symbols), None, selection)
+        checked = _checked(edited, symbols)
+        across = _new_crossings(checked, chart, symbols, diagnostics)
+        if across is not None:  # the structure edits cannot know every way a path leaves
+            raise EditRefused(across.message)
+        return Outcome(edited, checked, None, selection)
     except EditRefused as exc:
         refusal = Refusal(exc.reason, exc.diagnostics)
     except RecursionError:  # pragma: no cover - texts and charts are bounded before
@@ -389,6 +393,22 @@ def apply_edit(
     if diagnostics is None:
         diagnostics = tuple(validate(chart, symbols))
     return Outcome(chart, diagnostics, refusal, None)
+
+
+def _new_crossings(
+    checked: tuple[Diagnostic, ...],
+    chart: Chart,
+    symbols: SymbolTable | None,
+    before: tuple[Diagnostic, ...] | None,
+) -> Diagnostic | None:
+    """The first branch or join across sequencers (E015: it does not compile) an edit made
+    that ``chart`` did not have (None: none)."""
+    made = [d for d in checked if d.code == "E015"]
+    if not made:
+        return None
+    had = before if before is not None else tuple(validate(chart, symbols))
+    known = {d.message for d in had if d.code == "E015"}
+    return next((d for d in made if d.message not in known), None)
 
 
 def new_chart(

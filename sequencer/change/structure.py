@@ -165,6 +165,13 @@ class InsertSimultaneousBranch(Edit):
                 "before opening a simultaneous branch there"
             )
         q = sequence_with_transition(chart, t.number)
+        own = {st.number for st in q.steps}
+        away = [n for n in t.targets if n not in own]
+        if away:  # a branch across sequencers does not compile (E015)
+            raise EditRefused(
+                f"T{t.number} jumps to S{away[0]} of another sequencer; only a jump to one "
+                "step reaches another sequencer, a simultaneous branch forks in its own"
+            )
         if self.join is not None:
             j = transition_of(chart, self.join)
             if j.number == t.number:

@@ -122,6 +122,18 @@ def test_a_simultaneous_branch_that_cannot_be_opened_is_refused() -> None:
     assert "another sequencer" in refused(chart("two_sequencers"), InsertSimultaneousBranch(1, 10))
 
 
+def test_a_branch_that_would_fork_or_join_across_sequencers_is_refused() -> None:
+    """A jump may reach another sequencer; a simultaneous branch may not (E015: the chart
+    would not compile). The editor refuses such a branch at the transition that jumps,
+    and any edit that would make one another way, naming the steps."""
+    across = made(chart("two_sequencers"), Jump(1, 10))  # T1: S1 -> S10 of sequence 2
+    why = refused(across, InsertSimultaneousBranch(1))
+    assert why.startswith("T1 jumps to S10 of another sequencer")
+    leaving = made(chart("two_sequencers"), Jump(2, 10))  # T2: S2 -> S10 of sequence 2
+    why = refused(leaving, InsertSimultaneousBranch(1, 2))  # a new path from T1 joining at T2
+    assert why.startswith("a simultaneous branch joins or forks steps of different sequences")
+
+
 def test_a_jump_ends_the_path_at_any_step_of_the_FB() -> None:
     c = made(chart("two_sequencers"), Jump(2, 11))
     assert links(c)[2] == ((2,), (11,))

@@ -234,7 +234,8 @@ class OnlineChange(RuleBasedStateMachine):
             if after.refusal is None:
                 self.edits.append(f"{op.name} {args}")
             self.editor = after
-        assert not self.editor.has_errors, self.edits
+            errors = [d.message for d in after.diagnostics if d.is_error]
+            assert not errors, f"{op.name} {args} after {self.edits[-8:-1]}: {errors[0]}"
         self.download(removed)
         self.run(data, scans)
 
