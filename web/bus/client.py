@@ -573,6 +573,11 @@ class StateFollower:
             self.gaps += 1
         self._offer(update)
 
+    def forget(self) -> None:
+        """The CPU started anew (its counts start again): take whatever comes next."""
+        with self._lock:
+            self.latest = None
+
     def refetch(self) -> None:
         """Get the state again (a message of ``deltas`` was lost): it is taken if newer."""
         snapshot = self.resync()
@@ -605,7 +610,10 @@ class DeltaFeed:
     a message's envelope, then each delta of an FB followed, and offers it to that FB's
     followers; on a gap in the messages' ``seq`` every follower refetches its FB's state
     (:meth:`StateFollower.refetch`) on a thread of the feed's own, never a zenoh thread.
-    ``lost`` counts the gaps."""
+    A ``seq`` lower than the last is a CPU that started anew, counting from 1 again: every
+    follower forgets what it had first (:meth:`StateFollower.forget`), or it would take
+    the new CPU's states for stale ones until they outnumbered the old. ``lost`` counts
+    the gaps."""
 
     def __init__(self) -> None:
         self._followers: dict[str, tuple[StateFollower, ...]] = {}
@@ -625,6 +633,11 @@ class DeltaFeed:
         except ProtocolError:
             return
         followers = self._followers
+        last, self._last = self._last, envelope.seq
+        if last is not None and envelope.seq < last:  # a CPU started anew: its counts too
+            for group in list(followers.values()):
+                for follower in group:
+                    follower.forget()
         for fb, raw in envelope.fbs.items():
             wanted = followers.get(fb)
             if wanted:
@@ -634,7 +647,6 @@ class DeltaFeed:
                     continue
                 for follower in wanted:
                     follower.on_delta(update)
-        last, self._last = self._last, envelope.seq
         if last is not None and not last <= envelope.seq <= last + 1:  # lost, or a new CPU
             self.lost += 1
             self._refetch()

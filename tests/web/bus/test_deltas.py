@@ -42,6 +42,7 @@ class Bus:
     """A CPU with the FBs A, B, C and a view's session, both on one unix socket."""
 
     def __init__(self, cpu: zenoh.Session, view: zenoh.Session) -> None:
+        self.cpu = cpu
         self.view = view
         self.publisher = BusPublisher(cpu, "cpu1", {fb: layout(fb) for fb in FBS})
         self.client = BusClient(view, "cpu1")
@@ -228,3 +229,21 @@ def test_a_scan_given_fb_by_fb_sends_a_message_every_part_with_the_scans_seq(
             bus.publisher.begin_scan(2, 20).add("Z", state(2, 1))
     finally:
         sub.undeclare()  # type: ignore[no-untyped-call]
+
+
+def test_a_follower_takes_the_states_of_a_cpu_that_started_anew(bus: Bus) -> None:
+    """A restarted CPU counts its messages and each FB's changes from 1 again: a follower
+    that kept the old counts took every new state for a stale one (``watch`` stayed silent
+    for minutes after a restart) until the new counts passed the old."""
+    seen: list[StepStateUpdate] = []
+    bus.client.follow("A", seen.append)
+    for _ in range(6):
+        bus.scan("A", "B")
+    assert wait_until(lambda: bool(seen) and seen[-1].seq == 6)
+    bus.publisher.close()  # the CPU process ends; another starts on the same bus
+    bus.publisher = BusPublisher(bus.cpu, "cpu1", {fb: layout(fb) for fb in FBS})
+    bus.cycle = 0
+    bus.scan("A")
+    assert wait_until(lambda: (seen[-1].seq, seen[-1].cycle) == (1, 1))
+    bus.scan("A")
+    assert wait_until(lambda: (seen[-1].seq, seen[-1].cycle) == (2, 2))
