@@ -178,6 +178,9 @@ def carry_over(
     report = CarryReport()
     st = new_state(new)
     _by_number(old.step_numbers, new.step_numbers, STEP_LISTS, state, st)
+    for i, watched in enumerate(new.has_supervision):
+        if not watched:  # its supervision removed: no cause left (a latched fault stays latched)
+            st.sv_cond[i] = False
     for i in state.active:
         number = old.step_numbers[i]
         target = new.step_index.get(number)

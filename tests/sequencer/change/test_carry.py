@@ -65,3 +65,23 @@ def test_active_steps_keep_their_times_and_what_is_gone_is_reported(tmp_path: Pa
     lines = report.lines()
     assert lines[0] == "chart changed; carried over by step number: active steps kept: S4"
     assert "active steps gone (no longer active): S3" in lines
+
+
+def test_a_latched_fault_whose_supervision_a_download_removes_has_no_cause_left(
+    tmp_path: Path,
+) -> None:
+    """S3's supervision fault stays latched — it still waits for its acknowledgement — but
+    with the supervision gone nothing holds its cause: an acknowledgement releases it (a
+    kept cause made ``ack`` refuse it for good: "the cause persists")."""
+    old = _drill(tmp_path)
+    new = _drill(tmp_path, ("    SUPERVISION := S3.U > T#2S;\n", ""))
+    i = old.step_index[3]
+    st = new_state(old)
+    st.x[i] = True
+    st.active.append(i)
+    st.sv_cond[i] = st.sv_err[i] = True
+    carried, _ = carry_over(ChartShape.of(old), st, new)
+    k = new.step_index[3]
+    assert carried.sv_err[k] and not carried.sv_cond[k]
+    kept, _ = carry_over(ChartShape.of(old), st, _drill(tmp_path, ("T#2S", "T#3S")))
+    assert kept.sv_cond[k] and kept.sv_err[k]  # a supervision still there keeps its cause
