@@ -25,6 +25,7 @@ from typing import TypeVar
 import msgspec
 import zenoh
 
+from s7graph.engine.text import NotUtf8, read_utf8
 from s7graph.sequencer.change.base import MAX_SOURCE, EditRefused
 from s7graph.sequencer.change.typed import parse_source
 from s7graph.sequencer.checks.diagnostics import format_diagnostic
@@ -163,7 +164,11 @@ def send_command(
     if not reply.applied:
         return _refused(op, reply)
     on = net.cpu if kind.where in ("cpu", "force") else f"{net.cpu}/{shell.fb}"
-    print(f"s7graph: {op} applied on {on} (cycle {reply.cycle})")
+    for line in reply.lines:  # an engineering op's change summary, diagnostics, notes
+        print(f"s7graph: {line}")
+    when = f" (cycle {reply.cycle})" if reply.cycle is not None else ""
+    runs = f": version {reply.version} runs" if reply.version is not None else ""
+    print(f"s7graph: {op} applied on {on}{when}{runs}")
     if reply.reason:  # what an applied command will not do (a fault that stays latched)
         print(f"s7graph: {reply.reason}")
     return 0
@@ -226,14 +231,16 @@ def download_command(
     confirmed, 2 a usage or bus error."""
     sources: dict[str, str] = {}
     try:
-        source = chart.read_text(encoding="utf-8")
+        source = read_utf8(chart)
         for path in blocks:
             if path.name in sources:
                 return _fail(f"--blocks {path}: a source named {path.name} is given twice")
-            sources[path.name] = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        where = getattr(exc, "filename", None) or chart
-        return _fail(f"cannot read {where}: {getattr(exc, 'strerror', None) or exc}")
+            sources[path.name] = read_utf8(path)
+    except NotUtf8 as exc:  # located, as check says it: FILE:LINE:COL: not UTF-8: byte 0xff
+        return _fail(str(exc))
+    except OSError as exc:
+        where = exc.filename or chart
+        return _fail(f"cannot read {where}: {exc.strerror or exc}")
     for path, text in [(chart, source), *((p, sources[p.name]) for p in blocks)]:
         if len(text) > MAX_SOURCE:
             return _fail(

@@ -350,6 +350,11 @@ def test_s7graph_download_shows_the_change_asks_and_downloads(cpu: Cpu, tmp_path
     assert cpu.session.graph.cc.step_index.get(2) is None
     refused = _shell(cpu.bus, "download", str(edited), "--user", "olga", "--yes")
     assert refused.returncode == 1 and "needs engineer" in refused.stderr
+    # send undo_download: the preview's summary and the version, never "cycle None"
+    preview = _shell(cpu.bus, "send", "undo_download", "preview=true", "--user", "eng")
+    assert preview.returncode == 0, preview.stderr
+    assert "S2" in preview.stdout and "cycle None" not in preview.stdout, preview.stdout
+    assert "undo_download applied on cpu1/Seq_fill: version 2 runs" in preview.stdout
 
 
 def test_a_download_and_a_restart_with_the_downloaded_file_carry_the_state_alike(

@@ -99,6 +99,17 @@ def test_download_says_a_syntax_error_in_its_own_files_name_before_the_bus(
     assert not any("join the bus" in line for line in err)
 
 
+def test_download_says_bytes_that_are_not_utf8_where_they_are_as_check_does(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    chart = tmp_path / "mine.s7g"
+    chart.write_bytes(b'FUNCTION_BLOCK "X" FB 1 DB 1\n(* caf\xff *)\n')
+    assert main(["download", str(chart), "--user", "u", "--connect", "tcp/127.0.0.1:1"]) == 2
+    assert capsys.readouterr().err == (
+        f"s7graph: error: {chart}:2:7: not UTF-8: byte 0xff (invalid start byte)\n"
+    )
+
+
 def test_a_watcher_whose_reader_went_ends_quietly(monkeypatch: pytest.MonkeyPatch) -> None:
     """``s7graph watch … | head -1``: the next line meets a closed pipe — the watch ends
     (its stop set), no traceback of a broken pipe."""
