@@ -88,16 +88,20 @@ class ChangeSummary:
     def lines(self) -> tuple[str, ...]:
         """The summary as the download dialog lists it, one line a change."""
         out = [c.text for c in self.changes]
-        out += [
-            f"S{n} is active and would be removed: keep the other steps, or initialize the "
-            "sequencer"
-            for n in self.removed_active
-        ]
+        out += [removal_line(n) for n in self.removed_active]
         for s in self.stays_set:
             by = ", ".join(label(r) for r in s.reset_by)
             tail = f"reset by {by}" if by else "nothing in the edited chart resets it"
             out.append(f"{s.operand}, set by an S row of S{s.step}, may stay set: {tail}")
         return tuple(out)
+
+
+def removal_line(step: int) -> str:
+    """The line of a summary for active step ``step`` the change removes (the choice is the
+    sender's: a download made says what it did instead, ``SwapReport``)."""
+    return (
+        f"S{step} is active and would be removed: keep the other steps, or initialize the sequencer"
+    )
 
 
 # ---------------------------------------------------------------- readable values

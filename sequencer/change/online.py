@@ -53,7 +53,12 @@ class SwapReport:
         out = list(self.carry.lines())
         if self.removed_active:
             shown = ", ".join(f"S{n}" for n in self.removed_active)
-            what = "the sequencer is initialized" if self.initialized else "the other steps go on"
+            what = (
+                "the sequencer is initialized in its next call (the kept steps leave, the "
+                "initial steps become the active ones)"
+                if self.initialized
+                else "the other steps go on"
+            )
             out.append(f"active steps removed: {shown}; {what}")
         return out
 

@@ -59,6 +59,7 @@ from s7graph.engine.cores import allowed_cpus
 from s7graph.engine.switching import SWITCH_S, switching
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.change.base import MAX_SOURCE
+from s7graph.sequencer.change.diff import removal_line
 from s7graph.sequencer.collector import collector_paused
 from s7graph.sequencer.compiled import CompiledChart
 from s7graph.web.bus import compile_jobs
@@ -111,8 +112,13 @@ class Summary:
     def unchanged(self) -> bool:
         return self.count == 0
 
-    def lines(self) -> tuple[str, ...]:
-        return self.text
+    def lines(self, *, done: bool = False) -> tuple[str, ...]:
+        """Its lines; ``done``: as the reply of a download made lists them, without the
+        question of each removed active step (the swap's report says what was done)."""
+        if not done:
+            return self.text
+        asked = {removal_line(n) for n in self.removed_active}
+        return tuple(line for line in self.text if line not in asked)
 
 
 @dataclass(frozen=True, slots=True)

@@ -482,7 +482,7 @@ class OnlineChange:
         self.block_files.adopt(target.scl_texts)
         if self.publisher is not None:
             self.publisher.set_chart(self.live.fb, live.layout)
-        lines = [*pending.report.lines(), *summary.lines()]
+        lines = [*pending.report.lines(), *summary.lines(done=True)]
         if blocks is not None:
             lines += [_blocks_line(target.scl_texts, old), *pending.notes]
         where = f"; {self.path.name} written" if self.path is not None else ""

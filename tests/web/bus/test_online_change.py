@@ -168,7 +168,8 @@ def test_a_removed_active_step_is_refused_without_a_choice_then_kept_or_initiali
     kept = cpu.send("download", source=without_s2, removed="keep")
     assert kept.applied, kept.reason
     assert cpu.active() == []  # S2 went; the other steps (none) go on
-    assert any("S2" in line for line in kept.lines)
+    assert "active steps removed: S2; the other steps go on" in kept.lines
+    assert not any("would be removed" in line for line in kept.lines)  # that was the preview
 
     back = cpu.send("undo_download")
     assert back.applied, back.reason  # the old chart again (nothing active to remove)
@@ -182,6 +183,11 @@ def test_initialize_when_an_active_step_is_removed(cpu: Cpu) -> None:
     without_s2 = WITHOUT_S2
     reply = cpu.send("download", source=without_s2, removed="init")
     assert reply.applied, reply.reason
+    assert (
+        "active steps removed: S2; the sequencer is initialized in its next call (the kept "
+        "steps leave, the initial steps become the active ones)"
+    ) in reply.lines
+    assert not any("would be removed" in line for line in reply.lines)
     assert wait_until(lambda: cpu.active() == [1])  # INIT_SQ in the next call: S1 again
 
 
