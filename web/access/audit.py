@@ -37,6 +37,7 @@ import json
 import operator
 import sqlite3
 import threading
+import time
 import urllib.parse
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass
@@ -512,12 +513,29 @@ def _in_words(exc: sqlite3.Error) -> str:
     return text
 
 
+_OPEN_TRIES: Final = 3
+"""Tries to open a file a running CPU may be replacing (``engine/renew.py``: moved aside,
+built anew) before its ``unable to open`` is the answer, 50 ms apart."""
+
+
 def _reading(path: Path | str, read: Callable[[sqlite3.Connection], _T]) -> _T:
     """``read(connection)`` on the file opened read-only, so nothing in it changes; a file
     without a write-ahead log beside it (no run has it open) as immutable too, so none is
     left beside it either (a read-only connection to a WAL file makes an empty ``-wal`` and
     a ``-shm``, and cannot remove them). ``UnreadableAudit`` naming the file and, in words,
-    what could not be read."""
+    what could not be read; a file that cannot be opened is tried again, in case a running
+    CPU was replacing it."""
+    for _ in range(_OPEN_TRIES - 1):
+        try:
+            return _read_once(path, read)
+        except UnreadableAudit as exc:
+            if "unable to open" not in exc.problem:
+                raise
+            time.sleep(0.05)
+    return _read_once(path, read)
+
+
+def _read_once(path: Path | str, read: Callable[[sqlite3.Connection], _T]) -> _T:
     quiet = "" if Path(f"{path}-wal").exists() else "&immutable=1"
     try:
         uri = f"{Path(path).absolute().as_uri()}?mode=ro{quiet}"  # a '?' or '#' in it quoted

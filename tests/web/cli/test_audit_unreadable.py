@@ -136,3 +136,35 @@ def test_a_state_file_that_reads_is_listed_and_left_as_it_was(
     assert audit_command(path, None) == 0
     assert len(capsys.readouterr().out.splitlines()) == 3
     assert _files(path) == before
+
+
+def test_a_file_a_running_cpu_replaces_while_it_is_read_is_tried_again(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A CPU building its state file anew moves it aside for a moment: "unable to open"
+    then is tried again (3 tries) before it is the answer; any other problem is at once."""
+    from s7graph.web.access import audit
+
+    state = _state(tmp_path / "s.sqlite")
+    real = audit._read_once
+    calls: list[int] = []
+
+    def flaky(path: Path, read: object) -> object:
+        calls.append(1)
+        if len(calls) == 1:
+            raise audit.UnreadableAudit(path, "unable to open database file")
+        return real(path, read)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(audit, "time", type("T", (), {"sleep": staticmethod(lambda s: None)}))
+    monkeypatch.setattr(audit, "_read_once", flaky)
+    assert len(audit.read_audit(state)) == 3 and len(calls) == 2
+    calls.clear()
+
+    def gone(path: Path, read: object) -> object:
+        calls.append(1)
+        raise audit.UnreadableAudit(path, "unable to open database file")
+
+    monkeypatch.setattr(audit, "_read_once", gone)
+    with pytest.raises(audit.UnreadableAudit, match="unable to open"):
+        audit.read_audit(state)
+    assert len(calls) == audit._OPEN_TRIES
