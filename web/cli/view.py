@@ -56,14 +56,15 @@ def web_command(
     try:
         with open_session(connect=net.connect, tls=net.tls, login=net.login) as probe:
             cpus, unreadable = wait_for_cpus(probe, wait_s)
-            wrong = {s.cpu: peer_problem(probe, s.cpu) for s in cpus}
+            first = cpus[0] if cpus else None
+            chosen = next((s for s in cpus if s.cpu == cpu), None) if cpu else first
+            wrong = peer_problem(probe, chosen.cpu) if chosen is not None else None
     except Exception as exc:
         return _fail(net.join_error(exc))
     if not cpus:
         return _fail(f"no CPU answers on {', '.join(net.connect)}{unread_note(unreadable)}")
-    chosen = next((s for s in cpus if s.cpu == cpu), None) if cpu else cpus[0]
-    if chosen is not None and wrong[chosen.cpu] is not None:
-        return _fail(str(wrong[chosen.cpu]))  # before a word of what it said is shown
+    if wrong is not None:
+        return _fail(wrong)  # before a word of what it said is shown
     for status in cpus:
         print(
             f"s7graph: CPU {status.cpu} ({status.state}, logins: {status.login}): "
