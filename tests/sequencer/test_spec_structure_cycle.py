@@ -9,7 +9,7 @@ import pytest
 
 from s7graph.sequencer.checks.validate import validate
 from s7graph.sequencer.text.parse import parse_chart
-from tests.sequencer.helpers import chart, enter, leave, seq, source, two_steps
+from tests.sequencer.helpers import Run, chart, enter, leave, seq, source, two_steps
 
 # ---------------------------------------------------------------- structure
 
@@ -385,6 +385,40 @@ def test_sequencers_run_in_definition_order_not_number_order() -> None:
     run.call()
     run.set(I0_0=True).call()
     assert run.active == [2, 12]
+
+
+def _shared_n(leaving_sequencer_first: bool) -> Run:
+    """Two sequencers whose steps both hold M0.0 with N: S1 stays, S11 leaves on I0.0."""
+    stays = seq('INITIAL_STEP S1 "a": N M0.0; END_STEP\nTRANSITION T1 FROM S1 TO STOP := FALSE;')
+    leaves = seq(
+        'INITIAL_STEP S11 "x": N M0.0; END_STEP\nSTEP S12 "y": END_STEP\n'
+        "TRANSITION T11 FROM S11 TO S12 := I0.0;",
+        2,
+    )
+    return chart(leaves + stays if leaving_sequencer_first else stays + leaves)
+
+
+def test_an_n_operand_shared_across_sequencers_drops_for_the_call_a_later_one_leaves() -> None:
+    """docs/semantics.md, "Decisions", an N operand in two sequencers: each sequencer writes
+    it in its turn, so the final scan of a step left in a later sequencer writes 0 last —
+    the operand is 0 at the end of that call though a step of the earlier one still holds
+    it, and 1 again from the next call."""
+    run = _shared_n(leaving_sequencer_first=False)
+    run.call()
+    assert run.get("M0.0") is True
+    run.set(I0_0=True).call()
+    assert run.active == [1, 12] and run.get("M0.0") is False
+    run.call()
+    assert run.get("M0.0") is True
+
+
+def test_an_n_operand_shared_across_sequencers_holds_when_an_earlier_one_leaves() -> None:
+    """The same chart with the leaving sequencer written first: the step that stays writes
+    1 after the final scan wrote 0, so the operand never drops."""
+    run = _shared_n(leaving_sequencer_first=True)
+    run.call()
+    run.set(I0_0=True).call()
+    assert run.active == [1, 12] and run.get("M0.0") is True
 
 
 def test_permanent_instructions_run_once_per_call_around_all_sequencers() -> None:
