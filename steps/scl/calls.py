@@ -107,8 +107,7 @@ class Calls:
                 inputs.append((param.name, place.get))
                 outputs.append((param, place))
                 continue
-            x = self.b.exprs.expr(arg.value)
-            inputs.append((param.name, self.b.exprs.convert(x, param.type, arg.loc, "pass")))
+            inputs.append((param.name, self._input(info, param, arg)))
         missing = [p.name for p in info.params.values() if p.decl is not Decl.OUT]
         missing = [n for n in missing if n.upper() not in seen]
         if missing:
@@ -127,6 +126,44 @@ class Calls:
             )
         seen.add(key)
         return param
+
+    def _input(self, info: BlockInfo, param: Param, arg: m.Arg) -> str:
+        """Python source of an input's value; for a system block's ANY parameter the pointer
+        text it reads (``P#DB5.DBX4.0 BYTE 20``)."""
+        if param.type.kind == "ANY":
+            return self._pointer(info, param, arg)
+        x = self.b.exprs.expr(arg.value)
+        return self.b.exprs.convert(x, param.type, arg.loc, "pass")
+
+    def _pointer(self, info: BlockInfo, param: Param, arg: m.Arg) -> str:
+        """An ANY parameter (SFC 20 BLKMOV's SRCBLK and DSTBLK, SFC 21 FILL's BVAL and BLK …)
+        points at its actual: an absolute operand (``MW10``, ``DB5.DBW2``, ``MD[i]``) or a
+        variable of a global DB (``DB5.recipe``, ``"Data".temps[i]``), whose bytes the block
+        reads and writes. A variable of the block itself is held as a value, not as bytes,
+        and has no address to point at (E220). A string constant is taken as the pointer
+        text itself (``'P#DB5.DBX0.0 BYTE 20'``)."""
+        called = info.label if info.name.upper() == info.label else f"{info.name} ({info.label})"
+        if isinstance(arg.value, m.Path):
+            got = self.b.places.resolve(arg.value)
+            if isinstance(got, Place) and got.pointer:
+                return got.pointer
+            if isinstance(got, Place):
+                raise Problem(
+                    "E220",
+                    f"{called}: {param.name} is an ANY pointer to bytes; {got.what} is a "
+                    "variable of the block, held as a value: pass an absolute operand "
+                    "(MW10, DB5.DBW2) or a variable of a global DB, or assign it whole",
+                    arg.loc,
+                )
+        x = self.b.exprs.expr(arg.value)
+        if x.const is not None and isinstance(x.const.value, str) and x.type.kind == "STRING":
+            return x.src
+        raise Problem(
+            "E220",
+            f"{called}: {param.name} is an ANY pointer: pass an absolute operand or a "
+            f"variable of a global DB, not the value of an expression ({x.type})",
+            arg.loc,
+        )
 
     def _actual_place(self, arg: m.Arg) -> Place:
         if not isinstance(arg.value, m.Path):
@@ -194,8 +231,7 @@ class Calls:
                 lines.append(f"{item} = {place.get}")
                 backs.append(place.store(self._take(X(param.type, item), place, target)))
                 continue
-            x = b.exprs.expr(arg.value)
-            lines.append(f"{item} = {b.exprs.convert(x, param.type, arg.loc, 'pass')}")
+            lines.append(f"{item} = {self._input(info, param, arg)}")
         if en is not None:
             b.emit(f"if {en}:")
             b.indent += 1

@@ -155,13 +155,22 @@ def engine_type(name: str) -> ty.SclType:
     return ty.by_name(upper) or ty.ANY
 
 
+def _is_any(type_name: str) -> bool:
+    """A system block's ANY pin: declared to the engine as the pointer text it takes
+    (``P#DB5.DBX4.0 BYTE 20``), a ``STRING[254]`` (``sfb.catalogue``, ``ANY_AS``)."""
+    return "".join(type_name.split()).upper() == "STRING[254]"
+
+
 def external(blocks: Iterable[FB | FC]) -> list[BlockInfo]:
     """``BlockInfo`` of engine blocks (system blocks, blocks loaded before)."""
     out = []
     for blk in blocks:
         kind = str(blk.kind)
+        system = kind in ("SFB", "SFC")
         params = {
-            v.name.upper(): Param(v.name, v.decl, engine_type(v.type))
+            v.name.upper(): Param(
+                v.name, v.decl, ty.ANY if system and _is_any(v.type) else engine_type(v.type)
+            )
             for v in blk.interface
             if v.decl is not Decl.TEMP
         }
@@ -450,4 +459,19 @@ def _named_type(prog: Program, spec: m.NamedType) -> ty.SclType:
     blk = prog.block(spec.name)
     if blk is not None and blk.kind in ("FB", "SFB"):
         return ty.SclType("FB", name=blk.label)
+    if key in _PARAMETER_TYPES:
+        why = _PARAMETER_TYPES[key]
+        raise Problem("E212", f"the parameter type {key} is not supported here: {why}", spec.loc)
     raise Problem("E212", f"unknown data type {spec.name!r}", spec.loc)
+
+
+_BLOCK_NUMBER = "pass the DB's number as a WORD and reach it as WORD_TO_BLOCK_DB(w).DW[i]"
+_PARAMETER_TYPES = {
+    "BLOCK_DB": _BLOCK_NUMBER,
+    "BLOCK_FB": "call the FB by name",
+    "BLOCK_FC": "call the FC by name",
+    "BLOCK_SDB": "no SDB is loaded",
+    "ANY": "pass the data itself (a STRUCT, an ARRAY) or a DB's number as a WORD",
+    "POINTER": "pass the data itself (a STRUCT, an ARRAY) or a DB's number as a WORD",
+}
+"""S7-SCL's parameter types that s7graph does not take, and what to write instead."""

@@ -37,12 +37,16 @@ class X:
 @dataclass(frozen=True, slots=True)
 class Place:
     """Something that holds a value: ``get`` reads it, ``put`` (a statement with ``HOLE``
-    for the value, None if read-only) writes it; ``what`` names it in messages."""
+    for the value, None if read-only) writes it; ``what`` names it in messages; ``pointer``
+    points a system block's ANY parameter at it."""
 
     type: ty.SclType
     get: str
     put: str | None
     what: str
+    pointer: str = ""
+    """Python source of the ANY pointer text to it (``P#DB5.DBX4.0 BYTE 20``) when it lies
+    in an operand area or a global DB's bytes; empty for a value held by the block."""
 
     def store(self, value: str) -> str:
         assert self.put is not None

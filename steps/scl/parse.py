@@ -224,7 +224,13 @@ def _syntax(exc: UnexpectedInput, file: str, text: str) -> Diagnostic:
     prev = history[-1] if history else None
     if "SEMICOLON" in expected and prev is not None and str(prev).upper().startswith("END_"):
         return _missing_semicolon(file, prev, loc)
+    if prev is not None and str(prev).upper() in _MISSPELT:
+        where = SourceLocation(file, prev.line or loc.line, prev.column or loc.col)
+        return error("E201", _MISSPELT[str(prev).upper()], where)
     closing = tok.type == "$END" or str(tok).upper().startswith("END_")
+    follows = closing or str(tok).upper() in ("UNTIL", "ELSE", "ELSIF")
+    if follows and tok.type != "$END" and "SEMICOLON" in expected and prev is not None:
+        return _missing_semicolon(file, prev, loc)  # `x := x + 1 END_WHILE`: the ';' lacks
     opener = _open_construct(exc) if closing else None
     if opener is not None:
         keyword, line, closer = opener
@@ -238,6 +244,14 @@ def _syntax(exc: UnexpectedInput, file: str, text: str) -> Diagnostic:
     if "SEMICOLON" in expected and prev is not None and tok.line != prev.end_line:
         return _missing_semicolon(file, prev, loc)
     return error("E201", f"unexpected '{shorten(str(tok))}'; expected {_expected(expected)}", loc)
+
+
+_MISSPELT = {
+    "ELSEIF": "ELSEIF is no keyword: S7-SCL writes ELSIF",
+    "ELSE_IF": "ELSE_IF is no keyword: S7-SCL writes ELSIF",
+    "ENDIF": "ENDIF is no keyword: S7-SCL writes END_IF",
+}
+"""Words programmers bring from other languages, read as names, and what S7-SCL writes."""
 
 
 def _missing_semicolon(file: str, prev: Token, loc: SourceLocation) -> Diagnostic:

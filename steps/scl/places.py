@@ -18,7 +18,7 @@ from s7graph.engine.address import Address, Area, Width, parse_address
 from s7graph.engine.errors import AddressError, SourceLocation
 from s7graph.steps.scl import model as m
 from s7graph.steps.scl import types as ty
-from s7graph.steps.scl.builtins import BUILTINS
+from s7graph.steps.scl.builtins import BUILTINS, bind
 from s7graph.steps.scl.calls import S5_COUNTERS, S5_TIMERS
 from s7graph.steps.scl.consts import Constant
 from s7graph.steps.scl.declare import BlockInfo
@@ -28,6 +28,8 @@ from s7graph.steps.scl.gen import HOLE, Block, Place, Resolved, Target, X
 _INDEXED = re.compile(r"(PI|PQ|I|Q|M)([XBWD]?)", re.IGNORECASE)
 _DB_INDEXED = re.compile(r"D?B?([XBWD])", re.IGNORECASE)
 _DB_SHORT = re.compile(r"(DB\d+)\.D([XBWD]\d+(?:\.\d+)?)")
+_DB_FIXED = re.compile(r"(?:DB|D)([BWD])(\d{1,5})", re.IGNORECASE)
+_RUNTIME_DB = "an access: .DW[i], .DB[i], .DD[i], .DX[i, j] or .DBW2, .DBB0, .DBD4"
 _WIDTH_TYPE = {Width.BIT: ty.BOOL, Width.BYTE: ty.BYTE, Width.WORD: ty.WORD, Width.DWORD: ty.DWORD}
 _LETTER_BITS = {"X": 1, "": 1, "B": 8, "W": 16, "D": 32}
 _BITS_TYPE = {1: ty.BOOL, 8: ty.BYTE, 16: ty.WORD, 32: ty.DWORD}
@@ -105,9 +107,11 @@ class Places:
         if special is not None:
             return special
         called = sels and isinstance(sels[0], m.Args)
+        if called and key == "WORD_TO_BLOCK_DB":
+            return self._runtime_db(sels, path)
         if called and (key in BUILTINS or key in _S5_FUNCTIONS):
             assert isinstance(sels[0], m.Args)
-            return Target("builtin", key, sels[0], loc)
+            return self._after_call(Target("builtin", key, sels[0], loc), sels[1:], loc)
         blk = b.prog.block(text)
         if blk is not None:
             return self._block_path(blk, sels, path)
@@ -203,7 +207,7 @@ class Places:
 
     def _after_call(self, target: Target, rest: list[m.Selector], loc: SourceLocation) -> Target:
         if rest:
-            raise Problem("E224", "nothing may follow a call", loc)
+            raise Problem("E224", f"nothing may follow a call of {target.name}", rest[0].loc)
         return target
 
     def _instance(
@@ -289,7 +293,8 @@ class Places:
         k = self.b.const(addr)
         name = _engine_name(t)
         get = f"_mem.read_as({k}, {name!r})"
-        return Place(t, get, f"_mem.write_as({k}, {name!r}, {HOLE})", what)
+        pointer = repr("P#{} {} {}".format(addr, *_any_type(t)))
+        return Place(t, get, f"_mem.write_as({k}, {name!r}, {HOLE})", what, pointer)
 
     def _symbol(self, text: str, loc: SourceLocation) -> Resolved:
         table = self.b.prog.symbols
@@ -306,12 +311,13 @@ class Places:
     def _indexed(
         self,
         area: str,
-        db: int | None,
+        db: int | str | None,
         letter: str,
         sels: list[m.Selector],
         path: m.Path,
     ) -> Place:
-        """``MD[i]``, ``PIW[252 + i]``, ``Q[i, 0]``, ``DB11.DW[i]``, ``DB12.DX[w, b]``."""
+        """``MD[i]``, ``PIW[252 + i]``, ``Q[i, 0]``, ``DB11.DW[i]``, ``DB12.DX[w, b]``; ``db``
+        the DB's number, or Python source computing it (``WORD_TO_BLOCK_DB``)."""
         index = sels[0]
         assert isinstance(index, m.Index)
         bits = _LETTER_BITS[letter]
@@ -326,11 +332,32 @@ class Places:
         bit = xs[1].src if need == 2 else "0"
         addr = f"_ad({area!r}, {bits}, {xs[0].src}, {bit}, {db})"
         t = _BITS_TYPE[bits]
-        name = _engine_name(t)
-        what = f"{path.base.text}[…]"
-        return Place(
-            t, f"_mem.read_as({addr}, {name!r})", f"_mem.write_as({addr}, {name!r}, {HOLE})", what
-        )
+        return _mem_access(t, addr, f"{path.base.text}[…]")
+
+    def _runtime_db(self, sels: list[m.Selector], path: m.Path) -> Place:
+        """``WORD_TO_BLOCK_DB(w).DW[i]``, ``….DX[i, j]``, ``….DBW2``: an address in the DB
+        whose number the WORD ``w`` holds when the statement runs (S7-SCL manual, "Data
+        types", BLOCK_DB, and the class B conversions) — a missing DB, DB0 or an instance DB
+        of an S7-SCL FB is a block error there."""
+        call = sels[0]
+        assert isinstance(call, m.Args)
+        args = [(a.name, self.b.exprs.expr(a.value), a.loc) for a in call.items]
+        (w,) = bind("WORD_TO_BLOCK_DB", ("IN",), args, path.loc)
+        db = f"({self.b.exprs.convert(w, ty.WORD, call.loc, 'pass')})"
+        access = sels[1] if len(sels) > 1 else None
+        if not isinstance(access, m.Member):
+            where = access.loc if access is not None else path.loc
+            raise Problem("E224", f"WORD_TO_BLOCK_DB(…) is followed by {_RUNTIME_DB}", where)
+        indexed = _DB_INDEXED.fullmatch(access.name)
+        if indexed and len(sels) > 2 and isinstance(sels[2], m.Index):
+            return self._indexed("DB", db, indexed[1].upper(), sels[2:], path)
+        fixed = _DB_FIXED.fullmatch(access.name)
+        if fixed is None or len(sels) > 2:
+            raise Problem("E224", f"WORD_TO_BLOCK_DB(…) is followed by {_RUNTIME_DB}", access.loc)
+        bits = _LETTER_BITS[fixed[1].upper()]
+        t = _BITS_TYPE[bits]
+        addr = f"_ad('DB', {bits}, {int(fixed[2])}, 0, {db})"
+        return _mem_access(t, addr, f"WORD_TO_BLOCK_DB(…).{access.name}")
 
     def _db_absolute(self, number: int, sels: list[m.Selector], path: m.Path) -> Place:
         if len(sels) == 2 and isinstance(sels[0], m.Member) and isinstance(sels[1], m.Index):
@@ -384,20 +411,16 @@ class Places:
         if t.aggregate:
             k = self.b.const(t)
             head = f"_mem, {ref.area!r}, {ref.db}, {ref.byte}, {k}"
-            return Place(t, f"_mget({head})", f"_mset({head}, {HOLE})", ref.what)
+            start = f"_ad({ref.area!r}, 8, {ref.byte}, 0, {ref.db})"
+            pointer = "_anyp({}, {!r}, {})".format(start, *_any_type(t))
+            return Place(t, f"_mget({head})", f"_mset({head}, {HOLE})", ref.what, pointer)
         bits = _bits_of(t)
         if static[0] is not None and static[1] is not None:
             width = {1: Width.BIT, 8: Width.BYTE, 16: Width.WORD, 32: Width.DWORD}[bits]
             addr = Address(Area(ref.area), width, static[0], static[1], ref.db)
             return self._static(addr, t, ref.what)
         addr_src = f"_ad({ref.area!r}, {bits}, {ref.byte}, {ref.bit}, {ref.db})"
-        name = _engine_name(t)
-        return Place(
-            t,
-            f"_mem.read_as({addr_src}, {name!r})",
-            f"_mem.write_as({addr_src}, {name!r}, {HOLE})",
-            ref.what,
-        )
+        return _mem_access(t, addr_src, ref.what)
 
 
 _S5_FUNCTIONS = frozenset(S5_TIMERS) | frozenset(S5_COUNTERS)
@@ -413,6 +436,25 @@ def _bits_of(t: ty.SclType) -> int:
 
 def _engine_name(t: ty.SclType) -> str:
     return ty.engine_type(t)
+
+
+def _mem_access(t: ty.SclType, addr: str, what: str) -> Place:
+    """The place of a value of ``t`` at the address ``addr`` computes (Python source)."""
+    name = _engine_name(t)
+    pointer = "_anyp({}, {!r}, {})".format(addr, *_any_type(t))
+    get, put = f"_mem.read_as({addr}, {name!r})", f"_mem.write_as({addr}, {name!r}, {HOLE})"
+    return Place(t, get, put, what, pointer)
+
+
+_ANY_TYPES = frozenset({"BOOL", "BYTE", "CHAR", "WORD", "INT", "DWORD", "DINT", "REAL", "TIME"})
+
+
+def _any_type(t: ty.SclType) -> tuple[str, int]:
+    """The type and count an ANY pointer to a value of ``t`` names: an elementary type one
+    of it, a STRING, a DATE_AND_TIME, an ARRAY or a STRUCT its bytes."""
+    if t.kind in _ANY_TYPES:
+        return t.kind, 1
+    return "BYTE", ty.size_of(t)
 
 
 def _add(src: str, n: int) -> str:

@@ -404,6 +404,12 @@ def _ad(area: str, bits: int, byte: int, bit: int = 0, db: int | None = None) ->
     return Address(Area(area), _WIDTHS[bits], byte, bit, db)
 
 
+def _anyp(addr: Address, type_name: str, count: int) -> str:
+    """The ANY pointer text a system block reads (``P#DB5.DBX4.0 BYTE 20``, SFC 20 BLKMOV's
+    SRCBLK) to ``count`` values of ``type_name`` from ``addr``."""
+    return f"P#{addr} {type_name} {count}"
+
+
 def _mget(mem: Any, area: str, db: int | None, byte: int, t: SclType) -> Any:
     """A whole STRUCT or ARRAY read from memory (a DB) as a dict or list."""
     buf = mem.area_bytes(area, db)

@@ -38,7 +38,9 @@ Params = Mapping[str, Mapping[str, str]]
 """Blocks' parameters: block (upper case: ``FC10``, ``SCALE``, ``CONT_C``) → parameter
 (upper case) → its section (a key of :data:`ARG_ACCESS`)."""
 
-_FUNCTIONS: Final = frozenset(BUILTINS) | frozenset(S5_TIMERS) | frozenset(S5_COUNTERS)
+_FUNCTIONS: Final = frozenset(
+    {*BUILTINS, *S5_TIMERS, *S5_COUNTERS, "WORD_TO_BLOCK_DB"}  # the last opens a DB (places)
+)
 _BLOCK = re.compile(r"(OB|FB|FC|SFB|SFC|DB|UDT)\s*(\d+)", re.I)
 _CODE_KINDS: Final = {"FUNCTION_BLOCK": "FB", "FUNCTION": "FC", "ORGANIZATION_BLOCK": "OB"}
 

@@ -65,3 +65,31 @@ def test_at_most_ten_syntax_errors_are_reported() -> None:
 
 def _places(src: str) -> list[tuple[str, int, int]]:
     return [(d.code, d.loc.line, d.loc.col) for d in check_scl(src, "t.scl")]
+
+
+@pytest.mark.parametrize(
+    ("body", "message"),
+    [
+        ("WHILE n < 3 DO n := n + 1 END_WHILE;", "t.scl:3:26: error[E201]: missing ';' after '1'"),
+        ("IF b THEN n := 1 END_IF;", "t.scl:3:17: error[E201]: missing ';' after '1'"),
+        ("IF b THEN n := 1 ELSE n := 2; END_IF;", "t.scl:3:17: error[E201]: missing ';' after '1'"),
+        (
+            "IF b THEN n := 1 ELSIF n = 2 THEN ; END_IF;",
+            "t.scl:3:17: error[E201]: missing ';' after '1'",
+        ),
+        ("REPEAT n := 1 UNTIL b END_REPEAT;", "t.scl:3:14: error[E201]: missing ';' after '1'"),
+        (
+            "CASE n OF 1: b := TRUE ELSE n := 0; END_CASE;",
+            "t.scl:3:23: error[E201]: missing ';' after 'TRUE'",
+        ),
+    ],
+)
+def test_a_statement_without_its_semicolon_before_a_closing_keyword_says_so(
+    body: str, message: str
+) -> None:
+    assert found(fb(body)) == [message]
+
+
+def test_elseif_is_named_with_the_keyword_s7_scl_writes() -> None:
+    body = "IF n = 0 THEN b := TRUE; ELSEIF n = 1 THEN b := FALSE; END_IF;"
+    assert found(fb(body)) == ["t.scl:3:26: error[E201]: ELSEIF is no keyword: S7-SCL writes ELSIF"]
