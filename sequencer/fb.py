@@ -422,17 +422,24 @@ def counter_row(cells: Any, op: str, number: int, value: Any) -> None:
 
 
 def timer_row(cells: Any, op: str, number: int, value: Any, now_ns: int) -> None:
-    """TL (extended pulse), TD (retentive on-delay), TF (off-delay), TR (reset) on timer
-    cell T ``number``: started once in the event call, then run by the CPU's time base."""
+    """A timer row on cell T ``number`` in the call its event occurs (docs/semantics.md,
+    "Actions", timer rows): TL starts an extended pulse (SE), TD a latching on delay (SS) —
+    both restarted by every occurrence of the event, TD with its bit 0 again for the time —,
+    TF an off delay (SF) whose start input is the event, a one-call pulse (the bit 1 at
+    once, the time running from the next scan), TR stops and resets. ``value`` is the time,
+    an S5TIME word; the CPU's time base runs the timer from then on."""
     cell = s5_timers.cell_of(cells, number)
     if op == "TR":
         s5_timers.reset(cell)
-        return
-    fn = {"TL": "SE", "TD": "SS", "TF": "SF"}[op]
-    cell.s_edge = False
-    s5_timers.run(cell, fn, True, int(value), now_ns)
-    if op == "TF":
-        s5_timers.run(cell, fn, False, int(value), now_ns)
+    elif op == "TL":
+        s5_timers.start(cell, "SE", int(value), now_ns)
+    elif op == "TD":
+        s5_timers.reset(cell)
+        s5_timers.start(cell, "SS", int(value), now_ns)
+    elif op == "TF":
+        s5_timers.start_off_delay_at_next_update(cell, int(value), now_ns)
+    else:
+        raise ValueError(f"{op}: not a timer qualifier (TL TD TF TR)")
 
 
 def position(cc: CompiledChart, st: GraphState, limit: int = 8) -> str:

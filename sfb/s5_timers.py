@@ -8,13 +8,16 @@ asynchronously to the program, so a started timer expires between TV - 1 base an
 start. ``L T n`` reads the count binary, ``LC T n`` reads it BCD with the time base. The five
 functions:
 
-* SP pulse: rising S starts; Q = 1 while S = 1 and time runs; S = 0 stops it.
+* SP pulse: rising S starts; Q = 1 while S = 1 and time runs; S = 0 stops it (Q = 0).
 * SE extended pulse: rising S starts; Q = 1 for the full time; a rising S retriggers.
-* SD on-delay: rising S starts; Q = 1 after TV while S = 1; S = 0 resets value and Q.
+* SD on-delay: rising S starts; Q = 1 after TV while S = 1; S = 0 stops it (Q = 0).
 * SS retentive on-delay: rising S starts (restarts while running); Q = 1 after TV until R.
 * SF off-delay: S = 1 gives Q = 1; the falling S starts; Q = 0 after TV; rising S stops it.
 
-R = 1 clears value and Q for all five (R dominates). A rising FR with S = 1 restarts.
+A timer *stopped* keeps its time value (``L T n`` reads the time left when it stopped), as the
+STEP 7 Statement List manual (timer instructions) words it: "the time is stopped"; only R
+clears it. R = 1 clears value and Q for all five (R dominates, as a level: a reset timer whose
+S stays 1 starts again only on a new rising edge). A rising FR with S = 1 restarts.
 
 The OS updates the T area once per scan: importing this module registers ``scan_hook`` with
 ``engine.cpu.add_os_scan_hook``, so every CPU ticks its timers at the start of each cycle on the
@@ -90,7 +93,8 @@ def tick(cell: S5Timer, now_ns: int) -> None:
     """The OS update of one cell: count down on the time-base grid; handle expiry."""
     if not cell.running:
         return
-    if cell.resume:  # restored from a state file: its start was on another process's clock
+    if cell.resume:  # restored from a state file (its start was on another process's clock),
+        # or an off delay whose start input fell after its pulse: the time left runs from now
         cell.resume = False
         cell.start_ns = now_ns - (cell.preset_ms - cell.value_ms) * NS_PER_MS
     count = _remaining_count(cell, now_ns)
@@ -132,8 +136,13 @@ def cell_of(timers: Sequence[S5Timer], number: int) -> S5Timer:
     return timers[number]
 
 
-def _load(cell: S5Timer, tv_ms: int, now_ns: int) -> None:
-    count, base = s5time_split(s5time_encode(tv_ms))
+def _load(cell: S5Timer, tv_ms: int, now_ns: int, base_ms: int | None = None) -> None:
+    """Load the time ``tv_ms`` (in units of ``base_ms``, else of the finest base that holds
+    it) and start counting at ``now_ns``."""
+    if base_ms is None:
+        count, base = s5time_split(s5time_encode(tv_ms))
+    else:
+        count, base = tv_ms // base_ms, base_ms
     cell.time_base_ms, cell.preset_ms, cell.value_ms = base, count * base, count * base
     cell.start_ns = now_ns
     cell.running = count > 0
@@ -142,6 +151,27 @@ def _load(cell: S5Timer, tv_ms: int, now_ns: int) -> None:
 def reset(cell: S5Timer) -> None:
     """``R T n``: value 0, status 0, stopped (edge memories are kept)."""
     cell.value_ms, cell.running, cell.q = 0, False, False
+
+
+def start(cell: S5Timer, function: TimerFunction | str, word: int, now_ns: int) -> bool:
+    """Start ``cell`` in ``function`` with the S5TIME ``word`` (its count in its own time
+    base), as a rising edge of S does whatever the edge memory held (a GRAPH event row: each
+    occurrence of the event starts the timer); returns Q."""
+    count, base = s5time_split(word)
+    cell.s_edge = False
+    return run(cell, function, True, count * base, now_ns, base_ms=base)
+
+
+def start_off_delay_at_next_update(cell: S5Timer, word: int, now_ns: int) -> None:
+    """SF with S = 1 now and S = 0 from the next call: Q = 1 at once (a running off delay
+    stops), the S5TIME ``word`` loaded and counted from the next OS update of the T area (the
+    start of the next scan), as an S5 off delay whose start input is a one-call pulse."""
+    count, base = s5time_split(word)
+    start(cell, TimerFunction.SF, word, now_ns)
+    cell.s_edge = False  # the falling edge of the pulse, seen by the next update
+    _load(cell, count * base, now_ns, base)
+    # ``tick`` sets the start from the time left at the next update (a zero time ends there)
+    cell.q = cell.running = cell.resume = True
 
 
 def run(
@@ -153,10 +183,12 @@ def run(
     *,
     r: bool = False,
     fr: bool = False,
+    base_ms: int | None = None,
 ) -> bool:
     """One timer instruction or box call on ``cell``: start/stop per function, then R; Q.
 
-    ``tv_ms`` is the S5TIME preset in ms (encoded with the finest base that fits).
+    ``tv_ms`` is the S5TIME preset in ms, counted in ``base_ms`` (the time base of the
+    S5TIME word loaded), else in the finest base that holds it.
     """
     fn = _function(function)
     tick(cell, now_ns)
@@ -166,28 +198,28 @@ def run(
     cell.mode, cell.s_edge, cell.fr_edge = fn.value, s, fr
     if fn is TimerFunction.SP:
         if start:
-            _load(cell, tv_ms, now_ns)
+            _load(cell, tv_ms, now_ns, base_ms)
             cell.q = cell.running
         elif not s:
             cell.running, cell.q = False, False
     elif fn is TimerFunction.SE:
         if start:
-            _load(cell, tv_ms, now_ns)
+            _load(cell, tv_ms, now_ns, base_ms)
             cell.q = cell.running
     elif fn is TimerFunction.SD:
         if not s:
-            reset(cell)
+            cell.running, cell.q = False, False
         elif start:
-            _load(cell, tv_ms, now_ns)
+            _load(cell, tv_ms, now_ns, base_ms)
             cell.q = not cell.running
     elif fn is TimerFunction.SS:
         if start and not cell.q:
-            _load(cell, tv_ms, now_ns)
+            _load(cell, tv_ms, now_ns, base_ms)
             cell.q = not cell.running
     elif s:
         cell.running, cell.q = False, True
     elif falling:
-        _load(cell, tv_ms, now_ns)
+        _load(cell, tv_ms, now_ns, base_ms)
         cell.q = cell.running
     if r:
         reset(cell)

@@ -220,6 +220,21 @@ def _actual(e: Expr, val: Callable[[Expr], str], resolve: Resolve) -> str:
     return val(e)
 
 
+def _cell_value(row: ActionRow, val: Callable[[Expr], str], resolve: Resolve) -> str:
+    """The code of a counter or timer row's value. The time of TL, TD, TF goes as an S5TIME
+    word (BCD count and time base), as the CPU loads it: a word of memory (``MW10``,
+    ``DB1.DBW2``) as it holds it; the constant ``S5T#…`` and an FB variable, which hold
+    milliseconds, encoded with the finest time base, as STEP 7 encodes the constant."""
+    if row.value is None:
+        return "0"
+    code = val(row.value)
+    if row.qualifier.upper() not in ("TL", "TD", "TF"):
+        return code
+    if isinstance(row.value, Operand) and resolve(row.value).kind == "mem":
+        return code
+    return f"_s5t({code})"
+
+
 def _row(
     i: int,
     row: ActionRow,
@@ -271,7 +286,7 @@ def _row(
             raise ActionError(
                 f"{q} {op.name}: not a {'counter' if q[0] == 'C' else 'timer'}", row.loc
             )
-        value = val(row.value) if row.value is not None else "0"
+        value = _cell_value(row, val, resolve)
         fn = "counter" if q[0] == "C" else "timer"
         return [f"R.{fn}({q!r}, {ref.number}, {value})"]
     raise ActionError(f"unknown qualifier {row.qualifier}", row.loc)

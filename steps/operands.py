@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 from types import FunctionType
 from typing import Any
 
-from s7graph.engine.datatypes import real32
+from s7graph.engine.datatypes import ms_to_s5time, real32
 from s7graph.engine.errors import SourceLocation, SymbolError
 
 # S5 timer and counter cells (``T n``, ``C n``): a contact reads the status bit, a number
@@ -273,6 +273,12 @@ def _with_defaults(f: Any, values: tuple[int, ...]) -> Any:
     return FunctionType(f.__code__, f.__globals__, f.__name__, values, f.__closure__)
 
 
+def _s5t(ms: int) -> int:
+    """The S5TIME word of a time in milliseconds (``S5T#…``, an FB variable): the finest time
+    base that holds it, as STEP 7 encodes the constant (the time of a TL, TD or TF row)."""
+    return ms_to_s5time(int(ms))
+
+
 RUNTIME: dict[str, Any] = {
     "_with_index": _with_index,
     "_with_defaults": _with_defaults,
@@ -285,6 +291,7 @@ RUNTIME: dict[str, Any] = {
     "_put_pin": _put_pin,
     "_cell_q": _cell_q,
     "_cell_v": _cell_v,
+    "_s5t": _s5t,
 }
 
 

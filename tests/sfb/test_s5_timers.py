@@ -36,7 +36,7 @@ def test_on_delay_sets_q_7_s_after_the_rising_edge_and_s_false_resets_it() -> No
             (6990, True, False, False),
             (7000, True, False, True),
             (9000, True, False, True),
-            (9001, False, False, False),  # S -> 0: Q and value reset
+            (9001, False, False, False),  # S -> 0: Q = 0
             (10000, True, False, False),
             (15000, False, False, False),  # S fell before 7 s: never set
             (30000, False, False, False),
@@ -253,3 +253,96 @@ def test_a_timer_number_outside_the_cells_is_a_programming_error_saying_which_wa
         s5.cell_of(timers, 4)
     with pytest.raises(ProgramError, match=r"T-1: timer number negative"):
         s5.cell_of(timers, -1)
+
+
+def test_a_pulse_stopped_by_s_falling_keeps_its_time_left() -> None:
+    """STEP 7 Statement List manual, SP: "the time is stopped" when the RLO falls before it
+    elapsed — Q = 0, and ``L T n`` reads the time left until R or a new start."""
+    cell = drive("SP", 1000, [(0, True, False, True), (300, False, False, False)])
+    assert not cell.running and cell.binary() == 70
+    s5.tick(cell, 900 * MS)
+    assert cell.binary() == 70
+
+
+def test_an_on_delay_stopped_by_s_falling_keeps_its_time_left_and_q_0() -> None:
+    """STEP 7 Statement List manual, SD: the time is stopped (not reset) when the RLO falls
+    before it elapsed; only R clears the value."""
+    cell = drive("SD", 1000, [(0, True, False, False), (400, False, False, False)])
+    assert not cell.running and cell.binary() == 60
+    s5.tick(cell, 2000 * MS)
+    assert not cell.q and cell.binary() == 60
+    assert s5.run(cell, "SD", False, 1000, 2010 * MS, r=True) is False
+    assert cell.binary() == 0
+
+
+def test_a_reset_timer_whose_s_stays_1_starts_again_only_on_a_new_rising_edge() -> None:
+    """R acts as a level and dominates; the start needs a rising edge of S, so a timer reset
+    while S holds 1 stays reset until S falls and rises again."""
+    drive(
+        "SD",
+        100,
+        [
+            (0, True, False, False),
+            (50, True, True, False),  # reset while running
+            (60, True, False, False),  # S held: no edge, no start
+            (500, True, False, False),
+            (510, False, False, False),
+            (520, True, False, False),  # a new edge starts it
+            (619, True, False, False),
+            (620, True, False, True),
+        ],
+    )
+
+
+def test_a_rising_fr_restarts_a_timer_whose_s_is_held() -> None:
+    """FR (enable): a rising edge of its RLO while S = 1 starts the timer again without an
+    edge at S (STEP 7 Statement List manual, FR)."""
+    cell = S5Timer()
+    s5.run(cell, "SE", True, 100, 0)
+    assert s5.run(cell, "SE", True, 100, 100 * MS) is False  # elapsed, S still 1
+    assert s5.run(cell, "SE", True, 100, 150 * MS, fr=True) is True  # FR rises: restart
+    assert cell.binary() == 10
+    assert s5.run(cell, "SE", True, 100, 160 * MS, fr=True) is True  # FR held: no new start
+    assert s5.run(cell, "SE", True, 100, 250 * MS, fr=True) is False
+
+
+def test_a_preset_between_two_counts_of_its_time_base_is_cut_to_the_lower_count() -> None:
+    """S5T#12S15MS needs the 100 ms base (1201 units of 10 ms do not fit in three digits):
+    120 × 100 ms, the 15 ms dropped; the timer then counts and reads in units of 100 ms."""
+    assert s5.s5time_encode(12_015) == 0x1120
+    cell = S5Timer()
+    s5.run(cell, "SE", True, 12_015, 0)
+    assert (cell.preset_ms, cell.time_base_ms, cell.binary()) == (12_000, 100, 120)
+
+
+def test_a_timer_started_with_an_s5time_word_counts_in_the_words_time_base() -> None:
+    """``L W#16#1001`` then a start: 1 × 100 ms, not 10 × 10 ms — the word's time base is
+    the timer's (its accuracy and the unit of ``L T n``)."""
+    cell = S5Timer()
+    assert s5.start(cell, "SE", 0x1001, 0) is True
+    assert (cell.preset_ms, cell.time_base_ms, cell.binary()) == (100, 100, 1)
+    s5.tick(cell, 99 * MS)
+    assert cell.q
+    s5.tick(cell, 100 * MS)
+    assert not cell.q
+
+
+def test_an_off_delay_started_for_the_next_update_holds_q_and_counts_from_that_update() -> None:
+    """The TF row's off delay: Q = 1 at once, the time counted from the next OS update."""
+    cell = S5Timer()
+    s5.start_off_delay_at_next_update(cell, 0x0010, 5 * MS)  # 10 × 10 ms
+    assert cell.q and cell.binary() == 10
+    s5.tick(cell, 30 * MS)  # the next scan: the delay starts here
+    assert cell.q and cell.binary() == 10
+    s5.tick(cell, 129 * MS)
+    assert cell.q
+    s5.tick(cell, 130 * MS)
+    assert not cell.q and cell.binary() == 0
+
+
+def test_an_off_delay_of_zero_time_started_for_the_next_update_drops_q_there() -> None:
+    cell = S5Timer()
+    s5.start_off_delay_at_next_update(cell, 0x0000, 5 * MS)
+    assert cell.q
+    s5.tick(cell, 10 * MS)
+    assert not cell.q and not cell.running
