@@ -9,11 +9,15 @@ is acknowledged — its condition's event goes out from the ``Server`` object, w
 ``ActiveState``, ``AckedState`` and ``Retain`` (active, or waiting for its
 acknowledgement); a message that has left the list sends its last event with ``Retain``
 false. ``ConditionRefresh`` replays the retained ones (asyncua's subscription service).
+Just before an event goes out, the condition node's state children take what it says
+(``web.opcua.conditions``), for a client that reads rather than subscribes.
 
 ``Acknowledge`` on a condition sends ``ack_msg`` for its message under the OPC UA
 session's own login — the gate checks the role and audits it under that user, and a
 supervision message acknowledged so releases its step, as from any other face. The
-EventId must be one the condition sent; the comment is not kept.
+EventId must be one the condition sent; the comment is not kept. Called on an object that
+is no condition it is ``BadMethodInvalid``, on the condition type ``BadNodeIdInvalid``
+(OPC UA Part 9, "Acknowledge").
 """
 
 from __future__ import annotations
@@ -33,7 +37,9 @@ from asyncua.crypto.permission_rules import UserRole
 from s7graph.engine.errors import internal_error
 from s7graph.web.bus.protocol import AlarmEntry, AlarmList, CommandReply
 from s7graph.web.commands import AckMsg, Args, Command, MessageArgs
+from s7graph.web.opcua.conditions import event_values, show
 from s7graph.web.opcua.sessions import caller
+from s7graph.web.opcua.statuses import is_condition, node_class
 from s7graph.web.opcua.typed import ObjectIds, Server, StatusCodes, ua_id, ua_status
 
 __all__ = ["Alarms", "Send", "condition_name"]
@@ -189,12 +195,28 @@ class Alarms:
         ev.EventId = event_id
         ev.Time = when or now
         ev.ReceiveTime = now
+        await self._state(cond)  # first: a client reading on the event reads its state
         try:
             await self.server.iserver.subscription_service.trigger_event(ev)
         except Exception as exc:  # one client's broken filter must not stop the others
             why = internal_error("while sending an alarm event", exc)
             _log.warning("opcua: an alarm event was not sent: %s", why)
         self.triggered += 1
+
+    async def _state(self, cond: _Condition) -> None:
+        """The condition node's state children as its last event says."""
+        try:
+            await show(self.server, cond.nid, event_values(cond.event))
+        except Exception as exc:  # the event goes out all the same
+            why = internal_error(f"while writing the state of {cond.nid.to_string()}", exc)
+            _log.warning("opcua: a condition's state was not written: %s", why)
+
+    async def restate(self) -> None:
+        """Write every condition's state children again (an online change made a step's
+        condition node anew: it holds its last event's state again)."""
+        for cond in self._by_node.values():
+            if cond.event_ids:
+                await self._state(cond)
 
     # ------------------------------------------------------------ Acknowledge
 
@@ -214,10 +236,15 @@ class Alarms:
     def _ack_problem(
         self, parent: ua.NodeId, cond: _Condition | None, inputs: tuple[Any, ...]
     ) -> int | None:
-        """Why ``Acknowledge`` is refused before the CPU is asked, in this order: who may
-        (an anonymous session never), how many arguments, their types (an EventId's
-        ByteString, a Comment's LocalizedText or nothing), then which event: a condition
-        of no message yet knows no event (``BadEventIdUnknown``)."""
+        """Why ``Acknowledge`` is refused before the CPU is asked, in this order: on what
+        (OPC UA Part 9, "Acknowledge": a type node ``BadNodeIdInvalid``, an object that is
+        no condition ``BadMethodInvalid``), who may (an anonymous session never), how many
+        arguments, their types (an EventId's ByteString, a Comment's LocalizedText or
+        nothing), then which event: one the condition did not send — a condition of no
+        message yet sent none — is ``BadEventIdUnknown``."""
+        problem = self._target_problem(parent)
+        if problem is not None:
+            return problem
         if caller().role is UserRole.Anonymous:
             return StatusCodes.BadUserAccessDenied
         if len(inputs) < 2:
@@ -231,11 +258,20 @@ class Alarms:
             comment.Value is None or isinstance(comment.Value, ua.LocalizedText)
         ):
             return StatusCodes.BadTypeMismatch
-        if cond is None:
-            known = self.server.iserver.aspace.get(parent) is not None
-            return StatusCodes.BadEventIdUnknown if known else StatusCodes.BadNodeIdUnknown
-        if event_id.Value not in cond.event_ids:
+        if cond is None or event_id.Value not in cond.event_ids:
             return StatusCodes.BadEventIdUnknown
         if cond.msg_id is None or cond.event.AckedState.Text == "Acknowledged":
             return StatusCodes.BadConditionBranchAlreadyAcked
+        return None
+
+    def _target_problem(self, parent: ua.NodeId) -> int | None:
+        """Why ``parent`` is no object to acknowledge on (None: it is a condition)."""
+        aspace = self.server.iserver.aspace
+        kind = node_class(aspace, parent)
+        if kind is None:
+            return StatusCodes.BadNodeIdUnknown
+        if kind is not ua.NodeClass.Object:
+            return StatusCodes.BadNodeIdInvalid  # the condition type itself, or no object
+        if not is_condition(aspace, parent):
+            return StatusCodes.BadMethodInvalid
         return None

@@ -227,6 +227,7 @@ class Face:
             self.space.fbs[fb].version = -1  # another chart, whatever its number
         self.layouts[fb] = layout
         await self.space.build_chart(fb, layout)
+        await self.alarms.restate()  # a step made anew: its conditions' state again
         self.rebuilt()
         latest = self.latest.get(fb)
         if latest is not None:
@@ -269,7 +270,7 @@ class Face:
 
     async def _message_where(self, entry: AlarmEntry) -> tuple[ua.NodeId, ua.NodeId, str, str, str]:
         key = str(entry.msg_id)
-        nid = await self.space.message_condition(key, entry.text)
+        nid = await self.space.message_condition(key, entry.text, entry.kind)
         fb = entry.fb if entry.fb in self.space.fbs else self.first_fb
         return nid, self.space.root, entry.source or self.space.cpu, f"Message {key}", fb
 

@@ -180,17 +180,15 @@ class Nodes:
         data_type: int,
         *,
         array: bool = False,
+        type_def: int = ObjectIds.PropertyType,
     ) -> ua.NodeId:
-        """A property ``name`` of ``parent`` (its node id: the parent's, then ``/name``)."""
+        """A property ``name`` of ``parent`` (its node id: the parent's, then ``/name``;
+        its browse name in namespace 0), read only, holding ``value``; with another
+        ``type_def`` (a ``TwoStateVariableType``) a component variable of that type."""
         nid = child_id(parent, name)
-        item = self._item(
-            parent,
-            nid,
-            name,
-            ua.NodeClass.Variable,
-            ObjectIds.HasProperty,
-            ObjectIds.PropertyType,
-        )
+        prop = type_def == ObjectIds.PropertyType
+        ref = ObjectIds.HasProperty if prop else ObjectIds.HasComponent
+        item = self._item(parent, nid, name, ua.NodeClass.Variable, ref, type_def)
         item.BrowseName = ua.QualifiedName(name, 0)
         attrs = ua.VariableAttributes()
         attrs.DisplayName = ua.LocalizedText(name)

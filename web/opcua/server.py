@@ -36,6 +36,7 @@ from cryptography.hazmat.primitives.asymmetric.types import PrivateKeyTypes
 from s7graph.web.bus.protocol import CpuStatus
 from s7graph.web.collector import quiet_collector
 from s7graph.web.opcua.face import Face, FaceAttributes
+from s7graph.web.opcua.framing import FaceUaServer
 from s7graph.web.opcua.link import BusLink
 from s7graph.web.opcua.model import NAMESPACE_URI
 from s7graph.web.opcua.sessions import BusUsers, FaceRules, FaceServer, Limits
@@ -299,7 +300,7 @@ class OpcuaServer:
         iserver.max_pending_activation_seconds = 10.0
         iserver.max_monitored_item_queue_size = 1000
         InternalSession.max_connections = limits.sessions  # asyncua counts them there
-        server = Server(iserver=iserver)
+        server = FaceUaServer(iserver=iserver)  # a chunk too large ends its connection
         await server.init()
         cpu = self.status.cpu
         server.set_endpoint(options.url)

@@ -34,6 +34,7 @@ from asyncua.server.internal_session import InternalSession
 from asyncua.server.user_managers import UserManager
 
 from s7graph.web.access.lockout import Lockout
+from s7graph.web.opcua.statuses import call_problem, fix_browse, fix_translate, missing
 from s7graph.web.opcua.typed import AttributeIds, StatusCodes, ua_id, ua_status
 
 __all__ = [
@@ -270,13 +271,17 @@ class FaceSession(InternalSession):
 
     async def browse(self, params: ua.BrowseParameters) -> list[ua.BrowseResult]:
         await self._serve(len(params.NodesToBrowse), len(params.NodesToBrowse))
-        return await super().browse(params)
+        results = await super().browse(params)
+        fix_browse(self.aspace, params.NodesToBrowse, results)
+        return results
 
     async def translate_browsepaths_to_nodeids(
         self, params: list[ua.BrowsePath]
     ) -> list[ua.BrowsePathResult]:
         await self._serve(len(params), len(params))
-        return await super().translate_browsepaths_to_nodeids(params)
+        results = await super().translate_browsepaths_to_nodeids(params)
+        fix_translate(self.aspace, params, results)
+        return results
 
     async def register_nodes(self, nodes: list[ua.NodeId]) -> list[ua.NodeId]:
         await self._serve(len(nodes), len(nodes))
@@ -286,12 +291,20 @@ class FaceSession(InternalSession):
         raise ServiceError(StatusCodes.BadHistoryOperationUnsupported)
 
     async def call(self, params: list[ua.CallMethodRequest]) -> list[ua.CallMethodResult]:
+        """The calls of a request; one naming no object or no method is answered here
+        (``web.opcua.statuses.call_problem``), the others by their methods."""
         await self._serve(len(params), len(params) * COST_CALL)
+        problems = [call_problem(self.aspace, request) for request in params]
+        served = [r for r, p in zip(params, problems, strict=True) if p is None]
         mark = CALLER.set(self.user)
         try:
-            return await super().call(params)
+            done = iter(await super().call(served) if served else [])
         finally:
             CALLER.reset(mark)
+        return [
+            next(done) if p is None else ua.CallMethodResult(StatusCode=ua_status(p))
+            for p in problems
+        ]
 
     def _subscriptions(self) -> list[Any]:
         subs = self.subscription_service.subscriptions.values()
@@ -327,18 +340,28 @@ class FaceSession(InternalSession):
             refused = ua.MonitoredItemCreateResult()
             refused.StatusCode = ua_status(StatusCodes.BadTooManyMonitoredItems)
             return [refused for _ in range(asked)]
-        wrong = [not _filter_fits(item) for item in params.ItemsToCreate]
-        if not any(wrong):
+        problems = [self._item_problem(item) for item in params.ItemsToCreate]
+        if not any(problems):
             return await super().create_monitored_items(params)
         # the items that fit, in a request of their own (the one given stays as sent)
         fitting = copy.copy(params)
         fitting.ItemsToCreate = [
-            i for i, w in zip(params.ItemsToCreate, wrong, strict=True) if not w
+            i for i, p in zip(params.ItemsToCreate, problems, strict=True) if p is None
         ]
         made = iter(await super().create_monitored_items(fitting) if fitting.ItemsToCreate else [])
-        refused = ua.MonitoredItemCreateResult()
-        refused.StatusCode = ua_status(StatusCodes.BadFilterNotAllowed)
-        return [refused if w else next(made) for w in wrong]
+        return [
+            next(made) if p is None else ua.MonitoredItemCreateResult(StatusCode=ua_status(p))
+            for p in problems
+        ]
+
+    def _item_problem(self, item: ua.MonitoredItemCreateRequest) -> int | None:
+        """Why a monitored item is not made (None: asyncua makes it): no such node (an
+        event item of no node was asyncua's ``BadServiceUnsupported``), or a filter that
+        does not go with its attribute."""
+        problem = missing(self.aspace, item.ItemToMonitor.NodeId)
+        if problem is not None:
+            return problem
+        return None if _filter_fits(item) else StatusCodes.BadFilterNotAllowed
 
 
 _CURRENT_WRITE: Final = 0x02  # AccessLevel's CurrentWrite bit

@@ -34,7 +34,8 @@ from s7graph.web.bus.protocol import (
     StepStateUpdate,
 )
 from s7graph.web.opcua import sync
-from s7graph.web.opcua.alarms import condition_name
+from s7graph.web.opcua.alarms import SEVERITY, condition_name
+from s7graph.web.opcua.conditions import add_condition
 from s7graph.web.opcua.diag import event_id_text
 from s7graph.web.opcua.methods import MethodSpec, output_arguments
 from s7graph.web.opcua.model import (
@@ -373,12 +374,13 @@ class Space:
         for kind, flag in (("IL", step.interlock), ("SV", step.supervision)):
             if flag:
                 cond = self.nid(fb, key, condition_name(kind))
-                n.obj(
+                add_condition(
+                    n,
                     nid,
                     cond,
                     condition_name(kind),
                     display=f"{key} {condition_name(kind)}",
-                    type_def=ObjectIds.AlarmConditionType,
+                    severity=SEVERITY[kind],
                 )
                 n.reference(nid, cond, ObjectIds.HasCondition)
                 nodes.conditions[kind] = cond
@@ -557,19 +559,20 @@ class Space:
         nodes = fbn.steps.get(step) if fbn is not None else None
         return nodes.node if nodes is not None else None
 
-    async def message_condition(self, key: str, text: str) -> ua.NodeId:
+    async def message_condition(self, key: str, text: str, kind: str = "") -> ua.NodeId:
         """The condition node of a message of no step, ``Messages/<key>`` (made now when
-        it is new)."""
+        it is new; ``kind`` the message's, for its severity)."""
         nid = self.nid("Messages", key)
         if nid not in self.nodes.under:
             self.nodes.root(nid)
-            self.nodes.obj(
+            add_condition(
+                self.nodes,
                 self.nid("Messages"),
                 nid,
                 key[:128],
                 display=f"Message {key}",
                 description=text or key,
-                type_def=ObjectIds.AlarmConditionType,
+                severity=SEVERITY.get(kind, SEVERITY[""]),
             )
             self.nodes.end_root()
             self.nodes.reference(self.root, nid, ObjectIds.HasCondition)

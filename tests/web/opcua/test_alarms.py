@@ -2,7 +2,8 @@
 interlock and a supervision message are AlarmConditionType events of their step's
 conditions with their state; ``Acknowledge`` from an OPC UA client releases the step as
 ``ack_msg`` does and is audited under the OPC UA user; ``ConditionRefresh`` replays what
-is retained; an anonymous session cannot acknowledge (docs/opcua.md, "Alarms and
+is retained; an anonymous session cannot acknowledge; a client that browses and reads a
+condition node reads the state of its last event (docs/opcua.md, "Alarms and
 conditions")."""
 
 from __future__ import annotations
@@ -128,3 +129,72 @@ async def _alarms(face: FaceRig) -> None:
 
 async def _holds(events: list[dict[str, Any]], name: str, value: object) -> bool:
     return bool(events) and _value(events[-1], name) == value
+
+
+STATE = ("ActiveState/Id", "AckedState/Id", "EnabledState/Id", "Retain")
+
+
+async def _state(c: Any, condition: str) -> dict[str, Any]:
+    """The condition's state children as a client reads them."""
+    return {name: await node(c, f"{condition}/{name}").read_value() for name in STATE}
+
+
+def test_a_condition_node_holds_its_last_events_state_for_a_client_that_reads(
+    tmp_path: Path, bus_certs: BusCerts
+) -> None:
+    with face_rig(tmp_path, bus_certs) as face:
+        run(_read_state(face))
+
+
+async def _read_state(face: FaceRig) -> None:
+    supervision = "cpu1/Seq_mix/S2/Supervision"
+    async with connected(face.url, "olga") as c:
+        children = {
+            (await k.read_browse_name()).Name: k for k in await node(c, supervision).get_children()
+        }
+        assert {"ActiveState", "AckedState", "EnabledState", "Retain", "Severity"} <= set(children)
+        assert {"Message", "Time"} <= set(children)
+        for state in ("ActiveState", "AckedState", "EnabledState"):
+            kids = [(await k.read_browse_name()).Name for k in await children[state].get_children()]
+            assert "Id" in kids, state
+        before = {"ActiveState/Id": False, "AckedState/Id": True, "EnabledState/Id": True}
+        assert await _state(c, supervision) == {**before, "Retain": False}  # no message yet
+        assert await node(c, f"{supervision}/Severity").read_value() == 700
+        events = Events()
+        sub = await c.create_subscription(20, events)
+        await sub.subscribe_alarms_and_conditions(c.nodes.server, ua.ObjectIds.AlarmConditionType)
+        face.set("Guard", True)
+        face.set("Start", True)  # S2: past 400 ms its supervision latches
+
+        async def reads(active: bool, acked: bool) -> bool:
+            got = events.of(supervision)
+            state = await _state(c, supervision)
+            told = {name: _value(got[-1], name) for name in STATE} if got else None
+            return (
+                state["ActiveState/Id"] is active
+                and state["AckedState/Id"] is acked
+                and (
+                    state == told  # what its last event said
+                )
+            )
+
+        assert await eventually(lambda: reads(active=True, acked=False)), events.seen
+        came = await _state(c, supervision)
+        assert came["Retain"] is True and came["EnabledState/Id"] is True
+        assert await node(c, f"{supervision}/ActiveState").read_value() == ua.LocalizedText(
+            "Active"
+        )
+        assert await node(c, f"{supervision}/Time").read_value() is not None
+        text = await node(c, f"{supervision}/Message").read_value()
+        assert text == _value(events.of(supervision)[-1], "Message")
+        with pytest.raises(UaStatusCodeError) as refused:  # read only, for everyone
+            await node(c, f"{supervision}/ActiveState/Id").write_value(False)
+        assert refused.value.code == ua.StatusCodes.BadNotWritable
+
+        face.set("Level", 200)  # T2 goes once the fault is acknowledged
+        event_id = _value(events.of(supervision)[-1], "EventId")
+        await node(c, supervision).call_method(ACK, event_id, ua.LocalizedText("seen"))
+        assert await eventually(lambda: reads(active=False, acked=True)), events.seen
+        assert wait_until(lambda: face.active() == [3])
+        face.set("Start", False)
+        await sub.delete()

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import asyncio
 import socket
+import struct
+import time
 from collections.abc import Iterator
 from typing import TYPE_CHECKING
 from urllib.parse import urlparse
@@ -204,7 +206,7 @@ def test_wrong_arguments_are_refused_by_status_code(face: FaceRig) -> None:
             bad = await call(c, SET_MODE, ua.Variant("FAST"))
             assert bad.StatusCode.value == ua.StatusCodes.BadInvalidArgument
             bad = await call(c, ua.NodeId("cpu1/Seq_mix/NoSuchOp", 2))
-            assert bad.StatusCode.value == ua.StatusCodes.BadNodeIdInvalid
+            assert bad.StatusCode.value == ua.StatusCodes.BadMethodInvalid
             with pytest.raises(UaStatusCodeError) as refused:
                 await node(c, "cpu1/NoSuchNode").read_value()
             assert _code(refused.value) == ua.StatusCodes.BadNodeIdUnknown
@@ -212,6 +214,77 @@ def test_wrong_arguments_are_refused_by_status_code(face: FaceRig) -> None:
     run(check())
     after = [r for r in read_audit(face.rig.state) if r.op not in ("login", "logout")]
     assert after == before  # no command went to the CPU
+
+
+def test_a_node_id_of_no_node_is_unknown_and_a_call_of_no_method_is_method_invalid(
+    face: FaceRig,
+) -> None:
+    """OPC UA Part 4: a well-formed node id of no node is ``BadNodeIdUnknown`` (Browse,
+    TranslateBrowsePathsToNodeIds, Call's object, an event item), the null node id or a
+    call's object that is no object ``BadNodeIdInvalid``, a call's method that is no
+    method ``BadMethodInvalid``, one not implemented ``BadNotImplemented``; Part 9:
+    ``Acknowledge`` on an object that is no condition ``BadMethodInvalid``, on the
+    condition type ``BadNodeIdInvalid``. Nothing reaches the CPU."""
+    before = len(read_audit(face.rig.state))
+    nowhere = ua.NodeId("cpu1/NoSuchNode", 2)
+    ack = ua.NodeId(ua.ObjectIds.AcknowledgeableConditionType_Acknowledge)
+    supervision = ua.NodeId("cpu1/Seq_mix/S2/Supervision", 2)
+
+    def call(obj: ua.NodeId, method: ua.NodeId, *args: object) -> ua.CallMethodRequest:
+        return ua.CallMethodRequest(ObjectId=obj, MethodId=method, InputArguments=list(args))
+
+    async def check() -> None:
+        async with connected(face.url, "olga") as c:
+            browsed = await c.uaclient.browse(
+                ua.BrowseParameters(
+                    NodesToBrowse=[
+                        ua.BrowseDescription(NodeId=nowhere),
+                        ua.BrowseDescription(NodeId=ua.NodeId()),
+                        ua.BrowseDescription(NodeId=ua.NodeId("cpu1", 2)),
+                    ]
+                )
+            )
+            assert [r.StatusCode.name for r in browsed] == [
+                "BadNodeIdUnknown",
+                "BadNodeIdInvalid",
+                "Good",
+            ]
+            path = ua.BrowsePath(StartingNode=nowhere)
+            path.RelativePath.Elements = [ua.RelativePathElement(TargetName=ua.QualifiedName("X"))]
+            (found,) = await c.uaclient.translate_browsepaths_to_nodeids([path])
+            assert found.StatusCode.name == "BadNodeIdUnknown"
+            words = ua.Variant(b"x"), ua.Variant(ua.LocalizedText("x"))
+            called = await c.uaclient.call(
+                [
+                    call(nowhere, ua.NodeId("cpu1/Seq_mix/Init", 2)),
+                    call(ua.NodeId("cpu1/State", 2), ua.NodeId("cpu1/Seq_mix/Init", 2)),
+                    call(ua.NodeId("cpu1/Seq_mix", 2), ua.NodeId("cpu1/Seq_mix/NoSuchOp", 2)),
+                    call(ua.NodeId("cpu1/Seq_mix", 2), ua.NodeId("cpu1/Seq_mix/Mode", 2)),
+                    call(supervision, ua.NodeId(ua.ObjectIds.ConditionType_Disable)),
+                    call(ua.NodeId("cpu1/Symbols", 2), ack, *words),
+                    call(ua.NodeId(ua.ObjectIds.AcknowledgeableConditionType), ack, *words),
+                    call(supervision, ack, *words),
+                ]
+            )
+            assert [r.StatusCode.name for r in called] == [
+                "BadNodeIdUnknown",
+                "BadNodeIdInvalid",
+                "BadMethodInvalid",
+                "BadMethodInvalid",
+                "BadNotImplemented",
+                "BadMethodInvalid",
+                "BadNodeIdInvalid",
+                "BadEventIdUnknown",  # a condition: an event it never sent
+            ]
+            sub = await c.create_subscription(100, None)
+            with pytest.raises(UaStatusCodeError) as refused:
+                await sub.subscribe_events(nowhere)
+            assert _code(refused.value) == ua.StatusCodes.BadNodeIdUnknown
+            await sub.delete()
+
+    run(check())
+    rows = read_audit(face.rig.state)[before:]
+    assert [r for r in rows if r.op not in ("login", "logout")] == []
 
 
 def test_no_client_registers_a_server_with_the_face(face: FaceRig) -> None:
@@ -240,6 +313,38 @@ def test_garbage_on_the_socket_costs_that_connection_only(face: FaceRig) -> None
                     pass
             except OSError:
                 pass
+
+    async def check() -> None:
+        async with connected(face.url) as c:
+            assert await node(c, "cpu1/State").read_value() == "RUN"
+
+    run(check())
+
+
+def test_a_chunk_larger_than_the_server_receives_ends_its_connection_at_its_header(
+    face: FaceRig,
+) -> None:
+    """A header claiming a chunk of 4 GiB ends that connection with
+    ``BadTcpMessageTooLarge`` before its body: asyncua buffered all a client sent behind
+    it, copying the buffer on every read — other clients waited, memory grew."""
+    where = urlparse(face.url)
+    for header in (
+        b"MSGF" + struct.pack("<II", 0xFFFF_FFF0, 1),
+        b"HELF" + struct.pack("<I", 0xFFFF_FFF0),
+    ):
+        with socket.create_connection((where.hostname, where.port), timeout=5) as s:
+            s.sendall(header + b"\0" * 100_000)  # the body a chunk that large would have
+            s.settimeout(5)
+            got, start = b"", time.monotonic()
+            try:
+                while chunk := s.recv(65536):
+                    got += chunk
+            except OSError:
+                pass
+            assert time.monotonic() - start < 4, "the connection was kept open"
+            assert got[:4] == b"ERRF", got[:40]
+            (code,) = struct.unpack_from("<I", got, 8)
+            assert code == ua.StatusCodes.BadTcpMessageTooLarge
 
     async def check() -> None:
         async with connected(face.url) as c:
