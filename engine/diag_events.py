@@ -19,7 +19,15 @@ from s7graph.engine.diagnostics import EventId
 from s7graph.engine.interrupts import class_at_start, priority
 from s7graph.engine.record import DiagEntry
 
-__all__ = ["EVENT_TEXTS", "event_text", "hex_id", "priority_class", "requested_ob", "stop_cause"]
+__all__ = [
+    "EVENT_TEXTS",
+    "event_text",
+    "hex_id",
+    "last_error_stop",
+    "priority_class",
+    "requested_ob",
+    "stop_cause",
+]
 
 EVENT_TEXTS: dict[int, str] = {
     EventId.TYPE_ERROR: "Type error: a value that does not fit its type",
@@ -153,3 +161,28 @@ def stop_cause(entries: Iterable[DiagEntry], stop: DiagEntry) -> DiagEntry | Non
             return None
         before = entry
     return None
+
+
+_LEFT_STOP = frozenset({EventId.STARTUP_TO_RUN, EventId.STOP_BY_SWITCH, EventId.STOP_BY_REQUEST})
+"""Events after which the buffer's last STOP by an error is no longer why the CPU stopped."""
+
+
+def last_error_stop(entries: Iterable[DiagEntry]) -> str | None:
+    """Why the CPU stopped, when its last STOP (in ``entries``, a diagnostic buffer oldest
+    first) was one by an error (``16#45xx``) it has not restarted from since: the STOP
+    entry's message, after the error entry that caused it (``stop_cause``); None otherwise
+    (it stopped by the switch or a request, or it was in RUN: a power cut)."""
+    held = list(entries)
+    for entry in reversed(held):
+        if entry.event_id in _LEFT_STOP:
+            return None
+        if entry.event_id >> 8 == 0x45:
+            cause = stop_cause(held, entry)
+            if cause is None:
+                return _said(entry)
+            return f"{_said(cause)} ({entry.message})"
+    return None
+
+
+def _said(entry: DiagEntry) -> str:
+    return f"{entry.block}: {entry.message}" if entry.block else entry.message

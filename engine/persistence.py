@@ -78,6 +78,7 @@ import msgspec
 
 from s7graph.engine.blocks import FB, BlockKind, Decl, InstanceDB
 from s7graph.engine.cpu import Cpu
+from s7graph.engine.diag_events import last_error_stop
 from s7graph.engine.diagnostics import EventId
 from s7graph.engine.errors import S7Error
 from s7graph.engine.file_lock import try_lock
@@ -357,6 +358,9 @@ class LoadReport:
     changed: list[int] = field(default_factory=list)
     """Instance DBs whose FB changed since the file was written (carried over)."""
     notes: list[str] = field(default_factory=list)
+    stopped: str = ""
+    """Why the last run went to STOP by an error, read back from its diagnostic buffer
+    (``engine.diag_events.last_error_stop``); empty when it did not."""
 
 
 _MODES: Final = frozenset(str(m) for m in CpuMode)
@@ -483,6 +487,10 @@ class StateStore:
     def _next_diag_seq(self) -> int:
         row = self._db.execute("SELECT MAX(seq) FROM diagnostics").fetchone()
         return 0 if row is None or row[0] is None else int(row[0]) + 1
+
+    def diagnostics_saved(self) -> int:
+        """The number of the next diagnostics row: every entry below it is in the file."""
+        return self._next_diag_seq()
 
     def close(self) -> None:
         self._db.close()
@@ -800,6 +808,7 @@ class StateStore:
         for entry in saved:
             cpu.diagnostics.add(entry)
         cpu.diagnostics.continue_from(self._diag_seq)  # numbered on from the last run's
+        report.stopped = last_error_stop(saved) or ""
         stopped = stop_blocker(saved)
         if stopped is not None:
             cpu.hot_blockers.add(stopped)

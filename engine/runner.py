@@ -89,6 +89,7 @@ from s7graph.engine.record import DiagEntry, ScanRecord
 from s7graph.engine.restart import RestartType, error_blocker
 from s7graph.engine.switching import switching
 from s7graph.engine.watchdog import COMM_LOAD_PCT, CycleStatistics
+from s7graph.engine.write_stop import leave_trace, stop_on_write_error
 from s7graph.engine.writer import DurableCallback, StoreWriter
 
 __all__ = [
@@ -311,6 +312,8 @@ class Runner:
         self.stopped = ""
         """Why the CPU went to STOP by itself while running (one line), else empty."""
         self.write_error: StateWriteError | None = None
+        self.trace = ""
+        """After a write error: whether the STOP's entry reached the file at the end, in words."""
         self.rt_priority = rt_priority
         self.comm_load_pct = comm_load_pct
         self.comm_budget_ns = int(self.cycle_s * 1e9 * comm_load_pct / 100)
@@ -565,9 +568,9 @@ class Runner:
                 self.on_note(note)
         if writer.error is not None and self.write_error is None:
             self.write_error = writer.error
-            self.cpu.stop_by_error(
-                EventId.STOP_STATE_WRITE, "", f"state file not written: {writer.error.problem}"
-            )
+            self.stopped = stop_on_write_error(self.cpu, writer.error)  # engine/write_stop.py
+            if self.on_stop is not None:
+                self.on_stop(self.stopped)  # at once: the file may never take the entry
 
     def _finish_staging(self, *, carry: bool = True) -> None:
         """Before the next scan changes it: the last staging encoded, or carried over to the
@@ -666,6 +669,8 @@ class Runner:
                 self.store.save(self.cpu, clean=True, before=left)
             except StateWriteError as exc:
                 self.write_error = exc
+        elif self.store is not None:  # the entries the file lacks, the STOP's among them
+            self.trace = leave_trace(self.store, self.cpu)
         self._done.set()
         return record
 

@@ -68,4 +68,6 @@ CODES: Final[dict[str, str]] = {
     "W120": "empty transition condition (always holds)",
     "W122": "rows marked C on a step without an interlock",
     "W130": "simultaneous branch that can never join",
+    "W140": "operand beyond the memory of a default CPU (s7graph check, which knows no CPU: "
+    "sequencer/checks/default_cpu.py)",
 }

@@ -5,7 +5,9 @@ One diagnostic a line on stdout (``file:line:col: error[E010]: message (element)
 summary line. Exit status: 0 clean, 1 warnings only, 2 errors (syntax errors included). An
 unreadable chart or symbol file is one line on stderr and exit 2. ``--blocks``: the S7-SCL
 sources whose blocks the chart's calls are checked against (E047,
-``sequencer.checks.user_calls``); their own diagnostics come first and count.
+``sequencer.checks.user_calls``); their own diagnostics come first and count. An operand
+beyond the memory of a default CPU warns (W140, ``sequencer.checks.default_cpu``): the check
+knows no CPU.
 """
 
 from __future__ import annotations
@@ -16,7 +18,13 @@ from pathlib import Path
 
 from s7graph.engine.errors import S7Error
 from s7graph.engine.symbols import SymbolTable
-from s7graph.sequencer.checks.diagnostics import Diagnostic, format_diagnostic, warning
+from s7graph.sequencer.checks.default_cpu import default_cpu_warnings
+from s7graph.sequencer.checks.diagnostics import (
+    Diagnostic,
+    format_diagnostic,
+    sort_key,
+    warning,
+)
 from s7graph.sequencer.checks.interfaces import ProgramBlocks
 from s7graph.sequencer.checks.validate import validate
 from s7graph.sequencer.text.model import Chart
@@ -55,6 +63,7 @@ def check_command(chart: Path, symbols: Path | None = None, blocks: Sequence[Pat
         parsed = parse_chart(chart_text(data, str(chart)), str(chart))
         diags = validate(parsed, table, blocks=program)
         if not any(d.severity == "error" for d in diags):
+            diags = sorted([*diags, *default_cpu_warnings(parsed, table)], key=sort_key)
             diags += view_diagnostics(parsed)
     except ChartSyntaxError as exc:
         diags = exc.diagnostics

@@ -44,6 +44,7 @@ from s7graph.engine.persistence import StateFileError
 from s7graph.engine.record import ScanRecord
 from s7graph.engine.restart import parse_restart
 from s7graph.engine.runner import COMM_LOAD_PCT, RT_PRIORITY, Runner, core_for, keep_small_pages
+from s7graph.engine.write_stop import stop_words
 from s7graph.web.cli.report import fail
 from s7graph.web.cli.supervisor import child_marks, recovered_cause
 from s7graph.web.harness.persist import OpenedState, open_state, refusal
@@ -338,6 +339,18 @@ def _recover(runner: Runner, opened: OpenedState, what: str, recovered: tuple[st
     )
 
 
+def _say_last_run(opened: OpenedState) -> None:
+    """What the state file says of the last run: the notes of a carried-over state, and why
+    it went to STOP when that was by an error (``LoadReport.stopped``)."""
+    report = opened.report
+    if report is None:
+        return
+    for note in report.notes:
+        print(f"s7graph: note: {note}", file=sys.stderr)
+    if report.stopped:
+        print(f"s7graph: note: the last run went to STOP: {report.stopped}", file=sys.stderr)
+
+
 def run_until_stopped(
     runner: Runner,
     opened: OpenedState,
@@ -376,8 +389,7 @@ def run_until_stopped(
             record = runner.startup(restart)
             if on_start is not None:
                 on_start(record)
-            for note in opened.report.notes if opened.report is not None else ():
-                print(f"s7graph: note: {note}", file=sys.stderr)
+            _say_last_run(opened)
             done = str(cpu.last_restart or restart)
             print(f"s7graph: {what} in {cpu.mode} ({opened.describe(done)})", file=sys.stderr)
         if cpu.mode is CpuMode.RUN or (recovered is not None and not runner.end_on_stop):
@@ -391,10 +403,12 @@ def run_until_stopped(
             if close is not None:
                 close()
             store.close()
-    if runner.write_error is not None:
+    error = runner.write_error
+    if error is not None and runner.stopped != stop_words(error):  # else said at once
         print(f"s7graph: error: {runner.write_error}; the CPU went to STOP", file=sys.stderr)
-        return 1
-    if runner.stopped:
+    if runner.trace:
+        print(f"s7graph: note: {runner.trace}", file=sys.stderr)
+    if runner.write_error is not None or runner.stopped:
         return 1
     print(f"s7graph: {what} stopped (state saved in {store.path})", file=sys.stderr)
     return 0

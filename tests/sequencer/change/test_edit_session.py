@@ -26,6 +26,7 @@ from s7graph.sequencer.change.edit import (
 )
 from s7graph.sequencer.change.structure import InsertStep
 from s7graph.sequencer.change.typed import RowFields
+from s7graph.sequencer.checks.default_cpu import default_cpu_warnings
 from s7graph.sequencer.checks.diagnostics import Diagnostic, warning
 from s7graph.sequencer.checks.validate import validate
 from s7graph.sequencer.text.elements import (
@@ -234,7 +235,7 @@ def _diagnostics(path: Path) -> tuple[Chart | None, list[Diagnostic]]:
         c = parse_chart(path.read_text(encoding="utf-8"), path.name)
     except ChartSyntaxError as exc:
         return None, exc.diagnostics
-    return c, validate(c)
+    return c, validate(c) + default_cpu_warnings(c)  # and those of s7graph check (W140)
 
 
 PARSED = [p for p in BROKEN_CHARTS if _diagnostics(p)[0] is not None]  # syntax errors: no chart

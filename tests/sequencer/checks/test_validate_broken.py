@@ -2,7 +2,8 @@
 (``// expect: CODE line:col``, and ``(step S2)`` when it names the element it concerns); the
 front end must report exactly that code there. A chart
 with an S7-SCL source of the same name beside it is checked against that source's blocks
-(``s7graph check CHART.s7g --blocks CHART.scl``: E047)."""
+(``s7graph check CHART.s7g --blocks CHART.scl``: E047); a chart without errors also against
+a default CPU's memory, as ``s7graph check`` checks it (W140)."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ from pathlib import Path
 
 import pytest
 
+from s7graph.sequencer.checks.default_cpu import default_cpu_warnings
 from s7graph.sequencer.checks.diagnostics import CODES, Diagnostic
 from s7graph.sequencer.checks.interfaces import program_blocks
 from s7graph.sequencer.checks.validate import validate
@@ -29,9 +31,13 @@ def diagnostics_of(path: Path) -> list[Diagnostic]:
         program = compile_scl(scl.read_text(encoding="utf-8"), scl.name, blocks=SYSTEM_BLOCKS)
         blocks = program_blocks(program.blocks, program.instances, sources=scl.name)
     try:
-        return validate(parse_chart(path.read_text(encoding="utf-8"), path.name), blocks=blocks)
+        chart = parse_chart(path.read_text(encoding="utf-8"), path.name)
     except ChartSyntaxError as exc:
         return exc.diagnostics
+    found = validate(chart, blocks=blocks)
+    if not any(d.is_error for d in found):  # as s7graph check adds them (it knows no CPU)
+        found += default_cpu_warnings(chart)
+    return found
 
 
 def expectation(path: Path) -> tuple[str, int, int]:

@@ -69,3 +69,35 @@ def test_a_waiting_step_without_actions_is_clean(tmp_path: Path) -> None:
         encoding="utf-8",
     )
     assert check_command(chart, None) == 0
+
+
+def test_an_operand_beyond_a_default_cpus_memory_warns_naming_element_address_and_size(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``check`` knows no CPU: what a default CPU lacks warns (W140) — once per operand, at
+    its first use, a symbol with its address; what fits it (M255.7, T255) does not."""
+    chart = tmp_path / "far.s7g"
+    chart.write_text(
+        'FUNCTION_BLOCK "F"\nSEQUENCE 1\n'
+        "  INITIAL_STEP S1: N M300.0; N M255.7; N Q0.0; END_STEP\n"
+        "  STEP S2: N M300.0; END_STEP\n"
+        "  TRANSITION T1 FROM S1 TO S2 := T300 AND T255;\n"
+        '  TRANSITION T2 FROM S2 TO S1 := "Far" > 3;\nEND_SEQUENCE\nEND_FUNCTION_BLOCK\n',
+        encoding="utf-8",
+    )
+    syms = tmp_path / "s.txt"
+    syms.write_text('"Far" ; MW255 ; INT ; its second byte beyond MB255\n', encoding="utf-8")
+    assert check_command(chart, syms) == 1
+    tail = (
+        ": a download refuses the chart, a run stops the CPU at its first use (unless the CPU "
+        "has more)"
+    )
+    assert capsys.readouterr().out.splitlines() == [
+        f"{chart}:3:22: warning[W140]: M300.0 is beyond the M area of a default CPU (256 bytes, "
+        f"MB0 to MB255){tail} (step S1 row 1)",
+        f"{chart}:5:34: warning[W140]: T300 is beyond the timers of a default CPU (256, T0 to "
+        f"T255){tail} (transition T1)",
+        f'{chart}:6:34: warning[W140]: "Far" (MW255) is beyond the M area of a default CPU (256 '
+        f"bytes, MB0 to MB255){tail} (transition T2)",
+        f"{chart}: 0 errors, 3 warnings",
+    ]

@@ -6,16 +6,20 @@ with the view as without."""
 
 from __future__ import annotations
 
+import errno
+import os
 import resource
 import signal
 import sqlite3
 import subprocess
 import sys
 import textwrap
+import threading
 from pathlib import Path
 
 import pytest
 
+from s7graph.engine.persistence import Batch, StateStore
 from s7graph.web.cli import main
 from tests.paths import ROOT
 from tests.web.helpers import free_port
@@ -174,10 +178,45 @@ def test_a_state_file_that_cannot_grow_stops_the_run_with_one_line(
         preexec_fn=lambda: _no_room(room),
     )
     assert proc.returncode == 1, proc.stderr
-    (line,) = _errors(proc.stderr)
-    assert line.startswith(f"s7graph: error: {state}: cannot write the state: ")
-    assert "disk I/O error" in line or "database or disk is full" in line
-    assert line.endswith("; the CPU went to STOP") and "Traceback" not in proc.stderr
+    (line,) = _errors(proc.stderr)  # said when it stopped, not again at the end
+    assert line.startswith(
+        "s7graph: error: drill.s7g (Seq_drill): the CPU went to STOP: the state file could not "
+        "be written: "
+    )
+    assert "disk I/O error" in line or "disk full (database or disk is full" in line
+    assert line.endswith(f", {state}") and "Traceback" not in proc.stderr
+    assert (
+        f"s7graph: note: the STOP is recorded in {state}" in proc.stderr
+        or f"s7graph: note: the STOP could not be recorded in {state} either" in proc.stderr
+    )
+
+
+def test_the_next_start_says_the_last_run_stopped_on_a_full_disk(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The writer's first commit meets a full disk (ENOSPC); the disk has room again by the
+    end of the run, which writes the STOP's entry into the file: the next start says why."""
+    state = tmp_path / "drill.sqlite"
+    write = StateStore.write
+    failed: list[bool] = []
+
+    def full_once(store: StateStore, batch: Batch) -> None:
+        if threading.current_thread().name == "s7graph-writer" and not failed:
+            failed.append(True)
+            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(store.path))
+        write(store, batch)
+
+    monkeypatch.setattr(StateStore, "write", full_once)
+    why = f"the state file could not be written: disk full (No space left on device), {state}"
+    assert main([*CHART, "--state", str(state), "--duration-s", "30"]) == 1
+    err = capsys.readouterr().err
+    assert _errors(err) == [f"s7graph: error: drill.s7g (Seq_drill): the CPU went to STOP: {why}"]
+    assert f"s7graph: note: the STOP is recorded in {state}: its next start says why" in err
+    monkeypatch.undo()
+    assert main([*CHART, "--state", str(state), "--duration-s", "0.1"]) == 0
+    err = capsys.readouterr().err
+    assert f"s7graph: note: the last run went to STOP: {why}\n" in err
+    assert f"in RUN (warm restart from {state} after an unclean stop)" in err
 
 
 def test_fresh_sets_a_write_ahead_log_without_its_file_aside(
