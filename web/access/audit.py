@@ -1,9 +1,11 @@
 """The audit trail and the alarm history in the CPU's SQLite state file.
 
 Every command a CPU receives, applied or refused, is one row of the ``audit`` table: wall
-time, user (as established: ``alice``, ``bob (unverified)``, ``?`` for a message nobody
-could read), role, origin (page, shell, bus peer), op, FB, arguments (JSON), outcome
-(``applied``/``refused``) and reason. The table is the one ``engine.persistence`` has
+time, user (as established: ``alice``, ``bob (unverified)``; ``(unauthenticated)`` for a
+refusal of a sender the CPU did not authenticate), role, origin (page, shell, bus peer),
+op, FB, arguments (JSON), outcome (``applied``/``refused``) and reason; ``claimed``, the
+name an unauthenticated sender gave — a claim, never in the user column, so nobody can
+make rows appear under another's name. The table is the one ``engine.persistence`` has
 always had (``t_ns, user, action, detail``); the new columns are added to a file from
 before, whose rows then read as applied. The alarm history is the last rows of the
 ``alarms`` table, which the runner appends every message event to (came, went,
@@ -83,6 +85,7 @@ _NEW_COLUMNS: Final = (
     ("outcome", "TEXT NOT NULL DEFAULT 'applied'"),
     ("reason", "TEXT NOT NULL DEFAULT ''"),
     ("count", "INTEGER NOT NULL DEFAULT 1"),
+    ("claimed", "TEXT NOT NULL DEFAULT ''"),
 )
 _CREATE: Final = """
 CREATE TABLE IF NOT EXISTS audit (
@@ -108,12 +111,13 @@ _AUDIT_COLUMNS: Final = (
     "reason",
     "detail",
     "count",
+    "claimed",
 )
 _DEFAULTS: Final = {"outcome": "'applied'", "count": "1"}
 """What a column missing from an older file reads as (others: '')."""
 _ALWAYS: Final = ("id", "t_ns", "user", "action", "detail")
 """The audit table's columns since the first state file: a table without one is not ours."""
-_TEXT: Final = ("user", "role", "origin", "action", "fb", "args", "reason", "detail")
+_TEXT: Final = ("user", "role", "origin", "action", "fb", "args", "reason", "detail", "claimed")
 _SIZE: Final = "64 + " + " + ".join(f"length(ifnull({c}, ''))" for c in _TEXT)
 """SQL of ``row_size``."""
 _SUMMARY_NUMBERS: Final = ("count", "first_ns", "last_ns")
@@ -144,11 +148,15 @@ class AuditRecord:
     detail: str = ""
     count: int = 1
     """How many commands the row stands for: 1, or the refusals an aggregated row counts."""
+    claimed: str = ""
+    """The name an unauthenticated sender gave (its ``user`` is ``UNAUTHENTICATED``): a
+    claim nobody proved; "" for every row of a proven author."""
 
 
 def row_size(r: AuditRecord) -> int:
     """What a row weighs against ``max_bytes``: the characters of its text, plus 64."""
-    return 64 + sum(map(len, (r.user, r.role, r.origin, r.op, r.fb, r.args, r.reason, r.detail)))
+    text = (r.user, r.role, r.origin, r.op, r.fb, r.args, r.reason, r.detail, r.claimed)
+    return 64 + sum(map(len, text))
 
 
 @dataclass(frozen=True, slots=True)
@@ -164,6 +172,8 @@ class Facts:
     applied: bool
     reason: str = ""
     detail: str = ""
+    claimed: str = ""
+    """The name an unauthenticated sender gave (``web.bus.gate.unproven_author``)."""
 
     def at(self, row_id: int, t_ns: int, *, text: int = 4096) -> AuditRecord:
         """The row, its fields cut to their column sizes (arguments, reason and detail to
@@ -182,6 +192,7 @@ class Facts:
             outcome,
             self.reason[:text],
             self.detail[:text],
+            claimed=self.claimed[:80],
         )
 
 
@@ -266,11 +277,12 @@ def _record(r: tuple[object, ...]) -> AuditRecord:
     blob."""
     row_id = stored_integer(r[0], "id", "audit row")
     where = f"audit row {row_id}"
-    for name, v in zip(_AUDIT_COLUMNS[2:-1], r[2:-1], strict=True):
+    texts = (*r[2:-2], r[-1])  # every column but id, t_ns and count
+    for name, v in zip((*_AUDIT_COLUMNS[2:-2], _AUDIT_COLUMNS[-1]), texts, strict=True):
         if isinstance(v, bytes):
             raise ValueError(f"{where}: {name} is a blob, not text")
-    text = [str(v or "") for v in r[2:-1]]
-    user, role, origin, op, fb, args, outcome, reason, detail = text
+    text = [str(v or "") for v in texts]
+    user, role, origin, op, fb, args, outcome, reason, detail, claimed = text
     return AuditRecord(
         row_id,
         stored_integer(r[1] if r[1] is not None else 0, "t_ns", where),
@@ -283,7 +295,8 @@ def _record(r: tuple[object, ...]) -> AuditRecord:
         outcome,
         reason,
         detail,
-        stored_integer(r[-1] if r[-1] is not None else 1, "count", where),
+        stored_integer(r[-2] if r[-2] is not None else 1, "count", where),
+        claimed,
     )
 
 
@@ -310,8 +323,8 @@ def write_count(db: sqlite3.Connection, r: AuditRecord) -> None:
     (``*`` once its refusals differed in them) — to ``r``'s."""
     db.execute(
         "UPDATE audit SET count = ?, user = ?, origin = ?, action = ?, fb = ?, args = ?, "
-        "reason = ? WHERE id = ?",
-        (r.count, r.user, r.origin, r.op, r.fb, r.args, r.reason, r.id),
+        "reason = ?, claimed = ? WHERE id = ?",
+        (r.count, r.user, r.origin, r.op, r.fb, r.args, r.reason, r.claimed, r.id),
     )
 
 
@@ -577,7 +590,8 @@ def read_summary(path: Path | str) -> list[SummaryRecord]:
 
 def lines(records: Iterable[AuditRecord]) -> list[str]:
     """Audit rows as text lines (``s7graph audit``); a row that counts several refusals
-    says how many (``refused ×1,234: …``)."""
+    says how many (``refused ×1,234: …``); one of an unauthenticated sender the name it
+    gave as a claim (``(unauthenticated) claiming "olga" (unproven) from …``)."""
     import time
 
     out = []
@@ -588,6 +602,8 @@ def lines(records: Iterable[AuditRecord]) -> list[str]:
         args = "" if r.args in ("", "{}") else f" {r.args}"
         fb = f" {r.fb}" if r.fb else ""
         who = f"{r.user} ({r.role})" if r.role else r.user
+        if r.claimed:
+            who += f' claiming "{r.claimed}" (unproven)'
         origin = f" from {r.origin}" if r.origin else ""
         detail = f" - {r.detail}" if r.detail and r.outcome == "applied" else ""
         out.append(f"{when}  {who}{origin}: {r.op}{fb}{args}: {verdict}{detail}")

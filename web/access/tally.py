@@ -11,12 +11,12 @@ runs with the scan's rows, reading the count as it is then), or, without a write
 ``flush``; the bus's ``audit`` gets the row as written and then its count at most every
 ``flush`` (a timer of ``FLUSH_S``), never a message a refusal.
 
-A window's row says what its refusals had in common: user, origin, op, FB, arguments and
-reason of the first, each ``*`` once a later one differed. Its text (arguments, reason) is
-cut to ``TEXT`` characters: an unauthenticated sender's 4 KiB arguments are no evidence
-worth 4 KiB a row. More than ``MAX_KINDS`` kinds in one minute (a sender making up sources
-or reasons) are counted together in one more window, ``OVERFLOW``; so a minute adds at most
-``MAX_KINDS + 1`` rows, whatever is sent.
+A window's row says what its refusals had in common: user, origin, op, FB, arguments,
+reason and the name claimed of the first, each ``*`` once a later one differed. Its text
+(arguments, reason) is cut to ``TEXT`` characters: an unauthenticated sender's 4 KiB
+arguments are no evidence worth 4 KiB a row. More than ``MAX_KINDS`` kinds in one minute
+(a sender making up sources or reasons) are counted together in one more window,
+``OVERFLOW``; so a minute adds at most ``MAX_KINDS + 1`` rows, whatever is sent.
 
 Which refusals come here is the gate's decision (``web/bus/gate.py``, docs/security.md,
 "The audit cannot fill the disk"). The tally runs under the audit store's lock.
@@ -76,6 +76,7 @@ class _Window:
             ("origin", facts.origin[:160]),
             ("op", facts.op[:32]),
             ("fb", facts.fb[:64]),
+            ("claimed", facts.claimed[:80]),
         ):
             if now != getattr(row, name):
                 self.labels[name] = "*"
@@ -96,6 +97,7 @@ class _Window:
             fb=labels.get("fb", row.fb),
             args=labels.get("args", row.args),
             reason=labels.get("reason", row.reason),
+            claimed=labels.get("claimed", row.claimed),
         )
 
 

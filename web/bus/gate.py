@@ -16,13 +16,15 @@ A refusal of a sender the gate did not authenticate — no identity: a missing, 
 unknown or expired token, or one of another user or of a removed one; a message nobody
 could read; a failed login, whatever the name; a logout of no session — is *anonymous*:
 counted per minute, source and reason by ``web.access.tally`` (one row, a count), so a
-flood of them cannot fill the disk. A refusal of an authenticated sender, every applied
-command and every login that succeeds stay one row each (docs/security.md, "The audit
-cannot fill the disk").
+flood of them cannot fill the disk; its row's user is ``(unauthenticated)`` and the name
+the sender gave only its ``claimed`` (:func:`unproven_author`). A refusal of an
+authenticated sender, every applied command and every login that succeeds stay one row
+each (docs/security.md, "The audit cannot fill the disk").
 """
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import time
 from collections.abc import Callable, Iterable
@@ -33,7 +35,7 @@ import msgspec
 from msgspec import UNSET
 
 from s7graph.engine.errors import internal_error
-from s7graph.web.access.audit import AuditRecord, AuditStore, Facts
+from s7graph.web.access.audit import UNAUTHENTICATED, AuditRecord, AuditStore, Facts
 from s7graph.web.access.login import NOT_SIGNED, Authenticator, Identity
 from s7graph.web.access.roles import NOT_AVAILABLE, allowed, lowest_role
 from s7graph.web.access.scram import command_bytes, logout_bytes
@@ -54,7 +56,15 @@ if TYPE_CHECKING:
     from s7graph.engine.cpu import Cpu
     from s7graph.engine.persistence import StateStore
 
-__all__ = ["Apply", "Gate", "audit_entry", "claimed_note", "cpu_gate", "with_note"]
+__all__ = [
+    "Apply",
+    "Gate",
+    "audit_entry",
+    "claimed_note",
+    "cpu_gate",
+    "unproven_author",
+    "with_note",
+]
 
 ApplyResult: TypeAlias = tuple[bool, str] | tuple[bool, str, str]
 Apply: TypeAlias = Callable[[Command], ApplyResult]
@@ -76,7 +86,17 @@ def audit_entry(r: AuditRecord) -> AuditEntry:
         outcome="applied" if r.outcome == "applied" else "refused",
         reason=r.reason[:4096],
         count=max(r.count, 1),
+        claimed=r.claimed[:80],
     )
+
+
+def unproven_author(facts: Facts) -> Facts:
+    """``facts`` of a sender the CPU did not authenticate: its user ``(unauthenticated)``,
+    the name it gave in ``claimed`` — never in the user column, where a listener could
+    make rows appear under a victim's name (docs/security.md, "Users, roles, logins and
+    the audit")."""
+    given = facts.claimed or ("" if facts.user in ("?", UNAUTHENTICATED) else facts.user)
+    return dataclasses.replace(facts, user=UNAUTHENTICATED, claimed=given)
 
 
 def claimed_note(claimed: str) -> str:
@@ -129,10 +149,12 @@ class Gate:
 
     # ------------------------------------------------------------ login
 
-    def login(self, request: LoginRequest, source: str = "") -> LoginReply:
+    def login(self, request: LoginRequest, source: str = "", *, unproven: str = "") -> LoginReply:
         """Answer one step of a login, or a logout. ``source``: where it came from by the
         transport (``web.bus.origin``), the audit row's origin — the origin the request
         claims is then only a note; without it (no bus) the claim is the row's origin.
+        ``unproven``: why the transport cannot name the link it came over — the step is
+        refused with it (``web.bus.origin.query_origin``: what the client must do).
         Failed logins lock out the source (``lockout_source``: the transport, and the page a
         trusted view names), never the user. One audit row per login — refused or done —
         and per logout; none for a challenge."""
@@ -140,6 +162,10 @@ class Gate:
         note = claimed_note(request.origin) if source else ""
         if request.op == "logout":
             return self._logout(request, origin, note)
+        if unproven:
+            facts = Facts(request.user, "", origin, "login", "", {}, False, unproven, note)
+            self.record(facts, anonymous=True)
+            return LoginReply(ok=False, reason=unproven)
         lock = lockout_source(source, request.origin) if source else request.origin
         if request.op == "proof":
             result = self.auth.prove(request.login_id, request.user, request.scram, source=lock)
@@ -268,7 +294,8 @@ class Gate:
         counted in its minute's row instead when one is open (None returned)."""
         t_ns = self._wall_ns()
         if anonymous and not facts.applied:
-            name = facts.user if self.auth.knows(facts.user) else ""
+            facts = unproven_author(facts)
+            name = facts.claimed if self.auth.knows(facts.claimed) else ""
             kind = (facts.origin[:160], facts.reason[:TEXT], name)
             write = functools.partial(self._write, t_ns, text=TEXT)
             with self.tally.lock:

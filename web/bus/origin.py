@@ -9,7 +9,9 @@ locator alone when the link proved nobody. The rule (:func:`transport_origin`):
 1. the claimed id is one of this session's links: that link;
 2. else exactly one link, or exactly one link to a router: that link, ``(relayed)`` when
    it is a router's (the sender is behind it);
-3. else ``unknown transport``.
+3. else ``unknown transport``: the CPU cannot tell which link it came over, and
+   :func:`query_origin` says why and what the client must do — the CPU refuses such a
+   login or command with that reason (``web.bus.publisher``).
 
 A query that names this session's own id is "this process" only when it also carries this
 process's own ``source_sn`` (:func:`stamp`: a random number drawn at start): every reply
@@ -31,9 +33,19 @@ from typing import Any
 
 import zenoh
 
-__all__ = ["RELAYS", "UNKNOWN", "lockout_source", "stamp", "transport_origin"]
+__all__ = [
+    "RELAYS",
+    "UNKNOWN",
+    "UNPROVEN",
+    "lockout_source",
+    "query_origin",
+    "stamp",
+    "transport_origin",
+]
 
 UNKNOWN = "unknown transport"
+UNPROVEN = "origin unproven"
+"""How a refusal of a query whose link the CPU cannot name begins."""
 RELAYS = ("cpu.", "view.", "opcua.")
 """Identities that relay many people over one link (a view serves many pages, an OPC UA
 face many clients; ``run --web`` and ``run --opcua`` give theirs the CPU's certificate,
@@ -58,27 +70,50 @@ def _describe(link: Any, relayed: bool = False) -> str:
 def transport_origin(session: zenoh.Session, source_info: zenoh.SourceInfo | None) -> str:
     """Where a query with ``source_info`` came from by this session's links (the module's
     rule); never raises (a failure is :data:`UNKNOWN`)."""
+    return query_origin(session, source_info)[0]
+
+
+def query_origin(session: zenoh.Session, source_info: zenoh.SourceInfo | None) -> tuple[str, str]:
+    """(where a query with ``source_info`` came from, "") by the module's rule, or
+    (:data:`UNKNOWN`, why the CPU cannot tell and what the client must do); never raises."""
+    claimed, links, routers = "", [], 0
     try:
         claimed = str(source_info.source_id.zid) if source_info is not None else ""
         if claimed and claimed == str(session.zid()):
             if source_info is not None and source_info.source_sn == _OWN_SN:
-                return "this process"
+                return "this process", ""
             claimed = ""  # the CPU's id copied by a peer: a query that names no one
         links = list(session.info.links())
         for link in links:
             if claimed and str(link.zid) == claimed:
-                return _describe(link)
-        routers = {
-            str(t.zid) for t in session.info.transports() if t.whatami == zenoh.WhatAmI.ROUTER
-        }
-        via = [link for link in links if str(link.zid) in routers]
-        if len(via) == 1:
-            return _describe(via[0], relayed=True)
+                return _describe(link), ""
+        zids = {str(t.zid) for t in session.info.transports() if t.whatami == zenoh.WhatAmI.ROUTER}
+        via = [link for link in links if str(link.zid) in zids]
+        routers = len(via)
+        if routers == 1:
+            return _describe(via[0], relayed=True), ""
         if len(links) == 1:
-            return _describe(links[0])
+            return _describe(links[0]), ""
     except Exception:  # never raise on a zenoh thread
-        return UNKNOWN
-    return UNKNOWN
+        return UNKNOWN, f"{UNPROVEN}: the CPU could not read its own links; ask again"
+    return UNKNOWN, _unproven(bool(claimed), len(links), routers)
+
+
+def _unproven(named: bool, links: int, routers: int) -> str:
+    """Why a query's link cannot be named, and what its sender must do."""
+    have = f"this CPU has {links} link{'s' if links != 1 else ''}"
+    if not named:
+        return (
+            f"{UNPROVEN}: {have} and the request names no session of its own: send it with "
+            "zenoh source_info naming your session (zenoh.SourceInfo(session.id, n)), as "
+            "s7graph's own clients do"
+        )
+    also = ", or through a router" if not routers else ""
+    return (
+        f"{UNPROVEN}: the session the request names is not linked to this CPU, and the CPU "
+        f"cannot tell which of its {links} links relayed it ({routers} to routers): connect "
+        f"to the CPU directly{also}"
+    )
 
 
 def lockout_source(transport: str, claimed: str) -> str:

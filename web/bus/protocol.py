@@ -902,6 +902,9 @@ class AuditEntry(_Msg, frozen=True, kw_only=True):
     outcome: Literal["applied", "refused"]
     reason: Text = ""
     count: Annotated[int, Meta(ge=1, le=2**63 - 1)] = 1
+    claimed: Label = ""
+    """The name an unauthenticated sender gave (``user`` is ``(unauthenticated)``): a
+    claim nobody proved; "" for a proven author's row."""
 
 
 class AuditList(_Msg, frozen=True, kw_only=True):

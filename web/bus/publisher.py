@@ -23,7 +23,6 @@ import sqlite3
 import threading
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
@@ -35,7 +34,8 @@ from s7graph.engine.persistence import sqlite_words
 from s7graph.web.bus.deltas import PART, DeltaOut, ScanOut
 from s7graph.web.bus.gate import Apply, Gate, claimed_note
 from s7graph.web.bus.keys import ROOT, keys
-from s7graph.web.bus.origin import transport_origin
+from s7graph.web.bus.login_door import LoginDoor
+from s7graph.web.bus.origin import query_origin
 from s7graph.web.bus.outbox import Outbox, Sink
 from s7graph.web.bus.protocol import (
     AlarmList,
@@ -47,8 +47,6 @@ from s7graph.web.bus.protocol import (
     CycleStats,
     DiagEvent,
     ForceList,
-    LoginReply,
-    LoginRequest,
     ProtocolError,
     StepStateUpdate,
     decode,
@@ -178,10 +176,6 @@ class _Awaiting:
 
 
 def _answer(query: zenoh.Query | None, reply: CommandReply) -> None:
-    _reply(query, reply)
-
-
-def _reply(query: zenoh.Query | None, reply: CommandReply | LoginReply) -> None:
     if query is None:
         return
     try:
@@ -213,7 +207,7 @@ class BusPublisher:
     ) -> None:
         self._keys = keys(cpu)
         self.gate = gate if gate is not None else Gate()
-        self._logins = ThreadPoolExecutor(max_workers=1, thread_name_prefix="s7graph-login")
+        self._logins = LoginDoor(self._keys.login, self.gate, self.origin)
         self._session = session
         self._lock = threading.Lock()
         self._charts = dict(charts)
@@ -257,7 +251,8 @@ class BusPublisher:
             self.deltas = DeltaOut(session, self._keys, self._charts, self.outbox)
             self._declared.append(self.deltas)
             self._declared.append(session.declare_queryable(self._keys.cmd, self._on_cmd))
-            self._declared.append(session.declare_queryable(self._keys.login, self._on_login))
+            login = session.declare_queryable(self._keys.login, self._logins.on_query)
+            self._declared.append(login)
             self._serve(self._keys.status, self._status_bytes)
             self._status_pub = session.declare_publisher(
                 self._keys.status, encoding=zenoh.Encoding.APPLICATION_JSON
@@ -541,7 +536,7 @@ class BusPublisher:
             self.gate.flush()
         self.gate.on_audit = None
         self.outbox.close()  # what the last scans published goes out first
-        self._logins.shutdown(wait=False, cancel_futures=True)
+        self._logins.close()
         for d in reversed(self._declared):
             with contextlib.suppress(zenoh.ZError):
                 d.undeclare()
@@ -615,34 +610,10 @@ class BusPublisher:
             status = self._status_now()
         return encode(status)
 
-    def _on_login(self, query: zenoh.Query) -> None:
-        # Runs on a zenoh thread: only the exact key (never a wildcard), decode, and hand
-        # the step (a users file read, the SCRAM exchange) to the login worker, which replies.
-        if str(query.key_expr) != self._keys.login:
-            return
-        try:
-            payload = query.payload
-            if payload is None:
-                raise ProtocolError("empty login")
-            request = decode(payload.to_bytes(), LoginRequest)
-        except ProtocolError as exc:
-            _reply(query, LoginReply(ok=False, reason=str(exc)))
-            return
-        source = transport_origin(self._session, query.source_info)
-        try:
-            self._logins.submit(self._login, request, query, source)
-        except RuntimeError:  # shut down
-            _reply(query, LoginReply(ok=False, reason="CPU bus closed"))
-
-    def _login(self, request: LoginRequest, query: zenoh.Query, source: str) -> None:
-        """Answer a login on the login worker; ``source``: where it came from by the
-        transport (``web.bus.origin``)."""
-        try:
-            reply = self.gate.login(request, source=source)
-        except Exception:  # its message stays here: the asker is not logged in yet
-            why = internal_error(f"in the CPU while answering a {request.op} request")
-            reply = LoginReply(ok=False, reason=f"login failed: {why}")
-        _reply(query, reply)
+    def origin(self, query: zenoh.Query) -> tuple[str, str]:
+        """Where ``query`` came from by the transport, and why the CPU cannot tell ("": it
+        can; ``web.bus.origin.query_origin``)."""
+        return query_origin(self._session, query.source_info)
 
     def _on_cmd(self, query: zenoh.Query) -> None:
         # Runs on a zenoh thread: validate, enqueue, never block and never raise. A wildcard
@@ -650,7 +621,7 @@ class BusPublisher:
         # one it claims is kept as the audit row's note.
         if str(query.key_expr) != self._keys.cmd:
             return
-        source = transport_origin(self._session, query.source_info)
+        source, unproven = self.origin(query)
         try:
             payload = query.payload
             if payload is None:
@@ -661,6 +632,9 @@ class BusPublisher:
             return
         note = claimed_note(command.origin)
         command = msgspec.structs.replace(command, origin=source)
+        if unproven:  # the link it came over cannot be named: refused, saying what to do
+            self._refuse(query, command, unproven, source, note)
+            return
         if command.fb not in self._charts and not _cpu_wide(command, self._charts):
             runs = f"runs {', '.join(self._charts)}" if self._charts else "runs no GRAPH FB"
             reason = f"unknown FB {command.fb!r}; this CPU {runs}"

@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import queue
 import re
 import time
 from dataclasses import dataclass
@@ -45,6 +44,7 @@ from s7graph.engine.literals import format_literal
 from s7graph.engine.memory import DataBlock
 from s7graph.engine.symbols import default_type
 from s7graph.sequencer.fb import chart_variables
+from s7graph.web.bus.origin import lockout_source
 from s7graph.web.bus.protocol import (
     CpuState,
     ProtocolError,
@@ -55,6 +55,7 @@ from s7graph.web.bus.protocol import (
     encode,
 )
 from s7graph.web.bus.publisher import BusPublisher, QueryReply
+from s7graph.web.bus.shares import SharedQueue
 
 __all__ = [
     "Segment",
@@ -74,6 +75,10 @@ __all__ = [
 
 QUEUE: Final = 64
 """Watch requests waiting at most; beyond, a request is refused at once as busy."""
+PER_SOURCE: Final = 8
+"""Watch requests one source may have waiting (where the transport says they came from,
+``web.bus.origin.lockout_source``); beyond, its request is refused at once as busy, so a
+source that floods ``watch`` fills its own share, never the queue other sources wait in."""
 PER_BOUNDARY: Final = 8
 """Requests read at one scan boundary at most (the rest wait for the next)."""
 
@@ -501,7 +506,9 @@ class Watching:
         self.cpu = cpu
         self._publisher = publisher
         self._key = publisher.key("watch")
-        self._queue: queue.Queue[tuple[QueryReply, list[WatchItem]]] = queue.Queue(QUEUE)
+        self._queue: SharedQueue[tuple[QueryReply, list[WatchItem]]] = SharedQueue(
+            QUEUE, PER_SOURCE
+        )
         publisher.declare_queryable("watch", self._on_query)
 
     def at_boundary(self, t_ms: int | None = None, until_ns: int | None = None) -> int:
@@ -514,10 +521,10 @@ class Watching:
         while done < PER_BOUNDARY:
             if done and until_ns is not None and time.perf_counter_ns() >= until_ns:
                 break
-            try:
-                reply, items = self._queue.get_nowait()
-            except queue.Empty:
+            waiting = self._queue.get()
+            if waiting is None:
                 break
+            reply, items = waiting
             values = [watch_value(cpu, item) for item in items]
             at = t_ms if t_ms is not None else cpu.clock.now_ns() // 1_000_000
             state = cast(CpuState, str(cpu.mode))
@@ -539,14 +546,22 @@ class Watching:
                 raise ProtocolError("a watch request names the addresses to watch")
             request = decode(payload.to_bytes(), WatchRequest)
             items = [parse_item(text) for text in request.addresses]
-            self._queue.put_nowait((reply, items))
+            source = lockout_source(self._publisher.origin(query)[0], "")
+            busy = self._queue.put(source, (reply, items))
+            if busy == "source":
+                _refuse(reply, _FROM_HERE)
+            elif busy:
+                _refuse(reply, f"busy: {QUEUE} watch requests are waiting; ask again")
         except ProtocolError as exc:
             _refuse(reply, str(exc))
-        except queue.Full:
-            _refuse(reply, f"busy: {QUEUE} watch requests are waiting; ask again")
         except Exception as exc:
             where = "in the CPU while reading a watch request"
             _refuse(reply, f"watch refused: {internal_error(where, exc)}")
+
+
+_FROM_HERE: Final = (
+    f"busy: {PER_SOURCE} watch requests from here are waiting; ask again once they are answered"
+)
 
 
 def _refuse(reply: QueryReply, reason: str) -> None:

@@ -37,10 +37,11 @@ from s7graph.web.bus.session import open_session, peer_problem
 from s7graph.web.cli.diag_text import event_line, when
 from s7graph.web.cli.net import NetOptions
 from s7graph.web.cli.stopping import say, wait_until_stopped
-from s7graph.web.commands import Args, Download, DownloadArgs, checked, op_of
+from s7graph.web.commands import MAX_FILE_NAME, Args, Download, DownloadArgs, checked, op_of
 
 __all__ = [
     "PASSWORD_ENV",
+    "alive_line",
     "ask",
     "download_command",
     "fb_to_read",
@@ -254,11 +255,12 @@ def download_command(
             print(format_diagnostic(d), file=sys.stderr)
         return _fail(f"{chart}: not downloaded: {exc.reason}")
     sent: dict[str, str] | msgspec.UnsetType = sources or msgspec.UNSET
+    named = str(chart) if len(str(chart)) <= MAX_FILE_NAME else chart.name[-MAX_FILE_NAME:]
     with _logged_in(net, fb=fb, user=user) as shell:
         if isinstance(shell, int):
             return shell
         try:
-            asked = DownloadArgs(source=source, preview=True, blocks=sent)
+            asked = DownloadArgs(source=source, preview=True, blocks=sent, file=named)
             preview = shell.send(Download, asked, timeout=timeout)
         except (TypeError, ValueError) as exc:
             return _fail(str(exc))
@@ -281,7 +283,7 @@ def download_command(
                 file=sys.stderr,
             )
             return 1
-        args = DownloadArgs(source=source, blocks=sent)
+        args = DownloadArgs(source=source, blocks=sent, file=named)
         if preview.version is not None:
             args = msgspec.structs.replace(args, base=preview.version)
         if removed is not None:
@@ -370,6 +372,11 @@ def status_command(net: NetOptions) -> int:
     return 0
 
 
+def alive_line(cpu: str, up: bool) -> str:
+    """What ``watch`` says when CPU ``cpu`` appears on the bus (``up``) or goes."""
+    return f"CPU {cpu} {'reachable' if up else 'disconnected'}"
+
+
 def watch_command(net: NetOptions, *, fb: str | None, duration_s: float | None = None) -> int:
     """Print step changes of ``net.cpu`` live (of ``fb``, or of every FB); 0 at the end, 2
     when nothing can be watched: no CPU answers, it runs no such FB, or none."""
@@ -398,7 +405,7 @@ def watch_command(net: NetOptions, *, fb: str | None, duration_s: float | None =
 
         def alive(up: bool) -> None:
             with lock:
-                say(f"CPU {net.cpu} {'reachable' if up else 'disconnected'}", stop)
+                say(alive_line(net.cpu, up), stop)
 
         client.on_alive(alive)
         for name in names:

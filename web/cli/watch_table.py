@@ -7,7 +7,9 @@ one line whenever one changed — the cycle, the CPU's state and each operand as
 it (``MW0:INT=12  Q4.0=TRUE  DB20.avg=1.5``) — until Ctrl-C or ``--duration-s``. An
 operand the CPU cannot read is said once on stderr (``DB20.avg: DB20 is not loaded``) and
 shown as ``?``; when none can be read, or the CPU refuses the request, the exit status is
-2. A CPU that stops answering is said once, and again when it is back. A read: no login.
+2. A CPU that goes away is waited for, as ``s7graph watch`` waits (``CPU cpu1
+disconnected``, ``CPU cpu1 reachable``, then its values again); one that stops answering
+while there is said once on stderr, and again when it answers. A read: no login.
 """
 
 from __future__ import annotations
@@ -20,7 +22,7 @@ from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import MAX_WATCH, WatchValues
 from s7graph.web.bus.watch import split_operands
 from s7graph.web.cli.net import NetOptions
-from s7graph.web.cli.remote import on_bus
+from s7graph.web.cli.remote import alive_line, on_bus
 from s7graph.web.cli.stopping import say, wait_until_stopped
 
 __all__ = [
@@ -72,7 +74,8 @@ def watch_addresses(
 ) -> int:
     """Print the watch table of ``net.cpu`` on every change until Ctrl-C, SIGTERM or
     ``duration_s``; 0 at the end, 2 when nothing can be watched (no bus, no CPU, every
-    operand refused)."""
+    operand refused). A CPU that goes is waited for, as ``s7graph watch`` waits: ``CPU
+    cpu1 disconnected``, then ``CPU cpu1 reachable`` and the values once it is back."""
     with on_bus(net) as client:
         if isinstance(client, str):
             print(f"s7graph: error: {client}", file=sys.stderr)
@@ -89,41 +92,72 @@ def watch_addresses(
         stop = threading.Event()
         say(_line(first), stop)
         poll = max(interval_ms, MIN_INTERVAL_MS) / 1000
-        args = (client, addresses, first, poll, stop, net.cpu)
-        follower = threading.Thread(target=_follow, args=args, name="s7graph-watch", daemon=True)
-        follower.start()
+        follower = _Follower(client, addresses, first, stop, net.cpu)
+        client.on_alive(follower.alive)
+        thread = threading.Thread(
+            target=follower.run, args=(poll,), name="s7graph-watch", daemon=True
+        )
+        thread.start()
         try:
             wait_until_stopped(duration_s, stop)
         finally:
             stop.set()
-            follower.join(timeout=5.0)
+            thread.join(timeout=5.0)
     return 0
 
 
-def _follow(
-    client: BusClient,
-    addresses: list[str],
-    first: WatchValues,
-    poll_s: float,
-    stop: threading.Event,
-    cpu: str,
-) -> None:
-    """Ask every ``poll_s`` until ``stop``; a line for each change."""
-    shown = [(v.text, v.error) for v in first.values]
-    answering = True
-    while not stop.wait(poll_s):
-        answer = client.watch(addresses, timeout=2.0)
-        if stop.is_set():
-            return
+class _Follower:
+    """Asks ``client`` for the values of ``addresses`` again and again and prints a line
+    for each change; told by the CPU's liveliness when it goes and comes back (``alive``,
+    a zenoh thread), it says so in ``s7graph watch``'s words and, while it is gone, no
+    failed request is said."""
+
+    def __init__(
+        self,
+        client: BusClient,
+        addresses: list[str],
+        first: WatchValues,
+        stop: threading.Event,
+        cpu: str,
+    ) -> None:
+        self.client, self.addresses, self.stop, self.cpu = client, addresses, stop, cpu
+        self.shown = [(v.text, v.error) for v in first.values]
+        self.up: bool | None = None  # what the CPU's liveliness said last (None: nothing yet)
+        self.failed = False  # a failed request was said on stderr
+        self.back = False  # it came back: show the values again, changed or not
+        self.lock = threading.Lock()
+
+    def alive(self, up: bool) -> None:
+        """The CPU's liveliness changed; the first word, that it is there, is known already
+        (it answered) — unless a failed request was said since."""
+        with self.lock:
+            was, self.up = self.up, up
+            if was == up or (was is None and up and not self.failed):
+                return
+            self.back = self.back or up
+            say(alive_line(self.cpu, up), self.stop)
+
+    def run(self, poll_s: float) -> None:
+        """Ask every ``poll_s`` until ``stop``; a line for each change."""
+        while not self.stop.wait(poll_s):
+            answer = self.client.watch(self.addresses, timeout=2.0)
+            if self.stop.is_set():
+                return
+            with self.lock:
+                self._show(answer)
+
+    def _show(self, answer: WatchValues) -> None:
+        """One answer: a line if the values changed (or the CPU is back), a failure said
+        once while the CPU is not known to be gone (``lock`` held)."""
         if answer.error:
-            if answering:
-                print(f"s7graph: {cpu}: {answer.error}", file=sys.stderr, flush=True)
-            answering = False
-            continue
-        if not answering:
-            print(f"s7graph: {cpu} answers again", file=sys.stderr, flush=True)
-            answering = True
+            if not self.failed and self.up is not False:  # gone: "disconnected" said it
+                print(f"s7graph: {self.cpu}: {answer.error}", file=sys.stderr, flush=True)
+                self.failed = True
+            return
+        if self.failed and not self.back:
+            print(f"s7graph: {self.cpu} answers again", file=sys.stderr, flush=True)
+        self.failed = False
         now = [(v.text, v.error) for v in answer.values]
-        if now != shown:
-            shown = now
-            say(_line(answer), stop)
+        if now != self.shown or self.back:
+            self.shown, self.back = now, False
+            say(_line(answer), self.stop)

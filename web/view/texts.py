@@ -221,7 +221,8 @@ def banner_html(connected: bool, cpu: str) -> str:
 
 def audit_html(entries: list[AuditEntry]) -> str:
     """The last audit rows, newest first: when, who (role), from where, what, verdict (a
-    row of several refusals: how many, ``refused ×1,234``)."""
+    row of several refusals: how many, ``refused ×1,234``); an unproven sender's row says
+    the name it gave only as claimed, as ``s7graph audit`` does."""
     if not entries:
         return small('<span style="color:#777">no commands yet</span>')
     rows = []
@@ -233,6 +234,8 @@ def audit_html(entries: list[AuditEntry]) -> str:
             else f'<span style="color:#c00">refused{times}: {html.escape(e.reason)}</span>'
         )
         who = html.escape(e.user) + (f" ({html.escape(e.role)})" if e.role else "")
+        if e.claimed:  # a name nobody proved: never shown as the author
+            who += f' claiming "{html.escape(e.claimed)}" (unproven)'
         args = "" if e.args in ("", "{}") else " " + html.escape(e.args)
         origin = f" · {html.escape(e.origin)}" if e.origin else ""
         rows.append(f"{clock(e.t_ms)} <b>{who}</b>{origin}: {html.escape(e.op)}{args} — {verdict}")

@@ -164,8 +164,9 @@ def test_s7graph_audit_shows_counts_and_the_summary(
         gate.apply(Command(op="off", fb="FILL", user="eve", token="forged"), applied)
     gate.flush()
     assert audit_command(path, None) == 0
-    assert "  eve: off FILL: refused ×1,234: invalid token: log in again" in (
-        capsys.readouterr().out
+    assert (
+        '  (unauthenticated) claiming "eve" (unproven): off FILL: refused ×1,234: invalid token'
+        in capsys.readouterr().out
     )
     wall.t_ns += 60 * 10**9
     gate.flush()

@@ -14,7 +14,7 @@ import pytest
 from s7graph.engine import Cpu, VirtualClock
 from s7graph.engine.persistence import StateStore
 from s7graph.engine.writer import StoreWriter
-from s7graph.web.access.audit import AuditRecord, AuditStore, read_audit
+from s7graph.web.access.audit import UNAUTHENTICATED, AuditRecord, AuditStore, read_audit
 from s7graph.web.access.login import Authenticator
 from s7graph.web.access.scram import MIN_ITERATIONS
 from s7graph.web.access.tally import MAX_KINDS
@@ -78,8 +78,8 @@ def test_a_20_s_flood_of_unauthenticated_refusals_adds_at_most_1000_rows_and_cou
     assert sent == 40_000 and len(audit) <= 1000
     assert len(audit) == 2  # one a minute: the flood spans two
     assert sum(r.count for r in audit) == sent
-    assert {(r.user, r.role, r.origin, r.reason) for r in audit} == {
-        ("mallory", "", "10.0.0.66", "invalid token: log in again")
+    assert {(r.user, r.claimed, r.role, r.origin, r.reason) for r in audit} == {
+        (UNAUTHENTICATED, "mallory", "", "10.0.0.66", "invalid token: log in again")
     }
     assert len(published) <= 2 + 20 + 2  # the rows, a count a second, the last counts
     assert {e.id for e in published} == {r.id for r in audit}
@@ -167,9 +167,9 @@ def test_every_kind_of_unauthenticated_refusal_is_counted_and_only_those(
     audit = rows(tmp_path / "s.sqlite")
     counted = [r for r in audit if r.count > 1]
     assert sorted(r.count for r in counted) == [3, 3] + [20] * len(kinds)
-    assert {(r.user, r.reason) for r in counted if r.op == "login"} == {
-        ("olga", "wrong user name or password"),  # olga is a user: her own row
-        ("nobody", "wrong user name or password"),
+    assert {(r.user, r.claimed, r.reason) for r in counted if r.op == "login"} == {
+        (UNAUTHENTICATED, "olga", "wrong user name or password"),  # a user: her own row
+        (UNAUTHENTICATED, "nobody", "wrong user name or password"),
     }
     singles = [(r.user, r.op, r.outcome) for r in audit if r.count == 1]
     assert (
@@ -193,7 +193,13 @@ def test_a_window_row_says_star_where_its_refusals_differed(
     gate.apply(forged(user="eve"), applied)
     gate.flush()
     [row] = rows(tmp_path / "s.sqlite")
-    assert (row.user, row.op, row.origin, row.count) == ("*", "init", "10.0.0.66", 2)
+    assert (row.user, row.claimed, row.op, row.origin, row.count) == (
+        UNAUTHENTICATED,
+        "*",
+        "init",
+        "10.0.0.66",
+        2,
+    )
 
 
 def test_made_up_sources_cannot_open_more_than_max_kinds_windows_a_minute(

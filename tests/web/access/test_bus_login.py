@@ -27,6 +27,7 @@ from s7graph.web.access.scram import MIN_ITERATIONS, Verifier
 from s7graph.web.access.users import UsersFile
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.gate import Gate
+from s7graph.web.bus.origin import stamp
 from s7graph.web.bus.protocol import (
     ChartLayout,
     Command,
@@ -151,7 +152,8 @@ def _command(login: LoginReply, op: str = "mode", **args: object) -> Command:
 
 
 def _ask_login(session: zenoh.Session, payload: bytes) -> LoginReply:
-    for reply in session.get(LOGIN, payload=payload, timeout=5):
+    """``payload`` on ``login`` from ``session``, naming it as every client must (``stamp``)."""
+    for reply in session.get(LOGIN, payload=payload, timeout=5, source_info=stamp(session)):
         if reply.ok is not None:
             return decode(reply.ok.payload.to_bytes(), LoginReply)
     raise AssertionError("the CPU did not answer")

@@ -14,7 +14,7 @@ import pytest
 from asyncua import ua
 from asyncua.ua.uaerrors import UaStatusCodeError
 
-from s7graph.web.access.audit import AuditRecord, read_audit
+from s7graph.web.access.audit import UNAUTHENTICATED, AuditRecord, read_audit
 from s7graph.web.commands import COMMAND_TYPES
 from tests.web.helpers import wait_until
 from tests.web.opcua.helpers import FACE_CN, FaceRig, connected, eventually, face_rig, node, run
@@ -264,7 +264,7 @@ def test_a_wrong_password_is_refused_when_the_session_activates(face: FaceRig) -
 
     run(check())
     row = [r for r in read_audit(face.rig.state) if r.op == "login"][-1]
-    assert (row.user, row.outcome) == ("olga", "refused")
+    assert (row.user, row.claimed, row.outcome) == (UNAUTHENTICATED, "olga", "refused")
 
 
 def test_a_write_is_a_command_and_forcing_and_modifying_are_an_engineers(
