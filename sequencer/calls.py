@@ -16,13 +16,14 @@ CPU may not add such a call: ``swap`` refuses it.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
 from s7graph.engine.errors import BlockError
 from s7graph.sequencer.text.model import BlockCall, Chart
 
-__all__ = ["CallPlan", "call_sites", "missing_blocks", "prepare_calls"]
+__all__ = ["CallPlan", "CallSite", "call_sites", "missing_blocks", "plan_calls", "prepare_calls"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -50,6 +51,7 @@ class CallPlan:
     missing: list[str] = field(default_factory=list)
     created: list[int] = field(default_factory=list)
     missing_blocks: set[str] = field(default_factory=set)  # their labels: FC9, FB5
+    wanted: dict[int, Any] = field(default_factory=dict)  # instance DB → its block, to create
 
 
 def call_sites(chart: Chart) -> list[CallSite]:
@@ -70,15 +72,32 @@ def prepare_calls(cpu: Any, chart: Chart, *, allowed_missing: set[str] | None = 
     nothing is created when one of them cannot be (``problems``). With ``allowed_missing``
     (a download into a running CPU: the blocks the running chart already lacks), a call of
     any other block the CPU lacks is a problem too: reached, it would stop the plant."""
+    plan = plan_calls(cpu, call_sites(chart), allowed_missing=allowed_missing)
+    if not plan.problems:
+        for number, block in plan.wanted.items():
+            cpu.create_instance_db(number, block)
+            plan.created.append(number)
+    return plan
+
+
+def plan_calls(
+    cpu: Any,
+    sites: Iterable[CallSite],
+    *,
+    allowed_missing: set[str] | None = None,
+    find: Callable[[str], Any] | None = None,
+) -> CallPlan:
+    """What :func:`prepare_calls` finds for the calls ``sites``, nothing created (the
+    instance DBs it would create in ``wanted``): an online change's preview says so before
+    the swap. ``find``: the block of a label, None when the CPU lacks it (default: the
+    CPU's own; a preview with S7-SCL sources looks in those first)."""
     plan = CallPlan()
-    wanted: dict[int, Any] = {}
-    for site in call_sites(chart):
+    look = find if find is not None else _finder(cpu)
+    by_label = find is not None
+    for site in sites:
         c = site.call
         label = _label(c)
-        try:
-            block = cpu.block(label)
-        except BlockError:  # not loaded
-            block = None
+        block = look(label)
         if block is None:
             plan.missing_blocks.add(label)
             if allowed_missing is not None and label not in allowed_missing:
@@ -94,19 +113,29 @@ def prepare_calls(cpu: Any, chart: Chart, *, allowed_missing: set[str] | None = 
             plan.problems.append(site.line("error", "name the instance DB by its number"))
             continue
         held = cpu.instance_dbs.get(c.instance)
-        if held is not None and held.fb is not block:
+        # a preview's block of new sources is the one the download makes its DB's FB
+        same = held is not None and (
+            held.fb is block or (by_label and held.fb.label == block.label)
+        )
+        if held is not None and not same:
             why = f"DB{c.instance} is the instance DB of {held.fb.label} {held.fb.name!r}"
             plan.problems.append(site.line("error", why))
         elif held is None and c.instance in cpu.mem.dbs:
             plan.problems.append(site.line("error", f"DB{c.instance} is a global DB"))
-        elif held is None and wanted.setdefault(c.instance, block) is not block:
+        elif held is None and plan.wanted.setdefault(c.instance, block) is not block:
             why = f"DB{c.instance} is named as the instance of another block too"
             plan.problems.append(site.line("error", why))
-    if not plan.problems:
-        for number, block in wanted.items():
-            cpu.create_instance_db(number, block)
-            plan.created.append(number)
     return plan
+
+
+def _finder(cpu: Any) -> Callable[[str], Any]:
+    def find(label: str) -> Any:
+        try:
+            return cpu.block(label)
+        except BlockError:  # not loaded
+            return None
+
+    return find
 
 
 def missing_blocks(cpu: Any, chart: Chart) -> set[str]:

@@ -71,6 +71,20 @@ def _check_reach(reach: tuple[Reach, ...], mem: Any) -> None:
             raise AddressError(f"{name} is outside {where} ({size} bytes)")
 
 
+def reach_problem(
+    buffers: tuple[tuple[str, int | None], ...], reach: tuple[Reach, ...], mem: Any
+) -> str | None:
+    """Why ``mem`` lacks what a chart's operands use (``buffers``: the areas and DBs;
+    ``reach``: how far), or None (:meth:`CompiledChart.reach_problem`)."""
+    try:
+        for area, db in buffers:
+            area_buffer(mem, area, db)
+        _check_reach(reach, mem)
+    except (AddressError, SymbolError) as exc:
+        return str(exc)
+    return None
+
+
 @dataclass(frozen=True)
 class CompiledChart:
     chart: Chart
@@ -127,13 +141,7 @@ class CompiledChart:
         """Why :meth:`bind` would refuse ``mem`` (a DB the chart uses that does not exist, an
         operand beyond its area), or None: at an online change, said before the swap instead
         of stopping the CPU at the chart's first call."""
-        try:
-            for area, db in self.buffers:
-                area_buffer(mem, area, db)
-            _check_reach(self.reach, mem)
-        except (AddressError, SymbolError) as exc:
-            return str(exc)
-        return None
+        return reach_problem(self.buffers, self.reach, mem)
 
     def bind(self, mem: Any) -> Program:
         """Execute the generated module against ``mem`` (once per FB instance)."""

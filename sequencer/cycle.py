@@ -94,6 +94,7 @@ class GraphRuntime:
         self._commands: list[tuple[str, int | None]] = []  # operator commands, next call
         self._target: int | None = None  # step of this call's S_ON/S_OFF/ACK_S command
         self.placing: tuple[int, ...] = ()  # steps to place in the next call (MAN)
+        self.entering: tuple[int, ...] = ()  # steps made active outside a call: S1 next call
         self.levels = self.st.levels  # overrides of HALT_SQ / EN_IL / EN_SV (kept in the state)
         self._final: list[int] = []  # steps left, awaiting their final scan
         self._getter: Callable[[Any], Any] = operator.itemgetter(*self.input_names)
@@ -136,6 +137,7 @@ class GraphRuntime:
         self._remote.clear()
         self._commands.clear()
         self.placing = ()
+        self.entering = ()
         self._late.clear()
         self._carry.clear()
         self._done = 0
@@ -262,6 +264,16 @@ class GraphRuntime:
         for i in self.cc.initial:
             self._activate(i)
 
+    def _entered(self) -> None:
+        """The steps made active outside a call (``entering``: an online change's new
+        sequencer) get their S1 event and stay for this call, as the first call's."""
+        st = self.st
+        for i in self.entering:
+            if st.x[i] and i not in st.entered:
+                st.entered.append(i)
+                self._raise(i, EV_S1)
+        self.entering = ()
+
     # ------------------------------------------------------------ one FB call
 
     def execute(self, inputs: dict[str, Any], now_ns: int) -> GraphState:
@@ -319,6 +331,8 @@ class GraphRuntime:
             self._all_off()
         if st.calls == 0 or "INIT_SQ" in rose:
             self.initialize()
+        if self.entering:
+            self._entered()
         if self._acked:
             self._acked.clear()
         if rose:

@@ -145,6 +145,7 @@ class GraphFB:
         self._levels: dict[str, bool | None] = {}  # level overrides for the next call
         self._acting: tuple[str, int | None] | None = None  # who commanded (user, ACK_S step)
         self._placing: tuple[int, ...] = ()  # step numbers to place in the next call
+        self._entering: tuple[int, ...] = ()  # step numbers activated outside a call
         self._restart = ""  # the reason a startup OB's call gives its messages
         self._swapped = False  # a download swapped the chart: gone steps' messages go
 
@@ -256,6 +257,13 @@ class GraphFB:
         self._placing = tuple(steps)
         self.loaded.flat = False
 
+    def enter(self, steps: Iterable[int]) -> None:
+        """Step numbers ``steps``, made active outside a call (an online change's new
+        sequencer: ``sequencer.change.carry``), get their S1 event in the next call and stay
+        for it, as the steps the first call after a start activates."""
+        self._entering = tuple(steps)
+        self.loaded.flat = False
+
     def set_level(self, pin: str, value: bool | None) -> None:
         """Override HALT_SQ, EN_IL or EN_SV from the next call on (None: the pin decides
         again), whatever the parameter set (``GraphRuntime.set_level``)."""
@@ -321,6 +329,11 @@ class GraphFB:
             rt.placing = tuple(index[n] for n in self._placing if n in index)
             rt.fastpath.armed = False
             self._placing = ()
+        if self._entering:
+            index = self.cc.step_index
+            rt.entering = tuple(index[n] for n in self._entering if n in index)
+            rt.fastpath.armed = False
+            self._entering = ()
         acting, self._acting = self._acting, None
         st = rt.execute(values, ctx.now_ns)
         self._copy_outputs(values, st, rt.outs_written)

@@ -195,13 +195,15 @@ class DownloadArgs(Args, frozen=True, kw_only=True):
     """The chart text; the chart version the sender saw, what to do with active steps the
     change removes, and whether only to preview the change; ``blocks``: changed S7-SCL
     sources the chart's calls reach, by the file name of the CPU's ``--blocks`` source
-    each replaces (swapped in with the chart)."""
+    each replaces (swapped in with the chart); ``file``: the name the chart's diagnostics
+    give it (the engineer's file; without it, "the edited chart")."""
 
     source: Source
     base: Version | UnsetType = UNSET
     removed: Removed | UnsetType = UNSET
     preview: bool | UnsetType = UNSET
     blocks: BlockSources | UnsetType = UNSET
+    file: FileName | UnsetType = UNSET
 
 
 class UndoArgs(Args, frozen=True, kw_only=True):

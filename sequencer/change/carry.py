@@ -12,7 +12,10 @@ version to another — the state file of a changed chart, and the browser's onli
 number: an active step that still exists stays active with its times T and U, its fault
 latches and criteria; active steps that are gone are reported; transitions by number;
 variables by name (kept when their type is unchanged, else at their new initial value, and
-reported); the mode, the options latched from the pins and the edge memories as they were.
+reported: :func:`restart_line`); the mode, the options latched from the pins and the edge
+memories as they were. A sequencer the old version did not have (:func:`new_sequencers`)
+gets its initial steps active, as its first call after a start would activate them — unless
+an active step carried over is in it (moved there): it goes on from that one.
 
 ``ChartFormat`` is the ``engine.blocks.StateFormat`` of a GraphFB: how
 ``engine/persistence.py`` recognises (and carries over) its instance data.
@@ -22,14 +25,26 @@ from __future__ import annotations
 
 import hashlib
 import json
+from collections.abc import Collection, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
 from s7graph.sequencer.compiled import CompiledChart
 from s7graph.sequencer.cycle import new_state
 from s7graph.sequencer.state import STEP_LISTS, TRANSITION_LISTS, GraphState
+from s7graph.sequencer.text.model import VarDecl
 
-__all__ = ["CarryReport", "ChartFormat", "ChartShape", "carry_over", "fingerprint"]
+__all__ = [
+    "CarryReport",
+    "ChartFormat",
+    "ChartShape",
+    "NewSequencer",
+    "carry_over",
+    "fingerprint",
+    "initial_text",
+    "new_sequencers",
+    "restart_line",
+]
 
 _SCALARS = (
     "mode",
@@ -87,24 +102,31 @@ def fingerprint(cc: CompiledChart) -> str:
 @dataclass(frozen=True, slots=True)
 class ChartShape:
     """What a saved GraphState is read by: step and transition numbers by compiled index,
-    the variables' types, and the chart's name."""
+    the variables' types, the chart's name and its sequencers' numbers (None: a state saved
+    before they were kept)."""
 
     name: str
     step_numbers: tuple[int, ...]
     transition_numbers: tuple[int, ...]
     var_types: dict[str, str] = field(default_factory=dict)
+    sequences: tuple[int, ...] | None = None
 
     @classmethod
     def of(cls, cc: CompiledChart) -> ChartShape:
-        return cls(cc.name, cc.step_numbers, cc.transition_numbers, dict(cc.var_types))
+        return cls(
+            cc.name, cc.step_numbers, cc.transition_numbers, dict(cc.var_types), cc.seq_numbers
+        )
 
     def to_json(self) -> dict[str, Any]:
-        return {
+        out: dict[str, Any] = {
             "name": self.name,
             "steps": list(self.step_numbers),
             "transitions": list(self.transition_numbers),
             "vars": dict(self.var_types),
         }
+        if self.sequences is not None:
+            out["sequences"] = list(self.sequences)
+        return out
 
     @classmethod
     def from_json(cls, data: object) -> ChartShape:
@@ -113,12 +135,17 @@ class ChartShape:
             raise ValueError("no chart shape saved with the state")
         steps, transitions = data.get("steps"), data.get("transitions")
         variables = data.get("vars", {})
+        sequences = data.get("sequences")
         if not (
             isinstance(data.get("name"), str)
             and isinstance(steps, list)
             and isinstance(transitions, list)
             and all(isinstance(n, int) for n in steps + transitions)
             and isinstance(variables, dict)
+            and (
+                sequences is None
+                or (isinstance(sequences, list) and all(isinstance(n, int) for n in sequences))
+            )
         ):
             raise ValueError("malformed chart shape")
         return cls(
@@ -126,7 +153,80 @@ class ChartShape:
             tuple(steps),
             tuple(transitions),
             {str(k): str(v) for k, v in variables.items()},
+            tuple(sequences) if sequences is not None else None,
         )
+
+
+_ZERO_TEXT = {
+    "BOOL": "FALSE",
+    "REAL": "0.0",
+    "TIME": "T#0MS",
+    "S5TIME": "S5T#0MS",
+    "DATE": "D#1990-01-01",
+    "DATE_AND_TIME": "DT#1990-01-01-00:00:00",
+    "DT": "DT#1990-01-01-00:00:00",
+    "TIME_OF_DAY": "TOD#00:00:00",
+    "TOD": "TOD#00:00:00",
+}
+
+
+def initial_text(decl: VarDecl) -> str:
+    """The value variable ``decl`` starts at, as the chart writes it: its declared initial
+    value, else its type's (FALSE, 0, 0.0, '', D#1990-01-01 …)."""
+    if decl.init is not None:
+        return decl.init.text
+    t = decl.type.upper()
+    return "''" if t.startswith("STRING") else _ZERO_TEXT.get(t, "0")
+
+
+def restart_line(name: str, before: str, after: str, initial: str) -> str:
+    """A variable whose declared type changed: the carry-over's line, which a download's
+    preview gives too (``sequencer.change.diff``)."""
+    return f"variable {name}: {before} → {after}, restarts at its initial value {initial}"
+
+
+@dataclass(frozen=True, slots=True)
+class NewSequencer:
+    """A sequencer a new chart version has and the running one had not: its number, the
+    initial steps that become active at the swap, and the active steps carried into it
+    (moved there from another sequencer: then it goes on from those, none is activated)."""
+
+    number: int
+    started: tuple[int, ...]
+    carried: tuple[int, ...] = ()
+
+    def line(self) -> str:
+        """What a download's preview and its reply say of it."""
+        head = f"new sequencer {self.number}"
+        if self.carried:
+            shown = ", ".join(f"S{n}" for n in self.carried)
+            return f"{head}: active step {shown} goes on in it; its initial steps stay inactive"
+        if not self.started:
+            return f"{head}: it has no initial step; none of its steps becomes active"
+        shown = ", ".join(f"S{n}" for n in self.started)
+        if len(self.started) == 1:
+            return f"{head}: its initial step {shown} becomes active"
+        return f"{head}: its initial steps {shown} become active"
+
+
+def new_sequencers(
+    had: Collection[int] | None,
+    old_steps: Collection[int],
+    sequences: Iterable[tuple[int, tuple[int, ...], tuple[int, ...]]],
+    active: Collection[int],
+) -> list[NewSequencer]:
+    """The sequencers of a new chart version that the running one, which had the sequencers
+    numbered ``had`` (None: not known — a state saved before they were kept: then one none
+    of whose steps it had), did not have. ``sequences``: (number, its step numbers, its
+    initial step numbers) of the new version; ``active``: the step numbers active after the
+    carry-over. The one rule of ``carry_over`` and of a download's preview."""
+    out = []
+    for number, steps, initial in sequences:
+        new = number not in had if had is not None else not any(n in old_steps for n in steps)
+        if new:
+            carried = tuple(n for n in steps if n in active)
+            out.append(NewSequencer(number, () if carried else tuple(initial), carried))
+    return out
 
 
 @dataclass(slots=True)
@@ -140,8 +240,12 @@ class CarryReport:
     faults_gone: list[int] = field(default_factory=list)
     """Steps with a latched supervision fault that no longer exist."""
     vars_reset: list[str] = field(default_factory=list)
+    """Variables of a changed type (at their initial values); ``restarts`` says each so."""
+    restarts: list[str] = field(default_factory=list)
     vars_dropped: list[str] = field(default_factory=list)
     vars_new: list[str] = field(default_factory=list)
+    sequencers: list[NewSequencer] = field(default_factory=list)
+    """The sequencers the old version did not have, and the steps that became active."""
 
     def lines(self) -> list[str]:
         """The report as the CLI prints it (and the diagnostic buffer records it)."""
@@ -156,11 +260,8 @@ class CarryReport:
                 "latched supervision faults of steps gone: "
                 + ", ".join(f"S{n}" for n in self.faults_gone)
             )
-        if self.vars_reset:
-            out.append(
-                "variables of a changed type, at their initial values: "
-                + ", ".join(self.vars_reset)
-            )
+        out += self.restarts
+        out += [q.line() for q in self.sequencers]
         if self.vars_dropped:
             out.append("variables no longer declared: " + ", ".join(self.vars_dropped))
         if self.vars_new:
@@ -195,6 +296,7 @@ def carry_over(
     _by_number(old.transition_numbers, new.transition_numbers, TRANSITION_LISTS, state, st)
     for name in _SCALARS:
         setattr(st, name, getattr(state, name))
+    report.sequencers = _start_new_sequencers(old, new, st, report.kept)
     st.error = any(st.il_err[i] for i in st.active)
     st.fault = any(st.sv_err)
     st.err_flt = st.error or st.fault
@@ -208,6 +310,7 @@ def carry_over(
             if name in mine:
                 mine[name] = value
     st.prev = {k: v for k, v in state.prev.items() if k in st.inputs}
+    declared = {v.name: v for v in new.chart.vars}
     for name, value in state.vars.items():
         if name not in new.var_types:
             report.vars_dropped.append(name)
@@ -215,10 +318,42 @@ def carry_over(
             st.vars[name] = value
         else:
             report.vars_reset.append(name)
+            was, now = old.var_types.get(name, "?"), new.var_types[name]
+            start = initial_text(declared[name]) if name in declared else "?"
+            report.restarts.append(restart_line(name, was, now, start))
     report.vars_new = sorted(set(new.var_types) - set(state.vars))
     st.display = _display(state.display, new)
     st.levels = dict(state.levels)
     return st, report
+
+
+def _start_new_sequencers(
+    old: ChartShape, new: CompiledChart, st: GraphState, kept: list[int]
+) -> list[NewSequencer]:
+    """Activate the initial steps of the sequencers ``old`` did not have in ``st`` (the
+    state of ``new``), as the first call after a start activates them (times from 0, no
+    error; their S1 event is the next call's: ``GraphFB.enter``); what was done."""
+    numbers = new.step_numbers
+    initial = set(new.initial)
+    found = new_sequencers(
+        old.sequences,
+        set(old.step_numbers),
+        [
+            (q, tuple(numbers[i] for i in steps), tuple(numbers[i] for i in steps if i in initial))
+            for q, steps in zip(new.seq_numbers, new.seq_steps, strict=True)
+        ],
+        set(kept),
+    )
+    for q in found:
+        for n in q.started:
+            i = new.step_index[n]
+            if not st.x[i]:
+                st.x[i] = True
+                st.t_ns[i] = st.u_ns[i] = 0
+                st.act_ns[i] = st.last_ns
+                st.il_err[i] = st.sv_err[i] = False
+                st.active.append(i)
+    return found
 
 
 def _by_number(

@@ -15,11 +15,12 @@ set).
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Collection, Iterable
 from dataclasses import dataclass, fields
 from difflib import SequenceMatcher
 from typing import Literal
 
+from s7graph.sequencer.change.carry import initial_text, new_sequencers, restart_line
 from s7graph.sequencer.compiled import CompiledChart
 from s7graph.sequencer.state import GraphState
 from s7graph.sequencer.text.elements import (
@@ -42,6 +43,7 @@ from s7graph.sequencer.text.model import (
     Step,
     StepTarget,
     Transition,
+    VarDecl,
 )
 from s7graph.sequencer.text.walk import uncommented, unlocated
 from s7graph.steps.conditions import contact_text
@@ -180,14 +182,32 @@ class _Diff:
                     "changed", None, f"option {key}", f"option {key}: {_bool(x)} → {_bool(y)}", x, y
                 )
 
-    def sequences(self, a: Chart, b: Chart) -> None:
+    def sequences(self, a: Chart, b: Chart, active: Collection[int]) -> None:
+        """Sequencers added (saying which of their steps become active at the swap, by the
+        carry-over's rule: ``carry.new_sequencers``), removed or renamed; ``active``: the
+        step numbers active after the swap."""
         old = {q.number: q for q in a.sequences}
         new = {q.number: q for q in b.sequences}
+        added = new_sequencers(
+            old.keys(),
+            {s.number for s in a.all_steps()},
+            [
+                (
+                    q.number,
+                    tuple(s.number for s in q.steps),
+                    tuple(s.number for s in q.steps if s.initial),
+                )
+                for q in b.sequences
+                if q.number not in old
+            ],
+            active,
+        )
+        said = {q.number: q.line() for q in added}
         for n in sorted(old.keys() | new.keys()):
             ref = SequenceRef(n)
             x, y = old.get(n), new.get(n)
             if x is None and y is not None:
-                self.add("added", ref, "sequencer", f"sequencer {n} added", None, y)
+                self.add("added", ref, "sequencer", said[n], None, y)
             elif y is None and x is not None:
                 self.add("removed", ref, "sequencer", f"sequencer {n} removed", x, None)
             elif x is not None and y is not None and x.name != y.name:
@@ -319,7 +339,10 @@ class _Diff:
                 shown = f'"{v.name}"' if kind == "symbol" else v.name
                 kind_: ChangeKind = "added" if x is None else "removed" if y is None else "changed"
                 if x != y:
-                    self.add(kind_, ref, kind, f"{kind} {shown} {kind_}", x, y)
+                    text = f"{kind} {shown} {kind_}"
+                    if isinstance(x, VarDecl) and isinstance(y, VarDecl):
+                        text = _variable_change(x, y) or text
+                    self.add(kind_, ref, kind, text, x, y)
         for place, p, q in (("before", a.before, b.before), ("after", a.after, b.after)):
             if p != q:
                 self.add(
@@ -330,6 +353,16 @@ class _Diff:
                     x,
                     y,
                 )
+
+
+def _variable_change(x: VarDecl, y: VarDecl) -> str | None:
+    """The line of a variable whose value the carry-over does not keep (``carry_over``: by
+    its exact name and declared type): it restarts at its initial value."""
+    start = initial_text(y)
+    if x.name != y.name:
+        return f"variable {x.name} → {y.name}: restarts at its initial value {start}"
+    before, after = x.type.upper(), y.type.upper()
+    return restart_line(y.name, before, after, start) if before != after else None
 
 
 def _key(op: Operand) -> tuple[str, bool]:
@@ -367,14 +400,15 @@ def _stays_set(a: Chart, b: Chart) -> tuple[StaysSet, ...]:
 def summarize(running: Chart, edited: Chart, active: Iterable[int] = ()) -> ChangeSummary:
     """What a download of ``edited`` over ``running`` changes; ``active`` are the step
     numbers active in the running state (``active_steps``)."""
+    active = tuple(active)
     a, b = uncommented(unlocated(running)), uncommented(unlocated(edited))
     d = _Diff()
     d.header(a, b)
-    d.sequences(a, b)
+    kept = {s.number for s in b.all_steps()}
+    d.sequences(a, b, {n for n in active if n in kept})
     d.steps(a, b)
     d.transitions(a, b)
     d.declarations(a, b)
-    kept = {s.number for s in b.all_steps()}
     had = {s.number for s in a.all_steps()}
     removed = tuple(sorted({n for n in active if n in had and n not in kept}))
     return ChangeSummary(tuple(d.changes), removed, _stays_set(a, b))

@@ -10,8 +10,16 @@ next call (``GraphFB.replace_chart``), the instance DBs of the system blocks it 
 created first (``sequencer.calls``; a DB that is something else, or a new call of a block
 the CPU lacks, refuses the swap). Active steps the new chart does not have are never
 dropped silently: without a choice the swap is refused naming them; ``keep`` lets the
-other steps go on, ``init`` initializes the sequencer (INIT_SQ in the next call). The way
-back — *Undo download* — is the same swap with the charts the other way round.
+other steps go on, ``init`` initializes the sequencer (INIT_SQ in the next call). A
+sequencer the running chart did not have gets its initial steps active at the swap
+(``carry.new_sequencers``), their S1 event in the next call, as the first call after a start
+activates them. The way back — *Undo download* — is the same swap with the charts the other
+way round.
+
+:func:`refusal` is why the swap would refuse a chart now — an operand beyond the CPU's
+memory, a call of a block the CPU lacks, an instance DB that is something else — read off
+the chart's :class:`Needs` (small: a preview made in another process carries them), so that
+a download's preview refuses with the very reason the swap would give.
 
 Pure: no threads, no clock, no files; the caller (``web.bus.online``) compiles off the scan
 thread and calls :func:`swap` between two scans.
@@ -19,18 +27,29 @@ thread and calls :func:`swap` between two scans.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Final, Literal
 
 from s7graph.engine.errors import S7Error
-from s7graph.sequencer.calls import missing_blocks, prepare_calls
+from s7graph.sequencer.calls import CallPlan, CallSite, call_sites, missing_blocks, plan_calls
 from s7graph.sequencer.change.carry import CarryReport, ChartShape, carry_over
 from s7graph.sequencer.change.diff import ChangeSummary, active_steps, summarize
-from s7graph.sequencer.compiled import CompiledChart
+from s7graph.sequencer.compiled import CompiledChart, Reach, reach_problem
 from s7graph.sequencer.fb import GraphFB
+from s7graph.sequencer.text.model import Chart
 from s7graph.steps.qualifiers import EV_S0
 
-__all__ = ["REMOVED", "Removed", "SwapRefused", "SwapReport", "preview", "swap"]
+__all__ = [
+    "REMOVED",
+    "Needs",
+    "Removed",
+    "SwapRefused",
+    "SwapReport",
+    "preview",
+    "refusal",
+    "swap",
+]
 
 Removed = Literal["keep", "init"]
 REMOVED: Final = ("keep", "init")
@@ -61,6 +80,53 @@ class SwapReport:
             )
             out.append(f"active steps removed: {shown}; {what}")
         return out
+
+
+@dataclass(frozen=True, slots=True)
+class Needs:
+    """What a compiled chart needs of the CPU it runs in: the areas and DBs its operands
+    use (``buffers``) and how far they reach (``reach``), and its block calls."""
+
+    buffers: tuple[tuple[str, int | None], ...]
+    reach: tuple[Reach, ...]
+    calls: tuple[CallSite, ...]
+
+    @classmethod
+    def of(cls, cc: CompiledChart) -> Needs:
+        return cls(cc.buffers, cc.reach, tuple(call_sites(cc.chart)))
+
+
+def refusal(
+    cpu: Any,
+    running: Chart,
+    needs: Needs,
+    *,
+    find: Callable[[str], Any] | None = None,
+    mem: Any = None,
+) -> str | None:
+    """Why :func:`swap` would refuse a chart that needs ``needs`` in ``cpu`` (running the
+    chart ``running``) now, or None: an operand beyond the CPU's memory (bound, it would stop
+    the CPU), a new call of a block the CPU lacks, an instance DB that is something else.
+    ``find`` and ``mem``: the blocks and the memory as a download's S7-SCL sources leave
+    them, for its preview (default: the CPU's now)."""
+    return _checked(cpu, running, needs, find=find, mem=mem)[0]
+
+
+def _checked(
+    cpu: Any,
+    running: Chart,
+    needs: Needs,
+    *,
+    find: Callable[[str], Any] | None = None,
+    mem: Any = None,
+) -> tuple[str | None, CallPlan]:
+    """:func:`refusal`, and the plan of the chart's calls (the instance DBs to create)."""
+    beyond = reach_problem(needs.buffers, needs.reach, mem if mem is not None else cpu.mem)
+    if beyond is not None:
+        return f"{beyond}: reached, the new chart would stop the CPU", CallPlan()
+    lacking = missing_blocks(cpu, running)
+    plan = plan_calls(cpu, needs.calls, allowed_missing=lacking, find=find)
+    return ("; ".join(plan.problems) if plan.problems else None), plan
 
 
 def preview(graph: GraphFB, new: CompiledChart) -> ChangeSummary:
@@ -110,17 +176,17 @@ def swap(
             "go on) or init (initialize the sequencer)"
         )
     # nothing the new chart reaches beyond the CPU's memory (bound, it would stop the CPU);
-    # the instance DBs of its new SFB calls; no new call of a block the CPU lacks
-    beyond = new.reach_problem(cpu.mem)
-    if beyond is not None:
-        raise SwapRefused(f"{beyond}: reached, the new chart would stop the CPU")
-    plan = prepare_calls(cpu, new.chart, allowed_missing=missing_blocks(cpu, old.chart))
-    if plan.problems:
-        raise SwapRefused("; ".join(plan.problems))
+    # no new call of a block the CPU lacks; then the instance DBs of its new SFB calls
+    why, plan = _checked(cpu, old.chart, Needs.of(new))
+    if why is not None:
+        raise SwapRefused(why)
+    for number, block in plan.wanted.items():
+        cpu.create_instance_db(number, block)
     if gone:
         _final_scans(graph, [old.step_index[n] for n in gone])
     carried, report = carry_over(ChartShape.of(old), state, new)
     graph.replace_chart(new, carried, cpu)
+    graph.enter([n for q in report.sequencers for n in q.started])
     initialize = removed == "init" and bool(gone)
     if initialize:
         graph.command("INIT_SQ", user=user)

@@ -1,7 +1,8 @@
 """What the compiler process (``web.bus.compiler``) does with one request.
 
 ``answer(request)`` parses, validates and compiles a chart (``compile``; ``preview``: the
-same, only the change summary and the S7-SCL programs go back) — with ``blocks``, the S7-SCL
+same, only the change summary, what the chart needs of the CPU — ``Needs``, which the CPU
+checks as its swap will — and the S7-SCL programs go back) — with ``blocks``, the S7-SCL
 sources its calls reach too, the calls checked against their interfaces — compares two
 charts (``summary``: an undo), checks that a text parses (``check``: a save), or imports a
 file (``open``). Every refusal is ``{"refused": reason, "lines": diagnostics}`` with one
@@ -20,6 +21,7 @@ from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.change.base import EditRefused
 from s7graph.sequencer.change.carry import fingerprint
 from s7graph.sequencer.change.diff import summarize
+from s7graph.sequencer.change.online import Needs
 from s7graph.sequencer.change.typed import parse_source
 from s7graph.sequencer.checks.diagnostics import format_diagnostic
 from s7graph.sequencer.checks.validate import validate
@@ -128,7 +130,8 @@ def _compile(request: dict[str, Any], *, preview: bool) -> tuple[dict[str, Any],
     summary = summarize(running, chart, tuple(request.get("active", ())))
     lines = summary.lines()
     out: dict[str, Any] = {
-        "summary": (lines[:MAX_SUMMARY_LINES], summary.removed_active, len(summary.changes))
+        "summary": (lines[:MAX_SUMMARY_LINES], summary.removed_active, len(summary.changes)),
+        "needs": Needs.of(cc),  # what the swap checks in the CPU: its preview checks too
     }
     blocks = request.get("blocks")
     portable: list[tuple[bytes, bytes]] = []

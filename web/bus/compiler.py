@@ -60,6 +60,7 @@ from s7graph.engine.switching import SWITCH_S, switching
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.change.base import MAX_SOURCE
 from s7graph.sequencer.change.diff import removal_line
+from s7graph.sequencer.change.online import Needs
 from s7graph.sequencer.collector import collector_paused
 from s7graph.sequencer.compiled import CompiledChart
 from s7graph.web.bus import compile_jobs
@@ -107,6 +108,7 @@ class Summary:
     removed_active: tuple[int, ...]
     count: int
     blocks: SclSources | None = None  # a preview's S7-SCL sources, compiled (if sent)
+    needs: Needs | None = None  # what the chart needs of the CPU (None: an undo's summary)
 
     @property
     def unchanged(self) -> bool:
@@ -314,7 +316,8 @@ class Compiler:
             "blocks": blocks,
         }
         reply, blobs = self._call(request, "download")
-        summary = Summary(*reply["summary"])
+        said, removed, count = reply["summary"]
+        summary = Summary(said, removed, count, needs=reply.get("needs"))
         if blocks is None:
             return summary if preview else _loaded(blobs, reply["parts"], summary)
         files, warnings, n = reply["blocks"]

@@ -7,10 +7,13 @@ queue. One worker thread takes them in order: the gate establishes who sent each
 whether their role allows it (refusals audited like every command), the chart is parsed,
 checked against the editor's limits and compiled with the CPU's symbol table, and the
 change summary made — all in the compiler's process (``web.bus.compiler``: a size limit
-before parsing, a time limit), never in the CPU's. ``preview`` answers with that summary and
-stops there. A real download first writes the chart file (the old one kept as a numbered
-backup, the new one flushed to the disk: ``web.harness.project``), then hands the compiled
-chart to the scan thread, which swaps it in between two scans (:meth:`OnlineChange.at_boundary`,
+before parsing, a time limit), never in the CPU's; its diagnostics name the file the sender
+names (``file``; else "the edited chart"). What the swap would refuse in this CPU (an
+operand beyond its memory, a call of a block it lacks: ``chart_refusal``) is refused here
+already, with the swap's reason. ``preview`` answers with that summary and stops there. A
+real download first writes the chart file (the old one kept as a numbered backup, the new
+one flushed to the disk: ``web.harness.project``), then hands the compiled chart to the scan
+thread, which swaps it in between two scans (:meth:`OnlineChange.at_boundary`,
 ``sequencer.online.swap``: the state carried over by step number); only then does the
 reply say *applied* — the CPU runs the new chart and a restart would too. A swap refused at
 the boundary (active steps removed without a choice, the CPU not scanning) puts the old file
@@ -22,6 +25,8 @@ reaches the scan but a compiled chart.
 A download may bring changed S7-SCL sources of the blocks the chart calls (``blocks``):
 compiled with the chart in the compiler's process, written beside it, swapped in with it at
 the same boundary (``web.bus.online_blocks``), kept with its version for ``undo_download``.
+With the chart unchanged (its summary empty) only the blocks change: the chart that runs,
+its state and its file stay, and the reply says so as the preview does.
 Its preview (and an undo's) says what the instance DBs would keep, drop and start afresh
 — the notes the download's reply gives, made by the same function
 (``web.harness.scl_reload.carry_notes``) — or the reason it would be refused.
@@ -33,6 +38,7 @@ queryables like the chart and the state.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import hashlib
 import threading
 from collections.abc import Mapping, Sequence
@@ -45,7 +51,7 @@ import msgspec
 
 from s7graph.engine.errors import BlockError, internal_error
 from s7graph.engine.symbols import SymbolTable
-from s7graph.sequencer.change.online import SwapRefused, SwapReport, swap
+from s7graph.sequencer.change.online import Needs, SwapRefused, SwapReport, swap
 from s7graph.sequencer.compiled import CompiledChart
 from s7graph.sequencer.text.format import format_chart
 from s7graph.web.access.audit import Facts
@@ -53,7 +59,7 @@ from s7graph.web.bus.block_sources import MAX_TEXT_BYTES, source_files
 from s7graph.web.bus.compiler import Compiled, Compiler, CompileRefused, Opened, Summary
 from s7graph.web.bus.gate import Gate, with_note
 from s7graph.web.bus.live import LiveChart, LiveGraph
-from s7graph.web.bus.online_blocks import BlockFiles, BlocksRefused, swap_blocks
+from s7graph.web.bus.online_blocks import BlockFiles, BlocksRefused, chart_refusal, swap_blocks
 from s7graph.web.bus.protocol import (
     ChartSource,
     Command,
@@ -85,6 +91,9 @@ MAX_WAITING: Final = 4  # engineering commands queued at once; more are refused 
 BOUNDARY_TIMEOUT_S: Final = 5.0  # the scan loop takes a swap within this, or it is refused
 MAX_LINES: Final = 400  # lines of a reply (a change summary, diagnostics)
 MAX_HISTORY: Final = 20  # charts kept for undo_download (the oldest go first)
+EDITED: Final = "the edited chart"  # a download's chart in its diagnostics, unless it names it
+UNCHANGED: Final = "the chart does not change"  # a download of S7-SCL blocks alone
+SAME: Final = "no change: the CPU runs this chart"
 
 
 @dataclass(frozen=True, slots=True)
@@ -110,7 +119,9 @@ class _Swap:
     removed: str | None
     user: str
     blocks: SclSources | None = None  # S7-SCL blocks swapped in with the chart
+    chart: bool = True  # the chart changes (False: the blocks alone; the chart stays)
     done: threading.Event = field(default_factory=threading.Event)
+    ok: bool = False  # made (``report``: the chart's swap, when it changed)
     report: SwapReport | None = None
     notes: list[str] = field(default_factory=list)  # what the blocks' DBs did not keep
     refusal: str = ""
@@ -346,17 +357,24 @@ class OnlineChange:
             )
             scl_changed = back.scl is not self.current.scl
             scl_texts, new_scl = back.scl_texts, back.scl
+            needs = None if summary.unchanged else Needs.of(back.cc)
         else:
             sent = self._sent_blocks(command)
-            target, summary = self._compile(str(command.args["source"]), preview, sent)
+            file = str(command.args.get("file") or EDITED)
+            target, summary = self._compile(str(command.args["source"]), preview, sent, file)
             scl_changed, scl_texts = bool(sent), {**self.current.scl_texts, **sent}
             new_scl = summary.blocks if target is None else target.scl
-        same = "the chart does not change" if scl_changed else "no change: the CPU runs this chart"
-        lines = list(summary.lines()) or [same]
+            needs = summary.needs
+        lines = list(summary.lines()) or [UNCHANGED if scl_changed else SAME]
         if scl_changed:
             lines.append(_blocks_line(scl_texts, self.current))
-        if preview and scl_changed and new_scl is not None:
-            lines += self._carried(op, new_scl)  # the notes the download's reply gives
+        if scl_changed and new_scl is not None:
+            notes = self._carried(op, new_scl)  # the notes the download's reply gives
+            lines += notes if preview else []
+        if not summary.unchanged and needs is not None:  # what the swap would refuse
+            why = chart_refusal(self.session, needs, new_scl if scl_changed else None)
+            if why is not None:
+                raise _Refused(f"{op} refused: {why}; the CPU keeps the old chart")
         if preview:
             reply = CommandReply(
                 applied=True,
@@ -400,14 +418,13 @@ class OnlineChange:
         return self.block_files.changes(sent)
 
     def _compile(
-        self, text: str, preview: bool, sent: dict[str, str]
+        self, text: str, preview: bool, sent: dict[str, str], file: str
     ) -> tuple[Version | None, Summary]:
         """``text`` compiled with the CPU's symbol table in the compiler's process, with the
         changed S7-SCL sources ``sent`` (and the CPU's others), and its change summary (a
-        preview: the summary only)."""
+        preview: the summary only); its diagnostics name it ``file`` (the sender's)."""
         v = self.current
         blocks = self.block_files.merged(sent) if sent else None
-        file = self.path.name if self.path is not None else f"{v.cc.name}.s7g"
         done = self.compiler.compile(
             text,
             file,
@@ -436,14 +453,18 @@ class OnlineChange:
     def _download(
         self, command: Command, target: Version, summary: Summary, removed: str | None
     ) -> tuple[CommandReply, str]:
-        """Write the file, swap at the boundary, keep the old version; undo when refused."""
+        """Write the files, swap at the boundary, keep the old version; undo when refused.
+        S7-SCL blocks alone (the chart unchanged: its summary empty) leave the chart that
+        runs, its state and its file as they are."""
+        chart = not summary.unchanged
+        if not chart:
+            v = self.current
+            target = dataclasses.replace(target, cc=v.cc, table=v.table, text=v.text)
         backup = None
         written = False
         blocks = target.scl if target.scl is not self.current.scl else None
-        if blocks is not None:
-            self._carried(command.op, blocks)
         files = self._write_blocks(command, target) if blocks is not None else []
-        if self.path is not None:
+        if chart and self.path is not None:
             try:
                 backup = write_chart(self.path, target.text)
                 written = True
@@ -453,7 +474,7 @@ class OnlineChange:
                     f"{command.op} refused: {exc}; the CPU keeps the old chart"
                 ) from None
         live = target.live or self.live.prepare(target.cc, version=target.number)
-        pending = _Swap(target, live, removed, command.user, blocks)
+        pending = _Swap(target, live, removed, command.user, blocks, chart)
         with self._lock:
             self._swap = pending
         pending.done.wait(self._timeout)
@@ -461,7 +482,7 @@ class OnlineChange:
             if not pending.done.is_set():  # the scan thread will not take it any more
                 pending.cancelled = True
             self._swap = None
-        if pending.report is None:
+        if not pending.ok:
             reason = pending.refusal or (
                 f"the CPU reached no scan boundary within {self._timeout:g} s"
             )
@@ -482,19 +503,20 @@ class OnlineChange:
         self.block_files.adopt(target.scl_texts)
         if self.publisher is not None:
             self.publisher.set_chart(self.live.fb, live.layout)
-        lines = [*pending.report.lines(), *summary.lines(done=True)]
+        lines = _reply_lines(pending, summary)
         if blocks is not None:
             lines += [_blocks_line(target.scl_texts, old), *pending.notes]
-        where = f"; {self.path.name} written" if self.path is not None else ""
+        where = f"; {self.path.name} written" if written and self.path is not None else ""
         kept = f", the old file kept as {backup.name}" if backup is not None else ""
         head = f"version {target.number} runs (was {old.number}){where}{kept}"
         digest = hashlib.sha256(target.text.encode()).hexdigest()[:12]
         detail = f"{head}; chart sha256 {digest}; " + "; ".join(lines)
+        removed_now = list(pending.report.removed_active) if pending.report is not None else []
         reply = CommandReply(
             applied=True,
             lines=[head, *lines][:MAX_LINES],
             version=target.number,
-            removed=list(pending.report.removed_active),
+            removed=removed_now,
         )
         return reply, detail[:4096]
 
@@ -514,20 +536,22 @@ class OnlineChange:
                 if pending.blocks is not None:
                     pending.notes, back = swap_blocks(session, pending.blocks)
                 try:
-                    report = swap(
-                        session.graph,
-                        pending.target.cc,
-                        session.cpu,
-                        removed=pending.removed,
-                        user=pending.user,
-                    )
+                    report = None
+                    if pending.chart:
+                        report = swap(
+                            session.graph,
+                            pending.target.cc,
+                            session.cpu,
+                            removed=pending.removed,
+                            user=pending.user,
+                        )
                 except Exception:
                     if back is not None:
                         back()  # the old blocks with the old chart
                     raise
                 session.symbols = pending.target.table
                 self.live.switch(pending.live)
-                pending.report = report
+                pending.report, pending.ok = report, True
                 if self.durability is not None:
                     pending.mark = self.durability.durable_mark()
             except (SwapRefused, BlocksRefused) as exc:
@@ -573,55 +597,8 @@ class OnlineChange:
         opened = self.compiler.open(path, symbols=self.symbols_text, pou=pou)
         lines = opened.lines
         if opened.functions:
-            lines = [*self._functions_beside(path, pou, opened), *lines]
+            lines = [*_functions_beside(self.session, path, pou, opened), *lines]
         return CommandReply(applied=True, text=opened.text, lines=lines[:MAX_LINES])
-
-    def _functions_beside(self, path: Path, pou: str | None, opened: Opened) -> list[str]:
-        """The SCL FCs an imported chart calls for its ST bodies, written beside the file
-        as ``<stem>.scl`` (``chart_file``: as ``s7graph import -o <stem>.s7g`` writes them,
-        beside the ``.s7g`` the editor proposes; the file it replaces kept as a backup); the
-        notes saying so and which of them this CPU lacks.
-        Refused when this CPU has an FC of such a number that is another block: the chart
-        would call that one."""
-        cpu = self.session.cpu
-        loaded = _loaded_sources(self.session.blocks)
-        lacking: list[int] = []
-        other: list[int] = []
-        for number, source in opened.functions:
-            try:
-                cpu.block(f"FC{number}")
-            except BlockError:
-                lacking.append(number)
-                continue
-            if _squeezed(source) not in loaded:
-                other.append(number)
-        if other:
-            shown = ", ".join(f"FC {n}" for n in other)
-            raise _Refused(
-                f"{path.name}: its chart calls {shown} for ST bodies (SCL FCs the import "
-                f"makes), and this CPU's {shown} comes from another source: a download "
-                "would call it; import the file with s7graph import and renumber the FCs, "
-                "or run the CPU without them"
-            )
-        scl = path.with_name(chart_file(path.name, pou, ".scl"))
-        numbers = ", ".join(f"FC {n}" for n, _ in opened.functions)
-        note = f"{scl.name}: the SCL FCs the chart calls for its ST bodies ({numbers})"
-        try:
-            same = scl.is_file() and scl.read_text(encoding="utf-8") == opened.scl
-            backup = None if same else write_chart(scl, opened.scl)
-        except (OSError, UnicodeDecodeError, ProjectError) as exc:
-            raise _Refused(
-                f"{path.name}: cannot write {scl.name}, the SCL FCs its chart calls: {exc}"
-            ) from None
-        kept = f", the old file kept as {backup.name}" if backup is not None else ""
-        lines = [f"{note}, {'unchanged' if same else 'written'}{kept}"]
-        if lacking:
-            shown = ", ".join(f"FC {n}" for n in lacking)
-            lines.append(
-                f"this CPU does not have {shown}: a download of the chart is refused until "
-                f"the CPU runs with --blocks {scl.name}"
-            )
-        return lines
 
     def _save(self, name: str, text: str) -> tuple[CommandReply, str]:
         if not name.endswith(".s7g"):
@@ -635,6 +612,56 @@ class OnlineChange:
         kept = f" (the old file kept as {backup.name})" if backup is not None else ""
         line = f"{name} written{kept}"
         return CommandReply(applied=True, lines=[line]), line
+
+
+def _functions_beside(
+    session: ChartSession, path: Path, pou: str | None, opened: Opened
+) -> list[str]:
+    """The SCL FCs an imported chart calls for its ST bodies, written beside the file
+    as ``<stem>.scl`` (``chart_file``: as ``s7graph import -o <stem>.s7g`` writes them,
+    beside the ``.s7g`` the editor proposes; the file it replaces kept as a backup); the
+    notes saying so and which of them this CPU lacks.
+    Refused when this CPU has an FC of such a number that is another block: the chart
+    would call that one."""
+    cpu = session.cpu
+    loaded = _loaded_sources(session.blocks)
+    lacking: list[int] = []
+    other: list[int] = []
+    for number, source in opened.functions:
+        try:
+            cpu.block(f"FC{number}")
+        except BlockError:
+            lacking.append(number)
+            continue
+        if _squeezed(source) not in loaded:
+            other.append(number)
+    if other:
+        shown = ", ".join(f"FC {n}" for n in other)
+        raise _Refused(
+            f"{path.name}: its chart calls {shown} for ST bodies (SCL FCs the import "
+            f"makes), and this CPU's {shown} comes from another source: a download "
+            "would call it; import the file with s7graph import and renumber the FCs, "
+            "or run the CPU without them"
+        )
+    scl = path.with_name(chart_file(path.name, pou, ".scl"))
+    numbers = ", ".join(f"FC {n}" for n, _ in opened.functions)
+    note = f"{scl.name}: the SCL FCs the chart calls for its ST bodies ({numbers})"
+    try:
+        same = scl.is_file() and scl.read_text(encoding="utf-8") == opened.scl
+        backup = None if same else write_chart(scl, opened.scl)
+    except (OSError, UnicodeDecodeError, ProjectError) as exc:
+        raise _Refused(
+            f"{path.name}: cannot write {scl.name}, the SCL FCs its chart calls: {exc}"
+        ) from None
+    kept = f", the old file kept as {backup.name}" if backup is not None else ""
+    lines = [f"{note}, {'unchanged' if same else 'written'}{kept}"]
+    if lacking:
+        shown = ", ".join(f"FC {n}" for n in lacking)
+        lines.append(
+            f"this CPU does not have {shown}: a download of the chart is refused until "
+            f"the CPU runs with --blocks {scl.name}"
+        )
+    return lines
 
 
 def _loaded_sources(blocks: list[Any]) -> str:
@@ -687,3 +714,13 @@ def _blocks_line(texts: Mapping[str, str], old: Version) -> str:
     was = old.scl_texts
     changed = [n for n, t in texts.items() if was.get(n) != t]
     return f"S7-SCL blocks changed: {', '.join(changed) or 'the same sources, compiled again'}"
+
+
+def _reply_lines(pending: _Swap, summary: Summary) -> list[str]:
+    """What a download made did to the chart: the swap's report, then the summary's lines
+    it does not already give (a variable that restarts, a new sequencer: said alike by
+    both); or that the chart does not change (S7-SCL blocks alone)."""
+    if pending.report is None:
+        return [UNCHANGED]
+    done = pending.report.lines()
+    return [*done, *(line for line in summary.lines(done=True) if line not in done)]

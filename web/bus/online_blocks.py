@@ -13,6 +13,10 @@ instance DBs cannot carry their values (``web.harness.scl_reload.refusals``) and
 downloads the new blocks (``ChartSession.reload_blocks``); it returns the notes and a
 function that puts the CPU's program back as it was — blocks, OBs, instance DBs and DBs —
 for a chart swap that is refused after it. Nothing here compiles: the blocks come compiled.
+
+:func:`chart_refusal` is what the chart's swap would refuse (``sequencer.change.online.
+refusal``) once those blocks are in: what a download's preview says first, and the download
+checks before it writes a file.
 """
 
 from __future__ import annotations
@@ -22,13 +26,16 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from s7graph.engine.errors import S7Error
+from s7graph.engine.blocks import DB
+from s7graph.engine.errors import BlockError, S7Error
+from s7graph.sequencer.change.online import Needs, refusal
+from s7graph.steps.operands import area_buffer
 from s7graph.web.harness.project import ProjectError, restore_backup, write_chart
 from s7graph.web.harness.scl import SclSources
 from s7graph.web.harness.scl_reload import refusals
 from s7graph.web.harness.session import ChartSession
 
-__all__ = ["BlockFiles", "BlocksRefused", "swap_blocks"]
+__all__ = ["BlockFiles", "BlocksRefused", "chart_refusal", "swap_blocks"]
 
 
 class BlocksRefused(S7Error):
@@ -133,3 +140,55 @@ def _program_of(session: ChartSession) -> Callable[[], None]:
         session.blocks, session.dbvars.types = blocks, types
 
     return back
+
+
+def chart_refusal(session: ChartSession, needs: Needs, new: SclSources | None) -> str | None:
+    """Why the swap of a chart that needs ``needs`` would be refused in the session's CPU
+    once the S7-SCL sources ``new`` (None: none) are in — the swap's own reason — or None.
+    Read from a thread beside the scan: the CPU's tables changing meanwhile is no refusal
+    (the scan boundary checks again)."""
+    cpu: Any = session.cpu
+    find, mem = None, None
+    if new is not None:
+        find, mem = _after(cpu, new)
+    try:
+        return refusal(cpu, session.graph.cc.chart, needs, find=find, mem=mem)
+    except RuntimeError:  # a table changed while read
+        return None
+
+
+def _after(cpu: Any, new: SclSources) -> tuple[Callable[[str], Any], Any]:
+    """The blocks and the memory of ``cpu`` as loading ``new`` leaves them (its blocks
+    loaded over the CPU's, its global DBs in memory), without loading it."""
+    mine: dict[str, Any] = {}
+    for b in new.blocks:
+        mine[b.label.upper()] = b
+        name = getattr(b, "name", "")
+        if name:
+            mine.setdefault(name.upper(), b)
+
+    def find(label: str) -> Any:
+        block = mine.get(label.upper())
+        if block is not None:
+            return block
+        try:
+            return cpu.block(label)
+        except BlockError:
+            return None
+
+    dbs = {b.number: b.size for b in new.blocks if isinstance(b, DB)}
+    return find, _MemAfter(cpu.mem, dbs)
+
+
+class _MemAfter:
+    """``mem`` with the global DBs of new sources (number → size) as they would be."""
+
+    def __init__(self, mem: Any, dbs: dict[int, int]) -> None:
+        self._mem = mem
+        self._dbs = dbs
+        self.timers, self.counters = mem.timers, mem.counters
+
+    def area_bytes(self, area: str, db: int | None = None) -> bytearray:
+        if area == "DB" and db in self._dbs:
+            return bytearray(self._dbs[db])
+        return area_buffer(self._mem, area, db)

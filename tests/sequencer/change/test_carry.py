@@ -9,7 +9,7 @@ from pathlib import Path
 from s7graph.sequencer.change.carry import ChartShape, carry_over, fingerprint
 from s7graph.sequencer.compiled import CompiledChart
 from s7graph.sequencer.cycle import new_state
-from s7graph.web.harness.session import load_chart
+from s7graph.web.harness.session import compile_text, load_chart
 from tests.paths import EXAMPLES
 
 DRILL = EXAMPLES / "drill"
@@ -85,3 +85,76 @@ def test_a_latched_fault_whose_supervision_a_download_removes_has_no_cause_left(
     assert carried.sv_err[k] and not carried.sv_cond[k]
     kept, _ = carry_over(ChartShape.of(old), st, _drill(tmp_path, ("T#2S", "T#3S")))
     assert kept.sv_cond[k] and kept.sv_err[k]  # a supervision still there keeps its cause
+
+
+ONE = """FUNCTION_BLOCK "Two" FB 1 DB 1
+VAR
+  n : INT := 3;
+END_VAR
+SEQUENCE 1
+  INITIAL_STEP S1:
+  END_STEP
+  STEP S2:
+  END_STEP
+  TRANSITION T1 FROM S1 TO S2 := I0.0;
+  TRANSITION T2 FROM S2 TO S1 := I0.1;
+END_SEQUENCE
+END_FUNCTION_BLOCK
+"""
+SECOND = """SEQUENCE 2
+  INITIAL_STEP S20:
+  END_STEP
+  STEP S21:
+  END_STEP
+  TRANSITION T20 FROM S20 TO S21 := I0.2;
+  TRANSITION T21 FROM S21 TO S20 := I0.3;
+END_SEQUENCE
+"""
+
+
+def test_a_new_sequencer_starts_in_its_initial_steps_and_a_changed_type_says_its_restart() -> None:
+    """The one rule of a download and a restart with a changed chart: a sequencer the old
+    version did not have starts in its initial steps (times from 0) — the other sequencers
+    go on — also from a state file saved before the shape kept the sequencers' numbers;
+    a variable whose type changed restarts at its initial value, the line saying so."""
+    old = compile_text(ONE, "one.s7g")[0]
+    new = compile_text(
+        ONE.replace("n : INT := 3;", "n : REAL := 2.5;").replace(
+            "END_SEQUENCE\n", "END_SEQUENCE\n" + SECOND
+        ),
+        "two.s7g",
+    )[0]
+    st = new_state(old)
+    i = old.step_index[2]
+    st.x[i] = True
+    st.active.append(i)
+    st.t_ns[i] = 900_000_000
+    st.last_ns = 5_000_000_000
+    st.vars["n"] = 7
+    saved = ChartShape.of(old).to_json()
+    older = {k: v for k, v in saved.items() if k != "sequences"}  # a state file of before
+    for shape in (ChartShape.from_json(saved), ChartShape.from_json(older)):
+        carried, report = carry_over(shape, st, new)
+        s2, s20 = new.step_index[2], new.step_index[20]
+        assert sorted(carried.active) == sorted([s2, s20])
+        assert carried.step_t_ms(s2) == 900 and carried.step_t_ms(s20) == 0
+        assert carried.act_ns[s20] == st.last_ns and not carried.x[new.step_index[21]]
+        assert carried.vars["n"] == 2.5
+        lines = report.lines()
+        assert "new sequencer 2: its initial step S20 becomes active" in lines
+        assert "variable n: INT → REAL, restarts at its initial value 2.5" in lines
+    moved = new_state(old)  # S2, active, moved into the new sequencer: it goes on from S2
+    moved.x[i] = True
+    moved.active.append(i)
+    into = compile_text(
+        ONE.replace("  STEP S2:\n  END_STEP\n", "")
+        .replace("FROM S1 TO S2", "FROM S1 TO S1")
+        .replace("  TRANSITION T2 FROM S2 TO S1 := I0.1;\n", "")
+        .replace("END_SEQUENCE\n", "END_SEQUENCE\n" + SECOND.replace("S21", "S2")),
+        "moved.s7g",
+    )[0]
+    carried, report = carry_over(ChartShape.of(old), moved, into)
+    assert carried.active == [into.step_index[2]]
+    assert "new sequencer 2: active step S2 goes on in it; its initial steps stay inactive" in (
+        report.lines()
+    )

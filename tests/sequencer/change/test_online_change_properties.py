@@ -5,11 +5,13 @@ with random contacts, clock steps and operator commands.
 
 Oracle: the CPU never leaves RUN (no exception in any call) and its active steps are one
 list; a download is refused only when it would drop active steps without a choice, and
-carries the active steps by number with their times, variables and pins by name; after
-each download the running FB scans exactly as a fresh FB of the new chart started from
-the carried-over state (``twin``: a second CPU on the same clock and contacts): per scan
-the same active steps, step events (with their step numbers), FB outputs and watched
-operands (outputs, markers, a counter, a timer)."""
+carries the active steps by number with their times, variables and pins by name, and a
+sequencer the running chart did not have starts in its initial steps (from 0, their S1
+event in the next call); after each download the running FB scans exactly as a fresh FB of
+the new chart started from the carried-over state (``twin``: a second CPU on the same clock
+and contacts, told the same steps entered): per scan the same active steps, step events
+(with their step numbers), FB outputs and watched operands (outputs, markers, a counter,
+a timer)."""
 
 from __future__ import annotations
 
@@ -29,6 +31,7 @@ from s7graph.engine.cpu import CpuMode
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.change.edit import OPERATIONS, Argument, Session, make_edit
 from s7graph.sequencer.change.online import SwapRefused, swap
+from s7graph.sequencer.compiled import CompiledChart
 from s7graph.sequencer.fb import STATE_VAR
 from s7graph.sequencer.text.format import quote
 from s7graph.sequencer.text.model import Chart
@@ -167,12 +170,15 @@ def _scan(cpu: ChartSession) -> Scan:
     return Scan(record.mode, active, events, tuple(sorted(g.outputs.items())), operands)
 
 
-def twin(plant: ChartSession, queued: list[tuple[str, int | None]]) -> ChartSession:
+def twin(
+    plant: ChartSession, queued: list[tuple[str, int | None]], entered: tuple[int, ...] = ()
+) -> ChartSession:
     """A second CPU running a fresh GraphFB of the chart ``plant`` runs now, started from
     its carried-over state: the FB's instance DB (state and pins, restored from a snapshot
     as from a state file), those of the blocks its rows call, the memory, the message list
     and the cycle count copied, nothing run at its startup (an OB100 without the INIT_SQ
-    call); the commands ``queued`` for the FB's next call queued there too."""
+    call); the commands ``queued`` for the FB's next call queued there too, and the steps
+    ``entered`` at the swap (a new sequencer's initial steps) given their S1 there."""
     g = plant.graph
     fresh = ChartSession(g.cc, plant.symbols, plant.clock)
     fresh.cpu.load(OB(100, "OB100", lambda ctx: None))
@@ -192,6 +198,7 @@ def twin(plant: ChartSession, queued: list[tuple[str, int | None]]) -> ChartSess
             idb.values.update(copy.deepcopy(plant.cpu.instance_dbs[number].values))
     for pin, step in queued:
         fresh.graph.command(pin, step)
+    fresh.graph.enter(entered)
     return fresh
 
 
@@ -259,8 +266,12 @@ class OnlineChange(RuleBasedStateMachine):
         assert sorted(report.removed_active) == list(gone), (report.removed_active, gone)
         after = g.state  # carried by step number, variables and pins by name
         kept = [n for n in active if n not in gone]
-        assert sorted(new.step_numbers[i] for i in after.active) == kept
+        started = self.started(old, new, kept)
+        assert [q.started for q in report.carry.sequencers] == [q[1] for q in started]
+        entered = tuple(n for _, steps in started for n in steps)
+        assert sorted(new.step_numbers[i] for i in after.active) == sorted([*kept, *entered])
         assert {n: after.step_t_ms(new.step_index[n]) for n in kept} == {n: times[n] for n in kept}
+        assert all(after.step_t_ms(new.step_index[n]) == 0 for n in entered)
         assert after.vars == {
             k: variables.get(k, v) if new.var_types[k] == old.var_types.get(k) else v
             for k, v in after.vars.items()
@@ -271,7 +282,22 @@ class OnlineChange(RuleBasedStateMachine):
         self.edits.append(f"download removed={removed}")
         if report.initialized:
             self.queued.append(("INIT_SQ", None))
-        self.twin = twin(plant, self.queued)
+        self.twin = twin(plant, self.queued, entered)
+
+    @staticmethod
+    def started(
+        old: CompiledChart, new: CompiledChart, kept: list[int]
+    ) -> list[tuple[int, tuple[int, ...]]]:
+        """The test's own oracle of a download's new sequencers: each sequencer number the
+        running chart lacks, with its initial steps — none when a kept step moved into it."""
+        out = []
+        for number, steps in zip(new.seq_numbers, new.seq_steps, strict=True):
+            if number in old.seq_numbers:
+                continue
+            numbers = [new.step_numbers[i] for i in steps]
+            initial = tuple(new.step_numbers[i] for i in steps if i in new.initial)
+            out.append((number, () if any(n in kept for n in numbers) else initial))
+        return out
 
     @rule(data=st.data(), scans=st.integers(1, 12))
     def run(self, data: st.DataObject, scans: int) -> None:

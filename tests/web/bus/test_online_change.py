@@ -19,7 +19,7 @@ import pytest
 
 from s7graph.engine.clock import VirtualClock
 from s7graph.engine.persistence import StateStore
-from s7graph.sequencer.change.online import swap
+from s7graph.sequencer.change.online import SwapRefused, swap
 from s7graph.sequencer.exchange import import_file
 from s7graph.sequencer.fb import GraphFB
 from s7graph.web.access.audit import read_audit
@@ -214,7 +214,7 @@ def test_broken_or_hostile_downloads_are_refused_and_the_cpu_keeps_the_old_chart
     cc = cpu.session.graph.cc
     syntax = cpu.send("download", source=CHART.replace(":= full;", ":= full AND;"))
     assert not syntax.applied and "does not parse" in syntax.reason
-    assert any("fill.s7g:19:49: error" in line for line in syntax.lines), syntax.lines
+    assert any("the edited chart:19:49: error" in line for line in syntax.lines), syntax.lines
     unknown = cpu.send("download", source=CHART.replace("N Q0.1;", "N Q99999.0;"))
     assert not unknown.applied and "does not compile" in unknown.reason
     steps = "".join(f"  STEP S{n}:\n  END_STEP\n" for n in range(10, 10_010))
@@ -437,3 +437,124 @@ def test_s7graph_upload_brings_back_the_chart_the_cpu_runs_after_a_download(
     assert capsys.readouterr().err.endswith("runs no FB 'Nope'; it runs Seq_fill\n")
     assert main(["upload", *bus, "--to", str(folder / "fill.s7g")]) == 2
     assert capsys.readouterr().err == f"s7graph: error: --to {folder / 'fill.s7g'}: not a folder\n"
+
+
+def test_a_preview_refuses_what_the_swap_would_refuse_with_the_same_reason(
+    cpu: Cpu, tmp_path: Path
+) -> None:
+    """An operand beyond the CPU's memory and a call of a block the CPU has not loaded are
+    refused by the swap at the scan boundary; the preview says so first, with the very
+    reason the download's reply then gives — never a question whose answer is a refusal."""
+    cc = cpu.session.graph.cc
+    beyond = CHART.replace("N Q0.1;", "N Q9999.7;")
+    calls = CHART.replace("N Q0.1;", "N Q0.1;\n    CALL FC 9;")
+    for edited, why in (
+        (beyond, "Q9999.7 is outside the Q area (128 bytes): reached, the new chart would stop"),
+        (calls, "CALL FC 9: FC9 is not in this CPU; reached, the call would stop it"),
+    ):
+        asked = cpu.send("download", source=edited, preview=True)
+        assert not asked.applied and why in asked.reason, asked.reason
+        new_cc, _ = compile_text(edited, "the edited chart")
+        with pytest.raises(SwapRefused) as swapped:  # the boundary's own refusal
+            swap(cpu.session.graph, new_cc, cpu.session.cpu)
+        assert asked.reason == f"download refused: {swapped.value}; the CPU keeps the old chart"
+        done = cpu.send("download", source=edited)
+        assert not done.applied and done.reason == asked.reason
+    assert cpu.session.graph.cc is cc and cpu.path.read_text(encoding="utf-8") == CHART
+    assert not list(tmp_path.glob("fill.s7g.~*~"))
+
+
+def test_a_variable_whose_type_changes_restarts_at_its_initial_value_as_the_preview_says(
+    cpu: Cpu,
+) -> None:
+    cpu.set("go", True)
+    assert wait_until(lambda: cpu.active() == [2] and cpu.session.get("pieces") == 1)
+    edited = CHART.replace("pieces : INT := 0;", "pieces : REAL := 2.5;").replace(
+        "pieces := pieces + 1;", "pieces := pieces + 1.0;"
+    )
+    said = "variable pieces: INT → REAL, restarts at its initial value 2.5"
+    preview = cpu.send("download", source=edited, preview=True)
+    assert preview.applied and said in preview.lines, preview.lines
+    reply = cpu.send("download", source=edited)
+    assert reply.applied, reply.reason
+    assert reply.lines.count(said) == 1, reply.lines
+    assert cpu.session.get("pieces") == 2.5 and cpu.active() == [2]
+
+
+SECOND = """SEQUENCE 2 "Count"
+  INITIAL_STEP S20 "Ready":
+    S1 N starts := starts + 1;
+  END_STEP
+  STEP S21 "Counted":
+  END_STEP
+  TRANSITION T20 FROM S20 TO S21 := go;
+  TRANSITION T21 FROM S21 TO S20 := FALSE;
+END_SEQUENCE
+"""
+WITH_SECOND = CHART.replace("END_SEQUENCE\n", "END_SEQUENCE\n" + SECOND).replace(
+    "  pieces : INT := 0;\n", "  pieces : INT := 0;\n  starts : INT := 0;\n"
+)
+
+
+def test_a_new_sequencer_starts_in_its_initial_step_at_the_swap_as_the_preview_says(
+    cpu: Cpu,
+) -> None:
+    """A sequencer the running chart did not have: its initial step active at the swap, its
+    S1 rows run once in the next call (held there, as the first call after a start holds
+    it), then it switches on — while the other sequencer goes on where it was."""
+    cpu.set("go", True)
+    assert wait_until(lambda: cpu.active() == [2])
+    said = "new sequencer 2: its initial step S20 becomes active"
+    preview = cpu.send("download", source=WITH_SECOND, preview=True)
+    assert preview.applied and said in preview.lines, preview.lines
+    reply = cpu.send("download", source=WITH_SECOND)
+    assert reply.applied, reply.reason
+    assert reply.lines.count(said) == 1, reply.lines
+    assert wait_until(lambda: cpu.active() == [2, 21])  # S2 went on; S20 → S21 on go
+    assert cpu.session.get("starts") == 1  # S20's S1 row, once
+
+
+def test_a_restart_with_a_new_sequencer_starts_it_as_a_download_does(tmp_path: Path) -> None:
+    """``carry_over`` for a download and for ``s7graph run`` with the changed file: the new
+    sequencer's initial step active in both, the old sequencer's step with its time."""
+    path = tmp_path / "fill.s7g"
+    path.write_text(CHART, encoding="utf-8")
+    online = ChartSession(*load_chart(path), VirtualClock())
+    online.start()
+    online.set("go", True)
+    for _ in range(30):
+        online.clock.advance(10)  # type: ignore[attr-defined]
+        online.scan()
+    store = StateStore(tmp_path / "state.sqlite")
+    store.save(online.cpu)
+    store.close()
+    new_cc, _ = compile_text(WITH_SECOND, str(path))
+    swap(online.graph, new_cc, online.cpu)
+    path.write_text(WITH_SECOND, encoding="utf-8")
+    restarted = ChartSession(*load_chart(path), VirtualClock())
+    opened = open_state(tmp_path / "state.sqlite", restarted.cpu)
+    try:
+        a, b = online.graph.state, restarted.graph.state
+        assert sorted(a.active) == sorted(b.active) == sorted(new_cc.step_index[n] for n in (2, 20))
+        assert a.t_ns == b.t_ns and a.x == b.x
+        assert opened.report is not None
+        said = "new sequencer 2: its initial step S20 becomes active"
+        assert any(said in note for note in opened.report.notes), opened.report.notes
+    finally:
+        opened.store.close()
+
+
+def test_compile_errors_of_a_download_name_the_engineers_file(cpu: Cpu, tmp_path: Path) -> None:
+    """Not the CPU's own chart file: the file the engineer downloads (``file``, as
+    ``s7graph download`` gives its argument), or the edited chart of the page."""
+    bad = CHART.replace("N Q0.1;", "N Q99999.0;")
+    named = cpu.send("download", source=bad, file="my.s7g", preview=True)
+    assert not named.applied and "my.s7g:16:7: error[E041]" in named.reason, named.reason
+    assert all(line.startswith("my.s7g:") for line in named.lines), named.lines
+    page = cpu.send("download", source=bad)
+    assert not page.applied and page.lines[0].startswith("the edited chart:16:7:"), page.lines
+    mine = tmp_path / "mine.s7g"
+    mine.write_text(bad, encoding="utf-8")
+    shell = _shell(cpu.bus, "download", str(mine), "--user", "eng")
+    assert shell.returncode == 1 and f"{mine}:16:7: error[E041]" in shell.stderr, shell.stderr
+    assert "fill.s7g" not in shell.stderr + named.reason + page.reason + "".join(page.lines)

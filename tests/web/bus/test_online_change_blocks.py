@@ -294,3 +294,50 @@ def test_a_refusal_the_cpu_words_itself_is_printed_once(
     assert capsys.readouterr().err == f"s7graph: {why}\n"
     assert _refused("download", CommandReply(applied=False, reason="no chart")) == 1
     assert capsys.readouterr().err == "s7graph: download refused: no chart\n"
+
+
+def test_a_download_of_blocks_alone_leaves_the_chart_and_its_file_as_its_preview_says(
+    cpu: Cpu,
+) -> None:
+    """The chart's text unchanged, the S7-SCL blocks changed: the preview says the chart
+    does not change, and so does the reply — the chart that runs, its state and its file
+    (no backup) stay as they are; an undo of it too."""
+    graph = cpu.session.graph
+    cc, state = graph.cc, graph.state
+    by_7 = BLOCKS.replace("n + 1", "n + 7")
+    preview = cpu.send("download", source=CHART, blocks={"fb17.scl": by_7}, preview=True)
+    assert preview.applied and preview.lines[0] == "the chart does not change", preview.lines
+    reply = cpu.send("download", source=CHART, blocks={"fb17.scl": by_7})
+    assert reply.applied, reply.reason
+    assert reply.lines[:3] == [
+        "version 2 runs (was 1)",
+        "the chart does not change",
+        "S7-SCL blocks changed: fb17.scl",
+    ], reply.lines
+    assert not any("chart changed" in line for line in reply.lines)
+    assert cpu.grows_by(7)
+    assert graph.cc is cc and graph.state is state  # not swapped, not carried over
+    assert cpu.path.read_text(encoding="utf-8") == CHART
+    assert (cpu.path.parent / "fb17.scl.~1~").read_text(encoding="utf-8") == BLOCKS
+    back = cpu.send("undo_download")
+    assert back.applied and "the chart does not change" in back.lines, back.lines
+    assert cpu.grows_by(1) and graph.cc is cc
+    assert not list(cpu.path.parent.glob("seq.s7g.~*~"))  # the chart file never written
+
+
+def test_a_preview_checks_a_new_call_against_the_blocks_the_download_brings(cpu: Cpu) -> None:
+    """A chart calling an FB that only the new S7-SCL sources have: its preview does not
+    refuse what the swap, after those blocks, takes — and refuses an FB neither has."""
+    with_fb18 = CHANGED + BLOCKS.replace("FB17", "FB18").replace("n + 1", "n + 2")
+    calls = CHART.replace(
+        "    CALL FB 17, DB 10 (go := TRUE);\n",
+        "    CALL FB 17, DB 10 (go := TRUE);\n    CALL FB 18, DB 11 (go := TRUE);\n",
+    )
+    asked = cpu.send("download", source=calls, blocks={"fb17.scl": with_fb18}, preview=True)
+    assert asked.applied, asked.reason
+    done = cpu.send("download", source=calls, blocks={"fb17.scl": with_fb18})
+    assert done.applied, done.reason
+    assert wait_until(lambda: int(cpu.session.get("DB11.n")) > 4)
+    lacking = calls.replace("CALL FB 18, DB 11", "CALL FB 19, DB 12")
+    asked = cpu.send("download", source=lacking, preview=True)
+    assert not asked.applied and "FB19 is not in this CPU" in asked.reason, asked.reason
