@@ -81,9 +81,38 @@ def canonical_chains(chart: Chart) -> Chart:
     return rewrite(chart, one)
 
 
+_WIDE = (  # byte order marks, and XML's first "<?" without one (XML 1.0 appendix F)
+    (b"\x00\x00\xfe\xff", "utf-32-be"),
+    (b"\xff\xfe\x00\x00", "utf-32-le"),
+    (b"\xfe\xff", "utf-16-be"),
+    (b"\xff\xfe", "utf-16-le"),
+    (b"\x00<\x00?", "utf-16-be"),
+    (b"<\x00?\x00", "utf-16-le"),
+)
+_DECLARED = re.compile(
+    rb"""^(\s*<\?xml\b[^>]*?\bencoding\s*=\s*["'])(?:utf|ucs)-?(?:16|32|2|4)[\w-]*""", re.I
+)
+
+
+def as_utf8(data: bytes) -> bytes:
+    """``data`` in UTF-8: a file saved in UTF-16 or UTF-32 (Windows' "Unicode") is decoded
+    by its byte order mark — or, for XML without one, by its ``<?`` — and its XML
+    declaration then names UTF-8; lines stay where they were. Other data is unchanged."""
+    codec = next((c for bom, c in _WIDE if data.startswith(bom)), None)
+    if codec is None:
+        return data
+    if len(data) % (4 if "32" in codec else 2):  # cut short: decode what is whole
+        data = data[: len(data) - len(data) % (4 if "32" in codec else 2)]
+    try:
+        text = data.decode(codec).removeprefix("\ufeff")
+    except UnicodeDecodeError:
+        return data
+    return _DECLARED.sub(rb"\1utf-8", text.encode("utf-8"), count=1)
+
+
 def detect_format(data: bytes) -> str | None:
     """``simaticml`` | ``plcopen`` | ``iec-text`` | ``s7g`` | None, from the content."""
-    head = data[:200_000].removeprefix(b"\xef\xbb\xbf")
+    head = as_utf8(data[:200_000]).removeprefix(b"\xef\xbb\xbf")
     if head.lstrip().startswith(b"<"):
         if _PLCOPEN.search(head):
             return "plcopen"
@@ -138,6 +167,7 @@ def _import_chart(
     from s7graph.sequencer.text.parse import ChartSyntaxError, parse_chart
 
     problems = Problems(file)
+    data = as_utf8(data)
     found_fmt = detect_format(data)
     if found_fmt is None:
         looks_xml = data.removeprefix(b"\xef\xbb\xbf").lstrip().startswith(b"<")

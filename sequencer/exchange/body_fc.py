@@ -27,7 +27,7 @@ from typing import Any, Protocol
 from s7graph.engine.errors import SourceLocation
 from s7graph.sequencer.exchange.pending import MARK, PendingScl, comment, placement
 from s7graph.sequencer.exchange.problems import Problems
-from s7graph.sequencer.exchange.st import shift
+from s7graph.sequencer.exchange.st import blank_comments, shift
 from s7graph.sequencer.text.model import BlockCall, Expr, Operand
 from s7graph.steps.scl import check_scl
 
@@ -77,7 +77,7 @@ def identifiers(text: str) -> dict[str, str]:
     """The names ``text`` uses, upper case → as first written: not in comments, strings or
     typed literals, not a member after a ``.``."""
     out: dict[str, str] = {}
-    for m in _TOKEN.finditer(text):
+    for m in _TOKEN.finditer(blank_comments(text)):
         if m.group(1):
             out.setdefault(m.group(1).upper(), m.group(1))
     return out
@@ -85,7 +85,9 @@ def identifiers(text: str) -> dict[str, str]:
 
 def to_scl(text: str) -> str:
     """An IEC ST body as S7-SCL statements: every ``END_IF`` … ``END_REPEAT`` ends with
-    ``;`` (comments and strings untouched)."""
+    ``;`` (comments and strings untouched, but for those S7-SCL does not read: nested
+    comments, ``/* */``, pragmas — blanks)."""
+    text = blank_comments(text, keep_flat=True)
     out: list[str] = []
     pos = 0
     for m in re.finditer(r"\(\*[\s\S]*?\*\)|//[^\n]*|'(?:[^'$\n]|\$.)*'", text):

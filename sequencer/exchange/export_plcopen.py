@@ -20,6 +20,7 @@ STOP`` live in the `.s7g` source only.
 from __future__ import annotations
 
 import re
+from collections import Counter
 from dataclasses import replace
 from xml.sax.saxutils import escape, quoteattr
 
@@ -54,6 +55,7 @@ from s7graph.sfb import catalogue
 __all__ = ["export_plcopen"]
 
 _NS = "http://www.plcopen.org/xml/tc6_0201"
+_STEP_REF = re.compile(r"S\d+", re.IGNORECASE)  # the names of unnamed steps
 _OTHER_IDS = 200_000  # the other elements' localIds start here
 _TYPES = {"TIME_OF_DAY": "TOD", "DATE_AND_TIME": "DT"}
 _IEC_PIN = {s7: iec for iec, s7 in S7_PIN.items()}  # S7's LOAD → IEC's LD
@@ -75,13 +77,48 @@ class _Export:
         self.ids = _OTHER_IDS
         self.instances: dict[str, str] = {}  # IEC FB instances the calls name → their type
         self.p = Problems(chart.file)
-        names = [s.name for s in chart.all_steps()]
         self.step_name: dict[int, str] = {}
-        for s in chart.all_steps():
-            ident = _ident(s.name) if s.name else ""
-            unique = ident and names.count(s.name) == 1 and ident.upper() != f"S{s.number}"
-            self.step_name[s.number] = ident if unique else f"S{s.number}"
+        self.symbol_name: dict[str, str] = {}
+        self._iec_names()
         self.permanent_xml = self.permanent()
+
+    def _iec_names(self) -> None:
+        """An IEC identifier per step and symbol, each once in the POU (IEC 61131-3 compares
+        names without case; steps, variables and globals share the POU's names): a step keeps
+        its name's identifier when no other step, variable or ``S<n>`` has it, else it is
+        ``S<n>``; a symbol whose identifier is taken gets ``_2``, ``_3`` … (X013)."""
+        taken = {v.name.upper() for v in self.chart.vars}
+        steps = self.chart.all_steps()
+        idents = [_ident(s.name) if s.name else "" for s in steps]
+        counts = Counter(i.upper() for i in idents)
+        for s, ident in zip(steps, idents, strict=True):
+            free = counts[ident.upper()] == 1 and ident.upper() not in taken
+            keep = ident and free and not _STEP_REF.fullmatch(ident)
+            self.step_name[s.number] = ident if keep else f"S{s.number}"
+            if ident and not keep and ident.upper() != f"S{s.number}":
+                self.p.warn(
+                    "X013",
+                    f"step S{s.number} {s.name!r} is named S{s.number} in the SFC: its IEC "
+                    f"name {ident} is taken (IEC compares names without case)",
+                    s.loc,
+                )
+        taken |= {n.upper() for n in self.step_name.values()}
+        where = {d.name: d.loc for d in self.chart.symbols}
+        for name, _, _ in self.symbols():
+            base = unique = _ident(name)
+            k = 1
+            while unique.upper() in taken:
+                k += 1
+                unique = f"{base}_{k}"
+            if unique != base:
+                self.p.warn(
+                    "X013",
+                    f"symbol {name!r} is the global {unique} in the SFC: {base} is taken "
+                    "(IEC compares names without case)",
+                    where.get(name, self.chart.loc),
+                )
+            taken.add(unique.upper())
+            self.symbol_name[name] = unique
 
     def next_id(self) -> int:
         self.ids += 1
@@ -101,7 +138,7 @@ class _Export:
         if isinstance(e, Const) and e.text.upper().startswith("L#"):  # L#70000: a DINT
             return f"DINT#{e.text[2:]}"
         if isinstance(e, Operand) and e.quoted:
-            return _ident(e.name)
+            return self.symbol_name.get(e.name) or _ident(e.name)
         if isinstance(e, Operand):
             return s7_to_iec(e.name) or e.name
         if isinstance(e, StepAttr):
@@ -367,7 +404,7 @@ class _Export:
             local.append(f"<variable name={quoteattr(name)}>{derived}</variable>")
         external, globals_ = [], []
         for name, address, type_name in self.symbols():
-            ident = _ident(name)
+            ident = self.symbol_name[name]
             external.append(f"<variable name={quoteattr(ident)}>{_type(type_name)}</variable>")
             iec = s7_to_iec(address)
             at = f" address={quoteattr(iec)}" if iec else ""

@@ -98,18 +98,24 @@ class _Net:
             return _joined("OR", values, loc)  # type: ignore[arg-type]
         base = walks[0][0]
         head = self.value(base, want) if base is not None else None
-        if any(not ops for _, ops in walks):  # a branch of no contact: the flow itself
+        # the contacts every branch passes (one part, a wire fanning out after it) are
+        # read once, before the OR: ``a AND (b OR c)``, as drawn
+        shared = _shared_prefix([ops for _, ops in walks]) if len(walks) > 1 else 0
+        if shared:
+            head = _and(head, _joined("AND", [op for _, op in walks[0][1][:shared]], loc), loc)
+        branches = [[op for _, op in ops[shared:]] for _, ops in walks]
+        if any(not ops for ops in branches):  # a branch of no contact: the flow itself
             if head is None and len(walks) > 1:
                 return Const(True, "BOOL", "TRUE", loc)
             return head
-        alt = _joined("OR", [_joined("AND", ops, loc) for _, ops in walks], loc)
+        alt = _joined("OR", [_joined("AND", ops, loc) for ops in branches], loc)
         return _and(head, alt, loc)
 
-    def series(self, src: tuple[str, str]) -> tuple[tuple[str, str] | None, list[Expr]]:
+    def series(self, src: tuple[str, str]) -> tuple[tuple[str, str] | None, list[tuple[str, Expr]]]:
         """Walk back from ``src`` through contacts in series (each fed by one wire): where
-        the chain starts (None: the power rail) and the contacts' operands in drawing
+        the chain starts (None: the power rail) and the contacts (UId, operand) in drawing
         order; a loop of wires is an ElementError."""
-        ops: list[Expr] = []
+        ops: list[tuple[str, Expr]] = []
         for _ in range(len(self.parts) + 1):
             uid, pin = src
             if uid == "rail":
@@ -123,7 +129,7 @@ class _Net:
                 return src, ops[::-1]
             op = self.pin(uid, "operand", "BOOL")
             assert op is not None
-            ops.append(op)
+            ops.append((uid, op))
             src = ins[0]
         raise ElementError("a loop of wires: a contact feeds itself", self.parts[src[0]])
 
@@ -156,7 +162,7 @@ class _Net:
         if kind == "Contact":
             base, ops = self.series(src)
             head = self.value(base, want) if base is not None else None
-            return _and(head, _joined("AND", ops, loc), loc)
+            return _and(head, _joined("AND", [op for _, op in ops], loc), loc)
         if kind in ("O", "A", "X"):
             n = _cardinality(part)
             logic = {"O": "OR", "A": "AND", "X": "XOR"}[kind]
@@ -200,6 +206,16 @@ class _Net:
 
 def _is_time(e: Expr | None) -> bool:
     return isinstance(e, StepAttr) and e.attr in ("T", "U")
+
+
+def _shared_prefix(walks: list[list[tuple[str, Expr]]]) -> int:
+    """How many contacts, from the start, all ``walks`` pass through (the same parts)."""
+    n = 0
+    for parts in zip(*walks, strict=False):
+        if len({uid for uid, _ in parts}) != 1:
+            break
+        n += 1
+    return n
 
 
 def _cardinality(part: Node) -> int:

@@ -27,7 +27,14 @@ from s7graph.sequencer.exchange.iec_model import (
     Unsupported,
 )
 from s7graph.sequencer.exchange.problems import Problems
-from s7graph.sequencer.exchange.st import SLiteral, SName, StSyntaxError, build, parse_tree
+from s7graph.sequencer.exchange.st import (
+    SLiteral,
+    SName,
+    StSyntaxError,
+    blank_comments,
+    build,
+    parse_tree,
+)
 
 __all__ = ["read_iec_text"]
 
@@ -53,7 +60,9 @@ def read_iec_text(text: str, file: str, problems: Problems) -> list[IecChart]:
     """Every POU of ``text`` that holds SFC elements. When the text as a whole does not
     parse, each POU is read on its own (``_pieces``): one this grammar cannot read (an IL
     function, a TYPE block) is reported and left out, so that the charts beside it import;
-    a piece with SFC elements that does not parse is an error, as before."""
+    a piece with SFC elements that does not parse is an error, as before. Comments (nested
+    too) and pragmas are blanks (``st.blank_comments``)."""
+    text = blank_comments(text)
     try:
         trees = [build(parse_tree(text, "file", file, (1, 1), "the IEC text"))]
     except StSyntaxError as exc:

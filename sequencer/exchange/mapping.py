@@ -397,8 +397,10 @@ CONSTRUCTS: Final[tuple[tuple[str, str, str, str], ...]] = (
         TO_PLCOPEN,
         "names of the POU, steps and variables",
         "IEC identifiers: ASCII letters, digits and single underscores, none at the end "
-        "(`Lamp (x)` → `Lamp_x`)",
-        "the chart kept in s7graph's data keeps its own names",
+        "(`Lamp (x)` → `Lamp_x`), each once in the POU",
+        "the chart kept in s7graph's data keeps its own names; IEC compares names without "
+        "case: a step whose name another step or a variable has (`Dwell`, `dwell`) is "
+        "`S<n>`, a global `_2`, `_3` … (X013)",
     ),
     (
         TO_PLCOPEN,

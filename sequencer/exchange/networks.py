@@ -177,12 +177,12 @@ class Network:
                     f"an edge contact ({node.get('edge')}) has no GRAPH condition form", node
                 )
             var = self.variable(node)
-            if node.get("negated") == "true":
+            if node.flag("negated"):
                 var = _not(var, node)
             return _and(self.value_of(node.child("connectionPointIn"), seen), var, node)
         if tag in ("inVariable", "inOutVariable"):
             e = self.expr_of(node)
-            return _not(e, node) if node.get("negated") == "true" else e
+            return _not(e, node) if node.flag("negated") else e
         if tag == "continuation":
             target = self.connectors.get(node.get("name"))
             if target is None:
@@ -223,7 +223,7 @@ class Network:
             if optional and (point is None or not point.all("connection")):
                 continue
             value = self.value_of(point, seen)
-            if v.get("negated") == "true":
+            if v.flag("negated"):
                 value = _not(value, v)
             out.append((v.get("formalParameter"), value))
         return out
@@ -305,7 +305,7 @@ class Network:
                 return SSetReset(
                     "S" if storage == "set" else "R", target, value, node.line, node.col
                 )
-            if node.get("negated") == "true":
+            if node.flag("negated"):
                 value = _not(value, node)
             return SAssign(target, value, node.line, node.col)
         if tag in ("outVariable", "inOutVariable") and node.child("connectionPointIn"):
@@ -316,7 +316,7 @@ class Network:
             if not isinstance(target, SName):
                 raise ElementError("an output variable must be a variable", node)
             value = self.value_of(point)
-            if node.get("negatedIn") == "true" or node.get("negated") == "true":
+            if node.flag("negatedIn") or node.flag("negated"):
                 value = _not(value, node)
             return SAssign(target, value, node.line, node.col)
         if tag == "block" and node.get("instanceName"):

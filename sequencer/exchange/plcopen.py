@@ -178,7 +178,7 @@ class _Reader:
                     self.at(v),
                     v.get("address").upper(),
                     init,
-                    constant=section.get("constant") == "true",
+                    constant=section.flag("constant"),
                 )
             )
         return out
@@ -407,7 +407,7 @@ class _Reader:
         first.associations.append(IecAssociation(name, "S", loc))
 
     def step(self, el: Node) -> IecStep:
-        step = IecStep(el.get("name"), el.get("initialStep") == "true", self.at(el))
+        step = IecStep(el.get("name"), el.flag("initialStep"), self.at(el))
         if self.dialect == "s7graph" and el.get("localId").isdigit():
             number = int(el.get("localId"))  # s7graph's export: a step's localId is its number
             step.graph_number = number if 0 < number < TRANSITION_IDS else None

@@ -36,7 +36,7 @@ from s7graph.sequencer.exchange.markers import used_bytes
 from s7graph.sequencer.exchange.problems import ImportFailed, Problems
 from s7graph.sequencer.exchange.stalls import report_stalls
 from s7graph.sequencer.exchange.tia_operands import TIA_TYPES, TiaOperands
-from s7graph.sequencer.exchange.xmltree import ElementError, Node
+from s7graph.sequencer.exchange.xmltree import ElementError, Node, is_true
 from s7graph.sequencer.params import PARAMETER_SETS, pins_for
 from s7graph.sequencer.text.model import (
     ActionRow,
@@ -99,7 +99,7 @@ class _Reader(TiaOperands):
             return None  # the empty row that ends an action table
         event = action.get("Event")
         head = f"{event} " if event else ""
-        head += qualifier + ("C" if action.get("Interlock") == "true" else "")
+        head += qualifier + ("C" if action.flag("Interlock") else "")
         body = _graph_text(text.replace("\n", " "))
         source = (
             f'FUNCTION_BLOCK "x" SEQUENCE 1 STEP S{step}:\n{head} {body};\n'
@@ -216,7 +216,7 @@ class _Reader(TiaOperands):
             ("LockOperatingMode", "lock operating mode"),
             ("PermanentILProcessingInMANMode", "permanent interlock processing in MAN"),
         ):
-            if self.attr(name).lower() == "true":
+            if is_true(self.attr(name)):
                 self.p.warn(
                     "I020",
                     f"the block setting {what} is not imported (its behaviour is not documented)",
@@ -225,9 +225,10 @@ class _Reader(TiaOperands):
         kept = self.kept()
         return ChartOptions(
             parameters=parameters,
-            skip_steps=self.attr("SkipSteps").lower() == "true",
-            ack_required=self.attr("AcknowledgeErrorsRequired").lower() != "false",
-            messages=self.attr("WithAlarmHandling").lower() == "true",
+            skip_steps=is_true(self.attr("SkipSteps")),
+            ack_required=self.attr("AcknowledgeErrorsRequired").strip().lower()
+            not in ("false", "0"),
+            messages=is_true(self.attr("WithAlarmHandling")),
             ack_forces_switch=kept.get("ACK_FORCES_SWITCH") == "TRUE",
             order="codesys" if kept.get("ORDER") == "CODESYS" else "graph",
         )
@@ -413,7 +414,7 @@ class _Reader(TiaOperands):
         return Step(
             number,
             s.get("Name"),
-            s.get("Init") == "true",
+            s.flag("Init"),
             message,
             interlock,
             supervision,

@@ -10,6 +10,7 @@ located in the file itself. A syntax error raises ``StSyntaxError`` with that pl
 from __future__ import annotations
 
 import dataclasses
+import re
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
@@ -314,8 +315,62 @@ def _fail(exc: UnexpectedInput, file: str, origin: tuple[int, int], what: str) -
     return StSyntaxError(msg, SourceLocation(file, line, col))
 
 
+_NEXT = re.compile(r"['\"]|//|\(\*|/\*|\{")
+_STRING = {q: re.compile(rf"(?:[^{q}$\n]|\$.)*{q}") for q in "'\""}
+_BLANK = re.compile(r"[^\n]")
+_NEST = {"(*": re.compile(r"\(\*|\*\)"), "/*": re.compile(r"/\*|\*/")}
+
+
+def _comment_end(text: str, start: int) -> tuple[int, bool] | None:
+    """Where the comment opening at ``start`` ends, and whether it holds another (IEC
+    61131-3 ed.3 nests them); None when it never ends."""
+    opener = text[start : start + 2]
+    depth, nested, pos = 0, False, start
+    while (m := _NEST[opener].search(text, pos)) is not None:
+        depth += 1 if m.group() == opener else -1
+        nested = nested or depth > 1
+        pos = m.end()
+        if depth == 0:
+            return pos, nested
+    return None
+
+
+def blank_comments(text: str, *, keep_flat: bool = False) -> str:
+    """``text`` with its comments — ``(* *)`` and ``/* */`` nested as IEC 61131-3 ed.3
+    allows, ``//`` — and its pragmas (``{attribute 'x'}``, which a reader may ignore) as
+    blanks, lines and columns kept; strings untouched. ``keep_flat`` keeps the ``(* *)``
+    and ``//`` comments that hold no other (S7-SCL reads them). What never ends stays."""
+    out: list[str] = []
+    done = pos = 0
+    while (m := _NEXT.search(text, pos)) is not None:
+        start, token = m.start(), m.group()
+        if token in "'\"":  # a string: to its closing quote ($' escapes one)
+            end = _STRING[token].match(text, m.end())
+            pos = end.end() if end is not None else m.end()
+            continue
+        if token == "//":
+            stop, keep = text.find("\n", start), keep_flat
+            stop = len(text) if stop < 0 else stop
+        elif token == "{":
+            stop, keep = text.find("}", start) + 1, False
+            if stop == 0:
+                break
+        else:
+            ends = _comment_end(text, start)
+            if ends is None:
+                break
+            stop, keep = ends[0], keep_flat and token == "(*" and not ends[1]
+        if not keep:
+            out += [text[done:start], _BLANK.sub(" ", text[start:stop])]
+            done = stop
+        pos = stop
+    return "".join(out) + text[done:] if out else text
+
+
 def parse_tree(text: str, start: str, file: str, origin: tuple[int, int], what: str) -> Any:
-    """The lark tree of ``text`` from rule ``start`` (raises ``StSyntaxError``)."""
+    """The lark tree of ``text`` from rule ``start`` (raises ``StSyntaxError``); its
+    comments and pragmas read as blanks (``blank_comments``)."""
+    text = blank_comments(text)
     try:
         return _parser(start).parse(text)
     except UnexpectedInput as exc:

@@ -19,7 +19,7 @@ from xml.parsers import expat
 from s7graph.engine.errors import SourceLocation
 from s7graph.sequencer.exchange.problems import ImportFailed, Problems
 
-__all__ = ["ElementError", "Node", "parse_xml"]
+__all__ = ["ElementError", "Node", "is_true", "parse_xml"]
 
 _CONFLICT = re.compile(rb"^(<{7}|={7}|>{7})(?:[ \t].*)?\r?$", re.MULTILINE)
 
@@ -41,6 +41,10 @@ class Node:
 
     def get(self, name: str, default: str = "") -> str:
         return self.attrib.get(name, default)
+
+    def flag(self, name: str) -> bool:
+        """An ``xsd:boolean`` attribute: true for ``true`` and ``1`` (absent: false)."""
+        return is_true(self.get(name))
 
     def child(self, tag: str) -> Node | None:
         return next((c for c in self.children if c.tag == tag), None)
@@ -71,6 +75,12 @@ class Node:
 
     def loc(self, file: str) -> SourceLocation:
         return SourceLocation(file, self.line, self.col)
+
+
+def is_true(value: str) -> bool:
+    """An ``xsd:boolean`` value (XML Schema part 2, 3.2.2): ``true`` or ``1`` — both schemas
+    (TC6, SimaticML) declare their flags so; surrounding blanks collapse."""
+    return value.strip().lower() in ("true", "1")
 
 
 class ElementError(Exception):

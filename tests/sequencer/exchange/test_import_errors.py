@@ -4,11 +4,12 @@ ends, namespaces and their prefixes, the old ``tc6.xsd`` schema read as the rest
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
 
-from s7graph.sequencer.exchange import ImportFailed, import_chart
+from s7graph.sequencer.exchange import ImportFailed, detect_format, import_chart
 from s7graph.sequencer.text.walk import unlocated
 from s7graph.web.cli import main
 from tests.sequencer.exchange.helpers import codes, corpus
@@ -34,6 +35,27 @@ def test_bom_and_crlf_change_nothing_in_xml_and_lines_stay_right() -> None:
     a, b = import_chart(plain, "f.xml"), import_chart(dressed, "f.xml")
     assert unlocated(a.chart) == unlocated(b.chart)
     assert codes(a.problems) == codes(b.problems) == [("I023", 40), ("I023", 53), ("I024", 783)]
+
+
+@pytest.mark.parametrize(
+    ("relative", "codec"),
+    [
+        ("iec-text/matiec_sfc.txt", "utf-16"),  # Notepad's "Unicode": a BOM, little endian
+        ("plcopen/matiec_SFC_TEST.xml", "utf-16"),
+        ("plcopen/matiec_SFC_TEST.xml", "utf-16-be"),  # no BOM: told by its "<?"
+        ("simaticml/GraphBranch2.xml", "utf-32"),
+    ],
+)
+def test_a_file_saved_in_utf16_or_utf32_reads_as_in_utf8(relative: str, codec: str) -> None:
+    """A file saved as "Unicode" (XML names UTF-16 in its declaration) is the same chart,
+    its problems on the same lines, and ``importable_files`` knows its format."""
+    plain = corpus(relative).read_bytes()
+    text = re.sub('encoding="utf-8"', f'encoding="{codec}"', plain.decode("utf-8-sig"), flags=re.I)
+    wide = text.replace("\n", "\r\n").encode(codec)
+    assert detect_format(wide) == detect_format(plain)
+    a, b = import_chart(plain, "f.xml"), import_chart(wide, "f.xml")
+    assert unlocated(a.chart) == unlocated(b.chart)
+    assert codes(a.problems) == codes(b.problems)
 
 
 @pytest.mark.parametrize(

@@ -100,3 +100,25 @@ def test_an_fbd_whose_outputs_fan_out_is_read_or_refused_at_once() -> None:
         import_chart(_with_stop_body(40), "t.xml")  # 2 ** 40 elements written out
     said = [d.message for d in failed.value.diagnostics if d.is_error]
     assert any("over 20,000 elements" in m for m in said), said
+
+
+@pytest.mark.parametrize(
+    "cond",
+    [
+        "a AND (b OR c)",
+        "NOT a AND (b OR NOT c) AND S1.T >= T#2S",
+        "a AND b AND (c OR d AND e) AND (a OR e)",
+        "(a OR b) AND c AND (d OR e)",
+    ],
+)
+def test_contacts_before_a_parallel_branch_are_read_once_before_the_or(cond: str) -> None:
+    """LAD draws ``a AND (b OR c)`` as contact a, then a branch of b and c: read back, the
+    contacts every branch passes stay before the OR, not copied into each branch."""
+    text = CHART.replace(
+        "FB 3", "FB 3\nVAR a : BOOL; b : BOOL; c : BOOL; d : BOOL; e : BOOL; END_VAR"
+    ).format(cond=cond)
+    chart = parse_chart(text, "t.s7g")
+    xml = export_chart(chart, "simaticml")
+    read = import_chart(xml.encode(), "t.xml").chart.sequences[0].transitions[0].condition
+    assert read is not None
+    assert format_expr(read) == format_expr(chart.sequences[0].transitions[0].condition)

@@ -4,13 +4,15 @@ chart, and charts drawn in actions (TwinCAT, CODESYS)."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
 
 from s7graph.sequencer.exchange import ImportFailed, import_chart, import_file
 from s7graph.sequencer.text.format import format_chart, format_row
-from tests.sequencer.exchange.helpers import codes, import_to, sim, synthetic
+from s7graph.sequencer.text.walk import unlocated
+from tests.sequencer.exchange.helpers import codes, corpus, import_to, sim, synthetic
 from tests.sequencer.exchange.test_iec_mapping import CODESYS
 
 
@@ -109,3 +111,44 @@ def test_charts_in_actions_are_charts_of_their_own() -> None:
     with pytest.raises(ImportFailed) as info:
         import_file(source, pou="Crane")
     assert "2 charts of Crane in the file" in info.value.diagnostics[-1].message
+
+
+@pytest.mark.parametrize(
+    "relative",
+    [
+        "plcopen/beremiz_traffic_light.xml",  # initialStep, negated (a NOT on a wire)
+        "plcopen/iec_checker_example.xml",
+        "simaticml/GraphBranch2.xml",  # Init
+        "simaticml/StepSequence.xml",
+    ],
+)
+def test_an_xsd_boolean_written_1_or_0_reads_as_true_or_false(relative: str) -> None:
+    """Both schemas declare their flags ``xsd:boolean``, whose ``1`` and ``0`` are ``true``
+    and ``false`` (a hand edit, another tool's writer): the same chart, the same problems."""
+    words = corpus(relative).read_bytes()
+    digits = re.sub(rb'(initialStep|negated|Init|constant)="true"', rb'\1="1"', words)
+    digits = re.sub(rb'(initialStep|negated|Init|constant)="false"', rb'\1=" 0 "', digits)
+    assert digits != words
+    a, b = import_chart(words, "f.xml"), import_chart(digits, "f.xml")
+    assert unlocated(a.chart) == unlocated(b.chart)
+    assert codes(a.problems) == codes(b.problems)
+
+
+def test_nested_comments_and_pragmas_read_as_blanks() -> None:
+    """IEC 61131-3 ed.3 nests comments (``(* a (* b *) c *)``, ``/* */`` too) and leaves
+    pragmas (``{attribute 'x'}``, as CODESYS writes them) to the reader: the same chart, its
+    problems on the same lines and columns; a string holding ``(*`` stays a string."""
+    plain = corpus("iec-text/matiec_sfc.txt").read_text(encoding="utf-8")
+    dressed = re.sub(
+        r"\bEND_STEP\b", "(* Schritt (* verschachtelt *) *) {attribute 'hide'} END_STEP", plain
+    )
+    dressed = dressed.replace("TRANSITION FROM", "/* a /* b */ */ TRANSITION FROM", 1)
+    a, b = import_chart(plain.encode(), "f.st"), import_chart(dressed.encode(), "f.st")
+    assert unlocated(a.chart) == unlocated(b.chart)
+    assert [(d.code, d.loc.line) for d in a.problems] == [(d.code, d.loc.line) for d in b.problems]
+    commented = CODESYS.replace(
+        b"n := n + 1;", b"(* z\xc3\xa4hlen (* {x} *) *) n := n + 1; {attribute 'y'}"
+    ).replace(b"<expression>NOT go</expression>", b"<expression>NOT /* /* */ */ go</expression>")
+    assert unlocated(import_chart(commented, "s.xml").chart) == unlocated(
+        import_chart(CODESYS, "s.xml").chart
+    )

@@ -66,7 +66,8 @@ def test_plcopen_export_is_an_iec_sfc_with_the_same_steps_conditions_and_rows() 
     transitions, conditions and action rows: ``S1 S x`` went out as a P action
     ``x := TRUE``, ``N x`` as a Boolean action, ``S1 N n := n + 1`` as a P action — only the
     supervisions (GRAPH's) have no IEC form, and the symbols come back from the
-    configuration's located globals."""
+    configuration's located globals. Step S5 ``Dwell`` is ``S5`` there: IEC compares names
+    without case, and the variable ``dwell`` has that name."""
     path = next(p for p in EXAMPLES if p.stem == "drill")
     chart, table = example(path)
     back = import_chart(native_only(export_chart(chart, "plcopen", table)), "drill.xml").chart
@@ -83,7 +84,11 @@ def test_plcopen_export_is_an_iec_sfc_with_the_same_steps_conditions_and_rows() 
             ],
         ]
 
-    assert shape(back) == shape(chart)
+    want = shape(chart)
+    steps = want[0]
+    assert isinstance(steps, list) and steps[4][:2] == (5, "Dwell")
+    steps[4] = (5, "S5", *steps[4][2:])
+    assert shape(back) == want
     assert {s.name: s.address for s in back.symbols} == {s.name: str(s.address) for s in table}
 
 
@@ -432,6 +437,55 @@ END_FUNCTION_BLOCK
     names = re.findall(r'<(?:variable|step|pou) [^>]*?name="([^"]*)"', plain)
     assert names and all(re.fullmatch(r"[A-Za-z_](?:_?[A-Za-z0-9])*", n) for n in names), names
     assert "Lamp_x" in names and "F_ll" in names
+
+
+def test_plcopen_export_gives_each_step_and_global_an_iec_name_of_its_own() -> None:
+    """Names that differ in GRAPH but give one IEC identifier (``Шаг`` and ``Ход``,
+    ``Motor-1`` and ``Motor_1``, a step and a tag both ``Start``, a step ``Fill`` and the
+    variable ``fill``: IEC compares without case) stay apart in the SFC other tools read:
+    the steps as ``S<n>``, the globals with ``_2`` …, each reported (X013); read back as
+    IEC, every row, jump and condition names what it named before."""
+    text = """FUNCTION_BLOCK "Col" FB 4
+VAR fill : BOOL; END_VAR
+SYMBOLS
+  "Motor-1" : Q0.0 : BOOL;
+  "Motor_1" : Q0.1 : BOOL;
+  "Start" : I0.0 : BOOL;
+END_SYMBOLS
+SEQUENCE 1
+INITIAL_STEP S1 "Start": N "Motor-1"; END_STEP
+STEP S2 "Fill": N "Motor_1"; END_STEP
+STEP S3 "Шаг": END_STEP
+STEP S4 "Ход": END_STEP
+STEP S5 "S1": END_STEP
+TRANSITION T1 FROM S1 TO S2 := "Start";
+TRANSITION T2 FROM S2 TO S3 := NOT "Start";
+TRANSITION T3 FROM S3 TO S4 := fill;
+TRANSITION T4 FROM S4 TO S5 := S3.X;
+TRANSITION T5 FROM S5 TO S1 := fill;
+END_SEQUENCE
+END_FUNCTION_BLOCK
+"""
+    xml, problems = export_reported(parse_chart(text, "t.s7g"), "plcopen")
+    plain = native_only(xml).decode()
+    steps = re.findall(r'<step [^>]*?name="([^"]*)"', plain)
+    assert steps == ["Start", "S2", "S3", "S4", "S5"]
+    assert re.findall(r'<jumpStep [^>]*?targetName="([^"]*)"', plain) == ["Start"]
+    globals_ = re.findall(r'<variable name="([^"]*)" address', plain)
+    assert globals_ == ["Motor_1", "Motor_1_2", "Start_2"]
+    assert sorted((d.code, d.loc.line) for d in problems if d.code == "X013") == [
+        ("X013", 5),
+        ("X013", 6),
+        ("X013", 10),
+        ("X013", 11),
+        ("X013", 12),
+        ("X013", 13),
+    ]
+    back = import_chart(plain.encode(), "t.xml").chart
+    rows = [[format_row(r) for r in s.actions] for s in back.all_steps()]
+    assert rows[:2] == [['N "Motor_1";'], ['N "Motor_1_2";']]
+    conds = [format_expr(t.condition) for t in back.all_transitions() if t.condition]
+    assert conds == ['"Start_2"', 'NOT "Start_2"', "fill", "S3.X", "fill"]
 
 
 @pytest.mark.parametrize("path", [*EXAMPLES, SIX], ids=lambda p: p.stem)
