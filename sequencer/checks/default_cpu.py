@@ -6,6 +6,8 @@ with its default sizes: I and Q 128 bytes, M 256, 256 timers and counters, …) 
 check; a download refuses the chart, and a run stops the CPU at the operand's first use (an
 area length error naming it). ``default_cpu_warnings`` warns of each such operand at its
 first use, naming the element it is used in, the address and the size of the default area.
+``scl_default_cpu_warnings`` does the same for the absolute operands (and symbols) of an
+S7-SCL source, found by its cross-references (``steps.scl.xref``), naming the block.
 Not part of ``validate``: a download is checked against its CPU's own memory
 (``sequencer.change.online.refusal``). DB addresses are not judged: the program makes its
 DBs.
@@ -16,7 +18,7 @@ from __future__ import annotations
 import functools
 from collections.abc import Iterator
 
-from s7graph.engine.address import Address, Area
+from s7graph.engine.address import Address, Area, parse_address
 from s7graph.engine.errors import S7Error
 from s7graph.engine.memory import Memory
 from s7graph.engine.symbols import SymbolTable
@@ -26,8 +28,16 @@ from s7graph.sequencer.text.model import Chart, Operand
 from s7graph.sequencer.text.names import Resolved, resolve_operand
 from s7graph.sequencer.text.walk import nodes
 from s7graph.steps.operands import TYPE_BYTES
+from s7graph.steps.scl.model import Source
+from s7graph.steps.scl.xref import scl_uses
 
-__all__ = ["default_areas", "default_cpu_warnings"]
+__all__ = [
+    "beyond_default",
+    "beyond_message",
+    "default_areas",
+    "default_cpu_warnings",
+    "scl_default_cpu_warnings",
+]
 
 _CELLS = {Area.T: "timers", Area.C: "counters"}
 
@@ -58,7 +68,11 @@ def _elements(chart: Chart) -> Iterator[tuple[str, object]]:
 def _beyond(res: Resolved) -> str | None:
     """The default area ``res`` lies beyond, with its size (``the M area of a default CPU (256
     bytes, MB0 to MB255)``), or None: it fits, or it is not judged."""
-    addr: Address | None = res.address
+    return beyond_default(res.address, res.type if res.kind == "symbol" else None)
+
+
+def beyond_default(addr: Address | None, declared: str | None = None) -> str | None:
+    """``_beyond`` of an address (a symbol's: ``declared``, its type, whose width counts)."""
     if addr is None or addr.area is Area.DB:
         return None
     area, size = addr.area, default_areas()[addr.area]
@@ -66,10 +80,50 @@ def _beyond(res: Resolved) -> str | None:
         if addr.byte < size:
             return None
         return f"the {_CELLS[area]} of a default CPU ({size}, {area}0 to {area}{size - 1})"
-    end = addr.byte + max(addr.size, TYPE_BYTES.get(res.type, 1) if res.kind == "symbol" else 1)
+    end = addr.byte + max(addr.size, TYPE_BYTES.get(declared, 1) if declared else 1)
     if end <= size:
         return None
     return f"the {area} area of a default CPU ({size} bytes, {area}B0 to {area}B{size - 1})"
+
+
+def beyond_message(name: str, why: str, *, chart: bool = True) -> str:
+    """W140's message of the operand ``name`` beyond ``why`` (``beyond_default``); a
+    ``chart``'s download refuses it too."""
+    refused = "a download refuses the chart, " if chart else ""
+    stops = "a run stops the CPU at its first use (unless the CPU has more)"
+    return f"{name} is beyond {why}: {refused}{stops}"
+
+
+def scl_default_cpu_warnings(
+    source: Source, symbols: SymbolTable | None = None
+) -> list[Diagnostic]:
+    """W140 for each absolute operand (a symbol's too) the code blocks of an S7-SCL
+    ``source`` use beyond a default CPU's memory, at its first use (``steps.scl.xref``):
+    the block, the address and the default area's size."""
+    found: list[Diagnostic] = []
+    seen: set[str] = set()
+    for use in scl_uses(source):
+        key = use.operand.casefold()
+        if key in seen:
+            continue
+        seen.add(key)
+        name, addr, declared = use.operand, None, None
+        try:
+            if use.operand.startswith('"') and use.operand.endswith('"'):
+                symbol = symbols.lookup(use.operand[1:-1]) if symbols is not None else None
+                if symbol is None:
+                    continue
+                addr, declared = symbol.address, symbol.type
+                name = f"{use.operand} ({addr})"
+            else:
+                addr = parse_address(use.operand)
+        except S7Error:
+            continue  # a name, a DB variable, a block: not an operand area
+        why = beyond_default(addr, declared)
+        if why is not None:
+            message = beyond_message(name, why, chart=False)
+            found.append(warning("W140", message, use.loc, use.block))
+    return found
 
 
 def default_cpu_warnings(chart: Chart, symbols: SymbolTable | None = None) -> list[Diagnostic]:
@@ -89,9 +143,5 @@ def default_cpu_warnings(chart: Chart, symbols: SymbolTable | None = None) -> li
             why = _beyond(res)
             if why is not None:
                 name = f'"{op.name}" ({res.address})' if op.quoted else str(res.address)
-                message = (
-                    f"{name} is beyond {why}: a download refuses the chart, a run stops the "
-                    "CPU at its first use (unless the CPU has more)"
-                )
-                found.append(warning("W140", message, op.loc, element))
+                found.append(warning("W140", beyond_message(name, why), op.loc, element))
     return found

@@ -8,8 +8,9 @@ its position written to the diagnostic buffer first), hot (OB101: the sequencer 
 where it was; refused, exit 2, when the saved state allows none) or cold (OB102);
 ``engine.runner.Runner`` paces the scans.
 A plant (``--plant``) runs after every scan; a plant error ends the run with one line, a
-plant still running at twice the maximum cycle time is aborted (STOP). Without ``--web`` a
-STOP by error ends the run: the reason on stderr, exit 1.
+plant still running at twice the maximum cycle time is aborted (STOP). A STOP by error,
+in the startup too, is said at once on stderr (``web.cli.run_stop``: with where the chart
+uses the operand an area length error names); without ``--web`` it ends the run, exit 1.
 ``--web`` puts the running FB on the zenoh bus (``web/bus/scan_edge.py``: one state update
 per scan, operator commands applied between scans and answered once durable — an
 engineer's force jobs too, ``web/bus/forcing.py``, and downloads, ``web/bus/online.py`` —
@@ -45,6 +46,7 @@ from s7graph.engine.watchdog import Watchdog
 from s7graph.sfb.alarms import message_list
 from s7graph.web.cli.report import fail
 from s7graph.web.cli.run_program import run_until_stopped
+from s7graph.web.cli.run_stop import Locate, chart_locator
 from s7graph.web.cli.supervisor import child_marks, recovered_cause
 from s7graph.web.harness.persist import OpenedState, open_state, refusal
 from s7graph.web.harness.plant import LoadedPlant, PlantError, load_plant
@@ -242,10 +244,15 @@ def _run_chart(
         duration_s=duration_s,
         close=functools.partial(_close, children, live),
         recovered=recovered,
+        locate=_locator(session),
     )
-    if failure:
-        return fail(failure[0], 1)
-    return status
+    return fail(failure[0], 1) if failure else status
+
+
+def _locator(session: ChartSession) -> Locate:
+    """Where the chart the session runs now (an online change may swap it) uses the operand
+    a STOP's programming error names (``web.cli.run_stop.chart_locator``)."""
+    return chart_locator(lambda: session.cc.chart, lambda: session.symbols)
 
 
 def _watch(cpu: Cpu, max_cycle_ms: float | None, *, inline: bool) -> None:

@@ -46,6 +46,7 @@ from s7graph.engine.restart import parse_restart
 from s7graph.engine.runner import COMM_LOAD_PCT, RT_PRIORITY, Runner, core_for, keep_small_pages
 from s7graph.engine.write_stop import stop_words
 from s7graph.web.cli.report import fail
+from s7graph.web.cli.run_stop import Locate, RunStop
 from s7graph.web.cli.supervisor import child_marks, recovered_cause
 from s7graph.web.harness.persist import OpenedState, open_state, refusal
 
@@ -361,13 +362,16 @@ def run_until_stopped(
     on_start: Callable[[ScanRecord], object] | None = None,
     close: Callable[[], object] | None = None,
     recovered: tuple[str, str] | None = None,
+    locate: Locate | None = None,
 ) -> int:
     """Start the runner's CPU with ``restart`` (``on_start`` gets the startup record), say
     how on stderr with ``what``, and scan until Ctrl-C/SIGTERM/``duration_s`` (or, with the
     runner's ``end_on_stop``, a STOP by error). Always: the signal handlers back, the runner
     shut down, ``close()``, the store closed. Returns the exit status: 0 (saying so in one
     line on stderr), or 1 (with one line on stderr) when the CPU went to STOP by an error
-    or the state was not written.
+    — in its startup too — or the state was not written (``web.cli.run_stop``: a STOP the
+    program requested, SFC46 STP, is said and ends the run with 0). ``locate``: where the
+    program uses what a STOP's programming error names (a chart's, ``chart_locator``).
 
     ``recovered`` (place, cause): the supervisor killed the process before, whose scan hung
     (``web.cli.supervisor``): no startup; the CPU stays in STOP with the cause in its
@@ -376,9 +380,8 @@ def run_until_stopped(
     cpu = runner.cpu
     store = opened.store
 
-    runner.on_stop = lambda reason: print(
-        f"s7graph: error: {what}: the CPU went to STOP: {reason}", file=sys.stderr, flush=True
-    )
+    said = RunStop(what, locate)
+    said.bind(runner)
     runner.on_note = lambda note: print(f"s7graph: warning: {note}", file=sys.stderr, flush=True)
     stop = runner.on_stop_signal
     previous = {sig: signal.signal(sig, stop) for sig in (signal.SIGTERM, signal.SIGINT)}
@@ -392,7 +395,8 @@ def run_until_stopped(
             _say_last_run(opened)
             done = str(cpu.last_restart or restart)
             print(f"s7graph: {what} in {cpu.mode} ({opened.describe(done)})", file=sys.stderr)
-        if cpu.mode is CpuMode.RUN or (recovered is not None and not runner.end_on_stop):
+            said.after_startup(runner, record)
+        if cpu.mode is CpuMode.RUN or not runner.end_on_stop:
             runner.run(duration_s=duration_s)
     finally:
         try:
@@ -408,7 +412,7 @@ def run_until_stopped(
         print(f"s7graph: error: {runner.write_error}; the CPU went to STOP", file=sys.stderr)
     if runner.trace:
         print(f"s7graph: note: {runner.trace}", file=sys.stderr)
-    if runner.write_error is not None or runner.stopped:
+    if runner.write_error is not None or said.failed(runner):
         return 1
     print(f"s7graph: {what} stopped (state saved in {store.path})", file=sys.stderr)
     return 0

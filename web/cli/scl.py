@@ -2,16 +2,18 @@
 or run on the virtual clock (docs/cli.md, "s7graph sim"; docs/scl.md, "On the command line").
 
 ``check`` prints the source's diagnostics one a line and a summary — exit 0 clean, 1
-warnings only, 2 errors — as for a chart. ``sim`` compiles the source with the system
-blocks, loads it into a CPU on the virtual clock, starts it (OB100) and runs ``cycles``
-scans ``cycle_ms`` apart, one JSON line a cycle in the chart's trace format: ``active`` and
-``events`` are empty lists (no GRAPH FB runs), ``mode`` is the CPU's mode, ``values`` the
-``--watch`` names — addresses, symbols and DB variables by name (``DB10.CONTROL``,
-``DB20.motor[2].on``: ``web.harness.dbvars``), their types kept. Stimuli set addresses and
-symbols (an input on the module side) and elementary DB variables; a plant (``--plant``)
-runs with a chart only. ``--blocks`` sources are compiled first, in order, and the program
-calls their blocks (``web.harness.scl``). A source that does not compile is its diagnostics
-on stderr, exit 2; a STOP ends the trace with that cycle, the reason on stderr, exit 1.
+warnings only, 2 errors — as for a chart; an absolute operand (a symbol's too) beyond a
+default CPU's memory warns, W140, as a chart's (``sequencer.checks.default_cpu``). ``sim``
+compiles the source with the system blocks, loads it into a CPU on the virtual clock, starts
+it (OB100) and runs ``cycles`` scans ``cycle_ms`` apart, one JSON line a cycle in the
+chart's trace format: ``active`` and ``events`` are empty lists (no GRAPH FB runs), ``mode``
+is the CPU's mode, ``values`` the ``--watch`` names — addresses, symbols and DB variables by
+name (``DB10.CONTROL``, ``DB20.motor[2].on``: ``web.harness.dbvars``), their types kept.
+Stimuli set addresses and symbols (an input on the module side) and elementary DB variables;
+a plant (``--plant``) runs with a chart only. ``--blocks`` sources are compiled first, in
+order, and the program calls their blocks (``web.harness.scl``). A source that does not
+compile is its diagnostics on stderr, exit 2; a STOP ends the trace with that cycle, the
+reason on stderr, exit 1.
 """
 
 from __future__ import annotations
@@ -31,7 +33,10 @@ from s7graph.engine.cpu import Cpu
 from s7graph.engine.errors import S7Error
 from s7graph.engine.record import ScanRecord
 from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer.checks.default_cpu import scl_default_cpu_warnings
+from s7graph.steps.diagnostics import sort_key
 from s7graph.steps.scl import check_scl, format_diagnostic
+from s7graph.steps.scl.parse import parse_source
 from s7graph.web.cli.report import fail
 from s7graph.web.cli.trace import checked_inputs, run_trace, trace_out
 from s7graph.web.harness.dbvars import DbVariables
@@ -76,6 +81,9 @@ def check_scl_command(
     found = check_scl(
         text, str(source), blocks=[*sfb.SYSTEM_BLOCKS, *_callable(known)], symbols=table
     )
+    if not any(d.is_error for d in found):  # what a default CPU lacks (W140, as for a chart)
+        beyond = scl_default_cpu_warnings(parse_source(text, str(source)), table)
+        found = sorted([*found, *beyond], key=sort_key)
     lines = known.warnings + [format_diagnostic(d) for d in found]
     if blocks and not any(d.is_error for d in found):
         named = [*zip(known.files, known.texts, strict=True), (str(source), text)]

@@ -101,3 +101,33 @@ def test_an_operand_beyond_a_default_cpus_memory_warns_naming_element_address_an
         f"bytes, MB0 to MB255){tail} (transition T2)",
         f"{chart}: 0 errors, 3 warnings",
     ]
+
+
+def test_an_scl_sources_operands_beyond_a_default_cpus_memory_warn_naming_block_and_size(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``check SOURCE.scl`` gives an S7-SCL source the chart's W140: each absolute operand (a
+    symbol's with its address) beyond a default CPU's memory, once, at its first use, with
+    the block; what fits (MW254, %Q0.1, T255) and DB addresses do not warn."""
+    from s7graph.web.cli.scl import check_scl_command
+
+    source = tmp_path / "far.scl"
+    source.write_text(
+        "ORGANIZATION_BLOCK OB1\nVAR_TEMP x : BOOL; END_VAR\nBEGIN\n"
+        "  x := %I200.0;\n  %MW254 := 1;\n  %MW300 := 5;\n  %Q0.1 := x AND %I200.0;\n"
+        '  "Far" := 3;\n  %DB1.DBW900 := 2;\nEND_ORGANIZATION_BLOCK\n',
+        encoding="utf-8",
+    )
+    syms = tmp_path / "s.txt"
+    syms.write_text('"Far" ; MW255 ; INT ; its second byte beyond MB255\n', encoding="utf-8")
+    assert check_scl_command(source, syms) == 1
+    tail = ": a run stops the CPU at its first use (unless the CPU has more) (OB 1)"
+    assert capsys.readouterr().out.splitlines() == [
+        f"{source}:4:8: warning[W140]: I200.0 is beyond the I area of a default CPU (128 bytes, "
+        f"IB0 to IB127){tail}",
+        f"{source}:6:3: warning[W140]: MW300 is beyond the M area of a default CPU (256 bytes, "
+        f"MB0 to MB255){tail}",
+        f'{source}:8:3: warning[W140]: "Far" (MW255) is beyond the M area of a default CPU (256 '
+        f"bytes, MB0 to MB255){tail}",
+        f"{source}: 0 errors, 3 warnings",
+    ]

@@ -1,6 +1,8 @@
 """``s7graph run`` when things go wrong (real processes): a scan that swallows every abort
 cannot hold the process against SIGTERM; a chart run that goes to STOP by an error says why
-and exits non-zero; a plant's SystemExit is a plant error, not an exit."""
+and exits non-zero, in its startup too (where the chart uses the operand named); a STOP the
+program requested (SFC46) is said and exits 0; a plant's SystemExit is a plant error, not an
+exit."""
 
 from __future__ import annotations
 
@@ -145,3 +147,102 @@ def test_a_plant_raising_system_exit_ends_the_run_with_one_line(tmp_path: Path) 
     assert code == 1, err
     (line,) = [x for x in err.splitlines() if "error" in x]
     assert "SystemExit" in line and "quits.py:3" in line
+
+
+BEYOND = """
+FUNCTION_BLOCK "Far" FB 1 DB 1
+SEQUENCE 1
+  INITIAL_STEP S1: N Q0.0; END_STEP
+  STEP S2: END_STEP
+  TRANSITION T1 FROM S1 TO S2 := I200.0;
+  TRANSITION T2 FROM S2 TO S1 := TRUE;
+END_SEQUENCE
+END_FUNCTION_BLOCK
+"""
+
+
+@pytest.mark.timeout(60)
+def test_a_chart_whose_startup_stops_the_cpu_says_the_located_reason_at_once_and_exits_1(
+    tmp_path: Path,
+) -> None:
+    """The first call (OB100, INIT_SQ) reads I200.0, beyond a default CPU's 128 input bytes:
+    the run says why in one error line — the STOP's place (OB100), the diagnostic entry
+    (block, operand, message) and where the chart uses the operand — and exits 1, without
+    waiting for ``--duration-s``."""
+    chart = tmp_path / "far.s7g"
+    chart.write_text(textwrap.dedent(BEYOND))
+    proc = _start(str(chart), "--state", str(tmp_path / "s.sqlite"), "--rt-priority", "0")
+    code = proc.wait(40)
+    assert proc.stderr is not None
+    err = proc.stderr.read()
+    assert code == 1, err
+    (line,) = [x for x in err.splitlines() if x.startswith("s7graph: error")]
+    assert line == (
+        "s7graph: error: far.s7g (Far): the CPU went to STOP in its startup (OB100): FB1: "
+        "I200.0 is outside the I area (128 bytes) (programming error, OB121 not loaded); "
+        f"I200.0: first used at {chart}:6:34 (transition T1)"
+    )
+    assert "stopped (state saved" not in err
+
+
+SFC46_AT_SCAN_5 = """
+from s7graph.engine import ob
+
+calls = [0]
+
+@ob(1)
+def main(ctx):
+    calls[0] += 1
+    if calls[0] == 5:
+        ctx.call("SFC46")
+"""
+
+
+@pytest.mark.timeout(60)
+def test_a_program_stopping_the_cpu_by_sfc46_ends_the_run_saying_so_with_exit_0(
+    tmp_path: Path,
+) -> None:
+    """A STOP the program requested (SFC46 STP) is no error: one line says it, without
+    ``error:``, the run ends at once with its state saved, exit 0."""
+    program = tmp_path / "stp.py"
+    program.write_text(textwrap.dedent(SFC46_AT_SCAN_5))
+    proc = _start(str(program), "--state", str(tmp_path / "s.sqlite"), "--rt-priority", "0")
+    code = proc.wait(40)
+    assert proc.stderr is not None
+    err = proc.stderr.read()
+    assert code == 0, err
+    assert "s7graph: error" not in err
+    assert (
+        "s7graph: stp.py: the CPU went to STOP: SFC46 STP (the program's request, not an "
+        "error)\n" in err
+    )
+    assert "s7graph: stp.py stopped (state saved in" in err
+
+
+BAD_OB100 = """
+from s7graph.engine import ob
+
+@ob(100)
+def start(ctx):
+    ctx.mem.get("I200.0")
+
+@ob(1)
+def main(ctx):
+    pass
+"""
+
+
+@pytest.mark.timeout(60)
+def test_a_program_whose_startup_stops_the_cpu_by_an_error_says_why_and_exits_1(
+    tmp_path: Path,
+) -> None:
+    program = tmp_path / "bad.py"
+    program.write_text(textwrap.dedent(BAD_OB100))
+    proc = _start(str(program), "--state", str(tmp_path / "s.sqlite"), "--rt-priority", "0")
+    code = proc.wait(40)
+    assert proc.stderr is not None
+    err = proc.stderr.read()
+    assert code == 1, err
+    (line,) = [x for x in err.splitlines() if x.startswith("s7graph: error")]
+    assert line.startswith("s7graph: error: bad.py: the CPU went to STOP in its startup (OB100): ")
+    assert "I200.0" in line and "OB121 not loaded" in line
