@@ -2,10 +2,10 @@
 program's page (``web.view.program_view``).
 
 Every page is a session of its own: its ``User`` and ``Password`` fields in a Login
-folder (a form: Enter in the password field logs in as ``Log in`` does), ``Log in`` /
-``Log out``, and the token the CPU gave it, never seen by another page. The password is
-cleared from the page as soon as it is read; a page that goes away revokes its token.
-Until it logs in a page is a viewer. Verdicts come back as notifications on this page only.
+folder, ``Log in`` / ``Log out``, and the token the CPU gave it, never seen by another
+page. The password is cleared from the page as soon as it is read; a page that goes away
+revokes its token. Until it logs in a page is a viewer. Verdicts come back as
+notifications on this page only.
 """
 
 from __future__ import annotations
@@ -52,7 +52,7 @@ class PageLogin(ABC):
     def _build_login(self) -> None:
         """The Login folder: user, password (hidden in demo mode), the two buttons."""
         gui = self._page.gui
-        with gui.add_form("Login") as form:  # a <form>: Enter in a field submits it
+        with gui.add_folder("Login"):
             self.user_field = gui.add_text("User", "")
             self.password = gui.add_text("Password", "", visible=not self._demo)
             # viser has no password input: mask the one whose label points at this field
@@ -63,9 +63,8 @@ class PageLogin(ABC):
             self.login_button = gui.add_button("Log in")
             self.logout_button = gui.add_button("Log out", disabled=True)
             self.who = gui.add_html(texts.login_html("", "", True, self._demo))
-        self.login_button.on_click(lambda _: form.submit())  # clears the form's edit mark
+        self.login_button.on_click(lambda _: self._log_in())
         self.logout_button.on_click(lambda _: self._log_out())
-        form.on_submit(lambda event: self._submitted(by_enter=event.client is not None))
 
     @abstractmethod
     def _login(self, user: str, password: str) -> LoginReply: ...
@@ -84,15 +83,6 @@ class PageLogin(ABC):
         self.who.content = texts.login_html(
             self.user if self.token else "", self.role, self.verified, self._demo
         )
-
-    def _submitted(self, *, by_enter: bool) -> None:
-        """The Login form submitted: by the button, or by Enter in one of its fields (sent
-        by the page). Enter logs in as the button does — but not while logged in (the
-        button is disabled then), nor before a password is typed: Enter in the User field
-        would cost a refused attempt towards the lockout (the demo asks for none)."""
-        if by_enter and (self.token or (not self._demo and not str(self.password.value))):
-            return
-        self._log_in()
 
     def _log_in(self) -> None:
         # the name as typed, on every page: "olga " is refused, never trimmed to "olga"

@@ -30,17 +30,7 @@ from s7graph.web.harness.session import ChartSession, load_chart
 from s7graph.web.view.chart_view import DISCONNECTED
 from s7graph.web.wiring.live_edge import LiveEdge
 from tests.paths import ROOT
-from tests.web.helpers import (
-    ARGS,
-    CHROMIUM,
-    GUI_SETTLE_MS,
-    field,
-    fill,
-    log_in,
-    needs_chromium,
-    scanning,
-    wait_until,
-)
+from tests.web.helpers import ARGS, CHROMIUM, log_in, needs_chromium, scanning, wait_until
 
 if TYPE_CHECKING:
     from playwright.sync_api import Browser, Page
@@ -155,33 +145,6 @@ def test_two_pages_as_two_users_are_audited_apart_and_the_alarm_ack_names_its_us
     assert ("olga", "ack_msg", "applied") in audit
     first.close()
     second.close()
-
-
-def test_enter_in_the_password_field_logs_in_as_the_button_does(
-    plant: Plant, browser: Browser
-) -> None:
-    page = open_page(browser, plant.edge.url)
-    fill(page, "User", "vic")
-    field(page, "User").press("Enter")  # no password yet: no attempt, nothing refused
-    page.wait_for_timeout(1000)
-    assert page.get_by_text("login refused").count() == 0
-    assert page.get_by_text("logged in as vic").count() == 0
-    password = field(page, "Password")
-    password.fill(PASSWORD)
-    page.wait_for_timeout(GUI_SETTLE_MS)  # the page sends the field's value first
-    password.press("Enter")
-    page.get_by_text("logged in as vic").first.wait_for(timeout=30_000)
-    assert password.input_value() == ""  # read, then cleared, as after the button
-    assert page.get_by_role("button", name="Log in", exact=True).is_disabled()
-    page.get_by_role("button", name="Log out", exact=True).click()
-    page.get_by_role("button", name="Log in", exact=True).wait_for(timeout=30_000)
-    button = page.get_by_role("button", name="Log in", exact=True)
-    assert wait_until(button.is_enabled, 20)
-    assert button.get_attribute("type") == "button"  # a click does not submit the form too
-    log_in(page, "vic", PASSWORD)  # the button, as before
-    logins = [r.user for r in read_audit(plant.state) if r.op == "login"]
-    assert logins.count("vic") == 2  # once by Enter, once by the button
-    page.close()
 
 
 def _alarm_rows(state: Path) -> list[tuple[str, str, str]]:
