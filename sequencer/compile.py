@@ -76,7 +76,7 @@ class _Resolver:
         self.tr_index = tr_index
         self.vars = {v.name.upper(): v for v in chart.vars}
         self.problems: list[_Problem] = []
-        self.cache: dict[tuple[str, bool], Ref] = {}
+        self.cache: dict[tuple[str, bool, str], Ref] = {}
         self.reach: dict[tuple[str, int | None], tuple[int, str]] = {}
         """Per area (and DB): the end of the furthest byte an operand uses, and its name."""
 
@@ -97,7 +97,7 @@ class _Resolver:
             self.reach[key] = (end, ref.name)
 
     def __call__(self, op: Operand) -> Ref:
-        key = (op.name, op.quoted)
+        key = (op.name, op.quoted, op.member)
         ref = self.cache.get(key)
         if ref is None:
             try:
@@ -116,6 +116,8 @@ class _Resolver:
         r = resolve_operand(op, self.chart, self.symbols)
         if r.kind == "var":
             return Ref("var", r.type, name=self.vars[op.name.upper()].name)
+        if r.kind == "member":  # an instance DB's variable by name (DB10.Q)
+            return Ref("idb", r.type, name=r.member, db=r.db)
         if r.kind == "pin":
             p = pin_info(op.name)
             assert p is not None
@@ -243,6 +245,7 @@ def _compile_chart(chart: Chart, symbols: Any) -> CompiledChart:
         source=source,
         code=code,
         buffers=tuple(g.buffers),
+        idbs=tuple(g.idbs),
         reach=res.reaches(),
         consts=dict(g.consts),
         step_index=step_index,

@@ -11,6 +11,7 @@ the ``Program`` (tuples of functions indexed like the steps/transitions).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import CodeType, FunctionType
 from typing import Any
@@ -117,6 +118,9 @@ class CompiledChart:
     reach: tuple[Reach, ...] = ()
     """What the operands reach (``compile._Resolver.reaches``): ``bind`` refuses memory too
     small for them."""
+    idbs: tuple[int, ...] = ()
+    """The instance DBs whose variables the chart reads by name (``DB10.Q``,
+    ``CodeGen.idbs``): ``bind`` binds each one's ``values``."""
     step_index: dict[int, int] = field(default_factory=dict)
     transition_index: dict[int, int] = field(default_factory=dict)
     warnings: tuple[str, ...] = ()
@@ -143,8 +147,10 @@ class CompiledChart:
         of stopping the CPU at the chart's first call."""
         return reach_problem(self.buffers, self.reach, mem)
 
-    def bind(self, mem: Any) -> Program:
-        """Execute the generated module against ``mem`` (once per FB instance)."""
+    def bind(self, mem: Any, instance_dbs: Mapping[int, Any] | None = None) -> Program:
+        """Execute the generated module against ``mem`` (once per FB instance);
+        ``instance_dbs`` (the CPU's, by number) hold the variables the chart reads by name
+        (``idbs``: ``DB10.Q``); the calls' ``prepare_calls`` created them."""
         ns: dict[str, Any] = {"__builtins__": __builtins__, "_mem": mem}
         ns.update(OPERAND_RUNTIME)
         ns.update(EXPR_RUNTIME)
@@ -152,6 +158,11 @@ class CompiledChart:
         for k, (area, db) in enumerate(self.buffers):
             ns[f"_m{k}"] = area_buffer(mem, area, db)
         _check_reach(self.reach, mem)
+        for k, db in enumerate(self.idbs):
+            idb = instance_dbs.get(db) if instance_dbs is not None else None
+            if idb is None:
+                raise SymbolError(f"DB{db} is not an instance DB of this CPU (DB{db}.… read)")
+            ns[f"_d{k}"] = idb.values
         for piece in self.code:
             exec(piece, ns)
         for name, first, defaults in self.aliases:

@@ -203,7 +203,8 @@ class GraphFB:
         c = self.loaded
         rt = c.runtime
         if rt is None or c.mem is not mem:
-            c.prog = c.cc.bind(mem)
+            cpu = getattr(self._ctx, "cpu", None)
+            c.prog = c.cc.bind(mem, getattr(cpu, "instance_dbs", None))
             c.mem = mem
             rt = GraphRuntime(
                 c.cc,

@@ -282,7 +282,8 @@ def _read(element: _Element, expr: Expr | None) -> Iterator[_Found]:
 
 
 def _text(operand: Operand) -> str:
-    return f'"{operand.name}"' if operand.quoted else operand.name
+    text = f'"{operand.name}"' if operand.quoted else operand.name
+    return f"{text}.{operand.member}" if operand.member else text  # DB10.Q: a read by name
 
 
 def _block(kind: str, block: int | str) -> str:

@@ -67,7 +67,8 @@ def contact_negations(e: Expr | None) -> list[bool]:
 def contact_text(e: Expr) -> str:
     """A short label of a contact (for criteria displays)."""
     if isinstance(e, Operand):
-        return f'"{e.name}"' if e.quoted else e.name
+        text = f'"{e.name}"' if e.quoted else e.name
+        return f"{text}.{e.member}" if e.member else text
     if isinstance(e, StepAttr):
         return f"S{e.step}.{e.attr}"
     if isinstance(e, TransAttr):

@@ -53,7 +53,8 @@ TYPE_BYTES = {
 class Ref:
     """A resolved operand. ``kind``: ``mem`` (address), ``var`` (FB static variable),
     ``pin`` (FB pin, ``name``), ``step`` (``index``, ``attr`` X/T/U), ``trans`` (``index``),
-    ``timer``/``counter`` (``number``: an S5 cell; ``type`` BOOL, its status bit — ``CELLS``)."""
+    ``timer``/``counter`` (``number``: an S5 cell; ``type`` BOOL, its status bit — ``CELLS``),
+    ``idb`` (variable ``name`` of instance DB ``db``, read by name: ``DB10.Q``)."""
 
     kind: str
     type: str
@@ -95,6 +96,14 @@ class CodeGen:
 
     buffers: list[tuple[str, int | None]] = field(default_factory=list)
     consts: dict[str, Any] = field(default_factory=dict)
+    idbs: list[int] = field(default_factory=list)
+    """The instance DBs whose variables the module reads by name (``DB10.Q``): ``_d<k>`` is
+    the ``values`` of ``idbs[k]``, bound once per FB instance."""
+
+    def idb(self, db: int) -> str:
+        if db not in self.idbs:
+            self.idbs.append(db)
+        return f"_d{self.idbs.index(db)}"
 
     def buf(self, area: str, db: int | None) -> str:
         key = (area, db)
@@ -123,6 +132,9 @@ class CodeGen:
             return f"V[{ref.name!r}]"
         if k == "pin":
             return f"_pin(st, {ref.name!r})"
+        if k == "idb":
+            assert ref.db is not None
+            return f"{self.idb(ref.db)}[{ref.name!r}]"
         if k in ("timer", "counter"):
             return f"_cell_q(_mem, {k!r}, {ref.number})"
         b = self.buf(ref.area, ref.db)

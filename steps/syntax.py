@@ -58,11 +58,14 @@ class Operand:
     """A named or addressed operand as written: an absolute address (``I0.7``, ``MW10``,
     ``DB1.DBX0.0``), a quoted symbol (``"Start_button"``, quotes removed, ``quoted`` set),
     an FB variable or FB pin (``count``, ``ERR_FLT``). Resolution happens in the validator
-    and compiler."""
+    and compiler. ``member`` names a variable of an instance DB read by name (S7-SCL's
+    structured access: ``DB10.Q`` is name ``DB10``, ``"T_S2".Q`` the quoted name ``T_S2``,
+    each with member ``Q``); "" for any other operand."""
 
     name: str
     quoted: bool = False
     loc: SourceLocation = NOWHERE
+    member: str = ""
 
 
 @dataclass(frozen=True, slots=True)

@@ -60,6 +60,8 @@ CODES: Final[dict[str, str]] = {
     "E046": "CALL of a system block s7graph lacks, or with a wrong instance or parameter",
     "E047": "CALL of a user FB or FC that does not fit the program's blocks (--blocks): "
     "unknown block or parameter, wrong direction, type or instance DB",
+    "E048": 'instance DB variable read by name (DB10.Q, "T_S2".Q) of a DB that is no instance '
+    "DB of the chart's calls, or not an output or in-out of its block",
     # warnings
     "W101": "step without a way in",
     "W102": "step without a way out",

@@ -207,6 +207,11 @@ def _check_call(ctx: _Ctx, call: BlockCall, el: str) -> None:
 
 def _read_only(name: str, res: Resolved) -> str:
     """Why the chart cannot write ``name``: an FB output, or a peripheral input (PI)."""
+    if res.kind == "member":
+        return (
+            f"DB{res.db}.{res.member} is a variable of an instance DB, which its block writes; "
+            "the chart only reads it"
+        )
     if res.address is not None:
         return f"{name} is a peripheral input, read by the program only; the chart cannot write it"
     return f"{name} is an FB output; the chart cannot write it"
@@ -277,7 +282,7 @@ def rule_instance_db_addresses(ctx: _Ctx) -> None:
     calls name the instance DBs."""
     seen: set[tuple[str, bool]] = set()
     for op in nodes(ctx.chart):
-        if not isinstance(op, Operand) or (op.name, op.quoted) in seen:
+        if not isinstance(op, Operand) or op.member or (op.name, op.quoted) in seen:
             continue
         seen.add((op.name, op.quoted))
         try:

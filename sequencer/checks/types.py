@@ -32,7 +32,7 @@ from s7graph.sequencer.text.model import (
     TransAttr,
     Unary,
 )
-from s7graph.sequencer.text.names import Resolved, resolve_operand
+from s7graph.sequencer.text.names import MemberError, Resolved, resolve_operand
 from s7graph.steps.expressions import ARGUMENTS
 
 COMPARABLE: Final = frozenset({"INT", "DINT", "REAL", "TIME"})
@@ -202,6 +202,8 @@ def _resolve(ctx: _Ctx, op: Operand, el: str) -> Resolved | None:
     except AddressError as exc:
         where = exc.where if isinstance(exc.where, SourceLocation) else op.loc
         ctx.err("E041", exc.message, where, el)
+    except MemberError as exc:
+        ctx.err("E048", exc.message, op.loc, el)
     except SymbolError as exc:
         ctx.err("E040" if op.quoted else "E042", exc.message, op.loc, el)
     return None

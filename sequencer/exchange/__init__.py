@@ -22,8 +22,8 @@ from s7graph.sequencer.checks.diagnostics import Diagnostic, sort_key
 from s7graph.sequencer.exchange.body_fc import BodyFc, blocks_source
 from s7graph.sequencer.exchange.pending import PendingScl
 from s7graph.sequencer.exchange.problems import ImportFailed, Problems
-from s7graph.sequencer.text.model import Binary, Chart
-from s7graph.sequencer.text.walk import rewrite
+from s7graph.sequencer.text.model import Binary, Chart, Operand
+from s7graph.sequencer.text.walk import nodes, rewrite
 from s7graph.steps.syntax import CHAIN_OPS, chain, chain_parts
 
 __all__ = [
@@ -295,6 +295,7 @@ def export_reported(
 ) -> tuple[str, list[Diagnostic]]:
     """``export_chart``, and what of the chart the format's other readers do not see or run
     otherwise, each located in the chart (``X01x`` warnings)."""
+    _refuse_members(chart, to)
     if to == "plcopen":
         from s7graph.sequencer.exchange.export_plcopen import export_plcopen
 
@@ -304,3 +305,15 @@ def export_reported(
 
         return export_simaticml(chart, symbols)
     raise ValueError(f"unknown export format {to!r}: plcopen or simaticml")
+
+
+def _refuse_members(chart: Chart, to: str) -> None:
+    """``ValueError`` at the first instance DB variable read by name (``DB10.Q``,
+    ``"T_S2".Q``): not exported yet; the call's ``=>`` output exports."""
+    for op in nodes(chart):
+        if isinstance(op, Operand) and op.member:
+            text = f'"{op.name}".{op.member}' if op.quoted else f"{op.name}.{op.member}"
+            raise ValueError(
+                f"{op.loc}: {text}: a {to} export cannot hold an instance DB's variable read "
+                "by name yet; take it out with the call's => (Q => x)"
+            )

@@ -144,6 +144,13 @@ class _Build:
     def name(self, ch: list[Token]) -> Operand:
         return Operand(str(ch[0]), False, self._loc(ch[0]))
 
+    def member(self, ch: list[Token]) -> Operand:
+        """``DB10.Q`` / ``"T_S2".Q``: a variable of an instance DB, read by name."""
+        if len(ch) == 2:
+            return Operand(_unquote(ch[0]), True, self._loc(ch[0]), member=str(ch[1]))
+        db, _, member = _BLANKS.sub("", str(ch[0])).partition(".")
+        return Operand(f"DB{_int(db)}", False, self._loc(ch[0]), member=member)
+
     def step_attr(self, ch: list[Token]) -> StepAttr:
         num, attr = str(ch[0]).split(".")
         return StepAttr(_int(num), attr.upper(), self._loc(ch[0]))  # type: ignore[arg-type]

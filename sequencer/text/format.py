@@ -99,7 +99,8 @@ def format_expr(
     if isinstance(e, Const):
         return e.text or str(e.value)
     if isinstance(e, Operand):
-        return quote(e.name) if e.quoted else e.name
+        text = quote(e.name) if e.quoted else e.name
+        return f"{text}.{e.member}" if e.member else text  # DB10.Q, "T_S2".Q
     if isinstance(e, StepAttr):
         return f"S{e.step}.{e.attr}"
     if isinstance(e, TransAttr):

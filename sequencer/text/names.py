@@ -28,9 +28,10 @@ from s7graph.engine.address import Address, Area, parse_address
 from s7graph.engine.errors import SymbolError
 from s7graph.engine.symbols import SymbolTable, default_type
 from s7graph.sequencer.params import Direction, check_pin, pin
-from s7graph.sequencer.text.model import Chart, Operand, SymbolDecl, VarDecl
+from s7graph.sequencer.text.model import BlockCall, Chart, Operand, SymbolDecl, VarDecl
+from s7graph.sfb import catalogue
 
-Kind = Literal["address", "symbol", "var", "pin"]
+Kind = Literal["address", "symbol", "var", "pin", "member"]
 
 # The shape of an absolute address (as the grammar's ADDRESS terminal, blanks removed).
 ADDRESS_SHAPE: Final = re.compile(
@@ -44,12 +45,16 @@ class Resolved:
     """An operand resolved: ``kind`` address | symbol | var | pin; ``address`` for addresses
     and symbols (None for FB variables and pins); ``type`` the S7 type name (upper case);
     ``writable`` is False for FB output pins (the FB itself writes them) and for the
-    peripheral inputs (PI: the modules write them)."""
+    peripheral inputs (PI: the modules write them). A ``member`` (``DB10.Q``) names its
+    instance DB's number (``db``) and variable (``member``, as the block spells it); the
+    chart only reads it."""
 
     kind: Kind
     address: Address | None
     type: str
     writable: bool = True
+    db: int | None = None
+    member: str = ""
 
     @property
     def is_untyped(self) -> bool:
@@ -74,6 +79,18 @@ class _Declared:
         self.symbols: dict[str, SymbolDecl] = {}
         for s in chart.symbols:
             self.symbols.setdefault(s.name.casefold(), s)
+        self.instances: dict[int, BlockCall] = {}
+        """The instance DBs the chart's calls name: number → the first call naming it."""
+        for call in _calls(chart):
+            if isinstance(call.instance, int):
+                self.instances.setdefault(call.instance, call)
+
+
+def _calls(chart: Chart) -> list[BlockCall]:
+    """The chart's block calls: its action rows' and its permanent instructions'."""
+    calls: list[object] = [r.operand for s in chart.all_steps() for r in s.actions]
+    calls += [*chart.before, *chart.after]
+    return [c for c in calls if isinstance(c, BlockCall)]
 
 
 _declared: list[_Declared] = []  # the chart resolved last (its operands come in a row)
@@ -93,6 +110,8 @@ def _declarations(chart: Chart) -> _Declared:
 def resolve_operand(op: Operand, chart: Chart, symbols: SymbolTable | None = None) -> Resolved:
     """Resolve one operand (rule in the module docstring). Raises ``SymbolError`` for an
     unknown name and ``AddressError`` for a malformed address, both with ``op.loc``."""
+    if op.member:
+        return _member(op, chart, symbols)
     if op.quoted:
         return _symbol(op, chart, symbols)
     key = op.name.upper()
@@ -127,3 +146,51 @@ def _symbol(op: Operand, chart: Chart, symbols: SymbolTable | None) -> Resolved:
             writable = sym.address.area is not Area.PI
             return Resolved("symbol", sym.address, sym.type.upper(), writable=writable)
     raise SymbolError(f'unknown symbol "{op.name}"', op.loc)
+
+
+class MemberError(SymbolError):
+    """A variable of an instance DB read by name (``DB10.Q``) the chart cannot read (E048)."""
+
+
+def member_text(op: Operand) -> str:
+    """An instance DB's variable as written: ``DB10.Q``, ``"T_S2".Q``."""
+    return f'"{op.name}".{op.member}' if op.quoted else f"{op.name}.{op.member}"
+
+
+def _member(op: Operand, chart: Chart, symbols: SymbolTable | None) -> Resolved:
+    """``DB10.Q`` / ``"T_S2".Q`` (S7-SCL's structured access to a data block): an output or
+    in-out of the block whose instance DB one of the chart's calls names (by number; a
+    symbol of the symbol table given may name that DB). Raises ``MemberError``."""
+    text = member_text(op)
+    if op.quoted:
+        try:
+            db = symbols.db_number(op.name) if symbols is not None else None
+        except SymbolError as exc:
+            raise MemberError(f"{text}: {exc.message}", op.loc) from None
+        if db is None:
+            raise MemberError(f'{text}: no DB symbol "{op.name}" in the symbol table', op.loc)
+    else:
+        db = int(op.name[2:])
+    call = _declarations(chart).instances.get(db)
+    if call is None:
+        raise MemberError(
+            f"{text}: DB{db} is not an instance DB of this chart's calls "
+            f'(CALL "TON", DB {db} (...) names one)',
+            op.loc,
+        )
+    entry = catalogue.find(f"{call.kind}{call.block}")
+    if entry is None:
+        label = f"{call.kind}{call.block}" if call.kind else f'"{call.block}"'
+        raise MemberError(
+            f"{text}: DB{db} is the instance DB of {label}; only a system block's variables "
+            "are read by name: take the output out with the call's => (Q => x)",
+            op.loc,
+        )
+    pin = entry.pin(op.member)
+    if pin is None or (pin.is_input and not pin.is_output):
+        outs = ", ".join(p.name for p in entry.outputs) or "none"
+        why = "is an input of" if pin is not None else "is not a variable of"
+        raise MemberError(
+            f"{text}: {op.member} {why} {entry.key} {entry.name} (its outputs: {outs})", op.loc
+        )
+    return Resolved("member", None, pin.type, writable=False, db=db, member=pin.name)
