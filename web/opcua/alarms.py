@@ -38,6 +38,7 @@ from s7graph.engine.errors import internal_error
 from s7graph.web.bus.protocol import AlarmEntry, AlarmList, CommandReply
 from s7graph.web.commands import AckMsg, Args, Command, MessageArgs
 from s7graph.web.opcua.conditions import event_values, show
+from s7graph.web.opcua.nodes import Nodes
 from s7graph.web.opcua.sessions import caller
 from s7graph.web.opcua.statuses import is_condition, node_class
 from s7graph.web.opcua.typed import ObjectIds, Server, StatusCodes, ua_id, ua_status
@@ -110,17 +111,20 @@ def _event(cond_nid: ua.NodeId, source: ua.NodeId, source_name: str, name: str) 
 class Alarms:
     """The conditions of one CPU's message list in ``server``; ``locate(entry)`` says
     where a message's condition is (its node, source node, source name, name, FB), or
-    None for one under ``messages`` (made here); ``send`` sends an ``ack_msg``."""
+    None for one under ``messages`` (made here); ``send`` sends an ``ack_msg``; ``nodes``
+    writes the conditions' state children (``web.opcua.conditions.show``)."""
 
     def __init__(
         self,
         server: Server,
+        nodes: Nodes,
         *,
         messages: Callable[[AlarmEntry], Awaitable[tuple[ua.NodeId, ua.NodeId, str, str, str]]],
         locate: Callable[[AlarmEntry], tuple[ua.NodeId, ua.NodeId, str, str, str] | None],
         send: Send,
     ) -> None:
         self.server = server
+        self.nodes = nodes
         self._messages = messages
         self._locate = locate
         self._send = send
@@ -206,14 +210,15 @@ class Alarms:
     async def _state(self, cond: _Condition) -> None:
         """The condition node's state children as its last event says."""
         try:
-            await show(self.server, cond.nid, event_values(cond.event))
+            await show(self.nodes, cond.nid, event_values(cond.event))
         except Exception as exc:  # the event goes out all the same
             why = internal_error(f"while writing the state of {cond.nid.to_string()}", exc)
             _log.warning("opcua: a condition's state was not written: %s", why)
 
     async def restate(self) -> None:
         """Write every condition's state children again (an online change made a step's
-        condition node anew: it holds its last event's state again)."""
+        condition node anew, or the CPU is back on the bus: each holds its last event's
+        state again, with a good status)."""
         for cond in self._by_node.values():
             if cond.event_ids:
                 await self._state(cond)

@@ -8,7 +8,9 @@ and ``AckedState`` (``TwoStateVariableType`` variables, each with its ``Id``),
 condition's last event said: :func:`show` writes them each time that event goes out
 (before it goes, so a client reading on an event reads that event's state). A condition
 that has sent no event yet is enabled, inactive and acknowledged, retains nothing and has
-no ``Time``.
+no ``Time``. While the CPU is off the bus the children written so far keep their last value
+with ``UncertainNoCommunicationLastUsableValue``, as every value of the face; they are
+written again when it is back.
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ from typing import Any, Final
 from asyncua import ua
 
 from s7graph.web.opcua.nodes import Nodes
-from s7graph.web.opcua.typed import ObjectIds, Server, child_id, data_value
+from s7graph.web.opcua.typed import ObjectIds, child_id
 
 __all__ = ["STATES", "add_condition", "event_values", "initial_values", "show"]
 
@@ -110,11 +112,13 @@ def add_condition(
     return nid
 
 
-async def show(server: Server, nid: ua.NodeId, values: dict[str, ua.Variant]) -> None:
-    """Write ``values`` (by path) into the children of condition ``nid``."""
+async def show(nodes: Nodes, nid: ua.NodeId, values: dict[str, ua.Variant]) -> None:
+    """Write ``values`` (by path) into the children of condition ``nid``, through ``nodes``
+    (``Nodes.set``: a CPU that leaves the bus marks them, as every value written, with its
+    last usable value, ``Space.set_online``)."""
     now = datetime.now(UTC)
     for path, value in values.items():
         child = nid
         for part in path.split("/"):
             child = child_id(child, part)
-        await server.write_attribute_value(child, data_value(value, when=now))
+        await nodes.set(child, value, when=now)

@@ -105,7 +105,11 @@ class Face:
         self.link = link
         self.space = space
         self.alarms = Alarms(
-            server, messages=self._message_where, locate=self._locate, send=self.send
+            server,
+            space.nodes,
+            messages=self._message_where,
+            locate=self._locate,
+            send=self.send,
         )
         self.diag = DiagNodes(space.nodes, space.nid, space.root)
         self.first_fb = ""
@@ -242,6 +246,8 @@ class Face:
             return
         _log.info("opcua: CPU %s %s the bus", self.space.cpu, "is back on" if up else "left")
         await self.space.set_online(up)
+        if up:
+            await self.alarms.restate()  # the conditions' state children good again
         if not up or self._inbox is None:
             return
         link = self.link
