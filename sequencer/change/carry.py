@@ -29,6 +29,9 @@ from collections.abc import Collection, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
+from s7graph.engine.blocks import default_value
+from s7graph.engine.errors import S7Error
+from s7graph.engine.literals import format_literal
 from s7graph.sequencer.compiled import CompiledChart
 from s7graph.sequencer.cycle import new_state
 from s7graph.sequencer.state import STEP_LISTS, TRANSITION_LISTS, GraphState
@@ -157,26 +160,16 @@ class ChartShape:
         )
 
 
-_ZERO_TEXT = {
-    "BOOL": "FALSE",
-    "REAL": "0.0",
-    "TIME": "T#0MS",
-    "S5TIME": "S5T#0MS",
-    "DATE": "D#1990-01-01",
-    "DATE_AND_TIME": "DT#1990-01-01-00:00:00",
-    "DT": "DT#1990-01-01-00:00:00",
-    "TIME_OF_DAY": "TOD#00:00:00",
-    "TOD": "TOD#00:00:00",
-}
-
-
 def initial_text(decl: VarDecl) -> str:
     """The value variable ``decl`` starts at, as the chart writes it: its declared initial
-    value, else its type's (FALSE, 0, 0.0, '', D#1990-01-01 …)."""
+    value, else its type's zero as a literal of that type (``engine.blocks.default_value``,
+    ``engine.literals.format_literal``: FALSE, 0, L#0, W#16#0000, 0.0, '', D#1990-01-01 …)."""
     if decl.init is not None:
         return decl.init.text
-    t = decl.type.upper()
-    return "''" if t.startswith("STRING") else _ZERO_TEXT.get(t, "0")
+    try:
+        return format_literal(decl.type, default_value(decl.type))
+    except S7Error:  # a type with no literal of its own
+        return "0"
 
 
 def restart_line(name: str, before: str, after: str, initial: str) -> str:
