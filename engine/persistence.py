@@ -100,6 +100,7 @@ __all__ = [
     "StateFileError",
     "StateStore",
     "StateWriteError",
+    "diag_row",
     "fingerprint_of",
     "not_in_use",
     "sqlite_words",
@@ -196,6 +197,11 @@ _ADDED_DIAG_COLUMNS = (
 )
 DiagRow = tuple[int, int, int, str, str, str, int, int, int]
 """A row of the diagnostics table, in ``_DIAG_COLUMNS`` order."""
+
+
+def diag_row(seq: int, e: DiagEntry) -> DiagRow:
+    """The diagnostics row ``seq`` of entry ``e`` (``_DIAG_COLUMNS`` order)."""
+    return (seq, e.t_ns, e.event_id, e.block, e.message, e.address, e.ob, e.priority, e.wall_ns)
 
 
 class StateFileError(S7Error):
@@ -627,8 +633,7 @@ class StateStore:
         word when the scan hangs, written outside it)."""
         seq = self._diag_seq
         self._diag_seq += 1
-        e = entry
-        return (seq, e.t_ns, e.event_id, e.block, e.message, e.address, e.ob, e.priority, e.wall_ns)
+        return diag_row(seq, entry)
 
     def maybe_save(self, cpu: Cpu) -> bool:
         """Stage and write at once if something changed (and the interval has passed)."""

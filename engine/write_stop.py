@@ -22,7 +22,7 @@ import os
 from s7graph.engine.cpu import Cpu
 from s7graph.engine.diagnostics import EventId
 from s7graph.engine.errors import internal_error
-from s7graph.engine.persistence import Batch, DiagRow, StateStore, StateWriteError
+from s7graph.engine.persistence import Batch, DiagRow, StateStore, StateWriteError, diag_row
 
 __all__ = ["disk_full", "leave_trace", "stop_on_write_error", "stop_words"]
 
@@ -63,11 +63,7 @@ def _unsaved_rows(store: StateStore, cpu: Cpu) -> list[DiagRow]:
     entries = list(cpu.diagnostics)
     first = cpu.diagnostics.total - len(entries)  # the row of the oldest entry held
     saved = store.diagnostics_saved()
-    return [
-        (seq, e.t_ns, e.event_id, e.block, e.message, e.address, e.ob, e.priority, e.wall_ns)
-        for seq, e in enumerate(entries, first)
-        if seq >= saved
-    ]
+    return [diag_row(seq, e) for seq, e in enumerate(entries, first) if seq >= saved]
 
 
 def leave_trace(store: StateStore, cpu: Cpu) -> str:
