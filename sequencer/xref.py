@@ -164,15 +164,26 @@ def _system_name(operand: str, access: str, system: dict[str, str]) -> str:
 
 
 _SECTIONS: Final = {Decl.IN: "VAR_INPUT", Decl.OUT: "VAR_OUTPUT", Decl.IN_OUT: "VAR_IN_OUT"}
+_PIN_SECTIONS: Final = {
+    sfb.Direction.IN: "VAR_INPUT",
+    sfb.Direction.OUT: "VAR_OUTPUT",
+    sfb.Direction.IN_OUT: "VAR_IN_OUT",
+}
 
 
 @functools.cache
 def _system_params() -> dict[str, dict[str, str]]:
     """The parameters of the system blocks an S7-SCL source may call, by name and number
-    (``CONT_C``, ``SFB41``): made once, copied by the caller before it adds to it."""
+    (``CONT_C``, ``SFB41``): made once, copied by the caller before it adds to it. An ANY
+    pin is an input of the engine's block (its pointer text) but used as the catalogue
+    declares it: BLKMOV's DSTBLK, FILL's BLK are written."""
     out: dict[str, dict[str, str]] = {}
     for block in sfb.SYSTEM_BLOCKS:
         params = {v.name.upper(): _SECTIONS[v.decl] for v in block.interface if v.decl in _SECTIONS}
+        entry = sfb.find(block.label)
+        for pin in entry.pins if entry is not None else ():
+            if pin.type == "ANY" and pin.name in params:
+                params[pin.name] = _PIN_SECTIONS[pin.direction]
         out[block.name.upper()] = out[block.label.upper()] = params
     return out
 

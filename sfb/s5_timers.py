@@ -227,13 +227,23 @@ def run(
 
 
 def box(
-    timers: Sequence[S5Timer], number: int, function: str, s: bool, tv_ms: int, r: bool, now_ns: int
+    timers: Sequence[S5Timer],
+    number: int,
+    function: str,
+    s: bool,
+    tv_ms: int,
+    r: bool,
+    now_ns: int,
+    *,
+    base_ms: int | None = None,
 ) -> tuple[int, int, bool]:
     """An S5 timer box called as a function (S_PULSE … S_OFFDT of S7-SCL): timer ``number``
     run with S, TV and R; returns the remaining time in ms (the function value, an S5TIME),
-    the remaining count binary (BI) and the status (Q)."""
+    the remaining count binary (BI) and the status (Q). ``base_ms`` is the time base of the
+    S5TIME word given as TV (its count runs in it, as after ``L`` and ``SD``), else the
+    finest base that holds ``tv_ms``."""
     cell = cell_of(timers, number)
-    q = run(cell, function, s, tv_ms, now_ns, r=r)
+    q = run(cell, function, s, tv_ms, now_ns, r=r, base_ms=base_ms)
     return cell.value_ms, cell.binary(), q
 
 

@@ -169,6 +169,8 @@ def _var(prog: Program, p: Any, built: dict[str, FB | FC], info: BlockInfo) -> V
     if t.aggregate:
         value = init if init is not None else ty.zero(t)
         return Var(p.name, "OBJECT", p.decl, _factory(value) if info.kind == "FB" else None)
+    if t.kind == "BLOCK_DB":  # the engine knows it as the WORD holding the DB's number
+        return Var(p.name, ty.engine_type(t), p.decl, comment=ty.BLOCK_DB.kind)
     return Var(p.name, ty.engine_type(t), p.decl, init if info.kind == "FB" else None)
 
 

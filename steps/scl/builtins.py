@@ -137,7 +137,7 @@ def _same_type(
         if wider is None:
             raise Problem("E220", f"{name}: {t} and {x.type} are not of one type", loc)
         t = wider
-    if t.aggregate or t.kind in ("TIMER", "COUNTER", "FB"):
+    if t.aggregate or t.kind in ("TIMER", "COUNTER", "BLOCK_DB", "FB"):
         raise Problem("E220", f"{name} takes elementary values, not {t}", loc)
     return t, [_arg(b, x, t, loc) for x in xs]
 

@@ -13,13 +13,14 @@ label in the CPU's block table, as a CALL finds it.
 from __future__ import annotations
 
 from s7graph.engine.blocks import Decl
+from s7graph.engine.datatypes import ms_to_s5time
 from s7graph.engine.errors import SourceLocation
 from s7graph.steps.scl import model as m
 from s7graph.steps.scl import types as ty
 from s7graph.steps.scl.builtins import BUILTINS, bind
 from s7graph.steps.scl.declare import BlockInfo, Param
 from s7graph.steps.scl.diagnostics import Problem
-from s7graph.steps.scl.gen import Block, Place, Target, X
+from s7graph.steps.scl.gen import HOLE, Block, Place, Target, X
 
 S5_TIMERS = {"S_PULSE": "SP", "S_PEXT": "SE", "S_ODT": "SD", "S_ODTS": "SS", "S_OFFDT": "SF"}
 S5_COUNTERS = {"S_CU": ("CU",), "S_CD": ("CD",), "S_CUD": ("CU", "CD")}
@@ -132,8 +133,38 @@ class Calls:
         text it reads (``P#DB5.DBX4.0 BYTE 20``)."""
         if param.type.kind == "ANY":
             return self._pointer(info, param, arg)
+        if param.type.kind == "BLOCK_DB":
+            return self._block_db(param, arg)
         x = self.b.exprs.expr(arg.value)
         return self.b.exprs.convert(x, param.type, arg.loc, "pass")
+
+    def _block_db(self, param: Param, arg: m.Arg) -> str:
+        """A BLOCK_DB input takes a DB — ``DB10``, a DB's symbol, ``WORD_TO_BLOCK_DB(w)`` —
+        or a BLOCK_DB parameter of the caller: the DB's number (S7-SCL manual, "Data types",
+        parameter types)."""
+        path = arg.value if isinstance(arg.value, m.Path) else None
+        wanted = f'{param.name} is a BLOCK_DB: pass a DB (DB10, "Data"), WORD_TO_BLOCK_DB(w)'
+        base = path.base if path is not None and not path.selectors else None
+        if base is not None and base.text.upper() not in self.b.locals:
+            number = self.b.prog.db_number(base.text)
+            if number is not None and base.kind in ("block", "symbol", "name"):
+                if not 1 <= number <= 65535:
+                    raise Problem("E214", f"DB{number}: a DB is numbered 1..65535", arg.loc)
+                return str(number)
+            if base.kind in ("block", "symbol"):
+                raise Problem(
+                    "E220", f"{wanted} or a BLOCK_DB parameter; {base.text} is no DB", arg.loc
+                )
+        sels = path.selectors if path is not None else ()
+        if path is not None and path.base.text.upper() == "WORD_TO_BLOCK_DB" and len(sels) == 1:
+            call = sels[0]
+            if isinstance(call, m.Args):
+                return self.b.places.block_db_number(call, path.loc)
+        x = self.b.exprs.expr(arg.value)
+        if x.type.kind in ("BLOCK_DB", "ERROR"):
+            return x.src
+        a = "an" if str(x.type)[:1] in "AEIOU" else "a"
+        raise Problem("E220", f"{wanted} or a BLOCK_DB parameter, not {a} {x.type}", arg.loc)
 
     def _pointer(self, info: BlockInfo, param: Param, arg: m.Arg) -> str:
         """An ANY parameter (SFC 20 BLKMOV's SRCBLK and DSTBLK, SFC 21 FILL's BVAL and BLK …)
@@ -289,7 +320,11 @@ class Calls:
         for t, k, place in outs:
             b.emit(place.store(self._take(X(t, f"{r}[{k}]"), place, target)))
         if result is not None:
-            b.emit(result.store(self._take(X(rtype, f"{r}[0]"), result, target)))
+            word = _s5time_bytes(result.put) if timer and result.put else None
+            if word is not None:  # the time left as the timer's word: its time base kept
+                b.emit(word.replace(HOLE, f"{r}[3]"))
+            else:
+                b.emit(result.store(self._take(X(rtype, f"{r}[0]"), result, target)))
         return X(rtype, f"{r}[0]")
 
     def _s5_input(self, key: str, arg: m.Arg, timer: bool) -> str:
@@ -299,10 +334,36 @@ class Calls:
             if x.type.kind not in (cell.kind, "INT", "WORD", "ERROR"):
                 raise Problem("E220", f"{key} is a {cell.kind} or an INT, not {x.type}", arg.loc)
             return x.src
-        if key == "TV" and x.type.kind == "WORD":
-            return f"_s5ms({x.src})"
-        want = {"TV": ty.S5TIME, "PV": ty.WORD}.get(key, ty.BOOL)
+        if key == "TV":
+            return self._s5_word(x, arg)
+        want = {"PV": ty.WORD}.get(key, ty.BOOL)
         return self.b.exprs.convert(x, want, arg.loc, "pass")
+
+    def _s5_word(self, x: X, arg: m.Arg) -> str:
+        """TV as the S5TIME word the timer is started with, time base and BCD count (S7-SCL
+        manual, timers: TV is an S5TIME): a WORD's bits, an S5TIME in an operand area's or a
+        global DB's bytes as they lie there, an S5TIME held as a value (a literal, a block's
+        variable) in the finest time base that holds it."""
+        if x.type.kind == "WORD":
+            return x.src
+        word = _s5time_bytes(x.src) if isinstance(arg.value, m.Path) else None
+        if word is not None:
+            return word
+        ms = self.b.exprs.convert(x, ty.S5TIME, arg.loc, "pass")
+        if x.const is not None and ms.isdigit():
+            return str(ms_to_s5time(int(ms)))  # a literal: encoded once, here
+        return f"_s5w({ms})"
+
+
+def _s5time_bytes(src: str) -> str | None:
+    """``src`` — one read (or write) of an S5TIME in memory, ``_mem.read_as(a, 'S5TIME')`` —
+    as the same access to its word, else None."""
+    head, tail = "_mem.read_as(", ", 'S5TIME')"
+    if src.startswith("_mem.write_as(") and src.endswith(f", 'S5TIME', {HOLE})"):
+        head, tail = "_mem.write_as(", f", 'S5TIME', {HOLE})"
+    if not (src.startswith(head) and src.endswith(tail)) or src.count("_mem.") != 1:
+        return None
+    return src[: -len(tail)] + tail.replace("S5TIME", "WORD")
 
 
 def _described(t: ty.SclType) -> str:

@@ -155,6 +155,12 @@ def engine_type(name: str) -> ty.SclType:
     return ty.by_name(upper) or ty.ANY
 
 
+def _external_type(type_name: str, comment: str) -> ty.SclType:
+    if comment == ty.BLOCK_DB.kind and type_name.upper() == ty.engine_type(ty.BLOCK_DB):
+        return ty.BLOCK_DB
+    return engine_type(type_name)
+
+
 def _is_any(type_name: str) -> bool:
     """A system block's ANY pin: declared to the engine as the pointer text it takes
     (``P#DB5.DBX4.0 BYTE 20``), a ``STRING[254]`` (``sfb.catalogue``, ``ANY_AS``)."""
@@ -162,14 +168,17 @@ def _is_any(type_name: str) -> bool:
 
 
 def external(blocks: Iterable[FB | FC]) -> list[BlockInfo]:
-    """``BlockInfo`` of engine blocks (system blocks, blocks loaded before)."""
+    """``BlockInfo`` of engine blocks (system blocks, blocks loaded before). A BLOCK_DB
+    parameter of an S7-SCL block is a WORD of the engine, its comment saying BLOCK_DB."""
     out = []
     for blk in blocks:
         kind = str(blk.kind)
         system = kind in ("SFB", "SFC")
         params = {
             v.name.upper(): Param(
-                v.name, v.decl, ty.ANY if system and _is_any(v.type) else engine_type(v.type)
+                v.name,
+                v.decl,
+                ty.ANY if system and _is_any(v.type) else _external_type(v.type, v.comment),
             )
             for v in blk.interface
             if v.decl is not Decl.TEMP
@@ -354,9 +363,15 @@ def _variables(
     t = resolve_type(prog, var.type, consts)
     if t.kind == "FB" and decl is not Decl.STAT:
         raise Problem("E212", f"an FB instance ({t}) is declared in VAR only", var.loc)
+    if t.kind == "BLOCK_DB" and decl is not Decl.IN:
+        raise Problem("E212", "a BLOCK_DB is an input: declare it in VAR_INPUT", var.loc)
     init: object = None
     if var.init is not None:
-        if decl is Decl.TEMP or info.kind == "FC" or t.kind in ("FB", "TIMER", "COUNTER"):
+        if (
+            decl is Decl.TEMP
+            or info.kind == "FC"
+            or t.kind in ("FB", "TIMER", "COUNTER", "BLOCK_DB")
+        ):
             raise Problem("E216", "no initial value is allowed here", var.loc)
         init = initial(consts, t, var.init, var.loc)
     elif t.kind in ("STRUCT", "ARRAY") and decl is not Decl.TEMP and info.kind == "FB":
@@ -428,7 +443,7 @@ def resolve_type(prog: Program, spec: m.TypeSpec, consts: Consts) -> ty.SclType:
                 raise Problem("E217", f"array bounds {lo}..{hi}: need lo <= hi in INT", lo_e.loc)
             dims.append((lo, hi))
         element = resolve_type(prog, spec.element, consts)
-        if element.kind in ("FB", "ARRAY", "TIMER", "COUNTER"):
+        if element.kind in ("FB", "ARRAY", "TIMER", "COUNTER", "BLOCK_DB"):
             raise Problem("E212", f"an ARRAY of {element.kind} is not allowed", spec.loc)
         t = ty.SclType("ARRAY", dims=tuple(dims), element=element)
         if t.count > MAX_BYTES or ty.size_of(t) > MAX_BYTES:
@@ -438,8 +453,9 @@ def resolve_type(prog: Program, spec: m.TypeSpec, consts: Consts) -> ty.SclType:
     seen: set[str] = set()
     for decl in spec.members:
         ft = resolve_type(prog, decl.type, consts)
-        if ft.kind == "FB":
-            raise Problem("E212", "a STRUCT cannot hold an FB instance", decl.loc)
+        if ft.kind in ("FB", "BLOCK_DB"):
+            what = "an FB instance" if ft.kind == "FB" else "a BLOCK_DB (an input only)"
+            raise Problem("E212", f"a STRUCT cannot hold {what}", decl.loc)
         for name, loc in decl.names:
             _fresh(seen, name, loc)
             fields.append((name, ft))
@@ -465,13 +481,11 @@ def _named_type(prog: Program, spec: m.NamedType) -> ty.SclType:
     raise Problem("E212", f"unknown data type {spec.name!r}", spec.loc)
 
 
-_BLOCK_NUMBER = "pass the DB's number as a WORD and reach it as WORD_TO_BLOCK_DB(w).DW[i]"
 _PARAMETER_TYPES = {
-    "BLOCK_DB": _BLOCK_NUMBER,
     "BLOCK_FB": "call the FB by name",
     "BLOCK_FC": "call the FC by name",
     "BLOCK_SDB": "no SDB is loaded",
-    "ANY": "pass the data itself (a STRUCT, an ARRAY) or a DB's number as a WORD",
-    "POINTER": "pass the data itself (a STRUCT, an ARRAY) or a DB's number as a WORD",
+    "ANY": "pass the data itself (a STRUCT, an ARRAY) or a DB as a BLOCK_DB",
+    "POINTER": "pass the data itself (a STRUCT, an ARRAY) or a DB as a BLOCK_DB",
 }
 """S7-SCL's parameter types that s7graph does not take, and what to write instead."""

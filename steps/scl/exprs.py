@@ -147,7 +147,7 @@ class Exprs:
 
     def _compare(self, e: m.Binary, a: X, b: X) -> X:
         t = ty.common(a.type, b.type)
-        if t is None or t.aggregate or t.kind in ("TIMER", "COUNTER", "FB", "ANY"):
+        if t is None or t.aggregate or t.kind in ("TIMER", "COUNTER", "BLOCK_DB", "FB", "ANY"):
             raise Problem("E221", f"cannot compare {a.type} with {b.type}", e.loc)
         if e.op not in ("=", "<>") and t.kind not in _ORDERED:
             raise Problem("E221", f"{t} values compare only with = and <>", e.loc)

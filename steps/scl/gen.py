@@ -86,6 +86,8 @@ class Places(Protocol):
 
     def place(self, path: m.Path, writing: bool = False) -> Place: ...
 
+    def block_db_number(self, call: m.Args, loc: SourceLocation) -> str: ...
+
 
 class Calls(Protocol):
     """The call translator (``calls.Calls``)."""

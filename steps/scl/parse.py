@@ -168,6 +168,7 @@ _WORDS = {
     "LITERAL": "a constant",
     "ADDRESS": "an address like M0.0 or MW10",
     "DBADDR": "an address like DB1.DBW0",
+    "DBBIT": "a bit like .DX0.1",
     "BLOCKREF": "a block like FB17 or DB10",
     "CELL": "a timer or counter like T10",
     "DQSTRING": 'a quoted symbol like "Motor"',
@@ -547,6 +548,11 @@ class _Build(Transformer[Token, Any]):
 
     def member(self, c: list[Token]) -> m.Member:
         return m.Member(str(c[0]), self._at(c[0]))
+
+    def bit_member(self, c: list[Token]) -> m.Member:
+        tok = c[0]
+        at = SourceLocation(self.file, tok.line or 1, (tok.column or 1) + 1)  # after the '.'
+        return m.Member(str(tok)[1:].upper(), at)
 
     def block_member(self, c: list[Token]) -> m.Member:
         return m.Member("".join(str(c[0]).split()).upper(), self._at(c[0]), block=True)

@@ -29,7 +29,8 @@ _INDEXED = re.compile(r"(PI|PQ|I|Q|M)([XBWD]?)", re.IGNORECASE)
 _DB_INDEXED = re.compile(r"D?B?([XBWD])", re.IGNORECASE)
 _DB_SHORT = re.compile(r"(DB\d+)\.D([XBWD]\d+(?:\.\d+)?)")
 _DB_FIXED = re.compile(r"(?:DB|D)([BWD])(\d{1,5})", re.IGNORECASE)
-_RUNTIME_DB = "an access: .DW[i], .DB[i], .DD[i], .DX[i, j] or .DBW2, .DBB0, .DBD4"
+_DB_BIT = re.compile(r"D(?:BX|X)?(\d+)\.(\d+)", re.IGNORECASE)  # parse.py's bit_member
+_RUNTIME_DB = "an access: .DW[i], .DB[i], .DD[i], .DX[i, j] or .DW2, .DB0, .DD4, .DX0.1"
 _WIDTH_TYPE = {Width.BIT: ty.BOOL, Width.BYTE: ty.BYTE, Width.WORD: ty.WORD, Width.DWORD: ty.DWORD}
 _LETTER_BITS = {"X": 1, "": 1, "B": 8, "W": 16, "D": 32}
 _BITS_TYPE = {1: ty.BOOL, 8: ty.BYTE, 16: ty.WORD, 32: ty.DWORD}
@@ -98,6 +99,8 @@ class Places:
             place = local.place
             if place.type.kind == "FB":
                 return self._instance(place.get, place.type.name, sels, path, multi=True)
+            if place.type.kind == "BLOCK_DB" and sels:  # p.DW[i]: the DB the caller passed
+                return self.db_access(place.get, sels, path, place.what)
             return self.select(place, sels)
         if key in b.info.consts:
             t, v = b.info.consts[key]
@@ -335,29 +338,47 @@ class Places:
         return _mem_access(t, addr, f"{path.base.text}[…]")
 
     def _runtime_db(self, sels: list[m.Selector], path: m.Path) -> Place:
-        """``WORD_TO_BLOCK_DB(w).DW[i]``, ``….DX[i, j]``, ``….DBW2``: an address in the DB
-        whose number the WORD ``w`` holds when the statement runs (S7-SCL manual, "Data
-        types", BLOCK_DB, and the class B conversions) — a missing DB, DB0 or an instance DB
-        of an S7-SCL FB is a block error there."""
+        """``WORD_TO_BLOCK_DB(w).DW[i]``, ``….DX[i, j]``, ``….DW2``, ``….DX0.1``: an address in
+        the DB whose number the WORD ``w`` holds when the statement runs (S7-SCL manual,
+        "Data types", BLOCK_DB, and the class B conversions)."""
         call = sels[0]
         assert isinstance(call, m.Args)
+        db = f"({self.block_db_number(call, path.loc)})"
+        return self.db_access(db, sels[1:], path, "WORD_TO_BLOCK_DB(…)")
+
+    def block_db_number(self, call: m.Args, loc: SourceLocation) -> str:
+        """Python source of the DB number ``WORD_TO_BLOCK_DB(w)`` gives: the WORD ``w``."""
         args = [(a.name, self.b.exprs.expr(a.value), a.loc) for a in call.items]
-        (w,) = bind("WORD_TO_BLOCK_DB", ("IN",), args, path.loc)
-        db = f"({self.b.exprs.convert(w, ty.WORD, call.loc, 'pass')})"
-        access = sels[1] if len(sels) > 1 else None
+        (w,) = bind("WORD_TO_BLOCK_DB", ("IN",), args, loc)
+        return self.b.exprs.convert(w, ty.WORD, call.loc, "pass")
+
+    def db_access(self, db: str, sels: list[m.Selector], path: m.Path, what: str) -> Place:
+        """An address in the DB numbered ``db`` (Python source) when the statement runs,
+        reached as S7-SCL reaches a DB's bytes absolutely (S7-SCL manual, "Shared data": the
+        DB, then ``D`` and a size prefix X, B, W or D — ``.DW2``, ``.DX0.1``, ``.D0.1`` — or
+        indexed, ``.DW[i]``, ``.DX[i, j]``); STL's ``.DBW2``, ``.DBX0.1`` too. A missing DB,
+        DB0 or an instance DB of an S7-SCL FB is a block error at the statement."""
+        access = sels[0] if sels else None
         if not isinstance(access, m.Member):
             where = access.loc if access is not None else path.loc
-            raise Problem("E224", f"WORD_TO_BLOCK_DB(…) is followed by {_RUNTIME_DB}", where)
+            raise Problem("E224", f"{what} is followed by {_RUNTIME_DB}", where)
         indexed = _DB_INDEXED.fullmatch(access.name)
-        if indexed and len(sels) > 2 and isinstance(sels[2], m.Index):
-            return self._indexed("DB", db, indexed[1].upper(), sels[2:], path)
+        if indexed and len(sels) > 1 and isinstance(sels[1], m.Index):
+            return self._indexed("DB", db, indexed[1].upper(), sels[1:], path)
         fixed = _DB_FIXED.fullmatch(access.name)
-        if fixed is None or len(sels) > 2:
-            raise Problem("E224", f"WORD_TO_BLOCK_DB(…) is followed by {_RUNTIME_DB}", access.loc)
+        bit = _DB_BIT.fullmatch(access.name)
+        if (fixed is None and bit is None) or len(sels) > 1:
+            raise Problem("E224", f"{what} is followed by {_RUNTIME_DB}", access.loc)
+        if bit is not None:
+            byte, n = int(bit[1]), int(bit[2])
+            if n > 7 or byte > 65535:
+                why = f"bit {n} outside 0..7" if n > 7 else f"byte {byte} outside 0..65535"
+                raise Problem("E205", f"{what}.{access.name}: {why}", access.loc)
+            return _mem_access(ty.BOOL, f"_ad('DB', 1, {byte}, {n}, {db})", f"{what}.{access.name}")
+        assert fixed is not None
         bits = _LETTER_BITS[fixed[1].upper()]
-        t = _BITS_TYPE[bits]
         addr = f"_ad('DB', {bits}, {int(fixed[2])}, 0, {db})"
-        return _mem_access(t, addr, f"WORD_TO_BLOCK_DB(…).{access.name}")
+        return _mem_access(_BITS_TYPE[bits], addr, f"{what}.{access.name}")
 
     def _db_absolute(self, number: int, sels: list[m.Selector], path: m.Path) -> Place:
         if len(sels) == 2 and isinstance(sels[0], m.Member) and isinstance(sels[1], m.Index):

@@ -30,9 +30,11 @@ from s7graph.engine.datatypes import (
     DATE_MAX,
     DT_MAX,
     DT_MIN,
+    S5_BASES_MS,
     check_value,
     decode,
     encode,
+    ms_to_s5time,
     real32,
     s5time_to_ms,
 )
@@ -507,12 +509,22 @@ def _start_info(ctx: Any, key: str, default: Any, type_name: str) -> Any:
         return default
 
 
-def _s5_timer(ctx: Any, fn: str, number: int, s: bool, tv: int, r: bool) -> tuple[int, int, bool]:
+def _s5_timer(
+    ctx: Any, fn: str, number: int, s: bool, tv: int, r: bool
+) -> tuple[int, int, bool, int]:
     """S_PULSE … S_OFFDT: the operating system's S5 timer on T ``number`` (registered by
-    ``sfb``, ``engine.instructions``): remaining ms, remaining count, Q."""
+    ``sfb``, ``engine.instructions``) given the S5TIME word ``tv``, whose BCD count runs in
+    its own time base (as ``L`` then ``SD`` start a timer in STL): the remaining ms, the
+    remaining count (BI), Q, and the time left as an S5TIME word in the timer's time base
+    (as ``LC T`` reads it)."""
+    try:
+        ms = s5time_to_ms(tv)
+    except TypeMismatch as exc:
+        raise ProgramError(f"TV: {exc.message}") from None
+    base = S5_BASES_MS[(tv >> 12) & 0x3]
     box = instruction("S5_TIMER")
-    result: tuple[int, int, bool] = box(ctx.mem.timers, number, fn, s, tv, r, ctx.now_ns)
-    return result
+    left, count, q = box(ctx.mem.timers, number, fn, s, ms, r, ctx.now_ns, base_ms=base)
+    return int(left), int(count), bool(q), ctx.mem.timers[number].bcd()
 
 
 def _s5_counter(
@@ -523,12 +535,13 @@ def _s5_counter(
     return int(bcd), int(cv), bool(q)
 
 
-def _s5ms(word: int) -> int:
-    """An S5TIME given as a WORD (BCD count and time base) in ms."""
+def _s5w(ms: int) -> int:
+    """An S5TIME held as a value (ms) as a word, in the finest time base that holds it (as
+    ``S5T#`` encodes)."""
     try:
-        return s5time_to_ms(word)
+        return ms_to_s5time(ms)
     except TypeMismatch as exc:
-        raise ProgramError(exc.message) from None
+        raise ProgramError(f"TV: {exc.message}") from None
 
 
 class Meter:

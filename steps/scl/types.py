@@ -36,6 +36,7 @@ ELEMENTARY = frozenset(
         "DATE_AND_TIME",
         "TIMER",
         "COUNTER",
+        "BLOCK_DB",
     }
 )
 ALIASES = {"TOD": "TIME_OF_DAY", "DT": "DATE_AND_TIME"}
@@ -102,6 +103,7 @@ INT, DINT, REAL = (elementary(n) for n in NUMS)
 CHAR, TIME, S5TIME, DATE = (elementary(n) for n in ("CHAR", "TIME", "S5TIME", "DATE"))
 TOD, DT = elementary("TIME_OF_DAY"), elementary("DATE_AND_TIME")
 TIMER, COUNTER = elementary("TIMER"), elementary("COUNTER")
+BLOCK_DB = elementary("BLOCK_DB")  # a parameter: a DB's number, its bytes reached as p.DW[i]
 STRING = SclType("STRING", MAX_STRING)
 ANY = SclType("ANY")
 VOID = SclType("VOID")
@@ -278,7 +280,10 @@ def recast(value: object, t: SclType) -> object:
 
 def engine_type(t: SclType) -> str:
     """The type name of a block interface (``engine.blocks.Var``): elementary names,
-    ``STRING[n]``, and ``OBJECT`` for an aggregate (a list or dict value)."""
+    ``STRING[n]``, ``OBJECT`` for an aggregate (a list or dict value), a BLOCK_DB's
+    number a ``WORD``."""
+    if t.kind == "BLOCK_DB":
+        return "WORD"
     if t.kind == "STRING":
         return f"STRING[{t.length}]"
     if t.aggregate:

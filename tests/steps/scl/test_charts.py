@@ -70,3 +70,28 @@ def test_a_chart_calls_an_scl_fb_and_fc() -> None:
     assert cpu.mode is CpuMode.RUN
     assert cpu.instance_db(10)["n"] == 3
     assert cpu.mem.get("Q0.0") is True
+
+
+def test_a_chart_passes_a_block_db_input_the_dbs_number_as_a_word() -> None:
+    """The engine's interface holds a BLOCK_DB as the WORD with the DB's number: a chart's
+    CALL gives it ``W#16#5`` (docs/scl.md, "Operands")."""
+    scl = """
+DATA_BLOCK DB5
+STRUCT a : INT := 11; END_STRUCT
+BEGIN
+END_DATA_BLOCK
+FUNCTION FC5 : VOID
+VAR_INPUT src : BLOCK_DB; END_VAR
+  MW12 := src.DW0;
+END_FUNCTION
+"""
+    chart = CHART.replace("CALL FC 5 (x := MW10, twice => MW12);", "CALL FC 5 (src := W#16#5);")
+    cpu = Cpu(VirtualClock())
+    sfb.install(cpu)
+    build(scl).load(cpu)
+    cc = compile_chart(parse_chart(chart, "seq.s7g"))
+    install_all(cpu, [GraphFB(cc)])
+    prepare_calls(cpu, cc.chart)
+    cpu.start()
+    cpu.scan()
+    assert cpu.mode is CpuMode.RUN and cpu.mem.get("MW12") == 11

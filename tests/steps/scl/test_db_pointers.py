@@ -1,4 +1,5 @@
-"""A DB chosen at run time (``WORD_TO_BLOCK_DB(w).DW[i]``), the ANY parameters of the system
+"""A DB chosen at run time (``WORD_TO_BLOCK_DB(w).DW[i]``, a BLOCK_DB parameter's
+``p.DW[i]``), the ANY parameters of the system
 blocks (SFC 20 BLKMOV, SFC 21 FILL) pointed at absolute operands and global DB variables,
 ``%DB5.DBW2``, and the parameter types s7graph refuses with what to write instead
 (docs/scl.md, "Operands" and "Calls"; Siemens, S7-SCL V5.3 for S7-300/400, "Data types",
@@ -10,7 +11,7 @@ import pytest
 
 from s7graph import sfb
 from s7graph.steps.scl import check_scl
-from tests.steps.scl.helpers import codes, run
+from tests.steps.scl.helpers import build, codes, cpu_with, run
 
 DBS = """
 DATA_BLOCK DB5
@@ -69,6 +70,50 @@ def test_word_to_block_db_of_a_db_without_bytes_is_a_located_block_error(nr: int
     cpu = run(src)
     assert str(cpu.mode) == "STOP"
     assert any(why in str(e) for e in cpu.diagnostics.since(0))
+
+
+def test_word_to_block_db_takes_a_fixed_bit_as_dx_d_and_dbx_for_reads_and_writes() -> None:
+    """The S7-SCL manual's absolute form, ``.DX4.2`` (``.D4.2``: no size prefix is a bit),
+    and STL's ``.DBX4.2``, as a numbered DB takes them."""
+    src = (
+        DBS
+        + """
+FUNCTION_BLOCK FB1
+VAR nr : WORD := 5; b0 : BOOL; b1 : BOOL; b2 : BOOL; END_VAR
+  b0 := WORD_TO_BLOCK_DB(nr).DBX4.0;
+  b1 := WORD_TO_BLOCK_DB(nr).d4.1;
+  b2 := WORD_TO_BLOCK_DB(nr).DX4.2;
+  WORD_TO_BLOCK_DB(INT_TO_WORD(6)).DBX4.7 := TRUE;
+  WORD_TO_BLOCK_DB(INT_TO_WORD(6)).DX4.1 := b2;
+  WORD_TO_BLOCK_DB(nr).D4.0 := FALSE;
+END_FUNCTION_BLOCK
+ORGANIZATION_BLOCK OB1
+  FB1.DB1();
+END_ORGANIZATION_BLOCK
+"""
+    )
+    cpu = run(src)
+    v = cpu.instance_db(1).values
+    assert (v["b0"], v["b1"], v["b2"]) == (True, False, True)  # DB5.flags = 16#05
+    assert (cpu.mem.get("DB6.DBB4"), cpu.mem.get("DB5.DBB4")) == (0x82, 0x04)
+
+
+@pytest.mark.parametrize(
+    ("access", "code", "message"),
+    [
+        ("DX4.8", "E205", "WORD_TO_BLOCK_DB(…).DX4.8: bit 8 outside 0..7"),
+        ("DBX4.1[2]", "E224", "is followed by an access: .DW[i], .DB[i], .DD[i], .DX[i, j]"),
+    ],
+)
+def test_a_fixed_bit_of_a_db_chosen_at_run_time_is_checked_where_written(
+    access: str, code: str, message: str
+) -> None:
+    src = RUNTIME_DB.replace(
+        "r1 := WORD_TO_BLOCK_DB(nr).DW[i];", f"bit := WORD_TO_BLOCK_DB(nr).{access};"
+    )
+    found = check_scl(src, "t.scl", blocks=sfb.SYSTEM_BLOCKS)
+    assert [(d.code, d.loc.line, d.loc.col) for d in found] == [(code, 15, 31)]
+    assert message in found[0].message
 
 
 @pytest.mark.parametrize(
@@ -186,7 +231,7 @@ END_ORGANIZATION_BLOCK
 @pytest.mark.parametrize(
     ("type_name", "instead"),
     [
-        ("BLOCK_DB", "pass the DB's number as a WORD and reach it as WORD_TO_BLOCK_DB(w).DW[i]"),
+        ("BLOCK_SDB", "no SDB is loaded"),
         ("ANY", "pass the data itself"),
         ("POINTER", "pass the data itself"),
         ("BLOCK_FC", "call the FC by name"),
@@ -213,3 +258,107 @@ def test_only_the_any_pins_of_system_blocks_are_declared_as_pointer_text() -> No
         if p.type != "ANY" and "".join(p.type.split()).upper() == ANY_AS
     ]
     assert others == []
+
+
+BLOCK_DB = (
+    DBS
+    + """
+DATA_BLOCK "Data"
+STRUCT x : INT := 55; y : INT := 1; z : BYTE; END_STRUCT
+BEGIN
+END_DATA_BLOCK
+FUNCTION FC1 : INT
+VAR_INPUT src : BLOCK_DB; i : INT; END_VAR
+  src.DX4.7 := TRUE;
+  src.DW[i] := INT_TO_WORD(WORD_TO_INT(src.DW[i]) + 1);
+  FC1 := WORD_TO_INT(src.DW0) + WORD_TO_INT(src.DW[2]);
+END_FUNCTION
+FUNCTION_BLOCK FB1
+VAR_INPUT db : BLOCK_DB; END_VAR
+VAR r1 : INT; r2 : INT; r3 : INT; r4 : INT; bit : BOOL; nr : WORD := 6; END_VAR
+  r1 := FC1(src := DB5, i := 0);
+  r2 := FC1(src := WORD_TO_BLOCK_DB(nr), i := 2);
+  r3 := FC1(src := db, i := 0);
+  r4 := FC1(src := "Data", i := 0);
+  bit := db.D4.0;
+END_FUNCTION_BLOCK
+ORGANIZATION_BLOCK OB1
+  FB1.DB1(db := DB5);
+END_ORGANIZATION_BLOCK
+"""
+)
+
+
+def test_a_block_db_parameter_reaches_the_bytes_of_the_db_the_caller_passes() -> None:
+    """``src : BLOCK_DB`` in VAR_INPUT takes ``DB5``, a DB's name, ``WORD_TO_BLOCK_DB(w)``
+    or the caller's own BLOCK_DB, and reads and writes that DB as ``src.DW[i]``, ``src.DW0``,
+    ``src.DX4.7`` (S7-SCL manual, "Data types", parameter types)."""
+    cpu = run(BLOCK_DB, names={"Data": "DB7"})
+    v = cpu.instance_db(1).values
+    assert v["db"] == 5  # the instance holds the DB's number
+    assert (v["r1"], v["r2"], v["r3"], v["r4"]) == (12 + 22, 33 + 45, 13 + 22, 56 + 1)
+    assert v["bit"] is True  # DB5.flags = 16#05 | 16#80
+    assert (cpu.mem.get("DB5.DBB4"), cpu.mem.get("DB6.DBB4"), cpu.mem.get("DB7.DBX4.7")) == (
+        0x85,
+        0x80,
+        True,
+    )
+
+
+def test_a_block_db_parameter_of_another_source_still_takes_a_db() -> None:
+    """A block compiled before (``--blocks``) keeps its BLOCK_DB input: the engine holds it
+    as the WORD with the DB's number, marked BLOCK_DB."""
+    lib = build(
+        "FUNCTION FC1 : INT\nVAR_INPUT src : BLOCK_DB; END_VAR\n"
+        "  FC1 := WORD_TO_INT(src.DW2);\nEND_FUNCTION\n"
+    )
+    fc1 = lib.block("FC1")
+    assert [(v.type, v.comment) for v in fc1.interface] == [("WORD", "BLOCK_DB")]
+    main = build(
+        DBS + "ORGANIZATION_BLOCK OB1\n  MW0 := INT_TO_WORD(FC1(src := DB6));\n"
+        "END_ORGANIZATION_BLOCK\n",
+        blocks=[fc1],
+    )
+    cpu, _ = cpu_with(lib)
+    main.load(cpu)
+    cpu.start()
+    cpu.scan()
+    assert cpu.mem.get("MW0") == 44
+
+
+@pytest.mark.parametrize(
+    ("text", "code", "message"),
+    [
+        ("VAR d : BLOCK_DB; END_VAR", "E212", "a BLOCK_DB is an input: declare it in VAR_INPUT"),
+        ("VAR_IN_OUT d : BLOCK_DB; END_VAR", "E212", "a BLOCK_DB is an input"),
+        ("VAR_INPUT d : ARRAY[1..2] OF BLOCK_DB; END_VAR", "E212", "an ARRAY of BLOCK_DB"),
+        ("VAR_INPUT d : BLOCK_DB := 5; END_VAR", "E216", "no initial value"),
+        (
+            "VAR_INPUT d : BLOCK_DB; END_VAR\n  r := FC1(src := nr, i := 0);",
+            "E220",
+            'src is a BLOCK_DB: pass a DB (DB10, "Data"), WORD_TO_BLOCK_DB(w) or a BLOCK_DB '
+            "parameter, not a WORD",
+        ),
+        (
+            "VAR_INPUT d : BLOCK_DB; END_VAR\n  r := FC1(src := FB1, i := 0);",
+            "E220",
+            "FB1 is no DB",
+        ),
+        (
+            "VAR_INPUT d : BLOCK_DB; END_VAR\n  r := FC1(src := DB0, i := 0);",
+            "E214",
+            "DB0: a DB is numbered 1..65535",
+        ),
+        ("VAR_INPUT d : BLOCK_DB; END_VAR\n  nr := d.a;", "E224", "d is followed by an access"),
+        ("VAR_INPUT d : BLOCK_DB; END_VAR\n  nr := d;", "E220", "cannot assign a BLOCK_DB"),
+    ],
+)
+def test_a_block_db_parameter_wrongly_declared_or_passed_is_a_located_error(
+    text: str, code: str, message: str
+) -> None:
+    src = BLOCK_DB.split("FUNCTION_BLOCK FB1")[0] + (
+        f"FUNCTION_BLOCK FB2\nVAR r : INT; nr : WORD; END_VAR\n{text}\nEND_FUNCTION_BLOCK\n"
+    )
+    found = check_scl(src, "t.scl", blocks=sfb.SYSTEM_BLOCKS, names={"Data": "DB7"})
+    assert [d.code for d in found] == [code]
+    assert message in found[0].message and found[0].loc.line > 20

@@ -209,3 +209,71 @@ END_ORGANIZATION_BLOCK
 def test_s5_function_diagnostics(call: str, code: str) -> None:
     src = f"FUNCTION_BLOCK FB1\nVAR b : BOOL; END_VAR\n  {call}\nEND_FUNCTION_BLOCK\n"
     assert errors(src) == [code]
+
+
+WORD_TV = """
+DATA_BLOCK DB1 STRUCT tv : S5TIME; left : S5TIME; END_STRUCT BEGIN END_DATA_BLOCK
+FUNCTION_BLOCK FB1
+VAR tv : WORD := W#16#2005; bi : WORD; END_VAR
+  S_ODT(T_NO := T1, S := I0.0, TV := tv, BI := bi, Q := Q0.0);
+  MW2 := bi;
+  DB1.left := S_ODT(T_NO := T2, S := I0.0, TV := MW10, Q := Q0.1);
+  S_PEXT(T_NO := T3, S := I0.0, TV := DB1.tv, BI := MW4, Q := Q0.2);
+END_FUNCTION_BLOCK
+ORGANIZATION_BLOCK OB1
+  FB1.DB2();
+END_ORGANIZATION_BLOCK
+"""
+
+
+def test_a_tv_word_counts_in_its_own_time_base_and_bi_counts_in_it() -> None:
+    """``W#16#2005`` is 5 x 1 s, ``W#16#1050`` 50 x 100 ms, as STL's ``L`` then ``SD``
+    start them: BI counts seconds (not 500 x 10 ms), Q comes after the whole 5 s; an S5TIME
+    in a global DB's bytes is read as its word too (``W#16#2003``: 3 x 1 s)."""
+
+    def presets(cpu: object) -> None:
+        mem = cpu.mem  # type: ignore[attr-defined]
+        mem.set("MW10", 0x1050)
+        mem.set("DB1.DBW0", 0x2003)
+        mem.periph_in[0] = 1  # S
+
+    cpu = run(WORD_TV, 1, before=presets, ms=100)
+    timers = cpu.mem.timers
+    bases = [(timers[k].time_base_ms, timers[k].binary()) for k in (1, 2, 3)]
+    assert bases == [(1000, 5), (100, 50), (1000, 3)]
+    assert (cpu.mem.get("MW2"), cpu.mem.get("MW4")) == (5, 3)
+    for _ in range(44):  # 4.5 s in
+        cpu.scan()
+        cpu.clock.advance(100)  # type: ignore[attr-defined]
+    assert cpu.mem.get("Q0.0") is False and cpu.mem.get("MW2") == 1  # one second unit left
+    assert cpu.mem.get("Q0.2") is False  # the 3 s pulse is over
+    for _ in range(6):
+        cpu.scan()
+        cpu.clock.advance(100)  # type: ignore[attr-defined]
+    assert cpu.mem.get("Q0.0") is True and cpu.mem.get("MW2") == 0
+
+
+def test_the_time_left_written_to_memory_keeps_the_timers_time_base() -> None:
+    """The function value into an S5TIME in a global DB is the timer's word, as ``LC T``
+    reads it: 30 x 100 ms left (``W#16#1030``), not the same 3 s in the finest base."""
+    cpu = run(WORD_TV, 21, before=lambda cpu: cpu.mem.set("MW10", 0x1050), ms=100)
+    cpu.mem.periph_in[0] = 1
+    cpu.scan()
+    for _ in range(20):  # 2 s in
+        cpu.clock.advance(100)  # type: ignore[attr-defined]
+        cpu.scan()
+    assert cpu.mem.get("DB1.DBW2") == 0x1030
+    assert cpu.mem.read_as(parse_address("DB1.DBW2"), "S5TIME") == 3000
+
+
+def test_a_tv_word_that_is_not_bcd_is_a_located_block_error() -> None:
+    src = """
+ORGANIZATION_BLOCK OB1
+  S_ODT(T_NO := T1, S := TRUE, TV := MW0);
+END_ORGANIZATION_BLOCK
+"""
+    cpu = run(src, before=lambda cpu: cpu.mem.set("MW0", 0x00FA))
+    assert str(cpu.mode) == "STOP"
+    assert any(
+        "t.scl:3:3: TV: W#16#00FA is not valid BCD" in str(e) for e in cpu.diagnostics.since(0)
+    )

@@ -79,3 +79,26 @@ def test_an_actual_parameter_is_used_as_the_called_blocks_interface_declares_it(
     given = [(u.operand, u.access) for u in scl_uses(source, fb17) if u.loc.line == 21]
     assert ("DB20.DBW4", "read") in given and ("MW8", "write") in given
     assert set(ARG_ACCESS) == {"VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT"}
+
+
+def test_an_any_destination_of_a_system_block_is_written_and_its_source_read() -> None:
+    """BLKMOV's DSTBLK and FILL's BLK are outputs (SFC 20, SFC 21), though the block takes
+    them as pointer text; SRCBLK and BVAL are read — by name and by number alike."""
+    from s7graph.sequencer.xref import block_references
+
+    source = parse_source(
+        """\
+ORGANIZATION_BLOCK OB1
+VAR_TEMP r : INT; END_VAR
+BEGIN
+  r := BLKMOV(SRCBLK := DB5.arr, DSTBLK := DB6.arr);
+  r := FILL(BVAL := MW10, BLK := MW20);
+  r := SFC20(SRCBLK := "Recipe".rec, DSTBLK := DB6.cur);
+END_ORGANIZATION_BLOCK
+""",
+        "any.scl",
+    )
+    uses = {(u.operand, u.access) for u in block_references([source]).uses}
+    assert {("DB5.arr", "read"), ("DB6.arr", "write")} <= uses
+    assert {("MW10", "read"), ("MW20", "write")} <= uses
+    assert {('"Recipe".rec', "read"), ("DB6.cur", "write")} <= uses
