@@ -220,6 +220,14 @@ class Signer:
             return numbered
         return msgspec.structs.replace(numbered, mac=sign(self._key, command_bytes(numbered)))
 
+    def numbered(self, message: Callable[[int], bytes]) -> tuple[int, str]:
+        """The next ``seq`` and, with a key, the ``mac`` of ``message(seq)`` ("" in the
+        demo): a request other than a command signed by this session (a watch)."""
+        with self._lock:
+            self._seq += 1
+            seq = self._seq
+        return seq, sign(self._key, message(seq)) if self._key else ""
+
     def logout_mac(self) -> str:
         """The ``mac`` of this session's logout ("" in the demo)."""
         return sign(self._key, logout_bytes(self.token)) if self._key else ""

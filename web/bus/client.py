@@ -51,6 +51,7 @@ from s7graph.web.bus.protocol import (
     decode,
     encode,
     join_layout,
+    watch_bytes,
 )
 
 __all__ = [
@@ -315,11 +316,24 @@ class BusClient:
         key = self._keys.diag_new
         self._subscribers.append(self._session.declare_subscriber(key, on_sample))
 
-    def watch(self, addresses: Sequence[str], *, timeout: float | None = None) -> WatchValues:
+    def watch(
+        self, addresses: Sequence[str], *, timeout: float | None = None, token: str = ""
+    ) -> WatchValues:
         """The values of ``addresses`` at the CPU's next scan boundary; no answer, or a
-        request the CPU refuses, is a ``WatchValues`` with its ``error``."""
-        request = encode(WatchRequest(addresses=list(addresses)))
-        return self._answer(self._keys.watch, request, WatchValues, timeout)
+        request the CPU refuses, is a ``WatchValues`` with its ``error``. With the
+        ``token`` of a login of this client the request is numbered and signed with its
+        session key (the CPU queues it in its user's own share)."""
+        request = WatchRequest(addresses=list(addresses))
+        signer = self._signer(token)
+        if signer is not None:
+            request = msgspec.structs.replace(request, user=signer.user, token=token)
+
+            def message(seq: int) -> bytes:
+                return watch_bytes(msgspec.structs.replace(request, seq=seq))
+
+            seq, mac = signer.numbered(message)
+            request = msgspec.structs.replace(request, seq=seq, mac=mac or msgspec.UNSET)
+        return self._answer(self._keys.watch, encode(request), WatchValues, timeout)
 
     def synchronization(self, fb: str, *, timeout: float | None = None) -> SyncReport:
         """Every step of ``fb`` judged against the process values at the CPU's next scan

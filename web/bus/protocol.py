@@ -21,7 +21,7 @@ import re
 from typing import Annotated, Any, Literal, TypeVar
 
 import msgspec
-from msgspec import Meta, Struct
+from msgspec import UNSET, Meta, Struct, UnsetType
 
 from s7graph.sequencer.change.base import MAX_SOURCE
 from s7graph.sequencer.text.format import format_expr
@@ -42,6 +42,7 @@ from s7graph.web.commands import (
     Name,
     Origin,
     Scalar,
+    Seq,
     Token,
     UserName,
     explain,
@@ -109,6 +110,7 @@ __all__ = [
     "join_layout",
     "split_layout",
     "valid_name",
+    "watch_bytes",
 ]
 
 SCHEMA = 1
@@ -650,9 +652,25 @@ class WatchRequest(_Request, frozen=True, kw_only=True):
     "Monitor/Modify Variables", triggered once at the end of a cycle): an absolute address
     (``MW0``, ``Q4.0``, ``DB20.DBW2``, ``T5``), a symbol, or a DB variable by name
     (``DB20.avg``, ``DB10.ctu.cv``, ``DB20.speeds[2]``), each optionally with the type to
-    show it as (``MW0:INT``, ``MD4:REAL``)."""
+    show it as (``MW0:INT``, ``MD4:REAL``). A logged-in client may sign it as a command:
+    ``user``, ``token``, ``seq`` and ``mac`` over :func:`watch_bytes` — the CPU then queues
+    it in its user's own share (docs/bus.md, "The watch table: watch"); unset, the request
+    is the one it always was."""
 
     addresses: Annotated[list[WatchText], Meta(min_length=1, max_length=MAX_WATCH)]
+    user: UserName | UnsetType = UNSET
+    token: Token | UnsetType = UNSET
+    seq: Seq | UnsetType = UNSET
+    mac: Mac | UnsetType = UNSET
+
+
+_WATCH_SIGNED = b"s7graph watch\n"
+
+
+def watch_bytes(request: WatchRequest) -> bytes:
+    """What a signed watch request's ``mac`` signs: its JSON without ``mac``, after a
+    prefix of its own (a command's signature never passes for a watch's)."""
+    return _WATCH_SIGNED + msgspec.json.encode(msgspec.structs.replace(request, mac=UNSET))
 
 
 class WatchValue(_Msg, frozen=True, kw_only=True):

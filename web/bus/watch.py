@@ -3,9 +3,11 @@ triggered once at the end of a cycle (docs/bus.md, "The watch table: watch").
 
 A :class:`~web.bus.protocol.WatchRequest` on the ``watch`` queryable names up to 64
 operands; the zenoh thread checks their spelling (:func:`parse_item`) and queues the
-request, and the scan thread reads them all at the next scan boundary
-(:meth:`Watching.at_boundary`) — the values of one scan, never torn by the next — and
-hands the answer to the publisher's outbox, which encodes and sends it. An operand is
+request in its source's share (``web.bus.shares``: a request signed by a login in its
+user's, apart from every source that is only a claim), and the scan thread reads them all
+at the next scan boundary (:meth:`Watching.at_boundary`) — the values of one scan, never
+torn by the next — and hands the answer to the publisher's outbox, which encodes and sends
+it. An operand is
 
 - an absolute address: ``MW0``, ``Q4.0``, ``IB2``, ``DB20.DBW2``, ``T5`` (S5TIME left),
   ``C3`` (the count);
@@ -53,6 +55,7 @@ from s7graph.web.bus.protocol import (
     WatchValues,
     decode,
     encode,
+    watch_bytes,
 )
 from s7graph.web.bus.publisher import BusPublisher, QueryReply
 from s7graph.web.bus.shares import SharedQueue
@@ -74,11 +77,18 @@ __all__ = [
 ]
 
 QUEUE: Final = 64
-"""Watch requests waiting at most; beyond, a request is refused at once as busy."""
+"""Watch requests of proven sources waiting at most — users whose session signed them (with
+a users file), this process; beyond, such a request is refused at once as busy."""
+UNPROVEN: Final = 32
+"""Watch requests of all other sources waiting at most, in places of their own: a link
+named by the sender's own ``source_info``, requests that name no session, any request
+to a CPU without a users file. However many sources a peer makes up, they never take a
+proven source's place."""
 PER_SOURCE: Final = 8
-"""Watch requests one source may have waiting (where the transport says they came from,
-``web.bus.origin.lockout_source``); beyond, its request is refused at once as busy, so a
-source that floods ``watch`` fills its own share, never the queue other sources wait in."""
+"""Watch requests one source may have waiting — a proven user, or a link as the transport
+names it (``web.bus.origin.lockout_source``); beyond, its request is refused at once as
+busy, so a source that floods ``watch`` fills its own share, never the places other
+sources wait in."""
 PER_BOUNDARY: Final = 8
 """Requests read at one scan boundary at most (the rest wait for the next)."""
 
@@ -507,7 +517,7 @@ class Watching:
         self._publisher = publisher
         self._key = publisher.key("watch")
         self._queue: SharedQueue[tuple[QueryReply, list[WatchItem]]] = SharedQueue(
-            QUEUE, PER_SOURCE
+            QUEUE, PER_SOURCE, UNPROVEN
         )
         publisher.declare_queryable("watch", self._on_query)
 
@@ -546,22 +556,53 @@ class Watching:
                 raise ProtocolError("a watch request names the addresses to watch")
             request = decode(payload.to_bytes(), WatchRequest)
             items = [parse_item(text) for text in request.addresses]
-            source = lockout_source(self._publisher.origin(query)[0], "")
-            busy = self._queue.put(source, (reply, items))
-            if busy == "source":
-                _refuse(reply, _FROM_HERE)
-            elif busy:
-                _refuse(reply, f"busy: {QUEUE} watch requests are waiting; ask again")
+            source, proven, refused = self._source(query, request)
+            if refused:
+                _refuse(reply, refused)
+                return
+            busy = self._queue.put(source, (reply, items), proven=proven)
+            if busy:
+                _refuse(reply, self._busy(busy, source if proven else ""))
         except ProtocolError as exc:
             _refuse(reply, str(exc))
         except Exception as exc:
             where = "in the CPU while reading a watch request"
             _refuse(reply, f"watch refused: {internal_error(where, exc)}")
 
+    def _source(self, query: zenoh.Query, request: WatchRequest) -> tuple[str, bool, str]:
+        """(the share ``request`` waits in, whether its source is proven, why it is refused
+        — "": it is not). With a users file a request signed by a login is its user's:
+        the token must be a live session of ``user``, the ``mac`` its session key's over
+        ``watch_bytes`` and ``seq`` new to it, as for a command (``web.bus.gate``). Any
+        other is where the transport says it came from — a claim, unless it is this
+        process (``web.bus.origin``)."""
+        auth = self._publisher.gate.auth
+        if request.token and not auth.demo:
+            who = auth.identify(request.user or "", request.token)
+            if isinstance(who, str):
+                return "", False, f"watch refused: {who}"
+            seq = request.seq or 0
+            problem = auth.verify(request.token, request.mac or "", watch_bytes(request), seq=seq)
+            if problem:
+                return "", False, f"watch refused: {problem}"
+            return who.user, True, ""
+        transport = self._publisher.origin(query)[0]
+        return lockout_source(transport, ""), transport == "this process", ""
 
-_FROM_HERE: Final = (
-    f"busy: {PER_SOURCE} watch requests from here are waiting; ask again once they are answered"
-)
+    def _busy(self, why: str, user: str) -> str:
+        """The refusal of a request not queued (``why``: ``SharedQueue.put``'s), of proven
+        ``user`` ("": an unproven source)."""
+        if why == "source":
+            of = f"of {user}" if user else "from here"
+            return f"busy: {PER_SOURCE} watch requests {of} are waiting; {_ONCE_ANSWERED}"
+        if user:
+            return f"busy: {QUEUE} watch requests of logged-in users are waiting; ask again"
+        sign = "" if self._publisher.gate.auth.demo else _SIGN
+        return f"busy: {UNPROVEN} watch requests not signed by a login are waiting; ask again{sign}"
+
+
+_ONCE_ANSWERED: Final = "ask again once they are answered"
+_SIGN: Final = ", or log in: a watch signed by a login has places of its own"
 
 
 def _refuse(reply: QueryReply, reason: str) -> None:

@@ -336,6 +336,12 @@ class NetOptions:
             )
         return f"cannot join the bus: {words[:300]}{self.join_hint()}"
 
+    @staticmethod
+    def unreached(exc: BaseException) -> bool:
+        """Whether joining failed because nothing answered at the endpoints (nothing
+        listens there yet, or it refused this node's credentials: zenoh cannot tell)."""
+        return _UNREACHED.match(error_words(exc)) is not None
+
     def credential_args(self) -> list[str]:
         """The options that give a child process (the CPU's view) this node's credentials
         to connect with; a password from the environment reaches it there."""

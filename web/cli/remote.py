@@ -6,7 +6,8 @@ A command logs in as ``--user`` (the password from ``S7GRAPH_PASSWORD``, else a 
 when the CPU checks passwords), sends the command with the token, logs out, and exits 0
 when the CPU applied it, 1 when it refused it (the reason on stderr) or did not answer.
 ``watch`` prints every change of the FBs' active steps, mode and errors, and the events,
-one line each, until Ctrl-C or ``--duration-s``. ``force --list`` prints the CPU's force
+one line each, until Ctrl-C or ``--duration-s``, waiting first for a CPU not there yet
+(``web.cli.waiting``). ``force --list`` prints the CPU's force
 jobs (a read: no login).
 """
 
@@ -29,14 +30,13 @@ from s7graph.engine.text import NotUtf8, read_utf8
 from s7graph.sequencer.change.base import MAX_SOURCE, EditRefused
 from s7graph.sequencer.change.typed import parse_source
 from s7graph.sequencer.checks.diagnostics import format_diagnostic
-from s7graph.web.bus import local
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.cycle_text import cycle_lines
 from s7graph.web.bus.protocol import Command, CommandReply, CpuStatus, StepStateUpdate
-from s7graph.web.bus.session import open_session, peer_problem
 from s7graph.web.cli.diag_text import event_line, when
 from s7graph.web.cli.net import NetOptions
 from s7graph.web.cli.stopping import say, wait_until_stopped
+from s7graph.web.cli.waiting import Absent, cpu_reached, join_bus
 from s7graph.web.commands import MAX_FILE_NAME, Args, Download, DownloadArgs, checked, op_of
 
 __all__ = [
@@ -48,6 +48,7 @@ __all__ = [
     "list_forces",
     "on_bus",
     "send_command",
+    "shell_login",
     "status_command",
     "status_lines",
     "watch_command",
@@ -69,28 +70,8 @@ def _origin() -> str:
 
 def _join(net: NetOptions) -> zenoh.Session | str:
     """A session on the bus of ``net`` (connecting only), or why there is none."""
-    problem = net.problem(listening=False)
-    connect = list(net.connect)
-    if problem is None and not connect:
-        here = local.find(net.cpu)  # a CPU of this machine (web.bus.local)
-        if here is None:
-            problem = (
-                f"give the bus with --connect ENDPOINT (no CPU {net.cpu} runs on this "
-                "machine for this user)"
-            )
-        else:
-            connect = [here]
-    if problem:
-        return problem
-    try:
-        session = open_session(connect=connect, tls=net.tls, login=net.login)
-    except Exception as exc:
-        return net.join_error(exc)
-    wrong = peer_problem(session, net.cpu)
-    if wrong is not None:
-        session.close()  # type: ignore[no-untyped-call]  # zenoh's stub
-        return wrong
-    return session
+    got = join_bus(net)
+    return got.message if isinstance(got, Absent) else got
 
 
 @contextlib.contextmanager
@@ -121,17 +102,27 @@ def _logged_in(net: NetOptions, *, fb: str | None, user: str) -> Iterator[_Shell
             return
         # a CPU without an FB (a program) takes its CPU's ops whatever FB they name
         name = fb or (status.fbs[0] if status.fbs else net.cpu)
-        password = os.environ.get(PASSWORD_ENV, "")
-        if status.login == "users" and not password and sys.stdin.isatty():
-            password = getpass.getpass(f"Password for {user}: ")
-        login = client.login(user, password, origin=_origin())
-        if not login.ok:
-            yield _fail(f"login refused: {login.reason}", 1)
-            return
-        try:
-            yield _Shell(client, name, user, login.token)
-        finally:
-            client.logout(login.token, user=user, origin=_origin())
+        with shell_login(client, status, user) as token:
+            yield token if isinstance(token, int) else _Shell(client, name, user, token)
+
+
+@contextlib.contextmanager
+def shell_login(client: BusClient, status: CpuStatus, user: str) -> Iterator[str | int]:
+    """The token of ``user`` logged in at the CPU of ``status`` from a shell (logged out
+    again after) — the password from ``S7GRAPH_PASSWORD``, else a prompt when the CPU
+    checks passwords — or the exit status 1 when the login is refused (the reason
+    printed)."""
+    password = os.environ.get(PASSWORD_ENV, "")
+    if status.login == "users" and not password and sys.stdin.isatty():
+        password = getpass.getpass(f"Password for {user}: ")
+    login = client.login(user, password, origin=_origin())
+    if not login.ok:
+        yield _fail(f"login refused: {login.reason}", 1)
+        return
+    try:
+        yield login.token
+    finally:
+        client.logout(login.token, user=user, origin=_origin())
 
 
 class _Shell:
@@ -379,14 +370,13 @@ def alive_line(cpu: str, up: bool) -> str:
 
 def watch_command(net: NetOptions, *, fb: str | None, duration_s: float | None = None) -> int:
     """Print step changes of ``net.cpu`` live (of ``fb``, or of every FB); 0 at the end, 2
-    when nothing can be watched: no CPU answers, it runs no such FB, or none."""
+    when nothing can be watched: it runs no such FB, or none, or it did not appear within
+    ``duration_s``. A CPU not there at the start is waited for (``web.cli.waiting``)."""
     lock = threading.Lock()
-    with on_bus(net) as client:
-        if isinstance(client, str):
-            return _fail(client)
-        status = client.status()
-        if status is None:
-            return _fail(f"CPU {net.cpu!r} does not answer")
+    with cpu_reached(net, duration_s) as reached:
+        if isinstance(reached, int):
+            return reached
+        client, status, duration_s = reached.client, reached.status, reached.left_s
         without = "this CPU runs no GRAPH FB: no steps to watch (--address watches operands)"
         name, why = fb_to_read(status, fb, without=without)
         if why:

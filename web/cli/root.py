@@ -830,10 +830,20 @@ def watch(
         float,
         typer.Option(help="With --address: how often to read them, in ms (20 to 3,600,000)."),
     ] = 200.0,
+    user: Annotated[
+        str | None,
+        typer.Option(
+            "--user",
+            help="With --address: log in as this user and sign the requests (the CPU keeps "
+            "them in the user's own share).",
+        ),
+    ] = None,
 ) -> None:
     """Print a CPU's step changes live (one line each), or with --address the values of
     addresses and DB variables whenever one changes."""
     net = _net(cpu=cpu, connect=connect, tls_ca=tls_ca)
+    if address is None and user is not None:
+        raise typer.BadParameter("--user signs --address's requests: an FB's steps need none")
     if address is not None:
         from s7graph.web.cli.watch_table import check_interval, split_addresses, watch_addresses
 
@@ -844,7 +854,9 @@ def watch(
             check_interval(interval_ms)
         except ValueError as exc:
             raise typer.BadParameter(str(exc)) from None
-        code = watch_addresses(net, operands, interval_ms=interval_ms, duration_s=duration_s)
+        code = watch_addresses(
+            net, operands, interval_ms=interval_ms, duration_s=duration_s, user=user
+        )
         raise typer.Exit(code)
     from s7graph.web.cli.remote import watch_command
 

@@ -7,9 +7,13 @@ one line whenever one changed — the cycle, the CPU's state and each operand as
 it (``MW0:INT=12  Q4.0=TRUE  DB20.avg=1.5``) — until Ctrl-C or ``--duration-s``. An
 operand the CPU cannot read is said once on stderr (``DB20.avg: DB20 is not loaded``) and
 shown as ``?``; when none can be read, or the CPU refuses the request, the exit status is
-2. A CPU that goes away is waited for, as ``s7graph watch`` waits (``CPU cpu1
-disconnected``, ``CPU cpu1 reachable``, then its values again); one that stops answering
-while there is said once on stderr, and again when it answers. A read: no login.
+2. A CPU not there yet at the start is waited for (``web.cli.waiting``), and one that goes
+away, as ``s7graph watch`` waits (``CPU cpu1 disconnected``, ``CPU cpu1 reachable``, then
+its values again); one that stops answering while there is said once on stderr, and again
+when it answers. A read: no login needed; with ``--user`` each request is signed by that
+user's login, and the CPU keeps them in the user's own share of its watch queue
+(``web.bus.watch``) — one refused later (the login ended) is said once, and the watch goes
+on without it.
 """
 
 from __future__ import annotations
@@ -22,8 +26,9 @@ from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import MAX_WATCH, WatchValues
 from s7graph.web.bus.watch import split_operands
 from s7graph.web.cli.net import NetOptions
-from s7graph.web.cli.remote import alive_line, on_bus
+from s7graph.web.cli.remote import alive_line, shell_login
 from s7graph.web.cli.stopping import say, wait_until_stopped
+from s7graph.web.cli.waiting import cpu_reached
 
 __all__ = [
     "MAX_INTERVAL_MS",
@@ -34,6 +39,7 @@ __all__ = [
 ]
 
 MIN_INTERVAL_MS = 20
+_REFUSED = "watch refused: "  # how the CPU refuses a signed request it cannot take
 MAX_INTERVAL_MS = 3_600_000  # an hour
 
 
@@ -71,38 +77,58 @@ def watch_addresses(
     *,
     interval_ms: float = 200.0,
     duration_s: float | None = None,
+    user: str | None = None,
 ) -> int:
     """Print the watch table of ``net.cpu`` on every change until Ctrl-C, SIGTERM or
-    ``duration_s``; 0 at the end, 2 when nothing can be watched (no bus, no CPU, every
-    operand refused). A CPU that goes is waited for, as ``s7graph watch`` waits: ``CPU
-    cpu1 disconnected``, then ``CPU cpu1 reachable`` and the values once it is back."""
-    with on_bus(net) as client:
-        if isinstance(client, str):
-            print(f"s7graph: error: {client}", file=sys.stderr)
-            return 2
-        first = client.watch(addresses)
-        if first.error:
-            print(f"s7graph: error: {net.cpu}: {first.error}", file=sys.stderr)
-            return 2
-        for value in first.values:
-            if value.error:
-                print(f"s7graph: {value.address}: {value.error}", file=sys.stderr)
-        if first.values and all(v.error for v in first.values):
-            return 2
-        stop = threading.Event()
-        say(_line(first), stop)
-        poll = max(interval_ms, MIN_INTERVAL_MS) / 1000
-        follower = _Follower(client, addresses, first, stop, net.cpu)
-        client.on_alive(follower.alive)
-        thread = threading.Thread(
-            target=follower.run, args=(poll,), name="s7graph-watch", daemon=True
-        )
-        thread.start()
-        try:
-            wait_until_stopped(duration_s, stop)
-        finally:
-            stop.set()
-            thread.join(timeout=5.0)
+    ``duration_s``; 0 at the end, 1 when ``user``'s login is refused, 2 when nothing can
+    be watched (no bus, every operand refused, no CPU within ``duration_s``). A CPU not
+    there at the start is waited for (``web.cli.waiting``), and one that goes, as
+    ``s7graph watch`` waits: ``CPU cpu1 disconnected``, then ``CPU cpu1 reachable`` and
+    the values once it is back. With ``user`` the requests are signed by that user's login
+    (the CPU keeps them in the user's own share)."""
+    with cpu_reached(net, duration_s) as reached:
+        if isinstance(reached, int):
+            return reached
+        if reached.waited:  # it said it waits: now say the CPU is there
+            say(alive_line(net.cpu, True), threading.Event())
+        if user is None:
+            return _table(reached.client, net.cpu, addresses, interval_ms, reached.left_s)
+        with shell_login(reached.client, reached.status, user) as token:
+            if isinstance(token, int):
+                return token
+            return _table(reached.client, net.cpu, addresses, interval_ms, reached.left_s, token)
+
+
+def _table(
+    client: BusClient,
+    cpu: str,
+    addresses: list[str],
+    interval_ms: float,
+    duration_s: float | None,
+    token: str = "",
+) -> int:
+    """:func:`watch_addresses` once the CPU answers (``token``: a login's, "" none)."""
+    first = client.watch(addresses, token=token)
+    if first.error:
+        print(f"s7graph: error: {cpu}: {first.error}", file=sys.stderr)
+        return 2
+    for value in first.values:
+        if value.error:
+            print(f"s7graph: {value.address}: {value.error}", file=sys.stderr)
+    if first.values and all(v.error for v in first.values):
+        return 2
+    stop = threading.Event()
+    say(_line(first), stop)
+    poll = max(interval_ms, MIN_INTERVAL_MS) / 1000
+    follower = _Follower(client, addresses, first, stop, cpu, token)
+    client.on_alive(follower.alive)
+    thread = threading.Thread(target=follower.run, args=(poll,), name="s7graph-watch", daemon=True)
+    thread.start()
+    try:
+        wait_until_stopped(duration_s, stop)
+    finally:
+        stop.set()
+        thread.join(timeout=5.0)
     return 0
 
 
@@ -119,8 +145,10 @@ class _Follower:
         first: WatchValues,
         stop: threading.Event,
         cpu: str,
+        token: str = "",
     ) -> None:
         self.client, self.addresses, self.stop, self.cpu = client, addresses, stop, cpu
+        self.token = token  # the login that signs each request ("": none)
         self.shown = [(v.text, v.error) for v in first.values]
         self.up: bool | None = None  # what the CPU's liveliness said last (None: nothing yet)
         self.failed = False  # a failed request was said on stderr
@@ -140,7 +168,7 @@ class _Follower:
     def run(self, poll_s: float) -> None:
         """Ask every ``poll_s`` until ``stop``; a line for each change."""
         while not self.stop.wait(poll_s):
-            answer = self.client.watch(self.addresses, timeout=2.0)
+            answer = self.client.watch(self.addresses, timeout=2.0, token=self.token)
             if self.stop.is_set():
                 return
             with self.lock:
@@ -148,7 +176,17 @@ class _Follower:
 
     def _show(self, answer: WatchValues) -> None:
         """One answer: a line if the values changed (or the CPU is back), a failure said
-        once while the CPU is not known to be gone (``lock`` held)."""
+        once while the CPU is not known to be gone (``lock`` held). A signed request
+        refused (the login ended: expired, logged out, a CPU started again) is said once,
+        and the requests go on unsigned."""
+        if answer.error.startswith(_REFUSED) and self.token:
+            print(
+                f"s7graph: {self.cpu}: {answer.error}; watching without a login from now on",
+                file=sys.stderr,
+                flush=True,
+            )
+            self.token = ""
+            return
         if answer.error:
             if not self.failed and self.up is not False:  # gone: "disconnected" said it
                 print(f"s7graph: {self.cpu}: {answer.error}", file=sys.stderr, flush=True)

@@ -1,11 +1,14 @@
 """``s7graph watch --address`` waits for a CPU that goes away, as ``s7graph watch`` does
 (web/cli/watch_table.py, docs/cli.md, "s7graph watch --address"): it says ``CPU cpu1
 disconnected``, stays, says ``CPU cpu1 reachable`` when the CPU is back and shows its values
-again. Real processes: a CPU running a program of blocks on a unix socket, killed and
-started again, and the shell's watch."""
+again. Both watches wait for a CPU not there yet at their start too (web/cli/waiting.py,
+docs/cli.md, "The bus from a shell"): said once on stderr, with where; ``--duration-s``
+ends the wait with exit 2 and why. Real processes: a CPU running a program of blocks (or a
+chart) on a unix socket, killed and started again, and the shell's watch."""
 
 from __future__ import annotations
 
+import os
 import queue
 import signal
 import subprocess
@@ -13,12 +16,23 @@ import sys
 import threading
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 
+from s7graph.web.access.scram import MIN_ITERATIONS
+from s7graph.web.access.users import UsersFile
+from s7graph.web.bus.client import BusClient
+from s7graph.web.bus.cpu_side import CpuSide
+from s7graph.web.bus.session import open_session
+from s7graph.web.cli.net import NetOptions
+from s7graph.web.cli.waiting import Reached, cpu_reached
 from tests.paths import ROOT
 from tests.web.cli.test_program_bus import _bus, _program
-from tests.web.helpers import cpu_process
+from tests.web.helpers import PASSWORD, cpu_process, free_port
+
+if TYPE_CHECKING:
+    from tests.conftest import BusCerts
 
 pytestmark = pytest.mark.timeout(240)
 
@@ -26,11 +40,11 @@ pytestmark = pytest.mark.timeout(240)
 class Lines:
     """The stdout lines of ``proc``, read by a thread."""
 
-    def __init__(self, proc: subprocess.Popen[str]) -> None:
+    def __init__(self, proc: subprocess.Popen[str], *, stderr: bool = False) -> None:
         self.proc = proc
         self.seen: list[str] = []
         self._lines: queue.Queue[str] = queue.Queue()
-        out = proc.stdout
+        out = proc.stderr if stderr else proc.stdout
         assert out is not None
         threading.Thread(target=lambda: [self._lines.put(x) for x in out], daemon=True).start()
 
@@ -46,6 +60,14 @@ class Lines:
             except queue.Empty:
                 assert self.proc.poll() is None, f"watch ended: {self.seen}"
         raise AssertionError(f"no line {test!r} after line {after}: {self.seen}")
+
+    def rest(self) -> list[str]:
+        """Every line, once the process has ended and its stream is read to the end."""
+        while True:
+            try:
+                self.seen.append(self._lines.get(timeout=2).rstrip("\n"))
+            except queue.Empty:
+                return self.seen
 
 
 def test_watch_address_waits_for_a_cpu_that_goes_and_shows_it_again_when_it_is_back(
@@ -78,3 +100,213 @@ def test_watch_address_waits_for_a_cpu_that_goes_and_shows_it_again_when_it_is_b
         if watch is not None and watch.poll() is None:
             watch.kill()
             watch.wait(30)
+
+
+CHART = """FUNCTION_BLOCK "Seq_wait"
+  PARAMETERS := STANDARD;
+SEQUENCE 1 "Line"
+  INITIAL_STEP S1 "Ready": END_STEP
+  STEP S2 "Run": N Q0.0; END_STEP
+  TRANSITION T1 FROM S1 TO S2 := M0.0;
+  TRANSITION T2 FROM S2 TO S1 := M0.1;
+END_SEQUENCE
+END_FUNCTION_BLOCK
+"""
+
+
+def _started(command: list[str], env: dict[str, str] | None = None) -> subprocess.Popen[str]:
+    """``s7graph COMMAND`` as a real process (``env``: its environment, None: this one's)."""
+    return subprocess.Popen(
+        [sys.executable, "-m", "s7graph", *command],
+        cwd=ROOT,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+
+
+def test_watch_address_started_before_its_cpu_says_once_it_waits_and_shows_it_when_it_is_up(
+    tmp_path: Path,
+) -> None:
+    socket = f"unixsock-stream/{tmp_path}/bus.sock"
+    command = ["watch", "--connect", socket, "--address", "MW10:INT", "--interval-ms", "50"]
+    watch = _started([*command, "--duration-s", "200"])
+    try:
+        said = Lines(watch, stderr=True)
+        said.wait_for(f"s7graph: waiting for CPU cpu1 at {socket} (nothing answers there yet)")
+        time.sleep(1.5)  # several tries meanwhile
+        assert watch.poll() is None  # still there, waiting
+        with cpu_process(tmp_path, [*_program(tmp_path), "--fresh"]):
+            lines = Lines(watch)
+            up = lines.wait_for("CPU cpu1 reachable")
+            first = lines.wait_for("cycle ", up)  # its values
+            lines.wait_for("cycle ", first + 1)  # watching a while
+            watch.send_signal(signal.SIGINT)
+            assert watch.wait(30) == 0
+        err = said.rest()
+        assert "Traceback" not in "\n".join(err), err
+        assert err.count(err[0]) == 1 and err[0].startswith("s7graph: waiting")  # said once
+    finally:
+        if watch.poll() is None:
+            watch.kill()
+            watch.wait(30)
+
+
+def test_watch_started_before_its_cpu_waits_then_follows_its_steps(tmp_path: Path) -> None:
+    chart = tmp_path / "wait.s7g"
+    chart.write_text(CHART, encoding="utf-8")
+    watch = _started(["watch", *_bus(tmp_path), "--duration-s", "200"])
+    try:
+        said = Lines(watch, stderr=True)
+        said.wait_for("s7graph: waiting for CPU cpu1 at unixsock-stream/")
+        args = [str(chart), "--state", str(tmp_path / "s.sqlite"), "--duration-s", "110"]
+        with cpu_process(tmp_path, args, fb="Seq_wait"):
+            lines = Lines(watch)
+            up = lines.wait_for("CPU cpu1 reachable")
+            step = lines.wait_for("cycle ", up)
+            assert "Seq_wait" in lines.seen[step] and "active S1" in lines.seen[step]
+            time.sleep(1.0)  # following its steps a while (S1 stays: no more lines)
+            watch.send_signal(signal.SIGINT)
+            assert watch.wait(30) == 0
+        err = said.rest()
+        assert len(err) == 1 and "Traceback" not in err[0], err  # said once, nothing else
+    finally:
+        if watch.poll() is None:
+            watch.kill()
+            watch.wait(30)
+
+
+def test_a_watch_whose_cpu_does_not_appear_within_duration_s_exits_2_saying_so(
+    tmp_path: Path,
+) -> None:
+    socket = f"unixsock-stream/{tmp_path}/bus.sock"
+    for how in ([], ["--address", "MW10:INT"]):
+        started = time.monotonic()
+        watch = _started(["watch", "--connect", socket, *how, "--duration-s", "1.5"])
+        out, err = watch.communicate(timeout=60)
+        assert watch.returncode == 2 and out == "", (how, out, err)
+        assert err == (
+            f"s7graph: waiting for CPU cpu1 at {socket} (nothing answers there yet)\n"
+            f"s7graph: error: CPU cpu1 did not appear at {socket} within 1.5 s "
+            "(--duration-s)\n"
+        )
+        assert time.monotonic() - started >= 1.5
+
+
+def test_a_watch_given_no_connect_waits_until_its_cpu_writes_where_it_listens(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """No CPU line1 on this machine yet: the watch waits for its endpoint file
+    (``web.bus.local``) and goes on once the CPU, started a second later, has written it."""
+    monkeypatch.setenv("XDG_RUNTIME_DIR", str(tmp_path))
+    sides: list[CpuSide] = []
+    later = threading.Timer(1.0, lambda: sides.append(CpuSide({}, cpu="line1")))
+    later.start()
+    try:
+        with cpu_reached(NetOptions(cpu="line1"), 60) as reached:
+            assert isinstance(reached, Reached), reached
+            assert reached.waited and reached.status.cpu == "line1"
+            assert reached.left_s is not None and 0 < reached.left_s < 59
+    finally:
+        later.join()
+        for side in sides:
+            side.close()
+    assert capsys.readouterr().err == (
+        "s7graph: waiting for CPU line1 at s7graph/line1 on this machine (no CPU line1 runs "
+        "here for this user yet)\n"
+    )
+
+
+def test_watch_address_with_user_logs_in_signs_its_requests_and_logs_out(
+    tmp_path: Path, bus_certs: BusCerts
+) -> None:
+    """``--user``: the shell logs in (the password from S7GRAPH_PASSWORD), watches with
+    requests signed by that login (the CPU keeps them in olga's own share:
+    tests/web/bus/test_watch_proven_shares.py) and logs out at the end; a wrong password
+    is exit 1, with the CPU's reason. A CPU with a users file on mutual TLS."""
+    users = UsersFile(tmp_path / "users.json")
+    users.add("olga", "viewer", PASSWORD, iterations=MIN_ITERATIONS)
+    endpoint = f"tls/localhost:{free_port()}"
+    run = ["run", *_program(tmp_path), "--fresh", "--users", str(users.path)]
+    cpu = _started([*run, "--listen", endpoint, *bus_certs.args("cpu.cpu1")])
+    command = [sys.executable, "-m", "s7graph", "watch", "--connect", endpoint, "--user", "olga"]
+    command += [*bus_certs.args("client.olga"), "--address", "MW10:INT", "--interval-ms", "50"]
+    command += ["--duration-s", "2"]
+    env = {**os.environ, "S7GRAPH_PASSWORD": PASSWORD}
+    try:
+        Lines(cpu).wait_for("s7graph: CPU cpu1 on the bus")
+        done = subprocess.run(command, cwd=ROOT, env=env, capture_output=True, text=True)
+        assert done.returncode == 0 and done.stderr == "", done.stderr
+        lines = done.stdout.splitlines()
+        assert len(lines) > 2 and all(line.startswith("cycle ") for line in lines), lines
+        env["S7GRAPH_PASSWORD"] = "not it"
+        wrong = subprocess.run(command, cwd=ROOT, env=env, capture_output=True, text=True)
+        assert wrong.returncode == 1 and wrong.stdout == ""
+        assert wrong.stderr == "s7graph: error: login refused: wrong user name or password\n"
+        with (
+            open_session(connect=[endpoint], tls=bus_certs.tls("client.olga")) as session,
+            BusClient(session, "cpu1") as client,
+        ):
+            audit = client.audit()
+        assert audit is not None
+        rows = [(e.user, e.op, e.outcome) for e in audit.entries if e.op in ("login", "logout")]
+        assert rows == [
+            ("olga", "login", "applied"),
+            ("olga", "logout", "applied"),
+            ("(unauthenticated)", "login", "refused"),
+        ], rows
+    finally:
+        cpu.kill()
+        cpu.wait(30)
+
+
+def test_watch_address_with_user_goes_on_unsigned_once_a_cpu_started_again_ends_its_login(
+    tmp_path: Path, bus_certs: BusCerts
+) -> None:
+    users = UsersFile(tmp_path / "users.json")
+    users.add("olga", "viewer", PASSWORD, iterations=MIN_ITERATIONS)
+    endpoint = f"tls/localhost:{free_port()}"
+    run = ["run", *_program(tmp_path), "--users", str(users.path), "--listen", endpoint]
+    run += bus_certs.args("cpu.cpu1")
+    command = ["watch", "--connect", endpoint, "--user", "olga", *bus_certs.args("client.olga")]
+    command += ["--address", "MW10:INT", "--interval-ms", "50", "--duration-s", "200"]
+    procs = [_started([*run, "--fresh"])]
+    try:
+        Lines(procs[0]).wait_for("s7graph: CPU cpu1 on the bus")
+        procs.append(_started(command, {**os.environ, "S7GRAPH_PASSWORD": PASSWORD}))
+        watch, lines, said = procs[1], Lines(procs[1]), Lines(procs[1], stderr=True)
+        first = lines.wait_for("cycle ")
+        first = lines.wait_for("cycle ", first + 2)  # watching a while: it has heard the CPU
+        procs[0].kill()  # the CPU, and the session olga's login was
+        procs[0].wait(30)
+        gone = lines.wait_for("CPU cpu1 disconnected", first)
+        procs[0] = _started(run)  # started again: it knows no session of before
+        Lines(procs[0]).wait_for("s7graph: CPU cpu1 on the bus")
+        back = lines.wait_for("CPU cpu1 reachable", gone)
+        lines.wait_for("cycle ", back)  # its values again, without the login
+        said.wait_for(
+            "s7graph: cpu1: watch refused: invalid token: log in again; watching without a "
+            "login from now on"
+        )
+        watch.send_signal(signal.SIGINT)
+        assert watch.wait(30) == 0
+        assert len(said.rest()) == 1, said.seen  # said once, nothing else
+    finally:
+        for proc in procs:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait(30)
+
+
+def test_watch_user_without_address_is_a_usage_error_before_anything_is_joined() -> None:
+    done = subprocess.run(
+        [sys.executable, "-m", "s7graph", "watch", "--user", "olga", "--duration-s", "1"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert done.returncode == 2 and done.stdout == ""
+    assert "--user signs --address's requests: an FB's steps need none" in done.stderr
+    assert "waiting for CPU" not in done.stderr
