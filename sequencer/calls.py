@@ -11,7 +11,8 @@ when a named DB is already something else: a global DB, or the instance of anoth
 of a user block (``CALL FC 9``, ``CALL FB 5, DB 5``) that the CPU has not loaded is
 reported in ``missing``: a chart run by itself has the system blocks only, and the call stops the
 CPU when it is reached (a programming error without OB121, as on S7). A download into the running
-CPU may not add such a call: ``swap`` refuses it.
+CPU may not add such a call: ``swap`` refuses it. The calls are walked as the chart's text
+walks them (``sequencer.text.call_sites``).
 """
 
 from __future__ import annotations
@@ -21,25 +22,10 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from s7graph.engine.errors import BlockError
+from s7graph.sequencer.text.call_sites import CallSite, call_sites
 from s7graph.sequencer.text.model import BlockCall, Chart
 
 __all__ = ["CallPlan", "CallSite", "call_sites", "missing_blocks", "plan_calls", "prepare_calls"]
-
-
-@dataclass(frozen=True, slots=True)
-class CallSite:
-    """One call of the chart and the element it is in (``step S2 row 1``)."""
-
-    call: BlockCall
-    element: str
-
-    def line(self, severity: str, problem: str) -> str:
-        """One diagnostic line: ``file:line:col: error: CALL SFB 4, DB 10: …(step S2 row 1)``."""
-        c = self.call
-        block = f"{c.kind} {c.block}" if c.kind else f'"{c.block}"'
-        if c.instance is not None:
-            block += f", DB {c.instance}" if isinstance(c.instance, int) else f', "{c.instance}"'
-        return f"{c.loc}: {severity}: CALL {block}: {problem} ({self.element})"
 
 
 @dataclass(slots=True)
@@ -52,19 +38,6 @@ class CallPlan:
     created: list[int] = field(default_factory=list)
     missing_blocks: set[str] = field(default_factory=set)  # their labels: FC9, FB5
     wanted: dict[int, Any] = field(default_factory=dict)  # instance DB → its block, to create
-
-
-def call_sites(chart: Chart) -> list[CallSite]:
-    """Every block call of ``chart``, in written order: permanent instructions before, the
-    steps' rows, permanent instructions after."""
-    out = [CallSite(p, "permanent before") for p in chart.before if isinstance(p, BlockCall)]
-    for seq in chart.sequences:
-        for step in seq.steps:
-            for k, row in enumerate(step.actions, 1):
-                if isinstance(row.operand, BlockCall):
-                    out.append(CallSite(row.operand, f"step S{step.number} row {k}"))
-    out += [CallSite(p, "permanent after") for p in chart.after if isinstance(p, BlockCall)]
-    return out
 
 
 def prepare_calls(cpu: Any, chart: Chart, *, allowed_missing: set[str] | None = None) -> CallPlan:

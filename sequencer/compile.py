@@ -18,6 +18,7 @@ from typing import Any
 from s7graph.engine.address import Area, Width
 from s7graph.engine.datatypes import DATE_EPOCH, DT_MIN, real32
 from s7graph.engine.errors import S7Error, SourceLocation
+from s7graph.sequencer.checks.interfaces import ProgramBlocks
 from s7graph.sequencer.checks.validate import validate
 from s7graph.sequencer.collector import collector_paused
 from s7graph.sequencer.compiled import CompiledChart, Reach
@@ -59,19 +60,27 @@ class _Problem:
         return f"{self.where}: {self.severity}: {self.message}"
 
 
-def _validate(chart: Chart, symbols: Any) -> tuple[list[Diagnostic], list[Diagnostic]]:
+def _validate(
+    chart: Chart, symbols: Any, blocks: ProgramBlocks | None
+) -> tuple[list[Diagnostic], list[Diagnostic]]:
     """``sequencer.checks.validate``'s diagnostics: (errors, warnings)."""
-    diags = list(validate(chart, symbols))
+    diags = list(validate(chart, symbols, readable=blocks))
     errors = [d for d in diags if d.severity == "error"]
     return errors, [d for d in diags if d.severity != "error"]
 
 
 class _Resolver:
     def __init__(
-        self, chart: Chart, symbols: Any, step_index: dict[int, int], tr_index: dict[int, int]
+        self,
+        chart: Chart,
+        symbols: Any,
+        step_index: dict[int, int],
+        tr_index: dict[int, int],
+        blocks: ProgramBlocks | None = None,
     ) -> None:
         self.chart = chart
         self.symbols = symbols
+        self.blocks = blocks
         self.step_index = step_index
         self.tr_index = tr_index
         self.vars = {v.name.upper(): v for v in chart.vars}
@@ -113,7 +122,7 @@ class _Resolver:
         """The operand as the generated code addresses it; the lookup order is the one rule
         of ``sequencer.names.resolve_operand`` (docs/runtime.md, "The block runtime";
         docs/semantics.md, "FB pins")."""
-        r = resolve_operand(op, self.chart, self.symbols)
+        r = resolve_operand(op, self.chart, self.symbols, blocks=self.blocks)
         if r.kind == "var":
             return Ref("var", r.type, name=self.vars[op.name.upper()].name)
         if r.kind == "member":  # an instance DB's variable by name (DB10.Q)
@@ -161,15 +170,20 @@ def _addr_ref(addr: Any, type_name: str | None, name: str) -> Ref:
     )
 
 
-def compile_chart(chart: Chart, symbols: Any = None) -> CompiledChart:
-    """Validate and compile ``chart``; raise ``ChartError`` listing every error. The
-    garbage collector is paused meanwhile (``sequencer.collector``)."""
+def compile_chart(
+    chart: Chart, symbols: Any = None, *, blocks: ProgramBlocks | None = None
+) -> CompiledChart:
+    """Validate and compile ``chart``; raise ``ChartError`` listing every error. ``blocks``:
+    the program's user blocks (``--blocks``), when known: the chart reads their FBs'
+    instance DBs' variables by name (its calls are checked against them by ``check`` and
+    where the blocks are loaded). The garbage collector is paused meanwhile
+    (``sequencer.collector``)."""
     with collector_paused():
-        return _compile_chart(chart, symbols)
+        return _compile_chart(chart, symbols, blocks)
 
 
-def _compile_chart(chart: Chart, symbols: Any) -> CompiledChart:
-    errors, warnings = _validate(chart, symbols)
+def _compile_chart(chart: Chart, symbols: Any, blocks: ProgramBlocks | None) -> CompiledChart:
+    errors, warnings = _validate(chart, symbols, blocks)
     if errors:
         raise ChartError(errors)
     steps = chart.all_steps()
@@ -178,7 +192,7 @@ def _compile_chart(chart: Chart, symbols: Any) -> CompiledChart:
     tr_index = {t.number: j for j, t in enumerate(trans)}
     if len(step_index) != len(steps) or len(tr_index) != len(trans):
         raise ChartError([_Problem(chart.loc, "step and transition numbers must be unique")])
-    res = _Resolver(chart, symbols, step_index, tr_index)
+    res = _Resolver(chart, symbols, step_index, tr_index, blocks)
     g = CodeGen()
     parts: list[str] = []
 

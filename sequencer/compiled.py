@@ -23,6 +23,21 @@ from s7graph.steps.operands import RUNTIME as OPERAND_RUNTIME
 from s7graph.steps.operands import area_buffer
 
 
+class LiveValues:
+    """The variables of instance DB ``number`` of ``instance_dbs`` as they are at each read:
+    a user FB's instance DB is made again when its FB is downloaded into the running CPU
+    (``engine.cpu_program.replace_instance_db``), and the chart reads the new one."""
+
+    __slots__ = ("instance_dbs", "number")
+
+    def __init__(self, instance_dbs: Mapping[int, Any], number: int) -> None:
+        self.instance_dbs = instance_dbs
+        self.number = number
+
+    def __getitem__(self, name: str) -> Any:
+        return self.instance_dbs[self.number].values[name]
+
+
 @dataclass(frozen=True, slots=True)
 class Program:
     """The generated functions of a chart bound to one memory.
@@ -150,7 +165,9 @@ class CompiledChart:
     def bind(self, mem: Any, instance_dbs: Mapping[int, Any] | None = None) -> Program:
         """Execute the generated module against ``mem`` (once per FB instance);
         ``instance_dbs`` (the CPU's, by number) hold the variables the chart reads by name
-        (``idbs``: ``DB10.Q``); the calls' ``prepare_calls`` created them."""
+        (``idbs``: ``DB10.Q``); the calls' ``prepare_calls`` created them. A system block's
+        instance DB is bound as it is; a user FB's is looked up at each read
+        (``LiveValues``)."""
         ns: dict[str, Any] = {"__builtins__": __builtins__, "_mem": mem}
         ns.update(OPERAND_RUNTIME)
         ns.update(EXPR_RUNTIME)
@@ -158,11 +175,13 @@ class CompiledChart:
         for k, (area, db) in enumerate(self.buffers):
             ns[f"_m{k}"] = area_buffer(mem, area, db)
         _check_reach(self.reach, mem)
+        dbs: Mapping[int, Any] = instance_dbs if instance_dbs is not None else {}
         for k, db in enumerate(self.idbs):
-            idb = instance_dbs.get(db) if instance_dbs is not None else None
+            idb = dbs.get(db)
             if idb is None:
                 raise SymbolError(f"DB{db} is not an instance DB of this CPU (DB{db}.… read)")
-            ns[f"_d{k}"] = idb.values
+            system = str(getattr(idb.fb, "kind", "")) == "SFB"
+            ns[f"_d{k}"] = idb.values if system else LiveValues(dbs, db)
         for piece in self.code:
             exec(piece, ns)
         for name, first, defaults in self.aliases:

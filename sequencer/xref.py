@@ -18,6 +18,7 @@ of a program. Pure: the parsed chart and sources in, data out.
 from __future__ import annotations
 
 import functools
+import re
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from typing import Final
@@ -41,6 +42,7 @@ from s7graph.sequencer.text.model import (
     StepTarget,
     TransAttr,
 )
+from s7graph.sequencer.text.names import db_symbol
 from s7graph.sequencer.text.walk import nodes
 from s7graph.steps.scl import model as scl
 from s7graph.steps.scl.xref import interfaces, scl_uses
@@ -125,7 +127,11 @@ def cross_references(
     ]
     uses += _block_uses(names, blocks)
     used = {u.operand for u in uses}
-    unused = tuple(s.name for s in chart.symbols if names.shown(f'"{s.name}"') not in used)
+    unused = tuple(
+        s.name
+        for s in chart.symbols
+        if names.shown(f'"{s.name}"') not in used and s.name.casefold() not in names.read_dbs
+    )
     return CrossReferences(tuple(uses), unused, names.shown)
 
 
@@ -190,7 +196,8 @@ def _system_params() -> dict[str, dict[str, str]]:
 
 class _Names:
     """How an operand is shown: a symbol with its address, an address with its symbol
-    (the chart's own first), anything else as written."""
+    (the chart's own first), a variable of a DB by name with its DB's symbol and number
+    (``"T_S2".Q (DB10.Q)``, however written), anything else as written."""
 
     def __init__(self, chart: Chart | None, table: SymbolTable | None) -> None:
         self.by_name: dict[str, tuple[str, str]] = {}
@@ -204,8 +211,26 @@ class _Names:
             address.replace(" ", "").upper(): name for name, address in self.by_name.values()
         }
         self.variables = {v.name.casefold(): v.name for v in chart.vars} if chart else {}
+        own = [(s.name, db_symbol(s)) for s in chart.symbols] if chart is not None else []
+        blocks = table.block_names() if table is not None else {}
+        theirs = [(n, int(b[2:])) for n, b in blocks.items() if b.startswith("DB")]
+        first: dict[str, tuple[str, int | None]] = {}
+        for name, number in [*own, *theirs]:  # the chart's symbol of an operand hides one
+            first.setdefault(name.casefold(), (name, number))
+        self.dbs = {k: (n, db) for k, (n, db) in first.items() if db is not None}
+        """The DB symbols by folded name: (name, number), the chart's first."""
+        self.db_names: dict[int, str] = {}
+        for name, number in self.dbs.values():
+            self.db_names.setdefault(number, name)
+        self.members: dict[tuple[int, str], str] = {}
+        """Each DB variable read by name as first written (S7 names ignore case)."""
+        self.read_dbs: set[str] = set()
+        """The DB symbols (folded) a variable read by name was shown with."""
 
     def shown(self, text: str) -> str:
+        member = self._member(text)
+        if member is not None:
+            return member
         name = text.strip('"')
         found = self.by_name.get(name.casefold())
         if found is not None and (text.startswith('"') or name.casefold() not in self.variables):
@@ -216,6 +241,32 @@ class _Names:
         if symbol is not None:
             return f'"{symbol}" ({self.by_name[symbol.casefold()][1]})'
         return self.variables.get(text.casefold(), text)
+
+    def _member(self, text: str) -> str | None:
+        """``"T_S2".Q`` and ``DB10.Q`` as one operand: ``"T_S2".Q (DB10.Q)`` when a DB
+        symbol names DB 10, else ``DB10.Q``; None for any other text."""
+        m = _MEMBER.fullmatch(text)
+        if m is None:
+            return None
+        if m["db"] is not None:
+            number = int(m["db"])
+        elif (named := self.dbs.get(m["symbol"].casefold())) is not None:
+            number = named[1]
+        else:
+            return text  # no DB symbol of that name: as written
+        member = self.members.setdefault((number, m["member"].casefold()), m["member"])
+        symbol = self.db_names.get(number)
+        if symbol is None:
+            return f"DB{number}.{member}"
+        self.read_dbs.add(symbol.casefold())
+        return f'"{symbol}".{member} (DB{number}.{member})'
+
+
+_MEMBER: Final = re.compile(
+    r'(?:"(?P<symbol>[^"]+)"|(?i:DB)\s*(?P<db>\d+))\s*\.\s*'
+    r"(?!(?i:DB[XBWD]\s*\d))(?P<member>[A-Za-z_][A-Za-z0-9_]*)"
+)
+"""A variable of a DB read by name, as written: ``DB10.Q``, ``"T_S2".Q``."""
 
 
 _Element = tuple[str, Ref | None]  # the element as shown, and as the editor selects it

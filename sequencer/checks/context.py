@@ -21,6 +21,9 @@ class _Ctx:
     diags: list[Diagnostic] = field(default_factory=list)
     blocks: ProgramBlocks | None = None
     """The program's FBs, FCs and DBs the chart's calls reach (``--blocks``), if given."""
+    readable: ProgramBlocks | None = None
+    """The program's FBs whose instance DBs' variables the chart reads by name (``blocks``
+    unless told: the compiler reads them without checking the calls again)."""
     instances: dict[int, str] = field(default_factory=dict)
     """The instance DBs the chart's calls name so far: number → the FB or SFB's label."""
 

@@ -61,7 +61,8 @@ CODES: Final[dict[str, str]] = {
     "E047": "CALL of a user FB or FC that does not fit the program's blocks (--blocks): "
     "unknown block or parameter, wrong direction, type or instance DB",
     "E048": 'instance DB variable read by name (DB10.Q, "T_S2".Q) of a DB that is no instance '
-    "DB of the chart's calls, or not an output or in-out of its block",
+    "DB of the chart's calls, or not an output or in-out of its block (or a static variable "
+    "of a user FB of --blocks)",
     # warnings
     "W101": "step without a way in",
     "W102": "step without a way out",

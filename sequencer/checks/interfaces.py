@@ -5,8 +5,9 @@ BLOCKS.scl``; docs/cli.md, "s7graph check").
 ``program_blocks(blocks, instances)`` reads them from engine blocks — compiled S7-SCL or
 Python — so the chart's checks need neither the SCL compiler nor a CPU: a pin is its name,
 direction and S7 type (``OBJECT`` for an ARRAY, a STRUCT or a multi-instance, which a chart
-cannot pass), an FB's instance DBs are those the program names, a global DB is one the
-program holds.
+cannot pass), an FB's static variables beside its pins (a chart reads them by name:
+``"Motor_DB".Running``), an FB's instance DBs are those the program names, a global DB is
+one the program holds.
 """
 
 from __future__ import annotations
@@ -46,6 +47,8 @@ class Interface:
     number: int
     name: str
     pins: tuple[UserPin, ...]
+    statics: tuple[UserPin, ...] = ()
+    """An FB's static variables (``STAT``), in its instance DB beside its parameters."""
 
     @property
     def label(self) -> str:
@@ -54,6 +57,11 @@ class Interface:
     def pin(self, name: str) -> UserPin | None:
         upper = name.upper()
         return next((p for p in self.pins if p.name.upper() == upper), None)
+
+    def variable(self, name: str) -> UserPin | None:
+        """The parameter or static variable ``name`` (any case) of the instance DB."""
+        upper = name.upper()
+        return self.pin(name) or next((p for p in self.statics if p.name.upper() == upper), None)
 
 
 @dataclass(frozen=True)
@@ -88,7 +96,12 @@ def _interface(block: FB | FC) -> Interface:
     ]
     if isinstance(block, FC) and block.ret_type is not None:
         pins.append(UserPin("RET_VAL", "OUT", block.ret_type))
-    return Interface(str(block.kind), block.number, block.name, tuple(pins))
+    statics = tuple(
+        UserPin(v.name, "STAT", v.type if isinstance(v.type, str) else "OBJECT")
+        for v in block.interface
+        if v.decl is Decl.STAT and isinstance(block, FB)
+    )
+    return Interface(str(block.kind), block.number, block.name, tuple(pins), statics)
 
 
 def program_blocks(

@@ -13,6 +13,7 @@ from s7graph.engine.literals import parse_literal
 from s7graph.sequencer.checks.context import _Ctx, _step_el
 from s7graph.sequencer.checks.types import LOGIC, _conditions, _show, _type, _unify
 from s7graph.sequencer.text.model import Binary, Expr, Step, StepTarget, Transition, Unary
+from s7graph.sequencer.text.names import db_symbol
 from s7graph.steps.operands import TYPE_BYTES
 
 # Limits that warn (docs/semantics.md, "Structure").
@@ -67,12 +68,18 @@ def rule_duplicate_declarations(ctx: _Ctx) -> None:
 
 def rule_declarations(ctx: _Ctx) -> None:
     """The header's FB and DB numbers are block numbers, 1 to 65535 (E004); chart symbols
-    name valid addresses (E041); a variable's initial value fits its type (E031)."""
+    name valid addresses or DBs (E041); a variable's initial value fits its type (E031)."""
     c = ctx.chart
     for kind, number in (("FB", c.fb_number), ("DB", c.db_number)):
         if number is not None and not 1 <= number <= 65535:
             ctx.err("E004", f"{kind} {number}: a block number is 1 to 65535", c.loc)
     for s in ctx.chart.symbols:
+        db = db_symbol(s)
+        if db is not None:
+            if not 1 <= db <= 65535:
+                where = f'symbol "{s.name}"'
+                ctx.err("E041", f"DB {db}: a block number is 1 to 65535", s.loc, where)
+            continue
         try:
             parse_address(s.address, s.loc)
         except AddressError as exc:

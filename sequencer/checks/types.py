@@ -198,7 +198,7 @@ def _concrete(t: str) -> str:
 
 def _resolve(ctx: _Ctx, op: Operand, el: str) -> Resolved | None:
     try:
-        return resolve_operand(op, ctx.chart, ctx.symbols)
+        return resolve_operand(op, ctx.chart, ctx.symbols, blocks=ctx.readable)
     except AddressError as exc:
         where = exc.where if isinstance(exc.where, SourceLocation) else op.loc
         ctx.err("E041", exc.message, where, el)

@@ -106,12 +106,17 @@ RULES: Final[tuple[Callable[[_Ctx], None], ...]] = (
 
 
 def validate(
-    chart: Chart, symbols: SymbolTable | None = None, *, blocks: ProgramBlocks | None = None
+    chart: Chart,
+    symbols: SymbolTable | None = None,
+    *,
+    blocks: ProgramBlocks | None = None,
+    readable: ProgramBlocks | None = None,
 ) -> list[Diagnostic]:
     """Every diagnostic of ``chart`` (errors and warnings), sorted by place. ``blocks``: the
     program's FBs, FCs and DBs, when known, that the chart's calls are checked against
-    (E047, ``sequencer.checks.user_calls``)."""
-    ctx = _Ctx(chart, symbols, blocks=blocks)
+    (E047, ``sequencer.checks.user_calls``) and whose FBs' variables the chart reads by name
+    (E048); ``readable``: those FBs only, the calls not checked (the compiler's)."""
+    ctx = _Ctx(chart, symbols, blocks=blocks, readable=readable or blocks)
     if chart.db_number is not None and chart.fb_number is not None:
         ctx.instances[chart.db_number] = f"FB{chart.fb_number} (this chart)"
     for s in chart.all_steps():

@@ -1,8 +1,9 @@
 """An instance DB's variables read by name in a chart (S7-SCL's structured access to a data
-block: ``DB10.Q``, ``"T_S2".Q`` where the symbol names DB 10): in transitions, interlocks,
-supervisions and on the right of an assignment; checked against the chart's calls and the
-block's outputs (E048), never written (E045); formatted back as written, cross-referenced
-as a read, refused by the exporters with a located message."""
+block: ``DB10.Q``, ``"T_S2".Q`` where a symbol of the chart's ``SYMBOLS`` or of the symbol
+table names DB 10): in transitions, interlocks, supervisions and on the right of an
+assignment; checked against the chart's calls and the block's outputs (E048), never written
+(E045); formatted back as written, cross-referenced as a read — by symbol or number, one
+operand — refused by the exporters with a located message."""
 
 from __future__ import annotations
 
@@ -11,11 +12,13 @@ import pytest
 from s7graph import sfb
 from s7graph.engine import Cpu, CpuMode, VirtualClock
 from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer import calls as runtime_calls
 from s7graph.sequencer.calls import prepare_calls
 from s7graph.sequencer.checks.validate import validate
 from s7graph.sequencer.compile import compile_chart
 from s7graph.sequencer.exchange import export_chart
 from s7graph.sequencer.fb import GraphFB, install_all
+from s7graph.sequencer.text.call_sites import call_sites
 from s7graph.sequencer.text.format import format_chart
 from s7graph.sequencer.text.parse import parse_chart
 from s7graph.sequencer.text.walk import unlocated
@@ -140,3 +143,78 @@ def test_cross_references_list_the_access_as_a_read() -> None:
 def test_the_exporters_refuse_the_access_with_its_place(to: str) -> None:
     with pytest.raises(ValueError, match=r"m\.s7g:12:34: DB10\.Q: a \w+ export cannot hold"):
         export_chart(parse_chart(chart_text(), "m.s7g"), to)
+
+
+def with_db_symbol(text: str, declaration: str = '"T_S2" : DB 10 : SFB4;') -> str:
+    """``text`` with the chart's own ``SYMBOLS`` section holding ``declaration``."""
+    return text.replace("VAR elapsed", f"SYMBOLS {declaration} END_SYMBOLS\nVAR elapsed", 1)
+
+
+def test_a_db_symbol_of_the_charts_own_symbols_reads_the_same_variable() -> None:
+    text = with_db_symbol(chart_text('"T_S2".Q', interlock='INTERLOCK := NOT "t_s2".Q;'))
+    cpu, clock, g = run(text)
+    scan_until(cpu, clock, 1900)
+    assert g.state.active == [1]
+    scan_until(cpu, clock, 300)
+    assert g.state.active == [2]
+
+
+def test_the_charts_db_symbol_comes_before_the_symbol_tables() -> None:
+    table = SymbolTable()
+    table.add("T_S2", "DB 11")
+    assert errors(with_db_symbol(chart_text('"T_S2".Q')), table) == []
+
+
+@pytest.mark.parametrize(
+    ("declaration", "condition", "code", "why"),
+    [
+        ('"T_S2" : DB10 : SFB4;', '"T_S2"', "E040", '"T_S2" is DB 10, not an operand'),
+        ('"Start" : I0.0 : BOOL;', '"Start".Q', "E048", '"Start" is the operand I0.0, not a DB'),
+        ('"T_S2" : DB0 : SFB4;', "DB10.Q", "E041", "DB 0: a block number is 1 to 65535"),
+    ],
+)
+def test_a_charts_symbol_in_the_wrong_place_is_an_error_naming_it(
+    declaration: str, condition: str, code: str, why: str
+) -> None:
+    (found,) = errors(with_db_symbol(chart_text(condition), declaration))
+    assert found[0] == code and why in found[3]
+
+
+def test_the_formatter_writes_a_db_symbol_back() -> None:
+    chart = parse_chart(with_db_symbol(chart_text('"T_S2".Q'), '"T_S2":DB 10:SFB4;'), "m.s7g")
+    formatted = format_chart(chart)
+    assert '"T_S2" : DB10 : SFB4;' in formatted
+    assert unlocated(parse_chart(formatted, "m.s7g")) == unlocated(chart)
+
+
+def test_cross_references_list_a_variable_by_its_db_symbol_and_number_as_one_operand() -> None:
+    table = SymbolTable()
+    table.add("T_S2", "DB 10")
+    text = chart_text(
+        '"t_s2".q', interlock="INTERLOCK := NOT DB10.Q;", rows="N elapsed := DB10.ET;"
+    )
+    refs = cross_references(parse_chart(text, "m.s7g"), table)
+    uses = refs.operands()
+    shown = '"T_S2".Q (DB10.Q)'
+    assert [(u.element, u.access) for u in uses[shown]] == [
+        ('S2 "b" interlock', "read"),
+        ("T2", "read"),
+    ]
+    assert '"T_S2".ET (DB10.ET)' in uses and "DB10.Q" not in uses
+    assert [u.element for u in refs.of("DB10.q")] == ['S2 "b" interlock', "T2"]
+
+
+def test_a_db_symbol_of_the_chart_read_by_name_is_used() -> None:
+    text = with_db_symbol(chart_text("DB10.Q"))
+    refs = cross_references(parse_chart(text, "m.s7g"))
+    assert refs.unused == () and '"T_S2".Q (DB10.Q)' in refs.operands()
+
+
+def test_the_text_and_the_runtime_walk_a_charts_calls_the_one_way() -> None:
+    permanent = 'PERMANENT AFTER CALL "TON", DB 11 (IN := S2.X, PT := T#1S); END_PERMANENT\n'
+    text = chart_text("DB11.Q AND DB10.Q").replace("SEQUENCE 1", permanent + "SEQUENCE 1", 1)
+    chart = parse_chart(text, "m.s7g")
+    assert errors(text) == []  # DB 11 is named by a permanent instruction's call
+    sites = [(s.call.instance, s.element) for s in call_sites(chart)]
+    assert sites == [(10, "step S2 row 1"), (11, "permanent after")]
+    assert runtime_calls.call_sites is call_sites  # prepare_calls walks them so

@@ -24,6 +24,7 @@ from s7graph.engine.errors import S7Error
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.calls import prepare_calls
 from s7graph.sequencer.checks.diagnostics import Diagnostic, format_diagnostic
+from s7graph.sequencer.checks.interfaces import ProgramBlocks
 from s7graph.sequencer.compile import ChartError, compile_chart
 from s7graph.sequencer.compiled import CompiledChart
 from s7graph.sequencer.fb import GraphFB, install_all
@@ -44,6 +45,9 @@ __all__ = [
     "load_chart",
 ]
 
+Interfaces = Callable[[SymbolTable], ProgramBlocks]
+"""The program's user blocks, made from a symbol table (``compile_model``)."""
+
 _STEP_ATTR = re.compile(r"S(\d+)\.([XTU])", re.I)
 _TRANS_ATTR = re.compile(r"T(\d+)\.TT", re.I)
 
@@ -57,10 +61,14 @@ class ChartLoadError(S7Error):
 
 
 def load_chart(
-    path: Path, symbols: Path | None = None, *, table: SymbolTable | None = None
+    path: Path,
+    symbols: Path | None = None,
+    *,
+    table: SymbolTable | None = None,
+    blocks: Interfaces | None = None,
 ) -> tuple[CompiledChart, SymbolTable]:
     """Parse, validate and compile a chart file (with an optional symbol table file, or the
-    ``table`` read from it already)."""
+    ``table`` read from it already; ``blocks`` as :func:`compile_model`)."""
     try:
         data = Path(path).read_bytes()
     except OSError as exc:
@@ -69,30 +77,35 @@ def load_chart(
         if table is None:
             table = _symbols(symbols) if symbols is not None else SymbolTable()
         text = chart_text(data, str(path))
-    return compile_text(text, str(path), table)
+    return compile_text(text, str(path), table, blocks=blocks)
 
 
 def compile_text(
-    text: str, file: str, table: SymbolTable | None = None
+    text: str, file: str, table: SymbolTable | None = None, *, blocks: Interfaces | None = None
 ) -> tuple[CompiledChart, SymbolTable]:
     """Parse, validate and compile chart ``text`` (named ``file`` in diagnostics) with the
     symbol table ``table``, which gets the chart's own ``SYMBOLS`` added; ``ChartLoadError``
     with every diagnostic when it does not compile."""
     with _as_load_error(file):
         chart = parse_chart(text, file)
-    return compile_model(chart, table)
+    return compile_model(chart, table, blocks=blocks)
 
 
 def compile_model(
-    chart: Chart, table: SymbolTable | None = None
+    chart: Chart, table: SymbolTable | None = None, *, blocks: Interfaces | None = None
 ) -> tuple[CompiledChart, SymbolTable]:
-    """Validate and compile a parsed ``chart`` as :func:`compile_text` does."""
+    """Validate and compile a parsed ``chart`` as :func:`compile_text` does. ``blocks``:
+    the interfaces of the program's user blocks, made from the symbol table with the
+    chart's ``SYMBOLS`` in it (``ChartSession.load`` compiles its S7-SCL sources so): the
+    chart reads their FBs' variables by name."""
     table = table if table is not None else SymbolTable()
     with _as_load_error(chart.file):
-        for s in chart.symbols:
-            if table.lookup(s.name) is None:
+        for s in chart.symbols:  # a name the table has keeps its meaning there (the chart's first)
+            if table.lookup(s.name) is None and table.block(s.name) is None:
                 table.add(s.name, s.address, s.type, s.comment, where=s.loc)
-        cc = compile_chart(chart, table)
+    program = blocks(table) if blocks is not None else None
+    with _as_load_error(chart.file):
+        cc = compile_chart(chart, table, blocks=program)
     return cc, table
 
 
@@ -190,8 +203,15 @@ class ChartSession:
         if not blocks:
             cc, table = load_chart(path, symbols)
             return cls(cc, table, clock)
-        cc, table = load_chart(path, symbols)  # the sources see the chart's SYMBOLS too
-        sources = compile_sources(blocks, table)
+        compiled: list[SclSources] = []
+
+        def interfaces(table: SymbolTable) -> ProgramBlocks:
+            # the sources see the chart's SYMBOLS too; the chart their FBs' interfaces
+            compiled.append(compile_sources(blocks, table))
+            return compiled[-1].interfaces()
+
+        cc, table = load_chart(path, symbols, blocks=interfaces)
+        sources = compiled[-1]
         session = cls(cc, table, clock, blocks=[sources])
         session.warnings += sources.warnings
         return session
