@@ -11,8 +11,9 @@ from s7graph.engine.datatypes import string_chars
 from s7graph.engine.errors import AddressError, LiteralError
 from s7graph.engine.literals import parse_literal
 from s7graph.sequencer.checks.context import _Ctx, _step_el
+from s7graph.sequencer.checks.diagnostics import Diagnostic
 from s7graph.sequencer.checks.types import LOGIC, _conditions, _show, _type, _unify
-from s7graph.sequencer.text.model import Binary, Expr, Step, StepTarget, Transition, Unary
+from s7graph.sequencer.text.model import Binary, Chart, Expr, Step, StepTarget, Transition, Unary
 from s7graph.sequencer.text.names import db_symbol
 from s7graph.steps.operands import TYPE_BYTES
 
@@ -194,6 +195,14 @@ def rule_initial_steps(ctx: _Ctx) -> None:
                 seq.loc,
                 f"sequence {seq.number}",
             )
+
+
+def initial_step_warnings(chart: Chart) -> list[Diagnostic]:
+    """W103 for each sequence of ``chart`` without an initial step (an importer reports it
+    at once, in ``check``'s words)."""
+    ctx = _Ctx(chart, None)
+    rule_initial_steps(ctx)
+    return ctx.diags
 
 
 def _on_targets(ctx: _Ctx) -> set[int]:

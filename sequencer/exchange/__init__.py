@@ -19,6 +19,7 @@ from pathlib import Path
 
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.checks.diagnostics import Diagnostic, sort_key
+from s7graph.sequencer.checks.structure import initial_step_warnings
 from s7graph.sequencer.exchange.body_fc import BodyFc, blocks_source
 from s7graph.sequencer.exchange.pending import PendingScl
 from s7graph.sequencer.exchange.problems import ImportFailed, Problems
@@ -144,9 +145,14 @@ def import_chart(
 ) -> Imported:
     """Import one chart from ``data`` (raises ``ImportFailed`` with located problems); its
     AND/OR/XOR chains in the parser's shape (``steps.syntax.chain``), so that the chart is
-    the model its ``.s7g`` text parses to."""
+    the model its ``.s7g`` text parses to. A sequence without an initial step is reported
+    as ``s7graph check`` reports it (W103), but for a `.s7g` file."""
     found = _import_chart(data, file, pou=pou, symbols=symbols)
-    return replace(found, chart=canonical_chains(found.chart))
+    chart = canonical_chains(found.chart)
+    if found.format == "s7g":  # the chart itself: ``check`` says what it says
+        return replace(found, chart=chart)
+    more = [d for d in initial_step_warnings(chart) if d not in found.problems]
+    return replace(found, chart=chart, problems=sorted(found.problems + more, key=sort_key))
 
 
 def _import_chart(

@@ -2,19 +2,19 @@
 plus the chart's `.s7g` source in the POU's ``addData`` (PLCopen's place for a tool's own
 data), from which s7graph reads it back exactly.
 
-The SFC body: one ``step`` per step (IEC name: the GRAPH name when it is a unique
-identifier, else ``S<n>``), the transitions leaving a step left to right in their priority
-order (after a ``selectionDivergence`` when there are several), ``simultaneousDivergence``
-/ ``simultaneousConvergence`` for ``TO (…)`` / ``FROM (…)``, a ``selectionConvergence``
-before a step several transitions lead to, and a ``jumpStep`` for a transition that leads
-back up. Conditions are inline ST. Action rows with an IEC equivalent (``exchange.mapping``
-read backwards) become actions: ``N S R D L`` on a bit as Boolean actions, ``S1``/``S0``
-rows as ``P``/``P0`` actions, assignments as inline ST, a call of an IEC timer or counter
-(``CALL SFB 4, DB 10 (…)``) as the call of an FB instance ``TON_DB10`` the POU declares;
-the others (interlocked rows, other events, other calls, S5 counters and timers) an inline
-ST comment holding the GRAPH row. Symbols are global variables of the configuration at
-their IEC address. Interlocks, supervisions, options, permanent instructions and ``TO
-STOP`` live in the `.s7g` source only.
+The SFC body: one ``step`` per step (IEC name: the GRAPH name as an identifier, Cyrillic
+transliterated, when it is unique, else ``S<n>``), the transitions leaving a step left to
+right in their priority order (after a ``selectionDivergence`` when there are several),
+``simultaneousDivergence`` / ``simultaneousConvergence`` for ``TO (…)`` / ``FROM (…)``, a
+``selectionConvergence`` before a step several transitions lead to, and a ``jumpStep`` for
+a transition that leads back up. Conditions are inline ST. Action rows with an IEC
+equivalent (``exchange.mapping`` read backwards) become actions: ``N S R D L`` on a bit as
+Boolean actions, ``S1``/``S0`` rows as ``P``/``P0`` actions, assignments as inline ST, a
+call of an IEC timer or counter (``CALL SFB 4, DB 10 (…)``) as the call of an FB instance
+``TON_DB10`` the POU declares; the others (interlocked rows, other events, other calls, S5
+counters and timers) an inline ST comment holding the GRAPH row. Symbols are global
+variables of the configuration at their IEC address. Interlocks, supervisions, options,
+permanent instructions and ``TO STOP`` live in the `.s7g` source only.
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ from xml.sax.saxutils import escape, quoteattr
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.checks.diagnostics import Diagnostic
 from s7graph.sequencer.exchange.iec_to_chart import S7_PIN, SFB_OF
-from s7graph.sequencer.exchange.naming import s7_to_iec
+from s7graph.sequencer.exchange.naming import s7_to_iec, transliterate
 from s7graph.sequencer.exchange.plcopen import S7GRAPH_DATA, TRANSITION_IDS
 from s7graph.sequencer.exchange.problems import Problems
 from s7graph.sequencer.exchange.shape import priority, shape_of
@@ -61,13 +61,18 @@ _TYPES = {"TIME_OF_DAY": "TOD", "DATE_AND_TIME": "DT"}
 _IEC_PIN = {s7: iec for iec, s7 in S7_PIN.items()}  # S7's LOAD → IEC's LD
 
 
-def _ident(name: str) -> str:
-    """``name`` as an IEC 61131-3 identifier: ASCII letters, digits and single
-    underscores, none at the end, not starting with a digit (``Start ä x`` →
-    ``Start_x``)."""
-    out = "".join(c if (c.isascii() and c.isalnum()) or c == "_" else "_" for c in name)
+def _ident(name: str, fallback: str = "_x") -> str:
+    """``name`` as an IEC 61131-3 identifier (section 6.1.2): in Latin letters
+    (``naming.transliterate``: ``Подача`` → ``Podacha``), then ASCII letters, digits and
+    single underscores, none at the end, not starting with a digit (``Start ä x`` →
+    ``Start_a_x``); ``fallback`` when no letter or digit is left (``注水``)."""
+    out = "".join(
+        c if (c.isascii() and c.isalnum()) or c == "_" else "_" for c in transliterate(name)
+    )
     out = re.sub(r"_{2,}", "_", out).rstrip("_")
-    return out if out and not out[0].isdigit() else "_" + out if out else "_x"
+    if not out.strip("_"):
+        return fallback
+    return "_" + out if out[0].isdigit() else out
 
 
 class _Export:
@@ -89,12 +94,19 @@ class _Export:
         ``S<n>``; a symbol whose identifier is taken gets ``_2``, ``_3`` … (X013)."""
         taken = {v.name.upper() for v in self.chart.vars}
         steps = self.chart.all_steps()
-        idents = [_ident(s.name) if s.name else "" for s in steps]
+        idents = [_ident(s.name, "") for s in steps]
         counts = Counter(i.upper() for i in idents)
         for s, ident in zip(steps, idents, strict=True):
             free = counts[ident.upper()] == 1 and ident.upper() not in taken
             keep = ident and free and not _STEP_REF.fullmatch(ident)
             self.step_name[s.number] = ident if keep else f"S{s.number}"
+            if s.name and not ident:
+                self.p.warn(
+                    "X013",
+                    f"step S{s.number} {s.name!r} is named S{s.number} in the SFC: its name "
+                    "has no letter or digit an IEC identifier can hold",
+                    s.loc,
+                )
             if ident and not keep and ident.upper() != f"S{s.number}":
                 self.p.warn(
                     "X013",

@@ -1,21 +1,22 @@
 """Write a chart as a TIA Portal Openness SimaticML GRAPH FB (``Graph/v5``, GraphVersion
 6.0, the interface in ``Interface/v4``, as TIA V16 exports and V20 imports it).
 
-GRAPH to GRAPH: steps and transitions keep numbers and names; a step with several
-transitions leaving it opens an ``AltBegin`` branch (``Out`` 0 is the first written, the
-highest priority), a transition to several steps a ``SimBegin``, a transition from several
-steps closes a ``SimEnd``, a step reached forward by several transitions an ``AltEnd``; a
-transition that leads back up, or into another sequence, is a ``Jump`` link, ``TO STOP``
-an ``EndConnection``. Conditions, interlocks, supervisions (with the step's message text
-as alarm text) and bit coils of the permanent instructions are LAD networks
-(``exchange.flgnet``); action rows are ``Action`` elements with the row's text as tokens
-(``"Tag"``, ``#variable``, ``%Q0.3``). Symbols are global tags with their address as
-informative data. What a GRAPH block has no field for — the instance DB number,
+GRAPH to GRAPH: steps and transitions keep numbers and names (an unnamed one gets TIA's
+default, ``Step3``, ``Trans3``, which the import reads back as no name for a transition);
+a step with several transitions leaving it opens an ``AltBegin`` branch (``Out`` 0 is the
+first written, the highest priority), a transition to several steps a ``SimBegin``, a
+transition from several steps closes a ``SimEnd``, a step reached forward by several
+transitions an ``AltEnd``; a transition that leads back up, or into another sequence, is a
+``Jump`` link, ``TO STOP`` an ``EndConnection``. Conditions, interlocks, supervisions
+(with the step's message text as alarm text) and bit coils of the permanent instructions
+are LAD networks (``exchange.flgnet``); action rows are ``Action`` elements with the row's
+text as tokens (``"Tag"``, ``#variable``, ``%Q0.3``). Symbols are global tags with their
+address as informative data. What a GRAPH block has no field for — the instance DB number,
 ``ORDER``, ``ACK_FORCES_SWITCH`` — is kept in the block comment (``s7graph: …``), which
 the importer reads. ``XOR`` in a condition is drawn as (a AND NOT b) OR (NOT a AND b). A
-permanent CALL is a LAD ``Call`` box, a permanent assignment of an operand or constant to a
-non-bit a ``Move`` box; one of an arithmetic expression has no form here: a ``ValueError``
-naming its place.
+permanent CALL is a LAD ``Call`` box, a permanent assignment of an operand or constant to
+a non-bit a ``Move`` box; one of an arithmetic expression has no form here: a
+``ValueError`` naming its place.
 """
 
 from __future__ import annotations
@@ -49,7 +50,7 @@ from s7graph.sequencer.text.model import (
     Transition,
 )
 
-__all__ = ["S7GRAPH_COMMENT", "export_simaticml"]
+__all__ = ["S7GRAPH_COMMENT", "default_name", "export_simaticml"]
 
 S7GRAPH_COMMENT = "s7graph:"
 _GRAPH_NS = "http://www.siemens.com/automation/Openness/SW/NetworkSource/Graph/v5"
@@ -71,6 +72,13 @@ _TIA = {
 }
 _AREA = {"I": "Input", "Q": "Output", "M": "Memory"}
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+
+
+def default_name(what: str, number: int) -> str:
+    """The name TIA gives a ``step`` or ``transition`` of that number that nobody named
+    (``Step3``, ``Trans3``): what the export writes for an unnamed one, and what the import
+    reads back as no name for a transition."""
+    return f"{'Step' if what == 'step' else 'Trans'}{number}"
 
 
 def _tia_type(t: str) -> str:
@@ -98,21 +106,20 @@ class _Export:
         members of its interface): a name taken before gets ``_2``, ``_3`` … (X013)."""
         taken: set[str] = set()
         elements: list[tuple[Step | Transition, str, dict[int, str]]] = [
-            (s, "Step", self.step_names) for s in self.chart.all_steps()
+            (s, "step", self.step_names) for s in self.chart.all_steps()
         ]
-        elements += [(t, "Trans", self.trans_names) for t in self.chart.all_transitions()]
-        for e, prefix, names in elements:
-            name = e.name or f"{prefix}{e.number}"
+        elements += [(t, "transition", self.trans_names) for t in self.chart.all_transitions()]
+        for e, what, names in elements:
+            name = e.name or default_name(what, e.number)
             unique, k = name, 1
             while unique.casefold() in taken:
                 k += 1
                 unique = f"{name}_{k}"
             if unique != name:
-                what = "step S" if prefix == "Step" else "transition T"
                 self.p.warn(
                     "X013",
-                    f"{what}{e.number} {name!r} is named {unique!r}: TIA takes a name once "
-                    "per block (steps and transitions alike)",
+                    f"{what} {what[0].upper()}{e.number} {name!r} is named {unique!r}: TIA "
+                    "takes a name once per block (steps and transitions alike)",
                     e.loc,
                 )
             taken.add(unique.casefold())
@@ -138,9 +145,9 @@ class _Export:
             )
         if isinstance(e, StepAttr | TransAttr):
             owner = (
-                self.step_names.get(e.step, f"Step{e.step}")
+                self.step_names.get(e.step, default_name("step", e.step))
                 if isinstance(e, StepAttr)
-                else self.trans_names.get(e.transition, f"Trans{e.transition}")
+                else self.trans_names.get(e.transition, default_name("transition", e.transition))
             )
             return (
                 f'<Access Scope="LocalVariable" UId="{uid}"><Symbol><Component '

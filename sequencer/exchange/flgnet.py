@@ -26,8 +26,9 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from s7graph.engine.errors import SourceLocation
-from s7graph.sequencer.exchange.xmltree import ElementError, Node
+from s7graph.sequencer.exchange.xmltree import MAX_WIRE_DEPTH, ElementError, Node
 from s7graph.sequencer.text.model import Binary, Const, Expr, StepAttr, Unary
+from s7graph.steps.syntax import CHAIN_OPS, chain
 
 __all__ = ["COMPARE_PARTS", "Box", "read_boxes", "read_network", "write_call", "write_move"]
 
@@ -135,13 +136,20 @@ class _Net:
 
     def value(self, src: tuple[str, str], want: str | None) -> Expr | None:
         """What flows out of ``src`` (read once: the same value for every wire from it);
-        a part whose value needs its own is a loop of wires, an ElementError."""
+        a part whose value needs its own is a loop of wires, an ElementError, as is one
+        reached through more than ``MAX_WIRE_DEPTH`` parts one after another."""
         key = (src, want)
         if key in self.done:
             return self.done[key]
         if key in self.busy:
             part = self.parts.get(src[0])
             raise ElementError("a loop of wires: an element feeds itself", part or self.root)
+        if len(self.busy) >= MAX_WIRE_DEPTH:
+            raise ElementError(
+                f"a value that flows through more than {MAX_WIRE_DEPTH} elements one after "
+                f"another (an import reads at most {MAX_WIRE_DEPTH})",
+                self.parts.get(src[0]) or self.root,
+            )
         self.busy.add(key)
         out = self._value(src, want)
         self.busy.discard(key)
@@ -230,7 +238,11 @@ def _and(a: Expr | None, b: Expr, loc: SourceLocation) -> Expr:
 
 
 def _joined(op: str, values: list[Expr], loc: SourceLocation) -> Expr:
-    """``values`` joined by ``op``, left to right (one value: itself)."""
+    """``values`` joined by ``op``, left to right (one value: itself), in the shape the
+    parser gives a written chain (``steps.syntax.chain``: a rung of 500 contacts in series
+    is some 9 levels deep, not 500)."""
+    if len(values) > 2 and op in CHAIN_OPS:
+        return chain(op, values)
     out = values[0]
     for v in values[1:]:
         out = Binary(op, out, v, loc)

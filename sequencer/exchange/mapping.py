@@ -396,11 +396,14 @@ CONSTRUCTS: Final[tuple[tuple[str, str, str, str], ...]] = (
     (
         TO_PLCOPEN,
         "names of the POU, steps and variables",
-        "IEC identifiers: ASCII letters, digits and single underscores, none at the end "
-        "(`Lamp (x)` → `Lamp_x`), each once in the POU",
+        "IEC identifiers (IEC 61131-3 ed.3, 6.1.2): ASCII letters, digits and single "
+        "underscores, none at the end (`Lamp (x)` → `Lamp_x`), each once in the POU; "
+        "Cyrillic in Latin letters by GOST 7.79-2000 system B, without its marks "
+        "(`Подача` → `Podacha`, `Цех` → `Cex`), a letter with marks as its Latin base "
+        "(`Füll` → `Full`)",
         "the chart kept in s7graph's data keeps its own names; IEC compares names without "
-        "case: a step whose name another step or a variable has (`Dwell`, `dwell`) is "
-        "`S<n>`, a global `_2`, `_3` … (X013)",
+        "case: a step whose name another step or a variable has (`Dwell`, `dwell`), or "
+        "that keeps no letter or digit (`注水`), is `S<n>`, a global `_2`, `_3` … (X013)",
     ),
     (
         TO_PLCOPEN,
@@ -409,6 +412,14 @@ CONSTRUCTS: Final[tuple[tuple[str, str, str, str], ...]] = (
         "other tools know no `L#`; read back, a DINT literal is a plain number",
     ),
     (TO_TIA, "the chart", "a GRAPH FB (`Graph/v5`)", "numbers, names, options kept"),
+    (
+        TO_TIA,
+        "names of steps and transitions",
+        "the same names, in any script (`Подача`); an unnamed one TIA's default (`Step3`, "
+        "`Trans3`)",
+        "TIA's names are texts, not identifiers; a transition named with that default "
+        "comes back unnamed; a name taken before gets `_2` … (X013)",
+    ),
     (
         TO_TIA,
         "action rows",

@@ -10,16 +10,24 @@ IEC addresses: ``%I`` ``%Q`` ``%M`` with size ``X`` (or none) ``B`` ``W`` ``D`` 
 two-level ``byte.bit`` form map one to one (``%QX2.3`` → ``Q2.3``, ``%MW4`` → ``MW4``); a
 one-level bit address ``%IXn`` counts bits from ``I0.0`` (``%IX9`` → ``I1.1``); ``L``
 (64-bit) and deeper hierarchies have no S7 form.
+
+Latin letters for a format that takes only ASCII names (``transliterate``): Cyrillic by
+GOST 7.79-2000 system B (Table 4: ``Подача`` → ``Podacha``, ``Цех`` → ``Cex``), Russian
+values where the languages differ (``и`` ``i``, ``щ`` ``shh``), without the system's marks
+(`` ` `` and ``'``), which no identifier holds (``ъ`` and ``ь`` vanish, ``ы`` is ``y``, ``э``
+``e``); other letters with a Latin base lose their marks (Unicode NFKD: ``Füll`` →
+``Full``; ``ß`` ``ss``, ``ø`` ``o``, ``æ`` ``ae``); the rest stays as it is.
 """
 
 from __future__ import annotations
 
 import re
+import unicodedata
 from typing import Final
 
 from s7graph.sequencer.params import pin
 
-__all__ = ["iec_address", "is_graph_name", "s7_to_iec", "safe_name"]
+__all__ = ["iec_address", "is_graph_name", "s7_to_iec", "safe_name", "transliterate"]
 
 _KEYWORDS: Final = frozenset(
     [
@@ -133,3 +141,96 @@ def s7_to_iec(address: str) -> str | None:
     if size and bit is None:
         return f"%{area}{size}{int(byte)}"
     return None
+
+
+_GOST_B: Final = {
+    "а": "a",
+    "б": "b",
+    "в": "v",
+    "г": "g",
+    "д": "d",
+    "е": "e",
+    "ё": "yo",
+    "ж": "zh",
+    "з": "z",
+    "и": "i",
+    "й": "j",
+    "к": "k",
+    "л": "l",
+    "м": "m",
+    "н": "n",
+    "о": "o",
+    "п": "p",
+    "р": "r",
+    "с": "s",
+    "т": "t",
+    "у": "u",
+    "ф": "f",
+    "х": "x",
+    "ч": "ch",
+    "ш": "sh",
+    "щ": "shh",
+    "ъ": "",
+    "ы": "y",
+    "ь": "",
+    "э": "e",
+    "ю": "yu",
+    "я": "ya",
+    "ґ": "g",
+    "є": "ye",
+    "і": "i",
+    "ї": "yi",
+    "ў": "u",
+    "ѓ": "g",
+    "ѕ": "z",
+    "ј": "j",
+    "ќ": "k",
+    "љ": "l",
+    "њ": "n",
+    "џ": "dh",
+}
+"""GOST 7.79-2000 system B, lower case, without its marks (``ъ`` and ``ь`` are only one);
+Russian, then Ukrainian, Belarusian and Macedonian letters; ``ц`` depends on the next
+letter (``_cyrillic``)."""
+_LATIN: Final = {"ß": "ss", "ø": "o", "æ": "ae", "œ": "oe", "đ": "d", "ł": "l", "þ": "th"}
+"""Latin letters that Unicode does not decompose into a base letter and a mark."""
+
+
+def _cyrillic(name: str, i: int) -> str | None:
+    """GOST 7.79-2000 system B for ``name[i]`` (None: not a letter of its table): ``ц`` is
+    ``c`` before ``i``, ``e``, ``y``, ``j``, else ``cz``; a capital spelled with several
+    letters is all capitals beside another capital (``ЖУК`` → ``ZHUK``), else ``Zh``."""
+    c = name[i]
+    low = c.lower()
+    if low == "ц":
+        after = _GOST_B.get(name[i + 1 : i + 2].lower(), "")  # "" for ц, ъ, ь, no letter
+        out = "c" if after[:1] in ("i", "e", "y", "j") else "cz"
+    elif low in _GOST_B:
+        out = _GOST_B[low]
+    else:
+        return None
+    if c == low:
+        return out
+    after, before = name[i + 1 : i + 2], name[i - 1 : i] if i else ""
+    return out.upper() if (after if after.isalpha() else before).isupper() else out.capitalize()
+
+
+def transliterate(name: str) -> str:
+    """``name`` in Latin letters, for a format that takes only ASCII names (the rule: the
+    module's docstring); characters it has no Latin form for stay as they are."""
+    out: list[str] = []
+    for i, c in enumerate(name):
+        if c.isascii():
+            out.append(c)
+            continue
+        gost = _cyrillic(name, i)
+        if gost is not None:
+            out.append(gost)
+            continue
+        latin = _LATIN.get(c.lower())
+        if latin is not None:
+            out.append(latin if c.islower() else latin.capitalize())
+            continue
+        base = "".join(d for d in unicodedata.normalize("NFKD", c) if not unicodedata.combining(d))
+        out.append(base if base.isascii() and base else c)
+    return "".join(out)

@@ -38,7 +38,7 @@ from s7graph.sequencer.exchange.st import (
     absolute,
     parse_expression,
 )
-from s7graph.sequencer.exchange.xmltree import ElementError, Node
+from s7graph.sequencer.exchange.xmltree import MAX_WIRE_DEPTH, ElementError, Node
 
 __all__ = ["Network"]
 
@@ -142,7 +142,8 @@ class Network:
         """What flows out of the element ``conn`` names, read once per output; an
         expression that would be over ``MAX_ELEMENTS`` long written out (an output fanned
         out to several inputs at each of many levels) is an ElementError, not an import
-        that never ends."""
+        that never ends; one wired through more than ``MAX_WIRE_DEPTH`` elements one after
+        another is too, at the element past it."""
         key = (conn.get("refLocalId"), conn.get("formalParameter"))
         if key in self.read:
             return self.read[key]
@@ -167,6 +168,12 @@ class Network:
             return self.instance_output(node, conn.get("formalParameter"), seen)
         if ref in seen:
             raise ElementError("a feedback loop in the network", node)
+        if len(seen) >= MAX_WIRE_DEPTH:
+            raise ElementError(
+                f"a value that flows through more than {MAX_WIRE_DEPTH} elements one after "
+                f"another (an import reads at most {MAX_WIRE_DEPTH})",
+                node,
+            )
         seen = seen | {ref}
         tag = node.tag
         if tag == "leftPowerRail":

@@ -1,6 +1,7 @@
 """Read a TIA Portal Openness SimaticML export of an S7-GRAPH FB (``NetworkSource/Graph/v1``
 … ``v6``, TIA V14–V21) into the chart model. GRAPH to GRAPH: steps keep their numbers and
-names, transitions their numbers, names and order.
+names, transitions their numbers, names and order (a transition without a name, or with
+TIA's default for its number, ``Trans3``, is unnamed, as the export writes it).
 
 * Shape (``Connections``): a transition's preceding steps come in directly, through an
   ``AltBegin`` (its ``Out`` index is the branch's priority: leftmost first) or a
@@ -28,7 +29,7 @@ from dataclasses import replace
 from s7graph.engine.errors import LiteralError, S7Error, SourceLocation
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.change.base import MAX_NUMBER
-from s7graph.sequencer.exchange.export_simaticml import S7GRAPH_COMMENT
+from s7graph.sequencer.exchange.export_simaticml import S7GRAPH_COMMENT, default_name
 from s7graph.sequencer.exchange.flgnet import Box, read_boxes, read_network
 from s7graph.sequencer.exchange.iec_actions import permanent_assignment
 from s7graph.sequencer.exchange.iec_to_chart import accepted, const
@@ -309,7 +310,7 @@ class _Reader(TiaOperands):
                     first = holders.setdefault((what, number), name)
                     if first != name:
                         raise ElementError(f'Number {number} is {what} "{first}"\'s too', el)
-                    names[name] = number
+                    names[name if name.strip() else default_name(what, number)] = number
                 except ElementError as exc:
                     self.p.error(
                         "I013",
@@ -449,7 +450,7 @@ class _Reader(TiaOperands):
             out.append(
                 Transition(
                     n,
-                    t.get("Name"),
+                    _transition_name(t, n),
                     tuple(sources),
                     tuple(targets),
                     cond,
@@ -594,6 +595,14 @@ def _node(el: Node, port: str) -> tuple[str, int, int]:
         return ("E", 0, 0)
     kind = {"StepRef": "S", "TransitionRef": "T", "BranchRef": "B"}.get(el.tag, "?")
     return (kind, _number(el, "Number", 0), _number(el, port, 0))
+
+
+def _transition_name(t: Node, number: int) -> str:
+    """A transition's name as its author gave it: none ("") for no ``Name``, an empty one
+    or TIA's default for its number (``Trans3``), which TIA gives a transition nobody
+    named — so that an export writes that default again and a round trip changes nothing."""
+    name = t.get("Name")
+    return "" if name.strip() in ("", default_name("transition", number)) else name
 
 
 def _number(el: Node, attr: str, missing: int | None = None) -> int:

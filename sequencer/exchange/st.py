@@ -4,7 +4,8 @@
 ``parse_iec_file`` (textual SFC, in ``exchange.iec_text``) use one grammar, ``iec.lark``.
 Every node carries the line and column where it was written *in the text given*; an XML
 importer passes the place of that text in its file (``origin``) so that every problem is
-located in the file itself. A syntax error raises ``StSyntaxError`` with that place.
+located in the file itself. A syntax error raises ``StSyntaxError`` with that place, as
+does text nested deeper than ``MAX_TREE_DEPTH`` (at the first element past it).
 """
 
 from __future__ import annotations
@@ -367,14 +368,42 @@ def blank_comments(text: str, *, keep_flat: bool = False) -> str:
     return "".join(out) + text[done:] if out else text
 
 
+MAX_TREE_DEPTH = 200
+"""Rules nested in one parsed text, at most (some 190 NOTs or 95 IFs inside each other):
+the tree is turned into nodes recursively, two or three Python calls a level, and Python
+stops at about 1,000."""
+
+
+def _too_deep(tree: Tree[Any]) -> Tree[Any] | None:
+    """The first node of ``tree``, in reading order, deeper than ``MAX_TREE_DEPTH`` (None:
+    none is), found without recursion."""
+    stack: list[tuple[Tree[Any], int]] = [(tree, 1)]
+    while stack:
+        node, depth = stack.pop()
+        if depth > MAX_TREE_DEPTH:
+            return node
+        stack += [(c, depth + 1) for c in reversed(node.children) if isinstance(c, Tree)]
+    return None
+
+
 def parse_tree(text: str, start: str, file: str, origin: tuple[int, int], what: str) -> Any:
-    """The lark tree of ``text`` from rule ``start`` (raises ``StSyntaxError``); its
-    comments and pragmas read as blanks (``blank_comments``)."""
+    """The lark tree of ``text`` from rule ``start`` (raises ``StSyntaxError``, also for a
+    tree deeper than ``MAX_TREE_DEPTH``, at its first element past it); its comments and
+    pragmas read as blanks (``blank_comments``)."""
     text = blank_comments(text)
     try:
-        return _parser(start).parse(text)
+        tree = _parser(start).parse(text)
     except UnexpectedInput as exc:
         raise _fail(exc, file, origin, what) from None
+    deep = _too_deep(tree) if isinstance(tree, Tree) else None
+    if deep is not None:
+        line, col = shift(getattr(deep.meta, "line", 1), getattr(deep.meta, "column", 1), origin)
+        raise StSyntaxError(
+            f"{what} nests deeper than {MAX_TREE_DEPTH} levels here (an import reads at "
+            f"most {MAX_TREE_DEPTH})",
+            SourceLocation(file, line, col),
+        )
+    return tree
 
 
 def build(tree: Any) -> Any:

@@ -6,7 +6,8 @@ laughs" and no file or network access), and nothing is fetched. Every element ke
 line and column, and the place of its first non-blank character data, so that an
 importer can locate a problem in the file (``file:line:col``). A UTF-8 byte order mark,
 CRLF line ends and any namespace prefix are handled; merge-conflict markers (``<<<<<<<``,
-``=======``, ``>>>>>>>`` at the start of a line) and malformed XML are one clear error.
+``=======``, ``>>>>>>>`` at the start of a line), malformed XML and elements nested deeper
+than ``MAX_DEPTH`` are one clear error, at their line and column.
 """
 
 from __future__ import annotations
@@ -19,9 +20,16 @@ from xml.parsers import expat
 from s7graph.engine.errors import SourceLocation
 from s7graph.sequencer.exchange.problems import ImportFailed, Problems
 
-__all__ = ["ElementError", "Node", "is_true", "parse_xml"]
+__all__ = ["MAX_DEPTH", "MAX_WIRE_DEPTH", "ElementError", "Node", "is_true", "parse_xml"]
 
 _CONFLICT = re.compile(rb"^(<{7}|={7}|>{7})(?:[ \t].*)?\r?$", re.MULTILINE)
+MAX_DEPTH = 100
+"""Elements nested in an imported file, at most: TIA's and PLCopen's own files nest fewer
+than 20, and the readers walk the tree recursively (Python stops at about 1,000 calls)."""
+MAX_WIRE_DEPTH = 100
+"""Elements of a LAD/FBD network a value flows through one after another, at most (a
+rung's contacts in series count as one): the networks are read recursively, up to six
+Python calls an element."""
 
 
 @dataclass(eq=False)
@@ -96,6 +104,14 @@ class _Refused(Exception):
     pass
 
 
+class _TooDeep(Exception):
+    """An element deeper than ``MAX_DEPTH``, at (line, column)."""
+
+    def __init__(self, line: int, col: int) -> None:
+        super().__init__(line, col)
+        self.line, self.col = line, col
+
+
 _ENCODING = re.compile(rb"""^(?:\xef\xbb\xbf)?\s*<\?xml\b[^>]*?\bencoding\s*=\s*["']([^"']*)""")
 
 
@@ -140,8 +156,10 @@ def parse_xml(data: bytes, file: str) -> Node:
         return parser.CurrentLineNumber, parser.CurrentColumnNumber + 1
 
     def start(name: str, attrs: dict[str, str]) -> None:
-        ns, _, tag = name.rpartition(" ")
         line, col = place()
+        if len(stack) == MAX_DEPTH:
+            raise _TooDeep(line, col)
+        ns, _, tag = name.rpartition(" ")
         node = Node(tag, ns, {k.rpartition(" ")[2]: v for k, v in attrs.items()}, line, col)
         if stack:
             node.parent = stack[-1]
@@ -186,6 +204,13 @@ def parse_xml(data: bytes, file: str) -> Node:
             "I002",
             "the file declares a DTD or entities; they are refused (no entity expansion)",
             problems.at(line, col),
+        )
+    except _TooDeep as exc:
+        problems.error(
+            "I001",
+            f"elements nest deeper than {MAX_DEPTH} levels here (an import reads at most "
+            f"{MAX_DEPTH}; TIA and PLCopen files nest fewer than 20)",
+            problems.at(exc.line, exc.col),
         )
     except expat.ExpatError as exc:
         message = expat.errors.messages.get(exc.code, str(exc)) if exc.code else str(exc)

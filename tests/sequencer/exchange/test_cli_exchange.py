@@ -4,6 +4,7 @@ editor's Open."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
@@ -11,7 +12,7 @@ import pytest
 from s7graph.sequencer.exchange import importable_files
 from s7graph.web.cli import main
 from tests.paths import ROOT
-from tests.sequencer.exchange.helpers import corpus, import_to
+from tests.sequencer.exchange.helpers import corpus, import_to, synthetic
 
 
 def test_import_writes_the_chart_to_stdout_with_what_it_reports_on_top(
@@ -109,3 +110,32 @@ def test_importable_files_lists_what_import_reads_with_its_format(tmp_path: Path
         ("matiec_SFC_TEST.xml", "plcopen"),
         ("matiec_sfc.txt", "iec-text"),
     ]
+
+
+@pytest.mark.parametrize(
+    ("name", "initial", "line"),
+    [
+        ("tia_unnamed_transitions.xml", 'Init="true"', 100),  # at the <Sequence>
+        ("beremiz_chart_blocks.xml", 'initialStep="true"', 32),  # at its first step
+    ],
+)
+def test_import_warns_at_once_of_a_chart_without_an_initial_step(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], name: str, initial: str, line: int
+) -> None:
+    """A chart whose steps are none initial never starts by itself: the import says so as
+    ``check`` does — the same code and words (W103) — at the sequence in the file."""
+    text = synthetic(name).read_text(encoding="utf-8")
+    assert text.count(initial) == 1
+    source = tmp_path / name
+    source.write_text(text.replace(initial, initial.replace("true", "false")), encoding="utf-8")
+    rc, out = import_to(tmp_path, source)
+    assert rc == 1
+    said = (
+        "warning[W103]: sequence 1 has no initial step; it starts only by ON or MAN mode "
+        "(sequence 1)"
+    )
+    err = capsys.readouterr().err
+    assert re.search(rf"^{re.escape(str(source))}:{line}:\d+: {re.escape(said)}$", err, re.M), err
+    main(["check", str(out)])
+    checked = capsys.readouterr()
+    assert said in checked.out + checked.err

@@ -4,10 +4,12 @@ what it could not map, at its line in the file (docs/import-export.md). The corp
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
 
+from s7graph.sequencer.exchange import export_chart, import_file
 from s7graph.sequencer.text.format import format_chart, format_expr, format_row
 from s7graph.sequencer.text.model import Chart
 from s7graph.web.cli import main
@@ -220,3 +222,30 @@ def test_tia_v16_actions_and_lad_transition_are_rows_and_a_condition() -> None:
     ) in text
     assert edges(chart)[-1] == (2, (2,), ())
     assert chart.options.messages and chart.options.ack_required
+
+
+def _element_names(xml: str) -> list[tuple[str, str, str]]:
+    """(element, Number, Name) of every step and transition, sorted."""
+    out = []
+    for tag, attrs in re.findall(r"<(Step|Transition) ([^>]*)>", xml):
+        number = re.search(r'\bNumber="(\d+)"', attrs)
+        name = re.search(r'\bName="([^"]*)"', attrs)
+        assert number is not None and name is not None, attrs
+        out.append((tag, number[1], name[1]))
+    return sorted(out)
+
+
+@pytest.mark.parametrize(
+    "name", ["GraphBranch2", "GraphBranchAbortOption", "GraphEnd", "StepSequence"]
+)
+def test_a_tia_export_exported_again_names_steps_and_transitions_as_tia_did(name: str) -> None:
+    """Import, then export: every step and transition has the name TIA wrote —
+    StepSequence's transitions, TIA's defaults ``Trans1`` and ``Trans2``, are unnamed in
+    the chart and go out with those defaults again."""
+    source = corpus(f"simaticml/{name}.xml")
+    chart = import_file(source).chart
+    assert _element_names(export_chart(chart, "simaticml")) == _element_names(
+        source.read_text(encoding="utf-8")
+    )
+    if name == "StepSequence":
+        assert [t.name for t in chart.all_transitions()] == ["", ""]

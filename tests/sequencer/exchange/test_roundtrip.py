@@ -11,6 +11,7 @@ import pytest
 
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.exchange import export_chart, export_reported, import_chart
+from s7graph.sequencer.exchange.naming import transliterate
 from s7graph.sequencer.exchange.shape import priority
 from s7graph.sequencer.text.format import format_chart, format_expr, format_row
 from s7graph.sequencer.text.model import Chart
@@ -418,9 +419,31 @@ END_FUNCTION_BLOCK
     assert [(d.code, d.loc.line) for d in problems] == [("X013", 4), ("X013", 5)]
 
 
+def test_an_unnamed_transition_comes_back_unnamed_from_simaticml() -> None:
+    """TIA names a transition nobody named ``Trans<n>``: the export writes that default for
+    an unnamed transition, and the import reads it back as no name, so the chart comes
+    back as written — ``T1`` unnamed, ``T2`` still ``Back``."""
+    text = """FUNCTION_BLOCK "T"
+SEQUENCE 1
+INITIAL_STEP S1 "Idle": END_STEP
+STEP S2 "Busy": END_STEP
+TRANSITION T1 FROM S1 TO S2 := I0.0;
+TRANSITION T2 "Back" FROM S2 TO S1 := I0.1;
+END_SEQUENCE
+END_FUNCTION_BLOCK
+"""
+    chart = parse_chart(text, "t.s7g")
+    xml = export_chart(chart, "simaticml")
+    assert re.findall(r'<Transition [^>]*?Name="([^"]+)"', xml) == ["Trans1", "Back"]
+    back = import_chart(xml.encode(), "t.xml").chart
+    assert [t.name for t in back.all_transitions()] == ["", "Back"]
+    assert uncommented(unlocated(back)) == uncommented(unlocated(chart))
+
+
 def test_plcopen_export_names_are_iec_identifiers() -> None:
     """IEC 61131-3 identifiers are ASCII letters, digits and single underscores, none at
-    the end: ``Lamp (x)`` and ``Füll ä`` go out as ``Lamp_x`` and ``F_ll``."""
+    the end: ``Lamp (x)`` and ``Füll ä`` go out as ``Lamp_x`` and ``Full_a`` (a letter
+    with a Latin base loses its marks)."""
     text = """FUNCTION_BLOCK "Hard_Ünïcode"
 SYMBOLS
   "Lamp (x)" : Q0.0 : BOOL;
@@ -436,11 +459,11 @@ END_FUNCTION_BLOCK
     plain = native_only(export_chart(parse_chart(text, "t.s7g"), "plcopen")).decode()
     names = re.findall(r'<(?:variable|step|pou) [^>]*?name="([^"]*)"', plain)
     assert names and all(re.fullmatch(r"[A-Za-z_](?:_?[A-Za-z0-9])*", n) for n in names), names
-    assert "Lamp_x" in names and "F_ll" in names
+    assert "Lamp_x" in names and "Full_a" in names and "Hard_Unicode" in names
 
 
 def test_plcopen_export_gives_each_step_and_global_an_iec_name_of_its_own() -> None:
-    """Names that differ in GRAPH but give one IEC identifier (``Шаг`` and ``Ход``,
+    """Names that differ in GRAPH but give one IEC identifier (``Шаг`` and ``Shag``,
     ``Motor-1`` and ``Motor_1``, a step and a tag both ``Start``, a step ``Fill`` and the
     variable ``fill``: IEC compares without case) stay apart in the SFC other tools read:
     the steps as ``S<n>``, the globals with ``_2`` …, each reported (X013); read back as
@@ -456,7 +479,7 @@ SEQUENCE 1
 INITIAL_STEP S1 "Start": N "Motor-1"; END_STEP
 STEP S2 "Fill": N "Motor_1"; END_STEP
 STEP S3 "Шаг": END_STEP
-STEP S4 "Ход": END_STEP
+STEP S4 "Shag": END_STEP
 STEP S5 "S1": END_STEP
 TRANSITION T1 FROM S1 TO S2 := "Start";
 TRANSITION T2 FROM S2 TO S3 := NOT "Start";
@@ -486,6 +509,65 @@ END_FUNCTION_BLOCK
     assert rows[:2] == [['N "Motor_1";'], ['N "Motor_1_2";']]
     conds = [format_expr(t.condition) for t in back.all_transitions() if t.condition]
     assert conds == ['"Start_2"', 'NOT "Start_2"', "fill", "S3.X", "fill"]
+
+
+@pytest.mark.parametrize(
+    ("name", "latin"),
+    [
+        ("Подача", "Podacha"),
+        ("Цех", "Cex"),  # ц: c before i, e, y, j
+        ("Цапфа", "Czapfa"),  # else cz
+        ("Щит", "Shhit"),
+        ("ЖУК", "ZHUK"),  # a capital in capitals
+        ("Объём", "Obyom"),  # ъ and ь are only marks: left out
+        ("Выход", "Vyxod"),  # ы is y` without its mark
+        ("Эхо", "Exo"),
+        ("Їжак", "Yizhak"),  # Ukrainian
+        ("Füll Straße", "Full Strasse"),  # another script's marks, and ß
+        ("注水", "注水"),  # no Latin form: as it is
+    ],
+)
+def test_transliteration_is_gost_7_79_system_b_without_its_marks(name: str, latin: str) -> None:
+    assert transliterate(name) == latin
+
+
+def test_cyrillic_names_go_to_plcopen_in_latin_letters_and_to_simaticml_as_they_are() -> None:
+    """PLCopen takes IEC identifiers, ASCII only: Cyrillic names go out transliterated by
+    GOST 7.79-2000 system B (``Подача`` → ``Podacha``, ``Цех`` → ``Cex``, ``ЖУК`` →
+    ``ZHUK``, the POU ``Линия`` → ``Liniya``, the tag ``Насос`` → ``Nasos``), not as
+    ``S<n>``; a name with no letter either can hold (``注水``) is ``S<n>``, reported.
+    SimaticML names are not identifiers: they go out as they are, and both imports give
+    back the names the chart had."""
+    text = """FUNCTION_BLOCK "Линия"
+SYMBOLS
+  "Насос" : Q0.0 : BOOL;
+END_SYMBOLS
+SEQUENCE 1
+INITIAL_STEP S1 "Подача": N "Насос"; END_STEP
+STEP S2 "Цех": END_STEP
+STEP S3 "ЖУК": END_STEP
+STEP S4 "注水": END_STEP
+TRANSITION T1 FROM S1 TO S2 := I0.0;
+TRANSITION T2 FROM S2 TO S3 := I0.1;
+TRANSITION T3 FROM S3 TO S4 := I0.2;
+TRANSITION T4 FROM S4 TO S1 := I0.3;
+END_SEQUENCE
+END_FUNCTION_BLOCK
+"""
+    chart = parse_chart(text, "t.s7g")
+    xml, problems = export_reported(chart, "plcopen")
+    plain = native_only(xml).decode()
+    assert re.findall(r'<step [^>]*?name="([^"]*)"', plain) == ["Podacha", "Cex", "ZHUK", "S4"]
+    assert re.findall(r'<pou name="([^"]*)"', plain) == ["Liniya"]
+    assert re.findall(r'<variable name="([^"]*)" address', plain) == ["Nasos"]
+    assert [(d.code, d.loc.line) for d in problems if d.code == "X013"] == [("X013", 9)]
+    assert "no letter or digit" in next(d.message for d in problems if d.code == "X013")
+    kept = import_chart(xml.encode(), "t.xml").chart  # from s7graph's data in the file
+    assert [s.name for s in kept.all_steps()] == ["Подача", "Цех", "ЖУК", "注水"]
+    tia = export_chart(chart, "simaticml")
+    assert re.findall(r'<Step [^>]*?Name="([^"]*)"', tia) == ["Подача", "Цех", "ЖУК", "注水"]
+    back = import_chart(tia.encode(), "t.xml").chart
+    assert [s.name for s in back.all_steps()] == ["Подача", "Цех", "ЖУК", "注水"]
 
 
 @pytest.mark.parametrize("path", [*EXAMPLES, SIX], ids=lambda p: p.stem)

@@ -23,6 +23,9 @@ CONSTRUCTS: dict[str, str] = {
     "SimaticML: Scope=GlobalConstant operands": "tia_global_constant.xml",
     "SimaticML: a step's U compared with an untyped tag": "tia_time_compare.xml",
     "SimaticML: tags without address inside the CPU's M area": "tia_many_tags.xml",
+    "SimaticML: transitions nobody named (TIA's default name, no name)": (
+        "tia_unnamed_transitions.xml"
+    ),
     "export to PLCopen: the permanent instructions": "plcopen_export_permanent.s7g",
     "export to PLCopen: IEC timer and counter calls": "plcopen_export_timers.s7g",
     "export to PLCopen: a six-sequence chart read by another tool": "six_sequences.s7g",

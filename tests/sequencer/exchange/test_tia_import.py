@@ -1,7 +1,7 @@
 """What a real TIA Portal GRAPH export holds that the SimaticML import refused or placed wrongly
 (docs/import-export.md): named constants, a step's time compared with operands TIA types from
-the comparison, and global tags without an address, which get marker addresses inside the
-CPU's M area."""
+the comparison, global tags without an address, which get marker addresses inside the
+CPU's M area, and transitions nobody named."""
 
 from __future__ import annotations
 
@@ -10,9 +10,10 @@ from pathlib import Path
 
 import pytest
 
-from s7graph.sequencer.exchange import ImportFailed, import_chart, import_file
+from s7graph.sequencer.exchange import ImportFailed, export_chart, import_chart, import_file
 from s7graph.sequencer.exchange.markers import M_BYTES, Markers, used_bytes
 from s7graph.sequencer.text.format import format_chart
+from s7graph.sequencer.text.walk import uncommented, unlocated
 from tests.sequencer.exchange.helpers import codes, import_to, sim, synthetic
 
 
@@ -23,8 +24,8 @@ def test_a_global_constant_is_an_fb_variable_and_a_block_constant_its_value() ->
     (``LocalConstant``) is the value its interface gives."""
     result = import_file(synthetic("tia_global_constant.xml"))
     text = format_chart(result.chart)
-    assert 'TRANSITION T1 "Trans1" FROM S1 TO S2 := "Start" AND strokes < MAX_STROKES;' in text
-    assert 'TRANSITION T2 "Trans2" FROM S2 TO S1 := S2.U > T#2S;' in text
+    assert 'TRANSITION T1 FROM S1 TO S2 := "Start" AND strokes < MAX_STROKES;' in text
+    assert "TRANSITION T2 FROM S2 TO S1 := S2.U > T#2S;" in text
     assert "  MAX_STROKES : INT;" in text
     assert ("I023", 209) in codes(result.problems)
     assert "constant MAX_STROKES is in the PLC's constants table" in " ".join(
@@ -129,3 +130,33 @@ def test_a_static_string_keeps_the_length_tia_declared() -> None:
     )
     text = format_chart(import_chart(xml.encode(), "t.xml").chart)
     assert "  label : STRING[8] := 'Drill';" in text
+
+
+def _names(xml: str) -> list[tuple[str, str, str | None]]:
+    """(element, Number, Name or None when it has none) of every step and transition."""
+    out: list[tuple[str, str, str | None]] = []
+    for tag, attrs in re.findall(r"<(Step|Transition) ([^>]*)>", xml):
+        name = re.search(r'\bName="([^"]*)"', attrs)
+        number = re.search(r'\bNumber="(\d+)"', attrs)
+        assert number is not None
+        out.append((tag, number[1], name[1] if name else None))
+    return out
+
+
+def test_a_transition_nobody_named_stays_unnamed_through_a_simaticml_round_trip() -> None:
+    """TIA gives a transition nobody named its default name (``Trans1``); a file may also
+    carry none. Both import as an unnamed transition, which the export writes with TIA's
+    default again, while a name its author gave (``Back``) stays: importing the export
+    gives the same chart, and the export names every step and transition as the file did."""
+    source = synthetic("tia_unnamed_transitions.xml")
+    first = import_file(source)
+    names = [(t.number, t.name) for t in first.chart.all_transitions()]
+    assert names == [(1, ""), (2, ""), (3, "Back")]
+    xml = export_chart(first.chart, "simaticml")
+    written = _names(source.read_text())
+    assert ("Transition", "2", None) in written
+    assert _names(xml) == [
+        (tag, n, name if name is not None else f"Trans{n}") for tag, n, name in written
+    ]
+    back = import_chart(xml.encode(), "back.xml").chart
+    assert uncommented(unlocated(back.sequences)) == uncommented(unlocated(first.chart.sequences))

@@ -9,6 +9,10 @@ from pathlib import Path
 
 import pytest
 
+from s7graph.sequencer.exchange import import_chart
+from s7graph.sequencer.exchange.st import MAX_TREE_DEPTH
+from s7graph.sequencer.exchange.xmltree import MAX_DEPTH, MAX_WIRE_DEPTH
+from s7graph.sequencer.text.format import format_expr
 from s7graph.web.cli import main
 from tests.sequencer.exchange.helpers import corpus
 
@@ -253,3 +257,122 @@ def test_an_unexpected_failure_of_an_importer_is_one_line_naming_the_file_and_fo
         "TIA Portal SimaticML (S7-GRAPH)"
     ]
     assert not (tmp_path / "out.s7g").exists()
+
+
+def _at(text: str, line: int, col: int) -> str:
+    """The text of ``text`` from line ``line``, column ``col`` (both from 1) on."""
+    return text.splitlines()[line - 1][col - 1 :]
+
+
+@pytest.mark.parametrize(("levels", "refused"), [(MAX_DEPTH - 8, False), (3000, True)])
+def test_elements_nested_too_deeply_are_refused_at_the_first_element_past_the_limit(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], levels: int, refused: bool
+) -> None:
+    """``PostOperations`` is 8 elements deep: ``levels`` elements inside it reach the limit
+    and import; deeper, the first element past the limit is named by line and column."""
+    text = simaticml(post="<X>" * levels + "</X>" * levels)
+    rc, err = run(tmp_path, capsys, "deep.xml", text)
+    if not refused:
+        assert rc == 0, err
+        return
+    assert rc == 2
+    m = re.fullmatch(r".*deep\.xml:(\d+):(\d+): error\[I001\]: (.*)", err[0])
+    assert m is not None, err
+    assert m[3] == (
+        f"elements nest deeper than {MAX_DEPTH} levels here (an import reads at most "
+        f"{MAX_DEPTH}; TIA and PLCopen files nest fewer than 20)"
+    )
+    line, col = int(m[1]), int(m[2])  # the first <X> past the limit, and those in it
+    assert line == 19
+    assert _at(text, line, col) == "<X>" * (levels - (MAX_DEPTH - 8)) + "</X>" * levels + (
+        "</PostOperations>"
+    )
+
+
+def test_an_st_text_nested_too_deeply_is_refused_where_it_passes_the_limit(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """300 NOTs inside each other go past ``MAX_TREE_DEPTH``: the error is at one of them,
+    on the condition's line, not a file that "nests too deeply" somewhere."""
+    condition = "NOT " * 300 + "a"
+    text = (
+        "FUNCTION_BLOCK F\nVAR a : BOOL; END_VAR\nINITIAL_STEP S1: END_STEP\nSTEP S2: END_STEP\n"
+        f"TRANSITION FROM S1 TO S2 := {condition};\nEND_TRANSITION\n"
+        "TRANSITION FROM S2 TO S1 := a;\nEND_TRANSITION\nEND_FUNCTION_BLOCK\n"
+    )
+    rc, err = run(tmp_path, capsys, "deep.st", text)
+    assert rc == 2
+    m = re.fullmatch(r".*deep\.st:(\d+):(\d+): error\[I001\]: (.*)", err[0])
+    assert m is not None, err
+    assert m[3] == (
+        f"the IEC text nests deeper than {MAX_TREE_DEPTH} levels here (an import reads at "
+        f"most {MAX_TREE_DEPTH})"
+    )
+    assert int(m[1]) == 5 and _at(text, 5, int(m[2])).startswith("NOT NOT")
+
+
+def _lad(nots: int, contacts: int = 1) -> str:
+    """A transition's LAD network: ``contacts`` contacts in series on the power rail, then
+    ``nots`` NOT boxes one after another, each part on a line of its own."""
+    parts = ['<Part Name="TrCoil" UId="21"/>']
+    wires, prev, uid = [], "", 100
+    for k in range(contacts):
+        parts.append(
+            f'<Access Scope="GlobalVariable" UId="{uid}"><Symbol><Component Name="t{k}"/>'
+            f'</Symbol></Access><Part Name="Contact" UId="{uid + 1}"/>'
+        )
+        src = f'<NameCon UId="{prev}" Name="out"/>' if prev else "<Powerrail/>"
+        wires += [
+            f'<Wire UId="{uid + 2}"><IdentCon UId="{uid}"/>'
+            f'<NameCon UId="{uid + 1}" Name="operand"/></Wire>',
+            f'<Wire UId="{uid + 3}">{src}<NameCon UId="{uid + 1}" Name="in"/></Wire>',
+        ]
+        prev, uid = str(uid + 1), uid + 4
+    for _ in range(nots):
+        parts.append(f'<Part Name="Not" UId="{uid}"/>')
+        wires.append(
+            f'<Wire UId="{uid + 1}"><NameCon UId="{prev}" Name="out"/>'
+            f'<NameCon UId="{uid}" Name="in"/></Wire>'
+        )
+        prev, uid = str(uid), uid + 2
+    wires.append(
+        f'<Wire UId="{uid}"><NameCon UId="{prev}" Name="out"/><NameCon UId="21" Name="in"/></Wire>'
+    )
+    return (
+        "<FlgNet><Parts>\n"
+        + "\n".join(parts)
+        + "\n</Parts><Wires>"
+        + "".join(wires)
+        + "</Wires></FlgNet>"
+    )
+
+
+@pytest.mark.parametrize(("nots", "refused"), [(MAX_WIRE_DEPTH - 1, False), (500, True)])
+def test_a_condition_wired_through_too_many_elements_is_refused_at_the_one_past_the_limit(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], nots: int, refused: bool
+) -> None:
+    """A value flowing through NOT after NOT: up to ``MAX_WIRE_DEPTH`` elements it is read,
+    beyond, the element past the limit is named by its line."""
+    text = simaticml().replace(_TRUE, _lad(nots), 1)
+    rc, err = run(tmp_path, capsys, "wired.xml", text)
+    if not refused:
+        assert rc == 1 and "error" not in " ".join(err), err
+        return
+    assert rc == 2
+    m = re.fullmatch(r".*wired\.xml:(\d+):(\d+): error\[I012\]: (.*)", err[0])
+    assert m is not None, err
+    assert m[3] == (
+        f"transition 1: a value that flows through more than {MAX_WIRE_DEPTH} elements one "
+        f"after another (an import reads at most {MAX_WIRE_DEPTH})"
+    )
+    assert _at(text, int(m[1]), int(m[2])).startswith('<Part Name="Not"')
+
+
+def test_a_rung_of_hundreds_of_contacts_in_series_imports() -> None:
+    """Contacts in series are one chain, read without recursion and built as the parser
+    builds a written chain: 500 of them are a condition of 500 operands."""
+    text = simaticml().replace(_TRUE, _lad(0, contacts=500), 1)
+    chart = import_chart(text.encode(), "long.xml").chart
+    condition = chart.all_transitions()[0].condition
+    assert condition is not None
+    assert format_expr(condition, chains=True) == " AND ".join(f'"t{k}"' for k in range(500))
