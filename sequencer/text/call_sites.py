@@ -1,5 +1,5 @@
 """Where a chart calls blocks: every ``CALL`` of its action rows and permanent instructions,
-with the element it is in (docs/chart-format.md, "Calling blocks").
+with the element it is in (docs/chart-format.md).
 
 Pure: it reads the model only, so the text's names (``sequencer.text.names``: the instance
 DBs a chart's calls name) and the runtime's calls (``sequencer.calls``: the instance DBs
