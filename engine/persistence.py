@@ -53,7 +53,10 @@ changed fingerprint lets the FB's ``state_format.adapt`` carry the data over (a 
 FB: by step number, ``sequencer/change/carry.py``) and reports what it could not keep. A
 file missing beside its ``-wal`` (or its ``.renew``) is refused, never started fresh; a
 full disk or a read-only folder is the disk's problem, not the file's: refused without
-``--fresh`` as the way out.
+``--fresh`` as the way out. A file is recognised and loaded on a read-only connection
+(immutable without a ``-wal`` beside it) and opened for writing only once it is taken
+(``open_writing``; the first ``write`` at the latest): a refused file is left byte for byte
+as it was, no ``-wal`` of it checkpointed, no ``-wal`` or ``-shm`` made beside it.
 
 **Rebuilt when lost.** A file deleted, replaced or damaged under the running CPU (or its
 ``-wal`` deleted) is noticed at the next ``write`` (``StateWriteError.renew``) and built anew
@@ -421,8 +424,10 @@ def _json_row(snapshot: dict[str, object], volatile: dict[str, object]) -> tuple
 class StateStore:
     """One SQLite file holding a CPU's state, its alarm log and its audit log.
 
-    Opening checks the file (``StateFileError``); ``load`` restores a CPU from it; ``stage``
-    and ``write`` keep it up to date; ``save`` does both at once."""
+    Opening checks the file (``StateFileError``); ``load`` restores a CPU from it, both on a
+    read-only connection to a file that was there; ``open_writing`` (or the first
+    ``write``) opens it for writing; ``stage`` and ``write`` keep it up to date; ``save``
+    does both at once."""
 
     def __init__(
         self,
@@ -446,26 +451,16 @@ class StateStore:
         self.interval_ns = None if interval_ms is None else int(interval_ms * 1_000_000)
         existed = self.path.exists()
         _check_path(self.path, existed)
-        try:
-            self._db = _connect(self.path)
-        except sqlite3.Error as exc:
-            raise _unreadable(self.path, exc) from None
         self.renew_hooks: list[RenewHooks] = []
         """Other users of the file, told when it is built anew (``renew``)."""
-        try:
-            self._held = _hold(self.path)
-            _open_file(self._db, self.path, existed, self.synchronous)
-            self.made_private = _make_private(self.path) and existed
-            """Others could read the file as it was found: it was made its owner's alone."""
+        self.made_private = False
+        """Others could read the file as it was found: it was made its owner's alone (when
+        it was opened for writing)."""
+        self._db, self._held, self._made_shm = _opened(self.path, existed, synchronous)
+        self._writing = not existed  # an existing file: read-only until ``open_writing``
+        self._drop_hot = False  # the hot restart image to delete once writing
+        if self._writing:
             self._idents()
-        except sqlite3.DatabaseError as exc:
-            self._db.close()
-            _let_go(self._held)
-            raise _unreadable(self.path, exc) from None
-        except BaseException:
-            self._db.close()
-            _let_go(getattr(self, "_held", None))
-            raise
         self._lock: Any = _NoLock()  # a writer's lock once one is attached (use_lock)
         self._parts: dict[str, tuple[Callable[[], object], Callable[[Any], None]]] = {}
         self._part_seen: dict[str, object] = {}
@@ -484,13 +479,15 @@ class StateStore:
         self.alarm_limit = ALARM_ROWS
         """Message events kept in ``alarms``; older ones are summed into ``alarm_summary``
         (``engine/rollup.py``) in the transaction that adds the one over the limit."""
-        self._alarm_rows = int(self._db.execute("SELECT COUNT(*) FROM alarms").fetchone()[0])
+        self._alarm_rows = _count(self._db, "alarms")
         self.deferred = False
         """Set by a writer: ``log_*`` rows wait for the next ``stage`` instead of being
         written at once, so they commit with the scan's state (and off the scan thread)."""
         self.saves = 0
 
     def _next_diag_seq(self) -> int:
+        if "diagnostics" not in _tables(self._db):  # a file from before: read as it is
+            return 0
         row = self._db.execute("SELECT MAX(seq) FROM diagnostics").fetchone()
         return 0 if row is None or row[0] is None else int(row[0]) + 1
 
@@ -500,16 +497,26 @@ class StateStore:
 
     def close(self) -> None:
         self._db.close()
+        if self._made_shm and not self._writing:  # read only: nothing of it left beside the file
+            _drop_shm(self.path, self._held)
         _let_go(self._held)  # after the connection: closing a descriptor drops its locks
         self._held = None
+
+    def open_writing(self) -> None:
+        """Open the file, read-only since it was recognised (and loaded), for writing: the
+        tables and columns this code writes added, the format mark, the hot restart image
+        a warm run does not keep deleted, the file made its owner's alone. Done by the
+        first ``write`` at the latest; ``StateFileError`` (a full disk, a read-only folder).
+        Until then a file that is refused is left as it was found, byte for byte."""
+        if not self._writing:
+            _for_writing(self)
 
     def use_lock(self, lock: Any) -> None:
         """The writer's lock guards the queued log rows (``log_*`` from other threads)."""
         self._lock = lock
 
     def has_state(self) -> bool:
-        row = self._db.execute("SELECT 1 FROM meta WHERE key='memory'").fetchone()
-        return row is not None
+        return self.meta("memory") is not None
 
     def add_part(
         self, name: str, snapshot: Callable[[], object], restore: Callable[[Any], None]
@@ -679,6 +686,11 @@ class StateStore:
         (``renew`` set when the file was deleted, replaced or damaged: ``renew``)."""
         if not batch:
             return
+        if not self._writing:
+            try:
+                _for_writing(self)
+            except StateFileError as exc:
+                raise StateWriteError(self.path, exc.problem) from None
         lost = gone(self.path, self._files)
         if lost is not None:
             raise StateWriteError(self.path, lost[0], renew=lost[1])
@@ -770,68 +782,9 @@ class StateStore:
         holds a state this CPU cannot trust (see the module docstring), SQLite's own
         errors reading it included."""
         try:
-            return self._load(cpu)
+            return _load(self, cpu)
         except sqlite3.DatabaseError as exc:
             raise _unreadable(self.path, exc) from None
-
-    def _load(self, cpu: Cpu) -> LoadReport | None:
-        memory = self.meta("memory")
-        instances = self._db.execute(
-            "SELECT number, fb, name, fingerprint, shape, data FROM instances ORDER BY number"
-        ).fetchall()
-        if memory is None and not instances:
-            return None
-        report = _saved_report(self)
-        if memory is None:
-            raise StateFileError(self.path, "no memory image (an incomplete state)")
-        hot = self.meta("hot_memory")
-        image = _checked(self.path, "memory image", memory, check_memory_image, cpu)
-        if hot is not None:
-            hot_image = _checked(self.path, "hot restart image", hot, check_hot_image, cpu)
-            _restore_part(self.path, "hot restart image", lambda: cpu.mem.restore_hot(hot_image))
-        else:
-            cpu.hot_blockers.add("no hot restart image saved")
-        _restore_part(self.path, "memory image", lambda: cpu.mem.restore(image))
-        for number, label, name, fingerprint, shape, data in instances:
-            _load_instance(
-                self.path, cpu, int(number), label, name, fingerprint, shape, data, report
-            )
-        unsaved = _unsaved(cpu, {int(row[0]) for row in instances}, report)
-        blockers = self.meta("hot_blockers")
-        if blockers:
-            _restore_part(
-                self.path,
-                "hot restart blockers",
-                lambda: cpu.hot_blockers.update(str(b) for b in json.loads(blockers)),
-            )
-        forces = self.meta("forces")
-        if forces is not None:
-            _restore_part(
-                self.path, "force table", lambda: cpu.forces.restore(json.loads(forces), cpu.mem)
-            )
-        saved = _saved_diagnostics(self._db, self.path, cpu.diagnostics.capacity)
-        for entry in saved:
-            cpu.diagnostics.add(entry)
-        cpu.diagnostics.continue_from(self._diag_seq)  # numbered on from the last run's
-        report.stopped = last_error_stop(saved) or ""
-        stopped = stop_blocker(saved)
-        if stopped is not None:
-            cpu.hot_blockers.add(stopped)
-        self._diag_saved = cpu.diagnostics.total
-        for part_name, state in self._db.execute("SELECT name, state FROM parts"):
-            part = self._parts.get(str(part_name))
-            if part is not None:
-                _restore_part(
-                    self.path,
-                    f"part {part_name!r}",
-                    functools.partial(_restore_json, part[1], str(state)),
-                )
-        if not report.changed and not unsaved:
-            cpu.hot_blockers.discard("program download")  # the very program that was running
-        if not self.hot:  # not kept up to date from now on (a read-only file fails later)
-            with contextlib.suppress(sqlite3.Error):
-                self._db.execute("DELETE FROM meta WHERE key='hot_memory'")
-        return report
 
     # ---- alarms and audit (hooks for sfb/alarms.py and the web commands) ---------------------
 
@@ -913,16 +866,107 @@ class StateStore:
         return None if row is None else unpack_instance(row[0])
 
 
-def _open_file(db: sqlite3.Connection, path: Path, existed: bool, synchronous: str) -> None:
-    """Check an existing file (``StateFileError``), then set it up: WAL, ``synchronous``,
-    the schema."""
-    if existed:
-        _check_existing(db, path)
-    else:
+def _opened(
+    path: Path, existed: bool, synchronous: str
+) -> tuple[sqlite3.Connection, tuple[int, int] | None, bool]:
+    """(the connection, the lock held, whether this connection made the ``-shm``) of a state
+    file: a new one created and set up for writing; an existing one locked (``_hold``), then
+    recognised (``_check_existing``) on a read-only connection — nothing written to it, no
+    checkpoint of its write-ahead log, no ``-wal`` or ``-shm`` left beside it when it is
+    refused. ``StateFileError`` when it is."""
+    held: tuple[int, int] | None = None
+    shm = Path(f"{path}-shm")
+    had_shm = shm.exists()
+    try:
+        if existed:
+            held = _hold(path)
+            db = _reader(path)
+        else:
+            db = _connect(path)
+    except sqlite3.Error as exc:
+        _let_go(held)
+        raise _unreadable(path, exc) from None
+    try:
+        if existed:
+            _check_existing(db, path)
+        else:
+            held = _hold(path)
+            _setup(db, synchronous, new=True)
+            _make_private(path)
+    except BaseException as exc:
+        db.close()
+        if existed and not had_shm:
+            _drop_shm(path, held)
+        _let_go(held)
+        if isinstance(exc, sqlite3.DatabaseError):
+            raise _unreadable(path, exc) from None
+        raise
+    return db, held, existed and not had_shm and shm.exists()
+
+
+def _reader(path: Path) -> sqlite3.Connection:
+    """A read-only connection to ``path``; immutable when no ``-wal`` is beside it (nothing
+    to read from one, and a read-only connection to a WAL file makes a ``-wal`` and a
+    ``-shm`` it cannot remove), else reading the ``-wal`` too (it may make a ``-shm``:
+    ``_drop_shm``)."""
+    quiet = "" if Path(f"{path}-wal").exists() else "&immutable=1"
+    uri = f"{path.absolute().as_uri()}?mode=ro{quiet}"  # a '?' or '#' in the path quoted
+    return sqlite3.connect(
+        uri, uri=True, check_same_thread=False, isolation_level=None, timeout=5.0
+    )
+
+
+def _drop_shm(path: Path, held: tuple[int, int] | None) -> None:
+    """Remove the ``-shm`` a read-only connection made beside ``path`` (none was there),
+    unless another store of this process still has the file open."""
+    entry = _HELD.get(held) if held is not None else None
+    if entry is None or entry[1] <= 1:
+        with contextlib.suppress(OSError):
+            os.unlink(f"{path}-shm")
+
+
+def _for_writing(store: StateStore) -> None:
+    """``StateStore.open_writing``: the read-only connection replaced by one that writes."""
+    db = _connect(store.path)
+    store._db.close()
+    store._db = db
+    try:
+        _setup(db, store.synchronous, new=False)
+        if store._drop_hot:
+            _drop_hot_image(db)
+    except sqlite3.DatabaseError as exc:
+        raise _unreadable(store.path, exc) from None
+    store._writing = True
+    store.made_private = _make_private(store.path)
+    store._idents()
+    store._alarm_rows = _count(db, "alarms")
+
+
+def _drop_hot_image(db: sqlite3.Connection) -> None:
+    """A warm run does not keep the hot restart image up to date: it goes (a read-only
+    file fails later, at the first write)."""
+    with contextlib.suppress(sqlite3.Error):
+        db.execute("DELETE FROM meta WHERE key='hot_memory'")
+
+
+def _setup(db: sqlite3.Connection, synchronous: str, *, new: bool) -> None:
+    """Set a file up for writing: WAL, ``synchronous``, the schema."""
+    if new:
         db.execute("PRAGMA page_size=1024")  # a short row change writes one short page
     db.execute("PRAGMA journal_mode=WAL")
     db.execute(f"PRAGMA synchronous={synchronous}")  # FULL: fsync at every commit
     _schema(db)
+
+
+def _tables(db: sqlite3.Connection) -> set[str]:
+    return {r[0] for r in db.execute("SELECT name FROM sqlite_master WHERE type='table'")}
+
+
+def _count(db: sqlite3.Connection, table: str) -> int:
+    """The rows of ``table`` (0 when a file from before lacks it)."""
+    if table not in _tables(db):
+        return 0
+    return int(db.execute(f"SELECT COUNT(*) FROM {table}").fetchone()[0])
 
 
 def _schema(db: sqlite3.Connection) -> None:
@@ -941,7 +985,7 @@ def _schema(db: sqlite3.Connection) -> None:
 
 def _check_existing(db: sqlite3.Connection, path: Path) -> None:
     """``StateFileError`` for an existing file that is not a state file this code trusts."""
-    tables = {r[0] for r in db.execute("SELECT name FROM sqlite_master WHERE type='table'")}
+    tables = _tables(db)
     check = db.execute("PRAGMA quick_check").fetchone()
     if check is None or check[0] != "ok":
         raise StateFileError(path, f"damaged file ({check[0] if check else '?'})")
@@ -963,6 +1007,73 @@ def _check_existing(db: sqlite3.Connection, path: Path) -> None:
         mark = _meta(db, path, "format")
         if mark is not None and mark not in READABLE:
             raise StateFileError(path, f"unknown format {mark!r}")
+
+
+def _load(store: StateStore, cpu: Cpu) -> LoadReport | None:
+    """``StateStore.load``, on the connection the file was recognised on (read-only until
+    the store writes: a file refused here is left as it was found)."""
+    memory = store.meta("memory")
+    tables = _tables(store._db)  # a file from before may lack some (added once writing)
+    instances = (
+        store._db.execute(
+            "SELECT number, fb, name, fingerprint, shape, data FROM instances ORDER BY number"
+        ).fetchall()
+        if "instances" in tables
+        else []
+    )
+    if memory is None and not instances:
+        return None
+    report = _saved_report(store)
+    if memory is None:
+        raise StateFileError(store.path, "no memory image (an incomplete state)")
+    hot = store.meta("hot_memory")
+    image = _checked(store.path, "memory image", memory, check_memory_image, cpu)
+    if hot is not None:
+        hot_image = _checked(store.path, "hot restart image", hot, check_hot_image, cpu)
+        _restore_part(store.path, "hot restart image", lambda: cpu.mem.restore_hot(hot_image))
+    else:
+        cpu.hot_blockers.add("no hot restart image saved")
+    _restore_part(store.path, "memory image", lambda: cpu.mem.restore(image))
+    for number, label, name, fingerprint, shape, data in instances:
+        _load_instance(store.path, cpu, int(number), label, name, fingerprint, shape, data, report)
+    unsaved = _unsaved(cpu, {int(row[0]) for row in instances}, report)
+    blockers = store.meta("hot_blockers")
+    if blockers:
+        _restore_part(
+            store.path,
+            "hot restart blockers",
+            lambda: cpu.hot_blockers.update(str(b) for b in json.loads(blockers)),
+        )
+    forces = store.meta("forces")
+    if forces is not None:
+        _restore_part(
+            store.path, "force table", lambda: cpu.forces.restore(json.loads(forces), cpu.mem)
+        )
+    saved = _saved_diagnostics(store._db, store.path, cpu.diagnostics.capacity)
+    for entry in saved:
+        cpu.diagnostics.add(entry)
+    cpu.diagnostics.continue_from(store._diag_seq)  # numbered on from the last run's
+    report.stopped = last_error_stop(saved) or ""
+    stopped = stop_blocker(saved)
+    if stopped is not None:
+        cpu.hot_blockers.add(stopped)
+    store._diag_saved = cpu.diagnostics.total
+    parts = store._db.execute("SELECT name, state FROM parts") if "parts" in tables else []
+    for part_name, state in parts:
+        part = store._parts.get(str(part_name))
+        if part is not None:
+            _restore_part(
+                store.path,
+                f"part {part_name!r}",
+                functools.partial(_restore_json, part[1], str(state)),
+            )
+    if not report.changed and not unsaved:
+        cpu.hot_blockers.discard("program download")  # the very program that was running
+    if not store.hot:  # not kept up to date from now on: deleted once the store writes
+        store._drop_hot = True
+        if store._writing:
+            _drop_hot_image(store._db)
+    return report
 
 
 def _renewed(store: StateStore, batch: Batch, why: str) -> str:
@@ -1254,8 +1365,13 @@ def _checked(
 def _saved_diagnostics(db: sqlite3.Connection, path: Path, capacity: int) -> list[DiagEntry]:
     """The last ``capacity`` diagnostics rows as entries, oldest first; ``StateFileError``
     naming a row that is malformed (``engine/state_checks.py``)."""
+    have = {r[1] for r in db.execute("PRAGMA table_info(diagnostics)")}
+    if not have:
+        return []
+    added = dict(_ADDED_DIAG_COLUMNS)  # a file from before: their defaults (added once writing)
+    columns = [c if c in have else added[c].rsplit(None, 1)[-1] for c in _DIAG_COLUMNS[1:]]
     rows = db.execute(
-        f"SELECT seq, {', '.join(_DIAG_COLUMNS[1:])} FROM diagnostics ORDER BY seq DESC LIMIT ?",
+        f"SELECT seq, {', '.join(columns)} FROM diagnostics ORDER BY seq DESC LIMIT ?",
         (capacity,),
     ).fetchall()
     entries = []
@@ -1270,7 +1386,12 @@ def _saved_diagnostics(db: sqlite3.Connection, path: Path, capacity: int) -> lis
 def _meta(db: sqlite3.Connection, path: Path, key: str) -> str | None:
     """The ``meta`` value of ``key``, read as bytes so that one not UTF-8 is refused by its
     key (SQLite's own error names only the column)."""
-    row = db.execute("SELECT CAST(value AS BLOB) FROM meta WHERE key=?", (key,)).fetchone()
+    try:
+        row = db.execute("SELECT CAST(value AS BLOB) FROM meta WHERE key=?", (key,)).fetchone()
+    except sqlite3.OperationalError as exc:
+        if str(exc) != "no such table: meta":  # a file from before without it: none
+            raise
+        return None
     if row is None:
         return None
     try:

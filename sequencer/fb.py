@@ -144,8 +144,6 @@ class GraphFB:
         self._commands: list[tuple[str, int | None]] = []
         self._levels: dict[str, bool | None] = {}  # level overrides for the next call
         self._acting: tuple[str, int | None] | None = None  # who commanded (user, ACK_S step)
-        self._placing: tuple[int, ...] = ()  # step numbers to place in the next call
-        self._entering: tuple[int, ...] = ()  # step numbers activated outside a call
         self._restart = ""  # the reason a startup OB's call gives its messages
         self._swapped = False  # a download swapped the chart: gone steps' messages go
 
@@ -254,15 +252,19 @@ class GraphFB:
 
     def place(self, steps: Iterable[int]) -> None:
         """Place the sequence at step numbers ``steps`` in the next call, in MAN: in each
-        sequence holding one of them exactly those active (``sequencer.placing``)."""
-        self._placing = tuple(steps)
+        sequence holding one of them exactly those active (``sequencer.placing``). Kept in
+        the instance DB (``GraphState.to_place``) until that call: a restart from the state
+        file in between carries it out in its first call."""
+        self.state.to_place = list(steps)
         self.loaded.flat = False
 
     def enter(self, steps: Iterable[int]) -> None:
         """Step numbers ``steps``, made active outside a call (an online change's new
         sequencer: ``sequencer.change.carry``), get their S1 event in the next call and stay
-        for it, as the steps the first call after a start activates."""
-        self._entering = tuple(steps)
+        for it, as the steps the first call after a start activates. Kept in the instance DB
+        (``GraphState.to_enter``) until that call, as ``place``: S1 once, restart or not."""
+        st = self.state
+        st.to_enter = list(dict.fromkeys([*st.to_enter, *steps]))
         self.loaded.flat = False
 
     def set_level(self, pin: str, value: bool | None) -> None:
@@ -291,7 +293,8 @@ class GraphFB:
         Everything derived from the old chart goes with its :class:`LoadedChart`. The FB
         keeps its number and its instance DB number; the instance DB is made anew for the
         new parameter set, each pin keeping its value by name. One-call commands queued for
-        the next call and the level overrides in force (HALT_SQ, EN_IL, EN_SV) stay."""
+        the next call, a placement or an entry not carried out yet and the level overrides
+        in force (HALT_SQ, EN_IL, EN_SV) stay."""
         loaded = LoadedChart(cc, self.fb_number, self._body)
         levels = {**self.levels, **self._levels}
         old = self.idb
@@ -301,6 +304,9 @@ class GraphFB:
             for name, value in old.values.items():
                 if name != STATE_VAR and name in idb.values:
                     idb.values[name] = value
+            was = old.values.get(STATE_VAR)
+            if isinstance(was, GraphState):  # an entry or placement not carried out stays
+                state.to_enter, state.to_place = list(was.to_enter), list(was.to_place)
         idb.values[STATE_VAR] = state
         self.loaded = loaded
         self.idb = idb
@@ -325,16 +331,9 @@ class GraphFB:
             for pin, step in self._commands:
                 rt.command(pin, step)
             self._commands.clear()
-        if self._placing:
-            index = self.cc.step_index
-            rt.placing = tuple(index[n] for n in self._placing if n in index)
-            rt.fastpath.armed = False
-            self._placing = ()
-        if self._entering:
-            index = self.cc.step_index
-            rt.entering = tuple(index[n] for n in self._entering if n in index)
-            rt.fastpath.armed = False
-            self._entering = ()
+        st = rt.st
+        if st.to_place or st.to_enter:
+            self._pending(rt, st)
         acting, self._acting = self._acting, None
         st = rt.execute(values, ctx.now_ns)
         self._copy_outputs(values, st, rt.outs_written)
@@ -344,6 +343,16 @@ class GraphFB:
             c.flat = True
         if st.log:
             self._emit_events(ctx, idb, st)
+
+    def _pending(self, rt: GraphRuntime, st: GraphState) -> None:
+        """The placement and the entry the instance DB holds for this call (``place``,
+        ``enter``), handed to the runtime as step indices (a number the chart no longer has
+        is dropped) and taken out of the DB: carried out once."""
+        index = self.cc.step_index
+        rt.placing = tuple(index[n] for n in st.to_place if n in index)
+        rt.entering = tuple(index[n] for n in st.to_enter if n in index)
+        rt.fastpath.armed = False
+        st.to_place, st.to_enter = [], []
 
     def _copy_outputs(self, values: dict[str, Any], st: GraphState, names: tuple[str, ...]) -> None:
         """The output pins ``names`` this call wrote into the instance DB (all of them into

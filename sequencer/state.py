@@ -164,6 +164,12 @@ class GraphState:
       ``levels``          level overrides in force (``LEVEL_PINS`` → value): HALT_SQ, EN_IL or
                           EN_SV held by a command whatever the pin; part of the instance DB, so
                           a warm or hot restart keeps them and a cold restart clears them
+      ``to_enter``        step *numbers* made active outside a call (an online change's new
+                          sequencer, ``GraphFB.enter``) whose S1 is the next call's
+      ``to_place``        step *numbers* to place in the next call (``GraphFB.place``);
+                          both part of the instance DB, as ``levels``: a restart from the
+                          state file carries them out once, in its first call (a cold
+                          restart clears them); numbers, so they outlive a chart change
     """
 
     __slots__ = (
@@ -185,6 +191,8 @@ class GraphState:
         "diag",
         "display",
         "levels",
+        "to_enter",
+        "to_place",
         "repin",
     )
 
@@ -242,6 +250,8 @@ class GraphState:
         self.t_no = 0
         self.display: dict[str, Any] = {}
         self.levels: dict[str, bool] = {}
+        self.to_enter: list[int] = []  # step numbers whose S1 is the next call's
+        self.to_place: list[int] = []  # step numbers to place in the next call
         self.repin: list[str] = []  # input pins the chart's rows wrote in this call
 
     # ------------------------------------------------------------ reading times (S7 TIME, ms)
@@ -320,6 +330,8 @@ class GraphState:
         data["diag"] = self.diag
         data["display"] = self.display
         data["levels"] = self.levels
+        data["to_enter"] = self.to_enter
+        data["to_place"] = self.to_place
         return data
 
     @classmethod
@@ -380,6 +392,11 @@ class GraphState:
         ):
             raise ValueError(f"'levels' is {levels!r}")
         st.levels = dict(levels)
+        for name in ("to_enter", "to_place"):  # absent in a state written before they were kept
+            numbers = data.get(name, [])
+            if not isinstance(numbers, list) or any(type(n) is not int for n in numbers):
+                raise ValueError(f"{name!r} is {numbers!r}")
+            setattr(st, name, list(numbers))
         return st
 
     def __eq__(self, other: object) -> bool:

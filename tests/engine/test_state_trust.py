@@ -176,8 +176,9 @@ def test_a_file_of_an_older_readable_format_is_read_and_marked_with_the_current_
     tmp_path: Path, mark: str, row: bytes
 ) -> None:
     """Format 2 kept instance rows as compressed JSON, format 3 as one MessagePack map (the
-    volatile keys inside): they are still read, and the file is marked with the format it
-    now holds rows of (an older s7graph refuses it by name)."""
+    volatile keys inside): they are still read, and the file, once written, is marked with
+    the format it now holds rows of (an older s7graph refuses it by name) — not before: a
+    load alone writes nothing."""
     path = _written(tmp_path / "s.sqlite")
     with sqlite3.connect(path) as con:
         con.execute("UPDATE meta SET value=? WHERE key='format'", (mark,))
@@ -186,6 +187,8 @@ def test_a_file_of_an_older_readable_format_is_read_and_marked_with_the_current_
     store = StateStore(path)
     cpu = _cpu()
     store.load(cpu)
+    assert store.meta("format") == mark
+    store.save(cpu)
     store.close()
     assert cpu.instance_db(2).total == 41
     with sqlite3.connect(path) as con:

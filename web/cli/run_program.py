@@ -11,8 +11,8 @@ retentive data and the CPU's message list (who acknowledged what, when; every me
 is also appended to its alarm log) and the CPU comes back by the chosen restart (warm by
 default); on Ctrl-C, SIGTERM or ``--duration-s`` the CPU goes to STOP (outputs 0) and the
 state is saved. A broken program or a state file it cannot trust is one line on stderr and
-exit 2; a STOP by error or a state file that cannot be written ends the run, one line,
-exit 1.
+exit 2; a STOP by error, a startup the CPU refuses or a state file that cannot be written
+ends the run, one line, exit 1.
 
 With ``--listen``/``--connect`` (``web.cli.net``, checked as for a chart) the CPU is on the
 bus (``web.wiring.program_edge``): status, the diagnostic buffer, force jobs, the RUN/STOP
@@ -192,8 +192,8 @@ def run_program(
     load: Callable[[Clock], LoadedProgram] | None = None,
 ) -> int:
     """Run a program until Ctrl-C/SIGTERM/duration; 0 on a clean end, 1 when the CPU went
-    to STOP by an error or the state could not be written, 2 on a broken program or a
-    state file it cannot trust.
+    to STOP by an error, refused its startup or the state could not be written, 2 on a
+    broken program or a state file it cannot trust.
 
     ``max_cycle_ms``: the maximum cycle time; None keeps the program's (see ``build_cpu``).
     ``restart`` (``--restart``): the startup from a saved state; None: the program's
@@ -369,9 +369,10 @@ def run_until_stopped(
     runner's ``end_on_stop``, a STOP by error). Always: the signal handlers back, the runner
     shut down, ``close()``, the store closed. Returns the exit status: 0 (saying so in one
     line on stderr), or 1 (with one line on stderr) when the CPU went to STOP by an error
-    — in its startup too — or the state was not written (``web.cli.run_stop``: a STOP the
-    program requested, SFC46 STP, is said and ends the run with 0). ``locate``: where the
-    program uses what a STOP's programming error names (a chart's, ``chart_locator``).
+    — in its startup too —, refused its startup, or the state was not written
+    (``web.cli.run_stop``: a STOP the program requested, SFC46 STP, is said and ends the run
+    with 0). ``locate``: where the program uses what a STOP's programming error names (a
+    chart's, ``chart_locator``).
 
     ``recovered`` (place, cause): the supervisor killed the process before, whose scan hung
     (``web.cli.supervisor``): no startup; the CPU stays in STOP with the cause in its

@@ -9,7 +9,10 @@ startup too (``in its startup (OB100)``: before its first cycle), with where a c
 operand an area length error names (``locate``); the run then ends with exit status 1.
 A STOP the program requested (SFC46 STP: the STOP entry ``16#4304``, as a PG STOP) is said
 without ``error:`` and is no failure: an S7 CPU shows it by its STOP LED alone, without the
-SF (system fault) LED of a STOP by an error.
+SF (system fault) LED of a STOP by an error. A startup the CPU refuses (its entry
+``16#4309``: the key switch in STOP, a startup OB loaded but deselected) leaves it in STOP
+without a STOP entry: said the same way, the block the entry names first, and the run's
+failure as a STOP by an error is.
 """
 
 from __future__ import annotations
@@ -26,7 +29,7 @@ from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.checks.default_cpu import default_cpu_warnings
 from s7graph.sequencer.text.model import Chart
 
-__all__ = ["RunStop", "chart_locator"]
+__all__ = ["RunStop", "chart_locator", "refused"]
 
 Locate = Callable[[DiagEntry], str]
 """Where the program uses what an error entry names (``; I200.0: first used at …``), or ""."""
@@ -63,12 +66,18 @@ class RunStop:
 
     def after_startup(self, runner: Runner, record: ScanRecord) -> None:
         """When the startup of ``record`` ended in STOP by itself (its STOP entry among the
-        startup's entries; a startup refused writes none): say it, and the run ends with it
+        startup's entries) or was refused (``refused``): say it, and the run ends with it
         as with a STOP in a cycle (``Runner.stopped``)."""
-        stop = runner.cpu.stop_entry
-        if runner.cpu.mode is not CpuMode.STOP or stop is None:
+        if runner.cpu.mode is not CpuMode.STOP:
             return
-        if not any(entry is stop for entry in record.diagnostics):
+        stop = runner.cpu.stop_entry
+        if stop is None or not any(entry is stop for entry in record.diagnostics):
+            why = refused(record)
+            if why is not None:
+                self.requested = False
+                runner.stopped = why
+                line = f"s7graph: error: {self.what}: the CPU refused its startup: {why}"
+                print(line, file=sys.stderr, flush=True)
             return
         runner.stopped = stop_reason(runner.cpu)
         self(runner.stopped, where=f" in its startup (OB{stop.ob})" if stop.ob else "")
@@ -91,6 +100,19 @@ class RunStop:
             return ""
         cause = stop_cause(self._runner.cpu.diagnostics, stop)
         return self.locate(cause) if cause is not None else ""
+
+
+def refused(record: ScanRecord) -> str | None:
+    """Why the startup of ``record`` was refused — its last ``16#4309`` entry, the block it
+    names first (``OB35: OB35 is loaded but deselected: startup aborted``) — when the CPU
+    stayed in STOP; None when it was not (a hot restart turned warm is no refusal)."""
+    if record.mode is not CpuMode.STOP:
+        return None
+    entries = [e for e in record.diagnostics if e.event_id == EventId.STARTUP_REFUSED]
+    if not entries:
+        return None
+    last = entries[-1]
+    return f"{last.block}: {last.message}" if last.block else last.message
 
 
 def chart_locator(chart: Callable[[], Chart], symbols: Callable[[], SymbolTable]) -> Locate:

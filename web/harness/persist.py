@@ -114,7 +114,7 @@ def open_state(
     the store keeps the hot restart image too. ``restart``: the startup the run makes (implies
     ``hot`` when hot); a saved state that allows no hot restart is refused
     (``HotRestartRefused``). ``StateFileError`` when the file cannot be trusted (the store is
-    closed again)."""
+    closed again, the file as it was: it is opened for writing only once it is taken)."""
     if fresh:
         not_in_use(path)  # a running CPU's file is never moved aside under it
     kept = keep_aside(path) if fresh else None
@@ -125,6 +125,7 @@ def open_state(
         why = hot_refusal(cpu) if restart == "hot" and report is not None else None
         if why is not None:
             raise HotRestartRefused(store.path, why)
+        store.open_writing()  # only now: a file refused is left as it was, byte for byte
     except BaseException:
         store.close()
         raise

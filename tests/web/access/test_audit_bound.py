@@ -133,7 +133,9 @@ def test_an_older_state_file_without_the_count_column_opens_and_gets_it(tmp_path
     ]
     assert [(r.user, r.count) for r in read_audit(path)] == [("carl", 1)]
     store.close()
-    StateStore(path).close()  # the engine's store adds its own table
+    state = StateStore(path)  # the engine's store adds its own table, once it writes
+    state.open_writing()
+    state.close()
     db = sqlite3.connect(path)
     assert db.execute("SELECT name FROM sqlite_master WHERE name='alarm_summary'").fetchone()
     db.close()

@@ -246,3 +246,74 @@ def test_a_program_whose_startup_stops_the_cpu_by_an_error_says_why_and_exits_1(
     (line,) = [x for x in err.splitlines() if x.startswith("s7graph: error")]
     assert line.startswith("s7graph: error: bad.py: the CPU went to STOP in its startup (OB100): ")
     assert "I200.0" in line and "OB121 not loaded" in line
+
+
+KEY_AT_STOP = """
+from s7graph.engine import ob
+from s7graph.engine.modes import KeySwitch
+
+CPU = {"key": KeySwitch.STOP}
+
+@ob(1)
+def main(ctx):
+    pass
+"""
+
+OB35_DESELECTED = """
+from s7graph.engine import ob
+
+@ob(1)
+def main(ctx):
+    pass
+
+@ob(35)
+def every_100_ms(ctx):
+    pass
+
+def setup(cpu):
+    cpu.interrupts.configure(35, 0)  # loaded, but deselected: no startup (16#4309)
+"""
+
+
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize(
+    ("program", "why"),
+    [
+        (KEY_AT_STOP, "key switch is in STOP"),
+        (OB35_DESELECTED, "OB35: OB35 is loaded but deselected: startup aborted"),
+    ],
+    ids=["the key switch at STOP", "a deselected OB"],
+)
+def test_a_startup_the_cpu_refuses_says_why_at_once_and_exits_1(
+    tmp_path: Path, program: str, why: str
+) -> None:
+    """Before: ``in STOP``, then ``stopped (state saved …)``, exit 0 — as if the run had
+    done its work. The CPU's refusal (its entry 16#4309) is one error line, the block it
+    names first, and the run ends at once with exit 1, as after a STOP in the startup."""
+    path = tmp_path / "refused.py"
+    path.write_text(textwrap.dedent(program))
+    proc = _start(str(path), "--state", str(tmp_path / "s.sqlite"), "--rt-priority", "0")
+    code = proc.wait(40)
+    assert proc.stderr is not None
+    err = proc.stderr.read()
+    assert code == 1, err
+    (line,) = [x for x in err.splitlines() if x.startswith("s7graph: error")]
+    assert line == f"s7graph: error: refused.py: the CPU refused its startup: {why}"
+    assert "stopped (state saved" not in err
+
+
+def test_a_hot_restart_the_cpu_turns_warm_is_no_refused_startup() -> None:
+    """Its 16#4309 entry says so, but the CPU starts (warm): nothing for the run to say."""
+    from s7graph.engine import Cpu, VirtualClock, ob
+    from s7graph.web.cli.run_stop import refused
+
+    @ob(1)
+    def main(ctx: object) -> None:
+        pass
+
+    cpu = Cpu(VirtualClock())
+    cpu.load(main)
+    cpu.hot_blockers.add("program download")
+    record = cpu.start("hot")
+    assert any(e.event_id == EventId.STARTUP_REFUSED for e in record.diagnostics)
+    assert refused(record) is None and cpu.last_restart == "warm"
