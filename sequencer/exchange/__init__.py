@@ -23,8 +23,9 @@ from s7graph.sequencer.checks.structure import initial_step_warnings
 from s7graph.sequencer.exchange.body_fc import BodyFc, blocks_source
 from s7graph.sequencer.exchange.pending import PendingScl
 from s7graph.sequencer.exchange.problems import ImportFailed, Problems
-from s7graph.sequencer.text.model import Binary, Chart, Operand
-from s7graph.sequencer.text.walk import nodes, rewrite
+from s7graph.sequencer.text.model import Binary, Chart
+from s7graph.sequencer.text.names import db_symbol
+from s7graph.sequencer.text.walk import rewrite
 from s7graph.steps.syntax import CHAIN_OPS, chain, chain_parts
 
 __all__ = [
@@ -236,12 +237,18 @@ def _import_chart(
 
 def _beside(chart: Chart, symbols: SymbolTable | None) -> Chart:
     """The chart s7graph kept in its export, but for the symbols it carries that the
-    symbol table given to the import holds already (the same name at the same address):
-    they stay in the table, as for a chart exported and imported with one."""
+    symbol table given to the import holds already (the same name at the same address, a
+    DB symbol naming the same DB): they stay in the table, as for a chart exported and
+    imported with one."""
     if symbols is None or not chart.symbols:
         return chart
     given = {s.name: str(s.address) for s in symbols}
-    kept = tuple(s for s in chart.symbols if given.get(s.name) != s.address)
+    given |= {name: label for name, label in symbols.block_names().items()}
+    kept = tuple(
+        s
+        for s in chart.symbols
+        if given.get(s.name) != (f"DB{db_symbol(s)}" if db_symbol(s) is not None else s.address)
+    )
     return replace(chart, symbols=kept)
 
 
@@ -301,7 +308,6 @@ def export_reported(
 ) -> tuple[str, list[Diagnostic]]:
     """``export_chart``, and what of the chart the format's other readers do not see or run
     otherwise, each located in the chart (``X01x`` warnings)."""
-    _refuse_members(chart, to)
     if to == "plcopen":
         from s7graph.sequencer.exchange.export_plcopen import export_plcopen
 
@@ -311,15 +317,3 @@ def export_reported(
 
         return export_simaticml(chart, symbols)
     raise ValueError(f"unknown export format {to!r}: plcopen or simaticml")
-
-
-def _refuse_members(chart: Chart, to: str) -> None:
-    """``ValueError`` at the first instance DB variable read by name (``DB10.Q``,
-    ``"T_S2".Q``): not exported yet; the call's ``=>`` output exports."""
-    for op in nodes(chart):
-        if isinstance(op, Operand) and op.member:
-            text = f'"{op.name}".{op.member}' if op.quoted else f"{op.name}.{op.member}"
-            raise ValueError(
-                f"{op.loc}: {text}: a {to} export cannot hold an instance DB's variable read "
-                "by name yet; take it out with the call's => (Q => x)"
-            )

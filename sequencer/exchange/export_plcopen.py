@@ -13,7 +13,10 @@ Boolean actions, ``S1``/``S0`` rows as ``P``/``P0`` actions, assignments as inli
 call of an IEC timer or counter (``CALL SFB 4, DB 10 (…)``) as the call of an FB instance
 ``TON_DB10`` the POU declares; the others (interlocked rows, other events, other calls, S5
 counters and timers) an inline ST comment holding the GRAPH row. Symbols are global
-variables of the configuration at their IEC address. Interlocks, supervisions, options,
+variables of the configuration at their IEC address. An instance DB's variable read by
+name (``"T_S2".Q``, ``DB10.Q``) is the access to that instance's output, ``TON_DB10.Q``
+(a DB of another block: a global instance of the block's type, reported); a DB symbol is
+no IEC variable (one no read goes through is reported). Interlocks, supervisions, options,
 permanent instructions and ``TO STOP`` live in the `.s7g` source only.
 """
 
@@ -26,6 +29,7 @@ from xml.sax.saxutils import escape, quoteattr
 
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.checks.diagnostics import Diagnostic
+from s7graph.sequencer.exchange.db_reads import DbReads, member_text
 from s7graph.sequencer.exchange.iec_to_chart import S7_PIN, SFB_OF
 from s7graph.sequencer.exchange.naming import s7_to_iec, transliterate
 from s7graph.sequencer.exchange.plcopen import S7GRAPH_DATA, TRANSITION_IDS
@@ -50,6 +54,7 @@ from s7graph.sequencer.text.model import (
     TransAttr,
     Unary,
 )
+from s7graph.sequencer.text.names import db_symbol
 from s7graph.sfb import catalogue
 
 __all__ = ["export_plcopen"]
@@ -81,7 +86,10 @@ class _Export:
         self.table = symbols
         self.ids = _OTHER_IDS
         self.instances: dict[str, str] = {}  # IEC FB instances the calls name → their type
+        self.db_globals: dict[str, str] = {}  # instances only read, as globals → their type
         self.p = Problems(chart.file)
+        self.reads = DbReads(chart, symbols)
+        self.read_dbs: set[int] = set()  # the instance DBs the SFC reads a variable of
         self.step_name: dict[int, str] = {}
         self.symbol_name: dict[str, str] = {}
         self._iec_names()
@@ -149,6 +157,8 @@ class _Export:
                 return f"{e.type}#{m[1]}#{m[2]}"
         if isinstance(e, Const) and e.text.upper().startswith("L#"):  # L#70000: a DINT
             return f"DINT#{e.text[2:]}"
+        if isinstance(e, Operand) and e.member:
+            return self.member_st(e)
         if isinstance(e, Operand) and e.quoted:
             return self.symbol_name.get(e.name) or _ident(e.name)
         if isinstance(e, Operand):
@@ -158,6 +168,48 @@ class _Export:
         if isinstance(e, TransAttr):
             return f"T{e.transition}_TT"
         return None
+
+    def member_st(self, e: Operand) -> str:
+        """An instance DB's variable read by name as IEC 61131-3's access to an FB
+        instance's output (6.6.1.2.2): ``"T_S2".Q`` / ``DB10.Q`` of an IEC timer or
+        counter is ``TON_DB10.Q``, the instance its call is written with; of another
+        block, a global instance of the block's type that an IEC tool does not call
+        (X010, once per DB)."""
+        number = self.reads.db(e)
+        self.read_dbs.add(number)
+        call = self.reads.calls[number]
+        entry = catalogue.find(f"{call.kind}{call.block}")
+        pin = entry.pin(e.member) if entry is not None else None
+        member = pin.name if pin is not None else e.member
+        if entry is not None and entry.kind == "SFB" and entry.name in SFB_OF:
+            name = f"{entry.name}_DB{number}"
+            self.instances[name] = entry.name
+            return f"{name}.{member}"
+        fb = entry.name if entry is not None else _ident(self.reads.block(number))
+        name = _ident(self.reads.name(number) or f"DB{number}")
+        if name not in self.db_globals:
+            self.db_globals[name] = fb
+            self.p.warn(
+                "X010",
+                f"{member_text(e)}: DB {number} is the instance of {self.reads.block(number)}, "
+                f"whose call other tools do not run: their SFC reads the global {name} : {fb}, "
+                "which nothing calls (the chart is in s7graph's data)",
+                e.loc,
+            )
+        return f"{name}.{member}"
+
+    def unread_dbs(self) -> None:
+        """A DB symbol of the chart's ``SYMBOLS`` no read goes through has no IEC form (a
+        DB is no variable): left out of the SFC, reported (X010)."""
+        for s in self.chart.symbols:
+            number = db_symbol(s)
+            if number is not None and number not in self.read_dbs:
+                self.p.warn(
+                    "X010",
+                    f'DB symbol "{s.name}" (DB {number}) has no IEC form and no read goes '
+                    "through it: kept in s7graph's data only",
+                    s.loc,
+                )
 
     # ------------------------------------------------------------ actions
 
@@ -198,8 +250,10 @@ class _Export:
     def fb_call(self, c: BlockCall) -> str | None:
         """``CALL SFB 4, DB 10 (IN := x, …)`` as the call of the IEC FB instance
         ``TON_DB10`` (declared in the POU), for the IEC timers and counters; else None."""
-        entry = catalogue.find(f"SFB{c.block}") if c.kind == "SFB" else None
-        if entry is None or entry.name not in SFB_OF or not isinstance(c.instance, int):
+        entry = catalogue.find(f"{c.kind}{c.block}")  # CALL SFB 4 or CALL "TON"
+        if entry is None or entry.kind != "SFB" or entry.name not in SFB_OF:
+            return None
+        if not isinstance(c.instance, int):
             return None
         name = f"{entry.name}_DB{c.instance}"
         self.instances[name] = entry.name
@@ -415,6 +469,10 @@ class _Export:
             derived = f"<type><derived name={quoteattr(fb)}/></type>"
             local.append(f"<variable name={quoteattr(name)}>{derived}</variable>")
         external, globals_ = [], []
+        for name, fb in self.db_globals.items():
+            derived = f"<variable name={quoteattr(name)}><type><derived name={quoteattr(fb)}/>"
+            external.append(derived + "</type></variable>")
+            globals_.append(derived + "</type></variable>")
         for name, address, type_name in self.symbols():
             ident = self.symbol_name[name]
             external.append(f"<variable name={quoteattr(ident)}>{_type(type_name)}</variable>")
@@ -429,12 +487,25 @@ class _Export:
         return iface, "".join(globals_)
 
     def symbols(self) -> list[tuple[str, str, str]]:
+        """The symbols of operands (the chart's, then the table's): the globals."""
         seen: dict[str, tuple[str, str, str]] = {}
         for s in self.chart.symbols:
-            seen[s.name] = (s.name, s.address, s.type)
+            if db_symbol(s) is None:
+                seen[s.name] = (s.name, s.address, s.type)
         for sym in self.table or ():
             seen.setdefault(sym.name, (sym.name, str(sym.address), sym.type))
         return list(seen.values())
+
+    def kept_symbols(self) -> tuple[SymbolDecl, ...]:
+        """The chart's symbols, then the table's operands and the DB symbols of the table
+        the chart reads through."""
+        if self.table is None:  # (a table of DB symbols only has no len)
+            return self.chart.symbols
+        out = list(self.chart.symbols)
+        names = {s.name for s in out}
+        out += [SymbolDecl(n, a, t) for n, a, t in self.symbols() if n not in names]
+        names = {s.name.casefold() for s in out}
+        return (*out, *(s for s in self.reads.carried() if s.name.casefold() not in names))
 
     def options(self) -> None:
         o = self.chart.options
@@ -461,15 +532,11 @@ class _Export:
         body: list[str] = []
         for i, q in enumerate(self.chart.sequences):
             self.sequence(q, i, body)
+        self.unread_dbs()
         iface, globals_ = self.interface()
-        # the chart kept with the symbols it was exported with (from --symbols too): read
-        # back, it passes check without the symbol file
-        kept = replace(
-            self.chart,
-            symbols=tuple(SymbolDecl(n, a, t) for n, a, t in self.symbols())
-            if self.table
-            else self.chart.symbols,
-        )
+        # the chart kept with the symbols it was exported with (from --symbols too, the DB
+        # symbols its reads name): read back, it passes check without the symbol file
+        kept = replace(self.chart, symbols=self.kept_symbols())
         source = format_chart(kept).replace("]]>", "]]]]><![CDATA[>")
         name = quoteattr(self.chart.name)
         pou = quoteattr(_ident(self.chart.name))  # an IEC identifier (the chart keeps its own)

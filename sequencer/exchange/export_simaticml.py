@@ -12,11 +12,13 @@ transitions an ``AltEnd``; a transition that leads back up, or into another sequ
 are LAD networks (``exchange.flgnet``); action rows are ``Action`` elements with the row's
 text as tokens (``"Tag"``, ``#variable``, ``%Q0.3``). Symbols are global tags with their
 address as informative data. What a GRAPH block has no field for — the instance DB number,
-``ORDER``, ``ACK_FORCES_SWITCH`` — is kept in the block comment (``s7graph: …``), which
-the importer reads. ``XOR`` in a condition is drawn as (a AND NOT b) OR (NOT a AND b). A
-permanent CALL is a LAD ``Call`` box, a permanent assignment of an operand or constant to
-a non-bit a ``Move`` box; one of an arithmetic expression has no form here: a
-``ValueError`` naming its place.
+``ORDER``, ``ACK_FORCES_SWITCH``, the DB symbols (``"T_S2" : DB10 : SFB4``) — is kept in
+the block comment (``s7graph: …``), which the importer reads. An instance DB's variable read
+by name is a global access to a DB member, as TIA writes one (``"T_S2".Q``; ``DB10.Q`` by
+the DB's symbol, reported, and refused when DB 10 has none). ``XOR`` in a condition is
+drawn as (a AND NOT b) OR (NOT a AND b). A permanent CALL is a LAD ``Call`` box, a
+permanent assignment of an operand or constant to a non-bit a ``Move`` box; one of an
+arithmetic expression has no form here: a ``ValueError`` naming its place.
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ from xml.sax.saxutils import escape, quoteattr
 from s7graph.engine.address import parse_address
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.checks.diagnostics import Diagnostic
+from s7graph.sequencer.exchange.db_reads import DbReads, member_text
 from s7graph.sequencer.exchange.flgnet import write_call, write_move, write_network
 from s7graph.sequencer.exchange.problems import Problems
 from s7graph.sequencer.exchange.shape import shape_of
@@ -96,6 +99,7 @@ class _Export:
         self.chart = chart
         self.table = symbols
         self.p = Problems(chart.file)
+        self.reads = DbReads(chart, symbols)
         self.warned_call = False
         self.step_names: dict[int, str] = {}
         self.trans_names: dict[int, str] = {}
@@ -155,6 +159,8 @@ class _Export:
             )
         if not isinstance(e, Operand):
             raise ValueError("a condition operand that is not an operand or constant")
+        if e.member:
+            return self.member_access(e, uid)
         if not e.quoted and not any(v.name.upper() == e.name.upper() for v in self.chart.vars):
             addr = parse_address(e.name)
             return (
@@ -178,6 +184,31 @@ class _Export:
         comps = "".join(f"<Component Name={quoteattr(p)} />" for p in _path(e.name))
         return f'<Access Scope="GlobalVariable" UId="{uid}"><Symbol>{comps}{info}</Symbol></Access>'
 
+    def member_access(self, e: Operand, uid: str) -> str:
+        """An instance DB's variable read by name as TIA writes a DB member: a global
+        access by the DB's name and the variable's (``"T_S2".Q``). ``DB10.Q`` goes by the
+        DB symbol naming DB 10 (X013); without one it is refused, naming its place."""
+        number = self.reads.db(e)
+        name = e.name if e.quoted else self.reads.name(number)
+        if name is None:
+            raise _Refused(
+                f"{e.loc}: {member_text(e)}: TIA reads a DB's variables by the DB's name, "
+                f"and DB {number} has none: name it in the chart's SYMBOLS "
+                f'("Timer_{number}" : DB{number} : {self.reads.block(number)};) or in the '
+                "symbol table"
+            )
+        if not e.quoted:
+            self.p.warn(
+                "X013",
+                f'{member_text(e)} is written "{name}".{e.member}: TIA reads a DB\'s '
+                "variables by the DB's name",
+                e.loc,
+            )
+        return (
+            f'<Access Scope="GlobalVariable" UId="{uid}"><Symbol><Component Name='
+            f"{quoteattr(name)} /><Component Name={quoteattr(e.member)} /></Symbol></Access>"
+        )
+
     def spell(self, e: Expr) -> str | None:
         """An operand in a TIA action's text."""
         if isinstance(e, Operand) and e.quoted:
@@ -196,6 +227,8 @@ class _Export:
     def network(self, cond: Expr | None, coil: str, target: Expr | None = None) -> str:
         try:
             return write_network(cond, coil, self.access, target)
+        except _Refused:
+            raise
         except ValueError as exc:
             raise ValueError(f"{exc}: a SimaticML network cannot hold it") from None
 
@@ -209,7 +242,7 @@ class _Export:
         accesses: list[str] = []
 
         def spell(e: Expr) -> str | None:
-            if isinstance(e, Operand) and e.quoted:
+            if isinstance(e, Operand) and (e.quoted or e.member):
                 accesses.append(self.access(e, str(21 + len(accesses))))
                 return f"\x00{len(accesses) - 1}\x00"
             return self.spell(e)
@@ -399,6 +432,8 @@ class _Export:
             )
         try:
             return write_call(info, c.inputs, c.outputs, self.access)
+        except _Refused:
+            raise
         except ValueError as exc:
             raise ValueError(
                 f"{c.loc}: CALL {name}: {exc}: a LAD call box cannot hold it"
@@ -409,6 +444,8 @@ class _Export:
         t: str | None = None
         if isinstance(e, Const):
             t = e.type
+        elif isinstance(e, Operand) and e.member:
+            t = None  # the block's variable: TIA knows its type
         elif isinstance(e, Operand) and e.quoted:
             found = self.address_of(e.name)
             t = found[1] if found is not None else None
@@ -458,6 +495,7 @@ class _Export:
             keep.append(f"ORDER := {o.order.upper()}")
         if o.ack_forces_switch:
             keep.append("ACK_FORCES_SWITCH := TRUE")
+        keep += [f'"{s.name}" : {s.address} : {s.type}' for s in self.reads.carried(True)]
         return f"{S7GRAPH_COMMENT} {'; '.join(keep)}" if keep else ""
 
     def document(self) -> str:
@@ -501,6 +539,10 @@ class _Export:
             "<ProgrammingLanguage>GRAPH</ProgrammingLanguage></AttributeList></SW.Blocks.CompileUnit>"
             "</ObjectList></SW.Blocks.FB></Document>\n"
         )
+
+
+class _Refused(ValueError):
+    """A chart part this export refuses, its message naming the place."""
 
 
 def _path(name: str) -> list[str]:

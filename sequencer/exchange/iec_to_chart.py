@@ -31,13 +31,14 @@ chart ``s7graph check`` accepts; a refused condition is an error (no chart).
 from __future__ import annotations
 
 import dataclasses
-from typing import Literal
+from typing import Literal, TypeVar
 
 from s7graph.engine.errors import SourceLocation
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.checks.diagnostics import Diagnostic
 from s7graph.sequencer.checks.validate import validate
 from s7graph.sequencer.exchange.body_fc import BodyFc
+from s7graph.sequencer.exchange.db_reads import user_fb_reads
 from s7graph.sequencer.exchange.iec_actions import IecActions
 from s7graph.sequencer.exchange.iec_expressions import S7_PIN, SFB_OF, _NoMap, const, iec_literal
 from s7graph.sequencer.exchange.iec_model import (
@@ -53,6 +54,7 @@ from s7graph.sequencer.exchange.st import SAssign
 from s7graph.sequencer.exchange.stalls import report_stalls
 from s7graph.sequencer.text.model import (
     ActionRow,
+    BlockCall,
     Chart,
     ChartOptions,
     Expr,
@@ -63,6 +65,8 @@ from s7graph.sequencer.text.model import (
 )
 
 __all__ = ["S7_PIN", "SFB_OF", "const", "iec_literal", "iec_to_chart"]
+
+_T = TypeVar("_T")
 
 
 class _Convert(IecActions):
@@ -322,32 +326,66 @@ def _options(src: IecChart) -> ChartOptions:
 # ---------------------------------------------------------------- validation
 
 
-def _refused(chart: Chart, symbols: SymbolTable | None = None) -> list[Diagnostic]:
-    return [d for d in validate(chart, symbols) if d.is_error]
+def _errors(
+    chart: Chart, symbols: SymbolTable | None = None, unchecked: frozenset[object] = frozenset()
+) -> list[Diagnostic]:
+    """The validator's errors but E048 at a read of a user FB's instance DB (``unchecked``:
+    the import has no program blocks to check it against)."""
+    return [
+        d
+        for d in validate(chart, symbols)
+        if d.is_error and not (d.code == "E048" and d.loc in unchecked)
+    ]
 
 
-def _probe(chart: Chart) -> Chart:
-    """The chart without rows, interlocks, supervisions, conditions and instructions."""
+def _probe(chart: Chart, calls: bool = False) -> Chart:
+    """The chart without rows, interlocks, supervisions, conditions and instructions; with
+    ``calls``, its CALLs kept (the instance DBs whose variables a condition reads)."""
+
+    def kept(items: tuple[_T, ...]) -> tuple[_T, ...]:
+        return tuple(i for i in items if calls and _is_call(i))
+
     seqs = tuple(
         dataclasses.replace(
             q,
             steps=tuple(
-                dataclasses.replace(s, actions=(), interlock=None, supervision=None)
+                dataclasses.replace(s, actions=kept(s.actions), interlock=None, supervision=None)
                 for s in q.steps
             ),
             transitions=tuple(dataclasses.replace(t, condition=None) for t in q.transitions),
         )
         for q in chart.sequences
     )
-    return dataclasses.replace(chart, before=(), after=(), sequences=seqs)
+    return dataclasses.replace(
+        chart, before=kept(chart.before), after=kept(chart.after), sequences=seqs
+    )
+
+
+def _is_call(item: object) -> bool:
+    return isinstance(item, BlockCall) or (
+        isinstance(item, ActionRow) and isinstance(item.operand, BlockCall)
+    )
+
+
+def _plus(items: tuple[_T, ...], item: _T) -> tuple[_T, ...]:
+    """``items`` with ``item`` (once)."""
+    return items if item in items else (*items, item)
 
 
 def accepted(chart: Chart, problems: Problems, symbols: SymbolTable | None = None) -> Chart:
     """``chart`` without the rows and instructions the validator refuses (each reported,
-    located at its source); a refused condition, or a structural error, fails the import."""
+    located at its source); a refused condition, or a structural error, fails the import.
+    A read of a user FB's instance DB is left for ``check --blocks`` (``db_reads``)."""
+    skip = frozenset(user_fb_reads(chart, symbols))
+
+    def _refused(c: Chart, table: SymbolTable | None = None) -> list[Diagnostic]:
+        return _errors(c, table, skip)
+
     if not _refused(chart, symbols):
         return chart
-    base = _probe(chart)
+    base = _probe(chart, calls=True)
+    if _refused(base, symbols):  # a call refused: probe without them
+        base = _probe(chart)
     for d in _refused(base, symbols):
         problems.error("I013", d.message, d.loc, d.element)
     problems.fail_if_errors()
@@ -367,7 +405,8 @@ def accepted(chart: Chart, problems: Problems, symbols: SymbolTable | None = Non
         for si, s in enumerate(q.steps):
             kept: list[ActionRow] = []
             for row in s.actions:
-                probe_step = dataclasses.replace(base.sequences[qi].steps[si], actions=(row,))
+                probe_step = base.sequences[qi].steps[si]
+                probe_step = dataclasses.replace(probe_step, actions=_plus(probe_step.actions, row))
                 if ok(_with(base, qi, "steps", si, probe_step), f"step {s.name} row", row.loc):
                     kept.append(row)
             steps.append(dataclasses.replace(s, actions=tuple(kept)))
@@ -380,12 +419,14 @@ def accepted(chart: Chart, problems: Problems, symbols: SymbolTable | None = Non
     before = [
         p
         for p in chart.before
-        if ok(dataclasses.replace(base, before=(p,)), "permanent instruction", p.loc)
+        if ok(
+            dataclasses.replace(base, before=_plus(base.before, p)), "permanent instruction", p.loc
+        )
     ]
     after = [
         p
         for p in chart.after
-        if ok(dataclasses.replace(base, after=(p,)), "permanent instruction", p.loc)
+        if ok(dataclasses.replace(base, after=_plus(base.after, p)), "permanent instruction", p.loc)
     ]
     out = dataclasses.replace(
         chart, sequences=tuple(seqs), before=tuple(before), after=tuple(after)

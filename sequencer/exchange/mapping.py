@@ -348,6 +348,14 @@ CONSTRUCTS: Final[tuple[tuple[str, str, str, str], ...]] = (
     ),
     (
         TIA,
+        'a DB member `"T_S2".Q` of a DB symbol (kept in the block comment, or `--symbols`)',
+        'the instance DB\'s variable read by name, `"T_S2".Q`',
+        "the DB symbols s7graph's export kept are declared in `SYMBOLS` (those `--symbols` "
+        'names stay there); of any other DB it is a tag `"T_S2.Q"`; a user FB\'s variable '
+        "is checked by `check --blocks`",
+    ),
+    (
+        TIA,
         "global tag without an address",
         "a symbol at a marker address inside the CPU's M area (reported)",
         "bits from M100.0, wider tags from MB150, then from MB16, never a used byte; M full: "
@@ -385,6 +393,16 @@ CONSTRUCTS: Final[tuple[tuple[str, str, str, str], ...]] = (
         "`CALL SFB n, DB m` of an IEC timer or counter",
         "the call of instance `TON_DBm`",
         "",
+    ),
+    (
+        TO_PLCOPEN,
+        'an instance DB\'s variable read by name (`"T_S2".Q`, `DB10.Q`)',
+        "IEC's access to an FB instance's output: `TON_DB10.Q` of the instance the IEC "
+        "timer's or counter's call uses; of another block's DB a global instance of its "
+        "type (`Motor_DB : FB17`, reported: nothing calls it)",
+        "a DB symbol is no IEC variable: one no read goes through is left out (reported); "
+        "read by another tool, `TON_DB10.Q` is the FB variable `TON_DB10_Q` the call's "
+        "`Q =>` writes",
     ),
     (
         TO_PLCOPEN,
@@ -431,6 +449,14 @@ CONSTRUCTS: Final[tuple[tuple[str, str, str, str], ...]] = (
         "CALL rows",
         '`Qualifier="CALL"`, the call in s7graph\'s spelling',
         "reported: TIA names blocks and instance DBs by symbol",
+    ),
+    (
+        TO_TIA,
+        'an instance DB\'s variable read by name (`"T_S2".Q`, `DB10.Q`)',
+        "a global access to a DB member, the DB by its name, as TIA writes one "
+        "(`Component` `T_S2`, `Component` `Q`); the chart's DB symbols in the block comment",
+        '`DB10.Q` goes by the DB symbol naming DB 10 (X013, read back as `"T_S2".Q`) and '
+        "is refused, naming its place, when no symbol names it",
     ),
     (
         TO_TIA,

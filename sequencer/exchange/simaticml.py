@@ -10,8 +10,9 @@ TIA's default for its number, ``Trans3``, is unnamed, as the export writes it).
 * Conditions, interlocks, supervisions and permanent operations are LAD/FBD networks
   (``exchange.flgnet``); a supervision's alarm text is the step's message text.
 * Action rows are ``Action`` elements (``Event``, ``Qualifier``, ``Interlock``) whose tokens
-  spell the row as in the GRAPH editor: ``"Tag".member`` is the symbol ``"Tag.member"``,
-  ``#x`` the FB variable ``x``, ``%Q0.3`` the address ``Q0.3``.
+  spell the row as in the GRAPH editor: ``"Tag".member`` is the symbol ``"Tag.member"``
+  (a DB symbol's member the instance DB's variable, ``"T_S2".Q``), ``#x`` the FB variable
+  ``x``, ``%Q0.3`` the address ``Q0.3``.
 * The FB's attributes: ``SkipSteps``, ``AcknowledgeErrorsRequired``, ``WithAlarmHandling``
   (messages); its parameter set is the set whose pins the interface holds. Static members
   of elementary types are FB variables.
@@ -24,9 +25,10 @@ TIA's default for its number, ``Trans3``, is unnamed, as the export writes it).
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 from dataclasses import replace
 
-from s7graph.engine.errors import LiteralError, S7Error, SourceLocation
+from s7graph.engine.errors import LiteralError, S7Error, SourceLocation, SymbolError
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.change.base import MAX_NUMBER
 from s7graph.sequencer.exchange.export_simaticml import S7GRAPH_COMMENT, default_name
@@ -52,6 +54,7 @@ from s7graph.sequencer.text.model import (
     PermanentInstruction,
     Sequence,
     Step,
+    SymbolDecl,
     Transition,
     VarDecl,
 )
@@ -59,6 +62,8 @@ from s7graph.sequencer.text.parse import ChartSyntaxError, parse_chart
 from s7graph.sequencer.text.walk import nodes
 
 __all__ = ["TIA_TYPES", "read_simaticml"]
+
+_KEPT_DB = re.compile(r'"([^"]+)"\s*:\s*DB\s*(\d{1,5})\s*:\s*([^;\s]+)')
 
 
 class _Reader(TiaOperands):
@@ -101,7 +106,7 @@ class _Reader(TiaOperands):
         event = action.get("Event")
         head = f"{event} " if event else ""
         head += qualifier + ("C" if action.flag("Interlock") else "")
-        body = _graph_text(text.replace("\n", " "))
+        body = _graph_text(text.replace("\n", " "), self.is_db)
         source = (
             f'FUNCTION_BLOCK "x" SEQUENCE 1 STEP S{step}:\n{head} {body};\n'
             "END_STEP END_SEQUENCE END_FUNCTION_BLOCK"
@@ -123,17 +128,17 @@ class _Reader(TiaOperands):
         """Declare the tags a row names, typed by their use: a bit for N S R D L, a TIME
         for a D/L time, an assignment's target the type of its value."""
         op = row.operand
-        if isinstance(op, Operand) and op.quoted:
+        if isinstance(op, Operand) and op.quoted and not op.member:
             want = {"D": "BOOL", "L": "BOOL", "N": "BOOL", "S": "BOOL", "R": "BOOL"}.get(
                 row.qualifier
             )
             self.symbol(op.name, want, at)
-        if isinstance(row.value, Operand) and row.value.quoted:
+        if isinstance(row.value, Operand) and row.value.quoted and not row.value.member:
             self.symbol(row.value.name, "TIME", at)
         if isinstance(op, Assignment):
             value_type = self.expr_type(op.expr)
             for o in _operands(op.expr):
-                if o.quoted:
+                if o.quoted and not o.member:
                     self.symbol(o.name, value_type, at)
             if op.target.quoted:
                 self.symbol(op.target.name, value_type or "INT", at)
@@ -250,7 +255,32 @@ class _Reader(TiaOperands):
                     out[key.strip().upper()] = value.strip().upper()
         return out
 
+    def kept_dbs(self) -> None:
+        """The DB symbols s7graph's export kept in the block comment (``"T_S2" : DB10 :
+        SFB4``): the chart reads those DBs' variables by name."""
+        for item in self.fb.iter("MultilingualTextItem"):
+            text = item.find("AttributeList", "Text")
+            body = text.text.strip() if text is not None else ""
+            if body.startswith(S7GRAPH_COMMENT):
+                for m in _KEPT_DB.finditer(body):
+                    decl = SymbolDecl(m[1], f"DB{m[2]}", m[3], "", self.at(item))
+                    self.dbs.setdefault(m[1].casefold(), decl)
+
+    def db_symbols(self) -> tuple[SymbolDecl, ...]:
+        """The kept DB symbols the chart declares: all but those the symbol table given
+        names so (they stay in the table, as for a chart exported with it)."""
+        out = []
+        for s in self.dbs.values():
+            try:
+                same = self.known is not None and self.known.db_number(s.name) == int(s.address[2:])
+            except SymbolError:
+                same = False
+            if not same:
+                out.append(s)
+        return tuple(out)
+
     def chart(self, graph: Node) -> Chart:
+        self.kept_dbs()
         self.variables()
         opts = self.options()
         seq_nodes = graph.all("Sequence")
@@ -265,7 +295,7 @@ class _Reader(TiaOperands):
             if isinstance(n, Operand) and not n.quoted
             for b in used_bytes(n.name)
         }
-        symbols = self.finish_symbols(used)
+        symbols = self.finish_symbols(used) + self.db_symbols()
         self.p.fail_if_errors()
         name = self.attr("Name") or "GRAPH"
         number = self.attr("Number")
@@ -627,9 +657,16 @@ _ABSOLUTE = re.compile(
 )
 
 
-def _graph_text(text: str) -> str:
-    """A TIA action row's operand text in `.s7g` spelling."""
-    text = _GLOBAL.sub(lambda m: '"' + m.group(1) + m.group(2) + '"', text)
+def _graph_text(text: str, is_db: Callable[[str], bool]) -> str:
+    """A TIA action row's operand text in `.s7g` spelling (a DB symbol's member stays a
+    read of the DB's variable: ``"T_S2".ET``)."""
+
+    def tag(m: re.Match[str]) -> str:
+        if is_db(m[1]) and re.fullmatch(r"\.[A-Za-z_][A-Za-z0-9_]*", m[2]):
+            return m[0]
+        return '"' + m[1] + m[2] + '"'
+
+    text = _GLOBAL.sub(tag, text)
     text = _LOCAL.sub(lambda m: m.group(1), text)
     return _ABSOLUTE.sub(lambda m: m.group(1), text)
 

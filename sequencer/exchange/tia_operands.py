@@ -7,6 +7,9 @@ tokens as the chart model's operands, and the global tags they name (the first h
 * A tag found in the symbol table given keeps its address there; one exported with an
   informative I/Q/M address keeps that one; the others get marker addresses within the
   CPU's M area (``markers``); none left is an error (I014).
+* A DB member ``"T_S2".Q`` whose DB is a DB symbol — kept by s7graph's export in the block
+  comment, or of the symbol table given — is that instance DB's variable read by name
+  (``"T_S2".Q``), no tag.
 * A tag compared with a step's time is a TIME, as TIA compiles it (a DInt tag so declared
   is reported); an untyped integer compared with a time is milliseconds.
 * A block constant (``LocalConstant``) is its value; a global constant (``GlobalConstant``:
@@ -18,7 +21,7 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from s7graph.engine.errors import LiteralError, S7Error, SourceLocation
+from s7graph.engine.errors import LiteralError, S7Error, SourceLocation, SymbolError
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.exchange.iec_expressions import const
 from s7graph.sequencer.exchange.markers import Markers, used_bytes
@@ -84,6 +87,7 @@ class TiaOperands:
         self.constants: dict[str, Const] = {}  # the block's own (Constant section)
         self.constant_vars: dict[str, str] = {}  # a constant without a value → FB variable
         self.vars: dict[str, VarDecl] = {}
+        self.dbs: dict[str, SymbolDecl] = {}  # DB symbols kept in the block comment
         self.step_names: dict[str, int] = {}
         self.trans_names: dict[str, int] = {}
 
@@ -127,6 +131,22 @@ class TiaOperands:
                 self.at(node),
             )
 
+    def is_db(self, name: str) -> bool:
+        """``name`` is a DB symbol: kept by the export, or of the symbol table given."""
+        if name.casefold() in self.dbs:
+            return True
+        try:
+            return self.known is not None and self.known.db_number(name) is not None
+        except SymbolError:
+            return False
+
+    def member(self, parts: list[str], loc: SourceLocation) -> Operand | None:
+        """``"T_S2".Q``: a variable of the DB a DB symbol names, read by name; None for
+        any other path (a tag's)."""
+        if len(parts) != 2 or "[" in parts[1] or not self.is_db(parts[0]):
+            return None
+        return Operand(parts[0], True, loc, member=parts[1])
+
     def access(self, node: Node, want: str | None) -> Expr:
         scope = node.get("Scope")
         loc = self.at(node)
@@ -163,6 +183,9 @@ class TiaOperands:
             raise ElementError(
                 f"#{'.'.join(parts)} is not an FB variable, step or transition attribute", node
             )
+        read = self.member(parts, loc)
+        if read is not None:
+            return read
         informative, where = "", ""
         if addr is not None and addr.get("BlockNumber") and addr.get("BitOffset"):
             informative = f"TIA: DB{addr.get('BlockNumber')} bit offset {addr.get('BitOffset')}"
@@ -230,6 +253,8 @@ class TiaOperands:
             parts = [component(c) for c in sym.all("Component")]
             if scope == "LocalVariable":
                 return "#" + ".".join(parts)
+            if self.member(parts, self.at(node)) is not None:
+                return f'"{parts[0]}".{parts[1]}'
             return '"' + ".".join(parts) + '"'
         value = node.find("Constant", "ConstantValue")
         return value.text.strip() if value is not None else ""

@@ -3,7 +3,7 @@ block: ``DB10.Q``, ``"T_S2".Q`` where a symbol of the chart's ``SYMBOLS`` or of 
 table names DB 10): in transitions, interlocks, supervisions and on the right of an
 assignment; checked against the chart's calls and the block's outputs (E048), never written
 (E045); formatted back as written, cross-referenced as a read — by symbol or number, one
-operand — refused by the exporters with a located message."""
+operand — exported (a read by number of a DB without a symbol refused by SimaticML, located)."""
 
 from __future__ import annotations
 
@@ -139,10 +139,11 @@ def test_cross_references_list_the_access_as_a_read() -> None:
     assert [u.access for u in uses["DB10.ET"]] == ["read"]
 
 
-@pytest.mark.parametrize("to", ["plcopen", "simaticml"])
-def test_the_exporters_refuse_the_access_with_its_place(to: str) -> None:
-    with pytest.raises(ValueError, match=r"m\.s7g:12:34: DB10\.Q: a \w+ export cannot hold"):
-        export_chart(parse_chart(chart_text(), "m.s7g"), to)
+def test_simaticml_export_refuses_a_read_by_number_of_a_db_no_symbol_names() -> None:
+    """TIA names a DB; the exports themselves: tests/sequencer/exchange/test_db_reads.py."""
+    why = r"m\.s7g:12:34: DB10\.Q: TIA reads a DB's variables by the DB's name, and DB 10 has none"
+    with pytest.raises(ValueError, match=why):
+        export_chart(parse_chart(chart_text(), "m.s7g"), "simaticml")
 
 
 def with_db_symbol(text: str, declaration: str = '"T_S2" : DB 10 : SFB4;') -> str:

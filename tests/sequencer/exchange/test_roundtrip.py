@@ -23,6 +23,7 @@ from tests.sequencer.exchange.helpers import sim, synthetic
 
 EXAMPLES = sorted(ROOT.glob("examples/*/*.s7g"))
 SIX = synthetic("six_sequences.s7g")
+DB_READS = synthetic("db_reads.s7g")  # instance DB variables read by name
 
 
 def example(path: Path) -> tuple[Chart, SymbolTable]:
@@ -570,7 +571,7 @@ END_FUNCTION_BLOCK
     assert [s.name for s in back.all_steps()] == ["Подача", "Цех", "ЖУК", "注水"]
 
 
-@pytest.mark.parametrize("path", [*EXAMPLES, SIX], ids=lambda p: p.stem)
+@pytest.mark.parametrize("path", [*EXAMPLES, SIX, DB_READS], ids=lambda p: p.stem)
 def test_plcopen_export_has_what_the_tc6_schema_requires(path: Path) -> None:
     """The TC6 v2.01 schema's rules other tools check a file against: a divergence,
     convergence and jump is placed (``position`` first), an action block's action too

@@ -32,6 +32,7 @@ CONSTRUCTS: dict[str, str] = {
     "export to SimaticML: the addresses of action operands": "tia_export_addresses.s7g",
     "export to SimaticML: CALL rows": "tia_export_call_rows.s7g",
     "export to SimaticML: permanent CALLs and moves": "permanent_boxes.s7g",
+    "export to both: instance DB variables read by name, DB symbols": "db_reads.s7g",
 }
 
 

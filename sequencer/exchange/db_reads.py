@@ -1,0 +1,112 @@
+"""An instance DB's variables a chart reads by name (``DB10.Q``, ``"T_S2".Q``: S7-SCL's
+structured access to a data block), as the exporters see them: which DB a read names,
+which symbol names a DB, and the DB symbols an export carries (docs/import-export.md).
+
+A DB is named by a symbol of the chart's ``SYMBOLS`` (``"T_S2" : DB10 : SFB4;``) first,
+then by a DB symbol of the symbol table given, as the chart's own names resolve
+(``sequencer.text.names``); the instance DB's block is that of the chart's first call
+naming it.
+"""
+
+from __future__ import annotations
+
+from s7graph.engine.errors import SourceLocation, SymbolError
+from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer.text.call_sites import call_sites
+from s7graph.sequencer.text.model import BlockCall, Chart, Operand, SymbolDecl
+from s7graph.sequencer.text.names import db_symbol, member_text
+from s7graph.sequencer.text.walk import nodes
+from s7graph.sfb import catalogue
+
+__all__ = ["DbReads", "member_text", "user_fb_reads"]
+
+
+class DbReads:
+    """The instance DBs of one chart's calls and the DB symbols naming them."""
+
+    def __init__(self, chart: Chart, table: SymbolTable | None) -> None:
+        self.chart = chart
+        self.table = table
+        self.calls: dict[int, BlockCall] = {}
+        for site in call_sites(chart):
+            if isinstance(site.call.instance, int):
+                self.calls.setdefault(site.call.instance, site.call)
+        self.own: dict[str, tuple[SymbolDecl, int]] = {}
+        for s in chart.symbols:
+            number = db_symbol(s)
+            if number is not None:
+                self.own.setdefault(s.name.casefold(), (s, number))
+
+    def db(self, op: Operand) -> int:
+        """The DB number of a read ``op``; ``ValueError`` naming its place when no call of
+        the chart names that instance DB (a chart ``check`` refuses, E048)."""
+        number: int | None
+        if not op.quoted:
+            number = int(op.name[2:])
+        elif (own := self.own.get(op.name.casefold())) is not None:
+            number = own[1]
+        else:
+            try:
+                number = self.table.db_number(op.name) if self.table is not None else None
+            except SymbolError:
+                number = None
+        if number is None or number not in self.calls:
+            why = (
+                f'no DB symbol "{op.name}"'
+                if number is None
+                else f"DB{number} is no instance DB of this chart's calls"
+            )
+            raise ValueError(f"{op.loc}: {member_text(op)}: {why} (s7graph check says more)")
+        return number
+
+    def name(self, number: int) -> str | None:
+        """The DB symbol naming DB ``number``: the chart's, else the symbol table's."""
+        for s, n in self.own.values():
+            if n == number:
+                return s.name
+        if self.table is not None:
+            for name, label in self.table.block_names().items():
+                if label == f"DB{number}":
+                    return name
+        return None
+
+    def block(self, number: int) -> str:
+        """The block whose instance DB ``number`` is, as a chart's type column writes it
+        (``SFB4`` for ``CALL "TON"`` too, ``FB17``, a user block called by name as named)."""
+        call = self.calls[number]
+        label = f"{call.kind}{call.block}" if call.kind else str(call.block)
+        entry = catalogue.find(label)  # CALL "TON": SFB4, as STEP 7's symbol table says
+        return entry.key if entry is not None else label
+
+    def carried(self, by_symbol: bool = False) -> list[SymbolDecl]:
+        """The DB symbols an export carries: every one of the chart's ``SYMBOLS``, then
+        those of the symbol table a read names (``"T_S2" : DB10 : SFB4``) — with
+        ``by_symbol``, also those a read by number is written with (``DB10.Q``)."""
+        out = [s for s, _ in self.own.values()]
+        for op in nodes(self.chart):
+            if not (isinstance(op, Operand) and op.member and (op.quoted or by_symbol)):
+                continue
+            number = self.db(op)
+            name = op.name if op.quoted else self.name(number)
+            found = self.table.block(name) if self.table is not None and name else None
+            if found is None or any(s.name.casefold() == found.name.casefold() for s in out):
+                continue
+            out.append(SymbolDecl(found.name, f"DB{number}", self.block(number)))
+        return out
+
+
+def user_fb_reads(chart: Chart, table: SymbolTable | None) -> set[SourceLocation]:
+    """The places of the reads of a user FB's instance DB (``"Motor_DB".Running`` with
+    ``CALL FB 17, DB 12``): only the program's blocks say whether the FB has that
+    variable, and an import has none (``s7graph check --blocks`` checks them)."""
+    reads = DbReads(chart, table)
+    out: set[SourceLocation] = set()
+    for op in nodes(chart):
+        if isinstance(op, Operand) and op.member:
+            try:
+                number = reads.db(op)
+            except ValueError:
+                continue
+            if catalogue.find(reads.block(number)) is None:
+                out.add(op.loc)
+    return out
