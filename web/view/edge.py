@@ -107,7 +107,9 @@ class ViewSide:
             history=client.history,
             engineering=engineering,
             blocks=client.blocks,
-            watch=lambda operands: client.watch(operands, timeout=watch_table.TIMEOUT_S),
+            watch=lambda operands, token: client.watch(
+                operands, timeout=watch_table.TIMEOUT_S, token=token
+            ),
             sync=lambda: client.synchronization(name, timeout=sync_view.TIMEOUT_S),
         )
         self._closers.append(self.view.close)

@@ -5,7 +5,8 @@ Every page is a session of its own: its ``User`` and ``Password`` fields in a Lo
 folder, ``Log in`` / ``Log out``, and the token the CPU gave it, never seen by another
 page. The password is cleared from the page as soon as it is read; a page that goes away
 revokes its token. Until it logs in a page is a viewer. Verdicts come back as
-notifications on this page only.
+notifications on this page only. The login signs the page's commands and its watch
+requests (:meth:`PageLogin.watch_token`).
 """
 
 from __future__ import annotations
@@ -65,6 +66,12 @@ class PageLogin(ABC):
             self.who = gui.add_html(texts.login_html("", "", True, self._demo))
         self.login_button.on_click(lambda _: self._log_in())
         self.logout_button.on_click(lambda _: self._log_out())
+
+    def watch_token(self) -> str:
+        """The token that signs this page's watch requests: its login's ("": none), so
+        the CPU keeps them in its user's own share of the watch queue."""
+        with self._lock:
+            return self.token
 
     @abstractmethod
     def _login(self, user: str, password: str) -> LoginReply: ...

@@ -232,7 +232,9 @@ class ClientPanel(PageLogin):
             lambda t, b: self._notify(t, b, ok=False),
         )
         self._permanent(texts.permanent_html(w.layout, None))
-        self.watch_table = WatchTable(gui, expand=False) if w.watch is not None else None
+        self.watch_table = (
+            WatchTable(gui, expand=False, login=self.watch_token) if w.watch is not None else None
+        )
         self.sync_view = (
             SyncView(gui, w.sync, scene=self.client.scene, places=self._step_places)
             if w.sync is not None

@@ -6,7 +6,8 @@ scene.
 
 Every page has its own login (as the chart's page: ``web.view.page_login``), its own watch
 table — operands typed into ``Operands`` (``MW0:INT, Q4.0, DB20.avg``), read at the CPU's
-scan boundaries about twice a second while the page is open (``web.bus.watch``) — and the
+scan boundaries about twice a second while the page is open (``web.bus.watch``), signed by
+the page's login while it has one (``web.view.watch_table``) — and the
 buttons its role allows (``stop``, ``start``, ``mres``: an engineer's). The Blocks folder
 lists the blocks the CPU has a source of (``s7graph/<cpu>/blocks``, read once when the page
 opens, again every ``BLOCKS_RETRY_S`` while the CPU does not answer); each button opens the
@@ -106,7 +107,7 @@ class ProgramPage(PageLogin):
             self, ChartLayout(fb=view.cpu, steps=[], transitions=[], sequences=[])
         )
         self.alarms_shown: AlarmList | None = None
-        self.watch_table = WatchTable(gui)
+        self.watch_table = WatchTable(gui, login=self.watch_token)
         with gui.add_folder("Blocks") as folder:
             self.blocks_line = gui.add_html(texts.small("reading the CPU's blocks…"))
         self.blocks = BlockButtons(
@@ -300,8 +301,10 @@ class ProgramView:
                 page.alarms.set_alarms(alarms)
         refresh((page.watch_table for page in pages), self._watch)
 
-    def _watch(self, operands: Sequence[str]) -> WatchValues:
-        return self.client.watch(operands, timeout=TIMEOUT_S)
+    def _watch(self, operands: Sequence[str], token: str) -> WatchValues:
+        """``operands`` read at the CPU's next scan boundary, signed by the login of
+        ``token`` ("": unsigned)."""
+        return self.client.watch(operands, timeout=TIMEOUT_S, token=token)
 
     def close(self) -> None:
         self._closed = True
