@@ -347,12 +347,82 @@ def report(rounds: list[dict[str, dict[str, list[float]]]], loads: list[float]) 
     print(f"\nload average during the rounds: {spread(loads, '{:.1f}')}")
 
 
+# ---------------------------------------------------------------------------- start-up
+
+
+def build_worker(steps: int) -> int:
+    """Build the face's address space of one FB with ``steps`` supervised steps (every
+    second one with an interlock too: 1.5 conditions a step) as ``s7graph opcua`` does in
+    its own process (its collector's thresholds); print the wall and CPU seconds."""
+    import gc
+
+    from asyncua import Server
+
+    from s7graph.web.bus.protocol import ChartLayout, SequenceInfo, StepInfo
+    from s7graph.web.collector import GC_THRESHOLDS
+    from s7graph.web.opcua.space import Space
+
+    gc.set_threshold(*GC_THRESHOLDS)
+    numbers = list(range(1, steps + 1))
+    infos = [StepInfo(number=i, supervision=True, interlock=i % 2 == 0) for i in numbers]
+    sequence = SequenceInfo(number=1, steps=numbers, transitions=[])
+    layout = ChartLayout(fb=FB, steps=infos, transitions=[], sequences=[sequence])
+
+    async def build() -> tuple[float, float, int]:
+        server = Server()
+        await server.init()
+        space = Space(server, await server.register_namespace("urn:s7graph:plc"), "cpu1")
+        await space.build_cpu(None, [])
+        wall, cpu = time.perf_counter(), time.process_time()
+        await space.build_fb(FB, layout, [])
+        nids = server.iserver.aspace.keys()
+        made = sum(1 for nid in nids if nid.NamespaceIndex == 2)
+        return time.perf_counter() - wall, time.process_time() - cpu, made
+
+    wall, cpu, made = asyncio.run(build())
+    print(f"{wall:.3f} {cpu:.3f} {made}")
+    return 0
+
+
+def startup(steps: int, repeat: int) -> int:
+    """``--startup N``: the address space of ``N`` supervised steps built ``repeat``
+    times, each in a process of its own; min/median/max of the wall and CPU seconds."""
+    walls, cpus, loads, made = [], [], [], 0
+    for _ in range(repeat):
+        before = os.getloadavg()[0]
+        out = subprocess.run(
+            [sys.executable, __file__, "--build-worker", str(steps)],
+            cwd=ROOT,
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.split()
+        loads.append((before + os.getloadavg()[0]) / 2)
+        walls.append(float(out[0]))
+        cpus.append(float(out[1]))
+        made = int(out[2])
+    conditions = steps + steps // 2
+    print(
+        f"address space of {steps} supervised steps ({conditions} conditions, {made} nodes), "
+        f"{repeat} process(es): wall {spread(walls)} s, CPU {spread(cpus)} s, "
+        f"load average {spread(loads, '{:.1f}')}"
+    )
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=(__doc__ or "").split("\n")[0])
     ap.add_argument("--repeat", type=int, default=3, help="rounds; min/median/max over them")
     ap.add_argument("--changes", type=int, default=100, help="step changes watched per load")
     ap.add_argument("--page", action="store_true", help="the page beside, on the same CPU")
+    ap.add_argument(
+        "--startup",
+        type=int,
+        metavar="N",
+        help="instead: time building the address space of N supervised steps",
+    )
     ap.add_argument("--worker", nargs=6, help=argparse.SUPPRESS)
+    ap.add_argument("--build-worker", type=int, help=argparse.SUPPRESS)
     ap.add_argument("--flood", nargs=3, help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
     if args.worker:
@@ -360,6 +430,10 @@ def main(argv: list[str] | None = None) -> int:
         return worker(Path(path), endpoint, url, Path(state), int(port), float(max_cycle))
     if args.flood:
         return flood(args.flood[0], float(args.flood[1]), args.flood[2])
+    if args.build_worker is not None:
+        return build_worker(args.build_worker)
+    if args.startup is not None:
+        return startup(args.startup, args.repeat)
     print(
         f"python {sys.version.split()[0]}, {os.cpu_count()} cores, loop8 at a {CYCLE_MS:g} ms "
         f"cycle (max {MAX_CYCLE_MS:g} ms), publishing interval {PUBLISHING_MS:g} ms, "

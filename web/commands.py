@@ -92,6 +92,8 @@ FileName = Annotated[str, Meta(min_length=1, max_length=MAX_FILE_NAME)]
 MAX_FORCE_TEXT = 64  # an address or symbol, or a value's text, in a force command
 ForceText = Annotated[str, Meta(min_length=1, max_length=MAX_FORCE_TEXT)]
 ForceValue = bool | int | float | ForceText | None
+MAX_COMMENT = 256  # an acknowledgement's comment (an OPC UA client's Acknowledge)
+Comment = Annotated[str, Meta(max_length=MAX_COMMENT)]
 
 
 # ---------------------------------------------------------------- arguments
@@ -147,7 +149,10 @@ class OnArgs(Args, frozen=True, kw_only=True):
 
 
 class MessageArgs(Args, frozen=True, kw_only=True):
+    """``{"msg_id": id}``, and the acknowledger's ``comment`` (the audit row keeps it)."""
+
     msg_id: MsgId
+    comment: Comment | UnsetType = UNSET
 
 
 class ForceArgs(Args, frozen=True, kw_only=True):
@@ -568,10 +573,14 @@ def _args_info(kind: type[Command]) -> mi.StructType:
 
 
 def argument_field(kind: type[Command]) -> mi.Field | None:
-    """The one argument of ``kind`` (the only field of its argument struct), else None: what
+    """The one argument of ``kind`` (the only field of its argument struct, or its only
+    required one when the others are optional: ``ack_msg``'s ``msg_id``), else None: what
     its shell command takes as the positional or the option's value."""
     fields = _args_info(kind).fields
-    return fields[0] if len(fields) == 1 else None
+    required = [f for f in fields if f.required]
+    if len(fields) == 1:
+        return fields[0]
+    return required[0] if len(required) == 1 else None
 
 
 OPS: tuple[str, ...] = tuple(op_of(c) for c in COMMAND_TYPES)

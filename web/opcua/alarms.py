@@ -13,11 +13,14 @@ Just before an event goes out, the condition node's state children take what it 
 (``web.opcua.conditions``), for a client that reads rather than subscribes.
 
 ``Acknowledge`` on a condition sends ``ack_msg`` for its message under the OPC UA
-session's own login — the gate checks the role and audits it under that user, and a
-supervision message acknowledged so releases its step, as from any other face. The
-EventId must be one the condition sent; the comment is not kept. Called on an object that
-is no condition it is ``BadMethodInvalid``, on the condition type ``BadNodeIdInvalid``
-(OPC UA Part 9, "Acknowledge").
+session's own login — the gate checks the role and audits it under that user, the
+comment with it, and a supervision message acknowledged so releases its step, as from
+any other face. The EventId must be one the condition sent. An applied acknowledgement's
+comment becomes the condition's ``Comment`` (a Null one leaves it as it was, an empty
+text with a locale empties it: OPC UA Part 9, "Acknowledge"), stamped with when it was
+given; an event carries it (one of its own when the acknowledgement's event went out
+first). Called on an object that is no condition it is ``BadMethodInvalid``, on the
+condition type ``BadNodeIdInvalid`` (Part 9, "Acknowledge").
 """
 
 from __future__ import annotations
@@ -33,6 +36,7 @@ from typing import Any, Final
 from asyncua import ua
 from asyncua.common.event_objects import AlarmCondition
 from asyncua.crypto.permission_rules import UserRole
+from msgspec import UNSET
 
 from s7graph.engine.errors import internal_error
 from s7graph.web.bus.protocol import AlarmEntry, AlarmList, CommandReply
@@ -55,6 +59,8 @@ _TIME_FIELDS: Final = (
     "ActiveState/TransitionTime",
     "AckedState/TransitionTime",
     "EnabledState/TransitionTime",
+    "LastSeverity/SourceTimestamp",
+    "Comment/SourceTimestamp",
 )
 _KEPT_EVENT_IDS: Final = 32
 
@@ -104,6 +110,7 @@ def _event(cond_nid: ua.NodeId, source: ua.NodeId, source_name: str, name: str) 
     setattr(event, "EnabledState/Id", True)
     event.Quality = ua_status(StatusCodes.Good)
     event.SuppressedOrShelved = False
+    event.LastSeverity = 0  # the severity never changes: no previous one (Part 9)
     event.emitting_node = ua_id(ObjectIds.Server)
     return event
 
@@ -166,7 +173,6 @@ class Alarms:
         ev = cond.event
         ev.Message = ua.LocalizedText(e.text or cond.name)
         ev.Severity = SEVERITY.get(e.kind, SEVERITY[""])
-        ev.LastSeverity = ev.Severity
         ev.Retain = active or not acked
         ev.ActiveState = ua.LocalizedText("Active" if active else "Inactive")
         setattr(ev, "ActiveState/Id", active)
@@ -232,11 +238,29 @@ class Alarms:
         cond = self._by_node.get(parent)
         status = self._ack_problem(parent, cond, inputs)
         if status is None and cond is not None and cond.msg_id is not None:
-            args = MessageArgs(msg_id=cond.msg_id)
+            comment = inputs[1].Value
+            text = comment.Text if isinstance(comment, ua.LocalizedText) else ""
+            args = MessageArgs(msg_id=cond.msg_id, comment=text or UNSET)
             status, _ = await self._send(caller(), AckMsg, cond.fb, args)
+            if status == StatusCodes.Good and isinstance(comment, ua.LocalizedText):
+                await self._comment(cond, comment)
         result.StatusCode = ua_status(status if status is not None else StatusCodes.Good)
         result.InputArgumentResults = [ua.StatusCode() for _ in inputs]
         return result
+
+    async def _comment(self, cond: _Condition, comment: ua.LocalizedText) -> None:
+        """An applied acknowledgement's ``comment`` as the condition's ``Comment`` (Part 9,
+        "Acknowledge": a Null one — no text, no locale — leaves it as it was, an empty text
+        with a locale empties it), stamped now when it changed; an event of its own when
+        the acknowledgement's already went out."""
+        ev = cond.event
+        if not comment.Text and not comment.Locale:
+            return
+        if ev.Comment != comment:
+            ev.Comment = comment
+            setattr(ev, "Comment/SourceTimestamp", datetime.now(UTC))
+        if cond.event_ids and ev.AckedState.Text == "Acknowledged":
+            await self._trigger(cond, None)
 
     def _ack_problem(
         self, parent: ua.NodeId, cond: _Condition | None, inputs: tuple[Any, ...]

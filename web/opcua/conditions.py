@@ -4,13 +4,24 @@
 Each ``AlarmConditionType`` node of the face (``web.opcua.alarms``) has, as OPC UA Part 9
 gives a condition, the children that say its state: ``EnabledState``, ``ActiveState``
 and ``AckedState`` (``TwoStateVariableType`` variables, each with its ``Id``),
-``Retain``, ``Severity``, ``Message`` and ``Time``. They are read only and hold what the
+``ConditionName``, ``Retain``, ``Severity``, ``Message`` and ``Time``, and the
+``ConditionVariableType`` variables ``LastSeverity`` and ``Comment``, each with its
+``SourceTimestamp`` (Part 9, "ConditionVariableType": when its value last changed, the
+source timestamp a read of it returns too). They are read only and hold what the
 condition's last event said: :func:`show` writes them each time that event goes out
 (before it goes, so a client reading on an event reads that event's state). A condition
-that has sent no event yet is enabled, inactive and acknowledged, retains nothing and has
-no ``Time``. While the CPU is off the bus the children written so far keep their last value
-with ``UncertainNoCommunicationLastUsableValue``, as every value of the face; they are
-written again when it is back.
+that has sent no event yet is enabled, inactive and acknowledged, retains nothing, has
+no ``Time``, no ``Comment`` and a ``LastSeverity`` of 0 (a condition's severity is its
+kind's and never changes, so 0 it stays: Part 9, "ConditionType"). While the CPU is off
+the bus the children written so far keep their last value with
+``UncertainNoCommunicationLastUsableValue``, as every value of the face; they are written
+again when it is back.
+
+The condition has the standard ``Acknowledge`` method (``i=9111``, Part 9,
+"AcknowledgeableConditionType") as its component: a client that browses a condition finds
+it there, with its ``EventId`` and ``Comment`` arguments, and calls it with the condition
+as the object. The reference is forward only: the method's node would otherwise list
+every condition of the face.
 """
 
 from __future__ import annotations
@@ -21,19 +32,24 @@ from typing import Any, Final
 from asyncua import ua
 
 from s7graph.web.opcua.nodes import Nodes
-from s7graph.web.opcua.typed import ObjectIds, child_id
+from s7graph.web.opcua.typed import ObjectIds, child_id, ua_id
 
-__all__ = ["STATES", "add_condition", "event_values", "initial_values", "show"]
+__all__ = ["STAMPED", "STATES", "add_condition", "event_values", "initial_values", "show"]
 
 STATES: Final = ("EnabledState", "ActiveState", "AckedState")
 """The condition's ``TwoStateVariableType`` children; each has an ``Id`` property."""
 _PROPERTIES: Final = {
+    "ConditionName": ObjectIds.String,
     "Retain": ObjectIds.Boolean,
     "Severity": ObjectIds.UInt16,
     "Message": ObjectIds.LocalizedText,
     "Time": ObjectIds.UtcTime,
 }
 """The condition's properties and their data types."""
+STAMPED: Final = {"LastSeverity": ObjectIds.UInt16, "Comment": ObjectIds.LocalizedText}
+"""The condition's ``ConditionVariableType`` children and their data types; each has a
+``SourceTimestamp`` property."""
+_NO_TIME: Final = ua.Variant(None, ua.VariantType.Null)
 
 
 def _text(text: str) -> ua.Variant:
@@ -44,9 +60,14 @@ def _flag(on: bool) -> ua.Variant:
     return ua.Variant(bool(on), ua.VariantType.Boolean)
 
 
-def initial_values(message: str, severity: int) -> dict[str, ua.Variant]:
+def _time(when: Any) -> ua.Variant:
+    return ua.Variant(when, ua.VariantType.DateTime) if when is not None else _NO_TIME
+
+
+def initial_values(name: str, message: str, severity: int) -> dict[str, ua.Variant]:
     """A condition's children before its first event, by their path under it."""
     return {
+        "ConditionName": ua.Variant(name, ua.VariantType.String),
         "EnabledState": _text("Enabled"),
         "EnabledState/Id": _flag(True),
         "ActiveState": _text("Inactive"),
@@ -56,7 +77,11 @@ def initial_values(message: str, severity: int) -> dict[str, ua.Variant]:
         "Retain": _flag(False),
         "Severity": ua.Variant(severity, ua.VariantType.UInt16),
         "Message": _text(message),
-        "Time": ua.Variant(None, ua.VariantType.Null),
+        "Time": _NO_TIME,
+        "LastSeverity": ua.Variant(0, ua.VariantType.UInt16),
+        "LastSeverity/SourceTimestamp": _NO_TIME,
+        "Comment": ua.Variant(None, ua.VariantType.Null),
+        "Comment/SourceTimestamp": _NO_TIME,
     }
 
 
@@ -69,12 +94,23 @@ def event_values(event: Any) -> dict[str, ua.Variant]:
         text = shown.Text if isinstance(shown, ua.LocalizedText) else str(shown or "")
         values[state] = _text(text or "")
         values[f"{state}/Id"] = _flag(bool(getattr(event, f"{state}/Id")))
-    message = event.Message
+    message, comment = event.Message, event.Comment
+    values["ConditionName"] = ua.Variant(str(event.ConditionName or ""), ua.VariantType.String)
     values["Retain"] = _flag(bool(event.Retain))
     values["Severity"] = ua.Variant(int(event.Severity), ua.VariantType.UInt16)
     values["Message"] = _text((message.Text or "") if isinstance(message, ua.LocalizedText) else "")
     values["Time"] = ua.Variant(event.Time, ua.VariantType.DateTime)
+    values["LastSeverity"] = ua.Variant(int(event.LastSeverity or 0), ua.VariantType.UInt16)
+    values["LastSeverity/SourceTimestamp"] = _time(getattr(event, "LastSeverity/SourceTimestamp"))
+    values["Comment"] = (
+        _text_of(comment) if isinstance(comment, ua.LocalizedText) else ua.Variant(None)
+    )
+    values["Comment/SourceTimestamp"] = _time(getattr(event, "Comment/SourceTimestamp"))
     return values
+
+
+def _text_of(text: ua.LocalizedText) -> ua.Variant:
+    return ua.Variant(text, ua.VariantType.LocalizedText)
 
 
 def add_condition(
@@ -86,9 +122,12 @@ def add_condition(
     display: str,
     description: str = "",
     severity: int,
+    condition: str = "",
 ) -> ua.NodeId:
     """Batch condition ``nid`` (browse name ``name``) under ``parent``, with its state
-    children as :func:`initial_values` (its ``Message`` the description or display)."""
+    children as :func:`initial_values` (its ``ConditionName`` ``condition`` or ``name``,
+    its ``Message`` the description or display) and the standard ``Acknowledge`` as its
+    component."""
     nodes.obj(
         parent,
         nid,
@@ -97,7 +136,7 @@ def add_condition(
         description=description,
         type_def=ObjectIds.AlarmConditionType,
     )
-    values = initial_values(description or display, severity)
+    values = initial_values(condition or name, description or display, severity)
     for state in STATES:
         node = nodes.prop(
             nid,
@@ -109,16 +148,29 @@ def add_condition(
         nodes.prop(node, "Id", values[f"{state}/Id"], ObjectIds.Boolean)
     for prop, data_type in _PROPERTIES.items():
         nodes.prop(nid, prop, values[prop], data_type)
+    for var, data_type in STAMPED.items():
+        node = nodes.prop(
+            nid, var, values[var], data_type, type_def=ObjectIds.ConditionVariableType
+        )
+        stamp = values[f"{var}/SourceTimestamp"]
+        nodes.prop(node, "SourceTimestamp", stamp, ObjectIds.UtcTime)
+    ack = ua_id(ObjectIds.AcknowledgeableConditionType_Acknowledge)
+    nodes.reference(
+        nid, ack, ObjectIds.HasComponent, target_class=ua.NodeClass.Method, inverse=False
+    )
     return nid
 
 
 async def show(nodes: Nodes, nid: ua.NodeId, values: dict[str, ua.Variant]) -> None:
     """Write ``values`` (by path) into the children of condition ``nid``, through ``nodes``
     (``Nodes.set``: a CPU that leaves the bus marks them, as every value written, with its
-    last usable value, ``Space.set_online``)."""
+    last usable value, ``Space.set_online``); a ``ConditionVariableType`` child with the
+    source timestamp its ``SourceTimestamp`` says, once it has one."""
     now = datetime.now(UTC)
     for path, value in values.items():
         child = nid
         for part in path.split("/"):
             child = child_id(child, part)
-        await nodes.set(child, value, when=now)
+        stamp = values.get(f"{path}/SourceTimestamp") if path in STAMPED else None
+        when = stamp.Value if stamp is not None and stamp.Value is not None else now
+        await nodes.set(child, value, when=when)

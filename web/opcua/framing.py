@@ -7,8 +7,9 @@ agreed on, copying the buffer anew for each read: a client whose header claimed 
 every other client for each read, the longer the more it sent. :class:`FaceProtocol`
 reads each chunk's size from its header and, past the server's receive buffer (no chunk
 of any client may be larger: OPC UA Part 6, "Hello"), answers ``BadTcpMessageTooLarge``
-and closes the connection. :class:`FaceUaServer` is asyncua's server serving each
-connection so.
+and closes the connection. Its requests go to a :class:`FaceProcessor`, which serves
+``BrowseNext`` (``web.opcua.paging``) and leaves the rest to asyncua's.
+:class:`FaceUaServer` is asyncua's server serving each connection so.
 """
 
 from __future__ import annotations
@@ -16,24 +17,57 @@ from __future__ import annotations
 import logging
 import socket
 import struct
-from typing import Final
+import time
+from typing import Any, Final
 
 from asyncua import ua
 from asyncua.crypto import uacrypto
 from asyncua.server.binary_server_asyncio import BinaryServer, OPCUAProtocol
-from asyncua.ua.ua_binary import struct_to_binary
+from asyncua.server.uaprocessor import UaProcessor
+from asyncua.ua.ua_binary import struct_from_binary, struct_to_binary
 
-from s7graph.web.opcua.typed import Server, StatusCodes, ua_status
+from s7graph.web.opcua.typed import ObjectIds, Server, StatusCodes, ua_id, ua_status
 
-__all__ = ["FaceProtocol", "FaceUaServer"]
+__all__ = ["FaceProcessor", "FaceProtocol", "FaceUaServer"]
 
 _log = logging.getLogger("s7graph.web.opcua")
 
 _HEADER: Final = struct.Struct("<3scI")  # message type, chunk type, the chunk's size
+_BROWSE_NEXT: Final = ua_id(ObjectIds.BrowseNextRequest_Encoding_DefaultBinary)
+
+
+class FaceProcessor(UaProcessor):
+    """asyncua's request processor, serving ``BrowseNext`` too (asyncua 2.1 answers it
+    ``BadServiceUnsupported``): the session's continuation points, ``web.opcua.paging``."""
+
+    async def _process_message(self, typeid: Any, requesthdr: Any, seqhdr: Any, body: Any) -> Any:
+        served: Any = super()._process_message  # asyncua's, untyped
+        if typeid != _BROWSE_NEXT:
+            return await served(typeid, requesthdr, seqhdr, body)
+        session = self.session
+        if session is None:  # as asyncua refuses any request before a session
+            raise ua.uaerrors.BadUserAccessDenied
+        rules: Any = self._connection.security_policy.permissions
+        if rules is not None and rules.check_validity(session.user, typeid, body) is False:
+            raise ua.uaerrors.BadUserAccessDenied
+        self.session_last_activity = time.monotonic()
+        session.touch()
+        params = struct_from_binary(ua.BrowseNextParameters, body)
+        response = ua.BrowseNextResponse()
+        response.Parameters.Results = await session.browse_next(params)
+        send: Any = self.send_response
+        send(requesthdr.RequestHandle, seqhdr, response)
+        return True
 
 
 class FaceProtocol(OPCUAProtocol):
-    """asyncua's connection, ended at the header of a chunk larger than it takes."""
+    """asyncua's connection, ended at the header of a chunk larger than it takes, its
+    requests served by a :class:`FaceProcessor`."""
+
+    def connection_made(self, transport: Any) -> None:
+        super().connection_made(transport)
+        if type(self.processor) is UaProcessor:  # made by asyncua just now, nothing served
+            self.processor.__class__ = FaceProcessor
 
     def data_received(self, data: bytes) -> None:
         super().data_received(data)

@@ -17,6 +17,7 @@ from typing import Any, Final
 from asyncua import ua
 from asyncua.server.internal_session import InternalSession
 
+from s7graph.web.opcua.bulk import Refused, insert, remove
 from s7graph.web.opcua.model import UaType, eu_information
 from s7graph.web.opcua.typed import (
     AttributeIds,
@@ -113,6 +114,8 @@ class Nodes:
         attrs.Description = ua.LocalizedText(description or display or name)
         attrs.EventNotifier = 1 if notifier else 0
         item.NodeAttributes = attrs
+        self._names[(nid, AttributeIds.DisplayName)] = attrs.DisplayName.Text or ""
+        self._names[(nid, AttributeIds.Description)] = attrs.Description.Text or ""
         return self._add(item)
 
     def folder(self, parent: ua.NodeId, nid: ua.NodeId, name: str, description: str) -> ua.NodeId:
@@ -229,37 +232,42 @@ class Nodes:
         self._methods.append((nid, _owned(parent, callback)))
         return nid
 
-    def reference(self, source: ua.NodeId, target: ua.NodeId, ref: int) -> None:
-        """A forward reference ``ref`` from ``source`` to ``target`` (and its inverse)."""
-        for forward in (True, False):
+    def reference(
+        self,
+        source: ua.NodeId,
+        target: ua.NodeId,
+        ref: int,
+        *,
+        target_class: ua.NodeClass = ua.NodeClass.Object,
+        inverse: bool = True,
+    ) -> None:
+        """A forward reference ``ref`` from object ``source`` to ``target`` (of class
+        ``target_class``), and its inverse unless ``inverse`` is false."""
+        for forward in (True, False) if inverse else (True,):
             item = ua.AddReferencesItem()
             item.SourceNodeId = source if forward else target
             item.TargetNodeId = target if forward else source
             item.ReferenceTypeId = _ref(ref)
             item.IsForward = forward
-            item.TargetNodeClass = ua.NodeClass.Object
+            item.TargetNodeClass = target_class if forward else ua.NodeClass.Object
             self._refs.append(item)
 
     async def flush(self) -> None:
-        """Add what was batched; ``RuntimeError`` naming the first node refused."""
+        """Add what was batched (``web.opcua.bulk.insert``: its variables waiting for
+        their first value); ``RuntimeError`` naming the first node refused."""
         items, self._items = self._items, []
         refs, self._refs = self._refs, []
         methods, self._methods = self._methods, []
         waiting, self._waiting = self._waiting, []
         if items:
-            results = await self._session.add_nodes(items)
-            for item, result in zip(items, results, strict=True):
-                if not result.StatusCode.is_good():
-                    raise RuntimeError(
-                        f"node {item.RequestedNewNodeId} refused: {result.StatusCode.name}"
-                    )
+            try:
+                insert(self.server.iserver.aspace, items, frozenset(waiting))
+            except Refused as exc:
+                raise RuntimeError(str(exc)) from None
         if refs:
             await self._session.add_references(refs)
         for nid, callback in methods:
             self._session.add_method_callback(nid, callback)
-        initial = ua_status(StatusCodes.BadWaitingForInitialData)
-        for nid in waiting:
-            await self.server.write_attribute_value(nid, ua.DataValue(StatusCode=initial))
 
     async def delete(self, root: ua.NodeId) -> None:
         """Delete the subtree added under ``root``, ``root`` itself included (and every
@@ -272,16 +280,11 @@ class Nodes:
             del self.under[sub]
         for other in self.under.values():  # a subtree this one was inside
             other[:] = [nid for nid in other if nid not in gone]
-        params = ua.DeleteNodesParameters()
-        for nid in reversed(nids):
-            item = ua.DeleteNodesItem()
-            item.NodeId = nid
-            item.DeleteTargetReferences = True
-            params.NodesToDelete.append(item)
+        for nid in nids:
             self._written.pop(nid, None)
         for key in [k for k in self._names if k[0] in gone]:
             del self._names[key]
-        await self._session.delete_nodes(params)
+        remove(self.server.iserver.aspace, list(reversed(nids)))
 
     # ------------------------------------------------------------ values
 

@@ -34,11 +34,12 @@ from cryptography.hazmat.primitives.asymmetric import rsa
 from cryptography.hazmat.primitives.asymmetric.types import PrivateKeyTypes
 
 from s7graph.web.bus.protocol import CpuStatus
-from s7graph.web.collector import quiet_collector
+from s7graph.web.collector import GC_THRESHOLDS, quiet_collector
 from s7graph.web.opcua.face import Face, FaceAttributes
 from s7graph.web.opcua.framing import FaceUaServer
 from s7graph.web.opcua.link import BusLink
 from s7graph.web.opcua.model import NAMESPACE_URI
+from s7graph.web.opcua.paging import MAX_CONTINUATIONS
 from s7graph.web.opcua.sessions import BusUsers, FaceRules, FaceServer, Limits
 from s7graph.web.opcua.space import Space
 from s7graph.web.opcua.typed import ObjectIds, Server, ua_id
@@ -267,6 +268,11 @@ class OpcuaServer:
             space = Space(server, ns, self.status.cpu, writes=self.options.writes)
             face = self.face = Face(server, link, space)
             server.iserver.attribute_service = FaceAttributes(server.iserver.aspace, face)
+            if self.options.own_process:
+                # the address space's hundreds of thousands of objects, built with the
+                # default thresholds, had the collector walk them again and again: a
+                # chart of 1,000 supervised steps took twice as long (docs/opcua.md)
+                gc.set_threshold(*GC_THRESHOLDS)
             await face.start(self.status)
             await server.start()
             if self.options.own_process:
@@ -354,3 +360,7 @@ class OpcuaServer:
             value = ua.DataValue(ua.Variant(limits.operations, ua.VariantType.UInt32))
             with contextlib.suppress(Exception):
                 await server.write_attribute_value(ua_id(oid), value)
+        points = ua.DataValue(ua.Variant(MAX_CONTINUATIONS, ua.VariantType.UInt16))
+        with contextlib.suppress(Exception):  # web.opcua.paging
+            oid = ObjectIds.Server_ServerCapabilities_MaxBrowseContinuationPoints
+            await server.write_attribute_value(ua_id(oid), points)

@@ -19,6 +19,7 @@ from __future__ import annotations
 import asyncio
 import contextvars
 import copy
+import dataclasses
 import logging
 import math
 import time
@@ -34,8 +35,9 @@ from asyncua.server.internal_session import InternalSession
 from asyncua.server.user_managers import UserManager
 
 from s7graph.web.access.lockout import Lockout
+from s7graph.web.opcua.paging import Pages
 from s7graph.web.opcua.statuses import call_problem, fix_browse, fix_translate, missing
-from s7graph.web.opcua.typed import AttributeIds, StatusCodes, ua_id, ua_status
+from s7graph.web.opcua.typed import AttributeIds, ObjectIds, StatusCodes, ua_id, ua_status
 
 __all__ = [
     "CALLER",
@@ -149,7 +151,8 @@ class FaceRules(PermissionRuleset):
     delete nodes or references, or register servers."""
 
     def __init__(self) -> None:
-        self._allowed = frozenset(ua_id(t) for t in USER_TYPES)
+        browse_next = ObjectIds.BrowseNextRequest_Encoding_DefaultBinary  # web.opcua.paging
+        self._allowed = frozenset(ua_id(t) for t in (*USER_TYPES, browse_next))
 
     def check_validity(self, user: Any, action_type_id: Any, body: Any) -> bool:
         return action_type_id in self._allowed
@@ -210,6 +213,7 @@ class FaceSession(InternalSession):
     methods, the bus token logged out when it closes."""
 
     _pace: Pace | None = None
+    _pages: Pages | None = None
 
     @property
     def limits(self) -> Limits:
@@ -261,8 +265,10 @@ class FaceSession(InternalSession):
         await self._serve(len(params.NodesToRead), len(params.NodesToRead))
         values = await super().read(params)
         if not isinstance(self.user, FaceUser):  # anonymous: nothing to write or call
-            for asked, value in zip(params.NodesToRead, values, strict=False):
+            values = [
                 _read_only(asked.AttributeId, value)
+                for asked, value in zip(params.NodesToRead, values, strict=False)
+            ]
         return values
 
     async def write(self, params: ua.WriteParameters) -> list[ua.StatusCode]:
@@ -273,7 +279,21 @@ class FaceSession(InternalSession):
         await self._serve(len(params.NodesToBrowse), len(params.NodesToBrowse))
         results = await super().browse(params)
         fix_browse(self.aspace, params.NodesToBrowse, results)
+        self.pages.browsed(params.RequestedMaxReferencesPerNode, results)
         return results
+
+    async def browse_next(self, parameters: ua.BrowseNextParameters) -> list[ua.BrowseResult]:
+        """The next pages of a Browse, or the points released (``web.opcua.paging``)."""
+        points = parameters.ContinuationPoints or []
+        await self._serve(len(points), len(points))
+        return self.pages.next(parameters)
+
+    @property
+    def pages(self) -> Pages:
+        """This session's continuation points."""
+        if self._pages is None:
+            self._pages = Pages()
+        return self._pages
 
     async def translate_browsepaths_to_nodeids(
         self, params: list[ua.BrowsePath]
@@ -367,16 +387,20 @@ class FaceSession(InternalSession):
 _CURRENT_WRITE: Final = 0x02  # AccessLevel's CurrentWrite bit
 
 
-def _read_only(attribute: int, value: ua.DataValue) -> None:
+def _read_only(attribute: int, value: ua.DataValue) -> ua.DataValue:
     """``value`` of ``attribute`` as an anonymous session's: a variable's
     ``UserAccessLevel`` without CurrentWrite, a method's ``UserExecutable`` false — what a
     client greys out, as the face refuses those writes and calls (OPC UA Part 3, "User
-    access level")."""
+    access level"). A copy: ``value`` is the one the address space holds (asyncua's read
+    hands it out), which every other session reads."""
     held = value.Value.Value if value.Value is not None else None
     if attribute == AttributeIds.UserAccessLevel and isinstance(held, int):
-        value.Value = ua.Variant(held & ~_CURRENT_WRITE, ua.VariantType.Byte)
+        shown = ua.Variant(held & ~_CURRENT_WRITE, ua.VariantType.Byte)
     elif attribute == AttributeIds.UserExecutable and isinstance(held, bool):
-        value.Value = ua.Variant(False, ua.VariantType.Boolean)
+        shown = ua.Variant(False, ua.VariantType.Boolean)
+    else:
+        return value
+    return dataclasses.replace(value, Value=shown)
 
 
 def _filter_fits(item: ua.MonitoredItemCreateRequest) -> bool:

@@ -367,7 +367,8 @@ class Space:
         key = f"S{step.number}"
         nid = self.nid(fb, key)
         n.root(nid)
-        n.obj(parent, nid, key)
+        shown = f"{key} {step.name}".strip()  # as _names shows it: no rename at the start
+        n.obj(parent, nid, key, display=shown, description=step.message)
         nodes = StepNodes(nid, {}, sequence=sequence, shape=(step.interlock, step.supervision))
         for var, t, text in _STEP_VARS:
             nodes.vars[var] = n.var(nid, self.nid(fb, key, var), var, t, description=text)
@@ -573,6 +574,7 @@ class Space:
                 display=f"Message {key}",
                 description=text or key,
                 severity=SEVERITY.get(kind, SEVERITY[""]),
+                condition=f"Message {key}",
             )
             self.nodes.end_root()
             self.nodes.reference(self.root, nid, ObjectIds.HasCondition)

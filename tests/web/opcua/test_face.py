@@ -255,6 +255,25 @@ def test_anonymous_reads_but_never_writes_nor_calls(face: FaceRig) -> None:
     assert len(_commands(face)) == before  # nothing reached the CPU
 
 
+def test_an_anonymous_sessions_read_only_view_is_its_own_not_the_next_sessions(
+    face: FaceRig,
+) -> None:
+    """An anonymous read of ``UserAccessLevel`` and ``UserExecutable`` answered without
+    write and call changed the values the address space holds: a logged-in session read
+    them so after it."""
+
+    async def check() -> None:
+        user, execute = ua.AttributeIds.UserAccessLevel, ua.AttributeIds.UserExecutable
+        async with connected(face.url) as anonymous, connected(face.url, "olga") as c:
+            for client, may in ((anonymous, False), (c, True), (anonymous, False)):
+                level = await node(client, "cpu1/Seq_mix/Mode").read_attribute(user)
+                assert bool(level.Value.Value & 0x02) is may
+                call = await node(client, "cpu1/Seq_mix/Init").read_attribute(execute)
+                assert call.Value.Value is may
+
+    run(check())
+
+
 def test_a_wrong_password_is_refused_when_the_session_activates(face: FaceRig) -> None:
     async def check() -> None:
         with pytest.raises(UaStatusCodeError) as refused:

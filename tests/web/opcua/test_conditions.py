@@ -1,0 +1,136 @@
+"""A condition node as a generic OPC UA client (UaExpert-like) meets it, against a CPU on a
+real zenoh bus: it browses the condition to its ``Acknowledge`` method, reads its
+``ConditionName``, ``LastSeverity`` and ``Comment``, and acknowledges through the method
+it found; the comment becomes the condition's, stamped as OPC UA Part 9 says, and lands
+in the audit row; a viewer is refused and audited, an anonymous session refused
+(docs/opcua.md, "Alarms and conditions")."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import pytest
+from asyncua import ua
+from asyncua.ua.uaerrors import UaStatusCodeError
+
+from s7graph.web.access.audit import read_audit
+from tests.web.helpers import wait_until
+from tests.web.opcua.helpers import FaceRig, connected, eventually, face_rig, node, run
+from tests.web.opcua.test_alarms import Events, _value
+
+if TYPE_CHECKING:
+    from tests.conftest import BusCerts
+
+pytestmark = pytest.mark.timeout(120)
+
+SUPERVISION = "cpu1/Seq_mix/S2/Supervision"
+COMMENT = ua.LocalizedText("valve checked", "en")
+
+
+async def _acknowledge_method(c: Any) -> ua.NodeId:
+    """The method named Acknowledge among the condition's components, as a client that
+    browses finds it (with its two input arguments)."""
+    refs = await node(c, SUPERVISION).get_references(
+        ua.ObjectIds.HasComponent, ua.BrowseDirection.Forward
+    )
+    methods = [r for r in refs if r.NodeClass == ua.NodeClass.Method]
+    assert [r.BrowseName.Name for r in methods] == ["Acknowledge"]
+    found = c.get_node(methods[0].NodeId)
+    arguments = await (await found.get_child("0:InputArguments")).read_value()
+    assert [a.Name for a in arguments] == ["EventId", "Comment"]
+    return methods[0].NodeId
+
+
+async def _latched(face: FaceRig, events: Events) -> bytes:
+    """Run S2 until its supervision latches; the EventId of the event that says so."""
+    face.set("Guard", True)
+    face.set("Start", True)  # S2: past 400 ms its supervision latches
+
+    async def latched() -> bool:
+        got = [e for e in events.seen if _value(e, "NodeId") == ua.NodeId(SUPERVISION, 2)]
+        return bool(got) and _value(got[-1], "ActiveState/Id") is True
+
+    assert await eventually(latched), events.seen
+    face.set("Level", 200)  # T2 switches once the fault is acknowledged
+    event_id: bytes = _value(events.of(SUPERVISION)[-1], "EventId")
+    return event_id
+
+
+def test_a_client_that_browses_a_condition_acknowledges_it_with_a_comment_kept_and_audited(
+    tmp_path: Path, bus_certs: BusCerts
+) -> None:
+    with face_rig(tmp_path, bus_certs) as face:
+        run(_browse_and_acknowledge(face))
+    rows = [r for r in read_audit(face.rig.state) if r.op == "ack_msg"]
+    assert [(r.user, r.outcome) for r in rows] == [("olga", "applied")]
+    assert '"comment": "valve checked"' in rows[0].args
+
+
+async def _browse_and_acknowledge(face: FaceRig) -> None:
+    async with connected(face.url, "olga") as c:
+        method = await _acknowledge_method(c)
+        assert method == ua.NodeId(ua.ObjectIds.AcknowledgeableConditionType_Acknowledge)
+        assert await node(c, f"{SUPERVISION}/ConditionName").read_value() == "Supervision"
+        assert await node(c, f"{SUPERVISION}/LastSeverity").read_value() == 0
+        assert await node(c, f"{SUPERVISION}/Comment").read_value() is None  # none given yet
+        assert await node(c, f"{SUPERVISION}/Comment/SourceTimestamp").read_value() is None
+        events = Events()
+        sub = await c.create_subscription(20, events)
+        await sub.subscribe_alarms_and_conditions(c.nodes.server, ua.ObjectIds.AlarmConditionType)
+        event_id = await _latched(face, events)
+        assert _value(events.of(SUPERVISION)[-1], "Comment") is None
+
+        with pytest.raises(UaStatusCodeError) as refused:  # longer than an audit row keeps
+            await node(c, SUPERVISION).call_method(method, event_id, ua.LocalizedText("x" * 257))
+        assert refused.value.code == ua.StatusCodes.BadInvalidArgument
+        await node(c, SUPERVISION).call_method(method, event_id, COMMENT)
+        assert wait_until(lambda: face.active() == [3])  # released: T2 switched
+        comment = node(c, f"{SUPERVISION}/Comment")
+        assert await eventually(lambda: _reads(comment, COMMENT)), events.seen
+        stamped = await node(c, f"{SUPERVISION}/Comment/SourceTimestamp").read_value()
+        assert (await comment.read_data_value()).SourceTimestamp == stamped
+        assert await eventually(lambda: _told(events, COMMENT)), events.seen
+        told = [e for e in events.of(SUPERVISION) if _value(e, "Comment") == COMMENT]
+        assert _value(told[-1], "AckedState/Id") is True
+        assert _value(told[-1], "Comment/SourceTimestamp") == stamped
+        assert await node(c, f"{SUPERVISION}/LastSeverity").read_value() == 0
+        face.set("Start", False)
+        await sub.delete()
+
+
+async def _reads(variable: Any, value: object) -> bool:
+    return bool(await variable.read_value() == value)
+
+
+async def _told(events: Events, comment: ua.LocalizedText) -> bool:
+    return any(_value(e, "Comment") == comment for e in events.of(SUPERVISION))
+
+
+def test_a_viewer_acknowledging_a_condition_is_refused_and_audited_an_anonymous_one_refused(
+    tmp_path: Path, bus_certs: BusCerts
+) -> None:
+    with face_rig(tmp_path, bus_certs) as face:
+        run(_refused(face))
+    rows = [r for r in read_audit(face.rig.state) if r.op == "ack_msg"]
+    assert [(r.user, r.role, r.outcome) for r in rows] == [("vic", "viewer", "refused")]
+    assert '"comment": "let me"' in rows[0].args
+
+
+async def _refused(face: FaceRig) -> None:
+    async with connected(face.url, "vic") as viewer, connected(face.url) as anonymous:
+        events = Events()
+        sub = await viewer.create_subscription(20, events)
+        await sub.subscribe_alarms_and_conditions(
+            viewer.nodes.server, ua.ObjectIds.AlarmConditionType
+        )
+        event_id = await _latched(face, events)
+        for c, text in ((viewer, "let me"), (anonymous, "me too")):
+            method = await _acknowledge_method(c)
+            with pytest.raises(UaStatusCodeError) as refused:
+                await node(c, SUPERVISION).call_method(method, event_id, ua.LocalizedText(text))
+            assert refused.value.code == ua.StatusCodes.BadUserAccessDenied, text
+        assert face.active() == [2]  # still held by the latched fault
+        assert await node(viewer, f"{SUPERVISION}/Comment").read_value() is None
+        face.set("Start", False)
+        await sub.delete()
