@@ -98,6 +98,7 @@ __all__ = [
     "IdleGc",
     "Runner",
     "keep_small_pages",
+    "refused_startup",
     "set_realtime",
     "stop_reason",
 ]
@@ -760,7 +761,11 @@ _SHIELDED = {Runner.on_stop_signal.__code__, Runner.request_stop.__code__}
 
 def stop_reason(cpu: Cpu) -> str:
     """One line: why ``cpu`` went to STOP — the error entry that caused it, if any, and the
-    STOP entry (``Cpu.stop_entry``)."""
+    STOP entry (``Cpu.stop_entry``); or why it stays in STOP after a startup it refused
+    (``refused_startup``), in the words ``s7graph run`` says it with."""
+    refusal = refused_startup(cpu)
+    if refusal is not None:
+        return f"the CPU refused its startup: {_at(refusal)}{refusal.message}"
     stop = cpu.stop_entry
     if stop is None:
         return "the CPU is in STOP"
@@ -768,6 +773,23 @@ def stop_reason(cpu: Cpu) -> str:
     if cause is None:
         return f"{_at(stop)}{stop.message}"
     return f"{_at(cause)}{cause.message} ({stop.message})"
+
+
+def refused_startup(cpu: Cpu) -> DiagEntry | None:
+    """The entry ``16#4309`` of the startup ``cpu`` refused last (the key switch in STOP, a
+    startup OB deselected), when that refusal is why it is in STOP: no startup and no STOP
+    entry came after it. None otherwise — a hot restart it turned warm started."""
+    if cpu.mode is not CpuMode.STOP:
+        return None
+    for entry in reversed(list(cpu.diagnostics)):
+        if entry.event_id == EventId.STARTUP_REFUSED:
+            return entry
+        if entry is cpu.stop_entry or entry.event_id in _STARTED:
+            return None
+    return None
+
+
+_STARTED = frozenset({EventId.STOP_TO_STARTUP, EventId.STARTUP_TO_RUN})
 
 
 def _at(entry: DiagEntry) -> str:

@@ -38,7 +38,7 @@ from s7graph.sequencer.params import (
     output_defaults,
     pins_for,
 )
-from s7graph.sequencer.state import GraphState
+from s7graph.sequencer.state import COMMAND_PINS, LEVEL_PINS, GraphState
 from s7graph.sequencer.sync import SyncStep, synchronization
 from s7graph.sfb import s5_counters, s5_timers
 from s7graph.sfb.alarms import message_list
@@ -141,9 +141,6 @@ class GraphFB:
         self.loaded = LoadedChart(cc, self.fb_number, self._body)
         self.idb: InstanceDB | None = None
         self._ctx: Any = None
-        self._commands: list[tuple[str, int | None]] = []
-        self._levels: dict[str, bool | None] = {}  # level overrides for the next call
-        self._acting: tuple[str, int | None] | None = None  # who commanded (user, ACK_S step)
         self._restart = ""  # the reason a startup OB's call gives its messages
         self._swapped = False  # a download swapped the chart: gone steps' messages go
 
@@ -244,10 +241,12 @@ class GraphFB:
         """An operator command for the next call: ``pin`` (ACK_EF, ACK_S, INIT_SQ, OFF_SQ,
         S_ON, S_OFF, T_PUSH, SW_*) as a one-call rising edge, whatever the parameter set;
         S_ON, S_OFF and ACK_S on step number ``step`` (``GraphRuntime.command``). Messages
-        the command acknowledges are acknowledged as ``user`` (default ``program``)."""
-        self._commands.append((pin, step))
-        if user is not None:
-            self._acting = (user, step if pin == "ACK_S" else None)
+        the command acknowledges are acknowledged as ``user`` (default ``program``). Kept
+        in the instance DB (``GraphState.to_command``) until that call, as ``place``."""
+        if pin not in COMMAND_PINS:
+            raise ValueError(f"{self.cc.name}: {pin!r} is not an edge pin a command acts as")
+        st = self.state
+        st.to_command = [*st.to_command, (pin, step, user)]
         self.loaded.flat = False
 
     def place(self, steps: Iterable[int]) -> None:
@@ -269,8 +268,12 @@ class GraphFB:
 
     def set_level(self, pin: str, value: bool | None) -> None:
         """Override HALT_SQ, EN_IL or EN_SV from the next call on (None: the pin decides
-        again), whatever the parameter set (``GraphRuntime.set_level``)."""
-        self._levels[pin] = value
+        again), whatever the parameter set (``GraphRuntime.set_level``). Kept in the
+        instance DB (``GraphState.to_level``) until that call, as ``command``."""
+        if pin not in LEVEL_PINS:
+            raise ValueError(f"{self.cc.name}: {pin!r} is not a level pin (HALT_SQ EN_IL EN_SV)")
+        st = self.state
+        st.to_level = {**st.to_level, pin: value}
         self.loaded.flat = False
 
     @property
@@ -296,7 +299,6 @@ class GraphFB:
         the next call, a placement or an entry not carried out yet and the level overrides
         in force (HALT_SQ, EN_IL, EN_SV) stay."""
         loaded = LoadedChart(cc, self.fb_number, self._body)
-        levels = {**self.levels, **self._levels}
         old = self.idb
         cpu.load(loaded.fb)
         idb = cpu.replace_instance_db(self.db_number, loaded.fb, name=cc.name)
@@ -305,12 +307,13 @@ class GraphFB:
                 if name != STATE_VAR and name in idb.values:
                     idb.values[name] = value
             was = old.values.get(STATE_VAR)
-            if isinstance(was, GraphState):  # an entry or placement not carried out stays
+            if isinstance(was, GraphState):  # what is not carried out yet stays
                 state.to_enter, state.to_place = list(was.to_enter), list(was.to_place)
+                state.to_command, state.to_release = list(was.to_command), list(was.to_release)
+                state.to_level = {**was.levels, **was.to_level}  # in force again in the new
         idb.values[STATE_VAR] = state
         self.loaded = loaded
         self.idb = idb
-        self._levels = levels
         self._swapped = True
 
     # ------------------------------------------------------------ the FB body
@@ -323,36 +326,42 @@ class GraphFB:
         rt = c.runtime
         if rt is None or c.mem is not ctx.mem or rt.st is not values[STATE_VAR]:
             rt = self.runtime(ctx.mem)
-        if self._levels:
-            for pin, value in self._levels.items():
-                rt.set_level(pin, value)
-            self._levels.clear()
-        if self._commands:
-            for pin, step in self._commands:
-                rt.command(pin, step)
-            self._commands.clear()
         st = rt.st
-        if st.to_place or st.to_enter:
-            self._pending(rt, st)
-        acting, self._acting = self._acting, None
+        acting = None
+        if st.to_level or st.to_command or st.to_place or st.to_enter or st.to_release:
+            acting = self._pending(rt, st)
         st = rt.execute(values, ctx.now_ns)
         self._copy_outputs(values, st, rt.outs_written)
         if c.messages:
-            self._sync_messages(ctx, idb, rt, st, acting)
+            self._sync_messages(ctx, idb, st, acting)
         else:
             c.flat = True
         if st.log:
             self._emit_events(ctx, idb, st)
 
-    def _pending(self, rt: GraphRuntime, st: GraphState) -> None:
-        """The placement and the entry the instance DB holds for this call (``place``,
-        ``enter``), handed to the runtime as step indices (a number the chart no longer has
-        is dropped) and taken out of the DB: carried out once."""
+    def _pending(self, rt: GraphRuntime, st: GraphState) -> tuple[str, int | None] | None:
+        """What the instance DB holds for this call — level overrides, operator commands
+        (``set_level``, ``command``), the placement and the entry (``place``, ``enter``),
+        the steps users released in the message list (``_sync_messages``) — handed to the
+        runtime (a step number the chart no longer has is dropped) and taken out of the DB:
+        carried out once. Returns who commanded (the user and ACK_S step of the last
+        command given a user), who acknowledges what the call releases."""
+        for pin, value in st.to_level.items():
+            rt.set_level(pin, value)
+        acting = None
+        for pin, step, user in st.to_command:
+            rt.command(pin, step)
+            if user is not None:
+                acting = (user, step if pin == "ACK_S" else None)
         index = self.cc.step_index
         rt.placing = tuple(index[n] for n in st.to_place if n in index)
         rt.entering = tuple(index[n] for n in st.to_enter if n in index)
+        if st.to_release:
+            rt.acknowledge(index[n] for n in st.to_release if n in index)
         rt.fastpath.armed = False
-        st.to_place, st.to_enter = [], []
+        st.to_level, st.to_command, st.to_place, st.to_enter = {}, [], [], []
+        st.to_release = []
+        return acting
 
     def _copy_outputs(self, values: dict[str, Any], st: GraphState, names: tuple[str, ...]) -> None:
         """The output pins ``names`` this call wrote into the instance DB (all of them into
@@ -380,14 +389,14 @@ class GraphFB:
         self,
         ctx: Any,
         idb: InstanceDB,
-        rt: GraphRuntime,
         st: GraphState,
         acting: tuple[str, int | None] | None = None,
     ) -> None:
         """MESSAGES := TRUE (docs/semantics.md, "Messages"): bring the CPU's message list in line
-        with this call's faults, queue the steps a user acknowledged there for the next call, and
-        forward the list's new events into the scan record. ``acting``: the user (and ACK_S step) of
-        this call's operator command, who acknowledges what it releases."""
+        with this call's faults, queue the steps a user acknowledged there for the next call
+        (``GraphState.to_release``, in the instance DB: a restart in between keeps them), and
+        forward the list's new events into the scan record. ``acting``: the user (and ACK_S
+        step) of this call's operator command, who acknowledges what it releases."""
         messages = message_list(ctx.cpu)
         user, target = acting if acting is not None else (PROGRAM_USER, None)
         restart = self._restart if ctx.ob in (100, 102) else ""
@@ -402,8 +411,9 @@ class GraphFB:
             step=target,
             restart=restart,
         )
-        if acks:
-            rt.acknowledge(acks)
+        if acks:  # released in the next call; in the instance DB until then (``_pending``)
+            numbers = self.cc.step_numbers
+            st.to_release = list(dict.fromkeys([*st.to_release, *(numbers[i] for i in acks)]))
         if self._swapped:
             self._swapped = False
             forget_removed(st, messages, self.cc.name, idb.number, ctx.now_ns)

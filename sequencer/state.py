@@ -40,6 +40,9 @@ but a garbled value (S7's own TIME ends at T#24D20H31M23S647MS; the runtime coun
 it, so a step may wait longer than that and still be restarted)."""
 LEVEL_PINS: Final = ("HALT_SQ", "EN_IL", "EN_SV")
 """The level pins an operator or engineer may hold at a value (``GraphFB.set_level``)."""
+Command = tuple[str, int | None, str | None]
+"""An operator command queued for the next call (``GraphFB.command``): the pin, the step
+number it acts on (S_ON, S_OFF, ACK_S) or None, and the user it acts as or None."""
 
 # Inputs whose rising edge (not level) counts (docs/semantics.md, "One FB call", step 1 and "Modes"
 # and "FB pins").
@@ -65,6 +68,9 @@ EDGE_INPUTS: Final = (
     "DISP_SEF",
     "DISP_SALL",
 )
+COMMAND_PINS: Final = frozenset((*EDGE_INPUTS, "OFF_SQ"))
+"""The pins an operator command may act as (``GraphFB.command``): a saved queue holding
+another is refused."""
 
 STEP_LISTS: Final = (
     "x",
@@ -170,6 +176,14 @@ class GraphState:
                           both part of the instance DB, as ``levels``: a restart from the
                           state file carries them out once, in its first call (a cold
                           restart clears them); numbers, so they outlive a chart change
+      ``to_command``      operator commands for the next call (``GraphFB.command``: ``Command``
+                          = pin, step number or None, user or None), in order
+      ``to_level``        level overrides the next call puts in force (``LEVEL_PINS`` → value,
+                          None: back to the pin; ``GraphFB.set_level``)
+      ``to_release``      step *numbers* whose supervision message a user acknowledged: the
+                          next call releases them as ACK_S would (``sequencer.messages``); all
+                          three kept as ``to_place``: committed with the scan that took them,
+                          carried out once in the first call after a warm or hot restart
     """
 
     __slots__ = (
@@ -193,6 +207,9 @@ class GraphState:
         "levels",
         "to_enter",
         "to_place",
+        "to_command",
+        "to_level",
+        "to_release",
         "repin",
     )
 
@@ -252,6 +269,9 @@ class GraphState:
         self.levels: dict[str, bool] = {}
         self.to_enter: list[int] = []  # step numbers whose S1 is the next call's
         self.to_place: list[int] = []  # step numbers to place in the next call
+        self.to_command: list[Command] = []  # operator commands for the next call
+        self.to_level: dict[str, bool | None] = {}  # level overrides for the next call
+        self.to_release: list[int] = []  # step numbers a message's acknowledgement releases
         self.repin: list[str] = []  # input pins the chart's rows wrote in this call
 
     # ------------------------------------------------------------ reading times (S7 TIME, ms)
@@ -332,6 +352,9 @@ class GraphState:
         data["levels"] = self.levels
         data["to_enter"] = self.to_enter
         data["to_place"] = self.to_place
+        data["to_command"] = [list(c) for c in self.to_command]
+        data["to_level"] = self.to_level
+        data["to_release"] = self.to_release
         return data
 
     @classmethod
@@ -392,11 +415,19 @@ class GraphState:
         ):
             raise ValueError(f"'levels' is {levels!r}")
         st.levels = dict(levels)
-        for name in ("to_enter", "to_place"):  # absent in a state written before they were kept
+        for name in ("to_enter", "to_place", "to_release"):  # absent in a state from before
             numbers = data.get(name, [])
             if not isinstance(numbers, list) or any(type(n) is not int for n in numbers):
                 raise ValueError(f"{name!r} is {numbers!r}")
             setattr(st, name, list(numbers))
+        st.to_command = _commands(data.get("to_command", []))  # absent before: none queued
+        to_level = data.get("to_level", {})
+        if not isinstance(to_level, dict) or any(
+            pin not in LEVEL_PINS or not (v is None or isinstance(v, bool))
+            for pin, v in to_level.items()
+        ):
+            raise ValueError(f"'to_level' is {to_level!r}")
+        st.to_level = dict(to_level)
         return st
 
     def __eq__(self, other: object) -> bool:
@@ -406,6 +437,25 @@ class GraphState:
 
     def __repr__(self) -> str:
         return f"GraphState(active={self.active}, mode={self.mode}, calls={self.calls})"
+
+
+def _commands(value: object) -> list[Command]:
+    """``to_command`` as saved (lists of pin, step number or null, user or null); a pin
+    that is no command's, or an entry of another shape, is refused (ValueError)."""
+    if not isinstance(value, list):
+        raise ValueError(f"'to_command' is {value!r}")
+    out: list[Command] = []
+    for entry in value:
+        if (
+            not isinstance(entry, list | tuple)
+            or len(entry) != 3
+            or entry[0] not in COMMAND_PINS
+            or not (entry[1] is None or type(entry[1]) is int)
+            or not (entry[2] is None or isinstance(entry[2], str))
+        ):
+            raise ValueError(f"'to_command' has an entry {entry!r}")
+        out.append((entry[0], entry[1], entry[2]))
+    return out
 
 
 def _span(ns: int) -> str:

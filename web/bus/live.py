@@ -10,7 +10,10 @@ Commands act like the "Control Sequencer" dialog of S7-GRAPH (the TIA "MOP" comm
 bits): they come from the operator's debugger, not from the FB's pins, so they act
 whatever the chart's parameter set (a MINIMUM FB has no ACK_EF pin, yet can be
 acknowledged) and whatever the program wires to the pins. Each is applied at the scan
-boundary and acts in the FB's next call as a one-call rising edge (``GraphFB.command``):
+boundary and acts in the FB's next call as a one-call rising edge (``GraphFB.command``),
+queued meanwhile in the FB's instance DB (``GraphState.to_command``): committed with the
+boundary and its audit row, it outlives a kill before that call (a warm or hot restart
+carries it out in its first call):
 
 - ``ack`` → ACK_EF; refused when no step waits for an acknowledgement, or when each
   waiting fault's cause persists and the acknowledgement would not let its step switch

@@ -1,7 +1,7 @@
 """The CPU's RUN/STOP switch on a running loop (``Runner.switch_stop`` / ``switch_start``,
 the ops ``stop`` and ``start``) and a start in STOP after the supervisor killed a hung CPU
 (``Runner.recover``): a STOP by the switch is not a STOP by an error, and a start does the
-configured restart."""
+configured restart. ``status`` says why the CPU is in STOP, a startup it refused too."""
 
 from __future__ import annotations
 
@@ -9,10 +9,12 @@ import mmap
 
 import pytest
 
+from s7graph.engine import Cpu, VirtualClock, ob
 from s7graph.engine.diagnostics import EventId
 from s7graph.engine.marks import MARKS_SIZE, MarkReader, ScanMarks
-from s7graph.engine.modes import CpuMode
+from s7graph.engine.modes import CpuMode, KeySwitch
 from s7graph.engine.record import ScanRecord
+from s7graph.engine.runner import refused_startup, stop_reason
 from s7graph.web.bus.protocol import CpuStatus, StepStateUpdate
 from s7graph.web.cli.remote import status_lines
 from s7graph.web.view.texts import status_html
@@ -74,3 +76,69 @@ def test_status_and_the_page_say_why_the_cpu_is_in_stop() -> None:
     update = StepStateUpdate(cycle=9, t_ms=90, mode="AUTO", active=[1])
     html = status_html(update, 9, "STOP", None, 0, why)
     assert '<b style="color:#c00">STOP</b>' in html and why in html
+
+
+def _cpu(*, key_at_stop: bool = False, deselected: bool = False) -> Cpu:
+    """A CPU with an empty OB1; its key switch at STOP, or OB35 loaded but deselected."""
+
+    @ob(1)
+    def main(ctx: object) -> None:
+        pass
+
+    @ob(35)
+    def every_100_ms(ctx: object) -> None:
+        pass
+
+    cpu = Cpu(VirtualClock())
+    cpu.load(main)
+    if key_at_stop:
+        cpu.key = KeySwitch.STOP
+    if deselected:
+        cpu.load(every_100_ms)
+        cpu.interrupts.configure(35, 0)
+    return cpu
+
+
+@pytest.mark.parametrize(
+    ("setup", "why"),
+    [
+        ({"key_at_stop": True}, "key switch is in STOP"),
+        ({"deselected": True}, "OB35: OB35 is loaded but deselected: startup aborted"),
+    ],
+    ids=["the key switch at STOP", "a deselected OB"],
+)
+def test_status_says_that_the_cpu_refused_its_startup_and_why(
+    setup: dict[str, bool], why: str
+) -> None:
+    """Before: ``STOP: the CPU is in STOP`` — a refusal writes no STOP entry. Now the words
+    ``s7graph run`` says it with: the entry 16#4309's text, the block it names first."""
+    cpu = _cpu(**setup)
+    cpu.start("warm")
+    assert cpu.mode is CpuMode.STOP
+    reason = stop_reason(cpu)
+    assert reason == f"the CPU refused its startup: {why}"
+    lines = status_lines(CpuStatus(cpu="cpu1", state="STOP", reason=reason))
+    assert lines[1] == f"STOP: the CPU refused its startup: {why}"
+
+
+def test_a_startup_refused_after_a_stop_is_why_the_cpu_is_in_stop_now() -> None:
+    cpu = _cpu()
+    cpu.start("warm")
+    cpu.stop("STOP by the switch (eng)")
+    assert stop_reason(cpu) == "STOP by the switch (eng)"
+    cpu.key = KeySwitch.STOP
+    cpu.start("warm")
+    assert stop_reason(cpu) == "the CPU refused its startup: key switch is in STOP"
+    cpu.key = KeySwitch.RUN
+    cpu.start("warm")  # started since: the refusal is no reason any more
+    cpu.stop("STOP by the switch (eng)")
+    assert stop_reason(cpu) == "STOP by the switch (eng)"
+
+
+def test_a_hot_restart_turned_warm_is_no_refusal_in_status() -> None:
+    cpu = _cpu()
+    cpu.hot_blockers.add("program download")
+    cpu.start("hot")
+    assert cpu.mode is CpuMode.RUN and refused_startup(cpu) is None
+    cpu.stop("STOP by the switch (eng)")
+    assert stop_reason(cpu) == "STOP by the switch (eng)"
