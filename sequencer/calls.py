@@ -11,19 +11,24 @@ when a named DB is already something else: a global DB, or the instance of anoth
 of a user block (``CALL FC 9``, ``CALL FB 5, DB 5``) that the CPU has not loaded is
 reported in ``missing``: a chart run by itself has the system blocks only, and the call stops the
 CPU when it is reached (a programming error without OB121, as on S7). A download into the running
-CPU may not add such a call: ``swap`` refuses it. The calls are walked as the chart's text
+CPU may not add such a call: ``swap`` refuses it. A DB a call passes (``src := DB5``, a DB's
+symbol) goes to a BLOCK_DB input of the block the CPU holds, else the chart is refused: the
+block would take the DB's number for a value. The calls are walked as the chart's text
 walks them (``sequencer.text.call_sites``).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable
+import functools
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
 from s7graph.engine.errors import BlockError
+from s7graph.sequencer.checks.interfaces import is_block_db
 from s7graph.sequencer.text.call_sites import CallSite, call_sites
-from s7graph.sequencer.text.model import BlockCall, Chart
+from s7graph.sequencer.text.model import BlockCall, Chart, Operand
+from s7graph.sequencer.text.names import db_argument
 
 __all__ = ["CallPlan", "CallSite", "call_sites", "missing_blocks", "plan_calls", "prepare_calls"]
 
@@ -45,7 +50,11 @@ def prepare_calls(cpu: Any, chart: Chart, *, allowed_missing: set[str] | None = 
     nothing is created when one of them cannot be (``problems``). With ``allowed_missing``
     (a download into a running CPU: the blocks the running chart already lacks), a call of
     any other block the CPU lacks is a problem too: reached, it would stop the plant."""
-    plan = plan_calls(cpu, call_sites(chart), allowed_missing=allowed_missing)
+    table = getattr(cpu.mem, "symbols", None)
+    sites = call_sites(chart)
+    plan = plan_calls(
+        cpu, sites, allowed_missing=allowed_missing, dbs=lambda e: db_argument(e, chart, table)
+    )
     if not plan.problems:
         for number, block in plan.wanted.items():
             cpu.create_instance_db(number, block)
@@ -59,13 +68,17 @@ def plan_calls(
     *,
     allowed_missing: set[str] | None = None,
     find: Callable[[str], Any] | None = None,
+    dbs: Callable[[object], int | None] | None = None,
 ) -> CallPlan:
     """What :func:`prepare_calls` finds for the calls ``sites``, nothing created (the
     instance DBs it would create in ``wanted``): an online change's preview says so before
     the swap. ``find``: the block of a label, None when the CPU lacks it (default: the
-    CPU's own; a preview with S7-SCL sources looks in those first)."""
+    CPU's own; a preview with S7-SCL sources looks in those first). ``dbs``: the DB an
+    actual parameter names, if any (default: ``DB5``, or a DB symbol of the CPU's table)."""
     plan = CallPlan()
     look = find if find is not None else _finder(cpu)
+    if dbs is None:
+        dbs = functools.partial(db_argument, chart=None, symbols=getattr(cpu.mem, "symbols", None))
     by_label = find is not None
     for site in sites:
         c = site.call
@@ -80,6 +93,7 @@ def plan_calls(
                 why = f"{label} is not in this CPU; reached, the call stops it"
                 plan.missing.append(site.line("warning", why))
             continue
+        _check_db_inputs(plan, site, block, dbs, cpu.instance_dbs)
         if getattr(block, "kind", None) not in ("SFB", "FB"):  # by number or name ("TON")
             continue
         if not isinstance(c.instance, int):
@@ -99,6 +113,35 @@ def plan_calls(
             why = f"DB{c.instance} is named as the instance of another block too"
             plan.problems.append(site.line("error", why))
     return plan
+
+
+def _check_db_inputs(
+    plan: CallPlan,
+    site: CallSite,
+    block: Any,
+    dbs: Callable[[object], int | None],
+    instances: Mapping[int, Any],
+) -> None:
+    """A problem for each DB ``site`` passes to a parameter of ``block`` that is no
+    BLOCK_DB input (``block`` as the CPU holds it: a chart compiled without the program's
+    blocks has not been checked against them), and for an instance DB passed: it holds
+    values by name, no bytes for the block to reach."""
+    params = {v.name.upper(): v for v in getattr(block, "interface", ())}
+    for name, e in site.call.inputs:
+        var = params.get(name.upper())
+        number = dbs(e) if var is not None and isinstance(e, Operand) else None
+        if var is None or number is None or not isinstance(e, Operand):
+            continue
+        what = f'"{e.name}"' if e.quoted else e.name
+        if not is_block_db(var):
+            why = f"{block.label}: {var.name} is {var.type}; {what} is a DB, which only a "
+            plan.problems.append(site.line("error", why + "BLOCK_DB input takes"))
+        elif (held := instances.get(number)) is not None:
+            why = (
+                f"{what}: DB{number} is the instance DB of {held.fb.label}; it holds its "
+                "variables by name, not the bytes a BLOCK_DB input reaches"
+            )
+            plan.problems.append(site.line("error", why))
 
 
 def _finder(cpu: Any) -> Callable[[str], Any]:

@@ -13,6 +13,7 @@ with the validator: ``"quoted"`` → symbol; otherwise FB static variable, FB pi
 from __future__ import annotations
 
 import re
+from dataclasses import replace
 from typing import Any
 
 from s7graph.engine.address import Area, Width
@@ -23,8 +24,8 @@ from s7graph.sequencer.checks.validate import validate
 from s7graph.sequencer.collector import collector_paused
 from s7graph.sequencer.compiled import CompiledChart, Reach
 from s7graph.sequencer.params import pin as pin_info
-from s7graph.sequencer.text.model import BlockCall, Chart, Coil, Operand, Step
-from s7graph.sequencer.text.names import resolve_operand
+from s7graph.sequencer.text.model import ActionRow, BlockCall, Chart, Coil, Const, Operand, Step
+from s7graph.sequencer.text.names import db_argument, resolve_operand
 from s7graph.steps.actions import ActionParts, call_code, step_action_parts, uses_own_index
 from s7graph.steps.conditions import (
     condition_parts,
@@ -296,8 +297,9 @@ def _step_functions(
         if s.supervision is not None:
             parts.append(gen_condition(f"_sv{i}", s.supervision, g, res, res.step, res.transition))
         own: ActionParts | None
+        actions = tuple(_numbered_row(r, res) for r in s.actions)
         try:
-            own = step_action_parts(i, s.actions, g, res, res.step, res.transition)
+            own = step_action_parts(i, actions, g, res, res.step, res.transition)
             a_src, f_src = own.a_src, own.f_src
         except S7Error as exc:
             res.problems.append(_Problem(exc.where or s.loc, f"S{s.number}: {exc.message}"))
@@ -517,6 +519,30 @@ def _zero(type_name: str) -> Any:
     return 0
 
 
+def _numbered(call: BlockCall, res: _Resolver) -> BlockCall:
+    """``call`` with each DB it passes (``src := DB5``, ``src := "Recipe"``) as the DB's
+    number, a WORD: what the BLOCK_DB input of an S7-SCL block holds (the checks and
+    ``sequencer.calls`` let a DB go to no other parameter)."""
+    inputs = tuple(
+        (name, e if (n := db_argument(e, res.chart, res.symbols)) is None else _word(n, e))
+        for name, e in call.inputs
+    )
+    if all(a[1] is b[1] for a, b in zip(inputs, call.inputs, strict=True)):
+        return call
+    return replace(call, inputs=inputs)
+
+
+def _word(number: int, e: object) -> Const:
+    return Const(number, "WORD", f"W#16#{number:X}", getattr(e, "loc", SourceLocation()))
+
+
+def _numbered_row(row: ActionRow, res: _Resolver) -> ActionRow:
+    if not isinstance(row.operand, BlockCall):
+        return row
+    call = _numbered(row.operand, res)
+    return row if call is row.operand else replace(row, operand=call)
+
+
 def _gen_permanent(name: str, instrs: tuple[Any, ...], g: CodeGen, res: _Resolver) -> str:
     """``def name(st, R)``: permanent instructions, in order (docs/semantics.md, "One FB call",
     steps 3 and 5)."""
@@ -535,7 +561,7 @@ def _gen_permanent(name: str, instrs: tuple[Any, ...], g: CodeGen, res: _Resolve
                 lines.append(f"    if {cond}:")
                 lines.append("        " + g.set_bit(ref, ins.kind == "S"))
         elif isinstance(ins, BlockCall):
-            lines.append("    " + call_code(ins, val, res))
+            lines.append("    " + call_code(_numbered(ins, res), val, res))
             for pname, target in ins.outputs:
                 lines.append(f"    if {pname!r} in _o:")
                 lines.append("        " + g.write_returned(res(target), f"_o[{pname!r}]"))

@@ -5,12 +5,13 @@ cross-reference list (Tools > Cross-references) shows a tag's uses (docs/cli.md,
 Every contact and operand of a transition's condition, a step's interlock and supervision,
 its action rows and the permanent instructions is one :class:`Use`: the operand as written
 (a symbol, an address, an FB variable, ``S3.X``, ``T2.TT``, a block, a step an ON/OFF row
-acts on), the element it stands in (``T1 "Start"``, ``S2 "Clamp" interlock``, ``S2 "Clamp"
-row 3``, ``permanent before 1``), its access (:data:`ACCESS` by qualifier; contacts and the
-operands of an expression are read), and its place in the source. A symbol and its address
-are one operand (``"Start_button" (I0.7)``), with the chart's own ``SYMBOLS`` and a symbol
-table; the symbols the chart declares and never uses are listed as TIA lists unused tags.
-With the S7-SCL sources of the blocks beside the chart, their uses are listed too
+acts on, a DB a call passes to a BLOCK_DB input: ``DB 5``), the element it stands in (``T1
+"Start"``, ``S2 "Clamp" interlock``, ``S2 "Clamp" row 3``, ``permanent before 1``), its
+access (:data:`ACCESS` by qualifier; contacts and the operands of an expression are read),
+and its place in the source. A symbol and its address are one operand (``"Start_button"
+(I0.7)``, ``"Recipe" (DB5)``), with the chart's own ``SYMBOLS`` and a symbol table; the
+symbols the chart declares and never uses are listed as TIA lists unused tags. With the
+S7-SCL sources of the blocks beside the chart, their uses are listed too
 (``steps.scl.xref``: the element is the block, ``OB 35``), as TIA's list spans every block
 of a program. Pure: the parsed chart and sources in, data out.
 """
@@ -42,7 +43,7 @@ from s7graph.sequencer.text.model import (
     StepTarget,
     TransAttr,
 )
-from s7graph.sequencer.text.names import db_symbol
+from s7graph.sequencer.text.names import db_argument, db_symbol
 from s7graph.sequencer.text.walk import nodes
 from s7graph.steps.scl import model as scl
 from s7graph.steps.scl.xref import interfaces, scl_uses
@@ -108,9 +109,12 @@ class CrossReferences:
 
     def of(self, name: str) -> list[Use]:
         """The uses of the operand written ``name`` (a symbol with or without quotes, an
-        address, a variable; any case)."""
+        address, a variable, a block: ``DB5`` or ``DB 5``; any case)."""
         bare = name.strip().strip('"')
         keys = {self.shown(bare).casefold(), self.shown(f'"{bare}"').casefold()}
+        block = _BLOCK.fullmatch(bare)
+        if block is not None:
+            keys.add(self.shown(f"{block[1].upper()} {int(block[2])}").casefold())
         return [u for u in self.uses if u.operand.casefold() in keys]
 
 
@@ -121,9 +125,10 @@ def cross_references(
     order; ``symbols`` (optional) a symbol table beside the chart's own ``SYMBOLS``, which
     come first."""
     names = _Names(chart, symbols)
+    dbs = functools.partial(db_argument, chart=chart, symbols=symbols)
     uses = [
         Use(names.shown(text), element, access, loc, ref)
-        for (element, ref), text, access, loc in _walk(chart)
+        for (element, ref), text, access, loc in _walk(chart, dbs)
     ]
     uses += _block_uses(names, blocks)
     used = {u.operand for u in uses}
@@ -201,9 +206,11 @@ class _Names:
 
     def __init__(self, chart: Chart | None, table: SymbolTable | None) -> None:
         self.by_name: dict[str, tuple[str, str]] = {}
+        blocks = table.block_names() if table is not None else {}
         for source in (
             [(s.name, s.address) for s in chart.symbols] if chart is not None else [],
             [(s.name, str(s.address)) for s in table or ()],
+            [(n, b) for n, b in blocks.items() if b.startswith("DB")],  # "Recipe" (DB5)
         ):
             for name, address in source:
                 self.by_name.setdefault(name.casefold(), (name, address))
@@ -212,7 +219,6 @@ class _Names:
         }
         self.variables = {v.name.casefold(): v.name for v in chart.vars} if chart else {}
         own = [(s.name, db_symbol(s)) for s in chart.symbols] if chart is not None else []
-        blocks = table.block_names() if table is not None else {}
         theirs = [(n, int(b[2:])) for n, b in blocks.items() if b.startswith("DB")]
         first: dict[str, tuple[str, int | None]] = {}
         for name, number in [*own, *theirs]:  # the chart's symbol of an operand hides one
@@ -262,6 +268,9 @@ class _Names:
         return f'"{symbol}".{member} (DB{number}.{member})'
 
 
+_BLOCK: Final = re.compile(r"(?i)(OB|FB|FC|SFB|SFC|DB)\s*(\d+)")
+"""A block as written: ``DB5``, ``FC 5`` (the list shows ``DB 5``)."""
+
 _MEMBER: Final = re.compile(
     r'(?:"(?P<symbol>[^"]+)"|(?i:DB)\s*(?P<db>\d+))\s*\.\s*'
     r"(?!(?i:DB[XBWD]\s*\d))(?P<member>[A-Za-z_][A-Za-z0-9_]*)"
@@ -273,34 +282,38 @@ _Element = tuple[str, Ref | None]  # the element as shown, and as the editor sel
 _Found = tuple[_Element, str, str, SourceLocation]  # element, operand as written, access, place
 
 
-def _walk(chart: Chart) -> Iterator[_Found]:
+_Dbs = Callable[[object], int | None]
+"""The DB an actual parameter names (``DB5``, ``"Recipe"``), if any (``db_argument``)."""
+
+
+def _walk(chart: Chart, dbs: _Dbs) -> Iterator[_Found]:
     for label, instructions in (("before", chart.before), ("after", chart.after)):
         ref = DeclRef("permanent", label)
         for k, instruction in enumerate(instructions, 1):
-            yield from _permanent((f"permanent {label} {k}", ref), instruction)
+            yield from _permanent((f"permanent {label} {k}", ref), instruction, dbs)
     for sequence in chart.sequences:
         for step in sequence.steps:
-            yield from _step(step)
+            yield from _step(step, dbs)
         for t in sequence.transitions:
             element = (f"T{t.number} {_quoted(t.name)}".strip(), TransitionRef(t.number))
             yield from _read(element, t.condition)
 
 
-def _step(step: Step) -> Iterator[_Found]:
+def _step(step: Step, dbs: _Dbs) -> Iterator[_Found]:
     name, n = f"S{step.number} {_quoted(step.name)}".strip(), step.number
     yield from _read((f"{name} interlock", StepRef(n, "interlock")), step.interlock)
     yield from _read((f"{name} supervision", StepRef(n, "supervision")), step.supervision)
     for k, row in enumerate(step.actions, 1):
-        yield from _row((f"{name} row {k} ({_row_head(row)})", RowRef(n, k - 1)), row)
+        yield from _row((f"{name} row {k} ({_row_head(row)})", RowRef(n, k - 1)), row, dbs)
 
 
-def _row(element: _Element, row: ActionRow) -> Iterator[_Found]:
+def _row(element: _Element, row: ActionRow, dbs: _Dbs) -> Iterator[_Found]:
     operand = row.operand
     if isinstance(operand, Assignment):
         yield element, _text(operand.target), "write", operand.target.loc
         yield from _read(element, operand.expr)
     elif isinstance(operand, BlockCall):
-        yield from _call(element, operand)
+        yield from _call(element, operand, dbs)
     elif isinstance(operand, StepTarget):
         target = "S_ALL" if operand.step is None else f"S{operand.step}"
         yield element, target, ACCESS.get(row.qualifier, row.qualifier.lower()), operand.loc
@@ -309,7 +322,7 @@ def _row(element: _Element, row: ActionRow) -> Iterator[_Found]:
     yield from _read(element, row.value)
 
 
-def _permanent(element: _Element, instruction: PermanentInstruction) -> Iterator[_Found]:
+def _permanent(element: _Element, instruction: PermanentInstruction, dbs: _Dbs) -> Iterator[_Found]:
     if isinstance(instruction, Coil):
         yield element, _text(instruction.target), _COIL[instruction.kind], instruction.target.loc
         yield from _read(element, instruction.condition)
@@ -317,15 +330,21 @@ def _permanent(element: _Element, instruction: PermanentInstruction) -> Iterator
         yield element, _text(instruction.target), "write", instruction.target.loc
         yield from _read(element, instruction.expr)
     else:
-        yield from _call(element, instruction)
+        yield from _call(element, instruction, dbs)
 
 
-def _call(element: _Element, call: BlockCall) -> Iterator[_Found]:
+def _call(element: _Element, call: BlockCall, dbs: _Dbs) -> Iterator[_Found]:
+    """The block, its instance DB, each DB passed (``src := DB5``: an *argument* of the
+    DB, which the block may read or write), the operands of the other parameters."""
     yield element, _block(call.kind, call.block), "call", call.loc
     if call.instance is not None:
         yield element, _block("DB", call.instance), "instance", call.loc
     for _, expr in call.inputs:
-        yield from _read(element, expr)
+        number = dbs(expr)
+        if number is not None:
+            yield element, _block("DB", number), "argument", getattr(expr, "loc", call.loc)
+        else:
+            yield from _read(element, expr)
     for _, out in call.outputs:
         yield element, _text(out), "write", out.loc
 

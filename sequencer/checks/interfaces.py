@@ -5,9 +5,10 @@ BLOCKS.scl``; docs/cli.md, "s7graph check").
 ``program_blocks(blocks, instances)`` reads them from engine blocks — compiled S7-SCL or
 Python — so the chart's checks need neither the SCL compiler nor a CPU: a pin is its name,
 direction and S7 type (``OBJECT`` for an ARRAY, a STRUCT or a multi-instance, which a chart
-cannot pass), an FB's static variables beside its pins (a chart reads them by name:
-``"Motor_DB".Running``), an FB's instance DBs are those the program names, a global DB is
-one the program holds.
+cannot pass; ``BLOCK_DB`` for an input S7-SCL declares so, which the engine holds as the
+WORD with the DB's number), an FB's static variables beside its pins (a chart reads them by
+name: ``"Motor_DB".Running``), an FB's instance DBs are those the program names, a global
+DB is one the program holds.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from typing import Any
 
 from s7graph.engine.blocks import DB, FB, FC, Decl
 
-__all__ = ["Interface", "ProgramBlocks", "UserPin", "program_blocks"]
+__all__ = ["Interface", "ProgramBlocks", "UserPin", "is_block_db", "program_blocks"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -88,9 +89,21 @@ class ProgramBlocks:
 _DIRECTIONS = {Decl.IN: "IN", Decl.OUT: "OUT", Decl.IN_OUT: "IN_OUT"}
 
 
+def is_block_db(var: Any) -> bool:
+    """Whether an engine block's variable is a BLOCK_DB input: the WORD with a DB's number
+    that S7-SCL declares so, marked by its comment (``steps.scl.blocks``)."""
+    return getattr(var, "comment", "") == "BLOCK_DB" and var.type == "WORD"
+
+
+def _pin_type(v: Any) -> str:
+    if not isinstance(v.type, str):
+        return "OBJECT"
+    return "BLOCK_DB" if is_block_db(v) else v.type
+
+
 def _interface(block: FB | FC) -> Interface:
     pins = [
-        UserPin(v.name, _DIRECTIONS[v.decl], v.type if isinstance(v.type, str) else "OBJECT")
+        UserPin(v.name, _DIRECTIONS[v.decl], _pin_type(v))
         for v in block.interface
         if v.decl in _DIRECTIONS
     ]

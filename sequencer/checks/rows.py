@@ -18,17 +18,19 @@ from s7graph.sequencer.checks.types import (
     _type,
     _unify,
 )
-from s7graph.sequencer.checks.user_calls import check_instance, check_user_call
+from s7graph.sequencer.checks.user_calls import DB_TYPE, check_instance, check_user_call, db_only
+from s7graph.sequencer.text.call_sites import call_sites
 from s7graph.sequencer.text.model import (
     ActionRow,
     Assignment,
     BlockCall,
     Coil,
+    Expr,
     Operand,
     Step,
     StepTarget,
 )
-from s7graph.sequencer.text.names import Resolved, resolve_operand
+from s7graph.sequencer.text.names import Resolved, db_argument, resolve_operand
 from s7graph.sequencer.text.walk import nodes
 from s7graph.sfb import catalogue
 from s7graph.steps.qualifiers import (
@@ -134,7 +136,7 @@ def _check_call(ctx: _Ctx, call: BlockCall, el: str) -> None:
     inputs, ``=>`` for outputs, of the pin's type, all of them for an SFC (the catalogue,
     ``sfb.catalogue``). FB and FC calls name the user's blocks, which only the program
     that loads them knows: checked when it is given (``sequencer.checks.user_calls``)."""
-    types = [(name, _type(ctx, e, el), e) for name, e in call.inputs]
+    types = [(name, _input_type(ctx, e, el), e) for name, e in call.inputs]
     for name, o in call.outputs:
         res = _resolve(ctx, o, el)
         if res is not None and not res.writable:
@@ -193,6 +195,10 @@ def _check_call(ctx: _Ctx, call: BlockCall, el: str) -> None:
 
     for name, t, e in types:
         pin = entry.pin(name)
+        if pin is not None and t == DB_TYPE:
+            why = f"{entry.key} {entry.name}: {pin.name} is {_show(pin.type)}; {db_only(e)}"
+            ctx.err("E046", why, getattr(e, "loc", call.loc), el)
+            continue
         if pin is None or t is None or pin.type == "ANY":
             continue
         if _unify(pin.type, _as_bit(t) if pin.type == "BOOL" else _as_number(t)) is None:
@@ -203,6 +209,18 @@ def _check_call(ctx: _Ctx, call: BlockCall, el: str) -> None:
                 getattr(e, "loc", call.loc),
                 el,
             )
+
+
+def _input_type(ctx: _Ctx, e: Expr, el: str) -> str | None:
+    """The type of a call's input ``e``: ``DB_TYPE`` for a DB (``DB5``, a DB's symbol),
+    which a BLOCK_DB input takes (``sequencer.checks.user_calls``); E041 for a DB numbered
+    outside 1..65535."""
+    number = db_argument(e, ctx.chart, ctx.symbols)
+    if number is None:
+        return _type(ctx, e, el)
+    if not 1 <= number <= 65535:
+        ctx.err("E041", f"DB{number}: a DB is numbered 1..65535", _loc(e), el)
+    return DB_TYPE
 
 
 def _read_only(name: str, res: Resolved) -> str:
@@ -278,8 +296,20 @@ def rule_instance_db_addresses(ctx: _Ctx) -> None:
     """An absolute address into an instance DB the chart knows (its own, or one of its
     calls': ``DB10.DBX6.0`` of ``CALL "TON", DB 10``) has no bytes to reach — such a DB
     holds its FB's variables by name — and stopped the CPU at its first call (E041): a
-    call's output is read through its ``=>`` parameter instead. Run after the rows, whose
-    calls name the instance DBs."""
+    call's output is read through its ``=>`` parameter instead; nor has such a DB bytes for
+    a BLOCK_DB input to reach (``src := DB10``: E041). Run after the rows, whose calls name
+    the instance DBs."""
+    program = ctx.readable.instances if ctx.readable is not None else {}
+    for site in call_sites(ctx.chart):
+        for _, e in site.call.inputs:
+            number = db_argument(e, ctx.chart, ctx.symbols)
+            owner = ctx.instances.get(number) or program.get(number) if number else None
+            if owner is not None:
+                why = (
+                    f"DB{number} is the instance DB of {owner}; it holds its variables by "
+                    "name, not the bytes a BLOCK_DB input reaches: pass a global DB"
+                )
+                ctx.err("E041", why, _loc(e), site.element)
     seen: set[tuple[str, bool]] = set()
     for op in nodes(ctx.chart):
         if not isinstance(op, Operand) or op.member or (op.name, op.quoted) in seen:

@@ -7,7 +7,9 @@ loads them knows them). With them, as a CALL in STEP 7 is checked against the ca
 named by number, an FC none; that DB is no global DB and no instance of another FB, in the
 program or in the chart's other calls; ``:=`` names an input or in/out, ``=>`` an output or
 in/out, each once; an FC is given every parameter (its RET_VAL may be left out); a value
-fits its parameter's type; an ARRAY, STRUCT or multi-instance parameter cannot be passed.
+fits its parameter's type; an ARRAY, STRUCT or multi-instance parameter cannot be passed. A
+BLOCK_DB input takes a DB (``DB5``, a DB's symbol) or its number as a WORD (``W#16#5``),
+and a DB goes to a BLOCK_DB input only (S7-SCL manual, "Data types", parameter types).
 """
 
 from __future__ import annotations
@@ -18,9 +20,12 @@ from s7graph.engine.errors import SourceLocation
 from s7graph.sequencer.checks.context import _Ctx
 from s7graph.sequencer.checks.interfaces import Interface, UserPin
 from s7graph.sequencer.checks.types import _CELL_FLEX, _as_bit, _as_number, _resolve, _show, _unify
-from s7graph.sequencer.text.model import BlockCall, Operand
+from s7graph.sequencer.text.model import BlockCall, Const, Operand
 
-__all__ = ["check_instance", "check_own_blocks", "check_user_call"]
+__all__ = ["DB_TYPE", "check_instance", "check_own_blocks", "check_user_call", "db_only"]
+
+DB_TYPE = "@DB"
+"""The type of a call's actual parameter that names a DB (``DB5``, ``"Recipe"``)."""
 
 Typed = Sequence[tuple[str, str | None, object]]
 """Each parameter given: its name, the type of its value or operand (None: unknown), the
@@ -33,9 +38,16 @@ def _where(call: BlockCall) -> str:
 
 def check_user_call(ctx: _Ctx, call: BlockCall, el: str, types: Typed) -> None:
     """E047 for each way ``call`` (of an FB, an FC or a block symbol) does not fit the
-    program's blocks ``ctx.blocks``; nothing without them."""
+    program's blocks ``ctx.blocks``. Without them, the blocks the compiler reads
+    (``ctx.readable``) check what goes to a BLOCK_DB input and where a DB goes: a mistake
+    there would hand the block a DB's number for a value, or a value for a DB's number."""
     program = ctx.blocks
     if program is None:
+        read = ctx.readable.find(call.kind, call.block) if ctx.readable is not None else None
+        for name, t, e in types:
+            pin = read.pin(name) if read is not None else None
+            if read is not None and pin is not None and (t == DB_TYPE or pin.type == "BLOCK_DB"):
+                _check_block_db(ctx, read, pin, t, e, el)
         return
     block = program.find(call.kind, call.block)
     if block is None:
@@ -55,14 +67,43 @@ def check_user_call(ctx: _Ctx, call: BlockCall, el: str, types: Typed) -> None:
     _check_pins(ctx, call, el, block)
     for name, t, e in types:
         pin = block.pin(name)
+        loc = getattr(e, "loc", call.loc)
+        if pin is not None and (t == DB_TYPE or pin.type == "BLOCK_DB"):
+            _check_block_db(ctx, block, pin, t, e, el)
+            continue
         if pin is not None and t is not None:
-            _check_type(ctx, block, pin, t, getattr(e, "loc", call.loc), el)
+            _check_type(ctx, block, pin, t, loc, el)
         if pin is not None and pin.direction == "IN_OUT" and not _in_memory(ctx, e, el):
             why = (
                 f"{block.label}: {pin.name} is an in/out parameter: it takes an operand in "
                 "memory (an address or its symbol), which the block writes back"
             )
-            ctx.err("E047", why, getattr(e, "loc", call.loc), el)
+            ctx.err("E047", why, loc, el)
+
+
+def db_only(e: object) -> str:
+    """Why a DB does not fit a parameter that is no BLOCK_DB."""
+    text = f'"{e.name}"' if isinstance(e, Operand) and e.quoted else getattr(e, "name", "")
+    return f"{text} is a DB, which only a BLOCK_DB input takes"
+
+
+def _check_block_db(
+    ctx: _Ctx, block: Interface, pin: UserPin, t: str | None, e: object, el: str
+) -> None:
+    """A DB to a BLOCK_DB input, or its number as a WORD (not 0: a DB is numbered
+    1..65535); a DB to no other parameter."""
+    loc = getattr(e, "loc", SourceLocation())
+    if pin.type != "BLOCK_DB":
+        ctx.err("E047", f"{block.label}: {pin.name} is {_show(pin.type)}; {db_only(e)}", loc, el)
+    elif t is not None and t != DB_TYPE and _unify("WORD", t) != "WORD":
+        why = (
+            f"{block.label}: {pin.name} is a BLOCK_DB: pass a DB (DB5, a DB's symbol) or its "
+            f"number as a WORD (W#16#5), not {_show(t)}"
+        )
+        ctx.err("E047", why, loc, el)
+    elif isinstance(e, Const) and e.value == 0:
+        why = f"{block.label}: {pin.name} is a BLOCK_DB: {e.text} is no DB (numbered 1..65535)"
+        ctx.err("E047", why, loc, el)
 
 
 def _in_memory(ctx: _Ctx, e: object, el: str) -> bool:

@@ -175,6 +175,23 @@ def db_symbol(s: SymbolDecl) -> int | None:
     return int(m[1]) if m else None
 
 
+def db_argument(e: object, chart: Chart | None, symbols: SymbolTable | None) -> int | None:
+    """The number of the DB an actual parameter of a call names — ``DB5`` (unless the chart
+    has a variable so named), or a DB symbol: the chart's ``SYMBOLS`` first, then those of
+    ``symbols`` — as a BLOCK_DB input of S7-SCL takes a DB; None for anything else."""
+    if not isinstance(e, Operand) or e.member:
+        return None
+    if not e.quoted:
+        m = _DB_SYMBOL.fullmatch(e.name.strip())
+        declared = chart is not None and e.name.upper() in _declarations(chart).vars
+        return int(m[1]) if m and not declared else None
+    own = _declarations(chart).symbols.get(e.name.casefold()) if chart is not None else None
+    if own is not None:
+        return db_symbol(own)
+    block = symbols.block(e.name) if symbols is not None else None
+    return block.number if block is not None and block.kind == "DB" else None
+
+
 class MemberError(SymbolError):
     """A variable of an instance DB read by name (``DB10.Q``) the chart cannot read (E048)."""
 

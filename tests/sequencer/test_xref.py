@@ -136,3 +136,33 @@ def test_a_symbol_used_only_in_a_block_beside_the_chart_is_not_unused() -> None:
     ]
     assert [u.element for u in refs.of('"Start"')][-1] == "FC 3"  # its address written
     assert [u.ref for u in refs.of("M9.1")] == [None]  # nothing the chart's editor selects
+
+
+def test_a_db_a_call_passes_is_a_use_of_that_db_however_it_is_named() -> None:
+    chart = """FUNCTION_BLOCK "Seq" FB 1 DB 1
+SYMBOLS "Recipe" : DB5 : DB5; END_SYMBOLS
+PERMANENT BEFORE
+  CALL FC 5 (src := DB5, x := MW2);
+  CALL FC 5 (src := "Recipe", x := MW2);
+  CALL FB 7, DB 6 (src := "Other");
+  CALL FC 5 (src := db7, x := MW2);
+END_PERMANENT
+SEQUENCE 1 "S"
+  INITIAL_STEP S1 "wait": END_STEP
+END_SEQUENCE
+END_FUNCTION_BLOCK
+"""
+    table = SymbolTable.from_text('"Other" ; DB 6 ; DB 6\n')
+    refs = cross_references(parse_chart(chart, "x.s7g"), table)
+    uses = {k: [(u.element, u.access, u.place) for u in v] for k, v in refs.operands().items()}
+    assert uses['"Recipe" (DB5)'] == [
+        ("permanent before 1", "argument", "x.s7g:4:21"),
+        ("permanent before 2", "argument", "x.s7g:5:21"),
+    ]
+    assert uses['"Other" (DB6)'] == [  # a DB of the symbol table: passed, and an instance
+        ("permanent before 3", "instance", "x.s7g:6:3"),
+        ("permanent before 3", "argument", "x.s7g:6:27"),
+    ]
+    assert uses["DB 7"] == [("permanent before 4", "argument", "x.s7g:7:21")]
+    assert refs.unused == () and "MW2" in uses
+    assert refs.of("DB7") == refs.of("db 7") and len(refs.of("DB6")) == 2
