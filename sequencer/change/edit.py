@@ -62,6 +62,7 @@ from s7graph.sequencer.change.structure import (
 )
 from s7graph.sequencer.change.typed import RowFields, check_bounds
 from s7graph.sequencer.checks.diagnostics import Diagnostic
+from s7graph.sequencer.checks.interfaces import ProgramBlocks
 from s7graph.sequencer.checks.validate import validate
 from s7graph.sequencer.text.elements import (
     Ref,
@@ -359,11 +360,15 @@ class Outcome:
         return self.refusal is None
 
 
-def _checked(chart: Chart, symbols: SymbolTable | None) -> tuple[Diagnostic, ...]:
-    """The validator's diagnostics of a chart within the editor's limits."""
+def _checked(
+    chart: Chart, symbols: SymbolTable | None, blocks: ProgramBlocks | None = None
+) -> tuple[Diagnostic, ...]:
+    """The validator's diagnostics of a chart within the editor's limits; ``blocks``: the
+    interfaces of the CPU's user blocks, whose FBs' variables the chart reads by name
+    (``"Motor_DB".Running``), as a download's compile reads them (its calls unchecked)."""
     check_bounds(chart)
     try:
-        return tuple(validate(chart, symbols))
+        return tuple(validate(chart, symbols, readable=blocks))
     except RecursionError:  # pragma: no cover - check_bounds bounds the nesting
         raise EditRefused("the chart nests too deeply to check") from None
 
@@ -373,16 +378,19 @@ def apply_edit(
     edit: Edit,
     symbols: SymbolTable | None = None,
     diagnostics: tuple[Diagnostic, ...] | None = None,
+    *,
+    blocks: ProgramBlocks | None = None,
 ) -> Outcome:
     """``edit`` applied to ``chart``: the edited chart with all its diagnostics (errors
     included: they are listed, the chart is kept), or a refusal with ``chart`` and its
-    ``diagnostics`` (computed when not given). Never raises for any input."""
+    ``diagnostics`` (computed when not given); ``blocks`` as ``_checked``. Never raises for
+    any input."""
     try:
         if not isinstance(edit, Edit):
             raise EditRefused(f"not an edit operation: {type(edit).__name__}")
         edited, selection = edit.apply(chart)
-        checked = _checked(edited, symbols)
-        across = _new_crossings(checked, chart, symbols, diagnostics)
+        checked = _checked(edited, symbols, blocks)
+        across = _new_crossings(checked, chart, symbols, diagnostics, blocks)
         if across is not None:  # the structure edits cannot know every way a path leaves
             raise EditRefused(across.message)
         return Outcome(edited, checked, None, selection)
@@ -391,7 +399,7 @@ def apply_edit(
     except RecursionError:  # pragma: no cover - texts and charts are bounded before
         refusal = Refusal("the edit nests too deeply")
     if diagnostics is None:
-        diagnostics = tuple(validate(chart, symbols))
+        diagnostics = tuple(validate(chart, symbols, readable=blocks))
     return Outcome(chart, diagnostics, refusal, None)
 
 
@@ -400,13 +408,14 @@ def _new_crossings(
     chart: Chart,
     symbols: SymbolTable | None,
     before: tuple[Diagnostic, ...] | None,
+    blocks: ProgramBlocks | None = None,
 ) -> Diagnostic | None:
     """The first branch or join across sequencers (E015: it does not compile) an edit made
     that ``chart`` did not have (None: none)."""
     made = [d for d in checked if d.code == "E015"]
     if not made:
         return None
-    had = before if before is not None else tuple(validate(chart, symbols))
+    had = before if before is not None else tuple(validate(chart, symbols, readable=blocks))
     known = {d.message for d in had if d.code == "E015"}
     return next((d for d in made if d.message not in known), None)
 
@@ -438,9 +447,10 @@ class _Done:
 @dataclass(frozen=True, slots=True)
 class Session:
     """An editor's state as one immutable value: the chart, its diagnostics, the selected
-    element, the last refusal, and the charts to undo and redo (at most ``MAX_UNDO``).
-    Every method returns the next state; none raises except ``open`` on a chart beyond
-    the editor's limits."""
+    element, the last refusal, and the charts to undo and redo (at most ``MAX_UNDO``);
+    ``blocks``: the interfaces of the CPU's user blocks, whose FBs' variables the chart
+    reads by name. Every method returns the next state; none raises except ``open`` on a
+    chart beyond the editor's limits."""
 
     chart: Chart
     diagnostics: tuple[Diagnostic, ...]
@@ -449,12 +459,21 @@ class Session:
     refusal: Refusal | None = None
     done: tuple[_Done, ...] = ()
     undone: tuple[_Done, ...] = ()
+    blocks: ProgramBlocks | None = None
 
     @classmethod
-    def open(cls, chart: Chart, symbols: SymbolTable | None = None) -> Session:
+    def open(
+        cls, chart: Chart, symbols: SymbolTable | None = None, blocks: ProgramBlocks | None = None
+    ) -> Session:
         """A session on ``chart``; raises ``EditRefused`` when the chart is beyond the
         editor's limits (``change.base``: steps, transitions, rows, nesting)."""
-        return cls(chart, _checked(chart, symbols), symbols)
+        return cls(chart, _checked(chart, symbols, blocks), symbols, blocks=blocks)
+
+    def with_blocks(self, blocks: ProgramBlocks | None) -> Session:
+        """The session checking its chart against ``blocks`` from now on (the CPU's user
+        blocks changed), its diagnostics made again."""
+        diagnostics = _checked(self.chart, self.symbols, blocks)
+        return replace(self, blocks=blocks, diagnostics=diagnostics)
 
     @property
     def has_errors(self) -> bool:
@@ -472,7 +491,7 @@ class Session:
     def apply(self, edit: Edit) -> Session:
         """The state after ``edit``: made (undoable, redo cleared) or refused (the chart
         as it was, ``refusal`` saying why)."""
-        out = apply_edit(self.chart, edit, self.symbols, self.diagnostics)
+        out = apply_edit(self.chart, edit, self.symbols, self.diagnostics, blocks=self.blocks)
         if out.refusal is not None:
             return replace(self, refusal=out.refusal)
         done = _Done(self.chart, self.diagnostics, self.selection, describe(edit))

@@ -3,7 +3,9 @@
 ``answer(request)`` parses, validates and compiles a chart (``compile``; ``preview``: the
 same, only the change summary, what the chart needs of the CPU — ``Needs``, which the CPU
 checks as its swap will — and the S7-SCL programs go back) — with ``blocks``, the S7-SCL
-sources its calls reach too, the calls checked against their interfaces — compares two
+sources its calls reach too, compiled first, the calls checked against their interfaces
+and the FBs' variables the chart reads by name (``"Motor_DB".Running``) read in them;
+without, in the interfaces of the blocks the CPU holds (``interfaces``) — compares two
 charts (``summary``: an undo), checks that a text parses (``check``: a save), or imports a
 file (``open``). Every refusal is ``{"refused": reason, "lines": diagnostics}`` with one
 line naming the place; nothing a request holds makes it raise.
@@ -24,6 +26,7 @@ from s7graph.sequencer.change.diff import summarize
 from s7graph.sequencer.change.online import Needs
 from s7graph.sequencer.change.typed import parse_source
 from s7graph.sequencer.checks.diagnostics import format_diagnostic
+from s7graph.sequencer.checks.interfaces import ProgramBlocks
 from s7graph.sequencer.checks.validate import validate
 from s7graph.sequencer.exchange import ImportFailed, import_file
 from s7graph.sequencer.text.format import format_chart
@@ -32,8 +35,8 @@ from s7graph.sequencer.text.parse import parse_chart
 from s7graph.web.bus.live import prepare_chart
 from s7graph.web.bus.pieces import dumps_in_pieces
 from s7graph.web.harness.project import CHART_CHOICE
-from s7graph.web.harness.scl import SclLoadError, compile_texts
-from s7graph.web.harness.session import ChartLoadError, compile_model
+from s7graph.web.harness.scl import SclLoadError, SclSources, compile_texts
+from s7graph.web.harness.session import ChartLoadError, Interfaces, compile_model
 
 __all__ = ["MAX_SUMMARY_LINES", "answer"]
 
@@ -105,12 +108,18 @@ def _compile(request: dict[str, Any], *, preview: bool) -> tuple[dict[str, Any],
     """Parse, check and compile; the change summary; for a download the compiled chart
     and the view's description of it, pickled in pieces (``web.bus.pieces``) without its
     code objects, which follow marshalled batch by batch, and its generated source, which
-    follows in pieces of ``SOURCE_PIECE`` characters."""
+    follows in pieces of ``SOURCE_PIECE`` characters. The chart reads the FBs' variables of
+    the S7-SCL sources sent (``blocks``, compiled first) or else of the CPU's blocks
+    (``interfaces``: ``sequencer.checks.interfaces.ProgramBlocks``)."""
     chart = _parse(str(request["text"]), str(request["file"]), "the chart does not parse")
     symbols = str(request.get("symbols", ""))
+    named = request.get("blocks")
+    portable: list[tuple[bytes, bytes]] = []
+    sources: list[SclSources] = []
     try:
         table = SymbolTable.from_text(symbols) if symbols else None
-        cc, table = compile_model(chart, table)
+        made = _interfaces(request.get("interfaces"), named, portable, sources)
+        cc, table = compile_model(chart, table, blocks=made)
     except ChartLoadError as exc:
         errors = [line for line in exc.lines if ": error[" in line] or exc.lines
         raise _Refused(
@@ -133,10 +142,8 @@ def _compile(request: dict[str, Any], *, preview: bool) -> tuple[dict[str, Any],
         "summary": (lines[:MAX_SUMMARY_LINES], summary.removed_active, len(summary.changes)),
         "needs": Needs.of(cc),  # what the swap checks in the CPU: its preview checks too
     }
-    blocks = request.get("blocks")
-    portable: list[tuple[bytes, bytes]] = []
-    if blocks is not None:
-        out["blocks"] = _blocks(chart, table, list(blocks), portable)
+    if sources:
+        out["blocks"] = _blocks(chart, table, sources[-1])
     if preview:  # the S7-SCL programs only: the CPU says what they carry over
         return out, [blob for pair in portable for blob in pair]
     fingerprint(cc)  # kept with the chart: the scan boundary does not compute it
@@ -152,19 +159,36 @@ def _compile(request: dict[str, Any], *, preview: bool) -> tuple[dict[str, Any],
     return out, [*pieces, *code, *text, *(blob for pair in portable for blob in pair)]
 
 
+def _interfaces(
+    held: ProgramBlocks | None,
+    named: list[tuple[str, str]] | None,
+    portable: list[Any],
+    sources: list[SclSources],
+) -> Interfaces | None:
+    """The interfaces the chart is compiled with, made from its symbol table: those of the
+    S7-SCL sources ``named`` (compiled then, in order, their programs' bytes appended to
+    ``portable``: ``steps.scl.portable``; the sources appended to ``sources``), which
+    replace the CPU's; else the CPU's blocks' ``held`` (None: it has none)."""
+    if named is None:
+        return None if held is None else lambda table: held
+
+    def compiled(table: SymbolTable) -> ProgramBlocks:
+        try:
+            sources.append(compile_texts(list(named), table, portable=portable))
+        except SclLoadError as exc:
+            errors = [line for line in exc.lines if ": warning[" not in line] or exc.lines
+            reason = f"the S7-SCL blocks do not compile: {len(errors)} error(s); {errors[0]}"
+            raise _Refused(reason, exc.lines) from None
+        return sources[-1].interfaces()
+
+    return compiled
+
+
 def _blocks(
-    chart: Chart, table: SymbolTable, named: list[tuple[str, str]], portable: list[Any]
+    chart: Chart, table: SymbolTable, sources: SclSources
 ) -> tuple[list[str], list[str], int]:
-    """The S7-SCL sources ``named`` compiled in order with the chart's symbol table (their
-    programs' bytes appended to ``portable``: ``steps.scl.portable``) and the chart's calls
-    checked against their interfaces; (files, warnings, programs)."""
-    try:
-        sources = compile_texts(named, table, portable=portable)
-    except SclLoadError as exc:
-        errors = [line for line in exc.lines if ": warning[" not in line] or exc.lines
-        raise _Refused(
-            f"the S7-SCL blocks do not compile: {len(errors)} error(s); {errors[0]}", exc.lines
-        ) from None
+    """The chart's calls checked against the interfaces of the S7-SCL ``sources`` it was
+    compiled with; (files, warnings, programs)."""
     calls = [d for d in validate(chart, table, blocks=sources.interfaces()) if d.is_error]
     if calls:
         lines = [format_diagnostic(d) for d in calls]

@@ -27,7 +27,10 @@ lock. The rules:
   source's generated module once to make its blocks, and parses or compiles nothing; it
   loads them as a chart, the collector paused, and freezes them after. One source is one
   pickle, loaded in one piece: the end of a very large one still holds the interpreter
-  for a moment (about 50 ms for a 740 kB source of 12,000 IF statements: docs/scl.md);
+  for a moment (about 50 ms for a 740 kB source of 12,000 IF statements: docs/scl.md).
+  A request without sources carries the interfaces of the blocks the CPU holds
+  (``sequencer.checks.interfaces.ProgramBlocks``, small): the chart reads their FBs'
+  variables by name (``"Motor_DB".Running``) as it did when the CPU started;
 - a preview, a save and an open bring back text only (the change summary, the chart) —
   but a preview's S7-SCL sources, which come back as a download's do: the CPU's process
   says from them what the download would carry over (``web.harness.scl_reload``).
@@ -61,6 +64,7 @@ from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.change.base import MAX_SOURCE
 from s7graph.sequencer.change.diff import removal_line
 from s7graph.sequencer.change.online import Needs
+from s7graph.sequencer.checks.interfaces import ProgramBlocks
 from s7graph.sequencer.collector import collector_paused
 from s7graph.sequencer.compiled import CompiledChart
 from s7graph.web.bus import compile_jobs
@@ -294,13 +298,15 @@ class Compiler:
         version: int,
         preview: bool = False,
         blocks: list[tuple[str, str]] | None = None,
+        interfaces: ProgramBlocks | None = None,
     ) -> Compiled | Summary:
         """``text`` compiled as version ``version`` of FB ``fb`` with the symbol table text
         ``symbols``, its change summary against the ``running`` chart's text with the
         ``active`` steps; a ``preview`` brings back the summary only (with the compiled
         ``blocks``, if sent). ``blocks``: the S7-SCL sources (file, text) the chart's calls
         reach, compiled with it in that order (made in this process of the child's bytes:
-        ``web.harness.scl.load_texts``)."""
+        ``web.harness.scl.load_texts``); ``interfaces``: those of the blocks the CPU holds,
+        whose FBs' variables the chart reads by name when no ``blocks`` replace them."""
         _size_limit(text, "the chart")
         if blocks is not None:
             _size_limit("".join(t for _, t in blocks), "the S7-SCL sources (together)")
@@ -314,6 +320,7 @@ class Compiler:
             "fb": fb,
             "version": version,
             "blocks": blocks,
+            "interfaces": interfaces,
         }
         reply, blobs = self._call(request, "download")
         said, removed, count = reply["summary"]

@@ -26,7 +26,10 @@ A download may bring changed S7-SCL sources of the blocks the chart calls (``blo
 compiled with the chart in the compiler's process, written beside it, swapped in with it at
 the same boundary (``web.bus.online_blocks``), kept with its version for ``undo_download``.
 With the chart unchanged (its summary empty) only the blocks change: the chart that runs,
-its state and its file stay, and the reply says so as the preview does.
+its state and its file stay, and the reply says so as the preview does. The chart reads
+the FBs' variables by name (``"Motor_DB".Running``) in those sources, or, when a download
+brings none, in the blocks the CPU holds (``online_blocks.held_interfaces``): a variable
+the FB lacks refuses it (E048), its preview alike.
 Its preview (and an undo's) says what the instance DBs would keep, drop and start afresh
 — the notes the download's reply gives, made by the same function
 (``web.harness.scl_reload.carry_notes``) — or the reason it would be refused.
@@ -59,7 +62,13 @@ from s7graph.web.bus.block_sources import MAX_TEXT_BYTES, source_files
 from s7graph.web.bus.compiler import Compiled, Compiler, CompileRefused, Opened, Summary
 from s7graph.web.bus.gate import Gate, with_note
 from s7graph.web.bus.live import LiveChart, LiveGraph
-from s7graph.web.bus.online_blocks import BlockFiles, BlocksRefused, chart_refusal, swap_blocks
+from s7graph.web.bus.online_blocks import (
+    BlockFiles,
+    BlocksRefused,
+    chart_refusal,
+    held_interfaces,
+    swap_blocks,
+)
 from s7graph.web.bus.protocol import (
     ChartSource,
     Command,
@@ -421,10 +430,13 @@ class OnlineChange:
         self, text: str, preview: bool, sent: dict[str, str], file: str
     ) -> tuple[Version | None, Summary]:
         """``text`` compiled with the CPU's symbol table in the compiler's process, with the
-        changed S7-SCL sources ``sent`` (and the CPU's others), and its change summary (a
-        preview: the summary only); its diagnostics name it ``file`` (the sender's)."""
+        changed S7-SCL sources ``sent`` (and the CPU's others) — or, without, with the
+        interfaces of the blocks the CPU holds (the chart reads their FBs' variables by
+        name) — and its change summary (a preview: the summary only); its diagnostics name
+        it ``file`` (the sender's)."""
         v = self.current
         blocks = self.block_files.merged(sent) if sent else None
+        held = None if sent else held_interfaces(self.session)
         done = self.compiler.compile(
             text,
             file,
@@ -435,6 +447,7 @@ class OnlineChange:
             version=v.number + 1,
             preview=preview,
             blocks=blocks,
+            interfaces=held,
         )
         if not isinstance(done, Compiled):
             return None, done

@@ -16,7 +16,9 @@ for a chart swap that is refused after it. Nothing here compiles: the blocks com
 
 :func:`chart_refusal` is what the chart's swap would refuse (``sequencer.change.online.
 refusal``) once those blocks are in: what a download's preview says first, and the download
-checks before it writes a file.
+checks before it writes a file. :func:`held_interfaces` are the interfaces of the blocks
+the CPU holds, which a download's chart reads the FBs' variables of by name when it brings
+no sources.
 """
 
 from __future__ import annotations
@@ -29,13 +31,14 @@ from typing import Any
 from s7graph.engine.blocks import DB
 from s7graph.engine.errors import BlockError, S7Error
 from s7graph.sequencer.change.online import Needs, refusal
+from s7graph.sequencer.checks.interfaces import ProgramBlocks, program_blocks
 from s7graph.steps.operands import area_buffer
 from s7graph.web.harness.project import ProjectError, restore_backup, write_chart
 from s7graph.web.harness.scl import SclSources
 from s7graph.web.harness.scl_reload import refusals
 from s7graph.web.harness.session import ChartSession
 
-__all__ = ["BlockFiles", "BlocksRefused", "chart_refusal", "swap_blocks"]
+__all__ = ["BlockFiles", "BlocksRefused", "chart_refusal", "held_interfaces", "swap_blocks"]
 
 
 class BlocksRefused(S7Error):
@@ -140,6 +143,18 @@ def _program_of(session: ChartSession) -> Callable[[], None]:
         session.blocks, session.dbvars.types = blocks, types
 
     return back
+
+
+def held_interfaces(session: ChartSession) -> ProgramBlocks | None:
+    """The interfaces of the user blocks the session's CPU holds (its ``blocks``: S7-SCL
+    sources, a program of blocks) as the chart's compile reads them, None without any."""
+    programs = list(session.blocks)
+    if not programs:
+        return None
+    blocks = [b for p in programs for b in p.blocks]
+    instances = {n: fb for p in programs for n, fb in getattr(p, "instances", {}).items()}
+    files = [str(f) for p in programs for f in getattr(p, "files", ())]
+    return program_blocks(blocks, instances, sources=", ".join(files))
 
 
 def chart_refusal(session: ChartSession, needs: Needs, new: SclSources | None) -> str | None:

@@ -7,7 +7,8 @@ in its source view, checked live, saved, opened and downloaded into the running 
   they change, actions as buttons, and for a step its action rows.
 - **Diagnostics** are ``s7graph check``'s, located by line and column in the source view
   (the chart written as ``.s7g`` text); a click on one selects its element. A refused
-  edit says why and changes nothing.
+  edit says why and changes nothing. Reads of the FBs' variables by name are checked in
+  the S7-SCL blocks the CPU runs (``editor_cpu.cpu_blocks``), as a download's compile does.
 - **Source view**: the same chart as text; an edit there is applied once typing pauses
   (the ``set_source`` edit), an edit anywhere else rewrites the text.
 - **Save** / **Open** / **New**, **Download** and **Undo download** are commands to the CPU
@@ -36,6 +37,7 @@ from s7graph.sequencer.change.content import SetSource
 from s7graph.sequencer.change.edit import Operation, Session
 from s7graph.sequencer.change.typed import parse_source
 from s7graph.sequencer.checks.diagnostics import Diagnostic
+from s7graph.sequencer.checks.interfaces import ProgramBlocks
 from s7graph.sequencer.checks.validate import validate
 from s7graph.sequencer.text.elements import Ref, RowRef, StepRef, TransitionRef, element_of, find
 from s7graph.sequencer.text.format import format_chart
@@ -52,7 +54,13 @@ from s7graph.web.view.drawing import (
     picture,
 )
 from s7graph.web.view.edit_forms import DEBOUNCE_S, Field, Form, element_choices, form_for
-from s7graph.web.view.editor_cpu import MAX_DIAGNOSTIC_BUTTONS, CpuCommands, Located, refused
+from s7graph.web.view.editor_cpu import (
+    MAX_DIAGNOSTIC_BUTTONS,
+    CpuCommands,
+    Located,
+    cpu_blocks,
+    refused,
+)
 from s7graph.web.view.editor_place import EDIT_OFFSET, FOLLOW_S, InPlace, delete_of
 from s7graph.web.view.editor_rows import RowEditing
 from s7graph.web.view.editor_xref import CrossReferencing, key_ref
@@ -79,6 +87,7 @@ class Editor(CpuCommands, RowEditing, InPlace, CrossReferencing):
         self.session: Session | None = None
         self.base: ChartSource | None = None
         self.symbols: SymbolTable | None = None
+        self.interfaces: ProgramBlocks | None = None
         self.located = Located((), None)
         self.note = ""
         self._drawing: Drawing | None = None
@@ -208,12 +217,14 @@ class Editor(CpuCommands, RowEditing, InPlace, CrossReferencing):
         try:
             symbols = SymbolTable.from_text(source.symbols) if source.symbols else None
             chart = parse_source(source.text, source.file or "chart.s7g")
-            session = Session.open(chart, symbols)
+            interfaces, blocks_note = cpu_blocks(source, chart)
+            session = Session.open(chart, symbols, interfaces)
         except Exception as exc:  # EditRefused, a symbol table that does not load ...
             reason = exc.reason if isinstance(exc, EditRefused) else str(exc)
             self._notify("edit mode", f"cannot edit the running chart: {reason}", ok=False)
             return
         self.base, self.symbols, self.session = source, symbols, session
+        self.interfaces = interfaces
         self._xref_blocks = None  # the CPU's S7-SCL blocks read again for this session
         self.file.value = source.file or f"{chart.name}.s7g"  # type: ignore[misc]
         self.editing = True
@@ -224,6 +235,7 @@ class Editor(CpuCommands, RowEditing, InPlace, CrossReferencing):
         self._keys_on()
         self._refresh_files()
         self.note = f"editing version {source.version} as the CPU runs it"
+        self.note += f"; {blocks_note}" if blocks_note else ""
         self._show(source_changed=True)
         self.aim(whole=False)
 
@@ -310,7 +322,7 @@ class Editor(CpuCommands, RowEditing, InPlace, CrossReferencing):
             return
         chart = s.chart
         if chart is not self._drawn:
-            self.located = _located(chart, self.symbols)
+            self.located = _located(chart, self.symbols, s.blocks)
             self._draw(chart)
             self._xref_show(chart)
         self._colour()
@@ -553,15 +565,18 @@ class Editor(CpuCommands, RowEditing, InPlace, CrossReferencing):
 # ---------------------------------------------------------------- helpers
 
 
-def _located(chart: Chart, symbols: SymbolTable | None) -> Located:
-    """``check``'s diagnostics of ``chart`` as the source view writes it (line, column)."""
+def _located(
+    chart: Chart, symbols: SymbolTable | None, blocks: ProgramBlocks | None = None
+) -> Located:
+    """``check``'s diagnostics of ``chart`` as the source view writes it (line, column),
+    its reads of the FBs' variables of the CPU's blocks ``blocks`` checked in them."""
     text = format_chart(chart)
     try:
         read = parse_chart(text, chart.file or "chart.s7g")
     except ChartSyntaxError as exc:  # pragma: no cover - the writer's text parses
         return Located(tuple(exc.diagnostics), None)
     try:
-        return Located(tuple(validate(read, symbols)), read)
+        return Located(tuple(validate(read, symbols, readable=blocks)), read)
     except RecursionError:  # pragma: no cover - the session bounds the nesting
         return Located((), read)
 

@@ -1,6 +1,10 @@
 """The editor's commands to the CPU: Save, Open, New, Download and Undo download; and
 Save to this computer (the chart being edited, downloaded by the browser).
 
+The chart is checked as the CPU compiles a download of it: with the interfaces of the
+S7-SCL blocks the CPU runs (:func:`cpu_blocks`: the sources of its chart's source,
+compiled here), whose FBs' variables it reads by name (``"Motor_DB".Running``).
+
 Each is the engineer's command on the bus (checked and audited in the CPU); a download and
 its undo ask the CPU for the change summary first and confirm it in a modal. ``CpuCommands``
 is a part of ``web.view.editor.Editor``, which owns the attributes it declares.
@@ -18,11 +22,13 @@ from typing import TYPE_CHECKING, Any, Final
 import msgspec
 import viser
 
+from s7graph.engine.errors import S7Error
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.change.base import EditRefused, Refusal
 from s7graph.sequencer.change.edit import Session, new_chart
 from s7graph.sequencer.change.typed import parse_source
 from s7graph.sequencer.checks.diagnostics import Diagnostic
+from s7graph.sequencer.checks.interfaces import ProgramBlocks
 from s7graph.sequencer.text.format import format_chart
 from s7graph.sequencer.text.model import Chart
 from s7graph.sequencer.text.parse import ChartSyntaxError
@@ -39,11 +45,12 @@ from s7graph.web.commands import (
     UndoDownload,
 )
 from s7graph.web.harness.project import CHART_CHOICE, chart_file
+from s7graph.web.harness.scl import SclLoadError, compile_texts
 from s7graph.web.view import texts
 from s7graph.web.view.confirm import question
 from s7graph.web.view.engineering import EditorPage
 
-__all__ = ["MAX_DIAGNOSTIC_BUTTONS", "CpuCommands", "Located", "refused"]
+__all__ = ["MAX_DIAGNOSTIC_BUTTONS", "CpuCommands", "Located", "cpu_blocks", "refused"]
 
 MAX_DIAGNOSTIC_BUTTONS: Final = 25
 
@@ -67,6 +74,7 @@ class CpuCommands:
     session: Session | None
     base: ChartSource | None
     symbols: SymbolTable | None
+    interfaces: ProgramBlocks | None  # of the CPU's S7-SCL blocks (``cpu_blocks``)
     located: Located
     note: str
     file: viser.GuiTextHandle
@@ -172,7 +180,7 @@ class CpuCommands:
             return
         try:
             chart = parse_source(reply.text, name if name.endswith(".s7g") else f"{name}.s7g")
-            session = Session.open(chart, self.symbols)
+            session = Session.open(chart, self.symbols, self.interfaces)
         except EditRefused as exc:
             self._notify("open refused", exc.reason, ok=False)
             return
@@ -188,7 +196,7 @@ class CpuCommands:
             chart = new_chart(
                 name, running.fb_number if running else None, running.db_number if running else None
             )
-            self.session = Session.open(chart, self.symbols)
+            self.session = Session.open(chart, self.symbols, self.interfaces)
         except EditRefused as exc:
             self._notify("new refused", exc.reason, ok=False)
             return
@@ -271,15 +279,30 @@ class CpuCommands:
         if reply.applied:
             source = self.eng.source()
             if source is not None:
+                self._blocks_of(source)
                 self.base = source
                 if isinstance(command, UndoDownload):
                     with contextlib.suppress(EditRefused, ChartSyntaxError):
                         chart = parse_source(source.text, source.file or "chart.s7g")
-                        self.session = Session.open(chart, self.symbols)
+                        self.session = Session.open(chart, self.symbols, self.interfaces)
             self.note = f"the CPU runs version {reply.version}" + (
                 f": {reply.lines[0]}" if reply.lines else ""
             )
             self._show(source_changed=isinstance(command, UndoDownload))
+
+    def _blocks_of(self, source: ChartSource) -> None:
+        """The interfaces of the S7-SCL blocks the CPU runs now, when they are not those
+        of the chart source read before (an undo, someone else's download): the session
+        checked against them from now on."""
+        if self.base is not None and self.base.blocks == source.blocks:
+            return
+        with contextlib.suppress(EditRefused, ChartSyntaxError):
+            running = parse_source(source.text, source.file or "chart.s7g")
+            self.interfaces, note = cpu_blocks(source, running)
+            if note:
+                self._notify("S7-SCL blocks", note, ok=False)
+            if self.session is not None:
+                self.session = self.session.with_blocks(self.interfaces)
 
     def _command(self, command: Command) -> CommandReply:
         return self.panel.engineer_command(command)
@@ -308,6 +331,33 @@ class CpuCommands:
                 auto_close_seconds=6.0,
                 color="green" if ok else "red",
             )
+
+
+def cpu_blocks(source: ChartSource, chart: Chart) -> tuple[ProgramBlocks | None, str]:
+    """The interfaces of the S7-SCL blocks the CPU runs beside its ``chart`` (the sources
+    of its chart ``source``), compiled here as the CPU compiled them — with its symbol
+    table and the chart's ``SYMBOLS`` — or None (no blocks) and a note saying why when they
+    cannot be (a source too large to come with the chart, one that does not compile)."""
+    if not source.blocks and not source.left_out:
+        return None, ""
+    if source.left_out:
+        files = ", ".join(source.left_out)
+        return None, (
+            f"the CPU's S7-SCL sources {files} are too large to come with its chart: its "
+            "reads of their FBs' variables by name cannot be checked here (E048)"
+        )
+    try:
+        table = SymbolTable.from_text(source.symbols) if source.symbols else SymbolTable()
+        for s in chart.symbols:  # as ``compile_model`` adds them, the table's first
+            if table.lookup(s.name) is None and table.block(s.name) is None:
+                table.add(s.name, s.address, s.type, s.comment, where=s.loc)
+        program = compile_texts(list(source.blocks.items()), table)
+    except SclLoadError as exc:
+        first = exc.lines[0] if exc.lines else str(exc)
+        return None, f"the CPU's S7-SCL sources do not compile here: {first}"
+    except (S7Error, RecursionError) as exc:
+        return None, f"the CPU's S7-SCL sources do not compile here: {exc}"
+    return program.interfaces(), ""
 
 
 def refused(session: Session, exc: EditRefused) -> Session:

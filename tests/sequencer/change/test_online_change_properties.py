@@ -11,7 +11,14 @@ event in the next call); after each download the running FB scans exactly as a f
 the new chart started from the carried-over state (``twin``: a second CPU on the same clock
 and contacts, told the same steps entered): per scan the same active steps, step events
 (with their step numbers), FB outputs and watched operands (outputs, markers, a counter,
-a timer)."""
+a timer).
+
+Beside the chart the CPU runs an S7-SCL FB (FB17), which the random edits (and, drawn, the
+start chart) call (``CALL FB 17, DB 12``) and whose variables their conditions then read by
+name (``DB12.calls``): the editor and the download check those reads against the FB's
+interface; a read of DB12 left with no call naming it (the call's row or step deleted) is
+the one error an edit may leave (E048), and its download is refused with E048, the CPU
+running the old chart on."""
 
 from __future__ import annotations
 
@@ -29,6 +36,7 @@ from s7graph.engine.blocks import OB
 from s7graph.engine.clock import VirtualClock
 from s7graph.engine.cpu import CpuMode
 from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer.calls import call_sites
 from s7graph.sequencer.change.edit import OPERATIONS, Argument, Session, make_edit
 from s7graph.sequencer.change.online import SwapRefused, swap
 from s7graph.sequencer.compiled import CompiledChart
@@ -37,9 +45,10 @@ from s7graph.sequencer.text.format import quote
 from s7graph.sequencer.text.model import Chart
 from s7graph.sequencer.text.parse import parse_chart
 from s7graph.sfb.alarms import message_list
-from s7graph.web.harness.session import ChartSession, compile_model
+from s7graph.web.harness.session import ChartLoadError, ChartSession, compile_model
 from tests.paths import ROOT
 from tests.sequencer.helpers import CHARTS
+from tests.sequencer.test_user_fb_members import interfaces, scl_program
 
 DRILL = ROOT / "examples" / "drill"
 
@@ -69,6 +78,7 @@ CONDITIONS = [
     "C1 > 2",
     "I0.4",
 ]
+READS = ["DB12.calls > 2", "DB12.Running OR I0.5"]  # with a call of FB17, DB12 in the chart
 ROWS = [
     {"qualifier": "N", "operand": "Q0.0"},
     {"qualifier": "S", "operand": "Q0.1", "event": "S1"},
@@ -84,6 +94,11 @@ ROWS = [
     {"qualifier": "R", "operand": "M0.2", "event": "L1"},
     {"qualifier": "CALL", "operand": "SFB 4, DB 10 (IN := I0.1, PT := T#50MS, Q => M1.0)"},
 ]
+CALL_FB17 = {"qualifier": "CALL", "operand": "FB 17, DB 12 (start := I0.2)"}
+PROGRAM = scl_program()  # FB17: Running after its third call with start, ``calls`` counted
+BLOCKS = interfaces(PROGRAM.blocks)
+UNCALLED = "DB12 is not an instance DB of this chart's calls"
+"""The one error an edit may leave: a read of DB12 once no call names it (E048)."""
 
 
 def chain(n: int, header: str = "") -> str:
@@ -131,13 +146,15 @@ def _numbers(c: Chart, name: str) -> list[int]:
 
 def _argument(c: Chart, a: Argument) -> st.SearchStrategy[Any]:
     if a.type == "RowFields":
-        return st.sampled_from(ROWS)
+        return st.sampled_from([*ROWS, CALL_FB17])
     if a.type == "bool":
         return st.booleans()
     if a.name == "text":  # a whole chart for the same block (a download keeps the block)
         block = f"{quote(c.name)}{f' FB {c.fb_number}' if c.fb_number else ''}"
         block += f" DB {c.db_number}" if c.db_number else ""
         return st.sampled_from(TEXTS["text"]).map(lambda t: t.replace('"Chain" FB 1 DB 1', block))
+    if a.name == "condition" and any(x.call.instance == 12 for x in call_sites(c)):
+        return st.sampled_from([*CONDITIONS, *READS])  # DB12's variables: a call names it
     if a.type == "str":
         return st.sampled_from(TEXTS[a.name])
     numbers = st.sampled_from(_numbers(c, a.name))
@@ -180,7 +197,7 @@ def twin(
     call); the commands ``queued`` for the FB's next call queued there too, and the steps
     ``entered`` at the swap (a new sequencer's initial steps) given their S1 there."""
     g = plant.graph
-    fresh = ChartSession(g.cc, plant.symbols, plant.clock)
+    fresh = ChartSession(g.cc, plant.symbols, plant.clock, blocks=[PROGRAM])
     fresh.cpu.load(OB(100, "OB100", lambda ctx: None))
     fresh.start()
     fresh.cpu.cycle = plant.cpu.cycle
@@ -213,13 +230,19 @@ class OnlineChange(RuleBasedStateMachine):
         self.edits: list[str] = []
         self.queued: list[tuple[str, int | None]] = []  # commands for the next call
 
-    @initialize(start=st.sampled_from(STARTS))
-    def run_a_chart(self, start: Path) -> None:
+    @initialize(start=st.sampled_from(STARTS), call=st.booleans())
+    def run_a_chart(self, start: Path, call: bool) -> None:
+        """``start`` running; with ``call``, its first step calls FB17 (DB12) from the
+        start, so that the edits' reads of DB12 compile."""
         symbols = DRILL / "symbols.txt" if start.parent == DRILL else None
         chart, table = _start(start, symbols)
-        self.editor = Session.open(chart, table)
-        cc, table = compile_model(chart, table)
-        self.plant = ChartSession(cc, table, self.clock)
+        self.editor = Session.open(chart, table, BLOCKS)
+        if call:
+            first = chart.all_steps()[0].number
+            self.editor = self.editor.apply(make_edit("add_row", {"step": first, "row": CALL_FB17}))
+            chart = self.editor.chart
+        cc, table = compile_model(chart, table, blocks=lambda _: BLOCKS)
+        self.plant = ChartSession(cc, table, self.clock, blocks=[PROGRAM])
         self.plant.start()
 
     @rule(
@@ -241,7 +264,9 @@ class OnlineChange(RuleBasedStateMachine):
             if after.refusal is None:
                 self.edits.append(f"{op.name} {args}")
             self.editor = after
-            errors = [d.message for d in after.diagnostics if d.is_error]
+            errors = [
+                d.message for d in after.diagnostics if d.is_error and UNCALLED not in d.message
+            ]
             assert not errors, f"{op.name} {args} after {self.edits[-8:-1]}: {errors[0]}"
         self.download(removed)
         self.run(data, scans)
@@ -249,8 +274,13 @@ class OnlineChange(RuleBasedStateMachine):
     def download(self, removed: str | None) -> None:
         plant = self.plant
         assert plant is not None
-        new, table = compile_model(self.editor.chart, plant.symbols)
         g = plant.graph
+        try:
+            new, table = compile_model(self.editor.chart, plant.symbols, blocks=lambda _: BLOCKS)
+        except ChartLoadError as exc:  # a read of DB12 no call names: the old chart runs on
+            assert self.editor.has_errors and all(UNCALLED in x for x in exc.lines if "error" in x)
+            self.edits.append("download refused: E048")
+            return
         old, before = g.cc, g.state
         active = sorted(old.step_numbers[i] for i in before.active)
         gone = tuple(n for n in active if n not in new.step_index)

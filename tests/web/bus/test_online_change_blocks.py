@@ -341,3 +341,60 @@ def test_a_preview_checks_a_new_call_against_the_blocks_the_download_brings(cpu:
     lacking = calls.replace("CALL FB 18, DB 11", "CALL FB 19, DB 12")
     asked = cpu.send("download", source=lacking, preview=True)
     assert not asked.applied and "FB19 is not in this CPU" in asked.reason, asked.reason
+
+
+def _reading(condition: str) -> str:
+    """The chart with T1 reading ``condition`` and the DB symbol ``Count_DB`` of DB10."""
+    chart = CHART.replace(
+        "TRANSITION T1 FROM S1 TO S2 := FALSE;", f"TRANSITION T1 FROM S1 TO S2 := {condition};"
+    )
+    return chart.replace(
+        'SEQUENCE 1 "S"', 'SYMBOLS "Count_DB" : DB10 : FB17; END_SYMBOLS\nSEQUENCE 1 "S"'
+    )
+
+
+def test_a_chart_only_download_reads_a_variable_of_the_fb_the_cpu_holds_by_name(
+    cpu: Cpu,
+) -> None:
+    """No sources in the download: the chart is compiled with the interfaces of the CPU's
+    S7-SCL blocks, so ``"Count_DB".n`` compiles (its preview says so first) and switches
+    the step once the FB's static variable gets there."""
+    assert wait_until(lambda: cpu.n() > 2)
+    target = cpu.n() + 20
+    reads = _reading(f'"Count_DB".n >= {target}')
+    asked = cpu.send("download", source=reads, preview=True)
+    assert asked.applied, asked.reason
+    reply = cpu.send("download", source=reads)
+    assert reply.applied and reply.version == 2, reply.reason
+    graph = cpu.session.graph
+    assert wait_until(lambda: graph.state.active == [graph.cc.step_index[2]])
+    assert cpu.n() >= target
+
+
+def test_a_read_of_a_variable_the_downloaded_fb_no_longer_has_is_e048_naming_it(
+    cpu: Cpu,
+) -> None:
+    """The chart reads ``DB10.old``; new sources whose FB17 has no ``old`` are refused with
+    E048 naming it — its preview says the very same — and the old chart and blocks run on.
+    Blocks whose FB has it, and then a chart alone reading a variable only the new blocks
+    have, are taken: a chart-only download reads the blocks the CPU holds now."""
+    reads_old = _reading("DB10.old > 30000")
+    assert cpu.send("download", source=reads_old).applied
+    asked = cpu.send("download", source=reads_old, blocks={"fb17.scl": CHANGED}, preview=True)
+    reply = cpu.send("download", source=reads_old, blocks={"fb17.scl": CHANGED})
+    assert not asked.applied and asked.reason == reply.reason, (asked.reason, reply.reason)
+    assert not reply.applied and "E048" in reply.reason, reply.reason
+    assert "old is not a variable of FB17 (its outputs and static variables: n, fresh)" in (
+        reply.reason
+    )
+    assert cpu.session.cpu.block("FB17").interface[1].type == "INT"  # the old FB17
+    assert cpu.grows_by(1) and cpu.path.read_text(encoding="utf-8") == reads_old
+    assert (cpu.path.parent / "fb17.scl").read_text(encoding="utf-8") == BLOCKS
+
+    reads_fresh = _reading("DB10.fresh < 0")
+    assert cpu.send("download", source=reads_fresh, blocks={"fb17.scl": CHANGED}).applied
+    assert cpu.grows_by(1000)
+    alone = cpu.send("download", source=_reading("DB10.fresh < -1"), preview=True)
+    assert alone.applied, alone.reason
+    refused = cpu.send("download", source=reads_old)
+    assert not refused.applied and "old is not a variable of FB17" in refused.reason

@@ -1,10 +1,11 @@
 """Edit mode in a real headless Chromium against a chart running on the virtual clock, with a users
-file, a real zenoh bus and the CPU's online change (docs/online-change.md): an operator and a viewer
-get no edit mode; an invalid edit shows its diagnostic with line and column while the CPU keeps its
-chart; an engineer changes a transition condition, downloads, and the running sequence follows the
-new condition; a chart built from scratch in the browser (three steps, an alternative branch, a
-jump) downloads and runs. One browser, one page for the module (CI has 2 cores); the tests run in
-order on it."""
+file, a real zenoh bus and the CPU's online change (docs/online-change.md): an operator and a
+viewer get no edit mode; an invalid edit shows its diagnostic with line and column while the CPU
+keeps its chart; an engineer changes a transition condition, downloads, and the running sequence
+follows the new condition; a chart built from scratch in the browser (three steps, an
+alternative branch, a jump) downloads and runs; a read of the CPU's S7-SCL FB's variable by name
+(``DB12.n``) is no error in the editor and downloads, one of a variable the FB lacks is E048.
+One browser, one page for the module (CI has 2 cores); the tests run in order on it."""
 
 from __future__ import annotations
 
@@ -47,6 +48,13 @@ FUNCTION FC 5 : VOID
 BEGIN
   M1.0 := Q0.0;
 END_FUNCTION
+
+// counts its calls: a chart reads n by name (DB12.n)
+FUNCTION_BLOCK FB17
+VAR_INPUT go : BOOL; END_VAR
+VAR n : INT; END_VAR
+  IF go THEN n := n + 1; END_IF;
+END_FUNCTION_BLOCK
 """
 
 
@@ -145,6 +153,19 @@ def screenshot(page: Page, path: Path) -> None:
     with Image.open(raw) as image:
         image.convert("RGB").quantize(colors=64).save(path, optimize=True)
     raw.unlink()
+
+
+def source_typed(page: Page, ed: Editor, text: str) -> None:
+    """``text`` typed into the source view, and the chart it makes in the session."""
+    box = page.locator("textarea").first
+    box.fill(text)
+    box.blur()
+    assert wait_until(lambda: ed.session is not None and format_chart(ed.session.chart) == text)
+
+
+def error_codes(ed: Editor) -> list[str]:
+    """The codes of the errors the editor lists."""
+    return [d.code for d in ed.located.diagnostics if d.is_error]
 
 
 def test_an_operator_and_a_viewer_get_no_edit_mode(page: Page, cpu: OnlineRig) -> None:
@@ -296,3 +317,35 @@ def test_a_chart_built_from_scratch_downloads_and_runs(page: Page, cpu: OnlineRi
     cpu.session.set("I0.0", False)
     cpu.session.set("I0.3", True)  # the alternative branch jumps back to S1
     assert wait_until(lambda: active(cpu) == [1])
+
+
+def test_a_read_of_the_cpus_fb_variable_by_name_is_checked_in_its_blocks_and_downloads(
+    page: Page, cpu: OnlineRig
+) -> None:
+    """The editor checks ``DB12.n`` in the S7-SCL blocks the CPU runs: no E048, and the
+    download (chart alone) reads the FB's variable; ``DB12.nope`` is E048 on the page."""
+    ed = editor(cpu)
+    cpu.session.set("I0.3", False)
+    assert ed.session is not None
+    text = format_chart(ed.session.chart)
+    calls = text.replace("    N Q0.0;\n", "    N Q0.0;\n    CALL FB 17, DB 12 (go := TRUE);\n")
+    reads = calls.replace("FROM S2 TO S3 := I0.1;", "FROM S2 TO S3 := DB12.n > 3;")
+    assert "CALL FB 17, DB 12" in reads and "DB12.n > 3" in reads, reads
+    page.get_by_role("tab", name="Source (.s7g)").click()
+    source_typed(page, ed, reads.replace("DB12.n", "DB12.nope"))
+    assert wait_until(lambda: error_codes(ed) == ["E048"])
+    page.get_by_role("tab", name="Element").click()  # the diagnostics
+    page.get_by_text("nope is not a variable of FB17").first.wait_for(timeout=30_000)
+    page.get_by_role("tab", name="Source (.s7g)").click()
+    source_typed(page, ed, reads)
+    assert wait_until(lambda: error_codes(ed) == [])
+    page.get_by_role("tab", name="Element").click()
+    assert ed.session is not None and not ed.session.has_errors
+    click(page, "Download")
+    page.get_by_text("What changes").first.wait_for(timeout=PREVIEW_MS)
+    click(page, "Download to the CPU")
+    page.get_by_text("download applied").first.wait_for(timeout=30_000)
+    assert wait_until(lambda: cpu.online.current.number == 4)
+    cpu.session.set("I0.0", True)
+    assert wait_until(lambda: active(cpu) == [3])  # S2 called FB17 until its n was 4
+    assert int(cpu.session.get("DB12.n")) >= 4
