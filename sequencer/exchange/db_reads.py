@@ -14,7 +14,7 @@ from s7graph.engine.errors import SourceLocation, SymbolError
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.text.call_sites import call_sites
 from s7graph.sequencer.text.model import BlockCall, Chart, Operand, SymbolDecl
-from s7graph.sequencer.text.names import db_symbol, member_text
+from s7graph.sequencer.text.names import db_argument, db_symbol, member_text
 from s7graph.sequencer.text.walk import nodes
 from s7graph.sfb import catalogue
 
@@ -81,8 +81,17 @@ class DbReads:
     def carried(self, by_symbol: bool = False) -> list[SymbolDecl]:
         """The DB symbols an export carries: every one of the chart's ``SYMBOLS``, then
         those of the symbol table a read names (``"T_S2" : DB10 : SFB4``) — with
-        ``by_symbol``, also those a read by number is written with (``DB10.Q``)."""
+        ``by_symbol``, also those a read by number is written with (``DB10.Q``) — and those
+        a call passes to a BLOCK_DB input (``src := "Other"``: ``"Other" : DB6 : DB6``)."""
         out = [s for s, _ in self.own.values()]
+        for site in call_sites(self.chart):
+            for _, e in site.call.inputs:
+                number = db_argument(e, self.chart, self.table)
+                if number is None or not isinstance(e, Operand) or self.table is None:
+                    continue
+                found = self.table.block(e.name) if e.quoted else None
+                if found is not None and all(s.name.casefold() != e.name.casefold() for s in out):
+                    out.append(SymbolDecl(found.name, f"DB{number}", f"DB{number}"))
         for op in nodes(self.chart):
             if not (isinstance(op, Operand) and op.member and (op.quoted or by_symbol)):
                 continue

@@ -16,7 +16,9 @@ counters and timers) an inline ST comment holding the GRAPH row. Symbols are glo
 variables of the configuration at their IEC address. An instance DB's variable read by
 name (``"T_S2".Q``, ``DB10.Q``) is the access to that instance's output, ``TON_DB10.Q``
 (a DB of another block: a global instance of the block's type, reported); a DB symbol is
-no IEC variable (one no read goes through is reported). Interlocks, supervisions, options,
+no IEC variable (one no read goes through is reported). IEC 61131-3 has no BLOCK_DB: a call
+passing a DB (``src := DB5``) is an ST comment in its S7 spelling, as any call of a user
+block, the DB named in its report. Interlocks, supervisions, options,
 permanent instructions and ``TO STOP`` live in the `.s7g` source only.
 """
 
@@ -35,6 +37,7 @@ from s7graph.sequencer.exchange.naming import s7_to_iec, transliterate
 from s7graph.sequencer.exchange.plcopen import S7GRAPH_DATA, TRANSITION_IDS
 from s7graph.sequencer.exchange.problems import Problems
 from s7graph.sequencer.exchange.shape import priority, shape_of
+from s7graph.sequencer.text.call_sites import call_sites
 from s7graph.sequencer.text.format import format_chart, format_expr, format_row
 from s7graph.sequencer.text.model import (
     ActionRow,
@@ -54,7 +57,7 @@ from s7graph.sequencer.text.model import (
     TransAttr,
     Unary,
 )
-from s7graph.sequencer.text.names import db_symbol
+from s7graph.sequencer.text.names import db_argument, db_symbol
 from s7graph.sfb import catalogue
 
 __all__ = ["export_plcopen"]
@@ -200,16 +203,27 @@ class _Export:
 
     def unread_dbs(self) -> None:
         """A DB symbol of the chart's ``SYMBOLS`` no read goes through has no IEC form (a
-        DB is no variable): left out of the SFC, reported (X010)."""
+        DB is no variable): left out of the SFC, reported (X010) — one a call passes to a
+        BLOCK_DB input too: IEC 61131-3 has no BLOCK_DB, and that call is an ST comment."""
+        passed = {
+            n for site in call_sites(self.chart) for n in _passed(site.call, self.chart, self.table)
+        }
         for s in self.chart.symbols:
             number = db_symbol(s)
-            if number is not None and number not in self.read_dbs:
-                self.p.warn(
-                    "X010",
-                    f'DB symbol "{s.name}" (DB {number}) has no IEC form and no read goes '
-                    "through it: kept in s7graph's data only",
-                    s.loc,
-                )
+            if number is None or number in self.read_dbs:
+                continue
+            why = (
+                "a call passes it to a BLOCK_DB input, which IEC 61131-3 has not (the call "
+                "is an ST comment)"
+                if number in passed
+                else "no read goes through it"
+            )
+            self.p.warn(
+                "X010",
+                f'DB symbol "{s.name}" (DB {number}) has no IEC form and {why}: kept in '
+                "s7graph's data only",
+                s.loc,
+            )
 
     # ------------------------------------------------------------ actions
 
@@ -239,10 +253,11 @@ class _Export:
             call = self.fb_call(op)
             if call is not None:
                 return self.inline(qualifier or "N", call)
+        note = _db_note(op, self.chart, self.table)
         self.p.warn(
             "X010",
-            f"row {format_row(r)!r} has no IEC form: an ST comment in the SFC other tools "
-            "read, kept in s7graph's data",
+            f"row {format_row(r)!r} has no IEC form{f' ({note})' if note else ''}: an ST comment "
+            "in the SFC other tools read, kept in s7graph's data",
             r.loc,
         )
         return self.inline("N", f"(* s7graph: {format_row(r).replace('*)', '* )')} *)")
@@ -305,11 +320,11 @@ class _Export:
         call = self.fb_call(p)
         if call is not None:
             return call
-        text = _permanent_text(p)
+        text, note = _permanent_text(p), _db_note(p, self.chart, self.table)
         self.p.warn(
             "X010",
             f"{text!r} has no IEC form (an IEC tool calls only the IEC timers and counters "
-            "here): an ST comment, kept in s7graph's data",
+            f"here{f'; {note}' if note else ''}): an ST comment, kept in s7graph's data",
             p.loc,
         )
         return f"(* s7graph: {text.replace('*)', '* )')} *)"
@@ -573,6 +588,20 @@ def _type(type_name: str) -> str:
         length = t[7:-1] if "[" in t else ""
         return f'<type><string length="{length}"/></type>' if length else "<type><string/></type>"
     return f"<type><{t}/></type>"
+
+
+def _passed(call: BlockCall, chart: Chart, table: SymbolTable | None) -> list[int]:
+    """The DBs ``call`` passes (``src := DB5``, ``src := "Recipe"``)."""
+    return [n for _, e in call.inputs if (n := db_argument(e, chart, table)) is not None]
+
+
+def _db_note(op: object, chart: Chart, table: SymbolTable | None) -> str:
+    """What an ST comment's report says of the DBs a call passes: IEC 61131-3 has no
+    BLOCK_DB, nor a DB as a value, so the call keeps its S7 spelling."""
+    dbs = _passed(op, chart, table) if isinstance(op, BlockCall) else []
+    if not dbs:
+        return ""
+    return f"IEC 61131-3 has no BLOCK_DB to pass {', '.join(f'DB {n}' for n in dbs)} to"
 
 
 def _permanent_text(p: PermanentInstruction) -> str:

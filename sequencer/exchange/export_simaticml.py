@@ -18,7 +18,12 @@ by name is a global access to a DB member, as TIA writes one (``"T_S2".Q``; ``DB
 the DB's symbol, reported, and refused when DB 10 has none). ``XOR`` in a condition is
 drawn as (a AND NOT b) OR (NOT a AND b). A permanent CALL is a LAD ``Call`` box, a
 permanent assignment of an operand or constant to a non-bit a ``Move`` box; one of an
-arithmetic expression has no form here: a ``ValueError`` naming its place.
+arithmetic expression has no form here: a ``ValueError`` naming its place, as for every
+chart part this export cannot write. A DB a call passes to a BLOCK_DB input (``src :=
+DB5``, ``src := "Recipe"``) is TIA's access to a DB as a whole: area DB, type Block_DB, the
+DB's number and no bit offset (TIA Portal Openness system manual, "Major changes", the
+``Address`` node of ``SW.PlcBlocks.Access.xsd``: ``OPN %DB12``), under its symbol when it
+has one, the address then informative.
 """
 
 from __future__ import annotations
@@ -27,7 +32,8 @@ import re
 from collections.abc import Callable
 from xml.sax.saxutils import escape, quoteattr
 
-from s7graph.engine.address import parse_address
+from s7graph.engine.address import Address, parse_address
+from s7graph.engine.errors import AddressError, SourceLocation
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.checks.diagnostics import Diagnostic
 from s7graph.sequencer.exchange.db_reads import DbReads, member_text
@@ -52,6 +58,7 @@ from s7graph.sequencer.text.model import (
     TransAttr,
     Transition,
 )
+from s7graph.sequencer.text.names import db_argument
 
 __all__ = ["S7GRAPH_COMMENT", "default_name", "export_simaticml"]
 
@@ -158,11 +165,14 @@ class _Export:
                 f'Name={quoteattr(owner)} /><Component Name="{e.attr}" /></Symbol></Access>'
             )
         if not isinstance(e, Operand):
-            raise ValueError("a condition operand that is not an operand or constant")
+            raise _Refused(
+                f"{_loc(e)}: {format_expr(e)}: an operand LAD draws is a tag, a variable or a "
+                "constant, not an expression"
+            )
         if e.member:
             return self.member_access(e, uid)
         if not e.quoted and not any(v.name.upper() == e.name.upper() for v in self.chart.vars):
-            addr = parse_address(e.name)
+            addr = _address(e)
             return (
                 f'<Access Scope="GlobalVariable" UId="{uid}"><Address Area='
                 f'"{_AREA.get(str(addr.area), str(addr.area))}" Type="{_address_type(e.name)}"'
@@ -176,7 +186,7 @@ class _Export:
         info = ""
         found = self.address_of(e.name)
         if found is not None and found[0][0] in _AREA:
-            addr = parse_address(found[0])
+            addr = _address(Operand(found[0], False, e.loc))
             info = (
                 f'<Address Area="{_AREA[found[0][0]]}" Type="{_tia_type(found[1])}" '
                 f'BitOffset="{addr.byte * 8 + addr.bit}" Informative="true" />'
@@ -209,6 +219,26 @@ class _Export:
             f"{quoteattr(name)} /><Component Name={quoteattr(e.member)} /></Symbol></Access>"
         )
 
+    def passed_db(self, e: Expr) -> int | None:
+        """The number of the DB a call's actual parameter names (``DB5``, ``"Recipe"``: the
+        chart's ``SYMBOLS`` first, then the symbol table's), None for any other."""
+        return db_argument(e, self.chart, self.table)
+
+    def argument(self, e: Expr, uid: str) -> str:
+        """A call's actual parameter: a DB passed (``src := DB5``) as TIA writes a DB as a
+        whole — ``Address`` area DB, type Block_DB, its number, no bit offset; under the
+        DB's symbol, that address informative — any other operand as :meth:`access` does."""
+        number = self.passed_db(e)
+        if number is None or not isinstance(e, Operand):
+            return self.access(e, uid)
+        address = f'<Address Area="DB" Type="Block_DB" BlockNumber="{number}"'
+        if not e.quoted:
+            return f'<Access Scope="GlobalVariable" UId="{uid}">{address} /></Access>'
+        return (
+            f'<Access Scope="GlobalVariable" UId="{uid}"><Symbol><Component '
+            f'Name={quoteattr(e.name)} />{address} Informative="true" /></Symbol></Access>'
+        )
+
     def spell(self, e: Expr) -> str | None:
         """An operand in a TIA action's text."""
         if isinstance(e, Operand) and e.quoted:
@@ -225,12 +255,7 @@ class _Export:
     # ------------------------------------------------------------ elements
 
     def network(self, cond: Expr | None, coil: str, target: Expr | None = None) -> str:
-        try:
-            return write_network(cond, coil, self.access, target)
-        except _Refused:
-            raise
-        except ValueError as exc:
-            raise ValueError(f"{exc}: a SimaticML network cannot hold it") from None
+        return write_network(cond, coil, self.access, target)
 
     def action(self, r: ActionRow, step: int) -> str:
         """An ``Action``: the row's text as tokens, each symbol an ``Access`` element with
@@ -241,9 +266,12 @@ class _Export:
         attrs += f' Qualifier="{r.qualifier}"'
         accesses: list[str] = []
 
+        call = isinstance(r.operand, BlockCall)
+
         def spell(e: Expr) -> str | None:
-            if isinstance(e, Operand) and (e.quoted or e.member):
-                accesses.append(self.access(e, str(21 + len(accesses))))
+            passed = call and self.passed_db(e) is not None  # src := DB5: an Access too
+            if isinstance(e, Operand) and (e.quoted or e.member or passed):
+                accesses.append(self.argument(e, str(21 + len(accesses))))
                 return f"\x00{len(accesses) - 1}\x00"
             return self.spell(e)
 
@@ -430,19 +458,14 @@ class _Export:
                 "TIA calls blocks by their symbolic names: rename them there",
                 c.loc,
             )
-        try:
-            return write_call(info, c.inputs, c.outputs, self.access)
-        except _Refused:
-            raise
-        except ValueError as exc:
-            raise ValueError(
-                f"{c.loc}: CALL {name}: {exc}: a LAD call box cannot hold it"
-            ) from None
+        return write_call(info, c.inputs, c.outputs, self.argument)
 
     def type_attr(self, e: Expr) -> str:
         """`` Type="Int"`` of an operand or constant whose type is known, else ""."""
         t: str | None = None
-        if isinstance(e, Const):
+        if self.passed_db(e) is not None:
+            t = "Block_DB"  # a DB as a whole: the parameter TIA's S7-SCL block declares
+        elif isinstance(e, Const):
             t = e.type
         elif isinstance(e, Operand) and e.member:
             t = None  # the block's variable: TIA knows its type
@@ -549,6 +572,22 @@ def _path(name: str) -> list[str]:
     """A tag name's components: ``A.b.c`` → [A, b, c] when each is an identifier."""
     parts = name.split(".")
     return parts if len(parts) > 1 and all(_IDENT.fullmatch(p) for p in parts) else [name]
+
+
+def _loc(e: Expr) -> SourceLocation:
+    return getattr(e, "loc", SourceLocation())
+
+
+def _address(e: Operand) -> Address:
+    """The S7 address ``e`` names; a name that is none (no address, FB variable or symbol
+    of the chart: ``s7graph check`` says more) is refused, naming its place."""
+    try:
+        return parse_address(e.name)
+    except AddressError as exc:
+        raise _Refused(
+            f"{e.loc}: {exc.message}: TIA needs a tag, an address or an FB "
+            "variable here (s7graph check says more)"
+        ) from None
 
 
 def _address_type(address: str) -> str:

@@ -386,7 +386,7 @@ class _Writer:
             other = Binary("AND", Unary("NOT", a, e.loc), b, e.loc)
             return self._series(Binary("OR", one, other, e.loc), src)
         if isinstance(e, Binary):
-            raise ValueError(f"{e.op} has no LAD form")
+            raise ValueError(f"{e.loc}: {e.op} has no LAD form: a SimaticML network cannot hold it")
         return self._contact(e, src, negated=False)
 
     def _not(self, src: str) -> str:
@@ -435,7 +435,8 @@ def write_network(
     coil_operand: Expr | None = None,
 ) -> str:
     """A ``FlgNet`` computing ``cond`` (None: the rail alone) into part ``coil``; raises
-    ValueError for what LAD cannot draw (an operand that is an expression)."""
+    ValueError naming the place for what LAD cannot draw (an operand that is an
+    expression)."""
     w = _Writer(access)
     target = ""
     if coil_operand is not None:

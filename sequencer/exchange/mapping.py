@@ -406,6 +406,14 @@ CONSTRUCTS: Final[tuple[tuple[str, str, str, str], ...]] = (
     ),
     (
         TO_PLCOPEN,
+        "a call passing a DB to a BLOCK_DB input",
+        "an ST comment in its S7 spelling, as any call of a user block",
+        "IEC 61131-3 has neither BLOCK_DB nor a DB as a value, and an IEC tool calls no "
+        "S7-SCL block: no WORD literal is written for the DB; the warning (`X010`) names it, "
+        "and a DB symbol it passes is reported as such",
+    ),
+    (
+        TO_PLCOPEN,
         "transition names; the places of branches, jumps and actions",
         "names in s7graph's data only; each branch, jump and action placed (`position`, "
         "`relPosition`), each output named (`formalParameter`)",
@@ -463,6 +471,18 @@ CONSTRUCTS: Final[tuple[tuple[str, str, str, str], ...]] = (
         "permanent CALLs",
         "a LAD `Call` box fed by the power rail (`CallInfo` `FC2`, instance `DB10`)",
         "reported as for CALL rows; read back as the same CALL",
+    ),
+    (
+        TO_TIA,
+        'a DB a call passes to a BLOCK_DB input (`src := DB5`, `src := "Recipe"`)',
+        'a DB as a whole, as TIA writes `OPN %DB12` (Openness system manual, "Major '
+        'changes", the `Address` node of `SW.PlcBlocks.Access.xsd`): `<Address Area="DB" '
+        'Type="Block_DB" BlockNumber="5" />`, without bit offset; under the DB\'s symbol '
+        '(`<Component Name="Recipe" />`) that address informative; a call box\'s parameter '
+        '`Type="Block_DB"`',
+        "read back as the same DB; a DB symbol of `--symbols` a call passes is kept in the "
+        "block comment; a file TIA wrote declares the symbol from its informative address "
+        '(`"Recipe" : DB5 : DB5`)',
     ),
     (
         TO_TIA,

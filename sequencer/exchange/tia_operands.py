@@ -10,6 +10,9 @@ tokens as the chart model's operands, and the global tags they name (the first h
 * A DB member ``"T_S2".Q`` whose DB is a DB symbol — kept by s7graph's export in the block
   comment, or of the symbol table given — is that instance DB's variable read by name
   (``"T_S2".Q``), no tag.
+* A DB as a whole (``Address`` area DB, type Block_DB: what a call passes to a Block_DB
+  parameter) is ``DB5``; under a symbol, that DB symbol (``"Recipe"``, declared
+  ``"Recipe" : DB5 : DB5`` unless kept or given already), no tag.
 * A tag compared with a step's time is a TIME, as TIA compiles it (a DInt tag so declared
   is reported); an untyped integer compared with a time is milliseconds.
 * A block constant (``LocalConstant``) is its value; a global constant (``GlobalConstant``:
@@ -38,7 +41,7 @@ from s7graph.sequencer.text.model import (
     VarDecl,
 )
 
-__all__ = ["TIA_TYPES", "TiaOperands", "component"]
+__all__ = ["TIA_TYPES", "TiaOperands", "component", "whole_db"]
 
 # TIA data types → S7 types of the chart model.
 TIA_TYPES = {
@@ -168,10 +171,15 @@ class TiaOperands:
         if sym is None:
             address = node.child("Address")
             if address is not None and scope == "GlobalVariable":
+                number = whole_db(address)
+                if number is not None:  # %DB5 passed to a Block_DB parameter
+                    return Operand(f"DB{number}", False, loc)
                 return Operand(self.absolute(address, node), False, loc)
             raise ElementError(f"an operand of scope {scope} the importer does not read", node)
         parts = [component(c) for c in sym.all("Component")]
         addr = sym.child("Address")
+        if scope == "GlobalVariable" and self.passed_db(parts, addr, node):
+            return Operand(parts[0], True, loc)
         t = addr.get("Type").upper() if addr is not None else None
         if scope == "LocalVariable":
             if len(parts) == 2 and parts[0] in self.step_names and parts[1] in ("X", "T", "U"):
@@ -196,6 +204,19 @@ class TiaOperands:
         if want == "TIME" and tag_type == "DINT":
             self.symbol(name, "TIME", node)  # compared with a time: TIA's milliseconds
         return op
+
+    def passed_db(self, parts: list[str], addr: Node | None, node: Node) -> bool:
+        """``"Recipe"`` a call passes to a Block_DB parameter: a DB symbol (kept in the
+        block comment, of the symbol table given, or with the informative address of a DB
+        as a whole, which declares it in the chart: ``"Recipe" : DB5 : DB5``), no tag."""
+        number = whole_db(addr) if addr is not None else None
+        if len(parts) != 1 or (number is None and not self.is_db(parts[0])):
+            return False
+        if number is not None and not self.is_db(parts[0]):
+            label = f"DB{number}"
+            decl = SymbolDecl(parts[0], label, label, "", self.at(node))
+            self.dbs.setdefault(parts[0].casefold(), decl)
+        return True
 
     def named_constant(self, node: Node, scope: str, want: str | None) -> Expr:
         """A constant by name: the block's own (its interface's Constant section) is its
@@ -241,8 +262,11 @@ class TiaOperands:
         addr = sym.child("Address") if sym is not None else None
         if node.get("Scope") != "GlobalVariable" or sym is None or addr is None:
             return
+        parts = [component(c) for c in sym.all("Component")]
+        if self.passed_db(parts, addr, node):
+            return
         if addr.get("Area") in _AREAS:
-            name = ".".join(component(c) for c in sym.all("Component"))
+            name = ".".join(parts)
             t = TIA_TYPES.get(addr.get("Type").upper()) or None
             self.symbol(name, t, node, "", self.absolute(addr, node))
 
@@ -256,6 +280,10 @@ class TiaOperands:
             if self.member(parts, self.at(node)) is not None:
                 return f'"{parts[0]}".{parts[1]}'
             return '"' + ".".join(parts) + '"'
+        address = node.child("Address")
+        number = whole_db(address) if address is not None else None
+        if number is not None:  # %DB5 passed to a Block_DB parameter
+            return f"DB{number}"
         value = node.find("Constant", "ConstantValue")
         return value.text.strip() if value is not None else ""
 
@@ -313,6 +341,17 @@ class TiaOperands:
                 self.at(self.fb),
             )
         return tuple(out)
+
+
+def whole_db(address: Node) -> int | None:
+    """The number of the DB an ``Address`` names as a whole — area DB, type Block_DB, its
+    number, no bit offset, as TIA writes ``%DB5`` passed to a Block_DB parameter (TIA
+    Portal Openness system manual, "Major changes", the ``Address`` node of
+    ``SW.PlcBlocks.Access.xsd``) — None for any other address."""
+    number = address.get("BlockNumber")
+    if address.get("Area") != "DB" or address.get("Type").upper() != "BLOCK_DB":
+        return None
+    return int(number) if number.isdigit() and not address.get("BitOffset") else None
 
 
 def component(c: Node) -> str:

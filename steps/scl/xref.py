@@ -9,7 +9,10 @@ a block as ``FB 17``, a DB variable as ``DB41.LMN`` or ``"Data".temps`` (members
 first index). Its access: *write* for an assignment's target and a FOR variable, *call*
 for a called block, *instance* for its instance DB, an actual parameter by the called
 block's interface (:data:`ARG_ACCESS`; *argument* when the interface is not known), *read*
-for everything else. Pure: the parsed source in, data out.
+for everything else. A DB passed as a whole (``FC5(src := DB5)``, or ``"Recipe"`` to a
+BLOCK_DB input) is that DB, ``DB 5`` or ``"Recipe"``, its access *argument*, as a chart's
+``CALL`` passing it is listed (``sequencer.xref``): one operand for both. Pure: the parsed
+source in, data out.
 """
 
 from __future__ import annotations
@@ -30,13 +33,15 @@ ARG_ACCESS: Final[dict[str, str]] = {
     "VAR_INPUT": "read",
     "VAR_OUTPUT": "write",
     "VAR_IN_OUT": "read/write",
+    "BLOCK_DB": "argument",
 }
 """How an actual parameter's operand is used, by the section of the called block that
-declares the parameter."""
+declares the parameter; ``BLOCK_DB`` an input of that type, whose DB the block may read
+or write."""
 
 Params = Mapping[str, Mapping[str, str]]
 """Blocks' parameters: block (upper case: ``FC10``, ``SCALE``, ``CONT_C``) → parameter
-(upper case) → its section (a key of :data:`ARG_ACCESS`)."""
+(upper case) → its section, or ``BLOCK_DB`` (a key of :data:`ARG_ACCESS`)."""
 
 _FUNCTIONS: Final = frozenset(
     {*BUILTINS, *S5_TIMERS, *S5_COUNTERS, "WORD_TO_BLOCK_DB"}  # the last opens a DB (places)
@@ -72,7 +77,7 @@ def interfaces(source: m.Source) -> dict[str, dict[str, str]]:
         if unit.kind not in ("FUNCTION_BLOCK", "FUNCTION"):
             continue
         params: dict[str, str] = {
-            name.upper(): section.kind
+            name.upper(): "BLOCK_DB" if _is_block_db(decl) else section.kind
             for section in unit.decls
             if isinstance(section, m.VarSection) and section.kind in ARG_ACCESS
             for decl in section.decls
@@ -164,11 +169,29 @@ class _Walk:
         callee = self.params.get(path.base.text.upper().replace(" ", ""), {})
         for arg in args.items:
             section = callee.get(arg.name.upper())
-            if isinstance(arg.value, m.Path):
+            db = self._passed_db(arg.value, section)
+            if db is not None:
+                yield db
+            elif isinstance(arg.value, m.Path):
                 how = ARG_ACCESS.get(section or "", "argument" if shown else "read")
                 yield from self._path(arg.value, how)
             else:
                 yield from self._expr(arg.value)
+
+    def _passed_db(self, value: m.Expr, section: str | None) -> _Found | None:
+        """A DB an actual parameter passes as a whole: ``DB5`` (to any parameter: nothing
+        else is a DB by itself), or a symbol given to a BLOCK_DB input (``"Recipe"``) —
+        the DB as a chart's call passing it is listed, its access *argument*; None for
+        anything else (a BLOCK_DB parameter of the caller passed on is its own)."""
+        if not isinstance(value, m.Path) or value.selectors:
+            return None
+        base = value.base
+        if base.kind == "block" and base.text.upper().startswith("DB"):
+            return _block_name(base.text), "argument", base.loc
+        shown = self._operand(value, called=False)  # "Recipe"; None for a local
+        if section == "BLOCK_DB" and shown is not None and base.kind in ("symbol", "name"):
+            return shown, "argument", base.loc
+        return None
 
     def _operand(self, path: m.Path, *, called: bool) -> str | None:
         """``path`` as an outside operand is shown, None for the block's own names."""
@@ -187,6 +210,10 @@ class _Walk:
         if base.kind == "symbol":
             return f'"{base.text}"' + ("" if called else _members(path))
         return base.text.upper()  # a timer or counter: T10, C3
+
+
+def _is_block_db(decl: m.VarDecl) -> bool:
+    return isinstance(decl.type, m.NamedType) and decl.type.name.upper() == "BLOCK_DB"
 
 
 def _members(path: m.Path) -> str:

@@ -78,7 +78,7 @@ def test_an_actual_parameter_is_used_as_the_called_blocks_interface_declares_it(
     fb17 = {"FB17": {"IN": "VAR_INPUT", "OUT": "VAR_OUTPUT"}}
     given = [(u.operand, u.access) for u in scl_uses(source, fb17) if u.loc.line == 21]
     assert ("DB20.DBW4", "read") in given and ("MW8", "write") in given
-    assert set(ARG_ACCESS) == {"VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT"}
+    assert set(ARG_ACCESS) == {"VAR_INPUT", "VAR_OUTPUT", "VAR_IN_OUT", "BLOCK_DB"}
 
 
 def test_an_any_destination_of_a_system_block_is_written_and_its_source_read() -> None:
@@ -102,3 +102,83 @@ END_ORGANIZATION_BLOCK
     assert {("DB5.arr", "read"), ("DB6.arr", "write")} <= uses
     assert {("MW10", "read"), ("MW20", "write")} <= uses
     assert {('"Recipe".rec', "read"), ("DB6.cur", "write")} <= uses
+
+
+RECIPES = """\
+FUNCTION FC5 : VOID
+VAR_INPUT src : BLOCK_DB; x : INT; END_VAR
+  MW12 := src.DW0;
+END_FUNCTION
+
+FUNCTION_BLOCK FB2
+VAR_INPUT d : BLOCK_DB; END_VAR
+  FC5(src := d, x := 1);
+END_FUNCTION_BLOCK
+
+ORGANIZATION_BLOCK OB1
+BEGIN
+  FC5(src := DB5, x := 1);
+  FC5(src := "Recipe", x := MW2);
+  FC5(src := DB 6, x := 2);
+  FC5(src := WORD_TO_BLOCK_DB(MW4), x := 3);
+  FC9(src := DB7, x := MW6);
+END_ORGANIZATION_BLOCK
+"""
+
+
+def test_a_db_passed_as_a_whole_is_that_db_as_an_argument() -> None:
+    """``DB5`` to any parameter, a symbol to a BLOCK_DB input: the DB, ``DB 5`` or
+    ``"Recipe"``, *argument*; a DB's number as a WORD is read, and a BLOCK_DB parameter
+    passed on is the block's own."""
+    source = parse_source(RECIPES, "recipes.scl")
+    assert interfaces(source)["FC5"] == {"SRC": "BLOCK_DB", "X": "VAR_INPUT"}
+    uses = [(u.operand, u.access, u.loc.line) for u in scl_uses(source) if u.access != "call"]
+    assert uses == [
+        ("MW12", "write", 3),
+        ("DB 5", "argument", 13),
+        ('"Recipe"', "argument", 14),
+        ("MW2", "read", 14),
+        ("DB 6", "argument", 15),
+        ("MW4", "read", 16),
+        ("DB 7", "argument", 17),  # FC9's interface unknown: a DB all the same
+        ("MW6", "argument", 17),
+    ]
+
+
+def test_a_projects_xref_groups_a_db_the_chart_and_its_blocks_pass() -> None:
+    """A chart passing DB5 and an S7-SCL source passing it, by number or by the chart's
+    symbol: one operand, ``"Recipe" (DB5)``, every use an *argument*; a DB of the symbol
+    table likewise (``"Other" (DB6)``)."""
+    from s7graph.engine.symbols import SymbolTable
+    from s7graph.sequencer.text.parse import parse_chart
+    from s7graph.sequencer.xref import cross_references
+
+    chart = parse_chart(
+        """FUNCTION_BLOCK "Seq" FB 1 DB 1
+SYMBOLS "Recipe" : DB5 : DB5; END_SYMBOLS
+PERMANENT BEFORE
+  CALL FC 5 (src := DB5, x := 1);
+  CALL FC 5 (src := "Other", x := 2);
+END_PERMANENT
+SEQUENCE 1 "S"
+  INITIAL_STEP S1 "wait": END_STEP
+END_SEQUENCE
+END_FUNCTION_BLOCK
+""",
+        "seq.s7g",
+    )
+    table = SymbolTable.from_text('"Other" ; DB 6 ; DB 6\n')
+    refs = cross_references(chart, table, [parse_source(RECIPES, "recipes.scl")])
+    uses = {k: [(u.element, u.access, u.place) for u in v] for k, v in refs.operands().items()}
+    assert uses['"Recipe" (DB5)'] == [
+        ("permanent before 1", "argument", "seq.s7g:4:21"),
+        ("OB 1", "argument", "recipes.scl:13:14"),
+        ("OB 1", "argument", "recipes.scl:14:14"),
+    ]
+    assert uses['"Other" (DB6)'] == [
+        ("permanent before 2", "argument", "seq.s7g:5:21"),
+        ("OB 1", "argument", "recipes.scl:15:14"),
+    ]
+    assert uses["DB 7"] == [("OB 1", "argument", "recipes.scl:17:14")]
+    assert refs.unused == ()
+    assert [u.place for u in refs.of("db5")] == [u.place for u in refs.of('"Recipe"')]
