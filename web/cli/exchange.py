@@ -10,21 +10,25 @@ stderr, one a line (``file:line:col: warning[I021]: …``). The chart keeps its 
 left out or changed is listed, and noted at the top of the chart), 2 no chart (the list
 says why) — with ``--strict`` also when anything was left out.
 
-``export CHART.s7g --to plcopen|simaticml -o FILE [--symbols FILE]`` writes the chart in
-that format and prints, one a line, what of it the format's other readers do not see or
-run otherwise (exit 1; 0 when nothing); a chart that does not compile, or a part the
-format cannot hold, is its diagnostics and exit 2.
+``export CHART.s7g --to plcopen|simaticml -o FILE [--symbols FILE] [--blocks BLOCKS.scl …]``
+writes the chart in that format and prints, one a line, what of it the format's other
+readers do not see or run otherwise (exit 1; 0 when nothing); a chart that does not
+compile, or a part the format cannot hold, is its diagnostics and exit 2. ``--blocks``: the
+S7-SCL sources of the user FBs whose instance DBs the chart reads by name
+(``"Motor_DB".Running``), compiled with the chart as ``check --blocks`` does.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import sys
+from collections.abc import Sequence
 from pathlib import Path
 
 from s7graph.engine.errors import S7Error
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.checks.diagnostics import format_diagnostic
+from s7graph.sequencer.checks.interfaces import ProgramBlocks
 from s7graph.sequencer.exchange import (
     FORMATS,
     Imported,
@@ -36,7 +40,8 @@ from s7graph.sequencer.exchange import (
 from s7graph.sequencer.text.format import format_chart, quote
 from s7graph.sequencer.text.model import Chart
 from s7graph.web.cli.report import fail
-from s7graph.web.harness.session import load_chart
+from s7graph.web.harness.scl import compile_sources
+from s7graph.web.harness.session import Interfaces, load_chart
 
 __all__ = ["export_command", "import_command"]
 
@@ -172,12 +177,32 @@ def import_command(
     return 1 if result.problems else 0
 
 
-def export_command(chart: Path, *, to: str, output: Path, symbols: Path | None = None) -> int:
-    """Export ``chart`` to ``output`` in format ``to``; return the exit status."""
+def _interfaces(blocks: Sequence[Path]) -> Interfaces | None:
+    """The interfaces of the S7-SCL sources ``blocks``, compiled with the chart's symbol
+    table (None without any), as ``check --blocks`` and ``sim --blocks`` make them."""
+    if not blocks:
+        return None
+
+    def interfaces(table: SymbolTable) -> ProgramBlocks:
+        return compile_sources(blocks, table).interfaces()
+
+    return interfaces
+
+
+def export_command(
+    chart: Path,
+    *,
+    to: str,
+    output: Path,
+    symbols: Path | None = None,
+    blocks: Sequence[Path] = (),
+) -> int:
+    """Export ``chart`` to ``output`` in format ``to``; return the exit status. A chart that
+    reads a user FB's variable by name compiles only with that FB's source (``blocks``)."""
     if to not in ("plcopen", "simaticml"):
         return fail(S7Error(f"--to must be plcopen or simaticml, not {to!r}"))
     try:
-        _, table = load_chart(chart, symbols)
+        _, table = load_chart(chart, symbols, blocks=_interfaces(blocks))
         from s7graph.sequencer.text.parse import parse_file
 
         model = parse_file(chart)

@@ -684,11 +684,14 @@ def export(
     to: Annotated[str, typer.Option(help="plcopen or simaticml.")],
     output: Annotated[Path, typer.Option("-o", "--output", help="The file to write.")],
     symbols: Annotated[Path | None, typer.Option(help="A symbol table file.")] = None,
+    blocks: Blocks = None,
 ) -> None:
     """Export a chart as PLCopen TC6 XML or a TIA Portal SimaticML GRAPH block."""
     from s7graph.web.cli.exchange import export_command
 
-    raise typer.Exit(export_command(chart, to=to, output=output, symbols=symbols))
+    raise typer.Exit(
+        export_command(chart, to=to, output=output, symbols=symbols, blocks=blocks or [])
+    )
 
 
 # ---------------------------------------------------------------- the bus
