@@ -16,6 +16,7 @@ DBs.
 from __future__ import annotations
 
 import functools
+import re
 from collections.abc import Iterator
 
 from s7graph.engine.address import Address, Area, parse_address
@@ -94,6 +95,12 @@ def beyond_message(name: str, why: str, *, chart: bool = True) -> str:
     return f"{name} is beyond {why}: {refused}{stops}"
 
 
+def block_element(block: str) -> str:
+    """The element a block's diagnostic names, as the S7-SCL compiler's do: a numbered
+    block without a space (``OB 1`` → ``OB1``), a block by name as written (``FC "Scale"``)."""
+    return re.sub(r"^([A-Z]+) (\d+)$", r"\1\2", block)
+
+
 def scl_default_cpu_warnings(
     source: Source, symbols: SymbolTable | None = None
 ) -> list[Diagnostic]:
@@ -122,7 +129,7 @@ def scl_default_cpu_warnings(
         why = beyond_default(addr, declared)
         if why is not None:
             message = beyond_message(name, why, chart=False)
-            found.append(warning("W140", message, use.loc, use.block))
+            found.append(warning("W140", message, use.loc, block_element(use.block)))
     return found
 
 

@@ -168,6 +168,7 @@ def _import_chart(
     table a SimaticML block export refers to."""
     from s7graph.sequencer.exchange.iec_text import read_iec_text
     from s7graph.sequencer.exchange.iec_to_chart import iec_to_chart
+    from s7graph.sequencer.exchange.own_data import edited_at
     from s7graph.sequencer.exchange.plcopen import read_plcopen
     from s7graph.sequencer.exchange.simaticml import read_simaticml
     from s7graph.sequencer.exchange.xmltree import parse_xml
@@ -197,7 +198,7 @@ def _import_chart(
         except ChartSyntaxError as exc:
             raise ImportFailed(exc.diagnostics) from None
     if fmt == "plcopen":
-        found = read_plcopen(parse_xml(data, file), problems)
+        found = read_plcopen(parse_xml(data, file), problems, edited_at)
     else:
         found = list(read_iec_text(_text(data), file, problems))
     problems.fail_if_errors()

@@ -84,6 +84,24 @@ _AREA = {"I": "Input", "Q": "Output", "M": "Memory"}
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 
+def call_naming(c: BlockCall) -> str:
+    """How a call names its block and instance DB, as X012 says it: ``the block and its
+    instance DB by number`` (``CALL FB 17, DB 10``), ``the block by name, its instance DB by
+    number`` (``CALL "TON", DB 10``) …, and what to do in TIA, which calls blocks and DBs by
+    their symbolic names."""
+    block = "number" if c.kind else "name"
+    db = {int: "number", str: "name"}.get(type(c.instance), "")
+    if not db:
+        words = f"the block by {block}"
+    elif db == block:
+        words = f"the block and its instance DB by {block}"
+    else:
+        words = f"the block by {block}, its instance DB by {db}"
+    if "number" in (block, db):
+        return f"{words}; TIA calls blocks and DBs by their symbolic names: rename them there"
+    return f"{words}; TIA calls them by those symbolic names: its project must have them"
+
+
 def default_name(what: str, number: int) -> str:
     """The name TIA gives a ``step`` or ``transition`` of that number that nobody named
     (``Step3``, ``Trans3``): what the export writes for an unnamed one, and what the import
@@ -282,8 +300,7 @@ class _Export:
                 self.p.warn(
                     "X012",
                     f"S{step} row {format_row(r)!r}: CALL rows are written in s7graph's "
-                    "spelling (block and instance DB by number); TIA calls blocks by their "
-                    "symbolic names: rename them there",
+                    f"spelling ({call_naming(r.operand)})",
                     r.loc,
                 )
         else:
@@ -454,8 +471,7 @@ class _Export:
             self.warned_call = True
             self.p.warn(
                 "X012",
-                f"CALL {name}: calls are written with blocks and instance DBs by number; "
-                "TIA calls blocks by their symbolic names: rename them there",
+                f"CALL {name}: calls are written as the chart writes them ({call_naming(c)})",
                 c.loc,
             )
         return write_call(info, c.inputs, c.outputs, self.argument)

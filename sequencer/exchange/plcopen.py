@@ -9,10 +9,13 @@ Conditions are inline ST, references to named transitions (ST, LD or FBD bodies)
 from networks of the SFC body (``exchange.networks``); actions are action blocks of a
 step, inline or named. CODESYS step actions (entry, active, exit) are read from the
 step's vendor data. A file written by s7graph carries its `.s7g` source in the POU's
-``addData`` and is read from it.
+``addData`` and is read from it while the SFC is what the export wrote
+(``exchange.own_data``); an SFC edited since is read as any other.
 """
 
 from __future__ import annotations
+
+from collections.abc import Callable
 
 from s7graph.engine.errors import SourceLocation
 from s7graph.sequencer.exchange.iec_model import (
@@ -592,11 +595,19 @@ def _sfc_of(holder: Node) -> Node | None:
     return next((b.child("SFC") for b in holder.all("body") if b.child("SFC") is not None), None)
 
 
-def read_plcopen(root: Node, problems: Problems) -> list[IecChart | tuple[str, int, int, str]]:
+Edited = Callable[[Node, Node, tuple[str, int, int], str], tuple[SourceLocation, str] | None]
+"""Where a POU s7graph exported differs from its export of the chart it keeps (document,
+POU, the kept source, file → place and warning, None when it does not)."""
+
+
+def read_plcopen(
+    root: Node, problems: Problems, edited: Edited | None = None
+) -> list[IecChart | tuple[str, int, int, str]]:
     """Every SFC body: a POU's (a chart named after the POU), an action's (TwinCAT and
     CODESYS draw charts in actions: one named ``POU.action``, with the POU's variables,
     actions and transitions) — an ``IecChart`` each — or the `.s7g` source s7graph wrote
-    (text, line, col, POU name)."""
+    (text, line, col, POU name), unless ``edited`` finds the POU changed since: then its
+    SFC, with that warning (I024)."""
     reader = _Reader(root, problems)
     out: list[IecChart | tuple[str, int, int, str]] = []
     for pou in root.iter("pou"):
@@ -618,8 +629,11 @@ def read_plcopen(root: Node, problems: Problems) -> list[IecChart | tuple[str, i
             continue
         source = s7graph_source(pou)
         if source is not None:
-            out.append((*source, pou.get("name")))
-            continue
+            edit = edited(root, pou, source, problems.file) if edited is not None else None
+            if edit is None:
+                out.append((*source, pou.get("name")))
+                continue
+            problems.warn("I024", edit[1], edit[0])
         if sfc is not None:
             out.append(reader.chart(pou, sfc))
         elif pou.all("body"):

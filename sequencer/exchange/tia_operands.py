@@ -91,6 +91,7 @@ class TiaOperands:
         self.constant_vars: dict[str, str] = {}  # a constant without a value → FB variable
         self.vars: dict[str, VarDecl] = {}
         self.dbs: dict[str, SymbolDecl] = {}  # DB symbols kept in the block comment
+        self.moved: set[str] = set()  # those the block's networks number otherwise
         self.step_names: dict[str, int] = {}
         self.trans_names: dict[str, int] = {}
 
@@ -193,6 +194,8 @@ class TiaOperands:
             )
         read = self.member(parts, loc)
         if read is not None:
+            if addr is not None and addr.get("BlockNumber").isdigit():
+                self.renumbered(parts[0], int(addr.get("BlockNumber")), node)
             return read
         informative, where = "", ""
         if addr is not None and addr.get("BlockNumber") and addr.get("BitOffset"):
@@ -216,7 +219,26 @@ class TiaOperands:
             label = f"DB{number}"
             decl = SymbolDecl(parts[0], label, label, "", self.at(node))
             self.dbs.setdefault(parts[0].casefold(), decl)
+        elif number is not None:
+            self.renumbered(parts[0], number, node)
         return True
+
+    def renumbered(self, name: str, number: int, node: Node) -> None:
+        """A DB symbol s7graph's block comment kept whose DB the block's own networks number
+        otherwise (TIA's informative address, written when the block was exported again
+        after an edit): the networks' number holds, reported (I024), as an edited PLCopen
+        export is read from its SFC, not from s7graph's data."""
+        kept = self.dbs.get(name.casefold())
+        if kept is None or kept.address == f"DB{number}" or name.casefold() in self.moved:
+            return
+        self.moved.add(name.casefold())
+        self.dbs[name.casefold()] = replace(kept, address=f"DB{number}")
+        self.p.warn(
+            "I024",
+            f'"{name}" is DB{number} in the block\'s networks and {kept.address} in '
+            f"s7graph's block comment, written before: the networks' DB{number} holds",
+            self.at(node),
+        )
 
     def named_constant(self, node: Node, scope: str, want: str | None) -> Expr:
         """A constant by name: the block's own (its interface's Constant section) is its

@@ -519,8 +519,8 @@ def _s5_timer(
     (as ``LC T`` reads it)."""
     try:
         ms = s5time_to_ms(tv)
-    except TypeMismatch as exc:
-        raise ProgramError(f"TV: {exc.message}") from None
+    except TypeMismatch:  # the word given, time base bits and all
+        raise ProgramError(f"TV: W#16#{tv & 0xFFFF:04X} is not valid BCD") from None
     base = S5_BASES_MS[(tv >> 12) & 0x3]
     box = instruction("S5_TIMER")
     left, count, q = box(ctx.mem.timers, number, fn, s, ms, r, ctx.now_ns, base_ms=base)

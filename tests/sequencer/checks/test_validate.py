@@ -117,3 +117,20 @@ def test_fb_pins_are_readable_operands() -> None:
 def test_the_header_fb_and_db_numbers_are_block_numbers(numbers: str, expected: list[str]) -> None:
     text = one_step().replace('FUNCTION_BLOCK "V"', f'FUNCTION_BLOCK "V" {numbers}')
     assert codes(text) == expected
+
+
+def test_w140_of_an_scl_source_names_its_block_as_the_scl_compilers_messages_do() -> None:
+    """An S7-SCL source's W140 names the block ``OB1``, ``FC10`` — as E211 names ``FB1`` —
+    not ``OB 1``."""
+    from s7graph.sequencer.checks.default_cpu import scl_default_cpu_warnings
+    from s7graph.steps.scl.parse import parse_source
+
+    source = parse_source(
+        "ORGANIZATION_BLOCK OB1\nBEGIN\n  %MW300 := 5;\nEND_ORGANIZATION_BLOCK\n"
+        "FUNCTION FC10 : VOID\nBEGIN\n  %Q200.0 := TRUE;\nEND_FUNCTION\n",
+        "t.scl",
+    )
+    assert [(d.loc.line, d.element) for d in scl_default_cpu_warnings(source)] == [
+        (3, "OB1"),
+        (7, "FC10"),
+    ]

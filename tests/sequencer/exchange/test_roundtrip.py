@@ -598,3 +598,33 @@ def test_plcopen_export_has_what_the_tc6_schema_requires(path: Path) -> None:
             assert el.get("name") is None
     for action in sfc.iter(f"{ns}action"):
         assert action[0].tag == f"{ns}relPosition"
+
+
+def _call_chart(row: str, permanent: str = "") -> Chart:
+    after = f"PERMANENT AFTER\n  {permanent}\nEND_PERMANENT\n" if permanent else ""
+    return parse_chart(
+        'FUNCTION_BLOCK "T"\nVAR\n  go : BOOL;\nEND_VAR\nSEQUENCE 1\nINITIAL_STEP S1:\n'
+        f"  {row}\nEND_STEP\nSTEP S2: END_STEP\nTRANSITION T1 FROM S1 TO S2 := go;\n"
+        f"TRANSITION T2 FROM S2 TO S1 := NOT go;\nEND_SEQUENCE\n{after}END_FUNCTION_BLOCK\n",
+        "t.s7g",
+    )
+
+
+@pytest.mark.parametrize(
+    ("row", "permanent", "words"),
+    [
+        ('CALL "TON", DB 10 (IN := go);', "", "the block by name, its instance DB by number"),
+        ("CALL SFB 4, DB 10 (IN := go);", "", "the block and its instance DB by number"),
+        ('CALL "TON", "T_S1" (IN := go);', "", "the block and its instance DB by name"),
+        ("N go;", "CALL FC 2 (x := go);", "the block by number;"),
+    ],
+)
+def test_simaticml_export_says_how_a_call_names_its_block_and_instance_db(
+    row: str, permanent: str, words: str
+) -> None:
+    """X012 says what the call written names by number and what by name: ``CALL "TON", DB
+    10`` names the block by name, so "block and instance DB by number" would be wrong."""
+    _, problems = export_reported(_call_chart(row, permanent), "simaticml")
+    x012 = [d.message for d in problems if d.code == "X012"]
+    assert len(x012) == 1 and words in x012[0]
+    assert ("rename them there" in x012[0]) == ("number" in words)

@@ -277,3 +277,18 @@ END_ORGANIZATION_BLOCK
     assert any(
         "t.scl:3:3: TV: W#16#00FA is not valid BCD" in str(e) for e in cpu.diagnostics.since(0)
     )
+
+
+def test_a_tv_word_not_bcd_is_quoted_as_given_with_its_time_base() -> None:
+    """``TV := W#16#20A5``: the count A5 is no BCD; the error quotes the word given, time
+    base bits and all, not the count alone (``W#16#00A5``)."""
+    src = """
+ORGANIZATION_BLOCK OB1
+  S_ODT(T_NO := T1, S := TRUE, TV := W#16#20A5);
+END_ORGANIZATION_BLOCK
+"""
+    cpu = run(src)
+    assert str(cpu.mode) == "STOP"
+    found = [str(e) for e in cpu.diagnostics.since(0) if "BCD" in str(e)]
+    assert found and "t.scl:3:3: TV: W#16#20A5 is not valid BCD" in found[0]
+    assert not any("W#16#00A5" in e for e in found)

@@ -121,7 +121,7 @@ def test_an_scl_sources_operands_beyond_a_default_cpus_memory_warn_naming_block_
     syms = tmp_path / "s.txt"
     syms.write_text('"Far" ; MW255 ; INT ; its second byte beyond MB255\n', encoding="utf-8")
     assert check_scl_command(source, syms) == 1
-    tail = ": a run stops the CPU at its first use (unless the CPU has more) (OB 1)"
+    tail = ": a run stops the CPU at its first use (unless the CPU has more) (OB1)"
     assert capsys.readouterr().out.splitlines() == [
         f"{source}:4:8: warning[W140]: I200.0 is beyond the I area of a default CPU (128 bytes, "
         f"IB0 to IB127){tail}",
