@@ -15,22 +15,44 @@ CPU may not add such a call: ``swap`` refuses it. A DB a call passes (``src := D
 symbol) goes to a BLOCK_DB input of the block the CPU holds, else the chart is refused: the
 block would take the DB's number for a value. The calls are walked as the chart's text
 walks them (``sequencer.text.call_sites``).
+
+A chart compiled without the program's blocks has its calls of user blocks unchecked; run,
+a call that does not fit its block (a parameter it lacks, a value of another type, an
+output given with ``:=``) stops the CPU when reached. ``unfit_calls`` is the check a
+download into a running CPU makes against the blocks the CPU holds: E047 as ``s7graph
+check --blocks`` words it, for the calls of those blocks only — a call of a block the CPU
+lacks, and an instance DB that is something else, are ``plan_calls``'s to judge.
 """
 
 from __future__ import annotations
 
 import functools
+import re
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
 from s7graph.engine.errors import BlockError
-from s7graph.sequencer.checks.interfaces import is_block_db
+from s7graph.sequencer.checks.interfaces import ProgramBlocks, is_block_db
+from s7graph.sequencer.checks.validate import validate
 from s7graph.sequencer.text.call_sites import CallSite, call_sites
 from s7graph.sequencer.text.model import BlockCall, Chart, Operand
 from s7graph.sequencer.text.names import db_argument
+from s7graph.steps.diagnostics import Diagnostic
 
-__all__ = ["CallPlan", "CallSite", "call_sites", "missing_blocks", "plan_calls", "prepare_calls"]
+__all__ = [
+    "CallPlan",
+    "CallSite",
+    "call_sites",
+    "missing_blocks",
+    "plan_calls",
+    "prepare_calls",
+    "unfit_calls",
+]
+
+_THE_SWAPS = re.compile(r"DB\d+ is |.* is not in the program's blocks \(")
+"""How E047 begins when it judges a call's instance DB (``checks.user_calls.check_instance``)
+or names a block the program lacks: what ``plan_calls`` judges, in the CPU's own words."""
 
 
 @dataclass(slots=True)
@@ -142,6 +164,24 @@ def _check_db_inputs(
                 "variables by name, not the bytes a BLOCK_DB input reaches"
             )
             plan.problems.append(site.line("error", why))
+
+
+def unfit_calls(chart: Chart, symbols: Any, blocks: ProgramBlocks) -> list[Diagnostic]:
+    """The E047 errors of ``chart``'s calls of the user blocks ``blocks`` holds (the CPU's):
+    a parameter the block lacks, given twice or the wrong way (an output with ``:=``), a
+    value of another type, an FB without an instance DB, an FC with one, an FC not given
+    every parameter. A call of a block ``blocks`` lacks is left out (the swap's rule for
+    blocks the CPU lacks), and so is the judgement of an instance DB (``plan_calls``)."""
+    if not any(blocks.find(s.call.kind, s.call.block) for s in call_sites(chart)):
+        return []  # no call of the CPU's blocks: nothing to check
+    return [
+        d
+        for d in validate(chart, symbols, blocks=blocks)
+        if d.is_error
+        and d.code == "E047"
+        and d.element  # not the chart's own FB or DB: its load judged them
+        and not _THE_SWAPS.match(d.message)
+    ]
 
 
 def _finder(cpu: Any) -> Callable[[str], Any]:

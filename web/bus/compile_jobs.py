@@ -5,7 +5,8 @@ same, only the change summary, what the chart needs of the CPU — ``Needs``, wh
 checks as its swap will — and the S7-SCL programs go back) — with ``blocks``, the S7-SCL
 sources its calls reach too, compiled first, the calls checked against their interfaces
 and the FBs' variables the chart reads by name (``"Motor_DB".Running``) read in them;
-without, in the interfaces of the blocks the CPU holds (``interfaces``) — compares two
+without, in the interfaces of the blocks the CPU holds (``interfaces``), the chart's calls
+of those blocks checked against them — compares two
 charts (``summary``: an undo), checks that a text parses (``check``: a save), or imports a
 file (``open``). Every refusal is ``{"refused": reason, "lines": diagnostics}`` with one
 line naming the place; nothing a request holds makes it raise.
@@ -20,6 +21,7 @@ from typing import Any, Final
 
 from s7graph.engine.errors import S7Error, internal_error
 from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer.calls import unfit_calls
 from s7graph.sequencer.change.base import EditRefused
 from s7graph.sequencer.change.carry import fingerprint
 from s7graph.sequencer.change.diff import summarize
@@ -128,6 +130,8 @@ def _compile(request: dict[str, Any], *, preview: bool) -> tuple[dict[str, Any],
         ) from None
     except S7Error as exc:
         raise _Refused(f"the chart does not compile: {exc}") from None
+    if named is None and isinstance(held := request.get("interfaces"), ProgramBlocks):
+        _held_calls(chart, table, held)
     running = _running_chart(str(request["running"]))
     same = (chart.name, chart.fb_number, chart.db_number)
     was = (running.name, running.fb_number, running.db_number)
@@ -182,6 +186,17 @@ def _interfaces(
         return sources[-1].interfaces()
 
     return compiled
+
+
+def _held_calls(chart: Chart, table: SymbolTable, held: ProgramBlocks) -> None:
+    """Refuse a chart brought alone whose calls of the blocks the CPU holds do not fit them
+    (E047: a parameter the block lacks, a value of another type, an output given with
+    ``:=``, an FC given an instance DB …): reached, such a call would stop the CPU. A call
+    of a block the CPU lacks is the swap's to judge (``sequencer.calls.plan_calls``)."""
+    calls = unfit_calls(chart, table, held)
+    if calls:
+        lines = [format_diagnostic(d) for d in calls]
+        raise _Refused(f"the chart's calls do not fit the CPU's blocks: {lines[0]}", lines)
 
 
 def _blocks(

@@ -29,7 +29,8 @@ With the chart unchanged (its summary empty) only the blocks change: the chart t
 its state and its file stay, and the reply says so as the preview does. The chart reads
 the FBs' variables by name (``"Motor_DB".Running``) in those sources, or, when a download
 brings none, in the blocks the CPU holds (``online_blocks.held_interfaces``): a variable
-the FB lacks refuses it (E048), its preview alike.
+the FB lacks refuses it (E048), and so does a call of those blocks that does not fit them
+(E047, ``sequencer.calls.unfit_calls``), its preview alike.
 Its preview (and an undo's) says what the instance DBs would keep, drop and start afresh
 — the notes the download's reply gives, made by the same function
 (``web.harness.scl_reload.carry_notes``) — or the reason it would be refused.

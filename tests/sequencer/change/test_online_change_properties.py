@@ -18,7 +18,10 @@ start chart) call (``CALL FB 17, DB 12``) and whose variables their conditions t
 name (``DB12.calls``): the editor and the download check those reads against the FB's
 interface; a read of DB12 left with no call naming it (the call's row or step deleted) is
 the one error an edit may leave (E048), and its download is refused with E048, the CPU
-running the old chart on."""
+running the old chart on. Some of the calls drawn do not fit FB17 (a parameter it lacks, a
+REAL to its BOOL input, its output given with ``:=``): reached, each would stop the CPU; the
+download refuses them (E047, ``sequencer.calls.unfit_calls``, as the compiler process does)
+and the editor goes back to the running chart."""
 
 from __future__ import annotations
 
@@ -36,7 +39,7 @@ from s7graph.engine.blocks import OB
 from s7graph.engine.clock import VirtualClock
 from s7graph.engine.cpu import CpuMode
 from s7graph.engine.symbols import SymbolTable
-from s7graph.sequencer.calls import call_sites
+from s7graph.sequencer.calls import call_sites, unfit_calls
 from s7graph.sequencer.change.edit import OPERATIONS, Argument, Session, make_edit
 from s7graph.sequencer.change.online import SwapRefused, swap
 from s7graph.sequencer.compiled import CompiledChart
@@ -95,6 +98,17 @@ ROWS = [
     {"qualifier": "CALL", "operand": "SFB 4, DB 10 (IN := I0.1, PT := T#50MS, Q => M1.0)"},
 ]
 CALL_FB17 = {"qualifier": "CALL", "operand": "FB 17, DB 12 (start := I0.2)"}
+BAD_CALLS = [  # reached, each stopped the CPU: the download refuses them (E047)
+    {"qualifier": "CALL", "operand": "FB 17, DB 12 (start := I0.2, speed := 5)"},
+    {"qualifier": "CALL", "operand": "FB 17, DB 12 (start := 2.5)"},
+    {"qualifier": "CALL", "operand": "FB 17, DB 12 (Running := 5)"},
+]
+UNFIT = {  # what the download says of them
+    "FB17 has no parameter speed (parameters: start, Running)",
+    "FB17: start is BOOL, REAL does not fit it",
+    "FB17: Running is an output, use Running => ...",
+    "FB17: Running is BOOL, INT does not fit it",
+}
 PROGRAM = scl_program()  # FB17: Running after its third call with start, ``calls`` counted
 BLOCKS = interfaces(PROGRAM.blocks)
 UNCALLED = "DB12 is not an instance DB of this chart's calls"
@@ -146,7 +160,7 @@ def _numbers(c: Chart, name: str) -> list[int]:
 
 def _argument(c: Chart, a: Argument) -> st.SearchStrategy[Any]:
     if a.type == "RowFields":
-        return st.sampled_from([*ROWS, CALL_FB17])
+        return st.sampled_from([*ROWS, CALL_FB17, *BAD_CALLS])
     if a.type == "bool":
         return st.booleans()
     if a.name == "text":  # a whole chart for the same block (a download keeps the block)
@@ -280,6 +294,12 @@ class OnlineChange(RuleBasedStateMachine):
         except ChartLoadError as exc:  # a read of DB12 no call names: the old chart runs on
             assert self.editor.has_errors and all(UNCALLED in x for x in exc.lines if "error" in x)
             self.edits.append("download refused: E048")
+            return
+        unfit = unfit_calls(self.editor.chart, table, BLOCKS)
+        if unfit:  # a call that does not fit FB17: refused as the compiler process does
+            assert all(d.message in UNFIT for d in unfit), unfit
+            self.edits.append("download refused: E047")
+            self.editor = Session.open(g.cc.chart, plant.symbols, BLOCKS)  # edited back
             return
         old, before = g.cc, g.state
         active = sorted(old.step_numbers[i] for i in before.active)
