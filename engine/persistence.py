@@ -48,7 +48,9 @@ refuses — :class:`StateFileError` naming the problem — an empty, truncated, 
 foreign file, one without a table (copied without its write-ahead log), one locked by
 another process, a dropped instances table, an instance of another FB, a DB the program no
 longer has, a malformed row (a diagnostics row too) or memory image
-(``engine/state_checks.py``), text that is not UTF-8 (a ``meta`` value by its key); a
+(``engine/state_checks.py``), text that is not UTF-8 (a ``meta`` value by its key), a
+file of another program than the store's (``engine/state_identity.py``: recorded when
+the file is written, refused by ``load``); a
 changed fingerprint lets the FB's ``state_format.adapt`` carry the data over (a GRAPH
 FB: by step number, ``sequencer/change/carry.py``) and reports what it could not keep. A
 file missing beside its ``-wal`` (or its ``.renew``) is refused, never started fresh; a
@@ -91,6 +93,15 @@ from s7graph.engine.renew import gone, known, rebuild
 from s7graph.engine.restart import stop_blocker
 from s7graph.engine.rollup import ALARM_ROWS, ALARM_SUMMARY, Job, low_water, roll_alarms
 from s7graph.engine.state_checks import check_hot_image, check_memory_image, diag_entry
+from s7graph.engine.state_identity import (
+    CHART,
+    KIND_KEY,
+    SOURCE_KEY,
+    Program,
+    foreign,
+    malformed,
+    way_out,
+)
 
 __all__ = [
     "FORMAT",
@@ -105,6 +116,7 @@ __all__ = [
     "StateWriteError",
     "diag_row",
     "fingerprint_of",
+    "foreign_state",
     "not_in_use",
     "sqlite_words",
     "unpack_instance",
@@ -437,9 +449,13 @@ class StateStore:
         hot: bool = False,
         time_mark_ms: float | None = TIME_MARK_MS,
         synchronous: str = SYNCHRONOUS,
+        program: Program | None = None,
     ) -> None:
         self.path = Path(path)
         self.hot = hot
+        self.program = program
+        """The program the file belongs to: ``load`` refuses another's, writing records it
+        (None: neither; ``engine/state_identity.py``)."""
         if synchronous not in ("EXTRA", "FULL", "NORMAL", "OFF"):
             raise ValueError(f"synchronous must be EXTRA, FULL, NORMAL or OFF, not {synchronous!r}")
         self.synchronous = synchronous
@@ -461,6 +477,7 @@ class StateStore:
         self._drop_hot = False  # the hot restart image to delete once writing
         if self._writing:
             self._idents()
+            _stamp(self._db, program)
         self._lock: Any = _NoLock()  # a writer's lock once one is attached (use_lock)
         self._parts: dict[str, tuple[Callable[[], object], Callable[[Any], None]]] = {}
         self._part_seen: dict[str, object] = {}
@@ -932,6 +949,7 @@ def _for_writing(store: StateStore) -> None:
     store._db = db
     try:
         _setup(db, store.synchronous, new=False)
+        _stamp(db, store.program)
         if store._drop_hot:
             _drop_hot_image(db)
     except sqlite3.DatabaseError as exc:
@@ -1012,6 +1030,9 @@ def _check_existing(db: sqlite3.Connection, path: Path) -> None:
 def _load(store: StateStore, cpu: Cpu) -> LoadReport | None:
     """``StateStore.load``, on the connection the file was recognised on (read-only until
     the store writes: a file refused here is left as it was found)."""
+    problem = _foreign(store._db, store.path, store.program, cpu)
+    if problem is not None and store.program is not None:
+        raise StateFileError(store.path, problem, way_out=way_out(store.path, store.program))
     memory = store.meta("memory")
     tables = _tables(store._db)  # a file from before may lack some (added once writing)
     instances = (
@@ -1076,6 +1097,67 @@ def _load(store: StateStore, cpu: Cpu) -> LoadReport | None:
     return report
 
 
+def _stamp(db: sqlite3.Connection, program: Program | None) -> None:
+    """Record ``program`` in the file (none: what it records stays)."""
+    if program is not None:
+        db.executemany(
+            "INSERT OR REPLACE INTO meta VALUES (?, ?)",
+            ((KIND_KEY, program.kind), (SOURCE_KEY, program.source)),
+        )
+
+
+def _foreign(db: sqlite3.Connection, path: Path, program: Program | None, cpu: Cpu) -> str | None:
+    """Why the file is another program's than ``program`` (``state_identity.foreign``; None:
+    it is not known to be, or no program was given); ``StateFileError`` when what it
+    records is not what this code writes."""
+    tables = _tables(db)
+    kind, source = _meta(db, path, KIND_KEY), _meta(db, path, SOURCE_KEY)
+    problem = malformed(kind, source)
+    if problem is not None:
+        raise StateFileError(path, problem)
+    if program is None:
+        return None
+    rows = (
+        db.execute("SELECT number, fb, name, fingerprint FROM instances ORDER BY number")
+        if "instances" in tables
+        else []
+    )
+    charts = [f"DB{n} {fb} {name!r}" for n, fb, name, fp in rows if str(fp).startswith(CHART)]
+    mine = (fingerprint_of(idb.fb) for idb in cpu.instance_dbs.values())
+    saved = Program(kind, source) if kind is not None and source is not None else None
+    return foreign(
+        program,
+        saved,
+        holds_state=_holds_state(db, tables) or _count(db, "instances") > 0,
+        charts=charts,
+        has_chart=any(f.startswith(CHART) for f in mine),
+    )
+
+
+def foreign_state(path: Path, program: Program, cpu: Cpu) -> str | None:
+    """Why the state file at ``path`` is another program's than ``program``, read without
+    changing it and without taking its lock (readers are not kept out); None when it is
+    not known to be: no file, one of this program's, an older one that may be, or one that
+    cannot be read (opening it to run says why)."""
+    if not path.is_file():
+        return None
+    shm = Path(f"{path}-shm")
+    had_shm = shm.exists()
+    try:
+        db = _reader(path)
+    except sqlite3.Error:
+        return None
+    try:
+        return _foreign(db, path, program, cpu)
+    except (sqlite3.Error, StateFileError):
+        return None
+    finally:
+        db.close()
+        if not had_shm:  # one a reader of the -wal made: nothing of it left
+            with contextlib.suppress(OSError):
+                shm.unlink()
+
+
 def _renewed(store: StateStore, batch: Batch, why: str) -> str:
     """``StateStore.renew``: the file rebuilt, the store's connection and lock moved to it,
     the other users told (``RenewHooks``)."""
@@ -1089,6 +1171,7 @@ def _renewed(store: StateStore, batch: Batch, why: str) -> str:
 
     def schema(db: sqlite3.Connection) -> None:
         _schema(db)
+        _stamp(db, store.program)
         for hooks in store.renew_hooks:
             hooks.schema(db)
 

@@ -19,6 +19,7 @@ import pytest
 
 from s7graph.engine import Cpu
 from s7graph.engine.persistence import StateFileError, StateStore
+from s7graph.engine.state_identity import Program
 from s7graph.web.harness.persist import open_state
 from tests.engine.test_state_trust import _cpu, other
 
@@ -125,11 +126,13 @@ def _state(folder: Path, edits: list[Edit], *, killed: bool, shm: bool = True) -
     return folder / "s.sqlite"
 
 
-def _refused_untouched(path: Path, cpu: Cpu, restart: str | None = None) -> str:
+def _refused_untouched(
+    path: Path, cpu: Cpu, restart: str | None = None, program: Program | None = None
+) -> str:
     """The refusal of ``path``, asserting its folder as it was before, byte for byte."""
     before = _files(path.parent)
     with pytest.raises(StateFileError) as info:
-        open_state(path, cpu, restart=restart)
+        open_state(path, cpu, restart=restart, program=program)
     assert _files(path.parent) == before
     return info.value.problem
 
@@ -144,6 +147,20 @@ def test_a_refused_state_file_is_left_byte_for_byte_with_no_file_made_beside_it(
     path = _state(tmp_path / "run", edits, killed=killed, shm=ended == "killed")
     assert Path(f"{path}-wal").exists() is killed
     assert fragment in _refused_untouched(path, cpu(), restart)
+
+
+@pytest.mark.parametrize("ended", ["stopped", "killed", "killed without its -shm"])
+def test_the_file_of_another_program_is_refused_and_left_byte_for_byte(
+    tmp_path: Path, ended: str
+) -> None:
+    recorded = [
+        ("INSERT OR REPLACE INTO meta VALUES (?, ?)", ("program_kind", "scl")),
+        ("INSERT OR REPLACE INTO meta VALUES (?, ?)", ("program_source", "far.scl")),
+    ]
+    killed = ended != "stopped"
+    path = _state(tmp_path / "run", recorded, killed=killed, shm=ended == "killed")
+    problem = _refused_untouched(path, _cpu(), program=Program("chart", "far.s7g"))
+    assert problem.startswith("the state of another program: the S7-SCL program far.scl's")
 
 
 @pytest.mark.parametrize(

@@ -42,10 +42,11 @@ from s7graph.engine.modes import CpuMode
 from s7graph.engine.persistence import StateFileError, StateStore
 from s7graph.engine.record import ScanRecord
 from s7graph.engine.runner import COMM_LOAD_PCT, RT_PRIORITY, Runner, core_for, keep_small_pages
+from s7graph.engine.state_identity import Program
 from s7graph.engine.watchdog import Watchdog
 from s7graph.sfb.alarms import message_list
 from s7graph.web.cli.report import fail
-from s7graph.web.cli.run_program import run_until_stopped
+from s7graph.web.cli.run_program import run_until_stopped, state_path_of
 from s7graph.web.cli.run_stop import Locate, chart_locator
 from s7graph.web.cli.supervisor import child_marks, recovered_cause
 from s7graph.web.harness.persist import OpenedState, open_state, refusal
@@ -178,9 +179,8 @@ def _run_chart(
     clock, cpu = session.clock, session.cpu
     _watch(cpu, max_cycle_ms, inline=web and view_in_process)
     recovered = recovered_cause()  # never anew after a hang (--fresh): from its last state
-    state_path = state if state is not None else path.with_suffix(".state.sqlite")
     opened = _open_chart_state(
-        state_path, session, fresh=fresh, recovered=recovered, restart=restart
+        path, state, session, fresh=fresh, recovered=recovered, restart=restart
     )
     if isinstance(opened, int):
         return opened
@@ -326,15 +326,18 @@ def _edges(
 
 
 def _open_chart_state(
-    state_path: Path,
+    chart: Path,
+    state: Path | None,
     session: ChartSession,
     *,
     fresh: bool,
     recovered: tuple[str, str] | None,
     restart: str,
 ) -> OpenedState | int:
-    """The chart's state file opened and the CPU restored from it, or the exit status
-    when it cannot be used. A recovered CPU stays in STOP until started."""
+    """The chart's state file (``state``, else its default beside ``chart``) opened and the
+    CPU restored from it, or the exit status when it cannot be used. A recovered CPU stays
+    in STOP until started."""
+    state_path = state_path_of(chart, state, session.cpu)
     try:
         return open_state(
             state_path,
@@ -342,6 +345,7 @@ def _open_chart_state(
             fresh=fresh and not recovered,
             hot=restart == "hot",
             restart=None if recovered else restart,
+            program=Program.of(chart),
         )
     except StateFileError as exc:
         print(refusal(exc), file=sys.stderr)

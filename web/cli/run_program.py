@@ -6,7 +6,9 @@ Program convention: a Python file whose module-level ``@ob``/``@fb``/``@fc`` blo
 ``max_cycle_ms``; its ``restart`` chooses the startup from a saved state); an optional
 ``setup(cpu)`` creates instance DBs and configures interrupts. Other kinds of program
 plug in by their file's suffix (``PROGRAM_LOADERS``: a loader gives the CPU with its
-blocks, and the program's restart and core). The state file restores
+blocks, and the program's restart and core). The state file (``--state``, else
+``NAME.py.state.sqlite`` / ``NAME.scl.state.sqlite`` beside it, or an older
+``NAME.state.sqlite`` of its own: ``state_path_of``; another program's is refused) restores
 retentive data and the CPU's message list (who acknowledged what, when; every message event
 is also appended to its alarm log) and the CPU comes back by the chosen restart (warm by
 default); on Ctrl-C, SIGTERM or ``--duration-s`` the CPU goes to STOP (outputs 0) and the
@@ -44,11 +46,12 @@ from s7graph.engine.persistence import StateFileError
 from s7graph.engine.record import ScanRecord
 from s7graph.engine.restart import parse_restart
 from s7graph.engine.runner import COMM_LOAD_PCT, RT_PRIORITY, Runner, core_for, keep_small_pages
+from s7graph.engine.state_identity import Program
 from s7graph.engine.write_stop import stop_words
 from s7graph.web.cli.report import fail
 from s7graph.web.cli.run_stop import Locate, RunStop
 from s7graph.web.cli.supervisor import child_marks, recovered_cause
-from s7graph.web.harness.persist import OpenedState, open_state, refusal
+from s7graph.web.harness.persist import OpenedState, default_state, open_state, refusal
 
 if TYPE_CHECKING:
     from s7graph.engine.persistence import StateStore
@@ -168,6 +171,17 @@ def load_program(path: Path, clock: Clock, *, max_cycle_ms: float | None = None)
     return loader(path, clock, max_cycle_ms=max_cycle_ms)
 
 
+def state_path_of(source: Path, state: Path | None, cpu: Cpu) -> Path:
+    """``--state``, else the default beside ``source`` (``web.harness.persist.default_state``:
+    its note, a file of another program's passed over, said on stderr)."""
+    if state is not None:
+        return state
+    path, note = default_state(source, cpu)
+    if note is not None:
+        print(f"s7graph: note: {note}", file=sys.stderr)
+    return path
+
+
 def _report(record: ScanRecord) -> None:
     for entry in record.diagnostics:
         if entry.event_id >> 8 in (0x25, 0x35):  # errors; a STOP is reported by the run
@@ -225,7 +239,7 @@ def run_program(
         return 2
     restart = restart or loaded.restart or "warm"
     recovered = recovered_cause()
-    state_path = state if state is not None else path.with_suffix(".state.sqlite")
+    state_path = state_path_of(path, state, loaded.cpu)
     try:
         fresh = fresh and recovered is None  # never anew after a hang: its last state
         opened = open_state(  # a recovered CPU stays in STOP until started
@@ -234,6 +248,7 @@ def run_program(
             fresh=fresh,
             hot=restart == "hot",
             restart=None if recovered else restart,
+            program=Program.of(path),
         )
     except StateFileError as exc:
         print(refusal(exc), file=sys.stderr)

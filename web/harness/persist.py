@@ -4,8 +4,10 @@
 trust is refused (``StateFileError``: the CLI prints one line naming the file and the
 problem and exits 2), never taken for a fresh start; ``fresh`` keeps an existing file as
 ``FILE.old-N`` and starts anew. A hot restart the saved state does not allow is refused the
-same way (``HotRestartRefused``), never turned into a warm one. ``persist_messages`` adds the
-CPU's message list to it.
+same way (``HotRestartRefused``), never turned into a warm one; so is a file that is
+another program's (``program``: ``engine/state_identity.py``). ``default_state`` chooses a
+run's file without ``--state``: one of its own beside a chart or program of the same name.
+``persist_messages`` adds the CPU's message list to it.
 """
 
 from __future__ import annotations
@@ -15,13 +17,21 @@ from typing import Any
 
 from s7graph.engine.cpu import Cpu
 from s7graph.engine.diagnostics import EventId
-from s7graph.engine.persistence import LoadReport, StateFileError, StateStore, not_in_use
+from s7graph.engine.persistence import (
+    LoadReport,
+    StateFileError,
+    StateStore,
+    foreign_state,
+    not_in_use,
+)
 from s7graph.engine.renew import set_aside
+from s7graph.engine.state_identity import Program
 from s7graph.sfb.alarms import message_list
 
 __all__ = [
     "HotRestartRefused",
     "OpenedState",
+    "default_state",
     "hot_refusal",
     "keep_aside",
     "open_state",
@@ -107,18 +117,26 @@ def keep_aside(path: Path) -> Path | None:
 
 
 def open_state(
-    path: Path, cpu: Cpu, *, fresh: bool = False, hot: bool = False, restart: str | None = None
+    path: Path,
+    cpu: Cpu,
+    *,
+    fresh: bool = False,
+    hot: bool = False,
+    restart: str | None = None,
+    program: Program | None = None,
 ) -> OpenedState:
     """Open ``path`` and restore ``cpu`` (STOP) from it, with its message list; the notes
     of a carried-over state go to the diagnostic buffer. ``hot``: the run restarts hot, so
     the store keeps the hot restart image too. ``restart``: the startup the run makes (implies
     ``hot`` when hot); a saved state that allows no hot restart is refused
     (``HotRestartRefused``). ``StateFileError`` when the file cannot be trusted (the store is
-    closed again, the file as it was: it is opened for writing only once it is taken)."""
+    closed again, the file as it was: it is opened for writing only once it is taken).
+    ``program``: the program the run is of; a file that is another's is refused, one taken
+    records it (``engine/state_identity.py``)."""
     if fresh:
         not_in_use(path)  # a running CPU's file is never moved aside under it
     kept = keep_aside(path) if fresh else None
-    store = StateStore(path, hot=hot or restart == "hot")
+    store = StateStore(path, hot=hot or restart == "hot", program=program)
     try:
         persist_messages(store, cpu)
         report = store.load(cpu)
@@ -134,6 +152,41 @@ def open_state(
         for note in report.notes:
             cpu.diagnostics.record(now, EventId.STATE_CARRIED_OVER, "", note)
     return OpenedState(store, report, kept)
+
+
+def default_state(source: Path, cpu: Cpu) -> tuple[Path, str | None]:
+    """The state file of a run of ``source`` without ``--state``, and a note when the file
+    of the other name is another program's (docs/state-file.md, "Whose state it is").
+
+    A chart's is ``NAME.state.sqlite``, an S7-SCL or Python program's
+    ``NAME.scl.state.sqlite`` / ``NAME.py.state.sqlite`` (a chart and a program of one name
+    side by side each keep their own); the other name (a chart's ``NAME.s7g.state.sqlite``,
+    a program's ``NAME.state.sqlite``, as before) is taken when it is there and this
+    program's, or older and not known to be another's, and the own name is not. A file
+    another program's is passed over, said so, for a free name: never taken, never moved."""
+    program = Program.of(source)
+    plain = source.with_suffix(".state.sqlite")
+    suffixed = source.with_name(f"{source.name}.state.sqlite")
+    names = [plain, suffixed] if program.kind == "chart" else [suffixed, plain]
+    others: list[str] = []
+    for path in names:
+        if _there(path):
+            why = foreign_state(path, program, cpu)
+            if why is None:
+                return path, None
+            others.append(f"{path.name} is passed over ({why})")
+    for path in names:
+        if not _there(path):
+            kept = f"; the state of {program} is kept in {path.name}"
+            note = "; ".join(others) + kept if others else None
+            return path, note
+    return names[0], None  # both another's: refused, saying whose
+
+
+def _there(path: Path) -> bool:
+    """Whether a state file is at ``path``, or what is left of one (its ``-wal``, a file
+    being built anew)."""
+    return any(Path(f"{path}{tail}").exists() for tail in ("", "-wal", ".renew"))
 
 
 def refusal(exc: StateFileError) -> str:

@@ -68,8 +68,11 @@ def test_the_state_file_of_another_chart_is_refused_and_kept(
     capsys.readouterr()
     assert main([*CHART, "--state", str(state), "--duration-s", "0.1"]) == 2
     (line,) = capsys.readouterr().err.splitlines()
-    assert line.startswith(f"s7graph: error: {state}: DB3 holds an instance of FB3 'Seq_mixing'")
-    assert "which this program does not have" in line and "--fresh" in line
+    assert line.startswith(
+        f"s7graph: error: {state}: the state of another program: the chart mixing.s7g's, not "
+        "the chart drill.s7g's; run drill.s7g with a state file of its own (--state FILE)"
+    )
+    assert "--fresh" in line
     with sqlite3.connect(state) as con:
         assert con.execute("SELECT count(*) FROM instances").fetchone() == (1,)
     con.close()

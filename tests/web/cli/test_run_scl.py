@@ -73,7 +73,7 @@ def test_a_warm_restart_keeps_the_dbs_and_a_cold_one_brings_their_initial_values
 ) -> None:
     path = tmp_path / "prog.scl"
     path.write_text(PROGRAM, encoding="utf-8")
-    state = tmp_path / "prog.state.sqlite"
+    state = tmp_path / "prog.scl.state.sqlite"
     first = _run(path)
     assert first.returncode == 0, first.stderr
     one = _instance(state, 10)
@@ -97,7 +97,7 @@ def test_an_fb_whose_interface_changed_keeps_its_variables_by_name_and_type(
     path = tmp_path / "prog.scl"
     path.write_text(PROGRAM, encoding="utf-8")
     assert _run(path).returncode == 0
-    before = _instance(tmp_path / "prog.state.sqlite", 10)
+    before = _instance(tmp_path / "prog.scl.state.sqlite", 10)
     path.write_text(
         PROGRAM.replace("hist : ARRAY[1..3] OF INT;", "hist : ARRAY[1..5] OF INT; x : REAL;"),
         encoding="utf-8",
@@ -110,7 +110,7 @@ def test_an_fb_whose_interface_changed_keeps_its_variables_by_name_and_type(
         "s7graph: note: DB10 FB1 'FB1': of another type, at their initial values: hist",
         "s7graph: note: DB10 FB1 'FB1': new, at their initial values: x",
     ]
-    after = _instance(tmp_path / "prog.state.sqlite", 10)
+    after = _instance(tmp_path / "prog.scl.state.sqlite", 10)
     assert after["n"] > before["n"] and len(after["hist"]) == 5
 
 
@@ -148,7 +148,7 @@ def test_a_plant_or_a_recording_beside_an_scl_program_is_refused_in_one_line(
     assert main(["run", str(path), "--plant", str(path), "--duration-s", "0.1"]) == 2
     err = capsys.readouterr().err
     assert err == "s7graph: error: --plant is for a chart (.s7g), not a program\n"
-    assert not (tmp_path / "prog.state.sqlite").exists()
+    assert not (tmp_path / "prog.scl.state.sqlite").exists()
 
 
 def test_a_program_that_does_not_compile_is_its_diagnostics_and_exit_2(
