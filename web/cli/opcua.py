@@ -1,13 +1,15 @@
-"""``s7graph opcua --connect EP --cpu NAME [--listen opc.tcp://127.0.0.1:4840]``: the
+"""``s7graph opcua [--connect EP] [--cpu NAME] [--listen opc.tcp://127.0.0.1:4840]``: the
 OPC UA server of a CPU on the bus, as a process of its own (``web.opcua``; docs/opcua.md).
 
 It finds the CPU on the bus (waiting up to ``wait_s`` for it), serves its address space
-on ``--listen`` and knows the CPU only over the bus, like the view. ``s7graph run …
---opcua URL`` starts it so, as its child (``--child``: it ends when its stdin closes — the
-CPU's process went — and yields the processor to the CPU; :class:`OpcuaProcess`
-restarts it when it ends). Beyond loopback it serves only with ``--users`` (the CPU must
-check logins: its status says ``users``) and a certificate (``--cert``/``--key``:
-``SignAndEncrypt`` only). Stopped, it says so in one line on stderr.
+on ``--listen`` and knows the CPU only over the bus, like the view. Given no
+``--connect`` it serves the CPU of this machine (``web.cli.waiting.local_cpu``:
+``--cpu``'s, else the only one running here), waiting for it as ``s7graph watch`` does.
+``s7graph run … --opcua URL`` starts it so, as its child (``--child``: it ends when its
+stdin closes — the CPU's process went — and yields the processor to the CPU;
+:class:`OpcuaProcess` restarts it when it ends). Beyond loopback it serves only with
+``--users`` (the CPU must check logins: its status says ``users``) and a certificate
+(``--cert``/``--key``: ``SignAndEncrypt`` only). Stopped, it says so in one line on stderr.
 """
 
 from __future__ import annotations
@@ -87,8 +89,6 @@ def opcua_command(
     )
 
     problem = NetOptions(**{**net.__dict__, "host": "127.0.0.1"}).problem()
-    if problem is None and not net.connect:
-        problem = "give the bus to join with --connect ENDPOINT"
     if anonymous is not None and anonymous not in ANONYMOUS:
         problem = "--anonymous must be read or refuse"
     problem = problem or writes_problem(writes, "--writes")
@@ -99,6 +99,13 @@ def opcua_command(
         problem = trust_problem(trust) if trust.is_dir() else f"--trust {trust}: no such folder"
     if problem:
         return _fail(problem)
+    if not net.connect:  # the CPU of this machine (web.bus.local), waited for
+        from s7graph.web.cli.waiting import local_cpu
+
+        here = local_cpu(net, cpu, duration_s)
+        if isinstance(here, int):
+            return here
+        net, cpu, duration_s = here.net, here.cpu, here.left_s
     _logging()
     session = None
     try:

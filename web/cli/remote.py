@@ -371,12 +371,14 @@ def alive_line(cpu: str, up: bool) -> str:
 def watch_command(net: NetOptions, *, fb: str | None, duration_s: float | None = None) -> int:
     """Print step changes of ``net.cpu`` live (of ``fb``, or of every FB); 0 at the end, 2
     when nothing can be watched: it runs no such FB, or none, or it did not appear within
-    ``duration_s``. A CPU not there at the start is waited for (``web.cli.waiting``)."""
+    ``duration_s``. A CPU not there at the start is waited for (``web.cli.waiting``); one
+    that comes back (``CPU cpu1 reachable``) shows its steps again, changed or not, and one
+    of this machine started again is joined at its new socket (``web.cli.rejoin``)."""
     lock = threading.Lock()
     with cpu_reached(net, duration_s) as reached:
         if isinstance(reached, int):
             return reached
-        client, status, duration_s = reached.client, reached.status, reached.left_s
+        status, duration_s = reached.status, reached.left_s
         without = "this CPU runs no GRAPH FB: no steps to watch (--address watches operands)"
         name, why = fb_to_read(status, fb, without=without)
         if why:
@@ -387,18 +389,22 @@ def watch_command(net: NetOptions, *, fb: str | None, duration_s: float | None =
 
         def show(name: str, update: StepStateUpdate) -> None:
             key = (update.mode, update.active, update.disturbed, update.latched)
-            if last.get(name) == key and not update.events:
-                return
-            last[name] = key
             with lock:
+                if last.get(name) == key and not update.events:
+                    return
+                last[name] = key
                 say(_line(name, update), stop)
 
         def alive(up: bool) -> None:
             with lock:
+                if not up:  # once back, its steps are shown again, changed or not
+                    last.clear()
                 say(alive_line(net.cpu, up), stop)
 
-        client.on_alive(alive)
-        for name in names:
-            client.follow(name, lambda u, n=name: show(n, u))  # type: ignore[misc]
+        def attach(client: BusClient) -> None:
+            for name in names:
+                client.follow(name, lambda u, n=name: show(n, u))  # type: ignore[misc]
+
+        reached.link.keep(attach, alive)
         wait_until_stopped(duration_s, stop)
     return 0

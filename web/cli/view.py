@@ -1,10 +1,12 @@
-"""``s7graph web --connect EP [--cpu NAME] [--fb NAME]``: the browser view as a process of
+"""``s7graph web [--connect EP] [--cpu NAME] [--fb NAME]``: the browser view as a process of
 its own, for any CPU on the bus.
 
 It lists the CPUs answering on the bus with their FBs, serves the view of ``--cpu`` (by
 default the first, by name) and ``--fb`` (by default its first FB; a CPU without one, a
 program of blocks, gets its status, watch table and diagnostics) on ``--host:--port``,
-and knows the CPU only over the bus. ``s7graph run --web`` starts it so, as its child
+and knows the CPU only over the bus. Given no ``--connect`` it serves the CPU of this
+machine (``web.cli.waiting.local_cpu``: ``--cpu``'s, else the only one running here),
+waiting for it as ``s7graph watch`` does. ``s7graph run --web`` starts it so, as its child
 (``--child``: it ends when its stdin closes — the CPU's process went — and yields the
 processor to the CPU). The page may leave this machine (``--host``) only when the CPU
 checks logins (a users file). Once it serves, what it built to start is frozen
@@ -23,6 +25,7 @@ from s7graph.web.bus.client import unread_note, wait_for_cpus
 from s7graph.web.bus.session import open_session, peer_problem
 from s7graph.web.cli.net import NetOptions, error_words, is_loopback_host
 from s7graph.web.cli.stopping import wait_until_stopped
+from s7graph.web.cli.waiting import local_cpu
 from s7graph.web.collector import freeze_start
 from s7graph.web.view.edge import ViewSide
 from s7graph.web.view.port import PortError
@@ -49,10 +52,13 @@ def web_command(
     if child:
         _as_child(stop)
     problem = NetOptions(**{**net.__dict__, "host": "127.0.0.1"}).problem()
-    if problem is None and not net.connect:
-        problem = "give the bus to join with --connect ENDPOINT"
     if problem:
         return _fail(problem)
+    if not net.connect:  # the CPU of this machine (web.bus.local), waited for
+        here = local_cpu(net, cpu, duration_s)
+        if isinstance(here, int):
+            return here
+        net, cpu, duration_s = here.net, here.cpu, here.left_s
     try:
         with open_session(connect=net.connect, tls=net.tls, login=net.login) as probe:
             cpus, unreadable = wait_for_cpus(probe, wait_s)

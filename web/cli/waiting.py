@@ -6,14 +6,19 @@ tcp/127.0.0.1:7461 (nothing answers there yet)``), tries again every half second
 on when the CPU answers; Ctrl-C or SIGTERM end the wait (exit 0), ``--duration-s`` too,
 with exit 2 and why (``CPU cpu1 did not appear … within 5 s``). Wrong options, a bus that
 refuses this node for another reason or a node that is not the CPU stay an error at once.
-:func:`join_bus` is how every shell command joins the bus; those that do not wait say
-:class:`Absent`'s ``message`` and end.
+A CPU of this machine that starts again while watched is joined at its new socket
+(``web.cli.rejoin``). :func:`join_bus` is how every shell command joins the bus; those
+that do not wait say :class:`Absent`'s ``message`` and end. :func:`local_cpu` is how
+``s7graph web`` and ``s7graph opcua`` given no ``--connect`` find, and wait for, the CPU
+of this machine: the one named with ``--cpu``, else the only one running here.
 """
 
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import signal
+import socket
 import sys
 import threading
 import time
@@ -25,16 +30,14 @@ import zenoh
 from s7graph.web.bus import local
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.keys import ROOT
-from s7graph.web.bus.protocol import CpuStatus
+from s7graph.web.bus.protocol import CpuStatus, valid_name
 from s7graph.web.bus.session import open_session, peer_problem
 from s7graph.web.cli.net import NetOptions
+from s7graph.web.cli.rejoin import POLL_S, PROBE_S, Link
 
-__all__ = ["POLL_S", "Absent", "Reached", "cpu_reached", "join_bus"]
+__all__ = ["POLL_S", "Absent", "Local", "Reached", "cpu_reached", "join_bus", "local_cpu"]
 
-POLL_S = 0.5
-"""How often a watch that waits for its CPU tries again."""
-_PROBE_S = 1.0
-"""How long one try waits for the CPU's status."""
+_ENDPOINT = ".endpoint"  # web.bus.local's file of a CPU: NAME.endpoint
 
 
 @dataclass(frozen=True, slots=True)
@@ -47,24 +50,77 @@ class Absent:
     message: str
 
 
-def join_bus(net: NetOptions) -> zenoh.Session | Absent | str:
-    """A session on the bus of ``net`` (connecting only); :class:`Absent` when the CPU is
-    not there (no CPU of that name on this machine, nothing answers at ``--connect``), or
-    why the options or the bus are wrong."""
+@dataclass(frozen=True, slots=True)
+class _Joined:
+    """A session where CPU ``cpu`` is looked for; ``endpoint``: the one of this machine's
+    endpoint file it joined (None: ``--connect``)."""
+
+    session: zenoh.Session
+    cpu: str
+    endpoint: str | None
+
+
+def _listening(endpoint: str) -> bool:
+    """Whether a unix socket takes a connection (one a killed CPU left does not)."""
+    path = endpoint.removeprefix("unixsock-stream/")
+    if path == endpoint:
+        return True
+    with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as probe:
+        probe.settimeout(1.0)
+        try:
+            probe.connect(path)
+        except OSError:
+            return False
+    return True
+
+
+def _running_here() -> list[str]:
+    """The CPUs of this machine for this user, by name: those whose endpoint file names a
+    socket that takes a connection."""
+    root = local.local_dir()
+    if root is None:
+        return []
+    names = sorted(p.name.removesuffix(_ENDPOINT) for p in root.glob(f"*{_ENDPOINT}"))
+    return [n for n in names if valid_name(n) and _listening(local.find(n) or "")]
+
+
+def _here(cpu: str | None) -> tuple[str, str] | Absent | str:
+    """(name, endpoint) of CPU ``cpu`` of this machine — with None, of the only CPU that
+    runs here; :class:`Absent` when none does (yet), why when several do."""
+    if cpu is None:
+        names = _running_here()
+        if len(names) > 1:
+            return (
+                f"several CPUs run on this machine for this user ({', '.join(names)}): "
+                "name one with --cpu NAME, or give the bus with --connect ENDPOINT"
+            )
+        cpu = names[0] if names else None
+    endpoint = local.find(cpu) if cpu is not None else None
+    if cpu is None or endpoint is None:
+        which = f"CPU {cpu}" if cpu is not None else "CPU"
+        return Absent(
+            f"{ROOT}/{cpu or '*'} on this machine",
+            f"no {which} runs here for this user yet",
+            f"give the bus with --connect ENDPOINT (no {which} runs on this machine for this user)",
+        )
+    return cpu, endpoint
+
+
+def _join(net: NetOptions, cpu: str | None) -> _Joined | Absent | str:
+    """A session on the bus of ``net`` where CPU ``cpu`` is (None: the one of this machine;
+    with ``--connect``, ``net.cpu``), :class:`Absent` when it is not there, or why the
+    options or the bus are wrong."""
     problem = net.problem(listening=False)
     if problem:
         return problem
-    connect = list(net.connect)
+    connect, endpoint = list(net.connect), None
     if not connect:
-        here = local.find(net.cpu)  # a CPU of this machine (web.bus.local)
-        if here is None:
-            return Absent(
-                f"{ROOT}/{net.cpu} on this machine",
-                f"no CPU {net.cpu} runs here for this user yet",
-                f"give the bus with --connect ENDPOINT (no CPU {net.cpu} runs on this "
-                "machine for this user)",
-            )
-        connect = [here]
+        here = _here(cpu)  # a CPU of this machine (web.bus.local)
+        if not isinstance(here, tuple):
+            return here
+        cpu, endpoint = here
+        connect = [endpoint]
+    name = cpu or net.cpu
     try:
         session = open_session(connect=connect, tls=net.tls, login=net.login)
     except Exception as exc:
@@ -72,22 +128,35 @@ def join_bus(net: NetOptions) -> zenoh.Session | Absent | str:
             ends = ", ".join(connect)
             return Absent(ends, "nothing answers there yet", net.join_error(exc))
         return net.join_error(exc)
-    wrong = peer_problem(session, net.cpu)
+    wrong = peer_problem(session, name)
     if wrong is not None:
         session.close()  # type: ignore[no-untyped-call]  # zenoh's stub
         return wrong
-    return session
+    return _Joined(session, name, endpoint)
+
+
+def join_bus(net: NetOptions) -> zenoh.Session | Absent | str:
+    """A session on the bus of ``net`` (connecting only); :class:`Absent` when the CPU is
+    not there (no CPU of that name on this machine, nothing answers at ``--connect``), or
+    why the options or the bus are wrong."""
+    got = _join(net, net.cpu)
+    return got.session if isinstance(got, _Joined) else got
 
 
 @dataclass(frozen=True, slots=True)
 class Reached:
-    """The CPU answered: a client of it (``waited``: only after a wait, said on stderr),
-    its status, and what is left of ``--duration-s`` (None: no limit)."""
+    """The CPU answered: its status, whether only after a wait (said on stderr), what is
+    left of ``--duration-s`` (None: no limit), and the :class:`Link` to it."""
 
-    client: BusClient
     status: CpuStatus
     waited: bool
     left_s: float | None
+    link: Link
+
+    @property
+    def client(self) -> BusClient:
+        """A client of the CPU (of its run joined last)."""
+        return self.link.client
 
 
 @contextlib.contextmanager
@@ -95,46 +164,74 @@ def cpu_reached(net: NetOptions, duration_s: float | None) -> Iterator[Reached |
     """A client of ``net.cpu`` once it answers (its session closed after), or the exit
     status when the watch ends before: 0 stopped (Ctrl-C, SIGTERM), 2 an error or
     ``duration_s`` over (the reason printed)."""
-    deadline = None if duration_s is None else time.monotonic() + duration_s
-    stop = threading.Event()
-    previous = signal.signal(signal.SIGTERM, lambda *_: stop.set())
-    waiter = _Waiter(net, deadline, duration_s, stop)
-    try:
-        got = waiter.reach()
-    except KeyboardInterrupt:
-        got = 0
-    finally:
-        signal.signal(signal.SIGTERM, previous)
+    waiter = _Waiter(net, net.cpu, duration_s)
+    got = waiter.wait()
     if isinstance(got, int):
         yield got
         return
-    session, status = got
-    left = None if deadline is None else max(deadline - time.monotonic(), 0.0)
+    joined, status = got
+    link = Link(net, joined.session, joined.endpoint)
     try:
-        with BusClient(session, net.cpu) as client:
-            yield Reached(client, status, waiter.said, left)
+        yield Reached(status, waiter.said, waiter.left(), link)
     finally:
-        session.close()  # type: ignore[no-untyped-call]  # zenoh's stub
+        link.close()
+
+
+@dataclass(frozen=True, slots=True)
+class Local:
+    """The CPU of this machine found: ``net`` with its endpoint as ``--connect``, its
+    name, and what is left of ``--duration-s`` (None: no limit)."""
+
+    net: NetOptions
+    cpu: str
+    left_s: float | None
+
+
+def local_cpu(net: NetOptions, cpu: str | None, duration_s: float | None) -> Local | int:
+    """For ``s7graph web`` and ``opcua`` given no ``--connect``: CPU ``cpu`` of this
+    machine (None: the only one running here) once it answers, waited for as the watch
+    waits; or the exit status: 0 stopped meanwhile, 2 an error, several CPUs to choose
+    from, or ``duration_s`` over (the reason printed)."""
+    waiter = _Waiter(net, cpu, duration_s)
+    got = waiter.wait()
+    if isinstance(got, int):
+        return got
+    joined, _ = got
+    joined.session.close()  # type: ignore[no-untyped-call]  # zenoh's stub
+    connect = (joined.endpoint,) if joined.endpoint is not None else tuple(net.connect)
+    found = dataclasses.replace(net, connect=connect, cpu=joined.cpu)
+    return Local(found, joined.cpu, waiter.left())
 
 
 class _Waiter:
-    """Tries to reach ``net.cpu`` until it answers, ``stop`` or ``deadline``."""
+    """Tries to reach ``cpu`` (None: the one of this machine) until it answers, Ctrl-C,
+    SIGTERM or ``duration_s``."""
 
-    def __init__(
-        self,
-        net: NetOptions,
-        deadline: float | None,
-        duration_s: float | None,
-        stop: threading.Event,
-    ) -> None:
-        self.net, self.deadline, self.duration_s, self.stop = net, deadline, duration_s, stop
+    def __init__(self, net: NetOptions, cpu: str | None, duration_s: float | None) -> None:
+        self.net, self.cpu, self.duration_s = net, cpu, duration_s
+        self.deadline = None if duration_s is None else time.monotonic() + duration_s
+        self.stop = threading.Event()
         self.said = False
         self.where = ""
 
-    def reach(self) -> tuple[zenoh.Session, CpuStatus] | int:
+    def wait(self) -> tuple[_Joined, CpuStatus] | int:
+        """:meth:`reach`, with SIGTERM and Ctrl-C ending the wait (exit status 0)."""
+        previous = signal.signal(signal.SIGTERM, lambda *_: self.stop.set())
+        try:
+            return self.reach()
+        except KeyboardInterrupt:
+            return 0
+        finally:
+            signal.signal(signal.SIGTERM, previous)
+
+    def left(self) -> float | None:
+        """What is left of ``duration_s`` (None: no limit)."""
+        return None if self.deadline is None else max(self.deadline - time.monotonic(), 0.0)
+
+    def reach(self) -> tuple[_Joined, CpuStatus] | int:
         """(a session the CPU answers on, its status), or the exit status."""
         while True:
-            got = join_bus(self.net)
+            got = _join(self.net, self.cpu)
             if isinstance(got, str):
                 return _fail(got)
             if isinstance(got, Absent):
@@ -143,25 +240,26 @@ class _Waiter:
                 reached = self._answered(got)
                 if reached:
                     return reached
-                got.close()  # type: ignore[no-untyped-call]  # zenoh's stub
+                got.session.close()  # type: ignore[no-untyped-call]  # zenoh's stub
             ended = self._pause()
             if ended is not None:
                 return ended
 
-    def _answered(self, session: zenoh.Session) -> tuple[zenoh.Session, CpuStatus] | None:
-        """(``session``, the CPU's status) when it answers; None when it does not (said
+    def _answered(self, joined: _Joined) -> tuple[_Joined, CpuStatus] | None:
+        """(``joined``, the CPU's status) when it answers; None when it does not (said
         once)."""
-        with BusClient(session, self.net.cpu, timeout=_PROBE_S) as probe:
+        with BusClient(joined.session, joined.cpu, timeout=PROBE_S) as probe:
             status = probe.status()
         if status is not None:
-            return session, status
+            return joined, status
         ends = ", ".join(self.net.connect) or "this machine"
-        self._say(f"{ROOT}/{self.net.cpu} on {ends}", "not on the bus yet")
+        self._say(f"{ROOT}/{joined.cpu} on {ends}", "not on the bus yet")
         return None
 
     def _say(self, where: str, why: str) -> None:
         if not self.said:
-            print(f"s7graph: waiting for CPU {self.net.cpu} at {where} ({why})", file=sys.stderr)
+            who = f"CPU {self.cpu}" if self.cpu is not None else "a CPU"
+            print(f"s7graph: waiting for {who} at {where} ({why})", file=sys.stderr, flush=True)
             self.said, self.where = True, where
 
     def _pause(self) -> int | None:
@@ -172,10 +270,8 @@ class _Waiter:
         if wait > 0 and self.stop.wait(wait):
             return 0
         if self.deadline is not None and time.monotonic() >= self.deadline:
-            return _fail(
-                f"CPU {self.net.cpu} did not appear at {self.where} within "
-                f"{self.duration_s:g} s (--duration-s)"
-            )
+            who = f"CPU {self.cpu} did not appear" if self.cpu is not None else "no CPU appeared"
+            return _fail(f"{who} at {self.where} within {self.duration_s:g} s (--duration-s)")
         return None
 
 

@@ -9,7 +9,8 @@ operand the CPU cannot read is said once on stderr (``DB20.avg: DB20 is not load
 shown as ``?``; when none can be read, or the CPU refuses the request, the exit status is
 2. A CPU not there yet at the start is waited for (``web.cli.waiting``), and one that goes
 away, as ``s7graph watch`` waits (``CPU cpu1 disconnected``, ``CPU cpu1 reachable``, then
-its values again); one that stops answering while there is said once on stderr, and again
+its values again; one of this machine started again is joined at its new socket,
+``web.cli.rejoin``); one that stops answering while there is said once on stderr, and again
 when it answers. A read: no login needed; with ``--user`` each request is signed by that
 user's login, and the CPU keeps them in the user's own share of its watch queue
 (``web.bus.watch``) — one refused later (the login ended) is said once, and the watch goes
@@ -28,7 +29,7 @@ from s7graph.web.bus.watch import split_operands
 from s7graph.web.cli.net import NetOptions
 from s7graph.web.cli.remote import alive_line, shell_login
 from s7graph.web.cli.stopping import say, wait_until_stopped
-from s7graph.web.cli.waiting import cpu_reached
+from s7graph.web.cli.waiting import Reached, cpu_reached
 
 __all__ = [
     "MAX_INTERVAL_MS",
@@ -92,22 +93,18 @@ def watch_addresses(
         if reached.waited:  # it said it waits: now say the CPU is there
             say(alive_line(net.cpu, True), threading.Event())
         if user is None:
-            return _table(reached.client, net.cpu, addresses, interval_ms, reached.left_s)
+            return _table(reached, net.cpu, addresses, interval_ms)
         with shell_login(reached.client, reached.status, user) as token:
             if isinstance(token, int):
                 return token
-            return _table(reached.client, net.cpu, addresses, interval_ms, reached.left_s, token)
+            return _table(reached, net.cpu, addresses, interval_ms, token)
 
 
 def _table(
-    client: BusClient,
-    cpu: str,
-    addresses: list[str],
-    interval_ms: float,
-    duration_s: float | None,
-    token: str = "",
+    reached: Reached, cpu: str, addresses: list[str], interval_ms: float, token: str = ""
 ) -> int:
     """:func:`watch_addresses` once the CPU answers (``token``: a login's, "" none)."""
+    client = reached.client
     first = client.watch(addresses, token=token)
     if first.error:
         print(f"s7graph: error: {cpu}: {first.error}", file=sys.stderr)
@@ -121,11 +118,11 @@ def _table(
     say(_line(first), stop)
     poll = max(interval_ms, MIN_INTERVAL_MS) / 1000
     follower = _Follower(client, addresses, first, stop, cpu, token)
-    client.on_alive(follower.alive)
+    reached.link.keep(follower.rebind, follower.alive)
     thread = threading.Thread(target=follower.run, args=(poll,), name="s7graph-watch", daemon=True)
     thread.start()
     try:
-        wait_until_stopped(duration_s, stop)
+        wait_until_stopped(reached.left_s, stop)
     finally:
         stop.set()
         thread.join(timeout=5.0)
@@ -165,14 +162,34 @@ class _Follower:
             self.back = self.back or up
             say(alive_line(self.cpu, up), self.stop)
 
+    def rebind(self, client: BusClient) -> None:
+        """Ask ``client`` from now on: the CPU's run joined last (``web.cli.rejoin``). A
+        login does not outlive the run it was made at: said once, the requests go on
+        unsigned."""
+        with self.lock:
+            if client is self.client:
+                return
+            self.client = client
+            if self.token:
+                print(
+                    f"s7graph: {self.cpu}: the login ended with the CPU's run; watching "
+                    "without a login from now on",
+                    file=sys.stderr,
+                    flush=True,
+                )
+                self.token = ""
+
     def run(self, poll_s: float) -> None:
-        """Ask every ``poll_s`` until ``stop``; a line for each change."""
+        """Ask every ``poll_s`` until ``stop``; a line for each change (an answer of a
+        client left meanwhile is dropped)."""
         while not self.stop.wait(poll_s):
-            answer = self.client.watch(self.addresses, timeout=2.0, token=self.token)
+            client = self.client
+            answer = client.watch(self.addresses, timeout=2.0, token=self.token)
             if self.stop.is_set():
                 return
             with self.lock:
-                self._show(answer)
+                if client is self.client:
+                    self._show(answer)
 
     def _show(self, answer: WatchValues) -> None:
         """One answer: a line if the values changed (or the CPU is back), a failure said

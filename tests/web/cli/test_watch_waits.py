@@ -3,8 +3,10 @@
 disconnected``, stays, says ``CPU cpu1 reachable`` when the CPU is back and shows its values
 again. Both watches wait for a CPU not there yet at their start too (web/cli/waiting.py,
 docs/cli.md, "The bus from a shell"): said once on stderr, with where; ``--duration-s``
-ends the wait with exit 2 and why. Real processes: a CPU running a program of blocks (or a
-chart) on a unix socket, killed and started again, and the shell's watch."""
+ends the wait with exit 2 and why. Given no ``--connect``, a CPU of this machine started
+again on a new socket is joined there (web/cli/rejoin.py). Real processes: a CPU running a
+program of blocks (or a chart) on a unix socket, killed and started again, and the shell's
+watch."""
 
 from __future__ import annotations
 
@@ -24,9 +26,11 @@ from s7graph.web.access.scram import MIN_ITERATIONS
 from s7graph.web.access.users import UsersFile
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.cpu_side import CpuSide
+from s7graph.web.bus.protocol import WatchValues
 from s7graph.web.bus.session import open_session
 from s7graph.web.cli.net import NetOptions
 from s7graph.web.cli.waiting import Reached, cpu_reached
+from s7graph.web.cli.watch_table import _Follower
 from tests.paths import ROOT
 from tests.web.cli.test_program_bus import _bus, _program
 from tests.web.helpers import PASSWORD, cpu_process, free_port
@@ -310,3 +314,86 @@ def test_watch_user_without_address_is_a_usage_error_before_anything_is_joined()
     assert done.returncode == 2 and done.stdout == ""
     assert "--user signs --address's requests: an FB's steps need none" in done.stderr
     assert "waiting for CPU" not in done.stderr
+
+
+def _local_cpu(
+    tmp_path: Path, env: dict[str, str], chart: Path, cpu: str = "cpu1"
+) -> subprocess.Popen[str]:
+    """``s7graph run CHART --cpu CPU --web`` given no endpoint: a CPU of this machine on a
+    socket of its own run, written to its endpoint file in ``env``'s XDG_RUNTIME_DIR;
+    returned once it serves (its stdout read by a thread from then on)."""
+    state = tmp_path / f"{cpu}.sqlite"
+    args = ["run", str(chart), "--cpu", cpu, "--state", str(state), "--web", "--port", "0"]
+    proc = _started([*args, "--duration-s", "150"], env)
+    Lines(proc).wait_for("s7graph: view http")
+    return proc
+
+
+def test_watches_given_no_connect_rejoin_a_cpu_of_this_machine_started_again_on_a_new_socket(
+    tmp_path: Path,
+) -> None:
+    """Killed (SIGKILL: its endpoint file left, naming a dead socket) or stopped (Ctrl-C: the
+    file taken away), the CPU started again listens on a new socket and writes it: both
+    watches, given no ``--connect``, read the file again while the CPU is gone, join there
+    and show its lines again (``web.cli.rejoin``)."""
+    runtime = tmp_path / "runtime"
+    runtime.mkdir(mode=0o700)
+    env = {**os.environ, "XDG_RUNTIME_DIR": str(runtime)}
+    chart = tmp_path / "wait.s7g"
+    chart.write_text(CHART, encoding="utf-8")
+    endpoint = runtime / "s7graph" / "cpu1.endpoint"
+    procs = [_local_cpu(tmp_path, env, chart)]
+    try:
+        sockets = [endpoint.read_text(encoding="utf-8")]
+        address = ["--address", "Q0.0", "--interval-ms", "50"]
+        for command in (["watch"], ["watch", *address]):
+            procs.append(_started([*command, "--duration-s", "200"], env))
+        watches = [(Lines(p), Lines(p, stderr=True)) for p in procs[1:]]
+        seen = [lines.wait_for("cycle ") for lines, _ in watches]
+        for how in (signal.SIGKILL, signal.SIGINT):
+            procs[0].send_signal(how)
+            assert procs[0].wait(30) in (-9, 0)
+            gone = [
+                lines.wait_for("CPU cpu1 disconnected", at)
+                for (lines, _), at in zip(watches, seen, strict=True)
+            ]
+            procs[0] = _local_cpu(tmp_path, env, chart)
+            sockets.append(endpoint.read_text(encoding="utf-8"))
+            back = [
+                lines.wait_for("CPU cpu1 reachable", at)
+                for (lines, _), at in zip(watches, gone, strict=True)
+            ]
+            seen = [
+                lines.wait_for("cycle ", at) for (lines, _), at in zip(watches, back, strict=True)
+            ]
+        assert len(set(sockets)) == 3  # each run on a socket of its own
+        for proc in procs[1:]:
+            proc.send_signal(signal.SIGINT)
+        assert [proc.wait(30) for proc in procs[1:]] == [0, 0]
+        assert watches[0][1].rest() == []  # nothing on stderr
+        # a request on its way when the CPU was killed may be said to have no answer
+        late = "s7graph: cpu1: no answer from CPU 'cpu1': the bus ended the request"
+        assert all(line.startswith(late) for line in watches[1][1].rest()), watches[1][1].seen
+    finally:
+        for proc in procs:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait(30)
+
+
+def test_watch_address_with_a_login_that_joins_a_new_run_says_once_it_goes_on_unsigned(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A login does not outlive the CPU's run it was made at: the watch joined to a run
+    started again (``web.cli.rejoin``) says so once and asks without it from then on."""
+    with open_session(listen=[f"unixsock-stream/{tmp_path}/bus.sock"]) as session:
+        before, after = BusClient(session, "cpu1"), BusClient(session, "cpu1")
+        follower = _Follower(before, ["MW10"], WatchValues(), threading.Event(), "cpu1", "t")
+        follower.rebind(before)  # the same run: the login stays
+        assert follower.token == "t" and capsys.readouterr().err == ""
+        follower.rebind(after)
+        follower.rebind(after)
+    assert follower.client is after and follower.token == ""
+    assert capsys.readouterr().err == (
+        "s7graph: cpu1: the login ended with the CPU's run; watching without a login from now on\n"
+    )

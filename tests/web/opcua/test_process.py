@@ -248,7 +248,6 @@ async def _stop_and_start(child_url: str, own_url: str) -> None:
             "opc.tcp://HOST:PORT",
         ),
         (["opcua", "--connect", "tcp/127.0.0.1:1", "--anonymous", "maybe"], "read or refuse"),
-        (["opcua", "--listen", "opc.tcp://127.0.0.1:4840"], "--connect"),
         (["run", "x.s7g", "--opcua", "opc.tcp://10.1.2.3:4840"], "--users"),
         (["run", "x.s7g", "--opcua-cert", "c.pem"], "go with --opcua"),
         (["opcua", "--connect", "tcp/127.0.0.1:1", "--writes", "hold"], "force or modify"),
