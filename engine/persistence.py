@@ -50,7 +50,8 @@ another process, a dropped instances table, an instance of another FB, a DB the 
 longer has, a malformed row (a diagnostics row too) or memory image
 (``engine/state_checks.py``), text that is not UTF-8 (a ``meta`` value by its key), a
 file of another program than the store's (``engine/state_identity.py``: recorded when
-the file is written, refused by ``load``); a
+the file is written, refused by ``load``; a renamed source the file's instance DBs
+recognise is carried over, noted); a
 changed fingerprint lets the FB's ``state_format.adapt`` carry the data over (a GRAPH
 FB: by step number, ``sequencer/change/carry.py``) and reports what it could not keep. A
 file missing beside its ``-wal`` (or its ``.renew``) is refused, never started fresh; a
@@ -97,9 +98,12 @@ from s7graph.engine.state_identity import (
     CHART,
     KIND_KEY,
     SOURCE_KEY,
+    Held,
     Program,
     foreign,
     malformed,
+    recorded,
+    renamed,
     way_out,
 )
 
@@ -1033,6 +1037,7 @@ def _load(store: StateStore, cpu: Cpu) -> LoadReport | None:
     problem = _foreign(store._db, store.path, store.program, cpu)
     if problem is not None and store.program is not None:
         raise StateFileError(store.path, problem, way_out=way_out(store.path, store.program))
+    moved = renamed(store.program, recorded(store.meta)) if store.program is not None else None
     memory = store.meta("memory")
     tables = _tables(store._db)  # a file from before may lack some (added once writing)
     instances = (
@@ -1047,6 +1052,8 @@ def _load(store: StateStore, cpu: Cpu) -> LoadReport | None:
     report = _saved_report(store)
     if memory is None:
         raise StateFileError(store.path, "no memory image (an incomplete state)")
+    if moved is not None:  # a renamed source: its note first; no hot restart, as a download
+        report.notes.append(moved)
     hot = store.meta("hot_memory")
     image = _checked(store.path, "memory image", memory, check_memory_image, cpu)
     if hot is not None:
@@ -1088,7 +1095,7 @@ def _load(store: StateStore, cpu: Cpu) -> LoadReport | None:
                 f"part {part_name!r}",
                 functools.partial(_restore_json, part[1], str(state)),
             )
-    if not report.changed and not unsaved:
+    if not report.changed and not unsaved and moved is None:
         cpu.hot_blockers.discard("program download")  # the very program that was running
     if not store.hot:  # not kept up to date from now on: deleted once the store writes
         store._drop_hot = True
@@ -1122,14 +1129,16 @@ def _foreign(db: sqlite3.Connection, path: Path, program: Program | None, cpu: C
         if "instances" in tables
         else []
     )
-    charts = [f"DB{n} {fb} {name!r}" for n, fb, name, fp in rows if str(fp).startswith(CHART)]
+    held = [Held(int(n), str(fb), str(name), str(fp).startswith(CHART)) for n, fb, name, fp in rows]
+    own = {(n, idb.fb.label, idb.fb.name) for n, idb in cpu.instance_dbs.items()}
     mine = (fingerprint_of(idb.fb) for idb in cpu.instance_dbs.values())
     saved = Program(kind, source) if kind is not None and source is not None else None
     return foreign(
         program,
         saved,
         holds_state=_holds_state(db, tables) or _count(db, "instances") > 0,
-        charts=charts,
+        held=held,
+        own=own,
         has_chart=any(f.startswith(CHART) for f in mine),
     )
 

@@ -6,7 +6,11 @@ file it was run from (its name only: a program moved to another folder with its 
 file is the same program) — when it takes the file. A file recording another program is
 refused (``foreign``): a chart warm-restarting from an S7-SCL program's memory image and
 DBs would run on data that is not its own. A changed version of the same program (same
-kind, same file name) is not another program: its state is carried over as before.
+kind, same file name) is not another program: its state is carried over as before. Nor
+is a renamed source of the same kind the file's content recognises (``recognised``: every
+FB instance DB it holds is the program's, by DB number, FB number and FB name; for a
+chart, a GRAPH FB's among them): carried over the same way, said in a note
+(``renamed``), and recorded under its new name once taken.
 
 A file written before the program was recorded is judged by what it holds: a chart's own
 instance DB is a GRAPH FB's (fingerprint ``chart:``), so a file holding a state without
@@ -16,20 +20,23 @@ taken is stamped with the program when it is opened for writing.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass
 from pathlib import PurePath
-from typing import Final
+from typing import Final, NamedTuple
 
 __all__ = [
     "CHART",
     "KINDS",
     "KIND_KEY",
     "SOURCE_KEY",
+    "Held",
     "Program",
     "foreign",
     "malformed",
+    "recognised",
     "recorded",
+    "renamed",
     "way_out",
 ]
 
@@ -65,6 +72,19 @@ class Program:
         return f"{KINDS.get(self.kind, 'the program')} {self.source}"
 
 
+class Held(NamedTuple):
+    """An instance DB a state file holds: its number, its FB's label and name, and whether
+    the FB is a GRAPH FB (fingerprint ``chart:``)."""
+
+    number: int
+    label: str
+    name: str
+    chart: bool
+
+    def __str__(self) -> str:
+        return f"DB{self.number} {self.label} {self.name!r}"
+
+
 def malformed(kind: str | None, source: str | None) -> str | None:
     """The problem of a recorded identity this code never writes (None: fine): a kind not
     in ``KINDS``, a source that is not a file's name, one without the other."""
@@ -91,15 +111,18 @@ def foreign(
     saved: Program | None,
     *,
     holds_state: bool,
-    charts: Sequence[str],
+    held: Sequence[Held],
+    own: Collection[tuple[int, str, str]],
     has_chart: bool,
 ) -> str | None:
     """Why a file is another program's than ``mine`` (None: it is not known to be):
-    ``saved`` the program it records; for a file that records none, whether it holds a
-    state, ``charts`` the GRAPH FB instances it holds (``DB1 FB1 'Seq'``), and whether
-    ``mine`` has a GRAPH FB of its own."""
+    ``saved`` the program it records, ``held`` the instance DBs it holds, ``own`` those of
+    ``mine`` (DB number, FB label, FB name), ``has_chart`` whether ``mine`` has a GRAPH FB.
+    A file recording another source of the same kind is ``mine``'s when ``recognised``; one
+    that records none is judged by whether it holds a state and a GRAPH FB's instance DB."""
+    charts = [str(h) for h in held if h.chart]
     if saved is not None:
-        if saved == mine:
+        if saved == mine or (saved.kind == mine.kind and recognised(mine, held, own)):
             return None
         return f"the state of another program: {saved}'s, not {mine}'s"
     older = "written by an s7graph that did not record its program, and"
@@ -111,6 +134,29 @@ def foreign(
     if mine.kind != "chart" and charts and not has_chart:
         return f"{older} it holds a chart's sequencer ({charts[0]}): a chart's, not {mine}'s"
     return None
+
+
+def recognised(mine: Program, held: Sequence[Held], own: Collection[tuple[int, str, str]]) -> bool:
+    """Whether a file holds recognisably ``mine``'s state though it records another source
+    of its kind (a renamed file): it holds FB instance DBs (a system block's aside: any
+    program may call one), every one ``mine`` has at the same DB number with the same FB
+    number and name, and for a chart a GRAPH FB's among them. A program without instance
+    DBs is never recognised."""
+    rows = [h for h in held if not h.label.startswith("SFB")]
+    if not rows or any((h.number, h.label, h.name) not in own for h in rows):
+        return False
+    return mine.kind != "chart" or any(h.chart for h in rows)
+
+
+def renamed(mine: Program, saved: Program | None) -> str | None:
+    """The note of a file taken though it records another source (``recognised``); None
+    when it records ``mine`` or nothing."""
+    if saved is None or saved == mine:
+        return None
+    return (
+        f"the file was the state of {saved} and now records {mine} (a renamed source: "
+        "its instance DBs are this program's)"
+    )
 
 
 def way_out(path: PurePath, mine: Program) -> str:

@@ -1,20 +1,22 @@
 """A state file records the program it belongs to — its kind (chart, S7-SCL program, Python
 program) and its source file's name — and another program's file is refused naming both,
 never warm-restarted from (engine/state_identity.py, engine/persistence.py); a changed
-version of the same program is carried over as before; a file from before the record is
-taken and records it once written."""
+version of the same program is carried over as before, and so is a renamed source of the
+same kind whose instance DBs the file holds, said in a note; a file from before the record
+is taken and records it once written."""
 
 from __future__ import annotations
 
 import sqlite3
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
 
 from s7graph.engine import Cpu
 from s7graph.engine.persistence import StateFileError, StateStore
-from s7graph.engine.state_identity import Program
-from tests.engine.test_state_trust import _cpu, acc_grown
+from s7graph.engine.state_identity import Held, Program, recognised
+from tests.engine.test_state_trust import _cpu, acc_grown, other
 
 SCL = Program("scl", "far.scl")
 CHART = Program("chart", "far.s7g")
@@ -69,13 +71,85 @@ def test_the_file_of_another_kind_of_program_is_refused_naming_both(tmp_path: Pa
     assert path.read_bytes() == before
 
 
-def test_the_file_of_another_source_file_of_the_same_kind_is_refused(tmp_path: Path) -> None:
+@pytest.mark.parametrize(
+    ("cpu", "why"),
+    [(lambda: _cpu(other), "another FB"), (lambda: _cpu(number=3), "another DB number")],
+)
+def test_another_source_file_of_the_same_kind_whose_instance_dbs_differ_is_refused(
+    tmp_path: Path, cpu: Callable[[], Cpu], why: str
+) -> None:
     path = _written(tmp_path / "s.sqlite", Program("python", "line_a.py"))
-    refused = _refusal(path, Program("python", "line_b.py"))
+    before = path.read_bytes()
+    refused = _refusal(path, Program("python", "line_b.py"), cpu())
     assert refused.problem == (
         "the state of another program: the Python program line_a.py's, not the Python "
         "program line_b.py's"
+    ), why
+    assert path.read_bytes() == before
+
+
+def test_a_renamed_source_whose_instance_dbs_the_file_holds_is_carried_over_saying_so(
+    tmp_path: Path,
+) -> None:
+    path = _written(tmp_path / "s.sqlite", Program("python", "line_a.py"))
+    store = StateStore(path, program=Program("python", "line_b.py"))
+    cpu = _cpu(acc_grown)
+    try:
+        report = store.load(cpu)
+        assert _record(path)[1] == ("program_source", "line_a.py")  # read-only until taken
+        store.open_writing()
+    finally:
+        store.close()
+    assert report is not None and report.changed == [2]
+    assert report.notes[0] == (
+        "the file was the state of the Python program line_a.py and now records the Python "
+        "program line_b.py (a renamed source: its instance DBs are this program's)"
     )
+    assert "DB2 FB2 'acc': new, at their initial values: extra" in report.notes
+    assert _record(path) == [("program_kind", "python"), ("program_source", "line_b.py")]
+
+
+def test_a_renamed_source_unchanged_otherwise_makes_no_hot_restart(tmp_path: Path) -> None:
+    """As a download: the file's instance DBs say the same program, not the same code."""
+    path = _written(tmp_path / "s.sqlite", Program("scl", "line_a.scl"))
+    renamed, same = _cpu(), _cpu()
+    for program, cpu in (
+        (Program("scl", "line_b.scl"), renamed),
+        (Program("scl", "line_a.scl"), same),
+    ):
+        store = StateStore(path, program=program)
+        try:
+            store.load(cpu)
+        finally:
+            store.close()
+    assert "program download" in renamed.hot_blockers
+    assert "program download" not in same.hot_blockers
+
+
+GRAPH = Held(1, "FB1", "Seq_drill", chart=True)
+ACC = Held(2, "FB2", "acc", chart=False)
+TIMER = Held(9, "SFB4", "TON", chart=False)
+OWN = {(1, "FB1", "Seq_drill"), (2, "FB2", "acc")}
+
+
+@pytest.mark.parametrize(
+    ("kind", "held", "same"),
+    [
+        ("chart", [GRAPH, ACC], True),
+        ("chart", [GRAPH, TIMER], True),  # a system block's instance: anyone's
+        ("chart", [ACC], False),  # no GRAPH FB's: not a chart's state
+        ("chart", [GRAPH._replace(name="Seq_mix")], False),
+        ("chart", [GRAPH._replace(number=3)], False),
+        ("scl", [ACC], True),
+        ("scl", [ACC, Held(5, "FB5", "gone", chart=False)], False),  # one not the program's
+        ("python", [], False),  # nothing to recognise it by
+        ("python", [TIMER], False),
+    ],
+)
+def test_a_renamed_source_is_recognised_by_the_fb_instance_dbs_the_file_holds(
+    kind: str, held: list[Held], same: bool
+) -> None:
+    assert recognised(Program(kind, "x"), held, OWN) is same
 
 
 def test_a_changed_version_of_the_same_program_is_carried_over_not_refused(

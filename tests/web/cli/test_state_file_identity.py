@@ -2,8 +2,8 @@
 example's ``oven.s7g`` and ``oven.scl`` — as real processes: each keeps a state file of
 its own by default; the other's file given with ``--state`` is refused in one line naming
 both, exit 2, byte for byte as it was; an older shared file stays the program's that wrote
-it and the chart passes over it, saying so; a changed chart still warm-restarts with notes
-(docs/state-file.md, "Whose state it is")."""
+it and the chart passes over it, saying so; a changed chart still warm-restarts with notes,
+and so does a renamed one given its old file (docs/state-file.md, "Whose state it is")."""
 
 from __future__ import annotations
 
@@ -121,3 +121,27 @@ def test_a_changed_chart_still_warm_restarts_from_its_file_with_notes(oven: Path
     assert changed.returncode == 0, changed.stderr
     assert "s7graph: note: DB1 FB1 'Oven_seq': chart changed" in changed.stderr
     assert "warm restart from oven.state.sqlite" in changed.stderr
+
+
+def test_a_renamed_chart_given_its_old_state_file_warm_restarts_from_it_saying_so(
+    oven: Path,
+) -> None:
+    """The user's case: ``oven.s7g`` renamed ``oven_v2.s7g`` between runs, its state kept
+    with ``--state oven.state.sqlite`` (before: refused as another program's)."""
+    first = _run(oven, "oven.s7g")
+    assert first.returncode == 0, first.stderr
+    (oven / "oven.s7g").rename(oven / "oven_v2.s7g")
+    renamed = _run(oven, "oven_v2.s7g", "--state", "oven.state.sqlite")
+    assert renamed.returncode == 0, renamed.stderr
+    assert "warm restart from oven.state.sqlite" in renamed.stderr
+    assert (
+        "s7graph: note: the file was the state of the chart oven.s7g and now records the "
+        "chart oven_v2.s7g (a renamed source: its instance DBs are this program's)"
+    ) in renamed.stderr.splitlines()
+    with sqlite3.connect(oven / "oven.state.sqlite") as con:
+        source = con.execute("SELECT value FROM meta WHERE key='program_source'").fetchone()
+    con.close()
+    assert source == ("oven_v2.s7g",)
+    again = _run(oven, "oven_v2.s7g", "--state", "oven.state.sqlite")
+    assert "warm restart from oven.state.sqlite" in again.stderr, again.stderr
+    assert "note:" not in again.stderr

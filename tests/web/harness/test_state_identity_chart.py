@@ -2,7 +2,8 @@
 engine/state_identity.py): each has a default state file of its own; a file from before
 the program was recorded is judged by whether it holds a chart's sequencer; the file of
 the other name is looked at without a byte of it changing, and passed over, said so, when
-it is another program's. The drill demo on the virtual clock."""
+it is another program's; a renamed chart keeps the state its GRAPH FB's instance DB is in.
+The drill demo on the virtual clock."""
 
 from __future__ import annotations
 
@@ -76,6 +77,38 @@ def test_an_older_charts_file_is_taken_by_the_chart_and_records_it(tmp_path: Pat
     opened.store.close()
     assert opened.report is not None and not opened.report.notes
     assert _record(path) == [("program_kind", "chart"), ("program_source", "far.s7g")]
+
+
+def test_a_renamed_chart_takes_the_state_of_its_graph_fb_saying_so_and_records_its_name(
+    tmp_path: Path,
+) -> None:
+    """``far.s7g`` renamed ``far_v2.s7g``, run with ``--state far.state.sqlite``."""
+    path = _chart_file(tmp_path / "far.state.sqlite", CHART)
+    renamed = Program("chart", "far_v2.s7g")
+    opened = open_state(path, _session().cpu, program=renamed)
+    opened.store.close()
+    assert opened.report is not None and opened.report.notes == [
+        "the file was the state of the chart far.s7g and now records the chart far_v2.s7g "
+        "(a renamed source: its instance DBs are this program's)"
+    ]
+    assert _record(path) == [("program_kind", "chart"), ("program_source", "far_v2.s7g")]
+    again = open_state(path, _session().cpu, program=renamed)
+    again.store.close()
+    assert again.report is not None and not again.report.notes
+
+
+def test_a_renamed_chart_is_not_given_a_programs_state_of_the_same_blocks(
+    tmp_path: Path,
+) -> None:
+    """Another kind stays another program, whatever its instance DBs."""
+    path = _chart_file(tmp_path / "far.state.sqlite", Program("python", "far.py"))
+    before = _files(tmp_path)
+    with pytest.raises(StateFileError) as info:
+        open_state(path, _session().cpu, program=CHART)
+    assert info.value.problem == (
+        "the state of another program: the Python program far.py's, not the chart far.s7g's"
+    )
+    assert _files(tmp_path) == before
 
 
 def test_a_chart_and_a_program_of_one_name_default_to_state_files_of_their_own(
