@@ -19,7 +19,9 @@ any other face. The EventId must be one the condition sent. An applied acknowled
 comment becomes the condition's ``Comment`` (a Null one leaves it as it was, an empty
 text with a locale empties it: OPC UA Part 9, "Acknowledge"), stamped with when it was
 given; an event carries it (one of its own when the acknowledgement's event went out
-first). Called on an object that is no condition it is ``BadMethodInvalid``, on the
+first). A face started again takes each condition's last comment back from the CPU's
+audit rows (``web.opcua.conditions.acked_comments``) when it makes the condition. Called
+on an object that is no condition it is ``BadMethodInvalid``, on the
 condition type ``BadNodeIdInvalid`` (Part 9, "Acknowledge").
 """
 
@@ -137,7 +139,14 @@ class Alarms:
         self._send = send
         self._by_node: dict[ua.NodeId, _Condition] = {}
         self._live: dict[str, _Condition] = {}  # message key -> its condition
+        self._restored: dict[str, tuple[ua.LocalizedText, datetime]] = {}
         self.triggered = 0
+
+    def restore(self, comments: dict[str, tuple[ua.LocalizedText, datetime]]) -> None:
+        """The comments given before this face started, per message key
+        (``web.opcua.conditions.acked_comments``): each becomes its condition's ``Comment``
+        when the condition is made."""
+        self._restored = dict(comments)
 
     async def apply(self, alarms: AlarmList) -> None:
         """Send an event for each message whose state changed, and a last one for each
@@ -159,6 +168,10 @@ class Alarms:
         cond = self._by_node.get(nid)
         if cond is None:
             event = _event(nid, source, source_name, name)
+            restored = self._restored.pop(str(entry.msg_id), None)
+            if restored is not None:
+                event.Comment = restored[0]
+                setattr(event, "Comment/SourceTimestamp", restored[1])
             cond = _Condition(nid, source, source_name, name, fb, event)
             self._by_node[nid] = cond
         return cond
@@ -239,8 +252,9 @@ class Alarms:
         status = self._ack_problem(parent, cond, inputs)
         if status is None and cond is not None and cond.msg_id is not None:
             comment = inputs[1].Value
-            text = comment.Text if isinstance(comment, ua.LocalizedText) else ""
-            args = MessageArgs(msg_id=cond.msg_id, comment=text or UNSET)
+            given = isinstance(comment, ua.LocalizedText) and (comment.Text or comment.Locale)
+            text = (comment.Text or "") if given else UNSET  # "": emptied (audited so)
+            args = MessageArgs(msg_id=cond.msg_id, comment=text)
             status, _ = await self._send(caller(), AckMsg, cond.fb, args)
             if status == StatusCodes.Good and isinstance(comment, ua.LocalizedText):
                 await self._comment(cond, comment)

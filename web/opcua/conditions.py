@@ -22,19 +22,36 @@ The condition has the standard ``Acknowledge`` method (``i=9111``, Part 9,
 it there, with its ``EventId`` and ``Comment`` arguments, and calls it with the condition
 as the object. The reference is forward only: the method's node would otherwise list
 every condition of the face.
+
+A face started again knows no comment of its own: :func:`acked_comments` reads the last
+one of each message back from the CPU's audit rows (``audit/list``, its last 50): the
+newest applied ``ack_msg`` with a comment — from whatever client, the row on the bus does
+not say — its text without a locale (the row keeps none), stamped with the row's time;
+none when that comment emptied it.
 """
 
 from __future__ import annotations
 
+import json
+from collections.abc import Iterable
 from datetime import UTC, datetime
 from typing import Any, Final
 
 from asyncua import ua
 
+from s7graph.web.bus.protocol import AuditEntry
 from s7graph.web.opcua.nodes import Nodes
 from s7graph.web.opcua.typed import ObjectIds, child_id, ua_id
 
-__all__ = ["STAMPED", "STATES", "add_condition", "event_values", "initial_values", "show"]
+__all__ = [
+    "STAMPED",
+    "STATES",
+    "acked_comments",
+    "add_condition",
+    "event_values",
+    "initial_values",
+    "show",
+]
 
 STATES: Final = ("EnabledState", "ActiveState", "AckedState")
 """The condition's ``TwoStateVariableType`` children; each has an ``Id`` property."""
@@ -50,6 +67,29 @@ STAMPED: Final = {"LastSeverity": ObjectIds.UInt16, "Comment": ObjectIds.Localiz
 """The condition's ``ConditionVariableType`` children and their data types; each has a
 ``SourceTimestamp`` property."""
 _NO_TIME: Final = ua.Variant(None, ua.VariantType.Null)
+
+
+def acked_comments(rows: Iterable[AuditEntry]) -> dict[str, tuple[ua.LocalizedText, datetime]]:
+    """Per message id (as text): the comment of its newest applied acknowledgement that
+    gave one, and when — none when that one emptied it (``""``). ``rows`` oldest first;
+    a row whose arguments are not recognised is passed over."""
+    comments: dict[str, tuple[ua.LocalizedText, datetime]] = {}
+    for row in rows:
+        if row.op != "ack_msg" or row.outcome != "applied":
+            continue
+        try:
+            args = json.loads(row.args)
+        except ValueError:
+            continue
+        comment = args.get("comment") if isinstance(args, dict) else None
+        if not isinstance(comment, str) or "msg_id" not in args:
+            continue
+        if comment:
+            when = datetime.fromtimestamp(row.t_ms / 1000, UTC)
+            comments[str(args["msg_id"])] = (ua.LocalizedText(comment), when)
+        else:  # emptied
+            comments.pop(str(args["msg_id"]), None)
+    return comments
 
 
 def _text(text: str) -> ua.Variant:

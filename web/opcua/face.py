@@ -44,6 +44,7 @@ from s7graph.web.bus.protocol import (
     CpuStatus,
     DiagBuffer,
     OperandValues,
+    ProtocolError,
     StepStateUpdate,
 )
 from s7graph.web.commands import (
@@ -65,6 +66,7 @@ from s7graph.web.commands import (
 )
 from s7graph.web.opcua import sync
 from s7graph.web.opcua.alarms import Alarms, condition_name
+from s7graph.web.opcua.conditions import acked_comments
 from s7graph.web.opcua.diag import DIAG_ENTRIES, DiagNodes
 from s7graph.web.opcua.link import BusLink, Inbox
 from s7graph.web.opcua.methods import (
@@ -150,11 +152,23 @@ class Face:
             await space.build_operands(catalog)
         ack = ua_id(ObjectIds.AcknowledgeableConditionType_Acknowledge)
         self.server.iserver.isession.add_method_callback(ack, self.alarms.acknowledge)
+        await self._restore_comments()
         inbox = self._inbox = Inbox(asyncio.get_running_loop())
         link.watch_alive(inbox)
         await link.ask(link.follow, inbox, list(space.fbs))
         await self._diag_anew()  # after following: an entry between the two is not lost
         self._task = asyncio.create_task(self._pump(inbox), name="s7graph-opcua-face")
+
+    async def _restore_comments(self) -> None:
+        """The conditions' comments given before this start, from the CPU's audit rows;
+        none when it does not answer them (one line in the log)."""
+        try:
+            audit = await self.link.ask(self.link.reader.audit)
+        except ProtocolError as exc:
+            _log.warning("opcua: no comments of acknowledgements restored: %s", exc)
+            return
+        if audit is not None:
+            self.alarms.restore(acked_comments(audit.entries))
 
     async def stop(self) -> None:
         if self._task is not None:

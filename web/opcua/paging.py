@@ -11,6 +11,10 @@ one is ``BadNoContinuationPoints``, without references, as Part 4 gives it. ``Br
 hands out the next page under a new point, or releases the points it is given; a point
 unknown — never given, given to another session, used or released already — is
 ``BadContinuationPointInvalid``.
+
+asyncua also fills every field of a reference whatever the Browse's ``ResultMask``:
+:func:`masked` leaves each field the mask does not ask for at its null value (Part 4,
+"Browse", ``resultMask``; the target's ``NodeId`` always), before the pages are cut.
 """
 
 from __future__ import annotations
@@ -24,11 +28,42 @@ from asyncua import ua
 
 from s7graph.web.opcua.typed import StatusCodes, ua_status
 
-__all__ = ["MAX_CONTINUATIONS", "Pages"]
+__all__ = ["MAX_CONTINUATIONS", "Pages", "masked"]
 
 MAX_CONTINUATIONS: Final = 8
 """Continuation points one session holds at once
 (``ServerCapabilities/MaxBrowseContinuationPoints`` says so)."""
+
+
+_FIELDS: Final = (
+    (ua.BrowseResultMask.ReferenceTypeId, "ReferenceTypeId"),
+    (ua.BrowseResultMask.IsForward, "IsForward"),
+    (ua.BrowseResultMask.NodeClass, "NodeClass"),
+    (ua.BrowseResultMask.BrowseName, "BrowseName"),
+    (ua.BrowseResultMask.DisplayName, "DisplayName"),
+    (ua.BrowseResultMask.TypeDefinition, "TypeDefinition"),
+)
+
+
+def masked(asked: Sequence[ua.BrowseDescription], results: Sequence[ua.BrowseResult]) -> None:
+    """Each of ``results``' references with only the fields its description's
+    ``ResultMask`` asks for, the others null: new references, the address space's own
+    are left as they are."""
+    for description, result in zip(asked, results, strict=False):
+        mask = description.ResultMask or 0
+        if mask & ua.BrowseResultMask.All == ua.BrowseResultMask.All:
+            continue
+        result.References = [_only(reference, mask) for reference in result.References]
+
+
+def _only(reference: ua.ReferenceDescription, mask: int) -> ua.ReferenceDescription:
+    """A copy of ``reference``: its target and the fields of ``mask``, the others null
+    (``IsForward`` false)."""
+    kept = ua.ReferenceDescription(NodeId=reference.NodeId, IsForward=False)
+    for bit, field in _FIELDS:
+        if mask & bit:
+            setattr(kept, field, getattr(reference, field))
+    return kept
 
 
 @dataclass

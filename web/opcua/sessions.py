@@ -35,7 +35,7 @@ from asyncua.server.internal_session import InternalSession
 from asyncua.server.user_managers import UserManager
 
 from s7graph.web.access.lockout import Lockout
-from s7graph.web.opcua.paging import Pages
+from s7graph.web.opcua.paging import Pages, masked
 from s7graph.web.opcua.statuses import call_problem, fix_browse, fix_translate, missing
 from s7graph.web.opcua.typed import AttributeIds, ObjectIds, StatusCodes, ua_id, ua_status
 
@@ -279,6 +279,7 @@ class FaceSession(InternalSession):
         await self._serve(len(params.NodesToBrowse), len(params.NodesToBrowse))
         results = await super().browse(params)
         fix_browse(self.aspace, params.NodesToBrowse, results)
+        masked(params.NodesToBrowse, results)
         self.pages.browsed(params.RequestedMaxReferencesPerNode, results)
         return results
 

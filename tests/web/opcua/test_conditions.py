@@ -7,16 +7,28 @@ in the audit row; a viewer is refused and audited, an anonymous session refused
 
 from __future__ import annotations
 
+from datetime import UTC, datetime
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal
 
 import pytest
 from asyncua import ua
 from asyncua.ua.uaerrors import UaStatusCodeError
 
 from s7graph.web.access.audit import read_audit
+from s7graph.web.bus.protocol import AuditEntry
+from s7graph.web.opcua.conditions import acked_comments
+from s7graph.web.opcua.server import OpcuaOptions, OpcuaServer
 from tests.web.helpers import wait_until
-from tests.web.opcua.helpers import FaceRig, connected, eventually, face_rig, node, run
+from tests.web.opcua.helpers import (
+    FaceRig,
+    connected,
+    eventually,
+    face_rig,
+    free_port,
+    node,
+    run,
+)
 from tests.web.opcua.test_alarms import Events, _value
 
 if TYPE_CHECKING:
@@ -97,6 +109,74 @@ async def _browse_and_acknowledge(face: FaceRig) -> None:
         assert await node(c, f"{SUPERVISION}/LastSeverity").read_value() == 0
         face.set("Start", False)
         await sub.delete()
+
+
+def test_a_face_started_again_shows_the_comment_the_audit_rows_kept_and_an_emptying_audited(
+    tmp_path: Path, bus_certs: BusCerts
+) -> None:
+    with face_rig(tmp_path, bus_certs) as face:
+        run(_browse_and_acknowledge(face))  # "valve checked" (en) given to the first face
+        face.server.stop()
+        server = face.server
+        again = OpcuaServer(
+            server.session, server.status, OpcuaOptions(url=f"opc.tcp://127.0.0.1:{free_port()}")
+        )
+        again.start()
+        try:
+            stamped = run(_comes_again(face, again.url))
+        finally:
+            again.stop()
+    first, second = [r for r in read_audit(face.rig.state) if r.op == "ack_msg"]
+    assert stamped == datetime.fromtimestamp(first.t_ns // 1_000_000 / 1000, UTC)
+    assert '"comment": ""' in second.args
+
+
+def test_the_comment_restored_is_the_newest_applied_acknowledgements_emptied_or_none() -> None:
+    def row(t_ms: int, args: str, refused: bool = False, op: str = "ack_msg") -> AuditEntry:
+        outcome: Literal["applied", "refused"] = "refused" if refused else "applied"
+        return AuditEntry(id=t_ms, t_ms=t_ms, user="olga", op=op, args=args, outcome=outcome)
+
+    rows = [
+        row(1000, '{"comment": "first", "msg_id": "A"}'),
+        row(2000, '{"comment": "second", "msg_id": "A"}'),
+        row(3000, '{"msg_id": "A"}'),  # a Null comment leaves it
+        row(4000, '{"comment": "not mine", "msg_id": "A"}', refused=True),
+        row(5000, '{"comment": "a mode", "msg_id": "A"}', op="set_mode"),
+        row(6000, "{not json"),
+        row(1000, '{"comment": "kept", "msg_id": 7}'),
+        row(2000, '{"comment": "", "msg_id": 7}'),  # emptied
+        row(3000, '{"comment": "once", "msg_id": "B"}'),
+    ]
+    got = acked_comments(rows)
+    assert {k: (v[0].Text, v[0].Locale, v[1].timestamp()) for k, v in got.items()} == {
+        "A": ("second", None, 2.0),
+        "B": ("once", None, 3.0),
+    }
+
+
+async def _comes_again(face: FaceRig, url: str) -> datetime:
+    """The supervision latched again under a face that never saw the acknowledgement: its
+    condition's event and node carry the comment, without a locale; when it was given."""
+    async with connected(url, "olga") as c:
+        assert await node(c, f"{SUPERVISION}/Comment").read_value() is None  # no message
+        events = Events()
+        sub = await c.create_subscription(20, events)
+        await sub.subscribe_alarms_and_conditions(c.nodes.server, ua.ObjectIds.AlarmConditionType)
+        assert wait_until(lambda: face.active() == [1])
+        face.set("Level", 0)
+        event_id = await _latched(face, events)
+        restored = ua.LocalizedText("valve checked")
+        assert _value(events.of(SUPERVISION)[-1], "Comment") == restored
+        comment = node(c, f"{SUPERVISION}/Comment")
+        assert await comment.read_value() == restored
+        stamped: datetime = await node(c, f"{SUPERVISION}/Comment/SourceTimestamp").read_value()
+        emptied = ua.LocalizedText("", "en")  # audited as "", so a face after it shows none
+        method = ua.NodeId(ua.ObjectIds.AcknowledgeableConditionType_Acknowledge)
+        await node(c, SUPERVISION).call_method(method, event_id, emptied)
+        assert await eventually(lambda: _reads(comment, emptied))
+        face.set("Start", False)
+        await sub.delete()
+        return stamped.replace(tzinfo=stamped.tzinfo or UTC)
 
 
 async def _reads(variable: Any, value: object) -> bool:

@@ -30,14 +30,16 @@ def face(tmp_path_factory: pytest.TempPathFactory, bus_certs: BusCerts) -> Itera
         yield rig
 
 
-def _browse(*nodes: ua.NodeId, size: int) -> ua.BrowseParameters:
+def _browse(
+    *nodes: ua.NodeId, size: int, mask: int = ua.BrowseResultMask.All
+) -> ua.BrowseParameters:
     params = ua.BrowseParameters()
     params.RequestedMaxReferencesPerNode = size
     for nid in nodes:
         description = ua.BrowseDescription()
         description.NodeId = nid
         description.BrowseDirection = ua.BrowseDirection.Both
-        description.ResultMask = ua.BrowseResultMask.All
+        description.ResultMask = mask
         params.NodesToBrowse.append(description)
     return params
 
@@ -93,5 +95,41 @@ def test_continuation_points_are_bounded_released_and_the_sessions_own(face: Fac
             )
             (page,) = await ua_client.browse(_browse(FB, size=1))
             assert page.StatusCode.is_good() and page.ContinuationPoint  # free again
+
+    run(check())
+
+
+def test_a_browse_returns_only_the_fields_its_result_mask_asks_for_on_every_page(
+    face: FaceRig,
+) -> None:
+    def fields(r: ua.ReferenceDescription) -> tuple[object, ...]:
+        return (r.ReferenceTypeId, r.IsForward, r.NodeClass, r.BrowseName, r.DisplayName)
+
+    async def check() -> None:
+        async with connected(face.url) as c:
+            ua_client: Any = c.uaclient
+            (whole,) = await ua_client.browse(_browse(FB, size=0))
+            mask = ua.BrowseResultMask.BrowseName | ua.BrowseResultMask.NodeClass
+            (page,) = await ua_client.browse(_browse(FB, size=5, mask=mask))
+            got = list(page.References)
+            while page.ContinuationPoint:
+                (page,) = await ua_client.browse_next(_next(page.ContinuationPoint))
+                got += page.References
+            null_type, null_name = ua.NodeId(), ua.LocalizedText()
+            assert [r.NodeId for r in got] == [r.NodeId for r in whole.References]
+            assert [(r.BrowseName, r.NodeClass) for r in got] == [
+                (r.BrowseName, r.NodeClass) for r in whole.References
+            ]
+            nulls = (null_type, False, null_name, ua.ExpandedNodeId())
+            assert all(
+                (r.ReferenceTypeId, r.IsForward, r.DisplayName, r.TypeDefinition) == nulls
+                for r in got
+            )
+            (bare,) = await ua_client.browse(_browse(FB, size=0, mask=0))
+            assert [r.NodeId for r in bare.References] == [r.NodeId for r in whole.References]
+            assert all(not r.BrowseName.Name and not r.NodeClass for r in bare.References)
+            (again,) = await ua_client.browse(_browse(FB, size=0))
+            assert [fields(r) for r in again.References] == [fields(r) for r in whole.References]
+            assert any(r.DisplayName.Text for r in again.References)  # the node's own, kept
 
     run(check())
