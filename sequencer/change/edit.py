@@ -18,6 +18,7 @@ from typing import Any, Final, Literal
 
 from s7graph.engine.literals import shorten
 from s7graph.engine.symbols import SymbolTable
+from s7graph.sequencer.calls import unfit_calls
 from s7graph.sequencer.change.base import (
     MAX_NAME,
     MAX_UNDO,
@@ -61,7 +62,7 @@ from s7graph.sequencer.change.structure import (
     new_transition,
 )
 from s7graph.sequencer.change.typed import RowFields, check_bounds
-from s7graph.sequencer.checks.diagnostics import Diagnostic
+from s7graph.sequencer.checks.diagnostics import Diagnostic, sort_key
 from s7graph.sequencer.checks.interfaces import ProgramBlocks
 from s7graph.sequencer.checks.validate import validate
 from s7graph.sequencer.text.elements import (
@@ -360,15 +361,27 @@ class Outcome:
         return self.refusal is None
 
 
+def diagnostics_of(
+    chart: Chart, symbols: SymbolTable | None, blocks: ProgramBlocks | None = None
+) -> tuple[Diagnostic, ...]:
+    """The validator's diagnostics of ``chart``, sorted by place; ``blocks``: the interfaces
+    of the CPU's user blocks, whose FBs' variables the chart reads by name
+    (``"Motor_DB".Running``) as a download's compile reads them, and against which its calls
+    of those blocks are checked as a chart-only download checks them (E047,
+    ``sequencer.calls.unfit_calls``): what the download would refuse is listed before it."""
+    found = validate(chart, symbols, readable=blocks)
+    if blocks is not None:
+        found += unfit_calls(chart, symbols, blocks)
+    return tuple(sorted(dict.fromkeys(found), key=sort_key))
+
+
 def _checked(
     chart: Chart, symbols: SymbolTable | None, blocks: ProgramBlocks | None = None
 ) -> tuple[Diagnostic, ...]:
-    """The validator's diagnostics of a chart within the editor's limits; ``blocks``: the
-    interfaces of the CPU's user blocks, whose FBs' variables the chart reads by name
-    (``"Motor_DB".Running``), as a download's compile reads them (its calls unchecked)."""
+    """``diagnostics_of`` a chart within the editor's limits."""
     check_bounds(chart)
     try:
-        return tuple(validate(chart, symbols, readable=blocks))
+        return diagnostics_of(chart, symbols, blocks)
     except RecursionError:  # pragma: no cover - check_bounds bounds the nesting
         raise EditRefused("the chart nests too deeply to check") from None
 
@@ -383,8 +396,8 @@ def apply_edit(
 ) -> Outcome:
     """``edit`` applied to ``chart``: the edited chart with all its diagnostics (errors
     included: they are listed, the chart is kept), or a refusal with ``chart`` and its
-    ``diagnostics`` (computed when not given); ``blocks`` as ``_checked``. Never raises for
-    any input."""
+    ``diagnostics`` (computed when not given); ``blocks`` as ``diagnostics_of``. Never
+    raises for any input."""
     try:
         if not isinstance(edit, Edit):
             raise EditRefused(f"not an edit operation: {type(edit).__name__}")
@@ -399,7 +412,7 @@ def apply_edit(
     except RecursionError:  # pragma: no cover - texts and charts are bounded before
         refusal = Refusal("the edit nests too deeply")
     if diagnostics is None:
-        diagnostics = tuple(validate(chart, symbols, readable=blocks))
+        diagnostics = diagnostics_of(chart, symbols, blocks)
     return Outcome(chart, diagnostics, refusal, None)
 
 
@@ -449,8 +462,8 @@ class Session:
     """An editor's state as one immutable value: the chart, its diagnostics, the selected
     element, the last refusal, and the charts to undo and redo (at most ``MAX_UNDO``);
     ``blocks``: the interfaces of the CPU's user blocks, whose FBs' variables the chart
-    reads by name. Every method returns the next state; none raises except ``open`` on a
-    chart beyond the editor's limits."""
+    reads by name and whose calls it checks (``diagnostics_of``). Every method returns the
+    next state; none raises except ``open`` on a chart beyond the editor's limits."""
 
     chart: Chart
     diagnostics: tuple[Diagnostic, ...]

@@ -7,8 +7,9 @@ in its source view, checked live, saved, opened and downloaded into the running 
   they change, actions as buttons, and for a step its action rows.
 - **Diagnostics** are ``s7graph check``'s, located by line and column in the source view
   (the chart written as ``.s7g`` text); a click on one selects its element. A refused
-  edit says why and changes nothing. Reads of the FBs' variables by name are checked in
-  the S7-SCL blocks the CPU runs (``editor_cpu.cpu_blocks``), as a download's compile does.
+  edit says why and changes nothing. Reads of the FBs' variables by name, and calls of
+  those blocks, are checked in the S7-SCL blocks the CPU runs (``editor_cpu.cpu_blocks``),
+  as a download's compile does.
 - **Source view**: the same chart as text; an edit there is applied once typing pauses
   (the ``set_source`` edit), an edit anywhere else rewrites the text.
 - **Save** / **Open** / **New**, **Download** and **Undo download** are commands to the CPU
@@ -34,11 +35,10 @@ from s7graph.engine.errors import internal_error
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.change.base import Edit, EditRefused
 from s7graph.sequencer.change.content import SetSource
-from s7graph.sequencer.change.edit import Operation, Session
+from s7graph.sequencer.change.edit import Operation, Session, diagnostics_of
 from s7graph.sequencer.change.typed import parse_source
 from s7graph.sequencer.checks.diagnostics import Diagnostic
 from s7graph.sequencer.checks.interfaces import ProgramBlocks
-from s7graph.sequencer.checks.validate import validate
 from s7graph.sequencer.text.elements import Ref, RowRef, StepRef, TransitionRef, element_of, find
 from s7graph.sequencer.text.format import format_chart
 from s7graph.sequencer.text.model import Chart
@@ -569,14 +569,15 @@ def _located(
     chart: Chart, symbols: SymbolTable | None, blocks: ProgramBlocks | None = None
 ) -> Located:
     """``check``'s diagnostics of ``chart`` as the source view writes it (line, column),
-    its reads of the FBs' variables of the CPU's blocks ``blocks`` checked in them."""
+    its reads of the FBs' variables of the CPU's blocks ``blocks`` and its calls of those
+    blocks checked in them (``sequencer.change.edit.diagnostics_of``)."""
     text = format_chart(chart)
     try:
         read = parse_chart(text, chart.file or "chart.s7g")
     except ChartSyntaxError as exc:  # pragma: no cover - the writer's text parses
         return Located(tuple(exc.diagnostics), None)
     try:
-        return Located(tuple(validate(read, symbols, readable=blocks)), read)
+        return Located(diagnostics_of(read, symbols, blocks), read)
     except RecursionError:  # pragma: no cover - the session bounds the nesting
         return Located((), read)
 

@@ -3,7 +3,9 @@ Save to this computer (the chart being edited, downloaded by the browser).
 
 The chart is checked as the CPU compiles a download of it: with the interfaces of the
 S7-SCL blocks the CPU runs (:func:`cpu_blocks`: the sources of its chart's source,
-compiled here), whose FBs' variables it reads by name (``"Motor_DB".Running``).
+compiled here), whose FBs' variables it reads by name (``"Motor_DB".Running``) and whose
+blocks it calls (a call that does not fit its block is E047 in the page, as the download
+refuses it).
 
 Each is the engineer's command on the bus (checked and audited in the CPU); a download and
 its undo ask the CPU for the change summary first and confirm it in a modal. ``CpuCommands``
@@ -344,7 +346,8 @@ def cpu_blocks(source: ChartSource, chart: Chart) -> tuple[ProgramBlocks | None,
         files = ", ".join(source.left_out)
         return None, (
             f"the CPU's S7-SCL sources {files} are too large to come with its chart: its "
-            "reads of their FBs' variables by name cannot be checked here (E048)"
+            "reads of their FBs' variables by name (E048) and its calls of their blocks "
+            "(E047) cannot be checked here"
         )
     try:
         table = SymbolTable.from_text(source.symbols) if source.symbols else SymbolTable()

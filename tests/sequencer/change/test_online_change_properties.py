@@ -17,11 +17,12 @@ Beside the chart the CPU runs an S7-SCL FB (FB17), which the random edits (and, 
 start chart) call (``CALL FB 17, DB 12``) and whose variables their conditions then read by
 name (``DB12.calls``): the editor and the download check those reads against the FB's
 interface; a read of DB12 left with no call naming it (the call's row or step deleted) is
-the one error an edit may leave (E048), and its download is refused with E048, the CPU
+one error an edit may leave (E048), and its download is refused with E048, the CPU
 running the old chart on. Some of the calls drawn do not fit FB17 (a parameter it lacks, a
 REAL to its BOOL input, its output given with ``:=``): reached, each would stop the CPU; the
-download refuses them (E047, ``sequencer.calls.unfit_calls``, as the compiler process does)
-and the editor goes back to the running chart."""
+editor lists them as soon as they are made, exactly as the download then refuses them
+(E047, ``sequencer.calls.unfit_calls``, as the compiler process does), and the editor
+goes back to the running chart."""
 
 from __future__ import annotations
 
@@ -279,9 +280,13 @@ class OnlineChange(RuleBasedStateMachine):
                 self.edits.append(f"{op.name} {args}")
             self.editor = after
             errors = [
-                d.message for d in after.diagnostics if d.is_error and UNCALLED not in d.message
+                d.message
+                for d in after.diagnostics
+                if d.is_error and UNCALLED not in d.message and d.code != "E047"
             ]
             assert not errors, f"{op.name} {args} after {self.edits[-8:-1]}: {errors[0]}"
+            listed = [d for d in after.diagnostics if d.code == "E047"]  # before any download
+            assert listed == unfit_calls(after.chart, after.symbols, BLOCKS), listed
         self.download(removed)
         self.run(data, scans)
 
@@ -298,6 +303,7 @@ class OnlineChange(RuleBasedStateMachine):
         unfit = unfit_calls(self.editor.chart, table, BLOCKS)
         if unfit:  # a call that does not fit FB17: refused as the compiler process does
             assert all(d.message in UNFIT for d in unfit), unfit
+            assert self.editor.has_errors  # the editor listed them first
             self.edits.append("download refused: E047")
             self.editor = Session.open(g.cc.chart, plant.symbols, BLOCKS)  # edited back
             return

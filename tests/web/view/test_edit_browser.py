@@ -4,7 +4,8 @@ viewer get no edit mode; an invalid edit shows its diagnostic with line and colu
 keeps its chart; an engineer changes a transition condition, downloads, and the running sequence
 follows the new condition; a chart built from scratch in the browser (three steps, an
 alternative branch, a jump) downloads and runs; a read of the CPU's S7-SCL FB's variable by name
-(``DB12.n``) is no error in the editor and downloads, one of a variable the FB lacks is E048.
+(``DB12.n``) is no error in the editor and downloads, one of a variable the FB lacks is E048;
+a call that does not fit that FB is E047 on the page and its download refused there.
 One browser, one page for the module (CI has 2 cores); the tests run in order on it."""
 
 from __future__ import annotations
@@ -349,3 +350,24 @@ def test_a_read_of_the_cpus_fb_variable_by_name_is_checked_in_its_blocks_and_dow
     cpu.session.set("I0.0", True)
     assert wait_until(lambda: active(cpu) == [3])  # S2 called FB17 until its n was 4
     assert int(cpu.session.get("DB12.n")) >= 4
+
+
+def test_a_call_that_does_not_fit_the_cpus_fb_is_e047_on_the_page_before_any_download(
+    page: Page, cpu: OnlineRig
+) -> None:
+    """The editor checks the chart's calls in the S7-SCL blocks the CPU runs, as a download
+    does: ``go := 2.5`` to FB17's BOOL input is E047 on the page, and *Download* is refused
+    there, never asking the CPU, which runs its chart on."""
+    ed = editor(cpu)
+    assert ed.session is not None
+    version = cpu.online.current.number
+    text = format_chart(ed.session.chart)
+    assert "(go := TRUE)" in text, text
+    page.get_by_role("tab", name="Source (.s7g)").click()
+    source_typed(page, ed, text.replace("(go := TRUE)", "(go := 2.5)"))
+    assert wait_until(lambda: error_codes(ed) == ["E047"])
+    page.get_by_role("tab", name="Element").click()  # the diagnostics
+    page.get_by_text("FB17: go is BOOL, REAL does not fit it").first.wait_for(timeout=30_000)
+    click(page, "Download")
+    page.get_by_text("download refused: the chart has 1 error(s)").first.wait_for(timeout=30_000)
+    assert cpu.online.current.number == version
