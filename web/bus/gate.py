@@ -218,19 +218,29 @@ class Gate:
         """Who sent ``command`` (None: nobody we know) and why it may not be applied ("":
         it may). With a users file the session key must have signed it and its ``seq``
         must be new (it then counts as seen: a command is checked once)."""
-        who = self.auth.identify(command.user, command.token)
+        who = self.signed_by(
+            command.user, command.token, command.mac or "", command_bytes(command), command.seq
+        )
         if isinstance(who, str):
             return None, who
-        signed = command_bytes(command)
-        problem = self.auth.verify(command.token, command.mac or "", signed, seq=command.seq or 0)
-        if problem:
-            return None, problem
         if not allowed(who.role, command.op):
             need = lowest_role(command.op) or "?"
             return who, f"role {who.role} may not {command.op} (needs {need})"
         if command.op in NOT_AVAILABLE:
             return who, f"{command.op} is not available yet on this CPU"
         return who, ""
+
+    def signed_by(
+        self, user: str, token: str, mac: str, signed: bytes, seq: int | None
+    ) -> Identity | str:
+        """Who signed ``signed`` (a command's or a watch request's bytes), else why not: the
+        token a live session of ``user``, ``mac`` its session key's over ``signed``, ``seq``
+        new to it (it then counts as seen)."""
+        who = self.auth.identify(user, token)
+        if isinstance(who, str):
+            return who
+        problem = self.auth.verify(token, mac, signed, seq=seq or 0)
+        return problem if problem else who
 
     def sender(self, command: Command) -> Identity | None:
         """Who sent ``command``, if its token says so (None: nobody authenticated)."""

@@ -576,15 +576,17 @@ class Watching:
         ``watch_bytes`` and ``seq`` new to it, as for a command (``web.bus.gate``). Any
         other is where the transport says it came from — a claim, unless it is this
         process (``web.bus.origin``)."""
-        auth = self._publisher.gate.auth
-        if request.token and not auth.demo:
-            who = auth.identify(request.user or "", request.token)
+        gate = self._publisher.gate
+        if request.token and not gate.auth.demo:
+            who = gate.signed_by(
+                request.user or "",
+                request.token,
+                request.mac or "",
+                watch_bytes(request),
+                request.seq,
+            )
             if isinstance(who, str):
                 return "", False, f"watch refused: {who}"
-            seq = request.seq or 0
-            problem = auth.verify(request.token, request.mac or "", watch_bytes(request), seq=seq)
-            if problem:
-                return "", False, f"watch refused: {problem}"
             return who.user, True, ""
         transport = self._publisher.origin(query)[0]
         return lockout_source(transport, ""), transport == "this process", ""
