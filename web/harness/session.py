@@ -40,6 +40,7 @@ from s7graph.web.harness.scl_reload import reload_sources
 __all__ = [
     "ChartLoadError",
     "ChartSession",
+    "add_chart_symbols",
     "compile_model",
     "compile_text",
     "load_chart",
@@ -100,13 +101,20 @@ def compile_model(
     chart reads their FBs' variables by name."""
     table = table if table is not None else SymbolTable()
     with _as_load_error(chart.file):
-        for s in chart.symbols:  # a name the table has keeps its meaning there (the chart's first)
-            if table.lookup(s.name) is None and table.block(s.name) is None:
-                table.add(s.name, s.address, s.type, s.comment, where=s.loc)
+        add_chart_symbols(chart, table)
     program = blocks(table) if blocks is not None else None
     with _as_load_error(chart.file):
         cc = compile_chart(chart, table, blocks=program)
     return cc, table
+
+
+def add_chart_symbols(chart: Chart, table: SymbolTable) -> None:
+    """Add the chart's ``SYMBOLS`` to ``table``, as the CPU's table holds them when it
+    loads the chart: a name the table has keeps its meaning there (the chart resolves its
+    own first)."""
+    for s in chart.symbols:
+        if table.lookup(s.name) is None and table.block(s.name) is None:
+            table.add(s.name, s.address, s.type, s.comment, where=s.loc)
 
 
 @contextlib.contextmanager

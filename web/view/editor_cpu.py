@@ -48,6 +48,7 @@ from s7graph.web.commands import (
 )
 from s7graph.web.harness.project import CHART_CHOICE, chart_file
 from s7graph.web.harness.scl import SclLoadError, compile_texts
+from s7graph.web.harness.session import add_chart_symbols
 from s7graph.web.view import texts
 from s7graph.web.view.confirm import question
 from s7graph.web.view.engineering import EditorPage
@@ -351,9 +352,7 @@ def cpu_blocks(source: ChartSource, chart: Chart) -> tuple[ProgramBlocks | None,
         )
     try:
         table = SymbolTable.from_text(source.symbols) if source.symbols else SymbolTable()
-        for s in chart.symbols:  # as ``compile_model`` adds them, the table's first
-            if table.lookup(s.name) is None and table.block(s.name) is None:
-                table.add(s.name, s.address, s.type, s.comment, where=s.loc)
+        add_chart_symbols(chart, table)
         program = compile_texts(list(source.blocks.items()), table)
     except SclLoadError as exc:
         first = exc.lines[0] if exc.lines else str(exc)
