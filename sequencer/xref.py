@@ -46,7 +46,7 @@ from s7graph.sequencer.text.model import (
 from s7graph.sequencer.text.names import db_argument, db_symbol
 from s7graph.sequencer.text.walk import nodes
 from s7graph.steps.scl import model as scl
-from s7graph.steps.scl.xref import interfaces, scl_uses
+from s7graph.steps.scl.xref import block_name, interfaces, scl_uses
 
 __all__ = ["ACCESS", "CrossReferences", "Use", "block_references", "cross_references"]
 
@@ -112,9 +112,7 @@ class CrossReferences:
         address, a variable, a block: ``DB5`` or ``DB 5``; any case)."""
         bare = name.strip().strip('"')
         keys = {self.shown(bare).casefold(), self.shown(f'"{bare}"').casefold()}
-        block = _BLOCK.fullmatch(bare)
-        if block is not None:
-            keys.add(self.shown(f"{block[1].upper()} {int(block[2])}").casefold())
+        keys.add(self.shown(block_name(bare)).casefold())  # DB5 as DB 5; else as above
         return [u for u in self.uses if u.operand.casefold() in keys]
 
 
@@ -267,9 +265,6 @@ class _Names:
         self.read_dbs.add(symbol.casefold())
         return f'"{symbol}".{member} (DB{number}.{member})'
 
-
-_BLOCK: Final = re.compile(r"(?i)(OB|FB|FC|SFB|SFC|DB)\s*(\d+)")
-"""A block as written: ``DB5``, ``FC 5`` (the list shows ``DB 5``)."""
 
 _MEMBER: Final = re.compile(
     r'(?:"(?P<symbol>[^"]+)"|(?i:DB)\s*(?P<db>\d+))\s*\.\s*'

@@ -27,7 +27,15 @@ from s7graph.steps.scl import model as m
 from s7graph.steps.scl.builtins import BUILTINS
 from s7graph.steps.scl.calls import S5_COUNTERS, S5_TIMERS
 
-__all__ = ["ARG_ACCESS", "Params", "SclUse", "block_label", "interfaces", "scl_uses"]
+__all__ = [
+    "ARG_ACCESS",
+    "Params",
+    "SclUse",
+    "block_label",
+    "block_name",
+    "interfaces",
+    "scl_uses",
+]
 
 ARG_ACCESS: Final[dict[str, str]] = {
     "VAR_INPUT": "read",
@@ -165,7 +173,7 @@ class _Walk:
             yield shown, "call", path.base.loc
         for sel in path.selectors:
             if isinstance(sel, m.Member) and sel.block:
-                yield _block_name(sel.name), "instance", sel.loc
+                yield block_name(sel.name), "instance", sel.loc
         callee = self.params.get(path.base.text.upper().replace(" ", ""), {})
         for arg in args.items:
             section = callee.get(arg.name.upper())
@@ -187,7 +195,7 @@ class _Walk:
             return None
         base = value.base
         if base.kind == "block" and base.text.upper().startswith("DB"):
-            return _block_name(base.text), "argument", base.loc
+            return block_name(base.text), "argument", base.loc
         shown = self._operand(value, called=False)  # "Recipe"; None for a local
         if section == "BLOCK_DB" and shown is not None and base.kind in ("symbol", "name"):
             return shown, "argument", base.loc
@@ -206,7 +214,7 @@ class _Walk:
         if base.kind == "db_address":
             return base.text.upper()
         if base.kind == "block":
-            return _block_name(base.text) if called else base.text.upper() + _members(path)
+            return block_name(base.text) if called else base.text.upper() + _members(path)
         if base.kind == "symbol":
             return f'"{base.text}"' + ("" if called else _members(path))
         return base.text.upper()  # a timer or counter: T10, C3
@@ -226,6 +234,8 @@ def _members(path: m.Path) -> str:
     return out
 
 
-def _block_name(text: str) -> str:
+def block_name(text: str) -> str:
+    """A block as the cross-reference shows it: ``DB 5`` for ``DB5`` or ``db 5``, else the
+    name quoted (``"Recipe"``)."""
     numbered = _BLOCK.fullmatch(text.replace(" ", ""))
     return f"{numbered[1].upper()} {int(numbered[2])}" if numbered else f'"{text}"'
