@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from s7graph.engine.blocks import DB, FB, FC, Decl
+from s7graph.steps.scl.types import is_block_db_var
 
 __all__ = ["Interface", "ProgramBlocks", "UserPin", "is_block_db", "program_blocks"]
 
@@ -92,7 +93,7 @@ _DIRECTIONS = {Decl.IN: "IN", Decl.OUT: "OUT", Decl.IN_OUT: "IN_OUT"}
 def is_block_db(var: Any) -> bool:
     """Whether an engine block's variable is a BLOCK_DB input: the WORD with a DB's number
     that S7-SCL declares so, marked by its comment (``steps.scl.blocks``)."""
-    return getattr(var, "comment", "") == "BLOCK_DB" and var.type == "WORD"
+    return is_block_db_var(var.type, getattr(var, "comment", ""))
 
 
 def _pin_type(v: Any) -> str:

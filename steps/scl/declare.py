@@ -156,7 +156,7 @@ def engine_type(name: str) -> ty.SclType:
 
 
 def _external_type(type_name: str, comment: str) -> ty.SclType:
-    if comment == ty.BLOCK_DB.kind and type_name.upper() == ty.engine_type(ty.BLOCK_DB):
+    if ty.is_block_db_var(type_name, comment):
         return ty.BLOCK_DB
     return engine_type(type_name)
 

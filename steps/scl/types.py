@@ -291,6 +291,13 @@ def engine_type(t: SclType) -> str:
     return t.kind
 
 
+def is_block_db_var(type_name: object, comment: object) -> bool:
+    """Whether an engine interface variable is a BLOCK_DB parameter: the WORD holding a
+    DB's number (:func:`engine_type`), marked ``BLOCK_DB`` in its comment
+    (``steps.scl.blocks``), so a block from another source keeps the type."""
+    return comment == BLOCK_DB.kind and str(type_name).upper() == engine_type(BLOCK_DB)
+
+
 # ---------------------------------------------------------------- memory layout
 
 
