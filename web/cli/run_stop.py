@@ -24,12 +24,12 @@ from s7graph.engine.diag_events import stop_cause
 from s7graph.engine.diagnostics import EventId
 from s7graph.engine.modes import CpuMode
 from s7graph.engine.record import DiagEntry, ScanRecord
-from s7graph.engine.runner import Runner, stop_reason
+from s7graph.engine.runner import Runner, refused_startup, stop_reason
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.checks.default_cpu import default_cpu_warnings
 from s7graph.sequencer.text.model import Chart
 
-__all__ = ["RunStop", "chart_locator", "refused"]
+__all__ = ["RunStop", "chart_locator"]
 
 Locate = Callable[[DiagEntry], str]
 """Where the program uses what an error entry names (``; I200.0: first used at …``), or ""."""
@@ -66,18 +66,16 @@ class RunStop:
 
     def after_startup(self, runner: Runner, record: ScanRecord) -> None:
         """When the startup of ``record`` ended in STOP by itself (its STOP entry among the
-        startup's entries) or was refused (``refused``): say it, and the run ends with it
-        as with a STOP in a cycle (``Runner.stopped``)."""
+        startup's entries) or was refused (``engine.runner.refused_startup``): say it, and
+        the run ends with it as with a STOP in a cycle (``Runner.stopped``)."""
         if runner.cpu.mode is not CpuMode.STOP:
             return
         stop = runner.cpu.stop_entry
         if stop is None or not any(entry is stop for entry in record.diagnostics):
-            why = refused(record)
-            if why is not None:
+            if refused_startup(runner.cpu) is not None:
                 self.requested = False
-                runner.stopped = why
-                line = f"s7graph: error: {self.what}: the CPU refused its startup: {why}"
-                print(line, file=sys.stderr, flush=True)
+                runner.stopped = stop_reason(runner.cpu)  # "the CPU refused its startup: …"
+                print(f"s7graph: error: {self.what}: {runner.stopped}", file=sys.stderr, flush=True)
             return
         runner.stopped = stop_reason(runner.cpu)
         self(runner.stopped, where=f" in its startup (OB{stop.ob})" if stop.ob else "")
@@ -100,19 +98,6 @@ class RunStop:
             return ""
         cause = stop_cause(self._runner.cpu.diagnostics, stop)
         return self.locate(cause) if cause is not None else ""
-
-
-def refused(record: ScanRecord) -> str | None:
-    """Why the startup of ``record`` was refused — its last ``16#4309`` entry, the block it
-    names first (``OB35: OB35 is loaded but deselected: startup aborted``) — when the CPU
-    stayed in STOP; None when it was not (a hot restart turned warm is no refusal)."""
-    if record.mode is not CpuMode.STOP:
-        return None
-    entries = [e for e in record.diagnostics if e.event_id == EventId.STARTUP_REFUSED]
-    if not entries:
-        return None
-    last = entries[-1]
-    return f"{last.block}: {last.message}" if last.block else last.message
 
 
 def chart_locator(chart: Callable[[], Chart], symbols: Callable[[], SymbolTable]) -> Locate:

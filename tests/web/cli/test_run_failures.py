@@ -305,7 +305,7 @@ def test_a_startup_the_cpu_refuses_says_why_at_once_and_exits_1(
 def test_a_hot_restart_the_cpu_turns_warm_is_no_refused_startup() -> None:
     """Its 16#4309 entry says so, but the CPU starts (warm): nothing for the run to say."""
     from s7graph.engine import Cpu, VirtualClock, ob
-    from s7graph.web.cli.run_stop import refused
+    from s7graph.engine.runner import refused_startup
 
     @ob(1)
     def main(ctx: object) -> None:
@@ -316,4 +316,4 @@ def test_a_hot_restart_the_cpu_turns_warm_is_no_refused_startup() -> None:
     cpu.hot_blockers.add("program download")
     record = cpu.start("hot")
     assert any(e.event_id == EventId.STARTUP_REFUSED for e in record.diagnostics)
-    assert refused(record) is None and cpu.last_restart == "warm"
+    assert refused_startup(cpu) is None and cpu.last_restart == "warm"
