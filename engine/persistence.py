@@ -1132,11 +1132,10 @@ def _foreign(db: sqlite3.Connection, path: Path, program: Program | None, cpu: C
     held = [Held(int(n), str(fb), str(name), str(fp).startswith(CHART)) for n, fb, name, fp in rows]
     own = {(n, idb.fb.label, idb.fb.name) for n, idb in cpu.instance_dbs.items()}
     mine = (fingerprint_of(idb.fb) for idb in cpu.instance_dbs.values())
-    saved = Program(kind, source) if kind is not None and source is not None else None
     return foreign(
         program,
-        saved,
-        holds_state=_holds_state(db, tables) or _count(db, "instances") > 0,
+        recorded({KIND_KEY: kind, SOURCE_KEY: source}.get),
+        holds_state=_holds_state(db, tables) or bool(held),
         held=held,
         own=own,
         has_chart=any(f.startswith(CHART) for f in mine),
