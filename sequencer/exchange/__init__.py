@@ -244,7 +244,7 @@ def _beside(chart: Chart, symbols: SymbolTable | None) -> Chart:
     if symbols is None or not chart.symbols:
         return chart
     given = {s.name: str(s.address) for s in symbols}
-    given |= {name: label for name, label in symbols.block_names().items()}
+    given |= symbols.block_names()
     kept = tuple(
         s
         for s in chart.symbols

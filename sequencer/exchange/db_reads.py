@@ -36,6 +36,14 @@ class DbReads:
             number = db_symbol(s)
             if number is not None:
                 self.own.setdefault(s.name.casefold(), (s, number))
+        self._named: dict[int, str] = {}
+        """The DB symbols naming DBs by number: the chart's first, then the table's."""
+        for s, n in self.own.values():
+            self._named.setdefault(n, s.name)
+        names = table.block_names().items() if table is not None else ()
+        for name, label in names:
+            if label.startswith("DB") and label[2:].isdigit():
+                self._named.setdefault(int(label[2:]), name)
 
     def db(self, op: Operand) -> int:
         """The DB number of a read ``op``; ``ValueError`` naming its place when no call of
@@ -61,14 +69,7 @@ class DbReads:
 
     def name(self, number: int) -> str | None:
         """The DB symbol naming DB ``number``: the chart's, else the symbol table's."""
-        for s, n in self.own.values():
-            if n == number:
-                return s.name
-        if self.table is not None:
-            for name, label in self.table.block_names().items():
-                if label == f"DB{number}":
-                    return name
-        return None
+        return self._named.get(number)
 
     def block(self, number: int) -> str:
         """The block whose instance DB ``number`` is, as a chart's type column writes it
