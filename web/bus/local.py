@@ -16,7 +16,7 @@ import os
 import tempfile
 from pathlib import Path
 
-__all__ = ["find", "local_dir", "publish", "withdraw"]
+__all__ = ["find", "local_dir", "names", "publish", "withdraw"]
 
 _SUFFIX = ".endpoint"
 
@@ -85,3 +85,12 @@ def find(cpu: str, *, check: bool = True) -> str | None:
     if check and socket != endpoint and not Path(socket).exists():
         return None
     return endpoint
+
+
+def names() -> list[str]:
+    """The CPUs of this machine that wrote where they listen, by name, sorted (whether
+    they still listen there: :func:`find`)."""
+    root = local_dir()
+    if root is None:
+        return []
+    return sorted(p.name.removesuffix(_SUFFIX) for p in root.glob(f"*{_SUFFIX}"))

@@ -37,8 +37,6 @@ from s7graph.web.cli.rejoin import POLL_S, PROBE_S, Link
 
 __all__ = ["POLL_S", "Absent", "Local", "Reached", "cpu_reached", "join_bus", "local_cpu"]
 
-_ENDPOINT = ".endpoint"  # web.bus.local's file of a CPU: NAME.endpoint
-
 
 @dataclass(frozen=True, slots=True)
 class Absent:
@@ -77,11 +75,7 @@ def _listening(endpoint: str) -> bool:
 def _running_here() -> list[str]:
     """The CPUs of this machine for this user, by name: those whose endpoint file names a
     socket that takes a connection."""
-    root = local.local_dir()
-    if root is None:
-        return []
-    names = sorted(p.name.removesuffix(_ENDPOINT) for p in root.glob(f"*{_ENDPOINT}"))
-    return [n for n in names if valid_name(n) and _listening(local.find(n) or "")]
+    return [n for n in local.names() if valid_name(n) and _listening(local.find(n) or "")]
 
 
 def _here(cpu: str | None) -> tuple[str, str] | Absent | str:
