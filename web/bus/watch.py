@@ -71,6 +71,7 @@ __all__ = [
     "element_type",
     "instance_slot",
     "layout_address",
+    "login_refused",
     "parse_item",
     "split_operands",
     "watch_value",
@@ -567,7 +568,7 @@ class Watching:
             _refuse(reply, str(exc))
         except Exception as exc:
             where = "in the CPU while reading a watch request"
-            _refuse(reply, f"watch refused: {internal_error(where, exc)}")
+            _refuse(reply, f"{REFUSED}{internal_error(where, exc)}")
 
     def _source(self, query: zenoh.Query, request: WatchRequest) -> tuple[str, bool, str]:
         """(the share ``request`` waits in, whether its source is proven, why it is refused
@@ -586,7 +587,7 @@ class Watching:
                 request.seq,
             )
             if isinstance(who, str):
-                return "", False, f"watch refused: {who}"
+                return "", False, f"{REFUSED}{who}"
             return who.user, True, ""
         transport = self._publisher.origin(query)[0]
         return lockout_source(transport, ""), transport == "this process", ""
@@ -605,6 +606,18 @@ class Watching:
 
 _ONCE_ANSWERED: Final = "ask again once they are answered"
 _SIGN: Final = ", or log in: a watch signed by a login has places of its own"
+
+
+REFUSED: Final = "watch refused: "
+"""How the CPU begins its refusal of a request it cannot take (a login's it does not
+accept, or a fault of its own)."""
+
+
+def login_refused(error: str) -> bool:
+    """Whether ``error`` refuses a signed request for its login (expired, logged out, not
+    signed by its session, …) — not for a fault of the CPU, which an unsigned one meets
+    too."""
+    return error.startswith(REFUSED) and not error.startswith(REFUSED + "internal error")
 
 
 def _refuse(reply: QueryReply, reason: str) -> None:

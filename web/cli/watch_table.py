@@ -25,7 +25,7 @@ import threading
 from s7graph.engine.text import is_unicode
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import MAX_WATCH, WatchValues
-from s7graph.web.bus.watch import split_operands
+from s7graph.web.bus.watch import login_refused, split_operands
 from s7graph.web.cli.net import NetOptions
 from s7graph.web.cli.remote import alive_line, shell_login
 from s7graph.web.cli.stopping import say, wait_until_stopped
@@ -40,7 +40,6 @@ __all__ = [
 ]
 
 MIN_INTERVAL_MS = 20
-_REFUSED = "watch refused: "  # how the CPU refuses a signed request it cannot take
 MAX_INTERVAL_MS = 3_600_000  # an hour
 
 
@@ -196,7 +195,7 @@ class _Follower:
         once while the CPU is not known to be gone (``lock`` held). A signed request
         refused (the login ended: expired, logged out, a CPU started again) is said once,
         and the requests go on unsigned."""
-        if answer.error.startswith(_REFUSED) and self.token:
+        if self.token and login_refused(answer.error):
             print(
                 f"s7graph: {self.cpu}: {answer.error}; watching without a login from now on",
                 file=sys.stderr,

@@ -35,7 +35,8 @@ from typing import Final, Protocol
 import viser
 
 from s7graph.web.bus.protocol import MAX_WATCH, WatchValues
-from s7graph.web.bus.watch import parse_item, split_operands
+from s7graph.web.bus.watch import REFUSED, parse_item, split_operands
+from s7graph.web.bus.watch import login_refused as refused_for_login
 from s7graph.web.commands import MAX_FORCE_TEXT
 from s7graph.web.view import texts
 
@@ -64,7 +65,6 @@ Watch = Callable[[Sequence[str], str], WatchValues]
 """Reads operands at the CPU's next scan boundary (``BusClient.watch``), the request signed
 by the login of the token given ("": unsigned)."""
 
-_REFUSED: Final = "watch refused: "  # how the CPU refuses a signed request (web.bus.watch)
 _BUSY: Final = "busy: "  # how it refuses one it has no place for now
 _LOGIN_WORDS: Final = (  # the CPU's reason for refusing a login's watch -> the page's words
     ("token expired", "the login expired"),
@@ -77,11 +77,9 @@ _LOGIN_WORDS: Final = (  # the CPU's reason for refusing a login's watch -> the 
 
 
 def login_refused(answer: WatchValues) -> bool:
-    """Whether the CPU refused a signed request for its login (expired, logged out, not
-    signed by its session, …) — not for a fault of its own, which an unsigned one meets
-    too."""
-    error = answer.error
-    return error.startswith(_REFUSED) and not error.startswith(_REFUSED + "internal error")
+    """Whether the CPU refused a signed request for its login, not for a fault of its own
+    (``web.bus.watch.login_refused``)."""
+    return refused_for_login(answer.error)
 
 
 def said(error: str) -> str:
@@ -96,8 +94,8 @@ def said(error: str) -> str:
             else ""
         )
         return f"The CPU is busy ({waiting}): asked again in {POLL_S:g} s.{advice}"
-    if error.startswith(_REFUSED):
-        reason = error.removeprefix(_REFUSED)
+    if error.startswith(REFUSED):
+        reason = error.removeprefix(REFUSED)
         for start, words in _LOGIN_WORDS:
             if reason.startswith(start):
                 return f"{words} (the CPU said: {reason})"
