@@ -219,7 +219,7 @@ class Gate:
         it may). With a users file the session key must have signed it and its ``seq``
         must be new (it then counts as seen: a command is checked once)."""
         who = self.signed_by(
-            command.user, command.token, command.mac or "", command_bytes(command), command.seq
+            command.user, command.token, command.mac or "", command_bytes(command), command.seq or 0
         )
         if isinstance(who, str):
             return None, who
@@ -230,16 +230,14 @@ class Gate:
             return who, f"{command.op} is not available yet on this CPU"
         return who, ""
 
-    def signed_by(
-        self, user: str, token: str, mac: str, signed: bytes, seq: int | None
-    ) -> Identity | str:
+    def signed_by(self, user: str, token: str, mac: str, signed: bytes, seq: int) -> Identity | str:
         """Who signed ``signed`` (a command's or a watch request's bytes), else why not: the
         token a live session of ``user``, ``mac`` its session key's over ``signed``, ``seq``
         new to it (it then counts as seen)."""
         who = self.auth.identify(user, token)
         if isinstance(who, str):
             return who
-        problem = self.auth.verify(token, mac, signed, seq=seq or 0)
+        problem = self.auth.verify(token, mac, signed, seq=seq)
         return problem if problem else who
 
     def sender(self, command: Command) -> Identity | None:

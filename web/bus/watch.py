@@ -584,7 +584,7 @@ class Watching:
                 request.token,
                 request.mac or "",
                 watch_bytes(request),
-                request.seq,
+                request.seq or 0,
             )
             if isinstance(who, str):
                 return "", False, f"{REFUSED}{who}"
