@@ -14,8 +14,10 @@ with their format, for a file chooser (the browser editor's *Open*).
 from __future__ import annotations
 
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.checks.diagnostics import Diagnostic, sort_key
@@ -24,9 +26,12 @@ from s7graph.sequencer.exchange.body_fc import BodyFc, blocks_source
 from s7graph.sequencer.exchange.pending import PendingScl
 from s7graph.sequencer.exchange.problems import ImportFailed, Problems
 from s7graph.sequencer.text.model import Binary, Chart
-from s7graph.sequencer.text.names import db_symbol
 from s7graph.sequencer.text.walk import rewrite
 from s7graph.steps.syntax import CHAIN_OPS, chain, chain_parts
+
+if TYPE_CHECKING:
+    from s7graph.sequencer.exchange.iec_model import IecChart
+    from s7graph.sequencer.exchange.plcopen import Kept
 
 __all__ = [
     "FORMATS",
@@ -169,7 +174,7 @@ def _import_chart(
     from s7graph.sequencer.exchange.iec_text import read_iec_text
     from s7graph.sequencer.exchange.iec_to_chart import iec_to_chart
     from s7graph.sequencer.exchange.own_data import edited_at
-    from s7graph.sequencer.exchange.plcopen import read_plcopen
+    from s7graph.sequencer.exchange.plcopen import Kept, read_plcopen
     from s7graph.sequencer.exchange.simaticml import read_simaticml
     from s7graph.sequencer.exchange.xmltree import parse_xml
     from s7graph.sequencer.text.parse import ChartSyntaxError, parse_chart
@@ -198,11 +203,30 @@ def _import_chart(
         except ChartSyntaxError as exc:
             raise ImportFailed(exc.diagnostics) from None
     if fmt == "plcopen":
-        found = read_plcopen(parse_xml(data, file), problems, edited_at)
+        found: list[IecChart | Kept] = list(read_plcopen(parse_xml(data, file), problems))
     else:
         found = list(read_iec_text(_text(data), file, problems))
     problems.fail_if_errors()
-    names = [c.name if not isinstance(c, tuple) else c[3] for c in found]
+    while isinstance(item := found[_picked(found, pou, problems)], Kept):
+        try:  # s7graph's own export: its source, kept in the file
+            chart = parse_chart("\n" * (item.line - 1) + item.text, file)
+        except ChartSyntaxError as exc:
+            raise ImportFailed(exc.diagnostics) from None
+        edit = edited_at(item, chart, file)
+        if edit is None:
+            return Imported(_beside(chart, symbols), fmt, [])
+        problems.warn("I024", edit[1], edit[0])  # edited since: read from its SFC
+        at = found.index(item)
+        found[at : at + 1] = item.sfc()
+        problems.fail_if_errors()
+    chart, pending, functions = iec_to_chart(item, problems)
+    return Imported(chart, fmt, sorted(problems.items, key=sort_key), pending, functions)
+
+
+def _picked(found: Sequence[IecChart | Kept], pou: str | None, problems: Problems) -> int:
+    """The index of the chart to import: the one ``pou`` names (``_pick``), else the only
+    one; I004 or I005 (``ImportFailed``) when there is no such chart or more than one."""
+    names = [c.name for c in found]
     if not found:
         problems.error("I004", "no POU with an SFC body in the file", problems.at(1, 1))
         problems.fail_if_errors()
@@ -216,41 +240,25 @@ def _import_chart(
                 problems.at(1, 1),
             )
             problems.fail_if_errors()
-        found = [found[picked[0]]]
-    elif len(found) > 1:
+        return picked[0]
+    if len(found) > 1:
         problems.error(
             "I005",
             f"the file holds {len(found)} charts ({', '.join(names)}); choose one with --pou",
             problems.at(1, 1),
         )
         raise ImportFailed(problems.items, tuple(names))
-    item = found[0]
-    if isinstance(item, tuple):  # s7graph's own export: its source, kept in the file
-        text, line, _, _ = item
-        try:
-            chart = parse_chart("\n" * (line - 1) + text, file)
-        except ChartSyntaxError as exc:
-            raise ImportFailed(exc.diagnostics) from None
-        return Imported(_beside(chart, symbols), fmt, [])
-    chart, pending, functions = iec_to_chart(item, problems)
-    return Imported(chart, fmt, sorted(problems.items, key=sort_key), pending, functions)
+    return 0
 
 
 def _beside(chart: Chart, symbols: SymbolTable | None) -> Chart:
     """The chart s7graph kept in its export, but for the symbols it carries that the
-    symbol table given to the import holds already (the same name at the same address, a
-    DB symbol naming the same DB): they stay in the table, as for a chart exported and
-    imported with one."""
+    symbol table given to the import holds already (``db_reads.not_in_table``)."""
+    from s7graph.sequencer.exchange.db_reads import not_in_table
+
     if symbols is None or not chart.symbols:
         return chart
-    given = {s.name: str(s.address) for s in symbols}
-    given |= symbols.block_names()
-    kept = tuple(
-        s
-        for s in chart.symbols
-        if given.get(s.name) != (f"DB{db_symbol(s)}" if db_symbol(s) is not None else s.address)
-    )
-    return replace(chart, symbols=kept)
+    return replace(chart, symbols=not_in_table(chart.symbols, symbols))
 
 
 def _pick(pou: str, names: list[str]) -> list[int]:

@@ -1,6 +1,7 @@
 """An instance DB's variables a chart reads by name (``DB10.Q``, ``"T_S2".Q``: S7-SCL's
 structured access to a data block), as the exporters see them: which DB a read names,
-which symbol names a DB, and the DB symbols an export carries (docs/import-export.md).
+which symbol names a DB, and the DB symbols an export carries — and an import, of those
+it carried, declares: those the symbol table given does not hold (docs/import-export.md).
 
 A DB is named by a symbol of the chart's ``SYMBOLS`` (``"T_S2" : DB10 : SFB4;``) first,
 then by a DB symbol of the symbol table given, as the chart's own names resolve
@@ -10,15 +11,25 @@ naming it.
 
 from __future__ import annotations
 
-from s7graph.engine.errors import SourceLocation, SymbolError
+from collections.abc import Iterable, Mapping
+
+from s7graph.engine.address import parse_address
+from s7graph.engine.errors import AddressError, SourceLocation
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.text.call_sites import call_sites
 from s7graph.sequencer.text.model import BlockCall, Chart, Operand, SymbolDecl
-from s7graph.sequencer.text.names import db_argument, db_symbol, member_text
+from s7graph.sequencer.text.names import (
+    MemberError,
+    db_argument,
+    db_number,
+    db_symbol,
+    instance_calls,
+    member_text,
+)
 from s7graph.sequencer.text.walk import nodes
 from s7graph.sfb import catalogue
 
-__all__ = ["DbReads", "member_text", "user_fb_reads"]
+__all__ = ["DbReads", "member_text", "not_in_table", "user_fb_reads"]
 
 
 class DbReads:
@@ -27,10 +38,7 @@ class DbReads:
     def __init__(self, chart: Chart, table: SymbolTable | None) -> None:
         self.chart = chart
         self.table = table
-        self.calls: dict[int, BlockCall] = {}
-        for site in call_sites(chart):
-            if isinstance(site.call.instance, int):
-                self.calls.setdefault(site.call.instance, site.call)
+        self.calls: Mapping[int, BlockCall] = instance_calls(chart)
         self.own: dict[str, tuple[SymbolDecl, int]] = {}
         for s in chart.symbols:
             number = db_symbol(s)
@@ -49,15 +57,10 @@ class DbReads:
         """The DB number of a read ``op``; ``ValueError`` naming its place when no call of
         the chart names that instance DB (a chart ``check`` refuses, E048)."""
         number: int | None
-        if not op.quoted:
-            number = int(op.name[2:])
-        elif (own := self.own.get(op.name.casefold())) is not None:
-            number = own[1]
-        else:
-            try:
-                number = self.table.db_number(op.name) if self.table is not None else None
-            except SymbolError:
-                number = None
+        try:
+            number = db_number(op, self.chart, self.table) if op.quoted else int(op.name[2:])
+        except MemberError:
+            number = None
         if number is None or number not in self.calls:
             why = (
                 f'no DB symbol "{op.name}"'
@@ -103,6 +106,28 @@ class DbReads:
                 continue
             out.append(SymbolDecl(found.name, f"DB{number}", self.block(number)))
         return out
+
+
+def not_in_table(decls: Iterable[SymbolDecl], table: SymbolTable | None) -> tuple[SymbolDecl, ...]:
+    """``decls`` but those the symbol table given holds already — the same name, in any
+    case (the table holds a name once regardless of case, as STEP 7's symbol editor does),
+    at the same address, or a DB symbol naming the same DB: they stay in the table, as for
+    a chart exported and imported with it."""
+    if table is None:
+        return tuple(decls)
+    return tuple(s for s in decls if not _in_table(s, table))
+
+
+def _in_table(s: SymbolDecl, table: SymbolTable) -> bool:
+    number = db_symbol(s)
+    if number is not None:
+        block = table.block(s.name)
+        return block is not None and block.kind == "DB" and block.number == number
+    found = table.lookup(s.name)
+    try:
+        return found is not None and parse_address(s.address, s.loc) == found.address
+    except AddressError:
+        return False
 
 
 def user_fb_reads(chart: Chart, table: SymbolTable | None) -> set[SourceLocation]:

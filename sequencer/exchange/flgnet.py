@@ -26,7 +26,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from s7graph.engine.errors import SourceLocation
-from s7graph.sequencer.exchange.xmltree import MAX_WIRE_DEPTH, ElementError, Node
+from s7graph.sequencer.exchange.xmltree import ElementError, Node, check_wire_depth
 from s7graph.sequencer.text.model import Binary, Const, Expr, StepAttr, Unary
 from s7graph.steps.syntax import CHAIN_OPS, chain
 
@@ -144,12 +144,7 @@ class _Net:
         if key in self.busy:
             part = self.parts.get(src[0])
             raise ElementError("a loop of wires: an element feeds itself", part or self.root)
-        if len(self.busy) >= MAX_WIRE_DEPTH:
-            raise ElementError(
-                f"a value that flows through more than {MAX_WIRE_DEPTH} elements one after "
-                f"another (an import reads at most {MAX_WIRE_DEPTH})",
-                self.parts.get(src[0]) or self.root,
-            )
+        check_wire_depth(len(self.busy), self.parts.get(src[0]) or self.root)
         self.busy.add(key)
         out = self._value(src, want)
         self.busy.discard(key)

@@ -38,7 +38,7 @@ from s7graph.sequencer.exchange.st import (
     absolute,
     parse_expression,
 )
-from s7graph.sequencer.exchange.xmltree import MAX_WIRE_DEPTH, ElementError, Node
+from s7graph.sequencer.exchange.xmltree import ElementError, Node, check_wire_depth
 
 __all__ = ["Network"]
 
@@ -168,12 +168,7 @@ class Network:
             return self.instance_output(node, conn.get("formalParameter"), seen)
         if ref in seen:
             raise ElementError("a feedback loop in the network", node)
-        if len(seen) >= MAX_WIRE_DEPTH:
-            raise ElementError(
-                f"a value that flows through more than {MAX_WIRE_DEPTH} elements one after "
-                f"another (an import reads at most {MAX_WIRE_DEPTH})",
-                node,
-            )
+        check_wire_depth(len(seen), node)
         seen = seen | {ref}
         tag = node.tag
         if tag == "leftPowerRail":

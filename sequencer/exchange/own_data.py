@@ -15,10 +15,10 @@ from __future__ import annotations
 
 from s7graph.engine.errors import S7Error, SourceLocation
 from s7graph.sequencer.exchange.export_plcopen import export_plcopen
-from s7graph.sequencer.exchange.plcopen import TRANSITION_IDS
+from s7graph.sequencer.exchange.plcopen import TRANSITION_IDS, Kept
 from s7graph.sequencer.exchange.problems import ImportFailed
 from s7graph.sequencer.exchange.xmltree import Node, is_true, parse_xml
-from s7graph.sequencer.text.parse import ChartSyntaxError, parse_chart
+from s7graph.sequencer.text.model import Chart
 
 __all__ = ["edited_at"]
 
@@ -28,24 +28,16 @@ _BOOLEANS = frozenset({"true", "false", "1", "0"})
 _Found = tuple[Node, str]
 
 
-def edited_at(
-    root: Node, pou: Node, source: tuple[str, int, int], file: str
-) -> tuple[SourceLocation, str] | None:
-    """None when ``pou`` of the document ``root`` is what s7graph's export of the chart it
-    keeps (``source``: its `.s7g` text and place) writes; else where the file first differs
-    and the warning's text. Kept data that does not parse: None (its reading reports it)."""
-    text, line, _ = source
-    try:
-        chart = parse_chart("\n" * (line - 1) + text, file)
-    except ChartSyntaxError:
-        return None
+def edited_at(kept: Kept, chart: Chart, file: str) -> tuple[SourceLocation, str] | None:
+    """None when the POU ``kept`` is what s7graph's export of ``chart`` (its kept source,
+    parsed) writes; else where the file first differs and the warning's text."""
     try:
         xml, reported = export_plcopen(chart)
         ours = parse_xml(xml.encode("utf-8"), "<export>")
     except (ValueError, S7Error, ImportFailed) as exc:  # not what the export wrote
-        at = SourceLocation(file, line, 1)
+        at = SourceLocation(file, kept.line, 1)
         return at, _message(f"s7graph's data, which no export writes ({exc})", 0)
-    found = _differ(pou, next(ours.iter("pou"))) or _differ_globals(root, ours)
+    found = _differ(kept.pou, next(ours.iter("pou"))) or _differ_globals(kept.root, ours)
     if found is None:
         return None
     node, what = found
@@ -78,10 +70,8 @@ def _differ(mine: Node, ours: Node) -> _Found | None:
         return mine, f"{mine_text} where the export wrote {our_text}"
     kids = [c for c in mine.children if c.tag not in _LAYOUT_TAGS]
     our_kids = [c for c in ours.children if c.tag not in _LAYOUT_TAGS]
-    for x, y in zip(kids, our_kids, strict=False):
-        found = _differ(x, y)
-        if found is not None:
-            return found
+    if (found := _differ_pairs(kids, our_kids)) is not None:
+        return found
     if len(kids) > len(our_kids):
         return kids[len(our_kids)], f"a <{kids[len(our_kids)].tag}> the export did not write"
     if len(kids) < len(our_kids):
@@ -89,14 +79,17 @@ def _differ(mine: Node, ours: Node) -> _Found | None:
     return None
 
 
+def _differ_pairs(mine: list[Node], ours: list[Node]) -> _Found | None:
+    """The first difference within the elements the file and the export both have."""
+    return next(filter(None, map(_differ, mine, ours)), None)
+
+
 def _differ_globals(root: Node, ours: Node) -> _Found | None:
     """The first global variable of the file's configurations not as the export wrote it."""
     mine = _globals(root)
     theirs = _globals(ours)
-    for x, y in zip(mine, theirs, strict=False):
-        found = _differ(x, y)
-        if found is not None:
-            return found
+    if (found := _differ_pairs(mine, theirs)) is not None:
+        return found
     if len(mine) > len(theirs):
         return mine[len(theirs)], "a global variable the export did not write"
     if len(mine) < len(theirs):

@@ -15,7 +15,7 @@ step's vendor data. A file written by s7graph carries its `.s7g` source in the P
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from dataclasses import dataclass
 
 from s7graph.engine.errors import SourceLocation
 from s7graph.sequencer.exchange.iec_model import (
@@ -39,7 +39,7 @@ from s7graph.sequencer.exchange.st import (
 )
 from s7graph.sequencer.exchange.xmltree import ElementError, Node
 
-__all__ = ["S7GRAPH_DATA", "TRANSITION_IDS", "read_plcopen"]
+__all__ = ["S7GRAPH_DATA", "TRANSITION_IDS", "Kept", "read_plcopen"]
 
 S7GRAPH_DATA = "urn:s7graph:chart"
 TRANSITION_IDS = 100_000  # s7graph's export: a transition's localId is this plus its number
@@ -595,60 +595,93 @@ def _sfc_of(holder: Node) -> Node | None:
     return next((b.child("SFC") for b in holder.all("body") if b.child("SFC") is not None), None)
 
 
-Edited = Callable[[Node, Node, tuple[str, int, int], str], tuple[SourceLocation, str] | None]
-"""Where a POU s7graph exported differs from its export of the chart it keeps (document,
-POU, the kept source, file → place and warning, None when it does not)."""
+@dataclass(frozen=True, eq=False)
+class Kept:
+    """A POU s7graph exported: the `.s7g` source it keeps in its ``addData`` (``text`` at
+    ``line``, ``col``), trusted only while the POU is what s7graph's export of it writes
+    (``exchange.own_data``); else its charts are read from its SFC (``sfc``)."""
+
+    text: str
+    line: int
+    col: int
+    pou: Node
+    reader: _Reader
+
+    @property
+    def name(self) -> str:
+        return self.pou.get("name")
+
+    @property
+    def root(self) -> Node:
+        """The document the POU is in."""
+        return self.reader.root
+
+    def sfc(self) -> list[IecChart]:
+        """The POU's charts read from its SFC, as any other tool's."""
+        return _pou_charts(self.reader, self.pou)
 
 
-def read_plcopen(
-    root: Node, problems: Problems, edited: Edited | None = None
-) -> list[IecChart | tuple[str, int, int, str]]:
+def _pou_charts(reader: _Reader, pou: Node) -> list[IecChart]:
+    """The charts of a POU with an SFC body: its own, and one for each action drawn in
+    SFC (``POU.action``)."""
+    out: list[IecChart] = []
+    sfc, in_actions = _sfc_bodies(pou)
+    if sfc is not None:
+        out.append(reader.chart(pou, sfc))
+    elif pou.all("body"):
+        charts = ", ".join(f"{pou.get('name')}.{a.get('name')}" for a, _ in in_actions)
+        reader.p.warn(
+            "I024",
+            f"the {_languages(pou)} body of POU {pou.get('name')} is not "
+            f"imported; the charts of its actions are, each on its own ({charts})",
+            reader.at(pou),
+        )
+    for action, body in in_actions:
+        chart = reader.chart(pou, body, f"{pou.get('name')}.{action.get('name')}")
+        chart.loc = reader.at(action)
+        out.append(chart)
+    return out
+
+
+def _languages(pou: Node) -> str:
+    """The languages of a POU's bodies, as ``FBD/ST``."""
+    return "/".join(sorted({c.tag for b in pou.all("body") for c in b.children}))
+
+
+def _sfc_bodies(pou: Node) -> tuple[Node | None, list[tuple[Node, Node]]]:
+    """A POU's SFC body and its actions' (each with the action)."""
+    holder = pou.child("actions")
+    in_actions = [
+        (a, found)
+        for a in (holder.all("action") if holder is not None else [])
+        if (found := _sfc_of(a)) is not None
+    ]
+    return _sfc_of(pou), in_actions
+
+
+def read_plcopen(root: Node, problems: Problems) -> list[IecChart | Kept]:
     """Every SFC body: a POU's (a chart named after the POU), an action's (TwinCAT and
     CODESYS draw charts in actions: one named ``POU.action``, with the POU's variables,
-    actions and transitions) — an ``IecChart`` each — or the `.s7g` source s7graph wrote
-    (text, line, col, POU name), unless ``edited`` finds the POU changed since: then its
-    SFC, with that warning (I024)."""
+    actions and transitions) — an ``IecChart`` each — or, for a POU s7graph exported, the
+    `.s7g` source it keeps (``Kept``: whether to trust it is decided for the chart picked
+    alone, as it costs an export)."""
     reader = _Reader(root, problems)
-    out: list[IecChart | tuple[str, int, int, str]] = []
+    out: list[IecChart | Kept] = []
     for pou in root.iter("pou"):
-        sfc = _sfc_of(pou)
-        holder = pou.child("actions")
-        in_actions = [
-            (a, found)
-            for a in (holder.all("action") if holder is not None else [])
-            if (found := _sfc_of(a)) is not None
-        ]
+        sfc, in_actions = _sfc_bodies(pou)
         if sfc is None and not in_actions:
-            langs = {c.tag for b in pou.all("body") for c in b.children}
             problems.warn(
                 "I024",
-                f"POU {pou.get('name')} ({'/'.join(sorted(langs)) or 'no body'})"
+                f"POU {pou.get('name')} ({_languages(pou) or 'no body'})"
                 " has no SFC body; not imported",
                 reader.at(pou),
             )
             continue
         source = s7graph_source(pou)
         if source is not None:
-            edit = edited(root, pou, source, problems.file) if edited is not None else None
-            if edit is None:
-                out.append((*source, pou.get("name")))
-                continue
-            problems.warn("I024", edit[1], edit[0])
-        if sfc is not None:
-            out.append(reader.chart(pou, sfc))
-        elif pou.all("body"):
-            langs = {c.tag for b in pou.all("body") for c in b.children}
-            charts = ", ".join(f"{pou.get('name')}.{a.get('name')}" for a, _ in in_actions)
-            problems.warn(
-                "I024",
-                f"the {'/'.join(sorted(langs))} body of POU {pou.get('name')} is not "
-                f"imported; the charts of its actions are, each on its own ({charts})",
-                reader.at(pou),
-            )
-        for action, body in in_actions:
-            chart = reader.chart(pou, body, f"{pou.get('name')}.{action.get('name')}")
-            chart.loc = reader.at(action)
-            out.append(chart)
+            out.append(Kept(*source, pou, reader))
+        else:
+            out.extend(_pou_charts(reader, pou))
     for conf in root.iter("configuration"):
         problems.warn(
             "I024",

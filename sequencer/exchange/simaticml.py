@@ -28,9 +28,10 @@ import re
 from collections.abc import Callable
 from dataclasses import replace
 
-from s7graph.engine.errors import LiteralError, S7Error, SourceLocation, SymbolError
+from s7graph.engine.errors import LiteralError, S7Error, SourceLocation
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.change.base import MAX_NUMBER
+from s7graph.sequencer.exchange.db_reads import not_in_table
 from s7graph.sequencer.exchange.export_simaticml import S7GRAPH_COMMENT, default_name
 from s7graph.sequencer.exchange.flgnet import Box, read_boxes, read_network
 from s7graph.sequencer.exchange.iec_actions import permanent_assignment
@@ -137,8 +138,8 @@ class _Reader(TiaOperands):
             self.symbol(row.value.name, "TIME", at)
         if isinstance(op, Assignment):
             value_type = self.expr_type(op.expr)
-            for o in _operands(op.expr):
-                if o.quoted and not o.member:
+            for o in nodes(op.expr):
+                if isinstance(o, Operand) and o.quoted and not o.member:
                     self.symbol(o.name, value_type, at)
             if op.target.quoted:
                 self.symbol(op.target.name, value_type or "INT", at)
@@ -196,7 +197,9 @@ class _Reader(TiaOperands):
                         self.p.warn("I023", f"start value {text!r} not imported", self.at(start))
                 self.vars[m.get("Name")] = VarDecl(m.get("Name"), graph_type, init, self.at(m))
 
-    def options(self) -> ChartOptions:
+    def options(self, kept: dict[str, str]) -> ChartOptions:
+        """The block's options: its attributes and pins, and the settings s7graph's export
+        kept in the block comment (``kept``)."""
         pins: set[str] = set()
         for section in self.fb.iter("Section"):
             if (
@@ -228,7 +231,6 @@ class _Reader(TiaOperands):
                     f"the block setting {what} is not imported (its behaviour is not documented)",
                     self.at(self.fb),
                 )
-        kept = self.kept()
         return ChartOptions(
             parameters=parameters,
             skip_steps=is_true(self.attr("SkipSteps")),
@@ -240,13 +242,18 @@ class _Reader(TiaOperands):
         )
 
     def kept(self) -> dict[str, str]:
-        """What s7graph's export kept in the block comment (``s7graph: DB 1; ORDER := …``)."""
+        """What s7graph's export kept in the block comment (``s7graph: DB 1; ORDER := …``),
+        read in one pass: its settings, returned, and its DB symbols (``"T_S2" : DB10 :
+        SFB4``) into ``dbs`` — the chart reads those DBs' variables by name."""
         out: dict[str, str] = {}
         for item in self.fb.iter("MultilingualTextItem"):
             text = item.find("AttributeList", "Text")
             body = text.text.strip() if text is not None else ""
             if not body.startswith(S7GRAPH_COMMENT):
                 continue
+            for m in _KEPT_DB.finditer(body):
+                decl = SymbolDecl(m[1], f"DB{m[2]}", m[3], "", self.at(item))
+                self.dbs.setdefault(m[1].casefold(), decl)
             for part in body[len(S7GRAPH_COMMENT) :].split(";"):
                 key, _, value = part.strip().partition(":=")
                 if key.strip().startswith("DB ") and key.strip()[3:].isdigit():
@@ -255,34 +262,10 @@ class _Reader(TiaOperands):
                     out[key.strip().upper()] = value.strip().upper()
         return out
 
-    def kept_dbs(self) -> None:
-        """The DB symbols s7graph's export kept in the block comment (``"T_S2" : DB10 :
-        SFB4``): the chart reads those DBs' variables by name."""
-        for item in self.fb.iter("MultilingualTextItem"):
-            text = item.find("AttributeList", "Text")
-            body = text.text.strip() if text is not None else ""
-            if body.startswith(S7GRAPH_COMMENT):
-                for m in _KEPT_DB.finditer(body):
-                    decl = SymbolDecl(m[1], f"DB{m[2]}", m[3], "", self.at(item))
-                    self.dbs.setdefault(m[1].casefold(), decl)
-
-    def db_symbols(self) -> tuple[SymbolDecl, ...]:
-        """The kept DB symbols the chart declares: all but those the symbol table given
-        names so (they stay in the table, as for a chart exported with it)."""
-        out = []
-        for s in self.dbs.values():
-            try:
-                same = self.known is not None and self.known.db_number(s.name) == int(s.address[2:])
-            except SymbolError:
-                same = False
-            if not same:
-                out.append(s)
-        return tuple(out)
-
     def chart(self, graph: Node) -> Chart:
-        self.kept_dbs()
+        kept = self.kept()
         self.variables()
-        opts = self.options()
+        opts = self.options(kept)
         seq_nodes = graph.all("Sequence")
         self.numbers(seq_nodes)
         before = self.permanent(graph.child("PreOperations"))
@@ -295,11 +278,11 @@ class _Reader(TiaOperands):
             if isinstance(n, Operand) and not n.quoted
             for b in used_bytes(n.name)
         }
-        symbols = self.finish_symbols(used) + self.db_symbols()
+        symbols = self.finish_symbols(used) + not_in_table(self.dbs.values(), self.known)
         self.p.fail_if_errors()
         name = self.attr("Name") or "GRAPH"
         number = self.attr("Number")
-        db = self.kept().get("DB")
+        db = kept.get("DB")
         chart = Chart(
             name=name,
             fb_number=int(number) if number.isdigit() else None,
@@ -601,21 +584,6 @@ class _Links:
             for i, t in zip(idxs, ordered, strict=True):
                 out[i] = t
         return out
-
-
-def _operands(e: Expr) -> list[Operand]:
-    if isinstance(e, Operand):
-        return [e]
-    out: list[Operand] = []
-    for child in (
-        getattr(e, "left", None),
-        getattr(e, "right", None),
-        getattr(e, "operand", None),
-        *getattr(e, "args", ()),
-    ):
-        if child is not None:
-            out += _operands(child)
-    return out
 
 
 def _node(el: Node, port: str) -> tuple[str, int, int]:

@@ -20,7 +20,15 @@ from xml.parsers import expat
 from s7graph.engine.errors import SourceLocation
 from s7graph.sequencer.exchange.problems import ImportFailed, Problems
 
-__all__ = ["MAX_DEPTH", "MAX_WIRE_DEPTH", "ElementError", "Node", "is_true", "parse_xml"]
+__all__ = [
+    "MAX_DEPTH",
+    "MAX_WIRE_DEPTH",
+    "ElementError",
+    "Node",
+    "check_wire_depth",
+    "is_true",
+    "parse_xml",
+]
 
 _CONFLICT = re.compile(rb"^(<{7}|={7}|>{7})(?:[ \t].*)?\r?$", re.MULTILINE)
 MAX_DEPTH = 100
@@ -98,6 +106,17 @@ class ElementError(Exception):
         super().__init__(message)
         self.message = message
         self.node = node
+
+
+def check_wire_depth(depth: int, at: Node) -> None:
+    """An ElementError at ``at``, the element a value reaches after ``depth`` others one
+    after another, when that is ``MAX_WIRE_DEPTH`` or more (both network readers)."""
+    if depth >= MAX_WIRE_DEPTH:
+        raise ElementError(
+            f"a value that flows through more than {MAX_WIRE_DEPTH} elements one after "
+            f"another (an import reads at most {MAX_WIRE_DEPTH})",
+            at,
+        )
 
 
 class _Refused(Exception):

@@ -26,6 +26,7 @@ DWORD address for DINT, REAL or TIME (``is_untyped``).
 from __future__ import annotations
 
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Final, Literal
 
@@ -107,6 +108,11 @@ def _declarations(chart: Chart) -> _Declared:
     found = _Declared(chart)
     _declared[:] = [found]
     return found
+
+
+def instance_calls(chart: Chart) -> Mapping[int, BlockCall]:
+    """The instance DBs ``chart``'s calls name: number → the first call naming it."""
+    return _declarations(chart).instances
 
 
 def resolve_operand(
@@ -210,7 +216,7 @@ def _member(
     of a system block, or of a user FB of the program's ``blocks``, whose static variables
     are read too. Raises ``MemberError``."""
     text = member_text(op)
-    db = _db_number(op, chart, symbols) if op.quoted else int(op.name[2:])
+    db = db_number(op, chart, symbols) if op.quoted else int(op.name[2:])
     call = _declarations(chart).instances.get(db)
     if call is None:
         raise MemberError(
@@ -231,9 +237,9 @@ def _member(
     return Resolved("member", None, pin.type, writable=False, db=db, member=pin.name)
 
 
-def _db_number(op: Operand, chart: Chart, symbols: SymbolTable | None) -> int:
+def db_number(op: Operand, chart: Chart, symbols: SymbolTable | None) -> int:
     """The DB a quoted name before a member names: the chart's ``SYMBOLS`` first, then the
-    symbol table given."""
+    symbol table given; ``MemberError`` when neither names a DB so."""
     text = member_text(op)
     own = _declarations(chart).symbols.get(op.name.casefold())
     if own is not None:

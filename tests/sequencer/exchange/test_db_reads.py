@@ -6,6 +6,7 @@ to the chart; a DB symbol no read goes through is no PLCopen type."""
 from __future__ import annotations
 
 import re
+from dataclasses import replace
 
 import pytest
 
@@ -94,6 +95,22 @@ def test_a_db_symbol_of_the_symbol_table_travels_through_simaticml() -> None:
     assert [d for d in validate(alone) if d.is_error] == []
 
 
+@pytest.mark.parametrize("to", ["plcopen", "simaticml"])
+def test_symbols_the_table_given_holds_in_another_case_stay_in_the_table(to: str) -> None:
+    """The symbol table holds a name once regardless of case, as STEP 7's symbol editor
+    does: a DB symbol or tag the export carried that the table given to the import holds
+    as ``"t_s2"`` or ``"LAMP"`` (the same DB, the same address) stays in the table."""
+    table = SymbolTable()
+    table.add("t_s2", "DB 10")
+    table.add("LAMP", "Q0.0")
+    chart = chart_of('"T_S2".Q', '"T_S2" : DB10 : SFB4; "Lamp" : Q0.0 : BOOL;', 'N "Lamp";')
+    xml, _ = export_reported(chart, to)
+    back = import_chart(xml.encode(), "m.xml", symbols=table).chart
+    assert back.symbols == ()
+    assert same(back, replace(chart, symbols=()))
+    assert [d for d in validate(back, table) if d.is_error] == []
+
+
 def test_a_tia_file_reading_a_db_member_reads_the_instance_db_the_table_names() -> None:
     """A file TIA wrote has no s7graph comment: ``"T_S2".Q`` is the instance DB's variable
     when the symbol table given names DB ``"T_S2"``, else a tag, as before."""
@@ -175,6 +192,19 @@ def test_an_export_of_a_read_the_chart_cannot_make_names_its_place(
 ) -> None:
     with pytest.raises(ValueError, match=re.escape(f"m.s7g:7:34: {why} (s7graph check says")):
         export_reported(chart_of(read, '"T_S2" : DB11 : SFB4;'), to)
+
+
+@pytest.mark.parametrize("to", ["plcopen", "simaticml"])
+def test_an_export_reads_an_operand_symbol_of_the_chart_as_no_db_as_check_does(to: str) -> None:
+    """The chart's own ``"Lamp" : Q0.0`` hides a DB symbol ``"Lamp"`` of the symbol table
+    given, for the export as for ``check`` (E048): the read names no DB."""
+    table = SymbolTable()
+    table.add("Lamp", "DB 10")
+    chart = chart_of('"Lamp".Q', '"Lamp" : Q0.0 : BOOL;')
+    assert [d.code for d in validate(chart, table) if d.is_error] == ["E048"]
+    want = 'm.s7g:7:34: "Lamp".Q: no DB symbol "Lamp" (s7graph check says'
+    with pytest.raises(ValueError, match=re.escape(want)):
+        export_reported(chart, to, table)
 
 
 def test_a_row_the_import_leaves_out_leaves_the_calls_whose_dbs_the_chart_reads() -> None:

@@ -6,6 +6,7 @@ with it; else the file's own content holds, and the import says where it first d
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
@@ -16,6 +17,7 @@ from s7graph.sequencer.text.parse import parse_chart
 from s7graph.sequencer.text.walk import uncommented, unlocated
 from s7graph.web.cli import main
 from tests.sequencer.exchange.test_block_db_export import chart_of
+from tests.sequencer.exchange.test_roundtrip import native_only
 
 CHART = """FUNCTION_BLOCK "Fill"
 VAR
@@ -113,6 +115,29 @@ def test_a_variable_changed_in_the_pou_interface_is_an_edit_too() -> None:
     back = import_chart(xml.encode(), "fill.xml")
     assert any("variable brim" in d.message for d in back.problems if d.code == "I024")
     assert "brim" in [v.name for v in back.chart.vars]
+
+
+def beside(xml: str, other: str) -> str:
+    """``xml`` with the POU of ``other`` after its own: one file of two POUs."""
+    found = re.search(r"<pou .*?</pou>", other, re.S)
+    assert found is not None
+    at = xml.index("</pou>") + len("</pou>")
+    return xml[:at] + found[0] + xml[at:]
+
+
+def test_only_the_pou_picked_is_checked_for_edits_against_s7graphs_export() -> None:
+    """Whether s7graph's data still describes its POU takes an export of the chart it
+    keeps: the import decides it for the chart ``--pou`` picks alone, so an edited POU
+    beside it is neither exported nor reported."""
+    fill = sfc_edited(exported(), 'name="Filling"', 'name="Topping_up"')
+    drain = export_chart(parse_chart(CHART.replace('"Fill"', '"Drain"'), "d.s7g"), "plcopen")
+    xml = beside(fill, native_only(drain).decode()).encode()
+    back = import_chart(xml, "two.xml", pou="Drain")
+    assert back.chart.name == "Drain"
+    assert [d for d in back.problems if "edited" in d.message] == []
+    picked = import_chart(xml, "two.xml", pou="Fill")
+    assert [d.code for d in picked.problems if "the SFC was edited" in d.message] == ["I024"]
+    assert [s.name for s in picked.chart.all_steps()] == ["Idle", "Topping_up"]
 
 
 def test_a_db_renumbered_in_a_simaticml_block_holds_over_s7graphs_block_comment() -> None:

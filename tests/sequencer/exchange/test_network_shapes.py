@@ -12,6 +12,7 @@ import pytest
 
 from s7graph.sequencer.exchange import export_chart, import_chart
 from s7graph.sequencer.exchange.problems import ImportFailed
+from s7graph.sequencer.exchange.xmltree import MAX_WIRE_DEPTH
 from s7graph.sequencer.text.format import format_expr
 from s7graph.sequencer.text.parse import parse_chart
 from tests.sequencer.exchange.helpers import corpus
@@ -53,18 +54,19 @@ def test_a_loop_of_wires_is_an_error_at_its_place() -> None:
     assert any("a loop of wires" in m for m in said), said
 
 
-def _or_chain(levels: int) -> str:
-    """An FBD body: SWITCH_BUTTON into an OR fed twice, each OR into the next twice."""
+def _or_chain(levels: int, block: str = "OR", pins: tuple[str, ...] = ("IN1", "IN2")) -> str:
+    """An FBD body: SWITCH_BUTTON into an OR fed twice, each OR into the next twice (or
+    into another ``block`` by its ``pins``)."""
     blocks = []
     for k in range(levels):
         src = 43 if k == 0 else 1000 + k - 1
         ins = "".join(
-            f'<variable formalParameter="IN{n}"><connectionPointIn>'
+            f'<variable formalParameter="{n}"><connectionPointIn>'
             f'<connection refLocalId="{src}"/></connectionPointIn></variable>'
-            for n in (1, 2)
+            for n in pins
         )
         blocks.append(
-            f'<block localId="{1000 + k}" typeName="OR"><position x="0" y="0"/>'
+            f'<block localId="{1000 + k}" typeName="{block}"><position x="0" y="0"/>'
             f"<inputVariables>{ins}</inputVariables><inOutVariables/><outputVariables>"
             '<variable formalParameter="OUT"><connectionPointOut/></variable>'
             "</outputVariables></block>"
@@ -81,12 +83,14 @@ def _or_chain(levels: int) -> str:
     )
 
 
-def _with_stop_body(levels: int) -> bytes:
+def _with_stop_body(
+    levels: int, block: str = "OR", pins: tuple[str, ...] = ("IN1", "IN2")
+) -> bytes:
     text = corpus("plcopen/beremiz_traffic_light.xml").read_text(encoding="utf-8")
     start = text.index('<transition name="STOP">')
     body = text.index("<FBD>", start)
     end = text.index("</FBD>", body) + len("</FBD>")
-    return (text[:body] + _or_chain(levels) + text[end:]).encode()
+    return (text[:body] + _or_chain(levels, block, pins) + text[end:]).encode()
 
 
 def test_an_fbd_whose_outputs_fan_out_is_read_or_refused_at_once() -> None:
@@ -100,6 +104,29 @@ def test_an_fbd_whose_outputs_fan_out_is_read_or_refused_at_once() -> None:
         import_chart(_with_stop_body(40), "t.xml")  # 2 ** 40 elements written out
     said = [d.message for d in failed.value.diagnostics if d.is_error]
     assert any("over 20,000 elements" in m for m in said), said
+
+
+@pytest.mark.parametrize(("nots", "refused"), [(MAX_WIRE_DEPTH - 2, False), (150, True)])
+def test_an_fbd_value_through_more_elements_than_an_import_reads_is_refused_as_in_lad(
+    nots: int, refused: bool
+) -> None:
+    """NOT after NOT in a PLCopen FBD: the same limit and the same words as for a TIA LAD
+    network (test_unreadable_input), at the element past it."""
+    data = _with_stop_body(nots, "NOT", ("IN",))
+    if not refused:
+        stop = import_chart(data, "t.xml").chart.all_transitions()
+        assert any("SWITCH_BUTTON" in format_expr(t.condition) for t in stop if t.condition)
+        return
+    with pytest.raises(ImportFailed) as failed:
+        import_chart(data, "t.xml")
+    said = [d for d in failed.value.diagnostics if d.is_error]
+    words = (
+        f"a value that flows through more than {MAX_WIRE_DEPTH} elements one after "
+        f"another (an import reads at most {MAX_WIRE_DEPTH})"
+    )
+    assert len(said) == 1 and words in said[0].message, said
+    line = data.decode().splitlines()[said[0].loc.line - 1]
+    assert f'<block localId="{1000 + nots - MAX_WIRE_DEPTH - 1}"' in line, line
 
 
 @pytest.mark.parametrize(
