@@ -27,13 +27,13 @@ lacks, and an instance DB that is something else, are ``plan_calls``'s to judge.
 from __future__ import annotations
 
 import functools
-import re
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
 from s7graph.engine.errors import BlockError
 from s7graph.sequencer.checks.interfaces import ProgramBlocks, is_block_db
+from s7graph.sequencer.checks.user_calls import db_to_value, instance_db_passed
 from s7graph.sequencer.checks.validate import validate
 from s7graph.sequencer.text.call_sites import CallSite, call_sites
 from s7graph.sequencer.text.model import BlockCall, Chart, Operand
@@ -49,10 +49,6 @@ __all__ = [
     "prepare_calls",
     "unfit_calls",
 ]
-
-_THE_SWAPS = re.compile(r"DB\d+ is |.* is not in the program's blocks \(")
-"""How E047 begins when it judges a call's instance DB (``checks.user_calls.check_instance``)
-or names a block the program lacks: what ``plan_calls`` judges, in the CPU's own words."""
 
 
 @dataclass(slots=True)
@@ -154,15 +150,12 @@ def _check_db_inputs(
         number = dbs(e) if var is not None and isinstance(e, Operand) else None
         if var is None or number is None or not isinstance(e, Operand):
             continue
-        what = f'"{e.name}"' if e.quoted else e.name
         if not is_block_db(var):
-            why = f"{block.label}: {var.name} is {var.type}; {what} is a DB, which only a "
-            plan.problems.append(site.line("error", why + "BLOCK_DB input takes"))
+            why = db_to_value(block.label, var.name, var.type, e)
+            plan.problems.append(site.line("error", why))
         elif (held := instances.get(number)) is not None:
-            why = (
-                f"{what}: DB{number} is the instance DB of {held.fb.label}; it holds its "
-                "variables by name, not the bytes a BLOCK_DB input reaches"
-            )
+            what = f'"{e.name}"' if e.quoted else e.name
+            why = f"{what}: {instance_db_passed(number, held.fb.label)}"
             plan.problems.append(site.line("error", why))
 
 
@@ -171,17 +164,11 @@ def unfit_calls(chart: Chart, symbols: Any, blocks: ProgramBlocks) -> list[Diagn
     a parameter the block lacks, given twice or the wrong way (an output with ``:=``), a
     value of another type, an FB without an instance DB, an FC with one, an FC not given
     every parameter. A call of a block ``blocks`` lacks is left out (the swap's rule for
-    blocks the CPU lacks), and so is the judgement of an instance DB (``plan_calls``)."""
+    blocks the CPU lacks), and so is the judgement of an instance DB (``plan_calls``): the
+    validator's check against the CPU's blocks (``validate(held=…)``), in one pass."""
     if not any(blocks.find(s.call.kind, s.call.block) for s in call_sites(chart)):
         return []  # no call of the CPU's blocks: nothing to check
-    return [
-        d
-        for d in validate(chart, symbols, blocks=blocks)
-        if d.is_error
-        and d.code == "E047"
-        and d.element  # not the chart's own FB or DB: its load judged them
-        and not _THE_SWAPS.match(d.message)
-    ]
+    return [d for d in validate(chart, symbols, held=blocks) if d.is_error and d.code == "E047"]
 
 
 def _finder(cpu: Any) -> Callable[[str], Any]:

@@ -18,7 +18,6 @@ from typing import Any, Final, Literal
 
 from s7graph.engine.literals import shorten
 from s7graph.engine.symbols import SymbolTable
-from s7graph.sequencer.calls import unfit_calls
 from s7graph.sequencer.change.base import (
     MAX_NAME,
     MAX_UNDO,
@@ -62,7 +61,7 @@ from s7graph.sequencer.change.structure import (
     new_transition,
 )
 from s7graph.sequencer.change.typed import RowFields, check_bounds
-from s7graph.sequencer.checks.diagnostics import Diagnostic, sort_key
+from s7graph.sequencer.checks.diagnostics import Diagnostic
 from s7graph.sequencer.checks.interfaces import ProgramBlocks
 from s7graph.sequencer.checks.validate import validate
 from s7graph.sequencer.text.elements import (
@@ -368,11 +367,9 @@ def diagnostics_of(
     of the CPU's user blocks, whose FBs' variables the chart reads by name
     (``"Motor_DB".Running``) as a download's compile reads them, and against which its calls
     of those blocks are checked as a chart-only download checks them (E047,
-    ``sequencer.calls.unfit_calls``): what the download would refuse is listed before it."""
-    found = validate(chart, symbols, readable=blocks)
-    if blocks is not None:
-        found += unfit_calls(chart, symbols, blocks)
-    return tuple(sorted(dict.fromkeys(found), key=sort_key))
+    ``sequencer.calls.unfit_calls``): what the download would refuse is listed before it.
+    One pass of the validator (``validate(held=blocks)``)."""
+    return tuple(validate(chart, symbols, held=blocks))
 
 
 def _checked(

@@ -24,6 +24,10 @@ class _Ctx:
     readable: ProgramBlocks | None = None
     """The program's FBs whose instance DBs' variables the chart reads by name (``blocks``
     unless told: the compiler reads them without checking the calls again)."""
+    held: ProgramBlocks | None = None
+    """The CPU's user blocks the chart's calls are checked against as a download into it
+    checks them: as ``blocks``, but a call of a block the CPU lacks and an instance DB are
+    the swap's to judge (``sequencer.calls.plan_calls``)."""
     instances: dict[int, str] = field(default_factory=dict)
     """The instance DBs the chart's calls name so far: number → the FB or SFB's label."""
 

@@ -18,7 +18,13 @@ from s7graph.sequencer.checks.types import (
     _type,
     _unify,
 )
-from s7graph.sequencer.checks.user_calls import DB_TYPE, check_instance, check_user_call, db_only
+from s7graph.sequencer.checks.user_calls import (
+    DB_TYPE,
+    check_instance,
+    check_user_call,
+    db_to_value,
+    instance_db_passed,
+)
 from s7graph.sequencer.text.call_sites import call_sites
 from s7graph.sequencer.text.model import (
     ActionRow,
@@ -196,7 +202,7 @@ def _check_call(ctx: _Ctx, call: BlockCall, el: str) -> None:
     for name, t, e in types:
         pin = entry.pin(name)
         if pin is not None and t == DB_TYPE:
-            why = f"{entry.key} {entry.name}: {pin.name} is {_show(pin.type)}; {db_only(e)}"
+            why = db_to_value(f"{entry.key} {entry.name}", pin.name, pin.type, e)
             ctx.err("E046", why, getattr(e, "loc", call.loc), el)
             continue
         if pin is None or t is None or pin.type == "ANY":
@@ -304,11 +310,8 @@ def rule_instance_db_addresses(ctx: _Ctx) -> None:
         for _, e in site.call.inputs:
             number = db_argument(e, ctx.chart, ctx.symbols)
             owner = ctx.instances.get(number) or program.get(number) if number else None
-            if owner is not None:
-                why = (
-                    f"DB{number} is the instance DB of {owner}; it holds its variables by "
-                    "name, not the bytes a BLOCK_DB input reaches: pass a global DB"
-                )
+            if owner is not None and number is not None:
+                why = f"{instance_db_passed(number, owner)}: pass a global DB"
                 ctx.err("E041", why, _loc(e), site.element)
     seen: set[tuple[str, bool]] = set()
     for op in nodes(ctx.chart):

@@ -10,6 +10,9 @@ in/out, each once; an FC is given every parameter (its RET_VAL may be left out);
 fits its parameter's type; an ARRAY, STRUCT or multi-instance parameter cannot be passed. A
 BLOCK_DB input takes a DB (``DB5``, a DB's symbol) or its number as a WORD (``W#16#5``),
 and a DB goes to a BLOCK_DB input only (S7-SCL manual, "Data types", parameter types).
+Against the blocks a CPU holds (``validate(held=…)``: the editor, a download into the
+running CPU) the same, but a call of a block the CPU lacks and an instance DB are left to
+the swap, which judges them against the CPU itself (``sequencer.calls.plan_calls``).
 """
 
 from __future__ import annotations
@@ -18,11 +21,19 @@ from collections.abc import Sequence
 
 from s7graph.engine.errors import SourceLocation
 from s7graph.sequencer.checks.context import _Ctx
-from s7graph.sequencer.checks.interfaces import Interface, UserPin
+from s7graph.sequencer.checks.interfaces import Interface, ProgramBlocks, UserPin
 from s7graph.sequencer.checks.types import _CELL_FLEX, _as_bit, _as_number, _resolve, _show, _unify
 from s7graph.sequencer.text.model import BlockCall, Const, Operand
 
-__all__ = ["DB_TYPE", "check_instance", "check_own_blocks", "check_user_call", "db_only"]
+__all__ = [
+    "DB_TYPE",
+    "check_instance",
+    "check_own_blocks",
+    "check_user_call",
+    "db_only",
+    "db_to_value",
+    "instance_db_passed",
+]
 
 DB_TYPE = "@DB"
 """The type of a call's actual parameter that names a DB (``DB5``, ``"Recipe"``)."""
@@ -38,53 +49,79 @@ def _where(call: BlockCall) -> str:
 
 def check_user_call(ctx: _Ctx, call: BlockCall, el: str, types: Typed) -> None:
     """E047 for each way ``call`` (of an FB, an FC or a block symbol) does not fit the
-    program's blocks ``ctx.blocks``. Without them, the blocks the compiler reads
+    program's blocks ``ctx.blocks``, or the CPU's ``ctx.held`` (a block the CPU lacks and
+    the instance DB are the swap's to judge). Without either, the blocks the compiler reads
     (``ctx.readable``) check what goes to a BLOCK_DB input and where a DB goes: a mistake
     there would hand the block a DB's number for a value, or a value for a DB's number."""
-    program = ctx.blocks
+    program = ctx.blocks if ctx.blocks is not None else ctx.held
     if program is None:
-        read = ctx.readable.find(call.kind, call.block) if ctx.readable is not None else None
-        for name, t, e in types:
-            pin = read.pin(name) if read is not None else None
-            if read is not None and pin is not None and (t == DB_TYPE or pin.type == "BLOCK_DB"):
-                _check_block_db(ctx, read, pin, t, e, el)
-        return
-    block = program.find(call.kind, call.block)
+        block = ctx.readable.find(call.kind, call.block) if ctx.readable is not None else None
+    else:
+        block = program.find(call.kind, call.block)
+        if block is None and program is ctx.blocks:
+            _not_in_program(ctx, call, el, program)
+        elif block is not None:
+            _check_block(ctx, call, el, block)
     if block is None:
-        kind = call.kind or "FB"
-        known = f"{kind}s: {program.known(kind)}" if call.kind else "no block of that name"
-        ctx.err(
-            "E047",
-            f"{_where(call)} is not in the program's blocks ({program.sources}; {known})",
-            call.loc,
-            el,
-        )
         return
+    for name, t, e in types:
+        pin = block.pin(name)
+        if pin is not None and (t == DB_TYPE or pin.type == "BLOCK_DB"):
+            _check_block_db(ctx, block, pin, t, e, el)
+        elif pin is not None and program is not None:
+            _check_value(ctx, call, el, block, pin, t, e)
+
+
+def _not_in_program(ctx: _Ctx, call: BlockCall, el: str, program: ProgramBlocks) -> None:
+    kind = call.kind or "FB"
+    known = f"{kind}s: {program.known(kind)}" if call.kind else "no block of that name"
+    why = f"{_where(call)} is not in the program's blocks ({program.sources}; {known})"
+    ctx.err("E047", why, call.loc, el)
+
+
+def _check_block(ctx: _Ctx, call: BlockCall, el: str, block: Interface) -> None:
+    """An FB's instance DB, an FC without one; the parameters named."""
     if block.kind == "FB":
         _check_fb_instance(ctx, call, el, block)
     elif call.instance is not None:
         ctx.err("E047", f"{block.label} is an FC and takes no instance DB", call.loc, el)
     _check_pins(ctx, call, el, block)
-    for name, t, e in types:
-        pin = block.pin(name)
-        loc = getattr(e, "loc", call.loc)
-        if pin is not None and (t == DB_TYPE or pin.type == "BLOCK_DB"):
-            _check_block_db(ctx, block, pin, t, e, el)
-            continue
-        if pin is not None and t is not None:
-            _check_type(ctx, block, pin, t, loc, el)
-        if pin is not None and pin.direction == "IN_OUT" and not _in_memory(ctx, e, el):
-            why = (
-                f"{block.label}: {pin.name} is an in/out parameter: it takes an operand in "
-                "memory (an address or its symbol), which the block writes back"
-            )
-            ctx.err("E047", why, loc, el)
+
+
+def _check_value(
+    ctx: _Ctx, call: BlockCall, el: str, block: Interface, pin: UserPin, t: str | None, e: object
+) -> None:
+    """The value given for ``pin`` fits its type; an in/out's is an operand in memory."""
+    loc = getattr(e, "loc", call.loc)
+    if t is not None:
+        _check_type(ctx, block, pin, t, loc, el)
+    if pin.direction == "IN_OUT" and not _in_memory(ctx, e, el):
+        why = (
+            f"{block.label}: {pin.name} is an in/out parameter: it takes an operand in "
+            "memory (an address or its symbol), which the block writes back"
+        )
+        ctx.err("E047", why, loc, el)
 
 
 def db_only(e: object) -> str:
     """Why a DB does not fit a parameter that is no BLOCK_DB."""
     text = f'"{e.name}"' if isinstance(e, Operand) and e.quoted else getattr(e, "name", "")
     return f"{text} is a DB, which only a BLOCK_DB input takes"
+
+
+def db_to_value(block: str, pin: str, type_: object, e: object) -> str:
+    """Why the DB ``e`` does not fit ``block``'s parameter ``pin`` of ``type_`` (no
+    BLOCK_DB): one wording for the checks and for a load against the CPU's block."""
+    shown = _show(type_) if isinstance(type_, str) else str(type_)
+    return f"{block}: {pin} is {shown}; {db_only(e)}"
+
+
+def instance_db_passed(number: int, owner: str) -> str:
+    """Why the instance DB ``number`` of ``owner`` cannot go to a BLOCK_DB input."""
+    return (
+        f"DB{number} is the instance DB of {owner}; it holds its variables by name, not the "
+        "bytes a BLOCK_DB input reaches"
+    )
 
 
 def _check_block_db(
@@ -94,7 +131,7 @@ def _check_block_db(
     1..65535); a DB to no other parameter."""
     loc = getattr(e, "loc", SourceLocation())
     if pin.type != "BLOCK_DB":
-        ctx.err("E047", f"{block.label}: {pin.name} is {_show(pin.type)}; {db_only(e)}", loc, el)
+        ctx.err("E047", db_to_value(block.label, pin.name, pin.type, e), loc, el)
     elif t is not None and t != DB_TYPE and _unify("WORD", t) != "WORD":
         why = (
             f"{block.label}: {pin.name} is a BLOCK_DB: pass a DB (DB5, a DB's symbol) or its "
@@ -122,7 +159,7 @@ def _check_fb_instance(ctx: _Ctx, call: BlockCall, el: str, block: Interface) ->
     elif not isinstance(call.instance, int):
         why = f"{block.label}: name its instance DB by number (DB 10), not {call.instance!r}"
         ctx.err("E047", why, call.loc, el)
-    else:
+    elif ctx.blocks is not None:  # the CPU's blocks: the swap judges the DB (plan_calls)
         check_instance(ctx, call, el, block.label)
 
 

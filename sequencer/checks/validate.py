@@ -111,12 +111,15 @@ def validate(
     *,
     blocks: ProgramBlocks | None = None,
     readable: ProgramBlocks | None = None,
+    held: ProgramBlocks | None = None,
 ) -> list[Diagnostic]:
     """Every diagnostic of ``chart`` (errors and warnings), sorted by place. ``blocks``: the
     program's FBs, FCs and DBs, when known, that the chart's calls are checked against
     (E047, ``sequencer.checks.user_calls``) and whose FBs' variables the chart reads by name
-    (E048); ``readable``: those FBs only, the calls not checked (the compiler's)."""
-    ctx = _Ctx(chart, symbols, blocks=blocks, readable=readable or blocks)
+    (E048); ``readable``: those FBs only, the calls not checked (the compiler's); ``held``:
+    the blocks a CPU holds, read as ``readable`` and its calls checked as a download into
+    that CPU checks them (a block it lacks and an instance DB are the swap's to judge)."""
+    ctx = _Ctx(chart, symbols, blocks=blocks, readable=readable or blocks or held, held=held)
     if chart.db_number is not None and chart.fb_number is not None:
         ctx.instances[chart.db_number] = f"FB{chart.fb_number} (this chart)"
     for s in chart.all_steps():

@@ -20,7 +20,7 @@ from s7graph.steps.scl import types as ty
 from s7graph.steps.scl.builtins import BUILTINS, bind
 from s7graph.steps.scl.declare import BlockInfo, Param
 from s7graph.steps.scl.diagnostics import Problem
-from s7graph.steps.scl.gen import HOLE, Block, Place, Target, X
+from s7graph.steps.scl.gen import Block, Place, Target, X, in_memory
 
 S5_TIMERS = {"S_PULSE": "SP", "S_PEXT": "SE", "S_ODT": "SD", "S_ODTS": "SS", "S_OFFDT": "SF"}
 S5_COUNTERS = {"S_CU": ("CU",), "S_CD": ("CD",), "S_CUD": ("CU", "CD")}
@@ -320,50 +320,58 @@ class Calls:
         for t, k, place in outs:
             b.emit(place.store(self._take(X(t, f"{r}[{k}]"), place, target)))
         if result is not None:
-            word = _s5time_bytes(result.put) if timer and result.put else None
+            word = _s5time_word(result) if timer else None
             if word is not None:  # the time left as the timer's word: its time base kept
-                b.emit(word.replace(HOLE, f"{r}[3]"))
+                b.emit(word.store(f"{r}[3]"))
             else:
                 b.emit(result.store(self._take(X(rtype, f"{r}[0]"), result, target)))
         return X(rtype, f"{r}[0]")
 
     def _s5_input(self, key: str, arg: m.Arg, timer: bool) -> str:
+        if key == "TV":
+            return self._s5_word(arg)
         x = self.b.exprs.expr(arg.value)
         if key in ("T_NO", "C_NO"):
             cell = ty.TIMER if timer else ty.COUNTER
             if x.type.kind not in (cell.kind, "INT", "WORD", "ERROR"):
                 raise Problem("E220", f"{key} is a {cell.kind} or an INT, not {x.type}", arg.loc)
             return x.src
-        if key == "TV":
-            return self._s5_word(x, arg)
         want = {"PV": ty.WORD}.get(key, ty.BOOL)
         return self.b.exprs.convert(x, want, arg.loc, "pass")
 
-    def _s5_word(self, x: X, arg: m.Arg) -> str:
+    def _s5_word(self, arg: m.Arg) -> str:
         """TV as the S5TIME word the timer is started with, time base and BCD count (S7-SCL
         manual, timers: TV is an S5TIME): a WORD's bits, an S5TIME in an operand area's or a
         global DB's bytes as they lie there, an S5TIME held as a value (a literal, a block's
         variable) in the finest time base that holds it."""
+        x, place = self._operand(arg.value)
         if x.type.kind == "WORD":
             return x.src
-        word = _s5time_bytes(x.src) if isinstance(arg.value, m.Path) else None
+        word = _s5time_word(place) if place is not None else None
         if word is not None:
-            return word
+            return word.get
         ms = self.b.exprs.convert(x, ty.S5TIME, arg.loc, "pass")
         if x.const is not None and ms.isdigit():
             return str(ms_to_s5time(int(ms)))  # a literal: encoded once, here
         return f"_s5w({ms})"
 
+    def _operand(self, e: m.Expr) -> tuple[X, Place | None]:
+        """``e`` compiled, with the place it reads when it names a variable or an operand
+        (as ``Exprs.expr`` compiles a path)."""
+        if not isinstance(e, m.Path):
+            return self.b.exprs.expr(e), None
+        got = self.b.places.resolve(e)
+        if isinstance(got, Place):
+            return X(got.type, got.get), got
+        return (self.value(got) if isinstance(got, Target) else got), None
 
-def _s5time_bytes(src: str) -> str | None:
-    """``src`` — one read (or write) of an S5TIME in memory, ``_mem.read_as(a, 'S5TIME')`` —
-    as the same access to its word, else None."""
-    head, tail = "_mem.read_as(", ", 'S5TIME')"
-    if src.startswith("_mem.write_as(") and src.endswith(f", 'S5TIME', {HOLE})"):
-        head, tail = "_mem.write_as(", f", 'S5TIME', {HOLE})"
-    if not (src.startswith(head) and src.endswith(tail)) or src.count("_mem.") != 1:
+
+def _s5time_word(place: Place) -> Place | None:
+    """An S5TIME in memory (``place.address``) as the WORD there, time base and BCD count
+    as they lie; None for any other place."""
+    if place.type.kind != "S5TIME" or not place.address:
         return None
-    return src[: -len(tail)] + tail.replace("S5TIME", "WORD")
+    return in_memory(ty.WORD, place.address, place.what)
 
 
 def _described(t: ty.SclType) -> str:

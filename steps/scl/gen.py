@@ -47,10 +47,21 @@ class Place:
     pointer: str = ""
     """Python source of the ANY pointer text to it (``P#DB5.DBX4.0 BYTE 20``) when it lies
     in an operand area or a global DB's bytes; empty for a value held by the block."""
+    address: str = ""
+    """Python source of its ``Address`` when it is one value in an operand area's or a
+    global DB's bytes, read and written there (``_mem.read_as(address, …)``); else empty."""
 
     def store(self, value: str) -> str:
         assert self.put is not None
         return self.put.replace(HOLE, value)
+
+
+def in_memory(t: ty.SclType, address: str, what: str, pointer: str = "") -> Place:
+    """The place of a value of ``t`` at ``address`` (Python source of an ``Address``),
+    read and written in memory as its engine type (``types.engine_type``)."""
+    name = ty.engine_type(t)
+    get, put = f"_mem.read_as({address}, {name!r})", f"_mem.write_as({address}, {name!r}, {HOLE})"
+    return Place(t, get, put, what, pointer, address)
 
 
 @dataclass(frozen=True, slots=True)

@@ -23,7 +23,7 @@ from s7graph.steps.scl.calls import S5_COUNTERS, S5_TIMERS
 from s7graph.steps.scl.consts import Constant
 from s7graph.steps.scl.declare import BlockInfo
 from s7graph.steps.scl.diagnostics import Problem
-from s7graph.steps.scl.gen import HOLE, Block, Place, Resolved, Target, X
+from s7graph.steps.scl.gen import HOLE, Block, Place, Resolved, Target, X, in_memory
 
 _INDEXED = re.compile(r"(PI|PQ|I|Q|M)([XBWD]?)", re.IGNORECASE)
 _DB_INDEXED = re.compile(r"D?B?([XBWD])", re.IGNORECASE)
@@ -293,11 +293,8 @@ class Places:
         return self._static(addr, _WIDTH_TYPE[addr.width], text)
 
     def _static(self, addr: Address, t: ty.SclType, what: str) -> Place:
-        k = self.b.const(addr)
-        name = _engine_name(t)
-        get = f"_mem.read_as({k}, {name!r})"
         pointer = repr("P#{} {} {}".format(addr, *_any_type(t)))
-        return Place(t, get, f"_mem.write_as({k}, {name!r}, {HOLE})", what, pointer)
+        return in_memory(t, self.b.const(addr), what, pointer)
 
     def _symbol(self, text: str, loc: SourceLocation) -> Resolved:
         table = self.b.prog.symbols
@@ -455,16 +452,10 @@ def _bits_of(t: ty.SclType) -> int:
     return size * 8 if size in (1, 2, 4) else 8
 
 
-def _engine_name(t: ty.SclType) -> str:
-    return ty.engine_type(t)
-
-
 def _mem_access(t: ty.SclType, addr: str, what: str) -> Place:
     """The place of a value of ``t`` at the address ``addr`` computes (Python source)."""
-    name = _engine_name(t)
     pointer = "_anyp({}, {!r}, {})".format(addr, *_any_type(t))
-    get, put = f"_mem.read_as({addr}, {name!r})", f"_mem.write_as({addr}, {name!r}, {HOLE})"
-    return Place(t, get, put, what, pointer)
+    return in_memory(t, addr, what, pointer)
 
 
 _ANY_TYPES = frozenset({"BOOL", "BYTE", "CHAR", "WORD", "INT", "DWORD", "DINT", "REAL", "TIME"})

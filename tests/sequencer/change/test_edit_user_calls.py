@@ -7,13 +7,17 @@ blocks the calls are not checked."""
 
 from __future__ import annotations
 
+from typing import Any
+
 import pytest
 
 from s7graph import sfb
 from s7graph.sequencer.calls import unfit_calls
 from s7graph.sequencer.change.base import Edit
 from s7graph.sequencer.change.edit import Session, make_edit
+from s7graph.sequencer.checks.diagnostics import Diagnostic
 from s7graph.sequencer.checks.interfaces import ProgramBlocks
+from s7graph.sequencer.checks.validate import validate
 from s7graph.sequencer.text.parse import parse_chart
 from s7graph.steps.scl import compile_scl
 from tests.sequencer.test_user_fb_members import SCL, chart_text, interfaces
@@ -83,3 +87,37 @@ def test_without_the_cpus_blocks_calls_are_unchecked_until_the_session_gets_them
     assert [m[:26] for m in _calls(given)] == ["FB17 has no parameter nope"]
     assert given.has_errors and given.chart is session.chart
     assert _calls(given.with_blocks(None)) == []
+
+
+def test_against_the_cpus_blocks_the_validator_leaves_the_swaps_judgements_out() -> None:
+    """``validate(held=…)``: a call of the CPU's block is judged as ``--blocks`` judges it;
+    a block the CPU lacks and an instance DB that is a global DB are the swap's, which
+    ``validate(blocks=…)`` (``s7graph check --blocks``) reports."""
+    dbs = "DATA_BLOCK DB12\nSTRUCT a : INT; END_STRUCT\nBEGIN\nEND_DATA_BLOCK\n"
+    program = compile_scl(SCL + FC5 + dbs, "motor.scl", blocks=sfb.SYSTEM_BLOCKS)
+    blocks = interfaces(program.blocks)
+    call = "CALL FB 17, DB 12 (start := TRUE, nope := 1); CALL FB 19, DB 14"
+    chart = parse_chart(chart_text(call=call), "line.s7g")
+    checked = [d.message for d in validate(chart, None, blocks=blocks) if d.code == "E047"]
+    held = [d.message for d in validate(chart, None, held=blocks) if d.code == "E047"]
+    assert [m[:26] for m in held] == ["FB17 has no parameter nope"]
+    assert held[0] in checked
+    assert any(m.startswith("FB 19 is not in the program's blocks") for m in checked)
+    assert any(m.startswith("DB12 is a global DB of the program") for m in checked)
+
+
+def test_the_editor_checks_a_chart_against_the_cpus_blocks_in_one_pass(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    passes: list[object] = []
+
+    def counted(*args: Any, **kw: Any) -> list[Diagnostic]:
+        passes.append(kw.get("held"))
+        return validate(*args, **kw)
+
+    monkeypatch.setattr("s7graph.sequencer.change.edit.validate", counted)
+    blocks = _blocks()
+    session = Session.open(parse_chart(chart_text(), "line.s7g"), None, blocks)
+    assert passes == [blocks]
+    edited = session.apply(_call_row("CALL FB 17, DB 12 (start := 2.5)"))
+    assert passes == [blocks, blocks] and edited.has_errors

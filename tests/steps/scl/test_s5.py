@@ -292,3 +292,37 @@ END_ORGANIZATION_BLOCK
     found = [str(e) for e in cpu.diagnostics.since(0) if "BCD" in str(e)]
     assert found and "t.scl:3:3: TV: W#16#20A5 is not valid BCD" in found[0]
     assert not any("W#16#00A5" in e for e in found)
+
+
+INDEXED_TV = """
+DATA_BLOCK DB1
+STRUCT i : INT; tv : ARRAY[1..3] OF S5TIME; left : ARRAY[1..3] OF S5TIME; END_STRUCT
+BEGIN
+END_DATA_BLOCK
+FUNCTION_BLOCK FB1
+  DB1.left[DB1.i] := S_ODT(T_NO := T1, S := I0.0, TV := DB1.tv[DB1.i], Q := Q0.0);
+END_FUNCTION_BLOCK
+ORGANIZATION_BLOCK OB1
+  FB1.DB2();
+END_ORGANIZATION_BLOCK
+"""
+
+
+def test_an_s5time_at_an_index_read_from_memory_is_passed_and_written_as_its_word() -> None:
+    """``DB1.tv[DB1.i]``, its address computed from a value in memory, is an S5TIME in a
+    global DB's bytes like ``DB1.tv``: TV is its word (``W#16#2003``: 3 x 1 s, not 300 x
+    10 ms), and the time left goes into ``DB1.left[DB1.i]`` as the timer's word."""
+
+    def presets(cpu: object) -> None:
+        mem = cpu.mem  # type: ignore[attr-defined]
+        mem.set("DB1.DBW0", 2)  # i
+        mem.set("DB1.DBW4", 0x2003)  # tv[2]
+        mem.periph_in[0] = 1  # S
+
+    cpu = run(INDEXED_TV, 1, before=presets, ms=100)
+    timer = cpu.mem.timers[1]
+    assert (timer.time_base_ms, timer.binary()) == (1000, 3)
+    for _ in range(10):  # 1 s in
+        cpu.scan()
+        cpu.clock.advance(100)  # type: ignore[attr-defined]
+    assert cpu.mem.get("DB1.DBW10") == 0x2002  # left[2]: 2 x 1 s, the timer's word
