@@ -74,6 +74,7 @@ EVENT_TEXTS: dict[int, str] = {
     EventId.USERS_FILE_EXPOSED: "The users file is readable by others: logins refused",
     EventId.USERS_FILE_PROTECTED: "The users file is private again: logins taken",
     EventId.STATE_RENEWED: "State file written anew: it was deleted or damaged",
+    EventId.STATE_NOT_TAKEN: "A state file beside the program not taken: a fresh start",
 }
 """The text of each event ID the runtime writes."""
 

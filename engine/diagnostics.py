@@ -76,6 +76,9 @@ class EventId(IntEnum):
     STATE_RENEWED = 0x5F07
     """Ours: the state file was deleted, replaced or damaged while the CPU ran; it was
     written anew from the running CPU (``engine/renew.py``)."""
+    STATE_NOT_TAKEN = 0x5F08
+    """Ours: a run without ``--state`` started fresh though a state file beside its program
+    holds a state: another program's passed over, or a renamed source's named."""
 
 
 class DiagnosticBuffer:

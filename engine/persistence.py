@@ -100,6 +100,7 @@ from s7graph.engine.state_identity import (
     SOURCE_KEY,
     Held,
     Program,
+    beside,
     foreign,
     malformed,
     recorded,
@@ -123,6 +124,7 @@ __all__ = [
     "foreign_state",
     "not_in_use",
     "sqlite_words",
+    "state_beside",
     "unpack_instance",
 ]
 
@@ -960,8 +962,7 @@ def _for_writing(store: StateStore) -> None:
         raise _unreadable(store.path, exc) from None
     store._writing = True
     store.made_private = _make_private(store.path)
-    store._idents()
-    store._alarm_rows = _count(db, "alarms")
+    store._idents()  # the alarm rows were counted at open: nothing was written since
 
 
 def _drop_hot_image(db: sqlite3.Connection) -> None:
@@ -1117,6 +1118,20 @@ def _foreign(db: sqlite3.Connection, path: Path, program: Program | None, cpu: C
     """Why the file is another program's than ``program`` (``state_identity.foreign``; None:
     it is not known to be, or no program was given); ``StateFileError`` when what it
     records is not what this code writes."""
+    return _judged(db, path, program, cpu, foreign)
+
+
+def _judged(
+    db: sqlite3.Connection,
+    path: Path,
+    program: Program | None,
+    cpu: Cpu,
+    judge: Callable[..., str | None],
+) -> str | None:
+    """``judge`` (``state_identity.foreign`` or ``beside``) of the file on ``db`` for
+    ``program`` run on ``cpu``: what it records, the instance DBs it holds and the CPU's
+    (None when no program was given); ``StateFileError`` when what it records is not what
+    this code writes."""
     tables = _tables(db)
     kind, source = _meta(db, path, KIND_KEY), _meta(db, path, SOURCE_KEY)
     problem = malformed(kind, source)
@@ -1132,7 +1147,7 @@ def _foreign(db: sqlite3.Connection, path: Path, program: Program | None, cpu: C
     held = [Held(int(n), str(fb), str(name), str(fp).startswith(CHART)) for n, fb, name, fp in rows]
     own = {(n, idb.fb.label, idb.fb.name) for n, idb in cpu.instance_dbs.items()}
     mine = (fingerprint_of(idb.fb) for idb in cpu.instance_dbs.values())
-    return foreign(
+    return judge(
         program,
         recorded({KIND_KEY: kind, SOURCE_KEY: source}.get),
         holds_state=_holds_state(db, tables) or bool(held),
@@ -1147,23 +1162,34 @@ def foreign_state(path: Path, program: Program, cpu: Cpu) -> str | None:
     changing it and without taking its lock (readers are not kept out); None when it is
     not known to be: no file, one of this program's, an older one that may be, or one that
     cannot be read (opening it to run says why)."""
+    return _peek(path, lambda db: _foreign(db, path, program, cpu))
+
+
+def state_beside(path: Path, program: Program, cpu: Cpu) -> str | None:
+    """Whose state the file at ``path`` holds when ``program`` would carry it over and its
+    instance DBs are ``program``'s (``state_identity.beside``: a file of a renamed source),
+    read as ``foreign_state`` reads; None when it does not, or cannot be read."""
+    return _peek(path, lambda db: _judged(db, path, program, cpu, beside))
+
+
+def _peek(path: Path, read: Callable[[sqlite3.Connection], str | None]) -> str | None:
+    """``read`` of the file at ``path`` on a read-only connection (``_reader``), nothing of
+    it changed and its lock not taken; None when there is no file or it cannot be read."""
     if not path.is_file():
         return None
-    shm = Path(f"{path}-shm")
-    had_shm = shm.exists()
+    had_shm = Path(f"{path}-shm").exists()
     try:
         db = _reader(path)
     except sqlite3.Error:
         return None
     try:
-        return _foreign(db, path, program, cpu)
+        return read(db)
     except (sqlite3.Error, StateFileError):
         return None
     finally:
         db.close()
         if not had_shm:  # one a reader of the -wal made: nothing of it left
-            with contextlib.suppress(OSError):
-                shm.unlink()
+            _drop_shm(path, None)
 
 
 def _renewed(store: StateStore, batch: Batch, why: str) -> str:
@@ -1197,7 +1223,7 @@ def _renewed(store: StateStore, batch: Batch, why: str) -> str:
         store._db.execute(f"PRAGMA synchronous={store.synchronous}")
         store._held = _hold(store.path)
         store._idents()
-        store._alarm_rows = int(store._db.execute("SELECT COUNT(*) FROM alarms").fetchone()[0])
+        store._alarm_rows = _count(store._db, "alarms")  # what the new file could copy
     except (OSError, sqlite3.Error, StateFileError, StateWriteError) as exc:
         words = exc.problem if isinstance(exc, StateFileError | StateWriteError) else exc
         if isinstance(exc, OSError) and exc.strerror:

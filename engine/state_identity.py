@@ -10,7 +10,8 @@ kind, same file name) is not another program: its state is carried over as befor
 is a renamed source of the same kind the file's content recognises (``recognised``: every
 FB instance DB it holds is the program's, by DB number, FB number and FB name; for a
 chart, a GRAPH FB's among them): carried over the same way, said in a note
-(``renamed``), and recorded under its new name once taken.
+(``renamed``), and recorded under its new name once taken. A run of a renamed source
+without a state file of its own names such a file beside it (``beside``), never taking it.
 
 A file written before the program was recorded is judged by what it holds: a chart's own
 instance DB is a GRAPH FB's (fingerprint ``chart:``), so a file holding a state without
@@ -32,6 +33,7 @@ __all__ = [
     "SOURCE_KEY",
     "Held",
     "Program",
+    "beside",
     "foreign",
     "malformed",
     "recognised",
@@ -134,6 +136,24 @@ def foreign(
     if mine.kind != "chart" and charts and not has_chart:
         return f"{older} it holds a chart's sequencer ({charts[0]}): a chart's, not {mine}'s"
     return None
+
+
+def beside(
+    mine: Program,
+    saved: Program | None,
+    *,
+    holds_state: bool,
+    held: Sequence[Held],
+    own: Collection[tuple[int, str, str]],
+    has_chart: bool,
+) -> str | None:
+    """Whose state a file holds that ``mine`` would carry over given it (``foreign`` finds
+    nothing against it) and whose instance DBs are ``mine``'s (``recognised``): a file of
+    ``mine`` under another name, or of a renamed source; None for any other file."""
+    why = foreign(mine, saved, holds_state=holds_state, held=held, own=own, has_chart=has_chart)
+    if why is not None or not recognised(mine, held, own):
+        return None
+    return f"the state of {saved}" if saved is not None else "a state that records no program"
 
 
 def recognised(mine: Program, held: Sequence[Held], own: Collection[tuple[int, str, str]]) -> bool:

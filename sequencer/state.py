@@ -409,25 +409,14 @@ class GraphState:
                 raise ValueError(f"{name!r} is {value!r}")
             setattr(st, name, dict(value))
         st.diag = list(data.get("diag", []))
-        levels = data.get("levels", {})  # absent in a state written before overrides were kept
-        if not isinstance(levels, dict) or any(
-            pin not in LEVEL_PINS or not isinstance(v, bool) for pin, v in levels.items()
-        ):
-            raise ValueError(f"'levels' is {levels!r}")
-        st.levels = dict(levels)
+        st.levels = _levels(data, "levels")  # absent in a state from before overrides were kept
         for name in ("to_enter", "to_place", "to_release"):  # absent in a state from before
             numbers = data.get(name, [])
             if not isinstance(numbers, list) or any(type(n) is not int for n in numbers):
                 raise ValueError(f"{name!r} is {numbers!r}")
             setattr(st, name, list(numbers))
         st.to_command = _commands(data.get("to_command", []))  # absent before: none queued
-        to_level = data.get("to_level", {})
-        if not isinstance(to_level, dict) or any(
-            pin not in LEVEL_PINS or not (v is None or isinstance(v, bool))
-            for pin, v in to_level.items()
-        ):
-            raise ValueError(f"'to_level' is {to_level!r}")
-        st.to_level = dict(to_level)
+        st.to_level = _levels(data, "to_level", lifted=True)
         return st
 
     def __eq__(self, other: object) -> bool:
@@ -437,6 +426,19 @@ class GraphState:
 
     def __repr__(self) -> str:
         return f"GraphState(active={self.active}, mode={self.mode}, calls={self.calls})"
+
+
+def _levels(data: dict[str, Any], key: str, *, lifted: bool = False) -> dict[str, Any]:
+    """``levels`` or ``to_level`` as saved (none when absent): a map of level pins to a
+    BOOL, or to null where ``lifted`` (an override the next call lifts); anything else is
+    refused (ValueError)."""
+    value = data.get(key, {})
+    if not isinstance(value, dict) or any(
+        pin not in LEVEL_PINS or not (isinstance(v, bool) or (lifted and v is None))
+        for pin, v in value.items()
+    ):
+        raise ValueError(f"{key!r} is {value!r}")
+    return dict(value)
 
 
 def _commands(value: object) -> list[Command]:

@@ -194,6 +194,28 @@ def test_alarm_and_audit_tables(tmp_path: Path) -> None:
     assert store.audit()[0]["user"] == "ann"
 
 
+def test_an_existing_files_alarm_log_is_bounded_counting_the_rows_it_held(
+    tmp_path: Path,
+) -> None:
+    """The rows a file holds are counted when it is opened (read-only) and taken as they
+    are when it is opened for writing: the 21st row over a limit of 20 rolls the oldest."""
+    first = StateStore(tmp_path / "s.sqlite")
+    for i in range(15):
+        first.log_alarm(10**18 + i, f"M{i}", "incoming", "text")
+    first.close()
+    store = StateStore(tmp_path / "s.sqlite")
+    store.alarm_limit = 20
+    store.open_writing()
+    for i in range(5):
+        store.log_alarm(2 * 10**18 + i, f"N{i}", "incoming", "text")
+    assert len(store.alarms()) == 20  # not over the limit: nothing rolled
+    store.log_alarm(3 * 10**18, "N5", "incoming", "text")
+    rolled = store._db.execute("SELECT SUM(count) FROM alarm_summary").fetchone()[0]
+    assert len(store.alarms()) < 20 and rolled + len(store.alarms()) == 21
+    assert store.alarms()[-1]["key"] == "N5"
+    store.close()
+
+
 @dataclass(frozen=True)
 class _Event:  # the shape of sfb.alarms.MessageEvent (the engine may not import sfb)
     kind: str

@@ -85,3 +85,34 @@ def test_a_compact_list_that_does_not_fit_is_refused(
     with pytest.raises(ValueError) as refused:
         GraphState.from_state(data)
     assert fragment in str(refused.value)
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "fragment"),
+    [
+        ("levels", {"HALT_SQ": None}, "'levels' is {'HALT_SQ': None}"),
+        ("levels", {"S_ON": True}, "'levels' is"),
+        ("levels", [["EN_IL", True]], "'levels' is"),
+        ("to_level", {"EN_SV": 1}, "'to_level' is {'EN_SV': 1}"),
+        ("to_level", {"INIT_SQ": None}, "'to_level' is"),
+    ],
+)
+def test_level_overrides_that_are_not_a_level_pins_bool_are_refused(
+    key: str, value: object, fragment: str
+) -> None:
+    """In force (``levels``) an override is TRUE or FALSE; queued (``to_level``) it may
+    also be null, the pin deciding again from the next call."""
+    data = _on_disk(_running().state_view())
+    data[key] = value
+    with pytest.raises(ValueError) as refused:
+        GraphState.from_state(data)
+    assert fragment in str(refused.value)
+
+
+def test_level_overrides_in_force_and_queued_are_read_back() -> None:
+    st = _running()
+    st.levels = {"HALT_SQ": True}
+    st.to_level = {"HALT_SQ": None, "EN_IL": False}
+    back = GraphState.from_state(_on_disk(st.state_view()))
+    assert back.levels == {"HALT_SQ": True}
+    assert back.to_level == {"HALT_SQ": None, "EN_IL": False}

@@ -6,12 +6,14 @@ problem and exits 2), never taken for a fresh start; ``fresh`` keeps an existing
 ``FILE.old-N`` and starts anew. A hot restart the saved state does not allow is refused the
 same way (``HotRestartRefused``), never turned into a warm one; so is a file that is
 another program's (``program``: ``engine/state_identity.py``). ``default_state`` chooses a
-run's file without ``--state``: one of its own beside a chart or program of the same name.
+run's file without ``--state``: one of its own beside a chart or program of the same name,
+never another file beside it, but a file a renamed source left there is named.
 ``persist_messages`` adds the CPU's message list to it.
 """
 
 from __future__ import annotations
 
+import shlex
 from pathlib import Path
 from typing import Any
 
@@ -23,6 +25,7 @@ from s7graph.engine.persistence import (
     StateStore,
     foreign_state,
     not_in_use,
+    state_beside,
 )
 from s7graph.engine.renew import set_aside
 from s7graph.engine.state_identity import Program
@@ -156,14 +159,18 @@ def open_state(
 
 def default_state(source: Path, cpu: Cpu) -> tuple[Path, str | None]:
     """The state file of a run of ``source`` without ``--state``, and a note when the file
-    of the other name is another program's (docs/state-file.md, "Whose state it is").
+    of the other name is another program's, or when the run starts fresh though a state
+    file beside ``source`` is this program's (docs/state-file.md, "Whose state it is"); the
+    note goes to ``cpu``'s diagnostic buffer too.
 
     A chart's is ``NAME.state.sqlite``, an S7-SCL or Python program's
     ``NAME.scl.state.sqlite`` / ``NAME.py.state.sqlite`` (a chart and a program of one name
     side by side each keep their own); the other name (a chart's ``NAME.s7g.state.sqlite``,
     a program's ``NAME.state.sqlite``, as before) is taken when it is there and this
     program's, or older and not known to be another's, and the own name is not. A file
-    another program's is passed over, said so, for a free name: never taken, never moved."""
+    another program's is passed over, said so, for a free name: never taken, never moved.
+    Nor is any other file beside ``source`` taken, but one the program would carry over
+    given it with ``--state`` (a renamed source's, ``state_beside``) is named in the note."""
     program = Program.of(source)
     plain = source.with_suffix(".state.sqlite")
     suffixed = source.with_name(f"{source.name}.state.sqlite")
@@ -177,10 +184,46 @@ def default_state(source: Path, cpu: Cpu) -> tuple[Path, str | None]:
             others.append(f"{path.name} is passed over ({why})")
     for path in names:
         if not _there(path):
-            kept = f"; the state of {program} is kept in {path.name}"
-            note = "; ".join(others) + kept if others else None
+            if others:
+                others.append(f"the state of {program} is kept in {path.name}")
+            found = _beside(source, program, cpu, names)
+            if found:
+                others.append(found)
+            note = "; ".join(others) if others else None
+            if note is not None:
+                now = cpu.clock.now_ns()
+                cpu.diagnostics.record(now, EventId.STATE_NOT_TAKEN, "", note)
             return path, note
     return names[0], None  # both another's: refused, saying whose
+
+
+def _beside(source: Path, program: Program, cpu: Cpu, names: list[Path]) -> str | None:
+    """The files beside ``source`` (``*.state.sqlite``, but ``names``) that hold this
+    program's state (``state_beside``: each read-only, never locked or changed), in words:
+    which, and how to carry one over; None when there is none. A program without instance
+    DBs has none: nothing in a file tells it apart."""
+    if not cpu.instance_dbs:
+        return None
+    found = [
+        (path, whose)
+        for path in sorted(source.parent.glob("*.state.sqlite"))
+        if path not in names and (whose := state_beside(path, program, cpu)) is not None
+    ]
+    if not found:
+        return None
+    run = f"run {program.source} with --state"
+    if len(found) == 1:
+        path, whose = found[0]
+        return (
+            f"{path.name} beside it holds {whose}, whose instance DBs are {program}'s (a "
+            f"renamed source?): not taken without --state; to carry it over, {run} "
+            f"{shlex.quote(str(path))}"
+        )
+    files = ", ".join(f"{path.name} ({whose})" for path, whose in found)
+    return (
+        f"{files} beside it hold states whose instance DBs are {program}'s (a renamed "
+        f"source?): none taken without --state; to carry one over, {run} FILE"
+    )
 
 
 def _there(path: Path) -> bool:

@@ -3,7 +3,8 @@ example's ``oven.s7g`` and ``oven.scl`` — as real processes: each keeps a stat
 its own by default; the other's file given with ``--state`` is refused in one line naming
 both, exit 2, byte for byte as it was; an older shared file stays the program's that wrote
 it and the chart passes over it, saying so; a changed chart still warm-restarts with notes,
-and so does a renamed one given its old file (docs/state-file.md, "Whose state it is")."""
+and so does a renamed one given its old file; run without it, the renamed chart starts
+fresh naming its old file (docs/state-file.md, "Whose state it is")."""
 
 from __future__ import annotations
 
@@ -145,3 +146,30 @@ def test_a_renamed_chart_given_its_old_state_file_warm_restarts_from_it_saying_s
     again = _run(oven, "oven_v2.s7g", "--state", "oven.state.sqlite")
     assert "warm restart from oven.state.sqlite" in again.stderr, again.stderr
     assert "note:" not in again.stderr
+
+
+def test_a_renamed_chart_run_without_state_starts_fresh_naming_its_old_file_beside_it(
+    oven: Path,
+) -> None:
+    """``oven.s7g`` renamed ``oven2.s7g`` and run as before, without ``--state``: before, a
+    fresh start in ``oven2.state.sqlite`` without a word, ``oven.state.sqlite`` beside it
+    holding the plant's position. Now a note names it and ``--state`` (on stderr and in the
+    new file's diagnostic buffer); it is not taken, and stays byte for byte as it was."""
+    assert _run(oven, "oven.s7g").returncode == 0
+    assert _run(oven, "oven.scl").returncode == 0  # another program's file beside: not named
+    (oven / "oven.s7g").rename(oven / "oven2.s7g")
+    before = _files(oven)
+    renamed = _run(oven, "oven2.s7g")
+    assert renamed.returncode == 0, renamed.stderr
+    note = (
+        "oven.state.sqlite beside it holds the state of the chart oven.s7g, whose instance "
+        "DBs are the chart oven2.s7g's (a renamed source?): not taken without --state; to "
+        "carry it over, run oven2.s7g with --state oven.state.sqlite"
+    )
+    assert renamed.stderr.splitlines()[0] == f"s7graph: note: {note}"
+    assert "fresh start, state in oven2.state.sqlite" in renamed.stderr
+    assert {k: v for k, v in _files(oven).items() if k in before} == before
+    with sqlite3.connect(oven / "oven2.state.sqlite") as con:
+        rows = con.execute("SELECT message FROM diagnostics WHERE event_id=?", (0x5F08,))
+        assert rows.fetchall() == [(note,)]
+    con.close()

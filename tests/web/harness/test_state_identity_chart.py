@@ -2,8 +2,9 @@
 engine/state_identity.py): each has a default state file of its own; a file from before
 the program was recorded is judged by whether it holds a chart's sequencer; the file of
 the other name is looked at without a byte of it changing, and passed over, said so, when
-it is another program's; a renamed chart keeps the state its GRAPH FB's instance DB is in.
-The drill demo on the virtual clock."""
+it is another program's; a renamed chart keeps the state its GRAPH FB's instance DB is in,
+and without a file of its own starts fresh naming that one beside it. The drill demo on the
+virtual clock."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ from pathlib import Path
 import pytest
 
 from s7graph.engine.clock import VirtualClock
+from s7graph.engine.diagnostics import EventId
 from s7graph.engine.persistence import StateFileError, StateStore
 from s7graph.engine.state_identity import Program
 from s7graph.web.harness.persist import default_state, open_state, refusal
@@ -22,6 +24,7 @@ from tests.engine.test_state_trust import _cpu
 from tests.paths import ROOT
 
 DRILL = ROOT / "examples" / "drill"
+MIXING = ROOT / "examples" / "mixing"
 CHART = Program("chart", "far.s7g")
 
 
@@ -29,9 +32,16 @@ def _session() -> ChartSession:
     return ChartSession.load(DRILL / "drill.s7g", DRILL / "symbols.txt", VirtualClock(10**12))
 
 
-def _chart_file(path: Path, program: Program | None) -> Path:
-    """A state file of the drill chart after a scan, written by a run of ``program``."""
-    session = _session()
+def _chart_file(path: Path, program: Program | None, *, chart: Path = DRILL) -> Path:
+    """A state file of the drill chart (or the one in folder ``chart``) after a scan,
+    written by a run of ``program``."""
+    session = (
+        _session()
+        if chart == DRILL
+        else ChartSession.load(
+            chart / f"{chart.name}.s7g", chart / "symbols.txt", VirtualClock(10**12)
+        )
+    )
     store = StateStore(path, program=program)
     session.start()
     session.scan()
@@ -156,3 +166,54 @@ def test_another_programs_file_of_the_shared_name_is_passed_over_said_and_left_a
         "far.s7g.state.sqlite"
     )
     assert _files(folder) == before
+
+
+def test_a_renamed_chart_without_a_state_file_of_its_own_starts_fresh_naming_the_one_beside_it(
+    tmp_path: Path,
+) -> None:
+    """``far.s7g`` renamed ``far_v2.s7g``, run without ``--state``: before, a fresh start in
+    ``far_v2.state.sqlite`` without a word about ``far.state.sqlite``. Now the note names it
+    and how to carry it over, on stderr and in the diagnostic buffer; it is not taken, and
+    the files beside the chart stay as they were — the S7-SCL program's among them, which
+    is not named."""
+    _chart_file(tmp_path / "far.state.sqlite", CHART)
+    _written(tmp_path / "far.scl.state.sqlite", SCL)
+    before = _files(tmp_path)
+    cpu = _session().cpu
+    path, note = default_state(tmp_path / "far_v2.s7g", cpu)
+    assert path == tmp_path / "far_v2.state.sqlite"
+    assert note == (
+        "far.state.sqlite beside it holds the state of the chart far.s7g, whose instance DBs "
+        "are the chart far_v2.s7g's (a renamed source?): not taken without --state; to carry "
+        f"it over, run far_v2.s7g with --state {tmp_path / 'far.state.sqlite'}"
+    )
+    assert [(e.event_id, e.message) for e in cpu.diagnostics] == [(EventId.STATE_NOT_TAKEN, note)]
+    assert _files(tmp_path) == before
+
+
+def test_a_file_beside_a_chart_is_named_only_when_its_instance_dbs_are_the_charts(
+    tmp_path: Path,
+) -> None:
+    """Another chart's file (the mixing chart's GRAPH FB) and another kind's file (the same
+    blocks, a Python program's) are not this chart's state: a fresh start, no note."""
+    _chart_file(tmp_path / "mixing.state.sqlite", None, chart=MIXING)
+    _chart_file(tmp_path / "far.py.state.sqlite", Program("python", "far.py"))
+    cpu = _session().cpu
+    assert default_state(tmp_path / "far_v2.s7g", cpu) == (
+        tmp_path / "far_v2.state.sqlite",
+        None,
+    )
+    assert not list(cpu.diagnostics)
+
+
+def test_several_files_beside_a_chart_holding_its_state_are_all_named(tmp_path: Path) -> None:
+    _chart_file(tmp_path / "far.state.sqlite", CHART)
+    _chart_file(tmp_path / "old copy.state.sqlite", None)
+    path, note = default_state(tmp_path / "far_v2.s7g", _session().cpu)
+    assert path == tmp_path / "far_v2.state.sqlite"
+    assert note == (
+        "far.state.sqlite (the state of the chart far.s7g), old copy.state.sqlite (a state "
+        "that records no program) beside it hold states whose instance DBs are the chart "
+        "far_v2.s7g's (a renamed source?): none taken without --state; to carry one over, "
+        "run far_v2.s7g with --state FILE"
+    )
