@@ -34,6 +34,7 @@ detail, never a count. Rows of refusal windows still counting are not rolled.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import json
 import operator
@@ -113,6 +114,17 @@ _AUDIT_COLUMNS: Final = (
     "count",
     "claimed",
 )
+_ACKED: Final = (
+    "action = 'ack_msg' AND outcome = 'applied' AND "
+    "CASE WHEN json_valid(args) THEN json_type(args, '$.comment') END = 'text'"
+)
+"""SQL of the rows that gave a message its comment or emptied it: applied ``ack_msg`` rows
+with a ``comment`` text (arguments cut short, no JSON, never match)."""
+_ACKED_MSG: Final = "CASE WHEN json_valid(args) THEN json_extract(args, '$.msg_id') END"
+_ACKED_INDEX: Final = (
+    f"CREATE INDEX IF NOT EXISTS audit_acked ON audit({_ACKED_MSG}, id) WHERE {_ACKED}"
+)
+"""Those rows by message, so :meth:`AuditStore.acked` reads the index, not the table."""
 _DEFAULTS: Final = {"outcome": "'applied'", "count": "1"}
 """What a column missing from an older file reads as (others: '')."""
 _ALWAYS: Final = ("id", "t_ns", "user", "action", "detail")
@@ -227,6 +239,8 @@ def _migrate(db: sqlite3.Connection) -> None:
     for column, decl in _NEW_COLUMNS:
         if column not in have:  # a state file from before the column existed
             db.execute(f"ALTER TABLE audit ADD COLUMN {column} {decl}")
+    with contextlib.suppress(sqlite3.OperationalError):  # an SQLite without JSON: none
+        db.execute(_ACKED_INDEX)
 
 
 def _connect(target: Path | str, *, uri: bool = False) -> sqlite3.Connection:
@@ -483,6 +497,16 @@ class AuditStore:
         with self._conn_lock:
             rows = _audit_rows(self._reader(), "ORDER BY id DESC LIMIT ?", (max(n, 0),))
         return rows[::-1]
+
+    def acked(self, n: int = 1000) -> list[AuditRecord]:
+        """Of each message (of the ``n`` acknowledged last), the newest applied ``ack_msg``
+        row that gave it a comment or emptied it, however old, oldest first: a read of the
+        ``audit_acked`` index, not of the table. ``sqlite3.OperationalError`` from an
+        SQLite without JSON functions."""
+        newest = f"SELECT max(id) AS m FROM audit WHERE {_ACKED} GROUP BY {_ACKED_MSG}"
+        where = f"WHERE id IN (SELECT m FROM ({newest}) ORDER BY m DESC LIMIT ?) ORDER BY id"
+        with self._conn_lock:
+            return _audit_rows(self._reader(), where, (max(n, 0),))
 
     def summary(self) -> list[SummaryRecord]:
         """The rows rolled into the summary, oldest day first."""

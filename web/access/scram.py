@@ -212,13 +212,14 @@ class Signer:
         return f"Signer({self.user!r}, seq={self._seq})"
 
     def sign(self, command: Command) -> Command:
-        """``command`` with the next ``seq`` and, with a key, its ``mac``."""
-        with self._lock:
-            self._seq += 1
-            numbered = msgspec.structs.replace(command, seq=self._seq, mac=UNSET)
-        if not self._key:
-            return numbered
-        return msgspec.structs.replace(numbered, mac=sign(self._key, command_bytes(numbered)))
+        """``command`` with the next ``seq`` and, with a key, its ``mac``: :meth:`numbered`
+        with the command's bytes, the one signing path."""
+
+        def at(seq: int) -> Command:
+            return msgspec.structs.replace(command, seq=seq, mac=UNSET)
+
+        seq, mac = self.numbered(lambda seq: command_bytes(at(seq)))
+        return msgspec.structs.replace(at(seq), mac=mac or UNSET)
 
     def numbered(self, message: Callable[[int], bytes]) -> tuple[int, str]:
         """The next ``seq`` and, with a key, the ``mac`` of ``message(seq)`` ("" in the

@@ -433,6 +433,11 @@ class BusClient:
         """The CPU's last 50 audit rows, or None if no CPU answers."""
         return self._read(self._keys.audit_list, AuditList)
 
+    def acked(self) -> AuditList | None:
+        """Of each message, the CPU's newest applied acknowledgement that gave it a comment
+        or emptied it, however old (``audit/acked``), or None if no CPU answers."""
+        return self._read(self._keys.audit_acked, AuditList)
+
     def history(self) -> AlarmHistory | None:
         """The CPU's last 200 message events, or None if no CPU answers."""
         return self._read(self._keys.alarm_history, AlarmHistory)

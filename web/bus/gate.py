@@ -355,6 +355,13 @@ class Gate:
             rows = self.tally.live(rows)
         return AuditList(entries=[audit_entry(r) for r in rows])
 
+    def acked_list(self) -> AuditList:
+        """Of each message, the newest applied acknowledgement that gave it a comment or
+        emptied it, however old (``audit/acked``; ``AuditStore.acked``); without a state
+        file, the rows kept in memory (the last 50)."""
+        rows = self.audit.acked() if self.audit is not None else list(self._recent)
+        return AuditList(entries=[audit_entry(r) for r in rows])
+
     def history(self, n: int = HISTORY) -> AlarmHistory:
         if self.audit is None:
             return AlarmHistory()

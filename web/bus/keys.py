@@ -40,7 +40,8 @@ Key space, all under ``s7graph/<cpu>/``:
   confirmed. Unreadable ones are refused (and audited) at once with the reason;
 - ``login`` — queryable: a :class:`LoginRequest` in, a :class:`LoginReply` (a token) out;
 - ``audit`` — each :class:`AuditEntry` as it is written; ``audit/list`` — queryable: the
-  last 50 (:class:`AuditList`);
+  last 50 (:class:`AuditList`); ``audit/acked`` — queryable: of each message, its newest
+  applied ``ack_msg`` row with a comment, however old (:class:`AuditList`);
 - ``diag`` — queryable: the CPU's diagnostic buffer, newest first (:class:`DiagBuffer`; the
   newest 100, or ``?n=N``); ``diag/new`` — the entries written since the last publication,
   published at the scan boundary after they were written;
@@ -125,6 +126,10 @@ class keys:
     @property
     def audit_list(self) -> str:
         return f"{ROOT}/{self.cpu}/audit/list"
+
+    @property
+    def audit_acked(self) -> str:
+        return f"{ROOT}/{self.cpu}/audit/acked"
 
     @property
     def diag(self) -> str:

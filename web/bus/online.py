@@ -28,9 +28,9 @@ the same boundary (``web.bus.online_blocks``), kept with its version for ``undo_
 With the chart unchanged (its summary empty) only the blocks change: the chart that runs,
 its state and its file stay, and the reply says so as the preview does. The chart reads
 the FBs' variables by name (``"Motor_DB".Running``) in those sources, or, when a download
-brings none, in the blocks the CPU holds (``online_blocks.held_interfaces``): a variable
-the FB lacks refuses it (E048), and so does a call of those blocks that does not fit them
-(E047, ``sequencer.calls.unfit_calls``), its preview alike.
+brings none, in the blocks the CPU holds (``online_blocks.HeldInterfaces``, kept until the
+blocks change): a variable the FB lacks refuses it (E048), and so does a call of those
+blocks that does not fit them (E047, ``sequencer.calls.unfit_calls``), its preview alike.
 Its preview (and an undo's) says what the instance DBs would keep, drop and start afresh
 — the notes the download's reply gives, made by the same function
 (``web.harness.scl_reload.carry_notes``) — or the reason it would be refused.
@@ -66,8 +66,8 @@ from s7graph.web.bus.live import LiveChart, LiveGraph
 from s7graph.web.bus.online_blocks import (
     BlockFiles,
     BlocksRefused,
+    HeldInterfaces,
     chart_refusal,
-    held_interfaces,
     swap_blocks,
 )
 from s7graph.web.bus.protocol import (
@@ -190,6 +190,7 @@ class OnlineChange:
             with contextlib.suppress(OSError, UnicodeDecodeError):
                 text = self.path.read_text(encoding="utf-8")
         self.block_files = BlockFiles(blocks)
+        self.held_interfaces = HeldInterfaces(session)
         scl = next((b for b in session.blocks if isinstance(b, SclSources)), None)
         texts = dict(self.block_files.texts)
         self.current = Version(1, session.cc, session.symbols, text, None, scl, texts)
@@ -437,7 +438,7 @@ class OnlineChange:
         it ``file`` (the sender's)."""
         v = self.current
         blocks = self.block_files.merged(sent) if sent else None
-        held = None if sent else held_interfaces(self.session)
+        held = None if sent else self.held_interfaces()
         done = self.compiler.compile(
             text,
             file,

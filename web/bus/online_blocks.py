@@ -18,7 +18,7 @@ for a chart swap that is refused after it. Nothing here compiles: the blocks com
 refusal``) once those blocks are in: what a download's preview says first, and the download
 checks before it writes a file. :func:`held_interfaces` are the interfaces of the blocks
 the CPU holds, which a download's chart reads the FBs' variables of by name when it brings
-no sources.
+no sources; :class:`HeldInterfaces` keeps them, built again only after the blocks change.
 """
 
 from __future__ import annotations
@@ -38,7 +38,14 @@ from s7graph.web.harness.scl import SclSources
 from s7graph.web.harness.scl_reload import refusals
 from s7graph.web.harness.session import ChartSession
 
-__all__ = ["BlockFiles", "BlocksRefused", "chart_refusal", "held_interfaces", "swap_blocks"]
+__all__ = [
+    "BlockFiles",
+    "BlocksRefused",
+    "HeldInterfaces",
+    "chart_refusal",
+    "held_interfaces",
+    "swap_blocks",
+]
 
 
 class BlocksRefused(S7Error):
@@ -148,13 +155,37 @@ def _program_of(session: ChartSession) -> Callable[[], None]:
 def held_interfaces(session: ChartSession) -> ProgramBlocks | None:
     """The interfaces of the user blocks the session's CPU holds (its ``blocks``: S7-SCL
     sources, a program of blocks) as the chart's compile reads them, None without any."""
-    programs = list(session.blocks)
+    return _interfaces(tuple(session.blocks))
+
+
+def _interfaces(programs: tuple[Any, ...]) -> ProgramBlocks | None:
     if not programs:
         return None
     blocks = [b for p in programs for b in p.blocks]
     instances = {n: fb for p in programs for n, fb in getattr(p, "instances", {}).items()}
     files = [str(f) for p in programs for f in getattr(p, "files", ())]
     return program_blocks(blocks, instances, sources=", ".join(files))
+
+
+class HeldInterfaces:
+    """:func:`held_interfaces` of one session, kept: built again only when the session
+    holds other programs than the ones they were built from (a block download, its undo,
+    a refused swap put back; a reload makes new program objects and never changes one),
+    not for every download that brings no sources. ``builds`` counts the builds."""
+
+    def __init__(self, session: ChartSession) -> None:
+        self._session = session
+        self._kept: tuple[tuple[Any, ...], ProgramBlocks | None] = ((), None)
+        self.builds = 0
+
+    def __call__(self) -> ProgramBlocks | None:
+        programs = tuple(self._session.blocks)  # one read: a swap may replace the list
+        of, made = self._kept
+        if len(of) != len(programs) or any(a is not b for a, b in zip(of, programs, strict=True)):
+            made = _interfaces(programs)
+            self._kept = (programs, made)  # one assignment: read whole from another thread
+            self.builds += 1
+        return made
 
 
 def chart_refusal(session: ChartSession, needs: Needs, new: SclSources | None) -> str | None:

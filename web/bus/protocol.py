@@ -926,7 +926,8 @@ class AuditEntry(_Msg, frozen=True, kw_only=True):
 
 
 class AuditList(_Msg, frozen=True, kw_only=True):
-    """The last audit rows, oldest first (``audit/list``)."""
+    """Audit rows, oldest first: the last ones (``audit/list``), or each message's newest
+    acknowledgement with a comment (``audit/acked``)."""
 
     entries: Annotated[list[AuditEntry], Meta(max_length=1000)] = []
 

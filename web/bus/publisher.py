@@ -274,6 +274,7 @@ class BusPublisher:
             self._serve(self._keys.forces, self._force_bytes)
             self._serve(self._keys.alarm_history, lambda: encode(self.gate.history()))
             self._serve(self._keys.audit_list, lambda: encode(self.gate.audit_list()))
+            self._serve(self._keys.audit_acked, lambda: encode(self.gate.acked_list()))
             self._audit_pub = session.declare_publisher(
                 self._keys.audit, encoding=zenoh.Encoding.APPLICATION_JSON
             )

@@ -12,6 +12,8 @@ knows no CPU.
 
 from __future__ import annotations
 
+import contextlib
+import copy
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -30,7 +32,8 @@ from s7graph.sequencer.checks.validate import validate
 from s7graph.sequencer.text.model import Chart
 from s7graph.sequencer.text.parse import ChartSyntaxError, chart_text, parse_chart
 from s7graph.web.bus.protocol import ChartLayout, layout_problem
-from s7graph.web.harness.scl import SclLoadError, compile_sources
+from s7graph.web.harness.scl import ChartBlocks, SclLoadError
+from s7graph.web.harness.session import add_chart_symbols
 
 
 def check_command(chart: Path, symbols: Path | None = None, blocks: Sequence[Path] = ()) -> int:
@@ -55,18 +58,15 @@ def check_command(chart: Path, symbols: Path | None = None, blocks: Sequence[Pat
         except S7Error as exc:
             print(f"s7graph: error: cannot read symbols {symbols}: {exc}", file=sys.stderr)
             return 2
-    program, lines = _program(blocks, table)
-    if program is None and lines is None:
-        return 2
-    diags: list[Diagnostic]
+    parsed: Chart | ChartSyntaxError
     try:
         parsed = parse_chart(chart_text(data, str(chart)), str(chart))
-        diags = validate(parsed, table, blocks=program)
-        if not any(d.severity == "error" for d in diags):
-            diags = sorted([*diags, *default_cpu_warnings(parsed, table)], key=sort_key)
-            diags += view_diagnostics(parsed)
     except ChartSyntaxError as exc:
-        diags = exc.diagnostics
+        parsed = exc
+    program, lines = _program(blocks, _sources_table(table, parsed))
+    if program is None and lines is None:
+        return 2
+    diags = _diagnostics(parsed, table, program)
     scl_errors = 0
     for line, is_error in lines or []:
         print(line)
@@ -79,6 +79,35 @@ def check_command(chart: Path, symbols: Path | None = None, blocks: Sequence[Pat
     return 2 if errors else 1 if warnings else 0
 
 
+def _diagnostics(
+    parsed: Chart | ChartSyntaxError, table: SymbolTable | None, program: ProgramBlocks | None
+) -> list[Diagnostic]:
+    """The chart's diagnostics: its syntax errors, else its validation's, with the default
+    CPU's warnings and the view's when it has no error."""
+    if isinstance(parsed, ChartSyntaxError):
+        return parsed.diagnostics
+    try:
+        diags = validate(parsed, table, blocks=program)
+        if not any(d.severity == "error" for d in diags):
+            diags = sorted([*diags, *default_cpu_warnings(parsed, table)], key=sort_key)
+            diags += view_diagnostics(parsed)
+    except ChartSyntaxError as exc:
+        return exc.diagnostics
+    return diags
+
+
+def _sources_table(table: SymbolTable | None, chart: Chart | ChartSyntaxError) -> SymbolTable:
+    """The table the ``--blocks`` sources are compiled with: ``table`` with the chart's
+    ``SYMBOLS`` in, as ``sim``, ``run`` and ``export`` compile them (a copy: the chart is
+    validated against ``table`` as given; a symbol that does not fit is the chart's own
+    diagnostic)."""
+    out = copy.deepcopy(table) if table is not None else SymbolTable()
+    if isinstance(chart, Chart):
+        with contextlib.suppress(S7Error):
+            add_chart_symbols(chart, out)
+    return out
+
+
 def _program(
     blocks: Sequence[Path], table: SymbolTable | None
 ) -> tuple[ProgramBlocks | None, list[tuple[str, bool]] | None]:
@@ -87,14 +116,15 @@ def _program(
     be read."""
     if not blocks:
         return None, []
+    compiled = ChartBlocks(blocks)  # as sim, run and export compile them
     try:
-        sources = compile_sources(blocks, table)
+        program = compiled(table)
     except SclLoadError as exc:
         return None, [(line, ": warning[" not in line) for line in exc.lines]
     except S7Error as exc:
         print(f"s7graph: error: {exc}", file=sys.stderr)
         return None, None
-    return sources.interfaces(), [(line, False) for line in sources.warnings]
+    return program, [(line, False) for line in compiled.warnings]
 
 
 def view_diagnostics(chart: Chart) -> list[Diagnostic]:

@@ -15,7 +15,9 @@ writes the chart in that format and prints, one a line, what of it the format's 
 readers do not see or run otherwise (exit 1; 0 when nothing); a chart that does not
 compile, or a part the format cannot hold, is its diagnostics and exit 2. ``--blocks``: the
 S7-SCL sources of the user FBs whose instance DBs the chart reads by name
-(``"Motor_DB".Running``), compiled with the chart as ``check --blocks`` does.
+(``"Motor_DB".Running``), compiled with the chart by the function ``check``, ``sim`` and
+``run`` use (``web.harness.scl.ChartBlocks``); their warnings come first, as ``check``
+prints them, and count (exit 1).
 """
 
 from __future__ import annotations
@@ -28,7 +30,6 @@ from pathlib import Path
 from s7graph.engine.errors import S7Error
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.checks.diagnostics import format_diagnostic
-from s7graph.sequencer.checks.interfaces import ProgramBlocks
 from s7graph.sequencer.exchange import (
     FORMATS,
     Imported,
@@ -40,8 +41,8 @@ from s7graph.sequencer.exchange import (
 from s7graph.sequencer.text.format import format_chart, quote
 from s7graph.sequencer.text.model import Chart
 from s7graph.web.cli.report import fail
-from s7graph.web.harness.scl import compile_sources
-from s7graph.web.harness.session import Interfaces, load_chart
+from s7graph.web.harness.scl import ChartBlocks
+from s7graph.web.harness.session import load_chart
 
 __all__ = ["export_command", "import_command"]
 
@@ -79,6 +80,15 @@ def _os_error(doing: str, path: Path | str | None, exc: OSError) -> S7Error:
     else:
         reason = exc.strerror or str(exc)
     return S7Error(f"cannot {doing} {where}: {reason}")
+
+
+def _same_file(source: Path, output: Path) -> bool:
+    """Whether writing ``output`` would overwrite ``source`` (the same file, whatever the
+    path says): refused, the source would be lost."""
+    try:
+        return output.exists() and source.exists() and output.samefile(source)
+    except OSError:
+        return False
 
 
 def _format_of(source: Path) -> str:
@@ -177,18 +187,6 @@ def import_command(
     return 1 if result.problems else 0
 
 
-def _interfaces(blocks: Sequence[Path]) -> Interfaces | None:
-    """The interfaces of the S7-SCL sources ``blocks``, compiled with the chart's symbol
-    table (None without any), as ``check --blocks`` and ``sim --blocks`` make them."""
-    if not blocks:
-        return None
-
-    def interfaces(table: SymbolTable) -> ProgramBlocks:
-        return compile_sources(blocks, table).interfaces()
-
-    return interfaces
-
-
 def export_command(
     chart: Path,
     *,
@@ -201,21 +199,33 @@ def export_command(
     reads a user FB's variable by name compiles only with that FB's source (``blocks``)."""
     if to not in ("plcopen", "simaticml"):
         return fail(S7Error(f"--to must be plcopen or simaticml, not {to!r}"))
+    if _same_file(chart, output):
+        return fail(
+            S7Error(f"-o {output} is the chart exported: give the export a file of its own")
+        )
+    sources = ChartBlocks(blocks)  # compiled with the chart, as check, sim and run do
     try:
-        _, table = load_chart(chart, symbols, blocks=_interfaces(blocks))
+        _, table = load_chart(chart, symbols, blocks=sources if blocks else None)
         from s7graph.sequencer.text.parse import parse_file
 
         model = parse_file(chart)
         text, problems = export_reported(model, to, table if symbols is not None else None)
     except (S7Error, ValueError, OSError) as exc:
+        _say(sources.warnings)  # the sources' warnings first, as check prints them
         return fail(exc)
+    _say(sources.warnings)
     try:
         output.write_text(text, encoding="utf-8")
     except OSError as exc:
         return fail(_os_error("write", output, exc))
-    for d in problems:
-        print(format_diagnostic(d), file=sys.stderr)
-    n = len(problems)
+    _say([format_diagnostic(d) for d in problems])
+    n = len(problems) + len(sources.warnings)
     more = f", {n} warning{'s' * (n != 1)}" if n else ""
     print(f"{chart}: exported to {output} ({FORMATS[to]}){more}", file=sys.stderr)
-    return 1 if problems else 0
+    return 1 if n else 0
+
+
+def _say(lines: Sequence[str]) -> None:
+    """Each of ``lines`` on stderr."""
+    for line in lines:
+        print(line, file=sys.stderr)

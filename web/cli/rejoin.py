@@ -18,10 +18,11 @@ import zenoh
 
 from s7graph.web.bus import local
 from s7graph.web.bus.client import BusClient
+from s7graph.web.bus.protocol import CpuStatus
 from s7graph.web.bus.session import open_session, peer_problem
 from s7graph.web.cli.net import NetOptions
 
-__all__ = ["POLL_S", "PROBE_S", "Link", "answers"]
+__all__ = ["POLL_S", "PROBE_S", "Link", "answer"]
 
 POLL_S = 0.5
 """How often a watch whose CPU is not there looks for it again."""
@@ -29,10 +30,11 @@ PROBE_S = 1.0
 """How long one look waits for the CPU's status."""
 
 
-def answers(session: zenoh.Session, cpu: str) -> bool:
-    """Whether CPU ``cpu`` answers a status query on ``session`` within :data:`PROBE_S`."""
+def answer(session: zenoh.Session, cpu: str) -> CpuStatus | None:
+    """CPU ``cpu``'s status if it answers a query on ``session`` within :data:`PROBE_S`
+    (None: no answer): how a watch's first look and its rejoin alike ask."""
     with BusClient(session, cpu, timeout=PROBE_S) as probe:
-        return probe.status() is not None
+        return probe.status()
 
 
 class Link:
@@ -104,7 +106,7 @@ class Link:
             return
         if peer_problem(session, self.net.cpu) is not None:
             self._refused = endpoint
-        elif answers(session, self.net.cpu):
+        elif answer(session, self.net.cpu) is not None:
             self._swap(session, endpoint)
             return
         with contextlib.suppress(Exception):

@@ -33,7 +33,7 @@ from s7graph.web.bus.keys import ROOT
 from s7graph.web.bus.protocol import CpuStatus, valid_name
 from s7graph.web.bus.session import open_session, peer_problem
 from s7graph.web.cli.net import NetOptions
-from s7graph.web.cli.rejoin import POLL_S, PROBE_S, Link
+from s7graph.web.cli.rejoin import POLL_S, Link, answer
 
 __all__ = ["POLL_S", "Absent", "Local", "Reached", "cpu_reached", "join_bus", "local_cpu"]
 
@@ -242,8 +242,7 @@ class _Waiter:
     def _answered(self, joined: _Joined) -> tuple[_Joined, CpuStatus] | None:
         """(``joined``, the CPU's status) when it answers; None when it does not (said
         once)."""
-        with BusClient(joined.session, joined.cpu, timeout=PROBE_S) as probe:
-            status = probe.status()
+        status = answer(joined.session, joined.cpu)
         if status is not None:
             return joined, status
         ends = ", ".join(self.net.connect) or "this machine"

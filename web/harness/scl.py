@@ -32,6 +32,7 @@ if TYPE_CHECKING:  # the S7-SCL compiler is imported by the functions that compi
 
 __all__ = [
     "BlockText",
+    "ChartBlocks",
     "Loadable",
     "SclLoadError",
     "SclSources",
@@ -157,6 +158,28 @@ def compile_sources(paths: Sequence[Path], symbols: SymbolTable | None = None) -
     diagnostics of the first source that does not compile, ``S7Error`` for one that cannot
     be read."""
     return compile_texts([(str(path), read_source(path)) for path in paths], symbols)
+
+
+class ChartBlocks:
+    """The ``--blocks`` sources ``paths`` as a chart's compile takes them — ``check``,
+    ``sim``, ``run`` and ``export`` alike: called with the symbol table (when the chart's
+    compile calls it, with the chart's ``SYMBOLS`` in: ``web.harness.session.
+    compile_model``), it compiles them as :func:`compile_sources` does (its errors too)
+    and gives their interfaces; ``sources`` keeps what it compiled, ``warnings`` their
+    warnings, which each command prints."""
+
+    def __init__(self, paths: Sequence[Path]) -> None:
+        self.paths = list(paths)
+        self.sources: SclSources | None = None
+
+    def __call__(self, table: SymbolTable | None) -> ProgramBlocks:
+        self.sources = compile_sources(self.paths, table)
+        return self.sources.interfaces()
+
+    @property
+    def warnings(self) -> list[str]:
+        """The warnings of the sources compiled last (none before)."""
+        return list(self.sources.warnings) if self.sources is not None else []
 
 
 def compile_texts(

@@ -34,7 +34,7 @@ from s7graph.sequencer.text.parse import ChartSyntaxError, chart_text, parse_cha
 from s7graph.steps.scl.access import parse_name
 from s7graph.web.harness.dbvars import DbVariables
 from s7graph.web.harness.operands import address_of, stimulus_value, write_operand
-from s7graph.web.harness.scl import Loadable, SclSources, compile_sources, load_beside
+from s7graph.web.harness.scl import ChartBlocks, Loadable, SclSources, load_beside
 from s7graph.web.harness.scl_reload import reload_sources
 
 __all__ = [
@@ -211,15 +211,10 @@ class ChartSession:
         if not blocks:
             cc, table = load_chart(path, symbols)
             return cls(cc, table, clock)
-        compiled: list[SclSources] = []
-
-        def interfaces(table: SymbolTable) -> ProgramBlocks:
-            # the sources see the chart's SYMBOLS too; the chart their FBs' interfaces
-            compiled.append(compile_sources(blocks, table))
-            return compiled[-1].interfaces()
-
+        interfaces = ChartBlocks(blocks)  # the sources see the chart's SYMBOLS too
         cc, table = load_chart(path, symbols, blocks=interfaces)
-        sources = compiled[-1]
+        sources = interfaces.sources
+        assert sources is not None  # the compile called it
         session = cls(cc, table, clock, blocks=[sources])
         session.warnings += sources.warnings
         return session

@@ -20,9 +20,10 @@ comment becomes the condition's ``Comment`` (a Null one leaves it as it was, an 
 text with a locale empties it: OPC UA Part 9, "Acknowledge"), stamped with when it was
 given; an event carries it (one of its own when the acknowledgement's event went out
 first). A face started again takes each condition's last comment back from the CPU's
-audit rows (``web.opcua.conditions.acked_comments``) when it makes the condition. Called
-on an object that is no condition it is ``BadMethodInvalid``, on the
-condition type ``BadNodeIdInvalid`` (Part 9, "Acknowledge").
+audit rows (``web.opcua.conditions.acked_comments``) when it makes the condition; a
+running face takes another client's from each audit row as it comes
+(:meth:`Alarms.audited`). Called on an object that is no condition it is
+``BadMethodInvalid``, on the condition type ``BadNodeIdInvalid`` (Part 9, "Acknowledge").
 """
 
 from __future__ import annotations
@@ -41,9 +42,9 @@ from asyncua.crypto.permission_rules import UserRole
 from msgspec import UNSET
 
 from s7graph.engine.errors import internal_error
-from s7graph.web.bus.protocol import AlarmEntry, AlarmList, CommandReply
+from s7graph.web.bus.protocol import AlarmEntry, AlarmList, AuditEntry, CommandReply
 from s7graph.web.commands import AckMsg, Args, Command, MessageArgs
-from s7graph.web.opcua.conditions import event_values, show
+from s7graph.web.opcua.conditions import acked_comment, event_values, show
 from s7graph.web.opcua.nodes import Nodes
 from s7graph.web.opcua.sessions import caller
 from s7graph.web.opcua.statuses import is_condition, node_class
@@ -140,6 +141,8 @@ class Alarms:
         self._by_node: dict[ua.NodeId, _Condition] = {}
         self._live: dict[str, _Condition] = {}  # message key -> its condition
         self._restored: dict[str, tuple[ua.LocalizedText, datetime]] = {}
+        self._made: dict[str, _Condition] = {}  # message key -> its condition, once made
+        self._own: dict[str, str] = {}  # message key -> the comment this face is sending
         self.triggered = 0
 
     def restore(self, comments: dict[str, tuple[ua.LocalizedText, datetime]]) -> None:
@@ -174,7 +177,35 @@ class Alarms:
                 setattr(event, "Comment/SourceTimestamp", restored[1])
             cond = _Condition(nid, source, source_name, name, fb, event)
             self._by_node[nid] = cond
+        self._made[str(entry.msg_id)] = cond
         return cond
+
+    async def audited(self, row: AuditEntry) -> None:
+        """An audit row as the CPU writes it (``audit``): the comment of an applied
+        acknowledgement from another client — a page, a shell, another face — becomes its
+        condition's ``Comment``, stamped with the row's time, with an event of its own
+        when the condition says acknowledged already (as :meth:`_comment`); emptied, the
+        condition has none. A condition not made yet gets it when it is. This face's own
+        acknowledgements are left to :meth:`_comment` (their locale kept)."""
+        given = acked_comment(row)
+        if given is None:
+            return
+        key, text, when = given
+        cond = self._made.get(key)
+        if cond is None:
+            if text:
+                self._restored[key] = (ua.LocalizedText(text), when)
+            else:
+                self._restored.pop(key, None)
+            return
+        ev = cond.event
+        now = ev.Comment.Text if isinstance(ev.Comment, ua.LocalizedText) else ""
+        if self._own.get(key) == text or (now or "") == text:
+            return
+        ev.Comment = ua.LocalizedText(text) if text else None
+        setattr(ev, "Comment/SourceTimestamp", when)
+        if cond.event_ids and ev.AckedState.Text == "Acknowledged":
+            await self._trigger(cond, None)
 
     async def _show(self, cond: _Condition, e: AlarmEntry) -> None:
         shown = (e.msg_id, e.event_id, e.state, e.acked, e.ack_required, e.text, e.ack_user)
@@ -255,7 +286,13 @@ class Alarms:
             given = isinstance(comment, ua.LocalizedText) and (comment.Text or comment.Locale)
             text = (comment.Text or "") if given else UNSET  # "": emptied (audited so)
             args = MessageArgs(msg_id=cond.msg_id, comment=text)
-            status, _ = await self._send(caller(), AckMsg, cond.fb, args)
+            key = str(cond.msg_id)
+            if isinstance(text, str):
+                self._own[key] = text  # its audit row may come back before the reply
+            try:
+                status, _ = await self._send(caller(), AckMsg, cond.fb, args)
+            finally:
+                self._own.pop(key, None)
             if status == StatusCodes.Good and isinstance(comment, ua.LocalizedText):
                 await self._comment(cond, comment)
         result.StatusCode = ua_status(status if status is not None else StatusCodes.Good)

@@ -24,10 +24,11 @@ as the object. The reference is forward only: the method's node would otherwise 
 every condition of the face.
 
 A face started again knows no comment of its own: :func:`acked_comments` reads the last
-one of each message back from the CPU's audit rows (``audit/list``, its last 50): the
-newest applied ``ack_msg`` with a comment — from whatever client, the row on the bus does
-not say — its text without a locale (the row keeps none), stamped with the row's time;
-none when that comment emptied it.
+one of each message back from the CPU's audit rows (``audit/acked``: each message's newest
+applied ``ack_msg`` with a comment, however old; from a CPU before it, ``audit/list``'s
+last 50) — from whatever client, the row on the bus does not say — its text without a
+locale (the row keeps none), stamped with the row's time; none when that comment emptied
+it.
 """
 
 from __future__ import annotations
@@ -46,6 +47,7 @@ from s7graph.web.opcua.typed import ObjectIds, child_id, ua_id
 __all__ = [
     "STAMPED",
     "STATES",
+    "acked_comment",
     "acked_comments",
     "add_condition",
     "event_values",
@@ -69,26 +71,36 @@ STAMPED: Final = {"LastSeverity": ObjectIds.UInt16, "Comment": ObjectIds.Localiz
 _NO_TIME: Final = ua.Variant(None, ua.VariantType.Null)
 
 
+def acked_comment(row: AuditEntry) -> tuple[str, str, datetime] | None:
+    """Of an applied ``ack_msg`` row that gave a comment: its message id (as text), the
+    comment ("": emptied) and when; None for any other row, or one whose arguments are
+    not recognised."""
+    if row.op != "ack_msg" or row.outcome != "applied":
+        return None
+    try:
+        args = json.loads(row.args)
+    except ValueError:
+        return None
+    comment = args.get("comment") if isinstance(args, dict) else None
+    if not isinstance(comment, str) or "msg_id" not in args:
+        return None
+    return str(args["msg_id"]), comment, datetime.fromtimestamp(row.t_ms / 1000, UTC)
+
+
 def acked_comments(rows: Iterable[AuditEntry]) -> dict[str, tuple[ua.LocalizedText, datetime]]:
     """Per message id (as text): the comment of its newest applied acknowledgement that
     gave one, and when — none when that one emptied it (``""``). ``rows`` oldest first;
     a row whose arguments are not recognised is passed over."""
     comments: dict[str, tuple[ua.LocalizedText, datetime]] = {}
     for row in rows:
-        if row.op != "ack_msg" or row.outcome != "applied":
+        given = acked_comment(row)
+        if given is None:
             continue
-        try:
-            args = json.loads(row.args)
-        except ValueError:
-            continue
-        comment = args.get("comment") if isinstance(args, dict) else None
-        if not isinstance(comment, str) or "msg_id" not in args:
-            continue
+        key, comment, when = given
         if comment:
-            when = datetime.fromtimestamp(row.t_ms / 1000, UTC)
-            comments[str(args["msg_id"])] = (ua.LocalizedText(comment), when)
+            comments[key] = (ua.LocalizedText(comment), when)
         else:  # emptied
-            comments.pop(str(args["msg_id"]), None)
+            comments.pop(key, None)
     return comments
 
 

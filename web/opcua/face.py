@@ -39,6 +39,7 @@ from s7graph.engine.errors import internal_error
 from s7graph.web.bus.protocol import (
     AlarmEntry,
     AlarmList,
+    AuditList,
     ChartLayout,
     CommandReply,
     CpuStatus,
@@ -160,15 +161,23 @@ class Face:
         self._task = asyncio.create_task(self._pump(inbox), name="s7graph-opcua-face")
 
     async def _restore_comments(self) -> None:
-        """The conditions' comments given before this start, from the CPU's audit rows;
-        none when it does not answer them (one line in the log)."""
+        """The conditions' comments given before this start, however old: each message's
+        newest applied acknowledgement with a comment (``audit/acked``). A CPU that does
+        not answer that (one from before it) gives its last 50 audit rows (``audit/list``);
+        one that answers neither, none (one line in the log)."""
+        rows: AuditList | None = None
         try:
-            audit = await self.link.ask(self.link.reader.audit)
-        except ProtocolError as exc:
-            _log.warning("opcua: no comments of acknowledgements restored: %s", exc)
-            return
-        if audit is not None:
-            self.alarms.restore(acked_comments(audit.entries))
+            rows = await self.link.ask(self.link.reader.acked)
+        except ProtocolError as exc:  # an SQLite without JSON functions, a disk error
+            _log.warning("opcua: comments of acknowledgements from the last 50 rows: %s", exc)
+        if rows is None:
+            try:
+                rows = await self.link.ask(self.link.reader.audit)
+            except ProtocolError as exc:
+                _log.warning("opcua: no comments of acknowledgements restored: %s", exc)
+                return
+        if rows is not None:
+            self.alarms.restore(acked_comments(rows.entries))
 
     async def stop(self) -> None:
         if self._task is not None:
@@ -213,6 +222,8 @@ class Face:
             await self._diag(message)
         elif kind == "alive":
             await self._alive(bool(message))
+        elif kind == "audit":
+            await self.alarms.audited(message)
 
     async def _diag(self, new: DiagBuffer) -> None:
         if self.diag.shown.merge(new):

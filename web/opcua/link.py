@@ -25,7 +25,7 @@ from typing import Any, Final, TypeVar
 import zenoh
 
 from s7graph.web.bus.client import BusClient
-from s7graph.web.bus.protocol import Command, CommandReply
+from s7graph.web.bus.protocol import AuditEntry, Command, CommandReply
 from s7graph.web.opcua.sessions import FaceUser
 
 __all__ = ["BusLink", "Inbox"]
@@ -107,6 +107,7 @@ class BusLink:
         client.on_alarms(lambda a: inbox.put("alarms", "", a))
         client.on_operands(lambda v: inbox.put("operands", "", v))
         client.on_diag(lambda d: inbox.put("diag", "", d))
+        client.on_audit(functools.partial(_acknowledged, inbox))  # others' comments
         for fb in fbs:
             client.on_chart(fb, functools.partial(inbox.put, "chart", fb))
             client.follow(fb, functools.partial(inbox.put, "state", fb))
@@ -157,3 +158,10 @@ class BusLink:
             follower.close()
         self.reader.close()
         self._pool.shutdown(wait=False, cancel_futures=True)
+
+
+def _acknowledged(inbox: Inbox, row: AuditEntry) -> None:
+    """An applied acknowledgement's audit row into ``inbox`` as ``("audit", "", row)``;
+    the other rows never (a flood of commands must not push state deltas out)."""
+    if row.op == "ack_msg" and row.outcome == "applied":
+        inbox.put("audit", "", row)

@@ -192,6 +192,23 @@ def test_a_command_signed_by_the_session_passes_once(users: UsersFile) -> None:
     assert _verify(auth, signer.sign(command)) == ""  # seq 2
 
 
+def test_commands_and_watches_of_one_session_share_one_numbering_and_one_mac(
+    users: UsersFile,
+) -> None:
+    """``Signer.sign`` is ``Signer.numbered`` with the command's bytes: one sequence, one
+    way to the mac, and a stale ``mac`` on the command is replaced, never kept."""
+    auth = Authenticator(users)
+    signer, command = _signed(auth)
+    first = signer.sign(msgspec.structs.replace(command, mac="f" * 64))
+    seq, mac = signer.numbered(lambda n: b"watch %d" % n)
+    third = signer.sign(command)
+    assert (first.seq, seq, third.seq) == (1, 2, 3)
+    assert _verify(auth, first) == "" and _verify(auth, third) == ""
+    assert auth.verify(signer.token, mac, b"watch 2", seq=seq) == ""
+    demo = Signer("alice", "t")
+    assert demo.numbered(lambda n: b"x") == (1, "") and demo.sign(command).mac is msgspec.UNSET
+
+
 def test_a_command_with_a_tampered_argument_is_refused(users: UsersFile) -> None:
     auth = Authenticator(users)
     signer, _ = _signed(auth)

@@ -21,6 +21,7 @@ import pytest
 
 from s7graph.web.access.audit import read_audit
 from s7graph.web.bus.client import BusClient
+from s7graph.web.bus.online import OnlineChange
 from s7graph.web.bus.protocol import Command, CommandReply
 from s7graph.web.bus.session import open_session
 from s7graph.web.cli import main
@@ -58,6 +59,7 @@ class Cpu:
     state: Path
     token: str
     bus: list[str]
+    online: OnlineChange
 
     def send(self, op: str, **args: object) -> CommandReply:
         command = Command(op=op, fb="Seq", user="eng", token=self.token, args=args)  # type: ignore[arg-type]
@@ -90,7 +92,7 @@ def cpu(tmp_path: Path, bus_certs: BusCerts) -> Iterator[Cpu]:
         assert wait_until(lambda: client.status() is not None)
         login = client.login("eng", PASSWORD)
         assert login.ok, login.reason
-        yield Cpu(rig.session, client, rig.path, rig.state, login.token, rig.bus)
+        yield Cpu(rig.session, client, rig.path, rig.state, login.token, rig.bus, rig.online)
 
 
 def test_a_download_swaps_changed_blocks_in_keeping_the_instance_values_by_name(
@@ -398,3 +400,29 @@ def test_a_read_of_a_variable_the_downloaded_fb_no_longer_has_is_e048_naming_it(
     assert alone.applied, alone.reason
     refused = cpu.send("download", source=reads_old)
     assert not refused.applied and "old is not a variable of FB17" in refused.reason
+
+
+def test_the_held_interfaces_are_built_once_and_again_only_after_a_block_download(
+    cpu: Cpu,
+) -> None:
+    """Chart-only downloads and previews read the interfaces of the CPU's blocks as kept
+    (one build); a download of blocks, and its undo, make the next chart-only download read
+    the blocks the CPU holds then: ``fresh`` after the one, ``old`` again after the other."""
+    held = cpu.online.held_interfaces
+    assert cpu.send("download", source=_reading("DB10.old > 30000"), preview=True).applied
+    assert cpu.send("download", source=_reading("DB10.old > 30001")).applied
+    assert cpu.send("download", source=_reading("DB10.old > 30002"), preview=True).applied
+    assert held.builds == 1
+    wide = CHANGED.replace("n : DINT", "n : INT")  # no narrowing back: the undo is taken
+    assert cpu.send("download", source=_reading("DB10.fresh < 0"), blocks={"fb17.scl": wide})
+    lacks = cpu.send("download", source=_reading("DB10.old > 30000"), preview=True)
+    assert not lacks.applied and "old is not a variable of FB17" in lacks.reason
+    assert cpu.send("download", source=_reading("DB10.fresh < -1")).applied
+    assert held.builds == 2
+    assert cpu.send("undo_download").applied  # the chart reading fresh, the same blocks
+    back = cpu.send("undo_download")  # the chart reading old, and the blocks before
+    assert back.applied and "S7-SCL blocks changed: fb17.scl" in back.lines, back.reason
+    assert cpu.send("download", source=_reading("DB10.old > 30003"), preview=True).applied
+    lacks = cpu.send("download", source=_reading("DB10.fresh < -2"), preview=True)
+    assert not lacks.applied and "fresh is not a variable of FB17" in lacks.reason
+    assert held.builds == 3

@@ -87,3 +87,45 @@ def test_export_says_which_block_source_does_not_compile(
     assert main(args) == 2
     assert f"{blocks}:6:" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_export_prints_the_warnings_of_its_block_sources_as_check_does(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The sources are compiled as ``check --blocks`` compiles them: their warnings (an
+    unused label, W301) are the very lines ``check`` prints, first on stderr, counted in
+    the summary."""
+    chart, blocks = _files(tmp_path, '"Motor_DB".Running')
+    out = tmp_path / "motor.xml"
+    args = ["export", str(chart), "--to", "plcopen", "-o", str(out), "--blocks", str(blocks)]
+    assert main(args) == 1  # the export's own warnings (the CALL row's)
+    clean = capsys.readouterr().err.splitlines()
+    blocks.write_text(BLOCKS.replace("VAR calls", "LABEL spare; END_LABEL\nVAR calls"))
+    assert main(["check", str(chart), "--blocks", str(blocks)]) == 1
+    checked = [line for line in capsys.readouterr().out.splitlines() if "warning[W301]" in line]
+    assert checked == [
+        f"{blocks}:5:7: warning[W301]: label SPARE is declared but never placed (FB17)"
+    ]
+    assert main(args) == 1
+    err = capsys.readouterr().err.splitlines()
+    assert err[0] == checked[0] and err[1:-1] == clean[:-1]
+    assert clean[-1].endswith(", 2 warnings") and err[-1].endswith(", 3 warnings"), err
+
+
+def test_check_sim_and_export_compile_the_blocks_with_the_chart_s_symbols(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A source reading a symbol only the chart's ``SYMBOLS`` declare (``"Go"``) compiles
+    alike in the three commands; ``check`` compiled it without them (E211)."""
+    chart, blocks = _files(tmp_path, '"Motor_DB".Running')
+    chart.write_text(
+        chart.read_text().replace("END_SYMBOLS", '"Go" : M0.0 : BOOL; END_SYMBOLS'),
+    )
+    blocks.write_text(BLOCKS.replace("Start AND", 'Start AND "Go" AND'))
+    assert main(["check", str(chart), "--blocks", str(blocks)]) == 0
+    assert capsys.readouterr().out == f"{chart}: 0 errors, 0 warnings\n"
+    assert main(["sim", str(chart), "--blocks", str(blocks), "--cycles", "2"]) == 0
+    out = tmp_path / "motor.xml"
+    args = ["export", str(chart), "--to", "plcopen", "-o", str(out), "--blocks", str(blocks)]
+    assert main(args) == 1 and out.exists()  # the export's own warnings
+    assert "error" not in capsys.readouterr().err

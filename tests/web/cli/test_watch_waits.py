@@ -29,6 +29,7 @@ from s7graph.web.bus.cpu_side import CpuSide
 from s7graph.web.bus.protocol import WatchValues
 from s7graph.web.bus.session import open_session
 from s7graph.web.cli.net import NetOptions
+from s7graph.web.cli.rejoin import PROBE_S, answer
 from s7graph.web.cli.waiting import Reached, cpu_reached
 from s7graph.web.cli.watch_table import _Follower
 from tests.paths import ROOT
@@ -397,3 +398,21 @@ def test_watch_address_with_a_login_that_joins_a_new_run_says_once_it_goes_on_un
     assert capsys.readouterr().err == (
         "s7graph: cpu1: the login ended with the CPU's run; watching without a login from now on\n"
     )
+
+
+def test_a_watch_s_first_look_and_its_rejoin_ask_the_cpu_the_same_way(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """``rejoin.answer`` is the one status query of both: a CPU that answers gives its
+    status, a name no CPU on the bus has gives None, within ``PROBE_S``."""
+    monkeypatch.setenv("XDG_RUNTIME_DIR", str(tmp_path))
+    side = CpuSide({}, cpu="line1")
+    try:
+        with open_session(connect=[side.endpoint]) as session:
+            status = answer(session, "line1")
+            assert status is not None and status.cpu == "line1"
+            asked = time.monotonic()
+            assert answer(session, "line2") is None
+            assert time.monotonic() - asked < PROBE_S + 1.0
+    finally:
+        side.close()

@@ -7,6 +7,7 @@ in the audit row; a viewer is refused and audited, an anonymous session refused
 
 from __future__ import annotations
 
+import time
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
@@ -15,12 +16,15 @@ import pytest
 from asyncua import ua
 from asyncua.ua.uaerrors import UaStatusCodeError
 
-from s7graph.web.access.audit import read_audit
-from s7graph.web.bus.protocol import AuditEntry
+from s7graph.web.access.audit import Facts, read_audit
+from s7graph.web.bus.client import BusClient
+from s7graph.web.bus.protocol import AuditEntry, Command
+from s7graph.web.bus.session import open_session
 from s7graph.web.opcua.conditions import acked_comments
 from s7graph.web.opcua.server import OpcuaOptions, OpcuaServer
 from tests.web.helpers import wait_until
 from tests.web.opcua.helpers import (
+    PASSWORD,
     FaceRig,
     connected,
     eventually,
@@ -111,12 +115,22 @@ async def _browse_and_acknowledge(face: FaceRig) -> None:
         await sub.delete()
 
 
-def test_a_face_started_again_shows_the_comment_the_audit_rows_kept_and_an_emptying_audited(
+def test_a_face_started_again_shows_the_comment_however_many_rows_came_after_an_emptying_audited(
     tmp_path: Path, bus_certs: BusCerts
 ) -> None:
+    """The comment comes back from the message's newest acknowledgement with one, not from
+    a window of the last rows: 60 rows after it (more than ``audit/list``'s 50) lose
+    nothing."""
     with face_rig(tmp_path, bus_certs) as face:
         run(_browse_and_acknowledge(face))  # "valve checked" (en) given to the first face
         face.server.stop()
+        audit = face.rig.online.gate.audit
+        assert audit is not None
+        for i in range(60):
+            audit.record(
+                time.time_ns(), Facts("eng", "engineer", "shell", "force", "", {"i": i}, True)
+            )
+        assert wait_until(lambda: len(read_audit(face.rig.state)) >= 61)
         server = face.server
         again = OpcuaServer(
             server.session, server.status, OpcuaOptions(url=f"opc.tcp://127.0.0.1:{free_port()}")
@@ -129,6 +143,52 @@ def test_a_face_started_again_shows_the_comment_the_audit_rows_kept_and_an_empty
     first, second = [r for r in read_audit(face.rig.state) if r.op == "ack_msg"]
     assert stamped == datetime.fromtimestamp(first.t_ns // 1_000_000 / 1000, UTC)
     assert '"comment": ""' in second.args
+
+
+def test_a_running_face_shows_the_comment_another_client_acknowledged_with(
+    tmp_path: Path, bus_certs: BusCerts
+) -> None:
+    """An ``ack_msg`` with a comment from a shell on the bus (the live audit feed): the
+    condition's ``Comment`` becomes it, without a locale, stamped with the row's time, and
+    an event carries it."""
+    with (
+        face_rig(tmp_path, bus_certs) as face,
+        open_session(connect=[face.rig.endpoint], tls=face.rig.tls) as session,
+        BusClient(session, "cpu1") as shell,
+    ):
+        run(_acknowledged_from_the_shell(face, shell))
+    row = [r for r in read_audit(face.rig.state) if r.op == "ack_msg"][-1]
+    assert (row.user, row.outcome) == ("eng", "applied")
+
+
+async def _acknowledged_from_the_shell(face: FaceRig, shell: BusClient) -> None:
+    async with connected(face.url, "olga") as c:
+        events = Events()
+        sub = await c.create_subscription(20, events)
+        await sub.subscribe_alarms_and_conditions(c.nodes.server, ua.ObjectIds.AlarmConditionType)
+        await _latched(face, events)
+        login = shell.login("eng", PASSWORD)
+        listed = shell.alarms()
+        assert login.ok and listed is not None, login.reason
+        (entry,) = [e for e in listed.entries if e.kind == "SV"]
+        args = {"msg_id": entry.msg_id, "comment": "valve replaced"}
+        reply = shell.send(
+            Command(op="ack_msg", fb=entry.fb, user="eng", token=login.token, args=args)
+        )
+        assert reply.applied, reply.reason
+        given = ua.LocalizedText("valve replaced")
+        comment = node(c, f"{SUPERVISION}/Comment")
+        assert await eventually(lambda: _reads(comment, given)), events.seen
+        assert await eventually(lambda: _told(events, given)), events.seen
+        told = [e for e in events.of(SUPERVISION) if _value(e, "Comment") == given]
+        assert _value(told[-1], "AckedState/Id") is True
+        row = [r for r in read_audit(face.rig.state) if r.op == "ack_msg"][-1]
+        stamped = await node(c, f"{SUPERVISION}/Comment/SourceTimestamp").read_value()
+        assert stamped.replace(tzinfo=UTC) == datetime.fromtimestamp(
+            row.t_ns // 1_000_000 / 1000, UTC
+        )
+        face.set("Start", False)
+        await sub.delete()
 
 
 def test_the_comment_restored_is_the_newest_applied_acknowledgements_emptied_or_none() -> None:
