@@ -34,6 +34,7 @@ if TYPE_CHECKING:
     from s7graph.web.bus.client import BusClient
     from s7graph.web.bus.online import OnlineChange
     from s7graph.web.bus.session import TlsFiles
+    from s7graph.web.harness.scl import Loadable
     from s7graph.web.view.edge import ViewSide
     from s7graph.web.wiring.live_edge import LiveEdge
     from tests.conftest import BusCerts
@@ -249,6 +250,7 @@ def online_cpu(
     operands: bool = False,
     messages: bool = False,
     blocks: dict[str, str] | None = None,
+    program: Loadable | None = None,
 ) -> Iterator[OnlineRig]:
     """``chart`` written to ``tmp_path / name`` and run with a users file (name → role,
     password ``PASSWORD``), its bus on TLS on loopback with the certificates ``certs`` (as
@@ -256,7 +258,10 @@ def online_cpu(
     when ``serve``; the CPU takes force jobs as ``s7graph run`` does, and publishes its
     operands when ``operands`` (``web.bus.operands``) and keeps its message list on the bus
     when ``messages`` (the page's Alarms); ``blocks``: S7-SCL sources (file name → text)
-    written beside the chart and run with it, and served on the bus, as ``--blocks`` does."""
+    written beside the chart and run with it, and served on the bus, as ``--blocks`` does;
+    ``program``: a program of blocks (a Python program's) loaded beside the chart instead,
+    the chart compiled with its interfaces."""
+    from s7graph.sequencer.checks.interfaces import program_blocks
     from s7graph.sfb.alarms import message_list
     from s7graph.web.access.audit import AuditStore
     from s7graph.web.access.login import Authenticator
@@ -280,7 +285,12 @@ def online_cpu(
     for file, text in (blocks or {}).items():
         sources.append(tmp_path / file)
         sources[-1].write_text(text, encoding="utf-8")
-    session = ChartSession.load(path, None, VirtualClock(), blocks=sources)
+    if program is not None:
+        held = program_blocks(program.blocks)
+        cc, table = load_chart(path, None, blocks=lambda _: held)
+        session = ChartSession(cc, table, VirtualClock(), blocks=[program])
+    else:
+        session = ChartSession.load(path, None, VirtualClock(), blocks=sources)
     kept = message_list(session.cpu) if messages else None
     live = LiveGraph(session.graph, read=session.get, messages=kept)
     gate = Gate(Authenticator(users_file), audit)

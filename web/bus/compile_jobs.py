@@ -37,7 +37,7 @@ from s7graph.sequencer.text.parse import parse_chart
 from s7graph.web.bus.live import prepare_chart
 from s7graph.web.bus.pieces import dumps_in_pieces
 from s7graph.web.harness.project import CHART_CHOICE
-from s7graph.web.harness.scl import SclLoadError, SclSources, compile_texts
+from s7graph.web.harness.scl import ChartBlocks, SclLoadError, SclSources
 from s7graph.web.harness.session import ChartLoadError, Interfaces, compile_model
 
 __all__ = ["MAX_SUMMARY_LINES", "answer"]
@@ -170,20 +170,24 @@ def _interfaces(
     sources: list[SclSources],
 ) -> Interfaces | None:
     """The interfaces the chart is compiled with, made from its symbol table: those of the
-    S7-SCL sources ``named`` (compiled then, in order, their programs' bytes appended to
-    ``portable``: ``steps.scl.portable``; the sources appended to ``sources``), which
-    replace the CPU's; else the CPU's blocks' ``held`` (None: it has none)."""
+    S7-SCL sources ``named`` (compiled then, in order, as the CPU compiled its own:
+    ``web.harness.scl.ChartBlocks``; their programs' bytes appended to ``portable``:
+    ``steps.scl.portable``; the sources appended to ``sources``), which replace the CPU's;
+    else the CPU's blocks' ``held`` (None: it has none)."""
     if named is None:
         return None if held is None else lambda table: held
+    blocks = ChartBlocks.of_texts(named, portable=portable)  # as the CPU compiled its own
 
     def compiled(table: SymbolTable) -> ProgramBlocks:
         try:
-            sources.append(compile_texts(list(named), table, portable=portable))
+            made = blocks(table)
         except SclLoadError as exc:
             errors = [line for line in exc.lines if ": warning[" not in line] or exc.lines
             reason = f"the S7-SCL blocks do not compile: {len(errors)} error(s); {errors[0]}"
             raise _Refused(reason, exc.lines) from None
-        return sources[-1].interfaces()
+        assert blocks.sources is not None  # made by the call
+        sources.append(blocks.sources)
+        return made
 
     return compiled
 

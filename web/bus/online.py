@@ -36,7 +36,10 @@ Its preview (and an undo's) says what the instance DBs would keep, drop and star
 (``web.harness.scl_reload.carry_notes``) — or the reason it would be refused.
 
 Reads (``fb/<fb>/source``: :class:`ChartSource`; ``project``: :class:`ProjectFiles`) are
-queryables like the chart and the state.
+queryables like the chart and the state. The source carries the S7-SCL sources the CPU
+runs and, when those do not give every block it holds (a Python program's, sources too
+large to come along), the held interfaces (``ChartSource.interfaces``), which an editor
+checks the chart's calls against as the download does.
 """
 
 from __future__ import annotations
@@ -48,7 +51,7 @@ import threading
 from collections.abc import Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
-from pathlib import Path
+from pathlib import Path, PurePath
 from typing import Any, Final, Protocol
 
 import msgspec
@@ -56,6 +59,7 @@ import msgspec
 from s7graph.engine.errors import BlockError, internal_error
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.change.online import Needs, SwapRefused, SwapReport, swap
+from s7graph.sequencer.checks.interfaces import ProgramBlocks
 from s7graph.sequencer.compiled import CompiledChart
 from s7graph.sequencer.text.format import format_chart
 from s7graph.web.access.audit import Facts
@@ -71,6 +75,8 @@ from s7graph.web.bus.online_blocks import (
     swap_blocks,
 )
 from s7graph.web.bus.protocol import (
+    MAX_MESSAGE_BYTES,
+    BlockInterfaces,
     ChartSource,
     Command,
     CommandReply,
@@ -222,17 +228,35 @@ class OnlineChange:
         name = self.path.name if self.path is not None else f"{v.cc.name}.s7g"
         room = MAX_TEXT_BYTES - len(v.text.encode()) - len(self.symbols_text.encode())
         blocks, left_out = source_files(v.scl, room=room)
-        return encode(
-            ChartSource(
-                fb=self.live.fb,
-                version=v.number,
-                file=name[:256],
-                text=v.text,
-                symbols=self.symbols_text,
-                blocks=blocks,
-                left_out=left_out,
-            )
+        source = ChartSource(
+            fb=self.live.fb,
+            version=v.number,
+            file=name[:256],
+            text=v.text,
+            symbols=self.symbols_text,
+            blocks=blocks,
+            left_out=left_out,
         )
+        data = encode(source)
+        held = self._held_beside(v, left_out)
+        if held is None:
+            return data
+        fuller = encode(msgspec.structs.replace(source, interfaces=BlockInterfaces.of(held)))
+        return fuller if len(fuller) <= MAX_MESSAGE_BYTES else data
+
+    def _held_beside(self, v: Version, left_out: list[str]) -> ProgramBlocks | None:
+        """The interfaces of the blocks the CPU holds, for an editor, when the S7-SCL
+        sources of chart version ``v`` do not give them all: a program of blocks that is
+        not those sources (a Python program's), sources left out; else None. Their
+        sources by file name, no directory, as the sources themselves go."""
+        programs = list(self.session.blocks)
+        if not left_out and all(p is v.scl for p in programs):
+            return None
+        held = self.held_interfaces()
+        if held is None:
+            return None
+        names = [PurePath(f).name for p in programs for f in getattr(p, "files", ())]
+        return dataclasses.replace(held, sources=", ".join(names))
 
     def _project_bytes(self) -> bytes | None:
         if self.directory is None:

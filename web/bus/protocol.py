@@ -24,6 +24,7 @@ import msgspec
 from msgspec import UNSET, Meta, Struct, UnsetType
 
 from s7graph.sequencer.change.base import MAX_SOURCE
+from s7graph.sequencer.checks.interfaces import Interface, ProgramBlocks, UserPin
 from s7graph.sequencer.text.format import format_expr
 from s7graph.sequencer.text.model import Chart, Expr
 from s7graph.steps.conditions import MAX_CONTACTS
@@ -65,6 +66,9 @@ __all__ = [
     "AlarmList",
     "AuditEntry",
     "AuditList",
+    "BlockInterface",
+    "BlockInterfaces",
+    "BlockPin",
     "BlockSource",
     "BlockSources",
     "ChartLayout",
@@ -356,13 +360,87 @@ class ChartPart(_Msg, frozen=True, kw_only=True):
     transitions: Annotated[list[TransitionInfo], Meta(max_length=4096)] = []
 
 
+BlockNo = Annotated[int, Meta(ge=0, le=65535)]
+
+
+class BlockPin(_Msg, frozen=True, kw_only=True):
+    """A parameter (``IN``, ``OUT``, ``IN_OUT``) or static variable (``STAT``) of a user
+    block: its name, direction and S7 type (``OBJECT``: one a chart cannot pass)."""
+
+    name: Annotated[str, Meta(min_length=1, max_length=128)]
+    direction: Literal["IN", "OUT", "IN_OUT", "STAT"]
+    type: ShortText
+
+
+class BlockInterface(_Msg, frozen=True, kw_only=True):
+    """A user FB or FC as a chart's call sees it: its number, name, parameters in declared
+    order (an FC's function value as the output ``RET_VAL``) and an FB's static variables."""
+
+    kind: Literal["FB", "FC"]
+    number: BlockNo
+    name: ShortText = ""
+    pins: Annotated[list[BlockPin], Meta(max_length=1024)] = []
+    statics: Annotated[list[BlockPin], Meta(max_length=4096)] = []
+
+
+class BlockInterfaces(_Msg, frozen=True, kw_only=True):
+    """The interfaces of the user blocks a CPU holds (``sequencer.checks.interfaces.
+    ProgramBlocks``): its FBs and FCs, its instance DBs (number, FB label), its global DBs
+    and where they come from (``sources``, for messages)."""
+
+    blocks: Annotated[list[BlockInterface], Meta(max_length=4096)] = []
+    instances: Annotated[list[tuple[BlockNo, Label]], Meta(max_length=65536)] = []
+    global_dbs: Annotated[list[BlockNo], Meta(max_length=65536)] = []
+    sources: Text = ""
+
+    @classmethod
+    def of(cls, program: ProgramBlocks) -> BlockInterfaces:
+        """The message of ``program`` (each block once, in its order)."""
+        blocks = {i.label: i for i in program.blocks.values()}
+        return cls(
+            blocks=[
+                BlockInterface(
+                    kind=i.kind,  # type: ignore[arg-type]  # FB or FC: program_blocks
+                    number=i.number,
+                    name=_clip(i.name, 256),
+                    pins=[_pin(p) for p in i.pins],
+                    statics=[_pin(p) for p in i.statics],
+                )
+                for i in blocks.values()
+            ],
+            instances=sorted(program.instances.items()),
+            global_dbs=sorted(program.global_dbs),
+            sources=_clip(program.sources, 4096),
+        )
+
+    def program(self) -> ProgramBlocks:
+        """The interfaces as the chart's checks read them, keyed as ``program_blocks``
+        keys them: by label, and by name where no block before took the name."""
+        found: dict[str, Interface] = {}
+        for b in self.blocks:
+            pins = tuple(UserPin(p.name, p.direction, p.type) for p in b.pins)
+            statics = tuple(UserPin(p.name, "STAT", p.type) for p in b.statics)
+            interface = Interface(b.kind, b.number, b.name, pins, statics)
+            found[interface.label] = interface
+            found.setdefault(b.name.upper(), interface)
+        dbs = frozenset(self.global_dbs)
+        return ProgramBlocks(found, dict(self.instances), dbs, self.sources)
+
+
+def _pin(pin: UserPin) -> BlockPin:
+    direction: Any = pin.direction  # IN, OUT, IN_OUT or STAT: interfaces.program_blocks
+    return BlockPin(name=pin.name[:128], direction=direction, type=_clip(pin.type, 256))
+
+
 class ChartSource(_Msg, frozen=True, kw_only=True):
     """The running chart as ``.s7g`` text, for an editor (``fb/<name>/source``): its
     ``version`` (as in :class:`ChartLayout`), the file it came from (a name, no directory),
     the text of the symbol table it was compiled with, and ``blocks``: the S7-SCL sources
     the CPU runs beside it, whole, by file name (no directory) in the CPU's order — those a
     download's ``blocks`` replace; ``left_out``: the names of those that did not fit in
-    one message."""
+    one message; ``interfaces``: the interfaces of the user blocks the CPU holds when
+    ``blocks`` do not give them all (a program of blocks that is no S7-SCL source, sources
+    left out), None otherwise and from a CPU from before."""
 
     fb: Name
     version: Count = 0
@@ -371,6 +449,7 @@ class ChartSource(_Msg, frozen=True, kw_only=True):
     symbols: Annotated[str, Meta(max_length=MAX_SOURCE)] = ""
     blocks: Annotated[dict[ShortText, str], Meta(max_length=4096)] = {}
     left_out: Annotated[list[ShortText], Meta(max_length=4096)] = []
+    interfaces: BlockInterfaces | None = None
 
 
 class BlockSource(_Msg, frozen=True, kw_only=True):

@@ -162,8 +162,9 @@ def compile_sources(paths: Sequence[Path], symbols: SymbolTable | None = None) -
 
 class ChartBlocks:
     """The ``--blocks`` sources ``paths`` as a chart's compile takes them — ``check``,
-    ``sim``, ``run`` and ``export`` alike: called with the symbol table (when the chart's
-    compile calls it, with the chart's ``SYMBOLS`` in: ``web.harness.session.
+    ``sim``, ``run`` and ``export`` alike, and from their texts (:meth:`of_texts`) a
+    download's compile and the page's editor: called with the symbol table (when the
+    chart's compile calls it, with the chart's ``SYMBOLS`` in: ``web.harness.session.
     compile_model``), it compiles them as :func:`compile_sources` does (its errors too)
     and gives their interfaces; ``sources`` keeps what it compiled, ``warnings`` their
     warnings, which each command prints."""
@@ -171,9 +172,25 @@ class ChartBlocks:
     def __init__(self, paths: Sequence[Path]) -> None:
         self.paths = list(paths)
         self.sources: SclSources | None = None
+        self._named: list[tuple[str, str]] | None = None
+        self._portable: list[tuple[bytes, bytes]] | None = None
+
+    @classmethod
+    def of_texts(
+        cls, named: Sequence[tuple[str, str]], *, portable: list[tuple[bytes, bytes]] | None = None
+    ) -> ChartBlocks:
+        """The sources ``named`` (file, text) as they are, not read from their files (a
+        download's, not written yet; those the page gets with the chart); ``portable`` as
+        :func:`compile_texts` takes it."""
+        blocks = cls([Path(file) for file, _ in named])
+        blocks._named, blocks._portable = list(named), portable
+        return blocks
 
     def __call__(self, table: SymbolTable | None) -> ProgramBlocks:
-        self.sources = compile_sources(self.paths, table)
+        named = self._named
+        if named is None:
+            named = [(str(path), read_source(path)) for path in self.paths]
+        self.sources = compile_texts(named, table, portable=self._portable)
         return self.sources.interfaces()
 
     @property

@@ -8,8 +8,9 @@ in its source view, checked live, saved, opened and downloaded into the running 
 - **Diagnostics** are ``s7graph check``'s, located by line and column in the source view
   (the chart written as ``.s7g`` text); a click on one selects its element. A refused
   edit says why and changes nothing. Reads of the FBs' variables by name, and calls of
-  those blocks, are checked in the S7-SCL blocks the CPU runs (``editor_cpu.cpu_blocks``),
-  as a download's compile does.
+  those blocks, are checked in the user blocks the CPU runs (``editor_cpu.cpu_blocks``: its
+  S7-SCL sources, or the interfaces it sends of blocks without them), as a download's
+  compile does.
 - **Source view**: the same chart as text; an edit there is applied once typing pauses
   (the ``set_source`` edit), an edit anywhere else rewrites the text.
 - **Save** / **Open** / **New**, **Download** and **Undo download** are commands to the CPU
@@ -210,9 +211,9 @@ class Editor(CpuCommands, RowEditing, InPlace, CrossReferencing):
 
     def enter(self) -> None:
         """Start editing the chart the CPU runs."""
-        source = self.eng.source()
+        source, why = self._source()
         if source is None:
-            self._notify("edit mode", "the CPU does not answer with its chart", ok=False)
+            self._notify("edit mode", why or "the CPU does not answer with its chart", ok=False)
             return
         try:
             symbols = SymbolTable.from_text(source.symbols) if source.symbols else None

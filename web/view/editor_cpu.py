@@ -2,10 +2,11 @@
 Save to this computer (the chart being edited, downloaded by the browser).
 
 The chart is checked as the CPU compiles a download of it: with the interfaces of the
-S7-SCL blocks the CPU runs (:func:`cpu_blocks`: the sources of its chart's source,
-compiled here), whose FBs' variables it reads by name (``"Motor_DB".Running``) and whose
-blocks it calls (a call that does not fit its block is E047 in the page, as the download
-refuses it).
+user blocks the CPU runs (:func:`cpu_blocks`: the S7-SCL sources of its chart's source,
+compiled here, or the interfaces it sends when those do not give them all — a Python
+program's blocks), whose FBs' variables it reads by name (``"Motor_DB".Running``) and
+whose blocks it calls (a call that does not fit its block is E047 in the page, as the
+download refuses it).
 
 Each is the engineer's command on the bus (checked and audited in the CPU); a download and
 its undo ask the CPU for the change summary first and confirm it in a modal. ``CpuCommands``
@@ -34,7 +35,7 @@ from s7graph.sequencer.checks.interfaces import ProgramBlocks
 from s7graph.sequencer.text.format import format_chart
 from s7graph.sequencer.text.model import Chart
 from s7graph.sequencer.text.parse import ChartSyntaxError
-from s7graph.web.bus.protocol import ChartSource, CommandReply
+from s7graph.web.bus.protocol import ChartSource, CommandReply, ProtocolError
 from s7graph.web.commands import (
     Command,
     Download,
@@ -47,7 +48,7 @@ from s7graph.web.commands import (
     UndoDownload,
 )
 from s7graph.web.harness.project import CHART_CHOICE, chart_file
-from s7graph.web.harness.scl import SclLoadError, compile_texts
+from s7graph.web.harness.scl import ChartBlocks, SclLoadError
 from s7graph.web.harness.session import add_chart_symbols
 from s7graph.web.view import texts
 from s7graph.web.view.confirm import question
@@ -280,7 +281,9 @@ class CpuCommands:
         reply = self._command(msgspec.structs.replace(command, args=args))
         self._report(command.op.replace("_", " "), reply)
         if reply.applied:
-            source = self.eng.source()
+            source, why = self._source()
+            if why:
+                self._notify("chart source", why, ok=False)
             if source is not None:
                 self._blocks_of(source)
                 self.base = source
@@ -294,10 +297,13 @@ class CpuCommands:
             self._show(source_changed=isinstance(command, UndoDownload))
 
     def _blocks_of(self, source: ChartSource) -> None:
-        """The interfaces of the S7-SCL blocks the CPU runs now, when they are not those
+        """The interfaces of the user blocks the CPU runs now, when they are not those
         of the chart source read before (an undo, someone else's download): the session
         checked against them from now on."""
-        if self.base is not None and self.base.blocks == source.blocks:
+        if self.base is not None and (self.base.blocks, self.base.interfaces) == (
+            source.blocks,
+            source.interfaces,
+        ):
             return
         with contextlib.suppress(EditRefused, ChartSyntaxError):
             running = parse_source(source.text, source.file or "chart.s7g")
@@ -306,6 +312,15 @@ class CpuCommands:
                 self._notify("S7-SCL blocks", note, ok=False)
             if self.session is not None:
                 self.session = self.session.with_blocks(self.interfaces)
+
+    def _source(self) -> tuple[ChartSource | None, str]:
+        """The chart the CPU runs (``fb/<fb>/source``), or None and why when its answer does
+        not decode (a broken or hostile CPU: the page goes on); None and "" when it does not
+        answer."""
+        try:
+            return self.eng.source(), ""
+        except ProtocolError as exc:
+            return None, f"the CPU's chart cannot be read: {exc}"
 
     def _command(self, command: Command) -> CommandReply:
         return self.panel.engineer_command(command)
@@ -337,10 +352,15 @@ class CpuCommands:
 
 
 def cpu_blocks(source: ChartSource, chart: Chart) -> tuple[ProgramBlocks | None, str]:
-    """The interfaces of the S7-SCL blocks the CPU runs beside its ``chart`` (the sources
-    of its chart ``source``), compiled here as the CPU compiled them — with its symbol
-    table and the chart's ``SYMBOLS`` — or None (no blocks) and a note saying why when they
-    cannot be (a source too large to come with the chart, one that does not compile)."""
+    """The interfaces of the user blocks the CPU runs beside its ``chart``: those it sends
+    with its chart ``source`` when its S7-SCL sources do not give them all (a Python
+    program's blocks, sources too large to come along); else its sources, compiled here
+    as the CPU compiled them (``web.harness.scl.ChartBlocks``, with its symbol table and
+    the chart's ``SYMBOLS``) — or None (no blocks) and a note saying why when they cannot
+    be (a source too large to come with the chart from a CPU that sends no interfaces,
+    one that does not compile)."""
+    if source.interfaces is not None:  # those the CPU holds, as its download reads them
+        return source.interfaces.program(), ""
     if not source.blocks and not source.left_out:
         return None, ""
     if source.left_out:
@@ -353,13 +373,13 @@ def cpu_blocks(source: ChartSource, chart: Chart) -> tuple[ProgramBlocks | None,
     try:
         table = SymbolTable.from_text(source.symbols) if source.symbols else SymbolTable()
         add_chart_symbols(chart, table)
-        program = compile_texts(list(source.blocks.items()), table)
+        program = ChartBlocks.of_texts(list(source.blocks.items()))(table)
     except SclLoadError as exc:
         first = exc.lines[0] if exc.lines else str(exc)
         return None, f"the CPU's S7-SCL sources do not compile here: {first}"
     except (S7Error, RecursionError) as exc:
         return None, f"the CPU's S7-SCL sources do not compile here: {exc}"
-    return program.interfaces(), ""
+    return program, ""
 
 
 def refused(session: Session, exc: EditRefused) -> Session:

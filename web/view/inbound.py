@@ -13,7 +13,10 @@ server's event loop, so nothing it sends reaches viser's handlers unchecked:
   text field (at most :data:`MAX_TEXT` characters, :data:`MAX_SOURCE` for the editor's
   source), one of the offered options for a dropdown, true for a button — and is
   otherwise ignored with a notice on that page naming the field and what it takes;
-- inputs (GUI updates, clicks on the chart) beyond :data:`INPUT_RATE` a second
+- a form's mark of changes not yet submitted (``GuiFormDirtyMessage``, which viser relays to
+  every other page) passes only for a form of this page: naming another element, or none,
+  it is ignored, and with a name that is not text it closes the websocket (1007);
+- inputs (GUI updates, clicks on the chart, forms' marks) beyond :data:`INPUT_RATE` a second
   (:data:`INPUT_BURST` at once), and camera reports beyond :data:`CAMERA_RATE`, are
   ignored (the inputs with one notice a second), so one page's flood never queues up
   before another page's work in viser's thread pool.
@@ -68,6 +71,7 @@ _INPUTS: Final = (
     _messages.SceneNodeClickMessage,
     _messages.GuiButtonHoldMessage,
     _messages.GuiFormSubmitMessage,
+    _messages.GuiFormDirtyMessage,
     _messages.CommandTriggerMessage,
 )
 
@@ -184,6 +188,16 @@ def _gui_refusal(server: viser.ViserServer, client_id: int, message: Any) -> Ref
     return Refusal(f"{label}: {why}") if why else None
 
 
+def _dirty_refusal(server: viser.ViserServer, client_id: int, uuid: object) -> Refusal | None:
+    """A form's mark of changes (viser relays it to every other page) that names no form
+    of this page: ignored (None: it names one); a name that is not text closes the page."""
+    if not isinstance(uuid, str):
+        return Refusal("malformed message: bad fields for GuiFormDirtyMessage", close=True)
+    client = server._connected_clients.get(client_id)
+    forms = client.gui._container_handle_from_uuid if client is not None else {}
+    return None if isinstance(forms.get(uuid), viser.GuiFormHandle) else Refusal("")
+
+
 def _decode(raw: object) -> Message | Refusal:
     """``raw`` as a viser message, or why it closes the websocket."""
     if not isinstance(raw, bytes):
@@ -231,6 +245,8 @@ class _Screen:
             return Refusal("too many inputs from this page", flood=True)
         if isinstance(message, _messages.GuiUpdateMessage):
             return _gui_refusal(self.server, self.client_id, message)
+        if isinstance(message, _messages.GuiFormDirtyMessage):
+            return _dirty_refusal(self.server, self.client_id, message.uuid)
         return None
 
     def notify(self, refusal: Refusal) -> None:

@@ -352,6 +352,8 @@ REQUIRED = {
     "AlarmEntry": ("msg_id", "event_id", "state", "came_ms"),
     "AlarmEvent": ("id", "t_ms", "msg_id", "state"),
     "AuditEntry": ("id", "t_ms", "user", "op", "outcome"),
+    "BlockInterface": ("kind", "number"),
+    "BlockPin": ("name", "direction", "type"),
     "BlockSource": ("label",),
     "ChartLayout": ("fb", "steps", "transitions", "sequences"),
     "ChartPart": ("fb",),

@@ -2,9 +2,11 @@
 to the drill chart's view (a real viser server on 127.0.0.1, the CPU scanning on the
 virtual clock, a users file): malformed frames and uploads close only its websocket, with
 a reason and no traceback; GUI updates of the wrong type or for other properties are
-ignored with a notice naming the field; a page that closes while its panel is built leaves
-no panel behind; a flood of clicks is cut to the input rate, its
-clicks that pass are refused and audited, and another page still opens at once."""
+ignored with a notice naming the field; a form's mark of changes (which viser relays to
+the other pages) passes only for a form of its own page; a page that closes while its
+panel is built leaves no panel behind; a flood of clicks, or of forms' marks, is cut to the
+input rate, its clicks that pass are refused and audited, and another page still opens at
+once."""
 
 from __future__ import annotations
 
@@ -82,6 +84,7 @@ class Peer:
     ws: Any
     uuids: dict[str, str] = field(default_factory=dict)
     notices: list[str] = field(default_factory=list)
+    dirty: list[object] = field(default_factory=list)  # the forms' marks relayed to it
     closed: Any = None
 
     def send(self, message: object) -> None:
@@ -112,6 +115,8 @@ class Peer:
                     self.uuids.setdefault(props["label"], m["uuid"])
                 if m["type"] == "NotificationShowMessage":
                     self.notices.append(f"{props.get('title')}: {props.get('body')}")
+                if m["type"] == "GuiFormDirtyMessage":
+                    self.dirty.append(m.get("uuid"))
         return bool(until())
 
 
@@ -202,8 +207,13 @@ def test_bad_value_says_what_each_field_takes() -> None:
             1008,
             "file uploads are not accepted",
         ),
+        (
+            msgspec.msgpack.encode({"type": "GuiFormDirtyMessage", "uuid": [5]}),
+            1007,
+            "malformed message: bad fields for GuiFormDirtyMessage",
+        ),
     ],
-    ids=["text", "not-msgpack", "unknown-type", "not-a-map", "nan-camera", "upload"],
+    ids=["text", "not-msgpack", "unknown-type", "not-a-map", "nan-camera", "upload", "dirty"],
 )
 def test_a_malformed_frame_or_an_upload_closes_only_its_websocket_with_a_reason(
     plant: Plant,
@@ -270,6 +280,33 @@ def test_a_flood_of_clicks_is_cut_to_the_input_rate_audited_and_other_pages_open
     assert 0 < passed <= INPUT_BURST + INPUT_RATE * (time.monotonic() - start)
     rows = [r for r in read_audit(plant.state) if r.op == "init" and r.outcome == "refused"]
     assert rows  # the clicks that passed reached the CPU, which refused and audited them
+
+
+def test_a_forms_mark_of_changes_reaches_other_pages_only_for_a_form_of_its_own_page(
+    plant: Plant, peer: Peer
+) -> None:
+    with _connect(plant) as other:
+        theirs, mine = other.uuids["Login"], peer.uuids["Login"]
+        for uuid in (theirs, peer.uuids["User"], "no-such-form", mine):
+            peer.send({"type": "GuiFormDirtyMessage", "uuid": uuid})
+        assert other.pump(lambda: mine in other.dirty), other.dirty
+        other.pump(timeout=1)
+        assert other.dirty == [mine]  # not their own form's, nor a field's, nor a made-up one
+        assert peer.closed is None and not peer.notices
+
+
+def test_a_flood_of_forms_marks_is_cut_to_the_input_rate_and_other_pages_open_at_once(
+    plant: Plant, peer: Peer
+) -> None:
+    frame = msgspec.msgpack.encode({"type": "GuiFormDirtyMessage", "uuid": peer.uuids["Login"]})
+    for _ in range(5000):  # each relayed to every other page, were it not cut
+        peer.ws.send(frame)
+    opened = time.monotonic()
+    with _connect(plant):
+        took = time.monotonic() - opened
+    assert took < 5.0, f"another page waited {took:.1f} s for its panel"
+    peer.pump(lambda: "input ignored" in " ".join(peer.notices), 20)
+    assert any(n.startswith("input ignored: too many inputs") for n in peer.notices)
 
 
 def test_pages_that_close_while_their_panel_is_built_leave_no_panel_behind(
