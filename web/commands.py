@@ -283,7 +283,8 @@ class Command(
     memory; ``online``: the online change,
     ``web.bus.online``) and its ``group``: two commands of one group at the same scan
     boundary would act as simultaneous edges of one call, so the second is refused;
-    ``shell`` how a shell gives it (None: only by ``s7graph send``)."""
+    ``shell`` how a shell gives it (None: only by ``s7graph send``); ``words`` what the
+    page's notices call it, in the words of its buttons (never the op's wire name)."""
 
     role: ClassVar[str] = ""
     where: ClassVar[Literal["fb", "cpu", "force", "online"]] = "fb"
@@ -294,6 +295,7 @@ class Command(
     does: ClassVar[str] = ""
     example: ClassVar[str] = ""
     shell: ClassVar[Shell | None] = None
+    words: ClassVar[str] = ""
 
     fb: Name
     user: UserName = ""
@@ -328,6 +330,7 @@ class Command(
 
 
 class Ack(Command, tag="ack", frozen=True, kw_only=True):
+    words = "acknowledge"
     role, pin, kind = "operator", "ACK_EF", "edge"
     does = "acknowledge every supervision fault of the FB"
     shell = Shell(
@@ -337,6 +340,7 @@ class Ack(Command, tag="ack", frozen=True, kw_only=True):
 
 
 class AckStep(Command, tag="ack_step", frozen=True, kw_only=True):
+    words = "acknowledge step"
     group = "step"
     role, pin, kind = "operator", "ACK_S", "edge"
     does, example = "acknowledge one step's fault", '{"step": n}'
@@ -345,6 +349,7 @@ class AckStep(Command, tag="ack_step", frozen=True, kw_only=True):
 
 
 class AckMsg(Command, tag="ack_msg", frozen=True, kw_only=True):
+    words = "acknowledge message"
     role = "operator"
     does, example = "acknowledge one message of the alarm list", '{"msg_id": id}'
     shell = Shell("ack", "One message of the alarm list.", metavar="ID", option="--message")
@@ -352,6 +357,7 @@ class AckMsg(Command, tag="ack_msg", frozen=True, kw_only=True):
 
 
 class SetMode(Command, tag="mode", frozen=True, kw_only=True):
+    words = "mode"
     group = "mode"
     role, pin, kind = "operator", "SW_AUTO/MAN/TAP/TOP", "mode"
     does, example = "switch the mode", '{"mode": "MAN"}'
@@ -360,6 +366,7 @@ class SetMode(Command, tag="mode", frozen=True, kw_only=True):
 
 
 class Init(Command, tag="init", frozen=True, kw_only=True):
+    words = "initialize"
     group = "init"
     role, pin, kind = "operator", "INIT_SQ", "edge"
     does = "activate the initial steps"
@@ -368,6 +375,7 @@ class Init(Command, tag="init", frozen=True, kw_only=True):
 
 
 class Off(Command, tag="off", frozen=True, kw_only=True):
+    words = "disable (OFF)"
     group = "init"
     role, pin, kind = "operator", "OFF_SQ", "edge"
     does = "deactivate every step"
@@ -376,12 +384,14 @@ class Off(Command, tag="off", frozen=True, kw_only=True):
 
 
 class Halt(Command, tag="halt", frozen=True, kw_only=True):
+    words = "halt"
     role, pin, kind, held = "operator", "HALT_SQ", "level", True
     does, example = "halt / resume the sequencer", '{"on": true}'
     args: OnArgs
 
 
 class TPush(Command, tag="t_push", frozen=True, kw_only=True):
+    words = "T_PUSH (continue)"
     role, pin, kind = "operator", "T_PUSH", "edge"
     does = "switch a ready transition (TAP, TOP)"
     shell = Shell("t-push", "Switch a ready transition (TAP, TOP; T_PUSH).")
@@ -389,6 +399,7 @@ class TPush(Command, tag="t_push", frozen=True, kw_only=True):
 
 
 class StepOn(Command, tag="step_on", frozen=True, kw_only=True):
+    words = "activate step"
     group = "step"
     role, pin, kind = "operator", "S_ON", "edge"
     does, example = "activate a step (MAN)", '{"step": n}'
@@ -397,6 +408,7 @@ class StepOn(Command, tag="step_on", frozen=True, kw_only=True):
 
 
 class StepOff(Command, tag="step_off", frozen=True, kw_only=True):
+    words = "deactivate step"
     group = "step"
     role, pin, kind = "operator", "S_OFF", "edge"
     does, example = "deactivate a step (MAN)", '{"step": n}'
@@ -405,6 +417,7 @@ class StepOff(Command, tag="step_off", frozen=True, kw_only=True):
 
 
 class SetSteps(Command, tag="set_steps", frozen=True, kw_only=True):
+    words = "set step"
     group = "step"
     role = "operator"
     does = (
@@ -423,18 +436,21 @@ class SetSteps(Command, tag="set_steps", frozen=True, kw_only=True):
 
 
 class EnIl(Command, tag="en_il", frozen=True, kw_only=True):
+    words = "interlocks"
     role, pin, kind, held = "engineer", "EN_IL", "level", False
     does, example = "enable / disable interlocks", '{"on": false}'
     args: OnArgs
 
 
 class EnSv(Command, tag="en_sv", frozen=True, kw_only=True):
+    words = "supervisions"
     role, pin, kind, held = "engineer", "EN_SV", "level", False
     does, example = "enable / disable supervisions", '{"on": false}'
     args: OnArgs
 
 
 class Force(Command, tag="force", frozen=True, kw_only=True):
+    words = "force"
     where = "force"
     role = "engineer"
     does = (
@@ -447,6 +463,7 @@ class Force(Command, tag="force", frozen=True, kw_only=True):
 
 
 class Modify(Command, tag="modify", frozen=True, kw_only=True):
+    words = "modify"
     where = "force"
     role = "engineer"
     does = (
@@ -459,6 +476,7 @@ class Modify(Command, tag="modify", frozen=True, kw_only=True):
 
 
 class Download(Command, tag="download", frozen=True, kw_only=True):
+    words = "download"
     where = "online"
     role = "engineer"
     does = "download a changed chart into the running FB (online change)"
@@ -468,6 +486,7 @@ class Download(Command, tag="download", frozen=True, kw_only=True):
 
 
 class UndoDownload(Command, tag="undo_download", frozen=True, kw_only=True):
+    words = "undo download"
     where = "online"
     role = "engineer"
     does = "put the chart before the last download back"
@@ -476,6 +495,7 @@ class UndoDownload(Command, tag="undo_download", frozen=True, kw_only=True):
 
 
 class Save(Command, tag="save", frozen=True, kw_only=True):
+    words = "save"
     where = "online"
     role = "engineer"
     does, example = (
@@ -486,6 +506,7 @@ class Save(Command, tag="save", frozen=True, kw_only=True):
 
 
 class Open(Command, tag="open", frozen=True, kw_only=True):
+    words = "open"
     where = "online"
     role = "engineer"
     does = "read a chart or importable file of the project directory"
@@ -494,6 +515,7 @@ class Open(Command, tag="open", frozen=True, kw_only=True):
 
 
 class Stop(Command, tag="stop", frozen=True, kw_only=True):
+    words = "CPU to STOP"
     where = "cpu"
     role = "engineer"
     does = "the CPU's RUN/STOP switch to STOP (outputs to 0)"
@@ -502,6 +524,7 @@ class Stop(Command, tag="stop", frozen=True, kw_only=True):
 
 
 class Start(Command, tag="start", frozen=True, kw_only=True):
+    words = "CPU to RUN"
     where = "cpu"
     role = "engineer"
     does = "the switch to RUN: the CPU's configured restart (`--restart`)"
@@ -513,6 +536,7 @@ class Start(Command, tag="start", frozen=True, kw_only=True):
 
 
 class Mres(Command, tag="mres", frozen=True, kw_only=True):
+    words = "memory reset (MRES)"
     where = "cpu"
     role = "engineer"
     does = (

@@ -151,10 +151,12 @@ class Editor(CpuCommands, RowEditing, InPlace, CrossReferencing):
                 multiline=True,
                 hint="The chart as .s7g text; what you type becomes the chart when typing pauses.",
             )
+            # the page's height: a minimum, for Mantine's autosize writes the height
+            # inline (!important, which no style sheet overrides) at six rows
             uid = self.source._impl.uuid
             rule = (
                 f".mantine-Flex-root:has(label[for='{uid}']) textarea{{"
-                "height:calc(100vh - 12em) !important;max-height:none !important;"
+                "min-height:calc(100vh - 12em) !important;max-height:none !important;"
                 "font-family:monospace;font-size:0.75em;white-space:pre;"
                 "overflow:auto !important}"
             )

@@ -125,7 +125,9 @@ class PageLogin(ABC):
             self.user, self.token, self.role = reply.user, reply.token, reply.role
             self.verified = reply.verified
         self._enable()
-        self._notify("logged in", f"{reply.user} ({reply.role})", ok=True)
+        self._notify(
+            "logged in", texts.login_notice(reply.user, reply.role, reply.verified), ok=True
+        )
 
     def _log_out(self) -> None:
         self._revoke(viewer=True)

@@ -528,7 +528,8 @@ class ClientPanel(PageLogin):
         """Send ``command`` as this page's user (runs in viser's callback threads)."""
         reply = self._send(command, self.wiring.send)
         verdict = "applied" if reply.applied else "refused"
-        self._notify(f"{command.op} {verdict}", reply.reason or "OK", ok=reply.applied)
+        title = f"{texts.command_words(command)} {verdict}"
+        self._notify(title, reply.reason or "OK", ok=reply.applied)
         return reply
 
     def send_quiet(self, command: Command) -> CommandReply:

@@ -180,9 +180,12 @@ class ProgramPage(PageLogin):
     def command(self, command: Command | type[Command]) -> CommandReply:
         """Send ``command`` (or op ``kind`` without arguments) as this page's user (viser's
         callback thread), with a notice of how it went."""
+        if isinstance(command, type):
+            command = command(fb=self.view.cpu)
         reply = self.send_quiet(command)
         verdict = "applied" if reply.applied else "refused"
-        self._notify(f"{reply.op} {verdict}", reply.reason or "OK", ok=reply.applied)
+        title = f"{texts.command_words(command)} {verdict}"
+        self._notify(title, reply.reason or "OK", ok=reply.applied)
         return reply
 
     def send_quiet(self, command: Command | type[Command]) -> CommandReply:

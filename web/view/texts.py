@@ -25,6 +25,7 @@ from s7graph.web.bus.protocol import (
     StepDetail,
     StepStateUpdate,
 )
+from s7graph.web.commands import Command
 from s7graph.web.view.status_layer import value_text
 
 __all__ = [
@@ -33,6 +34,7 @@ __all__ = [
     "audit_html",
     "banner_html",
     "clip",
+    "command_words",
     "describe",
     "detail_html",
     "diagnostic_button",
@@ -45,6 +47,7 @@ __all__ = [
     "lines_html",
     "log_html",
     "login_html",
+    "login_notice",
     "permanent_html",
     "rows_note",
     "small",
@@ -64,6 +67,24 @@ def title(prefix: str, number: int, name: str, width: int) -> str:
     """``S3  Fill``; just ``S3`` when the name is empty or only repeats the number."""
     short = f"{prefix}{number}"
     return short if name in ("", short) else f"{short}  {clip(name, width)}"
+
+
+def command_words(command: Command) -> str:
+    """What a command's notice calls it, in the words of the page's buttons (never the
+    op's wire name): ``mode MAN``, ``activate step 3``, ``CPU to STOP``, ``resume``."""
+    op, args = command.op, command.args
+    words = type(command).words
+    if (on := getattr(args, "on", None)) is not None:
+        if op == "halt":
+            return "halt" if on else "resume"
+        return f"{words} {'on' if on else 'off'}"
+    if (mode := getattr(args, "mode", None)) is not None:
+        return f"{words} {mode}"
+    if (step := getattr(args, "step", None)) is not None:
+        return f"{words} {step}"
+    if steps := getattr(args, "steps", None):
+        return f"{words}{'s' if len(steps) > 1 else ''} {', '.join(map(str, steps))}"
+    return words
 
 
 def small(body: str) -> str:
@@ -370,6 +391,12 @@ def login_html(user: str, role: str, verified: bool, demo: bool, refused: str = 
         return small(f'<span style="color:#777">viewer: {how}</span>')
     shown = html.escape(user) + ("" if verified else " (unverified)")
     return small(f"logged in as <b>{shown}</b> ({html.escape(role)})")
+
+
+def login_notice(user: str, role: str, verified: bool) -> str:
+    """The body of a login's notice, in the words of the Login panel: ``olga (operator)``,
+    ``tess (unverified) (engineer)`` without a users file (plain text)."""
+    return f"{user}{'' if verified else ' (unverified)'} ({role})"
 
 
 # ---------------------------------------------------------------- the editor

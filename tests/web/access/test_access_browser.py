@@ -120,9 +120,11 @@ def test_two_pages_as_two_users_are_audited_apart_and_the_alarm_ack_names_its_us
     assert wait_until(init.is_enabled, 20)
 
     first.get_by_role("button", name="MAN", exact=True).click()
-    first.get_by_text("mode applied").first.wait_for(timeout=30_000)
+    first.get_by_text("mode MAN applied").first.wait_for(timeout=30_000)
     second.get_by_role("button", name="Activate", exact=True).click()  # S_ON on step 1
-    second.get_by_text(re.compile(r"step_on (applied|refused)")).first.wait_for(timeout=30_000)
+    second.get_by_text(re.compile(r"activate step 1 (applied|refused)")).first.wait_for(
+        timeout=30_000
+    )
 
     rows = [r for r in read_audit(plant.state) if r.op in ("mode", "step_on")]
     assert [(r.user, r.op) for r in rows] == [("olga", "mode"), ("otto", "step_on")]
@@ -144,7 +146,7 @@ def test_two_pages_as_two_users_are_audited_apart_and_the_alarm_ack_names_its_us
     released: list[int] = []
     client.follow(FB, lambda u: released.extend(s for e, s in u.events if e == "A1"))
     first.get_by_role("button", name="Acknowledge S2 supervision").click()
-    first.get_by_text("ack_msg applied").first.wait_for(timeout=30_000)
+    first.get_by_text("acknowledge message applied").first.wait_for(timeout=30_000)
     assert wait_until(lambda: 2 in released, 30)  # released as ACK_S would
 
     assert wait_until(lambda: (SV, "acknowledged", "olga") in _alarm_rows(plant.state), 20)

@@ -2,10 +2,11 @@
 file, a real zenoh bus and the CPU's online change (docs/online-change.md): an operator and a
 viewer get no edit mode; an invalid edit shows its diagnostic with line and column while the CPU
 keeps its chart; an engineer changes a transition condition, downloads, and the running sequence
-follows the new condition; a chart built from scratch in the browser (three steps, an
-alternative branch, a jump) downloads and runs; a read of the CPU's S7-SCL FB's variable by name
-(``DB12.n``) is no error in the editor and downloads, one of a variable the FB lacks is E048;
-a call that does not fit that FB is E047 on the page and its download refused there.
+follows the new condition; the source view is as tall as the page; a chart built from scratch
+in the browser (three steps, an alternative branch, a jump) downloads and runs; a read of the
+CPU's S7-SCL FB's variable by name (``DB12.n``) is no error in the editor and downloads, one of
+a variable the FB lacks is E048; a call that does not fit that FB is E047 on the page and its
+download refused there.
 One browser, one page for the module (CI has 2 cores); the tests run in order on it."""
 
 from __future__ import annotations
@@ -260,6 +261,16 @@ def test_an_engineer_changes_a_condition_downloads_and_the_sequence_follows(
     cpu.session.set("empty", True)
     assert wait_until(lambda: active(cpu) == [1])
     cpu.session.set("empty", False)
+
+
+def test_the_source_view_is_as_tall_as_the_page_not_six_rows(page: Page) -> None:
+    page.get_by_role("tab", name="Source (.s7g)").click()
+    box = page.locator("textarea").first
+    assert wait_until(lambda: "FUNCTION_BLOCK" in box.input_value())
+    shown, viewport = box.bounding_box(), page.viewport_size
+    assert shown is not None and viewport is not None
+    assert shown["height"] > 0.6 * viewport["height"], shown  # Mantine's autosize: 104 px
+    page.get_by_role("tab", name="Element").click()
 
 
 def test_save_to_this_computer_gives_the_browser_the_chart_being_edited(

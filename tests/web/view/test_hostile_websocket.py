@@ -272,7 +272,7 @@ def test_a_flood_of_clicks_is_cut_to_the_input_rate_audited_and_other_pages_open
     with _connect(plant):
         took = time.monotonic() - opened
     assert took < 5.0, f"another page waited {took:.1f} s for its panel"
-    refused = "init refused: not logged in: log in first (no token)"
+    refused = "initialize refused: not logged in: log in first (no token)"
     peer.pump(lambda: "input ignored" in " ".join(peer.notices), 20)
     assert any(n.startswith("input ignored: too many inputs") for n in peer.notices)
     peer.pump(timeout=3)

@@ -50,7 +50,7 @@ def test_a_programs_page_lists_its_messages_and_an_operator_acknowledges_one(
         log_in(page, "olga")
         assert wait_until(button.is_enabled, 30)
         button.click()
-        page.get_by_text("ack_msg applied").first.wait_for(timeout=30_000)
+        page.get_by_text("acknowledge message applied").first.wait_for(timeout=30_000)
         button.wait_for(state="detached", timeout=30_000)
     audited = [(r.op, r.outcome) for r in read_audit(program.state)]
     assert ("ack_msg", "applied") in audited

@@ -50,7 +50,7 @@ def test_a_page_finds_where_the_process_stands_and_an_operator_resumes_there(
         activate.wait_for(timeout=30_000)
         assert wait_until(activate.is_enabled, 30)
         activate.click()
-        page.get_by_text("set_steps applied").first.wait_for(timeout=30_000)
+        page.get_by_text("set step 2 applied").first.wait_for(timeout=30_000)
         state = cpu.session.graph.state
         assert wait_until(lambda: state.x[1] and not state.x[0], 30)  # S2 in, S1 out
 

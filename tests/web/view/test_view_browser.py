@@ -142,7 +142,7 @@ def test_acknowledge_click_reaches_the_cpu_queue_and_is_answered(
     pending.resolve(True, cycle=4)
     assert wait_until(lambda: bool(edge.view.replies))
     assert edge.view.replies[-1].applied
-    page.get_by_text("ack applied").first.wait_for(timeout=30_000)
+    page.get_by_text("acknowledge applied").first.wait_for(timeout=30_000)
 
     shot = tmp_path / "view.png"
     page.screenshot(path=str(shot))

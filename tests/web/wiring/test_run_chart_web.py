@@ -173,7 +173,7 @@ def test_run_drill_web_serves_the_live_sequence_and_takes_an_acknowledge_click(
             # the supervision message in the Alarms panel, acknowledged by its own button
             page.get_by_text("S002 Work piece not clamped").first.wait_for(timeout=40_000)
             page.get_by_role("button", name="Acknowledge S2 supervision").click()
-            page.get_by_text("ack_msg applied").first.wait_for(timeout=40_000)
+            page.get_by_text("acknowledge message applied").first.wait_for(timeout=40_000)
             # the cause persists (MAN holds S2): released as ACK_S would, S2 faults again
             # as a new message; the first went, acknowledged by olga (the alarm history)
 
@@ -186,7 +186,9 @@ def test_run_drill_web_serves_the_live_sequence_and_takes_an_acknowledge_click(
 
             assert wait_until(acked_by_olga, 40)
             page.get_by_role("button", name="Acknowledge", exact=True).click()
-            page.get_by_text(re.compile(r"ack (applied|refused)")).first.wait_for(timeout=40_000)
+            page.get_by_text(re.compile(r"acknowledge (applied|refused)")).first.wait_for(
+                timeout=40_000
+            )
         client.close()
         session.close()
         session = None
