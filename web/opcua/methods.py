@@ -12,6 +12,7 @@ an OPC UA client sees; :func:`outputs` the output arguments of an applied one.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, Final
@@ -313,10 +314,23 @@ _REFUSALS: Final[tuple[tuple[tuple[str, ...], int], ...]] = (
 )
 
 
+# The CPU's refusals of an argument's value — an address, a literal, a value too wide for
+# its operand, a file name, a chart that does not parse —, anchored at the start: the rest
+# is the client's own text, which may hold any of the words above.
+_INVALID_ARGUMENT: Final = re.compile(
+    r"bad (?:address|literal) |\S{1,80} does not fit the |'[^']*' is not a file name of "
+    r"|the (?:chart|source) does not parse: "
+)
+
+
 def refusal_status(reason: str) -> int:
     """The status code of a command the CPU refused with ``reason``: access denied for a
     role or login, a communication error when the CPU did not answer, invalid state for a
-    command the sequencer cannot take now, and ``BadRequestNotAllowed`` for the rest."""
+    command the sequencer cannot take now, an invalid argument for a value the CPU cannot
+    take (Part 4, "Call": ``BadInvalidArgument``), and ``BadRequestNotAllowed`` for the
+    rest."""
+    if "answered with an error" not in reason and _INVALID_ARGUMENT.match(reason):
+        return StatusCodes.BadInvalidArgument
     text = reason.lower()
     for words, code in _REFUSALS:
         if any(w in text for w in words):

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import datetime
 import gc
 import ipaddress
 import logging
@@ -204,6 +205,17 @@ def application_uri(cpu: str, cert: Path | None) -> str:
     return f"urn:s7graph:opcua:{cpu}"
 
 
+def build_info() -> tuple[str, str, str, str, str, datetime.datetime]:
+    """The server's ``BuildInfo`` (OPC UA Part 5, "BuildInfo"): product URI, manufacturer,
+    product name, software version, build number and build date — s7graph's, where asyncua
+    said ``FreeOpcUa Python Server`` ``1.0pre``; the date not known (1601-01-01, Part 6's
+    null DateTime)."""
+    from s7graph import __version__
+
+    unknown = datetime.datetime(1601, 1, 1, tzinfo=datetime.UTC)
+    return ("urn:s7graph", "s7graph", "s7graph OPC UA face", __version__, __version__, unknown)
+
+
 class OpcuaServer:
     """The face of CPU ``status.cpu`` (as found on the bus) over zenoh ``session``,
     serving OPC UA as ``options`` say; :meth:`start`, then :meth:`stop`."""
@@ -314,6 +326,7 @@ class OpcuaServer:
         server.product_uri = "urn:s7graph"
         server.manufacturer_name = "s7graph"
         await server.set_application_uri(application_uri(cpu, options.cert))
+        await server.set_build_info(*build_info())
         server.allow_remote_admin(False)
         server.limits.max_message_size = MAX_MESSAGE_BYTES
         server.limits.max_chunk_count = MAX_MESSAGE_BYTES // server.limits.max_recv_buffer + 1

@@ -36,8 +36,16 @@ from asyncua.server.user_managers import UserManager
 
 from s7graph.web.access.lockout import Lockout
 from s7graph.web.opcua.paging import Pages, masked
+from s7graph.web.opcua.ranges import follow_ranges, item_problem, read_ranges, write_problem
 from s7graph.web.opcua.statuses import call_problem, fix_browse, fix_translate, missing
-from s7graph.web.opcua.typed import AttributeIds, ObjectIds, StatusCodes, ua_id, ua_status
+from s7graph.web.opcua.typed import (
+    AttributeIds,
+    ObjectIds,
+    StatusCodes,
+    data_value,
+    ua_id,
+    ua_status,
+)
 
 __all__ = [
     "CALLER",
@@ -263,7 +271,11 @@ class FaceSession(InternalSession):
 
     async def read(self, params: ua.ReadParameters) -> list[ua.DataValue]:
         await self._serve(len(params.NodesToRead), len(params.NodesToRead))
-        values = await super().read(params)
+        values = read_ranges(params.NodesToRead, await super().read(params))
+        values = [
+            data_value(code=StatusCodes.BadNodeIdInvalid) if _null(asked.NodeId) else value
+            for asked, value in zip(params.NodesToRead, values, strict=False)
+        ]
         if not isinstance(self.user, FaceUser):  # anonymous: nothing to write or call
             values = [
                 _read_only(asked.AttributeId, value)
@@ -273,7 +285,18 @@ class FaceSession(InternalSession):
 
     async def write(self, params: ua.WriteParameters) -> list[ua.StatusCode]:
         await self._serve(len(params.NodesToWrite), len(params.NodesToWrite))
-        return await super().write(params)
+        problems = [
+            StatusCodes.BadNodeIdInvalid if _null(w.NodeId) else write_problem(w)
+            for w in params.NodesToWrite
+        ]
+        if not any(problems):
+            return await super().write(params)
+        fitting = copy.copy(params)
+        fitting.NodesToWrite = [
+            w for w, p in zip(params.NodesToWrite, problems, strict=True) if p is None
+        ]
+        done = iter(await super().write(fitting) if fitting.NodesToWrite else [])
+        return [next(done) if p is None else ua_status(p) for p in problems]
 
     async def browse(self, params: ua.BrowseParameters) -> list[ua.BrowseResult]:
         await self._serve(len(params.NodesToBrowse), len(params.NodesToBrowse))
@@ -315,7 +338,10 @@ class FaceSession(InternalSession):
         """The calls of a request; one naming no object or no method is answered here
         (``web.opcua.statuses.call_problem``), the others by their methods."""
         await self._serve(len(params), len(params) * COST_CALL)
-        problems = [call_problem(self.aspace, request) for request in params]
+        problems = [
+            call_problem(self.aspace, request) or self._refresh_problem(request)
+            for request in params
+        ]
         served = [r for r, p in zip(params, problems, strict=True) if p is None]
         mark = CALLER.set(self.user)
         try:
@@ -326,6 +352,20 @@ class FaceSession(InternalSession):
             next(done) if p is None else ua.CallMethodResult(StatusCode=ua_status(p))
             for p in problems
         ]
+
+    def _refresh_problem(self, request: ua.CallMethodRequest) -> int | None:
+        """``BadSubscriptionIdInvalid`` for a ``ConditionRefresh`` (or ``…2``) of a
+        subscription of another session: the server verifies that the subscription is the
+        calling session's (OPC UA Part 9, "ConditionRefresh Method") — asyncua replayed
+        every retained condition into any session's subscription for whoever asked."""
+        if request.MethodId not in _REFRESH:
+            return None
+        given = request.InputArguments[0] if request.InputArguments else None
+        asked = given.Value if isinstance(given, ua.Variant) else None
+        if not isinstance(asked, int) or isinstance(asked, bool):
+            return None  # asyncua answers a missing or mistyped id
+        ours = {s.data.SubscriptionId for s in self._subscriptions()}
+        return None if asked in ours else StatusCodes.BadSubscriptionIdInvalid
 
     def _subscriptions(self) -> list[Any]:
         subs = self.subscription_service.subscriptions.values()
@@ -362,6 +402,11 @@ class FaceSession(InternalSession):
             refused.StatusCode = ua_status(StatusCodes.BadTooManyMonitoredItems)
             return [refused for _ in range(asked)]
         problems = [self._item_problem(item) for item in params.ItemsToCreate]
+        subscription = self.subscription_service.subscriptions.get(params.SubscriptionId)
+        if subscription is not None and any(
+            i.ItemToMonitor.IndexRange for i in params.ItemsToCreate
+        ):
+            follow_ranges(subscription.monitored_item_srv)
         if not any(problems):
             return await super().create_monitored_items(params)
         # the items that fit, in a request of their own (the one given stays as sent)
@@ -377,14 +422,25 @@ class FaceSession(InternalSession):
 
     def _item_problem(self, item: ua.MonitoredItemCreateRequest) -> int | None:
         """Why a monitored item is not made (None: asyncua makes it): no such node (an
-        event item of no node was asyncua's ``BadServiceUnsupported``), or a filter that
-        does not go with its attribute."""
-        problem = missing(self.aspace, item.ItemToMonitor.NodeId)
+        event item of no node was asyncua's ``BadServiceUnsupported``), a range of another
+        syntax than Part 4's (``web.opcua.ranges``), or a filter that does not go with its
+        attribute."""
+        problem = missing(self.aspace, item.ItemToMonitor.NodeId) or item_problem(item)
         if problem is not None:
             return problem
         return None if _filter_fits(item) else StatusCodes.BadFilterNotAllowed
 
 
+def _null(nid: object) -> bool:
+    """Whether ``nid`` is the null node id (or no node id): ``BadNodeIdInvalid`` to a Read
+    or a Write, as to a Browse (asyncua: ``BadNodeIdUnknown``)."""
+    return not isinstance(nid, ua.NodeId) or nid.is_null()
+
+
+_REFRESH: Final = (
+    ua_id(ObjectIds.ConditionType_ConditionRefresh),
+    ua_id(ObjectIds.ConditionType_ConditionRefresh2),
+)
 _CURRENT_WRITE: Final = 0x02  # AccessLevel's CurrentWrite bit
 
 

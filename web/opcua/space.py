@@ -102,7 +102,7 @@ _CPU_VARS: Final[tuple[tuple[str, UaType, str, Callable[[CpuStatus], object]], .
     (
         "StopEventId",
         TEXT,
-        "in STOP: the event ID of the STOP's diagnostic entry, 16#4562 ('' in RUN)",
+        "in STOP: the event ID of the STOP's diagnostic entry, 16#4304 ('' in RUN)",
         lambda s: _event_id(s.stop if s.state == "STOP" else None),
     ),
     (
@@ -147,6 +147,10 @@ _FB_VARS: Final[tuple[tuple[str, UaType, str, str], ...]] = (
     ("ActiveSteps", UINT16, "the active steps' numbers", ""),
     ("Disturbed", UINT16, "steps with an interlock error or a supervision fault", ""),
     ("ChartVersion", UINT64, "the chart version running (1 at start, +1 per download)", ""),
+)
+_SEQUENCE_VARS: Final[tuple[tuple[str, UaType, str], ...]] = (
+    ("Number", UINT16, "the sequence's number"),
+    ("Name", TEXT, "the sequence's name"),
 )
 _STEP_VARS: Final[tuple[tuple[str, UaType, str], ...]] = (
     ("Number", UINT16, "the step's number"),
@@ -333,8 +337,8 @@ class Space:
             n.root(nid)
             if q.number not in fbn.sequences:
                 n.obj(fbn.node, nid, f"Sequence{q.number}")
-                n.var(nid, self.nid(fb, f"Sequence{q.number}", "Number"), "Number", UINT16)
-                n.var(nid, self.nid(fb, f"Sequence{q.number}", "Name"), "Name", TEXT)
+                for var, t, text in _SEQUENCE_VARS:
+                    n.var(nid, self.nid(fb, f"Sequence{q.number}", var), var, t, description=text)
                 fbn.sequences[q.number] = nid
             for number in q.steps:
                 if number not in fbn.steps and number in infos:

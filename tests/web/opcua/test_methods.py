@@ -120,6 +120,16 @@ def test_wrong_inputs_are_a_status_code(
         ("message 'x' is already acknowledged by olga", "BadConditionBranchAlreadyAcked"),
         ("mode conflicts with mode MAN, queued for the same scan; retry", "BadResourceUnavailable"),
         ("not confirmed: applied in cycle 7, but the state file failed", "BadTimeout"),
+        ("bad address 'XYZ': not an S7 address or a symbol", "BadInvalidArgument"),
+        ("70000 does not fit the word MW20 (0..65535, or -32768..32767)", "BadInvalidArgument"),
+        ("'../x' is not a file name of the project directory (a bare name", "BadInvalidArgument"),
+        ("the chart does not parse: unexpected 'garbage'", "BadInvalidArgument"),
+        # the client's own text in a reason decides nothing
+        ("no message 'bad address x' in the message list", "BadEventIdUnknown"),
+        (
+            "s7graph/cpu1/cmd: the CPU answered with an error: bad address 'x'",
+            "BadCommunicationError",
+        ),
         ("something nobody foresaw", "BadRequestNotAllowed"),
     ],
 )
