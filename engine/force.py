@@ -193,8 +193,9 @@ def resolve_operand(
         if text.startswith('"'):
             raise SymbolError(f"unknown symbol {text}")
         address = parse_address(text)
-    except S7Error as exc:
-        raise error(f"{exc.message}: not an S7 address or a symbol") from None
+    except S7Error as exc:  # said once: "bad address 'Nope': not an S7 address or a symbol"
+        said = exc.message.removesuffix(": not an S7 address").removesuffix("not an S7 address")
+        raise error(f"{said}{': ' if said else ''}not an S7 address or a symbol") from None
     return address, default_type(address), ""
 
 

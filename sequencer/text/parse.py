@@ -323,14 +323,37 @@ def _long_numbers(text: str, file: str) -> list[Diagnostic]:
     return out
 
 
+_UNCLOSED = re.compile(
+    r"'(?:[^'$\n]|\$.)*'|\"(?:[^\"\n]|\"\")*\"|\(\*.*?\*\)|//[^\n]*|(\(\*)", re.S
+)
+
+
+def _unclosed_comment(diags: list[Diagnostic], text: str, file: str) -> list[Diagnostic]:
+    """``diags`` of a chart whose ``(*`` comment is never closed: those before it, then one
+    E002 at the ``(*`` (the file ends in the comment) instead of an error for every word of
+    it; ``diags`` as they are otherwise."""
+    opened = next((m for m in _UNCLOSED.finditer(text) if m[1] is not None), None)
+    if opened is None:
+        return diags
+    line = text.count("\n", 0, opened.start()) + 1
+    col = opened.start() - (text.rfind("\n", 0, opened.start()) + 1) + 1
+    said = f"the comment opened at line {line} is never closed (missing '*)')"  # as S7-SCL's
+    before = [d for d in diags if (d.loc.line, d.loc.col) < (line, col)]
+    return [*before, error("E002", said, SourceLocation(file, line, col))]
+
+
 def parse_chart(text: str, file: str = "<input>") -> Chart:
     """Parse one `.s7g` chart (docs/chart-format.md). Raises :class:`ChartSyntaxError` with all
-    syntax diagnostics (file:line:col, what was found and what was expected). The garbage collector
-    is paused meanwhile (``sequencer.collector``)."""
+    syntax diagnostics (file:line:col, what was found and what was expected); a ``(*`` never
+    closed is one E002 where it opens. The garbage collector is paused meanwhile
+    (``sequencer.collector``)."""
     if long := _long_numbers(text, file):
         raise ChartSyntaxError(_placed(long, text))
     with collector_paused():
-        return attach_comments(_parse_chart(text, file), text)
+        try:
+            return attach_comments(_parse_chart(text, file), text)
+        except ChartSyntaxError as exc:
+            raise ChartSyntaxError(_unclosed_comment(exc.diagnostics, text, file)) from None
 
 
 def _parse_chart(text: str, file: str) -> Chart:

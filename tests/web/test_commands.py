@@ -310,22 +310,25 @@ def test_a_shell_command_sends_its_ops_struct(
 @pytest.mark.parametrize(
     ("words", "reason"),
     [
-        (["mode", "fast"], "mode must be one of AUTO, MAN, TAP, TOP"),
-        (["step-on", "0"], "$.args.step"),
-        (["step-on", "three"], "step is a whole number, not a text - at `$.args.step`"),
-        (["send", "halt", "on=yes"], "on is true or false, not a text - at `$.args.on`"),
-        (["set-steps", "3", "0"], "$.args.steps[1]"),
-        (["ack", "--message", "0"], "$.args.msg_id"),
+        (["mode", "fast"], "mode must be one of AUTO, MAN, TAP, TOP (see s7graph mode --help)"),
+        (["step-on", "0"], ": step is at least 1 (see s7graph step-on --help)"),
+        (["step-on", "three"], ": 'three' is not a step: write it S3 or 3, as S7-GRAPH numbers"),
+        (["send", "halt", "on=yes"], ": on is true or false, not a text (see s7graph send --help)"),
+        (["set-steps", "3", "0"], "s7graph: error: steps[1] is at least 1 (see s7graph set-steps"),
+        (["ack", "--message", "0"], ": msg_id is at least 1 (see s7graph ack --help)"),
     ],
 )
 def test_a_shell_command_refuses_a_bad_argument_before_the_bus(
     capsys: pytest.CaptureFixture[str], words: list[str], reason: str
 ) -> None:
+    """In words, with the help of the command to read, never the place msgspec names in
+    the message (`` - at `$.args.on```) nor its own words (``Expected `int` ...``)."""
     from s7graph.web import cli
 
     assert cli.main([*words, "--user", "u"]) == 2
     err = capsys.readouterr().err
     assert reason in err and "give the bus" not in err
+    assert "$." not in err and "Expected" not in err and len(err.splitlines()) == 1
 
 
 def test_docs_cli_md_lists_each_op_as_the_union_says() -> None:

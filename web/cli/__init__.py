@@ -8,6 +8,7 @@ CPU's process imports them, the supervisor stays small, and the CPU starts soone
 
 from __future__ import annotations
 
+import signal
 import sys
 
 __all__ = ["main"]
@@ -16,7 +17,18 @@ __all__ = ["main"]
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the console script; turns every known error into one stderr line
     (``root.main``). Run as the program (``argv`` None), ``s7graph run`` supervises its CPU
-    as a process of its own; called with ``argv`` it runs in this process."""
+    as a process of its own; called with ``argv`` it runs in this process. The program's
+    command done, Ctrl-C and SIGTERM are ignored while the process ends: one pressed again
+    could only turn a clean end into a traceback or a killed process."""
+    try:
+        return _main(argv)
+    finally:
+        if argv is None:
+            for sig in (signal.SIGINT, signal.SIGTERM):
+                signal.signal(sig, signal.SIG_IGN)
+
+
+def _main(argv: list[str] | None) -> int:
     if argv is None and sys.argv[1:2] == ["run"]:
         from s7graph.web.cli.supervisor import supervise, supervises
 

@@ -32,8 +32,8 @@ def parse_since(text: str, now: float | None = None) -> int:
     """Wall-clock ns of ``--since``; ValueError naming the accepted forms."""
     now = time.time() if now is None else now
     age = _AGE.match(text.strip())
-    if age:
-        return int((now - float(age[1]) * _UNIT[age[2]]) * 1e9)
+    if age:  # an age past the epoch: every row
+        return _ns(now - float(age[1]) * _UNIT[age[2]])
     try:
         if re.fullmatch(r"\d{1,2}:\d{2}(:\d{2})?", text.strip()):
             today = dt.datetime.fromtimestamp(now).date().isoformat()
@@ -44,15 +44,36 @@ def parse_since(text: str, now: float | None = None) -> int:
         raise ValueError(
             f"--since {text!r}: give a time (2026-11-22T08:30, 08:30) or an age (15m, 2h, 3d)"
         ) from None
-    return int(when.timestamp() * 1e9)
+    try:
+        return _ns(when.timestamp())
+    except (OverflowError, OSError, ValueError):  # a time the system clock cannot hold
+        raise ValueError(f"--since {text!r}: a time from 1970 on") from None
+
+
+def _ns(seconds: float) -> int:
+    """``seconds`` since the epoch as ns within what SQLite's integers hold (1970 to 2262)."""
+    return min(max(0, int(seconds * 1e9)), 2**63 - 1)
+
+
+def _not_a_state_file(state: Path) -> str:
+    """Why ``state`` cannot be a state file before SQLite reads it, as ``s7graph run`` says
+    it (``engine.persistence``), or ""."""
+    if state.is_dir():
+        return "a directory, not a state file"
+    if not state.exists():
+        return "no such state file"
+    if state.is_file() and state.stat().st_size == 0:
+        return "empty file (0 bytes), not a state file"
+    return ""
 
 
 def audit_command(state: Path, since: str | None, *, summary: bool = False) -> int:
     """Print the audit rows (oldest first), or with ``summary`` the summary's; exit 2 for a
     missing file, a bad --since, or a file whose audit cannot be read (one line naming it
     and what was wrong)."""
-    if not state.is_file():
-        print(f"s7graph: error: {state}: no such state file", file=sys.stderr)
+    problem = _not_a_state_file(state)
+    if problem:
+        print(f"s7graph: error: {state}: {problem}", file=sys.stderr)
         return 2
     try:
         if summary:

@@ -18,8 +18,17 @@ def _fail(message: str) -> int:
     return 2
 
 
+def _not_a_folder(directory: Path) -> str:
+    """Why the certificates cannot go into ``directory``: a file is there, or ""."""
+    if directory.exists() and not directory.is_dir():
+        return f"{directory}: a file, not a folder; give the folder of the plant's certificates"
+    return ""
+
+
 def certs_init(directory: Path, *, force: bool = False) -> int:
     """Make the CA in ``directory``; 0, or 2 with the reason."""
+    if problem := _not_a_folder(directory):
+        return _fail(problem)
     try:
         made = init_ca(directory, force=force)
     except CertsError as exc:
@@ -32,6 +41,8 @@ def certs_issue(
     directory: Path, name: str, kind: str, hosts: Sequence[str] = (), *, force: bool = False
 ) -> int:
     """Issue node ``<kind>.<name>``'s certificate with the CA of ``directory``; 0, or 2."""
+    if problem := _not_a_folder(directory):
+        return _fail(problem)
     try:
         made = issue(directory, name, kind, hosts, force=force)
         cn = common_name(kind, name)

@@ -149,6 +149,8 @@ def import_command(
 ) -> int:
     """Import ``source``; return the exit status (see the module docstring). A file the
     command cannot read or write is one ``s7graph: error:`` line naming it, exit 2."""
+    if output is not None and _same_file(source, output):
+        return fail(S7Error(f"-o {output} is the file imported: give the chart a file of its own"))
     result = _read(source, symbols, pou)
     if isinstance(result, int):
         return result

@@ -35,22 +35,79 @@ from s7graph.engine.text import is_unicode
 from s7graph.web.bus.protocol import valid_name
 from s7graph.web.bus.session import BusEnds, BusLogin, TlsFiles
 
-__all__ = ["PASSWORD_ENV", "NetOptions", "is_loopback_endpoint", "is_loopback_host"]
+__all__ = [
+    "PASSWORD_ENV",
+    "NetOptions",
+    "edge_error",
+    "is_loopback_endpoint",
+    "is_loopback_host",
+    "name_taken_note",
+    "running_here",
+]
 
 _LOCAL_NAMES = {"localhost", "localhost.localdomain", "ip6-localhost"}
 PASSWORD_ENV = "S7GRAPH_BUS_PASSWORD"
 """Where ``--bus-user``'s password comes from without ``--bus-password-file``."""
 CERTS_HINT = "make certificates: s7graph certs init DIR; s7graph certs issue DIR NAME --kind KIND"
-_ZENOH_PLACE = re.compile(r"\s+at \S+\.rs:\d+\.?\s*$")  # " at /…/orchestrator.rs:447."
+_ZENOH_PLACE = re.compile(r"\s+at \S+\.rs:\d+\.?")  # " at /…/orchestrator.rs:447."
 _UNREACHED = re.compile(r"^Unable to connect to any of \[(.*)\]!?$")
 
 
 def error_words(exc: BaseException) -> str:
     """What went wrong, in words: an OS error's own (``Address already in use``), zenoh's
-    without the place in its Rust source, else the message — never a class name."""
+    without the places in its Rust source (the one it quotes of a cause too), else the
+    message — never a class name."""
     if isinstance(exc, OSError) and exc.strerror:
         return f"{exc.strerror}{f': {exc.filename}' if exc.filename else ''}"
     return _ZENOH_PLACE.sub("", str(exc)).strip() or "it gave no reason"
+
+
+def running_here(cpu: str) -> str | None:
+    """Where a CPU named ``cpu`` of this machine listens when one does (its unix socket
+    takes a connection: one a killed CPU left does not), else None (``web.bus.local``)."""
+    import socket
+
+    from s7graph.web.bus import local
+
+    endpoint = local.find(cpu)
+    path = (endpoint or "").removeprefix("unixsock-stream/")
+    if endpoint is None or path == endpoint:
+        return None
+    with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as probe:
+        probe.settimeout(1.0)
+        try:
+            probe.connect(path)
+        except OSError:
+            return None
+    return endpoint
+
+
+def name_taken_note(net: NetOptions) -> str:
+    """A warning when this run goes on the bus of this machine (no ``--listen`` or
+    ``--connect``) under the name of a CPU running here: a shell then reaches only this
+    one, and the other not at all once this one ends; "" otherwise."""
+    if net.listen or net.connect:
+        return ""
+    endpoint = running_here(net.cpu)
+    if endpoint is None:
+        return ""
+    return (
+        f"s7graph: warning: a CPU named {net.cpu} runs on this machine already ({endpoint}): "
+        f"a shell reaches only this one, and that one not at all once this one ends; give "
+        f"each its own name with --cpu NAME"
+    )
+
+
+def edge_error(exc: BaseException, net: NetOptions | None, *, web: bool) -> str:
+    """Why ``s7graph run`` could not put its CPU on the bus or serve its page, in one line:
+    nothing answering at ``--connect`` as any node that joins says it
+    (``NetOptions.join_error``), zenoh's refusal as the bus's, anything else as the view's
+    (``web``) or the bus's."""
+    if NetOptions.unreached(exc):
+        return (net or NetOptions()).join_error(exc)
+    zenoh = type(exc).__module__.split(".", 1)[0] == "zenoh"
+    what = "cannot serve the view" if web and not zenoh else "cannot put the CPU on the bus"
+    return f"{what}: {error_words(exc)}"
 
 
 def is_loopback_host(host: str) -> bool:

@@ -52,6 +52,43 @@ from s7graph.web.commands import (
     command_type,
 )
 
+_TYPE_WORDS = {"bool": "", "path": "FILE", "Path": "FILE", "float": "NUMBER", "int": "INTEGER"}
+
+
+def _type_words(shown: str) -> str:
+    """An option's type as typer (0.2x) shows it in the help, Python's (``<list[Path]>``,
+    ``<bool>``, ``<float>``), in a user's words: ``FILE...``, nothing for a flag,
+    ``NUMBER``; a choice (``<warm|hot|cold>``) as it is."""
+    inner = shown[1:-1] if shown.startswith("<") and shown.endswith(">") else shown
+    several = inner.startswith("list[") and inner.endswith("]")
+    inner = inner[5:-1] if several else inner
+    if "|" in inner:  # a choice: its values as typed
+        words = inner
+    else:
+        words = _TYPE_WORDS.get(inner, "TEXT" if inner == "str" else inner.upper())
+    return f"{words}..." if several and words else words
+
+
+def _plain_help_types() -> None:
+    """Say each option's and argument's type in the help in words (``_type_words``): the
+    typer this runs with may show Python's; one without ``display_type`` is left as it is."""
+    import typer.core
+
+    for kind in ("TyperOption", "TyperArgument"):
+        cls = getattr(typer.core, kind, None)
+        shown = getattr(cls, "display_type", None)
+        if cls is None or shown is None or getattr(shown, "in_words", False):
+            continue
+
+        def display_type(self: Any, ctx: Any, _shown: Any = shown) -> str:
+            return _type_words(str(_shown(self, ctx)))
+
+        display_type.in_words = True  # type: ignore[attr-defined]
+        cls.display_type = display_type
+
+
+_plain_help_types()
+
 app = typer.Typer(
     add_completion=False,
     no_args_is_help=True,
@@ -208,8 +245,8 @@ def _credentials_everywhere() -> None:
 
 
 def _positive_ms(value: float | None) -> float | None:
-    if value is not None and not value > 0:
-        raise typer.BadParameter("--max-cycle-ms must be more than 0 ms")
+    if value is not None and not 0 < value <= MAX_CYCLE_MS:
+        raise typer.BadParameter(f"from more than 0 to {MAX_CYCLE_MS:,.0f} ms, not {value:g}")
     return value
 
 
@@ -248,7 +285,7 @@ MAX_CYCLES = 100_000_000
 
 def _rt_priority(value: int | None) -> int | None:
     if value is not None and not 0 <= value <= 98:
-        raise typer.BadParameter("--rt-priority must be 0 (normal scheduling) to 98")
+        raise typer.BadParameter(f"0 (normal scheduling) to 98, not {value}")
     return value
 
 
@@ -336,11 +373,18 @@ RtPriority = Annotated[
         "rtprio limit), else normal.",
     ),
 ]
+
+
+def _comm_load(value: float) -> float:
+    if not 1 <= value <= 100:  # NaN too
+        raise typer.BadParameter(f"from 1 to 100 %, not {value:g}")
+    return value
+
+
 CommLoad = Annotated[
     float,
     typer.Option(
-        min=1,
-        max=100,
+        callback=_comm_load,
         help="Scan cycle load from communication, %: the share of the cycle "
         "commands may take at each scan boundary; the rest wait for the next. S7's "
         "default: 20.",
@@ -552,6 +596,16 @@ def _opcua_face(
     return OpcuaFace(url=url, cert=cert, key=key, writes=writes or "force")
 
 
+def _a_chart(path: Path, command: str) -> None:
+    """Refuse at once, in one line (exit 2), a file ``command`` cannot read by its suffix: a
+    Python program, a chart ``s7graph import`` reads (``web.cli.report.not_a_chart``)."""
+    from s7graph.web.cli.report import fail, not_a_chart
+
+    problem = not_a_chart(path, f"{command} takes a chart (.s7g) or an S7-SCL source (.scl)")
+    if problem:
+        raise typer.Exit(fail(problem))
+
+
 @app.command()
 def check(
     chart: Annotated[Path, typer.Argument(help="A chart in .s7g source, or an .scl source.")],
@@ -560,6 +614,7 @@ def check(
 ) -> None:
     """Print a chart's (or an SCL source's) diagnostics; exit 0 clean, 1 warnings only, 2
     errors."""
+    _a_chart(chart, "check")
     if chart.suffix.lower() == ".scl":
         from s7graph.web.cli.scl import check_scl_command
 
@@ -588,6 +643,7 @@ def xref(
     ] = None,
 ) -> None:
     """Print a chart's cross-references: where each operand is used, and how."""
+    _a_chart(chart, "xref")
     from s7graph.web.cli.xref import xref_command
 
     raise typer.Exit(
@@ -619,6 +675,7 @@ def sim(
 ) -> None:
     """Run a chart (or an .scl program) on the virtual clock: stimulus in, one JSON line
     per cycle out."""
+    _a_chart(chart, "sim")
     if chart.suffix.lower() == ".scl":
         from s7graph.web.cli.scl import sim_scl_command as command
     else:
@@ -964,9 +1021,11 @@ _STEP_FIELDS = ("step", "steps")
 
 
 def _step_word(word: str) -> object:
-    """``S3`` or ``3`` as the step number 3; anything else as it is (the bus refuses it)."""
+    """``S3`` or ``3`` as the step number 3; ``ValueError`` for a word that is neither."""
     m = re.fullmatch(r"[Ss]?(\d{1,9})", word.strip())
-    return int(m[1]) if m else word
+    if m is None:
+        raise ValueError(f"{word!r} is not a step: write it S3 or 3, as S7-GRAPH numbers it")
+    return int(m[1])
 
 
 def _word(field: mi.Field, value: object) -> object:
@@ -1341,12 +1400,43 @@ def _doing(argv: list[str] | None) -> str:
     return f"while running s7graph {name}"[:120].rstrip() if name.isprintable() else ""
 
 
+_AT = re.compile(r" - at `\$(?:\.args)?\.?([^`]*)`$")
+_BOUND = re.compile(r"^Expected `int` ([<>])= (\d+)$")
+
+
+def _usage_error(exc: Exception, message: str) -> str:
+    """A usage error in words, pointing at the help of the command it is of (``s7graph mode
+    --help``); a command group given no command (its help printed already: typer's empty
+    message) asks for one."""
+    ctx = getattr(exc, "ctx", None)
+    where = str(getattr(ctx, "command_path", "") or "s7graph")
+    if not message.strip():
+        return f"give a command of {where}: one of those listed above"
+    return f"{_argument_words(message)} (see {where} --help)"
+
+
+def _argument_words(message: str) -> str:
+    """A refusal of an op's argument without the place msgspec names (`` - at
+    `$.args.on```: the command line is no JSON); one msgspec left in its own words names
+    the argument (``steps[1] is at least 1``)."""
+    at = _AT.search(message)
+    if at is None:
+        return message
+    said, name = message[: at.start()], at[1]
+    if not said.startswith(("Expected ", "Invalid value: Expected ")) or not name:
+        return said
+    bound = _BOUND.match(said.removeprefix("Invalid value: "))
+    if bound:
+        return f"{name} is at {'least' if bound[1] == '>' else 'most'} {int(bound[2]):,}"
+    return f"{name}: {said.removeprefix('Invalid value: ')}"
+
+
 def main(argv: list[str] | None = None) -> int:
     """The commands' entry point (``main`` in ``web/cli/__init__.py`` calls it, once the
     supervisor of a ``run`` is not wanted); turns every known error into one stderr line.
     ``argv`` None: the program's command line."""
     try:
-        rc = _command(_command_word(argv))(args=argv, standalone_mode=False)
+        rc = _command(_command_word(argv))(args=argv, prog_name="s7graph", standalone_mode=False)
     except S7Error as exc:
         print(f"s7graph: error: {exc}", file=sys.stderr)
         return 2
@@ -1357,7 +1447,7 @@ def main(argv: list[str] | None = None) -> int:
     except Exception as exc:
         message = getattr(exc, "format_message", None)
         if callable(message):  # a usage error of the command line (typer's click)
-            print(f"s7graph: error: {message()} (see s7graph --help)", file=sys.stderr)
+            print(f"s7graph: error: {_usage_error(exc, message())}", file=sys.stderr)
             code = getattr(exc, "exit_code", 2)
             return code if isinstance(code, int) else 2
         if type(exc).__name__ == "Abort":  # Ctrl-C at a prompt

@@ -45,8 +45,9 @@ from s7graph.engine.runner import COMM_LOAD_PCT, RT_PRIORITY, Runner, core_for, 
 from s7graph.engine.state_identity import Program
 from s7graph.engine.watchdog import Watchdog
 from s7graph.sfb.alarms import message_list
+from s7graph.web.cli.check import view_diagnostics
 from s7graph.web.cli.report import fail
-from s7graph.web.cli.run_program import run_until_stopped, state_path_of
+from s7graph.web.cli.run_program import run_until_stopped, start_notes, state_path_of
 from s7graph.web.cli.run_stop import Locate, chart_locator
 from s7graph.web.cli.supervisor import child_marks, recovered_cause
 from s7graph.web.harness.persist import OpenedState, open_state, refusal
@@ -124,6 +125,8 @@ def run_chart(
         return fail(f"--core: {exc}", 2)
     if rt_priority is not None:
         keep_small_pages()  # before the view starts: it inherits it
+    here = web or opcua is not None  # on this machine's bus, unless --listen or --connect
+    notes = start_notes(net, on_bus=here or bool(net and net.on_bus), here=here)
     with kept_free(kept):  # before the bus and the view start: they inherit it
         return _run_chart(
             path,
@@ -146,6 +149,7 @@ def run_chart(
             core=kept,
             blocks=blocks,
             opcua=opcua,
+            notes=notes,
         )
 
 
@@ -171,8 +175,9 @@ def _run_chart(
     core: int | None,
     blocks: Sequence[Path] = (),
     opcua: OpcuaFace | None,
+    notes: Sequence[str],
 ) -> int:
-    made = _load(path, symbols, plant, session, blocks)
+    made = _load(path, symbols, plant, session, blocks, web=web)
     if isinstance(made, int):
         return made
     session, loaded = made
@@ -245,6 +250,7 @@ def _run_chart(
         close=functools.partial(_close, children, live),
         recovered=recovered,
         locate=_locator(session),
+        notes=notes,
     )
     return fail(failure[0], 1) if failure else status
 
@@ -288,16 +294,21 @@ def _load(
     plant: Path | None,
     session: ChartSession | None,
     blocks: Sequence[Path] = (),
+    *,
+    web: bool = False,
 ) -> tuple[ChartSession, LoadedPlant | None] | int:
     """The chart's session (on the system clock unless given) with the S7-SCL ``blocks``
     and its plant, the sources' warnings and the calls of blocks the CPU lacks printed as
-    warnings; an exit status when either cannot load."""
+    warnings; an exit status when either cannot load, or with ``web`` when the view cannot
+    show the chart (``check``'s W110)."""
     try:
         if session is None:
             session = ChartSession.load(path, symbols, SystemClock(), blocks=blocks)
         loaded = load_plant(plant) if plant is not None else None
     except S7Error as exc:  # ChartLoadError and SclLoadError included
         return fail(exc)
+    if web and (unshown := view_diagnostics(session.cc.chart)):
+        return fail(f"{path}: {unshown[0].message}; run it without --web", 2)
     for line in session.warnings + session.missing:
         print(line, file=sys.stderr)
     return session, loaded
@@ -320,7 +331,10 @@ def _edges(
         store.close()
         return 2
     except Exception as exc:
-        print(f"s7graph: error: cannot serve the view: {exc}", file=sys.stderr)
+        from s7graph.web.cli.net import edge_error
+
+        why = edge_error(exc, options.get("net"), web=bool(options.get("web")))
+        print(f"s7graph: error: {why}", file=sys.stderr)
         store.close()
         return 2
 

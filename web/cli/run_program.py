@@ -29,7 +29,7 @@ import functools
 import importlib.util
 import signal
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
@@ -48,7 +48,7 @@ from s7graph.engine.restart import parse_restart
 from s7graph.engine.runner import COMM_LOAD_PCT, RT_PRIORITY, Runner, core_for, keep_small_pages
 from s7graph.engine.state_identity import Program
 from s7graph.engine.write_stop import stop_words
-from s7graph.web.cli.report import fail
+from s7graph.web.cli.report import fail, not_a_chart
 from s7graph.web.cli.run_stop import Locate, RunStop
 from s7graph.web.cli.supervisor import child_marks, recovered_cause
 from s7graph.web.harness.persist import OpenedState, default_state, open_state, refusal
@@ -87,6 +87,10 @@ def import_program(path: Path) -> ModuleType:
     return module
 
 
+MAX_CYCLE_MS = 3_600_000
+"""The longest maximum cycle time a program's ``CPU`` option or ``--max-cycle-ms`` sets."""
+
+
 def build_cpu(module: ModuleType, clock: Any, *, max_cycle_ms: float | None = None) -> Cpu:
     """A CPU with the module's blocks loaded and its ``setup(cpu)`` applied.
 
@@ -101,6 +105,11 @@ def build_cpu(module: ModuleType, clock: Any, *, max_cycle_ms: float | None = No
     options.pop("core", None)
     if max_cycle_ms is not None:
         options = {**options, "max_cycle_ms": max_cycle_ms}
+    cycle = options.get("max_cycle_ms", 1)
+    if not isinstance(cycle, int | float) or not 0 < cycle <= MAX_CYCLE_MS:  # NaN too
+        raise ProgramLoadError(
+            f"CPU option max_cycle_ms: from more than 0 to {MAX_CYCLE_MS:,} ms, not {cycle!r}"
+        )
     try:
         cpu = Cpu(clock, **options)
         sfb.install(cpu)  # the system blocks belong to the CPU, as on S7: ctx.call("SFB41", 41)
@@ -167,7 +176,9 @@ def load_program(path: Path, clock: Clock, *, max_cycle_ms: float | None = None)
     loader = PROGRAM_LOADERS.get(path.suffix.lower())
     if loader is None:
         kinds = ", ".join(sorted(PROGRAM_LOADERS))
-        raise ProgramLoadError(f"not a program s7graph runs ({kinds}, or a chart .s7g)")
+        takes = f"not a program s7graph runs ({kinds}, an S7-SCL program .scl, or a chart .s7g)"
+        foreign = not_a_chart(path, takes)
+        raise ProgramLoadError(foreign.removeprefix(f"{path}: ") if foreign else takes)
     return loader(path, clock, max_cycle_ms=max_cycle_ms)
 
 
@@ -182,10 +193,26 @@ def state_path_of(source: Path, state: Path | None, cpu: Cpu) -> Path:
     return path
 
 
-def _report(record: ScanRecord) -> None:
-    for entry in record.diagnostics:
-        if entry.event_id >> 8 in (0x25, 0x35):  # errors; a STOP is reported by the run
-            print(f"s7graph: {entry}", file=sys.stderr)
+class _Errors:
+    """A run's reporter of records: each programming or time error (a STOP is said by the
+    run) on stderr once per event, block and message — one that OB121 or OB80 handles
+    recurs every cycle, and the diagnostic buffer (``s7graph diag``) keeps every entry."""
+
+    AT_MOST = 1000
+    """Distinct errors remembered; past that, none more is said."""
+
+    def __init__(self) -> None:
+        self._said: set[tuple[int, str, str]] = set()
+
+    def __call__(self, record: ScanRecord) -> None:
+        for entry in record.diagnostics:
+            if entry.event_id >> 8 not in (0x25, 0x35):
+                continue
+            key = (entry.event_id, entry.block, entry.message)
+            if key in self._said or len(self._said) >= self.AT_MOST:
+                continue
+            self._said.add(key)
+            print(f"s7graph: {entry} (said once; s7graph diag lists each)", file=sys.stderr)
 
 
 def run_program(
@@ -257,6 +284,7 @@ def run_program(
         return _fail(state_path, f"cannot use the state file: {exc.strerror or exc}")
     with kept_free(kept):  # before the bus and the view start: they inherit it
         on_bus = web or (net is not None and net.on_bus)
+        notes = start_notes(net, on_bus=on_bus, here=web)
         edges = _program_edges(loaded, opened.store, net, web, port) if on_bus else None
         if isinstance(edges, int):
             return edges
@@ -265,6 +293,7 @@ def run_program(
             loaded.cpu,
             opened.store,
             edge,
+            report := _Errors(),
             cycle_ms=cycle_ms,
             end_on_stop=not (web or bool(recovered and edge is not None)),
             rt_priority=rt_priority,
@@ -281,21 +310,22 @@ def run_program(
             what=path.name,
             restart=restart,
             duration_s=duration_s,
-            on_start=_report,
+            on_start=report,
+            notes=notes,
             close=functools.partial(_close_edges, view, edge),
             recovered=recovered,
         )
 
 
 def _program_runner(
-    cpu: Cpu, store: StateStore, edge: ProgramEdge | None, **options: Any
+    cpu: Cpu, store: StateStore, edge: ProgramEdge | None, report: _Errors, **options: Any
 ) -> Runner:
-    """The runner of a program's CPU: each record reported (its errors on stderr) and, on
-    the bus, handed to ``edge`` in the scan thread."""
+    """The runner of a program's CPU: each record reported (its errors on stderr:
+    ``report``) and, on the bus, handed to ``edge`` in the scan thread."""
     runner: Runner
 
     def on_record(record: ScanRecord) -> None:
-        _report(record)
+        report(record)
         if edge is not None:
             edge.on_record(record, stats=cpu.stats, runner=runner)
 
@@ -327,7 +357,9 @@ def _program_edges(
             sources = loaded.sources
             serve_blocks(edge.publisher, lambda: sources)
     except Exception as exc:
-        print(f"s7graph: error: cannot put the CPU on the bus: {exc}", file=sys.stderr)
+        from s7graph.web.cli.net import edge_error
+
+        print(f"s7graph: error: {edge_error(exc, net, web=False)}", file=sys.stderr)
         store.close()
         return 2
     if not web:
@@ -367,6 +399,28 @@ def _say_last_run(opened: OpenedState) -> None:
         print(f"s7graph: note: the last run went to STOP: {report.stopped}", file=sys.stderr)
 
 
+UNREACHABLE = (
+    "s7graph: on no bus: s7graph status, watch and the other commands of a shell reach a run "
+    "started with --web, --listen or --connect"
+)
+"""Said as a run without a bus starts: a shell's ``status`` finds no CPU then."""
+
+
+def start_notes(net: NetOptions | None, *, on_bus: bool, here: bool) -> list[str]:
+    """What a run says after its ``in RUN`` line of the bus it is on: on none, how a shell
+    would reach it (``UNREACHABLE``); on this machine's (``here``: a page or an OPC UA face,
+    no ``--listen`` or ``--connect``) under the name of a CPU running here, that it takes
+    that name (``web.cli.net.name_taken_note``). Asked before the run goes on the bus."""
+    if not on_bus:
+        return [UNREACHABLE]
+    if not here:
+        return []
+    from s7graph.web.cli.net import NetOptions, name_taken_note
+
+    taken = name_taken_note(net or NetOptions())
+    return [taken] if taken else []
+
+
 def run_until_stopped(
     runner: Runner,
     opened: OpenedState,
@@ -378,11 +432,13 @@ def run_until_stopped(
     close: Callable[[], object] | None = None,
     recovered: tuple[str, str] | None = None,
     locate: Locate | None = None,
+    notes: Sequence[str] = (),
 ) -> int:
     """Start the runner's CPU with ``restart`` (``on_start`` gets the startup record), say
     how on stderr with ``what``, and scan until Ctrl-C/SIGTERM/``duration_s`` (or, with the
-    runner's ``end_on_stop``, a STOP by error). Always: the signal handlers back, the runner
-    shut down, ``close()``, the store closed. Returns the exit status: 0 (saying so in one
+    runner's ``end_on_stop``, a STOP by error). Always: the runner shut down, ``close()``, the
+    store closed, then the signal handlers back (a Ctrl-C pressed again meanwhile is one
+    more stop request). Returns the exit status: 0 (saying so in one
     line on stderr), or 1 (with one line on stderr) when the CPU went to STOP by an error
     — in its startup too —, refused its startup, or the state was not written
     (``web.cli.run_stop``: a STOP the program requested, SFC46 STP, is said and ends the run
@@ -392,7 +448,8 @@ def run_until_stopped(
     ``recovered`` (place, cause): the supervisor killed the process before, whose scan hung
     (``web.cli.supervisor``): no startup; the CPU stays in STOP with the cause in its
     diagnostic buffer, and scans in STOP (without ``end_on_stop``) until an engineer's
-    ``start``, or ends the run (exit 1)."""
+    ``start``, or ends the run (exit 1). ``notes``: lines said after the ``in RUN`` line
+    (``start_notes``)."""
     cpu = runner.cpu
     store = opened.store
 
@@ -411,6 +468,8 @@ def run_until_stopped(
             _say_last_run(opened)
             done = str(cpu.last_restart or restart)
             print(f"s7graph: {what} in {cpu.mode} ({opened.describe(done)})", file=sys.stderr)
+            for note in notes:
+                print(note, file=sys.stderr)
             said.after_startup(runner, record)
         if cpu.mode is CpuMode.RUN or not runner.end_on_stop:
             runner.run(duration_s=duration_s)
@@ -418,11 +477,13 @@ def run_until_stopped(
         try:
             runner.shutdown("s7graph run ended")
         finally:
-            for sig, handler in previous.items():
-                signal.signal(sig, handler)
-            if close is not None:
-                close()
-            store.close()
+            try:  # a second Ctrl-C while closing is one more stop request, not an interrupt
+                if close is not None:
+                    close()
+                store.close()
+            finally:
+                for sig, handler in previous.items():
+                    signal.signal(sig, handler)
     error = runner.write_error
     if error is not None and runner.stopped != stop_words(error):  # else said at once
         print(f"s7graph: error: {runner.write_error}; the CPU went to STOP", file=sys.stderr)

@@ -12,7 +12,9 @@ from __future__ import annotations
 
 import json
 import math
+import signal
 import sys
+import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -141,9 +143,48 @@ def run_trace(
     cycles: int,
     out: TextIO,
 ) -> int:
-    """Run ``cycles`` cycles writing one line each; the exit status (0, or 1 on STOP)."""
+    """Run ``cycles`` cycles writing one line each; the exit status (0, or 1 on STOP; 130
+    when Ctrl-C ends it between two cycles, ``_interrupts``)."""
+    with _interrupts() as asked:
+        return _cycles(session, clock, cycle, stim, names, cycle_ms, cycles, out, asked)
+
+
+@contextmanager
+def _interrupts() -> Iterator[list[int]]:
+    """Ctrl-C (SIGINT) while a sim runs, noted for the loop to end between two cycles: as an
+    interrupt inside a block it would be that block's programming error (a STOP, exit 1)."""
+    asked: list[int] = []
+    if threading.current_thread() is not threading.main_thread():
+        yield asked
+        return
+    previous = signal.getsignal(signal.SIGINT)
+    if previous is signal.SIG_IGN or previous is None:  # started in the background
+        yield asked
+        return
+    signal.signal(signal.SIGINT, lambda signum, frame: asked.append(signum))
+    try:
+        yield asked
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _cycles(
+    session: Traced,
+    clock: VirtualClock,
+    cycle: Cycle,
+    stim: Stimulus,
+    names: list[str],
+    cycle_ms: float,
+    cycles: int,
+    out: TextIO,
+    asked: list[int],
+) -> int:
     nxt = 0
     for k in range(cycles):
+        if asked:
+            done = f"cycles 0 to {k - 1}" if k else "no cycle"
+            print(f"s7graph: sim stopped by Ctrl-C: the trace holds {done}", file=sys.stderr)
+            return 130
         t_ms = k * cycle_ms
         while nxt < len(stim) and stim[nxt][0] <= t_ms + 1e-9:
             _, values, where = stim[nxt]

@@ -30,7 +30,19 @@ def _password(stdin: bool) -> str:
     return first
 
 
+def _not_a_users_file(path: Path, *, made: bool = False) -> str:
+    """Why ``path`` cannot be the users file (a folder; none there, unless ``made`` — ``add``
+    makes it), as ``s7graph run --users`` says it, or ""."""
+    if path.is_dir():
+        return f"{path}: a folder, not a users file; give --file the path of a file"
+    if not made and not path.exists():
+        return f"{path}: no such users file (s7graph users add NAME --role ROLE --file {path})"
+    return ""
+
+
 def users_add(path: Path, name: str, role: str, *, password_stdin: bool) -> int:
+    if problem := _not_a_users_file(path, made=True):
+        return _fail(problem)
     try:
         user = UsersFile(path).add(name, role, _password(password_stdin))
     except UsersError as exc:
@@ -40,6 +52,8 @@ def users_add(path: Path, name: str, role: str, *, password_stdin: bool) -> int:
 
 
 def users_list(path: Path) -> int:
+    if problem := _not_a_users_file(path):
+        return _fail(problem)
     try:
         users = UsersFile(path).load()
     except UsersError as exc:
@@ -51,6 +65,8 @@ def users_list(path: Path) -> int:
 
 
 def users_remove(path: Path, name: str) -> int:
+    if problem := _not_a_users_file(path):
+        return _fail(problem)
     try:
         UsersFile(path).remove(name)
     except UsersError as exc:
@@ -60,6 +76,8 @@ def users_remove(path: Path, name: str) -> int:
 
 
 def users_passwd(path: Path, name: str, *, password_stdin: bool) -> int:
+    if problem := _not_a_users_file(path):
+        return _fail(problem)
     try:
         UsersFile(path).passwd(name, _password(password_stdin))
     except UsersError as exc:

@@ -28,7 +28,7 @@ from s7graph.web.cli.stopping import wait_until_stopped
 from s7graph.web.cli.waiting import local_cpu
 from s7graph.web.collector import freeze_start
 from s7graph.web.view.edge import ViewSide
-from s7graph.web.view.port import PortError
+from s7graph.web.view.port import PortError, check_port
 
 __all__ = ["web_command"]
 
@@ -54,6 +54,11 @@ def web_command(
     problem = NetOptions(**{**net.__dict__, "host": "127.0.0.1"}).problem()
     if problem:
         return _fail(problem)
+    if not child:  # a port out of range or taken: said at once, before any wait for a CPU
+        try:
+            check_port(net.host, port)
+        except PortError as exc:
+            return _fail(str(exc))
     if not net.connect:  # the CPU of this machine (web.bus.local), waited for
         here = local_cpu(net, cpu, duration_s)
         if isinstance(here, int):

@@ -109,9 +109,11 @@ def _table(
         print(f"s7graph: error: {cpu}: {first.error}", file=sys.stderr)
         return 2
     for value in first.values:
-        if value.error:
-            print(f"s7graph: {value.address}: {value.error}", file=sys.stderr)
+        if value.error:  # the operand named once: the CPU's words may start with it
+            said = value.error.removeprefix(f"{value.address}: ")
+            print(f"s7graph: {value.address}: {said}", file=sys.stderr)
     if first.values and all(v.error for v in first.values):
+        print(f"s7graph: error: {cpu}: no operand of --address can be read", file=sys.stderr)
         return 2
     stop = threading.Event()
     say(_line(first), stop)

@@ -61,8 +61,8 @@ def load_plant(path: str | Path) -> LoadedPlant:
     if not p.is_file():
         raise PlantError(f"plant file {p} does not exist")
     spec = importlib.util.spec_from_file_location(f"s7graph_plant_{p.stem}", p)
-    if spec is None or spec.loader is None:
-        raise PlantError(f"cannot load plant file {p}")
+    if spec is None or spec.loader is None:  # a suffix Python does not import
+        raise PlantError(f"cannot load plant file {p}: a plant is a Python file (.py)")
     module = importlib.util.module_from_spec(spec)
     try:
         spec.loader.exec_module(module)
@@ -72,7 +72,7 @@ def load_plant(path: str | Path) -> LoadedPlant:
         plant = cls()
     except PlantError:
         raise
-    except Exception as exc:
+    except (Exception, SystemExit) as exc:  # sys.exit() in the file too: never a silent end
         raise PlantError(f"plant: {type(exc).__name__}: {exc}", _where(exc, p)) from None
     if not callable(getattr(plant, "cycle", None)):
         raise PlantError(f"{p}: Plant has no method cycle(io, t_ms, dt_ms)")

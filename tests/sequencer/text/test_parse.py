@@ -267,3 +267,24 @@ def test_the_element_of_a_place_is_read_past_comments_and_quoted_texts() -> None
     assert enclosing_element(text, 5, 40) == ""
     assert enclosing_element(text, 7, 5) == "permanent before"
     assert enclosing_element(text, 8, 14) == ""
+
+
+def test_a_comment_never_closed_is_one_error_where_it_opens() -> None:
+    """A file cut inside a ``(*`` comment (truncated, or ``*)`` forgotten) was an error for
+    every word of the comment, the first ``unexpected '('`` at its start; now one E002
+    there, with the errors before it kept, and ``(*`` in a string or a closed comment is
+    no opening."""
+    text = (
+        'FUNCTION_BLOCK "T"\nSEQUENCE 1\n  INITIAL_STEP S1: N "a(*b"; END_STEP (* ok *)\n'
+        "  STEP S2: END_STEP\n  (* the rest: not done\n  TRANSITION T1 FROM S1 TO S2 := I0.0;\n"
+        "END_SEQUENCE\nEND_FUNCTION_BLOCK\n"
+    )
+    with pytest.raises(ChartSyntaxError) as caught:
+        parse_chart(text, "t.s7g")
+    (only,) = caught.value.diagnostics
+    assert (only.code, only.loc.line, only.loc.col) == ("E002", 5, 3)
+    assert only.message == "the comment opened at line 5 is never closed (missing '*)')"
+    broken = text.replace("STEP S2: END_STEP", "STEP S2 := END_STEP")
+    with pytest.raises(ChartSyntaxError) as caught:
+        parse_chart(broken, "t.s7g")
+    assert [d.code for d in caught.value.diagnostics] == ["E001", "E002"]

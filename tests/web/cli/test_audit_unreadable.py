@@ -168,3 +168,31 @@ def test_a_file_a_running_cpu_replaces_while_it_is_read_is_tried_again(
     with pytest.raises(audit.UnreadableAudit, match="unable to open"):
         audit.read_audit(state)
     assert len(calls) == audit._OPEN_TRIES
+
+
+def test_a_folder_or_an_empty_file_is_said_as_run_says_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A folder was ``no such state file``, an empty file an empty audit with exit 0."""
+    empty = tmp_path / "empty.sqlite"
+    empty.write_bytes(b"")
+    for path, problem in (
+        (tmp_path, "a directory, not a state file"),
+        (empty, "empty file (0 bytes), not a state file"),
+        (tmp_path / "none.sqlite", "no such state file"),
+    ):
+        assert audit_command(path, None) == 2
+        assert capsys.readouterr() == ("", f"s7graph: error: {path}: {problem}\n")
+    assert empty.read_bytes() == b""
+
+
+@pytest.mark.parametrize("since", ["99999999999h", "9999-12-31", "100000000000000000000d"])
+def test_a_since_beyond_what_the_file_can_hold_lists_the_rows_in_range(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], since: str
+) -> None:
+    """An age before 1970 lists every row, a time past 2262 none; before, both were an
+    internal error (``Python int too large to convert to SQLite INTEGER``)."""
+    path = _state(tmp_path / "s.sqlite")
+    assert audit_command(path, since) == 0
+    rows = len(capsys.readouterr().out.splitlines())
+    assert rows == (0 if since == "9999-12-31" else 3)

@@ -269,3 +269,95 @@ def test_why_a_node_cannot_join_is_said_without_zenohs_source_places(
     nobody answers at says what to check, as this node showed credentials or not."""
     net = NetOptions(connect=["tcp/127.0.0.1:1"], bus_user="olga" if credentials else None)
     assert net.join_error(zenoh.ZError(error)) == said
+
+
+SYMBOLS = ("--symbols", str(ROOT / "examples" / "drill" / "symbols.txt"))
+
+
+@pytest.mark.parametrize(
+    "program", [(CHART, *SYMBOLS), (str(ROOT / "examples" / "blink.py"),)], ids=["chart", "py"]
+)
+def test_a_run_whose_bus_answers_nowhere_says_where_as_a_shell_does(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], program: tuple[str, ...]
+) -> None:
+    """``run --connect`` to an endpoint nobody listens at (no --web): the join's words,
+    never "cannot serve the view" nor zenoh's Rust source places (docs/cli.md, "The bus
+    from a shell")."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]  # closed again: nothing listens there
+    line = _refused(
+        capsys,
+        *("run", *program, "--state", str(tmp_path / "s.sqlite"), "--duration-s", "1"),
+        *("--connect", f"tcp/127.0.0.1:{port}"),
+    )
+    assert line == (
+        f"s7graph: error: cannot join the bus: nothing answers at tcp/127.0.0.1:{port}: nothing "
+        "listens there, or it lets in only nodes with credentials (--tls-cert/--tls-key or "
+        "--bus-user)"
+    )
+
+
+def test_a_run_whose_listen_address_is_taken_says_so_without_rust_places(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``run --listen`` on a port another program holds: the bus's refusal with the OS's
+    words, every Rust source place zenoh quotes left out (the cause's too)."""
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        line = _refused(
+            capsys,
+            *("run", CHART, *SYMBOLS, "--state", str(tmp_path / "s.sqlite")),
+            *("--duration-s", "1", "--listen", f"tcp/127.0.0.1:{port}"),
+        )
+    assert line.startswith("s7graph: error: cannot put the CPU on the bus: ")
+    assert "Address already in use" in line and ".rs:" not in line
+
+
+@pytest.mark.parametrize("command", [["init"], ["issue", "cpu1", "--kind", "cpu"]])
+def test_certs_given_a_file_for_its_folder_says_it_is_a_file(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], command: list[str]
+) -> None:
+    """Before: ``pki.txt/ca.key: cannot write: File exists`` for ``init``."""
+    path = tmp_path / "pki.txt"
+    path.write_text("notes\n", encoding="utf-8")
+    line = _refused(capsys, "certs", command[0], str(path), *command[1:])
+    assert line == (
+        f"s7graph: error: {path}: a file, not a folder; give the folder of the plant's certificates"
+    )
+    assert path.read_text(encoding="utf-8") == "notes\n"
+
+
+def test_a_run_taking_the_name_of_a_cpu_running_here_warns_before_it_starts(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Two runs named cpu1 on one machine (two examples in two shells): a shell reaches the
+    second only, and the first not at all once the second ends — the second says so; a
+    socket a killed CPU left behind is no CPU running (``web.cli.net.running_here``)."""
+    from s7graph.web.bus import local
+    from s7graph.web.cli.net import name_taken_note
+
+    runtime = tmp_path / "run"
+    runtime.mkdir(mode=0o700)
+    monkeypatch.setenv("XDG_RUNTIME_DIR", str(runtime))
+    sock = tmp_path / "bus.sock"
+    endpoint = f"unixsock-stream/{sock}"
+    with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as first:
+        first.bind(str(sock))
+        first.listen()
+        local.publish("cpu1", endpoint)
+        assert name_taken_note(NetOptions(cpu="line2")) == ""
+        assert name_taken_note(NetOptions(cpu="cpu1", listen=["tcp/127.0.0.1:7447"])) == ""
+        args = ["run", str(ROOT / "examples" / "blink.py"), "--state", str(tmp_path / "s.sqlite")]
+        assert main([*args, "--web", "--port", "0", "--duration-s", "0.5"]) == 0
+        err = capsys.readouterr().err
+    assert " in RUN (" in err.splitlines()[0]  # the warning after it, as the run starts
+    assert err.splitlines()[1] == (
+        f"s7graph: warning: a CPU named cpu1 runs on this machine already ({endpoint}): a shell "
+        "reaches only this one, and that one not at all once this one ends; give each its own "
+        "name with --cpu NAME"
+    )
+    local.publish("cpu1", endpoint)  # the socket file stays, nothing listens: a killed CPU's
+    assert name_taken_note(NetOptions(cpu="cpu1")) == ""

@@ -28,6 +28,33 @@ def test_a_usage_error_is_one_stderr_line_and_exit_2(
     assert len(err) == 1 and err[0].startswith("s7graph: error: ") and expected in err[0]
 
 
+@pytest.mark.parametrize(
+    ("argv", "help_of"),
+    [
+        (["sim"], "s7graph sim --help"),
+        (["export", "x.s7g", "-o", "x.xml"], "s7graph export --help"),
+        (["users", "add"], "s7graph users add --help"),
+        (["chek"], "s7graph --help"),
+    ],
+)
+def test_a_usage_error_points_at_the_help_of_its_own_command(
+    argv: list[str], help_of: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(argv) == 2
+    assert capsys.readouterr().err.rstrip().endswith(f"(see {help_of})")
+
+
+@pytest.mark.parametrize(("argv", "group"), [([], "s7graph"), (["users"], "s7graph users")])
+def test_a_group_given_no_command_prints_its_help_and_asks_for_one(
+    argv: list[str], group: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Never the empty error typer leaves (``s7graph: error:  (see s7graph --help)``)."""
+    assert main(argv) == 2
+    out, err = capsys.readouterr()
+    assert "Commands" in out
+    assert err == f"s7graph: error: give a command of {group}: one of those listed above\n"
+
+
 def test_version_prints_the_distribution_version(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["--version"]) == 0
     assert capsys.readouterr().out.startswith("s7graph ")
@@ -160,3 +187,145 @@ def test_a_download_sent_without_an_answer_says_it_may_have_taken_effect(
     err = capsys.readouterr().err
     assert err.startswith("s7graph: download not confirmed: no answer from CPU 'cpu1'")
     assert "may or may not have taken effect" in err and "refused" not in err
+
+
+@pytest.mark.parametrize("command", ["check", "sim", "xref"])
+def test_a_python_program_given_for_a_chart_is_named_for_what_it_is(
+    command: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Before: the program read as a chart, twenty syntax errors (``unexpected 'MB0';
+    expected 'FUNCTION_BLOCK'``)."""
+    blink = EXAMPLES / "blink.py"
+    assert main([command, str(blink)]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err == (
+        f"s7graph: error: {blink}: a Python program of blocks; {command} takes a chart (.s7g) "
+        "or an S7-SCL source (.scl) (s7graph run runs a program)\n"
+    )
+
+
+@pytest.mark.parametrize(
+    ("command", "suffix"), [("check", ".xml"), ("run", ".xml"), ("sim", ".st")]
+)
+def test_a_chart_written_elsewhere_is_sent_to_import_first(
+    tmp_path: Path, command: str, suffix: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / f"Graph{suffix}"
+    path.write_text("<Document/>")
+    assert main([command, str(path)]) == 2
+    (line,) = capsys.readouterr().err.splitlines()
+    assert line.startswith(f"s7graph: error: {path}: a chart in ")
+    assert line.endswith(f": import it first (s7graph import {path} -o Graph.s7g)")
+
+
+def test_web_refuses_a_port_out_of_range_before_it_waits_for_a_cpu(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """Before: ``waiting for a CPU`` until ``--duration-s`` ended it, the port never said."""
+    import time
+
+    began = time.monotonic()
+    assert main(["web", "--port", "99999", "--duration-s", "60"]) == 2
+    assert time.monotonic() - began < 30
+    assert capsys.readouterr().err == (
+        "s7graph: error: --port 99999 is out of range (0-65535; 0 picks a free one)\n"
+    )
+
+
+@pytest.mark.parametrize(
+    ("text", "name", "said"),
+    [
+        ("import sys\nsys.exit(5)\n", "quits.py", "quits.py:2: plant: SystemExit: 5"),
+        ('{"at_ms": 0, "set": {}}\n', "s.jsonl", "a plant is a Python file (.py)"),
+    ],
+)
+def test_a_plant_file_that_does_not_load_is_one_line_naming_why(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], text: str, name: str, said: str
+) -> None:
+    """Before: ``sys.exit(5)`` in a plant's file ended ``sim`` silently with exit 5, and a
+    file that is no Python was ``cannot load plant file`` without a reason."""
+    plant = tmp_path / name
+    plant.write_text(text)
+    drill = EXAMPLES / "drill"
+    argv = ["sim", str(drill / "drill.s7g"), "--symbols", str(drill / "symbols.txt")]
+    assert main([*argv, "--cycles", "1", "--plant", str(plant)]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and len(err.splitlines()) == 1
+    assert err.startswith("s7graph: error: ") and said in err
+
+
+@pytest.mark.parametrize("command", ["run", "check", "mode", "watch", "users add"])
+def test_the_help_says_types_in_words_not_pythons(
+    command: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """typer 0.2x prints an option's Python type (``--blocks <list[Path]>``, ``--web
+    <bool>``); the help says ``FILE...``, ``NUMBER``, ``TEXT``, and nothing for a flag."""
+    assert main([*command.split(), "--help"]) == 0
+    out = capsys.readouterr().out
+    for python in ("<list[", "<bool>", "<path>", "<float>", "<int>", "<str>", "Path]"):
+        assert python not in out
+    assert "FILE" in out or "TEXT" in out
+
+
+@pytest.mark.parametrize(
+    ("shown", "words"),
+    [
+        ("<list[Path]>", "FILE..."),
+        ("<list[str]>", "TEXT..."),
+        ("<bool>", ""),
+        ("<float>", "NUMBER"),
+        ("<int>", "INTEGER"),
+        ("<warm|hot|cold>", "warm|hot|cold"),
+    ],
+)
+def test_each_python_type_of_the_help_has_its_word(shown: str, words: str) -> None:
+    from s7graph.web.cli.root import _type_words
+
+    assert _type_words(shown) == words
+
+
+def test_export_or_import_onto_its_own_source_is_refused_and_the_source_kept(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Before: ``export drill.s7g --to plcopen -o drill.s7g`` wrote the XML over the chart
+    (exit 1: "exported"), and ``import x.xml -o x.xml`` the chart over the XML."""
+    drill = EXAMPLES / "drill"
+    chart = tmp_path / "drill.s7g"
+    chart.write_bytes((drill / "drill.s7g").read_bytes())
+    symbols = ["--symbols", str(drill / "symbols.txt")]
+    same = str(tmp_path / "." / "drill.s7g")  # another spelling of the same file
+    assert main(["export", str(chart), *symbols, "--to", "plcopen", "-o", same]) == 2
+    assert capsys.readouterr().err == (
+        f"s7graph: error: -o {same} is the chart exported: give the export a file of its own\n"
+    )
+    assert chart.read_bytes() == (drill / "drill.s7g").read_bytes()
+    assert main(["import", str(chart), "-o", str(chart)]) == 2
+    assert "is the file imported: give the chart a file of its own" in capsys.readouterr().err
+    assert chart.read_bytes() == (drill / "drill.s7g").read_bytes()
+
+
+@pytest.mark.timeout(120)
+def test_ctrl_c_ends_a_sim_between_two_cycles_keeping_the_trace(tmp_path: Path) -> None:
+    """Before: the interrupt struck inside the FB's call and was said as its programming
+    error (``the CPU went to STOP: OB1: KeyboardInterrupt``, exit 1)."""
+    import signal
+    import time
+
+    drill = EXAMPLES / "drill"
+    trace = tmp_path / "t.jsonl"
+    args = ["sim", str(drill / "drill.s7g"), "--symbols", str(drill / "symbols.txt")]
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "s7graph", *args, "--cycles", "100000000", "--trace", str(trace)],
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
+    deadline = time.monotonic() + 60
+    while (not trace.exists() or trace.stat().st_size < 10_000) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == 130, err
+    lines = trace.read_text().splitlines()
+    assert err == f"s7graph: sim stopped by Ctrl-C: the trace holds cycles 0 to {len(lines) - 1}\n"
+    assert '"cycle": 0,' in lines[0]

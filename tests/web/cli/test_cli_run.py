@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+import sqlite3
 import subprocess
 import sys
 from pathlib import Path
@@ -180,15 +181,19 @@ def test_max_cycle_time_reaches_the_cpu_of_a_chart_run(
     [
         ("--max-cycle-ms", "0"),
         ("--max-cycle-ms", "-5"),
+        ("--max-cycle-ms", "1e99"),
         ("--rt-priority", "-1"),
         ("--rt-priority", "99"),
+        ("--comm-load", "0"),
+        ("--comm-load", "nan"),
     ],
 )
 def test_max_cycle_time_and_rt_priority_out_of_range_are_usage_errors(
     tmp_path: Path, option: str, value: str
 ) -> None:
-    """A maximum cycle time of 0 ms or less, a real-time priority outside 0..98: a usage
-    error, exit 2, never a traceback."""
+    """A maximum cycle time of 0 ms or less or over an hour (1e99 was an internal error), a
+    real-time priority outside 0..98, a communication load outside 1..100 %: a usage error
+    naming the range and the value given, exit 2, never a traceback."""
     proc = _run(
         str(ROOT / "examples/blink.py"),
         "--state",
@@ -200,6 +205,7 @@ def test_max_cycle_time_and_rt_priority_out_of_range_are_usage_errors(
     )
     assert proc.returncode == 2
     assert option.lstrip("-") in proc.stderr and "Traceback" not in proc.stderr
+    assert f", not {float(value):g} (see s7graph run --help)" in proc.stderr
 
 
 def test_rt_priority_0_runs_at_the_normal_priority(tmp_path: Path) -> None:
@@ -213,3 +219,80 @@ def test_rt_priority_0_runs_at_the_normal_priority(tmp_path: Path) -> None:
         "0",
     )
     assert proc.returncode == 0, proc.stderr
+
+
+RECURRING = """
+from s7graph.engine import ob
+
+CPU = {"max_cycle_ms": 5000}
+
+@ob(1)
+def main(ctx):
+    1 / 0
+
+@ob(121)
+def programming_error(ctx):
+    pass  # the CPU stays in RUN: the error recurs every cycle
+"""
+
+
+@pytest.mark.timeout(120)
+def test_an_error_that_ob121_handles_every_cycle_is_said_once(tmp_path: Path) -> None:
+    """Before: one stderr line per cycle (100 a second at 10 ms) for as long as it ran; the
+    diagnostic buffer keeps every entry (``s7graph diag``)."""
+    program = tmp_path / "faulty.py"
+    program.write_text(RECURRING, encoding="utf-8")
+    proc = _run(str(program), "--state", str(tmp_path / "s.sqlite"), "--duration-s", "1")
+    assert proc.returncode == 0, proc.stderr
+    said = [line for line in proc.stderr.splitlines() if "ZeroDivisionError" in line]
+    assert len(said) == 1 and " 16#25FF OB1: " in said[0]
+    assert said[0].endswith("(said once; s7graph diag lists each)")
+    with sqlite3.connect(tmp_path / "s.sqlite") as con:
+        (kept,) = con.execute("SELECT COUNT(*) FROM diagnostics WHERE event_id = ?", (0x25FF,))
+    con.close()
+    assert kept[0] > 5  # the buffer has them all
+
+
+@pytest.mark.parametrize(
+    ("value", "shown"), [("1e99", "1e+99"), ("-5", "-5"), ('"fast"', "'fast'")]
+)
+def test_a_programs_max_cycle_time_out_of_range_is_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], value: str, shown: str
+) -> None:
+    """``CPU = {"max_cycle_ms": 1e99}`` was an internal error (``memoryview: invalid value
+    for format 'Q'``), -5 a bare ``ValueError``: now the option, its range and the value."""
+    from s7graph.web.cli import main
+
+    program = tmp_path / "p.py"
+    program.write_text(
+        f'from s7graph.engine import ob\nCPU = {{"max_cycle_ms": {value}}}\n'
+        "@ob(1)\ndef main(ctx):\n    pass\n",
+        encoding="utf-8",
+    )
+    assert main(["run", str(program), "--state", str(tmp_path / "s.sqlite")]) == 2
+    assert capsys.readouterr().err == (
+        f"s7graph: error: {program}: CPU option max_cycle_ms: from more than 0 to 3,600,000 "
+        f"ms, not {shown}\n"
+    )
+
+
+@pytest.mark.timeout(120)
+def test_a_run_on_no_bus_says_how_a_shell_would_reach_it(tmp_path: Path) -> None:
+    """A shell's ``s7graph status`` finds no CPU of a run without --web, --listen or
+    --connect (docs/cli.md, "The bus from a shell"): the run says so as it starts, after its
+    ``in RUN`` line; on a bus it does not."""
+    blink = str(ROOT / "examples/blink.py")
+    alone = _run(blink, "--state", str(tmp_path / "a.sqlite"), "--duration-s", "0.5")
+    assert alone.returncode == 0, alone.stderr
+    lines = alone.stderr.splitlines()
+    assert " in RUN (" in lines[0]
+    assert lines[1] == (
+        "s7graph: on no bus: s7graph status, watch and the other commands of a shell reach a "
+        "run started with --web, --listen or --connect"
+    )
+    sock = f"unixsock-stream/{tmp_path}/bus.sock"
+    listening = _run(
+        blink, "--state", str(tmp_path / "b.sqlite"), "--duration-s", "0.5", "--listen", sock
+    )
+    assert listening.returncode == 0, listening.stderr
+    assert "on no bus" not in listening.stderr and " in RUN (" in listening.stderr

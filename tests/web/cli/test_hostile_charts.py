@@ -208,6 +208,28 @@ def test_a_chart_the_view_cannot_show_is_reported_by_check(
     assert rc == 1 and "cannot show this chart" in out and "$.fb" in out
 
 
+def test_run_with_the_view_refuses_a_chart_the_view_cannot_show_at_once(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``run --web`` of a chart ``check`` warns W110 for: before, the CPU ran and its view's
+    process failed and was started again every second until the run ended."""
+    many = "\n".join(
+        f"  {'INITIAL_STEP' if s == 1 else 'STEP'} S{s}: END_STEP" for s in range(1, 5001)
+    )
+    loop = "\n".join(
+        f"  TRANSITION T{s} FROM S{s} TO S{s % 5000 + 1} := TRUE;" for s in range(1, 5001)
+    )
+    path = tmp_path / "many.s7g"
+    path.write_text(chart("Many", many, loop))
+    state = tmp_path / "many.sqlite"
+    argv = ["run", str(path), "--state", str(state), "--web", "--port", "0", "--duration-s", "9"]
+    rc, _, err = _cli(capsys, *argv)
+    assert rc == 2
+    last = err.splitlines()[-1]
+    assert last.startswith(f"s7graph: error: {path}: the browser view (--web) cannot show this")
+    assert last.endswith("; run it without --web") and not state.exists()
+
+
 # ---- seeded mutation of the examples ------------------------------------------------------
 
 TOKENS = [

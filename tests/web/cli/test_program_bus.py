@@ -99,6 +99,11 @@ def test_a_program_on_the_bus_answers_the_shell_status_diag_watch_stop_mres_star
         lines = watched.stdout.splitlines()
         assert lines and lines[0].startswith("cycle ") and "DB9.x=?" in lines[0]
         assert "s7graph: DB9.x: DB9 is not loaded" in watched.stderr
+        none = s7graph("watch", *bus, "--address", "MW10:FOO", "--duration-s", "1", check=2)
+        assert none.stderr == (  # the operand named once, and why the watch ends
+            "s7graph: MW10:FOO: unknown type 'FOO' after ':'\n"
+            "s7graph: error: cpu1: no operand of --address can be read\n"
+        )
         assert s7graph("mres", *bus, "--user", "eng", check=1).stderr.strip() == (
             "s7graph: mres refused: the CPU is in RUN: a memory reset needs STOP (stop it first)"
         )
@@ -225,7 +230,10 @@ def test_a_program_on_the_bus_is_refused_a_listen_a_chart_would_be_refused(
     other = tmp_path / "count.txt"
     other.write_text("x")
     refused = s7graph("run", str(other), check=2).stderr.strip()
-    assert refused == f"s7graph: error: {other}: not a program s7graph runs (.py, or a chart .s7g)"
+    assert refused == (
+        f"s7graph: error: {other}: not a program s7graph runs (.py, an S7-SCL program .scl, or "
+        "a chart .s7g)"
+    )
 
 
 def test_the_shell_says_in_one_line_what_is_wrong_with_diag_and_watch() -> None:

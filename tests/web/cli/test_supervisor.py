@@ -251,6 +251,31 @@ def test_ctrl_c_at_the_terminal_ends_a_supervised_run_cleanly_with_its_state_sav
 
 
 @pytest.mark.timeout(60)
+def test_ctrl_c_pressed_again_while_the_run_ends_is_one_more_stop_request(
+    tmp_path: Path,
+) -> None:
+    """Three quick Ctrl-C at the terminal (each reaching the supervisor and the CPU) while
+    the run closes its page: exit 0 with the state saved, never a hang killed after the
+    grace (exit 3) nor a traceback of the interrupted ending (docs/cli.md, "s7graph run")."""
+    state = tmp_path / "blink.sqlite"
+    proc = _s7graph(
+        "run", str(BLINK), "--state", str(state), "--web", "--port", "0", start_new_session=True
+    )
+    assert proc.stderr is not None
+    assert "in RUN" in proc.stderr.readline()
+    time.sleep(0.5)
+    sent = time.monotonic()
+    for _ in range(3):
+        os.killpg(proc.pid, signal.SIGINT)
+        time.sleep(0.05)
+    _, err = proc.communicate(timeout=30)
+    assert proc.returncode == 0, err
+    assert time.monotonic() - sent < GRACE_S
+    assert "stopped (state saved in" in err
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err and "error" not in err
+
+
+@pytest.mark.timeout(60)
 def test_sigterm_to_the_supervisor_reaches_the_cpu_which_ends_cleanly(tmp_path: Path) -> None:
     state = tmp_path / "blink.sqlite"
     proc = _s7graph("run", str(BLINK), "--state", str(state))
