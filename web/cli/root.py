@@ -878,12 +878,12 @@ def watch(
     tls_ca: TlsCa = None,
     duration_s: StopAfter = None,
     address: Annotated[
-        str | None,
+        list[str] | None,
         typer.Option(
             "--address",
-            help="Watch these operands instead of an FB's steps, comma-separated: addresses "
-            "(MW0, Q4.0, DB20.DBW2, T5), symbols, DB variables by name (DB20.avg, "
-            "DB10.ctu.CV, DB20.speeds[2]), each optionally :TYPE (MW0:INT).",
+            help="Watch these operands instead of an FB's steps, comma-separated (several "
+            "--address add up): addresses (MW0, Q4.0, DB20.DBW2, T5), symbols, DB variables "
+            "by name (DB20.avg, DB10.ctu.CV, DB20.speeds[2]), each optionally :TYPE (MW0:INT).",
         ),
     ] = None,
     interval_ms: Annotated[
@@ -910,7 +910,7 @@ def watch(
         if fb is not None:
             raise typer.BadParameter("--address watches operands, --fb an FB's steps: not both")
         try:
-            operands = split_addresses(address)
+            operands = split_addresses(",".join(address))
             check_interval(interval_ms)
         except ValueError as exc:
             raise typer.BadParameter(str(exc)) from None

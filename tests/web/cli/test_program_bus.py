@@ -120,7 +120,8 @@ def test_a_program_on_the_bus_answers_the_shell_status_diag_watch_stop_mres_star
         assert diag[0] == "Diagnostic buffer of cpu1 (3 of 4 entries, newest first)"
         assert "16#4307" in diag[1] and "Memory reset started by a PG operation" in diag[1]
         assert re.match(r"  1  #\d+ +20", diag[1]) and "16#4304" in diag[2]
-        zero = s7graph("watch", *bus, "--address", "MW10:INT,DB11.n", "--duration-s", "0.2")
+        addresses = ("--address", "MW10:INT", "--address", "DB11.n")  # several add up
+        zero = s7graph("watch", *bus, *addresses, "--duration-s", "0.2")
         assert zero.stdout.splitlines()[0].endswith("STOP  MW10:INT=0  DB11.n=0")
         assert s7graph("start", *bus, "--user", "eng").returncode == 0
         assert wait_until(lambda: (s := client.status()) is not None and s.state == "RUN", 30)
