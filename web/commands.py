@@ -655,7 +655,9 @@ _MISSING = re.compile(r"^Object missing required field `(\w+)` - at `\$\.args`$"
 _UNKNOWN = re.compile(r"^Object contains unknown field `(.+)` - at `\$\.args`$")
 _ENUM = re.compile(r"^Invalid enum value .* - at `\$\.args\.(\w+)`$")
 _USER = re.compile(r"^Expected `str` matching regex .* - at `\$\.user`$", re.S)
-_TYPE = re.compile(r"^Expected `(\w+)(?: \| null)?`, got `(\w+)` - at `\$\.args\.(\w+)`$")
+_TYPE = re.compile(
+    r"^Expected `(\w+)(?: \| null)?`, got `(\w+)` - at `\$\.args\.(\w+(?:\[\d+\])?)`$"
+)
 _TYPE_WORDS = {
     "bool": "true or false",
     "int": "a whole number",
@@ -665,7 +667,8 @@ _TYPE_WORDS = {
     "object": "an object",
 }
 _BOUND = re.compile(
-    r"^Expected `(str|int|array|object)`(?: of length)? ([<>]=) (\d+) - at `\$\.args\.(\w+)`$"
+    r"^Expected `(str|int|array|object)`(?: of length)? ([<>]=) (\d+)"
+    r" - at `\$\.args\.(\w+(?:\[\d+\])?)`$"
 )
 _BOUND_WORDS = {
     ("str", "<="): "{name} takes at most {n:,} characters",

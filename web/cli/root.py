@@ -1401,7 +1401,6 @@ def _doing(argv: list[str] | None) -> str:
 
 
 _AT = re.compile(r" - at `\$(?:\.args)?\.?([^`]*)`$")
-_BOUND = re.compile(r"^Expected `int` ([<>])= (\d+)$")
 
 
 def _usage_error(exc: Exception, message: str) -> str:
@@ -1416,19 +1415,11 @@ def _usage_error(exc: Exception, message: str) -> str:
 
 
 def _argument_words(message: str) -> str:
-    """A refusal of an op's argument without the place msgspec names (`` - at
-    `$.args.on```: the command line is no JSON); one msgspec left in its own words names
-    the argument (``steps[1] is at least 1``)."""
+    """A refusal of an op's argument, in the vocabulary's words (``web.commands.explain``),
+    without the place it names on the bus (`` - at `$.args.on```: the command line is no
+    JSON)."""
     at = _AT.search(message)
-    if at is None:
-        return message
-    said, name = message[: at.start()], at[1]
-    if not said.startswith(("Expected ", "Invalid value: Expected ")) or not name:
-        return said
-    bound = _BOUND.match(said.removeprefix("Invalid value: "))
-    if bound:
-        return f"{name} is at {'least' if bound[1] == '>' else 'most'} {int(bound[2]):,}"
-    return f"{name}: {said.removeprefix('Invalid value: ')}"
+    return message if at is None else message[: at.start()].removeprefix("Invalid value: ")
 
 
 def main(argv: list[str] | None = None) -> int:
