@@ -126,6 +126,7 @@ __all__ = [
     "sqlite_words",
     "state_beside",
     "unpack_instance",
+    "unrecognised",
 ]
 
 FORMAT = "s7graph-state 5"
@@ -1014,8 +1015,8 @@ def _check_existing(db: sqlite3.Connection, path: Path) -> None:
         raise StateFileError(path, f"damaged file ({check[0] if check else '?'})")
     if not tables:
         raise StateFileError(path, _NO_TABLES, way_out=_WAL_WAY_OUT.format(path))
-    if not tables & _OURS:
-        raise StateFileError(path, "an SQLite file, but not an s7graph state file")
+    if unrecognised(tables):
+        raise StateFileError(path, unrecognised(tables))
     if "instances" not in tables and _holds_state(db, tables):
         raise StateFileError(
             path,
@@ -1030,6 +1031,14 @@ def _check_existing(db: sqlite3.Connection, path: Path) -> None:
         mark = _meta(db, path, "format")
         if mark is not None and mark not in READABLE:
             raise StateFileError(path, f"unknown format {mark!r}")
+
+
+def unrecognised(tables: set[str]) -> str:
+    """Why an SQLite file of ``tables`` is no s7graph state file, as ``s7graph run`` says it
+    (no table at all; none a state file has ever had), or "" when it may be one."""
+    if not tables:
+        return _NO_TABLES
+    return "" if tables & _OURS else "an SQLite file, but not an s7graph state file"
 
 
 def _load(store: StateStore, cpu: Cpu) -> LoadReport | None:

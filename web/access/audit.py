@@ -47,7 +47,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Final, TypeVar
 
-from s7graph.engine.persistence import RenewHooks, sqlite_words
+from s7graph.engine.persistence import RenewHooks, sqlite_words, unrecognised
 from s7graph.engine.rollup import Job, day_of, low_water, roll
 from s7graph.engine.state_checks import stored_integer
 
@@ -62,6 +62,7 @@ __all__ = [
     "AuditRecord",
     "AuditStore",
     "Facts",
+    "NotAStateFile",
     "SummaryRecord",
     "UnreadableAudit",
     "read_audit",
@@ -271,6 +272,23 @@ class UnreadableAudit(Exception):
         super().__init__(f"{path}: not a state file s7graph can read the audit of ({problem})")
 
 
+class NotAStateFile(UnreadableAudit):
+    """An SQLite file ``s7graph run`` would not recognise as a state file, said as it says
+    it (``engine.persistence.unrecognised``)."""
+
+    def __str__(self) -> str:
+        return f"{self.path}: {self.problem}"
+
+
+def _tables(db: sqlite3.Connection, path: Path | str) -> set[str]:
+    """The tables of a state file; ``NotAStateFile`` when it is not one."""
+    tables = {r[0] for r in db.execute("SELECT name FROM sqlite_master WHERE type='table'")}
+    problem = unrecognised(tables)
+    if problem:
+        raise NotAStateFile(Path(path), problem)
+    return tables
+
+
 def _audit_rows(
     db: sqlite3.Connection, where: str, params: tuple[object, ...]
 ) -> list[AuditRecord]:
@@ -314,8 +332,14 @@ def _record(r: tuple[object, ...]) -> AuditRecord:
     )
 
 
-def _summary_rows(db: sqlite3.Connection) -> list[SummaryRecord]:
-    tables = {r[0] for r in db.execute("SELECT name FROM sqlite_master WHERE type='table'")}
+def _summary_rows(db: sqlite3.Connection, path: Path | str = "") -> list[SummaryRecord]:
+    """The summary's rows; with ``path``, ``NotAStateFile`` when the file is not a state
+    file."""
+    tables = (
+        _tables(db, path)
+        if path
+        else {r[0] for r in db.execute("SELECT name FROM sqlite_master WHERE type='table'")}
+    )
     if "audit_summary" not in tables:
         return []
     rows = db.execute(
@@ -596,8 +620,7 @@ def read_audit(path: Path | str, *, since_ns: int | None = None) -> list[AuditRe
     ``UnreadableAudit`` when it is not a state file whose audit can be read."""
 
     def read(db: sqlite3.Connection) -> list[AuditRecord]:
-        tables = {r[0] for r in db.execute("SELECT name FROM sqlite_master WHERE type='table'")}
-        if "audit" not in tables:
+        if "audit" not in _tables(db, path):
             return []
         if since_ns is None:
             return _audit_rows(db, "ORDER BY id", ())
@@ -609,7 +632,7 @@ def read_audit(path: Path | str, *, since_ns: int | None = None) -> list[AuditRe
 def read_summary(path: Path | str) -> list[SummaryRecord]:
     """The audit rows a state file rolled into its summary (read-only; none in a file from
     before); ``UnreadableAudit`` when it is not a state file whose audit can be read."""
-    return _reading(path, _summary_rows)
+    return _reading(path, lambda db: _summary_rows(db, path))
 
 
 def lines(records: Iterable[AuditRecord]) -> list[str]:

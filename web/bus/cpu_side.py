@@ -49,7 +49,7 @@ class CpuSide:
             self.close()
             raise
         if self._tmp:  # a shell of this machine finds it without --connect (web.bus.local)
-            local.publish(cpu, self.endpoint)
+            local.publish(cpu, self.endpoint, keep=local.KEEP_S)
 
     def close(self) -> None:
         with contextlib.suppress(Exception):

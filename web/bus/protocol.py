@@ -1095,16 +1095,76 @@ def _op_of(data: bytes | bytearray | memoryview | str) -> object:
 
 def layout_problem(layout: ChartLayout) -> str | None:
     """Why a view would refuse ``layout`` as it comes over the bus (a limit of this
-    protocol: steps, numbers, names, a step too large for one message), or None when it
-    decodes — whole or in parts (:func:`split_layout`)."""
+    protocol: steps, numbers, names, a step too large for one message), in words, or None
+    when it decodes — whole or in parts (:func:`split_layout`)."""
     try:
         head, parts = split_layout(layout)
         decode(encode(head), ChartLayout)
-        for part in parts:
-            decode(encode(part), ChartPart)
     except (ProtocolError, msgspec.ValidationError) as exc:
-        return str(exc)
+        return _layout_words(layout, str(exc))
+    for part in parts:
+        try:
+            decode(encode(part), ChartPart)
+        except (ProtocolError, msgspec.ValidationError) as exc:
+            return _layout_words(layout, _in_layout(str(exc), part))
     return None
+
+
+def _in_layout(message: str, part: ChartPart) -> str:
+    """A part's ``message`` with the place of its step or transition in the layout."""
+
+    def shifted(m: re.Match[str]) -> str:
+        first = part.first_step if m[1] == "steps" else part.first_transition
+        return f"`$.{m[1]}[{int(m[2]) + first}]"
+
+    return re.sub(r"`\$\.(steps|transitions)\[(\d+)\]", shifted, message)
+
+
+_TOO_MANY = re.compile(r"^invalid \w+: Expected `array` of length <= (\d+) - at `\$\.(.+)`$")
+_NOT_A_NAME = re.compile(r"^invalid \w+: Expected `str` matching regex .* - at `\$\.fb`$", re.S)
+
+
+def _layout_words(layout: ChartLayout, message: str) -> str:
+    """msgspec's ``message`` on ``layout`` in words, its place kept (as
+    ``web.commands.explain`` says a command's): a list longer than the view draws (``a
+    sequence (Main) has 5,000 steps, more than the 4,096 the view draws``), an FB name the
+    bus cannot carry; any other as msgspec says it."""
+    if _NOT_A_NAME.match(message):
+        return (
+            f"the FB name {layout.fb!r} is not one the bus carries: 1-64 of A-Z a-z 0-9 _ . -, "
+            "not starting with a digit, dot or dash - at `$.fb`"
+        )
+    m = _TOO_MANY.match(message)
+    if m is None:
+        return message
+    place = m[2]
+    owner, _, field = place.rpartition(".")
+    parent = _at(layout, owner) if owner else layout
+    items = _at(layout, place)
+    limit = int(m[1])
+    if owner:
+        kind = re.sub(r"\[\d+\]$", "", owner.rpartition(".")[2]).removesuffix("s")
+        label = getattr(parent, "name", "") or getattr(parent, "number", "")
+        whole = f"a {kind} ({label})" if label != "" else f"a {kind}"
+    else:
+        whole = "the chart"
+    if isinstance(items, list):
+        said = f"{whole} has {len(items):,} {field}, more than the {limit:,} the view draws"
+    else:
+        said = f"{whole} has more than {limit:,} {field}, more than the view draws"
+    return f"{said} - at `$.{place}`"
+
+
+def _at(layout: ChartLayout, place: str) -> object:
+    """The value at ``place`` (``sequences[0].steps``) of ``layout``; None when there is
+    none."""
+    value: object = layout
+    for name, index in re.findall(r"(\w+)|\[(\d+)\]", place):
+        try:
+            value = value[int(index)] if index else getattr(value, name)  # type: ignore[index]
+        except (AttributeError, IndexError, TypeError):
+            return None
+    return value
 
 
 def split_layout(

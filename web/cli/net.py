@@ -64,28 +64,21 @@ def error_words(exc: BaseException) -> str:
 
 def running_here(cpu: str) -> str | None:
     """Where a CPU named ``cpu`` of this machine listens when one does (its unix socket
-    takes a connection: one a killed CPU left does not), else None (``web.bus.local``)."""
-    import socket
-
+    takes a connection: one a killed CPU left does not, ``web.bus.local.listening``), else
+    None."""
     from s7graph.web.bus import local
 
     endpoint = local.find(cpu)
-    path = (endpoint or "").removeprefix("unixsock-stream/")
-    if endpoint is None or path == endpoint:
+    if endpoint is None or not endpoint.startswith("unixsock-stream/"):
         return None
-    with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as probe:
-        probe.settimeout(1.0)
-        try:
-            probe.connect(path)
-        except OSError:
-            return None
-    return endpoint
+    return endpoint if local.listening(endpoint) else None
 
 
 def name_taken_note(net: NetOptions) -> str:
     """A warning when this run goes on the bus of this machine (no ``--listen`` or
     ``--connect``) under the name of a CPU running here: a shell then reaches only this
-    one, and the other not at all once this one ends; "" otherwise."""
+    one while it runs (the other writes its file again once this one ends, ``web.bus.local``);
+    "" otherwise."""
     if net.listen or net.connect:
         return ""
     endpoint = running_here(net.cpu)
@@ -93,7 +86,7 @@ def name_taken_note(net: NetOptions) -> str:
         return ""
     return (
         f"s7graph: warning: a CPU named {net.cpu} runs on this machine already ({endpoint}): "
-        f"a shell reaches only this one, and that one not at all once this one ends; give "
+        f"a shell reaches only this one while it runs (that one again once it ends); give "
         f"each its own name with --cpu NAME"
     )
 

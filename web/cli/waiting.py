@@ -1,5 +1,5 @@
 """How ``s7graph watch`` and ``watch --address`` meet their CPU at start: one that is not
-there yet — no CPU of that name runs on this machine, nothing answers at ``--connect``, or
+there yet — no CPU of that name on this machine's bus, nothing answers at ``--connect``, or
 the bus has no such CPU — is waited for, as a CPU that goes while watched is. The watch
 says once on stderr that it waits and where (``s7graph: waiting for CPU cpu1 at
 tcp/127.0.0.1:7461 (nothing answers there yet)``), tries again every half second and goes
@@ -18,7 +18,6 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import signal
-import socket
 import sys
 import threading
 import time
@@ -58,24 +57,10 @@ class _Joined:
     endpoint: str | None
 
 
-def _listening(endpoint: str) -> bool:
-    """Whether a unix socket takes a connection (one a killed CPU left does not)."""
-    path = endpoint.removeprefix("unixsock-stream/")
-    if path == endpoint:
-        return True
-    with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as probe:
-        probe.settimeout(1.0)
-        try:
-            probe.connect(path)
-        except OSError:
-            return False
-    return True
-
-
 def _running_here() -> list[str]:
     """The CPUs of this machine for this user, by name: those whose endpoint file names a
     socket that takes a connection."""
-    return [n for n in local.names() if valid_name(n) and _listening(local.find(n) or "")]
+    return [n for n in local.names() if valid_name(n) and local.listening(local.find(n) or "")]
 
 
 def _here(cpu: str | None) -> tuple[str, str] | Absent | str:
@@ -94,8 +79,9 @@ def _here(cpu: str | None) -> tuple[str, str] | Absent | str:
         which = f"CPU {cpu}" if cpu is not None else "CPU"
         return Absent(
             f"{ROOT}/{cpu or '*'} on this machine",
-            f"no {which} runs here for this user yet",
-            f"give the bus with --connect ENDPOINT (no {which} runs on this machine for this user)",
+            f"no {which} is on this machine's bus for this user yet",
+            f"give the bus with --connect ENDPOINT (no {which} is on this machine's bus for this "
+            "user; a run given none of --web, --opcua, --listen and --connect is on none)",
         )
     return cpu, endpoint
 

@@ -196,3 +196,33 @@ def test_a_since_beyond_what_the_file_can_hold_lists_the_rows_in_range(
     assert audit_command(path, since) == 0
     rows = len(capsys.readouterr().out.splitlines())
     assert rows == (0 if since == "9999-12-31" else 3)
+
+
+@pytest.mark.parametrize("summary", [False, True], ids=["rows", "summary"])
+def test_another_applications_sqlite_file_is_refused_as_run_refuses_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], summary: bool
+) -> None:
+    """Before: exit 0 and nothing printed, as if the trail were empty."""
+    path = tmp_path / "other.sqlite"
+    _edit(
+        path, ("CREATE TABLE contacts (name TEXT)", ()), ("INSERT INTO contacts VALUES ('x')", ())
+    )
+    before = _files(path)
+    capsys.readouterr()
+    assert audit_command(path, None, summary=summary) == 2
+    out, err = capsys.readouterr()
+    assert out == ""
+    assert err == f"s7graph: error: {path}: an SQLite file, but not an s7graph state file\n"
+    assert _files(path) == before
+
+
+def test_an_sqlite_file_without_a_table_is_refused_as_run_refuses_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "s.sqlite"
+    _edit(path, ("CREATE TABLE t (x)", ()), ("DROP TABLE t", ()))
+    assert audit_command(path, None) == 2
+    (line,) = capsys.readouterr().err.splitlines()
+    assert line == f"s7graph: error: {path}: an SQLite file without a single table: its " + (
+        "content may be in a write-ahead log that is missing (copied without its -wal file?)"
+    )

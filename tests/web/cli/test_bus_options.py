@@ -334,7 +334,7 @@ def test_a_run_taking_the_name_of_a_cpu_running_here_warns_before_it_starts(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """Two runs named cpu1 on one machine (two examples in two shells): a shell reaches the
-    second only, and the first not at all once the second ends — the second says so; a
+    second only while it runs — the second says so; a
     socket a killed CPU left behind is no CPU running (``web.cli.net.running_here``)."""
     from s7graph.web.bus import local
     from s7graph.web.cli.net import name_taken_note
@@ -356,7 +356,7 @@ def test_a_run_taking_the_name_of_a_cpu_running_here_warns_before_it_starts(
     assert " in RUN (" in err.splitlines()[0]  # the warning after it, as the run starts
     assert err.splitlines()[1] == (
         f"s7graph: warning: a CPU named cpu1 runs on this machine already ({endpoint}): a shell "
-        "reaches only this one, and that one not at all once this one ends; give each its own "
+        "reaches only this one while it runs (that one again once it ends); give each its own "
         "name with --cpu NAME"
     )
     local.publish("cpu1", endpoint)  # the socket file stays, nothing listens: a killed CPU's

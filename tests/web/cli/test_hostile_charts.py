@@ -17,6 +17,7 @@ import sys
 import time
 from pathlib import Path
 
+import msgspec
 import pytest
 
 from s7graph.sequencer.text.parse import ChartSyntaxError, chart_text, parse_chart
@@ -201,11 +202,34 @@ def test_a_chart_the_view_cannot_show_is_reported_by_check(
     path.write_text(chart("Many", many, loop))
     rc, out, _ = _cli(capsys, "check", str(path))
     assert rc == 1
-    assert "warning[W110]: the browser view (--web) cannot show this chart: " in out
+    assert (
+        "warning[W110]: the browser view (--web) cannot show this chart: a sequence (S) has "
+        "5,000 steps, more than the 4,096 the view draws - at `$.sequences[0].steps`"
+    ) in out
     spaced = tmp_path / "spaced.s7g"
     spaced.write_text(two_steps("TRUE").replace('"Hostile"', '"Bohren und Fräsen"'))
     rc, out, _ = _cli(capsys, "check", str(spaced))
-    assert rc == 1 and "cannot show this chart" in out and "$.fb" in out
+    assert rc == 1 and "cannot show this chart" in out
+    assert (
+        "the FB name 'Bohren und Fräsen' is not one the bus carries: 1-64 of A-Z a-z 0-9 _ . -, "
+        "not starting with a digit, dot or dash - at `$.fb`"
+    ) in out
+
+
+def test_a_layout_the_view_cannot_show_is_said_in_words_naming_the_place() -> None:
+    """Before: msgspec's own words (``Expected `array` of length <= 4096 - at …``)."""
+    layout = ChartLayout.from_chart(parse_chart(two_steps("TRUE", "N Q0.0;")))
+    sequences = [*layout.sequences] * 300
+    assert layout_problem(msgspec.structs.replace(layout, sequences=sequences)) == (
+        "the chart has 300 sequences, more than the 256 the view draws - at `$.sequences`"
+    )
+    (action,) = layout.steps[0].actions
+    wide = msgspec.structs.replace(action, watch="x" * 120)
+    full = msgspec.structs.replace(layout.steps[0], actions=[wide] * 250)  # 60: in parts
+    over = msgspec.structs.replace(layout.steps[1], actions=[action] * 300)
+    assert layout_problem(msgspec.structs.replace(layout, steps=[full] * 60 + [over])) == (
+        "a step (B) has 300 actions, more than the 256 the view draws - at `$.steps[60].actions`"
+    )  # its place in the chart, not in the part that carries it
 
 
 def test_run_with_the_view_refuses_a_chart_the_view_cannot_show_at_once(

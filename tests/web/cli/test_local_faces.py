@@ -88,12 +88,12 @@ def test_web_and_opcua_started_before_the_cpu_of_this_machine_say_once_they_wait
     try:
         said = [Lines(face, stderr=True) for face in faces]
         said[0].wait_for(
-            "s7graph: waiting for a CPU at s7graph/* on this machine (no CPU runs here for "
-            "this user yet)"
+            "s7graph: waiting for a CPU at s7graph/* on this machine (no CPU is on this "
+            "machine's bus for this user yet)"
         )
         said[1].wait_for(
-            "s7graph: waiting for CPU cpu1 at s7graph/cpu1 on this machine (no CPU cpu1 runs "
-            "here for this user yet)"
+            "s7graph: waiting for CPU cpu1 at s7graph/cpu1 on this machine (no CPU cpu1 is on "
+            "this machine's bus for this user yet)"
         )
         cpu = _local_cpu(tmp_path, env, chart)
         Lines(faces[0]).wait_for("s7graph: view http://127.0.0.1:")
@@ -116,15 +116,15 @@ def test_web_and_opcua_started_before_the_cpu_of_this_machine_say_once_they_wait
     [
         (
             ["web", "--port", "0"],
-            "s7graph: waiting for a CPU at s7graph/* on this machine (no CPU runs here for "
-            "this user yet)\n"
+            "s7graph: waiting for a CPU at s7graph/* on this machine (no CPU is on this "
+            "machine's bus for this user yet)\n"
             "s7graph: error: no CPU appeared at s7graph/* on this machine within 1.5 s "
             "(--duration-s)\n",
         ),
         (
             ["opcua", "--cpu", "line1"],
             "s7graph: waiting for CPU line1 at s7graph/line1 on this machine (no CPU line1 "
-            "runs here for this user yet)\n"
+            "is on this machine's bus for this user yet)\n"
             "s7graph: error: CPU line1 did not appear at s7graph/line1 on this machine within "
             "1.5 s (--duration-s)\n",
         ),

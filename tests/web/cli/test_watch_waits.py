@@ -218,8 +218,8 @@ def test_a_watch_given_no_connect_waits_until_its_cpu_writes_where_it_listens(
         for side in sides:
             side.close()
     assert capsys.readouterr().err == (
-        "s7graph: waiting for CPU line1 at s7graph/line1 on this machine (no CPU line1 runs "
-        "here for this user yet)\n"
+        "s7graph: waiting for CPU line1 at s7graph/line1 on this machine (no CPU line1 is on "
+        "this machine's bus for this user yet)\n"
     )
 
 
