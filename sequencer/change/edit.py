@@ -102,12 +102,14 @@ class Argument:
 @dataclass(frozen=True, slots=True)
 class Operation:
     """One edit operation: its stable ``name`` (for a bus command), its ``edit`` class,
-    the kind of element it acts on and the menu ``title`` (S7-GRAPH's wording)."""
+    the kind of element it acts on, the menu ``title`` (S7-GRAPH's wording) and the
+    ``phrase`` of the undo and redo line (``describe``: the edit's fields in braces)."""
 
     name: str
     edit: type[Edit]
     target: Target
     title: str
+    phrase: str
 
     @property
     def doc(self) -> str:
@@ -198,42 +200,101 @@ HINTS: Final[dict[str, str]] = {
 # S7-GRAPH's Insert menu: Step + Transition, Alternative/Simultaneous branch, Jump, Branch
 # stop, Sequencer).
 OPERATIONS: Final[tuple[Operation, ...]] = (
-    Operation("rename_step", RenameStep, "step", "Name"),
-    Operation("renumber_step", RenumberStep, "step", "Number"),
-    Operation("set_initial", SetInitial, "step", "Initial step"),
-    Operation("set_message", SetMessage, "step", "Message text"),
-    Operation("set_interlock", SetInterlock, "step", "Interlock"),
-    Operation("set_supervision", SetSupervision, "step", "Supervision"),
-    Operation("add_row", AddRow, "step", "Add action row"),
-    Operation("insert_alternative_branch", InsertAlternativeBranch, "step", "Alternative branch"),
-    Operation("delete_step", DeleteStep, "step", "Delete step"),
+    Operation("rename_step", RenameStep, "step", "Name", 'rename S{step} to "{name}"'),
+    Operation("renumber_step", RenumberStep, "step", "Number", "renumber S{step} to S{to}"),
+    Operation("set_initial", SetInitial, "step", "Initial step", "initial step setting of S{step}"),
+    Operation("set_message", SetMessage, "step", "Message text", "message text of S{step}"),
+    Operation("set_interlock", SetInterlock, "step", "Interlock", "interlock of S{step}"),
+    Operation("set_supervision", SetSupervision, "step", "Supervision", "supervision of S{step}"),
+    Operation("add_row", AddRow, "step", "Add action row", "add action row to S{step}"),
     Operation(
-        "delete_simultaneous_branch", DeleteSimultaneousBranch, "step", "Delete simultaneous branch"
+        "insert_alternative_branch",
+        InsertAlternativeBranch,
+        "step",
+        "Alternative branch",
+        "insert alternative branch at S{step}",
     ),
-    Operation("change_row", ChangeRow, "row", "Change action row"),
-    Operation("remove_row", RemoveRow, "row", "Remove action row"),
-    Operation("move_row", MoveRow, "row", "Move action row"),
-    Operation("rename_transition", RenameTransition, "transition", "Name"),
-    Operation("renumber_transition", RenumberTransition, "transition", "Number"),
-    Operation("set_condition", SetCondition, "transition", "Condition"),
-    Operation("insert_step", InsertStep, "transition", "Step + Transition"),
+    Operation("delete_step", DeleteStep, "step", "Delete step", "delete S{step}"),
     Operation(
-        "insert_simultaneous_branch", InsertSimultaneousBranch, "transition", "Simultaneous branch"
+        "delete_simultaneous_branch",
+        DeleteSimultaneousBranch,
+        "step",
+        "Delete simultaneous branch",
+        "delete simultaneous branch at S{step}",
     ),
-    Operation("jump", Jump, "transition", "Jump"),
-    Operation("branch_stop", BranchStop, "transition", "Branch stop"),
-    Operation("delete_transition", DeleteTransition, "transition", "Delete transition"),
+    Operation(
+        "change_row", ChangeRow, "row", "Change action row", "change action row {index} of S{step}"
+    ),
+    Operation(
+        "remove_row", RemoveRow, "row", "Remove action row", "remove action row {index} of S{step}"
+    ),
+    Operation("move_row", MoveRow, "row", "Move action row", "move action row {index} of S{step}"),
+    Operation(
+        "rename_transition",
+        RenameTransition,
+        "transition",
+        "Name",
+        'rename T{transition} to "{name}"',
+    ),
+    Operation(
+        "renumber_transition",
+        RenumberTransition,
+        "transition",
+        "Number",
+        "renumber T{transition} to T{to}",
+    ),
+    Operation(
+        "set_condition", SetCondition, "transition", "Condition", "condition of T{transition}"
+    ),
+    Operation(
+        "insert_step",
+        InsertStep,
+        "transition",
+        "Step + Transition",
+        "insert step after T{transition}",
+    ),
+    Operation(
+        "insert_simultaneous_branch",
+        InsertSimultaneousBranch,
+        "transition",
+        "Simultaneous branch",
+        "insert simultaneous branch at T{transition}",
+    ),
+    Operation("jump", Jump, "transition", "Jump", "jump after T{transition} to S{to}"),
+    Operation(
+        "branch_stop", BranchStop, "transition", "Branch stop", "branch stop after T{transition}"
+    ),
+    Operation(
+        "delete_transition",
+        DeleteTransition,
+        "transition",
+        "Delete transition",
+        "delete T{transition}",
+    ),
     Operation(
         "delete_alternative_branch",
         DeleteAlternativeBranch,
         "transition",
         "Delete alternative branch",
+        "delete alternative branch at T{transition}",
     ),
-    Operation("rename_sequence", RenameSequence, "sequence", "Name"),
-    Operation("delete_sequence", DeleteSequence, "sequence", "Delete sequencer"),
-    Operation("insert_sequence", InsertSequence, "chart", "Sequencer"),
-    Operation("set_option", SetOption, "chart", "Block option"),
-    Operation("set_source", SetSource, "chart", "Source"),
+    Operation(
+        "rename_sequence",
+        RenameSequence,
+        "sequence",
+        "Name",
+        'rename sequencer {sequence} to "{name}"',
+    ),
+    Operation(
+        "delete_sequence",
+        DeleteSequence,
+        "sequence",
+        "Delete sequencer",
+        "delete sequencer {sequence}",
+    ),
+    Operation("insert_sequence", InsertSequence, "chart", "Sequencer", "insert sequencer"),
+    Operation("set_option", SetOption, "chart", "Block option", "block option {option}"),
+    Operation("set_source", SetSource, "chart", "Source", "edit in the source view"),
 )
 BY_NAME: Final[dict[str, Operation]] = {op.name: op for op in OPERATIONS}
 _BY_CLASS: Final[dict[type[Edit], Operation]] = {op.edit: op for op in OPERATIONS}
@@ -311,35 +372,21 @@ def make_edit(name: str, args: Mapping[str, object]) -> Edit:
 
 
 def describe(edit: Edit) -> str:
-    """A short line naming ``edit`` (the undo and redo menu)."""
+    """The undo and redo line of ``edit``: its operation's ``phrase`` with the edit's
+    fields as the chart says them (``rename S2 to "Clamp part"``, ``condition of T3``)."""
     op = _BY_CLASS.get(type(edit))
     if op is None:
         return type(edit).__name__
-    shown = [_shown_field(f.name, getattr(edit, f.name)) for f in fields(edit)]  # type: ignore[arg-type]
-    words = ", ".join(w for w in shown if w)
-    return f"{op.title}: {words}" if words else op.title
+    said = {f.name: _said(f.name, getattr(edit, f.name)) for f in fields(edit)}  # type: ignore[arg-type]
+    return op.phrase.format_map(said)
 
 
-_ELEMENT_FIELDS: Final = {"step": "S{}", "transition": "T{}", "sequence": "sequence {}"}
-
-
-def _shown_field(name: str, value: object) -> str:
-    """One field of an edit as the undo menu says it: ``S3``, ``T2``, ``name Clamp``, a
-    row as the chart writes it; a source text as "the text" (never a Python repr)."""
-    if value is None:
-        return ""
-    if name in _ELEMENT_FIELDS and isinstance(value, int):
-        return _ELEMENT_FIELDS[name].format(value)
-    if isinstance(value, RowFields):
-        text = value.text()
-    elif name == "text":
-        return "the chart's text"
-    elif isinstance(value, bool):
-        text = "yes" if value else "no"
-    else:
-        text = str(value)
-    text = shorten(text)
-    return f"{name} {text}" if name not in ("row",) else text
+def _said(name: str, value: object) -> str:
+    """One field of an edit in an undo line: a number as it is, a row index counted from 1
+    (as ``check`` prints rows), a text cut short; never a Python repr."""
+    if name == "index" and isinstance(value, int):
+        return str(value + 1)
+    return shorten(str(value), 24)
 
 
 # ---------------------------------------------------------------- applying an edit

@@ -6,8 +6,8 @@ their number, lines, jumps and stops; it is coloured live (active green, disturb
 latched red, inactive grey), with S7-GRAPH's status over it — the active steps' times and
 operand values, the contacts of the conditions evaluated (``web.view.status_layer``) — and
 greyed out with a "disconnected" banner while the CPU is unreachable (its ``alive`` token
-gone). The side panel is docked right of the chart (nothing is drawn under it) and viser's
-notice about software WebGL is not shown over the chart.
+gone). The side panel is docked right of the chart (nothing is drawn under it), viser's
+notice about software WebGL is not shown over the chart, and notices show at its bottom-left.
 The scene is shared by every page; each page has its own side panel
 (``web.view.panel.ClientPanel``: login, Control Sequencer, alarms, alarm history, audit,
 step details, events; an engineer's Force folder), built when the page connects — a page
@@ -70,7 +70,13 @@ LOG_LINES = 40
 AUDIT_ROWS = 50
 # viser shows a notice (its DOM id below) when the browser draws WebGL in software; it
 # covered the chart's top-left corner and has no theme option, so a page's style hides it.
-PAGE_STYLE = "<style>#webgl-software-rendering{display:none !important}</style>"
+# viser 1.1.1 also puts every notification (a command's verdict) at the top-left, where the
+# chart opens with its first step, with no option to place it elsewhere; the page's style
+# moves them to the bottom-left (viser still shifts them right of a panel docked left).
+PAGE_STYLE = (
+    "<style>#webgl-software-rendering{display:none !important}"
+    ".mantine-Notifications-root{top:auto !important;bottom:1em !important}</style>"
+)
 
 Sender = Callable[[Command], CommandReply]
 LoginCall = Callable[[str, str, str], LoginReply]

@@ -17,6 +17,7 @@ from s7graph.sequencer.change.content import AddRow, RenameStep, SetCondition, S
 from s7graph.sequencer.change.edit import (
     BY_NAME,
     OPERATIONS,
+    Operation,
     Session,
     apply_edit,
     describe,
@@ -124,12 +125,36 @@ def test_an_edit_from_data_may_leave_optional_arguments_out() -> None:
     assert [a.required for a in BY_NAME["add_row"].arguments] == [True, True, False]
 
 
-def test_an_edit_is_described_for_the_undo_menu() -> None:
-    """In the words of the chart, never a Python repr: ``S3``, ``T1``, a row as written."""
-    assert describe(RenameStep(3, "Clamp")) == "Name: S3, name Clamp"
-    assert describe(AddRow(2, RowFields("S", "Q0.0", "S1"))) == "Add action row: S2, S1 S Q0.0"
-    assert describe(SetCondition(1, "I0.0 AND " * 20)).endswith("I0.0 AND I...")
-    assert describe(SetSource("FUNCTION_BLOCK 'x'")) == "Source: the chart's text"
+def test_an_undo_entry_reads_as_one_short_phrase_of_its_operation() -> None:
+    """In the words of the chart, never a Python repr: ``S3``, ``T1``, a name in quotes."""
+    assert describe(RenameStep(2, "Clamp part")) == 'rename S2 to "Clamp part"'
+    assert describe(SetCondition(3, "I0.0 AND " * 20)) == "condition of T3"
+    assert describe(InsertStep(2)) == "insert step after T2"
+    assert describe(AddRow(2, RowFields("S", "Q0.0", "S1"))) == "add action row to S2"
+    assert describe(make_edit("move_row", {"step": 4, "index": 0, "to": 2})) == (
+        "move action row 1 of S4"  # rows counted from 1, as check prints them
+    )
+    assert describe(SetSource("FUNCTION_BLOCK 'x'")) == "edit in the source view"
+    assert describe(RenameStep(1, "N" * 90)) == f'rename S1 to "{"N" * 21}..."'
+
+
+_SAMPLE: dict[str, object] = {
+    "int": 32767,
+    "int | None": None,
+    "str": "x" * 200,
+    "bool": True,
+    "RowFields": RowFields("S", "Q0.0"),
+}
+
+
+@pytest.mark.parametrize("op", OPERATIONS, ids=lambda op: op.name)
+def test_every_operation_has_a_short_undo_phrase_of_its_own(op: Operation) -> None:
+    """Every operation's ``phrase`` names only its own fields, and says an edit of it in a
+    line the undo button's label holds, whatever the edit's texts."""
+    edit = op.edit(**{a.name: _SAMPLE[a.type] for a in op.arguments})
+    said = describe(edit)
+    assert said and said[0].islower() and "{" not in said and len(said) <= 60, said
+    assert [o.name for o in OPERATIONS if o.phrase == op.phrase] == [op.name]
 
 
 # ---------------------------------------------------------------- a new chart
@@ -163,8 +188,8 @@ def test_undo_gives_back_the_very_chart_and_redo_the_edited_one() -> None:
     start = Session.open(linear())
     one = start.apply(InsertStep(1))
     two = one.apply(RenameStep(4, "Wait"))
-    assert two.undo_label == "Name: S4, name Wait"
-    assert two.undo().undo_label == "Step + Transition: T1"
+    assert two.undo_label == 'rename S4 to "Wait"'
+    assert two.undo().undo_label == "insert step after T1"
     back = two.undo().undo()
     assert back.chart is start.chart and back.diagnostics == start.diagnostics
     again = back.redo().redo()

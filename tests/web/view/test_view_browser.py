@@ -290,3 +290,51 @@ def test_every_step_shows_its_state_colour_itself_on_the_page(page: Page, edge: 
         )
 
     assert wait_until(shown, 30, poll=0.5), seen
+
+
+# Where the page shows its notices: the union of the boxes of viser's (Mantine's)
+# notifications, as {x, y, width, height} (null: none drawn).
+NOTICES_BOX = """() => {
+    const all = document.querySelectorAll('.mantine-Notification-root');
+    const rs = Array.from(all).map(e => e.getBoundingClientRect())
+        .filter(r => r.width > 0 && r.height > 0);
+    if (!rs.length) return null;
+    const x = Math.min(...rs.map(r => r.left)), y = Math.min(...rs.map(r => r.top));
+    const w = Math.max(...rs.map(r => r.right)) - x, h = Math.max(...rs.map(r => r.bottom)) - y;
+    return {x: x, y: y, width: w, height: h};
+}"""
+
+
+def test_a_command_notice_shows_below_the_chart_not_over_its_first_step(
+    page: Page, edge: WebEdge
+) -> None:
+    """A command's verdict (viser puts its notices at the canvas's top-left, where the chart
+    opens) shows at the bottom-left of the canvas: even a refusal of three lines leaves the
+    first step's box clear, and the whole notice is on the page."""
+    view = edge.view
+    (panel,) = view.panels.values()
+    reason = "the CPU refuses: " + "a reason long enough to wrap over several lines " * 3
+    panel.notify("CPU to STOP refused", reason, ok=False)
+    page.get_by_text("CPU to STOP refused").first.wait_for(timeout=30_000)
+    boxes: list[Any] = [None]
+
+    def settled() -> bool:  # the notice slides in from the left: until it is in, at rest
+        boxes.append(page.evaluate(NOTICES_BOX))
+        box = boxes[-1]
+        return box is not None and box["x"] >= 0 and box == boxes[-2]
+
+    assert wait_until(settled, 30, poll=0.3), boxes
+    box = boxes[-1]
+    assert box["height"] > 70  # the reason wrapped: the notice is as tall as it gets
+    sx, sy = view.picture.steps[1]
+    left, top = screen_point(view, sx - BOX_W / 2, sy + BOX_H / 2)
+    right, bottom = screen_point(view, sx + BOX_W / 2, sy - BOX_H / 2)
+    apart = (
+        box["x"] + box["width"] <= left
+        or box["x"] >= right
+        or box["y"] + box["height"] <= top
+        or box["y"] >= bottom
+    )
+    assert apart, (box, (left, top, right, bottom))
+    height = page.viewport_size["height"] if page.viewport_size else 0
+    assert box["y"] >= 0 and box["y"] + box["height"] <= height, box
