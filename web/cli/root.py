@@ -19,6 +19,7 @@ from __future__ import annotations
 import contextvars
 import functools
 import inspect
+import os
 import re
 import sys
 from collections.abc import Callable
@@ -87,7 +88,31 @@ def _plain_help_types() -> None:
         cls.display_type = display_type
 
 
+def _plain_usage_names() -> None:
+    """Name an argument in the usage line as a user expects, ``s7graph sim [OPTIONS] CHART``
+    (``[CHART]`` when it may be left out, ``CHART...`` for several), not typer's
+    ``{chart}``; a metavar given is shown as it is; a typer without ``_usage_display_name``
+    is left as it is."""
+    import typer.core
+
+    cls = getattr(typer.core, "TyperArgument", None)
+    shown = getattr(cls, "_usage_display_name", None)
+    if cls is None or shown is None or getattr(shown, "in_words", False):
+        return
+
+    def usage_name(self: Any) -> str:
+        if self.metavar:  # written as the usage line shows it: OP, [NAME=VALUE]...
+            return str(self.metavar)
+        name = str(self.name or "").upper()
+        name = name if self.required else f"[{name}]"
+        return f"{name}..." if self.nargs != 1 else name
+
+    usage_name.in_words = True  # type: ignore[attr-defined]
+    cls._usage_display_name = usage_name
+
+
 _plain_help_types()
+_plain_usage_names()
 
 app = typer.Typer(
     add_completion=False,
@@ -244,48 +269,50 @@ def _credentials_everywhere() -> None:
             info.callback = _with_credentials(info.callback)
 
 
+MAX_CYCLE_MS = 3_600_000.0  # an hour: a cycle time beyond is no cycle
+MAX_DURATION_S = 1e9  # about 31 years: longer is "until stopped"
+MAX_CYCLES = 100_000_000
+_POSITIVE_MS = f"from more than 0 to {MAX_CYCLE_MS:,.0f} ms"
+_VIRTUAL_MS = f"from 0 to {MAX_CYCLE_MS:,.0f} ms"
+_DURATION = f"from 0 to {MAX_DURATION_S:,.0f} s"
+_CYCLES = f"from 0 to {MAX_CYCLES:,}"
+_PRIORITY = "from 0 (normal scheduling) to 98"
+_COMM_LOAD = "from 1 to 100 %"
+
+
 def _positive_ms(value: float | None) -> float | None:
     if value is not None and not 0 < value <= MAX_CYCLE_MS:
-        raise typer.BadParameter(f"from more than 0 to {MAX_CYCLE_MS:,.0f} ms, not {value:g}")
+        raise typer.BadParameter(f"{_POSITIVE_MS}, not {value:g}")
     return value
-
-
-MAX_DURATION_S = 1e9  # about 31 years: longer is "until stopped"
 
 
 def _duration(value: float | None) -> float | None:
     if value is not None and not 0 <= value <= MAX_DURATION_S:
-        raise typer.BadParameter(f"from 0 to {MAX_DURATION_S:,.0f} s, not {value:g}")
+        raise typer.BadParameter(f"{_DURATION}, not {value:g}")
     return value
-
-
-MAX_CYCLE_MS = 3_600_000.0  # an hour: a cycle time beyond is no cycle
 
 
 def _cycle_ms(value: float) -> float:
     if not 0 < value <= MAX_CYCLE_MS:
-        raise typer.BadParameter(f"from more than 0 to {MAX_CYCLE_MS:,.0f} ms, not {value:g}")
+        raise typer.BadParameter(f"{_POSITIVE_MS}, not {value:g}")
     return value
 
 
 def _virtual_cycle_ms(value: float) -> float:
     if not 0 <= value <= MAX_CYCLE_MS:  # 0: the virtual clock stands still
-        raise typer.BadParameter(f"from 0 to {MAX_CYCLE_MS:,.0f} ms, not {value:g}")
+        raise typer.BadParameter(f"{_VIRTUAL_MS}, not {value:g}")
     return value
 
 
 def _cycles(value: int) -> int:
     if not 0 <= value <= MAX_CYCLES:
-        raise typer.BadParameter(f"from 0 to {MAX_CYCLES:,}, not {value}")
+        raise typer.BadParameter(f"{_CYCLES}, not {value}")
     return value
-
-
-MAX_CYCLES = 100_000_000
 
 
 def _rt_priority(value: int | None) -> int | None:
     if value is not None and not 0 <= value <= 98:
-        raise typer.BadParameter(f"0 (normal scheduling) to 98, not {value}")
+        raise typer.BadParameter(f"{_PRIORITY}, not {value}")
     return value
 
 
@@ -377,8 +404,21 @@ RtPriority = Annotated[
 
 def _comm_load(value: float) -> float:
     if not 1 <= value <= 100:  # NaN too
-        raise typer.BadParameter(f"from 1 to 100 %, not {value:g}")
+        raise typer.BadParameter(f"{_COMM_LOAD}, not {value:g}")
     return value
+
+
+_RANGES: dict[Callable[..., Any], str] = {
+    _positive_ms: _POSITIVE_MS,
+    _duration: _DURATION,
+    _cycle_ms: _POSITIVE_MS,
+    _virtual_cycle_ms: _VIRTUAL_MS,
+    _cycles: _CYCLES,
+    _rt_priority: _PRIORITY,
+    _comm_load: _COMM_LOAD,
+}
+"""A range check's words for its option's range: said too when the option is given no
+number (``_not_a_number``)."""
 
 
 CommLoad = Annotated[
@@ -1411,7 +1451,41 @@ def _usage_error(exc: Exception, message: str) -> str:
     where = str(getattr(ctx, "command_path", "") or "s7graph")
     if not message.strip():
         return f"give a command of {where}: one of those listed above"
+    message = _not_a_number(exc) or message
     return f"{_argument_words(message)} (see {where} --help)"
+
+
+def _checked_later(option: str) -> str:
+    """The range of a numeric option its command checks itself (no range check of its own
+    here): ``--port``, ``--interval-ms``; "" for another."""
+    if option == "--port":
+        return "from 0 to 65535"
+    if option == "--interval-ms":
+        from s7graph.web.cli.watch_table import MAX_INTERVAL_MS, MIN_INTERVAL_MS
+
+        return f"from {MIN_INTERVAL_MS} to {MAX_INTERVAL_MS:,} ms"
+    return ""
+
+
+_NUMBER_WORDS = {"int_parsing": "a whole number", "float_parsing": "a number"}
+
+
+def _not_a_number(exc: Exception) -> str:
+    """A numeric option given no number (``--cycles abc``), worded as its range check words
+    a number out of range: ``Invalid value for '--cycles': a whole number from 0 to
+    100,000,000, not 'abc'``; "" for another error."""
+    errors = getattr(exc.__cause__, "errors", None)  # typer's parsing: pydantic's error
+    param = getattr(exc, "param", None)
+    if not callable(errors) or param is None or not getattr(param, "opts", None):
+        return ""
+    first = (errors() or [{}])[0]
+    kind = _NUMBER_WORDS.get(first.get("type", ""))
+    if kind is None:
+        return ""
+    check = getattr(param.callback, "__wrapped__", param.callback)
+    span = _RANGES.get(check) or _checked_later(param.opts[0])
+    takes = " ".join(filter(None, [kind, span]))
+    return f"Invalid value for '{param.opts[0]}': {takes}, not {first.get('input')!r}"
 
 
 def _argument_words(message: str) -> str:
@@ -1431,9 +1505,13 @@ def main(argv: list[str] | None = None) -> int:
     except S7Error as exc:
         print(f"s7graph: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:
+        return _reader_gone()
     except typer.Exit as exc:
         return int(exc.exit_code or 0)
-    except SystemExit as exc:  # click usage errors
+    except SystemExit as exc:  # click usage errors; click's end of a closed pipe: exit 1
+        if isinstance(exc.__context__, BrokenPipeError):
+            return _reader_gone()
         return int(exc.code or 0) if isinstance(exc.code, int) else 2
     except Exception as exc:
         message = getattr(exc, "format_message", None)
@@ -1450,7 +1528,30 @@ def main(argv: list[str] | None = None) -> int:
             return 2
         print(f"s7graph: {internal_error(_doing(argv), exc)}", file=sys.stderr)
         return 2
+    try:  # what is still buffered: a closed pipe found here ends as one found before
+        if sys.stdout is not None:
+            sys.stdout.flush()
+    except BrokenPipeError:
+        return _reader_gone()
     return rc if isinstance(rc, int) else 0
+
+
+SIGPIPE_EXIT = 128 + 13
+"""The exit status of a command whose output's reader went away: a shell's for a process
+killed by SIGPIPE (``yes | head``)."""
+
+
+def _reader_gone() -> int:
+    """The reader of stdout closed the pipe (``s7graph sim CHART | head -3``): end quietly,
+    with :data:`SIGPIPE_EXIT`, as a Unix tool killed by SIGPIPE; what is still buffered
+    goes to /dev/null, so the interpreter's last flush says nothing either."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):  # no file descriptor: nothing buffered
+        pass
+    return SIGPIPE_EXIT
 
 
 if __name__ == "__main__":
