@@ -29,7 +29,7 @@ from s7graph.engine.runner import stop_reason
 from s7graph.web.harness.scl import read_source
 
 Stimulus = list[tuple[float, dict[str, Any], str]]
-"""The stimulus lines in time order: (at_ms, what they set, ``--stimulus FILE:LINE``)."""
+"""The stimulus lines in time order: (at_ms, what they set, ``FILE:LINE``)."""
 Cycle = Callable[[int, float], tuple[ScanRecord, dict[str, Any]]]
 """One cycle ``(k, t_ms)``: scan, and the fields the line reports of it besides the values."""
 
@@ -48,27 +48,20 @@ class Traced(Protocol):
 
 def read_stimulus(path: Path | None) -> Stimulus:
     """The JSONL stimulus ``{"at_ms": 0, "set": {...}}`` a line, in time order, each with
-    its place (``--stimulus FILE:LINE``); S7Error naming the option and the file (and line)
-    that cannot be read."""
+    its place (``FILE:LINE``); S7Error naming the file (and line) that cannot be read."""
     if path is None:
         return []
-    try:
-        text = read_source(Path(path))
-    except S7Error as exc:  # `FILE:1:1: not UTF-8`, `cannot read FILE: …`
-        said = str(exc)
-        raise S7Error(f"--stimulus{' ' if said.startswith(str(path)) else ': '}{said}") from None
     out: Stimulus = []
-    for n, line in enumerate(text.splitlines(), 1):
+    for n, line in enumerate(read_source(Path(path)).splitlines(), 1):
         if not line.strip():
             continue
-        where = f"--stimulus {path}:{n}"
         try:
             at, values = _stimulus_line(line)
         except RecursionError:
-            raise S7Error(f"{where}: bad stimulus line: nested too deep") from None
+            raise S7Error(f"{path}:{n}: bad stimulus line: nested too deep") from None
         except ValueError as exc:
-            raise S7Error(f"{where}: bad stimulus line: {exc}") from None
-        out.append((at, values, where))
+            raise S7Error(f"{path}:{n}: bad stimulus line: {exc}") from None
+        out.append((at, values, f"{path}:{n}"))
     out.sort(key=lambda item: item[0])
     return out
 
@@ -95,15 +88,11 @@ def checked_inputs(
     session: Traced, stimulus: Path | None, watch: str
 ) -> tuple[Stimulus, list[str]]:
     """The stimulus and the watched names, every name checked against ``session``: a name
-    it cannot read (``--watch: …``), or a stimulus name it cannot write (``--stimulus
-    FILE:LINE: …``), raises S7Error."""
+    it cannot read, or a stimulus name it cannot write, raises S7Error."""
     stim = read_stimulus(stimulus)
     names = [w.strip() for w in watch.split(",") if w.strip()]
     for name in names:
-        try:
-            session.check_name(name, writing=False)
-        except S7Error as exc:
-            raise S7Error(f"--watch: {exc}") from None
+        session.check_name(name, writing=False)
     for _, values, where in stim:
         for name in values:
             try:
@@ -212,7 +201,7 @@ def _cycles(
             "cycle": k,
             "t_ms": ms(t_ms),
             **fields,
-            "values": _watched(session, names),
+            "values": {name: traced(session.get(name)) for name in names},
         }
         out.write(json.dumps(line) + "\n")
         if record.mode.name == "STOP":
@@ -221,12 +210,3 @@ def _cycles(
             return 1
         clock.advance(cycle_ms)
     return 0
-
-
-def _watched(session: Traced, names: list[str]) -> dict[str, Any]:
-    """The ``--watch`` values of a line; a name the session cannot read after all raises
-    S7Error naming the option (``--watch: …``)."""
-    try:
-        return {name: traced(session.get(name)) for name in names}
-    except S7Error as exc:
-        raise S7Error(f"--watch: {exc}") from None

@@ -70,24 +70,6 @@ def test_a_numeric_option_given_no_number_says_what_it_takes_in_one_line(
     ), err
 
 
-def test_sims_refusals_of_a_watch_name_and_a_stimulus_line_name_their_option(
-    tmp_path, capsys: pytest.CaptureFixture[str]
-) -> None:
-    assert main(["sim", *DRILL, "--watch", "NOPE", "--cycles", "1"]) == 2
-    assert capsys.readouterr().err == (
-        "s7graph: error: --watch: unknown name NOPE: not an address, symbol, FB pin or variable\n"
-    )
-    stim = tmp_path / "s.jsonl"
-    stim.write_text('{"at_ms": 0, "set": {}}\nnot json\n')
-    assert main(["sim", *DRILL, "--stimulus", str(stim), "--cycles", "1"]) == 2
-    assert capsys.readouterr().err.startswith(
-        f"s7graph: error: --stimulus {stim}:2: bad stimulus line: not JSON"
-    )
-    stim.write_text('{"at_ms": 0, "set": {"NOPE": 1}}\n')
-    assert main(["sim", *DRILL, "--stimulus", str(stim), "--cycles", "1"]) == 2
-    assert capsys.readouterr().err.startswith(f"s7graph: error: --stimulus {stim}:1: unknown name")
-
-
 @pytest.mark.parametrize(
     ("argv", "usage"),
     [

@@ -140,4 +140,4 @@ def test_a_stimulus_of_the_wrong_type_for_a_db_variable_is_one_line_and_exit_2(
     assert main(["sim", str(chart), "--blocks", str(scl), "--stimulus", str(stim)]) == 2
     err = capsys.readouterr().err
     _quiet(err)
-    assert err.startswith(f"s7graph: error: --stimulus {stim}:1: DB10.n: ") and err.count("\n") == 1
+    assert err.startswith(f"s7graph: error: {stim}:1: DB10.n: ") and err.count("\n") == 1

@@ -159,7 +159,7 @@ def test_a_db_variable_that_is_not_there_is_one_line_and_exit_2(
     f = _write(tmp_path, seq_s7g=CHART, blocks_scl=BLOCKS)
     rc, trace, err = _sim(capsys, f["seq_s7g"], "--blocks", f["blocks_scl"], "--watch", name)
     assert rc == 2 and trace == []
-    assert err.splitlines() == [f"s7graph: error: --watch: {why}"]
+    assert err.splitlines() == [f"s7graph: error: {why}"]
 
 
 def test_a_program_calls_the_blocks_of_an_earlier_source(
@@ -376,7 +376,7 @@ def test_a_symbol_that_names_no_loaded_db_is_one_line_and_exit_2(
     args = ["--blocks", f["blocks_scl"], "--symbols", f["sym_txt"], "--watch", name]
     rc, trace, err = _sim(capsys, f["seq_s7g"], *args)
     assert rc == 2 and trace == []
-    assert err.splitlines() == [f"s7graph: error: --watch: {why}"]
+    assert err.splitlines() == [f"s7graph: error: {why}"]
 
 
 INOUT = """

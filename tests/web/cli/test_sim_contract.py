@@ -133,9 +133,7 @@ def test_a_stimulus_value_that_does_not_fit_names_its_line_and_exits_2(
             tmp_path, [{"at_ms": 0, "set": {"S_SEL": 1}}, {"at_ms": 10, "set": values}], chart=VARS
         )
         err = capsys.readouterr().err
-        assert rc == 2 and err.startswith(
-            f"s7graph: error: --stimulus {tmp_path / 's.jsonl'}:2: {why}"
-        ), err
+        assert rc == 2 and err.startswith(f"s7graph: error: {tmp_path / 's.jsonl'}:2: {why}"), err
     rc, lines = run(
         tmp_path, [{"at_ms": 0, "set": {"n": 7.0, "S_SEL": 2}}], chart=VARS, watch="n,S_SEL"
     )
@@ -157,11 +155,9 @@ def test_a_stimulus_file_that_cannot_be_read_is_one_line_naming_it(tmp_path: Pat
     ]:
         s.write_bytes(content)
         assert sim_command(c, stimulus=s, cycles=1, trace=out) == 2
-        assert capsys.readouterr().err.startswith(f"s7graph: error: --stimulus {s}:{why}")
+        assert capsys.readouterr().err.startswith(f"s7graph: error: {s}:{why}")
     assert sim_command(c, stimulus=tmp_path, cycles=1, trace=out) == 2
-    assert capsys.readouterr().err == (
-        f"s7graph: error: --stimulus: cannot read {tmp_path}: Is a directory\n"
-    )
+    assert capsys.readouterr().err == f"s7graph: error: cannot read {tmp_path}: Is a directory\n"
     assert sim_command(c, cycles=1, trace=tmp_path) == 2
     assert capsys.readouterr().err == (
         f"s7graph: error: cannot write the trace {tmp_path}: Is a directory\n"
@@ -226,5 +222,5 @@ def test_a_watched_cell_beyond_the_cpus_cells_is_refused_by_name(tmp_path: Path,
         rc, _ = run(tmp_path, [], watch=name)
         assert rc == 2
         assert capsys.readouterr().err.endswith(
-            f"s7graph: error: --watch: {name}: only 256 {name[0]} cells exist\n"
+            f"s7graph: error: {name}: only 256 {name[0]} cells exist\n"
         )
