@@ -51,11 +51,9 @@ class PageLogin(ABC):
         self.origin = page_origin(client)
 
     def _build_login(self) -> None:
-        """The Login folder: user, password (hidden in demo mode), the two buttons. It is a
-        viser form (viser 1.1.1's ``add_form``: an HTML ``<form>``), so Enter in a field
-        submits it and logs in as *Log in* does (:meth:`_login_entered`)."""
+        """The Login folder: user, password (hidden in demo mode), the two buttons."""
         gui = self._page.gui
-        with gui.add_form("Login") as form:
+        with gui.add_folder("Login"):
             self.user_field = gui.add_text("User", "")
             self.password = gui.add_text("Password", "", visible=not self._demo)
             # viser has no password input: mask the one whose label points at this field
@@ -66,27 +64,8 @@ class PageLogin(ABC):
             self.login_button = gui.add_button("Log in")
             self.logout_button = gui.add_button("Log out", disabled=True)
             self.who = gui.add_html(texts.login_html("", "", True, self._demo))
-        self._login_form = form
-        form.on_submit(self._login_entered)
-        self.login_button.on_click(lambda _: self._login_clicked())
+        self.login_button.on_click(lambda _: self._log_in())
         self.logout_button.on_click(lambda _: self._log_out())
-
-    def _login_entered(self, event: viser.GuiEvent[Any]) -> None:
-        """Enter in a field of the Login form: log in as *Log in* does — not when logged
-        in already, nor with an empty password where a users file asks one (a field left
-        empty by an early Enter is no wrong password to count). The form's own submit
-        after a click (no client) only clears its mark of unsubmitted changes."""
-        if event.client is None or self.token:
-            return
-        if not self._demo and not str(self.password.value):
-            return
-        self._log_in()
-
-    def _login_clicked(self) -> None:
-        """*Log in* clicked: log in, then submit the form so the page drops its mark of
-        unsubmitted changes (viser's ``*`` beside Login)."""
-        self._log_in()
-        self._login_form.submit()
 
     def watch_token(self) -> str:
         """The token that signs this page's watch requests: its login's ("": none), so

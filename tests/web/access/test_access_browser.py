@@ -33,8 +33,6 @@ from tests.paths import ROOT
 from tests.web.helpers import (
     ARGS,
     CHROMIUM,
-    field,
-    fill,
     log_in,
     needs_chromium,
     scanning,
@@ -156,35 +154,6 @@ def test_two_pages_as_two_users_are_audited_apart_and_the_alarm_ack_names_its_us
     assert ("olga", "ack_msg", "applied") in audit
     first.close()
     second.close()
-
-
-def test_enter_in_the_password_field_logs_in_once_and_an_early_enter_tries_nothing(
-    plant: Plant, browser: Browser
-) -> None:
-    """The Login folder is a form (viser's ``add_form``): Enter in the Password field logs
-    the page in as *Log in* does, the password cleared from the page. Enter in the User
-    field before a password is given sends no login: no refusal, nothing counted towards
-    a lockout. *Log in* clicked logs in once (the button does not submit the form too)."""
-    page = open_page(browser, plant.edge.url)
-    before = len(_logins(plant.state))
-    fill(page, "User", "otto")
-    field(page, "User").press("Enter")  # no password yet: nothing sent
-    fill(page, "Password", PASSWORD)
-    field(page, "Password").press("Enter")
-    page.get_by_text("logged in as otto").first.wait_for(timeout=30_000)
-    assert field(page, "Password").input_value() == ""
-    assert _logins(plant.state)[before:] == [("otto", "applied")]
-    page.get_by_role("button", name="Log out", exact=True).click()
-    page.get_by_role("button", name="Log in", exact=True).wait_for(state="attached")
-    assert wait_until(lambda: page.get_by_role("button", name="Log in").is_enabled(), 30)
-    fill(page, "Password", PASSWORD)
-    button = page.get_by_role("button", name="Log in", exact=True)
-    assert button.get_attribute("type") == "button"  # no submit of its form: one login
-    button.click()
-    page.get_by_text("logged in as otto").first.wait_for(timeout=30_000)
-    assert wait_until(lambda: len(_logins(plant.state)) >= before + 2, 20)
-    assert _logins(plant.state)[before:] == [("otto", "applied")] * 2
-    page.close()
 
 
 def _logins(state: Path) -> list[tuple[str, str]]:
