@@ -146,7 +146,28 @@ def run_trace(
     """Run ``cycles`` cycles writing one line each; the exit status (0, or 1 on STOP; 130
     when Ctrl-C ends it between two cycles, ``_interrupts``)."""
     with _interrupts() as asked:
-        return _cycles(session, clock, cycle, stim, names, cycle_ms, cycles, out, asked)
+        nxt = 0
+        for k in range(cycles):
+            if asked:
+                done = f"cycles 0 to {k - 1}" if k else "no cycle"
+                print(f"s7graph: sim stopped by Ctrl-C: the trace holds {done}", file=sys.stderr)
+                return 130
+            t_ms = k * cycle_ms
+            nxt = _stimulate(session, stim, nxt, t_ms)
+            record, fields = cycle(k, t_ms)
+            line = {
+                "cycle": k,
+                "t_ms": ms(t_ms),
+                **fields,
+                "values": {name: traced(session.get(name)) for name in names},
+            }
+            out.write(json.dumps(line) + "\n")
+            if record.mode.name == "STOP":
+                why = stop_reason(session.cpu)
+                print(f"s7graph: error: cycle {k}: the CPU went to STOP: {why}", file=sys.stderr)
+                return 1
+            clock.advance(cycle_ms)
+        return 0
 
 
 @contextmanager
@@ -168,45 +189,17 @@ def _interrupts() -> Iterator[list[int]]:
         signal.signal(signal.SIGINT, previous)
 
 
-def _cycles(
-    session: Traced,
-    clock: VirtualClock,
-    cycle: Cycle,
-    stim: Stimulus,
-    names: list[str],
-    cycle_ms: float,
-    cycles: int,
-    out: TextIO,
-    asked: list[int],
-) -> int:
-    nxt = 0
-    for k in range(cycles):
-        if asked:
-            done = f"cycles 0 to {k - 1}" if k else "no cycle"
-            print(f"s7graph: sim stopped by Ctrl-C: the trace holds {done}", file=sys.stderr)
-            return 130
-        t_ms = k * cycle_ms
-        while nxt < len(stim) and stim[nxt][0] <= t_ms + 1e-9:
-            _, values, where = stim[nxt]
-            for name, value in values.items():
-                try:
-                    session.set(name, value)
-                except S7Error as exc:
-                    said = exc.message
-                    named = said if said.startswith(f"{name}: ") else f"{name}: {said}"
-                    raise S7Error(f"{where}: {named}") from None
-            nxt += 1
-        record, fields = cycle(k, t_ms)
-        line = {
-            "cycle": k,
-            "t_ms": ms(t_ms),
-            **fields,
-            "values": {name: traced(session.get(name)) for name in names},
-        }
-        out.write(json.dumps(line) + "\n")
-        if record.mode.name == "STOP":
-            why = stop_reason(session.cpu)
-            print(f"s7graph: error: cycle {k}: the CPU went to STOP: {why}", file=sys.stderr)
-            return 1
-        clock.advance(cycle_ms)
-    return 0
+def _stimulate(session: Traced, stim: Stimulus, nxt: int, t_ms: float) -> int:
+    """Set what the stimulus lines from ``nxt`` due by ``t_ms`` set; the next line's index.
+    A value a name cannot take raises S7Error naming the line and the name."""
+    while nxt < len(stim) and stim[nxt][0] <= t_ms + 1e-9:
+        _, values, where = stim[nxt]
+        for name, value in values.items():
+            try:
+                session.set(name, value)
+            except S7Error as exc:
+                said = exc.message
+                named = said if said.startswith(f"{name}: ") else f"{name}: {said}"
+                raise S7Error(f"{where}: {named}") from None
+        nxt += 1
+    return nxt
