@@ -98,6 +98,7 @@ from s7graph.engine.state_identity import (
     CHART,
     KIND_KEY,
     SOURCE_KEY,
+    Evidence,
     Held,
     Program,
     beside,
@@ -122,6 +123,7 @@ __all__ = [
     "diag_row",
     "fingerprint_of",
     "foreign_state",
+    "not_a_state_file",
     "not_in_use",
     "sqlite_words",
     "state_beside",
@@ -1135,12 +1137,12 @@ def _judged(
     path: Path,
     program: Program | None,
     cpu: Cpu,
-    judge: Callable[..., str | None],
+    judge: Callable[[Program, Evidence], str | None],
 ) -> str | None:
     """``judge`` (``state_identity.foreign`` or ``beside``) of the file on ``db`` for
-    ``program`` run on ``cpu``: what it records, the instance DBs it holds and the CPU's
-    (None when no program was given); ``StateFileError`` when what it records is not what
-    this code writes."""
+    ``program`` run on ``cpu``, on the ``Evidence`` of both: what the file records, the
+    instance DBs it holds and the CPU's (None when no program was given);
+    ``StateFileError`` when what it records is not what this code writes."""
     tables = _tables(db)
     kind, source = _meta(db, path, KIND_KEY), _meta(db, path, SOURCE_KEY)
     problem = malformed(kind, source)
@@ -1153,17 +1155,18 @@ def _judged(
         if "instances" in tables
         else []
     )
-    held = [Held(int(n), str(fb), str(name), str(fp).startswith(CHART)) for n, fb, name, fp in rows]
-    own = {(n, idb.fb.label, idb.fb.name) for n, idb in cpu.instance_dbs.items()}
+    held = tuple(
+        Held(int(n), str(fb), str(name), str(fp).startswith(CHART)) for n, fb, name, fp in rows
+    )
     mine = (fingerprint_of(idb.fb) for idb in cpu.instance_dbs.values())
-    return judge(
-        program,
-        recorded({KIND_KEY: kind, SOURCE_KEY: source}.get),
+    seen = Evidence(
+        saved=recorded({KIND_KEY: kind, SOURCE_KEY: source}.get),
         holds_state=_holds_state(db, tables) or bool(held),
         held=held,
-        own=own,
+        own=frozenset((n, idb.fb.label, idb.fb.name) for n, idb in cpu.instance_dbs.items()),
         has_chart=any(f.startswith(CHART) for f in mine),
     )
+    return judge(program, seen)
 
 
 def foreign_state(path: Path, program: Program, cpu: Cpu) -> str | None:
@@ -1276,18 +1279,31 @@ def _make_private(path: Path) -> bool:
     return made
 
 
-def _check_path(path: Path, existed: bool) -> None:
-    """``StateFileError`` for what is at ``path`` before SQLite opens it: an empty file, a
-    folder, or a write-ahead log without its file (deleted while a run wrote it: SQLite
-    would start a new file beside it and the state in the log would be lost)."""
-    if existed and path.is_dir():
-        raise StateFileError(
+def not_a_state_file(path: Path) -> StateFileError | None:
+    """Why what is at ``path`` cannot be a state file, told before SQLite opens it: a
+    directory, an empty file (SQLite would take it for a new database); None for anything
+    else, nothing there included. Its ``way_out`` when there is one besides starting anew
+    (``--fresh``, a run's; none for an empty file). ``s7graph run`` and ``s7graph audit``
+    refuse a path in these words."""
+    if path.is_dir():
+        return StateFileError(
             path,
             "a directory, not a state file",
             way_out="give --state the path of a file (or move the directory away)",
         )
-    if existed and path.is_file() and path.stat().st_size == 0:
-        raise StateFileError(path, "empty file (0 bytes), not a state file")
+    if path.is_file() and path.stat().st_size == 0:
+        return StateFileError(path, "empty file (0 bytes), not a state file")
+    return None
+
+
+def _check_path(path: Path, existed: bool) -> None:
+    """``StateFileError`` for what is at ``path`` before SQLite opens it: what is not a
+    state file (``not_a_state_file``), or a write-ahead log without its file (deleted while
+    a run wrote it: SQLite would start a new file beside it and the state in the log would
+    be lost)."""
+    refused = not_a_state_file(path) if existed else None
+    if refused is not None:
+        raise refused
     renewed = Path(f"{path}.renew")
     if not existed and renewed.is_file():
         raise StateFileError(

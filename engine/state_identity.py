@@ -31,6 +31,7 @@ __all__ = [
     "KINDS",
     "KIND_KEY",
     "SOURCE_KEY",
+    "Evidence",
     "Held",
     "Program",
     "beside",
@@ -108,52 +109,53 @@ def recorded(meta: Callable[[str], str | None]) -> Program | None:
     return Program(kind, source)
 
 
-def foreign(
-    mine: Program,
-    saved: Program | None,
-    *,
-    holds_state: bool,
-    held: Sequence[Held],
-    own: Collection[tuple[int, str, str]],
-    has_chart: bool,
-) -> str | None:
-    """Why a file is another program's than ``mine`` (None: it is not known to be):
-    ``saved`` the program it records, ``held`` the instance DBs it holds, ``own`` those of
-    ``mine`` (DB number, FB label, FB name), ``has_chart`` whether ``mine`` has a GRAPH FB.
-    A file recording another source of the same kind is ``mine``'s when ``recognised``; one
-    that records none is judged by whether it holds a state and a GRAPH FB's instance DB."""
-    charts = [str(h) for h in held if h.chart]
+@dataclass(frozen=True, slots=True)
+class Evidence:
+    """What a file is judged by for a program to run (``foreign``, ``beside``): what the
+    file records and holds — ``saved`` the program it records (None: none), ``holds_state``
+    whether it holds a state, ``held`` its instance DBs — and what the program has: ``own``
+    its instance DBs (DB number, FB label, FB name), ``has_chart`` whether it has a GRAPH
+    FB. Gathered once from the file and the CPU (``engine/persistence.py``)."""
+
+    saved: Program | None
+    holds_state: bool
+    held: tuple[Held, ...]
+    own: frozenset[tuple[int, str, str]]
+    has_chart: bool
+
+
+def foreign(mine: Program, seen: Evidence) -> str | None:
+    """Why a file is another program's than ``mine`` (None: it is not known to be). A file
+    recording another source of the same kind is ``mine``'s when ``recognised``; one that
+    records none is judged by whether it holds a state and a GRAPH FB's instance DB."""
+    saved = seen.saved
+    charts = [str(h) for h in seen.held if h.chart]
     if saved is not None:
-        if saved == mine or (saved.kind == mine.kind and recognised(mine, held, own)):
+        if saved == mine or (saved.kind == mine.kind and recognised(mine, seen.held, seen.own)):
             return None
         return f"the state of another program: {saved}'s, not {mine}'s"
     older = "written by an s7graph that did not record its program, and"
-    if mine.kind == "chart" and holds_state and not charts:
+    if mine.kind == "chart" and seen.holds_state and not charts:
         return (
             f"{older} it holds no chart's sequencer (no GRAPH FB's instance DB): another "
             f"program's (an S7-SCL or Python program of the same name?), not {mine}'s"
         )
-    if mine.kind != "chart" and charts and not has_chart:
+    if mine.kind != "chart" and charts and not seen.has_chart:
         return f"{older} it holds a chart's sequencer ({charts[0]}): a chart's, not {mine}'s"
     return None
 
 
-def beside(
-    mine: Program,
-    saved: Program | None,
-    *,
-    holds_state: bool,
-    held: Sequence[Held],
-    own: Collection[tuple[int, str, str]],
-    has_chart: bool,
-) -> str | None:
+def beside(mine: Program, seen: Evidence) -> str | None:
     """Whose state a file holds that ``mine`` would carry over given it (``foreign`` finds
     nothing against it) and whose instance DBs are ``mine``'s (``recognised``): a file of
     ``mine`` under another name, or of a renamed source; None for any other file."""
-    why = foreign(mine, saved, holds_state=holds_state, held=held, own=own, has_chart=has_chart)
-    if why is not None or not recognised(mine, held, own):
+    if foreign(mine, seen) is not None or not recognised(mine, seen.held, seen.own):
         return None
-    return f"the state of {saved}" if saved is not None else "a state that records no program"
+    return (
+        f"the state of {seen.saved}"
+        if seen.saved is not None
+        else "a state that records no program"
+    )
 
 
 def recognised(mine: Program, held: Sequence[Held], own: Collection[tuple[int, str, str]]) -> bool:

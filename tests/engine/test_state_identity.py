@@ -15,7 +15,7 @@ import pytest
 
 from s7graph.engine import Cpu
 from s7graph.engine.persistence import StateFileError, StateStore
-from s7graph.engine.state_identity import Held, Program, recognised
+from s7graph.engine.state_identity import Evidence, Held, Program, beside, foreign, recognised
 from tests.engine.test_state_trust import _cpu, acc_grown, other
 
 SCL = Program("scl", "far.scl")
@@ -150,6 +150,36 @@ def test_a_renamed_source_is_recognised_by_the_fb_instance_dbs_the_file_holds(
     kind: str, held: list[Held], same: bool
 ) -> None:
     assert recognised(Program(kind, "x"), held, OWN) is same
+
+
+def _seen(saved: Program | None, held: tuple[Held, ...], *, has_chart: bool = True) -> Evidence:
+    """What a file holding ``held`` and recording ``saved`` shows a program of ``OWN``."""
+    return Evidence(saved, bool(held), held, frozenset(OWN), has_chart)
+
+
+@pytest.mark.parametrize(
+    ("mine", "seen", "whose", "named"),
+    [
+        (CHART, _seen(CHART, (GRAPH, ACC)), None, "the state of the chart far.s7g"),
+        (Program("chart", "near.s7g"), _seen(CHART, (GRAPH, ACC)), None, "the state of the"),
+        (CHART, _seen(SCL, (ACC,)), "the state of another program: the S7-SCL", None),
+        (CHART, _seen(None, (GRAPH,)), None, "a state that records no program"),
+        (CHART, _seen(None, (ACC,)), "written by an s7graph that did not record", None),
+        (SCL, _seen(None, (GRAPH,), has_chart=False), "it holds a chart's sequencer (DB1", None),
+        (SCL, _seen(None, (ACC, Held(5, "FB5", "gone", chart=False))), None, None),
+    ],
+)
+def test_whose_a_file_is_and_whether_it_is_named_beside_are_judged_on_one_record(
+    mine: Program, seen: Evidence, whose: str | None, named: str | None
+) -> None:
+    """``foreign`` and ``beside`` take the same ``Evidence``, gathered once from the file
+    and the CPU: a file ``foreign`` finds another's is never named beside a run."""
+    why = foreign(mine, seen)
+    assert why is None if whose is None else why is not None and whose in why
+    said = beside(mine, seen)
+    assert said is None if named is None else said is not None and said.startswith(named)
+    with pytest.raises(AttributeError):
+        seen.saved = mine  # type: ignore[misc]
 
 
 def test_a_changed_version_of_the_same_program_is_carried_over_not_refused(

@@ -16,7 +16,7 @@ import pytest
 
 from s7graph.engine import CallContext, Cpu, InstanceDB, VirtualClock, fb, ob
 from s7graph.engine.modes import CpuMode
-from s7graph.engine.persistence import FORMAT, StateFileError, StateStore
+from s7graph.engine.persistence import FORMAT, StateFileError, StateStore, not_a_state_file
 
 
 @fb(2, "acc", STAT={"total": ("DINT", 0)})
@@ -453,6 +453,28 @@ def test_a_directory_or_a_missing_folder_is_refused_without_pointing_to_fresh(
             StateStore(path)
         assert info.value.problem == problem
         assert info.value.way_out and "--fresh" not in info.value.way_out
+
+
+def test_what_cannot_be_a_state_file_is_told_without_opening_it_and_anything_else_passes(
+    tmp_path: Path,
+) -> None:
+    """``not_a_state_file``: the check a run makes before SQLite opens the path, public so
+    that ``s7graph audit`` says the same; a file not there, or one SQLite will judge, is
+    not its to refuse."""
+    empty = tmp_path / "empty.sqlite"
+    empty.write_bytes(b"")
+    folder = not_a_state_file(tmp_path)
+    assert folder is not None and folder.problem == "a directory, not a state file"
+    assert folder.way_out.startswith("give --state the path of a file")
+    nothing = not_a_state_file(empty)
+    assert nothing is not None and (nothing.problem, nothing.way_out) == (
+        "empty file (0 bytes), not a state file",
+        "",  # only starting anew: a run's --fresh
+    )
+    assert empty.read_bytes() == b""
+    for fine in (tmp_path / "none.sqlite", _written(tmp_path / "s.sqlite")):
+        assert not_a_state_file(fine) is None
+    assert not (tmp_path / "none.sqlite").exists()
 
 
 def test_a_state_file_being_built_anew_when_its_run_ended_is_refused_not_started_fresh(

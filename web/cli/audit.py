@@ -14,6 +14,7 @@ import sys
 import time
 from pathlib import Path
 
+from s7graph.engine.persistence import not_a_state_file
 from s7graph.web.access.audit import (
     UnreadableAudit,
     lines,
@@ -55,25 +56,23 @@ def _ns(seconds: float) -> int:
     return min(max(0, int(seconds * 1e9)), 2**63 - 1)
 
 
-def _not_a_state_file(state: Path) -> str:
-    """Why ``state`` cannot be a state file before SQLite reads it, as ``s7graph run`` says
-    it (``engine.persistence``), or ""."""
-    if state.is_dir():
-        return "a directory, not a state file"
-    if not state.exists():
-        return "no such state file"
-    if state.is_file() and state.stat().st_size == 0:
-        return "empty file (0 bytes), not a state file"
-    return ""
+def _refused(state: Path) -> str:
+    """Why ``state`` cannot be read as a state file before SQLite reads it, as ``s7graph
+    run`` says it (``engine.persistence.not_a_state_file``, with its way out but a run's
+    ``--fresh``), or "": a file that is not there is ``no such state file``."""
+    refused = not_a_state_file(state)
+    if refused is not None:
+        return f"{refused}; {refused.way_out}" if refused.way_out else str(refused)
+    return "" if state.exists() else f"{state}: no such state file"
 
 
 def audit_command(state: Path, since: str | None, *, summary: bool = False) -> int:
     """Print the audit rows (oldest first), or with ``summary`` the summary's; exit 2 for a
     missing file, a bad --since, or a file whose audit cannot be read (one line naming it
     and what was wrong)."""
-    problem = _not_a_state_file(state)
+    problem = _refused(state)
     if problem:
-        print(f"s7graph: error: {state}: {problem}", file=sys.stderr)
+        print(f"s7graph: error: {problem}", file=sys.stderr)
         return 2
     try:
         if summary:

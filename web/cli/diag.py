@@ -10,10 +10,8 @@ A read: no login.
 
 from __future__ import annotations
 
-import sys
-
 from s7graph.web.bus.client import BusClient
-from s7graph.web.bus.protocol import MAX_DIAG_ENTRIES, encode
+from s7graph.web.bus.protocol import encode
 from s7graph.web.cli.diag_text import event_line, when
 from s7graph.web.cli.net import NetOptions
 from s7graph.web.cli.remote import ask
@@ -22,11 +20,9 @@ __all__ = ["diag_command"]
 
 
 def diag_command(net: NetOptions, *, n: int = 100, as_json: bool = False) -> int:
-    """Print the newest ``n`` entries of ``net.cpu``'s diagnostic buffer; 0, or 2 when the
-    CPU does not answer or ``n`` is out of range."""
-    if not 1 <= n <= MAX_DIAG_ENTRIES:
-        print(f"s7graph: error: -n {n}: give 1 to {MAX_DIAG_ENTRIES} entries", file=sys.stderr)
-        return 2
+    """Print the newest ``n`` entries of ``net.cpu``'s diagnostic buffer (``n`` from 1 to
+    ``web.bus.protocol.MAX_DIAG_ENTRIES``: the command line refuses another, as it does any
+    number out of its option's range); 0, or 2 when the CPU does not answer."""
     buffer = ask(net, lambda client: BusClient.diag(client, n))
     if isinstance(buffer, int):
         return buffer

@@ -278,6 +278,7 @@ _DURATION = f"from 0 to {MAX_DURATION_S:,.0f} s"
 _CYCLES = f"from 0 to {MAX_CYCLES:,}"
 _PRIORITY = "from 0 (normal scheduling) to 98"
 _COMM_LOAD = "from 1 to 100 %"
+_PORT = "from 0 (a free one) to 65535"
 
 
 def _positive_ms(value: float | None) -> float | None:
@@ -301,6 +302,20 @@ def _cycle_ms(value: float) -> float:
 def _virtual_cycle_ms(value: float) -> float:
     if not 0 <= value <= MAX_CYCLE_MS:  # 0: the virtual clock stands still
         raise typer.BadParameter(f"{_VIRTUAL_MS}, not {value:g}")
+    return value
+
+
+def _port(value: int) -> int:
+    """``--port`` of the browser view (``run --web``, ``web``); 0 picks a free one."""
+    if not 0 <= value <= 65535:
+        raise typer.BadParameter(f"{_PORT}, not {value}")
+    return value
+
+
+def _entries(value: int) -> int:
+    """``diag -n``: as many entries as one answer on the bus carries."""
+    if not 1 <= value <= _max_entries():
+        raise typer.BadParameter(f"{_range_of('-n')}, not {value}")
     return value
 
 
@@ -416,11 +431,15 @@ _RANGES: dict[Callable[..., Any], str] = {
     _cycles: _CYCLES,
     _rt_priority: _PRIORITY,
     _comm_load: _COMM_LOAD,
+    _port: _PORT,
 }
 """A range check's words for its option's range: said too when the option is given no
 number (``_not_a_number``)."""
 
 
+ViewPort = Annotated[
+    int, typer.Option(callback=_port, help="Port of the browser view (0: a free one).")
+]
 CommLoad = Annotated[
     float,
     typer.Option(
@@ -476,7 +495,7 @@ def run(
     max_cycle_ms: MaxCycleMs = None,
     duration_s: Duration = None,
     web: Annotated[bool, typer.Option(help="Serve the browser view.")] = False,
-    port: Annotated[int, typer.Option(help="Port of the browser view.")] = 8080,
+    port: ViewPort = 8080,
     record: Record = None,
     cpu: CpuName = "cpu1",
     listen: Listen = None,
@@ -505,7 +524,6 @@ def run(
     face = _opcua_face(program, opcua, users, opcua_cert, opcua_key, opcua_writes)
     net = _cpu_net(
         web,
-        port,
         cpu=cpu,
         listen=listen,
         connect=connect,
@@ -568,15 +586,13 @@ def run(
     )
 
 
-def _cpu_net(web: bool, port: int, **kw: Any) -> NetOptions:
-    """A CPU's network options (``run``), checked: what is refused is one line, exit 2."""
+def _cpu_net(web: bool, **kw: Any) -> NetOptions:
+    """A CPU's network options (``run``), checked: what is refused is one line, exit 2
+    (``--port`` is checked as it is parsed: ``_port``)."""
     net = _net(**kw)
     problem = net.problem(listening=web, role="cpu")
     if problem:
         print(f"s7graph: error: {problem}", file=sys.stderr)
-        raise typer.Exit(2)
-    if not 0 <= port <= 65535:
-        print(f"s7graph: error: --port {port} is out of range (0-65535)", file=sys.stderr)
         raise typer.Exit(2)
     return net
 
@@ -800,7 +816,7 @@ def web(
     cpu: Annotated[str | None, typer.Option("--cpu", help="The CPU (default: the first).")] = None,
     fb: FbName = None,
     host: Host = "127.0.0.1",
-    port: Annotated[int, typer.Option(help="Port of the browser view (0: a free one).")] = 8080,
+    port: ViewPort = 8080,
     tls_ca: TlsCa = None,
     origin: Origin = None,
     duration_s: StopAfter = None,
@@ -976,7 +992,9 @@ def diag(
     cpu: CpuName = "cpu1",
     connect: Connect = None,
     tls_ca: TlsCa = None,
-    n: Annotated[int, typer.Option("-n", help="How many entries, newest first (1-1000).")] = 100,
+    n: Annotated[
+        int, typer.Option("-n", callback=_entries, help="How many entries, newest first (1-1000).")
+    ] = 100,
     as_json: Annotated[bool, typer.Option("--json", help="Print the entries as JSON.")] = False,
 ) -> None:
     """Print a CPU's diagnostic buffer, newest first: time, event ID, OB and priority
@@ -1451,15 +1469,42 @@ def _usage_error(exc: Exception, message: str) -> str:
     where = str(getattr(ctx, "command_path", "") or "s7graph")
     if not message.strip():
         return f"give a command of {where}: one of those listed above"
-    message = _not_a_number(exc) or message
+    message = _missing(exc) or _not_a_number(exc) or message
     return f"{_argument_words(message)} (see {where} --help)"
 
 
-def _checked_later(option: str) -> str:
-    """The range of a numeric option its command checks itself (no range check of its own
-    here): ``--port``, ``--interval-ms``; "" for another."""
-    if option == "--port":
-        return "from 0 to 65535"
+def _missing(exc: Exception) -> str:
+    """An argument or a required option not given, in words as the other usage errors:
+    ``give CHART: a chart in .s7g source, or an .scl source`` (the argument named as the
+    usage line names it, then its help), ``give --state: the CPU's SQLite state file``,
+    not click's ``Missing argument 'chart'.``; "" for another error."""
+    param = getattr(exc, "param", None)
+    if type(exc).__name__ != "MissingParameter" or param is None:
+        return ""
+    if getattr(param, "param_type_name", "") == "argument":
+        shown = getattr(param, "_usage_display_name", None)
+        name = str(shown()) if callable(shown) else str(param.name).upper()
+    else:
+        name = str((getattr(param, "opts", None) or [param.name])[0])
+    told = str(getattr(param, "help", "") or "").strip().removesuffix(".")
+    if told[1:2].islower() or told[1:2] == " ":
+        told = told[0].lower() + told[1:]
+    return f"give {name}: {told}" if told else f"give {name}"
+
+
+def _max_entries() -> int:
+    """The most diagnostic entries one answer carries (imported only when asked)."""
+    from s7graph.web.bus.protocol import MAX_DIAG_ENTRIES
+
+    return MAX_DIAG_ENTRIES
+
+
+def _range_of(option: str) -> str:
+    """The range of a numeric option whose bound is another module's, imported only when
+    asked: ``-n`` (``diag``), ``--interval-ms`` (checked by ``watch`` itself); "" for
+    another."""
+    if option == "-n":
+        return f"from 1 to {_max_entries():,}"
     if option == "--interval-ms":
         from s7graph.web.cli.watch_table import MAX_INTERVAL_MS, MIN_INTERVAL_MS
 
@@ -1483,17 +1528,27 @@ def _not_a_number(exc: Exception) -> str:
     if kind is None:
         return ""
     check = getattr(param.callback, "__wrapped__", param.callback)
-    span = _RANGES.get(check) or _checked_later(param.opts[0])
+    span = _RANGES.get(check) or _range_of(param.opts[0])
     takes = " ".join(filter(None, [kind, span]))
     return f"Invalid value for '{param.opts[0]}': {takes}, not {first.get('input')!r}"
+
+
+_OPTION_SAID = re.compile(r"^Invalid value: (--?[a-z][\w-]*): ")
 
 
 def _argument_words(message: str) -> str:
     """A refusal of an op's argument, in the vocabulary's words (``web.commands.explain``),
     without the place it names on the bus (`` - at `$.args.on```: the command line is no
-    JSON)."""
+    JSON); a command's own refusal without click's ``Invalid value: `` before it, or, when
+    it names its option first (``--interval-ms: from 20 …``), worded as click words a range
+    check's (``Invalid value for '--interval-ms': from 20 …``)."""
     at = _AT.search(message)
-    return message if at is None else message[: at.start()].removeprefix("Invalid value: ")
+    if at is not None:
+        return message[: at.start()].removeprefix("Invalid value: ")
+    option = _OPTION_SAID.match(message)
+    if option is not None:
+        return f"Invalid value for '{option[1]}': {message[option.end() :]}"
+    return message.removeprefix("Invalid value: ")
 
 
 def main(argv: list[str] | None = None) -> int:

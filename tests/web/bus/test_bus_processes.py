@@ -224,7 +224,8 @@ def test_the_command_line_refuses_a_busy_port_and_an_open_bus_without_users(
     assert "is in use" in busy.stderr
     assert len(busy.stderr.strip().splitlines()) == 1, busy.stderr
     out_of_range = run("run", *chart, "--web", "--port", "70000")
-    assert out_of_range.returncode == 2 and "out of range" in out_of_range.stderr
+    assert out_of_range.returncode == 2
+    assert "to 65535, not 70000" in out_of_range.stderr, out_of_range.stderr
     open_bus = run("run", *chart, "--listen", "tcp/0.0.0.0:7447")
     assert open_bus.returncode == 2 and "not loopback" in open_bus.stderr
     open_page = run("run", *chart, "--web", "--host", "0.0.0.0")

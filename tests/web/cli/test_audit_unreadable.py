@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from s7graph.engine.persistence import StateStore
+from s7graph.engine.persistence import StateFileError, StateStore
 from s7graph.web.cli.audit import audit_command
 
 T0 = 1_700_000_000 * 10**9
@@ -170,20 +170,38 @@ def test_a_file_a_running_cpu_replaces_while_it_is_read_is_tried_again(
     assert len(calls) == audit._OPEN_TRIES
 
 
-def test_a_folder_or_an_empty_file_is_said_as_run_says_it(
+def test_a_folder_or_an_empty_file_is_refused_in_the_words_run_refuses_it(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    """A folder was ``no such state file``, an empty file an empty audit with exit 0."""
+    """One check for both (``engine.persistence.not_a_state_file``), with its way out but
+    a run's ``--fresh``; before, audit kept a copy of run's words and a folder's went
+    without its way out. A folder was once ``no such state file``, an empty file an empty
+    audit with exit 0."""
     empty = tmp_path / "empty.sqlite"
     empty.write_bytes(b"")
-    for path, problem in (
-        (tmp_path, "a directory, not a state file"),
+    for path, said in (
+        (
+            tmp_path,
+            "a directory, not a state file; give --state the path of a file (or move the "
+            "directory away)",
+        ),
         (empty, "empty file (0 bytes), not a state file"),
-        (tmp_path / "none.sqlite", "no such state file"),
     ):
+        with pytest.raises(StateFileError) as run:
+            StateStore(path)
         assert audit_command(path, None) == 2
-        assert capsys.readouterr() == ("", f"s7graph: error: {path}: {problem}\n")
+        assert capsys.readouterr() == ("", f"s7graph: error: {path}: {said}\n")
+        assert said.startswith(run.value.problem) and said.endswith(run.value.way_out)
     assert empty.read_bytes() == b""
+
+
+def test_a_missing_file_is_no_such_state_file_and_is_not_made(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "none.sqlite"
+    assert audit_command(path, None) == 2
+    assert capsys.readouterr() == ("", f"s7graph: error: {path}: no such state file\n")
+    assert list(tmp_path.iterdir()) == []
 
 
 @pytest.mark.parametrize("since", ["99999999999h", "9999-12-31", "100000000000000000000d"])

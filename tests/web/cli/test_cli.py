@@ -17,7 +17,7 @@ from tests.paths import EXAMPLES
     [
         (["run", "--max-cycle-ms", "abc", "x.py"], "Invalid value for '--max-cycle-ms'"),
         (["frob"], "No such command 'frob'"),
-        (["sim"], "Missing argument 'chart'"),
+        (["sim"], "give CHART: a chart in .s7g source"),
     ],
 )
 def test_a_usage_error_is_one_stderr_line_and_exit_2(
@@ -228,7 +228,8 @@ def test_web_refuses_a_port_out_of_range_before_it_waits_for_a_cpu(
     assert main(["web", "--port", "99999", "--duration-s", "60"]) == 2
     assert time.monotonic() - began < 30
     assert capsys.readouterr().err == (
-        "s7graph: error: --port 99999 is out of range (0-65535; 0 picks a free one)\n"
+        "s7graph: error: Invalid value for '--port': from 0 (a free one) to 65535, not 99999 "
+        "(see s7graph web --help)\n"
     )
 
 

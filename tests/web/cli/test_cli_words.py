@@ -52,7 +52,8 @@ def test_a_short_trace_whose_reader_is_gone_ends_quietly_too(tmp_path) -> None:
         (["sim", "--cycles", "1.5"], "a whole number from 0 to 100,000,000, not '1.5'"),
         (["sim", "--cycle-ms", "x"], "a number from 0 to 3,600,000 ms, not 'x'"),
         (["run", "--duration-s", "x"], "a number from 0 to 1,000,000,000 s, not 'x'"),
-        (["run", "--port", "x"], "a whole number from 0 to 65535, not 'x'"),
+        (["run", "--port", "x"], "a whole number from 0 (a free one) to 65535, not 'x'"),
+        (["diag", "-n", "x"], "a whole number from 1 to 1,000, not 'x'"),
         (["run", "--rt-priority", "x"], "a whole number from 0 (normal scheduling) to 98, not 'x'"),
         (["watch", "--interval-ms", "x"], "a number from 20 to 3,600,000 ms, not 'x'"),
     ],
@@ -61,7 +62,7 @@ def test_a_numeric_option_given_no_number_says_what_it_takes_in_one_line(
     argv: list[str], said: str, capsys: pytest.CaptureFixture[str]
 ) -> None:
     command, *rest = argv
-    given = DRILL if command != "watch" else ["--address", "MW0"]
+    given = {"watch": ["--address", "MW0"], "diag": []}.get(command, DRILL)
     assert main([command, *given, *rest]) == 2
     err = capsys.readouterr().err
     assert (
@@ -85,3 +86,62 @@ def test_the_usage_line_names_each_argument_in_capitals_as_a_user_expects(
     assert main(argv) == 0
     out = capsys.readouterr().out
     assert f"Usage: {usage} " in out and "{" not in out.split("Usage:")[1].splitlines()[0], out
+
+
+@pytest.mark.parametrize(
+    ("argv", "said"),
+    [
+        (["run", *DRILL, "--port", "70000"], "'--port': from 0 (a free one) to 65535, not 70000"),
+        (["run", *DRILL, "--port", "-1"], "'--port': from 0 (a free one) to 65535, not -1"),
+        (["web", "--port", "65536"], "'--port': from 0 (a free one) to 65535, not 65536"),
+        (["diag", "-n", "0"], "'-n': from 1 to 1,000, not 0"),
+        (["diag", "-n", "1001"], "'-n': from 1 to 1,000, not 1001"),
+        (["run", *DRILL, "--comm-load", "0"], "'--comm-load': from 1 to 100 %, not 0"),
+        (["watch", "--address", "MW0", "--interval-ms", "1"], "'--interval-ms': from 20 to"),
+    ],
+)
+def test_a_number_out_of_its_options_range_is_refused_in_the_same_words_by_every_command(
+    argv: list[str], said: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Before: ``--port 70000 is out of range (0-65535)``, ``-n 0: give 1 to 1000 entries``
+    and ``Invalid value: --interval-ms: …``, each its own way; now each as a range check
+    says it, pointing at the command's help."""
+    assert main(argv) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1, err
+    assert err.startswith(f"s7graph: error: Invalid value for {said}"), err
+    assert err.endswith(f" (see s7graph {argv[0]} --help)\n"), err
+
+
+@pytest.mark.parametrize(
+    ("argv", "said"),
+    [
+        (["sim"], "give CHART: a chart in .s7g source, or an .scl source"),
+        (["run"], "give PROGRAM: a Python program of blocks (.py), an S7-SCL program (.scl)"),
+        (["certs", "issue", "ca"], "give NAME: the node's name: a CPU's is its --cpu"),
+        (["modify"], "give ADDRESS VALUE: an I, Q, M or DB address or a symbol"),
+        (["audit"], "give --state: the CPU's SQLite state file"),
+        (["export", "x.s7g"], "give --to: plcopen or simaticml"),
+    ],
+)
+def test_a_missing_argument_or_required_option_is_asked_for_with_what_it_is(
+    argv: list[str], said: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Named as the usage line names it (capitals for an argument), with its help; before,
+    click's ``Missing argument 'chart'.`` in lower case and without a word of what it is."""
+    assert main(argv) == 2
+    (line,) = capsys.readouterr().err.splitlines()
+    assert line.startswith(f"s7graph: error: {said}"), line
+    command = " ".join(argv[:2] if argv[0] == "certs" else argv[:1])
+    assert line.endswith(f" (see s7graph {command} --help)"), line
+    assert "Missing" not in line
+
+
+def test_a_commands_own_refusal_is_said_without_clicks_invalid_value_before_it(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """Before: ``Invalid value: give the user to log in as with --user``."""
+    assert main(["force", "I0.3", "TRUE", "--connect", "tcp/127.0.0.1:9"]) == 2
+    assert capsys.readouterr().err == (
+        "s7graph: error: give the user to log in as with --user (see s7graph force --help)\n"
+    )

@@ -240,10 +240,10 @@ def test_a_program_on_the_bus_is_refused_a_listen_a_chart_would_be_refused(
 def test_the_shell_says_in_one_line_what_is_wrong_with_diag_and_watch() -> None:
     none = ["--connect", "tcp/127.0.0.1:9"]
     assert s7graph("diag", *none, "-n", "0", check=2).stderr.strip() == (
-        "s7graph: error: -n 0: give 1 to 1000 entries"
+        "s7graph: error: Invalid value for '-n': from 1 to 1,000, not 0 (see s7graph diag --help)"
     )
     refused = s7graph("watch", "--address", " , ", *none, check=2).stderr
-    assert "--address: give the operands to watch, e.g. MW0,Q4.0,DB20.avg" in refused
+    assert "'--address': give the operands to watch, e.g. MW0,Q4.0,DB20.avg" in refused
     both = s7graph("watch", "--address", "MW0", "--fb", "X", *none, check=2).stderr
     assert "--address watches operands, --fb an FB's steps: not both" in both
 
@@ -253,7 +253,7 @@ def test_the_shell_says_in_one_line_what_is_wrong_with_diag_and_watch() -> None:
     [
         (["watch", "--address", "MW0", "--interval-ms", "nan"], "from 20 to 3,600,000 ms, not nan"),
         (["watch", "--address", "MW0", "--interval-ms", "5"], "from 20 to 3,600,000 ms, not 5"),
-        (["watch", "--address", "M\udcff"], "--address: not valid UTF-8 text"),
+        (["watch", "--address", "M\udcff"], "'--address': not valid UTF-8 text"),
         (["watch", "--duration-s", "1e300"], "from 0 to 1,000,000,000 s, not 1e+300"),
         (["watch", "--duration-s", "-1"], "from 0 to 1,000,000,000 s, not -1"),
         (["web", "--duration-s", "inf"], "from 0 to 1,000,000,000 s, not inf"),
