@@ -16,7 +16,7 @@ from collections.abc import Callable
 
 from s7graph.sequencer.messages import PROGRAM_USER, parse_message_id
 from s7graph.sfb.alarms import Message, MessageList
-from s7graph.web.bus.protocol import AlarmEntry, AlarmList
+from s7graph.web.bus.protocol import AlarmEntry, AlarmList, Refusal
 
 __all__ = ["AlarmFeed"]
 
@@ -73,12 +73,12 @@ class AlarmFeed:
         """Acknowledge ``msg_id`` as ``user`` at CPU time ``t_ns``: the message as it was,
         or None and why not."""
         if user == PROGRAM_USER:
-            return None, f"the user name {PROGRAM_USER!r} is reserved for ACK_EF"
+            return None, Refusal("access", f"the user name {PROGRAM_USER!r} is reserved for ACK_EF")
         msg = self.messages.get(msg_id) if msg_id is not None else None
         if msg is None:
-            return None, f"no message {msg_id!r} in the message list"
+            return None, Refusal("no_event", f"no message {msg_id!r} in the message list")
         if msg.acked:
             how = f" by {msg.ack_user}" if msg.ack_user else ""
-            return None, f"message {msg_id!r} is already acknowledged{how}"
+            return None, Refusal("acked", f"message {msg_id!r} is already acknowledged{how}")
         self.messages.acknowledge(msg.msg_id, user, t_ns)
         return msg, ""

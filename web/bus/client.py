@@ -44,6 +44,7 @@ from s7graph.web.bus.protocol import (
     OperandValues,
     ProjectFiles,
     ProtocolError,
+    Refusal,
     StepStateUpdate,
     SyncReport,
     WatchRequest,
@@ -51,6 +52,7 @@ from s7graph.web.bus.protocol import (
     decode,
     encode,
     join_layout,
+    refusal_reply,
     watch_bytes,
 )
 
@@ -370,7 +372,8 @@ class BusClient:
         self._follow_seq(self._keys.operands, OperandValues, self.operands, callback)
 
     def send(self, command: Command, *, timeout: float | None = None) -> CommandReply:
-        """Send a command and wait for the CPU's answer; no answer is a refusal too. A
+        """Send a command and wait for the CPU's answer; no answer — or one that cannot be
+        read — is a refusal too, of kind ``communication``. A
         command with the token of a login of this client is numbered and signed with
         its session key first (unless it carries a ``mac`` already)."""
         wait = timeout or self._timeout
@@ -382,7 +385,7 @@ class BusClient:
         if got is None:
             got = no_answer(self._keys.cpu, wait, time.monotonic() - asked)
         if isinstance(got, str):
-            return CommandReply(applied=False, reason=got, op=command.op, fb=command.fb)
+            return refusal_reply(Refusal("communication", got), op=command.op, fb=command.fb)
         return got
 
     def login(self, user: str, password: str = "", *, origin: str = "") -> LoginReply:

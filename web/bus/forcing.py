@@ -23,7 +23,7 @@ from s7graph.engine.errors import internal_error
 from s7graph.engine.force import Force, ForceError
 from s7graph.engine.modify import ModifyError
 from s7graph.web.bus.modify_vars import modify_variable
-from s7graph.web.bus.protocol import Command, ForceEntry, ForceList
+from s7graph.web.bus.protocol import Command, ForceEntry, ForceList, Refusal
 from s7graph.web.bus.watch import WatchError
 
 __all__ = ["Forcing", "force_entry"]
@@ -61,7 +61,7 @@ class Forcing:
         if command.op == "modify":
             return self._modify(command)
         if command.op != "force":
-            return False, f"not a force command: {command.op!r}", ""
+            return False, Refusal("not_found", f"not a force command: {command.op!r}"), ""
         args, user, cpu = command.args, command.user or "?", self.cpu
         if args.get("all") is True:
             gone = cpu.unforce(user=user)
@@ -69,7 +69,7 @@ class Forcing:
             return True, "", f"unforce all ({listed})"
         address, value = args.get("address"), args.get("value")
         if not isinstance(address, str):
-            return False, "force needs an address", ""
+            return False, Refusal("argument", "force needs an address"), ""
         if value is None:
             (force,) = cpu.unforce(address, user=user)
             return True, "", f"unforce {force}"
@@ -83,7 +83,7 @@ class Forcing:
             getattr(command.args, "value", None),
         )
         if not isinstance(address, str) or value is None:
-            return False, "modify needs an address and a value", ""
+            return False, Refusal("argument", "modify needs an address and a value"), ""
         try:
             done = modify_variable(self.cpu, address, value)
             if done is None:

@@ -50,6 +50,7 @@ from s7graph.web.bus.protocol import (
     Command,
     LoginReply,
     LoginRequest,
+    Refusal,
 )
 
 if TYPE_CHECKING:
@@ -216,18 +217,19 @@ class Gate:
 
     def check(self, command: Command) -> tuple[Identity | None, str]:
         """Who sent ``command`` (None: nobody we know) and why it may not be applied ("":
-        it may). With a users file the session key must have signed it and its ``seq``
-        must be new (it then counts as seen: a command is checked once)."""
+        it may; a :class:`Refusal` of kind ``access``, or ``refused`` for an op this CPU
+        does not offer). With a users file the session key must have signed it and its
+        ``seq`` must be new (it then counts as seen: a command is checked once)."""
         who = self.signed_by(
             command.user, command.token, command.mac or "", command_bytes(command), command.seq or 0
         )
         if isinstance(who, str):
-            return None, who
+            return None, Refusal("access", who)
         if not allowed(who.role, command.op):
             need = lowest_role(command.op) or "?"
-            return who, f"role {who.role} may not {command.op} (needs {need})"
+            return who, Refusal("access", f"role {who.role} may not {command.op} (needs {need})")
         if command.op in NOT_AVAILABLE:
-            return who, f"{command.op} is not available yet on this CPU"
+            return who, Refusal("refused", f"{command.op} is not available yet on this CPU")
         return who, ""
 
     def signed_by(self, user: str, token: str, mac: str, signed: bytes, seq: int) -> Identity | str:
@@ -251,7 +253,8 @@ class Gate:
         self, command: Command, apply: Apply, *, cycle: int | None = None, note: str = ""
     ) -> tuple[bool, str]:
         """Check, apply (as the established user, without the token) and audit ``command``;
-        (applied, reason). ``apply`` raising refuses the command. ``note`` goes to the
+        (applied, reason) — a :class:`Refusal` keeps the kind its site gave it (the gate's
+        own are ``access``). ``apply`` raising refuses the command. ``note`` goes to the
         row's detail (the origin the sender claimed)."""
         try:
             who, refusal = self.check(command)

@@ -94,6 +94,7 @@ from s7graph.web.bus.protocol import (
     AlarmList,
     ChartLayout,
     Command,
+    Refusal,
     StepDetail,
     StepStateUpdate,
 )
@@ -144,7 +145,9 @@ MAX_VALUES = 512  # outputs, watched operands and the active steps' action opera
 # Commands of one group queued at the same scan boundary would act as simultaneous edges
 # in one call (the FB resolves them by priority, not by order), so the second is refused.
 _GROUPS = {op_of(c): c.group for c in COMMAND_TYPES if c.group}
-Result = tuple[bool, str, str]  # applied, the reason, what it acted on (for the audit)
+Result = tuple[bool, str, str]
+"""Applied, the reason (a refusal's a :class:`Refusal`, naming its kind), what it acted on
+(for the audit)."""
 
 
 @dataclass(frozen=True, slots=True)
@@ -558,11 +561,12 @@ class LiveGraph:
     def _check(self, command: Command) -> Result:
         op = getattr(command, "op", None)
         if self.cpu_mode is not CpuMode.RUN:
-            return False, f"the CPU is in {self.cpu_mode}, not RUN", ""
+            return False, Refusal("state", f"the CPU is in {self.cpu_mode}, not RUN"), ""
         group = _GROUPS.get(op) if isinstance(op, str) else None
         queued = self._pending.get(group) if group else None
         if queued is not None:
-            return False, f"{op} conflicts with {queued}, queued for the same scan; retry", ""
+            why = f"{op} conflicts with {queued}, queued for the same scan; retry"
+            return False, Refusal("busy", why), ""
         applied, reason, detail = self._queue(command, op)
         if applied and group:
             self._pending[group] = f"{op} {detail}".strip()
@@ -572,13 +576,13 @@ class LiveGraph:
         """``command`` to its op's handler (:data:`HANDLERS`, by its struct)."""
         handler = HANDLERS.get(type(command))
         if handler is None:
-            return False, f"unknown command {op!r}", ""
+            return False, Refusal("not_found", f"unknown command {op!r}"), ""
         return handler(self, command, self._pending_mode or self.graph.state.mode)
 
     def _mode(self, command: SetMode, mode: str) -> Result:
         new = command.mode
         if new not in MODE_PINS:
-            return False, f"mode must be one of {', '.join(MODES)}", ""
+            return False, Refusal("argument", f"mode must be one of {', '.join(MODES)}"), ""
         self.graph.command(MODE_PINS[new])
         self._pending_mode = new
         return True, "", f"{mode} -> {new}"
@@ -587,10 +591,10 @@ class LiveGraph:
         st, cc = self.graph.state, self.cc
         waiting = [i for i in st.active if st.sv_err[i]]
         if not waiting:
-            return False, "no supervision fault waits for an acknowledgement", ""
+            return False, Refusal("state", "no supervision fault waits for an acknowledgement"), ""
         stays = [i for i in waiting if self._relatches(i)]
         if len(stays) == len(waiting):
-            return False, _CAUSE_PERSISTS.format(_steps(cc, stays)), ""
+            return False, Refusal("state", _CAUSE_PERSISTS.format(_steps(cc, stays))), ""
         self.graph.command(OP_PINS[command.op], user=command.user or "?")
         note = f"{_steps(cc, stays)} stays latched: its cause persists" if stays else ""
         return True, note, "steps " + _steps(cc, [i for i in waiting if i not in stays])
@@ -599,11 +603,11 @@ class LiveGraph:
         st, step = self.graph.state, command.step
         i = self.cc.step_index.get(step) if isinstance(step, int) else None
         if i is None:
-            return False, f"no step S{step} in {self.fb}", ""
+            return False, Refusal("not_found", f"no step S{step} in {self.fb}"), ""
         if not (st.x[i] and st.sv_err[i]):
-            return False, f"S{step} waits for no acknowledgement", ""
+            return False, Refusal("state", f"S{step} waits for no acknowledgement"), ""
         if self._relatches(i):
-            return False, _CAUSE_PERSISTS.format(f"S{step}"), ""
+            return False, Refusal("state", _CAUSE_PERSISTS.format(f"S{step}")), ""
         self.graph.command(OP_PINS[command.op], step=step, user=command.user or "?")
         return True, "", f"S{step}"
 
@@ -618,14 +622,15 @@ class LiveGraph:
         pin, held = LEVEL_PINS[op]
         on = command.args.get("on")
         if not isinstance(on, bool):
-            return False, f"{op} needs on: true or false", ""
+            return False, Refusal("argument", f"{op} needs on: true or false"), ""
         hold = on == held
         self.graph.set_level(pin, held if hold else None)
         return True, "", f"{pin} {'held at ' + str(int(held)) if hold else 'back to its pin'}"
 
     def _t_push(self, command: TPush, mode: str) -> Result:
         if mode not in ("TAP", "TOP"):
-            return False, f"t_push needs mode TAP or TOP ({CONTROL_SEQUENCER})", ""
+            why = f"t_push needs mode TAP or TOP ({CONTROL_SEQUENCER})"
+            return False, Refusal("state", why), ""
         self.graph.command(OP_PINS[command.op])
         st, cc = self.graph.state, self.cc
         ready = any(st.tt[j] for i in st.active for j in cc.leaving[i])
@@ -635,15 +640,15 @@ class LiveGraph:
         """S_ON / S_OFF on the command's step (not S_NO), in MAN."""
         op, step = command.op, command.step
         if mode != "MAN":
-            return False, f"{op} needs mode MAN ({CONTROL_SEQUENCER})", ""
+            return False, Refusal("state", f"{op} needs mode MAN ({CONTROL_SEQUENCER})"), ""
         i = self.cc.step_index.get(step) if isinstance(step, int) else None
         if i is None:
-            return False, f"no step S{step} in {self.fb}", ""
+            return False, Refusal("not_found", f"no step S{step} in {self.fb}"), ""
         active = self.graph.state.x[i]
         if isinstance(command, StepOn) and active:
-            return False, f"S{step} is already active", ""
+            return False, Refusal("state", f"S{step} is already active"), ""
         if isinstance(command, StepOff) and not active:
-            return False, f"S{step} is not active", ""
+            return False, Refusal("state", f"S{step} is not active"), ""
         self.graph.command(OP_PINS[op], step=step)
         return True, "", f"S{step}"
 
@@ -660,7 +665,7 @@ class LiveGraph:
     def _ack_msg(self, command: AckMsg, mode: str) -> Result:
         mid = command.msg_id
         if self._alarms is None:
-            return False, "this view has no message list", ""
+            return False, Refusal("not_found", "this view has no message list"), ""
         msg, why = self._alarms.acknowledge(mid, command.user or "?", self._t_ns)
         if msg is None:
             return False, why, ""
@@ -679,16 +684,17 @@ def _set_steps(live: LiveGraph, command: SetSteps, mode: str) -> Result:
     """The steps named the active ones of their sequences in one call, in MAN
     (``sequencer.placing``); refused when nothing would change."""
     if mode != "MAN":
-        return False, f"set_steps needs mode MAN ({CONTROL_SEQUENCER})", ""
+        return False, Refusal("state", f"set_steps needs mode MAN ({CONTROL_SEQUENCER})"), ""
     cc, numbers = live.cc, command.args.steps
     unknown = [n for n in numbers if n not in cc.step_index]
     if unknown:
-        return False, f"no step {', '.join(f'S{n}' for n in unknown)} in {live.fb}", ""
+        why = f"no step {', '.join(f'S{n}' for n in unknown)} in {live.fb}"
+        return False, Refusal("not_found", why), ""
     steps = list(dict.fromkeys(cc.step_index[n] for n in numbers))
     leave, enter = moves(cc.step_seq, live.graph.state.active, steps)
     if not leave and not enter:
         why = "already active, no other step active in their sequences"
-        return False, f"nothing to change: {_steps(cc, steps)} {why}", ""
+        return False, Refusal("state", f"nothing to change: {_steps(cc, steps)} {why}"), ""
     live.graph.place(numbers)
     off, on = _steps(cc, leave) or "none", _steps(cc, enter) or "none"
     return True, "", f"{_steps(cc, steps)} (off: {off}; on: {on})"

@@ -82,7 +82,9 @@ from s7graph.web.bus.protocol import (
     CommandReply,
     ProjectFile,
     ProjectFiles,
+    Refusal,
     encode,
+    refusal_reply,
 )
 from s7graph.web.bus.publisher import BusPublisher, PendingCommand
 from s7graph.web.commands import COMMAND_TYPES, op_of
@@ -155,7 +157,13 @@ class Durability(Protocol):
     def write_problem(self) -> str | None: ...
 
 
+_NO_UNDO = "no download to undo (the charts of the last 20 downloads are kept)"
+
+
 class _Refused(Exception):
+    """An engineering command refused: its reason (a :class:`Refusal` when the kind is
+    said) and lines."""
+
     def __init__(self, reason: str, lines: list[str] | tuple[str, ...] = ()) -> None:
         super().__init__(reason)
         self.reason = reason
@@ -275,16 +283,17 @@ class OnlineChange:
             if not busy:
                 self._waiting += 1
         if busy:
-            reason = "the CPU is busy with other engineering commands; retry"
+            reason = Refusal("busy", "the CPU is busy with other engineering commands; retry")
             self.gate.consume(pending.command)  # never applied later, if sent again
-            self._finish(pending, None, "", CommandReply(applied=False, reason=reason))
+            self._finish(pending, None, "", refusal_reply(reason))
             return
         try:
             self._worker.submit(self._handle, pending)
         except RuntimeError:  # shut down meanwhile
             with self._lock:
                 self._waiting -= 1
-            self._finish(pending, None, "", CommandReply(applied=False, reason="CPU bus closed"))
+            closed = Refusal("communication", "CPU bus closed")
+            self._finish(pending, None, "", refusal_reply(closed))
 
     def close(self) -> None:
         """Refuse what still waits and stop the worker."""
@@ -303,14 +312,14 @@ class OnlineChange:
             command = pending.command
             who, refusal = self.gate.check(command)
             if who is None or refusal:
-                self._finish(pending, None, "", CommandReply(applied=False, reason=refusal))
+                self._finish(pending, None, "", refusal_reply(refusal))
                 return
             as_user = msgspec.structs.replace(command, user=who.label, token="")
             try:
                 reply, detail = self._run(as_user)
             except (_Refused, CompileRefused) as exc:
                 lines = exc.lines[:MAX_LINES]
-                reply, detail = CommandReply(applied=False, reason=exc.reason, lines=lines), ""
+                reply, detail = refusal_reply(exc.reason, lines=lines), ""
             except Exception as exc:  # a bad command must never stop the worker
                 where = f"in the CPU while applying {command.op} to {command.fb}"
                 why = internal_error(where, exc)
@@ -366,15 +375,16 @@ class OnlineChange:
         base = command.args.get("base")
         removed = command.args.get("removed")
         if isinstance(base, int) and base != self.current.number:
-            raise _Refused(
+            moved = (
                 f"the CPU runs chart version {self.current.number} now, not {base}: someone "
                 "downloaded meanwhile — look at the CPU's chart again and redo the change"
             )
+            raise _Refused(Refusal("state", moved))
         target: Version | None
         scl_texts: Mapping[str, str]
         if op == "undo_download":
             if not self.history:
-                raise _Refused("no download to undo (the charts of the last 20 downloads are kept)")
+                raise _Refused(Refusal("state", _NO_UNDO))
             back = self.history[-1]
             target = Version(
                 self.current.number + 1,
@@ -419,9 +429,8 @@ class OnlineChange:
             )
             return reply, f"preview of version {self.current.number + 1}: {summary.count} changes"
         if op == "download" and summary.unchanged and not scl_changed:
-            raise _Refused(
-                f"nothing changes: the CPU runs this chart (version {self.current.number})"
-            )
+            same = f"nothing changes: the CPU runs this chart (version {self.current.number})"
+            raise _Refused(Refusal("state", same))
         assert target is not None  # compiled: not a preview
         return self._download(command, target, summary, str(removed) if removed else None)
 
@@ -616,7 +625,8 @@ class OnlineChange:
 
     def _file(self, name: str) -> Path:
         if self.directory is None:
-            raise _Refused("this CPU has no project directory (it runs no chart file)")
+            why = "this CPU has no project directory (it runs no chart file)"
+            raise _Refused(Refusal("refused", why))
         try:
             return project_file(self.directory, name)
         except ProjectError as exc:
@@ -626,7 +636,7 @@ class OnlineChange:
         path = self._file(name)
         try:
             if not path.is_file():
-                raise _Refused(f"no file {name!r} in the project directory")
+                raise _Refused(Refusal("not_found", f"no file {name!r} in the project directory"))
             if path.stat().st_size > MAX_READ:
                 raise _Refused(
                     f"{name} has {path.stat().st_size:,} bytes; at most {MAX_READ:,} are read"
@@ -641,7 +651,8 @@ class OnlineChange:
 
     def _save(self, name: str, text: str) -> tuple[CommandReply, str]:
         if not name.endswith(".s7g"):
-            raise _Refused(f"{name!r}: Save writes .s7g charts (a name ending in .s7g)")
+            why = f"{name!r}: Save writes .s7g charts (a name ending in .s7g)"
+            raise _Refused(Refusal("argument", why))
         path = self._file(name)
         self.compiler.check(text, name)
         try:
@@ -727,7 +738,7 @@ def _unconfirmed(reply: CommandReply, timeout_s: float, problem: str | None) -> 
     else:
         reason = f"not confirmed: {head}, but the state file has not committed it within "
         reason += f"{timeout_s:g} s"
-    return msgspec.structs.replace(reply, applied=False, reason=reason)
+    return msgspec.structs.replace(reply, applied=False, reason=reason, kind="timeout")
 
 
 def _audited_args(command: Command) -> dict[str, object]:

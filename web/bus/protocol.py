@@ -58,6 +58,7 @@ __all__ = [
     "OPS",
     "PART_BYTES",
     "PROTOCOL",
+    "REFUSAL_KINDS",
     "REMOVED_CHOICES",
     "ActionInfo",
     "AlarmEntry",
@@ -96,6 +97,7 @@ __all__ = [
     "ProjectFile",
     "ProjectFiles",
     "ProtocolError",
+    "Refusal",
     "ScanDeltas",
     "SequenceInfo",
     "StepDetail",
@@ -112,6 +114,8 @@ __all__ = [
     "decode",
     "encode",
     "join_layout",
+    "refusal_kind",
+    "refusal_reply",
     "split_layout",
     "valid_name",
     "watch_bytes",
@@ -924,9 +928,55 @@ class AlarmList(_Msg, frozen=True, kw_only=True):
 
 Lines = Annotated[list[Text], Meta(max_length=4096)]
 
+REFUSAL_KINDS: tuple[str, ...] = (
+    "access",  # the sender may not: no login, a bad token, a role too low
+    "state",  # not now: the CPU or the sequencer is not in a state that takes it
+    "argument",  # a value the CPU cannot take: an address, a literal, a file name
+    "not_found",  # no such step, FB, op or file
+    "busy",  # a queue full, a conflicting command queued, expired waiting: retry
+    "timeout",  # applied, but not confirmed durable in time
+    "communication",  # the CPU did not answer, or not readably (said by the client)
+    "acked",  # the message is acknowledged already
+    "no_event",  # no such message in the message list
+    "refused",  # none of the above: this CPU does not take it
+)
+"""What kind of refusal a :class:`CommandReply` is (``kind``), decided where the refusal is
+made so a reader need not parse the reason's words. A later CPU may add a kind: a reader
+takes one it does not know as none ("")."""
+RefusalKindText = Annotated[str, Meta(max_length=32)]
+
+
+class Refusal(str):
+    """A reason for refusing a command that names its ``kind`` (one of
+    :data:`REFUSAL_KINDS`): the text as any ``str``, the kind read by :func:`refusal_kind`
+    where the :class:`CommandReply` is made. Encoded as its text."""
+
+    kind: str
+
+    def __new__(cls, kind: str, text: str) -> Refusal:
+        if kind not in REFUSAL_KINDS:
+            raise ValueError(f"refusal kind {kind!r}: not one of {', '.join(REFUSAL_KINDS)}")
+        made = super().__new__(cls, text)
+        made.kind = kind
+        return made
+
+
+def refusal_kind(reason: str) -> str:
+    """The kind of ``reason`` ("" for a plain text: no kind said)."""
+    return reason.kind if isinstance(reason, Refusal) else ""
+
+
+def refusal_reply(reason: str, **fields: Any) -> CommandReply:
+    """A refusal as a reply: ``reason``'s text (cut to 4096 characters) and its kind."""
+    return CommandReply(
+        applied=False, reason=str(reason)[:4096], kind=refusal_kind(reason), **fields
+    )
+
 
 class CommandReply(_Msg, frozen=True, kw_only=True):
-    """The answer to a command: applied, or refused with a reason. The engineering ops
+    """The answer to a command: applied, or refused with a reason and its ``kind``
+    (:data:`REFUSAL_KINDS`; "": not said — an older CPU, or a refusal given no kind; a
+    field added later, so a reply without it still reads). The engineering ops
     (``download``, ``undo_download``, ``save``, ``open``) add ``lines`` (a change summary,
     diagnostics, what the carry-over kept), ``version`` (the chart version running after a
     download, or seen by a preview) and ``text`` (the chart ``open`` read)."""
@@ -940,6 +990,7 @@ class CommandReply(_Msg, frozen=True, kw_only=True):
     version: Count | None = None
     removed: Steps = []  # active steps the change removes (the sender chooses keep or init)
     text: Annotated[str, Meta(max_length=MAX_SOURCE)] = ""
+    kind: RefusalKindText = ""
 
 
 # ---------------------------------------------------------------- login, audit, history
@@ -1033,7 +1084,16 @@ class AlarmHistory(_Msg, frozen=True, kw_only=True):
 
 T = TypeVar("T")
 _DECODERS: dict[type[Any], msgspec.json.Decoder[Any]] = {}
-_ENCODER = msgspec.json.Encoder()
+
+
+def _enc_hook(obj: object) -> object:
+    """A :class:`Refusal` (a ``str`` that names its kind) as its text."""
+    if isinstance(obj, str):
+        return str(obj)
+    raise NotImplementedError(f"cannot encode {type(obj).__name__}")
+
+
+_ENCODER = msgspec.json.Encoder(enc_hook=_enc_hook)
 
 
 def encode(message: Struct) -> bytes:

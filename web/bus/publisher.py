@@ -48,9 +48,12 @@ from s7graph.web.bus.protocol import (
     DiagEvent,
     ForceList,
     ProtocolError,
+    Refusal,
     StepStateUpdate,
     decode,
     encode,
+    refusal_kind,
+    refusal_reply,
     split_layout,
 )
 
@@ -63,6 +66,7 @@ be left for the state file to confirm them."""
 REPLY_WITHIN_S = 4.5
 """A command applied but not yet confirmed durable this long after it came is answered as
 not confirmed (before its sender's ``web.bus.client.CLIENT_TIMEOUT_S`` runs out)."""
+_EXPIRED = Refusal("busy", "expired before the scan boundary")
 STATUS_PERIOD_S = 1.0
 STATUS_PERIOD_NS = int(STATUS_PERIOD_S * 1e9)
 _CPU_WIDE = ("cpu", "force")
@@ -104,10 +108,11 @@ class PendingCommand:
             return
         self.reply = CommandReply(
             applied=applied,
-            reason=reason[:4096],
+            reason=str(reason)[:4096],
             op=self.command.op,
             fb=self.command.fb,
             cycle=cycle,
+            kind="" if applied else refusal_kind(reason),
         )
         _answer(self.query, self.reply)
         self.query = None
@@ -132,7 +137,7 @@ class Durability(Protocol):
 def _unreadable(exc: Exception) -> str:
     """Why a command's message was not taken: the protocol's reason, or an internal error."""
     if isinstance(exc, ProtocolError):
-        return str(exc)
+        return Refusal("argument", str(exc))
     return internal_error("in the CPU while reading a command", exc)
 
 
@@ -165,11 +170,8 @@ class _Awaiting:
             if error is None or not applied:
                 p.resolve(applied, reason, cycle=self.cycle)
             else:
-                p.resolve(
-                    False,
-                    f"not confirmed: applied in cycle {self.cycle}, but {error}",
-                    cycle=self.cycle,
-                )
+                why = f"not confirmed: applied in cycle {self.cycle}, but {error}"
+                p.resolve(False, Refusal("timeout", why), cycle=self.cycle)
 
     def overdue(self, why: str) -> None:
         self.durable(why)
@@ -515,8 +517,8 @@ class BusPublisher:
         return len(results)
 
     def _expire(self, p: PendingCommand) -> None:
-        p.resolve(False, "expired before the scan boundary")
-        self.gate.refuse(p.command, "expired before the scan boundary", note=p.note)
+        p.resolve(False, _EXPIRED)
+        self.gate.refuse(p.command, str(_EXPIRED), note=p.note)
 
     def _answer_overdue(self) -> None:
         now = time.monotonic_ns()
@@ -530,7 +532,7 @@ class BusPublisher:
     def close(self) -> None:
         """Undeclare queryables and publishers; refuse commands still waiting."""
         for p in self.drain_commands():
-            p.resolve(False, "CPU bus closed")
+            p.resolve(False, Refusal("communication", "CPU bus closed"))
         while self._awaiting:
             self._awaiting.popleft().overdue("the CPU bus closed before it was on disk")
         with contextlib.suppress(Exception):  # the refusals counted so far: written, published
@@ -629,16 +631,16 @@ class BusPublisher:
                 raise ProtocolError("empty command")
             command = decode(payload.to_bytes(), Command)
         except Exception as exc:
-            self._refuse(query, None, _unreadable(exc)[:4096], source)
+            self._refuse(query, None, _unreadable(exc), source)
             return
         note = claimed_note(command.origin)
         command = msgspec.structs.replace(command, origin=source)
         if unproven:  # the link it came over cannot be named: refused, saying what to do
-            self._refuse(query, command, unproven, source, note)
+            self._refuse(query, command, Refusal("refused", unproven), source, note)
             return
         if command.fb not in self._charts and not _cpu_wide(command, self._charts):
             runs = f"runs {', '.join(self._charts)}" if self._charts else "runs no GRAPH FB"
-            reason = f"unknown FB {command.fb!r}; this CPU {runs}"
+            reason = Refusal("not_found", f"unknown FB {command.fb!r}; this CPU {runs}")
             self._refuse(query, command, reason, source, note)
             return
         pending = PendingCommand(command, query, note=note)
@@ -652,7 +654,7 @@ class BusPublisher:
         try:
             self._commands.put_nowait(pending)
         except queue.Full:
-            reason = "command queue full; the CPU is not draining commands"
+            reason = Refusal("busy", "command queue full; the CPU is not draining commands")
             self._refuse(query, command, reason, source, note)
 
     def _refuse(
@@ -664,9 +666,9 @@ class BusPublisher:
         note: str = "",
     ) -> None:
         op, fb = (command.op, command.fb) if command is not None else ("", "")
-        _answer(query, CommandReply(applied=False, reason=reason, op=op, fb=fb))
+        _answer(query, refusal_reply(reason, op=op, fb=fb))
         with contextlib.suppress(Exception):  # the audit must not raise on a zenoh thread
-            self.gate.refuse(command, reason, origin=source, note=note)
+            self.gate.refuse(command, str(reason)[:4096], origin=source, note=note)
 
 
 def _served(layout: ChartLayout) -> tuple[bytes, list[bytes]]:

@@ -45,6 +45,7 @@ from s7graph.web.bus.protocol import (
     Command,
     CycleReport,
     CycleStats,
+    Refusal,
     StepStateUpdate,
 )
 from s7graph.web.bus.publisher import BusPublisher
@@ -232,9 +233,10 @@ class CpuEdge:
         if isinstance(command, AckMsg) and self.alarms is not None:
             return self._ack_msg(command)
         if where != "force":
-            return False, f"this CPU runs no GRAPH FB: {command.op} needs one", ""
+            why = f"this CPU runs no GRAPH FB: {command.op} needs one"
+            return False, Refusal("refused", why), ""
         if self.forcing is None:
-            return False, "this CPU takes no force jobs", ""
+            return False, Refusal("refused", "this CPU takes no force jobs"), ""
         return self.forcing.apply(command)
 
     def _ack_msg(self, command: AckMsg) -> tuple[bool, str, str]:
@@ -251,17 +253,17 @@ class CpuEdge:
         in STOP only (``Cpu.memory_reset``, the program kept)."""
         runner = self._runner
         if runner is None:
-            return False, "this CPU has no RUN/STOP switch", ""
+            return False, Refusal("refused", "this CPU has no RUN/STOP switch"), ""
         mode = runner.cpu.mode
         if command.op == "mres":
             return self._memory_reset(runner.cpu)
         if command.op == "stop":
             if mode is CpuMode.STOP:
-                return False, "the CPU is in STOP already", ""
+                return False, Refusal("state", "the CPU is in STOP already"), ""
             runner.switch_stop(f"STOP by the switch ({command.user or 'no user'})")
             return True, "", f"{mode} → STOP"
         if mode is not CpuMode.STOP:
-            return False, f"the CPU is in {mode}, not in STOP", ""
+            return False, Refusal("state", f"the CPU is in {mode}, not in STOP"), ""
         runner.switch_start(self.restart)
         self._starting = True
         return True, "", f"STOP → RUN ({self.restart} restart)"
@@ -270,9 +272,10 @@ class CpuEdge:
         """MRES (docs/runtime.md, "Memory reset (MRES)"): refused unless in STOP."""
         if cpu.mode is not CpuMode.STOP:
             why = f"the CPU is in {cpu.mode}: a memory reset needs STOP (stop it first)"
-            return False, why, ""
+            return False, Refusal("state", why), ""
         if self._starting:
-            return False, "a start came first at this scan boundary: the CPU is starting", ""
+            why = "a start came first at this scan boundary: the CPU is starting"
+            return False, Refusal("state", why), ""
         jobs = len(cpu.forces)
         cpu.memory_reset(keep_program=True)
         gone = f", {jobs} force job{'s' if jobs != 1 else ''} deleted" if jobs else ""

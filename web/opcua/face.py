@@ -386,7 +386,7 @@ class Face:
         _log.info("opcua: %s %s %s %s: %s", user.name, op, fb, shown, outcome)
         if reply.applied:
             return StatusCodes.Good, reply
-        return refusal_status(reply.reason), reply
+        return refusal_status(reply.reason, reply.kind), reply
 
     async def write(self, user: User, value: ua.WriteValue) -> int:
         """One value a client writes: the command it stands for, its answer's status."""

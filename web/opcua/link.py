@@ -25,7 +25,7 @@ from typing import Any, Final, TypeVar
 import zenoh
 
 from s7graph.web.bus.client import BusClient
-from s7graph.web.bus.protocol import AuditEntry, Command, CommandReply
+from s7graph.web.bus.protocol import AuditEntry, Command, CommandReply, Refusal, refusal_reply
 from s7graph.web.opcua.sessions import FaceUser
 
 __all__ = ["BusLink", "Inbox"]
@@ -148,7 +148,7 @@ class BusLink:
         """``command`` under ``user``'s login, answered when the CPU says (durable)."""
         client = user.client
         if not isinstance(client, BusClient):
-            return CommandReply(applied=False, reason="not logged in: log in first (no token)")
+            return refusal_reply(Refusal("access", "not logged in: log in first (no token)"))
         return await self.ask(lambda: client.send(command, timeout=COMMAND_TIMEOUT_S))
 
     def close(self) -> None:

@@ -6,14 +6,15 @@ with one typed input argument per field of its argument struct, in the struct's 
 :func:`method_specs` reads the union; :func:`arguments_of` turns a call's input variants
 into the op's checked argument struct — a wrong type is ``BadTypeMismatch`` on that
 argument, a value the struct refuses ``BadInvalidArgument``, never an exception;
-:func:`refusal_status` turns the CPU's reason for refusing a command into the status code
-an OPC UA client sees; :func:`outputs` the output arguments of an applied one.
+:func:`refusal_status` turns the kind of the CPU's refusal of a command (its reason's
+words for a reply without one) into the status code an OPC UA client sees;
+:func:`outputs` the output arguments of an applied one.
 """
 
 from __future__ import annotations
 
 import re
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Final
 
@@ -26,6 +27,7 @@ from s7graph.web.opcua.model import FLOAT_VARIANTS, INT_VARIANTS
 from s7graph.web.opcua.typed import ObjectIds, StatusCodes, ua_id
 
 __all__ = [
+    "KIND_STATUS",
     "ArgSpec",
     "CallError",
     "MethodSpec",
@@ -269,7 +271,23 @@ def outputs(spec: MethodSpec, reply: CommandReply) -> list[ua.Variant]:
     return out
 
 
-# The CPU's refusals in the words of OPC UA: the first pattern found in the reason wins.
+# Each kind of refusal (``web.bus.protocol.REFUSAL_KINDS``) in the words of OPC UA.
+KIND_STATUS: Final[Mapping[str, int]] = {
+    "access": StatusCodes.BadUserAccessDenied,
+    "state": StatusCodes.BadInvalidState,
+    "argument": StatusCodes.BadInvalidArgument,
+    "not_found": StatusCodes.BadNotFound,
+    "busy": StatusCodes.BadResourceUnavailable,
+    "timeout": StatusCodes.BadTimeout,
+    "communication": StatusCodes.BadCommunicationError,
+    "acked": StatusCodes.BadConditionBranchAlreadyAcked,
+    "no_event": StatusCodes.BadEventIdUnknown,
+    "refused": StatusCodes.BadRequestNotAllowed,
+}
+
+
+# A refusal without a kind (from a CPU before ``kind``, or a site that gives none) by its
+# words, one group per kind: the first pattern found in the reason wins.
 _REFUSALS: Final[tuple[tuple[tuple[str, ...], int], ...]] = (
     # first: the rest of such a reason is whatever the peer that answered wrote
     (("answered with an error",), StatusCodes.BadCommunicationError),
@@ -323,12 +341,15 @@ _INVALID_ARGUMENT: Final = re.compile(
 )
 
 
-def refusal_status(reason: str) -> int:
-    """The status code of a command the CPU refused with ``reason``: access denied for a
-    role or login, a communication error when the CPU did not answer, invalid state for a
-    command the sequencer cannot take now, an invalid argument for a value the CPU cannot
-    take (Part 4, "Call": ``BadInvalidArgument``), and ``BadRequestNotAllowed`` for the
-    rest."""
+def refusal_status(reason: str, kind: str = "") -> int:
+    """The status code of a command the CPU refused with ``reason`` of ``kind``: the kind's
+    (:data:`KIND_STATUS`) — access denied for a role or login, a communication error when
+    the CPU did not answer, invalid state for a command the sequencer cannot take now, an
+    invalid argument for a value the CPU cannot take (Part 4, "Call":
+    ``BadInvalidArgument``) … Without a kind this reader knows, the reason's words decide,
+    and ``BadRequestNotAllowed`` for the rest."""
+    if kind in KIND_STATUS:
+        return KIND_STATUS[kind]
     if "answered with an error" not in reason and _INVALID_ARGUMENT.match(reason):
         return StatusCodes.BadInvalidArgument
     text = reason.lower()

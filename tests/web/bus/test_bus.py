@@ -11,7 +11,7 @@ import pytest
 
 from s7graph.sequencer.text.model import Chart, Sequence, Step, Transition
 from s7graph.web.bus.client import BusClient
-from s7graph.web.bus.protocol import ChartLayout, Command, CommandReply, StepStateUpdate
+from s7graph.web.bus.protocol import ChartLayout, Command, CommandReply, Refusal, StepStateUpdate
 from s7graph.web.bus.publisher import BusPublisher
 from s7graph.web.bus.session import open_session
 from tests.web import helpers
@@ -113,20 +113,23 @@ def test_command_round_trip_is_applied_at_the_scan_boundary(
     assert replies == [CommandReply(applied=True, op="step_on", fb="FILL", cycle=7)]
 
 
-def test_command_refused_by_the_cpu_carries_its_reason(
+def test_command_refused_by_the_cpu_carries_its_reason_and_kind(
     bus: tuple[BusPublisher, BusClient],
 ) -> None:
+    """The kind its site gave the refusal travels in the reply (a reason that gives none:
+    "")."""
     publisher, client = bus
     replies: list[CommandReply] = []
     sender = threading.Thread(target=lambda: replies.append(client.send(cmd(client, "ack"))))
     sender.start()
 
     def apply(command: Command) -> tuple[bool, str]:
-        return False, "no error to acknowledge"
+        return False, Refusal("state", "no error to acknowledge")
 
     assert wait_until(lambda: publisher.apply_commands(apply, cycle=3) > 0)
     sender.join(5)
     assert replies[0].applied is False and replies[0].reason == "no error to acknowledge"
+    assert replies[0].kind == "state"
 
 
 def test_deeply_nested_json_is_refused_in_words(bus: tuple[BusPublisher, BusClient]) -> None:
@@ -188,6 +191,7 @@ def test_hostile_or_misdirected_command_is_refused_at_once(
     assert junk is not None and not junk.applied and "malformed JSON" in junk.reason
     other = client.send(cmd(client, "ack", fb="NOPE"))
     assert not other.applied and "unknown FB 'NOPE'" in other.reason
+    assert (bad.kind, junk.kind, other.kind) == ("argument", "argument", "not_found")
     assert publisher.drain_commands() == []  # none of them reached the scan loop
 
 
@@ -197,6 +201,7 @@ def test_a_command_nobody_drains_ends_in_a_refusal_not_a_hang(
     _, client = bus
     reply = client.send(cmd(client, "init"), timeout=0.3)
     assert not reply.applied and reply.reason == "no answer from CPU 'cpu1' within 0.3 s"
+    assert reply.kind == "communication"  # said by the client
 
 
 def test_no_answer_from_no_cpu_at_all_says_so_at_once(tmp_path: Path) -> None:
@@ -233,6 +238,7 @@ def test_an_exception_while_applying_refuses_that_command_only(
         "command refused: an internal error in the CPU while applying off to FILL: boom "
         "(please report it)"
     )
+    assert replies[0].kind == ""  # none said: a reader goes by the words
 
 
 def test_status_reports_the_cpu_and_its_fbs(bus: tuple[BusPublisher, BusClient]) -> None:

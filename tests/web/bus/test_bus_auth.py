@@ -101,6 +101,7 @@ def test_a_viewer_is_refused_and_an_operator_applied_each_audited_under_its_name
     assert status is not None and status.login == "users"
     refused = command(rig, "vic", "mode", mode="MAN")
     assert not refused.applied and refused.reason == "role viewer may not mode (needs operator)"
+    assert refused.kind == "access"
     applied = command(rig, "olga", "mode", mode="MAN")
     assert applied.applied, applied.reason
     assert [(c.op, c.user, c.token) for c in rig.applied] == [("mode", "olga", "")]  # no token

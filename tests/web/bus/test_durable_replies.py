@@ -169,6 +169,7 @@ def test_a_command_the_disk_has_not_confirmed_in_time_is_answered_as_not_confirm
     assert not reply.applied
     assert reply.reason.startswith("not confirmed: applied in cycle "), reply.reason
     assert reply.reason.endswith("but the state file has not committed it within 0.5 s")
+    assert reply.kind == "timeout"
     # it was applied, and lands once the lock is gone
     assert wait_until(lambda: _mode_on_disk(rig.state) == "MAN", 10)
     assert wait_until(lambda: ("tess (unverified)", "mode", "applied") in _audit_ops(rig.state), 10)

@@ -14,7 +14,7 @@ from s7graph.engine.clock import VirtualClock
 from s7graph.engine.errors import S7Error
 from s7graph.engine.persistence import StateStore
 from s7graph.web.bus.live import LiveGraph, watch_names
-from s7graph.web.bus.protocol import Command, StepStateUpdate
+from s7graph.web.bus.protocol import Command, StepStateUpdate, refusal_kind
 from s7graph.web.harness.session import ChartSession
 from tests.web.helpers import chart_session
 
@@ -135,6 +135,8 @@ def test_step_on_and_off_need_man_mode_and_a_known_step(rig: Rig) -> None:
     assert update.active == [1, 3] and ("S1", 3) in update.events
     assert rig.cmd("step_on", step=3) == (False, "S3 is already active")
     assert rig.cmd("step_on", step=9) == (False, "no step S9 in Live")
+    kinds = [refusal_kind(rig.cmd("step_on", step=n)[1]) for n in (3, 9)]
+    assert kinds == ["state", "not_found"]  # said where refused: the reply's kind
     assert rig.cmd("step_off", step=1) == (True, "")
     assert rig.scan().active == [3]
     assert rig.cmd("step_off", step=1) == (False, "S1 is not active")

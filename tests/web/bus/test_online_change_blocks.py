@@ -186,6 +186,7 @@ def test_refusals_give_a_reason_and_the_old_blocks_run_on(cpu: Cpu) -> None:
     assert not reply.applied and "runs no S7-SCL source other.scl" in reply.reason
     reply = cpu.send("download", source=CHART, blocks={"fb17.scl": BLOCKS})
     assert not reply.applied and "nothing changes" in reply.reason
+    assert reply.kind == "state"  # an engineering op's refusal names its kind too
     # the blocks swap, then the chart's is refused at the same boundary: both go back
     s3 = CHART.replace("INITIAL_STEP S1", "INITIAL_STEP S3").replace("FROM S1", "FROM S3")
     reply = cpu.send("download", source=s3, blocks={"fb17.scl": CHANGED})

@@ -185,6 +185,9 @@ def test_synchronize_answers_where_the_process_stands_to_any_session(face: FaceR
 
 
 def test_an_operator_commands_through_the_gate_and_is_audited(face: FaceRig) -> None:
+    """A refusal's status code is its kind's, whatever its words: a message id that reads
+    like a denial is still an unknown message (``BadEventIdUnknown``)."""
+
     async def check() -> None:
         async with connected(face.url, "olga") as c:
             fb = node(c, "cpu1/Seq_mix")
@@ -204,6 +207,9 @@ def test_an_operator_commands_through_the_gate_and_is_audited(face: FaceRig) -> 
             assert await _reads(c, "cpu1/Seq_mix/S1/Active", False)
             await fb.call_method(ua.NodeId("cpu1/Seq_mix/Init", 2))
             await fb.call_method(ua.NodeId("cpu1/Seq_mix/SetMode", 2), "AUTO")
+            with pytest.raises(UaStatusCodeError) as refused:  # its kind decides, not words
+                await fb.call_method(ua.NodeId("cpu1/Seq_mix/AckMsg", 2), "may not: no step")
+            assert _code(refused.value) == ua.StatusCodes.BadEventIdUnknown
 
     run(check())
     rows = [r for r in _commands(face) if r.user == "olga"]

@@ -9,9 +9,17 @@ import msgspec
 import pytest
 from asyncua import ua
 
-from s7graph.web.bus.protocol import CommandReply
+from s7graph.web.bus.protocol import (
+    REFUSAL_KINDS,
+    CommandReply,
+    Refusal,
+    decode,
+    encode,
+    refusal_reply,
+)
 from s7graph.web.commands import COMMAND_TYPES, ForceArgs, ModeArgs, StepArgs, StepsArgs
 from s7graph.web.opcua.methods import (
+    KIND_STATUS,
     CallError,
     arguments_of,
     method_specs,
@@ -133,8 +141,62 @@ def test_wrong_inputs_are_a_status_code(
         ("something nobody foresaw", "BadRequestNotAllowed"),
     ],
 )
-def test_a_refusal_is_a_status_code(reason: str, status: str) -> None:
+def test_a_refusal_without_a_kind_is_a_status_code_by_its_words(reason: str, status: str) -> None:
     assert refusal_status(reason) == getattr(ua.StatusCodes, status)
+
+
+def test_every_kind_of_refusal_has_its_status_code() -> None:
+    assert set(KIND_STATUS) == set(REFUSAL_KINDS)
+    assert len(set(KIND_STATUS.values())) == len(KIND_STATUS)  # no two kinds alike
+
+
+@pytest.mark.parametrize(
+    ("kind", "reason", "status"),
+    [
+        # the words of another kind in the reason (the client's own text) decide nothing
+        (
+            "no_event",
+            "no message 'may not, not logged in' in the message list",
+            "BadEventIdUnknown",
+        ),
+        ("state", "S3 is not active; no answer from CPU 'x'; bad address 'y'", "BadInvalidState"),
+        ("access", "role viewer may not open (needs engineer): no step S9", "BadUserAccessDenied"),
+        ("not_found", "no file 'busy, already acknowledged' in the directory", "BadNotFound"),
+        (
+            "communication",
+            "s7graph/cpu1/cmd: the CPU answered with an error: busy",
+            "BadCommunicationError",
+        ),
+        ("refused", "this CPU has no RUN/STOP switch", "BadRequestNotAllowed"),
+        # a kind this reader does not know (a later CPU's): the words decide
+        ("a later kind", "no step S9 in Seq_mix", "BadNotFound"),
+    ],
+)
+def test_the_kind_of_a_refusal_decides_its_status_code(kind: str, reason: str, status: str) -> None:
+    assert refusal_status(reason, kind) == getattr(ua.StatusCodes, status)
+
+
+def test_a_reply_without_a_kind_still_reads_and_one_with_it_reads_anywhere() -> None:
+    """A reply of a CPU from before ``kind``: read, its kind "" (the words decide); a
+    reply with ``kind`` read by a reader from before it (which ignores the field)."""
+    old = b'{"applied":false,"reason":"no step S9 in Seq_mix","op":"step_on","fb":"Seq_mix"}'
+    reply = decode(old, CommandReply)
+    assert (reply.kind, refusal_status(reply.reason, reply.kind)) == (
+        "",
+        ua.StatusCodes.BadNotFound,
+    )
+
+    class PreviousCommandReply(msgspec.Struct, kw_only=True):
+        applied: bool
+        reason: str = ""
+        op: str = ""
+        fb: str = ""
+
+    new = encode(refusal_reply(Refusal("state", "S3 is not active"), op="step_off"))
+    assert decode(new, CommandReply).kind == "state"
+    assert decode(new, PreviousCommandReply).reason == "S3 is not active"
+    with pytest.raises(ValueError, match="refusal kind 'nope': not one of access, state"):
+        Refusal("nope", "x")
 
 
 def test_an_applied_commands_outputs() -> None:
