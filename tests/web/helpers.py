@@ -1,6 +1,6 @@
 """Shared helpers of the web tests, imported as ``tests.web.helpers``: polling with a
-deadline, one headless Chromium page through playwright and a compiled chart's session on
-the virtual clock."""
+deadline, one headless Chromium page through playwright, a compiled chart's session on
+the virtual clock, and an online CPU on a real bus with a client logged in to it."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, ClassVar
 
 import pytest
 
@@ -33,6 +33,7 @@ if TYPE_CHECKING:
     from s7graph.engine.runner import Runner
     from s7graph.web.bus.client import BusClient
     from s7graph.web.bus.online import OnlineChange
+    from s7graph.web.bus.protocol import CommandReply
     from s7graph.web.bus.session import TlsFiles
     from s7graph.web.harness.scl import Loadable
     from s7graph.web.view.edge import ViewSide
@@ -322,6 +323,74 @@ def online_cpu(
         audit.close()
 
 
+@dataclass
+class OnlineClient:
+    """A bus client of an online CPU (``rig``) on a session of its own, joined as
+    ``client.olga``, logged in as ``user`` with ``token`` ("" for both: not logged in). Its
+    commands go to the chart ``FB`` and wait ``TIMEOUT`` s at the most for the reply."""
+
+    rig: OnlineRig
+    client: BusClient
+    token: str = ""
+    user: str = ""
+
+    FB: ClassVar[str] = "Seq"
+    TIMEOUT: ClassVar[float] = 60.0
+
+    @property
+    def session(self) -> ChartSession:
+        return self.rig.session
+
+    @property
+    def path(self) -> Path:
+        return self.rig.path
+
+    def send(self, op: str, **args: object) -> CommandReply:
+        """``op`` with ``args`` on the chart ``FB`` as ``user``: the CPU's reply."""
+        from s7graph.web.bus.protocol import Command
+
+        command = Command(op=op, fb=self.FB, user=self.user, token=self.token, args=args)
+        return self.client.send(command, timeout=self.TIMEOUT)
+
+
+def logged_in(client: BusClient, user: str, *, origin: str = "") -> str:
+    """The token of ``user`` (password ``PASSWORD``) logged in at ``client``'s CPU."""
+    login = client.login(user, PASSWORD, origin=origin)
+    assert login.ok, login.reason
+    return login.token
+
+
+@contextmanager
+def online_client(
+    tmp_path: Path,
+    chart: str,
+    *,
+    certs: BusCerts,
+    users: dict[str, str] | None = None,
+    user: str | None = "eng",
+    serve: bool = False,
+    **options: Any,
+) -> Iterator[OnlineClient]:
+    """:func:`online_cpu` of ``chart`` (``users``: ``{"eng": "engineer"}`` unless given;
+    ``options``: its others) and a bus client of it on a session of its own, joined with
+    the rig's ``tls``, logged in as ``user`` once the CPU answers its status (None:
+    neither waits nor logs in)."""
+    from s7graph.web.bus.client import BusClient
+    from s7graph.web.bus.session import open_session
+
+    roles = {"eng": "engineer"} if users is None else users
+    with (
+        online_cpu(tmp_path, chart, serve=serve, users=roles, certs=certs, **options) as rig,
+        open_session(connect=[rig.endpoint], tls=rig.tls) as session,
+        BusClient(session, "cpu1") as client,
+    ):
+        token = ""
+        if user is not None:
+            assert wait_until(lambda: client.status() is not None)
+            token = logged_in(client, user)
+        yield OnlineClient(rig, client, token, user or "")
+
+
 @contextmanager
 def cpu_process(
     tmp_path: Path,
@@ -389,6 +458,62 @@ def view_line(proc: subprocess.Popen[str], stderr: Path, timeout: float = 30) ->
 
 
 @dataclass
+class ProgramRun:
+    """A program's CPU scanned by its runner, its scans going to a ``ProgramEdge`` on the bus
+    at ``endpoint`` (TCP on loopback, no users file); ``store``: its state file (logins, the
+    audit)."""
+
+    cpu: Cpu
+    runner: Runner
+    store: StateStore
+    endpoint: str
+
+
+@contextmanager
+def program_run(cpu: Cpu, tmp_path: Path, *, duration_s: float = 60) -> Iterator[ProgramRun]:
+    """``cpu`` run on its own clock for at most ``duration_s`` s by a runner with the state
+    file ``tmp_path / "state.sqlite"``, on the bus through a ``ProgramEdge``; shut down at
+    the end."""
+    from s7graph.engine.runner import Runner
+    from s7graph.web.bus.gate import cpu_gate
+    from s7graph.web.bus.session import BusEnds
+    from s7graph.web.wiring.program_edge import ProgramEdge
+
+    store = StateStore(tmp_path / "state.sqlite")
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    edge = ProgramEdge(cpu, ends=BusEnds(listen=[endpoint]), gate=cpu_gate(None, store))
+    runner: Runner
+
+    def on_record(record: ScanRecord) -> None:
+        edge.on_record(record, stats=cpu.stats, runner=runner)
+
+    runner = Runner(cpu, store=store, on_record=on_record, rt_priority=None, idle_gc=False)
+    runner.startup()
+    runner.start_thread(duration_s=duration_s)
+    try:
+        yield ProgramRun(cpu, runner, store, endpoint)
+    finally:
+        runner.shutdown("test ended")
+        edge.close()
+        store.close()
+
+
+@contextmanager
+def program_client(cpu: Cpu, tmp_path: Path) -> Iterator[tuple[ProgramRun, BusClient]]:
+    """:func:`program_run` of ``cpu`` and a bus client of it, once the CPU answers."""
+    from s7graph.web.bus.client import BusClient
+    from s7graph.web.bus.session import open_session
+
+    with (
+        program_run(cpu, tmp_path) as run,
+        open_session(connect=[run.endpoint]) as session,
+        BusClient(session, "cpu1") as client,
+    ):
+        assert wait_until(lambda: client.status() is not None, 30)
+        yield run, client
+
+
+@dataclass
 class ProgramPage:
     """A program's CPU scanned by its runner, on a bus, and the view serving its page;
     ``state``: its state file (logins, the audit)."""
@@ -402,30 +527,12 @@ class ProgramPage:
 def program_page(cpu: Cpu, tmp_path: Path) -> Iterator[ProgramPage]:
     """``cpu`` run on the system clock by a runner whose scans go to a ``ProgramEdge`` on
     TCP on loopback (no users file), with a ``ViewSide`` serving its page on a free port."""
-    from s7graph.engine.runner import Runner
-    from s7graph.web.bus.gate import cpu_gate
     from s7graph.web.bus.session import BusEnds
     from s7graph.web.view.edge import ViewSide
-    from s7graph.web.wiring.program_edge import ProgramEdge
 
-    store = StateStore(tmp_path / "state.sqlite")
-    endpoint = f"tcp/127.0.0.1:{free_port()}"
-    edge = ProgramEdge(cpu, ends=BusEnds(listen=[endpoint]), gate=cpu_gate(None, store))
-    runner: Runner
-
-    def on_record(record: ScanRecord) -> None:
-        edge.on_record(record, stats=cpu.stats, runner=runner)
-
-    runner = Runner(cpu, store=store, on_record=on_record, rt_priority=None, idle_gc=False)
-    runner.startup()
-    runner.start_thread(duration_s=200)
-    view = None
-    try:
-        view = ViewSide(cpu="cpu1", fb=None, ends=BusEnds(connect=[endpoint]), port=0)
-        yield ProgramPage(runner, view, store.path)
-    finally:
-        if view is not None:
+    with program_run(cpu, tmp_path, duration_s=200) as run:
+        view = ViewSide(cpu="cpu1", fb=None, ends=BusEnds(connect=[run.endpoint]), port=0)
+        try:
+            yield ProgramPage(run.runner, view, run.store.path)
+        finally:
             view.close()
-        runner.shutdown("test ended")
-        edge.close()
-        store.close()

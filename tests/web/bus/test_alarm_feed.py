@@ -14,16 +14,11 @@ import pytest
 from s7graph.engine import CallContext, Cpu, ob
 from s7graph.engine.clock import SystemClock
 from s7graph.engine.persistence import StateStore
-from s7graph.engine.runner import Runner
 from s7graph.sfb import install
 from s7graph.web.access.audit import read_audit
 from s7graph.web.bus.client import BusClient
-from s7graph.web.bus.gate import cpu_gate
 from s7graph.web.bus.protocol import AlarmList, Command, CommandReply
-from s7graph.web.bus.session import BusEnds, open_session
-from s7graph.web.wiring.program_edge import ProgramEdge
-from tests.web.bus.test_diag_watch import free_port
-from tests.web.helpers import wait_until
+from tests.web.helpers import program_client, wait_until
 
 pytestmark = pytest.mark.timeout(120)
 
@@ -56,25 +51,8 @@ def plant(tmp_path: Path) -> Iterator[Plant]:
     cpu = Cpu(SystemClock(), max_cycle_ms=5000)
     install(cpu)
     cpu.load(main)
-    store = StateStore(tmp_path / "state.sqlite")
-    endpoint = f"tcp/127.0.0.1:{free_port()}"
-    edge = ProgramEdge(cpu, ends=BusEnds(listen=[endpoint]), gate=cpu_gate(None, store))
-    runner: Runner
-
-    def on_record(record: object) -> None:
-        edge.on_record(record, stats=cpu.stats, runner=runner)  # type: ignore[arg-type]
-
-    runner = Runner(cpu, store=store, on_record=on_record, rt_priority=None, idle_gc=False)
-    runner.startup()
-    runner.start_thread(duration_s=60)
-    try:
-        with open_session(connect=[endpoint]) as session, BusClient(session, "cpu1") as client:
-            assert wait_until(lambda: client.status() is not None, 30)
-            yield Plant(cpu, client, store)
-    finally:
-        runner.shutdown("test ended")
-        edge.close()
-        store.close()
+    with program_client(cpu, tmp_path) as (run, client):
+        yield Plant(cpu, client, run.store)
 
 
 def _entries(alarms: AlarmList | None) -> dict[object, tuple[str, bool, bool]]:

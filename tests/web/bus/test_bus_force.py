@@ -19,8 +19,7 @@ from s7graph.engine.diagnostics import EventId
 from s7graph.web.access.audit import read_audit
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.protocol import Command, CommandReply
-from s7graph.web.bus.session import open_session
-from tests.web.helpers import PASSWORD, OnlineRig, online_cpu, wait_until
+from tests.web.helpers import PASSWORD, OnlineRig, logged_in, online_client, wait_until
 
 if TYPE_CHECKING:
     from tests.conftest import BusCerts
@@ -71,20 +70,12 @@ class Bus:
 @pytest.fixture
 def bus(tmp_path: Path, bus_certs: BusCerts) -> Iterator[Bus]:
     users = {"olga": "operator", "eng": "engineer", "vic": "viewer"}
-    with (
-        online_cpu(
-            tmp_path, CHART, serve=False, users=users, certs=bus_certs, name="lamp.s7g"
-        ) as rig,
-        open_session(connect=[rig.endpoint], tls=rig.tls) as view,
-        BusClient(view, "cpu1") as client,
-    ):
-        assert wait_until(lambda: client.status() is not None)
-        tokens = {}
-        for user in users:
-            login = client.login(user, PASSWORD, origin="shell test")
-            assert login.ok, login.reason
-            tokens[user] = login.token
-        yield Bus(rig, client, tokens)
+    with online_client(
+        tmp_path, CHART, certs=bus_certs, users=users, user=None, name="lamp.s7g"
+    ) as on:
+        assert wait_until(lambda: on.client.status() is not None)
+        tokens = {user: logged_in(on.client, user, origin="shell test") for user in users}
+        yield Bus(on.rig, on.client, tokens)
 
 
 def _force_rows(rig: OnlineRig) -> list[tuple[str, str, str, str]]:

@@ -28,7 +28,6 @@ from s7graph.engine.runner import Runner
 from s7graph.engine.symbols import SymbolTable
 from s7graph.web.access.audit import read_audit
 from s7graph.web.bus.client import BusClient
-from s7graph.web.bus.gate import cpu_gate
 from s7graph.web.bus.protocol import (
     Command,
     DiagBuffer,
@@ -40,7 +39,7 @@ from s7graph.web.bus.protocol import (
 from s7graph.web.bus.session import BusEnds, open_session
 from s7graph.web.bus.watch import parse_item, split_operands
 from s7graph.web.wiring.program_edge import ProgramEdge
-from tests.web.helpers import free_port, wait_until
+from tests.web.helpers import free_port, program_client, wait_until
 
 pytestmark = pytest.mark.timeout(120)
 
@@ -372,25 +371,8 @@ def running(tmp_path: Path) -> Iterator[Running]:
     on the bus with the demo's logins and the audit in the state file."""
     cpu = program_cpu(SystemClock())
     cpu.load(DB(30, 4, init=b"\x00\x07"))
-    store = StateStore(tmp_path / "state.sqlite")
-    endpoint = f"tcp/127.0.0.1:{free_port()}"
-    edge = ProgramEdge(cpu, ends=BusEnds(listen=[endpoint]), gate=cpu_gate(None, store))
-    runner: Runner
-
-    def on_record(record: object) -> None:
-        edge.on_record(record, stats=cpu.stats, runner=runner)  # type: ignore[arg-type]
-
-    runner = Runner(cpu, store=store, on_record=on_record, rt_priority=None, idle_gc=False)
-    runner.startup()
-    runner.start_thread(duration_s=60)
-    try:
-        with open_session(connect=[endpoint]) as session, BusClient(session, "cpu1") as client:
-            assert wait_until(lambda: client.status() is not None)
-            yield Running(cpu, runner, client, store)
-    finally:
-        runner.shutdown("test ended")
-        edge.close()
-        store.close()
+    with program_client(cpu, tmp_path) as (run, client):
+        yield Running(cpu, run.runner, client, run.store)
 
 
 def _send(client: BusClient, op: str) -> tuple[bool, str]:

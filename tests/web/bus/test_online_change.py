@@ -11,7 +11,6 @@ import shutil
 import subprocess
 import sys
 from collections.abc import Iterator
-from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -23,16 +22,13 @@ from s7graph.sequencer.change.online import SwapRefused, swap
 from s7graph.sequencer.exchange import import_file
 from s7graph.sequencer.fb import GraphFB
 from s7graph.web.access.audit import read_audit
-from s7graph.web.bus.client import BusClient
-from s7graph.web.bus.online import OnlineChange
-from s7graph.web.bus.protocol import Command, CommandReply
-from s7graph.web.bus.session import open_session
+from s7graph.web.bus.protocol import Command
 from s7graph.web.cli import main
 from s7graph.web.harness.persist import open_state
 from s7graph.web.harness.scl import compile_sources
 from s7graph.web.harness.session import ChartSession, compile_text, load_chart
 from tests.sequencer.exchange.helpers import synthetic
-from tests.web.helpers import PASSWORD, online_cpu, wait_until
+from tests.web.helpers import PASSWORD, OnlineClient, online_client, wait_until
 
 if TYPE_CHECKING:
     from tests.conftest import BusCerts
@@ -73,16 +69,9 @@ WITHOUT_S2 = (
 )
 
 
-@dataclass
-class Cpu:
-    session: ChartSession
-    client: BusClient
-    online: OnlineChange
-    path: Path
-    state: Path
-    token: str
-    scans: list[int]
-    bus: list[str]
+class Cpu(OnlineClient):
+    FB = "Seq_fill"
+    TIMEOUT = 20.0
 
     def set(self, name: str, value: object) -> None:
         self.session.set(name, value)
@@ -91,27 +80,12 @@ class Cpu:
         g = self.session.graph
         return [n for n, x in zip(g.cc.step_numbers, g.state.x, strict=True) if x]
 
-    def send(self, op: str, **args: object) -> CommandReply:
-        command = Command(op=op, fb="Seq_fill", user="eng", token=self.token, args=args)  # type: ignore[arg-type]
-        return self.client.send(command, timeout=20)
-
 
 @pytest.fixture
 def cpu(tmp_path: Path, bus_certs: BusCerts) -> Iterator[Cpu]:
     users = {"eng": "engineer", "olga": "operator"}
-    with (
-        online_cpu(
-            tmp_path, CHART, serve=False, users=users, certs=bus_certs, name="fill.s7g"
-        ) as rig,
-        open_session(connect=[rig.endpoint], tls=rig.tls) as view,
-        BusClient(view, "cpu1") as client,
-    ):
-        assert wait_until(lambda: client.status() is not None)
-        login = client.login("eng", PASSWORD)
-        assert login.ok, login.reason
-        yield Cpu(
-            rig.session, client, rig.online, rig.path, rig.state, login.token, rig.scans, rig.bus
-        )
+    with online_client(tmp_path, CHART, certs=bus_certs, users=users, name="fill.s7g") as on:
+        yield Cpu(on.rig, on.client, on.token, on.user)
 
 
 def test_download_swaps_the_chart_at_a_scan_boundary_keeping_the_active_step_and_its_time(
@@ -145,7 +119,7 @@ def test_download_swaps_the_chart_at_a_scan_boundary_keeping_the_active_step_and
 
     cpu.set("empty", True)  # the sequence follows the new condition: S2 -> S3 on empty
     assert wait_until(lambda: cpu.active() in ([3], [1]))
-    rows = read_audit(cpu.state)
+    rows = read_audit(cpu.rig.state)
     download = [r for r in rows if r.op == "download" and r.outcome == "applied"]
     assert len(download) == 2  # the preview and the download, both as eng (engineer)
     assert download[-1].user == "eng" and download[-1].role == "engineer"
@@ -228,8 +202,8 @@ def test_broken_or_hostile_downloads_are_refused_and_the_cpu_keeps_the_old_chart
     assert cpu.session.graph.cc is cc  # the CPU kept its chart through all of it
     assert cpu.path.read_text(encoding="utf-8") == CHART
     assert not list(tmp_path.glob("fill.s7g.~*~"))
-    count = len(cpu.scans)
-    assert wait_until(lambda: len(cpu.scans) > count + 5)  # and keeps scanning
+    count = len(cpu.rig.scans)
+    assert wait_until(lambda: len(cpu.rig.scans) > count + 5)  # and keeps scanning
 
 
 def test_an_operator_may_not_download_and_the_refusal_is_audited(cpu: Cpu) -> None:
@@ -239,7 +213,7 @@ def test_an_operator_may_not_download_and_the_refusal_is_audited(cpu: Cpu) -> No
     )
     reply = cpu.client.send(command, timeout=20)
     assert not reply.applied and "needs engineer" in reply.reason
-    rows = [r for r in read_audit(cpu.state) if r.op == "download"]
+    rows = [r for r in read_audit(cpu.rig.state) if r.op == "download"]
     assert rows and rows[-1].user == "olga" and rows[-1].outcome == "refused"
 
 
@@ -344,20 +318,22 @@ def test_s7graph_download_shows_the_change_asks_and_downloads(cpu: Cpu, tmp_path
     assert wait_until(lambda: cpu.active() == [2])
     edited = tmp_path / "edited.s7g"
     edited.write_text(WITHOUT_S2, encoding="utf-8")
-    asked = _shell(cpu.bus, "download", str(edited), "--user", "eng")
+    asked = _shell(cpu.rig.bus, "download", str(edited), "--user", "eng")
     assert asked.returncode == 1 and "S2 would be removed" in asked.stderr, asked.stderr
     assert "S2" in asked.stdout  # the change summary came first
-    unconfirmed = _shell(cpu.bus, "download", str(edited), "--user", "eng", "--removed", "keep")
+    unconfirmed = _shell(cpu.rig.bus, "download", str(edited), "--user", "eng", "--removed", "keep")
     assert unconfirmed.returncode == 1 and "not confirmed" in unconfirmed.stderr
     assert cpu.active() == [2]  # nothing downloaded yet
-    done = _shell(cpu.bus, "download", str(edited), "--user", "eng", "--removed", "keep", "--yes")
+    done = _shell(
+        cpu.rig.bus, "download", str(edited), "--user", "eng", "--removed", "keep", "--yes"
+    )
     assert done.returncode == 0, done.stderr
     assert "version 2 runs" in done.stdout
     assert cpu.session.graph.cc.step_index.get(2) is None
-    refused = _shell(cpu.bus, "download", str(edited), "--user", "olga", "--yes")
+    refused = _shell(cpu.rig.bus, "download", str(edited), "--user", "olga", "--yes")
     assert refused.returncode == 1 and "needs engineer" in refused.stderr
     # send undo_download: the preview's summary and the version, never "cycle None"
-    preview = _shell(cpu.bus, "send", "undo_download", "preview=true", "--user", "eng")
+    preview = _shell(cpu.rig.bus, "send", "undo_download", "preview=true", "--user", "eng")
     assert preview.returncode == 0, preview.stderr
     assert "S2" in preview.stdout and "cycle None" not in preview.stdout, preview.stdout
     assert "undo_download applied on cpu1/Seq_fill: version 2 runs" in preview.stdout
@@ -416,7 +392,7 @@ def test_s7graph_upload_brings_back_the_chart_the_cpu_runs_after_a_download(
     """STEP 7's "Upload from device": the ``.s7g`` text the CPU compiled — after a download,
     the downloaded one — to stdout, or into a folder under the chart's file name, never over
     a file there without ``--force``."""
-    bus = ["--cpu", "cpu1", *cpu.bus]
+    bus = ["--cpu", "cpu1", *cpu.rig.bus]
     assert main(["upload", *bus]) == 0
     assert capsys.readouterr().out == CHART
     edited = CHART.replace(":= full;", ":= full OR empty;")
@@ -555,6 +531,6 @@ def test_compile_errors_of_a_download_name_the_engineers_file(cpu: Cpu, tmp_path
     assert not page.applied and page.lines[0].startswith("the edited chart:16:7:"), page.lines
     mine = tmp_path / "mine.s7g"
     mine.write_text(bad, encoding="utf-8")
-    shell = _shell(cpu.bus, "download", str(mine), "--user", "eng")
+    shell = _shell(cpu.rig.bus, "download", str(mine), "--user", "eng")
     assert shell.returncode == 1 and f"{mine}:16:7: error[E041]" in shell.stderr, shell.stderr
     assert "fill.s7g" not in shell.stderr + named.reason + page.reason + "".join(page.lines)

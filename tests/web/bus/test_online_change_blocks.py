@@ -13,7 +13,6 @@ import os
 import subprocess
 import sys
 from collections.abc import Iterator
-from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -21,14 +20,11 @@ import pytest
 
 from s7graph.web.access.audit import read_audit
 from s7graph.web.bus.client import BusClient
-from s7graph.web.bus.online import OnlineChange
-from s7graph.web.bus.protocol import Command, CommandReply
-from s7graph.web.bus.session import open_session
+from s7graph.web.bus.protocol import CommandReply
 from s7graph.web.cli import main
 from s7graph.web.commands import Download, DownloadArgs, checked, make_command
-from s7graph.web.harness.session import ChartSession
 from tests.paths import ROOT
-from tests.web.helpers import CALLS_FB17, PASSWORD, cpu_process, online_cpu, wait_until
+from tests.web.helpers import CALLS_FB17, OnlineClient, cpu_process, online_client, wait_until
 
 if TYPE_CHECKING:
     from tests.conftest import BusCerts
@@ -51,19 +47,8 @@ END_FUNCTION_BLOCK
 """
 
 
-@dataclass
-class Cpu:
-    session: ChartSession
-    client: BusClient
-    path: Path
-    state: Path
-    token: str
-    bus: list[str]
-    online: OnlineChange
-
-    def send(self, op: str, **args: object) -> CommandReply:
-        command = Command(op=op, fb="Seq", user="eng", token=self.token, args=args)  # type: ignore[arg-type]
-        return self.client.send(command, timeout=30)
+class Cpu(OnlineClient):
+    TIMEOUT = 30.0
 
     def n(self) -> int:
         return int(self.session.get("DB10.n"))
@@ -76,23 +61,9 @@ class Cpu:
 
 @pytest.fixture
 def cpu(tmp_path: Path, bus_certs: BusCerts) -> Iterator[Cpu]:
-    with (
-        online_cpu(
-            tmp_path,
-            CHART,
-            serve=False,
-            users={"eng": "engineer"},
-            certs=bus_certs,
-            name="seq.s7g",
-            blocks={"fb17.scl": BLOCKS},
-        ) as rig,
-        open_session(connect=[rig.endpoint], tls=rig.tls) as view,
-        BusClient(view, "cpu1") as client,
-    ):
-        assert wait_until(lambda: client.status() is not None)
-        login = client.login("eng", PASSWORD)
-        assert login.ok, login.reason
-        yield Cpu(rig.session, client, rig.path, rig.state, login.token, rig.bus, rig.online)
+    blocks = {"fb17.scl": BLOCKS}
+    with online_client(tmp_path, CHART, certs=bus_certs, name="seq.s7g", blocks=blocks) as on:
+        yield Cpu(on.rig, on.client, on.token, on.user)
 
 
 def test_a_download_swaps_changed_blocks_in_keeping_the_instance_values_by_name(
@@ -115,7 +86,7 @@ def test_a_download_swaps_changed_blocks_in_keeping_the_instance_values_by_name(
     block_file = cpu.path.parent / "fb17.scl"
     assert block_file.read_text(encoding="utf-8") == CHANGED
     assert (cpu.path.parent / "fb17.scl.~1~").read_text(encoding="utf-8") == BLOCKS
-    rows = [r for r in read_audit(cpu.state) if r.op == "download" and r.outcome == "applied"]
+    rows = [r for r in read_audit(cpu.rig.state) if r.op == "download" and r.outcome == "applied"]
     assert rows and "fb17.scl" in rows[-1].args and "sha256" in rows[-1].args
 
     asked = cpu.send("undo_download", preview=True)  # n would narrow: its preview says so
@@ -142,7 +113,7 @@ def test_upload_brings_back_the_chart_with_the_scl_sources_the_cpu_runs(
     """STEP 7's "Upload from device" with blocks: the chart and each S7-SCL source the CPU
     runs — after a download, those it brought — under its file name in the folder; without
     ``--to``, stderr names the sources."""
-    bus = ["--cpu", "cpu1", *cpu.bus]
+    bus = ["--cpu", "cpu1", *cpu.rig.bus]
     folder = tmp_path / "uploaded"
     assert main(["upload", *bus, "--to", str(folder)]) == 0
     assert (folder / "fb17.scl").read_text(encoding="utf-8") == BLOCKS
@@ -409,7 +380,7 @@ def test_the_held_interfaces_are_built_once_and_again_only_after_a_block_downloa
     """Chart-only downloads and previews read the interfaces of the CPU's blocks as kept
     (one build); a download of blocks, and its undo, make the next chart-only download read
     the blocks the CPU holds then: ``fresh`` after the one, ``old`` again after the other."""
-    held = cpu.online.held_interfaces
+    held = cpu.rig.online.held_interfaces
     assert cpu.send("download", source=_reading("DB10.old > 30000"), preview=True).applied
     assert cpu.send("download", source=_reading("DB10.old > 30001")).applied
     assert cpu.send("download", source=_reading("DB10.old > 30002"), preview=True).applied

@@ -9,18 +9,14 @@ taken when the running chart already has it."""
 from __future__ import annotations
 
 from collections.abc import Iterator
-from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 import pytest
 
 from s7graph.engine.cpu import CpuMode
-from s7graph.web.bus.client import BusClient
-from s7graph.web.bus.protocol import Command, CommandReply
-from s7graph.web.bus.session import open_session
-from s7graph.web.harness.session import ChartSession
-from tests.web.helpers import CALLS_FB17, PASSWORD, online_cpu, wait_until
+from s7graph.web.bus.protocol import CommandReply
+from tests.web.helpers import CALLS_FB17, OnlineClient, online_client, wait_until
 
 if TYPE_CHECKING:
     from tests.conftest import BusCerts
@@ -85,17 +81,9 @@ ELSEWHERE = {  # instance DBs that are something else: the swap's own words, as 
 }
 
 
-@dataclass
-class Cpu:
-    session: ChartSession
-    client: BusClient
-    path: Path
-    token: str
-
+class Cpu(OnlineClient):
     def download(self, source: str, *, preview: bool = False, **args: object) -> CommandReply:
-        args = {"source": source, "preview": preview, **args}
-        command = Command(op="download", fb="Seq", user="eng", token=self.token, args=args)
-        return self.client.send(command, timeout=60)
+        return self.send("download", source=source, preview=preview, **args)
 
     def counts(self) -> tuple[int, int]:
         return int(self.session.get("DB10.n")), int(self.session.get("DB11.n"))
@@ -111,23 +99,9 @@ class Cpu:
 
 @pytest.fixture
 def cpu(tmp_path: Path, bus_certs: BusCerts) -> Iterator[Cpu]:
-    with (
-        online_cpu(
-            tmp_path,
-            CHART,
-            serve=False,
-            users={"eng": "engineer"},
-            certs=bus_certs,
-            name="seq.s7g",
-            blocks={"fb.scl": BLOCKS},
-        ) as rig,
-        open_session(connect=[rig.endpoint], tls=rig.tls) as view,
-        BusClient(view, "cpu1") as client,
-    ):
-        assert wait_until(lambda: client.status() is not None)
-        login = client.login("eng", PASSWORD)
-        assert login.ok, login.reason
-        yield Cpu(rig.session, client, rig.path, login.token)
+    blocks = {"fb.scl": BLOCKS}
+    with online_client(tmp_path, CHART, certs=bus_certs, name="seq.s7g", blocks=blocks) as on:
+        yield Cpu(on.rig, on.client, on.token, on.user)
 
 
 def test_a_chart_alone_whose_call_does_not_fit_a_block_the_cpu_holds_is_refused_naming_it(

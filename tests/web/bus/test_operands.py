@@ -16,8 +16,7 @@ import pytest
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.operands import PERIOD_MS
 from s7graph.web.bus.protocol import Command, OperandValues
-from s7graph.web.bus.session import open_session
-from tests.web.helpers import PASSWORD, OnlineRig, online_cpu, wait_until
+from tests.web.helpers import PASSWORD, OnlineRig, online_client, wait_until
 
 if TYPE_CHECKING:
     from tests.conftest import BusCerts
@@ -60,23 +59,13 @@ class Bus:
 
 @pytest.fixture
 def bus(tmp_path: Path, bus_certs: BusCerts) -> Iterator[Bus]:
-    with (
-        online_cpu(
-            tmp_path,
-            CHART,
-            serve=False,
-            users={"eng": "engineer"},
-            certs=bus_certs,
-            name="lamp.s7g",
-            operands=True,
-        ) as rig,
-        open_session(connect=[rig.endpoint], tls=rig.tls) as session,
-        BusClient(session, "cpu1") as client,
-    ):
+    with online_client(
+        tmp_path, CHART, certs=bus_certs, user=None, name="lamp.s7g", operands=True
+    ) as on:
         seen: list[OperandValues] = []
-        client.on_operands(seen.append)
+        on.client.on_operands(seen.append)
         assert wait_until(lambda: bool(seen))
-        yield Bus(rig, client, seen)
+        yield Bus(on.rig, on.client, seen)
 
 
 def test_the_catalog_names_every_operand_with_its_type(bus: Bus) -> None:

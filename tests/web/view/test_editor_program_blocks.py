@@ -11,7 +11,6 @@ and the editor says so and goes on.
 from __future__ import annotations
 
 from collections.abc import Iterator
-from dataclasses import dataclass
 from pathlib import Path
 from types import SimpleNamespace
 from typing import TYPE_CHECKING, Any
@@ -26,18 +25,11 @@ from s7graph.sequencer.checks.diagnostics import format_diagnostic
 from s7graph.sequencer.checks.interfaces import program_blocks
 from s7graph.sequencer.text.format import format_chart
 from s7graph.web.bus.client import BusClient
-from s7graph.web.bus.protocol import (
-    BlockInterfaces,
-    ChartSource,
-    Command,
-    ProtocolError,
-    decode,
-    encode,
-)
+from s7graph.web.bus.protocol import BlockInterfaces, ChartSource, ProtocolError, decode, encode
 from s7graph.web.bus.session import open_session
 from s7graph.web.view.editor import _located
 from s7graph.web.view.editor_cpu import CpuCommands, cpu_blocks
-from tests.web.helpers import CALLS_FB17, PASSWORD, free_port, online_cpu, wait_until
+from tests.web.helpers import CALLS_FB17, OnlineClient, free_port, online_client, wait_until
 
 if TYPE_CHECKING:
     from tests.conftest import BusCerts
@@ -87,36 +79,17 @@ END_FUNCTION
 """
 
 
-@dataclass
-class Cpu:
-    client: BusClient
-    token: str
-    session: Any
-
-
 @pytest.fixture
-def cpu(tmp_path: Path, bus_certs: BusCerts) -> Iterator[Cpu]:
-    with (
-        online_cpu(
-            tmp_path,
-            CALLS_FB17,
-            serve=False,
-            users={"eng": "engineer"},
-            certs=bus_certs,
-            name="seq.s7g",
-            program=PythonProgram(),
-        ) as rig,
-        open_session(connect=[rig.endpoint], tls=rig.tls) as view,
-        BusClient(view, "cpu1") as client,
-    ):
-        assert wait_until(lambda: client.status() is not None)
-        login = client.login("eng", PASSWORD)
-        assert login.ok, login.reason
-        yield Cpu(client, login.token, rig.session)
+def cpu(tmp_path: Path, bus_certs: BusCerts) -> Iterator[OnlineClient]:
+    program = PythonProgram()
+    with online_client(
+        tmp_path, CALLS_FB17, certs=bus_certs, name="seq.s7g", program=program
+    ) as cpu:
+        yield cpu
 
 
 def test_the_editor_marks_a_call_that_does_not_fit_a_python_programs_block_as_the_download(
-    cpu: Cpu,
+    cpu: OnlineClient,
 ) -> None:
     source = cpu.client.source("Seq")
     assert source is not None and source.blocks == {} and source.interfaces is not None
@@ -132,16 +105,16 @@ def test_the_editor_marks_a_call_that_does_not_fit_a_python_programs_block_as_th
     shown = format_chart(chart).splitlines()  # as the source view writes it
     assert shown[found[1].loc.line - 1][found[1].loc.col - 1 :].startswith("2.5")
     assert Session.open(chart, None, blocks).has_errors  # the page's Download refuses
-    args = {"source": format_chart(chart), "preview": True}
-    command = Command(op="download", fb="Seq", user="eng", token=cpu.token, args=args)
-    reply = cpu.client.send(command, timeout=60)
+    reply = cpu.send("download", source=format_chart(chart), preview=True)
     assert not reply.applied
     assert reply.reason.startswith("the chart's calls do not fit the CPU's blocks: ")
     marked = [format_diagnostic(d).removeprefix("seq.s7g:") for d in found]  # 5:30: error…
     assert [line.removeprefix("the edited chart:") for line in reply.lines] == marked
 
 
-def test_calls_that_fit_the_python_programs_blocks_show_no_error_and_download(cpu: Cpu) -> None:
+def test_calls_that_fit_the_python_programs_blocks_show_no_error_and_download(
+    cpu: OnlineClient,
+) -> None:
     source = cpu.client.source("Seq")
     assert source is not None
     fits = "(go := TRUE, k := 3); CALL FC 5 (a := 41, r => MW20);"
@@ -149,9 +122,7 @@ def test_calls_that_fit_the_python_programs_blocks_show_no_error_and_download(cp
     chart = parse_source(text, "seq.s7g")
     blocks, _ = cpu_blocks(source, chart)
     assert [d.code for d in _located(chart, None, blocks).diagnostics if d.is_error] == []
-    args = {"source": text}
-    command = Command(op="download", fb="Seq", user="eng", token=cpu.token, args=args)
-    reply = cpu.client.send(command, timeout=60)
+    reply = cpu.send("download", source=text)
     assert reply.applied, reply.reason
     assert wait_until(lambda: int(cpu.session.get("MW20")) == 42)
 
@@ -216,20 +187,12 @@ def test_s7_scl_sources_too_large_to_come_along_send_their_interfaces_instead(
     (``left_out``): the interfaces come instead (the source by its file name, no directory,
     as the sources go), and the editor marks the unfit call."""
     padding = "".join(f"// line {n:06d} {'.' * 60}\n" for n in range(11_200))
-    with (
-        online_cpu(
-            tmp_path,
-            padding + CALLS_FB17,
-            serve=False,
-            users={"eng": "engineer"},
-            certs=bus_certs,
-            name="seq.s7g",
-            blocks={"fb.scl": SCL_FB17},
-        ) as rig,
-        open_session(connect=[rig.endpoint], tls=rig.tls) as view,
-        BusClient(view, "cpu1") as client,
-    ):
-        source = client.source("Seq")
+    blocks = {"fb.scl": SCL_FB17}
+    text = padding + CALLS_FB17
+    with online_client(
+        tmp_path, text, certs=bus_certs, user=None, name="seq.s7g", blocks=blocks
+    ) as on:
+        source = on.client.source("Seq")
     assert source is not None and source.left_out == ["fb.scl"] and source.blocks == {}
     assert source.interfaces is not None and source.interfaces.sources == "fb.scl"
     chart = parse_source(UNFIT, "seq.s7g")
@@ -268,21 +231,12 @@ def test_the_editor_compiles_the_cpus_s7_scl_sources_to_the_interfaces_the_cpu_h
     only, as they come."""
     from tests.web.harness.test_scl_blocks import CHART, SCL
 
-    with (
-        online_cpu(
-            tmp_path,
-            CHART,
-            serve=False,
-            users={"eng": "engineer"},
-            certs=bus_certs,
-            name="seq.s7g",
-            blocks={"prog.scl": SCL},
-        ) as rig,
-        open_session(connect=[rig.endpoint], tls=rig.tls) as view,
-        BusClient(view, "cpu1") as client,
-    ):
-        source = client.source("Seq")
-        held = rig.online.held_interfaces()
+    blocks = {"prog.scl": SCL}
+    with online_client(
+        tmp_path, CHART, certs=bus_certs, user=None, name="seq.s7g", blocks=blocks
+    ) as on:
+        source = on.client.source("Seq")
+        held = on.rig.online.held_interfaces()
     assert source is not None and source.interfaces is None and list(source.blocks) == ["prog.scl"]
     blocks, note = cpu_blocks(source, parse_source(source.text, "seq.s7g"))
     assert note == "" and blocks is not None and held is not None
