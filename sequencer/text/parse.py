@@ -199,6 +199,15 @@ def _phrased(e: UnexpectedInput, file: str, text: str) -> Diagnostic:
                 SourceLocation(file, line, col),
             )
         history = list(getattr(e, "token_history", None) or ())
+        last = history[-1] if history else None
+        if last is not None and last.type == "NAME" and str(last).upper() == "CALL":
+            where = SourceLocation(file, last.line or loc.line, last.column or loc.col)
+            return error(  # `N CALL FB 17, DB 10 (…)`: CALL read as an operand of N
+                "E001",
+                f"a block call is an action of its own: write CALL {tok!s}, … with no "
+                "qualifier before CALL (CALL is the qualifier, as in S7-GRAPH)",
+                where,
+            )
         if "SEMICOLON" in expected and (
             tok.type in _SYNC
             or tok.line != getattr(history[-1] if history else None, "end_line", tok.line)

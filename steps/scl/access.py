@@ -20,10 +20,11 @@ from dataclasses import dataclass
 from datetime import date, datetime
 from typing import Any
 
+from s7graph.engine.blocks import OBJECT
 from s7graph.steps.scl import types as ty
 from s7graph.steps.scl.runtime import _decode, _encode
 
-__all__ = ["Member", "member", "parse_name", "plain", "read_bytes", "write_bytes"]
+__all__ = ["Member", "hidden_members", "member", "parse_name", "plain", "read_bytes", "write_bytes"]
 
 _NAME = re.compile(r'\s*(?:DB\s*(\d+)|"([^"]{1,64})")\s*\.(.*)', re.IGNORECASE | re.DOTALL)
 _STEP = re.compile(r"\s*(?:\.\s*([A-Za-z_]\w{0,63})|\[\s*([-+\d\s,]{1,64})\])")
@@ -149,5 +150,13 @@ def plain(value: Any) -> Any:
         return {str(k): plain(v) for k, v in value.items()}
     values = getattr(value, "values", None)  # an instance DB (a multi-instance)
     if isinstance(values, dict):
-        return {str(k): plain(v) for k, v in values.items()}
+        hidden = hidden_members(getattr(value, "fb", None))
+        return {str(k): plain(v) for k, v in values.items() if k not in hidden}
     return str(value)
+
+
+def hidden_members(fb: Any) -> frozenset[str]:
+    """The variables of an FB's instances that hold the block's own Python state (an IEC
+    timer's or counter's ``STATE``): no S7 value, never shown."""
+    interface = getattr(fb, "interface", ())
+    return frozenset(var.name for var in interface if var.type == OBJECT)

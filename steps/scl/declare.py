@@ -22,6 +22,7 @@ from s7graph.steps.scl import model as m
 from s7graph.steps.scl import types as ty
 from s7graph.steps.scl.consts import Consts, initial
 from s7graph.steps.scl.diagnostics import Diagnostic, Problem, error
+from s7graph.steps.scl.tia import type_hint
 
 SECTION_DECL = {
     "VAR_INPUT": Decl.IN,
@@ -478,7 +479,7 @@ def _named_type(prog: Program, spec: m.NamedType) -> ty.SclType:
     if key in _PARAMETER_TYPES:
         why = _PARAMETER_TYPES[key]
         raise Problem("E212", f"the parameter type {key} is not supported here: {why}", spec.loc)
-    raise Problem("E212", f"unknown data type {spec.name!r}", spec.loc)
+    raise Problem("E212", type_hint(spec.name) or f"unknown data type {spec.name!r}", spec.loc)
 
 
 _PARAMETER_TYPES = {

@@ -27,6 +27,7 @@ from s7graph.steps.scl import model as m
 from s7graph.steps.scl.comments import blank_comments
 from s7graph.steps.scl.diagnostics import Diagnostic, Problem, SclError, error
 from s7graph.steps.scl.recover import parse_all
+from s7graph.steps.scl.tia import syntax_hint
 
 GRAMMAR = Path(__file__).with_name("grammar.lark")
 MAX_STATEMENT_NESTING = 16
@@ -217,12 +218,21 @@ def _syntax(exc: UnexpectedInput, file: str, text: str) -> Diagnostic:
     """Phrase lark's error for an SCL programmer: what was found, what was expected."""
     loc = SourceLocation(file, max(exc.line or 1, 1), max(exc.column or 1, 1))
     if isinstance(exc, UnexpectedCharacters):
-        return error("E201", f"unexpected character {exc.char!r}", loc)
+        pos = exc.pos_in_stream
+        hint = syntax_hint(exc.char, None, text[pos + 1 :] if pos is not None else "")
+        if hint is None and exc.char.isalpha():  # `ä`: a letter, but not one of a name
+            hint = f"{exc.char!r} cannot be in a name: S7-SCL names have letters A-Z, digits and _"
+        return error("E201", hint or f"unexpected character {exc.char!r}", loc)
     if not isinstance(exc, UnexpectedToken):
         return error("E201", str(exc), loc)
     tok, expected = exc.token, set(exc.expected)
     history = list(getattr(exc, "token_history", None) or ())
     prev = history[-1] if history else None
+    hint = syntax_hint(str(tok), None if prev is None else str(prev), "")
+    if hint is not None and prev is not None:  # at the TIA Portal token itself
+        return error(
+            "E201", hint, SourceLocation(file, prev.line or loc.line, prev.column or loc.col)
+        )
     if "SEMICOLON" in expected and prev is not None and str(prev).upper().startswith("END_"):
         return _missing_semicolon(file, prev, loc)
     if prev is not None and str(prev).upper() in _MISSPELT:

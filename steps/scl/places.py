@@ -24,6 +24,7 @@ from s7graph.steps.scl.consts import Constant
 from s7graph.steps.scl.declare import BlockInfo
 from s7graph.steps.scl.diagnostics import Problem
 from s7graph.steps.scl.gen import HOLE, Block, Place, Resolved, Target, X, in_memory
+from s7graph.steps.scl.tia import function_hint
 
 _INDEXED = re.compile(r"(PI|PQ|I|Q|M)([XBWD]?)", re.IGNORECASE)
 _DB_INDEXED = re.compile(r"D?B?([XBWD])", re.IGNORECASE)
@@ -126,7 +127,8 @@ class Places:
             return self._indexed(area, None, letter, sels, path)
         if b.prog.symbols is not None and b.prog.symbols.lookup(text) is not None:
             return self._selectless(self._symbol(text, loc), sels, path)
-        raise Problem("E211", f"unknown name {text!r}", loc)
+        hint = function_hint(text) if called else None
+        raise Problem("E211", hint or f"unknown name {text!r}", loc)
 
     def _special(self, key: str, sels: list[m.Selector], loc: SourceLocation) -> Place | None:
         b = self.b
@@ -171,7 +173,12 @@ class Places:
             return self._after_call(Target("fc", blk.label, sels[0], loc, blk), sels[1:], loc)
         if blk.kind in ("FB", "SFB"):
             if not sels or not isinstance(sels[0], m.Member):
-                raise Problem("E233", f"{blk.label} is called with an instance: FB.DB(…)", loc)
+                raise Problem(
+                    "E233",
+                    f"{blk.label} is a function block: call it with its instance DB, "
+                    f"{blk.label}.DB10(…), or as a multi-instance declared in VAR",
+                    loc,
+                )
             inst = sels[0].name
             number = self.b.prog.db_number(inst)
             if number is None:

@@ -16,6 +16,7 @@ from __future__ import annotations
 import contextlib
 import getpass
 import os
+import re
 import socket
 import sys
 import threading
@@ -32,7 +33,13 @@ from s7graph.sequencer.change.typed import parse_source
 from s7graph.sequencer.checks.diagnostics import format_diagnostic
 from s7graph.web.bus.client import BusClient
 from s7graph.web.bus.cycle_text import cycle_lines
-from s7graph.web.bus.protocol import Command, CommandReply, CpuStatus, StepStateUpdate
+from s7graph.web.bus.protocol import (
+    REFUSAL_KINDS,
+    Command,
+    CommandReply,
+    CpuStatus,
+    StepStateUpdate,
+)
 from s7graph.web.cli.diag_text import event_line, when
 from s7graph.web.cli.net import NetOptions
 from s7graph.web.cli.stopping import say, wait_until_stopped
@@ -256,7 +263,7 @@ def download_command(
         except (TypeError, ValueError) as exc:
             return _fail(str(exc))
         if not preview.applied:
-            return _refused("download", preview)
+            return _refused("download", _as_given(preview, blocks))
         print(f"s7graph: {chart.name} over version {preview.version} on {net.cpu}/{shell.fb}:")
         for line in preview.lines:
             print(f"  {line}")
@@ -283,7 +290,7 @@ def download_command(
             reply = shell.send(Download, args, timeout=timeout)
         except (TypeError, ValueError) as exc:
             return _fail(str(exc))
-    if not reply.applied and reply.reason.startswith("no answer from CPU"):
+    if not reply.applied and _unanswered(reply):
         # sent, no answer: the CPU may have swapped the chart before it went
         print(
             f"s7graph: download not confirmed: {reply.reason}; it may or may not have taken "
@@ -292,17 +299,51 @@ def download_command(
         )
         return 1
     if not reply.applied:
-        return _refused("download", reply)
+        return _refused("download", _as_given(reply, blocks))
     for line in reply.lines:
         print(f"s7graph: {line}")
     print(f"s7graph: download applied on {net.cpu}/{shell.fb}: version {reply.version} runs")
     return 0
 
 
+def _as_given(reply: CommandReply, blocks: Sequence[Path]) -> CommandReply:
+    """``reply`` with each S7-SCL diagnostic's place (``valve.scl:13:12:``, the CPU knows a
+    source by its file name) written as the command line gave the file
+    (``v2/valve.scl:13:12:``), as a chart's diagnostics are."""
+    named = {p.name: str(p) for p in blocks if str(p) != p.name}
+    if not named:
+        return reply
+    place = re.compile(r"(?<![\w/.-])(" + "|".join(re.escape(n) for n in named) + r")(?=:\d+:\d+:)")
+
+    def given(text: str) -> str:
+        return place.sub(lambda found: named[found[1]], text)
+
+    return msgspec.structs.replace(
+        reply, reason=given(reply.reason), lines=[given(line) for line in reply.lines]
+    )
+
+
+def _kind(reply: CommandReply) -> str:
+    """The reply's kind of refusal; "" when not said (an older CPU) or not known (a later
+    CPU's): then only the reason's words tell."""
+    return reply.kind if reply.kind in REFUSAL_KINDS else ""
+
+
+def _unanswered(reply: CommandReply) -> bool:
+    """No answer, or none readable (kind ``communication``; without a kind, the client's
+    words ``no answer from CPU``): the command may or may not have taken effect."""
+    kind = _kind(reply)
+    return kind == "communication" if kind else reply.reason.startswith("no answer from CPU")
+
+
 def _refused(op: str, reply: CommandReply) -> int:
-    """A reply not *applied*: refused, or applied but not confirmed durable (its reason
-    starts so)."""
-    how = "" if reply.reason.startswith("not confirmed: ") else "refused: "
+    """A reply not *applied*: refused, or applied but not confirmed durable (kind
+    ``timeout``; without a kind, a reason starting ``not confirmed:``)."""
+    kind = _kind(reply)
+    unconfirmed = kind == "timeout" if kind else reply.reason.startswith("not confirmed: ")
+    how = "refused: "
+    if unconfirmed:
+        how = "" if reply.reason.startswith("not confirmed: ") else "not confirmed: "
     said = f"{op} {how}{reply.reason}"
     if reply.reason.startswith(f"{op} refused: "):  # the CPU said it already
         said = reply.reason

@@ -18,10 +18,18 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import replace
 from typing import Any
 
-from s7graph.engine.blocks import Decl, InstanceDB
+from s7graph.engine.blocks import FB, Decl, InstanceDB
 from s7graph.engine.errors import S7Error
 from s7graph.steps.scl import types as ty
-from s7graph.steps.scl.access import Member, member, parse_name, plain, read_bytes, write_bytes
+from s7graph.steps.scl.access import (
+    Member,
+    hidden_members,
+    member,
+    parse_name,
+    plain,
+    read_bytes,
+    write_bytes,
+)
 from s7graph.web.harness.operands import stimulus_value
 
 __all__ = ["DbVariables"]
@@ -48,7 +56,7 @@ class DbVariables:
         where, m, _ = self._find(name)
         if isinstance(where, InstanceDB):
             keys = m.keys
-            return lambda: plain(_walk(where, keys))
+            return lambda: plain(_walk(where, keys, whole=True))
         buf = where
         return lambda: plain(read_bytes(buf, m))
 
@@ -85,8 +93,8 @@ class DbVariables:
         number = db if isinstance(db, int) else self.number_of(db, name)
         idb = self.cpu.instance_dbs.get(number)
         if idb is not None:
-            structure = self.types.get(idb.fb.label) or _interface(idb)
-            found = _member(structure, path, self.types, name)
+            structure = self.types.get(idb.fb.label) or _interface(idb.fb)
+            found = _member(structure, path, _structures(self.types, self.cpu), name)
             return idb, found, found.type
         block = self.cpu.mem.dbs.get(number)
         if block is None:
@@ -112,33 +120,42 @@ class DbVariables:
         return int(number)
 
 
-def _member(structure: ty.SclType, path: Any, types: Mapping[str, ty.SclType], name: str) -> Member:
+def _member(structure: ty.SclType, path: Any, types: dict[str, ty.SclType], name: str) -> Member:
     try:
-        return member(structure, path, dict(types), name)
+        return member(structure, path, types, name)
     except ValueError as exc:
         raise S7Error(str(exc)) from None
 
 
-def _interface(idb: InstanceDB) -> ty.SclType:
-    """An instance of an FB not written in S7-SCL: its variables by their engine types
-    (an OBJECT as ANY: read whole, never walked into)."""
+def _structures(types: Mapping[str, ty.SclType], cpu: Any) -> dict[str, ty.SclType]:
+    """The S7-SCL structures by FB label, and for a multi-instance of a system block or a
+    Python FB (``tmr : TON;`` in an S7-SCL FB, read as ``DB10.tmr.Q``) its interface."""
+    found = {label: _interface(b) for label, b in cpu.blocks.items() if isinstance(b, FB)}
+    return {**found, **types}
+
+
+def _interface(fb: FB) -> ty.SclType:
+    """The structure of an FB not written in S7-SCL: its variables by their engine types;
+    its Python state (an IEC timer's ``STATE``) left out."""
     fields = []
-    for var in idb.fb.interface:
-        if var.decl is Decl.TEMP:
+    hidden = hidden_members(fb)
+    for var in fb.interface:
+        if var.decl is Decl.TEMP or var.name in hidden:
             continue
         t = ty.by_name(var.type.split("[")[0]) if isinstance(var.type, str) else None
         if isinstance(var.type, str) and var.type.upper().startswith("STRING["):
             t = ty.string(int(var.type[7:-1]))
         fields.append((var.name, t or ty.ANY))
-    return ty.SclType("STRUCT", fields=tuple(fields), name=idb.fb.label)
+    return ty.SclType("STRUCT", fields=tuple(fields), name=fb.label)
 
 
-def _walk(idb: InstanceDB, keys: Sequence[str | int]) -> Any:
-    """The value at ``keys`` inside an instance DB (a multi-instance: its own values)."""
+def _walk(idb: InstanceDB, keys: Sequence[str | int], whole: bool = False) -> Any:
+    """The value at ``keys`` inside an instance DB (a multi-instance: its own values, or
+    with ``whole`` the instance itself when it is the last, for ``plain`` to read)."""
     value: Any = idb.values
     key: Any
-    for key in keys:
+    for i, key in enumerate(keys):
         value = value[key]
-        if isinstance(value, InstanceDB):
+        if isinstance(value, InstanceDB) and not (whole and i == len(keys) - 1):
             value = value.values
     return value

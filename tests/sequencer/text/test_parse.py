@@ -288,3 +288,14 @@ def test_a_comment_never_closed_is_one_error_where_it_opens() -> None:
     with pytest.raises(ChartSyntaxError) as caught:
         parse_chart(broken, "t.s7g")
     assert [d.code for d in caught.value.diagnostics] == ["E001", "E002"]
+
+
+def test_a_call_given_a_qualifier_says_call_is_the_qualifier() -> None:
+    with pytest.raises(ChartSyntaxError) as info:
+        chart_with_rows("    N CALL FB 17, DB 10 (go := TRUE);")
+    (d,) = info.value.diagnostics
+    assert (d.code, d.loc.line, d.loc.col) == ("E001", 5, 7)
+    assert d.message == (
+        "a block call is an action of its own: write CALL FB 17, … with no qualifier before"
+        " CALL (CALL is the qualifier, as in S7-GRAPH)"
+    )

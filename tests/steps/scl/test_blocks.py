@@ -9,7 +9,7 @@ import pytest
 from s7graph.engine import Cpu, CpuMode, EventId, VirtualClock, parse_address
 from s7graph.engine.blocks import FB, FC
 from s7graph.engine.symbols import SymbolTable
-from s7graph.steps.scl import SclError, check_scl
+from s7graph.steps.scl import SclError, check_scl, format_diagnostic
 from tests.steps.scl.helpers import build, codes, errors, run
 
 FB17 = """
@@ -693,3 +693,17 @@ def test_an_instance_dbs_begin_sets_members_and_elements_too() -> None:
 
 def test_a_name_the_fb_lacks_in_an_instance_dbs_begin_is_an_error_where_it_is_written() -> None:
     assert codes(INSTANCE.format(body="acc := 5;\n  s.x := 7;")) == [("E224", 10, 5)]
+
+
+def test_an_fb_called_without_an_instance_says_how_an_fb_is_called() -> None:
+    src = """FUNCTION_BLOCK FB3
+VAR_INPUT a : INT; END_VAR
+END_FUNCTION_BLOCK
+FUNCTION FC4 : VOID
+  FB3(a := 1);
+END_FUNCTION
+"""
+    assert [format_diagnostic(d) for d in check_scl(src, "t.scl")] == [
+        "t.scl:5:3: error[E233]: FB3 is a function block: call it with its instance DB,"
+        " FB3.DB10(…), or as a multi-instance declared in VAR (FC4)"
+    ]

@@ -93,3 +93,52 @@ def test_a_statement_without_its_semicolon_before_a_closing_keyword_says_so(
 def test_elseif_is_named_with_the_keyword_s7_scl_writes() -> None:
     body = "IF n = 0 THEN b := TRUE; ELSEIF n = 1 THEN b := FALSE; END_IF;"
     assert found(fb(body)) == ["t.scl:3:26: error[E201]: ELSEIF is no keyword: S7-SCL writes ELSIF"]
+
+
+@pytest.mark.parametrize(
+    ("body", "message"),
+    [
+        (
+            "#n := 1;",
+            "t.scl:3:1: error[E201]: '#' before a local name is TIA Portal's: S7-SCL V5"
+            " writes the name alone",
+        ),
+        (
+            "FB2.DB2(x := 1, q => b);",
+            "t.scl:3:19: error[E201]: '=>' in a call is TIA Portal's:"
+            " S7-SCL V5 reads an FB's output after the call (inst.Q) and gives an FC's output"
+            " with ':='",
+        ),
+        (
+            "REGION fill\n  n := 1;\nEND_REGION\nb := TRUE;",
+            "t.scl:3:1: error[E201]: REGION is"
+            " TIA Portal's: S7-SCL V5 has no regions; leave the line out",
+        ),
+    ],
+)
+def test_tia_portal_notation_is_named_with_what_s7_scl_v5_writes(body: str, message: str) -> None:
+    assert found(fb(body))[0] == message
+
+
+def test_tia_portal_types_and_string_conversions_say_the_s7_scl_v5_ones() -> None:
+    src = fb("s := INT_TO_STRING(n);\nn := STRING_TO_INT(s);", "n : INT; s : STRING; x : LREAL;")
+    assert found(src) == [
+        "t.scl:2:30: error[E212]: LREAL is a TIA Portal type of S7-1200/1500, not S7-SCL V5's:"
+        " use REAL (FB1)",
+        "t.scl:3:6: error[E211]: INT_TO_STRING is TIA Portal's; S7-SCL V5 writes I_STRNG (FB1)",
+        "t.scl:4:6: error[E211]: STRING_TO_INT is TIA Portal's; S7-SCL V5 writes STRNG_I (FB1)",
+    ]
+
+
+def test_a_letter_no_name_may_hold_says_which_letters_names_have() -> None:
+    assert found(fb("n := 1;", "n : INT; maß : INT;"))[0] == (
+        "t.scl:2:16: error[E201]: 'ß' cannot be in a name: S7-SCL names have letters A-Z,"
+        " digits and _"
+    )
+
+
+def test_an_iec_edge_fb_says_how_s7_scl_v5_computes_the_edge() -> None:
+    assert found(fb("n := 1;", "n : INT; e : R_TRIG;")) == [
+        "t.scl:2:18: error[E212]: R_TRIG is TIA Portal's: S7-300/400 has no such system block;"
+        " keep the last input in a static BOOL (q := clk AND NOT last; last := clk;) (FB1)"
+    ]

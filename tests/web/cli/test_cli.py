@@ -189,6 +189,46 @@ def test_a_download_sent_without_an_answer_says_it_may_have_taken_effect(
     assert "may or may not have taken effect" in err and "refused" not in err
 
 
+def test_a_download_refused_for_its_blocks_names_each_source_as_the_command_line_gave_it(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The CPU knows a source by its file name; its diagnostics are said in the path given,
+    as a chart's are, so an editor finds the place."""
+    import contextlib
+
+    from s7graph.web.bus.protocol import CommandReply
+    from s7graph.web.cli import remote
+    from s7graph.web.cli.net import NetOptions
+
+    said = "valve.scl:13:12: error[E201]: unexpected ';'"
+
+    class Shell:
+        fb = "Seq"
+
+        def send(self, kind: object, args: object, timeout: float) -> CommandReply:
+            why = f"the S7-SCL blocks do not compile: 1 error(s); {said}"
+            return CommandReply(applied=False, reason=why, lines=[said, "old.valve.scl:1:1: x"])
+
+    @contextlib.contextmanager
+    def logged_in(*_: object, **__: object):  # type: ignore[no-untyped-def]
+        yield Shell()
+
+    monkeypatch.setattr(remote, "_logged_in", logged_in)
+    chart = tmp_path / "c.s7g"
+    chart.write_text((EXAMPLES / "drill" / "drill.s7g").read_text(encoding="utf-8"))
+    (tmp_path / "v2").mkdir()
+    valve = tmp_path / "v2" / "valve.scl"
+    valve.write_text("FUNCTION FC1 : VOID\nEND_FUNCTION\n", encoding="utf-8")
+    rc = remote.download_command(NetOptions(), chart, fb=None, user="eng", yes=True, blocks=[valve])
+    assert rc == 1
+    assert capsys.readouterr().err.splitlines() == [
+        f"s7graph: download refused: the S7-SCL blocks do not compile: 1 error(s); {valve}:13:12:"
+        " error[E201]: unexpected ';'",
+        f"  {valve}:13:12: error[E201]: unexpected ';'",
+        "  old.valve.scl:1:1: x",
+    ]
+
+
 @pytest.mark.parametrize("command", ["check", "sim", "xref"])
 def test_a_python_program_given_for_a_chart_is_named_for_what_it_is(
     command: str, capsys: pytest.CaptureFixture[str]

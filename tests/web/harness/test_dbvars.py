@@ -113,3 +113,35 @@ def test_a_db_symbol_of_the_cpus_symbol_table_names_a_db(dbvars: DbVariables) ->
     assert dbvars.reader("DB20.motor[1].speed")() == 12
     with pytest.raises(S7Error, match=r'^"Pumps".on: "Pumps" is FB 3, not a DB$'):
         dbvars.reader('"Pumps".on')
+
+
+TIMED = """
+FUNCTION_BLOCK FB17
+VAR_INPUT go : BOOL; END_VAR
+VAR tmr : TON; END_VAR
+BEGIN
+  tmr(IN := go, PT := T#2S);
+END_FUNCTION_BLOCK
+ORGANIZATION_BLOCK OB1
+VAR_TEMP info : ARRAY[0..19] OF BYTE; END_VAR
+BEGIN
+  FB17.DB10(go := TRUE);
+END_ORGANIZATION_BLOCK
+"""
+
+
+def test_a_system_blocks_multi_instance_reads_its_variables_never_its_python_state() -> None:
+    program = compile_scl(TIMED, "t.scl", blocks=sfb.SYSTEM_BLOCKS)
+    clock = VirtualClock()
+    cpu = Cpu(clock)
+    sfb.install(cpu)
+    program.load(cpu)
+    cpu.start()
+    for _ in range(11):
+        cpu.scan()
+        clock.advance(100)
+    dbvars = DbVariables(cpu, program.types)
+    assert dbvars.reader("DB10.tmr")() == {"IN": True, "PT": 2000, "Q": False, "ET": 1000}
+    assert dbvars.reader("DB10.tmr.ET")() == 1000
+    with pytest.raises(S7Error, match=r"^DB10.tmr.STATE: SFB4 has no member STATE; it has IN,"):
+        dbvars.reader("DB10.tmr.STATE")
