@@ -26,6 +26,7 @@ import msgspec
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.compiled import CompiledChart
 from s7graph.sequencer.params import is_pin, pins_for
+from s7graph.sequencer.text.comments import find_comments
 from s7graph.web.bus.protocol import (
     FbOperands,
     OperandCatalog,
@@ -53,6 +54,16 @@ def _scalar(value: object) -> bool | int | float | str | None:
     if value is None or isinstance(value, _PLAIN):
         return value
     return str(value)
+
+
+def _comment(written: str) -> str:
+    """A chart variable's comment as text: its ``//`` and ``(* … *)`` comments as written
+    in the chart (``sequencer.text.comments``), without their delimiters."""
+    texts = (
+        c.text.removeprefix("//").removeprefix("(*").removesuffix("*)").strip()
+        for c in find_comments(written)
+    )
+    return " ".join(t for t in texts if t)
 
 
 def _read(readers: tuple[_Reader, ...]) -> dict[str, Any]:
@@ -130,6 +141,7 @@ class OperandFeed:
         cc, table = session.cc, session.symbols
         pins = pins_for(cc.parameters)
         variables = [(name, t) for name, t in cc.var_types.items()]
+        said = {v.name: _comment(v.trailing or v.comment) for v in cc.chart.vars}
         taken = {name for name, _ in variables} | {p.name for p in pins}
         symbols = [
             s for s in table if s.name not in taken and not is_pin(s.name) and len(s.name) <= 128
@@ -150,7 +162,10 @@ class OperandFeed:
             ],
             fbs={
                 self.fb: FbOperands(
-                    variables=[OperandInfo(name=n, type=t[:256]) for n, t in variables],
+                    variables=[
+                        OperandInfo(name=n, type=t[:256], comment=said.get(n, "")[:4096])
+                        for n, t in variables
+                    ],
                     pins=[
                         OperandInfo(
                             name=p.name,

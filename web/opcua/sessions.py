@@ -35,6 +35,7 @@ from asyncua.server.internal_session import InternalSession
 from asyncua.server.user_managers import UserManager
 
 from s7graph.web.access.lockout import Lockout
+from s7graph.web.opcua.model import INT_VARIANTS
 from s7graph.web.opcua.paging import Pages, masked
 from s7graph.web.opcua.ranges import follow_ranges, item_problem, read_ranges, write_problem
 from s7graph.web.opcua.statuses import call_problem, fix_browse, fix_translate, missing
@@ -338,34 +339,52 @@ class FaceSession(InternalSession):
         """The calls of a request; one naming no object or no method is answered here
         (``web.opcua.statuses.call_problem``), the others by their methods."""
         await self._serve(len(params), len(params) * COST_CALL)
-        problems = [
-            call_problem(self.aspace, request) or self._refresh_problem(request)
-            for request in params
-        ]
+        problems = [self._call_problem(request) for request in params]
         served = [r for r, p in zip(params, problems, strict=True) if p is None]
         mark = CALLER.set(self.user)
         try:
             done = iter(await super().call(served) if served else [])
         finally:
             CALLER.reset(mark)
-        return [
-            next(done) if p is None else ua.CallMethodResult(StatusCode=ua_status(p))
-            for p in problems
-        ]
+        return [next(done) if p is None else p for p in problems]
 
-    def _refresh_problem(self, request: ua.CallMethodRequest) -> int | None:
-        """``BadSubscriptionIdInvalid`` for a ``ConditionRefresh`` (or ``…2``) of a
-        subscription of another session: the server verifies that the subscription is the
-        calling session's (OPC UA Part 9, "ConditionRefresh Method") — asyncua replayed
-        every retained condition into any session's subscription for whoever asked."""
-        if request.MethodId not in _REFRESH:
+    def _call_problem(self, request: ua.CallMethodRequest) -> ua.CallMethodResult | None:
+        """The answer to a call refused here (None: its method answers)."""
+        problem = call_problem(self.aspace, request)
+        if problem is not None:
+            return ua.CallMethodResult(StatusCode=ua_status(problem))
+        return self._refresh_problem(request)
+
+    def _refresh_problem(self, request: ua.CallMethodRequest) -> ua.CallMethodResult | None:
+        """Why a ``ConditionRefresh`` (or ``…2``) is refused (None: asyncua replays). Its
+        arguments first, as the face's other methods (OPC UA Part 4, "Call"): a
+        SubscriptionId or MonitoredItemId that is no integer is ``BadTypeMismatch`` in the
+        ``InputArgumentResults`` and ``BadInvalidArgument`` (asyncua looked a String up as
+        an id), too few or too many ``BadArgumentsMissing`` or ``BadTooManyArguments``.
+        Then ``BadSubscriptionIdInvalid`` for a subscription of another session: the server
+        verifies that the subscription is the calling session's (Part 9, "ConditionRefresh
+        Method") — asyncua replayed every retained condition into any session's
+        subscription for whoever asked."""
+        wanted = _REFRESH.get(request.MethodId)
+        if wanted is None:
             return None
-        given = request.InputArguments[0] if request.InputArguments else None
-        asked = given.Value if isinstance(given, ua.Variant) else None
-        if not isinstance(asked, int) or isinstance(asked, bool):
-            return None  # asyncua answers a missing or mistyped id
+        inputs = list(request.InputArguments or [])
+        if len(inputs) > wanted:
+            return ua.CallMethodResult(StatusCode=ua_status(StatusCodes.BadTooManyArguments))
+        ids = [v.Value if isinstance(v, ua.Variant) else v for v in inputs]
+        codes = [
+            ua_status(StatusCodes.Good if _an_id(v) else StatusCodes.BadTypeMismatch)
+            for v in inputs
+        ]
+        if any(not c.is_good() for c in codes):
+            bad = ua_status(StatusCodes.BadInvalidArgument)
+            return ua.CallMethodResult(StatusCode=bad, InputArgumentResults=codes)
+        if len(inputs) < wanted or None in ids:
+            return ua.CallMethodResult(StatusCode=ua_status(StatusCodes.BadArgumentsMissing))
         ours = {s.data.SubscriptionId for s in self._subscriptions()}
-        return None if asked in ours else StatusCodes.BadSubscriptionIdInvalid
+        if ids[0] in ours:
+            return None
+        return ua.CallMethodResult(StatusCode=ua_status(StatusCodes.BadSubscriptionIdInvalid))
 
     def _subscriptions(self) -> list[Any]:
         subs = self.subscription_service.subscriptions.values()
@@ -437,11 +456,23 @@ def _null(nid: object) -> bool:
     return not isinstance(nid, ua.NodeId) or nid.is_null()
 
 
-_REFRESH: Final = (
-    ua_id(ObjectIds.ConditionType_ConditionRefresh),
-    ua_id(ObjectIds.ConditionType_ConditionRefresh2),
-)
+_REFRESH: Final = {  # the method: how many arguments (SubscriptionId, MonitoredItemId)
+    ua_id(ObjectIds.ConditionType_ConditionRefresh): 1,
+    ua_id(ObjectIds.ConditionType_ConditionRefresh2): 2,
+}
 _CURRENT_WRITE: Final = 0x02  # AccessLevel's CurrentWrite bit
+
+
+def _an_id(given: object) -> bool:
+    """Whether ``given`` is an IntegerId's value (an integer variant), or Null: left out."""
+    if not isinstance(given, ua.Variant):
+        return False
+    if given.VariantType is ua.VariantType.Null or given.Value is None:
+        return True
+    value = given.Value
+    return (
+        given.VariantType in INT_VARIANTS and isinstance(value, int) and not isinstance(value, bool)
+    )
 
 
 def _read_only(attribute: int, value: ua.DataValue) -> ua.DataValue:

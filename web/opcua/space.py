@@ -192,6 +192,18 @@ class FbNodes:
     touched: set[int] = field(default_factory=set)  # the steps the last state set
 
 
+def _described(fb: str, folder: str, info: OperandInfo) -> str:
+    """An FB operand's description: a pin's direction and type and its comment; a chart
+    variable's comment in the chart and its type, or without one what it is
+    (``the chart's variable count of the GRAPH FB Seq_mix (INT)``)."""
+    if folder == "Pins":
+        said = f": {info.comment}" if info.comment else ""
+        return f"{info.direction} {info.type}".strip() + said
+    if info.comment:
+        return f"{info.comment} ({info.type})"
+    return f"the chart's variable {info.name} of the GRAPH FB {fb} ({info.type})"
+
+
 def _v(value: object, t: UaType) -> ua.Variant:
     return to_variant(value, t)
 
@@ -439,9 +451,7 @@ class Space:
                 t = ua_type(info.type)
                 nid = self.nid(fb, folder, info.name)
                 n.root(nid)
-                text = f"{info.direction} {info.type}".strip() + (
-                    f": {info.comment}" if info.comment else ""
-                )
+                text = _described(fb, folder, info)
                 n.var(self.nid(fb, folder), nid, info.name, t, description=text, writable=writable)
                 n.end_root()
                 fbn.operands[info.name] = (nid, t)

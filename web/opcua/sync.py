@@ -46,9 +46,12 @@ def sync_output_arguments() -> list[ua.Argument]:
 def sync_result(report: SyncReport) -> tuple[int, list[ua.Variant]]:
     """The status code and output variants of ``report``: ``Good`` with the steps, or the
     status code of why nothing was judged (no answer: ``BadCommunicationError``; the FB
-    not called yet: ``BadInvalidState``)."""
+    not called yet: ``BadInvalidState``; the queue full: ``BadResourceUnavailable``). A
+    report names no kind: its words decide, the FB's name it begins with left out (an FB
+    ``Seq_busy`` not called yet is no busy CPU)."""
     if report.error:
-        return refusal_status(report.error), []
+        said = report.error.removeprefix(f"{report.fb}: ") if report.fb else report.error
+        return refusal_status(said), []
     likely = [s.number for s in report.steps if s.likely]  # StepNo: a UInt16 already
     fits = [s.number for s in report.steps if s.fits]
     return StatusCodes.Good, [

@@ -13,6 +13,7 @@ from s7graph.web.bus.protocol import (
     REFUSAL_KINDS,
     CommandReply,
     Refusal,
+    SyncReport,
     decode,
     encode,
     refusal_reply,
@@ -27,6 +28,7 @@ from s7graph.web.opcua.methods import (
     outputs,
     refusal_status,
 )
+from s7graph.web.opcua.sync import sync_result
 
 SPECS = {s.name: s for s in method_specs()}
 
@@ -197,6 +199,24 @@ def test_a_reply_without_a_kind_still_reads_and_one_with_it_reads_anywhere() -> 
     assert decode(new, PreviousCommandReply).reason == "S3 is not active"
     with pytest.raises(ValueError, match="refusal kind 'nope': not one of access, state"):
         Refusal("nope", "x")
+
+
+@pytest.mark.parametrize(
+    ("report", "status"),
+    [
+        (SyncReport(fb="Seq_busy", error="Seq_busy: not called yet"), "BadInvalidState"),
+        (
+            SyncReport(error="busy: 16 synchronization queries are waiting"),
+            "BadResourceUnavailable",
+        ),
+        (SyncReport(error="no answer from CPU 'busy' within 5 s"), "BadCommunicationError"),
+    ],
+)
+def test_a_synchronization_refused_is_a_status_code_whatever_the_fb_is_named(
+    report: SyncReport, status: str
+) -> None:
+    got, out = sync_result(report)
+    assert ua.StatusCode(got).name == status and out == []
 
 
 def test_an_applied_commands_outputs() -> None:

@@ -3,7 +3,8 @@
 (OPC UA Part 4, 7.27), a write with one is refused and sends nothing, the null node id is
 ``BadNodeIdInvalid`` to a read and a write as to a browse, a value the CPU refuses as an
 argument is ``BadInvalidArgument``, a session may refresh the conditions of its own
-subscriptions only, and a sequence's variables say what they are."""
+subscriptions only (an id of another type is a type mismatch), and a sequence's and a
+chart's variables say what they are."""
 
 from __future__ import annotations
 
@@ -16,7 +17,15 @@ from asyncua import ua
 from asyncua.ua.uaerrors import UaStatusCodeError
 
 from s7graph.web.access.audit import read_audit
-from tests.web.opcua.helpers import FaceRig, connected, eventually, face_rig, node, run
+from tests.web.opcua.helpers import (
+    CHART,
+    FaceRig,
+    connected,
+    eventually,
+    face_rig,
+    node,
+    run,
+)
 
 if TYPE_CHECKING:
     from tests.conftest import BusCerts
@@ -24,11 +33,12 @@ if TYPE_CHECKING:
 pytestmark = pytest.mark.timeout(180)
 
 NUMBER = ua.NodeId("cpu1/DiagnosticBuffer/Number", 2)
+COMMENTED = CHART.replace("T#2S;", "T#2S;  // how long the mixer runs", 1)
 
 
 @pytest.fixture(scope="module")
 def face(tmp_path_factory: pytest.TempPathFactory, bus_certs: BusCerts) -> Iterator[FaceRig]:
-    with face_rig(tmp_path_factory.mktemp("trial"), bus_certs) as rig:
+    with face_rig(tmp_path_factory.mktemp("trial"), bus_certs, chart=COMMENTED) as rig:
         yield rig
 
 
@@ -190,6 +200,27 @@ def test_a_sequences_number_and_name_say_what_they_are(face: FaceRig) -> None:
     run(check())
 
 
+def test_a_chart_variable_says_its_comment_or_what_it_is(face: FaceRig) -> None:
+    async def check() -> None:
+        async with connected(face.url) as c:
+            folder = "cpu1/Seq_mix/Variables"
+            assert await eventually(lambda: _has(c, f"{folder}/dwell"))
+            dwell = await node(c, f"{folder}/dwell").read_description()
+            count = await node(c, f"{folder}/count").read_description()
+            assert dwell.Text == "how long the mixer runs (TIME)"
+            assert count.Text == "the chart's variable count of the GRAPH FB Seq_mix (INT)"
+
+    run(check())
+
+
+async def _has(c: Any, path: str) -> bool:
+    try:
+        await node(c, path).read_description()
+    except UaStatusCodeError:
+        return False
+    return True
+
+
 class _Events:
     def __init__(self) -> None:
         self.seen: list[Any] = []
@@ -224,6 +255,45 @@ def test_a_session_refreshes_the_conditions_of_its_own_subscriptions_only(
             assert await eventually(lambda: _async(end in kinds()))
             await asyncio.sleep(0.3)  # anything that came later would be here by now
             assert kinds().count(start) == kinds().count(end) == 1  # the other's calls sent none
+
+    run(check())
+
+
+def test_a_condition_refresh_with_an_id_of_another_type_is_a_type_mismatch(
+    face: FaceRig,
+) -> None:
+    """As the face's other methods answer a wrong type (OPC UA Part 4, "Call"), never
+    ``BadSubscriptionIdInvalid`` for a String that looks like an id."""
+    refresh = ua.NodeId(ua.ObjectIds.ConditionType_ConditionRefresh)
+    refresh2 = ua.NodeId(ua.ObjectIds.ConditionType_ConditionRefresh2)
+
+    async def check() -> None:
+        async with connected(face.url, "olga") as scada:
+            sub = await scada.create_subscription(50, _Events())
+            sid = sub.subscription_id
+            good = ua.Variant(sid, ua.VariantType.UInt32)
+            text = ua.Variant(str(sid), ua.VariantType.String)
+            calls = [
+                (refresh, [text]),
+                (refresh2, [good, ua.Variant(1.0, ua.VariantType.Double)]),
+                (refresh, []),
+                (refresh, [good, good]),
+            ]
+            asked = [
+                ua.CallMethodRequest(
+                    ObjectId=scada.nodes.server.nodeid, MethodId=m, InputArguments=i
+                )
+                for m, i in calls
+            ]
+            got = await scada.uaclient.call(asked)
+            assert [r.StatusCode.name for r in got] == [
+                "BadInvalidArgument",
+                "BadInvalidArgument",
+                "BadArgumentsMissing",
+                "BadTooManyArguments",
+            ]
+            assert [c.name for c in got[0].InputArgumentResults] == ["BadTypeMismatch"]
+            assert [c.name for c in got[1].InputArgumentResults] == ["Good", "BadTypeMismatch"]
 
     run(check())
 
