@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import os
+import shutil
 import signal
+import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -24,6 +27,18 @@ def pytest_configure(config: pytest.Config) -> None:
     starts — each test stopping one as a terminal does would wait for its time-out instead."""
     if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
         signal.signal(signal.SIGINT, signal.default_int_handler)
+    _private_endpoints(config)
+
+
+def _private_endpoints(config: pytest.Config) -> None:
+    """The suite's CPUs publish their endpoints (``web.bus.local``) in a folder of the
+    suite's own, made fresh and removed at its end: a CPU named ``cpu1`` running elsewhere on
+    the machine is never found by a test, and no test's CPU is found by a shell outside it.
+    Set in the environment, so the processes the tests start inherit it; a test that needs
+    another folder still sets its own."""
+    runtime = tempfile.mkdtemp(prefix="s7t-")
+    os.environ["XDG_RUNTIME_DIR"] = runtime
+    config.add_cleanup(lambda: shutil.rmtree(runtime, ignore_errors=True))
 
 
 @pytest.fixture
