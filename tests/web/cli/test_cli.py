@@ -10,6 +10,7 @@ import pytest
 
 from s7graph.web.cli import main
 from tests.paths import EXAMPLES
+from tests.web.cli.test_refusal_kind import answering
 
 
 @pytest.mark.parametrize(
@@ -161,25 +162,13 @@ def test_a_download_sent_without_an_answer_says_it_may_have_taken_effect(
 ) -> None:
     """The CPU may swap the chart, then go before it answers: no answer is not a refusal
     (docs/durability.md) — the download is *not confirmed*, and says where to look."""
-    import contextlib
-
     from s7graph.web.bus.protocol import CommandReply
     from s7graph.web.cli import remote
     from s7graph.web.cli.net import NetOptions
 
-    class Shell:
-        fb = "Seq"
-
-        def send(self, kind: object, args: object, timeout: float) -> CommandReply:
-            if getattr(args, "preview", False):
-                return CommandReply(applied=True, version=3, lines=["S2: renamed"])
-            return CommandReply(applied=False, reason="no answer from CPU 'cpu1' within 30 s")
-
-    @contextlib.contextmanager
-    def logged_in(*_: object, **__: object):  # type: ignore[no-untyped-def]
-        yield Shell()
-
-    monkeypatch.setattr(remote, "_logged_in", logged_in)
+    answering(
+        monkeypatch, CommandReply(applied=False, reason="no answer from CPU 'cpu1' within 30 s")
+    )
     chart = tmp_path / "c.s7g"
     chart.write_text((EXAMPLES / "drill" / "drill.s7g").read_text(encoding="utf-8"))
     rc = remote.download_command(NetOptions(), chart, fb=None, user="eng", yes=True)
@@ -194,26 +183,16 @@ def test_a_download_refused_for_its_blocks_names_each_source_as_the_command_line
 ) -> None:
     """The CPU knows a source by its file name; its diagnostics are said in the path given,
     as a chart's are, so an editor finds the place."""
-    import contextlib
-
     from s7graph.web.bus.protocol import CommandReply
     from s7graph.web.cli import remote
     from s7graph.web.cli.net import NetOptions
 
     said = "valve.scl:13:12: error[E201]: unexpected ';'"
-
-    class Shell:
-        fb = "Seq"
-
-        def send(self, kind: object, args: object, timeout: float) -> CommandReply:
-            why = f"the S7-SCL blocks do not compile: 1 error(s); {said}"
-            return CommandReply(applied=False, reason=why, lines=[said, "old.valve.scl:1:1: x"])
-
-    @contextlib.contextmanager
-    def logged_in(*_: object, **__: object):  # type: ignore[no-untyped-def]
-        yield Shell()
-
-    monkeypatch.setattr(remote, "_logged_in", logged_in)
+    why = f"the S7-SCL blocks do not compile: 1 error(s); {said}"
+    answering(
+        monkeypatch,
+        CommandReply(applied=False, reason=why, lines=[said, "old.valve.scl:1:1: x"]),
+    )
     chart = tmp_path / "c.s7g"
     chart.write_text((EXAMPLES / "drill" / "drill.s7g").read_text(encoding="utf-8"))
     (tmp_path / "v2").mkdir()

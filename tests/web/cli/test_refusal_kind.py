@@ -17,7 +17,7 @@ from s7graph.web.commands import Ack, NoArgs
 from tests.paths import EXAMPLES
 
 
-def _answering(monkeypatch: pytest.MonkeyPatch, reply: CommandReply) -> None:
+def answering(monkeypatch: pytest.MonkeyPatch, reply: CommandReply) -> None:
     """The shell logs in and gets ``reply`` to its command (a download's preview
     applies)."""
 
@@ -55,7 +55,7 @@ def test_a_refusal_is_told_from_an_unconfirmed_command_by_its_kind(
     capsys: pytest.CaptureFixture[str],
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    _answering(monkeypatch, CommandReply(applied=False, reason=reason, kind=kind))
+    answering(monkeypatch, CommandReply(applied=False, reason=reason, kind=kind))
     rc = remote.send_command(NetOptions(), fb=None, user="op", kind=Ack, args=NoArgs())
     assert rc == 1
     assert capsys.readouterr().err.startswith(f"s7graph: {said}")
@@ -79,7 +79,7 @@ def test_a_download_not_answered_is_told_by_its_kind_communication(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     """No answer (kind ``communication``) may have taken effect; a refusal did not."""
-    _answering(monkeypatch, CommandReply(applied=False, reason=reason, kind=kind))
+    answering(monkeypatch, CommandReply(applied=False, reason=reason, kind=kind))
     chart = tmp_path / "c.s7g"
     chart.write_text((EXAMPLES / "drill" / "drill.s7g").read_text(encoding="utf-8"))
     rc = remote.download_command(NetOptions(), chart, fb=None, user="eng", yes=True)
