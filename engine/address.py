@@ -59,9 +59,10 @@ _AREA_ALIAS = {
 MAX_BYTE = 65535
 """Highest byte (and timer/counter/DB) number an address may name."""
 
-_PLAIN = re.compile(r"(PI|PQ|PE|PA|I|Q|E|A|M|L)([XBWD]?)(\d+)(?:\.(\d+))?")
-_CELL = re.compile(r"([TCZ])(\d+)")
-_DB = re.compile(r"DB(\d+)\.DB([XBWD])(\d+)(?:\.(\d+))?")
+# re.ASCII: digits are 0-9 only (``M١.٠`` and ``M１.0`` are no S7 addresses)
+_PLAIN = re.compile(r"(PI|PQ|PE|PA|I|Q|E|A|M|L)([XBWD]?)(\d+)(?:\.(\d+))?", re.ASCII)
+_CELL = re.compile(r"([TCZ])(\d+)", re.ASCII)
+_DB = re.compile(r"DB(\d+)\.DB([XBWD])(\d+)(?:\.(\d+))?", re.ASCII)
 
 
 @dataclass(frozen=True, slots=True)

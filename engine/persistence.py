@@ -924,7 +924,7 @@ def _opened(
         if existed and not had_shm:
             _drop_shm(path, held)
         _let_go(held)
-        if isinstance(exc, sqlite3.DatabaseError):
+        if isinstance(exc, (sqlite3.DatabaseError, UnicodeDecodeError)):
             raise _unreadable(path, exc) from None
         raise
     return db, held, existed and not had_shm and shm.exists()
@@ -1029,6 +1029,12 @@ def _check_existing(db: sqlite3.Connection, path: Path) -> None:
         columns = {r[1] for r in db.execute("PRAGMA table_info(instances)")}
         if "state" in columns:
             raise StateFileError(path, "written by an older s7graph (no fingerprints)")
+    if "diagnostics" in tables:
+        have = {r[1] for r in db.execute("PRAGMA table_info(diagnostics)")}
+        added = dict(_ADDED_DIAG_COLUMNS)  # a file from before lacks these: read as defaults
+        lacking = [c for c in _DIAG_COLUMNS if c not in have and c not in added]
+        if lacking:
+            raise StateFileError(path, f"the diagnostics table has no {', '.join(lacking)} column")
     if "meta" in tables:
         mark = _meta(db, path, "format")
         if mark is not None and mark not in READABLE:
@@ -1610,7 +1616,7 @@ def _let_go(key: tuple[int, int] | None) -> None:
             os.close(held[0])
 
 
-def _unreadable(path: Path, exc: sqlite3.Error) -> StateFileError:
+def _unreadable(path: Path, exc: sqlite3.Error | UnicodeDecodeError) -> StateFileError:
     """The refusal of a file SQLite could not open: in use by another process (locked), or
     not readable."""
     code = int(getattr(exc, "sqlite_errorcode", 0) or 0) & 0xFF
@@ -1634,9 +1640,12 @@ def _unreadable(path: Path, exc: sqlite3.Error) -> StateFileError:
     return StateFileError(path, f"not a readable state file ({sqlite_words(exc)})")
 
 
-def sqlite_words(exc: sqlite3.Error) -> str:
+def sqlite_words(exc: sqlite3.Error | UnicodeDecodeError) -> str:
     """SQLite's error in words, without the text it could not decode (it may be long and is
-    not text): for every reader of a state file."""
+    not text): for every reader of a state file. SQLite's own message that is not UTF-8 (a
+    damaged schema quoted in it) is said with the bytes it could not decode replaced."""
+    if isinstance(exc, UnicodeDecodeError):
+        return bytes(exc.object).decode("utf-8", "replace")
     text = str(exc)
     if text.startswith("Could not decode to UTF-8 column "):
         column = text.removeprefix("Could not decode to UTF-8 column ").split(" with text ")[0]

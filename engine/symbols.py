@@ -227,7 +227,10 @@ class SymbolTable:
             where = SourceLocation(file, line0 + i, 1)
             if not raw.strip() or _is_comment(raw):
                 continue
-            row = next(csv.reader(io.StringIO(raw), delimiter=sep, skipinitialspace=True))
+            try:
+                row = next(csv.reader(io.StringIO(raw), delimiter=sep, skipinitialspace=True))
+            except csv.Error as exc:  # a field over the csv module's limit (131,072 characters)
+                raise SymbolError(f"cannot read the row: {exc}", where) from None
             row = [c.strip() for c in row]
             if columns is None and _looks_like_header(row):
                 columns = _header_columns(row, where)

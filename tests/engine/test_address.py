@@ -87,6 +87,16 @@ def test_unknown_or_misaligned_addresses_raise_address_error_naming_the_text(tex
     assert repr(text) in str(info.value)
 
 
+@pytest.mark.parametrize(
+    "text", ["M\u0661.\u0660", "Q\uff11.0", "MW\uff11\uff10", "DB\uff11.DBX0.0", "T\uff11"]
+)
+def test_digits_other_than_0_to_9_make_no_address(text: str) -> None:
+    """Before: ``M١.٠`` (Arabic-Indic digits) and ``Q１.0`` (full-width) were M1.0 and Q1.0,
+    in a chart, an S7-SCL source and a symbol file alike."""
+    with pytest.raises(AddressError, match="not an S7 address"):
+        parse_address(text)
+
+
 def test_address_error_names_the_source_location_when_given() -> None:
     where = SourceLocation("drill.s7g", 12, 5)
     with pytest.raises(AddressError, match=r"^drill\.s7g:12:5: .*'MW10\.3'"):

@@ -210,3 +210,39 @@ def test_run_refuses_a_diagnostics_row_with_nulls_in_one_line_exit_2(
     problem = "malformed diagnostics row 9999: t_ns is NULL, not an integer"
     assert err.splitlines() == [_fresh(state, problem)]
     assert _content(state) == before
+
+
+@pytest.mark.parametrize("column", ["seq", "t_ns", "message"])
+def test_a_diagnostics_table_without_one_of_its_columns_is_refused_naming_it(
+    tmp_path: Path, column: str
+) -> None:
+    """Before: ``internal error: KeyError: 't_ns'`` (``OperationalError: no such column:
+    seq``). The columns added since (``ob``, ``priority``, ``wall_ns``) a file from before
+    may lack: those read as their defaults."""
+    path, before = _damaged(
+        tmp_path, f"ALTER TABLE diagnostics RENAME COLUMN {column} TO was_{column}"
+    )
+    problem = f"the diagnostics table has no {column} column"
+    assert _line(path) == _fresh(path, problem)
+    assert _content(path) == before
+
+
+def test_a_damaged_schema_sqlite_cannot_quote_as_utf8_is_refused_in_words(
+    tmp_path: Path,
+) -> None:
+    """SQLite's own message quotes the damaged schema, byte 0xBA with it: Python could not
+    decode the message. Before: ``internal error: 'utf-8' codec can't decode byte 0xba``."""
+    path = _written(tmp_path / "s.sqlite")
+    _edit(
+        path,
+        ("PRAGMA writable_schema=ON", ()),
+        (
+            "UPDATE sqlite_master SET sql=CAST(? AS TEXT) WHERE name='audit'",
+            (b"CREATE TABLE audit(t_ns INTEGER NOT \xbaULL)",),
+        ),
+    )
+    problem = (
+        'not a readable state file (malformed database schema (audit) - near "\ufffdULL": '
+        "syntax error)"
+    )
+    assert _line(path) == _fresh(path, problem)

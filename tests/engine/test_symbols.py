@@ -67,6 +67,14 @@ def test_bad_address_in_a_colon_entry_names_its_own_line() -> None:
         SymbolTable.from_text(text, file="s.s7g")
 
 
+@pytest.mark.parametrize("sep", [";", ","])
+def test_a_row_with_a_field_over_the_csv_limit_is_a_symbol_error_naming_its_line(sep: str) -> None:
+    """Before: ``internal error: field larger than field limit (131072)`` in ``check``."""
+    text = f'"A" {sep} I0.0 {sep} BOOL\n"B" {sep} I0.1 {sep} BOOL {sep} {"x" * 131_073}\n'
+    with pytest.raises(SymbolError, match=r"^s\.sym:2:1: cannot read the row: field larger"):
+        SymbolTable.from_text(text, file="s.sym")
+
+
 def test_resolve_falls_back_to_absolute_addresses_but_not_for_quoted_names() -> None:
     table = SymbolTable()
     assert table.resolve_typed("MW4") == (parse_address("MW4"), "WORD")

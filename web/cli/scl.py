@@ -139,9 +139,8 @@ class SclSession:
             if found[0].area in (Area.T, Area.C):
                 self.cpu.mem.read_as(found[0], "BOOL")  # a cell beyond the CPU's: S7Error
             return
-        if not self.dbvars.is_db_name(name):
-            raise S7Error(f"unknown name {name}: not an address, symbol or DBn.variable")
-        (self.dbvars.writer if writing else self.dbvars.reader)(name)
+        unknown = f"unknown name {name}: not an address, symbol or DBn.variable"
+        self.dbvars.check(name, writing=writing, unknown=unknown)
 
     def get(self, name: str) -> Any:
         found = self._address(name)

@@ -30,7 +30,7 @@ from s7graph.steps.scl.access import (
     read_bytes,
     write_bytes,
 )
-from s7graph.web.harness.operands import stimulus_value
+from s7graph.web.harness.operands import bad_address, stimulus_value
 
 __all__ = ["DbVariables"]
 
@@ -49,6 +49,21 @@ class DbVariables:
             return parse_name(name) is not None
         except ValueError:
             return True
+
+    def check(self, name: str, *, writing: bool, unknown: str) -> None:
+        """``S7Error`` unless ``name`` is a DB variable that resolves (one that can be
+        written, with ``writing``): a name written as an S7 address that is none is refused
+        as that address, with why (``bad address 'M10.8': bit 8 outside 0..7``), any other
+        name of no DB variable's form as ``unknown``."""
+        bad = bad_address(name)
+        if not self.is_db_name(name):
+            raise bad or S7Error(unknown)
+        try:
+            (self.writer if writing else self.reader)(name)
+        except S7Error:
+            if bad is None:
+                raise
+            raise bad from None
 
     def reader(self, name: str) -> Callable[[], Any]:
         """A function giving the variable's value as JSON holds it; ``S7Error`` when the

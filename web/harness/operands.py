@@ -29,6 +29,18 @@ def address_of(symbols: SymbolTable | None, name: str) -> tuple[Address, str] | 
     return addr, default_type(addr)
 
 
+def bad_address(name: str) -> AddressError | None:
+    """Why ``name``, written as an S7 address, is none (``M10.8``: bit 8 outside 0..7;
+    ``DB1.DBX99999.0``: byte 99999 outside 0..65535); None for a name of another form or a
+    valid address. A name no address, symbol or variable resolves is refused with this,
+    not as an unknown name."""
+    try:
+        parse_address(name)
+    except AddressError as exc:
+        return None if "not an S7 address" in exc.message else exc
+    return None
+
+
 def write_operand(mem: Memory, addr: Address, type_name: str, value: Any) -> None:
     """Write ``value`` at ``addr`` as ``type_name``; an input on the module side too, so
     the CPU reads it into the process image at the start of the next cycle. A word or

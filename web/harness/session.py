@@ -277,10 +277,8 @@ class ChartSession:
                 raise S7Error(f'{exc}; the symbol "{name}" is written with its quotes') from None
             return
         if self._address(name) is None:
-            if self.dbvars.is_db_name(name):
-                (self.dbvars.writer if writing else self.dbvars.reader)(name)
-                return
-            raise S7Error(f"unknown name {name}: not an address, symbol, FB pin or variable")
+            unknown = f"unknown name {name}: not an address, symbol, FB pin or variable"
+            self.dbvars.check(name, writing=writing, unknown=unknown)
 
     def get(self, name: str) -> Any:
         """The current value of an address, symbol, FB pin, variable or step attribute."""

@@ -162,6 +162,32 @@ def test_a_db_variable_that_is_not_there_is_one_line_and_exit_2(
     assert err.splitlines() == [f"s7graph: error: {why}"]
 
 
+@pytest.mark.parametrize("source", ["seq_s7g", "blocks_scl"])
+@pytest.mark.parametrize(
+    ("name", "why"),
+    [
+        ("M10.8", "bit 8 outside 0..7"),
+        ("DB10.DBX99999.0", "byte/number 99999 outside 0..65535"),
+        ("DB0.DBW0", "DB number 0 outside 1..65535"),
+        ("MW1.3", "misaligned: a WORD address has no bit number"),
+    ],
+)
+def test_an_address_out_of_its_range_is_refused_as_the_address_it_is(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], source: str, name: str, why: str
+) -> None:
+    """Watched or set by a stimulus, in a chart's run as in a program's. Before: ``unknown
+    name M10.8: not an address, symbol …``, ``DB10.DBX99999.0: cannot read '.0'``."""
+    f = _write(tmp_path, seq_s7g=CHART, blocks_scl=BLOCKS, s_jsonl="")
+    said = f"s7graph: error: bad address {name!r}: {why}"
+    f["s_jsonl"].write_text(json.dumps({"at_ms": 0, "set": {name: 1}}) + "\n")
+    blocks = ["--blocks", f["blocks_scl"]] if source == "seq_s7g" else []
+    rc, trace, err = _sim(capsys, f[source], *blocks, "--watch", name)
+    assert (rc, trace, err.splitlines()) == (2, [], [said])
+    rc, trace, err = _sim(capsys, f[source], *blocks, "--stimulus", f["s_jsonl"])
+    assert (rc, trace) == (2, [])
+    assert err.splitlines() == [said.replace("error: ", f"error: {f['s_jsonl']}:1: ")]
+
+
 def test_a_program_calls_the_blocks_of_an_earlier_source(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
