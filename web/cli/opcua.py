@@ -23,8 +23,7 @@ from pathlib import Path
 
 from s7graph.web.cli.net import NetOptions, error_words
 from s7graph.web.cli.stopping import wait_until_stopped
-from s7graph.web.cli.view import _as_child
-from s7graph.web.cli.view_process import ViewProcess
+from s7graph.web.cli.view_process import ViewProcess, as_child
 
 __all__ = ["ANONYMOUS", "OpcuaProcess", "opcua_command", "writes_problem"]
 
@@ -76,7 +75,7 @@ def opcua_command(
     stopped, 2 when it cannot serve (one line on stderr)."""
     stop = threading.Event()
     if child:
-        _as_child(stop)  # lower its priority before the imports: they take a while
+        as_child(stop)  # lower its priority before the imports: they take a while
     from s7graph.web.bus.client import unread_note, wait_for_cpus
     from s7graph.web.bus.protocol import ProtocolError
     from s7graph.web.bus.session import open_session, peer_problem

@@ -16,8 +16,6 @@ step change up on its way to the page for less. Stopped, it says so in one line 
 
 from __future__ import annotations
 
-import contextlib
-import os
 import sys
 import threading
 
@@ -25,6 +23,7 @@ from s7graph.web.bus.client import unread_note, wait_for_cpus
 from s7graph.web.bus.session import open_session, peer_problem
 from s7graph.web.cli.net import NetOptions, error_words, is_loopback_host
 from s7graph.web.cli.stopping import wait_until_stopped
+from s7graph.web.cli.view_process import as_child
 from s7graph.web.cli.waiting import local_cpu
 from s7graph.web.collector import freeze_start
 from s7graph.web.view.edge import ViewSide
@@ -50,7 +49,7 @@ def web_command(
 ) -> int:
     stop = threading.Event()
     if child:
-        _as_child(stop)
+        as_child(stop)
     problem = NetOptions(**{**net.__dict__, "host": "127.0.0.1"}).problem()
     if problem:
         return _fail(problem)
@@ -114,24 +113,3 @@ def web_command(
         view.close()
     print("s7graph: view stopped", file=sys.stderr, flush=True)
     return 0
-
-
-CHILD_NICE = 5
-"""How much a ``--child`` view lowers its priority below the CPU's process."""
-
-
-def _as_child(stop: threading.Event) -> None:
-    """The view of a ``run --web``: lower its priority, and set ``stop`` when stdin closes
-    (the CPU's process ended, even by SIGKILL)."""
-    with contextlib.suppress(OSError):
-        os.nice(CHILD_NICE)
-
-    def watch() -> None:
-        try:  # the raw descriptor: a buffered reader's lock would hold the exit up
-            while os.read(0, 4096):
-                pass
-        except OSError:
-            pass
-        stop.set()
-
-    threading.Thread(target=watch, name="s7graph-parent", daemon=True).start()

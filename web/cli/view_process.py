@@ -16,6 +16,7 @@ the CPU.
 from __future__ import annotations
 
 import contextlib
+import os
 import re
 import signal
 import subprocess
@@ -29,7 +30,15 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from s7graph.web.cli.net import NetOptions
 
-__all__ = ["MAX_BACKOFF_S", "STABLE_S", "ViewProcess", "run_view", "view_endpoints"]
+__all__ = [
+    "CHILD_NICE",
+    "MAX_BACKOFF_S",
+    "STABLE_S",
+    "ViewProcess",
+    "as_child",
+    "run_view",
+    "view_endpoints",
+]
 
 FIRST_BACKOFF_S = 1.0
 MAX_BACKOFF_S = 30.0
@@ -229,3 +238,24 @@ def run_view(net: NetOptions, port: int, bus: str) -> ViewProcess:
         on_url=served,
     )
     return view
+
+
+CHILD_NICE = 5
+"""How much a ``--child`` view lowers its priority below the CPU's process."""
+
+
+def as_child(stop: threading.Event) -> None:
+    """The view of a ``run --web``: lower its priority, and set ``stop`` when stdin closes
+    (the CPU's process ended, even by SIGKILL)."""
+    with contextlib.suppress(OSError):
+        os.nice(CHILD_NICE)
+
+    def watch() -> None:
+        try:  # the raw descriptor: a buffered reader's lock would hold the exit up
+            while os.read(0, 4096):
+                pass
+        except OSError:
+            pass
+        stop.set()
+
+    threading.Thread(target=watch, name="s7graph-parent", daemon=True).start()

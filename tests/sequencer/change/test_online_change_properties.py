@@ -219,8 +219,10 @@ def twin(
     mine, theirs = fresh.cpu.mem, plant.cpu.mem
     for area in ("inputs", "outputs", "markers", "periph_in", "periph_out"):
         getattr(mine, area)[:] = getattr(theirs, area)
-    mine.timers[:] = copy.deepcopy(theirs.timers)
-    mine.counters[:] = copy.deepcopy(theirs.counters)
+    # cells of scalars: a copy of each is a deep copy (copy.deepcopy of the 512 cells was
+    # most of a twin's time)
+    mine.timers[:] = [copy.copy(cell) for cell in theirs.timers]
+    mine.counters[:] = [copy.copy(cell) for cell in theirs.counters]
     message_list(fresh.cpu).restore(message_list(plant.cpu).snapshot())
     assert g.idb is not None and fresh.graph.idb is not None
     data = json.loads(json.dumps(g.idb.snapshot()))
