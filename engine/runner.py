@@ -185,6 +185,10 @@ def _threads() -> list[int]:
         return []
 
 
+PIN_ROUNDS = 8
+"""How often ``Runner._keep_core`` lists the threads to pin until none is new."""
+
+
 def _other_threads() -> list[int]:
     """The native ids of this process's threads but the calling one (Linux), else none."""
     me = threading.get_native_id()
@@ -473,10 +477,18 @@ class Runner:
 
     @staticmethod
     def _keep_core(core: int, everywhere: set[int]) -> bool:
-        """The calling (scan) thread on ``core``, the process's other threads off it."""
+        """The calling (scan) thread on ``core``, the process's other threads off it. A
+        thread inherits its starter's processors, so one started by a thread not pinned yet
+        is listed again until none is new (at most ``PIN_ROUNDS`` lists)."""
         rest = rest_of(core, everywhere)
-        for tid in _other_threads():
-            pin(rest, tid)
+        done: set[int] = set()
+        for _ in range(PIN_ROUNDS):
+            new = [tid for tid in _other_threads() if tid not in done]
+            if not new:
+                break
+            for tid in new:
+                pin(rest, tid)
+            done.update(new)
         return pin({core})
 
     def _loop(self, duration_s: float | None) -> None:

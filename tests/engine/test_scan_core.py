@@ -256,3 +256,23 @@ def test_the_writers_encoder_works_on_the_kept_core_while_the_scan_thread_sleeps
 
     _, seen = _at_scan_5(core, look, StateStore(tmp_path / "s.sqlite"))
     assert seen == {"encoder": {core}, "writer": allowed - {core}}
+
+
+def test_a_thread_started_while_the_others_are_pinned_is_pinned_off_the_scans_core_too(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A thread inherits its starter's processors: one started by a thread not yet pinned
+    would run everywhere. The threads are listed again until none is new."""
+    from s7graph.engine import runner
+
+    listings = iter([[11], [11, 12], [11, 12], [11, 12]])  # 12 appears while 11 is pinned
+    pinned: dict[int, set[int]] = {}
+
+    def pin(cpus: set[int], tid: int = 0) -> bool:
+        pinned[tid] = set(cpus)
+        return True
+
+    monkeypatch.setattr(runner, "_other_threads", lambda: next(listings))
+    monkeypatch.setattr(runner, "pin", pin)
+    assert Runner._keep_core(1, TWO)
+    assert pinned == {11: {0}, 12: {0}, 0: {1}}  # both off core 1, the scan thread on it
