@@ -22,6 +22,7 @@ from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedTok
 
 from s7graph.engine.errors import S7Error, SourceLocation
 from s7graph.engine.grammars import lark_parser
+from s7graph.engine.literals import shorten
 
 __all__ = [
     "SAssign",
@@ -308,7 +309,7 @@ def _fail(exc: UnexpectedInput, file: str, origin: tuple[int, int], what: str) -
         if exc.token.type == "$END":
             msg = f"{what} does not parse: it ends too early"
         else:
-            msg = f"{what} does not parse: unexpected {str(exc.token)!r}"
+            msg = f"{what} does not parse: unexpected {shorten(str(exc.token))!r}"
     elif isinstance(exc, UnexpectedCharacters):
         msg = f"{what} does not parse: unexpected character {exc.char!r}"
     else:
@@ -374,16 +375,34 @@ the tree is turned into nodes recursively, two or three Python calls a level, an
 stops at about 1,000."""
 
 
-def _too_deep(tree: Tree[Any]) -> Tree[Any] | None:
-    """The first node of ``tree``, in reading order, deeper than ``MAX_TREE_DEPTH`` (None:
-    none is), found without recursion."""
-    stack: list[tuple[Tree[Any], int]] = [(tree, 1)]
+def _too_deep(tree: Tree[Any]) -> tuple[Tree[Any], Tree[Any] | None] | None:
+    """The first node of ``tree``, in reading order, deeper than ``MAX_TREE_DEPTH``, and the
+    chain of binary operators it is a left operand of (``a AND b AND c …`` nests one level a
+    term; None when it is in none) — None when no node is that deep; found without
+    recursion."""
+    stack: list[tuple[Tree[Any], int, Tree[Any] | None]] = [(tree, 1, None)]
     while stack:
-        node, depth = stack.pop()
+        node, depth, chain = stack.pop()
         if depth > MAX_TREE_DEPTH:
-            return node
-        stack += [(c, depth + 1) for c in reversed(node.children) if isinstance(c, Tree)]
+            return node, chain
+        binary = node.data == "binary"
+        for k in range(len(node.children) - 1, -1, -1):
+            c = node.children[k]
+            if isinstance(c, Tree):
+                left = binary and k == 0 and c.data == "binary"
+                stack.append((c, depth + 1, (chain or node) if left else None))
     return None
+
+
+def _chain(top: Tree[Any]) -> tuple[int, str]:
+    """The terms of the chain of binary operators starting at ``top`` (its left operands,
+    one inside the other) and its operator (``AND``; "operators" when they differ)."""
+    terms, ops, node = 1, set(), top
+    while isinstance(node, Tree) and node.data == "binary":
+        op = str(node.children[1]).upper()
+        ops.add("AND" if op == "&" else op)
+        terms, node = terms + 1, node.children[0]
+    return terms, ops.pop() if len(ops) == 1 else "operators"
 
 
 def parse_tree(text: str, start: str, file: str, origin: tuple[int, int], what: str) -> Any:
@@ -395,14 +414,22 @@ def parse_tree(text: str, start: str, file: str, origin: tuple[int, int], what: 
         tree = _parser(start).parse(text)
     except UnexpectedInput as exc:
         raise _fail(exc, file, origin, what) from None
-    deep = _too_deep(tree) if isinstance(tree, Tree) else None
-    if deep is not None:
-        line, col = shift(getattr(deep.meta, "line", 1), getattr(deep.meta, "column", 1), origin)
-        raise StSyntaxError(
+    found = _too_deep(tree) if isinstance(tree, Tree) else None
+    if found is not None:
+        deep, chain = found
+        said = (
             f"{what} nests deeper than {MAX_TREE_DEPTH} levels here (an import reads at "
-            f"most {MAX_TREE_DEPTH})",
-            SourceLocation(file, line, col),
+            f"most {MAX_TREE_DEPTH})"
         )
+        if chain is not None:  # a long flat chain, not nesting: say so, where it starts
+            terms, op = _chain(chain)
+            said = (
+                f"{what} has an expression of {terms:,} terms joined by {op} here: each is "
+                f"a level, and an import reads at most {MAX_TREE_DEPTH} (split the expression)"
+            )
+            deep = chain
+        line, col = shift(getattr(deep.meta, "line", 1), getattr(deep.meta, "column", 1), origin)
+        raise StSyntaxError(said, SourceLocation(file, line, col))
     return tree
 
 

@@ -224,6 +224,8 @@ def _phrased(e: UnexpectedInput, file: str, text: str) -> Diagnostic:
     if isinstance(e, UnexpectedCharacters):
         allowed = set(e.allowed or ())
         hint = f"; expected {_expected(allowed)}" if 0 < len(allowed) <= 7 else ""
+        if e.char.isdigit():  # `١٢`, `１２`: a digit, but not one S7 writes
+            hint = " (S7 numbers have the digits 0-9 only)"
         return error("E001", f"unexpected character {e.char!r}{hint}", loc)
     return error("E001", str(e), loc)
 

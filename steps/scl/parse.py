@@ -222,6 +222,8 @@ def _syntax(exc: UnexpectedInput, file: str, text: str) -> Diagnostic:
         hint = syntax_hint(exc.char, None, text[pos + 1 :] if pos is not None else "")
         if hint is None and exc.char.isalpha():  # `ä`: a letter, but not one of a name
             hint = f"{exc.char!r} cannot be in a name: S7-SCL names have letters A-Z, digits and _"
+        elif hint is None and exc.char.isdigit():  # `١٢`, `１２`: a digit, but not one of S7's
+            hint = f"{exc.char!r} is not a digit of S7-SCL: numbers have the digits 0-9 only"
         return error("E201", hint or f"unexpected character {exc.char!r}", loc)
     if not isinstance(exc, UnexpectedToken):
         return error("E201", str(exc), loc)

@@ -60,6 +60,9 @@ class SclType:
     element: SclType | None = None
     fields: tuple[tuple[str, SclType], ...] = ()
     name: str = field(default="", compare=False)
+    _members: dict[str, tuple[str, SclType]] | None = field(
+        default=None, init=False, compare=False, repr=False
+    )
 
     def __str__(self) -> str:
         if self.kind == "STRING":
@@ -82,12 +85,16 @@ class SclType:
         return n
 
     def field_type(self, name: str) -> tuple[str, SclType] | None:
-        """A STRUCT's member by name (case-insensitive): its declared spelling and type."""
-        key = name.upper()
-        for fname, ftype in self.fields:
-            if fname.upper() == key:
-                return fname, ftype
-        return None
+        """A STRUCT's member by name (case-insensitive): its declared spelling and type (the
+        first so spelled). The index is built once per type: a DB of N members set in its
+        BEGIN section is looked up N times."""
+        members = self._members
+        if members is None:
+            members = {}
+            for fname, ftype in self.fields:
+                members.setdefault(fname.upper(), (fname, ftype))
+            object.__setattr__(self, "_members", members)
+        return members.get(name.upper())
 
     @property
     def aggregate(self) -> bool:

@@ -311,6 +311,51 @@ def test_an_st_text_nested_too_deeply_is_refused_where_it_passes_the_limit(
     assert int(m[1]) == 5 and _at(text, 5, int(m[2])).startswith("NOT NOT")
 
 
+def _iec(condition: str) -> str:
+    """An IEC textual SFC of two steps; ``condition`` is T1's, on line 5 at column 29."""
+    return (
+        "FUNCTION_BLOCK F\nVAR a : BOOL; n : INT; END_VAR\nINITIAL_STEP S1: END_STEP\n"
+        f"STEP S2: END_STEP\nTRANSITION FROM S1 TO S2 := {condition};\nEND_TRANSITION\n"
+        "TRANSITION FROM S2 TO S1 := a;\nEND_TRANSITION\nEND_FUNCTION_BLOCK\n"
+    )
+
+
+def test_a_flat_chain_past_the_limit_is_refused_as_an_expression_of_so_many_terms(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """20,000 ANDs in a row nest nothing: the refusal counts the terms, where they start."""
+    rc, err = run(tmp_path, capsys, "flat.st", _iec(" AND ".join(["a"] * 20_000)))
+    assert rc == 2
+    assert err[0].endswith(
+        "flat.st:5:29: error[I001]: the IEC text has an expression of 20,000 terms joined by "
+        f"AND here: each is a level, and an import reads at most {MAX_TREE_DEPTH} (split the "
+        "expression)"
+    )
+
+
+def test_a_syntax_error_quotes_at_most_forty_characters_of_the_text(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    rc, err = run(tmp_path, capsys, "bad.st", _iec("a AND AND " + " AND ".join(["a"] * 2_000)))
+    assert rc == 2
+    said = err[0].split("does not parse: unexpected ", 1)[1]
+    assert said == repr("a AND a AND a AND a AND a AND a AND a...")
+
+
+@pytest.mark.parametrize("digits", ["١٢", "１２"])
+def test_a_number_of_non_ascii_digits_is_a_parse_error_not_twelve(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], digits: str
+) -> None:
+    """IEC 61131-3 numbers have the digits 0-9 (section 2.2.1): another script's digits are
+    not read as 12 but refused where they stand."""
+    rc, err = run(tmp_path, capsys, "digits.st", _iec(f"n = {digits}"))
+    assert rc == 2
+    assert (
+        f"digits.st:5:33: error[I001]: the IEC text does not parse: unexpected '{digits}"
+        in (err[0])
+    )
+
+
 def _lad(nots: int, contacts: int = 1) -> str:
     """A transition's LAD network: ``contacts`` contacts in series on the power rail, then
     ``nots`` NOT boxes one after another, each part on a line of its own."""

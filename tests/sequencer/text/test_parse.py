@@ -299,3 +299,18 @@ def test_a_call_given_a_qualifier_says_call_is_the_qualifier() -> None:
         "a block call is an action of its own: write CALL FB 17, … with no qualifier before"
         " CALL (CALL is the qualifier, as in S7-GRAPH)"
     )
+
+
+@pytest.mark.parametrize("digits", ["١٢", "１２"])
+def test_a_number_of_non_ascii_digits_is_a_syntax_error_where_it_stands(digits: str) -> None:
+    """S7 numbers are written with the digits 0-9 only: Arabic-Indic or full-width digits
+    are not read as 12."""
+    text = (
+        'FUNCTION_BLOCK "T"\nSEQUENCE 1\n  INITIAL_STEP S1: END_STEP\n  STEP S2: END_STEP\n'
+        f"  TRANSITION T1 FROM S1 TO S2 := MW0 < {digits};\nEND_SEQUENCE\nEND_FUNCTION_BLOCK\n"
+    )
+    with pytest.raises(ChartSyntaxError) as info:
+        parse_chart(text, "x.s7g")
+    (d, *_) = info.value.diagnostics
+    assert (d.code, d.loc.line, d.loc.col) == ("E001", 5, 40)
+    assert d.message.startswith(f"unexpected character {digits[0]!r} (S7 numbers have the digits")

@@ -70,6 +70,27 @@ def test_a_long_string_literal_is_a_diagnostic() -> None:
     assert [c for c, _, _ in codes(fb("i := LEN('" + "x" * 300 + "');"))] == ["E203"]
 
 
+@pytest.mark.parametrize("digits", ["١٢", "１２"])
+def test_a_number_of_non_ascii_digits_is_a_syntax_error_where_it_stands(digits: str) -> None:
+    """S7-SCL numbers have the digits 0-9 only: Arabic-Indic or full-width digits are not
+    read as 12."""
+    found = check_scl(fb(f"i := WORD_TO_INT(INT_TO_WORD({digits}));"), "d.scl")
+    assert [(d.code, d.loc.line, d.loc.col) for d in found] == [("E201", 3, 30)]
+    assert f"{digits[0]!r} is not a digit of S7-SCL" in found[0].message
+
+
+def test_a_db_of_many_members_set_in_begin_gives_each_member_its_value() -> None:
+    """Members are found by name through an index (a DB of N members set in BEGIN is not
+    N×N comparisons)."""
+    n = 3_000
+    members = "".join(f"  v{k} : INT;\n" for k in range(n))
+    sets = "".join(f"  V{k} := {k % 1000};\n" for k in range(n))
+    src = f"DATA_BLOCK DB1\nSTRUCT\n{members}END_STRUCT\nBEGIN\n{sets}END_DATA_BLOCK\n"
+    src += "ORGANIZATION_BLOCK OB1\nEND_ORGANIZATION_BLOCK\n"
+    cpu = run(src)
+    assert [cpu.mem.get(f"DB1.DBW{2 * k}") for k in (0, 1, 999, 1000, n - 1)] == [0, 1, 999, 0, 999]
+
+
 ENDLESS = {
     "while": "WHILE TRUE DO END_WHILE;",
     "repeat": "REPEAT i := i + 1; UNTIL FALSE END_REPEAT;",
