@@ -97,6 +97,7 @@ __all__ = [
     "RT_PRIORITY",
     "IdleGc",
     "Runner",
+    "keep_core",
     "keep_small_pages",
     "refused_startup",
     "set_realtime",
@@ -186,13 +187,29 @@ def _threads() -> list[int]:
 
 
 PIN_ROUNDS = 8
-"""How often ``Runner._keep_core`` lists the threads to pin until none is new."""
+"""How often :func:`keep_core` lists the threads to pin until none is new."""
 
 
 def _other_threads() -> list[int]:
     """The native ids of this process's threads but the calling one (Linux), else none."""
     me = threading.get_native_id()
     return [tid for tid in _threads() if tid != me]
+
+
+def keep_core(core: int, everywhere: set[int]) -> bool:
+    """The calling (scan) thread on ``core``, the process's other threads off it. A
+    thread inherits its starter's processors, so one started by a thread not pinned yet
+    is listed again until none is new (at most ``PIN_ROUNDS`` lists)."""
+    rest = rest_of(core, everywhere)
+    done: set[int] = set()
+    for _ in range(PIN_ROUNDS):
+        new = [tid for tid in _other_threads() if tid not in done]
+        if not new:
+            break
+        for tid in new:
+            pin(rest, tid)
+        done.update(new)
+    return pin({core})
 
 
 class IdleGc:
@@ -450,7 +467,7 @@ class Runner:
                 set_realtime(helpers, tid, turns=True)
         everywhere = allowed_cpus() | ({self.core} if self.core is not None else set())
         if self.core is not None:  # (the calling thread may have kept off it already)
-            self.pinned = self._keep_core(self.core, everywhere)
+            self.pinned = keep_core(self.core, everywhere)
             encoder = self.writer.encoder_id if self.writer is not None else None
             if self.pinned and encoder is not None:
                 pin({self.core}, encoder)  # it works while the scan thread sleeps
@@ -474,22 +491,6 @@ class Runner:
             if previous is not None:
                 signal.signal(_ABORT_SIGNAL, previous)
             self._signal_abort = False
-
-    @staticmethod
-    def _keep_core(core: int, everywhere: set[int]) -> bool:
-        """The calling (scan) thread on ``core``, the process's other threads off it. A
-        thread inherits its starter's processors, so one started by a thread not pinned yet
-        is listed again until none is new (at most ``PIN_ROUNDS`` lists)."""
-        rest = rest_of(core, everywhere)
-        done: set[int] = set()
-        for _ in range(PIN_ROUNDS):
-            new = [tid for tid in _other_threads() if tid not in done]
-            if not new:
-                break
-            for tid in new:
-                pin(rest, tid)
-            done.update(new)
-        return pin({core})
 
     def _loop(self, duration_s: float | None) -> None:
         cpu = self.cpu

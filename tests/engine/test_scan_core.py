@@ -274,5 +274,5 @@ def test_a_thread_started_while_the_others_are_pinned_is_pinned_off_the_scans_co
 
     monkeypatch.setattr(runner, "_other_threads", lambda: next(listings))
     monkeypatch.setattr(runner, "pin", pin)
-    assert Runner._keep_core(1, TWO)
+    assert runner.keep_core(1, TWO)
     assert pinned == {11: {0}, 12: {0}, 0: {1}}  # both off core 1, the scan thread on it
