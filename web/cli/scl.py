@@ -35,8 +35,8 @@ from s7graph.engine.record import ScanRecord
 from s7graph.engine.symbols import SymbolTable
 from s7graph.sequencer.checks.default_cpu import scl_default_cpu_warnings
 from s7graph.steps.diagnostics import sort_key
-from s7graph.steps.scl import check_scl, format_diagnostic
-from s7graph.steps.scl.parse import parse_source
+from s7graph.steps.scl import format_diagnostic
+from s7graph.steps.scl.check import check_scl_source
 from s7graph.web.cli.report import fail
 from s7graph.web.cli.trace import checked_inputs, run_trace, trace_out
 from s7graph.web.harness.dbvars import DbVariables
@@ -78,11 +78,11 @@ def check_scl_command(
         return _summary(source, exc.lines)
     except S7Error as exc:
         return fail(exc)
-    found = check_scl(
+    found, parsed = check_scl_source(
         text, str(source), blocks=[*sfb.SYSTEM_BLOCKS, *_callable(known)], symbols=table
     )
     if not any(d.is_error for d in found):  # what a default CPU lacks (W140, as for a chart)
-        beyond = scl_default_cpu_warnings(parse_source(text, str(source)), table)
+        beyond = scl_default_cpu_warnings(parsed, table)
         found = sorted([*found, *beyond], key=sort_key)
     lines = known.warnings + [format_diagnostic(d) for d in found]
     if blocks and not any(d.is_error for d in found):
