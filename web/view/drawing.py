@@ -79,6 +79,7 @@ __all__ = [
     "fit_text",
     "picture",
     "rect_segments",
+    "same_canvas",
     "wrap",
 ]
 
@@ -153,6 +154,9 @@ class Picture:
     cells: dict[int, tuple[Cell, ...]] = field(default_factory=dict)  # step: live values
     contacts: dict[ConditionKey, tuple[tuple[Rect, ...], ...]] = field(default_factory=dict)
     sequence_bounds: dict[int, tuple[float, float, float, float]] = field(default_factory=dict)
+    shown: dict[int, tuple[float, float, float, float]] = field(default_factory=dict)
+    """transition: x0, y0, x1, y1 of its bar and the text drawn beside it (its click target
+    reaches across the lane)"""
 
 
 def rect_segments(
@@ -227,6 +231,7 @@ def picture(placement: Placement) -> Picture:
         steps=d.step_xy,
         transitions=d.transition_xy,
         targets=d.targets,
+        shown=d.shown,
         segments=joined(np.array(d.segments, np.float32).reshape(-1, 2, 3)),
         double=joined(np.array(d.double, np.float32).reshape(-1, 2, 3)),
         frames=joined(np.array(d.frames, np.float32).reshape(-1, 2, 3)),
@@ -336,6 +341,7 @@ class _Drawing:
         self.step_xy: dict[int, tuple[float, float]] = {}
         self.transition_xy: dict[int, tuple[float, float]] = {}
         self.targets: dict[int, tuple[float, float, float, float]] = {}
+        self.shown: dict[int, tuple[float, float, float, float]] = {}
         self.times: dict[int, tuple[float, float]] = {}
         self.cells: dict[int, tuple[Cell, ...]] = {}
         self.contacts: dict[ConditionKey, tuple[tuple[Rect, ...], ...]] = {}
@@ -418,6 +424,8 @@ class _Drawing:
             x0, x1 = x - BAR_W / 2 - 0.05, left + self.text_w
             y0, y1 = min(top - h, y - 0.15), max(top, y + 0.15)
             self.targets[t.number] = ((x0 + x1) / 2, (y0 + y1) / 2, x1 - x0, y1 - y0)
+            drawn = self.text_items[-1]
+            self.shown[t.number] = (x0, y0, max(x + BAR_W / 2, drawn.x + drawn.width), y1)
 
     def jumps(self, p: Placement) -> None:
         for j in p.jumps:
@@ -724,6 +732,18 @@ def canvas_of(client: Any) -> tuple[float, float]:
     except Exception:  # the page has not told its camera yet, or is gone
         pass
     return CANVAS_ASPECT, float(PAGE_H)
+
+
+def same_canvas(before: tuple[float, float], now: tuple[float, float]) -> bool:
+    """Whether a page's canvas reported ``now`` (its drawing buffer: device pixels) is the
+    one it reported ``before`` drawn at another resolution: of the same shape, a
+    pixel's rounding apart. viser's page lowers its resolution while it draws slowly (its
+    adaptive pixel ratio, down to 0.75 of the screen's) and raises it again; the canvas on
+    the page keeps its size."""
+    (w0, h0), (w1, h1) = before, now
+    if min(w0, h0, w1, h1) <= 0:
+        return False
+    return abs(w0 / h0 - w1 / h1) <= 1.5 / min(h0, h1) + 1.5 * max(w0, w1) / min(h0, h1) ** 2
 
 
 def aim_camera(

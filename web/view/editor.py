@@ -343,11 +343,15 @@ class Editor(CpuCommands, RowEditing, InPlace, CrossReferencing):
             self.status.content = self._status_html()
 
     def _draw(self, chart: Chart) -> None:
-        """Draw ``chart``; when the edit made it larger or smaller, fit the page to it."""
+        """Draw ``chart``; when the edit made it larger or smaller, fit the page to it —
+        unless the form is beside an element: the chart stays where the user looks, and
+        pans only for that element to show beside the form (a re-aim at its top left
+        would lose it)."""
         before = self._picture.bounds if self._picture is not None else None
         self._picture = picture(place(ChartLayout.from_chart(chart)))
-        if before is not None and before != self._picture.bounds:
+        if before is not None and before != self._picture.bounds and self._anchor is None:
             self.aim(whole=False)
+        self._reveal = self._anchor is not None
         if self._drawing is not None:
             self._drawing.remove()
         self._drawing = Drawing(
@@ -360,6 +364,7 @@ class Editor(CpuCommands, RowEditing, InPlace, CrossReferencing):
         )
         self._drawn = chart
         if self._anchor is not None:  # its element may be drawn elsewhere now
+            self._anchor = self._anchor_of(self.session.selection if self.session else None)
             self._later("follow", FOLLOW_S, self._follow)
 
     def _clicked_step(self, number: int, _: Any) -> None:
@@ -438,9 +443,10 @@ class Editor(CpuCommands, RowEditing, InPlace, CrossReferencing):
     # ------------------------------------------------------------ the form
 
     def _clear_form(self) -> None:
-        for timer, _ in self._timers.values():
-            timer.cancel()
-        self._timers.clear()
+        """Drop the form and what was typed in it and waits (the window's following stays:
+        an edit that selects another element rebuilds the form right after drawing)."""
+        for key in [k for k in self._timers if k != "follow"]:
+            self._timers.pop(key)[0].cancel()
         for handle in self._form_handles:
             with contextlib.suppress(Exception):
                 handle.remove()

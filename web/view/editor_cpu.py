@@ -94,6 +94,8 @@ class CpuCommands:
 
         def leave(self) -> None: ...
 
+        def _place_aside(self) -> None: ...
+
     def leave_asked(self) -> None:
         """Leave edit mode — after a yes when the chart edited is not the one the CPU runs
         (what was not downloaded would be dropped without a word)."""
@@ -191,6 +193,7 @@ class CpuCommands:
         self.session = session
         self.file.value = chart_file(file, pou, ".s7g")  # type: ignore[misc]
         self.note = "opened " + name + ("".join(f"; {x}" for x in reply.lines[:3]))
+        self._place_aside()  # another chart: the page aims at it, the form waits aside
         self._show(source_changed=True)
 
     def new(self) -> None:
@@ -205,6 +208,7 @@ class CpuCommands:
             self._notify("new refused", exc.reason, ok=False)
             return
         self.note = "a new chart: S1 and T1 (Insert: select T1, Step + Transition)"
+        self._place_aside()
         self._show(source_changed=True)
 
     def download(self) -> None:

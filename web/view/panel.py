@@ -71,7 +71,7 @@ from s7graph.web.view.alarms import AlarmView
 from s7graph.web.view.block_links import BlockLinks
 from s7graph.web.view.confirm import ask
 from s7graph.web.view.contact_modify import ContactModify
-from s7graph.web.view.drawing import aim_camera
+from s7graph.web.view.drawing import aim_camera, same_canvas
 from s7graph.web.view.editor import Editor
 from s7graph.web.view.engineering import Engineering, ViewHost
 from s7graph.web.view.page_login import PageLogin
@@ -411,8 +411,8 @@ class ClientPanel(PageLogin):
         """The page reported its camera: on a canvas of another size, fit again unless the
         camera is somewhere the user moved it (not where the view put it)."""
         canvas = (int(camera.image_width), int(camera.image_height))
-        if canvas == self._canvas:
-            return
+        if canvas == self._canvas or same_canvas(self._canvas, canvas):
+            return  # the same canvas, or only drawn at another resolution
         self._canvas = canvas
         at = tuple(float(v) for v in camera.position)
         if any(all(abs(a - b) < 1e-2 for a, b in zip(at, p, strict=True)) for p in self._ours):

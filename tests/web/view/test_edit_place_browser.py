@@ -1,12 +1,12 @@
 """Editing where the element is drawn, in a real headless Chromium against a chart running on the
 virtual clock with a users file and a real zenoh bus (docs/online-change.md, "Editing in the
 browser"): a wrong password says so on the page; a click on a step or transition in edit mode
-floats its form beside it with its values; renaming there and completing a condition change the
-chart and the source view; the step's action rows are a table; an insert at the clicked transition
-lands after it; Undo and Redo of the form and the keys Ctrl+Z, Ctrl+Y and Delete work; a click on
-an empty place offers the inserts there; the window follows its step when the chart is
-zoomed; a step of 21 rows pages its table. One browser, one page for the module (CI has 2 cores);
-the tests run in order on it."""
+floats its form beside it with its values, leaving its text free; renaming there and completing
+a condition change the chart and the source view; the step's action rows are a table; an insert
+at the clicked transition lands after it, the chart staying where it is looked at; Undo and Redo
+of the form and the keys Ctrl+Z, Ctrl+Y and Delete work; a click on an empty place offers the
+inserts there; the window follows its step when the chart is zoomed; a step of 21 rows pages its
+table. One browser, one page for the module (CI has 2 cores); the tests run in order on it."""
 
 from __future__ import annotations
 
@@ -187,6 +187,10 @@ def test_a_condition_completes_a_name_and_the_source_view_follows(
     assert wait_until(lambda: ed.session is not None and ed.session.selection == TransitionRef(2))
     page.get_by_text("transition T2 Full", exact=True).first.wait_for(timeout=30_000)
     assert field(page, "Condition").input_value() == "full"
+    assert ed._drawing is not None
+    _, _, x1, y1 = ed._drawing.picture.shown[2]  # its bar and text, which the form leaves free
+    right, _ = page_point(ed.client, x1 + EDIT_OFFSET[0], y1 + EDIT_OFFSET[1], page=page)
+    assert wait_until(lambda: tab_box(page)[0] > right, 30), (tab_box(page), right)
     field(page, "Condition").fill("full AND em")  # typing: the list offers what completes it
     choose(page, "Complete", "empty")
     assert wait_until(lambda: condition(ed, 2) == "full AND empty", 30)
@@ -202,10 +206,14 @@ def test_an_insert_lands_at_the_clicked_transition_and_undo_redo_and_keys_work(
     click_on_chart(page, ed, "transition", 1)
     assert wait_until(lambda: ed.session is not None and ed.session.selection == TransitionRef(1))
     page.get_by_text("transition T1 Go", exact=True).first.wait_for(timeout=30_000)
+    assert wait_until(lambda: settled(ed), timeout=30)
+    looked = [float(v) for v in ed.client.camera.position]
     click(page, "Step + Transition")  # after T1: S4, then T4 to where T1 led
     assert wait_until(lambda: targets(ed, 1) == (4,), 30)
     assert targets(ed, 4) == (2,)
     assert wait_until(lambda: "FROM S1 TO S4 := go;" in str(ed.source.value), 30)
+    assert wait_until(lambda: settled(ed), timeout=30)  # the chart grew; the page looks on
+    assert [float(v) for v in ed.client.camera.position] == pytest.approx(looked, abs=1e-3)
     click(page, "Undo")
     assert wait_until(lambda: targets(ed, 1) == (2,), 30)
     click(page, "Redo")
