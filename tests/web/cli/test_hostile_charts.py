@@ -189,9 +189,8 @@ def test_100000_action_rows_compile_and_run_under_500_mb(tmp_path: Path, layout:
     assert len((tmp_path / "t.jsonl").read_text().splitlines()) == 3
 
 
-def test_a_chart_the_view_cannot_show_is_reported_by_check(
-    tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
+def _ring_of_5000_steps(tmp_path: Path) -> Path:
+    """A chart of one sequence of 5,000 steps in a ring: more than the view draws."""
     many = "\n".join(
         f"  {'INITIAL_STEP' if s == 1 else 'STEP'} S{s}: END_STEP" for s in range(1, 5001)
     )
@@ -200,6 +199,13 @@ def test_a_chart_the_view_cannot_show_is_reported_by_check(
     )
     path = tmp_path / "many.s7g"
     path.write_text(chart("Many", many, loop))
+    return path
+
+
+def test_a_chart_the_view_cannot_show_is_reported_by_check(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = _ring_of_5000_steps(tmp_path)
     rc, out, _ = _cli(capsys, "check", str(path))
     assert rc == 1
     assert (
@@ -237,14 +243,7 @@ def test_run_with_the_view_refuses_a_chart_the_view_cannot_show_at_once(
 ) -> None:
     """``run --web`` of a chart ``check`` warns W110 for: before, the CPU ran and its view's
     process failed and was started again every second until the run ended."""
-    many = "\n".join(
-        f"  {'INITIAL_STEP' if s == 1 else 'STEP'} S{s}: END_STEP" for s in range(1, 5001)
-    )
-    loop = "\n".join(
-        f"  TRANSITION T{s} FROM S{s} TO S{s % 5000 + 1} := TRUE;" for s in range(1, 5001)
-    )
-    path = tmp_path / "many.s7g"
-    path.write_text(chart("Many", many, loop))
+    path = _ring_of_5000_steps(tmp_path)
     state = tmp_path / "many.sqlite"
     argv = ["run", str(path), "--state", str(state), "--web", "--port", "0", "--duration-s", "9"]
     rc, _, err = _cli(capsys, *argv)
